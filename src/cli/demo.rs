@@ -1,0 +1,24 @@
+//! `surfmotion demo`.
+
+/// Arguments of `demo`.
+#[derive(clap::Args)]
+pub struct Args {}
+
+/// Runs the demo. The end-to-end job (a procedural character driven by a
+/// procedural clip through the surface motion graph) needs the synthesis
+/// pipeline, which does not exist yet; until then this says so plainly.
+pub fn run(_: Args) -> anyhow::Result<()> {
+    println!(
+        "surfmotion demo: not available yet.\n\
+         \n\
+         The demo will drive an embedded procedural character with a procedural clip\n\
+         once the mocap-driven synthesis pipeline exists. What works today:\n\
+         \n\
+         \x20 surfmotion inspect FILE [--json]                 any mocap or mesh file\n\
+         \x20 surfmotion mocap positions CLIP --frames 0,10    forward kinematics\n\
+         \x20 surfmotion mocap convert IN.amc OUT.bvh --fps 30 convert and resample clips\n\
+         \x20 surfmotion mocap rigmap CLIP -o map.json         detected rig convention\n\
+         \x20 surfmotion mesh convert samba.pc2 samba.glb      mesh sequence formats"
+    );
+    Ok(())
+}

@@ -1,0 +1,39 @@
+//! `surfmotion inspect FILE [--json]`.
+
+use super::ClipOpts;
+use std::path::PathBuf;
+use surfmotion::inspect::{InspectOptions, inspect};
+
+/// Arguments of `inspect`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// A mocap clip (.bvh .amc .asf) or a mesh / sequence (.obj .ply .pc2 .mdd
+    /// .gltf .glb, a folder of .obj frames, or SEQ.pc2:FRAME).
+    pub file: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Topology mesh for a point cache (default: the .obj of the same name beside it).
+    #[arg(long, value_name = "MESH")]
+    pub topology: Option<PathBuf>,
+    #[command(flatten)]
+    pub clip: ClipOpts,
+}
+
+/// Runs `inspect`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let opts = InspectOptions {
+        mocap: a.clip.load_options()?,
+        mesh: surfmotion::mesh::io::LoadOptions {
+            topology: a.topology,
+            fps: None,
+        },
+    };
+    let r = inspect(&a.file, &opts)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&r)?);
+    } else {
+        print!("{}", r.to_text());
+    }
+    Ok(())
+}

@@ -1,0 +1,53 @@
+//! `surfmotion mesh ...`.
+
+use std::path::PathBuf;
+use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
+
+/// Mesh subcommands.
+#[derive(clap::Subcommand)]
+pub enum Cmd {
+    /// Convert between mesh formats: e.g. samba.pc2 (topology from samba.obj
+    /// beside it) to samba.glb, an OBJ folder to .pc2, SEQ.pc2:12 to one .obj.
+    /// Output by extension: .glb, .pc2 (+ .obj), .mdd (+ .obj), .obj, .ply,
+    /// or a path without extension for a folder of OBJ frames.
+    Convert(ConvertArgs),
+}
+
+/// Arguments of `mesh convert`.
+#[derive(clap::Args)]
+pub struct ConvertArgs {
+    /// Input mesh or sequence (PATH:FRAME picks one frame).
+    pub input: String,
+    /// Output path.
+    pub output: PathBuf,
+    /// Topology for a point cache input.
+    #[arg(long, value_name = "MESH")]
+    pub topology: Option<PathBuf>,
+    /// Frame rate where the input has none (default 30).
+    #[arg(long)]
+    pub fps: Option<f64>,
+}
+
+/// Runs a mesh subcommand.
+pub fn run(c: Cmd) -> anyhow::Result<()> {
+    match c {
+        Cmd::Convert(a) => {
+            let seq = load_sequence(
+                &a.input,
+                &LoadOptions {
+                    topology: a.topology,
+                    fps: a.fps,
+                },
+            )?;
+            let files = save_sequence(&seq, &a.output, a.fps)?;
+            eprintln!(
+                "wrote {} file(s): {} vertices, {} triangles, {} frames",
+                files.len(),
+                seq.mesh().vertex_count(),
+                seq.mesh().triangle_count(),
+                seq.frame_count()
+            );
+        }
+    }
+    Ok(())
+}

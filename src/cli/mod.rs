@@ -1,0 +1,112 @@
+//! Command-line interface: one file per subcommand.
+
+mod demo;
+mod inspect;
+mod mesh;
+mod mocap;
+
+use clap::{Parser, Subcommand};
+
+/// surfmotion: drive 4D performance-capture characters from skeletal motion
+/// capture, and transfer mocap onto scanned meshes.
+///
+/// Reads BVH and CMU ASF/AMC clips (any common rig naming: CMU, Reallusion
+/// CC_Base, Bandai Namco, Mixamo, MotionBuilder HumanIK) and meshes or mesh
+/// sequences (OBJ, PLY, PC2, MDD, OBJ folders, glTF/GLB). Exit codes: 0 ok,
+/// 1 bad input (the message names the file and line), 2 internal error.
+#[derive(Parser)]
+#[command(name = "surfmotion", version, about, long_about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the embedded demo (no files needed).
+    Demo(demo::Args),
+    /// Show what any supported file holds: joints, frames, fps, units and up
+    /// axis assumed, rig convention; or vertices, triangles, frames, bounds,
+    /// skin, morph targets; and any problems found.
+    Inspect(inspect::Args),
+    /// Mocap clips: joint positions, conversion, rig maps.
+    #[command(subcommand)]
+    Mocap(mocap::Cmd),
+    /// Meshes and mesh sequences: conversion between formats.
+    #[command(subcommand)]
+    Mesh(mesh::Cmd),
+}
+
+/// Entry point of the CLI.
+pub fn main() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::from_env("SURFMOTION_LOG"))
+        .with_writer(std::io::stderr)
+        .init();
+    match cli.command {
+        Command::Demo(a) => demo::run(a),
+        Command::Inspect(a) => inspect::run(a),
+        Command::Mocap(c) => mocap::run(c),
+        Command::Mesh(c) => mesh::run(c),
+    }
+}
+
+/// An error and its causes on one line.
+pub fn one_line(e: &anyhow::Error) -> String {
+    let mut s = e.to_string();
+    for c in e.chain().skip(1) {
+        let c = c.to_string();
+        if !s.contains(&c) {
+            s.push_str(": ");
+            s.push_str(&c);
+        }
+    }
+    s.replace('\n', " ")
+}
+
+/// Options shared by every command that reads a clip.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct ClipOpts {
+    /// Frame rate of the input, overriding the file's (BVH with a wrong
+    /// Frame Time; AMC files store none and default to CMU's 120).
+    #[arg(long = "input-fps", value_name = "FPS")]
+    pub input_fps: Option<f64>,
+    /// The ASF skeleton of an AMC clip (default: the only .asf beside it).
+    #[arg(long, value_name = "PATH")]
+    pub asf: Option<std::path::PathBuf>,
+    /// Length unit of the input: m, cm, mm, dm, inch, cmu (1/0.45 inch) or a
+    /// number of metres per unit. Default: from the ASF header, else guessed
+    /// from the skeleton's size (see `inspect`).
+    #[arg(long = "assume-units", value_name = "UNIT")]
+    pub assume_units: Option<String>,
+    /// Up axis of the input (y or z). Default: guessed from head above pelvis.
+    #[arg(long, value_name = "AXIS")]
+    pub up: Option<String>,
+}
+
+impl ClipOpts {
+    /// The library's load options.
+    pub fn load_options(&self) -> anyhow::Result<surfmotion::mocap::LoadOptions> {
+        let units = match &self.assume_units {
+            None => None,
+            Some(u) => Some(surfmotion::mocap::units::parse_unit(u).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--assume-units '{u}': expected m, cm, mm, dm, inch, cmu or a number"
+                )
+            })?),
+        };
+        let up = match self.up.as_deref().map(str::to_ascii_lowercase).as_deref() {
+            None => None,
+            Some("y") => Some(surfmotion::mocap::UpAxis::Y),
+            Some("z") => Some(surfmotion::mocap::UpAxis::Z),
+            Some(o) => anyhow::bail!("--up '{o}': expected y or z"),
+        };
+        Ok(surfmotion::mocap::LoadOptions {
+            fps: self.input_fps,
+            asf: self.asf.clone(),
+            units,
+            up,
+        })
+    }
+}

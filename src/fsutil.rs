@@ -1,0 +1,116 @@
+//! File-system helpers shared by every writer: atomic writes and bounded reads.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Largest input file any reader accepts (4 GiB). Readers never trust counts
+/// in a header: they check them against the bytes actually present.
+pub const MAX_INPUT_BYTES: u64 = 4 << 30;
+
+/// Error of a file-system helper, carrying the path it concerns.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {source}")]
+pub struct FsError {
+    /// The file that could not be read or written.
+    pub path: PathBuf,
+    /// What the OS said.
+    #[source]
+    pub source: std::io::Error,
+}
+
+/// Reads a whole file into memory, refusing files over [`MAX_INPUT_BYTES`].
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FsError> {
+    let wrap = |source| FsError {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(wrap)?;
+    if meta.is_dir() {
+        return Err(wrap(std::io::Error::other(
+            "is a directory, expected a file",
+        )));
+    }
+    if meta.len() > MAX_INPUT_BYTES {
+        return Err(wrap(std::io::Error::other(format!(
+            "file is {} bytes, larger than the {} byte limit",
+            meta.len(),
+            MAX_INPUT_BYTES
+        ))));
+    }
+    std::fs::read(path).map_err(wrap)
+}
+
+/// Reads a text file; invalid UTF-8 is replaced rather than rejected (mocap
+/// files from Windows tools carry Latin-1 comments).
+pub fn read_text(path: &Path) -> Result<String, FsError> {
+    let bytes = read_bytes(path)?;
+    Ok(match String::from_utf8(bytes) {
+        Ok(s) => s,
+        Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
+    })
+}
+
+/// Writes a file atomically: the bytes go to a temporary file in the same
+/// folder, which is flushed and renamed over `path`. A killed run leaves
+/// either the old file or the complete new one, never a truncated one.
+pub fn write_atomic(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), FsError> {
+    let wrap = |source| FsError {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&dir).map_err(wrap)?;
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".surfmotion-")
+        .suffix(".part")
+        .tempfile_in(&dir)
+        .map_err(wrap)?;
+    {
+        let mut buf = std::io::BufWriter::with_capacity(1 << 20, tmp.as_file_mut());
+        fill(&mut buf).map_err(wrap)?;
+        buf.flush().map_err(wrap)?;
+    }
+    tmp.as_file().sync_all().map_err(wrap)?;
+    tmp.persist(path).map_err(|e| wrap(e.error))?;
+    Ok(())
+}
+
+/// [`write_atomic`] for a byte slice.
+pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), FsError> {
+    write_atomic(path, |w| w.write_all(bytes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_replaces_whole_file_and_leaves_no_temporaries() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a/b/out.txt");
+        write_bytes_atomic(&p, b"first").unwrap();
+        write_bytes_atomic(&p, b"second").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"second");
+        let names: Vec<_> = std::fs::read_dir(p.parent().unwrap()).unwrap().collect();
+        assert_eq!(names.len(), 1);
+    }
+
+    #[test]
+    fn a_failing_writer_leaves_the_old_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("out.txt");
+        write_bytes_atomic(&p, b"old").unwrap();
+        let r = write_atomic(&p, |w| {
+            w.write_all(b"partial")?;
+            Err(std::io::Error::other("killed"))
+        });
+        assert!(r.is_err());
+        assert_eq!(std::fs::read(&p).unwrap(), b"old");
+    }
+}

@@ -1,0 +1,262 @@
+//! `inspect`: what any supported file holds, what was assumed, and problems.
+
+use crate::mesh::io::{MeshFormat, gltf::read_gltf};
+use crate::mesh::{Bounds, MeshError};
+use crate::mocap::{
+    LoadOptions, MocapError, MocapFormat, Units, UpAxis, load_clip, units::rest_extent,
+};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// What a mocap file holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct MocapReport {
+    /// The file.
+    pub path: PathBuf,
+    /// `bvh`, `amc` or `asf`.
+    pub format: String,
+    /// Joint count.
+    pub joints: usize,
+    /// Joint names in file order.
+    pub joint_names: Vec<String>,
+    /// Frame count.
+    pub frames: usize,
+    /// Frames per second.
+    pub fps: f64,
+    /// Seconds from first to last frame.
+    pub duration_s: f64,
+    /// Length unit assumed, and why.
+    pub units: Units,
+    /// Up axis assumed.
+    pub up: UpAxis,
+    /// Why.
+    pub up_reason: String,
+    /// Largest span of the rest skeleton, in metres.
+    pub rest_extent_m: f64,
+    /// Rig convention detected.
+    pub convention: String,
+    /// Canonical joints the convention could not map.
+    pub unmapped_canonical: Vec<String>,
+    /// Problems found while reading.
+    pub warnings: Vec<String>,
+}
+
+/// What a mesh file holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshReport {
+    /// The file.
+    pub path: PathBuf,
+    /// Format name.
+    pub format: String,
+    /// Vertex count.
+    pub vertices: usize,
+    /// Triangle count.
+    pub triangles: usize,
+    /// Frames (1 for a static mesh).
+    pub frames: usize,
+    /// Frames per second, if known.
+    pub fps: Option<f64>,
+    /// Bounds over all frames (file units).
+    pub bounds: Bounds,
+    /// Whether vertices carry colours.
+    pub colors: bool,
+    /// Groups and their triangle counts.
+    pub groups: Vec<(String, u32)>,
+    /// Skin joints (glTF).
+    pub skin_joints: Vec<String>,
+    /// Morph targets (glTF).
+    pub morph_targets: usize,
+    /// Animations and durations (glTF).
+    pub animations: Vec<(String, f32)>,
+    /// Problems (degenerate or duplicate triangles, unreferenced vertices, ...).
+    pub problems: Vec<String>,
+}
+
+/// The report of [`inspect`].
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Report {
+    /// A mocap clip.
+    Mocap(MocapReport),
+    /// A mesh or sequence.
+    Mesh(MeshReport),
+}
+
+/// Error of [`inspect`].
+#[derive(Debug, thiserror::Error)]
+pub enum InspectError {
+    /// A mocap reader failed.
+    #[error(transparent)]
+    Mocap(#[from] MocapError),
+    /// A mesh reader failed.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// Not a format we read.
+    #[error(
+        "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj)"
+    )]
+    Unknown(PathBuf),
+}
+
+/// Options for [`inspect`].
+#[derive(Debug, Clone, Default)]
+pub struct InspectOptions {
+    /// Passed to the mocap loader.
+    pub mocap: LoadOptions,
+    /// Passed to the mesh loader.
+    pub mesh: crate::mesh::io::LoadOptions,
+}
+
+/// Reads `path` and reports what it holds.
+pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectError> {
+    if let Some(fmt) = MocapFormat::of(path) {
+        let clip = load_clip(path, &opts.mocap)?;
+        let det = crate::rig::detect(&clip.point_names());
+        return Ok(Report::Mocap(MocapReport {
+            path: path.to_path_buf(),
+            format: format!("{fmt:?}").to_lowercase(),
+            joints: clip.joint_count(),
+            joint_names: clip.point_names(),
+            frames: clip.frame_count(),
+            fps: clip.fps(),
+            duration_s: clip.duration(),
+            rest_extent_m: rest_extent(&clip) * clip.units.metres_per_unit,
+            units: clip.units.clone(),
+            up: clip.up,
+            up_reason: clip.up_reason.clone(),
+            convention: det.map.convention.clone(),
+            unmapped_canonical: det.missing.iter().map(|c| c.name().to_string()).collect(),
+            warnings: clip.warnings.clone(),
+        }));
+    }
+    let spec = path.to_string_lossy().to_string();
+    let (p, _) = crate::mesh::io::split_frame_ref(&spec);
+    let Some(fmt) = MeshFormat::of(&p) else {
+        return Err(InspectError::Unknown(path.to_path_buf()));
+    };
+    let (mut skin_joints, mut morph_targets, mut animations, mut problems) =
+        (Vec::new(), 0, Vec::new(), Vec::new());
+    if matches!(fmt, MeshFormat::Gltf | MeshFormat::Glb) {
+        let a = read_gltf(&p)?;
+        skin_joints = a
+            .skin
+            .as_ref()
+            .map(|s| s.joint_names.clone())
+            .unwrap_or_default();
+        morph_targets = a.morph_targets.len();
+        animations = a.animations.clone();
+        problems = a.problems.clone();
+    }
+    let seq = crate::mesh::io::load_sequence(&spec, &opts.mesh)?;
+    let m = seq.mesh();
+    problems.extend(m.problems());
+    Ok(Report::Mesh(MeshReport {
+        path: path.to_path_buf(),
+        format: format!("{fmt:?}").to_lowercase(),
+        vertices: m.vertex_count(),
+        triangles: m.triangle_count(),
+        frames: seq.frame_count(),
+        fps: seq.fps,
+        bounds: seq.bounds(),
+        colors: m.colors().is_some(),
+        groups: m
+            .groups()
+            .iter()
+            .map(|g| (g.name.clone(), g.end - g.start))
+            .collect(),
+        skin_joints,
+        morph_targets,
+        animations,
+        problems,
+    }))
+}
+
+impl Report {
+    /// A human-readable summary.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        match self {
+            Report::Mocap(r) => {
+                let _ = writeln!(s, "{} ({})", r.path.display(), r.format);
+                let _ = writeln!(s, "  joints      {}", r.joints);
+                let _ = writeln!(
+                    s,
+                    "  frames      {} at {:.3} fps ({:.2} s)",
+                    r.frames, r.fps, r.duration_s
+                );
+                let _ = writeln!(
+                    s,
+                    "  units       {} = {} m per unit ({})",
+                    r.units.name, r.units.metres_per_unit, r.units.reason
+                );
+                let _ = writeln!(s, "  up axis     {:?} ({})", r.up, r.up_reason);
+                let _ = writeln!(
+                    s,
+                    "  rest size   {:.2} m (largest span of the rest skeleton)",
+                    r.rest_extent_m
+                );
+                let _ = writeln!(s, "  convention  {}", r.convention);
+                if !r.unmapped_canonical.is_empty() {
+                    let _ = writeln!(s, "  unmapped    {}", r.unmapped_canonical.join(", "));
+                }
+                let _ = writeln!(s, "  joint names {}", r.joint_names.join(" "));
+                for w in &r.warnings {
+                    let _ = writeln!(s, "  warning: {w}");
+                }
+            }
+            Report::Mesh(r) => {
+                let _ = writeln!(s, "{} ({})", r.path.display(), r.format);
+                let _ = writeln!(s, "  vertices    {}", r.vertices);
+                let _ = writeln!(s, "  triangles   {}", r.triangles);
+                let fps = r.fps.map(|f| format!(" at {f:.3} fps")).unwrap_or_default();
+                let _ = writeln!(s, "  frames      {}{fps}", r.frames);
+                let b = r.bounds;
+                let _ = writeln!(
+                    s,
+                    "  bounds      [{:.4} {:.4} {:.4}] .. [{:.4} {:.4} {:.4}] (diagonal {:.4}, file units)",
+                    b.min[0],
+                    b.min[1],
+                    b.min[2],
+                    b.max[0],
+                    b.max[1],
+                    b.max[2],
+                    b.diagonal()
+                );
+                let _ = writeln!(s, "  colours     {}", if r.colors { "yes" } else { "no" });
+                if !r.groups.is_empty() {
+                    let g: Vec<String> = r
+                        .groups
+                        .iter()
+                        .take(12)
+                        .map(|(n, c)| format!("{n}({c})"))
+                        .collect();
+                    let more = if r.groups.len() > 12 {
+                        format!(" … {} groups", r.groups.len())
+                    } else {
+                        String::new()
+                    };
+                    let _ = writeln!(s, "  groups      {}{more}", g.join(" "));
+                }
+                if !r.skin_joints.is_empty() {
+                    let _ = writeln!(
+                        s,
+                        "  skin        {} joints: {}",
+                        r.skin_joints.len(),
+                        r.skin_joints.join(" ")
+                    );
+                }
+                if r.morph_targets > 0 {
+                    let _ = writeln!(s, "  morph       {} targets", r.morph_targets);
+                }
+                for (n, d) in &r.animations {
+                    let _ = writeln!(s, "  animation   '{n}' {d:.2} s");
+                }
+                for p in &r.problems {
+                    let _ = writeln!(s, "  problem: {p}");
+                }
+            }
+        }
+        s
+    }
+}

@@ -1,0 +1,13 @@
+//! # surfmotion
+//!
+//! Drives 4D performance-capture characters from skeletal motion capture
+//! (Huang et al. 2015) and transfers mocap onto static scanned meshes
+//! (de Aguiar et al. 2007). Modules follow the pipeline: [`mocap`] (clips),
+//! [`rig`] (canonical skeleton), [`mesh`] (meshes, sequences and their file
+//! formats), [`inspect`] (what a file holds).
+
+pub mod fsutil;
+pub mod inspect;
+pub mod mesh;
+pub mod mocap;
+pub mod rig;

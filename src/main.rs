@@ -1,0 +1,31 @@
+//! The `surfmotion` binary: parse arguments, call the library, map errors to
+//! exit codes (0 ok, 1 bad input, 2 internal error). A panic is caught and
+//! reported as an internal error, so exit code 101 cannot happen.
+
+mod cli;
+
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    // Silence the default panic message; we print our own.
+    std::panic::set_hook(Box::new(|info| {
+        let loc = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        eprintln!("surfmotion: internal error{loc}: {info}");
+    }));
+    match std::panic::catch_unwind(cli::main) {
+        Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(e)) => {
+            eprintln!("surfmotion: {}", cli::one_line(&e));
+            ExitCode::from(1)
+        }
+        Err(_) => {
+            eprintln!(
+                "surfmotion: this is a bug; please report it with the command line and input file"
+            );
+            ExitCode::from(2)
+        }
+    }
+}

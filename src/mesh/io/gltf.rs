@@ -1,0 +1,616 @@
+//! glTF 2.0 reader (`.gltf` with external or data-URI buffers, `.glb`):
+//! triangle primitives of every mesh node merged into one [`Mesh`] (node
+//! transforms applied, except to skinned meshes, which stay in bind space),
+//! vertex colours, the first skin (joints, parents, inverse bind matrices,
+//! per-vertex joints and weights), morph targets, and a morph-weights
+//! animation sampled at its key times as a mesh sequence.
+//!
+//! Accessors are read by our own bounds-checked code rather than
+//! `gltf::Reader`, so a malformed file gives an error, never a panic.
+
+use crate::mesh::{Mesh, MeshError, MeshSequence};
+use base64::Engine as _;
+use gltf::accessor::{DataType, Dimensions};
+use std::path::Path;
+
+/// A skin: joints with their hierarchy, and per-vertex influences.
+#[derive(Debug, Clone)]
+pub struct Skin {
+    /// Joint node names (`joint_N` where a node has no name).
+    pub joint_names: Vec<String>,
+    /// Parent joint of each joint within the skin (`None` at the top).
+    pub parents: Vec<Option<u32>>,
+    /// Inverse bind matrices, column-major.
+    pub inverse_bind: Vec<[[f32; 4]; 4]>,
+    /// Four joint indices per vertex.
+    pub joints: Vec<[u16; 4]>,
+    /// Four weights per vertex, normalised to sum to 1 where they did not.
+    pub weights: Vec<[f32; 4]>,
+}
+
+/// What a glTF file holds.
+#[derive(Debug, Clone)]
+pub struct GltfAsset {
+    /// All triangle primitives merged.
+    pub mesh: Mesh,
+    /// The first skin, if any mesh is skinned.
+    pub skin: Option<Skin>,
+    /// Morph target displacements (per target, one per vertex of `mesh`).
+    pub morph_targets: Vec<Vec<[f32; 3]>>,
+    /// Key times and per-key weights of the first morph-weights animation.
+    pub weights_animation: Option<(Vec<f32>, Vec<Vec<f32>>)>,
+    /// Animation names and durations (seconds).
+    pub animations: Vec<(String, f32)>,
+    /// Node count, for `inspect`.
+    pub nodes: usize,
+    /// Non-fatal problems.
+    pub problems: Vec<String>,
+}
+
+struct Ctx<'a> {
+    path: &'a Path,
+    buffers: Vec<Vec<u8>>,
+}
+
+impl Ctx<'_> {
+    fn err(&self, msg: impl Into<String>) -> MeshError {
+        MeshError::invalid(self.path, msg)
+    }
+
+    /// Reads a view's bytes region `[offset, offset + len)`, checked.
+    fn view_bytes(&self, view: &gltf::buffer::View) -> Result<&[u8], MeshError> {
+        let b = self.buffers.get(view.buffer().index()).ok_or_else(|| {
+            self.err(format!(
+                "bufferView {} names a missing buffer",
+                view.index()
+            ))
+        })?;
+        let (o, l) = (view.offset(), view.length());
+        o.checked_add(l).and_then(|e| b.get(o..e)).ok_or_else(|| {
+            self.err(format!(
+                "bufferView {} (offset {o}, length {l}) exceeds its buffer ({} bytes)",
+                view.index(),
+                b.len()
+            ))
+        })
+    }
+
+    /// Reads `count` elements of `comps` scalars of type `dt` from a view.
+    #[allow(clippy::too_many_arguments)]
+    fn read_elements(
+        &self,
+        view: &gltf::buffer::View,
+        offset: usize,
+        count: usize,
+        comps: usize,
+        dt: DataType,
+        normalized: bool,
+        what: &str,
+    ) -> Result<Vec<f32>, MeshError> {
+        let bytes = self.view_bytes(view)?;
+        let cs = dt.size();
+        let elem = cs * comps;
+        let stride = view.stride().unwrap_or(elem).max(elem);
+        if count > 0 {
+            let last = (count - 1)
+                .checked_mul(stride)
+                .and_then(|v| v.checked_add(offset))
+                .and_then(|v| v.checked_add(elem));
+            if last.is_none_or(|e| e > bytes.len()) {
+                return Err(self.err(format!(
+                    "{what}: {count} elements do not fit in bufferView {}",
+                    view.index()
+                )));
+            }
+        }
+        let mut out = Vec::with_capacity(count * comps);
+        for i in 0..count {
+            let base = offset + i * stride;
+            for c in 0..comps {
+                let o = base + c * cs;
+                let b = &bytes[o..o + cs];
+                let v = match dt {
+                    DataType::I8 => {
+                        let x = b[0] as i8 as f32;
+                        if normalized { (x / 127.0).max(-1.0) } else { x }
+                    }
+                    DataType::U8 => {
+                        let x = b[0] as f32;
+                        if normalized { x / 255.0 } else { x }
+                    }
+                    DataType::I16 => {
+                        let x = i16::from_le_bytes([b[0], b[1]]) as f32;
+                        if normalized {
+                            (x / 32767.0).max(-1.0)
+                        } else {
+                            x
+                        }
+                    }
+                    DataType::U16 => {
+                        let x = u16::from_le_bytes([b[0], b[1]]) as f32;
+                        if normalized { x / 65535.0 } else { x }
+                    }
+                    DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
+                    DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                };
+                out.push(v);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Reads an accessor as f32 scalars (integers converted), with sparse
+    /// substitution. Returns (values, components per element).
+    fn read_f32(&self, acc: &gltf::Accessor, what: &str) -> Result<(Vec<f32>, usize), MeshError> {
+        let comps = acc.dimensions().multiplicity();
+        let count = acc.count();
+        let dt = acc.data_type();
+        let mut out = match acc.view() {
+            Some(view) => self.read_elements(
+                &view,
+                acc.offset(),
+                count,
+                comps,
+                dt,
+                acc.normalized(),
+                what,
+            )?,
+            None => {
+                if count > 100_000_000 {
+                    return Err(self.err(format!("{what}: absurd count {count}")));
+                }
+                vec![0.0; count * comps]
+            }
+        };
+        if let Some(sp) = acc.sparse() {
+            let n = sp.count();
+            let iv = sp.indices();
+            let it = match iv.index_type() {
+                gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+                gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+                gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+            };
+            let idx = self.read_elements(&iv.view(), iv.offset(), n, 1, it, false, what)?;
+            let vals = self.read_elements(
+                &sp.values().view(),
+                sp.values().offset(),
+                n,
+                comps,
+                dt,
+                acc.normalized(),
+                what,
+            )?;
+            for (k, &i) in idx.iter().enumerate() {
+                let i = i as usize;
+                if i >= count {
+                    return Err(self.err(format!("{what}: sparse index {i} ≥ count {count}")));
+                }
+                out[i * comps..(i + 1) * comps].copy_from_slice(&vals[k * comps..(k + 1) * comps]);
+            }
+        }
+        Ok((out, comps))
+    }
+
+    fn read_vec3(&self, acc: &gltf::Accessor, what: &str) -> Result<Vec<[f32; 3]>, MeshError> {
+        if acc.dimensions() != Dimensions::Vec3 {
+            return Err(self.err(format!("{what}: expected VEC3")));
+        }
+        let (v, _) = self.read_f32(acc, what)?;
+        Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+}
+
+fn load_buffers(
+    doc: &gltf::Document,
+    blob: Option<Vec<u8>>,
+    path: &Path,
+) -> Result<Vec<Vec<u8>>, MeshError> {
+    let mut blob = blob;
+    let mut out = Vec::new();
+    for b in doc.buffers() {
+        let data = match b.source() {
+            gltf::buffer::Source::Bin => blob.take().ok_or_else(|| {
+                MeshError::invalid(path, "buffer refers to a missing GLB BIN chunk")
+            })?,
+            gltf::buffer::Source::Uri(uri) => {
+                if let Some(rest) = uri.strip_prefix("data:") {
+                    let b64 = rest.split_once(";base64,").map(|x| x.1).ok_or_else(|| {
+                        MeshError::invalid(
+                            path,
+                            format!("buffer {}: only base64 data URIs are supported", b.index()),
+                        )
+                    })?;
+                    base64::engine::general_purpose::STANDARD
+                        .decode(b64)
+                        .map_err(|e| {
+                            MeshError::invalid(
+                                path,
+                                format!("buffer {}: bad base64: {e}", b.index()),
+                            )
+                        })?
+                } else {
+                    let rel = uri.replace("%20", " ");
+                    let p = path.parent().unwrap_or(Path::new(".")).join(rel);
+                    crate::fsutil::read_bytes(&p)?
+                }
+            }
+        };
+        if data.len() < b.length() {
+            return Err(MeshError::invalid(
+                path,
+                format!(
+                    "buffer {} has {} bytes, declares {}",
+                    b.index(),
+                    data.len(),
+                    b.length()
+                ),
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+type Mat4 = [[f32; 4]; 4];
+
+fn mat_mul(a: &Mat4, b: &Mat4) -> Mat4 {
+    let mut r = [[0.0; 4]; 4];
+    for (c, rc) in r.iter_mut().enumerate() {
+        for (row, v) in rc.iter_mut().enumerate() {
+            *v = (0..4).map(|k| a[k][row] * b[c][k]).sum();
+        }
+    }
+    r
+}
+
+fn transform_point(m: &Mat4, p: [f32; 3]) -> [f32; 3] {
+    let mut r = [0.0; 3];
+    for (row, v) in r.iter_mut().enumerate() {
+        *v = m[0][row] * p[0] + m[1][row] * p[1] + m[2][row] * p[2] + m[3][row];
+    }
+    r
+}
+
+const IDENTITY: Mat4 = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
+
+/// Parses glTF or GLB bytes. `path` locates external buffers and names errors.
+pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
+    let g = gltf::Gltf::from_slice(bytes)
+        .map_err(|e| MeshError::invalid(path, format!("glTF: {e}")))?;
+    let doc = g.document;
+    let ctx = Ctx {
+        path,
+        buffers: load_buffers(&doc, g.blob, path)?,
+    };
+    let mut problems = Vec::new();
+
+    // World transforms of every node reachable from the scene(s), cycle-safe.
+    let nn = doc.nodes().len();
+    let mut world: Vec<Option<Mat4>> = vec![None; nn];
+    let mut parent: Vec<Option<usize>> = vec![None; nn];
+    let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(s) => s.nodes().map(|n| n.index()).collect(),
+        None => {
+            let mut is_child = vec![false; nn];
+            for n in doc.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            (0..nn).filter(|&i| !is_child[i]).collect()
+        }
+    };
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut stack: Vec<(usize, Mat4)> = roots.iter().map(|&r| (r, IDENTITY)).collect();
+    while let Some((i, pm)) = stack.pop() {
+        if world[i].is_some() {
+            continue;
+        }
+        let m = mat_mul(&pm, &nodes[i].transform().matrix());
+        world[i] = Some(m);
+        for c in nodes[i].children() {
+            if world[c.index()].is_none() {
+                parent[c.index()] = Some(i);
+                stack.push((c.index(), m));
+            }
+        }
+    }
+
+    let mut positions: Vec<[f32; 3]> = Vec::new();
+    let mut colors: Vec<[f32; 3]> = Vec::new();
+    let mut any_color = false;
+    let mut tris: Vec<[u32; 3]> = Vec::new();
+    let mut targets: Vec<Vec<[f32; 3]>> = Vec::new();
+    let mut morph_node: Option<usize> = None;
+    let mut skin_joints: Vec<[u16; 4]> = Vec::new();
+    let mut skin_weights: Vec<[f32; 4]> = Vec::new();
+    let mut skin_idx: Option<usize> = None;
+    for (ni, node) in nodes.iter().enumerate() {
+        let (Some(mesh), Some(m)) = (node.mesh(), world[ni]) else {
+            continue;
+        };
+        let skinned = node.skin().is_some();
+        if let Some(s) = node.skin() {
+            if skin_idx.is_none() {
+                skin_idx = Some(s.index());
+            } else if skin_idx != Some(s.index()) {
+                problems.push(format!(
+                    "node {ni} uses skin {}; only the first skin is read",
+                    s.index()
+                ));
+            }
+        }
+        for prim in mesh.primitives() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                problems.push(format!(
+                    "mesh {} has a {:?} primitive; skipped",
+                    mesh.index(),
+                    prim.mode()
+                ));
+                continue;
+            }
+            let Some(pacc) = prim.get(&gltf::Semantic::Positions) else {
+                problems.push(format!(
+                    "mesh {} has a primitive without POSITION; skipped",
+                    mesh.index()
+                ));
+                continue;
+            };
+            let base = positions.len();
+            let mut p = ctx.read_vec3(&pacc, "POSITION")?;
+            if !skinned {
+                p.iter_mut().for_each(|x| *x = transform_point(&m, *x));
+            }
+            let nv = p.len();
+            if base + nv > u32::MAX as usize {
+                return Err(ctx.err("too many vertices"));
+            }
+            positions.extend(p);
+            match prim.get(&gltf::Semantic::Colors(0)) {
+                Some(c) => {
+                    let (v, comps) = ctx.read_f32(&c, "COLOR_0")?;
+                    if comps < 3 || v.len() != nv * comps {
+                        return Err(ctx.err("COLOR_0 has the wrong size"));
+                    }
+                    colors.extend(v.chunks_exact(comps).map(|c| [c[0], c[1], c[2]]));
+                    any_color = true;
+                }
+                None => colors.extend(std::iter::repeat_n([1.0; 3], nv)),
+            }
+            let idx: Vec<u32> = match prim.indices() {
+                Some(ia) => ctx
+                    .read_f32(&ia, "indices")?
+                    .0
+                    .into_iter()
+                    .map(|v| v as u32)
+                    .collect(),
+                None => (0..nv as u32).collect(),
+            };
+            for t in idx.chunks_exact(3) {
+                if t.iter().any(|&v| v as usize >= nv) {
+                    return Err(ctx.err(format!(
+                        "mesh {}: index out of range ({nv} vertices)",
+                        mesh.index()
+                    )));
+                }
+                tris.push([t[0] + base as u32, t[1] + base as u32, t[2] + base as u32]);
+            }
+            // Skin attributes.
+            match (
+                prim.get(&gltf::Semantic::Joints(0)),
+                prim.get(&gltf::Semantic::Weights(0)),
+            ) {
+                (Some(ja), Some(wa)) if skinned => {
+                    let (j, jc) = ctx.read_f32(&ja, "JOINTS_0")?;
+                    let (w, wc) = ctx.read_f32(&wa, "WEIGHTS_0")?;
+                    if jc != 4 || wc != 4 || j.len() != nv * 4 || w.len() != nv * 4 {
+                        return Err(ctx.err("JOINTS_0/WEIGHTS_0 must be VEC4 with one per vertex"));
+                    }
+                    skin_joints.resize(base, [0; 4]);
+                    skin_weights.resize(base, [0.0; 4]);
+                    skin_joints.extend(
+                        j.chunks_exact(4)
+                            .map(|c| [c[0] as u16, c[1] as u16, c[2] as u16, c[3] as u16]),
+                    );
+                    skin_weights.extend(w.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]));
+                }
+                _ => {}
+            }
+            // Morph targets: from the first node that has them.
+            let ptargets: Vec<_> = prim.morph_targets().collect();
+            if !ptargets.is_empty() && morph_node.is_none_or(|n| n == ni) {
+                morph_node = Some(ni);
+                if targets.is_empty() {
+                    targets = vec![Vec::new(); ptargets.len()];
+                }
+                if targets.len() != ptargets.len() {
+                    return Err(
+                        ctx.err("primitives of one mesh have different morph target counts")
+                    );
+                }
+                for (k, t) in ptargets.iter().enumerate() {
+                    let d = match t.positions() {
+                        Some(a) => ctx.read_vec3(&a, "morph target POSITION")?,
+                        None => vec![[0.0; 3]; nv],
+                    };
+                    if d.len() != nv {
+                        return Err(ctx.err("morph target size differs from its primitive"));
+                    }
+                    targets[k].resize(base, [0.0; 3]);
+                    targets[k].extend(d);
+                }
+            }
+        }
+    }
+    if positions.is_empty() {
+        return Err(ctx.err("no triangle mesh in the scene"));
+    }
+    for t in &mut targets {
+        t.resize(positions.len(), [0.0; 3]);
+    }
+    let mut mesh = Mesh::new(positions, tris).map_err(|e| MeshError::from(e).in_file(path))?;
+    if any_color {
+        mesh = mesh
+            .with_colors(colors)
+            .map_err(|e| MeshError::from(e).in_file(path))?;
+    }
+
+    let skin = match skin_idx.and_then(|i| doc.skins().nth(i)) {
+        None => None,
+        Some(s) => {
+            let joint_nodes: Vec<usize> = s.joints().map(|j| j.index()).collect();
+            let joint_names = s
+                .joints()
+                .map(|j| {
+                    j.name()
+                        .map(str::to_string)
+                        .unwrap_or_else(|| format!("joint_{}", j.index()))
+                })
+                .collect();
+            let parents = joint_nodes
+                .iter()
+                .map(|&n| {
+                    let mut p = parent[n];
+                    while let Some(pi) = p {
+                        if let Some(k) = joint_nodes.iter().position(|&x| x == pi) {
+                            return Some(k as u32);
+                        }
+                        p = parent[pi];
+                    }
+                    None
+                })
+                .collect();
+            let inverse_bind = match s.inverse_bind_matrices() {
+                Some(a) => {
+                    let (v, c) = ctx.read_f32(&a, "inverseBindMatrices")?;
+                    if c != 16 || v.len() != joint_nodes.len() * 16 {
+                        return Err(ctx.err("inverseBindMatrices must be one MAT4 per joint"));
+                    }
+                    v.chunks_exact(16)
+                        .map(|m| {
+                            [
+                                [m[0], m[1], m[2], m[3]],
+                                [m[4], m[5], m[6], m[7]],
+                                [m[8], m[9], m[10], m[11]],
+                                [m[12], m[13], m[14], m[15]],
+                            ]
+                        })
+                        .collect()
+                }
+                None => vec![IDENTITY; joint_nodes.len()],
+            };
+            let nv = mesh.vertex_count();
+            skin_joints.resize(nv, [0; 4]);
+            skin_weights.resize(nv, [0.0; 4]);
+            let mut renorm = 0usize;
+            for (w, j) in skin_weights.iter_mut().zip(&skin_joints) {
+                if j.iter().any(|&k| k as usize >= joint_nodes.len()) {
+                    return Err(ctx.err("JOINTS_0 refers to a joint the skin does not have"));
+                }
+                let s: f32 = w.iter().sum();
+                if (s - 1.0).abs() > 1e-3 {
+                    renorm += 1;
+                    if s > 0.0 {
+                        w.iter_mut().for_each(|x| *x /= s);
+                    }
+                }
+            }
+            if renorm > 0 {
+                problems.push(format!(
+                    "{renorm} vertices had skin weights not summing to 1; normalised"
+                ));
+            }
+            Some(Skin {
+                joint_names,
+                parents,
+                inverse_bind,
+                joints: skin_joints,
+                weights: skin_weights,
+            })
+        }
+    };
+
+    // Animations.
+    let mut animations = Vec::new();
+    let mut weights_animation = None;
+    for a in doc.animations() {
+        let mut dur = 0.0f32;
+        for ch in a.channels() {
+            let input = ch.sampler().input();
+            let (t, _) = ctx.read_f32(&input, "animation input")?;
+            dur = t.iter().copied().fold(dur, f32::max);
+            if weights_animation.is_none()
+                && ch.target().property() == gltf::animation::Property::MorphTargetWeights
+                && Some(ch.target().node().index()) == morph_node
+                && !targets.is_empty()
+            {
+                let (w, _) = ctx.read_f32(&ch.sampler().output(), "animation output")?;
+                let nt = targets.len();
+                let per_key = match ch.sampler().interpolation() {
+                    gltf::animation::Interpolation::CubicSpline => 3 * nt,
+                    _ => nt,
+                };
+                if w.len() != t.len() * per_key {
+                    return Err(ctx.err("morph weights animation output has the wrong size"));
+                }
+                let off = if per_key == 3 * nt { nt } else { 0 };
+                let keys = (0..t.len())
+                    .map(|k| w[k * per_key + off..k * per_key + off + nt].to_vec())
+                    .collect();
+                weights_animation = Some((t, keys));
+            }
+        }
+        animations.push((a.name().unwrap_or("").to_string(), dur));
+    }
+    Ok(GltfAsset {
+        mesh,
+        skin,
+        morph_targets: targets,
+        weights_animation,
+        animations,
+        nodes: nn,
+        problems,
+    })
+}
+
+/// Reads a `.gltf` or `.glb` file.
+pub fn read_gltf(path: &Path) -> Result<GltfAsset, MeshError> {
+    parse_gltf(&crate::fsutil::read_bytes(path)?, path)
+}
+
+impl GltfAsset {
+    /// The asset as a mesh sequence: one frame per key of the morph-weights
+    /// animation (`base + Σ w_k · target_k`), or the single rest frame.
+    pub fn to_sequence(&self) -> Result<MeshSequence, MeshError> {
+        let Some((times, keys)) = &self.weights_animation else {
+            return Ok(MeshSequence::single(self.mesh.clone()));
+        };
+        let base = self.mesh.positions();
+        let mut frames = Vec::with_capacity(keys.len() * base.len());
+        for w in keys {
+            let start = frames.len();
+            frames.extend_from_slice(base);
+            for (k, &wk) in w.iter().enumerate() {
+                if wk != 0.0 {
+                    for (p, d) in frames[start..].iter_mut().zip(&self.morph_targets[k]) {
+                        p[0] += wk * d[0];
+                        p[1] += wk * d[1];
+                        p[2] += wk * d[2];
+                    }
+                }
+            }
+        }
+        let fps = if times.len() > 1 {
+            let dt = (times[times.len() - 1] - times[0]) as f64 / (times.len() - 1) as f64;
+            (dt > 0.0).then(|| 1.0 / dt)
+        } else {
+            None
+        };
+        Ok(MeshSequence::new(self.mesh.clone(), frames, fps)?)
+    }
+}

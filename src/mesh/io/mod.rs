@@ -1,0 +1,215 @@
+//! Mesh and mesh-sequence file formats. In: OBJ, PLY, PC2, MDD, OBJ folders,
+//! glTF/GLB. Out: GLB (morph-target animation), PC2 + OBJ, MDD + OBJ, OBJ,
+//! OBJ folders, PLY. Every write is atomic.
+
+pub mod glb;
+pub mod gltf;
+pub mod mdd;
+pub mod obj;
+pub mod objseq;
+pub mod pc2;
+pub mod ply;
+
+use super::{MeshError, MeshSequence};
+use std::path::{Path, PathBuf};
+
+/// A mesh file format, by extension (or a folder of OBJ files).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Wavefront OBJ.
+    Obj,
+    /// Stanford PLY.
+    Ply,
+    /// Point Cache 2 (needs a topology OBJ).
+    Pc2,
+    /// MDD point cache (needs a topology OBJ).
+    Mdd,
+    /// glTF JSON.
+    Gltf,
+    /// Binary glTF.
+    Glb,
+    /// A folder of OBJ frames.
+    ObjFolder,
+}
+
+impl MeshFormat {
+    /// Format by extension; a path with no extension, or an existing folder, is an OBJ folder.
+    pub fn of(path: &Path) -> Option<MeshFormat> {
+        if path.is_dir() {
+            return Some(MeshFormat::ObjFolder);
+        }
+        let Some(ext) = path.extension() else {
+            return Some(MeshFormat::ObjFolder);
+        };
+        Some(match ext.to_str()?.to_ascii_lowercase().as_str() {
+            "obj" => MeshFormat::Obj,
+            "ply" => MeshFormat::Ply,
+            "pc2" => MeshFormat::Pc2,
+            "mdd" => MeshFormat::Mdd,
+            "gltf" => MeshFormat::Gltf,
+            "glb" => MeshFormat::Glb,
+            _ => return None,
+        })
+    }
+}
+
+/// Splits `PATH:FRAME` (a 0-based frame of a sequence file) into its parts.
+/// A path that exists as given is never split.
+pub fn split_frame_ref(spec: &str) -> (PathBuf, Option<usize>) {
+    if Path::new(spec).exists() {
+        return (PathBuf::from(spec), None);
+    }
+    if let Some((p, f)) = spec.rsplit_once(':')
+        && let Ok(k) = f.parse::<usize>()
+        && !p.is_empty()
+    {
+        return (PathBuf::from(p), Some(k));
+    }
+    (PathBuf::from(spec), None)
+}
+
+/// Options for [`load_sequence`].
+#[derive(Debug, Clone, Default)]
+pub struct LoadOptions {
+    /// Topology for point caches. Default: the `.obj` of the same name beside the cache.
+    pub topology: Option<PathBuf>,
+    /// Frame rate to assume where the file has none.
+    pub fps: Option<f64>,
+}
+
+fn cache_topology(path: &Path, opts: &LoadOptions) -> Result<super::Mesh, MeshError> {
+    let topo = match &opts.topology {
+        Some(t) => t.clone(),
+        None => {
+            let p = path.with_extension("obj");
+            if !p.exists() {
+                return Err(MeshError::invalid(
+                    path,
+                    format!(
+                        "a point cache needs a topology: no {} beside it; give one with --topology",
+                        p.display()
+                    ),
+                ));
+            }
+            p
+        }
+    };
+    match MeshFormat::of(&topo) {
+        Some(MeshFormat::Ply) => ply::read_ply(&topo),
+        _ => obj::read_obj(&topo),
+    }
+}
+
+/// Loads any supported mesh or sequence file as a sequence (a single mesh is
+/// a one-frame sequence). `spec` may name a frame: `samba.pc2:12`.
+pub fn load_sequence(spec: &str, opts: &LoadOptions) -> Result<MeshSequence, MeshError> {
+    let (path, frame) = split_frame_ref(spec);
+    let path = path.as_path();
+    let fmt = MeshFormat::of(path).ok_or_else(|| {
+        MeshError::invalid(
+            path,
+            "unknown mesh format (expected .obj .ply .pc2 .mdd .gltf .glb or a folder)",
+        )
+    })?;
+    let mut seq = match fmt {
+        MeshFormat::Obj => MeshSequence::single(obj::read_obj(path)?),
+        MeshFormat::Ply => MeshSequence::single(ply::read_ply(path)?),
+        MeshFormat::Pc2 | MeshFormat::Mdd => {
+            let cache = if fmt == MeshFormat::Pc2 {
+                pc2::read_pc2(path)?
+            } else {
+                mdd::read_mdd(path)?
+            };
+            let topo = cache_topology(path, opts)?;
+            if topo.vertex_count() != cache.points {
+                return Err(MeshError::invalid(
+                    path,
+                    format!(
+                        "{} points per frame, the topology has {} vertices",
+                        cache.points,
+                        topo.vertex_count()
+                    ),
+                ));
+            }
+            let fps = cache
+                .times
+                .as_ref()
+                .and_then(|t| (t.len() > 1 && t[1] > t[0]).then(|| 1.0 / (t[1] - t[0]) as f64));
+            MeshSequence::new(topo, cache.positions, fps.or(opts.fps))
+                .map_err(|e| MeshError::from(e).in_file(path))?
+        }
+        MeshFormat::Gltf | MeshFormat::Glb => gltf::read_gltf(path)?
+            .to_sequence()
+            .map_err(|e| e.in_file(path))?,
+        MeshFormat::ObjFolder => objseq::read_obj_folder(path)?,
+    };
+    if seq.fps.is_none() {
+        seq.fps = opts.fps;
+    }
+    if let Some(k) = frame {
+        let n = seq.frame_count();
+        seq = seq
+            .select_frame(k)
+            .ok_or_else(|| MeshError::invalid(path, format!("frame {k} out of range (0..{n})")))?;
+    }
+    Ok(seq)
+}
+
+/// Saves a sequence in the format of `out`'s extension. PC2 and MDD get a
+/// topology OBJ of the same name beside them; `.obj` takes one frame; a path
+/// without extension is a folder of OBJ frames. Returns the files written.
+pub fn save_sequence(
+    seq: &MeshSequence,
+    out: &Path,
+    fps: Option<f64>,
+) -> Result<Vec<PathBuf>, MeshError> {
+    let fmt = MeshFormat::of(out).ok_or_else(|| {
+        MeshError::invalid(
+            out,
+            "unknown output format (use .glb .pc2 .mdd .obj .ply or a folder)",
+        )
+    })?;
+    let fps_v = seq.fps.or(fps).unwrap_or(30.0);
+    Ok(match fmt {
+        MeshFormat::Glb => {
+            glb::write_glb(seq, fps, out)?;
+            vec![out.to_path_buf()]
+        }
+        MeshFormat::Gltf => {
+            return Err(MeshError::invalid(
+                out,
+                "writing .gltf is not supported; use .glb",
+            ));
+        }
+        MeshFormat::Pc2 | MeshFormat::Mdd => {
+            let n = seq.mesh().vertex_count();
+            if fmt == MeshFormat::Pc2 {
+                pc2::write_pc2(n, seq.all_positions(), out)?;
+            } else {
+                mdd::write_mdd(n, seq.all_positions(), fps_v, out)?;
+            }
+            let topo = out.with_extension("obj");
+            obj::write_obj(seq.mesh(), None, &topo)?;
+            vec![out.to_path_buf(), topo]
+        }
+        MeshFormat::Obj | MeshFormat::Ply => {
+            if seq.frame_count() != 1 {
+                return Err(MeshError::invalid(
+                    out,
+                    format!(
+                        "{} frames do not fit one {:?} file; write a folder, .pc2, .mdd or .glb",
+                        seq.frame_count(),
+                        fmt
+                    ),
+                ));
+            }
+            if fmt == MeshFormat::Obj {
+                obj::write_obj(seq.mesh(), Some(seq.frame(0)), out)?;
+            } else {
+                ply::write_ply(seq.mesh(), Some(seq.frame(0)), out)?;
+            }
+            vec![out.to_path_buf()]
+        }
+        MeshFormat::ObjFolder => objseq::write_obj_folder(seq, out)?,
+    })
+}

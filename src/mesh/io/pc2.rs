@@ -1,0 +1,150 @@
+//! Point Cache 2 (`.pc2`), as read by Blender's Mesh Cache modifier, Maya and
+//! Houdini: a 32-byte little-endian header (`POINTCACHE2\0`, version 1,
+//! point count, start frame, sample rate, sample count) then f32 xyz per
+//! point per sample.
+
+use crate::mesh::MeshError;
+use std::path::Path;
+
+/// Vertex positions per frame without topology (a PC2 or MDD cache).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointCache {
+    /// Points per frame.
+    pub points: usize,
+    /// Positions, frame-major (`frames × points`).
+    pub positions: Vec<[f32; 3]>,
+    /// First frame number (PC2) or 0.
+    pub start: f32,
+    /// Frames between samples (PC2 sample rate) or 1.
+    pub sample_rate: f32,
+    /// Per-frame times in seconds, where the format stores them (MDD).
+    pub times: Option<Vec<f32>>,
+    /// Non-fatal problems (trailing bytes).
+    pub warnings: Vec<String>,
+}
+
+impl PointCache {
+    /// Number of frames.
+    pub fn frame_count(&self) -> usize {
+        self.positions.len() / self.points.max(1)
+    }
+}
+
+const MAGIC: &[u8; 12] = b"POINTCACHE2\0";
+
+/// Parses PC2 bytes. Header counts are checked against the data length
+/// before anything is allocated.
+pub fn parse_pc2(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
+    if bytes.len() < 32 {
+        return Err(MeshError::invalid(
+            path,
+            format!("{} bytes: too short for a PC2 header (32)", bytes.len()),
+        ));
+    }
+    if &bytes[..12] != MAGIC {
+        return Err(MeshError::invalid(
+            path,
+            "not a PC2 file (no POINTCACHE2 signature)",
+        ));
+    }
+    let i32_at =
+        |o: usize| i32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+    let f32_at =
+        |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+    let version = i32_at(12);
+    let points = i32_at(16);
+    let start = f32_at(20);
+    let rate = f32_at(24);
+    let samples = i32_at(28);
+    if version != 1 {
+        return Err(MeshError::invalid(
+            path,
+            format!("PC2 version {version}, expected 1"),
+        ));
+    }
+    if points <= 0 || samples < 0 {
+        return Err(MeshError::invalid(
+            path,
+            format!("header: {points} points, {samples} samples"),
+        ));
+    }
+    let need = (points as u128) * (samples as u128) * 12;
+    let have = (bytes.len() - 32) as u128;
+    if need > have {
+        return Err(MeshError::invalid(
+            path,
+            format!(
+                "truncated: header claims {samples} frames × {points} points ({need} bytes), file has {have}"
+            ),
+        ));
+    }
+    let mut warnings = Vec::new();
+    if have > need {
+        warnings.push(format!(
+            "{} bytes after the last frame ignored",
+            have - need
+        ));
+    }
+    let data = &bytes[32..32 + need as usize];
+    let positions: Vec<[f32; 3]> = data
+        .chunks_exact(12)
+        .map(|c| {
+            let f = |o: usize| f32::from_le_bytes([c[o], c[o + 1], c[o + 2], c[o + 3]]);
+            [f(0), f(4), f(8)]
+        })
+        .collect();
+    if let Some(k) = positions
+        .iter()
+        .position(|p| !p.iter().all(|v| v.is_finite()))
+    {
+        return Err(MeshError::invalid(
+            path,
+            format!(
+                "non-finite position at frame {}, point {}",
+                k / points as usize,
+                k % points as usize
+            ),
+        ));
+    }
+    Ok(PointCache {
+        points: points as usize,
+        positions,
+        start: if start.is_finite() { start } else { 0.0 },
+        sample_rate: if rate.is_finite() && rate > 0.0 {
+            rate
+        } else {
+            1.0
+        },
+        times: None,
+        warnings,
+    })
+}
+
+/// Reads a PC2 file.
+pub fn read_pc2(path: &Path) -> Result<PointCache, MeshError> {
+    parse_pc2(&crate::fsutil::read_bytes(path)?, path)
+}
+
+/// Encodes positions (`frames × points`, frame-major) as PC2.
+pub fn encode_pc2(points: usize, positions: &[[f32; 3]]) -> Vec<u8> {
+    let frames = positions.len() / points.max(1);
+    let mut out = Vec::with_capacity(32 + positions.len() * 12);
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&1i32.to_le_bytes());
+    out.extend_from_slice(&(points as i32).to_le_bytes());
+    out.extend_from_slice(&0f32.to_le_bytes());
+    out.extend_from_slice(&1f32.to_le_bytes());
+    out.extend_from_slice(&(frames as i32).to_le_bytes());
+    for p in positions {
+        for v in p {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// Writes a PC2 file atomically.
+pub fn write_pc2(points: usize, positions: &[[f32; 3]], path: &Path) -> Result<(), MeshError> {
+    crate::fsutil::write_bytes_atomic(path, &encode_pc2(points, positions))?;
+    Ok(())
+}

@@ -1,0 +1,649 @@
+//! Acclaim ASF (skeleton) and AMC (motion) reader, as used by the CMU
+//! Graphics Lab Motion Capture Database.
+//!
+//! Conventions (Acclaim; the same as CMU's own tools and AMCParser):
+//! - Angles listed in an `axis` order string or a `dof`/`order` list are
+//!   applied in the order listed: `axis a b c XYZ` means `C = Rz(c) Ry(b) Rx(a)`.
+//! - A bone's world rotation is `W_b = W_parent · C_b · M_b · C_b⁻¹` with `M_b`
+//!   the AMC rotation, and its end point is `start + W_b · (length · direction)`.
+//!   A bone starts where its parent ends; root bones start at the root position.
+//! - `:units length L` means file lengths are inches × L (CMU: 0.45, so one
+//!   unit is 1/0.45 inch = 5.644 cm).
+//!
+//! In the [`Clip`] each bone becomes a joint at its start point, with the
+//! parent's bone vector as offset and its own bone vector as `tail`; the clip's
+//! points are the root position and the bone end points.
+
+use super::clip::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
+use super::error::MocapError;
+use super::euler;
+use glam::{DQuat, DVec3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// One bone of an ASF skeleton.
+#[derive(Debug, Clone)]
+pub struct AsfBone {
+    /// Bone name (`root` for the root).
+    pub name: String,
+    /// Unit direction, in the global rest frame.
+    pub direction: DVec3,
+    /// Length in file units.
+    pub length: f64,
+    /// The local frame `C` (from `axis`).
+    pub axis: DQuat,
+    /// Degrees of freedom in AMC value order: 0..3 rotations rx, ry, rz;
+    /// 3..6 translations tx, ty, tz; 6 the length channel `l`.
+    pub dof: Vec<u8>,
+    /// Parent bone index (`None` for the root).
+    pub parent: Option<usize>,
+}
+
+/// A parsed ASF skeleton, bones in depth-first order with the root first.
+#[derive(Debug, Clone)]
+pub struct AsfSkeleton {
+    /// Bones, root first, parents before children.
+    pub bones: Vec<AsfBone>,
+    /// Root position from `:root position`.
+    pub root_position: DVec3,
+    /// Inches per file unit multiplier from `:units length` (1.0 if absent).
+    pub length_scale: f64,
+    /// Whether `:units length` was present.
+    pub length_declared: bool,
+    /// True when angles are in degrees (`:units angle deg`, the default).
+    pub degrees: bool,
+}
+
+fn dof_code(s: &str) -> Option<u8> {
+    Some(match s.to_ascii_lowercase().as_str() {
+        "rx" => 0,
+        "ry" => 1,
+        "rz" => 2,
+        "tx" => 3,
+        "ty" => 4,
+        "tz" => 5,
+        "l" => 6,
+        _ => return None,
+    })
+}
+
+fn order_axes(s: &str) -> Option<Vec<usize>> {
+    let v: Option<Vec<usize>> = s
+        .chars()
+        .map(|c| match c.to_ascii_uppercase() {
+            'X' => Some(0),
+            'Y' => Some(1),
+            'Z' => Some(2),
+            _ => None,
+        })
+        .collect();
+    v.filter(|v| v.len() == 3)
+}
+
+/// Rotation applying the listed axes in order: `R = R_last · ... · R_first`.
+fn applied_in_order(axes: &[usize], radians: &[f64]) -> DQuat {
+    let mut q = DQuat::IDENTITY;
+    for (&a, &r) in axes.iter().zip(radians) {
+        q = euler::axis_rotation(a, r) * q;
+    }
+    q
+}
+
+fn num(tok: &str, path: &Path, line: usize) -> Result<f64, MocapError> {
+    match tok.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(MocapError::parse(
+            path,
+            line,
+            format!("expected a number, found '{tok}'"),
+        )),
+    }
+}
+
+/// Parses ASF text.
+pub fn parse_asf(text: &str, path: &Path) -> Result<AsfSkeleton, MocapError> {
+    #[derive(PartialEq)]
+    enum Sec {
+        None,
+        Units,
+        Root,
+        Bones,
+        Hier,
+        Other,
+    }
+    let mut sec = Sec::None;
+    let mut length_scale = 1.0;
+    let mut length_declared = false;
+    let mut degrees = true;
+    let mut root_axis = DQuat::IDENTITY;
+    let mut root_axis_order = vec![0usize, 1, 2];
+    let mut root_orient = [0.0; 3];
+    let mut root_position = DVec3::ZERO;
+    let mut root_dof: Vec<u8> = vec![3, 4, 5, 0, 1, 2];
+    struct Raw {
+        name: String,
+        dir: DVec3,
+        len: f64,
+        axis: [f64; 3],
+        order: Vec<usize>,
+        dof: Vec<u8>,
+        line: usize,
+    }
+    let mut bones: Vec<Raw> = Vec::new();
+    let mut cur: Option<Raw> = None;
+    let mut edges: Vec<(String, String, usize)> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let l = raw.split('#').next().unwrap_or("").trim();
+        if l.is_empty() {
+            continue;
+        }
+        if let Some(k) = l.strip_prefix(':') {
+            let key = k
+                .split_whitespace()
+                .next()
+                .unwrap_or("")
+                .to_ascii_lowercase();
+            sec = match key.as_str() {
+                "units" => Sec::Units,
+                "root" => Sec::Root,
+                "bonedata" => Sec::Bones,
+                "hierarchy" => Sec::Hier,
+                _ => Sec::Other,
+            };
+            continue;
+        }
+        let toks: Vec<&str> = l.split_whitespace().collect();
+        let key = toks[0].to_ascii_lowercase();
+        match sec {
+            Sec::Units => match key.as_str() {
+                "length" if toks.len() > 1 => {
+                    length_scale = num(toks[1], path, line)?;
+                    if length_scale <= 0.0 {
+                        return Err(MocapError::parse(
+                            path,
+                            line,
+                            "length unit must be positive",
+                        ));
+                    }
+                    length_declared = true;
+                }
+                "angle" if toks.len() > 1 => {
+                    degrees = !toks[1].to_ascii_lowercase().starts_with("rad")
+                }
+                _ => {}
+            },
+            Sec::Root => match key.as_str() {
+                "order" => {
+                    let mut d = Vec::new();
+                    for t in &toks[1..] {
+                        d.push(dof_code(t).ok_or_else(|| {
+                            MocapError::parse(path, line, format!("unknown root channel '{t}'"))
+                        })?);
+                    }
+                    root_dof = d;
+                }
+                "axis" if toks.len() > 1 => {
+                    root_axis_order = order_axes(toks[1]).ok_or_else(|| {
+                        MocapError::parse(path, line, format!("bad axis order '{}'", toks[1]))
+                    })?;
+                }
+                "position" | "orientation" if toks.len() >= 4 => {
+                    let v = [
+                        num(toks[1], path, line)?,
+                        num(toks[2], path, line)?,
+                        num(toks[3], path, line)?,
+                    ];
+                    if key == "position" {
+                        root_position = DVec3::from(v);
+                    } else {
+                        root_orient = v;
+                    }
+                }
+                _ => {
+                    return Err(MocapError::parse(
+                        path,
+                        line,
+                        format!("unexpected '{l}' in :root"),
+                    ));
+                }
+            },
+            Sec::Bones => match key.as_str() {
+                "begin" => {
+                    if cur.is_some() {
+                        return Err(MocapError::parse(path, line, "'begin' inside a bone"));
+                    }
+                    cur = Some(Raw {
+                        name: String::new(),
+                        dir: DVec3::ZERO,
+                        len: 0.0,
+                        axis: [0.0; 3],
+                        order: vec![0, 1, 2],
+                        dof: Vec::new(),
+                        line,
+                    });
+                }
+                "end" => {
+                    let b = cur
+                        .take()
+                        .ok_or_else(|| MocapError::parse(path, line, "'end' without 'begin'"))?;
+                    if b.name.is_empty() {
+                        return Err(MocapError::parse(path, b.line, "bone without a name"));
+                    }
+                    if bones.len() > 100_000 {
+                        return Err(MocapError::parse(path, line, "too many bones"));
+                    }
+                    bones.push(b);
+                }
+                _ => {
+                    let Some(b) = cur.as_mut() else {
+                        return Err(MocapError::parse(
+                            path,
+                            line,
+                            format!("'{}' outside begin/end", toks[0]),
+                        ));
+                    };
+                    match key.as_str() {
+                        "name" if toks.len() > 1 => b.name = toks[1].to_string(),
+                        "direction" if toks.len() >= 4 => {
+                            b.dir = DVec3::new(
+                                num(toks[1], path, line)?,
+                                num(toks[2], path, line)?,
+                                num(toks[3], path, line)?,
+                            )
+                        }
+                        "length" if toks.len() > 1 => b.len = num(toks[1], path, line)?,
+                        "axis" if toks.len() >= 4 => {
+                            b.axis = [
+                                num(toks[1], path, line)?,
+                                num(toks[2], path, line)?,
+                                num(toks[3], path, line)?,
+                            ];
+                            if let Some(o) = toks.get(4) {
+                                b.order = order_axes(o).ok_or_else(|| {
+                                    MocapError::parse(path, line, format!("bad axis order '{o}'"))
+                                })?;
+                            }
+                        }
+                        "dof" => {
+                            for t in &toks[1..] {
+                                b.dof.push(dof_code(t).ok_or_else(|| {
+                                    MocapError::parse(path, line, format!("unknown dof '{t}'"))
+                                })?);
+                            }
+                        }
+                        "id" | "limits" | "bodymass" | "cofmass" => {}
+                        _ if key.starts_with('(') => {}
+                        _ => {}
+                    }
+                }
+            },
+            Sec::Hier => match key.as_str() {
+                "begin" | "end" => {}
+                _ => {
+                    for c in &toks[1..] {
+                        edges.push((toks[0].to_string(), c.to_string(), line));
+                    }
+                }
+            },
+            Sec::None | Sec::Other => {}
+        }
+    }
+    if cur.is_some() {
+        return Err(MocapError::invalid(
+            path,
+            "file ends inside a bone's begin/end",
+        ));
+    }
+    // Build the tree from the root.
+    let mut index: HashMap<&str, usize> = HashMap::new();
+    for (i, b) in bones.iter().enumerate() {
+        if b.name.eq_ignore_ascii_case("root") {
+            return Err(MocapError::parse(
+                path,
+                b.line,
+                "a bone may not be called 'root'",
+            ));
+        }
+        if index.insert(b.name.as_str(), i).is_some() {
+            return Err(MocapError::parse(
+                path,
+                b.line,
+                format!("duplicate bone '{}'", b.name),
+            ));
+        }
+    }
+    let mut children: HashMap<&str, Vec<usize>> = HashMap::new();
+    let mut has_parent = vec![false; bones.len()];
+    for (p, c, line) in &edges {
+        let ci = *index.get(c.as_str()).ok_or_else(|| {
+            MocapError::parse(path, *line, format!("hierarchy names unknown bone '{c}'"))
+        })?;
+        if p != "root" && !index.contains_key(p.as_str()) {
+            return Err(MocapError::parse(
+                path,
+                *line,
+                format!("hierarchy names unknown bone '{p}'"),
+            ));
+        }
+        if has_parent[ci] {
+            return Err(MocapError::parse(
+                path,
+                *line,
+                format!("bone '{c}' has two parents"),
+            ));
+        }
+        has_parent[ci] = true;
+        children.entry(p.as_str()).or_default().push(ci);
+    }
+    let deg = |v: f64| if degrees { v.to_radians() } else { v };
+    let root = AsfBone {
+        name: "root".into(),
+        direction: DVec3::ZERO,
+        length: 0.0,
+        axis: applied_in_order(&root_axis_order, &root_orient.map(deg)),
+        dof: root_dof,
+        parent: None,
+    };
+    let _ = &mut root_axis;
+    let mut out = vec![root];
+    let mut stack: Vec<(&str, usize)> = vec![("root", 0)];
+    while let Some((name, out_idx)) = stack.pop() {
+        if let Some(ch) = children.get(name) {
+            // Reverse so the first listed child is visited first.
+            for &ci in ch.iter().rev() {
+                let b = &bones[ci];
+                let dir = if b.dir.length_squared() > 0.0 {
+                    b.dir.normalize()
+                } else {
+                    DVec3::ZERO
+                };
+                out.push(AsfBone {
+                    name: b.name.clone(),
+                    direction: dir,
+                    length: b.len,
+                    axis: applied_in_order(&b.order, &b.axis.map(deg)),
+                    dof: b.dof.clone(),
+                    parent: Some(out_idx),
+                });
+                stack.push((b.name.as_str(), out.len() - 1));
+            }
+        }
+    }
+    // The pop order above is depth-first but children were pushed after their
+    // parent was emitted, so parents precede children. Check everything was reached.
+    if out.len() != bones.len() + 1 {
+        let missing: Vec<&str> = bones
+            .iter()
+            .filter(|b| !out.iter().any(|o| o.name == b.name))
+            .map(|b| b.name.as_str())
+            .collect();
+        return Err(MocapError::invalid(
+            path,
+            format!(
+                "bones not connected to the root in :hierarchy: {}",
+                missing.join(", ")
+            ),
+        ));
+    }
+    Ok(AsfSkeleton {
+        bones: out,
+        root_position,
+        length_scale,
+        length_declared,
+        degrees,
+    })
+}
+
+/// Reads an ASF file.
+pub fn read_asf(path: &Path) -> Result<AsfSkeleton, MocapError> {
+    parse_asf(&crate::fsutil::read_text(path)?, path)
+}
+
+impl AsfSkeleton {
+    fn units(&self) -> Units {
+        let inch = 0.0254;
+        if self.length_declared {
+            Units {
+                metres_per_unit: inch / self.length_scale,
+                name: format!("1/{} inch", self.length_scale),
+                reason: format!(
+                    "ASF ':units length {}' (Acclaim: inches × {})",
+                    self.length_scale, self.length_scale
+                ),
+            }
+        } else {
+            Units {
+                metres_per_unit: inch,
+                name: "inch".into(),
+                reason: "ASF has no ':units length'; assumed inches".into(),
+            }
+        }
+    }
+
+    /// Builds a clip from per-frame bone values (`values[frame][bone]` in dof
+    /// order, angles already in radians).
+    fn to_clip(
+        &self,
+        frames: &[Vec<Vec<f64>>],
+        frame_time: f64,
+        path: &Path,
+    ) -> Result<Clip, MocapError> {
+        let n = self.bones.len();
+        let joints: Vec<Joint> = self
+            .bones
+            .iter()
+            .map(|b| {
+                let offset = match b.parent {
+                    None => self.root_position,
+                    Some(p) => self.bones[p].direction * self.bones[p].length,
+                };
+                let channels = if b.parent.is_none() {
+                    vec![
+                        Channel::Xposition,
+                        Channel::Yposition,
+                        Channel::Zposition,
+                        Channel::Zrotation,
+                        Channel::Yrotation,
+                        Channel::Xrotation,
+                    ]
+                } else {
+                    vec![Channel::Zrotation, Channel::Yrotation, Channel::Xrotation]
+                };
+                Joint {
+                    name: b.name.clone(),
+                    parent: b.parent.map(|p| JointId(p as u32)),
+                    offset,
+                    channels,
+                    tail: Some(b.direction * b.length),
+                }
+            })
+            .collect();
+        let mut rotations = Vec::with_capacity(frames.len() * n);
+        let mut translations = Vec::with_capacity(frames.len() * n);
+        for f in frames {
+            for (bi, b) in self.bones.iter().enumerate() {
+                let vals = &f[bi];
+                let mut axes = Vec::with_capacity(3);
+                let mut angles = Vec::with_capacity(3);
+                let mut t = joints[bi].offset;
+                for (&d, &v) in b.dof.iter().zip(vals) {
+                    match d {
+                        0..=2 => {
+                            axes.push(d as usize);
+                            angles.push(v);
+                        }
+                        3..=5 => {
+                            t[(d - 3) as usize] = if b.parent.is_none() {
+                                v
+                            } else {
+                                t[(d - 3) as usize] + v
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                let m = applied_in_order(&axes, &angles);
+                rotations.push((b.axis * m * b.axis.inverse()).normalize());
+                translations.push(t);
+            }
+        }
+        let mut clip = Clip::new(
+            joints,
+            frame_time,
+            rotations,
+            translations,
+            self.units(),
+            UpAxis::Y,
+            PointConvention::BoneEnds,
+        )
+        .map_err(|e| MocapError::invalid(path, e.to_string()))?;
+        clip.up_reason = "ASF is Y-up".into();
+        Ok(clip)
+    }
+
+    /// The skeleton in its rest pose, as a one-frame clip.
+    pub fn rest_clip(&self, path: &Path) -> Result<Clip, MocapError> {
+        let zero: Vec<Vec<f64>> = self.bones.iter().map(|b| vec![0.0; b.dof.len()]).collect();
+        let mut frame = zero;
+        frame[0] = self.bones[0]
+            .dof
+            .iter()
+            .map(|&d| {
+                if (3..6).contains(&d) {
+                    self.root_position[(d - 3) as usize]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        self.to_clip(&[frame], 1.0 / 120.0, path)
+    }
+}
+
+/// Options for AMC reading.
+#[derive(Debug, Clone, Default)]
+pub struct AmcOptions {
+    /// Frames per second (AMC files do not store it). Default: 120, CMU's rate.
+    pub fps: Option<f64>,
+}
+
+/// Parses AMC text against a skeleton.
+pub fn parse_amc(
+    text: &str,
+    path: &Path,
+    skel: &AsfSkeleton,
+    opts: &AmcOptions,
+) -> Result<Clip, MocapError> {
+    let index: HashMap<&str, usize> = skel
+        .bones
+        .iter()
+        .enumerate()
+        .map(|(i, b)| (b.name.as_str(), i))
+        .collect();
+    let mut degrees = skel.degrees;
+    let mut frames: Vec<Vec<Vec<f64>>> = Vec::new();
+    let mut cur: Option<Vec<Vec<f64>>> = None;
+    let mut seen: Vec<bool> = vec![false; skel.bones.len()];
+    let mut warnings = Vec::new();
+    let mut missing_warned = false;
+    let empty_frame: Vec<Vec<f64>> = skel.bones.iter().map(|b| vec![0.0; b.dof.len()]).collect();
+    let mut finish =
+        |cur: &mut Option<Vec<Vec<f64>>>, seen: &mut Vec<bool>, frames: &mut Vec<Vec<Vec<f64>>>| {
+            if let Some(f) = cur.take() {
+                if !missing_warned && seen.iter().any(|s| !s) {
+                    let names: Vec<&str> = skel
+                        .bones
+                        .iter()
+                        .zip(seen.iter())
+                        .filter(|(b, s)| !**s && !b.dof.is_empty())
+                        .map(|(b, _)| b.name.as_str())
+                        .collect();
+                    if !names.is_empty() {
+                        warnings.push(format!(
+                            "frame {} has no values for {}; zero used",
+                            frames.len() + 1,
+                            names.join(", ")
+                        ));
+                        missing_warned = true;
+                    }
+                }
+                frames.push(f);
+                seen.iter_mut().for_each(|s| *s = false);
+            }
+        };
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let l = raw.split('#').next().unwrap_or("").trim();
+        if l.is_empty() {
+            continue;
+        }
+        if let Some(k) = l.strip_prefix(':') {
+            let k = k.trim().to_ascii_uppercase();
+            if k.starts_with("RADIANS") {
+                degrees = false;
+            } else if k.starts_with("DEGREES") {
+                degrees = true;
+            }
+            continue;
+        }
+        let toks: Vec<&str> = l.split_whitespace().collect();
+        if toks.len() == 1 && toks[0].bytes().all(|b| b.is_ascii_digit()) {
+            finish(&mut cur, &mut seen, &mut frames);
+            cur = Some(empty_frame.clone());
+            continue;
+        }
+        let Some(f) = cur.as_mut() else {
+            return Err(MocapError::parse(
+                path,
+                line,
+                format!("'{}' before the first frame number", toks[0]),
+            ));
+        };
+        let bi = *index.get(toks[0]).ok_or_else(|| {
+            MocapError::parse(path, line, format!("bone '{}' is not in the ASF", toks[0]))
+        })?;
+        let dof = &skel.bones[bi].dof;
+        if toks.len() - 1 != dof.len() {
+            return Err(MocapError::parse(
+                path,
+                line,
+                format!(
+                    "bone '{}' has {} values, its ASF dof lists {}",
+                    toks[0],
+                    toks.len() - 1,
+                    dof.len()
+                ),
+            ));
+        }
+        for (k, (&d, t)) in dof.iter().zip(&toks[1..]).enumerate() {
+            let v = num(t, path, line)?;
+            f[bi][k] = if d < 3 && degrees { v.to_radians() } else { v };
+        }
+        seen[bi] = true;
+    }
+    finish(&mut cur, &mut seen, &mut frames);
+    if frames.is_empty() {
+        return Err(MocapError::invalid(path, "no frames"));
+    }
+    let fps = opts.fps.unwrap_or(120.0);
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(MocapError::invalid(
+            path,
+            format!("fps {fps} is not a positive number"),
+        ));
+    }
+    let mut clip = skel.to_clip(&frames, 1.0 / fps, path)?;
+    if opts.fps.is_none() {
+        warnings
+            .push("AMC stores no frame rate; assumed 120 fps (CMU); override with --fps".into());
+    }
+    clip.warnings = warnings;
+    Ok(clip)
+}
+
+/// Reads an AMC file with its ASF.
+pub fn read_amc(amc: &Path, asf: &Path, opts: &AmcOptions) -> Result<Clip, MocapError> {
+    let skel = read_asf(asf)?;
+    parse_amc(&crate::fsutil::read_text(amc)?, amc, &skel, opts)
+}

@@ -1,0 +1,16 @@
+//! Skeletal motion capture: the [`Clip`], its readers (BVH, ASF/AMC), BVH
+//! writer, forward kinematics, resampling and unit/up-axis normalisation.
+
+pub mod asfamc;
+pub mod bvh;
+mod clip;
+mod error;
+pub mod euler;
+mod fk;
+mod load;
+mod resample;
+pub mod units;
+
+pub use clip::{Channel, Clip, ClipError, Joint, JointId, PointConvention, Units, UpAxis};
+pub use error::MocapError;
+pub use load::{LoadOptions, MocapFormat, find_asf, load_clip};

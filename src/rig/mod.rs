@@ -1,0 +1,7 @@
+//! The canonical skeleton and the mapping of rig conventions onto it.
+
+mod canonical;
+mod map;
+
+pub use canonical::Canonical;
+pub use map::{CONVENTIONS, Convention, Detection, RigError, RigMap, detect, normalise_name};

@@ -1,0 +1,51 @@
+//! Shared helpers for integration tests: locating ../shared/data.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// The shared data folder (`$SURFMOTION_DATA` or `../shared/data`). When it is
+/// absent the test is skipped with a message, except under `CI=true`, where
+/// the absence is a failure.
+pub fn data_dir() -> Option<PathBuf> {
+    let p = match std::env::var_os("SURFMOTION_DATA") {
+        Some(p) => PathBuf::from(p),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
+    };
+    if p.join("README.md").exists() {
+        return Some(p);
+    }
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        panic!(
+            "shared data not found at {} (CI=true: tests on real data must run)",
+            p.display()
+        );
+    }
+    eprintln!(
+        "SKIPPED: shared data not found at {}; set SURFMOTION_DATA",
+        p.display()
+    );
+    None
+}
+
+/// Every file under `dir` with extension `ext`, sorted.
+pub fn files_with_ext(dir: &std::path::Path, ext: &str) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x.eq_ignore_ascii_case(ext)) {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Path of the built binary.
+pub fn bin() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_surfmotion"))
+}
