@@ -77,6 +77,18 @@ pub fn write_atomic(
         buf.flush().map_err(wrap)?;
     }
     tmp.as_file().sync_all().map_err(wrap)?;
+    // Temporary files are created private (0600); give the output the
+    // permissions of the file it replaces, or the usual 0644.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(path)
+            .map(|m| m.permissions().mode())
+            .unwrap_or(0o644);
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(mode))
+            .map_err(wrap)?;
+    }
     tmp.persist(path).map_err(|e| wrap(e.error))?;
     Ok(())
 }

@@ -257,7 +257,10 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
         if !el.props.is_empty() && el.count > body.left() / el.props.len() {
             return Err(MeshError::invalid(
                 path,
-                format!("element '{}' claims {} items, more than the data holds", el.name, el.count),
+                format!(
+                    "element '{}' claims {} items, more than the data holds",
+                    el.name, el.count
+                ),
             ));
         }
         if el.props.is_empty() {

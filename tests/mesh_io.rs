@@ -1,0 +1,271 @@
+//! Mesh readers on real data, and every writer round-tripped through its reader.
+
+mod common;
+
+use std::path::Path;
+use surfmotion::mesh::io::{LoadOptions, glb, load_sequence, obj, objseq, pc2, save_sequence};
+use surfmotion::mesh::{Mesh, MeshSequence};
+
+fn samba(d: &Path, frames: usize) -> MeshSequence {
+    let s = load_sequence(
+        d.join("4d/samba/samba.pc2").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let n = s.mesh().vertex_count();
+    MeshSequence::new(
+        s.mesh().clone(),
+        s.all_positions()[..frames * n].to_vec(),
+        Some(30.0),
+    )
+    .unwrap()
+}
+
+fn max_diff(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f32::max))
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn samba_cache_obj_frames_and_topology_agree() {
+    let Some(d) = common::data_dir() else { return };
+    let seq = load_sequence(
+        d.join("4d/samba/samba.pc2").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(seq.frame_count(), 175);
+    assert_eq!(seq.mesh().vertex_count(), 9971);
+    assert_eq!(seq.mesh().triangle_count(), 19938);
+    assert!(
+        seq.mesh().problems().is_empty(),
+        "{:?}",
+        seq.mesh().problems()
+    );
+    let folder = load_sequence(
+        d.join("4d/samba/frames").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(folder.frame_count(), 20);
+    assert_eq!(folder.mesh().triangles(), seq.mesh().triangles());
+    for f in 0..20 {
+        assert!(max_diff(folder.frame(f), seq.frame(f)) < 1e-5, "frame {f}");
+    }
+    // PATH:FRAME picks one frame.
+    let one = load_sequence(
+        &format!("{}:12", d.join("4d/samba/samba.pc2").display()),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(one.frame_count(), 1);
+    assert_eq!(one.frame(0), seq.frame(12));
+    let crane = load_sequence(
+        d.join("4d/crane/crane.pc2").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(
+        (crane.mesh().vertex_count(), crane.frame_count()),
+        (10002, 175)
+    );
+}
+
+#[test]
+fn every_writer_round_trips_through_its_reader() {
+    let Some(d) = common::data_dir() else { return };
+    let seq = samba(&d, 8);
+    let diag = seq.bounds().diagonal();
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["s.glb", "s.pc2", "s.mdd", "folder"] {
+        let out = dir.path().join(name);
+        let files = save_sequence(&seq, &out, Some(30.0)).unwrap();
+        assert!(!files.is_empty());
+        let back = load_sequence(out.to_str().unwrap(), &LoadOptions::default()).unwrap();
+        assert_eq!(back.frame_count(), 8, "{name}");
+        assert_eq!(back.mesh().triangles(), seq.mesh().triangles(), "{name}");
+        let tol = if name.ends_with("glb") {
+            1e-6 * diag
+        } else {
+            0.0
+        };
+        let e = max_diff(back.all_positions(), seq.all_positions());
+        assert!(e <= tol, "{name}: max error {e}");
+        assert!(
+            (back.fps.unwrap_or(30.0) - 30.0).abs() < 1e-3,
+            "{name}: fps {:?}",
+            back.fps
+        );
+    }
+    for name in ["one.obj", "one.ply"] {
+        let single = seq.select_frame(3).unwrap();
+        let out = dir.path().join(name);
+        save_sequence(&single, &out, None).unwrap();
+        let back = load_sequence(out.to_str().unwrap(), &LoadOptions::default()).unwrap();
+        assert_eq!(back.frame(0), single.frame(0), "{name}");
+        assert_eq!(back.mesh().triangles(), single.mesh().triangles(), "{name}");
+    }
+    // A multi-frame sequence does not fit one OBJ: a clear error, no file.
+    assert!(save_sequence(&seq, &dir.path().join("many.obj"), None).is_err());
+    assert!(!dir.path().join("many.obj").exists());
+}
+
+#[test]
+fn obj_groups_colours_and_polygons() {
+    let text = "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\nv 0 1 0 1 1 1\ng quad\nf 1/1/1 2/2/2 3/3/3 4/4/4\ng tri\nf -4 -3 -1\n";
+    let m = obj::parse_obj(text, Path::new("t.obj")).unwrap();
+    assert_eq!(m.triangle_count(), 3);
+    assert_eq!(m.groups().len(), 2);
+    assert_eq!(
+        (
+            m.groups()[0].end - m.groups()[0].start,
+            m.groups()[1].name.as_str()
+        ),
+        (2, "tri")
+    );
+    assert_eq!(m.colors().unwrap()[2], [0.0, 0.0, 1.0]);
+    let back = obj::parse_obj(&obj::format_obj(&m, None), Path::new("w.obj")).unwrap();
+    assert_eq!(back, m);
+    let e = obj::parse_obj("v 0 0 0\nv 1 0 0\nf 1 2 3\n", Path::new("bad.obj"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("bad.obj:3:"), "{e}");
+}
+
+#[test]
+fn ply_ascii_and_big_endian() {
+    let ascii = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 255 0 0\n1 0 0 0 255 0\n1 1 0 0 0 255\n0 1 0 0 0 0\n4 0 1 2 3\n";
+    let m = surfmotion::mesh::io::ply::parse_ply(ascii.as_bytes(), Path::new("a.ply")).unwrap();
+    assert_eq!((m.vertex_count(), m.triangle_count()), (4, 2));
+    assert_eq!(m.colors().unwrap()[1], [0.0, 1.0, 0.0]);
+    let mut be = b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n".to_vec();
+    for v in [[0.0f64, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 3.0, 0.0]] {
+        for c in v {
+            be.extend_from_slice(&c.to_be_bytes());
+        }
+    }
+    be.push(3);
+    for i in [0u32, 1, 2] {
+        be.extend_from_slice(&i.to_be_bytes());
+    }
+    let m = surfmotion::mesh::io::ply::parse_ply(&be, Path::new("b.ply")).unwrap();
+    assert_eq!(m.positions()[2], [0.0, 3.0, 0.0]);
+}
+
+#[test]
+fn obj_folder_names_the_frame_that_breaks_connectivity() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = Mesh::new(
+        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
+        vec![[0, 1, 2], [1, 3, 2]],
+    )
+    .unwrap();
+    for k in 0..3 {
+        obj::write_obj(&m, None, &dir.path().join(format!("f_{k}.obj"))).unwrap();
+    }
+    let other = Mesh::new(m.positions().to_vec(), vec![[0, 1, 2], [1, 2, 3]]).unwrap();
+    obj::write_obj(&other, None, &dir.path().join("f_10.obj")).unwrap();
+    let e = objseq::read_obj_folder(dir.path()).unwrap_err().to_string();
+    assert!(e.contains("f_10.obj") && e.contains("triangle 1"), "{e}");
+    // Natural order: f_2 before f_10.
+    let files = objseq::list_obj_frames(dir.path()).unwrap();
+    assert!(files[3].ends_with("f_10.obj"));
+}
+
+#[test]
+fn pc2_header_lies_are_errors_not_allocations() {
+    let mut b = pc2::encode_pc2(3, &[[0.0; 3]; 6]);
+    b[16..20].copy_from_slice(&(i32::MAX).to_le_bytes());
+    let e = pc2::parse_pc2(&b, Path::new("x.pc2"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("truncated"), "{e}");
+}
+
+#[test]
+fn gltf_samples_read_with_skins() {
+    let Some(d) = common::data_dir() else { return };
+    for (f, joints, verts) in [
+        ("gltf/Fox/Fox.glb", 24, 1728),
+        ("gltf/CesiumMan/CesiumMan.glb", 19, 3273),
+        ("gltf/RiggedFigure/RiggedFigure.glb", 19, 370),
+        ("gltf/RiggedSimple/RiggedSimple.glb", 2, 96),
+    ] {
+        let a = surfmotion::mesh::io::gltf::read_gltf(&d.join(f)).unwrap();
+        let s = a.skin.as_ref().unwrap();
+        assert_eq!(
+            (s.joint_names.len(), a.mesh.vertex_count()),
+            (joints, verts),
+            "{f}"
+        );
+        assert_eq!(
+            s.parents.iter().filter(|p| p.is_none()).count(),
+            1,
+            "{f}: one top joint"
+        );
+        for w in &s.weights {
+            let sum: f32 = w.iter().sum();
+            assert!(
+                (sum - 1.0).abs() < 1e-3 || sum == 0.0,
+                "{f}: weights sum {sum}"
+            );
+        }
+        assert!(!a.animations.is_empty());
+    }
+}
+
+/// Runs the Khronos glTF-Validator (installed by .ci/run from npm) on GLBs we
+/// write. Required under CI=true; skipped with a message elsewhere if absent.
+#[test]
+fn written_glb_passes_the_khronos_validator() {
+    let Some(d) = common::data_dir() else { return };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let script = root.join(".ci/validate-gltf.mjs");
+    let have = root.join(".ci/node_modules/gltf-validator").exists()
+        && std::process::Command::new("node")
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success());
+    if !have {
+        assert!(
+            !std::env::var("CI").is_ok_and(|v| v == "true"),
+            "CI=true but gltf-validator is not installed (.ci/run installs it)"
+        );
+        eprintln!("SKIPPED: run `npm install --prefix .ci` to validate GLB output");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let seq = samba(&d, 12);
+    let a = dir.path().join("anim.glb");
+    glb::write_glb(&seq, Some(30.0), &a).unwrap();
+    let b = dir.path().join("static.glb");
+    glb::write_glb(&seq.select_frame(0).unwrap(), None, &b).unwrap();
+    // A coloured mesh too.
+    let m = Mesh::new(
+        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        vec![[0, 1, 2]],
+    )
+    .unwrap()
+    .with_colors(vec![[1.0, 0.0, 0.0]; 3])
+    .unwrap();
+    let c = dir.path().join("colour.glb");
+    glb::write_glb(&MeshSequence::single(m), None, &c).unwrap();
+    let out = std::process::Command::new("node")
+        .arg(&script)
+        .args([&a, &b, &c])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "validator reported errors:\n{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for line in text.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        assert_eq!(v["errors"], 0, "{line}");
+    }
+}
