@@ -278,10 +278,53 @@ const IDENTITY: Mat4 = [
     [0.0, 0.0, 0.0, 1.0],
 ];
 
+/// Rejects enum-valued fields the `gltf` crate would unwrap (and panic on)
+/// when they hold an unknown value: its validation lets some through (an
+/// animation target `path` of `"weigh9s"` panics in `Target::property`).
+fn check_enums(root: &gltf::json::Root, path: &Path) -> Result<(), MeshError> {
+    use gltf::json::validation::Checked;
+    let bad = |what: String| Err(MeshError::invalid(path, format!("glTF: invalid {what}")));
+    for (i, a) in root.accessors.iter().enumerate() {
+        if matches!(a.component_type, Checked::Invalid) || matches!(a.type_, Checked::Invalid) {
+            return bad(format!("componentType or type of accessor {i}"));
+        }
+        if let Some(sp) = &a.sparse
+            && matches!(sp.indices.component_type, Checked::Invalid)
+        {
+            return bad(format!("sparse index type of accessor {i}"));
+        }
+    }
+    for (i, a) in root.animations.iter().enumerate() {
+        if a.channels
+            .iter()
+            .any(|c| matches!(c.target.path, Checked::Invalid))
+        {
+            return bad(format!("channel target path in animation {i}"));
+        }
+        if a.samplers
+            .iter()
+            .any(|s| matches!(s.interpolation, Checked::Invalid))
+        {
+            return bad(format!("sampler interpolation in animation {i}"));
+        }
+    }
+    for (i, m) in root.meshes.iter().enumerate() {
+        for p in &m.primitives {
+            if matches!(p.mode, Checked::Invalid)
+                || p.attributes.keys().any(|k| matches!(k, Checked::Invalid))
+            {
+                return bad(format!("primitive mode or attribute name in mesh {i}"));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Parses glTF or GLB bytes. `path` locates external buffers and names errors.
 pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
     let g = gltf::Gltf::from_slice(bytes)
         .map_err(|e| MeshError::invalid(path, format!("glTF: {e}")))?;
+    check_enums(g.document.as_json(), path)?;
     let doc = g.document;
     let ctx = Ctx {
         path,

@@ -1,0 +1,10 @@
+//! Fuzz target: the bvh reader must never panic and never allocate beyond its input.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use std::path::Path;
+
+fuzz_target!(|data: &[u8]| {
+    let t = String::from_utf8_lossy(data);
+    let _ = surfmotion::mocap::bvh::parse_bvh(&t, Path::new("fuzz.bvh"), &Default::default());
+});
