@@ -635,8 +635,9 @@ pub fn parse_amc(
     }
     let mut clip = skel.to_clip(&frames, 1.0 / fps, path)?;
     if opts.fps.is_none() {
-        warnings
-            .push("AMC stores no frame rate; assumed 120 fps (CMU); override with --fps".into());
+        warnings.push(
+            "AMC stores no frame rate; assumed 120 fps (CMU); override with --input-fps".into(),
+        );
     }
     clip.warnings = warnings;
     Ok(clip)

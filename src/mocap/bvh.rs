@@ -128,8 +128,10 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
     let motion_line;
     loop {
         let Some((tok, line)) = t.next() else {
-            return Err(MocapError::invalid(
+            let last = text.lines().count();
+            return Err(MocapError::parse(
                 path,
+                last,
                 "file ends inside HIERARCHY (no MOTION section)",
             ));
         };

@@ -1,0 +1,245 @@
+//! The binary as a user runs it: real files, bad files, exit codes.
+
+mod common;
+
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(common::bin()).args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn mocap_positions_json_matches_the_reference_from_outside() {
+    let Some(d) = common::data_dir() else { return };
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("reference/bvh_fk.json")).unwrap())
+            .unwrap();
+    let rel = "mocap/cmu-bvh/131_02.bvh";
+    let c = &r["clips"][rel];
+    let frames: Vec<String> = c["positions"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .cloned()
+        .collect();
+    let clip = d.join(rel);
+    let o = run(&[
+        "mocap",
+        "positions",
+        clip.to_str().unwrap(),
+        "--frames",
+        &frames.join(","),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["joints"], c["joint_names"]);
+    for f in &frames {
+        let ours = v["frames"][f].as_array().unwrap();
+        let theirs = c["positions"][f].as_array().unwrap();
+        for (a, b) in ours.iter().zip(theirs) {
+            for k in 0..3 {
+                assert!((a[k].as_f64().unwrap() - b[k].as_f64().unwrap()).abs() < 1e-3);
+            }
+        }
+    }
+    // AMC: ASF bone names with root, bone end points.
+    let amc = d.join("mocap/cmu-amc/02/02_03.amc");
+    let o = run(&[
+        "mocap",
+        "positions",
+        amc.to_str().unwrap(),
+        "--frames",
+        "0",
+        "--json",
+        "--units",
+        "metres",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["joints"][0], "root");
+    // In metres the root of a standing adult is about 1 m up.
+    let y = v["frames"]["0"][0][1].as_f64().unwrap();
+    assert!((0.7..1.3).contains(&y), "root height {y} m");
+}
+
+#[test]
+fn inspect_reports_units_convention_and_problems() {
+    let Some(d) = common::data_dir() else { return };
+    let cases = [
+        ("mocap/cmu-bvh-ccrig/005_01.bvh", "Reallusion CC_Base", 0.01),
+        (
+            "mocap/bandai-namco/dataset-1_walk_normal_001.bvh",
+            "Bandai Namco Research Motion",
+            0.01,
+        ),
+        (
+            "mocap/cmu-bvh/131_03.bvh",
+            "CMU BVH (3dsMax-friendly)",
+            0.0254 / 0.45,
+        ),
+        (
+            "mocap/cmu-bvh/01_01.bvh",
+            "CMU cgspeed BVH (MotionBuilder-friendly)",
+            0.0254 / 0.45,
+        ),
+        ("mocap/cmu-amc/03/03_01.amc", "CMU ASF/AMC", 0.0254 / 0.45),
+    ];
+    for (rel, conv, unit) in cases {
+        let o = run(&["inspect", d.join(rel).to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "{rel}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["kind"], "mocap");
+        assert_eq!(v["convention"], conv, "{rel}");
+        assert!(
+            v["unmapped_canonical"].as_array().unwrap().is_empty(),
+            "{rel}: {}",
+            v["unmapped_canonical"]
+        );
+        assert!(
+            (v["units"]["metres_per_unit"].as_f64().unwrap() - unit).abs() < 1e-9,
+            "{rel}: {}",
+            v["units"]
+        );
+        assert_eq!(v["up"], "Y", "{rel}");
+    }
+    let o = run(&[
+        "inspect",
+        d.join("4d/crane/crane.pc2").to_str().unwrap(),
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        (v["vertices"].as_u64(), v["frames"].as_u64()),
+        (Some(10002), Some(175))
+    );
+    let o = run(&["inspect", d.join("gltf/Fox/Fox.glb").to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("24 joints"));
+}
+
+#[test]
+fn bad_input_is_one_clear_line_and_exit_1() {
+    let Some(d) = common::data_dir() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    // Truncated in the hierarchy.
+    let text = std::fs::read_to_string(d.join("mocap/cmu-bvh/01_01.bvh")).unwrap();
+    let t = dir.path().join("trunc.bvh");
+    std::fs::write(&t, &text[..2000]).unwrap();
+    // A garbage value on a frame line.
+    let g = dir.path().join("garbage.bvh");
+    let mut lines: Vec<&str> = text.lines().collect();
+    let bad_line = lines.len() - 5;
+    let replaced = lines[bad_line].replacen(' ', " x1.2.3 ", 1);
+    lines[bad_line] = &replaced;
+    std::fs::write(&g, lines.join("\n")).unwrap();
+    let noise = dir.path().join("noise.glb");
+    std::fs::write(&noise, b"glTF\x02\0\0\0\xff\xff\xff\xff").unwrap();
+    let pc2 = dir.path().join("lie.pc2");
+    let mut b = b"POINTCACHE2\0".to_vec();
+    for v in [1i32, i32::MAX, 0, 0x3f800000, i32::MAX] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(&pc2, &b).unwrap();
+    std::fs::write(dir.path().join("lie.obj"), "v 0 0 0\n").unwrap();
+    let cases: Vec<(Vec<String>, String)> = vec![
+        (
+            vec!["inspect".into(), t.display().to_string()],
+            "trunc.bvh".into(),
+        ),
+        (
+            vec!["mocap".into(), "positions".into(), g.display().to_string()],
+            format!("garbage.bvh:{}:", bad_line + 1),
+        ),
+        (
+            vec!["inspect".into(), noise.display().to_string()],
+            "noise.glb".into(),
+        ),
+        (
+            vec!["inspect".into(), pc2.display().to_string()],
+            "truncated".into(),
+        ),
+        (
+            vec!["inspect".into(), "/no/such/file.bvh".into()],
+            "/no/such/file.bvh".into(),
+        ),
+        (
+            vec![
+                "mocap".into(),
+                "positions".into(),
+                d.join("mocap/cmu-bvh/01_01.bvh").display().to_string(),
+                "--frames".into(),
+                "999999".into(),
+            ],
+            "out of range".into(),
+        ),
+        (
+            vec!["inspect".into(), d.join("README.md").display().to_string()],
+            "unknown file type".into(),
+        ),
+    ];
+    for (args, needle) in cases {
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = run(&a);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {e}");
+        assert!(e.contains(&needle), "{args:?}: '{e}' lacks '{needle}'");
+        assert_eq!(e.trim().lines().count(), 1, "{args:?}: not one line: {e}");
+    }
+}
+
+#[test]
+fn convert_amc_to_bvh_resampled_and_meshes_between_formats() {
+    let Some(d) = common::data_dir() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("02_01_30fps.bvh");
+    let o = run(&[
+        "mocap",
+        "convert",
+        d.join("mocap/cmu-amc/02/02_01.amc").to_str().unwrap(),
+        out.to_str().unwrap(),
+        "--fps",
+        "30",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let c = surfmotion::mocap::load_clip(&out, &Default::default()).unwrap();
+    // 343 frames at 120 fps span 2.85 s: 86 frames at 30 fps.
+    assert_eq!(c.frame_count(), 86);
+    assert!((c.fps() - 30.0).abs() < 1e-9);
+    let glb = dir.path().join("samba.glb");
+    let o = run(&[
+        "mesh",
+        "convert",
+        d.join("4d/samba/samba.pc2").to_str().unwrap(),
+        glb.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let one = dir.path().join("f5.obj");
+    let spec = format!("{}:5", d.join("4d/samba/samba.pc2").display());
+    let o = run(&["mesh", "convert", &spec, one.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let folder = dir.path().join("frames");
+    let o = run(&[
+        "mesh",
+        "convert",
+        d.join("4d/samba/frames").to_str().unwrap(),
+        dir.path().join("f.pc2").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.path().join("f.obj").exists());
+    let _ = folder;
+}
+
+#[test]
+fn demo_runs_and_help_explains() {
+    let o = run(&["demo"]);
+    assert!(o.status.success());
+    let o = run(&["--help"]);
+    let h = String::from_utf8_lossy(&o.stdout);
+    for w in ["inspect", "mocap", "mesh", "Exit codes"] {
+        assert!(h.contains(w), "--help lacks {w}");
+    }
+}
