@@ -17,6 +17,7 @@ fn main() -> ExitCode {
     }));
     match std::panic::catch_unwind(cli::main) {
         Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(e)) if e.is::<cli::OutputClosed>() => ExitCode::SUCCESS,
         Ok(Err(e)) => {
             eprintln!("surfmotion: {}", cli::one_line(&e));
             ExitCode::from(1)

@@ -8,7 +8,7 @@ pub struct Args {}
 /// procedural clip through the surface motion graph) needs the synthesis
 /// pipeline, which does not exist yet; until then this says so plainly.
 pub fn run(_: Args) -> anyhow::Result<()> {
-    println!(
+    crate::outln!(
         "surfmotion demo: not available yet.\n\
          \n\
          The demo will drive an embedded procedural character with a procedural clip\n\
@@ -19,6 +19,6 @@ pub fn run(_: Args) -> anyhow::Result<()> {
          \x20 surfmotion mocap convert IN.amc OUT.bvh --fps 30 convert and resample clips\n\
          \x20 surfmotion mocap rigmap CLIP -o map.json         detected rig convention\n\
          \x20 surfmotion mesh convert samba.pc2 samba.glb      mesh sequence formats"
-    );
+    )?;
     Ok(())
 }

@@ -31,9 +31,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     let r = inspect(&a.file, &opts)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&r)?);
+        crate::outln!("{}", serde_json::to_string_pretty(&r)?)?;
     } else {
-        print!("{}", r.to_text());
+        crate::cli::emit(&r.to_text())?;
     }
     Ok(())
 }

@@ -111,12 +111,12 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     .map(|(k, v)| (k.to_string(), v))
                     .collect();
                 let out = serde_json::json!({ "joints": names, "frames": frames });
-                println!("{}", serde_json::to_string(&out)?);
+                crate::outln!("{}", serde_json::to_string(&out)?)?;
             } else {
                 for (f, p) in frames {
-                    println!("frame {f}");
+                    crate::outln!("frame {f}")?;
                     for (n, v) in names.iter().zip(p) {
-                        println!("  {n:<24} {:>12.6} {:>12.6} {:>12.6}", v[0], v[1], v[2]);
+                        crate::outln!("  {n:<24} {:>12.6} {:>12.6} {:>12.6}", v[0], v[1], v[2])?;
                     }
                 }
             }
@@ -150,21 +150,37 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             );
         }
         Cmd::Rigmap(a) => {
-            let clip = load(&a.clip, &a.opts)?;
-            let det = surfmotion::rig::detect(&clip.point_names());
+            let opts = a.opts.load_options()?;
+            let clip = load_clip(&a.clip, &opts)?;
+            let det = match &opts.rig_map {
+                // A given map: check that it resolves on this clip.
+                Some(m) => {
+                    m.resolve(&clip)
+                        .with_context(|| format!("{}", a.clip.display()))?;
+                    surfmotion::rig::Detection {
+                        map: m.clone(),
+                        missing: Vec::new(),
+                        signature: true,
+                    }
+                }
+                None => surfmotion::rig::detect(&clip.point_names()),
+            };
             if let Some(o) = &a.output {
                 det.map.save(o)?;
             }
             if a.json {
-                println!("{}", serde_json::to_string_pretty(&det)?);
+                crate::outln!("{}", serde_json::to_string_pretty(&det)?)?;
             } else {
-                println!("convention: {}", det.map.convention);
+                crate::outln!("convention: {}", det.map.convention)?;
                 for (k, v) in &det.map.joints {
-                    println!("  {:<12} {v}", k.name());
+                    crate::outln!("  {:<12} {v}", k.name())?;
                 }
                 if !det.missing.is_empty() {
                     let m: Vec<&str> = det.missing.iter().map(|c| c.name()).collect();
-                    println!("unmapped: {} (edit a saved map to fill them)", m.join(", "));
+                    crate::outln!(
+                        "unmapped: {} (save with -o, fill them in, pass back with --rig-map)",
+                        m.join(", ")
+                    )?;
                 }
             }
         }

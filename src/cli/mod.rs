@@ -52,6 +52,28 @@ pub fn main() -> anyhow::Result<()> {
     }
 }
 
+/// Stdout was closed by the reader (e.g. `| head`): not an error.
+#[derive(Debug, thiserror::Error)]
+#[error("output closed")]
+pub struct OutputClosed;
+
+/// Writes to stdout; a closed pipe becomes [`OutputClosed`] instead of a panic.
+pub fn emit(text: &str) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(OutputClosed.into()),
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// `println!` through [`emit`].
+#[macro_export]
+macro_rules! outln {
+    ($($t:tt)*) => { $crate::cli::emit(&format!("{}\n", format!($($t)*))) };
+}
+
 /// An error and its causes on one line.
 pub fn one_line(e: &anyhow::Error) -> String {
     let mut s = e.to_string();
@@ -83,6 +105,10 @@ pub struct ClipOpts {
     /// Up axis of the input (y or z). Default: guessed from head above pelvis.
     #[arg(long, value_name = "AXIS")]
     pub up: Option<String>,
+    /// A JSON rig map (canonical joint → joint name) for rigs whose naming
+    /// is not detected; `mocap rigmap CLIP -o map.json` writes one to edit.
+    #[arg(long = "rig-map", value_name = "JSON")]
+    pub rig_map: Option<std::path::PathBuf>,
 }
 
 impl ClipOpts {
@@ -102,11 +128,16 @@ impl ClipOpts {
             Some("z") => Some(surfmotion::mocap::UpAxis::Z),
             Some(o) => anyhow::bail!("--up '{o}': expected y or z"),
         };
+        let rig_map = match &self.rig_map {
+            Some(p) => Some(surfmotion::rig::RigMap::load(p)?),
+            None => None,
+        };
         Ok(surfmotion::mocap::LoadOptions {
             fps: self.input_fps,
             asf: self.asf.clone(),
             units,
             up,
+            rig_map,
         })
     }
 }

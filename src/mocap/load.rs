@@ -42,6 +42,8 @@ pub struct LoadOptions {
     pub units: Option<Units>,
     /// Up-axis override.
     pub up: Option<UpAxis>,
+    /// Rig map to use instead of detecting the convention from joint names.
+    pub rig_map: Option<crate::rig::RigMap>,
 }
 
 /// Finds the ASF for an AMC: the only `.asf` file in its folder.
@@ -87,7 +89,7 @@ pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
             let det = crate::rig::detect(&c.point_names());
             let cmu = det.map.convention.starts_with("CMU");
             c.units = guess_units(&c, cmu);
-            let (up, why) = guess_up(&c);
+            let (up, why) = guess_up(&c, opts.rig_map.as_ref());
             c.up = up;
             c.up_reason = why;
             c

@@ -7,7 +7,7 @@
 //! few frames (the rest pose of some rigs lies down: Bandai Namco).
 
 use super::clip::{Clip, Units, UpAxis};
-use crate::rig::{Canonical, detect};
+use crate::rig::{Canonical, RigMap, detect};
 use glam::DVec3;
 
 /// CMU's length unit: 1/0.45 inch.
@@ -83,21 +83,44 @@ pub fn guess_units(clip: &Clip, cmu: bool) -> Units {
     }
 }
 
-/// Guesses the up axis from head − pelvis averaged over up to 16 frames.
-/// Returns the axis and the reason.
-pub fn guess_up(clip: &Clip) -> (UpAxis, String) {
-    let det = detect(&clip.point_names());
-    let (Some(h), Some(p)) = (
-        det.map.joints.get(&Canonical::Head),
-        det.map.joints.get(&Canonical::Pelvis),
-    ) else {
+/// Dominant axis of a direction: `Some(Y)` or `Some(Z)` when that axis is the
+/// largest component and positive, `None` otherwise.
+fn dominant_up(d: DVec3) -> Option<UpAxis> {
+    let a = d.abs();
+    if a.z > a.y && a.z > a.x && d.z > 0.0 {
+        Some(UpAxis::Z)
+    } else if a.y >= a.x && a.y >= a.z && d.y > 0.0 {
+        Some(UpAxis::Y)
+    } else {
+        None
+    }
+}
+
+/// Guesses the up axis from head − pelvis averaged over up to 16 frames of
+/// the motion (world positions, so a root rotation that stands a lying rest
+/// pose up is taken into account). `map` names the head and pelvis; by
+/// default the convention is detected from the joint names. Returns the axis
+/// and the reason.
+pub fn guess_up(clip: &Clip, map: Option<&RigMap>) -> (UpAxis, String) {
+    let detected;
+    let map = match map {
+        Some(m) => m,
+        None => {
+            detected = detect(&clip.point_names()).map;
+            &detected
+        }
+    };
+    let ids = (
+        map.joints.get(&Canonical::Head).and_then(|n| clip.joint(n)),
+        map.joints
+            .get(&Canonical::Pelvis)
+            .and_then(|n| clip.joint(n)),
+    );
+    let (Some(h), Some(p)) = ids else {
         return (
             UpAxis::Y,
             "assumed Y-up (no head/pelvis joint recognised)".into(),
         );
-    };
-    let (Some(h), Some(p)) = (clip.joint(h), clip.joint(p)) else {
-        return (UpAxis::Y, "assumed Y-up".into());
     };
     let frames = clip.frame_count();
     let step = (frames / 16).max(1);
@@ -108,24 +131,67 @@ pub fn guess_up(clip: &Clip) -> (UpAxis, String) {
         d += (w[h.idx()] - w[p.idx()]).normalize_or_zero();
         k += step;
     }
-    let a = d.abs();
-    if a.z > a.y && a.z > a.x && d.z > 0.0 {
-        (
-            UpAxis::Z,
-            format!(
-                "head above pelvis along +Z (mean direction {:.2} {:.2} {:.2})",
-                d.x, d.y, d.z
-            ),
-        )
-    } else if a.y >= a.x && a.y >= a.z && d.y > 0.0 {
-        (UpAxis::Y, "head above pelvis along +Y".into())
-    } else {
-        (
+    let (rest, _) = clip.rest_positions();
+    let rest_up = dominant_up(rest[h.idx()] - rest[p.idx()]);
+    match dominant_up(d) {
+        Some(up) => {
+            let axis = if up == UpAxis::Y { "+Y" } else { "+Z" };
+            let note = match rest_up {
+                Some(r) if r == up => String::new(),
+                Some(r) => format!("; the rest pose is {r:?}-up and the root rotation turns it"),
+                None => "; the rest pose is not upright and the root rotation stands it up".into(),
+            };
+            (
+                up,
+                format!("head above pelvis along {axis} in the motion{note}"),
+            )
+        }
+        None => (
             UpAxis::Y,
             format!(
                 "assumed Y-up; head − pelvis points along ({:.2} {:.2} {:.2})",
                 d.x, d.y, d.z
             ),
-        )
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mocap::bvh::{BvhOptions, parse_bvh};
+    use std::path::Path;
+
+    /// A Z-up, centimetre skeleton (as 3ds Max or iClone write them).
+    const ZUP: &str = "HIERARCHY\nROOT Hips\n{\nOFFSET 0 0 95\nCHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\nJOINT Spine\n{\nOFFSET 0 0 20\nCHANNELS 3 Zrotation Yrotation Xrotation\nJOINT Head\n{\nOFFSET 0 0 50\nCHANNELS 3 Zrotation Yrotation Xrotation\nEnd Site\n{\nOFFSET 0 0 15\n}\n}\n}\nJOINT LeftUpLeg\n{\nOFFSET 10 0 0\nCHANNELS 3 Zrotation Yrotation Xrotation\nJOINT LeftLeg\n{\nOFFSET 0 0 -45\nCHANNELS 3 Zrotation Yrotation Xrotation\nEnd Site\n{\nOFFSET 0 0 -45\n}\n}\n}\n}\nMOTION\nFrames: 1\nFrame Time: 0.04\n0 0 95 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0\n";
+
+    #[test]
+    fn z_up_centimetres_are_detected_and_normalised() {
+        let mut c = parse_bvh(ZUP, Path::new("z.bvh"), &BvhOptions::default()).unwrap();
+        c.units = guess_units(&c, false);
+        assert_eq!(c.units.name, "cm");
+        let (up, why) = guess_up(&c, None);
+        assert_eq!(up, UpAxis::Z, "{why}");
+        c.up = up;
+        c.to_metres_y_up();
+        let p = c.world_positions(0);
+        let head = c.joint("Head").unwrap().idx();
+        // Head at 95 + 20 + 50 = 165 cm above the floor, now along +Y in metres.
+        assert!(
+            (p[head] - DVec3::new(0.0, 1.65, 0.0)).length() < 1e-12,
+            "{:?}",
+            p[head]
+        );
+        // Rest pose is upright in the new frame too.
+        let (rest, _) = c.rest_positions();
+        assert!(rest[head].y > rest[0].y);
+    }
+
+    #[test]
+    fn parse_unit_names_and_numbers() {
+        assert_eq!(parse_unit("cm").unwrap().metres_per_unit, 0.01);
+        assert!((parse_unit("cmu").unwrap().metres_per_unit - 0.0254 / 0.45).abs() < 1e-15);
+        assert_eq!(parse_unit("0.3048").unwrap().metres_per_unit, 0.3048);
+        assert!(parse_unit("-1").is_none() && parse_unit("furlong").is_none());
     }
 }
