@@ -1,0 +1,232 @@
+//! Poisson mesh reconstruction from per-triangle target transforms (the
+//! gradient-domain step of de Aguiar et al. 2007, Eqs. 3-4, and the
+//! Laplacian stitching of Casas et al. 2013, Eq. 2).
+//!
+//! Each triangle t asks that its edges become `T_t e`, with `e` its edges in
+//! the reference mesh. Weighting the edge residuals by the reference's
+//! half-cotangents,
+//! `E(x) = Σ_t Σ_(i,j)∈t w_ij^t ‖(x_j − x_i) − T_t (p_j − p_i)‖²`,
+//! whose minimiser solves `K x = b` with `K = −L` the cotangent Laplacian of
+//! the reference (factored once per topology) and
+//! `b_i = Σ w_ij^t T_t (p_i − p_j)`. This is the classical gradient-domain
+//! Poisson equation: `∇ᵀ A ∇ = −L` and `∇ᵀ A (T ∇p)` is the divergence of
+//! the target gradients. One vertex per connected component is anchored.
+
+use super::Mesh;
+use super::components::components;
+use super::frames::dvec;
+use super::laplacian::{cotan_triplets, half_cotangents};
+use super::solver::{FixedSolver, SolveError, Workspace};
+use glam::{DMat3, DVec3};
+
+/// A prefactored Poisson reconstruction for one reference mesh.
+pub struct Poisson {
+    triangles: Vec<[u32; 3]>,
+    /// Per triangle and corner k: `w_k · (p_(k+1) − p_(k+2))`, the weighted
+    /// reference edge facing corner k, oriented from corner k+2 to k+1.
+    weighted_edges: Vec<[DVec3; 3]>,
+    solver: FixedSolver,
+    anchors: Vec<u32>,
+    reference: Vec<[f64; 3]>,
+}
+
+/// Per-solve scratch for [`Poisson::solve`].
+pub struct PoissonWorkspace {
+    /// Right-hand side, one row per vertex.
+    pub b: Vec<[f64; 3]>,
+    anchor_values: Vec<[f64; 3]>,
+    ws: Workspace,
+}
+
+impl Poisson {
+    /// Factors the system for `reference`, anchoring the lowest vertex of each
+    /// connected component.
+    pub fn new(reference: &Mesh) -> Result<Poisson, SolveError> {
+        let c = components(reference);
+        if let Some(v) = c.label.iter().position(|&l| l == u32::MAX) {
+            return Err(SolveError::Isolated { vertex: v as u32 });
+        }
+        let mut anchors = vec![u32::MAX; c.count];
+        for (v, &l) in c.label.iter().enumerate() {
+            if anchors[l as usize] == u32::MAX {
+                anchors[l as usize] = v as u32;
+            }
+        }
+        Self::with_anchors(reference, &anchors)
+    }
+
+    /// Factors the system with the given anchor vertices (hard constraints).
+    pub fn with_anchors(reference: &Mesh, anchors: &[u32]) -> Result<Poisson, SolveError> {
+        let k: Vec<(u32, u32, f64)> = cotan_triplets(reference)
+            .into_iter()
+            .map(|(i, j, v)| (i, j, -v))
+            .collect();
+        let solver = FixedSolver::new(reference.vertex_count(), k, anchors)?;
+        let p = reference.positions();
+        let w = half_cotangents(p, reference.triangles());
+        let weighted_edges = reference
+            .triangles()
+            .iter()
+            .zip(&w)
+            .map(|(t, wt)| {
+                std::array::from_fn(|k| {
+                    let (i, j) = (t[(k + 1) % 3] as usize, t[(k + 2) % 3] as usize);
+                    (dvec(p[i]) - dvec(p[j])) * wt[k]
+                })
+            })
+            .collect();
+        Ok(Poisson {
+            triangles: reference.triangles().to_vec(),
+            weighted_edges,
+            solver,
+            anchors: anchors.to_vec(),
+            reference: p.iter().map(|&q| dvec(q).to_array()).collect(),
+        })
+    }
+
+    /// The anchored vertices.
+    pub fn anchors(&self) -> &[u32] {
+        &self.anchors
+    }
+
+    /// Scratch space for solves.
+    pub fn workspace(&self) -> PoissonWorkspace {
+        PoissonWorkspace {
+            b: vec![[0.0; 3]; self.reference.len()],
+            anchor_values: vec![[0.0; 3]; self.anchors.len()],
+            ws: self.solver.workspace(3),
+        }
+    }
+
+    /// Assembles `b` from per-triangle transforms into `ws.b`.
+    pub fn assemble(&self, transforms: &[DMat3], ws: &mut PoissonWorkspace) {
+        ws.b.iter_mut().for_each(|r| *r = [0.0; 3]);
+        for ((t, we), m) in self
+            .triangles
+            .iter()
+            .zip(&self.weighted_edges)
+            .zip(transforms)
+        {
+            for k in 0..3 {
+                let d = *m * we[k];
+                let (i, j) = (t[(k + 1) % 3] as usize, t[(k + 2) % 3] as usize);
+                for c in 0..3 {
+                    ws.b[i][c] += d[c];
+                    ws.b[j][c] -= d[c];
+                }
+            }
+        }
+    }
+
+    /// Solves with the current `ws.b`; anchors take their reference positions.
+    /// Writes positions into `out` (n rows). No allocation.
+    pub fn solve(&self, ws: &mut PoissonWorkspace, out: &mut [[f64; 3]]) {
+        for (a, &v) in ws.anchor_values.iter_mut().zip(&self.anchors) {
+            *a = self.reference[v as usize];
+        }
+        self.solver.solve(&ws.b, &ws.anchor_values, out, &mut ws.ws);
+    }
+
+    /// The mesh whose triangles best follow `transforms` (one 3×3 map per
+    /// triangle, from the reference). Translation is fixed by the anchors.
+    pub fn reconstruct(
+        &self,
+        transforms: &[DMat3],
+        ws: &mut PoissonWorkspace,
+        out: &mut [[f64; 3]],
+    ) {
+        self.assemble(transforms, ws);
+        self.solve(ws, out);
+    }
+}
+
+/// Mean of a set of points.
+pub fn centroid(p: &[[f64; 3]]) -> DVec3 {
+    let s: DVec3 = p.iter().map(|q| DVec3::from_array(*q)).sum();
+    s / p.len().max(1) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::frames::RestFrames;
+
+    pub(crate) fn icosphere() -> Mesh {
+        let t = (1.0 + 5f32.sqrt()) / 2.0;
+        let p = vec![
+            [-1.0, t, 0.0],
+            [1.0, t, 0.0],
+            [-1.0, -t, 0.0],
+            [1.0, -t, 0.0],
+            [0.0, -1.0, t],
+            [0.0, 1.0, t],
+            [0.0, -1.0, -t],
+            [0.0, 1.0, -t],
+            [t, 0.0, -1.0],
+            [t, 0.0, 1.0],
+            [-t, 0.0, -1.0],
+            [-t, 0.0, 1.0],
+        ];
+        let f = vec![
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ];
+        Mesh::new(p, f).unwrap()
+    }
+
+    #[test]
+    fn own_gradients_reconstruct_the_mesh() {
+        let rest = icosphere();
+        let mut def: Vec<[f32; 3]> = rest.positions().to_vec();
+        for (i, p) in def.iter_mut().enumerate() {
+            p[0] *= 1.0 + 0.1 * (i % 3) as f32;
+            p[1] += 0.05 * (i % 5) as f32;
+        }
+        let poisson = Poisson::new(&rest).unwrap();
+        let g =
+            RestFrames::new(rest.positions(), rest.triangles()).gradients(&def, rest.triangles());
+        let mut ws = poisson.workspace();
+        let mut out = vec![[0.0; 3]; 12];
+        poisson.reconstruct(&g, &mut ws, &mut out);
+        // Anchored at the reference's vertex 0: compare up to translation.
+        let shift = DVec3::from_array(out[0]) - dvec(def[0]);
+        for (o, d) in out.iter().zip(&def) {
+            assert!((DVec3::from_array(*o) - shift - dvec(*d)).length() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_component_without_anchor_is_an_error_not_nan() {
+        let m = icosphere();
+        let r = Poisson::with_anchors(&m, &[]);
+        assert!(matches!(
+            r,
+            Err(SolveError::UnanchoredComponent { component: 0, .. })
+        ));
+        let mut p = m.positions().to_vec();
+        p.push([9.0, 9.0, 9.0]);
+        let loose = Mesh::new(p, m.triangles().to_vec()).unwrap();
+        assert!(matches!(
+            Poisson::new(&loose),
+            Err(SolveError::Isolated { vertex: 12 })
+        ));
+    }
+}
