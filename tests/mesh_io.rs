@@ -21,12 +21,12 @@ fn samba(d: &Path, frames: usize) -> MeshSequence {
     .unwrap()
 }
 
-fn max_diff(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
+fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
     assert_eq!(a.len(), b.len());
     a.iter()
         .zip(b)
-        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f32::max))
-        .fold(0.0, f32::max)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max)
 }
 
 #[test]

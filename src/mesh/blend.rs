@@ -71,7 +71,7 @@ impl Blender {
     }
 
     /// Decomposes one frame (positions with the reference's topology).
-    pub fn decompose(&self, positions: &[[f32; 3]], ws: &mut BlendWorkspace) -> FrameGradients {
+    pub fn decompose(&self, positions: &[[f64; 3]], ws: &mut BlendWorkspace) -> FrameGradients {
         let mut out = FrameGradients::default();
         self.decompose_into(positions, ws, &mut out);
         out
@@ -80,7 +80,7 @@ impl Blender {
     /// [`Blender::decompose`] into an existing value (reusing its buffers).
     pub fn decompose_into(
         &self,
-        positions: &[[f32; 3]],
+        positions: &[[f64; 3]],
         ws: &mut BlendWorkspace,
         out: &mut FrameGradients,
     ) {
@@ -108,7 +108,7 @@ impl Blender {
         a: &FrameGradients,
         b: &FrameGradients,
         alpha: f64,
-        out: &mut [[f32; 3]],
+        out: &mut [[f64; 3]],
         ws: &mut BlendWorkspace,
     ) {
         for (((t, (ra, rb)), sa), sb) in ws
@@ -131,7 +131,7 @@ impl Blender {
     pub fn blend_many(
         &self,
         inputs: &[(&FrameGradients, f64)],
-        out: &mut [[f32; 3]],
+        out: &mut [[f64; 3]],
         ws: &mut BlendWorkspace,
     ) {
         let total: f64 = inputs.iter().map(|x| x.1).sum();
@@ -150,7 +150,7 @@ impl Blender {
                 } else {
                     g.rotation[t]
                 };
-                q = q + qi * w;
+                q += qi * w;
                 s += g.stretch[t] * w;
             }
             let q = if q.length_squared() > 0.0 {
@@ -165,19 +165,19 @@ impl Blender {
     }
 
     /// Reconstructs from `ws.transforms` and places the centroid at `c`.
-    fn stitch(&self, c: DVec3, out: &mut [[f32; 3]], ws: &mut BlendWorkspace) {
+    fn stitch(&self, c: DVec3, out: &mut [[f64; 3]], ws: &mut BlendWorkspace) {
         self.poisson
             .reconstruct(&ws.transforms, &mut ws.pw, &mut ws.x);
         let shift = c - centroid(&ws.x);
         for (o, x) in out.iter_mut().zip(&ws.x) {
-            *o = (DVec3::from_array(*x) + shift).as_vec3().to_array();
+            *o = (DVec3::from_array(*x) + shift).to_array();
         }
     }
 }
 
 /// Convenience: `G(m1, m2, α)` with `m1` as the reference. For many blends on
 /// one character build a [`Blender`] once instead.
-pub fn blend(m1: &Mesh, m2: &[[f32; 3]], alpha: f64) -> Result<Vec<[f32; 3]>, SolveError> {
+pub fn blend(m1: &Mesh, m2: &[[f64; 3]], alpha: f64) -> Result<Vec<[f64; 3]>, SolveError> {
     let b = Blender::new(m1)?;
     let mut ws = b.workspace();
     let g1 = b.decompose(m1.positions(), &mut ws);
@@ -188,8 +188,8 @@ pub fn blend(m1: &Mesh, m2: &[[f32; 3]], alpha: f64) -> Result<Vec<[f32; 3]>, So
 }
 
 /// Plain vertex lerp `(1 − α) a + α b`, for comparison.
-pub fn linear_blend(a: &[[f32; 3]], b: &[[f32; 3]], alpha: f64) -> Vec<[f32; 3]> {
-    let al = alpha as f32;
+pub fn linear_blend(a: &[[f64; 3]], b: &[[f64; 3]], alpha: f64) -> Vec<[f64; 3]> {
+    let al = alpha;
     a.iter()
         .zip(b)
         .map(|(p, q)| std::array::from_fn(|k| p[k] * (1.0 - al) + q[k] * al))
@@ -206,7 +206,7 @@ mod tests {
         crate::mesh::subdivide::midpoint(&m)
     }
 
-    fn close(a: &[[f32; 3]], b: &[[f32; 3]], tol: f32) -> bool {
+    fn close(a: &[[f64; 3]], b: &[[f64; 3]], tol: f64) -> bool {
         a.iter()
             .zip(b)
             .all(|(p, q)| (0..3).all(|k| (p[k] - q[k]).abs() <= tol))
@@ -215,7 +215,7 @@ mod tests {
     #[test]
     fn endpoints_and_identity() {
         let m1 = bumpy();
-        let m2: Vec<[f32; 3]> = m1
+        let m2: Vec<[f64; 3]> = m1
             .positions()
             .iter()
             .map(|p| [p[0] * 1.3, p[1] + 0.2 * p[0] * p[0], p[2]])
@@ -241,10 +241,10 @@ mod tests {
         let m1 = bumpy();
         let axis = DVec3::new(0.3, 1.0, -0.2).normalize();
         let rot = DQuat::from_axis_angle(axis, 2.0);
-        let m2: Vec<[f32; 3]> = m1
+        let m2: Vec<[f64; 3]> = m1
             .positions()
             .iter()
-            .map(|p| (rot * super::super::frames::dvec(*p)).as_vec3().to_array())
+            .map(|p| (rot * super::super::frames::dvec(*p)).to_array())
             .collect();
         let b = Blender::new(&m1).unwrap();
         let mut ws = b.workspace();
@@ -258,14 +258,10 @@ mod tests {
             b.blend(&g1, &g2, alpha, &mut out, &mut ws);
             let ra = DQuat::from_axis_angle(axis, 2.0 * alpha);
             let c = c1 * (1.0 - alpha) + (rot * c1) * alpha;
-            let want: Vec<[f32; 3]> = m1
+            let want: Vec<[f64; 3]> = m1
                 .positions()
                 .iter()
-                .map(|p| {
-                    (ra * (super::super::frames::dvec(*p) - c1) + c)
-                        .as_vec3()
-                        .to_array()
-                })
+                .map(|p| (ra * (super::super::frames::dvec(*p) - c1) + c).to_array())
                 .collect();
             assert!(
                 close(&out, &want, 1e-5 * m1.bounds().diagonal()),

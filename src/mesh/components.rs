@@ -61,7 +61,7 @@ mod tests {
 
     #[test]
     fn two_triangles_and_a_loose_vertex() {
-        let p = vec![[0.0f32; 3]; 7];
+        let p = vec![[0.0f64; 3]; 7];
         let m = Mesh::new(p, vec![[0, 1, 2], [3, 4, 5]]).unwrap();
         let c = components(&m);
         assert_eq!(c.count, 2);

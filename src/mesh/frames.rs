@@ -33,13 +33,13 @@ pub struct RestFrames {
 }
 
 #[inline]
-pub(crate) fn dvec(p: [f32; 3]) -> DVec3 {
-    DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+pub(crate) fn dvec(p: [f64; 3]) -> DVec3 {
+    DVec3::from_array(p)
 }
 
 impl RestFrames {
     /// Frames of the reference positions.
-    pub fn new(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> RestFrames {
+    pub fn new(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> RestFrames {
         let mut degenerate = Vec::new();
         let inv = triangles
             .iter()
@@ -62,7 +62,7 @@ impl RestFrames {
     /// Deformation gradients of `positions` relative to the reference, into `out`.
     pub fn gradients_into(
         &self,
-        positions: &[[f32; 3]],
+        positions: &[[f64; 3]],
         triangles: &[[u32; 3]],
         out: &mut [DMat3],
     ) {
@@ -77,7 +77,7 @@ impl RestFrames {
     }
 
     /// Deformation gradients of `positions` relative to the reference.
-    pub fn gradients(&self, positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<DMat3> {
+    pub fn gradients(&self, positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<DMat3> {
         let mut out = vec![DMat3::IDENTITY; triangles.len()];
         self.gradients_into(positions, triangles, &mut out);
         out
@@ -165,13 +165,13 @@ mod tests {
 
     #[test]
     fn gradient_of_an_affine_map_is_that_map() {
-        let p = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let p = [[0.0f64, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let t = [[0u32, 1, 2]];
         let rest = RestFrames::new(&p, &t);
         let r = DMat3::from_quat(DQuat::from_rotation_y(0.5));
-        let q: Vec<[f32; 3]> = p
+        let q: Vec<[f64; 3]> = p
             .iter()
-            .map(|v| (r * dvec(*v) + DVec3::ONE).as_vec3().to_array())
+            .map(|v| (r * dvec(*v) + DVec3::ONE).to_array())
             .collect();
         let g = rest.gradients(&q, &t);
         assert!(frob(g[0] - r) < 1e-6);

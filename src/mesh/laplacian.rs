@@ -3,7 +3,7 @@
 //! The cotangent Laplacian follows libigl's `cotmatrix`: #V by #V, symmetric,
 //! off-diagonal `L_ij = (cot α_ij + cot β_ij) / 2` over the two angles facing
 //! edge ij, diagonal minus the sum of the off-diagonals, so `L · 1 = 0` and
-//! L is negative semi-definite. Computed in f64 from the f32 positions.
+//! L is negative semi-definite. Computed in f64 from the f64 positions.
 //! Per triangle, half the cotangent of the angle at corner k is
 //! `(l_i² + l_j² − l_k²) / (8 A)` with `l_k` the length of the edge facing k
 //! and `A` the area; a zero-area triangle contributes nothing.
@@ -12,14 +12,11 @@ use super::Mesh;
 
 /// Half-cotangent weights of each triangle: entry k is `cot(angle at corner k) / 2`,
 /// the weight of the edge opposite corner k (between corners k+1 and k+2).
-pub fn half_cotangents(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
+pub fn half_cotangents(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
     triangles
         .iter()
         .map(|t| {
-            let p = t.map(|v| {
-                let q = positions[v as usize];
-                [q[0] as f64, q[1] as f64, q[2] as f64]
-            });
+            let p = t.map(|v| positions[v as usize]);
             let e = |a: usize, b: usize| [p[b][0] - p[a][0], p[b][1] - p[a][1], p[b][2] - p[a][2]];
             // Edge opposite corner k.
             let opp = [e(1, 2), e(2, 0), e(0, 1)];
@@ -165,7 +162,7 @@ mod tests {
 
     #[test]
     fn equilateral_weights_are_cot_60_over_2() {
-        let h = 3f32.sqrt() / 2.0;
+        let h = 3f64.sqrt() / 2.0;
         let w = half_cotangents(
             &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, h, 0.0]],
             &[[0, 1, 2]],

@@ -23,10 +23,7 @@ pub fn mass_diagonal(mesh: &Mesh, kind: MassKind) -> Vec<f64> {
     let p = mesh.positions();
     let mut m = vec![0.0; mesh.vertex_count()];
     for t in mesh.triangles() {
-        let q = t.map(|v| {
-            let a = p[v as usize];
-            glam::DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64)
-        });
+        let q = t.map(|v| glam::DVec3::from_array(p[v as usize]));
         let area = 0.5 * (q[1] - q[0]).cross(q[2] - q[0]).length();
         if area <= 0.0 || !area.is_finite() {
             continue;

@@ -19,7 +19,7 @@ pub fn edges(mesh: &Mesh) -> Vec<(u32, u32)> {
 }
 
 /// Length of each edge for the given positions.
-pub fn edge_lengths(positions: &[[f32; 3]], edges: &[(u32, u32)]) -> Vec<f64> {
+pub fn edge_lengths(positions: &[[f64; 3]], edges: &[(u32, u32)]) -> Vec<f64> {
     edges
         .iter()
         .map(|&(a, b)| (dvec(positions[a as usize]) - dvec(positions[b as usize])).length())
@@ -28,7 +28,7 @@ pub fn edge_lengths(positions: &[[f32; 3]], edges: &[(u32, u32)]) -> Vec<f64> {
 
 /// Signed enclosed volume (divergence theorem; positive for outward-facing
 /// counter-clockwise triangles of a closed mesh).
-pub fn volume(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> f64 {
+pub fn volume(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> f64 {
     triangles
         .iter()
         .map(|t| {
@@ -48,7 +48,7 @@ pub struct Distortion {
 }
 
 /// Distortion of `mid` relative to inputs `a` and `b` (same topology).
-pub fn distortion(mesh: &Mesh, a: &[[f32; 3]], b: &[[f32; 3]], mid: &[[f32; 3]]) -> Distortion {
+pub fn distortion(mesh: &Mesh, a: &[[f64; 3]], b: &[[f64; 3]], mid: &[[f64; 3]]) -> Distortion {
     let e = edges(mesh);
     let (la, lb, lm) = (
         edge_lengths(a, &e),

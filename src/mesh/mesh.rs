@@ -23,9 +23,9 @@ pub struct Group {
 /// are allowed (real scans have them) and listed by [`Mesh::problems`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mesh {
-    positions: Vec<[f32; 3]>,
+    positions: Vec<[f64; 3]>,
     triangles: Vec<[u32; 3]>,
-    colors: Option<Vec<[f32; 3]>>,
+    colors: Option<Vec<[f64; 3]>>,
     groups: Vec<Group>,
 }
 
@@ -33,22 +33,22 @@ pub struct Mesh {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Bounds {
     /// Minimum corner.
-    pub min: [f32; 3],
+    pub min: [f64; 3],
     /// Maximum corner.
-    pub max: [f32; 3],
+    pub max: [f64; 3],
 }
 
 impl Bounds {
     /// Bounds of a point set (zeros if empty).
-    pub fn of(points: &[[f32; 3]]) -> Bounds {
+    pub fn of(points: &[[f64; 3]]) -> Bounds {
         if points.is_empty() {
             return Bounds {
                 min: [0.0; 3],
                 max: [0.0; 3],
             };
         }
-        let mut min = [f32::INFINITY; 3];
-        let mut max = [f32::NEG_INFINITY; 3];
+        let mut min = [f64::INFINITY; 3];
+        let mut max = [f64::NEG_INFINITY; 3];
         for p in points {
             for k in 0..3 {
                 min[k] = min[k].min(p[k]);
@@ -58,14 +58,14 @@ impl Bounds {
         Bounds { min, max }
     }
     /// Length of the diagonal.
-    pub fn diagonal(&self) -> f32 {
-        let d: f32 = (0..3).map(|k| (self.max[k] - self.min[k]).powi(2)).sum();
+    pub fn diagonal(&self) -> f64 {
+        let d: f64 = (0..3).map(|k| (self.max[k] - self.min[k]).powi(2)).sum();
         d.sqrt()
     }
 }
 
 /// Checks that all coordinates are finite.
-pub fn check_finite(points: &[[f32; 3]]) -> Result<(), TopologyError> {
+pub fn check_finite(points: &[[f64; 3]]) -> Result<(), TopologyError> {
     match points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
         Some(vertex) => Err(TopologyError::NonFinite { vertex }),
         None => Ok(()),
@@ -74,7 +74,7 @@ pub fn check_finite(points: &[[f32; 3]]) -> Result<(), TopologyError> {
 
 impl Mesh {
     /// Builds a mesh, checking indices and coordinates.
-    pub fn new(positions: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>) -> Result<Mesh, TopologyError> {
+    pub fn new(positions: Vec<[f64; 3]>, triangles: Vec<[u32; 3]>) -> Result<Mesh, TopologyError> {
         if positions.len() > u32::MAX as usize || triangles.len() > u32::MAX as usize {
             return Err(TopologyError::TooLarge);
         }
@@ -98,7 +98,7 @@ impl Mesh {
     }
 
     /// Adds per-vertex colours (must have one per vertex; values are clamped to 0..1).
-    pub fn with_colors(mut self, colors: Vec<[f32; 3]>) -> Result<Mesh, TopologyError> {
+    pub fn with_colors(mut self, colors: Vec<[f64; 3]>) -> Result<Mesh, TopologyError> {
         if colors.len() != self.positions.len() {
             return Err(TopologyError::FrameSize {
                 frame: 0,
@@ -132,7 +132,7 @@ impl Mesh {
     }
 
     /// Vertex positions.
-    pub fn positions(&self) -> &[[f32; 3]] {
+    pub fn positions(&self) -> &[[f64; 3]] {
         &self.positions
     }
     /// Triangles (counter-clockwise seen from outside, by convention).
@@ -140,7 +140,7 @@ impl Mesh {
         &self.triangles
     }
     /// Per-vertex colours, if any.
-    pub fn colors(&self) -> Option<&[[f32; 3]]> {
+    pub fn colors(&self) -> Option<&[[f64; 3]]> {
         self.colors.as_deref()
     }
     /// Triangle groups.
@@ -157,7 +157,7 @@ impl Mesh {
     }
 
     /// Replaces the positions (same count, finite), keeping the topology.
-    pub fn set_positions(&mut self, p: &[[f32; 3]]) -> Result<(), TopologyError> {
+    pub fn set_positions(&mut self, p: &[[f64; 3]]) -> Result<(), TopologyError> {
         if p.len() != self.positions.len() {
             return Err(TopologyError::FrameSize {
                 frame: 0,
@@ -171,7 +171,7 @@ impl Mesh {
     }
 
     /// A copy with other positions (same count, finite).
-    pub fn with_positions(&self, p: &[[f32; 3]]) -> Result<Mesh, TopologyError> {
+    pub fn with_positions(&self, p: &[[f64; 3]]) -> Result<Mesh, TopologyError> {
         let mut m = self.clone();
         m.set_positions(p)?;
         Ok(m)
@@ -261,7 +261,7 @@ mod tests {
             }
         );
         let mut q = p.clone();
-        q[2][1] = f32::NAN;
+        q[2][1] = f64::NAN;
         assert_eq!(
             Mesh::new(q, vec![[0, 1, 2]]).unwrap_err(),
             TopologyError::NonFinite { vertex: 2 }

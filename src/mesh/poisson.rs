@@ -152,7 +152,7 @@ mod tests {
     use crate::mesh::frames::RestFrames;
 
     pub(crate) fn icosphere() -> Mesh {
-        let t = (1.0 + 5f32.sqrt()) / 2.0;
+        let t = (1.0 + 5f64.sqrt()) / 2.0;
         let p = vec![
             [-1.0, t, 0.0],
             [1.0, t, 0.0],
@@ -195,10 +195,10 @@ mod tests {
     #[test]
     fn own_gradients_reconstruct_the_mesh() {
         let rest = icosphere();
-        let mut def: Vec<[f32; 3]> = rest.positions().to_vec();
+        let mut def: Vec<[f64; 3]> = rest.positions().to_vec();
         for (i, p) in def.iter_mut().enumerate() {
-            p[0] *= 1.0 + 0.1 * (i % 3) as f32;
-            p[1] += 0.05 * (i % 5) as f32;
+            p[0] *= 1.0 + 0.1 * (i % 3) as f64;
+            p[1] += 0.05 * (i % 5) as f64;
         }
         let poisson = Poisson::new(&rest).unwrap();
         let g =

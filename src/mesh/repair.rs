@@ -12,7 +12,7 @@ use std::collections::{HashMap, HashSet};
 pub struct RepairOptions {
     /// Weld vertices closer than this fraction of the bounding-box diagonal.
     /// Default: 0 (weld only exact duplicates).
-    pub weld_tolerance: f32,
+    pub weld_tolerance: f64,
     /// Keep only the largest connected component (by triangle count). Default: false.
     pub keep_largest: bool,
 }
@@ -64,11 +64,11 @@ impl RepairReport {
     }
 }
 
-fn weld_map(p: &[[f32; 3]], tol: f32) -> Vec<u32> {
+fn weld_map(p: &[[f64; 3]], tol: f64) -> Vec<u32> {
     let n = p.len();
     let mut map: Vec<u32> = (0..n as u32).collect();
     if tol <= 0.0 {
-        let mut seen: HashMap<[u32; 3], u32> = HashMap::with_capacity(n);
+        let mut seen: HashMap<[u64; 3], u32> = HashMap::with_capacity(n);
         for (i, q) in p.iter().enumerate() {
             let key = q.map(|v| if v == 0.0 { 0 } else { v.to_bits() });
             map[i] = *seen.entry(key).or_insert(i as u32);
@@ -76,7 +76,7 @@ fn weld_map(p: &[[f32; 3]], tol: f32) -> Vec<u32> {
         return map;
     }
     // Grid hashing with cells of size tol; compare against the 27 neighbours.
-    let cell = |q: &[f32; 3]| q.map(|v| (v / tol).floor() as i64);
+    let cell = |q: &[f64; 3]| q.map(|v| (v / tol).floor() as i64);
     let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::with_capacity(n);
     for (i, q) in p.iter().enumerate() {
         let c = cell(q);
@@ -87,7 +87,7 @@ fn weld_map(p: &[[f32; 3]], tol: f32) -> Vec<u32> {
                     if let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
                         for &j in list {
                             let r = p[j as usize];
-                            let d2: f32 = (0..3).map(|k| (r[k] - q[k]).powi(2)).sum();
+                            let d2: f64 = (0..3).map(|k| (r[k] - q[k]).powi(2)).sum();
                             if d2 <= tol * tol {
                                 found = Some(j);
                                 break 'outer;
@@ -221,7 +221,7 @@ pub fn repair(mesh: &Mesh, opts: &RepairOptions) -> (Mesh, RepairReport, Vec<u32
     for t in out.triangles() {
         info[c.label[t[0] as usize] as usize].triangles += 1;
     }
-    info.sort_by(|a, b| b.triangles.cmp(&a.triangles));
+    info.sort_by_key(|c| std::cmp::Reverse(c.triangles));
     rep.components = info;
     (out, rep, vertex_map)
 }

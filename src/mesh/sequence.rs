@@ -8,7 +8,7 @@ use super::mesh::{Bounds, Mesh, check_finite};
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshSequence {
     mesh: Mesh,
-    frames: Vec<[f32; 3]>,
+    frames: Vec<[f64; 3]>,
     /// Frames per second, if the source says.
     pub fps: Option<f64>,
 }
@@ -18,7 +18,7 @@ impl MeshSequence {
     /// and every coordinate finite.
     pub fn new(
         mesh: Mesh,
-        frames: Vec<[f32; 3]>,
+        frames: Vec<[f64; 3]>,
         fps: Option<f64>,
     ) -> Result<MeshSequence, TopologyError> {
         let n = mesh.vertex_count();
@@ -54,12 +54,12 @@ impl MeshSequence {
         self.frames.len() / self.mesh.vertex_count().max(1)
     }
     /// Positions of frame `i`.
-    pub fn frame(&self, i: usize) -> &[[f32; 3]] {
+    pub fn frame(&self, i: usize) -> &[[f64; 3]] {
         let n = self.mesh.vertex_count();
         &self.frames[i * n..(i + 1) * n]
     }
     /// All positions, frame-major.
-    pub fn all_positions(&self) -> &[[f32; 3]] {
+    pub fn all_positions(&self) -> &[[f64; 3]] {
         &self.frames
     }
     /// Frame `i` as a mesh.

@@ -221,8 +221,8 @@ impl FixedSolver {
             MemStack::new(&mut ws.buf),
         );
         for (fi, &v) in self.free.iter().enumerate() {
-            for k in 0..K {
-                out[v as usize][k] = ws.rhs[(fi, k)];
+            for (k, o) in out[v as usize].iter_mut().enumerate() {
+                *o = ws.rhs[(fi, k)];
             }
         }
         for (c, &v) in self.fixed.iter().enumerate() {

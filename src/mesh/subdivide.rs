@@ -10,7 +10,7 @@ pub fn midpoint(mesh: &Mesh) -> Mesh {
     let mut pos = mesh.positions().to_vec();
     let mut mid: HashMap<(u32, u32), u32> = HashMap::with_capacity(mesh.triangle_count() * 3 / 2);
     let mut tris = Vec::with_capacity(mesh.triangle_count() * 4);
-    let mut edge = |a: u32, b: u32, pos: &mut Vec<[f32; 3]>| -> u32 {
+    let mut edge = |a: u32, b: u32, pos: &mut Vec<[f64; 3]>| -> u32 {
         let key = (a.min(b), a.max(b));
         *mid.entry(key).or_insert_with(|| {
             let (p, q) = (pos[a as usize], pos[b as usize]);
@@ -33,9 +33,9 @@ pub fn midpoint(mesh: &Mesh) -> Mesh {
 
 /// A regular icosahedron with unit circumradius.
 pub fn icosahedron() -> Mesh {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
     let s = 1.0 / (1.0 + t * t).sqrt();
-    let p: Vec<[f32; 3]> = [
+    let p: Vec<[f64; 3]> = [
         [-1.0, t, 0.0],
         [1.0, t, 0.0],
         [-1.0, -t, 0.0],

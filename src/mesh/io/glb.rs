@@ -89,15 +89,15 @@ fn accessor(
     })
 }
 
-fn bounds3(p: impl Iterator<Item = [f32; 3]>) -> (Vec<f32>, Vec<f32>) {
+fn bounds3(p: impl Iterator<Item = [f64; 3]>) -> (Vec<f32>, Vec<f32>) {
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
     let mut any = false;
     for v in p {
         any = true;
         for k in 0..3 {
-            lo[k] = lo[k].min(v[k]);
-            hi[k] = hi[k].max(v[k]);
+            lo[k] = lo[k].min(v[k] as f32);
+            hi[k] = hi[k].max(v[k] as f32);
         }
     }
     if !any {
@@ -145,7 +145,7 @@ pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshE
         None,
     );
 
-    let pos = bin.push_f32s(base.iter().flatten().copied());
+    let pos = bin.push_f32s(base.iter().flatten().map(|&v| v as f32));
     let pos_view = view(
         &mut root,
         pos,
@@ -165,7 +165,7 @@ pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshE
     let mut attributes = BTreeMap::new();
     attributes.insert(Valid(json::mesh::Semantic::Positions), pos_acc);
     if let Some(c) = mesh.colors() {
-        let cv = bin.push_f32s(c.iter().flatten().copied());
+        let cv = bin.push_f32s(c.iter().flatten().map(|&v| v as f32));
         let cview = view(&mut root, cv, Some(json::buffer::Target::ArrayBuffer), None);
         let cacc = accessor(&mut root, cview, 0, nv, C::F32, T::Vec3, None);
         attributes.insert(Valid(json::mesh::Semantic::Colors(0)), cacc);
@@ -183,7 +183,7 @@ pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshE
         };
         let (start, _) = bin.push_f32s(std::iter::empty());
         for f in 0..frames {
-            bin.push_f32s(disp(f).flatten());
+            bin.push_f32s(disp(f).flatten().map(|v| v as f32));
         }
         let len = bin.data.len() - start;
         let tview = view(

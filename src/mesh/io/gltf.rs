@@ -36,7 +36,7 @@ pub struct GltfAsset {
     /// The first skin, if any mesh is skinned.
     pub skin: Option<Skin>,
     /// Morph target displacements (per target, one per vertex of `mesh`).
-    pub morph_targets: Vec<Vec<[f32; 3]>>,
+    pub morph_targets: Vec<Vec<[f64; 3]>>,
     /// Key times and per-key weights of the first morph-weights animation.
     pub weights_animation: Option<(Vec<f32>, Vec<Vec<f32>>)>,
     /// Animation names and durations (seconds).
@@ -191,12 +191,14 @@ impl Ctx<'_> {
         Ok((out, comps))
     }
 
-    fn read_vec3(&self, acc: &gltf::Accessor, what: &str) -> Result<Vec<[f32; 3]>, MeshError> {
+    fn read_vec3(&self, acc: &gltf::Accessor, what: &str) -> Result<Vec<[f64; 3]>, MeshError> {
         if acc.dimensions() != Dimensions::Vec3 {
             return Err(self.err(format!("{what}: expected VEC3")));
         }
         let (v, _) = self.read_f32(acc, what)?;
-        Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        Ok(v.chunks_exact(3)
+            .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
+            .collect())
     }
 }
 
@@ -263,10 +265,13 @@ fn mat_mul(a: &Mat4, b: &Mat4) -> Mat4 {
     r
 }
 
-fn transform_point(m: &Mat4, p: [f32; 3]) -> [f32; 3] {
+fn transform_point(m: &Mat4, p: [f64; 3]) -> [f64; 3] {
     let mut r = [0.0; 3];
     for (row, v) in r.iter_mut().enumerate() {
-        *v = m[0][row] * p[0] + m[1][row] * p[1] + m[2][row] * p[2] + m[3][row];
+        *v = m[0][row] as f64 * p[0]
+            + m[1][row] as f64 * p[1]
+            + m[2][row] as f64 * p[2]
+            + m[3][row] as f64;
     }
     r
 }
@@ -364,11 +369,11 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
         }
     }
 
-    let mut positions: Vec<[f32; 3]> = Vec::new();
-    let mut colors: Vec<[f32; 3]> = Vec::new();
+    let mut positions: Vec<[f64; 3]> = Vec::new();
+    let mut colors: Vec<[f64; 3]> = Vec::new();
     let mut any_color = false;
     let mut tris: Vec<[u32; 3]> = Vec::new();
-    let mut targets: Vec<Vec<[f32; 3]>> = Vec::new();
+    let mut targets: Vec<Vec<[f64; 3]>> = Vec::new();
     let mut morph_node: Option<usize> = None;
     let mut skin_joints: Vec<[u16; 4]> = Vec::new();
     let mut skin_weights: Vec<[f32; 4]> = Vec::new();
@@ -420,7 +425,10 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
                     if comps < 3 || v.len() != nv * comps {
                         return Err(ctx.err("COLOR_0 has the wrong size"));
                     }
-                    colors.extend(v.chunks_exact(comps).map(|c| [c[0], c[1], c[2]]));
+                    colors.extend(
+                        v.chunks_exact(comps)
+                            .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]),
+                    );
                     any_color = true;
                 }
                 None => colors.extend(std::iter::repeat_n([1.0; 3], nv)),
@@ -641,9 +649,9 @@ impl GltfAsset {
             for (k, &wk) in w.iter().enumerate() {
                 if wk != 0.0 {
                     for (p, d) in frames[start..].iter_mut().zip(&self.morph_targets[k]) {
-                        p[0] += wk * d[0];
-                        p[1] += wk * d[1];
-                        p[2] += wk * d[2];
+                        p[0] += wk as f64 * d[0];
+                        p[1] += wk as f64 * d[1];
+                        p[2] += wk as f64 * d[2];
                     }
                 }
             }

@@ -45,11 +45,11 @@ pub fn parse_mdd(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
         .map(|c| f32::from_be_bytes([c[0], c[1], c[2], c[3]]))
         .collect();
     let data = &bytes[8 + 4 * frames..8 + 4 * frames + 12 * frames * points];
-    let positions: Vec<[f32; 3]> = data
+    let positions: Vec<[f64; 3]> = data
         .chunks_exact(12)
         .map(|c| {
             let f = |o: usize| f32::from_be_bytes([c[o], c[o + 1], c[o + 2], c[o + 3]]);
-            [f(0), f(4), f(8)]
+            [f(0) as f64, f(4) as f64, f(8) as f64]
         })
         .collect();
     if let Some(k) = positions
@@ -81,7 +81,7 @@ pub fn read_mdd(path: &Path) -> Result<PointCache, MeshError> {
 }
 
 /// Encodes positions as MDD with frame times `k / fps`.
-pub fn encode_mdd(points: usize, positions: &[[f32; 3]], fps: f64) -> Vec<u8> {
+pub fn encode_mdd(points: usize, positions: &[[f64; 3]], fps: f64) -> Vec<u8> {
     let frames = positions.len() / points.max(1);
     let mut out = Vec::with_capacity(8 + frames * 4 + positions.len() * 12);
     out.extend_from_slice(&(frames as i32).to_be_bytes());
@@ -91,7 +91,7 @@ pub fn encode_mdd(points: usize, positions: &[[f32; 3]], fps: f64) -> Vec<u8> {
     }
     for p in positions {
         for v in p {
-            out.extend_from_slice(&v.to_be_bytes());
+            out.extend_from_slice(&(*v as f32).to_be_bytes());
         }
     }
     out
@@ -100,7 +100,7 @@ pub fn encode_mdd(points: usize, positions: &[[f32; 3]], fps: f64) -> Vec<u8> {
 /// Writes an MDD file atomically.
 pub fn write_mdd(
     points: usize,
-    positions: &[[f32; 3]],
+    positions: &[[f64; 3]],
     fps: f64,
     path: &Path,
 ) -> Result<(), MeshError> {

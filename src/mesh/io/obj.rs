@@ -8,8 +8,8 @@ use std::path::Path;
 
 /// Parses OBJ text; `path` names the source in errors.
 pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, MeshError> {
-    let mut pos: Vec<[f32; 3]> = Vec::new();
-    let mut col: Vec<[f32; 3]> = Vec::new();
+    let mut pos: Vec<[f64; 3]> = Vec::new();
+    let mut col: Vec<[f64; 3]> = Vec::new();
     let mut tris: Vec<[u32; 3]> = Vec::new();
     let mut groups: Vec<Group> = Vec::new();
     let mut poly: Vec<u32> = Vec::with_capacity(8);
@@ -20,7 +20,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, MeshError> {
         let Some(key) = it.next() else { continue };
         match key {
             "v" => {
-                let mut v = [0.0f32; 7];
+                let mut v = [0.0f64; 7];
                 let mut k = 0;
                 for tok in it {
                     if k == 7 {
@@ -31,7 +31,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, MeshError> {
                         ));
                     }
                     v[k] = tok
-                        .parse::<f32>()
+                        .parse::<f64>()
                         .ok()
                         .filter(|x| x.is_finite())
                         .ok_or_else(|| {
@@ -140,7 +140,7 @@ pub fn read_obj(path: &Path) -> Result<Mesh, MeshError> {
 
 /// Formats a mesh as OBJ with the given positions (the mesh's own if `None`).
 /// Floats use the shortest exact decimal form, so reading back is lossless.
-pub fn format_obj(mesh: &Mesh, positions: Option<&[[f32; 3]]>) -> String {
+pub fn format_obj(mesh: &Mesh, positions: Option<&[[f64; 3]]>) -> String {
     let p = positions.unwrap_or(mesh.positions());
     let mut s = String::with_capacity(p.len() * 40 + mesh.triangle_count() * 24);
     s.push_str("# written by surfmotion\n");
@@ -171,7 +171,7 @@ pub fn format_obj(mesh: &Mesh, positions: Option<&[[f32; 3]]>) -> String {
 /// Writes an OBJ file atomically.
 pub fn write_obj(
     mesh: &Mesh,
-    positions: Option<&[[f32; 3]]>,
+    positions: Option<&[[f64; 3]]>,
     path: &Path,
 ) -> Result<(), MeshError> {
     crate::fsutil::write_bytes_atomic(path, format_obj(mesh, positions).as_bytes())?;

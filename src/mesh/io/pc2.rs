@@ -12,7 +12,7 @@ pub struct PointCache {
     /// Points per frame.
     pub points: usize,
     /// Positions, frame-major (`frames × points`).
-    pub positions: Vec<[f32; 3]>,
+    pub positions: Vec<[f64; 3]>,
     /// First frame number (PC2) or 0.
     pub start: f32,
     /// Frames between samples (PC2 sample rate) or 1.
@@ -86,11 +86,11 @@ pub fn parse_pc2(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
         ));
     }
     let data = &bytes[32..32 + need as usize];
-    let positions: Vec<[f32; 3]> = data
+    let positions: Vec<[f64; 3]> = data
         .chunks_exact(12)
         .map(|c| {
             let f = |o: usize| f32::from_le_bytes([c[o], c[o + 1], c[o + 2], c[o + 3]]);
-            [f(0), f(4), f(8)]
+            [f(0) as f64, f(4) as f64, f(8) as f64]
         })
         .collect();
     if let Some(k) = positions
@@ -126,7 +126,7 @@ pub fn read_pc2(path: &Path) -> Result<PointCache, MeshError> {
 }
 
 /// Encodes positions (`frames × points`, frame-major) as PC2.
-pub fn encode_pc2(points: usize, positions: &[[f32; 3]]) -> Vec<u8> {
+pub fn encode_pc2(points: usize, positions: &[[f64; 3]]) -> Vec<u8> {
     let frames = positions.len() / points.max(1);
     let mut out = Vec::with_capacity(32 + positions.len() * 12);
     out.extend_from_slice(MAGIC);
@@ -137,14 +137,14 @@ pub fn encode_pc2(points: usize, positions: &[[f32; 3]]) -> Vec<u8> {
     out.extend_from_slice(&(frames as i32).to_le_bytes());
     for p in positions {
         for v in p {
-            out.extend_from_slice(&v.to_le_bytes());
+            out.extend_from_slice(&(*v as f32).to_le_bytes());
         }
     }
     out
 }
 
 /// Writes a PC2 file atomically.
-pub fn write_pc2(points: usize, positions: &[[f32; 3]], path: &Path) -> Result<(), MeshError> {
+pub fn write_pc2(points: usize, positions: &[[f64; 3]], path: &Path) -> Result<(), MeshError> {
     crate::fsutil::write_bytes_atomic(path, &encode_pc2(points, positions))?;
     Ok(())
 }

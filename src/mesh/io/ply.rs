@@ -246,8 +246,8 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
             }
         }
     }
-    let mut positions: Vec<[f32; 3]> = Vec::new();
-    let mut colors: Vec<[f32; 3]> = Vec::new();
+    let mut positions: Vec<[f64; 3]> = Vec::new();
+    let mut colors: Vec<[f64; 3]> = Vec::new();
     let mut tris: Vec<[u32; 3]> = Vec::new();
     let mut poly: Vec<u32> = Vec::new();
     let mut has_vertex = false;
@@ -328,18 +328,14 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
             }
             if is_vertex {
                 let (x, y, z) = (xi.unwrap_or(0), yi.unwrap_or(0), zi.unwrap_or(0));
-                positions.push([vals[x] as f32, vals[y] as f32, vals[z] as f32]);
+                positions.push([vals[x], vals[y], vals[z]]);
                 if let [Some(r), Some(g), Some(b)] = ci {
                     let scale = if el.props[r].ty == Scalar::U8 {
                         1.0 / 255.0
                     } else {
                         1.0
                     };
-                    colors.push([
-                        (vals[r] * scale) as f32,
-                        (vals[g] * scale) as f32,
-                        (vals[b] * scale) as f32,
-                    ]);
+                    colors.push([vals[r] * scale, vals[g] * scale, vals[b] * scale]);
                 }
             }
         }
@@ -362,7 +358,7 @@ pub fn read_ply(path: &Path) -> Result<Mesh, MeshError> {
 }
 
 /// Encodes a mesh as binary little-endian PLY (float xyz, uchar colours).
-pub fn encode_ply(mesh: &Mesh, positions: Option<&[[f32; 3]]>) -> Vec<u8> {
+pub fn encode_ply(mesh: &Mesh, positions: Option<&[[f64; 3]]>) -> Vec<u8> {
     let p = positions.unwrap_or(mesh.positions());
     let mut h = format!(
         "ply\nformat binary_little_endian 1.0\ncomment written by surfmotion\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n",
@@ -378,7 +374,7 @@ pub fn encode_ply(mesh: &Mesh, positions: Option<&[[f32; 3]]>) -> Vec<u8> {
     let mut out = h.into_bytes();
     for (i, v) in p.iter().enumerate() {
         for c in v {
-            out.extend_from_slice(&c.to_le_bytes());
+            out.extend_from_slice(&(*c as f32).to_le_bytes());
         }
         if let Some(col) = mesh.colors() {
             out.extend(
@@ -400,7 +396,7 @@ pub fn encode_ply(mesh: &Mesh, positions: Option<&[[f32; 3]]>) -> Vec<u8> {
 /// Writes a binary PLY atomically.
 pub fn write_ply(
     mesh: &Mesh,
-    positions: Option<&[[f32; 3]]>,
+    positions: Option<&[[f64; 3]]>,
     path: &Path,
 ) -> Result<(), MeshError> {
     crate::fsutil::write_bytes_atomic(path, &encode_ply(mesh, positions))?;
