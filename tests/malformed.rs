@@ -217,3 +217,14 @@ proptest! {
         let _ = mdd::parse_mdd(&m, Path::new("p.mdd"));
     }
 }
+
+/// cargo-fuzz found this: a GLB header declaring fewer bytes than the header
+/// itself made the gltf crate underflow (a panic with overflow checks on).
+#[test]
+fn regression_glb_declared_length_under_header_size() {
+    let crash = b"glTF\x40\x40\0\0\0\0\0\0\x40\x40\x40\x40\x46\x40\x40\x40\x40";
+    assert!(gltf::parse_gltf(crash, Path::new("crash.glb")).is_err());
+    let mut short = b"glTF\x02\0\0\0\x04\0\0\0".to_vec();
+    short.extend_from_slice(&[0; 12]);
+    assert!(gltf::parse_gltf(&short, Path::new("short.glb")).is_err());
+}

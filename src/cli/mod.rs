@@ -1,9 +1,11 @@
 //! Command-line interface: one file per subcommand.
 
+mod blend;
 mod demo;
 mod inspect;
 mod mesh;
 mod mocap;
+mod repair;
 
 use clap::{Parser, Subcommand};
 
@@ -35,6 +37,13 @@ enum Command {
     /// Meshes and mesh sequences: conversion between formats.
     #[command(subcommand)]
     Mesh(mesh::Cmd),
+    /// Blend two meshes of one connectivity: non-linear (rotations slerped,
+    /// stretch lerped, Poisson-stitched) or --linear; reports edge-length and
+    /// volume distortion of both.
+    Blend(blend::Args),
+    /// Repair a mesh: weld duplicate vertices, drop degenerate and duplicate
+    /// triangles and unreferenced vertices, report connected components.
+    Repair(repair::Args),
 }
 
 /// Entry point of the CLI.
@@ -49,6 +58,8 @@ pub fn main() -> anyhow::Result<()> {
         Command::Inspect(a) => inspect::run(a),
         Command::Mocap(c) => mocap::run(c),
         Command::Mesh(c) => mesh::run(c),
+        Command::Blend(a) => blend::run(a),
+        Command::Repair(a) => repair::run(a),
     }
 }
 

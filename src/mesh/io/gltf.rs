@@ -325,8 +325,45 @@ fn check_enums(root: &gltf::json::Root, path: &Path) -> Result<(), MeshError> {
     Ok(())
 }
 
+/// Checks a GLB container's header and chunk lengths before the `gltf` crate
+/// sees them: its parser subtracts the header size from the declared length
+/// unchecked (a declared length under 12 overflows; found by cargo-fuzz).
+/// Returns the bytes the header declares. Non-GLB input passes through.
+fn check_glb_layout<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a [u8], MeshError> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(bytes);
+    }
+    let bad = |msg: String| Err(MeshError::invalid(path, format!("GLB: {msg}")));
+    if bytes.len() < 20 {
+        return bad(format!("{} bytes: too short for a header and a chunk", bytes.len()));
+    }
+    let u32_at = |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]) as usize;
+    let (version, total) = (u32_at(4), u32_at(8));
+    if version != 2 {
+        return bad(format!("version {version}, expected 2"));
+    }
+    if total < 20 || total > bytes.len() {
+        return bad(format!("header declares {total} bytes, the file has {}", bytes.len()));
+    }
+    let mut off = 12;
+    let mut first = true;
+    while off + 8 <= total {
+        let (len, kind) = (u32_at(off), &bytes[off + 4..off + 8]);
+        if first && kind != b"JSON" {
+            return bad("the first chunk is not JSON".into());
+        }
+        first = false;
+        match (off + 8).checked_add(len) {
+            Some(end) if end <= total => off = end,
+            _ => return bad(format!("chunk at byte {off} declares {len} bytes, past the end ({total})")),
+        }
+    }
+    Ok(&bytes[..total])
+}
+
 /// Parses glTF or GLB bytes. `path` locates external buffers and names errors.
 pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
+    let bytes = check_glb_layout(bytes, path)?;
     let g = gltf::Gltf::from_slice(bytes)
         .map_err(|e| MeshError::invalid(path, format!("glTF: {e}")))?;
     check_enums(g.document.as_json(), path)?;

@@ -1,0 +1,57 @@
+//! `surfmotion repair IN -o OUT`.
+
+use std::path::PathBuf;
+use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
+use surfmotion::mesh::repair::{RepairOptions, repair};
+use surfmotion::mesh::MeshSequence;
+
+/// Arguments of `repair`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Input mesh (a file, or SEQ.pc2:FRAME).
+    pub input: String,
+    /// Output mesh.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also weld vertices closer than this fraction of the bounding-box
+    /// diagonal (default: only exact duplicates).
+    #[arg(long, default_value_t = 0.0)]
+    pub weld_tolerance: f64,
+    /// Keep only the largest connected component.
+    #[arg(long)]
+    pub keep_largest: bool,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `repair`: weld, drop degenerate/duplicate triangles and unreferenced
+/// vertices, report the connected components.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let s = load_sequence(&a.input, &LoadOptions::default())?;
+    if s.frame_count() != 1 {
+        anyhow::bail!("{}: {} frames; repair one frame ({}:FRAME)", a.input, s.frame_count(), a.input);
+    }
+    let (m, rep, _) = repair(&s.frame_mesh(0), &RepairOptions { weld_tolerance: a.weld_tolerance, keep_largest: a.keep_largest });
+    save_sequence(&MeshSequence::single(m.clone()), &a.output, None)?;
+    if a.json {
+        crate::outln!("{}", serde_json::to_string_pretty(&rep)?)?;
+    } else {
+        let c: Vec<String> = rep.components.iter().take(8).map(|c| format!("{}v/{}t", c.vertices, c.triangles)).collect();
+        crate::outln!(
+            "wrote {} ({} vertices, {} triangles)\n  welded vertices        {}\n  degenerate triangles   {}\n  duplicate triangles    {}\n  unreferenced vertices  {}\n  dropped (components)   {}\n  components             {}: {}{}",
+            a.output.display(),
+            m.vertex_count(),
+            m.triangle_count(),
+            rep.welded_vertices,
+            rep.degenerate_triangles,
+            rep.duplicate_triangles,
+            rep.unreferenced_vertices,
+            rep.dropped_component_triangles,
+            rep.components.len(),
+            c.join(" "),
+            if rep.components.len() > 8 { " …" } else { "" }
+        )?;
+    }
+    Ok(())
+}
