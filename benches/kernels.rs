@@ -9,12 +9,12 @@ use criterion::{BenchmarkId, Criterion};
 use glam::{DMat3, DQuat, DVec3};
 use std::hint::black_box;
 use std::path::PathBuf;
+use surfmotion::mesh::Mesh;
 use surfmotion::mesh::blend::Blender;
 use surfmotion::mesh::frames::RestFrames;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, obj::read_obj};
 use surfmotion::mesh::poisson::Poisson;
 use surfmotion::mesh::subdivide::midpoint;
-use surfmotion::mesh::Mesh;
 
 fn data() -> Option<PathBuf> {
     let p = std::env::var_os("SURFMOTION_DATA")
@@ -44,13 +44,29 @@ struct Case {
 }
 
 fn cases(d: &std::path::Path) -> Vec<Case> {
-    let samba = load_sequence(d.join("4d/samba/samba.pc2").to_str().unwrap(), &LoadOptions::default()).unwrap();
+    let samba = load_sequence(
+        d.join("4d/samba/samba.pc2").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
     let arm = read_obj(&d.join("scans/armadillo/armadillo.obj")).unwrap();
     let arm1 = midpoint(&arm);
     let arm2 = midpoint(&arm1);
-    let mut v = vec![Case { name: "samba_10k".into(), other: samba.frame(60).to_vec(), mesh: samba.frame_mesh(0) }];
-    for (n, m) in [("armadillo_15k", arm), ("armadillo_58k", arm1), ("armadillo_233k", arm2)] {
-        v.push(Case { name: n.into(), other: twist(&m), mesh: m });
+    let mut v = vec![Case {
+        name: "samba_10k".into(),
+        other: samba.frame(60).to_vec(),
+        mesh: samba.frame_mesh(0),
+    }];
+    for (n, m) in [
+        ("armadillo_15k", arm),
+        ("armadillo_58k", arm1),
+        ("armadillo_233k", arm2),
+    ] {
+        v.push(Case {
+            name: n.into(),
+            other: twist(&m),
+            mesh: m,
+        });
     }
     v
 }
@@ -64,19 +80,26 @@ fn bench(c: &mut Criterion, cases: &[Case]) {
         g.bench_function("factor", |b| b.iter(|| Poisson::new(black_box(m)).unwrap()));
         let poisson = Poisson::new(m).unwrap();
         let mut pw = poisson.workspace();
-        let grads = RestFrames::new(m.positions(), m.triangles()).gradients(&case.other, m.triangles());
+        let grads =
+            RestFrames::new(m.positions(), m.triangles()).gradients(&case.other, m.triangles());
         let mut x = vec![[0.0; 3]; m.vertex_count()];
         poisson.assemble(&grads, &mut pw);
         g.bench_function("solve", |b| b.iter(|| poisson.solve(&mut pw, &mut x)));
-        g.bench_function("reconstruct", |b| b.iter(|| poisson.reconstruct(black_box(&grads), &mut pw, &mut x)));
+        g.bench_function("reconstruct", |b| {
+            b.iter(|| poisson.reconstruct(black_box(&grads), &mut pw, &mut x))
+        });
         let blender = Blender::new(m).unwrap();
         let mut bw = blender.workspace();
         let ga = blender.decompose(m.positions(), &mut bw);
         let gb = blender.decompose(&case.other, &mut bw);
         let mut out = vec![[0.0; 3]; m.vertex_count()];
-        g.bench_function("blend", |b| b.iter(|| blender.blend(&ga, &gb, black_box(0.4), &mut out, &mut bw)));
+        g.bench_function("blend", |b| {
+            b.iter(|| blender.blend(&ga, &gb, black_box(0.4), &mut out, &mut bw))
+        });
         let mut gd = ga.clone();
-        g.bench_function("decompose", |b| b.iter(|| blender.decompose_into(black_box(&case.other), &mut bw, &mut gd)));
+        g.bench_function("decompose", |b| {
+            b.iter(|| blender.decompose_into(black_box(&case.other), &mut bw, &mut gd))
+        });
         g.bench_with_input(BenchmarkId::new("polar", "x1000"), &grads, |b, gr| {
             b.iter(|| {
                 let mut s = DMat3::ZERO;
@@ -110,7 +133,10 @@ fn main() {
     bench(&mut c, &cases);
     c.final_summary();
     println!("\nper-frame cost as a ratio to the prefactored 3-column solve at the same size:");
-    println!("{:<16} {:>9} {:>10} {:>10} {:>12} {:>8} {:>10}", "mesh", "vertices", "factor ms", "solve ms", "reconstruct", "blend", "decompose");
+    println!(
+        "{:<16} {:>9} {:>10} {:>10} {:>12} {:>8} {:>10}",
+        "mesh", "vertices", "factor ms", "solve ms", "reconstruct", "blend", "decompose"
+    );
     for case in &cases {
         let g = format!("kernels/{}", case.name);
         let (Some(f), Some(s), Some(r), Some(b), Some(dc)) = (

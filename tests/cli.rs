@@ -243,3 +243,86 @@ fn demo_runs_and_help_explains() {
         assert!(h.contains(w), "--help lacks {w}");
     }
 }
+
+#[test]
+fn blend_and_repair_from_the_command_line() {
+    let Some(d) = common::data_dir() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let pc2 = d.join("4d/samba/samba.pc2");
+    let out = dir.path().join("mid.obj");
+    let (a, b) = (
+        format!("{}:0", pc2.display()),
+        format!("{}:60", pc2.display()),
+    );
+    let o = run(&[
+        "blend",
+        &a,
+        &b,
+        "--alpha",
+        "0.5",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(
+        v["edge_length_distortion"].as_f64().unwrap()
+            < v["linear_edge_length_distortion"].as_f64().unwrap()
+    );
+    assert_eq!(
+        surfmotion::mesh::io::obj::read_obj(&out)
+            .unwrap()
+            .vertex_count(),
+        9971
+    );
+    // Different connectivity is refused.
+    let o = run(&[
+        "blend",
+        &a,
+        d.join("4d/crane/crane.pc2:0").to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("connectivity"));
+    // A mesh with a loose vertex cannot be factored: a clear error, not NaNs.
+    let loose = dir.path().join("loose.obj");
+    std::fs::write(
+        &loose,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 5 5 5\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n",
+    )
+    .unwrap();
+    let moved = dir.path().join("moved.obj");
+    std::fs::write(
+        &moved,
+        "v 0 0 0\nv 2 0 0\nv 0 1 0\nv 0 0 1\nv 5 5 5\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "blend",
+        loose.to_str().unwrap(),
+        moved.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("vertex 4 is in no triangle"),
+        "{}",
+        stderr(&o)
+    );
+    // Repair drops it, and then the blend works.
+    let fixed = dir.path().join("fixed.obj");
+    let o = run(&[
+        "repair",
+        loose.to_str().unwrap(),
+        "-o",
+        fixed.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(r["unreferenced_vertices"], 1);
+    assert_eq!(r["components"].as_array().unwrap().len(), 1);
+}

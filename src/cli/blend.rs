@@ -2,10 +2,10 @@
 
 use anyhow::bail;
 use std::path::PathBuf;
+use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::blend::{Blender, linear_blend};
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
 use surfmotion::mesh::measure::distortion;
-use surfmotion::mesh::MeshSequence;
 
 /// Arguments of `blend`.
 #[derive(clap::Args)]
@@ -38,24 +38,39 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if !(0.0..=1.0).contains(&a.alpha) {
         bail!("--alpha {} is outside 0..1", a.alpha);
     }
-    let opts = LoadOptions { topology: a.topology.clone(), fps: None };
+    let opts = LoadOptions {
+        topology: a.topology.clone(),
+        fps: None,
+    };
     let one = |spec: &str| -> anyhow::Result<MeshSequence> {
         let s = load_sequence(spec, &opts)?;
         if s.frame_count() != 1 {
-            bail!("{spec}: {} frames; name one with {spec}:FRAME", s.frame_count());
+            bail!(
+                "{spec}: {} frames; name one with {spec}:FRAME",
+                s.frame_count()
+            );
         }
         Ok(s)
     };
     let (sa, sb) = (one(&a.a)?, one(&a.b)?);
     let (ma, mb) = (sa.frame_mesh(0), sb.frame_mesh(0));
     if ma.vertex_count() != mb.vertex_count() || ma.triangles() != mb.triangles() {
-        bail!("{} and {}: not the same connectivity ({} vs {} vertices)", a.a, a.b, ma.vertex_count(), mb.vertex_count());
+        bail!(
+            "{} and {}: not the same connectivity ({} vs {} vertices)",
+            a.a,
+            a.b,
+            ma.vertex_count(),
+            mb.vertex_count()
+        );
     }
     let t0 = std::time::Instant::now();
     let nonlinear = || -> anyhow::Result<Vec<[f64; 3]>> {
         let bl = Blender::new(&ma)?;
         let mut ws = bl.workspace();
-        let (ga, gb) = (bl.decompose(ma.positions(), &mut ws), bl.decompose(mb.positions(), &mut ws));
+        let (ga, gb) = (
+            bl.decompose(ma.positions(), &mut ws),
+            bl.decompose(mb.positions(), &mut ws),
+        );
         let mut out = vec![[0.0; 3]; ma.vertex_count()];
         bl.blend(&ga, &gb, a.alpha, &mut out, &mut ws);
         Ok(out)

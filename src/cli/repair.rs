@@ -1,9 +1,9 @@
 //! `surfmotion repair IN -o OUT`.
 
 use std::path::PathBuf;
+use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
 use surfmotion::mesh::repair::{RepairOptions, repair};
-use surfmotion::mesh::MeshSequence;
 
 /// Arguments of `repair`.
 #[derive(clap::Args)]
@@ -30,14 +30,30 @@ pub struct Args {
 pub fn run(a: Args) -> anyhow::Result<()> {
     let s = load_sequence(&a.input, &LoadOptions::default())?;
     if s.frame_count() != 1 {
-        anyhow::bail!("{}: {} frames; repair one frame ({}:FRAME)", a.input, s.frame_count(), a.input);
+        anyhow::bail!(
+            "{}: {} frames; repair one frame ({}:FRAME)",
+            a.input,
+            s.frame_count(),
+            a.input
+        );
     }
-    let (m, rep, _) = repair(&s.frame_mesh(0), &RepairOptions { weld_tolerance: a.weld_tolerance, keep_largest: a.keep_largest });
+    let (m, rep, _) = repair(
+        &s.frame_mesh(0),
+        &RepairOptions {
+            weld_tolerance: a.weld_tolerance,
+            keep_largest: a.keep_largest,
+        },
+    );
     save_sequence(&MeshSequence::single(m.clone()), &a.output, None)?;
     if a.json {
         crate::outln!("{}", serde_json::to_string_pretty(&rep)?)?;
     } else {
-        let c: Vec<String> = rep.components.iter().take(8).map(|c| format!("{}v/{}t", c.vertices, c.triangles)).collect();
+        let c: Vec<String> = rep
+            .components
+            .iter()
+            .take(8)
+            .map(|c| format!("{}v/{}t", c.vertices, c.triangles))
+            .collect();
         crate::outln!(
             "wrote {} ({} vertices, {} triangles)\n  welded vertices        {}\n  degenerate triangles   {}\n  duplicate triangles    {}\n  unreferenced vertices  {}\n  dropped (components)   {}\n  components             {}: {}{}",
             a.output.display(),

@@ -100,15 +100,18 @@ impl Poisson {
 
     /// Assembles `b` from per-triangle transforms into `ws.b`.
     pub fn assemble(&self, transforms: &[DMat3], ws: &mut PoissonWorkspace) {
+        self.assemble_with(ws, |t| transforms[t]);
+    }
+
+    /// Assembles `b` with the transform of triangle `t` given by `f(t)`, so
+    /// callers can compute transforms on the fly without storing them.
+    #[inline]
+    pub fn assemble_with(&self, ws: &mut PoissonWorkspace, mut f: impl FnMut(usize) -> DMat3) {
         ws.b.iter_mut().for_each(|r| *r = [0.0; 3]);
-        for ((t, we), m) in self
-            .triangles
-            .iter()
-            .zip(&self.weighted_edges)
-            .zip(transforms)
-        {
+        for (ti, (t, we)) in self.triangles.iter().zip(&self.weighted_edges).enumerate() {
+            let m = f(ti);
             for k in 0..3 {
-                let d = *m * we[k];
+                let d = m * we[k];
                 let (i, j) = (t[(k + 1) % 3] as usize, t[(k + 2) % 3] as usize);
                 for c in 0..3 {
                     ws.b[i][c] += d[c];

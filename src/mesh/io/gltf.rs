@@ -335,15 +335,23 @@ fn check_glb_layout<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a [u8], MeshEr
     }
     let bad = |msg: String| Err(MeshError::invalid(path, format!("GLB: {msg}")));
     if bytes.len() < 20 {
-        return bad(format!("{} bytes: too short for a header and a chunk", bytes.len()));
+        return bad(format!(
+            "{} bytes: too short for a header and a chunk",
+            bytes.len()
+        ));
     }
-    let u32_at = |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]) as usize;
+    let u32_at = |o: usize| {
+        u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]) as usize
+    };
     let (version, total) = (u32_at(4), u32_at(8));
     if version != 2 {
         return bad(format!("version {version}, expected 2"));
     }
     if total < 20 || total > bytes.len() {
-        return bad(format!("header declares {total} bytes, the file has {}", bytes.len()));
+        return bad(format!(
+            "header declares {total} bytes, the file has {}",
+            bytes.len()
+        ));
     }
     let mut off = 12;
     let mut first = true;
@@ -355,7 +363,11 @@ fn check_glb_layout<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a [u8], MeshEr
         first = false;
         match (off + 8).checked_add(len) {
             Some(end) if end <= total => off = end,
-            _ => return bad(format!("chunk at byte {off} declares {len} bytes, past the end ({total})")),
+            _ => {
+                return bad(format!(
+                    "chunk at byte {off} declares {len} bytes, past the end ({total})"
+                ));
+            }
         }
     }
     Ok(&bytes[..total])

@@ -1,0 +1,70 @@
+//! Property tests for the geometry kernels on random meshes (subdivided
+//! icosahedra with random vertex jitter) and random rigid motions.
+
+use glam::{DQuat, DVec3};
+use proptest::prelude::*;
+use surfmotion::mesh::Mesh;
+use surfmotion::mesh::blend::Blender;
+use surfmotion::mesh::laplacian::{cotan_triplets, to_rows};
+use surfmotion::mesh::subdivide::{icosahedron, midpoint};
+
+fn jittered(seed: u64, amount: f64) -> Mesh {
+    let m = midpoint(&icosahedron());
+    let mut s = seed | 1;
+    let mut rnd = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s % 10_000) as f64 / 10_000.0 - 0.5
+    };
+    let p: Vec<[f64; 3]> = m
+        .positions()
+        .iter()
+        .map(|q| q.map(|v| v * (1.0 + amount * rnd())))
+        .collect();
+    m.with_positions(&p).unwrap()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, .. ProptestConfig::default() })]
+
+    /// L·1 = 0, L symmetric, and −L positive semi-definite along random vectors.
+    #[test]
+    fn laplacian_invariants(seed in any::<u64>(), amount in 0.0f64..0.6, x in proptest::collection::vec(-1.0f64..1.0, 42)) {
+        let m = jittered(seed, amount);
+        let rows = to_rows(m.vertex_count(), cotan_triplets(&m));
+        let mut quad = 0.0;
+        for (i, r) in rows.iter().enumerate() {
+            let s: f64 = r.iter().map(|e| e.1).sum();
+            prop_assert!(s.abs() < 1e-9);
+            for &(j, v) in r {
+                let back = rows[j as usize].iter().find(|e| e.0 as usize == i).unwrap().1;
+                prop_assert!((back - v).abs() < 1e-12);
+                quad -= x[i] * v * x[j as usize];
+            }
+        }
+        prop_assert!(quad >= -1e-9, "xᵀ(−L)x = {quad}");
+    }
+
+    /// Blending a mesh with a rigidly moved copy gives the partially moved mesh.
+    #[test]
+    fn blend_of_rigid_motion_is_rigid(seed in any::<u64>(), ax in -1.0f64..1.0, ay in 0.1f64..1.0, angle in 0.0f64..3.0, alpha in 0.0f64..1.0) {
+        let m = jittered(seed, 0.3);
+        let axis = DVec3::new(ax, ay, 0.3).normalize();
+        let rot = DQuat::from_axis_angle(axis, angle);
+        let shift = DVec3::new(0.5, -1.0, 2.0);
+        let moved: Vec<[f64; 3]> = m.positions().iter().map(|p| (rot * DVec3::from_array(*p) + shift).to_array()).collect();
+        let b = Blender::new(&m).unwrap();
+        let mut ws = b.workspace();
+        let (g1, g2) = (b.decompose(m.positions(), &mut ws), b.decompose(&moved, &mut ws));
+        let mut out = vec![[0.0; 3]; m.vertex_count()];
+        b.blend(&g1, &g2, alpha, &mut out, &mut ws);
+        let c1 = g1.centroid;
+        let c = c1 * (1.0 - alpha) + g2.centroid * alpha;
+        let ra = DQuat::from_axis_angle(axis, angle * alpha);
+        for (o, p) in out.iter().zip(m.positions()) {
+            let want = ra * (DVec3::from_array(*p) - c1) + c;
+            prop_assert!((DVec3::from_array(*o) - want).length() < 1e-7);
+        }
+    }
+}
