@@ -27,14 +27,25 @@ pub type Sym3 = [f64; 6];
 /// Packs the symmetric part of a matrix.
 #[inline]
 pub fn sym3(m: DMat3) -> Sym3 {
-    [m.x_axis.x, m.y_axis.y, m.z_axis.z, 0.5 * (m.y_axis.x + m.x_axis.y), 0.5 * (m.z_axis.x + m.x_axis.z), 0.5 * (m.z_axis.y + m.y_axis.z)]
+    [
+        m.x_axis.x,
+        m.y_axis.y,
+        m.z_axis.z,
+        0.5 * (m.y_axis.x + m.x_axis.y),
+        0.5 * (m.z_axis.x + m.x_axis.z),
+        0.5 * (m.z_axis.y + m.y_axis.z),
+    ]
 }
 
 /// `R · S` for a unit quaternion `R` (unnormalised input is taken as is) and symmetric `S`.
 #[inline]
 fn rot_times_sym(q: DQuat, s: &Sym3) -> DMat3 {
     let r = DMat3::from_quat(q);
-    let cols = [DVec3::new(s[0], s[3], s[4]), DVec3::new(s[3], s[1], s[5]), DVec3::new(s[4], s[5], s[2])];
+    let cols = [
+        DVec3::new(s[0], s[3], s[4]),
+        DVec3::new(s[3], s[1], s[5]),
+        DVec3::new(s[4], s[5], s[2]),
+    ];
     DMat3::from_cols(r * cols[0], r * cols[1], r * cols[2])
 }
 
@@ -108,7 +119,8 @@ impl Blender {
         self.rest
             .gradients_into(positions, &self.triangles, &mut ws.gradients);
         out.rotation.resize(self.triangles.len(), DQuat::IDENTITY);
-        out.stretch.resize(self.triangles.len(), [1.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
+        out.stretch
+            .resize(self.triangles.len(), [1.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
         for ((g, r), s) in ws
             .gradients
             .iter()
@@ -124,7 +136,14 @@ impl Blender {
     }
 
     /// `G(a, b, α)`: the non-linear blend of two decomposed frames, written to `out`.
-    pub fn blend(&self, a: &FrameGradients, b: &FrameGradients, alpha: f64, out: &mut [[f64; 3]], ws: &mut BlendWorkspace) {
+    pub fn blend(
+        &self,
+        a: &FrameGradients,
+        b: &FrameGradients,
+        alpha: f64,
+        out: &mut [[f64; 3]],
+        ws: &mut BlendWorkspace,
+    ) {
         // Slerp weights in a separate pass over plain arrays: the per-triangle
         // chain (acos, sin, cos, divisions) is latency-bound, and independent
         // array lanes let the CPU overlap (and the compiler vectorise) them.
@@ -229,7 +248,11 @@ fn slerp_weight(dot: f64, t: f64) -> [f64; 2] {
     let s = if near { 1.0 } else { s };
     let (st, ct) = fast_sin_cos(t * th);
     let (wa, wb) = ((s * ct - d * st) / s, st / s);
-    if near { [(1.0 - t) / n, t * sign / n] } else { [wa, sign * wb] }
+    if near {
+        [(1.0 - t) / n, t * sign / n]
+    } else {
+        [wa, sign * wb]
+    }
 }
 
 /// [`slerp_weight`] for every entry of `cos`.
@@ -320,14 +343,21 @@ mod tests {
             let b = DQuat::from_axis_angle(DVec3::new(1.0, k as f64, -0.5).normalize(), ang) * a;
             for t in [0.0, 0.1, 0.5, 0.93, 1.0] {
                 let (x, y) = (slerp(a, b, t), a.slerp(b, t));
-                assert!(x.angle_between(y) < 1e-7, "{ang} {t}: {}", x.angle_between(y));
+                assert!(
+                    x.angle_between(y) < 1e-7,
+                    "{ang} {t}: {}",
+                    x.angle_between(y)
+                );
             }
             assert!(slerp(a, -b, 0.3).angle_between(a.slerp(b, 0.3)) < 1e-7);
         }
         for k in 0..=1000 {
             let y = std::f64::consts::FRAC_PI_2 * k as f64 / 1000.0;
             let (s, c) = fast_sin_cos(y);
-            assert!((s - y.sin()).abs() < 1e-12 && (c - y.cos()).abs() < 1e-12, "{y}");
+            assert!(
+                (s - y.sin()).abs() < 1e-12 && (c - y.cos()).abs() < 1e-12,
+                "{y}"
+            );
             let x = k as f64 / 1000.0;
             assert!((fast_acos(x) - x.acos()).abs() < 3e-8, "{x}");
         }
