@@ -6,6 +6,7 @@
 //! [`rig`] (canonical skeleton), [`mesh`] (meshes, sequences and their file
 //! formats), [`inspect`] (what a file holds).
 
+pub mod db;
 pub mod fsutil;
 pub mod inspect;
 pub mod mesh;

@@ -1,6 +1,7 @@
 //! Command-line interface: one file per subcommand.
 
 mod blend;
+mod db;
 mod demo;
 mod inspect;
 mod mesh;
@@ -37,6 +38,9 @@ enum Command {
     /// Meshes and mesh sequences: conversion between formats.
     #[command(subcommand)]
     Mesh(mesh::Cmd),
+    /// Character databases: write a manifest, check what it holds.
+    #[command(subcommand)]
+    Db(db::Cmd),
     /// Blend two meshes of one connectivity: non-linear (rotations slerped,
     /// stretch lerped, Poisson-stitched) or --linear; reports edge-length and
     /// volume distortion of both.
@@ -58,6 +62,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Inspect(a) => inspect::run(a),
         Command::Mocap(c) => mocap::run(c),
         Command::Mesh(c) => mesh::run(c),
+        Command::Db(c) => db::run(c),
         Command::Blend(a) => blend::run(a),
         Command::Repair(a) => repair::run(a),
     }

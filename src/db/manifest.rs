@@ -1,0 +1,363 @@
+//! The character database manifest, `character.toml`.
+//!
+//! A database is a directory holding a manifest that names the topology mesh,
+//! the captured sequences (OBJ folders, PC2/MDD caches, glTF files), their
+//! frame rate, units and up axis, optional vertex colours, and the rig
+//! annotation. Paths are relative to the directory unless absolute.
+//!
+//! ```toml
+//! name = "samba"
+//! topology = "samba.obj"
+//! fps = 30.0
+//! units = "m"
+//! up = "y"
+//!
+//! [[sequence]]
+//! name = "dance"
+//! path = "samba.pc2"
+//!
+//! [rig]
+//! landmarks = "landmarks.json"
+//! ```
+
+use crate::mesh::io::{LoadOptions, MeshFormat, load_sequence, obj::read_obj, ply::read_ply};
+use crate::mesh::{Mesh, MeshError, MeshSequence};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// File name of the manifest inside a database directory.
+pub const MANIFEST: &str = "character.toml";
+
+/// One captured sequence.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SequenceEntry {
+    /// Name, unique in the database.
+    pub name: String,
+    /// OBJ folder, PC2/MDD cache or glTF file.
+    pub path: PathBuf,
+    /// Frame rate of this sequence if it differs from the database's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fps: Option<f64>,
+}
+
+/// The skeletal annotation of the character (any one source is enough).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct RigSpec {
+    /// Landmarks on the rest frame (JSON: named points or vertex indices).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub landmarks: Option<PathBuf>,
+    /// Explicit part labels (JSON `{part: [vertex ids]}`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parts: Option<PathBuf>,
+    /// A rigged glTF whose vertices match the topology by position.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gltf_skin: Option<PathBuf>,
+}
+
+impl RigSpec {
+    /// True when no rig source is given.
+    pub fn is_empty(&self) -> bool {
+        self.landmarks.is_none() && self.parts.is_none() && self.gltf_skin.is_none()
+    }
+}
+
+fn default_fps() -> f64 {
+    30.0
+}
+fn default_units() -> String {
+    "m".into()
+}
+fn default_up() -> String {
+    "y".into()
+}
+
+/// The manifest.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// Character name.
+    pub name: String,
+    /// The topology mesh (its positions are the rest frame).
+    pub topology: PathBuf,
+    /// Frames per second of the captures. Default: 30.
+    #[serde(default = "default_fps")]
+    pub fps: f64,
+    /// Length unit of the files (`m`, `cm`, `mm`, `dm`, `inch`). Default: m.
+    #[serde(default = "default_units")]
+    pub units: String,
+    /// Up axis of the files (`y` or `z`). Default: y.
+    #[serde(default = "default_up")]
+    pub up: String,
+    /// Per-vertex colours (a mesh with the topology's vertex count), if separate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub colors: Option<PathBuf>,
+    /// Captured sequences.
+    #[serde(default, rename = "sequence")]
+    pub sequences: Vec<SequenceEntry>,
+    /// Rig annotation.
+    #[serde(default, skip_serializing_if = "RigSpec::is_empty")]
+    pub rig: RigSpec,
+}
+
+/// Errors of the database layer.
+#[derive(Debug, thiserror::Error)]
+pub enum DbError {
+    /// The manifest is missing or malformed.
+    #[error("{path}: {msg}")]
+    Manifest {
+        /// The manifest file.
+        path: PathBuf,
+        /// What is wrong.
+        msg: String,
+    },
+    /// A mesh file failed to load.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// Writing failed.
+    #[error(transparent)]
+    Io(#[from] crate::fsutil::FsError),
+}
+
+impl Manifest {
+    /// Reads `DIR/character.toml` and checks its fields.
+    pub fn load(dir: &Path) -> Result<Manifest, DbError> {
+        let path = dir.join(MANIFEST);
+        let text = crate::fsutil::read_text(&path).map_err(|e| DbError::Manifest {
+            path: path.clone(),
+            msg: format!(
+                "{} (is this a database directory? `surfmotion db init` writes one)",
+                e.source
+            ),
+        })?;
+        let m: Manifest = toml::from_str(&text).map_err(|e| DbError::Manifest {
+            path: path.clone(),
+            msg: e.to_string().replace('\n', " "),
+        })?;
+        m.validate()
+            .map_err(|msg| DbError::Manifest { path, msg })?;
+        Ok(m)
+    }
+
+    /// Checks values that TOML types cannot.
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.fps.is_finite() && self.fps > 0.0) {
+            return Err(format!("fps = {} is not a positive number", self.fps));
+        }
+        if crate::mocap::units::parse_unit(&self.units).is_none() {
+            return Err(format!(
+                "units = '{}': expected m, cm, mm, dm, inch or a number of metres",
+                self.units
+            ));
+        }
+        if !matches!(self.up.to_ascii_lowercase().as_str(), "y" | "z") {
+            return Err(format!("up = '{}': expected y or z", self.up));
+        }
+        let mut names = std::collections::HashSet::new();
+        for s in &self.sequences {
+            if !names.insert(s.name.as_str()) {
+                return Err(format!("two sequences are called '{}'", s.name));
+            }
+            if let Some(f) = s.fps
+                && !(f.is_finite() && f > 0.0)
+            {
+                return Err(format!(
+                    "sequence '{}': fps = {f} is not a positive number",
+                    s.name
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the manifest to `DIR/character.toml`, atomically.
+    pub fn save(&self, dir: &Path) -> Result<(), DbError> {
+        let text = toml::to_string_pretty(self).map_err(|e| DbError::Manifest {
+            path: dir.join(MANIFEST),
+            msg: e.to_string(),
+        })?;
+        crate::fsutil::write_bytes_atomic(&dir.join(MANIFEST), text.as_bytes())?;
+        Ok(())
+    }
+
+    /// A path of the manifest resolved against the database directory.
+    pub fn resolve(dir: &Path, p: &Path) -> PathBuf {
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            dir.join(p)
+        }
+    }
+
+    /// Loads the topology mesh.
+    pub fn load_topology(&self, dir: &Path) -> Result<Mesh, DbError> {
+        let p = Self::resolve(dir, &self.topology);
+        Ok(match MeshFormat::of(&p) {
+            Some(MeshFormat::Ply) => read_ply(&p)?,
+            Some(MeshFormat::Obj) => read_obj(&p)?,
+            _ => load_sequence(&p.to_string_lossy(), &LoadOptions::default())?.frame_mesh(0),
+        })
+    }
+
+    /// Loads one sequence, with the topology for point caches.
+    pub fn load_sequence(&self, dir: &Path, s: &SequenceEntry) -> Result<MeshSequence, DbError> {
+        let topo = Self::resolve(dir, &self.topology);
+        let p = Self::resolve(dir, &s.path);
+        let opts = LoadOptions {
+            topology: Some(topo),
+            fps: Some(s.fps.unwrap_or(self.fps)),
+        };
+        Ok(load_sequence(&p.to_string_lossy(), &opts)?)
+    }
+}
+
+/// Summary of one sequence for `db info`.
+#[derive(Debug, Clone, Serialize)]
+pub struct SequenceInfo {
+    /// Name.
+    pub name: String,
+    /// Frames (0 if it failed to load).
+    pub frames: usize,
+    /// Frames per second used.
+    pub fps: f64,
+}
+
+/// What `db info` reports.
+#[derive(Debug, Clone, Serialize)]
+pub struct DbInfo {
+    /// Character name.
+    pub name: String,
+    /// Topology vertex count.
+    pub vertices: usize,
+    /// Topology triangle count.
+    pub triangles: usize,
+    /// Sequences.
+    pub sequences: Vec<SequenceInfo>,
+    /// Total frames.
+    pub total_frames: usize,
+    /// Problems found (connectivity or frame-rate mismatch, missing rig, ...).
+    pub problems: Vec<String>,
+}
+
+/// Loads every part of a database and reports what it holds and what is wrong.
+pub fn info(dir: &Path) -> Result<DbInfo, DbError> {
+    let m = Manifest::load(dir)?;
+    let topo = m.load_topology(dir)?;
+    let mut problems: Vec<String> = topo
+        .problems()
+        .into_iter()
+        .map(|p| format!("topology: {p}"))
+        .collect();
+    let mut seqs = Vec::new();
+    for s in &m.sequences {
+        let fps = s.fps.unwrap_or(m.fps);
+        match m.load_sequence(dir, s) {
+            Ok(q) => {
+                if q.mesh().triangles() != topo.triangles()
+                    || q.mesh().vertex_count() != topo.vertex_count()
+                {
+                    problems.push(format!(
+                        "sequence '{}': connectivity differs from the topology ({} vertices / {} triangles vs {} / {})",
+                        s.name,
+                        q.mesh().vertex_count(),
+                        q.mesh().triangle_count(),
+                        topo.vertex_count(),
+                        topo.triangle_count()
+                    ));
+                }
+                if let Some(file_fps) = q.fps
+                    && (file_fps - fps).abs() > 1e-3 * fps
+                {
+                    problems.push(format!(
+                        "sequence '{}': the file says {file_fps:.3} fps, the manifest {fps}",
+                        s.name
+                    ));
+                }
+                seqs.push(SequenceInfo {
+                    name: s.name.clone(),
+                    frames: q.frame_count(),
+                    fps,
+                });
+            }
+            Err(e) => {
+                problems.push(format!("sequence '{}': {e}", s.name));
+                seqs.push(SequenceInfo {
+                    name: s.name.clone(),
+                    frames: 0,
+                    fps,
+                });
+            }
+        }
+    }
+    if m.sequences.is_empty() {
+        problems.push("no sequences".into());
+    }
+    if m.rig.is_empty() {
+        problems.push(
+            "no rig: add [rig] landmarks, parts or gltf_skin (needed for mocap-driven synthesis)"
+                .into(),
+        );
+    }
+    for (what, p) in [
+        ("landmarks", &m.rig.landmarks),
+        ("parts", &m.rig.parts),
+        ("gltf_skin", &m.rig.gltf_skin),
+        ("colors", &m.colors),
+    ] {
+        if let Some(p) = p
+            && !Manifest::resolve(dir, p).exists()
+        {
+            problems.push(format!(
+                "{what}: {} does not exist",
+                Manifest::resolve(dir, p).display()
+            ));
+        }
+    }
+    Ok(DbInfo {
+        name: m.name.clone(),
+        vertices: topo.vertex_count(),
+        triangles: topo.triangle_count(),
+        total_frames: seqs.iter().map(|s| s.frames).sum(),
+        sequences: seqs,
+        problems,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn toml_round_trip_and_validation() {
+        let m = Manifest {
+            name: "x".into(),
+            topology: "t.obj".into(),
+            fps: 25.0,
+            units: "cm".into(),
+            up: "z".into(),
+            colors: None,
+            sequences: vec![SequenceEntry {
+                name: "a".into(),
+                path: "a.pc2".into(),
+                fps: None,
+            }],
+            rig: RigSpec {
+                landmarks: Some("l.json".into()),
+                ..Default::default()
+            },
+        };
+        let text = toml::to_string_pretty(&m).unwrap();
+        let back: Manifest = toml::from_str(&text).unwrap();
+        assert_eq!(back, m);
+        let mut bad = m.clone();
+        bad.units = "furlong".into();
+        assert!(bad.validate().is_err());
+        let mut dup = m.clone();
+        dup.sequences.push(dup.sequences[0].clone());
+        assert!(dup.validate().unwrap_err().contains("two sequences"));
+        // Defaults.
+        let min: Manifest = toml::from_str("name = \"m\"\ntopology = \"m.obj\"\n").unwrap();
+        assert_eq!(
+            (min.fps, min.units.as_str(), min.up.as_str()),
+            (30.0, "m", "y")
+        );
+    }
+}

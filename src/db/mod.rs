@@ -1,0 +1,5 @@
+//! Character databases: the manifest and what it points to.
+
+pub mod manifest;
+
+pub use manifest::{DbError, DbInfo, MANIFEST, Manifest, RigSpec, SequenceEntry, info};
