@@ -12,3 +12,4 @@ pub mod inspect;
 pub mod mesh;
 pub mod mocap;
 pub mod rig;
+pub mod synth;
