@@ -269,3 +269,36 @@ fn written_glb_passes_the_khronos_validator() {
         assert_eq!(v["errors"], 0, "{line}");
     }
 }
+
+/// A skinned glTF with a node animation becomes a mesh sequence by linear
+/// blend skinning: it moves, stays finite, and keeps its edge lengths roughly.
+#[test]
+fn skinned_gltf_animation_becomes_a_sequence() {
+    let Some(d) = common::data_dir() else { return };
+    for (f, frames) in [
+        ("gltf/CesiumMan/CesiumMan.glb", 61),
+        ("gltf/Fox/Fox.glb", 103),
+    ] {
+        let s = load_sequence(d.join(f).to_str().unwrap(), &LoadOptions::default()).unwrap();
+        assert_eq!(s.frame_count(), frames, "{f}");
+        let m = s.mesh();
+        let e = surfmotion::mesh::measure::edges(m);
+        let l0 = surfmotion::mesh::measure::edge_lengths(s.frame(0), &e);
+        let mut moved = 0.0f64;
+        for k in 1..s.frame_count() {
+            let lk = surfmotion::mesh::measure::edge_lengths(s.frame(k), &e);
+            let change: f64 = l0
+                .iter()
+                .zip(&lk)
+                .map(|(a, b)| (a - b).abs() / a.max(1e-12))
+                .sum::<f64>()
+                / e.len() as f64;
+            assert!(
+                change < 0.1,
+                "{f} frame {k}: mean edge length change {change}"
+            );
+            moved = moved.max(max_diff(s.frame(0), s.frame(k)));
+        }
+        assert!(moved > 1e-3 * s.bounds().diagonal(), "{f}: nothing moves");
+    }
+}

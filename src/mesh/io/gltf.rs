@@ -43,8 +43,62 @@ pub struct GltfAsset {
     pub animations: Vec<(String, f32)>,
     /// Node count, for `inspect`.
     pub nodes: usize,
+    /// Node transform animations (translation, rotation, scale channels).
+    pub node_animations: Vec<NodeAnimation>,
+    /// Scene graph: parent of each node, rest TRS, and an order with parents first.
+    pub graph: NodeGraph,
     /// Non-fatal problems.
     pub problems: Vec<String>,
+}
+
+/// Which node property a channel drives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrsPath {
+    /// Translation (VEC3).
+    Translation,
+    /// Rotation quaternion xyzw (VEC4).
+    Rotation,
+    /// Scale (VEC3).
+    Scale,
+}
+
+/// One sampled channel of a node animation (CUBICSPLINE keys keep their values only).
+#[derive(Debug, Clone)]
+pub struct NodeChannel {
+    /// Target node.
+    pub node: usize,
+    /// Property.
+    pub path: TrsPath,
+    /// Key times (seconds, ascending).
+    pub times: Vec<f32>,
+    /// Key values (xyz or xyzw).
+    pub values: Vec<[f32; 4]>,
+    /// STEP interpolation (else linear / slerp).
+    pub step: bool,
+}
+
+/// A node animation: its name, duration and channels.
+#[derive(Debug, Clone)]
+pub struct NodeAnimation {
+    /// Name (may be empty).
+    pub name: String,
+    /// Last key time.
+    pub duration: f32,
+    /// Channels.
+    pub channels: Vec<NodeChannel>,
+}
+
+/// The node hierarchy with rest transforms.
+#[derive(Debug, Clone, Default)]
+pub struct NodeGraph {
+    /// Parent per node (`None` at a root or for unreachable nodes).
+    pub parent: Vec<Option<usize>>,
+    /// Rest translation, rotation, scale per node.
+    pub rest: Vec<(glam::DVec3, glam::DQuat, glam::DVec3)>,
+    /// Reachable nodes, parents before children.
+    pub order: Vec<usize>,
+    /// The skin's joint nodes (if any).
+    pub skin_joints: Vec<usize>,
 }
 
 struct Ctx<'a> {
@@ -404,12 +458,14 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
     };
     let nodes: Vec<gltf::Node> = doc.nodes().collect();
     let mut stack: Vec<(usize, Mat4)> = roots.iter().map(|&r| (r, IDENTITY)).collect();
+    let mut order = Vec::with_capacity(nn);
     while let Some((i, pm)) = stack.pop() {
         if world[i].is_some() {
             continue;
         }
         let m = mat_mul(&pm, &nodes[i].transform().matrix());
         world[i] = Some(m);
+        order.push(i);
         for c in nodes[i].children() {
             if world[c.index()].is_none() {
                 parent[c.index()] = Some(i);
@@ -637,6 +693,7 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
 
     // Animations.
     let mut animations = Vec::new();
+    let mut node_animations = Vec::new();
     let mut weights_animation = None;
     for a in doc.animations() {
         let mut dur = 0.0f32;
@@ -666,7 +723,74 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
             }
         }
         animations.push((a.name().unwrap_or("").to_string(), dur));
+        let mut channels = Vec::new();
+        for ch in a.channels() {
+            use gltf::animation::Property as P;
+            let path = match ch.target().property() {
+                P::Translation => TrsPath::Translation,
+                P::Rotation => TrsPath::Rotation,
+                P::Scale => TrsPath::Scale,
+                P::MorphTargetWeights => continue,
+            };
+            let (times, _) = ctx.read_f32(&ch.sampler().input(), "animation input")?;
+            let (vals, comps) = ctx.read_f32(&ch.sampler().output(), "animation output")?;
+            let want = if path == TrsPath::Rotation { 4 } else { 3 };
+            let cubic = ch.sampler().interpolation() == gltf::animation::Interpolation::CubicSpline;
+            let per_key = if cubic { 3 } else { 1 };
+            if comps != want || vals.len() != times.len() * per_key * comps {
+                return Err(ctx.err(format!(
+                    "animation '{}': a channel's output has the wrong size",
+                    a.name().unwrap_or("")
+                )));
+            }
+            if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
+                return Err(ctx.err(format!(
+                    "animation '{}': key times are not ascending",
+                    a.name().unwrap_or("")
+                )));
+            }
+            let values = (0..times.len())
+                .map(|k| {
+                    let o = (k * per_key + if cubic { 1 } else { 0 }) * comps;
+                    let mut v = [0.0f32; 4];
+                    v[..comps].copy_from_slice(&vals[o..o + comps]);
+                    v
+                })
+                .collect();
+            let step = ch.sampler().interpolation() == gltf::animation::Interpolation::Step;
+            channels.push(NodeChannel {
+                node: ch.target().node().index(),
+                path,
+                times,
+                values,
+                step,
+            });
+        }
+        node_animations.push(NodeAnimation {
+            name: a.name().unwrap_or("").to_string(),
+            duration: dur,
+            channels,
+        });
     }
+    let graph = NodeGraph {
+        parent: parent.clone(),
+        rest: nodes
+            .iter()
+            .map(|n| {
+                let (t, r, sc) = n.transform().decomposed();
+                (
+                    glam::DVec3::from_array(t.map(f64::from)),
+                    glam::DQuat::from_array(r.map(f64::from)).normalize(),
+                    glam::DVec3::from_array(sc.map(f64::from)),
+                )
+            })
+            .collect(),
+        order,
+        skin_joints: skin_idx
+            .and_then(|i| doc.skins().nth(i))
+            .map(|s| s.joints().map(|j| j.index()).collect())
+            .unwrap_or_default(),
+    };
     Ok(GltfAsset {
         mesh,
         skin,
@@ -674,6 +798,8 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
         weights_animation,
         animations,
         nodes: nn,
+        node_animations,
+        graph,
         problems,
     })
 }
@@ -683,11 +809,117 @@ pub fn read_gltf(path: &Path) -> Result<GltfAsset, MeshError> {
     parse_gltf(&crate::fsutil::read_bytes(path)?, path)
 }
 
+/// Samples one channel at time `t`.
+fn sample(ch: &NodeChannel, t: f32) -> [f32; 4] {
+    let n = ch.times.len();
+    if n == 0 {
+        return [0.0, 0.0, 0.0, 1.0];
+    }
+    let k = ch.times.partition_point(|&x| x <= t);
+    if k == 0 {
+        return ch.values[0];
+    }
+    if k >= n || ch.step {
+        return ch.values[(k - 1).min(n - 1)];
+    }
+    let (t0, t1) = (ch.times[k - 1], ch.times[k]);
+    let a = if t1 > t0 {
+        ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let (v0, v1) = (ch.values[k - 1], ch.values[k]);
+    if ch.path == TrsPath::Rotation {
+        let q0 = glam::Quat::from_array(v0).normalize();
+        let q1 = glam::Quat::from_array(v1).normalize();
+        q0.slerp(q1, a).to_array()
+    } else {
+        std::array::from_fn(|i| v0[i] + (v1[i] - v0[i]) * a)
+    }
+}
+
 impl GltfAsset {
+    /// Animation `index` of a skinned asset as a mesh sequence sampled at
+    /// `fps`: node transforms are sampled (linear, slerp or step), composed
+    /// down the hierarchy, and the mesh is skinned with linear blend skinning
+    /// `v' = Σ w_j (W_j · IBM_j) v` (glTF 2.0 §3.7.3; the mesh node's own
+    /// transform is ignored, as the spec says).
+    pub fn skinned_sequence(&self, index: usize, fps: f64) -> Result<MeshSequence, MeshError> {
+        use glam::{DMat4, DQuat, DVec3};
+        let bad = |m: String| MeshError::invalid(std::path::Path::new("<gltf>"), m);
+        let skin = self.skin.as_ref().ok_or_else(|| bad("no skin".into()))?;
+        let anim = self
+            .node_animations
+            .get(index)
+            .ok_or_else(|| bad(format!("no animation {index}")))?;
+        let g = &self.graph;
+        let frames = ((anim.duration as f64 * fps).floor() as usize + 1).min(100_000);
+        let nv = self.mesh.vertex_count();
+        let mut out = Vec::with_capacity(frames * nv);
+        let mut trs = g.rest.clone();
+        let mut world = vec![DMat4::IDENTITY; trs.len()];
+        let mut skinning = vec![DMat4::IDENTITY; g.skin_joints.len()];
+        for f in 0..frames {
+            let t = (f as f64 / fps) as f32;
+            trs.clone_from(&g.rest);
+            for ch in &anim.channels {
+                let Some(slot) = trs.get_mut(ch.node) else {
+                    continue;
+                };
+                let v = sample(ch, t);
+                match ch.path {
+                    TrsPath::Translation => {
+                        slot.0 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+                    }
+                    TrsPath::Rotation => {
+                        slot.1 =
+                            DQuat::from_xyzw(v[0] as f64, v[1] as f64, v[2] as f64, v[3] as f64)
+                                .normalize()
+                    }
+                    TrsPath::Scale => slot.2 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
+                }
+            }
+            for &n in &g.order {
+                let local = DMat4::from_scale_rotation_translation(trs[n].2, trs[n].1, trs[n].0);
+                world[n] = match g.parent[n] {
+                    Some(p) => world[p] * local,
+                    None => local,
+                };
+            }
+            for (k, &jn) in g.skin_joints.iter().enumerate() {
+                let ibm =
+                    DMat4::from_cols_array_2d(&skin.inverse_bind[k].map(|c| c.map(f64::from)));
+                skinning[k] = world[jn] * ibm;
+            }
+            for (v, p) in self.mesh.positions().iter().enumerate() {
+                let (js, ws) = (skin.joints[v], skin.weights[v]);
+                let src = DVec3::from_array(*p);
+                let mut acc = DVec3::ZERO;
+                let mut wsum = 0.0;
+                for i in 0..4 {
+                    let w = ws[i] as f64;
+                    if w != 0.0 {
+                        acc += skinning[js[i] as usize].transform_point3(src) * w;
+                        wsum += w;
+                    }
+                }
+                out.push(if wsum > 0.0 {
+                    (acc / wsum).to_array()
+                } else {
+                    *p
+                });
+            }
+        }
+        MeshSequence::new(self.mesh.clone(), out, Some(fps)).map_err(MeshError::from)
+    }
+
     /// The asset as a mesh sequence: one frame per key of the morph-weights
     /// animation (`base + Σ w_k · target_k`), or the single rest frame.
     pub fn to_sequence(&self) -> Result<MeshSequence, MeshError> {
         let Some((times, keys)) = &self.weights_animation else {
+            if self.skin.is_some() && !self.node_animations.is_empty() {
+                return self.skinned_sequence(0, 30.0);
+            }
             return Ok(MeshSequence::single(self.mesh.clone()));
         };
         let base = self.mesh.positions();
