@@ -439,16 +439,9 @@ impl AsfSkeleton {
                     Some(p) => self.bones[p].direction * self.bones[p].length,
                 };
                 let channels = if b.parent.is_none() {
-                    vec![
-                        Channel::Xposition,
-                        Channel::Yposition,
-                        Channel::Zposition,
-                        Channel::Zrotation,
-                        Channel::Yrotation,
-                        Channel::Xrotation,
-                    ]
+                    Channel::ROOT6.to_vec()
                 } else {
-                    vec![Channel::Zrotation, Channel::Yrotation, Channel::Xrotation]
+                    Channel::ROT_ZYX.to_vec()
                 };
                 Joint {
                     name: b.name.clone(),

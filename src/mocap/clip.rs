@@ -33,6 +33,18 @@ pub enum Channel {
 }
 
 impl Channel {
+    /// The usual root channels: position, then Z Y X rotation.
+    pub const ROOT6: [Channel; 6] = [
+        Channel::Xposition,
+        Channel::Yposition,
+        Channel::Zposition,
+        Channel::Zrotation,
+        Channel::Yrotation,
+        Channel::Xrotation,
+    ];
+    /// The usual joint channels: Z Y X rotation.
+    pub const ROT_ZYX: [Channel; 3] = [Channel::Zrotation, Channel::Yrotation, Channel::Xrotation];
+
     /// Parses a BVH channel name, case-insensitively.
     pub fn parse(s: &str) -> Option<Channel> {
         Some(match s.to_ascii_lowercase().as_str() {

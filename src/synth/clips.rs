@@ -132,16 +132,9 @@ pub fn gait_clip(g: Gait, seconds: f64, fps: f64) -> Clip {
             parent: parent.map(|p| JointId(p as u32)),
             offset: DVec3::from_array(*off),
             channels: if parent.is_none() {
-                vec![
-                    Channel::Xposition,
-                    Channel::Yposition,
-                    Channel::Zposition,
-                    Channel::Zrotation,
-                    Channel::Yrotation,
-                    Channel::Xrotation,
-                ]
+                Channel::ROOT6.to_vec()
             } else {
-                vec![Channel::Zrotation, Channel::Yrotation, Channel::Xrotation]
+                Channel::ROT_ZYX.to_vec()
             },
             tail: end.map(DVec3::from_array),
         })

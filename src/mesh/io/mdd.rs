@@ -45,26 +45,7 @@ pub fn parse_mdd(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
         .map(|c| f32::from_be_bytes([c[0], c[1], c[2], c[3]]))
         .collect();
     let data = &bytes[8 + 4 * frames..8 + 4 * frames + 12 * frames * points];
-    let positions: Vec<[f64; 3]> = data
-        .chunks_exact(12)
-        .map(|c| {
-            let f = |o: usize| f32::from_be_bytes([c[o], c[o + 1], c[o + 2], c[o + 3]]);
-            [f(0) as f64, f(4) as f64, f(8) as f64]
-        })
-        .collect();
-    if let Some(k) = positions
-        .iter()
-        .position(|p| !p.iter().all(|v| v.is_finite()))
-    {
-        return Err(MeshError::invalid(
-            path,
-            format!(
-                "non-finite position at frame {}, point {}",
-                k / points,
-                k % points
-            ),
-        ));
-    }
+    let positions = super::pc2::decode_points(data, points, true, path)?;
     Ok(PointCache {
         points,
         positions,

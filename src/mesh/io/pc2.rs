@@ -32,6 +32,42 @@ impl PointCache {
 
 const MAGIC: &[u8; 12] = b"POINTCACHE2\0";
 
+/// Decodes packed f32 xyz triples (little or big endian) into f64 points,
+/// rejecting non-finite values with their frame and point. Shared by PC2 and MDD.
+pub(crate) fn decode_points(
+    data: &[u8],
+    points: usize,
+    big_endian: bool,
+    path: &Path,
+) -> Result<Vec<[f64; 3]>, MeshError> {
+    let f = |c: &[u8]| {
+        let b = [c[0], c[1], c[2], c[3]];
+        (if big_endian {
+            f32::from_be_bytes(b)
+        } else {
+            f32::from_le_bytes(b)
+        }) as f64
+    };
+    let positions: Vec<[f64; 3]> = data
+        .chunks_exact(12)
+        .map(|c| [f(&c[0..4]), f(&c[4..8]), f(&c[8..12])])
+        .collect();
+    if let Some(k) = positions
+        .iter()
+        .position(|p| !p.iter().all(|v| v.is_finite()))
+    {
+        return Err(MeshError::invalid(
+            path,
+            format!(
+                "non-finite position at frame {}, point {}",
+                k / points.max(1),
+                k % points.max(1)
+            ),
+        ));
+    }
+    Ok(positions)
+}
+
 /// Parses PC2 bytes. Header counts are checked against the data length
 /// before anything is allocated.
 pub fn parse_pc2(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
@@ -85,27 +121,7 @@ pub fn parse_pc2(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
             have - need
         ));
     }
-    let data = &bytes[32..32 + need as usize];
-    let positions: Vec<[f64; 3]> = data
-        .chunks_exact(12)
-        .map(|c| {
-            let f = |o: usize| f32::from_le_bytes([c[o], c[o + 1], c[o + 2], c[o + 3]]);
-            [f(0) as f64, f(4) as f64, f(8) as f64]
-        })
-        .collect();
-    if let Some(k) = positions
-        .iter()
-        .position(|p| !p.iter().all(|v| v.is_finite()))
-    {
-        return Err(MeshError::invalid(
-            path,
-            format!(
-                "non-finite position at frame {}, point {}",
-                k / points as usize,
-                k % points as usize
-            ),
-        ));
-    }
+    let positions = decode_points(&bytes[32..32 + need as usize], points as usize, false, path)?;
     Ok(PointCache {
         points: points as usize,
         positions,
