@@ -18,7 +18,11 @@ pub fn run(_: Args) -> anyhow::Result<()> {
          \x20 surfmotion mocap positions CLIP --frames 0,10    forward kinematics\n\
          \x20 surfmotion mocap convert IN.amc OUT.bvh --fps 30 convert and resample clips\n\
          \x20 surfmotion mocap rigmap CLIP -o map.json         detected rig convention\n\
-         \x20 surfmotion mesh convert samba.pc2 samba.glb      mesh sequence formats"
+         \x20 surfmotion mocap procedural -o clips             procedural walk/run/turn BVH\n\
+         \x20 surfmotion mesh convert samba.pc2 samba.glb      mesh sequence formats\n\
+         \x20 surfmotion blend A.pc2:0 A.pc2:60 -o mid.obj     non-linear mesh blending\n\
+         \x20 surfmotion repair scan.obj -o clean.obj          weld, drop degenerate, components\n\
+         \x20 surfmotion db init DIR --mesh M --sequence N=P   character database manifest"
     )?;
     Ok(())
 }
