@@ -325,10 +325,22 @@ pub fn linear_blend(a: &[[f64; 3]], b: &[[f64; 3]], alpha: f64) -> Vec<[f64; 3]>
 mod tests {
     use super::*;
 
+    /// An icosahedron subdivided twice (162 vertices): small, closed, curved.
     fn bumpy() -> Mesh {
-        // A 2-ring-subdivided icosahedron would do; a small closed mesh suffices.
         let m = crate::mesh::subdivide::midpoint(&crate::mesh::subdivide::icosahedron());
         crate::mesh::subdivide::midpoint(&m)
+    }
+
+    /// A blender on `m1` and the decompositions of `m1` and `m2`.
+    fn setup(
+        m1: &Mesh,
+        m2: &[[f64; 3]],
+    ) -> (Blender, BlendWorkspace, FrameGradients, FrameGradients) {
+        let b = Blender::new(m1).unwrap();
+        let mut ws = b.workspace();
+        let g1 = b.decompose(m1.positions(), &mut ws);
+        let g2 = b.decompose(m2, &mut ws);
+        (b, ws, g1, g2)
     }
 
     fn close(a: &[[f64; 3]], b: &[[f64; 3]], tol: f64) -> bool {
@@ -372,12 +384,7 @@ mod tests {
             .iter()
             .map(|p| [p[0] * 1.3, p[1] + 0.2 * p[0] * p[0], p[2]])
             .collect();
-        let b = Blender::new(&m1).unwrap();
-        let mut ws = b.workspace();
-        let (g1, g2) = (
-            b.decompose(m1.positions(), &mut ws),
-            b.decompose(&m2, &mut ws),
-        );
+        let (b, mut ws, g1, g2) = setup(&m1, &m2);
         let mut out = vec![[0.0; 3]; m1.vertex_count()];
         let diag = m1.bounds().diagonal();
         b.blend(&g1, &g2, 0.0, &mut out, &mut ws);
@@ -398,14 +405,9 @@ mod tests {
             .iter()
             .map(|p| (rot * super::super::frames::dvec(*p)).to_array())
             .collect();
-        let b = Blender::new(&m1).unwrap();
-        let mut ws = b.workspace();
-        let (g1, g2) = (
-            b.decompose(m1.positions(), &mut ws),
-            b.decompose(&m2, &mut ws),
-        );
+        let (b, mut ws, g1, g2) = setup(&m1, &m2);
         let mut out = vec![[0.0; 3]; m1.vertex_count()];
-        let c1 = b.decompose(m1.positions(), &mut ws).centroid;
+        let c1 = g1.centroid;
         for alpha in [0.25, 0.5, 0.8] {
             b.blend(&g1, &g2, alpha, &mut out, &mut ws);
             let ra = DQuat::from_axis_angle(axis, 2.0 * alpha);
