@@ -38,7 +38,7 @@ pub fn sym3(m: DMat3) -> Sym3 {
 }
 
 /// `R · S` for a unit quaternion `R` (unnormalised input is taken as is) and symmetric `S`.
-#[inline]
+#[inline(always)]
 fn rot_times_sym(q: DQuat, s: &Sym3) -> DMat3 {
     let r = DMat3::from_quat(q);
     let cols = [
@@ -70,8 +70,7 @@ pub struct Blender {
 
 /// Scratch for [`Blender::blend`]: no allocation per blended frame.
 pub struct BlendWorkspace {
-    cos: Vec<f64>,
-    weights: Vec<[f64; 2]>,
+    edges: Vec<[DVec3; 3]>,
     transforms: Vec<DMat3>,
     gradients: Vec<DMat3>,
     pw: PoissonWorkspace,
@@ -93,8 +92,7 @@ impl Blender {
     /// Scratch space.
     pub fn workspace(&self) -> BlendWorkspace {
         BlendWorkspace {
-            cos: vec![0.0; self.triangles.len()],
-            weights: vec![[1.0, 0.0]; self.triangles.len()],
+            edges: vec![[DVec3::ZERO; 3]; self.triangles.len()],
             transforms: vec![DMat3::IDENTITY; self.triangles.len()],
             gradients: vec![DMat3::IDENTITY; self.triangles.len()],
             pw: self.poisson.workspace(),
@@ -144,21 +142,8 @@ impl Blender {
         out: &mut [[f64; 3]],
         ws: &mut BlendWorkspace,
     ) {
-        // Slerp weights in a separate pass over plain arrays: the per-triangle
-        // chain (acos, sin, cos, divisions) is latency-bound, and independent
-        // array lanes let the CPU overlap (and the compiler vectorise) them.
-        for ((c, qa), qb) in ws.cos.iter_mut().zip(&a.rotation).zip(&b.rotation) {
-            *c = qa.dot(*qb);
-        }
-        slerp_weights(&ws.cos, alpha, &mut ws.weights);
-        self.poisson.assemble_with(&mut ws.pw, |t| {
-            let [wa, wb] = ws.weights[t];
-            // Unit up to the approximation error (< 1e-7): no normalisation.
-            let r = a.rotation[t] * wa + b.rotation[t] * wb;
-            let (sa, sb) = (&a.stretch[t], &b.stretch[t]);
-            let s: Sym3 = std::array::from_fn(|k| sa[k] + (sb[k] - sa[k]) * alpha);
-            rot_times_sym(r, &s)
-        });
+        blend_edges(a, b, alpha, self.poisson.corner_vectors(), &mut ws.edges);
+        self.poisson.assemble_shares(&ws.edges, &mut ws.pw);
         let c = a.centroid * (1.0 - alpha) + b.centroid * alpha;
         self.finish(c, out, ws);
     }
@@ -218,6 +203,198 @@ impl Blender {
     }
 }
 
+/// The blended target edges of every triangle,
+/// `R(α) S(α) e_k` with `R(α)` the slerp of the inputs' rotations and `S(α)`
+/// the lerp of their stretches (Casas 2013, Eq. 1), `e_k` the weighted
+/// reference edges. One independent pass over the triangles; on x86-64 it
+/// runs in an AVX2+FMA build of the same code when the CPU has them.
+fn blend_edges(
+    a: &FrameGradients,
+    b: &FrameGradients,
+    alpha: f64,
+    g: &[[DVec3; 3]],
+    out: &mut [[DVec3; 3]],
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU has the features the function is compiled for.
+        unsafe { blend_edges_avx2(a, b, alpha, g, out) };
+        return;
+    }
+    blend_edges_body::<false>(a, b, alpha, g, out);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn blend_edges_avx2(
+    a: &FrameGradients,
+    b: &FrameGradients,
+    alpha: f64,
+    g: &[[DVec3; 3]],
+    out: &mut [[DVec3; 3]],
+) {
+    blend_edges_body::<true>(a, b, alpha, g, out);
+}
+
+/// `a · b + c`, fused where the build has FMA.
+#[inline(always)]
+fn madd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
+    if FMA { a.mul_add(b, c) } else { a * b + c }
+}
+
+/// `m · v` for a column-major 3×3 `m`.
+#[inline(always)]
+fn mat_vec<const FMA: bool>(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|r| madd::<FMA>(m[0][r], v[0], madd::<FMA>(m[1][r], v[1], m[2][r] * v[2])))
+}
+
+/// Lanes processed together: four triangles' arithmetic is done lane by
+/// lane on `[f64; LANES]` arrays, which the compiler maps onto SIMD registers.
+const LANES: usize = 4;
+type Lane = [f64; LANES];
+
+#[inline(always)]
+fn lanes(f: impl FnMut(usize) -> f64) -> Lane {
+    std::array::from_fn(f)
+}
+
+#[inline(always)]
+fn blend_edges_body<const FMA: bool>(
+    a: &FrameGradients,
+    b: &FrameGradients,
+    alpha: f64,
+    g: &[[DVec3; 3]],
+    out: &mut [[DVec3; 3]],
+) {
+    let n = out.len();
+    let full = n - n % LANES;
+    for (((qa, qb), (sa, sb)), (gt, ot)) in a.rotation[..full]
+        .chunks_exact(LANES)
+        .zip(b.rotation[..full].chunks_exact(LANES))
+        .zip(
+            a.stretch[..full]
+                .chunks_exact(LANES)
+                .zip(b.stretch[..full].chunks_exact(LANES)),
+        )
+        .zip(
+            g[..full]
+                .chunks_exact(LANES)
+                .zip(out[..full].chunks_exact_mut(LANES)),
+        )
+    {
+        let qa: [Lane; 4] = std::array::from_fn(|c| lanes(|l| qa[l].to_array()[c]));
+        let qb: [Lane; 4] = std::array::from_fn(|c| lanes(|l| qb[l].to_array()[c]));
+        let dot = lanes(|l| {
+            madd::<FMA>(
+                qa[0][l],
+                qb[0][l],
+                madd::<FMA>(
+                    qa[1][l],
+                    qb[1][l],
+                    madd::<FMA>(qa[2][l], qb[2][l], qa[3][l] * qb[3][l]),
+                ),
+            )
+        });
+        let (wa, wb) = slerp_weight_lanes::<FMA>(dot, alpha);
+        let q: [Lane; 4] =
+            std::array::from_fn(|c| lanes(|l| madd::<FMA>(qa[c][l], wa[l], qb[c][l] * wb[l])));
+        let st: [Lane; 6] =
+            std::array::from_fn(|c| lanes(|l| madd::<FMA>(sb[l][c] - sa[l][c], alpha, sa[l][c])));
+        let m = rot_sym_lanes::<FMA>(&q, &st);
+        // Each triangle's three corner vectors through its own M.
+        let gv: [[Lane; 3]; 3] =
+            std::array::from_fn(|k| std::array::from_fn(|c| lanes(|l| gt[l][k].to_array()[c])));
+        for k in 0..3 {
+            let r: [Lane; 3] = std::array::from_fn(|row| {
+                lanes(|l| {
+                    madd::<FMA>(
+                        m[0][row][l],
+                        gv[k][0][l],
+                        madd::<FMA>(m[1][row][l], gv[k][1][l], m[2][row][l] * gv[k][2][l]),
+                    )
+                })
+            });
+            for l in 0..LANES {
+                ot[l][k] = DVec3::new(r[0][l], r[1][l], r[2][l]);
+            }
+        }
+    }
+    for t in full..n {
+        let (qa, qb) = (a.rotation[t], b.rotation[t]);
+        let [wa, wb] = slerp_weight(qa.dot(qb), alpha);
+        let q = (qa * wa + qb * wb).to_array();
+        let (sa, sb) = (&a.stretch[t], &b.stretch[t]);
+        let st: Sym3 = std::array::from_fn(|k| madd::<FMA>(sb[k] - sa[k], alpha, sa[k]));
+        let m = rot_sym::<FMA>(q, st);
+        out[t] = g[t].map(|v| DVec3::from_array(mat_vec::<FMA>(&m, v.to_array())));
+    }
+}
+
+/// [`rot_sym`] lane by lane: `m[col][row]`.
+#[inline(always)]
+fn rot_sym_lanes<const FMA: bool>(q: &[Lane; 4], st: &[Lane; 6]) -> [[Lane; 3]; 3] {
+    let [x, y, z, w] = q;
+    let x2 = lanes(|l| x[l] + x[l]);
+    let y2 = lanes(|l| y[l] + y[l]);
+    let z2 = lanes(|l| z[l] + z[l]);
+    let p = |a: &Lane, b: &Lane| lanes(|l| a[l] * b[l]);
+    let (xx, xy, xz) = (p(x, &x2), p(x, &y2), p(x, &z2));
+    let (yy, yz, zz) = (p(y, &y2), p(y, &z2), p(z, &z2));
+    let (wx, wy, wz) = (p(w, &x2), p(w, &y2), p(w, &z2));
+    let r = [
+        [
+            lanes(|l| 1.0 - (yy[l] + zz[l])),
+            lanes(|l| xy[l] + wz[l]),
+            lanes(|l| xz[l] - wy[l]),
+        ],
+        [
+            lanes(|l| xy[l] - wz[l]),
+            lanes(|l| 1.0 - (xx[l] + zz[l])),
+            lanes(|l| yz[l] + wx[l]),
+        ],
+        [
+            lanes(|l| xz[l] + wy[l]),
+            lanes(|l| yz[l] - wx[l]),
+            lanes(|l| 1.0 - (xx[l] + yy[l])),
+        ],
+    ];
+    // Columns of S: (s0, s3, s4), (s3, s1, s5), (s4, s5, s2).
+    let cols = [[0, 3, 4], [3, 1, 5], [4, 5, 2]];
+    std::array::from_fn(|c| {
+        let [i, j, k] = cols[c];
+        std::array::from_fn(|row| {
+            lanes(|l| {
+                madd::<FMA>(
+                    r[0][row][l],
+                    st[i][l],
+                    madd::<FMA>(r[1][row][l], st[j][l], r[2][row][l] * st[k][l]),
+                )
+            })
+        })
+    })
+}
+
+/// `R · S` (column-major) for a quaternion `[x, y, z, w]` (unit up to the
+/// slerp's approximation error, < 1e-7: no normalisation) and symmetric `S`.
+#[inline(always)]
+fn rot_sym<const FMA: bool>(q: [f64; 4], st: Sym3) -> [[f64; 3]; 3] {
+    let [x, y, z, w] = q;
+    let (x2, y2, z2) = (x + x, y + y, z + z);
+    let (xx, xy, xz) = (x * x2, x * y2, x * z2);
+    let (yy, yz, zz) = (y * y2, y * z2, z * z2);
+    let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+    let r = [
+        [1.0 - (yy + zz), xy + wz, xz - wy],
+        [xy - wz, 1.0 - (xx + zz), yz + wx],
+        [xz + wy, yz - wx, 1.0 - (xx + yy)],
+    ];
+    [
+        mat_vec::<FMA>(&r, [st[0], st[3], st[4]]),
+        mat_vec::<FMA>(&r, [st[3], st[1], st[5]]),
+        mat_vec::<FMA>(&r, [st[4], st[5], st[2]]),
+    ]
+}
+
 /// Spherical linear interpolation along the shorter arc, without library
 /// transcendentals (the per-triangle slerp dominates a blend's cost):
 /// `θ = acos(cos θ)` by Abramowitz & Stegun 4.4.46 (|error| ≤ 2e-8 rad) and
@@ -236,8 +413,8 @@ pub fn slerp(a: DQuat, b: DQuat, t: f64) -> DQuat {
 /// `cos θ = a · b` (negative: the shorter arc, through `−b`).
 ///
 /// Branch-free (both the slerp and the normalised-lerp weights are computed
-/// and one is selected), so [`slerp_weights`] vectorises.
-#[inline]
+/// and one is selected), so the per-triangle pass has no unpredictable branch.
+#[inline(always)]
 fn slerp_weight(dot: f64, t: f64) -> [f64; 2] {
     let sign = if dot < 0.0 { -1.0 } else { 1.0 };
     let d = (dot * sign).min(1.0);
@@ -256,15 +433,84 @@ fn slerp_weight(dot: f64, t: f64) -> [f64; 2] {
     }
 }
 
-/// [`slerp_weight`] for every entry of `cos`.
-fn slerp_weights(cos: &[f64], t: f64, out: &mut [[f64; 2]]) {
-    for (o, &c) in out.iter_mut().zip(cos) {
-        *o = slerp_weight(c, t);
+/// [`slerp_weight`] lane by lane, written as whole-lane steps so that every
+/// step (including the square roots and divisions) becomes one SIMD operation.
+#[inline(always)]
+fn slerp_weight_lanes<const FMA: bool>(dot: Lane, t: f64) -> (Lane, Lane) {
+    let sign = lanes(|l| if dot[l] < 0.0 { -1.0 } else { 1.0 });
+    let d = lanes(|l| (dot[l] * sign[l]).min(1.0));
+    let n = lanes(|l| madd::<FMA>(2.0 * t * (1.0 - t), d[l], (1.0 - t) * (1.0 - t) + t * t).sqrt());
+    let mut p = [-0.0012624911; LANES];
+    for c in [
+        0.0066700901,
+        -0.0170881256,
+        0.0308918810,
+        -0.0501743046,
+        0.0889789874,
+        -0.2145988016,
+        1.5707963050,
+    ] {
+        p = lanes(|l| madd::<FMA>(p[l], d[l], c));
     }
+    let th = lanes(|l| (1.0 - d[l]).sqrt() * p[l]);
+    let near = lanes(|l| if d[l] > 0.99999 { 1.0 } else { 0.0 });
+    let s = lanes(|l| madd::<FMA>(-d[l], d[l], 1.0).sqrt());
+    let inv_s = lanes(|l| 1.0 / if near[l] > 0.0 { 1.0 } else { s[l] });
+    let y = lanes(|l| t * th[l]);
+    let y2 = lanes(|l| y[l] * y[l]);
+    let mut sn = [SIN_TAYLOR[0]; LANES];
+    let mut cs = [COS_TAYLOR[0]; LANES];
+    for k in 1..SIN_TAYLOR.len() {
+        sn = lanes(|l| madd::<FMA>(sn[l], y2[l], SIN_TAYLOR[k]));
+        cs = lanes(|l| madd::<FMA>(cs[l], y2[l], COS_TAYLOR[k]));
+    }
+    let sn = lanes(|l| sn[l] * y[l]);
+    let inv_n = lanes(|l| 1.0 / n[l]);
+    let wa = lanes(|l| {
+        if near[l] > 0.0 {
+            (1.0 - t) * inv_n[l]
+        } else {
+            (s[l] * cs[l] - d[l] * sn[l]) * inv_s[l]
+        }
+    });
+    let wb = lanes(|l| {
+        sign[l]
+            * if near[l] > 0.0 {
+                t * inv_n[l]
+            } else {
+                sn[l] * inv_s[l]
+            }
+    });
+    (wa, wb)
 }
 
+/// Taylor coefficients of `sin(y)/y` and `cos(y)` in `y²`, highest first
+/// (to degree 17 and 16).
+const SIN_TAYLOR: [f64; 9] = [
+    1.0 / 355687428096000.0,
+    -1.0 / 1307674368000.0,
+    1.0 / 6227020800.0,
+    -1.0 / 39916800.0,
+    1.0 / 362880.0,
+    -1.0 / 5040.0,
+    1.0 / 120.0,
+    -1.0 / 6.0,
+    1.0,
+];
+const COS_TAYLOR: [f64; 9] = [
+    1.0 / 20922789888000.0,
+    -1.0 / 87178291200.0,
+    1.0 / 479001600.0,
+    -1.0 / 3628800.0,
+    1.0 / 40320.0,
+    -1.0 / 720.0,
+    1.0 / 24.0,
+    -1.0 / 2.0,
+    1.0,
+];
+
 /// acos on [0, 1], Abramowitz & Stegun 4.4.46, |error| ≤ 2e-8.
-#[inline]
+#[inline(always)]
 fn fast_acos(x: f64) -> f64 {
     let p = -0.0012624911f64;
     let p = p * x + 0.0066700901;
@@ -278,7 +524,7 @@ fn fast_acos(x: f64) -> f64 {
 }
 
 /// (sin y, cos y) for y in [0, π/2] by Taylor series (error < 1e-12).
-#[inline]
+#[inline(always)]
 fn fast_sin_cos(y: f64) -> (f64, f64) {
     let y2 = y * y;
     // sin: y (1 − y²/3! + y⁴/5! − … − y¹⁶/17!) ; cos: 1 − y²/2! + … + y¹⁶/16!
@@ -373,6 +619,47 @@ mod tests {
             );
             let x = k as f64 / 1000.0;
             assert!((fast_acos(x) - x.acos()).abs() < 3e-8, "{x}");
+        }
+    }
+
+    #[test]
+    fn lane_kernel_matches_the_per_triangle_formula() {
+        // 21 triangles: five full lanes of four and a tail of one.
+        let m1 = crate::mesh::subdivide::icosahedron();
+        let tris: Vec<[u32; 3]> = m1.triangles()[..20]
+            .iter()
+            .chain(&m1.triangles()[..1])
+            .copied()
+            .collect();
+        let m1 = Mesh::new(m1.positions().to_vec(), tris).unwrap();
+        let m2: Vec<[f64; 3]> = m1
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let q = DQuat::from_rotation_y(0.4 * i as f64) * DQuat::from_rotation_x(0.3);
+                (q * DVec3::from_array(*p) * (1.0 + 0.05 * i as f64)).to_array()
+            })
+            .collect();
+        let (b, _, g1, g2) = setup(&m1, &m2);
+        let cv = b.poisson.corner_vectors();
+        for alpha in [0.0, 0.3, 1.0] {
+            let mut lanes_out = vec![[DVec3::ZERO; 3]; cv.len()];
+            blend_edges(&g1, &g2, alpha, cv, &mut lanes_out);
+            let mut plain = lanes_out.clone();
+            blend_edges_body::<false>(&g1, &g2, alpha, cv, &mut plain);
+            for t in 0..cv.len() {
+                let r = slerp(g1.rotation[t], g2.rotation[t], alpha);
+                let (sa, sb) = (&g1.stretch[t], &g2.stretch[t]);
+                let s: Sym3 = std::array::from_fn(|k| sa[k] + (sb[k] - sa[k]) * alpha);
+                let m = rot_times_sym(r, &s);
+                for k in 0..3 {
+                    let want = m * cv[t][k];
+                    let tol = 1e-6 * want.length().max(1e-3);
+                    assert!((lanes_out[t][k] - want).length() < tol, "{t} {k}");
+                    assert!((plain[t][k] - want).length() < tol, "{t} {k}");
+                }
+            }
         }
     }
 

@@ -22,9 +22,10 @@ use glam::{DMat3, DVec3};
 /// A prefactored Poisson reconstruction for one reference mesh.
 pub struct Poisson {
     triangles: Vec<[u32; 3]>,
-    /// Per triangle and corner k: `w_k · (p_(k+1) − p_(k+2))`, the weighted
-    /// reference edge facing corner k, oriented from corner k+2 to k+1.
-    weighted_edges: Vec<[DVec3; 3]>,
+    /// Per triangle and corner k: `we_(k+2) − we_(k+1)` with
+    /// `we_k = w_k · (p_(k+1) − p_(k+2))` the weighted reference edge facing
+    /// corner k (see [`Poisson::corner_vectors`]).
+    corner_vectors: Vec<[DVec3; 3]>,
     solver: FixedSolver,
     anchors: Vec<u32>,
     reference: Vec<[f64; 3]>,
@@ -64,7 +65,7 @@ impl Poisson {
         let solver = FixedSolver::new(reference.vertex_count(), k, anchors)?;
         let p = reference.positions();
         let w = half_cotangents(p, reference.triangles());
-        let weighted_edges = reference
+        let weighted_edges: Vec<[DVec3; 3]> = reference
             .triangles()
             .iter()
             .zip(&w)
@@ -75,9 +76,13 @@ impl Poisson {
                 })
             })
             .collect();
+        let corner_vectors = weighted_edges
+            .iter()
+            .map(|we| std::array::from_fn(|k| we[(k + 2) % 3] - we[(k + 1) % 3]))
+            .collect();
         Ok(Poisson {
             triangles: reference.triangles().to_vec(),
-            weighted_edges,
+            corner_vectors,
             solver,
             anchors: anchors.to_vec(),
             reference: p.iter().map(|&q| dvec(q).to_array()).collect(),
@@ -108,15 +113,36 @@ impl Poisson {
     #[inline]
     pub fn assemble_with(&self, ws: &mut PoissonWorkspace, mut f: impl FnMut(usize) -> DMat3) {
         ws.b.iter_mut().for_each(|r| *r = [0.0; 3]);
-        for (ti, (t, we)) in self.triangles.iter().zip(&self.weighted_edges).enumerate() {
+        for (ti, (t, g)) in self.triangles.iter().zip(&self.corner_vectors).enumerate() {
             let m = f(ti);
-            for k in 0..3 {
-                let d = m * we[k];
-                let (i, j) = (t[(k + 1) % 3] as usize, t[(k + 2) % 3] as usize);
-                for c in 0..3 {
-                    ws.b[i][c] += d[c];
-                    ws.b[j][c] -= d[c];
-                }
+            for (&v, gk) in t.iter().zip(g) {
+                let d = m * *gk;
+                let r = &mut ws.b[v as usize];
+                r[0] += d.x;
+                r[1] += d.y;
+                r[2] += d.z;
+            }
+        }
+    }
+
+    /// Per triangle and corner k: the vector `g_k` whose image `T_t g_k` is
+    /// corner k's share of `b` (the two weighted edges meeting at corner k,
+    /// `w_(k+2) e_(k+2) − w_(k+1) e_(k+1)`).
+    pub fn corner_vectors(&self) -> &[[DVec3; 3]] {
+        &self.corner_vectors
+    }
+
+    /// Assembles `b` from per-triangle corner shares already mapped:
+    /// `shares[t][k] = T_t · corner_vectors()[t][k]`. Three scattered
+    /// additions per triangle.
+    pub fn assemble_shares(&self, shares: &[[DVec3; 3]], ws: &mut PoissonWorkspace) {
+        ws.b.iter_mut().for_each(|r| *r = [0.0; 3]);
+        for (t, sh) in self.triangles.iter().zip(shares) {
+            for (&v, d) in t.iter().zip(sh) {
+                let r = &mut ws.b[v as usize];
+                r[0] += d.x;
+                r[1] += d.y;
+                r[2] += d.z;
             }
         }
     }

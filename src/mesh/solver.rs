@@ -83,6 +83,17 @@ impl FixedSolver {
     /// and that no vertex is isolated, so a singular system is a typed error
     /// rather than NaNs.
     pub fn new(n: usize, k: Triplets, fixed: &[u32]) -> Result<FixedSolver, SolveError> {
+        Self::build(n, k, fixed, true)
+    }
+
+    /// Factors a matrix the caller knows to be definite without fixed
+    /// unknowns (e.g. a Laplacian plus a positive diagonal, as in bone-heat
+    /// weights). A non-positive pivot is still a typed error.
+    pub fn definite(n: usize, k: Triplets) -> Result<FixedSolver, SolveError> {
+        Self::build(n, k, &[], false)
+    }
+
+    fn build(n: usize, k: Triplets, fixed: &[u32], check: bool) -> Result<FixedSolver, SolveError> {
         let rows = to_rows(n, k);
         let mut free_of = vec![0u32; n];
         for &f in fixed {
@@ -102,7 +113,9 @@ impl FixedSolver {
         for (k, &f) in fixed.iter().enumerate() {
             fixed_pos[f as usize] = k as u32;
         }
-        check_anchored(&rows, &free_of)?;
+        if check {
+            check_anchored(&rows, &free_of)?;
+        }
         let nf = free.len();
         let mut trip = Vec::with_capacity(rows.iter().map(Vec::len).sum());
         let mut coupling = vec![Vec::new(); nf];
