@@ -11,5 +11,7 @@ pub mod fsutil;
 pub mod inspect;
 pub mod mesh;
 pub mod mocap;
+pub mod render;
 pub mod rig;
+pub mod skeleton;
 pub mod synth;

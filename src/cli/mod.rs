@@ -6,7 +6,9 @@ mod demo;
 mod inspect;
 mod mesh;
 mod mocap;
+mod render;
 mod repair;
+mod rig;
 
 use clap::{Parser, Subcommand};
 
@@ -48,6 +50,13 @@ enum Command {
     /// Repair a mesh: weld duplicate vertices, drop degenerate and duplicate
     /// triangles and unreferenced vertices, report connected components.
     Repair(repair::Args),
+    /// Draw a mesh (or a frame of a sequence) to PNG, front and side views;
+    /// with --rig, coloured by body part with the skeleton drawn in.
+    Render(render::Args),
+    /// Rigs: embed the canonical skeleton, skin weights, body parts and joint
+    /// regressors in a rest mesh from a few landmarks.
+    #[command(subcommand)]
+    Rig(rig::Cmd),
 }
 
 /// Entry point of the CLI.
@@ -65,6 +74,8 @@ pub fn main() -> anyhow::Result<()> {
         Command::Db(c) => db::run(c),
         Command::Blend(a) => blend::run(a),
         Command::Repair(a) => repair::run(a),
+        Command::Render(a) => render::run(a),
+        Command::Rig(c) => rig::run(c),
     }
 }
 

@@ -1,0 +1,267 @@
+//! A small software rasteriser for looking at meshes: orthographic views,
+//! z-buffer, Lambert shading, per-vertex colours (part labels, weights),
+//! optional skeleton overlay; written as PNG. Used to check rig embeddings
+//! and deformations by eye, and by `surfmotion render`.
+
+use crate::fsutil::{FsError, write_atomic};
+use glam::DVec3;
+use std::path::Path;
+
+/// A viewing direction: the camera looks along `forward`, with `up` upwards.
+#[derive(Debug, Clone, Copy)]
+pub struct View {
+    /// Direction the camera looks along (from the eye into the scene).
+    pub forward: DVec3,
+    /// Up on the screen.
+    pub up: DVec3,
+}
+
+impl View {
+    /// Looking at a character that faces `facing` (Y-up), from in front of it.
+    pub fn front(facing: DVec3) -> View {
+        View {
+            forward: -facing.normalize_or(DVec3::Z),
+            up: DVec3::Y,
+        }
+    }
+
+    /// From the character's left side.
+    pub fn side(facing: DVec3) -> View {
+        let f = facing.normalize_or(DVec3::Z);
+        View {
+            forward: DVec3::Y.cross(f).normalize_or(DVec3::X) * -1.0,
+            up: DVec3::Y,
+        }
+    }
+}
+
+/// An RGB image.
+pub struct Image {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Row-major RGB bytes.
+    pub rgb: Vec<u8>,
+}
+
+impl Image {
+    /// A blank image of one colour.
+    pub fn new(width: usize, height: usize, background: [u8; 3]) -> Image {
+        Image {
+            width,
+            height,
+            rgb: background.repeat(width * height),
+        }
+    }
+
+    /// Puts `other` to the right of `self`.
+    pub fn beside(&self, other: &Image) -> Image {
+        let h = self.height.max(other.height);
+        let mut out = Image::new(self.width + other.width, h, [255; 3]);
+        for (img, x0) in [(self, 0), (other, self.width)] {
+            for y in 0..img.height {
+                let src = &img.rgb[y * img.width * 3..(y + 1) * img.width * 3];
+                let d = (y * out.width + x0) * 3;
+                out.rgb[d..d + src.len()].copy_from_slice(src);
+            }
+        }
+        out
+    }
+
+    /// Writes a PNG atomically.
+    pub fn save_png(&self, path: &Path) -> Result<(), FsError> {
+        write_atomic(path, |w| {
+            let mut enc = png::Encoder::new(w, self.width as u32, self.height as u32);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut wr = enc.write_header().map_err(std::io::Error::other)?;
+            wr.write_image_data(&self.rgb)
+                .map_err(std::io::Error::other)?;
+            wr.finish().map_err(std::io::Error::other)
+        })
+    }
+}
+
+/// What to draw.
+pub struct Scene<'a> {
+    /// Vertex positions.
+    pub positions: &'a [[f64; 3]],
+    /// Triangles.
+    pub triangles: &'a [[u32; 3]],
+    /// Per-vertex colour (grey when absent).
+    pub colours: Option<&'a [[u8; 3]]>,
+    /// Line segments drawn on top (e.g. bones), with their colour.
+    pub lines: &'a [([f64; 3], [f64; 3], [u8; 3])],
+}
+
+/// Renders `scene` seen along `view` into a `size × size` image, fitted to
+/// the mesh's extent.
+pub fn render(scene: &Scene, view: View, size: usize) -> Image {
+    let f = view.forward.normalize_or(DVec3::NEG_Z);
+    let up = (view.up - f * view.up.dot(f)).normalize_or(DVec3::Y);
+    let right = f.cross(up);
+    let project = |p: [f64; 3]| {
+        let p = DVec3::from_array(p);
+        (p.dot(right), p.dot(up), p.dot(f))
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for &p in scene.positions {
+        let (x, y, _) = project(p);
+        lo = [lo[0].min(x), lo[1].min(y)];
+        hi = [hi[0].max(x), hi[1].max(y)];
+    }
+    let mut img = Image::new(size, size, [255; 3]);
+    if !(lo[0].is_finite() && hi[0].is_finite()) {
+        return img;
+    }
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-12);
+    let scale = 0.92 * size as f64 / extent;
+    let centre = [(lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5];
+    let to_px = |p: [f64; 3]| {
+        let (x, y, z) = project(p);
+        (
+            size as f64 * 0.5 + (x - centre[0]) * scale,
+            size as f64 * 0.5 - (y - centre[1]) * scale,
+            z,
+        )
+    };
+    let mut depth = vec![f64::INFINITY; size * size];
+    let light = (-f + up * 0.5 + right * 0.3).normalize();
+    for tri in scene.triangles {
+        let [a, b, c] = tri.map(|v| scene.positions[v as usize]);
+        let n = (DVec3::from_array(b) - DVec3::from_array(a))
+            .cross(DVec3::from_array(c) - DVec3::from_array(a))
+            .normalize_or_zero();
+        let shade = 0.35 + 0.65 * n.dot(light).abs();
+        let col = |v: u32| {
+            scene
+                .colours
+                .and_then(|c| c.get(v as usize))
+                .copied()
+                .unwrap_or([200, 200, 200])
+        };
+        let cols = tri.map(col);
+        let avg: [f64; 3] =
+            std::array::from_fn(|k| cols.iter().map(|c| c[k] as f64).sum::<f64>() / 3.0);
+        let rgb = avg.map(|v| (v * shade).clamp(0.0, 255.0) as u8);
+        let p = [to_px(a), to_px(b), to_px(c)];
+        fill_triangle(&mut img, &mut depth, p, rgb);
+    }
+    for &(a, b, rgb) in scene.lines {
+        let (pa, pb) = (to_px(a), to_px(b));
+        let steps = ((pb.0 - pa.0).abs().max((pb.1 - pa.1).abs()) as usize).max(1);
+        for s in 0..=steps {
+            let t = s as f64 / steps as f64;
+            let (x, y) = (pa.0 + (pb.0 - pa.0) * t, pa.1 + (pb.1 - pa.1) * t);
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                put(&mut img, x as i64 + dx, y as i64 + dy, rgb);
+            }
+        }
+    }
+    img
+}
+
+fn put(img: &mut Image, x: i64, y: i64, rgb: [u8; 3]) {
+    if x >= 0 && y >= 0 && (x as usize) < img.width && (y as usize) < img.height {
+        let i = (y as usize * img.width + x as usize) * 3;
+        img.rgb[i..i + 3].copy_from_slice(&rgb);
+    }
+}
+
+fn fill_triangle(img: &mut Image, depth: &mut [f64], p: [(f64, f64, f64); 3], rgb: [u8; 3]) {
+    let xmin = p
+        .iter()
+        .map(|q| q.0)
+        .fold(f64::INFINITY, f64::min)
+        .floor()
+        .max(0.0);
+    let ymin = p
+        .iter()
+        .map(|q| q.1)
+        .fold(f64::INFINITY, f64::min)
+        .floor()
+        .max(0.0);
+    let xmax = p
+        .iter()
+        .map(|q| q.0)
+        .fold(f64::NEG_INFINITY, f64::max)
+        .ceil()
+        .min(img.width as f64 - 1.0);
+    let ymax = p
+        .iter()
+        .map(|q| q.1)
+        .fold(f64::NEG_INFINITY, f64::max)
+        .ceil()
+        .min(img.height as f64 - 1.0);
+    let area = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (p[1].1 - p[0].1);
+    if area.abs() < 1e-12 || xmin > xmax || ymin > ymax {
+        return;
+    }
+    for y in ymin as usize..=ymax as usize {
+        for x in xmin as usize..=xmax as usize {
+            let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
+            let e = |a: (f64, f64, f64), b: (f64, f64, f64)| {
+                ((b.0 - a.0) * (py - a.1) - (px - a.0) * (b.1 - a.1)) / area
+            };
+            let (w0, w1, w2) = (e(p[1], p[2]), e(p[2], p[0]), e(p[0], p[1]));
+            if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                continue;
+            }
+            let z = w0 * p[0].2 + w1 * p[1].2 + w2 * p[2].2;
+            let i = y * img.width + x;
+            if z < depth[i] {
+                depth[i] = z;
+                img.rgb[i * 3..i * 3 + 3].copy_from_slice(&rgb);
+            }
+        }
+    }
+}
+
+/// A distinct colour for label `k` (golden-angle hues).
+pub fn label_colour(k: usize) -> [u8; 3] {
+    let h = (k as f64 * 137.508) % 360.0;
+    let (s, v) = (0.65, 0.95);
+    let c = v * s;
+    let x = c * (1.0 - ((h / 60.0) % 2.0 - 1.0).abs());
+    let (r, g, b) = match (h / 60.0) as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let m = v - c;
+    [r, g, b].map(|u| ((u + m) * 255.0).round() as u8)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn renders_a_shape_and_round_trips_png() {
+        let m = crate::mesh::subdivide::icosahedron();
+        let img = render(
+            &Scene {
+                positions: m.positions(),
+                triangles: m.triangles(),
+                colours: None,
+                lines: &[],
+            },
+            View::front(DVec3::Z),
+            64,
+        );
+        // The centre is covered, the corner is background.
+        let at = |x: usize, y: usize| &img.rgb[(y * 64 + x) * 3..(y * 64 + x) * 3 + 3];
+        assert_ne!(at(32, 32), &[255, 255, 255]);
+        assert_eq!(at(0, 0), &[255, 255, 255]);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.png");
+        img.beside(&img).save_png(&p).unwrap();
+        let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).unwrap()));
+        let reader = dec.read_info().unwrap();
+        assert_eq!(reader.info().width, 128);
+    }
+}
