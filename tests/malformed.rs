@@ -44,6 +44,22 @@ fn readers() -> Vec<(&'static str, Reader)> {
         ("pc2", |b| drop(pc2::parse_pc2(b, Path::new("f.pc2")))),
         ("mdd", |b| drop(mdd::parse_mdd(b, Path::new("f.mdd")))),
         ("gltf", |b| drop(gltf::parse_gltf(b, Path::new("f.glb")))),
+        ("landmarks", |b| {
+            drop(surfmotion::rig::embed::landmarks::Landmarks::parse(
+                &text(b),
+                Path::new("f.json"),
+                100,
+            ))
+        }),
+        ("parts", |b| {
+            let tris = [[0u32, 1, 2], [0, 2, 3]];
+            drop(surfmotion::rig::embed::parse_parts(
+                &text(b),
+                Path::new("p.json"),
+                &tris,
+                4,
+            ))
+        }),
     ]
 }
 
@@ -82,6 +98,8 @@ fn seeds(fmt: &str) -> Vec<Vec<u8>> {
         "pc2" => vec![pc2::encode_pc2(4, seq.all_positions())],
         "mdd" => vec![mdd::encode_mdd(4, seq.all_positions(), 30.0)],
         "gltf" => vec![surfmotion::mesh::io::glb::encode_glb(&seq, None).unwrap()],
+        "landmarks" => vec![br#"{"chin": 1, "groin": [0, 1, 0], "l_wrist": 2, "r_wrist": 3, "l_elbow": 4, "r_elbow": 5, "l_knee": 6, "r_knee": [1e308, -0.5, 0]}"#.to_vec()],
+        "parts" => vec![br#"{"torso": [0, 1], "head": [2], "l_shin": [3, 3]}"#.to_vec()],
         _ => vec![],
     }
 }

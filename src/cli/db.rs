@@ -2,7 +2,10 @@
 
 use anyhow::{Context, bail};
 use std::path::{Path, PathBuf};
+use surfmotion::db::skeletons::{SkeletonKind, bone_length_spread, extract};
 use surfmotion::db::{MANIFEST, Manifest, RigSpec, SequenceEntry, info};
+use surfmotion::rig::Canonical;
+use surfmotion::skeleton::{BVH_NAMES, pose_clip};
 
 /// Database subcommands.
 #[derive(clap::Subcommand)]
@@ -13,6 +16,28 @@ pub enum Cmd {
     /// Load every part of a database and report what it holds and what is
     /// wrong (connectivity or frame-rate mismatch, missing rig, ...).
     Info(InfoArgs),
+    /// Extract the canonical skeleton of every frame of every sequence: the
+    /// rig is embedded from the manifest's landmarks, then each joint is
+    /// read off the frame by its regressor (or --kind centroid, the paper's
+    /// part centres). Writes per sequence SEQ.skeleton.json and SEQ.bvh (for
+    /// any mocap viewer), and rig.json, into --output (default DIR/skeletons).
+    Skeleton(SkeletonArgs),
+}
+
+/// Arguments of `db skeleton`.
+#[derive(clap::Args)]
+pub struct SkeletonArgs {
+    /// The database directory.
+    pub dir: PathBuf,
+    /// Output folder (default: DIR/skeletons).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// How joints are read off a frame.
+    #[arg(long, value_enum, default_value_t = SkeletonKind::Regressor)]
+    pub kind: SkeletonKind,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `db init`.
@@ -72,6 +97,7 @@ fn store_path(dir: &Path, p: &Path) -> anyhow::Result<PathBuf> {
 /// Runs a db subcommand.
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
+        Cmd::Skeleton(a) => return skeleton(a),
         Cmd::Init(a) => {
             std::fs::create_dir_all(&a.dir).with_context(|| format!("{}", a.dir.display()))?;
             if a.dir.join(MANIFEST).exists() && !a.force {
@@ -148,6 +174,68 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 }
             }
         }
+    }
+    Ok(())
+}
+
+fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
+    let t = std::time::Instant::now();
+    let (rig, seqs) = extract(&a.dir, a.kind)?;
+    let secs = t.elapsed().as_secs_f64();
+    let out = a.output.clone().unwrap_or_else(|| a.dir.join("skeletons"));
+    rig.save(&out.join("rig.json"))?;
+    let rest_pose = rig.joints.map(glam::DVec3::from_array);
+    let mut summary = Vec::new();
+    for s in &seqs {
+        let json = serde_json::json!({
+            "sequence": s.name,
+            "fps": s.fps,
+            "kind": a.kind,
+            "joints": Canonical::ALL.iter().map(|c| c.name()).collect::<Vec<_>>(),
+            "frames": s.poses.iter().map(|p| p.iter().map(|q| q.to_array()).collect::<Vec<_>>()).collect::<Vec<_>>(),
+        });
+        let jp = out.join(format!("{}.skeleton.json", s.name));
+        surfmotion::fsutil::write_bytes_atomic(&jp, serde_json::to_string(&json)?.as_bytes())?;
+        let clip = pose_clip(&rest_pose, &s.poses, s.fps)?;
+        let bp = out.join(format!("{}.bvh", s.name));
+        surfmotion::mocap::bvh::write_bvh(&clip, &bp)?;
+        let spread = bone_length_spread(&s.poses);
+        let worst = (1..Canonical::COUNT)
+            .max_by(|&x, &y| spread[x].total_cmp(&spread[y]))
+            .unwrap_or(1);
+        summary.push(serde_json::json!({
+            "sequence": s.name,
+            "frames": s.poses.len(),
+            "json": jp,
+            "bvh": bp,
+            "bone_length_max_deviation": Canonical::ALL.iter().skip(1).map(|c| (BVH_NAMES[c.index()], spread[c.index()])).collect::<std::collections::BTreeMap<_, _>>(),
+            "worst_bone": BVH_NAMES[worst],
+            "worst_deviation": spread[worst],
+        }));
+    }
+    if a.json {
+        let v = serde_json::json!({"seconds": secs, "kind": a.kind, "sequences": summary, "notes": rig.notes});
+        crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
+        return Ok(());
+    }
+    let frames: usize = seqs.iter().map(|s| s.poses.len()).sum();
+    crate::outln!(
+        "embedded the rig and extracted {frames} skeletons ({:?}) in {:.3} s → {}",
+        a.kind,
+        secs,
+        out.display()
+    )?;
+    for s in &summary {
+        crate::outln!(
+            "  {}: {} frames; bone lengths within {:.1}% of their median (worst: {})",
+            s["sequence"].as_str().unwrap_or(""),
+            s["frames"],
+            100.0 * s["worst_deviation"].as_f64().unwrap_or(0.0),
+            s["worst_bone"].as_str().unwrap_or("")
+        )?;
+    }
+    for n in &rig.notes {
+        crate::outln!("  note: {n}")?;
     }
     Ok(())
 }

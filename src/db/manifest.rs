@@ -115,6 +115,9 @@ pub enum DbError {
     /// Writing failed.
     #[error(transparent)]
     Io(#[from] crate::fsutil::FsError),
+    /// The rig could not be embedded.
+    #[error(transparent)]
+    Rig(#[from] crate::rig::embed::EmbedError),
 }
 
 impl Manifest {

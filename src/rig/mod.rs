@@ -1,6 +1,7 @@
 //! The canonical skeleton and the mapping of rig conventions onto it.
 
 mod canonical;
+pub mod embed;
 mod map;
 
 pub use canonical::Canonical;

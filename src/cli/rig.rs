@@ -1,0 +1,136 @@
+//! `surfmotion rig embed`: landmarks on a rest mesh → joints, skin weights,
+//! body parts and joint regressors.
+
+use std::path::PathBuf;
+use std::time::Instant;
+use surfmotion::fsutil::read_text;
+use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::rig::Canonical;
+use surfmotion::rig::embed::landmarks::Landmarks;
+use surfmotion::rig::embed::parts::{Part, neighbours, piece_counts};
+use surfmotion::rig::embed::{Embedding, parse_parts};
+
+/// `rig` subcommands.
+#[derive(clap::Subcommand)]
+pub enum Cmd {
+    /// Embed a rig in a rest mesh from landmarks (chin, groin, wrists,
+    /// elbows, knees; optionally shoulders, ankles, toes, head_top) given as
+    /// JSON points or vertex indices. Writes joints, bone-heat skin weights,
+    /// contiguous body parts with overlapping regions and joint regressors.
+    Embed(EmbedArgs),
+}
+
+/// Arguments of `rig embed`.
+#[derive(clap::Args)]
+pub struct EmbedArgs {
+    /// Rest mesh (a file, or SEQ.pc2:FRAME).
+    pub mesh: String,
+    /// Landmark JSON.
+    #[arg(long)]
+    pub landmarks: PathBuf,
+    /// Explicit part labels, JSON {part: [vertex ids]}, overriding the computed ones.
+    #[arg(long)]
+    pub parts: Option<PathBuf>,
+    /// Output embedding (JSON).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also draw the mesh coloured by part with the skeleton (PNG).
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs a `rig` subcommand.
+pub fn run(c: Cmd) -> anyhow::Result<()> {
+    match c {
+        Cmd::Embed(a) => embed(a),
+    }
+}
+
+fn embed(a: EmbedArgs) -> anyhow::Result<()> {
+    let s = load_sequence(&a.mesh, &LoadOptions::default())?;
+    let mesh = s.frame_mesh(0);
+    let lm = Landmarks::load(&a.landmarks, mesh.vertex_count())?;
+    let parts = match &a.parts {
+        Some(p) => Some(parse_parts(&read_text(p)?, p, mesh.triangles(), mesh.vertex_count())?.0),
+        None => None,
+    };
+    let t = Instant::now();
+    let e = Embedding::new(&mesh, &lm, parts)?;
+    let secs = t.elapsed().as_secs_f64();
+    e.save(&a.output)?;
+    if let Some(p) = &a.png {
+        let img = super::render::draw(
+            mesh.positions(),
+            mesh.triangles(),
+            Some(&e),
+            glam::DVec3::from_array(e.facing),
+            600,
+        );
+        img.save_png(p)?;
+    }
+    let nb = neighbours(mesh.vertex_count(), mesh.triangles());
+    let pieces = piece_counts(&e.labels, &nb);
+    let mut sizes = [0usize; Part::COUNT];
+    for &l in &e.labels {
+        sizes[l as usize] += 1;
+    }
+    if a.json {
+        let v = serde_json::json!({
+            "output": a.output,
+            "seconds": secs,
+            "joints": Canonical::ALL.iter().map(|c| (c.name(), e.joints[c.index()])).collect::<std::collections::BTreeMap<_, _>>(),
+            "parts": Part::ALL.iter().map(|p| (p.name(), serde_json::json!({"vertices": sizes[p.index()], "region": e.regions[p.index()].len(), "pieces": pieces[p.index()]}))).collect::<std::collections::BTreeMap<_, _>>(),
+            "facing": e.facing,
+            "height": e.height,
+            "notes": e.notes,
+        });
+        crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
+        return Ok(());
+    }
+    crate::outln!(
+        "embedded a rig in {} ({} vertices) in {:.2} s → {}",
+        a.mesh,
+        mesh.vertex_count(),
+        secs,
+        a.output.display()
+    )?;
+    let f = e.facing;
+    crate::outln!(
+        "  height {:.3}, facing ({:.2}, {:.2}, {:.2})",
+        e.height,
+        f[0],
+        f[1],
+        f[2]
+    )?;
+    crate::outln!("  joints:")?;
+    for c in Canonical::ALL {
+        let p = e.joints[c.index()];
+        crate::outln!(
+            "    {:<11} ({:>7.3}, {:>7.3}, {:>7.3})",
+            c.name(),
+            p[0],
+            p[1],
+            p[2]
+        )?;
+    }
+    crate::outln!("  parts (labelled vertices / overlapping region / pieces):")?;
+    for p in Part::ALL {
+        crate::outln!(
+            "    {:<12} {:>6} {:>6} {:>3}",
+            p.name(),
+            sizes[p.index()],
+            e.regions[p.index()].len(),
+            pieces[p.index()]
+        )?;
+    }
+    for n in &e.notes {
+        crate::outln!("  note: {n}")?;
+    }
+    if let Some(p) = &a.png {
+        crate::outln!("  drew {}", p.display())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,123 @@
+//! Per-frame skeletons of a character database (Huang et al. 2015, Sec. 3):
+//! the rig embedded once on the topology's rest frame, then every frame's
+//! canonical joints from the embedding's regressors (or, as in the paper,
+//! the plain centres of the joints' vertex sets).
+
+use super::manifest::{DbError, Manifest};
+use crate::fsutil::read_text;
+use crate::mesh::Mesh;
+use crate::rig::Canonical;
+use crate::rig::embed::landmarks::Landmarks;
+use crate::rig::embed::{Embedding, parse_parts};
+use crate::skeleton::{Pose, bone_lengths};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::Path;
+
+/// How joints are read off a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SkeletonKind {
+    /// Affine regressors: exact on the rest frame, rigid-motion equivariant.
+    #[default]
+    Regressor,
+    /// Plain centres of each joint's vertex set (Huang et al. 2015, Sec. 3).
+    Centroid,
+}
+
+/// The skeletons of one sequence.
+#[derive(Debug, Clone, Serialize)]
+pub struct SequenceSkeleton {
+    /// Sequence name.
+    pub name: String,
+    /// Frames per second.
+    pub fps: f64,
+    /// One pose per frame.
+    pub poses: Vec<Pose>,
+}
+
+/// Embeds the database's rig (landmarks, optionally with explicit parts).
+pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding, DbError> {
+    let Some(lp) = &m.rig.landmarks else {
+        return Err(DbError::Manifest {
+            path: dir.join(super::MANIFEST),
+            msg: "no [rig] landmarks: add `landmarks = \"FILE.json\"` under [rig] (see `surfmotion rig embed --help`)".into(),
+        });
+    };
+    let n = topology.vertex_count();
+    let lp = Manifest::resolve(dir, lp);
+    let lm = Landmarks::load(&lp, n).map_err(|e| DbError::Rig(e.into()))?;
+    let parts = match &m.rig.parts {
+        Some(p) => {
+            let p = Manifest::resolve(dir, p);
+            let text = read_text(&p)?;
+            Some(
+                parse_parts(&text, &p, topology.triangles(), n)
+                    .map_err(DbError::Rig)?
+                    .0,
+            )
+        }
+        None => None,
+    };
+    Embedding::new(topology, &lm, parts).map_err(DbError::Rig)
+}
+
+/// The poses of frames laid out one after another (`n` positions each).
+pub fn poses(rig: &Embedding, frames: &[[f64; 3]], n: usize, kind: SkeletonKind) -> Vec<Pose> {
+    frames
+        .par_chunks(n.max(1))
+        .map(|f| match kind {
+            SkeletonKind::Regressor => rig.skeleton(f),
+            SkeletonKind::Centroid => rig.centroid_skeleton(f),
+        })
+        .collect()
+}
+
+/// Largest relative deviation of each bone's length from its median over
+/// the poses (indexed by the child joint; 0 for the root).
+pub fn bone_length_spread(poses: &[Pose]) -> [f64; Canonical::COUNT] {
+    let lens: Vec<[f64; Canonical::COUNT]> = poses.iter().map(bone_lengths).collect();
+    std::array::from_fn(|b| {
+        let mut v: Vec<f64> = lens.iter().map(|l| l[b]).collect();
+        if v.is_empty() {
+            return 0.0;
+        }
+        v.sort_by(f64::total_cmp);
+        let med = v[v.len() / 2];
+        if med <= 0.0 {
+            return 0.0;
+        }
+        v.iter().map(|x| (x / med - 1.0).abs()).fold(0.0, f64::max)
+    })
+}
+
+/// Skeletons of every sequence of the database in `dir`.
+pub fn extract(
+    dir: &Path,
+    kind: SkeletonKind,
+) -> Result<(Embedding, Vec<SequenceSkeleton>), DbError> {
+    let m = Manifest::load(dir)?;
+    let topo = m.load_topology(dir)?;
+    let rig = embed_rig(dir, &m, &topo)?;
+    let mut out = Vec::with_capacity(m.sequences.len());
+    for s in &m.sequences {
+        let seq = m.load_sequence(dir, s)?;
+        if seq.mesh().vertex_count() != topo.vertex_count() {
+            return Err(DbError::Manifest {
+                path: dir.join(super::MANIFEST),
+                msg: format!(
+                    "sequence {}: {} vertices, the topology has {}",
+                    s.name,
+                    seq.mesh().vertex_count(),
+                    topo.vertex_count()
+                ),
+            });
+        }
+        out.push(SequenceSkeleton {
+            name: s.name.clone(),
+            fps: s.fps.unwrap_or(m.fps),
+            poses: poses(&rig, seq.all_positions(), topo.vertex_count(), kind),
+        });
+    }
+    Ok((rig, out))
+}

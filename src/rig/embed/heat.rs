@@ -1,0 +1,111 @@
+//! Bone-heat skin weights (Baran & Popović 2007, "Automatic rigging and
+//! animation of 3D characters", Sec. 4): the weight of joint j is the
+//! equilibrium temperature when the bones of j are held at 1 and heat
+//! diffuses over the surface,
+//! `(−Δ + H) w_j = H p_j`, with `H_ii = 1 / d_i²` (`d_i` the distance from
+//! vertex i to its nearest bone) and `p_j(i) = 1` where that bone is j's.
+//! Multiplied through by the mass matrix it is the symmetric definite
+//! `(−L + M H) w_j = M H p_j` (`L` the cotangent Laplacian), factored once
+//! and solved for all joints together. Visibility of bones is not tested:
+//! the nearest bone is taken as the one that heats a vertex.
+
+use super::section::segment_distance;
+use crate::mesh::Mesh;
+use crate::mesh::laplacian::cotan_triplets;
+use crate::mesh::mass::{MassKind, mass_diagonal};
+use crate::mesh::solver::{FixedSolver, SolveError};
+use crate::rig::Canonical;
+use glam::DVec3;
+
+/// A bone segment and the joint whose motion it follows.
+#[derive(Debug, Clone, Copy)]
+pub struct Bone {
+    /// The driving joint.
+    pub joint: Canonical,
+    /// Start.
+    pub a: DVec3,
+    /// End.
+    pub b: DVec3,
+}
+
+/// Dense weights: one row of [`Canonical::COUNT`] per vertex, summing to 1.
+pub type Weights = Vec<[f64; Canonical::COUNT]>;
+
+/// The nearest bone of each vertex and its distance.
+pub fn nearest_bones(positions: &[[f64; 3]], bones: &[Bone]) -> Vec<(usize, f64)> {
+    positions
+        .iter()
+        .map(|q| {
+            let p = DVec3::from_array(*q);
+            bones
+                .iter()
+                .enumerate()
+                .map(|(i, b)| (i, segment_distance(p, b.a, b.b)))
+                .min_by(|x, y| x.1.total_cmp(&y.1))
+                .unwrap_or((0, 1.0))
+        })
+        .collect()
+}
+
+/// Bone-heat weights for every vertex of `mesh`.
+pub fn bone_heat(mesh: &Mesh, bones: &[Bone]) -> Result<Weights, SolveError> {
+    let n = mesh.vertex_count();
+    let diag = mesh.bounds().diagonal().max(1e-12);
+    let near = nearest_bones(mesh.positions(), bones);
+    let mass = mass_diagonal(mesh, MassKind::Barycentric);
+    let mut k: Vec<(u32, u32, f64)> = cotan_triplets(mesh)
+        .into_iter()
+        .map(|(i, j, v)| (i, j, -v))
+        .collect();
+    let mut rhs = vec![[0.0; Canonical::COUNT]; n];
+    for (i, &(b, d)) in near.iter().enumerate() {
+        let d = d.max(1e-4 * diag);
+        let h = mass[i] / (d * d);
+        k.push((i as u32, i as u32, h));
+        rhs[i][bones[b].joint.index()] = h;
+    }
+    let solver = FixedSolver::definite(n, k)?;
+    let mut ws = solver.workspace(Canonical::COUNT);
+    let mut w = vec![[0.0; Canonical::COUNT]; n];
+    solver.solve::<{ Canonical::COUNT }>(&rhs, &[], &mut w, &mut ws);
+    for (row, &(b, _)) in w.iter_mut().zip(&near) {
+        let mut s = 0.0;
+        for x in row.iter_mut() {
+            *x = if x.is_finite() { x.max(0.0) } else { 0.0 };
+            s += *x;
+        }
+        if s > 1e-12 {
+            row.iter_mut().for_each(|x| *x /= s);
+        } else {
+            *row = [0.0; Canonical::COUNT];
+            row[bones[b].joint.index()] = 1.0;
+        }
+    }
+    Ok(w)
+}
+
+/// Keeps the `K` largest weights of each row, dropping those below `min`,
+/// renormalised: `(joint indices, weights)`; unused slots have weight 0.
+pub fn sparsify<const K: usize>(w: &Weights, min: f64) -> Vec<([u8; K], [f64; K])> {
+    w.iter()
+        .map(|row| {
+            let mut idx: Vec<usize> = (0..row.len()).collect();
+            idx.sort_by(|&a, &b| row[b].total_cmp(&row[a]));
+            let mut j = [0u8; K];
+            let mut v = [0.0; K];
+            for k in 0..K {
+                j[k] = idx[k] as u8;
+                v[k] = if k == 0 || row[idx[k]] >= min {
+                    row[idx[k]]
+                } else {
+                    0.0
+                };
+            }
+            let s: f64 = v.iter().sum();
+            if s > 0.0 {
+                v.iter_mut().for_each(|x| *x /= s);
+            }
+            (j, v)
+        })
+        .collect()
+}

@@ -1,0 +1,302 @@
+//! Canonical joint positions inside a rest mesh, from landmarks.
+//!
+//! Limb joints (wrists, elbows, knees, ankles) are the centres of the limb's
+//! cross-section through the landmark, perpendicular to the limb; torso and
+//! head joints are centres of horizontal sections at heights set from the
+//! chin, groin and floor. Where a section is not limb-like (a skirt over a
+//! knee, an arm touching the torso) the joint falls back to the landmark
+//! projected onto the line between its neighbours, and a note says so.
+//! Proportions used where the surface says nothing (hip height above the
+//! groin, ankle height above the floor, shoulder width) are standard
+//! anthropometric ratios of the body height `H`.
+
+use super::landmarks::{Landmark, Landmarks};
+use super::section::part_loop;
+use crate::rig::Canonical;
+use glam::DVec3;
+
+/// Joint positions and the body frame they were found in.
+#[derive(Debug, Clone)]
+pub struct JointEstimate {
+    /// Position of each canonical joint, indexed by [`Canonical::index`].
+    pub joints: [DVec3; Canonical::COUNT],
+    /// Ends of the end segments: head top, left and right hand tips, left
+    /// and right toe tips.
+    pub head_top: DVec3,
+    /// Left, right hand tips.
+    pub hand_tips: [DVec3; 2],
+    /// Left, right toe tips.
+    pub toe_tips: [DVec3; 2],
+    /// Unit up (groin to chin).
+    pub up: DVec3,
+    /// Unit facing direction.
+    pub facing: DVec3,
+    /// Character's left.
+    pub left: DVec3,
+    /// Height of the mesh along `up`.
+    pub height: f64,
+    /// What was assumed, per joint.
+    pub notes: Vec<String>,
+}
+
+struct Ctx<'a> {
+    p: &'a [[f64; 3]],
+    t: &'a [[u32; 3]],
+    h: f64,
+    notes: Vec<String>,
+}
+
+impl Ctx<'_> {
+    /// The centre of the section through `at` perpendicular to `axis` when
+    /// its loop is narrower than `max_r`, else `fallback`.
+    fn centre(
+        &mut self,
+        name: &str,
+        at: DVec3,
+        axis: DVec3,
+        near: DVec3,
+        max_r: f64,
+        fallback: DVec3,
+    ) -> DVec3 {
+        match part_loop(self.p, self.t, at, axis, near) {
+            Some(l) if l.radius <= max_r * self.h => l.centroid,
+            Some(l) => {
+                self.notes.push(format!(
+                    "{name}: the section is {:.0}% of the height across (not limb-like: clothing?); placed from the landmarks",
+                    200.0 * l.radius / self.h
+                ));
+                fallback
+            }
+            None => {
+                self.notes.push(format!(
+                    "{name}: no section found; placed from the landmarks"
+                ));
+                fallback
+            }
+        }
+    }
+}
+
+/// The point of the line through `a` and `b` nearest to `p`.
+fn on_line(p: DVec3, a: DVec3, b: DVec3) -> DVec3 {
+    let d = b - a;
+    if d.length_squared() == 0.0 {
+        return a;
+    }
+    a + d * ((p - a).dot(d) / d.length_squared())
+}
+
+/// Places every canonical joint of a rest mesh from its landmarks.
+pub fn place_joints(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    lm: &Landmarks,
+) -> JointEstimate {
+    use Canonical as C;
+    use Landmark as L;
+    let get = |l: L| lm.point(l, positions).map(DVec3::from_array);
+    let req = |l: L| get(l).unwrap_or(DVec3::ZERO);
+    let (chin, groin) = (req(L::Chin), req(L::Groin));
+    let (lw, rw, le, re, lk, rk) = (
+        req(L::LWrist),
+        req(L::RWrist),
+        req(L::LElbow),
+        req(L::RElbow),
+        req(L::LKnee),
+        req(L::RKnee),
+    );
+    // Meshes are Y-up inside the tool; a character lying down (groin-to-chin
+    // far from +Y) sets its own up.
+    let body = (chin - groin).normalize_or(DVec3::Y);
+    let up = if body.dot(DVec3::Y) > 0.7 {
+        DVec3::Y
+    } else {
+        body
+    };
+    let side = (lk - rk) + (le - re) + (lw - rw);
+    let left = (side - up * side.dot(up)).normalize_or(up.any_orthonormal_vector());
+    let facing = left.cross(up);
+    let hs = positions.iter().map(|q| DVec3::from_array(*q).dot(up));
+    let (floor, top) = hs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+        (a.min(x), b.max(x))
+    });
+    let h = (top - floor).max(1e-9);
+    let mut cx = Ctx {
+        p: positions,
+        t: triangles,
+        h,
+        notes: Vec::new(),
+    };
+    let at_height = |q: DVec3, height: f64| q + up * (height - q.dot(up));
+    let mut j = [DVec3::ZERO; Canonical::COUNT];
+
+    // Neck and head: horizontal sections below and above the chin, around a
+    // point behind the chin (inside the neck/head).
+    let chin_h = chin.dot(up);
+    let behind = chin - facing * 0.04 * h;
+    let neck_at = at_height(behind, chin_h - 0.05 * h);
+    j[C::Neck.index()] = cx.centre("neck", neck_at, up, neck_at, 0.08, neck_at);
+    let head_at = at_height(behind, chin_h + 0.03 * h);
+    j[C::Head.index()] = cx.centre("head", head_at, up, head_at, 0.1, head_at);
+    let head_top = get(L::HeadTop).unwrap_or_else(|| {
+        let hc = j[C::Head.index()];
+        positions
+            .iter()
+            .map(|q| DVec3::from_array(*q))
+            .filter(|q| {
+                let d = *q - hc;
+                (d - up * d.dot(up)).length() < 0.12 * h
+            })
+            .max_by(|a, b| a.dot(up).total_cmp(&b.dot(up)))
+            .unwrap_or(hc + up * 0.1 * h)
+    });
+
+    // Pelvis and hips: a horizontal section a little above the groin.
+    let hip_h = groin.dot(up) + 0.035 * h;
+    let pelvis_at = at_height(groin, hip_h);
+    let pc = cx.centre("pelvis", pelvis_at, up, pelvis_at, 0.2, pelvis_at);
+    let mut hip_w = 0.055 * h;
+    let hip = |w: f64, s: f64| pc + left * (s * w);
+
+    // Ankles: from a landmark, or a section just above the floor under the knee.
+    let ankle_h = floor + 0.055 * h;
+    let mut ankles = [DVec3::ZERO; 2];
+    for (k, (lmk, knee, name)) in [(L::LAnkle, lk, "l_ankle"), (L::RAnkle, rk, "r_ankle")]
+        .into_iter()
+        .enumerate()
+    {
+        let at = get(lmk).unwrap_or_else(|| at_height(knee, ankle_h));
+        let axis = (knee - at).normalize_or(up);
+        let near = at_height(knee, at.dot(up));
+        ankles[k] = cx.centre(name, at, axis, near, 0.06, at);
+    }
+    // Knees, then elbows and wrists, twice: each pass refines the limb axes.
+    let mut knees = [lk, rk];
+    let mut arm = [[le, lw], [re, rw]];
+    let mut shoulders = [DVec3::ZERO; 2];
+    let neck = j[C::Neck.index()];
+    for _ in 0..2 {
+        for (k, (lmk, s, name)) in [(lk, 1.0, "l_knee"), (rk, -1.0, "r_knee")]
+            .into_iter()
+            .enumerate()
+        {
+            let hp = hip(hip_w, s);
+            let axis = (ankles[k] - hp).normalize_or(-up);
+            let fb = on_line(lmk, hp, ankles[k]);
+            knees[k] = cx.centre(name, lmk, axis, lmk, 0.07, fb);
+        }
+        // Hip width: half the knees' separation, within normal proportions.
+        let sep = (knees[0] - knees[1]).dot(left) * 0.5;
+        hip_w = sep.clamp(0.045 * h, 0.065 * h);
+        for (k, (e_lm, w_lm, s, names)) in [
+            (le, lw, 1.0, ["l_elbow", "l_wrist", "l_shoulder"]),
+            (re, rw, -1.0, ["r_elbow", "r_wrist", "r_shoulder"]),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let sh_lm = get(if s > 0.0 { L::LShoulder } else { L::RShoulder });
+            let guess = sh_lm
+                .map(|q| q - facing * (q - neck).dot(facing))
+                .unwrap_or_else(|| neck + left * (s * 0.095 * h) - up * 0.01 * h);
+            let w = cx.centre(names[1], w_lm, w_lm - e_lm, w_lm, 0.06, w_lm);
+            let e_axis = (w - guess).normalize_or(-up);
+            let e = cx.centre(names[0], e_lm, e_axis, e_lm, 0.07, on_line(e_lm, guess, w));
+            // The upper arm's axis from a section a quarter of the way down it.
+            let q = guess.lerp(e, 0.3);
+            let len = guess.distance(e);
+            shoulders[k] = match part_loop(positions, triangles, q, e - guess, q) {
+                Some(l) if l.radius < 0.06 * h && len > 0.0 => {
+                    e + (l.centroid - e).normalize_or(guess - e) * len
+                }
+                _ => guess,
+            };
+            arm[k] = [e, w];
+        }
+    }
+    j[C::LShoulder.index()] = shoulders[0];
+    j[C::RShoulder.index()] = shoulders[1];
+    j[C::LElbow.index()] = arm[0][0];
+    j[C::LWrist.index()] = arm[0][1];
+    j[C::RElbow.index()] = arm[1][0];
+    j[C::RWrist.index()] = arm[1][1];
+    j[C::LHip.index()] = hip(hip_w, 1.0);
+    j[C::RHip.index()] = hip(hip_w, -1.0);
+    j[C::LKnee.index()] = knees[0];
+    j[C::RKnee.index()] = knees[1];
+    j[C::LAnkle.index()] = ankles[0];
+    j[C::RAnkle.index()] = ankles[1];
+    let pelvis = (j[C::LHip.index()] + j[C::RHip.index()]) * 0.5 + up * 0.02 * h;
+    j[C::Pelvis.index()] = pelvis;
+    for (c, f, name) in [(C::Spine, 0.33, "spine"), (C::Chest, 0.66, "chest")] {
+        let at = pelvis.lerp(neck, f);
+        j[c.index()] = cx.centre(name, at, up, at, 0.2, at);
+    }
+
+    // Toes and toe tips: the front of each foot (vertices below the ankle,
+    // near it), from a landmark when given.
+    let mut toe_tips = [DVec3::ZERO; 2];
+    for (k, (c, lmk)) in [(C::LToe, L::LToe), (C::RToe, L::RToe)]
+        .into_iter()
+        .enumerate()
+    {
+        let a = ankles[k];
+        let foot: Vec<DVec3> = positions
+            .iter()
+            .map(|q| DVec3::from_array(*q))
+            .filter(|q| {
+                let d = *q - a;
+                d.dot(up) < 0.0 && (d - up * d.dot(up)).length() < 0.12 * h
+            })
+            .collect();
+        let tip = foot
+            .iter()
+            .copied()
+            .max_by(|x, y| x.dot(facing).total_cmp(&y.dot(facing)))
+            .unwrap_or(at_height(a + facing * 0.12 * h, floor));
+        toe_tips[k] = tip;
+        let toe = match get(lmk) {
+            Some(q) => at_height(q, (q.dot(up) + floor) * 0.5),
+            None => {
+                let (fa, ft) = (a.dot(facing), tip.dot(facing));
+                let band: Vec<DVec3> = foot
+                    .iter()
+                    .copied()
+                    .filter(|q| {
+                        let f = (q.dot(facing) - fa) / (ft - fa).max(1e-12);
+                        (0.65..=0.8).contains(&f)
+                    })
+                    .collect();
+                if band.is_empty() {
+                    at_height(a.lerp(tip, 0.72), floor + 0.02 * h)
+                } else {
+                    band.iter().copied().sum::<DVec3>() / band.len() as f64
+                }
+            }
+        };
+        j[c.index()] = toe;
+    }
+
+    // Hand tips: the farthest arm vertex beyond each wrist.
+    let mut hand_tips = [DVec3::ZERO; 2];
+    for (k, [e, w]) in arm.iter().enumerate() {
+        let a = (*w - *e).normalize_or(-up);
+        hand_tips[k] = positions
+            .iter()
+            .map(|q| DVec3::from_array(*q))
+            .filter(|q| (*q - *w).dot(a) > 0.0 && q.distance(*w) < 0.15 * h)
+            .max_by(|x, y| (*x - *w).dot(a).total_cmp(&(*y - *w).dot(a)))
+            .unwrap_or(*w + a * 0.08 * h);
+    }
+    JointEstimate {
+        joints: j,
+        head_top,
+        hand_tips,
+        toe_tips,
+        up,
+        facing,
+        left,
+        height: h,
+        notes: cx.notes,
+    }
+}

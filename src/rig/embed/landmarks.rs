@@ -1,0 +1,254 @@
+//! Landmarks a user marks on a character's rest frame, as Mixamo's
+//! auto-rigger asks for them: chin, groin, wrists, elbows, knees (required);
+//! shoulders, ankles, toes, head top (optional). A JSON object whose values
+//! are either a 3D point `[x, y, z]` (on or near the surface) or a vertex
+//! index. Left and right are the character's own.
+//!
+//! ```json
+//! { "chin": 4512, "groin": [0.01, 0.93, 0.02], "l_wrist": 812, ... }
+//! ```
+
+use crate::fsutil::read_text;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// A landmark name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[allow(missing_docs)]
+pub enum Landmark {
+    Chin,
+    Groin,
+    LWrist,
+    RWrist,
+    LElbow,
+    RElbow,
+    LKnee,
+    RKnee,
+    LShoulder,
+    RShoulder,
+    LAnkle,
+    RAnkle,
+    LToe,
+    RToe,
+    HeadTop,
+}
+
+impl Landmark {
+    /// Every landmark, required ones first.
+    pub const ALL: [Landmark; 15] = [
+        Landmark::Chin,
+        Landmark::Groin,
+        Landmark::LWrist,
+        Landmark::RWrist,
+        Landmark::LElbow,
+        Landmark::RElbow,
+        Landmark::LKnee,
+        Landmark::RKnee,
+        Landmark::LShoulder,
+        Landmark::RShoulder,
+        Landmark::LAnkle,
+        Landmark::RAnkle,
+        Landmark::LToe,
+        Landmark::RToe,
+        Landmark::HeadTop,
+    ];
+
+    /// The landmarks without which no rig can be embedded.
+    pub const REQUIRED: [Landmark; 8] = [
+        Landmark::Chin,
+        Landmark::Groin,
+        Landmark::LWrist,
+        Landmark::RWrist,
+        Landmark::LElbow,
+        Landmark::RElbow,
+        Landmark::LKnee,
+        Landmark::RKnee,
+    ];
+
+    /// The JSON key.
+    pub fn name(self) -> &'static str {
+        match self {
+            Landmark::Chin => "chin",
+            Landmark::Groin => "groin",
+            Landmark::LWrist => "l_wrist",
+            Landmark::RWrist => "r_wrist",
+            Landmark::LElbow => "l_elbow",
+            Landmark::RElbow => "r_elbow",
+            Landmark::LKnee => "l_knee",
+            Landmark::RKnee => "r_knee",
+            Landmark::LShoulder => "l_shoulder",
+            Landmark::RShoulder => "r_shoulder",
+            Landmark::LAnkle => "l_ankle",
+            Landmark::RAnkle => "r_ankle",
+            Landmark::LToe => "l_toe",
+            Landmark::RToe => "r_toe",
+            Landmark::HeadTop => "head_top",
+        }
+    }
+
+    /// Parses a JSON key.
+    pub fn from_name(s: &str) -> Option<Landmark> {
+        Landmark::ALL.into_iter().find(|l| l.name() == s)
+    }
+}
+
+/// Why a landmark file cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum LandmarkError {
+    /// The file could not be read.
+    #[error(transparent)]
+    Io(#[from] crate::fsutil::FsError),
+    /// Not JSON, or not an object.
+    #[error("{path}: {reason}")]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A key is not a landmark name.
+    #[error(
+        "{path}: unknown landmark {key:?} (known: chin, groin, l_/r_wrist, l_/r_elbow, l_/r_knee, l_/r_shoulder, l_/r_ankle, l_/r_toe, head_top)"
+    )]
+    Unknown {
+        /// The file.
+        path: PathBuf,
+        /// The key.
+        key: String,
+    },
+    /// A value is neither a finite point nor a vertex index of the mesh.
+    #[error("{path}: landmark {key}: {reason}")]
+    BadValue {
+        /// The file.
+        path: PathBuf,
+        /// The key.
+        key: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A required landmark is absent.
+    #[error("{path}: missing required landmark(s): {missing}")]
+    Missing {
+        /// The file.
+        path: PathBuf,
+        /// Comma-separated names.
+        missing: String,
+    },
+}
+
+/// Where a landmark was given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Mark {
+    /// A 3D point.
+    Point([f64; 3]),
+    /// A vertex of the rest mesh.
+    Vertex(u32),
+}
+
+/// A set of landmarks.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Landmarks {
+    /// The marks by name.
+    pub marks: BTreeMap<Landmark, Mark>,
+}
+
+impl Landmarks {
+    /// Parses landmark JSON; `vertex_count` bounds vertex indices. `path`
+    /// names the source in errors.
+    pub fn parse(text: &str, path: &Path, vertex_count: usize) -> Result<Landmarks, LandmarkError> {
+        let json = |reason: String| LandmarkError::Json {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| json(e.to_string()))?;
+        let obj = v
+            .as_object()
+            .ok_or_else(|| json("expected a JSON object of landmarks".into()))?;
+        let mut marks = BTreeMap::new();
+        for (key, val) in obj {
+            let Some(l) = Landmark::from_name(key) else {
+                return Err(LandmarkError::Unknown {
+                    path: path.to_path_buf(),
+                    key: key.clone(),
+                });
+            };
+            let bad = |reason: &str| LandmarkError::BadValue {
+                path: path.to_path_buf(),
+                key: key.clone(),
+                reason: reason.to_string(),
+            };
+            let mark = if let Some(i) = val.as_u64() {
+                if i as usize >= vertex_count {
+                    return Err(bad(&format!(
+                        "vertex {i} is out of range (the mesh has {vertex_count})"
+                    )));
+                }
+                Mark::Vertex(i as u32)
+            } else if let Some(a) = val.as_array() {
+                let p: Vec<f64> = a.iter().filter_map(|x| x.as_f64()).collect();
+                if p.len() != 3 || a.len() != 3 || p.iter().any(|x| !x.is_finite()) {
+                    return Err(bad("expected [x, y, z] with three finite numbers"));
+                }
+                Mark::Point([p[0], p[1], p[2]])
+            } else {
+                return Err(bad("expected a vertex index or [x, y, z]"));
+            };
+            marks.insert(l, mark);
+        }
+        let missing: Vec<&str> = Landmark::REQUIRED
+            .iter()
+            .filter(|l| !marks.contains_key(l))
+            .map(|l| l.name())
+            .collect();
+        if !missing.is_empty() {
+            return Err(LandmarkError::Missing {
+                path: path.to_path_buf(),
+                missing: missing.join(", "),
+            });
+        }
+        Ok(Landmarks { marks })
+    }
+
+    /// Reads a landmark file.
+    pub fn load(path: &Path, vertex_count: usize) -> Result<Landmarks, LandmarkError> {
+        Landmarks::parse(&read_text(path)?, path, vertex_count)
+    }
+
+    /// The position of a landmark on `positions`, if given.
+    pub fn point(&self, l: Landmark, positions: &[[f64; 3]]) -> Option<[f64; 3]> {
+        self.marks.get(&l).map(|m| match *m {
+            Mark::Point(p) => p,
+            Mark::Vertex(v) => positions[v as usize],
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_points_and_indices_and_names_what_is_wrong() {
+        let p = Path::new("l.json");
+        let ok = r#"{"chin": 1, "groin": [0,1,0], "l_wrist": 2, "r_wrist": 3,
+            "l_elbow": 4, "r_elbow": 5, "l_knee": 6, "r_knee": [1, 0.5, 0]}"#;
+        let l = Landmarks::parse(ok, p, 10).unwrap();
+        assert_eq!(l.marks[&Landmark::Chin], Mark::Vertex(1));
+        assert_eq!(l.marks[&Landmark::RKnee], Mark::Point([1.0, 0.5, 0.0]));
+        let e = Landmarks::parse(ok, p, 5).unwrap_err().to_string();
+        assert!(e.contains("l_knee") && e.contains("out of range"), "{e}");
+        let e = Landmarks::parse(r#"{"chin": 1}"#, p, 5)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("missing") && e.contains("groin"), "{e}");
+        let e = Landmarks::parse(r#"{"nose": 1}"#, p, 5)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("nose"), "{e}");
+        let e = Landmarks::parse(r#"{"chin": [1, 2]}"#, p, 5)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("chin"), "{e}");
+        assert!(Landmarks::parse("[1]", p, 5).is_err());
+    }
+}

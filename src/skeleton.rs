@@ -1,0 +1,189 @@
+//! Canonical poses (joint positions) and the rotations that explain them.
+//!
+//! A [`Pose`] is the 19 canonical joint positions of one frame. Given a rest
+//! pose, [`pose_rotations`] finds for each joint the global rotation that
+//! turns its rest bones onto the posed ones: the rotation of least angle
+//! (composed on the parent's) for a joint with one child, the best-fitting
+//! rotation (Kabsch, via the polar decomposition of `Σ d oᵀ`) for a joint
+//! with several; end joints inherit their parent's. Twist about a bone is
+//! not observable from positions and is carried down from the parent. This
+//! drives linear blend skinning of a rest mesh, and turns extracted
+//! skeletons into BVH clips any mocap viewer can play.
+
+use crate::mesh::frames::polar;
+use crate::mocap::{Channel, Clip, ClipError, Joint, JointId, PointConvention, Units, UpAxis};
+use crate::rig::Canonical;
+use glam::{DMat3, DQuat, DVec3};
+
+/// Canonical joint positions of one frame, [`Canonical::ALL`] order.
+pub type Pose = [DVec3; Canonical::COUNT];
+
+/// MotionBuilder names of the canonical joints (understood by every mocap
+/// viewer and by the rig detector).
+pub const BVH_NAMES: [&str; Canonical::COUNT] = [
+    "Hips",
+    "Spine",
+    "Spine1",
+    "Neck",
+    "Head",
+    "LeftArm",
+    "LeftForeArm",
+    "LeftHand",
+    "RightArm",
+    "RightForeArm",
+    "RightHand",
+    "LeftUpLeg",
+    "LeftLeg",
+    "LeftFoot",
+    "LeftToeBase",
+    "RightUpLeg",
+    "RightLeg",
+    "RightFoot",
+    "RightToeBase",
+];
+
+/// Children of each canonical joint.
+pub fn children() -> [Vec<Canonical>; Canonical::COUNT] {
+    let mut c: [Vec<Canonical>; Canonical::COUNT] = Default::default();
+    for j in Canonical::ALL {
+        if let Some(p) = j.parent() {
+            c[p.index()].push(j);
+        }
+    }
+    c
+}
+
+/// Global rotation of each joint taking `rest`'s bones onto `pose`'s.
+pub fn pose_rotations(rest: &Pose, pose: &Pose) -> [DQuat; Canonical::COUNT] {
+    let kids = children();
+    let mut g = [DQuat::IDENTITY; Canonical::COUNT];
+    for j in Canonical::ALL {
+        let pr = j.parent().map_or(DQuat::IDENTITY, |p| g[p.index()]);
+        let ks = &kids[j.index()];
+        let bone = |c: &Canonical| {
+            (
+                rest[c.index()] - rest[j.index()],
+                pose[c.index()] - pose[j.index()],
+            )
+        };
+        g[j.index()] = match ks.len() {
+            0 => pr,
+            1 => {
+                let (o, d) = bone(&ks[0]);
+                let from = (pr * o).normalize_or_zero();
+                let to = d.normalize_or_zero();
+                if from == DVec3::ZERO || to == DVec3::ZERO {
+                    pr
+                } else {
+                    (DQuat::from_rotation_arc(from, to) * pr).normalize()
+                }
+            }
+            _ => {
+                let mut h = DMat3::ZERO;
+                for c in ks {
+                    let (o, d) = bone(c);
+                    let (o, d) = (o.normalize_or_zero(), d.normalize_or_zero());
+                    h += DMat3::from_cols(d * o.x, d * o.y, d * o.z);
+                }
+                polar(h).0
+            }
+        };
+    }
+    g
+}
+
+/// A BVH-ready clip of poses on a skeleton whose bone offsets are `rest`'s:
+/// the root carries the pelvis position, every joint its local rotation.
+/// Playing it reproduces each pose's bone directions with `rest`'s lengths.
+pub fn pose_clip(rest: &Pose, poses: &[Pose], fps: f64) -> Result<Clip, ClipError> {
+    let kids = children();
+    let joints: Vec<Joint> = Canonical::ALL
+        .iter()
+        .map(|&j| Joint {
+            name: BVH_NAMES[j.index()].to_string(),
+            parent: j.parent().map(|p| JointId(p.index() as u32)),
+            offset: match j.parent() {
+                Some(p) => rest[j.index()] - rest[p.index()],
+                None => rest[j.index()],
+            },
+            channels: if j.parent().is_none() {
+                Channel::ROOT6.to_vec()
+            } else {
+                Channel::ROT_ZYX.to_vec()
+            },
+            tail: kids[j.index()]
+                .is_empty()
+                .then_some(DVec3::new(0.0, 0.0, 0.0)),
+        })
+        .collect();
+    let n = Canonical::COUNT;
+    let mut rotations = Vec::with_capacity(poses.len() * n);
+    let mut translations = Vec::with_capacity(poses.len() * n);
+    for pose in poses {
+        let g = pose_rotations(rest, pose);
+        for j in Canonical::ALL {
+            let local = match j.parent() {
+                Some(p) => g[p.index()].inverse() * g[j.index()],
+                None => g[j.index()],
+            };
+            rotations.push(local.normalize());
+            translations.push(match j.parent() {
+                Some(p) => rest[j.index()] - rest[p.index()],
+                None => pose[j.index()],
+            });
+        }
+    }
+    Clip::new(
+        joints,
+        1.0 / fps.max(1e-9),
+        rotations,
+        translations,
+        Units {
+            metres_per_unit: 1.0,
+            name: "m".into(),
+            reason: "extracted from a mesh in metres".into(),
+        },
+        UpAxis::Y,
+        PointConvention::JointOrigins,
+    )
+}
+
+/// Length of every bone (child joint to its parent), indexed by the child.
+pub fn bone_lengths(p: &Pose) -> [f64; Canonical::COUNT] {
+    std::array::from_fn(|i| {
+        let c = Canonical::ALL[i];
+        c.parent().map_or(0.0, |par| p[i].distance(p[par.index()]))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rest() -> Pose {
+        let bones = crate::synth::clips::skeleton();
+        let mut p = [DVec3::ZERO; Canonical::COUNT];
+        for (i, (_, parent, off, _)) in bones.iter().enumerate() {
+            p[i] = parent.map_or(DVec3::ZERO, |q| p[q]) + DVec3::from_array(*off);
+        }
+        p
+    }
+
+    #[test]
+    fn rotations_reproduce_a_rigidly_posed_skeleton() {
+        let r = rest();
+        let q = DQuat::from_rotation_y(0.8) * DQuat::from_rotation_x(0.2);
+        let t = DVec3::new(0.3, 0.1, -2.0);
+        let posed: Pose = r.map(|p| q * p + t);
+        let g = pose_rotations(&r, &posed);
+        for j in Canonical::ALL {
+            assert!(g[j.index()].angle_between(q) < 1e-9, "{j:?}");
+        }
+        // And as a clip, FK returns the posed joints.
+        let clip = pose_clip(&r, &[posed], 30.0).unwrap();
+        let w = clip.world_positions(0);
+        for j in Canonical::ALL {
+            assert!((w[j.index()] - posed[j.index()]).length() < 1e-9, "{j:?}");
+        }
+    }
+}

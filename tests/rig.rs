@@ -1,0 +1,243 @@
+//! Rig embedding and per-frame skeletons on the real 4D captures, with the
+//! landmark fixtures in tests/fixtures (written for this project; the
+//! labelled meshes were checked by rendering them with `rig embed --png`).
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use surfmotion::db::skeletons::{SkeletonKind, bone_length_spread, poses};
+use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::rig::Canonical;
+use surfmotion::rig::embed::Embedding;
+use surfmotion::rig::embed::landmarks::Landmarks;
+use surfmotion::rig::embed::parts::{Part, neighbours, piece_counts};
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
+}
+
+struct Case {
+    name: &'static str,
+    pc2: &'static str,
+    landmarks: &'static str,
+    facing: [f64; 3],
+}
+
+const CASES: [Case; 2] = [
+    Case {
+        name: "samba",
+        pc2: "4d/samba/samba.pc2",
+        landmarks: "samba.landmarks.json",
+        facing: [1.0, 0.0, 0.0],
+    },
+    Case {
+        name: "crane",
+        pc2: "4d/crane/crane.pc2",
+        landmarks: "crane.landmarks.json",
+        facing: [-1.0, 0.0, 0.0],
+    },
+];
+
+#[test]
+fn landmarks_give_contiguous_parts_exact_regressors_and_steady_bones() {
+    let Some(d) = common::data_dir() else { return };
+    for c in &CASES {
+        let seq = load_sequence(d.join(c.pc2).to_str().unwrap(), &LoadOptions::default()).unwrap();
+        let rest = seq.frame_mesh(0);
+        let n = rest.vertex_count();
+        let lm = Landmarks::load(&fixture(c.landmarks), n).unwrap();
+        let e = Embedding::new(&rest, &lm, None).unwrap();
+
+        // The character faces the way the data README says (judged from the feet).
+        let f = glam::DVec3::from_array(e.facing);
+        assert!(
+            f.dot(glam::DVec3::from_array(c.facing)) > 0.9,
+            "{}: facing {f}",
+            c.name
+        );
+        // Every vertex has a part; every part is one connected region.
+        assert_eq!(e.labels.len(), n);
+        assert!(e.labels.iter().all(|&l| (l as usize) < Part::COUNT));
+        let pieces = piece_counts(&e.labels, &neighbours(n, rest.triangles()));
+        for p in Part::ALL {
+            assert_eq!(pieces[p.index()], 1, "{}: part {}", c.name, p.name());
+        }
+        // Regions contain their labelled vertices and may overlap.
+        for p in Part::ALL {
+            let labelled = e
+                .labels
+                .iter()
+                .filter(|&&l| l as usize == p.index())
+                .count();
+            assert!(e.regions[p.index()].len() >= labelled);
+        }
+        // Skin weights: non-negative, summing to 1.
+        for (_, w) in &e.skin {
+            assert!(w.iter().all(|&x| x >= 0.0));
+            assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+        }
+        // Regressors reproduce the embedded joints on the rest frame.
+        let j = e.skeleton(rest.positions());
+        for k in Canonical::ALL {
+            let err = (j[k.index()] - glam::DVec3::from_array(e.joints[k.index()])).length();
+            assert!(err < 1e-9, "{} {}: {err}", c.name, k.name());
+        }
+        // Anatomy: head above neck above chest above pelvis above knees above
+        // ankles; left joints on the character's left.
+        let y = |k: Canonical| j[k.index()].y;
+        use Canonical as C;
+        assert!(y(C::Head) > y(C::Neck) && y(C::Neck) > y(C::Chest) && y(C::Chest) > y(C::Pelvis));
+        assert!(y(C::Pelvis) > y(C::LKnee) && y(C::LKnee) > y(C::LAnkle));
+        let left = glam::DVec3::from_array(e.left);
+        for (l, r) in [
+            (C::LWrist, C::RWrist),
+            (C::LKnee, C::RKnee),
+            (C::LShoulder, C::RShoulder),
+        ] {
+            assert!(
+                (j[l.index()] - j[r.index()]).dot(left) > 0.0,
+                "{} {l:?}",
+                c.name
+            );
+        }
+
+        // A rigid-skeleton sanity check on the real motion: the long bones
+        // (upper arms, forearms, thighs, shins) keep their length. Measured
+        // (see the issue note): on samba the median frame is within 5% and
+        // the worst within 10%; on crane the upper arms vary most (median
+        // 10%, worst 23%), where the loose jacket bunches at sharply bent
+        // elbows with the arms raised.
+        let ps = poses(&e, seq.all_positions(), n, SkeletonKind::Regressor);
+        assert_eq!(ps.len(), 175);
+        let long = [
+            C::LElbow,
+            C::RElbow,
+            C::LWrist,
+            C::RWrist,
+            C::LKnee,
+            C::RKnee,
+            C::LAnkle,
+            C::RAnkle,
+        ];
+        let spread = bone_length_spread(&ps);
+        for b in long {
+            let lens: Vec<f64> = ps
+                .iter()
+                .map(|p| p[b.index()].distance(p[b.parent().unwrap().index()]))
+                .collect();
+            let mut s = lens.clone();
+            s.sort_by(f64::total_cmp);
+            let med = s[s.len() / 2];
+            let mut dev: Vec<f64> = lens.iter().map(|x| (x / med - 1.0).abs()).collect();
+            dev.sort_by(f64::total_cmp);
+            let (typical, cap) = if c.name == "samba" {
+                (0.05, 0.10)
+            } else {
+                (0.10, 0.25)
+            };
+            assert!(
+                dev[dev.len() / 2] < typical,
+                "{} {b:?}: median deviation {}",
+                c.name,
+                dev[dev.len() / 2]
+            );
+            assert!(
+                spread[b.index()] < cap,
+                "{} {b:?}: {}",
+                c.name,
+                spread[b.index()]
+            );
+        }
+    }
+}
+
+#[test]
+fn db_skeleton_writes_json_and_a_bvh_that_reads_back() {
+    let Some(d) = common::data_dir() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("samba");
+    let o = Command::new(common::bin())
+        .args(["db", "init", db.to_str().unwrap(), "--mesh"])
+        .arg(d.join("4d/samba/samba.obj"))
+        .arg("--sequence")
+        .arg(format!("dance={}", d.join("4d/samba/samba.pc2").display()))
+        .arg("--landmarks")
+        .arg(fixture("samba.landmarks.json"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for kind in ["regressor", "centroid"] {
+        let out = dir.path().join(kind);
+        let o = Command::new(common::bin())
+            .args([
+                "db",
+                "skeleton",
+                db.to_str().unwrap(),
+                "--json",
+                "--kind",
+                kind,
+                "-o",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["sequences"][0]["frames"], 175);
+        let j: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join("dance.skeleton.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(j["frames"].as_array().unwrap().len(), 175);
+        assert_eq!(j["joints"].as_array().unwrap().len(), Canonical::COUNT);
+        // The BVH reads back with the rig detected and 175 frames; its FK
+        // follows the extracted bone directions (lengths are the rest's).
+        let clip =
+            surfmotion::mocap::load_clip(&out.join("dance.bvh"), &Default::default()).unwrap();
+        assert_eq!(clip.frame_count(), 175);
+        let names: Vec<String> = clip.joints.iter().map(|j| j.name.clone()).collect();
+        let det = surfmotion::rig::detect(&names);
+        assert!(det.missing.is_empty(), "{:?}", det.missing);
+        let frames = j["frames"].as_array().unwrap();
+        for f in [0usize, 90, 174] {
+            let w = clip.world_positions(f);
+            let p = |k: usize| {
+                let a = frames[f][k].as_array().unwrap();
+                glam::DVec3::new(
+                    a[0].as_f64().unwrap(),
+                    a[1].as_f64().unwrap(),
+                    a[2].as_f64().unwrap(),
+                )
+            };
+            assert!((w[0] - p(0)).length() < 1e-6, "root at frame {f}");
+            for c in [Canonical::LKnee, Canonical::RElbow] {
+                let par = c.parent().unwrap().index();
+                let a = (w[c.index()] - w[par]).normalize();
+                let b = (p(c.index()) - p(par)).normalize();
+                assert!(a.dot(b) > 0.999, "{kind} frame {f} {c:?}: {}", a.dot(b));
+            }
+        }
+    }
+}
+
+#[test]
+fn rig_embed_cli_reports_errors_with_the_file() {
+    let Some(d) = common::data_dir() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.json");
+    std::fs::write(&bad, r#"{"chin": 99999999, "groin": [0, 0, 0]}"#).unwrap();
+    let o = Command::new(common::bin())
+        .args(["rig", "embed"])
+        .arg(d.join("4d/samba/samba.obj"))
+        .arg("--landmarks")
+        .arg(&bad)
+        .args(["-o", dir.path().join("r.json").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("bad.json") && e.contains("chin"), "{e}");
+}
