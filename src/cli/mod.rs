@@ -9,6 +9,7 @@ mod mocap;
 mod render;
 mod repair;
 mod rig;
+mod synth;
 
 use clap::{Parser, Subcommand};
 
@@ -57,6 +58,11 @@ enum Command {
     /// regressors in a rest mesh from a few landmarks.
     #[command(subcommand)]
     Rig(rig::Cmd),
+    /// Build a synthetic multi-motion 4D database from a rest mesh, its
+    /// landmarks and mocap clips: linear blend skinning with the embedded
+    /// weights plus secondary dynamics (a damped-spring lag on soft regions
+    /// and loose clothing). The driving skeletons are kept in DIR/truth.
+    Synth(synth::Args),
 }
 
 /// Entry point of the CLI.
@@ -76,7 +82,24 @@ pub fn main() -> anyhow::Result<()> {
         Command::Repair(a) => repair::run(a),
         Command::Render(a) => render::run(a),
         Command::Rig(c) => rig::run(c),
+        Command::Synth(a) => synth::run(a),
     }
+}
+
+/// A progress bar on a terminal (hidden when stderr is not one).
+pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{{bar:40}} {{pos}}/{{len}} {what} {{elapsed}} (eta {{eta}})"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
 }
 
 /// Stdout was closed by the reader (e.g. `| head`): not an error.

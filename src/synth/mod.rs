@@ -2,5 +2,6 @@
 //! (and, later, the procedural demo character and synthetic 4D databases).
 
 pub mod clips;
+pub mod database;
 
 pub use clips::{Gait, gait_clip, skeleton};

@@ -101,27 +101,47 @@ pub struct Embedding {
 /// joint's segments to its children, plus end segments to the head top,
 /// hand tips and toe tips.
 pub fn bones(est: &JointEstimate) -> Vec<Bone> {
+    bone_list(&est.joints, est.head_top, est.hand_tips, est.toe_tips)
+}
+
+/// [`bones`] of a stored embedding.
+pub fn bones_of(e: &Embedding) -> Vec<Bone> {
+    let v = DVec3::from_array;
+    bone_list(
+        &e.joints.map(v),
+        v(e.head_top),
+        e.hand_tips.map(v),
+        e.toe_tips.map(v),
+    )
+}
+
+fn bone_list(
+    joints: &[DVec3; Canonical::COUNT],
+    head_top: DVec3,
+    hand_tips: [DVec3; 2],
+    toe_tips: [DVec3; 2],
+) -> Vec<Bone> {
     let mut out = Vec::new();
     for c in Canonical::ALL {
         if let Some(p) = c.parent() {
             out.push(Bone {
                 joint: p,
-                a: est.joints[p.index()],
-                b: est.joints[c.index()],
+                a: joints[p.index()],
+                b: joints[c.index()],
             });
         }
     }
     let ends = [
-        (Canonical::Head, est.head_top),
-        (Canonical::LWrist, est.hand_tips[0]),
-        (Canonical::RWrist, est.hand_tips[1]),
-        (Canonical::LToe, est.toe_tips[0]),
-        (Canonical::RToe, est.toe_tips[1]),
+        (Canonical::Head, head_top),
+        (Canonical::LWrist, hand_tips[0]),
+        (Canonical::RWrist, hand_tips[1]),
+        (Canonical::LToe, toe_tips[0]),
+        (Canonical::RToe, toe_tips[1]),
     ];
     for (j, tip) in ends {
         out.push(Bone {
             joint: j,
-            a: est.joints[j.index()],
+            a: joints[j.index()],
             b: tip,
         });
     }

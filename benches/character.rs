@@ -1,0 +1,60 @@
+//! Character stage on real data: embedding a rig in samba from the landmark
+//! fixture, extracting skeletons for all 175 samba frames, and synthesising
+//! a 1,000-frame database sequence (a procedural walk driving samba).
+
+use criterion::Criterion;
+use std::hint::black_box;
+use std::path::PathBuf;
+use surfmotion::db::skeletons::{SkeletonKind, poses};
+use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::rig::embed::Embedding;
+use surfmotion::rig::embed::landmarks::Landmarks;
+use surfmotion::synth::database::{Dynamics, clip_poses, synthesise};
+use surfmotion::synth::{Gait, gait_clip};
+
+fn main() {
+    let d = std::env::var_os("SURFMOTION_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    if !d.exists() {
+        eprintln!("benchmark skipped: no ../shared/data");
+        return;
+    }
+    let seq = load_sequence(
+        d.join("4d/samba/samba.pc2").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let rest = seq.frame_mesh(0);
+    let n = rest.vertex_count();
+    let fixture =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
+    let lm = Landmarks::load(&fixture, n).unwrap();
+    let mut c = Criterion::default().configure_from_args();
+    let mut g = c.benchmark_group("character/samba");
+    g.sample_size(10);
+    g.bench_function("embed_rig", |b| {
+        b.iter(|| Embedding::new(black_box(&rest), &lm, None).unwrap())
+    });
+    let rig = Embedding::new(&rest, &lm, None).unwrap();
+    g.bench_function("skeletons_175_frames", |b| {
+        b.iter(|| {
+            poses(
+                &rig,
+                black_box(seq.all_positions()),
+                n,
+                SkeletonKind::Regressor,
+            )
+        })
+    });
+    let clip = gait_clip(Gait::Walk, 1000.0 / 30.0, 30.0);
+    let names = clip.point_names();
+    let map = surfmotion::rig::detect(&names).map;
+    let mocap = clip_poses(&clip, &map).unwrap();
+    assert_eq!(mocap.len(), 1000);
+    g.bench_function("synthesise_1000_frames", |b| {
+        b.iter(|| synthesise(&rest, &rig, black_box(&mocap), 30.0, Dynamics::default()))
+    });
+    g.finish();
+    c.final_summary();
+}

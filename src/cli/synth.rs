@@ -1,0 +1,198 @@
+//! `surfmotion synth`: a multi-motion 4D database from a rest mesh, its
+//! landmarks and mocap clips (skinning plus secondary dynamics).
+
+use anyhow::{Context, bail};
+use std::path::PathBuf;
+use std::time::Instant;
+use surfmotion::db::{Manifest, RigSpec, SequenceEntry};
+use surfmotion::mesh::MeshSequence;
+use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
+use surfmotion::mocap::load_clip;
+use surfmotion::rig::Canonical;
+use surfmotion::rig::embed::Embedding;
+use surfmotion::rig::embed::landmarks::Landmarks;
+use surfmotion::synth::database::{Dynamics, clip_poses, synthesise};
+
+/// Arguments of `synth`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Rest mesh of the character (a file, or SEQ.pc2:FRAME), metres, Y-up.
+    #[arg(long)]
+    pub mesh: String,
+    /// Landmarks on the rest mesh (JSON; see `rig embed --help`).
+    #[arg(long)]
+    pub landmarks: PathBuf,
+    /// Mocap clips (BVH or AMC), one sequence each; repeatable.
+    #[arg(long = "mocap", required = true, num_args = 1..)]
+    pub mocap: Vec<PathBuf>,
+    /// Output database directory.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Frame rate of the database.
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f64,
+    /// Use at most this many seconds of each clip.
+    #[arg(long)]
+    pub seconds: Option<f64>,
+    /// Strength of the secondary dynamics (0: pure skinning).
+    #[arg(long, default_value_t = 1.0)]
+    pub dynamics: f64,
+    /// Overwrite an existing manifest in the output.
+    #[arg(long)]
+    pub force: bool,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub clip: super::ClipOpts,
+}
+
+/// Runs `synth`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    if !(a.fps.is_finite() && a.fps > 0.0) {
+        bail!("--fps {}: expected a positive number", a.fps);
+    }
+    let dir = &a.output;
+    if dir.join(surfmotion::db::MANIFEST).exists() && !a.force {
+        bail!(
+            "{}: a database exists there already; pass --force to overwrite it",
+            dir.display()
+        );
+    }
+    std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+    let t0 = Instant::now();
+    let rest = load_sequence(&a.mesh, &LoadOptions::default())?.frame_mesh(0);
+    let lm = Landmarks::load(&a.landmarks, rest.vertex_count())?;
+    let rig = Embedding::new(&rest, &lm, None)?;
+    let embed_s = t0.elapsed().as_secs_f64();
+    save_sequence(
+        &MeshSequence::single(rest.clone()),
+        &dir.join("topology.obj"),
+        None,
+    )?;
+    surfmotion::fsutil::write_bytes_atomic(
+        &dir.join("landmarks.json"),
+        &surfmotion::fsutil::read_bytes(&a.landmarks)?,
+    )?;
+    let opts = a.clip.load_options()?;
+    let dynamics = Dynamics {
+        amount: a.dynamics.max(0.0),
+        ..Dynamics::default()
+    };
+    let mut sequences = Vec::new();
+    let mut report = Vec::new();
+    let mut names = std::collections::BTreeSet::new();
+    let bar = super::progress(a.mocap.len() as u64, "clips");
+    let mut frames_total = 0usize;
+    let t1 = Instant::now();
+    for path in &a.mocap {
+        let mut clip = load_clip(path, &opts)?;
+        clip.to_metres_y_up();
+        let clip = clip.resampled(a.fps);
+        let map = match &opts.rig_map {
+            Some(m) => m.clone(),
+            None => {
+                let det = surfmotion::rig::detect(&clip.point_names());
+                if !det.missing.is_empty() {
+                    let miss: Vec<&str> = det.missing.iter().map(|c| c.name()).collect();
+                    bail!(
+                        "{}: the rig ({}) has no joint for {}; pass --rig-map (see `mocap rigmap`)",
+                        path.display(),
+                        det.map.convention,
+                        miss.join(", ")
+                    );
+                }
+                det.map
+            }
+        };
+        let mut poses = clip_poses(&clip, &map).with_context(|| path.display().to_string())?;
+        if let Some(s) = a.seconds {
+            poses.truncate(((s * a.fps).round() as usize).max(1));
+        }
+        let out = synthesise(&rest, &rig, &poses, a.fps, dynamics);
+        // A unique sequence name from the clip's file stem.
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "clip".into());
+        let mut name = stem.clone();
+        let mut k = 2;
+        while !names.insert(name.clone()) {
+            name = format!("{stem}_{k}");
+            k += 1;
+        }
+        let frames = out.poses.len();
+        frames_total += frames;
+        let seq = MeshSequence::new(rest.clone(), out.positions, Some(a.fps))?;
+        let file = format!("{name}.pc2");
+        save_sequence(&seq, &dir.join(&file), Some(a.fps))?;
+        let truth = serde_json::json!({
+            "sequence": name,
+            "fps": a.fps,
+            "source": path,
+            "joints": Canonical::ALL.iter().map(|c| c.name()).collect::<Vec<_>>(),
+            "frames": out.poses.iter().map(|p| p.iter().map(|q| q.to_array()).collect::<Vec<_>>()).collect::<Vec<_>>(),
+        });
+        surfmotion::fsutil::write_bytes_atomic(
+            &dir.join("truth").join(format!("{name}.skeleton.json")),
+            serde_json::to_string(&truth)?.as_bytes(),
+        )?;
+        sequences.push(SequenceEntry {
+            name: name.clone(),
+            path: PathBuf::from(file),
+            fps: None,
+        });
+        report.push(serde_json::json!({"sequence": name, "source": path, "frames": frames}));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let synth_s = t1.elapsed().as_secs_f64();
+    let m = Manifest {
+        name: dir
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "synthetic".into()),
+        topology: PathBuf::from("topology.obj"),
+        fps: a.fps,
+        units: "m".into(),
+        up: "y".into(),
+        colors: None,
+        sequences,
+        rig: RigSpec {
+            landmarks: Some(PathBuf::from("landmarks.json")),
+            parts: None,
+            gltf_skin: None,
+        },
+    };
+    m.save(dir)?;
+    if a.json {
+        let v = serde_json::json!({
+            "output": dir,
+            "embed_seconds": embed_s,
+            "synth_seconds": synth_s,
+            "frames": frames_total,
+            "sequences": report,
+        });
+        crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
+    } else {
+        crate::outln!(
+            "wrote {} ({} sequences, {} frames): rig embedded in {:.2} s, {} frames synthesised in {:.2} s ({:.0} frames/s)",
+            dir.display(),
+            report.len(),
+            frames_total,
+            embed_s,
+            frames_total,
+            synth_s,
+            frames_total as f64 / synth_s.max(1e-9)
+        )?;
+        for r in &report {
+            crate::outln!(
+                "  {}: {} frames from {}",
+                r["sequence"].as_str().unwrap_or(""),
+                r["frames"],
+                r["source"].as_str().unwrap_or("")
+            )?;
+        }
+    }
+    Ok(())
+}
