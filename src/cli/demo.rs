@@ -22,7 +22,12 @@ pub fn run(_: Args) -> anyhow::Result<()> {
          \x20 surfmotion mesh convert samba.pc2 samba.glb      mesh sequence formats\n\
          \x20 surfmotion blend A.pc2:0 A.pc2:60 -o mid.obj     non-linear mesh blending\n\
          \x20 surfmotion repair scan.obj -o clean.obj          weld, drop degenerate, components\n\
-         \x20 surfmotion db init DIR --mesh M --sequence N=P   character database manifest"
+         \x20 surfmotion db init DIR --mesh M --sequence N=P   character database manifest\n\
+         \x20 surfmotion rig embed MESH --landmarks L -o R     joints, skin weights, parts, regressors\n\
+         \x20 surfmotion db skeleton DIR                       per-frame skeletons (JSON + BVH)\n\
+         \x20 surfmotion synth --mesh M --landmarks L --mocap CLIP... -o DIR\n\
+         \x20                                                  synthetic multi-motion database\n\
+         \x20 surfmotion render MESH --rig R -o view.png       a mesh and its rig as PNG"
     )?;
     Ok(())
 }
