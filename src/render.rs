@@ -170,30 +170,14 @@ fn put(img: &mut Image, x: i64, y: i64, rgb: [u8; 3]) {
 }
 
 fn fill_triangle(img: &mut Image, depth: &mut [f64], p: [(f64, f64, f64); 3], rgb: [u8; 3]) {
-    let xmin = p
-        .iter()
-        .map(|q| q.0)
-        .fold(f64::INFINITY, f64::min)
-        .floor()
-        .max(0.0);
-    let ymin = p
-        .iter()
-        .map(|q| q.1)
-        .fold(f64::INFINITY, f64::min)
-        .floor()
-        .max(0.0);
-    let xmax = p
-        .iter()
-        .map(|q| q.0)
-        .fold(f64::NEG_INFINITY, f64::max)
-        .ceil()
-        .min(img.width as f64 - 1.0);
-    let ymax = p
-        .iter()
-        .map(|q| q.1)
-        .fold(f64::NEG_INFINITY, f64::max)
-        .ceil()
-        .min(img.height as f64 - 1.0);
+    // Pixel bounds of the triangle, clipped to the image.
+    let span = |c: fn(&(f64, f64, f64)) -> f64, limit: usize| {
+        let lo = p.iter().map(c).fold(f64::INFINITY, f64::min);
+        let hi = p.iter().map(c).fold(f64::NEG_INFINITY, f64::max);
+        (lo.floor().max(0.0), hi.ceil().min(limit as f64 - 1.0))
+    };
+    let (xmin, xmax) = span(|q| q.0, img.width);
+    let (ymin, ymax) = span(|q| q.1, img.height);
     let area = (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[2].0 - p[0].0) * (p[1].1 - p[0].1);
     if area.abs() < 1e-12 || xmin > xmax || ymin > ymax {
         return;
