@@ -440,16 +440,8 @@ fn slerp_weight_lanes<const FMA: bool>(dot: Lane, t: f64) -> (Lane, Lane) {
     let sign = lanes(|l| if dot[l] < 0.0 { -1.0 } else { 1.0 });
     let d = lanes(|l| (dot[l] * sign[l]).min(1.0));
     let n = lanes(|l| madd::<FMA>(2.0 * t * (1.0 - t), d[l], (1.0 - t) * (1.0 - t) + t * t).sqrt());
-    let mut p = [-0.0012624911; LANES];
-    for c in [
-        0.0066700901,
-        -0.0170881256,
-        0.0308918810,
-        -0.0501743046,
-        0.0889789874,
-        -0.2145988016,
-        1.5707963050,
-    ] {
+    let mut p = [ACOS_POLY[0]; LANES];
+    for &c in &ACOS_POLY[1..] {
         p = lanes(|l| madd::<FMA>(p[l], d[l], c));
     }
     let th = lanes(|l| (1.0 - d[l]).sqrt() * p[l]);
@@ -512,34 +504,30 @@ const COS_TAYLOR: [f64; 9] = [
 /// acos on [0, 1], Abramowitz & Stegun 4.4.46, |error| ≤ 2e-8.
 #[inline(always)]
 fn fast_acos(x: f64) -> f64 {
-    let p = -0.0012624911f64;
-    let p = p * x + 0.0066700901;
-    let p = p * x + -0.0170881256;
-    let p = p * x + 0.0308918810;
-    let p = p * x + -0.0501743046;
-    let p = p * x + 0.0889789874;
-    let p = p * x + -0.2145988016;
-    let p = p * x + 1.5707963050;
+    let p = ACOS_POLY[1..].iter().fold(ACOS_POLY[0], |p, &c| p * x + c);
     (1.0 - x).sqrt() * p
 }
 
-/// (sin y, cos y) for y in [0, π/2] by Taylor series (error < 1e-12).
+/// Coefficients of Abramowitz & Stegun 4.4.46, highest first:
+/// `acos x ≈ √(1 − x) · Σ a_k x^k` on [0, 1].
+const ACOS_POLY: [f64; 8] = [
+    -0.0012624911,
+    0.0066700901,
+    -0.0170881256,
+    0.0308918810,
+    -0.0501743046,
+    0.0889789874,
+    -0.2145988016,
+    1.5707963050,
+];
+
+/// (sin y, cos y) for y in [0, π/2] by Taylor series to degree 17/16
+/// ([`SIN_TAYLOR`], [`COS_TAYLOR`]; error < 1e-12).
 #[inline(always)]
 fn fast_sin_cos(y: f64) -> (f64, f64) {
     let y2 = y * y;
-    // sin: y (1 − y²/3! + y⁴/5! − … − y¹⁶/17!) ; cos: 1 − y²/2! + … + y¹⁶/16!
-    let mut s: f64 = 1.0 / 355687428096000.0; // 1/17!
-    let mut c: f64 = 1.0 / 20922789888000.0; // 1/16!
-    for (ks, kc) in [
-        (-1.0 / 1307674368000.0, -1.0 / 87178291200.0),
-        (1.0 / 6227020800.0, 1.0 / 479001600.0),
-        (-1.0 / 39916800.0, -1.0 / 3628800.0),
-        (1.0 / 362880.0, 1.0 / 40320.0),
-        (-1.0 / 5040.0, -1.0 / 720.0),
-        (1.0 / 120.0, 1.0 / 24.0),
-        (-1.0 / 6.0, -1.0 / 2.0),
-        (1.0, 1.0),
-    ] {
+    let (mut s, mut c) = (SIN_TAYLOR[0], COS_TAYLOR[0]);
+    for (ks, kc) in SIN_TAYLOR[1..].iter().zip(&COS_TAYLOR[1..]) {
         s = s * y2 + ks;
         c = c * y2 + kc;
     }

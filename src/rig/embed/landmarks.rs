@@ -53,17 +53,8 @@ impl Landmark {
         Landmark::HeadTop,
     ];
 
-    /// The landmarks without which no rig can be embedded.
-    pub const REQUIRED: [Landmark; 8] = [
-        Landmark::Chin,
-        Landmark::Groin,
-        Landmark::LWrist,
-        Landmark::RWrist,
-        Landmark::LElbow,
-        Landmark::RElbow,
-        Landmark::LKnee,
-        Landmark::RKnee,
-    ];
+    /// The landmarks without which no rig can be embedded: the first eight of [`Landmark::ALL`].
+    pub const REQUIRED: &'static [Landmark] = Landmark::ALL.split_at(8).0;
 
     /// The JSON key.
     pub fn name(self) -> &'static str {
