@@ -8,10 +8,12 @@
 
 pub mod db;
 pub mod fsutil;
+pub mod graph;
 pub mod inspect;
 pub mod mesh;
 pub mod mocap;
 pub mod render;
 pub mod rig;
+pub mod similarity;
 pub mod skeleton;
 pub mod synth;

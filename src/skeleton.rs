@@ -156,6 +156,56 @@ pub fn bone_lengths(p: &Pose) -> [f64; Canonical::COUNT] {
     })
 }
 
+/// The rotation about the vertical (Y) axis that best aligns point set `b`
+/// onto `a` in least squares, from the horizontal cross terms
+/// `c = Σ (a_x b_x + a_z b_z)` and `s = Σ (a_x b_z − a_z b_x)` of the two sets
+/// (both centred). Returns `(cos θ, sin θ)` of the angle that turns `b`
+/// towards `a` with [`rotate_yaw`], and the aligned dot product gain
+/// `√(c² + s²)` (the maximum of `Σ a · R b` over θ, minus the vertical part).
+pub fn yaw_fit(c: f64, s: f64) -> (f64, f64, f64) {
+    let m = c.hypot(s);
+    if m <= f64::MIN_POSITIVE {
+        (1.0, 0.0, 0.0)
+    } else {
+        (c / m, s / m, m)
+    }
+}
+
+/// Rotates `p` about the Y axis by the angle with cosine `c` and sine `s`
+/// (right-handed: +X turns towards −Z).
+pub fn rotate_yaw(p: DVec3, c: f64, s: f64) -> DVec3 {
+    DVec3::new(c * p.x + s * p.z, p.y, -s * p.x + c * p.z)
+}
+
+/// Skeleton dissimilarity `c_skel` (Huang et al. 2015, Eq. 28): the sum over
+/// joints of the distance between corresponding joints, with equal weights,
+/// after the two poses are pre-aligned in translation (horizontal centroids
+/// of the joints brought together; height is kept, so a crouch still
+/// differs from a stand) and in heading (the least-squares rotation about
+/// the vertical axis, [`yaw_fit`]). Metres; 0 for a pose and any copy of it
+/// moved on the floor and turned about Y.
+pub fn skeleton_distance(a: &Pose, b: &Pose) -> f64 {
+    let ca = horizontal_centroid(a);
+    let cb = horizontal_centroid(b);
+    let (mut c, mut s) = (0.0, 0.0);
+    for (p, q) in a.iter().zip(b) {
+        let (p, q) = (*p - ca, *q - cb);
+        c += p.x * q.x + p.z * q.z;
+        s += p.x * q.z - p.z * q.x;
+    }
+    let (cos, sin, _) = yaw_fit(c, s);
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (*p - ca).distance(rotate_yaw(*q - cb, cos, sin)))
+        .sum()
+}
+
+/// Mean of the joints' X and Z (Y = 0).
+pub fn horizontal_centroid(p: &Pose) -> DVec3 {
+    let s: DVec3 = p.iter().copied().sum();
+    DVec3::new(s.x, 0.0, s.z) / p.len() as f64
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -185,5 +235,22 @@ mod tests {
         for j in Canonical::ALL {
             assert!((w[j.index()] - posed[j.index()]).length() < 1e-9, "{j:?}");
         }
+    }
+
+    #[test]
+    fn skeleton_distance_ignores_floor_motion_and_heading() {
+        let r = rest();
+        let q = DQuat::from_rotation_y(2.4);
+        let moved: Pose = r.map(|p| q * p + DVec3::new(1.5, 0.0, -0.7));
+        assert!(skeleton_distance(&r, &moved) < 1e-9);
+        assert!(skeleton_distance(&moved, &r) < 1e-9);
+        // Lifting the whole pose is not aligned away (Eq. 28 keeps height).
+        let lifted: Pose = r.map(|p| p + DVec3::new(0.0, 0.1, 0.0));
+        assert!((skeleton_distance(&r, &lifted) - 1.9).abs() < 1e-9);
+        // A bent elbow costs the forearm's displacement.
+        let mut bent = r;
+        bent[Canonical::LWrist.index()] += DVec3::new(0.0, 0.05, 0.0);
+        let d = skeleton_distance(&r, &bent);
+        assert!(d > 0.04 && d < 0.06, "{d}");
     }
 }

@@ -22,6 +22,115 @@ pub enum Cmd {
     /// part centres). Writes per sequence SEQ.skeleton.json and SEQ.bvh (for
     /// any mocap viewer), and rig.json, into --output (default DIR/skeletons).
     Skeleton(SkeletonArgs),
+    /// Build the Surface Motion Graph: compare every frame with every other
+    /// (3D shape histograms minimised over rotation about the vertical, or
+    /// --measure vertex|skeleton), find transitions by adaptive temporal
+    /// filtering (top N per sequence pair, half-window L < 25), and cache the
+    /// matrix and graph in DIR/cache. A second build with unchanged inputs
+    /// loads the cache and does no work. Settings: the manifest's [graph].
+    Build(BuildArgs),
+}
+
+/// Arguments of `db build`.
+#[derive(clap::Args)]
+pub struct BuildArgs {
+    /// The database directory.
+    pub dir: PathBuf,
+    /// Dissimilarity measure (default: the manifest's [graph] measure, else shape).
+    #[arg(long, value_enum)]
+    pub measure: Option<surfmotion::similarity::Measure>,
+    /// Recompute even if the cache is current.
+    #[arg(long)]
+    pub force: bool,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Progress bars for a build.
+pub struct Bars(std::sync::Mutex<Option<indicatif::ProgressBar>>);
+
+impl Bars {
+    /// No bar yet.
+    pub fn new() -> Bars {
+        Bars(std::sync::Mutex::new(None))
+    }
+}
+
+impl surfmotion::db::BuildProgress for Bars {
+    fn start(&self, what: &str, total: u64) {
+        if let Ok(mut b) = self.0.lock() {
+            *b = Some(super::progress(total, what));
+        }
+    }
+    fn advance(&self, k: u64) {
+        if let Ok(b) = self.0.lock()
+            && let Some(b) = b.as_ref()
+        {
+            b.inc(k);
+        }
+    }
+    fn finish(&self) {
+        if let Ok(mut b) = self.0.lock()
+            && let Some(b) = b.take()
+        {
+            b.finish_and_clear();
+        }
+    }
+}
+
+fn build(a: BuildArgs) -> anyhow::Result<()> {
+    let opts = surfmotion::db::BuildOptions {
+        measure: a.measure,
+        force: a.force,
+    };
+    let (_, graph, r) = surfmotion::db::build(&a.dir, &opts, &Bars::new())?;
+    if a.json {
+        return super::emit(&(serde_json::to_string_pretty(&r)? + "\n"));
+    }
+    let mut out = format!(
+        "{}: {} frames in {} sequences, measure {} ({})\n",
+        a.dir.display(),
+        r.frames,
+        r.sequences.len(),
+        r.measure.name(),
+        r.unit
+    );
+    if r.similarity_cached {
+        out += "similarity: cached\n";
+    } else {
+        out += &format!(
+            "similarity: {} pairs in {:.2} s (descriptors {:.2} s, {:.1} µs per pair)\n",
+            r.pairs,
+            r.pairs_seconds + r.describe_seconds,
+            r.describe_seconds,
+            1e6 * r.pairs_seconds / (r.pairs.max(1) as f64)
+        );
+    }
+    out += &format!(
+        "graph: {} transitions on {} sequence edges{} in {:.3} s\n",
+        r.transitions,
+        r.edges,
+        if r.graph_cached { " (cached)" } else { "" },
+        r.graph_seconds
+    );
+    for t in graph.transitions.iter().take(40) {
+        out += &format!(
+            "  {}:{} -> {}:{}  L = {:2}  cost {:.4}\n",
+            graph.sequences[t.from].name, t.m, graph.sequences[t.to].name, t.n, t.window, t.cost
+        );
+    }
+    if graph.transitions.len() > 40 {
+        out += &format!(
+            "  ... (`surfmotion graph {} --json` lists all)\n",
+            a.dir.display()
+        );
+    }
+    for e in &graph.removed {
+        out += &format!("  removed by the manifest: {e}\n");
+    }
+    out += &format!("cache: {}\n", r.cache.display());
+    super::emit(&out)
 }
 
 /// Arguments of `db skeleton`.
@@ -98,6 +207,7 @@ fn store_path(dir: &Path, p: &Path) -> anyhow::Result<PathBuf> {
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
         Cmd::Skeleton(a) => return skeleton(a),
+        Cmd::Build(a) => return build(a),
         Cmd::Init(a) => {
             std::fs::create_dir_all(&a.dir).with_context(|| format!("{}", a.dir.display()))?;
             if a.dir.join(MANIFEST).exists() && !a.force {
@@ -137,6 +247,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     parts: opt(&a.parts)?,
                     gltf_skin: opt(&a.gltf_skin)?,
                 },
+                graph: Default::default(),
             };
             if let Err(msg) = m.validate() {
                 bail!("{msg}");

@@ -3,6 +3,7 @@
 mod blend;
 mod db;
 mod demo;
+mod graph;
 mod inspect;
 mod mesh;
 mod mocap;
@@ -63,6 +64,10 @@ enum Command {
     /// weights plus secondary dynamics (a damped-spring lag on soft regions
     /// and loose clothing). The driving skeletons are kept in DIR/truth.
     Synth(synth::Args),
+    /// Export a database's Surface Motion Graph (sequences as nodes,
+    /// transitions as edges) as DOT or JSON, or draw its similarity matrix
+    /// with the transitions marked (--matrix OUT.png).
+    Graph(graph::Args),
 }
 
 /// Entry point of the CLI.
@@ -83,6 +88,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Render(a) => render::run(a),
         Command::Rig(c) => rig::run(c),
         Command::Synth(a) => synth::run(a),
+        Command::Graph(a) => graph::run(a),
     }
 }
 

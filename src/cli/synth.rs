@@ -163,6 +163,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             parts: None,
             gltf_skin: None,
         },
+        graph: Default::default(),
     };
     m.save(dir)?;
     if a.json {

@@ -20,8 +20,10 @@
 //! landmarks = "landmarks.json"
 //! ```
 
+use crate::graph::{GraphEdits, TransitionOptions};
 use crate::mesh::io::{LoadOptions, MeshFormat, load_sequence, obj::read_obj, ply::read_ply};
 use crate::mesh::{Mesh, MeshError, MeshSequence};
+use crate::similarity::Measure;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -71,6 +73,72 @@ fn default_up() -> String {
     "y".into()
 }
 
+/// How the Surface Motion Graph is built (`[graph]`; every field optional).
+///
+/// ```toml
+/// [graph]
+/// measure = "shape"        # shape | vertex | skeleton
+/// top_n = 4                # transitions per ordered sequence pair
+/// max_window = 24          # largest half-window L (frames)
+/// min_window = 2
+/// min_gap = 10             # within a sequence, smallest |m - n|
+/// velocity_weight = 1.0    # λ of the vertex measure
+/// forbid = ["walk -> jog"] # never create these sequence edges (* = any)
+/// remove = ["walk:30 -> jog:12"]  # drop single transitions
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GraphSpec {
+    /// Dissimilarity measure. Default: shape.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measure: Option<Measure>,
+    /// Transitions per ordered sequence pair. Default: 4.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub top_n: Option<usize>,
+    /// Largest half-window L. Default: 24.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_window: Option<usize>,
+    /// Smallest half-window L. Default: 2.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_window: Option<usize>,
+    /// Smallest jump inside one sequence. Default: 10.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_gap: Option<usize>,
+    /// Velocity weight λ of the vertex measure. Default: 1.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub velocity_weight: Option<f64>,
+    /// Sequence edges never to create, `"from -> to"`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub forbid: Vec<String>,
+    /// Transitions to drop, `"from:m -> to:n"`.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub remove: Vec<String>,
+}
+
+impl GraphSpec {
+    /// True when nothing is set.
+    pub fn is_default(&self) -> bool {
+        *self == GraphSpec::default()
+    }
+    /// The transition options, defaults filled in.
+    pub fn transition_options(&self) -> TransitionOptions {
+        let d = TransitionOptions::default();
+        TransitionOptions {
+            top_n: self.top_n.unwrap_or(d.top_n),
+            max_window: self.max_window.unwrap_or(d.max_window),
+            min_window: self.min_window.unwrap_or(d.min_window),
+            min_gap: self.min_gap.unwrap_or(d.min_gap),
+        }
+    }
+    /// The user's edits.
+    pub fn edits(&self) -> GraphEdits {
+        GraphEdits {
+            forbid: self.forbid.clone(),
+            remove: self.remove.clone(),
+        }
+    }
+}
+
 /// The manifest.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Manifest {
@@ -96,6 +164,9 @@ pub struct Manifest {
     /// Rig annotation.
     #[serde(default, skip_serializing_if = "RigSpec::is_empty")]
     pub rig: RigSpec,
+    /// Surface Motion Graph settings.
+    #[serde(default, skip_serializing_if = "GraphSpec::is_default")]
+    pub graph: GraphSpec,
 }
 
 /// Errors of the database layer.
@@ -118,6 +189,9 @@ pub enum DbError {
     /// The rig could not be embedded.
     #[error(transparent)]
     Rig(#[from] crate::rig::embed::EmbedError),
+    /// A graph edit in the manifest names something that does not exist.
+    #[error("character.toml: {0}")]
+    Graph(#[from] crate::graph::smg::EditError),
 }
 
 impl Manifest {
@@ -167,6 +241,21 @@ impl Manifest {
                     s.name
                 ));
             }
+        }
+        let g = &self.graph;
+        if let Some(w) = g.velocity_weight
+            && !(w.is_finite() && w >= 0.0)
+        {
+            return Err(format!(
+                "[graph] velocity_weight = {w}: expected a number ≥ 0"
+            ));
+        }
+        let t = g.transition_options();
+        if t.top_n == 0 || t.min_window == 0 || t.min_window > t.max_window {
+            return Err(format!(
+                "[graph]: need top_n ≥ 1 and 1 ≤ min_window ≤ max_window (got top_n = {}, min_window = {}, max_window = {})",
+                t.top_n, t.min_window, t.max_window
+            ));
         }
         Ok(())
     }
@@ -344,6 +433,11 @@ mod tests {
             }],
             rig: RigSpec {
                 landmarks: Some("l.json".into()),
+                ..Default::default()
+            },
+            graph: GraphSpec {
+                measure: Some(Measure::Vertex),
+                forbid: vec!["a -> *".into()],
                 ..Default::default()
             },
         };

@@ -1,6 +1,10 @@
-//! Character databases: the manifest and what it points to.
+//! Character databases: the manifest and what it points to, per-frame
+//! skeletons, and the cached similarity matrix and Surface Motion Graph.
 
+pub mod build;
+pub mod cache;
 pub mod manifest;
 pub mod skeletons;
 
-pub use manifest::{DbError, DbInfo, MANIFEST, Manifest, RigSpec, SequenceEntry, info};
+pub use build::{BuildOptions, BuildProgress, BuildReport, Quiet, build};
+pub use manifest::{DbError, DbInfo, GraphSpec, MANIFEST, Manifest, RigSpec, SequenceEntry, info};

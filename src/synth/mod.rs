@@ -3,5 +3,6 @@
 
 pub mod clips;
 pub mod database;
+pub mod shapes;
 
 pub use clips::{Gait, gait_clip, skeleton};

@@ -1,0 +1,74 @@
+//! `surfmotion graph`: export the Surface Motion Graph and draw its matrix.
+
+use std::path::PathBuf;
+use surfmotion::graph::plot::matrix_image;
+
+/// Arguments of `graph`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The database directory (built with `surfmotion db build`; built now
+    /// if the cache is missing or stale).
+    pub dir: PathBuf,
+    /// Dissimilarity measure (default: the manifest's, else shape).
+    #[arg(long, value_enum)]
+    pub measure: Option<surfmotion::similarity::Measure>,
+    /// Print the graph in Graphviz DOT (`| dot -Tpng -o graph.png`).
+    #[arg(long, conflicts_with = "json")]
+    pub dot: bool,
+    /// Print the graph as JSON: sequences, transitions (from, to, m, n,
+    /// window, cost), sequence edges, and the frame-level adjacency.
+    #[arg(long)]
+    pub json: bool,
+    /// Draw the similarity matrix with the transitions marked to this PNG
+    /// (dark = similar; red crosses = transitions, pink = their windows).
+    #[arg(long, value_name = "PNG")]
+    pub matrix: Option<PathBuf>,
+    /// Size of the matrix picture in pixels.
+    #[arg(long, default_value_t = 800)]
+    pub size: usize,
+}
+
+/// Runs `graph`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let opts = surfmotion::db::BuildOptions {
+        measure: a.measure,
+        force: false,
+    };
+    let (mat, g, _) = surfmotion::db::build(&a.dir, &opts, &super::db::Bars::new())?;
+    if let Some(p) = &a.matrix {
+        matrix_image(&mat, &g, a.size).save_png(p)?;
+        eprintln!("wrote {}", p.display());
+    }
+    if a.dot {
+        return super::emit(&g.to_dot());
+    }
+    if a.json {
+        let adj = g.adjacency();
+        let v = serde_json::json!({
+            "graph": g,
+            "adjacency": {
+                "offsets": adj.offsets,
+                "targets": adj.targets,
+                "costs": adj.costs,
+            },
+        });
+        return super::emit(&(serde_json::to_string(&v)? + "\n"));
+    }
+    if a.matrix.is_none() {
+        let mut out = String::new();
+        for s in &g.sequences {
+            out += &format!("{} ({} frames)\n", s.name, s.len);
+        }
+        for e in &g.edges {
+            out += &format!(
+                "{} -> {}: {} transitions, best cost {:.4}\n",
+                g.sequences[e.from].name,
+                g.sequences[e.to].name,
+                e.transitions.len(),
+                e.cost
+            );
+        }
+        super::emit(&out)?;
+    }
+    Ok(())
+}

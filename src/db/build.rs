@@ -1,0 +1,279 @@
+//! `db build`: similarity matrix, transitions and Surface Motion Graph of a
+//! database, cached (Huang et al. 2015, Sec. 4).
+//!
+//! Sequences are loaded one at a time and reduced to per-frame descriptors
+//! straight away, so a build holds the descriptors and the matrix, never
+//! every mesh of the database at once.
+
+use super::cache::{self, KeyHasher, add_rig, cache_dir, frames_key};
+use super::manifest::{DbError, Manifest};
+use super::skeletons::{SkeletonKind, embed_rig, poses};
+use crate::fsutil::{read_text, write_bytes_atomic};
+use crate::graph::SurfaceMotionGraph;
+use crate::similarity::vertex::VertexOptions;
+use crate::similarity::{
+    Measure, PairDistance, ShapeSet, SimilarityMatrix, SkeletonSet, Span, VertexSet, all_pairs,
+    y_up,
+};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Options of [`build`].
+#[derive(Debug, Clone, Default)]
+pub struct BuildOptions {
+    /// Measure; default: the manifest's `[graph] measure`, else shape.
+    pub measure: Option<Measure>,
+    /// Recompute even when the cache is current.
+    pub force: bool,
+}
+
+/// Progress callbacks of a build (the library does not print).
+pub trait BuildProgress: Sync {
+    /// A stage of `total` steps begins.
+    fn start(&self, _what: &str, _total: u64) {}
+    /// `k` more steps are done.
+    fn advance(&self, _k: u64) {}
+    /// The stage is done.
+    fn finish(&self) {}
+}
+
+/// Progress that goes nowhere.
+pub struct Quiet;
+impl BuildProgress for Quiet {}
+
+/// What a build did.
+#[derive(Debug, Clone, Serialize)]
+pub struct BuildReport {
+    /// Measure used.
+    pub measure: Measure,
+    /// Unit of the dissimilarities.
+    pub unit: &'static str,
+    /// Frames in the database.
+    pub frames: usize,
+    /// Sequences.
+    pub sequences: Vec<Span>,
+    /// True if the similarity matrix came from the cache.
+    pub similarity_cached: bool,
+    /// Seconds spent on descriptors (0 when cached).
+    pub describe_seconds: f64,
+    /// Seconds spent on all pairs (0 when cached).
+    pub pairs_seconds: f64,
+    /// Frame pairs evaluated (0 when cached).
+    pub pairs: u64,
+    /// True if the graph came from the cache.
+    pub graph_cached: bool,
+    /// Seconds spent finding transitions and building the graph.
+    pub graph_seconds: f64,
+    /// Transitions in the graph.
+    pub transitions: usize,
+    /// Sequence edges in the graph.
+    pub edges: usize,
+    /// The cache folder.
+    pub cache: PathBuf,
+}
+
+#[derive(Serialize, Deserialize)]
+struct GraphFile {
+    key: u64,
+    graph: SurfaceMotionGraph,
+}
+
+/// Where the time of a similarity computation went.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Timing {
+    /// Seconds loading sequences and computing descriptors.
+    pub describe_seconds: f64,
+    /// Seconds comparing all pairs.
+    pub pairs_seconds: f64,
+    /// Pairs compared (with the diagonal).
+    pub pairs: u64,
+}
+
+/// The similarity matrix of a database for one measure, from the cache if
+/// current. Returns the matrix, its key and the report fields.
+pub fn similarity(
+    dir: &Path,
+    m: &Manifest,
+    measure: Measure,
+    force: bool,
+    progress: &dyn BuildProgress,
+) -> Result<(SimilarityMatrix, u64, Option<Timing>), DbError> {
+    let mut key = frames_key(dir, m)?;
+    key.text("measure", measure.name());
+    let vopts = VertexOptions {
+        velocity_weight: m.graph.velocity_weight.unwrap_or(1.0),
+    };
+    match measure {
+        Measure::Shape => {
+            key.text("voxels", &ShapeSet::VOXELS_PER_HEIGHT.to_string());
+        }
+        Measure::Vertex => {
+            key.text("velocity_weight", &vopts.velocity_weight.to_string());
+        }
+        Measure::Skeleton => add_rig(&mut key, dir, m)?,
+    }
+    let key = key.finish();
+    let path = cache_dir(dir).join(format!("similarity-{}.bin", measure.name()));
+    if !force && let Some(mat) = cache::load_matrix(&path, key) {
+        return Ok((mat, key, None));
+    }
+    let topo = m.load_topology(dir)?;
+    let n = topo.vertex_count();
+    let z_up = m.up.eq_ignore_ascii_case("z");
+    let t0 = Instant::now();
+    let mut spans = Vec::new();
+    let mut shape = None;
+    let mut vertex = None;
+    let mut skel = None;
+    match measure {
+        Measure::Shape => {
+            let rest: Vec<_> = topo.positions().iter().map(|p| y_up(*p, z_up)).collect();
+            shape = Some(ShapeSet::new(ShapeSet::grid_for(&rest)));
+        }
+        Measure::Vertex => vertex = Some(VertexSet::new(n, vopts)),
+        Measure::Skeleton => {
+            skel = Some((embed_rig(dir, m, &topo)?, SkeletonSet::default()));
+        }
+    }
+    progress.start("sequences described", m.sequences.len() as u64);
+    for s in &m.sequences {
+        let seq = m.load_sequence(dir, s)?;
+        if seq.mesh().vertex_count() != n || seq.mesh().triangles() != topo.triangles() {
+            return Err(DbError::Manifest {
+                path: dir.join(super::MANIFEST),
+                msg: format!(
+                    "sequence '{}': its connectivity differs from the topology ({} vertices, the topology {}); `surfmotion db info` lists such problems",
+                    s.name,
+                    seq.mesh().vertex_count(),
+                    n
+                ),
+            });
+        }
+        let start = spans.iter().map(|s: &Span| s.len).sum();
+        spans.push(Span {
+            name: s.name.clone(),
+            start,
+            len: seq.frame_count(),
+        });
+        let frames = seq.all_positions();
+        if let Some(set) = shape.as_mut() {
+            set.push_sequence(frames, n, topo.triangles(), z_up);
+        }
+        if let Some(set) = vertex.as_mut() {
+            set.push_sequence(frames, z_up);
+        }
+        if let Some((rig, set)) = skel.as_mut() {
+            let p = poses(rig, frames, n, SkeletonKind::Regressor);
+            set.poses
+                .extend(p.into_iter().map(|q| q.map(|j| y_up(j.to_array(), z_up))));
+        }
+        progress.advance(1);
+    }
+    progress.finish();
+    let describe = t0.elapsed().as_secs_f64();
+    let set: &dyn PairDistance = match (&shape, &vertex, &skel) {
+        (Some(s), _, _) => s,
+        (_, Some(s), _) => s,
+        (_, _, Some((_, s))) => s,
+        _ => unreachable!("one set is built per measure"),
+    };
+    let frames = set.frames();
+    progress.start("frames compared", frames as u64);
+    let t1 = Instant::now();
+    let data = all_pairs(set, &|k| progress.advance(k));
+    let pairs_s = t1.elapsed().as_secs_f64();
+    progress.finish();
+    let mat = SimilarityMatrix::new(spans, data).ok_or_else(|| DbError::Manifest {
+        path: dir.join(super::MANIFEST),
+        msg: "internal: frame counts disagree".into(),
+    })?;
+    cache::save_matrix(&path, key, &mat)?;
+    let pairs = (frames as u64) * (frames as u64 + 1) / 2;
+    Ok((
+        mat,
+        key,
+        Some(Timing {
+            describe_seconds: describe,
+            pairs_seconds: pairs_s,
+            pairs,
+        }),
+    ))
+}
+
+/// Builds (or loads from the cache) the similarity matrix and the Surface
+/// Motion Graph of the database in `dir`.
+pub fn build(
+    dir: &Path,
+    opts: &BuildOptions,
+    progress: &dyn BuildProgress,
+) -> Result<(SimilarityMatrix, SurfaceMotionGraph, BuildReport), DbError> {
+    let m = Manifest::load(dir)?;
+    if m.sequences.is_empty() {
+        return Err(DbError::Manifest {
+            path: dir.join(super::MANIFEST),
+            msg:
+                "no sequences: add [[sequence]] entries (`surfmotion db init --sequence NAME=PATH`)"
+                    .into(),
+        });
+    }
+    let measure = opts.measure.or(m.graph.measure).unwrap_or_default();
+    let (mat, sim_key, timing) = similarity(dir, &m, measure, opts.force, progress)?;
+    let topts = m.graph.transition_options();
+    let edits = m.graph.edits();
+    let mut gk = KeyHasher::default();
+    gk.text("similarity", &sim_key.to_string());
+    gk.text(
+        "options",
+        &serde_json::to_string(&topts).unwrap_or_default(),
+    );
+    gk.text("edits", &serde_json::to_string(&edits).unwrap_or_default());
+    let graph_key = gk.finish();
+    let gpath = cache_dir(dir).join(format!("graph-{}.json", measure.name()));
+    let cached: Option<SurfaceMotionGraph> = if opts.force {
+        None
+    } else {
+        read_text(&gpath)
+            .ok()
+            .and_then(|t| serde_json::from_str::<GraphFile>(&t).ok())
+            .filter(|g| g.key == graph_key)
+            .map(|g| g.graph)
+    };
+    let t = Instant::now();
+    let (graph, graph_cached) = match cached {
+        Some(g) => (g, true),
+        None => {
+            let g = SurfaceMotionGraph::build(&mat, measure, &topts, &edits)?;
+            let text = serde_json::to_string(&GraphFile {
+                key: graph_key,
+                graph: g.clone(),
+            })
+            .map_err(|e| DbError::Manifest {
+                path: gpath.clone(),
+                msg: e.to_string(),
+            })?;
+            write_bytes_atomic(&gpath, text.as_bytes())?;
+            (g, false)
+        }
+    };
+    let graph_seconds = t.elapsed().as_secs_f64();
+    let (describe_seconds, pairs_seconds, pairs) = timing
+        .map(|t| (t.describe_seconds, t.pairs_seconds, t.pairs))
+        .unwrap_or((0.0, 0.0, 0));
+    let report = BuildReport {
+        measure,
+        unit: measure.unit(),
+        frames: mat.len(),
+        sequences: mat.spans.clone(),
+        similarity_cached: timing.is_none(),
+        describe_seconds,
+        pairs_seconds,
+        pairs,
+        graph_cached,
+        graph_seconds,
+        transitions: graph.transitions.len(),
+        edges: graph.edges.len(),
+        cache: cache_dir(dir),
+    };
+    Ok((mat, graph, report))
+}

@@ -1,0 +1,422 @@
+//! The Surface Motion Graph (Huang et al. 2015, Sec. 4.3): sequences as
+//! nodes, transitions as edges, the user's edits, and the flat frame-level
+//! adjacency the searches walk.
+//!
+//! Frames are numbered globally (`u32`), sequence after sequence. The frame
+//! graph has an edge `t → t+1` inside every sequence (cost 0) and, for every
+//! transition `(i, m) → (j, n)` with half-window `L`, an edge from frame `m`
+//! of `i` to frame `n+1` of `j` with the transition's cost: a path taking it
+//! plays `i` up to `m` and continues in `j` after `n`; the blend over
+//! `m−L..=m+L` / `n−L..=n+L` is applied when the path is turned into meshes.
+
+use super::transitions::{self, Transition, TransitionOptions};
+use crate::similarity::{Measure, SimilarityMatrix, Span};
+use serde::{Deserialize, Serialize};
+use std::fmt::Write;
+
+/// User edits of the graph (manifest `[graph]`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GraphEdits {
+    /// Sequence edges never to create, as `"from -> to"` (`*` matches any
+    /// sequence).
+    pub forbid: Vec<String>,
+    /// Single transitions to drop, as `"from:m -> to:n"`.
+    pub remove: Vec<String>,
+}
+
+/// A sequence edge (one or more transitions between two sequences).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SequenceEdge {
+    /// Source sequence.
+    pub from: usize,
+    /// Target sequence.
+    pub to: usize,
+    /// Transitions on this edge (indices into [`SurfaceMotionGraph::transitions`]).
+    pub transitions: Vec<usize>,
+    /// Cheapest transition cost.
+    pub cost: f64,
+}
+
+/// The graph.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SurfaceMotionGraph {
+    /// The measure the transitions were found with.
+    pub measure: Measure,
+    /// The options used.
+    pub options: TransitionOptions,
+    /// Sequences (nodes) with their frame spans.
+    pub sequences: Vec<Span>,
+    /// All transitions, grouped by ordered sequence pair, best first.
+    pub transitions: Vec<Transition>,
+    /// Sequence-level edges.
+    pub edges: Vec<SequenceEdge>,
+    /// What the edits removed, for the report.
+    pub removed: Vec<String>,
+}
+
+/// An edit that names something that does not exist.
+#[derive(Debug, Clone, thiserror::Error, PartialEq)]
+#[error("graph edit '{edit}': {msg}")]
+pub struct EditError {
+    /// The edit as written.
+    pub edit: String,
+    /// What is wrong.
+    pub msg: String,
+}
+
+impl SurfaceMotionGraph {
+    /// Finds the transitions of every ordered sequence pair (in parallel)
+    /// and builds the graph, applying `edits`.
+    pub fn build(
+        matrix: &SimilarityMatrix,
+        measure: Measure,
+        options: &TransitionOptions,
+        edits: &GraphEdits,
+    ) -> Result<SurfaceMotionGraph, EditError> {
+        use rayon::prelude::*;
+        let spans = matrix.spans.clone();
+        let forbid = parse_forbid(&edits.forbid, &spans)?;
+        let remove = parse_remove(&edits.remove, &spans)?;
+        let pairs: Vec<(usize, usize)> = (0..spans.len())
+            .flat_map(|i| (0..spans.len()).map(move |j| (i, j)))
+            .collect();
+        let found: Vec<Vec<Transition>> = pairs
+            .par_iter()
+            .map(|&(i, j)| {
+                if forbid.iter().any(|f| f.matches(i, j)) {
+                    return Vec::new();
+                }
+                let c = |r: usize, s: usize| matrix.between(i, r, j, s);
+                transitions::find(&c, spans[i].len, spans[j].len, i == j, options)
+                    .into_iter()
+                    .map(|(m, n, window, cost)| Transition {
+                        from: i,
+                        to: j,
+                        m,
+                        n,
+                        window,
+                        cost,
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut removed = Vec::new();
+        let mut all = Vec::new();
+        for t in found.into_iter().flatten() {
+            if remove.contains(&(t.from, t.m, t.to, t.n)) {
+                removed.push(format!(
+                    "{}:{} -> {}:{}",
+                    spans[t.from].name, t.m, spans[t.to].name, t.n
+                ));
+            } else {
+                all.push(t);
+            }
+        }
+        for f in &edits.forbid {
+            removed.push(format!("forbidden: {f}"));
+        }
+        let mut edges: Vec<SequenceEdge> = Vec::new();
+        for (k, t) in all.iter().enumerate() {
+            match edges.iter_mut().find(|e| e.from == t.from && e.to == t.to) {
+                Some(e) => {
+                    e.transitions.push(k);
+                    e.cost = e.cost.min(t.cost);
+                }
+                None => edges.push(SequenceEdge {
+                    from: t.from,
+                    to: t.to,
+                    transitions: vec![k],
+                    cost: t.cost,
+                }),
+            }
+        }
+        Ok(SurfaceMotionGraph {
+            measure,
+            options: *options,
+            sequences: spans,
+            transitions: all,
+            edges,
+            removed,
+        })
+    }
+
+    /// Total frames.
+    pub fn frame_count(&self) -> usize {
+        self.sequences.iter().map(|s| s.len).sum()
+    }
+
+    /// Global id of frame `t` of sequence `s`.
+    pub fn frame_id(&self, s: usize, t: usize) -> u32 {
+        (self.sequences[s].start + t) as u32
+    }
+
+    /// Sequence and frame of a global id.
+    pub fn frame_of(&self, id: u32) -> (usize, usize) {
+        let id = id as usize;
+        let s = self
+            .sequences
+            .partition_point(|q| q.start + q.len <= id)
+            .min(self.sequences.len().saturating_sub(1));
+        (s, id - self.sequences[s].start)
+    }
+
+    /// The frame-level adjacency (successors of each frame with costs).
+    pub fn adjacency(&self) -> FrameAdjacency {
+        let n = self.frame_count();
+        let mut out: Vec<Vec<(u32, f32)>> = vec![Vec::new(); n];
+        for (s, span) in self.sequences.iter().enumerate() {
+            for t in 0..span.len.saturating_sub(1) {
+                out[self.frame_id(s, t) as usize].push((self.frame_id(s, t + 1), 0.0));
+            }
+        }
+        for t in &self.transitions {
+            if t.n + 1 < self.sequences[t.to].len {
+                out[self.frame_id(t.from, t.m) as usize]
+                    .push((self.frame_id(t.to, t.n + 1), t.cost as f32));
+            }
+        }
+        let mut offsets = Vec::with_capacity(n + 1);
+        let mut targets = Vec::new();
+        let mut costs = Vec::new();
+        offsets.push(0u32);
+        for o in out {
+            for (t, c) in o {
+                targets.push(t);
+                costs.push(c);
+            }
+            offsets.push(targets.len() as u32);
+        }
+        FrameAdjacency {
+            offsets,
+            targets,
+            costs,
+        }
+    }
+
+    /// Graphviz DOT: one node per sequence (with its frame count), one edge
+    /// per sequence pair labelled with its transitions `m→n (L, cost)`.
+    pub fn to_dot(&self) -> String {
+        let mut s = String::from(
+            "digraph surface_motion_graph {\n  rankdir=LR;\n  node [shape=box, style=rounded];\n",
+        );
+        for (i, q) in self.sequences.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "  s{i} [label=\"{}\\n{} frames\"];",
+                escape(&q.name),
+                q.len
+            );
+        }
+        for e in &self.edges {
+            let label: Vec<String> = e
+                .transitions
+                .iter()
+                .map(|&k| {
+                    let t = &self.transitions[k];
+                    format!("{}→{} (L={}, {:.3})", t.m, t.n, t.window, t.cost)
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                "  s{} -> s{} [label=\"{}\"];",
+                e.from,
+                e.to,
+                label.join("\\n")
+            );
+        }
+        s.push_str("}\n");
+        s
+    }
+}
+
+fn escape(s: &str) -> String {
+    s.replace('\\', "\\\\").replace('"', "\\\"")
+}
+
+/// Successors of every frame in compressed rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameAdjacency {
+    /// Row starts, `frames + 1` entries.
+    pub offsets: Vec<u32>,
+    /// Successor frame ids.
+    pub targets: Vec<u32>,
+    /// Edge costs (0 along a sequence, the transition cost on a jump).
+    pub costs: Vec<f32>,
+}
+
+impl FrameAdjacency {
+    /// Successors of frame `f` with costs.
+    pub fn successors(&self, f: u32) -> impl Iterator<Item = (u32, f32)> + '_ {
+        let (a, b) = (
+            self.offsets[f as usize] as usize,
+            self.offsets[f as usize + 1] as usize,
+        );
+        self.targets[a..b]
+            .iter()
+            .copied()
+            .zip(self.costs[a..b].iter().copied())
+    }
+}
+
+struct Forbid(Option<usize>, Option<usize>);
+impl Forbid {
+    fn matches(&self, i: usize, j: usize) -> bool {
+        self.0.is_none_or(|a| a == i) && self.1.is_none_or(|b| b == j)
+    }
+}
+
+fn seq_index(spans: &[Span], name: &str, edit: &str) -> Result<usize, EditError> {
+    spans
+        .iter()
+        .position(|s| s.name == name)
+        .ok_or_else(|| EditError {
+            edit: edit.into(),
+            msg: format!(
+                "no sequence '{name}' (the database has {})",
+                spans
+                    .iter()
+                    .map(|s| s.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        })
+}
+
+fn split_arrow(e: &str) -> Result<(&str, &str), EditError> {
+    e.split_once("->")
+        .map(|(a, b)| (a.trim(), b.trim()))
+        .ok_or_else(|| EditError {
+            edit: e.into(),
+            msg: "expected 'FROM -> TO'".into(),
+        })
+}
+
+fn parse_forbid(edits: &[String], spans: &[Span]) -> Result<Vec<Forbid>, EditError> {
+    edits
+        .iter()
+        .map(|e| {
+            let (a, b) = split_arrow(e)?;
+            let side = |x: &str| {
+                if x == "*" {
+                    Ok(None)
+                } else {
+                    seq_index(spans, x, e).map(Some)
+                }
+            };
+            Ok(Forbid(side(a)?, side(b)?))
+        })
+        .collect()
+}
+
+fn parse_remove(
+    edits: &[String],
+    spans: &[Span],
+) -> Result<Vec<(usize, usize, usize, usize)>, EditError> {
+    edits
+        .iter()
+        .map(|e| {
+            let (a, b) = split_arrow(e)?;
+            let frame = |x: &str| -> Result<(usize, usize), EditError> {
+                let (name, f) = x.rsplit_once(':').ok_or_else(|| EditError {
+                    edit: e.clone(),
+                    msg: format!("'{x}': expected SEQUENCE:FRAME"),
+                })?;
+                let s = seq_index(spans, name.trim(), e)?;
+                let f: usize = f.trim().parse().map_err(|_| EditError {
+                    edit: e.clone(),
+                    msg: format!("'{f}' is not a frame number"),
+                })?;
+                Ok((s, f))
+            };
+            let (i, m) = frame(a)?;
+            let (j, n) = frame(b)?;
+            Ok((i, m, j, n))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn two_sequences() -> SimilarityMatrix {
+        // "a" (40 frames) and "b" (30 frames) of a 1-D motion; b repeats
+        // a's frames 10..30 at 5..25.
+        let a: Vec<f64> = (0..40).map(|t| (t as f64 * 0.41).sin() * 2.0).collect();
+        let mut b: Vec<f64> = (0..30).map(|t| 5.0 + (t as f64 * 0.3).cos()).collect();
+        b[5..25].copy_from_slice(&a[10..30]);
+        let all: Vec<f64> = a.iter().chain(&b).copied().collect();
+        let n = all.len();
+        let data = (0..n * n)
+            .map(|k| (all[k / n] - all[k % n]).abs() as f32)
+            .collect();
+        let spans = vec![
+            Span {
+                name: "a".into(),
+                start: 0,
+                len: 40,
+            },
+            Span {
+                name: "b".into(),
+                start: 40,
+                len: 30,
+            },
+        ];
+        SimilarityMatrix::new(spans, data).unwrap()
+    }
+
+    #[test]
+    fn build_edit_and_walk() {
+        let m = two_sequences();
+        let o = TransitionOptions::default();
+        let g = SurfaceMotionGraph::build(&m, Measure::Shape, &o, &GraphEdits::default()).unwrap();
+        let ab: Vec<&Transition> = g
+            .transitions
+            .iter()
+            .filter(|t| t.from == 0 && t.to == 1)
+            .collect();
+        assert!(!ab.is_empty() && ab.len() <= 4);
+        assert_eq!(ab[0].m - ab[0].n, 5);
+        assert!(g.edges.iter().any(|e| e.from == 1 && e.to == 0));
+        // Adjacency: sequence steps plus one jump per transition that lands
+        // inside its target.
+        let adj = g.adjacency();
+        let steps = 39 + 29;
+        let jumps = g
+            .transitions
+            .iter()
+            .filter(|t| t.n + 1 < g.sequences[t.to].len)
+            .count();
+        assert_eq!(adj.targets.len(), steps + jumps);
+        let f = g.frame_id(0, ab[0].m);
+        assert!(
+            adj.successors(f)
+                .any(|(t, _)| t == g.frame_id(1, ab[0].n + 1))
+        );
+        assert_eq!(g.frame_of(g.frame_id(1, 7)), (1, 7));
+        assert!(g.to_dot().contains("s0 -> s1"));
+        // Edits.
+        let edits = GraphEdits {
+            forbid: vec!["a -> b".into()],
+            remove: vec![format!("b:{} -> a:{}", ab[0].n, ab[0].m)],
+        };
+        let g2 = SurfaceMotionGraph::build(&m, Measure::Shape, &o, &edits).unwrap();
+        assert!(!g2.transitions.iter().any(|t| t.from == 0 && t.to == 1));
+        assert!(
+            !g2.transitions
+                .iter()
+                .any(|t| t.from == 1 && t.to == 0 && t.m == ab[0].n && t.n == ab[0].m)
+        );
+        let bad = GraphEdits {
+            forbid: vec!["a -> nope".into()],
+            ..Default::default()
+        };
+        assert!(
+            SurfaceMotionGraph::build(&m, Measure::Shape, &o, &bad)
+                .unwrap_err()
+                .msg
+                .contains("no sequence 'nope'")
+        );
+    }
+}

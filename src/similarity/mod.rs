@@ -1,0 +1,15 @@
+//! Frame-to-frame dissimilarity over a whole database (Huang et al. 2015,
+//! Sec. 4.1): volumetric shape histograms minimised over rotation about the
+//! vertical ([`histogram`] on [`voxel`] occupancy), vertex distance with a
+//! velocity term ([`vertex`]), and skeletal distance (Eq. 28,
+//! [`crate::skeleton::skeleton_distance`]); per-frame descriptors
+//! ([`sets`]) compared all-pairs in parallel ([`matrix`]).
+
+pub mod histogram;
+pub mod matrix;
+pub mod sets;
+pub mod vertex;
+pub mod voxel;
+
+pub use matrix::{PairDistance, SimilarityMatrix, Span, all_pairs};
+pub use sets::{Measure, ShapeSet, SkeletonSet, VertexSet, y_up};

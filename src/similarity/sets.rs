@@ -1,0 +1,240 @@
+//! Per-frame descriptors of a whole database for each measure, built one
+//! sequence at a time (so only descriptors, never all meshes, stay in
+//! memory) and compared pairwise by [`super::matrix::all_pairs`].
+
+use super::histogram::{self, DESCRIPTOR_LEN, PHI_SUB, ShapeGrid, ShapeKernel, ShapeScratch};
+use super::matrix::PairDistance;
+use super::vertex::{self, VertexOptions};
+use crate::skeleton::{Pose, skeleton_distance};
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A frame dissimilarity measure (Huang et al. 2015, Sec. 4.1 and Fig. 4).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Measure {
+    /// 3D volumetric shape histogram, minimised over rotation about the
+    /// vertical (Eq. 1).
+    #[default]
+    Shape,
+    /// Vertex positions and velocities after floor alignment (Casas 2013).
+    Vertex,
+    /// Canonical joint positions after floor alignment (Eq. 28); needs a rig.
+    Skeleton,
+}
+
+impl Measure {
+    /// Lower-case name, as in the manifest and cache files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Measure::Shape => "shape",
+            Measure::Vertex => "vertex",
+            Measure::Skeleton => "skeleton",
+        }
+    }
+    /// Unit of the values.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Measure::Shape => "L2 of unit-sum histograms",
+            Measure::Vertex => "RMS length (file units)",
+            Measure::Skeleton => "sum of 19 joint distances (file units)",
+        }
+    }
+}
+
+/// A point of a file in Y-up coordinates (`z_up` files are turned so that
+/// +Z becomes +Y, right-handed).
+pub fn y_up(p: [f64; 3], z_up: bool) -> DVec3 {
+    if z_up {
+        DVec3::new(p[0], p[2], -p[1])
+    } else {
+        DVec3::from_array(p)
+    }
+}
+
+/// Shape-histogram descriptors of every frame.
+#[derive(Debug, Clone)]
+pub struct ShapeSet {
+    /// The database-wide binning.
+    pub grid: ShapeGrid,
+    kernel: ShapeKernel,
+    desc: Vec<f32>,
+    norms: Vec<[f64; PHI_SUB]>,
+    /// Occupied voxels per frame (for reports).
+    pub voxels: Vec<u32>,
+}
+
+impl ShapeSet {
+    /// Voxels per body height: the grid spacing is the rest frame's vertical
+    /// extent divided by this (about 10⁴ voxels for a human body).
+    pub const VOXELS_PER_HEIGHT: f64 = 96.0;
+
+    /// The binning for a database whose rest frame is `rest` (Y-up): voxel
+    /// size from the height, `r_max` 1.25× the rest frame's largest distance
+    /// from its centroid (bigger reaches fall in the outer bin).
+    pub fn grid_for(rest: &[DVec3]) -> ShapeGrid {
+        let (lo, hi) = rest
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p.y), hi.max(p.y))
+            });
+        let c = rest.iter().copied().sum::<DVec3>() / rest.len().max(1) as f64;
+        let r = rest.iter().map(|p| p.distance(c)).fold(0.0, f64::max);
+        let height = (hi - lo).max(r).max(f64::MIN_POSITIVE);
+        ShapeGrid {
+            voxel: height / Self::VOXELS_PER_HEIGHT,
+            r_max: 1.25 * r.max(f64::MIN_POSITIVE),
+        }
+    }
+
+    /// An empty set with the given binning.
+    pub fn new(grid: ShapeGrid) -> ShapeSet {
+        ShapeSet {
+            grid,
+            kernel: ShapeKernel::default(),
+            desc: Vec::new(),
+            norms: Vec::new(),
+            voxels: Vec::new(),
+        }
+    }
+
+    /// Adds the frames of one sequence (`frames`: frame-major positions,
+    /// `n` per frame), in parallel over frames.
+    pub fn push_sequence(
+        &mut self,
+        frames: &[[f64; 3]],
+        n: usize,
+        triangles: &[[u32; 3]],
+        z_up: bool,
+    ) {
+        let count = frames.len() / n.max(1);
+        let start = self.norms.len();
+        self.desc.resize((start + count) * DESCRIPTOR_LEN, 0.0);
+        self.norms.resize(start + count, [0.0; PHI_SUB]);
+        self.voxels.resize(start + count, 0);
+        let grid = self.grid;
+        self.desc[start * DESCRIPTOR_LEN..]
+            .par_chunks_mut(DESCRIPTOR_LEN)
+            .zip(self.norms[start..].par_iter_mut())
+            .zip(self.voxels[start..].par_iter_mut())
+            .zip(frames.par_chunks(n.max(1)))
+            .for_each_init(
+                || (ShapeScratch::default(), Vec::with_capacity(n)),
+                |(scratch, pts), (((out, norms), voxels), f)| {
+                    pts.clear();
+                    pts.extend(f.iter().map(|p| y_up(*p, z_up)));
+                    *voxels =
+                        histogram::describe(pts, triangles, &grid, scratch, out, norms) as u32;
+                },
+            );
+    }
+}
+
+impl PairDistance for ShapeSet {
+    fn frames(&self) -> usize {
+        self.norms.len()
+    }
+    fn distance(&self, a: usize, b: usize) -> f64 {
+        let da = &self.desc[a * DESCRIPTOR_LEN..(a + 1) * DESCRIPTOR_LEN];
+        let db = &self.desc[b * DESCRIPTOR_LEN..(b + 1) * DESCRIPTOR_LEN];
+        let ab = self
+            .kernel
+            .distance(da, self.norms[a][0], db, &self.norms[b])
+            .0;
+        // The fine-shift search is not exactly symmetric; take the better
+        // of the two directions so the matrix is.
+        let ba = self
+            .kernel
+            .distance(db, self.norms[b][0], da, &self.norms[a])
+            .0;
+        ab.min(ba)
+    }
+}
+
+/// Vertex position-and-velocity blocks of every frame.
+#[derive(Debug, Clone)]
+pub struct VertexSet {
+    n: usize,
+    opts: VertexOptions,
+    blocks: Vec<f32>,
+    norms: Vec<f64>,
+}
+
+impl VertexSet {
+    /// An empty set for meshes of `n` vertices.
+    pub fn new(n: usize, opts: VertexOptions) -> VertexSet {
+        VertexSet {
+            n,
+            opts,
+            blocks: Vec::new(),
+            norms: Vec::new(),
+        }
+    }
+
+    /// Adds the frames of one sequence (velocities stay inside it).
+    pub fn push_sequence(&mut self, frames: &[[f64; 3]], z_up: bool) {
+        let n = self.n.max(1);
+        let count = frames.len() / n;
+        let start = self.norms.len();
+        let len = 6 * n;
+        self.blocks.resize((start + count) * len, 0.0);
+        self.norms.resize(start + count, 0.0);
+        let at = |t: usize| -> Vec<DVec3> {
+            frames[t * n..(t + 1) * n]
+                .iter()
+                .map(|p| y_up(*p, z_up))
+                .collect()
+        };
+        let opts = self.opts;
+        self.blocks[start * len..]
+            .par_chunks_mut(len)
+            .zip(self.norms[start..].par_iter_mut())
+            .enumerate()
+            .for_each(|(t, (out, norm))| {
+                let x = at(t);
+                let (prev, next) = if t > 0 {
+                    (Some(at(t - 1)), None)
+                } else if count > 1 {
+                    (None, Some(at(1)))
+                } else {
+                    (None, None)
+                };
+                *norm = vertex::describe(&x, prev.as_deref(), next.as_deref(), &opts, out);
+            });
+    }
+}
+
+impl PairDistance for VertexSet {
+    fn frames(&self) -> usize {
+        self.norms.len()
+    }
+    fn distance(&self, a: usize, b: usize) -> f64 {
+        let len = 6 * self.n;
+        vertex::distance(
+            &self.blocks[a * len..(a + 1) * len],
+            self.norms[a],
+            &self.blocks[b * len..(b + 1) * len],
+            self.norms[b],
+            self.n,
+        )
+    }
+}
+
+/// Canonical skeletons of every frame (Y-up).
+#[derive(Debug, Clone, Default)]
+pub struct SkeletonSet {
+    /// One pose per frame.
+    pub poses: Vec<Pose>,
+}
+
+impl PairDistance for SkeletonSet {
+    fn frames(&self) -> usize {
+        self.poses.len()
+    }
+    fn distance(&self, a: usize, b: usize) -> f64 {
+        skeleton_distance(&self.poses[a], &self.poses[b])
+    }
+}
