@@ -4,7 +4,9 @@
 //! A frame's occupied voxels ([`super::voxel`]) are binned in spherical
 //! coordinates `(r, θ, φ)` about their centre of mass, `(5, 10, 20)` bins:
 //! `r` uniform on `[0, r_max]` (one `r_max` per database, the last bin takes
-//! anything beyond), `θ` the angle from the vertical, `φ` the azimuth. The
+//! anything beyond), `θ` the angle from the vertical, `φ` the azimuth. Each
+//! voxel is shared linearly between neighbouring bins (soft binning), which
+//! removes most of the voxel grid's aliasing under rotation. The
 //! histogram is normalised to unit sum, so the distance does not depend on
 //! the voxel size. The dissimilarity (Eq. 1)
 //!
@@ -12,8 +14,8 @@
 //!
 //! is minimised over rotation about the vertical axis with the paper's
 //! fine-histogram method: φ is first binned 10× finer (200 bins); the fine
-//! histogram shifted by `s ∈ 0..10` fine bins and re-binned gives 10 coarse
-//! histograms, and every coarse circular shift `c ∈ 0..20` of each is
+//! histogram shifted by `s ∈ 0..10` fine bins and re-binned (with a hat
+//! kernel, see [`describe`]) gives 10 coarse histograms, and every coarse circular shift `c ∈ 0..20` of each is
 //! compared, so all 200 rotations in steps of 1.8° are searched. The coarse
 //! shifts are done at once as a circular cross-correlation over φ in the
 //! Fourier domain: each frame stores, for each `s`, the 11 DFT coefficients
@@ -57,13 +59,13 @@ pub struct ShapeGrid {
 #[derive(Debug, Default, Clone)]
 pub struct ShapeScratch {
     voxels: VoxelScratch,
-    points: Vec<DVec3>,
+    points: Vec<(DVec3, f64)>,
     fine: Vec<f64>,
 }
 
 /// Writes the descriptor of one frame (Y-up positions) into `out`
 /// (`DESCRIPTOR_LEN` values) and the squared norm of each sub-shifted
-/// histogram into `norms`. Returns the number of occupied voxels.
+/// histogram into `norms`. Returns the volume in voxels.
 pub fn describe(
     positions: &[DVec3],
     triangles: &[[u32; 3]],
@@ -71,36 +73,63 @@ pub fn describe(
     scratch: &mut ShapeScratch,
     out: &mut [f32],
     norms: &mut [f64; PHI_SUB],
-) -> usize {
+) -> f64 {
     let ShapeScratch {
         voxels,
         points,
         fine,
     } = scratch;
     points.clear();
-    occupancy(positions, triangles, grid.voxel, voxels, |p| points.push(p));
+    let mut volume = occupancy(positions, triangles, grid.voxel, voxels, |p, w| {
+        points.push((p, w))
+    });
     if points.is_empty() {
         // No volume: fall back to the vertices themselves.
-        points.extend_from_slice(positions);
+        points.extend(positions.iter().map(|p| (*p, 1.0)));
+        volume = positions.len() as f64;
     }
-    let centre = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
+    let mass: f64 = points.iter().map(|p| p.1).sum();
+    let centre = points.iter().map(|(p, w)| *p * *w).sum::<DVec3>() / mass.max(f64::MIN_POSITIVE);
     let nfine = PHI_BINS * PHI_SUB;
     fine.clear();
     fine.resize(RINGS * nfine, 0.0);
-    let unit = 1.0 / points.len().max(1) as f64;
-    for p in points.iter() {
+    let unit = 1.0 / mass.max(f64::MIN_POSITIVE);
+    for (p, w) in points.iter() {
         let d = *p - centre;
         let r = d.length();
-        let rb = ((r / grid.r_max * R_BINS as f64) as usize).min(R_BINS - 1);
         let theta = if r > 0.0 {
             (d.y / r).clamp(-1.0, 1.0).acos()
         } else {
             0.0
         };
-        let tb = ((theta / std::f64::consts::PI * THETA_BINS as f64) as usize).min(THETA_BINS - 1);
         let phi = (-d.z).atan2(d.x).rem_euclid(std::f64::consts::TAU);
-        let fb = ((phi / std::f64::consts::TAU * nfine as f64) as usize).min(nfine - 1);
-        fine[(rb * THETA_BINS + tb) * nfine + fb] += unit;
+        // Soft binning: each sample is shared linearly between the two
+        // nearest bin centres in r, θ and fine φ, so the histogram varies
+        // continuously with the mesh and the voxel grid's aliasing (a
+        // sample crossing a bin edge) does not show as noise.
+        let [(r0, r1, fr), (t0, t1, ft)] = [
+            (r / grid.r_max * R_BINS as f64, R_BINS),
+            (theta / std::f64::consts::PI * THETA_BINS as f64, THETA_BINS),
+        ]
+        .map(|(x, n)| {
+            let x = (x - 0.5).clamp(0.0, (n - 1) as f64);
+            let i = (x.floor() as usize).min(n - 1);
+            (i, (i + 1).min(n - 1), x - i as f64)
+        });
+        let x = phi / std::f64::consts::TAU * nfine as f64 - 0.5;
+        let xf = x.floor();
+        let ff = x - xf;
+        let f0 = (xf as i64).rem_euclid(nfine as i64) as usize;
+        let f1 = (f0 + 1) % nfine;
+        let m = unit * w;
+        for (ri, wr) in [(r0, 1.0 - fr), (r1, fr)] {
+            for (ti, wt) in [(t0, 1.0 - ft), (t1, ft)] {
+                let base = (ri * THETA_BINS + ti) * nfine;
+                let v = m * wr * wt;
+                fine[base + f0] += v * (1.0 - ff);
+                fine[base + f1] += v * ff;
+            }
+        }
     }
     let (cos, sin) = dft_table();
     out[..DESCRIPTOR_LEN].fill(0.0);
@@ -108,10 +137,18 @@ pub fn describe(
         let block = &mut out[s * SUB_STRIDE..(s + 1) * SUB_STRIDE];
         for ring in 0..RINGS {
             let f = &fine[ring * nfine..(ring + 1) * nfine];
-            // Shift by s fine bins, re-bin to coarse.
+            // Shift by s fine bins and re-bin to coarse with a hat kernel
+            // (linear interpolation between coarse bin centres, a partition
+            // of unity): a box would put a sharp, grid-aliased edge at
+            // every coarse φ boundary.
             let coarse: [f64; PHI_BINS] = std::array::from_fn(|c| {
-                (0..PHI_SUB)
-                    .map(|i| f[(c * PHI_SUB + i + nfine - s) % nfine])
+                let sub = PHI_SUB as i64;
+                (-sub / 2..sub + sub / 2)
+                    .map(|i| {
+                        let w = 1.0 - ((i as f64 - (sub as f64 - 1.0) / 2.0) / sub as f64).abs();
+                        let j = (c as i64 * sub + i - s as i64).rem_euclid(nfine as i64);
+                        w * f[j as usize]
+                    })
                     .sum()
             });
             for k in 0..FREQS {
@@ -136,7 +173,7 @@ pub fn describe(
         }
         *norm = n2 / PHI_BINS as f64;
     }
-    points.len()
+    volume
 }
 
 /// Weight of coefficient `k` in a sum over the full spectrum of a real
@@ -305,7 +342,7 @@ mod tests {
             &mut out,
             &mut norms,
         );
-        assert!(n > 1000);
+        assert!(n > 1000.0);
         (out, norms)
     }
 

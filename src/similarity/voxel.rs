@@ -23,19 +23,21 @@ pub struct VoxelScratch {
     crossings: Vec<(u32, f64, i8)>,
 }
 
-/// Calls `emit` with the centre of every occupied voxel of the closed mesh
-/// `(positions, triangles)` on a grid of spacing `h` (Y-up; the grid is
-/// anchored at multiples of `h`, so a translated mesh gives translated
-/// voxels up to the grid). Returns the number of voxels emitted.
+/// Calls `emit(centre, weight)` for every occupied voxel of the closed mesh
+/// `(positions, triangles)` on a grid of spacing `h` (Y-up, anchored at
+/// multiples of `h`). Along Y the inside of a column is known exactly, so a
+/// voxel's weight is the fraction of its height that is inside (1 within,
+/// less at the top and bottom ends); only X and Z are quantised. Returns
+/// the total weight, the volume in voxels.
 pub fn occupancy(
     positions: &[DVec3],
     triangles: &[[u32; 3]],
     h: f64,
     scratch: &mut VoxelScratch,
-    mut emit: impl FnMut(DVec3),
-) -> usize {
+    mut emit: impl FnMut(DVec3, f64),
+) -> f64 {
     if positions.is_empty() || h.is_nan() || h <= 0.0 {
-        return 0;
+        return 0.0;
     }
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for p in positions {
@@ -97,16 +99,22 @@ pub fn occupancy(
         }
     }
     xs.sort_unstable_by(|p, q| p.0.cmp(&q.0).then(p.1.total_cmp(&q.1)));
-    let mut count = 0;
-    let mut fill = |col: u32, y0: f64, y1: f64, emit: &mut dyn FnMut(DVec3)| {
+    let mut total = 0.0;
+    // Cells [j h, (j+1) h] along Y, weighted by the exact covered length.
+    let mut fill = |col: u32, y0: f64, y1: f64, emit: &mut dyn FnMut(DVec3, f64)| {
         let i = i0 + (col as usize / nk) as i64;
         let k = k0 + (col as usize % nk) as i64;
         let (x, z) = (cx(i), cx(k));
-        let ja = (y0 / h - 0.5).ceil() as i64;
-        let jb = (y1 / h - 0.5).floor() as i64;
+        let ja = (y0 / h).floor() as i64;
+        let jb = (y1 / h).floor() as i64;
         for j in ja..=jb {
-            emit(DVec3::new(x, cx(j), z));
-            count += 1;
+            let lo = (j as f64 * h).max(y0);
+            let hi = ((j + 1) as f64 * h).min(y1);
+            let w = (hi - lo) / h;
+            if w > 0.0 {
+                emit(DVec3::new(x, cx(j), z), w);
+                total += w;
+            }
         }
     };
     let mut s = 0;
@@ -138,13 +146,13 @@ pub fn occupancy(
         } else {
             // Leaky column: only the voxels the surface passes through.
             for c in run {
-                let y = ((c.1 / h).floor() + 0.5) * h;
-                fill(col, y, y, &mut emit);
+                let y = (c.1 / h).floor() * h;
+                fill(col, y, y + h, &mut emit);
             }
         }
         s = e;
     }
-    count
+    total
 }
 
 #[cfg(test)]
@@ -174,18 +182,18 @@ mod tests {
             [3, 7, 5],
         ];
         let mut sc = VoxelScratch::default();
-        let mut n = 0;
+        let mut sum = 0.0;
         let h = 0.05;
-        let count = occupancy(&p, &t, h, &mut sc, |_| n += 1);
-        assert_eq!(n, count);
-        // 10 × 10 × 10 voxel centres inside a 0.5 cube of spacing 0.05.
-        assert_eq!(count, 1000);
+        let total = occupancy(&p, &t, h, &mut sc, |_, w| sum += w);
+        assert!((sum - total).abs() < 1e-9);
+        // 10 × 10 columns, each exactly 0.5 / 0.05 = 10 voxels tall.
+        assert!((total - 1000.0).abs() < 1e-9, "{total}");
         // Reversed orientation fills the same volume.
         let flipped: Vec<[u32; 3]> = t.iter().map(|t| [t[0], t[2], t[1]]).collect();
-        assert_eq!(occupancy(&p, &flipped, h, &mut sc, |_| ()), 1000);
+        assert!((occupancy(&p, &flipped, h, &mut sc, |_, _| ()) - 1000.0).abs() < 1e-9);
         // An open box (top removed) keeps only its crossing voxels.
         let open: Vec<[u32; 3]> = [&t[..6], &t[8..]].concat();
-        assert_eq!(occupancy(&p, &open, h, &mut sc, |_| ()), 100);
+        assert!((occupancy(&p, &open, h, &mut sc, |_, _| ()) - 100.0).abs() < 1e-9);
     }
 
     #[test]
@@ -198,8 +206,14 @@ mod tests {
             .map(|p| DVec3::from_array(*p))
             .collect();
         let h = 0.005;
-        let n = occupancy(&p, m.triangles(), h, &mut VoxelScratch::default(), |_| ());
-        let vol = n as f64 * h * h * h;
+        let n = occupancy(
+            &p,
+            m.triangles(),
+            h,
+            &mut VoxelScratch::default(),
+            |_, _| (),
+        );
+        let vol = n * h * h * h;
         let exact = std::f64::consts::PI * r * r * (len + 4.0 / 3.0 * r);
         assert!((vol / exact - 1.0).abs() < 0.03, "{vol} vs {exact}");
     }
