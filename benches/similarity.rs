@@ -1,0 +1,113 @@
+//! Similarity stage on real data (samba, 175 frames, 10K vertices): the
+//! per-frame descriptors, the per-pair distances of each measure, the whole
+//! 175 × 175 shape matrix, and the transition search over it. Whole-database
+//! figures (1,000 frames) come from `surfmotion db build --json`, which
+//! reports descriptor and all-pairs times.
+
+use criterion::Criterion;
+use glam::DVec3;
+use std::hint::black_box;
+use std::path::PathBuf;
+use surfmotion::db::skeletons::{SkeletonKind, poses};
+use surfmotion::graph::transitions::{TransitionOptions, find};
+use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::rig::embed::Embedding;
+use surfmotion::rig::embed::landmarks::Landmarks;
+use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, ShapeScratch, describe};
+use surfmotion::similarity::{
+    PairDistance, ShapeSet, SimilarityMatrix, SkeletonSet, Span, VertexSet, all_pairs,
+};
+
+fn main() {
+    let d = std::env::var_os("SURFMOTION_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    if !d.exists() {
+        eprintln!("benchmark skipped: no ../shared/data");
+        return;
+    }
+    let seq = load_sequence(
+        d.join("4d/samba/samba.pc2").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let rest = seq.frame_mesh(0);
+    let n = rest.vertex_count();
+    let frames = seq.frame_count();
+    let pts: Vec<DVec3> = seq
+        .frame(40)
+        .iter()
+        .map(|p| DVec3::from_array(*p))
+        .collect();
+    let rest_pts: Vec<DVec3> = rest
+        .positions()
+        .iter()
+        .map(|p| DVec3::from_array(*p))
+        .collect();
+    let grid = ShapeSet::grid_for(&rest_pts);
+    let mut shape = ShapeSet::new(grid);
+    shape.push_sequence(seq.all_positions(), n, rest.triangles(), false);
+    let mut vertex = VertexSet::new(n, Default::default());
+    vertex.push_sequence(seq.all_positions(), false);
+    let fixture =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
+    let lm = Landmarks::load(&fixture, n).unwrap();
+    let rig = Embedding::new(&rest, &lm, None).unwrap();
+    let skel = SkeletonSet {
+        poses: poses(&rig, seq.all_positions(), n, SkeletonKind::Regressor),
+    };
+
+    let mut c = Criterion::default().configure_from_args();
+    let mut g = c.benchmark_group("similarity/samba");
+    g.bench_function("shape_describe_frame", |b| {
+        let mut out = vec![0.0; DESCRIPTOR_LEN];
+        let mut norms = [0.0; PHI_SUB];
+        let mut scratch = ShapeScratch::default();
+        b.iter(|| {
+            describe(
+                black_box(&pts),
+                rest.triangles(),
+                &grid,
+                &mut scratch,
+                &mut out,
+                &mut norms,
+            )
+        })
+    });
+    g.bench_function("shape_pair", |b| {
+        b.iter(|| shape.distance(black_box(3), 90))
+    });
+    g.bench_function("vertex_pair", |b| {
+        b.iter(|| vertex.distance(black_box(3), 90))
+    });
+    g.bench_function("skeleton_pair", |b| {
+        b.iter(|| skel.distance(black_box(3), 90))
+    });
+    g.sample_size(10);
+    g.bench_function("shape_all_pairs_175", |b| {
+        b.iter(|| all_pairs(black_box(&shape), &|_| ()))
+    });
+    let m = SimilarityMatrix::new(
+        vec![Span {
+            name: "samba".into(),
+            start: 0,
+            len: frames,
+        }],
+        all_pairs(&shape, &|_| ()),
+    )
+    .unwrap();
+    g.bench_function("transitions_175x175", |b| {
+        let c = |r: usize, s: usize| m.get(r, s);
+        b.iter(|| {
+            find(
+                &c,
+                frames,
+                frames,
+                true,
+                black_box(&TransitionOptions::default()),
+            )
+        })
+    });
+    g.finish();
+    c.final_summary();
+}
