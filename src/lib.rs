@@ -7,12 +7,14 @@
 //! formats), [`inspect`] (what a file holds).
 
 pub mod db;
+pub mod eval;
 pub mod fsutil;
 pub mod graph;
 pub mod inspect;
 pub mod mesh;
 pub mod mocap;
 pub mod render;
+pub mod retarget;
 pub mod rig;
 pub mod similarity;
 pub mod skeleton;

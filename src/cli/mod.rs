@@ -9,6 +9,7 @@ mod mesh;
 mod mocap;
 mod render;
 mod repair;
+mod retarget;
 mod rig;
 mod synth;
 
@@ -68,6 +69,17 @@ enum Command {
     /// transitions as edges) as DOT or JSON, or draw its similarity matrix
     /// with the transitions marked (--matrix OUT.png).
     Graph(graph::Args),
+    /// Drive a 4D character from a mocap clip (Huang et al. 2015, Sec. 5.2):
+    /// find the path through the database's Surface Motion Graph whose
+    /// skeletons best follow the clip (skeletal trellis + shortest path),
+    /// blend across transitions and interpolate repeated frames with
+    /// non-linear mesh blending, and place the result on the clip's root
+    /// trajectory.
+    Retarget(retarget::Args),
+    /// Score a retargeted result: the average joint-velocity difference
+    /// (cm/frame) between the clip on the character's skeleton and the
+    /// skeleton extracted from the result (Huang et al. 2015, Sec. 6.2).
+    Eval(retarget::EvalArgs),
 }
 
 /// Entry point of the CLI.
@@ -89,6 +101,8 @@ pub fn main() -> anyhow::Result<()> {
         Command::Rig(c) => rig::run(c),
         Command::Synth(a) => synth::run(a),
         Command::Graph(a) => graph::run(a),
+        Command::Retarget(a) => retarget::run(a),
+        Command::Eval(a) => retarget::eval(a),
     }
 }
 

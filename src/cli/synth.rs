@@ -7,11 +7,10 @@ use std::time::Instant;
 use surfmotion::db::{Manifest, RigSpec, SequenceEntry};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
-use surfmotion::mocap::load_clip;
 use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::synth::database::{Dynamics, clip_poses, synthesise};
+use surfmotion::synth::database::{Dynamics, synthesise};
 
 /// Arguments of `synth`.
 #[derive(clap::Args)]
@@ -86,26 +85,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut frames_total = 0usize;
     let t1 = Instant::now();
     for path in &a.mocap {
-        let mut clip = load_clip(path, &opts)?;
-        clip.to_metres_y_up();
-        let clip = clip.resampled(a.fps);
-        let map = match &opts.rig_map {
-            Some(m) => m.clone(),
-            None => {
-                let det = surfmotion::rig::detect(&clip.point_names());
-                if !det.missing.is_empty() {
-                    let miss: Vec<&str> = det.missing.iter().map(|c| c.name()).collect();
-                    bail!(
-                        "{}: the rig ({}) has no joint for {}; pass --rig-map (see `mocap rigmap`)",
-                        path.display(),
-                        det.map.convention,
-                        miss.join(", ")
-                    );
-                }
-                det.map
-            }
-        };
-        let mut poses = clip_poses(&clip, &map).with_context(|| path.display().to_string())?;
+        let mut poses = surfmotion::retarget::query::load_mocap(path, &opts, a.fps)?.poses;
         if let Some(s) = a.seconds {
             poses.truncate(((s * a.fps).round() as usize).max(1));
         }

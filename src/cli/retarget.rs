@@ -1,0 +1,206 @@
+//! `surfmotion retarget` and `surfmotion eval`.
+
+use anyhow::Context;
+use std::path::PathBuf;
+use surfmotion::eval::velocity_error;
+use surfmotion::mesh::MeshSequence;
+use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
+use surfmotion::retarget::character::Character;
+use surfmotion::retarget::query::{load_mocap, to_character};
+use surfmotion::retarget::{RetargetOptions, synthesise};
+
+/// Arguments of `retarget`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The character database (its graph is built first if needed).
+    #[arg(long)]
+    pub db: PathBuf,
+    /// The mocap clip (BVH or AMC, any detected rig convention).
+    #[arg(long)]
+    pub mocap: PathBuf,
+    /// Output: .glb (animated morph targets), .pc2 (+ .obj), .mdd, or a
+    /// folder of OBJ frames (a path without extension).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Skip the part-based deformation that makes the surface follow the
+    /// mocap skeleton (not implemented yet: the output is always the
+    /// retrieved, blended and interpolated 4D frames).
+    #[arg(long)]
+    pub no_deform: bool,
+    /// Write a JSON report: the retrieved path (sequence, frame) per output
+    /// frame, blends, transitions and cuts, costs, timings.
+    #[arg(long, value_name = "JSON")]
+    pub report: Option<PathBuf>,
+    /// Skeleton dissimilarity threshold T_skel (metres, summed over 19
+    /// joints). Default: chosen from the query's nearest-frame costs.
+    #[arg(long)]
+    pub t_skel: Option<f64>,
+    /// Weight of matching the skeleton against avoiding transitions.
+    #[arg(long, default_value_t = 1.0)]
+    pub w_retr: f64,
+    /// No temporal interpolation of repeated frames.
+    #[arg(long)]
+    pub no_interpolate: bool,
+    /// No blending across transitions.
+    #[arg(long)]
+    pub no_blend: bool,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub clip: super::ClipOpts,
+}
+
+/// Runs `retarget`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let ch = Character::load(&a.db, &super::db::Bars::new())?;
+    let fps = ch.manifest.fps;
+    let mocap = load_mocap(&a.mocap, &a.clip.load_options()?, fps)?;
+    anyhow::ensure!(
+        !mocap.poses.is_empty(),
+        "{}: the clip has no frames",
+        a.mocap.display()
+    );
+    let mut opts = RetargetOptions::default();
+    opts.trellis.t_skel = a.t_skel;
+    opts.trellis.w_retr = a.w_retr;
+    opts.timeline.interpolate = !a.no_interpolate;
+    opts.timeline.blend = !a.no_blend;
+    let out = synthesise(&ch, &mocap.poses, fps, &opts)?;
+    let seq = MeshSequence::new(ch.topology_metres(), out.positions, Some(fps))?;
+    let written = save_sequence(&seq, &a.output, Some(fps))?;
+    let r = &out.report;
+    if let Some(p) = &a.report {
+        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(r)?.as_bytes())?;
+    }
+    let per_frame =
+        (r.timings.retrieval + r.timings.timeline + r.timings.meshes) / r.frames.max(1) as f64;
+    if a.json {
+        let v = serde_json::json!({
+            "output": written,
+            "frames": r.frames,
+            "fps": fps,
+            "t_skel": r.retrieval.t_skel,
+            "trellis_nodes": r.retrieval.nodes,
+            "transitions": r.jumps.iter().filter(|j| j.transition).count(),
+            "cuts": r.retrieval.cuts.len(),
+            "widened": r.retrieval.widened.len(),
+            "node_cost": r.retrieval.node_cost,
+            "edge_cost": r.retrieval.edge_cost,
+            "timings": r.timings,
+            "ms_per_frame": 1e3 * per_frame,
+            "deformation": "not implemented: interpolation only",
+        });
+        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+    }
+    let mut s = format!(
+        "{} -> {}: {} frames at {} fps ({} rig)\n",
+        a.mocap.display(),
+        written
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        r.frames,
+        fps,
+        mocap.convention
+    );
+    s += &format!(
+        "retrieval: T_skel {:.3} m, {} trellis nodes, {} transitions, {} cuts, {} widened frames\n",
+        r.retrieval.t_skel,
+        r.retrieval.nodes,
+        r.jumps.iter().filter(|j| j.transition).count(),
+        r.retrieval.cuts.len(),
+        r.retrieval.widened.len()
+    );
+    let mut runs: Vec<(String, usize, usize)> = Vec::new();
+    for st in &r.steps {
+        match runs.last_mut() {
+            Some((n, _, b)) if *n == st.sequence && (st.frame == *b || st.frame == *b + 1) => {
+                *b = st.frame
+            }
+            _ => runs.push((st.sequence.clone(), st.frame, st.frame)),
+        }
+    }
+    s += "path:";
+    for (n, a0, b0) in runs.iter().take(12) {
+        s += &format!(" {n}[{a0}..{b0}]");
+    }
+    if runs.len() > 12 {
+        s += " ...";
+    }
+    s += "\n";
+    s += &format!(
+        "time: query {:.3} s, retrieval {:.3} s, timeline {:.3} s, factor {:.3} s, meshes {:.3} s ({:.2} ms per output frame)\n",
+        r.timings.query,
+        r.timings.retrieval,
+        r.timings.timeline,
+        r.timings.factor,
+        r.timings.meshes,
+        1e3 * per_frame
+    );
+    if !a.no_deform {
+        s += "note: part-based deformation (Huang 2015, Sec. 5.2.3) is not implemented yet; this is the interpolated retrieval\n";
+    }
+    super::emit(&s)
+}
+
+/// Arguments of `eval`.
+#[derive(clap::Args)]
+pub struct EvalArgs {
+    /// The character database the result was made from.
+    #[arg(long)]
+    pub db: PathBuf,
+    /// The mocap clip that drove it.
+    #[arg(long)]
+    pub mocap: PathBuf,
+    /// The result (any sequence format `retarget` writes).
+    #[arg(long)]
+    pub result: PathBuf,
+    /// Print the result as JSON.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub clip: super::ClipOpts,
+}
+
+/// Runs `eval`: the joint-velocity error of Huang et al. 2015, Sec. 6.2.
+pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
+    let ch = Character::load(&a.db, &super::db::Bars::new())?;
+    let fps = ch.manifest.fps;
+    let mocap = load_mocap(&a.mocap, &a.clip.load_options()?, fps)?;
+    let query = to_character(&ch.rest_pose, &mocap.poses);
+    let res = load_sequence(&a.result.to_string_lossy(), &LoadOptions::default())
+        .with_context(|| a.result.display().to_string())?;
+    anyhow::ensure!(
+        res.mesh().vertex_count() == ch.n,
+        "{}: {} vertices, the character has {}",
+        a.result.display(),
+        res.mesh().vertex_count(),
+        ch.n
+    );
+    let out: Vec<_> = (0..res.frame_count())
+        .map(|f| ch.rig.skeleton(res.frame(f)))
+        .collect();
+    let e = velocity_error(&query, &out);
+    if a.json {
+        let v = serde_json::json!({
+            "mocap": a.mocap,
+            "result": a.result,
+            "query_frames": query.len(),
+            "result_frames": out.len(),
+            "velocity_error_cm_per_frame": e.mean_cm,
+            "std_cm_per_frame": e.std_cm,
+            "per_frame_cm": e.per_frame,
+        });
+        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+    }
+    super::emit(&format!(
+        "joint-velocity error {:.2} ± {:.2} cm/frame over {} frames (query {} frames, result {})\n",
+        e.mean_cm,
+        e.std_cm,
+        e.frames,
+        query.len(),
+        out.len()
+    ))
+}

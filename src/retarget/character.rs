@@ -1,0 +1,133 @@
+//! A character database loaded for synthesis: every frame's positions, its
+//! extracted skeleton, the similarity matrix and the Surface Motion Graph.
+//!
+//! Frames stay in the files' units and axes; skeletons and anything handed
+//! out for output are in metres, Y-up (the crate's convention).
+
+use crate::db::build::{BuildOptions, BuildProgress, build};
+use crate::db::skeletons::{SkeletonKind, embed_rig, poses};
+use crate::db::{DbError, MANIFEST, Manifest};
+use crate::graph::{FrameAdjacency, SurfaceMotionGraph};
+use crate::mesh::Mesh;
+use crate::rig::embed::Embedding;
+use crate::similarity::{SimilarityMatrix, y_up};
+use crate::skeleton::Pose;
+use glam::DVec3;
+use std::path::Path;
+
+/// A loaded character.
+pub struct Character {
+    /// The manifest.
+    pub manifest: Manifest,
+    /// Topology (file units and axes).
+    pub topology: Mesh,
+    /// The rig embedded on the topology's rest frame.
+    pub rig: Embedding,
+    /// All frames of all sequences, frame-major, file units and axes.
+    pub frames: Vec<[f64; 3]>,
+    /// Vertices per frame.
+    pub n: usize,
+    /// Skeleton of every frame (metres, Y-up).
+    pub poses: Vec<Pose>,
+    /// The rig's rest joints (metres, Y-up).
+    pub rest_pose: Pose,
+    /// The similarity matrix of the graph's measure.
+    pub matrix: SimilarityMatrix,
+    /// The Surface Motion Graph.
+    pub graph: SurfaceMotionGraph,
+    /// Its frame-level adjacency.
+    pub adjacency: FrameAdjacency,
+    /// Metres per file unit.
+    pub metres_per_unit: f64,
+    /// The files are Z-up.
+    pub z_up: bool,
+}
+
+impl Character {
+    /// Loads the database in `dir`, building (or reading from the cache) its
+    /// matrix and graph.
+    pub fn load(dir: &Path, progress: &dyn BuildProgress) -> Result<Character, DbError> {
+        let (matrix, graph, _) = build(dir, &BuildOptions::default(), progress)?;
+        let manifest = Manifest::load(dir)?;
+        let topology = manifest.load_topology(dir)?;
+        let rig = embed_rig(dir, &manifest, &topology)?;
+        let n = topology.vertex_count();
+        let mut frames = Vec::with_capacity(matrix.len() * n);
+        for s in &manifest.sequences {
+            let seq = manifest.load_sequence(dir, s)?;
+            if seq.mesh().vertex_count() != n {
+                return Err(DbError::Manifest {
+                    path: dir.join(MANIFEST),
+                    msg: format!(
+                        "sequence '{}': vertex count differs from the topology",
+                        s.name
+                    ),
+                });
+            }
+            frames.extend_from_slice(seq.all_positions());
+        }
+        if frames.len() != matrix.len() * n {
+            return Err(DbError::Manifest {
+                path: dir.join(MANIFEST),
+                msg: "the sequences changed while loading; run `surfmotion db build` again".into(),
+            });
+        }
+        let metres_per_unit = crate::mocap::units::parse_unit(&manifest.units)
+            .map(|u| u.metres_per_unit)
+            .unwrap_or(1.0);
+        let z_up = manifest.up.eq_ignore_ascii_case("z");
+        let conv = |p: DVec3| y_up(p.to_array(), z_up) * metres_per_unit;
+        let poses = poses(&rig, &frames, n, SkeletonKind::Regressor)
+            .into_iter()
+            .map(|p| p.map(conv))
+            .collect();
+        let rest_pose = rig.joints.map(|j| conv(DVec3::from_array(j)));
+        let adjacency = graph.adjacency();
+        Ok(Character {
+            manifest,
+            topology,
+            rig,
+            frames,
+            n,
+            poses,
+            rest_pose,
+            matrix,
+            graph,
+            adjacency,
+            metres_per_unit,
+            z_up,
+        })
+    }
+
+    /// Number of frames.
+    pub fn frame_count(&self) -> usize {
+        self.poses.len()
+    }
+
+    /// Frame `id`'s positions in metres, Y-up, written to `out`.
+    pub fn frame_metres(&self, id: u32, out: &mut [[f64; 3]]) {
+        let f = &self.frames[id as usize * self.n..(id as usize + 1) * self.n];
+        for (o, p) in out.iter_mut().zip(f) {
+            *o = (y_up(*p, self.z_up) * self.metres_per_unit).to_array();
+        }
+    }
+
+    /// The topology in metres, Y-up.
+    pub fn topology_metres(&self) -> Mesh {
+        let p: Vec<[f64; 3]> = self
+            .topology
+            .positions()
+            .iter()
+            .map(|p| (y_up(*p, self.z_up) * self.metres_per_unit).to_array())
+            .collect();
+        self.topology
+            .with_positions(&p)
+            .unwrap_or_else(|_| self.topology.clone())
+    }
+
+    /// The natural successor of a frame (the next frame of its sequence).
+    pub fn successor(&self, id: u32) -> Option<u32> {
+        let (s, t) = self.graph.frame_of(id);
+        (t + 1 < self.graph.sequences[s].len).then_some(id + 1)
+    }
+}

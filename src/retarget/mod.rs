@@ -1,0 +1,321 @@
+//! Mocap-driven synthesis (Huang et al. 2015, Sec. 5.2): a mocap clip in,
+//! a mesh sequence of the character out.
+//!
+//! [`query`] prepares the clip, [`character`] loads the database with its
+//! graph, [`trellis`] retrieves the frame path (5.2.1), [`timeline`] turns
+//! repeats into interpolations (5.2.2) and jumps into blends (4.4), and
+//! [`synthesise`] makes the meshes: each output frame's database frames are
+//! placed on the query's root trajectory (the rotation about the vertical
+//! and the floor translation that best fit the frame's skeleton onto the
+//! query pose, smoothed over time) and blended non-linearly.
+
+pub mod character;
+pub mod query;
+pub mod timeline;
+pub mod trellis;
+
+use crate::mesh::blend::{Blender, FrameGradients};
+use crate::mesh::solver::SolveError;
+use crate::skeleton::{Pose, horizontal_centroid, rotate_yaw, yaw_fit};
+use character::Character;
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+use timeline::{Frames, Jump, OutFrame, TimelineOptions, timeline};
+use trellis::{Retrieval, TrellisInput, TrellisOptions, retrieve};
+
+/// Options of [`synthesise`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RetargetOptions {
+    /// Retrieval.
+    pub trellis: TrellisOptions,
+    /// Interpolation and blending.
+    pub timeline: TimelineOptions,
+    /// Half-width (frames) of the moving average applied to the placement
+    /// on the root trajectory. Default: 3.
+    pub smooth: usize,
+}
+
+impl Default for RetargetOptions {
+    fn default() -> Self {
+        RetargetOptions {
+            trellis: TrellisOptions::default(),
+            timeline: TimelineOptions::default(),
+            smooth: 3,
+        }
+    }
+}
+
+/// One output frame in the report.
+#[derive(Debug, Clone, Serialize)]
+pub struct Step {
+    /// Sequence of the retrieved frame.
+    pub sequence: String,
+    /// Retrieved frame in that sequence.
+    pub frame: usize,
+    /// `c_skel` to the query (metres, summed over joints).
+    pub skeleton_cost: f64,
+    /// What the output frame blends: `(sequence, frame, weight)`.
+    pub blend: Vec<(String, usize, f64)>,
+}
+
+/// Seconds per stage.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Timings {
+    /// Retargeting the query to the character.
+    pub query: f64,
+    /// The trellis search.
+    pub retrieval: f64,
+    /// Interpolation and blending weights.
+    pub timeline: f64,
+    /// Factoring the blender (once per character).
+    pub factor: f64,
+    /// Placing and blending the meshes.
+    pub meshes: f64,
+}
+
+/// What [`synthesise`] reports.
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    /// Output frames.
+    pub frames: usize,
+    /// Frames per second.
+    pub fps: f64,
+    /// The retrieval (path, threshold, costs, widened rows, cuts).
+    pub retrieval: Retrieval,
+    /// Jumps (transitions and cuts) with their blend windows.
+    pub jumps: Vec<Jump>,
+    /// Per output frame.
+    pub steps: Vec<Step>,
+    /// Seconds per stage.
+    pub timings: Timings,
+}
+
+/// The synthesised sequence.
+pub struct Output {
+    /// Positions, frame-major (metres, Y-up).
+    pub positions: Vec<[f64; 3]>,
+    /// The query on the character's skeleton (metres, Y-up).
+    pub query: Vec<Pose>,
+    /// What was done.
+    pub report: Report,
+}
+
+/// A rigid motion on the floor: rotation `theta` about Y, then `t` (y = 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Floor {
+    theta: f64,
+    t: DVec3,
+}
+
+impl Floor {
+    /// The floor motion that best maps `from` onto `to` (least squares).
+    fn fit(from: &Pose, to: &Pose) -> Floor {
+        let cf = horizontal_centroid(from);
+        let ct = horizontal_centroid(to);
+        let (mut c, mut s) = (0.0, 0.0);
+        for (q, p) in from.iter().zip(to) {
+            let (p, q) = (*p - ct, *q - cf);
+            c += p.x * q.x + p.z * q.z;
+            s += p.x * q.z - p.z * q.x;
+        }
+        let (cos, sin, _) = yaw_fit(c, s);
+        let theta = sin.atan2(cos);
+        Floor {
+            theta,
+            t: ct - rotate_yaw(cf, cos, sin),
+        }
+    }
+    fn apply(&self, p: DVec3) -> DVec3 {
+        rotate_yaw(p, self.theta.cos(), self.theta.sin()) + self.t
+    }
+    /// `self ∘ other`.
+    fn after(&self, other: &Floor) -> Floor {
+        Floor {
+            theta: self.theta + other.theta,
+            t: rotate_yaw(other.t, self.theta.cos(), self.theta.sin()) + self.t,
+        }
+    }
+}
+
+impl Frames for Character {
+    fn frame_of(&self, id: u32) -> (usize, usize) {
+        self.graph.frame_of(id)
+    }
+    fn id(&self, s: usize, t: usize) -> u32 {
+        self.graph.frame_id(s, t)
+    }
+    fn len(&self, s: usize) -> usize {
+        self.graph.sequences[s].len
+    }
+    fn transition_window(&self, from: u32, to_prev: u32) -> Option<usize> {
+        let (sa, m) = self.graph.frame_of(from);
+        let (sb, n) = self.graph.frame_of(to_prev);
+        self.graph
+            .transitions
+            .iter()
+            .find(|t| t.from == sa && t.to == sb && t.m == m && t.n == n)
+            .map(|t| t.window)
+    }
+}
+
+/// Drives the character by the mocap poses (metres, Y-up, the clip's own
+/// skeleton at the database frame rate): Sec. 5.2 up to interpolation.
+pub fn synthesise(
+    ch: &Character,
+    mocap: &[Pose],
+    fps: f64,
+    opts: &RetargetOptions,
+) -> Result<Output, SolveError> {
+    let mut timings = Timings::default();
+    let t0 = Instant::now();
+    let query = query::to_character(&ch.rest_pose, mocap);
+    timings.query = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let successor = |id: u32| ch.successor(id);
+    let dissimilarity = |a: u32, b: u32| ch.matrix.get(a as usize, b as usize);
+    let input = TrellisInput {
+        poses: &ch.poses,
+        adjacency: &ch.adjacency,
+        successor: &successor,
+        dissimilarity: &dissimilarity,
+    };
+    let retrieval = retrieve(&query, &input, &opts.trellis);
+    timings.retrieval = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let (frames, jumps) = timeline(&retrieval.path, ch, &opts.timeline);
+    timings.timeline = t2.elapsed().as_secs_f64();
+    let t3 = Instant::now();
+    let topo = ch.topology_metres();
+    let blender = Blender::new(&topo)?;
+    timings.factor = t3.elapsed().as_secs_f64();
+    let t4 = Instant::now();
+    let positions = place_and_blend(ch, &blender, &retrieval.path, &frames, &query, opts.smooth);
+    timings.meshes = t4.elapsed().as_secs_f64();
+    let name = |id: u32| {
+        let (s, t) = ch.graph.frame_of(id);
+        (ch.graph.sequences[s].name.clone(), t)
+    };
+    let steps = retrieval
+        .path
+        .iter()
+        .zip(&retrieval.skeleton_cost)
+        .zip(&frames)
+        .map(|((&id, &c), o)| {
+            let (sequence, frame) = name(id);
+            Step {
+                sequence,
+                frame,
+                skeleton_cost: c,
+                blend: o
+                    .used()
+                    .iter()
+                    .map(|&(f, w)| {
+                        let (s, t) = name(f);
+                        (s, t, w)
+                    })
+                    .collect(),
+            }
+        })
+        .collect();
+    Ok(Output {
+        positions,
+        query,
+        report: Report {
+            frames: frames.len(),
+            fps,
+            retrieval,
+            jumps,
+            steps,
+            timings,
+        },
+    })
+}
+
+/// Places every source frame on the query's trajectory and blends.
+fn place_and_blend(
+    ch: &Character,
+    blender: &Blender,
+    path: &[u32],
+    frames: &[OutFrame],
+    query: &[Pose],
+    smooth: usize,
+) -> Vec<[f64; 3]> {
+    let n = ch.n;
+    // Placement of each output frame's primary source, smoothed.
+    let raw: Vec<Floor> = frames
+        .iter()
+        .zip(query)
+        .map(|(o, q)| Floor::fit(&ch.poses[o.primary() as usize], q))
+        .collect();
+    let mut unwrapped: Vec<f64> = raw.iter().map(|f| f.theta).collect();
+    for k in 1..unwrapped.len() {
+        let d = unwrapped[k] - unwrapped[k - 1];
+        unwrapped[k] -= (d / std::f64::consts::TAU).round() * std::f64::consts::TAU;
+    }
+    // Frames of one segment (between jumps) share their capture's world
+    // frame, so their placements can be averaged; across a jump they
+    // cannot (the two captures stand in different places).
+    let mut segment = vec![0usize; frames.len()];
+    for k in 1..frames.len() {
+        segment[k] = segment[k - 1] + usize::from(!timeline::plays_on(ch, path[k - 1], path[k]));
+    }
+    let placed: Vec<Floor> = (0..raw.len())
+        .map(|k| {
+            let mut a = k.saturating_sub(smooth);
+            let mut b = (k + smooth + 1).min(raw.len());
+            while segment[a] != segment[k] {
+                a += 1;
+            }
+            while segment[b - 1] != segment[k] {
+                b -= 1;
+            }
+            let w = (b - a) as f64;
+            Floor {
+                theta: unwrapped[a..b].iter().sum::<f64>() / w,
+                t: raw[a..b].iter().map(|f| f.t).sum::<DVec3>() / w,
+            }
+        })
+        .collect();
+    let mut out = vec![[0.0; 3]; frames.len() * n];
+    out.par_chunks_mut(n.max(1)).enumerate().for_each_init(
+        || {
+            (
+                blender.workspace(),
+                vec![[0.0; 3]; n],
+                vec![FrameGradients::default(); 4],
+            )
+        },
+        |(ws, buf, grads), (k, dst)| {
+            let o = &frames[k];
+            let primary = o.primary();
+            let used = o.used();
+            for (i, &(id, _)) in used.iter().enumerate() {
+                let place = if id == primary {
+                    placed[k]
+                } else {
+                    placed[k].after(&Floor::fit(
+                        &ch.poses[id as usize],
+                        &ch.poses[primary as usize],
+                    ))
+                };
+                ch.frame_metres(id, buf);
+                for p in buf.iter_mut() {
+                    *p = place.apply(DVec3::from_array(*p)).to_array();
+                }
+                if used.len() == 1 {
+                    dst.copy_from_slice(buf);
+                } else {
+                    blender.decompose_into(buf, ws, &mut grads[i]);
+                }
+            }
+            if used.len() > 1 {
+                let inputs: [(&FrameGradients, f64); 4] =
+                    std::array::from_fn(|i| (&grads[i], used.get(i).map_or(0.0, |s| s.1)));
+                blender.blend_many(&inputs[..used.len()], dst, ws);
+            }
+        },
+    );
+    out
+}

@@ -1,0 +1,88 @@
+//! Query preparation (Huang et al. 2015, Sec. 5.2): a mocap clip as
+//! canonical poses at the database frame rate, on the character's bones.
+//!
+//! The clip is read (BVH or ASF/AMC, any detected rig convention or a given
+//! rig map), converted to metres and Y-up, resampled to the database's
+//! frame rate and reduced to the 19 canonical joints. It is then retargeted
+//! to the character ([`crate::synth::database::retarget`]): every bone keeps
+//! the clip's direction and takes the character's length, and the root
+//! follows the clip's pelvis scaled by the ratio of leg lengths. The result
+//! keeps the clip's global root trajectory (it places the output); pose
+//! comparison aligns translation and heading per pair (Eq. 28).
+
+use crate::mocap::{LoadOptions, MocapError, load_clip};
+use crate::rig::{RigError, detect};
+use crate::skeleton::Pose;
+use crate::synth::database::{clip_poses, retarget};
+use std::path::{Path, PathBuf};
+
+/// Errors of query preparation.
+#[derive(Debug, thiserror::Error)]
+pub enum QueryError {
+    /// The clip could not be read.
+    #[error(transparent)]
+    Mocap(#[from] MocapError),
+    /// The clip's rig could not be mapped to the canonical joints.
+    #[error("{path}: {msg}")]
+    Rig {
+        /// The clip.
+        path: PathBuf,
+        /// What is missing.
+        msg: String,
+    },
+}
+
+/// A clip as canonical poses.
+#[derive(Debug, Clone)]
+pub struct MocapPoses {
+    /// The clip's own joints (metres, Y-up), one pose per frame.
+    pub poses: Vec<Pose>,
+    /// Frames per second (the requested rate).
+    pub fps: f64,
+    /// The rig convention used.
+    pub convention: String,
+    /// The source's frame rate.
+    pub source_fps: f64,
+}
+
+/// Reads a clip and turns it into canonical poses at `fps`.
+pub fn load_mocap(path: &Path, opts: &LoadOptions, fps: f64) -> Result<MocapPoses, QueryError> {
+    let mut clip = load_clip(path, opts)?;
+    let source_fps = clip.fps();
+    clip.to_metres_y_up();
+    let clip = clip.resampled(fps);
+    let map = match &opts.rig_map {
+        Some(m) => m.clone(),
+        None => {
+            let det = detect(&clip.point_names());
+            if !det.missing.is_empty() {
+                let miss: Vec<&str> = det.missing.iter().map(|c| c.name()).collect();
+                return Err(QueryError::Rig {
+                    path: path.to_path_buf(),
+                    msg: format!(
+                        "the rig ({}) has no joint for {}; pass a rig map (see `mocap rigmap`)",
+                        det.map.convention,
+                        miss.join(", ")
+                    ),
+                });
+            }
+            det.map
+        }
+    };
+    let poses = clip_poses(&clip, &map).map_err(|e: RigError| QueryError::Rig {
+        path: path.to_path_buf(),
+        msg: e.to_string(),
+    })?;
+    Ok(MocapPoses {
+        poses,
+        fps,
+        convention: map.convention.clone(),
+        source_fps,
+    })
+}
+
+/// The clip's poses on the character's skeleton `rest` (bone directions
+/// from the clip, lengths from the character).
+pub fn to_character(rest: &Pose, mocap: &[Pose]) -> Vec<Pose> {
+    retarget(rest, mocap).into_iter().map(|(p, _)| p).collect()
+}

@@ -1,0 +1,294 @@
+//! Skeletal trellis retrieval (Huang et al. 2015, Sec. 5.2.1, Eqs. 26-31,
+//! Fig. 8): the path through the Surface Motion Graph whose skeletons best
+//! follow a query, with few and cheap transitions.
+//!
+//! Row `k` of the trellis holds the database frames whose skeleton is within
+//! `T_skel` of query frame `k` (Eq. 28, pre-aligned in translation and
+//! heading). Edges join row `k−1` to row `k` along the graph's frame
+//! adjacency plus frame repetition. Node cost `w_retr · c_skel / s_node`
+//! (Eq. 30), edge cost `c(M(succ(t_i)), M(t_j)) / s_edge`: Eq. 31 charges
+//! `c(M(t_i), M(t_j))`, which is 0 for a repeat and positive for playing
+//! on, and so favours stop-motion; we charge the dissimilarity between the
+//! frame reached and the natural successor of the frame left, which is 0
+//! for playing on and for a repeat (interpolated away later, Sec. 5.2.2)
+//! and the transition's dissimilarity for a jump. `s_node` and `s_edge`
+//! (the median best-match skeleton cost and the median frame-to-next
+//! dissimilarity) make the two dimensionless, so `w_retr = 1` weighs one
+//! typical pose mismatch like one typical frame step.
+//!
+//! Besides repetition we allow skipping one frame (`t → t+2`, charged
+//! `c(M(t+1), M(t+2))`, one step's dissimilarity), the same time warp the
+//! other way: without it a query walking faster than the capture falls
+//! further behind every frame until no candidate connects.
+//!
+//! The trellis is layered (edges only go from row `k−1` to row `k`) and its
+//! costs are non-negative, so Dijkstra from the virtual source settles rows
+//! in order: one relaxation sweep per row finds the same shortest path.
+//!
+//! `T_skel` is chosen per query: the larger of twice the median and the
+//! 90th percentile of the query frames' nearest-frame costs (or given).
+//! Rows keep at most `max_candidates` nodes (the nearest), so a 2,000-frame
+//! query on a 2,000-frame database has at most 2,000 · `max_candidates`
+//! nodes, not 4M. A query frame with no frame under `T_skel` keeps its
+//! `min_candidates` nearest (reported as widened). If no graph edge joins
+//! two rows, a cut (a jump to any candidate, at `cut_cost`) keeps the
+//! search going and is reported.
+
+use crate::graph::FrameAdjacency;
+use crate::skeleton::{Pose, skeleton_distance};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Options of the retrieval.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrellisOptions {
+    /// Weight of the skeleton term against transitions (Eq. 26). Default: 1.
+    pub w_retr: f64,
+    /// Skeleton dissimilarity threshold (metres, sum over joints); `None`
+    /// chooses it from the query. Default: `None`.
+    pub t_skel: Option<f64>,
+    /// Largest number of candidates per query frame. Default: 128.
+    pub max_candidates: usize,
+    /// Candidates kept when none is under `T_skel`. Default: 8.
+    pub min_candidates: usize,
+    /// Allow skipping one frame (`t → t+2`), the counterpart of repetition,
+    /// so that a query moving faster than the capture does not fall
+    /// behind. Default: true.
+    pub skip: bool,
+    /// Cost of a cut (a jump along no graph edge), in the normalised units
+    /// of the node and edge costs: a last resort. Default: 1000.
+    pub cut_cost: f64,
+}
+
+impl Default for TrellisOptions {
+    fn default() -> Self {
+        TrellisOptions {
+            w_retr: 1.0,
+            t_skel: None,
+            max_candidates: 128,
+            min_candidates: 8,
+            skip: true,
+            cut_cost: 1000.0,
+        }
+    }
+}
+
+/// The retrieved path and how it was found.
+#[derive(Debug, Clone, Serialize)]
+pub struct Retrieval {
+    /// Database frame per query frame.
+    pub path: Vec<u32>,
+    /// `c_skel` of each path node (metres).
+    pub skeleton_cost: Vec<f64>,
+    /// The threshold used.
+    pub t_skel: f64,
+    /// Trellis nodes.
+    pub nodes: usize,
+    /// Query frames with no candidate under `T_skel`.
+    pub widened: Vec<usize>,
+    /// Query frames entered by a cut.
+    pub cuts: Vec<usize>,
+    /// Total node cost (normalised).
+    pub node_cost: f64,
+    /// Total edge cost (normalised).
+    pub edge_cost: f64,
+    /// `s_node`: median best-match skeleton cost (metres).
+    pub node_scale: f64,
+    /// `s_edge`: median frame-to-next dissimilarity.
+    pub edge_scale: f64,
+}
+
+/// What the trellis needs from a database.
+pub struct TrellisInput<'a> {
+    /// Skeleton of every database frame.
+    pub poses: &'a [Pose],
+    /// The graph's frame adjacency.
+    pub adjacency: &'a FrameAdjacency,
+    /// Natural successor of a frame.
+    pub successor: &'a (dyn Fn(u32) -> Option<u32> + Sync),
+    /// Frame dissimilarity (the graph's measure).
+    pub dissimilarity: &'a (dyn Fn(u32, u32) -> f32 + Sync),
+}
+
+/// Finds the optimal path for `query` (Eq. 29).
+pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Retrieval {
+    let ng = db.poses.len();
+    let nq = query.len();
+    if ng == 0 || nq == 0 {
+        return Retrieval {
+            path: Vec::new(),
+            skeleton_cost: Vec::new(),
+            t_skel: 0.0,
+            nodes: 0,
+            widened: Vec::new(),
+            cuts: Vec::new(),
+            node_cost: 0.0,
+            edge_cost: 0.0,
+            node_scale: 0.0,
+            edge_scale: 0.0,
+        };
+    }
+    let kmax = opts.max_candidates.max(1).min(ng);
+    let kmin = opts.min_candidates.max(1).min(kmax);
+    // Nearest frames of every query frame (sorted by cost).
+    let near: Vec<Vec<(f32, u32)>> = query
+        .par_iter()
+        .map_init(
+            || Vec::with_capacity(ng),
+            |all, q| {
+                all.clear();
+                all.extend(
+                    db.poses
+                        .iter()
+                        .enumerate()
+                        .map(|(i, p)| (skeleton_distance(q, p) as f32, i as u32)),
+                );
+                if kmax < all.len() {
+                    all.select_nth_unstable_by(kmax - 1, |a, b| a.0.total_cmp(&b.0));
+                    all.truncate(kmax);
+                }
+                all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                all.clone()
+            },
+        )
+        .collect();
+    let mut best: Vec<f64> = near.iter().map(|r| r[0].0 as f64).collect();
+    best.sort_by(f64::total_cmp);
+    let median = best[best.len() / 2];
+    let p90 = best[((best.len() as f64 * 0.9) as usize).min(best.len() - 1)];
+    let t_skel = opts.t_skel.unwrap_or((2.0 * median).max(p90));
+    let node_scale = median.max(1e-6);
+    let mut steps: Vec<f64> = (0..ng as u32)
+        .filter_map(|f| (db.successor)(f).map(|g| (db.dissimilarity)(f, g) as f64))
+        .filter(|c| *c > 0.0)
+        .collect();
+    steps.sort_by(f64::total_cmp);
+    let edge_scale = steps
+        .get(steps.len() / 2)
+        .copied()
+        .unwrap_or(1.0)
+        .max(1e-12);
+    let mut widened = Vec::new();
+    let rows: Vec<Vec<(f32, u32)>> = near
+        .into_iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let under = r.iter().take_while(|c| (c.0 as f64) <= t_skel).count();
+            if under == 0 {
+                widened.push(k);
+            }
+            let keep = under.max(kmin).min(r.len());
+            r[..keep].to_vec()
+        })
+        .collect();
+    let nodes = rows.iter().map(Vec::len).sum();
+    let node = |c: f32| opts.w_retr * c as f64 / node_scale;
+    let edge = |i: u32, j: u32| -> f64 {
+        match (db.successor)(i) {
+            Some(s) if s == j => 0.0,
+            _ if i == j => 0.0,
+            Some(s) => (db.dissimilarity)(s, j) as f64 / edge_scale,
+            None => (db.dissimilarity)(i, j) as f64 / edge_scale,
+        }
+    };
+    // Relaxation row by row; back pointers per row (u32::MAX marks a cut
+    // from the previous row's best node).
+    let mut cost: Vec<f64> = rows[0].iter().map(|c| node(c.0)).collect();
+    let mut back: Vec<Vec<(u32, bool)>> = vec![vec![(0, false); rows[0].len()]];
+    let mut slot = vec![u32::MAX; ng];
+    for k in 1..nq {
+        let row = &rows[k];
+        for (s, c) in row.iter().enumerate() {
+            slot[c.1 as usize] = s as u32;
+        }
+        let mut next = vec![f64::INFINITY; row.len()];
+        let mut bp = vec![(u32::MAX, false); row.len()];
+        let prev = &rows[k - 1];
+        for (pi, p) in prev.iter().enumerate() {
+            let base = cost[pi];
+            if !base.is_finite() {
+                continue;
+            }
+            let i = p.1;
+            let mut relax = |j: u32| {
+                let s = slot[j as usize];
+                if s != u32::MAX {
+                    let v = base + edge(i, j);
+                    if v < next[s as usize] {
+                        next[s as usize] = v;
+                        bp[s as usize] = (pi as u32, false);
+                    }
+                }
+            };
+            relax(i);
+            for (j, _) in db.adjacency.successors(i) {
+                relax(j);
+            }
+            if opts.skip
+                && let Some(j) = (db.successor)(i).and_then(|s| (db.successor)(s))
+            {
+                relax(j);
+            }
+        }
+        // Cuts from the previous row's best node.
+        if let Some((pi, &b)) = cost.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)) {
+            for (s, v) in next.iter_mut().enumerate() {
+                let w = b + opts.cut_cost;
+                if w < *v {
+                    *v = w;
+                    bp[s] = (pi as u32, true);
+                }
+            }
+        }
+        for (s, c) in row.iter().enumerate() {
+            next[s] += node(c.0);
+            slot[c.1 as usize] = u32::MAX;
+        }
+        cost = next;
+        back.push(bp);
+    }
+    // Trace back from the sink (the cheapest node of the last row).
+    let (mut s, _) = cost
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))
+        .map(|(s, c)| (s, *c))
+        .unwrap_or((0, 0.0));
+    let mut path = vec![0u32; nq];
+    let mut skel = vec![0.0; nq];
+    let mut cuts = Vec::new();
+    for k in (0..nq).rev() {
+        path[k] = rows[k][s].1;
+        skel[k] = rows[k][s].0 as f64;
+        let (p, cut) = back[k][s];
+        if k > 0 {
+            if cut {
+                cuts.push(k);
+            }
+            s = p as usize;
+        }
+    }
+    cuts.reverse();
+    let node_cost: f64 = skel.iter().map(|c| node(*c as f32)).sum();
+    let edge_cost: f64 = (1..nq)
+        .map(|k| {
+            if cuts.binary_search(&k).is_ok() {
+                opts.cut_cost
+            } else {
+                edge(path[k - 1], path[k])
+            }
+        })
+        .sum();
+    Retrieval {
+        path,
+        skeleton_cost: skel,
+        t_skel,
+        nodes,
+        widened,
+        cuts,
+        node_cost,
+        edge_cost,
+        node_scale,
+        edge_scale,
+    }
+}
