@@ -166,7 +166,7 @@ fn interpolated_frames_lie_between_their_neighbours() {
         .map(|k| {
             let (a, b) = (
                 m.poses[k / 2],
-                m.poses[((k + 1) / 2).min(m.poses.len() - 1)],
+                m.poses[k.div_ceil(2).min(m.poses.len() - 1)],
             );
             std::array::from_fn(|j| (a[j] + b[j]) * 0.5)
         })
