@@ -235,8 +235,32 @@ fn convert_amc_to_bvh_resampled_and_meshes_between_formats() {
 
 #[test]
 fn demo_runs_and_help_explains() {
-    let o = run(&["demo"]);
-    assert!(o.status.success());
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let o = run(&["demo", "-o", out.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // The whole job ran: a database, its graph, a result that reads back
+    // with one frame per query frame, and the velocity error is sane.
+    assert!(v["transitions"].as_u64().unwrap() > 0);
+    let frames = v["query_frames"].as_u64().unwrap() as usize;
+    let seq = surfmotion::mesh::io::load_sequence(
+        out.join("turn.glb").to_str().unwrap(),
+        &Default::default(),
+    )
+    .unwrap();
+    assert_eq!(seq.frame_count(), frames);
+    assert!(seq.all_positions().iter().flatten().all(|x| x.is_finite()));
+    let e = v["velocity_error_cm_per_frame"].as_f64().unwrap();
+    assert!(e.is_finite() && e < 4.0, "{e}");
+    for f in [
+        "turn.png",
+        "turn.report.json",
+        "query_turn.bvh",
+        "database/character.toml",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
     let o = run(&["--help"]);
     let h = String::from_utf8_lossy(&o.stdout);
     for w in ["inspect", "mocap", "mesh", "Exit codes"] {

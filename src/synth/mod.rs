@@ -3,6 +3,7 @@
 
 pub mod clips;
 pub mod database;
+pub mod humanoid;
 pub mod shapes;
 
 pub use clips::{Gait, gait_clip, skeleton};
