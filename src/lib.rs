@@ -7,6 +7,7 @@
 //! formats), [`inspect`] (what a file holds).
 
 pub mod db;
+pub mod deform;
 pub mod eval;
 pub mod fsutil;
 pub mod graph;

@@ -170,8 +170,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
          \n\
          Next: `surfmotion retarget --db {} --mocap CLIP.bvh -o out.glb` with any BVH or AMC clip,\n\
          or build a database from a real capture (see README: Character databases).\n\
-         Part-based deformation (Sec. 5.2.3) is not implemented yet: the result is the\n\
-         retrieved, blended and interpolated database motion.\n",
+         The result is retrieved, blended, interpolated and then deformed part by part\n\
+         (PCA Laplacian, Sec. 5.2.3) to follow the query skeleton.\n",
         lm.marks.len(),
         ch.frame_count(),
         ch.graph.transitions.len(),

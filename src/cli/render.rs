@@ -11,8 +11,11 @@ use surfmotion::rig::embed::Embedding;
 /// Arguments of `render`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Mesh or sequence (a file, or SEQ.pc2:FRAME for one frame).
-    pub mesh: String,
+    /// Mesh or sequence (a file, or SEQ.pc2:FRAME for one frame); several
+    /// are drawn side by side (e.g. the same frame of results made
+    /// differently).
+    #[arg(required = true, num_args = 1..)]
+    pub mesh: Vec<String>,
     /// Output PNG.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -77,34 +80,44 @@ pub fn draw(
 
 /// Runs `render`.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let s = load_sequence(&a.mesh, &LoadOptions::default())?;
-    if a.frame >= s.frame_count() {
-        anyhow::bail!(
-            "{}: frame {} requested, the sequence has {}",
-            a.mesh,
-            a.frame,
-            s.frame_count()
+    let mut out: Option<surfmotion::render::Image> = None;
+    for mesh in &a.mesh {
+        let s = load_sequence(mesh, &LoadOptions::default())?;
+        if a.frame >= s.frame_count() {
+            anyhow::bail!(
+                "{}: frame {} requested, the sequence has {}",
+                mesh,
+                a.frame,
+                s.frame_count()
+            );
+        }
+        let rig = match &a.rig {
+            Some(p) => Some(Embedding::load(p, s.mesh().vertex_count())?),
+            None => None,
+        };
+        let facing = match (&a.facing, &rig) {
+            (Some(f), _) => parse_axis(f)?,
+            (None, Some(r)) => DVec3::from_array(r.facing),
+            (None, None) => DVec3::Z,
+        };
+        let img = draw(
+            s.frame(a.frame),
+            s.mesh().triangles(),
+            rig.as_ref(),
+            facing,
+            a.size.clamp(16, 8192),
         );
+        out = Some(match out {
+            None => img,
+            Some(o) => o.beside(&img),
+        });
     }
-    let rig = match &a.rig {
-        Some(p) => Some(Embedding::load(p, s.mesh().vertex_count())?),
-        None => None,
+    let Some(img) = out else {
+        anyhow::bail!("no mesh given");
     };
-    let facing = match (&a.facing, &rig) {
-        (Some(f), _) => parse_axis(f)?,
-        (None, Some(r)) => DVec3::from_array(r.facing),
-        (None, None) => DVec3::Z,
-    };
-    let img = draw(
-        s.frame(a.frame),
-        s.mesh().triangles(),
-        rig.as_ref(),
-        facing,
-        a.size.clamp(16, 8192),
-    );
     img.save_png(&a.output)?;
     crate::outln!(
-        "wrote {} ({}x{}: front and left side)",
+        "wrote {} ({}x{}: front and left side of each)",
         a.output.display(),
         img.width,
         img.height

@@ -14,6 +14,7 @@ pub mod query;
 pub mod timeline;
 pub mod trellis;
 
+use crate::deform::{DeformMode, DeformOptions, Deformer};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
 use crate::skeleton::{Pose, horizontal_centroid, rotate_yaw, yaw_fit};
@@ -35,6 +36,10 @@ pub struct RetargetOptions {
     /// Half-width (frames) of the moving average applied to the placement
     /// on the root trajectory. Default: 3.
     pub smooth: usize,
+    /// Deformation towards the query skeleton (Sec. 5.2.3). Default: part.
+    pub deform: DeformMode,
+    /// Its settings.
+    pub deform_options: DeformOptions,
 }
 
 impl Default for RetargetOptions {
@@ -43,6 +48,8 @@ impl Default for RetargetOptions {
             trellis: TrellisOptions::default(),
             timeline: TimelineOptions::default(),
             smooth: 3,
+            deform: DeformMode::Part,
+            deform_options: DeformOptions::default(),
         }
     }
 }
@@ -73,6 +80,10 @@ pub struct Timings {
     pub factor: f64,
     /// Placing and blending the meshes.
     pub meshes: f64,
+    /// Prefactoring the deformation (once per character).
+    pub deform_factor: f64,
+    /// Deforming every frame.
+    pub deform: f64,
 }
 
 /// What [`synthesise`] reports.
@@ -90,6 +101,8 @@ pub struct Report {
     pub steps: Vec<Step>,
     /// Seconds per stage.
     pub timings: Timings,
+    /// The deformation applied.
+    pub deform: DeformMode,
 }
 
 /// The synthesised sequence.
@@ -191,8 +204,17 @@ pub fn synthesise(
     let blender = Blender::new(&topo)?;
     timings.factor = t3.elapsed().as_secs_f64();
     let t4 = Instant::now();
-    let positions = place_and_blend(ch, &blender, &retrieval.path, &frames, &query, opts.smooth);
+    let mut positions =
+        place_and_blend(ch, &blender, &retrieval.path, &frames, &query, opts.smooth);
     timings.meshes = t4.elapsed().as_secs_f64();
+    if opts.deform != DeformMode::None {
+        let t5 = Instant::now();
+        let deformer = Deformer::new(ch, opts.deform, &opts.deform_options)?;
+        timings.deform_factor = t5.elapsed().as_secs_f64();
+        let t6 = Instant::now();
+        deformer.deform_all(ch, &mut positions, &query);
+        timings.deform = t6.elapsed().as_secs_f64();
+    }
     let name = |id: u32| {
         let (s, t) = ch.graph.frame_of(id);
         (ch.graph.sequences[s].name.clone(), t)
@@ -229,6 +251,7 @@ pub fn synthesise(
             jumps,
             steps,
             timings,
+            deform: opts.deform,
         },
     })
 }

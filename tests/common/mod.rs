@@ -49,3 +49,38 @@ pub fn files_with_ext(dir: &std::path::Path, ext: &str) -> Vec<PathBuf> {
 pub fn bin() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_surfmotion"))
 }
+
+/// A synthetic samba database (CMU walk 02_01, run 02_03, 01_01 capped at
+/// 8 s) built once per test binary with the `synth` command.
+pub fn synthetic_db(d: &std::path::Path) -> PathBuf {
+    use std::sync::OnceLock;
+    static DB: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    DB.get_or_init(|| {
+        let tmp = tempfile::tempdir().unwrap();
+        let db = tmp.path().join("db");
+        let m = d.join("mocap");
+        let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/samba.landmarks.json");
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_surfmotion"))
+            .args(["synth", "--mesh"])
+            .arg(d.join("4d/samba/samba.obj"))
+            .arg("--landmarks")
+            .arg(&fixture)
+            .arg("--mocap")
+            .arg(m.join("cmu-amc/02/02_01.amc"))
+            .arg(m.join("cmu-amc/02/02_03.amc"))
+            .arg(m.join("cmu-bvh/01_01.bvh"))
+            .args(["--seconds", "8", "-o"])
+            .arg(&db)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        (tmp, db)
+    })
+    .1
+    .clone()
+}

@@ -1,0 +1,520 @@
+//! Skeleton-driven editing of retrieved frames (Huang et al. 2015,
+//! Sec. 5.2.3): linear blend skinning gives positional constraints
+//! ([`lbs`]), and a part-based PCA Laplacian deformation
+//! ([`part_laplacian`], [`pca`]) makes the surface meet them while keeping
+//! the captured surface detail and dynamics.
+//!
+//! The deformation space of a frame is centred on that frame's own
+//! Laplacian coordinates (the paper centres it on the examples' mean; see
+//! [`part_laplacian`]), so the captured surface detail and dynamics of the
+//! retrieved frame are kept and the learnt modes say how it may bend.
+//!
+//! Per body part (the rig embedding's overlapping regions, so a skirt
+//! belongs to both legs) the deformation space is learnt from example
+//! frames of the database chosen to cover the part's range of rotation
+//! (farthest-point sampling of the part's rotation relative to the rest
+//! pose), with their Laplacian coordinates expressed in the part's own
+//! frame. Because a rotation commutes with the Laplacian, a part rotated by
+//! `R` in the target pose is solved in its own frame (`y = Rᵀx`, constraints
+//! rotated by `Rᵀ`) and turned back, so one factorisation per part serves
+//! every pose. Parts are solved from the torso outwards; a vertex a child
+//! shares with its parent is constrained (strongly) to the parent's result,
+//! the others to their LBS positions. Where regions overlap (siblings such
+//! as the two thighs under a skirt, or a parent and child near a joint) the
+//! results are blended by the parts' skin weights, so parts join without
+//! seams.
+//!
+//! Constraint vertices are chosen once per character, away from joints
+//! where LBS collapses: vertices bound (≥ 95 %) to one bone whose rest
+//! position projects into the middle 60 % of that bone, every `stride`-th.
+
+pub mod lbs;
+pub mod part_laplacian;
+pub mod pca;
+
+use crate::mesh::solver::SolveError;
+use crate::retarget::character::Character;
+use crate::rig::Canonical;
+use crate::rig::embed::parts::Part;
+use crate::skeleton::{Pose, pose_rotations};
+use glam::{DQuat, DVec3};
+use part_laplacian::{RegionSolver, RegionWorkspace, apply, region_laplacian};
+use rayon::prelude::*;
+
+/// How retrieved frames are made to follow the query skeleton.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DeformMode {
+    /// Part-based PCA Laplacian deformation (the paper's method).
+    #[default]
+    Part,
+    /// One PCA Laplacian deformation space for the whole body.
+    Global,
+    /// Plain linear blend skinning of the retrieved frame.
+    Lbs,
+    /// No deformation: the interpolated retrieval.
+    None,
+}
+
+/// Options of the deformation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DeformOptions {
+    /// Share of the examples' variance the basis keeps. Default: 0.95.
+    pub keep: f64,
+    /// Example frames per part (or for the whole body). Default: 40.
+    pub examples: usize,
+    /// Weight of an LBS constraint. Default: 1.
+    pub constraint_weight: f64,
+    /// Weight of a vertex shared with the parent part. Default: 10.
+    pub seam_weight: f64,
+    /// Keep every `stride`-th eligible constraint vertex. Default: 4.
+    pub stride: usize,
+    /// A database frame every region uses as an example (besides those
+    /// chosen automatically). Default: none.
+    pub include: Option<usize>,
+    /// Learn and solve each part in its own rotating frame (true) or in
+    /// world coordinates as the paper does (false). Default: true.
+    pub local_frames: bool,
+}
+
+impl Default for DeformOptions {
+    fn default() -> Self {
+        DeformOptions {
+            keep: 0.95,
+            examples: 40,
+            constraint_weight: 1.0,
+            seam_weight: 10.0,
+            stride: 4,
+            include: None,
+            local_frames: true,
+        }
+    }
+}
+
+/// The joint whose rotation carries a part.
+pub fn part_joint(p: Part) -> Canonical {
+    use Canonical as C;
+    match p {
+        Part::Torso => C::Pelvis,
+        Part::Head => C::Neck,
+        Part::LUpperArm => C::LShoulder,
+        Part::LForearm => C::LElbow,
+        Part::RUpperArm => C::RShoulder,
+        Part::RForearm => C::RElbow,
+        Part::LThigh => C::LHip,
+        Part::LShin => C::LKnee,
+        Part::LFoot => C::LAnkle,
+        Part::RThigh => C::RHip,
+        Part::RShin => C::RKnee,
+        Part::RFoot => C::RAnkle,
+    }
+}
+
+/// A region to build: vertices, carrying joint, parent (index in the
+/// list), joints whose rotations choose examples, vertices it owns.
+type RegionSpec = (Vec<u32>, Canonical, Option<usize>, Vec<Canonical>, Vec<u32>);
+
+struct Region {
+    joint: Canonical,
+    solver: RegionSolver,
+    /// Per constraint: global vertex and whether it is a seam (parent's result).
+    sources: Vec<(u32, bool)>,
+    /// Weight of this region's result at each local vertex (its part's
+    /// skin weight): overlapping regions are blended by it.
+    weights: Vec<f64>,
+}
+
+/// A character's prefactored deformation.
+pub struct Deformer {
+    mode: DeformMode,
+    local_frames: bool,
+    regions: Vec<Region>,
+    rest_pose: Pose,
+    n: usize,
+    /// Constraint vertices (global) of the LBS.
+    pub constraint_vertices: Vec<u32>,
+    /// Basis sizes (components per region).
+    pub components: Vec<usize>,
+    /// Example frames (database ids) of each region.
+    pub examples: Vec<Vec<usize>>,
+}
+
+/// Scratch of [`Deformer::deform`].
+pub struct DeformWorkspace {
+    lbs: Vec<[f64; 3]>,
+    turn: Vec<DQuat>,
+    xs: Vec<Vec<[f64; 3]>>,
+    delta: Vec<Vec<[f64; 3]>>,
+    acc: Vec<[f64; 3]>,
+    wsum: Vec<f64>,
+    solved: Vec<[f64; 3]>,
+    targets: Vec<Vec<[f64; 3]>>,
+    local: Vec<Vec<[f64; 3]>>,
+    ws: Vec<RegionWorkspace>,
+}
+
+fn fps_examples(rot: &[Vec<DQuat>], want: usize) -> Vec<usize> {
+    let nf = rot.len();
+    if nf == 0 {
+        return Vec::new();
+    }
+    let dist = |a: usize, b: usize| -> f64 {
+        rot[a]
+            .iter()
+            .zip(&rot[b])
+            .map(|(p, q)| p.angle_between(*q))
+            .sum()
+    };
+    // Start from the frame closest to the rest pose.
+    let start = (0..nf)
+        .min_by(|&a, &b| {
+            let d = |f: usize| {
+                rot[f]
+                    .iter()
+                    .map(|q| q.angle_between(DQuat::IDENTITY))
+                    .sum::<f64>()
+            };
+            d(a).total_cmp(&d(b))
+        })
+        .unwrap_or(0);
+    let mut chosen = vec![start];
+    let mut near: Vec<f64> = (0..nf).map(|f| dist(f, start)).collect();
+    while chosen.len() < want.min(nf) {
+        let (f, d) = near
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(f, d)| (f, *d))
+            .unwrap_or((0, 0.0));
+        if d <= 1e-9 {
+            break;
+        }
+        chosen.push(f);
+        for (g, v) in near.iter_mut().enumerate() {
+            *v = v.min(dist(g, f));
+        }
+    }
+    chosen
+}
+
+impl Deformer {
+    /// Prefactors the deformation of a character (nothing for `Lbs`/`None`).
+    pub fn new(
+        ch: &Character,
+        mode: DeformMode,
+        opts: &DeformOptions,
+    ) -> Result<Deformer, SolveError> {
+        let n = ch.n;
+        let rig = &ch.rig;
+        let constraint_vertices = lbs::constraint_vertices(ch, opts.stride);
+        let mut out = Deformer {
+            mode,
+            local_frames: opts.local_frames,
+            regions: Vec::new(),
+            rest_pose: ch.rest_pose,
+            n,
+            constraint_vertices: constraint_vertices.clone(),
+            components: Vec::new(),
+            examples: Vec::new(),
+        };
+        if matches!(mode, DeformMode::Lbs | DeformMode::None) {
+            return Ok(out);
+        }
+        let tris = ch.topology.triangles();
+        let is_constraint = {
+            let mut m = vec![false; n];
+            for &v in &constraint_vertices {
+                m[v as usize] = true;
+            }
+            m
+        };
+        // Regions in solve order (parents before children), with parents.
+        let specs: Vec<RegionSpec> = match mode {
+            DeformMode::Global => vec![(
+                (0..n as u32).collect(),
+                Canonical::Pelvis,
+                None,
+                Canonical::ALL.to_vec(),
+                (0..n as u32).collect(),
+            )],
+            _ => {
+                let order = [
+                    Part::Torso,
+                    Part::Head,
+                    Part::LUpperArm,
+                    Part::RUpperArm,
+                    Part::LThigh,
+                    Part::RThigh,
+                    Part::LForearm,
+                    Part::RForearm,
+                    Part::LShin,
+                    Part::RShin,
+                    Part::LFoot,
+                    Part::RFoot,
+                ];
+                order
+                    .iter()
+                    .map(|&p| {
+                        let mut verts = rig.regions[p.index()].clone();
+                        let owns: Vec<u32> = (0..n as u32)
+                            .filter(|&v| rig.labels[v as usize] as usize == p.index())
+                            .collect();
+                        verts.extend(&owns);
+                        verts.sort_unstable();
+                        verts.dedup();
+                        let parent = p.parent().and_then(|q| order.iter().position(|&o| o == q));
+                        (verts, part_joint(p), parent, vec![part_joint(p)], owns)
+                    })
+                    .collect()
+            }
+        };
+        let nf = ch.frame_count();
+        let mut buf = vec![[0.0; 3]; n];
+        let mut index_of: Vec<Option<usize>> = Vec::new();
+        for (verts, joint, parent, example_joints, owns) in specs {
+            if verts.is_empty() {
+                index_of.push(None);
+                continue;
+            }
+            index_of.push(Some(out.regions.len()));
+            let parent = parent.and_then(|p| index_of.get(p).copied().flatten());
+            let mut local = vec![u32::MAX; n];
+            for (i, &v) in verts.iter().enumerate() {
+                local[v as usize] = i as u32;
+            }
+            let lap = region_laplacian(tris, &local, verts.len());
+            // Examples covering the region's rotations.
+            let rots: Vec<Vec<DQuat>> = (0..nf)
+                .map(|f| {
+                    let g = pose_rotations(&ch.rest_pose, &ch.poses[f]);
+                    example_joints.iter().map(|j| g[j.index()]).collect()
+                })
+                .collect();
+            let mut chosen = fps_examples(&rots, opts.examples);
+            if let Some(f) = opts.include.filter(|&f| f < nf && !chosen.contains(&f)) {
+                chosen.push(f);
+            }
+            let mut examples = Vec::with_capacity(chosen.len());
+            for &f in &chosen {
+                ch.frame_metres(f as u32, &mut buf);
+                let x: Vec<[f64; 3]> = verts.iter().map(|&v| buf[v as usize]).collect();
+                let mut d = vec![[0.0; 3]; x.len()];
+                apply(&lap, &x, &mut d);
+                let r = if opts.local_frames {
+                    pose_rotations(&ch.rest_pose, &ch.poses[f])[joint.index()].inverse()
+                } else {
+                    DQuat::IDENTITY
+                };
+                for v in d.iter_mut() {
+                    *v = (r * DVec3::from_array(*v)).to_array();
+                }
+                examples.push(d);
+            }
+            let basis = pca::pca(&examples, opts.keep);
+            // Constraints: seams with the parent, then LBS vertices.
+            let parent_verts: Option<&Vec<u32>> = parent.map(|p| &out.regions[p].solver.vertices);
+            let mut constraints = Vec::new();
+            let mut sources = Vec::new();
+            for (i, &v) in verts.iter().enumerate() {
+                let seam = parent_verts.is_some_and(|pv| pv.binary_search(&v).is_ok());
+                if seam {
+                    constraints.push((i as u32, opts.seam_weight));
+                    sources.push((v, true));
+                } else if is_constraint[v as usize] {
+                    constraints.push((i as u32, opts.constraint_weight));
+                    sources.push((v, false));
+                }
+            }
+            if constraints.is_empty() {
+                // A region with no eligible vertex: constrain a spread of its own.
+                for (i, &v) in verts.iter().enumerate().step_by(opts.stride.max(1)) {
+                    constraints.push((i as u32, opts.constraint_weight));
+                    sources.push((v, false));
+                }
+            }
+            let weights: Vec<f64> = match mode {
+                DeformMode::Global => vec![1.0; verts.len()],
+                _ => {
+                    let _ = &owns;
+                    let part = Part::of_joint(joint);
+                    verts
+                        .iter()
+                        .map(|&v| {
+                            let (js, ws) = &rig.skin[v as usize];
+                            let w: f64 = js
+                                .iter()
+                                .zip(ws)
+                                .filter(|(j, _)| {
+                                    Part::of_joint(Canonical::ALL[**j as usize]) == part
+                                })
+                                .map(|(_, w)| *w)
+                                .sum();
+                            // A vertex labelled with the part always counts.
+                            if rig.labels[v as usize] as usize == part.index() {
+                                w.max(1e-3)
+                            } else {
+                                w
+                            }
+                        })
+                        .collect()
+                }
+            };
+            out.components.push(basis.components.len());
+            out.examples.push(chosen.clone());
+            let solver = RegionSolver::new(tris, n, verts, constraints, &basis)?;
+            out.regions.push(Region {
+                joint,
+                solver,
+                sources,
+                weights,
+            });
+        }
+        Ok(out)
+    }
+
+    /// The mode.
+    pub fn mode(&self) -> DeformMode {
+        self.mode
+    }
+
+    /// Scratch space.
+    pub fn workspace(&self) -> DeformWorkspace {
+        DeformWorkspace {
+            lbs: vec![[0.0; 3]; self.n],
+            turn: vec![DQuat::IDENTITY; self.n],
+            xs: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
+                .collect(),
+            delta: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
+                .collect(),
+            acc: vec![[0.0; 3]; self.n],
+            wsum: vec![0.0; self.n],
+            solved: vec![[0.0; 3]; self.n],
+            targets: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.sources.len()])
+                .collect(),
+            local: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
+                .collect(),
+            ws: self.regions.iter().map(|r| r.solver.workspace()).collect(),
+        }
+    }
+
+    /// Deforms `source` (a retrieved frame whose skeleton is `source_pose`)
+    /// to follow `target`, into `out`.
+    pub fn deform(
+        &self,
+        ch: &Character,
+        source: &[[f64; 3]],
+        source_pose: &Pose,
+        target: &Pose,
+        out: &mut [[f64; 3]],
+        ws: &mut DeformWorkspace,
+    ) {
+        if self.mode == DeformMode::None {
+            out.copy_from_slice(source);
+            return;
+        }
+        let g = pose_rotations(source_pose, target);
+        crate::synth::database::skin_into(source, &ch.rig, source_pose, target, &g, &mut ws.lbs);
+        out.copy_from_slice(&ws.lbs);
+        if self.mode == DeformMode::Lbs {
+            return;
+        }
+        let rot = pose_rotations(&self.rest_pose, target);
+        // Each vertex's rotation from source to target: its bones' turns,
+        // blended by skin weight.
+        for (t, (js, wts)) in ws.turn.iter_mut().zip(&ch.rig.skin) {
+            let q0 = g[js[0] as usize];
+            let mut q = DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+            for (&j, &w) in js.iter().zip(wts) {
+                let qj = g[j as usize];
+                q += if qj.dot(q0) < 0.0 { -qj } else { qj } * w;
+            }
+            *t = if q.length_squared() > 0.0 {
+                q.normalize()
+            } else {
+                q0
+            };
+        }
+        ws.acc.fill([0.0; 3]);
+        ws.wsum.fill(0.0);
+        for (k, r) in self.regions.iter().enumerate() {
+            let q = if self.local_frames {
+                rot[r.joint.index()]
+            } else {
+                DQuat::IDENTITY
+            };
+            let qi = q.inverse();
+            // δ₀: the source's Laplacian coordinates, each turned by its
+            // vertex's skin-blended rotation from the source skeleton to the
+            // target, in the part's frame. (A skirt vertex shared by both
+            // thighs turns the same way in both solves.)
+            for (x, &v) in ws.xs[k].iter_mut().zip(&r.solver.vertices) {
+                *x = source[v as usize];
+            }
+            apply(r.solver.laplacian(), &ws.xs[k], &mut ws.delta[k]);
+            for (dv, &v) in ws.delta[k].iter_mut().zip(&r.solver.vertices) {
+                let turn = if self.local_frames {
+                    qi * ws.turn[v as usize]
+                } else {
+                    DQuat::IDENTITY
+                };
+                *dv = (turn * DVec3::from_array(*dv)).to_array();
+            }
+            for (t, &(v, seam)) in ws.targets[k].iter_mut().zip(&r.sources) {
+                let p = if seam {
+                    ws.solved[v as usize]
+                } else {
+                    ws.lbs[v as usize]
+                };
+                *t = (qi * DVec3::from_array(p)).to_array();
+            }
+            r.solver.solve(
+                &ws.delta[k],
+                &ws.targets[k],
+                &mut ws.local[k],
+                &mut ws.ws[k],
+            );
+            for ((y, &v), &w) in ws.local[k].iter().zip(&r.solver.vertices).zip(&r.weights) {
+                let x = (q * DVec3::from_array(*y)).to_array();
+                ws.solved[v as usize] = x;
+                let a = &mut ws.acc[v as usize];
+                for d in 0..3 {
+                    a[d] += w * x[d];
+                }
+                ws.wsum[v as usize] += w;
+            }
+        }
+        for ((o, a), &w) in out.iter_mut().zip(&ws.acc).zip(&ws.wsum) {
+            if w > 0.0 {
+                *o = [a[0] / w, a[1] / w, a[2] / w];
+            }
+        }
+    }
+
+    /// Deforms every frame of a sequence (frame-major) in parallel.
+    pub fn deform_all(&self, ch: &Character, frames: &mut [[f64; 3]], targets: &[Pose]) {
+        let n = self.n;
+        frames
+            .par_chunks_mut(n.max(1))
+            .zip(targets.par_iter())
+            .for_each_init(
+                || (self.workspace(), vec![[0.0; 3]; n]),
+                |(ws, src), (f, t)| {
+                    src.copy_from_slice(f);
+                    let sp = ch.rig.skeleton(src);
+                    self.deform(ch, src, &sp, t, f, ws);
+                },
+            );
+    }
+}

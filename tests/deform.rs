@@ -1,0 +1,144 @@
+//! Part-based PCA Laplacian deformation on the samba character.
+
+mod common;
+
+use glam::DVec3;
+use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
+use surfmotion::retarget::character::Character;
+use surfmotion::retarget::query::load_mocap;
+use surfmotion::retarget::{RetargetOptions, synthesise};
+use surfmotion::skeleton::Pose;
+
+fn height(p: &[[f64; 3]]) -> f64 {
+    let (lo, hi) = p
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(v[1]), h.max(v[1]))
+        });
+    hi - lo
+}
+
+fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| DVec3::from_array(*p).distance(DVec3::from_array(*q)))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn constraints_from_an_example_frame_return_that_frame() {
+    let Some(d) = common::data_dir() else { return };
+    let db = common::synthetic_db(&d);
+    let ch = Character::load(&db, &surfmotion::db::Quiet).unwrap();
+    let n = ch.n;
+    for mode in [DeformMode::Part, DeformMode::Global] {
+        // A basis spanning all examples (keep everything).
+        // A frame every region uses as an example.
+        let f = 57;
+        let opts = DeformOptions {
+            keep: 1.0,
+            include: Some(f),
+            ..Default::default()
+        };
+        let def = Deformer::new(&ch, mode, &opts).unwrap();
+        assert!(!def.constraint_vertices.is_empty());
+        assert!(def.examples.iter().all(|e| e.contains(&f)));
+        let mut x = vec![[0.0; 3]; n];
+        ch.frame_metres(f as u32, &mut x);
+        let pose = ch.poses[f];
+        let mut out = vec![[0.0; 3]; n];
+        def.deform(&ch, &x, &pose, &pose, &mut out, &mut def.workspace());
+        let err = max_dist(&out, &x) / height(&x);
+        assert!(err < 1e-4, "{mode:?}: frame {f} moved {err} of the height");
+        // The space is centred on the edited frame, so with the paper's 95 %
+        // basis too a frame deformed to its own skeleton is returned.
+        let def95 = Deformer::new(&ch, mode, &DeformOptions::default()).unwrap();
+        def95.deform(&ch, &x, &pose, &pose, &mut out, &mut def95.workspace());
+        let err95 = max_dist(&out, &x) / height(&x);
+        assert!(err95 < 1e-4, "{mode:?}: {err95}");
+        eprintln!(
+            "{mode:?}: frame {f}, full basis {err:.2e}, 95 % basis {err95:.2e} of the height"
+        );
+    }
+}
+
+fn skeleton_error(ch: &Character, p: &[[f64; 3]], q: &[Pose]) -> f64 {
+    let n = ch.n;
+    let mut s = 0.0;
+    for (k, t) in q.iter().enumerate() {
+        let e = ch.rig.skeleton(&p[k * n..(k + 1) * n]);
+        s += e.iter().zip(t).map(|(a, b)| a.distance(*b)).sum::<f64>() / 19.0;
+    }
+    s / q.len() as f64
+}
+
+#[test]
+fn deformation_follows_the_query_and_flips_less_than_skinning() {
+    let Some(d) = common::data_dir() else { return };
+    let db = common::synthetic_db(&d);
+    let ch = Character::load(&db, &surfmotion::db::Quiet).unwrap();
+    let n = ch.n;
+    let tris = ch.topology.triangles();
+    for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
+        let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), 30.0).unwrap();
+        let none = RetargetOptions {
+            deform: DeformMode::None,
+            ..Default::default()
+        };
+        let raw = synthesise(&ch, &m.poses, 30.0, &none).unwrap();
+        let part = synthesise(&ch, &m.poses, 30.0, &RetargetOptions::default()).unwrap();
+        assert!(
+            part.positions.iter().flatten().all(|x| x.is_finite()),
+            "{clip}"
+        );
+        let e_raw = skeleton_error(&ch, &raw.positions, &raw.query);
+        let e_part = skeleton_error(&ch, &part.positions, &part.query);
+        assert!(
+            e_part < e_raw,
+            "{clip}: part {e_part} vs interpolation {e_raw}"
+        );
+        // Triangles turned over relative to the frame they were made from:
+        // fewer than plain skinning makes (a few remain in the skirt between
+        // the legs; see the issue notes).
+        let flips = |res: &surfmotion::retarget::Output| {
+            let mut count = 0;
+            for k in 0..raw.report.frames {
+                let (a, b) = (
+                    &raw.positions[k * n..(k + 1) * n],
+                    &res.positions[k * n..(k + 1) * n],
+                );
+                for t in tris {
+                    let nrm = |p: &[[f64; 3]]| {
+                        let [x, y, z] = t.map(|v| DVec3::from_array(p[v as usize]));
+                        (y - x).cross(z - x)
+                    };
+                    if nrm(a).dot(nrm(b)) < 0.0 {
+                        count += 1;
+                    }
+                }
+            }
+            count
+        };
+        let lbs = synthesise(
+            &ch,
+            &m.poses,
+            30.0,
+            &RetargetOptions {
+                deform: DeformMode::Lbs,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let (f_part, f_lbs) = (flips(&part), flips(&lbs));
+        let total = raw.report.frames * tris.len();
+        if clip.contains("02_02") {
+            // A walk like the database's: hardly any, fewer than skinning.
+            // (131_01 is far from anything in the database; both turn over
+            // 1-2 % of its triangles: a known gap.)
+            assert!(f_part <= f_lbs, "{clip}: part {f_part} flips, LBS {f_lbs}");
+            assert!(f_part * 1000 < total, "{clip}: {f_part} of {total} flipped");
+        }
+        eprintln!("{clip}: flipped triangles: part {f_part}, LBS {f_lbs} of {total}");
+        eprintln!("{clip}: mean joint error {e_raw:.4} m -> {e_part:.4} m");
+    }
+}
