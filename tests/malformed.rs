@@ -246,3 +246,38 @@ fn regression_glb_declared_length_under_header_size() {
     short.extend_from_slice(&[0; 12]);
     assert!(gltf::parse_gltf(&short, Path::new("short.glb")).is_err());
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+
+    /// The similarity cache and a manifest's `[graph]` section: arbitrary
+    /// and bit-flipped bytes never panic or allocate from header counts.
+    #[test]
+    fn cache_and_graph_settings_never_panic(
+        bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..300),
+        flip in 0usize..4096,
+    ) {
+        use surfmotion::db::cache::parse_matrix;
+        if bytes.len() >= 16 {
+            let key = u64::from_le_bytes(bytes[8..16].try_into().unwrap());
+            let _ = parse_matrix(&bytes, key);
+        }
+        // A valid file with one byte changed.
+        let spans = vec![surfmotion::similarity::Span { name: "a".into(), start: 0, len: 3 }];
+        let m = surfmotion::similarity::SimilarityMatrix::new(spans, vec![0.5; 9]).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("s.bin");
+        surfmotion::db::cache::save_matrix(&p, 7, &m).unwrap();
+        let mut good = std::fs::read(&p).unwrap();
+        let i = flip % good.len();
+        good[i] ^= 0x5a;
+        let _ = parse_matrix(&good, 7);
+        let text = format!(
+            "name = \"x\"\ntopology = \"t.obj\"\n[graph]\n{}\n",
+            String::from_utf8_lossy(&bytes)
+        );
+        if let Ok(m) = toml::from_str::<surfmotion::db::Manifest>(&text) {
+            let _ = m.validate();
+        }
+    }
+}

@@ -154,7 +154,13 @@ pub fn save_matrix(path: &Path, key: u64, m: &SimilarityMatrix) -> Result<(), Fs
 /// Reads a similarity matrix if the file exists, is well formed and has
 /// `key`; `None` otherwise (the caller recomputes).
 pub fn load_matrix(path: &Path, key: u64) -> Option<SimilarityMatrix> {
-    let bytes = std::fs::read(path).ok()?;
+    parse_matrix(&std::fs::read(path).ok()?, key)
+}
+
+/// Parses a similarity file's bytes; `None` unless well formed with `key`.
+/// Sizes in the header are checked against the bytes present before any
+/// allocation follows them.
+pub fn parse_matrix(bytes: &[u8], key: u64) -> Option<SimilarityMatrix> {
     let mut at = 0usize;
     let mut take = |k: usize| -> Option<&[u8]> {
         let s = bytes.get(at..at.checked_add(k)?)?;
@@ -180,7 +186,7 @@ pub fn load_matrix(path: &Path, key: u64) -> Option<SimilarityMatrix> {
         n = n.checked_add(len)?;
         spans.push(Span { name, start, len });
     }
-    let tri = n.checked_mul(n + 1)? / 2;
+    let tri = n.checked_mul(n.checked_add(1)?)? / 2;
     let body = take(tri.checked_mul(4)?)?;
     let mut data = vec![0.0f32; n.checked_mul(n)?];
     let mut k = 0;
