@@ -269,3 +269,78 @@ fn cli_builds_caches_and_exports_the_graph() {
     assert!(tmp.path().join("cache/similarity-vertex.bin").exists());
     assert!(tmp.path().join("cache/similarity-shape.bin").exists());
 }
+
+#[test]
+fn colour_measure_on_a_coloured_samba() {
+    let Some(d) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let mut m = samba_db(&d, tmp.path(), &[("dance", 0, 175)]);
+    // Colour the dancer: a red top, a blue skirt, skin below the knees,
+    // shaded by the side she faces (so turning shows in colour).
+    let topo = surfmotion::mesh::io::obj::read_obj(&d.join("4d/samba/samba.obj")).unwrap();
+    let colours: Vec<[f64; 3]> = topo
+        .positions()
+        .iter()
+        .map(|p| {
+            let side = 0.5 + 0.5 * ((p[2] + 0.05) * 8.0).tanh();
+            if p[1] > 1.05 {
+                [0.9, 0.15 + 0.3 * side, 0.1]
+            } else if p[1] > 0.45 {
+                [0.1, 0.2 * side, 0.85]
+            } else {
+                [0.85, 0.65, 0.5]
+            }
+        })
+        .collect();
+    let coloured = topo.clone().with_colors(colours).unwrap();
+    let cpath = tmp.path().join("colours.obj");
+    surfmotion::mesh::io::save_sequence(
+        &surfmotion::mesh::MeshSequence::single(coloured),
+        &cpath,
+        None,
+    )
+    .unwrap();
+    m.colors = Some("colours.obj".into());
+    m.save(tmp.path()).unwrap();
+    // With colours the default measure is the 6D one.
+    let (mat, g, r) = build(tmp.path(), &BuildOptions::default(), &Quiet).unwrap();
+    assert_eq!(r.measure, Measure::Colour);
+    let mut off = 0.0;
+    for a in 0..175 {
+        assert!(mat.get(a, a).abs() < 1e-6, "self {a}: {}", mat.get(a, a));
+        for b in 0..175 {
+            assert_eq!(mat.get(a, b), mat.get(b, a));
+            off += mat.get(a, b) as f64;
+        }
+    }
+    let mean = off / (175.0 * 174.0);
+    let near: f64 = (0..174).map(|a| mat.get(a, a + 1) as f64).sum::<f64>() / 174.0;
+    assert!(near < 0.5 * mean, "neighbours {near}, mean {mean}");
+    assert!(!g.transitions.is_empty());
+    // Turning a frame about the vertical keeps it near itself.
+    let all = read_pc2(&d.join("4d/samba/samba.pc2")).unwrap();
+    let n = topo.vertex_count();
+    let f0 = all.positions[..n].to_vec();
+    let q = DQuat::from_rotation_y(1.3);
+    let turned: Vec<[f64; 3]> = f0
+        .iter()
+        .map(|p| (q * DVec3::from_array(*p)).to_array())
+        .collect();
+    let rest: Vec<DVec3> = topo
+        .positions()
+        .iter()
+        .map(|p| DVec3::from_array(*p))
+        .collect();
+    let col = surfmotion::mesh::io::load_sequence(cpath.to_str().unwrap(), &Default::default())
+        .unwrap()
+        .mesh()
+        .colors()
+        .unwrap()
+        .to_vec();
+    let mut set = surfmotion::similarity::ColourSet::new(ShapeSet::grid_for(&rest), col);
+    set.push_sequence(&f0, n, topo.triangles(), false);
+    set.push_sequence(&turned, n, topo.triangles(), false);
+    set.push_sequence(&all.positions[60 * n..61 * n], n, topo.triangles(), false);
+    let (same, other) = (set.distance(0, 1), set.distance(0, 2));
+    assert!(same < 0.2 * other, "turned {same}, other pose {other}");
+}

@@ -12,8 +12,8 @@ use crate::fsutil::{read_text, write_bytes_atomic};
 use crate::graph::SurfaceMotionGraph;
 use crate::similarity::vertex::VertexOptions;
 use crate::similarity::{
-    Measure, PairDistance, ShapeSet, SimilarityMatrix, SkeletonSet, Span, VertexSet, all_pairs,
-    y_up,
+    ColourSet, Measure, PairDistance, ShapeSet, SimilarityMatrix, SkeletonSet, Span, VertexSet,
+    all_pairs, y_up,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -22,7 +22,8 @@ use std::time::Instant;
 /// Options of [`build`].
 #[derive(Debug, Clone, Default)]
 pub struct BuildOptions {
-    /// Measure; default: the manifest's `[graph] measure`, else shape.
+    /// Measure; default: the manifest's `[graph] measure`, else colour when
+    /// the manifest names vertex colours, else shape.
     pub measure: Option<Measure>,
     /// Recompute even when the cache is current.
     pub force: bool,
@@ -112,6 +113,11 @@ pub fn similarity(
             key.text("velocity_weight", &vopts.velocity_weight.to_string());
         }
         Measure::Skeleton => add_rig(&mut key, dir, m)?,
+        Measure::Colour => {
+            if let Some(c) = &m.colors {
+                key.path(&Manifest::resolve(dir, c))?;
+            }
+        }
     }
     let key = key.finish();
     let path = cache_dir(dir).join(format!("similarity-{}.bin", measure.name()));
@@ -126,6 +132,7 @@ pub fn similarity(
     let mut shape = None;
     let mut vertex = None;
     let mut skel = None;
+    let mut colour = None;
     match measure {
         Measure::Shape => {
             let rest: Vec<_> = topo.positions().iter().map(|p| y_up(*p, z_up)).collect();
@@ -134,6 +141,11 @@ pub fn similarity(
         Measure::Vertex => vertex = Some(VertexSet::new(n, vopts)),
         Measure::Skeleton => {
             skel = Some((embed_rig(dir, m, &topo)?, SkeletonSet::default()));
+        }
+        Measure::Colour => {
+            let colours = vertex_colours(dir, m, &topo)?;
+            let rest: Vec<_> = topo.positions().iter().map(|p| y_up(*p, z_up)).collect();
+            colour = Some(ColourSet::new(ShapeSet::grid_for(&rest), colours));
         }
     }
     progress.start("sequences described", m.sequences.len() as u64);
@@ -163,6 +175,9 @@ pub fn similarity(
         if let Some(set) = vertex.as_mut() {
             set.push_sequence(frames, z_up);
         }
+        if let Some(set) = colour.as_mut() {
+            set.push_sequence(frames, n, topo.triangles(), z_up);
+        }
         if let Some((rig, set)) = skel.as_mut() {
             let p = poses(rig, frames, n, SkeletonKind::Regressor);
             set.poses
@@ -172,10 +187,11 @@ pub fn similarity(
     }
     progress.finish();
     let describe = t0.elapsed().as_secs_f64();
-    let set: &dyn PairDistance = match (&shape, &vertex, &skel) {
-        (Some(s), _, _) => s,
-        (_, Some(s), _) => s,
-        (_, _, Some((_, s))) => s,
+    let set: &dyn PairDistance = match (&shape, &vertex, &skel, &colour) {
+        (Some(s), _, _, _) => s,
+        (_, Some(s), _, _) => s,
+        (_, _, Some((_, s)), _) => s,
+        (_, _, _, Some(s)) => s,
         _ => unreachable!("one set is built per measure"),
     };
     let frames = set.frames();
@@ -201,6 +217,41 @@ pub fn similarity(
     ))
 }
 
+/// The database's per-vertex colours: the manifest's `colors` mesh, else
+/// the topology's own (OBJ/PLY vertex colours).
+fn vertex_colours(
+    dir: &Path,
+    m: &Manifest,
+    topo: &crate::mesh::Mesh,
+) -> Result<Vec<[f64; 3]>, DbError> {
+    let err = |msg: String| DbError::Manifest {
+        path: dir.join(super::MANIFEST),
+        msg,
+    };
+    let mesh = match &m.colors {
+        Some(c) => {
+            let p = Manifest::resolve(dir, c);
+            crate::mesh::io::load_sequence(&p.to_string_lossy(), &Default::default())?
+                .mesh()
+                .clone()
+        }
+        None => topo.clone(),
+    };
+    let Some(c) = mesh.colors() else {
+        return Err(err(
+            "the colour measure needs vertex colours: set `colors = \"MESH\"` (an OBJ or PLY with vertex colours) or use a coloured topology".into(),
+        ));
+    };
+    if c.len() != topo.vertex_count() {
+        return Err(err(format!(
+            "colors: {} vertex colours, the topology has {} vertices",
+            c.len(),
+            topo.vertex_count()
+        )));
+    }
+    Ok(c.to_vec())
+}
+
 /// Builds (or loads from the cache) the similarity matrix and the Surface
 /// Motion Graph of the database in `dir`.
 pub fn build(
@@ -217,7 +268,13 @@ pub fn build(
                     .into(),
         });
     }
-    let measure = opts.measure.or(m.graph.measure).unwrap_or_default();
+    // The paper's 6D measure when the database has colours, else 3D shape.
+    let default = if m.colors.is_some() {
+        Measure::Colour
+    } else {
+        Measure::Shape
+    };
+    let measure = opts.measure.or(m.graph.measure).unwrap_or(default);
     let (mat, sim_key, timing) = similarity(dir, &m, measure, opts.force, progress)?;
     let topts = m.graph.transition_options();
     let edits = m.graph.edits();

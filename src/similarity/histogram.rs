@@ -88,6 +88,19 @@ pub fn describe(
         points.extend(positions.iter().map(|p| (*p, 1.0)));
         volume = positions.len() as f64;
     }
+    describe_weighted(points, grid, fine, out, norms);
+    volume
+}
+
+/// [`describe`] for weighted sample points (voxels, or area-weighted
+/// surface points), binned about their weighted centre.
+pub fn describe_weighted(
+    points: &[(DVec3, f64)],
+    grid: &ShapeGrid,
+    fine: &mut Vec<f64>,
+    out: &mut [f32],
+    norms: &mut [f64; PHI_SUB],
+) {
     let mass: f64 = points.iter().map(|p| p.1).sum();
     let centre = points.iter().map(|(p, w)| *p * *w).sum::<DVec3>() / mass.max(f64::MIN_POSITIVE);
     let nfine = PHI_BINS * PHI_SUB;
@@ -173,7 +186,6 @@ pub fn describe(
         }
         *norm = n2 / PHI_BINS as f64;
     }
-    volume
 }
 
 /// Weight of coefficient `k` in a sum over the full spectrum of a real

@@ -5,6 +5,7 @@
 //! [`crate::skeleton::skeleton_distance`]); per-frame descriptors
 //! ([`sets`]) compared all-pairs in parallel ([`matrix`]).
 
+pub mod colour;
 pub mod histogram;
 pub mod matrix;
 pub mod sets;
@@ -12,4 +13,4 @@ pub mod vertex;
 pub mod voxel;
 
 pub use matrix::{PairDistance, SimilarityMatrix, Span, all_pairs};
-pub use sets::{Measure, ShapeSet, SkeletonSet, VertexSet, y_up};
+pub use sets::{ColourSet, Measure, ShapeSet, SkeletonSet, VertexSet, y_up};

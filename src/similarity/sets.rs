@@ -24,6 +24,9 @@ pub enum Measure {
     Vertex,
     /// Canonical joint positions after floor alignment (Eq. 28); needs a rig.
     Skeleton,
+    /// 6D shape-colour histogram with a pyramid EMD (Sec. 4.1); needs
+    /// vertex colours.
+    Colour,
 }
 
 impl Measure {
@@ -33,6 +36,7 @@ impl Measure {
             Measure::Shape => "shape",
             Measure::Vertex => "vertex",
             Measure::Skeleton => "skeleton",
+            Measure::Colour => "colour",
         }
     }
     /// Unit of the values.
@@ -41,6 +45,7 @@ impl Measure {
             Measure::Shape => "L2 of unit-sum histograms",
             Measure::Vertex => "RMS length (file units)",
             Measure::Skeleton => "sum of 19 joint distances (file units)",
+            Measure::Colour => "pyramid EMD of unit-mass 6D histograms (level-0 bins)",
         }
     }
 }
@@ -238,5 +243,89 @@ impl PairDistance for SkeletonSet {
     }
     fn distance(&self, a: usize, b: usize) -> f64 {
         skeleton_distance(&self.poses[a], &self.poses[b])
+    }
+}
+
+/// 6D shape-colour signatures of every frame, with the surface's 3D shape
+/// spectra for the rotation search ([`super::colour`]).
+#[derive(Debug, Clone)]
+pub struct ColourSet {
+    grid: ShapeGrid,
+    kernel: ShapeKernel,
+    desc: Vec<f32>,
+    norms: Vec<[f64; PHI_SUB]>,
+    sigs: Vec<super::colour::Signature>,
+    colours: Vec<[f64; 3]>,
+}
+
+impl ColourSet {
+    /// An empty set with the binning and per-vertex colours (0..1).
+    pub fn new(grid: ShapeGrid, colours: Vec<[f64; 3]>) -> ColourSet {
+        ColourSet {
+            grid,
+            kernel: ShapeKernel::default(),
+            desc: Vec::new(),
+            norms: Vec::new(),
+            sigs: Vec::new(),
+            colours,
+        }
+    }
+
+    /// Adds the frames of one sequence, in parallel over frames.
+    pub fn push_sequence(
+        &mut self,
+        frames: &[[f64; 3]],
+        n: usize,
+        triangles: &[[u32; 3]],
+        z_up: bool,
+    ) {
+        let count = frames.len() / n.max(1);
+        let start = self.norms.len();
+        self.desc.resize((start + count) * DESCRIPTOR_LEN, 0.0);
+        self.norms.resize(start + count, [0.0; PHI_SUB]);
+        let grid = self.grid;
+        let colours = &self.colours;
+        let sigs: Vec<super::colour::Signature> = self.desc[start * DESCRIPTOR_LEN..]
+            .par_chunks_mut(DESCRIPTOR_LEN)
+            .zip(self.norms[start..].par_iter_mut())
+            .zip(frames.par_chunks(n.max(1)))
+            .map_init(
+                || (Vec::with_capacity(n), Vec::new(), Vec::new()),
+                |(pts, samples, fine), ((out, norms), f)| {
+                    pts.clear();
+                    pts.extend(f.iter().map(|p| y_up(*p, z_up)));
+                    super::colour::surface_samples(pts, triangles, samples);
+                    histogram::describe_weighted(samples, &grid, fine, out, norms);
+                    super::colour::signature(samples, colours, &grid)
+                },
+            )
+            .collect();
+        self.sigs.extend(sigs);
+    }
+}
+
+impl PairDistance for ColourSet {
+    fn frames(&self) -> usize {
+        self.norms.len()
+    }
+    fn distance(&self, a: usize, b: usize) -> f64 {
+        thread_local! {
+            static SCRATCH: std::cell::RefCell<super::colour::EmdScratch> =
+                std::cell::RefCell::new(Default::default());
+        }
+        let nfine = (histogram::PHI_BINS * PHI_SUB) as f64;
+        let step = std::f64::consts::TAU / nfine;
+        let da = &self.desc[a * DESCRIPTOR_LEN..(a + 1) * DESCRIPTOR_LEN];
+        let db = &self.desc[b * DESCRIPTOR_LEN..(b + 1) * DESCRIPTOR_LEN];
+        SCRATCH.with(|sc| {
+            let sc = &mut sc.borrow_mut();
+            // One direction: the matrix is filled from its upper triangle,
+            // so it is symmetric by construction.
+            let (_, ab) = self
+                .kernel
+                .distance(da, self.norms[a][0], db, &self.norms[b]);
+            let sh = ((ab / step).round() as usize) % nfine as usize;
+            super::colour::emd(&self.sigs[a], &self.sigs[b], sh, sc)
+        })
     }
 }
