@@ -185,6 +185,17 @@ pub fn rotate_yaw(p: DVec3, c: f64, s: f64) -> DVec3 {
 /// the vertical axis, [`yaw_fit`]). Metres; 0 for a pose and any copy of it
 /// moved on the floor and turned about Y.
 pub fn skeleton_distance(a: &Pose, b: &Pose) -> f64 {
+    let (cos, sin, ca, cb) = floor_fit(a, b);
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (*p - ca).distance(rotate_yaw(*q - cb, cos, sin)))
+        .sum()
+}
+
+/// The floor alignment of `b` onto `a`: `(cos θ, sin θ, c_a, c_b)` with
+/// `c` the horizontal centroids, such that `rotate_yaw(q − c_b) + c_a`
+/// best matches `a` in least squares.
+pub fn floor_fit(a: &Pose, b: &Pose) -> (f64, f64, DVec3, DVec3) {
     let ca = horizontal_centroid(a);
     let cb = horizontal_centroid(b);
     let (mut c, mut s) = (0.0, 0.0);
@@ -194,10 +205,7 @@ pub fn skeleton_distance(a: &Pose, b: &Pose) -> f64 {
         s += p.x * q.z - p.z * q.x;
     }
     let (cos, sin, _) = yaw_fit(c, s);
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| (*p - ca).distance(rotate_yaw(*q - cb, cos, sin)))
-        .sum()
+    (cos, sin, ca, cb)
 }
 
 /// Mean of the joints' X and Z (Y = 0).

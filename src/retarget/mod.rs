@@ -17,7 +17,7 @@ pub mod trellis;
 use crate::deform::{DeformMode, DeformOptions, Deformer};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
-use crate::skeleton::{Pose, horizontal_centroid, rotate_yaw, yaw_fit};
+use crate::skeleton::{Pose, floor_fit, rotate_yaw};
 use character::Character;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -125,15 +125,7 @@ struct Floor {
 impl Floor {
     /// The floor motion that best maps `from` onto `to` (least squares).
     fn fit(from: &Pose, to: &Pose) -> Floor {
-        let cf = horizontal_centroid(from);
-        let ct = horizontal_centroid(to);
-        let (mut c, mut s) = (0.0, 0.0);
-        for (q, p) in from.iter().zip(to) {
-            let (p, q) = (*p - ct, *q - cf);
-            c += p.x * q.x + p.z * q.z;
-            s += p.x * q.z - p.z * q.x;
-        }
-        let (cos, sin, _) = yaw_fit(c, s);
+        let (cos, sin, ct, cf) = floor_fit(to, from);
         let theta = sin.atan2(cos);
         Floor {
             theta,
