@@ -2,33 +2,22 @@
 //! fixture, extracting skeletons for all 175 samba frames, and synthesising
 //! a 1,000-frame database sequence (a procedural walk driving samba).
 
+mod common;
+
 use criterion::Criterion;
 use std::hint::black_box;
-use std::path::PathBuf;
 use surfmotion::db::skeletons::{SkeletonKind, poses};
-use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::synth::database::{Dynamics, clip_poses, synthesise};
 use surfmotion::synth::{Gait, gait_clip};
 
 fn main() {
-    let d = std::env::var_os("SURFMOTION_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
-    if !d.exists() {
-        eprintln!("benchmark skipped: no ../shared/data");
-        return;
-    }
-    let seq = load_sequence(
-        d.join("4d/samba/samba.pc2").to_str().unwrap(),
-        &LoadOptions::default(),
-    )
-    .unwrap();
+    let Some(d) = common::data() else { return };
+    let seq = common::samba(&d);
     let rest = seq.frame_mesh(0);
     let n = rest.vertex_count();
-    let fixture =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
+    let fixture = common::samba_landmarks();
     let lm = Landmarks::load(&fixture, n).unwrap();
     let mut c = Criterion::default().configure_from_args();
     let mut g = c.benchmark_group("character/samba");

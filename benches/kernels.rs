@@ -5,6 +5,8 @@
 //! and the per-input-frame polar decomposition. After the runs, per-frame
 //! figures are printed as ratios to the solve at the same size.
 
+mod common;
+
 use criterion::{BenchmarkId, Criterion};
 use glam::{DMat3, DQuat, DVec3};
 use std::hint::black_box;
@@ -16,12 +18,7 @@ use surfmotion::mesh::io::{LoadOptions, load_sequence, obj::read_obj};
 use surfmotion::mesh::poisson::Poisson;
 use surfmotion::mesh::subdivide::midpoint;
 
-fn data() -> Option<PathBuf> {
-    let p = std::env::var_os("SURFMOTION_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
-    p.exists().then_some(p)
-}
+use common::data;
 
 /// A smooth non-rigid pose change: a twist about +Y growing with height and a bend.
 fn twist(m: &Mesh) -> Vec<[f64; 3]> {

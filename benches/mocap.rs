@@ -2,25 +2,17 @@
 //! (cgspeed BVH 01_01, 2,752 frames; the largest AMC, 02_10, 2,645 frames).
 //! Throughput is reported in frames per second.
 
+mod common;
+
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::{DQuat, DVec3};
 use std::hint::black_box;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use surfmotion::mocap::Clip;
 use surfmotion::mocap::asfamc::{AmcOptions, parse_amc, parse_asf};
 use surfmotion::mocap::bvh::{BvhOptions, parse_bvh};
 
-fn data() -> Option<PathBuf> {
-    let p = std::env::var_os("SURFMOTION_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("benchmark skipped: no data at {}", p.display());
-        None
-    }
-}
+use common::data;
 
 /// FK of every frame into reused buffers; returns a checksum.
 fn fk_all(c: &Clip, pos: &mut [DVec3], rot: &mut [DQuat]) -> f64 {

@@ -4,13 +4,13 @@
 //! figures (1,000 frames) come from `surfmotion db build --json`, which
 //! reports descriptor and all-pairs times.
 
+mod common;
+
 use criterion::Criterion;
 use glam::DVec3;
 use std::hint::black_box;
-use std::path::PathBuf;
 use surfmotion::db::skeletons::{SkeletonKind, poses};
 use surfmotion::graph::transitions::{TransitionOptions, find};
-use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, ShapeScratch, describe};
@@ -19,18 +19,8 @@ use surfmotion::similarity::{
 };
 
 fn main() {
-    let d = std::env::var_os("SURFMOTION_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
-    if !d.exists() {
-        eprintln!("benchmark skipped: no ../shared/data");
-        return;
-    }
-    let seq = load_sequence(
-        d.join("4d/samba/samba.pc2").to_str().unwrap(),
-        &LoadOptions::default(),
-    )
-    .unwrap();
+    let Some(d) = common::data() else { return };
+    let seq = common::samba(&d);
     let rest = seq.frame_mesh(0);
     let n = rest.vertex_count();
     let frames = seq.frame_count();
@@ -49,8 +39,7 @@ fn main() {
     shape.push_sequence(seq.all_positions(), n, rest.triangles(), false);
     let mut vertex = VertexSet::new(n, Default::default());
     vertex.push_sequence(seq.all_positions(), false);
-    let fixture =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
+    let fixture = common::samba_landmarks();
     let lm = Landmarks::load(&fixture, n).unwrap();
     let rig = Embedding::new(&rest, &lm, None).unwrap();
     let skel = SkeletonSet {
