@@ -142,3 +142,50 @@ fn deformation_follows_the_query_and_flips_less_than_skinning() {
         eprintln!("{clip}: mean joint error {e_raw:.4} m -> {e_part:.4} m");
     }
 }
+
+#[test]
+fn the_manifest_overrides_constraints_and_examples() {
+    let Some(d) = common::data_dir() else { return };
+    let db = common::synthetic_db(&d);
+    let tmp = tempfile::tempdir().unwrap();
+    // A copy of the database with a [deform] section.
+    for e in std::fs::read_dir(&db).unwrap().flatten() {
+        if e.path().is_file() {
+            std::fs::copy(e.path(), tmp.path().join(e.file_name())).unwrap();
+        }
+    }
+    let mut m = surfmotion::db::Manifest::load(tmp.path()).unwrap();
+    std::fs::write(tmp.path().join("c.json"), "[10, 500, 2000, 7000]").unwrap();
+    m.deform.constraints = Some("c.json".into());
+    m.deform.examples = vec!["02_01:10".into(), "02_03:5".into(), "02_01:40".into()];
+    m.save(tmp.path()).unwrap();
+    let ch = Character::load(tmp.path(), &surfmotion::db::Quiet).unwrap();
+    let def = Deformer::new(&ch, DeformMode::Part, &DeformOptions::default()).unwrap();
+    assert_eq!(def.constraint_vertices, vec![10, 500, 2000, 7000]);
+    let s0 = ch
+        .graph
+        .sequences
+        .iter()
+        .position(|s| s.name == "02_01")
+        .unwrap();
+    let ids: Vec<usize> = def.examples[0].clone();
+    assert_eq!(ids.len(), 3);
+    assert_eq!(ids[0], ch.graph.frame_id(s0, 10) as usize);
+    assert!(def.examples.iter().all(|e| *e == ids));
+    // Bad overrides are one-line errors naming the manifest.
+    m.deform.examples = vec!["02_01:9999".into()];
+    m.save(tmp.path()).unwrap();
+    let e = Character::load(tmp.path(), &surfmotion::db::Quiet)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("[deform]") && e.contains("9999"), "{e}");
+    std::fs::write(tmp.path().join("c.json"), "[99999999]").unwrap();
+    m.deform.examples.clear();
+    m.save(tmp.path()).unwrap();
+    let e = Character::load(tmp.path(), &surfmotion::db::Quiet)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("out of range"), "{e}");
+}

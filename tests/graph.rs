@@ -39,6 +39,7 @@ fn samba_db(d: &Path, tmp: &Path, seqs: &[(&str, usize, usize)]) -> Manifest {
             ..Default::default()
         },
         graph: Default::default(),
+        deform: Default::default(),
     };
     m.save(tmp).unwrap();
     m

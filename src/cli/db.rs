@@ -248,6 +248,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     gltf_skin: opt(&a.gltf_skin)?,
                 },
                 graph: Default::default(),
+                deform: Default::default(),
             };
             if let Err(msg) = m.validate() {
                 bail!("{msg}");

@@ -80,6 +80,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             ..Default::default()
         },
         graph: Default::default(),
+        deform: Default::default(),
     }
     .save(&db)?;
     let t_db = t0.elapsed().as_secs_f64();

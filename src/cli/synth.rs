@@ -144,6 +144,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             gltf_skin: None,
         },
         graph: Default::default(),
+        deform: Default::default(),
     };
     m.save(dir)?;
     if a.json {

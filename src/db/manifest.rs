@@ -139,6 +139,32 @@ impl GraphSpec {
     }
 }
 
+/// Overrides of the deformation's automatic choices (`[deform]`).
+///
+/// ```toml
+/// [deform]
+/// constraints = "constraints.json"          # JSON array of vertex ids
+/// examples = ["walk:10", "walk:40", "jog:7"] # example frames for every part
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DeformSpec {
+    /// Constraint vertices (a JSON array of vertex ids) instead of the
+    /// automatic mid-bone choice.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub constraints: Option<PathBuf>,
+    /// Example frames `SEQUENCE:FRAME` instead of the automatic choice.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub examples: Vec<String>,
+}
+
+impl DeformSpec {
+    /// True when nothing is set.
+    pub fn is_default(&self) -> bool {
+        *self == DeformSpec::default()
+    }
+}
+
 /// The manifest.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Manifest {
@@ -167,6 +193,9 @@ pub struct Manifest {
     /// Surface Motion Graph settings.
     #[serde(default, skip_serializing_if = "GraphSpec::is_default")]
     pub graph: GraphSpec,
+    /// Deformation overrides.
+    #[serde(default, skip_serializing_if = "DeformSpec::is_default")]
+    pub deform: DeformSpec,
 }
 
 /// Errors of the database layer.
@@ -438,6 +467,10 @@ mod tests {
             graph: GraphSpec {
                 measure: Some(Measure::Vertex),
                 forbid: vec!["a -> *".into()],
+                ..Default::default()
+            },
+            deform: DeformSpec {
+                examples: vec!["a:3".into()],
                 ..Default::default()
             },
         };

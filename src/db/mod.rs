@@ -7,4 +7,6 @@ pub mod manifest;
 pub mod skeletons;
 
 pub use build::{BuildOptions, BuildProgress, BuildReport, Quiet, build};
-pub use manifest::{DbError, DbInfo, GraphSpec, MANIFEST, Manifest, RigSpec, SequenceEntry, info};
+pub use manifest::{
+    DbError, DbInfo, DeformSpec, GraphSpec, MANIFEST, Manifest, RigSpec, SequenceEntry, info,
+};

@@ -27,6 +27,8 @@
 //! Constraint vertices are chosen once per character, away from joints
 //! where LBS collapses: vertices bound (≥ 95 %) to one bone whose rest
 //! position projects into the middle 60 % of that bone, every `stride`-th.
+//! The manifest's `[deform]` section can give the constraint vertices and
+//! the example frames instead.
 
 pub mod lbs;
 pub mod part_laplacian;
@@ -206,7 +208,10 @@ impl Deformer {
     ) -> Result<Deformer, SolveError> {
         let n = ch.n;
         let rig = &ch.rig;
-        let constraint_vertices = lbs::constraint_vertices(ch, opts.stride);
+        let constraint_vertices = match &ch.constraint_override {
+            Some(c) => c.clone(),
+            None => lbs::constraint_vertices(ch, opts.stride),
+        };
         let mut out = Deformer {
             mode,
             local_frames: opts.local_frames,
@@ -290,7 +295,10 @@ impl Deformer {
                     example_joints.iter().map(|j| g[j.index()]).collect()
                 })
                 .collect();
-            let mut chosen = fps_examples(&rots, opts.examples);
+            let mut chosen = match &ch.example_override {
+                Some(e) => e.clone(),
+                None => fps_examples(&rots, opts.examples),
+            };
             if let Some(f) = opts.include.filter(|&f| f < nf && !chosen.contains(&f)) {
                 chosen.push(f);
             }

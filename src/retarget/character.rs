@@ -37,6 +37,10 @@ pub struct Character {
     pub graph: SurfaceMotionGraph,
     /// Its frame-level adjacency.
     pub adjacency: FrameAdjacency,
+    /// Constraint vertices given in the manifest (`[deform] constraints`).
+    pub constraint_override: Option<Vec<u32>>,
+    /// Example frames given in the manifest (`[deform] examples`).
+    pub example_override: Option<Vec<usize>>,
     /// Metres per file unit.
     pub metres_per_unit: f64,
     /// The files are Z-up.
@@ -83,6 +87,53 @@ impl Character {
             .collect();
         let rest_pose = rig.joints.map(|j| conv(DVec3::from_array(j)));
         let adjacency = graph.adjacency();
+        let bad = |msg: String| DbError::Manifest {
+            path: dir.join(MANIFEST),
+            msg: format!("[deform] {msg}"),
+        };
+        let constraint_override = match &manifest.deform.constraints {
+            None => None,
+            Some(p) => {
+                let p = Manifest::resolve(dir, p);
+                let text = crate::fsutil::read_text(&p)?;
+                let ids: Vec<u32> = serde_json::from_str(&text).map_err(|e| {
+                    bad(format!(
+                        "{}: expected a JSON array of vertex ids ({e})",
+                        p.display()
+                    ))
+                })?;
+                if let Some(v) = ids.iter().find(|&&v| v as usize >= n) {
+                    return Err(bad(format!(
+                        "{}: vertex {v} is out of range (the topology has {n})",
+                        p.display()
+                    )));
+                }
+                Some(ids)
+            }
+        };
+        let example_override = if manifest.deform.examples.is_empty() {
+            None
+        } else {
+            let mut ids = Vec::new();
+            for e in &manifest.deform.examples {
+                let (name, f) = e
+                    .rsplit_once(':')
+                    .ok_or_else(|| bad(format!("example '{e}': expected SEQUENCE:FRAME")))?;
+                let s = graph
+                    .sequences
+                    .iter()
+                    .position(|q| q.name == name.trim())
+                    .ok_or_else(|| bad(format!("example '{e}': no sequence '{name}'")))?;
+                let f: usize = f
+                    .trim()
+                    .parse()
+                    .ok()
+                    .filter(|&f| f < graph.sequences[s].len)
+                    .ok_or_else(|| bad(format!("example '{e}': no frame '{f}' in '{name}'")))?;
+                ids.push(graph.frame_id(s, f) as usize);
+            }
+            Some(ids)
+        };
         Ok(Character {
             manifest,
             topology,
@@ -94,6 +145,8 @@ impl Character {
             matrix,
             graph,
             adjacency,
+            constraint_override,
+            example_override,
             metres_per_unit,
             z_up,
         })
