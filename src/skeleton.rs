@@ -55,7 +55,10 @@ pub fn children() -> [Vec<Canonical>; Canonical::COUNT] {
 
 /// Global rotation of each joint taking `rest`'s bones onto `pose`'s.
 pub fn pose_rotations(rest: &Pose, pose: &Pose) -> [DQuat; Canonical::COUNT] {
-    let kids = children();
+    // Called per frame (and per part) by synthesis: the hierarchy is built once.
+    static KIDS: std::sync::OnceLock<[Vec<Canonical>; Canonical::COUNT]> =
+        std::sync::OnceLock::new();
+    let kids = KIDS.get_or_init(children);
     let mut g = [DQuat::IDENTITY; Canonical::COUNT];
     for j in Canonical::ALL {
         let pr = j.parent().map_or(DQuat::IDENTITY, |p| g[p.index()]);

@@ -60,14 +60,45 @@ pub fn y_up(p: [f64; 3], z_up: bool) -> DVec3 {
     }
 }
 
+/// Per-frame φ spectra of shape histograms ([`histogram::describe`]) and
+/// their rotation-minimised comparison, shared by the shape and colour sets.
+#[derive(Debug, Clone, Default)]
+struct Spectra {
+    kernel: ShapeKernel,
+    desc: Vec<f32>,
+    norms: Vec<[f64; PHI_SUB]>,
+}
+
+impl Spectra {
+    fn len(&self) -> usize {
+        self.norms.len()
+    }
+    /// Room for `count` more frames; returns the new frames' descriptor and
+    /// norm slots.
+    fn grow(&mut self, count: usize) -> (&mut [f32], &mut [[f64; PHI_SUB]]) {
+        let start = self.norms.len();
+        self.desc.resize((start + count) * DESCRIPTOR_LEN, 0.0);
+        self.norms.resize(start + count, [0.0; PHI_SUB]);
+        (
+            &mut self.desc[start * DESCRIPTOR_LEN..],
+            &mut self.norms[start..],
+        )
+    }
+    /// Eq. 1 from `a` to `b`: distance and rotation.
+    fn compare(&self, a: usize, b: usize) -> (f64, f64) {
+        let da = &self.desc[a * DESCRIPTOR_LEN..(a + 1) * DESCRIPTOR_LEN];
+        let db = &self.desc[b * DESCRIPTOR_LEN..(b + 1) * DESCRIPTOR_LEN];
+        self.kernel
+            .distance(da, self.norms[a][0], db, &self.norms[b])
+    }
+}
+
 /// Shape-histogram descriptors of every frame.
 #[derive(Debug, Clone)]
 pub struct ShapeSet {
     /// The database-wide binning.
     pub grid: ShapeGrid,
-    kernel: ShapeKernel,
-    desc: Vec<f32>,
-    norms: Vec<[f64; PHI_SUB]>,
+    spectra: Spectra,
     /// Occupied voxels per frame (for reports).
     pub voxels: Vec<u32>,
 }
@@ -101,9 +132,7 @@ impl ShapeSet {
     pub fn new(grid: ShapeGrid) -> ShapeSet {
         ShapeSet {
             grid,
-            kernel: ShapeKernel::default(),
-            desc: Vec::new(),
-            norms: Vec::new(),
+            spectra: Spectra::default(),
             voxels: Vec::new(),
         }
     }
@@ -118,14 +147,12 @@ impl ShapeSet {
         z_up: bool,
     ) {
         let count = frames.len() / n.max(1);
-        let start = self.norms.len();
-        self.desc.resize((start + count) * DESCRIPTOR_LEN, 0.0);
-        self.norms.resize(start + count, [0.0; PHI_SUB]);
+        let start = self.voxels.len();
         self.voxels.resize(start + count, 0);
         let grid = self.grid;
-        self.desc[start * DESCRIPTOR_LEN..]
-            .par_chunks_mut(DESCRIPTOR_LEN)
-            .zip(self.norms[start..].par_iter_mut())
+        let (desc, norms) = self.spectra.grow(count);
+        desc.par_chunks_mut(DESCRIPTOR_LEN)
+            .zip(norms.par_iter_mut())
             .zip(self.voxels[start..].par_iter_mut())
             .zip(frames.par_chunks(n.max(1)))
             .for_each_init(
@@ -142,22 +169,15 @@ impl ShapeSet {
 
 impl PairDistance for ShapeSet {
     fn frames(&self) -> usize {
-        self.norms.len()
+        self.spectra.len()
     }
     fn distance(&self, a: usize, b: usize) -> f64 {
-        let da = &self.desc[a * DESCRIPTOR_LEN..(a + 1) * DESCRIPTOR_LEN];
-        let db = &self.desc[b * DESCRIPTOR_LEN..(b + 1) * DESCRIPTOR_LEN];
-        let ab = self
-            .kernel
-            .distance(da, self.norms[a][0], db, &self.norms[b])
-            .0;
         // The fine-shift search is not exactly symmetric; take the better
         // of the two directions so the matrix is.
-        let ba = self
-            .kernel
-            .distance(db, self.norms[b][0], da, &self.norms[a])
-            .0;
-        ab.min(ba)
+        self.spectra
+            .compare(a, b)
+            .0
+            .min(self.spectra.compare(b, a).0)
     }
 }
 
@@ -251,9 +271,7 @@ impl PairDistance for SkeletonSet {
 #[derive(Debug, Clone)]
 pub struct ColourSet {
     grid: ShapeGrid,
-    kernel: ShapeKernel,
-    desc: Vec<f32>,
-    norms: Vec<[f64; PHI_SUB]>,
+    spectra: Spectra,
     sigs: Vec<super::colour::Signature>,
     colours: Vec<[f64; 3]>,
 }
@@ -263,9 +281,7 @@ impl ColourSet {
     pub fn new(grid: ShapeGrid, colours: Vec<[f64; 3]>) -> ColourSet {
         ColourSet {
             grid,
-            kernel: ShapeKernel::default(),
-            desc: Vec::new(),
-            norms: Vec::new(),
+            spectra: Spectra::default(),
             sigs: Vec::new(),
             colours,
         }
@@ -280,14 +296,12 @@ impl ColourSet {
         z_up: bool,
     ) {
         let count = frames.len() / n.max(1);
-        let start = self.norms.len();
-        self.desc.resize((start + count) * DESCRIPTOR_LEN, 0.0);
-        self.norms.resize(start + count, [0.0; PHI_SUB]);
         let grid = self.grid;
         let colours = &self.colours;
-        let sigs: Vec<super::colour::Signature> = self.desc[start * DESCRIPTOR_LEN..]
+        let (desc, norms) = self.spectra.grow(count);
+        let sigs: Vec<super::colour::Signature> = desc
             .par_chunks_mut(DESCRIPTOR_LEN)
-            .zip(self.norms[start..].par_iter_mut())
+            .zip(norms.par_iter_mut())
             .zip(frames.par_chunks(n.max(1)))
             .map_init(
                 || (Vec::with_capacity(n), Vec::new(), Vec::new()),
@@ -306,7 +320,7 @@ impl ColourSet {
 
 impl PairDistance for ColourSet {
     fn frames(&self) -> usize {
-        self.norms.len()
+        self.spectra.len()
     }
     fn distance(&self, a: usize, b: usize) -> f64 {
         thread_local! {
@@ -315,15 +329,11 @@ impl PairDistance for ColourSet {
         }
         let nfine = (histogram::PHI_BINS * PHI_SUB) as f64;
         let step = std::f64::consts::TAU / nfine;
-        let da = &self.desc[a * DESCRIPTOR_LEN..(a + 1) * DESCRIPTOR_LEN];
-        let db = &self.desc[b * DESCRIPTOR_LEN..(b + 1) * DESCRIPTOR_LEN];
         SCRATCH.with(|sc| {
             let sc = &mut sc.borrow_mut();
             // One direction: the matrix is filled from its upper triangle,
             // so it is symmetric by construction.
-            let (_, ab) = self
-                .kernel
-                .distance(da, self.norms[a][0], db, &self.norms[b]);
+            let (_, ab) = self.spectra.compare(a, b);
             let sh = ((ab / step).round() as usize) % nfine as usize;
             super::colour::emd(&self.sigs[a], &self.sigs[b], sh, sc)
         })
