@@ -20,3 +20,4 @@ pub mod rig;
 pub mod similarity;
 pub mod skeleton;
 pub mod synth;
+pub mod transfer;

@@ -12,6 +12,7 @@ mod repair;
 mod retarget;
 mod rig;
 mod synth;
+mod transfer;
 
 use clap::{Parser, Subcommand};
 
@@ -80,6 +81,13 @@ enum Command {
     /// (cm/frame) between the clip on the character's skeleton and the
     /// skeleton extracted from the result (Huang et al. 2015, Sec. 6.2).
     Eval(retarget::EvalArgs),
+    /// Animate a static scan from a mocap clip or a moving template mesh
+    /// (Confluent Motion, de Aguiar et al. 2007): marker triangles on the
+    /// scan (placed from landmarks, or from a file) take their rotations
+    /// from the clip's bones or the template's triangles; the rotations are
+    /// spread over the scan as harmonic quaternion fields and the mesh is
+    /// rebuilt by a prefactored Poisson solve each frame.
+    Transfer(Box<transfer::Args>),
 }
 
 /// Entry point of the CLI.
@@ -103,6 +111,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Graph(a) => graph::run(a),
         Command::Retarget(a) => retarget::run(a),
         Command::Eval(a) => retarget::eval(a),
+        Command::Transfer(a) => transfer::run(*a),
     }
 }
 

@@ -147,6 +147,20 @@ impl Mesh {
     pub fn groups(&self) -> &[Group] {
         &self.groups
     }
+    /// The mesh made of the triangles of the named groups only (all
+    /// vertices kept; a repair drops the unused ones). `None` if a name is
+    /// not a group of the mesh.
+    pub fn select_groups(&self, names: &[String]) -> Option<Mesh> {
+        let mut tris = Vec::new();
+        for name in names {
+            let g = self.groups.iter().find(|g| &g.name == name)?;
+            tris.extend_from_slice(self.triangles.get(g.start as usize..g.end as usize)?);
+        }
+        let mut m = Mesh::new(self.positions.clone(), tris).ok()?;
+        m.colors = self.colors.clone();
+        Some(m)
+    }
+
     /// Number of vertices.
     pub fn vertex_count(&self) -> usize {
         self.positions.len()

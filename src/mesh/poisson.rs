@@ -89,6 +89,11 @@ impl Poisson {
         })
     }
 
+    /// The reference triangles.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
     /// The anchored vertices.
     pub fn anchors(&self) -> &[u32] {
         &self.anchors

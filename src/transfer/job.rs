@@ -1,0 +1,163 @@
+//! One transfer job: a prepared scan, a source, the markers both know, the
+//! factorisations and the marker motion — everything before the per-frame
+//! solves of [`super::transfer`].
+
+use super::confluent::{Confluent, ConfluentError};
+use super::markers::Marker;
+use super::scan::PreparedScan;
+use super::source::{MarkerMotion, TemplateMarkers, from_skeleton, from_template};
+use crate::mesh::{Bounds, MeshSequence};
+use crate::skeleton::Pose;
+use crate::synth::database::retarget;
+use glam::DVec3;
+use std::collections::HashMap;
+
+/// What drives the scan.
+pub enum Source<'a> {
+    /// Canonical poses of a clip (metres, Y-up), as
+    /// [`crate::retarget::query::load_mocap`] gives them.
+    Mocap(&'a [Pose]),
+    /// A moving template mesh with its markers (paired with the scan's by
+    /// name) and the frame that is its reference pose.
+    Template {
+        /// The template sequence.
+        frames: &'a MeshSequence,
+        /// Its markers.
+        markers: &'a [Marker],
+        /// Its reference frame.
+        reference: usize,
+    },
+}
+
+/// A job ready to solve.
+pub struct Job {
+    /// The prefactored scan.
+    pub confluent: Confluent,
+    /// Marker rotations and targets per frame.
+    pub motion: MarkerMotion,
+    /// Names of the markers used, in the order of `motion`.
+    pub used: Vec<String>,
+    /// Scan markers without a counterpart in the source.
+    pub unpaired: usize,
+}
+
+/// Why a job cannot be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    /// Mocap needs the scan's skeleton.
+    #[error("a mocap source needs the scan's skeleton: give landmarks")]
+    NoSkeleton,
+    /// Nothing pairs the scan with the source.
+    #[error("{0}")]
+    NoMarkers(String),
+    /// A template marker is not on the template.
+    #[error(
+        "template marker {name}: triangle {triangle} is out of range (the template has {count})"
+    )]
+    TemplateTriangle {
+        /// The marker.
+        name: String,
+        /// Its triangle.
+        triangle: u32,
+        /// The template's triangles.
+        count: usize,
+    },
+    /// The template's reference frame does not exist.
+    #[error("template reference frame {frame} is out of range (0..{count})")]
+    Reference {
+        /// The frame asked for.
+        frame: usize,
+        /// Frames of the template.
+        count: usize,
+    },
+    /// Factorisation failed.
+    #[error(transparent)]
+    Confluent(#[from] ConfluentError),
+}
+
+impl Job {
+    /// Pairs markers, factors the scan and computes the marker motion.
+    pub fn new(scan: &PreparedScan, source: Source<'_>) -> Result<Job, JobError> {
+        let p = scan.mesh.positions();
+        let centroid = |m: &Marker| {
+            scan.mesh.triangles()[m.triangle as usize]
+                .iter()
+                .map(|&v| DVec3::from_array(p[v as usize]))
+                .sum::<DVec3>()
+                / 3.0
+        };
+        match source {
+            Source::Mocap(poses) => {
+                let rig = scan.rig.as_ref().ok_or(JobError::NoSkeleton)?;
+                let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
+                if used.is_empty() {
+                    return Err(JobError::NoMarkers(
+                        "no marker names a bone: a mocap source drives markers through bones"
+                            .into(),
+                    ));
+                }
+                let rest: Pose = rig.joints.map(DVec3::from_array);
+                let frames = retarget(&rest, poses);
+                let bones: Vec<_> = used.iter().filter_map(|m| m.bone).collect();
+                let cs: Vec<DVec3> = used.iter().map(|m| centroid(m)).collect();
+                let tris: Vec<u32> = used.iter().map(|m| m.triangle).collect();
+                Ok(Job {
+                    confluent: Confluent::new(&scan.mesh, &tris)?,
+                    motion: from_skeleton(&rest, &frames, &bones, &cs),
+                    used: used.iter().map(|m| m.name.clone()).collect(),
+                    unpaired: scan.markers.len() - used.len(),
+                })
+            }
+            Source::Template {
+                frames,
+                markers,
+                reference,
+            } => {
+                let tm = frames.mesh();
+                let count = frames.frame_count();
+                if reference >= count {
+                    return Err(JobError::Reference {
+                        frame: reference,
+                        count,
+                    });
+                }
+                let by_name: HashMap<&str, u32> = markers
+                    .iter()
+                    .map(|m| (m.name.as_str(), m.triangle))
+                    .collect();
+                let mut used = Vec::new();
+                let mut template_tris = Vec::new();
+                for m in &scan.markers {
+                    if let Some(&t) = by_name.get(m.name.as_str()) {
+                        if t as usize >= tm.triangle_count() {
+                            return Err(JobError::TemplateTriangle {
+                                name: m.name.clone(),
+                                triangle: t,
+                                count: tm.triangle_count(),
+                            });
+                        }
+                        used.push(m);
+                        template_tris.push(t);
+                    }
+                }
+                if used.is_empty() {
+                    return Err(JobError::NoMarkers(
+                        "no scan marker has a template marker of the same name".into(),
+                    ));
+                }
+                let tmk = TemplateMarkers::new(tm.triangles(), tm.vertex_count(), &template_tris);
+                let refp = frames.frame(reference);
+                let scale = scan.mesh.bounds().diagonal() / Bounds::of(refp).diagonal().max(1e-300);
+                let all: Vec<&[[f64; 3]]> = (0..count).map(|f| frames.frame(f)).collect();
+                let cs: Vec<DVec3> = used.iter().map(|m| centroid(m)).collect();
+                let tris: Vec<u32> = used.iter().map(|m| m.triangle).collect();
+                Ok(Job {
+                    confluent: Confluent::new(&scan.mesh, &tris)?,
+                    motion: from_template(&all, refp, tm.triangles(), &tmk, &cs, scale),
+                    used: used.iter().map(|m| m.name.clone()).collect(),
+                    unpaired: scan.markers.len() - used.len(),
+                })
+            }
+        }
+    }
+}

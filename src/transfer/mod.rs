@@ -1,0 +1,26 @@
+//! Scanned-mesh transfer: Confluent Motion (de Aguiar et al. 2007). A
+//! static scan is animated by a mocap clip or a moving template mesh
+//! through a sparse set of marker triangles: marker rotations are spread
+//! over the scan as harmonic quaternion fields and the mesh is rebuilt from
+//! the per-triangle rotations by a prefactored Poisson solve.
+//!
+//! Pipeline order: [`scan`] (repair, markers) → [`markers`] (placement
+//! rule, files) → [`source`] (marker motion per frame) → [`signs`]
+//! (quaternion signs, singularities) → [`confluent`] (the per-frame
+//! deformation) → [`run`] (a whole clip in parallel).
+
+pub mod confluent;
+pub mod job;
+pub mod markers;
+pub mod run;
+pub mod scan;
+pub mod signs;
+pub mod source;
+
+pub use confluent::{Confluent, ConfluentError};
+pub use job::{Job, JobError, Source};
+pub use markers::{Marker, MarkerError, MarkerFile, MarkerOptions};
+pub use run::{TransferOptions, TransferStats, transfer};
+pub use scan::{MarkerSpec, PreparedScan, ScanError, prepare};
+pub use signs::SignMode;
+pub use source::MarkerMotion;
