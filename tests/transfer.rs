@@ -85,7 +85,11 @@ fn self_transfer_reproduces_real_captures_better_with_more_markers() {
             assert_eq!(stats.max_weak_triangles, 0, "{name}: collapse threatened");
             let e = vertex_error(&out, seq.all_positions(), scan.vertex_count(), h);
             // The reference frame itself is reproduced.
-            assert!(e.per_frame[0] < 1e-6, "{name}: frame 0 moved {}", e.per_frame[0]);
+            assert!(
+                e.per_frame[0] < 1e-6,
+                "{name}: frame 0 moved {}",
+                e.per_frame[0]
+            );
             eprintln!(
                 "{name}, {count} markers ({} used): mean {:.2}%, p95 {:.2}% of height",
                 stats.markers, e.mean_pct, e.p95_pct
@@ -188,7 +192,10 @@ fn near_half_turns_do_not_collapse_the_mesh() {
     );
     assert!(gs.singular_frames == 1 && bs.singular_frames == 1);
     assert_eq!(gs.max_weak_triangles, 0);
-    assert!(bs.max_weak_triangles > 0, "the naive rule should collapse here");
+    assert!(
+        bs.max_weak_triangles > 0,
+        "the naive rule should collapse here"
+    );
     assert!(gmin > 0.5 && gmax < 2.0);
     assert!(bmin < gmin);
 }
@@ -204,7 +211,11 @@ fn a_cmu_walk_moves_the_armadillo_without_tearing() {
     let scan = seq.frame_mesh(0);
     let lm = Landmarks::load(&fixture("armadillo.landmarks.json"), scan.vertex_count()).unwrap();
     let prepared = prepare(&scan, MarkerSpec::Landmarks(&lm, MarkerOptions::default())).unwrap();
-    assert!(prepared.markers.len() >= 140, "{} markers", prepared.markers.len());
+    assert!(
+        prepared.markers.len() >= 140,
+        "{} markers",
+        prepared.markers.len()
+    );
     let clip = load_mocap(
         &d.join("mocap/cmu-amc/02/02_01.amc"),
         &Default::default(),
@@ -246,7 +257,10 @@ fn a_cmu_walk_moves_the_armadillo_without_tearing() {
             / n as f64
     };
     let h = prepared.rig.as_ref().unwrap().height;
-    assert!((c(stats.frames - 1) - c(0)).length() > h, "it did not travel");
+    assert!(
+        (c(stats.frames - 1) - c(0)).length() > h,
+        "it did not travel"
+    );
 }
 
 #[test]
@@ -270,8 +284,18 @@ fn raw_scans_are_repaired_and_stray_pieces_dropped() {
         .map(|(i, tv)| if i % 2 == 0 { *tv } else { tv.map(|v| v + n) })
         .collect();
     let s = p.len() as u32;
-    p.extend([[5.0, 0.0, 0.0], [5.1, 0.0, 0.0], [5.0, 0.1, 0.0], [5.0, 0.0, 0.1]]);
-    t.extend([[s, s + 2, s + 1], [s, s + 1, s + 3], [s, s + 3, s + 2], [s + 1, s + 2, s + 3]]);
+    p.extend([
+        [5.0, 0.0, 0.0],
+        [5.1, 0.0, 0.0],
+        [5.0, 0.1, 0.0],
+        [5.0, 0.0, 0.1],
+    ]);
+    t.extend([
+        [s, s + 2, s + 1],
+        [s, s + 1, s + 3],
+        [s, s + 3, s + 2],
+        [s + 1, s + 2, s + 3],
+    ]);
     let raw = Mesh::new(p, t).unwrap();
     let lm = Landmarks::load(&fixture("armadillo.landmarks.json"), clean.vertex_count()).unwrap();
     let prepared = prepare(&raw, MarkerSpec::Landmarks(&lm, MarkerOptions::default())).unwrap();
@@ -291,7 +315,12 @@ fn raw_scans_are_repaired_and_stray_pieces_dropped() {
         },
     )
     .unwrap();
-    let (out, _) = transfer(&job.confluent, &mut job.motion, &Default::default(), &|_| {});
+    let (out, _) = transfer(
+        &job.confluent,
+        &mut job.motion,
+        &Default::default(),
+        &|_| {},
+    );
     let e = vertex_error(&out, tpl.all_positions(), clean.vertex_count(), rig.height);
     assert!(e.max_pct < 1e-5);
 }
