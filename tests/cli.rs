@@ -350,3 +350,100 @@ fn blend_and_repair_from_the_command_line() {
     assert_eq!(r["unreferenced_vertices"], 1);
     assert_eq!(r["components"].as_array().unwrap().len(), 1);
 }
+
+#[test]
+fn transfer_from_the_command_line() {
+    let Some(d) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let t = |n: &str| tmp.path().join(n).to_str().unwrap().to_string();
+    let samba = d.join("4d/samba/samba.pc2");
+    let samba = samba.to_str().unwrap();
+    let lm = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/samba.landmarks.json"
+    );
+    let scan = format!("{samba}:0");
+    // Self-transfer with a ground truth: the JSON summary carries the error.
+    let o = run(&[
+        "transfer",
+        "--scan",
+        &scan,
+        "--landmarks",
+        lm,
+        "--template",
+        samba,
+        "--truth",
+        samba,
+        "--marker-count",
+        "80",
+        "-o",
+        &t("a.pc2"),
+        "--save-markers",
+        &t("m.json"),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["frames"], 175);
+    let mean = v["truth_error"]["mean_pct"].as_f64().unwrap();
+    assert!(mean > 0.0 && mean < 5.0, "{mean}");
+    // The saved markers, given back as a file on both sides, give the same result.
+    let o = run(&[
+        "transfer",
+        "--scan",
+        &scan,
+        "--markers",
+        &t("m.json"),
+        "--template",
+        samba,
+        "--template-markers",
+        &t("m.json"),
+        "--truth",
+        samba,
+        "-o",
+        &t("b.pc2"),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let w: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(w["markers"], v["markers"]);
+    assert_eq!(w["truth_error"], v["truth_error"]);
+    // A mocap clip needs a skeleton: markers alone are refused, clearly.
+    let walk = d.join("mocap/cmu-amc/02/02_01.amc");
+    let o = run(&[
+        "transfer",
+        "--scan",
+        &scan,
+        "--markers",
+        &t("m.json"),
+        "--mocap",
+        walk.to_str().unwrap(),
+        "-o",
+        &t("c.glb"),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("landmarks"), "{}", stderr(&o));
+    // A marker file naming a triangle the scan lacks: one line, exit 1.
+    std::fs::write(
+        t("bad.json"),
+        r#"{"markers":[{"name":"a","triangle":99999999}]}"#,
+    )
+    .unwrap();
+    let o = run(&[
+        "transfer",
+        "--scan",
+        &scan,
+        "--markers",
+        &t("bad.json"),
+        "--template",
+        samba,
+        "-o",
+        &t("d.pc2"),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("bad.json") && stderr(&o).contains("99999999"),
+        "{}",
+        stderr(&o)
+    );
+}

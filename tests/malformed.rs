@@ -51,6 +51,13 @@ fn readers() -> Vec<(&'static str, Reader)> {
                 100,
             ))
         }),
+        ("markers", |b| {
+            drop(surfmotion::transfer::MarkerFile::parse(
+                &text(b),
+                Path::new("m.json"),
+                100,
+            ))
+        }),
         ("parts", |b| {
             let tris = [[0u32, 1, 2], [0, 2, 3]];
             drop(surfmotion::rig::embed::parse_parts(
@@ -99,6 +106,7 @@ fn seeds(fmt: &str) -> Vec<Vec<u8>> {
         "mdd" => vec![mdd::encode_mdd(4, seq.all_positions(), 30.0)],
         "gltf" => vec![surfmotion::mesh::io::glb::encode_glb(&seq, None).unwrap()],
         "landmarks" => vec![br#"{"chin": 1, "groin": [0, 1, 0], "l_wrist": 2, "r_wrist": 3, "l_elbow": 4, "r_elbow": 5, "l_knee": 6, "r_knee": [1e308, -0.5, 0]}"#.to_vec()],
+        "markers" => vec![br#"{"triangle_count": 100, "markers": [{"name": "l_forearm/0/1", "triangle": 7, "bone": "l_elbow"}, {"name": "x", "triangle": 99}]}"#.to_vec()],
         "parts" => vec![br#"{"torso": [0, 1], "head": [2], "l_shin": [3, 3]}"#.to_vec()],
         _ => vec![],
     }
