@@ -58,6 +58,7 @@ fn bench(c: &mut Criterion, d: &std::path::Path, cases: &[Case]) {
                 frames: &seq,
                 markers: &tmarkers,
                 reference: 0,
+                align: glam::DQuat::IDENTITY,
             },
         };
         g.bench_function("setup", |b| {

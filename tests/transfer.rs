@@ -50,6 +50,7 @@ fn self_transfer(
             frames: template,
             markers: &tmarkers,
             reference: 0,
+            align: glam::DQuat::IDENTITY,
         },
     )
     .unwrap();
@@ -325,6 +326,7 @@ fn raw_scans_are_repaired_and_stray_pieces_dropped() {
             frames: &tpl,
             markers: &tm,
             reference: 0,
+            align: glam::DQuat::IDENTITY,
         },
     )
     .unwrap();
@@ -336,4 +338,78 @@ fn raw_scans_are_repaired_and_stray_pieces_dropped() {
     );
     let e = vertex_error(&out, tpl.all_positions(), clean.vertex_count(), rig.height);
     assert!(e.max_pct < 1e-5);
+}
+
+#[test]
+fn a_performance_moves_onto_another_character() {
+    // The samba dancer's capture onto the crane capture's first frame: the
+    // two face different ways; the template's rotations are turned into
+    // the crane's frame. The crane's limbs then point where the dancer's
+    // do (bone directions from each character's own joint regressors).
+    let Some(d) = common::data_dir() else { return };
+    let samba = capture(&d, "samba");
+    let crane = capture(&d, "crane").frame_mesh(0);
+    let opts = MarkerOptions::default();
+    let lc = Landmarks::load(&fixture("crane.landmarks.json"), crane.vertex_count()).unwrap();
+    let ls = Landmarks::load(
+        &fixture("samba.landmarks.json"),
+        samba.mesh().vertex_count(),
+    )
+    .unwrap();
+    let prepared = prepare(&crane, MarkerSpec::Landmarks(&lc, opts)).unwrap();
+    let crig = prepared.rig.as_ref().unwrap();
+    let srig = surfmotion::rig::embed::Embedding::new(&samba.frame_mesh(0), &ls, None).unwrap();
+    let align = surfmotion::transfer::alignment(&srig, crig);
+    let tm = generate(&samba.frame_mesh(0), &srig, &opts);
+    let mut job = Job::new(
+        &prepared,
+        Source::Template {
+            frames: &samba,
+            markers: &tm,
+            reference: 0,
+            align,
+        },
+    )
+    .unwrap();
+    assert!(job.used.len() > 140, "{} paired markers", job.used.len());
+    let (out, stats) = transfer(
+        &job.confluent,
+        &mut job.motion,
+        &Default::default(),
+        &|_| {},
+    );
+    assert_finite(&out);
+    assert_eq!(stats.max_weak_triangles, 0);
+    use surfmotion::rig::Canonical as C;
+    let limbs = [
+        (C::LShoulder, C::LElbow),
+        (C::LElbow, C::LWrist),
+        (C::RShoulder, C::RElbow),
+        (C::RElbow, C::RWrist),
+        (C::LHip, C::LKnee),
+        (C::LKnee, C::LAnkle),
+        (C::RHip, C::RKnee),
+        (C::RKnee, C::RAnkle),
+    ];
+    let n = crane.vertex_count();
+    let (mut with, mut without, mut k) = (0.0, 0.0, 0);
+    for f in (0..samba.frame_count()).step_by(5) {
+        let sj = srig.skeleton(samba.frame(f));
+        let cj = crig.skeleton(&out[f * n..(f + 1) * n]);
+        let c0 = crig.skeleton(crane.positions());
+        for (a, b) in limbs {
+            let want = align * (sj[b.index()] - sj[a.index()]).normalize();
+            let got = (cj[b.index()] - cj[a.index()]).normalize();
+            let rest = (c0[b.index()] - c0[a.index()]).normalize();
+            with += got.dot(want).clamp(-1.0, 1.0).acos().to_degrees();
+            without += rest.dot(want).clamp(-1.0, 1.0).acos().to_degrees();
+            k += 1;
+        }
+    }
+    let (with, without) = (with / k as f64, without / k as f64);
+    eprintln!("crane limbs off the dancer's by {with:.1}° (standing still: {without:.1}°)");
+    assert!(
+        with < 15.0 && with < 0.5 * without,
+        "{with:.1}° vs {without:.1}°"
+    );
 }

@@ -170,6 +170,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let clip;
     let template;
     let template_markers;
+    let mut align = glam::DQuat::IDENTITY;
     let (source, fps, what) = if let Some(m) = &a.mocap {
         clip = load_mocap(m, &a.clip.load_options()?, a.fps)?;
         anyhow::ensure!(
@@ -205,6 +206,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 ),
             };
             let rig = surfmotion::rig::embed::Embedding::new(&tmesh, &tl, None)?;
+            if let Some(scan_rig) = &prepared.rig {
+                align = surfmotion::transfer::alignment(&rig, scan_rig);
+            }
             generate(&tmesh, &rig, &mopts)
         };
         let fps = template.fps.unwrap_or(a.fps);
@@ -213,6 +217,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 frames: &template,
                 markers: &template_markers,
                 reference: a.template_frame,
+                align,
             },
             fps,
             spec.to_string(),

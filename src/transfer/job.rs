@@ -7,9 +7,10 @@ use super::markers::Marker;
 use super::scan::PreparedScan;
 use super::source::{MarkerMotion, TemplateMarkers, from_skeleton, from_template};
 use crate::mesh::{Bounds, MeshSequence};
+use crate::rig::embed::Embedding;
 use crate::skeleton::Pose;
 use crate::synth::database::retarget;
-use glam::DVec3;
+use glam::{DMat3, DQuat, DVec3};
 use std::collections::HashMap;
 
 /// What drives the scan.
@@ -26,7 +27,23 @@ pub enum Source<'a> {
         markers: &'a [Marker],
         /// Its reference frame.
         reference: usize,
+        /// Rotation from the template's body frame to the scan's (the paper
+        /// assumes both reference poses roughly aligned; see [`alignment`]).
+        align: DQuat,
     },
+}
+
+/// The rotation taking one rig's body frame (left, up, facing) onto
+/// another's: applied to the template's marker rotations and displacements
+/// when template and scan face different ways in their reference poses.
+pub fn alignment(from: &Embedding, to: &Embedding) -> DQuat {
+    let basis = |e: &Embedding| {
+        let up = DVec3::from_array(e.up).normalize_or(DVec3::Y);
+        let f = DVec3::from_array(e.facing);
+        let f = (f - up * f.dot(up)).normalize_or(up.any_orthonormal_vector());
+        DMat3::from_cols(up.cross(f), up, f)
+    };
+    DQuat::from_mat3(&(basis(to) * basis(from).transpose())).normalize()
 }
 
 /// A job ready to solve.
@@ -112,6 +129,7 @@ impl Job {
                 frames,
                 markers,
                 reference,
+                align,
             } => {
                 let tm = frames.mesh();
                 let count = frames.frame_count();
@@ -153,7 +171,7 @@ impl Job {
                 let tris: Vec<u32> = used.iter().map(|m| m.triangle).collect();
                 Ok(Job {
                     confluent: Confluent::new(&scan.mesh, &tris)?,
-                    motion: from_template(&all, refp, tm.triangles(), &tmk, &cs, scale),
+                    motion: from_template(&all, refp, tm.triangles(), &tmk, &cs, scale, align),
                     used: used.iter().map(|m| m.name.clone()).collect(),
                     unpaired: scan.markers.len() - used.len(),
                 })

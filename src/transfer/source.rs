@@ -106,8 +106,9 @@ impl TemplateMarkers {
 
 /// Motion of template markers over a sequence. `frames` are the template's
 /// vertex positions per frame, `t` its triangles, `reference` its reference
-/// frame; `centroids[m]` is the scan marker's rest centroid and `scale`
-/// multiplies the template's displacements.
+/// frame; `centroids[m]` is the scan marker's rest centroid, `scale`
+/// multiplies the template's displacements and `align` turns the template's
+/// frame into the scan's (rotations are conjugated, displacements turned).
 pub fn from_template(
     frames: &[&[[f64; 3]]],
     reference: &[[f64; 3]],
@@ -115,6 +116,7 @@ pub fn from_template(
     markers: &TemplateMarkers,
     centroids: &[DVec3],
     scale: f64,
+    align: DQuat,
 ) -> MarkerMotion {
     let frame_of = |p: &[[f64; 3]], i: u32| {
         let [a, b, c] = t[i as usize].map(|v| DVec3::from_array(p[v as usize]));
@@ -161,9 +163,10 @@ pub fn from_template(
             for (&i, inv) in patch.iter().zip(&rest_inv[mi]) {
                 g += frame_of(p, i) * *inv;
             }
-            m.rotations.push(polar(g).0);
+            m.rotations
+                .push((align * polar(g).0 * align.conjugate()).normalize());
             let d = centre(p, markers.triangles[mi]) - rest_centre[mi];
-            m.targets.push(centroids[mi] + d * scale);
+            m.targets.push(centroids[mi] + align * d * scale);
         }
     }
     m
@@ -184,7 +187,15 @@ mod tests {
             .collect();
         let tm = TemplateMarkers::new(m.triangles(), m.vertex_count(), &[0, 7]);
         let c = [DVec3::ZERO, DVec3::ONE];
-        let mo = from_template(&[&moved], m.positions(), m.triangles(), &tm, &c, 1.0);
+        let mo = from_template(
+            &[&moved],
+            m.positions(),
+            m.triangles(),
+            &tm,
+            &c,
+            1.0,
+            DQuat::IDENTITY,
+        );
         assert_eq!(mo.frames(), 1);
         for q in &mo.rotations {
             assert!(q.dot(r).abs() > 1.0 - 1e-9);
