@@ -6,6 +6,7 @@
 //! [`rig`] (canonical skeleton), [`mesh`] (meshes, sequences and their file
 //! formats), [`inspect`] (what a file holds).
 
+pub mod batch;
 pub mod db;
 pub mod deform;
 pub mod eval;

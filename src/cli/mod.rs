@@ -1,5 +1,6 @@
 //! Command-line interface: one file per subcommand.
 
+mod batch;
 mod blend;
 mod db;
 mod demo;
@@ -88,6 +89,13 @@ enum Command {
     /// spread over the scan as harmonic quaternion fields and the mesh is
     /// rebuilt by a prefactored Poisson solve each frame.
     Transfer(Box<transfer::Args>),
+    /// Convert a whole mocap library: every BVH/AMC clip under a folder,
+    /// driven onto a 4D character (--db) or transferred onto a scan
+    /// (--scan --landmarks), in parallel, one output per clip in a mirrored
+    /// tree. Resumable (complete outputs are skipped), shardable for
+    /// cluster array jobs (--shard i/n); bad clips are reported, not fatal
+    /// (exit 1 if any failed). Writes batch.json/.html/.svg.
+    Batch(Box<batch::Args>),
 }
 
 /// Entry point of the CLI.
@@ -112,6 +120,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Retarget(a) => retarget::run(a),
         Command::Eval(a) => retarget::eval(a),
         Command::Transfer(a) => transfer::run(*a),
+        Command::Batch(a) => batch::run_batch(*a),
     }
 }
 

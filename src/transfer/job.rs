@@ -92,6 +92,30 @@ pub enum JobError {
     Confluent(#[from] ConfluentError),
 }
 
+/// The motion of a scan's bone markers (those with a bone, in file order:
+/// the markers [`Job::new`] uses for a mocap source) from a clip's poses.
+/// For many clips on one scan: factor once with [`Job::new`], then call
+/// this per clip.
+pub fn mocap_motion(scan: &PreparedScan, poses: &[Pose]) -> Result<MarkerMotion, JobError> {
+    let rig = scan.rig.as_ref().ok_or(JobError::NoSkeleton)?;
+    let p = scan.mesh.positions();
+    let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
+    let rest: Pose = rig.joints.map(DVec3::from_array);
+    let frames = retarget(&rest, poses);
+    let bones: Vec<_> = used.iter().filter_map(|m| m.bone).collect();
+    let cs: Vec<DVec3> = used
+        .iter()
+        .map(|m| {
+            scan.mesh.triangles()[m.triangle as usize]
+                .iter()
+                .map(|&v| DVec3::from_array(p[v as usize]))
+                .sum::<DVec3>()
+                / 3.0
+        })
+        .collect();
+    Ok(from_skeleton(&rest, &frames, &bones, &cs))
+}
+
 impl Job {
     /// Pairs markers, factors the scan and computes the marker motion.
     pub fn new(scan: &PreparedScan, source: Source<'_>) -> Result<Job, JobError> {
@@ -105,7 +129,6 @@ impl Job {
         };
         match source {
             Source::Mocap(poses) => {
-                let rig = scan.rig.as_ref().ok_or(JobError::NoSkeleton)?;
                 let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
                 if used.is_empty() {
                     return Err(JobError::NoMarkers(
@@ -113,14 +136,11 @@ impl Job {
                             .into(),
                     ));
                 }
-                let rest: Pose = rig.joints.map(DVec3::from_array);
-                let frames = retarget(&rest, poses);
-                let bones: Vec<_> = used.iter().filter_map(|m| m.bone).collect();
-                let cs: Vec<DVec3> = used.iter().map(|m| centroid(m)).collect();
+                let motion = mocap_motion(scan, poses)?;
                 let tris: Vec<u32> = used.iter().map(|m| m.triangle).collect();
                 Ok(Job {
                     confluent: Confluent::new(&scan.mesh, &tris)?,
-                    motion: from_skeleton(&rest, &frames, &bones, &cs),
+                    motion,
                     used: used.iter().map(|m| m.name.clone()).collect(),
                     unpaired: scan.markers.len() - used.len(),
                 })

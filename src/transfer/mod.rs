@@ -18,7 +18,7 @@ pub mod signs;
 pub mod source;
 
 pub use confluent::{Confluent, ConfluentError};
-pub use job::{Job, JobError, Source, alignment};
+pub use job::{Job, JobError, Source, alignment, mocap_motion};
 pub use markers::{Marker, MarkerError, MarkerFile, MarkerOptions};
 pub use run::{TransferOptions, TransferStats, transfer};
 pub use scan::{MarkerSpec, PreparedScan, ScanError, prepare};

@@ -1,0 +1,208 @@
+//! Running a batch: clips in parallel (a rayon pool of `jobs` threads, each
+//! clip's work inside it), skipping clips whose output is complete, and
+//! turning every failure — an error or a panic — into a reported outcome.
+//!
+//! Outputs are complete or absent: single files are written atomically;
+//! PC2 counts as complete only with its topology OBJ beside it; an OBJ
+//! folder is written under a temporary name and renamed when finished.
+
+use super::clips::{Format, output_path};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Options for [`run`].
+#[derive(Debug, Clone, Copy)]
+pub struct RunOptions {
+    /// Clips converted at once. Default: the number of cores.
+    pub jobs: usize,
+    /// Redo clips whose output exists. Default: false.
+    pub force: bool,
+    /// Output format. Default: GLB.
+    pub format: Format,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            force: false,
+            format: Format::Glb,
+        }
+    }
+}
+
+/// What a converter reports for one clip.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Converted {
+    /// Frames written.
+    pub frames: usize,
+    /// Joint-velocity error of the result against the clip (cm/frame).
+    pub error_cm: Option<f64>,
+}
+
+/// How a clip ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ClipStatus {
+    /// Converted now.
+    Done,
+    /// Its output was already complete.
+    Skipped,
+    /// It could not be converted.
+    Failed,
+}
+
+/// One clip's outcome.
+#[derive(Debug, Clone, Serialize)]
+pub struct ClipOutcome {
+    /// The clip, relative to the mocap folder.
+    pub clip: PathBuf,
+    /// The output.
+    pub output: PathBuf,
+    /// How it ended.
+    pub status: ClipStatus,
+    /// Frames written (0 unless done).
+    pub frames: usize,
+    /// Seconds spent.
+    pub seconds: f64,
+    /// Joint-velocity error (cm/frame), if measured.
+    pub error_cm: Option<f64>,
+    /// Why it failed.
+    pub reason: Option<String>,
+}
+
+/// True when the output of a clip exists in full.
+pub fn complete(out: &Path, format: Format) -> bool {
+    match format {
+        Format::Glb => out.is_file(),
+        Format::Pc2 => out.is_file() && out.with_extension("obj").is_file(),
+        Format::Obj => out.is_dir(),
+    }
+}
+
+/// Converts `clips` (relative to `src`) into `out_dir`. `convert(clip,
+/// output)` does one clip and must write `output` (for OBJ folders, the
+/// folder it is given); `done` is called as each clip ends, from any
+/// thread. Outcomes come back in clip order.
+pub fn run(
+    src: &Path,
+    clips: &[PathBuf],
+    out_dir: &Path,
+    opts: &RunOptions,
+    convert: &(dyn Fn(&Path, &Path) -> Result<Converted, String> + Sync),
+    done: &(dyn Fn(&ClipOutcome) + Sync),
+) -> Vec<ClipOutcome> {
+    let one = |rel: &PathBuf| {
+        let out = output_path(out_dir, rel, opts.format);
+        let t = Instant::now();
+        let mut o = ClipOutcome {
+            clip: rel.clone(),
+            output: out.clone(),
+            status: ClipStatus::Skipped,
+            frames: 0,
+            seconds: 0.0,
+            error_cm: None,
+            reason: None,
+        };
+        if !opts.force && complete(&out, opts.format) {
+            done(&o);
+            return o;
+        }
+        let r = convert_one(&src.join(rel), &out, opts.format, convert);
+        o.seconds = t.elapsed().as_secs_f64();
+        match r {
+            Ok(c) => {
+                o.status = ClipStatus::Done;
+                o.frames = c.frames;
+                o.error_cm = c.error_cm;
+            }
+            Err(e) => {
+                o.status = ClipStatus::Failed;
+                o.reason = Some(e);
+            }
+        }
+        done(&o);
+        o
+    };
+    match rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.jobs.max(1))
+        .build()
+    {
+        Ok(pool) => pool.install(|| clips.par_iter().map(one).collect()),
+        Err(_) => clips.iter().map(one).collect(),
+    }
+}
+
+fn convert_one(
+    clip: &Path,
+    out: &Path,
+    format: Format,
+    convert: &(dyn Fn(&Path, &Path) -> Result<Converted, String> + Sync),
+) -> Result<Converted, String> {
+    if let Some(parent) = out.parent() {
+        std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
+    }
+    let target = match format {
+        Format::Obj => {
+            let mut t = out.as_os_str().to_owned();
+            t.push(".partial");
+            let t = PathBuf::from(t);
+            let _ = std::fs::remove_dir_all(&t);
+            t
+        }
+        _ => out.to_path_buf(),
+    };
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| convert(clip, &target)))
+        .unwrap_or_else(|p| {
+            let msg = p
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| p.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            Err(format!("internal error: {msg}"))
+        })?;
+    if format == Format::Obj {
+        let _ = std::fs::remove_dir_all(out);
+        std::fs::rename(&target, out).map_err(|e| format!("{}: {e}", out.display()))?;
+    }
+    Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn failures_and_panics_are_outcomes_and_finished_clips_are_skipped() {
+        let dir = tempfile::tempdir().unwrap();
+        let clips: Vec<PathBuf> = ["a.bvh", "sub/b.bvh", "c.bvh"].map(PathBuf::from).to_vec();
+        let opts = RunOptions {
+            jobs: 2,
+            force: false,
+            format: Format::Glb,
+        };
+        let convert = |clip: &Path, out: &Path| {
+            let name = clip.file_name().unwrap().to_str().unwrap();
+            match name {
+                "a.bvh" => Err("bad clip".to_string()),
+                "c.bvh" => panic!("boom"),
+                _ => {
+                    std::fs::write(out, b"x").unwrap();
+                    Ok(Converted {
+                        frames: 3,
+                        error_cm: None,
+                    })
+                }
+            }
+        };
+        let r = run(Path::new("src"), &clips, dir.path(), &opts, &convert, &|_| {});
+        let st: Vec<ClipStatus> = r.iter().map(|o| o.status).collect();
+        assert_eq!(st, [ClipStatus::Failed, ClipStatus::Done, ClipStatus::Failed]);
+        assert!(r[2].reason.as_deref().unwrap().contains("boom"));
+        assert!(dir.path().join("sub/b.glb").is_file());
+        let again = run(Path::new("src"), &clips, dir.path(), &opts, &convert, &|_| {});
+        assert_eq!(again[1].status, ClipStatus::Skipped);
+    }
+}

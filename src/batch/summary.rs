@@ -1,0 +1,204 @@
+//! The batch report in the output folder: `batch.json` (everything),
+//! `batch.svg` (per-clip time and error bars) and `batch.html` (a table of
+//! clips with the plot), all written atomically.
+
+use super::runner::{ClipOutcome, ClipStatus};
+use crate::fsutil::{FsError, write_bytes_atomic};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Totals of a batch.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// What was run (e.g. `retarget --db DIR`).
+    pub what: String,
+    /// Clips in this run (this shard).
+    pub clips: usize,
+    /// Converted now.
+    pub done: usize,
+    /// Already complete.
+    pub skipped: usize,
+    /// Failed.
+    pub failed: usize,
+    /// Frames written now.
+    pub frames: usize,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Clips converted per minute (done only).
+    pub clips_per_minute: f64,
+    /// Output frames per second (done only).
+    pub frames_per_second: f64,
+    /// Parallel jobs.
+    pub jobs: usize,
+    /// The shard, `i/n`.
+    pub shard: Option<String>,
+    /// Every clip.
+    pub outcomes: Vec<ClipOutcome>,
+}
+
+impl Summary {
+    /// Totals from outcomes.
+    pub fn new(
+        what: String,
+        outcomes: Vec<ClipOutcome>,
+        seconds: f64,
+        jobs: usize,
+        shard: Option<String>,
+    ) -> Summary {
+        let count = |s| outcomes.iter().filter(|o| o.status == s).count();
+        let done = count(ClipStatus::Done);
+        let frames = outcomes.iter().map(|o| o.frames).sum();
+        Summary {
+            what,
+            clips: outcomes.len(),
+            done,
+            skipped: count(ClipStatus::Skipped),
+            failed: count(ClipStatus::Failed),
+            frames,
+            seconds,
+            clips_per_minute: 60.0 * done as f64 / seconds.max(1e-9),
+            frames_per_second: frames as f64 / seconds.max(1e-9),
+            jobs,
+            shard,
+            outcomes,
+        }
+    }
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// A bar chart: per clip, seconds (blue, left scale) and joint-velocity
+/// error (orange, right scale); failed clips marked red.
+pub fn plot_svg(s: &Summary) -> String {
+    let n = s.outcomes.len().max(1);
+    let (w, h, left, bottom) = (60.0 + 14.0 * n as f64, 260.0, 50.0, 40.0);
+    let tmax = s.outcomes.iter().map(|o| o.seconds).fold(1e-9, f64::max);
+    let emax = s
+        .outcomes
+        .iter()
+        .filter_map(|o| o.error_cm)
+        .fold(1e-9, f64::max);
+    let ph = h - bottom - 20.0;
+    let mut svg = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w:.0}\" height=\"{h:.0}\" font-family=\"sans-serif\" font-size=\"10\">\n"
+    );
+    let _ = writeln!(
+        svg,
+        "<text x=\"4\" y=\"12\" fill=\"#1f77b4\">time (max {tmax:.2} s)</text><text x=\"{:.0}\" y=\"12\" fill=\"#ff7f0e\" text-anchor=\"end\">joint-velocity error (max {emax:.2} cm/frame)</text>",
+        w - 4.0
+    );
+    let _ = writeln!(
+        svg,
+        "<line x1=\"{left}\" y1=\"{:.0}\" x2=\"{:.0}\" y2=\"{:.0}\" stroke=\"#000\"/>",
+        h - bottom,
+        w - 10.0,
+        h - bottom
+    );
+    for (i, o) in s.outcomes.iter().enumerate() {
+        let x = left + 14.0 * i as f64;
+        let name = esc(&o.clip.display().to_string());
+        if o.status == ClipStatus::Failed {
+            let _ = writeln!(
+                svg,
+                "<rect x=\"{x:.1}\" y=\"20\" width=\"12\" height=\"{ph:.1}\" fill=\"#d62728\" opacity=\"0.25\"><title>{name}: failed</title></rect>"
+            );
+        }
+        let th = ph * o.seconds / tmax;
+        let _ = writeln!(
+            svg,
+            "<rect x=\"{x:.1}\" y=\"{:.1}\" width=\"6\" height=\"{th:.1}\" fill=\"#1f77b4\"><title>{name}: {:.2} s</title></rect>",
+            h - bottom - th,
+            o.seconds
+        );
+        if let Some(e) = o.error_cm {
+            let eh = ph * e / emax;
+            let _ = writeln!(
+                svg,
+                "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"6\" height=\"{eh:.1}\" fill=\"#ff7f0e\"><title>{name}: {e:.2} cm/frame</title></rect>",
+                x + 6.0,
+                h - bottom - eh
+            );
+        }
+        let _ = writeln!(
+            svg,
+            "<text transform=\"translate({:.1},{:.0}) rotate(60)\" font-size=\"7\">{}</text>",
+            x + 3.0,
+            h - bottom + 4.0,
+            esc(&o.clip.file_stem().unwrap_or_default().to_string_lossy())
+        );
+    }
+    svg.push_str("</svg>\n");
+    svg
+}
+
+/// An HTML page: totals, the plot, a table of clips.
+pub fn html(s: &Summary) -> String {
+    let mut h = String::from(
+        "<!doctype html>\n<meta charset=\"utf-8\">\n<title>surfmotion batch</title>\n<style>body{font-family:sans-serif;margin:2em}td,th{padding:2px 8px;text-align:left}.failed{color:#b00}</style>\n",
+    );
+    let _ = writeln!(
+        h,
+        "<h1>surfmotion batch</h1>\n<p>{}: {} clips, {} converted, {} already done, {} failed; {} frames in {:.1} s ({:.1} clips/min, {:.0} frames/s) with {} jobs{}.</p>",
+        esc(&s.what),
+        s.clips,
+        s.done,
+        s.skipped,
+        s.failed,
+        s.frames,
+        s.seconds,
+        s.clips_per_minute,
+        s.frames_per_second,
+        s.jobs,
+        s.shard
+            .as_ref()
+            .map(|x| format!(", shard {x}"))
+            .unwrap_or_default()
+    );
+    h.push_str(&plot_svg(s));
+    h.push_str("<table>\n<tr><th>clip</th><th>status</th><th>frames</th><th>seconds</th><th>error (cm/frame)</th><th>output / reason</th></tr>\n");
+    for o in &s.outcomes {
+        let status = match o.status {
+            ClipStatus::Done => "done",
+            ClipStatus::Skipped => "skipped",
+            ClipStatus::Failed => "failed",
+        };
+        let _ = writeln!(
+            h,
+            "<tr class=\"{status}\"><td>{}</td><td>{status}</td><td>{}</td><td>{:.2}</td><td>{}</td><td>{}</td></tr>",
+            esc(&o.clip.display().to_string()),
+            o.frames,
+            o.seconds,
+            o.error_cm.map(|e| format!("{e:.2}")).unwrap_or_default(),
+            esc(&o
+                .reason
+                .clone()
+                .unwrap_or_else(|| o.output.display().to_string()))
+        );
+    }
+    h.push_str("</table>\n");
+    h
+}
+
+/// Writes `batch.json`, `batch.svg` and `batch.html` into `dir` (names
+/// carry the shard, `batch-2of8.json`, so shards sharing a folder do not
+/// overwrite each other). Returns the files.
+pub fn write_summary(dir: &Path, s: &Summary) -> Result<Vec<PathBuf>, FsError> {
+    let stem = match &s.shard {
+        Some(x) => format!("batch-{}", x.replace('/', "of")),
+        None => "batch".into(),
+    };
+    let json = dir.join(format!("{stem}.json"));
+    let svg = dir.join(format!("{stem}.svg"));
+    let page = dir.join(format!("{stem}.html"));
+    let text = serde_json::to_string_pretty(s).unwrap_or_default();
+    write_bytes_atomic(&json, text.as_bytes())?;
+    write_bytes_atomic(&svg, plot_svg(s).as_bytes())?;
+    write_bytes_atomic(&page, html(s).as_bytes())?;
+    Ok(vec![json, page, svg])
+}
