@@ -197,12 +197,29 @@ mod tests {
                 }
             }
         };
-        let r = run(Path::new("src"), &clips, dir.path(), &opts, &convert, &|_| {});
+        let r = run(
+            Path::new("src"),
+            &clips,
+            dir.path(),
+            &opts,
+            &convert,
+            &|_| {},
+        );
         let st: Vec<ClipStatus> = r.iter().map(|o| o.status).collect();
-        assert_eq!(st, [ClipStatus::Failed, ClipStatus::Done, ClipStatus::Failed]);
+        assert_eq!(
+            st,
+            [ClipStatus::Failed, ClipStatus::Done, ClipStatus::Failed]
+        );
         assert!(r[2].reason.as_deref().unwrap().contains("boom"));
         assert!(dir.path().join("sub/b.glb").is_file());
-        let again = run(Path::new("src"), &clips, dir.path(), &opts, &convert, &|_| {});
+        let again = run(
+            Path::new("src"),
+            &clips,
+            dir.path(),
+            &opts,
+            &convert,
+            &|_| {},
+        );
         assert_eq!(again[1].status, ClipStatus::Skipped);
     }
 }

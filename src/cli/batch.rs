@@ -108,14 +108,20 @@ fn transfer_converter(scan: &str, landmarks: &Path, fps: f64) -> anyhow::Result<
             return Err("the clip has no frames".into());
         }
         let mut motion = mocap_motion(&prepared, &mocap.poses).map_err(|e| e.to_string())?;
-        let (pos, stats) = transfer(&confluent, &mut motion, &TransferOptions::default(), &|_| {});
+        let (pos, stats) = transfer(
+            &confluent,
+            &mut motion,
+            &TransferOptions::default(),
+            &|_| {},
+        );
         let n = prepared.mesh.vertex_count();
         let rig = prepared.rig.as_ref().ok_or("no rig")?;
         let rest: Pose = rig.joints.map(glam::DVec3::from_array);
         let query = to_character(&rest, &mocap.poses);
         let skel: Vec<Pose> = pos.chunks(n.max(1)).map(|p| rig.skeleton(p)).collect();
         let e = velocity_error(&query, &skel);
-        let seq = MeshSequence::new(prepared.mesh.clone(), pos, Some(fps)).map_err(|e| e.to_string())?;
+        let seq =
+            MeshSequence::new(prepared.mesh.clone(), pos, Some(fps)).map_err(|e| e.to_string())?;
         save_sequence(&seq, out, Some(fps)).map_err(|e| e.to_string())?;
         Ok(Converted {
             frames: stats.frames,
@@ -131,8 +137,8 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         Some(s) => Some(Shard::parse(s).map_err(anyhow::Error::msg)?),
         None => None,
     };
-    let all = find_clips(&a.mocap_dir)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", a.mocap_dir.display()))?;
+    let all =
+        find_clips(&a.mocap_dir).map_err(|e| anyhow::anyhow!("{}: {e}", a.mocap_dir.display()))?;
     let clips = match shard {
         Some(s) => s.select(&all),
         None => all,
