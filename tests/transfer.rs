@@ -128,7 +128,8 @@ fn identity_and_rigid_motions_are_reproduced() {
     let lm = Landmarks::load(&fixture("samba.landmarks.json"), scan.vertex_count()).unwrap();
     let r = DQuat::from_axis_angle(DVec3::new(0.2, 1.0, 0.3).normalize(), 2.0);
     let t = DVec3::new(0.4, 0.1, -0.7);
-    let cases: [(&str, Box<dyn Fn(DVec3) -> DVec3>); 2] = [
+    type Motion = Box<dyn Fn(DVec3) -> DVec3>;
+    let cases: [(&str, Motion); 2] = [
         ("identity", Box::new(|q| q)),
         ("rigid", Box::new(move |q| r * q + t)),
     ];
