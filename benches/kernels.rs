@@ -10,7 +10,6 @@ mod common;
 use criterion::{BenchmarkId, Criterion};
 use glam::{DMat3, DQuat, DVec3};
 use std::hint::black_box;
-use std::path::PathBuf;
 use surfmotion::mesh::Mesh;
 use surfmotion::mesh::blend::Blender;
 use surfmotion::mesh::frames::RestFrames;
@@ -18,7 +17,7 @@ use surfmotion::mesh::io::{LoadOptions, load_sequence, obj::read_obj};
 use surfmotion::mesh::poisson::Poisson;
 use surfmotion::mesh::subdivide::midpoint;
 
-use common::data;
+use common::{data, median_ns};
 
 /// A smooth non-rigid pose change: a twist about +Y growing with height and a bend.
 fn twist(m: &Mesh) -> Vec<[f64; 3]> {
@@ -108,16 +107,6 @@ fn bench(c: &mut Criterion, cases: &[Case]) {
         });
         g.finish();
     }
-}
-
-fn median_ns(group: &str, bench: &str) -> Option<f64> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("target/criterion")
-        .join(group.replace('/', "_"))
-        .join(bench)
-        .join("new/estimates.json");
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(p).ok()?).ok()?;
-    v["median"]["point_estimate"].as_f64()
 }
 
 fn main() {

@@ -21,7 +21,7 @@ use surfmotion::transfer::confluent::orient_frames;
 use surfmotion::transfer::markers::generate;
 use surfmotion::transfer::{Job, MarkerOptions, MarkerSpec, SignMode, Source, prepare};
 
-use common::{data, samba, samba_landmarks};
+use common::{data, median_ns, samba, samba_landmarks};
 
 struct Case {
     name: &'static str,
@@ -105,16 +105,6 @@ fn bench(c: &mut Criterion, d: &std::path::Path, cases: &[Case]) {
         g.bench_function("poisson_solve", |b| b.iter(|| p.solve(&mut pw, &mut out)));
         g.finish();
     }
-}
-
-fn median_ns(group: &str, bench: &str) -> Option<f64> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("target/criterion")
-        .join(group.replace('/', "_"))
-        .join(bench)
-        .join("new/estimates.json");
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(p).ok()?).ok()?;
-    v["median"]["point_estimate"].as_f64()
 }
 
 fn main() {

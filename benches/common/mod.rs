@@ -31,3 +31,14 @@ pub fn samba(d: &std::path::Path) -> MeshSequence {
 pub fn samba_landmarks() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json")
 }
+
+/// Criterion's median estimate (ns) of `group/bench` from its last run.
+pub fn median_ns(group: &str, bench: &str) -> Option<f64> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target/criterion")
+        .join(group.replace('/', "_"))
+        .join(bench)
+        .join("new/estimates.json");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(p).ok()?).ok()?;
+    v["median"]["point_estimate"].as_f64()
+}

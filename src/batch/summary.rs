@@ -66,6 +66,29 @@ impl Summary {
     }
 }
 
+impl Summary {
+    /// One line of totals: clips converted, skipped, failed, frames, speed.
+    pub fn line(&self) -> String {
+        format!(
+            "{}: {} clips: {} converted, {} already done, {} failed; {} frames in {:.1} s ({:.1} clips/min, {:.0} frames/s, {} jobs{})",
+            self.what,
+            self.clips,
+            self.done,
+            self.skipped,
+            self.failed,
+            self.frames,
+            self.seconds,
+            self.clips_per_minute,
+            self.frames_per_second,
+            self.jobs,
+            self.shard
+                .as_ref()
+                .map(|x| format!(", shard {x}"))
+                .unwrap_or_default()
+        )
+    }
+}
+
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -142,24 +165,7 @@ pub fn html(s: &Summary) -> String {
     let mut h = String::from(
         "<!doctype html>\n<meta charset=\"utf-8\">\n<title>surfmotion batch</title>\n<style>body{font-family:sans-serif;margin:2em}td,th{padding:2px 8px;text-align:left}.failed{color:#b00}</style>\n",
     );
-    let _ = writeln!(
-        h,
-        "<h1>surfmotion batch</h1>\n<p>{}: {} clips, {} converted, {} already done, {} failed; {} frames in {:.1} s ({:.1} clips/min, {:.0} frames/s) with {} jobs{}.</p>",
-        esc(&s.what),
-        s.clips,
-        s.done,
-        s.skipped,
-        s.failed,
-        s.frames,
-        s.seconds,
-        s.clips_per_minute,
-        s.frames_per_second,
-        s.jobs,
-        s.shard
-            .as_ref()
-            .map(|x| format!(", shard {x}"))
-            .unwrap_or_default()
-    );
+    let _ = writeln!(h, "<h1>surfmotion batch</h1>\n<p>{}.</p>", esc(&s.line()));
     h.push_str(&plot_svg(s));
     h.push_str("<table>\n<tr><th>clip</th><th>status</th><th>frames</th><th>seconds</th><th>error (cm/frame)</th><th>output / reason</th></tr>\n");
     for o in &s.outcomes {

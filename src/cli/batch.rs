@@ -202,17 +202,8 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         super::emit(&(serde_json::to_string_pretty(&s)? + "\n"))?;
     } else {
         let mut out = format!(
-            "{}: {} clips: {} converted, {} already done, {} failed; {} frames in {:.1} s ({:.1} clips/min, {:.0} frames/s, {} jobs)\nreport: {}\n",
-            s.what,
-            s.clips,
-            s.done,
-            s.skipped,
-            s.failed,
-            s.frames,
-            s.seconds,
-            s.clips_per_minute,
-            s.frames_per_second,
-            s.jobs,
+            "{}\nreport: {}\n",
+            s.line(),
             files
                 .iter()
                 .map(|p| p.display().to_string())
