@@ -73,6 +73,17 @@ pub struct MeshReport {
     pub problems: Vec<String>,
 }
 
+/// What a JSON input holds (landmarks or Confluent markers).
+#[derive(Debug, Clone, Serialize)]
+pub struct JsonReport {
+    /// The file.
+    pub path: PathBuf,
+    /// `landmarks` or `markers`.
+    pub format: String,
+    /// One line per fact.
+    pub lines: Vec<String>,
+}
+
 /// The report of [`inspect`].
 #[derive(Debug, Clone, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -81,6 +92,8 @@ pub enum Report {
     Mocap(MocapReport),
     /// A mesh or sequence.
     Mesh(MeshReport),
+    /// A landmark or marker file.
+    Json(JsonReport),
 }
 
 /// Error of [`inspect`].
@@ -92,9 +105,12 @@ pub enum InspectError {
     /// A mesh reader failed.
     #[error(transparent)]
     Mesh(#[from] MeshError),
+    /// A bad landmark or marker file.
+    #[error("{0}")]
+    Json(String),
     /// Not a format we read.
     #[error(
-        "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj)"
+        "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj; .json landmarks or markers)"
     )]
     Unknown(PathBuf),
 }
@@ -129,6 +145,12 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
             unmapped_canonical: det.missing.iter().map(|c| c.name().to_string()).collect(),
             warnings: clip.warnings.clone(),
         }));
+    }
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+    {
+        return inspect_json(path).map(Report::Json);
     }
     let spec = path.to_string_lossy().to_string();
     let (p, _) = crate::mesh::io::split_frame_ref(&spec);
@@ -170,6 +192,67 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
         animations,
         problems,
     }))
+}
+
+/// Landmarks (`{name: vertex | [x, y, z]}`) or markers (`{"markers": […]}`).
+fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
+    use crate::rig::embed::landmarks::{Landmark, Landmarks, Mark};
+    let err = |e: String| InspectError::Json(e);
+    let text = crate::fsutil::read_text(path).map_err(|e| err(e.to_string()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| err(format!("{}: {e}", path.display())))?;
+    let mut lines = Vec::new();
+    let format = if v.get("markers").is_some() {
+        let f = crate::transfer::MarkerFile::parse(&text, path, usize::MAX)
+            .map_err(|e| err(e.to_string()))?;
+        lines.push(format!(
+            "{} markers{}",
+            f.markers.len(),
+            f.triangle_count
+                .map(|t| format!(" on a mesh of {t} triangles"))
+                .unwrap_or_default()
+        ));
+        let mut per: std::collections::BTreeMap<String, usize> = Default::default();
+        for m in &f.markers {
+            let b = m
+                .bone
+                .map_or("(no bone)".to_string(), |b| b.name().to_string());
+            *per.entry(b).or_default() += 1;
+        }
+        lines.push(format!(
+            "by bone: {}",
+            per.iter()
+                .map(|(b, n)| format!("{b} {n}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        "markers"
+    } else {
+        let lm = Landmarks::parse(&text, path, usize::MAX).map_err(|e| err(e.to_string()))?;
+        for (l, m) in &lm.marks {
+            lines.push(match m {
+                Mark::Vertex(i) => format!("{:<11} vertex {i}", l.name()),
+                Mark::Point(p) => format!("{:<11} point [{}, {}, {}]", l.name(), p[0], p[1], p[2]),
+            });
+        }
+        let optional: Vec<&str> = Landmark::ALL
+            .iter()
+            .filter(|l| !lm.marks.contains_key(l))
+            .map(|l| l.name())
+            .collect();
+        if !optional.is_empty() {
+            lines.push(format!(
+                "not given (optional, placed by body proportions): {}",
+                optional.join(", ")
+            ));
+        }
+        "landmarks"
+    };
+    Ok(JsonReport {
+        path: path.to_path_buf(),
+        format: format.into(),
+        lines,
+    })
 }
 
 impl Report {
@@ -254,6 +337,12 @@ impl Report {
                 }
                 for p in &r.problems {
                     let _ = writeln!(s, "  problem: {p}");
+                }
+            }
+            Report::Json(r) => {
+                let _ = writeln!(s, "{} ({})", r.path.display(), r.format);
+                for l in &r.lines {
+                    let _ = writeln!(s, "  {l}");
                 }
             }
         }

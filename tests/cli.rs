@@ -447,3 +447,34 @@ fn transfer_from_the_command_line() {
         stderr(&o)
     );
 }
+
+#[test]
+fn inspect_reads_landmark_and_marker_files() {
+    let lm = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/smpl.landmarks.json"
+    );
+    let o = run(&["inspect", lm, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["kind"], "json");
+    assert_eq!(v["format"], "landmarks");
+    let tmp = tempfile::tempdir().unwrap();
+    let m = tmp.path().join("m.json");
+    std::fs::write(
+        &m,
+        r#"{"markers":[{"name":"a","triangle":3,"bone":"l_elbow"},{"name":"b","triangle":4}]}"#,
+    )
+    .unwrap();
+    let o = run(&["inspect", m.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("2 markers") && text.contains("l_elbow 1"),
+        "{text}"
+    );
+    std::fs::write(&m, r#"{"chin": 1}"#).unwrap();
+    let o = run(&["inspect", m.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("groin"), "{}", stderr(&o));
+}
