@@ -241,3 +241,87 @@ fn rig_embed_cli_reports_errors_with_the_file() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("bad.json") && e.contains("chin"), "{e}");
 }
+
+#[test]
+fn a_rigged_gltf_skin_gives_the_rig_matched_by_position() {
+    let Some(d) = common::data_dir() else { return };
+    use surfmotion::mesh::Mesh;
+    use surfmotion::mesh::io::gltf::read_gltf;
+    use surfmotion::rig::RigMap;
+    use surfmotion::rig::embed::skin::from_skin;
+    let g = d.join("gltf/CesiumMan/CesiumMan.glb");
+    let asset = read_gltf(&g).unwrap();
+    let map = RigMap::load(&fixture("cesiumman.rigmap.json")).unwrap();
+    // CesiumMan's joints have no names: without a map it is a clear error.
+    let e = from_skin(&asset.mesh, &asset, None, &g)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("rig map") && e.contains("CesiumMan.glb"), "{e}");
+    let rig = from_skin(&asset.mesh, &asset, Some(&map), &g).unwrap();
+    let mesh = &asset.mesh;
+    assert_eq!(rig.labels.len(), mesh.vertex_count());
+    // Joints are the bind pose's: the pelvis is the skin's root joint.
+    let skin = asset.skin.as_ref().unwrap();
+    let root = glam::Mat4::from_cols_array_2d(&skin.inverse_bind[0]).inverse();
+    let pelvis = rig.joints[Canonical::Pelvis.index()];
+    assert!((pelvis[2] - root.w_axis.z as f64).abs() < 1e-6);
+    // The regressors reproduce the joints on the rest frame.
+    let sk = rig.skeleton(mesh.positions());
+    for c in Canonical::ALL {
+        let want = glam::DVec3::from_array(rig.joints[c.index()]);
+        assert!((sk[c.index()] - want).length() < 1e-6, "{}", c.name());
+    }
+    // Every part labelled somewhere; the limbs are one region each (the
+    // head is split by the file's UV seams, which are cuts in the mesh).
+    let pieces = piece_counts(
+        &rig.labels,
+        &neighbours(mesh.vertex_count(), mesh.triangles()),
+    );
+    for p in Part::ALL {
+        assert!(
+            rig.labels.iter().any(|&l| l == p.index() as u8),
+            "{}",
+            p.name()
+        );
+        if p != Part::Head && p != Part::Torso {
+            assert_eq!(pieces[p.index()], 1, "{}", p.name());
+        }
+    }
+    // The same character with its vertices in another order (as another
+    // tool may export it) gets the same rig, vertex by vertex.
+    let n = mesh.vertex_count();
+    let perm: Vec<usize> = (0..n).map(|i| (i * 7919) % n).collect();
+    let mut inv = vec![0u32; n];
+    for (new, &old) in perm.iter().enumerate() {
+        inv[old] = new as u32;
+    }
+    let shuffled = Mesh::new(
+        perm.iter().map(|&o| mesh.positions()[o]).collect(),
+        mesh.triangles()
+            .iter()
+            .map(|t| t.map(|v| inv[v as usize]))
+            .collect(),
+    )
+    .unwrap();
+    let again = from_skin(&shuffled, &asset, Some(&map), &g).unwrap();
+    assert_eq!(again.joints, rig.joints);
+    let same = perm
+        .iter()
+        .enumerate()
+        .filter(|&(new, &old)| again.skin[new].0[0] == rig.skin[old].0[0])
+        .count();
+    // Vertices duplicated at seams may pick either copy: same weights anyway.
+    assert!(same as f64 > 0.99 * n as f64, "{same} of {n}");
+    // The rest pose in world space (Y-up here) matches too.
+    let (world, _) = asset.rest_pose().unwrap();
+    let upright = Mesh::new(world, mesh.triangles().to_vec()).unwrap();
+    let w = from_skin(&upright, &asset, Some(&map), &g).unwrap();
+    assert!(w.up[1] > 0.99, "up {:?}", w.up);
+    // A different mesh is refused with the reason.
+    let arm =
+        surfmotion::mesh::io::obj::read_obj(&d.join("scans/armadillo/armadillo.obj")).unwrap();
+    let e = from_skin(&arm, &asset, Some(&map), &g)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not this mesh"), "{e}");
+}

@@ -181,6 +181,9 @@ pub struct InitArgs {
     /// A rigged glTF whose vertices match the topology.
     #[arg(long = "gltf-skin")]
     pub gltf_skin: Option<PathBuf>,
+    /// A rig map for the glTF skin's joint names (when not detected).
+    #[arg(long = "rig-map", requires = "gltf_skin")]
+    pub rig_map: Option<PathBuf>,
     /// Overwrite an existing manifest.
     #[arg(long)]
     pub force: bool,
@@ -246,6 +249,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     landmarks: opt(&a.landmarks)?,
                     parts: opt(&a.parts)?,
                     gltf_skin: opt(&a.gltf_skin)?,
+                    rig_map: opt(&a.rig_map)?,
                 },
                 graph: Default::default(),
                 deform: Default::default(),

@@ -26,8 +26,17 @@ pub struct EmbedArgs {
     /// Rest mesh (a file, or SEQ.pc2:FRAME).
     pub mesh: String,
     /// Landmark JSON.
+    #[arg(long, required_unless_present = "skin", conflicts_with = "skin")]
+    pub landmarks: Option<PathBuf>,
+    /// Or take the rig from a rigged glTF (.glb/.gltf) of this character:
+    /// its skin's joints and weights, matched to the mesh by vertex
+    /// position.
     #[arg(long)]
-    pub landmarks: PathBuf,
+    pub skin: Option<PathBuf>,
+    /// A rig map (canonical joint → skin joint name) for a skin whose
+    /// joint names are not detected (e.g. unnamed `joint_N` nodes).
+    #[arg(long = "rig-map", requires = "skin")]
+    pub rig_map: Option<PathBuf>,
     /// Explicit part labels, JSON {part: [vertex ids]}, overriding the computed ones.
     #[arg(long)]
     pub parts: Option<PathBuf>,
@@ -51,14 +60,35 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
 
 fn embed(a: EmbedArgs) -> anyhow::Result<()> {
     let s = load_sequence(&a.mesh, &LoadOptions::default())?;
-    let mesh = s.frame_mesh(0);
-    let lm = Landmarks::load(&a.landmarks, mesh.vertex_count())?;
+    let mut mesh = s.frame_mesh(0);
     let parts = match &a.parts {
         Some(p) => Some(parse_parts(&read_text(p)?, p, mesh.triangles(), mesh.vertex_count())?.0),
         None => None,
     };
     let t = Instant::now();
-    let e = Embedding::new(&mesh, &lm, parts)?;
+    let e = match (&a.landmarks, &a.skin) {
+        (Some(l), _) => {
+            let lm = Landmarks::load(l, mesh.vertex_count())?;
+            Embedding::new(&mesh, &lm, parts)?
+        }
+        (None, Some(g)) => {
+            anyhow::ensure!(
+                parts.is_none(),
+                "--parts goes with --landmarks; a skin gives its own parts"
+            );
+            let asset = surfmotion::mesh::io::gltf::read_gltf(g)?;
+            // The glTF itself as the mesh: its bind pose, not its animation.
+            if std::path::Path::new(&a.mesh) == g.as_path() {
+                mesh = asset.mesh.clone();
+            }
+            let map = match &a.rig_map {
+                Some(m) => Some(surfmotion::rig::RigMap::load(m)?),
+                None => None,
+            };
+            surfmotion::rig::embed::skin::from_skin(&mesh, &asset, map.as_ref(), g)?
+        }
+        (None, None) => anyhow::bail!("give --landmarks or --skin"),
+    };
     let secs = t.elapsed().as_secs_f64();
     e.save(&a.output)?;
     if let Some(p) = &a.png {

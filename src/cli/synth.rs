@@ -142,6 +142,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             landmarks: Some(PathBuf::from("landmarks.json")),
             parts: None,
             gltf_skin: None,
+            rig_map: None,
         },
         graph: Default::default(),
         deform: Default::default(),

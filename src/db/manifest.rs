@@ -54,6 +54,10 @@ pub struct RigSpec {
     /// A rigged glTF whose vertices match the topology by position.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gltf_skin: Option<PathBuf>,
+    /// A rig map (canonical joint → skin joint name) for `gltf_skin` when
+    /// its joint names are not detected.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rig_map: Option<PathBuf>,
 }
 
 impl RigSpec {
@@ -421,6 +425,7 @@ pub fn info(dir: &Path) -> Result<DbInfo, DbError> {
         ("landmarks", &m.rig.landmarks),
         ("parts", &m.rig.parts),
         ("gltf_skin", &m.rig.gltf_skin),
+        ("rig_map", &m.rig.rig_map),
         ("colors", &m.colors),
     ] {
         if let Some(p) = p

@@ -39,9 +39,26 @@ pub struct SequenceSkeleton {
 /// Embeds the database's rig (landmarks, optionally with explicit parts).
 pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding, DbError> {
     let Some(lp) = &m.rig.landmarks else {
+        if let Some(g) = &m.rig.gltf_skin {
+            let g = Manifest::resolve(dir, g);
+            let asset = crate::mesh::io::gltf::read_gltf(&g)?;
+            let map = match &m.rig.rig_map {
+                Some(p) => Some(
+                    crate::rig::RigMap::load(&Manifest::resolve(dir, p)).map_err(|e| {
+                        DbError::Manifest {
+                            path: dir.join(super::MANIFEST),
+                            msg: e.to_string(),
+                        }
+                    })?,
+                ),
+                None => None,
+            };
+            return crate::rig::embed::skin::from_skin(topology, &asset, map.as_ref(), &g)
+                .map_err(DbError::Rig);
+        }
         return Err(DbError::Manifest {
             path: dir.join(super::MANIFEST),
-            msg: "no [rig] landmarks: add `landmarks = \"FILE.json\"` under [rig] (see `surfmotion rig embed --help`)".into(),
+            msg: "no [rig] landmarks or gltf_skin: add `landmarks = \"FILE.json\"` under [rig] (see `surfmotion rig embed --help`)".into(),
         });
     };
     let n = topology.vertex_count();

@@ -844,6 +844,57 @@ impl GltfAsset {
     /// down the hierarchy, and the mesh is skinned with linear blend skinning
     /// `v' = Σ w_j (W_j · IBM_j) v` (glTF 2.0 §3.7.3; the mesh node's own
     /// transform is ignored, as the spec says).
+    /// The skinned mesh in its rest pose in world space (every node at its
+    /// rest TRS, no animation), with the world position of each skin joint.
+    /// `None` without a skin.
+    pub fn rest_pose(&self) -> Option<(Vec<[f64; 3]>, Vec<glam::DVec3>)> {
+        use glam::{DMat4, DVec3};
+        let skin = self.skin.as_ref()?;
+        let g = &self.graph;
+        let mut world = vec![DMat4::IDENTITY; g.rest.len()];
+        for &n in &g.order {
+            let (t, r, sc) = g.rest[n];
+            let local = DMat4::from_scale_rotation_translation(sc, r, t);
+            world[n] = match g.parent[n] {
+                Some(p) => world[p] * local,
+                None => local,
+            };
+        }
+        let skinning: Vec<DMat4> = g
+            .skin_joints
+            .iter()
+            .enumerate()
+            .map(|(k, &jn)| {
+                let ibm = skin.inverse_bind.get(k).map_or(DMat4::IDENTITY, |m| {
+                    DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from)))
+                });
+                world.get(jn).copied().unwrap_or(DMat4::IDENTITY) * ibm
+            })
+            .collect();
+        let verts = self
+            .mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(v, p)| {
+                let src = DVec3::from_array(*p);
+                let mut acc = DVec3::ZERO;
+                for (j, w) in skin.joints[v].iter().zip(skin.weights[v]) {
+                    if let Some(m) = skinning.get(*j as usize) {
+                        acc += m.transform_point3(src) * w as f64;
+                    }
+                }
+                acc.to_array()
+            })
+            .collect();
+        let joints = g
+            .skin_joints
+            .iter()
+            .map(|&jn| world.get(jn).map_or(DVec3::ZERO, |m| m.w_axis.truncate()))
+            .collect();
+        Some((verts, joints))
+    }
+
     pub fn skinned_sequence(&self, index: usize, fps: f64) -> Result<MeshSequence, MeshError> {
         use glam::{DMat4, DQuat, DVec3};
         let bad = |m: String| MeshError::invalid(std::path::Path::new("<gltf>"), m);

@@ -10,6 +10,7 @@ pub mod landmarks;
 pub mod parts;
 pub mod regress;
 pub mod section;
+pub mod skin;
 
 use crate::fsutil::{FsError, read_text, write_atomic};
 use crate::mesh::Mesh;
@@ -231,7 +232,20 @@ impl Embedding {
         let est = place_joints(p, t, lm);
         let bs = bones(&est);
         let w = bone_heat(mesh, &bs)?;
-        let pw = part_weights(&w);
+        Embedding::assemble(mesh, est, &w, parts)
+    }
+
+    /// The embedding of joints `est` and dense skin weights `w` (one row
+    /// of [`Canonical::COUNT`] per vertex): part labels (or the given
+    /// ones, made contiguous), overlapping regions, sparse skin, regressors.
+    pub fn assemble(
+        mesh: &Mesh,
+        est: JointEstimate,
+        w: &heat::Weights,
+        parts: Option<Vec<u8>>,
+    ) -> Result<Embedding, EmbedError> {
+        let (p, t) = (mesh.positions(), mesh.triangles());
+        let pw = part_weights(w);
         let nb = neighbours(p.len(), t);
         let mut notes = est.notes.clone();
         let labels = match parts {
@@ -243,7 +257,7 @@ impl Embedding {
             None => contiguous_labels(&pw, &nb),
         };
         let regions = regions(&labels, &pw, 0.1);
-        let skin = sparsify::<4>(&w, 0.01);
+        let skin = sparsify::<4>(w, 0.01);
         let mut regressors = Vec::with_capacity(Canonical::COUNT);
         for j in Canonical::ALL {
             regressors.push(
