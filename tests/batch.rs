@@ -194,3 +194,50 @@ fn shards_cover_the_library_exactly_once() {
     let o = batch(&d, &lib, &out, &["--shard", "4/3"]);
     assert_eq!(o.status.code(), Some(1));
 }
+
+#[test]
+fn a_library_onto_a_4d_character() {
+    let Some(d) = common::data_dir() else { return };
+    let db = common::synthetic_db(&d);
+    let tmp = tempfile::tempdir().unwrap();
+    let lib = tmp.path().join("lib");
+    std::fs::create_dir_all(&lib).unwrap();
+    for f in ["02.asf", "02_02.amc"] {
+        std::fs::copy(d.join("mocap/cmu-amc/02").join(f), lib.join(f)).unwrap();
+    }
+    // A dot in the clip's name must not be taken for a format.
+    std::fs::copy(
+        d.join("mocap/bandai-namco/dataset-1_walk_normal_001.bvh"),
+        lib.join("walk.v2.bvh"),
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let o = Command::new(common::bin())
+        .args(["batch", "--db"])
+        .arg(&db)
+        .arg("--mocap-dir")
+        .arg(&lib)
+        .arg("-o")
+        .arg(&out)
+        .args(["--jobs", "2", "--format", "obj", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(s["done"], 2, "{s}");
+    for o in s["outcomes"].as_array().unwrap() {
+        // The part-based deformation follows the clip: well under the
+        // interpolation-only errors of 1-3 cm/frame (README table).
+        let e = o["error_cm"].as_f64().unwrap();
+        assert!(e < 0.6, "{o}");
+        let dir = Path::new(o["output"].as_str().unwrap());
+        let frames = std::fs::read_dir(dir).unwrap().count();
+        assert_eq!(
+            frames as u64,
+            o["frames"].as_u64().unwrap(),
+            "{}",
+            dir.display()
+        );
+    }
+    assert!(out.join("walk.v2").is_dir() && !out.join("walk_v2-partial").exists());
+}

@@ -4,7 +4,8 @@
 //!
 //! Outputs are complete or absent: single files are written atomically;
 //! PC2 counts as complete only with its topology OBJ beside it; an OBJ
-//! folder is written under a temporary name and renamed when finished.
+//! folder is written under a temporary name (`NAME-partial`) and renamed
+//! when finished.
 
 use super::clips::{Format, output_path};
 use rayon::prelude::*;
@@ -146,9 +147,13 @@ fn convert_one(
     }
     let target = match format {
         Format::Obj => {
-            let mut t = out.as_os_str().to_owned();
-            t.push(".partial");
-            let t = PathBuf::from(t);
+            // A sibling folder with no dot in its name, so the writer sees
+            // a folder (not an extension) whatever the clip is called.
+            let name = out
+                .file_name()
+                .map(|n| n.to_string_lossy().replace('.', "_"))
+                .unwrap_or_default();
+            let t = out.with_file_name(format!("{name}-partial"));
             let _ = std::fs::remove_dir_all(&t);
             t
         }
