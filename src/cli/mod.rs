@@ -140,6 +140,35 @@ pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
     bar
 }
 
+/// The first frame of a mesh file, keeping only the named OBJ groups when
+/// any are given.
+pub fn load_mesh_groups(spec: &str, groups: &[String]) -> anyhow::Result<surfmotion::mesh::Mesh> {
+    let seq = surfmotion::mesh::io::load_sequence(spec, &Default::default())?;
+    let mesh = seq.frame_mesh(0);
+    if groups.is_empty() {
+        return Ok(mesh);
+    }
+    let known: Vec<&str> = seq
+        .mesh()
+        .groups()
+        .iter()
+        .map(|g| g.name.as_str())
+        .collect();
+    let mut m = seq.mesh().select_groups(groups).ok_or_else(|| {
+        anyhow::anyhow!(
+            "{spec}: no group named {} (groups: {})",
+            groups.join(", "),
+            if known.is_empty() {
+                "none".to_string()
+            } else {
+                known.join(", ")
+            }
+        )
+    })?;
+    m.set_positions(mesh.positions())?;
+    Ok(m)
+}
+
 /// Stdout was closed by the reader (e.g. `| head`): not an error.
 #[derive(Debug, thiserror::Error)]
 #[error("output closed")]

@@ -4,7 +4,6 @@
 use std::path::PathBuf;
 use std::time::Instant;
 use surfmotion::fsutil::read_text;
-use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::rig::embed::parts::{Part, neighbours, piece_counts};
@@ -25,6 +24,10 @@ pub enum Cmd {
 pub struct EmbedArgs {
     /// Rest mesh (a file, or SEQ.pc2:FRAME).
     pub mesh: String,
+    /// Only these OBJ groups of the mesh (repeatable), e.g. `body`; the
+    /// embedding is for the groups' vertices alone (renumbered in order).
+    #[arg(long, value_name = "NAME")]
+    pub group: Vec<String>,
     /// Landmark JSON.
     #[arg(long, required_unless_present = "skin", conflicts_with = "skin")]
     pub landmarks: Option<PathBuf>,
@@ -59,8 +62,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
 }
 
 fn embed(a: EmbedArgs) -> anyhow::Result<()> {
-    let s = load_sequence(&a.mesh, &LoadOptions::default())?;
-    let mut mesh = s.frame_mesh(0);
+    let mut mesh = super::load_mesh_groups(&a.mesh, &a.group)?;
     let parts = match &a.parts {
         Some(p) => Some(parse_parts(&read_text(p)?, p, mesh.triangles(), mesh.vertex_count())?.0),
         None => None,
@@ -68,7 +70,25 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
     let t = Instant::now();
     let e = match (&a.landmarks, &a.skin) {
         (Some(l), _) => {
-            let lm = Landmarks::load(l, mesh.vertex_count())?;
+            let mut lm = Landmarks::load(l, mesh.vertex_count())?;
+            if !a.group.is_empty() {
+                // Only the groups' vertices: landmarks given as vertex ids
+                // of the file become points first.
+                anyhow::ensure!(
+                    parts.is_none(),
+                    "--parts with --group: part labels name the file's vertices"
+                );
+                let points: Vec<_> = lm
+                    .marks
+                    .keys()
+                    .filter_map(|&l| lm.point(l, mesh.positions()).map(|p| (l, p)))
+                    .collect();
+                for (l, p) in points {
+                    lm.marks
+                        .insert(l, surfmotion::rig::embed::landmarks::Mark::Point(p));
+                }
+                mesh = surfmotion::mesh::repair::repair(&mesh, &Default::default()).0;
+            }
             Embedding::new(&mesh, &lm, parts)?
         }
         (None, Some(g)) => {

@@ -5,8 +5,8 @@ use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
 use surfmotion::eval::vertex_error;
+use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
-use surfmotion::mesh::{Mesh, MeshSequence};
 use surfmotion::retarget::query::load_mocap;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::transfer::markers::generate;
@@ -93,37 +93,10 @@ pub struct Args {
     pub clip: super::ClipOpts,
 }
 
-fn load_scan(spec: &str, groups: &[String]) -> anyhow::Result<Mesh> {
-    let seq = load_sequence(spec, &LoadOptions::default())?;
-    let mesh = seq.frame_mesh(0);
-    if groups.is_empty() {
-        return Ok(mesh);
-    }
-    let known: Vec<&str> = seq
-        .mesh()
-        .groups()
-        .iter()
-        .map(|g| g.name.as_str())
-        .collect();
-    let mut m = seq.mesh().select_groups(groups).ok_or_else(|| {
-        anyhow::anyhow!(
-            "{spec}: no group named {} (groups: {})",
-            groups.join(", "),
-            if known.is_empty() {
-                "none".to_string()
-            } else {
-                known.join(", ")
-            }
-        )
-    })?;
-    m.set_positions(mesh.positions())?;
-    Ok(m)
-}
-
 /// Runs `transfer`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let scan = load_scan(&a.scan, &a.group)?;
+    let scan = super::load_mesh_groups(&a.scan, &a.group)?;
     let mopts = MarkerOptions {
         count: a.marker_count,
         margin: a.marker_margin,
