@@ -96,6 +96,11 @@ pub struct Args {
 /// Runs `transfer`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
+    anyhow::ensure!(
+        surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
+        "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",
+        a.output.display()
+    );
     let scan = super::load_mesh_groups(&a.scan, &a.group)?;
     let mopts = MarkerOptions {
         count: a.marker_count,
