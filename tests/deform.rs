@@ -98,24 +98,20 @@ fn deformation_follows_the_query_and_flips_less_than_skinning() {
             "{clip}: part {e_part} vs interpolation {e_raw}"
         );
         // Triangles turned over relative to the frame they were made from:
-        // fewer than plain skinning makes (a few remain in the skirt between
-        // the legs; see the issue notes).
+        // a normal opposing the source normal turned by the triangle's skin
+        // rotation (a triangle that merely turns with its limb does not
+        // count).
         let flips = |res: &surfmotion::retarget::Output| {
             let mut count = 0;
+            let mut turn = vec![glam::DQuat::IDENTITY; n];
             for k in 0..raw.report.frames {
                 let (a, b) = (
                     &raw.positions[k * n..(k + 1) * n],
                     &res.positions[k * n..(k + 1) * n],
                 );
-                for t in tris {
-                    let nrm = |p: &[[f64; 3]]| {
-                        let [x, y, z] = t.map(|v| DVec3::from_array(p[v as usize]));
-                        (y - x).cross(z - x)
-                    };
-                    if nrm(a).dot(nrm(b)) < 0.0 {
-                        count += 1;
-                    }
-                }
+                let g = surfmotion::skeleton::pose_rotations(&ch.rig.skeleton(a), &raw.query[k]);
+                surfmotion::deform::unflip::skin_turns(&ch.rig.skin, &g, &mut turn);
+                count += surfmotion::deform::unflip::turned_over(tris, a, b, &turn).len();
             }
             count
         };
@@ -131,13 +127,14 @@ fn deformation_follows_the_query_and_flips_less_than_skinning() {
         .unwrap();
         let (f_part, f_lbs) = (flips(&part), flips(&lbs));
         let total = raw.report.frames * tris.len();
+        // Measured with the default 3 repair rounds: see the README and the
+        // issue notes; not yet none.
+        assert!(f_part < f_lbs, "{clip}: part {f_part} flips, LBS {f_lbs}");
         if clip.contains("02_02") {
-            // A walk like the database's: hardly any, fewer than skinning.
-            // (131_01 is far from anything in the database; both turn over
-            // 1-2 % of its triangles: a known gap.)
-            assert!(f_part <= f_lbs, "{clip}: part {f_part} flips, LBS {f_lbs}");
-            assert!(f_part * 1000 < total, "{clip}: {f_part} of {total} flipped");
+            // A walk like the database's: far fewer than skinning.
+            assert!(f_part * 2 < f_lbs, "{clip}: part {f_part}, LBS {f_lbs}");
         }
+        assert!(f_part * 1000 < total, "{clip}: {f_part} of {total} flipped");
         eprintln!("{clip}: flipped triangles: part {f_part}, LBS {f_lbs} of {total}");
         eprintln!("{clip}: mean joint error {e_raw:.4} m -> {e_part:.4} m");
     }

@@ -1,0 +1,245 @@
+//! Repair of turned-over triangles after the part-based deformation.
+//!
+//! Where the part solutions meet under strong compression (a skirt between
+//! the legs) a few triangles of the deformed surface can face the wrong way.
+//! A triangle is *turned over* when its normal opposes the source
+//! triangle's normal turned by the triangle's skin-blended rotation from
+//! the source skeleton to the target (a triangle that simply rotates with
+//! its limb, however far, is not). Each such patch is rebuilt by a local
+//! Poisson solve: the patch (the turned-over triangles' vertices grown by a
+//! few rings) is free, its surrounding ring keeps the deformed positions,
+//! and every triangle touching the patch asks for its source edges turned
+//! by its rotation (uniform edge weights, so the small system is always
+//! definite). If triangles are still turned over the patch is grown and the
+//! solve repeated, up to a bound. Frames with nothing turned over cost one
+//! pass over the triangles.
+
+use crate::mesh::solver::{FixedSolver, SolveError};
+use glam::{DQuat, DVec3};
+
+/// Vertex adjacency of a mesh, built once.
+pub struct Adjacency {
+    /// Neighbouring vertices of each vertex.
+    pub vertices: Vec<Vec<u32>>,
+    /// Triangles around each vertex.
+    pub triangles: Vec<Vec<u32>>,
+}
+
+impl Adjacency {
+    /// Adjacency of `n` vertices and `tris`.
+    pub fn new(n: usize, tris: &[[u32; 3]]) -> Adjacency {
+        let mut vertices = vec![Vec::new(); n];
+        let mut triangles = vec![Vec::new(); n];
+        for (i, t) in tris.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k] as usize, t[(k + 1) % 3]);
+                vertices[a].push(b);
+                vertices[b as usize].push(t[k]);
+                triangles[a].push(i as u32);
+            }
+        }
+        for v in &mut vertices {
+            v.sort_unstable();
+            v.dedup();
+        }
+        Adjacency {
+            vertices,
+            triangles,
+        }
+    }
+}
+
+/// Each vertex's rotation: its joints' rotations `g` blended by its skin
+/// weights (sign-aligned quaternion average), written into `out`.
+pub fn skin_turns(skin: &[([u8; 4], [f64; 4])], g: &[DQuat], out: &mut [DQuat]) {
+    for (t, (js, wts)) in out.iter_mut().zip(skin) {
+        let q0 = g[js[0] as usize];
+        let mut q = DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+        for (&j, &w) in js.iter().zip(wts) {
+            let qj = g[j as usize];
+            q += if qj.dot(q0) < 0.0 { -qj } else { qj } * w;
+        }
+        *t = if q.length_squared() > 0.0 {
+            q.normalize()
+        } else {
+            q0
+        };
+    }
+}
+
+/// The rotation of triangle `t`: the mean of its vertices' (sign-aligned).
+fn triangle_turn(t: &[u32; 3], turn: &[DQuat]) -> DQuat {
+    let q0 = turn[t[0] as usize];
+    let mut q = DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+    for &v in t {
+        let qv = turn[v as usize];
+        q += if qv.dot(q0) < 0.0 { -qv } else { qv };
+    }
+    if q.length_squared() > 0.0 {
+        q.normalize()
+    } else {
+        q0
+    }
+}
+
+fn normal(t: &[u32; 3], p: &[[f64; 3]]) -> DVec3 {
+    let [a, b, c] = t.map(|v| DVec3::from_array(p[v as usize]));
+    (b - a).cross(c - a)
+}
+
+/// Triangles of `out` turned over against `source` under `turn`.
+pub fn turned_over(
+    tris: &[[u32; 3]],
+    source: &[[f64; 3]],
+    out: &[[f64; 3]],
+    turn: &[DQuat],
+) -> Vec<u32> {
+    tris.iter()
+        .enumerate()
+        .filter(|(_, t)| (triangle_turn(t, turn) * normal(t, source)).dot(normal(t, out)) < 0.0)
+        .map(|(i, _)| i as u32)
+        .collect()
+}
+
+/// Rebuilds the patches around turned-over triangles of `out` in place, in
+/// up to `rounds` rounds (the patch doubling each round from 2 rings).
+/// Returns (turned over before, turned over after).
+pub fn unflip(
+    tris: &[[u32; 3]],
+    adj: &Adjacency,
+    source: &[[f64; 3]],
+    out: &mut [[f64; 3]],
+    turn: &[DQuat],
+    rounds: usize,
+) -> (usize, usize) {
+    let mut bad = turned_over(tris, source, out, turn);
+    let before = bad.len();
+    let n = out.len();
+    let mut rings = 2;
+    for _ in 0..rounds {
+        if bad.is_empty() {
+            break;
+        }
+        // The patch: the bad triangles' vertices grown by `rings` rings.
+        let mut local = vec![u32::MAX; n];
+        let mut patch: Vec<u32> = Vec::new();
+        for &t in &bad {
+            for &v in &tris[t as usize] {
+                if local[v as usize] == u32::MAX {
+                    local[v as usize] = patch.len() as u32;
+                    patch.push(v);
+                }
+            }
+        }
+        for _ in 0..rings {
+            let frontier = patch.clone();
+            for v in frontier {
+                for &u in &adj.vertices[v as usize] {
+                    if local[u as usize] == u32::MAX {
+                        local[u as usize] = patch.len() as u32;
+                        patch.push(u);
+                    }
+                }
+            }
+        }
+        let free = patch.len();
+        // The fixed ring around it.
+        for k in 0..free {
+            for &u in &adj.vertices[patch[k] as usize] {
+                if local[u as usize] == u32::MAX {
+                    local[u as usize] = patch.len() as u32;
+                    patch.push(u);
+                }
+            }
+        }
+        let fixed: Vec<u32> = (free as u32..patch.len() as u32).collect();
+        let m = patch.len();
+        // Triangles touching a free vertex.
+        let mut touch: Vec<u32> = patch[..free]
+            .iter()
+            .flat_map(|&v| adj.triangles[v as usize].iter().copied())
+            .collect();
+        touch.sort_unstable();
+        touch.dedup();
+        let mut trip = Vec::with_capacity(touch.len() * 12);
+        let mut b = vec![[0.0; 3]; m];
+        for &ti in &touch {
+            let t = &tris[ti as usize];
+            if t.iter().any(|&v| local[v as usize] == u32::MAX) {
+                continue;
+            }
+            let q = triangle_turn(t, turn);
+            for k in 0..3 {
+                let (i, j) = (t[k], t[(k + 1) % 3]);
+                let (li, lj) = (local[i as usize], local[j as usize]);
+                trip.push((li, li, 1.0));
+                trip.push((lj, lj, 1.0));
+                trip.push((li, lj, -1.0));
+                trip.push((lj, li, -1.0));
+                let e = q
+                    * (DVec3::from_array(source[i as usize])
+                        - DVec3::from_array(source[j as usize]));
+                for d in 0..3 {
+                    b[li as usize][d] += e[d];
+                    b[lj as usize][d] -= e[d];
+                }
+            }
+        }
+        let solved: Result<Vec<[f64; 3]>, SolveError> = (|| {
+            let s = FixedSolver::new(m, trip, &fixed)?;
+            let vals: Vec<[f64; 3]> = patch[free..].iter().map(|&v| out[v as usize]).collect();
+            let mut x = vec![[0.0; 3]; m];
+            let mut ws = s.workspace(3);
+            s.solve(&b, &vals, &mut x, &mut ws);
+            Ok(x)
+        })();
+        let Ok(x) = solved else {
+            break;
+        };
+        if x.iter().flatten().any(|c| !c.is_finite()) {
+            break;
+        }
+        for (k, &v) in patch[..free].iter().enumerate() {
+            out[v as usize] = x[k];
+        }
+        bad = turned_over(tris, source, out, turn);
+        rings *= 2;
+    }
+    (before, bad.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::subdivide::{icosahedron, midpoint};
+
+    #[test]
+    fn a_pushed_in_vertex_is_pulled_back_out() {
+        let m = midpoint(&midpoint(&icosahedron()));
+        let src = m.positions().to_vec();
+        let mut out = src.clone();
+        // Push one vertex through the opposite side: its fan turns over.
+        out[0] = (DVec3::from_array(src[0]) * -0.5).to_array();
+        let turn = vec![DQuat::IDENTITY; src.len()];
+        let adj = Adjacency::new(src.len(), m.triangles());
+        assert!(!turned_over(m.triangles(), &src, &out, &turn).is_empty());
+        let (before, after) = unflip(m.triangles(), &adj, &src, &mut out, &turn, 4);
+        assert!(before > 0 && after == 0, "{before} -> {after}");
+        assert!(DVec3::from_array(out[0]).distance(DVec3::from_array(src[0])) < 1e-6);
+    }
+
+    #[test]
+    fn rotated_triangles_are_not_turned_over() {
+        let m = icosahedron();
+        let src = m.positions().to_vec();
+        let r = DQuat::from_rotation_x(2.5);
+        let out: Vec<[f64; 3]> = src
+            .iter()
+            .map(|p| (r * DVec3::from_array(*p)).to_array())
+            .collect();
+        let turn = vec![r; src.len()];
+        assert!(turned_over(m.triangles(), &src, &out, &turn).is_empty());
+        let none = vec![DQuat::IDENTITY; src.len()];
+        assert!(!turned_over(m.triangles(), &src, &out, &none).is_empty());
+    }
+}
