@@ -202,14 +202,17 @@ mod tests {
                 }
             }
         };
-        let r = run(
-            Path::new("src"),
-            &clips,
-            dir.path(),
-            &opts,
-            &convert,
-            &|_| {},
-        );
+        let go = || {
+            run(
+                Path::new("src"),
+                &clips,
+                dir.path(),
+                &opts,
+                &convert,
+                &|_| {},
+            )
+        };
+        let r = go();
         let st: Vec<ClipStatus> = r.iter().map(|o| o.status).collect();
         assert_eq!(
             st,
@@ -217,14 +220,7 @@ mod tests {
         );
         assert!(r[2].reason.as_deref().unwrap().contains("boom"));
         assert!(dir.path().join("sub/b.glb").is_file());
-        let again = run(
-            Path::new("src"),
-            &clips,
-            dir.path(),
-            &opts,
-            &convert,
-            &|_| {},
-        );
+        let again = go();
         assert_eq!(again[1].status, ClipStatus::Skipped);
     }
 }

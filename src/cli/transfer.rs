@@ -119,18 +119,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Some(p) => Some(MarkerFile::load(p, scan.triangle_count())?),
         None => None,
     };
-    let mut prepared = match (&file, &lm) {
-        (Some(f), _) => prepare(&scan, MarkerSpec::File(f))?,
+    let prepared = match (&file, &lm) {
+        (Some(f), l) => prepare(&scan, MarkerSpec::File(f, l.as_ref()))?,
         (None, Some(l)) => prepare(&scan, MarkerSpec::Landmarks(l, mopts))?,
         (None, None) => anyhow::bail!("give --landmarks or --markers"),
     };
-    if file.is_some()
-        && let Some(l) = &lm
-    {
-        // The skeleton (for a mocap source) still comes from the landmarks.
-        let withrig = prepare(&scan, MarkerSpec::Landmarks(l, mopts))?;
-        prepared.rig = withrig.rig;
-    }
     if let Some(p) = &a.save_markers {
         MarkerFile {
             triangle_count: Some(prepared.mesh.triangle_count()),

@@ -17,8 +17,9 @@ use std::collections::HashMap;
 pub enum MarkerSpec<'a> {
     /// Generated from the rig embedded from landmarks.
     Landmarks(&'a Landmarks, MarkerOptions),
-    /// Read from a file (triangle ids of the input mesh).
-    File(&'a MarkerFile),
+    /// Read from a file (triangle ids of the input mesh); the landmarks,
+    /// if given, still embed the rig (a mocap source needs the skeleton).
+    File(&'a MarkerFile, Option<&'a Landmarks>),
 }
 
 /// A scan ready to factor.
@@ -64,21 +65,11 @@ pub fn prepare(mesh: &Mesh, spec: MarkerSpec<'_>) -> Result<PreparedScan, ScanEr
     };
     let (markers, rig) = match spec {
         MarkerSpec::Landmarks(lm, opts) => {
-            // Landmarks given as vertex ids name input vertices: resolve
-            // them to points before the repair renumbers vertices.
-            let points = Landmarks {
-                marks: lm
-                    .marks
-                    .iter()
-                    .filter_map(|(&l, _)| {
-                        lm.point(l, mesh.positions()).map(|p| (l, Mark::Point(p)))
-                    })
-                    .collect(),
-            };
-            let rig = Embedding::new(&fixed, &points, None)?;
+            let rig = embed_resolved(mesh, &fixed, lm)?;
             (generate(&fixed, &rig, &opts), Some(rig))
         }
-        MarkerSpec::File(f) => {
+        MarkerSpec::File(f, lm) => {
+            let rig = lm.map(|l| embed_resolved(mesh, &fixed, l)).transpose()?;
             let index: HashMap<[u32; 3], u32> = fixed
                 .triangles()
                 .iter()
@@ -100,7 +91,7 @@ pub fn prepare(mesh: &Mesh, spec: MarkerSpec<'_>) -> Result<PreparedScan, ScanEr
                     _ => report.lost_markers += 1,
                 }
             }
-            (kept, None)
+            (kept, rig)
         }
     };
     if markers.is_empty() {
@@ -116,6 +107,20 @@ pub fn prepare(mesh: &Mesh, spec: MarkerSpec<'_>) -> Result<PreparedScan, ScanEr
         rig,
         report,
     })
+}
+
+/// The rig of the repaired mesh `fixed` from landmarks on the input `mesh`:
+/// marks given as vertex ids name input vertices, so they become points
+/// before the repair's renumbering matters.
+fn embed_resolved(mesh: &Mesh, fixed: &Mesh, lm: &Landmarks) -> Result<Embedding, EmbedError> {
+    let points = Landmarks {
+        marks: lm
+            .marks
+            .keys()
+            .filter_map(|&l| lm.point(l, mesh.positions()).map(|p| (l, Mark::Point(p))))
+            .collect(),
+    };
+    Embedding::new(fixed, &points, None)
 }
 
 fn sorted(mut t: [u32; 3]) -> [u32; 3] {
@@ -210,7 +215,7 @@ mod tests {
                 bone: None,
             }],
         };
-        let s = prepare(&two, MarkerSpec::File(&file)).unwrap();
+        let s = prepare(&two, MarkerSpec::File(&file, None)).unwrap();
         assert_eq!(s.mesh.vertex_count(), n as usize);
         assert_eq!(s.report.dropped_components, vec![(n as usize, nt as usize)]);
         assert_eq!(s.markers[0].triangle, 3);
