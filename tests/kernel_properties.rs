@@ -68,3 +68,43 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, .. ProptestConfig::default() })]
+
+    /// Untangling never turns more triangles over than it was given, and
+    /// the count it returns is the true count (regression: a move that
+    /// fixed two triangles of a fan and turned a third over used to go
+    /// uncounted, so the repair reported none left while one was).
+    #[test]
+    fn untangling_is_monotone_and_counts_truly(seed in 1u64..u64::MAX, amount in 0.05f64..1.0, share in 0.05f64..0.5) {
+        use surfmotion::deform::unflip::{Adjacency, turned_over};
+        use surfmotion::deform::untangle::{references, untangle};
+        let m = midpoint(&midpoint(&icosahedron()));
+        let (src, tris) = (m.positions().to_vec(), m.triangles());
+        let turn = vec![DQuat::IDENTITY; src.len()];
+        let adj = Adjacency::new(src.len(), tris);
+        let (mut normals, mut areas) = (vec![DVec3::ZERO; tris.len()], vec![0.0; tris.len()]);
+        references(tris, &src, &turn, &mut normals, &mut areas);
+        // Shove a random share of the vertices.
+        let mut s = seed | 1;
+        let mut rnd = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s % 10_000) as f64 / 10_000.0 - 0.5
+        };
+        let mut out = src.clone();
+        for p in out.iter_mut() {
+            if rnd() + 0.5 < share {
+                *p = [p[0] + amount * rnd(), p[1] + amount * rnd(), p[2] + amount * rnd()];
+            }
+        }
+        let bad = turned_over(tris, &src, &out, &turn);
+        let left = untangle(tris, &adj, &normals, &areas, &mut out, &bad, &Default::default());
+        let recount = turned_over(tris, &src, &out, &turn).len();
+        prop_assert_eq!(left, recount);
+        prop_assert!(recount <= bad.len(), "{} -> {}", bad.len(), recount);
+        prop_assert!(out.iter().flatten().all(|x| x.is_finite()));
+    }
+}

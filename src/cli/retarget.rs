@@ -101,6 +101,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "timings": r.timings,
             "ms_per_frame": 1e3 * per_frame,
             "deformation": r.deform,
+            "turned_over": r.turned_over,
         });
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
@@ -153,6 +154,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         1e3 * per_frame
     );
     s += &format!("deformation: {:?}\n", r.deform);
+    if matches!(
+        r.deform,
+        surfmotion::deform::DeformMode::Part | surfmotion::deform::DeformMode::Global
+    ) {
+        s += &format!(
+            "turned-over triangle-frames: {} after the solve, {} after the repair\n",
+            r.turned_over.before, r.turned_over.after
+        );
+    }
     super::emit(&s)
 }
 

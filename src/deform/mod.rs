@@ -34,6 +34,7 @@ pub mod lbs;
 pub mod part_laplacian;
 pub mod pca;
 pub mod unflip;
+pub mod untangle;
 
 use crate::mesh::solver::SolveError;
 use crate::retarget::character::Character;
@@ -59,6 +60,16 @@ pub enum DeformMode {
     None,
 }
 
+/// Triangles turned over relative to the source frame (see [`unflip`]),
+/// before and after the repair.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct TurnedOver {
+    /// After the deformation's solve.
+    pub before: usize,
+    /// After the repair and untangling.
+    pub after: usize,
+}
+
 /// Options of the deformation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DeformOptions {
@@ -78,14 +89,16 @@ pub struct DeformOptions {
     /// Learn and solve each part in its own rotating frame (true) or in
     /// world coordinates as the paper does (false). Default: true.
     pub local_frames: bool,
-    /// Rounds of patch repair where the solved surface turned triangles
-    /// over ([`unflip`]); each round doubles the patch (2, 4, 8, … rings).
-    /// 0 turns it off. Default: 3, up to 8 rings (measured on the samba
-    /// database, 02_02 walk: 155 turned-over triangle-frames → 79, joint-
-    /// velocity error unchanged. 6 rounds reach 5, but the rebuilt patches
-    /// then reach the joints' regressors and the error rises from 0.17 to
-    /// 0.46 cm/frame).
-    pub unflip_rounds: usize,
+    /// Repair of triangles the solve turned over ([`unflip`]); `rounds: 0`
+    /// turns it (and the untangling) off.
+    pub repair: unflip::RepairOptions,
+    /// Local untangling after each repair pass ([`untangle`]).
+    pub untangle: untangle::UntangleOptions,
+    /// Repair + untangle passes while triangles stay turned over; the
+    /// best pass is kept. Default 3 (measured on the samba database: one
+    /// pass leaves a few on the hardest queries, e.g. 1 on CMU 131_01, three
+    /// leave none on the nine retarget queries).
+    pub repair_passes: usize,
 }
 
 impl Default for DeformOptions {
@@ -98,7 +111,9 @@ impl Default for DeformOptions {
             stride: 4,
             include: None,
             local_frames: true,
-            unflip_rounds: 3,
+            repair: unflip::RepairOptions::default(),
+            untangle: untangle::UntangleOptions::default(),
+            repair_passes: 3,
         }
     }
 }
@@ -142,7 +157,10 @@ pub struct Deformer {
     local_frames: bool,
     /// Vertex adjacency for the turned-over repair (when on).
     adjacency: Option<unflip::Adjacency>,
-    unflip_rounds: usize,
+    repair: unflip::RepairOptions,
+    untangle: untangle::UntangleOptions,
+    repair_passes: usize,
+    triangles: usize,
     regions: Vec<Region>,
     rest_pose: Pose,
     n: usize,
@@ -166,6 +184,11 @@ pub struct DeformWorkspace {
     targets: Vec<Vec<[f64; 3]>>,
     local: Vec<Vec<[f64; 3]>>,
     ws: Vec<RegionWorkspace>,
+    /// Reference normals and source areas of the triangles (untangling).
+    normals: Vec<DVec3>,
+    areas: Vec<f64>,
+    /// The best repair pass so far.
+    best: Vec<[f64; 3]>,
 }
 
 fn fps_examples(rot: &[Vec<DQuat>], want: usize) -> Vec<usize> {
@@ -228,10 +251,13 @@ impl Deformer {
         let mut out = Deformer {
             mode,
             local_frames: opts.local_frames,
-            adjacency: (opts.unflip_rounds > 0
+            adjacency: (opts.repair.rounds > 0
                 && matches!(mode, DeformMode::Part | DeformMode::Global))
             .then(|| unflip::Adjacency::new(n, ch.topology.triangles())),
-            unflip_rounds: opts.unflip_rounds,
+            repair: opts.repair,
+            untangle: opts.untangle,
+            repair_passes: opts.repair_passes,
+            triangles: ch.topology.triangle_count(),
             regions: Vec::new(),
             rest_pose: ch.rest_pose,
             n,
@@ -431,11 +457,15 @@ impl Deformer {
                 .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
                 .collect(),
             ws: self.regions.iter().map(|r| r.solver.workspace()).collect(),
+            normals: vec![DVec3::ZERO; self.triangles],
+            areas: vec![0.0; self.triangles],
+            best: vec![[0.0; 3]; self.n],
         }
     }
 
     /// Deforms `source` (a retrieved frame whose skeleton is `source_pose`)
-    /// to follow `target`, into `out`.
+    /// to follow `target`, into `out`. Returns the triangles turned over
+    /// before and after the repair (zero for modes without one).
     pub fn deform(
         &self,
         ch: &Character,
@@ -444,16 +474,16 @@ impl Deformer {
         target: &Pose,
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
-    ) {
+    ) -> TurnedOver {
         if self.mode == DeformMode::None {
             out.copy_from_slice(source);
-            return;
+            return TurnedOver::default();
         }
         let g = pose_rotations(source_pose, target);
         crate::synth::database::skin_into(source, &ch.rig, source_pose, target, &g, &mut ws.lbs);
         out.copy_from_slice(&ws.lbs);
         if self.mode == DeformMode::Lbs {
-            return;
+            return TurnedOver::default();
         }
         let rot = pose_rotations(&self.rest_pose, target);
         // Each vertex's rotation from source to target: its bones' turns,
@@ -513,31 +543,87 @@ impl Deformer {
                 *o = [a[0] / w, a[1] / w, a[2] / w];
             }
         }
-        if let Some(adj) = &self.adjacency {
-            unflip::unflip(
-                ch.topology.triangles(),
-                adj,
-                source,
-                out,
-                &ws.turn,
-                self.unflip_rounds,
-            );
+        match &self.adjacency {
+            Some(adj) => self.repair(ch.topology.triangles(), adj, source, out, ws),
+            None => TurnedOver::default(),
         }
     }
 
-    /// Deforms every frame of a sequence (frame-major) in parallel.
-    pub fn deform_all(&self, ch: &Character, frames: &mut [[f64; 3]], targets: &[Pose]) {
+    /// Passes of [`unflip::unflip`] then [`untangle::untangle`] while
+    /// triangles stay turned over, keeping the best pass.
+    fn repair(
+        &self,
+        tris: &[[u32; 3]],
+        adj: &unflip::Adjacency,
+        source: &[[f64; 3]],
+        out: &mut [[f64; 3]],
+        ws: &mut DeformWorkspace,
+    ) -> TurnedOver {
+        let before = unflip::turned_over(tris, source, out, &ws.turn).len();
+        let mut best = before;
+        if best == 0 {
+            return TurnedOver::default();
+        }
+        ws.best.copy_from_slice(out);
+        let mut refs = false;
+        for pass in 0..self.repair_passes.max(1) {
+            // Each pass reaches one ring doubling further than the last, so
+            // a pass that starts again from the best state differs from it.
+            let repair = unflip::RepairOptions {
+                rounds: self.repair.rounds + pass,
+                ..self.repair
+            };
+            let (_, left) = unflip::unflip(tris, adj, source, out, &ws.turn, &repair);
+            let left = if left > 0 {
+                if !refs {
+                    untangle::references(tris, source, &ws.turn, &mut ws.normals, &mut ws.areas);
+                    refs = true;
+                }
+                let bad = unflip::turned_over(tris, source, out, &ws.turn);
+                untangle::untangle(tris, adj, &ws.normals, &ws.areas, out, &bad, &self.untangle)
+            } else {
+                0
+            };
+            if left < best {
+                best = left;
+                ws.best.copy_from_slice(out);
+            } else {
+                // A pass that did not help: back to the best so far.
+                out.copy_from_slice(&ws.best);
+            }
+            if left == 0 {
+                break;
+            }
+        }
+        TurnedOver {
+            before,
+            after: best,
+        }
+    }
+
+    /// Deforms every frame of a sequence (frame-major) in parallel;
+    /// returns the turned-over triangle counts summed over the frames.
+    pub fn deform_all(
+        &self,
+        ch: &Character,
+        frames: &mut [[f64; 3]],
+        targets: &[Pose],
+    ) -> TurnedOver {
         let n = self.n;
         frames
             .par_chunks_mut(n.max(1))
             .zip(targets.par_iter())
-            .for_each_init(
+            .map_init(
                 || (self.workspace(), vec![[0.0; 3]; n]),
                 |(ws, src), (f, t)| {
                     src.copy_from_slice(f);
                     let sp = ch.rig.skeleton(src);
-                    self.deform(ch, src, &sp, t, f, ws);
+                    self.deform(ch, src, &sp, t, f, ws)
                 },
-            );
+            )
+            .reduce(TurnedOver::default, |a, b| TurnedOver {
+                before: a.before + b.before,
+                after: a.after + b.after,
+            })
     }
 }

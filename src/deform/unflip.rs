@@ -1,18 +1,27 @@
 //! Repair of turned-over triangles after the part-based deformation.
 //!
 //! Where the part solutions meet under strong compression (a skirt between
-//! the legs) a few triangles of the deformed surface can face the wrong way.
-//! A triangle is *turned over* when its normal opposes the source
-//! triangle's normal turned by the triangle's skin-blended rotation from
-//! the source skeleton to the target (a triangle that simply rotates with
-//! its limb, however far, is not). Each such patch is rebuilt by a local
-//! Poisson solve: the patch (the turned-over triangles' vertices grown by a
-//! few rings) is free, its surrounding ring keeps the deformed positions,
-//! and every triangle touching the patch asks for its source edges turned
-//! by its rotation (uniform edge weights, so the small system is always
-//! definite). If triangles are still turned over the patch is grown and the
-//! solve repeated, up to a bound. Frames with nothing turned over cost one
-//! pass over the triangles.
+//! the legs, a hem pushed by a knee) a few triangles of the deformed surface
+//! can face the wrong way. A triangle is *turned over* when its normal
+//! opposes the source triangle's normal turned by the triangle's
+//! skin-blended rotation from the source skeleton to the target (a triangle
+//! that simply rotates with its limb, however far, is not).
+//!
+//! Each patch of such triangles (their vertices grown by a few rings) is
+//! rebuilt by a local Poisson solve with its surrounding ring fixed. A
+//! triangle that is turned over or nearly so (its normal within
+//! [`RepairOptions::healthy_cos`] of edge-on to the turned source normal)
+//! asks for its source edges turned by its rotation, weighted up
+//! ([`RepairOptions::weight`]); every other triangle of the patch asks for
+//! its current edges, so the deformation's shape is kept and only the fold
+//! is worked out (asking every triangle for its turned source shape, as an
+//! earlier version did, undid the deformation over large patches and moved
+//! the joints). If triangles are still turned over the patch is doubled and
+//! the solve repeated, up to [`RepairOptions::rounds`]; the vertices of any
+//! left then move to the mean of their neighbours (a few Jacobi steps of
+//! umbrella smoothing), which unfolds small folds the solve keeps.
+//! [`super::untangle`] finishes the job. Frames with nothing turned over
+//! cost one pass over the triangles.
 
 use crate::mesh::solver::{FixedSolver, SolveError};
 use glam::{DQuat, DVec3};
@@ -68,7 +77,7 @@ pub fn skin_turns(skin: &[([u8; 4], [f64; 4])], g: &[DQuat], out: &mut [DQuat]) 
 }
 
 /// The rotation of triangle `t`: the mean of its vertices' (sign-aligned).
-fn triangle_turn(t: &[u32; 3], turn: &[DQuat]) -> DQuat {
+pub(crate) fn triangle_turn(t: &[u32; 3], turn: &[DQuat]) -> DQuat {
     let q0 = turn[t[0] as usize];
     let mut q = DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0);
     for &v in t {
@@ -101,22 +110,49 @@ pub fn turned_over(
         .collect()
 }
 
-/// Rebuilds the patches around turned-over triangles of `out` in place, in
-/// up to `rounds` rounds (the patch doubling each round from 2 rings).
-/// Returns (turned over before, turned over after).
+/// Options of [`unflip`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RepairOptions {
+    /// Poisson rounds, the patch doubling each round from 2 rings. 0 turns
+    /// the repair off. Default 3 (up to 8 rings).
+    pub rounds: usize,
+    /// A triangle whose unit normal has a dot product with its turned source
+    /// normal below this is rebuilt towards its source shape; the others
+    /// keep their deformed shape. Default 0.3.
+    pub healthy_cos: f64,
+    /// Weight of a rebuilt triangle's edges against a kept one's. Default 4.
+    pub weight: f64,
+    /// Most umbrella-smoothing steps on the vertices of triangles still
+    /// turned over after the rounds. Default 20.
+    pub smooth: usize,
+}
+
+impl Default for RepairOptions {
+    fn default() -> Self {
+        RepairOptions {
+            rounds: 3,
+            healthy_cos: 0.3,
+            weight: 4.0,
+            smooth: 20,
+        }
+    }
+}
+
+/// Rebuilds the patches around turned-over triangles of `out` in place
+/// (see the module docs). Returns (turned over before, turned over after).
 pub fn unflip(
     tris: &[[u32; 3]],
     adj: &Adjacency,
     source: &[[f64; 3]],
     out: &mut [[f64; 3]],
     turn: &[DQuat],
-    rounds: usize,
+    opts: &RepairOptions,
 ) -> (usize, usize) {
     let mut bad = turned_over(tris, source, out, turn);
     let before = bad.len();
     let n = out.len();
     let mut rings = 2;
-    for _ in 0..rounds {
+    for _ in 0..opts.rounds {
         if bad.is_empty() {
             break;
         }
@@ -169,16 +205,23 @@ pub fn unflip(
                 continue;
             }
             let q = triangle_turn(t, turn);
+            let reference = (q * normal(t, source)).normalize_or_zero();
+            let keep = bad.binary_search(&ti).is_err()
+                && reference.dot(normal(t, out).normalize_or_zero()) >= opts.healthy_cos;
+            let w = if keep { 1.0 } else { opts.weight };
             for k in 0..3 {
                 let (i, j) = (t[k], t[(k + 1) % 3]);
                 let (li, lj) = (local[i as usize], local[j as usize]);
-                trip.push((li, li, 1.0));
-                trip.push((lj, lj, 1.0));
-                trip.push((li, lj, -1.0));
-                trip.push((lj, li, -1.0));
-                let e = q
-                    * (DVec3::from_array(source[i as usize])
-                        - DVec3::from_array(source[j as usize]));
+                trip.push((li, li, w));
+                trip.push((lj, lj, w));
+                trip.push((li, lj, -w));
+                trip.push((lj, li, -w));
+                let e = if keep {
+                    DVec3::from_array(out[i as usize]) - DVec3::from_array(out[j as usize])
+                } else {
+                    q * (DVec3::from_array(source[i as usize])
+                        - DVec3::from_array(source[j as usize]))
+                } * w;
                 for d in 0..3 {
                     b[li as usize][d] += e[d];
                     b[lj as usize][d] -= e[d];
@@ -205,7 +248,42 @@ pub fn unflip(
         bad = turned_over(tris, source, out, turn);
         rings *= 2;
     }
+    smooth(tris, adj, source, out, turn, &mut bad, opts.smooth);
     (before, bad.len())
+}
+
+/// Up to `steps` Jacobi steps of umbrella smoothing on the vertices of the
+/// turned-over triangles `bad` (kept sorted and up to date).
+fn smooth(
+    tris: &[[u32; 3]],
+    adj: &Adjacency,
+    source: &[[f64; 3]],
+    out: &mut [[f64; 3]],
+    turn: &[DQuat],
+    bad: &mut Vec<u32>,
+    steps: usize,
+) {
+    let mut vs: Vec<u32> = Vec::new();
+    let mut moved: Vec<[f64; 3]> = Vec::new();
+    for _ in 0..steps {
+        if bad.is_empty() {
+            break;
+        }
+        vs.clear();
+        vs.extend(bad.iter().flat_map(|&t| tris[t as usize]));
+        vs.sort_unstable();
+        vs.dedup();
+        moved.clear();
+        moved.extend(vs.iter().map(|&v| {
+            let nb = &adj.vertices[v as usize];
+            let s: DVec3 = nb.iter().map(|&u| DVec3::from_array(out[u as usize])).sum();
+            (s / nb.len().max(1) as f64).to_array()
+        }));
+        for (&v, p) in vs.iter().zip(&moved) {
+            out[v as usize] = *p;
+        }
+        *bad = turned_over(tris, source, out, turn);
+    }
 }
 
 #[cfg(test)]
@@ -223,7 +301,11 @@ mod tests {
         let turn = vec![DQuat::IDENTITY; src.len()];
         let adj = Adjacency::new(src.len(), m.triangles());
         assert!(!turned_over(m.triangles(), &src, &out, &turn).is_empty());
-        let (before, after) = unflip(m.triangles(), &adj, &src, &mut out, &turn, 4);
+        let opts = RepairOptions {
+            rounds: 4,
+            ..Default::default()
+        };
+        let (before, after) = unflip(m.triangles(), &adj, &src, &mut out, &turn, &opts);
         assert!(before > 0 && after == 0, "{before} -> {after}");
         assert!(DVec3::from_array(out[0]).distance(DVec3::from_array(src[0])) < 1e-6);
     }

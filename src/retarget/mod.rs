@@ -14,7 +14,7 @@ pub mod query;
 pub mod timeline;
 pub mod trellis;
 
-use crate::deform::{DeformMode, DeformOptions, Deformer};
+use crate::deform::{DeformMode, DeformOptions, Deformer, TurnedOver};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
 use crate::skeleton::{Pose, floor_fit, rotate_yaw};
@@ -103,6 +103,9 @@ pub struct Report {
     pub timings: Timings,
     /// The deformation applied.
     pub deform: DeformMode,
+    /// Triangle-frames turned over by the deformation, before and after
+    /// its repair (summed over frames; zero for `lbs` and `none`).
+    pub turned_over: TurnedOver,
 }
 
 /// The synthesised sequence.
@@ -199,12 +202,13 @@ pub fn synthesise(
     let mut positions =
         place_and_blend(ch, &blender, &retrieval.path, &frames, &query, opts.smooth);
     timings.meshes = t4.elapsed().as_secs_f64();
+    let mut turned_over = TurnedOver::default();
     if opts.deform != DeformMode::None {
         let t5 = Instant::now();
         let deformer = Deformer::new(ch, opts.deform, &opts.deform_options)?;
         timings.deform_factor = t5.elapsed().as_secs_f64();
         let t6 = Instant::now();
-        deformer.deform_all(ch, &mut positions, &query);
+        turned_over = deformer.deform_all(ch, &mut positions, &query);
         timings.deform = t6.elapsed().as_secs_f64();
     }
     let name = |id: u32| {
@@ -244,6 +248,7 @@ pub fn synthesise(
             steps,
             timings,
             deform: opts.deform,
+            turned_over,
         },
     })
 }

@@ -1,0 +1,128 @@
+//! Deformation stage on real data (Huang et al. 2015, Sec. 5.2.3): the
+//! samba capture as the database, the CMU 02_02 walk as the query. Every
+//! retrieved frame of the walk (75) is deformed in turn on one thread, with
+//! the turned-over-triangle repair and without it, against the floor: one
+//! prefactored full-size 2-ring solve (`LᵀL`, 3 right-hand sides).
+
+mod common;
+
+use criterion::Criterion;
+use std::hint::black_box;
+use surfmotion::deform::part_laplacian::region_laplacian;
+use surfmotion::deform::unflip::RepairOptions;
+use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
+use surfmotion::mesh::solver::FixedSolver;
+use surfmotion::retarget::character::Character;
+use surfmotion::retarget::query::load_mocap;
+use surfmotion::retarget::{RetargetOptions, synthesise};
+
+fn main() {
+    let Some(d) = common::data() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("samba");
+    let m = surfmotion::db::Manifest {
+        name: "samba".into(),
+        topology: d.join("4d/samba/samba.obj"),
+        fps: 30.0,
+        units: "m".into(),
+        up: "y".into(),
+        colors: None,
+        sequences: vec![surfmotion::db::SequenceEntry {
+            name: "dance".into(),
+            path: d.join("4d/samba/samba.pc2"),
+            fps: None,
+        }],
+        rig: surfmotion::db::RigSpec {
+            landmarks: Some(common::samba_landmarks()),
+            ..Default::default()
+        },
+        graph: Default::default(),
+        deform: Default::default(),
+    };
+    std::fs::create_dir_all(&db).unwrap();
+    m.save(&db).unwrap();
+    let ch = Character::load(&db, &surfmotion::db::Quiet).unwrap();
+    let q = load_mocap(
+        &d.join("mocap/cmu-amc/02/02_02.amc"),
+        &Default::default(),
+        30.0,
+    )
+    .unwrap();
+    let none = RetargetOptions {
+        deform: DeformMode::None,
+        ..Default::default()
+    };
+    let raw = synthesise(&ch, &q.poses, 30.0, &none).unwrap();
+    let n = ch.n;
+    let frames = raw.report.frames;
+    let skeletons: Vec<_> = raw
+        .positions
+        .chunks(n)
+        .map(|f| ch.rig.skeleton(f))
+        .collect();
+
+    let mut c = Criterion::default().configure_from_args();
+    let mut g = c.benchmark_group("deform/samba_10k");
+    g.sample_size(10);
+    let no_repair = DeformOptions {
+        repair: RepairOptions {
+            rounds: 0,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    for (name, opts) in [
+        ("part_75_frames", DeformOptions::default()),
+        ("part_no_repair_75_frames", no_repair),
+    ] {
+        let def = Deformer::new(&ch, DeformMode::Part, &opts).unwrap();
+        let mut ws = def.workspace();
+        let mut out = vec![[0.0; 3]; n];
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                for ((src, sk), q) in raw.positions.chunks(n).zip(&skeletons).zip(&raw.query) {
+                    def.deform(&ch, black_box(src), sk, q, &mut out, &mut ws);
+                }
+            })
+        });
+    }
+    // The floor: the whole body's 2-ring system, prefactored, one solve.
+    let all: Vec<u32> = (0..n as u32).collect();
+    let lap = region_laplacian(ch.topology.triangles(), &all, n);
+    let mut trip = Vec::new();
+    for r in &lap {
+        for &(a, wa) in r {
+            for &(b, wb) in r {
+                trip.push((a, b, wa * wb));
+            }
+        }
+    }
+    for i in 0..n as u32 {
+        trip.push((i, i, 1e-3));
+    }
+    let solver = FixedSolver::definite(n, trip).unwrap();
+    let mut sws = solver.workspace(3);
+    let rhs = raw.positions[..n].to_vec();
+    let mut x = vec![[0.0; 3]; n];
+    g.bench_function("solve_2ring", |b| {
+        b.iter(|| solver.solve::<3>(black_box(&rhs), &[], &mut x, &mut sws))
+    });
+    g.finish();
+    c.final_summary();
+    let med = |b: &str| common::median_ns("deform/samba_10k", b);
+    if let (Some(p), Some(p0), Some(s)) = (
+        med("part_75_frames"),
+        med("part_no_repair_75_frames"),
+        med("solve_2ring"),
+    ) {
+        let (p, p0) = (p / frames as f64, p0 / frames as f64);
+        println!(
+            "per frame: part {:.2} ms ({:.2}x the 2-ring solve), without the repair {:.2} ms ({:.2}x); solve {:.2} ms",
+            p / 1e6,
+            p / s,
+            p0 / 1e6,
+            p0 / s,
+            s / 1e6
+        );
+    }
+}
