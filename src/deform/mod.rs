@@ -559,11 +559,13 @@ impl Deformer {
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
     ) -> TurnedOver {
-        let before = unflip::turned_over(tris, source, out, &ws.turn).len();
-        let mut best = before;
-        if best == 0 {
+        let mut bad = unflip::turned_over(tris, source, out, &ws.turn);
+        let before = bad.len();
+        if before == 0 {
             return TurnedOver::default();
         }
+        let mut best = before;
+        let mut best_bad = bad.clone();
         ws.best.copy_from_slice(out);
         let mut refs = false;
         for pass in 0..self.repair_passes.max(1) {
@@ -573,25 +575,25 @@ impl Deformer {
                 rounds: self.repair.rounds + pass,
                 ..self.repair
             };
-            let (_, left) = unflip::unflip(tris, adj, source, out, &ws.turn, &repair);
-            let left = if left > 0 {
+            bad = unflip::unflip(tris, adj, source, out, &ws.turn, bad, &repair);
+            if !bad.is_empty() {
                 if !refs {
                     untangle::references(tris, source, &ws.turn, &mut ws.normals, &mut ws.areas);
                     refs = true;
                 }
-                let bad = unflip::turned_over(tris, source, out, &ws.turn);
-                untangle::untangle(tris, adj, &ws.normals, &ws.areas, out, &bad, &self.untangle)
-            } else {
-                0
-            };
-            if left < best {
-                best = left;
+                bad =
+                    untangle::untangle(tris, adj, &ws.normals, &ws.areas, out, bad, &self.untangle);
+            }
+            if bad.len() < best {
+                best = bad.len();
+                best_bad.clone_from(&bad);
                 ws.best.copy_from_slice(out);
             } else {
                 // A pass that did not help: back to the best so far.
                 out.copy_from_slice(&ws.best);
+                bad.clone_from(&best_bad);
             }
-            if left == 0 {
+            if best == 0 {
                 break;
             }
         }

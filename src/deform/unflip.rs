@@ -96,6 +96,26 @@ fn normal(t: &[u32; 3], p: &[[f64; 3]]) -> DVec3 {
     (b - a).cross(c - a)
 }
 
+/// Whether triangle `t` of `out` is turned over against `source`.
+#[inline]
+fn is_turned_over(t: &[u32; 3], source: &[[f64; 3]], out: &[[f64; 3]], turn: &[DQuat]) -> bool {
+    (triangle_turn(t, turn) * normal(t, source)).dot(normal(t, out)) < 0.0
+}
+
+/// Keeps, of the sorted candidate triangles `cand`, those turned over (the
+/// triangles a local change can have affected: no full pass).
+fn recount(
+    tris: &[[u32; 3]],
+    source: &[[f64; 3]],
+    out: &[[f64; 3]],
+    turn: &[DQuat],
+    cand: &mut Vec<u32>,
+) {
+    cand.sort_unstable();
+    cand.dedup();
+    cand.retain(|&t| is_turned_over(&tris[t as usize], source, out, turn));
+}
+
 /// Triangles of `out` turned over against `source` under `turn`.
 pub fn turned_over(
     tris: &[[u32; 3]],
@@ -105,7 +125,7 @@ pub fn turned_over(
 ) -> Vec<u32> {
     tris.iter()
         .enumerate()
-        .filter(|(_, t)| (triangle_turn(t, turn) * normal(t, source)).dot(normal(t, out)) < 0.0)
+        .filter(|(_, t)| is_turned_over(t, source, out, turn))
         .map(|(i, _)| i as u32)
         .collect()
 }
@@ -138,18 +158,18 @@ impl Default for RepairOptions {
     }
 }
 
-/// Rebuilds the patches around turned-over triangles of `out` in place
-/// (see the module docs). Returns (turned over before, turned over after).
+/// Rebuilds the patches around the turned-over triangles `bad` (sorted,
+/// as [`turned_over`] gives them) of `out` in place (see the module docs);
+/// returns the triangles still turned over.
 pub fn unflip(
     tris: &[[u32; 3]],
     adj: &Adjacency,
     source: &[[f64; 3]],
     out: &mut [[f64; 3]],
     turn: &[DQuat],
+    mut bad: Vec<u32>,
     opts: &RepairOptions,
-) -> (usize, usize) {
-    let mut bad = turned_over(tris, source, out, turn);
-    let before = bad.len();
+) -> Vec<u32> {
     let n = out.len();
     let mut rings = 2;
     for _ in 0..opts.rounds {
@@ -245,11 +265,13 @@ pub fn unflip(
         for (k, &v) in patch[..free].iter().enumerate() {
             out[v as usize] = x[k];
         }
-        bad = turned_over(tris, source, out, turn);
+        // Only triangles touching a moved vertex can have changed.
+        bad.extend_from_slice(&touch);
+        recount(tris, source, out, turn, &mut bad);
         rings *= 2;
     }
     smooth(tris, adj, source, out, turn, &mut bad, opts.smooth);
-    (before, bad.len())
+    bad
 }
 
 /// Up to `steps` Jacobi steps of umbrella smoothing on the vertices of the
@@ -282,7 +304,10 @@ fn smooth(
         for (&v, p) in vs.iter().zip(&moved) {
             out[v as usize] = *p;
         }
-        *bad = turned_over(tris, source, out, turn);
+        for &v in &vs {
+            bad.extend_from_slice(&adj.triangles[v as usize]);
+        }
+        recount(tris, source, out, turn, bad);
     }
 }
 
@@ -305,7 +330,9 @@ mod tests {
             rounds: 4,
             ..Default::default()
         };
-        let (before, after) = unflip(m.triangles(), &adj, &src, &mut out, &turn, &opts);
+        let bad = turned_over(m.triangles(), &src, &out, &turn);
+        let before = bad.len();
+        let after = unflip(m.triangles(), &adj, &src, &mut out, &turn, bad, &opts).len();
         assert!(before > 0 && after == 0, "{before} -> {after}");
         assert!(DVec3::from_array(out[0]).distance(DVec3::from_array(src[0])) < 1e-6);
     }

@@ -78,19 +78,18 @@ fn signed_area(t: &[u32; 3], x: &[[f64; 3]], n: DVec3) -> f64 {
 
 /// Moves vertices of `out` until no triangle faces against its reference
 /// normal (see the module docs), starting from the turned-over triangles
-/// `bad`. Returns the number still turned over.
+/// `bad`. Returns the triangles still turned over.
 pub fn untangle(
     tris: &[[u32; 3]],
     adj: &Adjacency,
     normals: &[DVec3],
     areas: &[f64],
     out: &mut [[f64; 3]],
-    bad: &[u32],
+    mut bad: Vec<u32>,
     opts: &UntangleOptions,
-) -> usize {
+) -> Vec<u32> {
     let flipped =
         |out: &[[f64; 3]], t: u32| signed_area(&tris[t as usize], out, normals[t as usize]) <= 0.0;
-    let mut bad: Vec<u32> = bad.to_vec();
     let mut verts: Vec<u32> = Vec::new();
     let mut idle = 0;
     for sweep in 0..opts.sweeps {
@@ -126,7 +125,7 @@ pub fn untangle(
         bad.retain(|&t| flipped(out, t));
         idle = if moved { 0 } else { idle + 1 };
     }
-    bad.len()
+    bad
 }
 
 /// Moves vertex `v` so that its whole fan faces the right way, if it can;
@@ -273,10 +272,10 @@ mod tests {
             &normals,
             &areas,
             &mut out,
-            &bad,
+            bad,
             &Default::default(),
         );
-        assert_eq!(left, 0);
+        assert!(left.is_empty());
         for t in 0..nt {
             assert!(
                 signed_area(&tris[t], &out, normals[t]) > 0.0,
