@@ -72,6 +72,15 @@ fn skeleton_error(ch: &Character, p: &[[f64; 3]], q: &[Pose]) -> f64 {
     s / q.len() as f64
 }
 
+/// The query `poses` on `ch` with deformation `mode` (default options).
+fn run(ch: &Character, poses: &[Pose], mode: DeformMode) -> Output {
+    let opts = RetargetOptions {
+        deform: mode,
+        ..Default::default()
+    };
+    synthesise(ch, poses, 30.0, &opts).unwrap()
+}
+
 /// Triangle-frames of `res` turned over relative to the frames `raw` they
 /// were made from: a normal opposing the source normal turned by the
 /// triangle's skin rotation (a triangle that merely turns with its limb
@@ -101,12 +110,10 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
     let tris = ch.topology.triangles();
     for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
         let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), 30.0).unwrap();
-        let none = RetargetOptions {
-            deform: DeformMode::None,
-            ..Default::default()
-        };
-        let raw = synthesise(&ch, &m.poses, 30.0, &none).unwrap();
-        let part = synthesise(&ch, &m.poses, 30.0, &RetargetOptions::default()).unwrap();
+        let (raw, part) = (
+            run(&ch, &m.poses, DeformMode::None),
+            run(&ch, &m.poses, DeformMode::Part),
+        );
         assert!(
             part.positions.iter().flatten().all(|x| x.is_finite()),
             "{clip}"
@@ -117,16 +124,7 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
             e_part < e_raw,
             "{clip}: part {e_part} vs interpolation {e_raw}"
         );
-        let lbs = synthesise(
-            &ch,
-            &m.poses,
-            30.0,
-            &RetargetOptions {
-                deform: DeformMode::Lbs,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let lbs = run(&ch, &m.poses, DeformMode::Lbs);
         let flips = |res: &Output| turned_over(&ch, &raw, res);
         let (f_part, f_lbs) = (flips(&part), flips(&lbs));
         let total = raw.report.frames * tris.len();
@@ -198,22 +196,8 @@ fn a_walk_on_the_real_capture_turns_no_triangle_over() {
         30.0,
     )
     .unwrap();
-    let none = RetargetOptions {
-        deform: DeformMode::None,
-        ..Default::default()
-    };
-    let raw = synthesise(&ch, &m.poses, 30.0, &none).unwrap();
-    let part = synthesise(&ch, &m.poses, 30.0, &RetargetOptions::default()).unwrap();
-    let lbs = synthesise(
-        &ch,
-        &m.poses,
-        30.0,
-        &RetargetOptions {
-            deform: DeformMode::Lbs,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let [raw, part, lbs] =
+        [DeformMode::None, DeformMode::Part, DeformMode::Lbs].map(|mode| run(&ch, &m.poses, mode));
     let (f_part, f_lbs) = (turned_over(&ch, &raw, &part), turned_over(&ch, &raw, &lbs));
     assert!(f_lbs > 0);
     assert_eq!(f_part, 0, "{f_part} triangle-frames turned over");

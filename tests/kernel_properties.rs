@@ -8,15 +8,20 @@ use surfmotion::mesh::blend::Blender;
 use surfmotion::mesh::laplacian::{cotan_triplets, to_rows};
 use surfmotion::mesh::subdivide::{icosahedron, midpoint};
 
-fn jittered(seed: u64, amount: f64) -> Mesh {
-    let m = midpoint(&icosahedron());
+/// A xorshift stream of numbers in [-0.5, 0.5).
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
     let mut s = seed | 1;
-    let mut rnd = || {
+    move || {
         s ^= s << 13;
         s ^= s >> 7;
         s ^= s << 17;
         (s % 10_000) as f64 / 10_000.0 - 0.5
-    };
+    }
+}
+
+fn jittered(seed: u64, amount: f64) -> Mesh {
+    let m = midpoint(&icosahedron());
+    let mut rnd = uniform(seed);
     let p: Vec<[f64; 3]> = m
         .positions()
         .iter()
@@ -87,13 +92,7 @@ proptest! {
         let (mut normals, mut areas) = (vec![DVec3::ZERO; tris.len()], vec![0.0; tris.len()]);
         references(tris, &src, &turn, &mut normals, &mut areas);
         // Shove a random share of the vertices.
-        let mut s = seed | 1;
-        let mut rnd = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s % 10_000) as f64 / 10_000.0 - 0.5
-        };
+        let mut rnd = uniform(seed);
         let mut out = src.clone();
         for p in out.iter_mut() {
             if rnd() + 0.5 < share {
