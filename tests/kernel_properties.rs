@@ -108,3 +108,82 @@ proptest! {
         prop_assert!(out.iter().flatten().all(|x| x.is_finite()));
     }
 }
+
+/// A standing character's canonical joints (metres, Y up, facing +Z).
+fn rest_skeleton() -> surfmotion::skeleton::Pose {
+    [
+        [0.0, 1.0, 0.0],
+        [0.0, 1.15, 0.0],
+        [0.0, 1.35, 0.0],
+        [0.0, 1.5, 0.0],
+        [0.0, 1.65, 0.02],
+        [0.18, 1.45, 0.0],
+        [0.45, 1.45, 0.0],
+        [0.7, 1.45, 0.0],
+        [-0.18, 1.45, 0.0],
+        [-0.45, 1.45, 0.0],
+        [-0.7, 1.45, 0.0],
+        [0.1, 0.95, 0.0],
+        [0.1, 0.52, 0.01],
+        [0.1, 0.08, 0.0],
+        [0.1, 0.0, 0.15],
+        [-0.1, 0.95, 0.0],
+        [-0.1, 0.52, 0.01],
+        [-0.1, 0.08, 0.0],
+        [-0.1, 0.0, 0.15],
+    ]
+    .map(DVec3::from_array)
+}
+
+/// The rest skeleton with every bone turned by a random rotation about its
+/// parent joint (the spine and the two hips by one: the pelvis is rigid),
+/// moved.
+fn random_pose(rnd: &mut impl FnMut() -> f64, spread: f64) -> surfmotion::skeleton::Pose {
+    use surfmotion::rig::Canonical;
+    let rest = rest_skeleton();
+    let rot = |rnd: &mut dyn FnMut() -> f64| {
+        let axis = DVec3::new(rnd(), rnd(), rnd()).normalize_or(DVec3::Y);
+        DQuat::from_axis_angle(axis, spread * rnd())
+    };
+    let hips = rot(rnd);
+    let mut p = rest;
+    p[0] = rest[0] + DVec3::new(rnd(), rnd(), rnd());
+    for c in Canonical::ALL.iter().skip(1) {
+        let par = c.parent().unwrap().index();
+        let q = match c {
+            Canonical::Spine | Canonical::LHip | Canonical::RHip => hips,
+            _ => rot(rnd),
+        };
+        p[c.index()] = p[par] + q * (rest[c.index()] - rest[par]);
+    }
+    p
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, .. ProptestConfig::default() })]
+
+    /// A pose of the skeleton itself is fitted back exactly; joints moved by
+    /// noise give a pose with the skeleton's bone lengths that is no further
+    /// from them than the pose they were made from.
+    #[test]
+    fn the_rigid_fit_returns_a_posed_skeleton_and_beats_the_true_pose(seed in 1u64..u64::MAX, spread in 0.0f64..3.0, noise in 0.0f64..0.05) {
+        use surfmotion::db::rigid::{FitOptions, RigidSkeleton};
+        use surfmotion::skeleton::bone_lengths;
+        let mut rnd = uniform(seed);
+        let rest = rest_skeleton();
+        let sk = RigidSkeleton::calibrate(&rest, &[rest]);
+        let truth = random_pose(&mut rnd, spread);
+        let fit = sk.fit(&truth, &FitOptions::default());
+        prop_assert!(fit.max < 1e-7, "exact pose: off by {}", fit.max);
+        let measured = truth.map(|p| p + noise * DVec3::new(rnd(), rnd(), rnd()));
+        let fit = sk.fit(&measured, &FitOptions::default());
+        let (want, got) = (bone_lengths(&rest), bone_lengths(&fit.pose));
+        for b in 1..want.len() {
+            prop_assert!((got[b] - want[b]).abs() < 1e-9, "bone {b}: {} vs {}", got[b], want[b]);
+        }
+        let e = |p: &surfmotion::skeleton::Pose| -> f64 {
+            p.iter().zip(&measured).map(|(a, b)| a.distance_squared(*b)).sum()
+        };
+        prop_assert!(e(&fit.pose) <= e(&truth) + 1e-12, "fit {} > truth {}", e(&fit.pose), e(&truth));
+    }
+}

@@ -141,8 +141,11 @@ pub struct SkeletonArgs {
     /// Output folder (default: DIR/skeletons).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// How joints are read off a frame.
-    #[arg(long, value_enum, default_value_t = SkeletonKind::Regressor)]
+    /// How joints are read off a frame: `rigid` (default) poses one
+    /// skeleton per character, its bone lengths the median over all frames,
+    /// nearest the regressor joints in each frame (least squares); `regressor`
+    /// gives those joints as measured, `centroid` the paper's part centres.
+    #[arg(long, value_enum, default_value_t = SkeletonKind::Rigid)]
     pub kind: SkeletonKind,
     /// Print the summary as JSON.
     #[arg(long)]
@@ -296,10 +299,12 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
 
 fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     let t = std::time::Instant::now();
-    let (rig, seqs) = extract(&a.dir, a.kind)?;
+    let (rig, seqs, rigid) = extract(&a.dir, a.kind)?;
     let secs = t.elapsed().as_secs_f64();
     let out = a.output.clone().unwrap_or_else(|| a.dir.join("skeletons"));
     rig.save(&out.join("rig.json"))?;
+    // The rigid skeleton's BVH plays its fits back exactly; the measured
+    // joints' BVH has the rest frame's bones turned to their directions.
     let rest_pose = rig.joints.map(glam::DVec3::from_array);
     let mut summary = Vec::new();
     for s in &seqs {
@@ -312,22 +317,50 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
         });
         let jp = out.join(format!("{}.skeleton.json", s.name));
         surfmotion::fsutil::write_bytes_atomic(&jp, serde_json::to_string(&json)?.as_bytes())?;
-        let clip = pose_clip(&rest_pose, &s.poses, s.fps)?;
+        let clip = match &rigid {
+            Some(r) => r.clip(&s.fits, s.fps)?,
+            None => pose_clip(&rest_pose, &s.poses, s.fps)?,
+        };
         let bp = out.join(format!("{}.bvh", s.name));
         surfmotion::mocap::bvh::write_bvh(&clip, &bp)?;
         let spread = bone_length_spread(&s.poses);
         let worst = (1..Canonical::COUNT)
             .max_by(|&x, &y| spread[x].total_cmp(&spread[y]))
             .unwrap_or(1);
-        summary.push(serde_json::json!({
+        let by_bone = |v: [f64; Canonical::COUNT]| {
+            Canonical::ALL
+                .iter()
+                .skip(1)
+                .map(|c| (BVH_NAMES[c.index()], v[c.index()]))
+                .collect::<std::collections::BTreeMap<_, _>>()
+        };
+        let mut row = serde_json::json!({
             "sequence": s.name,
             "frames": s.poses.len(),
             "json": jp,
             "bvh": bp,
-            "bone_length_max_deviation": Canonical::ALL.iter().skip(1).map(|c| (BVH_NAMES[c.index()], spread[c.index()])).collect::<std::collections::BTreeMap<_, _>>(),
+            "bone_length_max_deviation": by_bone(spread),
             "worst_bone": BVH_NAMES[worst],
             "worst_deviation": spread[worst],
-        }));
+        });
+        if let Some(r) = &rigid {
+            let mut rms: Vec<f64> = s.fits.iter().map(|x| x.rms).collect();
+            rms.sort_by(f64::total_cmp);
+            let max = s.fits.iter().map(|x| x.max).fold(0.0, f64::max);
+            let measured = bone_length_spread(&s.measured);
+            let mw = (1..Canonical::COUNT)
+                .max_by(|&x, &y| measured[x].total_cmp(&measured[y]))
+                .unwrap_or(1);
+            row["bone_lengths"] = serde_json::json!(by_bone(r.lengths()));
+            row["regressor_bone_length_max_deviation"] = serde_json::json!(by_bone(measured));
+            row["regressor_worst_bone"] = serde_json::json!(BVH_NAMES[mw]);
+            row["regressor_worst_deviation"] = serde_json::json!(measured[mw]);
+            row["fit_rms_median"] =
+                serde_json::json!(rms.get(rms.len() / 2).copied().unwrap_or(0.0));
+            row["fit_rms_max"] = serde_json::json!(rms.last().copied().unwrap_or(0.0));
+            row["fit_joint_max"] = serde_json::json!(max);
+        }
+        summary.push(row);
     }
     if a.json {
         let v = serde_json::json!({"seconds": secs, "kind": a.kind, "sequences": summary, "notes": rig.notes});
@@ -349,6 +382,18 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
             100.0 * s["worst_deviation"].as_f64().unwrap_or(0.0),
             s["worst_bone"].as_str().unwrap_or("")
         )?;
+        if rigid.is_some() {
+            crate::outln!(
+                "    rigid fit to the regressor joints (whose bones vary by up to {:.1}%, {}): \
+                 joints off by {:.1} mm RMS in the median frame, {:.1} mm RMS in the worst, \
+                 {:.1} mm at most",
+                100.0 * s["regressor_worst_deviation"].as_f64().unwrap_or(0.0),
+                s["regressor_worst_bone"].as_str().unwrap_or(""),
+                1e3 * s["fit_rms_median"].as_f64().unwrap_or(0.0),
+                1e3 * s["fit_rms_max"].as_f64().unwrap_or(0.0),
+                1e3 * s["fit_joint_max"].as_f64().unwrap_or(0.0),
+            )?;
+        }
     }
     for n in &rig.notes {
         crate::outln!("  note: {n}")?;

@@ -4,6 +4,7 @@
 pub mod build;
 pub mod cache;
 pub mod manifest;
+pub mod rigid;
 pub mod skeletons;
 
 pub use build::{BuildOptions, BuildProgress, BuildReport, Quiet, build};

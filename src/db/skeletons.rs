@@ -1,9 +1,11 @@
 //! Per-frame skeletons of a character database (Huang et al. 2015, Sec. 3):
 //! the rig embedded once on the topology's rest frame, then every frame's
 //! canonical joints from the embedding's regressors (or, as in the paper,
-//! the plain centres of the joints' vertex sets).
+//! the plain centres of the joints' vertex sets), and by default the one
+//! rigid skeleton of the character posed to explain them ([`super::rigid`]).
 
 use super::manifest::{DbError, Manifest};
+use super::rigid::{Fit, FitOptions, RigidSkeleton};
 use crate::fsutil::read_text;
 use crate::mesh::Mesh;
 use crate::rig::Canonical;
@@ -18,8 +20,11 @@ use std::path::Path;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SkeletonKind {
-    /// Affine regressors: exact on the rest frame, rigid-motion equivariant.
+    /// The character's rigid skeleton (bone lengths calibrated over the
+    /// database) posed per frame nearest the regressor joints.
     #[default]
+    Rigid,
+    /// Affine regressors: exact on the rest frame, rigid-motion equivariant.
     Regressor,
     /// Plain centres of each joint's vertex set (Huang et al. 2015, Sec. 3).
     Centroid,
@@ -34,6 +39,13 @@ pub struct SequenceSkeleton {
     pub fps: f64,
     /// One pose per frame.
     pub poses: Vec<Pose>,
+    /// For [`SkeletonKind::Rigid`]: the regressor joints the poses were
+    /// fitted to, and each frame's fit; empty otherwise.
+    #[serde(skip)]
+    pub measured: Vec<Pose>,
+    /// Per frame, the rigid fit (pose, rotations, residuals).
+    #[serde(skip)]
+    pub fits: Vec<Fit>,
 }
 
 /// Embeds the database's rig (landmarks, optionally with explicit parts).
@@ -80,14 +92,39 @@ pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding,
 }
 
 /// The poses of frames laid out one after another (`n` positions each).
+/// [`SkeletonKind::Rigid`] calibrates the bone lengths over these frames.
 pub fn poses(rig: &Embedding, frames: &[[f64; 3]], n: usize, kind: SkeletonKind) -> Vec<Pose> {
-    frames
-        .par_chunks(n.max(1))
-        .map(|f| match kind {
-            SkeletonKind::Regressor => rig.skeleton(f),
-            SkeletonKind::Centroid => rig.centroid_skeleton(f),
-        })
-        .collect()
+    let measure = |kind| -> Vec<Pose> {
+        frames
+            .par_chunks(n.max(1))
+            .map(|f| match kind {
+                SkeletonKind::Centroid => rig.centroid_skeleton(f),
+                _ => rig.skeleton(f),
+            })
+            .collect()
+    };
+    match kind {
+        SkeletonKind::Rigid => {
+            let m = measure(SkeletonKind::Regressor);
+            let (_, fits) = rigid_fit(rig, &[&m]);
+            fits.into_iter().flatten().map(|f| f.pose).collect()
+        }
+        k => measure(k),
+    }
+}
+
+/// Calibrates the character's rigid skeleton over every measured sequence
+/// (one bone length for all) and fits it to each frame, in parallel.
+pub fn rigid_fit(rig: &Embedding, measured: &[&[Pose]]) -> (RigidSkeleton, Vec<Vec<Fit>>) {
+    let all: Vec<Pose> = measured.iter().flat_map(|s| s.iter().copied()).collect();
+    let rest = rig.joints.map(glam::DVec3::from_array);
+    let sk = RigidSkeleton::calibrate(&rest, &all);
+    let opts = FitOptions::default();
+    let fits = measured
+        .iter()
+        .map(|s| s.par_iter().map(|m| sk.fit(m, &opts)).collect())
+        .collect();
+    (sk, fits)
 }
 
 /// Largest relative deviation of each bone's length from its median over
@@ -108,11 +145,13 @@ pub fn bone_length_spread(poses: &[Pose]) -> [f64; Canonical::COUNT] {
     })
 }
 
-/// Skeletons of every sequence of the database in `dir`.
+/// Skeletons of every sequence of the database in `dir`; for
+/// [`SkeletonKind::Rigid`] also the calibrated skeleton.
+#[allow(clippy::type_complexity)]
 pub fn extract(
     dir: &Path,
     kind: SkeletonKind,
-) -> Result<(Embedding, Vec<SequenceSkeleton>), DbError> {
+) -> Result<(Embedding, Vec<SequenceSkeleton>, Option<RigidSkeleton>), DbError> {
     let m = Manifest::load(dir)?;
     let topo = m.load_topology(dir)?;
     let rig = embed_rig(dir, &m, &topo)?;
@@ -133,8 +172,27 @@ pub fn extract(
         out.push(SequenceSkeleton {
             name: s.name.clone(),
             fps: s.fps.unwrap_or(m.fps),
-            poses: poses(&rig, seq.all_positions(), topo.vertex_count(), kind),
+            poses: poses(
+                &rig,
+                seq.all_positions(),
+                topo.vertex_count(),
+                match kind {
+                    SkeletonKind::Rigid => SkeletonKind::Regressor,
+                    k => k,
+                },
+            ),
+            measured: Vec::new(),
+            fits: Vec::new(),
         });
     }
-    Ok((rig, out))
+    if kind != SkeletonKind::Rigid {
+        return Ok((rig, out, None));
+    }
+    let measured: Vec<&[Pose]> = out.iter().map(|s| s.poses.as_slice()).collect();
+    let (sk, fits) = rigid_fit(&rig, &measured);
+    for (s, f) in out.iter_mut().zip(fits) {
+        s.measured = std::mem::replace(&mut s.poses, f.iter().map(|x| x.pose).collect());
+        s.fits = f;
+    }
+    Ok((rig, out, Some(sk)))
 }
