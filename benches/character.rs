@@ -1,5 +1,6 @@
 //! Character stage on real data: embedding a rig in samba from the landmark
-//! fixture, extracting skeletons for all 175 samba frames, and synthesising
+//! fixture, extracting skeletons for all 175 samba frames (measured joints,
+//! and the rigid skeleton fitted to them), and synthesising
 //! a 1,000-frame database sequence (a procedural walk driving samba).
 
 mod common;
@@ -35,6 +36,10 @@ fn main() {
                 SkeletonKind::Regressor,
             )
         })
+    });
+    // The rigid skeleton: regressor joints, calibration and 175 fits.
+    g.bench_function("rigid_skeletons_175_frames", |b| {
+        b.iter(|| poses(&rig, black_box(seq.all_positions()), n, SkeletonKind::Rigid))
     });
     let clip = gait_clip(Gait::Walk, 1000.0 / 30.0, 30.0);
     let names = clip.point_names();
