@@ -363,11 +363,18 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
         summary.push(row);
     }
     if a.json {
-        let v = serde_json::json!({"seconds": secs, "kind": a.kind, "sequences": summary, "notes": rig.notes});
+        // Lengths and fit residuals are in the database's units.
+        let units = Manifest::load(&a.dir).map(|m| m.units).unwrap_or_default();
+        let v = serde_json::json!({"seconds": secs, "kind": a.kind, "units": units, "sequences": summary, "notes": rig.notes});
         crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
         return Ok(());
     }
     let frames: usize = seqs.iter().map(|s| s.poses.len()).sum();
+    // Millimetres per model unit, from the manifest's units.
+    let mm = Manifest::load(&a.dir)
+        .ok()
+        .and_then(|m| surfmotion::mocap::units::parse_unit(&m.units))
+        .map_or(1e3, |u| 1e3 * u.metres_per_unit);
     crate::outln!(
         "embedded the rig and extracted {frames} skeletons ({:?}) in {:.3} s → {}",
         a.kind,
@@ -389,9 +396,9 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
                  {:.1} mm at most",
                 100.0 * s["regressor_worst_deviation"].as_f64().unwrap_or(0.0),
                 s["regressor_worst_bone"].as_str().unwrap_or(""),
-                1e3 * s["fit_rms_median"].as_f64().unwrap_or(0.0),
-                1e3 * s["fit_rms_max"].as_f64().unwrap_or(0.0),
-                1e3 * s["fit_joint_max"].as_f64().unwrap_or(0.0),
+                mm * s["fit_rms_median"].as_f64().unwrap_or(0.0),
+                mm * s["fit_rms_max"].as_f64().unwrap_or(0.0),
+                mm * s["fit_joint_max"].as_f64().unwrap_or(0.0),
             )?;
         }
     }
