@@ -136,6 +136,18 @@ pub fn pose_clip(rest: &Pose, poses: &[Pose], fps: f64) -> Result<Clip, ClipErro
             });
         }
     }
+    extracted_clip(joints, fps, rotations, translations)
+}
+
+/// A clip of skeletons extracted from a Y-up mesh sequence: `rotations`
+/// (local) and `translations` hold one entry per joint per frame, frame
+/// after frame.
+pub fn extracted_clip(
+    joints: Vec<Joint>,
+    fps: f64,
+    rotations: Vec<DQuat>,
+    translations: Vec<DVec3>,
+) -> Result<Clip, ClipError> {
     Clip::new(
         joints,
         1.0 / fps.max(1e-9),

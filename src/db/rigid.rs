@@ -33,9 +33,9 @@
 //! 19 joints (≤ 6 blocks each) and factors them (dense Cholesky on the
 //! stack); no heap allocation.
 
-use crate::mocap::{Channel, Clip, ClipError, Joint, JointId, PointConvention, Units, UpAxis};
+use crate::mocap::{Channel, Clip, ClipError, Joint, JointId};
 use crate::rig::Canonical;
-use crate::skeleton::{BVH_NAMES, Pose, pose_rotations};
+use crate::skeleton::{BVH_NAMES, Pose, extracted_clip, pose_rotations};
 use glam::{DQuat, DVec3};
 
 const N: usize = Canonical::COUNT;
@@ -332,19 +332,7 @@ impl RigidSkeleton {
                 });
             }
         }
-        Clip::new(
-            joints,
-            1.0 / fps.max(1e-9),
-            rotations,
-            translations,
-            Units {
-                metres_per_unit: 1.0,
-                name: "m".into(),
-                reason: "extracted from a mesh in metres".into(),
-            },
-            UpAxis::Y,
-            PointConvention::JointOrigins,
-        )
+        extracted_clip(joints, fps, rotations, translations)
     }
 
     /// `JᵀJ` and `Jᵀr` of the residuals `p_k − m_k` in the root
