@@ -187,3 +187,27 @@ proptest! {
         prop_assert!(e(&fit.pose) <= e(&truth) + 1e-12, "fit {} > truth {}", e(&fit.pose), e(&truth));
     }
 }
+
+/// Non-finite measured joints (a NaN in a cache) neither panic nor hang the
+/// fit; a skeleton calibrated from no frames keeps its rest lengths.
+#[test]
+fn the_rigid_fit_survives_non_finite_joints() {
+    use surfmotion::db::rigid::{FitOptions, RigidSkeleton};
+    let rest = rest_skeleton();
+    let sk = RigidSkeleton::calibrate(&rest, &[]);
+    assert_eq!(
+        sk.lengths(),
+        surfmotion::skeleton::bone_lengths(&rest),
+        "no frames: rest lengths"
+    );
+    for bad in [f64::NAN, f64::INFINITY] {
+        let mut m = rest;
+        m[3].x = bad;
+        let f = sk.fit(&m, &FitOptions::default());
+        assert!(f.iterations <= FitOptions::default().max_iterations);
+        let mut all = [DVec3::splat(bad); 19];
+        all[0] = DVec3::ZERO;
+        let f = sk.fit(&all, &FitOptions::default());
+        assert!(f.pose[0].is_finite() || !f.rms.is_finite());
+    }
+}
