@@ -17,10 +17,13 @@ pub enum Cmd {
     /// wrong (connectivity or frame-rate mismatch, missing rig, ...).
     Info(InfoArgs),
     /// Extract the canonical skeleton of every frame of every sequence: the
-    /// rig is embedded from the manifest's landmarks, then each joint is
-    /// read off the frame by its regressor (or --kind centroid, the paper's
-    /// part centres). Writes per sequence SEQ.skeleton.json and SEQ.bvh (for
-    /// any mocap viewer), and rig.json, into --output (default DIR/skeletons).
+    /// rig is embedded from the manifest's landmarks, each joint is read off
+    /// the frame by its regressor, and the character's one rigid skeleton
+    /// (bone lengths calibrated over the database) is fitted to those joints
+    /// (--kind regressor: the joints as measured; --kind centroid: the
+    /// paper's part centres). Writes per sequence SEQ.skeleton.json and
+    /// SEQ.bvh (for any mocap viewer), and rig.json, into --output (default
+    /// DIR/skeletons).
     Skeleton(SkeletonArgs),
     /// Build the Surface Motion Graph: compare every frame with every other
     /// (3D shape histograms minimised over rotation about the vertical, or
