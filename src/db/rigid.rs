@@ -176,7 +176,7 @@ impl RigidSkeleton {
                 .sum()
         };
         // Start from each bone's rotation of least angle onto the measured
-        // bone (the hip pair: the pelvis' best-fitting rotation).
+        // bone (the pelvis body: its best-fitting rotation).
         let g = pose_rotations(&self.rest, measured);
         let mut r = [DQuat::IDENTITY; N];
         for c in Canonical::ALL.iter().skip(1) {
