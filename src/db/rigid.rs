@@ -13,12 +13,13 @@
 //!   frame's embedding and takes the median of its measured length over all
 //!   frames of the database;
 //! - **articulation**: each bone turns about its parent joint on its own,
-//!   except the two hip bones, which are one rigid body with the pelvis (as
-//!   CMU's ASF skeletons give `lhipjoint`/`rhipjoint` no degree of freedom
-//!   while the lower back and the clavicles have theirs: the shoulders
-//!   shrug and the spine bends, the hips do not move in the pelvis);
+//!   except the three bones leaving the pelvis (spine root and both hips),
+//!   which are one rigid body, as the BVH `Hips` joint carries them (CMU's
+//!   ASF skeletons likewise give `lhipjoint`/`rhipjoint` no degree of
+//!   freedom while the clavicles have theirs: the shoulders shrug about
+//!   the chest, the hips do not move in the pelvis);
 //! - **fit**: the root position `t` and one global rotation `R_b` per
-//!   body (a bone, or the hip pair) minimise `E = Σ_k ‖p_k − m_k‖²`, the
+//!   body (a bone, or the pelvis) minimise `E = Σ_k ‖p_k − m_k‖²`, the
 //!   squared distances from the posed joints `p_k` (forward kinematics:
 //!   `p_c = p_j + R_b o_c` for the bone `c` of body `b` hanging from `j`,
 //!   `o_c` its calibrated offset) to the measured ones `m_k`, by
@@ -29,7 +30,7 @@
 //!   the damping keeps it. Iterations stop when one lowers `E` by less than
 //!   a relative `tolerance` or the joints are met to 1e-9 of the skeleton.
 //!
-//! Cost per frame: an iteration assembles the 54 × 54 normal equations from
+//! Cost per frame: an iteration assembles the 51 × 51 normal equations from
 //! 19 joints (≤ 6 blocks each) and factors them (dense Cholesky on the
 //! stack); no heap allocation.
 
