@@ -3,6 +3,7 @@
 
 use super::canonical::Canonical;
 use crate::mocap::{Clip, JointId};
+use crate::skeleton::Pose;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -320,6 +321,30 @@ impl RigMap {
     pub fn save(&self, path: &Path) -> Result<(), crate::fsutil::FsError> {
         let s = serde_json::to_string_pretty(self).unwrap_or_default();
         crate::fsutil::write_bytes_atomic(path, s.as_bytes())
+    }
+
+    /// Canonical joint positions of every frame of `clip`, in the clip's
+    /// units. Rig maps name a canonical joint by the bone that starts there,
+    /// so each is the joint origin (also for ASF/AMC clips, whose native
+    /// points are bone ends).
+    pub fn poses(&self, clip: &Clip) -> Result<Vec<Pose>, RigError> {
+        use rayon::prelude::*;
+        let ids = self.resolve(clip)?;
+        Ok((0..clip.frame_count())
+            .into_par_iter()
+            .map(|f| {
+                let p = clip.world_positions(f);
+                std::array::from_fn(|c| p[ids[c].idx()])
+            })
+            .collect())
+    }
+
+    /// Canonical joint positions of the clip's rest skeleton (every local
+    /// rotation the identity, offsets as in the file), in the clip's units.
+    pub fn rest_pose(&self, clip: &Clip) -> Result<Pose, RigError> {
+        let ids = self.resolve(clip)?;
+        let (p, _) = clip.rest_positions();
+        Ok(std::array::from_fn(|c| p[ids[c].idx()]))
     }
 
     /// Resolves every canonical joint to a joint of `clip`.
