@@ -10,7 +10,8 @@ use std::hint::black_box;
 use surfmotion::db::skeletons::{SkeletonKind, poses};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::synth::database::{Dynamics, clip_poses, synthesise};
+use surfmotion::rig::retarget::clip_poses;
+use surfmotion::synth::database::{Dynamics, synthesise};
 use surfmotion::synth::{Gait, gait_clip};
 
 fn main() {
@@ -45,9 +46,18 @@ fn main() {
     let names = clip.point_names();
     let map = surfmotion::rig::detect(&names).map;
     let mocap = clip_poses(&clip, &map).unwrap();
-    assert_eq!(mocap.len(), 1000);
+    assert_eq!(mocap.poses.len(), 1000);
     g.bench_function("synthesise_1000_frames", |b| {
-        b.iter(|| synthesise(&rest, &rig, black_box(&mocap), 30.0, Dynamics::default()))
+        b.iter(|| {
+            synthesise(
+                &rest,
+                &rig,
+                black_box(&mocap.poses),
+                &mocap.reference,
+                30.0,
+                Dynamics::default(),
+            )
+        })
     });
     g.finish();
     c.final_summary();

@@ -52,7 +52,7 @@ fn main() {
         deform: DeformMode::None,
         ..Default::default()
     };
-    let raw = synthesise(&ch, &q.poses, 30.0, &none).unwrap();
+    let raw = synthesise(&ch, &q.poses, &q.reference, 30.0, &none).unwrap();
     let n = ch.n;
     let frames = raw.report.frames;
     let skeletons: Vec<_> = raw

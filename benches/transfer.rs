@@ -53,7 +53,7 @@ fn bench(c: &mut Criterion, d: &std::path::Path, cases: &[Case]) {
             .as_ref()
             .map(|p| load_mocap(p, &Default::default(), 30.0).unwrap());
         let source = || match &clip {
-            Some(c) => Source::Mocap(&c.poses),
+            Some(c) => Source::Mocap(&c.poses, &c.reference),
             None => Source::Template {
                 frames: &seq,
                 markers: &tmarkers,

@@ -21,9 +21,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let lm = Landmarks::load(landmarks.as_ref(), mesh.vertex_count())?;
     // Repair, embed the rig, place ~180 markers in rings along the bones.
     let prepared = prepare(&mesh, MarkerSpec::Landmarks(&lm, MarkerOptions::default()))?;
-    let poses = load_mocap(clip.as_ref(), &Default::default(), 30.0)?.poses;
+    let clip = load_mocap(clip.as_ref(), &Default::default(), 30.0)?;
     // Factor the harmonic and Poisson systems once; marker motion per frame.
-    let mut job = Job::new(&prepared, Source::Mocap(&poses))?;
+    let mut job = Job::new(&prepared, Source::Mocap(&clip.poses, &clip.reference))?;
     let (positions, stats) = transfer(
         &job.confluent,
         &mut job.motion,

@@ -20,8 +20,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let ch = Character::load(db.as_ref(), &surfmotion::db::Quiet)?;
     let fps = ch.manifest.fps;
-    let poses = load_mocap(clip.as_ref(), &Default::default(), fps)?.poses;
-    let r = synthesise(&ch, &poses, fps, &RetargetOptions::default())?;
+    let clip = load_mocap(clip.as_ref(), &Default::default(), fps)?;
+    let r = synthesise(
+        &ch,
+        &clip.poses,
+        &clip.reference,
+        fps,
+        &RetargetOptions::default(),
+    )?;
     println!(
         "{} frames, {} transitions",
         r.report.frames,

@@ -5,7 +5,7 @@ mod common;
 use glam::DVec3;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
 use surfmotion::retarget::character::Character;
-use surfmotion::retarget::query::load_mocap;
+use surfmotion::retarget::query::{MocapPoses, load_mocap};
 use surfmotion::retarget::{Output, RetargetOptions, synthesise};
 use surfmotion::skeleton::Pose;
 
@@ -72,13 +72,13 @@ fn skeleton_error(ch: &Character, p: &[[f64; 3]], q: &[Pose]) -> f64 {
     s / q.len() as f64
 }
 
-/// The query `poses` on `ch` with deformation `mode` (default options).
-fn run(ch: &Character, poses: &[Pose], mode: DeformMode) -> Output {
+/// The query `m` on `ch` with deformation `mode` (default options).
+fn run(ch: &Character, m: &MocapPoses, mode: DeformMode) -> Output {
     let opts = RetargetOptions {
         deform: mode,
         ..Default::default()
     };
-    synthesise(ch, poses, 30.0, &opts).unwrap()
+    synthesise(ch, &m.poses, &m.reference, 30.0, &opts).unwrap()
 }
 
 /// Triangle-frames of `res` turned over relative to the frames `raw` they
@@ -111,8 +111,8 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
     for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
         let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), 30.0).unwrap();
         let (raw, part) = (
-            run(&ch, &m.poses, DeformMode::None),
-            run(&ch, &m.poses, DeformMode::Part),
+            run(&ch, &m, DeformMode::None),
+            run(&ch, &m, DeformMode::Part),
         );
         assert!(
             part.positions.iter().flatten().all(|x| x.is_finite()),
@@ -124,7 +124,7 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
             e_part < e_raw,
             "{clip}: part {e_part} vs interpolation {e_raw}"
         );
-        let lbs = run(&ch, &m.poses, DeformMode::Lbs);
+        let lbs = run(&ch, &m, DeformMode::Lbs);
         let flips = |res: &Output| turned_over(&ch, &raw, res);
         let (f_part, f_lbs) = (flips(&part), flips(&lbs));
         let total = raw.report.frames * tris.len();
@@ -141,6 +141,7 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
         let bare = synthesise(
             &ch,
             &m.poses,
+            &m.reference,
             30.0,
             &RetargetOptions {
                 deform_options: DeformOptions {
@@ -197,7 +198,7 @@ fn a_walk_on_the_real_capture_turns_no_triangle_over() {
     )
     .unwrap();
     let [raw, part, lbs] =
-        [DeformMode::None, DeformMode::Part, DeformMode::Lbs].map(|mode| run(&ch, &m.poses, mode));
+        [DeformMode::None, DeformMode::Part, DeformMode::Lbs].map(|mode| run(&ch, &m, mode));
     let (f_part, f_lbs) = (turned_over(&ch, &raw, &part), turned_over(&ch, &raw, &lbs));
     assert!(f_lbs > 0);
     assert_eq!(f_part, 0, "{f_part} triangle-frames turned over");

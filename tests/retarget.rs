@@ -28,7 +28,7 @@ fn run(
 ) -> (surfmotion::retarget::Output, usize) {
     let fps = ch.manifest.fps;
     let m = load_mocap(clip, &Default::default(), fps).unwrap();
-    let out = synthesise(ch, &m.poses, fps, opts).unwrap();
+    let out = synthesise(ch, &m.poses, &m.reference, fps, opts).unwrap();
     (out, m.poses.len())
 }
 
@@ -147,7 +147,7 @@ fn interpolated_frames_lie_between_their_neighbours() {
         deform: surfmotion::deform::DeformMode::None,
         ..Default::default()
     };
-    let out = synthesise(&ch, &slow, fps, &opts).unwrap();
+    let out = synthesise(&ch, &slow, &m.reference, fps, &opts).unwrap();
     let r = &out.report;
     let mut checked = 0;
     let mut buf = vec![[0.0; 3]; n];

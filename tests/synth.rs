@@ -10,8 +10,9 @@ use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::rig::embed::parts::Part;
+use surfmotion::rig::retarget::clip_poses;
 use surfmotion::skeleton::bone_lengths;
-use surfmotion::synth::database::{Dynamics, clip_poses, synthesise};
+use surfmotion::synth::database::{Dynamics, synthesise};
 
 fn samba_rig(d: &Path) -> (surfmotion::mesh::Mesh, Embedding) {
     let rest = read_obj(&d.join("4d/samba/samba.obj")).unwrap();
@@ -37,7 +38,14 @@ fn walk_and_run_have_the_right_frames_rigid_bones_and_measurable_dynamics() {
         let names = clip.point_names();
         let map = surfmotion::rig::detect(&names).map;
         let poses = clip_poses(&clip, &map).unwrap();
-        let out = synthesise(&rest, &rig, &poses, 30.0, Dynamics::default());
+        let out = synthesise(
+            &rest,
+            &rig,
+            &poses.poses,
+            &poses.reference,
+            30.0,
+            Dynamics::default(),
+        );
         let n = rest.vertex_count();
         let frames = clip.frame_count();
         assert_eq!(out.poses.len(), frames, "{clip_name}");

@@ -213,7 +213,7 @@ fn walk_on(name: &str, scan: &Mesh, landmarks: &str, clip: &Path) {
         prepared.markers.len()
     );
     let clip = load_mocap(clip, &Default::default(), 30.0).unwrap();
-    let mut job = Job::new(&prepared, Source::Mocap(&clip.poses)).unwrap();
+    let mut job = Job::new(&prepared, Source::Mocap(&clip.poses, &clip.reference)).unwrap();
     let (out, stats) = transfer(
         &job.confluent,
         &mut job.motion,

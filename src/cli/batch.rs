@@ -17,7 +17,7 @@ use surfmotion::retarget::{RetargetOptions, synthesise};
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::skeleton::Pose;
 use surfmotion::transfer::{
-    Job, MarkerOptions, MarkerSpec, Source, TransferOptions, mocap_motion, prepare, transfer,
+    Job, MarkerOptions, MarkerSpec, TransferOptions, mocap_motion, prepare, transfer,
 };
 
 /// Arguments of `batch`.
@@ -73,10 +73,16 @@ fn retarget_converter(db: &Path) -> anyhow::Result<(Convert, String)> {
         if mocap.poses.is_empty() {
             return Err("the clip has no frames".into());
         }
-        let r = synthesise(&ch, &mocap.poses, fps, &RetargetOptions::default())
-            .map_err(|e| e.to_string())?;
+        let r = synthesise(
+            &ch,
+            &mocap.poses,
+            &mocap.reference,
+            fps,
+            &RetargetOptions::default(),
+        )
+        .map_err(|e| e.to_string())?;
         let frames = r.positions.len() / ch.n.max(1);
-        let query = to_character(&ch.rest_pose, &mocap.poses);
+        let query = to_character(&ch.rest_pose, &mocap.reference, &mocap.poses);
         let skel: Vec<Pose> = r
             .positions
             .chunks(ch.n.max(1))
@@ -100,14 +106,15 @@ fn transfer_converter(scan: &str, landmarks: &Path, fps: f64) -> anyhow::Result<
     let lm = Landmarks::load(landmarks, mesh.vertex_count())?;
     let prepared = prepare(&mesh, MarkerSpec::Landmarks(&lm, MarkerOptions::default()))?;
     // Factored once for every clip.
-    let confluent = Job::new(&prepared, Source::Mocap(&[]))?.confluent;
+    let (confluent, _) = Job::factor_mocap(&prepared)?;
     let what = format!("transfer --scan {scan}");
     let f = move |clip: &Path, out: &Path| -> Result<Converted, String> {
         let mocap = load_mocap(clip, &Default::default(), fps).map_err(|e| e.to_string())?;
         if mocap.poses.is_empty() {
             return Err("the clip has no frames".into());
         }
-        let mut motion = mocap_motion(&prepared, &mocap.poses).map_err(|e| e.to_string())?;
+        let mut motion =
+            mocap_motion(&prepared, &mocap.poses, &mocap.reference).map_err(|e| e.to_string())?;
         let (pos, stats) = transfer(
             &confluent,
             &mut motion,
@@ -117,7 +124,7 @@ fn transfer_converter(scan: &str, landmarks: &Path, fps: f64) -> anyhow::Result<
         let n = prepared.mesh.vertex_count();
         let rig = prepared.rig.as_ref().ok_or("no rig")?;
         let rest: Pose = rig.joints.map(glam::DVec3::from_array);
-        let query = to_character(&rest, &mocap.poses);
+        let query = to_character(&rest, &mocap.reference, &mocap.poses);
         let skel: Vec<Pose> = pos.chunks(n.max(1)).map(|p| rig.skeleton(p)).collect();
         let e = velocity_error(&query, &skel);
         let seq =

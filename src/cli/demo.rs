@@ -11,7 +11,8 @@ use surfmotion::render::{Scene, View, render};
 use surfmotion::retarget::character::Character;
 use surfmotion::retarget::{RetargetOptions, synthesise};
 use surfmotion::rig::embed::Embedding;
-use surfmotion::synth::database::{Dynamics, clip_poses, synthesise as synth_db};
+use surfmotion::rig::retarget::clip_poses;
+use surfmotion::synth::database::{Dynamics, synthesise as synth_db};
 use surfmotion::synth::humanoid::{
     DEMO_GRID, humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh,
 };
@@ -57,7 +58,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let clip = gait_clip(g, seconds, fps);
         let map = surfmotion::rig::detect(&clip.point_names()).map;
         let poses = clip_poses(&clip, &map)?;
-        let out = synth_db(&mesh, &rig, &poses, fps, Dynamics::default());
+        let out = synth_db(
+            &mesh,
+            &rig,
+            &poses.poses,
+            &poses.reference,
+            fps,
+            Dynamics::default(),
+        );
         let seq = MeshSequence::new(mesh.clone(), out.positions, Some(fps))?;
         let file = format!("{}.pc2", g.name());
         save_sequence(&seq, &db.join(&file), Some(fps))?;
@@ -93,7 +101,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mocap = clip_poses(&query_clip, &map)?;
     surfmotion::mocap::bvh::write_bvh(&query_clip, &dir.join("query_turn.bvh"))?;
     let t2 = Instant::now();
-    let out = synthesise(&ch, &mocap, fps, &RetargetOptions::default())?;
+    let out = synthesise(
+        &ch,
+        &mocap.poses,
+        &mocap.reference,
+        fps,
+        &RetargetOptions::default(),
+    )?;
     let t_retarget = t2.elapsed().as_secs_f64();
     let result = dir.join("turn.glb");
     let seq = MeshSequence::new(ch.topology_metres(), out.positions.clone(), Some(fps))?;

@@ -76,7 +76,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     } else {
         a.deform
     };
-    let out = synthesise(&ch, &mocap.poses, fps, &opts)?;
+    let out = synthesise(&ch, &mocap.poses, &mocap.reference, fps, &opts)?;
     let seq = MeshSequence::new(ch.topology_metres(), out.positions, Some(fps))?;
     let written = save_sequence(&seq, &a.output, Some(fps))?;
     let r = &out.report;
@@ -190,7 +190,7 @@ pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
     let fps = ch.manifest.fps;
     let mocap = load_mocap(&a.mocap, &a.clip.load_options()?, fps)?;
-    let query = to_character(&ch.rest_pose, &mocap.poses);
+    let query = to_character(&ch.rest_pose, &mocap.reference, &mocap.poses);
     let res = load_sequence(&a.result.to_string_lossy(), &LoadOptions::default())
         .with_context(|| a.result.display().to_string())?;
     anyhow::ensure!(

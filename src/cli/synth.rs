@@ -85,11 +85,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut frames_total = 0usize;
     let t1 = Instant::now();
     for path in &a.mocap {
-        let mut poses = surfmotion::retarget::query::load_mocap(path, &opts, a.fps)?.poses;
+        let clip = surfmotion::retarget::query::load_mocap(path, &opts, a.fps)?;
+        let mut poses = clip.poses;
         if let Some(s) = a.seconds {
             poses.truncate(((s * a.fps).round() as usize).max(1));
         }
-        let out = synthesise(&rest, &rig, &poses, a.fps, dynamics);
+        let out = synthesise(&rest, &rig, &poses, &clip.reference, a.fps, dynamics);
         // A unique sequence name from the clip's file stem.
         let stem = path
             .file_stem()

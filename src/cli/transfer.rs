@@ -150,7 +150,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             m.display()
         );
         (
-            Source::Mocap(&clip.poses),
+            Source::Mocap(&clip.poses, &clip.reference),
             a.fps,
             format!("{} ({} rig)", m.display(), clip.convention),
         )

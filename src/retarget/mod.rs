@@ -17,6 +17,7 @@ pub mod trellis;
 use crate::deform::{DeformMode, DeformOptions, Deformer, TurnedOver};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
+use crate::rig::retarget::Reference;
 use crate::skeleton::{Pose, floor_fit, rotate_yaw};
 use character::Character;
 use glam::DVec3;
@@ -169,16 +170,18 @@ impl Frames for Character {
 }
 
 /// Drives the character by the mocap poses (metres, Y-up, the clip's own
-/// skeleton at the database frame rate): Sec. 5.2 up to interpolation.
+/// skeleton at the database frame rate) and the clip's neutral `reference`
+/// ([`query::load_mocap`] gives both): Sec. 5.2 up to interpolation.
 pub fn synthesise(
     ch: &Character,
     mocap: &[Pose],
+    reference: &Reference,
     fps: f64,
     opts: &RetargetOptions,
 ) -> Result<Output, SolveError> {
     let mut timings = Timings::default();
     let t0 = Instant::now();
-    let query = query::to_character(&ch.rest_pose, mocap);
+    let query = query::to_character(&ch.rest_pose, reference, mocap);
     timings.query = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let successor = |id: u32| ch.successor(id);

@@ -3,17 +3,20 @@
 //!
 //! The clip is read (BVH or ASF/AMC, any detected rig convention or a given
 //! rig map), converted to metres and Y-up, resampled to the database's
-//! frame rate and reduced to the 19 canonical joints. It is then retargeted
-//! to the character ([`crate::synth::database::retarget`]): every bone keeps
-//! the clip's direction and takes the character's length, and the root
-//! follows the clip's pelvis scaled by the ratio of leg lengths. The result
-//! keeps the clip's global root trajectory (it places the output); pose
-//! comparison aligns translation and heading per pair (Eq. 28).
+//! frame rate and reduced to the 19 canonical joints, with the clip's
+//! neutral reference pose. It is then retargeted to the character
+//! ([`crate::rig::retarget`]): the torso turns by the clip's rotations since
+//! that reference (the character keeps its captured attitude), the limbs
+//! take the clip's bone directions, every bone the character's length, and
+//! the root follows the clip's pelvis scaled by the ratio of leg lengths.
+//! The result keeps the clip's global root trajectory (it places the
+//! output); pose comparison aligns translation and heading per pair
+//! (Eq. 28).
 
 use crate::mocap::{LoadOptions, MocapError, load_clip};
+use crate::rig::retarget::{ClipPoses, Reference, clip_poses, retarget};
 use crate::rig::{RigError, detect};
 use crate::skeleton::Pose;
-use crate::synth::database::{clip_poses, retarget};
 use std::path::{Path, PathBuf};
 
 /// Errors of query preparation.
@@ -37,6 +40,8 @@ pub enum QueryError {
 pub struct MocapPoses {
     /// The clip's own joints (metres, Y-up), one pose per frame.
     pub poses: Vec<Pose>,
+    /// The clip's neutral reference pose (metres, Y-up).
+    pub reference: Reference,
     /// Frames per second (the requested rate).
     pub fps: f64,
     /// The rig convention used.
@@ -69,20 +74,25 @@ pub fn load_mocap(path: &Path, opts: &LoadOptions, fps: f64) -> Result<MocapPose
             det.map
         }
     };
-    let poses = clip_poses(&clip, &map).map_err(|e: RigError| QueryError::Rig {
-        path: path.to_path_buf(),
-        msg: e.to_string(),
-    })?;
+    let ClipPoses { poses, reference } =
+        clip_poses(&clip, &map).map_err(|e: RigError| QueryError::Rig {
+            path: path.to_path_buf(),
+            msg: e.to_string(),
+        })?;
     Ok(MocapPoses {
         poses,
+        reference,
         fps,
         convention: map.convention.clone(),
         source_fps,
     })
 }
 
-/// The clip's poses on the character's skeleton `rest` (bone directions
-/// from the clip, lengths from the character).
-pub fn to_character(rest: &Pose, mocap: &[Pose]) -> Vec<Pose> {
-    retarget(rest, mocap).into_iter().map(|(p, _)| p).collect()
+/// The clip's poses on the character's skeleton `rest` (see
+/// [`crate::rig::retarget`]).
+pub fn to_character(rest: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<Pose> {
+    retarget(rest, reference, mocap)
+        .into_iter()
+        .map(|(p, _)| p)
+        .collect()
 }

@@ -242,6 +242,12 @@ pub enum RigError {
         /// What went wrong.
         msg: String,
     },
+    /// The clip's skeleton cannot be retargeted (no extent, no frames).
+    #[error("degenerate skeleton: {reason}")]
+    Degenerate {
+        /// What is wrong.
+        reason: String,
+    },
 }
 
 /// Result of auto-detection.

@@ -4,10 +4,9 @@
 //! pure skinning. Each clip becomes one sequence; the skeleton that drove it
 //! is kept as ground truth.
 //!
-//! Retargeting: every frame's canonical bone directions come from the clip;
-//! bone lengths from the character. The root follows the clip's pelvis,
-//! scaled by the ratio of leg lengths. Rotations per joint come from
-//! [`pose_rotations`] (least rotation per bone, Kabsch at branching joints).
+//! Retargeting: [`crate::rig::retarget`] (the torso turns by the clip's
+//! rotations since its neutral reference, the limbs take the clip's bone
+//! directions, bone lengths are the character's).
 //!
 //! Dynamics: each vertex `x` follows its skinned position `t` as
 //! `ẍ = ω² (t − x) − 2 ζ ω ẋ` (semi-implicit Euler, four substeps a frame),
@@ -16,12 +15,12 @@
 //! the body's typical skin-to-bone distance: a skirt, loose sleeves).
 
 use crate::mesh::Mesh;
-use crate::mocap::Clip;
+use crate::rig::Canonical;
 use crate::rig::embed::Embedding;
 use crate::rig::embed::heat::nearest_bones;
 use crate::rig::embed::parts::Part;
-use crate::rig::{Canonical, RigError, RigMap};
-use crate::skeleton::{Pose, pose_rotations};
+use crate::rig::retarget::{Reference, retarget};
+use crate::skeleton::Pose;
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 
@@ -56,62 +55,6 @@ pub struct Synthesised {
     pub poses: Vec<Pose>,
 }
 
-/// Canonical joint positions of every frame of a clip. Rig maps name a
-/// canonical joint by the bone that starts there, so this is the joint
-/// origin (also for ASF/AMC clips, whose points are bone ends).
-pub fn clip_poses(clip: &Clip, map: &RigMap) -> Result<Vec<Pose>, RigError> {
-    let ids = map.resolve(clip)?;
-    Ok((0..clip.frame_count())
-        .into_par_iter()
-        .map(|f| {
-            let p = clip.world_positions(f);
-            std::array::from_fn(|c| p[ids[c].idx()])
-        })
-        .collect())
-}
-
-fn leg_length(p: &Pose) -> f64 {
-    use Canonical as C;
-    let d = |a: C, b: C| p[a.index()].distance(p[b.index()]);
-    0.5 * (d(C::LHip, C::LKnee)
-        + d(C::LKnee, C::LAnkle)
-        + d(C::RHip, C::RKnee)
-        + d(C::RKnee, C::RAnkle))
-}
-
-/// The character's joint rotations and positions in each mocap pose.
-///
-/// The mocap's own rotation of every joint since its first frame,
-/// `G_m(t)`, is composed with a fixed offset `O` that turns the character's
-/// rest bones onto the mocap's first-frame bones: `G(t) = G_m(t) O`. Joint
-/// positions are forward kinematics of `G(t)` on the character's rest bone
-/// offsets, the root following the mocap's pelvis scaled by the ratio of
-/// leg lengths. Skinning with these rotations and positions is consistent
-/// (no tearing where a branching joint's children disagree).
-pub fn retarget(rest: &Pose, mocap: &[Pose]) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
-    let Some(first) = mocap.first() else {
-        return Vec::new();
-    };
-    let s = leg_length(rest) / leg_length(first).max(1e-9);
-    let root = Canonical::Pelvis.index();
-    let offset = pose_rotations(rest, first);
-    mocap
-        .iter()
-        .map(|m| {
-            let gm = pose_rotations(first, m);
-            let g: [DQuat; Canonical::COUNT] =
-                std::array::from_fn(|j| (gm[j] * offset[j]).normalize());
-            let mut t = [DVec3::ZERO; Canonical::COUNT];
-            t[root] = rest[root] + (m[root] - first[root]) * s;
-            for c in Canonical::ALL.iter().skip(1) {
-                let p = c.parent().map_or(root, |p| p.index());
-                t[c.index()] = t[p] + g[p] * (rest[c.index()] - rest[p]);
-            }
-            (t, g)
-        })
-        .collect()
-}
-
 /// Softness of every vertex in [0, 1]: 0 up to 1.5 times the body's median
 /// distance from skin to bone, rising to 1 at 2.5 times (a skirt, a loose
 /// sleeve); always 0 on the head and feet.
@@ -133,18 +76,20 @@ pub fn softness(rest: &Mesh, rig: &Embedding) -> Vec<f64> {
         .collect()
 }
 
-/// Drives `rest` (with its rig) by the clip's canonical poses, at the clip's
-/// frame rate (resample the clip first for another rate).
+/// Drives `rest` (with its rig) by the clip's canonical poses (metres,
+/// Y-up) and their neutral `reference`, at the clip's frame rate (resample
+/// the clip first for another rate).
 pub fn synthesise(
     rest: &Mesh,
     rig: &Embedding,
     mocap: &[Pose],
+    reference: &Reference,
     fps: f64,
     dynamics: Dynamics,
 ) -> Synthesised {
     let n = rest.vertex_count();
     let rest_pose: Pose = rig.joints.map(DVec3::from_array);
-    let driven = retarget(&rest_pose, mocap);
+    let driven = retarget(&rest_pose, reference, mocap);
     let soft: Vec<f64> = softness(rest, rig)
         .into_iter()
         .map(|s| (s * dynamics.amount).clamp(0.0, 1.0))

@@ -8,16 +8,16 @@ use super::scan::PreparedScan;
 use super::source::{MarkerMotion, TemplateMarkers, from_skeleton, from_template};
 use crate::mesh::{Bounds, MeshSequence};
 use crate::rig::embed::Embedding;
+use crate::rig::retarget::{Reference, retarget};
 use crate::skeleton::Pose;
-use crate::synth::database::retarget;
 use glam::{DMat3, DQuat, DVec3};
 use std::collections::HashMap;
 
 /// What drives the scan.
 pub enum Source<'a> {
-    /// Canonical poses of a clip (metres, Y-up), as
-    /// [`crate::retarget::query::load_mocap`] gives them.
-    Mocap(&'a [Pose]),
+    /// Canonical poses of a clip (metres, Y-up) and its neutral reference,
+    /// as [`crate::retarget::query::load_mocap`] gives them.
+    Mocap(&'a [Pose], &'a Reference),
     /// A moving template mesh with its markers (paired with the scan's by
     /// name) and the frame that is its reference pose.
     Template {
@@ -96,12 +96,16 @@ pub enum JobError {
 /// the markers [`Job::new`] uses for a mocap source) from a clip's poses.
 /// For many clips on one scan: factor once with [`Job::new`], then call
 /// this per clip.
-pub fn mocap_motion(scan: &PreparedScan, poses: &[Pose]) -> Result<MarkerMotion, JobError> {
+pub fn mocap_motion(
+    scan: &PreparedScan,
+    poses: &[Pose],
+    reference: &Reference,
+) -> Result<MarkerMotion, JobError> {
     let rig = scan.rig.as_ref().ok_or(JobError::NoSkeleton)?;
     let p = scan.mesh.positions();
     let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
     let rest: Pose = rig.joints.map(DVec3::from_array);
-    let frames = retarget(&rest, poses);
+    let frames = retarget(&rest, reference, poses);
     let bones: Vec<_> = used.iter().filter_map(|m| m.bone).collect();
     let cs: Vec<DVec3> = used
         .iter()
@@ -117,6 +121,23 @@ pub fn mocap_motion(scan: &PreparedScan, poses: &[Pose]) -> Result<MarkerMotion,
 }
 
 impl Job {
+    /// Factors the scan for a mocap source (the markers that name a bone),
+    /// once for any number of clips ([`mocap_motion`] per clip); returns
+    /// the names of the markers used.
+    pub fn factor_mocap(scan: &PreparedScan) -> Result<(Confluent, Vec<String>), JobError> {
+        let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
+        if used.is_empty() {
+            return Err(JobError::NoMarkers(
+                "no marker names a bone: a mocap source drives markers through bones".into(),
+            ));
+        }
+        let tris: Vec<u32> = used.iter().map(|m| m.triangle).collect();
+        Ok((
+            Confluent::new(&scan.mesh, &tris)?,
+            used.iter().map(|m| m.name.clone()).collect(),
+        ))
+    }
+
     /// Pairs markers, factors the scan and computes the marker motion.
     pub fn new(scan: &PreparedScan, source: Source<'_>) -> Result<Job, JobError> {
         let p = scan.mesh.positions();
@@ -128,21 +149,14 @@ impl Job {
                 / 3.0
         };
         match source {
-            Source::Mocap(poses) => {
-                let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
-                if used.is_empty() {
-                    return Err(JobError::NoMarkers(
-                        "no marker names a bone: a mocap source drives markers through bones"
-                            .into(),
-                    ));
-                }
-                let motion = mocap_motion(scan, poses)?;
-                let tris: Vec<u32> = used.iter().map(|m| m.triangle).collect();
+            Source::Mocap(poses, reference) => {
+                let (confluent, used) = Job::factor_mocap(scan)?;
+                let motion = mocap_motion(scan, poses, reference)?;
                 Ok(Job {
-                    confluent: Confluent::new(&scan.mesh, &tris)?,
+                    confluent,
                     motion,
-                    used: used.iter().map(|m| m.name.clone()).collect(),
                     unpaired: scan.markers.len() - used.len(),
+                    used,
                 })
             }
             Source::Template {

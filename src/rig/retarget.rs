@@ -1,0 +1,426 @@
+//! Rest-pose-aware retargeting: a clip's canonical poses onto a character's
+//! own skeleton (used by `synth`, `retarget`, `transfer` and everything
+//! after them).
+//!
+//! Copying every bone's *direction* from the clip (the retargeting of
+//! Huang et al. 2015, Sec. 5.2, taken literally) gives the character the
+//! clip's anatomy wherever the two skeletons define a joint differently: a
+//! CMU "head" joint sits at the base of the skull, a character's at the top
+//! of its neck region, and the difference became a permanent 15-30° tilt of
+//! the head. Here the skeleton is split by what matters where:
+//!
+//! - **Torso** (pelvis, spine, chest, neck, head): each joint turns by the
+//!   clip's rotation *since a neutral reference pose of the clip*,
+//!   `G_j(t) = A_j(t) H` with `A(t)` the rotations taking the reference's
+//!   bones onto frame `t`'s ([`pose_rotations`]) and `H` the turn about the
+//!   vertical that faces the character's rest frame the reference's way. A
+//!   clip standing neutrally gives the character standing as captured; the
+//!   clip's motion comes on top.
+//! - **Limbs** (upper arms, forearms, thighs, shins, feet): each bone takes
+//!   the clip's direction at `t` (the least rotation from where the parent
+//!   carries the character's rest bone, so twist follows the parent), so
+//!   hands and feet reach where the clip's do, scaled; T- versus A-pose arms
+//!   make no difference.
+//! - **Root**: horizontal travel from the clip's first frame scaled by the
+//!   ratio of leg lengths (character / reference); height above the floor
+//!   scaled the same way, each skeleton's floor being its lowest ankle or
+//!   toe (the character's rest frame; the clip's 5th percentile over
+//!   frames), so the feet stand where the clip's stand.
+//!
+//! The clip's reference ([`choose_reference`]) is its rest skeleton when
+//! that stands upright (a T- or A-pose: trunk within 20° of vertical, legs
+//! within 30°, bones as long as in the motion), else its most neutral frame
+//! (trunk nearest vertical, knees straightest).
+
+use super::{Canonical, RigError, RigMap};
+use crate::mocap::Clip;
+use crate::skeleton::{Pose, pose_rotations};
+use glam::{DQuat, DVec3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Where a clip's neutral reference pose comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ReferenceSource {
+    /// The clip's rest (bind) skeleton, which stands upright.
+    Rest,
+    /// The clip's most neutral frame (the rest skeleton was not upright).
+    Frame(usize),
+}
+
+impl std::fmt::Display for ReferenceSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ReferenceSource::Rest => write!(f, "rest skeleton"),
+            ReferenceSource::Frame(i) => write!(f, "most neutral frame ({i})"),
+        }
+    }
+}
+
+/// A clip's neutral reference pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reference {
+    /// Canonical joint positions (the clip's units and axes).
+    pub pose: Pose,
+    /// Where it came from.
+    pub source: ReferenceSource,
+}
+
+/// A clip as canonical poses with its neutral reference.
+#[derive(Debug, Clone)]
+pub struct ClipPoses {
+    /// One pose per frame (the clip's units and axes).
+    pub poses: Vec<Pose>,
+    /// The neutral reference the retargeting measures rotations from.
+    pub reference: Reference,
+}
+
+/// Canonical poses of every frame of `clip` and its neutral reference.
+/// Convert the clip to metres, Y-up, first (`Clip::to_metres_y_up`): the
+/// reference is chosen against the vertical.
+pub fn clip_poses(clip: &Clip, map: &RigMap) -> Result<ClipPoses, RigError> {
+    let poses = map.poses(clip)?;
+    let rest = map.rest_pose(clip)?;
+    let reference = choose_reference(Some(&rest), &poses)?;
+    Ok(ClipPoses { poses, reference })
+}
+
+use Canonical as C;
+
+const TORSO: [Canonical; 5] = [C::Pelvis, C::Spine, C::Chest, C::Neck, C::Head];
+
+fn is_torso(c: Canonical) -> bool {
+    TORSO.contains(&c)
+}
+
+/// Mean length of the two legs (hip to knee to ankle).
+pub fn leg_length(p: &Pose) -> f64 {
+    let d = |a: C, b: C| p[a.index()].distance(p[b.index()]);
+    0.5 * (d(C::LHip, C::LKnee)
+        + d(C::LKnee, C::LAnkle)
+        + d(C::RHip, C::RKnee)
+        + d(C::RKnee, C::RAnkle))
+}
+
+fn angle(a: DVec3, b: DVec3) -> f64 {
+    let (a, b) = (a.normalize_or_zero(), b.normalize_or_zero());
+    if a == DVec3::ZERO || b == DVec3::ZERO {
+        return std::f64::consts::PI;
+    }
+    a.dot(b).clamp(-1.0, 1.0).acos()
+}
+
+/// Trunk tilt from the vertical (pelvis → neck), radians.
+fn trunk_tilt(p: &Pose) -> f64 {
+    angle(p[C::Neck.index()] - p[C::Pelvis.index()], DVec3::Y)
+}
+
+/// Knee bend of one leg (0 = straight), radians.
+fn knee_bend(p: &Pose, hip: C, knee: C, ankle: C) -> f64 {
+    let (h, k, a) = (p[hip.index()], p[knee.index()], p[ankle.index()]);
+    angle(k - h, a - k)
+}
+
+/// How far `p` is from standing neutrally: trunk tilt plus the mean knee
+/// bend (radians).
+fn neutrality(p: &Pose) -> f64 {
+    trunk_tilt(p)
+        + 0.5
+            * (knee_bend(p, C::LHip, C::LKnee, C::LAnkle)
+                + knee_bend(p, C::RHip, C::RKnee, C::RAnkle))
+}
+
+/// Canonical bones (child, parent) of the torso and legs, whose lengths the
+/// rest skeleton must share with the motion to stand in for it.
+fn bone_lengths(p: &Pose) -> impl Iterator<Item = f64> + '_ {
+    Canonical::ALL
+        .iter()
+        .filter_map(move |c| c.parent().map(|q| p[c.index()].distance(p[q.index()])))
+}
+
+/// Whether the rest skeleton stands upright (a T- or A-pose) with the
+/// motion's bone lengths.
+fn rest_is_neutral(rest: &Pose, poses: &[Pose]) -> bool {
+    let leg_ok = |hip: C, ankle: C| {
+        angle(rest[ankle.index()] - rest[hip.index()], -DVec3::Y) < 30f64.to_radians()
+    };
+    if trunk_tilt(rest) >= 20f64.to_radians()
+        || !leg_ok(C::LHip, C::LAnkle)
+        || !leg_ok(C::RHip, C::RAnkle)
+    {
+        return false;
+    }
+    // Bone lengths as in the motion (a file whose position channels replace
+    // the offsets has a rest skeleton of other proportions).
+    let Some(mid) = poses.get(poses.len() / 2) else {
+        return true;
+    };
+    let scale = leg_length(rest).max(1e-12);
+    bone_lengths(rest)
+        .zip(bone_lengths(mid))
+        .all(|(a, b)| (a - b).abs() <= 0.1 * b.max(a) + 0.02 * scale)
+}
+
+/// Chooses the clip's neutral reference: its rest skeleton when given and
+/// upright with the motion's proportions, else its most neutral frame.
+/// Refuses a degenerate skeleton (legs or trunk of no length, non-finite
+/// joints), which could only retarget to garbage.
+pub fn choose_reference(rest: Option<&Pose>, poses: &[Pose]) -> Result<Reference, RigError> {
+    let Some(first) = poses.first() else {
+        return Err(RigError::Degenerate {
+            reason: "the clip has no frames".into(),
+        });
+    };
+    if let Some(r) = rest
+        && r.iter().all(|p| p.is_finite())
+        && leg_length(r) > 0.0
+        && rest_is_neutral(r, poses)
+    {
+        return Ok(Reference {
+            pose: *r,
+            source: ReferenceSource::Rest,
+        });
+    }
+    let mut best: Option<(f64, usize)> = None;
+    for (i, p) in poses.iter().enumerate() {
+        if !p.iter().all(|x| x.is_finite()) {
+            continue;
+        }
+        let s = neutrality(p);
+        if best.is_none_or(|(b, _)| s < b) {
+            best = Some((s, i));
+        }
+    }
+    let (_, i) = best.ok_or_else(|| RigError::Degenerate {
+        reason: "every frame has a non-finite joint".into(),
+    })?;
+    let pose = poses[i];
+    let size = leg_length(&pose)
+        .max(pose[C::Neck.index()].distance(pose[C::Pelvis.index()]))
+        .max(leg_length(first));
+    let trunk = pose[C::Neck.index()].distance(pose[C::Pelvis.index()]);
+    if !(leg_length(&pose) > 1e-6 * size.max(1e-300) && trunk > 1e-6 * size.max(1e-300)) {
+        return Err(RigError::Degenerate {
+            reason: format!(
+                "legs {:.3e} and trunk {:.3e} long at frame {i}: the skeleton has no extent",
+                leg_length(&pose),
+                trunk
+            ),
+        });
+    }
+    Ok(Reference {
+        pose,
+        source: ReferenceSource::Frame(i),
+    })
+}
+
+/// Turn about the vertical taking `from`'s left-right axis (hips and
+/// shoulders) onto `to`'s.
+fn heading_between(from: &Pose, to: &Pose) -> DQuat {
+    let lateral = |p: &Pose| {
+        let v = (p[C::LHip.index()] - p[C::RHip.index()])
+            + (p[C::LShoulder.index()] - p[C::RShoulder.index()]);
+        DVec3::new(v.x, 0.0, v.z).normalize_or_zero()
+    };
+    let (a, b) = (lateral(from), lateral(to));
+    if a == DVec3::ZERO || b == DVec3::ZERO {
+        return DQuat::IDENTITY;
+    }
+    DQuat::from_rotation_y(a.z.atan2(a.x) - b.z.atan2(b.x))
+}
+
+/// Lowest ankle or toe joint height of a pose.
+fn foot_height(p: &Pose) -> f64 {
+    [C::LAnkle, C::LToe, C::RAnkle, C::RToe]
+        .iter()
+        .map(|c| p[c.index()].y)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The character's joint positions and global joint rotations (taking its
+/// rest bones, `character`, onto the posed ones) in every clip pose
+/// (metres, Y-up). See the module docs for what is matched. Skinning with
+/// these rotations and positions is consistent: every joint sits where its
+/// parent's rotation carries the rest bone.
+pub fn retarget(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
+    let Some(first) = mocap.first() else {
+        return Vec::new();
+    };
+    let r = &reference.pose;
+    let s = leg_length(character) / leg_length(r).max(1e-12);
+    let face = heading_between(character, r);
+    let root = C::Pelvis.index();
+    // The clip's floor: a low percentile of its lowest foot joint.
+    let mut lows: Vec<f64> = mocap
+        .iter()
+        .map(foot_height)
+        .filter(|h| h.is_finite())
+        .collect();
+    lows.sort_by(f64::total_cmp);
+    let clip_floor = lows.get(lows.len() / 20).copied().unwrap_or(first[root].y);
+    let char_floor = foot_height(character);
+    mocap
+        .par_iter()
+        .map(|m| {
+            let a = pose_rotations(r, m);
+            let mut g = [DQuat::IDENTITY; Canonical::COUNT];
+            let mut t = [DVec3::ZERO; Canonical::COUNT];
+            let d = (m[root] - first[root]) * s;
+            t[root] = DVec3::new(
+                character[root].x + d.x,
+                char_floor + (m[root].y - clip_floor) * s,
+                character[root].z + d.z,
+            );
+            for c in Canonical::ALL {
+                let j = c.index();
+                if let Some(p) = c.parent() {
+                    t[j] = t[p.index()] + g[p.index()] * (character[j] - character[p.index()]);
+                }
+                g[j] = if is_torso(c) {
+                    (a[j] * face).normalize()
+                } else {
+                    limb_rotation(character, m, &g, c)
+                };
+            }
+            (t, g)
+        })
+        .collect()
+}
+
+/// A limb joint's global rotation: the least rotation from where its
+/// parent carries the character's rest bone onto the clip's bone direction,
+/// composed on the parent's (an end joint keeps its parent's).
+fn limb_rotation(character: &Pose, m: &Pose, g: &[DQuat; Canonical::COUNT], c: Canonical) -> DQuat {
+    let pr = c.parent().map_or(DQuat::IDENTITY, |p| g[p.index()]);
+    let Some(child) = Canonical::ALL.iter().find(|k| k.parent() == Some(c)) else {
+        return pr;
+    };
+    let (j, k) = (c.index(), child.index());
+    let from = (pr * (character[k] - character[j])).normalize_or_zero();
+    let to = (m[k] - m[j]).normalize_or_zero();
+    if from == DVec3::ZERO || to == DVec3::ZERO {
+        return pr;
+    }
+    (DQuat::from_rotation_arc(from, to) * pr).normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A standing rest pose (metres, Y-up, facing +z, left at +x).
+    fn standing() -> Pose {
+        let mut p = [DVec3::ZERO; Canonical::COUNT];
+        let mut set = |c: C, x: f64, y: f64, z: f64| p[c.index()] = DVec3::new(x, y, z);
+        set(C::Pelvis, 0.0, 1.0, 0.0);
+        set(C::Spine, 0.0, 1.15, 0.0);
+        set(C::Chest, 0.0, 1.35, 0.0);
+        set(C::Neck, 0.0, 1.5, 0.0);
+        set(C::Head, 0.0, 1.6, 0.0);
+        set(C::LShoulder, 0.18, 1.45, 0.0);
+        set(C::LElbow, 0.2, 1.18, 0.0);
+        set(C::LWrist, 0.21, 0.93, 0.0);
+        set(C::RShoulder, -0.18, 1.45, 0.0);
+        set(C::RElbow, -0.2, 1.18, 0.0);
+        set(C::RWrist, -0.21, 0.93, 0.0);
+        set(C::LHip, 0.1, 0.95, 0.0);
+        set(C::LKnee, 0.1, 0.52, 0.0);
+        set(C::LAnkle, 0.1, 0.08, 0.0);
+        set(C::LToe, 0.1, 0.02, 0.14);
+        set(C::RHip, -0.1, 0.95, 0.0);
+        set(C::RKnee, -0.1, 0.52, 0.0);
+        set(C::RAnkle, -0.1, 0.08, 0.0);
+        set(C::RToe, -0.1, 0.02, 0.14);
+        p
+    }
+
+    fn map(p: &Pose, f: impl Fn(DVec3) -> DVec3) -> Pose {
+        p.map(f)
+    }
+
+    /// The neck → head bone's angle to the pelvis → neck axis.
+    fn head_tilt(p: &Pose) -> f64 {
+        angle(
+            p[C::Head.index()] - p[C::Neck.index()],
+            p[C::Neck.index()] - p[C::Pelvis.index()],
+        )
+    }
+
+    #[test]
+    fn a_neutral_clip_gives_the_character_as_captured() {
+        let ch = standing();
+        // A clip whose skeleton defines the head joint further back (a
+        // constant anatomical difference), scaled, turned and moved.
+        let mut clip = standing();
+        clip[C::Head.index()] += DVec3::new(0.0, 0.0, -0.05);
+        let q = DQuat::from_rotation_y(1.1);
+        let clip = map(&clip, |p| q * p * 1.7 + DVec3::new(3.0, 0.0, -2.0));
+        let rf = choose_reference(Some(&clip), &[clip]).unwrap();
+        assert_eq!(rf.source, ReferenceSource::Rest);
+        let out = retarget(&ch, &rf, &[clip, clip]);
+        for (p, _) in &out {
+            assert!((head_tilt(p) - head_tilt(&ch)).abs() < 1e-9);
+            // Upright, the character's own bone lengths.
+            assert!(trunk_tilt(p) < 1e-9);
+            for (a, b) in bone_lengths(p).zip(bone_lengths(&ch)) {
+                assert!((a - b).abs() < 1e-9);
+            }
+            // Facing the clip's way: left-right axis turned by q.
+            let l = p[C::LHip.index()] - p[C::RHip.index()];
+            assert!(l.normalize().distance(q * DVec3::X) < 1e-9);
+        }
+    }
+
+    #[test]
+    fn limbs_follow_the_clip_and_the_head_keeps_its_attitude_plus_motion() {
+        let ch = standing();
+        let rest = standing();
+        // Frame: the arm raised to the side, the head nodding 20° forward.
+        let mut m = rest;
+        let (s, e) = (C::LShoulder.index(), C::LElbow.index());
+        m[e] = m[s] + DVec3::new(0.27, 0.0, 0.0);
+        m[C::LWrist.index()] = m[e] + DVec3::new(0.25, 0.0, 0.0);
+        let nod = DQuat::from_rotation_x(20f64.to_radians());
+        m[C::Head.index()] =
+            m[C::Neck.index()] + nod * (rest[C::Head.index()] - rest[C::Neck.index()]);
+        let rf = choose_reference(Some(&rest), &[rest, m]).unwrap();
+        let out = retarget(&ch, &rf, &[rest, m]);
+        let p = &out[1].0;
+        let arm = (p[C::LElbow.index()] - p[C::LShoulder.index()]).normalize();
+        assert!(arm.distance(DVec3::X) < 1e-9, "{arm}");
+        assert!((head_tilt(p) - 20f64.to_radians()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_lying_rest_skeleton_falls_back_to_the_most_neutral_frame() {
+        let st = standing();
+        let lying = map(&st, |p| DQuat::from_rotation_x(1.5) * p);
+        let crouch = map(&st, |p| DQuat::from_rotation_x(0.4) * p);
+        let rf = choose_reference(Some(&lying), &[crouch, st, crouch]).unwrap();
+        assert_eq!(rf.source, ReferenceSource::Frame(1));
+    }
+
+    #[test]
+    fn degenerate_skeletons_are_refused() {
+        let z = [DVec3::ZERO; Canonical::COUNT];
+        assert!(choose_reference(Some(&z), &[z, z]).is_err());
+        assert!(choose_reference(None, &[]).is_err());
+        let nan = [DVec3::NAN; Canonical::COUNT];
+        assert!(choose_reference(None, &[nan]).is_err());
+    }
+
+    #[test]
+    fn feet_stand_on_the_floor_as_the_clip_stands() {
+        let ch = standing();
+        // The clip: twice as big, its floor 5 m below the origin.
+        let clip = map(&standing(), |p| p * 2.0 - DVec3::Y * 5.0);
+        let rf = choose_reference(Some(&clip), &[clip]).unwrap();
+        let (p, _) = &retarget(&ch, &rf, &[clip])[0];
+        assert!((foot_height(p) - foot_height(&ch)).abs() < 1e-9);
+    }
+}
