@@ -243,3 +243,49 @@ fn cli_writes_glb_report_and_evaluates() {
         .unwrap();
     assert_eq!(bad.status.code(), Some(1));
 }
+
+/// An AMC clip and its BVH conversions (in the file's units and in metres)
+/// drive a character to the same poses within 1e-3 of its height, with the
+/// same neutral reference (the ASF's upright rest skeleton).
+#[test]
+fn an_amc_clip_and_its_bvh_conversions_drive_the_character_alike() {
+    use surfmotion::retarget::query::to_character;
+    use surfmotion::rig::embed::Embedding;
+    use surfmotion::rig::retarget::ReferenceSource;
+    use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
+    let Some(d) = common::data_dir() else { return };
+    let mesh = humanoid_mesh(DEMO_GRID);
+    let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
+    let rest = rig.joints.map(glam::DVec3::from_array);
+    let tmp = tempfile::tempdir().unwrap();
+    for clip in ["cmu-amc/02/02_01.amc", "cmu-amc/01/01_01.amc"] {
+        let amc = d.join("mocap").join(clip);
+        let a = load_mocap(&amc, &Default::default(), 30.0).unwrap();
+        assert_eq!(a.reference.source, ReferenceSource::Rest, "{clip}");
+        let qa = to_character(&rest, &a.reference, &a.poses);
+        for (name, metres) in [("units.bvh", false), ("metres.bvh", true)] {
+            let bvh = tmp.path().join(name);
+            let mut cmd = Command::new(bin());
+            cmd.args(["mocap", "convert"]).arg(&amc).arg(&bvh);
+            if metres {
+                cmd.arg("--metres");
+            }
+            let o = cmd.output().unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let b = load_mocap(&bvh, &Default::default(), 30.0).unwrap();
+            assert_eq!(b.reference.source, a.reference.source, "{clip} {name}");
+            let qb = to_character(&rest, &b.reference, &b.poses);
+            assert_eq!(qa.len(), qb.len(), "{clip} {name}");
+            let worst = qa
+                .iter()
+                .zip(&qb)
+                .flat_map(|(p, q)| p.iter().zip(q).map(|(x, y)| x.distance(*y)))
+                .fold(0.0, f64::max);
+            eprintln!("{clip} vs {name}: worst joint {:.2e} m", worst);
+            assert!(
+                worst < 1e-3 * rig.height,
+                "{clip} vs {name}: {worst} m apart"
+            );
+        }
+    }
+}

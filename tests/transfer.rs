@@ -236,8 +236,11 @@ fn walk_on(name: &str, scan: &Mesh, landmarks: &str, clip: &Path) {
     );
     // Rest poses differ from the clip's (the armadillo's arms are above its
     // head, MakeHuman's in an A): skin folds in the armpits (shortest
-    // edges); nothing tears or inverts into a spike.
-    assert!(lo > 0.1 && hi < 3.0, "{name}: edges x{lo}..x{hi}");
+    // edges); nothing tears or inverts into a spike. (Measured on the
+    // armadillo with 02_01: one armpit edge at x0.089 in one frame with the
+    // rest-pose-aware retargeting, which keeps its hunched torso, x0.154
+    // before; the 99.9 % band narrowed from x0.53..1.51 to x0.62..1.40.)
+    assert!(lo > 0.05 && hi < 3.0, "{name}: edges x{lo}..x{hi}");
     assert!(q(0.0005) > 0.5 && q(0.9995) < 2.0, "{name}");
     // It walks: the centroid moves forward by more than a body height.
     let n = prepared.mesh.vertex_count();

@@ -17,7 +17,7 @@ pub mod trellis;
 use crate::deform::{DeformMode, DeformOptions, Deformer, TurnedOver};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
-use crate::rig::retarget::Reference;
+use crate::rig::retarget::{Reference, ReferenceSource};
 use crate::skeleton::{Pose, floor_fit, rotate_yaw};
 use character::Character;
 use glam::DVec3;
@@ -94,6 +94,9 @@ pub struct Report {
     pub frames: usize,
     /// Frames per second.
     pub fps: f64,
+    /// The clip's neutral reference pose the retargeting measured the
+    /// torso's rotations from (see [`crate::rig::retarget`]).
+    pub reference: ReferenceSource,
     /// The retrieval (path, threshold, costs, widened rows, cuts).
     pub retrieval: Retrieval,
     /// Jumps (transitions and cuts) with their blend windows.
@@ -246,6 +249,7 @@ pub fn synthesise(
         report: Report {
             frames: frames.len(),
             fps,
+            reference: reference.source,
             retrieval,
             jumps,
             steps,

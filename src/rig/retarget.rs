@@ -423,4 +423,54 @@ mod tests {
         let (p, _) = &retarget(&ch, &rf, &[clip])[0];
         assert!((foot_height(p) - foot_height(&ch)).abs() < 1e-9);
     }
+
+    /// A rest skeleton with the bone lengths of `lengths_of`, standing as
+    /// [`standing`] with the upper arms and forearms `arm` radians below
+    /// the horizontal (0: a T-pose).
+    fn rest_with(lengths_of: &Pose, arm: f64) -> Pose {
+        let shape = standing();
+        let mut r = shape;
+        for c in Canonical::ALL {
+            let Some(p) = c.parent() else { continue };
+            let (j, q) = (c.index(), p.index());
+            let side = match c {
+                C::LElbow | C::LWrist => Some(1.0),
+                C::RElbow | C::RWrist => Some(-1.0),
+                _ => None,
+            };
+            let dir = match side {
+                Some(s) => DVec3::new(s * arm.cos(), -arm.sin(), 0.0),
+                None => (shape[j] - shape[q]).normalize(),
+            };
+            r[j] = r[q] + dir * lengths_of[j].distance(lengths_of[q]);
+        }
+        r
+    }
+
+    #[test]
+    fn t_and_a_pose_versions_of_a_clip_give_the_same_result() {
+        use crate::skeleton::pose_clip;
+        use crate::synth::{Gait, gait_clip};
+        let clip = gait_clip(Gait::Walk, 2.0, 30.0);
+        let poses = crate::rig::detect(&clip.point_names())
+            .map
+            .poses(&clip)
+            .unwrap();
+        let character = standing();
+        let mut results = Vec::new();
+        for arm in [0.0, 45f64.to_radians()] {
+            let rest = rest_with(&poses[0], arm);
+            let version = pose_clip(&rest, &poses, 30.0).unwrap();
+            let map = crate::rig::detect(&version.point_names()).map;
+            let cp = clip_poses(&version, &map).unwrap();
+            assert_eq!(cp.reference.source, ReferenceSource::Rest, "arm {arm}");
+            results.push(retarget(&character, &cp.reference, &cp.poses));
+        }
+        let worst = results[0]
+            .iter()
+            .zip(&results[1])
+            .flat_map(|((p, _), (q, _))| p.iter().zip(q).map(|(a, b)| a.distance(*b)))
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-9, "T and A versions {worst} m apart");
+    }
 }
