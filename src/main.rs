@@ -1,5 +1,5 @@
 //! The `surfmotion` binary: parse arguments, call the library, map errors to
-//! exit codes (0 ok, 1 bad input, 2 internal error). A panic is caught and
+//! exit codes (0 ok, 1 bad input or command line, 2 internal error). A panic is caught and
 //! reported as an internal error, so exit code 101 cannot happen.
 
 mod cli;
@@ -18,6 +18,7 @@ fn main() -> ExitCode {
     match std::panic::catch_unwind(cli::main) {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) if e.is::<cli::OutputClosed>() => ExitCode::SUCCESS,
+        Ok(Err(e)) if e.is::<cli::Usage>() => ExitCode::from(1),
         Ok(Err(e)) => {
             eprintln!("surfmotion: {}", cli::one_line(&e));
             ExitCode::from(1)

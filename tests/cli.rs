@@ -478,3 +478,26 @@ fn inspect_reads_landmark_and_marker_files() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("groin"), "{}", stderr(&o));
 }
+
+/// Regression (issue 18, item 5): clap's usage errors exited 2, the code
+/// the contract keeps for internal errors. A bad command line is exit 1
+/// with clap's message; help is exit 0. Runs without ../shared.
+#[test]
+fn usage_errors_exit_1_and_help_exits_0() {
+    for args in [
+        &["no-such-verb"][..],
+        &["render", "x.pc2"],
+        &["retarget", "--db"],
+        &["mocap", "positions", "a.bvh", "--units", "furlongs"],
+    ] {
+        let o = run(args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).is_empty(), "{args:?}");
+        assert!(!stderr(&o).contains("internal error"), "{args:?}");
+    }
+    for args in [&["--help"][..], &["retarget", "--help"], &["--version"]] {
+        let o = run(args);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
+        assert!(!o.stdout.is_empty(), "{args:?}");
+    }
+}

@@ -100,7 +100,16 @@ enum Command {
 
 /// Entry point of the CLI.
 pub fn main() -> anyhow::Result<()> {
-    let cli = Cli::parse();
+    // clap exits 2 on a usage error, which the exit-code contract keeps for
+    // internal errors: print its message and exit 1 (help and version 0).
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let usage = e.use_stderr();
+            e.print()?;
+            return if usage { Err(Usage.into()) } else { Ok(()) };
+        }
+    };
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::from_env("SURFMOTION_LOG"))
         .with_writer(std::io::stderr)
@@ -173,6 +182,11 @@ pub fn load_mesh_groups(spec: &str, groups: &[String]) -> anyhow::Result<surfmot
 #[derive(Debug, thiserror::Error)]
 #[error("output closed")]
 pub struct OutputClosed;
+
+/// A command line clap refused (it has printed why): exit 1.
+#[derive(Debug, thiserror::Error)]
+#[error("bad command line")]
+pub struct Usage;
 
 /// Writes to stdout; a closed pipe becomes [`OutputClosed`] instead of a panic.
 pub fn emit(text: &str) -> anyhow::Result<()> {
