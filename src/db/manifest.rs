@@ -27,6 +27,34 @@ use crate::similarity::Measure;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+/// The highest frame rate a manifest may name (frames per second): a
+/// larger one is a typo that would make `retarget` resample to billions of
+/// frames.
+pub const MAX_FPS: f64 = 1000.0;
+
+/// A name read from a file (a sequence's) becomes part of output file
+/// names (`DIR/NAME.bvh`) and of `SEQ:FRAME` specs: it must be a plain
+/// name, never a path. Regression (issue 18, item 11): a sequence named
+/// `../../escaped` made `db skeleton` write outside its output folder.
+pub fn check_name(name: &str) -> Result<(), &'static str> {
+    if name.is_empty() {
+        return Err("empty");
+    }
+    if name.len() > 200 {
+        return Err("longer than 200 bytes");
+    }
+    if name.starts_with('.') {
+        return Err("starts with '.'");
+    }
+    if name
+        .chars()
+        .any(|c| matches!(c, '/' | '\\' | ':' | '\0') || c.is_control())
+    {
+        return Err("contains a path separator, ':' or a control character");
+    }
+    Ok(())
+}
+
 /// File name of the manifest inside a database directory.
 pub const MANIFEST: &str = "character.toml";
 
@@ -249,8 +277,11 @@ impl Manifest {
 
     /// Checks values that TOML types cannot.
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.fps.is_finite() && self.fps > 0.0) {
-            return Err(format!("fps = {} is not a positive number", self.fps));
+        if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= MAX_FPS) {
+            return Err(format!(
+                "fps = {} is not a frame rate (expected a number in (0, {MAX_FPS}])",
+                self.fps
+            ));
         }
         if crate::mocap::units::parse_unit(&self.units).is_none() {
             return Err(format!(
@@ -263,11 +294,12 @@ impl Manifest {
         }
         let mut names = std::collections::HashSet::new();
         for s in &self.sequences {
+            check_name(&s.name).map_err(|why| format!("sequence name {:?}: {why}", s.name))?;
             if !names.insert(s.name.as_str()) {
                 return Err(format!("two sequences are called '{}'", s.name));
             }
             if let Some(f) = s.fps
-                && !(f.is_finite() && f > 0.0)
+                && !(f.is_finite() && f > 0.0 && f <= MAX_FPS)
             {
                 return Err(format!(
                     "sequence '{}': fps = {f} is not a positive number",
@@ -494,5 +526,34 @@ mod tests {
             (min.fps, min.units.as_str(), min.up.as_str()),
             (30.0, "m", "y")
         );
+    }
+
+    /// Regression (issue 18, items 11 and 12): names from a manifest are
+    /// names, never paths; frame rates are bounded.
+    #[test]
+    fn sequence_names_are_names_and_rates_are_bounded() {
+        let base = "name = \"m\"\ntopology = \"m.obj\"\n";
+        for bad in [
+            "../../escaped",
+            "a/b",
+            "a\\\\b",
+            ".hidden",
+            "",
+            "x:3",
+            "a\\u0000b",
+        ] {
+            let text = format!("{base}[[sequence]]\nname = \"{bad}\"\npath = \"a.pc2\"\n");
+            let m: Manifest = toml::from_str(&text).unwrap();
+            assert!(m.validate().is_err(), "{bad:?} accepted");
+        }
+        let ok: Manifest = toml::from_str(&format!(
+            "{base}[[sequence]]\nname = \"walk_01-fast (take 2)\"\npath = \"a.pc2\"\n"
+        ))
+        .unwrap();
+        ok.validate().unwrap();
+        for fps in ["1e6", "0", "-30", "nan"] {
+            let m: Manifest = toml::from_str(&format!("fps = {fps}\n{base}")).unwrap();
+            assert!(m.validate().is_err(), "fps {fps} accepted");
+        }
     }
 }
