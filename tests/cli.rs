@@ -501,3 +501,39 @@ fn usage_errors_exit_1_and_help_exits_0() {
         assert!(!o.stdout.is_empty(), "{args:?}");
     }
 }
+
+/// Regression (issue 18, item 9): an output never overwrites an input,
+/// also not through a point cache's `.obj` topology. Runs without
+/// ../shared on a mesh the test writes.
+#[test]
+fn outputs_never_overwrite_inputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = tmp.path().join("m.obj");
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n";
+    std::fs::write(&m, text).unwrap();
+    let ms = m.to_str().unwrap();
+    let pc2 = tmp.path().join("m.pc2");
+    let alias = tmp.path().join(".").join("m.obj");
+    for args in [
+        vec!["mesh", "convert", ms, pc2.to_str().unwrap()],
+        vec!["mesh", "convert", ms, ms],
+        vec!["mesh", "convert", ms, alias.to_str().unwrap()],
+        vec!["repair", ms, "-o", ms],
+        vec!["blend", ms, ms, "-o", pc2.to_str().unwrap()],
+    ] {
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("overwrite the input"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+        assert_eq!(std::fs::read_to_string(&m).unwrap(), text, "{args:?}");
+        assert!(!pc2.exists(), "{args:?}");
+    }
+    // Another name is fine, and the message names what was written.
+    let out = tmp.path().join("n.pc2");
+    let o = run(&["mesh", "convert", ms, out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("n.pc2") && stderr(&o).contains("n.obj"));
+}

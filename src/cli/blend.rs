@@ -42,6 +42,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         topology: a.topology.clone(),
         fps: None,
     };
+    let inputs: Vec<_> = [&a.a, &a.b]
+        .iter()
+        .flat_map(|s| surfmotion::mesh::io::input_files(s, a.topology.as_deref()))
+        .collect();
+    surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
     let one = |spec: &str| -> anyhow::Result<MeshSequence> {
         let s = load_sequence(spec, &opts)?;
         if s.frame_count() != 1 {

@@ -32,6 +32,10 @@ pub struct ConvertArgs {
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
         Cmd::Convert(a) => {
+            surfmotion::mesh::io::refuse_overwriting(
+                &surfmotion::mesh::io::input_files(&a.input, a.topology.as_deref()),
+                &a.output,
+            )?;
             let seq = load_sequence(
                 &a.input,
                 &LoadOptions {
@@ -40,9 +44,10 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 },
             )?;
             let files = save_sequence(&seq, &a.output, a.fps)?;
+            let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
             eprintln!(
-                "wrote {} file(s): {} vertices, {} triangles, {} frames",
-                files.len(),
+                "wrote {}: {} vertices, {} triangles, {} frames",
+                names.join(" and "),
                 seq.mesh().vertex_count(),
                 seq.mesh().triangle_count(),
                 seq.frame_count()

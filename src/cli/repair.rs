@@ -28,6 +28,10 @@ pub struct Args {
 /// Runs `repair`: weld, drop degenerate/duplicate triangles and unreferenced
 /// vertices, report the connected components.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    surfmotion::mesh::io::refuse_overwriting(
+        &surfmotion::mesh::io::input_files(&a.input, None),
+        &a.output,
+    )?;
     let s = load_sequence(&a.input, &LoadOptions::default())?;
     if s.frame_count() != 1 {
         anyhow::bail!(

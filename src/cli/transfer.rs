@@ -95,6 +95,11 @@ pub struct Args {
 
 /// Runs `transfer`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    let mut inputs = surfmotion::mesh::io::input_files(&a.scan, None);
+    if let Some(t) = &a.template {
+        inputs.extend(surfmotion::mesh::io::input_files(t, None));
+    }
+    surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
     let t0 = Instant::now();
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),

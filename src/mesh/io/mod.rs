@@ -100,6 +100,59 @@ fn cache_topology(path: &Path, opts: &LoadOptions) -> Result<super::Mesh, MeshEr
     }
 }
 
+/// The files [`load_sequence`] reads for `spec` (the file, and a point
+/// cache's topology beside it or `topology`).
+pub fn input_files(spec: &str, topology: Option<&Path>) -> Vec<PathBuf> {
+    let (path, _) = split_frame_ref(spec);
+    let mut v = vec![path.clone()];
+    if matches!(
+        MeshFormat::of(&path),
+        Some(MeshFormat::Pc2 | MeshFormat::Mdd)
+    ) {
+        v.push(topology.map_or_else(|| path.with_extension("obj"), Path::to_path_buf));
+    }
+    v
+}
+
+/// The files [`save_sequence`] writes for `out` (a point cache writes its
+/// topology `.obj` beside it).
+pub fn output_files(out: &Path) -> Vec<PathBuf> {
+    let mut v = vec![out.to_path_buf()];
+    if matches!(MeshFormat::of(out), Some(MeshFormat::Pc2 | MeshFormat::Mdd)) {
+        v.push(out.with_extension("obj"));
+    }
+    v
+}
+
+/// Refuses an output that would overwrite one of `inputs` (compared as
+/// the same file on disk, whatever the spelling of the path). Regression
+/// (issue 18, item 9): a `.pc2` output wrote its `.obj` topology over the
+/// input scan of the same name, and `mesh convert m.obj m.obj` replaced
+/// its input.
+pub fn refuse_overwriting(inputs: &[PathBuf], out: &Path) -> Result<(), MeshError> {
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    };
+    for o in output_files(out) {
+        if let Some(i) = inputs.iter().find(|i| same(i, &o)) {
+            return Err(MeshError::invalid(
+                out,
+                format!(
+                    "writing it would overwrite the input {}{}; choose another output name",
+                    i.display(),
+                    if o != out {
+                        format!(" (a point cache writes its topology to {})", o.display())
+                    } else {
+                        String::new()
+                    }
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Loads any supported mesh or sequence file as a sequence (a single mesh is
 /// a one-frame sequence). `spec` may name a frame: `samba.pc2:12`.
 pub fn load_sequence(spec: &str, opts: &LoadOptions) -> Result<MeshSequence, MeshError> {
