@@ -489,6 +489,11 @@ fn usage_errors_exit_1_and_help_exits_0() {
         &["render", "x.pc2"],
         &["retarget", "--db"],
         &["mocap", "positions", "a.bvh", "--units", "furlongs"],
+        // Rates and weights that are not numbers, or absurd (issue 18,
+        // items 12 and 13).
+        &["mocap", "positions", "a.bvh", "--input-fps", "1e-4"],
+        &["mesh", "convert", "a.obj", "b.pc2", "--fps", "NaN"],
+        &["db", "init", "x", "--mesh", "m.obj", "--fps", "0"],
     ] {
         let o = run(args);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));

@@ -55,7 +55,7 @@ pub struct Args {
     #[arg(long)]
     pub force: bool,
     /// Output frame rate for scans (a database uses its own).
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
     pub fps: f64,
     /// Print the summary as JSON.
     #[arg(long)]

@@ -170,7 +170,7 @@ pub struct InitArgs {
     #[arg(long)]
     pub name: Option<String>,
     /// Frames per second of the captures.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
     pub fps: f64,
     /// Length unit of the files (m, cm, mm, dm, inch).
     #[arg(long, default_value = "m")]

@@ -24,7 +24,7 @@ pub struct ConvertArgs {
     #[arg(long, value_name = "MESH")]
     pub topology: Option<PathBuf>,
     /// Frame rate where the input has none (default 30).
-    #[arg(long)]
+    #[arg(long, value_parser = super::frame_rate)]
     pub fps: Option<f64>,
 }
 

@@ -183,6 +183,37 @@ pub fn load_mesh_groups(spec: &str, groups: &[String]) -> anyhow::Result<surfmot
 #[error("output closed")]
 pub struct OutputClosed;
 
+/// A frame rate on the command line: a finite number in (0, 1000]. (A
+/// typo such as `--input-fps 1e-4` would otherwise ask for billions of
+/// frames; issue 18, item 12.)
+pub fn frame_rate(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if v.is_finite() && v > 0.0 && v <= 1000.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{s} frames per second: expected a number in (0, 1000]"
+        ))
+    }
+}
+
+/// A weight or distance on the command line: a finite number ≥ 0 (NaN made
+/// the trellis panic; issue 18, item 13).
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{s}: expected a finite number ≥ 0"))
+    }
+}
+
 /// A command line clap refused (it has printed why): exit 1.
 #[derive(Debug, thiserror::Error)]
 #[error("bad command line")]
@@ -223,7 +254,7 @@ pub fn one_line(e: &anyhow::Error) -> String {
 pub struct ClipOpts {
     /// Frame rate of the input, overriding the file's (BVH with a wrong
     /// Frame Time; AMC files store none and default to CMU's 120).
-    #[arg(long = "input-fps", value_name = "FPS")]
+    #[arg(long = "input-fps", value_name = "FPS", value_parser = frame_rate)]
     pub input_fps: Option<f64>,
     /// The ASF skeleton of an AMC clip (default: the only .asf beside it).
     #[arg(long, value_name = "PATH")]
