@@ -124,3 +124,76 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     )?;
     Ok(())
 }
+
+/// Options of `--preview` (shared by retarget, synth and transfer).
+#[derive(clap::Args, Debug, Clone)]
+pub struct PreviewOpts {
+    /// Write a contact sheet of the result: a few evenly spaced frames,
+    /// front views above and left-side views below, all at one scale.
+    #[arg(long, value_name = "PNG")]
+    pub preview: Option<PathBuf>,
+    /// Frames on the contact sheet.
+    #[arg(long, default_value_t = 5, value_name = "N")]
+    pub preview_frames: usize,
+    /// Size of each panel of the contact sheet (pixels, square).
+    #[arg(long, default_value_t = 300, value_name = "PX")]
+    pub preview_size: usize,
+}
+
+/// Writes the contact sheet of `positions` (frame-major, `n` vertices each,
+/// Y-up) to `path`: part colours from `rig`'s labels when given, facing
+/// `facing` (else estimated from the first frame), the floor line at `floor`.
+/// Returns the image size.
+#[allow(clippy::too_many_arguments)]
+pub fn write_preview(
+    path: &std::path::Path,
+    positions: &[[f64; 3]],
+    n: usize,
+    triangles: &[[u32; 3]],
+    rig: Option<&Embedding>,
+    facing: Option<DVec3>,
+    floor: Option<f64>,
+    o: &PreviewOpts,
+) -> anyhow::Result<(usize, usize)> {
+    let count = positions.len() / n.max(1);
+    anyhow::ensure!(count > 0, "{}: nothing to preview", path.display());
+    let frames: Vec<&[[f64; 3]]> = surfmotion::render::sheet_frames(count, o.preview_frames.max(1))
+        .into_iter()
+        .map(|f| &positions[f * n..(f + 1) * n])
+        .collect();
+    let colours: Option<Vec<[u8; 3]>> = rig
+        .filter(|r| r.labels.len() == n)
+        .map(|r| r.labels.iter().map(|&l| label_colour(l as usize)).collect());
+    let facing = facing.unwrap_or_else(|| surfmotion::render::facing_of(frames[0]));
+    let img = surfmotion::render::contact_sheet(
+        &frames,
+        triangles,
+        colours.as_deref(),
+        facing,
+        floor,
+        o.preview_size.clamp(16, 4096),
+    );
+    img.save_png(path)?;
+    Ok((img.width, img.height))
+}
+
+/// The facing of a posed frame (Y-up): the rest facing `rest_facing` turned
+/// about Y by the turn that takes the rest pose's hip line (left hip minus
+/// right hip, horizontal) onto the frame's.
+pub fn turned_facing(
+    rest: &surfmotion::skeleton::Pose,
+    rest_facing: DVec3,
+    now: &surfmotion::skeleton::Pose,
+) -> DVec3 {
+    let hips = |p: &surfmotion::skeleton::Pose| {
+        let d = p[Canonical::LHip.index()] - p[Canonical::RHip.index()];
+        DVec3::new(d.x, 0.0, d.z).normalize_or_zero()
+    };
+    let (a, b) = (hips(rest), hips(now));
+    let f = DVec3::new(rest_facing.x, 0.0, rest_facing.z).normalize_or(DVec3::Z);
+    if a == DVec3::ZERO || b == DVec3::ZERO {
+        return f;
+    }
+    let angle = a.z.atan2(a.x) - b.z.atan2(b.x);
+    surfmotion::skeleton::rotate_yaw(f, angle.cos(), angle.sin())
+}

@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use std::path::PathBuf;
-use surfmotion::eval::velocity_error;
+use surfmotion::eval::{Checker, Plausibility, PlausibilityOptions, velocity_error};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
 use surfmotion::retarget::character::Character;
@@ -54,6 +54,27 @@ pub struct Args {
     pub json: bool,
     #[command(flatten)]
     pub clip: super::ClipOpts,
+    #[command(flatten)]
+    pub preview: super::render::PreviewOpts,
+}
+
+/// The plausibility of `positions` (metres, Y-up, frame-major) made for
+/// `ch`, against the database's own frames; `None` (with a warning logged)
+/// when the rig cannot support the checks.
+fn plausibility(
+    ch: &Character,
+    positions: &[[f64; 3]],
+    turned_over: Option<surfmotion::deform::TurnedOver>,
+) -> Option<(Plausibility, f64)> {
+    let checked = Checker::for_character(ch, PlausibilityOptions::default())
+        .and_then(|c| Ok((c.measure(positions, ch.n, turned_over)?, c.floor)));
+    match checked {
+        Ok(p) => Some(p),
+        Err(e) => {
+            tracing::warn!("plausibility not measured: {e}");
+            None
+        }
+    }
 }
 
 /// Runs `retarget`.
@@ -77,11 +98,41 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         a.deform
     };
     let out = synthesise(&ch, &mocap.poses, fps, &opts)?;
+    let deformed = matches!(
+        opts.deform,
+        surfmotion::deform::DeformMode::Part | surfmotion::deform::DeformMode::Global
+    );
+    let plaus = plausibility(
+        &ch,
+        &out.positions,
+        deformed.then_some(out.report.turned_over),
+    );
+    if let Some(path) = &a.preview.preview {
+        let facing = surfmotion::similarity::y_up(ch.rig.facing, ch.z_up);
+        super::render::write_preview(
+            path,
+            &out.positions,
+            ch.n,
+            ch.topology.triangles(),
+            Some(&ch.rig),
+            Some(super::render::turned_facing(
+                &ch.rest_pose,
+                facing,
+                &ch.rig
+                    .skeleton(&out.positions[..ch.n.min(out.positions.len())]),
+            )),
+            plaus.as_ref().map(|p| p.1),
+            &a.preview,
+        )?;
+    }
+    let plaus = plaus.map(|p| p.0);
     let seq = MeshSequence::new(ch.topology_metres(), out.positions, Some(fps))?;
     let written = save_sequence(&seq, &a.output, Some(fps))?;
     let r = &out.report;
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(r)?.as_bytes())?;
+        let mut v = serde_json::to_value(r)?;
+        v["plausibility"] = serde_json::to_value(&plaus)?;
+        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
     }
     let per_frame =
         (r.timings.retrieval + r.timings.timeline + r.timings.meshes + r.timings.deform)
@@ -102,6 +153,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "ms_per_frame": 1e3 * per_frame,
             "deformation": r.deform,
             "turned_over": r.turned_over,
+            "plausibility": plaus,
         });
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
@@ -162,6 +214,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "turned-over triangle-frames: {} after the solve, {} after the repair\n",
             r.turned_over.before, r.turned_over.after
         );
+    }
+    if let Some(p) = &plaus {
+        s += &p.text();
     }
     super::emit(&s)
 }
