@@ -36,6 +36,7 @@ impl View {
 }
 
 /// An RGB image.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Image {
     /// Width in pixels.
     pub width: usize,
@@ -263,8 +264,8 @@ fn fill_triangle(img: &mut Image, depth: &mut [f64], p: [(f64, f64, f64); 3], rg
 
 /// The direction a Y-up character faces, from its mesh alone: the
 /// horizontal axis of least spread (a body is wider across the shoulders
-/// than deep), signed towards where the lowest 5 % of the vertices (the
-/// feet, whose toes point forward) lie off the body's horizontal centroid.
+/// than deep), signed towards where the soles (lowest 3 % of the height)
+/// reach past the shins above them (the toes point forward).
 /// `+z` when the mesh gives no answer (empty, or no horizontal spread).
 pub fn facing_of(positions: &[[f64; 3]]) -> DVec3 {
     let n = positions.len();
@@ -298,15 +299,23 @@ pub fn facing_of(positions: &[[f64; 3]]) -> DVec3 {
         DVec3::Z
     }
     .normalize_or(DVec3::Z);
-    let mut heights: Vec<f64> = positions.iter().map(|p| p[1]).collect();
-    heights.sort_by(f64::total_cmp);
-    let cut = heights[(n - 1) * 5 / 100];
-    let low: Vec<DVec3> = positions
+    // Soles (bottom 3 % of the height) against the shins above them (6-12 %):
+    // a foot reaches forward of its ankle.
+    let (lo, hi) = positions
         .iter()
-        .filter(|p| p[1] <= cut)
-        .map(|p| DVec3::from_array(*p))
-        .collect();
-    let lc = low.iter().sum::<DVec3>() / low.len().max(1) as f64;
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p[1]), b.max(p[1]))
+        });
+    let band = |a: f64, b: f64| {
+        let (from, to) = (lo + a * (hi - lo), lo + b * (hi - lo));
+        let pts: Vec<DVec3> = positions
+            .iter()
+            .filter(|p| (from..=to).contains(&p[1]))
+            .map(|p| DVec3::from_array(*p))
+            .collect();
+        pts.iter().sum::<DVec3>() / pts.len().max(1) as f64
+    };
+    let (lc, c) = (band(0.0, 0.03), band(0.06, 0.12));
     if (lc - c).dot(axis) < 0.0 {
         -axis
     } else {

@@ -240,7 +240,9 @@ pub struct EvalArgs {
     pub clip: super::ClipOpts,
 }
 
-/// Runs `eval`: the joint-velocity error of Huang et al. 2015, Sec. 6.2.
+/// Runs `eval`: the joint-velocity error of Huang et al. 2015, Sec. 6.2,
+/// and the plausibility of the result (metres, Y-up, as `retarget` writes)
+/// against the database's own frames.
 pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
     let fps = ch.manifest.fps;
@@ -259,6 +261,7 @@ pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
         .map(|f| ch.rig.skeleton(res.frame(f)))
         .collect();
     let e = velocity_error(&query, &out);
+    let plaus = plausibility(&ch, res.all_positions(), None).map(|p| p.0);
     if a.json {
         let v = serde_json::json!({
             "mocap": a.mocap,
@@ -268,15 +271,20 @@ pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
             "velocity_error_cm_per_frame": e.mean_cm,
             "std_cm_per_frame": e.std_cm,
             "per_frame_cm": e.per_frame,
+            "plausibility": plaus,
         });
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
-    super::emit(&format!(
+    let mut s = format!(
         "joint-velocity error {:.2} ± {:.2} cm/frame over {} frames (query {} frames, result {})\n",
         e.mean_cm,
         e.std_cm,
         e.frames,
         query.len(),
         out.len()
-    ))
+    );
+    if let Some(p) = &plaus {
+        s += &p.text();
+    }
+    super::emit(&s)
 }

@@ -97,8 +97,10 @@ impl Feet {
         })
     }
 
-    /// Sliding over `frames` (frame-major, `n` vertices each, metres) at
-    /// `fps`, the floor at height `floor` along `up`.
+    /// Sliding over `frames` (frame-major, `n` vertices each, in units of
+    /// `metres_per_unit` metres) at `fps`, the floor at height `floor` along
+    /// `up` (same units).
+    #[allow(clippy::too_many_arguments)]
     pub fn sliding(
         &self,
         frames: &[[f64; 3]],
@@ -106,8 +108,10 @@ impl Feet {
         up: DVec3,
         floor: f64,
         fps: f64,
+        metres_per_unit: f64,
         opts: &FootOptions,
     ) -> Sliding {
+        let m = metres_per_unit;
         let up = up.normalize_or(DVec3::Y);
         let count = frames.len() / n.max(1);
         let fps = if fps.is_finite() && fps > 0.0 {
@@ -129,7 +133,7 @@ impl Feet {
                         low = low.min(q.dot(up));
                     }
                     c /= sole.len() as f64;
-                    (c - up * c.dot(up), low)
+                    ((c - up * c.dot(up)) * m, low * m)
                 })
                 .collect();
             let step = |t: usize| (track[t].0 - track[t - 1].0).length();
@@ -142,7 +146,7 @@ impl Feet {
                     } else {
                         0.0
                     };
-                    track[t].1 - floor <= opts.contact_height && d * fps <= opts.contact_speed
+                    track[t].1 - floor * m <= opts.contact_height && d * fps <= opts.contact_speed
                 })
                 .collect();
             for t in 0..count {

@@ -123,8 +123,11 @@ pub struct Checker {
     pub regressors: Vec<Regressor>,
     /// Up in the measured frames.
     pub up: DVec3,
-    /// Floor height along `up` (metres).
+    /// Floor height along `up` (units of the measured frames).
     pub floor: f64,
+    /// Metres per unit of the measured frames (1 for databases, which are
+    /// measured in metres). Default: 1.
+    pub metres_per_unit: f64,
     /// Frame rate of the measured frames.
     pub fps: f64,
     /// Options.
@@ -160,6 +163,7 @@ impl Checker {
             regressors: rig.regressors.clone(),
             up: up.normalize_or(DVec3::Y),
             floor,
+            metres_per_unit: 1.0,
             fps,
             opts,
             reference: None,
@@ -222,11 +226,20 @@ impl Checker {
             .collect();
         Series {
             head: self.head.series(frames, n),
-            lowest: lowest_heights(frames, n, self.up),
+            lowest: lowest_heights(frames, n, self.up)
+                .into_iter()
+                .map(|h| h * self.metres_per_unit)
+                .collect(),
             knee,
-            sliding: self
-                .feet
-                .sliding(frames, n, self.up, self.floor, self.fps, &self.opts.feet),
+            sliding: self.feet.sliding(
+                frames,
+                n,
+                self.up,
+                self.floor,
+                self.fps,
+                self.metres_per_unit,
+                &self.opts.feet,
+            ),
         }
     }
 
@@ -247,7 +260,7 @@ impl Checker {
             frames: head.len(),
             head_torso_deg: HeadTorso::summary(&head),
             foot_sliding: sliding,
-            ground: ground(&cat(|s| &s.lowest), self.floor),
+            ground: ground(&cat(|s| &s.lowest), self.floor * self.metres_per_unit),
             knee_hyperextension_deg: Summary::of(&cat(|s| &s.knee)),
         }
     }
@@ -273,8 +286,8 @@ impl Checker {
             head_torso_deg: HeadTorso::summary(&s.head),
             head_torso_rest_deg: self.head.rest_deg,
             foot_sliding: s.sliding,
-            ground: ground(&s.lowest, self.floor),
-            floor_m: self.floor,
+            ground: ground(&s.lowest, self.floor * self.metres_per_unit),
+            floor_m: self.floor * self.metres_per_unit,
             knee_hyperextension_deg: Summary::of(&s.knee),
             turned_over,
             reference: self.reference.clone(),
