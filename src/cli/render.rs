@@ -193,8 +193,9 @@ pub struct PreviewOpts {
 }
 
 /// The contact sheet of `positions` (frame-major, `n` vertices each, Y-up):
-/// part colours from `rig`'s labels when given, facing `facing` (else
-/// estimated from the first frame), the floor line at `floor`.
+/// part colours from `rig`'s labels when given, facing `facing` (else the
+/// rig's facing turned with the first frame's hips, else estimated from the
+/// first frame's mesh), the floor line at `floor`.
 #[allow(clippy::too_many_arguments)]
 pub fn preview_image(
     positions: &[[f64; 3]],
@@ -216,7 +217,15 @@ pub fn preview_image(
     let colours: Option<Vec<[u8; 3]>> = rig
         .filter(|r| r.labels.len() == n)
         .map(|r| r.labels.iter().map(|&l| label_colour(l as usize)).collect());
-    let facing = facing.unwrap_or_else(|| surfmotion::render::facing_of(frames[0]));
+    let facing = facing.unwrap_or_else(|| match rig.filter(|r| r.labels.len() == n) {
+        // The rig's rest facing, turned as the first frame's hips turned.
+        Some(r) => turned_facing(
+            &r.joints.map(DVec3::from_array),
+            DVec3::from_array(r.facing),
+            &r.skeleton(frames[0]),
+        ),
+        None => surfmotion::render::facing_of(frames[0]),
+    });
     Some(surfmotion::render::contact_sheet(
         &frames,
         triangles,

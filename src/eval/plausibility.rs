@@ -27,7 +27,8 @@ pub struct Limits {
     pub head_deg: f64,
     /// Largest penetration above the reference's largest (cm). Default: 2.
     pub penetration_margin_cm: f64,
-    /// Median floating above the reference's p95 (cm). Default: 3.
+    /// Median floating above the reference's p95 (or above the floor,
+    /// without a reference) (cm). Default: 3.
     pub floating_margin_cm: f64,
     /// Largest knee hyper-extension above the reference's (degrees). Default: 5.
     pub knee_margin_deg: f64,
@@ -354,6 +355,12 @@ pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
                 w.push(format!(
                     "ground penetration up to {:.1} cm",
                     p.ground.penetration_cm.max
+                ));
+            }
+            if p.ground.floating_cm.median > l.floating_margin_cm {
+                w.push(format!(
+                    "floating: median {:.1} cm above the floor",
+                    p.ground.floating_cm.median
                 ));
             }
         }
