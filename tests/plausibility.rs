@@ -216,6 +216,7 @@ fn foot_sliding_is_zero_when_planted_and_reads_a_dragged_foot() {
         p.foot_sliding
     );
     assert!(p.foot_sliding.total_cm < 1e-9, "{:?}", p.foot_sliding);
+    assert!(p.foot_sliding.touching_mean_cm_per_frame < 1e-9);
     assert!(p.warnings.is_empty(), "{:?}", p.warnings);
     // One foot dragged along the floor at `v` m per frame, slower than the
     // contact speed: the left foot slides v per frame, the right none.
@@ -234,12 +235,28 @@ fn foot_sliding_is_zero_when_planted_and_reads_a_dragged_foot() {
         let s = c.measure(&dragged, n, None).unwrap().foot_sliding;
         println!("foot dragged {:.1} cm/frame: {s:?}", 100.0 * v);
         assert!(s.max_cm_per_frame > 0.0);
+        assert!(s.touching_mean_cm_per_frame > 0.0);
         let per_left_frame = s.total_cm / 29.0;
         assert!(
             (per_left_frame - 100.0 * v).abs() < 0.05 * 100.0 * v,
             "{v}: {s:?}"
         );
     }
+}
+
+#[test]
+fn a_whole_body_gliding_fast_is_not_contact_but_is_seen_touching() {
+    let (mesh, rig) = humanoid();
+    let rest = mesh.positions();
+    let c = Checker::new(rest, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
+    // 4 cm per frame = 1.2 m/s: a held pose carried at walking speed.
+    let glide = animate(rest, 20, |t, _, p| p + DVec3::X * 0.04 * t as f64);
+    let s = c.measure(&glide, rest.len(), None).unwrap().foot_sliding;
+    assert_eq!(s.total_cm, 0.0, "{s:?}");
+    assert!(
+        (s.touching_mean_cm_per_frame - 4.0 * 19.0 / 20.0).abs() < 1e-6,
+        "{s:?}"
+    );
 }
 
 #[test]

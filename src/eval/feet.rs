@@ -58,6 +58,12 @@ pub struct Sliding {
     pub mean_cm_per_frame: f64,
     /// Largest travel in one contact frame (cm).
     pub max_cm_per_frame: f64,
+    /// Foot-frames touching the floor (height test only, at any speed).
+    pub touching_frames: usize,
+    /// Mean travel per touching frame (cm/frame): sees a foot gliding
+    /// faster than `contact_speed` (e.g. a held pose carried along a
+    /// trajectory), which the contact test excludes.
+    pub touching_mean_cm_per_frame: f64,
 }
 
 impl Feet {
@@ -120,6 +126,7 @@ impl Feet {
             30.0
         };
         let mut s = Sliding::default();
+        let mut touching_cm = 0.0;
         for sole in &self.soles {
             // Horizontal centroid and lowest height per frame.
             let track: Vec<(DVec3, f64)> = (0..count)
@@ -149,7 +156,14 @@ impl Feet {
                     track[t].1 - floor * m <= opts.contact_height && d * fps <= opts.contact_speed
                 })
                 .collect();
+            let touch = |t: usize| track[t].1 - floor * m <= opts.contact_height;
             for t in 0..count {
+                if touch(t) {
+                    s.touching_frames += 1;
+                    if t > 0 && touch(t - 1) {
+                        touching_cm += 100.0 * step(t);
+                    }
+                }
                 if contact[t] {
                     s.contact_frames += 1;
                 }
@@ -161,6 +175,7 @@ impl Feet {
             }
         }
         s.mean_cm_per_frame = s.total_cm / s.contact_frames.max(1) as f64;
+        s.touching_mean_cm_per_frame = touching_cm / s.touching_frames.max(1) as f64;
         s
     }
 }

@@ -255,6 +255,12 @@ impl Checker {
             sliding.max_cm_per_frame = sliding.max_cm_per_frame.max(s.sliding.max_cm_per_frame);
         }
         sliding.mean_cm_per_frame = sliding.total_cm / sliding.contact_frames.max(1) as f64;
+        let touching: f64 = series
+            .iter()
+            .map(|s| s.sliding.touching_mean_cm_per_frame * s.sliding.touching_frames as f64)
+            .sum();
+        sliding.touching_frames = series.iter().map(|s| s.sliding.touching_frames).sum();
+        sliding.touching_mean_cm_per_frame = touching / sliding.touching_frames.max(1) as f64;
         let head = cat(|s| &s.head);
         Reference {
             source: source.to_string(),
@@ -336,6 +342,13 @@ pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
                     r.knee_hyperextension_deg.max
                 ));
             }
+            let gl = p.foot_sliding.touching_mean_cm_per_frame;
+            if gl > r.foot_sliding.touching_mean_cm_per_frame + 2.0 * l.sliding_margin_cm {
+                w.push(format!(
+                    "feet glide {gl:.2} cm per frame while touching the floor (captured {:.2})",
+                    r.foot_sliding.touching_mean_cm_per_frame
+                ));
+            }
             let sl = p.foot_sliding.mean_cm_per_frame;
             if sl > r.foot_sliding.mean_cm_per_frame + l.sliding_margin_cm {
                 w.push(format!(
@@ -393,10 +406,14 @@ impl Plausibility {
             ))
         );
         s += &format!(
-            "  feet: {:.2} cm sliding per contact frame ({} contact foot-frames){}\n",
+            "  feet: {:.2} cm sliding per contact frame ({} contact foot-frames), {:.2} cm/frame while touching{}\n",
             self.foot_sliding.mean_cm_per_frame,
             self.foot_sliding.contact_frames,
-            refd(&|r| format!("{:.2}", r.foot_sliding.mean_cm_per_frame))
+            self.foot_sliding.touching_mean_cm_per_frame,
+            refd(&|r| format!(
+                "{:.2}, {:.2}",
+                r.foot_sliding.mean_cm_per_frame, r.foot_sliding.touching_mean_cm_per_frame
+            ))
         );
         s += &format!(
             "  ground: penetration max {:.1} cm, floating median {:.1} cm; knees: hyper-extension max {:.1}°{}\n",
