@@ -454,4 +454,48 @@ mod tests {
         let reader = dec.read_info().unwrap();
         assert_eq!(reader.info().width, 128);
     }
+
+    #[test]
+    fn facing_from_the_mesh_follows_a_turn() {
+        let mesh = crate::synth::humanoid::humanoid_mesh(0.03);
+        let lm = crate::synth::humanoid::humanoid_landmarks(&mesh);
+        let rig = crate::rig::embed::Embedding::new(&mesh, &lm, None).unwrap();
+        let want = DVec3::from_array(rig.facing);
+        for turn in [0.0, 1.0, 2.5, -2.0] {
+            let q = glam::DQuat::from_rotation_y(turn);
+            let p: Vec<[f64; 3]> = mesh
+                .positions()
+                .iter()
+                .map(|x| (q * DVec3::from_array(*x)).to_array())
+                .collect();
+            let f = facing_of(&p);
+            assert!(f.dot(q * want) > 0.95, "turn {turn}: {f} vs {}", q * want);
+        }
+    }
+
+    #[test]
+    fn contact_sheet_panels_share_one_scale() {
+        let m = crate::mesh::subdivide::icosahedron();
+        let small: Vec<[f64; 3]> = m.positions().iter().map(|p| p.map(|x| 0.5 * x)).collect();
+        let sheet = contact_sheet(
+            &[m.positions(), &small],
+            m.triangles(),
+            None,
+            DVec3::Z,
+            None,
+            64,
+        );
+        assert_eq!((sheet.width, sheet.height), (128, 128));
+        let covered = |x0: usize| {
+            (0..64)
+                .flat_map(|y| (x0..x0 + 64).map(move |x| (x, y)))
+                .filter(|&(x, y)| sheet.rgb[(y * 128 + x) * 3..(y * 128 + x) * 3 + 3] != [255; 3])
+                .count() as f64
+        };
+        // Half the size: a quarter of the pixels (not refitted to the panel).
+        let ratio = covered(64) / covered(0);
+        assert!((ratio - 0.25).abs() < 0.05, "{ratio}");
+        assert_eq!(sheet_frames(175, 5), vec![0, 43, 87, 130, 174]);
+        assert_eq!(sheet_frames(2, 5), vec![0, 1]);
+    }
 }
