@@ -457,7 +457,7 @@ mod tests {
 
     #[test]
     fn facing_from_the_mesh_follows_a_turn() {
-        let mesh = crate::synth::humanoid::humanoid_mesh(0.03);
+        let mesh = crate::synth::humanoid::humanoid_mesh(crate::synth::humanoid::DEMO_GRID);
         let lm = crate::synth::humanoid::humanoid_landmarks(&mesh);
         let rig = crate::rig::embed::Embedding::new(&mesh, &lm, None).unwrap();
         let want = DVec3::from_array(rig.facing);
