@@ -36,6 +36,7 @@ impl View {
 }
 
 /// An RGB image.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Image {
     /// Width in pixels.
     pub width: usize,
@@ -69,6 +70,20 @@ impl Image {
         out
     }
 
+    /// Puts `other` below `self`.
+    pub fn above(&self, other: &Image) -> Image {
+        let w = self.width.max(other.width);
+        let mut out = Image::new(w, self.height + other.height, [255; 3]);
+        for (img, y0) in [(self, 0), (other, self.height)] {
+            for y in 0..img.height {
+                let src = &img.rgb[y * img.width * 3..(y + 1) * img.width * 3];
+                let d = (y0 + y) * out.width * 3;
+                out.rgb[d..d + src.len()].copy_from_slice(src);
+            }
+        }
+        out
+    }
+
     /// Writes a PNG atomically.
     pub fn save_png(&self, path: &Path) -> Result<(), FsError> {
         write_atomic(path, |w| {
@@ -95,29 +110,74 @@ pub struct Scene<'a> {
     pub lines: &'a [([f64; 3], [f64; 3], [u8; 3])],
 }
 
+/// Where a view is placed in its image: pixels per unit and the view
+/// coordinates (right, up) drawn at the image centre.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Framing {
+    /// Pixels per unit of length.
+    pub scale: f64,
+    /// View coordinates (along the screen's right and up) of the centre.
+    pub centre: [f64; 2],
+}
+
+/// The screen axes (right, up, forward) of a view.
+fn axes(view: View) -> (DVec3, DVec3, DVec3) {
+    let f = view.forward.normalize_or(DVec3::NEG_Z);
+    let up = (view.up - f * view.up.dot(f)).normalize_or(DVec3::Y);
+    (f.cross(up), up, f)
+}
+
+/// Bounds `([min right, min up], [max right, max up])` of `positions` seen
+/// along `view`.
+pub fn view_bounds(positions: &[[f64; 3]], view: View) -> ([f64; 2], [f64; 2]) {
+    let (right, up, _) = axes(view);
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for &p in positions {
+        let p = DVec3::from_array(p);
+        let (x, y) = (p.dot(right), p.dot(up));
+        lo = [lo[0].min(x), lo[1].min(y)];
+        hi = [hi[0].max(x), hi[1].max(y)];
+    }
+    (lo, hi)
+}
+
+impl Framing {
+    /// The framing that fits `positions` seen along `view` into a square of
+    /// `size` pixels (92 % of it).
+    pub fn fit(positions: &[[f64; 3]], view: View, size: usize) -> Framing {
+        let (lo, hi) = view_bounds(positions, view);
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        let extent = if extent.is_finite() {
+            extent.max(1e-12)
+        } else {
+            1.0
+        };
+        Framing {
+            scale: 0.92 * size as f64 / extent,
+            centre: [(lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5],
+        }
+    }
+}
+
 /// Renders `scene` seen along `view` into a `size × size` image, fitted to
 /// the mesh's extent.
 pub fn render(scene: &Scene, view: View, size: usize) -> Image {
-    let f = view.forward.normalize_or(DVec3::NEG_Z);
-    let up = (view.up - f * view.up.dot(f)).normalize_or(DVec3::Y);
-    let right = f.cross(up);
+    render_framed(scene, view, size, Framing::fit(scene.positions, view, size))
+}
+
+/// Renders `scene` seen along `view` into a `size × size` image placed by
+/// `framing` (so that several panels can share one scale).
+pub fn render_framed(scene: &Scene, view: View, size: usize, framing: Framing) -> Image {
+    let (right, up, f) = axes(view);
     let project = |p: [f64; 3]| {
         let p = DVec3::from_array(p);
         (p.dot(right), p.dot(up), p.dot(f))
     };
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for &p in scene.positions {
-        let (x, y, _) = project(p);
-        lo = [lo[0].min(x), lo[1].min(y)];
-        hi = [hi[0].max(x), hi[1].max(y)];
-    }
     let mut img = Image::new(size, size, [255; 3]);
-    if !(lo[0].is_finite() && hi[0].is_finite()) {
+    if !(framing.scale.is_finite() && framing.centre.iter().all(|c| c.is_finite())) {
         return img;
     }
-    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-12);
-    let scale = 0.92 * size as f64 / extent;
-    let centre = [(lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5];
+    let (scale, centre) = (framing.scale, framing.centre);
     let to_px = |p: [f64; 3]| {
         let (x, y, z) = project(p);
         (
@@ -202,6 +262,152 @@ fn fill_triangle(img: &mut Image, depth: &mut [f64], p: [(f64, f64, f64); 3], rg
     }
 }
 
+/// The direction a Y-up character faces, from its mesh alone: the
+/// horizontal axis of least spread (a body is wider across the shoulders
+/// than deep), signed towards where the soles (lowest 3 % of the height)
+/// reach past the shins above them (the toes point forward).
+/// `+z` when the mesh gives no answer (empty, or no horizontal spread).
+pub fn facing_of(positions: &[[f64; 3]]) -> DVec3 {
+    let n = positions.len();
+    if n == 0 {
+        return DVec3::Z;
+    }
+    let c = positions
+        .iter()
+        .map(|p| DVec3::from_array(*p))
+        .sum::<DVec3>()
+        / n as f64;
+    let (mut xx, mut xz, mut zz) = (0.0, 0.0, 0.0);
+    for p in positions {
+        let (x, z) = (p[0] - c.x, p[2] - c.z);
+        xx += x * x;
+        xz += x * z;
+        zz += z * z;
+    }
+    // Eigenvector of the smaller eigenvalue of [[xx, xz], [xz, zz]].
+    let half = 0.5 * (xx - zz);
+    let r = (half * half + xz * xz).sqrt();
+    if !(r.is_finite() && xx + zz > 0.0) {
+        return DVec3::Z;
+    }
+    let small = 0.5 * (xx + zz) - r;
+    let axis = if xz.abs() > 1e-12 * (xx + zz) {
+        DVec3::new(xz, 0.0, small - xx)
+    } else if xx < zz {
+        DVec3::X
+    } else {
+        DVec3::Z
+    }
+    .normalize_or(DVec3::Z);
+    // Soles (bottom 3 % of the height) against the shins above them (6-12 %):
+    // a foot reaches forward of its ankle.
+    let (lo, hi) = positions
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p[1]), b.max(p[1]))
+        });
+    let band = |a: f64, b: f64| {
+        let (from, to) = (lo + a * (hi - lo), lo + b * (hi - lo));
+        let pts: Vec<DVec3> = positions
+            .iter()
+            .filter(|p| (from..=to).contains(&p[1]))
+            .map(|p| DVec3::from_array(*p))
+            .collect();
+        pts.iter().sum::<DVec3>() / pts.len().max(1) as f64
+    };
+    let (lc, c) = (band(0.0, 0.03), band(0.06, 0.12));
+    if (lc - c).dot(axis) < 0.0 {
+        -axis
+    } else {
+        axis
+    }
+}
+
+/// A contact sheet: the frames `frames` (each a full set of positions on
+/// `triangles`) side by side, front views in the top row and left-side
+/// views below, every panel `size` pixels square and all at ONE scale (the
+/// largest extent over all frames and both views), so that sizes and
+/// heights compare across panels. Each panel is centred horizontally on its
+/// own frame; vertically all share one centre, so the floor is one line.
+/// `floor` (height along Y) draws a grey floor line.
+pub fn contact_sheet(
+    frames: &[&[[f64; 3]]],
+    triangles: &[[u32; 3]],
+    colours: Option<&[[u8; 3]]>,
+    facing: DVec3,
+    floor: Option<f64>,
+    size: usize,
+) -> Image {
+    let views = [View::front(facing), View::side(facing)];
+    let bounds: Vec<[([f64; 2], [f64; 2]); 2]> = frames
+        .iter()
+        .map(|f| views.map(|v| view_bounds(f, v)))
+        .collect();
+    let (mut ylo, mut yhi, mut width) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+    for b in bounds.iter().flatten() {
+        ylo = ylo.min(b.0[1]);
+        yhi = yhi.max(b.1[1]);
+        width = width.max(b.1[0] - b.0[0]);
+    }
+    let extent = (yhi - ylo).max(width);
+    let extent = if extent.is_finite() {
+        extent.max(1e-12)
+    } else {
+        1.0
+    };
+    let scale = 0.92 * size as f64 / extent;
+    let mut rows: [Option<Image>; 2] = [None, None];
+    for (f, b) in frames.iter().zip(&bounds) {
+        for (k, view) in views.into_iter().enumerate() {
+            let framing = Framing {
+                scale,
+                centre: [(b[k].0[0] + b[k].1[0]) * 0.5, (ylo + yhi) * 0.5],
+            };
+            let (right, _, _) = axes(view);
+            let lines: Vec<([f64; 3], [f64; 3], [u8; 3])> = floor
+                .filter(|y| y.is_finite())
+                .map(|y| {
+                    let half = 0.5 * extent;
+                    let mid = right * framing.centre[0] + DVec3::Y * y;
+                    vec![(
+                        (mid - right * half).to_array(),
+                        (mid + right * half).to_array(),
+                        [150, 150, 150],
+                    )]
+                })
+                .unwrap_or_default();
+            let scene = Scene {
+                positions: f,
+                triangles,
+                colours,
+                lines: &lines,
+            };
+            let img = render_framed(&scene, view, size, framing);
+            rows[k] = Some(match rows[k].take() {
+                None => img,
+                Some(r) => r.beside(&img),
+            });
+        }
+    }
+    match rows {
+        [Some(a), Some(b)] => a.above(&b),
+        _ => Image::new(size, size, [255; 3]),
+    }
+}
+
+/// Frame indices for a contact sheet: `count` evenly spaced over `frames`
+/// (first and last included; fewer when the sequence is shorter).
+pub fn sheet_frames(frames: usize, count: usize) -> Vec<usize> {
+    if frames == 0 || count == 0 {
+        return Vec::new();
+    }
+    let k = count.min(frames);
+    if k == 1 {
+        return vec![0];
+    }
+    (0..k).map(|i| i * (frames - 1) / (k - 1)).collect()
+}
+
 /// A distinct colour for label `k` (golden-angle hues).
 pub fn label_colour(k: usize) -> [u8; 3] {
     let h = (k as f64 * 137.508) % 360.0;
@@ -247,5 +453,49 @@ mod tests {
         let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).unwrap()));
         let reader = dec.read_info().unwrap();
         assert_eq!(reader.info().width, 128);
+    }
+
+    #[test]
+    fn facing_from_the_mesh_follows_a_turn() {
+        let mesh = crate::synth::humanoid::humanoid_mesh(crate::synth::humanoid::DEMO_GRID);
+        let lm = crate::synth::humanoid::humanoid_landmarks(&mesh);
+        let rig = crate::rig::embed::Embedding::new(&mesh, &lm, None).unwrap();
+        let want = DVec3::from_array(rig.facing);
+        for turn in [0.0, 1.0, 2.5, -2.0] {
+            let q = glam::DQuat::from_rotation_y(turn);
+            let p: Vec<[f64; 3]> = mesh
+                .positions()
+                .iter()
+                .map(|x| (q * DVec3::from_array(*x)).to_array())
+                .collect();
+            let f = facing_of(&p);
+            assert!(f.dot(q * want) > 0.95, "turn {turn}: {f} vs {}", q * want);
+        }
+    }
+
+    #[test]
+    fn contact_sheet_panels_share_one_scale() {
+        let m = crate::mesh::subdivide::icosahedron();
+        let small: Vec<[f64; 3]> = m.positions().iter().map(|p| p.map(|x| 0.5 * x)).collect();
+        let sheet = contact_sheet(
+            &[m.positions(), &small],
+            m.triangles(),
+            None,
+            DVec3::Z,
+            None,
+            64,
+        );
+        assert_eq!((sheet.width, sheet.height), (128, 128));
+        let covered = |x0: usize| {
+            (0..64)
+                .flat_map(|y| (x0..x0 + 64).map(move |x| (x, y)))
+                .filter(|&(x, y)| sheet.rgb[(y * 128 + x) * 3..(y * 128 + x) * 3 + 3] != [255; 3])
+                .count() as f64
+        };
+        // Half the size: a quarter of the pixels (not refitted to the panel).
+        let ratio = covered(64) / covered(0);
+        assert!((ratio - 0.25).abs() < 0.05, "{ratio}");
+        assert_eq!(sheet_frames(175, 5), vec![0, 43, 87, 130, 174]);
+        assert_eq!(sheet_frames(2, 5), vec![0, 1]);
     }
 }

@@ -494,6 +494,12 @@ fn usage_errors_exit_1_and_help_exits_0() {
         &["mocap", "positions", "a.bvh", "--input-fps", "1e-4"],
         &["mesh", "convert", "a.obj", "b.pc2", "--fps", "NaN"],
         &["db", "init", "x", "--mesh", "m.obj", "--fps", "0"],
+        &[
+            "retarget", "--db", "d", "--mocap", "c.bvh", "-o", "o.glb", "--w-retr", "NaN",
+        ],
+        &[
+            "retarget", "--db", "d", "--mocap", "c.bvh", "-o", "o.glb", "--t-skel", "-1",
+        ],
     ] {
         let o = run(args);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));

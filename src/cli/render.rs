@@ -4,7 +4,9 @@
 use glam::DVec3;
 use std::path::PathBuf;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
-use surfmotion::render::{Image, Scene, View, label_colour, render};
+use surfmotion::render::{
+    Framing, Image, Scene, View, facing_of, label_colour, render_framed, view_bounds,
+};
 use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::Embedding;
 
@@ -27,7 +29,8 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     pub frame: usize,
     /// Direction the character faces (x, -x, z, -z): sets the front view.
-    /// Defaults to the rig's facing, else +z.
+    /// Defaults to the rig's facing, else the mesh's (see
+    /// `surfmotion::render::facing_of`).
     #[arg(long, allow_hyphen_values = true)]
     pub facing: Option<String>,
     /// Image height in pixels (each view is square).
@@ -56,6 +59,18 @@ pub fn draw(
     facing: DVec3,
     size: usize,
 ) -> Image {
+    draw_framed(positions, triangles, rig, facing, size, [None, None])
+}
+
+/// [`draw`] with each view placed by its framing (`None`: fitted to the frame).
+pub fn draw_framed(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    rig: Option<&Embedding>,
+    facing: DVec3,
+    size: usize,
+    framing: [Option<Framing>; 2],
+) -> Image {
     let colours: Option<Vec<[u8; 3]>> =
         rig.map(|r| r.labels.iter().map(|&l| label_colour(l as usize)).collect());
     let mut lines = Vec::new();
@@ -73,14 +88,20 @@ pub fn draw(
         colours: colours.as_deref(),
         lines: &lines,
     };
-    let front = render(&scene, View::front(facing), size);
-    let side = render(&scene, View::side(facing), size);
+    let views = [View::front(facing), View::side(facing)];
+    let [front, side] = [0, 1].map(|k| {
+        let f = framing[k].unwrap_or_else(|| Framing::fit(positions, views[k], size));
+        render_framed(&scene, views[k], size, f)
+    });
     front.beside(&side)
 }
 
-/// Runs `render`.
+/// Runs `render`: every panel at one scale (the largest extent over all
+/// meshes and both views), each centred horizontally on its own mesh, all
+/// sharing one vertical centre.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let mut out: Option<surfmotion::render::Image> = None;
+    let size = a.size.clamp(16, 8192);
+    let mut loaded = Vec::new();
     for mesh in &a.mesh {
         let s = load_sequence(mesh, &LoadOptions::default())?;
         if a.frame >= s.frame_count() {
@@ -98,14 +119,45 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let facing = match (&a.facing, &rig) {
             (Some(f), _) => parse_axis(f)?,
             (None, Some(r)) => DVec3::from_array(r.facing),
-            (None, None) => DVec3::Z,
+            (None, None) => facing_of(s.frame(a.frame)),
         };
-        let img = draw(
+        loaded.push((s, rig, facing));
+    }
+    // One scale across all panels.
+    let bounds: Vec<[([f64; 2], [f64; 2]); 2]> = loaded
+        .iter()
+        .map(|(s, _, f)| {
+            [View::front(*f), View::side(*f)].map(|v| view_bounds(s.frame(a.frame), v))
+        })
+        .collect();
+    let (mut ylo, mut yhi, mut width) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+    for b in bounds.iter().flatten() {
+        ylo = ylo.min(b.0[1]);
+        yhi = yhi.max(b.1[1]);
+        width = width.max(b.1[0] - b.0[0]);
+    }
+    let extent = (yhi - ylo).max(width);
+    let scale = 0.92 * size as f64
+        / if extent.is_finite() {
+            extent.max(1e-12)
+        } else {
+            1.0
+        };
+    let mut out: Option<Image> = None;
+    for ((s, rig, facing), b) in loaded.iter().zip(&bounds) {
+        let framing = [0, 1].map(|k| {
+            Some(Framing {
+                scale,
+                centre: [(b[k].0[0] + b[k].1[0]) * 0.5, (ylo + yhi) * 0.5],
+            })
+        });
+        let img = draw_framed(
             s.frame(a.frame),
             s.mesh().triangles(),
             rig.as_ref(),
-            facing,
-            a.size.clamp(16, 8192),
+            *facing,
+            size,
+            framing,
         );
         out = Some(match out {
             None => img,
@@ -117,10 +169,108 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     img.save_png(&a.output)?;
     crate::outln!(
-        "wrote {} ({}x{}: front and left side of each)",
+        "wrote {} ({}x{}: front and left side of each, one scale)",
         a.output.display(),
         img.width,
         img.height
     )?;
     Ok(())
+}
+
+/// Options of `--preview` (shared by retarget, synth and transfer).
+#[derive(clap::Args, Debug, Clone)]
+pub struct PreviewOpts {
+    /// Write a contact sheet of the result: a few evenly spaced frames,
+    /// front views above and left-side views below, all at one scale.
+    #[arg(long, value_name = "PNG")]
+    pub preview: Option<PathBuf>,
+    /// Frames on the contact sheet.
+    #[arg(long, default_value_t = 5, value_name = "N")]
+    pub preview_frames: usize,
+    /// Size of each panel of the contact sheet (pixels, square).
+    #[arg(long, default_value_t = 300, value_name = "PX")]
+    pub preview_size: usize,
+}
+
+/// The contact sheet of `positions` (frame-major, `n` vertices each, Y-up):
+/// part colours from `rig`'s labels when given, facing `facing` (else the
+/// rig's facing turned with the first frame's hips, else estimated from the
+/// first frame's mesh), the floor line at `floor`.
+#[allow(clippy::too_many_arguments)]
+pub fn preview_image(
+    positions: &[[f64; 3]],
+    n: usize,
+    triangles: &[[u32; 3]],
+    rig: Option<&Embedding>,
+    facing: Option<DVec3>,
+    floor: Option<f64>,
+    o: &PreviewOpts,
+) -> Option<Image> {
+    let count = positions.len() / n.max(1);
+    if count == 0 {
+        return None;
+    }
+    let frames: Vec<&[[f64; 3]]> = surfmotion::render::sheet_frames(count, o.preview_frames.max(1))
+        .into_iter()
+        .map(|f| &positions[f * n..(f + 1) * n])
+        .collect();
+    let colours: Option<Vec<[u8; 3]>> = rig
+        .filter(|r| r.labels.len() == n)
+        .map(|r| r.labels.iter().map(|&l| label_colour(l as usize)).collect());
+    let facing = facing.unwrap_or_else(|| match rig.filter(|r| r.labels.len() == n) {
+        // The rig's rest facing, turned as the first frame's hips turned.
+        Some(r) => turned_facing(
+            &r.joints.map(DVec3::from_array),
+            DVec3::from_array(r.facing),
+            &r.skeleton(frames[0]),
+        ),
+        None => surfmotion::render::facing_of(frames[0]),
+    });
+    Some(surfmotion::render::contact_sheet(
+        &frames,
+        triangles,
+        colours.as_deref(),
+        facing,
+        floor,
+        o.preview_size.clamp(16, 4096),
+    ))
+}
+
+/// Writes [`preview_image`] to `path`; returns the image size.
+#[allow(clippy::too_many_arguments)]
+pub fn write_preview(
+    path: &std::path::Path,
+    positions: &[[f64; 3]],
+    n: usize,
+    triangles: &[[u32; 3]],
+    rig: Option<&Embedding>,
+    facing: Option<DVec3>,
+    floor: Option<f64>,
+    o: &PreviewOpts,
+) -> anyhow::Result<(usize, usize)> {
+    let img = preview_image(positions, n, triangles, rig, facing, floor, o)
+        .ok_or_else(|| anyhow::anyhow!("{}: nothing to preview", path.display()))?;
+    img.save_png(path)?;
+    Ok((img.width, img.height))
+}
+
+/// The facing of a posed frame (Y-up): the rest facing `rest_facing` turned
+/// about Y by the turn that takes the rest pose's hip line (left hip minus
+/// right hip, horizontal) onto the frame's.
+pub fn turned_facing(
+    rest: &surfmotion::skeleton::Pose,
+    rest_facing: DVec3,
+    now: &surfmotion::skeleton::Pose,
+) -> DVec3 {
+    let hips = |p: &surfmotion::skeleton::Pose| {
+        let d = p[Canonical::LHip.index()] - p[Canonical::RHip.index()];
+        DVec3::new(d.x, 0.0, d.z).normalize_or_zero()
+    };
+    let (a, b) = (hips(rest), hips(now));
+    let f = DVec3::new(rest_facing.x, 0.0, rest_facing.z).normalize_or(DVec3::Z);
+    if a == DVec3::ZERO || b == DVec3::ZERO {
+        return f;
+    }
+    let angle = a.z.atan2(a.x) - b.z.atan2(b.x);
+    surfmotion::skeleton::rotate_yaw(f, angle.cos(), angle.sin())
 }

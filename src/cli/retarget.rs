@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use std::path::PathBuf;
-use surfmotion::eval::velocity_error;
+use surfmotion::eval::{Checker, Plausibility, PlausibilityOptions, velocity_error};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
 use surfmotion::retarget::character::Character;
@@ -38,10 +38,10 @@ pub struct Args {
     pub report: Option<PathBuf>,
     /// Skeleton dissimilarity threshold T_skel (metres, summed over 19
     /// joints). Default: chosen from the query's nearest-frame costs.
-    #[arg(long)]
+    #[arg(long, value_parser = super::non_negative)]
     pub t_skel: Option<f64>,
     /// Weight of matching the skeleton against avoiding transitions.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::non_negative)]
     pub w_retr: f64,
     /// No temporal interpolation of repeated frames.
     #[arg(long)]
@@ -54,6 +54,27 @@ pub struct Args {
     pub json: bool,
     #[command(flatten)]
     pub clip: super::ClipOpts,
+    #[command(flatten)]
+    pub preview: super::render::PreviewOpts,
+}
+
+/// The plausibility of `positions` (metres, Y-up, frame-major) made for
+/// `ch`, against the database's own frames; `None` (with a warning logged)
+/// when the rig cannot support the checks.
+fn plausibility(
+    ch: &Character,
+    positions: &[[f64; 3]],
+    turned_over: Option<surfmotion::deform::TurnedOver>,
+) -> Option<(Plausibility, f64)> {
+    let checked = Checker::for_character(ch, PlausibilityOptions::default())
+        .and_then(|c| Ok((c.measure(positions, ch.n, turned_over)?, c.floor)));
+    match checked {
+        Ok(p) => Some(p),
+        Err(e) => {
+            tracing::warn!("plausibility not measured: {e}");
+            None
+        }
+    }
 }
 
 /// Runs `retarget`.
@@ -77,11 +98,41 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         a.deform
     };
     let out = synthesise(&ch, &mocap.poses, &mocap.reference, fps, &opts)?;
+    let deformed = matches!(
+        opts.deform,
+        surfmotion::deform::DeformMode::Part | surfmotion::deform::DeformMode::Global
+    );
+    let plaus = plausibility(
+        &ch,
+        &out.positions,
+        deformed.then_some(out.report.turned_over),
+    );
+    if let Some(path) = &a.preview.preview {
+        let facing = surfmotion::similarity::y_up(ch.rig.facing, ch.z_up);
+        super::render::write_preview(
+            path,
+            &out.positions,
+            ch.n,
+            ch.topology.triangles(),
+            Some(&ch.rig),
+            Some(super::render::turned_facing(
+                &ch.rest_pose,
+                facing,
+                &ch.rig
+                    .skeleton(&out.positions[..ch.n.min(out.positions.len())]),
+            )),
+            plaus.as_ref().map(|p| p.1),
+            &a.preview,
+        )?;
+    }
+    let plaus = plaus.map(|p| p.0);
     let seq = MeshSequence::new(ch.topology_metres(), out.positions, Some(fps))?;
     let written = save_sequence(&seq, &a.output, Some(fps))?;
     let r = &out.report;
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(r)?.as_bytes())?;
+        let mut v = serde_json::to_value(r)?;
+        v["plausibility"] = serde_json::to_value(&plaus)?;
+        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
     }
     let per_frame =
         (r.timings.retrieval + r.timings.timeline + r.timings.meshes + r.timings.deform)
@@ -102,6 +153,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "ms_per_frame": 1e3 * per_frame,
             "deformation": r.deform,
             "turned_over": r.turned_over,
+            "plausibility": plaus,
         });
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
@@ -163,6 +215,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             r.turned_over.before, r.turned_over.after
         );
     }
+    if let Some(p) = &plaus {
+        s += &p.text();
+    }
     super::emit(&s)
 }
 
@@ -185,7 +240,9 @@ pub struct EvalArgs {
     pub clip: super::ClipOpts,
 }
 
-/// Runs `eval`: the joint-velocity error of Huang et al. 2015, Sec. 6.2.
+/// Runs `eval`: the joint-velocity error of Huang et al. 2015, Sec. 6.2,
+/// and the plausibility of the result (metres, Y-up, as `retarget` writes)
+/// against the database's own frames.
 pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
     let fps = ch.manifest.fps;
@@ -204,6 +261,7 @@ pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
         .map(|f| ch.rig.skeleton(res.frame(f)))
         .collect();
     let e = velocity_error(&query, &out);
+    let plaus = plausibility(&ch, res.all_positions(), None).map(|p| p.0);
     if a.json {
         let v = serde_json::json!({
             "mocap": a.mocap,
@@ -213,15 +271,20 @@ pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
             "velocity_error_cm_per_frame": e.mean_cm,
             "std_cm_per_frame": e.std_cm,
             "per_frame_cm": e.per_frame,
+            "plausibility": plaus,
         });
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
-    super::emit(&format!(
+    let mut s = format!(
         "joint-velocity error {:.2} ± {:.2} cm/frame over {} frames (query {} frames, result {})\n",
         e.mean_cm,
         e.std_cm,
         e.frames,
         query.len(),
         out.len()
-    ))
+    );
+    if let Some(p) = &plaus {
+        s += &p.text();
+    }
+    super::emit(&s)
 }

@@ -44,6 +44,8 @@ pub struct Args {
     pub json: bool,
     #[command(flatten)]
     pub clip: super::ClipOpts,
+    #[command(flatten)]
+    pub preview: super::render::PreviewOpts,
 }
 
 /// Runs `synth`.
@@ -83,6 +85,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut names = std::collections::BTreeSet::new();
     let bar = super::progress(a.mocap.len() as u64, "clips");
     let mut frames_total = 0usize;
+    let (mut plaus_text, mut sheets) = (Vec::<String>::new(), Vec::new());
     let t1 = Instant::now();
     for path in &a.mocap {
         let clip = surfmotion::retarget::query::load_mocap(path, &opts, a.fps)?;
@@ -107,6 +110,33 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let seq = MeshSequence::new(rest.clone(), out.positions, Some(a.fps))?;
         let file = format!("{name}.pc2");
         save_sequence(&seq, &dir.join(&file), Some(a.fps))?;
+        // Plausibility of the sequence against the rest frame (no capture
+        // to compare with: absolute limits), and its contact sheet.
+        let plaus = surfmotion::eval::Checker::new(
+            rest.positions(),
+            &rig,
+            glam::DVec3::Y,
+            None,
+            a.fps,
+            Default::default(),
+        )
+        .and_then(|c| c.measure(seq.all_positions(), rest.vertex_count(), None))
+        .map_err(|e| tracing::warn!("{name}: plausibility not measured: {e}"))
+        .ok();
+        if let Some(p) = &plaus {
+            plaus_text.push(format!("{name}: {}", p.text()));
+        }
+        if a.preview.preview.is_some() {
+            sheets.extend(super::render::preview_image(
+                seq.all_positions(),
+                rest.vertex_count(),
+                rest.triangles(),
+                Some(&rig),
+                None,
+                plaus.as_ref().map(|p| p.floor_m),
+                &a.preview,
+            ));
+        }
         let truth = serde_json::json!({
             "sequence": name,
             "fps": a.fps,
@@ -123,7 +153,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             path: PathBuf::from(file),
             fps: None,
         });
-        report.push(serde_json::json!({"sequence": name, "source": path, "frames": frames}));
+        report.push(serde_json::json!({"sequence": name, "source": path, "frames": frames, "plausibility": plaus}));
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -177,6 +207,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 r["source"].as_str().unwrap_or("")
             )?;
         }
+    }
+    // The contact sheets of all sequences, one above the other; plausibility.
+    if let (Some(p), Some(first)) = (&a.preview.preview, sheets.first()) {
+        let img = sheets[1..]
+            .iter()
+            .fold(first.clone(), |acc, s| acc.above(s));
+        img.save_png(p)?;
+    }
+    if !a.json {
+        crate::outln!("{}", plaus_text.concat().trim_end())?;
     }
     Ok(())
 }

@@ -4,7 +4,7 @@
 use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
-use surfmotion::eval::vertex_error;
+use surfmotion::eval::{Checker, vertex_error};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
 use surfmotion::retarget::query::load_mocap;
@@ -91,6 +91,17 @@ pub struct Args {
     pub json: bool,
     #[command(flatten)]
     pub clip: super::ClipOpts,
+    #[command(flatten)]
+    pub preview: super::render::PreviewOpts,
+}
+
+/// Metres per unit of a scan whose rig is `height` units tall, assuming a
+/// person of 0.5-2.5 m: 1 (m), 0.1 (dm), 0.01 (cm) or 0.001 (mm).
+fn guess_metres_per_unit(height: f64) -> f64 {
+    [1.0, 0.1, 0.01, 0.001]
+        .into_iter()
+        .find(|m| (0.5..=2.5).contains(&(height * m)))
+        .unwrap_or(1.0)
 }
 
 /// Runs `transfer`.
@@ -231,6 +242,41 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
         None => None,
     };
+    // Plausibility against the scan's rest frame (floor: its lowest point).
+    let mut metres_per_unit = None;
+    let plaus = prepared.rig.as_ref().and_then(|rig| {
+        let mpu = guess_metres_per_unit(rig.height);
+        metres_per_unit = Some(mpu);
+        let rest = prepared.mesh.positions();
+        let up = glam::DVec3::from_array(rig.up);
+        Checker::new(rest, rig, up, None, fps, Default::default())
+            .and_then(|mut c| {
+                c.metres_per_unit = mpu;
+                c.measure(&positions, rest.len(), None)
+            })
+            .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
+            .ok()
+    });
+    if let Some(path) = &a.preview.preview {
+        let up = prepared.rig.as_ref().map(|r| glam::DVec3::from_array(r.up));
+        let y_up = up.is_none_or(|u| u.y > 0.9);
+        super::render::write_preview(
+            path,
+            &positions,
+            prepared.mesh.vertex_count(),
+            prepared.mesh.triangles(),
+            prepared.rig.as_ref(),
+            prepared
+                .rig
+                .as_ref()
+                .map(|r| glam::DVec3::from_array(r.facing)),
+            plaus
+                .as_ref()
+                .filter(|_| y_up)
+                .map(|p| p.floor_m / metres_per_unit.unwrap_or(1.0)),
+            &a.preview,
+        )?;
+    }
     let seq = MeshSequence::new(prepared.mesh.clone(), positions, Some(fps))?;
     let written = save_sequence(&seq, &a.output, Some(fps))?;
     let ms_per_frame = 1e3 * stats.solve_seconds / frames.max(1) as f64;
@@ -253,6 +299,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "mean_pct": e.mean_pct, "p95_pct": e.p95_pct, "max_pct": e.max_pct,
         })),
         "markers_used": job.used,
+        "metres_per_unit_assumed": metres_per_unit,
+        "plausibility": plaus,
     });
     if let Some(p) = &a.report {
         let mut full = v.clone();
@@ -301,6 +349,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             e.p95_pct,
             e.max_pct
         );
+    }
+    if let Some(p) = &plaus {
+        s += &p.text();
     }
     super::emit(&s)
 }

@@ -1,0 +1,435 @@
+//! The plausibility report of a result: every check of this module on one
+//! sequence, next to the same checks on the character's own captured frames,
+//! with a warning wherever the result leaves that range.
+//!
+//! Acceptance line for the head (issue 17): a result's head-to-torso p95
+//! should not exceed the database's own p95 by more than 3°.
+
+use super::EvalError;
+use super::feet::{Feet, FootOptions, Sliding};
+use super::ground::{Ground, floor_height, ground, lowest_heights};
+use super::head::{HeadOptions, HeadTorso};
+use super::knee::knee_hyperextension;
+use super::summary::Summary;
+use crate::deform::TurnedOver;
+use crate::retarget::character::Character;
+use crate::rig::embed::Embedding;
+use crate::rig::embed::regress::Regressor;
+use glam::DVec3;
+use serde::Serialize;
+
+/// How far a result may leave the reference before it is warned about.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// Head-to-torso p95 above the reference's p95 (degrees). Default: 3.
+    pub head_margin_deg: f64,
+    /// Head-to-torso p95 when there is no reference (degrees). Default: 10.
+    pub head_deg: f64,
+    /// Largest penetration above the reference's largest (cm). Default: 2.
+    pub penetration_margin_cm: f64,
+    /// Median floating above the reference's p95 (or above the floor,
+    /// without a reference) (cm). Default: 3.
+    pub floating_margin_cm: f64,
+    /// Largest knee hyper-extension above the reference's (degrees). Default: 5.
+    pub knee_margin_deg: f64,
+    /// Mean sliding per contact frame above the reference's (cm). Default: 0.5.
+    pub sliding_margin_cm: f64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            head_margin_deg: 3.0,
+            head_deg: 10.0,
+            penetration_margin_cm: 2.0,
+            floating_margin_cm: 3.0,
+            knee_margin_deg: 5.0,
+            sliding_margin_cm: 0.5,
+        }
+    }
+}
+
+/// Options of a [`Checker`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PlausibilityOptions {
+    /// The head-to-torso vertex sets.
+    pub head: HeadOptions,
+    /// Soles and contact.
+    pub feet: FootOptions,
+    /// Warning limits.
+    pub limits: Limits,
+}
+
+/// The checks on the character's own frames (a database's captured frames,
+/// or a scan's rest frame).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Reference {
+    /// What was measured (e.g. "database 'samba' (175 frames)").
+    pub source: String,
+    /// Frames measured.
+    pub frames: usize,
+    /// |head-to-torso angle| (degrees).
+    pub head_torso_deg: Summary,
+    /// Foot sliding.
+    pub foot_sliding: Sliding,
+    /// Penetration and floating (cm).
+    pub ground: Ground,
+    /// Knee hyper-extension (degrees).
+    pub knee_hyperextension_deg: Summary,
+}
+
+/// The plausibility of one result sequence.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Plausibility {
+    /// Frames measured.
+    pub frames: usize,
+    /// |head-to-torso angle| relative to rest (degrees; see [`HeadTorso`]).
+    pub head_torso_deg: Summary,
+    /// The rest frame's `∠(chin→crown, hips→chin)` (degrees).
+    pub head_torso_rest_deg: f64,
+    /// Foot sliding during contact.
+    pub foot_sliding: Sliding,
+    /// Penetration and floating (cm).
+    pub ground: Ground,
+    /// The floor height along up (metres).
+    pub floor_m: f64,
+    /// Knee hyper-extension of the skeleton extracted from each frame (degrees).
+    pub knee_hyperextension_deg: Summary,
+    /// Triangle-frames turned over by the deformation (retarget only).
+    pub turned_over: Option<TurnedOver>,
+    /// The same checks on the character's own frames.
+    pub reference: Option<Reference>,
+    /// Where the result leaves the reference (or the absolute limits).
+    pub warnings: Vec<String>,
+    /// Signed head-to-torso angle per frame (degrees).
+    pub head_torso_per_frame: Vec<f64>,
+}
+
+/// Per-frame series of one sequence, pooled to make a [`Reference`].
+struct Series {
+    head: Vec<f64>,
+    lowest: Vec<f64>,
+    knee: Vec<f64>,
+    sliding: Sliding,
+}
+
+/// Everything a character's checks need, chosen once on its rest frame.
+#[derive(Debug, Clone)]
+pub struct Checker {
+    /// Head-to-torso vertex sets.
+    pub head: HeadTorso,
+    /// Soles.
+    pub feet: Feet,
+    /// Joint regressors of the rig (for the knees).
+    pub regressors: Vec<Regressor>,
+    /// Up in the measured frames.
+    pub up: DVec3,
+    /// Floor height along `up` (units of the measured frames).
+    pub floor: f64,
+    /// Metres per unit of the measured frames (1 for databases, which are
+    /// measured in metres). Default: 1.
+    pub metres_per_unit: f64,
+    /// Frame rate of the measured frames.
+    pub fps: f64,
+    /// Options.
+    pub opts: PlausibilityOptions,
+    /// The character's own figures, when known.
+    pub reference: Option<Reference>,
+}
+
+impl Checker {
+    /// A checker for frames in metres along `up`, with the vertex sets
+    /// chosen on `rest` (in the rig's space, the rig's `up`). The floor is
+    /// `floor`, else the rest frame's lowest point along `up`.
+    pub fn new(
+        rest: &[[f64; 3]],
+        rig: &Embedding,
+        up: DVec3,
+        floor: Option<f64>,
+        fps: f64,
+        opts: PlausibilityOptions,
+    ) -> Result<Checker, EvalError> {
+        let rig_up = DVec3::from_array(rig.up);
+        let head = HeadTorso::new(rest, &rig.labels, rig_up, &opts.head)?;
+        let feet = Feet::new(rest, &rig.labels, rig_up, &opts.feet)?;
+        let floor = floor.unwrap_or_else(|| {
+            lowest_heights(rest, rest.len(), up)
+                .first()
+                .copied()
+                .unwrap_or(0.0)
+        });
+        Ok(Checker {
+            head,
+            feet,
+            regressors: rig.regressors.clone(),
+            up: up.normalize_or(DVec3::Y),
+            floor,
+            metres_per_unit: 1.0,
+            fps,
+            opts,
+            reference: None,
+        })
+    }
+
+    /// The checker of a database character, for frames in metres, Y-up (as
+    /// `retarget` writes them), with the database's floor (median lowest
+    /// point of its frames) and its own figures as the reference.
+    pub fn for_character(ch: &Character, opts: PlausibilityOptions) -> Result<Checker, EvalError> {
+        let mut c = Checker::new(
+            ch.topology.positions(),
+            &ch.rig,
+            DVec3::Y,
+            Some(0.0),
+            ch.manifest.fps,
+            opts,
+        )?;
+        let n = ch.n;
+        let mut buf = vec![[0.0; 3]; n];
+        let mut seqs: Vec<Vec<[f64; 3]>> = Vec::with_capacity(ch.graph.sequences.len());
+        for (s, q) in ch.graph.sequences.iter().enumerate() {
+            let mut frames = Vec::with_capacity(q.len * n);
+            for t in 0..q.len {
+                ch.frame_metres(ch.graph.frame_id(s, t), &mut buf);
+                frames.extend_from_slice(&buf);
+            }
+            seqs.push(frames);
+        }
+        let lowest: Vec<f64> = seqs
+            .iter()
+            .flat_map(|f| lowest_heights(f, n, DVec3::Y))
+            .collect();
+        c.floor = floor_height(&lowest);
+        let series: Vec<Series> = seqs.iter().map(|f| c.series(f, n)).collect();
+        c.reference = Some(c.pool(
+            &format!("database '{}' ({} frames)", ch.manifest.name, lowest.len()),
+            &series,
+        ));
+        Ok(c)
+    }
+
+    /// Sets the reference to the checks on `sequences` (each frame-major,
+    /// metres along `up`), e.g. a synthetic database's sequences.
+    pub fn set_reference(&mut self, source: &str, sequences: &[&[[f64; 3]]], n: usize) {
+        let series: Vec<Series> = sequences.iter().map(|f| self.series(f, n)).collect();
+        self.reference = Some(self.pool(source, &series));
+    }
+
+    fn series(&self, frames: &[[f64; 3]], n: usize) -> Series {
+        let knee = frames
+            .chunks_exact(n.max(1))
+            .map(|f| {
+                let p = std::array::from_fn(|j| {
+                    self.regressors.get(j).map_or(DVec3::ZERO, |r| r.apply(f))
+                });
+                let k = knee_hyperextension(&p);
+                k[0].max(k[1])
+            })
+            .collect();
+        Series {
+            head: self.head.series(frames, n),
+            lowest: lowest_heights(frames, n, self.up)
+                .into_iter()
+                .map(|h| h * self.metres_per_unit)
+                .collect(),
+            knee,
+            sliding: self.feet.sliding(
+                frames,
+                n,
+                self.up,
+                self.floor,
+                self.fps,
+                self.metres_per_unit,
+                &self.opts.feet,
+            ),
+        }
+    }
+
+    fn pool(&self, source: &str, series: &[Series]) -> Reference {
+        let cat = |f: fn(&Series) -> &Vec<f64>| -> Vec<f64> {
+            series.iter().flat_map(|s| f(s).iter().copied()).collect()
+        };
+        let mut sliding = Sliding::default();
+        for s in series {
+            sliding.contact_frames += s.sliding.contact_frames;
+            sliding.total_cm += s.sliding.total_cm;
+            sliding.max_cm_per_frame = sliding.max_cm_per_frame.max(s.sliding.max_cm_per_frame);
+        }
+        sliding.mean_cm_per_frame = sliding.total_cm / sliding.contact_frames.max(1) as f64;
+        let touching: f64 = series
+            .iter()
+            .map(|s| s.sliding.touching_mean_cm_per_frame * s.sliding.touching_frames as f64)
+            .sum();
+        sliding.touching_frames = series.iter().map(|s| s.sliding.touching_frames).sum();
+        sliding.touching_mean_cm_per_frame = touching / sliding.touching_frames.max(1) as f64;
+        let head = cat(|s| &s.head);
+        Reference {
+            source: source.to_string(),
+            frames: head.len(),
+            head_torso_deg: HeadTorso::summary(&head),
+            foot_sliding: sliding,
+            ground: ground(&cat(|s| &s.lowest), self.floor * self.metres_per_unit),
+            knee_hyperextension_deg: Summary::of(&cat(|s| &s.knee)),
+        }
+    }
+
+    /// The plausibility of `frames` (frame-major, `n` vertices each, metres
+    /// along `up`), with warnings against the reference (or the absolute
+    /// limits), each also logged with `tracing::warn!`.
+    pub fn measure(
+        &self,
+        frames: &[[f64; 3]],
+        n: usize,
+        turned_over: Option<TurnedOver>,
+    ) -> Result<Plausibility, EvalError> {
+        if n != self.head.vertex_count() {
+            return Err(EvalError::VertexCount {
+                have: n,
+                want: self.head.vertex_count(),
+            });
+        }
+        let s = self.series(frames, n);
+        let mut p = Plausibility {
+            frames: s.head.len(),
+            head_torso_deg: HeadTorso::summary(&s.head),
+            head_torso_rest_deg: self.head.rest_deg,
+            foot_sliding: s.sliding,
+            ground: ground(&s.lowest, self.floor * self.metres_per_unit),
+            floor_m: self.floor * self.metres_per_unit,
+            knee_hyperextension_deg: Summary::of(&s.knee),
+            turned_over,
+            reference: self.reference.clone(),
+            warnings: Vec::new(),
+            head_torso_per_frame: s.head,
+        };
+        p.warnings = warnings(&p, &self.opts.limits);
+        for w in &p.warnings {
+            tracing::warn!("{w}");
+        }
+        Ok(p)
+    }
+}
+
+/// Where `p` leaves its reference (or, without one, the absolute limits).
+pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
+    let mut w = Vec::new();
+    let h = p.head_torso_deg.p95;
+    match &p.reference {
+        Some(r) => {
+            if h > r.head_torso_deg.p95 + l.head_margin_deg {
+                w.push(format!(
+                    "head-to-torso angle p95 {h:.1}° exceeds the captured p95 {:.1}° + {:.0}° (median {:.1}°, max {:.1}°)",
+                    r.head_torso_deg.p95, l.head_margin_deg, p.head_torso_deg.median, p.head_torso_deg.max
+                ));
+            }
+            let pen = p.ground.penetration_cm.max;
+            if pen > r.ground.penetration_cm.max + l.penetration_margin_cm {
+                w.push(format!(
+                    "ground penetration up to {pen:.1} cm (captured: up to {:.1} cm)",
+                    r.ground.penetration_cm.max
+                ));
+            }
+            let fl = p.ground.floating_cm.median;
+            if fl > r.ground.floating_cm.p95 + l.floating_margin_cm {
+                w.push(format!(
+                    "floating: median {fl:.1} cm above the floor (captured p95 {:.1} cm)",
+                    r.ground.floating_cm.p95
+                ));
+            }
+            let k = p.knee_hyperextension_deg.max;
+            if k > r.knee_hyperextension_deg.max + l.knee_margin_deg {
+                w.push(format!(
+                    "knee hyper-extension up to {k:.1}° (captured: up to {:.1}°)",
+                    r.knee_hyperextension_deg.max
+                ));
+            }
+            let gl = p.foot_sliding.touching_mean_cm_per_frame;
+            if gl > r.foot_sliding.touching_mean_cm_per_frame + 2.0 * l.sliding_margin_cm {
+                w.push(format!(
+                    "feet glide {gl:.2} cm per frame while touching the floor (captured {:.2})",
+                    r.foot_sliding.touching_mean_cm_per_frame
+                ));
+            }
+            let sl = p.foot_sliding.mean_cm_per_frame;
+            if sl > r.foot_sliding.mean_cm_per_frame + l.sliding_margin_cm {
+                w.push(format!(
+                    "foot sliding {sl:.2} cm per contact frame (captured {:.2})",
+                    r.foot_sliding.mean_cm_per_frame
+                ));
+            }
+        }
+        None => {
+            if h > l.head_deg {
+                w.push(format!(
+                    "head-to-torso angle p95 {h:.1}° from rest exceeds {:.0}°",
+                    l.head_deg
+                ));
+            }
+            if p.ground.penetration_cm.max > l.penetration_margin_cm {
+                w.push(format!(
+                    "ground penetration up to {:.1} cm",
+                    p.ground.penetration_cm.max
+                ));
+            }
+            if p.ground.floating_cm.median > l.floating_margin_cm {
+                w.push(format!(
+                    "floating: median {:.1} cm above the floor",
+                    p.ground.floating_cm.median
+                ));
+            }
+        }
+    }
+    if let Some(t) = p.turned_over
+        && t.after > 0
+    {
+        w.push(format!("{} triangle-frames stay turned over", t.after));
+    }
+    w
+}
+
+impl Plausibility {
+    /// A short text block (a few lines) for the command line.
+    pub fn text(&self) -> String {
+        let r = self.reference.as_ref();
+        let refd = |f: &dyn Fn(&Reference) -> String| {
+            r.map(|r| format!(" [captured {}]", f(r)))
+                .unwrap_or_default()
+        };
+        let mut s = format!(
+            "plausibility over {} frames:\n  head-to-torso: median {:.1}°, p95 {:.1}°, max {:.1}°{}\n",
+            self.frames,
+            self.head_torso_deg.median,
+            self.head_torso_deg.p95,
+            self.head_torso_deg.max,
+            refd(&|r| format!(
+                "median {:.1}°, p95 {:.1}°",
+                r.head_torso_deg.median, r.head_torso_deg.p95
+            ))
+        );
+        s += &format!(
+            "  feet: {:.2} cm sliding per contact frame ({} contact foot-frames), {:.2} cm/frame while touching{}\n",
+            self.foot_sliding.mean_cm_per_frame,
+            self.foot_sliding.contact_frames,
+            self.foot_sliding.touching_mean_cm_per_frame,
+            refd(&|r| format!(
+                "{:.2}, {:.2}",
+                r.foot_sliding.mean_cm_per_frame, r.foot_sliding.touching_mean_cm_per_frame
+            ))
+        );
+        s += &format!(
+            "  ground: penetration max {:.1} cm, floating median {:.1} cm; knees: hyper-extension max {:.1}°{}\n",
+            self.ground.penetration_cm.max,
+            self.ground.floating_cm.median,
+            self.knee_hyperextension_deg.max,
+            refd(&|r| format!(
+                "{:.1} cm, {:.1} cm; {:.1}°",
+                r.ground.penetration_cm.max,
+                r.ground.floating_cm.median,
+                r.knee_hyperextension_deg.max
+            ))
+        );
+        for w in &self.warnings {
+            s += &format!("  warning: {w}\n");
+        }
+        s
+    }
+}

@@ -1,0 +1,375 @@
+//! Plausibility checks (issue 17): the head-to-torso angle measured on the
+//! mesh, foot sliding, ground penetration, and their wiring into the CLI.
+//! Procedural tests run without data; the real-capture ones skip without it.
+
+mod common;
+
+use glam::{DQuat, DVec3};
+use std::path::Path;
+use surfmotion::eval::{
+    Checker, FootOptions, HeadOptions, HeadTorso, PlausibilityOptions, lowest_heights,
+};
+use surfmotion::mesh::Mesh;
+use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::rig::embed::Embedding;
+use surfmotion::rig::embed::landmarks::Landmarks;
+use surfmotion::rig::embed::parts::Part;
+use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
+
+fn humanoid() -> (Mesh, Embedding) {
+    let mesh = humanoid_mesh(DEMO_GRID);
+    let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
+    (mesh, rig)
+}
+
+fn centroid(p: &[[f64; 3]], ids: &[u32]) -> DVec3 {
+    ids.iter()
+        .map(|&v| DVec3::from_array(p[v as usize]))
+        .sum::<DVec3>()
+        / ids.len() as f64
+}
+
+/// The rest mesh with every head-part vertex turned by `deg` about the neck
+/// (the chin centroid), about the axis normal to the plane of the chin→crown
+/// and hips→chin axes (turning the head away from the trunk's line), or
+/// about `axis` when given.
+fn tilt_head(
+    rest: &[[f64; 3]],
+    rig: &Embedding,
+    h: &HeadTorso,
+    deg: f64,
+    axis: Option<DVec3>,
+) -> Vec<[f64; 3]> {
+    let (c, k, hip) = (
+        centroid(rest, &h.crown),
+        centroid(rest, &h.chin),
+        centroid(rest, &h.hips),
+    );
+    let axis = axis.unwrap_or_else(|| {
+        let n = (k - hip).cross(c - k);
+        if n.length() > 1e-9 * (k - hip).length() * (c - k).length() {
+            n.normalize()
+        } else {
+            DVec3::from_array(rig.left)
+        }
+    });
+    let q = DQuat::from_axis_angle(axis.normalize(), deg.to_radians());
+    rest.iter()
+        .zip(&rig.labels)
+        .map(|(p, &l)| {
+            if l == Part::Head.index() as u8 {
+                (k + q * (DVec3::from_array(*p) - k)).to_array()
+            } else {
+                *p
+            }
+        })
+        .collect()
+}
+
+/// Zero at rest and under rigid motions and scaling; a head tilted by a
+/// known angle reads it back within 1°.
+fn check_head_angle(name: &str, rest: &[[f64; 3]], rig: &Embedding) {
+    let h = HeadTorso::new(
+        rest,
+        &rig.labels,
+        DVec3::from_array(rig.up),
+        &HeadOptions::default(),
+    )
+    .unwrap();
+    assert!(h.angle_deg(rest).abs() < 1e-9, "{name}: rest");
+    for (k, (axis, turn, shift, scale)) in [
+        (DVec3::Y, 1.3, DVec3::new(2.0, 0.0, -1.0), 1.0),
+        (
+            DVec3::new(1.0, 2.0, 0.5),
+            0.7,
+            DVec3::new(-0.3, 5.0, 0.2),
+            0.01,
+        ),
+        (DVec3::X, 3.0, DVec3::ZERO, 100.0),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let q = DQuat::from_axis_angle(axis.normalize(), turn);
+        let moved: Vec<[f64; 3]> = rest
+            .iter()
+            .map(|p| (q * DVec3::from_array(*p) * scale + shift).to_array())
+            .collect();
+        let a = h.angle_deg(&moved);
+        assert!(a.abs() < 1e-6, "{name}: rigid motion {k} reads {a}°");
+    }
+    for deg in [5.0, 15.0, 25.0, 40.0] {
+        let tilted = tilt_head(rest, rig, &h, deg, None);
+        let a = h.angle_deg(&tilted);
+        println!(
+            "{name}: head tilted {deg}° reads {a:.3}° (rest angle {:.2}°)",
+            h.rest_deg
+        );
+        assert!((a - deg).abs() < 1.0, "{name}: tilt {deg}° reads {a}°");
+    }
+}
+
+#[test]
+fn head_angle_is_zero_at_rest_and_under_rigid_motion_and_reads_a_tilt() {
+    let (mesh, rig) = humanoid();
+    check_head_angle("humanoid", mesh.positions(), &rig);
+    // A pitch about the body's left axis moves the head by that angle
+    // whichever way, so |reading| stays within the rest angle of it.
+    let h = HeadTorso::new(
+        mesh.positions(),
+        &rig.labels,
+        DVec3::Y,
+        &HeadOptions::default(),
+    )
+    .unwrap();
+    for deg in [-20.0, 20.0] {
+        let t = tilt_head(
+            mesh.positions(),
+            &rig,
+            &h,
+            deg,
+            Some(DVec3::from_array(rig.left)),
+        );
+        let a = h.angle_deg(&t);
+        assert!(
+            (a.abs() - 20.0).abs() <= 2.0 * h.rest_deg + 1.0,
+            "pitch {deg}° reads {a}° (rest {})",
+            h.rest_deg
+        );
+    }
+}
+
+#[test]
+fn head_angle_on_real_captures() {
+    let Some(d) = common::data_dir() else { return };
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    for (name, bound_median, bound_p95) in [("samba", 6.0, 15.0), ("crane", 10.0, 25.0)] {
+        let seq = load_sequence(
+            &d.join(format!("4d/{name}/{name}.pc2")).to_string_lossy(),
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        let rest = load_sequence(
+            &d.join(format!("4d/{name}/{name}.obj")).to_string_lossy(),
+            &LoadOptions::default(),
+        )
+        .unwrap()
+        .frame_mesh(0);
+        let lm = Landmarks::load(
+            &fixtures.join(format!("{name}.landmarks.json")),
+            rest.vertex_count(),
+        )
+        .unwrap();
+        let rig = Embedding::new(&rest, &lm, None).unwrap();
+        check_head_angle(name, rest.positions(), &rig);
+        let h = HeadTorso::new(
+            rest.positions(),
+            &rig.labels,
+            DVec3::from_array(rig.up),
+            &HeadOptions::default(),
+        )
+        .unwrap();
+        let s = HeadTorso::summary(&h.series(seq.all_positions(), rest.vertex_count()));
+        println!(
+            "{name} capture ({} frames): head-to-torso median {:.2}°, p95 {:.2}°, max {:.2}°",
+            seq.frame_count(),
+            s.median,
+            s.p95,
+            s.max
+        );
+        assert!(
+            s.median < bound_median && s.p95 < bound_p95,
+            "{name}: {s:?}"
+        );
+    }
+}
+
+/// `frames` copies of `rest`, each changed by `edit(frame, vertex, position)`.
+fn animate(
+    rest: &[[f64; 3]],
+    frames: usize,
+    edit: impl Fn(usize, usize, DVec3) -> DVec3,
+) -> Vec<[f64; 3]> {
+    (0..frames)
+        .flat_map(|t| {
+            rest.iter()
+                .enumerate()
+                .map(|(v, p)| edit(t, v, DVec3::from_array(*p)).to_array())
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+#[test]
+fn foot_sliding_is_zero_when_planted_and_reads_a_dragged_foot() {
+    let (mesh, rig) = humanoid();
+    let rest = mesh.positions();
+    let n = rest.len();
+    let c = Checker::new(rest, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
+    // Planted: the whole body still, then moved only vertically above the
+    // contact band (feet stay on the floor, the body bobs 1 cm).
+    let still = animate(rest, 30, |_, _, p| p);
+    let p = c.measure(&still, n, None).unwrap();
+    assert!(
+        p.foot_sliding.contact_frames >= 2 * 30,
+        "{:?}",
+        p.foot_sliding
+    );
+    assert!(p.foot_sliding.total_cm < 1e-9, "{:?}", p.foot_sliding);
+    assert!(p.foot_sliding.touching_mean_cm_per_frame < 1e-9);
+    assert!(p.warnings.is_empty(), "{:?}", p.warnings);
+    // One foot dragged along the floor at `v` m per frame, slower than the
+    // contact speed: the left foot slides v per frame, the right none.
+    let left = Part::LFoot.index() as u8;
+    let fwd = DVec3::from_array(rig.facing);
+    let opts = FootOptions::default();
+    for v in [0.002, 0.005, 0.01] {
+        assert!(v * 30.0 < opts.contact_speed);
+        let dragged = animate(rest, 30, |t, i, p| {
+            if rig.labels[i] == left {
+                p + fwd * v * t as f64
+            } else {
+                p
+            }
+        });
+        let s = c.measure(&dragged, n, None).unwrap().foot_sliding;
+        println!("foot dragged {:.1} cm/frame: {s:?}", 100.0 * v);
+        assert!(s.max_cm_per_frame > 0.0);
+        assert!(s.touching_mean_cm_per_frame > 0.0);
+        let per_left_frame = s.total_cm / 29.0;
+        assert!(
+            (per_left_frame - 100.0 * v).abs() < 0.05 * 100.0 * v,
+            "{v}: {s:?}"
+        );
+    }
+}
+
+#[test]
+fn a_whole_body_gliding_fast_is_not_contact_but_is_seen_touching() {
+    let (mesh, rig) = humanoid();
+    let rest = mesh.positions();
+    let c = Checker::new(rest, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
+    // 4 cm per frame = 1.2 m/s: a held pose carried at walking speed.
+    let glide = animate(rest, 20, |t, _, p| p + DVec3::X * 0.04 * t as f64);
+    let s = c.measure(&glide, rest.len(), None).unwrap().foot_sliding;
+    assert_eq!(s.total_cm, 0.0, "{s:?}");
+    assert!(
+        (s.touching_mean_cm_per_frame - 4.0 * 19.0 / 20.0).abs() < 1e-6,
+        "{s:?}"
+    );
+}
+
+#[test]
+fn penetration_reads_the_depth_pushed_below_the_floor() {
+    let (mesh, rig) = humanoid();
+    let rest = mesh.positions();
+    let n = rest.len();
+    let c = Checker::new(rest, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
+    let floor = lowest_heights(rest, n, DVec3::Y)[0];
+    assert!((c.floor - floor).abs() < 1e-12);
+    for d in [0.01, 0.04, 0.1] {
+        // Frames pushed down by d·t/9, t = 0..9: the deepest is d.
+        let pushed = animate(rest, 10, |t, _, p| p - DVec3::Y * d * t as f64 / 9.0);
+        let p = c.measure(&pushed, n, None).unwrap();
+        println!("pushed {:.0} cm: {:?}", 100.0 * d, p.ground);
+        assert!((p.ground.penetration_cm.max - 100.0 * d).abs() < 1e-6);
+        assert!(p.ground.floating_cm.max < 1e-9);
+        assert_eq!(
+            p.warnings.iter().any(|w| w.contains("penetration")),
+            100.0 * d > PlausibilityOptions::default().limits.penetration_margin_cm
+        );
+        let lifted = animate(rest, 10, |t, _, p| p + DVec3::Y * d * t as f64 / 9.0);
+        let p = c.measure(&lifted, n, None).unwrap();
+        assert!((p.ground.floating_cm.max - 100.0 * d).abs() < 1e-6);
+        assert!(p.ground.penetration_cm.max < 1e-9);
+    }
+}
+
+fn png_size(p: &Path) -> (u32, u32) {
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(p).unwrap()));
+    let r = dec.read_info().unwrap();
+    (r.info().width, r.info().height)
+}
+
+#[test]
+fn retarget_json_and_eval_carry_the_report_and_preview_writes_a_sheet() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("demo");
+    let run = |args: &[&std::ffi::OsStr]| {
+        let out = std::process::Command::new(common::bin())
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{:?}: {}",
+            args,
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    run(&["demo".as_ref(), "-o".as_ref(), dir.as_os_str()]);
+    let db = dir.join("database");
+    let clip = dir.join("query_turn.bvh");
+    let result = tmp.path().join("r.glb");
+    let sheet = tmp.path().join("sheet.png");
+    let json = run(&[
+        "retarget".as_ref(),
+        "--db".as_ref(),
+        db.as_os_str(),
+        "--mocap".as_ref(),
+        clip.as_os_str(),
+        "-o".as_ref(),
+        result.as_os_str(),
+        "--json".as_ref(),
+        "--preview".as_ref(),
+        sheet.as_os_str(),
+        "--preview-frames".as_ref(),
+        "4".as_ref(),
+        "--preview-size".as_ref(),
+        "64".as_ref(),
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let p = &v["plausibility"];
+    for key in [
+        "head_torso_deg",
+        "foot_sliding",
+        "ground",
+        "knee_hyperextension_deg",
+        "turned_over",
+        "reference",
+        "warnings",
+    ] {
+        assert!(!p[key].is_null(), "retarget --json: no plausibility.{key}");
+    }
+    assert!(p["head_torso_deg"]["p95"].as_f64().unwrap() >= 0.0);
+    assert!(p["reference"]["head_torso_deg"]["p95"].is_number());
+    assert_eq!(png_size(&sheet), (4 * 64, 2 * 64));
+    let ev = run(&[
+        "eval".as_ref(),
+        "--db".as_ref(),
+        db.as_os_str(),
+        "--mocap".as_ref(),
+        clip.as_os_str(),
+        "--result".as_ref(),
+        result.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    let e: serde_json::Value = serde_json::from_str(&ev).unwrap();
+    // eval reads the written file back: the same figures as retarget's.
+    let (a, b) = (&e["plausibility"]["head_torso_deg"], &p["head_torso_deg"]);
+    for k in ["median", "p95", "max"] {
+        let (x, y) = (a[k].as_f64().unwrap(), b[k].as_f64().unwrap());
+        assert!((x - y).abs() < 0.05, "eval {k} {x} vs retarget {y}");
+    }
+    let text = run(&[
+        "eval".as_ref(),
+        "--db".as_ref(),
+        db.as_os_str(),
+        "--mocap".as_ref(),
+        clip.as_os_str(),
+        "--result".as_ref(),
+        result.as_os_str(),
+    ]);
+    assert!(text.contains("head-to-torso"), "{text}");
+}
