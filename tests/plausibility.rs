@@ -372,4 +372,54 @@ fn retarget_json_and_eval_carry_the_report_and_preview_writes_a_sheet() {
         result.as_os_str(),
     ]);
     assert!(text.contains("head-to-torso"), "{text}");
+    // synth: a plausibility per sequence written, and one sheet per sequence.
+    let synth_db = tmp.path().join("synth");
+    let synth_sheet = tmp.path().join("synth.png");
+    let sj = run(&[
+        "synth".as_ref(),
+        "--mesh".as_ref(),
+        db.join("topology.obj").as_os_str(),
+        "--landmarks".as_ref(),
+        db.join("landmarks.json").as_os_str(),
+        "--mocap".as_ref(),
+        clip.as_os_str(),
+        "--seconds".as_ref(),
+        "1".as_ref(),
+        "-o".as_ref(),
+        synth_db.as_os_str(),
+        "--json".as_ref(),
+        "--preview".as_ref(),
+        synth_sheet.as_os_str(),
+        "--preview-frames".as_ref(),
+        "3".as_ref(),
+        "--preview-size".as_ref(),
+        "32".as_ref(),
+    ]);
+    let s: serde_json::Value = serde_json::from_str(&sj).unwrap();
+    assert!(s["sequences"][0]["plausibility"]["head_torso_deg"]["p95"].is_number());
+    assert_eq!(png_size(&synth_sheet), (3 * 32, 2 * 32));
+    // transfer onto the demo mesh as a scan.
+    let t_sheet = tmp.path().join("transfer.png");
+    let tj = run(&[
+        "transfer".as_ref(),
+        "--scan".as_ref(),
+        db.join("topology.obj").as_os_str(),
+        "--landmarks".as_ref(),
+        db.join("landmarks.json").as_os_str(),
+        "--mocap".as_ref(),
+        clip.as_os_str(),
+        "-o".as_ref(),
+        tmp.path().join("t.pc2").as_os_str(),
+        "--json".as_ref(),
+        "--preview".as_ref(),
+        t_sheet.as_os_str(),
+        "--preview-frames".as_ref(),
+        "2".as_ref(),
+        "--preview-size".as_ref(),
+        "40".as_ref(),
+    ]);
+    let t: serde_json::Value = serde_json::from_str(&tj).unwrap();
+    assert!(t["plausibility"]["ground"]["penetration_cm"]["max"].is_number());
+    assert_eq!(t["metres_per_unit_assumed"], 1.0);
+    assert_eq!(png_size(&t_sheet), (2 * 40, 2 * 40));
 }
