@@ -33,9 +33,10 @@
 //!   make no difference.
 //! - **Root**: horizontal travel from the clip's first frame scaled by the
 //!   ratio of leg lengths (character / reference); height above the floor
-//!   scaled the same way, each skeleton's floor being its lowest ankle or
-//!   toe (the character's rest frame; the clip's 5th percentile over
-//!   frames), so the feet stand where the clip's stand.
+//!   scaled the same way, then the whole sequence lifted so that the
+//!   character's lowest ankle or toe stands where the clip's stands (the
+//!   5th percentile over frames of each, the character's floor being its
+//!   rest frame's lowest foot joint).
 //!
 //! The clip's reference ([`choose_reference`]) is its rest skeleton when
 //! that stands upright (a T- or A-pose: trunk within 20° of vertical, legs
@@ -278,7 +279,7 @@ pub fn retarget(
         mocap.par_iter().map(|m| pose_rotations(r, m)).collect();
     let carriage_inv = neck_carriage(&rotations).inverse();
     let (chest, neck) = (C::Chest.index(), C::Neck.index());
-    mocap
+    let mut out: Vec<(Pose, [DQuat; Canonical::COUNT])> = mocap
         .par_iter()
         .zip(&rotations)
         .map(|(m, a)| {
@@ -306,7 +307,25 @@ pub fn retarget(
             }
             (t, g)
         })
-        .collect()
+        .collect();
+    // Feet on the floor: the character's lowest foot joint stands where the
+    // clip's does (the same low percentile over frames), whatever the two
+    // skeletons' pelvis-to-hip offsets.
+    let mut feet: Vec<f64> = out
+        .iter()
+        .map(|(t, _)| foot_height(t))
+        .filter(|h| h.is_finite())
+        .collect();
+    feet.sort_by(f64::total_cmp);
+    let lift = feet
+        .get(feet.len() / 20)
+        .map_or(0.0, |low| char_floor - low);
+    for (t, _) in &mut out {
+        for p in t.iter_mut() {
+            p.y += lift;
+        }
+    }
+    out
 }
 
 /// The clip's typical carriage of the neck: the mean (sign-aligned,
