@@ -40,6 +40,9 @@ pub struct CheckOptions {
     /// Relative difference of a left bone's length and its right twin's.
     /// Default value: 0.05.
     pub bone_ratio: f64,
+    /// Least distance across between a left joint and its right twin.
+    /// Default value: 0.02.
+    pub twin_separation: f64,
 }
 
 impl Default for CheckOptions {
@@ -50,6 +53,7 @@ impl Default for CheckOptions {
             limb_symmetry: 0.03,
             central_offset: 0.03,
             bone_ratio: 0.05,
+            twin_separation: 0.02,
         }
     }
 }
@@ -63,6 +67,9 @@ pub enum Problem {
     /// A left joint and its right twin at different distances from the
     /// mid-plane.
     Asymmetric,
+    /// A left joint and its right twin (nearly) at one place across: both
+    /// limbs' joints put in the middle of the two.
+    Merged,
     /// A left bone and its right twin of different lengths.
     BoneLengths,
     /// A joint outside the body.
@@ -233,6 +240,21 @@ pub fn check_with(e: &Embedding, mesh: &Mesh, o: &CheckOptions) -> EmbedCheck {
         } else {
             o.limb_symmetry
         };
+        if dl + dr < o.twin_separation * h {
+            warn(
+                Problem::Merged,
+                l.name(),
+                dl + dr,
+                format!(
+                    "{} and {} are only {:.4} apart across the body ({:.2}% of the height; at least {:.0}% expected): both placed between the two limbs?",
+                    l.name(),
+                    r.name(),
+                    dl + dr,
+                    pct(dl + dr),
+                    100.0 * o.twin_separation
+                ),
+            );
+        }
         let d = (dl - dr).abs();
         if d > tol * h {
             warn(

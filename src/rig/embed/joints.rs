@@ -55,11 +55,16 @@ struct Ctx<'a> {
     t: &'a [[u32; 3]],
     h: f64,
     notes: Vec<String>,
+    /// The twin limb's point for the next [`Ctx::centre`] (taken by it): a
+    /// loop that encloses it is both limbs joined (legs together), not
+    /// this one.
+    twin: Option<DVec3>,
 }
 
 impl Ctx<'_> {
     /// The centre of the section through `at` perpendicular to `axis` when
-    /// its loop is narrower than `max_r`, else `fallback`.
+    /// its loop is narrower than `max_r` (and does not enclose the twin
+    /// point set in `self.twin`), else `fallback`.
     fn centre(
         &mut self,
         name: &str,
@@ -69,7 +74,14 @@ impl Ctx<'_> {
         max_r: f64,
         fallback: DVec3,
     ) -> DVec3 {
+        let twin = self.twin.take();
         match part_loop(self.p, self.t, at, axis, near) {
+            Some(l) if twin.is_some_and(|q| encloses(&l, q, axis)) => {
+                self.notes.push(format!(
+                    "{name}: the section holds both limbs (joined); placed from the landmarks"
+                ));
+                fallback
+            }
             Some(l) if l.radius <= max_r * self.h => l.centroid,
             Some(l) => {
                 self.notes.push(format!(
@@ -137,6 +149,7 @@ pub fn place_joints(
         t: triangles,
         h,
         notes: Vec::new(),
+        twin: None,
     };
     let at_height = |q: DVec3, height: f64| q + up * (height - q.dot(up));
     let mut j = [DVec3::ZERO; Canonical::COUNT];
@@ -190,6 +203,8 @@ pub fn place_joints(
         let at = get(lmk).unwrap_or_else(|| at_height(knee, ankle_h));
         let axis = (knee - at).normalize_or(up);
         let near = at_height(knee, at.dot(up));
+        let other = [rk, lk][k];
+        cx.twin = Some(get([L::RAnkle, L::LAnkle][k]).unwrap_or_else(|| at_height(other, ankle_h)));
         ankles[k] = cx.centre(name, at, axis, near, 0.06, at);
     }
     // Knees, then elbows and wrists, twice: each pass refines the limb axes.
@@ -206,6 +221,7 @@ pub fn place_joints(
             let hp = hip(hip_w, s);
             let axis = (ankles[k] - hp).normalize_or(-up);
             let fb = on_line(lmk, hp, ankles[k]);
+            cx.twin = Some([rk, lk][k]);
             knees[k] = cx.centre(name, lmk, axis, lmk, 0.07, fb);
         }
         let (w, note) = hip_half_width(
@@ -332,6 +348,10 @@ pub fn place_joints(
         }
     }
 
+    // The same note from both refinement passes once.
+    let mut seen = std::collections::HashSet::new();
+    cx.notes.retain(|n| seen.insert(n.clone()));
+
     // Hand tips: the farthest arm vertex beyond each wrist.
     let mut hand_tips = [DVec3::ZERO; 2];
     for (k, [e, w]) in arm.iter().enumerate() {
@@ -443,7 +463,7 @@ fn pelvis_centre(
 /// centre) is followed up to hip height `hip_h`; the two distances are
 /// averaged (a single one used for both when only one thigh is limb-like,
 /// half the knees' separation when neither is, as under a skirt), within
-/// normal proportions (4-7.5 % of the height). Also a note when the two
+/// plausible proportions (3-8 % of the height). Also a note when the two
 /// thighs disagree by more than 1 % of the height.
 fn hip_half_width(
     cx: &Ctx,
@@ -483,5 +503,5 @@ fn hip_half_width(
         [a] => *a,
         _ => 0.5 * (plane.distance(knees[0]) - plane.distance(knees[1])),
     };
-    (w.clamp(0.04 * h, 0.075 * h), note)
+    (w.clamp(0.03 * h, 0.08 * h), note)
 }
