@@ -20,7 +20,6 @@
 use super::landmarks::{Landmark, Landmarks};
 use super::midplane::{MidPlane, estimate_mid_plane};
 use super::section::{cross_section, encloses, part_loop};
-use super::surface::is_inside;
 use crate::rig::Canonical;
 use glam::DVec3;
 
@@ -187,8 +186,8 @@ pub fn place_joints(
     );
     let hip_h = groin.dot(up) + 0.035 * h;
     let (pc, pelvis_h) = pelvis_centre(&mut cx, &plane, groin, up, hip_h);
-    for (c, name) in [(C::Neck, "neck"), (C::Head, "head")] {
-        j[c.index()] = centred(&mut cx, &plane, name, j[c.index()]);
+    for (c, name, at) in [(C::Neck, "neck", neck_at), (C::Head, "head", head_at)] {
+        j[c.index()] = centred(&mut cx, &plane, name, j[c.index()], at);
     }
     let mut hip_w = 0.055 * h;
     let hip = |w: f64, s: f64| pc + left * (s * w);
@@ -281,7 +280,7 @@ pub fn place_joints(
     for (c, f, name) in [(C::Spine, 0.33, "spine"), (C::Chest, 0.66, "chest")] {
         let at = pelvis.lerp(neck, f);
         let q = cx.centre(name, at, up, at, 0.2, at);
-        j[c.index()] = centred(&mut cx, &plane, name, q);
+        j[c.index()] = centred(&mut cx, &plane, name, q, at);
     }
 
     // Toes and toe tips: the front of each foot (vertices below the ankle,
@@ -332,22 +331,6 @@ pub fn place_joints(
         j[c.index()] = toe;
     }
 
-    // Every joint inside the body: one outside (a toe from the sole's
-    // vertices, a shoulder extrapolated along the upper arm) moves towards
-    // its parent until it is inside.
-    for c in Canonical::ALL {
-        let Some(par) = c.parent() else { continue };
-        if let Some((q, d)) = pull_inside(positions, triangles, j[c.index()], j[par.index()]) {
-            cx.notes.push(format!(
-                "{}: outside the body; moved {:.1}% of the height towards {} to be inside",
-                c.name(),
-                100.0 * d / h,
-                par.name()
-            ));
-            j[c.index()] = q;
-        }
-    }
-
     // The same note from both refinement passes once.
     let mut seen = std::collections::HashSet::new();
     cx.notes.retain(|n| seen.insert(n.clone()));
@@ -377,13 +360,16 @@ pub fn place_joints(
     }
 }
 
-/// A central joint (spine, chest, neck, head) from its section centre `q`:
-/// kept when within 2 % of the height of the mid-plane, else moved onto it
-/// with a note (a lopsided section: a shoulder or an arm joined to it on
-/// one side). A rest pose holds these joints on the mid-plane.
-fn centred(cx: &mut Ctx, plane: &MidPlane, name: &str, q: DVec3) -> DVec3 {
+/// A central joint (spine, chest, neck, head) from its section centre `q`
+/// found around `at` (the point the landmarks give): kept when within 2 %
+/// of the height of the mid-plane, or when `at` is itself off the plane
+/// (the landmarks put it there: a turned head, a body not in a rest pose);
+/// else moved onto the plane with a note (a lopsided section: a shoulder or
+/// an arm joined to it on one side). A rest pose holds these joints on the
+/// mid-plane.
+fn centred(cx: &mut Ctx, plane: &MidPlane, name: &str, q: DVec3, at: DVec3) -> DVec3 {
     let d = plane.distance(q);
-    if d.abs() <= 0.02 * cx.h {
+    if d.abs() <= 0.02 * cx.h || plane.distance(at).abs() > 0.02 * cx.h {
         return q;
     }
     cx.notes.push(format!(
@@ -391,26 +377,6 @@ fn centred(cx: &mut Ctx, plane: &MidPlane, name: &str, q: DVec3) -> DVec3 {
         100.0 * d.abs() / cx.h
     ));
     plane.project(q)
-}
-
-/// When `q` is outside the surface: the first point inside on the way from
-/// `q` to `towards` (in fortieths of the way, one more step in for a
-/// margin) and the distance moved; `None` when `q` is inside or no point on
-/// the way is.
-fn pull_inside(
-    positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    q: DVec3,
-    towards: DVec3,
-) -> Option<(DVec3, f64)> {
-    if is_inside(positions, triangles, q) {
-        return None;
-    }
-    let first =
-        (1..=40).find(|&k| is_inside(positions, triangles, q.lerp(towards, k as f64 / 40.0)))?;
-    let k = (first + 1).min(40);
-    let p = q.lerp(towards, k as f64 / 40.0);
-    Some((p, p.distance(q)))
 }
 
 /// The pelvis centre at height `hip_h` on the mid-plane, and the height of
