@@ -89,8 +89,13 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
                 }
                 mesh = surfmotion::mesh::repair::repair(&mesh, &Default::default()).0;
             }
-            Embedding::new(&mesh, &lm, parts)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", l.display()))?
+            // A degenerate landmark set is the landmark file's fault: name it.
+            Embedding::new(&mesh, &lm, parts).map_err(|e| match e {
+                surfmotion::rig::embed::EmbedError::Landmarks(le) => {
+                    anyhow::anyhow!("{}: {le}", l.display())
+                }
+                other => other.into(),
+            })?
         }
         (None, Some(g)) => {
             anyhow::ensure!(
