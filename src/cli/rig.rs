@@ -89,7 +89,13 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
                 }
                 mesh = surfmotion::mesh::repair::repair(&mesh, &Default::default()).0;
             }
-            Embedding::new(&mesh, &lm, parts)?
+            // A degenerate landmark set is the landmark file's fault: name it.
+            Embedding::new(&mesh, &lm, parts).map_err(|e| match e {
+                surfmotion::rig::embed::EmbedError::Landmarks(le) => {
+                    anyhow::anyhow!("{}: {le}", l.display())
+                }
+                other => other.into(),
+            })?
         }
         (None, Some(g)) => {
             anyhow::ensure!(
@@ -111,6 +117,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
     };
     let secs = t.elapsed().as_secs_f64();
     e.save(&a.output)?;
+    let verdict = surfmotion::rig::embed::check(&e, &mesh);
     if let Some(p) = &a.png {
         let img = super::render::draw(
             mesh.positions(),
@@ -136,6 +143,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
             "facing": e.facing,
             "height": e.height,
             "notes": e.notes,
+            "check": verdict,
         });
         crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
         return Ok(());
@@ -178,6 +186,19 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
     }
     for n in &e.notes {
         crate::outln!("  note: {n}")?;
+    }
+    crate::outln!(
+        "  self-check: pelvis {:.2}% of the height off the mid-plane, hips {:.2}% asymmetric: {}",
+        verdict.pelvis_offset_percent,
+        verdict.hip_asymmetry_percent,
+        if verdict.passed() {
+            "passed".to_string()
+        } else {
+            format!("{} warning(s)", verdict.warnings.len())
+        }
+    )?;
+    for w in &verdict.warnings {
+        crate::outln!("  warning: {}", w.message)?;
     }
     if let Some(p) = &a.png {
         crate::outln!("  drew {}", p.display())?;

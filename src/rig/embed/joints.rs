@@ -9,9 +9,17 @@
 //! Proportions used where the surface says nothing (hip height above the
 //! groin, ankle height above the floor, shoulder width) are standard
 //! anthropometric ratios of the body height `H`.
+//!
+//! The pelvis lies on the body's mid-plane ([`super::midplane`]) and the
+//! hips are symmetric about it: each hip is where its thigh's axis (the
+//! centre of a cross-section of the upper thigh, through the knee centre)
+//! reaches hip height, and the two distances from the plane are averaged.
+//! The pelvis is never the centre of whatever one horizontal section finds
+//! (below a high crotch that is one thigh, 5-6 % of the height to the side).
 
 use super::landmarks::{Landmark, Landmarks};
-use super::section::part_loop;
+use super::midplane::{MidPlane, estimate_mid_plane};
+use super::section::{cross_section, encloses, part_loop};
 use crate::rig::Canonical;
 use glam::DVec3;
 
@@ -35,6 +43,8 @@ pub struct JointEstimate {
     pub left: DVec3,
     /// Height of the mesh along `up`.
     pub height: f64,
+    /// The body's mid-plane the pelvis was placed on.
+    pub mid_plane: MidPlane,
     /// What was assumed, per joint.
     pub notes: Vec<String>,
 }
@@ -44,11 +54,16 @@ struct Ctx<'a> {
     t: &'a [[u32; 3]],
     h: f64,
     notes: Vec<String>,
+    /// The twin limb's point for the next [`Ctx::centre`] (taken by it): a
+    /// loop that encloses it is both limbs joined (legs together), not
+    /// this one.
+    twin: Option<DVec3>,
 }
 
 impl Ctx<'_> {
     /// The centre of the section through `at` perpendicular to `axis` when
-    /// its loop is narrower than `max_r`, else `fallback`.
+    /// its loop is narrower than `max_r` (and does not enclose the twin
+    /// point set in `self.twin`), else `fallback`.
     fn centre(
         &mut self,
         name: &str,
@@ -58,7 +73,14 @@ impl Ctx<'_> {
         max_r: f64,
         fallback: DVec3,
     ) -> DVec3 {
+        let twin = self.twin.take();
         match part_loop(self.p, self.t, at, axis, near) {
+            Some(l) if twin.is_some_and(|q| encloses(&l, q, axis)) => {
+                self.notes.push(format!(
+                    "{name}: the section holds both limbs (joined); placed from the landmarks"
+                ));
+                fallback
+            }
             Some(l) if l.radius <= max_r * self.h => l.centroid,
             Some(l) => {
                 self.notes.push(format!(
@@ -126,6 +148,7 @@ pub fn place_joints(
         t: triangles,
         h,
         notes: Vec::new(),
+        twin: None,
     };
     let at_height = |q: DVec3, height: f64| q + up * (height - q.dot(up));
     let mut j = [DVec3::ZERO; Canonical::COUNT];
@@ -151,10 +174,21 @@ pub fn place_joints(
             .unwrap_or(hc + up * 0.1 * h)
     });
 
-    // Pelvis and hips: a horizontal section a little above the groin.
+    // Pelvis and hips: on and about the mid-plane, at a height a little
+    // above the groin; the pelvis's depth from the torso's section there.
+    let (plane, _) = estimate_mid_plane(
+        positions,
+        triangles,
+        [groin, chin, (lk + rk) * 0.5],
+        up,
+        left,
+        h,
+    );
     let hip_h = groin.dot(up) + 0.035 * h;
-    let pelvis_at = at_height(groin, hip_h);
-    let pc = cx.centre("pelvis", pelvis_at, up, pelvis_at, 0.2, pelvis_at);
+    let (pc, pelvis_h) = pelvis_centre(&mut cx, &plane, groin, up, hip_h);
+    for (c, name, at) in [(C::Neck, "neck", neck_at), (C::Head, "head", head_at)] {
+        j[c.index()] = centred(&mut cx, &plane, name, j[c.index()], at);
+    }
     let mut hip_w = 0.055 * h;
     let hip = |w: f64, s: f64| pc + left * (s * w);
 
@@ -168,12 +202,15 @@ pub fn place_joints(
         let at = get(lmk).unwrap_or_else(|| at_height(knee, ankle_h));
         let axis = (knee - at).normalize_or(up);
         let near = at_height(knee, at.dot(up));
+        let other = [rk, lk][k];
+        cx.twin = Some(get([L::RAnkle, L::LAnkle][k]).unwrap_or_else(|| at_height(other, ankle_h)));
         ankles[k] = cx.centre(name, at, axis, near, 0.06, at);
     }
     // Knees, then elbows and wrists, twice: each pass refines the limb axes.
     let mut knees = [lk, rk];
     let mut arm = [[le, lw], [re, rw]];
     let mut shoulders = [DVec3::ZERO; 2];
+    let mut hip_note = None;
     let neck = j[C::Neck.index()];
     for _ in 0..2 {
         for (k, (lmk, s, name)) in [(lk, 1.0, "l_knee"), (rk, -1.0, "r_knee")]
@@ -183,11 +220,19 @@ pub fn place_joints(
             let hp = hip(hip_w, s);
             let axis = (ankles[k] - hp).normalize_or(-up);
             let fb = on_line(lmk, hp, ankles[k]);
+            cx.twin = Some([rk, lk][k]);
             knees[k] = cx.centre(name, lmk, axis, lmk, 0.07, fb);
         }
-        // Hip width: half the knees' separation, within normal proportions.
-        let sep = (knees[0] - knees[1]).dot(left) * 0.5;
-        hip_w = sep.clamp(0.045 * h, 0.065 * h);
+        let (w, note) = hip_half_width(
+            &cx,
+            &plane,
+            [hip(hip_w, 1.0), hip(hip_w, -1.0)],
+            knees,
+            up,
+            hip_h,
+        );
+        hip_w = w;
+        hip_note = note;
         for (k, (e_lm, w_lm, s, names)) in [
             (le, lw, 1.0, ["l_elbow", "l_wrist", "l_shoulder"]),
             (re, rw, -1.0, ["r_elbow", "r_wrist", "r_shoulder"]),
@@ -214,6 +259,7 @@ pub fn place_joints(
             arm[k] = [e, w];
         }
     }
+    cx.notes.extend(hip_note);
     j[C::LShoulder.index()] = shoulders[0];
     j[C::RShoulder.index()] = shoulders[1];
     j[C::LElbow.index()] = arm[0][0];
@@ -226,27 +272,35 @@ pub fn place_joints(
     j[C::RKnee.index()] = knees[1];
     j[C::LAnkle.index()] = ankles[0];
     j[C::RAnkle.index()] = ankles[1];
-    let pelvis = (j[C::LHip.index()] + j[C::RHip.index()]) * 0.5 + up * 0.02 * h;
+    // Between the hips, a little above them, and inside the torso when the
+    // crotch is above hip height.
+    let mid_hips = (j[C::LHip.index()] + j[C::RHip.index()]) * 0.5;
+    let pelvis = at_height(mid_hips, (hip_h + 0.02 * h).max(pelvis_h + 0.01 * h));
     j[C::Pelvis.index()] = pelvis;
     for (c, f, name) in [(C::Spine, 0.33, "spine"), (C::Chest, 0.66, "chest")] {
         let at = pelvis.lerp(neck, f);
-        j[c.index()] = cx.centre(name, at, up, at, 0.2, at);
+        let q = cx.centre(name, at, up, at, 0.2, at);
+        j[c.index()] = centred(&mut cx, &plane, name, q, at);
     }
 
     // Toes and toe tips: the front of each foot (vertices below the ankle,
-    // near it), from a landmark when given.
+    // near it and nearer to it than to the other ankle: with the feet
+    // closer than the search radius, both feet would average to a point
+    // between them), from a landmark when given.
     let mut toe_tips = [DVec3::ZERO; 2];
     for (k, (c, lmk)) in [(C::LToe, L::LToe), (C::RToe, L::RToe)]
         .into_iter()
         .enumerate()
     {
         let a = ankles[k];
+        let other = ankles[1 - k];
+        let flat = |d: DVec3| (d - up * d.dot(up)).length();
         let foot: Vec<DVec3> = positions
             .iter()
             .map(|q| DVec3::from_array(*q))
             .filter(|q| {
                 let d = *q - a;
-                d.dot(up) < 0.0 && (d - up * d.dot(up)).length() < 0.12 * h
+                d.dot(up) < 0.0 && flat(d) < 0.12 * h && flat(d) <= flat(*q - other)
             })
             .collect();
         let tip = foot
@@ -277,6 +331,10 @@ pub fn place_joints(
         j[c.index()] = toe;
     }
 
+    // The same note from both refinement passes once.
+    let mut seen = std::collections::HashSet::new();
+    cx.notes.retain(|n| seen.insert(n.clone()));
+
     // Hand tips: the farthest arm vertex beyond each wrist.
     let mut hand_tips = [DVec3::ZERO; 2];
     for (k, [e, w]) in arm.iter().enumerate() {
@@ -297,6 +355,119 @@ pub fn place_joints(
         facing,
         left,
         height: h,
+        mid_plane: plane,
         notes: cx.notes,
     }
+}
+
+/// A central joint (spine, chest, neck, head) from its section centre `q`
+/// found around `at` (the point the landmarks give): kept when within 2 %
+/// of the height of the mid-plane, or when `at` is itself off the plane
+/// (the landmarks put it there: a turned head, a body not in a rest pose);
+/// else moved onto the plane with a note (a lopsided section: a shoulder or
+/// an arm joined to it on one side). A rest pose holds these joints on the
+/// mid-plane.
+fn centred(cx: &mut Ctx, plane: &MidPlane, name: &str, q: DVec3, at: DVec3) -> DVec3 {
+    let d = plane.distance(q);
+    if d.abs() <= 0.02 * cx.h || plane.distance(at).abs() > 0.02 * cx.h {
+        return q;
+    }
+    cx.notes.push(format!(
+        "{name}: the section's centre is {:.1}% of the height off the mid-plane (lopsided: a shoulder or an arm joined to it?); centred on the plane",
+        100.0 * d.abs() / cx.h
+    ));
+    plane.project(q)
+}
+
+/// The pelvis centre at height `hip_h` on the mid-plane, and the height of
+/// the section it was found in. Its depth (front to back) is the centroid
+/// of the horizontal section loop that encloses the mid-plane point above
+/// the groin; where the section there is two thighs apart (the crotch is
+/// higher), the first enclosing section up to 12 % of the height higher.
+fn pelvis_centre(
+    cx: &mut Ctx,
+    plane: &MidPlane,
+    groin: DVec3,
+    up: DVec3,
+    hip_h: f64,
+) -> (DVec3, f64) {
+    let h = cx.h;
+    let at_height = |q: DVec3, height: f64| q + up * (height - q.dot(up));
+    for k in 0..=12 {
+        let height = hip_h + k as f64 * 0.01 * h;
+        let at = plane.project(at_height(groin, height));
+        let found = cross_section(cx.p, cx.t, at, up)
+            .into_iter()
+            .filter(|l| l.points.len() >= 3 && encloses(l, at, up))
+            .min_by(|a, b| a.length.total_cmp(&b.length));
+        let Some(l) = found else { continue };
+        if k > 0 {
+            cx.notes.push(format!(
+                "pelvis: at hip height the section is the two thighs apart (the crotch is higher); its depth from the section {:.1}% of the height higher",
+                k as f64
+            ));
+        }
+        if l.radius > 0.2 * h {
+            cx.notes.push(format!(
+                "pelvis: the section is {:.0}% of the height across (not limb-like: clothing?); placed from the landmarks",
+                200.0 * l.radius / h
+            ));
+            return (plane.project(at_height(groin, hip_h)), height);
+        }
+        return (plane.project(at_height(l.centroid, hip_h)), height);
+    }
+    cx.notes.push(
+        "pelvis: no section encloses the mid-plane above the groin; placed from the landmarks"
+            .into(),
+    );
+    (plane.project(at_height(groin, hip_h)), hip_h)
+}
+
+/// The hips' common distance from the mid-plane. For each leg, the axis of
+/// its thigh (the centre of a section perpendicular to the thigh, 35 % of
+/// the way from the current hip `hips[k]` to the knee centre, and the knee
+/// centre) is followed up to hip height `hip_h`; the two distances are
+/// averaged (a single one used for both when only one thigh is limb-like,
+/// half the knees' separation when neither is, as under a skirt), within
+/// plausible proportions (3-8 % of the height). Also a note when the two
+/// thighs disagree by more than 1 % of the height.
+fn hip_half_width(
+    cx: &Ctx,
+    plane: &MidPlane,
+    hips: [DVec3; 2],
+    knees: [DVec3; 2],
+    up: DVec3,
+    hip_h: f64,
+) -> (f64, Option<String>) {
+    let h = cx.h;
+    let mut d = Vec::with_capacity(2);
+    for (k, s) in [(0, 1.0), (1, -1.0)] {
+        let q = hips[k].lerp(knees[k], 0.35);
+        let Some(l) = part_loop(cx.p, cx.t, q, knees[k] - hips[k], q) else {
+            continue;
+        };
+        let dir = l.centroid - knees[k];
+        let rise = dir.dot(up);
+        if l.radius > 0.07 * h || rise < 0.05 * h {
+            continue;
+        }
+        let x = knees[k] + dir * ((hip_h - knees[k].dot(up)) / rise);
+        d.push(s * plane.distance(x));
+    }
+    let mut note = None;
+    let w = match d.as_slice() {
+        [a, b] => {
+            if (a - b).abs() > 0.01 * h {
+                note = Some(format!(
+                    "hips: the thighs' axes reach hip height {:.1}% and {:.1}% of the height from the mid-plane; placed symmetrically",
+                    100.0 * a / h,
+                    100.0 * b / h
+                ));
+            }
+            0.5 * (a + b)
+        }
+        [a] => *a,
+        _ => 0.5 * (plane.distance(knees[0]) - plane.distance(knees[1])),
+    };
+    (w.clamp(0.03 * h, 0.08 * h), note)
 }

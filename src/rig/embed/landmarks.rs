@@ -125,6 +125,51 @@ pub enum LandmarkError {
         /// Comma-separated names.
         missing: String,
     },
+    /// The landmarks span a tiny part of the mesh: all at one point, or in
+    /// other units than the mesh (metres on a millimetre mesh).
+    #[error(
+        "the landmarks span only {span:.4} (from {a} to {b}) on a mesh {height:.4} tall ({percent:.2}% of it): all at one point, or in other units than the mesh?"
+    )]
+    Span {
+        /// The landmark at one end of the widest pair.
+        a: &'static str,
+        /// The landmark at the other end.
+        b: &'static str,
+        /// Their distance (mesh units).
+        span: f64,
+        /// The mesh's height along the vertical.
+        height: f64,
+        /// `span` as a percentage of `height`.
+        percent: f64,
+    },
+    /// A landmark lies outside the body, far from its surface.
+    #[error(
+        "landmark {key} is outside the mesh, {distance:.4} from its surface ({percent:.1}% of the height; the limit is {limit_percent:.0}%)"
+    )]
+    OffSurface {
+        /// The landmark.
+        key: &'static str,
+        /// Distance to the nearest surface point (mesh units).
+        distance: f64,
+        /// As a percentage of the height.
+        percent: f64,
+        /// The limit, as a percentage of the height.
+        limit_percent: f64,
+    },
+    /// Two landmarks that mark different joints are at one place.
+    #[error(
+        "landmarks {a} and {b} are {distance:.4} apart ({percent:.2}% of the height): they mark different joints"
+    )]
+    Coincide {
+        /// One landmark.
+        a: &'static str,
+        /// The other.
+        b: &'static str,
+        /// Their distance (mesh units).
+        distance: f64,
+        /// As a percentage of the height.
+        percent: f64,
+    },
 }
 
 /// Where a landmark was given.
@@ -203,6 +248,97 @@ impl Landmarks {
     /// Reads a landmark file.
     pub fn load(path: &Path, vertex_count: usize) -> Result<Landmarks, LandmarkError> {
         Landmarks::parse(&read_text(path)?, path, vertex_count)
+    }
+
+    /// Refuses landmark sets no rig can be embedded from, naming the
+    /// landmark: all within 20 % of the mesh's height of one another (all at
+    /// one point, or in other units); a landmark outside the mesh (by its
+    /// winding number) more than 10 % of the height from its surface; two
+    /// landmarks of different joints (chin and groin, left and right
+    /// knees, elbows, wrists, an elbow and its wrist, the groin and a knee)
+    /// within 1 % of the height. `up` is the vertical the height is
+    /// measured along.
+    pub fn validate(
+        &self,
+        positions: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+        up: [f64; 3],
+    ) -> Result<(), LandmarkError> {
+        use super::surface::{distance_to_surface, is_inside};
+        use glam::DVec3;
+        let up = DVec3::from_array(up).normalize_or(DVec3::Y);
+        let (lo, hi) = positions
+            .iter()
+            .map(|q| DVec3::from_array(*q).dot(up))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(x), b.max(x))
+            });
+        let height = hi - lo;
+        if height.is_nan() || height <= 0.0 {
+            return Ok(());
+        }
+        let pts: Vec<(Landmark, DVec3)> = self
+            .marks
+            .keys()
+            .filter_map(|&l| self.point(l, positions).map(|p| (l, DVec3::from_array(p))))
+            .collect();
+        let mut widest = (0.0, Landmark::Chin, Landmark::Groin);
+        for (i, (la, pa)) in pts.iter().enumerate() {
+            for (lb, pb) in &pts[i + 1..] {
+                let d = pa.distance(*pb);
+                if d > widest.0 {
+                    widest = (d, *la, *lb);
+                }
+            }
+        }
+        if widest.0 < 0.2 * height {
+            return Err(LandmarkError::Span {
+                a: widest.1.name(),
+                b: widest.2.name(),
+                span: widest.0,
+                height,
+                percent: 100.0 * widest.0 / height,
+            });
+        }
+        for (l, p) in &pts {
+            if matches!(self.marks.get(l), Some(Mark::Vertex(_))) {
+                continue;
+            }
+            let d = distance_to_surface(positions, triangles, *p);
+            if d > 0.1 * height && !is_inside(positions, triangles, *p) {
+                return Err(LandmarkError::OffSurface {
+                    key: l.name(),
+                    distance: d,
+                    percent: 100.0 * d / height,
+                    limit_percent: 10.0,
+                });
+            }
+        }
+        use Landmark as L;
+        for (a, b) in [
+            (L::Chin, L::Groin),
+            (L::LKnee, L::RKnee),
+            (L::LElbow, L::RElbow),
+            (L::LWrist, L::RWrist),
+            (L::LElbow, L::LWrist),
+            (L::RElbow, L::RWrist),
+            (L::Groin, L::LKnee),
+            (L::Groin, L::RKnee),
+        ] {
+            let (Some(pa), Some(pb)) = (self.point(a, positions), self.point(b, positions)) else {
+                continue;
+            };
+            let d = DVec3::from_array(pa).distance(DVec3::from_array(pb));
+            if d < 0.01 * height {
+                return Err(LandmarkError::Coincide {
+                    a: a.name(),
+                    b: b.name(),
+                    distance: d,
+                    percent: 100.0 * d / height,
+                });
+            }
+        }
+        Ok(())
     }
 
     /// The position of a landmark on `positions`, if given.

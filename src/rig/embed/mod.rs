@@ -4,13 +4,18 @@
 //! skeleton of any frame of the character's sequences (Huang et al. 2015,
 //! Sec. 3, skeleton extraction).
 
+pub mod check;
 pub mod heat;
 pub mod joints;
 pub mod landmarks;
+pub mod midplane;
 pub mod parts;
 pub mod regress;
 pub mod section;
 pub mod skin;
+pub mod surface;
+
+pub use check::{EmbedCheck, check};
 
 use crate::fsutil::{FsError, read_text, write_atomic};
 use crate::mesh::Mesh;
@@ -222,13 +227,28 @@ pub fn parse_parts(
 
 impl Embedding {
     /// Embeds the rig in a rest mesh from landmarks; `parts` overrides the
-    /// computed part labels (see [`parse_parts`]).
+    /// computed part labels (see [`parse_parts`]). Degenerate landmark sets
+    /// are refused first ([`Landmarks::validate`]); [`check`] judges the
+    /// result.
     pub fn new(
         mesh: &Mesh,
         lm: &Landmarks,
         parts: Option<Vec<u8>>,
     ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
+        // The vertical as `place_joints` takes it: +Y unless the body lies
+        // down (groin to chin far from +Y).
+        let up = match (
+            lm.point(landmarks::Landmark::Chin, p),
+            lm.point(landmarks::Landmark::Groin, p),
+        ) {
+            (Some(c), Some(g)) => {
+                let b = (DVec3::from_array(c) - DVec3::from_array(g)).normalize_or(DVec3::Y);
+                if b.dot(DVec3::Y) > 0.7 { DVec3::Y } else { b }
+            }
+            _ => DVec3::Y,
+        };
+        lm.validate(p, t, up.to_array())?;
         let est = place_joints(p, t, lm);
         let bs = bones(&est);
         let w = bone_heat(mesh, &bs)?;

@@ -247,6 +247,9 @@ fn frame_of(
         facing,
         left,
         height: (hi - lo).max(1e-9),
+        // The skin's own joints say where the middle is: the plane through
+        // its pelvis.
+        mid_plane: super::midplane::MidPlane::median_of(left, &[j(C::Pelvis)]),
         notes: vec![format!(
             "joints and skin weights from a glTF skin ({convention})"
         )],
