@@ -60,14 +60,7 @@ pub struct Synthesised {
 /// canonical joint by the bone that starts there, so this is the joint
 /// origin (also for ASF/AMC clips, whose points are bone ends).
 pub fn clip_poses(clip: &Clip, map: &RigMap) -> Result<Vec<Pose>, RigError> {
-    let ids = map.resolve(clip)?;
-    Ok((0..clip.frame_count())
-        .into_par_iter()
-        .map(|f| {
-            let p = clip.world_positions(f);
-            std::array::from_fn(|c| p[ids[c].idx()])
-        })
-        .collect())
+    map.poses(clip)
 }
 
 fn leg_length(p: &Pose) -> f64 {
