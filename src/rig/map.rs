@@ -662,10 +662,20 @@ impl RigMap {
                     canonical: c.name(),
                 })
         };
+        // Joints first, then rules in canonical order (a rule may use any
+        // joint and the rules before it).
         for c in Canonical::ALL {
+            if let Some(name) = self.joints.get(&c) {
+                slots[c.index()] = Some(Slot::Joint(joint(name, c)?));
+            }
+        }
+        for c in Canonical::ALL {
+            if slots[c.index()].is_some() {
+                continue;
+            }
             let placed = |k: Canonical, slots: &[Option<Slot>]| slots[k.index()].is_some();
             let s = match (self.joints.get(&c), self.derived.get(&c)) {
-                (Some(name), _) => Some(Slot::Joint(joint(name, c)?)),
+                (Some(_), _) => None,
                 (None, Some(Derive::EndSite { joint: name })) => {
                     let j = joint(name, c)?;
                     match clip.joints[j].tail {

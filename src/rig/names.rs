@@ -114,6 +114,20 @@ const HELPER: &[&str] = &[
     "cheek",
 ];
 
+/// Leading tokens of rig prefixes (`Bip01 `, `CC_Base_`, `mixamorig`, `DEF-`).
+const RIG_PREFIX: &[&str] = &[
+    "bip",
+    "cc",
+    "base",
+    "mixamorig",
+    "character",
+    "armature",
+    "def",
+    "rig",
+    "sk",
+    "skel",
+];
+
 /// Body words that may be fused to an ASF/Poser side letter (`lfemur`).
 const FUSED: &[&str] = &[
     "femur", "tibia", "humerus", "radius", "wrist", "hand", "foot", "toes", "toe", "clavicle",
@@ -243,12 +257,16 @@ pub fn role(tokens: &[String]) -> Option<Role> {
     let has = |w: &str| tokens.iter().any(|t| t == w);
     let sided = side(tokens).is_some();
     let num: Option<u32> = tokens.iter().find_map(|t| t.parse().ok());
-    let words: Vec<&str> = tokens
+    let mut words: Vec<&str> = tokens
         .iter()
         .map(String::as_str)
         .filter(|t| !matches!(*t, "l" | "r" | "left" | "right" | "lft" | "rt"))
         .filter(|t| t.parse::<u32>().is_err())
         .collect();
+    // Rig prefixes left over when not every joint carries them.
+    while words.len() > 1 && RIG_PREFIX.contains(&words[0]) {
+        words.remove(0);
+    }
     let w = words.join("");
     Some(match w.as_str() {
         "hipjoint" => return None,

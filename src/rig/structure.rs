@@ -281,7 +281,7 @@ impl<'a> Geo<'a> {
     /// Non-helper joints of `path` whose rest position differs from the
     /// previous kept one (starting from `from`), with pass-through joints
     /// (collinear with their neighbours in every sampled pose) removed.
-    fn candidates(&self, from: DVec3, path: &[usize]) -> Vec<usize> {
+    fn candidates(&self, tokens: &[Vec<String>], from: DVec3, path: &[usize]) -> Vec<usize> {
         let mut out: Vec<usize> = Vec::new();
         let mut last = from;
         for &j in path {
@@ -295,6 +295,9 @@ impl<'a> Geo<'a> {
             let mut keep = vec![true; out.len()];
             for k in 1..out.len() - 1 {
                 let (a, b, c) = (out[k - 1], out[k], out[k + 1]);
+                if tokens.get(b).is_some_and(|t| role(t).is_some()) {
+                    continue; // a named body joint is never a pass-through
+                }
                 let bent = self.poses.iter().any(|(p, _)| {
                     let u = (p[b] - p[a]).normalize_or_zero();
                     let v = (p[c] - p[b]).normalize_or_zero();
@@ -332,7 +335,7 @@ struct Limb {
 pub fn analyse(clip: &Clip, tokens: &[Vec<String>]) -> Result<Body, NotHumanoid> {
     let g = Geo::new(clip, tokens)?;
     let n = clip.joint_count();
-    let mut reason = String::from("no joint where two leg chains and a spine meet");
+    let mut reasons: Vec<String> = Vec::new();
     for p in 0..n {
         if g.rep[p] != p || !g.useful[p] {
             continue;
@@ -342,24 +345,24 @@ pub fn analyse(clip: &Clip, tokens: &[Vec<String>]) -> Result<Body, NotHumanoid>
             continue;
         }
         if b.len() > 3 {
-            reason = format!(
+            reasons.push(format!(
                 "{} chains meet at '{}' (two legs and a spine expected)",
                 b.len(),
                 g.names[p]
-            );
+            ));
             continue;
         }
         let junctions: Vec<Option<usize>> = b.iter().map(|&s| g.junction_below(s)).collect();
         let with: Vec<usize> = (0..3).filter(|&k| junctions[k].is_some()).collect();
         if with.len() != 1 {
-            reason = if with.is_empty() {
+            reasons.push(if with.is_empty() {
                 format!("no arms branch off the chains above '{}'", g.names[p])
             } else {
                 format!(
                     "more than one chain below '{}' branches into limbs",
                     g.names[p]
                 )
-            };
+            });
             continue;
         }
         let s = with[0];
@@ -367,10 +370,14 @@ pub fn analyse(clip: &Clip, tokens: &[Vec<String>]) -> Result<Body, NotHumanoid>
         let legs: Vec<usize> = (0..3).filter(|&k| k != s).map(|k| b[k]).collect();
         match body(&g, tokens, p, b[s], chest, [legs[0], legs[1]]) {
             Ok(body) => return Ok(body),
-            Err(e) => reason = e.0,
+            Err(e) => reasons.push(e.0),
         }
     }
-    Err(NotHumanoid(reason))
+    if reasons.is_empty() {
+        reasons.push("no joint where two leg chains and a spine meet".into());
+    }
+    reasons.truncate(3);
+    Err(NotHumanoid(reasons.join("; ")))
 }
 
 fn body(
@@ -404,9 +411,23 @@ fn body(
                 (g.tail_rest[end].unwrap_or(g.rest[end]) - g.rest[chest]).normalize_or_zero()
             };
             if cb.len() == 3 {
-                let k = (0..3)
-                    .max_by(|&a, &b| far(cb[a]).dot(up).total_cmp(&far(cb[b]).dot(up)))
-                    .unwrap_or(0);
+                // The neck: the branch whose path names a neck or head; else
+                // the odd one out of the three (the arms are the most alike
+                // pair in reach), ties broken by pointing up.
+                let named = (0..3).find(|&k| {
+                    g.path(cb[k])
+                        .iter()
+                        .any(|&j| matches!(role_of(tokens, j), Some(Role::Neck) | Some(Role::Head)))
+                });
+                let odd = |k: usize| {
+                    let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+                    -ratio(reach(cb[a]), reach(cb[b])) + 0.05 * far(cb[k]).dot(up)
+                };
+                let k = named.unwrap_or_else(|| {
+                    (0..3)
+                        .max_by(|&a, &b| odd(a).total_cmp(&odd(b)))
+                        .unwrap_or(0)
+                });
                 let arms: Vec<usize> = (0..3).filter(|&i| i != k).map(|i| cb[i]).collect();
                 ([arms[0], arms[1]], Some(cb[k]))
             } else {
@@ -525,7 +546,7 @@ fn body(
     let _ = spine_start;
     let chest_named_neck = role_of(tokens, chest) == Some(Role::Neck);
     let spine_c: Vec<usize> = g
-        .candidates(g.rest[pelvis], &between)
+        .candidates(tokens, g.rest[pelvis], &between)
         .into_iter()
         .filter(|&j| g.rest[j].distance(g.rest[chest]) >= g.eps)
         .collect();
@@ -579,7 +600,7 @@ fn body(
 
     // Neck and head.
     let neck_path = g.path(neck_start);
-    let neck_c = g.candidates(g.rest[chest], &neck_path);
+    let neck_c = g.candidates(tokens, g.rest[chest], &neck_path);
     let (neck_j, head_c): (usize, Vec<usize>) = match neck_from_chest {
         Some(nj) => (nj, neck_c.clone()),
         None => {
@@ -622,11 +643,15 @@ fn body(
             );
         }
         None => {
-            let tail = g.clip.joints[neck_j].tail.filter(|t| t.length() > g.eps);
+            // The End Site of the neck chain's last joint (the neck itself
+            // or a helper after it), else a third of a neck above the neck.
+            let mut last = *neck_path.last().unwrap_or(&neck_j);
+            while let [only] = g.children[last].as_slice() {
+                last = *only;
+            }
+            let tail = g.clip.joints[last].tail.filter(|t| t.length() > g.eps);
             let d = match tail {
-                Some(_) => Derive::EndSite {
-                    joint: name(neck_j),
-                },
+                Some(_) => Derive::EndSite { joint: name(last) },
                 None => Derive::Between {
                     from: Canonical::Chest,
                     to: Canonical::Neck,
@@ -822,7 +847,7 @@ fn leg_chain(
     start: usize,
 ) -> Result<Limb, NotHumanoid> {
     let path = g.path(start);
-    let c = g.candidates(g.rest[pelvis], &path);
+    let c = g.candidates(tokens, g.rest[pelvis], &path);
     let short = || {
         NotHumanoid(format!(
             "the leg chain from '{}' has fewer than three joints",
@@ -924,7 +949,7 @@ fn arm_chain(
     start: usize,
 ) -> Result<Limb, NotHumanoid> {
     let path = g.path(start);
-    let c = g.candidates(g.rest[chest], &path);
+    let c = g.candidates(tokens, g.rest[chest], &path);
     let short = || {
         NotHumanoid(format!(
             "the arm chain from '{}' has fewer than three joints",
