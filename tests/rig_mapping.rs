@@ -386,11 +386,11 @@ fn leaf(nodes: &mut Vec<Node>, parent: usize, offset: DVec3, name: &str) {
 /// Removes `j` and its subtree; its parent gets `tail` as End Site.
 fn remove(nodes: &[Node], j: usize, tail: Option<DVec3>) -> Vec<Node> {
     let mut gone = vec![false; nodes.len()];
-    for i in 0..nodes.len() {
+    for (i, g) in gone.iter_mut().enumerate() {
         let mut k = Some(i);
         while let Some(x) = k {
             if x == j {
-                gone[i] = true;
+                *g = true;
                 break;
             }
             k = nodes[x].parent;
@@ -561,9 +561,9 @@ fn toeless_and_headless_skeletons_derive_the_missing_joints() {
         // No End Sites at all: toes forward of and below the ankle, head
         // above the neck.
         let mut n3 = n2.clone();
-        for i in 0..n3.len() {
+        for (i, n) in n3.iter_mut().enumerate() {
             if !n2.iter().any(|m| m.parent == Some(i)) {
-                n3[i].tail = Some(DVec3::ZERO);
+                n.tail = Some(DVec3::ZERO);
             }
         }
         let v = via_bvh(&build(&c, &n3, false));

@@ -678,10 +678,7 @@ impl RigMap {
                 (Some(_), _) => None,
                 (None, Some(Derive::EndSite { joint: name })) => {
                     let j = joint(name, c)?;
-                    match clip.joints[j].tail {
-                        Some(t) => Some(Slot::EndSite(j, t)),
-                        None => None,
-                    }
+                    clip.joints[j].tail.map(|t| Slot::EndSite(j, t))
                 }
                 (None, Some(Derive::Between { from, to, t }))
                     if placed(*from, &slots) && placed(*to, &slots) && t.is_finite() =>

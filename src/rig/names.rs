@@ -366,6 +366,9 @@ mod tests {
             ("LeftHandIndex1", Some(Side::Left), None),
             ("lhipjoint", Some(Side::Left), None),
             ("SpineBase", None, Some(Role::Pelvis)),
+            ("L5", None, Some(Role::Spine(1))),
+            ("Bip01 L Thigh", Some(Side::Left), Some(Role::Thigh)),
+            ("mixamorig:LeftToe_End", Some(Side::Left), None),
         ];
         for (n, s, r) in cases {
             let tk = t(n);
@@ -376,7 +379,13 @@ mod tests {
 
     #[test]
     fn common_prefixes_are_found_and_namespaces_stripped() {
-        let n = ["Bip01", "Bip01 Pelvis", "Bip01 Spine", "Bip01 L Thigh"];
+        let n = [
+            "Bip01",
+            "Bip01 Pelvis",
+            "Bip01 Spine",
+            "Bip01 L Thigh",
+            "Bip01 R Thigh",
+        ];
         assert_eq!(common_prefix(&n).as_deref(), Some("Bip01 "));
         assert_eq!(strip_namespace("mixamorig7:Hips"), "Hips");
         assert_eq!(strip_namespace("Armature|Hips"), "Hips");
