@@ -1021,3 +1021,62 @@ proptest! {
         assert_same(FAMILIES[fam].name, &orig, &poses(&v));
     }
 }
+
+/// Structure alone: every non-helper joint renamed `x<i>` (no name hints).
+/// Prints, per clip, the canonical joints whose position differs from the
+/// name-based map; asserts that the pelvis, hips, knees, shoulders and
+/// elbows agree (so left/right is right). Known differences: the spine/neck
+/// choice where a rig has more spine joints than the canonical skeleton (CC),
+/// and the ankle/toe height rule on one Bandai dash frame.
+#[test]
+fn structure_alone_agrees_with_the_names_on_limbs() {
+    for (what, c) in originals() {
+        let c = via_bvh(&c);
+        let orig = poses(&c);
+        let mut nodes = nodes_of(&c);
+        for (i, n) in nodes.iter_mut().enumerate() {
+            let toks =
+                surfmotion::rig::names::tokens(surfmotion::rig::names::strip_namespace(&n.name));
+            if !surfmotion::rig::names::is_helper(&toks) {
+                n.name = format!("x{i}");
+            }
+        }
+        let v = via_bvh(&build(&c, &nodes, false));
+        let got = poses(&v);
+        assert_eq!(got.0.convention, surfmotion::rig::BY_STRUCTURE, "{what}");
+        let tol = 1e-4 * scale(&orig.1);
+        let differ: Vec<&str> = Canonical::ALL
+            .iter()
+            .filter(|k| {
+                std::iter::once((&orig.1, &got.1))
+                    .chain(orig.2.iter().zip(&got.2))
+                    .any(|(a, b)| a[k.index()].distance(b[k.index()]) > tol)
+            })
+            .map(|k| k.name())
+            .collect();
+        eprintln!("structure alone on {what}: differs at {differ:?}");
+        if !differ.is_empty() {
+            eprintln!(
+                "  names: {:?}\n  structure: {:?}",
+                orig.0.joints, got.0.joints
+            );
+        }
+        for k in differ {
+            assert!(
+                !matches!(
+                    k,
+                    "pelvis"
+                        | "l_hip"
+                        | "r_hip"
+                        | "l_knee"
+                        | "r_knee"
+                        | "l_shoulder"
+                        | "r_shoulder"
+                        | "l_elbow"
+                        | "r_elbow"
+                ),
+                "{what}: structure alone differs at {k}"
+            );
+        }
+    }
+}

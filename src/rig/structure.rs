@@ -281,7 +281,13 @@ impl<'a> Geo<'a> {
     /// Non-helper joints of `path` whose rest position differs from the
     /// previous kept one (starting from `from`), with pass-through joints
     /// (collinear with their neighbours in every sampled pose) removed.
-    fn candidates(&self, tokens: &[Vec<String>], from: DVec3, path: &[usize]) -> Vec<usize> {
+    fn candidates(
+        &self,
+        tokens: &[Vec<String>],
+        from: DVec3,
+        path: &[usize],
+        collinear: bool,
+    ) -> Vec<usize> {
         let mut out: Vec<usize> = Vec::new();
         let mut last = from;
         for &j in path {
@@ -291,7 +297,7 @@ impl<'a> Geo<'a> {
             last = self.rest[j];
             out.push(j);
         }
-        if self.poses.len() > 2 && out.len() > 2 {
+        if collinear && self.poses.len() > 2 && out.len() > 2 {
             let mut keep = vec![true; out.len()];
             for k in 1..out.len() - 1 {
                 let (a, b, c) = (out[k - 1], out[k], out[k + 1]);
@@ -466,7 +472,9 @@ fn body(
             let end = *path.last().unwrap_or(&l);
             c += 0.5 * (p[end] - p[pelvis]).normalize_or_zero().dot(up);
         }
-        if c < best_cos {
+        // The rest pose (usually neutral, legs straight) when it stands
+        // upright enough; else the most upright sampled pose.
+        if c < best_cos && !(k > 0 && ref_pose == 0 && best_cos < -0.8) {
             best_cos = c;
             ref_pose = k;
         }
@@ -546,7 +554,7 @@ fn body(
     let _ = spine_start;
     let chest_named_neck = role_of(tokens, chest) == Some(Role::Neck);
     let spine_c: Vec<usize> = g
-        .candidates(tokens, g.rest[pelvis], &between)
+        .candidates(tokens, g.rest[pelvis], &between, false)
         .into_iter()
         .filter(|&j| g.rest[j].distance(g.rest[chest]) >= g.eps)
         .collect();
@@ -600,7 +608,7 @@ fn body(
 
     // Neck and head.
     let neck_path = g.path(neck_start);
-    let neck_c = g.candidates(tokens, g.rest[chest], &neck_path);
+    let neck_c = g.candidates(tokens, g.rest[chest], &neck_path, false);
     let (neck_j, head_c): (usize, Vec<usize>) = match neck_from_chest {
         Some(nj) => (nj, neck_c.clone()),
         None => {
@@ -847,7 +855,7 @@ fn leg_chain(
     start: usize,
 ) -> Result<Limb, NotHumanoid> {
     let path = g.path(start);
-    let c = g.candidates(tokens, g.rest[pelvis], &path);
+    let c = g.candidates(tokens, g.rest[pelvis], &path, true);
     let short = || {
         NotHumanoid(format!(
             "the leg chain from '{}' has fewer than three joints",
@@ -949,7 +957,7 @@ fn arm_chain(
     start: usize,
 ) -> Result<Limb, NotHumanoid> {
     let path = g.path(start);
-    let c = g.candidates(tokens, g.rest[chest], &path);
+    let c = g.candidates(tokens, g.rest[chest], &path, true);
     let short = || {
         NotHumanoid(format!(
             "the arm chain from '{}' has fewer than three joints",
@@ -959,8 +967,15 @@ fn arm_chain(
     if c.len() < 3 {
         return Err(short());
     }
+    // The wrist: by name, else the first joint where the chain branches
+    // (a hand into fingers), else the chain's last joint.
+    let branching = c.iter().position(|&j| {
+        let real = |&&k: &&usize| g.len[k] >= g.eps && !(g.helper[k] && g.children[k].is_empty());
+        g.children[j].iter().filter(real).count() >= 2
+    });
     let w_k = first_role(tokens, &c, |r| r == Role::Wrist)
         .or_else(|| first_role(tokens, &c, |r| r == Role::Hand))
+        .or(branching)
         .unwrap_or(c.len() - 1);
     if w_k < 2 {
         return Err(short());
