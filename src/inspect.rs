@@ -34,10 +34,19 @@ pub struct MocapReport {
     pub up_reason: String,
     /// Largest span of the rest skeleton, in metres.
     pub rest_extent_m: f64,
-    /// Rig convention detected.
+    /// Rig convention detected (a known convention only when all its names
+    /// match; `unknown convention, mapped by structure|names`; or
+    /// `not a humanoid: <reason>`).
     pub convention: String,
     /// Canonical joints the convention could not map.
     pub unmapped_canonical: Vec<String>,
+    /// Per canonical joint: the clip's joint, its source and confidence
+    /// (empty when not a humanoid).
+    pub rig_joints: Vec<crate::rig::JointReport>,
+    /// Canonical joints placed by a derivation rule (no joint in the clip).
+    pub derived_canonical: Vec<String>,
+    /// How left and right were decided.
+    pub sides: String,
     /// Problems found while reading.
     pub warnings: Vec<String>,
 }
@@ -128,7 +137,34 @@ pub struct InspectOptions {
 pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectError> {
     if let Some(fmt) = MocapFormat::of(path) {
         let clip = load_clip(path, &opts.mocap)?;
-        let det = crate::rig::detect(&clip.point_names());
+        let det = match &opts.mocap.rig_map {
+            Some(m) => Ok(crate::rig::Detection::from_map(
+                m.clone(),
+                crate::rig::Source::MapFile,
+                1.0,
+                "from the map file",
+            )),
+            None => crate::rig::detect_clip(&clip),
+        };
+        let (convention, unmapped_canonical, rig_joints, derived_canonical, sides) = match det {
+            Ok(d) => (
+                d.map.convention.clone(),
+                d.missing.iter().map(|c| c.name().to_string()).collect(),
+                d.joints,
+                d.derived.iter().map(|c| c.name().to_string()).collect(),
+                d.sides,
+            ),
+            Err(e) => (
+                e.to_string(),
+                crate::rig::Canonical::ALL
+                    .iter()
+                    .map(|c| c.name().to_string())
+                    .collect(),
+                Vec::new(),
+                Vec::new(),
+                String::new(),
+            ),
+        };
         return Ok(Report::Mocap(MocapReport {
             path: path.to_path_buf(),
             format: format!("{fmt:?}").to_lowercase(),
@@ -141,8 +177,11 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
             units: clip.units.clone(),
             up: clip.up,
             up_reason: clip.up_reason.clone(),
-            convention: det.map.convention.clone(),
-            unmapped_canonical: det.missing.iter().map(|c| c.name().to_string()).collect(),
+            convention,
+            unmapped_canonical,
+            rig_joints,
+            derived_canonical,
+            sides,
             warnings: clip.warnings.clone(),
         }));
     }
@@ -192,6 +231,34 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
         animations,
         problems,
     }))
+}
+
+/// A rig detection as text: the convention, how sides were decided, then
+/// one line per canonical joint (joint or rule, source, confidence).
+pub fn detection_text(d: &crate::rig::Detection) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "convention: {}", d.map.convention);
+    if !d.sides.is_empty() {
+        let _ = writeln!(s, "left/right: {}", d.sides);
+    }
+    for j in &d.joints {
+        let what = match (&j.joint, d.map.derived.get(&j.canonical)) {
+            (Some(n), _) => n.clone(),
+            (None, Some(r)) => {
+                format!("derived ({})", serde_json::to_string(r).unwrap_or_default())
+            }
+            (None, None) => "-".into(),
+        };
+        let _ = writeln!(
+            s,
+            "  {:<12} {:<32} {:<10} {:.2}",
+            j.canonical.name(),
+            what,
+            format!("{:?}", j.source).to_lowercase(),
+            j.confidence
+        );
+    }
+    s
 }
 
 /// Landmarks (`{name: vertex | [x, y, z]}`) or markers (`{"markers": […]}`).
@@ -280,8 +347,21 @@ impl Report {
                     r.rest_extent_m
                 );
                 let _ = writeln!(s, "  convention  {}", r.convention);
-                if !r.unmapped_canonical.is_empty() {
+                if !r.unmapped_canonical.is_empty() && !r.rig_joints.is_empty() {
                     let _ = writeln!(s, "  unmapped    {}", r.unmapped_canonical.join(", "));
+                }
+                if !r.sides.is_empty() {
+                    let _ = writeln!(s, "  left/right  {}", r.sides);
+                }
+                for j in &r.rig_joints {
+                    let _ = writeln!(
+                        s,
+                        "    {:<12} {:<28} {:<10} {:.2}",
+                        j.canonical.name(),
+                        j.joint.as_deref().unwrap_or("(derived)"),
+                        format!("{:?}", j.source).to_lowercase(),
+                        j.confidence
+                    );
                 }
                 let _ = writeln!(s, "  joint names {}", r.joint_names.join(" "));
                 for w in &r.warnings {

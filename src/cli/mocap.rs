@@ -212,17 +212,19 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             let opts = a.opts.load_options()?;
             let clip = load_clip(&a.clip, &opts)?;
             let det = match &opts.rig_map {
-                // A given map: check that it resolves on this clip.
+                // A given map: check that it places every joint on this clip.
                 Some(m) => {
-                    m.resolve(&clip)
+                    m.rest_pose(&clip)
                         .with_context(|| format!("{}", a.clip.display()))?;
-                    surfmotion::rig::Detection {
-                        map: m.clone(),
-                        missing: Vec::new(),
-                        signature: true,
-                    }
+                    surfmotion::rig::Detection::from_map(
+                        m.clone(),
+                        surfmotion::rig::Source::MapFile,
+                        1.0,
+                        "from the map file",
+                    )
                 }
-                None => surfmotion::rig::detect(&clip.point_names()),
+                None => surfmotion::rig::detect_clip(&clip)
+                    .with_context(|| format!("{}", a.clip.display()))?,
             };
             if let Some(o) = &a.output {
                 det.map.save(o)?;
@@ -230,10 +232,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             if a.json {
                 crate::outln!("{}", serde_json::to_string_pretty(&det)?)?;
             } else {
-                crate::outln!("convention: {}", det.map.convention)?;
-                for (k, v) in &det.map.joints {
-                    crate::outln!("  {:<12} {v}", k.name())?;
-                }
+                crate::cli::emit(&surfmotion::inspect::detection_text(&det))?;
                 if !det.missing.is_empty() {
                     let m: Vec<&str> = det.missing.iter().map(|c| c.name()).collect();
                     crate::outln!(

@@ -7,7 +7,7 @@
 //! few frames (the rest pose of some rigs lies down: Bandai Namco).
 
 use super::clip::{Clip, Units, UpAxis};
-use crate::rig::{Canonical, RigMap, detect};
+use crate::rig::{Canonical, RigMap, detect, detect_clip};
 use glam::DVec3;
 
 /// CMU's length unit: 1/0.45 inch.
@@ -106,12 +106,18 @@ pub fn guess_up(clip: &Clip, map: Option<&RigMap>) -> (UpAxis, String) {
     let map = match map {
         Some(m) => m,
         None => {
-            detected = detect(&clip.point_names()).map;
+            detected = detect_clip(clip)
+                .map(|d| d.map)
+                .unwrap_or_else(|_| detect(&clip.point_names()).map);
             &detected
         }
     };
+    // The head, or the neck when the head is derived.
     let ids = (
-        map.joints.get(&Canonical::Head).and_then(|n| clip.joint(n)),
+        map.joints
+            .get(&Canonical::Head)
+            .or_else(|| map.joints.get(&Canonical::Neck))
+            .and_then(|n| clip.joint(n)),
         map.joints
             .get(&Canonical::Pelvis)
             .and_then(|n| clip.joint(n)),

@@ -15,7 +15,7 @@
 
 use crate::mocap::{LoadOptions, MocapError, load_clip};
 use crate::rig::retarget::{ClipPoses, Reference, clip_poses, retarget};
-use crate::rig::{RigError, detect};
+use crate::rig::{RigError, detect_clip};
 use crate::skeleton::Pose;
 use std::path::{Path, PathBuf};
 
@@ -59,19 +59,12 @@ pub fn load_mocap(path: &Path, opts: &LoadOptions, fps: f64) -> Result<MocapPose
     let map = match &opts.rig_map {
         Some(m) => m.clone(),
         None => {
-            let det = detect(&clip.point_names());
-            if !det.missing.is_empty() {
-                let miss: Vec<&str> = det.missing.iter().map(|c| c.name()).collect();
-                return Err(QueryError::Rig {
+            detect_clip(&clip)
+                .map_err(|e| QueryError::Rig {
                     path: path.to_path_buf(),
-                    msg: format!(
-                        "the rig ({}) has no joint for {}; pass a rig map (see `mocap rigmap`)",
-                        det.map.convention,
-                        miss.join(", ")
-                    ),
-                });
-            }
-            det.map
+                    msg: format!("{e}; pass a rig map (see `mocap rigmap`)"),
+                })?
+                .map
         }
     };
     let ClipPoses { poses, reference } =

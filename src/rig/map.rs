@@ -2,8 +2,10 @@
 //! auto-detection and JSON map files.
 
 use super::canonical::Canonical;
+use super::structure::{self, Source};
 use crate::mocap::{Clip, JointId};
 use crate::skeleton::Pose;
+use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -205,14 +207,54 @@ pub fn normalise_name(s: &str) -> String {
     s.trim().to_ascii_lowercase()
 }
 
+/// How to place a canonical joint for which the clip has no joint. Rules
+/// are evaluated in [`Canonical::ALL`] order on the frame's canonical
+/// positions, so a rule may use joints (or earlier derived joints) only.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "rule", rename_all = "snake_case")]
+pub enum Derive {
+    /// The End Site (bone tail) of the named joint, e.g. the head from a
+    /// leaf neck or the toe from a leaf ankle.
+    EndSite {
+        /// Joint name in the file.
+        joint: String,
+    },
+    /// `from + t · (to − from)`: the chest half-way from spine to neck
+    /// (`t = 0.5`), the head a third of a neck length above the neck along
+    /// chest→neck (`from = chest, to = neck, t = 4/3`).
+    Between {
+        /// Start joint.
+        from: Canonical,
+        /// End joint.
+        to: Canonical,
+        /// Fraction along from→to (may exceed 1).
+        t: f64,
+    },
+    /// A toe forward of and below the ankle: `ankle + fraction · |knee −
+    /// ankle| · (cos 20° · forward − sin 20° · up)`, with up = pelvis→neck
+    /// and forward = (l_hip − r_hip) × up (the body's left × up).
+    ToeFromAnkle {
+        /// The ankle (`l_ankle` or `r_ankle`); the knee is its parent.
+        ankle: Canonical,
+        /// Toe distance as a fraction of the shin length (0.35 ≈ foot
+        /// length 0.152 H over shin 0.246 H · 0.57 for the toe base).
+        fraction: f64,
+    },
+}
+
 /// A map from canonical joints to a clip's joint names. Saved and loaded as
-/// JSON: `{"convention": "...", "joints": {"pelvis": "Hips", ...}}`.
+/// JSON: `{"convention": "...", "joints": {"pelvis": "Hips", ...},
+/// "derived": {"l_toe": {"rule": "end_site", "joint": "LeftFoot"}}}`
+/// (`derived` is optional; files without it load unchanged).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RigMap {
     /// Name of the convention (informative).
     pub convention: String,
     /// Canonical joint name → joint name in the file.
     pub joints: BTreeMap<Canonical, String>,
+    /// Canonical joints with no joint in the file and the rule placing them.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub derived: BTreeMap<Canonical, Derive>,
 }
 
 /// Error of rig mapping.
@@ -248,6 +290,25 @@ pub enum RigError {
         /// What is wrong.
         reason: String,
     },
+    /// The clip's skeleton is not a humanoid (structure analysis).
+    #[error("not a humanoid: {reason}")]
+    NotHumanoid {
+        /// What the structure analysis found.
+        reason: String,
+    },
+}
+
+/// How one canonical joint was mapped.
+#[derive(Debug, Clone, Serialize)]
+pub struct JointReport {
+    /// The canonical joint.
+    pub canonical: Canonical,
+    /// The clip's joint, or `None` when derived or missing.
+    pub joint: Option<String>,
+    /// Where it came from.
+    pub source: Source,
+    /// Confidence in [0, 1].
+    pub confidence: f64,
 }
 
 /// Result of auto-detection.
@@ -259,9 +320,59 @@ pub struct Detection {
     pub missing: Vec<Canonical>,
     /// Whether a signature name of the convention was present.
     pub signature: bool,
+    /// Per canonical joint (in [`Canonical::ALL`] order): joint, source, confidence.
+    pub joints: Vec<JointReport>,
+    /// Canonical joints placed by a [`Derive`] rule.
+    pub derived: Vec<Canonical>,
+    /// How left and right were decided.
+    pub sides: String,
 }
 
-/// Detects the naming convention from joint names.
+impl Detection {
+    /// A detection that reports `map` as given, every joint from `source`
+    /// with confidence `confidence`.
+    pub fn from_map(map: RigMap, source: Source, confidence: f64, sides: &str) -> Detection {
+        let joints = Canonical::ALL
+            .iter()
+            .map(|c| JointReport {
+                canonical: *c,
+                joint: map.joints.get(c).cloned(),
+                source: if map.joints.contains_key(c) {
+                    source
+                } else {
+                    Source::Derived
+                },
+                confidence: if map.joints.contains_key(c) || map.derived.contains_key(c) {
+                    confidence
+                } else {
+                    0.0
+                },
+            })
+            .collect();
+        let missing = Canonical::ALL
+            .into_iter()
+            .filter(|c| !map.joints.contains_key(c) && !map.derived.contains_key(c))
+            .collect();
+        Detection {
+            derived: map.derived.keys().copied().collect(),
+            missing,
+            signature: false,
+            joints,
+            map,
+            sides: sides.to_string(),
+        }
+    }
+}
+
+/// Convention name of a map decided by name tokens inside the structure.
+pub const BY_NAMES: &str = "unknown convention, mapped by names";
+/// Convention name of a map decided (at least partly) by structure.
+pub const BY_STRUCTURE: &str = "unknown convention, mapped by structure";
+
+/// Detects the naming convention from joint names alone (no geometry): the
+/// best of [`CONVENTIONS`]; its name is reported only when every canonical
+/// joint matched, else `"unknown convention"`. For clips prefer
+/// [`detect_clip`], which also maps unknown rigs by structure.
 pub fn detect(names: &[String]) -> Detection {
     let norm: Vec<String> = names.iter().map(|n| normalise_name(n)).collect();
     let raw_lower: Vec<String> = names.iter().map(|n| n.to_ascii_lowercase()).collect();
@@ -287,27 +398,186 @@ pub fn detect(names: &[String]) -> Detection {
         });
         let score = joints.len() as f64 + if signature { 0.5 } else { 0.0 };
         if best.as_ref().is_none_or(|(s, _)| score > *s) {
-            best = Some((
-                score,
-                Detection {
-                    map: RigMap {
-                        convention: c.name.to_string(),
-                        joints,
-                    },
-                    missing,
-                    signature,
+            let map = RigMap {
+                convention: if missing.is_empty() {
+                    c.name.to_string()
+                } else {
+                    "unknown convention".to_string()
                 },
-            ));
+                joints,
+                derived: BTreeMap::new(),
+            };
+            let mut d = Detection::from_map(map, Source::Convention, 1.0, "from names");
+            d.signature = signature;
+            best = Some((score, d));
         }
     }
-    best.map(|b| b.1).unwrap_or(Detection {
-        map: RigMap {
-            convention: "none".into(),
-            joints: BTreeMap::new(),
-        },
-        missing: Canonical::ALL.to_vec(),
-        signature: false,
+    best.map(|b| b.1).unwrap_or_else(|| {
+        Detection::from_map(
+            RigMap {
+                convention: "none".into(),
+                joints: BTreeMap::new(),
+                derived: BTreeMap::new(),
+            },
+            Source::Convention,
+            0.0,
+            "none",
+        )
     })
+}
+
+fn swap_side(c: Canonical) -> Canonical {
+    use Canonical::*;
+    match c {
+        LShoulder => RShoulder,
+        LElbow => RElbow,
+        LWrist => RWrist,
+        RShoulder => LShoulder,
+        RElbow => LElbow,
+        RWrist => LWrist,
+        LHip => RHip,
+        LKnee => RKnee,
+        LAnkle => RAnkle,
+        LToe => RToe,
+        RHip => LHip,
+        RKnee => LKnee,
+        RAnkle => LAnkle,
+        RToe => LToe,
+        o => o,
+    }
+}
+
+/// Maps a clip onto the canonical skeleton with no rig map: a known
+/// convention when all its names match (its left/right checked against the
+/// body's geometry, see [`super::structure`]), else the structure of the
+/// hierarchy and rest/motion geometry with name tokens as hints inside
+/// chains. Joints the clip lacks (toes, head, chest) get [`Derive`] rules.
+///
+/// Errors: [`RigError::NotHumanoid`] when neither names nor structure find
+/// a humanoid.
+pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
+    let names = clip.point_names();
+    let tokens = super::names::all_tokens(&names);
+    let conv = detect(&names);
+    let body = structure::analyse(clip, &tokens);
+    if conv.missing.is_empty() {
+        let Ok(b) = &body else {
+            let mut d = conv;
+            d.sides = "from names (the structure analysis did not find a humanoid)".into();
+            return Ok(d);
+        };
+        let id = |c: Canonical| {
+            conv.map
+                .joints
+                .get(&c)
+                .and_then(|n| clip.joint(n))
+                .map(|j| j.idx())
+        };
+        let within = |c: Canonical, set: &[usize]| id(c).is_some_and(|j| set.contains(&j));
+        use Canonical as C;
+        let legs_swapped = within(C::LHip, &b.right_leg) && within(C::RHip, &b.left_leg);
+        let arms_swapped = within(C::LShoulder, &b.right_arm) && within(C::RShoulder, &b.left_arm);
+        let confirmed = within(C::LHip, &b.left_leg)
+            && within(C::RHip, &b.right_leg)
+            && within(C::LShoulder, &b.left_arm)
+            && within(C::RShoulder, &b.right_arm);
+        if !(legs_swapped || arms_swapped) {
+            let mut d = conv;
+            d.sides = if confirmed {
+                format!(
+                    "from names, confirmed by geometry (forward from the {}, confidence {:.2})",
+                    b.forward_from, b.side_confidence
+                )
+            } else {
+                "from names (geometry undecided)".into()
+            };
+            return Ok(d);
+        }
+        let legs = [
+            C::LHip,
+            C::LKnee,
+            C::LAnkle,
+            C::LToe,
+            C::RHip,
+            C::RKnee,
+            C::RAnkle,
+            C::RToe,
+        ];
+        let mut joints = BTreeMap::new();
+        for (c, n) in &conv.map.joints {
+            let swap = if legs.contains(c) {
+                legs_swapped
+            } else {
+                arms_swapped
+            };
+            joints.insert(if swap { swap_side(*c) } else { *c }, n.clone());
+        }
+        let map = RigMap {
+            convention: BY_NAMES.into(),
+            joints,
+            derived: BTreeMap::new(),
+        };
+        let mut d = Detection::from_map(map, Source::Names, 0.9, "");
+        d.sides = format!(
+            "from geometry (forward from the {}, confidence {:.2}); the names' left/right are mirrored",
+            b.forward_from, b.side_confidence
+        );
+        return Ok(d);
+    }
+    let b = body.map_err(|e| RigError::NotHumanoid { reason: e.0 })?;
+    let mut joints = BTreeMap::new();
+    let mut derived = BTreeMap::new();
+    let mut reports = Vec::with_capacity(Canonical::COUNT);
+    let mut all_named = true;
+    for (c, p) in Canonical::ALL.iter().zip(&b.picks) {
+        if let Some(j) = p.joint {
+            joints.insert(*c, names[j].clone());
+            all_named &= p.source == Source::Names;
+        } else if let Some(d) = &p.derive {
+            derived.insert(*c, d.clone());
+        }
+        reports.push(JointReport {
+            canonical: *c,
+            joint: p.joint.map(|j| names[j].clone()),
+            source: p.source,
+            confidence: p.confidence,
+        });
+    }
+    let missing: Vec<Canonical> = Canonical::ALL
+        .into_iter()
+        .filter(|c| !joints.contains_key(c) && !derived.contains_key(c))
+        .collect();
+    let map = RigMap {
+        convention: if all_named { BY_NAMES } else { BY_STRUCTURE }.into(),
+        joints,
+        derived,
+    };
+    Ok(Detection {
+        derived: map.derived.keys().copied().collect(),
+        map,
+        missing,
+        signature: false,
+        joints: reports,
+        sides: format!(
+            "from geometry (forward from the {}, confidence {:.2}){}",
+            b.forward_from,
+            b.side_confidence,
+            if b.names_mirrored {
+                "; the names' left/right are mirrored"
+            } else {
+                ""
+            }
+        ),
+    })
+}
+
+/// One canonical joint resolved on a clip.
+#[derive(Debug, Clone)]
+enum Slot {
+    Joint(usize),
+    EndSite(usize, DVec3),
+    Between(usize, usize, f64),
+    Toe(usize, f64),
 }
 
 impl RigMap {
@@ -332,28 +602,35 @@ impl RigMap {
     /// Canonical joint positions of every frame of `clip`, in the clip's
     /// units. Rig maps name a canonical joint by the bone that starts there,
     /// so each is the joint origin (also for ASF/AMC clips, whose native
-    /// points are bone ends).
+    /// points are bone ends); derived joints follow their [`Derive`] rule.
     pub fn poses(&self, clip: &Clip) -> Result<Vec<Pose>, RigError> {
         use rayon::prelude::*;
-        let ids = self.resolve(clip)?;
+        let slots = self.plan(clip)?;
+        let n = clip.joint_count();
         Ok((0..clip.frame_count())
             .into_par_iter()
-            .map(|f| {
-                let p = clip.world_positions(f);
-                std::array::from_fn(|c| p[ids[c].idx()])
-            })
+            .map_init(
+                || (vec![DVec3::ZERO; n], vec![DQuat::IDENTITY; n]),
+                |(p, r), f| {
+                    clip.world_into(f, p, r);
+                    place(&slots, p, r)
+                },
+            )
             .collect())
     }
 
     /// Canonical joint positions of the clip's rest skeleton (every local
     /// rotation the identity, offsets as in the file), in the clip's units.
     pub fn rest_pose(&self, clip: &Clip) -> Result<Pose, RigError> {
-        let ids = self.resolve(clip)?;
+        let slots = self.plan(clip)?;
         let (p, _) = clip.rest_positions();
-        Ok(std::array::from_fn(|c| p[ids[c].idx()]))
+        let r = vec![DQuat::IDENTITY; p.len()];
+        Ok(place(&slots, &p, &r))
     }
 
-    /// Resolves every canonical joint to a joint of `clip`.
+    /// Resolves every canonical joint to a joint of `clip`. Derived joints
+    /// have no joint: they are reported as missing here (use
+    /// [`RigMap::poses`], which places them).
     pub fn resolve(&self, clip: &Clip) -> Result<[JointId; 19], RigError> {
         let mut out = [JointId(0); 19];
         let mut missing = Vec::new();
@@ -377,6 +654,90 @@ impl RigMap {
         }
         Ok(out)
     }
+
+    /// Every canonical joint as a joint of the clip or a derivation rule
+    /// whose inputs are placed before it.
+    fn plan(&self, clip: &Clip) -> Result<Vec<Slot>, RigError> {
+        let mut slots: Vec<Option<Slot>> = vec![None; Canonical::COUNT];
+        let mut missing = Vec::new();
+        let joint = |name: &str, c: Canonical| {
+            clip.joint(name)
+                .map(|j| j.idx())
+                .ok_or_else(|| RigError::UnknownJoint {
+                    name: name.to_string(),
+                    canonical: c.name(),
+                })
+        };
+        // Joints first, then rules in canonical order (a rule may use any
+        // joint and the rules before it).
+        for c in Canonical::ALL {
+            if let Some(name) = self.joints.get(&c) {
+                slots[c.index()] = Some(Slot::Joint(joint(name, c)?));
+            }
+        }
+        for c in Canonical::ALL {
+            if slots[c.index()].is_some() {
+                continue;
+            }
+            let placed = |k: Canonical, slots: &[Option<Slot>]| slots[k.index()].is_some();
+            let s = match (self.joints.get(&c), self.derived.get(&c)) {
+                (Some(_), _) => None,
+                (None, Some(Derive::EndSite { joint: name })) => {
+                    let j = joint(name, c)?;
+                    clip.joints[j].tail.map(|t| Slot::EndSite(j, t))
+                }
+                (None, Some(Derive::Between { from, to, t }))
+                    if placed(*from, &slots) && placed(*to, &slots) && t.is_finite() =>
+                {
+                    Some(Slot::Between(from.index(), to.index(), *t))
+                }
+                (None, Some(Derive::ToeFromAnkle { ankle, fraction })) => {
+                    use Canonical as C;
+                    let needs = [C::Pelvis, C::Neck, C::LHip, C::RHip, *ankle];
+                    let knee = ankle.parent();
+                    let ok = needs.iter().all(|k| placed(*k, &slots))
+                        && knee.is_some_and(|k| placed(k, &slots))
+                        && fraction.is_finite();
+                    ok.then(|| Slot::Toe(ankle.index(), *fraction))
+                }
+                _ => None,
+            };
+            match s {
+                Some(s) => slots[c.index()] = Some(s),
+                None => missing.push(c.name()),
+            }
+        }
+        if !missing.is_empty() {
+            return Err(RigError::Missing {
+                convention: self.convention.clone(),
+                missing: missing.join(", "),
+            });
+        }
+        Ok(slots.into_iter().flatten().collect())
+    }
+}
+
+/// Canonical positions of one frame from world joint positions and rotations.
+fn place(slots: &[Slot], p: &[DVec3], r: &[DQuat]) -> Pose {
+    let mut out: Pose = [DVec3::ZERO; 19];
+    for (c, s) in slots.iter().enumerate() {
+        out[c] = match *s {
+            Slot::Joint(j) => p[j],
+            Slot::EndSite(j, t) => p[j] + r[j] * t,
+            Slot::Between(a, b, t) => out[a] + t * (out[b] - out[a]),
+            Slot::Toe(a, f) => {
+                use Canonical as C;
+                let knee = Canonical::ALL[a].parent().map_or(a, |k| k.index());
+                let up = (out[C::Neck.index()] - out[C::Pelvis.index()]).normalize_or_zero();
+                let left = out[C::LHip.index()] - out[C::RHip.index()];
+                let fwd = left.cross(up).normalize_or_zero();
+                let shin = out[knee].distance(out[a]);
+                let (s, co) = 20f64.to_radians().sin_cos();
+                out[a] + f * shin * (co * fwd - s * up)
+            }
+        };
+    }
+    out
 }
 
 #[cfg(test)]

@@ -3,7 +3,13 @@
 mod canonical;
 pub mod embed;
 mod map;
+pub mod names;
 pub mod retarget;
+pub mod structure;
 
 pub use canonical::Canonical;
-pub use map::{CONVENTIONS, Convention, Detection, RigError, RigMap, detect, normalise_name};
+pub use map::{
+    BY_NAMES, BY_STRUCTURE, CONVENTIONS, Convention, Derive, Detection, JointReport, RigError,
+    RigMap, detect, detect_clip, normalise_name,
+};
+pub use structure::Source;
