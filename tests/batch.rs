@@ -241,3 +241,35 @@ fn a_library_onto_a_4d_character() {
     }
     assert!(out.join("walk.v2").is_dir() && !out.join("walk_v2-partial").exists());
 }
+
+/// Regression (issue 18, item 1): `batch --scan` on the raw MakeHuman base
+/// mesh (154 groups, stray pieces the preparation drops) panicked in the
+/// regressor with an index past the kept vertices; `transfer` worked.
+#[test]
+fn batch_scan_prepares_a_raw_scan_like_transfer() {
+    let Some(d) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let lib = tmp.path().join("lib");
+    std::fs::create_dir_all(&lib).unwrap();
+    for f in ["02.asf", "02_01.amc"] {
+        std::fs::copy(d.join("mocap/cmu-amc/02").join(f), lib.join(f)).unwrap();
+    }
+    let out = tmp.path().join("out");
+    let o = Command::new(common::bin())
+        .args(["batch", "--scan"])
+        .arg(d.join("scans/makehuman/base.obj"))
+        .arg("--landmarks")
+        .arg(fixture("makehuman.landmarks.json"))
+        .arg("--mocap-dir")
+        .arg(&lib)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(!err.contains("internal error"), "{err}");
+    let s = summary(&out, "batch.json");
+    assert_eq!(s["failed"], 0, "{s}");
+    assert!(out.join("02_01.glb").exists());
+}

@@ -63,6 +63,10 @@ pub fn prepare(mesh: &Mesh, spec: MarkerSpec<'_>) -> Result<PreparedScan, ScanEr
         repair: rep,
         ..Default::default()
     };
+    let spec_points = match &spec {
+        MarkerSpec::Landmarks(lm, _) => Some(resolved_points(mesh, lm)),
+        MarkerSpec::File(_, lm) => lm.map(|l| resolved_points(mesh, l)),
+    };
     let (markers, rig) = match spec {
         MarkerSpec::Landmarks(lm, opts) => {
             let rig = embed_resolved(mesh, &fixed, lm)?;
@@ -100,7 +104,18 @@ pub fn prepare(mesh: &Mesh, spec: MarkerSpec<'_>) -> Result<PreparedScan, ScanEr
         )
         .into());
     }
+    let before = fixed.vertex_count();
     let (mesh, markers) = keep_marked(fixed, markers, &mut report);
+    // The rig's per-vertex data (labels, skin, regressors) must index the
+    // mesh that is kept: re-embed it when stray pieces were dropped.
+    // Regression (issue 18, item 1): `batch --scan` on the raw MakeHuman
+    // base mesh indexed a regressor past the kept vertices and panicked.
+    let rig = match (rig, spec_points) {
+        (Some(_), Some(points)) if mesh.vertex_count() != before => {
+            Some(Embedding::new(&mesh, &points, None)?)
+        }
+        (rig, _) => rig,
+    };
     Ok(PreparedScan {
         mesh,
         markers,
@@ -113,14 +128,18 @@ pub fn prepare(mesh: &Mesh, spec: MarkerSpec<'_>) -> Result<PreparedScan, ScanEr
 /// marks given as vertex ids name input vertices, so they become points
 /// before the repair's renumbering matters.
 fn embed_resolved(mesh: &Mesh, fixed: &Mesh, lm: &Landmarks) -> Result<Embedding, EmbedError> {
-    let points = Landmarks {
+    Embedding::new(fixed, &resolved_points(mesh, lm), None)
+}
+
+/// The landmarks as points on the input `mesh` (vertex ids resolved).
+fn resolved_points(mesh: &Mesh, lm: &Landmarks) -> Landmarks {
+    Landmarks {
         marks: lm
             .marks
             .keys()
             .filter_map(|&l| lm.point(l, mesh.positions()).map(|p| (l, Mark::Point(p))))
             .collect(),
-    };
-    Embedding::new(fixed, &points, None)
+    }
 }
 
 fn sorted(mut t: [u32; 3]) -> [u32; 3] {
