@@ -82,17 +82,7 @@ impl Feet {
         }
         let up = up.normalize_or(DVec3::Y);
         let sole = |part: Part| -> Result<Vec<u32>, EvalError> {
-            let ids: Vec<u32> = (0..labels.len() as u32)
-                .filter(|&v| labels[v as usize] == part.index() as u8)
-                .collect();
-            let h = |v: u32| DVec3::from_array(rest[v as usize]).dot(up);
-            let (a, b) = ids
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                    (a.min(h(v)), b.max(h(v)))
-                });
-            let top = a + opts.sole_band.clamp(1e-3, 1.0) * (b - a);
-            let s: Vec<u32> = ids.into_iter().filter(|&v| h(v) <= top).collect();
+            let s = super::head::band(rest, labels, part, up, 0.0, opts.sole_band.clamp(1e-3, 1.0));
             if s.is_empty() {
                 return Err(EvalError::MissingPart { part: part.name() });
             }

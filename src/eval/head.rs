@@ -50,7 +50,17 @@ pub struct HeadTorso {
 
 /// Vertices of `part` whose height along `up` lies in `[lo, hi]` as a share
 /// of the part's extent (0 = its lowest vertex, 1 = its highest).
-fn band(rest: &[[f64; 3]], labels: &[u8], part: Part, up: DVec3, lo: f64, hi: f64) -> Vec<u32> {
+/// The vertices of `part` whose height along `up` lies between the
+/// fractions `lo` and `hi` of the part's extent (0 its lowest point, 1 its
+/// highest), on the rest frame. Shared by the head and foot checks.
+pub(crate) fn band(
+    rest: &[[f64; 3]],
+    labels: &[u8],
+    part: Part,
+    up: DVec3,
+    lo: f64,
+    hi: f64,
+) -> Vec<u32> {
     let ids: Vec<u32> = (0..labels.len() as u32)
         .filter(|&v| labels[v as usize] == part.index() as u8)
         .collect();
