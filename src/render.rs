@@ -323,6 +323,35 @@ pub fn facing_of(positions: &[[f64; 3]]) -> DVec3 {
     }
 }
 
+/// One scale for many panels: a framing per panel of view-space `bounds`
+/// (min, max), all at one scale (the largest extent fills 92 % of `size`
+/// pixels) and one vertical centre, each centred horizontally on its own
+/// bounds. Also returns the extent (view units). Shared by contact sheets
+/// and `surfmotion render`.
+pub fn shared_framing(bounds: &[([f64; 2], [f64; 2])], size: usize) -> (Vec<Framing>, f64) {
+    let (mut ylo, mut yhi, mut width) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+    for b in bounds {
+        ylo = ylo.min(b.0[1]);
+        yhi = yhi.max(b.1[1]);
+        width = width.max(b.1[0] - b.0[0]);
+    }
+    let extent = (yhi - ylo).max(width);
+    let extent = if extent.is_finite() {
+        extent.max(1e-12)
+    } else {
+        1.0
+    };
+    let scale = 0.92 * size as f64 / extent;
+    let framings = bounds
+        .iter()
+        .map(|b| Framing {
+            scale,
+            centre: [(b.0[0] + b.1[0]) * 0.5, (ylo + yhi) * 0.5],
+        })
+        .collect();
+    (framings, extent)
+}
+
 /// A contact sheet: the frames `frames` (each a full set of positions on
 /// `triangles`) side by side, front views in the top row and left-side
 /// views below, every panel `size` pixels square and all at ONE scale (the
@@ -343,26 +372,12 @@ pub fn contact_sheet(
         .iter()
         .map(|f| views.map(|v| view_bounds(f, v)))
         .collect();
-    let (mut ylo, mut yhi, mut width) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
-    for b in bounds.iter().flatten() {
-        ylo = ylo.min(b.0[1]);
-        yhi = yhi.max(b.1[1]);
-        width = width.max(b.1[0] - b.0[0]);
-    }
-    let extent = (yhi - ylo).max(width);
-    let extent = if extent.is_finite() {
-        extent.max(1e-12)
-    } else {
-        1.0
-    };
-    let scale = 0.92 * size as f64 / extent;
+    let flat: Vec<([f64; 2], [f64; 2])> = bounds.iter().flatten().copied().collect();
+    let (framings, extent) = shared_framing(&flat, size);
     let mut rows: [Option<Image>; 2] = [None, None];
-    for (f, b) in frames.iter().zip(&bounds) {
+    for (i, f) in frames.iter().enumerate() {
         for (k, view) in views.into_iter().enumerate() {
-            let framing = Framing {
-                scale,
-                centre: [(b[k].0[0] + b[k].1[0]) * 0.5, (ylo + yhi) * 0.5],
-            };
+            let framing = framings[2 * i + k];
             let (right, _, _) = axes(view);
             let lines: Vec<([f64; 3], [f64; 3], [u8; 3])> = floor
                 .filter(|y| y.is_finite())

@@ -130,27 +130,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             [View::front(*f), View::side(*f)].map(|v| view_bounds(s.frame(a.frame), v))
         })
         .collect();
-    let (mut ylo, mut yhi, mut width) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
-    for b in bounds.iter().flatten() {
-        ylo = ylo.min(b.0[1]);
-        yhi = yhi.max(b.1[1]);
-        width = width.max(b.1[0] - b.0[0]);
-    }
-    let extent = (yhi - ylo).max(width);
-    let scale = 0.92 * size as f64
-        / if extent.is_finite() {
-            extent.max(1e-12)
-        } else {
-            1.0
-        };
+    let flat: Vec<([f64; 2], [f64; 2])> = bounds.iter().flatten().copied().collect();
+    let (framings, _) = surfmotion::render::shared_framing(&flat, size);
     let mut out: Option<Image> = None;
-    for ((s, rig, facing), b) in loaded.iter().zip(&bounds) {
-        let framing = [0, 1].map(|k| {
-            Some(Framing {
-                scale,
-                centre: [(b[k].0[0] + b[k].1[0]) * 0.5, (ylo + yhi) * 0.5],
-            })
-        });
+    for (i, (s, rig, facing)) in loaded.iter().enumerate() {
+        let framing = [0, 1].map(|k| Some(framings[2 * i + k]));
         let img = draw_framed(
             s.frame(a.frame),
             s.mesh().triangles(),
