@@ -62,6 +62,10 @@ fn mocap_positions_json_matches_the_reference_from_outside() {
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["joints"][0], "root");
+    // The JSON says its units and up axis (issue 18, item 8).
+    assert_eq!(v["units"], "m", "{v}");
+    assert_eq!(v["metres_per_unit"], 1.0);
+    assert_eq!(v["up"], "y");
     // In metres the root of a standing adult is about 1 m up.
     let y = v["frames"]["0"][0][1].as_f64().unwrap();
     assert!((0.7..1.3).contains(&y), "root height {y} m");

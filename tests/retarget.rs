@@ -230,6 +230,21 @@ fn cli_writes_glb_report_and_evaluates() {
     let err = v["velocity_error_cm_per_frame"].as_f64().unwrap();
     // The paper reports about 2 cm/frame for walks with interpolation only.
     assert!(err > 0.0 && err < 4.0, "{err}");
+    // eval_refuses_a_result_of_another_clip (issue 18, item 8): 02_01 has
+    // more frames than 02_02's result; the pairing would be meaningless.
+    let other = Command::new(bin())
+        .arg("eval")
+        .arg("--db")
+        .arg(&db)
+        .arg("--mocap")
+        .arg(d.join("mocap/cmu-amc/02/02_01.amc"))
+        .arg("--result")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let msg = String::from_utf8_lossy(&other.stderr);
+    assert_eq!(other.status.code(), Some(1), "{msg}");
+    assert!(msg.contains("this clip") && msg.contains("frames"), "{msg}");
     // Bad input: a clip that does not exist is a one-line error, exit 1.
     let bad = Command::new(bin())
         .arg("retarget")

@@ -92,10 +92,10 @@ fn build(a: BuildArgs) -> anyhow::Result<()> {
         return super::emit(&(serde_json::to_string_pretty(&r)? + "\n"));
     }
     let mut out = format!(
-        "{}: {} frames in {} sequences, measure {} ({})\n",
+        "{}: {} in {}, measure {} ({})\n",
         a.dir.display(),
-        r.frames,
-        r.sequences.len(),
+        super::count(r.frames, "frame"),
+        super::count(r.sequences.len(), "sequence"),
         r.measure.name(),
         r.unit
     );
@@ -111,9 +111,9 @@ fn build(a: BuildArgs) -> anyhow::Result<()> {
         );
     }
     out += &format!(
-        "graph: {} transitions on {} sequence edges{} in {:.3} s\n",
-        r.transitions,
-        r.edges,
+        "graph: {} on {}{} in {:.3} s\n",
+        super::count(r.transitions, "transition"),
+        super::count(r.edges, "sequence edge"),
         if r.graph_cached { " (cached)" } else { "" },
         r.graph_seconds
     );
@@ -379,7 +379,8 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
         .and_then(|m| surfmotion::mocap::units::parse_unit(&m.units))
         .map_or(1e3, |u| 1e3 * u.metres_per_unit);
     crate::outln!(
-        "embedded the rig and extracted {frames} skeletons ({:?}) in {:.3} s → {}",
+        "embedded the rig and extracted {} ({}) in {:.3} s → {}",
+        super::count(frames, "skeleton"),
         a.kind,
         secs,
         out.display()

@@ -57,14 +57,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.matrix.is_none() {
         let mut out = String::new();
         for s in &g.sequences {
-            out += &format!("{} ({} frames)\n", s.name, s.len);
+            out += &format!("{} ({})\n", s.name, super::count(s.len, "frame"));
         }
         for e in &g.edges {
             out += &format!(
-                "{} -> {}: {} transitions, best cost {:.4}\n",
+                "{} -> {}: {}, best cost {:.4}\n",
                 g.sequences[e.from].name,
                 g.sequences[e.to].name,
-                e.transitions.len(),
+                super::count(e.transitions.len(), "transition"),
                 e.cost
             );
         }

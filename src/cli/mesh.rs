@@ -46,11 +46,11 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             let files = save_sequence(&seq, &a.output, a.fps)?;
             let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
             eprintln!(
-                "wrote {}: {} vertices, {} triangles, {} frames",
+                "wrote {}: {}, {}, {}",
                 names.join(" and "),
-                seq.mesh().vertex_count(),
-                seq.mesh().triangle_count(),
-                seq.frame_count()
+                super::count(seq.mesh().vertex_count(), "vertex"),
+                super::count(seq.mesh().triangle_count(), "triangle"),
+                super::count(seq.frame_count(), "frame")
             );
         }
     }

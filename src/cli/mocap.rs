@@ -4,7 +4,7 @@ use super::ClipOpts;
 use anyhow::{Context, bail};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use surfmotion::mocap::{Clip, load_clip};
+use surfmotion::mocap::{Clip, UpAxis, load_clip};
 
 /// Mocap subcommands.
 #[derive(clap::Subcommand)]
@@ -131,9 +131,22 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     .into_iter()
                     .map(|(k, v)| (k.to_string(), v))
                     .collect();
-                let out = serde_json::json!({ "joints": names, "frames": frames });
+                let out = serde_json::json!({
+                    "units": clip.units.name,
+                    "metres_per_unit": clip.units.metres_per_unit,
+                    "units_reason": clip.units.reason,
+                    "up": if clip.up == UpAxis::Z { "z" } else { "y" },
+                    "joints": names,
+                    "frames": frames,
+                });
                 crate::outln!("{}", serde_json::to_string(&out)?)?;
             } else {
+                crate::outln!(
+                    "units: {} ({}), {}-up",
+                    clip.units.name,
+                    clip.units.reason,
+                    if clip.up == UpAxis::Z { "z" } else { "y" }
+                )?;
                 for (f, p) in frames {
                     crate::outln!("frame {f}")?;
                     for (n, v) in names.iter().zip(p) {
@@ -163,10 +176,10 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             surfmotion::mocap::bvh::write_bvh(&clip, &a.output)
                 .with_context(|| format!("writing {}", a.output.display()))?;
             eprintln!(
-                "wrote {} ({} joints, {} frames at {:.3} fps)",
+                "wrote {} ({}, {} at {:.3} fps)",
                 a.output.display(),
-                clip.joint_count(),
-                clip.frame_count(),
+                super::count(clip.joint_count(), "joint"),
+                super::count(clip.frame_count(), "frame"),
                 clip.fps()
             );
         }
@@ -201,9 +214,9 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 };
                 surfmotion::mocap::bvh::write_bvh(&clip, &path)?;
                 eprintln!(
-                    "wrote {} ({} frames at {} fps)",
+                    "wrote {} ({} at {} fps)",
                     path.display(),
-                    clip.frame_count(),
+                    super::count(clip.frame_count(), "frame"),
                     a.fps
                 );
             }

@@ -183,6 +183,20 @@ pub fn load_mesh_groups(spec: &str, groups: &[String]) -> anyhow::Result<surfmot
 #[error("output closed")]
 pub struct OutputClosed;
 
+/// `n` and a noun, plural when `n` is not one: "1 frame", "2 frames",
+/// "3 vertices".
+pub fn count(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else if let Some(stem) = noun.strip_suffix("ex") {
+        format!("{n} {stem}ices")
+    } else if noun.ends_with('s') || noun.ends_with('x') || noun.ends_with("ch") {
+        format!("{n} {noun}es")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
 /// A frame rate on the command line: a finite number in (0, 1000]. (A
 /// typo such as `--input-fps 1e-4` would otherwise ask for billions of
 /// frames; issue 18, item 12.)
@@ -301,5 +315,16 @@ impl ClipOpts {
             up,
             rig_map,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn count_says_one_frame_and_two_vertices() {
+        assert_eq!(super::count(1, "frame"), "1 frame");
+        assert_eq!(super::count(0, "transition"), "0 transitions");
+        assert_eq!(super::count(3, "vertex"), "3 vertices");
+        assert_eq!(super::count(2, "match"), "2 matches");
     }
 }

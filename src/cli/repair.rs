@@ -59,7 +59,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             .map(|c| format!("{}v/{}t", c.vertices, c.triangles))
             .collect();
         crate::outln!(
-            "wrote {} ({} vertices, {} triangles)\n  welded vertices        {}\n  degenerate triangles   {}\n  duplicate triangles    {}\n  unreferenced vertices  {}\n  dropped (components)   {}\n  components             {}: {}{}",
+            "wrote {} ({} vertices, {} triangles)\n  welded vertices                      {}\n  degenerate triangles                 {}\n  duplicate triangles                  {}\n  unreferenced vertices                {}\n  triangles dropped with small pieces  {}\n  components (vertices v/triangles t)  {}: {}{}",
             a.output.display(),
             m.vertex_count(),
             m.triangle_count(),

@@ -158,24 +158,27 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
     let mut s = format!(
-        "{} -> {}: {} frames at {} fps ({} rig)\n",
+        "{} -> {}: {} at {} fps ({} rig)\n",
         a.mocap.display(),
         written
             .iter()
             .map(|p| p.display().to_string())
             .collect::<Vec<_>>()
             .join(", "),
-        r.frames,
+        super::count(r.frames, "frame"),
         fps,
         mocap.convention
     );
     s += &format!(
-        "retrieval: T_skel {:.3} m, {} trellis nodes, {} transitions, {} cuts, {} widened frames\n",
+        "retrieval: T_skel {:.3} m (summed over the 19 joints), {}, {}, {}, {}\n",
         r.retrieval.t_skel,
-        r.retrieval.nodes,
-        r.jumps.iter().filter(|j| j.transition).count(),
-        r.retrieval.cuts.len(),
-        r.retrieval.widened.len()
+        super::count(r.retrieval.nodes, "trellis node"),
+        super::count(
+            r.jumps.iter().filter(|j| j.transition).count(),
+            "transition"
+        ),
+        super::count(r.retrieval.cuts.len(), "cut"),
+        super::count(r.retrieval.widened.len(), "widened frame")
     );
     let mut runs: Vec<(String, usize, usize)> = Vec::new();
     for st in &r.steps {
@@ -205,7 +208,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         r.timings.deform,
         1e3 * per_frame
     );
-    s += &format!("deformation: {:?}\n", r.deform);
+    s += &format!("deformation: {}\n", r.deform);
     if matches!(
         r.deform,
         surfmotion::deform::DeformMode::Part | surfmotion::deform::DeformMode::Global
@@ -256,6 +259,17 @@ pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
         a.result.display(),
         res.mesh().vertex_count(),
         ch.n
+    );
+    // A result of another clip (or another frame rate) would give a number
+    // that means nothing: the frames must pair one to one (issue 18, item 8).
+    anyhow::ensure!(
+        res.frame_count() == query.len(),
+        "{}: {}, but {} at the database's {} fps gives {}; was it made from this clip (and with --input-fps as given)?",
+        a.result.display(),
+        super::count(res.frame_count(), "frame"),
+        a.mocap.display(),
+        fps,
+        super::count(query.len(), "frame")
     );
     let out: Vec<_> = (0..res.frame_count())
         .map(|f| ch.rig.skeleton(res.frame(f)))

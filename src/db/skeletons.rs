@@ -30,6 +30,17 @@ pub enum SkeletonKind {
     Centroid,
 }
 
+impl std::fmt::Display for SkeletonKind {
+    /// The words a report uses for the kind.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Rigid => "rigid skeleton fitted to the regressed joints",
+            Self::Regressor => "regressed joints",
+            Self::Centroid => "centres of the joints' vertex sets",
+        })
+    }
+}
+
 /// The skeletons of one sequence.
 #[derive(Debug, Clone, Serialize)]
 pub struct SequenceSkeleton {

@@ -60,6 +60,18 @@ pub enum DeformMode {
     None,
 }
 
+impl std::fmt::Display for DeformMode {
+    /// The words a report uses for the mode.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Part => "part-based PCA Laplacian",
+            Self::Global => "whole-body PCA Laplacian",
+            Self::Lbs => "linear blend skinning",
+            Self::None => "none (the interpolated retrieval)",
+        })
+    }
+}
+
 /// Triangles turned over relative to the source frame (see [`unflip`]),
 /// before and after the repair.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
