@@ -184,6 +184,40 @@ fn head_angle_on_real_captures() {
     }
 }
 
+/// The real captures' knees bend the right way: the skeleton read off every
+/// frame of samba and crane (a dance, a martial-arts form; knees bent deep
+/// with feet pointed) reads little hyper-extension. The earlier foot-based
+/// measure read such bent knees as bent backwards.
+#[test]
+fn knee_hyperextension_on_real_captures_is_small() {
+    let Some(d) = common::data_dir() else { return };
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    for name in ["samba", "crane"] {
+        let seq = load_sequence(
+            &d.join(format!("4d/{name}/{name}.pc2")).to_string_lossy(),
+            &LoadOptions::default(),
+        )
+        .unwrap();
+        let rest = load_sequence(
+            &d.join(format!("4d/{name}/{name}.obj")).to_string_lossy(),
+            &LoadOptions::default(),
+        )
+        .unwrap()
+        .frame_mesh(0);
+        let lm = Landmarks::load(
+            &fixtures.join(format!("{name}.landmarks.json")),
+            rest.vertex_count(),
+        )
+        .unwrap();
+        let rig = Embedding::new(&rest, &lm, None).unwrap();
+        let worst = (0..seq.frame_count())
+            .flat_map(|f| surfmotion::eval::knee_hyperextension(&rig.skeleton(seq.frame(f))))
+            .fold(0.0f64, f64::max);
+        println!("{name}: worst knee hyper-extension {worst:.1}°");
+        assert!(worst < 12.0, "{name}: {worst:.1}°");
+    }
+}
+
 /// `frames` copies of `rest`, each changed by `edit(frame, vertex, position)`.
 fn animate(
     rest: &[[f64; 3]],
