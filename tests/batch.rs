@@ -43,6 +43,7 @@ fn small_library(d: &Path, dir: &Path) {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn whole_cmu_folders_convert_every_clip() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -72,6 +73,7 @@ fn whole_cmu_folders_convert_every_clip() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_killed_batch_resumes_to_the_same_outputs() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -137,6 +139,7 @@ fn walk(d: &Path) -> Vec<PathBuf> {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_corrupt_clip_is_reported_and_the_rest_succeed() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -164,6 +167,7 @@ fn a_corrupt_clip_is_reported_and_the_rest_succeed() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn shards_cover_the_library_exactly_once() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -196,6 +200,7 @@ fn shards_cover_the_library_exactly_once() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_library_onto_a_4d_character() {
     let Some(d) = common::data_dir() else { return };
     let db = common::synthetic_db(&d);
@@ -246,6 +251,7 @@ fn a_library_onto_a_4d_character() {
 /// mesh (154 groups, stray pieces the preparation drops) panicked in the
 /// regressor with an index past the kept vertices; `transfer` worked.
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn batch_scan_prepares_a_raw_scan_like_transfer() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();

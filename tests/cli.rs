@@ -13,6 +13,7 @@ fn stderr(o: &Output) -> String {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn mocap_positions_json_matches_the_reference_from_outside() {
     let Some(d) = common::data_dir() else { return };
     let r: serde_json::Value =
@@ -72,6 +73,7 @@ fn mocap_positions_json_matches_the_reference_from_outside() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn inspect_reports_units_convention_and_problems() {
     let Some(d) = common::data_dir() else { return };
     let cases = [
@@ -126,6 +128,7 @@ fn inspect_reports_units_convention_and_problems() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn bad_input_is_one_clear_line_and_exit_1() {
     let Some(d) = common::data_dir() else { return };
     let dir = tempfile::tempdir().unwrap();
@@ -196,6 +199,7 @@ fn bad_input_is_one_clear_line_and_exit_1() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn convert_amc_to_bvh_resampled_and_meshes_between_formats() {
     let Some(d) = common::data_dir() else { return };
     let dir = tempfile::tempdir().unwrap();
@@ -273,6 +277,7 @@ fn demo_runs_and_help_explains() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn blend_and_repair_from_the_command_line() {
     let Some(d) = common::data_dir() else { return };
     let dir = tempfile::tempdir().unwrap();
@@ -356,6 +361,7 @@ fn blend_and_repair_from_the_command_line() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn transfer_from_the_command_line() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();

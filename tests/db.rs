@@ -9,6 +9,7 @@ fn run(args: &[&str]) -> std::process::Output {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn init_and_info_on_samba_and_crane() {
     let Some(d) = common::data_dir() else { return };
     let dir = tempfile::tempdir().unwrap();

@@ -26,6 +26,7 @@ fn max_dist(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn constraints_from_an_example_frame_return_that_frame() {
     let Some(d) = common::data_dir() else { return };
     let db = common::synthetic_db(&d);
@@ -103,6 +104,7 @@ fn turned_over(ch: &Character, raw: &Output, res: &Output) -> usize {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn deformation_follows_the_query_and_turns_no_triangle_over() {
     let Some(d) = common::data_dir() else { return };
     let db = common::synthetic_db(&d);
@@ -173,6 +175,7 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
 /// The real samba capture itself as the database (its own dress, with the
 /// captured folds): a CMU walk leaves no triangle turned over either.
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_walk_on_the_real_capture_turns_no_triangle_over() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -209,6 +212,7 @@ fn a_walk_on_the_real_capture_turns_no_triangle_over() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn the_manifest_overrides_constraints_and_examples() {
     let Some(d) = common::data_dir() else { return };
     let db = common::synthetic_db(&d);

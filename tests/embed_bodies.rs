@@ -348,6 +348,7 @@ fn fixture(name: &str) -> PathBuf {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn the_real_fixtures_have_the_pelvis_on_the_mid_plane() {
     let Some(d) = common::data_dir() else { return };
     // Read as `rig embed` reads them.

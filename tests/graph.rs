@@ -46,6 +46,7 @@ fn samba_db(d: &Path, tmp: &Path, seqs: &[(&str, usize, usize)]) -> Manifest {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn samba_matrix_is_symmetric_zero_on_the_diagonal_and_has_loops() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -103,6 +104,7 @@ fn samba_matrix_is_symmetric_zero_on_the_diagonal_and_has_loops() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn shape_distance_ignores_rotation_about_the_vertical() {
     let Some(d) = common::data_dir() else { return };
     let all = read_pc2(&d.join("4d/samba/samba.pc2")).unwrap();
@@ -144,6 +146,7 @@ fn shape_distance_ignores_rotation_about_the_vertical() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn two_clips_sharing_a_segment_get_a_transition_inside_it() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -181,6 +184,7 @@ fn two_clips_sharing_a_segment_get_a_transition_inside_it() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_second_build_uses_the_cache_until_an_input_changes() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -219,6 +223,7 @@ fn a_second_build_uses_the_cache_until_an_input_changes() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn cli_builds_caches_and_exports_the_graph() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -272,6 +277,7 @@ fn cli_builds_caches_and_exports_the_graph() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn colour_measure_on_a_coloured_samba() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();

@@ -25,6 +25,7 @@ fn json(d: &std::path::Path, f: &str) -> serde_json::Value {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn cotan_laplacian_matches_libigl_on_samba() {
     let Some(d) = common::data_dir() else { return };
     let r = json(&d, "cotan_samba.json");
@@ -71,6 +72,7 @@ fn cotan_laplacian_matches_libigl_on_samba() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn harmonic_fields_match_libigl_on_armadillo() {
     let Some(d) = common::data_dir() else { return };
     let r = json(&d, "harmonic_armadillo.json");
@@ -113,6 +115,7 @@ fn harmonic_fields_match_libigl_on_armadillo() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn poisson_reconstructs_real_frames_from_their_own_gradients() {
     let Some(d) = common::data_dir() else { return };
     for (name, f) in [("samba", 60), ("crane", 100)] {
@@ -180,6 +183,7 @@ fn blend_quality(d: &std::path::Path, name: &str, f: usize) -> (f64, f64, f64, f
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn nonlinear_blend_preserves_shape_better_than_linear() {
     let Some(d) = common::data_dir() else { return };
     for (name, f) in [("samba", 60), ("crane", 100)] {

@@ -113,7 +113,7 @@ fn seeds(fmt: &str) -> Vec<Vec<u8>> {
 }
 
 fn real_seeds(fmt: &str) -> Vec<Vec<u8>> {
-    let Some(d) = common::data_dir() else {
+    let Some(d) = common::optional_data_dir() else {
         return vec![];
     };
     let files: &[&str] = match fmt {

@@ -30,6 +30,7 @@ fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn samba_cache_obj_frames_and_topology_agree() {
     let Some(d) = common::data_dir() else { return };
     let seq = load_sequence(
@@ -75,6 +76,7 @@ fn samba_cache_obj_frames_and_topology_agree() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn every_writer_round_trips_through_its_reader() {
     let Some(d) = common::data_dir() else { return };
     let seq = samba(&d, 8);
@@ -186,6 +188,7 @@ fn pc2_header_lies_are_errors_not_allocations() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn gltf_samples_read_with_skins() {
     let Some(d) = common::data_dir() else { return };
     for (f, joints, verts) in [
@@ -220,6 +223,7 @@ fn gltf_samples_read_with_skins() {
 /// Runs the Khronos glTF-Validator (installed by .ci/run from npm) on GLBs we
 /// write. Required under CI=true; skipped with a message elsewhere if absent.
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn written_glb_passes_the_khronos_validator() {
     let Some(d) = common::data_dir() else { return };
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -273,6 +277,7 @@ fn written_glb_passes_the_khronos_validator() {
 /// A skinned glTF with a node animation becomes a mesh sequence by linear
 /// blend skinning: it moves, stays finite, and keeps its edge lengths roughly.
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn skinned_gltf_animation_becomes_a_sequence() {
     let Some(d) = common::data_dir() else { return };
     for (f, frames) in [

@@ -13,6 +13,7 @@ fn reference(name: &str) -> Option<(std::path::PathBuf, Value)> {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn bvh_fk_matches_bvhio_on_every_clip() {
     let Some((d, r)) = reference("bvh_fk.json") else {
         return;
@@ -51,6 +52,7 @@ fn bvh_fk_matches_bvhio_on_every_clip() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn amc_fk_matches_amcparser_on_every_clip() {
     let Some((d, r)) = reference("amc_fk.json") else {
         return;
@@ -104,6 +106,7 @@ fn amc_fk_matches_amcparser_on_every_clip() {
 /// of the ASF bone before it, which pins the ASF unit and axis handling. (The
 /// cgspeed conversion rebuilt the neck and arms, so those do not coincide.)
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn amc_and_cgspeed_bvh_of_01_01_agree() {
     let Some(d) = common::data_dir() else { return };
     let amc = load_clip(
@@ -146,6 +149,7 @@ fn amc_and_cgspeed_bvh_of_01_01_agree() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn bvh_write_read_round_trip_is_exact_on_every_clip() {
     let Some(d) = common::data_dir() else { return };
     let mut files = common::files_with_ext(&d.join("mocap"), "bvh");

@@ -140,6 +140,7 @@ fn head_angle_is_zero_at_rest_and_under_rigid_motion_and_reads_a_tilt() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn head_angle_on_real_captures() {
     let Some(d) = common::data_dir() else { return };
     let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");

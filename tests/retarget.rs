@@ -33,6 +33,7 @@ fn run(
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
     let Some(d) = common::data_dir() else { return };
     let db = database(&d);
@@ -119,6 +120,7 @@ fn skeletons(ch: &Character, p: &[[f64; 3]]) -> Vec<surfmotion::skeleton::Pose> 
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn interpolated_frames_lie_between_their_neighbours() {
     let Some(d) = common::data_dir() else { return };
     let db = database(&d);
@@ -184,6 +186,7 @@ fn interpolated_frames_lie_between_their_neighbours() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn cli_writes_glb_report_and_evaluates() {
     let Some(d) = common::data_dir() else { return };
     let db = database(&d);
@@ -263,6 +266,7 @@ fn cli_writes_glb_report_and_evaluates() {
 /// drive a character to the same poses within 1e-3 of its height, with the
 /// same neutral reference (the ASF's upright rest skeleton).
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn an_amc_clip_and_its_bvh_conversions_drive_the_character_alike() {
     use surfmotion::retarget::query::to_character;
     use surfmotion::rig::embed::Embedding;

@@ -42,6 +42,7 @@ const CASES: [Case; 2] = [
 ];
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn landmarks_give_contiguous_parts_exact_regressors_and_steady_bones() {
     let Some(d) = common::data_dir() else { return };
     for c in &CASES {
@@ -201,6 +202,7 @@ fn landmarks_give_contiguous_parts_exact_regressors_and_steady_bones() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn db_skeleton_writes_json_and_a_bvh_that_reads_back() {
     let Some(d) = common::data_dir() else { return };
     let dir = tempfile::tempdir().unwrap();
@@ -286,6 +288,7 @@ fn db_skeleton_writes_json_and_a_bvh_that_reads_back() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn rig_embed_cli_reports_errors_with_the_file() {
     let Some(d) = common::data_dir() else { return };
     let dir = tempfile::tempdir().unwrap();
@@ -305,6 +308,7 @@ fn rig_embed_cli_reports_errors_with_the_file() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_rigged_gltf_skin_gives_the_rig_matched_by_position() {
     let Some(d) = common::data_dir() else { return };
     use surfmotion::mesh::Mesh;

@@ -426,7 +426,7 @@ fn originals() -> Vec<(String, Clip)> {
             surfmotion::synth::gait_clip(surfmotion::synth::Gait::Run, 2.0, 30.0),
         ),
     ];
-    if let Some(d) = common::data_dir() {
+    if let Some(d) = common::optional_data_dir() {
         for rel in [
             "mocap/cmu-bvh/01_01.bvh",
             "mocap/cmu-bvh/131_01.bvh",
@@ -664,6 +664,7 @@ fn left_is_left(p: &Pose) -> f64 {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn the_sign_of_left_is_checked_on_trusted_names() {
     let Some(d) = common::data_dir() else { return };
     let c = load_clip(&d.join("mocap/cmu-bvh/01_01.bvh"), &Default::default()).unwrap();
@@ -680,6 +681,7 @@ fn the_sign_of_left_is_checked_on_trusted_names() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn every_humanoid_clip_in_the_data_maps_with_left_on_the_left() {
     let Some(d) = common::data_dir() else { return };
     let mut files = common::files_with_ext(&d.join("mocap"), "bvh");

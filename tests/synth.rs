@@ -23,6 +23,7 @@ fn samba_rig(d: &Path) -> (surfmotion::mesh::Mesh, Embedding) {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn walk_and_run_have_the_right_frames_rigid_bones_and_measurable_dynamics() {
     let Some(d) = common::data_dir() else { return };
     let (rest, rig) = samba_rig(&d);
@@ -98,6 +99,7 @@ fn walk_and_run_have_the_right_frames_rigid_bones_and_measurable_dynamics() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn synth_cli_writes_a_database_whose_skeletons_follow_the_truth() {
     let Some(d) = common::data_dir() else { return };
     let dir = tempfile::tempdir().unwrap();

@@ -68,6 +68,7 @@ fn assert_finite(p: &[[f64; 3]]) {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn self_transfer_reproduces_real_captures_better_with_more_markers() {
     let Some(d) = common::data_dir() else { return };
     for name in ["samba", "crane"] {
@@ -122,6 +123,7 @@ fn moved_template(scan: &Mesh, f: impl Fn(DVec3) -> DVec3, frames: usize) -> Mes
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn identity_and_rigid_motions_are_reproduced() {
     let Some(d) = common::data_dir() else { return };
     let scan = capture(&d, "samba").frame_mesh(0);
@@ -169,6 +171,7 @@ fn edge_band(rest: &Mesh, p: &[[f64; 3]]) -> (f64, f64) {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn near_half_turns_do_not_collapse_the_mesh() {
     // The candy-wrapper case of Sec. 4.3: the template turns by 180° about
     // the vertical, a little more at the head than at the feet, so marker
@@ -259,6 +262,7 @@ fn walk_on(name: &str, scan: &Mesh, landmarks: &str, clip: &Path) {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_cmu_walk_moves_every_scan_without_tearing() {
     let Some(d) = common::data_dir() else { return };
     let walk = d.join("mocap/cmu-amc/02/02_01.amc");
@@ -282,6 +286,7 @@ fn a_cmu_walk_moves_every_scan_without_tearing() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn raw_scans_are_repaired_and_stray_pieces_dropped() {
     let Some(d) = common::data_dir() else { return };
     let seq = load_sequence(
@@ -345,6 +350,7 @@ fn raw_scans_are_repaired_and_stray_pieces_dropped() {
 }
 
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_performance_moves_onto_another_character() {
     // The samba dancer's capture onto the crane capture's first frame: the
     // two face different ways; the template's rotations are turned into

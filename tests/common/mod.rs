@@ -3,15 +3,27 @@
 
 use std::path::PathBuf;
 
-/// The shared data folder (`$SURFMOTION_DATA` or `../shared/data`). When it is
-/// absent the test is skipped with a message, except under `CI=true`, where
-/// the absence is a failure.
-pub fn data_dir() -> Option<PathBuf> {
-    let p = match std::env::var_os("SURFMOTION_DATA") {
+/// Where the shared data folder is looked for: `$SURFMOTION_DATA`, else
+/// `../shared/data` beside the package (the same rule as `build.rs`).
+pub fn data_path() -> PathBuf {
+    match std::env::var_os("SURFMOTION_DATA") {
         Some(p) => PathBuf::from(p),
         None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
-    };
-    if p.join("README.md").exists() {
+    }
+}
+
+/// The shared data folder (`$SURFMOTION_DATA` or `../shared/data`). When it is
+/// absent the test returns early with a message, except under `CI=true`, where
+/// the absence is a failure.
+///
+/// Every `#[test]` that calls this (directly or through a helper in its file)
+/// must carry the line
+/// `#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]`
+/// so that, without the data, the runner lists it as ignored with the reason
+/// (`build.rs` sets `no_shared_data`); `tests/data_gate.rs` enforces it.
+pub fn data_dir() -> Option<PathBuf> {
+    let p = data_path();
+    if p.join("README.md").is_file() {
         return Some(p);
     }
     if std::env::var("CI").is_ok_and(|v| v == "true") {
@@ -25,6 +37,21 @@ pub fn data_dir() -> Option<PathBuf> {
         p.display()
     );
     None
+}
+
+/// The shared data folder for a test that runs in full without it and only
+/// adds real files when they are there (made-up inputs first, real ones as
+/// extra cases). Such a test needs no `ignore` line; under `CI=true` a
+/// missing folder still fails.
+pub fn optional_data_dir() -> Option<PathBuf> {
+    let p = data_path();
+    if p.join("README.md").is_file() {
+        return Some(p);
+    }
+    data_dir().or_else(|| {
+        eprintln!("(the cases on real files are left out)");
+        None
+    })
 }
 
 /// Every file under `dir` with extension `ext`, sorted.
