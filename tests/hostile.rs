@@ -260,7 +260,7 @@ fn rows() -> Vec<Row> {
     // The sweep: verbs × malformed files, each message naming the file.
     let bvh_cut = {
         let t = walk_text();
-        t[..t.find("JOINT LeftUpLeg").unwrap()].as_bytes().to_vec()
+        t.as_bytes()[..t.find("JOINT LeftUpLeg").unwrap()].to_vec()
     };
     let malformed_clips: Vec<(&'static str, Vec<u8>)> = vec![
         ("empty.bvh", Vec::new()),
@@ -275,7 +275,7 @@ fn rows() -> Vec<Row> {
         ),
         ("noframes.bvh", {
             let t = walk_text();
-            t[..t.find("MOTION").unwrap() + 7].as_bytes().to_vec()
+            t.as_bytes()[..t.find("MOTION").unwrap() + 7].to_vec()
         }),
     ];
     let clip_verbs: [(&str, &'static str); 6] = [
@@ -344,7 +344,7 @@ fn rows() -> Vec<Row> {
             "nan.json",
             landmarks_json().replacen("0.0", "NaN", 1).into_bytes(),
         ),
-        ("cut.json", landmarks_json()[..40].as_bytes().to_vec()),
+        ("cut.json", landmarks_json().as_bytes()[..40].to_vec()),
     ];
     let json_verbs: [(&str, &'static str); 4] = [
         (

@@ -371,7 +371,7 @@ fn parse_forbid(edits: &[String], spans: &[Span]) -> Result<Vec<Forbid>, EditErr
 fn found_any(removed: &[String], spans: &[Span], r: &(usize, usize, usize, usize)) -> bool {
     let (i, m, j, n) = *r;
     let text = format!("{}:{} -> {}:{}", spans[i].name, m, spans[j].name, n);
-    removed.iter().any(|x| *x == text)
+    removed.contains(&text)
 }
 
 fn parse_remove(

@@ -174,7 +174,7 @@ pub fn repair(mesh: &Mesh, opts: &RepairOptions) -> (Mesh, RepairReport, Vec<u32
         .filter(|t| {
             let [a, b, c] = t.map(|v| glam::DVec3::from_array(p[v as usize]));
             let area2 = (b - a).cross(c - a).length();
-            !(area2 > eps)
+            area2.is_nan() || area2 <= eps
         })
         .count();
     // Compact vertices.

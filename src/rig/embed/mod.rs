@@ -126,7 +126,7 @@ pub fn check_body(mesh: &Mesh) -> Result<(), EmbedError> {
     let b = mesh.bounds();
     let ext: Vec<f64> = (0..3).map(|k| b.max[k] - b.min[k]).collect();
     let big = ext.iter().copied().fold(0.0, f64::max);
-    if let Some(k) = (0..3).find(|&k| !(ext[k] > 1e-3 * big)) {
+    if let Some(k) = (0..3).find(|&k| ext[k].is_nan() || ext[k] <= 1e-3 * big) {
         return Err(EmbedError::Mesh(format!(
             "is flat: its extent along {} is {:.3e} against {:.3e} along the largest axis",
             ["x", "y", "z"][k],
