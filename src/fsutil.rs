@@ -18,32 +18,68 @@ pub struct FsError {
     pub source: std::io::Error,
 }
 
+/// Largest settings file (landmarks, markers, rig maps, part labels,
+/// manifests) any reader accepts (64 MiB): such files are a few kB.
+pub const MAX_SMALL_FILE_BYTES: u64 = 64 << 20;
+
 /// Reads a whole file into memory, refusing files over [`MAX_INPUT_BYTES`].
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FsError> {
+    read_bytes_limited(path, MAX_INPUT_BYTES)
+}
+
+/// Reads a whole file into memory, refusing more than `limit` bytes. The
+/// limit holds for devices, pipes and other files without a size too
+/// (`/dev/zero` was read to 4 GiB before failing; issue 18, item 17): at
+/// most `limit + 1` bytes are read.
+pub fn read_bytes_limited(path: &Path, limit: u64) -> Result<Vec<u8>, FsError> {
+    use std::io::Read;
     let wrap = |source| FsError {
         path: path.to_path_buf(),
         source,
     };
+    let too_big = |what: String| wrap(std::io::Error::other(what));
     let meta = std::fs::metadata(path).map_err(wrap)?;
     if meta.is_dir() {
         return Err(wrap(std::io::Error::other(
             "is a directory, expected a file",
         )));
     }
-    if meta.len() > MAX_INPUT_BYTES {
-        return Err(wrap(std::io::Error::other(format!(
-            "file is {} bytes, larger than the {} byte limit",
-            meta.len(),
-            MAX_INPUT_BYTES
-        ))));
+    if meta.is_file() && meta.len() > limit {
+        return Err(too_big(format!(
+            "file is {} bytes, larger than the {limit} byte limit",
+            meta.len()
+        )));
     }
-    std::fs::read(path).map_err(wrap)
+    let file = std::fs::File::open(path).map_err(wrap)?;
+    let mut out = Vec::with_capacity(if meta.is_file() {
+        meta.len() as usize
+    } else {
+        0
+    });
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut out)
+        .map_err(wrap)?;
+    if out.len() as u64 > limit {
+        return Err(too_big(format!(
+            "more than the {limit} byte limit could be read (not a regular file?)"
+        )));
+    }
+    Ok(out)
 }
 
 /// Reads a text file; invalid UTF-8 is replaced rather than rejected (mocap
 /// files from Windows tools carry Latin-1 comments).
 pub fn read_text(path: &Path) -> Result<String, FsError> {
-    let bytes = read_bytes(path)?;
+    read_text_limited(path, MAX_INPUT_BYTES)
+}
+
+/// [`read_text`] of a settings file, at most [`MAX_SMALL_FILE_BYTES`].
+pub fn read_small_text(path: &Path) -> Result<String, FsError> {
+    read_text_limited(path, MAX_SMALL_FILE_BYTES)
+}
+
+fn read_text_limited(path: &Path, limit: u64) -> Result<String, FsError> {
+    let bytes = read_bytes_limited(path, limit)?;
     Ok(match String::from_utf8(bytes) {
         Ok(s) => s,
         Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),

@@ -7,6 +7,7 @@
 //! formats), [`inspect`] (what a file holds).
 
 pub mod batch;
+pub mod budget;
 pub mod db;
 pub mod deform;
 pub mod eval;

@@ -190,6 +190,7 @@ fn head_angle_on_real_captures() {
 /// with feet pointed) reads little hyper-extension. The earlier foot-based
 /// measure read such bent knees as bent backwards.
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn knee_hyperextension_on_real_captures_is_small() {
     let Some(d) = common::data_dir() else { return };
     let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");

@@ -15,7 +15,7 @@ pub struct Args {
     /// Second mesh, same connectivity.
     pub b: String,
     /// Blend weight: 0 gives A, 1 gives B.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = super::fraction)]
     pub alpha: f64,
     /// Output mesh (.obj, .ply, .glb ...).
     #[arg(short, long)]

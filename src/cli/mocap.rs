@@ -59,7 +59,7 @@ pub struct ConvertArgs {
     /// Output .bvh.
     pub output: PathBuf,
     /// Resample to this frame rate (slerp of rotations, lerp of translations).
-    #[arg(long)]
+    #[arg(long, value_parser = super::frame_rate)]
     pub fps: Option<f64>,
     /// Convert lengths to metres and the up axis to Y.
     #[arg(long)]
@@ -78,10 +78,10 @@ pub struct ProceduralArgs {
     #[arg(long, value_enum)]
     pub gait: Vec<surfmotion::synth::Gait>,
     /// Length of each clip in seconds.
-    #[arg(long, default_value_t = 4.0)]
+    #[arg(long, default_value_t = 4.0, value_parser = super::positive)]
     pub seconds: f64,
     /// Frames per second.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
     pub fps: f64,
 }
 
@@ -161,10 +161,9 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 clip.to_metres_y_up();
             }
             if let Some(fps) = a.fps {
-                if !(fps.is_finite() && fps > 0.0) {
-                    bail!("--fps {fps}: expected a positive number");
-                }
-                clip = clip.resampled(fps);
+                clip = clip
+                    .try_resampled(fps)
+                    .with_context(|| a.input.display().to_string())?;
             }
             if !a
                 .output

@@ -15,7 +15,7 @@ mod rig;
 mod synth;
 mod transfer;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Subcommand};
 
 /// surfmotion: drive 4D performance-capture characters from skeletal motion
 /// capture, and transfer mocap onto scanned meshes.
@@ -24,7 +24,7 @@ use clap::{Parser, Subcommand};
 /// CC_Base, Bandai Namco, Mixamo, MotionBuilder HumanIK) and meshes or mesh
 /// sequences (OBJ, PLY, PC2, MDD, OBJ folders, glTF/GLB). Exit codes: 0 ok,
 /// 1 bad input (the message names the file and line), 2 internal error.
-#[derive(Parser)]
+#[derive(clap::Parser)]
 #[command(name = "surfmotion", version, about, long_about)]
 struct Cli {
     #[command(subcommand)]
@@ -102,7 +102,10 @@ enum Command {
 pub fn main() -> anyhow::Result<()> {
     // clap exits 2 on a usage error, which the exit-code contract keeps for
     // internal errors: print its message and exit 1 (help and version 0).
-    let cli = match Cli::try_parse() {
+    let cli = match allow_negative_numbers(Cli::command())
+        .try_get_matches()
+        .and_then(|m| Cli::from_arg_matches(&m))
+    {
         Ok(c) => c,
         Err(e) => {
             let usage = e.use_stderr();
@@ -110,8 +113,18 @@ pub fn main() -> anyhow::Result<()> {
             return if usage { Err(Usage.into()) } else { Ok(()) };
         }
     };
+    // Warnings (a cache rebuilt, a graph edit that matched nothing, an
+    // implausible result) show by default; SURFMOTION_LOG=debug etc. for more.
     tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_env("SURFMOTION_LOG"))
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::builder()
+                .with_default_directive(tracing::level_filters::LevelFilter::WARN.into())
+                .with_env_var("SURFMOTION_LOG")
+                .from_env_lossy(),
+        )
+        .without_time()
+        .with_target(false)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .with_writer(std::io::stderr)
         .init();
     match cli.command {
@@ -197,20 +210,63 @@ pub fn count(n: usize, noun: &str) -> String {
     }
 }
 
-/// A frame rate on the command line: a finite number in (0, 1000]. (A
-/// typo such as `--input-fps 1e-4` would otherwise ask for billions of
+/// Every option of every verb takes negative numbers as values, so that
+/// `--fps -30` reaches the option's parser ("expected a frame rate") instead
+/// of being read as a flag `-3` (issue 18, item 17).
+fn allow_negative_numbers(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|a| {
+        if a.get_action().takes_values() {
+            a.allow_negative_numbers(true)
+        } else {
+            a
+        }
+    })
+    .mut_subcommands(allow_negative_numbers)
+}
+
+/// A frame rate on the command line: a finite number in
+/// [[`MIN_FPS`](surfmotion::budget::MIN_FPS),
+/// [`MAX_FPS`](surfmotion::budget::MAX_FPS)] (1-1000). (A typo such as
+/// `--input-fps 1e-4` or `--fps 1e9` would otherwise ask for billions of
 /// frames; issue 18, item 12.)
 pub fn frame_rate(s: &str) -> Result<f64, String> {
+    use surfmotion::budget::{MAX_FPS, MIN_FPS, is_frame_rate};
     let v: f64 = s
         .trim()
         .parse()
         .map_err(|_| format!("'{s}' is not a number"))?;
-    if v.is_finite() && v > 0.0 && v <= 1000.0 {
+    if is_frame_rate(v) {
         Ok(v)
     } else {
         Err(format!(
-            "{s} frames per second: expected a number in (0, 1000]"
+            "{s} frames per second: expected a frame rate in [{MIN_FPS}, {MAX_FPS}]"
         ))
+    }
+}
+
+/// A duration or size on the command line: a finite number > 0.
+pub fn positive(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{s}: expected a finite number > 0"))
+    }
+}
+
+/// A fraction on the command line: a finite number in [0, 1].
+pub fn fraction(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if v.is_finite() && (0.0..=1.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("{s}: expected a number in [0, 1]"))
     }
 }
 

@@ -15,7 +15,7 @@ pub struct Args {
     pub output: PathBuf,
     /// Also weld vertices closer than this fraction of the bounding-box
     /// diagonal (default: only exact duplicates).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::non_negative)]
     pub weld_tolerance: f64,
     /// Keep only the largest connected component.
     #[arg(long)]
@@ -48,6 +48,24 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             keep_largest: a.keep_largest,
         },
     );
+    // Nothing left (every triangle degenerate) or nothing with area: a
+    // mesh that only looks repaired (issue 18, item 16).
+    if m.triangle_count() == 0 {
+        anyhow::bail!(
+            "{}: no triangle is left after repair ({} of {} degenerate, {} duplicate): nothing to write",
+            a.input,
+            rep.degenerate_triangles,
+            s.frame_mesh(0).triangle_count(),
+            rep.duplicate_triangles
+        );
+    }
+    if rep.zero_area_triangles == m.triangle_count() {
+        anyhow::bail!(
+            "{}: all {} triangles have zero area (collinear vertices): not a surface",
+            a.input,
+            m.triangle_count()
+        );
+    }
     save_sequence(&MeshSequence::single(m.clone()), &a.output, None)?;
     if a.json {
         crate::outln!("{}", serde_json::to_string_pretty(&rep)?)?;
@@ -59,12 +77,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             .map(|c| format!("{}v/{}t", c.vertices, c.triangles))
             .collect();
         crate::outln!(
-            "wrote {} ({} vertices, {} triangles)\n  welded vertices                      {}\n  degenerate triangles                 {}\n  duplicate triangles                  {}\n  unreferenced vertices                {}\n  triangles dropped with small pieces  {}\n  components (vertices v/triangles t)  {}: {}{}",
+            "wrote {} ({} vertices, {} triangles)\n  welded vertices                      {}\n  degenerate triangles                 {}\n  zero-area triangles                  {} (kept)\n  duplicate triangles                  {}\n  unreferenced vertices                {}\n  triangles dropped with small pieces  {}\n  components (vertices v/triangles t)  {}: {}{}",
             a.output.display(),
             m.vertex_count(),
             m.triangle_count(),
             rep.welded_vertices,
             rep.degenerate_triangles,
+            rep.zero_area_triangles,
             rep.duplicate_triangles,
             rep.unreferenced_vertices,
             rep.dropped_component_triangles,

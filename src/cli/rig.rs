@@ -94,6 +94,9 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
                 surfmotion::rig::embed::EmbedError::Landmarks(le) => {
                     anyhow::anyhow!("{}: {le}", l.display())
                 }
+                e @ surfmotion::rig::embed::EmbedError::Mesh(_) => {
+                    anyhow::anyhow!("{}: {e}", a.mesh)
+                }
                 other => other.into(),
             })?
         }

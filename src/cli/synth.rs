@@ -28,13 +28,13 @@ pub struct Args {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Frame rate of the database.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
     pub fps: f64,
     /// Use at most this many seconds of each clip.
-    #[arg(long)]
+    #[arg(long, value_parser = super::positive)]
     pub seconds: Option<f64>,
     /// Strength of the secondary dynamics (0: pure skinning).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::non_negative)]
     pub dynamics: f64,
     /// Overwrite an existing manifest in the output.
     #[arg(long)]
@@ -50,9 +50,6 @@ pub struct Args {
 
 /// Runs `synth`.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    if !(a.fps.is_finite() && a.fps > 0.0) {
-        bail!("--fps {}: expected a positive number", a.fps);
-    }
     let dir = &a.output;
     if dir.join(surfmotion::db::MANIFEST).exists() && !a.force {
         bail!(
@@ -64,7 +61,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let rest = load_sequence(&a.mesh, &LoadOptions::default())?.frame_mesh(0);
     let lm = Landmarks::load(&a.landmarks, rest.vertex_count())?;
-    let rig = Embedding::new(&rest, &lm, None)?;
+    let rig = Embedding::new(&rest, &lm, None).map_err(|e| match e {
+        e @ surfmotion::rig::embed::EmbedError::Mesh(_) => anyhow::anyhow!("{}: {e}", a.mesh),
+        surfmotion::rig::embed::EmbedError::Landmarks(le) => {
+            anyhow::anyhow!("{}: {le}", a.landmarks.display())
+        }
+        other => other.into(),
+    })?;
     let embed_s = t0.elapsed().as_secs_f64();
     save_sequence(
         &MeshSequence::single(rest.clone()),
@@ -93,6 +96,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         if let Some(s) = a.seconds {
             poses.truncate(((s * a.fps).round() as usize).max(1));
         }
+        // Skinned frames, their dynamics copy and the sequence: refuse a
+        // clip that cannot fit before allocating (issue 18, item 12).
+        surfmotion::budget::check_frames(
+            &format!("{}", path.display()),
+            poses.len(),
+            rest.vertex_count(),
+            3,
+        )?;
         let out = synthesise(&rest, &rig, &poses, &clip.reference, a.fps, dynamics);
         // A unique sequence name from the clip's file stem.
         let stem = path

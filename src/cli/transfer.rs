@@ -44,7 +44,7 @@ pub struct Args {
     pub marker_count: usize,
     /// Distance of generated marker rings from the joints, as a fraction
     /// of the bone length (0-0.5): small gives sharp bends, large soft ones.
-    #[arg(long, default_value_t = 0.25)]
+    #[arg(long, default_value_t = 0.25, value_parser = super::non_negative)]
     pub marker_margin: f64,
     /// Write the scan's markers (on the repaired scan) as JSON.
     #[arg(long, value_name = "JSON")]
@@ -53,7 +53,7 @@ pub struct Args {
     #[arg(long)]
     pub mocap: Option<PathBuf>,
     /// Output frame rate for a mocap source (the clip is resampled).
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
     pub fps: f64,
     /// A moving template mesh (any sequence format) whose performance the
     /// scan copies.

@@ -122,7 +122,27 @@ pub fn similarity(
     let key = key.finish();
     let path = cache_dir(dir).join(format!("similarity-{}.bin", measure.name()));
     if !force && let Some(mat) = cache::load_matrix(&path, key) {
-        return Ok((mat, key, None));
+        // A valid key does not make the contents right: the spans must be
+        // the manifest's sequences and every value a finite distance.
+        let names_match = mat.spans.len() == m.sequences.len()
+            && mat
+                .spans
+                .iter()
+                .zip(&m.sequences)
+                .all(|(s, q)| s.name == q.name);
+        let finite = (0..mat.len()).all(|a| mat.row(a).iter().all(|v| v.is_finite() && *v >= 0.0));
+        if names_match && finite {
+            return Ok((mat, key, None));
+        }
+        tracing::warn!(
+            "{}: the cached similarity matrix disagrees with the database ({}); recomputing it",
+            path.display(),
+            if names_match {
+                "a value that is not a finite distance"
+            } else {
+                "other sequences"
+            }
+        );
     }
     let topo = m.load_topology(dir)?;
     let n = topo.vertex_count();
@@ -295,6 +315,16 @@ pub fn build(
             .and_then(|t| serde_json::from_str::<GraphFile>(&t).ok())
             .filter(|g| g.key == graph_key)
             .map(|g| g.graph)
+            .filter(|g| match g.validate(&mat) {
+                Ok(()) => true,
+                Err(why) => {
+                    tracing::warn!(
+                        "{}: the cached graph disagrees with the database ({why}); rebuilding it",
+                        gpath.display()
+                    );
+                    false
+                }
+            })
     };
     let t = Instant::now();
     let (graph, graph_cached) = match cached {

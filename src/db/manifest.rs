@@ -29,8 +29,38 @@ use std::path::{Path, PathBuf};
 
 /// The highest frame rate a manifest may name (frames per second): a
 /// larger one is a typo that would make `retarget` resample to billions of
-/// frames.
-pub const MAX_FPS: f64 = 1000.0;
+/// frames. The lowest is [`crate::budget::MIN_FPS`].
+pub const MAX_FPS: f64 = crate::budget::MAX_FPS;
+
+/// True for text with NUL bytes or many invalid UTF-8 sequences (read
+/// lossily as U+FFFD): a binary file, whose bytes must not be echoed into
+/// a message (issue 18, item 17).
+pub fn looks_binary(text: &str) -> bool {
+    let head: Vec<char> = text.chars().take(4096).collect();
+    let bad = head
+        .iter()
+        .filter(|&&c| c == '\u{FFFD}' || (c.is_control() && !c.is_whitespace()))
+        .count();
+    text.contains('\0') || (bad >= 4 && bad * 100 >= head.len())
+}
+
+/// `s` with control and replacement characters escaped and at most `max`
+/// characters kept (for echoing file contents into messages).
+pub fn printable(s: &str, max: usize) -> String {
+    let mut out = String::new();
+    for (k, c) in s.chars().enumerate() {
+        if k >= max {
+            out.push('…');
+            break;
+        }
+        if c.is_control() || c == '\u{FFFD}' {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
 
 /// A name read from a file (a sequence's) becomes part of output file
 /// names (`DIR/NAME.bvh`) and of `SEQ:FRAME` specs: it must be a plain
@@ -60,6 +90,7 @@ pub const MANIFEST: &str = "character.toml";
 
 /// One captured sequence.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SequenceEntry {
     /// Name, unique in the database.
     pub name: String,
@@ -72,6 +103,7 @@ pub struct SequenceEntry {
 
 /// The skeletal annotation of the character (any one source is enough).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RigSpec {
     /// Landmarks on the rest frame (JSON: named points or vertex indices).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -199,6 +231,7 @@ impl DeformSpec {
 
 /// The manifest.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Manifest {
     /// Character name.
     pub name: String,
@@ -259,16 +292,22 @@ impl Manifest {
     /// Reads `DIR/character.toml` and checks its fields.
     pub fn load(dir: &Path) -> Result<Manifest, DbError> {
         let path = dir.join(MANIFEST);
-        let text = crate::fsutil::read_text(&path).map_err(|e| DbError::Manifest {
+        let text = crate::fsutil::read_small_text(&path).map_err(|e| DbError::Manifest {
             path: path.clone(),
             msg: format!(
                 "{} (is this a database directory? `surfmotion db init` writes one)",
                 e.source
             ),
         })?;
+        if looks_binary(&text) {
+            return Err(DbError::Manifest {
+                path,
+                msg: "not a text file (binary data): expected a TOML manifest".into(),
+            });
+        }
         let m: Manifest = toml::from_str(&text).map_err(|e| DbError::Manifest {
             path: path.clone(),
-            msg: e.to_string().replace('\n', " "),
+            msg: printable(&e.to_string().replace('\n', " "), 400),
         })?;
         m.validate()
             .map_err(|msg| DbError::Manifest { path, msg })?;
@@ -277,10 +316,11 @@ impl Manifest {
 
     /// Checks values that TOML types cannot.
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= MAX_FPS) {
+        if !crate::budget::is_frame_rate(self.fps) {
             return Err(format!(
-                "fps = {} is not a frame rate (expected a number in (0, {MAX_FPS}])",
-                self.fps
+                "fps = {} is not a frame rate (expected a number in [{}, {MAX_FPS}])",
+                self.fps,
+                crate::budget::MIN_FPS
             ));
         }
         if crate::mocap::units::parse_unit(&self.units).is_none() {
@@ -299,11 +339,12 @@ impl Manifest {
                 return Err(format!("two sequences are called '{}'", s.name));
             }
             if let Some(f) = s.fps
-                && !(f.is_finite() && f > 0.0 && f <= MAX_FPS)
+                && !crate::budget::is_frame_rate(f)
             {
                 return Err(format!(
-                    "sequence '{}': fps = {f} is not a positive number",
-                    s.name
+                    "sequence '{}': fps = {f} is not a frame rate (expected a number in [{}, {MAX_FPS}])",
+                    s.name,
+                    crate::budget::MIN_FPS
                 ));
             }
         }

@@ -113,6 +113,16 @@ impl SurfaceMotionGraph {
                 all.push(t);
             }
         }
+        // A `remove` rule that matched no transition is most likely a typo
+        // or a stale frame number: say so rather than ignore it (issue 18,
+        // item 16).
+        for (rule, r) in edits.remove.iter().zip(&remove) {
+            if !found_any(&removed, &spans, r) {
+                tracing::warn!(
+                    "graph edit remove '{rule}': no such transition was found, nothing removed"
+                );
+            }
+        }
         for f in &edits.forbid {
             removed.push(format!("forbidden: {f}"));
         }
@@ -139,6 +149,53 @@ impl SurfaceMotionGraph {
             edges,
             removed,
         })
+    }
+
+    /// Checks a graph read from a cache against the similarity matrix it
+    /// claims to come from: the same sequences (names, starts, lengths),
+    /// every transition and edge naming existing sequences, frames and
+    /// transitions, finite costs. A cache edited by hand (or by a bug) with
+    /// a valid key made `retarget` and `graph --json` panic and `graph
+    /// --dot` print nonsense (issue 18, item 13). Returns what is wrong.
+    pub fn validate(&self, matrix: &SimilarityMatrix) -> Result<(), String> {
+        if self.sequences != matrix.spans {
+            return Err("its sequences differ from the similarity matrix's".into());
+        }
+        let seqs = &self.sequences;
+        for (k, t) in self.transitions.iter().enumerate() {
+            let (Some(a), Some(b)) = (seqs.get(t.from), seqs.get(t.to)) else {
+                return Err(format!(
+                    "transition {k} joins sequences {} -> {} of {}",
+                    t.from,
+                    t.to,
+                    seqs.len()
+                ));
+            };
+            if t.m >= a.len || t.n >= b.len {
+                return Err(format!(
+                    "transition {k} ({}:{} -> {}:{}) is past the end of a sequence ({} and {} frames)",
+                    a.name, t.m, b.name, t.n, a.len, b.len
+                ));
+            }
+            if !t.cost.is_finite() || t.window > a.len.max(b.len) {
+                return Err(format!(
+                    "transition {k} has cost {} and half-window {}",
+                    t.cost, t.window
+                ));
+            }
+        }
+        for (k, e) in self.edges.iter().enumerate() {
+            if e.from >= seqs.len() || e.to >= seqs.len() {
+                return Err(format!("edge {k} joins sequences that do not exist"));
+            }
+            for &i in &e.transitions {
+                match self.transitions.get(i) {
+                    Some(t) if t.from == e.from && t.to == e.to => {}
+                    _ => return Err(format!("edge {k} lists transition {i}, not one of its own")),
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Total frames.
@@ -309,6 +366,14 @@ fn parse_forbid(edits: &[String], spans: &[Span]) -> Result<Vec<Forbid>, EditErr
         .collect()
 }
 
+/// True when `removed` (as [`SurfaceMotionGraph::build`] words it) holds the
+/// transition `r`.
+fn found_any(removed: &[String], spans: &[Span], r: &(usize, usize, usize, usize)) -> bool {
+    let (i, m, j, n) = *r;
+    let text = format!("{}:{} -> {}:{}", spans[i].name, m, spans[j].name, n);
+    removed.contains(&text)
+}
+
 fn parse_remove(
     edits: &[String],
     spans: &[Span],
@@ -327,6 +392,15 @@ fn parse_remove(
                     edit: e.clone(),
                     msg: format!("'{f}' is not a frame number"),
                 })?;
+                if f >= spans[s].len {
+                    return Err(EditError {
+                        edit: e.clone(),
+                        msg: format!(
+                            "frame {f} is past the end of {} ({} frames)",
+                            spans[s].name, spans[s].len
+                        ),
+                    });
+                }
                 Ok((s, f))
             };
             let (i, m) = frame(a)?;

@@ -48,6 +48,12 @@ pub struct RepairReport {
     pub unreferenced_vertices: usize,
     /// Triangles dropped with smaller components (`keep_largest`).
     pub dropped_component_triangles: usize,
+    /// Kept triangles of (numerically) zero area: three distinct but
+    /// collinear vertices (cross product under 1e-12 of the squared
+    /// bounding-box diagonal). Not dropped, as that would open holes;
+    /// reported so a flat or collapsed mesh does not pass as clean.
+    #[serde(default)]
+    pub zero_area_triangles: usize,
     /// Connected components of the result, largest first.
     pub components: Vec<ComponentInfo>,
 }
@@ -161,6 +167,16 @@ pub fn repair(mesh: &Mesh, opts: &RepairOptions) -> (Mesh, RepairReport, Vec<u32
         });
         rep.dropped_component_triangles = before - tris.len();
     }
+    let diag = mesh.bounds().diagonal();
+    let eps = 1e-12 * diag * diag;
+    rep.zero_area_triangles = tris
+        .iter()
+        .filter(|t| {
+            let [a, b, c] = t.map(|v| glam::DVec3::from_array(p[v as usize]));
+            let area2 = (b - a).cross(c - a).length();
+            area2.is_nan() || area2 <= eps
+        })
+        .count();
     // Compact vertices.
     let mut used = vec![false; p.len()];
     for t in &tris {
@@ -255,6 +271,33 @@ pub fn split_components(mesh: &Mesh) -> Vec<(Mesh, Vec<u32>)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Regression (issue 18, item 16): a mesh of collinear triangles is
+    /// not reported as clean.
+    #[test]
+    fn zero_area_triangles_are_reported() {
+        let m = Mesh::new(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [2.0, 0.0, 0.0],
+                [3.0, 0.0, 0.0],
+            ],
+            vec![[0, 1, 2], [0, 1, 3], [1, 2, 3]],
+        )
+        .unwrap();
+        let (_, rep, _) = repair(&m, &RepairOptions::default());
+        assert_eq!(rep.zero_area_triangles, 3);
+        let ok = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        assert_eq!(
+            repair(&ok, &RepairOptions::default()).1.zero_area_triangles,
+            0
+        );
+    }
 
     #[test]
     fn welds_drops_and_splits() {

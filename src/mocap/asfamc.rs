@@ -620,10 +620,14 @@ pub fn parse_amc(
         return Err(MocapError::invalid(path, "no frames"));
     }
     let fps = opts.fps.unwrap_or(120.0);
-    if !(fps.is_finite() && fps > 0.0) {
+    if !crate::budget::is_frame_rate(fps) {
         return Err(MocapError::invalid(
             path,
-            format!("fps {fps} is not a positive number"),
+            format!(
+                "--input-fps {fps}: expected a frame rate in [{}, {}]",
+                crate::budget::MIN_FPS,
+                crate::budget::MAX_FPS
+            ),
         ));
     }
     let mut clip = skel.to_clip(&frames, 1.0 / fps, path)?;

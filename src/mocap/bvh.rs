@@ -333,11 +333,15 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
         .ok()
         .filter(|v: &f64| v.is_finite() && *v > 0.0);
     let frame_time = match (opts.fps, file_ft) {
-        (Some(fps), _) if fps.is_finite() && fps > 0.0 => 1.0 / fps,
+        (Some(fps), _) if crate::budget::is_frame_rate(fps) => 1.0 / fps,
         (Some(fps), _) => {
             return Err(MocapError::invalid(
                 path,
-                format!("--fps {fps} is not a positive number"),
+                format!(
+                    "--input-fps {fps}: expected a frame rate in [{}, {}]",
+                    crate::budget::MIN_FPS,
+                    crate::budget::MAX_FPS
+                ),
             ));
         }
         (None, Some(ft)) => ft,
@@ -346,7 +350,7 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
                 path,
                 tl,
                 format!(
-                    "bad Frame Time '{}'; give the frame rate with --fps",
+                    "bad Frame Time '{}'; give the frame rate with --input-fps",
                     value_after(time_line, 10)
                 ),
             ));
@@ -406,6 +410,27 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
     let frames = rotations.len() / n;
     if frames == 0 {
         return Err(MocapError::invalid(path, "no motion frames"));
+    }
+    // A frame time outside 1-1000 fps (a Frame Time in milliseconds, or
+    // 1e300) would ask for absurd frame counts downstream (issue 18,
+    // items 12 and 17). A single frame has no rate to speak of.
+    if opts.fps.is_none() && frames > 1 && !crate::budget::is_frame_rate(1.0 / frame_time) {
+        return Err(MocapError::parse(
+            path,
+            tl,
+            format!(
+                "Frame Time {} s is {:.4} frames per second, outside [{}, {}]{}; give the frame rate with --input-fps",
+                value_after(time_line, 10),
+                1.0 / frame_time,
+                crate::budget::MIN_FPS,
+                crate::budget::MAX_FPS,
+                if frame_time > 1.0 && frame_time < 1000.0 {
+                    " (milliseconds instead of seconds?)"
+                } else {
+                    ""
+                }
+            ),
+        ));
     }
     match declared {
         Some(d) if d != frames as u64 => warnings.push(format!(
@@ -563,6 +588,26 @@ mod tests {
         // Frame 0: root turned 90° about z, leg hangs along -y → world +x.
         let p = c.world_positions(0);
         assert!((p[1] - DVec3::new(2.0, 2.0, 3.0)).length() < 1e-12, "{p:?}");
+    }
+
+    #[test]
+    fn frame_times_in_milliseconds_or_absurd_are_refused() {
+        for ft in ["33.3333", "1e300", "1e-9"] {
+            let bad = SMALL.replace("Frame Time: .5", &format!("Frame Time: {ft}"));
+            let e = parse_bvh(&bad, Path::new("t.bvh"), &BvhOptions::default())
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with("t.bvh:17:") && e.contains("--input-fps"),
+                "{e}"
+            );
+        }
+        let ms = SMALL.replace("Frame Time: .5", "Frame Time: 33.3");
+        let e = parse_bvh(&ms, Path::new("t.bvh"), &BvhOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("milliseconds"), "{e}");
+        // The override rescues it; an absurd override is refused.
+        assert!(parse_bvh(&ms, Path::new("t.bvh"), &BvhOptions { fps: Some(30.0) }).is_ok());
+        assert!(parse_bvh(&ms, Path::new("t.bvh"), &BvhOptions { fps: Some(1e-4) }).is_err());
     }
 
     #[test]

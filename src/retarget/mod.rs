@@ -172,6 +172,17 @@ impl Frames for Character {
     }
 }
 
+/// Why a retarget cannot run.
+#[derive(Debug, thiserror::Error)]
+pub enum RetargetError {
+    /// A solver could not be factored (mesh problems).
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    /// The output would not fit in memory (checked before allocating).
+    #[error(transparent)]
+    Budget(#[from] crate::budget::OverBudget),
+}
+
 /// Drives the character by the mocap poses (metres, Y-up, the clip's own
 /// skeleton at the database frame rate) and the clip's neutral `reference`
 /// ([`query::load_mocap`] gives both): Sec. 5.2 up to interpolation.
@@ -181,7 +192,11 @@ pub fn synthesise(
     reference: &Reference,
     fps: f64,
     opts: &RetargetOptions,
-) -> Result<Output, SolveError> {
+) -> Result<Output, RetargetError> {
+    // One output frame per query frame, each holding the character's
+    // vertices (placed, then deformed in place; the blend keeps a copy per
+    // worker): refuse before allocating (issue 18, item 12).
+    crate::budget::check_frames(&format!("the retarget at {fps} fps"), mocap.len(), ch.n, 2)?;
     let mut timings = Timings::default();
     let t0 = Instant::now();
     let query = query::to_character(&ch.rest_pose, reference, mocap);

@@ -25,6 +25,14 @@ pub enum QueryError {
     /// The clip could not be read.
     #[error(transparent)]
     Mocap(#[from] MocapError),
+    /// The clip at the requested rate would not fit in memory.
+    #[error("{path}: {source}")]
+    Budget {
+        /// The clip.
+        path: PathBuf,
+        /// The estimate.
+        source: crate::budget::OverBudget,
+    },
     /// The clip's rig could not be mapped to the canonical joints.
     #[error("{path}: {msg}")]
     Rig {
@@ -55,7 +63,14 @@ pub fn load_mocap(path: &Path, opts: &LoadOptions, fps: f64) -> Result<MocapPose
     let mut clip = load_clip(path, opts)?;
     let source_fps = clip.fps();
     clip.to_metres_y_up();
-    let clip = clip.resampled(fps);
+    // Checked before allocating: a rate typo or a very long clip asks for
+    // millions of frames (issue 18, item 12).
+    let clip = clip
+        .try_resampled(fps)
+        .map_err(|source| QueryError::Budget {
+            path: path.to_path_buf(),
+            source,
+        })?;
     let map = match &opts.rig_map {
         Some(m) => m.clone(),
         None => {

@@ -583,7 +583,7 @@ enum Slot {
 impl RigMap {
     /// Reads a JSON map file.
     pub fn load(path: &Path) -> Result<RigMap, RigError> {
-        let text = crate::fsutil::read_text(path).map_err(|e| RigError::File {
+        let text = crate::fsutil::read_small_text(path).map_err(|e| RigError::File {
             path: path.into(),
             msg: e.source.to_string(),
         })?;

@@ -90,6 +90,9 @@ pub enum JobError {
     /// Factorisation failed.
     #[error(transparent)]
     Confluent(#[from] ConfluentError),
+    /// The output would not fit in memory (checked before allocating).
+    #[error(transparent)]
+    Budget(#[from] crate::budget::OverBudget),
 }
 
 /// The motion of a scan's bone markers (those with a bone, in file order:
@@ -102,6 +105,10 @@ pub fn mocap_motion(
     reference: &Reference,
 ) -> Result<MarkerMotion, JobError> {
     let rig = scan.rig.as_ref().ok_or(JobError::NoSkeleton)?;
+    // The transfer holds every output frame of the scan: refuse a clip
+    // whose frames cannot fit before anything is allocated (issue 18,
+    // item 12).
+    crate::budget::check_frames("the transfer", poses.len(), scan.mesh.vertex_count(), 1)?;
     let p = scan.mesh.positions();
     let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
     let rest: Pose = rig.joints.map(DVec3::from_array);
@@ -167,6 +174,7 @@ impl Job {
             } => {
                 let tm = frames.mesh();
                 let count = frames.frame_count();
+                crate::budget::check_frames("the transfer", count, scan.mesh.vertex_count(), 1)?;
                 if reference >= count {
                     return Err(JobError::Reference {
                         frame: reference,

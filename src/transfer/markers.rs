@@ -12,7 +12,7 @@
 //! marker's name (`bone/ring/ray`) depends only on the rule, so markers made
 //! with the same options on two characters pair up by name.
 
-use crate::fsutil::{FsError, read_text, write_atomic};
+use crate::fsutil::{FsError, read_small_text, write_atomic};
 use crate::mesh::Mesh;
 use crate::rig::Canonical;
 use crate::rig::embed::Embedding;
@@ -76,6 +76,46 @@ pub enum MarkerError {
     /// Too few markers to drive a mesh.
     #[error("{0}")]
     TooFew(String),
+    /// More markers asked for than the mesh can hold (one per triangle).
+    #[error(
+        "{requested} markers asked for: the mesh has {triangles} triangles and a marker is a triangle, so at most {triangles} (the paper uses 140-220)"
+    )]
+    TooMany {
+        /// The count asked for.
+        requested: usize,
+        /// Triangles of the mesh.
+        triangles: usize,
+    },
+    /// Markers made for another mesh.
+    #[error(
+        "the markers were made for a mesh of {recorded} triangles; this one has {triangles}: markers of another mesh?"
+    )]
+    OtherMesh {
+        /// The count the file records.
+        recorded: usize,
+        /// Triangles of the mesh they are used on.
+        triangles: usize,
+    },
+}
+
+impl MarkerOptions {
+    /// Refuses a count the mesh cannot hold: none, or more than its
+    /// triangles (generation casts one ray per marker against every
+    /// triangle, so an absurd count ran for minutes; issue 18, item 15).
+    pub fn validate(&self, triangles: usize) -> Result<(), MarkerError> {
+        if self.count == 0 {
+            return Err(MarkerError::TooFew(
+                "0 markers asked for: at least one is needed (the paper uses 140-220)".into(),
+            ));
+        }
+        if self.count > triangles {
+            return Err(MarkerError::TooMany {
+                requested: self.count,
+                triangles,
+            });
+        }
+        Ok(())
+    }
 }
 
 /// Options for [`generate`].
@@ -192,7 +232,8 @@ fn layout(per_bone: usize) -> (usize, usize) {
 /// Rays that leave the body part (hit another limb, or nothing) give no
 /// marker, so the count can fall short of `opts.count`.
 ///
-/// Cost: one ray against every triangle per marker, O(markers × triangles).
+/// Cost: one ray against every triangle per marker, O(markers × triangles);
+/// check the count with [`MarkerOptions::validate`] first.
 pub fn generate(mesh: &Mesh, rig: &Embedding, opts: &MarkerOptions) -> Vec<Marker> {
     let segs = segments(rig);
     let (rings, rays) = layout((opts.count as f64 / segs.len() as f64).round() as usize);
@@ -202,6 +243,7 @@ pub fn generate(mesh: &Mesh, rig: &Embedding, opts: &MarkerOptions) -> Vec<Marke
     let facing = DVec3::from_array(rig.facing).normalize_or(DVec3::Z);
     let up = DVec3::from_array(rig.up).normalize_or(DVec3::Y);
     let mut out: Vec<Marker> = Vec::new();
+    let mut taken = std::collections::HashSet::new();
     for s in &segs {
         let axis = s.b - s.a;
         let Some(d) = axis.try_normalize() else {
@@ -228,7 +270,7 @@ pub fn generate(mesh: &Mesh, rig: &Embedding, opts: &MarkerOptions) -> Vec<Marke
                     s.parts
                         .contains(&Part::ALL[rig.labels[x as usize] as usize])
                 });
-                if !on_part || out.iter().any(|m| m.triangle == tri) {
+                if !on_part || !taken.insert(tri) {
                     continue;
                 }
                 out.push(Marker {
@@ -307,7 +349,7 @@ impl MarkerFile {
 
     /// Reads a marker file.
     pub fn load(path: &Path, triangle_count: usize) -> Result<MarkerFile, MarkerError> {
-        MarkerFile::parse(&read_text(path)?, path, triangle_count)
+        MarkerFile::parse(&read_small_text(path)?, path, triangle_count)
     }
 
     /// Writes the file atomically.
@@ -360,6 +402,17 @@ mod tests {
             Err(MarkerError::Triangle { .. })
         ));
         let ok = r#"{"markers":[{"name":"a","triangle":3,"bone":"l_elbow"}]}"#;
+        // Regression (issue 18, item 15): a count the mesh cannot hold.
+        let o = |count| MarkerOptions {
+            count,
+            margin: 0.25,
+        };
+        assert!(matches!(
+            o(1_000_000).validate(100),
+            Err(MarkerError::TooMany { .. })
+        ));
+        assert!(o(0).validate(100).is_err());
+        assert!(o(100).validate(100).is_ok());
         let f = MarkerFile::parse(ok, p, 10).unwrap();
         assert_eq!(f.markers[0].bone, Some(Canonical::LElbow));
     }

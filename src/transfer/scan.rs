@@ -69,10 +69,26 @@ pub fn prepare(mesh: &Mesh, spec: MarkerSpec<'_>) -> Result<PreparedScan, ScanEr
     };
     let (markers, rig) = match spec {
         MarkerSpec::Landmarks(lm, opts) => {
+            opts.validate(fixed.triangle_count())?;
             let rig = embed_resolved(mesh, &fixed, lm)?;
             (generate(&fixed, &rig, &opts), Some(rig))
         }
         MarkerSpec::File(f, lm) => {
+            // Triangle ids are only meaningful on the mesh they were made
+            // for: the file records its triangle count (`--save-markers`
+            // writes that of the repaired scan).
+            let on_fixed = match f.triangle_count {
+                Some(c) if c == mesh.triangle_count() => false,
+                Some(c) if c == fixed.triangle_count() => true,
+                Some(c) => {
+                    return Err(MarkerError::OtherMesh {
+                        recorded: c,
+                        triangles: mesh.triangle_count(),
+                    }
+                    .into());
+                }
+                None => false,
+            };
             let rig = lm.map(|l| embed_resolved(mesh, &fixed, l)).transpose()?;
             let index: HashMap<[u32; 3], u32> = fixed
                 .triangles()
@@ -82,6 +98,13 @@ pub fn prepare(mesh: &Mesh, spec: MarkerSpec<'_>) -> Result<PreparedScan, ScanEr
                 .collect();
             let mut kept = Vec::with_capacity(f.markers.len());
             for m in &f.markers {
+                if on_fixed {
+                    match fixed.triangles().get(m.triangle as usize) {
+                        Some(_) => kept.push(m.clone()),
+                        None => report.lost_markers += 1,
+                    }
+                    continue;
+                }
                 let Some(tv) = mesh.triangles().get(m.triangle as usize) else {
                     report.lost_markers += 1;
                     continue;
@@ -239,5 +262,22 @@ mod tests {
         assert_eq!(s.report.dropped_components, vec![(n as usize, nt as usize)]);
         assert_eq!(s.markers[0].triangle, 3);
         assert_eq!(s.mesh.triangles()[3], a.triangles()[3]);
+    }
+
+    /// Regression (issue 18, item 16): markers recording another mesh's
+    /// triangle count are refused, not applied to unrelated triangles.
+    #[test]
+    fn markers_of_another_mesh_are_refused() {
+        let a = capsule_mesh(0.1, 1.0, 8, 4);
+        let file = MarkerFile {
+            triangle_count: Some(a.triangle_count() + 7),
+            markers: vec![Marker {
+                name: "m".into(),
+                triangle: 3,
+                bone: None,
+            }],
+        };
+        let e = prepare(&a, MarkerSpec::File(&file, None)).err().unwrap();
+        assert!(e.to_string().contains("another mesh"), "{e}");
     }
 }

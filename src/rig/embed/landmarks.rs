@@ -8,7 +8,7 @@
 //! { "chin": 4512, "groin": [0.01, 0.93, 0.02], "l_wrist": 812, ... }
 //! ```
 
-use crate::fsutil::read_text;
+use crate::fsutil::read_small_text;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -247,7 +247,7 @@ impl Landmarks {
 
     /// Reads a landmark file.
     pub fn load(path: &Path, vertex_count: usize) -> Result<Landmarks, LandmarkError> {
-        Landmarks::parse(&read_text(path)?, path, vertex_count)
+        Landmarks::parse(&read_small_text(path)?, path, vertex_count)
     }
 
     /// Refuses landmark sets no rig can be embedded from, naming the

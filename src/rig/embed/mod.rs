@@ -50,6 +50,9 @@ pub enum EmbedError {
     /// Reading or writing failed.
     #[error(transparent)]
     Io(#[from] FsError),
+    /// The mesh cannot hold a rig: no triangles, or flat.
+    #[error("the mesh {0}: a rig needs a closed body surface")]
+    Mesh(String),
     /// No regressor could be fitted for a joint.
     #[error(
         "joint {joint}: no vertices around it span a volume (is the landmark on the right body part?)"
@@ -101,6 +104,37 @@ pub struct Embedding {
     pub regressors: Vec<Regressor>,
     /// What was assumed while embedding.
     pub notes: Vec<String>,
+}
+
+/// Refuses meshes no rig can be embedded in, with the reason (a face-less,
+/// tiny or flat mesh used to fail later with "joint pelvis: no vertices
+/// around it span a volume"; issue 18, item 17).
+pub fn check_body(mesh: &Mesh) -> Result<(), EmbedError> {
+    if mesh.triangle_count() == 0 {
+        return Err(EmbedError::Mesh(format!(
+            "has {} vertices and no triangles (a point cloud?)",
+            mesh.vertex_count()
+        )));
+    }
+    if mesh.vertex_count() < 4 || mesh.triangle_count() < 4 {
+        return Err(EmbedError::Mesh(format!(
+            "has only {} vertices and {} triangles",
+            mesh.vertex_count(),
+            mesh.triangle_count()
+        )));
+    }
+    let b = mesh.bounds();
+    let ext: Vec<f64> = (0..3).map(|k| b.max[k] - b.min[k]).collect();
+    let big = ext.iter().copied().fold(0.0, f64::max);
+    if let Some(k) = (0..3).find(|&k| ext[k].is_nan() || ext[k] <= 1e-3 * big) {
+        return Err(EmbedError::Mesh(format!(
+            "is flat: its extent along {} is {:.3e} against {:.3e} along the largest axis",
+            ["x", "y", "z"][k],
+            ext[k],
+            big
+        )));
+    }
+    Ok(())
 }
 
 /// The bone segments of an estimate, each with its driving joint: every
@@ -236,6 +270,7 @@ impl Embedding {
         parts: Option<Vec<u8>>,
     ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
+        check_body(mesh)?;
         // The vertical as `place_joints` takes it: +Y unless the body lies
         // down (groin to chin far from +Y).
         let up = match (

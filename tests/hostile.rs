@@ -1,0 +1,746 @@
+//! Hostile input, verb by verb (issue 18, items 12-17): every row runs the
+//! release binary on inputs the test writes into a temporary folder and
+//! expects exit code 1 (bad input) with words that say what is wrong —
+//! never 2 (a panic), never a signal (an aborted allocation), never a hang.
+//! Memory-hungry cases run under a small `SURFMOTION_MEMORY_LIMIT`, so a
+//! refusal must come before the allocation. The fixtures (a procedural
+//! clip, the demo's database) come from the binary itself: no ../shared
+//! needed, except for the rows at the end.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+/// What every row may refer to: `{walk}` (a 120-frame procedural BVH),
+/// `{db}` (the demo database: 6,304 vertices, walk + run), `{topo}` and
+/// `{lm}` (its topology and landmarks), `{d}` (the row's own folder).
+struct Fixture {
+    _tmp: tempfile::TempDir,
+    walk: PathBuf,
+    db: PathBuf,
+}
+
+fn fixture() -> &'static Fixture {
+    static F: OnceLock<Fixture> = OnceLock::new();
+    F.get_or_init(|| {
+        let tmp = tempfile::tempdir().unwrap();
+        let run = |args: &[&str]| {
+            let o = Command::new(common::bin())
+                .args(args)
+                .current_dir(tmp.path())
+                .output()
+                .unwrap();
+            assert!(
+                o.status.success(),
+                "{args:?}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        };
+        run(&["mocap", "procedural", "--gait", "walk", "-o", "walk.bvh"]);
+        run(&["demo", "-o", "demo"]);
+        Fixture {
+            walk: tmp.path().join("walk.bvh"),
+            db: tmp.path().join("demo/database"),
+            _tmp: tmp,
+        }
+    })
+}
+
+fn walk_text() -> String {
+    std::fs::read_to_string(&fixture().walk).unwrap()
+}
+
+/// The walk with its header line `key: ...` replaced.
+fn walk_with(line_start: &str, new: &str) -> Vec<u8> {
+    walk_text()
+        .lines()
+        .map(|l| if l.starts_with(line_start) { new } else { l })
+        .collect::<Vec<_>>()
+        .join("\n")
+        .into_bytes()
+}
+
+/// The walk's motion repeated to `frames` frames.
+fn long_walk(frames: usize) -> Vec<u8> {
+    let text = walk_text();
+    let lines: Vec<&str> = text.lines().collect();
+    let m = lines.iter().position(|l| *l == "MOTION").unwrap();
+    let data: Vec<&str> = lines[m + 3..]
+        .iter()
+        .copied()
+        .filter(|l| !l.trim().is_empty())
+        .collect();
+    let mut out: Vec<String> = lines[..=m].iter().map(|s| s.to_string()).collect();
+    out.push(format!("Frames: {frames}"));
+    out.push(lines[m + 2].to_string());
+    out.extend((0..frames).map(|k| data[k % data.len()].to_string()));
+    out.join("\n").into_bytes()
+}
+
+/// The walk with its first frame line's first value replaced.
+fn walk_value(v: &str) -> Vec<u8> {
+    let text = walk_text();
+    let lines: Vec<&str> = text.lines().collect();
+    let m = lines.iter().position(|l| *l == "MOTION").unwrap();
+    let mut out: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+    let first = &mut out[m + 3];
+    let rest = first.split_once(' ').unwrap().1.to_string();
+    *first = format!("{v} {rest}");
+    out.join("\n").into_bytes()
+}
+
+fn garbage(n: usize) -> Vec<u8> {
+    let mut x = 0x9E37_79B9_7F4A_7C15u64;
+    (0..n)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 24) as u8
+        })
+        .collect()
+}
+
+fn landmarks_json() -> String {
+    std::fs::read_to_string(fixture().db.join("landmarks.json")).unwrap()
+}
+
+/// The demo's landmarks with `f` applied to every point.
+fn landmarks_mapped(f: impl Fn(&str, [f64; 3]) -> [f64; 3]) -> Vec<u8> {
+    let v: serde_json::Value = serde_json::from_str(&landmarks_json()).unwrap();
+    let mut out = serde_json::Map::new();
+    for (k, p) in v.as_object().unwrap() {
+        let a: Vec<f64> = p
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let q = f(k, [a[0], a[1], a[2]]);
+        out.insert(k.clone(), serde_json::json!(q));
+    }
+    serde_json::to_vec(&out).unwrap()
+}
+
+fn manifest_with(extra: &str) -> Vec<u8> {
+    let base = std::fs::read_to_string(fixture().db.join("character.toml")).unwrap();
+    format!("{base}\n{extra}\n").into_bytes()
+}
+
+fn manifest_replacing(from: &str, to: &str) -> Vec<u8> {
+    std::fs::read_to_string(fixture().db.join("character.toml"))
+        .unwrap()
+        .replace(from, to)
+        .into_bytes()
+}
+
+/// One hostile case.
+struct Row {
+    what: &'static str,
+    /// Arguments; `{walk}`, `{db}`, `{topo}`, `{lm}`, `{d}` are replaced.
+    args: &'static str,
+    /// Files written into `{d}` first.
+    files: Vec<(&'static str, Vec<u8>)>,
+    /// Extra environment.
+    env: Vec<(&'static str, &'static str)>,
+    /// Copy the demo database to `{d}/db` first (files then overwrite).
+    copy_db: bool,
+    /// Words the message must hold (case-insensitive).
+    words: &'static [&'static str],
+}
+
+fn row(what: &'static str, args: &'static str, words: &'static [&'static str]) -> Row {
+    Row {
+        what,
+        args,
+        files: Vec::new(),
+        env: Vec::new(),
+        copy_db: false,
+        words,
+    }
+}
+
+impl Row {
+    fn file(mut self, name: &'static str, bytes: impl Into<Vec<u8>>) -> Row {
+        self.files.push((name, bytes.into()));
+        self
+    }
+    fn env(mut self, k: &'static str, v: &'static str) -> Row {
+        self.env.push((k, v));
+        self
+    }
+    fn with_db(mut self) -> Row {
+        self.copy_db = true;
+        self
+    }
+}
+
+/// A small budget: a refusal must come before the allocation.
+const SMALL: &str = "64M";
+
+fn rows() -> Vec<Row> {
+    let obj_ok = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
+    let mut r = vec![
+        // Item 12: unbounded allocations.
+        row("BVH Frame Time in milliseconds", "retarget --db {db} --mocap {d}/ms.bvh -o {d}/o.pc2", &["ms.bvh", "Frame Time", "milliseconds", "--input-fps"])
+            .file("ms.bvh", walk_with("Frame Time", "Frame Time: 33.333333")),
+        row("a clip too long for the memory budget (retarget)", "retarget --db {db} --mocap {d}/long.bvh -o {d}/o.pc2", &["3,000 frames", "6,304 vertices", "SURFMOTION_MEMORY_LIMIT"])
+            .file("long.bvh", long_walk(3000)).env("SURFMOTION_MEMORY_LIMIT", SMALL),
+        row("a clip too long for the memory budget (transfer)", "transfer --scan {topo} --landmarks {lm} --mocap {d}/long.bvh -o {d}/o.pc2", &["transfer", "3,000 frames", "SURFMOTION_MEMORY_LIMIT"])
+            .file("long.bvh", long_walk(3000)).env("SURFMOTION_MEMORY_LIMIT", SMALL),
+        row("a clip too long for the memory budget (synth)", "synth --mesh {topo} --landmarks {lm} --mocap {d}/long.bvh -o {d}/out", &["long.bvh", "3,000 frames", "SURFMOTION_MEMORY_LIMIT"])
+            .file("long.bvh", long_walk(3000)).env("SURFMOTION_MEMORY_LIMIT", SMALL),
+        row("a resample too big for the budget (mocap convert)", "mocap convert {d}/long.bvh {d}/o.bvh --fps 1000", &["long.bvh", "frames", "SURFMOTION_MEMORY_LIMIT"])
+            .file("long.bvh", long_walk(3000)).env("SURFMOTION_MEMORY_LIMIT", "1M"),
+        row("--input-fps 1e-4", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --input-fps 1e-4", &["1e-4", "frame rate", "[1, 1000]"]),
+        row("transfer --fps 1e6", "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --fps 1e6", &["1e6", "frame rate"]),
+        row("synth --fps 1e5", "synth --mesh {topo} --landmarks {lm} --mocap {walk} -o {d}/out --fps 1e5", &["1e5", "frame rate"]),
+        row("mocap convert --fps 1e9", "mocap convert {walk} {d}/o.bvh --fps 1e9", &["1e9", "frame rate"]),
+        row("mocap procedural --fps 1e9", "mocap procedural -o {d}/p --fps 1e9", &["1e9", "frame rate"]),
+        row("mesh convert --fps 1e9", "mesh convert {topo} {d}/o.glb --fps 1e9", &["1e9", "frame rate"]),
+        row("db init --fps 1e6", "db init {d}/x --mesh {topo} --fps 1e6", &["1e6", "frame rate"]),
+        row("manifest fps = 1e6 then retarget", "retarget --db {d}/db --mocap {walk} -o {d}/o.pc2", &["character.toml", "fps = 1000000", "frame rate"])
+            .file("db/character.toml", manifest_replacing("fps = 30.0", "fps = 1e6")),
+        row("manifest fps = 0", "db info {d}/db", &["character.toml", "fps = 0"])
+            .file("db/character.toml", manifest_replacing("fps = 30.0", "fps = 0.0")),
+        // Item 13: NaN and negative options (every numeric flag).
+        row("retarget --w-retr NaN", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --w-retr NaN", &["NaN", "finite"]),
+        row("retarget --t-skel -1", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --t-skel -1", &["-1", "≥ 0"]),
+        row("transfer --marker-margin NaN", "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --marker-margin NaN", &["NaN", "finite"]),
+        row("blend --alpha NaN", "blend {topo} {topo} -o {d}/o.obj --alpha NaN", &["NaN", "[0, 1]"]),
+        row("blend --alpha -0.5", "blend {topo} {topo} -o {d}/o.obj --alpha -0.5", &["-0.5", "[0, 1]"]),
+        row("repair --weld-tolerance -1", "repair {topo} -o {d}/o.obj --weld-tolerance -1", &["-1", "≥ 0"]),
+        row("synth --dynamics inf", "synth --mesh {topo} --landmarks {lm} --mocap {walk} -o {d}/out --dynamics inf", &["inf", "finite"]),
+        row("synth --seconds 0", "synth --mesh {topo} --landmarks {lm} --mocap {walk} -o {d}/out --seconds 0", &["0", "> 0"]),
+        row("mocap procedural --seconds -4", "mocap procedural -o {d}/p --seconds -4", &["-4", "> 0"]),
+        // Item 15: a marker count no mesh can hold.
+        row("transfer --marker-count 1000000", "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --marker-count 1000000", &["1000000 markers", "12604 triangles"]),
+        row("transfer --marker-count 0", "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --marker-count 0", &["0 markers"]),
+        // Item 16: accepted without a word.
+        row("all landmarks at one point", "rig embed {topo} --landmarks {d}/one.json -o {d}/r.json", &["one.json", "one point"])
+            .file("one.json", landmarks_mapped(|_, _| [0.0, 1.0, 0.0])),
+        row("a landmark 100 m outside the mesh", "transfer --scan {topo} --landmarks {d}/far.json --mocap {walk} -o {d}/o.pc2", &["chin", "outside the mesh"])
+            .file("far.json", landmarks_mapped(|k, p| if k == "chin" { [p[0], p[1] + 100.0, p[2]] } else { p })),
+        row("metre landmarks on a millimetre scan", "synth --mesh {d}/mm.obj --landmarks {lm} --mocap {walk} -o {d}/out", &["landmarks.json", "other units"])
+            .file("mm.obj", scaled_obj(1000.0)),
+        row("markers of another mesh", "transfer --scan {topo} --markers {d}/m.json --landmarks {lm} --mocap {walk} -o {d}/o.pc2", &["29170 triangles", "another mesh"])
+            .file("m.json", r#"{"triangle_count": 29170, "markers": [{"name": "a", "triangle": 5, "bone": "l_knee"}]}"#),
+        row("--fps 0", "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --fps 0", &["'0'", "frame rate"]),
+        row("--fps NaN", "mocap convert {walk} {d}/o.bvh --fps NaN", &["NaN", "frame rate"]),
+        row("a misspelt manifest section", "db info {d}/db", &["character.toml", "grahp"])
+            .file("db/character.toml", manifest_with("[grahp]\ntop_n = 2")),
+        row("a misspelt manifest key", "db info {d}/db", &["character.toml", "fsp"])
+            .file("db/character.toml", manifest_replacing("fps = 30.0", "fsp = 30.0")),
+        row("a remove rule past the end of a sequence", "db build {d}/db", &["walk:1 -> run:2000", "past the end"])
+            .with_db()
+            .file("db/character.toml", manifest_with("[graph]\nremove = [\"walk:1 -> run:2000\"]")),
+        row("repair of an all-zero-area mesh", "repair {d}/z.obj -o {d}/o.obj", &["z.obj", "zero area"])
+            .file("z.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 1 2 4\nf 2 3 4\n"),
+        row("repair of an all-degenerate mesh", "repair {d}/z.obj -o {d}/o.obj", &["z.obj", "degenerate"])
+            .file("z.obj", "v 0 0 0\nv 0 0 0\nv 0 0 0\nf 1 2 3\n"),
+        // Item 17: messages.
+        row("--fps -30 is a number, not a flag", "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --fps -30", &["-30", "frame rate"]),
+        row("--input-fps -30", "mocap positions {walk} --input-fps -30", &["-30", "frame rate"]),
+        row("a face-less mesh", "rig embed {d}/p.obj --landmarks {lm} -o {d}/r.json", &["p.obj", "no triangles"])
+            .file("p.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"),
+        row("a 3-vertex mesh", "synth --mesh {d}/t.obj --landmarks {lm} --mocap {walk} -o {d}/out", &["t.obj", "3 vertices"])
+            .file("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+        row("a flat mesh", "rig embed {d}/flat.obj --landmarks {lm} -o {d}/r.json", &["flat.obj", "flat"])
+            .file("flat.obj", flat_obj()),
+        row("Frame Time 1e300", "mocap convert {d}/f.bvh {d}/o.bvh", &["f.bvh", "Frame Time 1e300"])
+            .file("f.bvh", walk_with("Frame Time", "Frame Time: 1e300")),
+        row("landmarks from /dev/zero", "rig embed {topo} --landmarks /dev/zero -o {d}/r.json", &["/dev/zero", "limit"]),
+        row("markers from /dev/zero", "transfer --scan {topo} --markers /dev/zero --mocap {walk} -o {d}/o.pc2", &["/dev/zero", "limit"]),
+        row("a binary manifest", "db info {d}/db", &["character.toml", "binary"])
+            .file("db/character.toml", garbage(300)),
+    ];
+    // The sweep: verbs × malformed files, each message naming the file.
+    let bvh_cut = {
+        let t = walk_text();
+        t.as_bytes()[..t.find("JOINT LeftUpLeg").unwrap()].to_vec()
+    };
+    let malformed_clips: Vec<(&'static str, Vec<u8>)> = vec![
+        ("empty.bvh", Vec::new()),
+        ("garbage.bvh", garbage(4000)),
+        ("cut.bvh", bvh_cut),
+        ("nan.bvh", walk_value("nan")),
+        (
+            "huge.bvh",
+            walk_text()
+                .replacen("CHANNELS 6", "CHANNELS 4000000000", 1)
+                .into_bytes(),
+        ),
+        ("noframes.bvh", {
+            let t = walk_text();
+            t.as_bytes()[..t.find("MOTION").unwrap() + 7].to_vec()
+        }),
+    ];
+    let clip_verbs: [(&str, &'static str); 6] = [
+        ("inspect", "inspect {d}/CLIP"),
+        ("mocap positions", "mocap positions {d}/CLIP"),
+        ("mocap convert", "mocap convert {d}/CLIP {d}/o.bvh"),
+        ("mocap rigmap", "mocap rigmap {d}/CLIP"),
+        (
+            "retarget",
+            "retarget --db {db} --mocap {d}/CLIP -o {d}/o.pc2",
+        ),
+        (
+            "transfer",
+            "transfer --scan {topo} --landmarks {lm} --mocap {d}/CLIP -o {d}/o.pc2",
+        ),
+    ];
+    for (name, bytes) in &malformed_clips {
+        for (verb, args) in clip_verbs {
+            let args: &'static str = Box::leak(args.replace("CLIP", name).into_boxed_str());
+            let what: &'static str = Box::leak(format!("{verb} on {name}").into_boxed_str());
+            let words: &'static [&'static str] = Box::leak(Box::new([*name]));
+            r.push(row(what, args, words).file(name, bytes.clone()));
+        }
+    }
+    let malformed_meshes: Vec<(&'static str, Vec<u8>)> = vec![
+        ("empty.obj", Vec::new()),
+        ("garbage.obj", garbage(4000)),
+        ("nan.obj", format!("v nan 0 0\n{}", &obj_ok[8..]).into_bytes()),
+        ("index.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4000000000\n".to_vec()),
+        ("huge.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n".to_vec()),
+        ("garbage.ply", garbage(4000)),
+        ("huge.pc2", {
+            let mut b = b"POINTCACHE2\0".to_vec();
+            b.extend(1i32.to_le_bytes());
+            b.extend(2_000_000_000i32.to_le_bytes());
+            b.extend(0f32.to_le_bytes());
+            b.extend(1f32.to_le_bytes());
+            b.extend(2_000_000_000i32.to_le_bytes());
+            b
+        }),
+        ("garbage.glb", garbage(4000)),
+    ];
+    let mesh_verbs: [(&str, &'static str); 5] = [
+        ("inspect", "inspect {d}/MESH"),
+        ("mesh convert", "mesh convert {d}/MESH {d}/o.glb"),
+        ("repair", "repair {d}/MESH -o {d}/o.obj"),
+        ("render", "render {d}/MESH -o {d}/o.png"),
+        (
+            "rig embed",
+            "rig embed {d}/MESH --landmarks {lm} -o {d}/r.json",
+        ),
+    ];
+    for (name, bytes) in &malformed_meshes {
+        for (verb, args) in mesh_verbs {
+            let args: &'static str = Box::leak(args.replace("MESH", name).into_boxed_str());
+            let what: &'static str = Box::leak(format!("{verb} on {name}").into_boxed_str());
+            let words: &'static [&'static str] = Box::leak(Box::new([*name]));
+            r.push(row(what, args, words).file(name, bytes.clone()));
+        }
+    }
+    let malformed_json: Vec<(&'static str, Vec<u8>)> = vec![
+        ("empty.json", Vec::new()),
+        ("garbage.json", garbage(3000)),
+        ("array.json", b"[1, 2, 3]".to_vec()),
+        (
+            "nan.json",
+            landmarks_json().replacen("0.0", "NaN", 1).into_bytes(),
+        ),
+        ("cut.json", landmarks_json().as_bytes()[..40].to_vec()),
+    ];
+    let json_verbs: [(&str, &'static str); 4] = [
+        (
+            "rig embed --landmarks",
+            "rig embed {topo} --landmarks {d}/JSON -o {d}/r.json",
+        ),
+        (
+            "transfer --landmarks",
+            "transfer --scan {topo} --landmarks {d}/JSON --mocap {walk} -o {d}/o.pc2",
+        ),
+        (
+            "transfer --markers",
+            "transfer --scan {topo} --markers {d}/JSON --mocap {walk} -o {d}/o.pc2",
+        ),
+        (
+            "mocap positions --rig-map",
+            "mocap positions {walk} --rig-map {d}/JSON",
+        ),
+    ];
+    for (name, bytes) in &malformed_json {
+        for (verb, args) in json_verbs {
+            let args: &'static str = Box::leak(args.replace("JSON", name).into_boxed_str());
+            let what: &'static str = Box::leak(format!("{verb} {name}").into_boxed_str());
+            let words: &'static [&'static str] = Box::leak(Box::new([*name]));
+            r.push(row(what, args, words).file(name, bytes.clone()));
+        }
+    }
+    for (name, bytes) in [
+        ("empty", Vec::new()),
+        ("garbage", garbage(500)),
+        ("cut", manifest_with("")[..20].to_vec()),
+    ] {
+        for (verb, args) in [
+            ("db info", "db info {d}/db"),
+            ("db build", "db build {d}/db"),
+            ("graph", "graph {d}/db --json"),
+            (
+                "retarget",
+                "retarget --db {d}/db --mocap {walk} -o {d}/o.pc2",
+            ),
+        ] {
+            let what: &'static str =
+                Box::leak(format!("{verb} on a {name} manifest").into_boxed_str());
+            r.push(row(what, args, &["character.toml"]).file("db/character.toml", bytes.clone()));
+        }
+    }
+    r
+}
+
+fn scaled_obj(k: f64) -> Vec<u8> {
+    obj_map(|p| p.map(|x| x * k))
+}
+
+fn flat_obj() -> Vec<u8> {
+    obj_map(|p| [p[0], p[1], 0.0])
+}
+
+fn obj_map(f: impl Fn([f64; 3]) -> [f64; 3]) -> Vec<u8> {
+    let text = std::fs::read_to_string(fixture().db.join("topology.obj")).unwrap();
+    let mut out = String::with_capacity(text.len());
+    for l in text.lines() {
+        if let Some(rest) = l.strip_prefix("v ") {
+            let v: Vec<f64> = rest
+                .split_whitespace()
+                .map(|x| x.parse().unwrap())
+                .collect();
+            let q = f([v[0], v[1], v[2]]);
+            out.push_str(&format!("v {} {} {}\n", q[0], q[1], q[2]));
+        } else {
+            out.push_str(l);
+            out.push('\n');
+        }
+    }
+    out.into_bytes()
+}
+
+fn expand(s: &str, d: &Path) -> Vec<String> {
+    let f = fixture();
+    s.split_whitespace()
+        .map(|a| {
+            a.replace("{walk}", &f.walk.display().to_string())
+                .replace("{db}", &f.db.display().to_string())
+                .replace("{topo}", &f.db.join("topology.obj").display().to_string())
+                .replace("{lm}", &f.db.join("landmarks.json").display().to_string())
+                .replace("{d}", &d.display().to_string())
+        })
+        .collect()
+}
+
+/// Runs one row; returns what went wrong, if anything.
+fn check(r: &Row) -> Option<String> {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    if r.copy_db {
+        copy_dir(&fixture().db, &d.join("db"));
+    }
+    for (name, bytes) in &r.files {
+        let p = d.join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, bytes).unwrap();
+    }
+    let args = expand(r.args, d);
+    let t = Instant::now();
+    let mut cmd = Command::new(common::bin());
+    cmd.args(&args).current_dir(d).env_remove("SURFMOTION_LOG");
+    for (k, v) in &r.env {
+        cmd.env(k, v);
+    }
+    let o = cmd.output().unwrap();
+    let secs = t.elapsed();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let lower = err.to_lowercase();
+    let mut problems = Vec::new();
+    match o.status.code() {
+        Some(1) => {}
+        Some(c) => problems.push(format!("exit {c}")),
+        None => problems.push("killed by a signal".into()),
+    }
+    if lower.contains("internal error") || lower.contains("memory allocation") {
+        problems.push("internal error".into());
+    }
+    for w in r.words {
+        if !lower.contains(&w.to_lowercase()) {
+            problems.push(format!("no '{w}' in the message"));
+        }
+    }
+    if secs > Duration::from_secs(30) {
+        problems.push(format!("took {secs:?}"));
+    }
+    (!problems.is_empty()).then(|| {
+        format!(
+            "{}: {} (surfmotion {})\n    stderr: {}",
+            r.what,
+            problems.join(", "),
+            args.join(" "),
+            err.trim().replace('\n', "\n            ")
+        )
+    })
+}
+
+/// Every hostile row exits 1 with a message saying what is wrong.
+#[test]
+fn hostile_inputs_exit_1_with_a_message() {
+    let rows = rows();
+    assert!(rows.len() >= 100, "{} rows", rows.len());
+    let t = Instant::now();
+    let failures: Vec<String> = rows.iter().filter_map(check).collect();
+    eprintln!(
+        "{} hostile rows in {:.1} s, {} failed",
+        rows.len(),
+        t.elapsed().as_secs_f64(),
+        failures.len()
+    );
+    assert!(failures.is_empty(), "\n{}", failures.join("\n"));
+}
+
+/// Regression (issue 18, item 13): a tampered graph cache with a valid key
+/// (a transition moved past its sequence, a sequence that does not exist)
+/// is rebuilt with a warning; `graph --json`, `--dot` and `retarget` work.
+#[test]
+fn tampered_graph_cache_is_rebuilt() {
+    let f = fixture();
+    for (what, tamper) in [
+        ("frame", ("m", 5000)),
+        ("sequence", ("to", 7)),
+        ("edge", ("edge", 99)),
+    ] {
+        let tmp = tempfile::tempdir().unwrap();
+        let db = tmp.path().join("db");
+        copy_dir(&f.db, &db);
+        let gpath = db.join("cache/graph-shape.json");
+        let mut g: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&gpath).unwrap()).unwrap();
+        if tamper.0 == "edge" {
+            g["graph"]["edges"][0]["transitions"][0] = tamper.1.into();
+        } else {
+            g["graph"]["transitions"][0][tamper.0] = tamper.1.into();
+        }
+        std::fs::write(&gpath, serde_json::to_string(&g).unwrap()).unwrap();
+        let run = |args: &[&str]| {
+            let o = Command::new(common::bin())
+                .args(args)
+                .env_remove("SURFMOTION_LOG")
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&o.stderr).into_owned();
+            assert_eq!(o.status.code(), Some(0), "{what}: {args:?}: {err}");
+            (String::from_utf8_lossy(&o.stdout).into_owned(), err)
+        };
+        let dbs = db.to_str().unwrap();
+        let (json, err) = run(&["graph", dbs, "--json"]);
+        assert!(err.contains("rebuilding"), "{what}: {err}");
+        let out: serde_json::Value = serde_json::from_str(&json).unwrap();
+        let g = &out["graph"];
+        let seqs = g["sequences"].as_array().unwrap();
+        for t in g["transitions"].as_array().unwrap() {
+            let to = t["to"].as_u64().unwrap() as usize;
+            assert!(to < seqs.len(), "{what}");
+            assert!(t["n"].as_u64().unwrap() < seqs[to]["len"].as_u64().unwrap());
+        }
+        // The rebuilt cache is clean: no warning the second time.
+        let (dot, err) = run(&["graph", dbs, "--dot"]);
+        assert!(!err.contains("rebuilding"), "{what}: {err}");
+        assert!(!dot.contains("5000"), "{what}: {dot}");
+    }
+    // Retarget on a tampered cache.
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    copy_dir(&f.db, &db);
+    let gpath = db.join("cache/graph-shape.json");
+    let mut g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&gpath).unwrap()).unwrap();
+    g["graph"]["transitions"][0]["n"] = 100000.into();
+    std::fs::write(&gpath, serde_json::to_string(&g).unwrap()).unwrap();
+    let o = Command::new(common::bin())
+        .args(["retarget", "--db", db.to_str().unwrap(), "--mocap"])
+        .arg(&f.walk)
+        .arg("-o")
+        .arg(tmp.path().join("o.pc2"))
+        .env_remove("SURFMOTION_LOG")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("rebuilding"), "{err}");
+}
+
+/// Regression (issue 18, item 16): a `remove` rule that names no
+/// transition is reported, not silently ignored.
+#[test]
+fn graph_remove_rule_matching_nothing_is_reported() {
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    copy_dir(&fixture().db, &db);
+    let mut m = std::fs::read_to_string(db.join("character.toml")).unwrap();
+    m.push_str("\n[graph]\nremove = [\"walk:1 -> run:2\"]\n");
+    std::fs::write(db.join("character.toml"), m).unwrap();
+    let o = Command::new(common::bin())
+        .args(["db", "build", db.to_str().unwrap()])
+        .env_remove("SURFMOTION_LOG")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("walk:1 -> run:2") && err.contains("nothing removed"),
+        "{err}"
+    );
+}
+
+/// Regression (issue 18, item 17): 60 frames at `Frame Time: 0.0333333`
+/// convert to 60 frames at 30 fps, not 59.
+#[test]
+fn rounded_frame_time_keeps_every_frame() {
+    let tmp = tempfile::tempdir().unwrap();
+    let clip = tmp.path().join("c.bvh");
+    let text = String::from_utf8(long_walk(60)).unwrap();
+    let text: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("Frame Time") {
+                "Frame Time: 0.0333333"
+            } else {
+                l
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(&clip, text).unwrap();
+    let out = tmp.path().join("o.bvh");
+    let o = Command::new(common::bin())
+        .args(["mocap", "convert"])
+        .arg(&clip)
+        .arg(&out)
+        .args(["--fps", "30"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let written = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        written.contains("Frames: 60"),
+        "{}",
+        &written[written.find("MOTION").unwrap()..][..40]
+    );
+}
+
+/// Regression (issue 18, item 15): the largest marker count the mesh can
+/// hold (one per triangle) finishes promptly; one more is refused at once.
+#[test]
+fn marker_count_is_bounded_by_the_mesh() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let run = |count: &str| {
+        let t = Instant::now();
+        let o = Command::new(common::bin())
+            .args(["transfer", "--scan"])
+            .arg(f.db.join("topology.obj"))
+            .arg("--landmarks")
+            .arg(f.db.join("landmarks.json"))
+            .arg("--mocap")
+            .arg(&f.walk)
+            .args(["--marker-count", count, "-o"])
+            .arg(tmp.path().join("o.pc2"))
+            .output()
+            .unwrap();
+        (o, t.elapsed())
+    };
+    let (o, secs) = run("12605");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(secs < Duration::from_secs(5), "{secs:?}");
+    let (o, secs) = run("12604");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(secs < Duration::from_secs(60), "{secs:?}");
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            copy_dir(&p, &to.join(e.file_name()));
+        } else {
+            std::fs::copy(&p, to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
+/// Rows on the shared data (skipped without it): real files, same rules.
+#[test]
+fn hostile_inputs_on_shared_data() {
+    let Some(data) = common::data_dir() else {
+        return;
+    };
+    let cmu = data.join("mocap/cmu-bvh/01_01.bvh");
+    let samba = data.join("4d/samba/samba.obj");
+    let fixtures = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("o.pc2");
+    let cases: Vec<(&str, Vec<std::ffi::OsString>, &[&str])> = vec![
+        (
+            "CMU clip at --input-fps 1e-4",
+            vec![
+                "mocap".into(),
+                "convert".into(),
+                cmu.clone().into(),
+                tmp.path().join("o.bvh").into(),
+                "--input-fps".into(),
+                "1e-4".into(),
+            ],
+            &["1e-4", "frame rate"],
+        ),
+        (
+            "samba with 1,000,000 markers",
+            vec![
+                "transfer".into(),
+                "--scan".into(),
+                samba.clone().into(),
+                "--landmarks".into(),
+                fixtures.join("samba.landmarks.json").into(),
+                "--mocap".into(),
+                cmu.clone().into(),
+                "--marker-count".into(),
+                "1000000".into(),
+                "-o".into(),
+                out.clone().into(),
+            ],
+            &["1000000 markers", "triangles"],
+        ),
+        (
+            "samba landmarks on the crane",
+            vec![
+                "transfer".into(),
+                "--scan".into(),
+                data.join("4d/crane/crane.obj").into(),
+                "--markers".into(),
+                tmp.path().join("samba.markers.json").into(),
+                "--mocap".into(),
+                cmu.clone().into(),
+                "-o".into(),
+                out.clone().into(),
+            ],
+            &["another mesh"],
+        ),
+    ];
+    std::fs::write(
+        tmp.path().join("samba.markers.json"),
+        r#"{"triangle_count": 19938, "markers": [{"name": "a", "triangle": 5, "bone": "l_knee"}]}"#,
+    )
+    .unwrap();
+    let mut failures = Vec::new();
+    for (what, args, words) in cases {
+        let o = Command::new(common::bin()).args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).to_lowercase();
+        if o.status.code() != Some(1) || words.iter().any(|w| !err.contains(&w.to_lowercase())) {
+            failures.push(format!("{what}: {:?} {err}", o.status.code()));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
