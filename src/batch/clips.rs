@@ -2,6 +2,7 @@
 //! so every machine sees the same list), split into shards, and each clip's
 //! output path in the mirrored tree.
 
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 /// Output format of a batch.
@@ -53,42 +54,283 @@ impl Shard {
 }
 
 /// Every `.bvh` and `.amc` file under `dir` (any case), as paths relative
-/// to `dir`, sorted. Unreadable folders are skipped.
+/// to `dir`, sorted. Unreadable folders are skipped. Symbolic links are
+/// followed, but every folder is entered once and every clip listed once
+/// (by its canonical path), so a link back up the tree neither loops nor
+/// converts a clip many times. The real tree is walked before any linked
+/// folder, and a clip's own spelling wins over one through a link.
 pub fn find_clips(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     std::fs::read_dir(dir)?;
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        let Ok(rd) = std::fs::read_dir(&d) else {
+    // (relative path, canonical path, reached through a link)
+    let mut found: Vec<(PathBuf, PathBuf, bool)> = Vec::new();
+    let mut seen_dirs = HashSet::new();
+    let mut todo: Vec<(PathBuf, bool)> = vec![(PathBuf::new(), false)];
+    let mut linked: Vec<(PathBuf, bool)> = Vec::new();
+    while !todo.is_empty() || !linked.is_empty() {
+        if todo.is_empty() {
+            // Folders reached through links, after everything real.
+            linked.sort();
+            linked.reverse();
+            todo.append(&mut linked);
+        }
+        let Some((rel, via_link)) = todo.pop() else {
+            break;
+        };
+        let here = dir.join(&rel);
+        let Ok(canonical) = here.canonicalize() else {
             continue;
         };
-        for e in rd.flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p
-                .extension()
-                .and_then(|x| x.to_str())
-                .is_some_and(|x| x.eq_ignore_ascii_case("bvh") || x.eq_ignore_ascii_case("amc"))
-                && let Ok(rel) = p.strip_prefix(dir)
+        if !seen_dirs.insert(canonical) {
+            continue;
+        }
+        let Ok(rd) = std::fs::read_dir(&here) else {
+            continue;
+        };
+        let mut entries: Vec<_> = rd.flatten().collect();
+        entries.sort_by_key(|e| std::cmp::Reverse(e.file_name()));
+        for e in entries {
+            let r = rel.join(e.file_name());
+            let p = dir.join(&r);
+            let link = e.file_type().is_ok_and(|t| t.is_symlink());
+            // Follows links; a dangling link is skipped.
+            let Ok(meta) = std::fs::metadata(&p) else {
+                continue;
+            };
+            if meta.is_dir() {
+                if link {
+                    linked.push((r, true));
+                } else {
+                    todo.push((r, via_link));
+                }
+            } else if is_clip(&p)
+                && let Ok(c) = p.canonicalize()
             {
-                out.push(rel.to_path_buf());
+                found.push((r, c, via_link || link));
             }
         }
     }
+    // One spelling per clip: its own before any through a link, then the
+    // first in sorted order.
+    found.sort_by(|a, b| (a.2, &a.0).cmp(&(b.2, &b.0)));
+    let mut seen_files = HashSet::new();
+    let mut out: Vec<PathBuf> = found
+        .into_iter()
+        .filter(|(_, canonical, _)| seen_files.insert(canonical.clone()))
+        .map(|(rel, _, _)| rel)
+        .collect();
     out.sort();
     Ok(out)
+}
+
+fn is_clip(p: &Path) -> bool {
+    p.extension()
+        .and_then(|x| x.to_str())
+        .is_some_and(|x| x.eq_ignore_ascii_case("bvh") || x.eq_ignore_ascii_case("amc"))
 }
 
 /// Where clip `rel` goes under `out_dir`: the same folders, the clip's
 /// name with the format's extension (a folder for OBJ frames).
 pub fn output_path(out_dir: &Path, rel: &Path, format: Format) -> PathBuf {
-    let stem = out_dir.join(rel);
+    with_format(out_dir.join(rel).with_extension(""), format)
+}
+
+fn with_format(stem: PathBuf, format: Format) -> PathBuf {
+    let name = |ext: &str| {
+        let mut n = stem.file_name().unwrap_or_default().to_os_string();
+        n.push(ext);
+        stem.with_file_name(n)
+    };
     match format {
-        Format::Glb => stem.with_extension("glb"),
-        Format::Pc2 => stem.with_extension("pc2"),
-        Format::Obj => stem.with_extension(""),
+        Format::Glb => name(".glb"),
+        Format::Pc2 => name(".pc2"),
+        Format::Obj => stem,
     }
+}
+
+/// The files (or, for OBJ frames, the folder) a clip's output occupies.
+fn occupies(out: &Path, format: Format) -> Vec<PathBuf> {
+    match format {
+        Format::Pc2 => vec![out.to_path_buf(), out.with_extension("obj")],
+        _ => vec![out.to_path_buf()],
+    }
+}
+
+/// One clip of a batch and where it goes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Planned {
+    /// The clip, relative to the mocap folder.
+    pub clip: PathBuf,
+    /// Its output.
+    pub output: PathBuf,
+}
+
+/// Two or more clips that would write one output, and could not be told
+/// apart by their extensions; or an output that is already something else.
+#[derive(Debug, thiserror::Error)]
+#[error("{}", self.text())]
+pub struct CollisionError {
+    /// (output, the clips that want it or why it is taken).
+    pub collisions: Vec<(PathBuf, Vec<String>)>,
+}
+
+impl CollisionError {
+    fn text(&self) -> String {
+        let list: Vec<String> = self
+            .collisions
+            .iter()
+            .map(|(out, who)| format!("{}: {}", out.display(), who.join(", ")))
+            .collect();
+        format!(
+            "{} output{} of this batch cannot be written, nothing was converted: {}",
+            self.collisions.len(),
+            if self.collisions.len() == 1 { "" } else { "s" },
+            list.join("; ")
+        )
+    }
+}
+
+/// The plan of a batch: every clip of `all` (the whole library, before
+/// sharding, so every shard agrees) with its output under `out_dir`.
+///
+/// Clips whose outputs would collide — `x.bvh` and `x.amc` both making
+/// `x.glb`, or an OBJ-frame folder `walk/` of `walk.bvh` that is also the
+/// folder of the clips in `walk/` — get their extension in the name
+/// (`x-bvh.glb`, `x-amc.glb`, `walk-bvh/`); the second value lists these
+/// renames as `clip -> output` lines. Outputs that still collide, outputs
+/// that would take the name of the batch's own files (reports, lock,
+/// temporaries), and file outputs that exist as folders are refused before
+/// any work.
+pub fn plan(
+    all: &[PathBuf],
+    out_dir: &Path,
+    format: Format,
+) -> Result<(Vec<Planned>, Vec<String>), CollisionError> {
+    let mut plan: Vec<Planned> = all
+        .iter()
+        .map(|c| Planned {
+            clip: c.clone(),
+            output: output_path(out_dir, c, format),
+        })
+        .collect();
+    let mut renamed = Vec::new();
+    let clashing = clashes(&plan, out_dir, format);
+    for &i in clashing.keys() {
+        let c = &plan[i].clip;
+        let ext = c.extension().unwrap_or_default().to_string_lossy();
+        let mut stem = c.file_stem().unwrap_or_default().to_os_string();
+        stem.push(format!("-{ext}"));
+        let out = with_format(out_dir.join(c).with_file_name(stem), format);
+        renamed.push(format!("{} -> {}", c.display(), out.display()));
+        plan[i].output = out;
+    }
+    let mut left: BTreeMap<PathBuf, Vec<String>> = BTreeMap::new();
+    for (i, why) in clashes(&plan, out_dir, format) {
+        left.entry(plan[i].output.clone())
+            .or_default()
+            .push(format!("{} ({why})", plan[i].clip.display()));
+    }
+    if format != Format::Obj {
+        for p in &plan {
+            for o in occupies(&p.output, format)
+                .into_iter()
+                .filter(|o| o.is_dir())
+            {
+                left.entry(o).or_default().push(format!(
+                    "{} (a folder of that name exists where its file goes; remove it or write elsewhere)",
+                    p.clip.display()
+                ));
+            }
+        }
+    }
+    if !left.is_empty() {
+        return Err(CollisionError {
+            collisions: left.into_iter().collect(),
+        });
+    }
+    Ok((plan, renamed))
+}
+
+/// Clips whose output collides with another's, with a batch file, or
+/// contains another's: index → why.
+fn clashes(plan: &[Planned], out_dir: &Path, format: Format) -> BTreeMap<usize, String> {
+    let mut owner: HashMap<PathBuf, Vec<usize>> = HashMap::new();
+    for (i, p) in plan.iter().enumerate() {
+        for o in occupies(&p.output, format) {
+            owner.entry(o).or_default().push(i);
+        }
+    }
+    let mut bad = BTreeMap::new();
+    for (o, who) in &owner {
+        if who.len() > 1 {
+            let names: Vec<String> = who
+                .iter()
+                .map(|&i| plan[i].clip.display().to_string())
+                .collect();
+            for &i in who {
+                bad.insert(i, format!("{} all write {}", names.join(", "), o.display()));
+            }
+        }
+        if reserved(o, out_dir) {
+            for &i in who {
+                bad.insert(
+                    i,
+                    format!("{} is a name of the batch's own files", o.display()),
+                );
+            }
+        }
+    }
+    // An output that is a folder holding other outputs (OBJ frames of
+    // `walk.bvh` and the clips in `walk/`).
+    let mut holds: HashMap<&Path, usize> = HashMap::new();
+    for (o, who) in &owner {
+        for a in o.ancestors().skip(1) {
+            if a == out_dir || !a.starts_with(out_dir) {
+                break;
+            }
+            holds.entry(a).or_insert(who[0]);
+        }
+    }
+    for (i, p) in plan.iter().enumerate() {
+        if let Some(&j) = holds.get(p.output.as_path()) {
+            bad.insert(
+                i,
+                format!(
+                    "its output folder {} would also hold the output of {}",
+                    p.output.display(),
+                    plan[j].clip.display()
+                ),
+            );
+        }
+    }
+    bad
+}
+
+/// Names the batch itself writes in its output folder: reports and locks
+/// (`batch*.json/html/svg/lock` at the top) and temporaries anywhere.
+fn reserved(o: &Path, out_dir: &Path) -> bool {
+    let name = o.file_name().unwrap_or_default().to_string_lossy();
+    if is_temporary(&name) {
+        return true;
+    }
+    let ext = o.extension().unwrap_or_default().to_string_lossy();
+    o.parent() == Some(out_dir)
+        && name.starts_with("batch")
+        && matches!(ext.as_ref(), "json" | "html" | "svg" | "lock")
+}
+
+/// Prefix of every temporary file or folder this crate writes.
+pub const TEMP_PREFIX: &str = ".surfmotion-";
+
+/// True for the name of a temporary this crate writes: an atomic write's
+/// `.surfmotion-XXXXXX.part` file, or a batch's `.surfmotion-XXXXXX-partial`
+/// folder of OBJ frames.
+pub fn is_temporary(name: &str) -> bool {
+    name.strip_prefix(TEMP_PREFIX)
+        .and_then(|r| {
+            r.strip_suffix(".part")
+                .or_else(|| r.strip_suffix("-partial"))
+        })
+        .is_some_and(|mid| !mid.is_empty() && mid.bytes().all(|b| b.is_ascii_alphanumeric()))
 }
 
 #[cfg(test)]
@@ -108,6 +350,69 @@ mod tests {
         assert!(Shard::parse("4/3").is_err());
         assert!(Shard::parse("a/b").is_err());
         assert!(Shard::parse("3").is_err());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn links_are_followed_once_and_real_spellings_win() {
+        let d = tempfile::tempdir().unwrap();
+        let lib = d.path();
+        std::fs::create_dir_all(lib.join("sub/deep")).unwrap();
+        for f in ["b.bvh", "sub/a.bvh", "sub/deep/c.AMC", "sub/notes.txt"] {
+            std::fs::write(lib.join(f), b"x").unwrap();
+        }
+        let outside = tempfile::tempdir().unwrap();
+        std::fs::write(outside.path().join("o.bvh"), b"x").unwrap();
+        let link = |to: &Path, at: &str| std::os::unix::fs::symlink(to, lib.join(at)).unwrap();
+        link(Path::new(".."), "sub/loop");
+        link(Path::new("../.."), "sub/deep/up");
+        link(Path::new("sub/a.bvh"), "also_a.bvh");
+        link(Path::new("sub"), "a_linked");
+        link(outside.path(), "outside");
+        link(Path::new("nowhere"), "dangling.bvh");
+        let clips = find_clips(lib).unwrap();
+        let want: Vec<PathBuf> = ["b.bvh", "outside/o.bvh", "sub/a.bvh", "sub/deep/c.AMC"]
+            .map(PathBuf::from)
+            .to_vec();
+        assert_eq!(clips, want);
+    }
+
+    #[test]
+    fn colliding_outputs_are_named_apart_or_refused() {
+        let out = Path::new("out");
+        let clips: Vec<PathBuf> = ["x.bvh", "x.amc", "walk.bvh", "walk/a.bvh", "y.bvh"]
+            .map(PathBuf::from)
+            .to_vec();
+        let (p, renamed) = plan(&clips, out, Format::Obj).unwrap();
+        let outs: Vec<&Path> = p.iter().map(|p| p.output.as_path()).collect();
+        assert_eq!(
+            outs,
+            [
+                "out/x-bvh",
+                "out/x-amc",
+                "out/walk-bvh",
+                "out/walk/a",
+                "out/y"
+            ]
+            .map(Path::new)
+        );
+        assert_eq!(renamed.len(), 3);
+        let (p, renamed) = plan(&clips, out, Format::Glb).unwrap();
+        assert_eq!(p[2].output, Path::new("out/walk.glb"));
+        assert_eq!(renamed.len(), 2);
+        // Still one output for two clips: refused.
+        let clash: Vec<PathBuf> = ["x.bvh", "x.BVH", "x-bvh.bvh"].map(PathBuf::from).to_vec();
+        let e = plan(&clash, out, Format::Glb).unwrap_err();
+        assert!(e.to_string().contains("x-bvh.glb"), "{e}");
+        // The batch's own names are not outputs.
+        let own: Vec<PathBuf> = ["batch.json.bvh", ".surfmotion-ab12CD-partial.bvh"]
+            .map(PathBuf::from)
+            .to_vec();
+        let (p, _) = plan(&own, out, Format::Obj).unwrap();
+        assert_eq!(p[0].output, Path::new("out/batch.json-bvh"));
+        assert!(is_temporary(".surfmotion-ab12CD-partial"));
+        assert!(!is_temporary(".surfmotion-ab12CD-partial-bvh"));
+        assert_eq!(p[1].output, Path::new("out/.surfmotion-ab12CD-partial-bvh"));
     }
 
     #[test]

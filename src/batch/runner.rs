@@ -4,10 +4,11 @@
 //!
 //! Outputs are complete or absent: single files are written atomically;
 //! PC2 counts as complete only with its topology OBJ beside it; an OBJ
-//! folder is written under a temporary name (`NAME-partial`) and renamed
-//! when finished.
+//! folder is written under a unique temporary name
+//! (`.surfmotion-XXXXXX-partial`, removed on failure) and renamed when
+//! finished.
 
-use super::clips::{Format, output_path};
+use super::clips::{Format, Planned, TEMP_PREFIX};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -72,6 +73,10 @@ pub struct ClipOutcome {
     pub error_cm: Option<f64>,
     /// Why it failed.
     pub reason: Option<String>,
+    /// True when frames, seconds and error of a skipped clip come from the
+    /// report of the run that wrote its output.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub earlier: bool,
 }
 
 /// True when the output of a clip exists in full.
@@ -83,20 +88,19 @@ pub fn complete(out: &Path, format: Format) -> bool {
     }
 }
 
-/// Converts `clips` (relative to `src`) into `out_dir`. `convert(clip,
-/// output)` does one clip and must write `output` (for OBJ folders, the
-/// folder it is given); `done` is called as each clip ends, from any
-/// thread. Outcomes come back in clip order.
+/// Converts the `clips` of a plan (relative to `src`) into their outputs.
+/// `convert(clip, output)` does one clip and must write `output` (for OBJ
+/// folders, the folder it is given); `done` is called as each clip ends,
+/// from any thread. Outcomes come back in clip order.
 pub fn run(
     src: &Path,
-    clips: &[PathBuf],
-    out_dir: &Path,
+    clips: &[Planned],
     opts: &RunOptions,
     convert: &(dyn Fn(&Path, &Path) -> Result<Converted, String> + Sync),
     done: &(dyn Fn(&ClipOutcome) + Sync),
 ) -> Vec<ClipOutcome> {
-    let one = |rel: &PathBuf| {
-        let out = output_path(out_dir, rel, opts.format);
+    let one = |p: &Planned| {
+        let (rel, out) = (&p.clip, &p.output);
         let t = Instant::now();
         let mut o = ClipOutcome {
             clip: rel.clone(),
@@ -106,12 +110,13 @@ pub fn run(
             seconds: 0.0,
             error_cm: None,
             reason: None,
+            earlier: false,
         };
-        if !opts.force && complete(&out, opts.format) {
+        if !opts.force && complete(out, opts.format) {
             done(&o);
             return o;
         }
-        let r = convert_one(&src.join(rel), &out, opts.format, convert);
+        let r = convert_one(&src.join(rel), out, opts.format, convert);
         o.seconds = t.elapsed().as_secs_f64();
         match r {
             Ok(c) => {
@@ -145,21 +150,21 @@ fn convert_one(
     if let Some(parent) = out.parent() {
         std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
     }
-    let target = match format {
-        Format::Obj => {
-            // A sibling folder with no dot in its name, so the writer sees
-            // a folder (not an extension) whatever the clip is called.
-            let name = out
-                .file_name()
-                .map(|n| n.to_string_lossy().replace('.', "_"))
-                .unwrap_or_default();
-            let t = out.with_file_name(format!("{name}-partial"));
-            let _ = std::fs::remove_dir_all(&t);
-            t
-        }
-        _ => out.to_path_buf(),
+    // OBJ frames go to a fresh folder of their own beside the output (no
+    // dot after the prefix, so the writer sees a folder, not an extension),
+    // removed with its contents if the clip fails.
+    let partial = match format {
+        Format::Obj => Some(
+            tempfile::Builder::new()
+                .prefix(TEMP_PREFIX)
+                .suffix("-partial")
+                .tempdir_in(out.parent().unwrap_or(Path::new(".")))
+                .map_err(|e| format!("{}: {e}", out.display()))?,
+        ),
+        _ => None,
     };
-    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| convert(clip, &target)))
+    let target = partial.as_ref().map_or(out, |t| t.path());
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| convert(clip, target)))
         .unwrap_or_else(|p| {
             let msg = p
                 .downcast_ref::<&str>()
@@ -168,9 +173,13 @@ fn convert_one(
                 .unwrap_or_default();
             Err(format!("internal error: {msg}"))
         })?;
-    if format == Format::Obj {
-        let _ = std::fs::remove_dir_all(out);
-        std::fs::rename(&target, out).map_err(|e| format!("{}: {e}", out.display()))?;
+    if let Some(t) = partial {
+        if out.is_dir() {
+            std::fs::remove_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+        }
+        std::fs::rename(t.path(), out).map_err(|e| format!("{}: {e}", out.display()))?;
+        // Renamed away: nothing left for the guard to remove.
+        let _ = t.keep();
     }
     Ok(r)
 }
@@ -182,7 +191,8 @@ mod tests {
     #[test]
     fn failures_and_panics_are_outcomes_and_finished_clips_are_skipped() {
         let dir = tempfile::tempdir().unwrap();
-        let clips: Vec<PathBuf> = ["a.bvh", "sub/b.bvh", "c.bvh"].map(PathBuf::from).to_vec();
+        let names: Vec<PathBuf> = ["a.bvh", "sub/b.bvh", "c.bvh"].map(PathBuf::from).to_vec();
+        let (clips, _) = crate::batch::clips::plan(&names, dir.path(), Format::Glb).unwrap();
         let opts = RunOptions {
             jobs: 2,
             force: false,
@@ -202,16 +212,7 @@ mod tests {
                 }
             }
         };
-        let go = || {
-            run(
-                Path::new("src"),
-                &clips,
-                dir.path(),
-                &opts,
-                &convert,
-                &|_| {},
-            )
-        };
+        let go = || run(Path::new("src"), &clips, &opts, &convert, &|_| {});
         let r = go();
         let st: Vec<ClipStatus> = r.iter().map(|o| o.status).collect();
         assert_eq!(

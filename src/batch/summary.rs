@@ -1,10 +1,17 @@
 //! The batch report in the output folder: `batch.json` (everything),
 //! `batch.svg` (per-clip time and error bars) and `batch.html` (a table of
 //! clips with the plot), all written atomically.
+//!
+//! The report describes every output of the run's clips, not only those
+//! converted now: a clip skipped because its output is complete keeps the
+//! frames, time and error its earlier run recorded ([`Earlier`]). While the
+//! batch runs, `batch.json` is rewritten after each clip (`"finished":
+//! false`), so a killed run leaves a valid report of what it finished.
 
 use super::runner::{ClipOutcome, ClipStatus};
 use crate::fsutil::{FsError, write_bytes_atomic};
 use serde::Serialize;
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -13,6 +20,9 @@ use std::path::{Path, PathBuf};
 pub struct Summary {
     /// What was run (e.g. `retarget --db DIR`).
     pub what: String,
+    /// False while the batch runs (and in the report of a killed run):
+    /// `outcomes` then lists the clips finished so far.
+    pub finished: bool,
     /// Clips in this run (this shard).
     pub clips: usize,
     /// Converted now.
@@ -21,13 +31,16 @@ pub struct Summary {
     pub skipped: usize,
     /// Failed.
     pub failed: usize,
-    /// Frames written now.
+    /// Frames in the outputs listed (converted now, or skipped with an
+    /// earlier report's count).
     pub frames: usize,
+    /// Frames written by this run.
+    pub frames_written: usize,
     /// Wall-clock seconds.
     pub seconds: f64,
     /// Clips converted per minute (done only).
     pub clips_per_minute: f64,
-    /// Output frames per second (done only).
+    /// Output frames written per second (done only).
     pub frames_per_second: f64,
     /// Parallel jobs.
     pub jobs: usize,
@@ -49,16 +62,23 @@ impl Summary {
         let count = |s| outcomes.iter().filter(|o| o.status == s).count();
         let done = count(ClipStatus::Done);
         let frames = outcomes.iter().map(|o| o.frames).sum();
+        let frames_written = outcomes
+            .iter()
+            .filter(|o| o.status == ClipStatus::Done)
+            .map(|o| o.frames)
+            .sum();
         Summary {
             what,
+            finished: true,
             clips: outcomes.len(),
             done,
             skipped: count(ClipStatus::Skipped),
             failed: count(ClipStatus::Failed),
             frames,
+            frames_written,
             seconds,
             clips_per_minute: 60.0 * done as f64 / seconds.max(1e-9),
-            frames_per_second: frames as f64 / seconds.max(1e-9),
+            frames_per_second: frames_written as f64 / seconds.max(1e-9),
             jobs,
             shard,
             outcomes,
@@ -70,14 +90,15 @@ impl Summary {
     /// One line of totals: clips converted, skipped, failed, frames, speed.
     pub fn line(&self) -> String {
         format!(
-            "{}: {} clips: {} converted, {} already done, {} failed; {} frames in {:.1} s ({:.1} clips/min, {:.0} frames/s, {} jobs{})",
+            "{}: {} clips: {} converted, {} already done, {} failed; {} frames written in {:.1} s, {} in the outputs ({:.1} clips/min, {:.0} frames/s, {} jobs{})",
             self.what,
             self.clips,
             self.done,
             self.skipped,
             self.failed,
-            self.frames,
+            self.frames_written,
             self.seconds,
+            self.frames,
             self.clips_per_minute,
             self.frames_per_second,
             self.jobs,
@@ -174,9 +195,14 @@ pub fn html(s: &Summary) -> String {
             ClipStatus::Skipped => "skipped",
             ClipStatus::Failed => "failed",
         };
+        let label = if o.earlier {
+            "skipped (done earlier)"
+        } else {
+            status
+        };
         let _ = writeln!(
             h,
-            "<tr class=\"{status}\"><td>{}</td><td>{status}</td><td>{}</td><td>{:.2}</td><td>{}</td><td>{}</td></tr>",
+            "<tr class=\"{status}\"><td>{}</td><td>{label}</td><td>{}</td><td>{:.2}</td><td>{}</td><td>{}</td></tr>",
             esc(&o.clip.display().to_string()),
             o.frames,
             o.seconds,
@@ -195,10 +221,7 @@ pub fn html(s: &Summary) -> String {
 /// carry the shard, `batch-2of8.json`, so shards sharing a folder do not
 /// overwrite each other). Returns the files.
 pub fn write_summary(dir: &Path, s: &Summary) -> Result<Vec<PathBuf>, FsError> {
-    let stem = match &s.shard {
-        Some(x) => format!("batch-{}", x.replace('/', "of")),
-        None => "batch".into(),
-    };
+    let stem = report_stem(s.shard.as_deref());
     let json = dir.join(format!("{stem}.json"));
     let svg = dir.join(format!("{stem}.svg"));
     let page = dir.join(format!("{stem}.html"));
@@ -207,4 +230,97 @@ pub fn write_summary(dir: &Path, s: &Summary) -> Result<Vec<PathBuf>, FsError> {
     write_bytes_atomic(&svg, plot_svg(s).as_bytes())?;
     write_bytes_atomic(&page, html(s).as_bytes())?;
     Ok(vec![json, page, svg])
+}
+
+/// What earlier reports in an output folder recorded for the outputs they
+/// converted: output path → (clip, frames, seconds, error).
+#[derive(Debug, Default)]
+pub struct Earlier {
+    by_output: HashMap<PathBuf, (PathBuf, usize, f64, Option<f64>)>,
+}
+
+impl Earlier {
+    /// Reads every `batch*.json` in `dir` (any shard split, so a folder
+    /// first converted whole and then by shards keeps its records); the
+    /// report named `own` wins over the others. Unreadable reports are
+    /// ignored.
+    pub fn load(dir: &Path, own: &str) -> Earlier {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+            .map(|rd| {
+                rd.flatten()
+                    .map(|e| e.path())
+                    .filter(|p| {
+                        let n = p.file_name().unwrap_or_default().to_string_lossy();
+                        n.starts_with("batch") && n.ends_with(".json")
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        // Own report last, so its records overwrite the others'.
+        files.sort_by_key(|p| (p.file_name().is_some_and(|n| n == own), p.clone()));
+        let mut e = Earlier::default();
+        for f in files {
+            let Ok(text) = std::fs::read_to_string(&f) else {
+                continue;
+            };
+            let Ok(v) = serde_json::from_str::<serde_json::Value>(&text) else {
+                continue;
+            };
+            for o in v["outcomes"].as_array().into_iter().flatten() {
+                let done = o["status"] == "done" || o["earlier"] == true;
+                let (Some(clip), Some(out), Some(frames)) = (
+                    o["clip"].as_str(),
+                    o["output"].as_str(),
+                    o["frames"].as_u64(),
+                ) else {
+                    continue;
+                };
+                if done {
+                    e.by_output.insert(
+                        PathBuf::from(out),
+                        (
+                            PathBuf::from(clip),
+                            frames as usize,
+                            o["seconds"].as_f64().unwrap_or(0.0),
+                            o["error_cm"].as_f64(),
+                        ),
+                    );
+                }
+            }
+        }
+        e
+    }
+
+    /// A skipped outcome with what the run that wrote its output recorded
+    /// (the same clip to the same output); others unchanged.
+    pub fn fill(&self, o: &mut ClipOutcome) {
+        if o.status != ClipStatus::Skipped {
+            return;
+        }
+        if let Some((clip, frames, seconds, error)) = self.by_output.get(&o.output)
+            && *clip == o.clip
+        {
+            o.frames = *frames;
+            o.seconds = *seconds;
+            o.error_cm = *error;
+            o.earlier = true;
+        }
+    }
+}
+
+/// The name of a run's report files without extension: `batch`, or
+/// `batch-2of8` for shard 2/8.
+pub fn report_stem(shard: Option<&str>) -> String {
+    match shard {
+        Some(x) => format!("batch-{}", x.replace('/', "of")),
+        None => "batch".into(),
+    }
+}
+
+/// Writes only `batch.json` (the report while the batch runs).
+pub fn write_json(dir: &Path, s: &Summary) -> Result<PathBuf, FsError> {
+    let json = dir.join(format!("{}.json", report_stem(s.shard.as_deref())));
+    let text = serde_json::to_string_pretty(s).unwrap_or_default();
+    write_bytes_atomic(&json, text.as_bytes())?;
+    Ok(json)
 }

@@ -1,24 +1,25 @@
 //! `surfmotion batch`: convert a whole mocap library, onto a 4D character
-//! (`--db`) or a scan (`--scan --landmarks`).
+//! (`--db`) or a scan (`--scan --landmarks`), with the per-clip options of
+//! `retarget` and `transfer` (the same option groups, flattened).
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::time::Instant;
 use surfmotion::batch::{
-    ClipOutcome, ClipStatus, Converted, Format, RunOptions, Shard, Summary, find_clips, run,
-    write_summary,
+    ClipOutcome, ClipStatus, Converted, Earlier, Format, RunOptions, Shard, Summary,
+    clean_temporaries, find_clips, lock_folder, plan, report_stem, run, write_json, write_summary,
 };
 use surfmotion::eval::velocity_error;
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::save_sequence;
+use surfmotion::mocap::LoadOptions;
 use surfmotion::retarget::character::Character;
 use surfmotion::retarget::query::{load_mocap, to_character};
 use surfmotion::retarget::{RetargetOptions, synthesise};
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::skeleton::Pose;
-use surfmotion::transfer::{
-    Job, MarkerOptions, MarkerSpec, TransferOptions, mocap_motion, prepare, transfer,
-};
+use surfmotion::transfer::{Job, MarkerSpec, TransferOptions, mocap_motion, prepare, transfer};
 
 /// Arguments of `batch`.
 #[derive(clap::Args)]
@@ -34,11 +35,12 @@ pub struct Args {
     #[arg(long)]
     pub landmarks: Option<PathBuf>,
     /// The folder of clips: every .bvh and .amc below it (AMC clips use the
-    /// .asf beside them).
+    /// .asf beside them). Links are followed; each clip is converted once.
     #[arg(long)]
     pub mocap_dir: PathBuf,
     /// Output folder: one output per clip in the same folder tree, plus
-    /// batch.json, batch.html and batch.svg.
+    /// batch.json, batch.html and batch.svg. One run at a time writes there
+    /// (shards of one split may share it): batch.lock holds its pid.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Clips converted at once (default: the number of cores).
@@ -54,33 +56,38 @@ pub struct Args {
     /// Redo clips whose output is already complete.
     #[arg(long)]
     pub force: bool,
-    /// Output frame rate for scans (a database uses its own).
-    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
-    pub fps: f64,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+    /// How each clip is read (as for `retarget` and `transfer`).
+    #[command(flatten)]
+    pub clip: super::ClipOpts,
+    /// Options of a transfer job (with --scan).
+    #[command(flatten)]
+    pub scan_job: super::transfer::JobOpts,
+    /// Options of a retarget job (with --db).
+    #[command(flatten)]
+    pub retarget_job: super::retarget::JobOpts,
 }
 
 type Convert = Box<dyn Fn(&Path, &Path) -> Result<Converted, String> + Sync>;
 
-fn retarget_converter(db: &Path) -> anyhow::Result<(Convert, String)> {
+/// The retarget job of one clip, `retarget`'s options `opts` and `load`.
+fn retarget_converter(
+    db: &Path,
+    opts: RetargetOptions,
+    load: LoadOptions,
+) -> anyhow::Result<(Convert, String)> {
     let ch = Character::load(db, &super::db::Bars::new())?;
     let what = format!("retarget --db {}", db.display());
     let f = move |clip: &Path, out: &Path| -> Result<Converted, String> {
         let fps = ch.manifest.fps;
-        let mocap = load_mocap(clip, &Default::default(), fps).map_err(|e| e.to_string())?;
+        let mocap = load_mocap(clip, &load, fps).map_err(|e| e.to_string())?;
         if mocap.poses.is_empty() {
             return Err("the clip has no frames".into());
         }
-        let r = synthesise(
-            &ch,
-            &mocap.poses,
-            &mocap.reference,
-            fps,
-            &RetargetOptions::default(),
-        )
-        .map_err(|e| e.to_string())?;
+        let r = synthesise(&ch, &mocap.poses, &mocap.reference, fps, &opts)
+            .map_err(|e| e.to_string())?;
         let frames = r.positions.len() / ch.n.max(1);
         let query = to_character(&ch.rest_pose, &mocap.reference, &mocap.poses);
         let skel: Vec<Pose> = r
@@ -100,16 +107,23 @@ fn retarget_converter(db: &Path) -> anyhow::Result<(Convert, String)> {
     Ok((Box::new(f), what))
 }
 
-fn transfer_converter(scan: &str, landmarks: &Path, fps: f64) -> anyhow::Result<(Convert, String)> {
-    let seq = surfmotion::mesh::io::load_sequence(scan, &Default::default())?;
-    let mesh = seq.frame_mesh(0);
+/// The transfer job of one clip onto `scan` (prepared and factored once),
+/// with `transfer`'s options `job` and `load`.
+fn transfer_converter(
+    scan: &str,
+    landmarks: &Path,
+    job: super::transfer::ScanJob,
+    load: LoadOptions,
+) -> anyhow::Result<(Convert, String)> {
+    let mesh = super::load_mesh_groups(scan, &job.groups)?;
     let lm = Landmarks::load(landmarks, mesh.vertex_count())?;
-    let prepared = prepare(&mesh, MarkerSpec::Landmarks(&lm, MarkerOptions::default()))?;
+    let prepared = prepare(&mesh, MarkerSpec::Landmarks(&lm, job.markers))?;
+    let fps = job.fps;
     // Factored once for every clip.
     let (confluent, _) = Job::factor_mocap(&prepared)?;
     let what = format!("transfer --scan {scan}");
     let f = move |clip: &Path, out: &Path| -> Result<Converted, String> {
-        let mocap = load_mocap(clip, &Default::default(), fps).map_err(|e| e.to_string())?;
+        let mocap = load_mocap(clip, &load, fps).map_err(|e| e.to_string())?;
         if mocap.poses.is_empty() {
             return Err("the clip has no frames".into());
         }
@@ -144,30 +158,130 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         Some(s) => Some(Shard::parse(s).map_err(anyhow::Error::msg)?),
         None => None,
     };
+    if a.db.is_some() {
+        anyhow::ensure!(
+            a.scan_job.is_default(),
+            "--group, --marker-count, --marker-margin and --fps apply to --scan (a database has its own frame rate)"
+        );
+    } else {
+        anyhow::ensure!(
+            a.retarget_job.is_default(),
+            "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db"
+        );
+    }
+    let load = a.clip.load_options()?;
+    let scan_job = a.scan_job.job()?;
+    let retarget_opts = a.retarget_job.options();
     let all =
         find_clips(&a.mocap_dir).map_err(|e| anyhow::anyhow!("{}: {e}", a.mocap_dir.display()))?;
+    // Outputs of the whole library, so every shard names them alike; clips
+    // that would write one output are renamed or refused before any work.
+    let (planned, renamed) = plan(&all, &a.output, a.format)?;
+    if !renamed.is_empty() {
+        eprintln!(
+            "{} clips would write the same output; named with their extension:\n  {}",
+            renamed.len(),
+            renamed.join("\n  ")
+        );
+    }
     let clips = match shard {
-        Some(s) => s.select(&all),
-        None => all,
-    };
-    let (convert, what) = match (&a.db, &a.scan, &a.landmarks) {
-        (Some(db), _, _) => retarget_converter(db)?,
-        (None, Some(scan), Some(lm)) => transfer_converter(scan, lm, a.fps)?,
-        _ => anyhow::bail!("give --db, or --scan with --landmarks"),
+        Some(s) => s.select(&planned),
+        None => planned,
     };
     std::fs::create_dir_all(&a.output)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.output.display()))?;
+    let stem = report_stem(a.shard.as_deref());
+    let lock = lock_folder(&a.output, &stem, a.shard.as_deref())?;
+    for p in &lock.stale_removed {
+        eprintln!("removed the stale lock {} (its run is gone)", p.display());
+    }
+    if lock.alone {
+        let (gone, bytes) = clean_temporaries(&a.output);
+        if !gone.is_empty() {
+            eprintln!(
+                "removed {} unfinished temporar{} ({:.1} MB) left by a killed run",
+                gone.len(),
+                if gone.len() == 1 { "y" } else { "ies" },
+                bytes as f64 / 1e6
+            );
+        }
+    }
+    let (convert, what) = match (&a.db, &a.scan, &a.landmarks) {
+        (Some(db), _, _) => retarget_converter(db, retarget_opts, load)?,
+        (None, Some(scan), Some(lm)) => transfer_converter(scan, lm, scan_job, load)?,
+        _ => anyhow::bail!("give --db, or --scan with --landmarks"),
+    };
     let opts = RunOptions {
         jobs: a.jobs.unwrap_or_else(|| RunOptions::default().jobs),
         force: a.force,
         format: a.format,
     };
+    // The report keeps what earlier runs recorded for the outputs they
+    // wrote, and is rewritten after every clip.
+    let earlier = Earlier::load(&a.output, &format!("{stem}.json"));
+    let index: std::collections::HashMap<PathBuf, usize> = clips
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p.clip.clone(), i))
+        .collect();
+    let slots: Mutex<Vec<Option<ClipOutcome>>> = Mutex::new(
+        clips
+            .iter()
+            .map(|p| {
+                let mut o = ClipOutcome {
+                    clip: p.clip.clone(),
+                    output: p.output.clone(),
+                    status: ClipStatus::Skipped,
+                    frames: 0,
+                    seconds: 0.0,
+                    error_cm: None,
+                    reason: None,
+                    earlier: false,
+                };
+                earlier.fill(&mut o);
+                (!a.force && o.earlier && surfmotion::batch::runner::complete(&p.output, a.format))
+                    .then_some(o)
+            })
+            .collect(),
+    );
     let term = std::io::stderr().is_terminal();
     let bar = super::progress(clips.len() as u64, "clips");
     let frames_done = std::sync::atomic::AtomicUsize::new(0);
     let t0 = Instant::now();
+    let progress_report = |slots: &[Option<ClipOutcome>]| {
+        let mut s = Summary::new(
+            what.clone(),
+            slots.iter().flatten().cloned().collect(),
+            t0.elapsed().as_secs_f64(),
+            opts.jobs,
+            a.shard.clone(),
+        );
+        s.finished = false;
+        if let Err(e) = write_json(&a.output, &s) {
+            tracing::warn!("report not updated: {e}");
+        }
+    };
+    if let Ok(slots) = slots.lock() {
+        progress_report(&slots);
+    }
     let log = |o: &ClipOutcome| {
-        let f = frames_done.fetch_add(o.frames, std::sync::atomic::Ordering::Relaxed) + o.frames;
+        let mut o = o.clone();
+        earlier.fill(&mut o);
+        if let Ok(mut slots) = slots.lock()
+            && let Some(&i) = index.get(&o.clip)
+        {
+            slots[i] = Some(o.clone());
+            // A skipped output was listed before the run (when its earlier
+            // record is known): rewrite only for news.
+            if o.status != ClipStatus::Skipped {
+                progress_report(&slots);
+            }
+        }
+        let f = if o.status == ClipStatus::Done {
+            frames_done.fetch_add(o.frames, std::sync::atomic::Ordering::Relaxed) + o.frames
+        } else {
+            frames_done.load(std::sync::atomic::Ordering::Relaxed)
+        };
         let line = match o.status {
             ClipStatus::Done => format!(
                 "done {} ({} frames, {:.1} s)",
@@ -195,8 +309,11 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             eprintln!("{line}");
         }
     };
-    let outcomes = run(&a.mocap_dir, &clips, &a.output, &opts, &convert, &log);
+    let mut outcomes = run(&a.mocap_dir, &clips, &opts, &convert, &log);
     bar.finish_and_clear();
+    for o in &mut outcomes {
+        earlier.fill(o);
+    }
     let s = Summary::new(
         what,
         outcomes,
@@ -205,6 +322,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         a.shard.clone(),
     );
     let files = write_summary(&a.output, &s)?;
+    drop(lock);
     if a.json {
         super::emit(&(serde_json::to_string_pretty(&s)? + "\n"))?;
     } else {

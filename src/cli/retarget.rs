@@ -22,6 +22,25 @@ pub struct Args {
     /// folder of OBJ frames (a path without extension).
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub job: JobOpts,
+    /// Write a JSON report: the retrieved path (sequence, frame) per output
+    /// frame, blends, transitions and cuts, costs, timings.
+    #[arg(long, value_name = "JSON")]
+    pub report: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub clip: super::ClipOpts,
+    #[command(flatten)]
+    pub preview: super::render::PreviewOpts,
+}
+
+/// The options of one retarget job, shared by `retarget` and `batch --db`
+/// (one definition, so the two verbs cannot drift).
+#[derive(clap::Args, Clone, Debug)]
+pub struct JobOpts {
     /// Skip the deformation that makes the surface follow the mocap
     /// skeleton (same as --deform none): the output is the retrieved,
     /// blended and interpolated 4D frames.
@@ -32,10 +51,6 @@ pub struct Args {
     /// blend skinning, or none.
     #[arg(long, value_enum, default_value_t = surfmotion::deform::DeformMode::Part)]
     pub deform: surfmotion::deform::DeformMode,
-    /// Write a JSON report: the retrieved path (sequence, frame) per output
-    /// frame, blends, transitions and cuts, costs, timings.
-    #[arg(long, value_name = "JSON")]
-    pub report: Option<PathBuf>,
     /// Skeleton dissimilarity threshold T_skel (metres, summed over 19
     /// joints). Default: chosen from the query's nearest-frame costs.
     #[arg(long, value_parser = super::non_negative)]
@@ -49,13 +64,34 @@ pub struct Args {
     /// No blending across transitions.
     #[arg(long)]
     pub no_blend: bool,
-    /// Print the summary as JSON.
-    #[arg(long)]
-    pub json: bool,
-    #[command(flatten)]
-    pub clip: super::ClipOpts,
-    #[command(flatten)]
-    pub preview: super::render::PreviewOpts,
+}
+
+impl JobOpts {
+    /// The options of [`synthesise`].
+    pub fn options(&self) -> RetargetOptions {
+        let mut opts = RetargetOptions::default();
+        opts.trellis.t_skel = self.t_skel;
+        opts.trellis.w_retr = self.w_retr;
+        opts.timeline.interpolate = !self.no_interpolate;
+        opts.timeline.blend = !self.no_blend;
+        opts.deform = if self.no_deform {
+            surfmotion::deform::DeformMode::None
+        } else {
+            self.deform
+        };
+        opts
+    }
+
+    /// True when every option has its default (they apply only to 4D
+    /// characters).
+    pub fn is_default(&self) -> bool {
+        !self.no_deform
+            && self.deform == surfmotion::deform::DeformMode::Part
+            && self.t_skel.is_none()
+            && self.w_retr == 1.0
+            && !self.no_interpolate
+            && !self.no_blend
+    }
 }
 
 /// The plausibility of `positions` (metres, Y-up, frame-major) made for
@@ -79,6 +115,7 @@ fn plausibility(
 
 /// Runs `retarget`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
     let fps = ch.manifest.fps;
     let mocap = load_mocap(&a.mocap, &a.clip.load_options()?, fps)?;
@@ -87,16 +124,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         "{}: the clip has no frames",
         a.mocap.display()
     );
-    let mut opts = RetargetOptions::default();
-    opts.trellis.t_skel = a.t_skel;
-    opts.trellis.w_retr = a.w_retr;
-    opts.timeline.interpolate = !a.no_interpolate;
-    opts.timeline.blend = !a.no_blend;
-    opts.deform = if a.no_deform {
-        surfmotion::deform::DeformMode::None
-    } else {
-        a.deform
-    };
+    let opts = a.job.options();
     let out = synthesise(&ch, &mocap.poses, &mocap.reference, fps, &opts)?;
     let deformed = matches!(
         opts.deform,

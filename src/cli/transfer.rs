@@ -25,10 +25,8 @@ pub struct Args {
     /// dropped); pieces no marker reaches are dropped.
     #[arg(long)]
     pub scan: String,
-    /// Only these OBJ groups of the scan (repeatable), e.g. `body` of a
-    /// MakeHuman base mesh.
-    #[arg(long, value_name = "NAME")]
-    pub group: Vec<String>,
+    #[command(flatten)]
+    pub job: JobOpts,
     /// Landmarks on the scan (JSON, as for `rig embed`): the skeleton is
     /// embedded and markers are placed in rings along its bones.
     #[arg(long)]
@@ -38,23 +36,12 @@ pub struct Args {
     /// writes one to start from.
     #[arg(long)]
     pub markers: Option<PathBuf>,
-    /// Generated markers wanted in total (about; rays that leave their body
-    /// part give none). The paper uses 140-220; ~20 already give the pose.
-    #[arg(long, default_value_t = 180)]
-    pub marker_count: usize,
-    /// Distance of generated marker rings from the joints, as a fraction
-    /// of the bone length (0-0.5): small gives sharp bends, large soft ones.
-    #[arg(long, default_value_t = 0.25, value_parser = super::non_negative)]
-    pub marker_margin: f64,
     /// Write the scan's markers (on the repaired scan) as JSON.
     #[arg(long, value_name = "JSON")]
     pub save_markers: Option<PathBuf>,
     /// A mocap clip (BVH or AMC, any detected rig convention) to perform.
     #[arg(long)]
     pub mocap: Option<PathBuf>,
-    /// Output frame rate for a mocap source (the clip is resampled).
-    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
-    pub fps: f64,
     /// A moving template mesh (any sequence format) whose performance the
     /// scan copies.
     #[arg(long)]
@@ -95,6 +82,65 @@ pub struct Args {
     pub preview: super::render::PreviewOpts,
 }
 
+/// The options of one transfer job, shared by `transfer` and `batch
+/// --scan` (one definition, so the two verbs cannot drift).
+#[derive(clap::Args, Clone, Debug)]
+pub struct JobOpts {
+    /// Only these OBJ groups of the scan (repeatable), e.g. `body` of a
+    /// MakeHuman base mesh.
+    #[arg(long, value_name = "NAME")]
+    pub group: Vec<String>,
+    /// Generated markers wanted in total (about; rays that leave their body
+    /// part give none). The paper uses 140-220; ~20 already give the pose.
+    #[arg(long, default_value_t = 180)]
+    pub marker_count: usize,
+    /// Distance of generated marker rings from the joints, as a fraction
+    /// of the bone length (0-0.5): small gives sharp bends, large soft ones.
+    #[arg(long, default_value_t = 0.25, value_parser = super::non_negative)]
+    pub marker_margin: f64,
+    /// Output frame rate for a mocap source (the clip is resampled).
+    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
+    pub fps: f64,
+}
+
+/// A transfer job's options, checked.
+#[derive(Clone, Debug)]
+pub struct ScanJob {
+    /// OBJ groups of the scan to keep (none: all).
+    pub groups: Vec<String>,
+    /// Generated markers.
+    pub markers: MarkerOptions,
+    /// Output frame rate for a mocap source.
+    pub fps: f64,
+}
+
+impl JobOpts {
+    /// The checked options.
+    pub fn job(&self) -> anyhow::Result<ScanJob> {
+        anyhow::ensure!(
+            (0.0..=0.5).contains(&self.marker_margin),
+            "--marker-margin {}: expected a fraction in [0, 0.5]",
+            self.marker_margin
+        );
+        Ok(ScanJob {
+            groups: self.group.clone(),
+            markers: MarkerOptions {
+                count: self.marker_count,
+                margin: self.marker_margin,
+            },
+            fps: self.fps,
+        })
+    }
+
+    /// True when every option has its default (they apply only to scans).
+    pub fn is_default(&self) -> bool {
+        self.group.is_empty()
+            && self.marker_count == 180
+            && self.marker_margin == 0.25
+            && self.fps == 30.0
+    }
+}
+
 /// Metres per unit of a scan whose rig is `height` units tall, assuming a
 /// person of 0.5-2.5 m: 1 (m), 0.1 (dm), 0.01 (cm) or 0.001 (mm).
 fn guess_metres_per_unit(height: f64) -> f64 {
@@ -111,22 +157,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         inputs.extend(surfmotion::mesh::io::input_files(t, None));
     }
     surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
+    surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
     let t0 = Instant::now();
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
         "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",
         a.output.display()
     );
-    let scan = super::load_mesh_groups(&a.scan, &a.group)?;
-    let mopts = MarkerOptions {
-        count: a.marker_count,
-        margin: a.marker_margin,
-    };
-    anyhow::ensure!(
-        (0.0..=0.5).contains(&a.marker_margin),
-        "--marker-margin {}: expected a fraction in [0, 0.5]",
-        a.marker_margin
-    );
+    let job_opts = a.job.job()?;
+    let mopts = job_opts.markers;
+    let scan = super::load_mesh_groups(&a.scan, &job_opts.groups)?;
     let lm = match &a.landmarks {
         Some(p) => Some(Landmarks::load(p, scan.vertex_count())?),
         None => None,
@@ -159,7 +199,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let template_markers;
     let mut align = glam::DQuat::IDENTITY;
     let (source, fps, what) = if let Some(m) = &a.mocap {
-        clip = load_mocap(m, &a.clip.load_options()?, a.fps)?;
+        clip = load_mocap(m, &a.clip.load_options()?, job_opts.fps)?;
         anyhow::ensure!(
             !clip.poses.is_empty(),
             "{}: the clip has no frames",
@@ -167,7 +207,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         );
         (
             Source::Mocap(&clip.poses, &clip.reference),
-            a.fps,
+            job_opts.fps,
             format!("{} ({} rig)", m.display(), clip.convention),
         )
     } else {
@@ -198,7 +238,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             }
             generate(&tmesh, &rig, &mopts)
         };
-        let fps = template.fps.unwrap_or(a.fps);
+        let fps = template.fps.unwrap_or(job_opts.fps);
         (
             Source::Template {
                 frames: &template,

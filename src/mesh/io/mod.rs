@@ -153,6 +153,25 @@ pub fn refuse_overwriting(inputs: &[PathBuf], out: &Path) -> Result<(), MeshErro
     Ok(())
 }
 
+/// Refuses an output that exists as a folder while its extension names a
+/// file format (`-o out.glb` where `out.glb/` is a folder would otherwise
+/// fill the folder with OBJ frames). Regression (issue 18, item 16).
+pub fn refuse_folder_as_file(out: &Path) -> Result<(), MeshError> {
+    let ext = out
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if out.is_dir() && matches!(ext.as_str(), "obj" | "ply" | "pc2" | "mdd" | "gltf" | "glb") {
+        return Err(MeshError::invalid(
+            out,
+            format!(
+                "is a folder, but the .{ext} extension asks for a file; remove the folder or choose another output name (a folder of OBJ frames takes a name without extension)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Loads any supported mesh or sequence file as a sequence (a single mesh is
 /// a one-frame sequence). `spec` may name a frame: `samba.pc2:12`.
 pub fn load_sequence(spec: &str, opts: &LoadOptions) -> Result<MeshSequence, MeshError> {
@@ -216,6 +235,7 @@ pub fn save_sequence(
     out: &Path,
     fps: Option<f64>,
 ) -> Result<Vec<PathBuf>, MeshError> {
+    refuse_folder_as_file(out)?;
     let fmt = MeshFormat::of(out).ok_or_else(|| {
         MeshError::invalid(
             out,
