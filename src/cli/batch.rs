@@ -10,7 +10,8 @@ use surfmotion::batch::{
 };
 use surfmotion::eval::velocity_error;
 use surfmotion::mesh::MeshSequence;
-use surfmotion::mesh::io::save_sequence;
+use surfmotion::mesh::io::glb::GlbOptions;
+use surfmotion::mesh::io::{SaveOptions, save_sequence_with};
 use surfmotion::retarget::character::Character;
 use surfmotion::retarget::query::{load_mocap, to_character};
 use surfmotion::retarget::{RetargetOptions, synthesise};
@@ -60,11 +61,13 @@ pub struct Args {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub glb: super::mesh::GlbArgs,
 }
 
 type Convert = Box<dyn Fn(&Path, &Path) -> Result<Converted, String> + Sync>;
 
-fn retarget_converter(db: &Path) -> anyhow::Result<(Convert, String)> {
+fn retarget_converter(db: &Path, glb: GlbOptions) -> anyhow::Result<(Convert, String)> {
     let ch = Character::load(db, &super::db::Bars::new())?;
     let what = format!("retarget --db {}", db.display());
     let f = move |clip: &Path, out: &Path| -> Result<Converted, String> {
@@ -91,7 +94,11 @@ fn retarget_converter(db: &Path) -> anyhow::Result<(Convert, String)> {
         let e = velocity_error(&query, &skel);
         let seq = MeshSequence::new(ch.topology_metres(), r.positions, Some(fps))
             .map_err(|e| e.to_string())?;
-        save_sequence(&seq, out, Some(fps)).map_err(|e| e.to_string())?;
+        let so = SaveOptions {
+            fps: Some(fps),
+            glb,
+        };
+        save_sequence_with(&seq, out, &so).map_err(|e| e.to_string())?;
         Ok(Converted {
             frames,
             error_cm: Some(e.mean_cm),
@@ -100,7 +107,12 @@ fn retarget_converter(db: &Path) -> anyhow::Result<(Convert, String)> {
     Ok((Box::new(f), what))
 }
 
-fn transfer_converter(scan: &str, landmarks: &Path, fps: f64) -> anyhow::Result<(Convert, String)> {
+fn transfer_converter(
+    scan: &str,
+    landmarks: &Path,
+    fps: f64,
+    glb: GlbOptions,
+) -> anyhow::Result<(Convert, String)> {
     let seq = surfmotion::mesh::io::load_sequence(scan, &Default::default())?;
     let mesh = seq.frame_mesh(0);
     let lm = Landmarks::load(landmarks, mesh.vertex_count())?;
@@ -129,7 +141,11 @@ fn transfer_converter(scan: &str, landmarks: &Path, fps: f64) -> anyhow::Result<
         let e = velocity_error(&query, &skel);
         let seq =
             MeshSequence::new(prepared.mesh.clone(), pos, Some(fps)).map_err(|e| e.to_string())?;
-        save_sequence(&seq, out, Some(fps)).map_err(|e| e.to_string())?;
+        let so = SaveOptions {
+            fps: Some(fps),
+            glb,
+        };
+        save_sequence_with(&seq, out, &so).map_err(|e| e.to_string())?;
         Ok(Converted {
             frames: stats.frames,
             error_cm: Some(e.mean_cm),
@@ -151,8 +167,8 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         None => all,
     };
     let (convert, what) = match (&a.db, &a.scan, &a.landmarks) {
-        (Some(db), _, _) => retarget_converter(db)?,
-        (None, Some(scan), Some(lm)) => transfer_converter(scan, lm, a.fps)?,
+        (Some(db), _, _) => retarget_converter(db, a.glb.options())?,
+        (None, Some(scan), Some(lm)) => transfer_converter(scan, lm, a.fps, a.glb.options())?,
         _ => anyhow::bail!("give --db, or --scan with --landmarks"),
     };
     std::fs::create_dir_all(&a.output)
