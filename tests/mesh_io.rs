@@ -323,6 +323,7 @@ fn quantised_samba_glb_is_half_the_size_within_a_tenth_of_a_millimetre() {
                     .acos()
             })
             .fold(0.0, f64::max);
+        eprintln!("frame {k}: normals within {:.2} deg", worst.to_degrees());
         assert!(
             worst < 2f64.to_radians(),
             "frame {k}: normals off by {worst} rad"
