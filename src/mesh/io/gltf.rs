@@ -50,8 +50,10 @@ pub struct GltfAsset {
     /// (per target, one per vertex; zero where a target has none). Empty when
     /// the asset has no normals.
     pub morph_normals: Vec<Vec<[f64; 3]>>,
-    /// Key times and per-key weights of the first morph-weights animation.
-    pub weights_animation: Option<(Vec<f32>, Vec<Vec<f32>>)>,
+    /// Key times and, per key, the non-zero weights `(target, weight)` of the
+    /// first morph-weights animation (sparse: a clip of `F` frames written as
+    /// one target per frame has `F` weights, not `F²`).
+    pub weights_animation: Option<(Vec<f32>, Vec<Vec<(u32, f32)>>)>,
     /// Animation names and durations (seconds).
     pub animations: Vec<(String, f32)>,
     /// Node count, for `inspect`.
@@ -237,7 +239,7 @@ impl Ctx<'_> {
                 gltf::accessor::sparse::IndexType::U16 => DataType::U16,
                 gltf::accessor::sparse::IndexType::U32 => DataType::U32,
             };
-            let idx = self.read_elements(&iv.view(), iv.offset(), n, 1, it, false, what)?;
+            let idx = self.read_indices(&iv.view(), iv.offset(), n, it, what)?;
             let vals = self.read_elements(
                 &sp.values().view(),
                 sp.values().offset(),
@@ -248,7 +250,6 @@ impl Ctx<'_> {
                 what,
             )?;
             for (k, &i) in idx.iter().enumerate() {
-                let i = i as usize;
                 if i >= count {
                     return Err(self.err(format!("{what}: sparse index {i} ≥ count {count}")));
                 }
@@ -256,6 +257,81 @@ impl Ctx<'_> {
             }
         }
         Ok((out, comps))
+    }
+
+    /// `count` unsigned integers of type `it` (exact: an f32 holds
+    /// integers only up to 2²⁴, and sparse indices into an F×F weight table
+    /// exceed that).
+    fn read_indices(
+        &self,
+        view: &gltf::buffer::View,
+        offset: usize,
+        count: usize,
+        it: DataType,
+        what: &str,
+    ) -> Result<Vec<usize>, MeshError> {
+        let bytes = self.view_bytes(view)?;
+        let cs = it.size();
+        let stride = view.stride().unwrap_or(cs).max(cs);
+        let fits = count == 0
+            || (count - 1)
+                .checked_mul(stride)
+                .and_then(|v| v.checked_add(offset + cs))
+                .is_some_and(|e| e <= bytes.len());
+        if !fits {
+            return Err(self.err(format!(
+                "{what}: {count} indices do not fit in bufferView {}",
+                view.index()
+            )));
+        }
+        Ok((0..count)
+            .map(|i| {
+                let b = &bytes[offset + i * stride..offset + i * stride + cs];
+                match cs {
+                    1 => b[0] as usize,
+                    2 => u16::from_le_bytes([b[0], b[1]]) as usize,
+                    _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+                }
+            })
+            .collect())
+    }
+
+    /// A scalar sparse accessor without a view (zeros but for its
+    /// substitutions) as its (index, value) pairs, in O(substitutions)
+    /// whatever its count; `None` for any other accessor.
+    fn read_sparse_zeros(
+        &self,
+        acc: &gltf::Accessor,
+        what: &str,
+    ) -> Result<Option<(Vec<usize>, Vec<f32>)>, MeshError> {
+        let (None, Some(sp), Dimensions::Scalar) = (acc.view(), acc.sparse(), acc.dimensions())
+        else {
+            return Ok(None);
+        };
+        let n = sp.count();
+        let iv = sp.indices();
+        let it = match iv.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+        };
+        let idx = self.read_indices(&iv.view(), iv.offset(), n, it, what)?;
+        let vals = self.read_elements(
+            &sp.values().view(),
+            sp.values().offset(),
+            n,
+            1,
+            acc.data_type(),
+            acc.normalized(),
+            what,
+        )?;
+        if idx.windows(2).any(|w| w[1] <= w[0]) || idx.last().is_some_and(|&i| i >= acc.count()) {
+            return Err(self.err(format!(
+                "{what}: sparse indices must increase and stay under the count {}",
+                acc.count()
+            )));
+        }
+        Ok(Some((idx, vals)))
     }
 
     fn read_vec3(&self, acc: &gltf::Accessor, what: &str) -> Result<Vec<[f64; 3]>, MeshError> {
@@ -409,6 +485,33 @@ fn check_enums(root: &gltf::json::Root, path: &Path) -> Result<(), MeshError> {
     Ok(())
 }
 
+/// Rejects mesh attributes naming an accessor that does not exist: the
+/// `gltf` crate's validation indexes the POSITION accessor unchecked (a
+/// panic; found by `tests/malformed.rs` on a bit-flipped GLB).
+fn check_attribute_indices(root: &gltf::json::Root, path: &Path) -> Result<(), MeshError> {
+    let n = root.accessors.len();
+    for (i, m) in root.meshes.iter().enumerate() {
+        for p in &m.primitives {
+            let targets = p.targets.iter().flatten();
+            let named = p.attributes.values().copied().chain(
+                targets.flat_map(|t| [t.positions, t.normals, t.tangents].into_iter().flatten()),
+            );
+            for a in named.chain(p.indices) {
+                if a.value() >= n {
+                    return Err(MeshError::invalid(
+                        path,
+                        format!(
+                            "glTF: mesh {i} names accessor {}, the file has {n}",
+                            a.value()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Checks a GLB container's header and chunk lengths before the `gltf` crate
 /// sees them: its parser subtracts the header size from the declared length
 /// unchecked (a declared length under 12 overflows; found by cargo-fuzz).
@@ -467,6 +570,7 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
     // `Ctx::read_f32` reads whatever they are.
     json.extensions_required
         .retain(|e| e != super::glb::KHR_MESH_QUANTIZATION);
+    check_attribute_indices(&json, path)?;
     let doc = gltf::Document::from_json(json)
         .map_err(|e| MeshError::invalid(path, format!("glTF: {e}")))?;
     check_enums(doc.as_json(), path)?;
@@ -773,19 +877,34 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
                 && Some(ch.target().node().index()) == morph_node
                 && !targets.is_empty()
             {
-                let (w, _) = ctx.read_f32(&ch.sampler().output(), "animation output")?;
+                let out = ch.sampler().output();
                 let nt = targets.len();
                 let per_key = match ch.sampler().interpolation() {
                     gltf::animation::Interpolation::CubicSpline => 3 * nt,
                     _ => nt,
                 };
-                if w.len() != t.len() * per_key {
+                if out.dimensions() != Dimensions::Scalar
+                    || Some(out.count()) != t.len().checked_mul(per_key)
+                {
                     return Err(ctx.err("morph weights animation output has the wrong size"));
                 }
+                // Element i is weight i % per_key (of which the value part
+                // of a cubic key, off..off + nt) at key i / per_key.
                 let off = if per_key == 3 * nt { nt } else { 0 };
-                let keys = (0..t.len())
-                    .map(|k| w[k * per_key + off..k * per_key + off + nt].to_vec())
-                    .collect();
+                let mut keys = vec![Vec::new(); t.len()];
+                let mut put = |i: usize, w: f32| {
+                    let j = i % per_key;
+                    if w != 0.0 && (off..off + nt).contains(&j) {
+                        keys[i / per_key].push(((j - off) as u32, w));
+                    }
+                };
+                match ctx.read_sparse_zeros(&out, "animation output")? {
+                    Some((idx, vals)) => idx.into_iter().zip(vals).for_each(|(i, w)| put(i, w)),
+                    None => {
+                        let (w, _) = ctx.read_f32(&out, "animation output")?;
+                        w.into_iter().enumerate().for_each(|(i, w)| put(i, w));
+                    }
+                }
                 weights_animation = Some((t, keys));
             }
         }
@@ -917,11 +1036,12 @@ impl GltfAsset {
         let base = self.normals.as_ref()?;
         let mut n: Vec<DVec3> = base.iter().map(|v| DVec3::from_array(*v)).collect();
         if let Some((_, keys)) = &self.weights_animation {
-            for (w, d) in keys.get(key)?.iter().zip(&self.morph_normals) {
-                if *w != 0.0 {
-                    for (a, b) in n.iter_mut().zip(d) {
-                        *a += *w as f64 * DVec3::from_array(*b);
-                    }
+            for &(j, w) in keys.get(key)? {
+                let Some(d) = self.morph_normals.get(j as usize) else {
+                    continue;
+                };
+                for (a, b) in n.iter_mut().zip(d) {
+                    *a += w as f64 * DVec3::from_array(*b);
                 }
             }
         }
@@ -1067,13 +1187,14 @@ impl GltfAsset {
         for w in keys {
             let start = frames.len();
             frames.extend_from_slice(base);
-            for (k, &wk) in w.iter().enumerate() {
-                if wk != 0.0 {
-                    for (p, d) in frames[start..].iter_mut().zip(&self.morph_targets[k]) {
-                        p[0] += wk as f64 * d[0];
-                        p[1] += wk as f64 * d[1];
-                        p[2] += wk as f64 * d[2];
-                    }
+            for &(k, wk) in w {
+                let Some(target) = self.morph_targets.get(k as usize) else {
+                    continue;
+                };
+                for (p, d) in frames[start..].iter_mut().zip(target) {
+                    p[0] += wk as f64 * d[0];
+                    p[1] += wk as f64 * d[1];
+                    p[2] += wk as f64 * d[2];
                 }
             }
         }
