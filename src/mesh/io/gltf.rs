@@ -18,6 +18,12 @@ use base64::Engine as _;
 use gltf::accessor::{DataType, Dimensions};
 use std::path::Path;
 
+/// The non-zero morph weights of one animation key: `(target, weight)`.
+pub type KeyWeights = Vec<(u32, f32)>;
+
+/// Indices and values of a sparse accessor's substitutions.
+type Substitutions = (Vec<usize>, Vec<f32>);
+
 /// A skin: joints with their hierarchy, and per-vertex influences.
 #[derive(Debug, Clone)]
 pub struct Skin {
@@ -53,7 +59,7 @@ pub struct GltfAsset {
     /// Key times and, per key, the non-zero weights `(target, weight)` of the
     /// first morph-weights animation (sparse: a clip of `F` frames written as
     /// one target per frame has `F` weights, not `F²`).
-    pub weights_animation: Option<(Vec<f32>, Vec<Vec<(u32, f32)>>)>,
+    pub weights_animation: Option<(Vec<f32>, Vec<KeyWeights>)>,
     /// Animation names and durations (seconds).
     pub animations: Vec<(String, f32)>,
     /// Node count, for `inspect`.
@@ -303,7 +309,7 @@ impl Ctx<'_> {
         &self,
         acc: &gltf::Accessor,
         what: &str,
-    ) -> Result<Option<(Vec<usize>, Vec<f32>)>, MeshError> {
+    ) -> Result<Option<Substitutions>, MeshError> {
         let (None, Some(sp), Dimensions::Scalar) = (acc.view(), acc.sparse(), acc.dimensions())
         else {
             return Ok(None);
