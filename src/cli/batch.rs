@@ -12,7 +12,8 @@ use surfmotion::batch::{
 };
 use surfmotion::eval::velocity_error;
 use surfmotion::mesh::MeshSequence;
-use surfmotion::mesh::io::save_sequence;
+use surfmotion::mesh::io::glb::GlbOptions;
+use surfmotion::mesh::io::{SaveOptions, save_sequence_with};
 use surfmotion::mocap::LoadOptions;
 use surfmotion::retarget::character::Character;
 use surfmotion::retarget::query::{load_mocap, to_character};
@@ -68,6 +69,8 @@ pub struct Args {
     /// Options of a retarget job (with --db).
     #[command(flatten)]
     pub retarget_job: super::retarget::JobOpts,
+    #[command(flatten)]
+    pub glb: super::mesh::GlbArgs,
 }
 
 type Convert = Box<dyn Fn(&Path, &Path) -> Result<Converted, String> + Sync>;
@@ -77,6 +80,7 @@ fn retarget_converter(
     db: &Path,
     opts: RetargetOptions,
     load: LoadOptions,
+    glb: GlbOptions,
 ) -> anyhow::Result<(Convert, String)> {
     let ch = Character::load(db, &super::db::Bars::new())?;
     let what = format!("retarget --db {}", db.display());
@@ -98,7 +102,11 @@ fn retarget_converter(
         let e = velocity_error(&query, &skel);
         let seq = MeshSequence::new(ch.topology_metres(), r.positions, Some(fps))
             .map_err(|e| e.to_string())?;
-        save_sequence(&seq, out, Some(fps)).map_err(|e| e.to_string())?;
+        let so = SaveOptions {
+            fps: Some(fps),
+            glb,
+        };
+        save_sequence_with(&seq, out, &so).map_err(|e| e.to_string())?;
         Ok(Converted {
             frames,
             error_cm: Some(e.mean_cm),
@@ -114,6 +122,7 @@ fn transfer_converter(
     landmarks: &Path,
     job: super::transfer::ScanJob,
     load: LoadOptions,
+    glb: GlbOptions,
 ) -> anyhow::Result<(Convert, String)> {
     let mesh = super::load_mesh_groups(scan, &job.groups)?;
     let lm = Landmarks::load(landmarks, mesh.vertex_count())?;
@@ -143,7 +152,11 @@ fn transfer_converter(
         let e = velocity_error(&query, &skel);
         let seq =
             MeshSequence::new(prepared.mesh.clone(), pos, Some(fps)).map_err(|e| e.to_string())?;
-        save_sequence(&seq, out, Some(fps)).map_err(|e| e.to_string())?;
+        let so = SaveOptions {
+            fps: Some(fps),
+            glb,
+        };
+        save_sequence_with(&seq, out, &so).map_err(|e| e.to_string())?;
         Ok(Converted {
             frames: stats.frames,
             error_cm: Some(e.mean_cm),
@@ -207,8 +220,10 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         }
     }
     let (convert, what) = match (&a.db, &a.scan, &a.landmarks) {
-        (Some(db), _, _) => retarget_converter(db, retarget_opts, load)?,
-        (None, Some(scan), Some(lm)) => transfer_converter(scan, lm, scan_job, load)?,
+        (Some(db), _, _) => retarget_converter(db, retarget_opts, load, a.glb.options())?,
+        (None, Some(scan), Some(lm)) => {
+            transfer_converter(scan, lm, scan_job, load, a.glb.options())?
+        }
         _ => anyhow::bail!("give --db, or --scan with --landmarks"),
     };
     let opts = RunOptions {

@@ -4,7 +4,7 @@ use anyhow::Context;
 use std::path::PathBuf;
 use surfmotion::eval::{Checker, Plausibility, PlausibilityOptions, velocity_error};
 use surfmotion::mesh::MeshSequence;
-use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
+use surfmotion::mesh::io::{LoadOptions, SaveOptions, load_sequence, save_sequence_with};
 use surfmotion::retarget::character::Character;
 use surfmotion::retarget::query::{load_mocap, to_character};
 use surfmotion::retarget::{RetargetOptions, synthesise};
@@ -35,6 +35,8 @@ pub struct Args {
     pub clip: super::ClipOpts,
     #[command(flatten)]
     pub preview: super::render::PreviewOpts,
+    #[command(flatten)]
+    pub glb: super::mesh::GlbArgs,
 }
 
 /// The options of one retarget job, shared by `retarget` and `batch --db`
@@ -155,7 +157,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     let plaus = plaus.map(|p| p.0);
     let seq = MeshSequence::new(ch.topology_metres(), out.positions, Some(fps))?;
-    let written = save_sequence(&seq, &a.output, Some(fps))?;
+    let written = save_sequence_with(
+        &seq,
+        &a.output,
+        &SaveOptions {
+            fps: Some(fps),
+            glb: a.glb.options(),
+        },
+    )?;
     let r = &out.report;
     if let Some(p) = &a.report {
         let mut v = serde_json::to_value(r)?;

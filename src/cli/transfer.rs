@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 use surfmotion::eval::{Checker, vertex_error};
 use surfmotion::mesh::MeshSequence;
-use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
+use surfmotion::mesh::io::{LoadOptions, SaveOptions, load_sequence, save_sequence_with};
 use surfmotion::retarget::query::load_mocap;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::transfer::markers::generate;
@@ -80,6 +80,8 @@ pub struct Args {
     pub clip: super::ClipOpts,
     #[command(flatten)]
     pub preview: super::render::PreviewOpts,
+    #[command(flatten)]
+    pub glb: super::mesh::GlbArgs,
 }
 
 /// The options of one transfer job, shared by `transfer` and `batch
@@ -318,7 +320,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         )?;
     }
     let seq = MeshSequence::new(prepared.mesh.clone(), positions, Some(fps))?;
-    let written = save_sequence(&seq, &a.output, Some(fps))?;
+    let written = save_sequence_with(
+        &seq,
+        &a.output,
+        &SaveOptions {
+            fps: Some(fps),
+            glb: a.glb.options(),
+        },
+    )?;
     let ms_per_frame = 1e3 * stats.solve_seconds / frames.max(1) as f64;
     let v = serde_json::json!({
         "output": written,

@@ -11,6 +11,7 @@ pub mod mass;
 pub mod measure;
 #[allow(clippy::module_inception)]
 mod mesh;
+pub mod normals;
 pub mod poisson;
 pub mod repair;
 mod sequence;

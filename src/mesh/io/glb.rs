@@ -1,17 +1,71 @@
-//! Binary glTF (`.glb`) writer for mesh sequences: the rest mesh, one morph
-//! target per frame (displacement from the rest positions) and a LINEAR
-//! morph-weights animation whose key `k` at time `k / fps` has weight 1 on
-//! target `k`, so playback shows frame `k` at its time and blends linearly
-//! between frames. Valid per the glTF 2.0 spec (POSITION min/max on the base
-//! and on every target, animation input min/max, 4-byte aligned views,
-//! `byteStride` on the shared target view), checked with the Khronos
-//! glTF-Validator in the test suite.
+//! Binary glTF (`.glb`) writer for mesh sequences: the rest mesh with
+//! area-weighted vertex normals and a plain PBR material, one morph target
+//! per frame (POSITION and NORMAL displacements from the rest mesh) and a
+//! LINEAR morph-weights animation whose key `k` at time `k / fps` has weight
+//! `w` on target `k` (1, or 2 in quantised files, see below), so playback
+//! shows frame `k` at its time and blends linearly between frames.
+//!
+//! Valid per the glTF 2.0 spec (POSITION min/max on the base and on every
+//! target, animation input min/max, 4-byte aligned views and elements,
+//! `byteStride` on the shared target views, unit base normals), checked with
+//! the Khronos glTF-Validator in the test suite. The weights animation's
+//! output is a sparse accessor (one non-zero per key), so it costs `8·F`
+//! bytes instead of `4·F²` for `F` frames.
+//!
+//! **Quantised files** ([`GlbOptions::quantize`], `KHR_mesh_quantization`,
+//! listed in `extensionsRequired`): positions and position displacements are
+//! `SHORT` integers on one uniform grid of step `s`, dequantised by the
+//! node's transform `p = t + s·q` (uniform scale, so normals keep their
+//! direction; the extension's recommendation); the base normals are
+//! normalized `SHORT`, the per-frame normal displacements normalized `BYTE`
+//! (4-byte stride). A normal displacement lies in `[-2, 2]` per component (a
+//! normal can turn over) while normalized types hold `[-1, 1]`, so every
+//! target stores half its displacement and the animation uses weight 2:
+//! `base + 2·(Δ/2)` is the frame. The grid step is chosen so that the rest
+//! mesh and every halved displacement fit in 16 bits: the error of a vertex
+//! is at most `s` per axis. 12 bytes per vertex and frame instead of 24.
 
+use crate::mesh::normals::vertex_normals_into;
 use crate::mesh::{MeshError, MeshSequence};
 use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use std::collections::BTreeMap;
 use std::path::Path;
+
+/// Options of the GLB writer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GlbOptions {
+    /// Write vertex normals: the rest mesh's `NORMAL` and, per frame, morph
+    /// target `NORMAL` displacements, so viewers shade smoothly.
+    /// Default value: `true`.
+    pub normals: bool,
+    /// Quantise with `KHR_mesh_quantization` (a required extension: viewers
+    /// without it refuse the file): 16-bit positions and displacements on a
+    /// uniform grid, 8-bit normal displacements; half the size, error at most
+    /// one grid step per axis (see the module docs). Default value: `false`.
+    pub quantize: bool,
+}
+
+impl GlbOptions {
+    /// Normals on, floats (the most widely readable file).
+    pub const DEFAULT: GlbOptions = GlbOptions {
+        normals: true,
+        quantize: false,
+    };
+}
+
+impl Default for GlbOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The most frames one GLB holds: the weights animation has `F²` values,
+/// addressed by 32-bit sparse indices.
+pub const MAX_FRAMES: usize = 65_535;
+
+/// The `extensionsRequired` entry of quantised files.
+pub const KHR_MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
 
 struct Bin {
     data: Vec<u8>,
@@ -23,21 +77,42 @@ impl Bin {
             self.data.push(0);
         }
     }
-    fn push_f32s(&mut self, v: impl Iterator<Item = f32>) -> (usize, usize) {
+    /// Aligns and returns the start of the next region.
+    fn start(&mut self) -> usize {
         self.align();
-        let start = self.data.len();
-        for x in v {
-            self.data.extend_from_slice(&x.to_le_bytes());
-        }
+        self.data.len()
+    }
+    fn region(&self, start: usize) -> (usize, usize) {
         (start, self.data.len() - start)
     }
-    fn push_u32s(&mut self, v: impl Iterator<Item = u32>) -> (usize, usize) {
-        self.align();
-        let start = self.data.len();
+    fn f32s(&mut self, v: impl Iterator<Item = f32>) {
         for x in v {
             self.data.extend_from_slice(&x.to_le_bytes());
         }
-        (start, self.data.len() - start)
+    }
+    fn push_f32s(&mut self, v: impl Iterator<Item = f32>) -> (usize, usize) {
+        let s = self.start();
+        self.f32s(v);
+        self.region(s)
+    }
+    fn push_u32s(&mut self, v: impl Iterator<Item = u32>) -> (usize, usize) {
+        let s = self.start();
+        for x in v {
+            self.data.extend_from_slice(&x.to_le_bytes());
+        }
+        self.region(s)
+    }
+    /// Three i16 and two bytes of padding (an 8-byte element).
+    fn i16x3(&mut self, v: [i16; 3]) {
+        for x in v {
+            self.data.extend_from_slice(&x.to_le_bytes());
+        }
+        self.data.extend_from_slice(&[0, 0]);
+    }
+    /// Three i8 and one byte of padding (a 4-byte element).
+    fn i8x3(&mut self, v: [i8; 3]) {
+        self.data
+            .extend_from_slice(&[v[0] as u8, v[1] as u8, v[2] as u8, 0]);
     }
 }
 
@@ -59,59 +134,207 @@ fn view(
     })
 }
 
+/// How an accessor's components are stored.
+#[derive(Clone, Copy)]
+struct Storage {
+    ct: json::accessor::ComponentType,
+    normalized: bool,
+}
+
+const F32: Storage = Storage {
+    ct: json::accessor::ComponentType::F32,
+    normalized: false,
+};
+const U32: Storage = Storage {
+    ct: json::accessor::ComponentType::U32,
+    normalized: false,
+};
+const I16: Storage = Storage {
+    ct: json::accessor::ComponentType::I16,
+    normalized: false,
+};
+const I16_NORM: Storage = Storage {
+    ct: json::accessor::ComponentType::I16,
+    normalized: true,
+};
+const I8_NORM: Storage = Storage {
+    ct: json::accessor::ComponentType::I8,
+    normalized: true,
+};
+
 #[allow(clippy::too_many_arguments)]
 fn accessor(
     root: &mut json::Root,
-    view: json::Index<json::buffer::View>,
+    view: Option<json::Index<json::buffer::View>>,
     offset: usize,
     count: usize,
-    ct: json::accessor::ComponentType,
+    storage: Storage,
     ty: json::accessor::Type,
-    minmax: Option<(Vec<f32>, Vec<f32>)>,
+    minmax: Option<(json::Value, json::Value)>,
 ) -> json::Index<json::Accessor> {
     let (min, max) = match minmax {
-        Some((a, b)) => (Some(json::Value::from(a)), Some(json::Value::from(b))),
+        Some((a, b)) => (Some(a), Some(b)),
         None => (None, None),
     };
     root.push(json::Accessor {
-        buffer_view: Some(view),
-        byte_offset: Some(USize64(offset as u64)),
+        buffer_view: view,
+        byte_offset: view.map(|_| USize64(offset as u64)),
         count: USize64(count as u64),
-        component_type: Valid(json::accessor::GenericComponentType(ct)),
+        component_type: Valid(json::accessor::GenericComponentType(storage.ct)),
         extensions: None,
         extras: Default::default(),
         type_: Valid(ty),
         min,
         max,
         name: None,
-        normalized: false,
+        normalized: storage.normalized,
         sparse: None,
     })
 }
 
-fn bounds3(p: impl Iterator<Item = [f64; 3]>) -> (Vec<f32>, Vec<f32>) {
+/// Per-axis bounds of float values, as JSON (zeros when empty).
+fn bounds_f32(p: impl Iterator<Item = [f32; 3]>) -> (json::Value, json::Value) {
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
     let mut any = false;
     for v in p {
         any = true;
         for k in 0..3 {
-            lo[k] = lo[k].min(v[k] as f32);
-            hi[k] = hi[k].max(v[k] as f32);
+            lo[k] = lo[k].min(v[k]);
+            hi[k] = hi[k].max(v[k]);
         }
     }
     if !any {
-        return (vec![0.0; 3], vec![0.0; 3]);
+        return (
+            json::Value::from(vec![0.0f32; 3]),
+            json::Value::from(vec![0.0f32; 3]),
+        );
     }
-    (lo.to_vec(), hi.to_vec())
+    (
+        json::Value::from(lo.to_vec()),
+        json::Value::from(hi.to_vec()),
+    )
+}
+
+/// Per-axis bounds of integer values, as JSON integers (zeros when empty).
+fn bounds_i16(p: impl Iterator<Item = [i16; 3]>) -> (json::Value, json::Value) {
+    let mut lo = [i16::MAX; 3];
+    let mut hi = [i16::MIN; 3];
+    let mut any = false;
+    for v in p {
+        any = true;
+        for k in 0..3 {
+            lo[k] = lo[k].min(v[k]);
+            hi[k] = hi[k].max(v[k]);
+        }
+    }
+    if !any {
+        (lo, hi) = ([0; 3], [0; 3]);
+    }
+    (
+        json::Value::from(lo.to_vec()),
+        json::Value::from(hi.to_vec()),
+    )
+}
+
+fn f32x3(v: [f64; 3]) -> [f32; 3] {
+    v.map(|x| x as f32)
+}
+
+/// The uniform grid of a quantised file: world `p = t + s·q`.
+#[derive(Debug, Clone, Copy)]
+struct Grid {
+    /// Translation (the centre of the rest mesh's box).
+    t: [f32; 3],
+    /// Step (uniform scale).
+    s: f32,
+    /// Weight of every key; displacements are stored divided by it.
+    w: f64,
+}
+
+impl Grid {
+    fn new(seq: &MeshSequence, w: f64) -> Grid {
+        let base = seq.mesh().positions();
+        let b = seq.mesh().bounds();
+        let t = f32x3(std::array::from_fn(|k| 0.5 * (b.min[k] + b.max[k])));
+        let mut reach = 0.0f64;
+        for p in base {
+            for k in 0..3 {
+                reach = reach.max((p[k] - t[k] as f64).abs());
+            }
+        }
+        let mut disp = 0.0f64;
+        for f in 0..seq.frame_count() {
+            for (p, q) in seq.frame(f).iter().zip(base) {
+                for k in 0..3 {
+                    disp = disp.max((p[k] - q[k]).abs());
+                }
+            }
+        }
+        // Headroom for the rounding of the base and of `s` to f32.
+        let need = reach.max(disp / w) / (32767.0 - 1.0);
+        let s = if need.is_finite() && need > 0.0 {
+            need as f32 * (1.0 + 1e-6)
+        } else {
+            1.0
+        };
+        Grid { t, s, w }
+    }
+
+    fn q(x: f64) -> i16 {
+        x.round().clamp(-32767.0, 32767.0) as i16
+    }
+
+    /// Rest position on the grid.
+    fn base(&self, p: [f64; 3]) -> [i16; 3] {
+        std::array::from_fn(|k| Self::q((p[k] - self.t[k] as f64) / self.s as f64))
+    }
+
+    /// Stored displacement of a frame position from its quantised rest
+    /// position (rounded against the quantised base, so errors do not add).
+    fn disp(&self, p: [f64; 3], qb: [i16; 3]) -> [i16; 3] {
+        std::array::from_fn(|k| {
+            let u = (p[k] - self.t[k] as f64) / self.s as f64;
+            Self::q((u - qb[k] as f64) / self.w)
+        })
+    }
+}
+
+fn snorm16(x: f64) -> i16 {
+    (x.clamp(-1.0, 1.0) * 32767.0).round() as i16
+}
+
+fn snorm8(x: f64) -> i8 {
+    (x.clamp(-1.0, 1.0) * 127.0).round() as i8
+}
+
+/// Vertex normals of `p` with a fallback where undefined.
+fn normals_or(p: &[[f64; 3]], tris: &[[u32; 3]], fallback: &[[f64; 3]], out: &mut Vec<[f64; 3]>) {
+    vertex_normals_into(p, tris, out);
+    for (n, f) in out.iter_mut().zip(fallback) {
+        if *n == [0.0; 3] {
+            *n = *f;
+        }
+    }
+}
+
+/// Encodes a sequence as GLB bytes with the default options. `fps` is used
+/// when the sequence has none (default 30).
+pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshError> {
+    encode_glb_with(seq, fps, &GlbOptions::DEFAULT)
 }
 
 /// Encodes a sequence as GLB bytes. `fps` is used when the sequence has none
-/// (default 30).
-pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshError> {
-    use json::accessor::{ComponentType as C, Type as T};
+/// (default 30). Memory: the output plus one frame of normals.
+pub fn encode_glb_with(
+    seq: &MeshSequence,
+    fps: Option<f64>,
+    opts: &GlbOptions,
+) -> Result<Vec<u8>, MeshError> {
+    use json::accessor::Type as T;
     let mesh = seq.mesh();
     let base = mesh.positions();
+    let tris = mesh.triangles();
     let nv = base.len();
     let frames = seq.frame_count();
     let fps = seq
@@ -119,6 +342,17 @@ pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshE
         .or(fps)
         .filter(|f| f.is_finite() && *f > 0.0)
         .unwrap_or(30.0);
+    let animate = frames > 1 || (frames == 1 && seq.frame(0) != base);
+    if frames > MAX_FRAMES {
+        return Err(MeshError::invalid(
+            Path::new("<glb>"),
+            format!("{frames} frames: a GLB holds at most {MAX_FRAMES} (one morph target each)"),
+        ));
+    }
+    let grid = opts
+        .quantize
+        .then(|| Grid::new(seq, if opts.normals && animate { 2.0 } else { 1.0 }));
+    let key_weight = grid.map_or(1.0, |g| g.w) as f32;
     let mut root = json::Root {
         asset: json::Asset {
             generator: Some("surfmotion".into()),
@@ -126,9 +360,14 @@ pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshE
         },
         ..Default::default()
     };
+    if grid.is_some() {
+        root.extensions_used = vec![KHR_MESH_QUANTIZATION.into()];
+        root.extensions_required = vec![KHR_MESH_QUANTIZATION.into()];
+    }
     let mut bin = Bin { data: Vec::new() };
+    let array = Some(json::buffer::Target::ArrayBuffer);
 
-    let idx = bin.push_u32s(mesh.triangles().iter().flatten().copied());
+    let idx = bin.push_u32s(tris.iter().flatten().copied());
     let idx_view = view(
         &mut root,
         idx,
@@ -137,87 +376,166 @@ pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshE
     );
     let idx_acc = accessor(
         &mut root,
-        idx_view,
+        Some(idx_view),
         0,
         mesh.triangle_count() * 3,
-        C::U32,
+        U32,
         T::Scalar,
         None,
     );
 
-    let pos = bin.push_f32s(base.iter().flatten().map(|&v| v as f32));
-    let pos_view = view(
-        &mut root,
-        pos,
-        Some(json::buffer::Target::ArrayBuffer),
-        None,
-    );
-    let pos_acc = accessor(
-        &mut root,
-        pos_view,
-        0,
-        nv,
-        C::F32,
-        T::Vec3,
-        Some(bounds3(base.iter().copied())),
-    );
-
+    // Rest positions.
+    let qbase: Vec<[i16; 3]> =
+        grid.map_or_else(Vec::new, |g| base.iter().map(|p| g.base(*p)).collect());
+    let pos_acc = match grid {
+        Some(_) => {
+            let s = bin.start();
+            qbase.iter().for_each(|q| bin.i16x3(*q));
+            let v = view(&mut root, bin.region(s), array, Some(8));
+            let mm = bounds_i16(qbase.iter().copied());
+            accessor(&mut root, Some(v), 0, nv, I16, T::Vec3, Some(mm))
+        }
+        None => {
+            let r = bin.push_f32s(base.iter().flatten().map(|&v| v as f32));
+            let v = view(&mut root, r, array, None);
+            let mm = bounds_f32(base.iter().map(|p| f32x3(*p)));
+            accessor(&mut root, Some(v), 0, nv, F32, T::Vec3, Some(mm))
+        }
+    };
     let mut attributes = BTreeMap::new();
     attributes.insert(Valid(json::mesh::Semantic::Positions), pos_acc);
+
+    // Rest normals (unit; +z where a vertex has no area).
+    let mut base_normals = Vec::new();
+    if opts.normals {
+        normals_or(base, tris, &vec![[0.0, 0.0, 1.0]; nv], &mut base_normals);
+        let acc = match grid {
+            Some(_) => {
+                let s = bin.start();
+                base_normals.iter().for_each(|n| bin.i16x3(n.map(snorm16)));
+                let v = view(&mut root, bin.region(s), array, Some(8));
+                accessor(&mut root, Some(v), 0, nv, I16_NORM, T::Vec3, None)
+            }
+            None => {
+                let r = bin.push_f32s(base_normals.iter().flatten().map(|&v| v as f32));
+                let v = view(&mut root, r, array, None);
+                accessor(&mut root, Some(v), 0, nv, F32, T::Vec3, None)
+            }
+        };
+        attributes.insert(Valid(json::mesh::Semantic::Normals), acc);
+    }
     if let Some(c) = mesh.colors() {
         let cv = bin.push_f32s(c.iter().flatten().map(|&v| v as f32));
-        let cview = view(&mut root, cv, Some(json::buffer::Target::ArrayBuffer), None);
-        let cacc = accessor(&mut root, cview, 0, nv, C::F32, T::Vec3, None);
+        let cview = view(&mut root, cv, array, None);
+        let cacc = accessor(&mut root, Some(cview), 0, nv, F32, T::Vec3, None);
         attributes.insert(Valid(json::mesh::Semantic::Colors(0)), cacc);
     }
 
-    let animate = frames > 1 || (frames == 1 && seq.frame(0) != base);
     let mut targets = None;
     let mut weights = None;
     if animate {
+        // Position displacements of every frame, one view.
         let disp = |f: usize| {
             seq.frame(f)
                 .iter()
                 .zip(base)
                 .map(|(p, b)| [p[0] - b[0], p[1] - b[1], p[2] - b[2]])
         };
-        let (start, _) = bin.push_f32s(std::iter::empty());
+        let s = bin.start();
+        let mut pos_bounds = Vec::with_capacity(frames);
         for f in 0..frames {
-            bin.push_f32s(disp(f).flatten().map(|v| v as f32));
+            match grid {
+                Some(g) => {
+                    let start = bin.data.len();
+                    for (p, qb) in seq.frame(f).iter().zip(&qbase) {
+                        bin.i16x3(g.disp(*p, *qb));
+                    }
+                    let q = bin.data[start..]
+                        .chunks_exact(8)
+                        .map(|c| [0, 2, 4].map(|o| i16::from_le_bytes([c[o], c[o + 1]])));
+                    pos_bounds.push(bounds_i16(q));
+                }
+                None => {
+                    bin.f32s(disp(f).flatten().map(|v| v as f32));
+                    pos_bounds.push(bounds_f32(disp(f).map(f32x3)));
+                }
+            }
         }
-        let len = bin.data.len() - start;
-        let tview = view(
-            &mut root,
-            (start, len),
-            Some(json::buffer::Target::ArrayBuffer),
-            Some(12),
-        );
+        let (pstride, pstorage) = if grid.is_some() { (8, I16) } else { (12, F32) };
+        let pview = view(&mut root, bin.region(s), array, Some(pstride));
+        // Normal displacements of every frame, one view.
+        let nview = if opts.normals {
+            let s = bin.start();
+            let mut n = Vec::new();
+            for f in 0..frames {
+                normals_or(seq.frame(f), tris, &base_normals, &mut n);
+                for (a, b) in n.iter().zip(&base_normals) {
+                    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+                    match grid {
+                        Some(g) => bin.i8x3(d.map(|x| snorm8(x / g.w))),
+                        None => bin.f32s(d.iter().map(|&x| x as f32)),
+                    }
+                }
+            }
+            let stride = if grid.is_some() { 4 } else { 12 };
+            Some(view(&mut root, bin.region(s), array, Some(stride)))
+        } else {
+            None
+        };
+        let nstorage = if grid.is_some() { I8_NORM } else { F32 };
+        let nstride = if grid.is_some() { 4 } else { 12 };
         let mut t = Vec::with_capacity(frames);
-        for f in 0..frames {
-            let acc = accessor(
+        for (f, mm) in pos_bounds.into_iter().enumerate() {
+            let positions = accessor(
                 &mut root,
-                tview,
-                f * nv * 12,
+                Some(pview),
+                f * nv * pstride,
                 nv,
-                C::F32,
+                pstorage,
                 T::Vec3,
-                Some(bounds3(disp(f))),
+                Some(mm),
             );
+            let normals = nview.map(|v| {
+                accessor(
+                    &mut root,
+                    Some(v),
+                    f * nv * nstride,
+                    nv,
+                    nstorage,
+                    T::Vec3,
+                    None,
+                )
+            });
             t.push(json::mesh::MorphTarget {
-                positions: Some(acc),
-                normals: None,
+                positions: Some(positions),
+                normals,
                 tangents: None,
             });
         }
         targets = Some(t);
         weights = Some(vec![0.0f32; frames]);
     }
+    let material = root.push(json::Material {
+        name: Some("surfmotion".into()),
+        pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+            // Vertex colours multiply the base colour: keep them as they are.
+            base_color_factor: json::material::PbrBaseColorFactor(if mesh.colors().is_some() {
+                [1.0; 4]
+            } else {
+                [0.8, 0.8, 0.8, 1.0]
+            }),
+            metallic_factor: json::material::StrengthFactor(0.0),
+            roughness_factor: json::material::StrengthFactor(0.6),
+            ..Default::default()
+        },
+        ..Default::default()
+    });
     let primitive = json::mesh::Primitive {
         attributes,
         extensions: None,
         extras: Default::default(),
         indices: Some(idx_acc),
-        material: None,
+        material: Some(material),
         mode: Valid(json::mesh::Mode::Triangles),
         targets,
     };
@@ -231,6 +549,8 @@ pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshE
     let node = root.push(json::Node {
         mesh: Some(mesh_idx),
         name: Some("character".into()),
+        translation: grid.map(|g| g.t),
+        scale: grid.map(|g| [g.s; 3]),
         ..Default::default()
     });
     let scene = root.push(json::Scene {
@@ -248,26 +568,43 @@ pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshE
         let last = *times.last().unwrap_or(&0.0);
         let tacc = accessor(
             &mut root,
-            tview,
+            Some(tview),
             0,
             frames,
-            C::F32,
+            F32,
             T::Scalar,
-            Some((vec![0.0], vec![last])),
+            Some((
+                json::Value::from(vec![0.0f32]),
+                json::Value::from(vec![last]),
+            )),
         );
-        let wv = bin.push_f32s(
-            (0..frames * frames).map(|i| if i / frames == i % frames { 1.0 } else { 0.0 }),
-        );
-        let wview = view(&mut root, wv, None, None);
-        let wacc = accessor(
-            &mut root,
-            wview,
-            0,
-            frames * frames,
-            C::F32,
-            T::Scalar,
-            None,
-        );
+        // Output: F keys of F weights, zero but for weight `key_weight` at
+        // (k, k): a sparse accessor without a view (zeros) and F substitutions.
+        let iv = bin.push_u32s((0..frames).map(|k| (k * frames + k) as u32));
+        let iview = view(&mut root, iv, None, None);
+        let vv = bin.push_f32s(std::iter::repeat_n(key_weight, frames));
+        let vview = view(&mut root, vv, None, None);
+        let wacc = accessor(&mut root, None, 0, frames * frames, F32, T::Scalar, None);
+        root.accessors[wacc.value()].sparse = Some(json::accessor::sparse::Sparse {
+            count: USize64(frames as u64),
+            indices: json::accessor::sparse::Indices {
+                buffer_view: iview,
+                byte_offset: USize64(0),
+                component_type: Valid(json::accessor::IndexComponentType(
+                    json::accessor::ComponentType::U32,
+                )),
+                extensions: None,
+                extras: Default::default(),
+            },
+            values: json::accessor::sparse::Values {
+                buffer_view: vview,
+                byte_offset: USize64(0),
+                extensions: None,
+                extras: Default::default(),
+            },
+            extensions: None,
+            extras: Default::default(),
+        });
         let sampler = json::animation::Sampler {
             extensions: None,
             extras: Default::default(),
@@ -310,7 +647,10 @@ pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshE
     if total > u32::MAX as usize {
         return Err(MeshError::invalid(
             Path::new("<glb>"),
-            format!("{total} bytes: too large for GLB (4 GiB)"),
+            format!(
+                "{total} bytes: too large for GLB (4 GiB); quantise (--glb-quantize), \
+                 leave out normals (--glb-no-normals) or split the sequence"
+            ),
         ));
     }
     let mut out = Vec::with_capacity(total);
@@ -326,9 +666,19 @@ pub fn encode_glb(seq: &MeshSequence, fps: Option<f64>) -> Result<Vec<u8>, MeshE
     Ok(out)
 }
 
-/// Writes a sequence as GLB, atomically.
+/// Writes a sequence as GLB with the default options, atomically.
 pub fn write_glb(seq: &MeshSequence, fps: Option<f64>, path: &Path) -> Result<(), MeshError> {
-    let bytes = encode_glb(seq, fps).map_err(|e| match e {
+    write_glb_with(seq, fps, &GlbOptions::DEFAULT, path)
+}
+
+/// Writes a sequence as GLB, atomically.
+pub fn write_glb_with(
+    seq: &MeshSequence,
+    fps: Option<f64>,
+    opts: &GlbOptions,
+    path: &Path,
+) -> Result<(), MeshError> {
+    let bytes = encode_glb_with(seq, fps, opts).map_err(|e| match e {
         MeshError::Invalid { msg, .. } => MeshError::invalid(path, msg),
         e => e,
     })?;

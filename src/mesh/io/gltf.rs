@@ -1,9 +1,14 @@
 //! glTF 2.0 reader (`.gltf` with external or data-URI buffers, `.glb`):
 //! triangle primitives of every mesh node merged into one [`Mesh`] (node
 //! transforms applied, except to skinned meshes, which stay in bind space),
-//! vertex colours, the first skin (joints, parents, inverse bind matrices,
-//! per-vertex joints and weights), morph targets, and a morph-weights
-//! animation sampled at its key times as a mesh sequence.
+//! vertex colours and normals, the first skin (joints, parents, inverse bind
+//! matrices, per-vertex joints and weights), morph targets (POSITION and
+//! NORMAL displacements, through the node transform like the base), and a
+//! morph-weights animation sampled at its key times as a mesh sequence.
+//! Quantised attributes (`KHR_mesh_quantization`: integer and normalized
+//! integer component types, dequantised by the node transform) are read;
+//! the `gltf` crate's validation, which refuses that required extension,
+//! runs with it taken out of `extensionsRequired`.
 //!
 //! Accessors are read by our own bounds-checked code rather than
 //! `gltf::Reader`, so a malformed file gives an error, never a panic.
@@ -12,6 +17,12 @@ use crate::mesh::{Mesh, MeshError, MeshSequence};
 use base64::Engine as _;
 use gltf::accessor::{DataType, Dimensions};
 use std::path::Path;
+
+/// The non-zero morph weights of one animation key: `(target, weight)`.
+pub type KeyWeights = Vec<(u32, f32)>;
+
+/// Indices and values of a sparse accessor's substitutions.
+type Substitutions = (Vec<usize>, Vec<f32>);
 
 /// A skin: joints with their hierarchy, and per-vertex influences.
 #[derive(Debug, Clone)]
@@ -37,8 +48,18 @@ pub struct GltfAsset {
     pub skin: Option<Skin>,
     /// Morph target displacements (per target, one per vertex of `mesh`).
     pub morph_targets: Vec<Vec<[f64; 3]>>,
-    /// Key times and per-key weights of the first morph-weights animation.
-    pub weights_animation: Option<(Vec<f32>, Vec<Vec<f32>>)>,
+    /// Vertex normals (`NORMAL`) through the normal matrix of their node
+    /// (cofactor of its linear part), not renormalised; zero for the vertices
+    /// of primitives without normals. `None` when no primitive has them.
+    pub normals: Option<Vec<[f64; 3]>>,
+    /// Morph target normal displacements, transformed like [`Self::normals`]
+    /// (per target, one per vertex; zero where a target has none). Empty when
+    /// the asset has no normals.
+    pub morph_normals: Vec<Vec<[f64; 3]>>,
+    /// Key times and, per key, the non-zero weights `(target, weight)` of the
+    /// first morph-weights animation (sparse: a clip of `F` frames written as
+    /// one target per frame has `F` weights, not `F²`).
+    pub weights_animation: Option<(Vec<f32>, Vec<KeyWeights>)>,
     /// Animation names and durations (seconds).
     pub animations: Vec<(String, f32)>,
     /// Node count, for `inspect`.
@@ -224,7 +245,7 @@ impl Ctx<'_> {
                 gltf::accessor::sparse::IndexType::U16 => DataType::U16,
                 gltf::accessor::sparse::IndexType::U32 => DataType::U32,
             };
-            let idx = self.read_elements(&iv.view(), iv.offset(), n, 1, it, false, what)?;
+            let idx = self.read_indices(&iv.view(), iv.offset(), n, it, what)?;
             let vals = self.read_elements(
                 &sp.values().view(),
                 sp.values().offset(),
@@ -235,7 +256,6 @@ impl Ctx<'_> {
                 what,
             )?;
             for (k, &i) in idx.iter().enumerate() {
-                let i = i as usize;
                 if i >= count {
                     return Err(self.err(format!("{what}: sparse index {i} ≥ count {count}")));
                 }
@@ -243,6 +263,81 @@ impl Ctx<'_> {
             }
         }
         Ok((out, comps))
+    }
+
+    /// `count` unsigned integers of type `it` (exact: an f32 holds
+    /// integers only up to 2²⁴, and sparse indices into an F×F weight table
+    /// exceed that).
+    fn read_indices(
+        &self,
+        view: &gltf::buffer::View,
+        offset: usize,
+        count: usize,
+        it: DataType,
+        what: &str,
+    ) -> Result<Vec<usize>, MeshError> {
+        let bytes = self.view_bytes(view)?;
+        let cs = it.size();
+        let stride = view.stride().unwrap_or(cs).max(cs);
+        let fits = count == 0
+            || (count - 1)
+                .checked_mul(stride)
+                .and_then(|v| v.checked_add(offset + cs))
+                .is_some_and(|e| e <= bytes.len());
+        if !fits {
+            return Err(self.err(format!(
+                "{what}: {count} indices do not fit in bufferView {}",
+                view.index()
+            )));
+        }
+        Ok((0..count)
+            .map(|i| {
+                let b = &bytes[offset + i * stride..offset + i * stride + cs];
+                match cs {
+                    1 => b[0] as usize,
+                    2 => u16::from_le_bytes([b[0], b[1]]) as usize,
+                    _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+                }
+            })
+            .collect())
+    }
+
+    /// A scalar sparse accessor without a view (zeros but for its
+    /// substitutions) as its (index, value) pairs, in O(substitutions)
+    /// whatever its count; `None` for any other accessor.
+    fn read_sparse_zeros(
+        &self,
+        acc: &gltf::Accessor,
+        what: &str,
+    ) -> Result<Option<Substitutions>, MeshError> {
+        let (None, Some(sp), Dimensions::Scalar) = (acc.view(), acc.sparse(), acc.dimensions())
+        else {
+            return Ok(None);
+        };
+        let n = sp.count();
+        let iv = sp.indices();
+        let it = match iv.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+        };
+        let idx = self.read_indices(&iv.view(), iv.offset(), n, it, what)?;
+        let vals = self.read_elements(
+            &sp.values().view(),
+            sp.values().offset(),
+            n,
+            1,
+            acc.data_type(),
+            acc.normalized(),
+            what,
+        )?;
+        if idx.windows(2).any(|w| w[1] <= w[0]) || idx.last().is_some_and(|&i| i >= acc.count()) {
+            return Err(self.err(format!(
+                "{what}: sparse indices must increase and stay under the count {}",
+                acc.count()
+            )));
+        }
+        Ok(Some((idx, vals)))
     }
 
     fn read_vec3(&self, acc: &gltf::Accessor, what: &str) -> Result<Vec<[f64; 3]>, MeshError> {
@@ -330,6 +425,23 @@ fn transform_point(m: &Mat4, p: [f64; 3]) -> [f64; 3] {
     r
 }
 
+/// The linear part of `m` applied to a displacement.
+fn transform_vector(m: &Mat4, d: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|row| {
+        m[0][row] as f64 * d[0] + m[1][row] as f64 * d[1] + m[2][row] as f64 * d[2]
+    })
+}
+
+/// The cofactor matrix of `m`'s linear part (`det · A⁻ᵀ`, defined for any
+/// `A`) applied to a normal: directions stay perpendicular to transformed
+/// surfaces; renormalise after summing morph displacements.
+fn transform_normal(m: &Mat4, n: [f64; 3]) -> [f64; 3] {
+    use glam::DVec3;
+    let c = |i: usize| DVec3::new(m[i][0] as f64, m[i][1] as f64, m[i][2] as f64);
+    let (c0, c1, c2) = (c(0), c(1), c(2));
+    (c1.cross(c2) * n[0] + c2.cross(c0) * n[1] + c0.cross(c1) * n[2]).to_array()
+}
+
 const IDENTITY: Mat4 = [
     [1.0, 0.0, 0.0, 0.0],
     [0.0, 1.0, 0.0, 0.0],
@@ -373,6 +485,33 @@ fn check_enums(root: &gltf::json::Root, path: &Path) -> Result<(), MeshError> {
                 || p.attributes.keys().any(|k| matches!(k, Checked::Invalid))
             {
                 return bad(format!("primitive mode or attribute name in mesh {i}"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Rejects mesh attributes naming an accessor that does not exist: the
+/// `gltf` crate's validation indexes the POSITION accessor unchecked (a
+/// panic; found by `tests/malformed.rs` on a bit-flipped GLB).
+fn check_attribute_indices(root: &gltf::json::Root, path: &Path) -> Result<(), MeshError> {
+    let n = root.accessors.len();
+    for (i, m) in root.meshes.iter().enumerate() {
+        for p in &m.primitives {
+            let targets = p.targets.iter().flatten();
+            let named = p.attributes.values().copied().chain(
+                targets.flat_map(|t| [t.positions, t.normals, t.tangents].into_iter().flatten()),
+            );
+            for a in named.chain(p.indices) {
+                if a.value() >= n {
+                    return Err(MeshError::invalid(
+                        path,
+                        format!(
+                            "glTF: mesh {i} names accessor {}, the file has {n}",
+                            a.value()
+                        ),
+                    ));
+                }
             }
         }
     }
@@ -430,10 +569,17 @@ fn check_glb_layout<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a [u8], MeshEr
 /// Parses glTF or GLB bytes. `path` locates external buffers and names errors.
 pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
     let bytes = check_glb_layout(bytes, path)?;
-    let g = gltf::Gltf::from_slice(bytes)
+    let g = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| MeshError::invalid(path, format!("glTF: {e}")))?;
-    check_enums(g.document.as_json(), path)?;
-    let doc = g.document;
+    let mut json = g.document.into_json();
+    // Quantisation only widens the component types of attributes, which
+    // `Ctx::read_f32` reads whatever they are.
+    json.extensions_required
+        .retain(|e| e != super::glb::KHR_MESH_QUANTIZATION);
+    check_attribute_indices(&json, path)?;
+    let doc = gltf::Document::from_json(json)
+        .map_err(|e| MeshError::invalid(path, format!("glTF: {e}")))?;
+    check_enums(doc.as_json(), path)?;
     let ctx = Ctx {
         path,
         buffers: load_buffers(&doc, g.blob, path)?,
@@ -479,6 +625,9 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
     let mut any_color = false;
     let mut tris: Vec<[u32; 3]> = Vec::new();
     let mut targets: Vec<Vec<[f64; 3]>> = Vec::new();
+    let mut normals: Vec<[f64; 3]> = Vec::new();
+    let mut any_normal = false;
+    let mut target_normals: Vec<Vec<[f64; 3]>> = Vec::new();
     let mut morph_node: Option<usize> = None;
     let mut skin_joints: Vec<[u16; 4]> = Vec::new();
     let mut skin_weights: Vec<[f32; 4]> = Vec::new();
@@ -524,6 +673,20 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
                 return Err(ctx.err("too many vertices"));
             }
             positions.extend(p);
+            match prim.get(&gltf::Semantic::Normals) {
+                Some(a) => {
+                    let mut n = ctx.read_vec3(&a, "NORMAL")?;
+                    if n.len() != nv {
+                        return Err(ctx.err("NORMAL has the wrong size"));
+                    }
+                    if !skinned {
+                        n.iter_mut().for_each(|x| *x = transform_normal(&m, *x));
+                    }
+                    normals.extend(n);
+                    any_normal = true;
+                }
+                None => normals.extend(std::iter::repeat_n([0.0; 3], nv)),
+            }
             match prim.get(&gltf::Semantic::Colors(0)) {
                 Some(c) => {
                     let (v, comps) = ctx.read_f32(&c, "COLOR_0")?;
@@ -583,6 +746,7 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
                 morph_node = Some(ni);
                 if targets.is_empty() {
                     targets = vec![Vec::new(); ptargets.len()];
+                    target_normals = vec![Vec::new(); ptargets.len()];
                 }
                 if targets.len() != ptargets.len() {
                     return Err(
@@ -590,15 +754,25 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
                     );
                 }
                 for (k, t) in ptargets.iter().enumerate() {
-                    let d = match t.positions() {
+                    let mut d = match t.positions() {
                         Some(a) => ctx.read_vec3(&a, "morph target POSITION")?,
                         None => vec![[0.0; 3]; nv],
                     };
-                    if d.len() != nv {
+                    let mut dn = match t.normals() {
+                        Some(a) => ctx.read_vec3(&a, "morph target NORMAL")?,
+                        None => vec![[0.0; 3]; nv],
+                    };
+                    if d.len() != nv || dn.len() != nv {
                         return Err(ctx.err("morph target size differs from its primitive"));
+                    }
+                    if !skinned {
+                        d.iter_mut().for_each(|x| *x = transform_vector(&m, *x));
+                        dn.iter_mut().for_each(|x| *x = transform_normal(&m, *x));
                     }
                     targets[k].resize(base, [0.0; 3]);
                     targets[k].extend(d);
+                    target_normals[k].resize(base, [0.0; 3]);
+                    target_normals[k].extend(dn);
                 }
             }
         }
@@ -606,8 +780,11 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
     if positions.is_empty() {
         return Err(ctx.err("no triangle mesh in the scene"));
     }
-    for t in &mut targets {
+    for t in targets.iter_mut().chain(&mut target_normals) {
         t.resize(positions.len(), [0.0; 3]);
+    }
+    if !any_normal {
+        target_normals.clear();
     }
     let mut mesh = Mesh::new(positions, tris).map_err(|e| MeshError::from(e).in_file(path))?;
     if any_color {
@@ -706,19 +883,34 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
                 && Some(ch.target().node().index()) == morph_node
                 && !targets.is_empty()
             {
-                let (w, _) = ctx.read_f32(&ch.sampler().output(), "animation output")?;
+                let out = ch.sampler().output();
                 let nt = targets.len();
                 let per_key = match ch.sampler().interpolation() {
                     gltf::animation::Interpolation::CubicSpline => 3 * nt,
                     _ => nt,
                 };
-                if w.len() != t.len() * per_key {
+                if out.dimensions() != Dimensions::Scalar
+                    || Some(out.count()) != t.len().checked_mul(per_key)
+                {
                     return Err(ctx.err("morph weights animation output has the wrong size"));
                 }
+                // Element i is weight i % per_key (of which the value part
+                // of a cubic key, off..off + nt) at key i / per_key.
                 let off = if per_key == 3 * nt { nt } else { 0 };
-                let keys = (0..t.len())
-                    .map(|k| w[k * per_key + off..k * per_key + off + nt].to_vec())
-                    .collect();
+                let mut keys = vec![Vec::new(); t.len()];
+                let mut put = |i: usize, w: f32| {
+                    let j = i % per_key;
+                    if w != 0.0 && (off..off + nt).contains(&j) {
+                        keys[i / per_key].push(((j - off) as u32, w));
+                    }
+                };
+                match ctx.read_sparse_zeros(&out, "animation output")? {
+                    Some((idx, vals)) => idx.into_iter().zip(vals).for_each(|(i, w)| put(i, w)),
+                    None => {
+                        let (w, _) = ctx.read_f32(&out, "animation output")?;
+                        w.into_iter().enumerate().for_each(|(i, w)| put(i, w));
+                    }
+                }
                 weights_animation = Some((t, keys));
             }
         }
@@ -795,6 +987,8 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
         mesh,
         skin,
         morph_targets: targets,
+        normals: any_normal.then_some(normals),
+        morph_normals: target_normals,
         weights_animation,
         animations,
         nodes: nn,
@@ -839,6 +1033,27 @@ fn sample(ch: &NodeChannel, t: f32) -> [f32; 4] {
 }
 
 impl GltfAsset {
+    /// Unit vertex normals at key `key` of the morph-weights animation,
+    /// `normalize(N + Σ_j w_j ΔN_j)` (zero where that vanishes); the rest
+    /// normals when there is no such animation. `None` without normals or
+    /// past the last key.
+    pub fn key_normals(&self, key: usize) -> Option<Vec<[f64; 3]>> {
+        use glam::DVec3;
+        let base = self.normals.as_ref()?;
+        let mut n: Vec<DVec3> = base.iter().map(|v| DVec3::from_array(*v)).collect();
+        if let Some((_, keys)) = &self.weights_animation {
+            for &(j, w) in keys.get(key)? {
+                let Some(d) = self.morph_normals.get(j as usize) else {
+                    continue;
+                };
+                for (a, b) in n.iter_mut().zip(d) {
+                    *a += w as f64 * DVec3::from_array(*b);
+                }
+            }
+        }
+        Some(n.iter().map(|v| v.normalize_or_zero().to_array()).collect())
+    }
+
     /// Animation `index` of a skinned asset as a mesh sequence sampled at
     /// `fps`: node transforms are sampled (linear, slerp or step), composed
     /// down the hierarchy, and the mesh is skinned with linear blend skinning
@@ -978,13 +1193,14 @@ impl GltfAsset {
         for w in keys {
             let start = frames.len();
             frames.extend_from_slice(base);
-            for (k, &wk) in w.iter().enumerate() {
-                if wk != 0.0 {
-                    for (p, d) in frames[start..].iter_mut().zip(&self.morph_targets[k]) {
-                        p[0] += wk as f64 * d[0];
-                        p[1] += wk as f64 * d[1];
-                        p[2] += wk as f64 * d[2];
-                    }
+            for &(k, wk) in w {
+                let Some(target) = self.morph_targets.get(k as usize) else {
+                    continue;
+                };
+                for (p, d) in frames[start..].iter_mut().zip(target) {
+                    p[0] += wk as f64 * d[0];
+                    p[1] += wk as f64 * d[1];
+                    p[2] += wk as f64 * d[2];
                 }
             }
         }
@@ -995,5 +1211,44 @@ impl GltfAsset {
             None
         };
         Ok(MeshSequence::new(self.mesh.clone(), frames, fps)?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    /// Under a non-uniform scale and a rotation, a transformed normal stays
+    /// perpendicular to the transformed tangent plane (where the plain
+    /// linear map would tilt it), and a displacement is the linear map.
+    #[test]
+    fn normals_follow_the_node_transform_through_the_cofactor() {
+        let r = glam::Mat4::from_scale_rotation_translation(
+            glam::Vec3::new(3.0, 0.5, 1.0),
+            glam::Quat::from_rotation_z(0.7),
+            glam::Vec3::new(5.0, -2.0, 1.0),
+        );
+        let m: Mat4 = r.to_cols_array_2d();
+        let n = DVec3::new(1.0, 1.0, 0.0).normalize();
+        let (t1, t2) = (DVec3::new(1.0, -1.0, 0.0), DVec3::Z);
+        let tn = DVec3::from_array(transform_normal(&m, n.to_array()));
+        for t in [t1, t2] {
+            let tt = DVec3::from_array(transform_vector(&m, t.to_array()));
+            assert!(
+                tn.dot(tt).abs() < 1e-5 * tn.length() * tt.length(),
+                "{tn} · {tt}"
+            );
+        }
+        let plain = DVec3::from_array(transform_vector(&m, n.to_array()));
+        assert!(
+            plain
+                .dot(DVec3::from_array(transform_vector(&m, t1.to_array())))
+                .abs()
+                > 0.1
+        );
+        let p = DVec3::from_array(transform_point(&m, [0.0; 3]));
+        assert!((p - DVec3::new(5.0, -2.0, 1.0)).length() < 1e-6);
+        assert!(tn.dot(n) > 0.0, "orientation kept for det > 0");
     }
 }

@@ -227,6 +227,15 @@ pub fn load_sequence(spec: &str, opts: &LoadOptions) -> Result<MeshSequence, Mes
     Ok(seq)
 }
 
+/// Options of [`save_sequence_with`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SaveOptions {
+    /// Frame rate where the sequence has none. Default value: `None` (30).
+    pub fps: Option<f64>,
+    /// GLB output (normals, quantisation). Default value: [`glb::GlbOptions::DEFAULT`].
+    pub glb: glb::GlbOptions,
+}
+
 /// Saves a sequence in the format of `out`'s extension. PC2 and MDD get a
 /// topology OBJ of the same name beside them; `.obj` takes one frame; a path
 /// without extension is a folder of OBJ frames. Returns the files written.
@@ -235,6 +244,23 @@ pub fn save_sequence(
     out: &Path,
     fps: Option<f64>,
 ) -> Result<Vec<PathBuf>, MeshError> {
+    save_sequence_with(
+        seq,
+        out,
+        &SaveOptions {
+            fps,
+            ..Default::default()
+        },
+    )
+}
+
+/// [`save_sequence`] with options for the GLB writer.
+pub fn save_sequence_with(
+    seq: &MeshSequence,
+    out: &Path,
+    opts: &SaveOptions,
+) -> Result<Vec<PathBuf>, MeshError> {
+    let fps = opts.fps;
     refuse_folder_as_file(out)?;
     let fmt = MeshFormat::of(out).ok_or_else(|| {
         MeshError::invalid(
@@ -245,7 +271,7 @@ pub fn save_sequence(
     let fps_v = seq.fps.or(fps).unwrap_or(30.0);
     Ok(match fmt {
         MeshFormat::Glb => {
-            glb::write_glb(seq, fps, out)?;
+            glb::write_glb_with(seq, fps, &opts.glb, out)?;
             vec![out.to_path_buf()]
         }
         MeshFormat::Gltf => {
