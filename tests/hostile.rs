@@ -674,6 +674,7 @@ fn copy_dir(from: &Path, to: &Path) {
 
 /// Rows on the shared data (skipped without it): real files, same rules.
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn hostile_inputs_on_shared_data() {
     let Some(data) = common::data_dir() else {
         return;

@@ -296,6 +296,7 @@ fn written_glb_passes_the_khronos_validator() {
 /// with normals within 2 degrees of the normals of the input frames, at
 /// about half the size of the float file.
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn quantised_samba_glb_is_half_the_size_within_a_tenth_of_a_millimetre() {
     let Some(d) = common::data_dir() else { return };
     let seq = samba(&d, 175);
