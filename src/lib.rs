@@ -13,6 +13,7 @@ pub mod eval;
 pub mod fsutil;
 pub mod graph;
 pub mod inspect;
+pub mod keyframe;
 pub mod mesh;
 pub mod mocap;
 pub mod render;
