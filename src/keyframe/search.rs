@@ -167,6 +167,7 @@ struct Cycle {
 #[derive(Debug, Clone)]
 struct Walk {
     nodes: Vec<u32>,
+    arcs: Vec<u32>,
     m: Measure,
     /// `(walk position, cycle)` of its distinct loops.
     loops: Vec<(usize, u32)>,
@@ -675,7 +676,7 @@ impl Segment {
         let mut capped_loops = false;
         self.walks = found
             .into_iter()
-            .map(|(nodes, m)| {
+            .map(|(nodes, arcs, m)| {
                 let (loops, capped) = self.attached(&nodes, limits.loops_per_walk);
                 capped_loops |= capped;
                 let measures: Vec<Measure> = loops
@@ -685,6 +686,7 @@ impl Segment {
                 let cone = super::repeats::cone(&measures);
                 Walk {
                     nodes,
+                    arcs,
                     m,
                     loops,
                     measures,
@@ -760,7 +762,7 @@ impl Segment {
             });
         };
         let wk = &self.walks[i];
-        Ok(self.expand(&wk.nodes, &wk.loops, &n))
+        Ok(self.expand(&wk.nodes, &wk.arcs, &wk.loops, &n))
     }
 
     fn pop(
@@ -787,26 +789,6 @@ impl Segment {
         }
     }
 
-    /// The walk's arcs from its node list.
-    fn walk_arcs(&self, nodes: &[u32]) -> Vec<u32> {
-        nodes
-            .windows(2)
-            .map(|p| {
-                self.out[p[0] as usize]
-                    .iter()
-                    .copied()
-                    .filter(|&a| self.arcs[a as usize].to == p[1])
-                    .min_by(|&a, &b| {
-                        self.arcs[a as usize]
-                            .m
-                            .cost
-                            .total_cmp(&self.arcs[b as usize].m.cost)
-                    })
-                    .unwrap_or(0)
-            })
-            .collect()
-    }
-
     /// One repetition of a cycle starting at walk node `node`.
     fn cycle_frames(&self, c: u32, node: u32) -> Vec<u32> {
         let cyc = &self.cycles[c as usize];
@@ -822,9 +804,8 @@ impl Segment {
         out
     }
 
-    fn expand(&self, nodes: &[u32], att: &[(usize, u32)], n: &[u32]) -> SegmentPath {
-        let warcs = self.walk_arcs(nodes);
-        let walk_measure = self.walk_measure(&warcs);
+    fn expand(&self, nodes: &[u32], warcs: &[u32], att: &[(usize, u32)], n: &[u32]) -> SegmentPath {
+        let walk_measure = self.walk_measure(warcs);
         let mut loops: Vec<(usize, LoopUse)> = Vec::new();
         for (&(at, c), &k) in att.iter().zip(n) {
             if k == 0 {
@@ -878,7 +859,12 @@ impl Segment {
 
     /// Every walk (up to `limit`), as node lists with their measures,
     /// cheapest transition cost first; flags a hit bound.
-    fn all_walks(&self, limit: usize, expansions: usize) -> (Vec<(Vec<u32>, Measure)>, bool) {
+    #[allow(clippy::type_complexity)]
+    fn all_walks(
+        &self,
+        limit: usize,
+        expansions: usize,
+    ) -> (Vec<(Vec<u32>, Vec<u32>, Measure)>, bool) {
         let mut out = Vec::new();
         let mut on = vec![false; self.frames.len()];
         let mut nodes = vec![self.start];
@@ -888,7 +874,7 @@ impl Segment {
         let mut steps = 0usize;
         let mut capped = false;
         if self.start == self.goal {
-            return (vec![(nodes, self.walk_measure(&[]))], false);
+            return (vec![(nodes, Vec::new(), self.walk_measure(&[]))], false);
         }
         while let Some((order, k)) = stack.last_mut() {
             if *k >= order.len() {
@@ -910,7 +896,7 @@ impl Segment {
             if v == self.goal {
                 let mut ns = nodes.clone();
                 ns.push(v);
-                out.push((ns, self.walk_measure(&arcs)));
+                out.push((ns, arcs.clone(), self.walk_measure(&arcs)));
                 arcs.pop();
                 continue;
             }
@@ -918,7 +904,7 @@ impl Segment {
             nodes.push(v);
             stack.push((self.out[v as usize].clone(), 0));
         }
-        out.sort_by(|a, b| a.1.cost.total_cmp(&b.1.cost));
+        out.sort_by(|a, b| a.2.cost.total_cmp(&b.2.cost));
         (out, capped)
     }
 }
@@ -1046,7 +1032,7 @@ pub fn solve_split(
         let wk = &s.walks[choice[i]];
         let ni = &n[off..off + wk.loops.len()];
         off += wk.loops.len();
-        out.push(s.expand(&wk.nodes, &wk.loops, ni));
+        out.push(s.expand(&wk.nodes, &wk.arcs, &wk.loops, ni));
     }
     Ok(out)
 }
