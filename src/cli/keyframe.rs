@@ -67,6 +67,14 @@ pub struct Args {
     /// Weight of the time error, per frame. Default: 1/10 (the paper).
     #[arg(long, value_parser = super::non_negative)]
     pub w_time: Option<f64>,
+    /// Optimality gap of the search (cost units: 1 = 30 cm of distance or
+    /// 10 frames at the default weights; 0: the exact optimum).
+    #[arg(long, default_value_t = 0.03, value_parser = super::non_negative)]
+    pub gap: f64,
+    /// Most distinct loops handed to one repetition problem (the slowest,
+    /// the fastest and the cheapest per frame are kept).
+    #[arg(long, default_value_t = 64)]
+    pub max_loops: usize,
     /// Loop repetition solver.
     #[arg(long, value_enum, default_value_t = SolverArg::Exact)]
     pub solver: SolverArg,
@@ -117,6 +125,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             solver: match a.solver {
                 SolverArg::Exact => Solver::Exact,
                 SolverArg::Ilp => Solver::Ilp,
+            },
+            gap: a.gap,
+            limits: surfmotion::keyframe::search::Limits {
+                loops_per_walk: a.max_loops.max(2),
+                ..Default::default()
             },
             ..Default::default()
         },
@@ -233,9 +246,10 @@ fn grid(ch: &Character, keys: &[u32], a: &Args, opts: &KeyframeOptions) -> anyho
 fn grid_text(g: &GridReport) -> String {
     let n = g.queries.len();
     let mut s = format!(
-        "{}: {} ({} distances x {} times)\n",
+        "{}: {} {} ({} distances x {} times)\n",
         g.keys.join(" -> "),
-        super::count(n, "query"),
+        n,
+        if n == 1 { "query" } else { "queries" },
         g.distances.len(),
         g.times.len()
     );
