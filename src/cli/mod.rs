@@ -6,6 +6,7 @@ mod db;
 mod demo;
 mod graph;
 mod inspect;
+mod keyframe;
 mod mesh;
 mod mocap;
 mod render;
@@ -78,6 +79,13 @@ enum Command {
     /// non-linear mesh blending, and place the result on the clip's root
     /// trajectory.
     Retarget(retarget::Args),
+    /// Key-frame animation (Huang et al. 2015, Sec. 5.1): the path through
+    /// the Surface Motion Graph from one database frame to another (via
+    /// others, in order) that best meets a travel distance and time; loops
+    /// repeated as an integer programme decides, transitions blended, the
+    /// character placed along its accumulated travel. --grid evaluates a
+    /// grid of targets (Table III).
+    Keyframe(Box<keyframe::Args>),
     /// Score a retargeted result: the average joint-velocity difference
     /// (cm/frame) between the clip on the character's skeleton and the
     /// skeleton extracted from the result (Huang et al. 2015, Sec. 6.2).
@@ -140,6 +148,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Synth(a) => synth::run(a),
         Command::Graph(a) => graph::run(a),
         Command::Retarget(a) => retarget::run(a),
+        Command::Keyframe(a) => keyframe::run(*a),
         Command::Eval(a) => retarget::eval(a),
         Command::Transfer(a) => transfer::run(*a),
         Command::Batch(a) => batch::run_batch(*a),

@@ -124,14 +124,16 @@ pub struct Output {
 
 /// A rigid motion on the floor: rotation `theta` about Y, then `t` (y = 0).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Floor {
-    theta: f64,
-    t: DVec3,
+pub struct Floor {
+    /// Rotation about Y (radians, [`rotate_yaw`]'s sense).
+    pub theta: f64,
+    /// Translation (y = 0).
+    pub t: DVec3,
 }
 
 impl Floor {
     /// The floor motion that best maps `from` onto `to` (least squares).
-    fn fit(from: &Pose, to: &Pose) -> Floor {
+    pub fn fit(from: &Pose, to: &Pose) -> Floor {
         let (cos, sin, ct, cf) = floor_fit(to, from);
         let theta = sin.atan2(cos);
         Floor {
@@ -139,11 +141,12 @@ impl Floor {
             t: ct - rotate_yaw(cf, cos, sin),
         }
     }
-    fn apply(&self, p: DVec3) -> DVec3 {
+    /// The motion applied to a point.
+    pub fn apply(&self, p: DVec3) -> DVec3 {
         rotate_yaw(p, self.theta.cos(), self.theta.sin()) + self.t
     }
     /// `self ∘ other`.
-    fn after(&self, other: &Floor) -> Floor {
+    pub fn after(&self, other: &Floor) -> Floor {
         Floor {
             theta: self.theta + other.theta,
             t: rotate_yaw(other.t, self.theta.cos(), self.theta.sin()) + self.t,

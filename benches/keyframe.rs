@@ -1,0 +1,88 @@
+//! Key-frame search alone (Huang et al. 2015, Sec. 5.1): preparing the
+//! walks and loops between two key-frames, and one query (a distance and
+//! time target), on a generated frame graph shaped like a walk/run/walk
+//! database at 25 fps (three cyclic sequences, 72/36/162 frames, loops
+//! every gait cycle and transitions between them, 42 in all, as `db build`
+//! finds on the synthetic database of the README). The figures in the
+//! README come from `surfmotion keyframe --grid` on real databases.
+
+use criterion::Criterion;
+use std::hint::black_box;
+use surfmotion::keyframe::graph::KeyGraph;
+use surfmotion::keyframe::search::SearchOptions;
+use surfmotion::keyframe::{Planner, Targets};
+
+fn graph() -> KeyGraph {
+    // (frames, metres per frame, gait period in frames)
+    let seqs = [(72usize, 0.055, 27usize), (36, 0.13, 19), (162, 0.05, 28)];
+    let mut centre = Vec::new();
+    let mut sequence = Vec::new();
+    let mut start = Vec::new();
+    for (s, &(len, v, _)) in seqs.iter().enumerate() {
+        start.push(centre.len());
+        for f in 0..len {
+            centre.push([v * f as f64, 0.03 * (f as f64 * 0.23).sin()]);
+            sequence.push(s as u32);
+        }
+    }
+    let n = centre.len();
+    let mut succ: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
+    for f in 0..n - 1 {
+        if sequence[f] == sequence[f + 1] {
+            succ[f].push((f as u32 + 1, 0.0));
+        }
+    }
+    // Loops: every gait period, both ways.
+    for (s, &(len, _, p)) in seqs.iter().enumerate() {
+        let mut m = 5;
+        while m + p + 2 < len {
+            succ[start[s] + m + p].push(((start[s] + m + 1) as u32, 0.001));
+            succ[start[s] + m].push(((start[s] + m + p + 1) as u32, 0.001));
+            m += p / 2 + 3;
+        }
+    }
+    // Between sequences.
+    for (a, b, m, k) in [
+        (0, 1, 30, 29),
+        (0, 1, 58, 29),
+        (1, 0, 29, 30),
+        (1, 0, 29, 58),
+        (0, 2, 53, 31),
+        (2, 0, 31, 53),
+        (1, 2, 29, 37),
+        (2, 1, 37, 29),
+        (1, 2, 30, 117),
+        (2, 1, 117, 30),
+    ] {
+        succ[start[a] + m].push(((start[b] + k + 1) as u32, 0.004));
+    }
+    KeyGraph::new(&succ, centre, sequence)
+}
+
+fn main() {
+    let g = graph();
+    let keys = [0u32, (72 + 36 + 150) as u32];
+    let o = SearchOptions::default();
+    let mut c = Criterion::default().configure_from_args();
+    let mut grp = c.benchmark_group("keyframe/search");
+    grp.sample_size(10);
+    grp.bench_function("prepare", |b| {
+        b.iter(|| Planner::new(black_box(g.clone()), &keys, 25.0, &o).unwrap())
+    });
+    let p = Planner::new(g.clone(), &keys, 25.0, &o).unwrap();
+    for (d, t) in [(10.0, 8.0), (20.0, 12.0), (3.0, 30.0)] {
+        grp.bench_function(format!("query_{d}m_{t}s"), |b| {
+            b.iter(|| {
+                p.plan(
+                    black_box(&Targets::Global {
+                        distance: d,
+                        time: t,
+                    }),
+                    &o,
+                )
+                .unwrap()
+            })
+        });
+    }
+    grp.finish();
+}

@@ -1,0 +1,288 @@
+//! `surfmotion keyframe`: key-frame animation through the Surface Motion
+//! Graph (Huang et al. 2015, Sec. 5.1), and its Table III grid evaluation.
+
+use std::path::PathBuf;
+use surfmotion::keyframe::graph::KeyGraph;
+use surfmotion::keyframe::grid::{GridReport, evaluate, parse_range};
+use surfmotion::keyframe::search::{SearchOptions, Solver, Weights};
+use surfmotion::keyframe::{KeyframeOptions, Planner, Targets, describe, parse_key, synthesise};
+use surfmotion::mesh::MeshSequence;
+use surfmotion::mesh::io::save_sequence;
+use surfmotion::retarget::character::Character;
+
+/// Repetition solver on the command line.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum SolverArg {
+    /// Exact dynamic programme over the loop frames (fast).
+    Exact,
+    /// The paper's four integer linear programmes (microlp).
+    Ilp,
+}
+
+/// Arguments of `keyframe`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The character database (its graph is built first if needed).
+    #[arg(long)]
+    pub db: PathBuf,
+    /// Start key-frame, SEQUENCE:FRAME (frames from 0).
+    #[arg(long, value_name = "SEQ:F")]
+    pub from: String,
+    /// End key-frame, SEQUENCE:FRAME.
+    #[arg(long, value_name = "SEQ:F")]
+    pub to: String,
+    /// Key-frames to pass in between, in order (repeat the option).
+    #[arg(long, value_name = "SEQ:F")]
+    pub via: Vec<String>,
+    /// Target travel distance in metres (0: as short as possible): one
+    /// value for the whole path (split optimally over its segments), or a
+    /// comma list with one per segment.
+    #[arg(
+        long,
+        value_name = "M",
+        allow_hyphen_values = true,
+        required_unless_present = "grid"
+    )]
+    pub distance: Option<String>,
+    /// Target time in seconds (0: as short as possible); one value or one
+    /// per segment.
+    #[arg(
+        long,
+        value_name = "S",
+        allow_hyphen_values = true,
+        required_unless_present = "grid"
+    )]
+    pub time: Option<String>,
+    /// Output: .glb, .pc2 (+ .obj), .mdd, or a folder of OBJ frames.
+    #[arg(short, long, required_unless_present = "grid")]
+    pub output: Option<PathBuf>,
+    /// Write the JSON report: path (segments, loops, repetitions), cost
+    /// terms, achieved distance and time, transitions and smoothness,
+    /// search time.
+    #[arg(long, value_name = "JSON")]
+    pub report: Option<PathBuf>,
+    /// Weight of the distance error, per metre. Default: 1/0.3 (the paper).
+    #[arg(long, value_parser = super::non_negative)]
+    pub w_dist: Option<f64>,
+    /// Weight of the time error, per frame. Default: 1/10 (the paper).
+    #[arg(long, value_parser = super::non_negative)]
+    pub w_time: Option<f64>,
+    /// Optimality gap of the search (cost units: 1 = 30 cm of distance or
+    /// 10 frames at the default weights; 0: the exact optimum).
+    #[arg(long, default_value_t = 0.03, value_parser = super::non_negative)]
+    pub gap: f64,
+    /// Most distinct loops handed to one repetition problem (the slowest,
+    /// the fastest and the cheapest per frame are kept).
+    #[arg(long, default_value_t = 64)]
+    pub max_loops: usize,
+    /// Loop repetition solver.
+    #[arg(long, value_enum, default_value_t = SolverArg::Exact)]
+    pub solver: SolverArg,
+    /// No blending across transitions.
+    #[arg(long)]
+    pub no_blend: bool,
+    /// Evaluate over a grid of targets instead (Table III): every
+    /// --distances × --times, one query each; prints the errors, the
+    /// smoothness and the query time.
+    #[arg(long)]
+    pub grid: bool,
+    /// Grid distances (metres), A:B:STEP or a comma list.
+    #[arg(long, default_value = "1:20:1")]
+    pub distances: String,
+    /// Grid times (seconds), A:B:STEP or a comma list.
+    #[arg(long, default_value = "1:40:1")]
+    pub times: String,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn numbers(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
+    s.split(',')
+        .map(|x| {
+            x.trim()
+                .parse::<f64>()
+                .map_err(|_| anyhow::anyhow!("--{what} '{s}': expected a number or a comma list"))
+        })
+        .collect()
+}
+
+/// Runs `keyframe`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let ch = Character::load(&a.db, &super::db::Bars::new())?;
+    let mut keys = vec![parse_key(&ch, &a.from)?];
+    for v in &a.via {
+        keys.push(parse_key(&ch, v)?);
+    }
+    keys.push(parse_key(&ch, &a.to)?);
+    let defaults = Weights::default();
+    let opts = KeyframeOptions {
+        search: SearchOptions {
+            weights: Weights {
+                distance: a.w_dist.unwrap_or(defaults.distance),
+                time: a.w_time.unwrap_or(defaults.time),
+            },
+            solver: match a.solver {
+                SolverArg::Exact => Solver::Exact,
+                SolverArg::Ilp => Solver::Ilp,
+            },
+            gap: a.gap,
+            limits: surfmotion::keyframe::search::Limits {
+                loops_per_walk: a.max_loops.max(2),
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+        timeline: surfmotion::retarget::timeline::TimelineOptions {
+            blend: !a.no_blend,
+            ..Default::default()
+        },
+    };
+    if a.grid {
+        return grid(&ch, &keys, &a, &opts);
+    }
+    let (Some(d), Some(t), Some(out)) = (&a.distance, &a.time, &a.output) else {
+        anyhow::bail!("--distance, --time and -o are needed (or --grid)");
+    };
+    let targets = Targets::from_lists(
+        &numbers("distance", d)?,
+        &numbers("time", t)?,
+        keys.len() - 1,
+    )?;
+    let o = synthesise(&ch, &keys, &targets, &opts)?;
+    let fps = ch.manifest.fps;
+    let seq = MeshSequence::new(ch.topology_metres(), o.positions, Some(fps))?;
+    let written = save_sequence(&seq, out, Some(fps))?;
+    let r = &o.report;
+    if let Some(p) = &a.report {
+        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(r)?.as_bytes())?;
+    }
+    if a.json {
+        let mut v = serde_json::to_value(r)?;
+        v["output"] = serde_json::to_value(&written)?;
+        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+    }
+    let mut s = format!(
+        "{} -> {}: {} at {} fps\n",
+        r.keys.join(" -> "),
+        written
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        super::count(r.frames, "frame"),
+        fps
+    );
+    s += &format!("achieved: {:.3} m in {:.3} s", r.distance, r.time);
+    if let (Some(de), Some(te)) = (r.distance_error, r.time_error) {
+        s += &format!(" (error {de:+.3} m, {te:+.3} s)");
+    }
+    s += "\n";
+    s += &format!(
+        "cost: transitions {:.4} + distance {:.4} + time {:.4} = {:.4}\n",
+        r.cost.transition, r.cost.distance, r.cost.time, r.cost.total
+    );
+    for seg in &r.segments {
+        s += &format!(
+            "segment {} -> {}: {:.3} m, {:.3} s; walk {}",
+            seg.from,
+            seg.to,
+            seg.distance,
+            seg.time,
+            seg.walk.join(" ")
+        );
+        for l in &seg.loops {
+            s += &format!("; loop at {} ({}) x{}", l.at, l.frames.join(" "), l.repeats);
+        }
+        s += "\n";
+    }
+    s += &format!(
+        "{}, smoothness {}\n",
+        super::count(r.transitions.len(), "transition"),
+        r.smoothness
+            .map_or("- (none)".to_string(), |x| format!("{x:.4} m"))
+    );
+    s += &format!(
+        "search: {} nodes, {}, {} solved, {} pruned; {:.1} ms preparing, {:.1} ms searching, {:.2} s meshes\n",
+        r.stats.nodes,
+        super::count(r.stats.cycles, "loop"),
+        super::count(r.stats.walks, "walk"),
+        r.stats.pruned,
+        1e3 * r.prepare_seconds,
+        1e3 * r.search_seconds,
+        r.mesh_seconds
+    );
+    for b in &r.stats.bounds_hit {
+        s += &format!("bound hit: {b}\n");
+    }
+    super::emit(&s)
+}
+
+fn grid(ch: &Character, keys: &[u32], a: &Args, opts: &KeyframeOptions) -> anyhow::Result<()> {
+    let planner = Planner::new(
+        KeyGraph::of_character(ch),
+        keys,
+        ch.manifest.fps,
+        &opts.search,
+    )
+    .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
+    let ds = parse_range(&a.distances).map_err(|e| anyhow::anyhow!("--distances {e}"))?;
+    let ts = parse_range(&a.times).map_err(|e| anyhow::anyhow!("--times {e}"))?;
+    let g = evaluate(ch, &planner, &ds, &ts, &opts.search, &opts.timeline)
+        .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
+    if let Some(p) = &a.report {
+        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&g)?.as_bytes())?;
+    }
+    if a.json {
+        let mut v = serde_json::to_value(&g)?;
+        if let Some(o) = v.as_object_mut() {
+            o.remove("queries");
+        }
+        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+    }
+    super::emit(&grid_text(&g))
+}
+
+fn grid_text(g: &GridReport) -> String {
+    let n = g.queries.len();
+    let mut s = format!(
+        "{}: {} {} ({} distances x {} times)\n",
+        g.keys.join(" -> "),
+        n,
+        if n == 1 { "query" } else { "queries" },
+        g.distances.len(),
+        g.times.len()
+    );
+    for (what, e) in [("reachable", &g.reachable), ("unreachable", &g.unreachable)] {
+        if e.distance_m.count == 0 {
+            s += &format!("{what}: none\n");
+            continue;
+        }
+        s += &format!(
+            "{what} ({}): distance error min/rms/max {:.4}/{:.4}/{:.4} m = {:.3}/{:.3}/{:.3} %; time error {:.3}/{:.3}/{:.3} s = {:.3}/{:.3}/{:.3} %; {} within 1 %\n",
+            e.distance_m.count,
+            e.distance_m.min,
+            e.distance_m.rms,
+            e.distance_m.max,
+            e.distance_pct.min,
+            e.distance_pct.rms,
+            e.distance_pct.max,
+            e.time_s.min,
+            e.time_s.rms,
+            e.time_s.max,
+            e.time_pct.min,
+            e.time_pct.rms,
+            e.time_pct.max,
+            e.within_1pct
+        );
+    }
+    s += &format!(
+        "smoothness min/mean/max {:.4}/{:.4}/{:.4} m over {} queries with transitions\n",
+        g.smoothness.min, g.smoothness_mean, g.smoothness.max, g.smoothness.count
+    );
+    s += &format!(
+        "query time {:.2} ± {:.2} ms (max {:.1} ms); preparation {:.1} ms once; {} hit a search bound\n",
+        g.query_ms_mean, g.query_ms_std, g.query_ms_max, g.prepare_ms, g.bounded
+    );
+    s
+}

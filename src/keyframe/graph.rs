@@ -1,0 +1,180 @@
+//! The frame graph the key-frame search walks (Huang et al. 2015, Sec. 5.1):
+//! the Surface Motion Graph's frame-level adjacency with, for every frame,
+//! the floor distance its centroid moves when the path enters it (Eq. 10).
+//!
+//! A path of frames `f_0 … f_{N−1}` travels `Σ step[f_k]` for `k ≥ 1`: the
+//! step of a frame is the floor-projected distance between the mesh
+//! centroid of that frame and of the frame before it in its own sequence.
+//! Inside a sequence this is Eq. 10 exactly; across a transition
+//! `(i, m) → (j, n+1)` it is the step `n → n+1` of `j`, i.e. the motion the
+//! character makes once the new segment is aligned to where the previous
+//! one left off ([`super::place`] places the output so, and the output
+//! travels exactly this distance).
+
+use crate::graph::FrameAdjacency;
+use crate::retarget::character::Character;
+use crate::similarity::y_up;
+
+/// An arc of the frame graph as the search sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameEdge {
+    /// Frame entered.
+    pub to: u32,
+    /// Transition cost (0 along a sequence).
+    pub cost: f64,
+    /// True for a transition (a jump), false for the next frame of the
+    /// sequence.
+    pub jump: bool,
+}
+
+/// The frame graph with per-frame steps. Frames are numbered as in
+/// [`crate::graph::SurfaceMotionGraph::frame_id`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeyGraph {
+    /// Successors of every frame (CSR rows: `offsets[f]..offsets[f+1]`).
+    pub offsets: Vec<u32>,
+    /// The arcs.
+    pub edges: Vec<FrameEdge>,
+    /// Floor distance (metres) of every frame's centroid from the previous
+    /// frame of its sequence; 0 on a sequence's first frame.
+    pub step: Vec<f64>,
+    /// Floor-projected centroid `(x, z)` of every frame, metres, in its own
+    /// capture's world frame.
+    pub centre: Vec<[f64; 2]>,
+    /// Sequence of every frame.
+    pub sequence: Vec<u32>,
+}
+
+impl KeyGraph {
+    /// Builds the graph from successor lists and per-frame centroids.
+    /// `sequence[f]` names the sequence of frame `f`; frames of one
+    /// sequence are consecutive. An arc `f → f+1` inside a sequence with
+    /// cost 0 is a plain step; any other arc is a jump.
+    pub fn new(succ: &[Vec<(u32, f64)>], centre: Vec<[f64; 2]>, sequence: Vec<u32>) -> KeyGraph {
+        let n = succ.len();
+        let mut offsets = Vec::with_capacity(n + 1);
+        let mut edges = Vec::new();
+        offsets.push(0);
+        for (f, row) in succ.iter().enumerate() {
+            for &(to, cost) in row {
+                let plain =
+                    to as usize == f + 1 && sequence.get(f + 1) == sequence.get(f) && cost == 0.0;
+                edges.push(FrameEdge {
+                    to,
+                    cost,
+                    jump: !plain,
+                });
+            }
+            offsets.push(edges.len() as u32);
+        }
+        let step = (0..n)
+            .map(|f| {
+                if f > 0 && sequence[f - 1] == sequence[f] {
+                    let (a, b) = (centre[f - 1], centre[f]);
+                    (b[0] - a[0]).hypot(b[1] - a[1])
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        KeyGraph {
+            offsets,
+            edges,
+            step,
+            centre,
+            sequence,
+        }
+    }
+
+    /// From a frame adjacency and centroids.
+    pub fn from_adjacency(
+        adj: &FrameAdjacency,
+        centre: Vec<[f64; 2]>,
+        sequence: Vec<u32>,
+    ) -> KeyGraph {
+        let n = adj.offsets.len().saturating_sub(1);
+        let succ: Vec<Vec<(u32, f64)>> = (0..n as u32)
+            .map(|f| adj.successors(f).map(|(t, c)| (t, c as f64)).collect())
+            .collect();
+        KeyGraph::new(&succ, centre, sequence)
+    }
+
+    /// The graph of a loaded character: its adjacency, and the centroid of
+    /// every frame (mean of the vertices, metres, Y-up, projected on the
+    /// floor).
+    pub fn of_character(ch: &Character) -> KeyGraph {
+        let centre = frame_centres(ch);
+        let mut sequence = vec![0u32; ch.frame_count()];
+        for (s, span) in ch.graph.sequences.iter().enumerate() {
+            for f in span.start..span.start + span.len {
+                if let Some(x) = sequence.get_mut(f) {
+                    *x = s as u32;
+                }
+            }
+        }
+        KeyGraph::from_adjacency(&ch.adjacency, centre, sequence)
+    }
+
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.step.len()
+    }
+
+    /// True without frames.
+    pub fn is_empty(&self) -> bool {
+        self.step.is_empty()
+    }
+
+    /// Arcs leaving `f`.
+    pub fn successors(&self, f: u32) -> &[FrameEdge] {
+        &self.edges[self.offsets[f as usize] as usize..self.offsets[f as usize + 1] as usize]
+    }
+
+    /// The arc `a → b`, the cheapest if several.
+    pub fn edge(&self, a: u32, b: u32) -> Option<FrameEdge> {
+        self.successors(a)
+            .iter()
+            .filter(|e| e.to == b)
+            .min_by(|x, y| x.cost.total_cmp(&y.cost))
+            .copied()
+    }
+}
+
+/// Floor-projected mean vertex `(x, z)` of every frame of a character
+/// (metres, Y-up).
+pub fn frame_centres(ch: &Character) -> Vec<[f64; 2]> {
+    (0..ch.frame_count())
+        .map(|f| {
+            let fr = &ch.frames[f * ch.n..(f + 1) * ch.n];
+            let mut s = [0.0f64; 2];
+            for p in fr {
+                let q = y_up(*p, ch.z_up) * ch.metres_per_unit;
+                s[0] += q.x;
+                s[1] += q.z;
+            }
+            let k = ch.n.max(1) as f64;
+            [s[0] / k, s[1] / k]
+        })
+        .collect()
+}
+
+/// Floor-projected mean vertex `(x, z)` of one frame of positions
+/// (metres, Y-up).
+pub fn centre_of(positions: &[[f64; 3]]) -> [f64; 2] {
+    let mut s = [0.0f64; 2];
+    for p in positions {
+        s[0] += p[0];
+        s[1] += p[2];
+    }
+    let k = positions.len().max(1) as f64;
+    [s[0] / k, s[1] / k]
+}
+
+/// The travelled distance of a frame-major sequence: the sum of the floor
+/// distances between consecutive frames' centroids (Eq. 10).
+pub fn travelled(positions: &[[f64; 3]], n: usize) -> f64 {
+    let c: Vec<[f64; 2]> = positions.chunks(n.max(1)).map(centre_of).collect();
+    c.windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum()
+}

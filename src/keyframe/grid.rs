@@ -1,0 +1,244 @@
+//! The Table III evaluation (Huang et al. 2015, Sec. 6.1): one query per
+//! target of a grid of distances × times (the paper: 1-20 m by 1 m × 1-40 s
+//! by 1 s), with the distance and time errors (absolute and as a
+//! percentage of the target), the transitions' smoothness and the query
+//! time.
+//!
+//! A target `(d, t)` is called *reachable* when the database can
+//! physically make it between the key-frames: `t` is at least the fewest
+//! frames of a walk, `d` at least the shortest walk distance, and the mean
+//! speed `d / t` lies between the slowest and the fastest loop attached to
+//! the key-frames' walks. The figures are given for the reachable targets
+//! and, separately, for the others (where the search returns its best
+//! compromise under Eq. 7).
+
+use super::search::{Reach, SearchOptions};
+use super::{Planner, Targets, mean_smoothness, transitions};
+use crate::retarget::character::Character;
+use crate::retarget::timeline::TimelineOptions;
+use serde::Serialize;
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// One query of the grid.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GridQuery {
+    /// Target distance (metres).
+    pub distance: f64,
+    /// Target time (seconds).
+    pub time: f64,
+    /// Achieved distance (metres).
+    pub achieved_distance: f64,
+    /// Achieved time (seconds).
+    pub achieved_time: f64,
+    /// See the module docs.
+    pub reachable: bool,
+    /// Transitions taken.
+    pub transitions: usize,
+    /// Mean smoothness over them (metres).
+    pub smoothness: Option<f64>,
+    /// Search seconds.
+    pub seconds: f64,
+    /// A search bound was hit.
+    pub bounded: bool,
+}
+
+/// Min, root mean square and max of a set of values.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct Spread {
+    /// Smallest.
+    pub min: f64,
+    /// Root mean square.
+    pub rms: f64,
+    /// Largest.
+    pub max: f64,
+    /// How many.
+    pub count: usize,
+}
+
+impl Spread {
+    /// Of `v` (zeros when empty).
+    pub fn of(v: impl Iterator<Item = f64>) -> Spread {
+        let v: Vec<f64> = v.collect();
+        if v.is_empty() {
+            return Spread::default();
+        }
+        Spread {
+            min: v.iter().copied().fold(f64::INFINITY, f64::min),
+            rms: (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt(),
+            max: v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            count: v.len(),
+        }
+    }
+}
+
+/// Errors over a set of queries.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
+pub struct Errors {
+    /// |distance error|, metres.
+    pub distance_m: Spread,
+    /// |distance error| / target, percent.
+    pub distance_pct: Spread,
+    /// |time error|, seconds.
+    pub time_s: Spread,
+    /// |time error| / target, percent.
+    pub time_pct: Spread,
+    /// Queries whose distance and time errors are both under 1 % of the
+    /// target.
+    pub within_1pct: usize,
+}
+
+impl Errors {
+    fn of(q: &[&GridQuery]) -> Errors {
+        let de = |x: &&GridQuery| (x.achieved_distance - x.distance).abs();
+        let te = |x: &&GridQuery| (x.achieved_time - x.time).abs();
+        let pct = |e: f64, t: f64| if t > 0.0 { 100.0 * e / t } else { 0.0 };
+        Errors {
+            distance_m: Spread::of(q.iter().map(de)),
+            distance_pct: Spread::of(q.iter().map(|x| pct(de(x), x.distance))),
+            time_s: Spread::of(q.iter().map(te)),
+            time_pct: Spread::of(q.iter().map(|x| pct(te(x), x.time))),
+            within_1pct: q
+                .iter()
+                .filter(|x| pct(de(x), x.distance) < 1.0 && pct(te(x), x.time) < 1.0)
+                .count(),
+        }
+    }
+}
+
+/// The evaluation.
+#[derive(Debug, Clone, Serialize)]
+pub struct GridReport {
+    /// Key-frames.
+    pub keys: Vec<String>,
+    /// Distances (metres).
+    pub distances: Vec<f64>,
+    /// Times (seconds).
+    pub times: Vec<f64>,
+    /// What the key-frames can reach.
+    pub reach: Vec<Reach>,
+    /// Errors over the reachable targets.
+    pub reachable: Errors,
+    /// Errors over the others.
+    pub unreachable: Errors,
+    /// Smoothness (metres) over the queries with transitions.
+    pub smoothness: Spread,
+    /// Mean smoothness.
+    pub smoothness_mean: f64,
+    /// Query time, milliseconds: mean.
+    pub query_ms_mean: f64,
+    /// Standard deviation.
+    pub query_ms_std: f64,
+    /// Largest.
+    pub query_ms_max: f64,
+    /// Preparation (once per key-frame list), milliseconds.
+    pub prepare_ms: f64,
+    /// Queries where a search bound was hit.
+    pub bounded: usize,
+    /// Every query.
+    pub queries: Vec<GridQuery>,
+}
+
+/// A range `a:b:step` (inclusive) or a comma list.
+pub fn parse_range(s: &str) -> Result<Vec<f64>, String> {
+    let bad = || format!("'{s}': expected A:B:STEP or a comma list of numbers ≥ 0");
+    let v: Vec<f64> = if s.contains(':') {
+        let p: Vec<f64> = s
+            .split(':')
+            .map(|x| x.trim().parse::<f64>().map_err(|_| bad()))
+            .collect::<Result<_, _>>()?;
+        if p.len() != 3 || p[2] <= 0.0 || p[1] < p[0] || (p[1] - p[0]) / p[2] > 1e5 {
+            return Err(bad());
+        }
+        let n = ((p[1] - p[0]) / p[2] + 1e-9).floor() as usize;
+        (0..=n).map(|k| p[0] + k as f64 * p[2]).collect()
+    } else {
+        s.split(',')
+            .map(|x| x.trim().parse::<f64>().map_err(|_| bad()))
+            .collect::<Result<_, _>>()?
+    };
+    if v.is_empty() || v.iter().any(|x| !x.is_finite() || *x < 0.0) {
+        return Err(bad());
+    }
+    Ok(v)
+}
+
+/// Is `(d, t)` reachable (module docs)?
+pub fn reachable(reach: &[Reach], fps: f64, d: f64, t: f64) -> bool {
+    let frames: u32 = reach.iter().map(|r| r.frames).sum();
+    let dist: f64 = reach.iter().map(|r| r.distance).sum();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for r in reach {
+        if let Some((a, b)) = r.speed {
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+    }
+    let f = t * fps;
+    f >= frames as f64 && d >= dist && f > 0.0 && lo <= d / f && d / f <= hi
+}
+
+/// Runs the grid (one global target per query).
+pub fn evaluate(
+    ch: &Character,
+    planner: &Planner,
+    distances: &[f64],
+    times: &[f64],
+    search: &SearchOptions,
+    timeline: &TimelineOptions,
+) -> Result<GridReport, super::search::SearchError> {
+    let reach: Vec<Reach> = planner.segments.iter().map(|s| s.reach()).collect();
+    let mut cache = HashMap::new();
+    let mut queries = Vec::with_capacity(distances.len() * times.len());
+    for &d in distances {
+        for &t in times {
+            let t0 = Instant::now();
+            let plan = planner.plan(
+                &Targets::Global {
+                    distance: d,
+                    time: t,
+                },
+                search,
+            )?;
+            let seconds = t0.elapsed().as_secs_f64();
+            let tr = transitions(ch, &planner.graph, &plan.path, timeline, &mut cache);
+            queries.push(GridQuery {
+                distance: d,
+                time: t,
+                achieved_distance: plan.measure.distance,
+                achieved_time: plan.measure.frames as f64 / planner.fps,
+                reachable: reachable(&reach, planner.fps, d, t),
+                transitions: tr.len(),
+                smoothness: mean_smoothness(&tr),
+                seconds,
+                bounded: !plan.stats.bounds_hit.is_empty(),
+            });
+        }
+    }
+    let r: Vec<&GridQuery> = queries.iter().filter(|q| q.reachable).collect();
+    let u: Vec<&GridQuery> = queries.iter().filter(|q| !q.reachable).collect();
+    let sm: Vec<f64> = queries.iter().filter_map(|q| q.smoothness).collect();
+    let ms: Vec<f64> = queries.iter().map(|q| 1e3 * q.seconds).collect();
+    let mean = ms.iter().sum::<f64>() / ms.len().max(1) as f64;
+    let std = (ms.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / ms.len().max(1) as f64).sqrt();
+    Ok(GridReport {
+        keys: planner
+            .keys
+            .iter()
+            .map(|&k| super::key_name(ch, k))
+            .collect(),
+        distances: distances.to_vec(),
+        times: times.to_vec(),
+        reach,
+        reachable: Errors::of(&r),
+        unreachable: Errors::of(&u),
+        smoothness: Spread::of(sm.iter().copied()),
+        smoothness_mean: sm.iter().sum::<f64>() / sm.len().max(1) as f64,
+        query_ms_mean: mean,
+        query_ms_std: std,
+        query_ms_max: ms.iter().copied().fold(0.0, f64::max),
+        prepare_ms: 1e3 * planner.prepare_seconds,
+        bounded: queries.iter().filter(|q| q.bounded).count(),
+        queries,
+    })
+}

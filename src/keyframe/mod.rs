@@ -1,0 +1,598 @@
+//! Key-frame animation (Huang et al. 2015, Secs. 5.1 and 6.1): the path
+//! through the Surface Motion Graph that passes the animator's key-frames
+//! in order and best meets a travel distance and time.
+//!
+//! Pipeline: [`graph`] (the frame graph with each frame's floor step),
+//! [`search`] (walks, loops and pruning, Eqs. 13-22) with [`repeats`] (the
+//! loop repetition counts, Eqs. 20-25), [`place`] (blending across
+//! transitions and placement along the accumulated root motion),
+//! [`smoothness`] (Table III's transition smoothness) and [`grid`] (the
+//! Table III evaluation over a grid of targets).
+//!
+//! The cost of a path `P` (Eq. 7) is
+//! `C_tran(P) + w_dist |dist(P) − d_V| + w_time |time(P) − t_V|`, with
+//! `C_tran` the sum of its transitions' costs (Eq. 8), `dist` the floor
+//! distance travelled by the mesh centroid (Eq. 10) and `time = N_f Δt`
+//! (Eq. 12). Zero targets ask for the shortest path.
+
+pub mod graph;
+pub mod grid;
+pub mod place;
+pub mod repeats;
+pub mod search;
+pub mod smoothness;
+
+use crate::retarget::character::Character;
+use crate::retarget::timeline::{TimelineOptions, timeline};
+use graph::KeyGraph;
+use repeats::Measure;
+use search::{SearchError, SearchOptions, Segment, SegmentPath, Stats, Target};
+use serde::Serialize;
+use std::time::Instant;
+
+/// Bad key-frames or targets.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum KeyframeError {
+    /// Not `SEQUENCE:FRAME`.
+    #[error("key-frame '{0}': expected SEQUENCE:FRAME (e.g. walk:12)")]
+    Syntax(String),
+    /// No such sequence.
+    #[error("key-frame '{key}': no sequence '{name}' (the database has {known})")]
+    Sequence {
+        /// As written.
+        key: String,
+        /// The name.
+        name: String,
+        /// The database's sequences.
+        known: String,
+    },
+    /// Frame out of range.
+    #[error("key-frame '{key}': sequence '{name}' has frames 0..{len}")]
+    Frame {
+        /// As written.
+        key: String,
+        /// The sequence.
+        name: String,
+        /// Its frame count.
+        len: usize,
+    },
+    /// A target that is negative or not a number.
+    #[error("{what} {value}: expected a finite number ≥ 0")]
+    Target {
+        /// Which target.
+        what: String,
+        /// The value.
+        value: f64,
+    },
+    /// Per-segment targets whose count does not match the segments.
+    #[error("{what}: {given} values for {segments} segments (give one, or one per segment)")]
+    Count {
+        /// Which target.
+        what: String,
+        /// Values given.
+        given: usize,
+        /// Segments.
+        segments: usize,
+    },
+    /// Fewer than two key-frames.
+    #[error("at least two key-frames are needed")]
+    TooFew,
+    /// The search failed.
+    #[error("{0}")]
+    Search(String),
+}
+
+/// Frame id of a key-frame written `SEQUENCE:FRAME`.
+pub fn parse_key(ch: &Character, key: &str) -> Result<u32, KeyframeError> {
+    let (name, f) = key
+        .rsplit_once(':')
+        .ok_or_else(|| KeyframeError::Syntax(key.into()))?;
+    let name = name.trim();
+    let s = ch
+        .graph
+        .sequences
+        .iter()
+        .position(|q| q.name == name)
+        .ok_or_else(|| KeyframeError::Sequence {
+            key: key.into(),
+            name: name.into(),
+            known: ch
+                .graph
+                .sequences
+                .iter()
+                .map(|q| q.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+        })?;
+    let len = ch.graph.sequences[s].len;
+    let f: usize = f
+        .trim()
+        .parse()
+        .map_err(|_| KeyframeError::Syntax(key.into()))?;
+    if f >= len {
+        return Err(KeyframeError::Frame {
+            key: key.into(),
+            name: name.into(),
+            len,
+        });
+    }
+    Ok(ch.graph.frame_id(s, f))
+}
+
+/// `SEQUENCE:FRAME` of a frame id.
+pub fn key_name(ch: &Character, id: u32) -> String {
+    let (s, f) = ch.graph.frame_of(id);
+    format!("{}:{}", ch.graph.sequences[s].name, f)
+}
+
+/// Distance and time targets.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Targets {
+    /// One target for the whole path, split optimally over its segments.
+    Global {
+        /// Metres.
+        distance: f64,
+        /// Seconds.
+        time: f64,
+    },
+    /// One target per segment (between consecutive key-frames).
+    PerSegment(Vec<(f64, f64)>),
+}
+
+impl Targets {
+    /// From the command line's lists (one value, or one per segment).
+    pub fn from_lists(
+        distance: &[f64],
+        time: &[f64],
+        segments: usize,
+    ) -> Result<Targets, KeyframeError> {
+        for (what, v) in [("distance", distance), ("time", time)] {
+            if let Some(&x) = v.iter().find(|x| !x.is_finite() || **x < 0.0) {
+                return Err(KeyframeError::Target {
+                    what: what.into(),
+                    value: x,
+                });
+            }
+            if v.len() != 1 && v.len() != segments {
+                return Err(KeyframeError::Count {
+                    what: what.into(),
+                    given: v.len(),
+                    segments,
+                });
+            }
+        }
+        if distance.len() == 1 && time.len() == 1 {
+            return Ok(Targets::Global {
+                distance: distance[0],
+                time: time[0],
+            });
+        }
+        let at = |v: &[f64], i: usize| if v.len() == 1 { v[0] } else { v[i] };
+        Ok(Targets::PerSegment(
+            (0..segments)
+                .map(|i| (at(distance, i), at(time, i)))
+                .collect(),
+        ))
+    }
+}
+
+/// Options of a key-frame query.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct KeyframeOptions {
+    /// The search (weights, bounds, solver).
+    pub search: SearchOptions,
+    /// Blending across transitions.
+    pub timeline: TimelineOptions,
+}
+
+/// The search prepared for a list of key-frames: the compressed graph of
+/// every segment with its loops (built once, queried for any target).
+pub struct Planner {
+    /// The frame graph.
+    pub graph: KeyGraph,
+    /// Key-frame ids, in order.
+    pub keys: Vec<u32>,
+    /// One per consecutive pair.
+    pub segments: Vec<Segment>,
+    /// Frames per second.
+    pub fps: f64,
+    /// Seconds spent preparing.
+    pub prepare_seconds: f64,
+}
+
+/// The cost terms of Eq. 7.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CostTerms {
+    /// Sum of transition costs (Eq. 8).
+    pub transition: f64,
+    /// `w_dist · |dist − d_V|` (summed over segments with per-segment
+    /// targets).
+    pub distance: f64,
+    /// `w_time · |time − t_V|` (frames).
+    pub time: f64,
+    /// Their sum.
+    pub total: f64,
+}
+
+/// One segment of the result.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SegmentReport {
+    /// Start key-frame (`SEQUENCE:FRAME`).
+    pub from: String,
+    /// End key-frame.
+    pub to: String,
+    /// Target distance (metres; `None` with one global target).
+    pub target_distance: Option<f64>,
+    /// Target time (seconds).
+    pub target_time: Option<f64>,
+    /// Achieved distance (metres).
+    pub distance: f64,
+    /// Achieved time (seconds; frames of the segment · Δt, the first
+    /// segment counting its start frame).
+    pub time: f64,
+    /// Transition cost.
+    pub transition_cost: f64,
+    /// The loop-free walk as runs `SEQUENCE[a..b]`.
+    pub walk: Vec<String>,
+    /// Loops and their repetitions.
+    pub loops: Vec<LoopReport>,
+}
+
+/// A repeated loop.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LoopReport {
+    /// Where it starts and ends.
+    pub at: String,
+    /// One repetition as runs.
+    pub frames: Vec<String>,
+    /// Repetitions.
+    pub repeats: u32,
+    /// One repetition's cost, distance, frames.
+    pub measure: Measure,
+}
+
+/// The result of a query.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Plan {
+    /// Segments in order.
+    pub segments: Vec<SegmentPath>,
+    /// The whole frame path (key-frame to key-frame).
+    pub path: Vec<u32>,
+    /// Transition cost, distance and frames of the whole path.
+    pub measure: Measure,
+    /// Eq. 7's terms.
+    pub cost: CostTerms,
+    /// Search counts and bounds hit.
+    pub stats: Stats,
+    /// Seconds of the search (preparation excluded).
+    pub search_seconds: f64,
+}
+
+/// Runs of consecutive frames as `SEQUENCE[a..b]`.
+pub fn runs(ch: &Character, frames: &[u32]) -> Vec<String> {
+    let mut out: Vec<(usize, usize, usize)> = Vec::new();
+    for &f in frames {
+        let (s, t) = ch.graph.frame_of(f);
+        match out.last_mut() {
+            Some((ls, _, b)) if *ls == s && t == *b + 1 => *b = t,
+            _ => out.push((s, t, t)),
+        }
+    }
+    out.into_iter()
+        .map(|(s, a, b)| format!("{}[{a}..{b}]", ch.graph.sequences[s].name))
+        .collect()
+}
+
+impl Planner {
+    /// Prepares the search through `keys` (frame ids, at least two).
+    pub fn new(
+        graph: KeyGraph,
+        keys: &[u32],
+        fps: f64,
+        opts: &SearchOptions,
+    ) -> Result<Planner, SearchError> {
+        let t0 = Instant::now();
+        let segments = keys
+            .windows(2)
+            .enumerate()
+            .map(|(i, w)| Segment::new(&graph, w[0], w[1], i == 0, &opts.limits))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Planner {
+            graph,
+            keys: keys.to_vec(),
+            segments,
+            fps,
+            prepare_seconds: t0.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The best path for the targets (Eq. 13 per segment, or over the
+    /// whole path for one global target).
+    pub fn plan(&self, targets: &Targets, opts: &SearchOptions) -> Result<Plan, SearchError> {
+        let t0 = Instant::now();
+        let mut stats = Stats::default();
+        let w = opts.weights;
+        let segs = match targets {
+            Targets::Global { distance, time } => {
+                let t = Target {
+                    distance: *distance,
+                    frames: time * self.fps,
+                };
+                if self.segments.len() == 1 {
+                    vec![self.segments[0].solve(&t, opts, &mut stats)?]
+                } else {
+                    search::solve_split(&self.segments, &t, opts, &mut stats)?
+                }
+            }
+            Targets::PerSegment(v) => self
+                .segments
+                .iter()
+                .zip(v)
+                .map(|(s, &(d, tm))| {
+                    s.solve(
+                        &Target {
+                            distance: d,
+                            frames: tm * self.fps,
+                        },
+                        opts,
+                        &mut stats,
+                    )
+                })
+                .collect::<Result<Vec<_>, _>>()?,
+        };
+        if stats.beamed > 0 {
+            stats.bounds_hit.push(format!(
+                "{} repetition problems kept more than {} labels and were finished with {} labels per frame count",
+                stats.beamed, opts.limits.labels, opts.beam
+            ));
+        }
+        let mut path: Vec<u32> = Vec::new();
+        for s in &segs {
+            let skip = usize::from(!path.is_empty());
+            path.extend_from_slice(&s.path[skip..]);
+        }
+        let measure = segs
+            .iter()
+            .fold(Measure::default(), |a, s| a.plus(s.measure));
+        let (dterm, tterm) = match targets {
+            Targets::Global { distance, time } => (
+                w.distance * (measure.distance - distance).abs(),
+                w.time * (measure.frames as f64 - time * self.fps).abs(),
+            ),
+            Targets::PerSegment(v) => segs.iter().zip(v).fold((0.0, 0.0), |acc, (s, &(d, t))| {
+                (
+                    acc.0 + w.distance * (s.measure.distance - d).abs(),
+                    acc.1 + w.time * (s.measure.frames as f64 - t * self.fps).abs(),
+                )
+            }),
+        };
+        Ok(Plan {
+            cost: CostTerms {
+                transition: measure.cost,
+                distance: dterm,
+                time: tterm,
+                total: measure.cost + dterm + tterm,
+            },
+            segments: segs,
+            path,
+            measure,
+            stats,
+            search_seconds: t0.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// The report of a key-frame animation.
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    /// Key-frames in order.
+    pub keys: Vec<String>,
+    /// The targets.
+    pub targets: Targets,
+    /// Weights used (per metre, per frame).
+    pub weights: search::Weights,
+    /// Repetition solver.
+    pub solver: search::Solver,
+    /// Frames per second.
+    pub fps: f64,
+    /// Output frames.
+    pub frames: usize,
+    /// Achieved distance (metres) and time (seconds).
+    pub distance: f64,
+    /// Seconds.
+    pub time: f64,
+    /// `distance − target` (global target), metres.
+    pub distance_error: Option<f64>,
+    /// `time − target`, seconds.
+    pub time_error: Option<f64>,
+    /// Eq. 7's terms.
+    pub cost: CostTerms,
+    /// Per segment.
+    pub segments: Vec<SegmentReport>,
+    /// Transitions taken, with their blend windows and smoothness (metres).
+    pub transitions: Vec<TransitionReport>,
+    /// Mean smoothness over the transitions (metres; `None` without any).
+    pub smoothness: Option<f64>,
+    /// Final heading relative to the first key-frame's (degrees).
+    pub final_heading_deg: f64,
+    /// Search counts and bounds hit.
+    pub stats: Stats,
+    /// Seconds preparing the search (compressed graph, loops).
+    pub prepare_seconds: f64,
+    /// Seconds searching.
+    pub search_seconds: f64,
+    /// Seconds blending and placing the meshes.
+    pub mesh_seconds: f64,
+}
+
+/// A transition of the output.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TransitionReport {
+    /// Output frame after the jump.
+    pub at: usize,
+    /// Frame left.
+    pub from: String,
+    /// Frame entered.
+    pub to: String,
+    /// Blend half-window.
+    pub window: usize,
+    /// Transition cost of the graph edge.
+    pub cost: f64,
+    /// Weighted Hausdorff distance of the overlapping frames (metres).
+    pub smoothness: f64,
+}
+
+/// The report's segments.
+pub fn segment_reports(
+    ch: &Character,
+    planner: &Planner,
+    plan: &Plan,
+    targets: &Targets,
+) -> Vec<SegmentReport> {
+    plan.segments
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let (td, tt) = match targets {
+                Targets::Global { .. } => (None, None),
+                Targets::PerSegment(v) => (Some(v[i].0), Some(v[i].1)),
+            };
+            SegmentReport {
+                from: key_name(ch, s.from),
+                to: key_name(ch, s.to),
+                target_distance: td,
+                target_time: tt,
+                distance: s.measure.distance,
+                time: s.measure.frames as f64 / planner.fps,
+                transition_cost: s.measure.cost,
+                walk: runs(ch, &s.walk),
+                loops: s
+                    .loops
+                    .iter()
+                    .map(|l| LoopReport {
+                        at: key_name(ch, l.at),
+                        frames: runs(ch, &l.frames),
+                        repeats: l.repeats,
+                        measure: l.measure,
+                    })
+                    .collect(),
+            }
+        })
+        .collect()
+}
+
+/// Transitions of a path with their blend windows (from the timeline) and
+/// smoothness, computed through `cache` (keyed by `(from, to, window)`).
+pub fn transitions(
+    ch: &Character,
+    g: &KeyGraph,
+    path: &[u32],
+    opts: &TimelineOptions,
+    cache: &mut std::collections::HashMap<(u32, u32, usize), f64>,
+) -> Vec<TransitionReport> {
+    let (_, jumps) = timeline(path, ch, opts);
+    jumps
+        .iter()
+        .map(|j| {
+            let s = *cache
+                .entry((j.from, j.to, j.window))
+                .or_insert_with(|| smoothness::transition_smoothness(ch, j.from, j.to, j.window));
+            TransitionReport {
+                at: j.at,
+                from: key_name(ch, j.from),
+                to: key_name(ch, j.to),
+                window: j.window,
+                cost: g.edge(j.from, j.to).map_or(0.0, |e| e.cost),
+                smoothness: s,
+            }
+        })
+        .collect()
+}
+
+/// The mean of the transitions' smoothness.
+pub fn mean_smoothness(t: &[TransitionReport]) -> Option<f64> {
+    (!t.is_empty()).then(|| t.iter().map(|x| x.smoothness).sum::<f64>() / t.len() as f64)
+}
+
+/// The synthesised key-frame animation.
+pub struct Output {
+    /// Positions, frame-major (metres, Y-up).
+    pub positions: Vec<[f64; 3]>,
+    /// The plan.
+    pub plan: Plan,
+    /// The report.
+    pub report: Report,
+}
+
+/// Plans and synthesises: key-frame ids `keys` (at least two), targets,
+/// options. Errors: the search's (no path between two key-frames) or a
+/// failed factorisation of the blender.
+pub fn synthesise(
+    ch: &Character,
+    keys: &[u32],
+    targets: &Targets,
+    opts: &KeyframeOptions,
+) -> Result<Output, KeyframeError> {
+    if keys.len() < 2 {
+        return Err(KeyframeError::TooFew);
+    }
+    let fps = ch.manifest.fps;
+    let g = KeyGraph::of_character(ch);
+    let planner = Planner::new(g, keys, fps, &opts.search)
+        .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
+    let plan = planner
+        .plan(targets, &opts.search)
+        .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
+    let t0 = Instant::now();
+    let placed = place::place(ch, &planner.graph, &plan.path, &opts.timeline)
+        .map_err(|e| KeyframeError::Search(format!("blending: {e}")))?;
+    let mesh_seconds = t0.elapsed().as_secs_f64();
+    let mut cache = std::collections::HashMap::new();
+    let trans = transitions(ch, &planner.graph, &plan.path, &opts.timeline, &mut cache);
+    let (de, te) = match targets {
+        Targets::Global { distance, time } => (
+            Some(plan.measure.distance - distance),
+            Some(plan.measure.frames as f64 / fps - time),
+        ),
+        Targets::PerSegment(_) => (None, None),
+    };
+    let report = Report {
+        keys: keys.iter().map(|&k| key_name(ch, k)).collect(),
+        targets: targets.clone(),
+        weights: opts.search.weights,
+        solver: opts.search.solver,
+        fps,
+        frames: plan.path.len(),
+        distance: plan.measure.distance,
+        time: plan.measure.frames as f64 / fps,
+        distance_error: de,
+        time_error: te,
+        cost: plan.cost,
+        segments: segment_reports(ch, &planner, &plan, targets),
+        smoothness: mean_smoothness(&trans),
+        transitions: trans,
+        final_heading_deg: placed.heading.last().copied().unwrap_or(0.0).to_degrees(),
+        stats: plan.stats.clone(),
+        prepare_seconds: planner.prepare_seconds,
+        search_seconds: plan.search_seconds,
+        mesh_seconds,
+    };
+    Ok(Output {
+        positions: placed.positions,
+        plan,
+        report,
+    })
+}
+
+/// A search error in the database's words (`SEQUENCE:FRAME`).
+pub fn describe(ch: &Character, e: &SearchError) -> String {
+    match e {
+        SearchError::NoPath { from, to } => format!(
+            "no path from key-frame {} to {} in the graph (no sequence of transitions joins them; see `surfmotion graph`)",
+            key_name(ch, *from),
+            key_name(ch, *to)
+        ),
+        other => other.to_string(),
+    }
+}

@@ -1,0 +1,432 @@
+//! Key-frame animation (Huang et al. 2015, Sec. 5.1): the search on
+//! synthetic frame graphs (walks, loops, repetitions against brute force
+//! and Dijkstra) and the `keyframe` command on a small synthetic database.
+
+mod common;
+
+use std::collections::BinaryHeap;
+use std::process::Command;
+use surfmotion::keyframe::graph::KeyGraph;
+use surfmotion::keyframe::repeats::{Measure, Problem, brute_force, solve_exact, solve_ilp};
+use surfmotion::keyframe::search::SearchOptions;
+use surfmotion::keyframe::{Planner, Targets};
+
+/// A small deterministic generator (no dependency).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn below(&mut self, n: usize) -> usize {
+        ((self.next() * n as f64) as usize).min(n - 1)
+    }
+}
+
+fn random_problem(r: &mut Lcg, loops: &mut Vec<Measure>) -> (Measure, f64, f64) {
+    loops.clear();
+    for _ in 0..1 + r.below(3) {
+        loops.push(Measure {
+            cost: 0.05 * r.next(),
+            distance: 0.2 + 1.5 * r.next(),
+            frames: 3 + r.below(12) as u32,
+        });
+    }
+    let walk = Measure {
+        cost: 0.1 * r.next(),
+        distance: 2.0 * r.next(),
+        frames: 1 + r.below(20) as u32,
+    };
+    (walk, 3.0 * r.next(), 40.0 * r.next())
+}
+
+#[test]
+fn ilp_exact_and_brute_force_agree_on_random_repetition_problems() {
+    let mut r = Lcg(7);
+    let mut loops = Vec::new();
+    for case in 0..200 {
+        let (walk, d, t) = random_problem(&mut r, &mut loops);
+        let p = Problem {
+            walk,
+            loops: &loops,
+            distance: d,
+            frames: t,
+            w_dist: 1.0 / 0.3,
+            w_time: 0.1,
+        };
+        // No count past the frames at which the time error alone exceeds the
+        // cost of n = 0 can be optimal: brute force up to there.
+        let c0 = p.cost(&vec![0; loops.len()]);
+        let frames = t - walk.frames as f64 + (c0 - walk.cost) / p.w_time;
+        let limit = (frames.max(0.0) / 3.0).ceil() as u32;
+        let b = brute_force(&p, limit);
+        let e = solve_exact(&p, f64::INFINITY, 1_000_000).unwrap();
+        let i = solve_ilp(&p).unwrap();
+        assert!(
+            (e.cost - b.cost).abs() < 1e-9,
+            "case {case}: exact {e:?} brute {b:?}"
+        );
+        assert!(
+            (i.cost - b.cost).abs() < 1e-6,
+            "case {case}: ilp {i:?} brute {b:?}"
+        );
+        assert!((p.cost(&e.n) - e.cost).abs() < 1e-9);
+    }
+}
+
+/// A random frame graph: `seqs` sequences of 20-40 frames walking at
+/// different speeds (with a lateral sway), and random transitions.
+fn random_graph(r: &mut Lcg, seqs: usize, jumps: usize) -> KeyGraph {
+    let mut centre = Vec::new();
+    let mut sequence = Vec::new();
+    let mut starts = Vec::new();
+    for s in 0..seqs {
+        let len = 20 + r.below(21);
+        let speed = 0.01 + 0.08 * r.next();
+        starts.push((centre.len(), len));
+        for f in 0..len {
+            let x = f as f64 * speed;
+            centre.push([x, 0.02 * (f as f64 * 0.7).sin()]);
+            sequence.push(s as u32);
+        }
+    }
+    let n = centre.len();
+    let mut succ: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
+    for f in 0..n - 1 {
+        if sequence[f] == sequence[f + 1] {
+            succ[f].push((f as u32 + 1, 0.0));
+        }
+    }
+    for _ in 0..jumps {
+        let (a0, la) = starts[r.below(seqs)];
+        let (b0, lb) = starts[r.below(seqs)];
+        let m = a0 + r.below(la);
+        let to = b0 + 1 + r.below(lb - 1);
+        if to != m + 1 {
+            succ[m].push((to as u32, 0.001 + 0.01 * r.next()));
+        }
+    }
+    KeyGraph::new(&succ, centre, sequence)
+}
+
+/// Dijkstra on the frame graph with the zero-target cost of a step:
+/// transition cost + w_dist · step + w_time · 1 frame.
+fn dijkstra(g: &KeyGraph, from: u32, to: u32, wd: f64, wt: f64) -> Option<f64> {
+    #[derive(PartialEq)]
+    struct Item(f64, u32);
+    impl Eq for Item {}
+    impl PartialOrd for Item {
+        fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+            Some(self.cmp(o))
+        }
+    }
+    impl Ord for Item {
+        fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+            o.0.total_cmp(&self.0)
+        }
+    }
+    let mut d = vec![f64::INFINITY; g.len()];
+    d[from as usize] = wt; // the start frame counts (Eq. 12)
+    let mut h = BinaryHeap::new();
+    h.push(Item(wt, from));
+    while let Some(Item(c, u)) = h.pop() {
+        if c > d[u as usize] {
+            continue;
+        }
+        for e in g.successors(u) {
+            let nc = c + e.cost + wd * g.step[e.to as usize] + wt;
+            if nc < d[e.to as usize] {
+                d[e.to as usize] = nc;
+                h.push(Item(nc, e.to));
+            }
+        }
+    }
+    d[to as usize].is_finite().then_some(d[to as usize])
+}
+
+fn exact() -> SearchOptions {
+    SearchOptions {
+        gap: 0.0,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn zero_targets_give_the_dijkstra_shortest_path() {
+    let mut r = Lcg(11);
+    let mut compared = 0;
+    for case in 0..60 {
+        let g = random_graph(&mut r, 3, 10);
+        let from = r.below(g.len()) as u32;
+        let to = r.below(g.len()) as u32;
+        let o = exact();
+        let w = o.weights;
+        let want = dijkstra(&g, from, to, w.distance, w.time);
+        let planner = Planner::new(g.clone(), &[from, to], 25.0, &o);
+        match (want, planner) {
+            (None, Err(_)) => {}
+            (Some(want), Ok(p)) => {
+                let plan = p
+                    .plan(
+                        &Targets::Global {
+                            distance: 0.0,
+                            time: 0.0,
+                        },
+                        &o,
+                    )
+                    .unwrap();
+                assert!(
+                    (plan.cost.total - want).abs() < 1e-9,
+                    "case {case}: search {} dijkstra {want} ({from} -> {to}, {:?}, path {:?})",
+                    plan.cost.total,
+                    plan.stats,
+                    plan.path
+                );
+                assert!(plan.segments[0].loops.is_empty());
+                compared += 1;
+            }
+            (w, p) => panic!("case {case}: dijkstra {w:?}, search {:?}", p.err()),
+        }
+    }
+    assert!(compared > 10, "only {compared} connected cases");
+}
+
+#[test]
+fn paths_start_and_end_at_the_key_frames_pass_every_via_and_follow_edges() {
+    let mut r = Lcg(5);
+    let mut checked = 0;
+    for case in 0..40 {
+        let g = random_graph(&mut r, 3, 14);
+        let keys: Vec<u32> = (0..3).map(|_| r.below(g.len()) as u32).collect();
+        let o = SearchOptions::default();
+        let Ok(p) = Planner::new(g.clone(), &keys, 25.0, &o) else {
+            continue;
+        };
+        for targets in [
+            Targets::Global {
+                distance: 3.0,
+                time: 4.0,
+            },
+            Targets::PerSegment(vec![(1.0, 1.5), (2.0, 2.5)]),
+        ] {
+            let plan = p.plan(&targets, &o).unwrap();
+            let path = &plan.path;
+            assert_eq!(path[0], keys[0], "case {case}");
+            assert_eq!(*path.last().unwrap(), keys[2], "case {case}");
+            assert_eq!(plan.segments.len(), 2);
+            assert_eq!(plan.segments[0].to, keys[1]);
+            assert_eq!(*plan.segments[0].path.last().unwrap(), keys[1]);
+            assert_eq!(plan.segments[1].path[0], keys[1]);
+            // Every step is an arc of the graph; the measures are the path's.
+            let mut cost = 0.0;
+            let mut dist = 0.0;
+            for w in path.windows(2) {
+                let e = g.edge(w[0], w[1]);
+                assert!(e.is_some(), "case {case}: {} -> {} is no edge", w[0], w[1]);
+                cost += e.unwrap().cost;
+                dist += g.step[w[1] as usize];
+            }
+            assert_eq!(plan.measure.frames as usize, path.len(), "case {case}");
+            assert!((plan.measure.distance - dist).abs() < 1e-9, "case {case}");
+            assert!((plan.measure.cost - cost).abs() < 1e-9, "case {case}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 10, "only {checked} connected cases");
+}
+
+#[test]
+fn loops_are_repeated_to_meet_a_reachable_target() {
+    // One sequence walking 0.05 m per frame with a loop 30 -> 11 (20 frames,
+    // 1 m): 0 -> 39 plus k loops makes 1.95 + k m in 40 + 20k frames.
+    let n = 40;
+    let centre: Vec<[f64; 2]> = (0..n).map(|f| [0.05 * f as f64, 0.0]).collect();
+    let mut succ: Vec<Vec<(u32, f64)>> = (0..n)
+        .map(|f| {
+            if f + 1 < n {
+                vec![(f as u32 + 1, 0.0)]
+            } else {
+                vec![]
+            }
+        })
+        .collect();
+    succ[30].push((11, 0.002));
+    let g = KeyGraph::new(&succ, centre, vec![0; n]);
+    let o = exact();
+    let p = Planner::new(g, &[0, 39], 20.0, &o).unwrap();
+    let plan = p
+        .plan(
+            &Targets::Global {
+                distance: 6.95,
+                time: 140.0 / 20.0,
+            },
+            &o,
+        )
+        .unwrap();
+    assert_eq!(plan.segments[0].loops.len(), 1);
+    assert_eq!(plan.segments[0].loops[0].repeats, 5);
+    assert_eq!(plan.measure.frames, 140);
+    assert!((plan.measure.distance - 6.95).abs() < 1e-9);
+}
+
+fn run(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    Command::new(common::bin()).args(args).output().unwrap()
+}
+
+/// The `keyframe` command on a small synthetic database (CMU walk 02_01 and
+/// run 02_03, 25 fps): the written sequence travels the distance and lasts
+/// the time the report gives; bad input is a one-line error with exit 1.
+#[test]
+fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
+    let Some(d) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    let m = d.join("mocap/cmu-amc/02");
+    let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/samba.landmarks.json");
+    let o = Command::new(common::bin())
+        .args(["synth", "--mesh"])
+        .arg(d.join("4d/samba/samba.obj"))
+        .arg("--landmarks")
+        .arg(&fixture)
+        .arg("--mocap")
+        .arg(m.join("02_01.amc"))
+        .arg(m.join("02_03.amc"))
+        .args(["--fps", "25", "-o"])
+        .arg(&db)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = tmp.path().join("kf.pc2");
+    let report = tmp.path().join("kf.json");
+    let o = run(&[
+        "keyframe".as_ref(),
+        "--db".as_ref(),
+        db.as_os_str(),
+        "--from".as_ref(),
+        "02_01:0".as_ref(),
+        "--to".as_ref(),
+        "02_03:30".as_ref(),
+        "--distance".as_ref(),
+        "6".as_ref(),
+        "--time".as_ref(),
+        "4".as_ref(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--report".as_ref(),
+        report.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let seq =
+        surfmotion::mesh::io::load_sequence(out.to_str().unwrap(), &Default::default()).unwrap();
+    let n = seq.mesh().vertex_count();
+    let travelled = surfmotion::keyframe::graph::travelled(seq.all_positions(), n);
+    let fps = r["fps"].as_f64().unwrap();
+    let dist = r["distance"].as_f64().unwrap();
+    let time = r["time"].as_f64().unwrap();
+    assert_eq!(seq.frame_count(), r["frames"].as_u64().unwrap() as usize);
+    assert!((seq.frame_count() as f64 / fps - time).abs() < 1e-9);
+    // f32 positions in the file: agreement to 0.1 mm over the path.
+    assert!(
+        (travelled - dist).abs() < 1e-4,
+        "file {travelled} m, report {dist} m"
+    );
+    assert!(
+        r["distance_error"].as_f64().unwrap().abs() < 0.06,
+        "{}",
+        r["distance_error"]
+    );
+    assert!(
+        r["time_error"].as_f64().unwrap().abs() < 0.04 + 1e-9,
+        "{}",
+        r["time_error"]
+    );
+    let segs = r["segments"].as_array().unwrap();
+    assert_eq!(segs[0]["from"], "02_01:0");
+    assert_eq!(segs[0]["to"], "02_03:30");
+    assert!(r["cost"]["total"].as_f64().unwrap() >= r["cost"]["transition"].as_f64().unwrap());
+    // Bad input: one line on stderr, exit 1.
+    let x = tmp.path().join("x.pc2");
+    let bad = |args: &[&str], want: &str| {
+        let mut a: Vec<&std::ffi::OsStr> =
+            vec!["keyframe".as_ref(), "--db".as_ref(), db.as_os_str()];
+        a.extend(args.iter().map(|s| std::ffi::OsStr::new(*s)));
+        a.extend(["-o".as_ref(), x.as_os_str()]);
+        let o = run(&a);
+        let e = String::from_utf8_lossy(&o.stderr).to_string();
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {e}");
+        assert_eq!(e.trim_end().lines().count(), 1, "{args:?}: {e}");
+        assert!(e.contains(want), "{args:?}: {e}");
+    };
+    bad(
+        &[
+            "--from",
+            "nope:0",
+            "--to",
+            "02_03:30",
+            "--distance",
+            "1",
+            "--time",
+            "1",
+        ],
+        "no sequence 'nope'",
+    );
+    bad(
+        &[
+            "--from",
+            "02_01:9999",
+            "--to",
+            "02_03:30",
+            "--distance",
+            "1",
+            "--time",
+            "1",
+        ],
+        "has frames 0..",
+    );
+    // Frame 0 of a sequence is entered by no transition (they land on n+1).
+    bad(
+        &[
+            "--from",
+            "02_03:5",
+            "--to",
+            "02_01:0",
+            "--distance",
+            "1",
+            "--time",
+            "1",
+        ],
+        "no path from key-frame 02_03:5 to 02_01:0",
+    );
+    bad(
+        &[
+            "--from",
+            "02_01:0",
+            "--to",
+            "02_03:30",
+            "--distance",
+            "-1",
+            "--time",
+            "1",
+        ],
+        "distance -1",
+    );
+    bad(
+        &[
+            "--from",
+            "02_01:0",
+            "--to",
+            "02_03:30",
+            "--distance",
+            "1",
+            "--time",
+            "NaN",
+        ],
+        "time NaN",
+    );
+}
