@@ -280,6 +280,7 @@ fn run(args: &[&std::ffi::OsStr]) -> std::process::Output {
 /// run 02_03, 25 fps): the written sequence travels the distance and lasts
 /// the time the report gives; bad input is a one-line error with exit 1.
 #[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
