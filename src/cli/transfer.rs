@@ -2,7 +2,7 @@
 //! moving template mesh (Confluent Motion, de Aguiar et al. 2007).
 
 use anyhow::Context;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 use surfmotion::eval::{Checker, vertex_error};
 use surfmotion::mesh::MeshSequence;
@@ -177,9 +177,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Some(p) => Some(MarkerFile::load(p, scan.triangle_count())?),
         None => None,
     };
+    // Errors of the preparation (a flat or face-less mesh, markers of
+    // another mesh) name the files they came from.
     let prepared = match (&file, &lm) {
-        (Some(f), l) => prepare(&scan, MarkerSpec::File(f, l.as_ref()))?,
-        (None, Some(l)) => prepare(&scan, MarkerSpec::Landmarks(l, mopts))?,
+        (Some(f), l) => prepare(&scan, MarkerSpec::File(f, l.as_ref())).with_context(|| {
+            format!(
+                "{} with markers {}",
+                a.scan,
+                a.markers.as_deref().unwrap_or(Path::new("?")).display()
+            )
+        })?,
+        (None, Some(l)) => prepare(&scan, MarkerSpec::Landmarks(l, mopts)).with_context(|| {
+            format!(
+                "{} with landmarks {}",
+                a.scan,
+                a.landmarks.as_deref().unwrap_or(Path::new("?")).display()
+            )
+        })?,
         (None, None) => anyhow::bail!("give --landmarks or --markers"),
     };
     if let Some(p) = &a.save_markers {
