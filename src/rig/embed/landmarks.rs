@@ -117,6 +117,19 @@ pub enum LandmarkError {
         /// What is wrong.
         reason: String,
     },
+    /// The file records the vertex count of the mesh it was made for, and
+    /// this mesh has another: its vertex indices would mark other places.
+    #[error(
+        "{path}: made for a mesh of {recorded} vertices; this one has {actual}: landmarks of another mesh?"
+    )]
+    OtherMesh {
+        /// The file.
+        path: PathBuf,
+        /// The count the file records.
+        recorded: u64,
+        /// The mesh's.
+        actual: usize,
+    },
     /// A required landmark is absent.
     #[error("{path}: missing required landmark(s): {missing}")]
     Missing {
@@ -202,6 +215,22 @@ impl Landmarks {
             .ok_or_else(|| json("expected a JSON object of landmarks".into()))?;
         let mut marks = BTreeMap::new();
         for (key, val) in obj {
+            // Optional: the vertex count of the mesh the file was made for
+            // (vertex indices of another mesh are otherwise in range and
+            // wrong; issue 18, item 16).
+            if key == "vertex_count" {
+                let Some(n) = val.as_u64() else {
+                    return Err(json("vertex_count: expected a whole number".into()));
+                };
+                if n as usize != vertex_count {
+                    return Err(LandmarkError::OtherMesh {
+                        path: path.to_path_buf(),
+                        recorded: n,
+                        actual: vertex_count,
+                    });
+                }
+                continue;
+            }
             let Some(l) = Landmark::from_name(key) else {
                 return Err(LandmarkError::Unknown {
                     path: path.to_path_buf(),
@@ -377,5 +406,20 @@ mod tests {
             .to_string();
         assert!(e.contains("chin"), "{e}");
         assert!(Landmarks::parse("[1]", p, 5).is_err());
+    }
+
+    #[test]
+    fn landmarks_of_another_mesh_are_refused_when_the_file_says_its_mesh() {
+        let p = Path::new("l.json");
+        let ok = r#"{"vertex_count": 10, "chin": 1, "groin": [0,1,0], "l_wrist": 2,
+            "r_wrist": 3, "l_elbow": 4, "r_elbow": 5, "l_knee": 6, "r_knee": 7}"#;
+        assert!(Landmarks::parse(ok, p, 10).is_ok());
+        let e = Landmarks::parse(ok, p, 12).unwrap_err().to_string();
+        assert!(
+            e.contains("another mesh") && e.contains("10") && e.contains("12"),
+            "{e}"
+        );
+        let bad = ok.replace("\"vertex_count\": 10", "\"vertex_count\": \"ten\"");
+        assert!(Landmarks::parse(&bad, p, 10).is_err());
     }
 }
