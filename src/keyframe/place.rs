@@ -18,9 +18,9 @@
 use super::graph::{KeyGraph, centre_of};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
-use crate::retarget::Floor;
 use crate::retarget::character::Character;
 use crate::retarget::timeline::{Jump, OutFrame, TimelineOptions, timeline};
+use crate::retarget::{BlendScratch, Floor, blend_placed};
 use crate::skeleton::rotate_yaw;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -101,29 +101,9 @@ pub fn place(
             |(ws, buf, grads), (k, dst)| {
                 let o = &frames[k];
                 let r = path[k];
-                let used = o.used();
-                for (i, &(id, _)) in used.iter().enumerate() {
-                    let same = g.sequence[id as usize] == g.sequence[r as usize];
-                    let pl = if same {
-                        place[k]
-                    } else {
-                        place[k].after(&Floor::fit(&ch.poses[id as usize], &ch.poses[r as usize]))
-                    };
-                    ch.frame_metres(id, buf);
-                    for p in buf.iter_mut() {
-                        *p = pl.apply(DVec3::from_array(*p)).to_array();
-                    }
-                    if used.len() == 1 {
-                        dst.copy_from_slice(buf);
-                    } else {
-                        blender.decompose_into(buf, ws, &mut grads[i]);
-                    }
-                }
-                if used.len() > 1 {
-                    let inputs: [(&FrameGradients, f64); 4] =
-                        std::array::from_fn(|i| (&grads[i], used.get(i).map_or(0.0, |s| s.1)));
-                    blender.blend_many(&inputs[..used.len()], dst, ws);
-                }
+                let same = |id: u32| g.sequence[id as usize] == g.sequence[r as usize];
+                let mut scratch = BlendScratch { ws, buf, grads };
+                blend_placed(ch, &blender, o.used(), r, place[k], same, &mut scratch, dst);
                 // Exactly on the accumulated floor track.
                 let c = centre_of(dst);
                 let (dx, dz) = (centre[k][0] - c[0], centre[k][1] - c[1]);

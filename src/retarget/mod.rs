@@ -122,6 +122,59 @@ pub struct Output {
     pub report: Report,
 }
 
+/// Scratch of [`blend_placed`]: a blending workspace, a frame buffer and
+/// up to four frames' gradients.
+pub struct BlendScratch<'a> {
+    /// The blender's workspace.
+    pub ws: &'a mut crate::mesh::blend::BlendWorkspace,
+    /// One frame's positions.
+    pub buf: &'a mut Vec<[f64; 3]>,
+    /// Gradients of each frame blended (at least four).
+    pub grads: &'a mut Vec<FrameGradients>,
+}
+
+/// One output frame (Huang et al. 2015, Sec. 4.4): the database frames
+/// `used` (id, weight), each placed on the floor by `place` (the placement
+/// of frame `anchor`; a frame of another capture, `!same(id)`, is first
+/// fitted onto the anchor's skeleton), then blended non-linearly into
+/// `dst` (a single frame is copied). Shared by `retarget` and `keyframe`.
+#[allow(clippy::too_many_arguments)]
+pub fn blend_placed(
+    ch: &Character,
+    blender: &Blender,
+    used: &[(u32, f64)],
+    anchor: u32,
+    place: Floor,
+    same: impl Fn(u32) -> bool,
+    s: &mut BlendScratch<'_>,
+    dst: &mut [[f64; 3]],
+) {
+    for (i, &(id, _)) in used.iter().enumerate() {
+        let pl = if same(id) {
+            place
+        } else {
+            place.after(&Floor::fit(
+                &ch.poses[id as usize],
+                &ch.poses[anchor as usize],
+            ))
+        };
+        ch.frame_metres(id, s.buf);
+        for p in s.buf.iter_mut() {
+            *p = pl.apply(DVec3::from_array(*p)).to_array();
+        }
+        if used.len() == 1 {
+            dst.copy_from_slice(s.buf);
+        } else {
+            blender.decompose_into(s.buf, s.ws, &mut s.grads[i]);
+        }
+    }
+    if used.len() > 1 {
+        let inputs: [(&FrameGradients, f64); 4] =
+            std::array::from_fn(|i| (&s.grads[i], used.get(i).map_or(0.0, |u| u.1)));
+        blender.blend_many(&inputs[..used.len()], dst, s.ws);
+    }
+}
+
 /// A rigid motion on the floor: rotation `theta` about Y, then `t` (y = 0).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Floor {
@@ -333,33 +386,18 @@ fn place_and_blend(
             )
         },
         |(ws, buf, grads), (k, dst)| {
-            let o = &frames[k];
-            let primary = o.primary();
-            let used = o.used();
-            for (i, &(id, _)) in used.iter().enumerate() {
-                let place = if id == primary {
-                    placed[k]
-                } else {
-                    placed[k].after(&Floor::fit(
-                        &ch.poses[id as usize],
-                        &ch.poses[primary as usize],
-                    ))
-                };
-                ch.frame_metres(id, buf);
-                for p in buf.iter_mut() {
-                    *p = place.apply(DVec3::from_array(*p)).to_array();
-                }
-                if used.len() == 1 {
-                    dst.copy_from_slice(buf);
-                } else {
-                    blender.decompose_into(buf, ws, &mut grads[i]);
-                }
-            }
-            if used.len() > 1 {
-                let inputs: [(&FrameGradients, f64); 4] =
-                    std::array::from_fn(|i| (&grads[i], used.get(i).map_or(0.0, |s| s.1)));
-                blender.blend_many(&inputs[..used.len()], dst, ws);
-            }
+            let primary = frames[k].primary();
+            let mut scratch = BlendScratch { ws, buf, grads };
+            blend_placed(
+                ch,
+                &blender,
+                frames[k].used(),
+                primary,
+                placed[k],
+                |id| id == primary,
+                &mut scratch,
+                dst,
+            );
         },
     );
     out
