@@ -351,6 +351,27 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     assert_eq!(segs[0]["from"], "02_01:0");
     assert_eq!(segs[0]["to"], "02_03:30");
     assert!(r["cost"]["total"].as_f64().unwrap() >= r["cost"]["transition"].as_f64().unwrap());
+    // A target the graph cannot reach (100 m in 1 s) gives the best
+    // compromise, flagged as such.
+    let far = tmp.path().join("far.pc2");
+    let o = run(&[
+        "keyframe".as_ref(),
+        "--db".as_ref(),
+        db.as_os_str(),
+        "--from".as_ref(),
+        "02_01:0".as_ref(),
+        "--to".as_ref(),
+        "02_03:30".as_ref(),
+        "--distance".as_ref(),
+        "100".as_ref(),
+        "--time".as_ref(),
+        "1".as_ref(),
+        "-o".as_ref(),
+        far.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("not met within 1 %"), "{text}");
     // Bad input: one line on stderr, exit 1.
     let x = tmp.path().join("x.pc2");
     let bad = |args: &[&str], want: &str| {
@@ -388,7 +409,7 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
             "--time",
             "1",
         ],
-        "has frames 0..",
+        "frames (0 to",
     );
     // Frame 0 of a sequence is entered by no transition (they land on n+1).
     bad(

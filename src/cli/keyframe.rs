@@ -174,10 +174,21 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         fps
     );
     s += &format!("achieved: {:.3} m in {:.3} s", r.distance, r.time);
+    let mut missed = None;
     if let (Some(de), Some(te)) = (r.distance_error, r.time_error) {
         s += &format!(" (error {de:+.3} m, {te:+.3} s)");
+        // Flag a compromise: an error over 1 % of a non-zero target.
+        let (dt, tt) = (r.distance - de, r.time - te);
+        if (dt > 0.0 && de.abs() > 0.01 * dt) || (tt > 0.0 && te.abs() > 0.01 * tt) {
+            missed = Some((dt, tt));
+        }
     }
     s += "\n";
+    if let Some((dt, tt)) = missed {
+        s += &format!(
+            "not met within 1 %: the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 (the graph may not reach it; --w-dist and --w-time weigh the two)\n"
+        );
+    }
     s += &format!(
         "cost: transitions {:.4} + distance {:.4} + time {:.4} = {:.4}\n",
         r.cost.transition, r.cost.distance, r.cost.time, r.cost.total

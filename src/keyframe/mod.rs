@@ -47,7 +47,10 @@ pub enum KeyframeError {
         known: String,
     },
     /// Frame out of range.
-    #[error("key-frame '{key}': sequence '{name}' has frames 0..{len}")]
+    #[error(
+        "key-frame '{key}': sequence '{name}' has {len} frames (0 to {})",
+        .len.saturating_sub(1)
+    )]
     Frame {
         /// As written.
         key: String,

@@ -390,7 +390,7 @@ fn place_and_blend(
             let mut scratch = BlendScratch { ws, buf, grads };
             blend_placed(
                 ch,
-                &blender,
+                blender,
                 frames[k].used(),
                 primary,
                 placed[k],
