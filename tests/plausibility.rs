@@ -139,29 +139,33 @@ fn head_angle_is_zero_at_rest_and_under_rigid_motion_and_reads_a_tilt() {
     }
 }
 
+/// A real capture (`4d/NAME/NAME.pc2`), its rest mesh and the rig embedded
+/// from the fixture landmarks.
+fn capture(d: &Path, name: &str) -> (surfmotion::mesh::MeshSequence, Mesh, Embedding) {
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let load = |ext: &str| {
+        load_sequence(
+            &d.join(format!("4d/{name}/{name}.{ext}")).to_string_lossy(),
+            &LoadOptions::default(),
+        )
+        .unwrap()
+    };
+    let (seq, rest) = (load("pc2"), load("obj").frame_mesh(0));
+    let lm = Landmarks::load(
+        &fixtures.join(format!("{name}.landmarks.json")),
+        rest.vertex_count(),
+    )
+    .unwrap();
+    let rig = Embedding::new(&rest, &lm, None).unwrap();
+    (seq, rest, rig)
+}
+
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn head_angle_on_real_captures() {
     let Some(d) = common::data_dir() else { return };
-    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
     for (name, bound_median, bound_p95) in [("samba", 6.0, 15.0), ("crane", 10.0, 25.0)] {
-        let seq = load_sequence(
-            &d.join(format!("4d/{name}/{name}.pc2")).to_string_lossy(),
-            &LoadOptions::default(),
-        )
-        .unwrap();
-        let rest = load_sequence(
-            &d.join(format!("4d/{name}/{name}.obj")).to_string_lossy(),
-            &LoadOptions::default(),
-        )
-        .unwrap()
-        .frame_mesh(0);
-        let lm = Landmarks::load(
-            &fixtures.join(format!("{name}.landmarks.json")),
-            rest.vertex_count(),
-        )
-        .unwrap();
-        let rig = Embedding::new(&rest, &lm, None).unwrap();
+        let (seq, rest, rig) = capture(&d, name);
         check_head_angle(name, rest.positions(), &rig);
         let h = HeadTorso::new(
             rest.positions(),
@@ -193,25 +197,8 @@ fn head_angle_on_real_captures() {
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn knee_hyperextension_on_real_captures_is_small() {
     let Some(d) = common::data_dir() else { return };
-    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
     for name in ["samba", "crane"] {
-        let seq = load_sequence(
-            &d.join(format!("4d/{name}/{name}.pc2")).to_string_lossy(),
-            &LoadOptions::default(),
-        )
-        .unwrap();
-        let rest = load_sequence(
-            &d.join(format!("4d/{name}/{name}.obj")).to_string_lossy(),
-            &LoadOptions::default(),
-        )
-        .unwrap()
-        .frame_mesh(0);
-        let lm = Landmarks::load(
-            &fixtures.join(format!("{name}.landmarks.json")),
-            rest.vertex_count(),
-        )
-        .unwrap();
-        let rig = Embedding::new(&rest, &lm, None).unwrap();
+        let (seq, _, rig) = capture(&d, name);
         let worst = (0..seq.frame_count())
             .flat_map(|f| surfmotion::eval::knee_hyperextension(&rig.skeleton(seq.frame(f))))
             .fold(0.0f64, f64::max);
