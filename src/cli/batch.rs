@@ -52,8 +52,8 @@ pub struct Args {
     #[arg(long, value_name = "i/n")]
     pub shard: Option<String>,
     /// Output format.
-    #[arg(long, value_enum, default_value_t = Format::Glb)]
-    pub format: Format,
+    #[arg(long, value_enum, default_value_t = super::values::FormatArg::Glb)]
+    pub format: super::values::FormatArg,
     /// Redo clips whose output is already complete.
     #[arg(long)]
     pub force: bool,
@@ -182,6 +182,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db"
         );
     }
+    let format = Format::from(a.format);
     let load = a.clip.load_options()?;
     let scan_job = a.scan_job.job()?;
     let retarget_opts = a.retarget_job.options();
@@ -189,7 +190,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         find_clips(&a.mocap_dir).map_err(|e| anyhow::anyhow!("{}: {e}", a.mocap_dir.display()))?;
     // Outputs of the whole library, so every shard names them alike; clips
     // that would write one output are renamed or refused before any work.
-    let (planned, renamed) = plan(&all, &a.output, a.format)?;
+    let (planned, renamed) = plan(&all, &a.output, format)?;
     if !renamed.is_empty() {
         eprintln!(
             "{} clips would write the same output; named with their extension:\n  {}",
@@ -229,7 +230,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
     let opts = RunOptions {
         jobs: a.jobs.unwrap_or_else(|| RunOptions::default().jobs),
         force: a.force,
-        format: a.format,
+        format,
     };
     // The report keeps what earlier runs recorded for the outputs they
     // wrote, and is rewritten after every clip.
@@ -254,7 +255,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
                     earlier: false,
                 };
                 earlier.fill(&mut o);
-                (!a.force && o.earlier && surfmotion::batch::runner::complete(&p.output, a.format))
+                (!a.force && o.earlier && surfmotion::batch::runner::complete(&p.output, format))
                     .then_some(o)
             })
             .collect(),

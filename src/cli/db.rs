@@ -41,7 +41,7 @@ pub struct BuildArgs {
     pub dir: PathBuf,
     /// Dissimilarity measure (default: the manifest's [graph] measure, else shape).
     #[arg(long, value_enum)]
-    pub measure: Option<surfmotion::similarity::Measure>,
+    pub measure: Option<super::values::MeasureArg>,
     /// Recompute even if the cache is current.
     #[arg(long)]
     pub force: bool,
@@ -84,7 +84,7 @@ impl surfmotion::db::BuildProgress for Bars {
 
 fn build(a: BuildArgs) -> anyhow::Result<()> {
     let opts = surfmotion::db::BuildOptions {
-        measure: a.measure,
+        measure: a.measure.map(Into::into),
         force: a.force,
     };
     let (_, graph, r) = surfmotion::db::build(&a.dir, &opts, &Bars::new())?;
@@ -148,8 +148,8 @@ pub struct SkeletonArgs {
     /// skeleton per character, its bone lengths the median over all frames,
     /// nearest the regressor joints in each frame (least squares); `regressor`
     /// gives those joints as measured, `centroid` the paper's part centres.
-    #[arg(long, value_enum, default_value_t = SkeletonKind::Rigid)]
-    pub kind: SkeletonKind,
+    #[arg(long, value_enum, default_value_t = super::values::SkeletonKindArg::Rigid)]
+    pub kind: super::values::SkeletonKindArg,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
@@ -302,7 +302,8 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
 
 fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     let t = std::time::Instant::now();
-    let (rig, seqs, rigid) = extract(&a.dir, a.kind)?;
+    let kind = SkeletonKind::from(a.kind);
+    let (rig, seqs, rigid) = extract(&a.dir, kind)?;
     let secs = t.elapsed().as_secs_f64();
     let out = a.output.clone().unwrap_or_else(|| a.dir.join("skeletons"));
     rig.save(&out.join("rig.json"))?;
@@ -314,7 +315,7 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
         let json = serde_json::json!({
             "sequence": s.name,
             "fps": s.fps,
-            "kind": a.kind,
+            "kind": kind,
             "joints": Canonical::ALL.iter().map(|c| c.name()).collect::<Vec<_>>(),
             "frames": s.poses.iter().map(|p| p.iter().map(|q| q.to_array()).collect::<Vec<_>>()).collect::<Vec<_>>(),
         });
@@ -368,7 +369,7 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     if a.json {
         // Lengths and fit residuals are in the database's units.
         let units = Manifest::load(&a.dir).map(|m| m.units).unwrap_or_default();
-        let v = serde_json::json!({"seconds": secs, "kind": a.kind, "units": units, "sequences": summary, "notes": rig.notes});
+        let v = serde_json::json!({"seconds": secs, "kind": kind, "units": units, "sequences": summary, "notes": rig.notes});
         crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
         return Ok(());
     }
@@ -381,7 +382,7 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     crate::outln!(
         "embedded the rig and extracted {} ({}) in {:.3} s → {}",
         super::count(frames, "skeleton"),
-        a.kind,
+        kind,
         secs,
         out.display()
     )?;

@@ -76,7 +76,7 @@ pub struct ProceduralArgs {
     pub output: PathBuf,
     /// Which gaits (default: all).
     #[arg(long, value_enum)]
-    pub gait: Vec<surfmotion::synth::Gait>,
+    pub gait: Vec<super::values::GaitArg>,
     /// Length of each clip in seconds.
     #[arg(long, default_value_t = 4.0, value_parser = super::positive)]
     pub seconds: f64,
@@ -198,7 +198,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             let gaits = if a.gait.is_empty() {
                 surfmotion::synth::Gait::ALL.to_vec()
             } else {
-                a.gait.clone()
+                a.gait.iter().map(|&g| g.into()).collect()
             };
             let single = gaits.len() == 1
                 && a.output

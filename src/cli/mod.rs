@@ -15,6 +15,7 @@ mod retarget;
 mod rig;
 mod synth;
 mod transfer;
+mod values;
 
 use clap::{CommandFactory, FromArgMatches, Subcommand};
 

@@ -51,8 +51,8 @@ pub struct JobOpts {
     /// How the retrieved frames follow the query skeleton: part-based PCA
     /// Laplacian deformation (the paper), one whole-body space, plain linear
     /// blend skinning, or none.
-    #[arg(long, value_enum, default_value_t = surfmotion::deform::DeformMode::Part)]
-    pub deform: surfmotion::deform::DeformMode,
+    #[arg(long, value_enum, default_value_t = super::values::DeformModeArg::Part)]
+    pub deform: super::values::DeformModeArg,
     /// Skeleton dissimilarity threshold T_skel (metres, summed over 19
     /// joints). Default: chosen from the query's nearest-frame costs.
     #[arg(long, value_parser = super::non_negative)]
@@ -79,7 +79,7 @@ impl JobOpts {
         opts.deform = if self.no_deform {
             surfmotion::deform::DeformMode::None
         } else {
-            self.deform
+            self.deform.into()
         };
         opts
     }
@@ -88,7 +88,7 @@ impl JobOpts {
     /// characters).
     pub fn is_default(&self) -> bool {
         !self.no_deform
-            && self.deform == surfmotion::deform::DeformMode::Part
+            && self.deform == super::values::DeformModeArg::Part
             && self.t_skel.is_none()
             && self.w_retr == 1.0
             && !self.no_interpolate

@@ -17,7 +17,7 @@ use serde::Serialize;
 use std::path::Path;
 
 /// How joints are read off a frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SkeletonKind {
     /// The character's rigid skeleton (bone lengths calibrated over the

@@ -49,7 +49,7 @@ use part_laplacian::{RegionSolver, RegionWorkspace, apply, region_laplacian};
 use rayon::prelude::*;
 
 /// How retrieved frames are made to follow the query skeleton.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum DeformMode {
     /// Part-based PCA Laplacian deformation (the paper's method).

@@ -14,7 +14,7 @@ use glam::{DQuat, DVec3};
 use std::f64::consts::{PI, TAU};
 
 /// Which procedural motion.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Gait {
     /// Walk straight ahead at 1.4 m/s.
     Walk,
