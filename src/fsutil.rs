@@ -18,6 +18,54 @@ pub struct FsError {
     pub source: std::io::Error,
 }
 
+/// The error shape every file reader shares (meshes, mocap): the file could
+/// not be read, a syntax or value error at a 1-based line of a text file, or
+/// a problem with the file as a whole (or at a byte offset of a binary
+/// file). Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum FileError {
+    /// The file could not be read or written.
+    #[error(transparent)]
+    Io(#[from] FsError),
+    /// A syntax or value error at a line of a text file.
+    #[error("{path}:{line}: {msg}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        msg: String,
+    },
+    /// A problem with the file as a whole (no frames, missing companion
+    /// file, ...) or at a byte offset of a binary file.
+    #[error("{path}: {msg}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        msg: String,
+    },
+}
+
+impl FileError {
+    /// A [`FileError::Parse`] at 1-based `line` of `path`.
+    pub fn parse(path: &Path, line: usize, msg: impl Into<String>) -> Self {
+        FileError::Parse {
+            path: path.to_path_buf(),
+            line,
+            msg: msg.into(),
+        }
+    }
+    /// A [`FileError::Invalid`] about `path` as a whole.
+    pub fn invalid(path: &Path, msg: impl Into<String>) -> Self {
+        FileError::Invalid {
+            path: path.to_path_buf(),
+            msg: msg.into(),
+        }
+    }
+}
+
 /// Largest settings file (landmarks, markers, rig maps, part labels,
 /// manifests) any reader accepts (64 MiB): such files are a few kB.
 pub const MAX_SMALL_FILE_BYTES: u64 = 64 << 20;
@@ -137,6 +185,26 @@ pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), FsError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The messages of the shared file-error shape (tests/malformed.rs and
+    /// tests/hostile.rs check them through every reader).
+    #[test]
+    fn file_error_messages_name_file_and_line() {
+        let p = Path::new("dir/a.bvh");
+        assert_eq!(
+            FileError::parse(p, 7, "bad number").to_string(),
+            "dir/a.bvh:7: bad number"
+        );
+        assert_eq!(
+            FileError::invalid(p, "no frames").to_string(),
+            "dir/a.bvh: no frames"
+        );
+        let io = FileError::from(FsError {
+            path: p.to_path_buf(),
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, "gone"),
+        });
+        assert_eq!(io.to_string(), "dir/a.bvh: gone");
+    }
 
     #[test]
     fn atomic_write_replaces_whole_file_and_leaves_no_temporaries() {

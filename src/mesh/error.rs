@@ -1,50 +1,35 @@
-use std::path::PathBuf;
+use crate::fsutil::{FileError, FsError};
+use std::path::Path;
 
-/// Errors of mesh construction, readers and writers.
+/// Errors of mesh construction, readers and writers: the shared file-error
+/// shape ([`FileError`]: the file could not be read, an error at a line of a
+/// text file, a problem with a file as a whole or at a byte offset of a
+/// binary file), or a mesh that breaks an invariant.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
-    /// The file could not be read or written.
+    /// A file could not be read or written, or holds something wrong.
     #[error(transparent)]
-    Io(#[from] crate::fsutil::FsError),
-    /// A syntax or value error at a line of a text file.
-    #[error("{path}:{line}: {msg}")]
-    Parse {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line.
-        line: usize,
-        /// What is wrong.
-        msg: String,
-    },
-    /// A problem with a file as a whole, or at a byte offset of a binary file.
-    #[error("{path}: {msg}")]
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong.
-        msg: String,
-    },
+    File(#[from] FileError),
     /// A mesh that breaks an invariant (index out of range, non-finite value).
     #[error("{0}")]
     Topology(#[from] TopologyError),
 }
 
-impl MeshError {
-    pub(crate) fn parse(path: &std::path::Path, line: usize, msg: impl Into<String>) -> Self {
-        MeshError::Parse {
-            path: path.to_path_buf(),
-            line,
-            msg: msg.into(),
-        }
+impl From<FsError> for MeshError {
+    fn from(e: FsError) -> Self {
+        MeshError::File(FileError::Io(e))
     }
-    pub(crate) fn invalid(path: &std::path::Path, msg: impl Into<String>) -> Self {
-        MeshError::Invalid {
-            path: path.to_path_buf(),
-            msg: msg.into(),
-        }
+}
+
+impl MeshError {
+    pub(crate) fn parse(path: &Path, line: usize, msg: impl Into<String>) -> Self {
+        MeshError::File(FileError::parse(path, line, msg))
+    }
+    pub(crate) fn invalid(path: &Path, msg: impl Into<String>) -> Self {
+        MeshError::File(FileError::invalid(path, msg))
     }
     /// Attaches a file name to a topology error.
-    pub(crate) fn in_file(self, path: &std::path::Path) -> Self {
+    pub(crate) fn in_file(self, path: &Path) -> Self {
         match self {
             MeshError::Topology(t) => MeshError::invalid(path, t.to_string()),
             e => e,

@@ -25,6 +25,7 @@
 //! mesh and every halved displacement fit in 16 bits: the error of a vertex
 //! is at most `s` per axis. 12 bytes per vertex and frame instead of 24.
 
+use crate::fsutil::FileError;
 use crate::mesh::normals::vertex_normals_into;
 use crate::mesh::{MeshError, MeshSequence};
 use gltf_json as json;
@@ -679,7 +680,7 @@ pub fn write_glb_with(
     path: &Path,
 ) -> Result<(), MeshError> {
     let bytes = encode_glb_with(seq, fps, opts).map_err(|e| match e {
-        MeshError::Invalid { msg, .. } => MeshError::invalid(path, msg),
+        MeshError::File(FileError::Invalid { msg, .. }) => MeshError::invalid(path, msg),
         e => e,
     })?;
     crate::fsutil::write_bytes_atomic(path, &bytes)?;
