@@ -8,9 +8,9 @@ mod common;
 
 use criterion::Criterion;
 use std::hint::black_box;
-use surfmotion::deform::part_laplacian::region_laplacian;
 use surfmotion::deform::unflip::RepairOptions;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
+use surfmotion::mesh::laplacian::uniform_region_rows;
 use surfmotion::mesh::solver::FixedSolver;
 use surfmotion::retarget::character::Character;
 use surfmotion::retarget::query::load_mocap;
@@ -88,7 +88,7 @@ fn main() {
     }
     // The floor: the whole body's 2-ring system, prefactored, one solve.
     let all: Vec<u32> = (0..n as u32).collect();
-    let lap = region_laplacian(ch.topology.triangles(), &all, n);
+    let lap = uniform_region_rows(ch.topology.triangles(), &all, n);
     let mut trip = Vec::new();
     for r in &lap {
         for &(a, wa) in r {

@@ -39,13 +39,14 @@ pub mod pca;
 pub mod unflip;
 pub mod untangle;
 
+use crate::mesh::laplacian::uniform_region_rows;
 use crate::mesh::solver::SolveError;
 use crate::retarget::character::Character;
 use crate::rig::Canonical;
 use crate::rig::embed::parts::Part;
 use crate::skeleton::{Pose, pose_rotations};
 use glam::{DQuat, DVec3};
-use part_laplacian::{RegionSolver, RegionWorkspace, apply, region_laplacian};
+use part_laplacian::{RegionSolver, RegionWorkspace, apply};
 use rayon::prelude::*;
 
 /// How retrieved frames are made to follow the query skeleton.
@@ -356,7 +357,7 @@ impl Deformer {
             for (i, &v) in verts.iter().enumerate() {
                 local[v as usize] = i as u32;
             }
-            let lap = region_laplacian(tris, &local, verts.len());
+            let lap = uniform_region_rows(tris, &local, verts.len());
             // Examples covering the region's rotations.
             let rots: Vec<Vec<DQuat>> = (0..nf)
                 .map(|f| {

@@ -17,7 +17,7 @@
 //! the three are solved together.
 
 use super::pca::Basis;
-use crate::mesh::laplacian::to_rows;
+use crate::mesh::laplacian::uniform_region_rows;
 use crate::mesh::solver::{FixedSolver, SolveError, Workspace};
 use nalgebra::DMatrix;
 
@@ -60,28 +60,6 @@ fn apply_t(rows: &[Vec<(u32, f64)>], x: &[[f64; 3]], out: &mut [[f64; 3]]) {
     apply(rows, x, out)
 }
 
-/// The uniform Laplacian rows of the local mesh made of the edges of
-/// `triangles` with both ends in the region (`local[v]` the local index or
-/// `u32::MAX`).
-pub fn region_laplacian(triangles: &[[u32; 3]], local: &[u32], n: usize) -> Vec<Vec<(u32, f64)>> {
-    let mut edges = Vec::new();
-    for t in triangles {
-        for k in 0..3 {
-            let (a, b) = (local[t[k] as usize], local[t[(k + 1) % 3] as usize]);
-            if a != u32::MAX && b != u32::MAX && a != b {
-                edges.push((a.min(b), a.max(b)));
-            }
-        }
-    }
-    edges.sort_unstable();
-    edges.dedup();
-    let mut trip = Vec::with_capacity(edges.len() * 4);
-    for (a, b) in edges {
-        trip.extend([(a, b, 1.0), (b, a, 1.0), (a, a, -1.0), (b, b, -1.0)]);
-    }
-    to_rows(n, trip)
-}
-
 fn dot(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
     a.iter()
         .zip(b)
@@ -105,7 +83,7 @@ impl RegionSolver {
         for (i, &v) in vertices.iter().enumerate() {
             local[v as usize] = i as u32;
         }
-        let lap = region_laplacian(triangles, &local, n);
+        let lap = uniform_region_rows(triangles, &local, n);
         // S = LᵀL + WᵀW (+ a tiny diagonal so an isolated vertex is not singular).
         let mut trip = Vec::new();
         for r in &lap {

@@ -65,11 +65,21 @@ pub fn cotan_triplets(mesh: &Mesh) -> Triplets {
 /// Triplets of the uniform (graph) Laplacian: `L_ij = 1` per edge, diagonal
 /// minus the degree.
 pub fn uniform_triplets(mesh: &Mesh) -> Triplets {
-    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(mesh.triangle_count() * 3);
-    for t in mesh.triangles() {
+    uniform_triplets_by(mesh.triangles(), Some)
+}
+
+/// Triplets of the uniform Laplacian of the edges of `triangles` with both
+/// ends kept by `index` (which maps a vertex to its row, or `None` to drop
+/// it): each edge once, `(a, b, 1), (b, a, 1), (a, a, −1), (b, b, −1)`, in
+/// sorted edge order. The one implementation behind [`uniform_triplets`]
+/// and [`uniform_region_rows`].
+fn uniform_triplets_by(triangles: &[[u32; 3]], index: impl Fn(u32) -> Option<u32>) -> Triplets {
+    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(triangles.len() * 3);
+    for t in triangles {
         for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            if a != b {
+            if let (Some(a), Some(b)) = (index(t[k]), index(t[(k + 1) % 3]))
+                && a != b
+            {
                 edges.push((a.min(b), a.max(b)));
             }
         }
@@ -81,6 +91,23 @@ pub fn uniform_triplets(mesh: &Mesh) -> Triplets {
         out.extend([(a, b, 1.0), (b, a, 1.0), (a, a, -1.0), (b, b, -1.0)]);
     }
     out
+}
+
+/// The uniform Laplacian rows (see [`to_rows`]) of a region of a mesh: the
+/// edges of `triangles` with both ends in the region, `local[v]` being
+/// vertex v's index in the region or `u32::MAX` outside it; `n` region
+/// vertices, so `n` rows. Used per body part by the part-based deformation
+/// (Huang et al. 2015, Eq. 32).
+pub fn uniform_region_rows(
+    triangles: &[[u32; 3]],
+    local: &[u32],
+    n: usize,
+) -> Vec<Vec<(u32, f64)>> {
+    let trip = uniform_triplets_by(triangles, |v| {
+        let l = local[v as usize];
+        (l != u32::MAX).then_some(l)
+    });
+    to_rows(n, trip)
 }
 
 /// Sums duplicate triplets and returns compressed rows: for each row, its
@@ -157,6 +184,53 @@ mod tests {
                     assert!((back - v).abs() < 1e-15);
                 }
             }
+        }
+    }
+
+    /// Regression (issue 19): the region Laplacian of the part-based
+    /// deformation was a second implementation of the uniform Laplacian.
+    /// The shared one gives, for the whole mesh, exactly the rows of
+    /// [`uniform_triplets`], and for a region exactly the rows of the
+    /// former `deform::part_laplacian::region_laplacian` (kept here as the
+    /// reference).
+    #[test]
+    fn uniform_region_rows_equal_the_former_region_laplacian() {
+        fn former(triangles: &[[u32; 3]], local: &[u32], n: usize) -> Vec<Vec<(u32, f64)>> {
+            let mut edges = Vec::new();
+            for t in triangles {
+                for k in 0..3 {
+                    let (a, b) = (local[t[k] as usize], local[t[(k + 1) % 3] as usize]);
+                    if a != u32::MAX && b != u32::MAX && a != b {
+                        edges.push((a.min(b), a.max(b)));
+                    }
+                }
+            }
+            edges.sort_unstable();
+            edges.dedup();
+            let mut trip = Vec::with_capacity(edges.len() * 4);
+            for (a, b) in edges {
+                trip.extend([(a, b, 1.0), (b, a, 1.0), (a, a, -1.0), (b, b, -1.0)]);
+            }
+            to_rows(n, trip)
+        }
+        let m = octa();
+        let all: Vec<u32> = (0..6).collect();
+        let whole = uniform_region_rows(m.triangles(), &all, 6);
+        assert_eq!(whole, to_rows(6, uniform_triplets(&m)));
+        assert_eq!(whole, former(m.triangles(), &all, 6));
+        // A region of four vertices in a shuffled local order.
+        let local = [2, u32::MAX, 0, 3, 1, u32::MAX];
+        let region = uniform_region_rows(m.triangles(), &local, 4);
+        assert_eq!(region, former(m.triangles(), &local, 4));
+        // Vertices 0, 2, 3, 4 of the octahedron: edges 0-2, 0-3, 0-4, 2-4, 3-4.
+        let degrees: Vec<f64> = region
+            .iter()
+            .enumerate()
+            .map(|(i, r)| -r.iter().find(|x| x.0 as usize == i).unwrap().1)
+            .collect();
+        assert_eq!(degrees, vec![2.0, 3.0, 3.0, 2.0]);
+        for r in &region {
+            assert_eq!(r.iter().map(|x| x.1).sum::<f64>(), 0.0);
         }
     }
 
