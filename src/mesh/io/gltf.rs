@@ -15,6 +15,7 @@
 
 use crate::mesh::{Mesh, MeshError, MeshSequence};
 use base64::Engine as _;
+use glam::{DVec3, Mat4};
 use gltf::accessor::{DataType, Dimensions};
 use std::path::Path;
 
@@ -402,52 +403,33 @@ fn load_buffers(
     Ok(out)
 }
 
-type Mat4 = [[f32; 4]; 4];
-
-fn mat_mul(a: &Mat4, b: &Mat4) -> Mat4 {
-    let mut r = [[0.0; 4]; 4];
-    for (c, rc) in r.iter_mut().enumerate() {
-        for (row, v) in rc.iter_mut().enumerate() {
-            *v = (0..4).map(|k| a[k][row] * b[c][k]).sum();
-        }
-    }
-    r
-}
-
+/// A point through a node's world matrix (f32 entries, f64 arithmetic; the
+/// bottom row is taken as `0 0 0 1`).
 fn transform_point(m: &Mat4, p: [f64; 3]) -> [f64; 3] {
-    let mut r = [0.0; 3];
-    for (row, v) in r.iter_mut().enumerate() {
-        *v = m[0][row] as f64 * p[0]
-            + m[1][row] as f64 * p[1]
-            + m[2][row] as f64 * p[2]
-            + m[3][row] as f64;
-    }
-    r
+    m.as_dmat4()
+        .transform_point3(DVec3::from_array(p))
+        .to_array()
 }
 
 /// The linear part of `m` applied to a displacement.
 fn transform_vector(m: &Mat4, d: [f64; 3]) -> [f64; 3] {
-    std::array::from_fn(|row| {
-        m[0][row] as f64 * d[0] + m[1][row] as f64 * d[1] + m[2][row] as f64 * d[2]
-    })
+    m.as_dmat4()
+        .transform_vector3(DVec3::from_array(d))
+        .to_array()
 }
 
 /// The cofactor matrix of `m`'s linear part (`det · A⁻ᵀ`, defined for any
 /// `A`) applied to a normal: directions stay perpendicular to transformed
 /// surfaces; renormalise after summing morph displacements.
 fn transform_normal(m: &Mat4, n: [f64; 3]) -> [f64; 3] {
-    use glam::DVec3;
-    let c = |i: usize| DVec3::new(m[i][0] as f64, m[i][1] as f64, m[i][2] as f64);
-    let (c0, c1, c2) = (c(0), c(1), c(2));
+    let m = m.as_dmat4();
+    let (c0, c1, c2) = (
+        m.x_axis.truncate(),
+        m.y_axis.truncate(),
+        m.z_axis.truncate(),
+    );
     (c1.cross(c2) * n[0] + c2.cross(c0) * n[1] + c0.cross(c1) * n[2]).to_array()
 }
-
-const IDENTITY: Mat4 = [
-    [1.0, 0.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0, 0.0],
-    [0.0, 0.0, 1.0, 0.0],
-    [0.0, 0.0, 0.0, 1.0],
-];
 
 /// Rejects enum-valued fields the `gltf` crate would unwrap (and panic on)
 /// when they hold an unknown value: its validation lets some through (an
@@ -567,13 +549,61 @@ fn check_glb_layout<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a [u8], MeshEr
 }
 
 /// Parses glTF or GLB bytes. `path` locates external buffers and names errors.
+///
+/// The steps, in order (each names the file in its errors): [`open_document`]
+/// (GLB layout, JSON, validation, buffers), [`SceneNodes::walk`] (world
+/// transforms, parents, order), [`Geometry::add_node`] per mesh node
+/// (positions, normals, colours, triangles, skin attributes, morph targets),
+/// [`Geometry::into_mesh`], [`read_skin`], [`read_animations`] and
+/// [`node_graph`].
 pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
+    let (doc, ctx) = open_document(bytes, path)?;
+    let mut problems = Vec::new();
+    let scene = SceneNodes::walk(&doc);
+    let nodes: Vec<gltf::Node> = doc.nodes().collect();
+    let mut geo = Geometry::default();
+    for (ni, node) in nodes.iter().enumerate() {
+        geo.add_node(&ctx, ni, node, scene.world[ni], &mut problems)?;
+    }
+    let skin_idx = geo.skin_idx;
+    let morph_node = geo.morph_node;
+    let (mesh, parts) = geo.into_mesh(&ctx)?;
+    let skin = read_skin(
+        &ctx,
+        &doc,
+        skin_idx,
+        &scene.parent,
+        mesh.vertex_count(),
+        (parts.skin_joints, parts.skin_weights),
+        &mut problems,
+    )?;
+    let anims = read_animations(&ctx, &doc, morph_node, parts.targets.len())?;
+    let graph = node_graph(&doc, &nodes, scene, skin_idx);
+    Ok(GltfAsset {
+        mesh,
+        skin,
+        morph_targets: parts.targets,
+        normals: parts.normals,
+        morph_normals: parts.target_normals,
+        weights_animation: anims.weights,
+        animations: anims.names,
+        nodes: nodes.len(),
+        node_animations: anims.nodes,
+        graph,
+        problems,
+    })
+}
+
+/// Step 1 of [`parse_gltf`]: checks the GLB layout, parses the JSON (with
+/// `KHR_mesh_quantization` taken out of `extensionsRequired`, since
+/// quantisation only widens the component types of attributes, which
+/// `Ctx::read_f32` reads whatever they are), validates it, and loads the
+/// buffers.
+fn open_document<'a>(bytes: &[u8], path: &'a Path) -> Result<(gltf::Document, Ctx<'a>), MeshError> {
     let bytes = check_glb_layout(bytes, path)?;
     let g = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| MeshError::invalid(path, format!("glTF: {e}")))?;
     let mut json = g.document.into_json();
-    // Quantisation only widens the component types of attributes, which
-    // `Ctx::read_f32` reads whatever they are.
     json.extensions_required
         .retain(|e| e != super::glb::KHR_MESH_QUANTIZATION);
     check_attribute_indices(&json, path)?;
@@ -584,63 +614,109 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
         path,
         buffers: load_buffers(&doc, g.blob, path)?,
     };
-    let mut problems = Vec::new();
+    Ok((doc, ctx))
+}
 
-    // World transforms of every node reachable from the scene(s), cycle-safe.
-    let nn = doc.nodes().len();
-    let mut world: Vec<Option<Mat4>> = vec![None; nn];
-    let mut parent: Vec<Option<usize>> = vec![None; nn];
-    let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
-        Some(s) => s.nodes().map(|n| n.index()).collect(),
-        None => {
-            let mut is_child = vec![false; nn];
-            for n in doc.nodes() {
-                for c in n.children() {
-                    is_child[c.index()] = true;
+/// World transforms of every node reachable from the scene(s), cycle-safe.
+struct SceneNodes {
+    /// World matrix per node (`None` for unreachable nodes).
+    world: Vec<Option<Mat4>>,
+    /// Parent per node.
+    parent: Vec<Option<usize>>,
+    /// Reachable nodes, parents first.
+    order: Vec<usize>,
+}
+
+impl SceneNodes {
+    /// Step 2 of [`parse_gltf`]: walks the default scene (else the first,
+    /// else every node that is nobody's child) depth first.
+    fn walk(doc: &gltf::Document) -> SceneNodes {
+        let nn = doc.nodes().len();
+        let mut world: Vec<Option<Mat4>> = vec![None; nn];
+        let mut parent: Vec<Option<usize>> = vec![None; nn];
+        let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+            Some(s) => s.nodes().map(|n| n.index()).collect(),
+            None => {
+                let mut is_child = vec![false; nn];
+                for n in doc.nodes() {
+                    for c in n.children() {
+                        is_child[c.index()] = true;
+                    }
+                }
+                (0..nn).filter(|&i| !is_child[i]).collect()
+            }
+        };
+        let nodes: Vec<gltf::Node> = doc.nodes().collect();
+        let mut stack: Vec<(usize, Mat4)> = roots.iter().map(|&r| (r, Mat4::IDENTITY)).collect();
+        let mut order = Vec::with_capacity(nn);
+        while let Some((i, pm)) = stack.pop() {
+            if world[i].is_some() {
+                continue;
+            }
+            let m = pm * Mat4::from_cols_array_2d(&nodes[i].transform().matrix());
+            world[i] = Some(m);
+            order.push(i);
+            for c in nodes[i].children() {
+                if world[c.index()].is_none() {
+                    parent[c.index()] = Some(i);
+                    stack.push((c.index(), m));
                 }
             }
-            (0..nn).filter(|&i| !is_child[i]).collect()
         }
-    };
-    let nodes: Vec<gltf::Node> = doc.nodes().collect();
-    let mut stack: Vec<(usize, Mat4)> = roots.iter().map(|&r| (r, IDENTITY)).collect();
-    let mut order = Vec::with_capacity(nn);
-    while let Some((i, pm)) = stack.pop() {
-        if world[i].is_some() {
-            continue;
-        }
-        let m = mat_mul(&pm, &nodes[i].transform().matrix());
-        world[i] = Some(m);
-        order.push(i);
-        for c in nodes[i].children() {
-            if world[c.index()].is_none() {
-                parent[c.index()] = Some(i);
-                stack.push((c.index(), m));
-            }
+        SceneNodes {
+            world,
+            parent,
+            order,
         }
     }
+}
 
-    let mut positions: Vec<[f64; 3]> = Vec::new();
-    let mut colors: Vec<[f64; 3]> = Vec::new();
-    let mut any_color = false;
-    let mut tris: Vec<[u32; 3]> = Vec::new();
-    let mut targets: Vec<Vec<[f64; 3]>> = Vec::new();
-    let mut normals: Vec<[f64; 3]> = Vec::new();
-    let mut any_normal = false;
-    let mut target_normals: Vec<Vec<[f64; 3]>> = Vec::new();
-    let mut morph_node: Option<usize> = None;
-    let mut skin_joints: Vec<[u16; 4]> = Vec::new();
-    let mut skin_weights: Vec<[f32; 4]> = Vec::new();
-    let mut skin_idx: Option<usize> = None;
-    for (ni, node) in nodes.iter().enumerate() {
-        let (Some(mesh), Some(m)) = (node.mesh(), world[ni]) else {
-            continue;
+/// The merged triangle primitives, as they are read.
+#[derive(Default)]
+struct Geometry {
+    positions: Vec<[f64; 3]>,
+    colors: Vec<[f64; 3]>,
+    any_color: bool,
+    tris: Vec<[u32; 3]>,
+    targets: Vec<Vec<[f64; 3]>>,
+    normals: Vec<[f64; 3]>,
+    any_normal: bool,
+    target_normals: Vec<Vec<[f64; 3]>>,
+    morph_node: Option<usize>,
+    skin_joints: Vec<[u16; 4]>,
+    skin_weights: Vec<[f32; 4]>,
+    skin_idx: Option<usize>,
+}
+
+/// What [`Geometry::into_mesh`] hands on besides the mesh.
+struct GeometryParts {
+    targets: Vec<Vec<[f64; 3]>>,
+    normals: Option<Vec<[f64; 3]>>,
+    target_normals: Vec<Vec<[f64; 3]>>,
+    skin_joints: Vec<[u16; 4]>,
+    skin_weights: Vec<[f32; 4]>,
+}
+
+impl Geometry {
+    /// Step 3 of [`parse_gltf`]: the triangle primitives of node `ni` (if
+    /// it has a mesh and is reachable, `world` its matrix), through the
+    /// node transform unless skinned. Only the first skin is read.
+    fn add_node(
+        &mut self,
+        ctx: &Ctx,
+        ni: usize,
+        node: &gltf::Node,
+        world: Option<Mat4>,
+        problems: &mut Vec<String>,
+    ) -> Result<(), MeshError> {
+        let (Some(mesh), Some(m)) = (node.mesh(), world) else {
+            return Ok(());
         };
         let skinned = node.skin().is_some();
         if let Some(s) = node.skin() {
-            if skin_idx.is_none() {
-                skin_idx = Some(s.index());
-            } else if skin_idx != Some(s.index()) {
+            if self.skin_idx.is_none() {
+                self.skin_idx = Some(s.index());
+            } else if self.skin_idx != Some(s.index()) {
                 problems.push(format!(
                     "node {ni} uses skin {}; only the first skin is read",
                     s.index()
@@ -663,309 +739,408 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
                 ));
                 continue;
             };
-            let base = positions.len();
-            let mut p = ctx.read_vec3(&pacc, "POSITION")?;
-            if !skinned {
-                p.iter_mut().for_each(|x| *x = transform_point(&m, *x));
-            }
-            let nv = p.len();
-            if base + nv > u32::MAX as usize {
-                return Err(ctx.err("too many vertices"));
-            }
-            positions.extend(p);
-            match prim.get(&gltf::Semantic::Normals) {
-                Some(a) => {
-                    let mut n = ctx.read_vec3(&a, "NORMAL")?;
-                    if n.len() != nv {
-                        return Err(ctx.err("NORMAL has the wrong size"));
-                    }
-                    if !skinned {
-                        n.iter_mut().for_each(|x| *x = transform_normal(&m, *x));
-                    }
-                    normals.extend(n);
-                    any_normal = true;
-                }
-                None => normals.extend(std::iter::repeat_n([0.0; 3], nv)),
-            }
-            match prim.get(&gltf::Semantic::Colors(0)) {
-                Some(c) => {
-                    let (v, comps) = ctx.read_f32(&c, "COLOR_0")?;
-                    if comps < 3 || v.len() != nv * comps {
-                        return Err(ctx.err("COLOR_0 has the wrong size"));
-                    }
-                    colors.extend(
-                        v.chunks_exact(comps)
-                            .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]),
-                    );
-                    any_color = true;
-                }
-                None => colors.extend(std::iter::repeat_n([1.0; 3], nv)),
-            }
-            let idx: Vec<u32> = match prim.indices() {
-                Some(ia) => ctx
-                    .read_f32(&ia, "indices")?
-                    .0
-                    .into_iter()
-                    .map(|v| v as u32)
-                    .collect(),
-                None => (0..nv as u32).collect(),
-            };
-            for t in idx.chunks_exact(3) {
-                if t.iter().any(|&v| v as usize >= nv) {
-                    return Err(ctx.err(format!(
-                        "mesh {}: index out of range ({nv} vertices)",
-                        mesh.index()
-                    )));
-                }
-                tris.push([t[0] + base as u32, t[1] + base as u32, t[2] + base as u32]);
-            }
-            // Skin attributes.
-            match (
-                prim.get(&gltf::Semantic::Joints(0)),
-                prim.get(&gltf::Semantic::Weights(0)),
-            ) {
-                (Some(ja), Some(wa)) if skinned => {
-                    let (j, jc) = ctx.read_f32(&ja, "JOINTS_0")?;
-                    let (w, wc) = ctx.read_f32(&wa, "WEIGHTS_0")?;
-                    if jc != 4 || wc != 4 || j.len() != nv * 4 || w.len() != nv * 4 {
-                        return Err(ctx.err("JOINTS_0/WEIGHTS_0 must be VEC4 with one per vertex"));
-                    }
-                    skin_joints.resize(base, [0; 4]);
-                    skin_weights.resize(base, [0.0; 4]);
-                    skin_joints.extend(
-                        j.chunks_exact(4)
-                            .map(|c| [c[0] as u16, c[1] as u16, c[2] as u16, c[3] as u16]),
-                    );
-                    skin_weights.extend(w.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]));
-                }
-                _ => {}
-            }
-            // Morph targets: from the first node that has them.
-            let ptargets: Vec<_> = prim.morph_targets().collect();
-            if !ptargets.is_empty() && morph_node.is_none_or(|n| n == ni) {
-                morph_node = Some(ni);
-                if targets.is_empty() {
-                    targets = vec![Vec::new(); ptargets.len()];
-                    target_normals = vec![Vec::new(); ptargets.len()];
-                }
-                if targets.len() != ptargets.len() {
-                    return Err(
-                        ctx.err("primitives of one mesh have different morph target counts")
-                    );
-                }
-                for (k, t) in ptargets.iter().enumerate() {
-                    let mut d = match t.positions() {
-                        Some(a) => ctx.read_vec3(&a, "morph target POSITION")?,
-                        None => vec![[0.0; 3]; nv],
-                    };
-                    let mut dn = match t.normals() {
-                        Some(a) => ctx.read_vec3(&a, "morph target NORMAL")?,
-                        None => vec![[0.0; 3]; nv],
-                    };
-                    if d.len() != nv || dn.len() != nv {
-                        return Err(ctx.err("morph target size differs from its primitive"));
-                    }
-                    if !skinned {
-                        d.iter_mut().for_each(|x| *x = transform_vector(&m, *x));
-                        dn.iter_mut().for_each(|x| *x = transform_normal(&m, *x));
-                    }
-                    targets[k].resize(base, [0.0; 3]);
-                    targets[k].extend(d);
-                    target_normals[k].resize(base, [0.0; 3]);
-                    target_normals[k].extend(dn);
-                }
-            }
+            self.add_primitive(ctx, ni, mesh.index(), &prim, &pacc, &m, skinned)?;
         }
-    }
-    if positions.is_empty() {
-        return Err(ctx.err("no triangle mesh in the scene"));
-    }
-    for t in targets.iter_mut().chain(&mut target_normals) {
-        t.resize(positions.len(), [0.0; 3]);
-    }
-    if !any_normal {
-        target_normals.clear();
-    }
-    let mut mesh = Mesh::new(positions, tris).map_err(|e| MeshError::from(e).in_file(path))?;
-    if any_color {
-        mesh = mesh
-            .with_colors(colors)
-            .map_err(|e| MeshError::from(e).in_file(path))?;
+        Ok(())
     }
 
-    let skin = match skin_idx.and_then(|i| doc.skins().nth(i)) {
-        None => None,
-        Some(s) => {
-            let joint_nodes: Vec<usize> = s.joints().map(|j| j.index()).collect();
-            let joint_names = s
-                .joints()
-                .map(|j| {
-                    j.name()
-                        .map(str::to_string)
-                        .unwrap_or_else(|| format!("joint_{}", j.index()))
-                })
-                .collect();
-            let parents = joint_nodes
-                .iter()
-                .map(|&n| {
-                    let mut p = parent[n];
-                    while let Some(pi) = p {
-                        if let Some(k) = joint_nodes.iter().position(|&x| x == pi) {
-                            return Some(k as u32);
-                        }
-                        p = parent[pi];
-                    }
-                    None
-                })
-                .collect();
-            let inverse_bind = match s.inverse_bind_matrices() {
-                Some(a) => {
-                    let (v, c) = ctx.read_f32(&a, "inverseBindMatrices")?;
-                    if c != 16 || v.len() != joint_nodes.len() * 16 {
-                        return Err(ctx.err("inverseBindMatrices must be one MAT4 per joint"));
-                    }
-                    v.chunks_exact(16)
-                        .map(|m| {
-                            [
-                                [m[0], m[1], m[2], m[3]],
-                                [m[4], m[5], m[6], m[7]],
-                                [m[8], m[9], m[10], m[11]],
-                                [m[12], m[13], m[14], m[15]],
-                            ]
-                        })
-                        .collect()
-                }
-                None => vec![IDENTITY; joint_nodes.len()],
-            };
-            let nv = mesh.vertex_count();
-            skin_joints.resize(nv, [0; 4]);
-            skin_weights.resize(nv, [0.0; 4]);
-            let mut renorm = 0usize;
-            for (w, j) in skin_weights.iter_mut().zip(&skin_joints) {
-                if j.iter().any(|&k| k as usize >= joint_nodes.len()) {
-                    return Err(ctx.err("JOINTS_0 refers to a joint the skin does not have"));
-                }
-                let s: f32 = w.iter().sum();
-                if (s - 1.0).abs() > 1e-3 {
-                    renorm += 1;
-                    if s > 0.0 {
-                        w.iter_mut().for_each(|x| *x /= s);
-                    }
-                }
-            }
-            if renorm > 0 {
-                problems.push(format!(
-                    "{renorm} vertices had skin weights not summing to 1; normalised"
-                ));
-            }
-            Some(Skin {
-                joint_names,
-                parents,
-                inverse_bind,
-                joints: skin_joints,
-                weights: skin_weights,
-            })
+    /// One triangle primitive: vertices, normals, colours, triangles, skin
+    /// attributes, and morph targets (from the first node that has them).
+    #[allow(clippy::too_many_arguments)]
+    fn add_primitive(
+        &mut self,
+        ctx: &Ctx,
+        ni: usize,
+        mesh_index: usize,
+        prim: &gltf::Primitive,
+        pacc: &gltf::Accessor,
+        m: &Mat4,
+        skinned: bool,
+    ) -> Result<(), MeshError> {
+        let base = self.positions.len();
+        let mut p = ctx.read_vec3(pacc, "POSITION")?;
+        if !skinned {
+            p.iter_mut().for_each(|x| *x = transform_point(m, *x));
         }
+        let nv = p.len();
+        if base + nv > u32::MAX as usize {
+            return Err(ctx.err("too many vertices"));
+        }
+        self.positions.extend(p);
+        match prim.get(&gltf::Semantic::Normals) {
+            Some(a) => {
+                let mut n = ctx.read_vec3(&a, "NORMAL")?;
+                if n.len() != nv {
+                    return Err(ctx.err("NORMAL has the wrong size"));
+                }
+                if !skinned {
+                    n.iter_mut().for_each(|x| *x = transform_normal(m, *x));
+                }
+                self.normals.extend(n);
+                self.any_normal = true;
+            }
+            None => self.normals.extend(std::iter::repeat_n([0.0; 3], nv)),
+        }
+        match prim.get(&gltf::Semantic::Colors(0)) {
+            Some(c) => {
+                let (v, comps) = ctx.read_f32(&c, "COLOR_0")?;
+                if comps < 3 || v.len() != nv * comps {
+                    return Err(ctx.err("COLOR_0 has the wrong size"));
+                }
+                self.colors.extend(
+                    v.chunks_exact(comps)
+                        .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]),
+                );
+                self.any_color = true;
+            }
+            None => self.colors.extend(std::iter::repeat_n([1.0; 3], nv)),
+        }
+        let idx: Vec<u32> = match prim.indices() {
+            Some(ia) => ctx
+                .read_f32(&ia, "indices")?
+                .0
+                .into_iter()
+                .map(|v| v as u32)
+                .collect(),
+            None => (0..nv as u32).collect(),
+        };
+        for t in idx.chunks_exact(3) {
+            if t.iter().any(|&v| v as usize >= nv) {
+                return Err(ctx.err(format!(
+                    "mesh {mesh_index}: index out of range ({nv} vertices)"
+                )));
+            }
+            self.tris
+                .push([t[0] + base as u32, t[1] + base as u32, t[2] + base as u32]);
+        }
+        // Skin attributes.
+        match (
+            prim.get(&gltf::Semantic::Joints(0)),
+            prim.get(&gltf::Semantic::Weights(0)),
+        ) {
+            (Some(ja), Some(wa)) if skinned => {
+                let (j, jc) = ctx.read_f32(&ja, "JOINTS_0")?;
+                let (w, wc) = ctx.read_f32(&wa, "WEIGHTS_0")?;
+                if jc != 4 || wc != 4 || j.len() != nv * 4 || w.len() != nv * 4 {
+                    return Err(ctx.err("JOINTS_0/WEIGHTS_0 must be VEC4 with one per vertex"));
+                }
+                self.skin_joints.resize(base, [0; 4]);
+                self.skin_weights.resize(base, [0.0; 4]);
+                self.skin_joints.extend(
+                    j.chunks_exact(4)
+                        .map(|c| [c[0] as u16, c[1] as u16, c[2] as u16, c[3] as u16]),
+                );
+                self.skin_weights
+                    .extend(w.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]));
+            }
+            _ => {}
+        }
+        // Morph targets: from the first node that has them.
+        let ptargets: Vec<_> = prim.morph_targets().collect();
+        if !ptargets.is_empty() && self.morph_node.is_none_or(|n| n == ni) {
+            self.morph_node = Some(ni);
+            if self.targets.is_empty() {
+                self.targets = vec![Vec::new(); ptargets.len()];
+                self.target_normals = vec![Vec::new(); ptargets.len()];
+            }
+            if self.targets.len() != ptargets.len() {
+                return Err(ctx.err("primitives of one mesh have different morph target counts"));
+            }
+            for (k, t) in ptargets.iter().enumerate() {
+                let mut d = match t.positions() {
+                    Some(a) => ctx.read_vec3(&a, "morph target POSITION")?,
+                    None => vec![[0.0; 3]; nv],
+                };
+                let mut dn = match t.normals() {
+                    Some(a) => ctx.read_vec3(&a, "morph target NORMAL")?,
+                    None => vec![[0.0; 3]; nv],
+                };
+                if d.len() != nv || dn.len() != nv {
+                    return Err(ctx.err("morph target size differs from its primitive"));
+                }
+                if !skinned {
+                    d.iter_mut().for_each(|x| *x = transform_vector(m, *x));
+                    dn.iter_mut().for_each(|x| *x = transform_normal(m, *x));
+                }
+                self.targets[k].resize(base, [0.0; 3]);
+                self.targets[k].extend(d);
+                self.target_normals[k].resize(base, [0.0; 3]);
+                self.target_normals[k].extend(dn);
+            }
+        }
+        Ok(())
+    }
+
+    /// Step 4 of [`parse_gltf`]: the merged mesh (with colours when any
+    /// primitive has them), morph targets padded to every vertex.
+    fn into_mesh(self, ctx: &Ctx) -> Result<(Mesh, GeometryParts), MeshError> {
+        let Geometry {
+            positions,
+            colors,
+            any_color,
+            tris,
+            mut targets,
+            normals,
+            any_normal,
+            mut target_normals,
+            skin_joints,
+            skin_weights,
+            ..
+        } = self;
+        if positions.is_empty() {
+            return Err(ctx.err("no triangle mesh in the scene"));
+        }
+        for t in targets.iter_mut().chain(&mut target_normals) {
+            t.resize(positions.len(), [0.0; 3]);
+        }
+        if !any_normal {
+            target_normals.clear();
+        }
+        let path = ctx.path;
+        let mut mesh = Mesh::new(positions, tris).map_err(|e| MeshError::from(e).in_file(path))?;
+        if any_color {
+            mesh = mesh
+                .with_colors(colors)
+                .map_err(|e| MeshError::from(e).in_file(path))?;
+        }
+        let parts = GeometryParts {
+            targets,
+            normals: any_normal.then_some(normals),
+            target_normals,
+            skin_joints,
+            skin_weights,
+        };
+        Ok((mesh, parts))
+    }
+}
+
+/// Step 5 of [`parse_gltf`]: skin `skin_idx` (joints, their parents within
+/// the skin, inverse bind matrices) with the per-vertex influences of the
+/// `nv` vertices; weights not summing to 1 are normalised (and said in
+/// `problems`).
+fn read_skin(
+    ctx: &Ctx,
+    doc: &gltf::Document,
+    skin_idx: Option<usize>,
+    parent: &[Option<usize>],
+    nv: usize,
+    (mut skin_joints, mut skin_weights): (Vec<[u16; 4]>, Vec<[f32; 4]>),
+    problems: &mut Vec<String>,
+) -> Result<Option<Skin>, MeshError> {
+    let Some(s) = skin_idx.and_then(|i| doc.skins().nth(i)) else {
+        return Ok(None);
     };
+    let joint_nodes: Vec<usize> = s.joints().map(|j| j.index()).collect();
+    let joint_names = s
+        .joints()
+        .map(|j| {
+            j.name()
+                .map(str::to_string)
+                .unwrap_or_else(|| format!("joint_{}", j.index()))
+        })
+        .collect();
+    let parents = joint_nodes
+        .iter()
+        .map(|&n| {
+            let mut p = parent[n];
+            while let Some(pi) = p {
+                if let Some(k) = joint_nodes.iter().position(|&x| x == pi) {
+                    return Some(k as u32);
+                }
+                p = parent[pi];
+            }
+            None
+        })
+        .collect();
+    let inverse_bind = match s.inverse_bind_matrices() {
+        Some(a) => {
+            let (v, c) = ctx.read_f32(&a, "inverseBindMatrices")?;
+            if c != 16 || v.len() != joint_nodes.len() * 16 {
+                return Err(ctx.err("inverseBindMatrices must be one MAT4 per joint"));
+            }
+            v.chunks_exact(16)
+                .map(|m| Mat4::from_cols_slice(m).to_cols_array_2d())
+                .collect()
+        }
+        None => vec![Mat4::IDENTITY.to_cols_array_2d(); joint_nodes.len()],
+    };
+    skin_joints.resize(nv, [0; 4]);
+    skin_weights.resize(nv, [0.0; 4]);
+    let mut renorm = 0usize;
+    for (w, j) in skin_weights.iter_mut().zip(&skin_joints) {
+        if j.iter().any(|&k| k as usize >= joint_nodes.len()) {
+            return Err(ctx.err("JOINTS_0 refers to a joint the skin does not have"));
+        }
+        let s: f32 = w.iter().sum();
+        if (s - 1.0).abs() > 1e-3 {
+            renorm += 1;
+            if s > 0.0 {
+                w.iter_mut().for_each(|x| *x /= s);
+            }
+        }
+    }
+    if renorm > 0 {
+        problems.push(format!(
+            "{renorm} vertices had skin weights not summing to 1; normalised"
+        ));
+    }
+    Ok(Some(Skin {
+        joint_names,
+        parents,
+        inverse_bind,
+        joints: skin_joints,
+        weights: skin_weights,
+    }))
+}
 
-    // Animations.
-    let mut animations = Vec::new();
-    let mut node_animations = Vec::new();
-    let mut weights_animation = None;
+/// The animations of an asset (see [`GltfAsset`]).
+struct Animations {
+    names: Vec<(String, f32)>,
+    nodes: Vec<NodeAnimation>,
+    weights: Option<(Vec<f32>, Vec<KeyWeights>)>,
+}
+
+/// Step 6 of [`parse_gltf`]: every animation's name and duration, its node
+/// (TRS) channels, and the first morph-weights channel that drives
+/// `morph_node` (with `nt` targets).
+fn read_animations(
+    ctx: &Ctx,
+    doc: &gltf::Document,
+    morph_node: Option<usize>,
+    nt: usize,
+) -> Result<Animations, MeshError> {
+    let mut names = Vec::new();
+    let mut nodes = Vec::new();
+    let mut weights = None;
     for a in doc.animations() {
         let mut dur = 0.0f32;
         for ch in a.channels() {
             let input = ch.sampler().input();
             let (t, _) = ctx.read_f32(&input, "animation input")?;
             dur = t.iter().copied().fold(dur, f32::max);
-            if weights_animation.is_none()
+            if weights.is_none()
                 && ch.target().property() == gltf::animation::Property::MorphTargetWeights
                 && Some(ch.target().node().index()) == morph_node
-                && !targets.is_empty()
+                && nt > 0
             {
-                let out = ch.sampler().output();
-                let nt = targets.len();
-                let per_key = match ch.sampler().interpolation() {
-                    gltf::animation::Interpolation::CubicSpline => 3 * nt,
-                    _ => nt,
-                };
-                if out.dimensions() != Dimensions::Scalar
-                    || Some(out.count()) != t.len().checked_mul(per_key)
-                {
-                    return Err(ctx.err("morph weights animation output has the wrong size"));
-                }
-                // Element i is weight i % per_key (of which the value part
-                // of a cubic key, off..off + nt) at key i / per_key.
-                let off = if per_key == 3 * nt { nt } else { 0 };
-                let mut keys = vec![Vec::new(); t.len()];
-                let mut put = |i: usize, w: f32| {
-                    let j = i % per_key;
-                    if w != 0.0 && (off..off + nt).contains(&j) {
-                        keys[i / per_key].push(((j - off) as u32, w));
-                    }
-                };
-                match ctx.read_sparse_zeros(&out, "animation output")? {
-                    Some((idx, vals)) => idx.into_iter().zip(vals).for_each(|(i, w)| put(i, w)),
-                    None => {
-                        let (w, _) = ctx.read_f32(&out, "animation output")?;
-                        w.into_iter().enumerate().for_each(|(i, w)| put(i, w));
-                    }
-                }
-                weights_animation = Some((t, keys));
+                weights = Some(read_weights_channel(ctx, &ch, t, nt)?);
             }
         }
-        animations.push((a.name().unwrap_or("").to_string(), dur));
+        names.push((a.name().unwrap_or("").to_string(), dur));
         let mut channels = Vec::new();
         for ch in a.channels() {
-            use gltf::animation::Property as P;
-            let path = match ch.target().property() {
-                P::Translation => TrsPath::Translation,
-                P::Rotation => TrsPath::Rotation,
-                P::Scale => TrsPath::Scale,
-                P::MorphTargetWeights => continue,
-            };
-            let (times, _) = ctx.read_f32(&ch.sampler().input(), "animation input")?;
-            let (vals, comps) = ctx.read_f32(&ch.sampler().output(), "animation output")?;
-            let want = if path == TrsPath::Rotation { 4 } else { 3 };
-            let cubic = ch.sampler().interpolation() == gltf::animation::Interpolation::CubicSpline;
-            let per_key = if cubic { 3 } else { 1 };
-            if comps != want || vals.len() != times.len() * per_key * comps {
-                return Err(ctx.err(format!(
-                    "animation '{}': a channel's output has the wrong size",
-                    a.name().unwrap_or("")
-                )));
+            if let Some(c) = read_trs_channel(ctx, &a, &ch)? {
+                channels.push(c);
             }
-            if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
-                return Err(ctx.err(format!(
-                    "animation '{}': key times are not ascending",
-                    a.name().unwrap_or("")
-                )));
-            }
-            let values = (0..times.len())
-                .map(|k| {
-                    let o = (k * per_key + if cubic { 1 } else { 0 }) * comps;
-                    let mut v = [0.0f32; 4];
-                    v[..comps].copy_from_slice(&vals[o..o + comps]);
-                    v
-                })
-                .collect();
-            let step = ch.sampler().interpolation() == gltf::animation::Interpolation::Step;
-            channels.push(NodeChannel {
-                node: ch.target().node().index(),
-                path,
-                times,
-                values,
-                step,
-            });
         }
-        node_animations.push(NodeAnimation {
+        nodes.push(NodeAnimation {
             name: a.name().unwrap_or("").to_string(),
             duration: dur,
             channels,
         });
     }
-    let graph = NodeGraph {
-        parent: parent.clone(),
+    Ok(Animations {
+        names,
+        nodes,
+        weights,
+    })
+}
+
+/// A morph-weights channel with key times `t` as sparse keys: the non-zero
+/// weights of each key (the value part of a cubic-spline key).
+fn read_weights_channel(
+    ctx: &Ctx,
+    ch: &gltf::animation::Channel,
+    t: Vec<f32>,
+    nt: usize,
+) -> Result<(Vec<f32>, Vec<KeyWeights>), MeshError> {
+    let out = ch.sampler().output();
+    let per_key = match ch.sampler().interpolation() {
+        gltf::animation::Interpolation::CubicSpline => 3 * nt,
+        _ => nt,
+    };
+    if out.dimensions() != Dimensions::Scalar || Some(out.count()) != t.len().checked_mul(per_key) {
+        return Err(ctx.err("morph weights animation output has the wrong size"));
+    }
+    // Element i is weight i % per_key (of which the value part
+    // of a cubic key, off..off + nt) at key i / per_key.
+    let off = if per_key == 3 * nt { nt } else { 0 };
+    let mut keys = vec![Vec::new(); t.len()];
+    let mut put = |i: usize, w: f32| {
+        let j = i % per_key;
+        if w != 0.0 && (off..off + nt).contains(&j) {
+            keys[i / per_key].push(((j - off) as u32, w));
+        }
+    };
+    match ctx.read_sparse_zeros(&out, "animation output")? {
+        Some((idx, vals)) => idx.into_iter().zip(vals).for_each(|(i, w)| put(i, w)),
+        None => {
+            let (w, _) = ctx.read_f32(&out, "animation output")?;
+            w.into_iter().enumerate().for_each(|(i, w)| put(i, w));
+        }
+    }
+    Ok((t, keys))
+}
+
+/// A translation, rotation or scale channel of animation `a` (`None` for a
+/// morph-weights channel); cubic-spline keys keep their values only.
+fn read_trs_channel(
+    ctx: &Ctx,
+    a: &gltf::Animation,
+    ch: &gltf::animation::Channel,
+) -> Result<Option<NodeChannel>, MeshError> {
+    use gltf::animation::Property as P;
+    let path = match ch.target().property() {
+        P::Translation => TrsPath::Translation,
+        P::Rotation => TrsPath::Rotation,
+        P::Scale => TrsPath::Scale,
+        P::MorphTargetWeights => return Ok(None),
+    };
+    let (times, _) = ctx.read_f32(&ch.sampler().input(), "animation input")?;
+    let (vals, comps) = ctx.read_f32(&ch.sampler().output(), "animation output")?;
+    let want = if path == TrsPath::Rotation { 4 } else { 3 };
+    let cubic = ch.sampler().interpolation() == gltf::animation::Interpolation::CubicSpline;
+    let per_key = if cubic { 3 } else { 1 };
+    if comps != want || vals.len() != times.len() * per_key * comps {
+        return Err(ctx.err(format!(
+            "animation '{}': a channel's output has the wrong size",
+            a.name().unwrap_or("")
+        )));
+    }
+    if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
+        return Err(ctx.err(format!(
+            "animation '{}': key times are not ascending",
+            a.name().unwrap_or("")
+        )));
+    }
+    let values = (0..times.len())
+        .map(|k| {
+            let o = (k * per_key + if cubic { 1 } else { 0 }) * comps;
+            let mut v = [0.0f32; 4];
+            v[..comps].copy_from_slice(&vals[o..o + comps]);
+            v
+        })
+        .collect();
+    let step = ch.sampler().interpolation() == gltf::animation::Interpolation::Step;
+    Ok(Some(NodeChannel {
+        node: ch.target().node().index(),
+        path,
+        times,
+        values,
+        step,
+    }))
+}
+
+/// Step 7 of [`parse_gltf`]: the scene graph (parents, rest TRS, order,
+/// the skin's joint nodes).
+fn node_graph(
+    doc: &gltf::Document,
+    nodes: &[gltf::Node],
+    scene: SceneNodes,
+    skin_idx: Option<usize>,
+) -> NodeGraph {
+    NodeGraph {
+        parent: scene.parent,
         rest: nodes
             .iter()
             .map(|n| {
@@ -977,25 +1152,12 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
                 )
             })
             .collect(),
-        order,
+        order: scene.order,
         skin_joints: skin_idx
             .and_then(|i| doc.skins().nth(i))
             .map(|s| s.joints().map(|j| j.index()).collect())
             .unwrap_or_default(),
-    };
-    Ok(GltfAsset {
-        mesh,
-        skin,
-        morph_targets: targets,
-        normals: any_normal.then_some(normals),
-        morph_normals: target_normals,
-        weights_animation,
-        animations,
-        nodes: nn,
-        node_animations,
-        graph,
-        problems,
-    })
+    }
 }
 
 /// Reads a `.gltf` or `.glb` file.
@@ -1217,7 +1379,6 @@ impl GltfAsset {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::DVec3;
 
     /// Under a non-uniform scale and a rotation, a transformed normal stays
     /// perpendicular to the transformed tangent plane (where the plain
@@ -1229,7 +1390,7 @@ mod tests {
             glam::Quat::from_rotation_z(0.7),
             glam::Vec3::new(5.0, -2.0, 1.0),
         );
-        let m: Mat4 = r.to_cols_array_2d();
+        let m: Mat4 = r;
         let n = DVec3::new(1.0, 1.0, 0.0).normalize();
         let (t1, t2) = (DVec3::new(1.0, -1.0, 0.0), DVec3::Z);
         let tn = DVec3::from_array(transform_normal(&m, n.to_array()));
