@@ -101,42 +101,100 @@ fn num(tok: &str, path: &Path, line: usize) -> Result<f64, MocapError> {
 }
 
 /// Parses ASF text.
+///
+/// The steps, in order: [`AsfText::read_line`] for every line (sections
+/// `:units`, `:root`, `:bonedata`, `:hierarchy`), [`index_bones`] (names
+/// unique, none called `root`), [`link_hierarchy`] (every edge names known
+/// bones, one parent each) and [`build_tree`] (bones parents first, from
+/// the root, with their axes in radians).
 pub fn parse_asf(text: &str, path: &Path) -> Result<AsfSkeleton, MocapError> {
-    #[derive(PartialEq)]
-    enum Sec {
-        None,
-        Units,
-        Root,
-        Bones,
-        Hier,
-        Other,
-    }
-    let mut sec = Sec::None;
-    let mut length_scale = 1.0;
-    let mut length_declared = false;
-    let mut degrees = true;
-    let mut root_axis = DQuat::IDENTITY;
-    let mut root_axis_order = vec![0usize, 1, 2];
-    let mut root_orient = [0.0; 3];
-    let mut root_position = DVec3::ZERO;
-    let mut root_dof: Vec<u8> = vec![3, 4, 5, 0, 1, 2];
-    struct Raw {
-        name: String,
-        dir: DVec3,
-        len: f64,
-        axis: [f64; 3],
-        order: Vec<usize>,
-        dof: Vec<u8>,
-        line: usize,
-    }
-    let mut bones: Vec<Raw> = Vec::new();
-    let mut cur: Option<Raw> = None;
-    let mut edges: Vec<(String, String, usize)> = Vec::new();
+    let mut asf = AsfText::default();
     for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
+        asf.read_line(i + 1, raw, path)?;
+    }
+    if asf.cur.is_some() {
+        return Err(MocapError::invalid(
+            path,
+            "file ends inside a bone's begin/end",
+        ));
+    }
+    let index = index_bones(&asf.bones, path)?;
+    let children = link_hierarchy(&asf.edges, &index, asf.bones.len(), path)?;
+    let bones = build_tree(&asf, &children, path)?;
+    Ok(AsfSkeleton {
+        bones,
+        root_position: asf.root_position,
+        length_scale: asf.length_scale,
+        length_declared: asf.length_declared,
+        degrees: asf.degrees,
+    })
+}
+
+/// A section of an ASF file.
+#[derive(PartialEq, Default)]
+enum Sec {
+    #[default]
+    None,
+    Units,
+    Root,
+    Bones,
+    Hier,
+    Other,
+}
+
+/// A bone of `:bonedata` as written.
+struct RawBone {
+    name: String,
+    dir: DVec3,
+    len: f64,
+    axis: [f64; 3],
+    order: Vec<usize>,
+    dof: Vec<u8>,
+    line: usize,
+}
+
+/// What the lines of an ASF file say, as they are read.
+struct AsfText {
+    sec: Sec,
+    length_scale: f64,
+    length_declared: bool,
+    degrees: bool,
+    root_axis_order: Vec<usize>,
+    root_orient: [f64; 3],
+    root_position: DVec3,
+    root_dof: Vec<u8>,
+    bones: Vec<RawBone>,
+    /// The bone between `begin` and `end`.
+    cur: Option<RawBone>,
+    /// `(parent, child, line)` of `:hierarchy`.
+    edges: Vec<(String, String, usize)>,
+}
+
+impl Default for AsfText {
+    fn default() -> Self {
+        AsfText {
+            sec: Sec::None,
+            length_scale: 1.0,
+            length_declared: false,
+            degrees: true,
+            root_axis_order: vec![0, 1, 2],
+            root_orient: [0.0; 3],
+            root_position: DVec3::ZERO,
+            root_dof: vec![3, 4, 5, 0, 1, 2],
+            bones: Vec::new(),
+            cur: None,
+            edges: Vec::new(),
+        }
+    }
+}
+
+impl AsfText {
+    /// One line (1-based `line`): comments after `#` dropped, `:section`
+    /// switches, else the line goes to its section's reader.
+    fn read_line(&mut self, line: usize, raw: &str, path: &Path) -> Result<(), MocapError> {
         let l = raw.split('#').next().unwrap_or("").trim();
         if l.is_empty() {
-            continue;
+            return Ok(());
         }
         if let Some(k) = l.strip_prefix(':') {
             let key = k
@@ -144,158 +202,201 @@ pub fn parse_asf(text: &str, path: &Path) -> Result<AsfSkeleton, MocapError> {
                 .next()
                 .unwrap_or("")
                 .to_ascii_lowercase();
-            sec = match key.as_str() {
+            self.sec = match key.as_str() {
                 "units" => Sec::Units,
                 "root" => Sec::Root,
                 "bonedata" => Sec::Bones,
                 "hierarchy" => Sec::Hier,
                 _ => Sec::Other,
             };
-            continue;
+            return Ok(());
         }
         let toks: Vec<&str> = l.split_whitespace().collect();
         let key = toks[0].to_ascii_lowercase();
-        match sec {
-            Sec::Units => match key.as_str() {
-                "length" if toks.len() > 1 => {
-                    length_scale = num(toks[1], path, line)?;
-                    if length_scale <= 0.0 {
-                        return Err(MocapError::parse(
-                            path,
-                            line,
-                            "length unit must be positive",
-                        ));
-                    }
-                    length_declared = true;
-                }
-                "angle" if toks.len() > 1 => {
-                    degrees = !toks[1].to_ascii_lowercase().starts_with("rad")
-                }
-                _ => {}
-            },
-            Sec::Root => match key.as_str() {
-                "order" => {
-                    let mut d = Vec::new();
-                    for t in &toks[1..] {
-                        d.push(dof_code(t).ok_or_else(|| {
-                            MocapError::parse(path, line, format!("unknown root channel '{t}'"))
-                        })?);
-                    }
-                    root_dof = d;
-                }
-                "axis" if toks.len() > 1 => {
-                    root_axis_order = order_axes(toks[1]).ok_or_else(|| {
-                        MocapError::parse(path, line, format!("bad axis order '{}'", toks[1]))
-                    })?;
-                }
-                "position" | "orientation" if toks.len() >= 4 => {
-                    let v = [
-                        num(toks[1], path, line)?,
-                        num(toks[2], path, line)?,
-                        num(toks[3], path, line)?,
-                    ];
-                    if key == "position" {
-                        root_position = DVec3::from(v);
-                    } else {
-                        root_orient = v;
+        match self.sec {
+            Sec::Units => self.units_line(&key, &toks, line, path),
+            Sec::Root => self.root_line(&key, &toks, l, line, path),
+            Sec::Bones => self.bone_line(&key, &toks, line, path),
+            Sec::Hier => {
+                match key.as_str() {
+                    "begin" | "end" => {}
+                    _ => {
+                        for c in &toks[1..] {
+                            self.edges.push((toks[0].to_string(), c.to_string(), line));
+                        }
                     }
                 }
-                _ => {
+                Ok(())
+            }
+            Sec::None | Sec::Other => Ok(()),
+        }
+    }
+
+    /// `length s` and `angle deg|rad` of `:units`.
+    fn units_line(
+        &mut self,
+        key: &str,
+        toks: &[&str],
+        line: usize,
+        path: &Path,
+    ) -> Result<(), MocapError> {
+        match key {
+            "length" if toks.len() > 1 => {
+                self.length_scale = num(toks[1], path, line)?;
+                if self.length_scale <= 0.0 {
                     return Err(MocapError::parse(
                         path,
                         line,
-                        format!("unexpected '{l}' in :root"),
+                        "length unit must be positive",
                     ));
                 }
-            },
-            Sec::Bones => match key.as_str() {
-                "begin" => {
-                    if cur.is_some() {
-                        return Err(MocapError::parse(path, line, "'begin' inside a bone"));
-                    }
-                    cur = Some(Raw {
-                        name: String::new(),
-                        dir: DVec3::ZERO,
-                        len: 0.0,
-                        axis: [0.0; 3],
-                        order: vec![0, 1, 2],
-                        dof: Vec::new(),
-                        line,
-                    });
-                }
-                "end" => {
-                    let b = cur
-                        .take()
-                        .ok_or_else(|| MocapError::parse(path, line, "'end' without 'begin'"))?;
-                    if b.name.is_empty() {
-                        return Err(MocapError::parse(path, b.line, "bone without a name"));
-                    }
-                    if bones.len() > 100_000 {
-                        return Err(MocapError::parse(path, line, "too many bones"));
-                    }
-                    bones.push(b);
-                }
-                _ => {
-                    let Some(b) = cur.as_mut() else {
-                        return Err(MocapError::parse(
-                            path,
-                            line,
-                            format!("'{}' outside begin/end", toks[0]),
-                        ));
-                    };
-                    match key.as_str() {
-                        "name" if toks.len() > 1 => b.name = toks[1].to_string(),
-                        "direction" if toks.len() >= 4 => {
-                            b.dir = DVec3::new(
-                                num(toks[1], path, line)?,
-                                num(toks[2], path, line)?,
-                                num(toks[3], path, line)?,
-                            )
-                        }
-                        "length" if toks.len() > 1 => b.len = num(toks[1], path, line)?,
-                        "axis" if toks.len() >= 4 => {
-                            b.axis = [
-                                num(toks[1], path, line)?,
-                                num(toks[2], path, line)?,
-                                num(toks[3], path, line)?,
-                            ];
-                            if let Some(o) = toks.get(4) {
-                                b.order = order_axes(o).ok_or_else(|| {
-                                    MocapError::parse(path, line, format!("bad axis order '{o}'"))
-                                })?;
-                            }
-                        }
-                        "dof" => {
-                            for t in &toks[1..] {
-                                b.dof.push(dof_code(t).ok_or_else(|| {
-                                    MocapError::parse(path, line, format!("unknown dof '{t}'"))
-                                })?);
-                            }
-                        }
-                        "id" | "limits" | "bodymass" | "cofmass" => {}
-                        _ if key.starts_with('(') => {}
-                        _ => {}
-                    }
-                }
-            },
-            Sec::Hier => match key.as_str() {
-                "begin" | "end" => {}
-                _ => {
-                    for c in &toks[1..] {
-                        edges.push((toks[0].to_string(), c.to_string(), line));
-                    }
-                }
-            },
-            Sec::None | Sec::Other => {}
+                self.length_declared = true;
+            }
+            "angle" if toks.len() > 1 => {
+                self.degrees = !toks[1].to_ascii_lowercase().starts_with("rad")
+            }
+            _ => {}
         }
+        Ok(())
     }
-    if cur.is_some() {
-        return Err(MocapError::invalid(
-            path,
-            "file ends inside a bone's begin/end",
-        ));
+
+    /// `order`, `axis`, `position` and `orientation` of `:root` (`l` the
+    /// whole line, for the error).
+    fn root_line(
+        &mut self,
+        key: &str,
+        toks: &[&str],
+        l: &str,
+        line: usize,
+        path: &Path,
+    ) -> Result<(), MocapError> {
+        match key {
+            "order" => {
+                let mut d = Vec::new();
+                for t in &toks[1..] {
+                    d.push(dof_code(t).ok_or_else(|| {
+                        MocapError::parse(path, line, format!("unknown root channel '{t}'"))
+                    })?);
+                }
+                self.root_dof = d;
+            }
+            "axis" if toks.len() > 1 => {
+                self.root_axis_order = order_axes(toks[1]).ok_or_else(|| {
+                    MocapError::parse(path, line, format!("bad axis order '{}'", toks[1]))
+                })?;
+            }
+            "position" | "orientation" if toks.len() >= 4 => {
+                let v = [
+                    num(toks[1], path, line)?,
+                    num(toks[2], path, line)?,
+                    num(toks[3], path, line)?,
+                ];
+                if key == "position" {
+                    self.root_position = DVec3::from(v);
+                } else {
+                    self.root_orient = v;
+                }
+            }
+            _ => {
+                return Err(MocapError::parse(
+                    path,
+                    line,
+                    format!("unexpected '{l}' in :root"),
+                ));
+            }
+        }
+        Ok(())
     }
-    // Build the tree from the root.
+
+    /// `begin`, `end` and the fields of a bone in `:bonedata`.
+    fn bone_line(
+        &mut self,
+        key: &str,
+        toks: &[&str],
+        line: usize,
+        path: &Path,
+    ) -> Result<(), MocapError> {
+        match key {
+            "begin" => {
+                if self.cur.is_some() {
+                    return Err(MocapError::parse(path, line, "'begin' inside a bone"));
+                }
+                self.cur = Some(RawBone {
+                    name: String::new(),
+                    dir: DVec3::ZERO,
+                    len: 0.0,
+                    axis: [0.0; 3],
+                    order: vec![0, 1, 2],
+                    dof: Vec::new(),
+                    line,
+                });
+            }
+            "end" => {
+                let b = self
+                    .cur
+                    .take()
+                    .ok_or_else(|| MocapError::parse(path, line, "'end' without 'begin'"))?;
+                if b.name.is_empty() {
+                    return Err(MocapError::parse(path, b.line, "bone without a name"));
+                }
+                if self.bones.len() > 100_000 {
+                    return Err(MocapError::parse(path, line, "too many bones"));
+                }
+                self.bones.push(b);
+            }
+            _ => {
+                let Some(b) = self.cur.as_mut() else {
+                    return Err(MocapError::parse(
+                        path,
+                        line,
+                        format!("'{}' outside begin/end", toks[0]),
+                    ));
+                };
+                match key {
+                    "name" if toks.len() > 1 => b.name = toks[1].to_string(),
+                    "direction" if toks.len() >= 4 => {
+                        b.dir = DVec3::new(
+                            num(toks[1], path, line)?,
+                            num(toks[2], path, line)?,
+                            num(toks[3], path, line)?,
+                        )
+                    }
+                    "length" if toks.len() > 1 => b.len = num(toks[1], path, line)?,
+                    "axis" if toks.len() >= 4 => {
+                        b.axis = [
+                            num(toks[1], path, line)?,
+                            num(toks[2], path, line)?,
+                            num(toks[3], path, line)?,
+                        ];
+                        if let Some(o) = toks.get(4) {
+                            b.order = order_axes(o).ok_or_else(|| {
+                                MocapError::parse(path, line, format!("bad axis order '{o}'"))
+                            })?;
+                        }
+                    }
+                    "dof" => {
+                        for t in &toks[1..] {
+                            b.dof.push(dof_code(t).ok_or_else(|| {
+                                MocapError::parse(path, line, format!("unknown dof '{t}'"))
+                            })?);
+                        }
+                    }
+                    // id, limits, bodymass, cofmass, limit rows "(lo hi)" and
+                    // anything else are not needed.
+                    _ => {}
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Bone name → index in `bones`; refuses duplicates and a bone called
+/// `root`.
+fn index_bones<'a>(
+    bones: &'a [RawBone],
+    path: &Path,
+) -> Result<HashMap<&'a str, usize>, MocapError> {
     let mut index: HashMap<&str, usize> = HashMap::new();
     for (i, b) in bones.iter().enumerate() {
         if b.name.eq_ignore_ascii_case("root") {
@@ -313,9 +414,20 @@ pub fn parse_asf(text: &str, path: &Path) -> Result<AsfSkeleton, MocapError> {
             ));
         }
     }
+    Ok(index)
+}
+
+/// Children of each parent name (`root` or a bone) from the `:hierarchy`
+/// edges, in the order listed; every bone has at most one parent.
+fn link_hierarchy<'a>(
+    edges: &'a [(String, String, usize)],
+    index: &HashMap<&str, usize>,
+    bone_count: usize,
+    path: &Path,
+) -> Result<HashMap<&'a str, Vec<usize>>, MocapError> {
     let mut children: HashMap<&str, Vec<usize>> = HashMap::new();
-    let mut has_parent = vec![false; bones.len()];
-    for (p, c, line) in &edges {
+    let mut has_parent = vec![false; bone_count];
+    for (p, c, line) in edges {
         let ci = *index.get(c.as_str()).ok_or_else(|| {
             MocapError::parse(path, *line, format!("hierarchy names unknown bone '{c}'"))
         })?;
@@ -336,16 +448,27 @@ pub fn parse_asf(text: &str, path: &Path) -> Result<AsfSkeleton, MocapError> {
         has_parent[ci] = true;
         children.entry(p.as_str()).or_default().push(ci);
     }
-    let deg = |v: f64| if degrees { v.to_radians() } else { v };
+    Ok(children)
+}
+
+/// The bones from the root down (parents before children, the first listed
+/// child first), directions normalised and axes turned to rotations; every
+/// bone must be reached.
+fn build_tree(
+    asf: &AsfText,
+    children: &HashMap<&str, Vec<usize>>,
+    path: &Path,
+) -> Result<Vec<AsfBone>, MocapError> {
+    let bones = &asf.bones;
+    let deg = |v: f64| if asf.degrees { v.to_radians() } else { v };
     let root = AsfBone {
         name: "root".into(),
         direction: DVec3::ZERO,
         length: 0.0,
-        axis: applied_in_order(&root_axis_order, &root_orient.map(deg)),
-        dof: root_dof,
+        axis: applied_in_order(&asf.root_axis_order, &asf.root_orient.map(deg)),
+        dof: asf.root_dof.clone(),
         parent: None,
     };
-    let _ = &mut root_axis;
     let mut out = vec![root];
     let mut stack: Vec<(&str, usize)> = vec![("root", 0)];
     while let Some((name, out_idx)) = stack.pop() {
@@ -386,13 +509,7 @@ pub fn parse_asf(text: &str, path: &Path) -> Result<AsfSkeleton, MocapError> {
             ),
         ));
     }
-    Ok(AsfSkeleton {
-        bones: out,
-        root_position,
-        length_scale,
-        length_declared,
-        degrees,
-    })
+    Ok(out)
 }
 
 /// Reads an ASF file.

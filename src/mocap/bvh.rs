@@ -106,259 +106,419 @@ fn parse_f64(tok: &str, path: &Path, line: usize, what: &str) -> Result<f64, Moc
 }
 
 /// Parses BVH text. `path` is used only to name the source in errors.
+///
+/// The steps, in order: [`expect_hierarchy`], [`Hierarchy::parse`] (joints,
+/// offsets, channels, end sites, up to `MOTION`), [`MotionHeader::parse`]
+/// (`Frames:` and `Frame Time:`), [`parse_frames`] (one row of channel
+/// values per frame into local rotations and translations) and
+/// [`MotionHeader::check_rate`]; then the clip is assembled with the
+/// warnings gathered on the way.
 pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, MocapError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut t = Tokens::new(text);
     let mut warnings = Vec::new();
+    expect_hierarchy(&mut t, path)?;
+    let (joints, motion_line) = Hierarchy::parse(&mut t, text, path)?;
+    let rest = t.remaining_lines();
+    let header = MotionHeader::parse(rest, path, motion_line, opts, &mut warnings)?;
+    let (rotations, translations) =
+        parse_frames(&joints, &rest[header.data_start..], path, &mut warnings)?;
+    let frames = rotations.len() / joints.len();
+    if frames == 0 {
+        return Err(MocapError::invalid(path, "no motion frames"));
+    }
+    header.check_rate(frames, path, opts)?;
+    match header.declared {
+        Some(d) if d != frames as u64 => warnings.push(format!(
+            "header says {d} frames, the data has {frames}; using the data"
+        )),
+        _ => {}
+    }
+    if let (Some(fps), Some(ft)) = (opts.fps, header.file_frame_time)
+        && (1.0 / ft - fps).abs() > 1e-6 * fps
+    {
+        warnings.push(format!(
+            "file says {:.4} fps; overridden to {fps}",
+            1.0 / ft
+        ));
+    }
+    let units = Units {
+        metres_per_unit: 1.0,
+        name: "file".into(),
+        reason: "BVH has no unit; not yet decided".into(),
+    };
+    let mut clip = Clip::new(
+        joints,
+        header.frame_time,
+        rotations,
+        translations,
+        units,
+        UpAxis::Y,
+        PointConvention::JointOrigins,
+    )
+    .map_err(|e| MocapError::invalid(path, e.to_string()))?;
+    clip.warnings = warnings;
+    Ok(clip)
+}
+
+/// Step 1 of [`parse_bvh`]: the file starts with `HIERARCHY`.
+fn expect_hierarchy(t: &mut Tokens, path: &Path) -> Result<(), MocapError> {
     match t.next() {
-        Some((k, _)) if k.eq_ignore_ascii_case("HIERARCHY") => {}
-        Some((k, l)) => {
+        Some((k, _)) if k.eq_ignore_ascii_case("HIERARCHY") => Ok(()),
+        Some((k, l)) => Err(MocapError::parse(
+            path,
+            l,
+            format!("expected HIERARCHY, found '{k}'"),
+        )),
+        None => Err(MocapError::invalid(path, "empty file")),
+    }
+}
+
+/// The joint hierarchy as it is read.
+struct Hierarchy {
+    joints: Vec<Joint>,
+    /// Open blocks: `Some(joint)`, or `None` for an End Site block.
+    stack: Vec<Option<usize>>,
+    expecting_open: bool,
+    done_root: bool,
+}
+
+impl Hierarchy {
+    /// Step 2 of [`parse_bvh`]: the joints, up to the `MOTION` keyword
+    /// (returned with its line).
+    fn parse(t: &mut Tokens, text: &str, path: &Path) -> Result<(Vec<Joint>, usize), MocapError> {
+        let mut h = Hierarchy {
+            joints: Vec::new(),
+            stack: Vec::new(),
+            expecting_open: false,
+            done_root: false,
+        };
+        loop {
+            let Some((tok, line)) = t.next() else {
+                let last = text.lines().count();
+                return Err(MocapError::parse(
+                    path,
+                    last,
+                    "file ends inside HIERARCHY (no MOTION section)",
+                ));
+            };
+            if h.expecting_open {
+                if tok != "{" {
+                    return Err(MocapError::parse(
+                        path,
+                        line,
+                        format!("expected '{{', found '{tok}'"),
+                    ));
+                }
+                h.expecting_open = false;
+                continue;
+            }
+            let key = tok.to_ascii_uppercase();
+            match key.as_str() {
+                "ROOT" | "JOINT" => h.joint(t, &key, path, line)?,
+                "END" => h.end_site(t, path, line)?,
+                "OFFSET" => h.offset(t, path, line)?,
+                "CHANNELS" => h.channels(t, path, line)?,
+                "{" => return Err(MocapError::parse(path, line, "unexpected '{'")),
+                "}" => {
+                    if h.stack.pop().is_none() {
+                        return Err(MocapError::parse(path, line, "unmatched '}'"));
+                    }
+                    if h.stack.is_empty() {
+                        h.done_root = true;
+                    }
+                }
+                "MOTION" => {
+                    if !h.stack.is_empty() {
+                        return Err(MocapError::parse(
+                            path,
+                            line,
+                            "MOTION before the hierarchy's braces are closed",
+                        ));
+                    }
+                    if h.joints.is_empty() {
+                        return Err(MocapError::parse(path, line, "MOTION before any ROOT"));
+                    }
+                    return Ok((h.joints, line));
+                }
+                _ => {
+                    return Err(MocapError::parse(
+                        path,
+                        line,
+                        format!("unknown keyword '{tok}'"),
+                    ));
+                }
+            }
+        }
+    }
+
+    /// `ROOT name` or `JOINT name` (`key` upper-cased).
+    fn joint(
+        &mut self,
+        t: &mut Tokens,
+        key: &str,
+        path: &Path,
+        line: usize,
+    ) -> Result<(), MocapError> {
+        if key == "ROOT" && (self.done_root || !self.stack.is_empty()) {
+            return Err(MocapError::parse(
+                path,
+                line,
+                "a second ROOT is not supported",
+            ));
+        }
+        if key == "JOINT" && self.stack.is_empty() {
+            return Err(MocapError::parse(path, line, "JOINT outside of ROOT"));
+        }
+        let mut words = t.rest_of_line();
+        let open_here = words.last() == Some(&"{");
+        if open_here {
+            words.pop();
+        }
+        if words.is_empty() || words.contains(&"{") || words.contains(&"}") {
+            return Err(MocapError::parse(
+                path,
+                line,
+                format!("{key} without a name"),
+            ));
+        }
+        let parent = match self.stack.last() {
+            Some(Some(p)) => Some(JointId(*p as u32)),
+            Some(None) => {
+                return Err(MocapError::parse(path, line, "JOINT inside an End Site"));
+            }
+            None => None,
+        };
+        if self.joints.len() >= u32::MAX as usize / 2 {
+            return Err(MocapError::parse(path, line, "too many joints"));
+        }
+        self.joints.push(Joint {
+            name: words.join(" "),
+            parent,
+            offset: DVec3::ZERO,
+            channels: Vec::new(),
+            tail: None,
+        });
+        self.stack.push(Some(self.joints.len() - 1));
+        self.expecting_open = !open_here;
+        Ok(())
+    }
+
+    /// `End Site`.
+    fn end_site(&mut self, t: &mut Tokens, path: &Path, line: usize) -> Result<(), MocapError> {
+        let words = t.rest_of_line();
+        let open_here = words.last() == Some(&"{");
+        let ok = words
+            .first()
+            .is_some_and(|w| w.eq_ignore_ascii_case("SITE"));
+        if !ok {
+            return Err(MocapError::parse(path, line, "expected 'End Site'"));
+        }
+        match self.stack.last() {
+            Some(Some(_)) => self.stack.push(None),
+            _ => return Err(MocapError::parse(path, line, "End Site outside of a joint")),
+        }
+        self.expecting_open = !open_here;
+        Ok(())
+    }
+
+    /// `OFFSET x y z` of the open joint, or of its End Site (its tail).
+    fn offset(&mut self, t: &mut Tokens, path: &Path, line: usize) -> Result<(), MocapError> {
+        let mut v = [0.0; 3];
+        for (k, c) in v.iter_mut().enumerate() {
+            let (tok, l) = t
+                .next()
+                .ok_or_else(|| MocapError::parse(path, line, "OFFSET needs 3 numbers"))?;
+            *c = parse_f64(tok, path, l, &format!("OFFSET component {}", k + 1))?;
+        }
+        let v = DVec3::from(v);
+        match self.stack.last() {
+            Some(Some(j)) => self.joints[*j].offset = v,
+            Some(None) => {
+                // The End Site belongs to the joint below it on the stack.
+                let owner = self.stack.iter().rev().find_map(|s| *s);
+                if let Some(j) = owner {
+                    self.joints[j].tail = Some(v);
+                }
+            }
+            None => return Err(MocapError::parse(path, line, "OFFSET outside of a joint")),
+        }
+        Ok(())
+    }
+
+    /// `CHANNELS n name...` of the open joint (at most 6).
+    fn channels(&mut self, t: &mut Tokens, path: &Path, line: usize) -> Result<(), MocapError> {
+        let Some(Some(j)) = self.stack.last().copied() else {
+            return Err(MocapError::parse(path, line, "CHANNELS outside of a joint"));
+        };
+        let (tok, l) = t
+            .next()
+            .ok_or_else(|| MocapError::parse(path, line, "CHANNELS needs a count"))?;
+        let n: usize = tok
+            .parse()
+            .map_err(|_| MocapError::parse(path, l, format!("bad channel count '{tok}'")))?;
+        if n > 6 {
             return Err(MocapError::parse(
                 path,
                 l,
-                format!("expected HIERARCHY, found '{k}'"),
+                format!("{n} channels on one joint (at most 6)"),
             ));
         }
-        None => return Err(MocapError::invalid(path, "empty file")),
+        let mut chans = Vec::with_capacity(n);
+        for _ in 0..n {
+            let (tok, l) = t
+                .next()
+                .ok_or_else(|| MocapError::parse(path, line, "file ends inside CHANNELS"))?;
+            let c = Channel::parse(tok)
+                .ok_or_else(|| MocapError::parse(path, l, format!("unknown channel '{tok}'")))?;
+            chans.push(c);
+        }
+        self.joints[j].channels = chans;
+        Ok(())
     }
-    let mut joints: Vec<Joint> = Vec::new();
-    let mut stack: Vec<Option<usize>> = Vec::new(); // Some(joint) or None for an End Site block
-    let mut expecting_open = false;
-    let mut done_root = false;
-    let motion_line;
-    loop {
-        let Some((tok, line)) = t.next() else {
-            let last = text.lines().count();
+}
+
+/// The `Frames:` and `Frame Time:` lines after `MOTION`.
+struct MotionHeader {
+    /// The declared frame count, if readable.
+    declared: Option<u64>,
+    /// The file's frame time, if a positive finite number.
+    file_frame_time: Option<f64>,
+    /// The frame time used (the override's, else the file's).
+    frame_time: f64,
+    /// Line of `Frame Time:` and its value as written.
+    time_line: usize,
+    time_value: String,
+    /// Index, in the lines after `MOTION`, of the first frame line.
+    data_start: usize,
+}
+
+impl MotionHeader {
+    /// Step 3 of [`parse_bvh`]: "Frames: N" then "Frame Time: t", leniently
+    /// (an unreadable count is a warning; a frame-rate override replaces a
+    /// bad or missing frame time).
+    fn parse(
+        rest: &[(usize, &str)],
+        path: &Path,
+        motion_line: usize,
+        opts: &BvhOptions,
+        warnings: &mut Vec<String>,
+    ) -> Result<MotionHeader, MocapError> {
+        let mut idx = 0;
+        let next_line = |idx: &mut usize| -> Option<(usize, &str)> {
+            while let Some(&(no, l)) = rest.get(*idx) {
+                *idx += 1;
+                if !l.trim().is_empty() {
+                    return Some((no, l.trim()));
+                }
+            }
+            None
+        };
+        let (fl, frames_line) = next_line(&mut idx)
+            .ok_or_else(|| MocapError::parse(path, motion_line, "missing 'Frames:' line"))?;
+        if !frames_line.to_ascii_lowercase().starts_with("frames") {
             return Err(MocapError::parse(
                 path,
-                last,
-                "file ends inside HIERARCHY (no MOTION section)",
-            ));
-        };
-        if expecting_open {
-            if tok != "{" {
-                return Err(MocapError::parse(
-                    path,
-                    line,
-                    format!("expected '{{', found '{tok}'"),
-                ));
-            }
-            expecting_open = false;
-            continue;
-        }
-        let key = tok.to_ascii_uppercase();
-        match key.as_str() {
-            "ROOT" | "JOINT" => {
-                if key == "ROOT" && (done_root || !stack.is_empty()) {
-                    return Err(MocapError::parse(
-                        path,
-                        line,
-                        "a second ROOT is not supported",
-                    ));
-                }
-                if key == "JOINT" && stack.is_empty() {
-                    return Err(MocapError::parse(path, line, "JOINT outside of ROOT"));
-                }
-                let mut words = t.rest_of_line();
-                let open_here = words.last() == Some(&"{");
-                if open_here {
-                    words.pop();
-                }
-                if words.is_empty() || words.contains(&"{") || words.contains(&"}") {
-                    return Err(MocapError::parse(
-                        path,
-                        line,
-                        format!("{key} without a name"),
-                    ));
-                }
-                let parent = match stack.last() {
-                    Some(Some(p)) => Some(JointId(*p as u32)),
-                    Some(None) => {
-                        return Err(MocapError::parse(path, line, "JOINT inside an End Site"));
-                    }
-                    None => None,
-                };
-                if joints.len() >= u32::MAX as usize / 2 {
-                    return Err(MocapError::parse(path, line, "too many joints"));
-                }
-                joints.push(Joint {
-                    name: words.join(" "),
-                    parent,
-                    offset: DVec3::ZERO,
-                    channels: Vec::new(),
-                    tail: None,
-                });
-                stack.push(Some(joints.len() - 1));
-                expecting_open = !open_here;
-            }
-            "END" => {
-                let words = t.rest_of_line();
-                let open_here = words.last() == Some(&"{");
-                let ok = words
-                    .first()
-                    .is_some_and(|w| w.eq_ignore_ascii_case("SITE"));
-                if !ok {
-                    return Err(MocapError::parse(path, line, "expected 'End Site'"));
-                }
-                match stack.last() {
-                    Some(Some(_)) => stack.push(None),
-                    _ => return Err(MocapError::parse(path, line, "End Site outside of a joint")),
-                }
-                expecting_open = !open_here;
-            }
-            "OFFSET" => {
-                let mut v = [0.0; 3];
-                for (k, c) in v.iter_mut().enumerate() {
-                    let (tok, l) = t
-                        .next()
-                        .ok_or_else(|| MocapError::parse(path, line, "OFFSET needs 3 numbers"))?;
-                    *c = parse_f64(tok, path, l, &format!("OFFSET component {}", k + 1))?;
-                }
-                let v = DVec3::from(v);
-                match stack.last() {
-                    Some(Some(j)) => joints[*j].offset = v,
-                    Some(None) => {
-                        // The End Site belongs to the joint below it on the stack.
-                        let owner = stack.iter().rev().find_map(|s| *s);
-                        if let Some(j) = owner {
-                            joints[j].tail = Some(v);
-                        }
-                    }
-                    None => return Err(MocapError::parse(path, line, "OFFSET outside of a joint")),
-                }
-            }
-            "CHANNELS" => {
-                let Some(Some(j)) = stack.last().copied() else {
-                    return Err(MocapError::parse(path, line, "CHANNELS outside of a joint"));
-                };
-                let (tok, l) = t
-                    .next()
-                    .ok_or_else(|| MocapError::parse(path, line, "CHANNELS needs a count"))?;
-                let n: usize = tok.parse().map_err(|_| {
-                    MocapError::parse(path, l, format!("bad channel count '{tok}'"))
-                })?;
-                if n > 6 {
-                    return Err(MocapError::parse(
-                        path,
-                        l,
-                        format!("{n} channels on one joint (at most 6)"),
-                    ));
-                }
-                let mut chans = Vec::with_capacity(n);
-                for _ in 0..n {
-                    let (tok, l) = t.next().ok_or_else(|| {
-                        MocapError::parse(path, line, "file ends inside CHANNELS")
-                    })?;
-                    let c = Channel::parse(tok).ok_or_else(|| {
-                        MocapError::parse(path, l, format!("unknown channel '{tok}'"))
-                    })?;
-                    chans.push(c);
-                }
-                joints[j].channels = chans;
-            }
-            "{" => return Err(MocapError::parse(path, line, "unexpected '{'")),
-            "}" => {
-                if stack.pop().is_none() {
-                    return Err(MocapError::parse(path, line, "unmatched '}'"));
-                }
-                if stack.is_empty() {
-                    done_root = true;
-                }
-            }
-            "MOTION" => {
-                if !stack.is_empty() {
-                    return Err(MocapError::parse(
-                        path,
-                        line,
-                        "MOTION before the hierarchy's braces are closed",
-                    ));
-                }
-                if joints.is_empty() {
-                    return Err(MocapError::parse(path, line, "MOTION before any ROOT"));
-                }
-                motion_line = line;
-                break;
-            }
-            _ => {
-                return Err(MocapError::parse(
-                    path,
-                    line,
-                    format!("unknown keyword '{tok}'"),
-                ));
-            }
-        }
-    }
-
-    // MOTION header: "Frames: N" then "Frame Time: t", leniently.
-    let rest = t.remaining_lines();
-    let mut idx = 0;
-    let next_line = |idx: &mut usize| -> Option<(usize, &str)> {
-        while let Some(&(no, l)) = rest.get(*idx) {
-            *idx += 1;
-            if !l.trim().is_empty() {
-                return Some((no, l.trim()));
-            }
-        }
-        None
-    };
-    let value_after = |l: &str, key_len: usize| -> String {
-        let v = l.get(key_len..).unwrap_or("");
-        v.trim_start().trim_start_matches(':').trim().to_string()
-    };
-    let (fl, frames_line) = next_line(&mut idx)
-        .ok_or_else(|| MocapError::parse(path, motion_line, "missing 'Frames:' line"))?;
-    if !frames_line.to_ascii_lowercase().starts_with("frames") {
-        return Err(MocapError::parse(
-            path,
-            fl,
-            format!("expected 'Frames:', found '{frames_line}'"),
-        ));
-    }
-    let declared = value_after(frames_line, 6);
-    let declared: Option<u64> = declared.parse().ok();
-    if declared.is_none() {
-        warnings.push(format!("line {fl}: unreadable frame count; using the data"));
-    }
-    let (tl, time_line) = next_line(&mut idx)
-        .ok_or_else(|| MocapError::parse(path, fl, "missing 'Frame Time:' line"))?;
-    if !time_line.to_ascii_lowercase().starts_with("frame time") {
-        return Err(MocapError::parse(
-            path,
-            tl,
-            format!("expected 'Frame Time:', found '{time_line}'"),
-        ));
-    }
-    let file_ft: Option<f64> = value_after(time_line, 10)
-        .parse()
-        .ok()
-        .filter(|v: &f64| v.is_finite() && *v > 0.0);
-    let frame_time = match (opts.fps, file_ft) {
-        (Some(fps), _) if crate::budget::is_frame_rate(fps) => 1.0 / fps,
-        (Some(fps), _) => {
-            return Err(MocapError::invalid(
-                path,
-                format!(
-                    "--input-fps {fps}: expected a frame rate in [{}, {}]",
-                    crate::budget::MIN_FPS,
-                    crate::budget::MAX_FPS
-                ),
+                fl,
+                format!("expected 'Frames:', found '{frames_line}'"),
             ));
         }
-        (None, Some(ft)) => ft,
-        (None, None) => {
+        let declared = value_after(frames_line, 6);
+        let declared: Option<u64> = declared.parse().ok();
+        if declared.is_none() {
+            warnings.push(format!("line {fl}: unreadable frame count; using the data"));
+        }
+        let (tl, time_line) = next_line(&mut idx)
+            .ok_or_else(|| MocapError::parse(path, fl, "missing 'Frame Time:' line"))?;
+        if !time_line.to_ascii_lowercase().starts_with("frame time") {
             return Err(MocapError::parse(
                 path,
                 tl,
+                format!("expected 'Frame Time:', found '{time_line}'"),
+            ));
+        }
+        let time_value = value_after(time_line, 10);
+        let file_ft: Option<f64> = time_value
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite() && *v > 0.0);
+        let frame_time = match (opts.fps, file_ft) {
+            (Some(fps), _) if crate::budget::is_frame_rate(fps) => 1.0 / fps,
+            (Some(fps), _) => {
+                return Err(MocapError::invalid(
+                    path,
+                    format!(
+                        "--input-fps {fps}: expected a frame rate in [{}, {}]",
+                        crate::budget::MIN_FPS,
+                        crate::budget::MAX_FPS
+                    ),
+                ));
+            }
+            (None, Some(ft)) => ft,
+            (None, None) => {
+                return Err(MocapError::parse(
+                    path,
+                    tl,
+                    format!("bad Frame Time '{time_value}'; give the frame rate with --input-fps"),
+                ));
+            }
+        };
+        Ok(MotionHeader {
+            declared,
+            file_frame_time: file_ft,
+            frame_time,
+            time_line: tl,
+            time_value,
+            data_start: idx,
+        })
+    }
+
+    /// Step 5 of [`parse_bvh`]: a frame time outside 1-1000 fps (a Frame
+    /// Time in milliseconds, or 1e300) would ask for absurd frame counts
+    /// downstream (issue 18, items 12 and 17). A single frame has no rate
+    /// to speak of; an override was checked when read.
+    fn check_rate(&self, frames: usize, path: &Path, opts: &BvhOptions) -> Result<(), MocapError> {
+        let frame_time = self.frame_time;
+        if opts.fps.is_none() && frames > 1 && !crate::budget::is_frame_rate(1.0 / frame_time) {
+            return Err(MocapError::parse(
+                path,
+                self.time_line,
                 format!(
-                    "bad Frame Time '{}'; give the frame rate with --input-fps",
-                    value_after(time_line, 10)
+                    "Frame Time {} s is {:.4} frames per second, outside [{}, {}]{}; give the frame rate with --input-fps",
+                    self.time_value,
+                    1.0 / frame_time,
+                    crate::budget::MIN_FPS,
+                    crate::budget::MAX_FPS,
+                    if frame_time > 1.0 && frame_time < 1000.0 {
+                        " (milliseconds instead of seconds?)"
+                    } else {
+                        ""
+                    }
                 ),
             ));
         }
-    };
+        Ok(())
+    }
+}
 
-    // Per-joint channel layout into a row.
-    let n = joints.len();
+/// The value of a `Key: value` header line whose key is `key_len` bytes.
+fn value_after(l: &str, key_len: usize) -> String {
+    let v = l.get(key_len..).unwrap_or("");
+    v.trim_start().trim_start_matches(':').trim().to_string()
+}
+
+/// Step 4 of [`parse_bvh`]: each non-empty line of `lines` is one frame of
+/// channel values (degrees for rotations, applied in the joint's channel
+/// order; position channels replace the offset). Returns the local
+/// rotations and translations, frame-major; a short last line (truncated
+/// file) is dropped with a warning.
+#[allow(clippy::type_complexity)]
+fn parse_frames(
+    joints: &[Joint],
+    lines: &[(usize, &str)],
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<DQuat>, Vec<DVec3>), MocapError> {
     let total: usize = joints.iter().map(|j| j.channels.len()).sum();
     if total == 0 {
         return Err(MocapError::invalid(path, "no joint has channels"));
@@ -366,7 +526,7 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
     let mut rotations = Vec::new();
     let mut translations = Vec::new();
     let mut row = Vec::with_capacity(total);
-    let data: Vec<(usize, &str)> = rest[idx..]
+    let data: Vec<(usize, &str)> = lines
         .iter()
         .copied()
         .filter(|(_, l)| !l.trim().is_empty())
@@ -391,7 +551,7 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
             ));
         }
         let mut c = 0;
-        for j in &joints {
+        for j in joints {
             let mut tr = j.offset;
             let mut q = DQuat::IDENTITY;
             for ch in &j.channels {
@@ -407,62 +567,7 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
             translations.push(tr);
         }
     }
-    let frames = rotations.len() / n;
-    if frames == 0 {
-        return Err(MocapError::invalid(path, "no motion frames"));
-    }
-    // A frame time outside 1-1000 fps (a Frame Time in milliseconds, or
-    // 1e300) would ask for absurd frame counts downstream (issue 18,
-    // items 12 and 17). A single frame has no rate to speak of.
-    if opts.fps.is_none() && frames > 1 && !crate::budget::is_frame_rate(1.0 / frame_time) {
-        return Err(MocapError::parse(
-            path,
-            tl,
-            format!(
-                "Frame Time {} s is {:.4} frames per second, outside [{}, {}]{}; give the frame rate with --input-fps",
-                value_after(time_line, 10),
-                1.0 / frame_time,
-                crate::budget::MIN_FPS,
-                crate::budget::MAX_FPS,
-                if frame_time > 1.0 && frame_time < 1000.0 {
-                    " (milliseconds instead of seconds?)"
-                } else {
-                    ""
-                }
-            ),
-        ));
-    }
-    match declared {
-        Some(d) if d != frames as u64 => warnings.push(format!(
-            "header says {d} frames, the data has {frames}; using the data"
-        )),
-        _ => {}
-    }
-    if let (Some(fps), Some(ft)) = (opts.fps, file_ft)
-        && (1.0 / ft - fps).abs() > 1e-6 * fps
-    {
-        warnings.push(format!(
-            "file says {:.4} fps; overridden to {fps}",
-            1.0 / ft
-        ));
-    }
-    let units = Units {
-        metres_per_unit: 1.0,
-        name: "file".into(),
-        reason: "BVH has no unit; not yet decided".into(),
-    };
-    let mut clip = Clip::new(
-        joints,
-        frame_time,
-        rotations,
-        translations,
-        units,
-        UpAxis::Y,
-        PointConvention::JointOrigins,
-    )
-    .map_err(|e| MocapError::invalid(path, e.to_string()))?;
-    clip.warnings = warnings;
-    Ok(clip)
+    Ok((rotations, translations))
 }
 
 /// Reads a BVH file.
