@@ -262,15 +262,193 @@ fn fps_examples(rot: &[Vec<DQuat>], want: usize) -> Vec<usize> {
     chosen
 }
 
+/// The deformation regions in solve order (parents before children), each
+/// with its vertices, joint, parent (index in this list), the joints whose
+/// rotations its examples cover, and the vertices it owns: one region for
+/// the whole body (`Global`), else one per body part (its region of the
+/// embedding plus the vertices labelled with it).
+fn region_specs(ch: &Character, mode: DeformMode) -> Vec<RegionSpec> {
+    let n = ch.n;
+    let rig = &ch.rig;
+    match mode {
+        DeformMode::Global => vec![(
+            (0..n as u32).collect(),
+            Canonical::Pelvis,
+            None,
+            Canonical::ALL.to_vec(),
+            (0..n as u32).collect(),
+        )],
+        _ => {
+            let order = [
+                Part::Torso,
+                Part::Head,
+                Part::LUpperArm,
+                Part::RUpperArm,
+                Part::LThigh,
+                Part::RThigh,
+                Part::LForearm,
+                Part::RForearm,
+                Part::LShin,
+                Part::RShin,
+                Part::LFoot,
+                Part::RFoot,
+            ];
+            order
+                .iter()
+                .map(|&p| {
+                    let mut verts = rig.regions[p.index()].clone();
+                    let owns: Vec<u32> = (0..n as u32)
+                        .filter(|&v| rig.labels[v as usize] as usize == p.index())
+                        .collect();
+                    verts.extend(&owns);
+                    verts.sort_unstable();
+                    verts.dedup();
+                    let parent = p.parent().and_then(|q| order.iter().position(|&o| o == q));
+                    (verts, part_joint(p), parent, vec![part_joint(p)], owns)
+                })
+                .collect()
+        }
+    }
+}
+
+/// The example frames of a region (database ids: the override, else the
+/// frames farthest apart in the rotations of `example_joints`, plus
+/// `opts.include`) and their differential coordinates `L x` on the region
+/// (`lap`), turned into the joint's frame when `opts.local_frames`. `buf`
+/// is scratch of one frame.
+fn region_examples(
+    ch: &Character,
+    verts: &[u32],
+    lap: &[Vec<(u32, f64)>],
+    joint: Canonical,
+    example_joints: &[Canonical],
+    opts: &DeformOptions,
+    buf: &mut [[f64; 3]],
+) -> (Vec<usize>, Vec<Vec<[f64; 3]>>) {
+    let nf = ch.frame_count();
+    // Examples covering the region's rotations.
+    let rots: Vec<Vec<DQuat>> = (0..nf)
+        .map(|f| {
+            let g = pose_rotations(&ch.rest_pose, &ch.poses[f]);
+            example_joints.iter().map(|j| g[j.index()]).collect()
+        })
+        .collect();
+    let mut chosen = match &ch.example_override {
+        Some(e) => e.clone(),
+        None => fps_examples(&rots, opts.examples),
+    };
+    if let Some(f) = opts.include.filter(|&f| f < nf && !chosen.contains(&f)) {
+        chosen.push(f);
+    }
+    let mut examples = Vec::with_capacity(chosen.len());
+    for &f in &chosen {
+        ch.frame_metres(f as u32, buf);
+        let x: Vec<[f64; 3]> = verts.iter().map(|&v| buf[v as usize]).collect();
+        let mut d = vec![[0.0; 3]; x.len()];
+        apply(lap, &x, &mut d);
+        let r = if opts.local_frames {
+            pose_rotations(&ch.rest_pose, &ch.poses[f])[joint.index()].inverse()
+        } else {
+            DQuat::IDENTITY
+        };
+        for v in d.iter_mut() {
+            *v = (r * DVec3::from_array(*v)).to_array();
+        }
+        examples.push(d);
+    }
+    (chosen, examples)
+}
+
+/// The soft constraints of a region, `(local index, weight)`, with their
+/// sources `(global vertex, from the parent's result)`: seams with the
+/// parent region first, then the LBS constraint vertices (and, with
+/// `hold_joints`, a spread of the child parts' vertices); a region with
+/// none of those constrains a spread of its own vertices.
+fn region_constraints(
+    ch: &Character,
+    mode: DeformMode,
+    opts: &DeformOptions,
+    verts: &[u32],
+    joint: Canonical,
+    parent_verts: Option<&[u32]>,
+    is_constraint: &[bool],
+) -> (Vec<(u32, f64)>, Vec<(u32, bool)>) {
+    let rig = &ch.rig;
+    let mut constraints = Vec::new();
+    let mut sources = Vec::new();
+    for (i, &v) in verts.iter().enumerate() {
+        let seam = parent_verts.is_some_and(|pv| pv.binary_search(&v).is_ok());
+        if seam {
+            constraints.push((i as u32, opts.seam_weight));
+            sources.push((v, true));
+        } else if is_constraint[v as usize]
+            || (opts.hold_joints
+                && mode == DeformMode::Part
+                && i % opts.stride.max(1) == 0
+                && Part::ALL
+                    .get(rig.labels[v as usize] as usize)
+                    .is_some_and(|c| c.parent() == Some(Part::of_joint(joint))))
+        {
+            constraints.push((i as u32, opts.constraint_weight));
+            sources.push((v, false));
+        }
+    }
+    if constraints.is_empty() {
+        // A region with no eligible vertex: constrain a spread of its own.
+        for (i, &v) in verts.iter().enumerate().step_by(opts.stride.max(1)) {
+            constraints.push((i as u32, opts.constraint_weight));
+            sources.push((v, false));
+        }
+    }
+    (constraints, sources)
+}
+
+/// The weight of a region's result at each of its vertices: 1 for the
+/// whole body, else the vertex's skin weight on the region's part (at least
+/// 1e-3 for a vertex labelled with the part), so overlapping regions blend.
+fn region_weights(ch: &Character, mode: DeformMode, verts: &[u32], joint: Canonical) -> Vec<f64> {
+    let rig = &ch.rig;
+    match mode {
+        DeformMode::Global => vec![1.0; verts.len()],
+        _ => {
+            let part = Part::of_joint(joint);
+            verts
+                .iter()
+                .map(|&v| {
+                    let (js, ws) = &rig.skin[v as usize];
+                    let w: f64 = js
+                        .iter()
+                        .zip(ws)
+                        .filter(|(j, _)| Part::of_joint(Canonical::ALL[**j as usize]) == part)
+                        .map(|(_, w)| *w)
+                        .sum();
+                    // A vertex labelled with the part always counts.
+                    if rig.labels[v as usize] as usize == part.index() {
+                        w.max(1e-3)
+                    } else {
+                        w
+                    }
+                })
+                .collect()
+        }
+    }
+}
+
 impl Deformer {
     /// Prefactors the deformation of a character (nothing for `Lbs`/`None`).
+    ///
+    /// The steps: the LBS constraint vertices, `region_specs` (the regions
+    /// in solve order, parents first), then per region its uniform
+    /// Laplacian, `region_examples` (the frames spanning its rotations and
+    /// their differential coordinates, Huang et al. 2015 Sec. 5.2.3),
+    /// the PCA basis, `region_constraints` (seams with the parent, then
+    /// LBS vertices), `region_weights` and the prefactored Eq. 32 solver.
     pub fn new(
         ch: &Character,
         mode: DeformMode,
         opts: &DeformOptions,
     ) -> Result<Deformer, SolveError> {
         let n = ch.n;
-        let rig = &ch.rig;
         let constraint_vertices = match &ch.constraint_override {
             Some(c) => c.clone(),
             None => lbs::constraint_vertices(ch, opts.stride),
@@ -303,50 +481,9 @@ impl Deformer {
             }
             m
         };
-        // Regions in solve order (parents before children), with parents.
-        let specs: Vec<RegionSpec> = match mode {
-            DeformMode::Global => vec![(
-                (0..n as u32).collect(),
-                Canonical::Pelvis,
-                None,
-                Canonical::ALL.to_vec(),
-                (0..n as u32).collect(),
-            )],
-            _ => {
-                let order = [
-                    Part::Torso,
-                    Part::Head,
-                    Part::LUpperArm,
-                    Part::RUpperArm,
-                    Part::LThigh,
-                    Part::RThigh,
-                    Part::LForearm,
-                    Part::RForearm,
-                    Part::LShin,
-                    Part::RShin,
-                    Part::LFoot,
-                    Part::RFoot,
-                ];
-                order
-                    .iter()
-                    .map(|&p| {
-                        let mut verts = rig.regions[p.index()].clone();
-                        let owns: Vec<u32> = (0..n as u32)
-                            .filter(|&v| rig.labels[v as usize] as usize == p.index())
-                            .collect();
-                        verts.extend(&owns);
-                        verts.sort_unstable();
-                        verts.dedup();
-                        let parent = p.parent().and_then(|q| order.iter().position(|&o| o == q));
-                        (verts, part_joint(p), parent, vec![part_joint(p)], owns)
-                    })
-                    .collect()
-            }
-        };
-        let nf = ch.frame_count();
         let mut buf = vec![[0.0; 3]; n];
         let mut index_of: Vec<Option<usize>> = Vec::new();
-        for (verts, joint, parent, example_joints, owns) in specs {
+        for (verts, joint, parent, example_joints, _owns) in region_specs(ch, mode) {
             if verts.is_empty() {
                 index_of.push(None);
                 continue;
@@ -358,94 +495,22 @@ impl Deformer {
                 local[v as usize] = i as u32;
             }
             let lap = uniform_region_rows(tris, &local, verts.len());
-            // Examples covering the region's rotations.
-            let rots: Vec<Vec<DQuat>> = (0..nf)
-                .map(|f| {
-                    let g = pose_rotations(&ch.rest_pose, &ch.poses[f]);
-                    example_joints.iter().map(|j| g[j.index()]).collect()
-                })
-                .collect();
-            let mut chosen = match &ch.example_override {
-                Some(e) => e.clone(),
-                None => fps_examples(&rots, opts.examples),
-            };
-            if let Some(f) = opts.include.filter(|&f| f < nf && !chosen.contains(&f)) {
-                chosen.push(f);
-            }
-            let mut examples = Vec::with_capacity(chosen.len());
-            for &f in &chosen {
-                ch.frame_metres(f as u32, &mut buf);
-                let x: Vec<[f64; 3]> = verts.iter().map(|&v| buf[v as usize]).collect();
-                let mut d = vec![[0.0; 3]; x.len()];
-                apply(&lap, &x, &mut d);
-                let r = if opts.local_frames {
-                    pose_rotations(&ch.rest_pose, &ch.poses[f])[joint.index()].inverse()
-                } else {
-                    DQuat::IDENTITY
-                };
-                for v in d.iter_mut() {
-                    *v = (r * DVec3::from_array(*v)).to_array();
-                }
-                examples.push(d);
-            }
+            let (chosen, examples) =
+                region_examples(ch, &verts, &lap, joint, &example_joints, opts, &mut buf);
             let basis = pca::pca(&examples, opts.keep);
-            // Constraints: seams with the parent, then LBS vertices.
             let parent_verts: Option<&Vec<u32>> = parent.map(|p| &out.regions[p].solver.vertices);
-            let mut constraints = Vec::new();
-            let mut sources = Vec::new();
-            for (i, &v) in verts.iter().enumerate() {
-                let seam = parent_verts.is_some_and(|pv| pv.binary_search(&v).is_ok());
-                if seam {
-                    constraints.push((i as u32, opts.seam_weight));
-                    sources.push((v, true));
-                } else if is_constraint[v as usize]
-                    || (opts.hold_joints
-                        && mode == DeformMode::Part
-                        && i % opts.stride.max(1) == 0
-                        && Part::ALL
-                            .get(rig.labels[v as usize] as usize)
-                            .is_some_and(|c| c.parent() == Some(Part::of_joint(joint))))
-                {
-                    constraints.push((i as u32, opts.constraint_weight));
-                    sources.push((v, false));
-                }
-            }
-            if constraints.is_empty() {
-                // A region with no eligible vertex: constrain a spread of its own.
-                for (i, &v) in verts.iter().enumerate().step_by(opts.stride.max(1)) {
-                    constraints.push((i as u32, opts.constraint_weight));
-                    sources.push((v, false));
-                }
-            }
-            let weights: Vec<f64> = match mode {
-                DeformMode::Global => vec![1.0; verts.len()],
-                _ => {
-                    let _ = &owns;
-                    let part = Part::of_joint(joint);
-                    verts
-                        .iter()
-                        .map(|&v| {
-                            let (js, ws) = &rig.skin[v as usize];
-                            let w: f64 = js
-                                .iter()
-                                .zip(ws)
-                                .filter(|(j, _)| {
-                                    Part::of_joint(Canonical::ALL[**j as usize]) == part
-                                })
-                                .map(|(_, w)| *w)
-                                .sum();
-                            // A vertex labelled with the part always counts.
-                            if rig.labels[v as usize] as usize == part.index() {
-                                w.max(1e-3)
-                            } else {
-                                w
-                            }
-                        })
-                        .collect()
-                }
-            };
+            let (constraints, sources) = region_constraints(
+                ch,
+                mode,
+                opts,
+                &verts,
+                joint,
+                parent_verts.map(Vec::as_slice),
+                &is_constraint,
+            );
+            let weights = region_weights(ch, mode, &verts, joint);
             out.components.push(basis.components.len());
-            out.examples.push(chosen.clone());
+            out.examples.push(chosen);
             let solver = RegionSolver::new(tris, n, verts, constraints, &basis)?;
             out.regions.push(Region {
                 joint,

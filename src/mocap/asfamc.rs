@@ -102,10 +102,10 @@ fn num(tok: &str, path: &Path, line: usize) -> Result<f64, MocapError> {
 
 /// Parses ASF text.
 ///
-/// The steps, in order: [`AsfText::read_line`] for every line (sections
-/// `:units`, `:root`, `:bonedata`, `:hierarchy`), [`index_bones`] (names
-/// unique, none called `root`), [`link_hierarchy`] (every edge names known
-/// bones, one parent each) and [`build_tree`] (bones parents first, from
+/// The steps, in order: `AsfText::read_line` for every line (sections
+/// `:units`, `:root`, `:bonedata`, `:hierarchy`), `index_bones` (names
+/// unique, none called `root`), `link_hierarchy` (every edge names known
+/// bones, one parent each) and `build_tree` (bones parents first, from
 /// the root, with their axes in radians).
 pub fn parse_asf(text: &str, path: &Path) -> Result<AsfSkeleton, MocapError> {
     let mut asf = AsfText::default();

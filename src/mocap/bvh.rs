@@ -107,11 +107,11 @@ fn parse_f64(tok: &str, path: &Path, line: usize, what: &str) -> Result<f64, Moc
 
 /// Parses BVH text. `path` is used only to name the source in errors.
 ///
-/// The steps, in order: [`expect_hierarchy`], [`Hierarchy::parse`] (joints,
-/// offsets, channels, end sites, up to `MOTION`), [`MotionHeader::parse`]
-/// (`Frames:` and `Frame Time:`), [`parse_frames`] (one row of channel
+/// The steps, in order: `expect_hierarchy`, `Hierarchy::parse` (joints,
+/// offsets, channels, end sites, up to `MOTION`), `MotionHeader::parse`
+/// (`Frames:` and `Frame Time:`), `parse_frames` (one row of channel
 /// values per frame into local rotations and translations) and
-/// [`MotionHeader::check_rate`]; then the clip is assembled with the
+/// `MotionHeader::check_rate`; then the clip is assembled with the
 /// warnings gathered on the way.
 pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, MocapError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);

@@ -550,12 +550,12 @@ fn check_glb_layout<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a [u8], MeshEr
 
 /// Parses glTF or GLB bytes. `path` locates external buffers and names errors.
 ///
-/// The steps, in order (each names the file in its errors): [`open_document`]
-/// (GLB layout, JSON, validation, buffers), [`SceneNodes::walk`] (world
-/// transforms, parents, order), [`Geometry::add_node`] per mesh node
+/// The steps, in order (each names the file in its errors): `open_document`
+/// (GLB layout, JSON, validation, buffers), `SceneNodes::walk` (world
+/// transforms, parents, order), `Geometry::add_node` per mesh node
 /// (positions, normals, colours, triangles, skin attributes, morph targets),
-/// [`Geometry::into_mesh`], [`read_skin`], [`read_animations`] and
-/// [`node_graph`].
+/// `Geometry::into_mesh`, `read_skin`, `read_animations` and
+/// `node_graph`.
 pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
     let (doc, ctx) = open_document(bytes, path)?;
     let mut problems = Vec::new();
