@@ -1,26 +1,83 @@
 //! # surfmotion
 //!
-//! Drives 4D performance-capture characters from skeletal motion capture
-//! (Huang et al. 2015) and transfers mocap onto static scanned meshes
-//! (de Aguiar et al. 2007). Modules follow the pipeline: [`mocap`] (clips),
-//! [`rig`] (canonical skeleton), [`mesh`] (meshes, sequences and their file
-//! formats), [`inspect`] (what a file holds).
+//! Drives 4D performance-capture characters (mesh sequences of a real
+//! actor, one connectivity across all frames) from skeletal motion capture
+//! (Huang et al. 2015, "Hybrid Skeletal-Surface Motion Graphs for Character
+//! Animation from 4D Performance Capture", ACM TOG 34(2)), and transfers
+//! mocap onto static scanned meshes (de Aguiar et al. 2007, "A Simple
+//! Framework for Natural Animation of Digitized Models", Confluent Motion).
+//!
+//! ## Modules, in pipeline order
+//!
+//! Input:
+//! - [`mocap`]: motion-capture clips: BVH and ASF/AMC readers, BVH writer,
+//!   forward kinematics, resampling, units and up axis.
+//! - [`rig`]: the canonical 19-joint skeleton, the mapping of any humanoid
+//!   rig onto it, and rig embedding from landmarks on a rest mesh.
+//!
+//! Geometry:
+//! - [`mesh`]: triangle meshes and mesh sequences, Laplacians, Poisson and
+//!   harmonic solves, non-linear blending, repair, and their file formats.
+//! - [`skeleton`]: canonical poses, their alignment and the skeletal
+//!   dissimilarity `c_skel` (Huang Eq. 28).
+//!
+//! Character:
+//! - [`db`]: character databases: the manifest, per-frame skeletons, and
+//!   the cached similarity matrix and graph.
+//! - [`similarity`]: frame-to-frame dissimilarity over a database (shape
+//!   histograms, vertex, skeleton and colour measures; Huang Sec. 4.1).
+//! - [`graph`]: transitions and the Surface Motion Graph (Huang Secs.
+//!   4.2-4.3), with its export and picture.
+//! - [`keyframe`]: key-frame animation through the graph: walks, loops and
+//!   the distance/time path optimisation (Huang Sec. 5.1).
+//!
+//! Synthesis:
+//! - [`retarget`]: mocap-driven synthesis: skeletal trellis retrieval,
+//!   timeline, blending and placement (Huang Sec. 5.2).
+//! - [`deform`]: skeleton-driven editing of retrieved frames: skinning
+//!   constraints and the part-based PCA Laplacian deformation (Huang Eq. 32).
+//! - [`transfer`]: Confluent Motion onto scanned meshes (de Aguiar 2007).
+//!
+//! Jobs:
+//! - [`batch`]: batch conversion of whole mocap libraries, resumable and
+//!   sharded.
+//!
+//! Tools:
+//! - [`eval`]: the papers' metrics (joint-velocity error) and plausibility
+//!   checks of a result.
+//! - [`render`]: a small software rasteriser for PNG views of meshes and
+//!   rigs.
+//! - [`inspect`]: what any supported file holds, what was assumed, and
+//!   problems.
+//! - [`synth`]: synthetic data made by the project's own code: procedural
+//!   clips, the procedural humanoid and synthetic databases.
+//! - [`budget`]: limits on what one job may ask for, checked before
+//!   allocating.
+//! - [`fsutil`]: atomic writes, bounded reads and the shared file-error
+//!   shape.
+#![warn(missing_docs)]
 
-pub mod batch;
-pub mod budget;
+// Input.
+pub mod mocap;
+pub mod rig;
+// Geometry.
+pub mod mesh;
+pub mod skeleton;
+// Character.
 pub mod db;
+pub mod graph;
+pub mod keyframe;
+pub mod similarity;
+// Synthesis.
 pub mod deform;
+pub mod retarget;
+pub mod transfer;
+// Jobs.
+pub mod batch;
+// Tools.
+pub mod budget;
 pub mod eval;
 pub mod fsutil;
-pub mod graph;
 pub mod inspect;
-pub mod keyframe;
-pub mod mesh;
-pub mod mocap;
 pub mod render;
-pub mod retarget;
-pub mod rig;
-pub mod similarity;
-pub mod skeleton;
 pub mod synth;
-pub mod transfer;

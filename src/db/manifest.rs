@@ -144,7 +144,7 @@ fn default_up() -> String {
 /// measure = "shape"        # shape | vertex | skeleton
 /// top_n = 4                # transitions per ordered sequence pair
 /// max_window = 24          # largest half-window L (frames)
-/// min_window = 2
+/// min_window = 4           # smallest half-window L (frames)
 /// min_gap = 10             # within a sequence, smallest |m - n|
 /// velocity_weight = 1.0    # λ of the vertex measure
 /// forbid = ["walk -> jog"] # never create these sequence edges (* = any)
@@ -162,7 +162,8 @@ pub struct GraphSpec {
     /// Largest half-window L. Default: 24.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_window: Option<usize>,
-    /// Smallest half-window L. Default: 2.
+    /// Smallest half-window L. Default: 4 (the paper's Fig. 4; see
+    /// [`TransitionOptions`](crate::graph::transitions::TransitionOptions)).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub min_window: Option<usize>,
     /// Smallest jump inside one sequence. Default: 10.
@@ -523,6 +524,45 @@ pub fn info(dir: &Path) -> Result<DbInfo, DbError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Regression (issue 19): `[graph] min_window` was documented with
+    /// default 2 while the code used 4. The documented defaults of the
+    /// transition fields (field docs and the TOML example) are the ones a
+    /// manifest without them gets.
+    #[test]
+    fn graph_spec_documented_defaults_are_the_real_ones() {
+        let src = include_str!("manifest.rs");
+        let t = GraphSpec::default().transition_options();
+        for (field, value) in [
+            ("top_n", t.top_n),
+            ("max_window", t.max_window),
+            ("min_window", t.min_window),
+            ("min_gap", t.min_gap),
+        ] {
+            let example = format!("/// {field} = ");
+            let line = src
+                .lines()
+                .find_map(|l| l.trim_start().strip_prefix(example.as_str()))
+                .unwrap_or_else(|| panic!("{field} missing from the TOML example"));
+            let documented: usize = line.split_whitespace().next().unwrap().parse().unwrap();
+            assert_eq!(documented, value, "TOML example of {field}");
+            // The field's doc: the comment lines just above `pub {field}:`.
+            let decl = format!("pub {field}: Option<usize>,");
+            let at = src.find(&decl).unwrap();
+            let doc_default = src[..at]
+                .rsplit("Default: ")
+                .next()
+                .unwrap()
+                .split(|c: char| !c.is_ascii_digit())
+                .next()
+                .unwrap();
+            assert_eq!(
+                doc_default.parse::<usize>().unwrap(),
+                value,
+                "doc of {field}"
+            );
+        }
+    }
 
     #[test]
     fn toml_round_trip_and_validation() {

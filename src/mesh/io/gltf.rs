@@ -1216,11 +1216,6 @@ impl GltfAsset {
         Some(n.iter().map(|v| v.normalize_or_zero().to_array()).collect())
     }
 
-    /// Animation `index` of a skinned asset as a mesh sequence sampled at
-    /// `fps`: node transforms are sampled (linear, slerp or step), composed
-    /// down the hierarchy, and the mesh is skinned with linear blend skinning
-    /// `v' = Σ w_j (W_j · IBM_j) v` (glTF 2.0 §3.7.3; the mesh node's own
-    /// transform is ignored, as the spec says).
     /// The skinned mesh in its rest pose in world space (every node at its
     /// rest TRS, no animation), with the world position of each skin joint.
     /// `None` without a skin.
@@ -1272,6 +1267,11 @@ impl GltfAsset {
         Some((verts, joints))
     }
 
+    /// Animation `index` of a skinned asset as a mesh sequence sampled at
+    /// `fps`: node transforms are sampled (linear, slerp or step), composed
+    /// down the hierarchy, and the mesh is skinned with linear blend skinning
+    /// `v' = Σ w_j (W_j · IBM_j) v` (glTF 2.0 §3.7.3; the mesh node's own
+    /// transform is ignored, as the spec says).
     pub fn skinned_sequence(&self, index: usize, fps: f64) -> Result<MeshSequence, MeshError> {
         use glam::{DMat4, DQuat, DVec3};
         let bad = |m: String| MeshError::invalid(std::path::Path::new("<gltf>"), m);
