@@ -100,7 +100,8 @@ fn fixture() -> &'static Fixture {
         std::fs::create_dir_all(&db).unwrap();
         write_database(&db);
         let ch = Character::load(&db, &Quiet).unwrap();
-        let clip = gait_clip(Gait::Turn, 2.5, FPS);
+        // Longer than the database's walk (3 s), so the path must leave it.
+        let clip = gait_clip(Gait::Turn, 4.0, FPS);
         let map = surfmotion::rig::detect(&clip.point_names()).map;
         let query = clip_poses(&clip, &map).unwrap();
         eprintln!(
@@ -168,7 +169,7 @@ fn procedural_retarget_through_the_graph_follows_the_query() {
     let f = fixture();
     let out = retarget(DeformMode::Part);
     let frames = f.query.poses.len();
-    assert_eq!(frames, 75);
+    assert_eq!(frames, 120);
     assert_eq!(out.report.frames, frames);
     assert_eq!(out.positions.len(), frames * f.ch.n);
     assert_eq!(out.query.len(), frames);
@@ -190,6 +191,25 @@ fn procedural_retarget_through_the_graph_follows_the_query() {
         out.report.jumps
     );
     assert!(walking * 2 > frames, "{walking} of {frames} walking frames");
+    // Through the graph: each step repeats a frame, follows an edge of the
+    // frame graph (next frame of a sequence, or a transition), or is a cut
+    // the retrieval reports; the query outlasts the walk, so there is at
+    // least one jump.
+    for (k, w) in r.path.windows(2).enumerate() {
+        let (a, b) = (w[0], w[1]);
+        let edge = f.ch.adjacency.successors(a).any(|(t, _)| t == b);
+        assert!(
+            a == b || edge || r.cuts.contains(&(k + 1)),
+            "query frame {}: {a} -> {b} is neither a repeat, a graph edge nor a cut",
+            k + 1
+        );
+    }
+    // Measured: two jumps, both transitions of the graph.
+    assert!(
+        out.report.jumps.iter().any(|j| j.transition),
+        "no transition used in {frames} frames: {:?}",
+        out.report.jumps
+    );
     // The paper's joint-velocity metric (Huang et al. 2015, Sec. 6.2).
     let skel = output_skeletons(&f.ch, &out);
     let err = velocity_error(&out.query, &skel);
@@ -216,9 +236,10 @@ fn procedural_part_deformation_brings_the_mesh_to_the_driving_skeleton() {
     let d_part = mean_joint_distance(&part.query, &output_skeletons(&f.ch, &part));
     let d_none = mean_joint_distance(&none.query, &output_skeletons(&f.ch, &none));
     eprintln!("mean joint distance to the query: part {d_part:.4} m, none {d_none:.4} m");
-    assert!(d_part < d_none, "part {d_part} vs none {d_none}");
-    // Every output frame moved by the deformation stays a body: no vertex
-    // further than a body length from its undeformed place.
+    // Measured: part 2.1 mm, none 6.8 mm.
+    assert!(d_part < 0.6 * d_none, "part {d_part} vs none {d_none}");
+    // The deformation edits the retrieved frames, it does not rebuild
+    // them: measured at most 3.1 cm per vertex.
     let max_move = part
         .positions
         .iter()
@@ -229,5 +250,5 @@ fn procedural_part_deformation_brings_the_mesh_to_the_driving_skeleton() {
         .fold(0.0, f64::max);
     eprintln!("largest vertex displacement by the deformation: {max_move:.4} m");
     assert!(max_move > 0.0);
-    assert!(max_move < 1.0, "{max_move} m");
+    assert!(max_move < 0.15, "{max_move} m");
 }
