@@ -359,6 +359,10 @@ fn region_examples(
     (chosen, examples)
 }
 
+/// Where a region constraint's target comes from: `(global vertex, from
+/// the parent region's result)`.
+type RegionSource = (u32, bool);
+
 /// The soft constraints of a region, `(local index, weight)`, with their
 /// sources `(global vertex, from the parent's result)`: seams with the
 /// parent region first, then the LBS constraint vertices (and, with
@@ -372,7 +376,7 @@ fn region_constraints(
     joint: Canonical,
     parent_verts: Option<&[u32]>,
     is_constraint: &[bool],
-) -> (Vec<(u32, f64)>, Vec<(u32, bool)>) {
+) -> (Vec<(u32, f64)>, Vec<RegionSource>) {
     let rig = &ch.rig;
     let mut constraints = Vec::new();
     let mut sources = Vec::new();

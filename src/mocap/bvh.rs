@@ -512,7 +512,6 @@ fn value_after(l: &str, key_len: usize) -> String {
 /// order; position channels replace the offset). Returns the local
 /// rotations and translations, frame-major; a short last line (truncated
 /// file) is dropped with a warning.
-#[allow(clippy::type_complexity)]
 fn parse_frames(
     joints: &[Joint],
     lines: &[(usize, &str)],
