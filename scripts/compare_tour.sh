@@ -60,7 +60,7 @@ run_tour() {
     step db info samba_db
     step mocap procedural -o clips
     step rig embed "$S/4d/samba/samba.obj" --landmarks tests/fixtures/samba.landmarks.json -o samba.rig.json --png samba_rig.png
-    step rig embed "$S/4d/samba/samba.obj" --landmarks tests/fixtures/samba.landmarks.json --json
+    step rig embed "$S/4d/samba/samba.obj" --landmarks tests/fixtures/samba.landmarks.json -o samba2.rig.json --json
     step render "$S/4d/samba/samba.pc2" --frame 90 --rig samba.rig.json -o samba_90.png
     step db init samba_db --mesh "$S/4d/samba/samba.obj" --sequence "dance=$S/4d/samba/samba.pc2" --landmarks tests/fixtures/samba.landmarks.json --force
     step db info samba_db --json
@@ -88,7 +88,7 @@ run_tour() {
         --mocap-dir "$S/mocap/cmu-amc/03" -o armadillo_cmu --jobs 2 --format glb
     step db build samba_db
     step batch --db samba_db --mocap-dir "$S/mocap/cmu-amc/03" -o samba_cmu --format pc2
-    step keyframe --db samba_synth --from 02_01:0 --to 02_03:10 --distance 6 --time 5 -o kf.pc2 --report kf.json
+    step keyframe --db samba_synth --from 02_01:0 --to 02_03:30 --distance 6 --time 5 -o kf.pc2 --report kf.json
     step demo -o demo
     cd - >/dev/null
 }
@@ -110,7 +110,9 @@ import json, os, re, sys
 old, new = sys.argv[1], sys.argv[2]
 TOL = 1e-6
 # Keys whose values are wall-clock measurements.
-TIMING_KEY = re.compile(r"seconds|timings?|elapsed|wall|_ms$|_s$|^ms$|^s$|per_second")
+TIMING_KEY = re.compile(r"seconds|timings?|elapsed|wall|_ms$|_s$|^ms$|^s$|per_second|ms_per|per_minute")
+# batch.html rows: clip, status, frames, seconds, error, output (drop the seconds).
+HTML_SECONDS = re.compile(r"(<td>\d+</td>)<td>[0-9.]+</td>")
 # Text lines that carry a time measurement.
 TIMING_LINE = re.compile(r"\d\s*(ms|s|µs|us|min)\b|\bs\)|frames/s|elapsed|took|timings?")
 NUM = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
@@ -146,6 +148,7 @@ def cmp_json(a, b, path):
     return None if a == b else f"{path}: {a!r} != {b!r}"
 
 def cmp_text(ta, tb):
+    ta, tb = HTML_SECONDS.sub(r"\1", ta), HTML_SECONDS.sub(r"\1", tb)
     la, lb = ta.splitlines(), tb.splitlines()
     if len(la) != len(lb):
         return f"{len(la)} lines != {len(lb)} lines"

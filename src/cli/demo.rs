@@ -12,7 +12,7 @@ use surfmotion::retarget::character::Character;
 use surfmotion::retarget::{RetargetOptions, synthesise};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::retarget::clip_poses;
-use surfmotion::synth::database::{Dynamics, synthesise as synth_db};
+use surfmotion::synth::database::{Dynamics, drive as synth_db};
 use surfmotion::synth::humanoid::{
     DEMO_GRID, humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh,
 };

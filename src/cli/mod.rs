@@ -354,7 +354,7 @@ pub struct ClipOpts {
 
 impl ClipOpts {
     /// The library's load options.
-    pub fn load_options(&self) -> anyhow::Result<surfmotion::mocap::LoadOptions> {
+    pub fn load_options(&self) -> anyhow::Result<surfmotion::rig::LoadOptions> {
         let units = match &self.assume_units {
             None => None,
             Some(u) => Some(surfmotion::mocap::units::parse_unit(u).ok_or_else(|| {
@@ -373,7 +373,7 @@ impl ClipOpts {
             Some(p) => Some(surfmotion::rig::RigMap::load(p)?),
             None => None,
         };
-        Ok(surfmotion::mocap::LoadOptions {
+        Ok(surfmotion::rig::LoadOptions {
             fps: self.input_fps,
             asf: self.asf.clone(),
             units,

@@ -10,7 +10,7 @@ use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
 use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::synth::database::{Dynamics, synthesise};
+use surfmotion::synth::database::{Dynamics, drive};
 
 /// Arguments of `synth`.
 #[derive(clap::Args)]
@@ -104,7 +104,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             rest.vertex_count(),
             3,
         )?;
-        let out = synthesise(&rest, &rig, &poses, &clip.reference, a.fps, dynamics);
+        let out = drive(&rest, &rig, &poses, &clip.reference, a.fps, dynamics);
         // A unique sequence name from the clip's file stem.
         let stem = path
             .file_stem()
