@@ -14,6 +14,7 @@ pub mod eval;
 pub mod fsutil;
 pub mod graph;
 pub mod inspect;
+pub mod jobs;
 pub mod keyframe;
 pub mod mesh;
 pub mod mocap;
