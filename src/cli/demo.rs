@@ -3,17 +3,14 @@
 use std::path::PathBuf;
 use std::time::Instant;
 use surfmotion::eval::velocity_error;
-use surfmotion::jobs::{SynthClip, SynthOptions, write_synthetic_database};
+use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::save_sequence;
 use surfmotion::render::{Scene, View, render};
 use surfmotion::retarget::character::Character;
 use surfmotion::retarget::{RetargetOptions, synthesise};
-use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::retarget::clip_poses;
-use surfmotion::synth::humanoid::{
-    DEMO_GRID, humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh,
-};
+use surfmotion::synth::humanoid::humanoid_landmarks;
 use surfmotion::synth::{Gait, gait_clip};
 
 /// Arguments of `demo`.
@@ -38,18 +35,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let db = dir.join("database");
     let t0 = Instant::now();
     let fps = 30.0;
-    let mesh = humanoid_mesh(DEMO_GRID);
-    let lm = humanoid_landmarks(&mesh);
-    let rig = Embedding::new(&mesh, &lm, None)?;
+    let character = SynthCharacter::humanoid()?;
+    let mesh = &character.rest;
+    let lm = humanoid_landmarks(mesh);
     let mut clips = Vec::new();
     for (g, seconds) in [(Gait::Walk, 6.0), (Gait::Run, 4.0)] {
-        let clip = gait_clip(g, seconds, fps);
-        let map = surfmotion::rig::detect(&clip.point_names()).map;
-        clips.push(SynthClip::Poses {
-            name: g.name().into(),
-            source: format!("procedural {}", g.name()).into(),
-            poses: clip_poses(&clip, &map)?,
-        });
+        clips.push(SynthClip::from_clip(g.name(), &gait_clip(g, seconds, fps))?);
     }
     let opts = SynthOptions {
         fps,
@@ -59,15 +50,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         force: true,
         ..Default::default()
     };
-    write_synthetic_database(
-        &db,
-        &mesh,
-        &rig,
-        humanoid_landmarks_json().as_bytes(),
-        &clips,
-        &opts,
-        &mut |_, _| {},
-    )?;
+    write_synthetic_database(&db, &character, &clips, &opts, &mut |_, _| {})?;
     let t_db = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let ch = Character::load(&db, &super::db::Bars::new())?;

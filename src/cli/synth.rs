@@ -5,7 +5,7 @@ use anyhow::bail;
 use std::path::PathBuf;
 use std::time::Instant;
 use surfmotion::jobs::synth_db::SynthSequence;
-use surfmotion::jobs::{SynthClip, SynthOptions, write_synthetic_database};
+use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
@@ -68,6 +68,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         other => other.into(),
     })?;
     let embed_s = t0.elapsed().as_secs_f64();
+    let character = SynthCharacter {
+        rest,
+        rig,
+        landmarks_json: surfmotion::fsutil::read_bytes(&a.landmarks)?,
+    };
+    let (rest, rig) = (&character.rest, &character.rig);
     let opts = SynthOptions {
         fps: a.fps,
         seconds: a.seconds,
@@ -91,7 +97,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 positions,
                 rest.vertex_count(),
                 rest.triangles(),
-                Some(&rig),
+                Some(rig),
                 None,
                 row.plausibility.as_ref().map(|p| p.floor_m),
                 &a.preview,
@@ -99,9 +105,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
         bar.inc(1);
     };
-    let landmarks_json = surfmotion::fsutil::read_bytes(&a.landmarks)?;
-    let mut r =
-        write_synthetic_database(dir, &rest, &rig, &landmarks_json, &clips, &opts, &mut each)?;
+    let mut r = write_synthetic_database(dir, &character, &clips, &opts, &mut each)?;
     bar.finish_and_clear();
     r.embed_seconds = embed_s;
     if a.json {

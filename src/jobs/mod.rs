@@ -33,7 +33,9 @@ pub use batch::{BatchEvent, BatchOptions, BatchReport, batch_folder};
 pub use database::{build_database, load_database};
 pub use retarget::{RetargetJob, RetargetJobOptions, RetargetRun, RetargetSummary};
 pub use skeletons::{SkeletonFile, SkeletonsReport, export_skeletons};
-pub use synth_db::{SynthClip, SynthOptions, SynthReport, write_synthetic_database};
+pub use synth_db::{
+    SynthCharacter, SynthClip, SynthOptions, SynthReport, write_synthetic_database,
+};
 pub use transfer::{ScanTransferJob, ScanTransferOptions};
 
 use std::path::PathBuf;

@@ -37,6 +37,20 @@ pub enum SynthClip {
     },
 }
 
+impl SynthClip {
+    /// A clip in memory (metres, Y-up, at the database's rate; e.g.
+    /// [`crate::synth::gait_clip`]) as canonical poses, its rig convention
+    /// detected from the joint names.
+    pub fn from_clip(name: &str, clip: &crate::mocap::Clip) -> Result<SynthClip, JobError> {
+        let map = crate::rig::detect(&clip.point_names()).map;
+        Ok(SynthClip::Poses {
+            name: name.to_string(),
+            source: PathBuf::from(name),
+            poses: crate::rig::retarget::clip_poses(clip, &map)?,
+        })
+    }
+}
+
 /// Options of [`write_synthetic_database`].
 #[derive(Debug, Clone)]
 pub struct SynthOptions {
@@ -105,19 +119,47 @@ pub struct SynthReport {
     pub sequences: Vec<SynthSequence>,
 }
 
-/// Writes a synthetic database of `rest` (with its `rig`, embedded from
-/// `landmarks_json`, which is copied into the folder) driven by `clips`,
-/// into `dir`. `each` is called after every sequence with its report row
-/// and positions (frame-major), e.g. for a progress bar or a preview.
+/// The character of a synthetic database: its rest mesh (metres, Y-up),
+/// the rig embedded on it, and the landmarks file it was embedded from
+/// (copied into the database).
+pub struct SynthCharacter {
+    /// The rest mesh.
+    pub rest: Mesh,
+    /// Its rig.
+    pub rig: Embedding,
+    /// The landmarks JSON (bytes of `landmarks.json`).
+    pub landmarks_json: Vec<u8>,
+}
+
+impl SynthCharacter {
+    /// The procedural humanoid of `demo` ([`crate::synth::humanoid`]) with
+    /// its rig embedded from its landmarks.
+    pub fn humanoid() -> Result<SynthCharacter, JobError> {
+        use crate::synth::humanoid::{
+            DEMO_GRID, humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh,
+        };
+        let rest = humanoid_mesh(DEMO_GRID);
+        let rig = Embedding::new(&rest, &humanoid_landmarks(&rest), None)?;
+        Ok(SynthCharacter {
+            rest,
+            rig,
+            landmarks_json: humanoid_landmarks_json().into_bytes(),
+        })
+    }
+}
+
+/// Writes a synthetic database of `character` driven by `clips` into
+/// `dir`. `each` is called after every sequence with its report row and
+/// positions (frame-major), e.g. for a progress bar or a preview.
 pub fn write_synthetic_database(
     dir: &Path,
-    rest: &Mesh,
-    rig: &Embedding,
-    landmarks_json: &[u8],
+    character: &SynthCharacter,
     clips: &[SynthClip],
     opts: &SynthOptions,
     each: &mut dyn FnMut(&SynthSequence, &[[f64; 3]]),
 ) -> Result<SynthReport, JobError> {
+    let (rest, rig) = (&character.rest, &character.rig);
+    let landmarks_json = &character.landmarks_json[..];
     if dir.join(crate::db::MANIFEST).exists() && !opts.force {
         return Err(JobError::Input {
             path: dir.to_path_buf(),
