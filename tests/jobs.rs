@@ -113,6 +113,14 @@ fn character_is_in_metres_once_and_its_skeleton_kind_is_selectable() {
             assert!((got[k] - want[k]).abs() < 1e-12, "{got:?} vs {want:?}");
         }
     }
+    // Frame ids: (sequence, frame) and the flat id the graph uses.
+    let id = surfmotion::db::FrameId { seq: 1, frame: 4 };
+    assert_eq!(ch.flat_id(id), Some(64));
+    assert_eq!(ch.frame_id(64), id);
+    assert_eq!(
+        ch.flat_id(surfmotion::db::FrameId { seq: 1, frame: 45 }),
+        None
+    );
     let mut buf = vec![[0.0; 3]; ch.n];
     ch.frame_metres(f, &mut buf);
     assert_eq!(buf, ch.frame(f));

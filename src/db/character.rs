@@ -26,6 +26,17 @@ use crate::skeleton::Pose;
 use glam::DVec3;
 use std::path::Path;
 
+/// A database frame: a sequence (manifest order) and a frame in it. The
+/// graph and the searches use the flat `u32` id instead
+/// ([`Character::flat_id`]: frames of all sequences numbered in order).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+pub struct FrameId {
+    /// Sequence index.
+    pub seq: u32,
+    /// Frame within the sequence.
+    pub frame: u32,
+}
+
 /// Options of [`Character::load_with`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CharacterOptions {
@@ -200,6 +211,21 @@ impl Character {
     /// Number of frames.
     pub fn frame_count(&self) -> usize {
         self.poses.len()
+    }
+
+    /// The flat id of a database frame (`None` when out of range).
+    pub fn flat_id(&self, f: FrameId) -> Option<u32> {
+        let q = self.graph.sequences.get(f.seq as usize)?;
+        ((f.frame as usize) < q.len).then(|| self.graph.frame_id(f.seq as usize, f.frame as usize))
+    }
+
+    /// The sequence and frame of a flat id.
+    pub fn frame_id(&self, id: u32) -> FrameId {
+        let (s, t) = self.graph.frame_of(id);
+        FrameId {
+            seq: s as u32,
+            frame: t as u32,
+        }
     }
 
     /// Frame `id`'s positions (metres, Y-up, `n` of them).

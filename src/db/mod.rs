@@ -10,7 +10,7 @@ pub mod rigid;
 pub mod skeletons;
 
 pub use build::{BuildOptions, BuildProgress, BuildReport, Quiet, build};
-pub use character::{Character, CharacterOptions};
+pub use character::{Character, CharacterOptions, FrameId};
 pub use manifest::{
     DbError, DbInfo, DeformSpec, GraphSpec, MANIFEST, Manifest, RigSpec, SequenceEntry, info,
 };
