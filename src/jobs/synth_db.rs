@@ -33,7 +33,7 @@ pub enum SynthClip {
         /// What the poses came from (for the report).
         source: PathBuf,
         /// The poses and their neutral reference.
-        poses: ClipPoses,
+        poses: Box<ClipPoses>,
     },
 }
 
@@ -46,7 +46,7 @@ impl SynthClip {
         Ok(SynthClip::Poses {
             name: name.to_string(),
             source: PathBuf::from(name),
-            poses: crate::rig::retarget::clip_poses(clip, &map)?,
+            poses: Box::new(crate::rig::retarget::clip_poses(clip, &map)?),
         })
     }
 }
