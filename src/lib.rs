@@ -4,7 +4,8 @@
 //! (Huang et al. 2015) and transfers mocap onto static scanned meshes
 //! (de Aguiar et al. 2007). Modules follow the pipeline: [`mocap`] (clips),
 //! [`rig`] (canonical skeleton), [`mesh`] (meshes, sequences and their file
-//! formats), [`inspect`] (what a file holds).
+//! formats), [`inspect`] (what a file holds). [`jobs`] is every job the
+//! CLI runs as one library call (options in, typed report out).
 
 pub mod batch;
 pub mod budget;

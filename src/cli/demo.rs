@@ -2,12 +2,12 @@
 
 use std::path::PathBuf;
 use std::time::Instant;
+use surfmotion::db::Character;
 use surfmotion::eval::velocity_error;
 use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::save_sequence;
 use surfmotion::render::{Scene, View, render};
-use surfmotion::retarget::character::Character;
 use surfmotion::retarget::{RetargetOptions, synthesise};
 use surfmotion::rig::retarget::clip_poses;
 use surfmotion::synth::humanoid::humanoid_landmarks;
