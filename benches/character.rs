@@ -11,7 +11,7 @@ use surfmotion::db::skeletons::{SkeletonKind, poses};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::rig::retarget::clip_poses;
-use surfmotion::synth::database::{Dynamics, synthesise};
+use surfmotion::synth::database::{Dynamics, drive};
 use surfmotion::synth::{Gait, gait_clip};
 
 fn main() {
@@ -49,7 +49,7 @@ fn main() {
     assert_eq!(mocap.poses.len(), 1000);
     g.bench_function("synthesise_1000_frames", |b| {
         b.iter(|| {
-            synthesise(
+            drive(
                 &rest,
                 &rig,
                 black_box(&mocap.poses),

@@ -8,11 +8,11 @@ mod common;
 
 use criterion::Criterion;
 use std::hint::black_box;
+use surfmotion::db::Character;
 use surfmotion::deform::unflip::RepairOptions;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
 use surfmotion::mesh::laplacian::uniform_region_rows;
 use surfmotion::mesh::solver::FixedSolver;
-use surfmotion::retarget::character::Character;
 use surfmotion::retarget::query::load_mocap;
 use surfmotion::retarget::{RetargetOptions, synthesise};
 

@@ -2,9 +2,8 @@
 
 use crate::mesh::io::{MeshFormat, gltf::read_gltf};
 use crate::mesh::{Bounds, MeshError};
-use crate::mocap::{
-    LoadOptions, MocapError, MocapFormat, Units, UpAxis, load_clip, units::rest_extent,
-};
+use crate::mocap::{MocapError, MocapFormat, Units, UpAxis, units::rest_extent};
+use crate::rig::{LoadOptions, load_clip};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

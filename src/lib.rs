@@ -39,6 +39,8 @@
 //! - [`transfer`]: Confluent Motion onto scanned meshes (de Aguiar 2007).
 //!
 //! Jobs:
+//! - [`jobs`]: every job the CLI runs as one library call (options in,
+//!   typed report out): retarget, transfer, databases, skeletons, batch.
 //! - [`batch`]: batch conversion of whole mocap libraries, resumable and
 //!   sharded.
 //!
@@ -74,6 +76,7 @@ pub mod retarget;
 pub mod transfer;
 // Jobs.
 pub mod batch;
+pub mod jobs;
 // Tools.
 pub mod budget;
 pub mod eval;

@@ -10,13 +10,9 @@
 //! drives linear blend skinning of a rest mesh, and turns extracted
 //! skeletons into BVH clips any mocap viewer can play.
 
-use crate::mesh::frames::polar;
 use crate::mocap::{Channel, Clip, ClipError, Joint, JointId, PointConvention, Units, UpAxis};
 use crate::rig::Canonical;
-use glam::{DMat3, DQuat, DVec3};
-
-/// Canonical joint positions of one frame, [`Canonical::ALL`] order.
-pub type Pose = [DVec3; Canonical::COUNT];
+use glam::{DQuat, DVec3};
 
 /// MotionBuilder names of the canonical joints (understood by every mocap
 /// viewer and by the rig detector).
@@ -42,58 +38,7 @@ pub const BVH_NAMES: [&str; Canonical::COUNT] = [
     "RightToeBase",
 ];
 
-/// Children of each canonical joint.
-pub fn children() -> [Vec<Canonical>; Canonical::COUNT] {
-    let mut c: [Vec<Canonical>; Canonical::COUNT] = Default::default();
-    for j in Canonical::ALL {
-        if let Some(p) = j.parent() {
-            c[p.index()].push(j);
-        }
-    }
-    c
-}
-
-/// Global rotation of each joint taking `rest`'s bones onto `pose`'s.
-pub fn pose_rotations(rest: &Pose, pose: &Pose) -> [DQuat; Canonical::COUNT] {
-    // Called per frame (and per part) by synthesis: the hierarchy is built once.
-    static KIDS: std::sync::OnceLock<[Vec<Canonical>; Canonical::COUNT]> =
-        std::sync::OnceLock::new();
-    let kids = KIDS.get_or_init(children);
-    let mut g = [DQuat::IDENTITY; Canonical::COUNT];
-    for j in Canonical::ALL {
-        let pr = j.parent().map_or(DQuat::IDENTITY, |p| g[p.index()]);
-        let ks = &kids[j.index()];
-        let bone = |c: &Canonical| {
-            (
-                rest[c.index()] - rest[j.index()],
-                pose[c.index()] - pose[j.index()],
-            )
-        };
-        g[j.index()] = match ks.len() {
-            0 => pr,
-            1 => {
-                let (o, d) = bone(&ks[0]);
-                let from = (pr * o).normalize_or_zero();
-                let to = d.normalize_or_zero();
-                if from == DVec3::ZERO || to == DVec3::ZERO {
-                    pr
-                } else {
-                    (DQuat::from_rotation_arc(from, to) * pr).normalize()
-                }
-            }
-            _ => {
-                let mut h = DMat3::ZERO;
-                for c in ks {
-                    let (o, d) = bone(c);
-                    let (o, d) = (o.normalize_or_zero(), d.normalize_or_zero());
-                    h += DMat3::from_cols(d * o.x, d * o.y, d * o.z);
-                }
-                polar(h).0
-            }
-        };
-    }
-    g
-}
+pub use crate::rig::pose::{Pose, children, pose_rotations};
 
 /// A BVH-ready clip of poses on a skeleton whose bone offsets are `rest`'s:
 /// the root carries the pelvis position, every joint its local rotation.

@@ -213,7 +213,7 @@ fn convert_amc_to_bvh_resampled_and_meshes_between_formats() {
         "30",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let c = surfmotion::mocap::load_clip(&out, &Default::default()).unwrap();
+    let c = surfmotion::rig::load_clip(&out, &Default::default()).unwrap();
     // 343 frames at 120 fps span 2.85 s: 86 frames at 30 fps.
     assert_eq!(c.frame_count(), 86);
     assert!((c.fps() - 30.0).abs() < 1e-9);

@@ -3,8 +3,8 @@
 mod common;
 
 use glam::DVec3;
+use surfmotion::db::Character;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
-use surfmotion::retarget::character::Character;
 use surfmotion::retarget::query::{MocapPoses, load_mocap};
 use surfmotion::retarget::{Output, RetargetOptions, synthesise};
 use surfmotion::skeleton::Pose;

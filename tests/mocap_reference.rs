@@ -4,7 +4,8 @@
 mod common;
 
 use serde_json::Value;
-use surfmotion::mocap::{LoadOptions, bvh, load_clip};
+use surfmotion::mocap::bvh;
+use surfmotion::rig::{LoadOptions, load_clip};
 
 fn reference(name: &str) -> Option<(std::path::PathBuf, Value)> {
     let d = common::data_dir()?;

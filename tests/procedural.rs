@@ -1,7 +1,7 @@
 //! The clips in mocap/ are what the project's own code generates.
 
 use std::path::Path;
-use surfmotion::mocap::{LoadOptions, load_clip};
+use surfmotion::rig::{LoadOptions, load_clip};
 use surfmotion::synth::{Gait, gait_clip};
 
 #[test]

@@ -9,17 +9,17 @@
 
 use std::path::Path;
 use std::sync::OnceLock;
+use surfmotion::db::Character;
 use surfmotion::db::{Manifest, Quiet, RigSpec, SequenceEntry};
 use surfmotion::deform::DeformMode;
 use surfmotion::eval::velocity_error;
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::save_sequence;
-use surfmotion::retarget::character::Character;
 use surfmotion::retarget::{Output, RetargetOptions, synthesise};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::retarget::clip_poses;
 use surfmotion::skeleton::Pose;
-use surfmotion::synth::database::{Dynamics, synthesise as synth_db};
+use surfmotion::synth::database::{Dynamics, drive as synth_db};
 use surfmotion::synth::humanoid::{humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh};
 use surfmotion::synth::{Gait, gait_clip};
 

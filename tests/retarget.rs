@@ -5,8 +5,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use surfmotion::db::Character;
 use surfmotion::eval::velocity_error;
-use surfmotion::retarget::character::Character;
 use surfmotion::retarget::query::load_mocap;
 use surfmotion::retarget::timeline::plays_on;
 use surfmotion::retarget::{RetargetOptions, synthesise};

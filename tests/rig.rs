@@ -244,8 +244,7 @@ fn db_skeleton_writes_json_and_a_bvh_that_reads_back() {
         // The BVH reads back with the rig detected and 175 frames; its FK
         // follows the extracted bone directions (lengths are the rest's),
         // and for the rigid skeleton it gives every joint back.
-        let clip =
-            surfmotion::mocap::load_clip(&out.join("dance.bvh"), &Default::default()).unwrap();
+        let clip = surfmotion::rig::load_clip(&out.join("dance.bvh"), &Default::default()).unwrap();
         assert_eq!(clip.frame_count(), 175);
         let names: Vec<String> = clip.joints.iter().map(|j| j.name.clone()).collect();
         let det = surfmotion::rig::detect(&names);

@@ -9,7 +9,8 @@ mod common;
 use glam::{DQuat, DVec3};
 use proptest::prelude::*;
 use surfmotion::mocap::bvh::{BvhOptions, format_bvh, parse_bvh};
-use surfmotion::mocap::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis, load_clip};
+use surfmotion::mocap::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
+use surfmotion::rig::load_clip;
 use surfmotion::rig::{Canonical, RigError, RigMap, Source, detect_clip};
 use surfmotion::skeleton::Pose;
 

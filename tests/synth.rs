@@ -5,14 +5,14 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 use surfmotion::mesh::io::obj::read_obj;
-use surfmotion::mocap::load_clip;
 use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::rig::embed::parts::Part;
+use surfmotion::rig::load_clip;
 use surfmotion::rig::retarget::clip_poses;
 use surfmotion::skeleton::bone_lengths;
-use surfmotion::synth::database::{Dynamics, synthesise};
+use surfmotion::synth::database::{Dynamics, drive};
 
 fn samba_rig(d: &Path) -> (surfmotion::mesh::Mesh, Embedding) {
     let rest = read_obj(&d.join("4d/samba/samba.obj")).unwrap();
@@ -39,7 +39,7 @@ fn walk_and_run_have_the_right_frames_rigid_bones_and_measurable_dynamics() {
         let names = clip.point_names();
         let map = surfmotion::rig::detect(&names).map;
         let poses = clip_poses(&clip, &map).unwrap();
-        let out = synthesise(
+        let out = drive(
             &rest,
             &rig,
             &poses.poses,

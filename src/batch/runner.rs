@@ -88,6 +88,17 @@ pub fn complete(out: &Path, format: Format) -> bool {
     }
 }
 
+/// One kind of conversion of a clip (a retarget through a database, a
+/// transfer onto a scan: [`crate::jobs`]); a new batch job is one impl.
+pub trait Converter: Sync {
+    /// What the run does, for the report (`retarget --db DIR`).
+    fn describe(&self) -> String;
+    /// Converts `clip` (a path to the clip) into `output`, which it must
+    /// write (for OBJ folders, the folder it is given). Errors are the
+    /// message the report keeps.
+    fn convert(&self, clip: &Path, output: &Path) -> Result<Converted, String>;
+}
+
 /// Converts the `clips` of a plan (relative to `src`) into their outputs.
 /// `convert(clip, output)` does one clip and must write `output` (for OBJ
 /// folders, the folder it is given); `done` is called as each clip ends,

@@ -2,10 +2,10 @@
 
 use anyhow::{Context, bail};
 use std::path::{Path, PathBuf};
-use surfmotion::db::skeletons::{SkeletonKind, bone_length_spread, extract};
+use surfmotion::db::skeletons::SkeletonKind;
 use surfmotion::db::{MANIFEST, Manifest, RigSpec, SequenceEntry, info};
-use surfmotion::rig::Canonical;
-use surfmotion::skeleton::{BVH_NAMES, pose_clip};
+use surfmotion::jobs::export_skeletons;
+use surfmotion::jobs::skeletons::SkeletonsOptions;
 
 /// Database subcommands.
 #[derive(clap::Subcommand)]
@@ -87,7 +87,7 @@ fn build(a: BuildArgs) -> anyhow::Result<()> {
         measure: a.measure.map(Into::into),
         force: a.force,
     };
-    let (_, graph, r) = surfmotion::db::build(&a.dir, &opts, &Bars::new())?;
+    let (graph, r) = surfmotion::jobs::build_database(&a.dir, &opts, &Bars::new())?;
     if a.json {
         return super::emit(&(serde_json::to_string_pretty(&r)? + "\n"));
     }
@@ -301,79 +301,20 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
 }
 
 fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
-    let t = std::time::Instant::now();
-    let kind = SkeletonKind::from(a.kind);
-    let (rig, seqs, rigid) = extract(&a.dir, kind)?;
-    let secs = t.elapsed().as_secs_f64();
-    let out = a.output.clone().unwrap_or_else(|| a.dir.join("skeletons"));
-    rig.save(&out.join("rig.json"))?;
-    // The rigid skeleton's BVH plays its fits back exactly; the measured
-    // joints' BVH has the rest frame's bones turned to their directions.
-    let rest_pose = rig.joints.map(glam::DVec3::from_array);
-    let mut summary = Vec::new();
-    for s in &seqs {
-        let json = serde_json::json!({
-            "sequence": s.name,
-            "fps": s.fps,
-            "kind": kind,
-            "joints": Canonical::ALL.iter().map(|c| c.name()).collect::<Vec<_>>(),
-            "frames": s.poses.iter().map(|p| p.iter().map(|q| q.to_array()).collect::<Vec<_>>()).collect::<Vec<_>>(),
-        });
-        let jp = out.join(format!("{}.skeleton.json", s.name));
-        surfmotion::fsutil::write_bytes_atomic(&jp, serde_json::to_string(&json)?.as_bytes())?;
-        let clip = match &rigid {
-            Some(r) => r.clip(&s.fits, s.fps)?,
-            None => pose_clip(&rest_pose, &s.poses, s.fps)?,
-        };
-        let bp = out.join(format!("{}.bvh", s.name));
-        surfmotion::mocap::bvh::write_bvh(&clip, &bp)?;
-        let spread = bone_length_spread(&s.poses);
-        let worst = (1..Canonical::COUNT)
-            .max_by(|&x, &y| spread[x].total_cmp(&spread[y]))
-            .unwrap_or(1);
-        let by_bone = |v: [f64; Canonical::COUNT]| {
-            Canonical::ALL
-                .iter()
-                .skip(1)
-                .map(|c| (BVH_NAMES[c.index()], v[c.index()]))
-                .collect::<std::collections::BTreeMap<_, _>>()
-        };
-        let mut row = serde_json::json!({
-            "sequence": s.name,
-            "frames": s.poses.len(),
-            "json": jp,
-            "bvh": bp,
-            "bone_length_max_deviation": by_bone(spread),
-            "worst_bone": BVH_NAMES[worst],
-            "worst_deviation": spread[worst],
-        });
-        if let Some(r) = &rigid {
-            let mut rms: Vec<f64> = s.fits.iter().map(|x| x.rms).collect();
-            rms.sort_by(f64::total_cmp);
-            let max = s.fits.iter().map(|x| x.max).fold(0.0, f64::max);
-            let measured = bone_length_spread(&s.measured);
-            let mw = (1..Canonical::COUNT)
-                .max_by(|&x, &y| measured[x].total_cmp(&measured[y]))
-                .unwrap_or(1);
-            row["bone_lengths"] = serde_json::json!(by_bone(r.lengths()));
-            row["regressor_bone_length_max_deviation"] = serde_json::json!(by_bone(measured));
-            row["regressor_worst_bone"] = serde_json::json!(BVH_NAMES[mw]);
-            row["regressor_worst_deviation"] = serde_json::json!(measured[mw]);
-            row["fit_rms_median"] =
-                serde_json::json!(rms.get(rms.len() / 2).copied().unwrap_or(0.0));
-            row["fit_rms_max"] = serde_json::json!(rms.last().copied().unwrap_or(0.0));
-            row["fit_joint_max"] = serde_json::json!(max);
-        }
-        summary.push(row);
-    }
+    let opts = SkeletonsOptions {
+        kind: a.kind.into(),
+        output: a.output.clone(),
+    };
+    let r = export_skeletons(&a.dir, &opts)?;
     if a.json {
         // Lengths and fit residuals are in the database's units.
-        let units = Manifest::load(&a.dir).map(|m| m.units).unwrap_or_default();
-        let v = serde_json::json!({"seconds": secs, "kind": kind, "units": units, "sequences": summary, "notes": rig.notes});
-        crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
+        crate::outln!(
+            "{}",
+            serde_json::to_string_pretty(&serde_json::to_value(&r)?)?
+        )?;
         return Ok(());
     }
-    let frames: usize = seqs.iter().map(|s| s.poses.len()).sum();
+    let frames: usize = r.sequences.iter().map(|s| s.frames).sum();
     // Millimetres per model unit, from the manifest's units.
     let mm = Manifest::load(&a.dir)
         .ok()
@@ -382,32 +323,32 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     crate::outln!(
         "embedded the rig and extracted {} ({}) in {:.3} s → {}",
         super::count(frames, "skeleton"),
-        kind,
-        secs,
-        out.display()
+        SkeletonKind::from(a.kind),
+        r.seconds,
+        r.output.display()
     )?;
-    for s in &summary {
+    for s in &r.sequences {
         crate::outln!(
             "  {}: {} frames; bone lengths within {:.1}% of their median (worst: {})",
-            s["sequence"].as_str().unwrap_or(""),
-            s["frames"],
-            100.0 * s["worst_deviation"].as_f64().unwrap_or(0.0),
-            s["worst_bone"].as_str().unwrap_or("")
+            s.sequence,
+            s.frames,
+            100.0 * s.worst_deviation,
+            s.worst_bone
         )?;
-        if rigid.is_some() {
+        if let Some(f) = &s.rigid {
             crate::outln!(
                 "    rigid fit to the regressor joints (whose bones vary by up to {:.1}%, {}): \
                  joints off by {:.1} mm RMS in the median frame, {:.1} mm RMS in the worst, \
                  {:.1} mm at most",
-                100.0 * s["regressor_worst_deviation"].as_f64().unwrap_or(0.0),
-                s["regressor_worst_bone"].as_str().unwrap_or(""),
-                mm * s["fit_rms_median"].as_f64().unwrap_or(0.0),
-                mm * s["fit_rms_max"].as_f64().unwrap_or(0.0),
-                mm * s["fit_joint_max"].as_f64().unwrap_or(0.0),
+                100.0 * f.regressor_worst_deviation,
+                f.regressor_worst_bone,
+                mm * f.fit_rms_median,
+                mm * f.fit_rms_max,
+                mm * f.fit_joint_max,
             )?;
         }
     }
-    for n in &rig.notes {
+    for n in &r.notes {
         crate::outln!("  note: {n}")?;
     }
     Ok(())

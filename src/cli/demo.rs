@@ -1,21 +1,16 @@
 //! `surfmotion demo`: the main job end to end on an embedded character.
 
-use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
-use surfmotion::db::{Manifest, RigSpec, SequenceEntry};
+use surfmotion::db::Character;
 use surfmotion::eval::velocity_error;
+use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::save_sequence;
 use surfmotion::render::{Scene, View, render};
-use surfmotion::retarget::character::Character;
 use surfmotion::retarget::{RetargetOptions, synthesise};
-use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::retarget::clip_poses;
-use surfmotion::synth::database::{Dynamics, synthesise as synth_db};
-use surfmotion::synth::humanoid::{
-    DEMO_GRID, humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh,
-};
+use surfmotion::synth::humanoid::humanoid_landmarks;
 use surfmotion::synth::{Gait, gait_clip};
 
 /// Arguments of `demo`.
@@ -38,59 +33,24 @@ pub struct Args {
 pub fn run(a: Args) -> anyhow::Result<()> {
     let dir = &a.output;
     let db = dir.join("database");
-    std::fs::create_dir_all(&db).with_context(|| db.display().to_string())?;
     let t0 = Instant::now();
     let fps = 30.0;
-    let mesh = humanoid_mesh(DEMO_GRID);
-    let lm = humanoid_landmarks(&mesh);
-    let rig = Embedding::new(&mesh, &lm, None)?;
-    save_sequence(
-        &MeshSequence::single(mesh.clone()),
-        &db.join("topology.obj"),
-        None,
-    )?;
-    surfmotion::fsutil::write_bytes_atomic(
-        &db.join("landmarks.json"),
-        humanoid_landmarks_json().as_bytes(),
-    )?;
-    let mut sequences = Vec::new();
+    let character = SynthCharacter::humanoid()?;
+    let mesh = &character.rest;
+    let lm = humanoid_landmarks(mesh);
+    let mut clips = Vec::new();
     for (g, seconds) in [(Gait::Walk, 6.0), (Gait::Run, 4.0)] {
-        let clip = gait_clip(g, seconds, fps);
-        let map = surfmotion::rig::detect(&clip.point_names()).map;
-        let poses = clip_poses(&clip, &map)?;
-        let out = synth_db(
-            &mesh,
-            &rig,
-            &poses.poses,
-            &poses.reference,
-            fps,
-            Dynamics::default(),
-        );
-        let seq = MeshSequence::new(mesh.clone(), out.positions, Some(fps))?;
-        let file = format!("{}.pc2", g.name());
-        save_sequence(&seq, &db.join(&file), Some(fps))?;
-        sequences.push(SequenceEntry {
-            name: g.name().into(),
-            path: file.into(),
-            fps: None,
-        });
+        clips.push(SynthClip::from_clip(g.name(), &gait_clip(g, seconds, fps))?);
     }
-    Manifest {
-        name: "demo".into(),
-        topology: "topology.obj".into(),
+    let opts = SynthOptions {
         fps,
-        units: "m".into(),
-        up: "y".into(),
-        colors: None,
-        sequences,
-        rig: RigSpec {
-            landmarks: Some("landmarks.json".into()),
-            ..Default::default()
-        },
-        graph: Default::default(),
-        deform: Default::default(),
-    }
-    .save(&db)?;
+        name: Some("demo".into()),
+        truth: false,
+        plausibility: false,
+        force: true,
+        ..Default::default()
+    };
+    write_synthetic_database(&db, &character, &clips, &opts, &mut |_, _| {})?;
     let t_db = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let ch = Character::load(&db, &super::db::Bars::new())?;

@@ -4,7 +4,8 @@ use super::ClipOpts;
 use anyhow::{Context, bail};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
-use surfmotion::mocap::{Clip, UpAxis, load_clip};
+use surfmotion::mocap::{Clip, UpAxis};
+use surfmotion::rig::load_clip;
 
 /// Mocap subcommands.
 #[derive(clap::Subcommand)]

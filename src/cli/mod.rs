@@ -124,17 +124,29 @@ pub fn main() -> anyhow::Result<()> {
     };
     // Warnings (a cache rebuilt, a graph edit that matched nothing, an
     // implausible result) show by default; SURFMOTION_LOG=debug etc. for more.
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::builder()
-                .with_default_directive(tracing::level_filters::LevelFilter::WARN.into())
-                .with_env_var("SURFMOTION_LOG")
-                .from_env_lossy(),
+    // Notices of the jobs layer (target `surfmotion::notice`) are plain
+    // lines on stderr, as the verbs printed them before they moved into
+    // the library.
+    use tracing_subscriber::prelude::*;
+    let is_notice = |m: &tracing::Metadata<'_>| m.target() == surfmotion::jobs::batch::NOTICE;
+    tracing_subscriber::registry()
+        .with(
+            tracing_subscriber::fmt::layer()
+                .without_time()
+                .with_target(false)
+                .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+                .with_writer(std::io::stderr)
+                .with_filter(
+                    tracing_subscriber::EnvFilter::builder()
+                        .with_default_directive(tracing::level_filters::LevelFilter::WARN.into())
+                        .with_env_var("SURFMOTION_LOG")
+                        .from_env_lossy(),
+                )
+                .with_filter(tracing_subscriber::filter::filter_fn(move |m| {
+                    !is_notice(m)
+                })),
         )
-        .without_time()
-        .with_target(false)
-        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
-        .with_writer(std::io::stderr)
+        .with(PlainNotices.with_filter(tracing_subscriber::filter::filter_fn(is_notice)))
         .init();
     match cli.command {
         Command::Demo(a) => demo::run(a),
@@ -199,6 +211,30 @@ pub fn load_mesh_groups(spec: &str, groups: &[String]) -> anyhow::Result<surfmot
     })?;
     m.set_positions(mesh.positions())?;
     Ok(m)
+}
+
+/// Prints a notice event's message as one plain line on stderr.
+struct PlainNotices;
+
+impl<S: tracing::Subscriber> tracing_subscriber::Layer<S> for PlainNotices {
+    fn on_event(&self, e: &tracing::Event<'_>, _: tracing_subscriber::layer::Context<'_, S>) {
+        struct Message(String);
+        impl tracing::field::Visit for Message {
+            fn record_debug(&mut self, f: &tracing::field::Field, v: &dyn std::fmt::Debug) {
+                if f.name() == "message" {
+                    self.0 = format!("{v:?}");
+                }
+            }
+            fn record_str(&mut self, f: &tracing::field::Field, v: &str) {
+                if f.name() == "message" {
+                    self.0 = v.to_string();
+                }
+            }
+        }
+        let mut m = Message(String::new());
+        e.record(&mut m);
+        eprintln!("{}", m.0);
+    }
 }
 
 /// Stdout was closed by the reader (e.g. `| head`): not an error.
@@ -355,7 +391,7 @@ pub struct ClipOpts {
 
 impl ClipOpts {
     /// The library's load options.
-    pub fn load_options(&self) -> anyhow::Result<surfmotion::mocap::LoadOptions> {
+    pub fn load_options(&self) -> anyhow::Result<surfmotion::rig::LoadOptions> {
         let units = match &self.assume_units {
             None => None,
             Some(u) => Some(surfmotion::mocap::units::parse_unit(u).ok_or_else(|| {
@@ -374,7 +410,7 @@ impl ClipOpts {
             Some(p) => Some(surfmotion::rig::RigMap::load(p)?),
             None => None,
         };
-        Ok(surfmotion::mocap::LoadOptions {
+        Ok(surfmotion::rig::LoadOptions {
             fps: self.input_fps,
             asf: self.asf.clone(),
             units,

@@ -2,12 +2,13 @@
 
 use anyhow::Context;
 use std::path::PathBuf;
-use surfmotion::eval::{Checker, Plausibility, PlausibilityOptions, velocity_error};
-use surfmotion::mesh::MeshSequence;
-use surfmotion::mesh::io::{LoadOptions, SaveOptions, load_sequence, save_sequence_with};
-use surfmotion::retarget::character::Character;
+use surfmotion::db::Character;
+use surfmotion::eval::velocity_error;
+use surfmotion::jobs::retarget::{per_frame_seconds, plausibility};
+use surfmotion::jobs::{RetargetJob, RetargetJobOptions, RetargetSummary};
+use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::retarget::RetargetOptions;
 use surfmotion::retarget::query::{load_mocap, to_character};
-use surfmotion::retarget::{RetargetOptions, synthesise};
 
 /// Arguments of `retarget`.
 #[derive(clap::Args)]
@@ -96,49 +97,26 @@ impl JobOpts {
     }
 }
 
-/// The plausibility of `positions` (metres, Y-up, frame-major) made for
-/// `ch`, against the database's own frames; `None` (with a warning logged)
-/// when the rig cannot support the checks.
-fn plausibility(
-    ch: &Character,
-    positions: &[[f64; 3]],
-    turned_over: Option<surfmotion::deform::TurnedOver>,
-) -> Option<(Plausibility, f64)> {
-    let checked = Checker::for_character(ch, PlausibilityOptions::default())
-        .and_then(|c| Ok((c.measure(positions, ch.n, turned_over)?, c.floor)));
-    match checked {
-        Ok(p) => Some(p),
-        Err(e) => {
-            tracing::warn!("plausibility not measured: {e}");
-            None
-        }
-    }
-}
-
-/// Runs `retarget`.
+/// Runs `retarget`: one [`RetargetJob`] and one clip.
 pub fn run(a: Args) -> anyhow::Result<()> {
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
-    let ch = Character::load(&a.db, &super::db::Bars::new())?;
+    let opts = RetargetJobOptions {
+        retarget: a.job.options(),
+        load: a.clip.load_options()?,
+        glb: a.glb.options(),
+        ..Default::default()
+    };
+    let job = RetargetJob::load(&a.db, opts, &super::db::Bars::new())?;
+    let ch = &job.character;
     let fps = ch.manifest.fps;
-    let mocap = load_mocap(&a.mocap, &a.clip.load_options()?, fps)?;
-    anyhow::ensure!(
-        !mocap.poses.is_empty(),
-        "{}: the clip has no frames",
-        a.mocap.display()
-    );
-    let opts = a.job.options();
-    let out = synthesise(&ch, &mocap.poses, &mocap.reference, fps, &opts)?;
-    let deformed = matches!(
-        opts.deform,
-        surfmotion::deform::DeformMode::Part | surfmotion::deform::DeformMode::Global
-    );
-    let plaus = plausibility(
-        &ch,
+    let run = job.run(&a.mocap)?;
+    let (out, convention) = (&run.output, &run.mocap.convention);
+    let plaus = job.plausibility(
         &out.positions,
-        deformed.then_some(out.report.turned_over),
+        run.deformed().then_some(out.report.turned_over),
     );
     if let Some(path) = &a.preview.preview {
-        let facing = surfmotion::similarity::y_up(ch.rig.facing, ch.z_up);
+        let facing = surfmotion::mocap::units::y_up(ch.rig.facing, ch.z_up);
         super::render::write_preview(
             path,
             &out.positions,
@@ -156,42 +134,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         )?;
     }
     let plaus = plaus.map(|p| p.0);
-    let seq = MeshSequence::new(ch.topology_metres(), out.positions, Some(fps))?;
-    let written = save_sequence_with(
-        &seq,
-        &a.output,
-        &SaveOptions {
-            fps: Some(fps),
-            glb: a.glb.options(),
-        },
-    )?;
-    let r = &out.report;
+    let r = &run.output.report;
+    let written = job.write(run.output.positions, &a.output)?;
     if let Some(p) = &a.report {
         let mut v = serde_json::to_value(r)?;
         v["plausibility"] = serde_json::to_value(&plaus)?;
         surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
     }
-    let per_frame =
-        (r.timings.retrieval + r.timings.timeline + r.timings.meshes + r.timings.deform)
-            / r.frames.max(1) as f64;
+    let per_frame = per_frame_seconds(r);
     if a.json {
-        let v = serde_json::json!({
-            "output": written,
-            "frames": r.frames,
-            "fps": fps,
-            "t_skel": r.retrieval.t_skel,
-            "trellis_nodes": r.retrieval.nodes,
-            "transitions": r.jumps.iter().filter(|j| j.transition).count(),
-            "cuts": r.retrieval.cuts.len(),
-            "widened": r.retrieval.widened.len(),
-            "node_cost": r.retrieval.node_cost,
-            "edge_cost": r.retrieval.edge_cost,
-            "timings": r.timings,
-            "ms_per_frame": 1e3 * per_frame,
-            "deformation": r.deform,
-            "turned_over": r.turned_over,
-            "plausibility": plaus,
-        });
+        let v = serde_json::to_value(RetargetSummary::new(written, r, plaus))?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
     let mut s = format!(
@@ -204,7 +156,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             .join(", "),
         super::count(r.frames, "frame"),
         fps,
-        mocap.convention
+        convention
     );
     s += &format!(
         "retrieval: T_skel {:.3} m (summed over the 19 joints), {}, {}, {}, {}\n",

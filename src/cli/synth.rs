@@ -1,16 +1,15 @@
 //! `surfmotion synth`: a multi-motion 4D database from a rest mesh, its
 //! landmarks and mocap clips (skinning plus secondary dynamics).
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use std::path::PathBuf;
 use std::time::Instant;
-use surfmotion::db::{Manifest, RigSpec, SequenceEntry};
-use surfmotion::mesh::MeshSequence;
-use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
-use surfmotion::rig::Canonical;
+use surfmotion::jobs::synth_db::SynthSequence;
+use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
+use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::synth::database::{Dynamics, synthesise};
+use surfmotion::synth::database::Dynamics;
 
 /// Arguments of `synth`.
 #[derive(clap::Args)]
@@ -48,7 +47,8 @@ pub struct Args {
     pub preview: super::render::PreviewOpts,
 }
 
-/// Runs `synth`.
+/// Runs `synth`: the rig embedded here (errors name the mesh or the
+/// landmarks file), then [`write_synthetic_database`].
 pub fn run(a: Args) -> anyhow::Result<()> {
     let dir = &a.output;
     if dir.join(surfmotion::db::MANIFEST).exists() && !a.force {
@@ -57,7 +57,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             dir.display()
         );
     }
-    std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
     let t0 = Instant::now();
     let rest = load_sequence(&a.mesh, &LoadOptions::default())?.frame_mesh(0);
     let lm = Landmarks::load(&a.landmarks, rest.vertex_count())?;
@@ -69,153 +68,68 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         other => other.into(),
     })?;
     let embed_s = t0.elapsed().as_secs_f64();
-    save_sequence(
-        &MeshSequence::single(rest.clone()),
-        &dir.join("topology.obj"),
-        None,
-    )?;
-    surfmotion::fsutil::write_bytes_atomic(
-        &dir.join("landmarks.json"),
-        &surfmotion::fsutil::read_bytes(&a.landmarks)?,
-    )?;
-    let opts = a.clip.load_options()?;
-    let dynamics = Dynamics {
-        amount: a.dynamics.max(0.0),
-        ..Dynamics::default()
+    let character = SynthCharacter {
+        rest,
+        rig,
+        landmarks_json: surfmotion::fsutil::read_bytes(&a.landmarks)?,
     };
-    let mut sequences = Vec::new();
-    let mut report = Vec::new();
-    let mut names = std::collections::BTreeSet::new();
+    let (rest, rig) = (&character.rest, &character.rig);
+    let opts = SynthOptions {
+        fps: a.fps,
+        seconds: a.seconds,
+        dynamics: Dynamics {
+            amount: a.dynamics.max(0.0),
+            ..Dynamics::default()
+        },
+        force: true,
+        load: a.clip.load_options()?,
+        ..Default::default()
+    };
+    let clips: Vec<SynthClip> = a.mocap.iter().cloned().map(SynthClip::File).collect();
     let bar = super::progress(a.mocap.len() as u64, "clips");
-    let mut frames_total = 0usize;
     let (mut plaus_text, mut sheets) = (Vec::<String>::new(), Vec::new());
-    let t1 = Instant::now();
-    for path in &a.mocap {
-        let clip = surfmotion::retarget::query::load_mocap(path, &opts, a.fps)?;
-        let mut poses = clip.poses;
-        if let Some(s) = a.seconds {
-            poses.truncate(((s * a.fps).round() as usize).max(1));
-        }
-        // Skinned frames, their dynamics copy and the sequence: refuse a
-        // clip that cannot fit before allocating (issue 18, item 12).
-        surfmotion::budget::check_frames(
-            &format!("{}", path.display()),
-            poses.len(),
-            rest.vertex_count(),
-            3,
-        )?;
-        let out = synthesise(&rest, &rig, &poses, &clip.reference, a.fps, dynamics);
-        // A unique sequence name from the clip's file stem.
-        let stem = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "clip".into());
-        let mut name = stem.clone();
-        let mut k = 2;
-        while !names.insert(name.clone()) {
-            name = format!("{stem}_{k}");
-            k += 1;
-        }
-        let frames = out.poses.len();
-        frames_total += frames;
-        let seq = MeshSequence::new(rest.clone(), out.positions, Some(a.fps))?;
-        let file = format!("{name}.pc2");
-        save_sequence(&seq, &dir.join(&file), Some(a.fps))?;
-        // Plausibility of the sequence against the rest frame (no capture
-        // to compare with: absolute limits), and its contact sheet.
-        let plaus = surfmotion::eval::Checker::new(
-            rest.positions(),
-            &rig,
-            glam::DVec3::Y,
-            None,
-            a.fps,
-            Default::default(),
-        )
-        .and_then(|c| c.measure(seq.all_positions(), rest.vertex_count(), None))
-        .map_err(|e| tracing::warn!("{name}: plausibility not measured: {e}"))
-        .ok();
-        if let Some(p) = &plaus {
-            plaus_text.push(format!("{name}: {}", p.text()));
+    let mut each = |row: &SynthSequence, positions: &[[f64; 3]]| {
+        if let Some(p) = &row.plausibility {
+            plaus_text.push(format!("{}: {}", row.sequence, p.text()));
         }
         if a.preview.preview.is_some() {
             sheets.extend(super::render::preview_image(
-                seq.all_positions(),
+                positions,
                 rest.vertex_count(),
                 rest.triangles(),
-                Some(&rig),
+                Some(rig),
                 None,
-                plaus.as_ref().map(|p| p.floor_m),
+                row.plausibility.as_ref().map(|p| p.floor_m),
                 &a.preview,
             ));
         }
-        let truth = serde_json::json!({
-            "sequence": name,
-            "fps": a.fps,
-            "source": path,
-            "joints": Canonical::ALL.iter().map(|c| c.name()).collect::<Vec<_>>(),
-            "frames": out.poses.iter().map(|p| p.iter().map(|q| q.to_array()).collect::<Vec<_>>()).collect::<Vec<_>>(),
-        });
-        surfmotion::fsutil::write_bytes_atomic(
-            &dir.join("truth").join(format!("{name}.skeleton.json")),
-            serde_json::to_string(&truth)?.as_bytes(),
-        )?;
-        sequences.push(SequenceEntry {
-            name: name.clone(),
-            path: PathBuf::from(file),
-            fps: None,
-        });
-        report.push(serde_json::json!({"sequence": name, "source": path, "frames": frames, "plausibility": plaus}));
         bar.inc(1);
-    }
-    bar.finish_and_clear();
-    let synth_s = t1.elapsed().as_secs_f64();
-    let m = Manifest {
-        name: dir
-            .file_name()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "synthetic".into()),
-        topology: PathBuf::from("topology.obj"),
-        fps: a.fps,
-        units: "m".into(),
-        up: "y".into(),
-        colors: None,
-        sequences,
-        rig: RigSpec {
-            landmarks: Some(PathBuf::from("landmarks.json")),
-            parts: None,
-            gltf_skin: None,
-            rig_map: None,
-        },
-        graph: Default::default(),
-        deform: Default::default(),
     };
-    m.save(dir)?;
+    let mut r = write_synthetic_database(dir, &character, &clips, &opts, &mut each)?;
+    bar.finish_and_clear();
+    r.embed_seconds = embed_s;
     if a.json {
-        let v = serde_json::json!({
-            "output": dir,
-            "embed_seconds": embed_s,
-            "synth_seconds": synth_s,
-            "frames": frames_total,
-            "sequences": report,
-        });
-        crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
+        crate::outln!(
+            "{}",
+            serde_json::to_string_pretty(&serde_json::to_value(&r)?)?
+        )?;
     } else {
         crate::outln!(
             "wrote {} ({} sequences, {} frames): rig embedded in {:.2} s, {} frames synthesised in {:.2} s ({:.0} frames/s)",
             dir.display(),
-            report.len(),
-            frames_total,
+            r.sequences.len(),
+            r.frames,
             embed_s,
-            frames_total,
-            synth_s,
-            frames_total as f64 / synth_s.max(1e-9)
+            r.frames,
+            r.synth_seconds,
+            r.frames as f64 / r.synth_seconds.max(1e-9)
         )?;
-        for r in &report {
+        for s in &r.sequences {
             crate::outln!(
                 "  {}: {} frames from {}",
-                r["sequence"].as_str().unwrap_or(""),
-                r["frames"],
-                r["source"].as_str().unwrap_or("")
+                s.sequence,
+                s.frames,
+                s.source.display()
             )?;
         }
     }

@@ -10,10 +10,11 @@ use super::manifest::{DbError, Manifest};
 use super::skeletons::{SkeletonKind, embed_rig, poses};
 use crate::fsutil::{read_text, write_bytes_atomic};
 use crate::graph::SurfaceMotionGraph;
+use crate::mocap::units::y_up;
 use crate::similarity::vertex::VertexOptions;
 use crate::similarity::{
     ColourSet, Measure, PairDistance, ShapeSet, SimilarityMatrix, SkeletonSet, Span, VertexSet,
-    all_pairs, y_up,
+    all_pairs,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

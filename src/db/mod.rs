@@ -1,13 +1,16 @@
 //! Character databases: the manifest and what it points to, per-frame
-//! skeletons, and the cached similarity matrix and Surface Motion Graph.
+//! skeletons, the cached similarity matrix and Surface Motion Graph, and
+//! the [`Character`] they load into for synthesis.
 
 pub mod build;
 pub mod cache;
+pub mod character;
 pub mod manifest;
 pub mod rigid;
 pub mod skeletons;
 
 pub use build::{BuildOptions, BuildProgress, BuildReport, Quiet, build};
+pub use character::{Character, CharacterOptions, FrameId};
 pub use manifest::{
     DbError, DbInfo, DeformSpec, GraphSpec, MANIFEST, Manifest, RigSpec, SequenceEntry, info,
 };

@@ -1,23 +1,55 @@
-//! Linear blend skinning constraints (Huang et al. 2015, Sec. 5.2.3): the
-//! retrieved frame, bound to its own extracted skeleton, is skinned to the
-//! query pose with the rig's weights (`synth::database::skin_into`), and the
-//! positions of a fixed set of constraint vertices become the soft
-//! constraints `x_c` of Eq. 32.
+//! Linear blend skinning (Magnenat-Thalmann et al. 1988; Huang et al. 2015,
+//! Sec. 5.2.3): [`skin_into`] poses rest positions by the rig's weights, and
+//! the positions of a fixed set of constraint vertices
+//! ([`constraint_vertices`]) become the soft constraints `x_c` of Eq. 32
+//! when a retrieved frame, bound to its own extracted skeleton, is skinned
+//! to the query pose. `synth` drives its synthetic databases with the same
+//! kernel.
 
-use crate::retarget::character::Character;
+use crate::db::Character;
+use crate::rig::Canonical;
+use crate::rig::embed::Embedding;
 use crate::rig::embed::bones_of;
-use glam::DVec3;
+use crate::skeleton::Pose;
+use glam::{DQuat, DVec3};
+
+/// Linear blend skinning of `rest` positions into `out` (one entry per
+/// vertex): `x' = Σ_j w_j (g_j (x − r_j) + p_j)` with the rig's four
+/// weights per vertex, `r` the `rest_pose` joints, `p` the `pose` joints
+/// and `g` each joint's global rotation from rest to pose
+/// ([`crate::skeleton::pose_rotations`]). O(4 V), no allocation.
+pub fn skin_into(
+    rest: &[[f64; 3]],
+    rig: &Embedding,
+    rest_pose: &Pose,
+    pose: &Pose,
+    g: &[DQuat; Canonical::COUNT],
+    out: &mut [[f64; 3]],
+) {
+    for ((o, p), (js, ws)) in out.iter_mut().zip(rest).zip(&rig.skin) {
+        let p = DVec3::from_array(*p);
+        let mut acc = DVec3::ZERO;
+        for (&j, &w) in js.iter().zip(ws) {
+            if w == 0.0 {
+                continue;
+            }
+            let j = j as usize;
+            acc += (g[j] * (p - rest_pose[j]) + pose[j]) * w;
+        }
+        *o = acc.to_array();
+    }
+}
 
 /// Constraint vertices of a character, chosen once: bound (≥ 95 %) to one
 /// bone, projecting into the middle 60 % of that bone on the rest frame
 /// (LBS collapses near joints), and not loose (skin no farther from its
 /// bone than 1.5× the body's median, see
-/// [`crate::synth::database::softness`]: LBS would weld a skirt to a
+/// [`super::soft::softness`]: LBS would weld a skirt to a
 /// thigh), every `stride`-th such vertex.
 pub fn constraint_vertices(ch: &Character, stride: usize) -> Vec<u32> {
     let bones = bones_of(&ch.rig);
     let rest = ch.topology.positions();
-    let soft = crate::synth::database::softness(&ch.topology, &ch.rig);
+    let soft = super::soft::softness(&ch.topology, &ch.rig);
     let mut out = Vec::new();
     let mut count = 0usize;
     for (v, (js, ws)) in ch.rig.skin.iter().enumerate() {

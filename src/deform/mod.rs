@@ -36,12 +36,13 @@
 pub mod lbs;
 pub mod part_laplacian;
 pub mod pca;
+pub mod soft;
 pub mod unflip;
 pub mod untangle;
 
+use crate::db::Character;
 use crate::mesh::laplacian::uniform_region_rows;
 use crate::mesh::solver::SolveError;
-use crate::retarget::character::Character;
 use crate::rig::Canonical;
 use crate::rig::embed::parts::Part;
 use crate::skeleton::{Pose, pose_rotations};
@@ -583,7 +584,7 @@ impl Deformer {
             return TurnedOver::default();
         }
         let g = pose_rotations(source_pose, target);
-        crate::synth::database::skin_into(source, &ch.rig, source_pose, target, &g, &mut ws.lbs);
+        lbs::skin_into(source, &ch.rig, source_pose, target, &g, &mut ws.lbs);
         out.copy_from_slice(&ws.lbs);
         if self.mode == DeformMode::Lbs {
             return TurnedOver::default();

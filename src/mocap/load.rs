@@ -1,10 +1,10 @@
-//! Loading any supported clip file, with units and up axis decided.
+//! Reading any supported clip file by its extension (the rig-aware
+//! loader that decides a BVH's units and up axis is [`crate::rig::load_clip`]).
 
 use super::asfamc::{AmcOptions, read_amc, read_asf};
 use super::bvh::{BvhOptions, read_bvh};
-use super::clip::{Clip, Units, UpAxis};
+use super::clip::Clip;
 use super::error::MocapError;
-use super::units::{guess_units, guess_up};
 use std::path::{Path, PathBuf};
 
 /// A mocap file format.
@@ -29,21 +29,6 @@ impl MocapFormat {
             _ => return None,
         })
     }
-}
-
-/// Options for [`load_clip`]. All default to "decide from the file".
-#[derive(Debug, Clone, Default)]
-pub struct LoadOptions {
-    /// Frame rate override (BVH with a wrong `Frame Time`; AMC, which has none).
-    pub fps: Option<f64>,
-    /// The ASF for an AMC file. Default: the only `.asf` in the AMC's folder.
-    pub asf: Option<PathBuf>,
-    /// Unit override.
-    pub units: Option<Units>,
-    /// Up-axis override.
-    pub up: Option<UpAxis>,
-    /// Rig map to use instead of detecting the convention from joint names.
-    pub rig_map: Option<crate::rig::RigMap>,
 }
 
 /// Finds the ASF for an AMC: the only `.asf` file in its folder.
@@ -76,42 +61,27 @@ pub fn find_asf(amc: &Path) -> Result<PathBuf, MocapError> {
     }
 }
 
-/// Reads a BVH, AMC (with its ASF) or ASF file, in file units, with the
-/// clip's `units` and `up` decided (from the header, the rig convention and
-/// the skeleton's size) or taken from `opts`.
-pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
+/// Reads a BVH, AMC (with its ASF) or ASF file, in file units. AMC and ASF
+/// clips carry their units and up axis; a BVH's are left at the reader's
+/// defaults (deciding them needs the rig convention:
+/// [`crate::rig::load_clip`] does it). `fps` overrides the frame rate, `asf`
+/// names the ASF of an AMC (default: the only `.asf` in its folder).
+pub fn read_clip(path: &Path, fps: Option<f64>, asf: Option<&Path>) -> Result<Clip, MocapError> {
     let fmt = MocapFormat::of(path).ok_or_else(|| {
         MocapError::invalid(path, "unknown mocap format (expected .bvh, .amc or .asf)")
     })?;
-    let mut clip = match fmt {
-        MocapFormat::Bvh => {
-            let mut c = read_bvh(path, &BvhOptions { fps: opts.fps })?;
-            let det = crate::rig::detect(&c.point_names());
-            let cmu = det.map.convention.starts_with("CMU");
-            c.units = guess_units(&c, cmu);
-            let (up, why) = guess_up(&c, opts.rig_map.as_ref());
-            c.up = up;
-            c.up_reason = why;
-            c
-        }
+    Ok(match fmt {
+        MocapFormat::Bvh => read_bvh(path, &BvhOptions { fps })?,
         MocapFormat::Amc => {
-            let asf = match &opts.asf {
-                Some(a) => a.clone(),
+            let asf = match asf {
+                Some(a) => a.to_path_buf(),
                 None => find_asf(path)?,
             };
-            read_amc(path, &asf, &AmcOptions { fps: opts.fps })?
+            read_amc(path, &asf, &AmcOptions { fps })?
         }
         MocapFormat::Asf => {
             let skel = read_asf(path)?;
             skel.rest_clip(path)?
         }
-    };
-    if let Some(u) = &opts.units {
-        clip.units = u.clone();
-    }
-    if let Some(up) = opts.up {
-        clip.up = up;
-        clip.up_reason = "given by the user".into();
-    }
-    Ok(clip)
+    })
 }

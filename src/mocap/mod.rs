@@ -13,4 +13,4 @@ pub mod units;
 
 pub use clip::{Channel, Clip, ClipError, Joint, JointId, PointConvention, Units, UpAxis};
 pub use error::MocapError;
-pub use load::{LoadOptions, MocapFormat, find_asf, load_clip};
+pub use load::{MocapFormat, find_asf, read_clip};

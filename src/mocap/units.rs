@@ -6,9 +6,20 @@
 //! nearest 1.7 m. The up axis is the dominant axis of head − pelvis over a
 //! few frames (the rest pose of some rigs lies down: Bandai Namco).
 
+use super::clip::JointId;
 use super::clip::{Clip, Units, UpAxis};
-use crate::rig::{Canonical, RigMap, detect, detect_clip};
 use glam::DVec3;
+
+/// A point of a file in Y-up coordinates (`z_up` files are turned so that
+/// +Z becomes +Y, right-handed: `(x, y, z) → (x, z, −y)`). The axis
+/// conversion beside the units: scale by `metres_per_unit` after it.
+pub fn y_up(p: [f64; 3], z_up: bool) -> DVec3 {
+    if z_up {
+        DVec3::new(p[0], p[2], -p[1])
+    } else {
+        DVec3::from_array(p)
+    }
+}
 
 /// CMU's length unit: 1/0.45 inch.
 pub const CMU_UNIT_M: f64 = 0.0254 / 0.45;
@@ -98,31 +109,15 @@ fn dominant_up(d: DVec3) -> Option<UpAxis> {
 
 /// Guesses the up axis from head − pelvis averaged over up to 16 frames of
 /// the motion (world positions, so a root rotation that stands a lying rest
-/// pose up is taken into account). `map` names the head and pelvis; by
-/// default the convention is detected from the joint names. Returns the axis
-/// and the reason.
-pub fn guess_up(clip: &Clip, map: Option<&RigMap>) -> (UpAxis, String) {
-    let detected;
-    let map = match map {
-        Some(m) => m,
-        None => {
-            detected = detect_clip(clip)
-                .map(|d| d.map)
-                .unwrap_or_else(|_| detect(&clip.point_names()).map);
-            &detected
-        }
-    };
-    // The head, or the neck when the head is derived.
-    let ids = (
-        map.joints
-            .get(&Canonical::Head)
-            .or_else(|| map.joints.get(&Canonical::Neck))
-            .and_then(|n| clip.joint(n)),
-        map.joints
-            .get(&Canonical::Pelvis)
-            .and_then(|n| clip.joint(n)),
-    );
-    let (Some(h), Some(p)) = ids else {
+/// pose up is taken into account). `head` (or the neck when the head is
+/// derived) and `pelvis` are the clip's joints, as the rig map names them
+/// ([`crate::rig::guess_up`] finds them). Returns the axis and the reason.
+pub fn up_from_joints(
+    clip: &Clip,
+    head: Option<JointId>,
+    pelvis: Option<JointId>,
+) -> (UpAxis, String) {
+    let (Some(h), Some(p)) = (head, pelvis) else {
         return (
             UpAxis::Y,
             "assumed Y-up (no head/pelvis joint recognised)".into(),
@@ -176,7 +171,7 @@ mod tests {
         let mut c = parse_bvh(ZUP, Path::new("z.bvh"), &BvhOptions::default()).unwrap();
         c.units = guess_units(&c, false);
         assert_eq!(c.units.name, "cm");
-        let (up, why) = guess_up(&c, None);
+        let (up, why) = crate::rig::guess_up(&c, None);
         assert_eq!(up, UpAxis::Z, "{why}");
         c.up = up;
         c.to_metres_y_up();

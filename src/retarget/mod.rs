@@ -1,25 +1,29 @@
 //! Mocap-driven synthesis (Huang et al. 2015, Sec. 5.2): a mocap clip in,
 //! a mesh sequence of the character out.
 //!
-//! [`query`] prepares the clip, [`character`] loads the database with its
-//! graph, [`trellis`] retrieves the frame path (5.2.1), [`timeline`] turns
+//! [`query`] prepares the clip, [`crate::db::Character`] is the database loaded
+//! with its graph, [`trellis`] retrieves the frame path (5.2.1), [`timeline`] turns
 //! repeats into interpolations (5.2.2) and jumps into blends (4.4), and
 //! [`synthesise`] makes the meshes: each output frame's database frames are
 //! placed on the query's root trajectory (the rotation about the vertical
 //! and the floor translation that best fit the frame's skeleton onto the
 //! query pose, smoothed over time) and blended non-linearly.
 
-pub mod character;
+/// The loaded character (now [`crate::db::character`]; kept here so
+/// `retarget::character::Character` paths keep working).
+pub mod character {
+    pub use crate::db::character::*;
+}
 pub mod query;
 pub mod timeline;
 pub mod trellis;
 
+use crate::db::Character;
 use crate::deform::{DeformMode, DeformOptions, Deformer, TurnedOver};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
 use crate::rig::retarget::{Reference, ReferenceSource};
 use crate::skeleton::{Pose, floor_fit, rotate_yaw};
-use character::Character;
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;

@@ -13,8 +13,9 @@
 //! output); pose comparison aligns translation and heading per pair
 //! (Eq. 28).
 
-use crate::mocap::{LoadOptions, MocapError, load_clip};
+use crate::mocap::MocapError;
 use crate::rig::retarget::{ClipPoses, Reference, clip_poses, retarget};
+use crate::rig::{LoadOptions, load_clip};
 use crate::rig::{RigError, detect_clip};
 use crate::skeleton::Pose;
 use std::path::{Path, PathBuf};

@@ -2,9 +2,9 @@
 //! auto-detection and JSON map files.
 
 use super::canonical::Canonical;
+use super::pose::Pose;
 use super::structure::{self, Source};
 use crate::mocap::{Clip, JointId};
-use crate::skeleton::Pose;
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

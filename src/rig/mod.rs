@@ -2,12 +2,15 @@
 
 mod canonical;
 pub mod embed;
+pub mod load;
 mod map;
 pub mod names;
+pub mod pose;
 pub mod retarget;
 pub mod structure;
 
 pub use canonical::Canonical;
+pub use load::{LoadOptions, guess_up, load_clip};
 pub use map::{
     BY_NAMES, BY_STRUCTURE, CONVENTIONS, Convention, Derive, Detection, JointReport, RigError,
     RigMap, detect, detect_clip, normalise_name,

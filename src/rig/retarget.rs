@@ -43,9 +43,9 @@
 //! within 30°, bones as long as in the motion), else its most neutral frame
 //! (trunk nearest vertical, knees straightest).
 
+use super::pose::{Pose, pose_rotations};
 use super::{Canonical, RigError, RigMap};
 use crate::mocap::Clip;
-use crate::skeleton::{Pose, pose_rotations};
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;

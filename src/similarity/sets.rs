@@ -48,15 +48,7 @@ impl Measure {
     }
 }
 
-/// A point of a file in Y-up coordinates (`z_up` files are turned so that
-/// +Z becomes +Y, right-handed).
-pub fn y_up(p: [f64; 3], z_up: bool) -> DVec3 {
-    if z_up {
-        DVec3::new(p[0], p[2], -p[1])
-    } else {
-        DVec3::from_array(p)
-    }
-}
+pub use crate::mocap::units::y_up;
 
 /// Per-frame φ spectra of shape histograms ([`histogram::describe`]) and
 /// their rotation-minimised comparison, shared by the shape and colour sets.

@@ -4,7 +4,8 @@
 //! pure skinning. Each clip becomes one sequence; the skeleton that drove it
 //! is kept as ground truth.
 //!
-//! Retargeting: [`crate::rig::retarget`] (the torso turns by the clip's
+//! Skinning: [`crate::deform::lbs::skin_into`]; softness:
+//! [`crate::deform::soft::softness`]. Retargeting: [`crate::rig::retarget`] (the torso turns by the clip's
 //! rotations since its neutral reference, the limbs take the clip's bone
 //! directions, bone lengths are the character's).
 //!
@@ -14,14 +15,13 @@
 //! feet, and skin close to its bone) to 1 (far from the bone compared with
 //! the body's typical skin-to-bone distance: a skirt, loose sleeves).
 
+use crate::deform::lbs::skin_into;
+use crate::deform::soft::softness;
 use crate::mesh::Mesh;
-use crate::rig::Canonical;
 use crate::rig::embed::Embedding;
-use crate::rig::embed::heat::nearest_bones;
-use crate::rig::embed::parts::Part;
 use crate::rig::retarget::{Reference, retarget};
 use crate::skeleton::Pose;
-use glam::{DQuat, DVec3};
+use glam::DVec3;
 use rayon::prelude::*;
 
 /// Secondary-motion settings.
@@ -55,31 +55,10 @@ pub struct Synthesised {
     pub poses: Vec<Pose>,
 }
 
-/// Softness of every vertex in [0, 1]: 0 up to 1.5 times the body's median
-/// distance from skin to bone, rising to 1 at 2.5 times (a skirt, a loose
-/// sleeve); always 0 on the head and feet.
-pub fn softness(rest: &Mesh, rig: &Embedding) -> Vec<f64> {
-    let est_bones = crate::rig::embed::bones_of(rig);
-    let near = nearest_bones(rest.positions(), &est_bones);
-    let mut all: Vec<f64> = near.iter().map(|x| x.1).collect();
-    all.sort_by(f64::total_cmp);
-    let med = all.get(all.len() / 2).copied().unwrap_or(1.0).max(1e-9);
-    near.iter()
-        .enumerate()
-        .map(|(v, &(_, d))| {
-            let p = Part::ALL[rig.labels[v] as usize];
-            if matches!(p, Part::Head | Part::LFoot | Part::RFoot) {
-                return 0.0;
-            }
-            (d / med - 1.5).clamp(0.0, 1.0)
-        })
-        .collect()
-}
-
 /// Drives `rest` (with its rig) by the clip's canonical poses (metres,
 /// Y-up) and their neutral `reference`, at the clip's frame rate (resample
 /// the clip first for another rate).
-pub fn synthesise(
+pub fn drive(
     rest: &Mesh,
     rig: &Embedding,
     mocap: &[Pose],
@@ -138,28 +117,5 @@ pub fn synthesise(
         positions,
         skinned,
         poses,
-    }
-}
-
-/// Linear blend skinning of the rest positions into `out`.
-pub fn skin_into(
-    rest: &[[f64; 3]],
-    rig: &Embedding,
-    rest_pose: &Pose,
-    pose: &Pose,
-    g: &[DQuat; Canonical::COUNT],
-    out: &mut [[f64; 3]],
-) {
-    for ((o, p), (js, ws)) in out.iter_mut().zip(rest).zip(&rig.skin) {
-        let p = DVec3::from_array(*p);
-        let mut acc = DVec3::ZERO;
-        for (&j, &w) in js.iter().zip(ws) {
-            if w == 0.0 {
-                continue;
-            }
-            let j = j as usize;
-            acc += (g[j] * (p - rest_pose[j]) + pose[j]) * w;
-        }
-        *o = acc.to_array();
     }
 }

@@ -1,19 +1,60 @@
-//! A character database loaded for synthesis: every frame's positions, its
-//! extracted skeleton, the similarity matrix and the Surface Motion Graph.
+//! A character database loaded for synthesis (Huang et al. 2015, Sec. 5.2):
+//! every frame's positions, its extracted skeleton, the similarity matrix
+//! and the Surface Motion Graph.
 //!
-//! Frames stay in the files' units and axes; skeletons and anything handed
-//! out for output are in metres, Y-up (the crate's convention).
+//! Frames and skeletons are converted once, on load, to metres, Y-up (the
+//! crate's convention); the topology and the rig stay in the files' units
+//! and axes (the rig is embedded on the file's rest frame), and
+//! [`Character::topology_metres`] gives the topology for output.
+//!
+//! Which skeleton each stage reads: [`CharacterOptions::skeleton`]
+//! (default [`SkeletonKind::Regressor`], the joints as measured) feeds the
+//! graph-side consumers of [`Character::poses`] — trellis retrieval (Eq. 28),
+//! placement, deformation binding and the plausibility checks. The graph's
+//! `skeleton` measure reads the regressor joints in `db build`; `db
+//! skeleton` writes [`SkeletonKind::Rigid`] by default.
 
 use crate::db::build::{BuildOptions, BuildProgress, build};
 use crate::db::skeletons::{SkeletonKind, embed_rig, poses};
 use crate::db::{DbError, MANIFEST, Manifest};
 use crate::graph::{FrameAdjacency, SurfaceMotionGraph};
 use crate::mesh::Mesh;
+use crate::mocap::units::y_up;
 use crate::rig::embed::Embedding;
-use crate::similarity::{SimilarityMatrix, y_up};
+use crate::similarity::SimilarityMatrix;
 use crate::skeleton::Pose;
 use glam::DVec3;
 use std::path::Path;
+
+/// A database frame: a sequence (manifest order) and a frame in it. The
+/// graph and the searches use the flat `u32` id instead
+/// ([`Character::flat_id`]: frames of all sequences numbered in order).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+pub struct FrameId {
+    /// Sequence index.
+    pub seq: u32,
+    /// Frame within the sequence.
+    pub frame: u32,
+}
+
+/// Options of [`Character::load_with`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CharacterOptions {
+    /// How each frame's skeleton is read off its surface (see the module
+    /// docs for which stage reads it). Default: [`SkeletonKind::Regressor`]
+    /// (the measured joints; whether retrieval gains from the rigid
+    /// skeleton is not yet measured). Note that [`SkeletonKind::default`]
+    /// is `Rigid`, the default of `db skeleton`.
+    pub skeleton: SkeletonKind,
+}
+
+impl Default for CharacterOptions {
+    fn default() -> Self {
+        CharacterOptions {
+            skeleton: SkeletonKind::Regressor,
+        }
+    }
+}
 
 /// A loaded character.
 pub struct Character {
@@ -23,7 +64,8 @@ pub struct Character {
     pub topology: Mesh,
     /// The rig embedded on the topology's rest frame.
     pub rig: Embedding,
-    /// All frames of all sequences, frame-major, file units and axes.
+    /// All frames of all sequences, frame-major, metres, Y-up (converted
+    /// once on load).
     pub frames: Vec<[f64; 3]>,
     /// Vertices per frame.
     pub n: usize,
@@ -49,8 +91,17 @@ pub struct Character {
 
 impl Character {
     /// Loads the database in `dir`, building (or reading from the cache) its
-    /// matrix and graph.
+    /// matrix and graph, with the default [`CharacterOptions`].
     pub fn load(dir: &Path, progress: &dyn BuildProgress) -> Result<Character, DbError> {
+        Self::load_with(dir, progress, &CharacterOptions::default())
+    }
+
+    /// [`Character::load`] with options.
+    pub fn load_with(
+        dir: &Path,
+        progress: &dyn BuildProgress,
+        opts: &CharacterOptions,
+    ) -> Result<Character, DbError> {
         let (matrix, graph, _) = build(dir, &BuildOptions::default(), progress)?;
         let manifest = Manifest::load(dir)?;
         let topology = manifest.load_topology(dir)?;
@@ -81,10 +132,15 @@ impl Character {
             .unwrap_or(1.0);
         let z_up = manifest.up.eq_ignore_ascii_case("z");
         let conv = |p: DVec3| y_up(p.to_array(), z_up) * metres_per_unit;
-        let poses = poses(&rig, &frames, n, SkeletonKind::Regressor)
+        let poses = poses(&rig, &frames, n, opts.skeleton)
             .into_iter()
             .map(|p| p.map(conv))
             .collect();
+        // Frames in metres, Y-up, once (the skeletons above were read off
+        // the file-unit frames, as the rig was embedded on them).
+        for p in frames.iter_mut() {
+            *p = (y_up(*p, z_up) * metres_per_unit).to_array();
+        }
         let rest_pose = rig.joints.map(|j| conv(DVec3::from_array(j)));
         let adjacency = graph.adjacency();
         let bad = |msg: String| DbError::Manifest {
@@ -157,12 +213,30 @@ impl Character {
         self.poses.len()
     }
 
-    /// Frame `id`'s positions in metres, Y-up, written to `out`.
-    pub fn frame_metres(&self, id: u32, out: &mut [[f64; 3]]) {
-        let f = &self.frames[id as usize * self.n..(id as usize + 1) * self.n];
-        for (o, p) in out.iter_mut().zip(f) {
-            *o = (y_up(*p, self.z_up) * self.metres_per_unit).to_array();
+    /// The flat id of a database frame (`None` when out of range).
+    pub fn flat_id(&self, f: FrameId) -> Option<u32> {
+        let q = self.graph.sequences.get(f.seq as usize)?;
+        ((f.frame as usize) < q.len).then(|| self.graph.frame_id(f.seq as usize, f.frame as usize))
+    }
+
+    /// The sequence and frame of a flat id.
+    pub fn frame_id(&self, id: u32) -> FrameId {
+        let (s, t) = self.graph.frame_of(id);
+        FrameId {
+            seq: s as u32,
+            frame: t as u32,
         }
+    }
+
+    /// Frame `id`'s positions (metres, Y-up, `n` of them).
+    pub fn frame(&self, id: u32) -> &[[f64; 3]] {
+        &self.frames[id as usize * self.n..(id as usize + 1) * self.n]
+    }
+
+    /// Frame `id`'s positions in metres, Y-up, copied to `out` (kept for
+    /// callers that own a buffer; [`Character::frame`] borrows instead).
+    pub fn frame_metres(&self, id: u32, out: &mut [[f64; 3]]) {
+        out.copy_from_slice(self.frame(id));
     }
 
     /// The topology in metres, Y-up.

@@ -1,0 +1,242 @@
+//! Retargeting a clip through a database (Huang et al. 2015, Sec. 5.2):
+//! load the character once ([`RetargetJob::load`]), then any number of
+//! clips ([`RetargetJob::run`]); each result can be scored (Sec. 6.2,
+//! [`RetargetRun::velocity_error`]), checked for plausibility and written.
+
+use super::JobError;
+use crate::batch::{Converted, Converter};
+use crate::db::{BuildProgress, Character, CharacterOptions};
+use crate::deform::{DeformMode, TurnedOver};
+use crate::eval::{Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error};
+use crate::mesh::MeshSequence;
+use crate::mesh::io::glb::GlbOptions;
+use crate::mesh::io::{SaveOptions, save_sequence_with};
+use crate::retarget::query::{MocapPoses, load_mocap, to_character};
+use crate::retarget::{Output, Report, RetargetOptions, Timings, synthesise};
+use crate::rig::LoadOptions;
+use crate::skeleton::Pose;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// Options of a [`RetargetJob`].
+#[derive(Debug, Clone, Default)]
+pub struct RetargetJobOptions {
+    /// Retrieval, timeline and deformation. Default:
+    /// [`RetargetOptions::default`] (part-based deformation).
+    pub retarget: RetargetOptions,
+    /// How the database is loaded. Default: regressor skeletons.
+    pub character: CharacterOptions,
+    /// How clips are read. Default: decide from the file.
+    pub load: LoadOptions,
+    /// GLB output. Default: [`GlbOptions::DEFAULT`].
+    pub glb: GlbOptions,
+}
+
+/// A database loaded once for retargeting many clips.
+pub struct RetargetJob {
+    /// The loaded character.
+    pub character: Character,
+    /// The options.
+    pub options: RetargetJobOptions,
+    /// The database folder.
+    pub db: PathBuf,
+}
+
+/// One clip retargeted.
+pub struct RetargetRun {
+    /// The clip as read (canonical poses, metres, Y-up, the database's rate).
+    pub mocap: MocapPoses,
+    /// Positions, the query on the character's skeleton, and the report.
+    pub output: Output,
+}
+
+impl RetargetJob {
+    /// Loads the database in `db` (building its graph first if needed).
+    pub fn load(
+        db: &Path,
+        options: RetargetJobOptions,
+        progress: &dyn BuildProgress,
+    ) -> Result<RetargetJob, JobError> {
+        let character = Character::load_with(db, progress, &options.character)?;
+        Ok(RetargetJob {
+            character,
+            options,
+            db: db.to_path_buf(),
+        })
+    }
+
+    /// Retargets the clip at `clip` (BVH or AMC, any detected rig).
+    pub fn run(&self, clip: &Path) -> Result<RetargetRun, JobError> {
+        let ch = &self.character;
+        let fps = ch.manifest.fps;
+        let mocap = load_mocap(clip, &self.options.load, fps)?;
+        if mocap.poses.is_empty() {
+            return Err(JobError::Input {
+                path: clip.to_path_buf(),
+                msg: "the clip has no frames".into(),
+            });
+        }
+        let output = synthesise(
+            ch,
+            &mocap.poses,
+            &mocap.reference,
+            fps,
+            &self.options.retarget,
+        )?;
+        Ok(RetargetRun { mocap, output })
+    }
+
+    /// The plausibility of `positions` (metres, Y-up, frame-major) against
+    /// the database's own frames, and the floor height; `None` (with a
+    /// warning) when the rig cannot support the checks.
+    pub fn plausibility(
+        &self,
+        positions: &[[f64; 3]],
+        turned_over: Option<TurnedOver>,
+    ) -> Option<(Plausibility, f64)> {
+        plausibility(&self.character, positions, turned_over)
+    }
+
+    /// Writes `positions` (the character's vertices, frame-major) to `out`
+    /// (by extension); returns the files written.
+    pub fn write(&self, positions: Vec<[f64; 3]>, out: &Path) -> Result<Vec<PathBuf>, JobError> {
+        let ch = &self.character;
+        let fps = ch.manifest.fps;
+        let seq = MeshSequence::new(ch.topology_metres(), positions, Some(fps))?;
+        Ok(save_sequence_with(
+            &seq,
+            out,
+            &SaveOptions {
+                fps: Some(fps),
+                glb: self.options.glb,
+            },
+        )?)
+    }
+}
+
+/// The plausibility of `positions` made for `ch` against the database's
+/// own frames, and the floor; `None` (with a warning) when the rig cannot
+/// support the checks.
+pub fn plausibility(
+    ch: &Character,
+    positions: &[[f64; 3]],
+    turned_over: Option<TurnedOver>,
+) -> Option<(Plausibility, f64)> {
+    let checked = Checker::for_character(ch, PlausibilityOptions::default())
+        .and_then(|c| Ok((c.measure(positions, ch.n, turned_over)?, c.floor)));
+    match checked {
+        Ok(p) => Some(p),
+        Err(e) => {
+            tracing::warn!("plausibility not measured: {e}");
+            None
+        }
+    }
+}
+
+impl RetargetRun {
+    /// The joint-velocity error (Huang et al. 2015, Sec. 6.2) between the
+    /// query on the character's bones and the skeleton read off the result.
+    pub fn velocity_error(&self, ch: &Character) -> VelocityError {
+        let query = to_character(&ch.rest_pose, &self.mocap.reference, &self.mocap.poses);
+        let skel: Vec<Pose> = self
+            .output
+            .positions
+            .chunks(ch.n.max(1))
+            .map(|p| ch.rig.skeleton(p))
+            .collect();
+        velocity_error(&query, &skel)
+    }
+
+    /// True when the deformation ran (its repair counts are meaningful).
+    pub fn deformed(&self) -> bool {
+        matches!(
+            self.output.report.deform,
+            DeformMode::Part | DeformMode::Global
+        )
+    }
+}
+
+/// The summary `retarget --json` prints.
+#[derive(Debug, Clone, Serialize)]
+pub struct RetargetSummary {
+    /// Files written.
+    pub output: Vec<PathBuf>,
+    /// Output frames.
+    pub frames: usize,
+    /// Frame rate.
+    pub fps: f64,
+    /// The skeleton threshold used (metres, summed over 19 joints).
+    pub t_skel: f64,
+    /// Trellis nodes.
+    pub trellis_nodes: usize,
+    /// Transitions taken.
+    pub transitions: usize,
+    /// Cuts (jumps along no edge).
+    pub cuts: usize,
+    /// Query frames whose candidate set was widened.
+    pub widened: usize,
+    /// Summed node cost of the path.
+    pub node_cost: f64,
+    /// Summed edge cost of the path.
+    pub edge_cost: f64,
+    /// Timings (seconds).
+    pub timings: Timings,
+    /// Retrieval, timeline, meshes and deformation per output frame (ms).
+    pub ms_per_frame: f64,
+    /// The deformation mode.
+    pub deformation: DeformMode,
+    /// Triangle-frames turned over before and after the repair.
+    pub turned_over: TurnedOver,
+    /// Plausibility against the database's frames.
+    pub plausibility: Option<Plausibility>,
+}
+
+impl RetargetSummary {
+    /// The summary of report `r`, written to `output`.
+    pub fn new(output: Vec<PathBuf>, r: &Report, plausibility: Option<Plausibility>) -> Self {
+        RetargetSummary {
+            output,
+            frames: r.frames,
+            fps: r.fps,
+            t_skel: r.retrieval.t_skel,
+            trellis_nodes: r.retrieval.nodes,
+            transitions: r.jumps.iter().filter(|j| j.transition).count(),
+            cuts: r.retrieval.cuts.len(),
+            widened: r.retrieval.widened.len(),
+            node_cost: r.retrieval.node_cost,
+            edge_cost: r.retrieval.edge_cost,
+            timings: r.timings,
+            ms_per_frame: 1e3 * per_frame_seconds(r),
+            deformation: r.deform,
+            turned_over: r.turned_over,
+            plausibility,
+        }
+    }
+}
+
+/// Retrieval, timeline, meshes and deformation time per output frame (s).
+pub fn per_frame_seconds(r: &Report) -> f64 {
+    (r.timings.retrieval + r.timings.timeline + r.timings.meshes + r.timings.deform)
+        / r.frames.max(1) as f64
+}
+
+impl Converter for RetargetJob {
+    fn describe(&self) -> String {
+        format!("retarget --db {}", self.db.display())
+    }
+
+    fn convert(&self, clip: &Path, out: &Path) -> Result<Converted, String> {
+        let run = self.run(clip).map_err(|e| match e {
+            JobError::Input { msg, .. } => msg,
+            e => e.to_string(),
+        })?;
+        let frames = run.output.positions.len() / self.character.n.max(1);
+        let e = run.velocity_error(&self.character);
+        self.write(run.output.positions, out)
+            .map_err(|e| e.to_string())?;
+        Ok(Converted {
+            frames,
+            error_cm: Some(e.mean_cm),
+        })
+    }
+}
