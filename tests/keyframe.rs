@@ -158,8 +158,8 @@ fn exact() -> SearchOptions {
 fn zero_targets_give_the_dijkstra_shortest_path() {
     let mut r = Lcg(11);
     let mut compared = 0;
-    for case in 0..60 {
-        let g = random_graph(&mut r, 3, 10);
+    for case in 0..400 {
+        let g = random_graph(&mut r, 3, 16);
         let from = r.below(g.len()) as u32;
         let to = r.below(g.len()) as u32;
         let o = exact();
@@ -451,4 +451,96 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
         ],
         "time NaN",
     );
+}
+
+/// Every distinct (distance, cheapest transition cost) of the paths of
+/// exactly `frames` frames (start counted) from `from` to `to`: the
+/// exhaustive programme the lattice search bins (frame level, no pruning).
+fn all_exact_length(g: &KeyGraph, from: u32, to: u32, frames: usize) -> Vec<(f64, f64)> {
+    use std::collections::HashMap;
+    let mut layer: HashMap<u32, Vec<(f64, f64)>> = HashMap::new();
+    layer.insert(from, vec![(0.0, 0.0)]);
+    for _ in 1..frames {
+        let mut next: HashMap<u32, Vec<(f64, f64)>> = HashMap::new();
+        for (&f, labels) in &layer {
+            for e in g.successors(f) {
+                let row = next.entry(e.to).or_default();
+                for &(d, c) in labels {
+                    row.push((d + g.step[e.to as usize], c + e.cost));
+                }
+            }
+        }
+        for row in next.values_mut() {
+            row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            row.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-9);
+        }
+        layer = next;
+    }
+    layer.remove(&to).unwrap_or_default()
+}
+
+#[test]
+fn exact_length_search_matches_an_exhaustive_search_on_random_graphs() {
+    // Targets drawn between the least and the most distance of the paths
+    // of exactly N frames: the lattice search must land within 1 % at N
+    // frames whenever some path does, and never report a cost below the
+    // exhaustive optimum.
+    let mut r = Lcg(23);
+    let (mut compared, mut within) = (0, 0);
+    let o = SearchOptions::default();
+    let w = o.weights;
+    for case in 0..400 {
+        let g = random_graph(&mut r, 3, 16);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
+            continue;
+        };
+        let frames = 30 + r.below(50);
+        let all = all_exact_length(&g, a, b, frames);
+        if all.len() < 2 {
+            continue;
+        }
+        let lo = all.first().unwrap().0;
+        let hi = all.last().unwrap().0;
+        let d = lo + (hi - lo) * r.next();
+        if d < 0.05 {
+            continue;
+        }
+        let best = all
+            .iter()
+            .map(|&(x, c)| c + w.distance * (x - d).abs())
+            .fold(f64::INFINITY, f64::min);
+        let lands = all.iter().any(|&(x, _)| (x - d).abs() <= 0.01 * d);
+        let plan = p
+            .plan(
+                &Targets::Global {
+                    distance: d,
+                    time: frames as f64 / 25.0,
+                },
+                &o,
+            )
+            .unwrap();
+        assert_eq!(
+            plan.stats.exact_length, 1,
+            "case {case}: lattice found nothing"
+        );
+        assert!(
+            plan.cost.total >= best - 1e-9 || plan.measure.frames as usize != frames,
+            "case {case}: cost {} below the exhaustive optimum {best}",
+            plan.cost.total
+        );
+        if lands {
+            compared += 1;
+            let ok = plan.measure.frames as usize == frames
+                && (plan.measure.distance - d).abs() <= 0.01 * d;
+            within += usize::from(ok);
+            assert!(
+                plan.cost.total <= best + 0.05,
+                "case {case}: cost {} vs exhaustive {best}",
+                plan.cost.total
+            );
+        }
+    }
+    assert!(compared >= 20, "only {compared} cases compared");
+    assert_eq!(within, compared, "{within} of {compared} landed within 1 %");
 }
