@@ -126,6 +126,10 @@ pub struct Args {
     /// Grid times (seconds), A:B:STEP or a comma list.
     #[arg(long, default_value = "1:40:1")]
     pub times: String,
+    /// With --grid: a heat-map of the errors over the grid (.svg with
+    /// axes and legend, or .png).
+    #[arg(long, value_name = "FILE", requires = "grid")]
+    pub plot: Option<PathBuf>,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
@@ -284,6 +288,9 @@ fn grid(ch: &Character, keys: &[u32], a: &Args, opts: &KeyframeOptions) -> anyho
         .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     if let Some(p) = &a.report {
         surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&g)?.as_bytes())?;
+    }
+    if let Some(p) = &a.plot {
+        surfmotion::keyframe::heatmap::save(&g, p)?;
     }
     if a.json {
         let mut v = serde_json::to_value(&g)?;

@@ -24,6 +24,11 @@
 //! 3. The goal's labels at `k = N` are scored with Eq. 7 and the best is
 //!    traced back.
 //!
+//! Two transitions are at least [`LatticeOptions::min_run`] frames apart
+//! (a path that jumps out of a sequence on the frame it jumped into would
+//! show that frame alone, unblended); the extremes ignore this rule, so
+//! they stay valid bounds.
+//!
 //! The binning makes this a bounded search (like a beam), not a proof of
 //! optimality: [`super::search::Segment::solve`] keeps the paper's search
 //! as the fallback when no path lands within `T`, and reports which one
@@ -48,6 +53,10 @@ pub struct LatticeOptions {
     pub frame_slack: u32,
     /// Longest path considered (frames). Default: 20 000.
     pub max_frames: usize,
+    /// Fewest frames between two transitions (so that each keeps a blend
+    /// window; the timeline shortens windows that would overlap).
+    /// Default: 4.
+    pub min_run: u32,
 }
 
 impl Default for LatticeOptions {
@@ -58,6 +67,7 @@ impl Default for LatticeOptions {
             tolerance_m: 0.01,
             frame_slack: 3,
             max_frames: 20_000,
+            min_run: 4,
         }
     }
 }
@@ -121,6 +131,8 @@ struct Label {
     arc: u32,
     distance: f64,
     cost: f64,
+    /// Frames since the last transition.
+    since: u32,
 }
 
 /// The path found: its arcs and measure (frames counted as the segment
@@ -160,11 +172,15 @@ pub fn solve_exact_length(
         arc: u32::MAX,
         distance: 0.0,
         cost: 0.0,
+        since: u32::MAX / 2,
     });
     let mut arena: Vec<Label> = Vec::new();
-    // Bins, plus the labels of least and most distance (they alone may
-    // reach the extremes of the window).
-    let mut slot: Vec<Option<usize>> = vec![None; bins + 2];
+    // Bins per class of frames since the last transition (below
+    // `min_run`, and at least), plus the labels of least and most
+    // distance (they alone may reach the extremes of the window).
+    let classes = opts.min_run as usize + 1;
+    let mut slot: Vec<Option<usize>> = vec![None; bins * classes + 2];
+    let (lo_slot, hi_slot) = (bins * classes, bins * classes + 1);
     let mut best: Option<(u32, f64)> = None;
     for k in 0..=frames {
         let mut raw = std::mem::take(&mut layers[k]);
@@ -184,13 +200,14 @@ pub fn solve_exact_length(
             let mid = 0.5 * (lo + hi);
             slot.iter_mut().for_each(|s| *s = None);
             for (r, l) in raw[i..j].iter().enumerate() {
-                if slot[bins].is_none_or(|o| l.distance < raw[i + o].distance) {
-                    slot[bins] = Some(r);
+                if slot[lo_slot].is_none_or(|o| l.distance < raw[i + o].distance) {
+                    slot[lo_slot] = Some(r);
                 }
-                if slot[bins + 1].is_none_or(|o| l.distance > raw[i + o].distance) {
-                    slot[bins + 1] = Some(r);
+                if slot[hi_slot].is_none_or(|o| l.distance > raw[i + o].distance) {
+                    slot[hi_slot] = Some(r);
                 }
-                let b = (((l.distance - lo) / width) as usize).min(bins - 1);
+                let class = l.since.min(opts.min_run) as usize;
+                let b = class * bins + (((l.distance - lo) / width) as usize).min(bins - 1);
                 let better = match slot[b] {
                     None => true,
                     Some(o) => {
@@ -223,19 +240,25 @@ pub fn solve_exact_length(
                     }
                     continue;
                 }
-                for (a, (to, am)) in seg.arcs_from_indexed(u) {
+                for arc in seg.arcs_from_indexed(u) {
+                    let am = arc.m;
                     let kk = k + am.frames as usize;
-                    if am.frames == 0 || kk > frames {
+                    if am.frames == 0 || kk > frames || (arc.jump && l.since < opts.min_run) {
                         continue;
                     }
                     let d = l.distance + am.distance;
-                    match window(to, kk) {
+                    match window(arc.to, kk) {
                         Some((lo, hi)) if d >= lo && d <= hi => layers[kk].push(Label {
-                            node: to,
+                            node: arc.to,
                             parent: id,
-                            arc: a,
+                            arc: arc.index,
                             distance: d,
                             cost: l.cost + am.cost,
+                            since: if arc.jump {
+                                am.frames
+                            } else {
+                                l.since.saturating_add(am.frames)
+                            },
                         }),
                         _ => {}
                     }

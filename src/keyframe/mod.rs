@@ -17,6 +17,7 @@
 
 pub mod graph;
 pub mod grid;
+pub mod heatmap;
 pub mod lattice;
 pub mod place;
 pub mod repeats;

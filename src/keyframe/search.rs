@@ -174,6 +174,20 @@ struct Arc {
     jump: bool,
 }
 
+/// An arc of the compressed graph as [`Segment::arcs_from_indexed`] gives
+/// it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArcView {
+    /// Its index.
+    pub index: u32,
+    /// Head node.
+    pub to: u32,
+    /// Transition cost, distance, frames.
+    pub m: Measure,
+    /// A transition (else a run of plain frames).
+    pub jump: bool,
+}
+
 /// A simple cycle of the compressed graph.
 #[derive(Debug, Clone)]
 struct Cycle {
@@ -606,14 +620,19 @@ impl Segment {
 
     /// The arcs leaving node `u`: head node and measure.
     pub fn arcs_from(&self, u: u32) -> impl Iterator<Item = (u32, Measure)> + '_ {
-        self.arcs_from_indexed(u).map(|(_, x)| x)
+        self.arcs_from_indexed(u).map(|a| (a.to, a.m))
     }
 
-    /// The arcs leaving node `u` with their indices.
-    pub fn arcs_from_indexed(&self, u: u32) -> impl Iterator<Item = (u32, (u32, Measure))> + '_ {
+    /// The arcs leaving node `u` towards relevant nodes, with their indices.
+    pub fn arcs_from_indexed(&self, u: u32) -> impl Iterator<Item = ArcView> + '_ {
         self.out[u as usize].iter().filter_map(move |&a| {
             let arc = &self.arcs[a as usize];
-            self.relevant[arc.to as usize].then_some((a, (arc.to, arc.m)))
+            self.relevant[arc.to as usize].then_some(ArcView {
+                index: a,
+                to: arc.to,
+                m: arc.m,
+                jump: arc.jump,
+            })
         })
     }
 
