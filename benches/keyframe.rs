@@ -1,6 +1,7 @@
 //! Key-frame search alone (Huang et al. 2015, Sec. 5.1): preparing the
 //! walks and loops between two key-frames, and one query (a distance and
-//! time target), on a generated frame graph shaped like a walk/run/walk
+//! time target) with the exact-length search (the default) and with the
+//! paper's walks and loops alone, on a generated frame graph shaped like a walk/run/walk
 //! database at 25 fps (three cyclic sequences, 72/36/162 frames, loops
 //! every gait cycle and transitions between them, 42 in all, as `db build`
 //! finds on the synthetic database of the README). The figures in the
@@ -9,7 +10,7 @@
 use criterion::Criterion;
 use std::hint::black_box;
 use surfmotion::keyframe::graph::KeyGraph;
-use surfmotion::keyframe::search::SearchOptions;
+use surfmotion::keyframe::search::{Method, SearchOptions};
 use surfmotion::keyframe::{Planner, Targets};
 
 fn graph() -> KeyGraph {
@@ -70,8 +71,15 @@ fn main() {
         b.iter(|| Planner::new(black_box(g.clone()), &keys, 25.0, &o).unwrap())
     });
     let p = Planner::new(g.clone(), &keys, 25.0, &o).unwrap();
-    for (d, t) in [(10.0, 8.0), (20.0, 12.0), (3.0, 30.0)] {
-        grp.bench_function(format!("query_{d}m_{t}s"), |b| {
+    let walks = SearchOptions {
+        method: Method::Walks,
+        ..Default::default()
+    };
+    for ((d, t), (name, o)) in [(10.0, 8.0), (20.0, 12.0), (3.0, 30.0)]
+        .into_iter()
+        .flat_map(|x| [(x, ("lattice", o)), (x, ("walks", walks))])
+    {
+        grp.bench_function(format!("{name}_{d}m_{t}s"), |b| {
             b.iter(|| {
                 p.plan(
                     black_box(&Targets::Global {

@@ -158,8 +158,8 @@ fn exact() -> SearchOptions {
 fn zero_targets_give_the_dijkstra_shortest_path() {
     let mut r = Lcg(11);
     let mut compared = 0;
-    for case in 0..60 {
-        let g = random_graph(&mut r, 3, 10);
+    for case in 0..400 {
+        let g = random_graph(&mut r, 3, 16);
         let from = r.below(g.len()) as u32;
         let to = r.below(g.len()) as u32;
         let o = exact();
@@ -372,6 +372,51 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("not met within 1 %"), "{text}");
+    // A small grid with its heat-map: one cell per target, each with the
+    // achieved figures the JSON report gives.
+    let svg = tmp.path().join("grid.svg");
+    let png = tmp.path().join("grid.png");
+    let grid_report = tmp.path().join("grid.json");
+    for plot in [&svg, &png] {
+        let o = run(&[
+            "keyframe".as_ref(),
+            "--db".as_ref(),
+            db.as_os_str(),
+            "--from".as_ref(),
+            "02_01:0".as_ref(),
+            "--to".as_ref(),
+            "02_03:30".as_ref(),
+            "--grid".as_ref(),
+            "--distances".as_ref(),
+            "4,6,8".as_ref(),
+            "--times".as_ref(),
+            "3,4".as_ref(),
+            "--plot".as_ref(),
+            plot.as_os_str(),
+            "--report".as_ref(),
+            grid_report.as_os_str(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&grid_report).unwrap()).unwrap();
+    let queries = g["queries"].as_array().unwrap();
+    assert_eq!(queries.len(), 6);
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert_eq!(text.matches("<title>").count(), 6, "{text}");
+    let q = &queries[0];
+    let want = format!(
+        "{} m in {} s: {:.3} m",
+        q["distance"].as_f64().unwrap(),
+        q["time"].as_f64().unwrap(),
+        q["achieved_distance"].as_f64().unwrap()
+    );
+    assert!(text.contains(&want), "{want} not in the SVG");
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    // 2 time columns × 3 distance rows of 8 pixels (IHDR width, height).
+    assert_eq!(u32::from_be_bytes(bytes[16..20].try_into().unwrap()), 16);
+    assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 24);
     // Bad input: one line on stderr, exit 1.
     let x = tmp.path().join("x.pc2");
     let bad = |args: &[&str], want: &str| {
@@ -451,4 +496,115 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
         ],
         "time NaN",
     );
+}
+
+/// Every distinct (distance, cheapest transition cost) of the paths of
+/// exactly `frames` frames (start counted) from `from` to `to` whose
+/// transitions are at least `min_run` frames apart: the exhaustive
+/// programme the lattice search bins (frame level, no pruning).
+fn all_exact_length(
+    g: &KeyGraph,
+    from: u32,
+    to: u32,
+    frames: usize,
+    min_run: u32,
+) -> Vec<(f64, f64)> {
+    use std::collections::HashMap;
+    // (frame, frames since the last transition, capped) -> labels.
+    let mut layer: HashMap<(u32, u32), Vec<(f64, f64)>> = HashMap::new();
+    layer.insert((from, min_run), vec![(0.0, 0.0)]);
+    for _ in 1..frames {
+        let mut next: HashMap<(u32, u32), Vec<(f64, f64)>> = HashMap::new();
+        for (&(f, since), labels) in &layer {
+            for e in g.successors(f) {
+                if e.jump && since < min_run {
+                    continue;
+                }
+                let s2 = if e.jump { 1 } else { (since + 1).min(min_run) };
+                let row = next.entry((e.to, s2)).or_default();
+                for &(d, c) in labels {
+                    row.push((d + g.step[e.to as usize], c + e.cost));
+                }
+            }
+        }
+        for row in next.values_mut() {
+            row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            row.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-9);
+        }
+        layer = next;
+    }
+    let mut out: Vec<(f64, f64)> = layer
+        .into_iter()
+        .filter(|((f, _), _)| *f == to)
+        .flat_map(|(_, v)| v)
+        .collect();
+    out.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    out.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-9);
+    out
+}
+
+#[test]
+fn exact_length_search_matches_an_exhaustive_search_on_random_graphs() {
+    // Targets drawn between the least and the most distance of the paths
+    // of exactly N frames: the lattice search must land within 1 % at N
+    // frames whenever some path does, and never report a cost below the
+    // exhaustive optimum.
+    let mut r = Lcg(23);
+    let (mut compared, mut within) = (0, 0);
+    let o = SearchOptions::default();
+    let w = o.weights;
+    for case in 0..400 {
+        let g = random_graph(&mut r, 3, 16);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
+            continue;
+        };
+        let frames = 30 + r.below(50);
+        let all = all_exact_length(&g, a, b, frames, o.lattice.min_run);
+        if all.len() < 2 {
+            continue;
+        }
+        let lo = all.first().unwrap().0;
+        let hi = all.last().unwrap().0;
+        let d = lo + (hi - lo) * r.next();
+        if d < 0.05 {
+            continue;
+        }
+        let best = all
+            .iter()
+            .map(|&(x, c)| c + w.distance * (x - d).abs())
+            .fold(f64::INFINITY, f64::min);
+        let lands = all.iter().any(|&(x, _)| (x - d).abs() <= 0.01 * d);
+        let plan = p
+            .plan(
+                &Targets::Global {
+                    distance: d,
+                    time: frames as f64 / 25.0,
+                },
+                &o,
+            )
+            .unwrap();
+        assert_eq!(
+            plan.stats.exact_length, 1,
+            "case {case}: lattice found nothing"
+        );
+        assert!(
+            plan.cost.total >= best - 1e-9 || plan.measure.frames as usize != frames,
+            "case {case}: cost {} below the exhaustive optimum {best}",
+            plan.cost.total
+        );
+        if lands {
+            compared += 1;
+            let ok = plan.measure.frames as usize == frames
+                && (plan.measure.distance - d).abs() <= 0.01 * d;
+            within += usize::from(ok);
+            assert!(
+                plan.cost.total <= best + 0.05,
+                "case {case}: cost {} vs exhaustive {best}",
+                plan.cost.total
+            );
+        }
+    }
+    assert!(compared >= 20, "only {compared} cases compared");
+    assert_eq!(within, compared, "{within} of {compared} landed within 1 %");
 }

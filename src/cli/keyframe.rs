@@ -2,10 +2,11 @@
 //! Graph (Huang et al. 2015, Sec. 5.1), and its Table III grid evaluation.
 
 use std::path::PathBuf;
-use surfmotion::keyframe::graph::KeyGraph;
 use surfmotion::keyframe::grid::{GridReport, evaluate, parse_range};
-use surfmotion::keyframe::search::{SearchOptions, Solver, Weights};
-use surfmotion::keyframe::{KeyframeOptions, Planner, Targets, describe, parse_key, synthesise};
+use surfmotion::keyframe::search::{Method, SearchOptions, Solver, Weights};
+use surfmotion::keyframe::{
+    KeyframeOptions, Planner, Targets, TransitionCost, describe, key_graph, parse_key, synthesise,
+};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::save_sequence;
 use surfmotion::retarget::character::Character;
@@ -17,6 +18,26 @@ pub enum SolverArg {
     Exact,
     /// The paper's four integer linear programmes (microlp).
     Ilp,
+}
+
+/// Search method on the command line.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Exact-length dynamic programme over (node, frames) first (any path,
+    /// nested loops included); the paper's walks and loops when it finds
+    /// nothing within its tolerance.
+    Lattice,
+    /// The paper's loop-free walks plus repeated loops only (Eqs. 13-25).
+    Walks,
+}
+
+/// Transition cost on the command line.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum CostArg {
+    /// The graph's shape distortion (Eqs. 2-3, the paper).
+    Graph,
+    /// The measured smoothness (metres).
+    Smoothness,
 }
 
 /// Arguments of `keyframe`.
@@ -75,9 +96,22 @@ pub struct Args {
     /// the fastest and the cheapest per frame are kept).
     #[arg(long, default_value_t = 64)]
     pub max_loops: usize,
-    /// Loop repetition solver.
+    /// Loop repetition solver (of the walks-and-loops search).
     #[arg(long, value_enum, default_value_t = SolverArg::Exact)]
     pub solver: SolverArg,
+    /// What a transition costs (Eq. 8): the graph's shape distortion (the
+    /// paper), or its measured smoothness in metres (weighted Hausdorff
+    /// distance of the blended frames; computed once per run, a few seconds
+    /// on a large graph).
+    #[arg(long, value_enum, default_value_t = CostArg::Graph)]
+    pub transition_cost: CostArg,
+    /// Which search finds the path.
+    #[arg(long, value_enum, default_value_t = MethodArg::Lattice)]
+    pub search: MethodArg,
+    /// Distance bins kept per (node, frame count) by the exact-length
+    /// search (more: slower, closer to the optimum).
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub bins: u32,
     /// No blending across transitions.
     #[arg(long)]
     pub no_blend: bool,
@@ -92,6 +126,10 @@ pub struct Args {
     /// Grid times (seconds), A:B:STEP or a comma list.
     #[arg(long, default_value = "1:40:1")]
     pub times: String,
+    /// With --grid: a heat-map of the errors over the grid (.svg with
+    /// axes and legend, or .png).
+    #[arg(long, value_name = "FILE", requires = "grid")]
+    pub plot: Option<PathBuf>,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
@@ -127,6 +165,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 SolverArg::Ilp => Solver::Ilp,
             },
             gap: a.gap,
+            method: match a.search {
+                MethodArg::Lattice => Method::Lattice,
+                MethodArg::Walks => Method::Walks,
+            },
+            lattice: surfmotion::keyframe::lattice::LatticeOptions {
+                bins: a.bins as usize,
+                ..Default::default()
+            },
             limits: surfmotion::keyframe::search::Limits {
                 loops_per_walk: a.max_loops.max(2),
                 ..Default::default()
@@ -136,6 +182,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         timeline: surfmotion::retarget::timeline::TimelineOptions {
             blend: !a.no_blend,
             ..Default::default()
+        },
+        transition_cost: match a.transition_cost {
+            CostArg::Graph => TransitionCost::Graph,
+            CostArg::Smoothness => TransitionCost::Smoothness,
         },
     };
     if a.grid {
@@ -230,19 +280,17 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 }
 
 fn grid(ch: &Character, keys: &[u32], a: &Args, opts: &KeyframeOptions) -> anyhow::Result<()> {
-    let planner = Planner::new(
-        KeyGraph::of_character(ch),
-        keys,
-        ch.manifest.fps,
-        &opts.search,
-    )
-    .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
+    let planner = Planner::new(key_graph(ch, opts), keys, ch.manifest.fps, &opts.search)
+        .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     let ds = parse_range(&a.distances).map_err(|e| anyhow::anyhow!("--distances {e}"))?;
     let ts = parse_range(&a.times).map_err(|e| anyhow::anyhow!("--times {e}"))?;
     let g = evaluate(ch, &planner, &ds, &ts, &opts.search, &opts.timeline)
         .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     if let Some(p) = &a.report {
         surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&g)?.as_bytes())?;
+    }
+    if let Some(p) = &a.plot {
+        surfmotion::keyframe::heatmap::save(&g, p)?;
     }
     if a.json {
         let mut v = serde_json::to_value(&g)?;

@@ -5,10 +5,12 @@
 //! time.
 //!
 //! A target `(d, t)` is called *reachable* when the database can
-//! physically make it between the key-frames: `t` is at least the fewest
-//! frames of a walk, `d` at least the shortest walk distance, and the mean
-//! speed `d / t` lies between the slowest and the fastest loop attached to
-//! the key-frames' walks. The figures are given for the reachable targets
+//! physically make it between the key-frames: some path of exactly
+//! `t · fps` frames travels at most `d`, and some at least `d` (the
+//! exact-length extremes of [`super::lattice`]). With `--via` key-frames
+//! (several segments) the criterion is the asymptotic one: `t` at least
+//! the fewest frames of a walk, `d` at least the shortest walk distance,
+//! and the mean speed `d / t` between the slowest and the fastest loop. The figures are given for the reachable targets
 //! and, separately, for the others (where the search returns its best
 //! compromise under Eq. 7).
 
@@ -163,8 +165,21 @@ pub fn parse_range(s: &str) -> Result<Vec<f64>, String> {
     Ok(v)
 }
 
-/// Is `(d, t)` reachable (module docs)?
-pub fn reachable(reach: &[Reach], fps: f64, d: f64, t: f64) -> bool {
+/// Is `(d, t)` reachable (module docs)? One segment: exactly, by the
+/// exact-length extremes ([`super::search::Segment::reaches_exactly`]);
+/// several: by the walks' and loops' speeds ([`reachable_by_speed`]).
+pub fn reachable(planner: &Planner, reach: &[Reach], d: f64, t: f64) -> bool {
+    if let [seg] = planner.segments.as_slice() {
+        if let Some(r) = seg.reaches_exactly(d, t * planner.fps, 100_000) {
+            return r;
+        }
+    }
+    reachable_by_speed(reach, planner.fps, d, t)
+}
+
+/// The asymptotic criterion: at least the shortest walk's frames and
+/// distance, and a mean speed between the slowest and the fastest loop.
+pub fn reachable_by_speed(reach: &[Reach], fps: f64, d: f64, t: f64) -> bool {
     let frames: u32 = reach.iter().map(|r| r.frames).sum();
     let dist: f64 = reach.iter().map(|r| r.distance).sum();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -207,7 +222,7 @@ pub fn evaluate(
                 time: t,
                 achieved_distance: plan.measure.distance,
                 achieved_time: plan.measure.frames as f64 / planner.fps,
-                reachable: reachable(&reach, planner.fps, d, t),
+                reachable: reachable(planner, &reach, d, t),
                 transitions: tr.len(),
                 smoothness: mean_smoothness(&tr),
                 seconds,

@@ -17,6 +17,8 @@
 
 pub mod graph;
 pub mod grid;
+pub mod heatmap;
+pub mod lattice;
 pub mod place;
 pub mod repeats;
 pub mod search;
@@ -187,6 +189,17 @@ pub struct KeyframeOptions {
     pub search: SearchOptions,
     /// Blending across transitions.
     pub timeline: TimelineOptions,
+    /// What a transition costs the search.
+    pub transition_cost: TransitionCost,
+}
+
+/// The frame graph of a character priced as `opts` asks.
+pub fn key_graph(ch: &Character, opts: &KeyframeOptions) -> KeyGraph {
+    let mut g = KeyGraph::of_character(ch);
+    if opts.transition_cost == TransitionCost::Smoothness {
+        price_by_smoothness(ch, &mut g);
+    }
+    g
 }
 
 /// The search prepared for a list of key-frames: the compressed graph of
@@ -513,6 +526,55 @@ pub fn transitions(
         .collect()
 }
 
+/// What a transition costs the search (Eq. 8's distortion `D`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum TransitionCost {
+    /// The graph's: the shape dissimilarity of the overlapping frames
+    /// (Eqs. 2-3), as the paper.
+    #[default]
+    Graph,
+    /// The measured smoothness of the transition (metres: the weighted
+    /// Hausdorff distance of the overlapping frames over the graph's blend
+    /// window, [`smoothness::transition_smoothness`]), the measure Table
+    /// III reports. Costs one Hausdorff distance per blended frame of every
+    /// transition once, at preparation.
+    Smoothness,
+}
+
+/// Prices every transition of `g` by its measured smoothness (see
+/// [`TransitionCost::Smoothness`]), in parallel over the transitions.
+pub fn price_by_smoothness(ch: &Character, g: &mut KeyGraph) {
+    use rayon::prelude::*;
+    let mut window = std::collections::HashMap::new();
+    for t in &ch.graph.transitions {
+        let from = ch.graph.frame_id(t.from, t.m);
+        let to = ch.graph.frame_id(t.to, t.n) + 1;
+        window.insert((from, to), t.window);
+    }
+    let jumps: Vec<(usize, u32, u32)> = (0..g.len() as u32)
+        .flat_map(|f| {
+            let lo = g.offsets[f as usize] as usize;
+            g.successors(f)
+                .iter()
+                .enumerate()
+                .filter(|(_, e)| e.jump)
+                .map(move |(i, e)| (lo + i, f, e.to))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let priced: Vec<(usize, f64)> = jumps
+        .par_iter()
+        .map(|&(i, from, to)| {
+            let l = window.get(&(from, to)).copied().unwrap_or(4);
+            (i, smoothness::transition_smoothness(ch, from, to, l))
+        })
+        .collect();
+    for (i, c) in priced {
+        g.edges[i].cost = c;
+    }
+}
+
 /// The mean of the transitions' smoothness.
 pub fn mean_smoothness(t: &[TransitionReport]) -> Option<f64> {
     (!t.is_empty()).then(|| t.iter().map(|x| x.smoothness).sum::<f64>() / t.len() as f64)
@@ -541,7 +603,7 @@ pub fn synthesise(
         return Err(KeyframeError::TooFew);
     }
     let fps = ch.manifest.fps;
-    let g = KeyGraph::of_character(ch);
+    let g = key_graph(ch, opts);
     let planner = Planner::new(g, keys, fps, &opts.search)
         .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
     let plan = planner

@@ -84,9 +84,25 @@ pub enum Solver {
     Ilp,
 }
 
+/// Which search finds the path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// The exact-length search ([`super::lattice`]) first, the paper's
+    /// walks and loops when it finds no path within its tolerance.
+    #[default]
+    Lattice,
+    /// The paper's walks plus repeated loops only (Eqs. 13-25).
+    Walks,
+}
+
 /// Options of the search.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SearchOptions {
+    /// Which search.
+    pub method: Method,
+    /// The exact-length search's options.
+    pub lattice: super::lattice::LatticeOptions,
     /// Eq. 7 weights.
     pub weights: Weights,
     /// Enumeration bounds.
@@ -108,6 +124,8 @@ pub struct SearchOptions {
 impl Default for SearchOptions {
     fn default() -> Self {
         SearchOptions {
+            method: Method::default(),
+            lattice: super::lattice::LatticeOptions::default(),
             weights: Weights::default(),
             limits: Limits::default(),
             solver: Solver::default(),
@@ -154,6 +172,20 @@ struct Arc {
     to_frame: u32,
     /// A transition (else a run of plain frames).
     jump: bool,
+}
+
+/// An arc of the compressed graph as [`Segment::arcs_from_indexed`] gives
+/// it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArcView {
+    /// Its index.
+    pub index: u32,
+    /// Head node.
+    pub to: u32,
+    /// Transition cost, distance, frames.
+    pub m: Measure,
+    /// A transition (else a run of plain frames).
+    pub jump: bool,
 }
 
 /// A simple cycle of the compressed graph.
@@ -267,6 +299,10 @@ pub struct Stats {
     pub beamed: usize,
     /// Bounds that were hit (the result may then not be the optimum).
     pub bounds_hit: Vec<String>,
+    /// Segments found by the exact-length search ([`Method::Lattice`]).
+    pub exact_length: usize,
+    /// Segments found by the walks-and-loops search.
+    pub walks_and_loops: usize,
 }
 
 fn min_cost_paths(n: usize, rev: &[Vec<(u32, f64)>], goal: u32) -> Vec<f64> {
@@ -567,6 +603,195 @@ impl Segment {
         self.frames.len()
     }
 
+    /// The start key-frame's node.
+    pub fn start(&self) -> u32 {
+        self.start
+    }
+
+    /// The end key-frame's node.
+    pub fn goal(&self) -> u32 {
+        self.goal
+    }
+
+    /// Is node `u` on some path from the start to the goal?
+    pub fn is_relevant(&self, u: u32) -> bool {
+        self.relevant[u as usize]
+    }
+
+    /// The arcs leaving node `u`: head node and measure.
+    pub fn arcs_from(&self, u: u32) -> impl Iterator<Item = (u32, Measure)> + '_ {
+        self.arcs_from_indexed(u).map(|a| (a.to, a.m))
+    }
+
+    /// The arcs leaving node `u` towards relevant nodes, with their indices.
+    pub fn arcs_from_indexed(&self, u: u32) -> impl Iterator<Item = ArcView> + '_ {
+        self.out[u as usize].iter().filter_map(move |&a| {
+            let arc = &self.arcs[a as usize];
+            self.relevant[arc.to as usize].then_some(ArcView {
+                index: a,
+                to: arc.to,
+                m: arc.m,
+                jump: arc.jump,
+            })
+        })
+    }
+
+    /// Is `(distance, frames)` reachable exactly: some path of exactly
+    /// `frames` frames travels at most `distance` and some at least
+    /// ([`super::lattice`])? `None` when `frames` is beyond `limit`.
+    pub fn reaches_exactly(&self, distance: f64, frames: f64, limit: usize) -> Option<bool> {
+        let f = frames.round() as i64 - i64::from(self.count_start);
+        if f < 0 {
+            return Some(false);
+        }
+        let f = f as usize;
+        if f > limit {
+            return None;
+        }
+        let ext = super::lattice::extremes(self, f);
+        let (lo, hi) = ext.at(self.start, f);
+        Some(lo <= distance + 1e-9 && distance <= hi + 1e-9)
+    }
+
+    /// The exact-length search ([`super::lattice`]), best first by Eq. 7.
+    /// Frame counts `N` are tried in increasing order of their lower bound
+    /// `w_dist · gap(d_V, [r_min(N), r_max(N)]) + w_time · |N − t_V|` (the
+    /// distance no path of `N` frames can avoid missing, plus the time
+    /// error), each aiming at the reachable distance nearest the target,
+    /// until the bound reaches the best cost: a reachable target is met at
+    /// its own frame count, an unreachable one gets the best compromise.
+    /// `None` for zero targets (shortest paths are the walks' search) or
+    /// when no path lands within the tolerance.
+    fn solve_lattice(&self, t: &Target, opts: &SearchOptions) -> Option<(SegmentPath, f64)> {
+        let lo = opts.lattice;
+        let w = opts.weights;
+        if t.distance <= 0.0 || t.frames <= 0.0 || !t.distance.is_finite() {
+            return None;
+        }
+        let cs = i64::from(self.count_start);
+        let target = (t.frames.round() as i64 - cs).max(0);
+        let least = (self.h[self.start as usize].frames as i64).max(1);
+        // Frames beyond which the time error alone exceeds the cost of
+        // the nearest frame count's whole distance.
+        let extra = (w.distance * t.distance / w.time.max(1e-9)).ceil() as i64;
+        let top = (target.max(least) + extra + i64::from(lo.frame_slack)).min(lo.max_frames as i64);
+        if top < least {
+            return None;
+        }
+        let ext = super::lattice::extremes(self, top as usize);
+        let mut order: Vec<(f64, i64, f64)> = (least..=top)
+            .filter_map(|n| {
+                let (a, b) = ext.at(self.start, n as usize);
+                if !a.is_finite() {
+                    return None;
+                }
+                let aim = t.distance.clamp(a, b);
+                let time = w.time * ((n + cs) as f64 - t.frames).abs();
+                Some((w.distance * (aim - t.distance).abs() + time, n, aim))
+            })
+            .collect();
+        order.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut best: Option<(super::lattice::Found, f64)> = None;
+        for &(bound, n, aim) in order.iter().take(8) {
+            if best.as_ref().is_some_and(|b| bound >= b.1) {
+                break;
+            }
+            if let Some((found, _)) =
+                super::lattice::solve_exact_length(self, &ext, n as usize, aim, w.distance, &lo)
+            {
+                let total = found.measure.cost
+                    + w.distance * (found.measure.distance - t.distance).abs()
+                    + w.time * ((n + cs) as f64 - t.frames).abs();
+                if best.as_ref().is_none_or(|b| total < b.1) {
+                    best = Some((found, total));
+                }
+            }
+        }
+        let (found, cost) = best?;
+        Some((self.decompose(&found.arcs), cost))
+    }
+
+    /// A path of arcs as its loop-free walk plus the loops cut out of it
+    /// (each where it starts and ends; equal consecutive loops counted as
+    /// repetitions).
+    fn decompose(&self, arcs: &[u32]) -> SegmentPath {
+        let mut path = vec![self.from];
+        for &a in arcs {
+            self.arc_frames(a, &mut path);
+        }
+        // Stack of (node, arc into it); loops popped when a node recurs.
+        let mut stack: Vec<(u32, u32)> = vec![(self.start, u32::MAX)];
+        let mut pos = vec![usize::MAX; self.frames.len()];
+        pos[self.start as usize] = 0;
+        let mut cut: Vec<(u32, Vec<u32>)> = Vec::new();
+        for &a in arcs {
+            let v = self.arcs[a as usize].to;
+            let p = pos[v as usize];
+            if p != usize::MAX {
+                let mut cyc: Vec<u32> = stack[p + 1..].iter().map(|x| x.1).collect();
+                cyc.push(a);
+                for x in stack.drain(p + 1..) {
+                    pos[x.0 as usize] = usize::MAX;
+                }
+                cut.push((v, cyc));
+            } else {
+                pos[v as usize] = stack.len();
+                stack.push((v, a));
+            }
+        }
+        let warcs: Vec<u32> = stack[1..].iter().map(|x| x.1).collect();
+        let walk_measure = self.walk_measure(&warcs);
+        let mut walk = vec![self.from];
+        for &a in &warcs {
+            self.arc_frames(a, &mut walk);
+        }
+        let mut loops: Vec<LoopUse> = Vec::new();
+        for (node, cyc) in cut {
+            let at = self.frames[node as usize];
+            if let Some(l) = loops.last_mut() {
+                let same = l.at == at && {
+                    let mut fr = Vec::new();
+                    for &a in &cyc {
+                        self.arc_frames(a, &mut fr);
+                    }
+                    fr == l.frames
+                };
+                if same {
+                    l.repeats += 1;
+                    continue;
+                }
+            }
+            let mut frames = Vec::new();
+            let mut m = Measure::default();
+            for &a in &cyc {
+                self.arc_frames(a, &mut frames);
+                m = m.plus(self.arcs[a as usize].m);
+            }
+            loops.push(LoopUse {
+                at,
+                frames,
+                measure: m,
+                repeats: 1,
+            });
+        }
+        let measure = arcs.iter().fold(
+            Measure {
+                frames: u32::from(self.count_start),
+                ..Default::default()
+            },
+            |s, &a| s.plus(self.arcs[a as usize].m),
+        );
+        SegmentPath {
+            from: self.from,
+            to: self.to,
+            walk,
+            walk_measure,
+            loops,
+            measure,
+            path,
+        }
+    }
+
     fn walk_measure(&self, arcs: &[u32]) -> Measure {
         arcs.iter().fold(
             Measure {
@@ -721,7 +946,14 @@ impl Segment {
         stats.nodes += self.frames.len();
         stats.arcs += self.arcs.len();
         stats.cycles += self.cycles.len();
+        if opts.method == Method::Lattice {
+            if let Some((p, _)) = self.solve_lattice(t, opts) {
+                stats.exact_length += 1;
+                return Ok(p);
+            }
+        }
         stats.bounds_hit.extend(self.bounds_hit.iter().cloned());
+        stats.walks_and_loops += 1;
         let mut order: Vec<(f64, usize)> = self
             .walks
             .iter()
