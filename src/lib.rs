@@ -17,6 +17,7 @@ pub mod inspect;
 pub mod keyframe;
 pub mod mesh;
 pub mod mocap;
+pub mod parametric;
 pub mod render;
 pub mod retarget;
 pub mod rig;

@@ -89,6 +89,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         },
         graph: Default::default(),
         deform: Default::default(),
+        spaces: Vec::new(),
     }
     .save(&db)?;
     let t_db = t0.elapsed().as_secs_f64();

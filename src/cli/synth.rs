@@ -188,6 +188,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         },
         graph: Default::default(),
         deform: Default::default(),
+        spaces: Vec::new(),
     };
     m.save(dir)?;
     if a.json {

@@ -72,6 +72,14 @@ pub struct BuildReport {
     pub edges: usize,
     /// The cache folder.
     pub cache: PathBuf,
+    /// The parametric motion spaces built for `[[space]]` entries (Casas
+    /// et al. 2013; empty without any).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub spaces: Vec<crate::parametric::space::SpaceSummary>,
+    /// True if the parametric model came from the cache.
+    pub spaces_cached: bool,
+    /// Seconds spent on the parametric model.
+    pub spaces_seconds: f64,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -344,6 +352,22 @@ pub fn build(
         }
     };
     let graph_seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let (spaces, spaces_cached) = if m.spaces.is_empty() {
+        (Vec::new(), false)
+    } else {
+        let popts = crate::parametric::MotionOptions::default();
+        let (motion, cached) = crate::parametric::store::load_or_build(dir, &popts, opts.force)
+            .map_err(|e| match e {
+                crate::parametric::ParamError::Db(e) => e,
+                other => DbError::Manifest {
+                    path: dir.join(super::MANIFEST),
+                    msg: other.to_string(),
+                },
+            })?;
+        (motion.summary(), cached)
+    };
+    let spaces_seconds = t.elapsed().as_secs_f64();
     let (describe_seconds, pairs_seconds, pairs) = timing
         .map(|t| (t.describe_seconds, t.pairs_seconds, t.pairs))
         .unwrap_or((0.0, 0.0, 0));
@@ -361,6 +385,9 @@ pub fn build(
         transitions: graph.transitions.len(),
         edges: graph.edges.len(),
         cache: cache_dir(dir),
+        spaces,
+        spaces_cached,
+        spaces_seconds,
     };
     Ok((mat, graph, report))
 }
