@@ -28,8 +28,9 @@ pub const FEATURE_VERTICES: usize = 400;
 pub struct Cycle {
     /// First frame of the cycle.
     pub start: usize,
-    /// Length in frames (frame `start + period` closes it).
-    pub period: usize,
+    /// Length in frames, fractional (refined by a parabola through the
+    /// repetition measure at the best lag and its neighbours).
+    pub period: f64,
     /// True when the sequence repeats itself; false: the cycle is the
     /// whole sequence (played in a loop with a jump).
     pub cyclic: bool,
@@ -59,7 +60,7 @@ impl Alignment {
     /// `(floor frame, next frame, fraction)`.
     pub fn wrapped(&self, i: usize, t: f64) -> (usize, usize, f64) {
         let c = &self.cycles[i];
-        let p = c.period.max(1) as f64;
+        let p = c.period.max(1.0);
         let r = (t - c.start as f64).rem_euclid(p);
         let r = if r >= p { 0.0 } else { r };
         let a = r.floor();
@@ -95,7 +96,7 @@ pub fn detect_cycle(feat: &[Vec<f32>], fps: f64) -> Cycle {
     let len = feat.len();
     let whole = |len: usize| Cycle {
         start: 0,
-        period: len.saturating_sub(1).max(1),
+        period: len.saturating_sub(1).max(1) as f64,
         cyclic: false,
         closure: if len > 1 {
             dist(&feat[0], &feat[len - 1]).sqrt()
@@ -133,19 +134,39 @@ pub fn detect_cycle(feat: &[Vec<f32>], fps: f64) -> Cycle {
     if !(dmin < 0.3 * spread) {
         return whole(len);
     }
-    // The smallest local minimum within 15 % of the best.
+    // The smallest local minimum near the best (a whole-frame lag misses a
+    // fractional period by up to half a frame, which a fast motion feels:
+    // the tolerance is relative to the sequence's spread too).
     let mut pick = None;
     for k in 0..d.len() {
         let left = k == 0 || d[k] <= d[k - 1];
         let right = k + 1 == d.len() || d[k] <= d[k + 1];
-        if left && right && d[k] <= dmin * 1.15 + 1e-12 {
+        if left && right && d[k] <= dmin * 1.15 + 0.05 * spread + 1e-12 {
             pick = Some(k);
             break;
         }
     }
-    let period = lo + pick.unwrap_or(0);
-    let (start, closure) = (0..len - period)
-        .map(|s| (s, dist(&feat[s], &feat[s + period])))
+    let k = pick.unwrap_or(0);
+    let lag = lo + k;
+    // Parabolic refinement of the lag.
+    let frac = if k > 0 && k + 1 < d.len() {
+        let (a, b, c) = (d[k - 1], d[k], d[k + 1]);
+        let den = a - 2.0 * b + c;
+        if den > 1e-15 {
+            (0.5 * (a - c) / den).clamp(-0.5, 0.5)
+        } else {
+            0.0
+        }
+    } else {
+        0.0
+    };
+    let period = lag as f64 + frac;
+    let need = period.ceil() as usize;
+    if need + 1 >= len {
+        return whole(len);
+    }
+    let (start, closure) = (0..len - need)
+        .map(|s| (s, dist(&feat[s], &feat[s + lag])))
         .fold((0, f64::INFINITY), |b, x| if x.1 < b.1 { x } else { b });
     Cycle {
         start,
@@ -218,19 +239,27 @@ fn dtw(ta: usize, tb: usize, cost: impl Fn(usize, usize) -> f64) -> (f64, Vec<f6
 /// per-frame features, [`features`]) at `fps`.
 pub fn align(feats: &[Vec<Vec<f32>>], fps: f64) -> Alignment {
     let cycles: Vec<Cycle> = feats.iter().map(|f| detect_cycle(f, fps)).collect();
-    let grid = cycles.iter().map(|c| c.period).max().unwrap_or(1).max(2);
+    let grid = cycles
+        .iter()
+        .map(|c| c.period.ceil() as usize)
+        .max()
+        .unwrap_or(1)
+        .max(2);
     let c0 = &cycles[0];
-    let t0 = c0.period;
+    let t0 = (c0.period.round() as usize).max(1);
     let mut offsets = vec![0];
     let mut times = vec![
         (0..=grid)
-            .map(|k| c0.start as f64 + k as f64 * t0 as f64 / grid as f64)
+            .map(|k| c0.start as f64 + k as f64 * c0.period / grid as f64)
             .collect::<Vec<f64>>(),
     ];
     let mut costs = vec![0.0];
     for (i, f) in feats.iter().enumerate().skip(1) {
         let ci = &cycles[i];
-        let ti = ci.period;
+        let ti = (ci.period.round() as usize).max(1);
+        // DTW runs on whole frames; its columns are rescaled to the
+        // fractional period.
+        let scale = ci.period / ti as f64;
         let offs: Vec<usize> = if ci.cyclic && c0.cyclic {
             (0..ti).collect()
         } else {
@@ -258,7 +287,9 @@ pub fn align(feats: &[Vec<Vec<f32>>], fps: f64) -> Alignment {
         };
         times.push(
             (0..=grid)
-                .map(|k| ci.start as f64 + o as f64 + at(k as f64 * t0 as f64 / grid as f64))
+                .map(|k| {
+                    ci.start as f64 + (o as f64 + at(k as f64 * t0 as f64 / grid as f64)) * scale
+                })
                 .collect(),
         );
         offsets.push(o);
@@ -290,8 +321,16 @@ mod tests {
         let s0: Vec<Vec<f32>> = (0..100).map(|f| feat(f as f64 / 30.0)).collect();
         let s1: Vec<Vec<f32>> = (0..80).map(|f| feat(f as f64 / 20.0 + 0.5)).collect();
         let al = align(&[s0, s1], fps);
-        assert_eq!(al.cycles[0].period, 30);
-        assert_eq!(al.cycles[1].period, 20);
+        assert!(
+            (al.cycles[0].period - 30.0).abs() < 0.2,
+            "{}",
+            al.cycles[0].period
+        );
+        assert!(
+            (al.cycles[1].period - 20.0).abs() < 0.2,
+            "{}",
+            al.cycles[1].period
+        );
         assert_eq!(al.grid, 30);
         for k in 0..=30 {
             let p0 = (al.times[0][k] / 30.0).rem_euclid(1.0);

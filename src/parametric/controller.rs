@@ -200,6 +200,10 @@ impl<'m> Controller<'m> {
     pub fn frame(&self) -> usize {
         self.frame
     }
+    /// The current phase (grid units of the current space).
+    pub fn phase(&self) -> f64 {
+        self.head.phase
+    }
     /// The current weight coordinate.
     pub fn weight(&self) -> f64 {
         self.head.u
@@ -272,6 +276,7 @@ impl<'m> Controller<'m> {
             _ => {}
         }
         let target = self.pending.map(|p| p.target).unwrap_or(self.head.space);
+        notices.clear();
         let (u, _) = self.resolve(target, &mut notices);
         if target == self.head.space {
             self.u_target = u;
@@ -292,8 +297,7 @@ impl<'m> Controller<'m> {
         let k = src.grid();
         for _ in 0..=opts.depth {
             self.predicted.push((ph.round() as usize) % k);
-            let d = src.step(self.head.u, (ph.floor() as usize) % k)[3];
-            ph = (ph + 1.0 / d.max(1e-6)).rem_euclid(k as f64);
+            ph = src.play_phase(self.head.u, ph, 1.0).0;
         }
         let table = m.table(self.head.space, target);
         let plan = self.planner.plan(
@@ -333,13 +337,9 @@ impl<'m> Controller<'m> {
     /// Moves a playhead one frame: returns the root step `(x, z, dθ)` in its
     /// body frame.
     fn step_head(motion: &Motion, h: &mut Head) -> [f64; 3] {
-        let s = &motion.spaces[h.space];
-        let k = s.grid();
-        let i = (h.phase.floor() as usize) % k;
-        let [x, z, dh, d] = s.step(h.u, i);
-        let frac = 1.0 / d.max(1e-6);
-        h.phase = (h.phase + frac).rem_euclid(k as f64);
-        [x * frac, z * frac, dh * frac]
+        let (p, d) = motion.spaces[h.space].play_phase(h.u, h.phase, 1.0);
+        h.phase = p;
+        d
     }
 
     /// Plays one frame: the mesh (metres, Y-up, world placement). No

@@ -116,6 +116,42 @@ impl MotionSpace {
         blended_step(&self.steps, u, k)
     }
 
+    /// Plays `frames` frames from `phase` (grid units) at weight `u`:
+    /// the new phase and the root motion `(x, z, dθ)` in the body frame at
+    /// the start. Integrates step by step (a step's travel spread over its
+    /// duration), so steps the time warp made short are passed through,
+    /// not skipped.
+    pub fn play_phase(&self, u: f64, phase: f64, frames: f64) -> (f64, [f64; 3]) {
+        let k = self.grid();
+        let mut p = phase.rem_euclid(k as f64);
+        let mut left = frames;
+        let mut acc = [0.0; 3];
+        for _ in 0..4 * k + 4 {
+            if left <= 1e-12 {
+                break;
+            }
+            let i = (p.floor() as usize).min(k - 1);
+            let [x, z, dh, d] = self.step(u, i);
+            let rest = (i + 1) as f64 - p;
+            let need = rest * d;
+            let (take, dp) = if need <= left {
+                (rest, need)
+            } else {
+                (left / d.max(1e-12), left)
+            };
+            let take = take.min(rest);
+            acc[0] += x * take;
+            acc[1] += z * take;
+            acc[2] += dh * take;
+            left -= dp;
+            p += take;
+            if p >= (i + 1) as f64 - 1e-12 {
+                p = ((i + 1) % k) as f64;
+            }
+        }
+        (p, acc)
+    }
+
     /// The similarity features of the references ([`super::transition`]).
     pub fn ref_features(&self, fps: f64) -> RefFeatures {
         let n = self.blend.n;
@@ -468,8 +504,8 @@ pub struct SpaceSummary {
     pub name: String,
     /// Sequences.
     pub sequences: Vec<String>,
-    /// Cycle length of each sequence (frames).
-    pub cycles: Vec<usize>,
+    /// Cycle length of each sequence (frames, fractional).
+    pub cycles: Vec<f64>,
     /// Whether each sequence repeats (else its whole length loops).
     pub cyclic: Vec<bool>,
     /// RMS vertex distance along each sequence's warping path (metres).

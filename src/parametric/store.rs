@@ -20,6 +20,8 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"SMPAR001";
+/// Bump when the model's algorithm or layout changes (old caches are rebuilt).
+pub const FORMAT_VERSION: u32 = 2;
 
 /// The cache file of a database's parametric model.
 pub fn cache_path(dir: &Path) -> PathBuf {
@@ -38,7 +40,7 @@ struct Header {
 pub fn key(dir: &Path, m: &Manifest, opts: &MotionOptions) -> Result<u64, DbError> {
     let mut h: KeyHasher = frames_key(dir, m)?;
     h.text("units", &m.units);
-    h.text("parametric", "1");
+    h.text("parametric", &FORMAT_VERSION.to_string());
     h.text(
         "spaces",
         &serde_json::to_string(&m.spaces).unwrap_or_default(),
