@@ -131,7 +131,7 @@ pub fn detect_cycle(feat: &[Vec<f32>], fps: f64) -> Cycle {
     let mean32: Vec<f32> = mean.iter().map(|&x| x as f32).collect();
     let spread = 2.0 * feat.iter().map(|f| dist(f, &mean32)).sum::<f64>() / len as f64;
     let dmin = d.iter().cloned().fold(f64::INFINITY, f64::min);
-    if !(dmin < 0.3 * spread) {
+    if dmin.is_nan() || dmin >= 0.3 * spread {
         return whole(len);
     }
     // The smallest local minimum near the best (a whole-frame lag misses a

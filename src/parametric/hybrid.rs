@@ -61,7 +61,7 @@ pub struct PairRefs {
 }
 
 /// The hybrid blend of a space: phase-sampled reference meshes.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct HybridBlend {
     /// Vertices.
     pub n: usize,

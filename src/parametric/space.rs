@@ -56,17 +56,6 @@ pub struct MotionSpace {
     pub epsilon: f64,
 }
 
-impl Default for HybridBlend {
-    fn default() -> Self {
-        HybridBlend {
-            n: 0,
-            grid: 0,
-            blocks: Vec::new(),
-            pairs: Vec::new(),
-        }
-    }
-}
-
 impl MotionSpace {
     /// Largest weight coordinate (`N − 1`).
     pub fn u_max(&self) -> f64 {

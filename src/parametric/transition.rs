@@ -257,6 +257,7 @@ impl Planner {
                 if v + 1 < l {
                     relax(v + 1, step, &mut self.dist, &mut self.prev, &mut self.heap);
                 }
+                #[allow(clippy::needless_range_loop)] // m indexes target nodes too
                 for m in 0..tn {
                     let j = match target {
                         TargetState::AnyPhase => m,
