@@ -476,11 +476,10 @@ fn malformed_spaces_and_scripts_give_one_line_errors() {
             "[[space]]\nname = \"x\"\nsequences = [\"walk\"]\nepsilon_mm = -1\n",
             "epsilon_mm = -1",
         ),
-        // The run before the walk: speed falls, then... both orders are monotone;
-        // the turn space ordered by speed is not a speed space.
+        // The straight and the circle walk have one speed: not a speed space.
         (
             "[[space]]\nname = \"x\"\nsequences = [\"walk\", \"turn\"]\nparameters = [\"speed\"]\n",
-            "does not change monotonically",
+            "spans only",
         ),
     ] {
         let d = tmp.path().join("bad");

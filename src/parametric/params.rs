@@ -50,6 +50,15 @@ impl Parameter {
             Parameter::Turn => "deg/s",
         }
     }
+    /// The smallest span of values over a space's weights that makes the
+    /// parameter steerable (0.05 m/s, 2°/s): below it the sequences do not
+    /// differ in this parameter (e.g. a sideways walk offered as a turn).
+    pub fn min_span(self) -> f64 {
+        match self {
+            Parameter::Speed => 0.05,
+            Parameter::Turn => 2.0,
+        }
+    }
     /// Parses a name.
     pub fn parse(s: &str) -> Option<Parameter> {
         Parameter::ALL.into_iter().find(|p| p.name() == s)
@@ -162,7 +171,17 @@ impl ParamMap {
                     w[1][1] < w[0][1]
                 }
             });
-            if !monotone || hi - lo < 1e-6 {
+            if hi - lo < parameter.min_span() {
+                return Err(format!(
+                    "parameter '{}' spans only {:.3} {} over the space's sequences (from {lo:.3} to {hi:.3}; at least {} needed): its sequences do not differ in {}",
+                    parameter.name(),
+                    hi - lo,
+                    parameter.unit(),
+                    parameter.min_span(),
+                    parameter.name()
+                ));
+            }
+            if !monotone {
                 let list: Vec<String> = (0..=pairs)
                     .map(|i| format!("{:.3}", samples[i * per][1]))
                     .collect();
