@@ -360,6 +360,10 @@ pub fn build(
         let (motion, cached) = crate::parametric::store::load_or_build(dir, &popts, opts.force)
             .map_err(|e| match e {
                 crate::parametric::ParamError::Db(e) => e,
+                crate::parametric::ParamError::Space { path, space, msg } => DbError::Manifest {
+                    path,
+                    msg: format!("space '{space}': {msg}"),
+                },
                 other => DbError::Manifest {
                     path: dir.join(super::MANIFEST),
                     msg: other.to_string(),
