@@ -241,7 +241,8 @@ pub fn align(feats: &[Vec<Vec<f32>>], fps: f64) -> Alignment {
     let cycles: Vec<Cycle> = feats.iter().map(|f| detect_cycle(f, fps)).collect();
     let grid = cycles
         .iter()
-        .map(|c| c.period.ceil() as usize)
+        // A period a hair above a whole frame count needs no extra sample.
+        .map(|c| (c.period - 0.01).ceil().max(1.0) as usize)
         .max()
         .unwrap_or(1)
         .max(2);
@@ -332,7 +333,7 @@ mod tests {
             al.cycles[1].period
         );
         assert_eq!(al.grid, 30);
-        for k in 0..=30 {
+        for k in 0..=al.grid {
             let p0 = (al.times[0][k] / 30.0).rem_euclid(1.0);
             let p1 = (al.times[1][k] / 20.0 + 0.5).rem_euclid(1.0);
             let d = (p0 - p1 + 0.5).rem_euclid(1.0) - 0.5;

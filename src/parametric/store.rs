@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"SMPAR001";
 /// Bump when the model's algorithm or layout changes (old caches are rebuilt).
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 
 /// The cache file of a database's parametric model.
 pub fn cache_path(dir: &Path) -> PathBuf {
