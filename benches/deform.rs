@@ -38,6 +38,7 @@ fn main() {
         },
         graph: Default::default(),
         deform: Default::default(),
+        spaces: Vec::new(),
     };
     std::fs::create_dir_all(&db).unwrap();
     m.save(&db).unwrap();

@@ -36,6 +36,9 @@
 //!   timeline, blending and placement (Huang Sec. 5.2).
 //! - [`deform`]: skeleton-driven editing of retrieved frames: skinning
 //!   constraints and the part-based PCA Laplacian deformation (Huang Eq. 32).
+//! - [`parametric`]: 4D parametric motion: aligned sequences blended by
+//!   speed or turn in real time, online transitions between spaces
+//!   (Casas et al. 2013).
 //! - [`transfer`]: Confluent Motion onto scanned meshes (de Aguiar 2007).
 //!
 //! Jobs:
@@ -72,6 +75,7 @@ pub mod keyframe;
 pub mod similarity;
 // Synthesis.
 pub mod deform;
+pub mod parametric;
 pub mod retarget;
 pub mod transfer;
 // Jobs.

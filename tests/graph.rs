@@ -40,6 +40,7 @@ fn samba_db(d: &Path, tmp: &Path, seqs: &[(&str, usize, usize)]) -> Manifest {
         },
         graph: Default::default(),
         deform: Default::default(),
+        spaces: Vec::new(),
     };
     m.save(tmp).unwrap();
     m

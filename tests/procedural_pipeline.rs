@@ -86,6 +86,7 @@ fn write_database(db: &Path) {
         },
         graph: Default::default(),
         deform: Default::default(),
+        spaces: Vec::new(),
     }
     .save(db)
     .unwrap();

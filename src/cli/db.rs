@@ -259,6 +259,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 },
                 graph: Default::default(),
                 deform: Default::default(),
+                spaces: Vec::new(),
             };
             if let Err(msg) = m.validate() {
                 bail!("{msg}");

@@ -9,6 +9,7 @@ mod inspect;
 mod keyframe;
 mod mesh;
 mod mocap;
+mod play;
 mod render;
 mod repair;
 mod retarget;
@@ -105,6 +106,8 @@ enum Command {
     /// cluster array jobs (--shard i/n); bad clips are reported, not fatal
     /// (exit 1 if any failed). Writes batch.json/.html/.svg.
     Batch(Box<batch::Args>),
+    /// Play a scripted session of parametric motion (Casas et al. 2013): the database's [[space]] motion spaces steered by timed requests (space, speed, turn), with online transitions; writes any mesh output and a report of parameters asked vs achieved.
+    Play(play::Args),
 }
 
 /// Entry point of the CLI.
@@ -165,6 +168,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Eval(a) => retarget::eval(a),
         Command::Transfer(a) => transfer::run(*a),
         Command::Batch(a) => batch::run_batch(*a),
+        Command::Play(a) => play::run(a),
     }
 }
 

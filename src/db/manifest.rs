@@ -230,6 +230,33 @@ impl DeformSpec {
     }
 }
 
+/// A parametric motion space (`[[space]]`; Casas et al. 2013, Sec. 3.1):
+/// related sequences blended into one motion steered by parameters.
+///
+/// ```toml
+/// [[space]]
+/// name = "locomotion"
+/// sequences = ["walk", "run"]   # ordered along the blend weight
+/// parameters = ["speed", "turn"] # the first is the blended one; turn steers
+/// epsilon_mm = 5.0              # hybrid blending tolerance (default 5)
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpaceEntry {
+    /// Name, unique among spaces.
+    pub name: String,
+    /// The space's sequences (names of `[[sequence]]` entries), in the
+    /// order of the parameter they are blended for.
+    pub sequences: Vec<String>,
+    /// Parameters (`speed`, `turn`): the first is mapped to blend weights;
+    /// `turn` after it steers the heading.
+    #[serde(default)]
+    pub parameters: Vec<String>,
+    /// Largest hybrid-blending error in millimetres. Default: 5.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub epsilon_mm: Option<f64>,
+}
+
 /// The manifest.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -262,6 +289,9 @@ pub struct Manifest {
     /// Deformation overrides.
     #[serde(default, skip_serializing_if = "DeformSpec::is_default")]
     pub deform: DeformSpec,
+    /// Parametric motion spaces.
+    #[serde(default, rename = "space", skip_serializing_if = "Vec::is_empty")]
+    pub spaces: Vec<SpaceEntry>,
 }
 
 /// Errors of the database layer.
@@ -349,6 +379,7 @@ impl Manifest {
                 ));
             }
         }
+        self.validate_spaces(&names)?;
         let g = &self.graph;
         if let Some(w) = g.velocity_weight
             && !(w.is_finite() && w >= 0.0)
@@ -363,6 +394,58 @@ impl Manifest {
                 "[graph]: need top_n ≥ 1 and 1 ≤ min_window ≤ max_window (got top_n = {}, min_window = {}, max_window = {})",
                 t.top_n, t.min_window, t.max_window
             ));
+        }
+        Ok(())
+    }
+
+    /// Checks the `[[space]]` entries against the sequence names.
+    fn validate_spaces(&self, sequences: &std::collections::HashSet<&str>) -> Result<(), String> {
+        let mut names = std::collections::HashSet::new();
+        for sp in &self.spaces {
+            let at = format!("[[space]] '{}'", printable(&sp.name, 60));
+            check_name(&sp.name).map_err(|why| format!("{at}: name {why}"))?;
+            if !names.insert(sp.name.as_str()) {
+                return Err(format!("two spaces are called '{}'", sp.name));
+            }
+            if sp.sequences.is_empty() {
+                return Err(format!(
+                    "{at}: sequences is empty (name one or more [[sequence]] entries)"
+                ));
+            }
+            let mut seen = std::collections::HashSet::new();
+            for q in &sp.sequences {
+                if !sequences.contains(q.as_str()) {
+                    return Err(format!(
+                        "{at}: no sequence '{}' in this manifest",
+                        printable(q, 60)
+                    ));
+                }
+                if !seen.insert(q.as_str()) {
+                    return Err(format!("{at}: sequence '{q}' is listed twice"));
+                }
+            }
+            let mut params = std::collections::HashSet::new();
+            for (k, p) in sp.parameters.iter().enumerate() {
+                if !matches!(p.as_str(), "speed" | "turn") {
+                    return Err(format!(
+                        "{at}: unknown parameter '{}' (expected speed or turn)",
+                        printable(p, 60)
+                    ));
+                }
+                if !params.insert(p.as_str()) {
+                    return Err(format!("{at}: parameter '{p}' is listed twice"));
+                }
+                if p == "speed" && k > 0 {
+                    return Err(format!("{at}: speed must be the first (blended) parameter"));
+                }
+            }
+            if let Some(e) = sp.epsilon_mm
+                && !(e.is_finite() && e > 0.0 && e <= 1000.0)
+            {
+                return Err(format!(
+                    "{at}: epsilon_mm = {e}: expected a number in (0, 1000]"
+                ));
+            }
         }
         Ok(())
     }
@@ -591,6 +674,12 @@ mod tests {
                 examples: vec!["a:3".into()],
                 ..Default::default()
             },
+            spaces: vec![SpaceEntry {
+                name: "loco".into(),
+                sequences: vec!["a".into()],
+                parameters: vec!["speed".into()],
+                epsilon_mm: None,
+            }],
         };
         let text = toml::to_string_pretty(&m).unwrap();
         let back: Manifest = toml::from_str(&text).unwrap();

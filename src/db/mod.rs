@@ -12,5 +12,6 @@ pub mod skeletons;
 pub use build::{BuildOptions, BuildProgress, BuildReport, Quiet, build};
 pub use character::{Character, CharacterOptions, FrameId};
 pub use manifest::{
-    DbError, DbInfo, DeformSpec, GraphSpec, MANIFEST, Manifest, RigSpec, SequenceEntry, info,
+    DbError, DbInfo, DeformSpec, GraphSpec, MANIFEST, Manifest, RigSpec, SequenceEntry, SpaceEntry,
+    info,
 };

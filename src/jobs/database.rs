@@ -3,21 +3,77 @@
 //! in `DIR/cache`), and the [`Character`] that synthesis reads.
 
 use super::JobError;
-use crate::db::{BuildOptions, BuildProgress, BuildReport, Character, CharacterOptions};
+use crate::db::{BuildOptions, BuildProgress, BuildReport, Character, CharacterOptions, DbError};
 use crate::graph::SurfaceMotionGraph;
+use crate::parametric::space::SpaceSummary;
+use serde::Serialize;
 use std::path::Path;
+use std::time::Instant;
+
+/// What [`build_database`] did: the graph's report ([`BuildReport`], which
+/// this derefs to) and the parametric motion spaces of the manifest's
+/// `[[space]]` entries (Casas et al. 2013).
+#[derive(Debug, Clone, Serialize)]
+pub struct DatabaseReport {
+    /// Similarity matrix and graph.
+    #[serde(flatten)]
+    pub build: BuildReport,
+    /// The parametric motion spaces built (empty without any).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub spaces: Vec<SpaceSummary>,
+    /// True if the parametric model came from the cache.
+    pub spaces_cached: bool,
+    /// Seconds spent on the parametric model.
+    pub spaces_seconds: f64,
+}
+
+impl std::ops::Deref for DatabaseReport {
+    type Target = BuildReport;
+    fn deref(&self) -> &BuildReport {
+        &self.build
+    }
+}
 
 /// Builds (or reads from the cache) the similarity matrix and graph of the
-/// database in `dir`; returns the graph and the typed report
-/// ([`BuildReport`]: frames, pairs, transitions, timings, cache state).
+/// database in `dir`, and the parametric motion spaces of its `[[space]]`
+/// entries; returns the graph and the typed report ([`DatabaseReport`]:
+/// frames, pairs, transitions, timings, cache state, spaces).
 /// Options: [`BuildOptions`] (default: the manifest's measure, cache used).
 pub fn build_database(
     dir: &Path,
     opts: &BuildOptions,
     progress: &dyn BuildProgress,
-) -> Result<(SurfaceMotionGraph, BuildReport), JobError> {
-    let (_, graph, report) = crate::db::build(dir, opts, progress)?;
-    Ok((graph, report))
+) -> Result<(SurfaceMotionGraph, DatabaseReport), JobError> {
+    let (_, graph, build) = crate::db::build(dir, opts, progress)?;
+    let m = crate::db::Manifest::load(dir)?;
+    let t = Instant::now();
+    let (spaces, spaces_cached) = if m.spaces.is_empty() {
+        (Vec::new(), false)
+    } else {
+        let popts = crate::parametric::MotionOptions::default();
+        let (motion, cached) = crate::parametric::store::load_or_build(dir, &popts, opts.force)
+            .map_err(|e| match e {
+                crate::parametric::ParamError::Db(e) => e,
+                crate::parametric::ParamError::Space { path, space, msg } => DbError::Manifest {
+                    path,
+                    msg: format!("space '{space}': {msg}"),
+                },
+                other => DbError::Manifest {
+                    path: dir.join(crate::db::MANIFEST),
+                    msg: other.to_string(),
+                },
+            })?;
+        (motion.summary(), cached)
+    };
+    Ok((
+        graph,
+        DatabaseReport {
+            build,
+            spaces,
+            spaces_cached,
+            spaces_seconds: t.elapsed().as_secs_f64(),
+        },
+    ))
 }
 
 /// Loads the database in `dir` for synthesis (building its graph first if

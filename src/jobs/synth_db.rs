@@ -281,6 +281,7 @@ pub fn write_synthetic_database(
         },
         graph: Default::default(),
         deform: Default::default(),
+        spaces: Vec::new(),
     }
     .save(dir)?;
     Ok(SynthReport {

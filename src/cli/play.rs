@@ -1,0 +1,137 @@
+//! `surfmotion play`: a scripted session of parametric motion (Casas et
+//! al. 2013, Sec. 3): the database's `[[space]]` motion spaces steered by
+//! timed requests (space, speed, turn), written to any mesh output.
+
+use anyhow::Context;
+use std::path::PathBuf;
+use std::time::Instant;
+use surfmotion::mesh::MeshSequence;
+use surfmotion::mesh::io::save_sequence;
+use surfmotion::parametric::MotionOptions;
+use surfmotion::parametric::script::{parse_script, play};
+use surfmotion::parametric::store::load_or_build;
+
+/// Arguments of `play`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The character database; its manifest declares `[[space]]` entries
+    /// (built and cached on first use, as `db build` does).
+    #[arg(long)]
+    pub db: PathBuf,
+    /// The control script: a JSON list of timed requests, e.g.
+    /// `[{"t": 0, "space": "locomotion", "speed": 1.2}, {"t": 3, "turn": 30}]`
+    /// (t in seconds, speed in m/s, turn in degrees per second, left positive).
+    #[arg(long, value_name = "JSON")]
+    pub script: PathBuf,
+    /// Output: .glb, .pc2 (+ .obj), .mdd, or a folder of OBJ frames.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Length of the session in seconds (default: the last request + 2 s).
+    #[arg(long, value_parser = super::positive)]
+    pub seconds: Option<f64>,
+    /// Write the JSON report: parameters asked and achieved per second,
+    /// transitions (request, start, end, latency, cost), notices, spaces.
+    #[arg(long, value_name = "JSON")]
+    pub report: Option<PathBuf>,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `play`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let (motion, cached) = load_or_build(&a.db, &MotionOptions::default(), false)?;
+    let build_s = t0.elapsed().as_secs_f64();
+    let text = surfmotion::fsutil::read_small_text(&a.script)
+        .with_context(|| a.script.display().to_string())?;
+    let script = parse_script(&text, &a.script, &motion)?;
+    let seconds = a
+        .seconds
+        .unwrap_or_else(|| script.last().map_or(0.0, |r| r.t) + 2.0);
+    let n = motion.topology.vertex_count();
+    surfmotion::budget::check_frames(
+        &a.script.display().to_string(),
+        (seconds * motion.fps).round() as usize,
+        n,
+        1,
+    )?;
+    let mut frames = Vec::new();
+    let report = play(&motion, &script, Some(seconds), |p| {
+        frames.extend_from_slice(p)
+    });
+    for n in &report.notices {
+        tracing::warn!(
+            "{}: request {} (t = {} s): {}",
+            a.script.display(),
+            n.request,
+            n.t,
+            n.message
+        );
+    }
+    let t1 = Instant::now();
+    let seq = MeshSequence::new(motion.topology.clone(), frames, Some(motion.fps))?;
+    let written = save_sequence(&seq, &a.output, Some(motion.fps))?;
+    let write_s = t1.elapsed().as_secs_f64();
+    if let Some(p) = &a.report {
+        surfmotion::fsutil::write_bytes_atomic(
+            p,
+            serde_json::to_string_pretty(&report)?.as_bytes(),
+        )?;
+    }
+    if a.json {
+        let mut v = serde_json::to_value(&report)?;
+        v["output"] = serde_json::to_value(&written)?;
+        v["model_cached"] = cached.into();
+        v["model_seconds"] = build_s.into();
+        v["write_seconds"] = write_s.into();
+        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+    }
+    crate::outln!(
+        "{} ({:.1} s at {} fps, {} vertices) → {}",
+        super::count(report.frames, "frame"),
+        report.seconds,
+        report.fps,
+        n,
+        a.output.display()
+    )?;
+    crate::outln!(
+        "synthesis {:.3} s ({:.0}× real time); model {} in {:.2} s; writing {:.2} s",
+        report.synthesis_seconds,
+        report.realtime_factor,
+        if cached { "from the cache" } else { "built" },
+        build_s,
+        write_s
+    )?;
+    for t in &report.transitions {
+        crate::outln!(
+            "transition {} → {}: requested {:.2} s, start {:.2} s, end {:.2} s, latency {:.2} s, similarity {:.3}, cost {:.3}",
+            t.from,
+            t.to,
+            t.request_frame as f64 / report.fps,
+            t.start_frame as f64 / report.fps,
+            t.end_frame as f64 / report.fps,
+            t.latency,
+            t.similarity,
+            t.cost
+        )?;
+    }
+    crate::outln!("second  space  speed asked/achieved (m/s)  turn asked/achieved (deg/s)")?;
+    let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.2}"));
+    for s in &report.per_second {
+        crate::outln!(
+            "{:>4}  {}{}  {} / {:.2}  {} / {:.1}",
+            s.second,
+            s.space,
+            if s.transition { " (transition)" } else { "" },
+            opt(s.speed_asked),
+            s.speed,
+            opt(s.turn_asked),
+            s.turn
+        )?;
+    }
+    for n in &report.notices {
+        crate::outln!("note: request {} (t = {} s): {}", n.request, n.t, n.message)?;
+    }
+    Ok(())
+}

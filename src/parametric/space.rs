@@ -1,0 +1,527 @@
+//! Motion spaces and the parametric model of a database (Casas et al.
+//! 2013, Sec. 3): each `[[space]]` of the manifest aligned
+//! ([`super::align`]), its hybrid blend precomputed ([`super::hybrid`]),
+//! its root motion and parameters measured ([`super::params`]), and the
+//! reference similarities between every pair of spaces
+//! ([`super::transition`]).
+
+use super::ParamError;
+use super::align::{Alignment, align, features};
+use super::hybrid::{HybridBlend, HybridOptions};
+use super::local::{RootTrack, local_frame, root_track, rotate};
+use super::params::{ParamMap, Parameter, RootSteps, WEIGHT_STEP, blended_step, measure};
+use super::transition::{
+    RefFeatures, SIMILARITY_VERTICES, SimilarityTable, TransitionOptions, VELOCITY_SECONDS,
+};
+use crate::db::{MANIFEST, Manifest};
+use crate::mesh::Mesh;
+use crate::mesh::blend::Blender;
+use crate::similarity::y_up;
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Options of the model.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct MotionOptions {
+    /// Bisection options (a space's `epsilon_mm` overrides `epsilon`).
+    pub hybrid: HybridOptions,
+    /// Transition search options.
+    pub transition: TransitionOptions,
+}
+
+/// One motion space.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MotionSpace {
+    /// Name.
+    pub name: String,
+    /// Its sequences, in blend order (weight coordinate `u = i` is sequence `i`).
+    pub sequences: Vec<String>,
+    /// Its parameters; the first is blended, a later `turn` steers.
+    pub parameters: Vec<Parameter>,
+    /// The time alignment of the sequences.
+    pub alignment: Alignment,
+    /// The hybrid blend (reference blocks are stored apart in the cache).
+    #[serde(skip)]
+    pub blend: HybridBlend,
+    /// Reference weights per pair (mirrors `blend.pairs`, for the cache).
+    pub pairs: Vec<super::hybrid::PairRefs>,
+    /// Root motion of each sequence on the phase grid.
+    pub steps: Vec<RootSteps>,
+    /// The inverse map of the first parameter.
+    pub axis: Option<ParamMap>,
+    /// `(u, speed m/s, turn deg/s)` at weight step 0.05.
+    pub measured: Vec<[f64; 3]>,
+    /// Hybrid tolerance used (metres).
+    pub epsilon: f64,
+}
+
+impl MotionSpace {
+    /// Largest weight coordinate (`N − 1`).
+    pub fn u_max(&self) -> f64 {
+        self.sequences.len().saturating_sub(1) as f64
+    }
+
+    /// Phase samples per cycle.
+    pub fn grid(&self) -> usize {
+        self.alignment.grid
+    }
+
+    /// The measured `[speed, turn]` at `u` (interpolated from the samples).
+    pub fn measured_at(&self, u: f64) -> [f64; 2] {
+        let s = &self.measured;
+        if s.len() < 2 {
+            return s.first().map_or([0.0; 2], |m| [m[1], m[2]]);
+        }
+        let x = (u / WEIGHT_STEP).clamp(0.0, (s.len() - 1) as f64);
+        let k = (x.floor() as usize).min(s.len() - 2);
+        let t = x - k as f64;
+        [
+            s[k][1] + (s[k + 1][1] - s[k][1]) * t,
+            s[k][2] + (s[k + 1][2] - s[k][2]) * t,
+        ]
+    }
+
+    /// The references `(u, block)` sorted by weight coordinate.
+    pub fn references(&self) -> Vec<(f64, usize)> {
+        if self.pairs.is_empty() {
+            return vec![(0.0, 0)];
+        }
+        let mut out = Vec::new();
+        for (a, p) in self.pairs.iter().enumerate() {
+            for (k, (&w, &b)) in p.weights.iter().zip(&p.blocks).enumerate() {
+                if a > 0 && k == 0 {
+                    continue;
+                }
+                out.push((a as f64 + w, b));
+            }
+        }
+        out
+    }
+
+    /// The blended root step at phase sample `k` and weight `u`.
+    #[inline]
+    pub fn step(&self, u: f64, k: usize) -> [f64; 4] {
+        blended_step(&self.steps, u, k)
+    }
+
+    /// Plays `frames` frames from `phase` (grid units) at weight `u`:
+    /// the new phase and the root motion `(x, z, dθ)` in the body frame at
+    /// the start. Integrates step by step (a step's travel spread over its
+    /// duration), so steps the time warp made short are passed through,
+    /// not skipped.
+    pub fn play_phase(&self, u: f64, phase: f64, frames: f64) -> (f64, [f64; 3]) {
+        let k = self.grid();
+        let mut p = phase.rem_euclid(k as f64);
+        let mut left = frames;
+        let mut acc = [0.0; 3];
+        for _ in 0..4 * k + 4 {
+            if left <= 1e-12 {
+                break;
+            }
+            let i = (p.floor() as usize).min(k - 1);
+            let [x, z, dh, d] = self.step(u, i);
+            let rest = (i + 1) as f64 - p;
+            let need = rest * d;
+            let (take, dp) = if need <= left {
+                (rest, need)
+            } else {
+                (left / d.max(1e-12), left)
+            };
+            let take = take.min(rest);
+            acc[0] += x * take;
+            acc[1] += z * take;
+            acc[2] += dh * take;
+            left -= dp;
+            p += take;
+            if p >= (i + 1) as f64 - 1e-12 {
+                p = ((i + 1) % k) as f64;
+            }
+        }
+        (p, acc)
+    }
+
+    /// The similarity features of the references ([`super::transition`]).
+    pub fn ref_features(&self, fps: f64) -> RefFeatures {
+        let n = self.blend.n;
+        let stride = n.div_ceil(SIMILARITY_VERTICES).max(1);
+        let k = self.grid();
+        let refs = self.references();
+        let feats = refs
+            .iter()
+            .map(|&(u, b)| {
+                let block = &self.blend.blocks[b];
+                (0..k)
+                    .map(|i| {
+                        let j = (i + 1) % k;
+                        let scale = VELOCITY_SECONDS * fps / self.step(u, i)[3].max(1e-6);
+                        let mut f = Vec::with_capacity(6 * n.div_ceil(stride));
+                        for v in (0..n).step_by(stride) {
+                            for c in 0..3 {
+                                f.push(block[(i * n + v) * 3 + c]);
+                            }
+                            for c in 0..3 {
+                                let d = block[(j * n + v) * 3 + c] - block[(i * n + v) * 3 + c];
+                                f.push((d as f64 * scale) as f32);
+                            }
+                        }
+                        f
+                    })
+                    .collect()
+            })
+            .collect();
+        RefFeatures {
+            u: refs.iter().map(|r| r.0).collect(),
+            feats,
+        }
+    }
+}
+
+/// The parametric model of a database: its spaces and the similarity
+/// tables between them.
+#[derive(Debug, Clone)]
+pub struct Motion {
+    /// Frames per second (the database's).
+    pub fps: f64,
+    /// The topology in metres, Y-up (for output meshes).
+    pub topology: Mesh,
+    /// The spaces, in manifest order.
+    pub spaces: Vec<MotionSpace>,
+    /// `tables[s * S + t]`: reference similarities from space `s` to `t`
+    /// (empty for `s = t`).
+    pub tables: Vec<SimilarityTable>,
+    /// Options it was built with.
+    pub options: MotionOptions,
+}
+
+/// A sequence in metres, Y-up, with its root track.
+struct Loaded {
+    frames: Vec<[f64; 3]>,
+    track: RootTrack,
+}
+
+/// Root steps of sequence `i` of an alignment (see [`RootSteps`]).
+fn root_steps(al: &Alignment, i: usize, track: &RootTrack) -> RootSteps {
+    let k = al.grid;
+    let t = &al.times[i];
+    let per_frame = |f: usize| -> [f64; 3] {
+        let g = (f + 1).min(track.centre.len() - 1);
+        let d = rotate(track.centre[g] - track.centre[f], -track.heading[f]);
+        [d.x, d.y, track.heading[g] - track.heading[f]]
+    };
+    let mut step = Vec::with_capacity(k);
+    let mut duration = Vec::with_capacity(k);
+    for j in 0..k {
+        let (ta, tb) = (t[j], t[j + 1].max(t[j]));
+        let mut acc = [0.0; 3];
+        let mut x = ta;
+        while x < tb - 1e-9 {
+            let (f, _, fr) = al.wrapped(i, x);
+            let end = tb.min(x + (1.0 - fr));
+            let w = (end - x).max(1e-9);
+            let d = per_frame(f);
+            for c in 0..3 {
+                acc[c] += d[c] * w;
+            }
+            x = end;
+        }
+        step.push(acc);
+        duration.push((tb - ta).max(1e-6));
+    }
+    RootSteps { step, duration }
+}
+
+impl Motion {
+    /// Builds the model of the database in `dir` from its manifest's
+    /// `[[space]]` entries (factoring the blender once for all spaces).
+    pub fn build(dir: &Path, m: &Manifest, opts: &MotionOptions) -> Result<Motion, ParamError> {
+        let path = dir.join(MANIFEST);
+        let space_err = |space: &str, msg: String| ParamError::Space {
+            path: path.clone(),
+            space: space.to_string(),
+            msg,
+        };
+        let mpu = crate::mocap::units::parse_unit(&m.units)
+            .map(|u| u.metres_per_unit)
+            .unwrap_or(1.0);
+        let z_up = m.up.eq_ignore_ascii_case("z");
+        let conv = |p: &[f64; 3]| (y_up(*p, z_up) * mpu).to_array();
+        let topo_file = m.load_topology(dir)?;
+        let topology = topo_file
+            .with_positions(&topo_file.positions().iter().map(conv).collect::<Vec<_>>())
+            .map_err(crate::mesh::MeshError::from)
+            .map_err(crate::db::DbError::from)?;
+        let n = topology.vertex_count();
+        let blender = Blender::new(&topology)?;
+        let fps = m.fps;
+        let mut loaded: std::collections::HashMap<String, Loaded> = Default::default();
+        let mut spaces = Vec::new();
+        for sp in &m.spaces {
+            for q in &sp.sequences {
+                if loaded.contains_key(q) {
+                    continue;
+                }
+                let entry = m
+                    .sequences
+                    .iter()
+                    .find(|s| &s.name == q)
+                    .ok_or_else(|| space_err(&sp.name, format!("no sequence '{q}'")))?;
+                if let Some(f) = entry.fps
+                    && (f - fps).abs() > 1e-6 * fps
+                {
+                    return Err(space_err(
+                        &sp.name,
+                        format!(
+                            "sequence '{q}' is at {f} fps, the database at {fps}: a space's sequences play at the database's rate"
+                        ),
+                    ));
+                }
+                let seq = m.load_sequence(dir, entry)?;
+                if seq.mesh().vertex_count() != n || seq.mesh().triangles() != topo_file.triangles()
+                {
+                    return Err(space_err(
+                        &sp.name,
+                        format!("sequence '{q}': its connectivity differs from the topology"),
+                    ));
+                }
+                if seq.frame_count() < 2 {
+                    return Err(space_err(
+                        &sp.name,
+                        format!(
+                            "sequence '{q}' has {} frame(s); a space needs at least 2 per sequence",
+                            seq.frame_count()
+                        ),
+                    ));
+                }
+                let frames: Vec<[f64; 3]> = seq.all_positions().iter().map(conv).collect();
+                let track = root_track(&frames, n, fps);
+                loaded.insert(q.clone(), Loaded { frames, track });
+            }
+            let seqs: Vec<&Loaded> = sp.sequences.iter().map(|q| &loaded[q]).collect();
+            let feats: Vec<_> = seqs
+                .iter()
+                .map(|l| features(&l.frames, n, &l.track))
+                .collect();
+            let alignment = align(&feats, fps);
+            let k = alignment.grid;
+            let mut buf0 = vec![[0.0; 3]; n];
+            let mut buf1 = vec![[0.0; 3]; n];
+            let originals: Vec<Vec<f32>> = seqs
+                .iter()
+                .enumerate()
+                .map(|(i, l)| {
+                    let mut block = Vec::with_capacity(k * n * 3);
+                    for j in 0..k {
+                        let (f0, f1, fr) = alignment.wrapped(i, alignment.times[i][j]);
+                        let f1 = f1.min(l.track.centre.len() - 1);
+                        local_frame(&l.frames, n, &l.track, f0, &mut buf0);
+                        local_frame(&l.frames, n, &l.track, f1, &mut buf1);
+                        for (a, b) in buf0.iter().zip(&buf1) {
+                            for c in 0..3 {
+                                block.push((a[c] + (b[c] - a[c]) * fr) as f32);
+                            }
+                        }
+                    }
+                    block
+                })
+                .collect();
+            let steps: Vec<RootSteps> = seqs
+                .iter()
+                .enumerate()
+                .map(|(i, l)| root_steps(&alignment, i, &l.track))
+                .collect();
+            let epsilon = sp.epsilon_mm.map_or(opts.hybrid.epsilon, |e| e * 1e-3);
+            let hopts = HybridOptions {
+                epsilon,
+                ..opts.hybrid
+            };
+            let blend = HybridBlend::build(originals, n, k, &blender, &hopts);
+            let parameters: Vec<Parameter> = sp
+                .parameters
+                .iter()
+                .filter_map(|p| Parameter::parse(p))
+                .collect();
+            let axis = match parameters.first() {
+                Some(&p) => {
+                    Some(ParamMap::fit(p, &steps, fps).map_err(|e| space_err(&sp.name, e))?)
+                }
+                None => None,
+            };
+            let per = (1.0 / WEIGHT_STEP).round() as usize;
+            let measured = (0..=(sp.sequences.len() - 1) * per)
+                .map(|i| {
+                    let u = i as f64 / per as f64;
+                    let [s, t] = measure(&steps, u, fps);
+                    [u, s, t]
+                })
+                .collect();
+            spaces.push(MotionSpace {
+                name: sp.name.clone(),
+                sequences: sp.sequences.clone(),
+                parameters,
+                alignment,
+                pairs: blend.pairs.clone(),
+                blend,
+                steps,
+                axis,
+                measured,
+                epsilon,
+            });
+        }
+        let feats: Vec<RefFeatures> = spaces.iter().map(|s| s.ref_features(fps)).collect();
+        let count = spaces.len();
+        let mut tables = Vec::with_capacity(count * count);
+        for s in 0..count {
+            for t in 0..count {
+                tables.push(if s == t {
+                    SimilarityTable {
+                        ks: 0,
+                        kt: 0,
+                        us: Vec::new(),
+                        ut: Vec::new(),
+                        sim: Vec::new(),
+                    }
+                } else {
+                    SimilarityTable::new(&feats[s], &feats[t])
+                });
+            }
+        }
+        Ok(Motion {
+            fps,
+            topology,
+            spaces,
+            tables,
+            options: *opts,
+        })
+    }
+
+    /// The index of the space called `name`.
+    pub fn space_index(&self, name: &str) -> Option<usize> {
+        self.spaces.iter().position(|s| s.name == name)
+    }
+
+    /// The similarity table from space `s` to space `t`.
+    pub fn table(&self, s: usize, t: usize) -> &SimilarityTable {
+        &self.tables[s * self.spaces.len() + t]
+    }
+
+    /// What was built, per space (for `db build` and `play` reports).
+    pub fn summary(&self) -> Vec<SpaceSummary> {
+        self.spaces
+            .iter()
+            .map(|s| SpaceSummary {
+                name: s.name.clone(),
+                sequences: s.sequences.clone(),
+                cycles: s.alignment.cycles.iter().map(|c| c.period).collect(),
+                cyclic: s.alignment.cycles.iter().map(|c| c.cyclic).collect(),
+                alignment_rms_m: s.alignment.cost.clone(),
+                phase_samples: s.grid(),
+                references: s.blend.pairs.iter().map(|p| p.weights.clone()).collect(),
+                hybrid_max_error_mm: s
+                    .blend
+                    .pairs
+                    .iter()
+                    .map(|p| p.max_error * 1e3)
+                    .fold(0.0, f64::max),
+                epsilon_mm: s.epsilon * 1e3,
+                correction_bytes: s.blend.correction_bytes(),
+                ranges: s
+                    .parameters
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| {
+                        let idx = if *p == Parameter::Speed { 1 } else { 2 };
+                        let (lo, hi) = match (&s.axis, i) {
+                            (Some(a), 0) => (a.range[0], a.range[1]),
+                            _ => s
+                                .measured
+                                .iter()
+                                .map(|m| m[idx])
+                                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                                    (a.min(x), b.max(x))
+                                }),
+                        };
+                        ParamRange {
+                            parameter: *p,
+                            blended: i == 0,
+                            min: lo,
+                            max: hi,
+                            fit: s.axis.as_ref().filter(|_| i == 0).map(|a| a.fit),
+                            roundtrip_error: s.axis.as_ref().filter(|_| i == 0).map(|a| {
+                                match a.fit {
+                                    super::params::FitKind::Quadratic => a.error_quadratic,
+                                    super::params::FitKind::Table => a.error_table,
+                                }
+                            }),
+                            quadratic_error: s
+                                .axis
+                                .as_ref()
+                                .filter(|_| i == 0)
+                                .map(|a| a.error_quadratic),
+                        }
+                    })
+                    .collect(),
+            })
+            .collect()
+    }
+}
+
+/// The valid range of one parameter of a space.
+#[derive(Debug, Clone, Serialize)]
+pub struct ParamRange {
+    /// The parameter.
+    pub parameter: Parameter,
+    /// True for the blended (first) parameter; false: a steering `turn`
+    /// (any value; the range shown is the blend's own turning).
+    pub blended: bool,
+    /// Lowest value.
+    pub min: f64,
+    /// Highest value.
+    pub max: f64,
+    /// The inverse map used.
+    pub fit: Option<super::params::FitKind>,
+    /// Its largest round-trip error (parameter units).
+    pub roundtrip_error: Option<f64>,
+    /// The quadratic's (the paper's) round-trip error.
+    pub quadratic_error: Option<f64>,
+}
+
+/// What a space holds (reports).
+#[derive(Debug, Clone, Serialize)]
+pub struct SpaceSummary {
+    /// Name.
+    pub name: String,
+    /// Sequences.
+    pub sequences: Vec<String>,
+    /// Cycle length of each sequence (frames, fractional).
+    pub cycles: Vec<f64>,
+    /// Whether each sequence repeats (else its whole length loops).
+    pub cyclic: Vec<bool>,
+    /// RMS vertex distance along each sequence's warping path (metres).
+    pub alignment_rms_m: Vec<f64>,
+    /// Phase samples per cycle.
+    pub phase_samples: usize,
+    /// Reference weights per pair of neighbouring sequences.
+    pub references: Vec<Vec<f64>>,
+    /// Largest tested hybrid error (mm).
+    pub hybrid_max_error_mm: f64,
+    /// The tolerance (mm).
+    pub epsilon_mm: f64,
+    /// Bytes of the stored non-linear references.
+    pub correction_bytes: usize,
+    /// Parameter ranges.
+    pub ranges: Vec<ParamRange>,
+}
+
+/// Places a body frame in the world: turned to `heading` about the
+/// vertical and moved to the horizontal `root` (`out[i] = R_y(θ) p_i + root`).
+pub fn place(local: &[[f64; 3]], root: DVec2, heading: f64, out: &mut [[f64; 3]]) {
+    let (s, c) = heading.sin_cos();
+    for (o, p) in out.iter_mut().zip(local) {
+        *o = [
+            p[0] * c + p[2] * s + root.x,
+            p[1],
+            -p[0] * s + p[2] * c + root.y,
+        ];
+    }
+}

@@ -1,0 +1,229 @@
+//! The parametric model's cache file, `DIR/cache/parametric.bin`, written
+//! by `db build` and read by `play` until an input changes.
+//!
+//! Format (little-endian): magic `SMPAR001`, key `u64` (xxh3 of the frames'
+//! inputs, the `[[space]]` entries and the options), the length `u64` and
+//! bytes of a JSON header (spaces without their reference blocks, tables
+//! without their values), then every space's reference blocks and every
+//! table's values as `u64` counts of f32. On load every count is checked
+//! against the header before anything is allocated, and every value must
+//! be finite (similarities in `[0, 1]`); a file that fails is rebuilt with
+//! a warning.
+
+use super::ParamError;
+use super::space::{Motion, MotionOptions, MotionSpace};
+use super::transition::SimilarityTable;
+use crate::db::cache::{KeyHasher, cache_dir, frames_key};
+use crate::db::{DbError, MANIFEST, Manifest};
+use crate::fsutil::write_atomic;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+const MAGIC: &[u8; 8] = b"SMPAR001";
+/// Bump when the model's algorithm or layout changes (old caches are rebuilt).
+pub const FORMAT_VERSION: u32 = 4;
+
+/// The cache file of a database's parametric model.
+pub fn cache_path(dir: &Path) -> PathBuf {
+    cache_dir(dir).join("parametric.bin")
+}
+
+#[derive(Serialize, Deserialize)]
+struct Header {
+    fps: f64,
+    spaces: Vec<MotionSpace>,
+    tables: Vec<SimilarityTable>,
+    options: MotionOptions,
+}
+
+/// The cache key of a database's model.
+pub fn key(dir: &Path, m: &Manifest, opts: &MotionOptions) -> Result<u64, DbError> {
+    let mut h: KeyHasher = frames_key(dir, m)?;
+    h.text("units", &m.units);
+    h.text("parametric", &FORMAT_VERSION.to_string());
+    h.text(
+        "spaces",
+        &serde_json::to_string(&m.spaces).unwrap_or_default(),
+    );
+    h.text("options", &serde_json::to_string(opts).unwrap_or_default());
+    Ok(h.finish())
+}
+
+/// Writes the model with its key, atomically.
+pub fn save(path: &Path, key: u64, motion: &Motion) -> Result<(), ParamError> {
+    let header = serde_json::to_vec(&HeaderRef {
+        fps: motion.fps,
+        spaces: &motion.spaces,
+        tables: &motion.tables,
+        options: &motion.options,
+    })
+    .map_err(|e| DbError::Manifest {
+        path: path.to_path_buf(),
+        msg: e.to_string(),
+    })?;
+    write_atomic(path, |w| {
+        w.write_all(MAGIC)?;
+        w.write_all(&key.to_le_bytes())?;
+        w.write_all(&(header.len() as u64).to_le_bytes())?;
+        w.write_all(&header)?;
+        let mut put = |v: &[f32]| -> std::io::Result<()> {
+            w.write_all(&(v.len() as u64).to_le_bytes())?;
+            for x in v {
+                w.write_all(&x.to_le_bytes())?;
+            }
+            Ok(())
+        };
+        for s in &motion.spaces {
+            for b in &s.blend.blocks {
+                put(b)?;
+            }
+        }
+        for t in &motion.tables {
+            put(&t.sim)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct HeaderRef<'a> {
+    fps: f64,
+    spaces: &'a [MotionSpace],
+    tables: &'a [SimilarityTable],
+    options: &'a MotionOptions,
+}
+
+/// Parses a cache file's bytes for `key` against the topology (`n`
+/// vertices); `Err(reason)` when it is stale or malformed.
+pub fn parse(bytes: &[u8], key: u64, topology: &crate::mesh::Mesh) -> Result<Motion, String> {
+    let mut at = 0usize;
+    let mut take = |k: usize| -> Result<&[u8], String> {
+        let s = bytes
+            .get(at..at.checked_add(k).ok_or("size overflow")?)
+            .ok_or("truncated")?;
+        at += k;
+        Ok(s)
+    };
+    if take(8)? != MAGIC {
+        return Err("not a parametric cache".into());
+    }
+    let u64_of = |b: &[u8]| u64::from_le_bytes(b.try_into().unwrap_or([0; 8]));
+    if u64_of(take(8)?) != key {
+        return Err("stale (inputs changed)".into());
+    }
+    let hl = usize::try_from(u64_of(take(8)?)).map_err(|_| "header size")?;
+    let header: Header = serde_json::from_slice(take(hl)?).map_err(|e| format!("header: {e}"))?;
+    let n = topology.vertex_count();
+    let mut floats = |expect: usize, what: &str| -> Result<Vec<f32>, String> {
+        let len = usize::try_from(u64_of(take(8)?)).map_err(|_| "count")?;
+        if len != expect {
+            return Err(format!("{what}: {len} values, expected {expect}"));
+        }
+        let body = take(len.checked_mul(4).ok_or("size overflow")?)?;
+        let v: Vec<f32> = body
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(format!("{what}: a value that is not finite"));
+        }
+        Ok(v)
+    };
+    let mut spaces = header.spaces;
+    for s in &mut spaces {
+        let k = s.alignment.grid;
+        let blocks = s
+            .pairs
+            .iter()
+            .flat_map(|p| p.blocks.iter().copied())
+            .max()
+            .map_or(1, |b| b + 1);
+        if k == 0
+            || s.steps.len() != s.sequences.len()
+            || s.steps
+                .iter()
+                .any(|r| r.step.len() != k || r.duration.len() != k)
+        {
+            return Err(format!("space '{}': inconsistent header", s.name));
+        }
+        let mut out = Vec::with_capacity(blocks);
+        for b in 0..blocks {
+            out.push(floats(k * n * 3, &format!("space '{}' block {b}", s.name))?);
+        }
+        s.blend = super::hybrid::HybridBlend {
+            n,
+            grid: k,
+            blocks: out,
+            pairs: s.pairs.clone(),
+        };
+    }
+    let mut tables = header.tables;
+    if tables.len() != spaces.len() * spaces.len() {
+        return Err("table count".into());
+    }
+    for t in &mut tables {
+        t.sim = floats(t.expected_len(), "similarity table")?;
+        if t.sim.iter().any(|x| !(0.0..=1.0).contains(x)) {
+            return Err("a similarity outside [0, 1]".into());
+        }
+    }
+    Ok(Motion {
+        fps: header.fps,
+        topology: topology.clone(),
+        spaces,
+        tables,
+        options: header.options,
+    })
+}
+
+/// The model of the database in `dir`: from the cache when current, else
+/// built and cached. Returns the model and whether it came from the cache.
+/// Errors when the manifest declares no space.
+pub fn load_or_build(
+    dir: &Path,
+    opts: &MotionOptions,
+    force: bool,
+) -> Result<(Motion, bool), ParamError> {
+    let m = Manifest::load(dir)?;
+    if m.spaces.is_empty() {
+        return Err(DbError::Manifest {
+            path: dir.join(MANIFEST),
+            msg: "no [[space]] entries: declare a parametric motion space (name, sequences, parameters; see the README's \"Parametric motion\")".into(),
+        }
+        .into());
+    }
+    let key = key(dir, &m, opts)?;
+    let path = cache_path(dir);
+    if !force && let Ok(bytes) = std::fs::read(&path) {
+        let topo = metres_topology(dir, &m)?;
+        match parse(&bytes, key, &topo) {
+            Ok(motion) => return Ok((motion, true)),
+            Err(why) => {
+                if !why.starts_with("stale") {
+                    tracing::warn!("{}: {why}; rebuilding the parametric model", path.display());
+                }
+            }
+        }
+    }
+    let motion = Motion::build(dir, &m, opts)?;
+    save(&path, key, &motion)?;
+    Ok((motion, false))
+}
+
+/// The topology in metres, Y-up.
+fn metres_topology(dir: &Path, m: &Manifest) -> Result<crate::mesh::Mesh, ParamError> {
+    let mpu = crate::mocap::units::parse_unit(&m.units)
+        .map(|u| u.metres_per_unit)
+        .unwrap_or(1.0);
+    let z_up = m.up.eq_ignore_ascii_case("z");
+    let t = m.load_topology(dir)?;
+    let p: Vec<[f64; 3]> = t
+        .positions()
+        .iter()
+        .map(|p| (crate::similarity::y_up(*p, z_up) * mpu).to_array())
+        .collect();
+    Ok(t.with_positions(&p)
+        .map_err(crate::mesh::MeshError::from)
+        .map_err(DbError::from)?)
+}
