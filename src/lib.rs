@@ -24,3 +24,4 @@ pub mod similarity;
 pub mod skeleton;
 pub mod synth;
 pub mod transfer;
+pub mod web;

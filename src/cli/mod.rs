@@ -15,6 +15,7 @@ mod retarget;
 mod rig;
 mod synth;
 mod transfer;
+mod web;
 
 use clap::{CommandFactory, FromArgMatches, Subcommand};
 
@@ -104,6 +105,11 @@ enum Command {
     /// cluster array jobs (--shard i/n); bad clips are reported, not fatal
     /// (exit 1 if any failed). Writes batch.json/.html/.svg.
     Batch(Box<batch::Args>),
+    /// The character in a web browser (Volino et al. 2015): export a
+    /// static site (compact 4D geometry, the Surface Motion Graph, a WebGL2
+    /// page with an animation engine) or serve it locally.
+    #[command(subcommand)]
+    Web(web::Cmd),
 }
 
 /// Entry point of the CLI.
@@ -152,6 +158,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Eval(a) => retarget::eval(a),
         Command::Transfer(a) => transfer::run(*a),
         Command::Batch(a) => batch::run_batch(*a),
+        Command::Web(c) => web::run(c),
     }
 }
 
