@@ -37,6 +37,9 @@ pub struct Source {
     /// Prediction of the geometry codec (measured: spatio-temporal is smaller).
     #[arg(long, value_enum, default_value_t = PredictorArg::SpatioTemporal)]
     pub predictor: PredictorArg,
+    /// DEFLATE level of the geometry (0-9): higher is smaller and slower.
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=9))]
+    pub level: u32,
 }
 
 /// The codec's predictor.
@@ -85,7 +88,7 @@ fn options(s: &Source) -> anyhow::Result<ExportOptions> {
                 PredictorArg::Temporal => Predictor::Temporal,
                 PredictorArg::SpatioTemporal => Predictor::SpatioTemporal,
             },
-            ..EncodeOptions::default()
+            level: s.level,
         },
     })
 }

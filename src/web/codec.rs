@@ -93,7 +93,8 @@ pub struct EncodeOptions {
     /// The predictor. Default: [`Predictor::SpatioTemporal`] (the smaller
     /// output on samba, crane and synthetic databases; see the README).
     pub predictor: Predictor,
-    /// DEFLATE level 0-9. Default: 9.
+    /// DEFLATE level 0-9. Default: 6 (on samba: 1,618 KB in 1.6 s; level 9:
+    /// 1,571 KB in 5.1 s; level 3: 1,686 KB in 0.5 s; see the README).
     pub level: u32,
 }
 
@@ -102,7 +103,7 @@ impl Default for EncodeOptions {
         EncodeOptions {
             max_error: 0.001,
             predictor: Predictor::SpatioTemporal,
-            level: 9,
+            level: 6,
         }
     }
 }
