@@ -458,14 +458,22 @@ impl Reader<'_> {
 /// Inflates one block and reads `count` zigzag varints from it.
 fn read_block(data: &[u8], offset: usize, count: usize) -> Result<Vec<i32>, CodecError> {
     let bad = |msg: String| CodecError::Corrupt { offset, msg };
-    let mut raw = Vec::with_capacity(count * 2);
+    // DEFLATE expands at most 1,032:1: a count no block of this size can
+    // hold is corrupt (and must not size an allocation).
+    if count > data.len().saturating_mul(1100) {
+        return Err(bad(format!(
+            "{count} values cannot come from a block of {} bytes",
+            data.len()
+        )));
+    }
+    let mut raw = Vec::with_capacity(count.min(data.len() * 8));
     // At most 5 bytes per varint: a bigger stream is corrupt (and this caps
     // what a hostile file can make us allocate).
     DeflateDecoder::new(data)
         .take(count as u64 * 5 + 1)
         .read_to_end(&mut raw)
         .map_err(|e| bad(format!("the block does not inflate ({e})")))?;
-    let mut out = Vec::with_capacity(count);
+    let mut out = Vec::with_capacity(count.min(raw.len()));
     let mut z = 0u32;
     let mut shift = 0;
     for &b in &raw {
@@ -520,7 +528,11 @@ pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
     let levels = [r.u32()?, r.u32()?, r.u32()?];
     let max_error = r.f32()?;
     let topo_bytes = r.u32()? as usize;
-    if n == 0 || levels.iter().any(|&l| l > MAX_LEVELS) || step <= 0.0 {
+    if n == 0
+        || n > (1 << 26).min(b.len().saturating_mul(1100))
+        || levels.iter().any(|&l| l > MAX_LEVELS)
+        || step <= 0.0
+    {
         return Err(CodecError::Corrupt {
             offset: 16,
             msg: format!("{n} vertices, step {step}, levels {levels:?}"),
@@ -547,11 +559,7 @@ pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
                 ),
             })
     };
-    let idx = read_block(
-        block(at, topo_bytes)?,
-        at,
-        nt.checked_mul(3).unwrap_or(usize::MAX),
-    )?;
+    let idx = read_block(block(at, topo_bytes)?, at, nt.saturating_mul(3))?;
     let mut triangles = Vec::with_capacity(nt);
     let mut last = 0i64;
     for (k, d) in idx.chunks_exact(3).enumerate() {
@@ -716,6 +724,19 @@ mod tests {
         assert!(matches!(
             decode(&bad),
             Err(CodecError::Corrupt { offset: 8, .. })
+        ));
+    }
+
+    #[test]
+    fn a_header_claiming_huge_counts_is_an_error_not_an_allocation() {
+        let (mut bytes, _) = encode(&grid(), &EncodeOptions::default()).unwrap();
+        let mut b = bytes.clone();
+        b[20..24].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(matches!(decode(&b), Err(CodecError::Corrupt { .. })));
+        bytes[16..20].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(matches!(
+            decode(&bytes),
+            Err(CodecError::Corrupt { offset: 16, .. })
         ));
     }
 

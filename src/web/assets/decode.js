@@ -23,6 +23,7 @@ async function inflate(bytes, offset) {
 
 // Reads `count` zigzag LEB128 varints into an Int32Array.
 function varints(raw, count, offset) {
+  if (count > raw.length) throw fail(offset, `the block holds ${raw.length} bytes, too few for ${count} values`);
   const out = new Int32Array(count);
   let k = 0, z = 0, shift = 0;
   for (let i = 0; i < raw.length; i++) {
@@ -71,7 +72,7 @@ export async function decodeSm4d(buffer) {
   const levels = [u32(44), u32(48), u32(52)];
   const maxError = f32(56);
   const topoBytes = u32(60);
-  if (!(n > 0) || !(step > 0) || !isFinite(step) || origin.some((x) => !isFinite(x)) || levels.some((l) => l > 65536))
+  if (!(n > 0) || n > Math.min(1 << 26, b.length * 1100) || !(step > 0) || !isFinite(step) || origin.some((x) => !isFinite(x)) || levels.some((l) => l > 65536))
     throw fail(16, `${n} vertices, step ${step}, levels ${levels}`);
   if (HEADER + 8 * ns > b.length) throw fail(24, `${ns} sequences do not fit the file`);
   const table = [];
