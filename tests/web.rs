@@ -285,6 +285,14 @@ fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
         r["glMsMean"].as_f64().unwrap_or(-1.0),
     );
     assert_eq!(r["ok"], true, "{r}");
+    // The engine in the page walks the graph's own transition table.
+    let (_, _, graph) = web::load_db_geometry(&db).unwrap();
+    let table: Vec<[usize; 5]> = graph
+        .transitions
+        .iter()
+        .map(|t| [t.from, t.to, t.m, t.n, t.window])
+        .collect();
+    assert_eq!(r["engineTransitions"], serde_json::json!(table));
     assert_eq!(r["webgl2"], true);
     assert_eq!(r["errors"], serde_json::json!([]), "console errors");
     let px = &r["characterPixels"];

@@ -217,6 +217,7 @@ async function selftest(app, step, renderer, m) {
   let diff = 0;
   for (let i = 0; i < a.mask.length; i++) diff += a.mask[i] !== b.mask[i];
   out.characterPixels = [a.count, b.count]; out.diffPixels = diff;
+  if (app.engine) out.engineTransitions = app.engine.trans.map((t) => [t.from, t.to, t.m, t.n, t.window]);
   if (app.engine && m.sequences.length > 1) {
     const e = app.engine;
     out.before = e.state();
