@@ -54,6 +54,9 @@
 //!   rigs.
 //! - [`inspect`]: what any supported file holds, what was assumed, and
 //!   problems.
+//! - [`web`]: the character in a web browser (Volino et al. 2015): compact
+//!   4D geometry, a static site with a WebGL2 page and an animation engine
+//!   over the graph, and a local server.
 //! - [`synth`]: synthetic data made by the project's own code: procedural
 //!   clips, the procedural humanoid and synthetic databases.
 //! - [`budget`]: limits on what one job may ask for, checked before
@@ -88,3 +91,4 @@ pub mod fsutil;
 pub mod inspect;
 pub mod render;
 pub mod synth;
+pub mod web;

@@ -17,6 +17,7 @@ mod rig;
 mod synth;
 mod transfer;
 mod values;
+mod web;
 
 use clap::{CommandFactory, FromArgMatches, Subcommand};
 
@@ -108,6 +109,11 @@ enum Command {
     Batch(Box<batch::Args>),
     /// Play a scripted session of parametric motion (Casas et al. 2013): the database's [[space]] motion spaces steered by timed requests (space, speed, turn), with online transitions; writes any mesh output and a report of parameters asked vs achieved.
     Play(play::Args),
+    /// The character in a web browser (Volino et al. 2015): export a
+    /// static site (compact 4D geometry, the Surface Motion Graph, a WebGL2
+    /// page with an animation engine) or serve it locally.
+    #[command(subcommand)]
+    Web(web::Cmd),
 }
 
 /// Entry point of the CLI.
@@ -169,6 +175,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Transfer(a) => transfer::run(*a),
         Command::Batch(a) => batch::run_batch(*a),
         Command::Play(a) => play::run(a),
+        Command::Web(c) => web::run(c),
     }
 }
 

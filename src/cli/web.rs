@@ -1,0 +1,152 @@
+//! `surfmotion web`: export the character (or a result) as a static site,
+//! or serve it locally.
+
+use std::path::PathBuf;
+use surfmotion::web::{self, EncodeOptions, ExportOptions, Predictor};
+
+/// Subcommands of `web`.
+#[derive(clap::Subcommand)]
+pub enum Cmd {
+    /// Write a self-contained static site: index.html, the engine and
+    /// renderer (JavaScript modules, WebGL2), the compact 4D geometry and
+    /// the Surface Motion Graph's transition table. Any static host serves
+    /// it; no network access at run time.
+    Export(ExportArgs),
+    /// Export into a temporary folder and serve it on 127.0.0.1 (prints the
+    /// URL; Ctrl-C stops).
+    Serve(ServeArgs),
+}
+
+/// What to export.
+#[derive(clap::Args)]
+pub struct Source {
+    /// The database directory: the interactive character.
+    #[arg(long, required_unless_present_any = ["result", "site"], conflicts_with = "result")]
+    pub db: Option<PathBuf>,
+    /// A result to view with a timeline instead (`.glb`, or `.pc2`/`.mdd`
+    /// with the `.obj` of the same name or --topology).
+    #[arg(long, value_name = "FILE")]
+    pub result: Option<PathBuf>,
+    /// Topology of a `--result` point cache.
+    #[arg(long, value_name = "OBJ", requires = "result")]
+    pub topology: Option<PathBuf>,
+    /// Largest vertex error of the compressed geometry, in millimetres
+    /// (guaranteed: checked after encoding).
+    #[arg(long, default_value_t = 1.0, value_name = "MM")]
+    pub max_error: f64,
+    /// Prediction of the geometry codec (measured: spatio-temporal is smaller).
+    #[arg(long, value_enum, default_value_t = PredictorArg::SpatioTemporal)]
+    pub predictor: PredictorArg,
+    /// DEFLATE level of the geometry (0-9): higher is smaller and slower.
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=9))]
+    pub level: u32,
+}
+
+/// The codec's predictor.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum PredictorArg {
+    /// The previous frame.
+    Temporal,
+    /// The previous frame plus a neighbour's motion.
+    SpatioTemporal,
+}
+
+/// Arguments of `web export`.
+#[derive(clap::Args)]
+pub struct ExportArgs {
+    #[command(flatten)]
+    pub source: Source,
+    /// The site folder to write (replaced if it holds an earlier export).
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `web serve`.
+#[derive(clap::Args)]
+pub struct ServeArgs {
+    #[command(flatten)]
+    pub source: Source,
+    /// Serve this already exported site instead.
+    #[arg(long, conflicts_with_all = ["db", "result"])]
+    pub site: Option<PathBuf>,
+    /// Port (0 picks a free one).
+    #[arg(long, default_value_t = 8080)]
+    pub port: u16,
+    /// Address to listen on.
+    #[arg(long, default_value = "127.0.0.1")]
+    pub bind: String,
+}
+
+fn options(s: &Source) -> anyhow::Result<ExportOptions> {
+    Ok(ExportOptions {
+        codec: EncodeOptions {
+            max_error: s.max_error * 1e-3,
+            predictor: match s.predictor {
+                PredictorArg::Temporal => Predictor::Temporal,
+                PredictorArg::SpatioTemporal => Predictor::SpatioTemporal,
+            },
+            level: s.level,
+        },
+    })
+}
+
+fn export(s: &Source, out: &std::path::Path) -> anyhow::Result<web::ExportReport> {
+    let opts = options(s)?;
+    Ok(match (&s.db, &s.result) {
+        (Some(db), _) => web::export_db(db, out, &opts)?,
+        (None, Some(r)) => web::export_result(r, s.topology.as_deref(), out, &opts)?,
+        (None, None) => return Err(super::Usage.into()),
+    })
+}
+
+fn summary(r: &web::ExportReport) -> String {
+    let g = &r.geometry;
+    format!(
+        "wrote {}: {} frames × {} vertices, geometry {:.0} KB ({:.1} KB/frame, {:.1}× smaller than float32), max vertex error {:.3} mm (step {:.3} mm), {} transitions, {:.2} s\n",
+        r.site.display(),
+        g.frames,
+        r.vertices,
+        g.bytes as f64 / 1e3,
+        g.bytes as f64 / 1e3 / g.frames.max(1) as f64,
+        r.raw_bytes as f64 / g.bytes.max(1) as f64,
+        g.max_error * 1e3,
+        g.step * 1e3,
+        r.transitions,
+        r.seconds
+    )
+}
+
+/// Runs `web`.
+pub fn run(c: Cmd) -> anyhow::Result<()> {
+    match c {
+        Cmd::Export(a) => {
+            let r = export(&a.source, &a.out)?;
+            if a.json {
+                super::emit(&(serde_json::to_string_pretty(&r)? + "\n"))
+            } else {
+                super::emit(&summary(&r))
+            }
+        }
+        Cmd::Serve(a) => {
+            let _tmp;
+            let root = match &a.site {
+                Some(s) => s.clone(),
+                None => {
+                    let t = tempfile::tempdir()?;
+                    let site = t.path().join("site");
+                    let r = export(&a.source, &site)?;
+                    eprint!("{}", summary(&r));
+                    _tmp = t;
+                    site
+                }
+            };
+            let server = web::SiteServer::bind(&root, &format!("{}:{}", a.bind, a.port))?;
+            println!("serving {} at {}", root.display(), server.url());
+            server.run();
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,253 @@
+// The page: loads manifest.json and the geometry (decoded in a worker),
+// runs the engine (character mode) or a timeline (result mode), draws with
+// the WebGL2 renderer, and shows any failure as a message on the page.
+// `?selftest=1` runs the browser test's checks and POSTs them to /__report.
+import { Engine, IDENTITY, mat4, apply } from './engine.js';
+import { Renderer } from './render.js';
+
+const $ = (id) => document.getElementById(id);
+const params = new URLSearchParams(location.search);
+const SELFTEST = params.has('selftest');
+const errors = [];
+const app = { ready: false, error: null, errors, stats: {} };
+window.surfmotion = app;
+
+const origError = console.error.bind(console);
+console.error = (...a) => { errors.push(a.map(String).join(' ')); origError(...a); };
+window.addEventListener('error', (e) => { errors.push(String(e.message)); showError(e.message); });
+window.addEventListener('unhandledrejection', (e) => { errors.push(String(e.reason)); showError(e.reason && e.reason.message || e.reason); });
+
+function showError(msg) {
+  if (app.error) return;
+  app.error = String(msg);
+  $('loading').hidden = true;
+  const box = $('error');
+  box.textContent = 'Cannot show this character: ' + app.error;
+  box.hidden = false;
+  if (SELFTEST) report({ ok: false, error: app.error, errorVisible: !box.hidden && box.offsetHeight > 0 });
+}
+
+async function report(r) {
+  try { await fetch('/__report', { method: 'POST', body: JSON.stringify(r) }); } catch (_) { /* nothing to report to */ }
+}
+
+function checkManifest(m) {
+  const bad = (msg) => { throw new Error('manifest.json: ' + msg); };
+  if (!m || m.format !== 'surfmotion-web') bad('not a surfmotion site manifest');
+  if (m.version !== 1) bad(`version ${m.version}, this page knows 1`);
+  if (!Array.isArray(m.sequences) || m.sequences.length === 0) bad('no sequences');
+  for (const s of m.sequences) if (!(s.frames > 0) || !(s.fps > 0)) bad(`sequence ${s.name}: ${s.frames} frames at ${s.fps} fps`);
+  for (const [k, t] of (m.transitions || []).entries()) {
+    const A = m.sequences[t.from], B = m.sequences[t.to];
+    if (!A || !B || !(t.m < A.frames) || !(t.n < B.frames) || !(t.window >= 0) || !Array.isArray(t.align))
+      bad(`transition ${k} does not fit its sequences`);
+  }
+}
+
+function decodeInWorker(url) {
+  return new Promise((resolve, reject) => {
+    const w = new Worker('worker.js', { type: 'module' });
+    w.onmessage = (e) => { w.terminate(); e.data.ok ? resolve(e.data) : reject(new Error(e.data.error)); };
+    w.onerror = (e) => { w.terminate(); reject(new Error('the decoder worker failed: ' + (e.message || 'unknown error'))); };
+    w.postMessage({ url });
+  });
+}
+
+async function main() {
+  const t0 = performance.now();
+  const stages = app.stats.stages = { start: t0 };
+  const r = await fetch('manifest.json');
+  if (!r.ok) throw new Error(`manifest.json: HTTP ${r.status}`);
+  let m;
+  try { m = await r.json(); } catch (e) { throw new Error('manifest.json: not JSON (' + e.message + ')'); }
+  checkManifest(m);
+  stages.manifest = performance.now();
+  // The worker fetches and decodes while the WebGL2 context starts.
+  const pending = decodeInWorker(m.geometry);
+  pending.catch(() => {});
+  const renderer = new Renderer($('view'));
+  stages.webgl = performance.now();
+  const d = await pending;
+  const g = d.g;
+  if (g.sequences.length !== m.sequences.length) throw new Error(`the geometry holds ${g.sequences.length} sequences, the manifest ${m.sequences.length}`);
+  m.sequences.forEach((s, i) => { if (g.sequences[i].frames !== s.frames) throw new Error(`sequence ${s.name}: ${g.sequences[i].frames} frames in the geometry, ${s.frames} in the manifest`); });
+  stages.decoded = performance.now();
+  renderer.load(g);
+  stages.uploaded = performance.now();
+  app.stats.fetchMs = d.fetchMs; app.stats.decodeMs = d.decodeMs; app.stats.bytes = d.bytes;
+  $('title').textContent = m.name;
+  $('loading').hidden = true;
+
+  const result = m.mode === 'result';
+  const engine = result ? null : new Engine(m);
+  app.engine = engine; app.manifest = m;
+  let scrubFrame = 0, playing = true;
+  const buttons = [];
+  if (result) {
+    $('timeline').style.display = 'flex';
+    const sc = $('scrub'); sc.max = m.sequences[0].frames - 1;
+    sc.oninput = () => { scrubFrame = +sc.value; playing = false; $('play').textContent = 'play'; };
+    $('play').onclick = () => { playing = !playing; $('play').textContent = playing ? 'pause' : 'play'; };
+  } else {
+    m.sequences.forEach((s, i) => {
+      const b = document.createElement('button');
+      b.textContent = (i < 9 ? `${i + 1} ` : '') + s.name;
+      b.onclick = () => engine.request(i);
+      $('bar').appendChild(b); buttons.push(b);
+    });
+  }
+  window.addEventListener('keydown', (e) => {
+    if (result) {
+      if (e.key === ' ') { playing = !playing; $('play').textContent = playing ? 'pause' : 'play'; }
+      if (e.key === 'ArrowRight') scrubFrame = Math.min(scrubFrame + 1, m.sequences[0].frames - 1);
+      if (e.key === 'ArrowLeft') scrubFrame = Math.max(scrubFrame - 1, 0);
+      return;
+    }
+    const k = parseInt(e.key, 10);
+    if (k >= 1 && k <= m.sequences.length) engine.request(k - 1);
+  });
+
+  // Orbit camera around the character's centre.
+  const cam = { yaw: 0.6, pitch: 0.25, dist: 4.5, at: [0, 1, 0] };
+  const cv = $('view');
+  let drag = null;
+  cv.addEventListener('pointerdown', (e) => { drag = [e.clientX, e.clientY]; cv.setPointerCapture(e.pointerId); });
+  cv.addEventListener('pointerup', () => { drag = null; });
+  cv.addEventListener('pointermove', (e) => {
+    if (!drag) return;
+    cam.yaw -= (e.clientX - drag[0]) * 0.008;
+    cam.pitch = Math.max(-0.2, Math.min(1.4, cam.pitch + (e.clientY - drag[1]) * 0.008));
+    drag = [e.clientX, e.clientY];
+  });
+  cv.addEventListener('wheel', (e) => { cam.dist = Math.max(0.8, Math.min(30, cam.dist * Math.exp(e.deltaY * 0.001))); e.preventDefault(); }, { passive: false });
+
+  const centre = (v) => {
+    const c = d.centres[v.s];
+    const [x, z] = apply(v.W, c[3 * v.f], c[3 * v.f + 2]);
+    return [x, c[3 * v.f + 1], z];
+  };
+  let first = true;
+  const camAt = (v) => {
+    const c = centre(v.a);
+    if (first) { cam.at = c; first = false; }
+    for (let i = 0; i < 3; i++) cam.at[i] += (c[i] - cam.at[i]) * 0.15;
+    const e = [cam.at[0] + cam.dist * Math.cos(cam.pitch) * Math.sin(cam.yaw), cam.at[1] + cam.dist * Math.sin(cam.pitch), cam.at[2] + cam.dist * Math.cos(cam.pitch) * Math.cos(cam.yaw)];
+    return { eye: e, at: cam.at.slice() };
+  };
+
+  const timing = { engine: [], gl: [] };
+  let frames = 0;
+  // Advances `ticks` frames and draws; returns {engineMs, glMs}.
+  const step = (ticks, finish) => {
+    const a = performance.now();
+    let v;
+    if (result) {
+      if (playing && ticks) scrubFrame = (scrubFrame + ticks) % m.sequences[0].frames;
+      $('scrub').value = scrubFrame;
+      v = { a: { s: 0, f: scrubFrame, W: IDENTITY }, b: { s: 0, f: scrubFrame, W: IDENTITY }, alpha: 0 };
+    } else {
+      for (let i = 0; i < ticks; i++) engine.tick();
+      v = engine.view();
+    }
+    const mA = mat4(v.a.W), mB = mat4(v.b.W);
+    const c = camAt(v);
+    const b = performance.now();
+    renderer.draw(v, c, mA, mB);
+    if (finish) renderer.gl.finish();
+    const e = performance.now();
+    frames++;
+    const st = result ? null : engine.state();
+    buttons.forEach((bt, i) => bt.classList.toggle('on', m.sequences[i].name === st.goal));
+    $('status').textContent = result
+      ? `frame ${scrubFrame + 1} / ${m.sequences[0].frames}`
+      : `${st.shown.sequence} frame ${st.shown.frame}${st.blending ? ` (blend ${st.shown.blend.toFixed(2)})` : ''}` +
+        `  queue [${st.queue.join(', ')}]  transitions ${st.transitions}  drawn ${frames}`;
+    return { engineMs: b - a, glMs: e - b, view: v };
+  };
+  app.step = step;
+
+  const fps = m.sequences[0].fps;
+  app.ready = true;
+  app.stats.loadMs = performance.now();
+  app.stats.setupMs = performance.now() - t0;
+  if (SELFTEST) { selftest(app, step, renderer, m); return; }
+  let acc = 0, last = performance.now();
+  const loop = (now) => {
+    acc += Math.min(0.25, (now - last) / 1000); last = now;
+    const ticks = Math.floor(acc * fps); acc -= ticks / fps;
+    const t = step(ticks, false);
+    timing.engine.push(t.engineMs); if (timing.engine.length > 120) timing.engine.shift();
+    app.stats.engineMs = timing.engine.reduce((x, y) => x + y, 0) / timing.engine.length;
+    requestAnimationFrame(loop);
+  };
+  requestAnimationFrame(loop);
+}
+
+// Character pixels: the warm skin colour (red well above blue).
+function characterMask(gl) {
+  const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
+  const px = new Uint8Array(w * h * 4);
+  gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+  const mask = new Uint8Array(w * h);
+  let count = 0;
+  for (let i = 0; i < w * h; i++) {
+    if (px[4 * i] > px[4 * i + 2] + 40) { mask[i] = 1; count++; }
+  }
+  return { mask, count };
+}
+
+async function selftest(app, step, renderer, m) {
+  const gl = renderer.gl;
+  const pause = () => new Promise((r) => setTimeout(r, 0));
+  const out = { ok: true, webgl2: gl instanceof WebGL2RenderingContext, loadMs: app.stats.loadMs, fetchMs: app.stats.fetchMs, decodeMs: app.stats.decodeMs, mode: m.mode };
+  const shots = params.has('shots') ? [] : null;
+  const skip = +(params.get('skip') || 0);
+  for (let i = 0; i < skip; i++) step(1, false);
+  step(0, true);
+  app.stats.stages.firstFrame = performance.now();
+  out.loadMs = app.stats.stages.firstFrame;
+  const a = characterMask(gl);
+  if (shots) shots.push(gl.canvas.toDataURL('image/png'));
+  const gap = +(params.get('gap') || 10);
+  for (let i = 0; i < gap; i++) { step(1, false); if (i % 10 === 0) await pause(); }
+  step(1, true);
+  const b = characterMask(gl);
+  if (shots) shots.push(gl.canvas.toDataURL('image/png'));
+  out.shots = shots;
+  let diff = 0;
+  for (let i = 0; i < a.mask.length; i++) diff += a.mask[i] !== b.mask[i];
+  out.characterPixels = [a.count, b.count]; out.diffPixels = diff;
+  if (app.engine) out.engineTransitions = app.engine.trans.map((t) => [t.from, t.to, t.m, t.n, t.window]);
+  if (app.engine && m.sequences.length > 1) {
+    const e = app.engine;
+    out.before = e.state();
+    const target = m.sequences.length > 1 ? (m.sequences.findIndex((s) => s.name !== out.before.sequence) + 1) : 1;
+    window.dispatchEvent(new KeyboardEvent('keydown', { key: String(target) }));
+    out.queued = e.state().queue;
+    let n = 0;
+    while (n < 3000 && e.state().sequence === out.before.sequence) { step(1, false); n++; if (n % 50 === 0) await pause(); }
+    out.after = e.state(); out.ticksToChange = n;
+    // Drive on for a while: loops and further transitions must not break.
+    for (let i = 0; i < 300; i++) e.tick();
+    out.later = e.state();
+  }
+  // performance.now() is coarse (0.1 ms) in headless Chromium: sum over
+  // batches of frames. Engine = ticks + view + matrices + camera; GL = the
+  // draw calls and gl.finish() (software GL here).
+  let eng = 0, glt = 0, worst = 0;
+  const N = 120;
+  for (let i = 0; i < N; i++) { const t = step(1, true); eng += t.engineMs; glt += t.glMs; worst = Math.max(worst, t.engineMs); if (i % 20 === 0) await pause(); }
+  const e0 = performance.now();
+  for (let i = 0; i < 1000; i++) { app.engine ? app.engine.tick() : 0; }
+  out.engineTickMs = (performance.now() - e0) / 1000;
+  out.engineMsMean = eng / N; out.glMsMean = glt / N; out.engineMsMax = worst;
+  out.stages = app.stats.stages;
+  out.errors = errors.slice();
+  out.errorShown = !!app.error;
+  out.canvas = [gl.drawingBufferWidth, gl.drawingBufferHeight];
+  app.selftest = out;
+  await report(out);
+  document.title = 'selftest done';
+}
+
+main().catch((e) => showError(e.message || e));

@@ -1,0 +1,764 @@
+//! The compact 4D geometry format of the web viewer (`.sm4d`, version 1):
+//! one topology and any number of vertex-position sequences, quantised on a
+//! uniform grid and predicted from the previous frame and a neighbour, the
+//! integer residuals deflated. Volino, Huang & Hilton 2015 (Sec. 4, Table 1)
+//! stream 4D characters at 47-92 KB per frame; this layout aims at a tenth
+//! of that at a guaranteed maximum vertex error.
+//!
+//! # Layout (little-endian)
+//!
+//! ```text
+//! offset size  field
+//!  0     8     magic "SM4DGEO\0"
+//!  8     4     u32 version = 1
+//! 12     4     u32 predictor: 0 = temporal, 1 = spatio-temporal
+//! 16     4     u32 V, vertices
+//! 20     4     u32 T, triangles
+//! 24     4     u32 S, sequences
+//! 28     4     f32 step: metres per quantisation unit
+//! 32    12     3 × f32 origin (metres; the bounds' minimum corner)
+//! 44    12     3 × u32 levels per axis (each ≤ 65,536: positions fit u16)
+//! 56     4     f32 measured maximum vertex error (metres)
+//! 60     4     u32 bytes of the topology block
+//! 64   8·S     per sequence: u32 frames, u32 bytes of its block
+//! then the topology block, then the S sequence blocks, in order.
+//! ```
+//!
+//! Every block is raw DEFLATE (RFC 1951; the browser's
+//! `DecompressionStream("deflate-raw")` inflates it) of a stream of unsigned
+//! LEB128 varints holding zigzag-coded integers (`z = (x << 1) ^ (x >> 31)`).
+//!
+//! - Topology: the 3T vertex indices as differences from the previous index
+//!   (the first from 0).
+//! - Sequence: for every frame `t`, for every axis `c` (x, y, z), for every
+//!   vertex `v` in index order, the residual `q[t][v][c] − pred`, where `q`
+//!   is the quantised position (`round((p − origin) / step)`) and, with the
+//!   vertex's *parent* `u` = the smallest index sharing a triangle with `v`
+//!   when that is smaller than `v` (else none):
+//!   - `t = 0`: `pred = q[0][u][c]` (0 without a parent);
+//!   - temporal, `t > 0`: `pred = q[t−1][v][c]`;
+//!   - spatio-temporal, `t > 0`: `pred = q[t−1][v][c] + q[t][u][c] − q[t−1][u][c]`
+//!     (temporal without a parent): the vertex moves like its neighbour.
+//!
+//! A decoded position is `origin + step · q` (f32). The encoder verifies the
+//! bound after encoding (in f32, as the GPU evaluates it) and shrinks the
+//! step until it holds.
+
+use flate2::Compression;
+use flate2::read::DeflateDecoder;
+use flate2::write::DeflateEncoder;
+use rayon::prelude::*;
+use std::io::{Read, Write};
+
+/// The file's first eight bytes.
+pub const MAGIC: &[u8; 8] = b"SM4DGEO\0";
+/// The layout version this code writes and reads.
+pub const VERSION: u32 = 1;
+/// Bytes of the fixed header (before the per-sequence table).
+pub const HEADER_BYTES: usize = 64;
+/// The most quantisation levels per axis (positions fit a `u16`).
+pub const MAX_LEVELS: u32 = 65_536;
+
+/// How a frame is predicted from what is already decoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Predictor {
+    /// The same vertex in the previous frame.
+    Temporal,
+    /// The previous frame plus the parent vertex's motion in this frame.
+    SpatioTemporal,
+}
+
+impl Predictor {
+    fn code(self) -> u32 {
+        match self {
+            Predictor::Temporal => 0,
+            Predictor::SpatioTemporal => 1,
+        }
+    }
+    fn from_code(c: u32) -> Option<Predictor> {
+        match c {
+            0 => Some(Predictor::Temporal),
+            1 => Some(Predictor::SpatioTemporal),
+            _ => None,
+        }
+    }
+}
+
+/// Options of [`encode`].
+#[derive(Debug, Clone, Copy)]
+pub struct EncodeOptions {
+    /// Largest allowed distance between an input and a decoded vertex, in
+    /// metres. Default: 0.001 (1 mm).
+    pub max_error: f64,
+    /// The predictor. Default: [`Predictor::SpatioTemporal`] (the smaller
+    /// output on samba, crane and synthetic databases; see the README).
+    pub predictor: Predictor,
+    /// DEFLATE level 0-9. Default: 6 (on samba: 1,618 KB in 1.6 s; level 9:
+    /// 1,571 KB in 5.1 s; level 3: 1,686 KB in 0.5 s; see the README).
+    pub level: u32,
+}
+
+impl Default for EncodeOptions {
+    fn default() -> Self {
+        EncodeOptions {
+            max_error: 0.001,
+            predictor: Predictor::SpatioTemporal,
+            level: 6,
+        }
+    }
+}
+
+/// Geometry to encode: one topology, sequences of frame-major positions
+/// (metres, Y-up; `frames × vertices` entries each).
+#[derive(Debug, Clone)]
+pub struct Geometry {
+    /// Vertices per frame.
+    pub vertices: usize,
+    /// Triangles (indices below `vertices`).
+    pub triangles: Vec<[u32; 3]>,
+    /// Sequences, each frame-major positions.
+    pub sequences: Vec<Vec<[f32; 3]>>,
+}
+
+/// Errors of the codec.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum CodecError {
+    /// The input cannot be encoded.
+    #[error("cannot encode: {0}")]
+    Input(String),
+    /// The data is not a valid `.sm4d` file; says where.
+    #[error("corrupt 4D geometry at byte {offset}: {msg}")]
+    Corrupt {
+        /// Byte offset (in the file) of the field or block at fault.
+        offset: usize,
+        /// What is wrong.
+        msg: String,
+    },
+}
+
+/// What [`encode`] measured.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct EncodeReport {
+    /// Bytes of the file.
+    pub bytes: usize,
+    /// Frames over all sequences.
+    pub frames: usize,
+    /// The quantisation step finally used (metres).
+    pub step: f64,
+    /// The largest vertex error after decoding (metres).
+    pub max_error: f64,
+    /// Steps tried before the bound held.
+    pub attempts: usize,
+    /// The predictor used.
+    pub predictor: Predictor,
+}
+
+/// Decoded geometry: quantised positions (what the page uploads) and the
+/// grid that maps them to metres.
+#[derive(Debug, Clone)]
+pub struct Decoded {
+    /// The predictor the file used.
+    pub predictor: Predictor,
+    /// Vertices per frame.
+    pub vertices: usize,
+    /// Triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// Metres per unit.
+    pub step: f32,
+    /// Grid origin (metres).
+    pub origin: [f32; 3],
+    /// The error the encoder measured (metres).
+    pub max_error: f32,
+    /// Per sequence, frame-major quantised positions.
+    pub sequences: Vec<Vec<[u16; 3]>>,
+}
+
+impl Decoded {
+    /// Position in metres of a quantised vertex (f32, as the shader does).
+    pub fn position(&self, q: [u16; 3]) -> [f32; 3] {
+        std::array::from_fn(|c| self.origin[c] + self.step * q[c] as f32)
+    }
+}
+
+/// The parent of every vertex: the smallest index sharing a triangle with
+/// it when that is smaller than the vertex itself (see the module docs).
+pub fn parents(vertices: usize, triangles: &[[u32; 3]]) -> Vec<u32> {
+    let mut p: Vec<u32> = (0..vertices as u32).collect();
+    for t in triangles {
+        for &a in t {
+            for &b in t {
+                let (a, b) = (a as usize, b);
+                if a < vertices && b < p[a] {
+                    p[a] = b;
+                }
+            }
+        }
+    }
+    p
+}
+
+fn zigzag(x: i32) -> u32 {
+    ((x << 1) ^ (x >> 31)) as u32
+}
+fn unzigzag(z: u32) -> i32 {
+    ((z >> 1) as i32) ^ -((z & 1) as i32)
+}
+fn put_varint(out: &mut Vec<u8>, mut z: u32) {
+    while z >= 0x80 {
+        out.push((z as u8) | 0x80);
+        z >>= 7;
+    }
+    out.push(z as u8);
+}
+
+fn deflate(raw: &[u8], level: u32) -> Vec<u8> {
+    let mut e = DeflateEncoder::new(Vec::new(), Compression::new(level.min(9)));
+    // Writing into a Vec cannot fail.
+    let _ = e.write_all(raw);
+    e.finish().unwrap_or_default()
+}
+
+/// The residual stream of one sequence (before DEFLATE).
+fn residuals(q: &[[u16; 3]], n: usize, parent: &[u32], predictor: Predictor) -> Vec<u8> {
+    let frames = q.len() / n.max(1);
+    let mut out = Vec::with_capacity(q.len() * 3 * 2);
+    for t in 0..frames {
+        let cur = &q[t * n..(t + 1) * n];
+        let prev = if t > 0 {
+            Some(&q[(t - 1) * n..t * n])
+        } else {
+            None
+        };
+        for c in 0..3 {
+            for v in 0..n {
+                let u = parent[v] as usize;
+                let x = cur[v][c] as i32;
+                let pred = match prev {
+                    None if u != v => cur[u][c] as i32,
+                    None => 0,
+                    Some(p) => match predictor {
+                        Predictor::SpatioTemporal if u != v => {
+                            p[v][c] as i32 + cur[u][c] as i32 - p[u][c] as i32
+                        }
+                        _ => p[v][c] as i32,
+                    },
+                };
+                put_varint(&mut out, zigzag(x - pred));
+            }
+        }
+    }
+    out
+}
+
+/// Encodes `g` so that no decoded vertex is further than
+/// `opts.max_error` from its input: the step starts at `2·max_error/√3`
+/// (rounding leaves at most half a step per axis, so at most the bound per
+/// vertex in exact arithmetic) and shrinks by 3 % while the measured
+/// maximum vertex error (decoded in f32, as the GPU does) exceeds the bound.
+/// Cost: one pass of quantisation per attempt, then prediction and DEFLATE
+/// once (sequences in parallel).
+pub fn encode(g: &Geometry, opts: &EncodeOptions) -> Result<(Vec<u8>, EncodeReport), CodecError> {
+    let n = g.vertices;
+    if n == 0 || n > u32::MAX as usize / 2 {
+        return Err(CodecError::Input(format!("{n} vertices")));
+    }
+    if !(opts.max_error.is_finite() && opts.max_error > 0.0) {
+        return Err(CodecError::Input(format!(
+            "the error bound must be positive, got {} m",
+            opts.max_error
+        )));
+    }
+    if let Some((i, t)) = g
+        .triangles
+        .iter()
+        .enumerate()
+        .find(|(_, t)| t.iter().any(|&v| v as usize >= n))
+    {
+        return Err(CodecError::Input(format!(
+            "triangle {i} {t:?} names a vertex past {n}"
+        )));
+    }
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for (s, seq) in g.sequences.iter().enumerate() {
+        if seq.len() % n != 0 || seq.is_empty() {
+            return Err(CodecError::Input(format!(
+                "sequence {s} holds {} positions, not a whole number of {n}-vertex frames",
+                seq.len()
+            )));
+        }
+        for (i, p) in seq.iter().enumerate() {
+            for c in 0..3 {
+                let x = p[c] as f64;
+                if !x.is_finite() {
+                    return Err(CodecError::Input(format!(
+                        "sequence {s}, frame {}, vertex {}: non-finite position",
+                        i / n,
+                        i % n
+                    )));
+                }
+                lo[c] = lo[c].min(x);
+                hi[c] = hi[c].max(x);
+            }
+        }
+    }
+    if g.sequences.is_empty() {
+        lo = [0.0; 3];
+        hi = [0.0; 3];
+    }
+    let origin = lo.map(|x| x as f32);
+    let parent = parents(n, &g.triangles);
+    let mut topo = Vec::with_capacity(g.triangles.len() * 6);
+    let mut last = 0i64;
+    for t in &g.triangles {
+        for &v in t {
+            put_varint(&mut topo, zigzag((v as i64 - last) as i32));
+            last = v as i64;
+        }
+    }
+    let topo = deflate(&topo, opts.level);
+    let mut step = 2.0 * opts.max_error / 3f64.sqrt();
+    for attempt in 1..=64 {
+        let stepf = step as f32;
+        let levels: [u32; 3] =
+            std::array::from_fn(|c| (((hi[c] - origin[c] as f64) / step).round() as u32) + 1);
+        if levels.iter().any(|&l| l > MAX_LEVELS) {
+            return Err(CodecError::Input(format!(
+                "the bounds ({:.3} × {:.3} × {:.3} m) need more than {MAX_LEVELS} steps of {:.3} mm per axis: raise the error bound",
+                hi[0] - lo[0],
+                hi[1] - lo[1],
+                hi[2] - lo[2],
+                step * 1e3
+            )));
+        }
+        let quantised: Vec<(Vec<[u16; 3]>, f64)> = g
+            .sequences
+            .par_iter()
+            .map(|seq| {
+                let q: Vec<[u16; 3]> = seq
+                    .iter()
+                    .map(|p| {
+                        std::array::from_fn(|c| {
+                            ((p[c] as f64 - origin[c] as f64) / step)
+                                .round()
+                                .clamp(0.0, (MAX_LEVELS - 1) as f64)
+                                as u16
+                        })
+                    })
+                    .collect();
+                let mut worst = 0f64;
+                for (p, qq) in seq.iter().zip(&q) {
+                    let d: f64 = (0..3)
+                        .map(|c| {
+                            let r = origin[c] + stepf * qq[c] as f32;
+                            ((r - p[c]) as f64).powi(2)
+                        })
+                        .sum::<f64>()
+                        .sqrt();
+                    worst = worst.max(d);
+                }
+                (q, worst)
+            })
+            .collect();
+        let worst = quantised.iter().map(|x| x.1).fold(0.0, f64::max);
+        if worst <= opts.max_error {
+            let blocks: Vec<(usize, Vec<u8>)> = quantised
+                .par_iter()
+                .map(|(q, _)| {
+                    (
+                        q.len() / n,
+                        deflate(&residuals(q, n, &parent, opts.predictor), opts.level),
+                    )
+                })
+                .collect();
+            let mut out = Vec::with_capacity(
+                HEADER_BYTES
+                    + 8 * blocks.len()
+                    + topo.len()
+                    + blocks.iter().map(|b| b.1.len()).sum::<usize>(),
+            );
+            out.extend_from_slice(MAGIC);
+            for x in [
+                VERSION,
+                opts.predictor.code(),
+                n as u32,
+                g.triangles.len() as u32,
+                blocks.len() as u32,
+            ] {
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+            out.extend_from_slice(&stepf.to_le_bytes());
+            for o in origin {
+                out.extend_from_slice(&o.to_le_bytes());
+            }
+            for l in levels {
+                out.extend_from_slice(&l.to_le_bytes());
+            }
+            out.extend_from_slice(&(worst as f32).to_le_bytes());
+            out.extend_from_slice(&(topo.len() as u32).to_le_bytes());
+            for (f, b) in &blocks {
+                out.extend_from_slice(&(*f as u32).to_le_bytes());
+                out.extend_from_slice(&(b.len() as u32).to_le_bytes());
+            }
+            out.extend_from_slice(&topo);
+            for (_, b) in &blocks {
+                out.extend_from_slice(b);
+            }
+            let frames = blocks.iter().map(|b| b.0).sum();
+            let bytes = out.len();
+            return Ok((
+                out,
+                EncodeReport {
+                    bytes,
+                    frames,
+                    step,
+                    max_error: worst,
+                    attempts: attempt,
+                    predictor: opts.predictor,
+                },
+            ));
+        }
+        step *= 0.97;
+    }
+    Err(CodecError::Input(format!(
+        "the error bound {} m was not met after 64 attempts",
+        opts.max_error
+    )))
+}
+
+struct Reader<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+impl Reader<'_> {
+    fn u32(&mut self) -> Result<u32, CodecError> {
+        let s = self
+            .b
+            .get(self.at..self.at + 4)
+            .ok_or(CodecError::Corrupt {
+                offset: self.at,
+                msg: format!("the file ends in its header ({} bytes)", self.b.len()),
+            })?;
+        self.at += 4;
+        Ok(u32::from_le_bytes([s[0], s[1], s[2], s[3]]))
+    }
+    fn f32(&mut self) -> Result<f32, CodecError> {
+        let at = self.at;
+        let x = f32::from_bits(self.u32()?);
+        if !x.is_finite() {
+            return Err(CodecError::Corrupt {
+                offset: at,
+                msg: "a non-finite number in the header".into(),
+            });
+        }
+        Ok(x)
+    }
+}
+
+/// Inflates one block and reads `count` zigzag varints from it.
+fn read_block(data: &[u8], offset: usize, count: usize) -> Result<Vec<i32>, CodecError> {
+    let bad = |msg: String| CodecError::Corrupt { offset, msg };
+    // DEFLATE expands at most 1,032:1: a count no block of this size can
+    // hold is corrupt (and must not size an allocation).
+    if count > data.len().saturating_mul(1100) {
+        return Err(bad(format!(
+            "{count} values cannot come from a block of {} bytes",
+            data.len()
+        )));
+    }
+    let mut raw = Vec::with_capacity(count.min(data.len() * 8));
+    // At most 5 bytes per varint: a bigger stream is corrupt (and this caps
+    // what a hostile file can make us allocate).
+    DeflateDecoder::new(data)
+        .take(count as u64 * 5 + 1)
+        .read_to_end(&mut raw)
+        .map_err(|e| bad(format!("the block does not inflate ({e})")))?;
+    let mut out = Vec::with_capacity(count.min(raw.len()));
+    let mut z = 0u32;
+    let mut shift = 0;
+    for &b in &raw {
+        if shift > 28 {
+            return Err(bad("a varint longer than 5 bytes".into()));
+        }
+        z |= ((b & 0x7f) as u32) << shift;
+        if b & 0x80 == 0 {
+            out.push(unzigzag(z));
+            z = 0;
+            shift = 0;
+        } else {
+            shift += 7;
+        }
+    }
+    if out.len() != count || shift != 0 {
+        return Err(bad(format!(
+            "the block holds {} values, expected {count}",
+            out.len()
+        )));
+    }
+    Ok(out)
+}
+
+/// Reads a `.sm4d` file; every size, index and value is checked, and the
+/// error names the byte offset of the field or block at fault.
+pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
+    if b.len() < 8 || &b[..8] != MAGIC {
+        return Err(CodecError::Corrupt {
+            offset: 0,
+            msg: "not a surfmotion 4D geometry file (bad magic)".into(),
+        });
+    }
+    let mut r = Reader { b, at: 8 };
+    let version = r.u32()?;
+    if version != VERSION {
+        return Err(CodecError::Corrupt {
+            offset: 8,
+            msg: format!("version {version}, this reader knows {VERSION}"),
+        });
+    }
+    let pc = r.u32()?;
+    let predictor = Predictor::from_code(pc).ok_or(CodecError::Corrupt {
+        offset: 12,
+        msg: format!("unknown predictor {pc}"),
+    })?;
+    let n = r.u32()? as usize;
+    let nt = r.u32()? as usize;
+    let ns = r.u32()? as usize;
+    let step = r.f32()?;
+    let origin = [r.f32()?, r.f32()?, r.f32()?];
+    let levels = [r.u32()?, r.u32()?, r.u32()?];
+    let max_error = r.f32()?;
+    let topo_bytes = r.u32()? as usize;
+    if n == 0
+        || n > (1 << 26).min(b.len().saturating_mul(1100))
+        || levels.iter().any(|&l| l > MAX_LEVELS)
+        || step <= 0.0
+    {
+        return Err(CodecError::Corrupt {
+            offset: 16,
+            msg: format!("{n} vertices, step {step}, levels {levels:?}"),
+        });
+    }
+    if ns > (b.len() - HEADER_BYTES.min(b.len())) / 8 {
+        return Err(CodecError::Corrupt {
+            offset: 24,
+            msg: format!("{ns} sequences do not fit the file"),
+        });
+    }
+    let mut table = Vec::with_capacity(ns);
+    for _ in 0..ns {
+        table.push((r.u32()? as usize, r.u32()? as usize));
+    }
+    let mut at = r.at;
+    let block = |at: usize, len: usize| {
+        b.get(at..at.saturating_add(len))
+            .ok_or_else(|| CodecError::Corrupt {
+                offset: at,
+                msg: format!(
+                    "a block of {len} bytes runs past the end of the file ({} bytes): truncated?",
+                    b.len()
+                ),
+            })
+    };
+    let idx = read_block(block(at, topo_bytes)?, at, nt.saturating_mul(3))?;
+    let mut triangles = Vec::with_capacity(nt);
+    let mut last = 0i64;
+    for (k, d) in idx.chunks_exact(3).enumerate() {
+        let mut t = [0u32; 3];
+        for c in 0..3 {
+            last += d[c] as i64;
+            if last < 0 || last as usize >= n {
+                return Err(CodecError::Corrupt {
+                    offset: at,
+                    msg: format!("triangle {k} names vertex {last} of {n}"),
+                });
+            }
+            t[c] = last as u32;
+        }
+        triangles.push(t);
+    }
+    at += topo_bytes;
+    let parent = parents(n, &triangles);
+    let mut sequences = Vec::with_capacity(ns);
+    for (s, &(frames, len)) in table.iter().enumerate() {
+        let count = frames
+            .checked_mul(n * 3)
+            .filter(|&c| c <= len.saturating_mul(1100))
+            .ok_or(CodecError::Corrupt {
+                offset: HEADER_BYTES + 8 * s,
+                msg: format!("sequence {s}: {frames} frames cannot come from {len} bytes"),
+            })?;
+        let res = read_block(block(at, len)?, at, count)?;
+        let mut q = vec![[0u16; 3]; frames * n];
+        for t in 0..frames {
+            for c in 0..3 {
+                for v in 0..n {
+                    let u = parent[v] as usize;
+                    let e = res[(t * 3 + c) * n + v] as i64;
+                    let pred = if t == 0 {
+                        if u != v { q[u][c] as i64 } else { 0 }
+                    } else {
+                        let p = (t - 1) * n;
+                        match predictor {
+                            Predictor::SpatioTemporal if u != v => {
+                                q[p + v][c] as i64 + q[t * n + u][c] as i64 - q[p + u][c] as i64
+                            }
+                            _ => q[p + v][c] as i64,
+                        }
+                    };
+                    let x = pred + e;
+                    if x < 0 || x >= levels[c] as i64 {
+                        return Err(CodecError::Corrupt {
+                            offset: at,
+                            msg: format!(
+                                "sequence {s}, frame {t}, vertex {v}: position {x} outside 0..{}",
+                                levels[c]
+                            ),
+                        });
+                    }
+                    q[t * n + v][c] = x as u16;
+                }
+            }
+        }
+        sequences.push(q);
+        at += len;
+    }
+    if at != b.len() {
+        return Err(CodecError::Corrupt {
+            offset: at,
+            msg: format!("{} bytes after the last block", b.len() - at),
+        });
+    }
+    Ok(Decoded {
+        predictor,
+        vertices: n,
+        triangles,
+        step,
+        origin,
+        max_error,
+        sequences,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small moving grid: two sequences, the second moving faster.
+    fn grid() -> Geometry {
+        let w = 6;
+        let n = w * w;
+        let mut triangles = Vec::new();
+        for i in 0..w - 1 {
+            for j in 0..w - 1 {
+                let a = (i * w + j) as u32;
+                triangles.push([a, a + 1, a + w as u32]);
+                triangles.push([a + 1, a + w as u32 + 1, a + w as u32]);
+            }
+        }
+        let seq = |speed: f32, frames: usize| {
+            let mut p = Vec::new();
+            for t in 0..frames {
+                for v in 0..n {
+                    let (x, y) = ((v % w) as f32 * 0.1, (v / w) as f32 * 0.1);
+                    let s = (t as f32 * speed + x).sin() * 0.05;
+                    p.push([x + t as f32 * 0.01, y + s, s * x]);
+                }
+            }
+            p
+        };
+        Geometry {
+            vertices: n,
+            triangles,
+            sequences: vec![seq(0.2, 7), seq(0.5, 4)],
+        }
+    }
+
+    fn max_err(g: &Geometry, d: &Decoded) -> f64 {
+        let mut worst = 0f64;
+        for (a, b) in g.sequences.iter().zip(&d.sequences) {
+            for (p, q) in a.iter().zip(b) {
+                let r = d.position(*q);
+                let e: f64 = (0..3).map(|c| ((r[c] - p[c]) as f64).powi(2)).sum();
+                worst = worst.max(e.sqrt());
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn round_trip_meets_the_bound_for_both_predictors() {
+        let g = grid();
+        for predictor in [Predictor::Temporal, Predictor::SpatioTemporal] {
+            for bound in [1e-3, 1e-4] {
+                let opts = EncodeOptions {
+                    max_error: bound,
+                    predictor,
+                    level: 6,
+                };
+                let (bytes, rep) = encode(&g, &opts).unwrap();
+                let d = decode(&bytes).unwrap();
+                assert_eq!(d.triangles, g.triangles);
+                assert_eq!(d.predictor, predictor);
+                let e = max_err(&g, &d);
+                assert!(e <= bound, "{predictor:?} {bound}: {e}");
+                assert!((e - rep.max_error).abs() < 1e-7);
+                assert_eq!(rep.frames, 11);
+            }
+        }
+    }
+
+    #[test]
+    fn every_truncation_is_an_error_not_a_panic() {
+        let (bytes, _) = encode(&grid(), &EncodeOptions::default()).unwrap();
+        for len in 0..bytes.len() {
+            assert!(decode(&bytes[..len]).is_err(), "truncated to {len}");
+        }
+        let mut flipped = bytes.clone();
+        for i in 0..flipped.len() {
+            flipped[i] ^= 0x5a;
+            let _ = decode(&flipped);
+            flipped[i] ^= 0x5a;
+        }
+        let mut bad = bytes.clone();
+        bad[8] = 9;
+        assert!(matches!(
+            decode(&bad),
+            Err(CodecError::Corrupt { offset: 8, .. })
+        ));
+    }
+
+    #[test]
+    fn a_header_claiming_huge_counts_is_an_error_not_an_allocation() {
+        let (mut bytes, _) = encode(&grid(), &EncodeOptions::default()).unwrap();
+        let mut b = bytes.clone();
+        b[20..24].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(matches!(decode(&b), Err(CodecError::Corrupt { .. })));
+        bytes[16..20].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(matches!(
+            decode(&bytes),
+            Err(CodecError::Corrupt { offset: 16, .. })
+        ));
+    }
+
+    #[test]
+    fn zigzag_round_trips() {
+        for x in [0, 1, -1, 63, -64, 1 << 20, -(1 << 20), i32::MAX, i32::MIN] {
+            assert_eq!(unzigzag(zigzag(x)), x);
+        }
+    }
+
+    #[test]
+    fn parents_are_smaller_neighbours() {
+        let g = grid();
+        let p = parents(g.vertices, &g.triangles);
+        assert_eq!(p[0], 0);
+        for (v, &u) in p.iter().enumerate().skip(1) {
+            assert!((u as usize) < v);
+            assert!(
+                g.triangles
+                    .iter()
+                    .any(|t| t.contains(&u) && t.contains(&(v as u32)))
+            );
+        }
+    }
+}

@@ -1,0 +1,419 @@
+//! The static site: the page's assets, the compact geometry
+//! ([`super::codec`]) and `manifest.json` with the sequences and the Surface
+//! Motion Graph's transition table (Huang et al. 2015, Sec. 4.3; the
+//! paper's fixed transitions as Volino et al. 2015 play them in the
+//! browser), each transition with the rigid ground-plane alignment that
+//! carries the target's frames onto the source's.
+//!
+//! The folder is written into a temporary sibling and renamed into place:
+//! an interrupted export never leaves a half-written site.
+
+use super::codec::{self, CodecError, EncodeOptions, EncodeReport, Geometry};
+use crate::db::{BuildOptions, DbError, Manifest, Quiet};
+use crate::graph::SurfaceMotionGraph;
+use crate::mesh::io::{LoadOptions, load_sequence};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Name of the geometry file in a site.
+pub const GEOMETRY_FILE: &str = "character.sm4d";
+/// Name of the manifest in a site.
+pub const MANIFEST_FILE: &str = "manifest.json";
+/// The `format` field of a site manifest.
+pub const FORMAT: &str = "surfmotion-web";
+
+/// Errors of the export.
+#[derive(Debug, thiserror::Error)]
+pub enum WebError {
+    /// The database failed to load.
+    #[error(transparent)]
+    Db(#[from] DbError),
+    /// A result file failed to load.
+    #[error(transparent)]
+    Mesh(#[from] crate::mesh::MeshError),
+    /// The geometry could not be encoded or decoded.
+    #[error(transparent)]
+    Codec(#[from] CodecError),
+    /// Writing the site failed.
+    #[error("{path}: {msg}")]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// What went wrong.
+        msg: String,
+    },
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> WebError + '_ {
+    move |e| WebError::Io {
+        path: path.to_path_buf(),
+        msg: e.to_string(),
+    }
+}
+
+/// Options of the export.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ExportOptions {
+    /// The geometry codec's options (default: 1 mm max vertex error).
+    pub codec: EncodeOptions,
+}
+
+/// A sequence as the page sees it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SiteSequence {
+    /// Name (the button's label).
+    pub name: String,
+    /// Frames.
+    pub frames: usize,
+    /// Frames per second.
+    pub fps: f64,
+    /// Ground-plane alignment `[cos θ, sin θ, tx, tz]` carrying frame 0 onto
+    /// the last frame: the page's fallback when a motion ends with no
+    /// transition to take.
+    pub restart: [f64; 4],
+}
+
+/// One transition of the Surface Motion Graph, as the page's engine plays
+/// it: frames `m−L..=m+L` of `from` blended into `n−L..=n+L` of `to`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SiteTransition {
+    /// Source sequence index.
+    pub from: usize,
+    /// Target sequence index.
+    pub to: usize,
+    /// Centre frame in the source.
+    pub m: usize,
+    /// Centre frame in the target.
+    pub n: usize,
+    /// Half-window L.
+    pub window: usize,
+    /// The graph's cost.
+    pub cost: f64,
+    /// Ground-plane alignment `[cos θ, sin θ, tx, tz]` carrying the target's
+    /// frame `n` onto the source's frame `m` (a rotation about +Y, then a
+    /// translation in x and z; least squares over all vertices).
+    pub align: [f64; 4],
+}
+
+/// `manifest.json` of a site.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SiteManifest {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// Layout version of the manifest (1).
+    pub version: u32,
+    /// `"character"` (the interactive engine) or `"result"` (a timeline).
+    pub mode: String,
+    /// Character or result name.
+    pub name: String,
+    /// The geometry file.
+    pub geometry: String,
+    /// Its size in bytes.
+    pub geometry_bytes: usize,
+    /// The measured maximum vertex error of the geometry (metres).
+    pub max_error: f64,
+    /// Sequences (one for a result).
+    pub sequences: Vec<SiteSequence>,
+    /// The transition table (empty for a result).
+    pub transitions: Vec<SiteTransition>,
+}
+
+/// What an export wrote.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExportReport {
+    /// The site folder.
+    pub site: PathBuf,
+    /// The codec's report.
+    pub geometry: EncodeReport,
+    /// Vertices per frame.
+    pub vertices: usize,
+    /// Bytes the positions take as raw float32.
+    pub raw_bytes: usize,
+    /// Transitions in the table.
+    pub transitions: usize,
+    /// Seconds spent (load, encode and write).
+    pub seconds: f64,
+}
+
+/// A database's geometry in metres, Y-up, with its manifest and graph.
+pub fn load_db_geometry(dir: &Path) -> Result<(Manifest, Geometry, SurfaceMotionGraph), WebError> {
+    let (_, graph, _) = crate::db::build(dir, &BuildOptions::default(), &Quiet)?;
+    let m = Manifest::load(dir)?;
+    let topo = m.load_topology(dir)?;
+    let n = topo.vertex_count();
+    let scale = crate::mocap::units::parse_unit(&m.units)
+        .map(|u| u.metres_per_unit)
+        .unwrap_or(1.0);
+    let z_up = m.up.eq_ignore_ascii_case("z");
+    let mut sequences = Vec::with_capacity(m.sequences.len());
+    for s in &m.sequences {
+        let seq = m.load_sequence(dir, s)?;
+        if seq.mesh().vertex_count() != n {
+            return Err(DbError::Manifest {
+                path: dir.join(crate::db::MANIFEST),
+                msg: format!(
+                    "sequence '{}': {} vertices, the topology has {n}",
+                    s.name,
+                    seq.mesh().vertex_count()
+                ),
+            }
+            .into());
+        }
+        sequences.push(metres(seq.all_positions(), z_up, scale));
+    }
+    Ok((
+        m,
+        Geometry {
+            vertices: n,
+            triangles: topo.triangles().to_vec(),
+            sequences,
+        },
+        graph,
+    ))
+}
+
+fn metres(p: &[[f64; 3]], z_up: bool, scale: f64) -> Vec<[f32; 3]> {
+    p.iter()
+        .map(|&q| {
+            let v = crate::similarity::sets::y_up(q, z_up) * scale;
+            [v.x as f32, v.y as f32, v.z as f32]
+        })
+        .collect()
+}
+
+/// The ground-plane rigid motion `[cos θ, sin θ, tx, tz]` that best carries
+/// the points `b` onto `a` (2D Procrustes on x, z; Umeyama 1991 without
+/// scale): `x' = R(θ) x + t` with `R` a rotation about +Y.
+pub fn align_ground(a: &[[f32; 3]], b: &[[f32; 3]]) -> [f64; 4] {
+    let k = a.len().min(b.len()).max(1) as f64;
+    let mean = |p: &[[f32; 3]]| {
+        let (mut x, mut z) = (0.0, 0.0);
+        for q in p {
+            x += q[0] as f64;
+            z += q[2] as f64;
+        }
+        (x / k, z / k)
+    };
+    let (ax, az) = mean(a);
+    let (bx, bz) = mean(b);
+    let (mut dot, mut cross) = (0.0, 0.0);
+    for (p, q) in a.iter().zip(b) {
+        let (px, pz) = (p[0] as f64 - ax, p[2] as f64 - az);
+        let (qx, qz) = (q[0] as f64 - bx, q[2] as f64 - bz);
+        dot += px * qx + pz * qz;
+        // Rotation about +Y maps (x, z) to (x cos + z sin, −x sin + z cos).
+        cross += qz * px - qx * pz;
+    }
+    let th = cross.atan2(dot);
+    let (c, s) = (th.cos(), th.sin());
+    let tx = ax - (c * bx + s * bz);
+    let tz = az - (-s * bx + c * bz);
+    [c, s, tx, tz]
+}
+
+fn frame(g: &Geometry, s: usize, f: usize) -> &[[f32; 3]] {
+    &g.sequences[s][f * g.vertices..(f + 1) * g.vertices]
+}
+
+/// Writes the site for database `dir` into `out` (replacing an earlier
+/// site there; refusing to replace any other non-empty folder).
+pub fn export_db(dir: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportReport, WebError> {
+    let t0 = std::time::Instant::now();
+    let (m, g, graph) = load_db_geometry(dir)?;
+    let sequences = m
+        .sequences
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let frames = g.sequences[i].len() / g.vertices;
+            SiteSequence {
+                name: s.name.clone(),
+                frames,
+                fps: s.fps.unwrap_or(m.fps),
+                restart: align_ground(frame(&g, i, frames - 1), frame(&g, i, 0)),
+            }
+        })
+        .collect();
+    let transitions = transition_table(&graph, &g);
+    write_site(
+        out,
+        &g,
+        m.name.clone(),
+        "character",
+        sequences,
+        transitions,
+        opts,
+        t0,
+    )
+}
+
+/// The graph's transitions as the page's table, in the graph's order.
+pub fn transition_table(graph: &SurfaceMotionGraph, g: &Geometry) -> Vec<SiteTransition> {
+    graph
+        .transitions
+        .iter()
+        .map(|t| SiteTransition {
+            from: t.from,
+            to: t.to,
+            m: t.m,
+            n: t.n,
+            window: t.window,
+            cost: t.cost,
+            align: align_ground(frame(g, t.from, t.m), frame(g, t.to, t.n)),
+        })
+        .collect()
+}
+
+/// Writes a site that plays one result (a `.glb`, or a `.pc2`/`.mdd` with
+/// its topology: `topology`, else the `.obj` of the same name) with a
+/// timeline. Results are in metres, Y-up, as every writer of this tool
+/// makes them.
+pub fn export_result(
+    result: &Path,
+    topology: Option<&Path>,
+    out: &Path,
+    opts: &ExportOptions,
+) -> Result<ExportReport, WebError> {
+    let t0 = std::time::Instant::now();
+    let seq = load_sequence(
+        &result.to_string_lossy(),
+        &LoadOptions {
+            topology: topology.map(Path::to_path_buf),
+            fps: None,
+        },
+    )?;
+    let n = seq.mesh().vertex_count();
+    let g = Geometry {
+        vertices: n,
+        triangles: seq.mesh().triangles().to_vec(),
+        sequences: vec![metres(seq.all_positions(), false, 1.0)],
+    };
+    let frames = seq.frame_count();
+    let name = result
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "result".into());
+    let sequences = vec![SiteSequence {
+        name: name.clone(),
+        frames,
+        fps: seq.fps.unwrap_or(30.0),
+        restart: [1.0, 0.0, 0.0, 0.0],
+    }];
+    write_site(out, &g, name, "result", sequences, Vec::new(), opts, t0)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn write_site(
+    out: &Path,
+    g: &Geometry,
+    name: String,
+    mode: &str,
+    sequences: Vec<SiteSequence>,
+    transitions: Vec<SiteTransition>,
+    opts: &ExportOptions,
+    t0: std::time::Instant,
+) -> Result<ExportReport, WebError> {
+    let (bytes, rep) = codec::encode(g, &opts.codec)?;
+    let manifest = SiteManifest {
+        format: FORMAT.into(),
+        version: 1,
+        mode: mode.into(),
+        name,
+        geometry: GEOMETRY_FILE.into(),
+        geometry_bytes: bytes.len(),
+        max_error: rep.max_error,
+        sequences,
+        transitions,
+    };
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&parent).map_err(io(&parent))?;
+    if out.exists() && !is_replaceable(out) {
+        return Err(WebError::Io {
+            path: out.to_path_buf(),
+            msg: "exists and is not a site written by `surfmotion web export`; not replacing it"
+                .into(),
+        });
+    }
+    let tmp = tempfile::Builder::new()
+        .prefix(".surfmotion-site-")
+        .tempdir_in(&parent)
+        .map_err(io(&parent))?;
+    for (file, body) in super::assets::FILES {
+        let p = tmp.path().join(file);
+        std::fs::write(&p, body).map_err(io(&p))?;
+    }
+    let p = tmp.path().join(GEOMETRY_FILE);
+    std::fs::write(&p, &bytes).map_err(io(&p))?;
+    let p = tmp.path().join(MANIFEST_FILE);
+    let json = serde_json::to_string_pretty(&manifest).map_err(|e| WebError::Io {
+        path: p.clone(),
+        msg: e.to_string(),
+    })?;
+    std::fs::write(&p, json).map_err(io(&p))?;
+    // Folders are created private; a site is for serving.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(0o755))
+            .map_err(io(tmp.path()))?;
+    }
+    let tmp = tmp.keep();
+    if out.exists() {
+        let old = parent.join(format!(".surfmotion-old-site-{}", std::process::id()));
+        std::fs::rename(out, &old).map_err(io(out))?;
+        std::fs::rename(&tmp, out).map_err(io(out))?;
+        std::fs::remove_dir_all(&old).map_err(io(&old))?;
+    } else {
+        std::fs::rename(&tmp, out).map_err(io(out))?;
+    }
+    Ok(ExportReport {
+        site: out.to_path_buf(),
+        vertices: g.vertices,
+        raw_bytes: g.sequences.iter().map(|s| s.len() * 12).sum(),
+        transitions: manifest.transitions.len(),
+        geometry: rep,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// An empty folder, or one holding a site manifest.
+fn is_replaceable(out: &Path) -> bool {
+    if let Ok(t) = std::fs::read_to_string(out.join(MANIFEST_FILE)) {
+        return t.contains(FORMAT);
+    }
+    std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_none())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ground_alignment_recovers_a_turn_and_shift() {
+        let a: Vec<[f32; 3]> = (0..20)
+            .map(|i| {
+                let t = i as f32 * 0.7;
+                [t.cos() + 0.1 * t, t * 0.05, t.sin()]
+            })
+            .collect();
+        let (c, s) = (0.6f64.cos(), 0.6f64.sin());
+        // b = R(−0.6)(a − (1, 2)): aligning b onto a must give R(0.6), t = (1, 2)
+        // up to the rotation's convention; check by applying it.
+        let b: Vec<[f32; 3]> = a
+            .iter()
+            .map(|p| {
+                let (x, z) = (p[0] as f64 - 1.0, p[2] as f64 - 2.0);
+                [(c * x - s * z) as f32, p[1], (s * x + c * z) as f32]
+            })
+            .collect();
+        let [c2, s2, tx, tz] = align_ground(&a, &b);
+        for (p, q) in a.iter().zip(&b) {
+            let (x, z) = (q[0] as f64, q[2] as f64);
+            let (x2, z2) = (c2 * x + s2 * z + tx, -s2 * x + c2 * z + tz);
+            assert!((x2 - p[0] as f64).abs() < 1e-5 && (z2 - p[2] as f64).abs() < 1e-5);
+        }
+    }
+}

@@ -1,0 +1,216 @@
+//! A small static server for an exported site (tiny_http), bound to
+//! 127.0.0.1 by default. It serves files inside the site's folder only:
+//! request paths are percent-decoded, and any `..`, `.`, empty, absolute or
+//! backslash segment, or a file whose real path (symlinks resolved) leaves
+//! the folder, is refused with 404.
+//!
+//! With reports enabled (the browser test), `POST /__report` bodies (the
+//! page's self-test results) are collected for the caller.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+/// The file a request path names inside `root`, or `None` when the path
+/// leaves it or names nothing there. `/` is `index.html`; the query and
+/// fragment are ignored.
+pub fn resolve_path(root: &Path, url: &str) -> Option<PathBuf> {
+    let path = url.split(['?', '#']).next().unwrap_or("");
+    let path = percent_decode(path)?;
+    let rel = path.strip_prefix('/')?;
+    let rel = if rel.is_empty() { "index.html" } else { rel };
+    let mut out = root.to_path_buf();
+    for seg in rel.split('/') {
+        if seg.is_empty()
+            || seg == "."
+            || seg == ".."
+            || seg.contains(['\\', '\0', ':'])
+            || Path::new(seg).is_absolute()
+        {
+            return None;
+        }
+        out.push(seg);
+    }
+    let real = out.canonicalize().ok()?;
+    let root = root.canonicalize().ok()?;
+    (real.starts_with(&root) && real.is_file()).then_some(real)
+}
+
+/// `%XX` decoding; `None` on a bad escape or non-UTF-8 result.
+fn percent_decode(s: &str) -> Option<String> {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' {
+            let h = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(h, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+fn content_type(p: &Path) -> &'static str {
+    match p.extension().and_then(|e| e.to_str()).unwrap_or("") {
+        "html" => "text/html; charset=utf-8",
+        "js" | "mjs" => "text/javascript; charset=utf-8",
+        "json" => "application/json",
+        "css" => "text/css",
+        "png" => "image/png",
+        "glsl" | "txt" => "text/plain; charset=utf-8",
+        _ => "application/octet-stream",
+    }
+}
+
+/// A running server of one site folder.
+pub struct SiteServer {
+    server: tiny_http::Server,
+    root: PathBuf,
+    reports: Option<Arc<Mutex<Vec<String>>>>,
+}
+
+/// Errors of the server.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot listen on {addr}: {msg}")]
+pub struct ServeError {
+    /// The address asked for.
+    pub addr: String,
+    /// Why.
+    pub msg: String,
+}
+
+impl SiteServer {
+    /// Listens on `addr` (`127.0.0.1:8080`; port 0 picks a free one) for
+    /// the site in `root`.
+    pub fn bind(root: &Path, addr: &str) -> Result<SiteServer, ServeError> {
+        let server = tiny_http::Server::http(addr).map_err(|e| ServeError {
+            addr: addr.into(),
+            msg: e.to_string(),
+        })?;
+        Ok(SiteServer {
+            server,
+            root: root.to_path_buf(),
+            reports: None,
+        })
+    }
+
+    /// Collects `POST /__report` bodies (for the browser test) into the
+    /// returned list.
+    pub fn collect_reports(&mut self) -> Arc<Mutex<Vec<String>>> {
+        let r = Arc::new(Mutex::new(Vec::new()));
+        self.reports = Some(r.clone());
+        r
+    }
+
+    /// The URL of the site.
+    pub fn url(&self) -> String {
+        match self.server.server_addr().to_ip() {
+            Some(a) => format!("http://{a}/"),
+            None => "http://localhost/".into(),
+        }
+    }
+
+    /// Serves requests until the process ends.
+    pub fn run(&self) {
+        for req in self.server.incoming_requests() {
+            self.handle(req);
+        }
+    }
+
+    /// Serves requests on a background thread until the returned server
+    /// handle is dropped... or the process ends.
+    pub fn spawn(self) -> std::thread::JoinHandle<()> {
+        std::thread::spawn(move || self.run())
+    }
+
+    fn handle(&self, mut req: tiny_http::Request) {
+        let url = req.url().to_string();
+        if let (Some(r), tiny_http::Method::Post, "/__report") =
+            (&self.reports, req.method(), url.as_str())
+        {
+            let mut body = String::new();
+            let _ = std::io::Read::read_to_string(
+                &mut std::io::Read::take(req.as_reader(), 1 << 20),
+                &mut body,
+            );
+            if let Ok(mut v) = r.lock() {
+                v.push(body);
+            }
+            let _ = req.respond(tiny_http::Response::empty(204));
+            return;
+        }
+        if !matches!(
+            req.method(),
+            tiny_http::Method::Get | tiny_http::Method::Head
+        ) {
+            let _ = req.respond(tiny_http::Response::empty(405));
+            return;
+        }
+        let file = resolve_path(&self.root, &url).and_then(|p| {
+            let f = std::fs::File::open(&p).ok()?;
+            Some((p, f))
+        });
+        let _ = match file {
+            Some((p, f)) => {
+                let mut resp = tiny_http::Response::from_file(f);
+                for (k, v) in [
+                    ("Content-Type", content_type(&p)),
+                    ("Cache-Control", "no-cache"),
+                    ("X-Content-Type-Options", "nosniff"),
+                ] {
+                    if let Ok(h) = tiny_http::Header::from_bytes(k, v) {
+                        resp.add_header(h);
+                    }
+                }
+                req.respond(resp)
+            }
+            None => {
+                req.respond(tiny_http::Response::from_string("not found").with_status_code(404))
+            }
+        };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paths_outside_the_site_are_refused() {
+        let d = tempfile::tempdir().unwrap();
+        let site = d.path().join("site");
+        std::fs::create_dir_all(site.join("sub")).unwrap();
+        std::fs::write(site.join("index.html"), "x").unwrap();
+        std::fs::write(site.join("sub/a.js"), "x").unwrap();
+        std::fs::write(d.path().join("secret.txt"), "no").unwrap();
+        assert!(resolve_path(&site, "/").is_some());
+        assert!(resolve_path(&site, "/sub/a.js?v=1").is_some());
+        assert!(resolve_path(&site, "/sub%2fa.js").is_some());
+        for bad in [
+            "/../secret.txt",
+            "/sub/../../secret.txt",
+            "/%2e%2e/secret.txt",
+            "/%2E%2E%2Fsecret.txt",
+            "/sub/%2e%2e/%2e%2e/secret.txt",
+            "//etc/passwd",
+            "/%2fetc%2fpasswd",
+            "/..%5csecret.txt",
+            "/%00",
+            "/%zz",
+            "secret.txt",
+            "/missing.js",
+        ] {
+            assert!(resolve_path(&site, bad).is_none(), "{bad}");
+        }
+        let abs = format!("/{}", d.path().join("secret.txt").display());
+        assert!(resolve_path(&site, &abs).is_none(), "{abs}");
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink(d.path().join("secret.txt"), site.join("link.txt")).unwrap();
+            assert!(resolve_path(&site, "/link.txt").is_none());
+        }
+    }
+}
