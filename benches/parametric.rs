@@ -11,10 +11,10 @@
 use criterion::Criterion;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
-use surfmotion::db::{Manifest, RigSpec, SequenceEntry, SpaceEntry};
-use surfmotion::mesh::MeshSequence;
+use surfmotion::db::{Manifest, SpaceEntry};
+use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::mesh::blend::Blender;
-use surfmotion::mesh::io::{load_sequence, save_sequence};
+use surfmotion::mesh::io::load_sequence;
 use surfmotion::parametric::hybrid::{HybridBlend, HybridOptions};
 use surfmotion::parametric::params::measure;
 use surfmotion::parametric::script::{Request, play};
@@ -23,7 +23,6 @@ use surfmotion::parametric::{Control, Controller, Motion, MotionOptions};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::rig::retarget::clip_poses;
-use surfmotion::synth::database::{Dynamics, drive as synthesise};
 use surfmotion::synth::{Gait, gait_clip};
 
 fn data() -> Option<PathBuf> {
@@ -34,71 +33,53 @@ fn data() -> Option<PathBuf> {
 }
 
 fn database(d: &Path, db: &Path) -> Manifest {
-    std::fs::create_dir_all(db).unwrap();
     let fps = 30.0;
-    let mesh = load_sequence(
+    let rest = load_sequence(
         &d.join("4d/samba/samba.obj").to_string_lossy(),
         &Default::default(),
     )
     .unwrap()
     .frame_mesh(0);
     let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
-    let lm = Landmarks::load(&fixture, mesh.vertex_count()).unwrap();
-    let rig = Embedding::new(&mesh, &lm, None).unwrap();
-    save_sequence(
-        &MeshSequence::single(mesh.clone()),
-        &db.join("topology.obj"),
-        None,
-    )
-    .unwrap();
-    std::fs::copy(&fixture, db.join("landmarks.json")).unwrap();
-    let mut sequences = Vec::new();
-    for g in [Gait::Walk, Gait::Run, Gait::Turn] {
-        let clip = gait_clip(g, 3.0, fps);
-        let map = surfmotion::rig::detect(&clip.point_names()).map;
-        let poses = clip_poses(&clip, &map).unwrap();
-        let out = synthesise(
-            &mesh,
-            &rig,
-            &poses.poses,
-            &poses.reference,
-            fps,
-            Dynamics::default(),
-        );
-        let seq = MeshSequence::new(mesh.clone(), out.positions, Some(fps)).unwrap();
-        let file = format!("{}.pc2", g.name());
-        save_sequence(&seq, &db.join(&file), Some(fps)).unwrap();
-        sequences.push(SequenceEntry {
-            name: g.name().into(),
-            path: file.into(),
-            fps: None,
-        });
-    }
+    let lm = Landmarks::load(&fixture, rest.vertex_count()).unwrap();
+    let rig = Embedding::new(&rest, &lm, None).unwrap();
+    let character = SynthCharacter {
+        rest,
+        rig,
+        landmarks_json: std::fs::read(&fixture).unwrap(),
+    };
+    let clips: Vec<SynthClip> = [Gait::Walk, Gait::Run, Gait::Turn]
+        .into_iter()
+        .map(|g| {
+            let clip = gait_clip(g, 3.0, fps);
+            let map = surfmotion::rig::detect(&clip.point_names()).map;
+            SynthClip::Poses {
+                name: g.name().into(),
+                source: format!("{}.bvh", g.name()).into(),
+                poses: Box::new(clip_poses(&clip, &map).unwrap()),
+            }
+        })
+        .collect();
+    let opts = SynthOptions {
+        fps,
+        name: Some("samba_gaits".into()),
+        truth: false,
+        plausibility: false,
+        force: true,
+        ..Default::default()
+    };
+    write_synthetic_database(db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
     let space = |name: &str, seqs: [&str; 2], params: &[&str]| SpaceEntry {
         name: name.into(),
         sequences: seqs.iter().map(|s| s.to_string()).collect(),
         parameters: params.iter().map(|s| s.to_string()).collect(),
         epsilon_mm: None,
     };
-    let m = Manifest {
-        name: "samba_gaits".into(),
-        topology: "topology.obj".into(),
-        fps,
-        units: "m".into(),
-        up: "y".into(),
-        colors: None,
-        sequences,
-        rig: RigSpec {
-            landmarks: Some("landmarks.json".into()),
-            ..Default::default()
-        },
-        graph: Default::default(),
-        deform: Default::default(),
-        spaces: vec![
-            space("locomotion", ["walk", "run"], &["speed", "turn"]),
-            space("turning", ["walk", "turn"], &["turn"]),
-        ],
-    };
+    let mut m = Manifest::load(db).unwrap();
+    m.spaces = vec![
+        space("locomotion", ["walk", "run"], &["speed", "turn"]),
+        space("turning", ["walk", "turn"], &["turn"]),
+    ];
     m.save(db).unwrap();
     m
 }

@@ -10,20 +10,14 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use surfmotion::db::{Manifest, RigSpec, SequenceEntry, SpaceEntry};
-use surfmotion::mesh::MeshSequence;
+use surfmotion::db::Manifest;
+use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::mesh::blend::Blender;
-use surfmotion::mesh::io::save_sequence;
 use surfmotion::parametric::hybrid::{HybridBlend, HybridOptions};
 use surfmotion::parametric::params::measure;
 use surfmotion::parametric::store::load_or_build;
 use surfmotion::parametric::{Control, Controller, Motion, MotionOptions, Parameter};
-use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::retarget::clip_poses;
-use surfmotion::synth::database::{Dynamics, drive as synthesise};
-use surfmotion::synth::humanoid::{
-    DEMO_GRID, humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh,
-};
 use surfmotion::synth::{Gait, gait_clip};
 
 const SPACES: &str = r#"
@@ -48,57 +42,31 @@ fn database() -> PathBuf {
         let db = tmp.path().join("db");
         std::fs::create_dir_all(&db).unwrap();
         let fps = 30.0;
-        let mesh = humanoid_mesh(DEMO_GRID);
-        let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
-        save_sequence(
-            &MeshSequence::single(mesh.clone()),
-            &db.join("topology.obj"),
-            None,
-        )
-        .unwrap();
-        std::fs::write(db.join("landmarks.json"), humanoid_landmarks_json()).unwrap();
-        let mut sequences = Vec::new();
-        for g in [Gait::Walk, Gait::Run, Gait::Turn] {
-            let clip = gait_clip(g, 3.0, fps);
-            let map = surfmotion::rig::detect(&clip.point_names()).map;
-            let poses = clip_poses(&clip, &map).unwrap();
-            let out = synthesise(
-                &mesh,
-                &rig,
-                &poses.poses,
-                &poses.reference,
-                fps,
-                Dynamics::default(),
-            );
-            let seq = MeshSequence::new(mesh.clone(), out.positions, Some(fps)).unwrap();
-            let file = format!("{}.pc2", g.name());
-            save_sequence(&seq, &db.join(&file), Some(fps)).unwrap();
-            sequences.push(SequenceEntry {
-                name: g.name().into(),
-                path: file.into(),
-                fps: None,
-            });
-        }
-        let spaces: toml::Table = toml::from_str(SPACES).unwrap();
-        let spaces: Vec<SpaceEntry> = spaces["space"].clone().try_into().unwrap();
-        Manifest {
-            name: "gaits".into(),
-            topology: "topology.obj".into(),
+        let clips: Vec<SynthClip> = [Gait::Walk, Gait::Run, Gait::Turn]
+            .into_iter()
+            .map(|g| {
+                let clip = gait_clip(g, 3.0, fps);
+                let map = surfmotion::rig::detect(&clip.point_names()).map;
+                SynthClip::Poses {
+                    name: g.name().into(),
+                    source: format!("{}.bvh", g.name()).into(),
+                    poses: Box::new(clip_poses(&clip, &map).unwrap()),
+                }
+            })
+            .collect();
+        let opts = SynthOptions {
             fps,
-            units: "m".into(),
-            up: "y".into(),
-            colors: None,
-            sequences,
-            rig: RigSpec {
-                landmarks: Some("landmarks.json".into()),
-                ..Default::default()
-            },
-            graph: Default::default(),
-            deform: Default::default(),
-            spaces,
-        }
-        .save(&db)
-        .unwrap();
+            name: Some("gaits".into()),
+            truth: false,
+            plausibility: false,
+            ..Default::default()
+        };
+        let character = SynthCharacter::humanoid().unwrap();
+        write_synthetic_database(&db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
+        let spaces: toml::Table = toml::from_str(SPACES).unwrap();
+        let mut m = Manifest::load(&db).unwrap();
+        m.spaces = spaces["space"].clone().try_into().unwrap();
+        m.save(&db).unwrap();
         (tmp, db)
     })
     .1

@@ -10,16 +10,14 @@
 use std::path::Path;
 use std::sync::OnceLock;
 use surfmotion::db::Character;
-use surfmotion::db::{Manifest, Quiet, RigSpec, SequenceEntry};
+use surfmotion::db::Quiet;
 use surfmotion::deform::DeformMode;
 use surfmotion::eval::velocity_error;
-use surfmotion::mesh::MeshSequence;
-use surfmotion::mesh::io::save_sequence;
+use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::retarget::{Output, RetargetOptions, synthesise};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::retarget::clip_poses;
 use surfmotion::skeleton::Pose;
-use surfmotion::synth::database::{Dynamics, drive as synth_db};
 use surfmotion::synth::humanoid::{humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh};
 use surfmotion::synth::{Gait, gait_clip};
 
@@ -36,60 +34,34 @@ struct Fixture {
 }
 
 fn write_database(db: &Path) {
-    let mesh = humanoid_mesh(GRID);
-    let lm = humanoid_landmarks(&mesh);
-    let rig = Embedding::new(&mesh, &lm, None).unwrap();
-    save_sequence(
-        &MeshSequence::single(mesh.clone()),
-        &db.join("topology.obj"),
-        None,
-    )
-    .unwrap();
-    surfmotion::fsutil::write_bytes_atomic(
-        &db.join("landmarks.json"),
-        humanoid_landmarks_json().as_bytes(),
-    )
-    .unwrap();
-    let mut sequences = Vec::new();
-    for (g, seconds) in [(Gait::Walk, 3.0), (Gait::Run, 2.0)] {
-        let clip = gait_clip(g, seconds, FPS);
-        let map = surfmotion::rig::detect(&clip.point_names()).map;
-        let poses = clip_poses(&clip, &map).unwrap();
-        let out = synth_db(
-            &mesh,
-            &rig,
-            &poses.poses,
-            &poses.reference,
-            FPS,
-            Dynamics::default(),
-        );
-        let seq = MeshSequence::new(mesh.clone(), out.positions, Some(FPS)).unwrap();
-        let file = format!("{}.pc2", g.name());
-        save_sequence(&seq, &db.join(&file), Some(FPS)).unwrap();
-        sequences.push(SequenceEntry {
-            name: g.name().into(),
-            path: file.into(),
-            fps: None,
-        });
-    }
-    Manifest {
-        name: "procedural".into(),
-        topology: "topology.obj".into(),
+    let rest = humanoid_mesh(GRID);
+    let rig = Embedding::new(&rest, &humanoid_landmarks(&rest), None).unwrap();
+    let character = SynthCharacter {
+        rest,
+        rig,
+        landmarks_json: humanoid_landmarks_json().into_bytes(),
+    };
+    let clips: Vec<SynthClip> = [(Gait::Walk, 3.0), (Gait::Run, 2.0)]
+        .into_iter()
+        .map(|(g, seconds)| {
+            let clip = gait_clip(g, seconds, FPS);
+            let map = surfmotion::rig::detect(&clip.point_names()).map;
+            SynthClip::Poses {
+                name: g.name().into(),
+                source: format!("{}.bvh", g.name()).into(),
+                poses: Box::new(clip_poses(&clip, &map).unwrap()),
+            }
+        })
+        .collect();
+    let opts = SynthOptions {
         fps: FPS,
-        units: "m".into(),
-        up: "y".into(),
-        colors: None,
-        sequences,
-        rig: RigSpec {
-            landmarks: Some("landmarks.json".into()),
-            ..Default::default()
-        },
-        graph: Default::default(),
-        deform: Default::default(),
-        spaces: Vec::new(),
-    }
-    .save(db)
-    .unwrap();
+        name: Some("procedural".into()),
+        truth: false,
+        plausibility: false,
+        force: true,
+        ..Default::default()
+    };
+    write_synthetic_database(db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
 }
 
 fn fixture() -> &'static Fixture {
