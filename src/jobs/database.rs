@@ -21,10 +21,13 @@ pub struct DatabaseReport {
     /// The parametric motion spaces built (empty without any).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub spaces: Vec<SpaceSummary>,
-    /// True if the parametric model came from the cache.
-    pub spaces_cached: bool,
-    /// Seconds spent on the parametric model.
-    pub spaces_seconds: f64,
+    /// True if the parametric model came from the cache (absent without
+    /// spaces).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spaces_cached: Option<bool>,
+    /// Seconds spent on the parametric model (absent without spaces).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spaces_seconds: Option<f64>,
 }
 
 impl std::ops::Deref for DatabaseReport {
@@ -48,7 +51,7 @@ pub fn build_database(
     let m = crate::db::Manifest::load(dir)?;
     let t = Instant::now();
     let (spaces, spaces_cached) = if m.spaces.is_empty() {
-        (Vec::new(), false)
+        (Vec::new(), None)
     } else {
         let popts = crate::parametric::MotionOptions::default();
         let (motion, cached) = crate::parametric::store::load_or_build(dir, &popts, opts.force)
@@ -63,7 +66,7 @@ pub fn build_database(
                     msg: other.to_string(),
                 },
             })?;
-        (motion.summary(), cached)
+        (motion.summary(), Some(cached))
     };
     Ok((
         graph,
@@ -71,7 +74,7 @@ pub fn build_database(
             build,
             spaces,
             spaces_cached,
-            spaces_seconds: t.elapsed().as_secs_f64(),
+            spaces_seconds: spaces_cached.map(|_| t.elapsed().as_secs_f64()),
         },
     ))
 }
