@@ -66,6 +66,23 @@ impl FileError {
     }
 }
 
+/// The `tracing` target of the library's collected warnings: those raised
+/// while reading input files (a clip's frame count disagreeing with its
+/// header, bytes after a point cache's last frame, ...) and the rig
+/// embedding self-check. Every such warning is emitted once, where it is
+/// raised, as a `WARN` event with this target (readers add a `file` field),
+/// and also kept in the struct returned (`Clip::warnings`,
+/// `PointCache::warnings`, `EmbedCheck::warnings`), so reports still carry
+/// it.
+pub const WARNING: &str = "surfmotion::warning";
+
+/// Raise a reader warning about `path`: a `tracing` event with target
+/// [`WARNING`], and `message` appended to `warnings`.
+pub(crate) fn raise_warning(warnings: &mut Vec<String>, path: &Path, message: String) {
+    tracing::warn!(target: WARNING, file = %path.display(), "{message}");
+    warnings.push(message);
+}
+
 /// Largest settings file (landmarks, markers, rig maps, part labels,
 /// manifests) any reader accepts (64 MiB): such files are a few kB.
 pub const MAX_SMALL_FILE_BYTES: u64 = 64 << 20;

@@ -189,6 +189,22 @@ fn a_clip_retargets_through_a_synthetic_database_in_one_call() {
             .frame_count(),
         60
     );
+    // The `eval` verb is one call: the result scored against its clip, and
+    // a result of another clip (frames that do not pair) refused.
+    let load = surfmotion::rig::LoadOptions::default();
+    let r =
+        surfmotion::jobs::retarget::evaluate_result(&job.character, &clip, &out, &load).unwrap();
+    assert_eq!((r.query_frames, r.result_frames), (60, 60));
+    assert!((r.velocity_error_cm_per_frame - e.mean_cm).abs() < 1e-3);
+    let short = tmp.path().join("short.bvh");
+    surfmotion::mocap::bvh::write_bvh(&gait_clip(Gait::Turn, 1.0, 30.0), &short).unwrap();
+    let err = surfmotion::jobs::retarget::evaluate_result(&job.character, &short, &out, &load)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("turn.pc2: 60 frames, but") && err.contains("gives 30 frames"),
+        "{err}"
+    );
 }
 
 /// A converter that writes the clip's name: a new batch job is one impl.

@@ -137,7 +137,10 @@ pub fn main() -> anyhow::Result<()> {
     // lines on stderr, as the verbs printed them before they moved into
     // the library.
     use tracing_subscriber::prelude::*;
+    // Reader warnings (target `surfmotion::warning`) are kept in the reports
+    // the verbs print (inspect, rig check), so they are not printed again.
     let is_notice = |m: &tracing::Metadata<'_>| m.target() == surfmotion::jobs::batch::NOTICE;
+    let is_reader_warning = |m: &tracing::Metadata<'_>| m.target() == surfmotion::fsutil::WARNING;
     tracing_subscriber::registry()
         .with(
             tracing_subscriber::fmt::layer()
@@ -152,7 +155,7 @@ pub fn main() -> anyhow::Result<()> {
                         .from_env_lossy(),
                 )
                 .with_filter(tracing_subscriber::filter::filter_fn(move |m| {
-                    !is_notice(m)
+                    !is_notice(m) && !is_reader_warning(m)
                 })),
         )
         .with(PlainNotices.with_filter(tracing_subscriber::filter::filter_fn(is_notice)))

@@ -1,14 +1,10 @@
 //! `surfmotion retarget` and `surfmotion eval`.
 
-use anyhow::Context;
 use std::path::PathBuf;
 use surfmotion::db::Character;
-use surfmotion::eval::velocity_error;
-use surfmotion::jobs::retarget::{per_frame_seconds, plausibility};
+use surfmotion::jobs::retarget::{evaluate_result, per_frame_seconds};
 use surfmotion::jobs::{RetargetJob, RetargetJobOptions, RetargetSummary};
-use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::retarget::RetargetOptions;
-use surfmotion::retarget::query::{load_mocap, to_character};
 
 /// Arguments of `retarget`.
 #[derive(clap::Args)]
@@ -237,56 +233,20 @@ pub struct EvalArgs {
 /// against the database's own frames.
 pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
-    let fps = ch.manifest.fps;
-    let mocap = load_mocap(&a.mocap, &a.clip.load_options()?, fps)?;
-    let query = to_character(&ch.rest_pose, &mocap.reference, &mocap.poses);
-    let res = load_sequence(&a.result.to_string_lossy(), &LoadOptions::default())
-        .with_context(|| a.result.display().to_string())?;
-    anyhow::ensure!(
-        res.mesh().vertex_count() == ch.n,
-        "{}: {} vertices, the character has {}",
-        a.result.display(),
-        res.mesh().vertex_count(),
-        ch.n
-    );
-    // A result of another clip (or another frame rate) would give a number
-    // that means nothing: the frames must pair one to one (issue 18, item 8).
-    anyhow::ensure!(
-        res.frame_count() == query.len(),
-        "{}: {}, but {} at the database's {} fps gives {}; was it made from this clip (and with --input-fps as given)?",
-        a.result.display(),
-        super::count(res.frame_count(), "frame"),
-        a.mocap.display(),
-        fps,
-        super::count(query.len(), "frame")
-    );
-    let out: Vec<_> = (0..res.frame_count())
-        .map(|f| ch.rig.skeleton(res.frame(f)))
-        .collect();
-    let e = velocity_error(&query, &out);
-    let plaus = plausibility(&ch, res.all_positions(), None).map(|p| p.0);
+    let r = evaluate_result(&ch, &a.mocap, &a.result, &a.clip.load_options()?)?;
     if a.json {
-        let v = serde_json::json!({
-            "mocap": a.mocap,
-            "result": a.result,
-            "query_frames": query.len(),
-            "result_frames": out.len(),
-            "velocity_error_cm_per_frame": e.mean_cm,
-            "std_cm_per_frame": e.std_cm,
-            "per_frame_cm": e.per_frame,
-            "plausibility": plaus,
-        });
+        let v = serde_json::to_value(&r)?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
     let mut s = format!(
         "joint-velocity error {:.2} ± {:.2} cm/frame over {} frames (query {} frames, result {})\n",
-        e.mean_cm,
-        e.std_cm,
-        e.frames,
-        query.len(),
-        out.len()
+        r.velocity_error_cm_per_frame,
+        r.std_cm_per_frame,
+        r.velocity_frames,
+        r.query_frames,
+        r.result_frames
     );
-    if let Some(p) = &plaus {
+    if let Some(p) = &r.plausibility {
         s += &p.text();
     }
     super::emit(&s)

@@ -1,19 +1,11 @@
 //! `surfmotion transfer`: animate a static scan from a mocap clip or a
 //! moving template mesh (Confluent Motion, de Aguiar et al. 2007).
 
-use anyhow::Context;
-use std::path::{Path, PathBuf};
-use std::time::Instant;
-use surfmotion::eval::{Checker, vertex_error};
-use surfmotion::mesh::MeshSequence;
-use surfmotion::mesh::io::{LoadOptions, SaveOptions, load_sequence, save_sequence_with};
-use surfmotion::retarget::query::load_mocap;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::transfer::markers::generate;
-use surfmotion::transfer::{
-    Job, MarkerFile, MarkerOptions, MarkerSpec, SignMode, Source, TransferOptions, prepare,
-    transfer,
+use std::path::PathBuf;
+use surfmotion::jobs::{
+    ScanTransferOptions, TransferOutcome, TransferSource, TransferSpec, transfer_onto_scan,
 };
+use surfmotion::transfer::{MarkerOptions, SignMode, TransferOptions};
 
 /// Arguments of `transfer`.
 #[derive(clap::Args)]
@@ -143,15 +135,6 @@ impl JobOpts {
     }
 }
 
-/// Metres per unit of a scan whose rig is `height` units tall, assuming a
-/// person of 0.5-2.5 m: 1 (m), 0.1 (dm), 0.01 (cm) or 0.001 (mm).
-fn guess_metres_per_unit(height: f64) -> f64 {
-    [1.0, 0.1, 0.01, 0.001]
-        .into_iter()
-        .find(|m| (0.5..=2.5).contains(&(height * m)))
-        .unwrap_or(1.0)
-}
-
 /// Runs `transfer`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let mut inputs = surfmotion::mesh::io::input_files(&a.scan, None);
@@ -160,165 +143,59 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
-    let t0 = Instant::now();
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
         "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",
         a.output.display()
     );
     let job_opts = a.job.job()?;
-    let mopts = job_opts.markers;
     let scan = super::load_mesh_groups(&a.scan, &job_opts.groups)?;
-    let lm = match &a.landmarks {
-        Some(p) => Some(Landmarks::load(p, scan.vertex_count())?),
-        None => None,
+    let source = match (&a.mocap, &a.template) {
+        (Some(m), _) => TransferSource::Mocap(m.clone()),
+        (None, Some(t)) => TransferSource::Template {
+            spec: t.clone(),
+            markers: a.template_markers.clone(),
+            landmarks: a.template_landmarks.clone(),
+            frame: a.template_frame,
+        },
+        (None, None) => anyhow::bail!("give --mocap or --template"),
     };
-    let file = match &a.markers {
-        Some(p) => Some(MarkerFile::load(p, scan.triangle_count())?),
-        None => None,
-    };
-    // Errors of the preparation (a flat or face-less mesh, markers of
-    // another mesh) name the files they came from.
-    let prepared = match (&file, &lm) {
-        (Some(f), l) => prepare(&scan, MarkerSpec::File(f, l.as_ref())).with_context(|| {
-            format!(
-                "{} with markers {}",
-                a.scan,
-                a.markers.as_deref().unwrap_or(Path::new("?")).display()
-            )
-        })?,
-        (None, Some(l)) => prepare(&scan, MarkerSpec::Landmarks(l, mopts)).with_context(|| {
-            format!(
-                "{} with landmarks {}",
-                a.scan,
-                a.landmarks.as_deref().unwrap_or(Path::new("?")).display()
-            )
-        })?,
-        (None, None) => anyhow::bail!("give --landmarks or --markers"),
-    };
-    if let Some(p) = &a.save_markers {
-        MarkerFile {
-            triangle_count: Some(prepared.mesh.triangle_count()),
-            markers: prepared.markers.clone(),
-        }
-        .save(p)?;
-    }
-    let height = match &prepared.rig {
-        Some(r) => r.height,
-        None => {
-            let b = prepared.mesh.bounds();
-            (0..3).map(|k| b.max[k] - b.min[k]).fold(0.0, f64::max)
-        }
-    };
-    let clip;
-    let template;
-    let template_markers;
-    let mut align = glam::DQuat::IDENTITY;
-    let (source, fps, what) = if let Some(m) = &a.mocap {
-        clip = load_mocap(m, &a.clip.load_options()?, job_opts.fps)?;
-        anyhow::ensure!(
-            !clip.poses.is_empty(),
-            "{}: the clip has no frames",
-            m.display()
-        );
-        (
-            Source::Mocap(&clip.poses, &clip.reference),
-            job_opts.fps,
-            format!("{} ({} rig)", m.display(), clip.convention),
-        )
-    } else {
-        let spec = a
-            .template
-            .as_deref()
-            .context("give --mocap or --template")?;
-        template = load_sequence(spec, &LoadOptions::default())?;
-        let tmesh = template.frame_mesh(a.template_frame.min(template.frame_count() - 1));
-        template_markers = if let Some(p) = &a.template_markers {
-            MarkerFile::load(p, tmesh.triangle_count())?.markers
-        } else {
-            let tl = match (&a.template_landmarks, &a.landmarks) {
-                (Some(p), _) => Landmarks::load(p, tmesh.vertex_count())?,
-                (None, Some(p))
-                    if tmesh.vertex_count() == scan.vertex_count()
-                        && tmesh.triangles() == scan.triangles() =>
-                {
-                    Landmarks::load(p, tmesh.vertex_count())?
-                }
-                _ => anyhow::bail!(
-                    "the template needs markers: give --template-markers or --template-landmarks"
-                ),
-            };
-            let rig = surfmotion::rig::embed::Embedding::new(&tmesh, &tl, None)?;
-            if let Some(scan_rig) = &prepared.rig {
-                align = surfmotion::transfer::alignment(&rig, scan_rig);
-            }
-            generate(&tmesh, &rig, &mopts)
-        };
-        let fps = template.fps.unwrap_or(job_opts.fps);
-        (
-            Source::Template {
-                frames: &template,
-                markers: &template_markers,
-                reference: a.template_frame,
-                align,
+    let spec = TransferSpec {
+        scan_name: a.scan.clone(),
+        landmarks: a.landmarks.clone(),
+        markers: a.markers.clone(),
+        save_markers: a.save_markers.clone(),
+        source,
+        truth: a.truth.clone(),
+        options: ScanTransferOptions {
+            markers: job_opts.markers,
+            fps: job_opts.fps,
+            transfer: TransferOptions {
+                signs: if a.naive_signs {
+                    SignMode::Hemisphere
+                } else {
+                    SignMode::Consistent
+                },
             },
-            fps,
-            spec.to_string(),
-        )
-    };
-    let t_setup = Instant::now();
-    let mut job = Job::new(&prepared, source)?;
-    let factor_s = t_setup.elapsed().as_secs_f64();
-    let frames = job.motion.frames();
-    let bar = super::progress(frames as u64, "frames");
-    let opts = TransferOptions {
-        signs: if a.naive_signs {
-            SignMode::Hemisphere
-        } else {
-            SignMode::Consistent
+            load: a.clip.load_options()?,
+            glb: a.glb.options(),
         },
     };
-    let (positions, stats) = transfer(&job.confluent, &mut job.motion, &opts, &|_| bar.inc(1));
+    let bar = super::progress(0, "frames");
+    let outcome = transfer_onto_scan(&scan, &spec, &|_| bar.inc(1))?;
     bar.finish_and_clear();
-    let truth_error = match &a.truth {
-        Some(spec) => {
-            let t = load_sequence(spec, &LoadOptions::default())?;
-            anyhow::ensure!(
-                t.mesh().vertex_count() == prepared.mesh.vertex_count(),
-                "{spec}: {} vertices, the (repaired) scan has {}",
-                t.mesh().vertex_count(),
-                prepared.mesh.vertex_count()
-            );
-            Some(vertex_error(
-                &positions,
-                t.all_positions(),
-                prepared.mesh.vertex_count(),
-                height,
-            ))
-        }
-        None => None,
-    };
-    // Plausibility against the scan's rest frame (floor: its lowest point).
-    let mut metres_per_unit = None;
-    let plaus = prepared.rig.as_ref().and_then(|rig| {
-        let mpu = guess_metres_per_unit(rig.height);
-        metres_per_unit = Some(mpu);
-        let rest = prepared.mesh.positions();
-        let up = glam::DVec3::from_array(rig.up);
-        Checker::new(rest, rig, up, None, fps, Default::default())
-            .and_then(|mut c| {
-                c.metres_per_unit = mpu;
-                c.measure(&positions, rest.len(), None)
-            })
-            .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
-            .ok()
-    });
+    print_outcome(&a, outcome)
+}
+
+/// Writes the preview and the result of a transfer and prints its report.
+fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
+    let prepared = &outcome.prepared;
     if let Some(path) = &a.preview.preview {
         let up = prepared.rig.as_ref().map(|r| glam::DVec3::from_array(r.up));
         let y_up = up.is_none_or(|u| u.y > 0.9);
         super::render::write_preview(
             path,
-            &positions,
+            &outcome.positions,
             prepared.mesh.vertex_count(),
             prepared.mesh.triangles(),
             prepared.rig.as_ref(),
@@ -326,85 +203,56 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 .rig
                 .as_ref()
                 .map(|r| glam::DVec3::from_array(r.facing)),
-            plaus
+            outcome
+                .plausibility
                 .as_ref()
                 .filter(|_| y_up)
-                .map(|p| p.floor_m / metres_per_unit.unwrap_or(1.0)),
+                .map(|p| p.floor_m / outcome.metres_per_unit.unwrap_or(1.0)),
             &a.preview,
         )?;
     }
-    let seq = MeshSequence::new(prepared.mesh.clone(), positions, Some(fps))?;
-    let written = save_sequence_with(
-        &seq,
-        &a.output,
-        &SaveOptions {
-            fps: Some(fps),
-            glb: a.glb.options(),
-        },
-    )?;
-    let ms_per_frame = 1e3 * stats.solve_seconds / frames.max(1) as f64;
-    let v = serde_json::json!({
-        "output": written,
-        "source": what,
-        "frames": frames,
-        "fps": fps,
-        "vertices": prepared.mesh.vertex_count(),
-        "triangles": prepared.mesh.triangle_count(),
-        "markers": job.used.len(),
-        "unpaired_markers": job.unpaired,
-        "scan": prepared.report,
-        "transfer": stats,
-        "setup_seconds": t_setup.duration_since(t0).as_secs_f64(),
-        "factor_seconds": factor_s,
-        "ms_per_frame": ms_per_frame,
-        "frames_per_second": 1e3 / ms_per_frame.max(1e-12),
-        "truth_error": truth_error.as_ref().map(|e| serde_json::json!({
-            "mean_pct": e.mean_pct, "p95_pct": e.p95_pct, "max_pct": e.max_pct,
-        })),
-        "markers_used": job.used,
-        "metres_per_unit_assumed": metres_per_unit,
-        "plausibility": plaus,
-    });
+    let dropped = prepared.report.dropped_components.len();
+    let report = outcome.write(&a.output, a.glb.options(), a.report.is_some())?;
     if let Some(p) = &a.report {
-        let mut full = v.clone();
-        if let Some(e) = &truth_error {
-            full["truth_error"]["per_frame_pct"] = serde_json::json!(e.per_frame);
-        }
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&full)?.as_bytes())?;
+        surfmotion::fsutil::write_bytes_atomic(
+            p,
+            serde_json::to_string_pretty(&serde_json::to_value(&report)?)?.as_bytes(),
+        )?;
     }
     if a.json {
-        let mut short = v;
+        let mut short = serde_json::to_value(&report)?;
         short.as_object_mut().map(|o| o.remove("markers_used"));
+        if let Some(t) = short.get_mut("truth_error").and_then(|t| t.as_object_mut()) {
+            t.remove("per_frame_pct");
+        }
         return super::emit(&(serde_json::to_string_pretty(&short)? + "\n"));
     }
+    let r = &report;
     let mut s = format!(
-        "{} -> {}: {} frames at {} fps from {what}\n",
+        "{} -> {}: {} frames at {} fps from {}\n",
         a.scan,
-        written
+        r.output
             .iter()
             .map(|p| p.display().to_string())
             .collect::<Vec<_>>()
             .join(", "),
-        frames,
-        fps
+        r.frames,
+        r.fps,
+        r.source
     );
     s += &format!(
         "scan: {} vertices, {} triangles; {} markers ({} unpaired); {} components dropped\n",
-        prepared.mesh.vertex_count(),
-        prepared.mesh.triangle_count(),
-        job.used.len(),
-        job.unpaired,
-        prepared.report.dropped_components.len()
+        r.vertices, r.triangles, r.markers, r.unpaired_markers, dropped
     );
     s += &format!(
         "time: setup {:.2} s, factor {:.2} s, {:.2} ms/frame ({:.0} frames/s); {} frames near 180°\n",
-        t_setup.duration_since(t0).as_secs_f64(),
-        factor_s,
-        ms_per_frame,
-        1e3 / ms_per_frame.max(1e-12),
-        stats.singular_frames
+        r.setup_seconds,
+        r.factor_seconds,
+        r.ms_per_frame,
+        r.frames_per_second,
+        r.transfer.singular_frames
     );
-    if let Some(e) = &truth_error {
+    if let Some(e) = &r.truth_error {
         s += &format!(
             "error against {}: mean {:.3}%, p95 {:.3}%, max {:.3}% of height\n",
             a.truth.as_deref().unwrap_or(""),
@@ -413,7 +261,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             e.max_pct
         );
     }
-    if let Some(p) = &plaus {
+    if let Some(p) = &r.plausibility {
         s += &p.text();
     }
     super::emit(&s)

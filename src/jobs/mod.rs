@@ -36,7 +36,10 @@ pub use skeletons::{SkeletonFile, SkeletonsReport, export_skeletons};
 pub use synth_db::{
     SynthCharacter, SynthClip, SynthOptions, SynthReport, write_synthetic_database,
 };
-pub use transfer::{ScanTransferJob, ScanTransferOptions};
+pub use transfer::{
+    ScanTransferJob, ScanTransferOptions, TransferOutcome, TransferReport, TransferSource,
+    TransferSpec, TruthError, transfer_onto_scan,
+};
 
 use std::path::PathBuf;
 
@@ -86,6 +89,25 @@ pub enum JobError {
     /// A report could not be serialised.
     #[error(transparent)]
     Json(#[from] serde_json::Error),
+    /// A marker file could not be read or written.
+    #[error(transparent)]
+    Markers(#[from] crate::transfer::MarkerError),
+    /// A landmark file could not be read.
+    #[error(transparent)]
+    Landmarks(#[from] crate::rig::embed::landmarks::LandmarkError),
+    /// Options that do not make a job (what to give instead).
+    #[error("{0}")]
+    Usage(String),
+    /// An error with what the job was doing when it happened (the inputs
+    /// involved).
+    #[error("{what}")]
+    Context {
+        /// What was being done, naming its inputs.
+        what: String,
+        /// The error.
+        #[source]
+        source: Box<JobError>,
+    },
     /// An input the job refuses, with the file it came from.
     #[error("{path}: {msg}")]
     Input {

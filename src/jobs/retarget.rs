@@ -240,3 +240,101 @@ impl Converter for RetargetJob {
         })
     }
 }
+
+/// The score of a retargeted result (the `eval` verb): the joint-velocity
+/// error of Huang et al. 2015, Sec. 6.2, and the plausibility of the result
+/// against the database's own frames.
+#[derive(Debug, Serialize)]
+pub struct EvalReport {
+    /// The clip that drove the result.
+    pub mocap: PathBuf,
+    /// The result.
+    pub result: PathBuf,
+    /// Frames of the clip at the database's frame rate.
+    pub query_frames: usize,
+    /// Frames of the result.
+    pub result_frames: usize,
+    /// Mean joint-velocity error (cm per frame).
+    pub velocity_error_cm_per_frame: f64,
+    /// Its standard deviation (cm per frame).
+    pub std_cm_per_frame: f64,
+    /// Per frame (cm).
+    pub per_frame_cm: Vec<f64>,
+    /// Plausibility of the result.
+    pub plausibility: Option<Plausibility>,
+    /// Frames the velocity error is measured over.
+    #[serde(skip)]
+    pub velocity_frames: usize,
+}
+
+/// `n` and `noun`, in the plural unless `n` is 1 ("1 frame", "2 frames").
+fn count(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
+/// Scores `result` (a sequence on `ch`'s vertices, metres, Y-up, as
+/// [`RetargetJob`] writes it) against the clip at `mocap` (read with
+/// `load` at the database's frame rate): the joint-velocity error of Huang
+/// et al. 2015, Sec. 6.2, and the plausibility against the database's
+/// frames. The result must have one frame per clip frame.
+pub fn evaluate_result(
+    ch: &Character,
+    mocap: &Path,
+    result: &Path,
+    load: &LoadOptions,
+) -> Result<EvalReport, JobError> {
+    use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
+    let fps = ch.manifest.fps;
+    let clip = load_mocap(mocap, load, fps)?;
+    let query = to_character(&ch.rest_pose, &clip.reference, &clip.poses);
+    let res = load_sequence(&result.to_string_lossy(), &SeqLoad::default()).map_err(|e| {
+        JobError::Context {
+            what: result.display().to_string(),
+            source: Box::new(e.into()),
+        }
+    })?;
+    if res.mesh().vertex_count() != ch.n {
+        return Err(JobError::Input {
+            path: result.to_path_buf(),
+            msg: format!(
+                "{} vertices, the character has {}",
+                res.mesh().vertex_count(),
+                ch.n
+            ),
+        });
+    }
+    // A result of another clip (or another frame rate) would give a number
+    // that means nothing: the frames must pair one to one (issue 18, item 8).
+    if res.frame_count() != query.len() {
+        return Err(JobError::Input {
+            path: result.to_path_buf(),
+            msg: format!(
+                "{}, but {} at the database's {} fps gives {}; was it made from this clip (and with --input-fps as given)?",
+                count(res.frame_count(), "frame"),
+                mocap.display(),
+                fps,
+                count(query.len(), "frame")
+            ),
+        });
+    }
+    let out: Vec<Pose> = (0..res.frame_count())
+        .map(|f| ch.rig.skeleton(res.frame(f)))
+        .collect();
+    let e = velocity_error(&query, &out);
+    let plaus = plausibility(ch, res.all_positions(), None).map(|p| p.0);
+    Ok(EvalReport {
+        mocap: mocap.to_path_buf(),
+        result: result.to_path_buf(),
+        query_frames: query.len(),
+        result_frames: out.len(),
+        velocity_error_cm_per_frame: e.mean_cm,
+        std_cm_per_frame: e.std_cm,
+        per_frame_cm: e.per_frame,
+        plausibility: plaus,
+        velocity_frames: e.frames,
+    })
+}

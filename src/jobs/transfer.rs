@@ -162,3 +162,380 @@ impl Converter for ScanTransferJob {
         })
     }
 }
+
+/// What drives a [`transfer_onto_scan`] job.
+#[derive(Debug, Clone)]
+pub enum TransferSource {
+    /// A mocap clip (BVH, AMC), resampled to [`ScanTransferOptions::fps`].
+    Mocap(PathBuf),
+    /// A moving template mesh sequence (played at its own frame rate, else
+    /// [`ScanTransferOptions::fps`]).
+    Template {
+        /// The template sequence (a mesh-sequence spec).
+        spec: String,
+        /// Its markers (a marker file); else generated from `landmarks`.
+        markers: Option<PathBuf>,
+        /// Its landmarks; default: the scan's landmarks when the template
+        /// has the scan's topology.
+        landmarks: Option<PathBuf>,
+        /// Its reference frame (the one matching the scan's pose). Default 0.
+        frame: usize,
+    },
+}
+
+/// A one-off transfer onto a scan (the `transfer` verb): where the scan's
+/// markers come from, the source, and what to measure.
+#[derive(Debug, Clone)]
+pub struct TransferSpec {
+    /// The scan's name in messages (its spec as given).
+    pub scan_name: String,
+    /// The scan's landmarks (generated markers and the embedded rig).
+    pub landmarks: Option<PathBuf>,
+    /// A marker file for the scan (takes precedence over generated ones).
+    pub markers: Option<PathBuf>,
+    /// Save the scan's markers to this file.
+    pub save_markers: Option<PathBuf>,
+    /// What drives the scan.
+    pub source: TransferSource,
+    /// A ground-truth sequence on the scan's vertices to measure against.
+    pub truth: Option<String>,
+    /// Markers, frame rate, signs, clip reading and GLB output.
+    pub options: ScanTransferOptions,
+}
+
+/// The vertex error against a ground truth (% of the scan's height), as
+/// reported.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TruthError {
+    /// Mean over frames and vertices.
+    pub mean_pct: f64,
+    /// 95th percentile.
+    pub p95_pct: f64,
+    /// Largest.
+    pub max_pct: f64,
+    /// Mean per frame (only in the full report).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub per_frame_pct: Option<Vec<f64>>,
+}
+
+/// A transfer computed by [`transfer_onto_scan`], not yet written.
+pub struct TransferOutcome {
+    /// The repaired scan with its markers and rig.
+    pub prepared: PreparedScan,
+    /// Positions, frame-major (the repaired scan's vertices).
+    pub positions: Vec<[f64; 3]>,
+    /// Frame rate of the result.
+    pub fps: f64,
+    /// Frames of the result.
+    pub frames: usize,
+    /// The source, for messages.
+    pub what: String,
+    /// Names of the markers used.
+    pub used: Vec<String>,
+    /// Scan markers without a counterpart in the source.
+    pub unpaired: usize,
+    /// What the transfer did.
+    pub stats: TransferStats,
+    /// Error against the ground truth, when one was given.
+    pub truth_error: Option<crate::eval::VertexError>,
+    /// Metres per scan unit assumed for the plausibility measure.
+    pub metres_per_unit: Option<f64>,
+    /// Plausibility against the scan's rest frame (with a rig).
+    pub plausibility: Option<crate::eval::Plausibility>,
+    /// Seconds from the start to the factorisation.
+    pub setup_seconds: f64,
+    /// Seconds to set up the job (factor the system, build the motion).
+    pub factor_seconds: f64,
+}
+
+/// The report of a transfer written by [`TransferOutcome::write`] (keys
+/// as the `transfer` verb's `--json` and `--report`).
+#[derive(serde::Serialize)]
+pub struct TransferReport {
+    /// Files written.
+    pub output: Vec<PathBuf>,
+    /// The source.
+    pub source: String,
+    /// Frames.
+    pub frames: usize,
+    /// Frame rate.
+    pub fps: f64,
+    /// Vertices of the repaired scan.
+    pub vertices: usize,
+    /// Triangles of the repaired scan.
+    pub triangles: usize,
+    /// Markers used.
+    pub markers: usize,
+    /// Scan markers without a counterpart.
+    pub unpaired_markers: usize,
+    /// What the repair of the scan did.
+    pub scan: crate::transfer::scan::ScanReport,
+    /// What the transfer did.
+    pub transfer: TransferStats,
+    /// Seconds of setup.
+    pub setup_seconds: f64,
+    /// Seconds to factor.
+    pub factor_seconds: f64,
+    /// Milliseconds per frame of the solve.
+    pub ms_per_frame: f64,
+    /// Frames per second of the solve.
+    pub frames_per_second: f64,
+    /// Error against the ground truth.
+    pub truth_error: Option<TruthError>,
+    /// Names of the markers used.
+    pub markers_used: Vec<String>,
+    /// Metres per scan unit assumed.
+    pub metres_per_unit_assumed: Option<f64>,
+    /// Plausibility of the result.
+    pub plausibility: Option<crate::eval::Plausibility>,
+}
+
+/// Metres per unit of a scan whose rig is `height` units tall, assuming a
+/// person of 0.5-2.5 m: 1 (m), 0.1 (dm), 0.01 (cm) or 0.001 (mm).
+fn guess_metres_per_unit(height: f64) -> f64 {
+    [1.0, 0.1, 0.01, 0.001]
+        .into_iter()
+        .find(|m| (0.5..=2.5).contains(&(height * m)))
+        .unwrap_or(1.0)
+}
+
+fn context(what: String) -> impl FnOnce(JobError) -> JobError {
+    move |e| JobError::Context {
+        what,
+        source: Box::new(e),
+    }
+}
+
+/// Animates `scan` from `spec.source` (Confluent Motion, de Aguiar et al.
+/// 2007, Sec. 4): prepares the scan, pairs its markers with the source's,
+/// factors once and solves every frame (`progress` is called per frame);
+/// measures the result against `spec.truth` and its plausibility. Write the
+/// result with [`TransferOutcome::write`].
+pub fn transfer_onto_scan(
+    scan: &Mesh,
+    spec: &TransferSpec,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<TransferOutcome, JobError> {
+    use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
+    use crate::transfer::{MarkerFile, Source};
+    let t0 = std::time::Instant::now();
+    let mopts = spec.options.markers;
+    let lm = match &spec.landmarks {
+        Some(p) => Some(Landmarks::load(p, scan.vertex_count())?),
+        None => None,
+    };
+    let file = match &spec.markers {
+        Some(p) => Some(MarkerFile::load(p, scan.triangle_count())?),
+        None => None,
+    };
+    // Errors of the preparation (a flat or face-less mesh, markers of
+    // another mesh) name the files they came from.
+    let prepared = match (&file, &lm) {
+        (Some(f), l) => prepare(scan, MarkerSpec::File(f, l.as_ref()))
+            .map_err(JobError::from)
+            .map_err(context(format!(
+                "{} with markers {}",
+                spec.scan_name,
+                spec.markers.as_deref().unwrap_or(Path::new("?")).display()
+            )))?,
+        (None, Some(l)) => prepare(scan, MarkerSpec::Landmarks(l, mopts))
+            .map_err(JobError::from)
+            .map_err(context(format!(
+                "{} with landmarks {}",
+                spec.scan_name,
+                spec.landmarks
+                    .as_deref()
+                    .unwrap_or(Path::new("?"))
+                    .display()
+            )))?,
+        (None, None) => return Err(JobError::Usage("give --landmarks or --markers".into())),
+    };
+    if let Some(p) = &spec.save_markers {
+        MarkerFile {
+            triangle_count: Some(prepared.mesh.triangle_count()),
+            markers: prepared.markers.clone(),
+        }
+        .save(p)?;
+    }
+    let height = match &prepared.rig {
+        Some(r) => r.height,
+        None => {
+            let b = prepared.mesh.bounds();
+            (0..3).map(|k| b.max[k] - b.min[k]).fold(0.0, f64::max)
+        }
+    };
+    let clip;
+    let template;
+    let template_markers;
+    let mut align = glam::DQuat::IDENTITY;
+    let (source, fps, what) = match &spec.source {
+        TransferSource::Mocap(m) => {
+            clip = load_mocap(m, &spec.options.load, spec.options.fps)?;
+            if clip.poses.is_empty() {
+                return Err(JobError::Input {
+                    path: m.clone(),
+                    msg: "the clip has no frames".into(),
+                });
+            }
+            (
+                Source::Mocap(&clip.poses, &clip.reference),
+                spec.options.fps,
+                format!("{} ({} rig)", m.display(), clip.convention),
+            )
+        }
+        TransferSource::Template {
+            spec: tspec,
+            markers,
+            landmarks,
+            frame,
+        } => {
+            template = load_sequence(tspec, &SeqLoad::default())?;
+            let tmesh = template.frame_mesh((*frame).min(template.frame_count() - 1));
+            template_markers = if let Some(p) = markers {
+                MarkerFile::load(p, tmesh.triangle_count())?.markers
+            } else {
+                let tl = match (landmarks, &spec.landmarks) {
+                    (Some(p), _) => Landmarks::load(p, tmesh.vertex_count())?,
+                    (None, Some(p))
+                        if tmesh.vertex_count() == scan.vertex_count()
+                            && tmesh.triangles() == scan.triangles() =>
+                    {
+                        Landmarks::load(p, tmesh.vertex_count())?
+                    }
+                    _ => {
+                        return Err(JobError::Usage(
+                            "the template needs markers: give --template-markers or --template-landmarks"
+                                .into(),
+                        ));
+                    }
+                };
+                let rig = crate::rig::embed::Embedding::new(&tmesh, &tl, None)?;
+                if let Some(scan_rig) = &prepared.rig {
+                    align = crate::transfer::alignment(&rig, scan_rig);
+                }
+                crate::transfer::markers::generate(&tmesh, &rig, &mopts)
+            };
+            let fps = template.fps.unwrap_or(spec.options.fps);
+            (
+                Source::Template {
+                    frames: &template,
+                    markers: &template_markers,
+                    reference: *frame,
+                    align,
+                },
+                fps,
+                tspec.to_string(),
+            )
+        }
+    };
+    let t_setup = std::time::Instant::now();
+    let mut job = crate::transfer::Job::new(&prepared, source)?;
+    let factor_seconds = t_setup.elapsed().as_secs_f64();
+    let frames = job.motion.frames();
+    let (positions, stats) = transfer(
+        &job.confluent,
+        &mut job.motion,
+        &spec.options.transfer,
+        progress,
+    );
+    let truth_error = match &spec.truth {
+        Some(tspec) => {
+            let t = load_sequence(tspec, &SeqLoad::default())?;
+            if t.mesh().vertex_count() != prepared.mesh.vertex_count() {
+                return Err(JobError::Input {
+                    path: tspec.into(),
+                    msg: format!(
+                        "{} vertices, the (repaired) scan has {}",
+                        t.mesh().vertex_count(),
+                        prepared.mesh.vertex_count()
+                    ),
+                });
+            }
+            Some(crate::eval::vertex_error(
+                &positions,
+                t.all_positions(),
+                prepared.mesh.vertex_count(),
+                height,
+            ))
+        }
+        None => None,
+    };
+    // Plausibility against the scan's rest frame (floor: its lowest point).
+    let mut metres_per_unit = None;
+    let plausibility = prepared.rig.as_ref().and_then(|rig| {
+        let mpu = guess_metres_per_unit(rig.height);
+        metres_per_unit = Some(mpu);
+        let rest = prepared.mesh.positions();
+        let up = glam::DVec3::from_array(rig.up);
+        crate::eval::Checker::new(rest, rig, up, None, fps, Default::default())
+            .and_then(|mut c| {
+                c.metres_per_unit = mpu;
+                c.measure(&positions, rest.len(), None)
+            })
+            .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
+            .ok()
+    });
+    Ok(TransferOutcome {
+        used: std::mem::take(&mut job.used),
+        unpaired: job.unpaired,
+        prepared,
+        positions,
+        fps,
+        frames,
+        what,
+        stats,
+        truth_error,
+        metres_per_unit,
+        plausibility,
+        setup_seconds: t_setup.duration_since(t0).as_secs_f64(),
+        factor_seconds,
+    })
+}
+
+impl TransferOutcome {
+    /// Writes the result to `out` (by extension, GLB options `glb`) and
+    /// returns its report; `per_frame` keeps the per-frame truth error.
+    pub fn write(
+        self,
+        out: &Path,
+        glb: GlbOptions,
+        per_frame: bool,
+    ) -> Result<TransferReport, JobError> {
+        let frames = self.frames;
+        let seq = MeshSequence::new(self.prepared.mesh.clone(), self.positions, Some(self.fps))?;
+        let output = save_sequence_with(
+            &seq,
+            out,
+            &SaveOptions {
+                fps: Some(self.fps),
+                glb,
+            },
+        )?;
+        let ms_per_frame = 1e3 * self.stats.solve_seconds / frames.max(1) as f64;
+        Ok(TransferReport {
+            output,
+            source: self.what,
+            frames,
+            fps: self.fps,
+            vertices: self.prepared.mesh.vertex_count(),
+            triangles: self.prepared.mesh.triangle_count(),
+            markers: self.used.len(),
+            unpaired_markers: self.unpaired,
+            scan: self.prepared.report,
+            transfer: self.stats,
+            setup_seconds: self.setup_seconds,
+            factor_seconds: self.factor_seconds,
+            ms_per_frame,
+            frames_per_second: 1e3 / ms_per_frame.max(1e-12),
+            truth_error: self.truth_error.map(|e| TruthError {
+                mean_pct: e.mean_pct,
+                p95_pct: e.p95_pct,
+                max_pct: e.max_pct,
+                per_frame_pct: per_frame.then_some(e.per_frame),
+            }),
+            markers_used: self.used,
+            metres_per_unit_assumed: self.metres_per_unit,
+            plausibility: self.plausibility,
+        })
+    }
+}

@@ -17,6 +17,7 @@
 use super::clip::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
 use super::error::MocapError;
 use super::euler;
+use crate::fsutil::raise_warning;
 use glam::{DQuat, DVec3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -670,11 +671,15 @@ pub fn parse_amc(
                         .map(|(b, _)| b.name.as_str())
                         .collect();
                     if !names.is_empty() {
-                        warnings.push(format!(
-                            "frame {} has no values for {}; zero used",
-                            frames.len() + 1,
-                            names.join(", ")
-                        ));
+                        raise_warning(
+                            &mut warnings,
+                            path,
+                            format!(
+                                "frame {} has no values for {}; zero used",
+                                frames.len() + 1,
+                                names.join(", ")
+                            ),
+                        );
                         missing_warned = true;
                     }
                 }
@@ -749,7 +754,9 @@ pub fn parse_amc(
     }
     let mut clip = skel.to_clip(&frames, 1.0 / fps, path)?;
     if opts.fps.is_none() {
-        warnings.push(
+        raise_warning(
+            &mut warnings,
+            path,
             "AMC stores no frame rate; assumed 120 fps (CMU); override with --input-fps".into(),
         );
     }

@@ -13,6 +13,7 @@
 use super::clip::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
 use super::error::MocapError;
 use super::euler;
+use crate::fsutil::raise_warning;
 use glam::{DQuat, DVec3};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -129,18 +130,21 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
     }
     header.check_rate(frames, path, opts)?;
     match header.declared {
-        Some(d) if d != frames as u64 => warnings.push(format!(
-            "header says {d} frames, the data has {frames}; using the data"
-        )),
+        Some(d) if d != frames as u64 => raise_warning(
+            &mut warnings,
+            path,
+            format!("header says {d} frames, the data has {frames}; using the data"),
+        ),
         _ => {}
     }
     if let (Some(fps), Some(ft)) = (opts.fps, header.file_frame_time)
         && (1.0 / ft - fps).abs() > 1e-6 * fps
     {
-        warnings.push(format!(
-            "file says {:.4} fps; overridden to {fps}",
-            1.0 / ft
-        ));
+        raise_warning(
+            &mut warnings,
+            path,
+            format!("file says {:.4} fps; overridden to {fps}", 1.0 / ft),
+        );
     }
     let units = Units {
         metres_per_unit: 1.0,
@@ -426,7 +430,11 @@ impl MotionHeader {
         let declared = value_after(frames_line, 6);
         let declared: Option<u64> = declared.parse().ok();
         if declared.is_none() {
-            warnings.push(format!("line {fl}: unreadable frame count; using the data"));
+            raise_warning(
+                warnings,
+                path,
+                format!("line {fl}: unreadable frame count; using the data"),
+            );
         }
         let (tl, time_line) = next_line(&mut idx)
             .ok_or_else(|| MocapError::parse(path, fl, "missing 'Frame Time:' line"))?;
@@ -537,10 +545,14 @@ fn parse_frames(
         }
         if row.len() != total {
             if k + 1 == data.len() && row.len() < total {
-                warnings.push(format!(
-                    "line {no}: last frame has {} of {total} values (truncated file?); dropped",
-                    row.len()
-                ));
+                raise_warning(
+                    warnings,
+                    path,
+                    format!(
+                        "line {no}: last frame has {} of {total} values (truncated file?); dropped",
+                        row.len()
+                    ),
+                );
                 break;
             }
             return Err(MocapError::parse(

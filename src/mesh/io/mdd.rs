@@ -34,10 +34,14 @@ pub fn parse_mdd(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
     }
     let mut warnings = Vec::new();
     if (bytes.len() as u128) > need {
-        warnings.push(format!(
-            "{} bytes after the last frame ignored",
-            bytes.len() as u128 - need
-        ));
+        crate::fsutil::raise_warning(
+            &mut warnings,
+            path,
+            format!(
+                "{} bytes after the last frame ignored",
+                bytes.len() as u128 - need
+            ),
+        );
     }
     let (frames, points) = (frames as usize, points as usize);
     let times: Vec<f32> = bytes[8..8 + 4 * frames]

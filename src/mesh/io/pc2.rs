@@ -116,10 +116,11 @@ pub fn parse_pc2(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
     }
     let mut warnings = Vec::new();
     if have > need {
-        warnings.push(format!(
-            "{} bytes after the last frame ignored",
-            have - need
-        ));
+        crate::fsutil::raise_warning(
+            &mut warnings,
+            path,
+            format!("{} bytes after the last frame ignored", have - need),
+        );
     }
     let positions = decode_points(&bytes[32..32 + need as usize], points as usize, false, path)?;
     Ok(PointCache {
