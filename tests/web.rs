@@ -352,3 +352,132 @@ fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
         "{msg}"
     );
 }
+
+/// A small valid `.sm4d` file: a moving 5 × 5 grid, two sequences.
+fn small_sm4d() -> Vec<u8> {
+    let w = 5usize;
+    let n = w * w;
+    let mut triangles = Vec::new();
+    for i in 0..w - 1 {
+        for j in 0..w - 1 {
+            let a = (i * w + j) as u32;
+            triangles.push([a, a + 1, a + w as u32]);
+            triangles.push([a + 1, a + w as u32 + 1, a + w as u32]);
+        }
+    }
+    let seq = |speed: f32, frames: usize| -> Vec<[f32; 3]> {
+        (0..frames * n)
+            .map(|i| {
+                let (t, v) = ((i / n) as f32, i % n);
+                let (x, y) = ((v % w) as f32 * 0.1, (v / w) as f32 * 0.1);
+                [x + 0.01 * t, y + (t * speed + x).sin() * 0.05, 0.02 * x * t]
+            })
+            .collect()
+    };
+    let g = codec::Geometry {
+        vertices: n,
+        triangles,
+        sequences: vec![seq(0.3, 6), seq(0.7, 3)],
+    };
+    codec::encode(&g, &web::EncodeOptions::default()).unwrap().0
+}
+
+/// What the reader must do with any input: return geometry that is
+/// consistent, or a typed `Corrupt` error naming a byte inside (or just
+/// past the header of) the file. A panic fails the test by itself.
+fn check_decode_is_total(data: &[u8]) {
+    match codec::decode(data) {
+        Ok(d) => {
+            assert!(
+                d.triangles
+                    .iter()
+                    .flatten()
+                    .all(|&v| (v as usize) < d.vertices)
+            );
+            assert!(d.sequences.iter().all(|s| s.len() % d.vertices == 0));
+        }
+        Err(web::CodecError::Corrupt { offset, msg }) => {
+            assert!(
+                offset <= data.len().max(codec::HEADER_BYTES),
+                "offset {offset} past a {}-byte file: {msg}",
+                data.len()
+            );
+        }
+        Err(e) => panic!("the reader returned a non-Corrupt error: {e}"),
+    }
+}
+
+mod sm4d_reader_properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 256, .. ProptestConfig::default() })]
+
+        /// Random bytes, with or without a valid magic and version in
+        /// front, never panic the reader.
+        #[test]
+        fn sm4d_reader_never_panics_on_random_bytes(
+            body in proptest::collection::vec(any::<u8>(), 0..400),
+            prefix in 0usize..3,
+        ) {
+            let mut data = Vec::new();
+            if prefix >= 1 { data.extend_from_slice(codec::MAGIC); }
+            if prefix >= 2 { data.extend_from_slice(&codec::VERSION.to_le_bytes()); }
+            data.extend_from_slice(&body);
+            check_decode_is_total(&data);
+        }
+
+        /// A valid file with bytes overwritten, inserted, removed or the
+        /// tail cut never panics the reader, and a changed header field
+        /// that breaks the file gives a typed error.
+        #[test]
+        fn sm4d_reader_never_panics_on_mutated_valid_files(
+            edits in proptest::collection::vec((any::<u16>(), any::<u8>(), 0u8..4), 1..6),
+        ) {
+            let mut data = small_sm4d();
+            for (at, byte, kind) in edits {
+                let len = data.len().max(1);
+                let i = at as usize % len;
+                match kind {
+                    0 if !data.is_empty() => data[i] = byte,
+                    1 => data.insert(i.min(data.len()), byte),
+                    2 if !data.is_empty() => { data.remove(i); }
+                    _ => data.truncate(i),
+                }
+            }
+            check_decode_is_total(&data);
+        }
+    }
+}
+
+/// The hand-made file decodes: the mutation test starts from a valid file.
+#[test]
+fn small_sm4d_fixture_is_valid() {
+    let d = codec::decode(&small_sm4d()).unwrap();
+    assert_eq!(d.vertices, 25);
+    assert_eq!(d.sequences.len(), 2);
+}
+
+/// The page starts the geometry's fetch and decode (a worker) and the
+/// manifest's download from an inline script ahead of its modules, so they
+/// overlap module loading and the WebGL2 context's creation.
+#[test]
+fn page_starts_geometry_download_before_its_modules() {
+    let db = demo_db();
+    let tmp = tempfile::tempdir().unwrap();
+    let site = tmp.path().join("site");
+    web::export_db(&db, &site, &ExportOptions::default()).unwrap();
+    let html = std::fs::read_to_string(site.join("index.html")).unwrap();
+    let boot = html
+        .find("new Worker('worker.js'")
+        .expect("index.html starts the decoder worker");
+    let fetch = html
+        .find("fetch('manifest.json')")
+        .expect("and the manifest");
+    let module = html.find("<script type=\"module\"").unwrap();
+    assert!(boot < module && fetch < module);
+    assert!(html.contains(&format!("'{}'", web::export::GEOMETRY_FILE)));
+    let app = std::fs::read_to_string(site.join("app.js")).unwrap();
+    assert!(app.contains("window.surfmotionBoot"));
+}

@@ -47,7 +47,7 @@ function checkManifest(m) {
 function decodeInWorker(url) {
   return new Promise((resolve, reject) => {
     const w = new Worker('worker.js', { type: 'module' });
-    w.onmessage = (e) => { w.terminate(); e.data.ok ? resolve(e.data) : reject(new Error(e.data.error)); };
+    w.onmessage = (e) => { if (e.data.started) return; w.terminate(); e.data.ok ? resolve(e.data) : reject(new Error(e.data.error)); };
     w.onerror = (e) => { w.terminate(); reject(new Error('the decoder worker failed: ' + (e.message || 'unknown error'))); };
     w.postMessage({ url });
   });
@@ -56,17 +56,23 @@ function decodeInWorker(url) {
 async function main() {
   const t0 = performance.now();
   const stages = app.stats.stages = { start: t0 };
-  const r = await fetch('manifest.json');
+  // index.html started the manifest's download and the geometry's decode;
+  // the WebGL2 context (0.4-0.5 s under software GL) starts meanwhile.
+  const boot = window.surfmotionBoot;
+  const fetched = boot ? boot.manifest : fetch('manifest.json');
+  // A worker starts through this thread, which creating the context blocks
+  // for 0.4-0.5 s: let the decoder start first (at most 300 ms).
+  if (boot) await Promise.race([boot.ready, new Promise((r) => setTimeout(r, 300))]);
+  stages.workerStarted = performance.now();
+  const renderer = new Renderer($('view'));
+  stages.webgl = performance.now();
+  const r = await fetched;
   if (!r.ok) throw new Error(`manifest.json: HTTP ${r.status}`);
   let m;
   try { m = await r.json(); } catch (e) { throw new Error('manifest.json: not JSON (' + e.message + ')'); }
   checkManifest(m);
   stages.manifest = performance.now();
-  // The worker fetches and decodes while the WebGL2 context starts.
-  const pending = decodeInWorker(m.geometry);
-  pending.catch(() => {});
-  const renderer = new Renderer($('view'));
-  stages.webgl = performance.now();
+  const pending = boot && boot.url === m.geometry ? boot.geometry : decodeInWorker(m.geometry);
   const d = await pending;
   const g = d.g;
   if (g.sequences.length !== m.sequences.length) throw new Error(`the geometry holds ${g.sequences.length} sequences, the manifest ${m.sequences.length}`);
@@ -74,6 +80,7 @@ async function main() {
   stages.decoded = performance.now();
   renderer.load(g);
   stages.uploaded = performance.now();
+  if (d.at) for (const k of ['worker', 'fetched', 'decoded']) stages['w_' + k] = d.at[k] - performance.timeOrigin;
   app.stats.fetchMs = d.fetchMs; app.stats.decodeMs = d.decodeMs; app.stats.bytes = d.bytes;
   $('title').textContent = m.name;
   $('loading').hidden = true;

@@ -53,6 +53,51 @@ export function parents(n, tris) {
   return p;
 }
 
+// Undoes the prediction of one sequence while reading its zigzag varints
+// (one pass, no intermediate array): for every frame t, axis c, vertex v,
+// q = pred + residual, pred as in src/web/codec.rs.
+function reconstruct(raw, frames, n, parent, predictor, levels, offset, s) {
+  const count = frames * n * 3;
+  if (count > raw.length) throw fail(offset, `the block holds ${raw.length} bytes, too few for ${count} values`);
+  const q = new Uint16Array(count);
+  const len = raw.length;
+  const spatial = predictor === 1;
+  let i = 0;
+  for (let t = 0; t < frames; t++) {
+    const cur = t * n * 3, prev = cur - n * 3;
+    for (let c = 0; c < 3; c++) {
+      const lim = levels[c];
+      for (let v = 0; v < n; v++) {
+        if (i >= len) throw fail(offset, `the block holds ${(t * 3 + c) * n + v} values, expected ${count}`);
+        let b = raw[i++];
+        let z = b & 0x7f;
+        if (b & 0x80) {
+          let shift = 7;
+          do {
+            if (i >= len) throw fail(offset, `the block holds ${(t * 3 + c) * n + v} values, expected ${count}`);
+            if (shift > 28) throw fail(offset, 'a varint longer than 5 bytes');
+            b = raw[i++];
+            z |= (b & 0x7f) << shift;
+            shift += 7;
+          } while (b & 0x80);
+          z >>>= 0;
+        }
+        const u = parent[v];
+        const o = v * 3 + c;
+        let pred;
+        if (t === 0) pred = u !== v ? q[cur + u * 3 + c] : 0;
+        else if (spatial && u !== v) pred = q[prev + o] + q[cur + u * 3 + c] - q[prev + u * 3 + c];
+        else pred = q[prev + o];
+        const x = pred + ((z >>> 1) ^ -(z & 1));
+        if (x < 0 || x >= lim) throw fail(offset, `sequence ${s}, frame ${t}, vertex ${v}: position ${x} outside 0..${lim}`);
+        q[cur + o] = x;
+      }
+    }
+  }
+  if (i !== len) throw fail(offset, `the block holds more than ${count} values`);
+  return q;
+}
+
 export async function decodeSm4d(buffer) {
   const b = new Uint8Array(buffer);
   const magic = 'SM4DGEO\0';
@@ -92,31 +137,24 @@ export async function decodeSm4d(buffer) {
   }
   at += topoBytes;
   const parent = parents(n, tris);
-  const sequences = [];
+  // Every block's inflation starts at once (the browser inflates off the
+  // script's thread); each sequence is rebuilt as its block arrives.
+  const inflating = [];
+  const starts = [];
   for (let s = 0; s < ns; s++) {
     const [frames, len] = table[s];
     if (frames * n * 3 > len * 1100) throw fail(HEADER + 8 * s, `sequence ${s}: ${frames} frames cannot come from ${len} bytes`);
-    const res = varints(await inflate(block(len), at), frames * n * 3, at);
-    const q = new Uint16Array(frames * n * 3);
-    for (let t = 0; t < frames; t++) {
-      const cur = t * n * 3, prev = (t - 1) * n * 3;
-      for (let c = 0; c < 3; c++) {
-        const lim = levels[c];
-        const r0 = (t * 3 + c) * n;
-        for (let v = 0; v < n; v++) {
-          const u = parent[v];
-          let pred;
-          if (t === 0) pred = u !== v ? q[cur + u * 3 + c] : 0;
-          else if (predictor === 1 && u !== v) pred = q[prev + v * 3 + c] + q[cur + u * 3 + c] - q[prev + u * 3 + c];
-          else pred = q[prev + v * 3 + c];
-          const x = pred + res[r0 + v];
-          if (x < 0 || x >= lim) throw fail(at, `sequence ${s}, frame ${t}, vertex ${v}: position ${x} outside 0..${lim}`);
-          q[cur + v * 3 + c] = x;
-        }
-      }
-    }
-    sequences.push({ frames, q });
+    const p = inflate(block(len), at);
+    p.catch(() => {});
+    inflating.push(p);
+    starts.push(at);
     at += len;
+  }
+  const sequences = [];
+  for (let s = 0; s < ns; s++) {
+    const frames = table[s][0];
+    const q = reconstruct(await inflating[s], frames, n, parent, predictor, levels, starts[s], s);
+    sequences.push({ frames, q });
   }
   if (at !== b.length) throw fail(at, `${b.length - at} bytes after the last block`);
   return { vertices: n, triangles: tris, step, origin, levels, maxError, sequences };

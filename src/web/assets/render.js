@@ -45,7 +45,7 @@ in vec2 aP;
 uniform mat4 uVP; uniform float uGround; uniform vec2 uCentre;
 out vec2 vW;
 void main() {
-  vW = uCentre + aP * 40.0;
+  vW = uCentre + aP * 200.0;
   gl_Position = uVP * vec4(vW.x, uGround, vW.y, 1.0);
 }`;
 
@@ -58,6 +58,9 @@ void main() {
   float line = smoothstep(0.48, 0.5, max(g.x, g.y));
   float fade = exp(-length(vW - uCentre) * 0.12);
   vec3 c = mix(vec3(0.30, 0.33, 0.37), vec3(0.62, 0.66, 0.72), fade) - 0.08 * line * fade;
+  // Far ground melts into the page's background (#c7d1dd, linear): no
+  // hard horizon edge or quad corner.
+  c = mix(vec3(0.579, 0.646, 0.730), c, exp(-length(vW - uCentre) * 0.035));
   outColor = vec4(pow(c, vec3(1.0 / 2.2)), 1.0);
 }`;
 
