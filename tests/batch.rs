@@ -288,14 +288,14 @@ fn batch_scan_prepares_a_raw_scan_like_transfer() {
 /// The demo humanoid as a scan (OBJ) and its landmarks, written once.
 fn humanoid() -> (PathBuf, PathBuf) {
     use std::sync::OnceLock;
-    static H: OnceLock<(tempfile::TempDir, PathBuf, PathBuf)> = OnceLock::new();
+    static H: OnceLock<(PathBuf, PathBuf, PathBuf)> = OnceLock::new();
     let h = H.get_or_init(|| {
         use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks_json, humanoid_mesh};
-        let tmp = tempfile::tempdir().unwrap();
-        let scan = tmp.path().join("humanoid.obj");
+        let tmp = common::fixture_dir("batch-humanoid");
+        let scan = tmp.join("humanoid.obj");
         let seq = surfmotion::mesh::MeshSequence::single(humanoid_mesh(DEMO_GRID));
         surfmotion::mesh::io::save_sequence(&seq, &scan, None).unwrap();
-        let lm = tmp.path().join("humanoid.landmarks.json");
+        let lm = tmp.join("humanoid.landmarks.json");
         std::fs::write(&lm, humanoid_landmarks_json()).unwrap();
         (tmp, scan, lm)
     });
@@ -305,16 +305,16 @@ fn humanoid() -> (PathBuf, PathBuf) {
 /// The demo's 4D character database (`surfmotion demo`), built once.
 fn demo_db() -> PathBuf {
     use std::sync::OnceLock;
-    static DB: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    static DB: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
     DB.get_or_init(|| {
-        let tmp = tempfile::tempdir().unwrap();
+        let tmp = common::fixture_dir("batch-demo");
         let o = Command::new(common::bin())
             .args(["demo", "-o"])
-            .arg(tmp.path())
+            .arg(&tmp)
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let db = tmp.path().join("database");
+        let db = tmp.join("database");
         (tmp, db)
     })
     .1

@@ -36,10 +36,10 @@ parameters = ["turn"]
 /// (3 s each), with two spaces; built once per test binary.
 fn database() -> PathBuf {
     use std::sync::OnceLock;
-    static DB: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    static DB: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
     DB.get_or_init(|| {
-        let tmp = tempfile::tempdir().unwrap();
-        let db = tmp.path().join("db");
+        let tmp = common::fixture_dir("parametric-gaits");
+        let db = tmp.join("db");
         std::fs::create_dir_all(&db).unwrap();
         let fps = 30.0;
         let clips: Vec<SynthClip> = [Gait::Walk, Gait::Run, Gait::Turn]

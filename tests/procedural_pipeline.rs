@@ -28,7 +28,6 @@ const FPS: f64 = 30.0;
 
 /// The database (built once per test binary) and the query poses.
 struct Fixture {
-    _dir: tempfile::TempDir,
     ch: Character,
     query: surfmotion::rig::retarget::ClipPoses,
 }
@@ -64,12 +63,22 @@ fn write_database(db: &Path) {
     write_synthetic_database(db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
 }
 
+/// `target/tmp/fixtures/NAME`, emptied: the fixture lives in a `static`,
+/// which is never dropped, so a temporary folder would be left behind.
+fn fixture_dir(name: &str) -> std::path::PathBuf {
+    let p = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("fixtures")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&p);
+    std::fs::create_dir_all(&p).unwrap();
+    p
+}
+
 fn fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
     F.get_or_init(|| {
         let t = std::time::Instant::now();
-        let dir = tempfile::tempdir().unwrap();
-        let db = dir.path().join("db");
+        let db = fixture_dir("procedural-pipeline").join("db");
         std::fs::create_dir_all(&db).unwrap();
         write_database(&db);
         let ch = Character::load(&db, &Quiet).unwrap();
@@ -84,11 +93,7 @@ fn fixture() -> &'static Fixture {
             ch.graph.transitions.len(),
             t.elapsed().as_secs_f64()
         );
-        Fixture {
-            _dir: dir,
-            ch,
-            query,
-        }
+        Fixture { ch, query }
     })
 }
 

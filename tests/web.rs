@@ -16,13 +16,13 @@ use surfmotion::web::{self, ExportOptions, SiteManifest, SiteServer, codec};
 /// The procedural demo database (no files needed), made once.
 fn demo_db() -> PathBuf {
     use std::sync::OnceLock;
-    static DB: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    static DB: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
     DB.get_or_init(|| {
-        let tmp = tempfile::tempdir().unwrap();
+        let tmp = common::fixture_dir("web-demo");
         let out = Command::new(common::bin())
             .arg("demo")
             .arg("-o")
-            .arg(tmp.path().join("demo"))
+            .arg(tmp.join("demo"))
             .output()
             .unwrap();
         assert!(
@@ -30,7 +30,7 @@ fn demo_db() -> PathBuf {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        let db = tmp.path().join("demo/database");
+        let db = tmp.join("demo/database");
         (tmp, db)
     })
     .1

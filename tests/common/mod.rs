@@ -111,3 +111,16 @@ pub fn synthetic_db(d: &std::path::Path) -> PathBuf {
     .1
     .clone()
 }
+
+/// A folder for a fixture that a test binary builds once and keeps in a
+/// `static` (statics are never dropped, so a `tempfile::TempDir` there
+/// would be left behind in the system temp folder after every run):
+/// `target/tmp/fixtures/NAME`, emptied first.
+pub fn fixture_dir(name: &str) -> PathBuf {
+    let p = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("fixtures")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&p);
+    std::fs::create_dir_all(&p).unwrap();
+    p
+}
