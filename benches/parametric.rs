@@ -22,7 +22,6 @@ use surfmotion::parametric::transition::{Planner, TargetState};
 use surfmotion::parametric::{Control, Controller, Motion, MotionOptions};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::retarget::clip_poses;
 use surfmotion::synth::{Gait, gait_clip};
 
 fn data() -> Option<PathBuf> {
@@ -50,15 +49,7 @@ fn database(d: &Path, db: &Path) -> Manifest {
     };
     let clips: Vec<SynthClip> = [Gait::Walk, Gait::Run, Gait::Turn]
         .into_iter()
-        .map(|g| {
-            let clip = gait_clip(g, 3.0, fps);
-            let map = surfmotion::rig::detect(&clip.point_names()).map;
-            SynthClip::Poses {
-                name: g.name().into(),
-                source: format!("{}.bvh", g.name()).into(),
-                poses: Box::new(clip_poses(&clip, &map).unwrap()),
-            }
-        })
+        .map(|g| SynthClip::from_clip(g.name(), &gait_clip(g, 3.0, fps)).unwrap())
         .collect();
     let opts = SynthOptions {
         fps,

@@ -17,7 +17,6 @@ use surfmotion::parametric::hybrid::{HybridBlend, HybridOptions};
 use surfmotion::parametric::params::measure;
 use surfmotion::parametric::store::load_or_build;
 use surfmotion::parametric::{Control, Controller, Motion, MotionOptions, Parameter};
-use surfmotion::rig::retarget::clip_poses;
 use surfmotion::synth::{Gait, gait_clip};
 
 const SPACES: &str = r#"
@@ -44,15 +43,7 @@ fn database() -> PathBuf {
         let fps = 30.0;
         let clips: Vec<SynthClip> = [Gait::Walk, Gait::Run, Gait::Turn]
             .into_iter()
-            .map(|g| {
-                let clip = gait_clip(g, 3.0, fps);
-                let map = surfmotion::rig::detect(&clip.point_names()).map;
-                SynthClip::Poses {
-                    name: g.name().into(),
-                    source: format!("{}.bvh", g.name()).into(),
-                    poses: Box::new(clip_poses(&clip, &map).unwrap()),
-                }
-            })
+            .map(|g| SynthClip::from_clip(g.name(), &gait_clip(g, 3.0, fps)).unwrap())
             .collect();
         let opts = SynthOptions {
             fps,

@@ -42,15 +42,7 @@ fn write_database(db: &Path) {
     };
     let clips: Vec<SynthClip> = [(Gait::Walk, 3.0), (Gait::Run, 2.0)]
         .into_iter()
-        .map(|(g, seconds)| {
-            let clip = gait_clip(g, seconds, FPS);
-            let map = surfmotion::rig::detect(&clip.point_names()).map;
-            SynthClip::Poses {
-                name: g.name().into(),
-                source: format!("{}.bvh", g.name()).into(),
-                poses: Box::new(clip_poses(&clip, &map).unwrap()),
-            }
-        })
+        .map(|(g, seconds)| SynthClip::from_clip(g.name(), &gait_clip(g, seconds, FPS)).unwrap())
         .collect();
     let opts = SynthOptions {
         fps: FPS,
