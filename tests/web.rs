@@ -176,6 +176,34 @@ fn server_refuses_paths_outside_the_site() {
     }
 }
 
+#[test]
+fn serving_a_folder_that_is_no_site_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    for dir in [tmp.path().join("missing"), tmp.path().to_path_buf()] {
+        // A server that starts would run forever: give it 10 s.
+        let mut child = Command::new(common::bin())
+            .args(["web", "serve", "--port", "0", "--site"])
+            .arg(&dir)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let t = std::time::Instant::now();
+        while child.try_wait().unwrap().is_none() {
+            if t.elapsed().as_secs() > 10 {
+                child.kill().unwrap();
+                panic!("{}: served a folder that is no site", dir.display());
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        let o = child.wait_with_output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{e}");
+        assert!(e.contains("not an exported site"), "{e}");
+        assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    }
+}
+
 /// The browser: `$SURFMOTION_CHROMIUM`, else `chromium` or
 /// `chromium-browser` on the PATH.
 fn chromium() -> Option<PathBuf> {

@@ -133,6 +133,10 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
         Cmd::Serve(a) => {
             let _tmp;
             let root = match &a.site {
+                Some(s) if !s.join("index.html").is_file() => anyhow::bail!(
+                    "{}: not an exported site (no index.html); make one with `surfmotion web export`",
+                    s.display()
+                ),
                 Some(s) => s.clone(),
                 None => {
                     let t = tempfile::tempdir()?;
