@@ -276,6 +276,21 @@ fn run(args: &[&std::ffi::OsStr]) -> std::process::Output {
     Command::new(common::bin()).args(args).output().unwrap()
 }
 
+/// `keyframe --db DB --from 02_01:0 --to 02_03:30` and `rest`.
+fn walk_to_run(db: &std::path::Path, rest: &[&std::ffi::OsStr]) -> std::process::Output {
+    let mut a: Vec<&std::ffi::OsStr> = vec![
+        "keyframe".as_ref(),
+        "--db".as_ref(),
+        db.as_os_str(),
+        "--from".as_ref(),
+        "02_01:0".as_ref(),
+        "--to".as_ref(),
+        "02_03:30".as_ref(),
+    ];
+    a.extend_from_slice(rest);
+    run(&a)
+}
+
 /// The `keyframe` command on a small synthetic database (CMU walk 02_01 and
 /// run 02_03, 25 fps): the written sequence travels the distance and lasts
 /// the time the report gives; bad input is a one-line error with exit 1.
@@ -303,23 +318,19 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = tmp.path().join("kf.pc2");
     let report = tmp.path().join("kf.json");
-    let o = run(&[
-        "keyframe".as_ref(),
-        "--db".as_ref(),
-        db.as_os_str(),
-        "--from".as_ref(),
-        "02_01:0".as_ref(),
-        "--to".as_ref(),
-        "02_03:30".as_ref(),
-        "--distance".as_ref(),
-        "6".as_ref(),
-        "--time".as_ref(),
-        "4".as_ref(),
-        "-o".as_ref(),
-        out.as_os_str(),
-        "--report".as_ref(),
-        report.as_os_str(),
-    ]);
+    let o = walk_to_run(
+        &db,
+        &[
+            "--distance".as_ref(),
+            "6".as_ref(),
+            "--time".as_ref(),
+            "4".as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "--report".as_ref(),
+            report.as_os_str(),
+        ],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
@@ -354,21 +365,17 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     // A target the graph cannot reach (100 m in 1 s) gives the best
     // compromise, flagged as such.
     let far = tmp.path().join("far.pc2");
-    let o = run(&[
-        "keyframe".as_ref(),
-        "--db".as_ref(),
-        db.as_os_str(),
-        "--from".as_ref(),
-        "02_01:0".as_ref(),
-        "--to".as_ref(),
-        "02_03:30".as_ref(),
-        "--distance".as_ref(),
-        "100".as_ref(),
-        "--time".as_ref(),
-        "1".as_ref(),
-        "-o".as_ref(),
-        far.as_os_str(),
-    ]);
+    let o = walk_to_run(
+        &db,
+        &[
+            "--distance".as_ref(),
+            "100".as_ref(),
+            "--time".as_ref(),
+            "1".as_ref(),
+            "-o".as_ref(),
+            far.as_os_str(),
+        ],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("not met within 1 %"), "{text}");
@@ -378,24 +385,20 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     let png = tmp.path().join("grid.png");
     let grid_report = tmp.path().join("grid.json");
     for plot in [&svg, &png] {
-        let o = run(&[
-            "keyframe".as_ref(),
-            "--db".as_ref(),
-            db.as_os_str(),
-            "--from".as_ref(),
-            "02_01:0".as_ref(),
-            "--to".as_ref(),
-            "02_03:30".as_ref(),
-            "--grid".as_ref(),
-            "--distances".as_ref(),
-            "4,6,8".as_ref(),
-            "--times".as_ref(),
-            "3,4".as_ref(),
-            "--plot".as_ref(),
-            plot.as_os_str(),
-            "--report".as_ref(),
-            grid_report.as_os_str(),
-        ]);
+        let o = walk_to_run(
+            &db,
+            &[
+                "--grid".as_ref(),
+                "--distances".as_ref(),
+                "4,6,8".as_ref(),
+                "--times".as_ref(),
+                "3,4".as_ref(),
+                "--plot".as_ref(),
+                plot.as_os_str(),
+                "--report".as_ref(),
+                grid_report.as_os_str(),
+            ],
+        );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     let g: serde_json::Value =
