@@ -54,12 +54,12 @@ fn main() {
         ..Default::default()
     };
     let raw = synthesise(&ch, &q.poses, &q.reference, 30.0, &none).unwrap();
-    let n = ch.n;
+    let n = ch.n();
     let frames = raw.report.frames;
     let skeletons: Vec<_> = raw
         .positions
         .chunks(n)
-        .map(|f| ch.rig.skeleton(f))
+        .map(|f| ch.rig().skeleton(f))
         .collect();
 
     let mut c = Criterion::default().configure_from_args();
@@ -89,7 +89,7 @@ fn main() {
     }
     // The floor: the whole body's 2-ring system, prefactored, one solve.
     let all: Vec<u32> = (0..n as u32).collect();
-    let lap = uniform_region_rows(ch.topology.triangles(), &all, n);
+    let lap = uniform_region_rows(ch.topology().triangles(), &all, n);
     let mut trip = Vec::new();
     for r in &lap {
         for &(a, wa) in r {

@@ -31,7 +31,7 @@ fn constraints_from_an_example_frame_return_that_frame() {
     let Some(d) = common::data_dir() else { return };
     let db = common::synthetic_db(&d);
     let ch = Character::load(&db, &surfmotion::db::Quiet).unwrap();
-    let n = ch.n;
+    let n = ch.n();
     for mode in [DeformMode::Part, DeformMode::Global] {
         // A basis spanning all examples (keep everything).
         // A frame every region uses as an example.
@@ -46,7 +46,7 @@ fn constraints_from_an_example_frame_return_that_frame() {
         assert!(def.examples.iter().all(|e| e.contains(&f)));
         let mut x = vec![[0.0; 3]; n];
         ch.frame_metres(f as u32, &mut x);
-        let pose = ch.poses[f];
+        let pose = ch.poses()[f];
         let mut out = vec![[0.0; 3]; n];
         def.deform(&ch, &x, &pose, &pose, &mut out, &mut def.workspace());
         let err = max_dist(&out, &x) / height(&x);
@@ -64,10 +64,10 @@ fn constraints_from_an_example_frame_return_that_frame() {
 }
 
 fn skeleton_error(ch: &Character, p: &[[f64; 3]], q: &[Pose]) -> f64 {
-    let n = ch.n;
+    let n = ch.n();
     let mut s = 0.0;
     for (k, t) in q.iter().enumerate() {
-        let e = ch.rig.skeleton(&p[k * n..(k + 1) * n]);
+        let e = ch.rig().skeleton(&p[k * n..(k + 1) * n]);
         s += e.iter().zip(t).map(|(a, b)| a.distance(*b)).sum::<f64>() / 19.0;
     }
     s / q.len() as f64
@@ -87,8 +87,8 @@ fn run(ch: &Character, m: &MocapPoses, mode: DeformMode) -> Output {
 /// triangle's skin rotation (a triangle that merely turns with its limb
 /// does not count).
 fn turned_over(ch: &Character, raw: &Output, res: &Output) -> usize {
-    let n = ch.n;
-    let tris = ch.topology.triangles();
+    let n = ch.n();
+    let tris = ch.topology().triangles();
     let mut count = 0;
     let mut turn = vec![glam::DQuat::IDENTITY; n];
     for k in 0..raw.report.frames {
@@ -96,8 +96,8 @@ fn turned_over(ch: &Character, raw: &Output, res: &Output) -> usize {
             &raw.positions[k * n..(k + 1) * n],
             &res.positions[k * n..(k + 1) * n],
         );
-        let g = surfmotion::skeleton::pose_rotations(&ch.rig.skeleton(a), &raw.query[k]);
-        surfmotion::deform::unflip::skin_turns(&ch.rig.skin, &g, &mut turn);
+        let g = surfmotion::skeleton::pose_rotations(&ch.rig().skeleton(a), &raw.query[k]);
+        surfmotion::deform::unflip::skin_turns(&ch.rig().skin, &g, &mut turn);
         count += surfmotion::deform::unflip::turned_over(tris, a, b, &turn).len();
     }
     count
@@ -109,7 +109,7 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
     let Some(d) = common::data_dir() else { return };
     let db = common::synthetic_db(&d);
     let ch = Character::load(&db, &surfmotion::db::Quiet).unwrap();
-    let tris = ch.topology.triangles();
+    let tris = ch.topology().triangles();
     for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
         let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), 30.0).unwrap();
         let (raw, part) = (
@@ -232,14 +232,14 @@ fn the_manifest_overrides_constraints_and_examples() {
     let def = Deformer::new(&ch, DeformMode::Part, &DeformOptions::default()).unwrap();
     assert_eq!(def.constraint_vertices, vec![10, 500, 2000, 7000]);
     let s0 = ch
-        .graph
+        .graph()
         .sequences
         .iter()
         .position(|s| s.name == "02_01")
         .unwrap();
     let ids: Vec<usize> = def.examples[0].clone();
     assert_eq!(ids.len(), 3);
-    assert_eq!(ids[0], ch.graph.frame_id(s0, 10) as usize);
+    assert_eq!(ids[0], ch.graph().frame_id(s0, 10) as usize);
     assert!(def.examples.iter().all(|e| *e == ids));
     // Bad overrides are one-line errors naming the manifest.
     m.deform.examples = vec!["02_01:9999".into()];

@@ -121,7 +121,7 @@ fn character_is_in_metres_once_and_its_skeleton_kind_is_selectable() {
         ch.flat_id(surfmotion::db::FrameId { seq: 1, frame: 45 }),
         None
     );
-    let mut buf = vec![[0.0; 3]; ch.n];
+    let mut buf = vec![[0.0; 3]; ch.n()];
     ch.frame_metres(f, &mut buf);
     assert_eq!(buf, ch.frame(f));
     // Regressor is the default; rigid skeletons keep their bone lengths.
@@ -138,9 +138,9 @@ fn character_is_in_metres_once_and_its_skeleton_kind_is_selectable() {
     )
     .unwrap();
     let differ = ch
-        .poses
+        .poses()
         .iter()
-        .zip(&rigid.poses)
+        .zip(rigid.poses())
         .any(|(a, b)| a.iter().zip(b).any(|(p, q)| (*p - *q).length() > 1e-6));
     assert!(differ, "the skeleton kind made no difference");
 }

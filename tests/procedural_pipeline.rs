@@ -80,9 +80,9 @@ fn fixture() -> &'static Fixture {
         let query = clip_poses(&clip, &map).unwrap();
         eprintln!(
             "fixture: {} vertices, {} database frames, {} transitions, in {:.2} s",
-            ch.n,
+            ch.n(),
             ch.frame_count(),
-            ch.graph.transitions.len(),
+            ch.graph().transitions.len(),
             t.elapsed().as_secs_f64()
         );
         Fixture { ch, query }
@@ -104,8 +104,8 @@ fn retarget(mode: DeformMode) -> Output {
 /// The skeleton the rig reads off each output frame.
 fn output_skeletons(ch: &Character, out: &Output) -> Vec<Pose> {
     out.positions
-        .chunks(ch.n)
-        .map(|f| ch.rig.skeleton(f))
+        .chunks(ch.n())
+        .map(|f| ch.rig().skeleton(f))
         .collect()
 }
 
@@ -127,9 +127,9 @@ fn procedural_database_has_a_graph_with_transitions() {
     let f = fixture();
     // 3 s of walk and 2 s of run at 30 fps.
     assert_eq!(f.ch.frame_count(), 150);
-    assert!(f.ch.n > 500, "{} vertices", f.ch.n);
+    assert!(f.ch.n() > 500, "{} vertices", f.ch.n());
     assert!(
-        !f.ch.graph.transitions.is_empty(),
+        !f.ch.graph().transitions.is_empty(),
         "a walk and a run of one character must have transitions"
     );
 }
@@ -141,7 +141,7 @@ fn procedural_retarget_through_the_graph_follows_the_query() {
     let frames = f.query.poses.len();
     assert_eq!(frames, 120);
     assert_eq!(out.report.frames, frames);
-    assert_eq!(out.positions.len(), frames * f.ch.n);
+    assert_eq!(out.positions.len(), frames * f.ch.n());
     assert_eq!(out.query.len(), frames);
     assert!(out.positions.iter().flatten().all(|c| c.is_finite()));
     // Retrieval: one database frame per query frame, mostly walking (the
@@ -167,7 +167,7 @@ fn procedural_retarget_through_the_graph_follows_the_query() {
     // least one jump.
     for (k, w) in r.path.windows(2).enumerate() {
         let (a, b) = (w[0], w[1]);
-        let edge = f.ch.adjacency.successors(a).any(|(t, _)| t == b);
+        let edge = f.ch.adjacency().successors(a).any(|(t, _)| t == b);
         assert!(
             a == b || edge || r.cuts.contains(&(k + 1)),
             "query frame {}: {a} -> {b} is neither a repeat, a graph edge nor a cut",

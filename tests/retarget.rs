@@ -26,7 +26,7 @@ fn run(
     clip: &Path,
     opts: &RetargetOptions,
 ) -> (surfmotion::retarget::Output, usize) {
-    let fps = ch.manifest.fps;
+    let fps = ch.manifest().fps;
     let m = load_mocap(clip, &Default::default(), fps).unwrap();
     let out = synthesise(ch, &m.poses, &m.reference, fps, opts).unwrap();
     (out, m.poses.len())
@@ -38,7 +38,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
     let Some(d) = common::data_dir() else { return };
     let db = database(&d);
     let ch = Character::load(&db, &surfmotion::db::Quiet).unwrap();
-    let n = ch.n;
+    let n = ch.n();
     for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
         let (out, frames) = run(
             &ch,
@@ -57,7 +57,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
         // or is a reported cut.
         let p = &r.retrieval.path;
         for k in 1..p.len() {
-            let edge = ch.adjacency.successors(p[k - 1]).any(|(j, _)| j == p[k]);
+            let edge = ch.adjacency().successors(p[k - 1]).any(|(j, _)| j == p[k]);
             let cut = r.retrieval.cuts.contains(&k);
             assert!(
                 plays_on(&ch, p[k - 1], p[k]) || edge || cut,
@@ -68,7 +68,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
         // pelvis follows the query's pelvis.
         let pelvis: Vec<f64> = (0..frames)
             .map(|f| {
-                let s = ch.rig.skeleton(&out.positions[f * n..(f + 1) * n]);
+                let s = ch.rig().skeleton(&out.positions[f * n..(f + 1) * n]);
                 let (a, b) = (s[0], out.query[f][0]);
                 glam::DVec2::new(a.x - b.x, a.z - b.z).length()
             })
@@ -90,7 +90,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
         &RetargetOptions::default(),
     );
     let seq = ch
-        .graph
+        .graph()
         .sequences
         .iter()
         .position(|s| s.name == "02_03")
@@ -101,7 +101,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
         .path
         .iter()
         .enumerate()
-        .filter(|&(k, &id)| ch.graph.frame_of(id) == (seq, k))
+        .filter(|&(k, &id)| ch.graph().frame_of(id) == (seq, k))
         .count();
     assert!(
         own * 10 >= frames * 9,
@@ -116,7 +116,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
 }
 
 fn skeletons(ch: &Character, p: &[[f64; 3]]) -> Vec<surfmotion::skeleton::Pose> {
-    p.chunks(ch.n).map(|f| ch.rig.skeleton(f)).collect()
+    p.chunks(ch.n()).map(|f| ch.rig().skeleton(f)).collect()
 }
 
 #[test]
@@ -125,9 +125,9 @@ fn interpolated_frames_lie_between_their_neighbours() {
     let Some(d) = common::data_dir() else { return };
     let db = database(&d);
     let ch = Character::load(&db, &surfmotion::db::Quiet).unwrap();
-    let n = ch.n;
+    let n = ch.n();
     // A slow query: a walk at half speed forces repeats.
-    let fps = ch.manifest.fps;
+    let fps = ch.manifest().fps;
     let m = load_mocap(
         &d.join("mocap/cmu-amc/02/02_02.amc"),
         &Default::default(),
@@ -160,7 +160,7 @@ fn interpolated_frames_lie_between_their_neighbours() {
         // Shape distances (floor-aligned RMS) between the output and the
         // two captured frames it interpolates.
         let seq = ch
-            .graph
+            .graph()
             .sequences
             .iter()
             .position(|s| s.name == step.blend[0].0)
@@ -173,7 +173,7 @@ fn interpolated_frames_lie_between_their_neighbours() {
         );
         set.push_sequence(&out.positions[k * n..(k + 1) * n], false);
         for (_, f, _) in &step.blend {
-            ch.frame_metres(ch.graph.frame_id(seq, *f), &mut buf);
+            ch.frame_metres(ch.graph().frame_id(seq, *f), &mut buf);
             set.push_sequence(&buf, false);
         }
         use surfmotion::similarity::PairDistance;

@@ -79,12 +79,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     )?;
     let skel: Vec<_> = out
         .positions
-        .chunks(ch.n)
-        .map(|f| ch.rig.skeleton(f))
+        .chunks(ch.n())
+        .map(|f| ch.rig().skeleton(f))
         .collect();
     let err = velocity_error(&out.query, &skel);
     // A strip of frames, seen from the side of the path.
-    let n = ch.n;
+    let n = ch.n();
     let frames = r.frames;
     let mut strip: Option<surfmotion::render::Image> = None;
     for k in [
@@ -119,7 +119,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "output": dir,
             "vertices": n,
             "database_frames": ch.frame_count(),
-            "transitions": ch.graph.transitions.len(),
+            "transitions": ch.graph().transitions.len(),
             "query_frames": frames,
             "velocity_error_cm_per_frame": err.mean_cm,
             "seconds": {"database": t_db, "graph": t_graph, "retarget": t_retarget},
@@ -149,7 +149,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
          (PCA Laplacian, Sec. 5.2.3) to follow the query skeleton.\n",
         lm.marks.len(),
         ch.frame_count(),
-        ch.graph.transitions.len(),
+        ch.graph().transitions.len(),
         r.retrieval.cuts.len(),
         1e3 * t_retarget / frames.max(1) as f64,
         err.mean_cm,

@@ -200,7 +200,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         keys.len() - 1,
     )?;
     let o = synthesise(&ch, &keys, &targets, &opts)?;
-    let fps = ch.manifest.fps;
+    let fps = ch.manifest().fps;
     let seq = MeshSequence::new(ch.topology_metres(), o.positions, Some(fps))?;
     let written = save_sequence(&seq, out, Some(fps))?;
     let r = &o.report;
@@ -280,7 +280,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 }
 
 fn grid(ch: &Character, keys: &[u32], a: &Args, opts: &KeyframeOptions) -> anyhow::Result<()> {
-    let planner = Planner::new(key_graph(ch, opts), keys, ch.manifest.fps, &opts.search)
+    let planner = Planner::new(key_graph(ch, opts), keys, ch.manifest().fps, &opts.search)
         .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     let ds = parse_range(&a.distances).map_err(|e| anyhow::anyhow!("--distances {e}"))?;
     let ts = parse_range(&a.times).map_err(|e| anyhow::anyhow!("--times {e}"))?;

@@ -104,7 +104,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     let job = RetargetJob::load(&a.db, opts, &super::db::Bars::new())?;
     let ch = &job.character;
-    let fps = ch.manifest.fps;
+    let fps = ch.manifest().fps;
     let run = job.run(&a.mocap)?;
     let (out, convention) = (&run.output, &run.mocap.convention);
     let plaus = job.plausibility(
@@ -112,18 +112,18 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         run.deformed().then_some(out.report.turned_over),
     );
     if let Some(path) = &a.preview.preview {
-        let facing = surfmotion::mocap::units::y_up(ch.rig.facing, ch.z_up);
+        let facing = surfmotion::mocap::units::y_up(ch.rig().facing, ch.z_up());
         super::render::write_preview(
             path,
             &out.positions,
-            ch.n,
-            ch.topology.triangles(),
-            Some(&ch.rig),
+            ch.n(),
+            ch.topology().triangles(),
+            Some(ch.rig()),
             Some(super::render::turned_facing(
-                &ch.rest_pose,
+                ch.rest_pose(),
                 facing,
-                &ch.rig
-                    .skeleton(&out.positions[..ch.n.min(out.positions.len())]),
+                &ch.rig()
+                    .skeleton(&out.positions[..ch.n().min(out.positions.len())]),
             )),
             plaus.as_ref().map(|p| p.1),
             &a.preview,

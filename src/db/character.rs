@@ -56,37 +56,38 @@ impl Default for CharacterOptions {
     }
 }
 
-/// A loaded character.
+/// A loaded character. Built by [`Character::load`] (or
+/// [`Character::load_with`]); read through its accessors.
 pub struct Character {
     /// The manifest.
-    pub manifest: Manifest,
+    manifest: Manifest,
     /// Topology (file units and axes).
-    pub topology: Mesh,
+    topology: Mesh,
     /// The rig embedded on the topology's rest frame.
-    pub rig: Embedding,
+    rig: Embedding,
     /// All frames of all sequences, frame-major, metres, Y-up (converted
     /// once on load).
-    pub frames: Vec<[f64; 3]>,
+    frames: Vec<[f64; 3]>,
     /// Vertices per frame.
-    pub n: usize,
+    n: usize,
     /// Skeleton of every frame (metres, Y-up).
-    pub poses: Vec<Pose>,
+    poses: Vec<Pose>,
     /// The rig's rest joints (metres, Y-up).
-    pub rest_pose: Pose,
+    rest_pose: Pose,
     /// The similarity matrix of the graph's measure.
-    pub matrix: SimilarityMatrix,
+    matrix: SimilarityMatrix,
     /// The Surface Motion Graph.
-    pub graph: SurfaceMotionGraph,
+    graph: SurfaceMotionGraph,
     /// Its frame-level adjacency.
-    pub adjacency: FrameAdjacency,
+    adjacency: FrameAdjacency,
     /// Constraint vertices given in the manifest (`[deform] constraints`).
-    pub constraint_override: Option<Vec<u32>>,
+    constraint_override: Option<Vec<u32>>,
     /// Example frames given in the manifest (`[deform] examples`).
-    pub example_override: Option<Vec<usize>>,
+    example_override: Option<Vec<usize>>,
     /// Metres per file unit.
-    pub metres_per_unit: f64,
+    metres_per_unit: f64,
     /// The files are Z-up.
-    pub z_up: bool,
+    z_up: bool,
 }
 
 impl Character {
@@ -206,6 +207,79 @@ impl Character {
             metres_per_unit,
             z_up,
         })
+    }
+
+    /// The manifest.
+    pub fn manifest(&self) -> &Manifest {
+        &self.manifest
+    }
+
+    /// The topology (file units and axes; [`Character::topology_metres`]
+    /// for metres, Y-up).
+    pub fn topology(&self) -> &Mesh {
+        &self.topology
+    }
+
+    /// The rig embedded on the topology's rest frame (file units and axes).
+    pub fn rig(&self) -> &Embedding {
+        &self.rig
+    }
+
+    /// All frames of all sequences, frame-major (`n` positions a frame),
+    /// metres, Y-up (converted once on load).
+    pub fn frames(&self) -> &[[f64; 3]] {
+        &self.frames
+    }
+
+    /// Vertices per frame.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// The skeleton of every frame (metres, Y-up), indexed by flat id.
+    pub fn poses(&self) -> &[Pose] {
+        &self.poses
+    }
+
+    /// The rig's rest joints (metres, Y-up).
+    pub fn rest_pose(&self) -> &Pose {
+        &self.rest_pose
+    }
+
+    /// The similarity matrix of the graph's measure.
+    pub fn matrix(&self) -> &SimilarityMatrix {
+        &self.matrix
+    }
+
+    /// The Surface Motion Graph.
+    pub fn graph(&self) -> &SurfaceMotionGraph {
+        &self.graph
+    }
+
+    /// The graph's frame-level adjacency.
+    pub fn adjacency(&self) -> &FrameAdjacency {
+        &self.adjacency
+    }
+
+    /// Constraint vertices given in the manifest (`[deform] constraints`).
+    pub fn constraint_override(&self) -> Option<&[u32]> {
+        self.constraint_override.as_deref()
+    }
+
+    /// Example frames (flat ids) given in the manifest (`[deform]
+    /// examples`).
+    pub fn example_override(&self) -> Option<&[usize]> {
+        self.example_override.as_deref()
+    }
+
+    /// Metres per file unit.
+    pub fn metres_per_unit(&self) -> f64 {
+        self.metres_per_unit
+    }
+
+    /// True when the files are Z-up.
+    pub fn z_up(&self) -> bool {
+        self.z_up
     }
 
     /// Number of frames.

@@ -47,12 +47,12 @@ pub fn skin_into(
 /// [`super::soft::softness`]: LBS would weld a skirt to a
 /// thigh), every `stride`-th such vertex.
 pub fn constraint_vertices(ch: &Character, stride: usize) -> Vec<u32> {
-    let bones = bones_of(&ch.rig);
-    let rest = ch.topology.positions();
-    let soft = super::soft::softness(&ch.topology, &ch.rig);
+    let bones = bones_of(ch.rig());
+    let rest = ch.topology().positions();
+    let soft = super::soft::softness(ch.topology(), ch.rig());
     let mut out = Vec::new();
     let mut count = 0usize;
-    for (v, (js, ws)) in ch.rig.skin.iter().enumerate() {
+    for (v, (js, ws)) in ch.rig().skin.iter().enumerate() {
         let (k, w) = ws
             .iter()
             .enumerate()

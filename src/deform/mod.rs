@@ -269,8 +269,8 @@ fn fps_examples(rot: &[Vec<DQuat>], want: usize) -> Vec<usize> {
 /// the whole body (`Global`), else one per body part (its region of the
 /// embedding plus the vertices labelled with it).
 fn region_specs(ch: &Character, mode: DeformMode) -> Vec<RegionSpec> {
-    let n = ch.n;
-    let rig = &ch.rig;
+    let n = ch.n();
+    let rig = ch.rig();
     match mode {
         DeformMode::Global => vec![(
             (0..n as u32).collect(),
@@ -330,12 +330,12 @@ fn region_examples(
     // Examples covering the region's rotations.
     let rots: Vec<Vec<DQuat>> = (0..nf)
         .map(|f| {
-            let g = pose_rotations(&ch.rest_pose, &ch.poses[f]);
+            let g = pose_rotations(ch.rest_pose(), &ch.poses()[f]);
             example_joints.iter().map(|j| g[j.index()]).collect()
         })
         .collect();
-    let mut chosen = match &ch.example_override {
-        Some(e) => e.clone(),
+    let mut chosen = match ch.example_override() {
+        Some(e) => e.to_vec(),
         None => fps_examples(&rots, opts.examples),
     };
     if let Some(f) = opts.include.filter(|&f| f < nf && !chosen.contains(&f)) {
@@ -348,7 +348,7 @@ fn region_examples(
         let mut d = vec![[0.0; 3]; x.len()];
         apply(lap, &x, &mut d);
         let r = if opts.local_frames {
-            pose_rotations(&ch.rest_pose, &ch.poses[f])[joint.index()].inverse()
+            pose_rotations(ch.rest_pose(), &ch.poses()[f])[joint.index()].inverse()
         } else {
             DQuat::IDENTITY
         };
@@ -378,7 +378,7 @@ fn region_constraints(
     parent_verts: Option<&[u32]>,
     is_constraint: &[bool],
 ) -> (Vec<(u32, f64)>, Vec<RegionSource>) {
-    let rig = &ch.rig;
+    let rig = ch.rig();
     let mut constraints = Vec::new();
     let mut sources = Vec::new();
     for (i, &v) in verts.iter().enumerate() {
@@ -412,7 +412,7 @@ fn region_constraints(
 /// whole body, else the vertex's skin weight on the region's part (at least
 /// 1e-3 for a vertex labelled with the part), so overlapping regions blend.
 fn region_weights(ch: &Character, mode: DeformMode, verts: &[u32], joint: Canonical) -> Vec<f64> {
-    let rig = &ch.rig;
+    let rig = ch.rig();
     match mode {
         DeformMode::Global => vec![1.0; verts.len()],
         _ => {
@@ -453,9 +453,9 @@ impl Deformer {
         mode: DeformMode,
         opts: &DeformOptions,
     ) -> Result<Deformer, SolveError> {
-        let n = ch.n;
-        let constraint_vertices = match &ch.constraint_override {
-            Some(c) => c.clone(),
+        let n = ch.n();
+        let constraint_vertices = match ch.constraint_override() {
+            Some(c) => c.to_vec(),
             None => lbs::constraint_vertices(ch, opts.stride),
         };
         let mut out = Deformer {
@@ -463,13 +463,13 @@ impl Deformer {
             local_frames: opts.local_frames,
             adjacency: (opts.repair.rounds > 0
                 && matches!(mode, DeformMode::Part | DeformMode::Global))
-            .then(|| unflip::Adjacency::new(n, ch.topology.triangles())),
+            .then(|| unflip::Adjacency::new(n, ch.topology().triangles())),
             repair: opts.repair,
             untangle: opts.untangle,
             repair_passes: opts.repair_passes,
-            triangles: ch.topology.triangle_count(),
+            triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
-            rest_pose: ch.rest_pose,
+            rest_pose: *ch.rest_pose(),
             n,
             constraint_vertices: constraint_vertices.clone(),
             components: Vec::new(),
@@ -478,7 +478,7 @@ impl Deformer {
         if matches!(mode, DeformMode::Lbs | DeformMode::None) {
             return Ok(out);
         }
-        let tris = ch.topology.triangles();
+        let tris = ch.topology().triangles();
         let is_constraint = {
             let mut m = vec![false; n];
             for &v in &constraint_vertices {
@@ -584,7 +584,7 @@ impl Deformer {
             return TurnedOver::default();
         }
         let g = pose_rotations(source_pose, target);
-        lbs::skin_into(source, &ch.rig, source_pose, target, &g, &mut ws.lbs);
+        lbs::skin_into(source, ch.rig(), source_pose, target, &g, &mut ws.lbs);
         out.copy_from_slice(&ws.lbs);
         if self.mode == DeformMode::Lbs {
             return TurnedOver::default();
@@ -592,7 +592,7 @@ impl Deformer {
         let rot = pose_rotations(&self.rest_pose, target);
         // Each vertex's rotation from source to target: its bones' turns,
         // blended by skin weight.
-        unflip::skin_turns(&ch.rig.skin, &g, &mut ws.turn);
+        unflip::skin_turns(&ch.rig().skin, &g, &mut ws.turn);
         ws.acc.fill([0.0; 3]);
         ws.wsum.fill(0.0);
         for (k, r) in self.regions.iter().enumerate() {
@@ -648,7 +648,7 @@ impl Deformer {
             }
         }
         match &self.adjacency {
-            Some(adj) => self.repair(ch.topology.triangles(), adj, source, out, ws),
+            Some(adj) => self.repair(ch.topology().triangles(), adj, source, out, ws),
             None => TurnedOver::default(),
         }
     }
@@ -731,7 +731,7 @@ impl Deformer {
                 || (self.workspace(), vec![[0.0; 3]; n]),
                 |(ws, src), (f, t)| {
                     src.copy_from_slice(f);
-                    let sp = ch.rig.skeleton(src);
+                    let sp = ch.rig().skeleton(src);
                     self.deform(ch, src, &sp, t, f, ws)
                 },
             )

@@ -176,20 +176,20 @@ impl Checker {
     /// point of its frames) and its own figures as the reference.
     pub fn for_character(ch: &Character, opts: PlausibilityOptions) -> Result<Checker, EvalError> {
         let mut c = Checker::new(
-            ch.topology.positions(),
-            &ch.rig,
+            ch.topology().positions(),
+            ch.rig(),
             DVec3::Y,
             Some(0.0),
-            ch.manifest.fps,
+            ch.manifest().fps,
             opts,
         )?;
-        let n = ch.n;
+        let n = ch.n();
         let mut buf = vec![[0.0; 3]; n];
-        let mut seqs: Vec<Vec<[f64; 3]>> = Vec::with_capacity(ch.graph.sequences.len());
-        for (s, q) in ch.graph.sequences.iter().enumerate() {
+        let mut seqs: Vec<Vec<[f64; 3]>> = Vec::with_capacity(ch.graph().sequences.len());
+        for (s, q) in ch.graph().sequences.iter().enumerate() {
             let mut frames = Vec::with_capacity(q.len * n);
             for t in 0..q.len {
-                ch.frame_metres(ch.graph.frame_id(s, t), &mut buf);
+                ch.frame_metres(ch.graph().frame_id(s, t), &mut buf);
                 frames.extend_from_slice(&buf);
             }
             seqs.push(frames);
@@ -201,7 +201,11 @@ impl Checker {
         c.floor = floor_height(&lowest);
         let series: Vec<Series> = seqs.iter().map(|f| c.series(f, n)).collect();
         c.reference = Some(c.pool(
-            &format!("database '{}' ({} frames)", ch.manifest.name, lowest.len()),
+            &format!(
+                "database '{}' ({} frames)",
+                ch.manifest().name,
+                lowest.len()
+            ),
             &series,
         ));
         Ok(c)

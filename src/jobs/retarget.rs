@@ -68,7 +68,7 @@ impl RetargetJob {
     /// Retargets the clip at `clip` (BVH or AMC, any detected rig).
     pub fn run(&self, clip: &Path) -> Result<RetargetRun, JobError> {
         let ch = &self.character;
-        let fps = ch.manifest.fps;
+        let fps = ch.manifest().fps;
         let mocap = load_mocap(clip, &self.options.load, fps)?;
         if mocap.poses.is_empty() {
             return Err(JobError::Input {
@@ -101,7 +101,7 @@ impl RetargetJob {
     /// (by extension); returns the files written.
     pub fn write(&self, positions: Vec<[f64; 3]>, out: &Path) -> Result<Vec<PathBuf>, JobError> {
         let ch = &self.character;
-        let fps = ch.manifest.fps;
+        let fps = ch.manifest().fps;
         let seq = MeshSequence::new(ch.topology_metres(), positions, Some(fps))?;
         Ok(save_sequence_with(
             &seq,
@@ -123,7 +123,7 @@ pub fn plausibility(
     turned_over: Option<TurnedOver>,
 ) -> Option<(Plausibility, f64)> {
     let checked = Checker::for_character(ch, PlausibilityOptions::default())
-        .and_then(|c| Ok((c.measure(positions, ch.n, turned_over)?, c.floor)));
+        .and_then(|c| Ok((c.measure(positions, ch.n(), turned_over)?, c.floor)));
     match checked {
         Ok(p) => Some(p),
         Err(e) => {
@@ -137,12 +137,12 @@ impl RetargetRun {
     /// The joint-velocity error (Huang et al. 2015, Sec. 6.2) between the
     /// query on the character's bones and the skeleton read off the result.
     pub fn velocity_error(&self, ch: &Character) -> VelocityError {
-        let query = to_character(&ch.rest_pose, &self.mocap.reference, &self.mocap.poses);
+        let query = to_character(ch.rest_pose(), &self.mocap.reference, &self.mocap.poses);
         let skel: Vec<Pose> = self
             .output
             .positions
-            .chunks(ch.n.max(1))
-            .map(|p| ch.rig.skeleton(p))
+            .chunks(ch.n().max(1))
+            .map(|p| ch.rig().skeleton(p))
             .collect();
         velocity_error(&query, &skel)
     }
@@ -230,7 +230,7 @@ impl Converter for RetargetJob {
             JobError::Input { msg, .. } => msg,
             e => e.to_string(),
         })?;
-        let frames = run.output.positions.len() / self.character.n.max(1);
+        let frames = run.output.positions.len() / self.character.n().max(1);
         let e = run.velocity_error(&self.character);
         self.write(run.output.positions, out)
             .map_err(|e| e.to_string())?;
@@ -288,22 +288,22 @@ pub fn evaluate_result(
     load: &LoadOptions,
 ) -> Result<EvalReport, JobError> {
     use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
-    let fps = ch.manifest.fps;
+    let fps = ch.manifest().fps;
     let clip = load_mocap(mocap, load, fps)?;
-    let query = to_character(&ch.rest_pose, &clip.reference, &clip.poses);
+    let query = to_character(ch.rest_pose(), &clip.reference, &clip.poses);
     let res = load_sequence(&result.to_string_lossy(), &SeqLoad::default()).map_err(|e| {
         JobError::Context {
             what: result.display().to_string(),
             source: Box::new(e.into()),
         }
     })?;
-    if res.mesh().vertex_count() != ch.n {
+    if res.mesh().vertex_count() != ch.n() {
         return Err(JobError::Input {
             path: result.to_path_buf(),
             msg: format!(
                 "{} vertices, the character has {}",
                 res.mesh().vertex_count(),
-                ch.n
+                ch.n()
             ),
         });
     }
@@ -322,7 +322,7 @@ pub fn evaluate_result(
         });
     }
     let out: Vec<Pose> = (0..res.frame_count())
-        .map(|f| ch.rig.skeleton(res.frame(f)))
+        .map(|f| ch.rig().skeleton(res.frame(f)))
         .collect();
     let e = velocity_error(&query, &out);
     let plaus = plausibility(ch, res.all_positions(), None).map(|p| p.0);

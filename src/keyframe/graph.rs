@@ -105,14 +105,14 @@ impl KeyGraph {
     pub fn of_character(ch: &Character) -> KeyGraph {
         let centre = frame_centres(ch);
         let mut sequence = vec![0u32; ch.frame_count()];
-        for (s, span) in ch.graph.sequences.iter().enumerate() {
+        for (s, span) in ch.graph().sequences.iter().enumerate() {
             for f in span.start..span.start + span.len {
                 if let Some(x) = sequence.get_mut(f) {
                     *x = s as u32;
                 }
             }
         }
-        KeyGraph::from_adjacency(&ch.adjacency, centre, sequence)
+        KeyGraph::from_adjacency(ch.adjacency(), centre, sequence)
     }
 
     /// Number of frames.
@@ -145,14 +145,14 @@ impl KeyGraph {
 pub fn frame_centres(ch: &Character) -> Vec<[f64; 2]> {
     (0..ch.frame_count())
         .map(|f| {
-            let fr = &ch.frames[f * ch.n..(f + 1) * ch.n];
+            let fr = &ch.frames()[f * ch.n()..(f + 1) * ch.n()];
             let mut s = [0.0f64; 2];
             for p in fr {
-                let q = y_up(*p, ch.z_up) * ch.metres_per_unit;
+                let q = y_up(*p, ch.z_up()) * ch.metres_per_unit();
                 s[0] += q.x;
                 s[1] += q.z;
             }
-            let k = ch.n.max(1) as f64;
+            let k = ch.n().max(1) as f64;
             [s[0] / k, s[1] / k]
         })
         .collect()

@@ -94,7 +94,7 @@ pub fn parse_key(ch: &Character, key: &str) -> Result<u32, KeyframeError> {
         .ok_or_else(|| KeyframeError::Syntax(key.into()))?;
     let name = name.trim();
     let s = ch
-        .graph
+        .graph()
         .sequences
         .iter()
         .position(|q| q.name == name)
@@ -102,14 +102,14 @@ pub fn parse_key(ch: &Character, key: &str) -> Result<u32, KeyframeError> {
             key: key.into(),
             name: name.into(),
             known: ch
-                .graph
+                .graph()
                 .sequences
                 .iter()
                 .map(|q| q.name.as_str())
                 .collect::<Vec<_>>()
                 .join(", "),
         })?;
-    let len = ch.graph.sequences[s].len;
+    let len = ch.graph().sequences[s].len;
     let f: usize = f
         .trim()
         .parse()
@@ -121,13 +121,13 @@ pub fn parse_key(ch: &Character, key: &str) -> Result<u32, KeyframeError> {
             len,
         });
     }
-    Ok(ch.graph.frame_id(s, f))
+    Ok(ch.graph().frame_id(s, f))
 }
 
 /// `SEQUENCE:FRAME` of a frame id.
 pub fn key_name(ch: &Character, id: u32) -> String {
-    let (s, f) = ch.graph.frame_of(id);
-    format!("{}:{}", ch.graph.sequences[s].name, f)
+    let (s, f) = ch.graph().frame_of(id);
+    format!("{}:{}", ch.graph().sequences[s].name, f)
 }
 
 /// Distance and time targets.
@@ -289,14 +289,14 @@ pub struct Plan {
 pub fn runs(ch: &Character, frames: &[u32]) -> Vec<String> {
     let mut out: Vec<(usize, usize, usize)> = Vec::new();
     for &f in frames {
-        let (s, t) = ch.graph.frame_of(f);
+        let (s, t) = ch.graph().frame_of(f);
         match out.last_mut() {
             Some((ls, _, b)) if *ls == s && t == *b + 1 => *b = t,
             _ => out.push((s, t, t)),
         }
     }
     out.into_iter()
-        .map(|(s, a, b)| format!("{}[{a}..{b}]", ch.graph.sequences[s].name))
+        .map(|(s, a, b)| format!("{}[{a}..{b}]", ch.graph().sequences[s].name))
         .collect()
 }
 
@@ -547,9 +547,9 @@ pub enum TransitionCost {
 pub fn price_by_smoothness(ch: &Character, g: &mut KeyGraph) {
     use rayon::prelude::*;
     let mut window = std::collections::HashMap::new();
-    for t in &ch.graph.transitions {
-        let from = ch.graph.frame_id(t.from, t.m);
-        let to = ch.graph.frame_id(t.to, t.n) + 1;
+    for t in &ch.graph().transitions {
+        let from = ch.graph().frame_id(t.from, t.m);
+        let to = ch.graph().frame_id(t.to, t.n) + 1;
         window.insert((from, to), t.window);
     }
     let jumps: Vec<(usize, u32, u32)> = (0..g.len() as u32)
@@ -602,7 +602,7 @@ pub fn synthesise(
     if keys.len() < 2 {
         return Err(KeyframeError::TooFew);
     }
-    let fps = ch.manifest.fps;
+    let fps = ch.manifest().fps;
     let g = key_graph(ch, opts);
     let planner = Planner::new(g, keys, fps, &opts.search)
         .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;

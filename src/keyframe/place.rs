@@ -52,7 +52,7 @@ pub fn placements(ch: &Character, g: &KeyGraph, path: &[u32]) -> (Vec<Floor>, Ve
             let a = path[k - 1];
             let plain = b == a + 1 && g.sequence[a as usize] == g.sequence[b as usize];
             if !plain && b > 0 {
-                let fit = Floor::fit(&ch.poses[b as usize - 1], &ch.poses[a as usize]);
+                let fit = Floor::fit(&ch.poses()[b as usize - 1], &ch.poses()[a as usize]);
                 theta += fit.theta;
             }
             let (cb, cp) = (g.centre[b as usize], g.centre[b as usize - 1]);
@@ -85,7 +85,7 @@ pub fn place(
     let (place, centre) = placements(ch, g, path);
     let topo = ch.topology_metres();
     let blender = Blender::new(&topo)?;
-    let n = ch.n;
+    let n = ch.n();
     let mut positions = vec![[0.0; 3]; frames.len() * n];
     positions
         .par_chunks_mut(n.max(1))

@@ -96,16 +96,16 @@ pub fn hausdorff(a: &[DVec3], b: &[DVec3]) -> f64 {
 /// The smoothness of a jump from frame `from` (of sequence `i`) to frame
 /// `to` (of `j`; `to − 1` pairs with `from`) with half-window `window`.
 pub fn transition_smoothness(ch: &Character, from: u32, to: u32, window: usize) -> f64 {
-    let (sa, ta) = ch.graph.frame_of(from);
-    let (sb, tb) = ch.graph.frame_of(to);
+    let (sa, ta) = ch.graph().frame_of(from);
+    let (sb, tb) = ch.graph().frame_of(to);
     let tb = tb.saturating_sub(1);
     let l = window.max(1) as i64;
     let (la, lb) = (
-        ch.graph.sequences[sa].len as i64,
-        ch.graph.sequences[sb].len as i64,
+        ch.graph().sequences[sa].len as i64,
+        ch.graph().sequences[sb].len as i64,
     );
-    let mut a = vec![[0.0; 3]; ch.n];
-    let mut b = vec![[0.0; 3]; ch.n];
+    let mut a = vec![[0.0; 3]; ch.n()];
+    let mut b = vec![[0.0; 3]; ch.n()];
     let (mut num, mut den) = (0.0, 0.0);
     for k in -l..=l {
         let alpha = (k + l) as f64 / (2 * l) as f64;
@@ -118,12 +118,12 @@ pub fn transition_smoothness(ch: &Character, from: u32, to: u32, window: usize) 
             continue;
         }
         let (ia, ib) = (
-            ch.graph.frame_id(sa, fa as usize),
-            ch.graph.frame_id(sb, fb as usize),
+            ch.graph().frame_id(sa, fa as usize),
+            ch.graph().frame_id(sb, fb as usize),
         );
         ch.frame_metres(ia, &mut a);
         ch.frame_metres(ib, &mut b);
-        let fit = Floor::fit(&ch.poses[ib as usize], &ch.poses[ia as usize]);
+        let fit = Floor::fit(&ch.poses()[ib as usize], &ch.poses()[ia as usize]);
         let pa: Vec<DVec3> = a.iter().map(|p| DVec3::from_array(*p)).collect();
         let pb: Vec<DVec3> = b.iter().map(|p| fit.apply(DVec3::from_array(*p))).collect();
         num += w * hausdorff(&pa, &pb);

@@ -158,8 +158,8 @@ pub fn blend_placed(
             place
         } else {
             place.after(&Floor::fit(
-                &ch.poses[id as usize],
-                &ch.poses[anchor as usize],
+                &ch.poses()[id as usize],
+                &ch.poses()[anchor as usize],
             ))
         };
         ch.frame_metres(id, s.buf);
@@ -213,18 +213,18 @@ impl Floor {
 
 impl Frames for Character {
     fn frame_of(&self, id: u32) -> (usize, usize) {
-        self.graph.frame_of(id)
+        self.graph().frame_of(id)
     }
     fn id(&self, s: usize, t: usize) -> u32 {
-        self.graph.frame_id(s, t)
+        self.graph().frame_id(s, t)
     }
     fn len(&self, s: usize) -> usize {
-        self.graph.sequences[s].len
+        self.graph().sequences[s].len
     }
     fn transition_window(&self, from: u32, to_prev: u32) -> Option<usize> {
-        let (sa, m) = self.graph.frame_of(from);
-        let (sb, n) = self.graph.frame_of(to_prev);
-        self.graph
+        let (sa, m) = self.graph().frame_of(from);
+        let (sb, n) = self.graph().frame_of(to_prev);
+        self.graph()
             .transitions
             .iter()
             .find(|t| t.from == sa && t.to == sb && t.m == m && t.n == n)
@@ -256,17 +256,22 @@ pub fn synthesise(
     // One output frame per query frame, each holding the character's
     // vertices (placed, then deformed in place; the blend keeps a copy per
     // worker): refuse before allocating (issue 18, item 12).
-    crate::budget::check_frames(&format!("the retarget at {fps} fps"), mocap.len(), ch.n, 2)?;
+    crate::budget::check_frames(
+        &format!("the retarget at {fps} fps"),
+        mocap.len(),
+        ch.n(),
+        2,
+    )?;
     let mut timings = Timings::default();
     let t0 = Instant::now();
-    let query = query::to_character(&ch.rest_pose, reference, mocap);
+    let query = query::to_character(ch.rest_pose(), reference, mocap);
     timings.query = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let successor = |id: u32| ch.successor(id);
-    let dissimilarity = |a: u32, b: u32| ch.matrix.get(a as usize, b as usize);
+    let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
     let input = TrellisInput {
-        poses: &ch.poses,
-        adjacency: &ch.adjacency,
+        poses: ch.poses(),
+        adjacency: ch.adjacency(),
         successor: &successor,
         dissimilarity: &dissimilarity,
     };
@@ -293,8 +298,8 @@ pub fn synthesise(
         timings.deform = t6.elapsed().as_secs_f64();
     }
     let name = |id: u32| {
-        let (s, t) = ch.graph.frame_of(id);
-        (ch.graph.sequences[s].name.clone(), t)
+        let (s, t) = ch.graph().frame_of(id);
+        (ch.graph().sequences[s].name.clone(), t)
     };
     let steps = retrieval
         .path
@@ -344,12 +349,12 @@ fn place_and_blend(
     query: &[Pose],
     smooth: usize,
 ) -> Vec<[f64; 3]> {
-    let n = ch.n;
+    let n = ch.n();
     // Placement of each output frame's primary source, smoothed.
     let raw: Vec<Floor> = frames
         .iter()
         .zip(query)
-        .map(|(o, q)| Floor::fit(&ch.poses[o.primary() as usize], q))
+        .map(|(o, q)| Floor::fit(&ch.poses()[o.primary() as usize], q))
         .collect();
     let mut unwrapped: Vec<f64> = raw.iter().map(|f| f.theta).collect();
     for k in 1..unwrapped.len() {
