@@ -28,6 +28,8 @@ const FPS: f64 = 30.0;
 
 /// The database (built once per test binary) and the query poses.
 struct Fixture {
+    /// The database folder.
+    db: std::path::PathBuf,
     ch: Character,
     query: surfmotion::rig::retarget::ClipPoses,
 }
@@ -85,7 +87,7 @@ fn fixture() -> &'static Fixture {
             ch.graph().transitions.len(),
             t.elapsed().as_secs_f64()
         );
-        Fixture { ch, query }
+        Fixture { db, ch, query }
     })
 }
 
@@ -221,4 +223,52 @@ fn procedural_part_deformation_brings_the_mesh_to_the_driving_skeleton() {
     eprintln!("largest vertex displacement by the deformation: {max_move:.4} m");
     assert!(max_move > 0.0);
     assert!(max_move < 0.15, "{max_move} m");
+}
+
+/// Copies the files of `from` (and its sub-folders) into `to`.
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let dest = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &dest);
+        } else {
+            std::fs::copy(e.path(), dest).unwrap();
+        }
+    }
+}
+
+/// The key-frame graph's floor centres read the character's frames, which
+/// are in metres, Y-up once on load: they must not be converted again
+/// (they were scaled by the units twice on a database not in metres).
+#[test]
+fn keyframe_frame_centres_read_frames_converted_once_on_load() {
+    use surfmotion::keyframe::graph::{centre_of, frame_centres};
+    let f = fixture();
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("db");
+    copy_dir(&f.db, &db);
+    let mut manifest = surfmotion::db::Manifest::load(&db).unwrap();
+    manifest.units = "cm".into();
+    manifest.up = "z".into();
+    manifest.save(&db).unwrap();
+    let ch = Character::load(&db, &Quiet).unwrap();
+    assert_eq!(ch.metres_per_unit(), 0.01);
+    assert!(ch.z_up());
+    let centres = frame_centres(&ch);
+    assert_eq!(centres.len(), ch.frame_count());
+    for (i, c) in centres.iter().enumerate() {
+        let want = centre_of(ch.frame(i as u32));
+        assert!(
+            (c[0] - want[0]).abs() < 1e-12 && (c[1] - want[1]).abs() < 1e-12,
+            "frame {i}: centre {c:?}, its frame's centre {want:?}"
+        );
+    }
+    // Not vacuous: the centres are away from the origin by more than a
+    // second conversion to centimetres would leave.
+    assert!(
+        centres.iter().any(|c| c[0].hypot(c[1]) > 1e-3),
+        "the walk's centres all sit at the origin"
+    );
 }

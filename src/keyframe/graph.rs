@@ -13,7 +13,6 @@
 
 use crate::graph::FrameAdjacency;
 use crate::retarget::character::Character;
-use crate::similarity::y_up;
 
 /// An arc of the frame graph as the search sees it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -143,18 +142,10 @@ impl KeyGraph {
 /// Floor-projected mean vertex `(x, z)` of every frame of a character
 /// (metres, Y-up).
 pub fn frame_centres(ch: &Character) -> Vec<[f64; 2]> {
+    // The character's frames are in metres, Y-up already (converted once
+    // on load).
     (0..ch.frame_count())
-        .map(|f| {
-            let fr = &ch.frames()[f * ch.n()..(f + 1) * ch.n()];
-            let mut s = [0.0f64; 2];
-            for p in fr {
-                let q = y_up(*p, ch.z_up()) * ch.metres_per_unit();
-                s[0] += q.x;
-                s[1] += q.z;
-            }
-            let k = ch.n().max(1) as f64;
-            [s[0] / k, s[1] / k]
-        })
+        .map(|f| centre_of(ch.frame(f as u32)))
         .collect()
 }
 
