@@ -45,8 +45,8 @@ fn constraints_from_an_example_frame_return_that_frame() {
         assert!(!def.constraint_vertices.is_empty());
         assert!(def.examples.iter().all(|e| e.contains(&f)));
         let mut x = vec![[0.0; 3]; n];
-        ch.frame_metres(f as u32, &mut x);
-        let pose = ch.poses()[f];
+        ch.frame_metres(f, &mut x);
+        let pose = ch.poses()[f as usize];
         let mut out = vec![[0.0; 3]; n];
         def.deform(&ch, &x, &pose, &pose, &mut out, &mut def.workspace());
         let err = max_dist(&out, &x) / height(&x);
@@ -237,9 +237,9 @@ fn the_manifest_overrides_constraints_and_examples() {
         .iter()
         .position(|s| s.name == "02_01")
         .unwrap();
-    let ids: Vec<usize> = def.examples[0].clone();
+    let ids: Vec<u32> = def.examples[0].clone();
     assert_eq!(ids.len(), 3);
-    assert_eq!(ids[0], ch.graph().frame_id(s0, 10) as usize);
+    assert_eq!(ids[0], ch.graph().frame_id(s0, 10));
     assert!(def.examples.iter().all(|e| *e == ids));
     // Bad overrides are one-line errors naming the manifest.
     m.deform.examples = vec!["02_01:9999".into()];

@@ -17,7 +17,7 @@
 use crate::db::build::{BuildOptions, BuildProgress, build};
 use crate::db::skeletons::{SkeletonKind, embed_rig, poses};
 use crate::db::{DbError, MANIFEST, Manifest};
-use crate::graph::{FrameAdjacency, SurfaceMotionGraph};
+use crate::graph::{FrameAdjacency, FrameId, SurfaceMotionGraph};
 use crate::mesh::Mesh;
 use crate::mocap::units::y_up;
 use crate::rig::embed::Embedding;
@@ -25,17 +25,6 @@ use crate::similarity::SimilarityMatrix;
 use crate::skeleton::Pose;
 use glam::DVec3;
 use std::path::Path;
-
-/// A database frame: a sequence (manifest order) and a frame in it. The
-/// graph and the searches use the flat `u32` id instead
-/// ([`Character::flat_id`]: frames of all sequences numbered in order).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
-pub struct FrameId {
-    /// Sequence index.
-    pub seq: u32,
-    /// Frame within the sequence.
-    pub frame: u32,
-}
 
 /// Options of [`Character::load_with`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -83,7 +72,7 @@ pub struct Character {
     /// Constraint vertices given in the manifest (`[deform] constraints`).
     constraint_override: Option<Vec<u32>>,
     /// Example frames given in the manifest (`[deform] examples`).
-    example_override: Option<Vec<usize>>,
+    example_override: Option<Vec<u32>>,
     /// Metres per file unit.
     metres_per_unit: f64,
     /// The files are Z-up.
@@ -181,13 +170,18 @@ impl Character {
                     .iter()
                     .position(|q| q.name == name.trim())
                     .ok_or_else(|| bad(format!("example '{e}': no sequence '{name}'")))?;
-                let f: usize = f
+                let id = f
                     .trim()
                     .parse()
                     .ok()
-                    .filter(|&f| f < graph.sequences[s].len)
+                    .and_then(|frame| {
+                        graph.flat_id(FrameId {
+                            seq: s as u32,
+                            frame,
+                        })
+                    })
                     .ok_or_else(|| bad(format!("example '{e}': no frame '{f}' in '{name}'")))?;
-                ids.push(graph.frame_id(s, f) as usize);
+                ids.push(id);
             }
             Some(ids)
         };
@@ -268,7 +262,7 @@ impl Character {
 
     /// Example frames (flat ids) given in the manifest (`[deform]
     /// examples`).
-    pub fn example_override(&self) -> Option<&[usize]> {
+    pub fn example_override(&self) -> Option<&[u32]> {
         self.example_override.as_deref()
     }
 
@@ -289,17 +283,12 @@ impl Character {
 
     /// The flat id of a database frame (`None` when out of range).
     pub fn flat_id(&self, f: FrameId) -> Option<u32> {
-        let q = self.graph.sequences.get(f.seq as usize)?;
-        ((f.frame as usize) < q.len).then(|| self.graph.frame_id(f.seq as usize, f.frame as usize))
+        self.graph.flat_id(f)
     }
 
     /// The sequence and frame of a flat id.
     pub fn frame_id(&self, id: u32) -> FrameId {
-        let (s, t) = self.graph.frame_of(id);
-        FrameId {
-            seq: s as u32,
-            frame: t as u32,
-        }
+        self.graph.frame_at(id)
     }
 
     /// Frame `id`'s positions (metres, Y-up, `n` of them).

@@ -9,8 +9,9 @@ pub mod manifest;
 pub mod rigid;
 pub mod skeletons;
 
+pub use crate::graph::FrameId;
 pub use build::{BuildOptions, BuildProgress, BuildReport, Quiet, build};
-pub use character::{Character, CharacterOptions, FrameId};
+pub use character::{Character, CharacterOptions};
 pub use manifest::{
     DbError, DbInfo, DeformSpec, GraphSpec, MANIFEST, Manifest, RigSpec, SequenceEntry, SpaceEntry,
     info,

@@ -100,9 +100,10 @@ pub struct DeformOptions {
     pub seam_weight: f64,
     /// Keep every `stride`-th eligible constraint vertex. Default: 4.
     pub stride: usize,
-    /// A database frame every region uses as an example (besides those
-    /// chosen automatically). Default: none.
-    pub include: Option<usize>,
+    /// A database frame (flat id, [`crate::graph::SurfaceMotionGraph::flat_id`])
+    /// every region uses as an example (besides those chosen
+    /// automatically). Default: none.
+    pub include: Option<u32>,
     /// Learn and solve each part in its own rotating frame (true) or in
     /// world coordinates as the paper does (false). Default: true.
     pub local_frames: bool,
@@ -196,8 +197,8 @@ pub struct Deformer {
     pub constraint_vertices: Vec<u32>,
     /// Basis sizes (components per region).
     pub components: Vec<usize>,
-    /// Example frames (database ids) of each region.
-    pub examples: Vec<Vec<usize>>,
+    /// Example frames (flat database ids) of each region.
+    pub examples: Vec<Vec<u32>>,
 }
 
 /// Scratch of [`Deformer::deform`].
@@ -325,7 +326,7 @@ fn region_examples(
     example_joints: &[Canonical],
     opts: &DeformOptions,
     buf: &mut [[f64; 3]],
-) -> (Vec<usize>, Vec<Vec<[f64; 3]>>) {
+) -> (Vec<u32>, Vec<Vec<[f64; 3]>>) {
     let nf = ch.frame_count();
     // Examples covering the region's rotations.
     let rots: Vec<Vec<DQuat>> = (0..nf)
@@ -336,19 +337,25 @@ fn region_examples(
         .collect();
     let mut chosen = match ch.example_override() {
         Some(e) => e.to_vec(),
-        None => fps_examples(&rots, opts.examples),
+        None => fps_examples(&rots, opts.examples)
+            .into_iter()
+            .map(|f| f as u32)
+            .collect(),
     };
-    if let Some(f) = opts.include.filter(|&f| f < nf && !chosen.contains(&f)) {
+    if let Some(f) = opts
+        .include
+        .filter(|&f| (f as usize) < nf && !chosen.contains(&f))
+    {
         chosen.push(f);
     }
     let mut examples = Vec::with_capacity(chosen.len());
     for &f in &chosen {
-        ch.frame_metres(f as u32, buf);
+        ch.frame_metres(f, buf);
         let x: Vec<[f64; 3]> = verts.iter().map(|&v| buf[v as usize]).collect();
         let mut d = vec![[0.0; 3]; x.len()];
         apply(lap, &x, &mut d);
         let r = if opts.local_frames {
-            pose_rotations(ch.rest_pose(), &ch.poses()[f])[joint.index()].inverse()
+            pose_rotations(ch.rest_pose(), &ch.poses()[f as usize])[joint.index()].inverse()
         } else {
             DQuat::IDENTITY
         };

@@ -7,5 +7,5 @@ pub mod plot;
 pub mod smg;
 pub mod transitions;
 
-pub use smg::{FrameAdjacency, GraphEdits, SequenceEdge, SurfaceMotionGraph};
+pub use smg::{FrameAdjacency, FrameId, GraphEdits, SequenceEdge, SurfaceMotionGraph};
 pub use transitions::{Transition, TransitionOptions};

@@ -14,6 +14,18 @@ use crate::similarity::{Measure, SimilarityMatrix, Span};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 
+/// A database frame: a sequence (in graph order) and a frame in it. The
+/// frame-level adjacency and the searches use the flat `u32` id instead
+/// ([`SurfaceMotionGraph::flat_id`]: frames of all sequences numbered in
+/// order).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+pub struct FrameId {
+    /// Sequence index.
+    pub seq: u32,
+    /// Frame within the sequence.
+    pub frame: u32,
+}
+
 /// User edits of the graph (manifest `[graph]`).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -206,6 +218,21 @@ impl SurfaceMotionGraph {
     /// Global id of frame `t` of sequence `s`.
     pub fn frame_id(&self, s: usize, t: usize) -> u32 {
         (self.sequences[s].start + t) as u32
+    }
+
+    /// The flat id of a frame (`None` when out of range).
+    pub fn flat_id(&self, f: FrameId) -> Option<u32> {
+        let q = self.sequences.get(f.seq as usize)?;
+        ((f.frame as usize) < q.len).then(|| self.frame_id(f.seq as usize, f.frame as usize))
+    }
+
+    /// The frame of a flat id ([`SurfaceMotionGraph::frame_of`] typed).
+    pub fn frame_at(&self, id: u32) -> FrameId {
+        let (s, t) = self.frame_of(id);
+        FrameId {
+            seq: s as u32,
+            frame: t as u32,
+        }
     }
 
     /// Sequence and frame of a global id.
