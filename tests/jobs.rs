@@ -4,6 +4,8 @@
 //! any converter; the loaded character in metres once, with its skeleton
 //! kind selectable.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use surfmotion::batch::{Converted, Converter};
@@ -273,4 +275,137 @@ fn batch_folder_runs_any_converter_and_raises_notices_as_tracing_events() {
     );
     assert_eq!(*seen.lock().unwrap(), r.notices);
     assert!(r.files.iter().any(|f| f.ends_with("batch.json")));
+}
+
+/// Runs [`transfer_onto_scan`] and checks its progress reports: one per
+/// frame solved, every one with the total frame count (the `transfer`
+/// verb's bar took its length from them; it was created with length 0).
+fn transfer_with_progress(
+    scan: &surfmotion::mesh::Mesh,
+    spec: &surfmotion::jobs::TransferSpec,
+) -> surfmotion::jobs::TransferOutcome {
+    use surfmotion::jobs::{FrameProgress, transfer_onto_scan};
+    let seen: Mutex<Vec<FrameProgress>> = Mutex::new(Vec::new());
+    let out = transfer_onto_scan(scan, spec, &|p| seen.lock().unwrap().push(p)).unwrap();
+    let mut seen = seen.into_inner().unwrap();
+    assert_eq!(seen.len(), out.frames, "one progress report per frame");
+    assert!(
+        seen.iter().all(|p| p.total == out.frames),
+        "every report carries the total ({} frames)",
+        out.frames
+    );
+    seen.sort_by_key(|p| p.done);
+    assert!(
+        seen.iter().enumerate().all(|(i, p)| p.done == i + 1),
+        "frames done count 1..={}",
+        out.frames
+    );
+    out
+}
+
+#[test]
+fn transfer_onto_scan_animates_the_procedural_humanoid_from_a_clip() {
+    use surfmotion::jobs::{ScanTransferJob, ScanTransferOptions, TransferSource, TransferSpec};
+    use surfmotion::synth::humanoid::{humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh};
+    let tmp = tempfile::tempdir().unwrap();
+    let scan = humanoid_mesh(0.035);
+    let lm = tmp.path().join("humanoid.landmarks.json");
+    std::fs::write(&lm, humanoid_landmarks_json()).unwrap();
+    let clip = tmp.path().join("walk.bvh");
+    surfmotion::mocap::bvh::write_bvh(&gait_clip(Gait::Walk, 1.0, 30.0), &clip).unwrap();
+    let spec = TransferSpec {
+        scan_name: "humanoid".into(),
+        landmarks: Some(lm),
+        markers: None,
+        save_markers: None,
+        source: TransferSource::Mocap(clip.clone()),
+        truth: None,
+        options: ScanTransferOptions::default(),
+    };
+    let out = transfer_with_progress(&scan, &spec);
+    assert_eq!(out.frames, 30);
+    let n = out.prepared.mesh.vertex_count();
+    assert!(n > 500, "{n} vertices");
+    assert_eq!(out.positions.len(), 30 * n);
+    assert!(out.positions.iter().flatten().all(|x| x.is_finite()));
+    assert!(out.truth_error.is_none());
+    // The body moves: some vertex of the last frame is away from the rest
+    // scan by more than a centimetre (the humanoid is in metres).
+    let rest = out.prepared.mesh.positions();
+    let moved = out.positions[29 * n..]
+        .iter()
+        .zip(rest)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt())
+        .fold(0.0, f64::max);
+    assert!(moved > 0.01, "the last frame moved {moved} m at most");
+    // The one-off job and the job prepared once for many clips (`batch
+    // --scan`) give the same frames, and the result follows the clip.
+    let job = ScanTransferJob::prepare(
+        &scan,
+        &humanoid_landmarks(&scan),
+        "humanoid",
+        ScanTransferOptions::default(),
+    )
+    .unwrap();
+    let run = job.run(&clip).unwrap();
+    assert_eq!(run.positions.len(), out.positions.len());
+    let diff = run
+        .positions
+        .iter()
+        .zip(&out.positions)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
+    assert!(diff < 1e-9, "the two paths differ by {diff}");
+    let e = job.velocity_error(&run).unwrap();
+    assert!(e.mean_cm.is_finite() && e.mean_cm < 2.0, "{}", e.mean_cm);
+    // Written by one call, with its report.
+    let path = tmp.path().join("walk.pc2");
+    let report = out
+        .write(&path, surfmotion::mesh::io::glb::GlbOptions::DEFAULT, false)
+        .unwrap();
+    assert_eq!(report.frames, 30);
+    assert_eq!(report.output.len(), 2);
+    assert_eq!(
+        load_sequence(path.to_str().unwrap(), &Default::default())
+            .unwrap()
+            .frame_count(),
+        30
+    );
+}
+
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn transfer_onto_scan_reproduces_the_samba_capture_from_its_first_frame() {
+    use surfmotion::jobs::{ScanTransferOptions, TransferSource, TransferSpec};
+    let Some(d) = common::data_dir() else { return };
+    let samba = d.join("4d/samba/samba.pc2");
+    let samba = samba.to_str().unwrap().to_string();
+    let seq = load_sequence(&samba, &Default::default()).unwrap();
+    let scan = seq.frame_mesh(0);
+    let lm = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
+    let spec = TransferSpec {
+        scan_name: format!("{samba}:0"),
+        landmarks: Some(lm),
+        markers: None,
+        save_markers: None,
+        source: TransferSource::Template {
+            spec: samba.clone(),
+            markers: None,
+            landmarks: None,
+            frame: 0,
+        },
+        truth: Some(samba),
+        options: ScanTransferOptions {
+            markers: surfmotion::transfer::MarkerOptions {
+                count: 80,
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+    };
+    let out = transfer_with_progress(&scan, &spec);
+    assert_eq!(out.frames, seq.frame_count());
+    // The same bound as the `transfer` verb's self-transfer test.
+    let e = out.truth_error.as_ref().unwrap();
+    assert!(e.mean_pct > 0.0 && e.mean_pct < 5.0, "{}", e.mean_pct);
 }

@@ -181,8 +181,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             glb: a.glb.options(),
         },
     };
+    // The number of frames is known once the source is read: the library
+    // reports it with every frame solved.
     let bar = super::progress(0, "frames");
-    let outcome = transfer_onto_scan(&scan, &spec, &|_| bar.inc(1))?;
+    let outcome = transfer_onto_scan(&scan, &spec, &|p| {
+        bar.set_length(p.total as u64);
+        bar.inc(1);
+    })?;
     bar.finish_and_clear();
     print_outcome(&a, outcome)
 }

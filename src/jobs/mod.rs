@@ -37,8 +37,8 @@ pub use synth_db::{
     SynthCharacter, SynthClip, SynthOptions, SynthReport, write_synthetic_database,
 };
 pub use transfer::{
-    ScanTransferJob, ScanTransferOptions, TransferOutcome, TransferReport, TransferSource,
-    TransferSpec, TruthError, transfer_onto_scan,
+    FrameProgress, ScanTransferJob, ScanTransferOptions, TransferOutcome, TransferReport,
+    TransferSource, TransferSpec, TruthError, transfer_onto_scan,
 };
 
 use std::path::PathBuf;

@@ -306,15 +306,25 @@ fn context(what: String) -> impl FnOnce(JobError) -> JobError {
     }
 }
 
+/// Progress of the solve of a [`transfer_onto_scan`] job.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameProgress {
+    /// Frames solved so far.
+    pub done: usize,
+    /// Frames to solve in all (known once the source is read).
+    pub total: usize,
+}
+
 /// Animates `scan` from `spec.source` (Confluent Motion, de Aguiar et al.
 /// 2007, Sec. 4): prepares the scan, pairs its markers with the source's,
-/// factors once and solves every frame (`progress` is called per frame);
+/// factors once and solves every frame (`progress` is called once per
+/// frame solved, from any thread, with the frames done and the total);
 /// measures the result against `spec.truth` and its plausibility. Write the
 /// result with [`TransferOutcome::write`].
 pub fn transfer_onto_scan(
     scan: &Mesh,
     spec: &TransferSpec,
-    progress: &(dyn Fn(usize) + Sync),
+    progress: &(dyn Fn(FrameProgress) + Sync),
 ) -> Result<TransferOutcome, JobError> {
     use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
     use crate::transfer::{MarkerFile, Source};
@@ -436,7 +446,12 @@ pub fn transfer_onto_scan(
         &job.confluent,
         &mut job.motion,
         &spec.options.transfer,
-        progress,
+        &|done| {
+            progress(FrameProgress {
+                done,
+                total: frames,
+            })
+        },
     );
     let truth_error = match &spec.truth {
         Some(tspec) => {
