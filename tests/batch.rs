@@ -413,6 +413,7 @@ fn batch_has_the_per_clip_options_of_transfer_and_retarget() {
         "--w-retr",
         "--no-interpolate",
         "--no-blend",
+        "--skeleton",
     ];
     // A flag as help prints it: `--up <AXIS>`, or `--no-blend` alone.
     let has = |help: &str, f: &str| {

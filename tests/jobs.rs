@@ -409,3 +409,35 @@ fn transfer_onto_scan_reproduces_the_samba_capture_from_its_first_frame() {
     let e = out.truth_error.as_ref().unwrap();
     assert!(e.mean_pct > 0.0 && e.mean_pct < 5.0, "{}", e.mean_pct);
 }
+
+/// `retarget --skeleton` selects how the database frames' skeletons are
+/// read (issue 19: the kind was selectable in the library only); the
+/// default is the regressor's.
+#[test]
+fn retarget_reads_the_skeleton_kind_given_on_the_command_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    humanoid_db(&db);
+    let clip = tmp.path().join("turn.bvh");
+    surfmotion::mocap::bvh::write_bvh(&gait_clip(Gait::Turn, 1.0, 30.0), &clip).unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let out = tmp.path().join(format!("{name}.pc2"));
+        let o = std::process::Command::new(common::bin())
+            .args(["retarget", "--db"])
+            .arg(&db)
+            .arg("--mocap")
+            .arg(&clip)
+            .arg("-o")
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(out).unwrap()
+    };
+    let default = run("default", &[]);
+    let regressor = run("regressor", &["--skeleton", "regressor"]);
+    let rigid = run("rigid", &["--skeleton", "rigid"]);
+    assert_eq!(default, regressor, "the default is not the regressor's");
+    assert!(rigid != regressor, "--skeleton rigid changed nothing");
+}

@@ -97,9 +97,9 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             db,
             RetargetJobOptions {
                 retarget: retarget_opts,
+                character: a.retarget_job.character(),
                 load,
                 glb: a.glb.options(),
-                ..Default::default()
             },
             &super::db::Bars::new(),
         )?),

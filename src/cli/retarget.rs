@@ -1,7 +1,7 @@
 //! `surfmotion retarget` and `surfmotion eval`.
 
 use std::path::PathBuf;
-use surfmotion::db::Character;
+use surfmotion::db::{Character, CharacterOptions};
 use surfmotion::jobs::retarget::{evaluate_result, per_frame_seconds};
 use surfmotion::jobs::{RetargetJob, RetargetJobOptions, RetargetSummary};
 use surfmotion::retarget::RetargetOptions;
@@ -63,6 +63,12 @@ pub struct JobOpts {
     /// No blending across transitions.
     #[arg(long)]
     pub no_blend: bool,
+    /// How each database frame's skeleton is read off its surface for
+    /// retrieval, placement, the deformation's binding and the
+    /// plausibility checks: the measured regressor joints, the character's
+    /// rigid skeleton, or part centroids.
+    #[arg(long, value_enum, default_value_t = super::values::SkeletonKindArg::Regressor)]
+    pub skeleton: super::values::SkeletonKindArg,
 }
 
 impl JobOpts {
@@ -81,6 +87,13 @@ impl JobOpts {
         opts
     }
 
+    /// How the database is loaded.
+    pub fn character(&self) -> CharacterOptions {
+        CharacterOptions {
+            skeleton: self.skeleton.into(),
+        }
+    }
+
     /// True when every option has its default (they apply only to 4D
     /// characters).
     pub fn is_default(&self) -> bool {
@@ -90,6 +103,7 @@ impl JobOpts {
             && self.w_retr == 1.0
             && !self.no_interpolate
             && !self.no_blend
+            && self.skeleton == super::values::SkeletonKindArg::Regressor
     }
 }
 
@@ -98,9 +112,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
+        character: a.job.character(),
         load: a.clip.load_options()?,
         glb: a.glb.options(),
-        ..Default::default()
     };
     let job = RetargetJob::load(&a.db, opts, &super::db::Bars::new())?;
     let ch = &job.character;
