@@ -181,6 +181,26 @@ impl Row {
 /// A small budget: a refusal must come before the allocation.
 const SMALL: &str = "64M";
 
+/// One row per malformed file and verb: the verb's arguments with `hole`
+/// replaced by the file's name, the file written into `{d}` and its name
+/// the word the error must carry; the row is named `{verb}{sep}{name}`.
+fn cross(
+    r: &mut Vec<Row>,
+    files: &[(&'static str, Vec<u8>)],
+    verbs: &[(&str, &'static str)],
+    hole: &str,
+    sep: &str,
+) {
+    for (name, bytes) in files {
+        for (verb, args) in verbs {
+            let args: &'static str = Box::leak(args.replace(hole, name).into_boxed_str());
+            let what: &'static str = Box::leak(format!("{verb}{sep}{name}").into_boxed_str());
+            let words: &'static [&'static str] = Box::leak(Box::new([*name]));
+            r.push(row(what, args, words).file(name, bytes.clone()));
+        }
+    }
+}
+
 fn rows() -> Vec<Row> {
     let obj_ok = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
     let mut r = vec![
@@ -292,14 +312,7 @@ fn rows() -> Vec<Row> {
             "transfer --scan {topo} --landmarks {lm} --mocap {d}/CLIP -o {d}/o.pc2",
         ),
     ];
-    for (name, bytes) in &malformed_clips {
-        for (verb, args) in clip_verbs {
-            let args: &'static str = Box::leak(args.replace("CLIP", name).into_boxed_str());
-            let what: &'static str = Box::leak(format!("{verb} on {name}").into_boxed_str());
-            let words: &'static [&'static str] = Box::leak(Box::new([*name]));
-            r.push(row(what, args, words).file(name, bytes.clone()));
-        }
-    }
+    cross(&mut r, &malformed_clips, &clip_verbs, "CLIP", " on ");
     let malformed_meshes: Vec<(&'static str, Vec<u8>)> = vec![
         ("empty.obj", Vec::new()),
         ("garbage.obj", garbage(4000)),
@@ -328,14 +341,7 @@ fn rows() -> Vec<Row> {
             "rig embed {d}/MESH --landmarks {lm} -o {d}/r.json",
         ),
     ];
-    for (name, bytes) in &malformed_meshes {
-        for (verb, args) in mesh_verbs {
-            let args: &'static str = Box::leak(args.replace("MESH", name).into_boxed_str());
-            let what: &'static str = Box::leak(format!("{verb} on {name}").into_boxed_str());
-            let words: &'static [&'static str] = Box::leak(Box::new([*name]));
-            r.push(row(what, args, words).file(name, bytes.clone()));
-        }
-    }
+    cross(&mut r, &malformed_meshes, &mesh_verbs, "MESH", " on ");
     let malformed_json: Vec<(&'static str, Vec<u8>)> = vec![
         ("empty.json", Vec::new()),
         ("garbage.json", garbage(3000)),
@@ -364,14 +370,7 @@ fn rows() -> Vec<Row> {
             "mocap positions {walk} --rig-map {d}/JSON",
         ),
     ];
-    for (name, bytes) in &malformed_json {
-        for (verb, args) in json_verbs {
-            let args: &'static str = Box::leak(args.replace("JSON", name).into_boxed_str());
-            let what: &'static str = Box::leak(format!("{verb} {name}").into_boxed_str());
-            let words: &'static [&'static str] = Box::leak(Box::new([*name]));
-            r.push(row(what, args, words).file(name, bytes.clone()));
-        }
-    }
+    cross(&mut r, &malformed_json, &json_verbs, "JSON", " ");
     for (name, bytes) in [
         ("empty", Vec::new()),
         ("garbage", garbage(500)),

@@ -379,6 +379,20 @@ pub fn one_line(e: &anyhow::Error) -> String {
     s.replace('\n', " ")
 }
 
+/// Options shared by the verbs that read clips and show their result
+/// (`retarget`, `transfer`, `synth`; flattened in place, so their help
+/// lists them where each verb declared them before).
+#[derive(clap::Args, Clone, Debug)]
+pub struct RunOpts {
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub clip: ClipOpts,
+    #[command(flatten)]
+    pub preview: render::PreviewOpts,
+}
+
 /// Options shared by every command that reads a clip.
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct ClipOpts {

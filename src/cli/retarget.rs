@@ -25,13 +25,8 @@ pub struct Args {
     /// frame, blends, transitions and cuts, costs, timings.
     #[arg(long, value_name = "JSON")]
     pub report: Option<PathBuf>,
-    /// Print the summary as JSON.
-    #[arg(long)]
-    pub json: bool,
     #[command(flatten)]
-    pub clip: super::ClipOpts,
-    #[command(flatten)]
-    pub preview: super::render::PreviewOpts,
+    pub run: super::RunOpts,
     #[command(flatten)]
     pub glb: super::mesh::GlbArgs,
 }
@@ -113,7 +108,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
         character: a.job.character(),
-        load: a.clip.load_options()?,
+        load: a.run.clip.load_options()?,
         glb: a.glb.options(),
     };
     let job = RetargetJob::load(&a.db, opts, &super::db::Bars::new())?;
@@ -125,7 +120,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         &out.positions,
         run.deformed().then_some(out.report.turned_over),
     );
-    if let Some(path) = &a.preview.preview {
+    if let Some(path) = &a.run.preview.preview {
         let facing = surfmotion::mocap::units::y_up(ch.rig().facing, ch.z_up());
         super::render::write_preview(
             path,
@@ -140,7 +135,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                     .skeleton(&out.positions[..ch.n().min(out.positions.len())]),
             )),
             plaus.as_ref().map(|p| p.1),
-            &a.preview,
+            &a.run.preview,
         )?;
     }
     let plaus = plaus.map(|p| p.0);
@@ -152,7 +147,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
     }
     let per_frame = per_frame_seconds(r);
-    if a.json {
+    if a.run.json {
         let v = serde_json::to_value(RetargetSummary::new(written, r, plaus))?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }

@@ -38,13 +38,8 @@ pub struct Args {
     /// Overwrite an existing manifest in the output.
     #[arg(long)]
     pub force: bool,
-    /// Print the summary as JSON.
-    #[arg(long)]
-    pub json: bool,
     #[command(flatten)]
-    pub clip: super::ClipOpts,
-    #[command(flatten)]
-    pub preview: super::render::PreviewOpts,
+    pub run: super::RunOpts,
 }
 
 /// Runs `synth`: the rig embedded here (errors name the mesh or the
@@ -82,7 +77,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             ..Dynamics::default()
         },
         force: true,
-        load: a.clip.load_options()?,
+        load: a.run.clip.load_options()?,
         ..Default::default()
     };
     let clips: Vec<SynthClip> = a.mocap.iter().cloned().map(SynthClip::File).collect();
@@ -92,7 +87,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         if let Some(p) = &row.plausibility {
             plaus_text.push(format!("{}: {}", row.sequence, p.text()));
         }
-        if a.preview.preview.is_some() {
+        if a.run.preview.preview.is_some() {
             sheets.extend(super::render::preview_image(
                 positions,
                 rest.vertex_count(),
@@ -100,7 +95,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 Some(rig),
                 None,
                 row.plausibility.as_ref().map(|p| p.floor_m),
-                &a.preview,
+                &a.run.preview,
             ));
         }
         bar.inc(1);
@@ -108,7 +103,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut r = write_synthetic_database(dir, &character, &clips, &opts, &mut each)?;
     bar.finish_and_clear();
     r.embed_seconds = embed_s;
-    if a.json {
+    if a.run.json {
         crate::outln!(
             "{}",
             serde_json::to_string_pretty(&serde_json::to_value(&r)?)?
@@ -134,13 +129,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
     }
     // The contact sheets of all sequences, one above the other; plausibility.
-    if let (Some(p), Some(first)) = (&a.preview.preview, sheets.first()) {
+    if let (Some(p), Some(first)) = (&a.run.preview.preview, sheets.first()) {
         let img = sheets[1..]
             .iter()
             .fold(first.clone(), |acc, s| acc.above(s));
         img.save_png(p)?;
     }
-    if !a.json {
+    if !a.run.json {
         crate::outln!("{}", plaus_text.concat().trim_end())?;
     }
     Ok(())

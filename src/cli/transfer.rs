@@ -65,13 +65,8 @@ pub struct Args {
     /// Write a JSON report (markers, repair, timings, errors).
     #[arg(long, value_name = "JSON")]
     pub report: Option<PathBuf>,
-    /// Print the summary as JSON.
-    #[arg(long)]
-    pub json: bool,
     #[command(flatten)]
-    pub clip: super::ClipOpts,
-    #[command(flatten)]
-    pub preview: super::render::PreviewOpts,
+    pub run: super::RunOpts,
     #[command(flatten)]
     pub glb: super::mesh::GlbArgs,
 }
@@ -177,7 +172,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                     SignMode::Consistent
                 },
             },
-            load: a.clip.load_options()?,
+            load: a.run.clip.load_options()?,
             glb: a.glb.options(),
         },
     };
@@ -195,7 +190,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 /// Writes the preview and the result of a transfer and prints its report.
 fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
     let prepared = &outcome.prepared;
-    if let Some(path) = &a.preview.preview {
+    if let Some(path) = &a.run.preview.preview {
         let up = prepared.rig.as_ref().map(|r| glam::DVec3::from_array(r.up));
         let y_up = up.is_none_or(|u| u.y > 0.9);
         super::render::write_preview(
@@ -213,7 +208,7 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
                 .as_ref()
                 .filter(|_| y_up)
                 .map(|p| p.floor_m / outcome.metres_per_unit.unwrap_or(1.0)),
-            &a.preview,
+            &a.run.preview,
         )?;
     }
     let dropped = prepared.report.dropped_components.len();
@@ -224,7 +219,7 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
             serde_json::to_string_pretty(&serde_json::to_value(&report)?)?.as_bytes(),
         )?;
     }
-    if a.json {
+    if a.run.json {
         let mut short = serde_json::to_value(&report)?;
         short.as_object_mut().map(|o| o.remove("markers_used"));
         if let Some(t) = short.get_mut("truth_error").and_then(|t| t.as_object_mut()) {

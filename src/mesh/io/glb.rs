@@ -142,26 +142,15 @@ struct Storage {
     normalized: bool,
 }
 
-const F32: Storage = Storage {
-    ct: json::accessor::ComponentType::F32,
-    normalized: false,
-};
-const U32: Storage = Storage {
-    ct: json::accessor::ComponentType::U32,
-    normalized: false,
-};
-const I16: Storage = Storage {
-    ct: json::accessor::ComponentType::I16,
-    normalized: false,
-};
-const I16_NORM: Storage = Storage {
-    ct: json::accessor::ComponentType::I16,
-    normalized: true,
-};
-const I8_NORM: Storage = Storage {
-    ct: json::accessor::ComponentType::I8,
-    normalized: true,
-};
+const fn storage(ct: json::accessor::ComponentType, normalized: bool) -> Storage {
+    Storage { ct, normalized }
+}
+
+const F32: Storage = storage(json::accessor::ComponentType::F32, false);
+const U32: Storage = storage(json::accessor::ComponentType::U32, false);
+const I16: Storage = storage(json::accessor::ComponentType::I16, false);
+const I16_NORM: Storage = storage(json::accessor::ComponentType::I16, true);
+const I8_NORM: Storage = storage(json::accessor::ComponentType::I8, true);
 
 #[allow(clippy::too_many_arguments)]
 fn accessor(

@@ -239,23 +239,7 @@ impl Ctx<'_> {
             }
         };
         if let Some(sp) = acc.sparse() {
-            let n = sp.count();
-            let iv = sp.indices();
-            let it = match iv.index_type() {
-                gltf::accessor::sparse::IndexType::U8 => DataType::U8,
-                gltf::accessor::sparse::IndexType::U16 => DataType::U16,
-                gltf::accessor::sparse::IndexType::U32 => DataType::U32,
-            };
-            let idx = self.read_indices(&iv.view(), iv.offset(), n, it, what)?;
-            let vals = self.read_elements(
-                &sp.values().view(),
-                sp.values().offset(),
-                n,
-                comps,
-                dt,
-                acc.normalized(),
-                what,
-            )?;
+            let (idx, vals) = self.read_sparse(&sp, comps, dt, acc.normalized(), what)?;
             for (k, &i) in idx.iter().enumerate() {
                 if i >= count {
                     return Err(self.err(format!("{what}: sparse index {i} ≥ count {count}")));
@@ -264,6 +248,36 @@ impl Ctx<'_> {
             }
         }
         Ok((out, comps))
+    }
+
+    /// A sparse accessor's substitutions: its indices and its values
+    /// (`comps` components of type `dt` each), indices read first.
+    fn read_sparse(
+        &self,
+        sp: &gltf::accessor::sparse::Sparse,
+        comps: usize,
+        dt: DataType,
+        normalized: bool,
+        what: &str,
+    ) -> Result<(Vec<usize>, Vec<f32>), MeshError> {
+        let n = sp.count();
+        let iv = sp.indices();
+        let it = match iv.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+        };
+        let idx = self.read_indices(&iv.view(), iv.offset(), n, it, what)?;
+        let vals = self.read_elements(
+            &sp.values().view(),
+            sp.values().offset(),
+            n,
+            comps,
+            dt,
+            normalized,
+            what,
+        )?;
+        Ok((idx, vals))
     }
 
     /// `count` unsigned integers of type `it` (exact: an f32 holds
@@ -315,23 +329,7 @@ impl Ctx<'_> {
         else {
             return Ok(None);
         };
-        let n = sp.count();
-        let iv = sp.indices();
-        let it = match iv.index_type() {
-            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
-            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
-            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
-        };
-        let idx = self.read_indices(&iv.view(), iv.offset(), n, it, what)?;
-        let vals = self.read_elements(
-            &sp.values().view(),
-            sp.values().offset(),
-            n,
-            1,
-            acc.data_type(),
-            acc.normalized(),
-            what,
-        )?;
+        let (idx, vals) = self.read_sparse(&sp, 1, acc.data_type(), acc.normalized(), what)?;
         if idx.windows(2).any(|w| w[1] <= w[0]) || idx.last().is_some_and(|&i| i >= acc.count()) {
             return Err(self.err(format!(
                 "{what}: sparse indices must increase and stay under the count {}",
