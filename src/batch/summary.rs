@@ -5,8 +5,9 @@
 //! The report describes every output of the run's clips, not only those
 //! converted now: a clip skipped because its output is complete keeps the
 //! frames, time and error its earlier run recorded ([`Earlier`]). While the
-//! batch runs, `batch.json` is rewritten after each clip (`"finished":
-//! false`), so a killed run leaves a valid report of what it finished.
+//! batch runs, all three are rewritten after each clip (`"finished":
+//! false`, and the page says "running"), so a killed run leaves a valid
+//! report of what it finished.
 
 use super::runner::{ClipOutcome, ClipStatus};
 use crate::fsutil::{FsError, write_bytes_atomic};
@@ -187,6 +188,9 @@ pub fn html(s: &Summary) -> String {
         "<!doctype html>\n<meta charset=\"utf-8\">\n<title>surfmotion batch</title>\n<style>body{font-family:sans-serif;margin:2em}td,th{padding:2px 8px;text-align:left}.failed{color:#b00}</style>\n",
     );
     let _ = writeln!(h, "<h1>surfmotion batch</h1>\n<p>{}.</p>", esc(&s.line()));
+    if !s.finished {
+        h.push_str("<p class=\"running\"><b>running</b> (or stopped before its end): the clips listed are those finished so far.</p>\n");
+    }
     h.push_str(&plot_svg(s));
     h.push_str("<table>\n<tr><th>clip</th><th>status</th><th>frames</th><th>seconds</th><th>error (cm/frame)</th><th>output / reason</th></tr>\n");
     for o in &s.outcomes {
