@@ -38,7 +38,7 @@ pub use synth_db::{
 };
 pub use transfer::{
     ScanTransferJob, ScanTransferOptions, TransferOutcome, TransferReport, TransferSource,
-    TransferSpec, TruthError, transfer_onto_scan,
+    TransferSpec, TruthError, transfer_onto_scan, transfer_onto_scan_to,
 };
 
 use std::path::PathBuf;
