@@ -424,7 +424,7 @@ impl Landmarks {
                 return Err(bad(
                     knee,
                     format!(
-                        "{:.0}% of the groin-chin distance {} the groin along the body (groin to chin); a knee is well below it",
+                        "{:.0}% of the groin-chin distance {} the groin along the body (groin to chin); a knee is below it",
                         100.0 * hk.abs(),
                         if hk >= 0.0 { "above" } else { "below" }
                     ),
