@@ -122,7 +122,9 @@ fn esc(s: &str) -> String {
 /// error (orange, right scale); failed clips marked red.
 pub fn plot_svg(s: &Summary) -> String {
     let n = s.outcomes.len().max(1);
-    let (w, h, left, bottom) = (60.0 + 14.0 * n as f64, 260.0, 50.0, 40.0);
+    // At least wide enough for the two axis titles (a report of one or two
+    // clips, as a killed run leaves, overlapped them).
+    let (w, h, left, bottom) = ((60.0 + 14.0 * n as f64).max(440.0), 260.0, 50.0, 40.0);
     let tmax = s.outcomes.iter().map(|o| o.seconds).fold(1e-9, f64::max);
     let emax = s
         .outcomes
@@ -230,9 +232,12 @@ pub fn write_summary(dir: &Path, s: &Summary) -> Result<Vec<PathBuf>, FsError> {
     let svg = dir.join(format!("{stem}.svg"));
     let page = dir.join(format!("{stem}.html"));
     let text = serde_json::to_string_pretty(s).unwrap_or_default();
-    write_bytes_atomic(&json, text.as_bytes())?;
+    // The JSON last: whoever sees a clip in it finds it in the page and
+    // the plot too (a run killed between two writes leaves the page at
+    // most one clip ahead).
     write_bytes_atomic(&svg, plot_svg(s).as_bytes())?;
     write_bytes_atomic(&page, html(s).as_bytes())?;
+    write_bytes_atomic(&json, text.as_bytes())?;
     Ok(vec![json, page, svg])
 }
 
