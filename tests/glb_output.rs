@@ -303,11 +303,15 @@ fn regression_position_accessor_out_of_range_is_an_error_not_a_panic() {
     assert!(e.contains("accessor 999"), "{e}");
 }
 
+/// A GLB as glTF Transform decodes it: every frame's positions
+/// (frame-major), the node's scale, the frame count.
+type Decoded = (Vec<[f64; 3]>, f64, usize);
+
 /// The positions of every frame as glTF Transform decodes a GLB (a reader
 /// independent of ours, `.ci/decode-gltf.mjs`), and the node's scale (the
 /// grid step of a quantised file); `None` (skipped with a message) when
 /// node or the package is absent, which fails under CI=true.
-fn decode_in_gltf_transform(files: &[&Path]) -> Option<Vec<(Vec<[f64; 3]>, f64, usize)>> {
+fn decode_in_gltf_transform(files: &[&Path]) -> Option<Vec<Decoded>> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let have = root.join(".ci/node_modules/@gltf-transform/core").exists()
         && std::process::Command::new("node")
