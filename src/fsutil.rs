@@ -194,6 +194,73 @@ pub fn write_atomic(
     Ok(())
 }
 
+/// A file written piece by piece and made visible at once: the bytes go to
+/// a temporary file beside `path` (`.surfmotion-XXXXXX.part`), which
+/// [`AtomicFile::commit`] flushes and renames over `path`. Dropped without
+/// a commit (an error, a panic), the temporary is removed and `path` keeps
+/// its old content. For outputs too large to hold in memory (a point cache
+/// streamed frame by frame; issue 18, item 12).
+pub struct AtomicFile {
+    path: PathBuf,
+    buf: std::io::BufWriter<tempfile::NamedTempFile>,
+}
+
+impl AtomicFile {
+    /// Starts writing `path` (its folder is created).
+    pub fn create(path: &Path) -> Result<AtomicFile, FsError> {
+        let wrap = |source| FsError {
+            path: path.to_path_buf(),
+            source,
+        };
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&dir).map_err(wrap)?;
+        let tmp = tempfile::Builder::new()
+            .prefix(".surfmotion-")
+            .suffix(".part")
+            .tempfile_in(&dir)
+            .map_err(wrap)?;
+        Ok(AtomicFile {
+            path: path.to_path_buf(),
+            buf: std::io::BufWriter::with_capacity(1 << 20, tmp),
+        })
+    }
+
+    /// Appends bytes.
+    pub fn write_all(&mut self, bytes: &[u8]) -> Result<(), FsError> {
+        self.buf.write_all(bytes).map_err(|source| FsError {
+            path: self.path.clone(),
+            source,
+        })
+    }
+
+    /// Flushes, syncs and renames the temporary over the path (with the
+    /// permissions of the file it replaces, or 0644).
+    pub fn commit(self) -> Result<(), FsError> {
+        let path = self.path;
+        let wrap = |source| FsError {
+            path: path.clone(),
+            source,
+        };
+        let tmp = self.buf.into_inner().map_err(|e| wrap(e.into_error()))?;
+        tmp.as_file().sync_all().map_err(wrap)?;
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&path)
+                .map(|m| m.permissions().mode())
+                .unwrap_or(0o644);
+            tmp.as_file()
+                .set_permissions(std::fs::Permissions::from_mode(mode))
+                .map_err(wrap)?;
+        }
+        tmp.persist(&path).map_err(|e| wrap(e.error))?;
+        Ok(())
+    }
+}
+
 /// [`write_atomic`] for a byte slice.
 pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), FsError> {
     write_atomic(path, |w| w.write_all(bytes))
@@ -232,6 +299,25 @@ mod tests {
         assert_eq!(std::fs::read(&p).unwrap(), b"second");
         let names: Vec<_> = std::fs::read_dir(p.parent().unwrap()).unwrap().collect();
         assert_eq!(names.len(), 1);
+    }
+
+    #[test]
+    fn an_atomic_file_appears_only_when_committed() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("out.bin");
+        write_bytes_atomic(&p, b"old").unwrap();
+        let mut f = AtomicFile::create(&p).unwrap();
+        f.write_all(b"new ").unwrap();
+        f.write_all(b"content").unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"old");
+        f.commit().unwrap();
+        assert_eq!(std::fs::read(&p).unwrap(), b"new content");
+        // Dropped without a commit: the old file stays, no temporary.
+        let mut f = AtomicFile::create(&p).unwrap();
+        f.write_all(b"partial").unwrap();
+        drop(f);
+        assert_eq!(std::fs::read(&p).unwrap(), b"new content");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 
     #[test]

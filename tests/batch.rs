@@ -615,6 +615,25 @@ fn a_killed_batch_leaves_a_valid_report_of_what_finished() {
         assert_eq!(o["status"], "done");
         assert!(Path::new(o["output"].as_str().unwrap()).is_file(), "{o}");
     }
+    // The page and the plot describe the clips of the JSON (they were
+    // written only at the end of a run); written before the JSON, they may
+    // be one clip ahead of it.
+    let page = std::fs::read_to_string(out.join("batch.html")).expect("batch.html of a killed run");
+    let svg = std::fs::read_to_string(out.join("batch.svg")).expect("batch.svg of a killed run");
+    assert!(page.contains("<b>running</b>"), "{page}");
+    for o in &done {
+        let clip = o["clip"].as_str().unwrap();
+        assert!(
+            page.contains(&format!("<td>{clip}</td>")),
+            "{clip} not in the page: {page}"
+        );
+        assert!(svg.contains(clip), "{clip} not in the plot: {svg}");
+    }
+    let rows = page.matches("<tr class=").count();
+    assert!(
+        rows == done.len() || rows == done.len() + 1,
+        "{rows} rows: {page}"
+    );
     // The rerun takes over the dead run's lock and completes the report.
     let err = ok(&hbatch(&lib, &out, &["--jobs", "2"]));
     assert!(err.contains("stale lock"), "{err}");

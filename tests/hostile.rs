@@ -125,6 +125,58 @@ fn landmarks_mapped(f: impl Fn(&str, [f64; 3]) -> [f64; 3]) -> Vec<u8> {
     serde_json::to_vec(&out).unwrap()
 }
 
+/// The demo's vertices (its topology OBJ).
+fn demo_vertices() -> Vec<[f64; 3]> {
+    let text = std::fs::read_to_string(fixture().db.join("topology.obj")).unwrap();
+    text.lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|r| {
+            let v: Vec<f64> = r.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect()
+}
+
+/// The demo's landmarks as vertex indices (the nearest vertex of each
+/// point), each index then mapped by `f(name, index)`.
+fn index_landmarks_with(f: impl Fn(&str, usize) -> usize) -> Vec<u8> {
+    let vs = demo_vertices();
+    let v: serde_json::Value = serde_json::from_str(&landmarks_json()).unwrap();
+    let mut out = serde_json::Map::new();
+    for (k, p) in v.as_object().unwrap() {
+        let a: Vec<f64> = p
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let d = |q: &[f64; 3]| (0..3).map(|i| (q[i] - a[i]).powi(2)).sum::<f64>();
+        let i = (0..vs.len())
+            .min_by(|&x, &y| d(&vs[x]).total_cmp(&d(&vs[y])))
+            .unwrap();
+        out.insert(k.clone(), serde_json::json!(f(k, i)));
+    }
+    serde_json::to_vec(&out).unwrap()
+}
+
+/// Vertex indices as another mesh of the same size would have them: each
+/// landmark's index moved by `shift` of the vertex count (another vertex
+/// order), in range and without a `vertex_count` to compare.
+fn index_landmarks(shift_tenths: usize) -> Vec<u8> {
+    let n = demo_vertices().len();
+    index_landmarks_with(|_, i| (i + n * shift_tenths / 10) % n)
+}
+
+/// The demo's index landmarks with the left and right wrists swapped.
+fn index_landmarks_swapped() -> Vec<u8> {
+    let v: serde_json::Value = serde_json::from_slice(&index_landmarks_with(|_, i| i)).unwrap();
+    let mut o = v.as_object().unwrap().clone();
+    let (l, r) = (o["l_wrist"].clone(), o["r_wrist"].clone());
+    o.insert("l_wrist".into(), r);
+    o.insert("r_wrist".into(), l);
+    serde_json::to_vec(&o).unwrap()
+}
+
 fn manifest_with(extra: &str) -> Vec<u8> {
     let base = std::fs::read_to_string(fixture().db.join("character.toml")).unwrap();
     format!("{base}\n{extra}\n").into_bytes()
@@ -209,8 +261,12 @@ fn rows() -> Vec<Row> {
             .file("ms.bvh", walk_with("Frame Time", "Frame Time: 33.333333")),
         row("a clip too long for the memory budget (retarget)", "retarget --db {db} --mocap {d}/long.bvh -o {d}/o.pc2", &["3,000 frames", "6,304 vertices", "SURFMOTION_MEMORY_LIMIT"])
             .file("long.bvh", long_walk(3000)).env("SURFMOTION_MEMORY_LIMIT", SMALL),
-        row("a clip too long for the memory budget (transfer)", "transfer --scan {topo} --landmarks {lm} --mocap {d}/long.bvh -o {d}/o.pc2", &["transfer", "3,000 frames", "SURFMOTION_MEMORY_LIMIT"])
+        // A point cache streams (`a_long_transfer_streams_within_a_small_memory_budget`);
+        // a GLB is written whole and refused before the first frame.
+        row("a GLB too big for the memory budget (transfer)", "transfer --scan {topo} --landmarks {lm} --mocap {d}/long.bvh -o {d}/o.glb", &["o.glb", "GLB of 3,000 frames", "6,304 vertices", "SURFMOTION_MEMORY_LIMIT"])
             .file("long.bvh", long_walk(3000)).env("SURFMOTION_MEMORY_LIMIT", SMALL),
+        row("a GLB over the format's 4 GiB (transfer)", "transfer --scan {topo} --landmarks {lm} --mocap {d}/long.bvh -o {d}/o.glb", &["o.glb", "30000 frames", "4 GiB", ".pc2"])
+            .file("long.bvh", long_walk(30_000)),
         row("a clip too long for the memory budget (synth)", "synth --mesh {topo} --landmarks {lm} --mocap {d}/long.bvh -o {d}/out", &["long.bvh", "3,000 frames", "SURFMOTION_MEMORY_LIMIT"])
             .file("long.bvh", long_walk(3000)).env("SURFMOTION_MEMORY_LIMIT", SMALL),
         row("a resample too big for the budget (mocap convert)", "mocap convert {d}/long.bvh {d}/o.bvh --fps 1000", &["long.bvh", "frames", "SURFMOTION_MEMORY_LIMIT"])
@@ -246,6 +302,11 @@ fn rows() -> Vec<Row> {
             .file("far.json", landmarks_mapped(|k, p| if k == "chin" { [p[0], p[1] + 100.0, p[2]] } else { p })),
         row("metre landmarks on a millimetre scan", "synth --mesh {d}/mm.obj --landmarks {lm} --mocap {walk} -o {d}/out", &["landmarks.json", "other units"])
             .file("mm.obj", scaled_obj(1000.0)),
+        // Vertex indices of another mesh, no vertex_count in the file.
+        row("vertex-index landmarks of another mesh", "rig embed {topo} --landmarks {d}/other.json -o {d}/r.json", &["other.json", "landmark", "another mesh"])
+            .file("other.json", index_landmarks(7)),
+        row("vertex-index landmarks with left and right swapped", "transfer --scan {topo} --landmarks {d}/swapped.json --mocap {walk} -o {d}/o.pc2", &["swapped.json", "_wrist", "side of the body"])
+            .file("swapped.json", index_landmarks_swapped()),
         row("markers of another mesh", "transfer --scan {topo} --markers {d}/m.json --landmarks {lm} --mocap {walk} -o {d}/o.pc2", &["29170 triangles", "another mesh"])
             .file("m.json", r#"{"triangle_count": 29170, "markers": [{"name": "a", "triangle": 5, "bone": "l_knee"}]}"#),
         row("--fps 0", "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --fps 0", &["'0'", "frame rate"]),
@@ -500,6 +561,46 @@ fn hostile_inputs_exit_1_with_a_message() {
     assert!(failures.is_empty(), "\n{}", failures.join("\n"));
 }
 
+/// Regression (issue 18, item 12): a transfer whose frames exceed the
+/// memory budget was refused; its point cache now streams frame by frame,
+/// so the same clip converts under the same small budget.
+#[test]
+fn a_long_transfer_streams_within_a_small_memory_budget() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let clip = tmp.path().join("long.bvh");
+    let frames = 3000;
+    std::fs::write(&clip, long_walk(frames)).unwrap();
+    let out = tmp.path().join("o.pc2");
+    let o = Command::new(common::bin())
+        .args(["transfer", "--scan"])
+        .arg(f.db.join("topology.obj"))
+        .arg("--landmarks")
+        .arg(f.db.join("landmarks.json"))
+        .arg("--mocap")
+        .arg(&clip)
+        .arg("-o")
+        .arg(&out)
+        .env("SURFMOTION_MEMORY_LIMIT", SMALL)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    // 3,000 frames × 6,304 vertices of f64 are 454 MB: more than the
+    // budget, so they were never held.
+    let bytes = std::fs::read(&out).unwrap();
+    let n = i32::from_le_bytes(bytes[16..20].try_into().unwrap()) as usize;
+    let count = i32::from_le_bytes(bytes[28..32].try_into().unwrap()) as usize;
+    assert_eq!(count, frames);
+    assert_eq!(bytes.len(), 32 + 12 * n * frames);
+    assert!((n * frames * 24) as u64 > surfmotion::budget::parse_bytes(SMALL).unwrap());
+    let names: Vec<_> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!names.iter().any(|n| n.ends_with(".part")), "{names:?}");
+}
+
 /// Regression (issue 18, item 13): a tampered graph cache with a valid key
 /// (a transition moved past its sequence, a sequence that does not exist)
 /// is rebuilt with a warning; `graph --json`, `--dot` and `retarget` work.
@@ -729,6 +830,39 @@ fn hostile_inputs_on_shared_data() {
             &["another mesh"],
         ),
     ];
+    // Samba's landmarks as samba vertex indices, no vertex_count: in range
+    // on the crane (10,002 vertices), so only their places can tell.
+    let samba_idx = tmp.path().join("samba.index-landmarks.json");
+    std::fs::write(
+        &samba_idx,
+        nearest_vertex_landmarks(&samba, &fixtures.join("samba.landmarks.json")),
+    )
+    .unwrap();
+    let embed = |mesh: &Path| {
+        Command::new(common::bin())
+            .arg("rig")
+            .arg("embed")
+            .arg(mesh)
+            .arg("--landmarks")
+            .arg(&samba_idx)
+            .arg("-o")
+            .arg(tmp.path().join("rig.json"))
+            .output()
+            .unwrap()
+    };
+    let own = embed(&samba);
+    assert!(
+        own.status.success(),
+        "on samba itself: {}",
+        String::from_utf8_lossy(&own.stderr)
+    );
+    let other = embed(&data.join("4d/crane/crane.obj"));
+    let err = String::from_utf8_lossy(&other.stderr);
+    assert_eq!(other.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("samba.index-landmarks.json") && err.contains("another mesh"),
+        "{err}"
+    );
     std::fs::write(
         tmp.path().join("samba.markers.json"),
         r#"{"triangle_count": 19938, "markers": [{"name": "a", "triangle": 5, "bone": "l_knee"}]}"#,
@@ -743,4 +877,34 @@ fn hostile_inputs_on_shared_data() {
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// A landmark file of `mesh`'s vertex indices: the nearest vertex of each
+/// point of the landmark file `points` (vertex indices kept).
+fn nearest_vertex_landmarks(mesh: &Path, points: &Path) -> Vec<u8> {
+    let text = std::fs::read_to_string(mesh).unwrap();
+    let vs: Vec<[f64; 3]> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|r| {
+            let v: Vec<f64> = r.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(points).unwrap()).unwrap();
+    let mut out = serde_json::Map::new();
+    for (k, p) in v.as_object().unwrap() {
+        let Some(a) = p.as_array() else {
+            out.insert(k.clone(), p.clone());
+            continue;
+        };
+        let a: Vec<f64> = a.iter().map(|x| x.as_f64().unwrap()).collect();
+        let d = |q: &[f64; 3]| (0..3).map(|i| (q[i] - a[i]).powi(2)).sum::<f64>();
+        let i = (0..vs.len())
+            .min_by(|&x, &y| d(&vs[x]).total_cmp(&d(&vs[y])))
+            .unwrap();
+        out.insert(k.clone(), serde_json::json!(i));
+    }
+    serde_json::to_vec(&out).unwrap()
 }

@@ -5,8 +5,9 @@
 //! The report describes every output of the run's clips, not only those
 //! converted now: a clip skipped because its output is complete keeps the
 //! frames, time and error its earlier run recorded ([`Earlier`]). While the
-//! batch runs, `batch.json` is rewritten after each clip (`"finished":
-//! false`), so a killed run leaves a valid report of what it finished.
+//! batch runs, all three are rewritten after each clip (`"finished":
+//! false`, and the page says "running"), so a killed run leaves a valid
+//! report of what it finished.
 
 use super::runner::{ClipOutcome, ClipStatus};
 use crate::fsutil::{FsError, write_bytes_atomic};
@@ -121,7 +122,9 @@ fn esc(s: &str) -> String {
 /// error (orange, right scale); failed clips marked red.
 pub fn plot_svg(s: &Summary) -> String {
     let n = s.outcomes.len().max(1);
-    let (w, h, left, bottom) = (60.0 + 14.0 * n as f64, 260.0, 50.0, 40.0);
+    // At least wide enough for the two axis titles (a report of one or two
+    // clips, as a killed run leaves, overlapped them).
+    let (w, h, left, bottom) = ((60.0 + 14.0 * n as f64).max(440.0), 260.0, 50.0, 40.0);
     let tmax = s.outcomes.iter().map(|o| o.seconds).fold(1e-9, f64::max);
     let emax = s
         .outcomes
@@ -187,6 +190,9 @@ pub fn html(s: &Summary) -> String {
         "<!doctype html>\n<meta charset=\"utf-8\">\n<title>surfmotion batch</title>\n<style>body{font-family:sans-serif;margin:2em}td,th{padding:2px 8px;text-align:left}.failed{color:#b00}</style>\n",
     );
     let _ = writeln!(h, "<h1>surfmotion batch</h1>\n<p>{}.</p>", esc(&s.line()));
+    if !s.finished {
+        h.push_str("<p class=\"running\"><b>running</b> (or stopped before its end): the clips listed are those finished so far.</p>\n");
+    }
     h.push_str(&plot_svg(s));
     h.push_str("<table>\n<tr><th>clip</th><th>status</th><th>frames</th><th>seconds</th><th>error (cm/frame)</th><th>output / reason</th></tr>\n");
     for o in &s.outcomes {
@@ -226,9 +232,12 @@ pub fn write_summary(dir: &Path, s: &Summary) -> Result<Vec<PathBuf>, FsError> {
     let svg = dir.join(format!("{stem}.svg"));
     let page = dir.join(format!("{stem}.html"));
     let text = serde_json::to_string_pretty(s).unwrap_or_default();
-    write_bytes_atomic(&json, text.as_bytes())?;
+    // The JSON last: whoever sees a clip in it finds it in the page and
+    // the plot too (a run killed between two writes leaves the page at
+    // most one clip ahead).
     write_bytes_atomic(&svg, plot_svg(s).as_bytes())?;
     write_bytes_atomic(&page, html(s).as_bytes())?;
+    write_bytes_atomic(&json, text.as_bytes())?;
     Ok(vec![json, page, svg])
 }
 

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 use surfmotion::jobs::{
     ScanTransferOptions, TransferOutcome, TransferSource, TransferSpec, transfer_onto_scan,
+    transfer_onto_scan_to,
 };
 use surfmotion::transfer::{MarkerOptions, SignMode, TransferOptions};
 
@@ -179,6 +180,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // The number of frames is known once the source is read: the library
     // reports it with every frame solved.
     let bar = super::progress(0, "frames");
+    if a.truth.is_none() && a.run.preview.preview.is_none() {
+        // Nothing needs every frame at once: they go to the output as they
+        // are solved (issue 18, item 12).
+        let report = transfer_onto_scan_to(
+            &scan,
+            &spec,
+            &a.output,
+            a.glb.options(),
+            a.report.is_some(),
+            &|p| {
+                bar.set_length(p.total as u64);
+                bar.inc(1);
+            },
+        )?;
+        bar.finish_and_clear();
+        return print_report(&a, &report);
+    }
     let outcome = transfer_onto_scan(&scan, &spec, &|p| {
         bar.set_length(p.total as u64);
         bar.inc(1);
@@ -211,23 +229,28 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
             &a.run.preview,
         )?;
     }
-    let dropped = prepared.report.dropped_components.len();
     let report = outcome.write(&a.output, a.glb.options(), a.report.is_some())?;
+    print_report(a, &report)
+}
+
+/// Writes the JSON report if asked and prints the summary of a transfer.
+fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::Result<()> {
+    let dropped = report.scan.dropped_components.len();
     if let Some(p) = &a.report {
         surfmotion::fsutil::write_bytes_atomic(
             p,
-            serde_json::to_string_pretty(&serde_json::to_value(&report)?)?.as_bytes(),
+            serde_json::to_string_pretty(&serde_json::to_value(report)?)?.as_bytes(),
         )?;
     }
     if a.run.json {
-        let mut short = serde_json::to_value(&report)?;
+        let mut short = serde_json::to_value(report)?;
         short.as_object_mut().map(|o| o.remove("markers_used"));
         if let Some(t) = short.get_mut("truth_error").and_then(|t| t.as_object_mut()) {
             t.remove("per_frame_pct");
         }
         return super::emit(&(serde_json::to_string_pretty(&short)? + "\n"));
     }
-    let r = &report;
+    let r = report;
     let mut s = format!(
         "{} -> {}: {} frames at {} fps from {}\n",
         a.scan,

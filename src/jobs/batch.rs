@@ -7,7 +7,7 @@
 
 use crate::batch::{
     ClipOutcome, ClipStatus, Converter, Earlier, Format, RunOptions, Shard, Summary,
-    clean_temporaries, find_clips, lock_folder, plan, report_stem, run, write_json, write_summary,
+    clean_temporaries, find_clips, lock_folder, plan, report_stem, run, write_summary,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -198,7 +198,9 @@ pub fn batch_folder(
             opts.shard.clone(),
         );
         s.finished = false;
-        if let Err(e) = write_json(output, &s) {
+        // All three files, each atomically: a killed run leaves a JSON,
+        // page and plot of what it finished (issue 18, item 3).
+        if let Err(e) = write_summary(output, &s) {
             tracing::warn!("report not updated: {e}");
         }
     };

@@ -38,7 +38,7 @@ pub use synth_db::{
 };
 pub use transfer::{
     FrameProgress, ScanTransferJob, ScanTransferOptions, TransferOutcome, TransferReport,
-    TransferSource, TransferSpec, TruthError, transfer_onto_scan,
+    TransferSource, TransferSpec, TruthError, transfer_onto_scan, transfer_onto_scan_to,
 };
 
 use std::path::PathBuf;

@@ -8,6 +8,7 @@ use super::JobError;
 use crate::batch::{Converted, Converter};
 use crate::eval::{VelocityError, velocity_error};
 use crate::mesh::io::glb::GlbOptions;
+use crate::mesh::io::stream::SequenceWriter;
 use crate::mesh::io::{SaveOptions, save_sequence_with};
 use crate::mesh::{Mesh, MeshSequence};
 use crate::retarget::query::{MocapPoses, load_mocap, to_character};
@@ -16,7 +17,7 @@ use crate::rig::embed::landmarks::Landmarks;
 use crate::skeleton::Pose;
 use crate::transfer::{
     Confluent, MarkerOptions, MarkerSpec, PreparedScan, TransferOptions, TransferStats,
-    mocap_motion, prepare, transfer,
+    mocap_motion, prepare, transfer, transfer_each,
 };
 use std::path::{Path, PathBuf};
 
@@ -98,6 +99,14 @@ impl ScanTransferJob {
                 msg: "the clip has no frames".into(),
             });
         }
+        // Every output frame is held: refuse what cannot fit before
+        // anything is allocated ([`Converter::convert`] streams instead).
+        crate::budget::check_frames(
+            "the transfer",
+            mocap.poses.len(),
+            self.prepared.mesh.vertex_count(),
+            1,
+        )?;
         let mut motion = mocap_motion(&self.prepared, &mocap.poses, &mocap.reference)?;
         let (positions, stats) = transfer(
             &self.confluent,
@@ -148,17 +157,52 @@ impl Converter for ScanTransferJob {
         self.what.clone()
     }
 
+    /// Streams the frames to `out` as they are solved ([`transfer_each`]
+    /// into a [`SequenceWriter`]): a clip of any length converts with the
+    /// memory of its marker motion and one chunk of frames (issue 18, item
+    /// 12); only a GLB, written whole, is checked against the budget.
     fn convert(&self, clip: &Path, out: &Path) -> Result<Converted, String> {
-        let run = self.run(clip).map_err(|e| match e {
+        let msg = |e: JobError| match e {
             JobError::Input { msg, .. } => msg,
             e => e.to_string(),
-        })?;
-        let e = self.velocity_error(&run).ok_or("no rig")?;
-        let frames = run.stats.frames;
-        self.write(run.positions, out).map_err(|e| e.to_string())?;
+        };
+        let rig = self.prepared.rig.as_ref().ok_or("no rig")?;
+        let mocap =
+            load_mocap(clip, &self.options.load, self.options.fps).map_err(|e| msg(e.into()))?;
+        if mocap.poses.is_empty() {
+            return Err("the clip has no frames".into());
+        }
+        let mut motion = mocap_motion(&self.prepared, &mocap.poses, &mocap.reference)
+            .map_err(|e| msg(e.into()))?;
+        let fps = self.options.fps;
+        let mut writer = SequenceWriter::create(
+            &self.prepared.mesh,
+            out,
+            motion.frames(),
+            &SaveOptions {
+                fps: Some(fps),
+                glb: self.options.glb,
+            },
+        )
+        .map_err(|e| e.to_string())?;
+        let mut skel: Vec<Pose> = Vec::with_capacity(motion.frames());
+        let stats = transfer_each(
+            &self.confluent,
+            &mut motion,
+            &self.options.transfer,
+            &|_| {},
+            |_, p| {
+                skel.push(rig.skeleton(p));
+                writer.push(p)
+            },
+        )
+        .map_err(|e| e.to_string())?;
+        writer.finish().map_err(|e| e.to_string())?;
+        let rest: Pose = rig.joints.map(glam::DVec3::from_array);
+        let query = to_character(&rest, &mocap.reference, &mocap.poses);
         Ok(Converted {
-            frames,
-            error_cm: Some(e.mean_cm),
+            frames: stats.frames,
+            error_cm: Some(velocity_error(&query, &skel).mean_cm),
         })
     }
 }
@@ -326,6 +370,48 @@ pub fn transfer_onto_scan(
     spec: &TransferSpec,
     progress: &(dyn Fn(FrameProgress) + Sync),
 ) -> Result<TransferOutcome, JobError> {
+    Ok(transfer_inner(scan, spec, progress, None)?.0)
+}
+
+/// Frames of a streamed transfer kept for its plausibility measure, in
+/// bytes of positions (the first frames up to this size, and up to a
+/// quarter of the memory budget, are measured).
+pub const PLAUSIBILITY_BYTES: usize = 256 << 20;
+
+/// [`transfer_onto_scan`] writing each frame to `out` as it is solved
+/// (GLB options `glb`), so a clip of any length needs the memory of its
+/// marker motion and one chunk of frames, not of every frame (issue 18,
+/// item 12): point caches and OBJ folders stream; a GLB, written whole, is
+/// checked against the memory budget and its format's size before the
+/// first frame. The plausibility is measured on the first frames, up to
+/// [`PLAUSIBILITY_BYTES`] of positions (the report says how many). A
+/// ground truth (`spec.truth`) needs every frame held: use
+/// [`transfer_onto_scan`].
+pub fn transfer_onto_scan_to(
+    scan: &Mesh,
+    spec: &TransferSpec,
+    out: &Path,
+    glb: GlbOptions,
+    per_frame: bool,
+    progress: &(dyn Fn(FrameProgress) + Sync),
+) -> Result<TransferReport, JobError> {
+    if spec.truth.is_some() {
+        return Err(JobError::Usage(
+            "a ground truth needs every frame held: use transfer_onto_scan".into(),
+        ));
+    }
+    let (outcome, output) = transfer_inner(scan, spec, progress, Some((out, glb)))?;
+    Ok(outcome.report(output.unwrap_or_default(), per_frame))
+}
+
+/// The transfer: frames held in the outcome (`stream` `None`), or written
+/// to `stream`'s path as they are solved (the files written returned).
+fn transfer_inner(
+    scan: &Mesh,
+    spec: &TransferSpec,
+    progress: &(dyn Fn(FrameProgress) + Sync),
+    stream: Option<(&Path, GlbOptions)>,
+) -> Result<(TransferOutcome, Option<Vec<PathBuf>>), JobError> {
     use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
     use crate::transfer::{MarkerFile, Source};
     let t0 = std::time::Instant::now();
@@ -442,17 +528,61 @@ pub fn transfer_onto_scan(
     let mut job = crate::transfer::Job::new(&prepared, source)?;
     let factor_seconds = t_setup.elapsed().as_secs_f64();
     let frames = job.motion.frames();
-    let (positions, stats) = transfer(
-        &job.confluent,
-        &mut job.motion,
-        &spec.options.transfer,
-        &|done| {
-            progress(FrameProgress {
-                done,
-                total: frames,
-            })
-        },
-    );
+    let n = prepared.mesh.vertex_count();
+    let progress = &|done| {
+        progress(FrameProgress {
+            done,
+            total: frames,
+        })
+    };
+    let (positions, stats, output) = match stream {
+        None => {
+            // Every output frame is held: refuse what cannot fit before
+            // anything is allocated (issue 18, item 12).
+            crate::budget::check_frames("the transfer", frames, n, 1)?;
+            let (positions, stats) = transfer(
+                &job.confluent,
+                &mut job.motion,
+                &spec.options.transfer,
+                progress,
+            );
+            (positions, stats, None)
+        }
+        Some((out, glb)) => {
+            let mut writer = SequenceWriter::create(
+                &prepared.mesh,
+                out,
+                frames,
+                &SaveOptions {
+                    fps: Some(fps),
+                    glb,
+                },
+            )?;
+            // The first frames, for the plausibility measure.
+            let keep_bytes =
+                PLAUSIBILITY_BYTES.min((crate::budget::Budget::current().bytes / 4) as usize);
+            let keep = (keep_bytes / (24 * n.max(1))).clamp(1, frames);
+            let mut kept = Vec::with_capacity(keep * n);
+            let stats = transfer_each(
+                &job.confluent,
+                &mut job.motion,
+                &spec.options.transfer,
+                progress,
+                |f, p| {
+                    if f < keep {
+                        kept.extend_from_slice(p);
+                    }
+                    writer.push(p)
+                },
+            )?;
+            if keep < frames {
+                tracing::info!(
+                    "plausibility measured on the first {keep} of {frames} frames (streamed output)"
+                );
+            }
+            (kept, stats, Some(writer.finish()?))
+        }
+    };
     let truth_error = match &spec.truth {
         Some(tspec) => {
             let t = load_sequence(tspec, &SeqLoad::default())?;
@@ -490,7 +620,7 @@ pub fn transfer_onto_scan(
             .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
             .ok()
     });
-    Ok(TransferOutcome {
+    let outcome = TransferOutcome {
         used: std::mem::take(&mut job.used),
         unpaired: job.unpaired,
         prepared,
@@ -504,20 +634,24 @@ pub fn transfer_onto_scan(
         plausibility,
         setup_seconds: t_setup.duration_since(t0).as_secs_f64(),
         factor_seconds,
-    })
+    };
+    Ok((outcome, output))
 }
 
 impl TransferOutcome {
     /// Writes the result to `out` (by extension, GLB options `glb`) and
     /// returns its report; `per_frame` keeps the per-frame truth error.
     pub fn write(
-        self,
+        mut self,
         out: &Path,
         glb: GlbOptions,
         per_frame: bool,
     ) -> Result<TransferReport, JobError> {
-        let frames = self.frames;
-        let seq = MeshSequence::new(self.prepared.mesh.clone(), self.positions, Some(self.fps))?;
+        let seq = MeshSequence::new(
+            self.prepared.mesh.clone(),
+            std::mem::take(&mut self.positions),
+            Some(self.fps),
+        )?;
         let output = save_sequence_with(
             &seq,
             out,
@@ -526,8 +660,15 @@ impl TransferOutcome {
                 glb,
             },
         )?;
+        drop(seq);
+        Ok(self.report(output, per_frame))
+    }
+
+    /// The report of the outcome written to `output`.
+    fn report(self, output: Vec<PathBuf>, per_frame: bool) -> TransferReport {
+        let frames = self.frames;
         let ms_per_frame = 1e3 * self.stats.solve_seconds / frames.max(1) as f64;
-        Ok(TransferReport {
+        TransferReport {
             output,
             source: self.what,
             frames,
@@ -551,6 +692,6 @@ impl TransferOutcome {
             markers_used: self.used,
             metres_per_unit_assumed: self.metres_per_unit,
             plausibility: self.plausibility,
-        })
+        }
     }
 }

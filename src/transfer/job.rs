@@ -95,6 +95,10 @@ pub enum JobError {
     Budget(#[from] crate::budget::OverBudget),
 }
 
+/// Bytes of one marker in one frame of a [`MarkerMotion`] (a quaternion
+/// and a target, `f64`).
+const MOTION_BYTES: u128 = 56;
+
 /// The motion of a scan's bone markers (those with a bone, in file order:
 /// the markers [`Job::new`] uses for a mocap source) from a clip's poses.
 /// For many clips on one scan: factor once with [`Job::new`], then call
@@ -105,10 +109,21 @@ pub fn mocap_motion(
     reference: &Reference,
 ) -> Result<MarkerMotion, JobError> {
     let rig = scan.rig.as_ref().ok_or(JobError::NoSkeleton)?;
-    // The transfer holds every output frame of the scan: refuse a clip
-    // whose frames cannot fit before anything is allocated (issue 18,
-    // item 12).
-    crate::budget::check_frames("the transfer", poses.len(), scan.mesh.vertex_count(), 1)?;
+    // The motion holds a rotation and a target per marker and frame
+    // (whatever holds the output checks its own frames; a streamed
+    // transfer holds none): refuse a clip whose motion cannot fit before
+    // anything is allocated (issue 18, item 12).
+    let used_markers = scan.markers.iter().filter(|m| m.bone.is_some()).count();
+    crate::budget::check(
+        || {
+            format!(
+                "the marker motion: {} frames × {} markers",
+                crate::budget::thousands(poses.len() as u128),
+                used_markers
+            )
+        },
+        (poses.len() as u128) * (used_markers as u128) * MOTION_BYTES,
+    )?;
     let p = scan.mesh.positions();
     let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
     let rest: Pose = rig.joints.map(DVec3::from_array);
@@ -174,7 +189,6 @@ impl Job {
             } => {
                 let tm = frames.mesh();
                 let count = frames.frame_count();
-                crate::budget::check_frames("the transfer", count, scan.mesh.vertex_count(), 1)?;
                 if reference >= count {
                     return Err(JobError::Reference {
                         frame: reference,

@@ -7,7 +7,7 @@
 //! Pipeline order: [`scan`] (repair, markers) → [`markers`] (placement
 //! rule, files) → [`source`] (marker motion per frame) → [`signs`]
 //! (quaternion signs, singularities) → [`confluent`] (the per-frame
-//! deformation) → [`run`] (a whole clip in parallel).
+//! deformation) → [`run`] (a whole clip in parallel, held or streamed).
 
 pub mod confluent;
 pub mod job;
@@ -20,7 +20,7 @@ pub mod source;
 pub use confluent::{Confluent, ConfluentError};
 pub use job::{Job, JobError, Source, alignment, mocap_motion};
 pub use markers::{Marker, MarkerError, MarkerFile, MarkerOptions};
-pub use run::{TransferOptions, TransferStats, transfer};
+pub use run::{TransferOptions, TransferStats, transfer, transfer_each};
 pub use scan::{MarkerSpec, PreparedScan, ScanError, prepare};
 pub use signs::SignMode;
 pub use source::MarkerMotion;

@@ -1,6 +1,8 @@
 //! Mesh and mesh-sequence file formats. In: OBJ, PLY, PC2, MDD, OBJ folders,
 //! glTF/GLB. Out: GLB (morph-target animation), PC2 + OBJ, MDD + OBJ, OBJ,
-//! OBJ folders, PLY. Every write is atomic.
+//! OBJ folders, PLY. Every write is atomic. [`stream::SequenceWriter`]
+//! writes a sequence frame by frame (point caches and OBJ folders without
+//! holding the frames).
 
 pub mod glb;
 pub mod gltf;
@@ -9,6 +11,7 @@ pub mod obj;
 pub mod objseq;
 pub mod pc2;
 pub mod ply;
+pub mod stream;
 
 use super::{MeshError, MeshSequence};
 use std::path::{Path, PathBuf};

@@ -142,16 +142,24 @@ pub fn read_pc2(path: &Path) -> Result<PointCache, MeshError> {
     parse_pc2(&crate::fsutil::read_bytes(path)?, path)
 }
 
+/// The 32-byte PC2 header of `frames` frames of `points` points (start
+/// frame 0, sample rate 1); the frames follow it.
+pub fn header(points: i32, frames: i32) -> [u8; 32] {
+    let mut h = [0u8; 32];
+    h[..12].copy_from_slice(MAGIC);
+    h[12..16].copy_from_slice(&1i32.to_le_bytes());
+    h[16..20].copy_from_slice(&points.to_le_bytes());
+    h[20..24].copy_from_slice(&0f32.to_le_bytes());
+    h[24..28].copy_from_slice(&1f32.to_le_bytes());
+    h[28..32].copy_from_slice(&frames.to_le_bytes());
+    h
+}
+
 /// Encodes positions (`frames × points`, frame-major) as PC2.
 pub fn encode_pc2(points: usize, positions: &[[f64; 3]]) -> Vec<u8> {
     let frames = positions.len() / points.max(1);
     let mut out = Vec::with_capacity(32 + positions.len() * 12);
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&1i32.to_le_bytes());
-    out.extend_from_slice(&(points as i32).to_le_bytes());
-    out.extend_from_slice(&0f32.to_le_bytes());
-    out.extend_from_slice(&1f32.to_le_bytes());
-    out.extend_from_slice(&(frames as i32).to_le_bytes());
+    out.extend_from_slice(&header(points as i32, frames as i32));
     for p in positions {
         for v in p {
             out.extend_from_slice(&(*v as f32).to_le_bytes());

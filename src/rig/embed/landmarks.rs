@@ -169,6 +169,19 @@ pub enum LandmarkError {
         /// The limit, as a percentage of the height.
         limit_percent: f64,
     },
+    /// A landmark is where no body has that joint: a knee above the
+    /// groin, an arm below the knees, a left landmark on the right side
+    /// (seen from the other pairs). Typically the vertex indices of
+    /// another mesh, which land in range but on the wrong places.
+    #[error(
+        "landmark {key}: {reason}; landmarks of another mesh or character? (a file made for this mesh may record its \"vertex_count\")"
+    )]
+    Implausible {
+        /// The landmark.
+        key: &'static str,
+        /// Where it is and where it should be.
+        reason: String,
+    },
     /// Two landmarks that mark different joints are at one place.
     #[error(
         "landmarks {a} and {b} are {distance:.4} apart ({percent:.2}% of the height): they mark different joints"
@@ -285,8 +298,8 @@ impl Landmarks {
     /// winding number) more than 10 % of the height from its surface; two
     /// landmarks of different joints (chin and groin, left and right
     /// knees, elbows, wrists, an elbow and its wrist, the groin and a knee)
-    /// within 1 % of the height. `up` is the vertical the height is
-    /// measured along.
+    /// within 1 % of the height; then [`Landmarks::check_anatomy`]. `up` is
+    /// the vertical the height is measured along.
     pub fn validate(
         &self,
         positions: &[[f64; 3]],
@@ -367,6 +380,135 @@ impl Landmarks {
                 });
             }
         }
+        self.check_anatomy(positions)
+    }
+
+    /// Refuses landmarks no body could have, naming the landmark (issue
+    /// 18, item 16: vertex indices of another mesh are in range and were
+    /// accepted when the file records no `vertex_count`). Along the body
+    /// axis `b` (groin to chin): the knees lie below the groin by at least
+    /// 5 % of the groin-chin distance (the crouching armadillo's: 15 %),
+    /// ankles and toes below the knees, elbows, wrists and shoulders above
+    /// the knees, the head top above the chin. Across it: the lateral axis
+    /// is the mean direction from right to left of the given pairs
+    /// (wrists, elbows, knees, shoulders, ankles, toes; `b` removed); every
+    /// left landmark lies on its positive side of the mid-plane through the
+    /// groin and every right one on the negative side, within 5 % of the
+    /// groin-chin distance. Tolerant of the A-, T- and I-pose and of a body
+    /// lying down (nothing assumes +Y).
+    pub fn check_anatomy(&self, positions: &[[f64; 3]]) -> Result<(), LandmarkError> {
+        use Landmark as L;
+        use glam::DVec3;
+        let at = |l: Landmark| self.point(l, positions).map(DVec3::from_array);
+        let (Some(c), Some(g)) = (at(L::Chin), at(L::Groin)) else {
+            return Ok(());
+        };
+        let len = c.distance(g);
+        if !(len.is_finite() && len > 0.0) {
+            return Ok(());
+        }
+        let b = (c - g) / len;
+        let h = |p: DVec3| (p - g).dot(b) / len;
+        let bad = |key: Landmark, reason: String| LandmarkError::Implausible {
+            key: key.name(),
+            reason,
+        };
+        let mut knee_top = f64::NEG_INFINITY;
+        for (knee, ankle, toe) in [
+            (L::LKnee, L::LAnkle, L::LToe),
+            (L::RKnee, L::RAnkle, L::RToe),
+        ] {
+            let Some(k) = at(knee) else { continue };
+            let hk = h(k);
+            if hk > -0.05 {
+                return Err(bad(
+                    knee,
+                    format!(
+                        "{:.0}% of the groin-chin distance {} the groin along the body (groin to chin); a knee is below it",
+                        100.0 * hk.abs(),
+                        if hk >= 0.0 { "above" } else { "below" }
+                    ),
+                ));
+            }
+            knee_top = knee_top.max(hk);
+            let mut above = hk;
+            for l in [ankle, toe] {
+                let Some(p) = at(l) else { continue };
+                if h(p) >= above {
+                    return Err(bad(
+                        l,
+                        format!(
+                            "not below the {} along the body (groin to chin)",
+                            if l == ankle {
+                                knee.name()
+                            } else {
+                                ankle.name()
+                            }
+                        ),
+                    ));
+                }
+                above = h(p);
+            }
+        }
+        for l in [
+            L::LElbow,
+            L::RElbow,
+            L::LWrist,
+            L::RWrist,
+            L::LShoulder,
+            L::RShoulder,
+        ] {
+            let Some(p) = at(l) else { continue };
+            if h(p) <= knee_top {
+                return Err(bad(
+                    l,
+                    format!(
+                        "{:.0}% of the groin-chin distance below the groin, not above the knees along the body (groin to chin)",
+                        -100.0 * h(p)
+                    ),
+                ));
+            }
+        }
+        if let Some(t) = at(L::HeadTop)
+            && h(t) <= 1.0
+        {
+            return Err(bad(L::HeadTop, "not above the chin along the body".into()));
+        }
+        let pairs = [
+            (L::LWrist, L::RWrist),
+            (L::LElbow, L::RElbow),
+            (L::LKnee, L::RKnee),
+            (L::LShoulder, L::RShoulder),
+            (L::LAnkle, L::RAnkle),
+            (L::LToe, L::RToe),
+        ];
+        let across = |p: DVec3| p - b * p.dot(b);
+        let lat = pairs
+            .iter()
+            .filter_map(|&(l, r)| Some(across(at(l)? - at(r)?).normalize_or_zero()))
+            .sum::<DVec3>();
+        let Some(lat) = lat.try_normalize() else {
+            return Ok(());
+        };
+        let tol = 0.05;
+        for &(l, r) in &pairs {
+            let (Some(pl), Some(pr)) = (at(l), at(r)) else {
+                continue;
+            };
+            let (sl, sr) = ((pl - g).dot(lat) / len, (pr - g).dot(lat) / len);
+            for (key, side, s, other) in [(l, "left", sl, "right"), (r, "right", sr, "left")] {
+                let wrong = if side == "left" { s < -tol } else { s > tol };
+                if wrong || sl <= sr {
+                    return Err(bad(
+                        key,
+                        format!(
+                            "{:.0}% of the groin-chin distance on the {other} side of the body's mid-plane (through the groin), where the other left/right pairs put the {side} ones",
+                            100.0 * s.abs()
+                        ),
+                    ));
+                }
+            }
+        }
         Ok(())
     }
 
@@ -421,5 +563,106 @@ mod tests {
         );
         let bad = ok.replace("\"vertex_count\": 10", "\"vertex_count\": \"ten\"");
         assert!(Landmarks::parse(&bad, p, 10).is_err());
+    }
+
+    /// A standing A-pose body (Y up, its left at +x), every landmark a
+    /// vertex index, and the points as the mesh's vertices.
+    fn body() -> (Vec<[f64; 3]>, Landmarks) {
+        let named = [
+            ("chin", [0.0, 1.55, 0.05]),
+            ("groin", [0.0, 0.8, 0.0]),
+            ("l_wrist", [0.35, 0.85, 0.0]),
+            ("r_wrist", [-0.35, 0.85, 0.0]),
+            ("l_elbow", [0.3, 1.12, -0.02]),
+            ("r_elbow", [-0.3, 1.12, -0.02]),
+            ("l_knee", [0.1, 0.45, 0.02]),
+            ("r_knee", [-0.1, 0.45, 0.02]),
+            ("l_ankle", [0.1, 0.08, 0.0]),
+            ("r_ankle", [-0.1, 0.08, 0.0]),
+            ("head_top", [0.0, 1.8, 0.0]),
+        ];
+        let mut positions: Vec<[f64; 3]> = named.iter().map(|n| n.1).collect();
+        positions.push([0.0, 0.0, 0.0]);
+        let json: String = named
+            .iter()
+            .enumerate()
+            .map(|(i, (k, _))| format!("\"{k}\": {i}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        let lm =
+            Landmarks::parse(&format!("{{{json}}}"), Path::new("b.json"), positions.len()).unwrap();
+        (positions, lm)
+    }
+
+    fn key_of(e: LandmarkError) -> &'static str {
+        match e {
+            LandmarkError::Implausible { key, .. } => key,
+            e => panic!("not an anatomy error: {e}"),
+        }
+    }
+
+    /// Regression (issue 18, item 16): vertex indices of
+    /// another mesh were accepted when the file records no vertex count.
+    /// The resolved points are checked against a body's layout.
+    #[test]
+    fn landmarks_of_another_mesh_are_refused_without_a_vertex_count() {
+        let (p, lm) = body();
+        lm.validate(&p, &[], [0.0, 1.0, 0.0]).unwrap();
+        // The same file on a mesh whose vertices are in another order.
+        for shift in 1..p.len() {
+            let other: Vec<[f64; 3]> = (0..p.len()).map(|i| p[(i + shift) % p.len()]).collect();
+            let e = lm.check_anatomy(&other);
+            if let Err(e) = e {
+                let s = e.to_string();
+                assert!(s.contains("another mesh"), "{s}");
+            } else {
+                // Only an order that keeps chin and groin apart and every
+                // joint on its side may pass; none of these does.
+                panic!("shift {shift} accepted");
+            }
+        }
+    }
+
+    #[test]
+    fn misplaced_landmarks_are_named() {
+        let (p, lm) = body();
+        let mut swapped = p.clone();
+        swapped.swap(2, 3); // l_wrist <-> r_wrist
+        let k = key_of(lm.check_anatomy(&swapped).unwrap_err());
+        assert!(k == "l_wrist" || k == "r_wrist", "{k}");
+        let mut knee_up = p.clone();
+        knee_up[6] = [0.1, 0.9, 0.0];
+        assert_eq!(key_of(lm.check_anatomy(&knee_up).unwrap_err()), "l_knee");
+        let mut arm_down = p.clone();
+        arm_down[5] = [-0.3, 0.3, 0.0];
+        assert_eq!(key_of(lm.check_anatomy(&arm_down).unwrap_err()), "r_elbow");
+        let mut ankle_up = p.clone();
+        ankle_up[8] = [0.1, 0.6, 0.0];
+        assert_eq!(key_of(lm.check_anatomy(&ankle_up).unwrap_err()), "l_ankle");
+        let mut head_low = p.clone();
+        head_low[10] = [0.0, 1.3, 0.0];
+        let e = lm.check_anatomy(&head_low).unwrap_err().to_string();
+        assert!(e.contains("head_top"), "{e}");
+    }
+
+    /// T-pose, I-pose and a body lying down pass.
+    #[test]
+    fn plausible_poses_pass_the_anatomy_check() {
+        let (p, lm) = body();
+        let mut t = p.clone();
+        t[2] = [0.8, 1.4, 0.0];
+        t[3] = [-0.8, 1.4, 0.0];
+        t[4] = [0.5, 1.4, 0.0];
+        t[5] = [-0.5, 1.4, 0.0];
+        lm.check_anatomy(&t).unwrap();
+        let mut i = p.clone();
+        i[2] = [0.22, 0.75, 0.0];
+        i[3] = [-0.22, 0.75, 0.0];
+        lm.check_anatomy(&i).unwrap();
+        // Lying on its back along +x (y becomes x, z becomes -y).
+        let lying: Vec<[f64; 3]> = p.iter().map(|q| [q[1], -q[2], q[0]]).collect();
+        lm.check_anatomy(&lying).unwrap();
+        let mirrored: Vec<[f64; 3]> = p.iter().map(|q| [-q[0], q[1], q[2]]).collect();
+        lm.check_anatomy(&mirrored).unwrap();
     }
 }
