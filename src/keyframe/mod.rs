@@ -414,63 +414,16 @@ impl Planner {
                     }
                     _ => None,
                 };
-                let within = opts.lattice.within;
-                let meets = |m: &Measure| {
-                    within > 0.0
-                        && (m.distance - t.distance).abs() < within * t.distance
-                        && (m.frames as f64 - t.frames).abs() < within * t.frames
-                };
-                if let (Some((f, cost)), Some(c)) = (found, &self.chain) {
-                    let lattice: Vec<SegmentPath> = c
-                        .split(&f.arcs)
+                if let (Some((f, _)), Some(c)) = (found, &self.chain) {
+                    stats.exact_length += self.segments.len();
+                    c.split(&f.arcs)
                         .iter()
                         .zip(&self.segments)
                         .map(|(arcs, s)| {
                             s.count(&mut stats);
                             s.decompose(arcs)
                         })
-                        .collect();
-                    let m = lattice
-                        .iter()
-                        .fold(Measure::default(), |a, s| a.plus(s.measure));
-                    // The binned programme is not a proof of optimality:
-                    // when it misses the tolerance the walks' split may do
-                    // better; the better of the two (within tolerance
-                    // first, then Eq. 7) is kept.
-                    let mut split_stats = Stats::default();
-                    let other = (!meets(&m))
-                        .then(|| {
-                            search::solve_split(&self.segments, &t, opts, &mut split_stats).ok()
-                        })
-                        .flatten();
-                    match other {
-                        Some(o) => {
-                            let mo = o.iter().fold(Measure::default(), |a, s| a.plus(s.measure));
-                            let eq7 = |m: &Measure| {
-                                m.cost
-                                    + w.distance * (m.distance - t.distance).abs()
-                                    + w.time * (m.frames as f64 - t.frames).abs()
-                                    + heading
-                                        .as_ref()
-                                        .map_or(0.0, |h| h.cost(self.turn_of(&join(&o))))
-                            };
-                            let key = |ok: bool, c: f64| (u8::from(!ok), c);
-                            if key(meets(&mo), eq7(&mo)) < key(meets(&m), cost) {
-                                stats.walks_and_loops += self.segments.len();
-                                stats.walks += split_stats.walks;
-                                stats.pruned += split_stats.pruned;
-                                stats.bounds_hit.extend(split_stats.bounds_hit);
-                                o
-                            } else {
-                                stats.exact_length += self.segments.len();
-                                lattice
-                            }
-                        }
-                        None => {
-                            stats.exact_length += self.segments.len();
-                            lattice
-                        }
-                    }
+                        .collect()
                 } else if self.segments.len() == 1 {
                     vec![self.solve_one(0, &t, heading.as_ref(), opts, &mut stats)?]
                 } else {
