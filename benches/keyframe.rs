@@ -92,5 +92,23 @@ fn main() {
             })
         });
     }
+    // One global target over a via key-frame: the exact-length search over
+    // the chain of segments, and the walks' split.
+    let via = [0u32, (72 + 30) as u32, (72 + 36 + 150) as u32];
+    let pv = Planner::new(g.clone(), &via, 25.0, &o).unwrap();
+    for (name, o) in [("lattice", o), ("walks", walks)] {
+        grp.bench_function(format!("via_{name}_10m_8s"), |b| {
+            b.iter(|| {
+                pv.plan(
+                    black_box(&Targets::Global {
+                        distance: 10.0,
+                        time: 8.0,
+                    }),
+                    &o,
+                )
+                .unwrap()
+            })
+        });
+    }
     grp.finish();
 }

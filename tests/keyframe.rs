@@ -294,32 +294,42 @@ fn walk_to_run(db: &std::path::Path, rest: &[&std::ffi::OsStr]) -> std::process:
 /// The `keyframe` command on a small synthetic database (CMU walk 02_01 and
 /// run 02_03, 25 fps): the written sequence travels the distance and lasts
 /// the time the report gives; bad input is a one-line error with exit 1.
+/// The small synthetic database (CMU walk 02_01 and run 02_03 on the
+/// samba character, 25 fps), built once for the tests that need it.
+fn walk_run_db(d: &std::path::Path) -> &'static std::path::Path {
+    static DB: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+    DB.get_or_init(|| {
+        let db = common::fixture_dir("keyframe-walk-run").join("db");
+        let m = d.join("mocap/cmu-amc/02");
+        let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/samba.landmarks.json");
+        let o = Command::new(common::bin())
+            .args(["synth", "--mesh"])
+            .arg(d.join("4d/samba/samba.obj"))
+            .arg("--landmarks")
+            .arg(&fixture)
+            .arg("--mocap")
+            .arg(m.join("02_01.amc"))
+            .arg(m.join("02_03.amc"))
+            .args(["--fps", "25", "-o"])
+            .arg(&db)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        db
+    })
+}
+
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     let Some(d) = common::data_dir() else { return };
     let tmp = tempfile::tempdir().unwrap();
-    let db = tmp.path().join("db");
-    let m = d.join("mocap/cmu-amc/02");
-    let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/samba.landmarks.json");
-    let o = Command::new(common::bin())
-        .args(["synth", "--mesh"])
-        .arg(d.join("4d/samba/samba.obj"))
-        .arg("--landmarks")
-        .arg(&fixture)
-        .arg("--mocap")
-        .arg(m.join("02_01.amc"))
-        .arg(m.join("02_03.amc"))
-        .args(["--fps", "25", "-o"])
-        .arg(&db)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let db = walk_run_db(&d);
     let out = tmp.path().join("kf.pc2");
     let report = tmp.path().join("kf.json");
     let o = walk_to_run(
-        &db,
+        db,
         &[
             "--distance".as_ref(),
             "6".as_ref(),
@@ -366,7 +376,7 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     // compromise, flagged as such.
     let far = tmp.path().join("far.pc2");
     let o = walk_to_run(
-        &db,
+        db,
         &[
             "--distance".as_ref(),
             "100".as_ref(),
@@ -386,7 +396,7 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     let grid_report = tmp.path().join("grid.json");
     for plot in [&svg, &png] {
         let o = walk_to_run(
-            &db,
+            db,
             &[
                 "--grid".as_ref(),
                 "--distances".as_ref(),
@@ -610,4 +620,379 @@ fn exact_length_search_matches_an_exhaustive_search_on_random_graphs() {
     }
     assert!(compared >= 20, "only {compared} cases compared");
     assert_eq!(within, compared, "{within} of {compared} landed within 1 %");
+}
+
+/// Key-frames given as skeleton poses resolve to the nearest database
+/// frame by `c_skel` (Eq. 28): a pose written from a database frame
+/// resolves to that frame at distance 0, a frame of the clip the database
+/// was made from to that frame; unreadable poses are one-line errors with
+/// exit 1.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn pose_key_frames_resolve_to_the_nearest_database_frame_and_bad_poses_exit_1() {
+    let Some(d) = common::data_dir() else { return };
+    let db = walk_run_db(&d);
+    let tmp = tempfile::tempdir().unwrap();
+    let ch = surfmotion::db::Character::load(db, &surfmotion::db::Quiet).unwrap();
+    let id = surfmotion::keyframe::parse_key(&ch, "02_03:30").unwrap();
+    let pose: Vec<[f64; 3]> = ch.poses()[id as usize]
+        .iter()
+        .map(|p| p.to_array())
+        .collect();
+    let pose_file = tmp.path().join("pose.json");
+    std::fs::write(&pose_file, serde_json::to_string(&pose).unwrap()).unwrap();
+    let r = surfmotion::keyframe::pose::nearest_frame(&ch, "pose", &ch.poses()[id as usize]);
+    assert_eq!((r.id, r.frame.as_str()), (id, "02_03:30"));
+    assert!(r.distance < 1e-9, "{}", r.distance);
+    let report = tmp.path().join("kf.json");
+    let out = tmp.path().join("kf.pc2");
+    let clip = d.join("mocap/cmu-amc/02/02_01.amc");
+    let from = format!("{}:10", clip.display());
+    let o = run(&[
+        "keyframe".as_ref(),
+        "--db".as_ref(),
+        db.as_os_str(),
+        "--from".as_ref(),
+        from.as_ref(),
+        "--to".as_ref(),
+        pose_file.as_os_str(),
+        "--distance".as_ref(),
+        "6".as_ref(),
+        "--time".as_ref(),
+        "4".as_ref(),
+        "--no-blend".as_ref(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--report".as_ref(),
+        report.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("nearest database frame 02_03:30 (skeleton distance 0.000 m"),
+        "{text}"
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(r["keys"][1], "02_03:30");
+    assert_eq!(r["poses"][1]["frame"], "02_03:30");
+    // Frame 10 of the clip the database's 02_01 was made from.
+    assert_eq!(r["keys"][0], "02_01:10", "{}", r["poses"][0]);
+    let bad_json = tmp.path().join("bad.json");
+    std::fs::write(&bad_json, "[[0, 1, 2]]").unwrap();
+    let missing = format!("{}:3", tmp.path().join("none.bvh").display());
+    let past = format!("{}:100000", clip.display());
+    for (key, want) in [
+        (bad_json.to_str().unwrap(), "1 joints, expected 19"),
+        (missing.as_str(), "none.bvh"),
+        (past.as_str(), "frames at 25 fps"),
+    ] {
+        let o = walk_to_run(
+            db,
+            &[
+                "--via".as_ref(),
+                key.as_ref(),
+                "--distance".as_ref(),
+                "6".as_ref(),
+                "--time".as_ref(),
+                "4".as_ref(),
+                "-o".as_ref(),
+                out.as_os_str(),
+            ],
+        );
+        assert_eq!(o.status.code(), Some(1), "{key}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(e.trim().lines().count(), 1, "{key}: {e}");
+        assert!(e.contains(want), "{key}: {e}");
+    }
+}
+
+/// `random_graph` with a random turn (±1 rad) on every transition.
+fn turning_graph(r: &mut Lcg) -> KeyGraph {
+    let mut g = random_graph(r, 3, 16);
+    for e in g.edges.iter_mut().filter(|e| e.jump) {
+        e.turn = 2.0 * r.next() - 1.0;
+    }
+    g
+}
+
+fn wrap_deg(x: f64) -> f64 {
+    (x + 180.0).rem_euclid(360.0) - 180.0
+}
+
+/// A heading target (`--heading`) turns the final facing towards it: the
+/// reported facing is the sum of the path's transition turns, and asking
+/// for 60° more than the plain result's facing brings the error well
+/// under 60° in most cases.
+#[test]
+fn heading_target_turns_the_final_facing() {
+    use surfmotion::keyframe::lattice::HeadingTarget;
+    let mut r = Lcg(31);
+    let (mut cases, mut closer, mut sum) = (0, 0, 0.0);
+    for _ in 0..300 {
+        let g = turning_graph(&mut r);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let o = SearchOptions::default();
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
+            continue;
+        };
+        let t = Targets::Global {
+            distance: 1.0 + 2.0 * r.next(),
+            time: 2.0 + 2.0 * r.next(),
+        };
+        let Ok(plain) = p.plan(&t, &o) else { continue };
+        if plain.stats.exact_length == 0 {
+            continue;
+        }
+        let turns: f64 = plain
+            .path
+            .windows(2)
+            .map(|w| g.edge(w[0], w[1]).unwrap().turn)
+            .sum();
+        assert!((wrap_deg(turns.to_degrees()) - plain.facing_deg).abs() < 1e-6);
+        let want = wrap_deg(plain.facing_deg + 60.0);
+        let h = SearchOptions {
+            heading: Some(HeadingTarget {
+                degrees: want,
+                weight: 1.0 / 30.0,
+                sectors: 8,
+            }),
+            ..o
+        };
+        let turned = p.plan(&t, &h).unwrap();
+        let err = wrap_deg(turned.facing_deg - want).abs();
+        assert!(
+            (turned.cost.heading - err / 30.0).abs() < 1e-9,
+            "{} vs {err}",
+            turned.cost.heading
+        );
+        cases += 1;
+        closer += usize::from(err < 30.0);
+        sum += err;
+    }
+    // Without the heading term every error would be 60°.
+    let mean = sum / cases.max(1) as f64;
+    assert!(cases >= 50, "{cases} cases");
+    assert!(
+        mean < 45.0 && 4 * closer >= cases,
+        "mean error {mean:.1}°, {closer} of {cases} within 30° of the heading target"
+    );
+}
+
+/// Every distinct (distance, cheapest cost) of the paths of exactly
+/// `frames` frames through `keys` in order (each via key-frame passed, the
+/// path may pass it again), transitions `min_run` apart: exhaustive.
+fn all_exact_length_via(
+    g: &KeyGraph,
+    keys: &[u32],
+    frames: usize,
+    min_run: u32,
+) -> Vec<(f64, f64)> {
+    use std::collections::HashMap;
+    let last = keys.len() - 2; // stage of the last segment
+    let mut layer: HashMap<(u32, u32, usize), Vec<(f64, f64)>> = HashMap::new();
+    layer.insert((keys[0], min_run, 0), vec![(0.0, 0.0)]);
+    for _ in 1..frames {
+        let mut next: HashMap<(u32, u32, usize), Vec<(f64, f64)>> = HashMap::new();
+        for (&(f, since, stage), labels) in &layer {
+            for e in g.successors(f) {
+                if e.jump && since < min_run {
+                    continue;
+                }
+                let s2 = if e.jump { 1 } else { (since + 1).min(min_run) };
+                let mut stages = vec![stage];
+                let mut st = stage;
+                while st < last && e.to == keys[st + 1] {
+                    st += 1;
+                    stages.push(st);
+                }
+                for st in stages {
+                    let row = next.entry((e.to, s2, st)).or_default();
+                    for &(d, c) in labels {
+                        row.push((d + g.step[e.to as usize], c + e.cost));
+                    }
+                }
+            }
+        }
+        for row in next.values_mut() {
+            row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+            row.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-9);
+        }
+        layer = next;
+    }
+    let end = *keys.last().unwrap();
+    let mut out: Vec<(f64, f64)> = layer
+        .into_iter()
+        .filter(|((f, _, st), _)| *f == end && *st == last)
+        .flat_map(|(_, v)| v)
+        .collect();
+    out.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    out.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-9);
+    out
+}
+
+/// One global target over key-frames with a via is split over the
+/// segments by the exact-length search on their chain: it lands within
+/// 1 % at the target's frame count whenever some path through the
+/// key-frames does (the exhaustive programme), and no cost is below the
+/// exhaustive optimum. The walks' split (`--search walks`) lands in fewer.
+#[test]
+fn one_global_target_over_via_keyframes_is_split_by_the_exact_length_search() {
+    let mut r = Lcg(41);
+    let (mut compared, mut within, mut walks_within) = (0, 0, 0);
+    let o = SearchOptions::default();
+    let walks = SearchOptions {
+        method: surfmotion::keyframe::search::Method::Walks,
+        ..o
+    };
+    let w = o.weights;
+    for case in 0..900 {
+        let g = random_graph(&mut r, 3, 16);
+        let keys: Vec<u32> = (0..3).map(|_| r.below(g.len()) as u32).collect();
+        if keys[0] == keys[1] || keys[1] == keys[2] {
+            continue;
+        }
+        let Ok(p) = Planner::new(g.clone(), &keys, 25.0, &o) else {
+            continue;
+        };
+        let frames = 40 + r.below(40);
+        let all = all_exact_length_via(&g, &keys, frames, o.lattice.min_run);
+        if all.len() < 2 {
+            continue;
+        }
+        // A distance some path makes, so that the target is reachable.
+        let d = all[r.below(all.len())].0;
+        if d < 0.05 {
+            continue;
+        }
+        let best = all
+            .iter()
+            .map(|&(x, c)| c + w.distance * (x - d).abs())
+            .fold(f64::INFINITY, f64::min);
+        let t = Targets::Global {
+            distance: d,
+            time: frames as f64 / 25.0,
+        };
+        let plan = p.plan(&t, &o).unwrap();
+        let lands = |pl: &surfmotion::keyframe::Plan| {
+            pl.measure.frames as usize == frames && (pl.measure.distance - d).abs() < 0.01 * d
+        };
+        assert!(
+            plan.cost.total >= best - 1e-9 || plan.measure.frames as usize != frames,
+            "case {case}: cost {} below the exhaustive optimum {best}",
+            plan.cost.total
+        );
+        // The path passes the via key-frame and ends at the last.
+        assert!(plan.path.contains(&keys[1]) && *plan.path.last().unwrap() == keys[2]);
+        compared += 1;
+        within += usize::from(lands(&plan));
+        walks_within += usize::from(lands(&p.plan(&t, &walks).unwrap()));
+    }
+    assert!(compared >= 30, "only {compared} cases compared");
+    assert_eq!(within, compared, "{within} of {compared} landed within 1 %");
+    assert!(
+        walks_within < compared,
+        "the walks' split landed in all {compared}: the test shows nothing"
+    );
+}
+
+/// The reachability oracle of the grid agrees with the exhaustive
+/// programme: a target is reachable (some path of exactly N frames lands
+/// strictly within 1 %) exactly when the oracle finds a witness, and "out
+/// of range" is never said of a reachable target.
+#[test]
+fn reachability_oracle_agrees_with_an_exhaustive_search() {
+    use surfmotion::keyframe::lattice::{Chain, Reachability, oracle};
+    use surfmotion::keyframe::search::Target;
+    let mut r = Lcg(53);
+    let o = SearchOptions::default();
+    let (mut yes, mut no) = (0, 0);
+    for case in 0..700 {
+        let g = random_graph(&mut r, 3, 16);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
+            continue;
+        };
+        let frames = 30 + r.below(40);
+        let all = all_exact_length(&g, a, b, frames, o.lattice.min_run);
+        if all.is_empty() {
+            continue;
+        }
+        let (lo, hi) = (all[0].0, all.last().unwrap().0);
+        let d = (lo - 0.1 + (hi - lo + 0.2) * r.next()).max(0.05);
+        let truth = all.iter().any(|&(x, _)| (x - d).abs() < 0.01 * d);
+        let c = Chain::of(&p.segments).unwrap();
+        let t = Target {
+            distance: d,
+            frames: frames as f64,
+        };
+        let said = oracle(&c, &t, 0.01, 256, o.lattice.min_run);
+        assert_eq!(
+            said == Reachability::Reachable,
+            truth,
+            "case {case}: oracle {said:?}, exhaustive {truth} ({d} m in {frames} frames)"
+        );
+        if truth {
+            yes += 1;
+        } else {
+            no += 1;
+        }
+    }
+    assert!(yes >= 20 && no >= 20, "{yes} reachable, {no} not");
+}
+
+/// With Eq. 7's time weight made small, the plain optimum trades a time
+/// error for a cheaper path; the search (`--within 1`, the default) still
+/// returns a path within 1 % of both targets whenever one exists, and
+/// without it (`--within 0`) it often does not.
+#[test]
+fn the_search_meets_both_targets_within_1pct_when_some_path_does() {
+    let mut r = Lcg(61);
+    let base = SearchOptions {
+        weights: surfmotion::keyframe::search::Weights {
+            distance: 1.0 / 0.3,
+            time: 0.001,
+        },
+        ..Default::default()
+    };
+    let plain = SearchOptions {
+        lattice: surfmotion::keyframe::lattice::LatticeOptions {
+            within: 0.0,
+            ..base.lattice
+        },
+        ..base
+    };
+    let (mut cases, mut met, mut plain_met) = (0, 0, 0);
+    for _ in 0..300 {
+        let g = random_graph(&mut r, 3, 16);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &base) else {
+            continue;
+        };
+        let frames = 30 + r.below(40);
+        let all = all_exact_length(&g, a, b, frames, base.lattice.min_run);
+        if all.is_empty() {
+            continue;
+        }
+        let d = all[r.below(all.len())].0;
+        if d < 0.05 {
+            continue;
+        }
+        let t = Targets::Global {
+            distance: d,
+            time: frames as f64 / 25.0,
+        };
+        let ok = |pl: &surfmotion::keyframe::Plan| {
+            pl.measure.frames as usize == frames && (pl.measure.distance - d).abs() < 0.01 * d
+        };
+        cases += 1;
+        met += usize::from(ok(&p.plan(&t, &base).unwrap()));
+        plain_met += usize::from(ok(&p.plan(&t, &plain).unwrap()));
+    }
+    assert!(cases >= 50, "{cases} cases");
+    assert_eq!(met, cases, "{met} of {cases} within 1 %");
+    assert!(
+        plain_met < cases,
+        "Eq. 7 alone met all {cases}: the test shows nothing"
+    );
 }

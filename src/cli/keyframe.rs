@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use surfmotion::keyframe::grid::{GridReport, evaluate, parse_range};
 use surfmotion::keyframe::search::{Method, SearchOptions, Solver, Weights};
 use surfmotion::keyframe::{
-    KeyframeOptions, Planner, Targets, TransitionCost, describe, key_graph, parse_key, synthesise,
+    KeyframeOptions, Planner, Targets, TransitionCost, describe, key_graph, parse_key, pose,
+    synthesise,
 };
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::save_sequence;
@@ -46,15 +47,35 @@ pub struct Args {
     /// The character database (its graph is built first if needed).
     #[arg(long)]
     pub db: PathBuf,
-    /// Start key-frame, SEQUENCE:FRAME (frames from 0).
+    /// Start key-frame: SEQUENCE:FRAME (frames from 0), or a skeleton pose
+    /// (CLIP.bvh:F, CLIP.amc:F at the database's frame rate, or POSE.json
+    /// with the 19 canonical joints in metres, Y up) resolved to the
+    /// nearest database frame by the skeleton measure (Eq. 28).
     #[arg(long, value_name = "SEQ:F")]
     pub from: String,
-    /// End key-frame, SEQUENCE:FRAME.
+    /// End key-frame, as --from.
     #[arg(long, value_name = "SEQ:F")]
     pub to: String,
-    /// Key-frames to pass in between, in order (repeat the option).
+    /// Key-frames to pass in between, in order (repeat the option), as
+    /// --from.
     #[arg(long, value_name = "SEQ:F")]
     pub via: Vec<String>,
+    /// Target final facing, degrees relative to the start key-frame's
+    /// (positive: from +Z towards +X); a cost term of the exact-length
+    /// search (--w-heading per degree).
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub heading: Option<f64>,
+    /// Weight of the heading error, per degree. Default: 1/30 (30° cost as
+    /// much as 0.3 m of distance).
+    #[arg(long, value_parser = super::non_negative)]
+    pub w_heading: Option<f64>,
+    /// Prefer a path within this percentage of both the distance and the
+    /// time target over a cheaper one (Eq. 7) that is not, when the graph
+    /// has one (0: Eq. 7 alone).
+    #[arg(long, value_name = "PCT", default_value_t = 1.0, value_parser = super::non_negative)]
+    pub within: f64,
+    #[command(flatten)]
+    pub clip: super::ClipOpts,
     /// Target travel distance in metres (0: as short as possible): one
     /// value for the whole path (split optimally over its segments), or a
     /// comma list with one per segment.
@@ -148,11 +169,24 @@ fn numbers(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
 /// Runs `keyframe`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
-    let mut keys = vec![parse_key(&ch, &a.from)?];
+    let load = a.clip.load_options()?;
+    let mut resolved = Vec::new();
+    let mut key = |k: &str| -> anyhow::Result<u32> {
+        if pose::is_pose_key(k) {
+            let p = pose::read_pose(&ch, k, &load)?;
+            let r = pose::nearest_frame(&ch, k, &p);
+            let id = r.id;
+            resolved.push(r);
+            Ok(id)
+        } else {
+            Ok(parse_key(&ch, k)?)
+        }
+    };
+    let mut keys = vec![key(&a.from)?];
     for v in &a.via {
-        keys.push(parse_key(&ch, v)?);
+        keys.push(key(v)?);
     }
-    keys.push(parse_key(&ch, &a.to)?);
+    keys.push(key(&a.to)?);
     let defaults = Weights::default();
     let opts = KeyframeOptions {
         search: SearchOptions {
@@ -171,8 +205,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             },
             lattice: surfmotion::keyframe::lattice::LatticeOptions {
                 bins: a.bins as usize,
+                within: a.within / 100.0,
                 ..Default::default()
             },
+            heading: a
+                .heading
+                .map(|d| surfmotion::keyframe::lattice::HeadingTarget {
+                    degrees: d,
+                    weight: a.w_heading.unwrap_or(1.0 / 30.0),
+                    sectors: 8,
+                }),
             limits: surfmotion::keyframe::search::Limits {
                 loops_per_walk: a.max_loops.max(2),
                 ..Default::default()
@@ -188,8 +230,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             CostArg::Smoothness => TransitionCost::Smoothness,
         },
     };
+    let mut head = String::new();
+    for r in &resolved {
+        head += &format!(
+            "key-frame {}: nearest database frame {} (skeleton distance {:.3} m{})\n",
+            r.key,
+            r.frame,
+            r.distance,
+            r.runner_up
+                .as_ref()
+                .map_or(String::new(), |(f, d)| format!("; next {f} at {d:.3} m"))
+        );
+    }
     if a.grid {
-        return grid(&ch, &keys, &a, &opts);
+        return grid(&ch, &keys, &a, &opts, &head);
     }
     let (Some(d), Some(t), Some(out)) = (&a.distance, &a.time, &a.output) else {
         anyhow::bail!("--distance, --time and -o are needed (or --grid)");
@@ -199,7 +253,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         &numbers("time", t)?,
         keys.len() - 1,
     )?;
-    let o = synthesise(&ch, &keys, &targets, &opts)?;
+    let mut o = synthesise(&ch, &keys, &targets, &opts)?;
+    o.report.poses = resolved;
     let fps = ch.manifest().fps;
     let seq = MeshSequence::new(ch.topology_metres(), o.positions, Some(fps))?;
     let written = save_sequence(&seq, out, Some(fps))?;
@@ -212,7 +267,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         v["output"] = serde_json::to_value(&written)?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
-    let mut s = format!(
+    let mut s = head;
+    s += &format!(
         "{} -> {}: {} at {} fps\n",
         r.keys.join(" -> "),
         written
@@ -239,9 +295,22 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "not met within 1 %: the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 (the graph may not reach it; --w-dist and --w-time weigh the two)\n"
         );
     }
+    s += &format!("final facing {:+.1}°", r.final_facing_deg);
+    if let (Some(h), Some(e)) = (r.heading_target_deg, r.heading_error_deg) {
+        s += &format!(" (target {h:+.1}°, error {e:+.1}°)");
+    }
+    s += "\n";
     s += &format!(
-        "cost: transitions {:.4} + distance {:.4} + time {:.4} = {:.4}\n",
-        r.cost.transition, r.cost.distance, r.cost.time, r.cost.total
+        "cost: transitions {:.4} + distance {:.4} + time {:.4}{} = {:.4}\n",
+        r.cost.transition,
+        r.cost.distance,
+        r.cost.time,
+        if r.heading_target_deg.is_some() {
+            format!(" + heading {:.4}", r.cost.heading)
+        } else {
+            String::new()
+        },
+        r.cost.total
     );
     for seg in &r.segments {
         s += &format!(
@@ -279,9 +348,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     super::emit(&s)
 }
 
-fn grid(ch: &Character, keys: &[u32], a: &Args, opts: &KeyframeOptions) -> anyhow::Result<()> {
-    let planner = Planner::new(key_graph(ch, opts), keys, ch.manifest().fps, &opts.search)
+fn grid(
+    ch: &Character,
+    keys: &[u32],
+    a: &Args,
+    opts: &KeyframeOptions,
+    head: &str,
+) -> anyhow::Result<()> {
+    let mut planner = Planner::new(key_graph(ch, opts), keys, ch.manifest().fps, &opts.search)
         .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
+    planner.facing = surfmotion::keyframe::facing_change(ch, keys);
     let ds = parse_range(&a.distances).map_err(|e| anyhow::anyhow!("--distances {e}"))?;
     let ts = parse_range(&a.times).map_err(|e| anyhow::anyhow!("--times {e}"))?;
     let g = evaluate(ch, &planner, &ds, &ts, &opts.search, &opts.timeline)
@@ -299,7 +375,7 @@ fn grid(ch: &Character, keys: &[u32], a: &Args, opts: &KeyframeOptions) -> anyho
         }
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
-    super::emit(&grid_text(&g))
+    super::emit(&(head.to_string() + &grid_text(&g)))
 }
 
 fn grid_text(g: &GridReport) -> String {
@@ -311,6 +387,10 @@ fn grid_text(g: &GridReport) -> String {
         if n == 1 { "query" } else { "queries" },
         g.distances.len(),
         g.times.len()
+    );
+    s += &format!(
+        "reachable (some path within 1 % of both): {}; unreachable: {} ({} out of range, {} in a gap of the achievable distances; best compromise returned, flagged)\n",
+        g.reachable.distance_m.count, g.unreachable.distance_m.count, g.out_of_range, g.gaps
     );
     for (what, e) in [("reachable", &g.reachable), ("unreachable", &g.unreachable)] {
         if e.distance_m.count == 0 {
@@ -335,13 +415,30 @@ fn grid_text(g: &GridReport) -> String {
             e.within_1pct
         );
     }
+    if !g.missed.is_empty() {
+        s += &format!(
+            "reachable but missed by the search: {}\n",
+            g.missed
+                .iter()
+                .map(|(d, t)| format!("{d} m in {t} s"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     s += &format!(
-        "smoothness min/mean/max {:.4}/{:.4}/{:.4} m over {} queries with transitions\n",
-        g.smoothness.min, g.smoothness_mean, g.smoothness.max, g.smoothness.count
+        "smoothness min/mean/max {:.4}/{:.4}/{:.4} m over {} queries with transitions; the graph's {} transitions: min/median/max {:.4}/{:.4}/{:.4} m\n",
+        g.smoothness.min,
+        g.smoothness_mean,
+        g.smoothness.max,
+        g.smoothness.count,
+        g.graph_smoothness.count,
+        g.graph_smoothness.min,
+        g.graph_smoothness_median,
+        g.graph_smoothness.max
     );
     s += &format!(
-        "query time {:.2} ± {:.2} ms (max {:.1} ms); preparation {:.1} ms once; {} hit a search bound\n",
-        g.query_ms_mean, g.query_ms_std, g.query_ms_max, g.prepare_ms, g.bounded
+        "query time {:.2} ± {:.2} ms (max {:.1} ms); preparation {:.1} ms once; {} hit a search bound; reachability oracle {:.0} ms in all\n",
+        g.query_ms_mean, g.query_ms_std, g.query_ms_max, g.prepare_ms, g.bounded, g.oracle_ms
     );
     s
 }

@@ -24,6 +24,12 @@ pub struct FrameEdge {
     /// True for a transition (a jump), false for the next frame of the
     /// sequence.
     pub jump: bool,
+    /// The turn of the output's heading at this arc (radians about Y,
+    /// [`crate::skeleton::rotate_yaw`]'s sense): for a transition `a → b`
+    /// the floor rotation fitting the skeleton of `b − 1` onto that of `a`
+    /// ([`super::place`]); 0 along a sequence and in graphs built without
+    /// skeletons.
+    pub turn: f64,
 }
 
 /// The frame graph with per-frame steps. Frames are numbered as in
@@ -62,6 +68,7 @@ impl KeyGraph {
                     to,
                     cost,
                     jump: !plain,
+                    turn: 0.0,
                 });
             }
             offsets.push(edges.len() as u32);
@@ -111,7 +118,18 @@ impl KeyGraph {
                 }
             }
         }
-        KeyGraph::from_adjacency(ch.adjacency(), centre, sequence)
+        let mut g = KeyGraph::from_adjacency(ch.adjacency(), centre, sequence);
+        // The placement's turn at every transition (as `place` turns).
+        for f in 0..g.len() {
+            let (lo, hi) = (g.offsets[f] as usize, g.offsets[f + 1] as usize);
+            for e in &mut g.edges[lo..hi] {
+                let b = e.to as usize;
+                if e.jump && b > 0 && b < ch.poses().len() && f < ch.poses().len() {
+                    e.turn = crate::retarget::Floor::fit(&ch.poses()[b - 1], &ch.poses()[f]).theta;
+                }
+            }
+        }
+        g
     }
 
     /// Number of frames.

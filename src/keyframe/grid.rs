@@ -4,17 +4,28 @@
 //! percentage of the target), the transitions' smoothness and the query
 //! time.
 //!
-//! A target `(d, t)` is called *reachable* when the database can
-//! physically make it between the key-frames: some path of exactly
-//! `t · fps` frames travels at most `d`, and some at least `d` (the
-//! exact-length extremes of [`super::lattice`]). With `--via` key-frames
-//! (several segments) the criterion is the asymptotic one: `t` at least
-//! the fewest frames of a walk, `d` at least the shortest walk distance,
-//! and the mean speed `d / t` between the slowest and the fastest loop. The figures are given for the reachable targets
-//! and, separately, for the others (where the search returns its best
-//! compromise under Eq. 7).
+//! A target `(d, t)` is *reachable* when some path through the key-frames
+//! (transitions at least [`super::lattice::LatticeOptions::min_run`] frames
+//! apart, as the search's paths) travels within 1 % of `d` in a time within
+//! 1 % of `t`. It is decided per target ([`super::lattice::oracle`]): the
+//! query's own result when it lands within 1 % (a witness); else *out of
+//! range* when no frame count within 1 % of `t` has exact-length extremes
+//! `[r_min, r_max]` meeting `d ± 1 %` (certain); else the exact-length
+//! programme with fine bins ([`ORACLE_BINS`]) over every such frame count:
+//! a path found is a witness (the target was reachable and the search
+//! missed it), none is a *gap* (the achievable distances of those lengths
+//! skip `d ± 1 %`, up to the programme's resolution). The figures are
+//! given for the reachable targets and, separately, for the others (where
+//! the search returns its best compromise under Eq. 7, flagged).
+//!
+//! Smoothness (Table III) is measured on the raw database frames that
+//! overlap at each transition ([`super::smoothness`]), not on the blended
+//! output; [`GridReport::graph_smoothness`] gives the same measure over
+//! every transition of the graph, the floor any path with a transition
+//! can reach.
 
-use super::search::{Reach, SearchOptions};
+use super::lattice::{Reachability, oracle};
+use super::search::{Reach, SearchOptions, Target};
 use super::{Planner, Targets, mean_smoothness, transitions};
 use crate::retarget::character::Character;
 use crate::retarget::timeline::TimelineOptions;
@@ -35,6 +46,10 @@ pub struct GridQuery {
     pub achieved_time: f64,
     /// See the module docs.
     pub reachable: bool,
+    /// How reachability was decided.
+    pub reach: Reachability,
+    /// Distance and time both within 1 % of the target.
+    pub within_1pct: bool,
     /// Transitions taken.
     pub transitions: usize,
     /// Mean smoothness over them (metres).
@@ -137,6 +152,20 @@ pub struct GridReport {
     pub prepare_ms: f64,
     /// Queries where a search bound was hit.
     pub bounded: usize,
+    /// Unreachable targets out of range of the exact-length extremes.
+    pub out_of_range: usize,
+    /// Unreachable targets in a gap of the achievable distances.
+    pub gaps: usize,
+    /// Reachable targets the search did not meet within 1 % (`(d, t)`).
+    pub missed: Vec<(f64, f64)>,
+    /// Milliseconds spent by the reachability oracle (not in the query
+    /// time).
+    pub oracle_ms: f64,
+    /// Smoothness (metres) of every transition of the graph at its own
+    /// blend window: the best any path with a transition can do.
+    pub graph_smoothness: Spread,
+    /// Its median.
+    pub graph_smoothness_median: f64,
     /// Every query.
     pub queries: Vec<GridQuery>,
 }
@@ -165,20 +194,29 @@ pub fn parse_range(s: &str) -> Result<Vec<f64>, String> {
     Ok(v)
 }
 
-/// Is `(d, t)` reachable (module docs)? One segment: exactly, by the
-/// exact-length extremes ([`super::search::Segment::reaches_exactly`]);
-/// several: by the walks' and loops' speeds ([`reachable_by_speed`]).
-pub fn reachable(planner: &Planner, reach: &[Reach], d: f64, t: f64) -> bool {
-    if let [seg] = planner.segments.as_slice() {
-        if let Some(r) = seg.reaches_exactly(d, t * planner.fps, 100_000) {
-            return r;
-        }
+/// Distance bins of the reachability oracle per (node, frames, class).
+pub const ORACLE_BINS: usize = 256;
+
+/// Is `(d, t)` reachable (module docs)? `met`: the query's result landed
+/// within 1 % (a witness).
+pub fn reachability(planner: &Planner, d: f64, t: f64, met: bool) -> Reachability {
+    if met {
+        return Reachability::Reachable;
     }
-    reachable_by_speed(reach, planner.fps, d, t)
+    let Some(c) = &planner.chain else {
+        return Reachability::Gap;
+    };
+    let t = Target {
+        distance: d,
+        frames: t * planner.fps,
+    };
+    let min_run = SearchOptions::default().lattice.min_run;
+    oracle(c, &t, 0.01, ORACLE_BINS, min_run)
 }
 
 /// The asymptotic criterion: at least the shortest walk's frames and
-/// distance, and a mean speed between the slowest and the fastest loop.
+/// distance, and a mean speed between the slowest and the fastest loop
+/// (a necessary condition for long paths, kept for the report's `reach`).
 pub fn reachable_by_speed(reach: &[Reach], fps: f64, d: f64, t: f64) -> bool {
     let frames: u32 = reach.iter().map(|r| r.frames).sum();
     let dist: f64 = reach.iter().map(|r| r.distance).sum();
@@ -193,6 +231,21 @@ pub fn reachable_by_speed(reach: &[Reach], fps: f64, d: f64, t: f64) -> bool {
     f >= frames as f64 && d >= dist && f > 0.0 && lo <= d / f && d / f <= hi
 }
 
+/// Smoothness of every transition of the character's graph at its own
+/// blend window ([`super::smoothness::transition_smoothness`]).
+pub fn graph_smoothness(ch: &Character) -> Vec<f64> {
+    use rayon::prelude::*;
+    ch.graph()
+        .transitions
+        .par_iter()
+        .map(|t| {
+            let from = ch.graph().frame_id(t.from, t.m);
+            let to = ch.graph().frame_id(t.to, t.n) + 1;
+            super::smoothness::transition_smoothness(ch, from, to, t.window)
+        })
+        .collect()
+}
+
 /// Runs the grid (one global target per query).
 pub fn evaluate(
     ch: &Character,
@@ -204,6 +257,7 @@ pub fn evaluate(
 ) -> Result<GridReport, super::search::SearchError> {
     let reach: Vec<Reach> = planner.segments.iter().map(|s| s.reach()).collect();
     let mut cache = HashMap::new();
+    let mut oracle_s = 0.0;
     let mut queries = Vec::with_capacity(distances.len() * times.len());
     for &d in distances {
         for &t in times {
@@ -217,12 +271,22 @@ pub fn evaluate(
             )?;
             let seconds = t0.elapsed().as_secs_f64();
             let tr = transitions(ch, &planner.graph, &plan.path, timeline, &mut cache);
+            let (ad, at) = (
+                plan.measure.distance,
+                plan.measure.frames as f64 / planner.fps,
+            );
+            let met = (ad - d).abs() < 0.01 * d && (at - t).abs() < 0.01 * t;
+            let o0 = Instant::now();
+            let class = reachability(planner, d, t, met);
+            oracle_s += o0.elapsed().as_secs_f64();
             queries.push(GridQuery {
                 distance: d,
                 time: t,
-                achieved_distance: plan.measure.distance,
-                achieved_time: plan.measure.frames as f64 / planner.fps,
-                reachable: reachable(planner, &reach, d, t),
+                achieved_distance: ad,
+                achieved_time: at,
+                reachable: class == Reachability::Reachable,
+                reach: class,
+                within_1pct: met,
                 transitions: tr.len(),
                 smoothness: mean_smoothness(&tr),
                 seconds,
@@ -230,6 +294,8 @@ pub fn evaluate(
             });
         }
     }
+    let mut gsm = graph_smoothness(ch);
+    gsm.sort_by(f64::total_cmp);
     let r: Vec<&GridQuery> = queries.iter().filter(|q| q.reachable).collect();
     let u: Vec<&GridQuery> = queries.iter().filter(|q| !q.reachable).collect();
     let sm: Vec<f64> = queries.iter().filter_map(|q| q.smoothness).collect();
@@ -254,6 +320,22 @@ pub fn evaluate(
         query_ms_max: ms.iter().copied().fold(0.0, f64::max),
         prepare_ms: 1e3 * planner.prepare_seconds,
         bounded: queries.iter().filter(|q| q.bounded).count(),
+        out_of_range: queries
+            .iter()
+            .filter(|q| q.reach == Reachability::OutOfRange)
+            .count(),
+        gaps: queries
+            .iter()
+            .filter(|q| q.reach == Reachability::Gap)
+            .count(),
+        missed: queries
+            .iter()
+            .filter(|q| q.reachable && !q.within_1pct)
+            .map(|q| (q.distance, q.time))
+            .collect(),
+        oracle_ms: 1e3 * oracle_s,
+        graph_smoothness: Spread::of(gsm.iter().copied()),
+        graph_smoothness_median: gsm.get(gsm.len() / 2).copied().unwrap_or(0.0),
         queries,
     })
 }

@@ -32,11 +32,31 @@
 //! The binning makes this a bounded search (like a beam), not a proof of
 //! optimality: [`super::search::Segment::solve`] keeps the paper's search
 //! as the fallback when no path lands within `T`, and reports which one
-//! found the result. A target is *reachable* in exactly `N` frames when
-//! `r_min(start, N) ≤ d_V ≤ r_max(start, N)` ([`extremes`]).
+//! found the result. `r_min(start, N) ≤ d_V ≤ r_max(start, N)` is necessary
+//! for a path of `N` frames to travel `d_V` ([`extremes`]), not sufficient:
+//! the distances of the paths of `N` frames have gaps ([`oracle`]).
+//!
+//! The programme runs on a [`Chain`]: one segment's compressed graph, or
+//! the segments between several key-frames joined at each key-frame, so
+//! that one global target is split over the segments optimally (any path
+//! through the key-frames in order is a path of the chain).
+//!
+//! Extensions of Eq. 7 (documented departures from the paper):
+//! - **Heading** ([`Heading`]): labels carry the heading's accumulated turn
+//!   (the placement's rotation at every transition, [`super::place`]); a
+//!   term `w_head · |turn − target|` (wrapped to ±180°) is added at the
+//!   goal, and the bins are split into sectors of turn so that paths that
+//!   end facing different ways survive the binning.
+//! - **Within tolerance** ([`LatticeOptions::within`]): when the Eq. 7
+//!   optimum misses the distance or the time by more than the tolerance
+//!   but some path of a frame count within the time tolerance lands within
+//!   the distance tolerance, the cheapest such path is returned instead
+//!   (Eq. 7's weights can prefer a 4-frame time error to a 10 cm distance
+//!   error; an animator asking for 6 m in 4 s wants both met when the
+//!   graph can).
 
 use super::repeats::Measure;
-use super::search::Segment;
+use super::search::{ArcView, SearchOptions, Segment, Target};
 
 /// Options of the exact-length search.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -57,6 +77,10 @@ pub struct LatticeOptions {
     /// window; the timeline shortens windows that would overlap).
     /// Default: 4.
     pub min_run: u32,
+    /// Prefer a path within this fraction of both targets over a cheaper
+    /// (Eq. 7) one that is not (module docs); 0: Eq. 7 alone. Default:
+    /// 0.01 (the 1 % of the figures).
+    pub within: f64,
 }
 
 impl Default for LatticeOptions {
@@ -68,7 +92,135 @@ impl Default for LatticeOptions {
             frame_slack: 3,
             max_frames: 20_000,
             min_run: 4,
+            within: 0.01,
         }
+    }
+}
+
+/// The animator's heading target: the final facing relative to the start
+/// key-frame's.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct HeadingTarget {
+    /// Degrees about the vertical ([`crate::skeleton::rotate_yaw`]'s
+    /// sense: positive turns from +Z towards +X).
+    pub degrees: f64,
+    /// Cost per degree of error. Default in the CLI: 1/30 (a 30° error
+    /// costs 1, as much as 0.3 m of distance error at the paper's
+    /// `w_dist`).
+    pub weight: f64,
+    /// Sectors of turn the search's bins are split into. Default: 8.
+    pub sectors: usize,
+}
+
+/// A heading target as the programme uses it (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Heading {
+    /// Target turn of the placement over the path (radians; the facing
+    /// target minus the key-frames' own facing difference).
+    pub turn: f64,
+    /// Cost per radian of error.
+    pub weight: f64,
+    /// Sectors of turn the bins are split into. Default in the CLI: 8.
+    pub sectors: usize,
+}
+
+/// `x` wrapped to `(−π, π]`.
+pub fn wrap(x: f64) -> f64 {
+    let t = std::f64::consts::TAU;
+    let y = x.rem_euclid(t);
+    if y > std::f64::consts::PI { y - t } else { y }
+}
+
+impl Heading {
+    /// The heading term of a path that turns `turn` radians.
+    pub fn cost(&self, turn: f64) -> f64 {
+        self.weight * wrap(turn - self.turn).abs()
+    }
+    fn sector(&self, turn: f64) -> usize {
+        let s = self.sectors.max(1);
+        let x = (wrap(turn - self.turn) + std::f64::consts::PI) / std::f64::consts::TAU;
+        ((x * s as f64) as usize).min(s - 1)
+    }
+}
+
+/// The graph the programme walks: one segment's compressed graph, or
+/// several joined at their key-frames (module docs).
+#[derive(Debug, Clone)]
+pub struct Chain {
+    /// Arcs leaving every node (indices global over the segments).
+    adj: Vec<Vec<ArcView>>,
+    relevant: Vec<bool>,
+    start: u32,
+    goal: u32,
+    /// First global arc index of every segment.
+    arc_offsets: Vec<u32>,
+    /// The first segment counts its start frame.
+    count_start: bool,
+    /// Fewest frames (start not counted) over all segments.
+    least: u32,
+}
+
+impl Chain {
+    /// The chain of consecutive segments (the end key-frame of each is the
+    /// start of the next). `None` when a segment after the first starts
+    /// where it ends (a repeated key-frame: the walks' search handles it).
+    pub fn of(segs: &[Segment]) -> Option<Chain> {
+        let k = segs.len();
+        if k == 0 || (k > 1 && segs.iter().any(|s| s.start() == s.goal())) {
+            return None;
+        }
+        let mut node_off = vec![0u32; k + 1];
+        let mut arc_off = vec![0u32; k + 1];
+        for (i, s) in segs.iter().enumerate() {
+            node_off[i + 1] = node_off[i] + s.node_count() as u32;
+            arc_off[i + 1] = arc_off[i] + s.arc_count() as u32;
+        }
+        let n = node_off[k] as usize;
+        let mut adj = vec![Vec::new(); n];
+        let mut relevant = vec![false; n];
+        let shift = |i: usize, a: ArcView| ArcView {
+            index: a.index + arc_off[i],
+            to: a.to + node_off[i],
+            ..a
+        };
+        for (i, s) in segs.iter().enumerate() {
+            for u in 0..s.node_count() as u32 {
+                let g = (node_off[i] + u) as usize;
+                relevant[g] = s.is_relevant(u);
+                if !relevant[g] {
+                    continue;
+                }
+                adj[g].extend(s.arcs_from_indexed(u).map(|a| shift(i, a)));
+                if i + 1 < k && u == s.goal() {
+                    let nx = &segs[i + 1];
+                    adj[g].extend(nx.arcs_from_indexed(nx.start()).map(|a| shift(i + 1, a)));
+                }
+            }
+        }
+        Some(Chain {
+            adj,
+            relevant,
+            start: node_off[0] + segs[0].start(),
+            goal: node_off[k - 1] + segs[k - 1].goal(),
+            arc_offsets: arc_off[..k].to_vec(),
+            count_start: segs[0].counts_start(),
+            least: segs.iter().map(|s| s.least_frames()).sum(),
+        })
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.adj.len()
+    }
+
+    /// Global arcs cut into each segment's own arcs.
+    pub fn split(&self, arcs: &[u32]) -> Vec<Vec<u32>> {
+        let mut out = vec![Vec::new(); self.arc_offsets.len()];
+        for &a in arcs {
+            let i = self.arc_offsets.partition_point(|&o| o <= a) - 1;
+            out[i].push(a - self.arc_offsets[i]);
+        }
+        out
     }
 }
 
@@ -91,27 +243,39 @@ impl Extremes {
 
 /// The exact-length extremes of a segment up to `m` frames (step 1).
 pub fn extremes(seg: &Segment, m: usize) -> Extremes {
-    let n = seg.node_count();
+    match Chain::of(std::slice::from_ref(seg)) {
+        Some(c) => chain_extremes(&c, m),
+        None => Extremes {
+            nodes: 0,
+            min: Vec::new(),
+            max: Vec::new(),
+        },
+    }
+}
+
+/// The exact-length extremes of a chain up to `m` frames (step 1).
+pub fn chain_extremes(c: &Chain, m: usize) -> Extremes {
+    let n = c.node_count();
     let mut min = vec![f64::INFINITY; n * (m + 1)];
     let mut max = vec![f64::NEG_INFINITY; n * (m + 1)];
-    let goal = seg.goal() as usize;
+    let goal = c.goal as usize;
     min[goal] = 0.0;
     max[goal] = 0.0;
     for k in 1..=m {
         for u in 0..n {
-            if !seg.is_relevant(u as u32) {
+            if !c.relevant[u] {
                 continue;
             }
             let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-            for (to, am) in seg.arcs_from(u as u32) {
-                let l = am.frames as usize;
+            for a in &c.adj[u] {
+                let l = a.m.frames as usize;
                 if l == 0 || l > k {
                     continue;
                 }
-                let j = (k - l) * n + to as usize;
+                let j = (k - l) * n + a.to as usize;
                 if min[j].is_finite() {
-                    lo = lo.min(am.distance + min[j]);
-                    hi = hi.max(am.distance + max[j]);
+                    lo = lo.min(a.m.distance + min[j]);
+                    hi = hi.max(a.m.distance + max[j]);
                 }
             }
             min[k * n + u] = lo;
@@ -131,6 +295,8 @@ struct Label {
     arc: u32,
     distance: f64,
     cost: f64,
+    /// Accumulated heading turn (radians).
+    turn: f64,
     /// Frames since the last transition.
     since: u32,
 }
@@ -139,31 +305,37 @@ struct Label {
 /// counts them).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Found {
-    /// Arcs of the compressed graph, in order.
+    /// Arcs of the chain, in order (global indices, [`Chain::split`]).
     pub arcs: Vec<u32>,
-    /// Transition cost, distance, frames.
+    /// Transition cost, distance, frames (arc frames, the start frame not
+    /// counted).
     pub measure: Measure,
+    /// The heading's turn over the path (radians).
+    pub turn: f64,
 }
 
 /// The best path of exactly `frames` arc frames from the start to the goal
-/// whose distance lands within the tolerance of `distance` (steps 2-3),
-/// or `None`. `ext` must cover `frames`.
+/// whose distance lands within `tol` metres of `distance` (steps 2-3),
+/// scored by transition cost + `w_dist |D − d|` + the heading term, or
+/// `None`. `ext` must cover `frames`.
+#[allow(clippy::too_many_arguments)]
 pub fn solve_exact_length(
-    seg: &Segment,
+    c: &Chain,
     ext: &Extremes,
     frames: usize,
     distance: f64,
+    tol: f64,
     w_dist: f64,
+    heading: Option<&Heading>,
     opts: &LatticeOptions,
 ) -> Option<(Found, f64)> {
-    let tol = opts.tolerance * distance + opts.tolerance_m;
     let bins = opts.bins.max(1);
     let window = |u: u32, k: usize| -> Option<(f64, f64)> {
         let (lo, hi) = ext.at(u, frames - k);
         lo.is_finite()
             .then_some((distance - hi - tol, distance - lo + tol))
     };
-    let start = seg.start();
+    let start = c.start;
     window(start, 0)?;
     let mut layers: Vec<Vec<Label>> = vec![Vec::new(); frames + 1];
     layers[0].push(Label {
@@ -172,15 +344,19 @@ pub fn solve_exact_length(
         arc: u32::MAX,
         distance: 0.0,
         cost: 0.0,
+        turn: 0.0,
         since: u32::MAX / 2,
     });
     let mut arena: Vec<Label> = Vec::new();
     // Bins per class of frames since the last transition (below
-    // `min_run`, and at least), plus the labels of least and most
-    // distance (they alone may reach the extremes of the window).
+    // `min_run`, and at least) and per sector of turn, plus the labels of
+    // least and most distance (they alone may reach the extremes of the
+    // window).
     let classes = opts.min_run as usize + 1;
-    let mut slot: Vec<Option<usize>> = vec![None; bins * classes + 2];
-    let (lo_slot, hi_slot) = (bins * classes, bins * classes + 1);
+    let sectors = heading.map_or(1, |h| h.sectors.max(1));
+    let cells = bins * classes * sectors;
+    let mut slot: Vec<Option<usize>> = vec![None; cells + 2];
+    let (lo_slot, hi_slot) = (cells, cells + 1);
     let mut best: Option<(u32, f64)> = None;
     for k in 0..=frames {
         let mut raw = std::mem::take(&mut layers[k]);
@@ -207,7 +383,9 @@ pub fn solve_exact_length(
                     slot[hi_slot] = Some(r);
                 }
                 let class = l.since.min(opts.min_run) as usize;
-                let b = class * bins + (((l.distance - lo) / width) as usize).min(bins - 1);
+                let sector = heading.map_or(0, |h| h.sector(l.turn));
+                let b = (sector * classes + class) * bins
+                    + (((l.distance - lo) / width) as usize).min(bins - 1);
                 let better = match slot[b] {
                     None => true,
                     Some(o) => {
@@ -232,15 +410,17 @@ pub fn solve_exact_length(
                 let id = arena.len() as u32;
                 arena.push(l);
                 if k == frames {
-                    if u == seg.goal() {
-                        let c = l.cost + w_dist * (l.distance - distance).abs();
-                        if best.is_none_or(|(_, b)| c < b) {
-                            best = Some((id, c));
+                    if u == c.goal {
+                        let sc = l.cost
+                            + w_dist * (l.distance - distance).abs()
+                            + heading.map_or(0.0, |h| h.cost(l.turn));
+                        if best.is_none_or(|(_, b)| sc < b) {
+                            best = Some((id, sc));
                         }
                     }
                     continue;
                 }
-                for arc in seg.arcs_from_indexed(u) {
+                for arc in &c.adj[u as usize] {
                     let am = arc.m;
                     let kk = k + am.frames as usize;
                     if am.frames == 0 || kk > frames || (arc.jump && l.since < opts.min_run) {
@@ -254,6 +434,7 @@ pub fn solve_exact_length(
                             arc: arc.index,
                             distance: d,
                             cost: l.cost + am.cost,
+                            turn: l.turn + arc.turn,
                             since: if arc.jump {
                                 am.frames
                             } else {
@@ -267,7 +448,7 @@ pub fn solve_exact_length(
             i = j;
         }
     }
-    let (id, c) = best?;
+    let (id, sc) = best?;
     let mut arcs = Vec::new();
     let mut at = id;
     while arena[at as usize].parent != u32::MAX {
@@ -284,7 +465,188 @@ pub fn solve_exact_length(
                 distance: l.distance,
                 frames: frames as u32,
             },
+            turn: l.turn,
         },
-        c,
+        sc,
     ))
+}
+
+/// Is `(distance, frames)` (start counted) within `within` of the targets?
+fn lands(found: &Found, cs: i64, t: &Target, within: f64) -> bool {
+    let f = (i64::from(found.measure.frames) + cs) as f64;
+    (found.measure.distance - t.distance).abs() < within * t.distance
+        && (f - t.frames).abs() < within * t.frames
+}
+
+/// The exact-length search on a chain, best first by Eq. 7 (plus the
+/// heading term). Frame counts `N` are tried in increasing order of their
+/// lower bound `w_dist · gap(d_V, [r_min(N), r_max(N)]) + w_time · |N − t_V|`
+/// (the distance no path of `N` frames can avoid missing, plus the time
+/// error), each aiming at the reachable distance nearest the target, until
+/// the bound reaches the best cost; then, if that best misses either
+/// target by more than [`LatticeOptions::within`], the frame counts within
+/// the time tolerance are searched for a path within the distance
+/// tolerance, the cheapest of which wins (module docs). Returns the path
+/// and its cost; `None` for zero targets (shortest paths are the walks'
+/// search) or when no path lands within the tolerance.
+pub fn search(
+    c: &Chain,
+    t: &Target,
+    heading: Option<&Heading>,
+    opts: &SearchOptions,
+) -> Option<(Found, f64)> {
+    let lo = opts.lattice;
+    let w = opts.weights;
+    if t.distance <= 0.0 || t.frames <= 0.0 || !t.distance.is_finite() {
+        return None;
+    }
+    let cs = i64::from(c.count_start);
+    let target = (t.frames.round() as i64 - cs).max(0);
+    let least = (c.least as i64).max(1);
+    // Frames beyond which the time error alone exceeds the cost of
+    // the nearest frame count's whole distance.
+    let extra = (w.distance * t.distance / w.time.max(1e-9)).ceil() as i64;
+    let top = (target.max(least) + extra + i64::from(lo.frame_slack)).min(lo.max_frames as i64);
+    if top < least {
+        return None;
+    }
+    let ext = chain_extremes(c, top as usize);
+    let total = |f: &Found| {
+        f.measure.cost
+            + w.distance * (f.measure.distance - t.distance).abs()
+            + w.time * ((i64::from(f.measure.frames) + cs) as f64 - t.frames).abs()
+            + heading.map_or(0.0, |h| h.cost(f.turn))
+    };
+    let mut order: Vec<(f64, i64, f64)> = (least..=top)
+        .filter_map(|n| {
+            let (a, b) = ext.at(c.start, n as usize);
+            if !a.is_finite() {
+                return None;
+            }
+            let aim = t.distance.clamp(a, b);
+            let time = w.time * ((n + cs) as f64 - t.frames).abs();
+            Some((w.distance * (aim - t.distance).abs() + time, n, aim))
+        })
+        .collect();
+    order.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let tol = lo.tolerance * t.distance + lo.tolerance_m;
+    let mut best: Option<(Found, f64)> = None;
+    for &(bound, n, aim) in order.iter().take(8) {
+        if best.as_ref().is_some_and(|b| bound >= b.1) {
+            break;
+        }
+        if let Some((found, _)) =
+            solve_exact_length(c, &ext, n as usize, aim, tol, w.distance, heading, &lo)
+        {
+            let cost = total(&found);
+            if best.as_ref().is_none_or(|b| cost < b.1) {
+                best = Some((found, cost));
+            }
+        }
+    }
+    let within = lo.within;
+    if within > 0.0 && best.as_ref().is_none_or(|b| !lands(&b.0, cs, t, within)) {
+        // Frame counts within the time tolerance whose extremes admit a
+        // distance within the distance tolerance, nearest the target first.
+        let dt = within * t.distance;
+        let mut ns: Vec<i64> = (least..=top)
+            .filter(|&n| ((n + cs) as f64 - t.frames).abs() < within * t.frames)
+            .filter(|&n| {
+                let (a, b) = ext.at(c.start, n as usize);
+                a.is_finite() && a < t.distance + dt && b > t.distance - dt
+            })
+            .collect();
+        ns.sort_by_key(|&n| (n - target).abs());
+        let mut inside: Option<(Found, f64)> = None;
+        for n in ns {
+            let tol = dt * (1.0 - 1e-9);
+            if let Some((found, _)) = solve_exact_length(
+                c, &ext, n as usize, t.distance, tol, w.distance, heading, &lo,
+            ) {
+                let cost = total(&found);
+                if lands(&found, cs, t, within) && inside.as_ref().is_none_or(|b| cost < b.1) {
+                    inside = Some((found, cost));
+                }
+            }
+        }
+        if inside.is_some() {
+            best = inside;
+        }
+    }
+    best
+}
+
+/// What the exact-length programme says about a target `(d, t)` at a
+/// tolerance (e.g. 0.01): is there a path through the chain whose
+/// distance and frame count (start counted) are both strictly within the
+/// tolerance of the target?
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reachability {
+    /// A path was found (a witness).
+    Reachable,
+    /// No frame count within the time tolerance has extremes
+    /// `[r_min, r_max]` meeting the distance tolerance: certainly out of
+    /// reach.
+    OutOfRange,
+    /// The extremes admit it but the fine programme found no path: the
+    /// achievable distances of those lengths have a gap there (certain up
+    /// to the programme's resolution, see [`oracle`]).
+    Gap,
+}
+
+/// The reachability oracle: for every frame count `N` within the time
+/// tolerance, the exact-length programme with `bins` distance bins per
+/// (node, frames, class) and the final window the distance tolerance
+/// (the final resolution `2 · tol · d / bins`). A witness is exact; a
+/// miss by [`Reachability::OutOfRange`] is exact; a [`Reachability::Gap`]
+/// is a miss at that resolution (labels merged within a bin could, in
+/// principle, have extended to a distance the kept one misses).
+pub fn oracle(c: &Chain, t: &Target, within: f64, bins: usize, min_run: u32) -> Reachability {
+    if t.distance <= 0.0 || t.frames <= 0.0 {
+        return Reachability::OutOfRange;
+    }
+    let cs = i64::from(c.count_start);
+    let lo_n = ((t.frames * (1.0 - within)).floor() as i64 - cs).max(0);
+    let hi_n = (t.frames * (1.0 + within)).ceil() as i64 - cs;
+    if hi_n < 0 {
+        return Reachability::OutOfRange;
+    }
+    let ext = chain_extremes(c, hi_n as usize);
+    let dt = within * t.distance;
+    let opts = LatticeOptions {
+        bins,
+        min_run,
+        ..Default::default()
+    };
+    let mut admitted = false;
+    for n in lo_n..=hi_n {
+        if ((n + cs) as f64 - t.frames).abs() >= within * t.frames {
+            continue;
+        }
+        let (a, b) = ext.at(c.start, n as usize);
+        if !(a.is_finite() && a < t.distance + dt && b > t.distance - dt) {
+            continue;
+        }
+        admitted = true;
+        if let Some((f, _)) = solve_exact_length(
+            c,
+            &ext,
+            n as usize,
+            t.distance,
+            dt * (1.0 - 1e-9),
+            1.0,
+            None,
+            &opts,
+        ) {
+            if (f.measure.distance - t.distance).abs() < dt {
+                return Reachability::Reachable;
+            }
+        }
+    }
+    if admitted {
+        Reachability::Gap
+    } else {
+        Reachability::OutOfRange
+    }
 }

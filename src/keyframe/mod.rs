@@ -7,7 +7,9 @@
 //! loop repetition counts, Eqs. 20-25), [`place`] (blending across
 //! transitions and placement along the accumulated root motion),
 //! [`smoothness`] (Table III's transition smoothness) and [`grid`] (the
-//! Table III evaluation over a grid of targets).
+//! Table III evaluation over a grid of targets); [`lattice`] is the
+//! exact-length search (the default) and [`pose`] resolves key-frames
+//! given as skeleton poses to database frames.
 //!
 //! The cost of a path `P` (Eq. 7) is
 //! `C_tran(P) + w_dist |dist(P) − d_V| + w_time |time(P) − t_V|`, with
@@ -20,6 +22,7 @@ pub mod grid;
 pub mod heatmap;
 pub mod lattice;
 pub mod place;
+pub mod pose;
 pub mod repeats;
 pub mod search;
 pub mod smoothness;
@@ -28,7 +31,7 @@ use crate::retarget::character::Character;
 use crate::retarget::timeline::{TimelineOptions, timeline};
 use graph::KeyGraph;
 use repeats::Measure;
-use search::{SearchError, SearchOptions, Segment, SegmentPath, Stats, Target};
+use search::{Method, SearchError, SearchOptions, Segment, SegmentPath, Stats, Target};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -211,6 +214,14 @@ pub struct Planner {
     pub keys: Vec<u32>,
     /// One per consecutive pair.
     pub segments: Vec<Segment>,
+    /// The segments joined at their key-frames for the exact-length search
+    /// of one global target ([`lattice::Chain`]; `None` with a repeated
+    /// key-frame).
+    pub chain: Option<lattice::Chain>,
+    /// The end key-frame's facing minus the start's (radians, from their
+    /// skeletons, [`pose::facing`]): the output's final facing is this
+    /// plus the path's turn. 0 unless set (graphs without skeletons).
+    pub facing: f64,
     /// Frames per second.
     pub fps: f64,
     /// Seconds spent preparing.
@@ -227,6 +238,9 @@ pub struct CostTerms {
     pub distance: f64,
     /// `w_time · |time − t_V|` (frames).
     pub time: f64,
+    /// `w_head · |facing − target|` (degrees, wrapped; 0 without a heading
+    /// target).
+    pub heading: f64,
     /// Their sum.
     pub total: f64,
 }
@@ -279,10 +293,26 @@ pub struct Plan {
     pub measure: Measure,
     /// Eq. 7's terms.
     pub cost: CostTerms,
+    /// The heading's turn over the path (radians).
+    pub turn: f64,
+    /// The final facing relative to the start key-frame's (degrees,
+    /// wrapped to ±180; [`Planner::facing`] plus the turn).
+    pub facing_deg: f64,
     /// Search counts and bounds hit.
     pub stats: Stats,
     /// Seconds of the search (preparation excluded).
     pub search_seconds: f64,
+}
+
+/// The frame path of consecutive segments (each shares its first frame
+/// with the previous one's last).
+pub fn join(segs: &[SegmentPath]) -> Vec<u32> {
+    let mut path: Vec<u32> = Vec::new();
+    for s in segs {
+        let skip = usize::from(!path.is_empty());
+        path.extend_from_slice(&s.path[skip..]);
+    }
+    path
 }
 
 /// Runs of consecutive frames as `SEQUENCE[a..b]`.
@@ -314,48 +344,109 @@ impl Planner {
             .enumerate()
             .map(|(i, w)| Segment::new(&graph, w[0], w[1], i == 0, &opts.limits))
             .collect::<Result<Vec<_>, _>>()?;
+        let chain = lattice::Chain::of(&segments);
         Ok(Planner {
             graph,
             keys: keys.to_vec(),
             segments,
+            chain,
+            facing: 0.0,
             fps,
             prepare_seconds: t0.elapsed().as_secs_f64(),
         })
     }
 
+    /// The heading term of the search for a target facing (module docs
+    /// of [`lattice`]).
+    fn heading(&self, opts: &SearchOptions) -> Option<lattice::Heading> {
+        opts.heading.map(|h| lattice::Heading {
+            turn: h.degrees.to_radians() - self.facing,
+            weight: h.weight.to_degrees(),
+            sectors: h.sectors,
+        })
+    }
+
+    /// One segment: the exact-length search (with the heading term when
+    /// `heading`), else the walks and loops.
+    fn solve_one(
+        &self,
+        i: usize,
+        t: &Target,
+        heading: Option<&lattice::Heading>,
+        opts: &SearchOptions,
+        stats: &mut Stats,
+    ) -> Result<SegmentPath, SearchError> {
+        let s = &self.segments[i];
+        if opts.method == Method::Lattice {
+            if let Some((p, _)) = s.solve_lattice(t, heading, opts) {
+                s.count(stats);
+                stats.exact_length += 1;
+                return Ok(p);
+            }
+        }
+        let walks = SearchOptions {
+            method: Method::Walks,
+            ..*opts
+        };
+        s.solve(t, &walks, stats)
+    }
+
     /// The best path for the targets (Eq. 13 per segment, or over the
-    /// whole path for one global target).
+    /// whole path for one global target: the exact-length search over the
+    /// chain of segments, which splits the target optimally, else the
+    /// walks-and-loops split [`search::solve_split`]). A heading target
+    /// ([`SearchOptions::heading`]) applies to the last segment with per
+    /// segment targets, after the turns of the earlier ones.
     pub fn plan(&self, targets: &Targets, opts: &SearchOptions) -> Result<Plan, SearchError> {
         let t0 = Instant::now();
         let mut stats = Stats::default();
         let w = opts.weights;
+        let heading = self.heading(opts);
         let segs = match targets {
             Targets::Global { distance, time } => {
                 let t = Target {
                     distance: *distance,
                     frames: time * self.fps,
                 };
-                if self.segments.len() == 1 {
-                    vec![self.segments[0].solve(&t, opts, &mut stats)?]
+                let found = match (&self.chain, opts.method) {
+                    (Some(c), Method::Lattice) if self.segments.len() > 1 => {
+                        lattice::search(c, &t, heading.as_ref(), opts)
+                    }
+                    _ => None,
+                };
+                if let (Some((f, _)), Some(c)) = (found, &self.chain) {
+                    stats.exact_length += self.segments.len();
+                    c.split(&f.arcs)
+                        .iter()
+                        .zip(&self.segments)
+                        .map(|(arcs, s)| {
+                            s.count(&mut stats);
+                            s.decompose(arcs)
+                        })
+                        .collect()
+                } else if self.segments.len() == 1 {
+                    vec![self.solve_one(0, &t, heading.as_ref(), opts, &mut stats)?]
                 } else {
                     search::solve_split(&self.segments, &t, opts, &mut stats)?
                 }
             }
-            Targets::PerSegment(v) => self
-                .segments
-                .iter()
-                .zip(v)
-                .map(|(s, &(d, tm))| {
-                    s.solve(
-                        &Target {
-                            distance: d,
-                            frames: tm * self.fps,
-                        },
-                        opts,
-                        &mut stats,
-                    )
-                })
-                .collect::<Result<Vec<_>, _>>()?,
+            Targets::PerSegment(v) => {
+                let mut out: Vec<SegmentPath> = Vec::new();
+                for (i, &(d, tm)) in v.iter().enumerate() {
+                    let t = Target {
+                        distance: d,
+                        frames: tm * self.fps,
+                    };
+                    let last = i + 1 == self.segments.len();
+                    let h = heading.filter(|_| last).map(|mut h| {
+                        let before: f64 = out.iter().map(|p| self.turn_of(&p.path)).sum();
+                        h.turn -= before;
+                        h
+                    });
+                    out.push(self.solve_one(i, &t, h.as_ref(), opts, &mut stats)?);
+                }
+                out
+            }
         };
         if stats.beamed > 0 {
             stats.bounds_hit.push(format!(
@@ -363,11 +454,7 @@ impl Planner {
                 stats.beamed, opts.limits.labels, opts.beam
             ));
         }
-        let mut path: Vec<u32> = Vec::new();
-        for s in &segs {
-            let skip = usize::from(!path.is_empty());
-            path.extend_from_slice(&s.path[skip..]);
-        }
+        let path = join(&segs);
         let measure = segs
             .iter()
             .fold(Measure::default(), |a, s| a.plus(s.measure));
@@ -383,19 +470,33 @@ impl Planner {
                 )
             }),
         };
+        let turn = self.turn_of(&path);
+        let hterm = heading.map_or(0.0, |h| h.cost(turn));
         Ok(Plan {
             cost: CostTerms {
                 transition: measure.cost,
                 distance: dterm,
                 time: tterm,
-                total: measure.cost + dterm + tterm,
+                heading: hterm,
+                total: measure.cost + dterm + tterm + hterm,
             },
+            turn,
+            facing_deg: lattice::wrap(turn + self.facing).to_degrees(),
             segments: segs,
             path,
             measure,
             stats,
             search_seconds: t0.elapsed().as_secs_f64(),
         })
+    }
+
+    /// The heading's turn along a frame path: the sum of its transitions'
+    /// turns ([`graph::FrameEdge::turn`]).
+    pub fn turn_of(&self, path: &[u32]) -> f64 {
+        path.windows(2)
+            .filter_map(|w| self.graph.edge(w[0], w[1]))
+            .map(|e| e.turn)
+            .sum()
     }
 }
 
@@ -430,8 +531,20 @@ pub struct Report {
     pub transitions: Vec<TransitionReport>,
     /// Mean smoothness over the transitions (metres; `None` without any).
     pub smoothness: Option<f64>,
-    /// Final heading relative to the first key-frame's (degrees).
+    /// Final placement rotation relative to the first key-frame's capture
+    /// (degrees, the sum of the transitions' turns).
     pub final_heading_deg: f64,
+    /// Final facing of the character relative to the first key-frame's
+    /// (degrees, ±180: the turn plus the end key-frame's own facing minus
+    /// the start's, [`pose::facing`]).
+    pub final_facing_deg: f64,
+    /// The heading target (`--heading`), degrees.
+    pub heading_target_deg: Option<f64>,
+    /// `final_facing − target`, wrapped to ±180 degrees.
+    pub heading_error_deg: Option<f64>,
+    /// Key-frames given as skeleton poses and the frames they resolved to
+    /// (filled by the caller that resolved them).
+    pub poses: Vec<pose::Resolved>,
     /// Search counts and bounds hit.
     pub stats: Stats,
     /// Seconds preparing the search (compressed graph, loops).
@@ -604,8 +717,9 @@ pub fn synthesise(
     }
     let fps = ch.manifest().fps;
     let g = key_graph(ch, opts);
-    let planner = Planner::new(g, keys, fps, &opts.search)
+    let mut planner = Planner::new(g, keys, fps, &opts.search)
         .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
+    planner.facing = facing_change(ch, keys);
     let plan = planner
         .plan(targets, &opts.search)
         .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
@@ -638,6 +752,13 @@ pub fn synthesise(
         smoothness: mean_smoothness(&trans),
         transitions: trans,
         final_heading_deg: placed.heading.last().copied().unwrap_or(0.0).to_degrees(),
+        final_facing_deg: plan.facing_deg,
+        heading_target_deg: opts.search.heading.map(|h| h.degrees),
+        heading_error_deg: opts
+            .search
+            .heading
+            .map(|h| lattice::wrap((plan.facing_deg - h.degrees).to_radians()).to_degrees()),
+        poses: Vec::new(),
         stats: plan.stats.clone(),
         prepare_seconds: planner.prepare_seconds,
         search_seconds: plan.search_seconds,
@@ -648,6 +769,17 @@ pub fn synthesise(
         plan,
         report,
     })
+}
+
+/// The end key-frame's facing minus the start's (radians, from their
+/// skeletons; [`Planner::facing`]).
+pub fn facing_change(ch: &Character, keys: &[u32]) -> f64 {
+    match (keys.first(), keys.last()) {
+        (Some(&a), Some(&b)) if (a.max(b) as usize) < ch.poses().len() => {
+            pose::facing(&ch.poses()[b as usize]) - pose::facing(&ch.poses()[a as usize])
+        }
+        _ => 0.0,
+    }
 }
 
 /// A search error in the database's words (`SEQUENCE:FRAME`).

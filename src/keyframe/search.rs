@@ -119,6 +119,9 @@ pub struct SearchOptions {
     /// kept [`Limits::labels`] in all (then no longer exact, and reported).
     /// Default: 48.
     pub beam: usize,
+    /// A target for the final facing (an extension, [`super::lattice`]):
+    /// used by the exact-length search only. Default: none.
+    pub heading: Option<super::lattice::HeadingTarget>,
 }
 
 impl Default for SearchOptions {
@@ -131,6 +134,7 @@ impl Default for SearchOptions {
             solver: Solver::default(),
             gap: 0.03,
             beam: 48,
+            heading: None,
         }
     }
 }
@@ -172,6 +176,8 @@ struct Arc {
     to_frame: u32,
     /// A transition (else a run of plain frames).
     jump: bool,
+    /// The heading's turn (radians; [`super::graph::FrameEdge::turn`]).
+    turn: f64,
 }
 
 /// An arc of the compressed graph as [`Segment::arcs_from_indexed`] gives
@@ -186,6 +192,8 @@ pub struct ArcView {
     pub m: Measure,
     /// A transition (else a run of plain frames).
     pub jump: bool,
+    /// The heading's turn (radians; 0 on a run of plain frames).
+    pub turn: f64,
 }
 
 /// A simple cycle of the compressed graph.
@@ -390,6 +398,7 @@ impl Segment {
                         from_frame: u,
                         to_frame: f,
                         jump: false,
+                        turn: 0.0,
                     });
                     break;
                 }
@@ -406,6 +415,7 @@ impl Segment {
                     from_frame: u,
                     to_frame: e.to,
                     jump: true,
+                    turn: e.turn,
                 });
             }
         }
@@ -613,6 +623,22 @@ impl Segment {
         self.goal
     }
 
+    /// Arcs of the compressed graph (indices `0..arc_count()`).
+    pub fn arc_count(&self) -> usize {
+        self.arcs.len()
+    }
+
+    /// Fewest frames from the start to the goal (the start frame not
+    /// counted).
+    pub fn least_frames(&self) -> u32 {
+        self.h[self.start as usize].frames
+    }
+
+    /// Does the segment count its start frame (the first of a path)?
+    pub fn counts_start(&self) -> bool {
+        self.count_start
+    }
+
     /// Is node `u` on some path from the start to the goal?
     pub fn is_relevant(&self, u: u32) -> bool {
         self.relevant[u as usize]
@@ -632,6 +658,7 @@ impl Segment {
                 to: arc.to,
                 m: arc.m,
                 jump: arc.jump,
+                turn: arc.turn,
             })
         })
     }
@@ -653,68 +680,23 @@ impl Segment {
         Some(lo <= distance + 1e-9 && distance <= hi + 1e-9)
     }
 
-    /// The exact-length search ([`super::lattice`]), best first by Eq. 7.
-    /// Frame counts `N` are tried in increasing order of their lower bound
-    /// `w_dist · gap(d_V, [r_min(N), r_max(N)]) + w_time · |N − t_V|` (the
-    /// distance no path of `N` frames can avoid missing, plus the time
-    /// error), each aiming at the reachable distance nearest the target,
-    /// until the bound reaches the best cost: a reachable target is met at
-    /// its own frame count, an unreachable one gets the best compromise.
-    /// `None` for zero targets (shortest paths are the walks' search) or
-    /// when no path lands within the tolerance.
-    fn solve_lattice(&self, t: &Target, opts: &SearchOptions) -> Option<(SegmentPath, f64)> {
-        let lo = opts.lattice;
-        let w = opts.weights;
-        if t.distance <= 0.0 || t.frames <= 0.0 || !t.distance.is_finite() {
-            return None;
-        }
-        let cs = i64::from(self.count_start);
-        let target = (t.frames.round() as i64 - cs).max(0);
-        let least = (self.h[self.start as usize].frames as i64).max(1);
-        // Frames beyond which the time error alone exceeds the cost of
-        // the nearest frame count's whole distance.
-        let extra = (w.distance * t.distance / w.time.max(1e-9)).ceil() as i64;
-        let top = (target.max(least) + extra + i64::from(lo.frame_slack)).min(lo.max_frames as i64);
-        if top < least {
-            return None;
-        }
-        let ext = super::lattice::extremes(self, top as usize);
-        let mut order: Vec<(f64, i64, f64)> = (least..=top)
-            .filter_map(|n| {
-                let (a, b) = ext.at(self.start, n as usize);
-                if !a.is_finite() {
-                    return None;
-                }
-                let aim = t.distance.clamp(a, b);
-                let time = w.time * ((n + cs) as f64 - t.frames).abs();
-                Some((w.distance * (aim - t.distance).abs() + time, n, aim))
-            })
-            .collect();
-        order.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let mut best: Option<(super::lattice::Found, f64)> = None;
-        for &(bound, n, aim) in order.iter().take(8) {
-            if best.as_ref().is_some_and(|b| bound >= b.1) {
-                break;
-            }
-            if let Some((found, _)) =
-                super::lattice::solve_exact_length(self, &ext, n as usize, aim, w.distance, &lo)
-            {
-                let total = found.measure.cost
-                    + w.distance * (found.measure.distance - t.distance).abs()
-                    + w.time * ((n + cs) as f64 - t.frames).abs();
-                if best.as_ref().is_none_or(|b| total < b.1) {
-                    best = Some((found, total));
-                }
-            }
-        }
-        let (found, cost) = best?;
-        Some((self.decompose(&found.arcs), cost))
+    /// The exact-length search ([`super::lattice::search`]) on this
+    /// segment alone; `None` when it finds nothing within its tolerance.
+    pub fn solve_lattice(
+        &self,
+        t: &Target,
+        heading: Option<&super::lattice::Heading>,
+        opts: &SearchOptions,
+    ) -> Option<(SegmentPath, super::lattice::Found)> {
+        let c = super::lattice::Chain::of(std::slice::from_ref(self))?;
+        let (found, _) = super::lattice::search(&c, t, heading, opts)?;
+        Some((self.decompose(&found.arcs), found))
     }
 
     /// A path of arcs as its loop-free walk plus the loops cut out of it
     /// (each where it starts and ends; equal consecutive loops counted as
     /// repetitions).
-    fn decompose(&self, arcs: &[u32]) -> SegmentPath {
+    pub fn decompose(&self, arcs: &[u32]) -> SegmentPath {
         let mut path = vec![self.from];
         for &a in arcs {
             self.arc_frames(a, &mut path);
@@ -927,6 +909,13 @@ impl Segment {
         }
     }
 
+    /// Adds the segment's nodes, arcs and cycles to `stats`.
+    pub fn count(&self, stats: &mut Stats) {
+        stats.nodes += self.frames.len();
+        stats.arcs += self.arcs.len();
+        stats.cycles += self.cycles.len();
+    }
+
     /// Walks enumerated.
     pub fn walk_count(&self) -> usize {
         self.walks.len()
@@ -943,11 +932,9 @@ impl Segment {
         stats: &mut Stats,
     ) -> Result<SegmentPath, SearchError> {
         let w = opts.weights;
-        stats.nodes += self.frames.len();
-        stats.arcs += self.arcs.len();
-        stats.cycles += self.cycles.len();
+        self.count(stats);
         if opts.method == Method::Lattice {
-            if let Some((p, _)) = self.solve_lattice(t, opts) {
+            if let Some((p, _)) = self.solve_lattice(t, None, opts) {
                 stats.exact_length += 1;
                 return Ok(p);
             }
