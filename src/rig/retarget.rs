@@ -105,6 +105,13 @@ fn is_torso(c: Canonical) -> bool {
     TORSO.contains(&c)
 }
 
+/// The feet turn by the clip's rotation since its reference, like the
+/// torso: a flat foot in the clip is the character's flat foot, whatever
+/// the angle each skeleton's ankle-to-toe bone makes with the sole.
+fn is_foot(c: Canonical) -> bool {
+    matches!(c, C::LAnkle | C::RAnkle)
+}
+
 /// Mean length of the two legs (hip to knee to ankle).
 pub fn leg_length(p: &Pose) -> f64 {
     let d = |a: C, b: C| p[a.index()].distance(p[b.index()]);
@@ -259,10 +266,27 @@ pub fn retarget(
     reference: &Reference,
     mocap: &[Pose],
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
-    let Some(first) = mocap.first() else {
+    if mocap.is_empty() {
         return Vec::new();
+    }
+    // The clip's ground made level (a capture volume's floor is often a
+    // degree or two off its vertical axis; CMU subject 02's rises 8 cm
+    // over a 4 m walk), so that one floor height holds for every frame.
+    let tilt = ground_tilt(mocap);
+    let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
+    let mocap = &levelled[..];
+    let first = &mocap[0];
+    let level_ref;
+    let r = match reference.source {
+        ReferenceSource::Frame(i) if i < mocap.len() => {
+            level_ref = mocap[i];
+            &level_ref
+        }
+        _ => &reference.pose,
     };
-    let r = &reference.pose;
+    // The feet measured from how the clip holds them flat on its floor.
+    let stance_ref = flat_feet(r, mocap);
+    let r = &stance_ref;
     let s = leg_length(character) / leg_length(r).max(1e-12);
     let face = heading_between(character, r);
     let root = C::Pelvis.index();
@@ -301,31 +325,204 @@ pub fn retarget(
                 }
                 g[j] = match c {
                     C::Neck | C::Head => (neck_g * face).normalize(),
-                    _ if is_torso(c) => (a[j] * face).normalize(),
+                    _ if is_torso(c) || is_foot(c) => (a[j] * face).normalize(),
                     _ => limb_rotation(character, m, &g, c),
                 };
             }
             (t, g)
         })
         .collect();
-    // Feet on the floor: the character's lowest foot joint stands where the
-    // clip's does (the same low percentile over frames), whatever the two
-    // skeletons' pelvis-to-hip offsets.
-    let mut feet: Vec<f64> = out
+    // Feet on the floor: in every frame where the clip stands on its floor
+    // (its lowest ankle or toe within 3 cm of it), the character's lowest
+    // sole point (a toe joint, or a heel under an ankle) stands on the
+    // character's; between such frames (a run's flight) the correction is
+    // interpolated. Whatever the two skeletons' hip offsets and foot
+    // lengths (a longer foot dips its toe further when the heel lifts).
+    let sole_rest = sole_height(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
+    let fix: Vec<Option<f64>> = out
         .iter()
-        .map(|(t, _)| foot_height(t))
-        .filter(|h| h.is_finite())
+        .zip(mocap)
+        .map(|((t, g), m)| {
+            let h = sole_height(character, t, g);
+            (foot_height(m) <= clip_floor + 0.03 && h.is_finite()).then(|| sole_rest - h)
+        })
         .collect();
-    feet.sort_by(f64::total_cmp);
-    let lift = feet
-        .get(feet.len() / 20)
-        .map_or(0.0, |low| char_floor - low);
-    for (t, _) in &mut out {
+    let lift = interpolate_gaps(&fix);
+    for ((t, _), d) in out.iter_mut().zip(lift) {
         for p in t.iter_mut() {
-            p.y += lift;
+            p.y += d;
         }
     }
     out
+}
+
+/// The lowest sole point of the character posed as `t` with global
+/// rotations `g`: its toe joints; under each ankle a heel point at the
+/// height of the toe in the rest pose `character`; and a toe tip a quarter of the
+/// foot's horizontal length beyond the toe joint at its height (a foot
+/// pivoting on its toes dips the tips); both carried by the ankle.
+fn sole_height(character: &Pose, t: &Pose, g: &[DQuat; Canonical::COUNT]) -> f64 {
+    [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
+        .iter()
+        .flat_map(|&(a, k)| {
+            let (a, k) = (a.index(), k.index());
+            let heel = DVec3::new(
+                0.0,
+                character[k].y.min(character[a].y) - character[a].y,
+                0.0,
+            );
+            let f = character[k] - character[a];
+            let tip = DVec3::new(0.25 * f.x, 0.0, 0.25 * f.z);
+            [t[k].y, (t[a] + g[a] * heel).y, (t[k] + g[a] * tip).y]
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Fills the `None`s of `v` linearly between their known neighbours (the
+/// nearest known value past either end; all zeros when none is known).
+fn interpolate_gaps(v: &[Option<f64>]) -> Vec<f64> {
+    let known: Vec<(usize, f64)> = v
+        .iter()
+        .enumerate()
+        .filter_map(|(i, x)| x.map(|x| (i, x)))
+        .collect();
+    let (Some(&first), Some(&last)) = (known.first(), known.last()) else {
+        return vec![0.0; v.len()];
+    };
+    let mut out = Vec::with_capacity(v.len());
+    let mut k = 0;
+    for i in 0..v.len() {
+        while k + 1 < known.len() && known[k + 1].0 <= i {
+            k += 1;
+        }
+        out.push(if i <= first.0 {
+            first.1
+        } else if i >= last.0 {
+            last.1
+        } else {
+            let ((i0, a), (i1, b)) = (known[k], known[k + 1]);
+            if i1 == i0 {
+                a
+            } else {
+                a + (b - a) * (i - i0) as f64 / (i1 - i0) as f64
+            }
+        });
+    }
+    out
+}
+
+/// `r` with each foot bone (ankle → toe) turned about its lateral axis to
+/// the elevation the clip's foot has when flat on the floor: the median
+/// over the frames where both the foot's ankle and toe are within 2 cm of
+/// their lowest (5th percentile) heights. A rest skeleton's foot bone need
+/// not point as the standing foot's does (CMU's ASF rest skeleton points it
+/// 15° further down than the walks' stance, and copying that left the
+/// character's heels 2 cm up); `r` unchanged for a foot never flat.
+fn flat_feet(r: &Pose, mocap: &[Pose]) -> Pose {
+    let mut out = *r;
+    let low = |c: C| {
+        let mut h: Vec<f64> = mocap
+            .iter()
+            .map(|p| p[c.index()].y)
+            .filter(|y| y.is_finite())
+            .collect();
+        h.sort_by(f64::total_cmp);
+        h.get(h.len() / 20).copied()
+    };
+    let elevation = |f: DVec3| (f.y / f.length()).clamp(-1.0, 1.0).asin();
+    for (ankle, toe) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)] {
+        let (a, t) = (ankle.index(), toe.index());
+        let (Some(la), Some(lt)) = (low(ankle), low(toe)) else {
+            continue;
+        };
+        let mut e: Vec<f64> = mocap
+            .iter()
+            .filter(|p| p[a].y <= la + 0.02 && p[t].y <= lt + 0.02)
+            .map(|p| elevation(p[t] - p[a]))
+            .filter(|e| e.is_finite())
+            .collect();
+        if e.len() < 5 {
+            continue;
+        }
+        e.sort_by(f64::total_cmp);
+        let f = r[t] - r[a];
+        let axis = f.cross(DVec3::Y).normalize_or_zero();
+        if axis == DVec3::ZERO || !f.is_finite() {
+            continue;
+        }
+        let turn = DQuat::from_axis_angle(axis, e[e.len() / 2] - elevation(f));
+        out[t] = r[a] + turn * f;
+    }
+    out
+}
+
+/// The rotation that makes a clip's ground level: a plane
+/// `y = a + b·x + c·z` fitted to the lowest ankle or toe joint of every
+/// frame (least squares, then three times on the lower half of the
+/// residuals, so that lifted feet and jumps do not count), its slope
+/// shrunk by a ridge of (0.22 m)² so that a clip standing in place has
+/// none, turned onto the horizontal. Identity for a clip of fewer than 10
+/// frames or a slope past 5° (a ramp or stairs, not a tilted floor).
+pub fn ground_tilt(mocap: &[Pose]) -> DQuat {
+    let feet = [C::LAnkle, C::LToe, C::RAnkle, C::RToe];
+    let samples: Vec<DVec3> = mocap
+        .iter()
+        .filter_map(|p| {
+            feet.iter()
+                .map(|c| p[c.index()])
+                .filter(|q| q.is_finite())
+                .min_by(|a, b| a.y.total_cmp(&b.y))
+        })
+        .collect();
+    if samples.len() < 10 {
+        return DQuat::IDENTITY;
+    }
+    const RIDGE: f64 = 0.05;
+    let fit = |keep: &[DVec3]| -> Option<(f64, f64, f64, DVec3)> {
+        let n = keep.len() as f64;
+        let mean = keep.iter().copied().sum::<DVec3>() / n;
+        let (mut sxx, mut sxz, mut szz, mut sxy, mut szy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for q in keep {
+            let d = *q - mean;
+            sxx += d.x * d.x;
+            sxz += d.x * d.z;
+            szz += d.z * d.z;
+            sxy += d.x * d.y;
+            szy += d.z * d.y;
+        }
+        let (sxx, szz) = (sxx + n * RIDGE, szz + n * RIDGE);
+        let det = sxx * szz - sxz * sxz;
+        if !(det.is_finite() && det > 0.0) {
+            return None;
+        }
+        let b = (sxy * szz - szy * sxz) / det;
+        let c = (szy * sxx - sxy * sxz) / det;
+        Some((mean.y, b, c, mean))
+    };
+    let Some(mut plane) = fit(&samples) else {
+        return DQuat::IDENTITY;
+    };
+    for _ in 0..3 {
+        let (a, b, c, m) = plane;
+        let res = |q: &DVec3| q.y - (a + b * (q.x - m.x) + c * (q.z - m.z));
+        let mut r: Vec<f64> = samples.iter().map(res).collect();
+        r.sort_by(f64::total_cmp);
+        let cut = r[r.len() / 2];
+        let low: Vec<DVec3> = samples.iter().copied().filter(|q| res(q) <= cut).collect();
+        if low.len() < 5 {
+            break;
+        }
+        match fit(&low) {
+            Some(p) => plane = p,
+            None => break,
+        }
+    }
+    let (_, b, c, _) = plane;
+    let normal = DVec3::new(-b, 1.0, -c).normalize();
+    if normal.angle_between(DVec3::Y) > 5f64.to_radians() || !normal.is_finite() {
+        return DQuat::IDENTITY;
+    }
+    DQuat::from_rotation_arc(normal, DVec3::Y)
 }
 
 /// The clip's typical carriage of the neck: the mean (sign-aligned,
