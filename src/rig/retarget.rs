@@ -301,7 +301,7 @@ pub fn retarget(
     let char_floor = foot_height(character);
     let rotations: Vec<[DQuat; Canonical::COUNT]> =
         mocap.par_iter().map(|m| pose_rotations(r, m)).collect();
-    let carriage_inv = neck_carriage(&rotations).inverse();
+    let carriage_inv = neck_carriage(&upright(mocap, &rotations)).inverse();
     let (chest, neck) = (C::Chest.index(), C::Neck.index());
     let mut out: Vec<(Pose, [DQuat; Canonical::COUNT])> = mocap
         .par_iter()
@@ -523,6 +523,61 @@ pub fn ground_tilt(mocap: &[Pose]) -> DQuat {
         return DQuat::IDENTITY;
     }
     DQuat::from_rotation_arc(normal, DVec3::Y)
+}
+
+/// The clip's own head-to-trunk angle per frame (degrees, signed): the
+/// angle `∠(neck→head, pelvis→neck)` of each pose minus its value in the
+/// clip's neutral (the reference pose with the neck turned to the clip's
+/// typical carriage relative to the chest, which the retargeting maps onto
+/// the character's rest). The skeleton analogue of the mesh measure
+/// [`crate::eval::HeadTorso`]: what a result's head should do relative to
+/// the character's rest when it follows the clip's head.
+pub fn clip_head_trunk_deg(reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+    // The neck → head bone in a frame attached to the trunk (up pelvis →
+    // neck, lateral from the hips and shoulders).
+    let local = |p: &Pose| {
+        let y = (p[C::Neck.index()] - p[C::Pelvis.index()]).normalize_or_zero();
+        let l = (p[C::LHip.index()] - p[C::RHip.index()])
+            + (p[C::LShoulder.index()] - p[C::RShoulder.index()]);
+        let x = (l - y * l.dot(y)).normalize_or_zero();
+        let z = x.cross(y);
+        let h = p[C::Head.index()] - p[C::Neck.index()];
+        DVec3::new(h.dot(x), h.dot(y), h.dot(z))
+    };
+    let r = &reference.pose;
+    let rotations: Vec<[DQuat; Canonical::COUNT]> =
+        mocap.iter().map(|m| pose_rotations(r, m)).collect();
+    let mut neutral = *r;
+    let (n, h) = (C::Neck.index(), C::Head.index());
+    neutral[h] = r[n] + neck_carriage(&upright(mocap, &rotations)) * (r[h] - r[n]);
+    let zero = local(&neutral);
+    mocap
+        .iter()
+        .map(|p| angle(local(p), zero).to_degrees())
+        .collect()
+}
+
+/// The rotations of the clip's upright frames: those whose trunk is within
+/// 10° of the clip's most upright. The neck's carriage is read on them: a
+/// clip that spends most of its time bent over, head down (CMU 131_02),
+/// would otherwise make head-down its neutral, and its upright frames
+/// would throw the character's head back.
+fn upright(
+    mocap: &[Pose],
+    rotations: &[[DQuat; Canonical::COUNT]],
+) -> Vec<[DQuat; Canonical::COUNT]> {
+    let tilt: Vec<f64> = mocap.iter().map(trunk_tilt).collect();
+    let least = tilt
+        .iter()
+        .copied()
+        .filter(|t| t.is_finite())
+        .fold(f64::INFINITY, f64::min);
+    rotations
+        .iter()
+        .zip(&tilt)
+        .filter(|&(_, &t)| t <= least + 10f64.to_radians())
+        .map(|(a, _)| *a)
+        .collect()
 }
 
 /// The clip's typical carriage of the neck: the mean (sign-aligned,
