@@ -472,3 +472,51 @@ impl Plausibility {
         s
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn summary(p95: f64) -> Summary {
+        Summary {
+            median: p95 / 2.0,
+            p95,
+            max: p95,
+        }
+    }
+
+    #[test]
+    fn a_clip_whose_head_moves_more_than_the_database_is_held_to_its_own_range() {
+        let reference = Reference {
+            source: "db".into(),
+            frames: 10,
+            head_torso_deg: summary(7.7),
+            foot_sliding: Sliding::default(),
+            ground: Ground::default(),
+            knee_hyperextension_deg: Summary::default(),
+        };
+        let p = Plausibility {
+            frames: 10,
+            head_torso_deg: summary(20.0),
+            head_torso_rest_deg: 0.0,
+            foot_sliding: Sliding::default(),
+            ground: Ground::default(),
+            floor_m: 0.0,
+            knee_hyperextension_deg: Summary::default(),
+            turned_over: None,
+            reference: Some(reference),
+            clip_head_torso_deg: None,
+            warnings: Vec::new(),
+            head_torso_per_frame: Vec::new(),
+        };
+        let l = Limits::default();
+        let head = |p: &Plausibility| p.warnings.iter().any(|w| w.contains("head-to-torso"));
+        // Against the database alone: 20° > 7.7° + 3°.
+        assert!(head(&p.clone().with_clip_head(&[0.0; 5], &l)));
+        // A clip whose own head moves 18° (p95): within its range + 3°.
+        let own = [18.0; 20];
+        assert!(!head(&p.clone().with_clip_head(&own, &l)));
+        // ... but not past it.
+        assert!(head(&p.with_clip_head(&[12.0; 20], &l)));
+    }
+}

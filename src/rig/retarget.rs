@@ -809,4 +809,145 @@ mod tests {
             .fold(0.0, f64::max);
         assert!(worst < 1e-9, "T and A versions {worst} m apart");
     }
+
+    /// The joints above the pelvis (spine, chest, neck, head, arms).
+    fn upper(c: C) -> bool {
+        !matches!(
+            c,
+            C::Pelvis
+                | C::LHip
+                | C::LKnee
+                | C::LAnkle
+                | C::LToe
+                | C::RHip
+                | C::RKnee
+                | C::RAnkle
+                | C::RToe
+        )
+    }
+
+    /// `p` bowed forward by `bow` at the pelvis and the head bent down a
+    /// further `nod` at the neck (radians).
+    fn bowed(p: &Pose, bow: f64, nod: f64) -> Pose {
+        let mut out = *p;
+        let (pv, n, h) = (C::Pelvis.index(), C::Neck.index(), C::Head.index());
+        let q = DQuat::from_rotation_x(bow);
+        for c in Canonical::ALL {
+            if upper(c) {
+                out[c.index()] = p[pv] + q * (p[c.index()] - p[pv]);
+            }
+        }
+        out[h] = out[n] + DQuat::from_rotation_x(nod) * (out[h] - out[n]);
+        out
+    }
+
+    #[test]
+    fn the_neck_carriage_is_read_on_the_upright_frames() {
+        // Three upright frames and seven bowed 40° with the head down a
+        // further 30° (CMU 131_02): the upright frames carry the head as
+        // the character does, not thrown back by the bowed frames' carriage.
+        let ch = standing();
+        let up = standing();
+        let down = bowed(&up, 0.7, 0.5);
+        let mut clip = vec![up; 3];
+        clip.extend(std::iter::repeat_n(down, 7));
+        let rf = choose_reference(Some(&up), &clip).unwrap();
+        let out = retarget(&ch, &rf, &clip);
+        for (p, _) in &out[..3] {
+            assert!(
+                (head_tilt(p) - head_tilt(&ch)).abs() < 1e-9,
+                "{}",
+                head_tilt(p).to_degrees()
+            );
+        }
+        // The clip's own head-to-trunk angle: 0 upright, the nod when bowed.
+        let own = clip_head_trunk_deg(&rf, &clip);
+        assert!(
+            own[0].abs() < 1e-9 && (own[5] - 0.5f64.to_degrees()).abs() < 1e-6,
+            "{own:?}"
+        );
+    }
+
+    #[test]
+    fn a_tilted_capture_floor_is_levelled() {
+        use crate::synth::{Gait, gait_clip};
+        let clip = gait_clip(Gait::Walk, 3.0, 30.0);
+        let map = crate::rig::detect(&clip.point_names()).map;
+        let cp = clip_poses(&clip, &map).unwrap();
+        // The capture's floor rises 1.5° along every axis through the origin.
+        let q = DQuat::from_rotation_x(-1.5f64.to_radians())
+            * DQuat::from_rotation_z(1.5f64.to_radians());
+        let tilted: Vec<Pose> = cp.poses.iter().map(|p| p.map(|x| q * x)).collect();
+        let rise = tilted.last().unwrap()[0].y - tilted[0][0].y;
+        assert!(rise.abs() > 0.05, "the test clip rises {rise} m");
+        let ch = standing();
+        let flat = retarget(&ch, &cp.reference, &cp.poses);
+        let levelled = retarget(&ch, &cp.reference, &tilted);
+        for ((a, _), (b, _)) in flat.iter().zip(&levelled) {
+            let d = (a[0].y - b[0].y).abs();
+            assert!(d < 0.01, "pelvis heights {} and {} m", a[0].y, b[0].y);
+        }
+        // Feet on the character's floor: the lowest sole point of every
+        // frame within 1 cm of the rest's (the clip walks: always a foot down).
+        let rest = sole_height(&ch, &ch, &[DQuat::IDENTITY; Canonical::COUNT]);
+        let mut lows: Vec<f64> = cp.poses.iter().map(foot_height).collect();
+        lows.sort_by(f64::total_cmp);
+        let floor = lows[lows.len() / 20];
+        let mut standing_frames = 0;
+        for ((p, g), m) in levelled.iter().zip(&cp.poses) {
+            if foot_height(m) <= floor + 0.03 {
+                standing_frames += 1;
+                assert!((sole_height(&ch, p, g) - rest).abs() < 0.01);
+            }
+        }
+        assert!(standing_frames * 2 > levelled.len());
+    }
+
+    #[test]
+    fn a_bent_rest_skeleton_falls_back_to_the_most_neutral_frame() {
+        use crate::skeleton::pose_clip;
+        use crate::synth::{Gait, gait_clip};
+        let clip = gait_clip(Gait::Walk, 2.0, 30.0);
+        let poses = crate::rig::detect(&clip.point_names())
+            .map
+            .poses(&clip)
+            .unwrap();
+        // The rest skeleton bowed 50° at the pelvis with the knees bent:
+        // not a T- or A-pose.
+        let mut shape = bowed(&standing(), 50f64.to_radians(), 0.0);
+        for (k, a, t) in [
+            (C::LKnee, C::LAnkle, C::LToe),
+            (C::RKnee, C::RAnkle, C::RToe),
+        ] {
+            let (k, a, t) = (k.index(), a.index(), t.index());
+            let bend = DQuat::from_rotation_x(-1.0);
+            let (da, dt) = (shape[a] - shape[k], shape[t] - shape[a]);
+            shape[a] = shape[k] + bend * da;
+            shape[t] = shape[a] + dt;
+        }
+        let mut rest = shape;
+        for c in Canonical::ALL {
+            let Some(p) = c.parent() else { continue };
+            let (j, q) = (c.index(), p.index());
+            let len = poses[0][j].distance(poses[0][q]);
+            rest[j] = rest[q] + (shape[j] - shape[q]).normalize() * len;
+        }
+        let version = pose_clip(&rest, &poses, 30.0).unwrap();
+        let map = crate::rig::detect(&version.point_names()).map;
+        let cp = clip_poses(&version, &map).unwrap();
+        let ReferenceSource::Frame(i) = cp.reference.source else {
+            panic!("a bent rest skeleton was taken as the reference");
+        };
+        // The most neutral frame is as upright as the walk gets, and in it
+        // the character stands as at rest (trunk vertical).
+        let least = poses.iter().map(trunk_tilt).fold(f64::INFINITY, f64::min);
+        assert!(trunk_tilt(&cp.poses[i]) < least + 5f64.to_radians());
+        let out = retarget(&standing(), &cp.reference, &cp.poses);
+        assert!(
+            trunk_tilt(&out[i].0) < 1e-6,
+            "{}",
+            trunk_tilt(&out[i].0).to_degrees()
+        );
+        assert!((head_tilt(&out[i].0) - head_tilt(&standing())).abs() < 0.1);
+    }
 }
