@@ -31,12 +31,20 @@
 //!   carries the character's rest bone, so twist follows the parent), so
 //!   hands and feet reach where the clip's do, scaled; T- versus A-pose arms
 //!   make no difference.
+//! - **Feet** (ankles) turn by the clip's rotation since the reference,
+//!   as the torso does, with the reference's foot bones set to the
+//!   elevation the clip's feet have when flat on its floor: a flat foot
+//!   gives the character's flat foot.
 //! - **Root**: horizontal travel from the clip's first frame scaled by the
 //!   ratio of leg lengths (character / reference); height above the floor
-//!   scaled the same way, then the whole sequence lifted so that the
-//!   character's lowest ankle or toe stands where the clip's stands (the
-//!   5th percentile over frames of each, the character's floor being its
-//!   rest frame's lowest foot joint).
+//!   scaled the same way. The clip's ground is first levelled
+//!   ([`ground_tilt`]); then in every frame where the clip stands on its
+//!   floor the character's lowest sole point (toe joint, heel, toe tip)
+//!   is put on the character's floor (its rest frame's), the correction
+//!   interpolated across frames where the clip does not (a run's flight).
+//! - The neck's carriage is read on the clip's upright frames (trunk
+//!   within 10° of its most upright), so a clip mostly bent over does not
+//!   make head-down its neutral.
 //!
 //! The clip's reference ([`choose_reference`]) is its rest skeleton when
 //! that stands upright (a T- or A-pose: trunk within 20° of vertical, legs
@@ -344,7 +352,7 @@ pub fn retarget(
         .zip(mocap)
         .map(|((t, g), m)| {
             let h = sole_height(character, t, g);
-            (foot_height(m) <= clip_floor + 0.03 && h.is_finite()).then(|| sole_rest - h)
+            (foot_height(m) <= clip_floor + 0.03 && h.is_finite()).then_some(sole_rest - h)
         })
         .collect();
     let lift = interpolate_gaps(&fix);
