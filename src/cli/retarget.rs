@@ -116,10 +116,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let fps = ch.manifest().fps;
     let run = job.run(&a.mocap)?;
     let (out, convention) = (&run.output, &run.mocap.convention);
-    let plaus = job.plausibility(
-        &out.positions,
-        run.deformed().then_some(out.report.turned_over),
-    );
+    let plaus = job.plausibility_of(&run);
     if let Some(path) = &a.run.preview.preview {
         let facing = surfmotion::mocap::units::y_up(ch.rig().facing, ch.z_up());
         super::render::write_preview(

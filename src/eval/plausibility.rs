@@ -99,6 +99,12 @@ pub struct Plausibility {
     pub turned_over: Option<TurnedOver>,
     /// The same checks on the character's own frames.
     pub reference: Option<Reference>,
+    /// |head-to-trunk angle| of the driving clip on its own skeleton,
+    /// relative to its neutral carriage (degrees;
+    /// [`crate::rig::retarget::clip_head_trunk_deg`]), when known. A clip
+    /// whose head moves further than the database's does (a bow, a kick)
+    /// is held to its own range: the head line is the larger p95 + margin.
+    pub clip_head_torso_deg: Option<Summary>,
     /// Where the result leaves the reference (or the absolute limits).
     pub warnings: Vec<String>,
     /// Signed head-to-torso angle per frame (degrees).
@@ -302,6 +308,7 @@ impl Checker {
             knee_hyperextension_deg: Summary::of(&s.knee),
             turned_over,
             reference: self.reference.clone(),
+            clip_head_torso_deg: None,
             warnings: Vec::new(),
             head_torso_per_frame: s.head,
         };
@@ -317,13 +324,27 @@ impl Checker {
 pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
     let mut w = Vec::new();
     let h = p.head_torso_deg.p95;
+    let clip = p.clip_head_torso_deg.map(|c| c.p95);
     match &p.reference {
         Some(r) => {
-            if h > r.head_torso_deg.p95 + l.head_margin_deg {
-                w.push(format!(
-                    "head-to-torso angle p95 {h:.1}° exceeds the captured p95 {:.1}° + {:.0}° (median {:.1}°, max {:.1}°)",
-                    r.head_torso_deg.p95, l.head_margin_deg, p.head_torso_deg.median, p.head_torso_deg.max
-                ));
+            let captured = r.head_torso_deg.p95;
+            match clip {
+                Some(c) if c > captured => {
+                    if h > c + l.head_margin_deg {
+                        w.push(format!(
+                            "head-to-torso angle p95 {h:.1}° exceeds the clip's own p95 {c:.1}° + {:.0}° (median {:.1}°, max {:.1}°)",
+                            l.head_margin_deg, p.head_torso_deg.median, p.head_torso_deg.max
+                        ));
+                    }
+                }
+                _ => {
+                    if h > captured + l.head_margin_deg {
+                        w.push(format!(
+                            "head-to-torso angle p95 {h:.1}° exceeds the captured p95 {captured:.1}° + {:.0}° (median {:.1}°, max {:.1}°)",
+                            l.head_margin_deg, p.head_torso_deg.median, p.head_torso_deg.max
+                        ));
+                    }
+                }
             }
             let pen = p.ground.penetration_cm.max;
             if pen > r.ground.penetration_cm.max + l.penetration_margin_cm {
@@ -362,10 +383,12 @@ pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
             }
         }
         None => {
-            if h > l.head_deg {
+            let line = clip.map_or(l.head_deg, |c| {
+                c.max(l.head_deg - l.head_margin_deg) + l.head_margin_deg
+            });
+            if h > line {
                 w.push(format!(
-                    "head-to-torso angle p95 {h:.1}° from rest exceeds {:.0}°",
-                    l.head_deg
+                    "head-to-torso angle p95 {h:.1}° from rest exceeds {line:.0}°"
                 ));
             }
             if p.ground.penetration_cm.max > l.penetration_margin_cm {
@@ -391,6 +414,16 @@ pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
 }
 
 impl Plausibility {
+    /// Sets the driving clip's own head-to-trunk angles (`series`, per
+    /// frame, degrees; [`crate::rig::retarget::clip_head_trunk_deg`]) and
+    /// recomputes the warnings with `limits`: the head is then held to the
+    /// larger of the captured range and the clip's own.
+    pub fn with_clip_head(mut self, series: &[f64], limits: &Limits) -> Self {
+        self.clip_head_torso_deg = Some(HeadTorso::summary(series));
+        self.warnings = warnings(&self, limits);
+        self
+    }
+
     /// A short text block (a few lines) for the command line.
     pub fn text(&self) -> String {
         let r = self.reference.as_ref();
@@ -409,6 +442,12 @@ impl Plausibility {
                 r.head_torso_deg.median, r.head_torso_deg.p95
             ))
         );
+        if let Some(c) = self.clip_head_torso_deg {
+            s += &format!(
+                "  the clip's own head-to-trunk: median {:.1}°, p95 {:.1}°\n",
+                c.median, c.p95
+            );
+        }
         s += &format!(
             "  feet: {:.2} cm sliding per contact frame ({} contact foot-frames), {:.2} cm/frame while touching{}\n",
             self.foot_sliding.mean_cm_per_frame,
@@ -435,5 +474,53 @@ impl Plausibility {
             s += &format!("  warning: {w}\n");
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn summary(p95: f64) -> Summary {
+        Summary {
+            median: p95 / 2.0,
+            p95,
+            max: p95,
+        }
+    }
+
+    #[test]
+    fn a_clip_whose_head_moves_more_than_the_database_is_held_to_its_own_range() {
+        let reference = Reference {
+            source: "db".into(),
+            frames: 10,
+            head_torso_deg: summary(7.7),
+            foot_sliding: Sliding::default(),
+            ground: Ground::default(),
+            knee_hyperextension_deg: Summary::default(),
+        };
+        let p = Plausibility {
+            frames: 10,
+            head_torso_deg: summary(20.0),
+            head_torso_rest_deg: 0.0,
+            foot_sliding: Sliding::default(),
+            ground: Ground::default(),
+            floor_m: 0.0,
+            knee_hyperextension_deg: Summary::default(),
+            turned_over: None,
+            reference: Some(reference),
+            clip_head_torso_deg: None,
+            warnings: Vec::new(),
+            head_torso_per_frame: Vec::new(),
+        };
+        let l = Limits::default();
+        let head = |p: &Plausibility| p.warnings.iter().any(|w| w.contains("head-to-torso"));
+        // Against the database alone: 20° > 7.7° + 3°.
+        assert!(head(&p.clone().with_clip_head(&[0.0; 5], &l)));
+        // A clip whose own head moves 18° (p95): within its range + 3°.
+        let own = [18.0; 20];
+        assert!(!head(&p.clone().with_clip_head(&own, &l)));
+        // ... but not past it.
+        assert!(head(&p.with_clip_head(&[12.0; 20], &l)));
     }
 }

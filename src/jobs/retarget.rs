@@ -14,6 +14,7 @@ use crate::mesh::io::{SaveOptions, save_sequence_with};
 use crate::retarget::query::{MocapPoses, load_mocap, to_character};
 use crate::retarget::{Output, Report, RetargetOptions, Timings, synthesise};
 use crate::rig::LoadOptions;
+use crate::rig::retarget::clip_head_trunk_deg;
 use crate::skeleton::Pose;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -94,7 +95,20 @@ impl RetargetJob {
         positions: &[[f64; 3]],
         turned_over: Option<TurnedOver>,
     ) -> Option<(Plausibility, f64)> {
-        plausibility(&self.character, positions, turned_over)
+        plausibility(&self.character, positions, turned_over, None)
+    }
+
+    /// [`RetargetJob::plausibility`] of a run's output, with the head held
+    /// to the larger of the database's range and the clip's own
+    /// ([`Plausibility::with_clip_head`]).
+    pub fn plausibility_of(&self, run: &RetargetRun) -> Option<(Plausibility, f64)> {
+        let out = &run.output;
+        plausibility(
+            &self.character,
+            &out.positions,
+            run.deformed().then_some(out.report.turned_over),
+            Some(&run.mocap),
+        )
     }
 
     /// Writes `positions` (the character's vertices, frame-major) to `out`
@@ -115,15 +129,22 @@ impl RetargetJob {
 }
 
 /// The plausibility of `positions` made for `ch` against the database's
-/// own frames, and the floor; `None` (with a warning) when the rig cannot
-/// support the checks.
+/// own frames (and, given the driving `clip`, its own head range), and the
+/// floor; `None` (with a warning) when the rig cannot support the checks.
 pub fn plausibility(
     ch: &Character,
     positions: &[[f64; 3]],
     turned_over: Option<TurnedOver>,
+    clip: Option<&MocapPoses>,
 ) -> Option<(Plausibility, f64)> {
-    let checked = Checker::for_character(ch, PlausibilityOptions::default())
-        .and_then(|c| Ok((c.measure(positions, ch.n(), turned_over)?, c.floor)));
+    let opts = PlausibilityOptions::default();
+    let checked = Checker::for_character(ch, opts).and_then(|c| {
+        let mut p = c.measure(positions, ch.n(), turned_over)?;
+        if let Some(m) = clip {
+            p = p.with_clip_head(&clip_head_trunk_deg(&m.reference, &m.poses), &opts.limits);
+        }
+        Ok((p, c.floor))
+    });
     match checked {
         Ok(p) => Some(p),
         Err(e) => {
@@ -325,7 +346,7 @@ pub fn evaluate_result(
         .map(|f| ch.rig().skeleton(res.frame(f)))
         .collect();
     let e = velocity_error(&query, &out);
-    let plaus = plausibility(ch, res.all_positions(), None).map(|p| p.0);
+    let plaus = plausibility(ch, res.all_positions(), None, Some(&clip)).map(|p| p.0);
     Ok(EvalReport {
         mocap: mocap.to_path_buf(),
         result: result.to_path_buf(),

@@ -234,7 +234,11 @@ pub fn write_synthetic_database(
                 fps,
                 Default::default(),
             )
-            .and_then(|c| c.measure(seq.all_positions(), rest.vertex_count(), None))
+            .and_then(|c| {
+                let clip = crate::rig::retarget::clip_head_trunk_deg(&reference, &poses);
+                Ok(c.measure(seq.all_positions(), rest.vertex_count(), None)?
+                    .with_clip_head(&clip, &c.opts.limits))
+            })
             .map_err(|e| tracing::warn!("{name}: plausibility not measured: {e}"))
             .ok()
         } else {

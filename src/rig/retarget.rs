@@ -31,12 +31,20 @@
 //!   carries the character's rest bone, so twist follows the parent), so
 //!   hands and feet reach where the clip's do, scaled; T- versus A-pose arms
 //!   make no difference.
+//! - **Feet** (ankles) turn by the clip's rotation since the reference,
+//!   as the torso does, with the reference's foot bones set to the
+//!   elevation the clip's feet have when flat on its floor: a flat foot
+//!   gives the character's flat foot.
 //! - **Root**: horizontal travel from the clip's first frame scaled by the
 //!   ratio of leg lengths (character / reference); height above the floor
-//!   scaled the same way, then the whole sequence lifted so that the
-//!   character's lowest ankle or toe stands where the clip's stands (the
-//!   5th percentile over frames of each, the character's floor being its
-//!   rest frame's lowest foot joint).
+//!   scaled the same way. The clip's ground is first levelled
+//!   ([`ground_tilt`]); then in every frame where the clip stands on its
+//!   floor the character's lowest sole point (toe joint, heel, toe tip)
+//!   is put on the character's floor (its rest frame's), the correction
+//!   interpolated across frames where the clip does not (a run's flight).
+//! - The neck's carriage is read on the clip's upright frames (trunk
+//!   within 10° of its most upright), so a clip mostly bent over does not
+//!   make head-down its neutral.
 //!
 //! The clip's reference ([`choose_reference`]) is its rest skeleton when
 //! that stands upright (a T- or A-pose: trunk within 20° of vertical, legs
@@ -103,6 +111,13 @@ const TORSO: [Canonical; 5] = [C::Pelvis, C::Spine, C::Chest, C::Neck, C::Head];
 
 fn is_torso(c: Canonical) -> bool {
     TORSO.contains(&c)
+}
+
+/// The feet turn by the clip's rotation since its reference, like the
+/// torso: a flat foot in the clip is the character's flat foot, whatever
+/// the angle each skeleton's ankle-to-toe bone makes with the sole.
+fn is_foot(c: Canonical) -> bool {
+    matches!(c, C::LAnkle | C::RAnkle)
 }
 
 /// Mean length of the two legs (hip to knee to ankle).
@@ -259,10 +274,27 @@ pub fn retarget(
     reference: &Reference,
     mocap: &[Pose],
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
-    let Some(first) = mocap.first() else {
+    if mocap.is_empty() {
         return Vec::new();
+    }
+    // The clip's ground made level (a capture volume's floor is often a
+    // degree or two off its vertical axis; CMU subject 02's rises 8 cm
+    // over a 4 m walk), so that one floor height holds for every frame.
+    let tilt = ground_tilt(mocap);
+    let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
+    let mocap = &levelled[..];
+    let first = &mocap[0];
+    let level_ref;
+    let r = match reference.source {
+        ReferenceSource::Frame(i) if i < mocap.len() => {
+            level_ref = mocap[i];
+            &level_ref
+        }
+        _ => &reference.pose,
     };
-    let r = &reference.pose;
+    // The feet measured from how the clip holds them flat on its floor.
+    let stance_ref = flat_feet(r, mocap);
+    let r = &stance_ref;
     let s = leg_length(character) / leg_length(r).max(1e-12);
     let face = heading_between(character, r);
     let root = C::Pelvis.index();
@@ -277,7 +309,7 @@ pub fn retarget(
     let char_floor = foot_height(character);
     let rotations: Vec<[DQuat; Canonical::COUNT]> =
         mocap.par_iter().map(|m| pose_rotations(r, m)).collect();
-    let carriage_inv = neck_carriage(&rotations).inverse();
+    let carriage_inv = neck_carriage(&upright(mocap, &rotations)).inverse();
     let (chest, neck) = (C::Chest.index(), C::Neck.index());
     let mut out: Vec<(Pose, [DQuat; Canonical::COUNT])> = mocap
         .par_iter()
@@ -301,31 +333,259 @@ pub fn retarget(
                 }
                 g[j] = match c {
                     C::Neck | C::Head => (neck_g * face).normalize(),
-                    _ if is_torso(c) => (a[j] * face).normalize(),
+                    _ if is_torso(c) || is_foot(c) => (a[j] * face).normalize(),
                     _ => limb_rotation(character, m, &g, c),
                 };
             }
             (t, g)
         })
         .collect();
-    // Feet on the floor: the character's lowest foot joint stands where the
-    // clip's does (the same low percentile over frames), whatever the two
-    // skeletons' pelvis-to-hip offsets.
-    let mut feet: Vec<f64> = out
+    // Feet on the floor: in every frame where the clip stands on its floor
+    // (its lowest ankle or toe within 3 cm of it), the character's lowest
+    // sole point (a toe joint, or a heel under an ankle) stands on the
+    // character's; between such frames (a run's flight) the correction is
+    // interpolated. Whatever the two skeletons' hip offsets and foot
+    // lengths (a longer foot dips its toe further when the heel lifts).
+    let sole_rest = sole_height(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
+    let fix: Vec<Option<f64>> = out
         .iter()
-        .map(|(t, _)| foot_height(t))
-        .filter(|h| h.is_finite())
+        .zip(mocap)
+        .map(|((t, g), m)| {
+            let h = sole_height(character, t, g);
+            (foot_height(m) <= clip_floor + 0.03 && h.is_finite()).then_some(sole_rest - h)
+        })
         .collect();
-    feet.sort_by(f64::total_cmp);
-    let lift = feet
-        .get(feet.len() / 20)
-        .map_or(0.0, |low| char_floor - low);
-    for (t, _) in &mut out {
+    let lift = interpolate_gaps(&fix);
+    for ((t, _), d) in out.iter_mut().zip(lift) {
         for p in t.iter_mut() {
-            p.y += lift;
+            p.y += d;
         }
     }
     out
+}
+
+/// The lowest sole point of the character posed as `t` with global
+/// rotations `g`: its toe joints; under each ankle a heel point at the
+/// height of the toe in the rest pose `character`; and a toe tip a quarter of the
+/// foot's horizontal length beyond the toe joint at its height (a foot
+/// pivoting on its toes dips the tips); both carried by the ankle.
+fn sole_height(character: &Pose, t: &Pose, g: &[DQuat; Canonical::COUNT]) -> f64 {
+    [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
+        .iter()
+        .flat_map(|&(a, k)| {
+            let (a, k) = (a.index(), k.index());
+            let heel = DVec3::new(
+                0.0,
+                character[k].y.min(character[a].y) - character[a].y,
+                0.0,
+            );
+            let f = character[k] - character[a];
+            let tip = DVec3::new(0.25 * f.x, 0.0, 0.25 * f.z);
+            [t[k].y, (t[a] + g[a] * heel).y, (t[k] + g[a] * tip).y]
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Fills the `None`s of `v` linearly between their known neighbours (the
+/// nearest known value past either end; all zeros when none is known).
+fn interpolate_gaps(v: &[Option<f64>]) -> Vec<f64> {
+    let known: Vec<(usize, f64)> = v
+        .iter()
+        .enumerate()
+        .filter_map(|(i, x)| x.map(|x| (i, x)))
+        .collect();
+    let (Some(&first), Some(&last)) = (known.first(), known.last()) else {
+        return vec![0.0; v.len()];
+    };
+    let mut out = Vec::with_capacity(v.len());
+    let mut k = 0;
+    for i in 0..v.len() {
+        while k + 1 < known.len() && known[k + 1].0 <= i {
+            k += 1;
+        }
+        out.push(if i <= first.0 {
+            first.1
+        } else if i >= last.0 {
+            last.1
+        } else {
+            let ((i0, a), (i1, b)) = (known[k], known[k + 1]);
+            if i1 == i0 {
+                a
+            } else {
+                a + (b - a) * (i - i0) as f64 / (i1 - i0) as f64
+            }
+        });
+    }
+    out
+}
+
+/// `r` with each foot bone (ankle → toe) turned about its lateral axis to
+/// the elevation the clip's foot has when flat on the floor: the median
+/// over the frames where both the foot's ankle and toe are within 2 cm of
+/// their lowest (5th percentile) heights. A rest skeleton's foot bone need
+/// not point as the standing foot's does (CMU's ASF rest skeleton points it
+/// 15° further down than the walks' stance, and copying that left the
+/// character's heels 2 cm up); `r` unchanged for a foot never flat.
+fn flat_feet(r: &Pose, mocap: &[Pose]) -> Pose {
+    let mut out = *r;
+    let low = |c: C| {
+        let mut h: Vec<f64> = mocap
+            .iter()
+            .map(|p| p[c.index()].y)
+            .filter(|y| y.is_finite())
+            .collect();
+        h.sort_by(f64::total_cmp);
+        h.get(h.len() / 20).copied()
+    };
+    let elevation = |f: DVec3| (f.y / f.length()).clamp(-1.0, 1.0).asin();
+    for (ankle, toe) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)] {
+        let (a, t) = (ankle.index(), toe.index());
+        let (Some(la), Some(lt)) = (low(ankle), low(toe)) else {
+            continue;
+        };
+        let mut e: Vec<f64> = mocap
+            .iter()
+            .filter(|p| p[a].y <= la + 0.02 && p[t].y <= lt + 0.02)
+            .map(|p| elevation(p[t] - p[a]))
+            .filter(|e| e.is_finite())
+            .collect();
+        if e.len() < 5 {
+            continue;
+        }
+        e.sort_by(f64::total_cmp);
+        let f = r[t] - r[a];
+        let axis = f.cross(DVec3::Y).normalize_or_zero();
+        if axis == DVec3::ZERO || !f.is_finite() {
+            continue;
+        }
+        let turn = DQuat::from_axis_angle(axis, e[e.len() / 2] - elevation(f));
+        out[t] = r[a] + turn * f;
+    }
+    out
+}
+
+/// The rotation that makes a clip's ground level: a plane
+/// `y = a + b·x + c·z` fitted to the lowest ankle or toe joint of every
+/// frame (least squares, then three times on the lower half of the
+/// residuals, so that lifted feet and jumps do not count), its slope
+/// shrunk by a ridge of (0.22 m)² so that a clip standing in place has
+/// none, turned onto the horizontal. Identity for a clip of fewer than 10
+/// frames or a slope past 5° (a ramp or stairs, not a tilted floor).
+pub fn ground_tilt(mocap: &[Pose]) -> DQuat {
+    let feet = [C::LAnkle, C::LToe, C::RAnkle, C::RToe];
+    let samples: Vec<DVec3> = mocap
+        .iter()
+        .filter_map(|p| {
+            feet.iter()
+                .map(|c| p[c.index()])
+                .filter(|q| q.is_finite())
+                .min_by(|a, b| a.y.total_cmp(&b.y))
+        })
+        .collect();
+    if samples.len() < 10 {
+        return DQuat::IDENTITY;
+    }
+    const RIDGE: f64 = 0.05;
+    let fit = |keep: &[DVec3]| -> Option<(f64, f64, f64, DVec3)> {
+        let n = keep.len() as f64;
+        let mean = keep.iter().copied().sum::<DVec3>() / n;
+        let (mut sxx, mut sxz, mut szz, mut sxy, mut szy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for q in keep {
+            let d = *q - mean;
+            sxx += d.x * d.x;
+            sxz += d.x * d.z;
+            szz += d.z * d.z;
+            sxy += d.x * d.y;
+            szy += d.z * d.y;
+        }
+        let (sxx, szz) = (sxx + n * RIDGE, szz + n * RIDGE);
+        let det = sxx * szz - sxz * sxz;
+        if !(det.is_finite() && det > 0.0) {
+            return None;
+        }
+        let b = (sxy * szz - szy * sxz) / det;
+        let c = (szy * sxx - sxy * sxz) / det;
+        Some((mean.y, b, c, mean))
+    };
+    let Some(mut plane) = fit(&samples) else {
+        return DQuat::IDENTITY;
+    };
+    for _ in 0..3 {
+        let (a, b, c, m) = plane;
+        let res = |q: &DVec3| q.y - (a + b * (q.x - m.x) + c * (q.z - m.z));
+        let mut r: Vec<f64> = samples.iter().map(res).collect();
+        r.sort_by(f64::total_cmp);
+        let cut = r[r.len() / 2];
+        let low: Vec<DVec3> = samples.iter().copied().filter(|q| res(q) <= cut).collect();
+        if low.len() < 5 {
+            break;
+        }
+        match fit(&low) {
+            Some(p) => plane = p,
+            None => break,
+        }
+    }
+    let (_, b, c, _) = plane;
+    let normal = DVec3::new(-b, 1.0, -c).normalize();
+    if normal.angle_between(DVec3::Y) > 5f64.to_radians() || !normal.is_finite() {
+        return DQuat::IDENTITY;
+    }
+    DQuat::from_rotation_arc(normal, DVec3::Y)
+}
+
+/// The clip's own head-to-trunk angle per frame (degrees, signed): the
+/// angle `∠(neck→head, pelvis→neck)` of each pose minus its value in the
+/// clip's neutral (the reference pose with the neck turned to the clip's
+/// typical carriage relative to the chest, which the retargeting maps onto
+/// the character's rest). The skeleton analogue of the mesh measure
+/// [`crate::eval::HeadTorso`]: what a result's head should do relative to
+/// the character's rest when it follows the clip's head.
+pub fn clip_head_trunk_deg(reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+    // The neck → head bone in a frame attached to the trunk (up pelvis →
+    // neck, lateral from the hips and shoulders).
+    let local = |p: &Pose| {
+        let y = (p[C::Neck.index()] - p[C::Pelvis.index()]).normalize_or_zero();
+        let l = (p[C::LHip.index()] - p[C::RHip.index()])
+            + (p[C::LShoulder.index()] - p[C::RShoulder.index()]);
+        let x = (l - y * l.dot(y)).normalize_or_zero();
+        let z = x.cross(y);
+        let h = p[C::Head.index()] - p[C::Neck.index()];
+        DVec3::new(h.dot(x), h.dot(y), h.dot(z))
+    };
+    let r = &reference.pose;
+    let rotations: Vec<[DQuat; Canonical::COUNT]> =
+        mocap.iter().map(|m| pose_rotations(r, m)).collect();
+    let mut neutral = *r;
+    let (n, h) = (C::Neck.index(), C::Head.index());
+    neutral[h] = r[n] + neck_carriage(&upright(mocap, &rotations)) * (r[h] - r[n]);
+    let zero = local(&neutral);
+    mocap
+        .iter()
+        .map(|p| angle(local(p), zero).to_degrees())
+        .collect()
+}
+
+/// The rotations of the clip's upright frames: those whose trunk is within
+/// 10° of the clip's most upright. The neck's carriage is read on them: a
+/// clip that spends most of its time bent over, head down (CMU 131_02),
+/// would otherwise make head-down its neutral, and its upright frames
+/// would throw the character's head back.
+fn upright(
+    mocap: &[Pose],
+    rotations: &[[DQuat; Canonical::COUNT]],
+) -> Vec<[DQuat; Canonical::COUNT]> {
+    let tilt: Vec<f64> = mocap.iter().map(trunk_tilt).collect();
+    let least = tilt
+        .iter()
+        .copied()
+        .filter(|t| t.is_finite())
+        .fold(f64::INFINITY, f64::min);
+    rotations
+        .iter()
+        .zip(&tilt)
+        .filter(|&(_, &t)| t <= least + 10f64.to_radians())
+        .map(|(a, _)| *a)
+        .collect()
 }
 
 /// The clip's typical carriage of the neck: the mean (sign-aligned,
@@ -556,5 +816,146 @@ mod tests {
             .flat_map(|((p, _), (q, _))| p.iter().zip(q).map(|(a, b)| a.distance(*b)))
             .fold(0.0, f64::max);
         assert!(worst < 1e-9, "T and A versions {worst} m apart");
+    }
+
+    /// The joints above the pelvis (spine, chest, neck, head, arms).
+    fn upper(c: C) -> bool {
+        !matches!(
+            c,
+            C::Pelvis
+                | C::LHip
+                | C::LKnee
+                | C::LAnkle
+                | C::LToe
+                | C::RHip
+                | C::RKnee
+                | C::RAnkle
+                | C::RToe
+        )
+    }
+
+    /// `p` bowed forward by `bow` at the pelvis and the head bent down a
+    /// further `nod` at the neck (radians).
+    fn bowed(p: &Pose, bow: f64, nod: f64) -> Pose {
+        let mut out = *p;
+        let (pv, n, h) = (C::Pelvis.index(), C::Neck.index(), C::Head.index());
+        let q = DQuat::from_rotation_x(bow);
+        for c in Canonical::ALL {
+            if upper(c) {
+                out[c.index()] = p[pv] + q * (p[c.index()] - p[pv]);
+            }
+        }
+        out[h] = out[n] + DQuat::from_rotation_x(nod) * (out[h] - out[n]);
+        out
+    }
+
+    #[test]
+    fn the_neck_carriage_is_read_on_the_upright_frames() {
+        // Three upright frames and seven bowed 40° with the head down a
+        // further 30° (CMU 131_02): the upright frames carry the head as
+        // the character does, not thrown back by the bowed frames' carriage.
+        let ch = standing();
+        let up = standing();
+        let down = bowed(&up, 0.7, 0.5);
+        let mut clip = vec![up; 3];
+        clip.extend(std::iter::repeat_n(down, 7));
+        let rf = choose_reference(Some(&up), &clip).unwrap();
+        let out = retarget(&ch, &rf, &clip);
+        for (p, _) in &out[..3] {
+            assert!(
+                (head_tilt(p) - head_tilt(&ch)).abs() < 1e-9,
+                "{}",
+                head_tilt(p).to_degrees()
+            );
+        }
+        // The clip's own head-to-trunk angle: 0 upright, the nod when bowed.
+        let own = clip_head_trunk_deg(&rf, &clip);
+        assert!(
+            own[0].abs() < 1e-9 && (own[5] - 0.5f64.to_degrees()).abs() < 1e-6,
+            "{own:?}"
+        );
+    }
+
+    #[test]
+    fn a_tilted_capture_floor_is_levelled() {
+        use crate::synth::{Gait, gait_clip};
+        let clip = gait_clip(Gait::Walk, 3.0, 30.0);
+        let map = crate::rig::detect(&clip.point_names()).map;
+        let cp = clip_poses(&clip, &map).unwrap();
+        // The capture's floor rises 1.5° along every axis through the origin.
+        let q = DQuat::from_rotation_x(-1.5f64.to_radians())
+            * DQuat::from_rotation_z(1.5f64.to_radians());
+        let tilted: Vec<Pose> = cp.poses.iter().map(|p| p.map(|x| q * x)).collect();
+        let rise = tilted.last().unwrap()[0].y - tilted[0][0].y;
+        assert!(rise.abs() > 0.05, "the test clip rises {rise} m");
+        let ch = standing();
+        let flat = retarget(&ch, &cp.reference, &cp.poses);
+        let levelled = retarget(&ch, &cp.reference, &tilted);
+        for ((a, _), (b, _)) in flat.iter().zip(&levelled) {
+            let d = (a[0].y - b[0].y).abs();
+            assert!(d < 0.01, "pelvis heights {} and {} m", a[0].y, b[0].y);
+        }
+        // Feet on the character's floor: the lowest sole point of every
+        // frame within 1 cm of the rest's (the clip walks: always a foot down).
+        let rest = sole_height(&ch, &ch, &[DQuat::IDENTITY; Canonical::COUNT]);
+        let mut lows: Vec<f64> = cp.poses.iter().map(foot_height).collect();
+        lows.sort_by(f64::total_cmp);
+        let floor = lows[lows.len() / 20];
+        let mut standing_frames = 0;
+        for ((p, g), m) in levelled.iter().zip(&cp.poses) {
+            if foot_height(m) <= floor + 0.03 {
+                standing_frames += 1;
+                assert!((sole_height(&ch, p, g) - rest).abs() < 0.01);
+            }
+        }
+        assert!(standing_frames * 2 > levelled.len());
+    }
+
+    #[test]
+    fn a_bent_rest_skeleton_falls_back_to_the_most_neutral_frame() {
+        use crate::skeleton::pose_clip;
+        use crate::synth::{Gait, gait_clip};
+        let clip = gait_clip(Gait::Walk, 2.0, 30.0);
+        let poses = crate::rig::detect(&clip.point_names())
+            .map
+            .poses(&clip)
+            .unwrap();
+        // The rest skeleton bowed 50° at the pelvis with the knees bent:
+        // not a T- or A-pose.
+        let mut shape = bowed(&standing(), 50f64.to_radians(), 0.0);
+        for (k, a, t) in [
+            (C::LKnee, C::LAnkle, C::LToe),
+            (C::RKnee, C::RAnkle, C::RToe),
+        ] {
+            let (k, a, t) = (k.index(), a.index(), t.index());
+            let bend = DQuat::from_rotation_x(-1.0);
+            let (da, dt) = (shape[a] - shape[k], shape[t] - shape[a]);
+            shape[a] = shape[k] + bend * da;
+            shape[t] = shape[a] + dt;
+        }
+        let mut rest = shape;
+        for c in Canonical::ALL {
+            let Some(p) = c.parent() else { continue };
+            let (j, q) = (c.index(), p.index());
+            let len = poses[0][j].distance(poses[0][q]);
+            rest[j] = rest[q] + (shape[j] - shape[q]).normalize() * len;
+        }
+        let version = pose_clip(&rest, &poses, 30.0).unwrap();
+        let map = crate::rig::detect(&version.point_names()).map;
+        let cp = clip_poses(&version, &map).unwrap();
+        let ReferenceSource::Frame(i) = cp.reference.source else {
+            panic!("a bent rest skeleton was taken as the reference");
+        };
+        // The most neutral frame is as upright as the walk gets, and in it
+        // the character stands as at rest (trunk vertical).
+        let least = poses.iter().map(trunk_tilt).fold(f64::INFINITY, f64::min);
+        assert!(trunk_tilt(&cp.poses[i]) < least + 5f64.to_radians());
+        let out = retarget(&standing(), &cp.reference, &cp.poses);
+        assert!(
+            trunk_tilt(&out[i].0) < 1e-6,
+            "{}",
+            trunk_tilt(&out[i].0).to_degrees()
+        );
+        assert!((head_tilt(&out[i].0) - head_tilt(&standing())).abs() < 0.1);
     }
 }
