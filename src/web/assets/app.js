@@ -193,7 +193,8 @@ async function main() {
   let first = true;
   const camAt = (v) => {
     const c = centre(v.parts.reduce((a, b) => (b.w > a.w ? b : a)));
-    if (first) { cam.at = c; first = false; }
+    // Far off (a restart or a jump while not drawing): look there at once.
+    if (first || Math.hypot(c[0] - cam.at[0], c[2] - cam.at[2]) > 3) { cam.at = c; first = false; }
     for (let i = 0; i < 3; i++) cam.at[i] += (c[i] - cam.at[i]) * 0.15;
     const e = [cam.at[0] + cam.dist * Math.cos(cam.pitch) * Math.sin(cam.yaw), cam.at[1] + cam.dist * Math.sin(cam.pitch), cam.at[2] + cam.dist * Math.cos(cam.pitch) * Math.cos(cam.yaw)];
     return { eye: e, at: cam.at.slice() };
