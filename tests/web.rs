@@ -410,6 +410,7 @@ fn browser_speed_slider_drives_the_achieved_speed() {
     let Some(browser) = browser_or_skip() else {
         return;
     };
+    let _one = one_browser();
     let db = gaits_db();
     let tmp = tempfile::tempdir().unwrap();
     let site = tmp.path().join("site");
@@ -728,12 +729,12 @@ mod cdp {
 }
 
 /// Loads a page with `?selftest=1` and waits for the page's self-test
-/// (draw checks and timings), at most 40 s.
+/// (draw checks and timings), at most 90 s.
 fn run_page(b: &mut cdp::Browser, url: &str) -> serde_json::Value {
     b.navigate(url);
     b.wait_for(
         "window.surfmotion && window.surfmotion.selftest || null",
-        Duration::from_secs(40),
+        Duration::from_secs(90),
     )
 }
 
@@ -758,6 +759,14 @@ fn save_shots(r: &serde_json::Value, name: &str) -> Vec<PathBuf> {
     out
 }
 
+/// The browser tests run one at a time: three software-GL browsers at once
+/// on 2 cores starve each other past the page's time limits.
+static ONE_BROWSER: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn one_browser() -> std::sync::MutexGuard<'static, ()> {
+    ONE_BROWSER.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// The browser, or `None` (skip) outside CI.
 fn browser_or_skip() -> Option<PathBuf> {
     let b = chromium();
@@ -776,6 +785,7 @@ fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
     let Some(browser) = browser_or_skip() else {
         return;
     };
+    let _one = one_browser();
     let db = demo_db();
     let tmp = tempfile::tempdir().unwrap();
     let site = tmp.path().join("site");
@@ -919,6 +929,7 @@ fn devtools_client_sees_console_errors_and_exceptions() {
     let Some(browser) = browser_or_skip() else {
         return;
     };
+    let _one = one_browser();
     let mut b = cdp::Browser::launch(&browser);
     assert!(b.errors().is_empty());
     b.eval("console.error('boom from the page'); setTimeout(() => { throw new Error('thrown later'); }, 0); 1");
