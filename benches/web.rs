@@ -2,7 +2,8 @@
 //! (175 frames × 9,971 vertices) at the default 1 mm bound and DEFLATE
 //! levels 3 and 6, decoding it (the Rust decoder; the page's is timed by
 //! `tests/web.rs`), and `web export` of a 1,050-frame database (samba's
-//! capture six times, graph cache warm). No solve is involved, so the
+//! capture six times, graph cache warm; `--linear-transitions`, the
+//! precomputed non-linear windows timed once apart). No solve is involved, so the
 //! figures are bare times next to the raw float32 size. It also prints the
 //! other candidate measured for the README: per-sequence PCA of the vertex
 //! trajectories (snapshot method), the fewest components whose
@@ -66,10 +67,26 @@ fn main() {
         });
     }
     let site = tmp.path().join("site");
-    // The first export builds the graph cache; the timed ones read it.
-    web::export_db(&big, &site, &ExportOptions::default()).unwrap();
-    grp.bench_function("export_1050_frames", |b| {
-        b.iter(|| web::export_db(&big, &site, &ExportOptions::default()).unwrap())
+    // The first export builds the graph cache and precomputes the
+    // transitions' non-linear windows (the default; timed once, it takes
+    // a solve per window frame); the timed ones read the cache and leave
+    // the windows to the page's linear blend.
+    let r = web::export_db(&big, &site, &ExportOptions::default()).unwrap();
+    eprintln!(
+        "samba6 export with non-linear windows: {:.1} s, {} transitions, {} window frames blended in {:.1} s, {} of {} bytes",
+        r.seconds,
+        r.transitions,
+        r.transition_frames,
+        r.transition_seconds,
+        r.transition_bytes,
+        r.geometry.bytes
+    );
+    let linear = ExportOptions {
+        linear_transitions: true,
+        ..ExportOptions::default()
+    };
+    grp.bench_function("export_1050_frames_linear_transitions", |b| {
+        b.iter(|| web::export_db(&big, &site, &linear).unwrap())
     });
     grp.finish();
     c.final_summary();

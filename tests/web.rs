@@ -9,8 +9,8 @@ mod common;
 use base64::Engine as _;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 use surfmotion::web::{self, ExportOptions, SiteManifest, SiteServer, codec};
 
 /// The procedural demo database (no files needed), made once.
@@ -47,7 +47,11 @@ fn check_round_trip(db: &Path, site: &Path, bound: f64) -> f64 {
     let (_, g, graph) = web::load_db_geometry(db).unwrap();
     let d = codec::decode(&std::fs::read(site.join("character.sm4d")).unwrap()).unwrap();
     assert_eq!(d.triangles, g.triangles);
-    assert_eq!(d.sequences.len(), g.sequences.len());
+    // The database's sequences first, then what the export adds (blended
+    // transition windows, space references).
+    let m = manifest(site);
+    assert_eq!(d.sequences.len(), m.geometry_sequences);
+    assert!(d.sequences.len() >= g.sequences.len());
     let mut worst = 0f64;
     for (a, b) in g.sequences.iter().zip(&d.sequences) {
         assert_eq!(a.len(), b.len());
@@ -59,7 +63,6 @@ fn check_round_trip(db: &Path, site: &Path, bound: f64) -> f64 {
     }
     assert!(worst <= bound, "max vertex error {worst} m > {bound} m");
     // The page's transition table is the graph's, in the graph's order.
-    let m = manifest(site);
     let page: Vec<_> = m
         .transitions
         .iter()
@@ -88,7 +91,8 @@ fn exported_demo_geometry_round_trips_within_the_bound_and_keeps_the_graph() {
         opts.codec.max_error = mm * 1e-3;
         let r = web::export_db(&db, &site, &opts).unwrap();
         let worst = check_round_trip(&db, &site, mm * 1e-3);
-        assert!((worst - r.geometry.max_error).abs() < 1e-7);
+        // The codec's figure also covers the blended transition windows.
+        assert!(worst <= r.geometry.max_error + 1e-7);
         assert!(r.geometry.bytes * 4 < r.raw_bytes, "{r:?}");
     }
     // An export replaces an earlier one; a folder of other files is kept.
@@ -126,8 +130,10 @@ fn samba_geometry_is_under_2mb_at_1mm() {
     );
     let site = tmp.path().join("site");
     let r = web::export_db(&db, &site, &ExportOptions::default()).unwrap();
-    assert_eq!(r.geometry.frames, 175);
-    assert!(r.geometry.bytes <= 2_000_000, "{} bytes", r.geometry.bytes);
+    assert_eq!(r.geometry.frames - r.transition_frames, 175);
+    // The capture itself; the precomputed transition windows come on top.
+    let capture = r.geometry.bytes - r.transition_bytes;
+    assert!(capture <= 2_000_000, "{capture} bytes");
     check_round_trip(&db, &site, 1e-3);
 }
 
@@ -216,49 +222,530 @@ fn chromium() -> Option<PathBuf> {
         .find(|p| p.is_file())
 }
 
-/// Loads `url` in headless Chromium and waits for the page's self-test
-/// report (POSTed to the server), at most `limit`.
-fn run_page(
-    browser: &Path,
-    url: &str,
-    reports: &std::sync::Mutex<Vec<String>>,
-) -> serde_json::Value {
-    let profile = tempfile::tempdir().unwrap();
-    let mut child = Command::new(browser)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--use-angle=swiftshader",
-            "--enable-unsafe-swiftshader",
-            "--no-first-run",
-            "--disable-extensions",
-            "--window-size=800,600",
-        ])
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .arg(url)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
+/// A database of the demo humanoid walking and running (procedural
+/// clips, 3 s each, as tests/parametric.rs) with one parametric space
+/// `locomotion = [walk, run]` steered by speed and turn; made once.
+fn gaits_db() -> PathBuf {
+    use std::sync::OnceLock;
+    use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
+    use surfmotion::synth::{Gait, gait_clip};
+    static DB: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
+    DB.get_or_init(|| {
+        let tmp = common::fixture_dir("web-gaits");
+        let db = tmp.join("db");
+        std::fs::create_dir_all(&db).unwrap();
+        let fps = 30.0;
+        let clips: Vec<SynthClip> = [Gait::Walk, Gait::Run]
+            .into_iter()
+            .map(|g| SynthClip::from_clip(g.name(), &gait_clip(g, 3.0, fps)).unwrap())
+            .collect();
+        let opts = SynthOptions {
+            fps,
+            name: Some("gaits".into()),
+            truth: false,
+            plausibility: false,
+            ..Default::default()
+        };
+        let character = SynthCharacter::humanoid().unwrap();
+        write_synthetic_database(&db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
+        let spaces: toml::Table = toml::from_str(
+            "[[space]]\nname = \"locomotion\"\nsequences = [\"walk\", \"run\"]\nparameters = [\"speed\", \"turn\"]\n",
+        )
         .unwrap();
-    let t0 = Instant::now();
-    let got = loop {
-        if let Some(r) = reports.lock().unwrap().pop() {
-            break Some(r);
+        let mut m = surfmotion::db::Manifest::load(&db).unwrap();
+        m.spaces = spaces["space"].clone().try_into().unwrap();
+        m.save(&db).unwrap();
+        (tmp, db)
+    })
+    .1
+    .clone()
+}
+
+fn max_dist(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| {
+            (0..3)
+                .map(|c| ((p[c] - q[c]) as f64).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The export carries what the page needs to play a parametric space
+/// (Casas et al. 2013): every stored reference block of the hybrid blend,
+/// decoded within the bound, the parameter map and its valid ranges.
+#[test]
+fn exported_space_carries_the_hybrid_references_and_parameter_map() {
+    use surfmotion::parametric::{MotionOptions, store::load_or_build};
+    let db = gaits_db();
+    let tmp = tempfile::tempdir().unwrap();
+    let site = tmp.path().join("site");
+    let r = web::export_db(&db, &site, &ExportOptions::default()).unwrap();
+    let (motion, _) = load_or_build(&db, &MotionOptions::default(), false).unwrap();
+    let m = manifest(&site);
+    assert_eq!(m.spaces.len(), 1);
+    let (sp, model) = (&m.spaces[0], &motion.spaces[0]);
+    assert_eq!(sp.name, "locomotion");
+    assert_eq!(sp.parameters, ["speed", "turn"]);
+    assert_eq!(sp.grid, model.grid());
+    assert_eq!(sp.axis.as_ref(), model.axis.as_ref());
+    let range = sp.ranges[0];
+    assert!(range[1] - range[0] > 0.5, "speed range {range:?}");
+    assert_eq!(r.spaces, 1);
+    assert_eq!(r.space_frames, model.blend.blocks.len() * model.grid());
+    let d = codec::decode(&std::fs::read(site.join("character.sm4d")).unwrap()).unwrap();
+    assert_eq!(d.sequences.len(), m.geometry_sequences);
+    let n = d.vertices;
+    let mut checked = 0;
+    for (pair, mp) in sp.pairs.iter().zip(&model.blend.pairs) {
+        assert_eq!(pair.weights, mp.weights);
+        for (&g, &b) in pair.blocks.iter().zip(&mp.blocks) {
+            let got: Vec<[f32; 3]> = d.sequences[g].iter().map(|q| d.position(*q)).collect();
+            let want: Vec<[f32; 3]> = model.blend.blocks[b]
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect();
+            assert_eq!(got.len(), sp.grid * n);
+            let e = max_dist(&got, &want);
+            assert!(e <= 1e-3 + 1e-6, "block {b}: {e} m");
+            checked += 1;
         }
-        if t0.elapsed() > Duration::from_secs(40) {
-            break None;
-        }
-        std::thread::sleep(Duration::from_millis(50));
+    }
+    assert!(checked >= 3, "{checked} blocks");
+}
+
+/// Each transition's window is precomputed as the non-linear blend (Huang
+/// et al. 2015, Sec. 4.4): it starts at the source's frame and ends at the
+/// aligned target's (within the bound and the blender's reconstruction),
+/// and differs from the linear blend in between.
+#[test]
+fn exported_transitions_carry_precomputed_nonlinear_windows() {
+    let db = demo_db();
+    let tmp = tempfile::tempdir().unwrap();
+    let site = tmp.path().join("site");
+    let r = web::export_db(&db, &site, &ExportOptions::default()).unwrap();
+    let m = manifest(&site);
+    let d = codec::decode(&std::fs::read(site.join("character.sm4d")).unwrap()).unwrap();
+    let pos = |s: usize, f: usize| -> Vec<[f32; 3]> {
+        d.sequences[s][f * d.vertices..(f + 1) * d.vertices]
+            .iter()
+            .map(|q| d.position(*q))
+            .collect()
     };
-    let _ = child.kill();
-    let _ = child.wait();
-    let got = got.expect("the page sent no self-test report within 40 s");
-    serde_json::from_str(&got).unwrap()
+    let aligned = |p: Vec<[f32; 3]>, a: [f64; 4]| -> Vec<[f32; 3]> {
+        p.iter()
+            .map(|q| {
+                let (x, z) = (q[0] as f64, q[2] as f64);
+                [
+                    (a[0] * x + a[1] * z + a[2]) as f32,
+                    q[1],
+                    (-a[1] * x + a[0] * z + a[3]) as f32,
+                ]
+            })
+            .collect()
+    };
+    let mut frames = 0;
+    let mut largest_gap: f64 = 0.0;
+    for t in &m.transitions {
+        let w = t
+            .blended
+            .expect("every transition has its window precomputed");
+        let l = t.window;
+        assert_eq!(d.sequences[w].len(), (2 * l + 1) * d.vertices);
+        frames += 2 * l + 1;
+        let clamp = |s: usize, f: isize| f.clamp(0, m.sequences[s].frames as isize - 1) as usize;
+        let a = pos(t.from, clamp(t.from, t.m as isize - l as isize));
+        let b = aligned(pos(t.to, clamp(t.to, (t.n + l) as isize)), t.align);
+        assert!(max_dist(&pos(w, 0), &a) < 3e-3, "{t:?}");
+        assert!(max_dist(&pos(w, 2 * l), &b) < 3e-3, "{t:?}");
+        if l > 0 {
+            let ma = pos(t.from, clamp(t.from, t.m as isize));
+            let mb = aligned(pos(t.to, t.n), t.align);
+            let lin: Vec<[f32; 3]> = ma
+                .iter()
+                .zip(&mb)
+                .map(|(p, q)| std::array::from_fn(|c| 0.5 * (p[c] + q[c])))
+                .collect();
+            largest_gap = largest_gap.max(max_dist(&pos(w, l), &lin));
+        }
+    }
+    assert_eq!(r.transition_frames, frames);
+    assert!(r.transition_bytes > 0);
+    eprintln!(
+        "{} transitions, {frames} blended frames, {} bytes ({:.1} % of {}), largest non-linear − linear gap {:.1} mm, {:.2} s",
+        m.transitions.len(),
+        r.transition_bytes,
+        100.0 * r.transition_bytes as f64 / r.geometry.bytes as f64,
+        r.geometry.bytes,
+        largest_gap * 1e3,
+        r.transition_seconds
+    );
+    assert!(
+        largest_gap > 2e-3,
+        "the window is the linear blend: {largest_gap} m"
+    );
+    // --linear-transitions leaves them to the page.
+    let lin = tmp.path().join("linear");
+    let opts = ExportOptions {
+        linear_transitions: true,
+        ..Default::default()
+    };
+    let r2 = web::export_db(&db, &lin, &opts).unwrap();
+    assert!(
+        manifest(&lin)
+            .transitions
+            .iter()
+            .all(|t| t.blended.is_none())
+    );
+    assert!(r2.geometry.bytes < r.geometry.bytes);
+}
+
+/// In a real browser: pressing the space's key enters the parametric
+/// space, and moving the speed slider changes the speed the engine
+/// achieves (root path per second) to the one asked.
+#[test]
+fn browser_speed_slider_drives_the_achieved_speed() {
+    let Some(browser) = browser_or_skip() else {
+        return;
+    };
+    let _one = one_browser();
+    let db = gaits_db();
+    let tmp = tempfile::tempdir().unwrap();
+    let site = tmp.path().join("site");
+    web::export_db(&db, &site, &ExportOptions::default()).unwrap();
+    let range = manifest(&site).spaces[0].ranges[0];
+    let server = SiteServer::bind(tmp.path(), "127.0.0.1:0").unwrap();
+    let url = server.url();
+    server.spawn();
+    let mut b = cdp::Browser::launch(&browser);
+    let r = run_page(&mut b, &format!("{url}site/index.html?selftest=1"));
+    assert_eq!(r["ok"], true, "{r}");
+    assert_eq!(
+        b.eval("surfmotion.engine.state().space"),
+        serde_json::Value::Null
+    );
+    b.key("q");
+    let st = b.eval("surfmotion.engine.state()");
+    assert_eq!(st["space"]["name"], "locomotion", "{st}");
+    assert_eq!(b.eval("document.getElementById('sliders').hidden"), false);
+    let mut achieved = Vec::new();
+    for (i, f) in [0.1, 0.9].into_iter().enumerate() {
+        let v = range[0] + f * (range[1] - range[0]);
+        let st = b.eval(&format!(
+            "(() => {{ const s = document.getElementById('speed'); s.value = {v}; s.dispatchEvent(new Event('input'));
+               for (let i = 0; i < 90; i++) surfmotion.step(1, false);
+               surfmotion.step(0, true); return surfmotion.engine.state(); }})()"
+        ));
+        let sp = &st["space"];
+        let asked = sp["speedAsked"].as_f64().unwrap();
+        let got = sp["achievedSpeed"].as_f64().unwrap();
+        eprintln!(
+            "slider at {f}: asked {asked:.3} m/s, achieved {got:.3} m/s, u {:.3}",
+            sp["u"]
+        );
+        assert!((asked - v).abs() < 0.02 * v, "{st}");
+        assert!((got - asked).abs() < 0.08 * asked, "{st}");
+        achieved.push(got);
+        let shot = shots_dir().join(format!("gaits-slider-{i}.png"));
+        b.screenshot(&shot);
+        eprintln!("screenshot {}", shot.display());
+    }
+    assert!(
+        achieved[1] - achieved[0] > 0.5 * (range[1] - range[0]),
+        "{achieved:?} over {range:?}"
+    );
+    // Leaving the space for a motion of the graph.
+    b.key("1");
+    let st = b.eval("surfmotion.engine.state()");
+    assert_eq!(st["space"], serde_json::Value::Null, "{st}");
+    assert_eq!(st["sequence"], "walk");
+    let errors = b.errors();
+    assert!(errors.is_empty(), "console errors: {errors:?}");
+}
+
+/// A headless Chromium driven from outside through the DevTools protocol
+/// (a websocket to `--remote-debugging-port`): navigation, key presses
+/// (`Input.dispatchKeyEvent`), evaluation, screenshots, and the console
+/// errors and exceptions the page raised (`Runtime.consoleAPICalled`,
+/// `Runtime.exceptionThrown`, `Log.entryAdded`).
+mod cdp {
+    use serde_json::{Value, json};
+    use std::io::{Read, Write};
+    use std::net::TcpStream;
+    use std::path::Path;
+    use std::process::{Child, Command, Stdio};
+    use std::time::{Duration, Instant};
+    use tungstenite::stream::MaybeTlsStream;
+
+    pub struct Browser {
+        child: Child,
+        _profile: tempfile::TempDir,
+        ws: tungstenite::WebSocket<MaybeTlsStream<TcpStream>>,
+        next: u64,
+        events: Vec<Value>,
+    }
+
+    fn http_get(port: u16, path: &str) -> String {
+        let mut s = TcpStream::connect(("127.0.0.1", port)).unwrap();
+        write!(
+            s,
+            "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n"
+        )
+        .unwrap();
+        // The DevTools server may keep the connection open: read the
+        // headers, then Content-Length bytes.
+        s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+        let mut buf = Vec::new();
+        let mut chunk = [0u8; 4096];
+        loop {
+            let text = String::from_utf8_lossy(&buf).into_owned();
+            if let Some((head, body)) = text.split_once("\r\n\r\n") {
+                let len = head
+                    .lines()
+                    .find_map(|l| {
+                        let (k, v) = l.split_once(':')?;
+                        k.eq_ignore_ascii_case("content-length")
+                            .then(|| v.trim().parse::<usize>().ok())?
+                    })
+                    .unwrap_or(usize::MAX);
+                if body.len() >= len {
+                    return body[..len].to_string();
+                }
+            }
+            match s.read(&mut chunk) {
+                Ok(0) | Err(_) => {
+                    return text
+                        .split_once("\r\n\r\n")
+                        .map(|x| x.1.to_string())
+                        .unwrap_or(text);
+                }
+                Ok(k) => buf.extend_from_slice(&chunk[..k]),
+            }
+        }
+    }
+
+    impl Browser {
+        pub fn launch(bin: &Path) -> Browser {
+            let profile = tempfile::tempdir().unwrap();
+            let child = Command::new(bin)
+                .args([
+                    "--headless",
+                    "--no-sandbox",
+                    "--use-angle=swiftshader",
+                    "--enable-unsafe-swiftshader",
+                    "--no-first-run",
+                    "--disable-extensions",
+                    "--window-size=800,600",
+                    "--remote-debugging-port=0",
+                ])
+                .arg(format!("--user-data-dir={}", profile.path().display()))
+                .arg("about:blank")
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap();
+            // Chromium writes the port it picked into the profile.
+            let t0 = Instant::now();
+            let port = loop {
+                let f = profile.path().join("DevToolsActivePort");
+                if let Some(p) = std::fs::read_to_string(&f)
+                    .ok()
+                    .and_then(|t| t.lines().next().and_then(|l| l.trim().parse::<u16>().ok()))
+                {
+                    break p;
+                }
+                assert!(
+                    t0.elapsed() < Duration::from_secs(30),
+                    "chromium opened no DevTools port within 30 s"
+                );
+                std::thread::sleep(Duration::from_millis(50));
+            };
+            let url = loop {
+                let list: Value = serde_json::from_str(&http_get(port, "/json/list")).unwrap();
+                if let Some(u) = list.as_array().and_then(|a| {
+                    a.iter()
+                        .find(|t| t["type"] == "page")
+                        .and_then(|t| t["webSocketDebuggerUrl"].as_str().map(String::from))
+                }) {
+                    break u;
+                }
+                assert!(t0.elapsed() < Duration::from_secs(30), "no page target");
+                std::thread::sleep(Duration::from_millis(50));
+            };
+            let (ws, _) = tungstenite::connect(url.as_str()).unwrap();
+            if let MaybeTlsStream::Plain(s) = ws.get_ref() {
+                s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
+            }
+            let mut b = Browser {
+                child,
+                _profile: profile,
+                ws,
+                next: 0,
+                events: Vec::new(),
+            };
+            for m in ["Runtime.enable", "Log.enable", "Page.enable"] {
+                b.call(m, json!({}));
+            }
+            b
+        }
+
+        /// Sends a command and waits for its answer; events that arrive
+        /// meanwhile are kept.
+        pub fn call(&mut self, method: &str, params: Value) -> Value {
+            self.next += 1;
+            let id = self.next;
+            if std::env::var_os("SURFMOTION_CDP_TRACE").is_some() {
+                eprintln!("cdp {id} {method} {params}");
+            }
+            let msg = json!({"id": id, "method": method, "params": params});
+            self.ws
+                .send(tungstenite::Message::text(msg.to_string()))
+                .unwrap();
+            loop {
+                let m = self.ws.read().unwrap_or_else(|e| panic!("{method}: {e}"));
+                let tungstenite::Message::Text(t) = m else {
+                    continue;
+                };
+                let v: Value = serde_json::from_str(t.as_str()).unwrap();
+                if v["id"] == id {
+                    assert!(v["error"].is_null(), "{method}: {}", v["error"]);
+                    return v["result"].clone();
+                }
+                if v["method"].is_string() {
+                    self.events.push(v);
+                }
+            }
+        }
+
+        /// Evaluates an expression in the page (promises awaited) and
+        /// returns its value.
+        pub fn eval(&mut self, expr: &str) -> Value {
+            let r = self.call(
+                "Runtime.evaluate",
+                json!({"expression": expr, "returnByValue": true, "awaitPromise": true}),
+            );
+            assert!(
+                r["exceptionDetails"].is_null(),
+                "{expr}: {}",
+                r["exceptionDetails"]
+            );
+            r["result"]["value"].clone()
+        }
+
+        pub fn navigate(&mut self, url: &str) {
+            self.call("Page.navigate", json!({ "url": url }));
+        }
+
+        /// Polls `expr` until it is neither null nor undefined.
+        pub fn wait_for(&mut self, expr: &str, limit: Duration) -> Value {
+            let t0 = Instant::now();
+            loop {
+                let v = self.eval(expr);
+                if !v.is_null() {
+                    return v;
+                }
+                if t0.elapsed() > limit {
+                    let page = self.eval(
+                        "JSON.stringify({ready: window.surfmotion && surfmotion.ready, error: window.surfmotion && surfmotion.error, status: (document.getElementById('status') || {}).textContent})",
+                    );
+                    let errors = self.errors();
+                    panic!("waited {limit:?} for {expr}; page {page}; errors {errors:?}");
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        }
+
+        /// Presses and releases a printable key as a user would.
+        pub fn key(&mut self, key: &str) {
+            let c = key.chars().next().unwrap();
+            let (code, vk) = if c.is_ascii_digit() {
+                (format!("Digit{c}"), c as u32)
+            } else {
+                (
+                    format!("Key{}", c.to_ascii_uppercase()),
+                    c.to_ascii_uppercase() as u32,
+                )
+            };
+            for t in ["keyDown", "keyUp"] {
+                let mut p =
+                    json!({"type": t, "key": key, "code": code, "windowsVirtualKeyCode": vk});
+                if t == "keyDown" {
+                    p["text"] = json!(key);
+                }
+                self.call("Input.dispatchKeyEvent", p);
+            }
+        }
+
+        /// A PNG of the whole page (canvas and controls).
+        pub fn screenshot(&mut self, path: &Path) {
+            use base64::Engine as _;
+            let r = self.call("Page.captureScreenshot", json!({"format": "png"}));
+            let png = base64::engine::general_purpose::STANDARD
+                .decode(r["data"].as_str().unwrap())
+                .unwrap();
+            std::fs::write(path, png).unwrap();
+        }
+
+        /// Console errors, assertion failures, uncaught exceptions and
+        /// error log entries so far.
+        pub fn errors(&mut self) -> Vec<String> {
+            self.eval("0");
+            self.events
+                .iter()
+                .filter_map(|e| {
+                    let p = &e["params"];
+                    match e["method"].as_str()? {
+                        "Runtime.consoleAPICalled"
+                            if matches!(p["type"].as_str(), Some("error" | "assert")) =>
+                        {
+                            Some(format!("console.{}: {}", p["type"], p["args"]))
+                        }
+                        "Runtime.exceptionThrown" => {
+                            Some(format!("exception: {}", p["exceptionDetails"]))
+                        }
+                        "Log.entryAdded" if p["entry"]["level"] == "error" => {
+                            Some(format!("log: {}", p["entry"]))
+                        }
+                        _ => None,
+                    }
+                })
+                .collect()
+        }
+
+        pub fn clear_events(&mut self) {
+            self.eval("0");
+            self.events.clear();
+        }
+    }
+
+    impl Drop for Browser {
+        fn drop(&mut self) {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// Loads a page with `?selftest=1` and waits for the page's self-test
+/// (draw checks and timings), at most 90 s.
+fn run_page(b: &mut cdp::Browser, url: &str) -> serde_json::Value {
+    b.navigate(url);
+    b.wait_for(
+        "window.surfmotion && window.surfmotion.selftest || null",
+        Duration::from_secs(90),
+    )
+}
+
+fn shots_dir() -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("web-shots");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
 }
 
 fn save_shots(r: &serde_json::Value, name: &str) -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("web-shots");
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = shots_dir();
     let mut out = Vec::new();
     for (i, s) in r["shots"].as_array().into_iter().flatten().enumerate() {
         let b64 = s.as_str().unwrap().split(',').nth(1).unwrap();
@@ -272,16 +759,33 @@ fn save_shots(r: &serde_json::Value, name: &str) -> Vec<PathBuf> {
     out
 }
 
-#[test]
-fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
-    let Some(browser) = chromium() else {
+/// The browser tests run one at a time: three software-GL browsers at once
+/// on 2 cores starve each other past the page's time limits.
+static ONE_BROWSER: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn one_browser() -> std::sync::MutexGuard<'static, ()> {
+    ONE_BROWSER.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The browser, or `None` (skip) outside CI.
+fn browser_or_skip() -> Option<PathBuf> {
+    let b = chromium();
+    if b.is_none() {
         assert!(
             std::env::var("CI").as_deref() != Ok("true"),
             "CI=true and no chromium installed (.ci/run installs it)"
         );
         eprintln!("SKIPPED: no chromium on the PATH (apt-get install chromium)");
+    }
+    b
+}
+
+#[test]
+fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
+    let Some(browser) = browser_or_skip() else {
         return;
     };
+    let _one = one_browser();
     let db = demo_db();
     let tmp = tempfile::tempdir().unwrap();
     let site = tmp.path().join("site");
@@ -290,16 +794,12 @@ fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
     web::export_db(&db, &bad, &ExportOptions::default()).unwrap();
     let geo = std::fs::read(bad.join("character.sm4d")).unwrap();
     std::fs::write(bad.join("character.sm4d"), &geo[..geo.len() / 2]).unwrap();
-    let mut server = SiteServer::bind(tmp.path(), "127.0.0.1:0").unwrap();
-    let reports = server.collect_reports();
+    let server = SiteServer::bind(tmp.path(), "127.0.0.1:0").unwrap();
     let url = server.url();
     server.spawn();
 
-    let r = run_page(
-        &browser,
-        &format!("{url}site/index.html?selftest=1&shots=1"),
-        &reports,
-    );
+    let mut b = cdp::Browser::launch(&browser);
+    let r = run_page(&mut b, &format!("{url}site/index.html?selftest=1&shots=1"));
     let shots = save_shots(&r, "demo");
     eprintln!("page stages (ms since navigation): {}", r["stages"]);
     eprintln!(
@@ -322,7 +822,6 @@ fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
         .collect();
     assert_eq!(r["engineTransitions"], serde_json::json!(table));
     assert_eq!(r["webgl2"], true);
-    assert_eq!(r["errors"], serde_json::json!([]), "console errors");
     let px = &r["characterPixels"];
     assert!(
         px[0].as_u64().unwrap() > 500 && px[1].as_u64().unwrap() > 500,
@@ -332,19 +831,56 @@ fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
         r["diffPixels"].as_u64().unwrap() > 50,
         "frames identical: {r}"
     );
-    // The key for the other motion: the engine moved into it by a graph
-    // transition (it starts in the first sequence).
-    let before = &r["before"];
-    let after = &r["after"];
-    assert_eq!(r["queued"].as_array().map(Vec::len), Some(1), "{r}");
+    // The key for the other motion, pressed through the DevTools protocol:
+    // the engine queues it and moves into it by a graph transition (it
+    // starts in the first sequence), playing the transition's precomputed
+    // non-linear window.
+    let before = b.eval("surfmotion.engine.state()");
+    let names: Vec<String> = manifest(&site)
+        .sequences
+        .iter()
+        .map(|s| s.name.clone())
+        .collect();
+    let target = names.iter().position(|n| *n != before["sequence"]).unwrap() + 1;
+    b.key(&target.to_string());
+    let queued = b.eval("surfmotion.engine.state().queue");
+    assert_eq!(queued, serde_json::json!([names[target - 1]]), "{before}");
+    let run = b.eval(
+        "(() => { const e = surfmotion.engine, s0 = e.state().sequence, base = surfmotion.manifest.sequences.length;
+           let n = 0, blended = 0, mid = null;
+           while (n < 3000 && e.state().sequence === s0) {
+             surfmotion.step(1, false); n++;
+             const st = e.state();
+             if (st.blending && st.shown.part >= base) { blended++; if (!mid && st.shown.frame >= 2) mid = n; }
+           }
+           const after = e.state();
+           for (let i = 0; i < 300; i++) e.tick();
+           return { n, blended, after, later: e.state() }; })()",
+    );
+    let after = &run["after"];
     assert_ne!(after["sequence"], before["sequence"], "{after}");
     assert_eq!(after["lastTransition"]["kind"], "transition", "{after}");
     assert_eq!(after["lastTransition"]["to"], after["sequence"]);
-    assert!(r["later"]["ticks"].as_u64().unwrap() > 300);
+    assert!(
+        run["blended"].as_u64().unwrap() > 0,
+        "no precomputed blended frame was shown: {run}"
+    );
+    assert!(run["later"]["ticks"].as_u64().unwrap() > 300);
+    // A picture during a transition: play on to the next one and stop in it.
+    b.eval(
+        "(() => { const e = surfmotion.engine; let n = 0;
+           while (n < 3000 && !(e.blend && e.blend.i >= 2)) { surfmotion.step(1, false); n++; }
+           surfmotion.step(0, true); return n; })()",
+    );
+    let shot = shots_dir().join("demo-transition.png");
+    b.screenshot(&shot);
+    eprintln!("transition screenshot {}", shot.display());
     let engine_ms = r["engineMsMean"].as_f64().unwrap();
     assert!(engine_ms < 4.0, "engine {engine_ms} ms per frame");
+    let errors = b.errors();
+    assert!(errors.is_empty(), "console errors: {errors:?}");
 
-    // Pictures of other sites for a person to look at:
+    // Pictures and load times of other sites for a person to look at:
     // SURFMOTION_WEB_SHOTS=/path/site1,/path/site2 (copied beside the test sites).
     for (i, extra) in std::env::var("SURFMOTION_WEB_SHOTS")
         .unwrap_or_default()
@@ -359,19 +895,24 @@ fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
             std::fs::copy(&f, dst.join(f.file_name().unwrap())).unwrap();
         }
         let r = run_page(
-            &browser,
+            &mut b,
             &format!("{url}extra{i}/index.html?selftest=1&shots=1&skip=20&gap=40"),
-            &reports,
         );
         let name = Path::new(extra).file_name().unwrap().to_string_lossy();
-        eprintln!("{name}: {:?} {}", save_shots(&r, &name), r["stages"]);
+        eprintln!(
+            "{name}: load {:.0} ms (fetch {:.0}, decode {:.0}), engine {:.3} ms/frame, GL {:.2} ms/frame, {:?} {}",
+            r["loadMs"].as_f64().unwrap_or(-1.0),
+            r["fetchMs"].as_f64().unwrap_or(-1.0),
+            r["decodeMs"].as_f64().unwrap_or(-1.0),
+            r["engineMsMean"].as_f64().unwrap_or(-1.0),
+            r["glMsMean"].as_f64().unwrap_or(-1.0),
+            save_shots(&r, &name),
+            r["stages"]
+        );
     }
 
-    let r = run_page(
-        &browser,
-        &format!("{url}bad/index.html?selftest=1"),
-        &reports,
-    );
+    b.clear_events();
+    let r = run_page(&mut b, &format!("{url}bad/index.html?selftest=1"));
     assert_eq!(r["ok"], false, "{r}");
     assert_eq!(r["errorVisible"], true, "{r}");
     let msg = r["error"].as_str().unwrap();
@@ -379,6 +920,23 @@ fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
         msg.contains("corrupt 4D geometry") && msg.contains("truncated"),
         "{msg}"
     );
+}
+
+/// The console check listens from outside: an error the page logs, and an
+/// uncaught exception, are both seen through the DevTools protocol.
+#[test]
+fn devtools_client_sees_console_errors_and_exceptions() {
+    let Some(browser) = browser_or_skip() else {
+        return;
+    };
+    let _one = one_browser();
+    let mut b = cdp::Browser::launch(&browser);
+    assert!(b.errors().is_empty());
+    b.eval("console.error('boom from the page'); setTimeout(() => { throw new Error('thrown later'); }, 0); 1");
+    std::thread::sleep(Duration::from_millis(200));
+    let e = b.errors();
+    assert!(e.iter().any(|x| x.contains("boom from the page")), "{e:?}");
+    assert!(e.iter().any(|x| x.contains("thrown later")), "{e:?}");
 }
 
 /// A small valid `.sm4d` file: a moving 5 × 5 grid, two sequences.

@@ -40,6 +40,10 @@ pub struct Source {
     /// DEFLATE level of the geometry (0-9): higher is smaller and slower.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=9))]
     pub level: u32,
+    /// Let the page blend transitions linearly on the GPU instead of
+    /// precomputing each window's non-linear blend (smaller, faster export).
+    #[arg(long)]
+    pub linear_transitions: bool,
 }
 
 /// The codec's predictor.
@@ -90,6 +94,7 @@ fn options(s: &Source) -> anyhow::Result<ExportOptions> {
             },
             level: s.level,
         },
+        linear_transitions: s.linear_transitions,
     })
 }
 
@@ -105,7 +110,7 @@ fn export(s: &Source, out: &std::path::Path) -> anyhow::Result<web::ExportReport
 fn summary(r: &web::ExportReport) -> String {
     let g = &r.geometry;
     format!(
-        "wrote {}: {} frames × {} vertices, geometry {:.0} KB ({:.1} KB/frame, {:.1}× smaller than float32), max vertex error {:.3} mm (step {:.3} mm), {} transitions, {:.2} s\n",
+        "wrote {}: {} frames × {} vertices, geometry {:.0} KB ({:.1} KB/frame, {:.1}× smaller than float32), max vertex error {:.3} mm (step {:.3} mm), {} transitions ({} precomputed frames, {:.0} KB, {:.2} s), {} spaces ({} frames, {:.0} KB), {:.2} s\n",
         r.site.display(),
         g.frames,
         r.vertices,
@@ -115,6 +120,12 @@ fn summary(r: &web::ExportReport) -> String {
         g.max_error * 1e3,
         g.step * 1e3,
         r.transitions,
+        r.transition_frames,
+        r.transition_bytes as f64 / 1e3,
+        r.transition_seconds,
+        r.spaces,
+        r.space_frames,
+        r.space_bytes as f64 / 1e3,
         r.seconds
     )
 }

@@ -11,6 +11,7 @@
 use super::codec::{self, CodecError, EncodeOptions, EncodeReport, Geometry};
 use crate::db::{BuildOptions, DbError, Manifest, Quiet};
 use crate::graph::SurfaceMotionGraph;
+use crate::mesh::blend::Blender;
 use crate::mesh::io::{LoadOptions, load_sequence};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -34,6 +35,10 @@ pub enum WebError {
     /// The geometry could not be encoded or decoded.
     #[error(transparent)]
     Codec(#[from] CodecError),
+    /// The parametric model (motion spaces) or the transition blender
+    /// could not be built.
+    #[error(transparent)]
+    Param(#[from] crate::parametric::ParamError),
     /// Writing the site failed.
     #[error("{path}: {msg}")]
     Io {
@@ -56,6 +61,10 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> WebError + '_ {
 pub struct ExportOptions {
     /// The geometry codec's options (default: 1 mm max vertex error).
     pub codec: EncodeOptions,
+    /// Leave the transitions to the page's linear blend on the GPU instead
+    /// of precomputing each window's non-linear blend (Huang et al. 2015,
+    /// Sec. 4.4; default false: precomputed).
+    pub linear_transitions: bool,
 }
 
 /// A sequence as the page sees it.
@@ -93,6 +102,58 @@ pub struct SiteTransition {
     /// frame `n` onto the source's frame `m` (a rotation about +Y, then a
     /// translation in x and z; least squares over all vertices).
     pub align: [f64; 4],
+    /// The geometry sequence holding the window's `2L + 1` frames blended
+    /// non-linearly (Huang et al. 2015, Sec. 4.4: frame `i` is
+    /// `G(from[m−L+i], align·to[n−L+i], i / 2L)`, [`crate::mesh::blend::Blender`]),
+    /// in the source's coordinates; absent: the page blends linearly.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blended: Option<usize>,
+}
+
+/// A parametric motion space (Casas et al. 2013, Sec. 3) as the page plays
+/// it: the hybrid blend's stored reference frames (Eq. 3; each a geometry
+/// sequence of `grid` phase samples in the body frame, metres), the root
+/// motion per phase step, and the parameter maps with their valid ranges.
+/// A frame is the bilinear blend of four stored frames: the two references
+/// bracketing the weight, each at the two phase samples around the phase.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SiteSpace {
+    /// Name (the button's label).
+    pub name: String,
+    /// Its sequences, in blend order (weight coordinate `u = i` is sequence `i`).
+    pub sequences: Vec<String>,
+    /// Its parameters (`"speed"`, `"turn"`); the first is blended, a later
+    /// `turn` steers the heading.
+    pub parameters: Vec<String>,
+    /// Phase samples per cycle, `K`.
+    pub grid: usize,
+    /// Frames per second of the model.
+    pub fps: f64,
+    /// Per pair of neighbouring sequences: reference weights in `[0, 1]`
+    /// (increasing, 0 and 1 included) and the geometry sequence of each.
+    pub pairs: Vec<SitePair>,
+    /// The geometry sequence of the space's first block (its sequence 0;
+    /// the whole blend when the space has a single sequence).
+    pub first_block: usize,
+    /// Root motion per sequence and phase step: travel `(x, z)` in the
+    /// body frame (metres), heading change (radians), duration (frames).
+    pub steps: Vec<Vec<[f64; 4]>>,
+    /// `(u, speed m/s, turn deg/s)` measured at weight step 0.05.
+    pub measured: Vec<[f64; 3]>,
+    /// The inverse map `u = h⁻¹(p)` of the first parameter (Sec. 3.1.4).
+    pub axis: Option<crate::parametric::params::ParamMap>,
+    /// Valid range `[min, max]` of each parameter (a steering `turn`: the
+    /// blend's own turning; the page allows ±90°/s around it).
+    pub ranges: Vec<[f64; 2]>,
+}
+
+/// The references between two neighbouring sequences of a space.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SitePair {
+    /// Reference weights in `[0, 1]`, increasing.
+    pub weights: Vec<f64>,
+    /// The geometry sequence of each reference.
+    pub blocks: Vec<usize>,
 }
 
 /// `manifest.json` of a site.
@@ -116,6 +177,13 @@ pub struct SiteManifest {
     pub sequences: Vec<SiteSequence>,
     /// The transition table (empty for a result).
     pub transitions: Vec<SiteTransition>,
+    /// Parametric motion spaces (absent without `[[space]]` entries).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spaces: Vec<SiteSpace>,
+    /// Sequences in the geometry file: the `sequences` above first, then
+    /// the spaces' reference blocks and the blended transition windows.
+    #[serde(default)]
+    pub geometry_sequences: usize,
 }
 
 /// What an export wrote.
@@ -131,6 +199,18 @@ pub struct ExportReport {
     pub raw_bytes: usize,
     /// Transitions in the table.
     pub transitions: usize,
+    /// Frames of the precomputed non-linear transition windows.
+    pub transition_frames: usize,
+    /// Their bytes in the geometry file.
+    pub transition_bytes: usize,
+    /// Seconds spent blending them.
+    pub transition_seconds: f64,
+    /// Parametric spaces exported.
+    pub spaces: usize,
+    /// Frames of the spaces' reference blocks.
+    pub space_frames: usize,
+    /// Their bytes in the geometry file.
+    pub space_bytes: usize,
     /// Seconds spent (load, encode and write).
     pub seconds: f64,
 }
@@ -219,7 +299,7 @@ fn frame(g: &Geometry, s: usize, f: usize) -> &[[f32; 3]] {
 /// site there; refusing to replace any other non-empty folder).
 pub fn export_db(dir: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportReport, WebError> {
     let t0 = std::time::Instant::now();
-    let (m, g, graph) = load_db_geometry(dir)?;
+    let (m, mut g, graph) = load_db_geometry(dir)?;
     let sequences = m
         .sequences
         .iter()
@@ -234,7 +314,30 @@ pub fn export_db(dir: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportR
             }
         })
         .collect();
-    let transitions = transition_table(&graph, &g);
+    let mut transitions = transition_table(&graph, &g);
+    let base = g.sequences.len();
+    let mut extra = Extra::default();
+    if !opts.linear_transitions && !transitions.is_empty() {
+        let t1 = std::time::Instant::now();
+        let windows = blend_windows(&g, &transitions)?;
+        for (t, w) in transitions.iter_mut().zip(windows) {
+            t.blended = Some(g.sequences.len());
+            extra.transition_frames += w.len() / g.vertices;
+            extra.transition_seqs.push(g.sequences.len());
+            g.sequences.push(w);
+        }
+        extra.transition_seconds = t1.elapsed().as_secs_f64();
+    }
+    let spaces = if m.spaces.is_empty() {
+        Vec::new()
+    } else {
+        let s0 = g.sequences.len();
+        let sp = space_table(dir, &mut g)?;
+        extra.space_seqs = (s0..g.sequences.len()).collect();
+        extra.space_frames = g.sequences[s0..].iter().map(|s| s.len()).sum::<usize>() / g.vertices;
+        sp
+    };
+    debug_assert!(g.sequences.len() >= base);
     write_site(
         out,
         &g,
@@ -242,9 +345,134 @@ pub fn export_db(dir: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportR
         "character",
         sequences,
         transitions,
+        spaces,
+        extra,
         opts,
         t0,
     )
+}
+
+/// What the export adds to the database's own sequences.
+#[derive(Debug, Default)]
+struct Extra {
+    transition_seqs: Vec<usize>,
+    transition_frames: usize,
+    transition_seconds: f64,
+    space_seqs: Vec<usize>,
+    space_frames: usize,
+}
+
+/// The transitions' windows blended non-linearly (Huang et al. 2015,
+/// Sec. 4.4, the paper's fixed transitions): frame `i ∈ 0..=2L` is
+/// `G(from[m−L+i], align·to[n−L+i], i / 2L)` with `G` the gradient-domain
+/// blend of [`Blender`] (slerped rotations, lerped stretches,
+/// Poisson-stitched), in the source's coordinates. Frames past a sequence's
+/// ends are clamped, as the page's linear blend does.
+pub fn blend_windows(
+    g: &Geometry,
+    table: &[SiteTransition],
+) -> Result<Vec<Vec<[f32; 3]>>, WebError> {
+    use rayon::prelude::*;
+    let n = g.vertices;
+    let f64s = |p: &[[f32; 3]]| -> Vec<[f64; 3]> {
+        p.iter()
+            .map(|q| [q[0] as f64, q[1] as f64, q[2] as f64])
+            .collect()
+    };
+    let reference = crate::mesh::Mesh::new(f64s(frame(g, 0, 0)), g.triangles.clone())
+        .map_err(crate::mesh::MeshError::from)?;
+    let blender = Blender::new(&reference).map_err(crate::parametric::ParamError::from)?;
+    let frames = |s: usize| g.sequences[s].len() / n;
+    Ok(table
+        .par_iter()
+        .map_init(
+            || (blender.workspace(), vec![[0.0f64; 3]; n]),
+            |(ws, out), t| {
+                let l = t.window as isize;
+                let clamp = |s: usize, f: isize| f.clamp(0, frames(s) as isize - 1) as usize;
+                let [c, si, tx, tz] = t.align;
+                let mut w = Vec::with_capacity((2 * t.window + 1) * n);
+                for i in 0..=2 * l {
+                    let a = f64s(frame(g, t.from, clamp(t.from, t.m as isize - l + i)));
+                    let b: Vec<[f64; 3]> = frame(g, t.to, clamp(t.to, t.n as isize - l + i))
+                        .iter()
+                        .map(|q| {
+                            let (x, z) = (q[0] as f64, q[2] as f64);
+                            [c * x + si * z + tx, q[1] as f64, -si * x + c * z + tz]
+                        })
+                        .collect();
+                    let alpha = if l == 0 {
+                        1.0
+                    } else {
+                        i as f64 / (2 * l) as f64
+                    };
+                    let ga = blender.decompose(&a, ws);
+                    let gb = blender.decompose(&b, ws);
+                    blender.blend(&ga, &gb, alpha, out, ws);
+                    w.extend(out.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]));
+                }
+                w
+            },
+        )
+        .collect())
+}
+
+/// The database's parametric model ([`crate::parametric`], built or read
+/// from its cache) as the page's spaces; each reference block is appended
+/// to `g` as a geometry sequence of `K` frames.
+fn space_table(dir: &Path, g: &mut Geometry) -> Result<Vec<SiteSpace>, WebError> {
+    use crate::parametric::{MotionOptions, store::load_or_build};
+    let (motion, _) = load_or_build(dir, &MotionOptions::default(), false)?;
+    let summary = motion.summary();
+    let mut out = Vec::with_capacity(motion.spaces.len());
+    for (s, sum) in motion.spaces.iter().zip(summary) {
+        if s.blend.n != g.vertices {
+            return Err(WebError::Io {
+                path: dir.to_path_buf(),
+                msg: format!(
+                    "space '{}': {} vertices, the topology has {}",
+                    s.name, s.blend.n, g.vertices
+                ),
+            });
+        }
+        let first = g.sequences.len();
+        for b in &s.blend.blocks {
+            g.sequences
+                .push(b.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect());
+        }
+        out.push(SiteSpace {
+            name: s.name.clone(),
+            sequences: s.sequences.clone(),
+            parameters: s.parameters.iter().map(|p| p.name().to_string()).collect(),
+            grid: s.grid(),
+            fps: motion.fps,
+            pairs: s
+                .blend
+                .pairs
+                .iter()
+                .map(|p| SitePair {
+                    weights: p.weights.clone(),
+                    blocks: p.blocks.iter().map(|b| first + b).collect(),
+                })
+                .collect(),
+            first_block: first,
+            steps: s
+                .steps
+                .iter()
+                .map(|r| {
+                    r.step
+                        .iter()
+                        .zip(&r.duration)
+                        .map(|(x, &d)| [x[0], x[1], x[2], d])
+                        .collect()
+                })
+                .collect(),
+            measured: s.measured.clone(),
+            axis: s.axis.clone(),
+            ranges: sum.ranges.iter().map(|r| [r.min, r.max]).collect(),
+        });
+    }
+    Ok(out)
 }
 
 /// The graph's transitions as the page's table, in the graph's order.
@@ -260,6 +488,7 @@ pub fn transition_table(graph: &SurfaceMotionGraph, g: &Geometry) -> Vec<SiteTra
             window: t.window,
             cost: t.cost,
             align: align_ground(frame(g, t.from, t.m), frame(g, t.to, t.n)),
+            blended: None,
         })
         .collect()
 }
@@ -299,7 +528,18 @@ pub fn export_result(
         fps: seq.fps.unwrap_or(30.0),
         restart: [1.0, 0.0, 0.0, 0.0],
     }];
-    write_site(out, &g, name, "result", sequences, Vec::new(), opts, t0)
+    write_site(
+        out,
+        &g,
+        name,
+        "result",
+        sequences,
+        Vec::new(),
+        Vec::new(),
+        Extra::default(),
+        opts,
+        t0,
+    )
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -310,10 +550,21 @@ fn write_site(
     mode: &str,
     sequences: Vec<SiteSequence>,
     transitions: Vec<SiteTransition>,
+    spaces: Vec<SiteSpace>,
+    extra: Extra,
     opts: &ExportOptions,
     t0: std::time::Instant,
 ) -> Result<ExportReport, WebError> {
     let (bytes, rep) = codec::encode(g, &opts.codec)?;
+    // Bytes of geometry sequence `s`: its entry in the file's table.
+    let seq_bytes = |s: usize| -> usize {
+        let at = codec::HEADER_BYTES + 8 * s + 4;
+        bytes
+            .get(at..at + 4)
+            .map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    let transition_bytes = extra.transition_seqs.iter().map(|&s| seq_bytes(s)).sum();
+    let space_bytes = extra.space_seqs.iter().map(|&s| seq_bytes(s)).sum();
     let manifest = SiteManifest {
         format: FORMAT.into(),
         version: 1,
@@ -324,6 +575,8 @@ fn write_site(
         max_error: rep.max_error,
         sequences,
         transitions,
+        spaces,
+        geometry_sequences: g.sequences.len(),
     };
     let parent = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -374,6 +627,12 @@ fn write_site(
         vertices: g.vertices,
         raw_bytes: g.sequences.iter().map(|s| s.len() * 12).sum(),
         transitions: manifest.transitions.len(),
+        transition_frames: extra.transition_frames,
+        transition_bytes,
+        transition_seconds: extra.transition_seconds,
+        spaces: manifest.spaces.len(),
+        space_frames: extra.space_frames,
+        space_bytes,
         geometry: rep,
         seconds: t0.elapsed().as_secs_f64(),
     })

@@ -11,7 +11,7 @@ pub mod serve;
 
 pub use codec::{CodecError, Decoded, EncodeOptions, EncodeReport, Geometry, Predictor};
 pub use export::{
-    ExportOptions, ExportReport, SiteManifest, SiteSequence, SiteTransition, WebError, export_db,
-    export_result, load_db_geometry,
+    ExportOptions, ExportReport, SiteManifest, SitePair, SiteSequence, SiteSpace, SiteTransition,
+    WebError, export_db, export_result, load_db_geometry,
 };
 pub use serve::{SiteServer, resolve_path};

@@ -3,12 +3,8 @@
 //! request paths are percent-decoded, and any `..`, `.`, empty, absolute or
 //! backslash segment, or a file whose real path (symlinks resolved) leaves
 //! the folder, is refused with 404.
-//!
-//! With reports enabled (the browser test), `POST /__report` bodies (the
-//! page's self-test results) are collected for the caller.
 
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
 
 /// The file a request path names inside `root`, or `None` when the path
 /// leaves it or names nothing there. `/` is `index.html`; the query and
@@ -69,7 +65,6 @@ fn content_type(p: &Path) -> &'static str {
 pub struct SiteServer {
     server: tiny_http::Server,
     root: PathBuf,
-    reports: Option<Arc<Mutex<Vec<String>>>>,
 }
 
 /// Errors of the server.
@@ -93,16 +88,7 @@ impl SiteServer {
         Ok(SiteServer {
             server,
             root: root.to_path_buf(),
-            reports: None,
         })
-    }
-
-    /// Collects `POST /__report` bodies (for the browser test) into the
-    /// returned list.
-    pub fn collect_reports(&mut self) -> Arc<Mutex<Vec<String>>> {
-        let r = Arc::new(Mutex::new(Vec::new()));
-        self.reports = Some(r.clone());
-        r
     }
 
     /// The URL of the site.
@@ -126,22 +112,8 @@ impl SiteServer {
         std::thread::spawn(move || self.run())
     }
 
-    fn handle(&self, mut req: tiny_http::Request) {
+    fn handle(&self, req: tiny_http::Request) {
         let url = req.url().to_string();
-        if let (Some(r), tiny_http::Method::Post, "/__report") =
-            (&self.reports, req.method(), url.as_str())
-        {
-            let mut body = String::new();
-            let _ = std::io::Read::read_to_string(
-                &mut std::io::Read::take(req.as_reader(), 1 << 20),
-                &mut body,
-            );
-            if let Ok(mut v) = r.lock() {
-                v.push(body);
-            }
-            let _ = req.respond(tiny_http::Response::empty(204));
-            return;
-        }
         if !matches!(
             req.method(),
             tiny_http::Method::Get | tiny_http::Method::Head

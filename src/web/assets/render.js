@@ -1,19 +1,19 @@
-// WebGL2 renderer: the character (quantised positions dequantised and the
-// two frames of a transition blended in the vertex shader; faceted normals
+// WebGL2 renderer: the character (quantised positions dequantised and up
+// to four placed frames blended in the vertex shader: two across a linear
+// transition, four for a parametric space's bilinear blend; faceted normals
 // from screen-space derivatives; hemisphere light with a height-based
 // occlusion term), a ground plane with a grid, and a planar shadow drawn
 // once per pixel through the stencil buffer.
 
 const MESH_VS = `#version 300 es
-in vec3 aA; in vec3 aB;
-uniform vec3 uOrigin; uniform float uStep; uniform float uAlpha;
-uniform mat4 uMA, uMB, uVP;
+in vec3 aQ0; in vec3 aQ1; in vec3 aQ2; in vec3 aQ3;
+uniform vec3 uOrigin; uniform float uStep; uniform vec4 uW;
+uniform mat4 uM[4]; uniform mat4 uVP;
 uniform int uShadow; uniform float uGround; uniform vec3 uLight;
 out vec3 vPos; out float vH;
+vec3 placed(int i, vec3 q) { return (uM[i] * vec4(uOrigin + uStep * q, 1.0)).xyz; }
 void main() {
-  vec3 pa = (uMA * vec4(uOrigin + uStep * aA, 1.0)).xyz;
-  vec3 pb = (uMB * vec4(uOrigin + uStep * aB, 1.0)).xyz;
-  vec3 p = mix(pa, pb, uAlpha);
+  vec3 p = uW.x * placed(0, aQ0) + uW.y * placed(1, aQ1) + uW.z * placed(2, aQ2) + uW.w * placed(3, aQ3);
   vH = p.y - uGround;
   if (uShadow == 1) {
     p -= uLight * ((p.y - uGround) / uLight.y);
@@ -72,8 +72,8 @@ function compile(gl, vs, fs) {
     if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error('shader: ' + gl.getShaderInfoLog(s));
     gl.attachShader(p, s);
   }
-  gl.bindAttribLocation(p, 0, vs.includes('in vec2 aP') ? 'aP' : 'aA');
-  if (!vs.includes('in vec2 aP')) gl.bindAttribLocation(p, 1, 'aB');
+  if (vs.includes('in vec2 aP')) gl.bindAttribLocation(p, 0, 'aP');
+  else for (let i = 0; i < 4; i++) gl.bindAttribLocation(p, i, 'aQ' + i);
   gl.linkProgram(p);
   if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error('program: ' + gl.getProgramInfoLog(p));
   const u = {};
@@ -142,8 +142,9 @@ export class Renderer {
     if (c.width !== w || c.height !== h) { c.width = w; c.height = h; }
   }
 
-  // view: {a: {s, f, W}, b: {s, f, W}, alpha}; cam: {eye, at}; Wa/Wb as mat4.
-  draw(view, cam, mA, mB) {
+  // view: {parts: [{s, f, w}, ...]} (at most four); cam: {eye, at};
+  // mats: each part's placement as a mat4.
+  draw(view, cam, mats) {
     const gl = this.gl, m = this.mesh, n = this.n;
     this.resize();
     gl.viewport(0, 0, this.canvas.width, this.canvas.height);
@@ -171,13 +172,17 @@ export class Renderer {
       gl.enableVertexAttribArray(loc);
       gl.vertexAttribPointer(loc, 3, gl.UNSIGNED_SHORT, false, 6, v.f * n * 6);
     };
-    attrib(0, view.a);
-    attrib(1, view.b);
+    const parts = view.parts, w = [0, 0, 0, 0], M = new Float32Array(64);
+    for (let i = 0; i < 4; i++) {
+      const k = i < parts.length ? i : 0;
+      attrib(i, parts[k]);
+      w[i] = i < parts.length ? parts[i].w : 0;
+      M.set(mats[k], 16 * i);
+    }
     gl.uniform3fv(m.u.uOrigin, this.g.origin);
     gl.uniform1f(m.u.uStep, this.g.step);
-    gl.uniform1f(m.u.uAlpha, view.alpha);
-    gl.uniformMatrix4fv(m.u.uMA, false, mA);
-    gl.uniformMatrix4fv(m.u.uMB, false, mB);
+    gl.uniform4fv(m.u.uW, w);
+    gl.uniformMatrix4fv(m.u['uM[0]'], false, M);
     gl.uniformMatrix4fv(m.u.uVP, false, vp);
     gl.uniform1f(m.u.uGround, this.ground_y);
     gl.uniform3fv(m.u.uLight, this.light);
