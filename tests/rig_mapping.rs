@@ -1538,3 +1538,104 @@ fn structure_alone_picks_the_named_joints_on_cc_and_asf_rigs() {
     }
     eprintln!("{}", report.join("\n"));
 }
+
+// ------------------------------------------------------------ glTF skins
+
+/// Canonical poses of a skin mapped with no rig map: the bind pose and the
+/// first animation's frames (world space).
+fn skin_poses(a: &surfmotion::mesh::io::gltf::GltfAsset) -> Result<(RigMap, Vec<Pose>), RigError> {
+    let d = surfmotion::rig::load::detect_skin(a)?;
+    assert!(d.missing.is_empty(), "{:?}", d.missing);
+    let bind = surfmotion::rig::load::skin_bind_positions(a).unwrap();
+    let (clip, _) = surfmotion::rig::load::skin_clip(a, &bind, true).unwrap();
+    let p = d.map.poses(&clip)?;
+    Ok((d.map, p))
+}
+
+/// Every rigged glTF in the data: the humanoids (CesiumMan, RiggedFigure:
+/// joints named `joint_N`, so by structure alone) map with no rig map and
+/// left on the left (glTF assets face +Z with +Y up, so left is +X: the
+/// spec's convention, independent of the mapping); the fox and the
+/// two-bone cylinder are not humanoids. Names given to a humanoid skin map
+/// to the same joints, and mirrored names are corrected by the geometry.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn rigged_gltf_skins_map_by_structure_like_clips() {
+    let Some(d) = common::data_dir() else { return };
+    let mut files = common::files_with_ext(&d.join("gltf"), "glb");
+    files.sort();
+    assert!(files.len() >= 4);
+    let mut humanoids = 0;
+    for f in files {
+        let a = surfmotion::mesh::io::gltf::read_gltf(&f).unwrap();
+        let humanoid = ["CesiumMan", "RiggedFigure"]
+            .iter()
+            .any(|n| f.to_string_lossy().contains(n));
+        let got = skin_poses(&a);
+        if !humanoid {
+            match got {
+                Err(RigError::NotHumanoid { reason }) => {
+                    eprintln!("{}: not a humanoid: {reason}", f.display())
+                }
+                Ok((m, _)) => panic!("{} mapped as {}: {:?}", f.display(), m.convention, m.joints),
+                Err(e) => panic!("{}: {e}", f.display()),
+            }
+            continue;
+        }
+        humanoids += 1;
+        let (map, ps) = got.unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        assert_eq!(
+            map.convention,
+            surfmotion::rig::BY_STRUCTURE,
+            "{}",
+            f.display()
+        );
+        let ps = &ps[1..]; // the animation frames, in world space
+        use Canonical as C;
+        let x = |p: &Pose, l: C, r: C| p[l.index()].x - p[r.index()].x;
+        let good = ps
+            .iter()
+            .filter(|p| x(p, C::LHip, C::RHip) > 0.0 && x(p, C::LShoulder, C::RShoulder) > 0.0)
+            .count();
+        eprintln!(
+            "{}: left at +X in {good} of {} frames",
+            f.display(),
+            ps.len()
+        );
+        assert!(
+            good * 4 >= ps.len() * 3,
+            "{}: left at +X in {good} of {} frames",
+            f.display(),
+            ps.len()
+        );
+        // The same skin with Mixamo names on the joints found, then with the
+        // names' left and right swapped.
+        for mirrored in [false, true] {
+            let mut b = a.clone();
+            let skin = b.skin.as_mut().unwrap();
+            for (k, name) in &map.joints {
+                let k = if mirrored { swap_side(*k) } else { *k };
+                let mixamo = surfmotion::rig::CONVENTIONS
+                    .iter()
+                    .find(|c| c.name == "Mixamo")
+                    .unwrap()
+                    .candidates[k.index()][0];
+                let i = skin.joint_names.iter().position(|n| n == name).unwrap();
+                skin.joint_names[i] = format!("mixamorig:{mixamo}");
+            }
+            let (m2, p2) = skin_poses(&b).unwrap();
+            for (pa, pb) in ps.iter().zip(&p2[1..]) {
+                for c in Canonical::ALL {
+                    assert!(
+                        pa[c.index()].distance(pb[c.index()]) < 1e-9,
+                        "{} named (mirrored {mirrored}): {} moved ({})",
+                        f.display(),
+                        c.name(),
+                        m2.convention
+                    );
+                }
+            }
+        }
+    }
+    assert_eq!(humanoids, 2);
+}

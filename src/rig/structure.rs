@@ -3,25 +3,31 @@
 //!
 //! Steps, all O(joints · sampled frames):
 //! 1. Bone lengths and "reach" (longest path to an end point) per joint;
-//!    joints joined by zero-length offsets form one node; helper bones
-//!    (twist, roll, fingers, ...; see [`super::names::is_helper`]) and their
-//!    helper-only subtrees are ignored.
+//!    joints joined by zero-length offsets form one node; helper bones are
+//!    ignored with their helper-only subtrees: by name (twist, roll,
+//!    fingers, ...; see [`super::names::is_helper`]) or by geometry (a side
+//!    branch lying along the bone from its parent to a sibling in most
+//!    poses: CC's ThighTwist01/02 beside Calf, ToeBaseShareBone).
 //! 2. A branch of a node is *significant* when its reach is at least 12% of
-//!    the rest skeleton's bounding-box diagonal (legs ≈ 35%, arms ≈ 30%,
-//!    fingers and toes ≈ 7%, measured on CMU, CC and Bandai rigs).
+//!    the body's size (the largest single-pose bounding-box diagonal; legs
+//!    ≈ 35%, arms ≈ 30%, fingers and toes ≈ 7%, measured on CMU, CC and
+//!    Bandai rigs).
 //! 3. The pelvis is the first node where exactly three significant chains
 //!    meet: two legs without further junctions and a spine that reaches a
 //!    node where two arms branch off (the chest). Legs must point away from
-//!    the chest (cosine below −0.5 in the rest pose or a sampled frame):
-//!    a quadruped's spine is horizontal above vertical legs.
-//! 4. Joints along a chain are chosen by position: hip = first joint off the
-//!    pelvis, ankle = first joint below 25% of the hip's height over the
-//!    chain's lowest point (height along pelvis→chest), knee = joint nearest
-//!    the hip–ankle midpoint, toe = next joint after the ankle; elbow = the
-//!    joint whose upper/fore-arm length ratio is closest to 1.2 (Drillis &
-//!    Contini's 0.186 H / 0.146 H ≈ 1.27); joints that stay collinear with
-//!    their neighbours in every sampled frame are pass-through helpers.
-//!    A joint whose name has the matching role wins inside its chain.
+//!    the chest (mean cosine below −0.7 in the rest pose or the median
+//!    sampled frame): a quadruped's spine is near horizontal above its legs.
+//! 4. Joints along a chain, where names do not fix them, by the body's
+//!    proportions on arc lengths (rest offsets, so any pose works): knee and
+//!    ankle make thigh ≈ shin and shin ≈ 2.5 × ankle-to-toe-tip; shoulder,
+//!    elbow and wrist make upper arm ≈ 1.27 × forearm ≈ 1.27 · 1.35 × hand
+//!    (Drillis & Contini 1966), a collar being the first arm joint when it
+//!    sits under 0.6 of the next one's distance from the mid-plane; the
+//!    spine is the joint nearest 40% of the pelvis→chest arc; the neck the
+//!    first joint above the chest (a helper-named one when the chain has
+//!    nothing else, CC's NeckTwist01); the head the first joint above it
+//!    whose node branches (jaw, eyes), else the chain's last joint. A joint
+//!    whose name has the matching role wins inside its chain.
 //! 5. Left/right from the body's own frame, never from names: up =
 //!    pelvis→neck, forward = the feet's heel→toe direction (else the knees'
 //!    bend, else the root's travel), left = up × forward (Y-up, facing +Z:
@@ -565,27 +571,31 @@ fn body(
             name(chest)
         )));
     }
-    // Legs point away from the chest in at least one pose.
-    let mut best_cos = f64::MAX;
-    let mut ref_pose = 0;
-    for (k, (p, _)) in g.poses.iter().enumerate() {
-        let up = (p[chest] - p[pelvis]).normalize_or_zero();
-        let mut c = 0.0;
-        for &l in &legs {
-            let path = g.path(l);
-            let end = *path.last().unwrap_or(&l);
-            c += 0.5 * (p[end] - p[pelvis]).normalize_or_zero().dot(up);
-        }
-        // The rest pose (usually neutral, legs straight) when it stands
-        // upright enough; else the most upright sampled pose.
-        if c < best_cos && !(k > 0 && ref_pose == 0 && best_cos < -0.8) {
-            best_cos = c;
-            ref_pose = k;
-        }
-    }
-    if best_cos > -0.5 {
+    // Legs point away from the chest in the rest pose or in the median
+    // sampled frame (not merely in one: a sitting quadruped's hind legs do).
+    let cosines: Vec<f64> = g
+        .poses
+        .iter()
+        .map(|(p, _)| {
+            let up = (p[chest] - p[pelvis]).normalize_or_zero();
+            legs.iter()
+                .map(|&l| {
+                    let path = g.path(l);
+                    let end = *path.last().unwrap_or(&l);
+                    0.5 * (p[end] - p[pelvis]).normalize_or_zero().dot(up)
+                })
+                .sum::<f64>()
+        })
+        .collect();
+    let mut frames: Vec<f64> = cosines.iter().skip(1).copied().collect();
+    frames.sort_by(f64::total_cmp);
+    let median = frames.get(frames.len() / 2).copied().unwrap_or(f64::MAX);
+    let best_cos = cosines.first().copied().unwrap_or(f64::MAX).min(median);
+    // −0.7 (134°): humans walk and run at −0.85 to −1; a fox standing
+    // with its chest above its hips is at −0.53.
+    if best_cos > -0.7 {
         return Err(NotHumanoid(format!(
-            "the chains below '{}' never point away from the spine (cosine {best_cos:.2}): a horizontal body",
+            "the chains below '{}' do not point away from the spine (cosine {best_cos:.2} in the rest pose or the median frame): a horizontal body",
             name(pelvis)
         )));
     }
