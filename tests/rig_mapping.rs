@@ -1583,6 +1583,18 @@ fn rigged_gltf_skins_map_by_structure_like_clips() {
             continue;
         }
         humanoids += 1;
+        if f.to_string_lossy().contains("CesiumMan") {
+            // Its left and right are undecided by geometry (it faces +X in
+            // bind space; see tests/rig.rs): the mapping must say so, and
+            // the rig embedding refuses it without a rig map.
+            let d = surfmotion::rig::load::detect_skin(&a).unwrap();
+            let c = d.side_confidence.unwrap();
+            assert!(
+                c < surfmotion::rig::embed::skin::MIN_SIDE_CONFIDENCE,
+                "CesiumMan: side confidence {c}"
+            );
+            continue;
+        }
         let (map, ps) = got.unwrap_or_else(|e| panic!("{}: {e}", f.display()));
         assert_eq!(
             map.convention,

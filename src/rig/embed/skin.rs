@@ -18,6 +18,10 @@ use glam::{DVec3, Mat4};
 use std::collections::HashMap;
 use std::path::Path;
 
+/// Side confidence (0-1) below which a skin mapped by structure alone is
+/// refused: its left and right would be a guess.
+pub const MIN_SIDE_CONFIDENCE: f64 = 0.6;
+
 /// Embeds the rig of `asset`'s skin in `mesh`. `map` overrides name
 /// detection; `path` names the glTF in errors. Every vertex must lie
 /// within 1e-4 of the bounding-box diagonal of a glTF vertex, in the bind
@@ -49,6 +53,14 @@ pub fn from_skin(
                     "the skin's joints ({}) give no joint for {}; pass a rig map",
                     d.map.convention,
                     miss.join(", ")
+                )));
+            }
+            // A rig whose left and right the geometry cannot tell apart
+            // would be mirrored as often as not: ask for a map instead.
+            if let Some(c) = d.side_confidence.filter(|&c| c < MIN_SIDE_CONFIDENCE) {
+                return Err(bad(format!(
+                    "the skin's joints have no known names and its geometry does not tell \
+                     left from right (confidence {c:.2}, below {MIN_SIDE_CONFIDENCE}); pass a rig map"
                 )));
             }
             d.map
