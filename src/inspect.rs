@@ -73,6 +73,15 @@ pub struct MeshReport {
     pub groups: Vec<(String, u32)>,
     /// Skin joints (glTF).
     pub skin_joints: Vec<String>,
+    /// The skin's rig convention, as for clips (a known convention; `unknown
+    /// convention, mapped by structure|names`; or `not a humanoid: <reason>`).
+    /// Empty without a skin.
+    pub skin_convention: String,
+    /// Per canonical joint: the skin joint, its source and confidence
+    /// (empty without a skin or when not a humanoid).
+    pub skin_rig_joints: Vec<crate::rig::JointReport>,
+    /// How the skin's left and right were decided.
+    pub skin_sides: String,
     /// Morph targets (glTF).
     pub morph_targets: usize,
     /// Animations and durations (glTF).
@@ -197,6 +206,8 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
     };
     let (mut skin_joints, mut morph_targets, mut animations, mut problems) =
         (Vec::new(), 0, Vec::new(), Vec::new());
+    let (mut skin_convention, mut skin_rig_joints, mut skin_sides) =
+        (String::new(), Vec::new(), String::new());
     if matches!(fmt, MeshFormat::Gltf | MeshFormat::Glb) {
         let a = read_gltf(&p)?;
         skin_joints = a
@@ -204,6 +215,16 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
             .as_ref()
             .map(|s| s.joint_names.clone())
             .unwrap_or_default();
+        if a.skin.is_some() {
+            match crate::rig::load::detect_skin(&a) {
+                Ok(d) => {
+                    skin_convention = d.map.convention.clone();
+                    skin_rig_joints = d.joints;
+                    skin_sides = d.sides;
+                }
+                Err(e) => skin_convention = e.to_string(),
+            }
+        }
         morph_targets = a.morph_targets.len();
         animations = a.animations.clone();
         problems = a.problems.clone();
@@ -226,6 +247,9 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
             .map(|g| (g.name.clone(), g.end - g.start))
             .collect(),
         skin_joints,
+        skin_convention,
+        skin_rig_joints,
+        skin_sides,
         morph_targets,
         animations,
         problems,
@@ -407,6 +431,20 @@ impl Report {
                         r.skin_joints.len(),
                         r.skin_joints.join(" ")
                     );
+                    let _ = writeln!(s, "  convention  {}", r.skin_convention);
+                    if !r.skin_sides.is_empty() {
+                        let _ = writeln!(s, "  left/right  {}", r.skin_sides);
+                    }
+                    for j in &r.skin_rig_joints {
+                        let _ = writeln!(
+                            s,
+                            "    {:<12} {:<28} {:<10} {:.2}",
+                            j.canonical.name(),
+                            j.joint.as_deref().unwrap_or("(derived)"),
+                            format!("{:?}", j.source).to_lowercase(),
+                            j.confidence
+                        );
+                    }
                 }
                 if r.morph_targets > 0 {
                     let _ = writeln!(s, "  morph       {} targets", r.morph_targets);

@@ -1083,3 +1083,571 @@ fn structure_alone_agrees_with_the_names_on_limbs() {
         }
     }
 }
+
+// ------------------------------------------------ structure alone (issue 17)
+
+/// Adds a joint under `parent` with `offset` and End Site `tail`; static
+/// (identity rotation) relative to its parent.
+fn add(
+    nodes: &mut Vec<Node>,
+    parent: usize,
+    name: &str,
+    offset: DVec3,
+    tail: Option<DVec3>,
+) -> usize {
+    let ch = nodes[parent]
+        .channels
+        .iter()
+        .copied()
+        .filter(|c| c.is_rotation())
+        .collect();
+    nodes.push(Node {
+        name: name.to_string(),
+        parent: Some(parent),
+        offset,
+        channels: ch,
+        tail,
+        src: None,
+        scale: 1.0,
+    });
+    nodes.len() - 1
+}
+
+/// Inserts a zero-length joint between `kids` (siblings) and their parent.
+fn insert_above(nodes: &mut Vec<Node>, kids: &[usize], name: &str) -> usize {
+    let p = nodes[kids[0]].parent;
+    let ch = nodes[kids[0]]
+        .channels
+        .iter()
+        .copied()
+        .filter(|c| c.is_rotation())
+        .collect();
+    nodes.push(Node {
+        name: name.to_string(),
+        parent: p,
+        offset: DVec3::ZERO,
+        channels: ch,
+        tail: None,
+        src: None,
+        scale: 1.0,
+    });
+    let k = nodes.len() - 1;
+    for &c in kids {
+        nodes[c].parent = Some(k);
+    }
+    k
+}
+
+fn idx(nodes: &[Node], name: &str) -> usize {
+    nodes.iter().position(|n| n.name == name).unwrap()
+}
+
+/// The procedural walk as a Character Creator rig: `CC_Base_` names, a
+/// zero-length Pelvis under Hip holding the thighs, Waist below Spine01,
+/// clavicles, a neck of two NeckTwist bones, twist and share bones beside
+/// every limb bone, five three-joint fingers, toes, face bones, rib bones.
+fn cc_like(c: &Clip) -> Vec<Node> {
+    let mut n = nodes_of(c);
+    let names = [
+        ("Hips", "Hip"),
+        ("Spine", "Spine01"),
+        ("Spine1", "Spine02"),
+        ("Neck", "NeckTwist01"),
+        ("Head", "Head"),
+    ];
+    for (a, b) in names {
+        let i = idx(&n, a);
+        n[i].name = format!("CC_Base_{b}");
+    }
+    for (side, s) in [("Left", "L"), ("Right", "R")] {
+        for (a, b) in [
+            ("Arm", "Upperarm"),
+            ("ForeArm", "Forearm"),
+            ("Hand", "Hand"),
+            ("UpLeg", "Thigh"),
+            ("Leg", "Calf"),
+            ("Foot", "Foot"),
+            ("ToeBase", "ToeBase"),
+        ] {
+            let i = idx(&n, &format!("{side}{a}"));
+            n[i].name = format!("CC_Base_{s}_{b}");
+        }
+    }
+    let cc = |s: &str| format!("CC_Base_{s}");
+    let thighs = [idx(&n, &cc("L_Thigh")), idx(&n, &cc("R_Thigh"))];
+    insert_above(&mut n, &thighs, &cc("Pelvis"));
+    let s1 = idx(&n, &cc("Spine01"));
+    split(&mut n, s1, 0.6, &cc("Waist"));
+    let h = idx(&n, &cc("Head"));
+    split(&mut n, h, 0.5, &cc("NeckTwist02"));
+    let h = idx(&n, &cc("Head"));
+    let face = add(&mut n, h, &cc("FacialBone"), DVec3::ZERO, None);
+    let jaw = add(
+        &mut n,
+        face,
+        &cc("JawRoot"),
+        DVec3::new(0.0, 0.01, 0.03),
+        None,
+    );
+    add(
+        &mut n,
+        jaw,
+        &cc("Tongue01"),
+        DVec3::new(0.0, 0.0, 0.03),
+        Some(DVec3::ZERO),
+    );
+    add(
+        &mut n,
+        face,
+        &cc("L_Eye"),
+        DVec3::new(0.03, 0.07, 0.08),
+        Some(DVec3::ZERO),
+    );
+    add(
+        &mut n,
+        face,
+        &cc("R_Eye"),
+        DVec3::new(-0.03, 0.07, 0.08),
+        Some(DVec3::ZERO),
+    );
+    add(
+        &mut n,
+        face,
+        &cc("UpperJaw"),
+        DVec3::new(0.0, 0.04, 0.06),
+        Some(DVec3::ZERO),
+    );
+    let chest = idx(&n, &cc("Spine02"));
+    for (s, x) in [("L", 1.0), ("R", -1.0)] {
+        let r = add(
+            &mut n,
+            chest,
+            &cc(&format!("{s}_RibsTwist")),
+            DVec3::new(0.1 * x, 0.05, 0.09),
+            None,
+        );
+        add(
+            &mut n,
+            r,
+            &cc(&format!("{s}_Breast")),
+            DVec3::new(0.0, 0.0, 0.03),
+            Some(DVec3::ZERO),
+        );
+        let up = idx(&n, &cc(&format!("{s}_Upperarm")));
+        split(&mut n, up, 0.25, &cc(&format!("{s}_Clavicle")));
+        // Twist and share bones beside each limb bone, along it.
+        for (bone, next, twist) in [
+            ("Upperarm", "Forearm", "UpperarmTwist"),
+            ("Forearm", "Hand", "ForearmTwist"),
+            ("Thigh", "Calf", "ThighTwist"),
+            ("Calf", "Foot", "CalfTwist"),
+        ] {
+            let b = idx(&n, &cc(&format!("{s}_{bone}")));
+            let o = n[idx(&n, &cc(&format!("{s}_{next}")))].offset;
+            let t1 = add(&mut n, b, &cc(&format!("{s}_{twist}01")), DVec3::ZERO, None);
+            add(
+                &mut n,
+                t1,
+                &cc(&format!("{s}_{twist}02")),
+                o * 0.5,
+                Some(DVec3::ZERO),
+            );
+        }
+        let fa = idx(&n, &cc(&format!("{s}_Forearm")));
+        add(
+            &mut n,
+            fa,
+            &cc(&format!("{s}_ElbowShareBone")),
+            DVec3::ZERO,
+            Some(DVec3::ZERO),
+        );
+        let calf = idx(&n, &cc(&format!("{s}_Calf")));
+        add(
+            &mut n,
+            calf,
+            &cc(&format!("{s}_KneeShareBone")),
+            DVec3::ZERO,
+            Some(DVec3::ZERO),
+        );
+        let foot = idx(&n, &cc(&format!("{s}_Foot")));
+        let toe = idx(&n, &cc(&format!("{s}_ToeBase")));
+        let to = n[toe].offset;
+        add(
+            &mut n,
+            foot,
+            &cc(&format!("{s}_ToeBaseShareBone")),
+            to,
+            Some(DVec3::ZERO),
+        );
+        n[toe].tail = None;
+        for (k, t) in ["BigToe1", "IndexToe1", "MidToe1"].iter().enumerate() {
+            let dx = x * (0.02 - 0.015 * k as f64);
+            add(
+                &mut n,
+                toe,
+                &cc(&format!("{s}_{t}")),
+                DVec3::new(dx, 0.0, 0.04),
+                Some(DVec3::ZERO),
+            );
+        }
+        let hand = idx(&n, &cc(&format!("{s}_Hand")));
+        n[hand].tail = None;
+        for (k, f) in ["Thumb", "Index", "Mid", "Ring", "Pinky"]
+            .iter()
+            .enumerate()
+        {
+            let base = if k == 0 {
+                DVec3::new(0.0, -0.03, 0.025)
+            } else {
+                DVec3::new(0.0, -0.085, 0.02 * (2.5 - k as f64))
+            };
+            let f1 = add(&mut n, hand, &cc(&format!("{s}_{f}1")), base, None);
+            let f2 = add(
+                &mut n,
+                f1,
+                &cc(&format!("{s}_{f}2")),
+                DVec3::new(0.0, -0.035, 0.0),
+                None,
+            );
+            add(
+                &mut n,
+                f2,
+                &cc(&format!("{s}_{f}3")),
+                DVec3::new(0.0, -0.025, 0.0),
+                Some(DVec3::ZERO),
+            );
+        }
+    }
+    n
+}
+
+/// The procedural walk as a CMU ASF skeleton (joints at bone starts, as
+/// the AMC reader makes them): zero-length lowerback and hip joints,
+/// clavicles, lowerneck/upperneck/head, lwrist → lhand → lfingers with
+/// lthumb beside lhand.
+fn asf_like(c: &Clip) -> Vec<Node> {
+    let mut n = nodes_of(c);
+    for (a, b) in [
+        ("Hips", "root"),
+        ("Spine", "upperback"),
+        ("Spine1", "thorax"),
+        ("Neck", "lowerneck"),
+        ("Head", "head"),
+    ] {
+        let i = idx(&n, a);
+        n[i].name = b.into();
+    }
+    for (side, s) in [("Left", "l"), ("Right", "r")] {
+        for (a, b) in [
+            ("Arm", "humerus"),
+            ("ForeArm", "radius"),
+            ("Hand", "wrist"),
+            ("UpLeg", "femur"),
+            ("Leg", "tibia"),
+            ("Foot", "foot"),
+            ("ToeBase", "toes"),
+        ] {
+            let i = idx(&n, &format!("{side}{a}"));
+            n[i].name = format!("{s}{b}");
+        }
+    }
+    let ub = idx(&n, "upperback");
+    insert_above(&mut n, &[ub], "lowerback");
+    let h = idx(&n, "head");
+    split(&mut n, h, 0.5, "upperneck");
+    for (s, x) in [("l", 1.0), ("r", -1.0)] {
+        let f = idx(&n, &format!("{s}femur"));
+        insert_above(&mut n, &[f], &format!("{s}hipjoint"));
+        let hu = idx(&n, &format!("{s}humerus"));
+        split(&mut n, hu, 0.25, &format!("{s}clavicle"));
+        let w = idx(&n, &format!("{s}wrist"));
+        n[w].tail = None;
+        let hand = add(
+            &mut n,
+            w,
+            &format!("{s}hand"),
+            DVec3::new(0.0, -0.04, 0.0),
+            None,
+        );
+        add(
+            &mut n,
+            hand,
+            &format!("{s}fingers"),
+            DVec3::new(0.0, -0.03, 0.0),
+            Some(DVec3::new(0.0, -0.025, 0.0)),
+        );
+        add(
+            &mut n,
+            w,
+            &format!("{s}thumb"),
+            DVec3::new(0.0, -0.04, 0.0),
+            Some(DVec3::new(0.02 * x, -0.02, 0.02)),
+        );
+    }
+    n
+}
+
+/// Every joint renamed `{prefix}J{k}` (helpers too: no name hints at all).
+fn meaningless(nodes: &[Node], prefix: &str) -> Vec<Node> {
+    let mut out = nodes.to_vec();
+    for (k, n) in out.iter_mut().enumerate() {
+        n.name = format!("{prefix}J{k}");
+    }
+    out
+}
+
+/// Positions of every canonical joint, the rest pose and every frame: the
+/// largest difference, relative to the body's size.
+fn worst(
+    a: &(RigMap, Pose, Vec<Pose>),
+    b: &(RigMap, Pose, Vec<Pose>),
+    swap: bool,
+) -> Vec<(f64, Canonical)> {
+    let m = if swap {
+        DVec3::new(-1.0, 1.0, 1.0)
+    } else {
+        DVec3::ONE
+    };
+    let s = scale(&a.1);
+    Canonical::ALL
+        .iter()
+        .map(|&k| {
+            let other = if swap { swap_side(k) } else { k };
+            let e = std::iter::once((&a.1, &b.1))
+                .chain(a.2.iter().zip(&b.2))
+                .map(|(pa, pb)| (pa[other.index()] * m).distance(pb[k.index()]))
+                .fold(0.0, f64::max);
+            (e / s, k)
+        })
+        .collect()
+}
+
+/// Structure alone, on rigs whose helper bones carry no telling name: every
+/// joint of CC-like and ASF-like rigs (generated, and the real CC and
+/// ASF/AMC files, plus every other family in the data) renamed `J0, J1, …`,
+/// also prefixed, re-ordered, mirrored and with extra neutral pass-through
+/// and attachment bones, maps every canonical joint where the names do.
+/// (CC: the names pick CC_Base_Pelvis, the structure its parent CC_Base_Hip,
+/// at the same place: equal positions are what later stages read.)
+#[test]
+fn structure_alone_picks_the_named_joints_on_cc_and_asf_rigs() {
+    let walk = via_bvh(&surfmotion::synth::gait_clip(
+        surfmotion::synth::Gait::Walk,
+        2.0,
+        30.0,
+    ));
+    let mut rigs: Vec<(String, Vec<Node>, Clip)> = vec![
+        ("generated CC rig".into(), cc_like(&walk), walk.clone()),
+        ("generated ASF rig".into(), asf_like(&walk), walk.clone()),
+    ];
+    for (what, c) in originals() {
+        let c = via_bvh(&c);
+        rigs.push((what, nodes_of(&c), c));
+    }
+    let mut report = Vec::new();
+    for (what, nodes, src) in rigs {
+        let named = via_bvh(&build(&src, &nodes, false));
+        let orig = poses(&named);
+        if what.starts_with("generated") {
+            assert!(
+                surfmotion::rig::CONVENTIONS
+                    .iter()
+                    .any(|cv| cv.name == orig.0.convention),
+                "{what}: names not detected as a convention ({})",
+                orig.0.convention
+            );
+        }
+        let canon = canonical_index(&named, &orig.0);
+        let at = |k: Canonical| canon.iter().position(|x| *x == Some(k)).unwrap();
+        let named_nodes = nodes_of(&named);
+        // Extra neutral bones: a pass-through 40% down each upper arm and
+        // each shin, a mesh-attachment leaf on each elbow.
+        let mut laden = named_nodes.clone();
+        for k in [
+            Canonical::LElbow,
+            Canonical::RElbow,
+            Canonical::LAnkle,
+            Canonical::RAnkle,
+        ] {
+            split(&mut laden, at(k), 0.4, "x");
+        }
+        for e in [Canonical::LElbow, Canonical::RElbow] {
+            let o = laden[at(e)].offset;
+            add(
+                &mut laden,
+                at(e),
+                "x",
+                DVec3::new(o.y, o.z, o.x) * 0.2,
+                Some(DVec3::ZERO),
+            );
+        }
+        let variants: Vec<(&str, Clip, bool)> = vec![
+            (
+                "J-named",
+                via_bvh(&build(&named, &meaningless(&named_nodes, ""), false)),
+                false,
+            ),
+            (
+                "J-named, namespaced, re-ordered",
+                via_bvh(&build(&named, &meaningless(&named_nodes, "rig7:"), true)),
+                false,
+            ),
+            (
+                "J-named, mirrored",
+                via_bvh(&mirror(&build(
+                    &named,
+                    &meaningless(&named_nodes, ""),
+                    false,
+                ))),
+                true,
+            ),
+            (
+                "J-named, extra bones",
+                via_bvh(&build(&named, &meaningless(&laden, ""), true)),
+                false,
+            ),
+        ];
+        for (how, v, swap) in variants {
+            let got = poses(&v);
+            assert_eq!(
+                got.0.convention,
+                surfmotion::rig::BY_STRUCTURE,
+                "{what} {how}"
+            );
+            let w = worst(&orig, &got, swap);
+            let bad: Vec<String> = w
+                .iter()
+                .filter(|(e, _)| *e > 1e-4)
+                .map(|(e, k)| format!("{} ({e:.3})", k.name()))
+                .collect();
+            report.push(format!(
+                "{what}, {how}: {}",
+                if bad.is_empty() {
+                    "all 19 equal".into()
+                } else {
+                    bad.join(", ")
+                }
+            ));
+            assert!(
+                bad.is_empty(),
+                "{what}, {how}: structure differs from the names at {bad:?}\n  names: {:?}\n  structure: {:?}",
+                orig.0.joints,
+                got.0.joints
+            );
+        }
+    }
+    eprintln!("{}", report.join("\n"));
+}
+
+// ------------------------------------------------------------ glTF skins
+
+/// Canonical poses of a skin mapped with no rig map: the bind pose and the
+/// first animation's frames (world space).
+fn skin_poses(a: &surfmotion::mesh::io::gltf::GltfAsset) -> Result<(RigMap, Vec<Pose>), RigError> {
+    let d = surfmotion::rig::load::detect_skin(a)?;
+    assert!(d.missing.is_empty(), "{:?}", d.missing);
+    let bind = surfmotion::rig::load::skin_bind_positions(a).unwrap();
+    let (clip, _) = surfmotion::rig::load::skin_clip(a, &bind, true).unwrap();
+    let p = d.map.poses(&clip)?;
+    Ok((d.map, p))
+}
+
+/// Every rigged glTF in the data: the humanoids (CesiumMan, RiggedFigure:
+/// joints named `joint_N`, so by structure alone) map with no rig map and
+/// left on the left (glTF assets face +Z with +Y up, so left is +X: the
+/// spec's convention, independent of the mapping); the fox and the
+/// two-bone cylinder are not humanoids. Names given to a humanoid skin map
+/// to the same joints, and mirrored names are corrected by the geometry.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn rigged_gltf_skins_map_by_structure_like_clips() {
+    let Some(d) = common::data_dir() else { return };
+    let mut files = common::files_with_ext(&d.join("gltf"), "glb");
+    files.sort();
+    assert!(files.len() >= 4);
+    let mut humanoids = 0;
+    for f in files {
+        let a = surfmotion::mesh::io::gltf::read_gltf(&f).unwrap();
+        let humanoid = ["CesiumMan", "RiggedFigure"]
+            .iter()
+            .any(|n| f.to_string_lossy().contains(n));
+        let got = skin_poses(&a);
+        if !humanoid {
+            match got {
+                Err(RigError::NotHumanoid { reason }) => {
+                    eprintln!("{}: not a humanoid: {reason}", f.display())
+                }
+                Ok((m, _)) => panic!("{} mapped as {}: {:?}", f.display(), m.convention, m.joints),
+                Err(e) => panic!("{}: {e}", f.display()),
+            }
+            continue;
+        }
+        humanoids += 1;
+        if f.to_string_lossy().contains("CesiumMan") {
+            // Its left and right are undecided by geometry (it faces +X in
+            // bind space; see tests/rig.rs): the mapping must say so, and
+            // the rig embedding refuses it without a rig map.
+            let d = surfmotion::rig::load::detect_skin(&a).unwrap();
+            let c = d.side_confidence.unwrap();
+            assert!(
+                c < surfmotion::rig::embed::skin::MIN_SIDE_CONFIDENCE,
+                "CesiumMan: side confidence {c}"
+            );
+            continue;
+        }
+        let (map, ps) = got.unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        assert_eq!(
+            map.convention,
+            surfmotion::rig::BY_STRUCTURE,
+            "{}",
+            f.display()
+        );
+        let ps = &ps[1..]; // the animation frames, in world space
+        use Canonical as C;
+        let x = |p: &Pose, l: C, r: C| p[l.index()].x - p[r.index()].x;
+        let good = ps
+            .iter()
+            .filter(|p| x(p, C::LHip, C::RHip) > 0.0 && x(p, C::LShoulder, C::RShoulder) > 0.0)
+            .count();
+        eprintln!(
+            "{}: left at +X in {good} of {} frames",
+            f.display(),
+            ps.len()
+        );
+        assert!(
+            good * 4 >= ps.len() * 3,
+            "{}: left at +X in {good} of {} frames",
+            f.display(),
+            ps.len()
+        );
+        // The same skin with Mixamo names on the joints found, then with the
+        // names' left and right swapped.
+        for mirrored in [false, true] {
+            let mut b = a.clone();
+            let skin = b.skin.as_mut().unwrap();
+            for (k, name) in &map.joints {
+                let k = if mirrored { swap_side(*k) } else { *k };
+                let mixamo = surfmotion::rig::CONVENTIONS
+                    .iter()
+                    .find(|c| c.name == "Mixamo")
+                    .unwrap()
+                    .candidates[k.index()][0];
+                let i = skin.joint_names.iter().position(|n| n == name).unwrap();
+                skin.joint_names[i] = format!("mixamorig:{mixamo}");
+            }
+            let (m2, p2) = skin_poses(&b).unwrap();
+            for (pa, pb) in ps.iter().zip(&p2[1..]) {
+                for c in Canonical::ALL {
+                    assert!(
+                        pa[c.index()].distance(pb[c.index()]) < 1e-9,
+                        "{} named (mirrored {mirrored}): {} moved ({})",
+                        f.display(),
+                        c.name(),
+                        m2.convention
+                    );
+                }
+            }
+        }
+    }
+    assert_eq!(humanoids, 2);
+}

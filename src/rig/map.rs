@@ -326,6 +326,9 @@ pub struct Detection {
     pub derived: Vec<Canonical>,
     /// How left and right were decided.
     pub sides: String,
+    /// How sure the geometry is of left and right (0-1), when the sides
+    /// were decided from geometry alone (a mapping by structure).
+    pub side_confidence: Option<f64>,
 }
 
 impl Detection {
@@ -360,6 +363,7 @@ impl Detection {
             joints,
             map,
             sides: sides.to_string(),
+            side_confidence: None,
         }
     }
 }
@@ -558,6 +562,7 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
         missing,
         signature: false,
         joints: reports,
+        side_confidence: Some(b.side_confidence),
         sides: format!(
             "from geometry (forward from the {}, confidence {:.2}){}",
             b.forward_from,

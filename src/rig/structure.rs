@@ -3,25 +3,31 @@
 //!
 //! Steps, all O(joints · sampled frames):
 //! 1. Bone lengths and "reach" (longest path to an end point) per joint;
-//!    joints joined by zero-length offsets form one node; helper bones
-//!    (twist, roll, fingers, ...; see [`super::names::is_helper`]) and their
-//!    helper-only subtrees are ignored.
+//!    joints joined by zero-length offsets form one node; helper bones are
+//!    ignored with their helper-only subtrees: by name (twist, roll,
+//!    fingers, ...; see [`super::names::is_helper`]) or by geometry (a side
+//!    branch lying along the bone from its parent to a sibling in most
+//!    poses: CC's ThighTwist01/02 beside Calf, ToeBaseShareBone).
 //! 2. A branch of a node is *significant* when its reach is at least 12% of
-//!    the rest skeleton's bounding-box diagonal (legs ≈ 35%, arms ≈ 30%,
-//!    fingers and toes ≈ 7%, measured on CMU, CC and Bandai rigs).
+//!    the body's size (the largest single-pose bounding-box diagonal; legs
+//!    ≈ 35%, arms ≈ 30%, fingers and toes ≈ 7%, measured on CMU, CC and
+//!    Bandai rigs).
 //! 3. The pelvis is the first node where exactly three significant chains
 //!    meet: two legs without further junctions and a spine that reaches a
 //!    node where two arms branch off (the chest). Legs must point away from
-//!    the chest (cosine below −0.5 in the rest pose or a sampled frame):
-//!    a quadruped's spine is horizontal above vertical legs.
-//! 4. Joints along a chain are chosen by position: hip = first joint off the
-//!    pelvis, ankle = first joint below 25% of the hip's height over the
-//!    chain's lowest point (height along pelvis→chest), knee = joint nearest
-//!    the hip–ankle midpoint, toe = next joint after the ankle; elbow = the
-//!    joint whose upper/fore-arm length ratio is closest to 1.2 (Drillis &
-//!    Contini's 0.186 H / 0.146 H ≈ 1.27); joints that stay collinear with
-//!    their neighbours in every sampled frame are pass-through helpers.
-//!    A joint whose name has the matching role wins inside its chain.
+//!    the chest (mean cosine below −0.7 in the rest pose or the median
+//!    sampled frame): a quadruped's spine is near horizontal above its legs.
+//! 4. Joints along a chain, where names do not fix them, by the body's
+//!    proportions on arc lengths (rest offsets, so any pose works): knee and
+//!    ankle make thigh ≈ shin and shin ≈ 2.5 × ankle-to-toe-tip; shoulder,
+//!    elbow and wrist make upper arm ≈ 1.27 × forearm ≈ 1.27 · 1.35 × hand
+//!    (Drillis & Contini 1966), a collar being the first arm joint when it
+//!    sits under 0.6 of the next one's distance from the mid-plane; the
+//!    spine is the joint nearest 40% of the pelvis→chest arc; the neck the
+//!    first joint above the chest (a helper-named one when the chain has
+//!    nothing else, CC's NeckTwist01); the head the first joint above it
+//!    whose node branches (jaw, eyes), else the chain's last joint. A joint
+//!    whose name has the matching role wins inside its chain.
 //! 5. Left/right from the body's own frame, never from names: up =
 //!    pelvis→neck, forward = the feet's heel→toe direction (else the knees'
 //!    bend, else the root's travel), left = up × forward (Y-up, facing +Z:
@@ -123,7 +129,7 @@ impl<'a> Geo<'a> {
             }
         }
         let len: Vec<f64> = clip.joints.iter().map(|j| j.offset.length()).collect();
-        let helper: Vec<bool> = (0..n)
+        let mut helper: Vec<bool> = (0..n)
             .map(|i| tokens.get(i).is_some_and(|t| is_helper(t)))
             .collect();
         let (rest, _) = clip.rest_positions();
@@ -133,16 +139,113 @@ impl<'a> Geo<'a> {
             .enumerate()
             .map(|(i, j)| j.tail.map(|t| rest[i] + t))
             .collect();
-        let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-        for p in rest.iter().chain(tail_rest.iter().flatten()) {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-        let diag = (hi - lo).length();
+        let bbox_diag = |pts: &mut dyn Iterator<Item = DVec3>| {
+            let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+            for p in pts {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+            (hi - lo).length()
+        };
+        let diag = bbox_diag(&mut rest.iter().chain(tail_rest.iter().flatten()).copied());
         if !(diag.is_finite() && diag > 0.0) {
             return Err(NotHumanoid("the rest skeleton has no extent".into()));
         }
         let eps = 1e-3 * diag;
+        let mut poses = Vec::new();
+        let mut rot = vec![DQuat::IDENTITY; n];
+        poses.push((rest.clone(), rot.clone()));
+        let frames = clip.frame_count();
+        let step = (frames / MAX_FRAMES).max(1);
+        let mut pos = vec![DVec3::ZERO; n];
+        let mut f = 0;
+        while f < frames {
+            clip.world_into(f, &mut pos, &mut rot);
+            poses.push((pos.clone(), rot.clone()));
+            f += step;
+        }
+        // The body's size: the largest single-pose extent (a rest skeleton
+        // in bone-local frames, as CC exports, can be a folded stick).
+        let size = poses
+            .iter()
+            .map(|(p, _)| bbox_diag(&mut p.iter().copied()))
+            .filter(|d| d.is_finite())
+            .fold(diag, f64::max);
+        // Twist and share bones by geometry: a side branch whose joints (and
+        // End Sites) all lie on the bone from its parent to a sibling, in the
+        // rest pose and most sampled poses (CC's ThighTwist01/02 beside Calf,
+        // ToeBaseShareBone beside ToeBase), is a helper whatever its name.
+        let subtree_of = |j: usize| {
+            let mut out = Vec::new();
+            let mut stack = vec![j];
+            while let Some(k) = stack.pop() {
+                out.push(k);
+                stack.extend(children[k].iter().copied());
+                if out.len() > 64 {
+                    break; // a twist chain is short; a limb is not a helper
+                }
+            }
+            out
+        };
+        for j in 0..n {
+            let Some(p) = parent[j] else { continue };
+            if helper[j] || children[p].len() < 2 {
+                continue;
+            }
+            let sub = subtree_of(j);
+            if sub.len() > 64 {
+                continue;
+            }
+            let on_bone = |k: usize| {
+                let seg_len = len[k];
+                if k == j || seg_len < eps {
+                    return false;
+                }
+                let tol = 0.1 * seg_len;
+                let hits = poses
+                    .iter()
+                    .filter(|(ps, rs)| {
+                        let (a, mut b) = (ps[p], ps[k]);
+                        // The bone runs on through pass-through joints in
+                        // line with it (a split shin: Calf → x → Foot).
+                        let mut e = k;
+                        for _ in 0..8 {
+                            let dir = (b - a).normalize_or_zero();
+                            let next = children[e].iter().copied().find(|&q| {
+                                let v = ps[q] - a;
+                                len[q] >= eps
+                                    && v.dot(dir) > (b - a).length()
+                                    && (v - dir * v.dot(dir)).length() <= tol
+                            });
+                            match next {
+                                Some(q) => {
+                                    e = q;
+                                    b = ps[q];
+                                }
+                                None => break,
+                            }
+                        }
+                        let ab = b - a;
+                        let d = |q: DVec3| {
+                            let t = ((q - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+                            (a + ab * t).distance(q)
+                        };
+                        sub.iter().all(|&m| {
+                            d(ps[m]) <= tol
+                                && clip.joints[m]
+                                    .tail
+                                    .is_none_or(|t| d(ps[m] + rs[m] * t) <= tol)
+                        })
+                    })
+                    .count();
+                hits * 5 >= poses.len() * 4
+            };
+            if children[p].iter().any(|&k| on_bone(k)) {
+                for m in sub {
+                    helper[m] = true;
+                }
+            }
+        }
         // Children lists are in index order and parents precede children, so
         // a reverse sweep sees every child before its parent.
         let mut useful = vec![false; n];
@@ -167,18 +270,6 @@ impl<'a> Geo<'a> {
                 rep[i] = rep[p];
             }
         }
-        let mut poses = Vec::new();
-        let mut rot = vec![DQuat::IDENTITY; n];
-        poses.push((rest.clone(), rot.clone()));
-        let frames = clip.frame_count();
-        let step = (frames / MAX_FRAMES).max(1);
-        let mut pos = vec![DVec3::ZERO; n];
-        let mut f = 0;
-        while f < frames {
-            clip.world_into(f, &mut pos, &mut rot);
-            poses.push((pos.clone(), rot.clone()));
-            f += step;
-        }
         Ok(Geo {
             clip,
             names: clip.point_names(),
@@ -192,7 +283,7 @@ impl<'a> Geo<'a> {
             rest,
             tail_rest,
             eps,
-            thr: 0.12 * diag,
+            thr: 0.12 * size,
             poses,
         })
     }
@@ -266,6 +357,25 @@ impl<'a> Geo<'a> {
             }
         }
         None
+    }
+
+    /// Arc length (sum of bone lengths) along `path` from its first joint
+    /// to each joint, and to the path's far end (the last joint's End Site
+    /// included). Pose-independent: rest offsets only.
+    fn arcs(&self, path: &[usize]) -> (Vec<f64>, f64) {
+        let mut a = Vec::with_capacity(path.len());
+        let mut acc = 0.0;
+        for (k, &j) in path.iter().enumerate() {
+            if k > 0 {
+                acc += self.len[j];
+            }
+            a.push(acc);
+        }
+        let tail = path
+            .last()
+            .and_then(|&j| self.clip.joints[j].tail)
+            .map_or(0.0, |t| t.length());
+        (a, acc + tail)
     }
 
     fn subtree(&self, start: usize) -> Vec<usize> {
@@ -461,27 +571,31 @@ fn body(
             name(chest)
         )));
     }
-    // Legs point away from the chest in at least one pose.
-    let mut best_cos = f64::MAX;
-    let mut ref_pose = 0;
-    for (k, (p, _)) in g.poses.iter().enumerate() {
-        let up = (p[chest] - p[pelvis]).normalize_or_zero();
-        let mut c = 0.0;
-        for &l in &legs {
-            let path = g.path(l);
-            let end = *path.last().unwrap_or(&l);
-            c += 0.5 * (p[end] - p[pelvis]).normalize_or_zero().dot(up);
-        }
-        // The rest pose (usually neutral, legs straight) when it stands
-        // upright enough; else the most upright sampled pose.
-        if c < best_cos && !(k > 0 && ref_pose == 0 && best_cos < -0.8) {
-            best_cos = c;
-            ref_pose = k;
-        }
-    }
-    if best_cos > -0.5 {
+    // Legs point away from the chest in the rest pose or in the median
+    // sampled frame (not merely in one: a sitting quadruped's hind legs do).
+    let cosines: Vec<f64> = g
+        .poses
+        .iter()
+        .map(|(p, _)| {
+            let up = (p[chest] - p[pelvis]).normalize_or_zero();
+            legs.iter()
+                .map(|&l| {
+                    let path = g.path(l);
+                    let end = *path.last().unwrap_or(&l);
+                    0.5 * (p[end] - p[pelvis]).normalize_or_zero().dot(up)
+                })
+                .sum::<f64>()
+        })
+        .collect();
+    let mut frames: Vec<f64> = cosines.iter().skip(1).copied().collect();
+    frames.sort_by(f64::total_cmp);
+    let median = frames.get(frames.len() / 2).copied().unwrap_or(f64::MAX);
+    let best_cos = cosines.first().copied().unwrap_or(f64::MAX).min(median);
+    // −0.7 (134°): humans walk and run at −0.85 to −1; a fox standing
+    // with its chest above its hips is at −0.53.
+    if best_cos > -0.7 {
         return Err(NotHumanoid(format!(
-            "the chains below '{}' never point away from the spine (cosine {best_cos:.2}): a horizontal body",
+            "the chains below '{}' do not point away from the spine (cosine {best_cos:.2} in the rest pose or the median frame): a horizontal body",
             name(pelvis)
         )));
     }
@@ -582,16 +696,44 @@ fn body(
             set(&mut picks, Canonical::Spine, j, true);
             j
         }
-        None => match spine_c.first() {
-            Some(&j) if Some(j) != chest_j || chest_named_neck => {
-                set(&mut picks, Canonical::Spine, j, false);
-                j
+        None => {
+            // The joint nearest 40% of the way (arc length) from the pelvis
+            // to the chest: the canonical spine sits at the lumbar curve
+            // (the procedural skeleton's spine is at 0.43 of pelvis→chest;
+            // rigs with two lumbar joints put the name-chosen one at
+            // 0.28-0.47: Mixamo Spine 0.28 vs Spine1 0.62, CC Spine01 0.47
+            // vs Waist 0.29, SMPL Spine1 0.37 vs Spine2 0.81).
+            let arc_to = |j: usize| {
+                let (mut a, mut k) = (0.0, j);
+                while g.rep[k] != pelvis {
+                    a += g.len[k];
+                    match g.parent[k] {
+                        Some(p) => k = p,
+                        None => break,
+                    }
+                }
+                a
+            };
+            let total = arc_to(chest_j.unwrap_or(chest)).max(1e-300);
+            let pick = spine_c
+                .iter()
+                .copied()
+                .filter(|&j| Some(j) != chest_j)
+                .min_by(|&a, &b| {
+                    let f = |j: usize| (arc_to(j) / total - 0.4).abs();
+                    f(a).total_cmp(&f(b))
+                });
+            match pick {
+                Some(j) => {
+                    set(&mut picks, Canonical::Spine, j, false);
+                    j
+                }
+                None => {
+                    set(&mut picks, Canonical::Spine, chest, false);
+                    chest
+                }
             }
-            _ => {
-                set(&mut picks, Canonical::Spine, chest, false);
-                chest
-            }
-        },
+        }
     };
     let chest_derived = match chest_j {
         Some(c) if c != spine_j => {
@@ -609,6 +751,24 @@ fn body(
     // Neck and head.
     let neck_path = g.path(neck_start);
     let neck_c = g.candidates(tokens, g.rest[chest], &neck_path, false);
+    // A neck made only of helper-named bones (CC's NeckTwist01/02 under
+    // Head): the first of them off the chest is the neck when the chain
+    // has no other joint for it (helpers are ignored only as leaves or
+    // pass-throughs).
+    let neck_c = match neck_c.first() {
+        Some(&first) if neck_c.len() < 2 || role_of(tokens, first) == Some(Role::Head) => {
+            let mut out = neck_c.clone();
+            if let Some(&h) = neck_path
+                .iter()
+                .take_while(|&&j| j != first)
+                .find(|&&j| g.helper[j] && g.rest[j].distance(g.rest[chest]) >= g.eps)
+            {
+                out.insert(0, h);
+            }
+            out
+        }
+        _ => neck_c,
+    };
     let (neck_j, head_c): (usize, Vec<usize>) = match neck_from_chest {
         Some(nj) => (nj, neck_c.clone()),
         None => {
@@ -636,11 +796,25 @@ fn body(
             },
         );
     }
-    match first_role(tokens, &head_c, |r| r == Role::Head).or(if head_c.is_empty() {
-        None
-    } else {
-        Some(0)
-    }) {
+    // The head: by name, else the top of the neck: the first joint whose
+    // node branches (into jaw, eyes, face bones), else the chain's last
+    // joint (its End Site the crown), skipping a final leaf marker with no
+    // End Site (`HeadTop_End` as a joint).
+    let head_geo = || -> Option<usize> {
+        if let Some(k) = head_c
+            .iter()
+            .position(|&j| g.node_children(g.rep[j]).len() >= 2)
+        {
+            return Some(k);
+        }
+        let last = head_c.len().checked_sub(1)?;
+        let j = head_c[last];
+        let marker = last >= 1
+            && g.children[j].is_empty()
+            && g.clip.joints[j].tail.is_none_or(|t| t.length() < g.eps);
+        Some(if marker { last - 1 } else { last })
+    };
+    match first_role(tokens, &head_c, |r| r == Role::Head).or_else(head_geo) {
         Some(k) => {
             let h = head_c[k];
             set(
@@ -671,10 +845,9 @@ fn body(
     }
 
     // Limbs.
-    let leg = |start: usize| -> Result<Limb, NotHumanoid> {
-        leg_chain(g, tokens, pelvis, chest, ref_pose, start)
-    };
-    let arm = |start: usize| -> Result<Limb, NotHumanoid> { arm_chain(g, tokens, chest, start) };
+    let leg = |start: usize| -> Result<Limb, NotHumanoid> { leg_chain(g, tokens, pelvis, start) };
+    let arm =
+        |start: usize| -> Result<Limb, NotHumanoid> { arm_chain(g, tokens, legs, chest, start) };
     let l0 = leg(legs[0])?;
     let l1 = leg(legs[1])?;
     let a0 = arm(arms[0])?;
@@ -850,12 +1023,10 @@ fn leg_chain(
     g: &Geo,
     tokens: &[Vec<String>],
     pelvis: usize,
-    chest: usize,
-    ref_pose: usize,
     start: usize,
 ) -> Result<Limb, NotHumanoid> {
     let path = g.path(start);
-    let c = g.candidates(tokens, g.rest[pelvis], &path, true);
+    let c = g.candidates(tokens, g.rest[pelvis], &path, false);
     let short = || {
         NotHumanoid(format!(
             "the leg chain from '{}' has fewer than three joints",
@@ -867,50 +1038,62 @@ fn leg_chain(
     }
     let hip_k = first_role(tokens, &c, |r| r == Role::Thigh).unwrap_or(0);
     let after = &c[hip_k + 1..];
-    let p = &g.poses[ref_pose.min(g.poses.len() - 1)].0;
-    let up = (p[chest] - p[pelvis]).normalize_or_zero();
-    let h = |q: DVec3| (q - p[pelvis]).dot(up);
     let ankle_named = first_role(tokens, after, |r| r == Role::Ankle);
     let foot_named = first_role(tokens, after, |r| r == Role::Foot);
-    let ankle_k = match ankle_named.or(foot_named) {
-        Some(k) if k >= 1 => k,
-        _ => {
-            let end = *path.last().unwrap_or(&start);
-            let lowest = after
-                .iter()
-                .map(|&j| h(p[j]))
-                .chain(g.clip.joints[end].tail.map(|_| {
-                    // the end point of the last joint in this pose
-                    let (pp, rr) = &g.poses[ref_pose.min(g.poses.len() - 1)];
-                    h(pp[end] + rr[end] * g.clip.joints[end].tail.unwrap_or_default())
-                }))
-                .fold(f64::MAX, f64::min);
-            let hh = h(p[c[hip_k]]);
-            let thr = lowest + 0.25 * (hh - lowest);
-            let k = after
-                .iter()
-                .position(|&j| h(p[j]) <= thr)
-                .unwrap_or(after.len() - 1);
-            k.max(1).min(after.len().saturating_sub(1))
+    let knee_named = first_role(tokens, after, |r| r == Role::Knee);
+    // Knee and ankle: by name, else the joints whose segment lengths (arc
+    // length along the chain, rest offsets: pose-independent) best match
+    // the body's proportions: thigh / shin ≈ 1 and shin / foot (ankle to
+    // the chain's far end) ≈ 2.5 (Drillis & Contini 1966: thigh 0.245 H,
+    // shin 0.246 H; ankle to toe tip 0.10-0.13 H, 2.2-3.2 on CMU, CC and
+    // Mixamo rigs), the foot term half-weighted.
+    let (arc, far) = g.arcs(&path);
+    let ac: Vec<f64> = after
+        .iter()
+        .map(|&j| path.iter().position(|&p| p == j).map_or(0.0, |k| arc[k]))
+        .collect();
+    let a_hip = path
+        .iter()
+        .position(|&p| p == c[hip_k])
+        .map_or(0.0, |k| arc[k]);
+    let ln_off = |x: f64, want: f64| {
+        if x.is_finite() && x > 0.0 {
+            (x / want).ln().abs()
+        } else {
+            f64::INFINITY
         }
     };
-    if after.len() < 2 || ankle_k >= after.len() {
-        return Err(short());
+    let fixed_ankle = match ankle_named.or(foot_named) {
+        Some(k) if k >= 1 => Some(k),
+        _ => None,
+    };
+    let mut best: Option<(f64, usize, usize)> = None;
+    for k in 0..after.len() {
+        if knee_named.is_some_and(|x| x != k) {
+            continue;
+        }
+        for an in k + 1..after.len() {
+            if fixed_ankle.is_some_and(|x| x != an) {
+                continue;
+            }
+            let (thigh, shin, foot) = (ac[k] - a_hip, ac[an] - ac[k], far - ac[an]);
+            let f = if foot > 0.1 * shin {
+                ln_off(shin / foot, 2.5)
+            } else {
+                0.6
+            };
+            let sc = ln_off(thigh / shin, 1.0) + 0.5 * f;
+            if best.is_none_or(|b| sc < b.0) {
+                best = Some((sc, k, an));
+            }
+        }
     }
+    let Some((_, knee_k, ankle_k)) = best else {
+        return Err(short());
+    };
     let hip = c[hip_k];
     let ankle = after[ankle_k];
-    let mids = &after[..ankle_k];
-    let knee_k = first_role(tokens, mids, |r| r == Role::Knee).unwrap_or_else(|| {
-        let m = 0.5 * (g.rest[hip] + g.rest[ankle]);
-        (0..mids.len())
-            .min_by(|&a, &b| {
-                g.rest[mids[a]]
-                    .distance(m)
-                    .total_cmp(&g.rest[mids[b]].distance(m))
-            })
-            .unwrap_or(0)
-    });
-    let knee = *mids.get(knee_k).ok_or_else(short)?;
+    let knee = after[knee_k];
     let toes = &after[ankle_k + 1..];
     let toe_k = if ankle_named.is_some() && foot_named.is_some_and(|f| f > ankle_k) {
         foot_named.map(|f| f - ankle_k - 1)
@@ -953,11 +1136,12 @@ fn leg_chain(
 fn arm_chain(
     g: &Geo,
     tokens: &[Vec<String>],
+    hips: [usize; 2],
     chest: usize,
     start: usize,
 ) -> Result<Limb, NotHumanoid> {
     let path = g.path(start);
-    let c = g.candidates(tokens, g.rest[chest], &path, true);
+    let c = g.candidates(tokens, g.rest[chest], &path, false);
     let short = || {
         NotHumanoid(format!(
             "the arm chain from '{}' has fewer than three joints",
@@ -967,57 +1151,90 @@ fn arm_chain(
     if c.len() < 3 {
         return Err(short());
     }
-    // The wrist: by name, else the first joint where the chain branches
-    // (a hand into fingers), else the chain's last joint.
-    let branching = c.iter().position(|&j| {
-        let real = |&&k: &&usize| g.len[k] >= g.eps && !(g.helper[k] && g.children[k].is_empty());
-        g.children[j].iter().filter(real).count() >= 2
-    });
-    let w_k = first_role(tokens, &c, |r| r == Role::Wrist)
-        .or_else(|| first_role(tokens, &c, |r| r == Role::Hand))
-        .or(branching)
-        .unwrap_or(c.len() - 1);
-    if w_k < 2 {
-        return Err(short());
-    }
-    let before = &c[..w_k];
-    let collar = first_role(tokens, before, |r| r == Role::Collar).is_some();
-    let s_named = first_role(tokens, before, |r| {
+    // Shoulder, elbow and wrist: joints named for them fix their slot;
+    // the free slots take the joints whose segment lengths (arc length
+    // along the chain, rest offsets) best match the body's proportions:
+    // upper arm / forearm ≈ 1.27 and forearm / hand (wrist to the chain's
+    // far end) ≈ 1.35 (Drillis & Contini 1966: 0.186 H, 0.146 H, 0.108 H).
+    let (arc, far) = g.arcs(&path);
+    let ac: Vec<f64> = c
+        .iter()
+        .map(|&j| path.iter().position(|&p| p == j).map_or(0.0, |k| arc[k]))
+        .collect();
+    let a = |k: usize| ac[k];
+    let w_named = first_role(tokens, &c, |r| r == Role::Wrist)
+        .or_else(|| first_role(tokens, &c, |r| r == Role::Hand));
+    let collar = first_role(tokens, &c, |r| r == Role::Collar).is_some();
+    // A collar (clavicle) starts near the body's mid-plane and the shoulder
+    // joint well out from it: c[0] is a collar when its median distance
+    // from the chest along the hip-to-hip axis is under 0.6 of c[1]'s
+    // (collar/shoulder 0.0-0.48 on CMU, CC, Bandai, Mixamo, SMPL and Daz
+    // rigs; shoulder/elbow ≥ 0.8 with the arms down). Proportions alone
+    // cannot tell: CC's forearm is as long as its upper arm, so collar +
+    // upper arm fits 1.27 better than the upper arm alone.
+    let lateral = |j: usize| {
+        let mut d: Vec<f64> = g
+            .poses
+            .iter()
+            .map(|(p, _)| {
+                let lr = (p[hips[0]] - p[hips[1]]).normalize_or_zero();
+                (p[j] - p[chest]).dot(lr).abs()
+            })
+            .collect();
+        d.sort_by(f64::total_cmp);
+        d.get(d.len() / 2).copied().unwrap_or(0.0)
+    };
+    let geo_collar = c.len() >= 4 && lateral(c[0]) < 0.6 * lateral(c[1]);
+    let s_named = first_role(tokens, &c, |r| {
         r == Role::UpperArm || (collar && r == Role::ShoulderWord)
-    });
-    let e_named =
-        first_role(tokens, before, |r| r == Role::Elbow).filter(|&e| s_named.is_none_or(|s| e > s));
-    let w = c[w_k];
-    let d = |a: usize, b: usize| g.rest[a].distance(g.rest[b]);
-    let (s_k, e_k) = match (s_named, e_named) {
-        (Some(s), Some(e)) => (s, e),
-        (None, Some(e)) if e >= 1 => (e - 1, e),
-        (Some(s), _) if s + 1 < w_k => {
-            let m = 0.5 * (g.rest[before[s]] + g.rest[w]);
-            let e = (s + 1..w_k)
-                .min_by(|&a, &b| {
-                    g.rest[before[a]]
-                        .distance(m)
-                        .total_cmp(&g.rest[before[b]].distance(m))
-                })
-                .unwrap_or(s + 1);
-            (s, e)
-        }
-        _ => {
-            let e = (1..w_k)
-                .min_by(|&a, &b| {
-                    let score = |k: usize| {
-                        let r = d(before[k - 1], before[k]) / d(before[k], w).max(1e-300);
-                        (r / 1.2).ln().abs()
-                    };
-                    score(a).total_cmp(&score(b))
-                })
-                .unwrap_or(1);
-            (e - 1, e)
+    })
+    .filter(|&s| w_named.is_none_or(|w| s < w))
+    .or(Some(usize::from(geo_collar)));
+    let e_named = first_role(tokens, &c, |r| r == Role::Elbow)
+        .filter(|&e| s_named.is_none_or(|s| e > s) && w_named.is_none_or(|w| e < w));
+    let ln_off = |x: f64, want: f64| {
+        if x.is_finite() && x > 0.0 {
+            (x / want).ln().abs()
+        } else {
+            f64::INFINITY
         }
     };
+    let score = |s: usize, e: usize, w: usize| {
+        let (upper, fore, hand) = (a(e) - a(s), a(w) - a(e), far - a(w));
+        let h = if hand > 0.1 * fore {
+            ln_off(fore / hand, 1.35)
+        } else {
+            0.6 // no hand: a wrist at the chain's end costs as a 1.8× mismatch
+        };
+        ln_off(upper / fore, 1.27) + h
+    };
+    let n = c.len();
+    let mut best: Option<(f64, usize, usize, usize)> = None;
+    for s in 0..n {
+        if s_named.is_some_and(|x| x != s) {
+            continue;
+        }
+        for e in s + 1..n {
+            if e_named.is_some_and(|x| x != e) {
+                continue;
+            }
+            for w in e + 1..n {
+                if w_named.is_some_and(|x| x != w) {
+                    continue;
+                }
+                let sc = score(s, e, w);
+                if best.is_none_or(|b| sc < b.0) {
+                    best = Some((sc, s, e, w));
+                }
+            }
+        }
+    }
+    let Some((_, s_k, e_k, w_k)) = best else {
+        return Err(short());
+    };
+    let w = c[w_k];
     let named = |j: usize, r: &[Role]| role_of(tokens, j).is_some_and(|x| r.contains(&x));
-    let (s, e) = (before[s_k], before[e_k]);
+    let (s, e) = (c[s_k], c[e_k]);
     Ok(Limb {
         picks: [
             Some((s, named(s, &[Role::UpperArm, Role::ShoulderWord]))),

@@ -1339,6 +1339,47 @@ impl GltfAsset {
         MeshSequence::new(self.mesh.clone(), out, Some(fps)).map_err(MeshError::from)
     }
 
+    /// World positions of the skin's joints (in skin order) at time `t` of
+    /// node animation `index` (linear, slerp or step keys; the rest TRS of
+    /// nodes the animation does not drive). `None` without a skin or that
+    /// animation. For the joint mapping of rigged characters
+    /// (`rig::load::skin_clip`).
+    pub fn joint_positions_at(&self, index: usize, t: f32) -> Option<Vec<glam::DVec3>> {
+        use glam::{DMat4, DQuat, DVec3};
+        self.skin.as_ref()?;
+        let anim = self.node_animations.get(index)?;
+        let g = &self.graph;
+        let mut trs = g.rest.clone();
+        for ch in &anim.channels {
+            let Some(slot) = trs.get_mut(ch.node) else {
+                continue;
+            };
+            let v = sample(ch, t);
+            match ch.path {
+                TrsPath::Translation => slot.0 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
+                TrsPath::Rotation => {
+                    slot.1 = DQuat::from_xyzw(v[0] as f64, v[1] as f64, v[2] as f64, v[3] as f64)
+                        .normalize()
+                }
+                TrsPath::Scale => slot.2 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
+            }
+        }
+        let mut world = vec![DMat4::IDENTITY; trs.len()];
+        for &n in &g.order {
+            let local = DMat4::from_scale_rotation_translation(trs[n].2, trs[n].1, trs[n].0);
+            world[n] = match g.parent[n] {
+                Some(p) => world[p] * local,
+                None => local,
+            };
+        }
+        Some(
+            g.skin_joints
+                .iter()
+                .map(|&jn| world.get(jn).map_or(DVec3::ZERO, |m| m.w_axis.truncate()))
+                .collect(),
+        )
+    }
+
     /// The asset as a mesh sequence: one frame per key of the morph-weights
     /// animation (`base + Σ w_k · target_k`), or the single rest frame.
     pub fn to_sequence(&self) -> Result<MeshSequence, MeshError> {

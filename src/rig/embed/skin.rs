@@ -2,8 +2,9 @@
 //! whose vertices match the character's rest frame by position (the same
 //! character exported from a DCC tool, possibly re-ordered or split at UV
 //! seams). Joints are the skin's bind-pose joint positions (inverse bind
-//! matrices), mapped to the canonical skeleton by name (any detected
-//! convention, or a rig map for unnamed or unusual joints); each vertex
+//! matrices), mapped to the canonical skeleton as clips are (a known
+//! convention's names, else the skin's structure: hierarchy and bind pose;
+//! or a rig map); each vertex
 //! takes the skin weights of the glTF vertex at its position, a joint the
 //! map leaves out handing its weight to its nearest mapped ancestor. Part
 //! labels, regions and regressors then follow as for landmarks.
@@ -12,10 +13,14 @@ use super::joints::JointEstimate;
 use super::{EmbedError, Embedding};
 use crate::mesh::Mesh;
 use crate::mesh::io::gltf::GltfAsset;
-use crate::rig::{Canonical, RigMap, detect};
+use crate::rig::{Canonical, RigMap};
 use glam::{DVec3, Mat4};
 use std::collections::HashMap;
 use std::path::Path;
+
+/// Side confidence (0-1) below which a skin mapped by structure alone is
+/// refused: its left and right would be a guess.
+pub const MIN_SIDE_CONFIDENCE: f64 = 0.6;
 
 /// Embeds the rig of `asset`'s skin in `mesh`. `map` overrides name
 /// detection; `path` names the glTF in errors. Every vertex must lie
@@ -39,7 +44,9 @@ pub fn from_skin(
     let map = match map {
         Some(m) => m.clone(),
         None => {
-            let d = detect(names);
+            // Names when a convention matches, else the skin's structure
+            // (hierarchy and bind pose), as for BVH and ASF clips.
+            let d = crate::rig::load::detect_skin(asset).map_err(|e| bad(e.to_string()))?;
             if !d.missing.is_empty() {
                 let miss: Vec<&str> = d.missing.iter().map(|c| c.name()).collect();
                 return Err(bad(format!(
@@ -48,16 +55,28 @@ pub fn from_skin(
                     miss.join(", ")
                 )));
             }
+            // A rig whose left and right the geometry cannot tell apart
+            // would be mirrored as often as not: ask for a map instead.
+            if let Some(c) = d.side_confidence.filter(|&c| c < MIN_SIDE_CONFIDENCE) {
+                return Err(bad(format!(
+                    "the skin's joints have no known names and its geometry does not tell \
+                     left from right (confidence {c:.2}, below {MIN_SIDE_CONFIDENCE}); pass a rig map"
+                )));
+            }
             d.map
         }
     };
-    // Canonical joint of each skin joint (or of its nearest mapped ancestor).
+    // Canonical joint of each skin joint (or of its nearest mapped
+    // ancestor); canonical joints the map derives (a head from the neck's
+    // end, toes from the feet) own no skin joint.
     let mut canon: Vec<Option<Canonical>> = vec![None; names.len()];
     for c in Canonical::ALL {
-        let name = map
-            .joints
-            .get(&c)
-            .ok_or_else(|| bad(format!("the rig map has no joint for {}", c.name())))?;
+        let Some(name) = map.joints.get(&c) else {
+            if map.derived.contains_key(&c) {
+                continue;
+            }
+            return Err(bad(format!("the rig map has no joint for {}", c.name())));
+        };
         let i = names.iter().position(|n| n == name).ok_or_else(|| {
             bad(format!(
                 "the rig map names {name:?} for {}, which is not a skin joint",
@@ -109,17 +128,13 @@ pub fn from_skin(
             }
         }
     };
-    let mut joints = [DVec3::ZERO; Canonical::COUNT];
-    for (i, c) in canon.iter().enumerate() {
-        if let Some(c) = c {
-            let p = joint_pos
-                .get(i)
-                .copied()
-                .filter(|p| p.is_finite())
-                .ok_or_else(|| bad(format!("joint {}: no usable transform", names[i])))?;
-            joints[c.index()] = p;
-        }
+    // Canonical positions (derived ones by their rules) from the skin as a
+    // one-frame clip at the matched joint positions.
+    if let Some(i) = joint_pos.iter().position(|p| !p.is_finite()) {
+        return Err(bad(format!("joint {}: no usable transform", names[i])));
     }
+    let (clip, _) = crate::rig::load::skin_clip(asset, &joint_pos, false).map_err(bad)?;
+    let joints = map.rest_pose(&clip).map_err(|e| bad(e.to_string()))?;
     let mut w = vec![[0.0f64; Canonical::COUNT]; mesh.vertex_count()];
     for (row, &g) in w.iter_mut().zip(&matched) {
         let (js, ws) = (skin.joints[g as usize], skin.weights[g as usize]);
