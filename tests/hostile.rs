@@ -259,7 +259,12 @@ fn rows() -> Vec<Row> {
         // Item 12: unbounded allocations.
         row("BVH Frame Time in milliseconds", "retarget --db {db} --mocap {d}/ms.bvh -o {d}/o.pc2", &["ms.bvh", "Frame Time", "milliseconds", "--input-fps"])
             .file("ms.bvh", walk_with("Frame Time", "Frame Time: 33.333333")),
-        row("a clip too long for the memory budget (retarget)", "retarget --db {db} --mocap {d}/long.bvh -o {d}/o.pc2", &["3,000 frames", "6,304 vertices", "SURFMOTION_MEMORY_LIMIT"])
+        // A retarget's point cache streams (`a_long_retarget_streams_within_a_small_memory_budget`);
+        // a preview needs every frame, and a GLB is written whole: both are
+        // refused before the first frame.
+        row("a preview of a clip too long for the memory budget (retarget)", "retarget --db {db} --mocap {d}/long.bvh -o {d}/o.pc2 --preview {d}/p.png", &["3,000 frames", "6,304 vertices", "SURFMOTION_MEMORY_LIMIT"])
+            .file("long.bvh", long_walk(3000)).env("SURFMOTION_MEMORY_LIMIT", SMALL),
+        row("a GLB too big for the memory budget (retarget)", "retarget --db {db} --mocap {d}/long.bvh -o {d}/o.glb", &["o.glb", "GLB of 3,000 frames", "6,304 vertices", "SURFMOTION_MEMORY_LIMIT"])
             .file("long.bvh", long_walk(3000)).env("SURFMOTION_MEMORY_LIMIT", SMALL),
         // A point cache streams (`a_long_transfer_streams_within_a_small_memory_budget`);
         // a GLB is written whole and refused before the first frame.
@@ -594,6 +599,51 @@ fn a_long_transfer_streams_within_a_small_memory_budget() {
     assert_eq!(count, frames);
     assert_eq!(bytes.len(), 32 + 12 * n * frames);
     assert!((n * frames * 24) as u64 > surfmotion::budget::parse_bytes(SMALL).unwrap());
+    let names: Vec<_> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!names.iter().any(|n| n.ends_with(".part")), "{names:?}");
+}
+
+/// Regression (issue 18, item 12): a retarget whose frames exceed the
+/// memory budget was refused before it began ("the retarget at 30 fps:
+/// 3,000 frames × 6,304 vertices would need about …"); its point cache now
+/// streams chunk by chunk, so a long clip converts under a small budget.
+#[test]
+fn a_long_retarget_streams_within_a_small_memory_budget() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let clip = tmp.path().join("long.bvh");
+    let frames = 1000;
+    std::fs::write(&clip, long_walk(frames)).unwrap();
+    let out = tmp.path().join("o.pc2");
+    let o = Command::new(common::bin())
+        .args(["retarget", "--db"])
+        .arg(&f.db)
+        .arg("--mocap")
+        .arg(&clip)
+        .arg("-o")
+        .arg(&out)
+        .env("SURFMOTION_MEMORY_LIMIT", SMALL)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    // 1,000 frames × 6,304 vertices of f64 are 151 MB: more than the
+    // budget, so they were never held; the plausibility says it measured
+    // the first frames only.
+    let bytes = std::fs::read(&out).unwrap();
+    let n = i32::from_le_bytes(bytes[16..20].try_into().unwrap()) as usize;
+    let count = i32::from_le_bytes(bytes[28..32].try_into().unwrap()) as usize;
+    assert_eq!(count, frames);
+    assert_eq!(bytes.len(), 32 + 12 * n * frames);
+    assert!((n * frames * 24) as u64 > surfmotion::budget::parse_bytes(SMALL).unwrap());
+    assert!(
+        text.contains("plausibility measured on the first") && text.contains("of 1000"),
+        "{text}"
+    );
     let names: Vec<_> = std::fs::read_dir(tmp.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

@@ -272,3 +272,48 @@ fn keyframe_frame_centres_read_frames_converted_once_on_load() {
         "the walk's centres all sit at the origin"
     );
 }
+
+/// Regression (issue 18, item 12): a retarget streamed to its output
+/// (`RetargetJob::run_to`, chunks of 64 frames handed on in order) writes
+/// the bytes the held path (`run` then `write`) writes, with the same
+/// report (turned-over counts, steps) and joint-velocity error; the
+/// 120-frame query crosses a chunk boundary.
+#[test]
+fn streamed_retarget_writes_the_bytes_of_the_held_one() {
+    use surfmotion::jobs::{RetargetJob, RetargetJobOptions};
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let clip = tmp.path().join("turn.bvh");
+    surfmotion::mocap::bvh::write_bvh(&gait_clip(Gait::Turn, 4.0, FPS), &clip).unwrap();
+    let job = RetargetJob::load(&f.db, RetargetJobOptions::default(), &Quiet).unwrap();
+    let held = job.run(&clip).unwrap();
+    assert!(held.output.report.frames > surfmotion::retarget::CHUNK_FRAMES);
+    let held_error = held.velocity_error(&job.character);
+    let held_report = serde_json::to_value(&held.output.report.steps).unwrap();
+    let held_turned = held.output.report.turned_over;
+    let first: Vec<[f64; 3]> = held.output.positions[..job.character.n()].to_vec();
+    let held_files = job
+        .write(held.output.positions, &tmp.path().join("held.pc2"))
+        .unwrap();
+    let streamed = job
+        .run_to(&clip, &tmp.path().join("streamed.pc2"), 0)
+        .unwrap();
+    assert_eq!(held_files.len(), streamed.written.len());
+    for (a, b) in held_files.iter().zip(&streamed.written) {
+        let (a, b) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+        assert!(
+            a == b,
+            "{} bytes held, {} streamed, differ",
+            a.len(),
+            b.len()
+        );
+    }
+    assert_eq!(streamed.report.turned_over, held_turned);
+    assert_eq!(
+        serde_json::to_value(&streamed.report.steps).unwrap(),
+        held_report
+    );
+    assert_eq!(streamed.velocity.mean_cm, held_error.mean_cm);
+    // No bytes asked for: one frame is kept, the first.
+    assert_eq!(streamed.kept, first);
+}

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use surfmotion::db::{Character, CharacterOptions};
 use surfmotion::jobs::retarget::{evaluate_result, per_frame_seconds};
+use surfmotion::jobs::transfer::PLAUSIBILITY_BYTES;
 use surfmotion::jobs::{RetargetJob, RetargetJobOptions, RetargetSummary};
 use surfmotion::retarget::RetargetOptions;
 
@@ -113,7 +114,27 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     let job = RetargetJob::load(&a.db, opts, &super::db::Bars::new())?;
     let ch = &job.character;
-    let fps = ch.manifest().fps;
+    if a.run.preview.preview.is_none() {
+        // Nothing needs every frame at once: they go to the output as they
+        // are made (issue 18, item 12); the plausibility is measured on the
+        // first frames, as `transfer` does.
+        let keep_bytes =
+            PLAUSIBILITY_BYTES.min((surfmotion::budget::Budget::current().bytes / 4) as usize);
+        let run = job.run_to(&a.mocap, &a.output, keep_bytes)?;
+        let r = &run.report;
+        let measured = run.kept.len() / ch.n().max(1);
+        let plaus = job
+            .plausibility(&run.kept, run.deformed().then_some(r.turned_over))
+            .map(|p| p.0);
+        let partial = (measured < r.frames).then_some(measured);
+        if let Some(k) = partial {
+            tracing::info!(
+                "plausibility measured on the first {k} of {} frames (streamed output)",
+                r.frames
+            );
+        }
+        return print_report(&a, r, run.written, &run.mocap.convention, plaus, partial);
+    }
     let run = job.run(&a.mocap)?;
     let (out, convention) = (&run.output, &run.mocap.convention);
     let plaus = job.plausibility_of(&run);
@@ -136,11 +157,29 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         )?;
     }
     let plaus = plaus.map(|p| p.0);
+    let convention = convention.clone();
     let r = &run.output.report;
     let written = job.write(run.output.positions, &a.output)?;
+    print_report(&a, r, written, &convention, plaus, None)
+}
+
+/// Writes the `--report` file and prints the summary of a retarget
+/// (`partial`: the plausibility was measured on that many first frames).
+fn print_report(
+    a: &Args,
+    r: &surfmotion::retarget::Report,
+    written: Vec<PathBuf>,
+    convention: &str,
+    plaus: Option<surfmotion::eval::Plausibility>,
+    partial: Option<usize>,
+) -> anyhow::Result<()> {
+    let fps = r.fps;
     if let Some(p) = &a.report {
         let mut v = serde_json::to_value(r)?;
         v["plausibility"] = serde_json::to_value(&plaus)?;
+        if let Some(k) = partial {
+            v["plausibility_frames"] = serde_json::to_value(k)?;
+        }
         surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
     }
     let per_frame = per_frame_seconds(r);
@@ -210,6 +249,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         );
     }
     if let Some(p) = &plaus {
+        if let Some(k) = partial {
+            s += &format!(
+                "plausibility measured on the first {} of {} (streamed output):\n",
+                super::count(k, "frame"),
+                r.frames
+            );
+        }
         s += &p.text();
     }
     super::emit(&s)

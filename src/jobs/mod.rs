@@ -31,7 +31,7 @@ pub mod transfer;
 pub use crate::batch::Converter;
 pub use batch::{BatchEvent, BatchOptions, BatchReport, batch_folder};
 pub use database::{build_database, load_database};
-pub use retarget::{RetargetJob, RetargetJobOptions, RetargetRun, RetargetSummary};
+pub use retarget::{RetargetJob, RetargetJobOptions, RetargetRun, RetargetSummary, StreamedRun};
 pub use skeletons::{SkeletonFile, SkeletonsReport, export_skeletons};
 pub use synth_db::{
     SynthCharacter, SynthClip, SynthOptions, SynthReport, write_synthetic_database,

@@ -10,9 +10,10 @@ use crate::deform::{DeformMode, TurnedOver};
 use crate::eval::{Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error};
 use crate::mesh::MeshSequence;
 use crate::mesh::io::glb::GlbOptions;
+use crate::mesh::io::stream::SequenceWriter;
 use crate::mesh::io::{SaveOptions, save_sequence_with};
 use crate::retarget::query::{MocapPoses, load_mocap, to_character};
-use crate::retarget::{Output, Report, RetargetOptions, Timings, synthesise};
+use crate::retarget::{Output, Report, RetargetOptions, Timings, synthesise, synthesise_each};
 use crate::rig::LoadOptions;
 use crate::rig::retarget::clip_head_trunk_deg;
 use crate::skeleton::Pose;
@@ -87,6 +88,70 @@ impl RetargetJob {
         Ok(RetargetRun { mocap, output })
     }
 
+    /// Retargets the clip at `clip` straight to `out` (by extension), each
+    /// frame written as it is made ([`synthesise_each`] into a
+    /// [`SequenceWriter`]), so a clip of any length needs the memory of one
+    /// chunk of frames, not of every frame (issue 18, item 12): point caches
+    /// and OBJ folders stream; a GLB, written whole, is checked against the
+    /// memory budget and its format's size before the first frame is made.
+    /// The first frames, up to `keep_bytes` of positions, are kept (for a
+    /// plausibility measure); the joint-velocity error is measured on every
+    /// frame. The bytes written are those of [`RetargetJob::run`] then
+    /// [`RetargetJob::write`].
+    pub fn run_to(
+        &self,
+        clip: &Path,
+        out: &Path,
+        keep_bytes: usize,
+    ) -> Result<StreamedRun, JobError> {
+        let ch = &self.character;
+        let fps = ch.manifest().fps;
+        let mocap = load_mocap(clip, &self.options.load, fps)?;
+        if mocap.poses.is_empty() {
+            return Err(JobError::Input {
+                path: clip.to_path_buf(),
+                msg: "the clip has no frames".into(),
+            });
+        }
+        let n = ch.n();
+        let frames = mocap.poses.len();
+        let mut writer = SequenceWriter::create(
+            &ch.topology_metres(),
+            out,
+            frames,
+            &SaveOptions {
+                fps: Some(fps),
+                glb: self.options.glb,
+            },
+        )?;
+        let keep = (keep_bytes / (24 * n.max(1))).clamp(1, frames);
+        let mut kept = Vec::with_capacity(keep * n);
+        let mut skeletons: Vec<Pose> = Vec::with_capacity(frames);
+        let s = synthesise_each(
+            ch,
+            &mocap.poses,
+            &mocap.reference,
+            fps,
+            &self.options.retarget,
+            |f, p| -> Result<(), JobError> {
+                if f < keep {
+                    kept.extend_from_slice(p);
+                }
+                skeletons.push(ch.rig().skeleton(p));
+                Ok(writer.push(p)?)
+            },
+        )?;
+        let written = writer.finish()?;
+        let velocity = velocity_error(&s.query, &skeletons);
+        Ok(StreamedRun {
+            mocap,
+            report: s.report,
+            written,
+            kept,
+            velocity,
+        })
+    }
+
     /// The plausibility of `positions` (metres, Y-up, frame-major) against
     /// the database's own frames, and the floor height; `None` (with a
     /// warning) when the rig cannot support the checks.
@@ -151,6 +216,29 @@ pub fn plausibility(
             tracing::warn!("plausibility not measured: {e}");
             None
         }
+    }
+}
+
+/// One clip retargeted straight to a file ([`RetargetJob::run_to`]).
+pub struct StreamedRun {
+    /// The clip as read (canonical poses, metres, Y-up, the database's rate).
+    pub mocap: MocapPoses,
+    /// What was done.
+    pub report: Report,
+    /// Files written.
+    pub written: Vec<PathBuf>,
+    /// The first output frames (frame-major), as many as the `keep_bytes`
+    /// given allow (at least one).
+    pub kept: Vec<[f64; 3]>,
+    /// The joint-velocity error (Huang et al. 2015, Sec. 6.2) over every
+    /// frame, as [`RetargetRun::velocity_error`].
+    pub velocity: VelocityError,
+}
+
+impl StreamedRun {
+    /// True when the deformation ran (its repair counts are meaningful).
+    pub fn deformed(&self) -> bool {
+        matches!(self.report.deform, DeformMode::Part | DeformMode::Global)
     }
 }
 
@@ -246,18 +334,18 @@ impl Converter for RetargetJob {
         format!("retarget --db {}", self.db.display())
     }
 
+    /// Streams the frames to `out` as they are made
+    /// ([`RetargetJob::run_to`]): a clip of any length converts with the
+    /// memory of one chunk of frames (issue 18, item 12); only a GLB,
+    /// written whole, is checked against the budget.
     fn convert(&self, clip: &Path, out: &Path) -> Result<Converted, String> {
-        let run = self.run(clip).map_err(|e| match e {
+        let run = self.run_to(clip, out, 0).map_err(|e| match e {
             JobError::Input { msg, .. } => msg,
             e => e.to_string(),
         })?;
-        let frames = run.output.positions.len() / self.character.n().max(1);
-        let e = run.velocity_error(&self.character);
-        self.write(run.output.positions, out)
-            .map_err(|e| e.to_string())?;
         Ok(Converted {
-            frames,
-            error_cm: Some(e.mean_cm),
+            frames: run.report.frames,
+            error_cm: Some(run.velocity.mean_cm),
         })
     }
 }

@@ -243,9 +243,16 @@ pub enum RetargetError {
     Budget(#[from] crate::budget::OverBudget),
 }
 
+/// Output frames made at once by [`synthesise_each`]: blended and deformed
+/// in parallel, then handed on in order. A chunk holds two copies of the
+/// character's vertices per frame (64 × 6,304 vertices × 48 B ≈ 19 MB).
+pub const CHUNK_FRAMES: usize = 64;
+
 /// Drives the character by the mocap poses (metres, Y-up, the clip's own
 /// skeleton at the database frame rate) and the clip's neutral `reference`
-/// ([`query::load_mocap`] gives both): Sec. 5.2 up to interpolation.
+/// ([`query::load_mocap`] gives both): Sec. 5.2 up to interpolation. Every
+/// output frame is held: the memory is checked against
+/// [`crate::budget`] first. [`synthesise_each`] streams instead.
 pub fn synthesise(
     ch: &Character,
     mocap: &[Pose],
@@ -254,14 +261,51 @@ pub fn synthesise(
     opts: &RetargetOptions,
 ) -> Result<Output, RetargetError> {
     // One output frame per query frame, each holding the character's
-    // vertices (placed, then deformed in place; the blend keeps a copy per
-    // worker): refuse before allocating (issue 18, item 12).
+    // vertices: refuse before allocating (issue 18, item 12).
     crate::budget::check_frames(
         &format!("the retarget at {fps} fps"),
         mocap.len(),
         ch.n(),
-        2,
+        1,
     )?;
+    let mut positions = Vec::with_capacity(mocap.len() * ch.n());
+    let s = synthesise_each(ch, mocap, reference, fps, opts, |_, p| {
+        positions.extend_from_slice(p);
+        Ok::<(), RetargetError>(())
+    })?;
+    Ok(Output {
+        positions,
+        query: s.query,
+        report: s.report,
+    })
+}
+
+/// What [`synthesise_each`] returns once every frame is handed on.
+pub struct Streamed {
+    /// The query on the character's skeleton (metres, Y-up).
+    pub query: Vec<Pose>,
+    /// What was done.
+    pub report: Report,
+}
+
+/// [`synthesise`] handing each output frame (its index and the character's
+/// vertices, metres, Y-up) to `each` in order, so a clip of any length
+/// needs the memory of [`CHUNK_FRAMES`] frames, not of every frame (issue
+/// 18, item 12). The frames are those of [`synthesise`], bit for bit: the
+/// placements on the root trajectory (Sec. 5.2) are computed for every
+/// frame first (they are smoothed over time), then chunks of frames are
+/// blended (Sec. 4.4) and deformed (Sec. 5.2.3) in parallel, each frame
+/// independently, with per-worker scratch reused from chunk to chunk. The
+/// report's timings count the blending and deformation, not `each`. The
+/// first error of `each` stops the job and is returned.
+pub fn synthesise_each<E: From<RetargetError>>(
+    ch: &Character,
+    mocap: &[Pose],
+    reference: &Reference,
+    fps: f64,
+    opts: &RetargetOptions,
+    mut each: impl FnMut(usize, &[[f64; 3]]) -> Result<(), E>,
+) -> Result<Streamed, E> {
     let mut timings = Timings::default();
     let t0 = Instant::now();
     let query = query::to_character(ch.rest_pose(), reference, mocap);
@@ -282,20 +326,94 @@ pub fn synthesise(
     timings.timeline = t2.elapsed().as_secs_f64();
     let t3 = Instant::now();
     let topo = ch.topology_metres();
-    let blender = Blender::new(&topo)?;
+    let blender = Blender::new(&topo).map_err(RetargetError::from)?;
     timings.factor = t3.elapsed().as_secs_f64();
     let t4 = Instant::now();
-    let mut positions =
-        place_and_blend(ch, &blender, &retrieval.path, &frames, &query, opts.smooth);
+    let placed = placements(ch, &retrieval.path, &frames, &query, opts.smooth);
     timings.meshes = t4.elapsed().as_secs_f64();
-    let mut turned_over = TurnedOver::default();
-    if opts.deform != DeformMode::None {
+    let deformer = if opts.deform != DeformMode::None {
         let t5 = Instant::now();
-        let deformer = Deformer::new(ch, opts.deform, &opts.deform_options)?;
+        let d =
+            Deformer::new(ch, opts.deform, &opts.deform_options).map_err(RetargetError::from)?;
         timings.deform_factor = t5.elapsed().as_secs_f64();
-        let t6 = Instant::now();
-        turned_over = deformer.deform_all(ch, &mut positions, &query);
-        timings.deform = t6.elapsed().as_secs_f64();
+        Some(d)
+    } else {
+        None
+    };
+    let n = ch.n().max(1);
+    let chunk = CHUNK_FRAMES.min(frames.len()).max(1);
+    // The chunk's blended frames, then (when deforming) its deformed ones.
+    let mut blended = vec![[0.0; 3]; chunk * n];
+    let mut deformed = if deformer.is_some() {
+        vec![[0.0; 3]; chunk * n]
+    } else {
+        Vec::new()
+    };
+    // Per-worker scratch, taken and given back frame by frame (allocated
+    // once per worker, not per frame).
+    let blend_pool = std::sync::Mutex::new(Vec::<BlendWorker>::new());
+    let deform_pool = std::sync::Mutex::new(Vec::<crate::deform::DeformWorkspace>::new());
+    let mut turned_over = TurnedOver::default();
+    for start in (0..frames.len()).step_by(chunk) {
+        let m = chunk.min(frames.len() - start);
+        let t = Instant::now();
+        blended[..m * n]
+            .par_chunks_mut(n)
+            .enumerate()
+            .for_each(|(i, dst)| {
+                let k = start + i;
+                let mut w = take(&blend_pool).unwrap_or_else(|| BlendWorker {
+                    ws: blender.workspace(),
+                    buf: vec![[0.0; 3]; n],
+                    grads: vec![FrameGradients::default(); 4],
+                });
+                let primary = frames[k].primary();
+                let mut scratch = BlendScratch {
+                    ws: &mut w.ws,
+                    buf: &mut w.buf,
+                    grads: &mut w.grads,
+                };
+                blend_placed(
+                    ch,
+                    &blender,
+                    frames[k].used(),
+                    primary,
+                    placed[k],
+                    |id| id == primary,
+                    &mut scratch,
+                    dst,
+                );
+                give(&blend_pool, w);
+            });
+        timings.meshes += t.elapsed().as_secs_f64();
+        let out: &[[f64; 3]] = match &deformer {
+            Some(d) => {
+                let t = Instant::now();
+                let sum = deformed[..m * n]
+                    .par_chunks_mut(n)
+                    .zip(blended[..m * n].par_chunks(n))
+                    .zip(query[start..start + m].par_iter())
+                    .map(|((dst, src), target)| {
+                        let mut ws = take(&deform_pool).unwrap_or_else(|| d.workspace());
+                        let sp = ch.rig().skeleton(src);
+                        let c = d.deform(ch, src, &sp, target, dst, &mut ws);
+                        give(&deform_pool, ws);
+                        c
+                    })
+                    .reduce(TurnedOver::default, |a, b| TurnedOver {
+                        before: a.before + b.before,
+                        after: a.after + b.after,
+                    });
+                turned_over.before += sum.before;
+                turned_over.after += sum.after;
+                timings.deform += t.elapsed().as_secs_f64();
+                &deformed[..m * n]
+            }
+            None => &blended[..m * n],
+        };
+        for (i, f) in out.chunks(n).enumerate() {
+            each(start + i, f)?;
+        }
     }
     let name = |id: u32| {
         let (s, t) = ch.graph().frame_of(id);
@@ -323,8 +441,7 @@ pub fn synthesise(
             }
         })
         .collect();
-    Ok(Output {
-        positions,
+    Ok(Streamed {
         query,
         report: Report {
             frames: frames.len(),
@@ -340,16 +457,33 @@ pub fn synthesise(
     })
 }
 
-/// Places every source frame on the query's trajectory and blends.
-fn place_and_blend(
+/// One worker's blending scratch in [`synthesise_each`].
+struct BlendWorker {
+    ws: crate::mesh::blend::BlendWorkspace,
+    buf: Vec<[f64; 3]>,
+    grads: Vec<FrameGradients>,
+}
+
+/// A worker's scratch from `pool`, if one is free.
+fn take<T>(pool: &std::sync::Mutex<Vec<T>>) -> Option<T> {
+    pool.lock().unwrap_or_else(|e| e.into_inner()).pop()
+}
+
+/// Gives a worker's scratch back to `pool`.
+fn give<T>(pool: &std::sync::Mutex<Vec<T>>, w: T) {
+    pool.lock().unwrap_or_else(|e| e.into_inner()).push(w);
+}
+
+/// The placement of every output frame on the query's root trajectory:
+/// its primary source fitted onto the query pose, smoothed over `smooth`
+/// frames either side within a segment (between jumps).
+fn placements(
     ch: &Character,
-    blender: &Blender,
     path: &[u32],
     frames: &[OutFrame],
     query: &[Pose],
     smooth: usize,
-) -> Vec<[f64; 3]> {
-    let n = ch.n();
+) -> Vec<Floor> {
     // Placement of each output frame's primary source, smoothed.
     let raw: Vec<Floor> = frames
         .iter()
@@ -368,7 +502,7 @@ fn place_and_blend(
     for k in 1..frames.len() {
         segment[k] = segment[k - 1] + usize::from(!timeline::plays_on(ch, path[k - 1], path[k]));
     }
-    let placed: Vec<Floor> = (0..raw.len())
+    (0..raw.len())
         .map(|k| {
             let mut a = k.saturating_sub(smooth);
             let mut b = (k + smooth + 1).min(raw.len());
@@ -384,30 +518,5 @@ fn place_and_blend(
                 t: raw[a..b].iter().map(|f| f.t).sum::<DVec3>() / w,
             }
         })
-        .collect();
-    let mut out = vec![[0.0; 3]; frames.len() * n];
-    out.par_chunks_mut(n.max(1)).enumerate().for_each_init(
-        || {
-            (
-                blender.workspace(),
-                vec![[0.0; 3]; n],
-                vec![FrameGradients::default(); 4],
-            )
-        },
-        |(ws, buf, grads), (k, dst)| {
-            let primary = frames[k].primary();
-            let mut scratch = BlendScratch { ws, buf, grads };
-            blend_placed(
-                ch,
-                blender,
-                frames[k].used(),
-                primary,
-                placed[k],
-                |id| id == primary,
-                &mut scratch,
-                dst,
-            );
-        },
-    );
-    out
+        .collect()
 }
