@@ -101,7 +101,7 @@ pub fn read_pose(ch: &Character, key: &str, load: &LoadOptions) -> Result<Pose, 
             fps,
         });
     }
-    let q = to_character(&ch.rest_pose(), &m.reference, &m.poses[f..=f]);
+    let q = to_character(ch.rest_pose(), &m.reference, &m.poses[f..=f]);
     q.into_iter()
         .next()
         .ok_or_else(|| err("the clip gave no pose".into()))
