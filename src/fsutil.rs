@@ -158,40 +158,12 @@ pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), FsError> {
-    let wrap = |source| FsError {
+    let mut f = AtomicFile::create(path)?;
+    fill(&mut f.buf).map_err(|source| FsError {
         path: path.to_path_buf(),
         source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    std::fs::create_dir_all(&dir).map_err(wrap)?;
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".surfmotion-")
-        .suffix(".part")
-        .tempfile_in(&dir)
-        .map_err(wrap)?;
-    {
-        let mut buf = std::io::BufWriter::with_capacity(1 << 20, tmp.as_file_mut());
-        fill(&mut buf).map_err(wrap)?;
-        buf.flush().map_err(wrap)?;
-    }
-    tmp.as_file().sync_all().map_err(wrap)?;
-    // Temporary files are created private (0600); give the output the
-    // permissions of the file it replaces, or the usual 0644.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        let mode = std::fs::metadata(path)
-            .map(|m| m.permissions().mode())
-            .unwrap_or(0o644);
-        tmp.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(mode))
-            .map_err(wrap)?;
-    }
-    tmp.persist(path).map_err(|e| wrap(e.error))?;
-    Ok(())
+    })?;
+    f.commit()
 }
 
 /// A file written piece by piece and made visible at once: the bytes go to

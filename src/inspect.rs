@@ -373,19 +373,7 @@ impl Report {
                 if !r.unmapped_canonical.is_empty() && !r.rig_joints.is_empty() {
                     let _ = writeln!(s, "  unmapped    {}", r.unmapped_canonical.join(", "));
                 }
-                if !r.sides.is_empty() {
-                    let _ = writeln!(s, "  left/right  {}", r.sides);
-                }
-                for j in &r.rig_joints {
-                    let _ = writeln!(
-                        s,
-                        "    {:<12} {:<28} {:<10} {:.2}",
-                        j.canonical.name(),
-                        j.joint.as_deref().unwrap_or("(derived)"),
-                        format!("{:?}", j.source).to_lowercase(),
-                        j.confidence
-                    );
-                }
+                write_mapping(&mut s, &r.sides, &r.rig_joints);
                 let _ = writeln!(s, "  joint names {}", r.joint_names.join(" "));
                 for w in &r.warnings {
                     let _ = writeln!(s, "  warning: {w}");
@@ -432,19 +420,7 @@ impl Report {
                         r.skin_joints.join(" ")
                     );
                     let _ = writeln!(s, "  convention  {}", r.skin_convention);
-                    if !r.skin_sides.is_empty() {
-                        let _ = writeln!(s, "  left/right  {}", r.skin_sides);
-                    }
-                    for j in &r.skin_rig_joints {
-                        let _ = writeln!(
-                            s,
-                            "    {:<12} {:<28} {:<10} {:.2}",
-                            j.canonical.name(),
-                            j.joint.as_deref().unwrap_or("(derived)"),
-                            format!("{:?}", j.source).to_lowercase(),
-                            j.confidence
-                        );
-                    }
+                    write_mapping(&mut s, &r.skin_sides, &r.skin_rig_joints);
                 }
                 if r.morph_targets > 0 {
                     let _ = writeln!(s, "  morph       {} targets", r.morph_targets);
@@ -464,5 +440,24 @@ impl Report {
             }
         }
         s
+    }
+}
+
+/// The joint mapping's lines of a text report: how left and right were
+/// decided, then each canonical joint with its joint, source and confidence.
+fn write_mapping(s: &mut String, sides: &str, joints: &[crate::rig::JointReport]) {
+    use std::fmt::Write as _;
+    if !sides.is_empty() {
+        let _ = writeln!(s, "  left/right  {sides}");
+    }
+    for j in joints {
+        let _ = writeln!(
+            s,
+            "    {:<12} {:<28} {:<10} {:.2}",
+            j.canonical.name(),
+            j.joint.as_deref().unwrap_or("(derived)"),
+            format!("{:?}", j.source).to_lowercase(),
+            j.confidence
+        );
     }
 }

@@ -593,13 +593,19 @@ fn a_long_transfer_streams_within_a_small_memory_budget() {
     assert_eq!(o.status.code(), Some(0), "{err}");
     // 3,000 frames × 6,304 vertices of f64 are 454 MB: more than the
     // budget, so they were never held.
-    let bytes = std::fs::read(&out).unwrap();
+    assert_streamed_pc2(&out, frames, tmp.path());
+}
+
+/// `out` is a complete point cache of `frames` frames whose f64 positions
+/// would not fit the small budget, and `dir` holds no temporary left over.
+fn assert_streamed_pc2(out: &Path, frames: usize, dir: &Path) {
+    let bytes = std::fs::read(out).unwrap();
     let n = i32::from_le_bytes(bytes[16..20].try_into().unwrap()) as usize;
     let count = i32::from_le_bytes(bytes[28..32].try_into().unwrap()) as usize;
     assert_eq!(count, frames);
     assert_eq!(bytes.len(), 32 + 12 * n * frames);
     assert!((n * frames * 24) as u64 > surfmotion::budget::parse_bytes(SMALL).unwrap());
-    let names: Vec<_> = std::fs::read_dir(tmp.path())
+    let names: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
@@ -634,21 +640,11 @@ fn a_long_retarget_streams_within_a_small_memory_budget() {
     // 1,000 frames × 6,304 vertices of f64 are 151 MB: more than the
     // budget, so they were never held; the plausibility says it measured
     // the first frames only.
-    let bytes = std::fs::read(&out).unwrap();
-    let n = i32::from_le_bytes(bytes[16..20].try_into().unwrap()) as usize;
-    let count = i32::from_le_bytes(bytes[28..32].try_into().unwrap()) as usize;
-    assert_eq!(count, frames);
-    assert_eq!(bytes.len(), 32 + 12 * n * frames);
-    assert!((n * frames * 24) as u64 > surfmotion::budget::parse_bytes(SMALL).unwrap());
+    assert_streamed_pc2(&out, frames, tmp.path());
     assert!(
         text.contains("plausibility measured on the first") && text.contains("of 1000"),
         "{text}"
     );
-    let names: Vec<_> = std::fs::read_dir(tmp.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    assert!(!names.iter().any(|n| n.ends_with(".part")), "{names:?}");
 }
 
 /// Regression (issue 18, item 13): a tampered graph cache with a valid key

@@ -67,17 +67,24 @@ impl RetargetJob {
         })
     }
 
-    /// Retargets the clip at `clip` (BVH or AMC, any detected rig).
-    pub fn run(&self, clip: &Path) -> Result<RetargetRun, JobError> {
-        let ch = &self.character;
-        let fps = ch.manifest().fps;
-        let mocap = load_mocap(clip, &self.options.load, fps)?;
+    /// The clip at `clip` at the database's frame rate, refused when it
+    /// has no frames.
+    fn load_clip(&self, clip: &Path) -> Result<MocapPoses, JobError> {
+        let mocap = load_mocap(clip, &self.options.load, self.character.manifest().fps)?;
         if mocap.poses.is_empty() {
             return Err(JobError::Input {
                 path: clip.to_path_buf(),
                 msg: "the clip has no frames".into(),
             });
         }
+        Ok(mocap)
+    }
+
+    /// Retargets the clip at `clip` (BVH or AMC, any detected rig).
+    pub fn run(&self, clip: &Path) -> Result<RetargetRun, JobError> {
+        let ch = &self.character;
+        let fps = ch.manifest().fps;
+        let mocap = self.load_clip(clip)?;
         let output = synthesise(
             ch,
             &mocap.poses,
@@ -106,13 +113,7 @@ impl RetargetJob {
     ) -> Result<StreamedRun, JobError> {
         let ch = &self.character;
         let fps = ch.manifest().fps;
-        let mocap = load_mocap(clip, &self.options.load, fps)?;
-        if mocap.poses.is_empty() {
-            return Err(JobError::Input {
-                path: clip.to_path_buf(),
-                msg: "the clip has no frames".into(),
-            });
-        }
+        let mocap = self.load_clip(clip)?;
         let n = ch.n();
         let frames = mocap.poses.len();
         let mut writer = SequenceWriter::create(
