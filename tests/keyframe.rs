@@ -509,6 +509,34 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
         ],
         "time NaN",
     );
+    // A heading that is no number made every cost NaN, with exit 0; it is
+    // now a usage error (clap's: the reason, then a pointer to --help).
+    let mut a: Vec<&std::ffi::OsStr> = vec!["keyframe".as_ref(), "--db".as_ref(), db.as_os_str()];
+    a.extend(
+        [
+            "--from",
+            "02_01:0",
+            "--to",
+            "02_03:30",
+            "--distance",
+            "1",
+            "--time",
+            "1",
+            "--heading",
+            "nan",
+            "-o",
+        ]
+        .map(std::ffi::OsStr::new),
+    );
+    a.push(x.as_os_str());
+    let o = run(&a);
+    let e = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    let first = e.lines().next().unwrap_or_default();
+    assert!(
+        first.contains("--heading") && first.contains("expected a finite number"),
+        "{e}"
+    );
 }
 
 /// Every distinct (distance, cheapest transition cost) of the paths of

@@ -63,7 +63,7 @@ pub struct Args {
     /// Target final facing, degrees relative to the start key-frame's
     /// (positive: from +Z towards +X); a cost term of the exact-length
     /// search (--w-heading per degree).
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = super::finite)]
     pub heading: Option<f64>,
     /// Weight of the heading error, per degree. Default: 1/30 (30° cost as
     /// much as 0.3 m of distance).

@@ -330,6 +330,20 @@ pub fn fraction(s: &str) -> Result<f64, String> {
     }
 }
 
+/// An angle or signed quantity on the command line: any finite number
+/// (NaN or infinity would make every cost NaN; issue 18, item 13).
+pub fn finite(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{s}: expected a finite number"))
+    }
+}
+
 /// A weight or distance on the command line: a finite number ≥ 0 (NaN made
 /// the trellis panic; issue 18, item 13).
 pub fn non_negative(s: &str) -> Result<f64, String> {
