@@ -313,17 +313,10 @@ type Decoded = (Vec<[f64; 3]>, f64, usize);
 /// node or the package is absent, which fails under CI=true.
 fn decode_in_gltf_transform(files: &[&Path]) -> Option<Vec<Decoded>> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let have = root.join(".ci/node_modules/@gltf-transform/core").exists()
-        && std::process::Command::new("node")
-            .arg("--version")
-            .output()
-            .is_ok_and(|o| o.status.success());
-    if !have {
-        assert!(
-            !std::env::var("CI").is_ok_and(|v| v == "true"),
-            "CI=true but @gltf-transform/core is not installed (.ci/run installs it)"
-        );
-        eprintln!("SKIPPED: run `npm install --prefix .ci` to decode GLB output in glTF Transform");
+    if !common::npm_package(
+        "@gltf-transform/core",
+        "decode GLB output in glTF Transform",
+    ) {
         return None;
     }
     let out = std::process::Command::new("node")

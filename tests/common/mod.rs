@@ -124,3 +124,24 @@ pub fn fixture_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&p).unwrap();
     p
 }
+
+/// Whether the npm package `package` is installed under `.ci/node_modules`
+/// and `node` runs (`.ci/run` installs both). When not, the test should
+/// return early: this prints why (`what` it would have done), except under
+/// `CI=true`, where the absence is a failure.
+pub fn npm_package(package: &str, what: &str) -> bool {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let have = root.join(".ci/node_modules").join(package).exists()
+        && std::process::Command::new("node")
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success());
+    if !have {
+        assert!(
+            !std::env::var("CI").is_ok_and(|v| v == "true"),
+            "CI=true but {package} is not installed (.ci/run installs it)"
+        );
+        eprintln!("SKIPPED: run `npm install --prefix .ci` to {what}");
+    }
+    have
+}
