@@ -28,7 +28,8 @@ pub enum Role {
     /// `Hips`, `Pelvis`, `root`, `SpineBase`, unsided `hip`.
     Pelvis,
     /// A lower/mid spine joint, with a preference score (3 best):
-    /// `Spine`/`abdomen`/`L3` 3, `Spine1`/`Spine01` 2, `Waist`/`L5`/`LowerBack` 1.
+    /// `Spine`/`abdomen`/`L3` 3, `Spine1`/`Spine01`/`abdomen2`/`abdomenUpper` 2,
+    /// `Waist`/`L5`/`LowerBack` 1.
     Spine(u8),
     /// `Chest`, `Spine2`, `T8`, `UpperChest`, `thorax`.
     Chest,
@@ -274,6 +275,7 @@ pub fn role(tokens: &[String]) -> Option<Role> {
         "spine" | "abdomen" | "abdomenlower" | "spinelower" => match num {
             None | Some(0) => Role::Spine(3),
             Some(1) if w == "abdomen" => Role::Spine(3),
+            Some(2) if w == "abdomen" => Role::Spine(2),
             Some(1) => Role::Spine(2),
             _ => Role::Chest,
         },
@@ -369,6 +371,31 @@ mod tests {
             ("L5", None, Some(Role::Spine(1))),
             ("Bip01 L Thigh", Some(Side::Left), Some(Role::Thigh)),
             ("mixamorig:LeftToe_End", Some(Side::Left), None),
+            // Daz Genesis 1-8.
+            ("hip", None, Some(Role::Pelvis)),
+            ("pelvis", None, Some(Role::Pelvis)),
+            ("abdomen", None, Some(Role::Spine(3))),
+            ("abdomen2", None, Some(Role::Spine(2))),
+            ("abdomenLower", None, Some(Role::Spine(3))),
+            ("abdomenUpper", None, Some(Role::Spine(2))),
+            ("chestLower", None, Some(Role::Chest)),
+            ("chestUpper", None, Some(Role::Chest)),
+            ("neckLower", None, Some(Role::Neck)),
+            ("lCollar", Some(Side::Left), Some(Role::Collar)),
+            ("lShldrBend", Some(Side::Left), Some(Role::UpperArm)),
+            ("lShldrTwist", Some(Side::Left), None),
+            ("rForearmBend", Some(Side::Right), Some(Role::Elbow)),
+            ("lForeArm", Some(Side::Left), Some(Role::Elbow)),
+            ("lForearmTwist", Some(Side::Left), None),
+            ("lThighBend", Some(Side::Left), Some(Role::Thigh)),
+            ("rThighTwist", Some(Side::Right), None),
+            ("lShin", Some(Side::Left), Some(Role::Knee)),
+            ("lToe", Some(Side::Left), Some(Role::Toe)),
+            ("lBigToe", Some(Side::Left), None),
+            // Unreal: `_l` suffixes.
+            ("thigh_l", Some(Side::Left), Some(Role::Thigh)),
+            ("ball_r", Some(Side::Right), Some(Role::Toe)),
+            ("upperarm_l", Some(Side::Left), Some(Role::UpperArm)),
         ];
         for (n, s, r) in cases {
             let tk = t(n);

@@ -17,6 +17,8 @@
 //!    node where two arms branch off (the chest). Legs must point away from
 //!    the chest (mean cosine below −0.7 in the rest pose or the median
 //!    sampled frame): a quadruped's spine is near horizontal above its legs.
+//!    A short bone (under 3% of the body's size) to a joint carrying both
+//!    legs joins that joint to the junction (Daz Genesis `hip` → `pelvis`).
 //! 4. Joints along a chain, where names do not fix them, by the body's
 //!    proportions on arc lengths (rest offsets, so any pose works): knee and
 //!    ankle make thigh ≈ shin and shin ≈ 2.5 × ankle-to-toe-tip; shoulder,
@@ -26,10 +28,13 @@
 //!    spine is the joint nearest 40% of the pelvis→chest arc; the neck the
 //!    first joint above the chest (a helper-named one when the chain has
 //!    nothing else, CC's NeckTwist01); the head the first joint above it
-//!    whose node branches (jaw, eyes), else the chain's last joint. A joint
-//!    whose name has the matching role wins inside its chain.
+//!    whose node branches (jaw, eyes), else the chain's last joint; the toe
+//!    the first joint after the ankle that is not a straight pass-through
+//!    (Daz `lMetatarsals`). A joint whose name has the matching role wins
+//!    inside its chain.
 //! 5. Left/right from the body's own frame, never from names: up =
-//!    pelvis→neck, forward = the feet's heel→toe direction (else the knees'
+//!    pelvis→neck, forward = the feet's ankle→toe direction across the shin
+//!    (else the knees'
 //!    bend, else the root's travel), left = up × forward (Y-up, facing +Z:
 //!    left is +X).
 
@@ -165,10 +170,37 @@ impl<'a> Geo<'a> {
             f += step;
         }
         // The body's size: the largest single-pose extent (a rest skeleton
-        // in bone-local frames, as CC exports, can be a folded stick).
+        // in bone-local frames, as CC exports, can be a folded stick), over
+        // the joints from the first branching joint down: a root chain
+        // above it is no part of the body (Bandai's static `joint_Root`
+        // stays at the origin while the body walks metres away from it).
+        let mut top = parent.iter().position(Option::is_none).unwrap_or(0);
+        for _ in 0..n {
+            match children[top].as_slice() {
+                [only] => top = *only,
+                _ => break,
+            }
+        }
+        let mut above = vec![false; n];
+        let mut k = parent[top];
+        while let Some(x) = k {
+            if above[x] {
+                break;
+            }
+            above[x] = true;
+            k = parent[x];
+        }
         let size = poses
             .iter()
-            .map(|(p, _)| bbox_diag(&mut p.iter().copied()))
+            .map(|(p, _)| {
+                bbox_diag(
+                    &mut p
+                        .iter()
+                        .enumerate()
+                        .filter(|&(i, _)| !above[i])
+                        .map(|(_, q)| *q),
+                )
+            })
             .filter(|d| d.is_finite())
             .fold(diag, f64::max);
         // Twist and share bones by geometry: a side branch whose joints (and
@@ -299,6 +331,26 @@ impl<'a> Geo<'a> {
                 } else if self.useful[c] && self.len[c] + self.reach[c] >= self.thr {
                     out.push(c);
                 }
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    /// Significant branches of the node of `r`, a short bone to a node that
+    /// itself splits into two or more significant branches counting as
+    /// those branches: a pelvis split across two joints (Daz Genesis: `hip`
+    /// carries the spine and, a centimetre or two away, `pelvis` carries
+    /// the thighs) is one junction. Short: under a quarter of the
+    /// significance threshold (3% of the body's size).
+    fn hip_branches(&self, r: usize) -> Vec<usize> {
+        let mut out = Vec::new();
+        for c in self.branches(r) {
+            let sub = self.branches(self.rep[c]);
+            if self.len[c] < 0.25 * self.thr && sub.len() >= 2 {
+                out.extend(sub);
+            } else {
+                out.push(c);
             }
         }
         out.sort_unstable();
@@ -456,7 +508,7 @@ pub fn analyse(clip: &Clip, tokens: &[Vec<String>]) -> Result<Body, NotHumanoid>
         if g.rep[p] != p || !g.useful[p] {
             continue;
         }
-        let b = g.branches(p);
+        let b = g.hip_branches(p);
         if b.len() < 3 {
             continue;
         }
@@ -891,10 +943,22 @@ fn body(
         let flat = |v: DVec3| v - up * v.dot(up);
         let mut fw = [DVec3::ZERO; 3];
         if let (Some(t0), Some(t1)) = (toe_pt(&l0, p, r), toe_pt(&l1, p, r)) {
+            // The sole: ankle→toe across the shin (its part along the
+            // knee→ankle axis removed). A foot stands at right angles to
+            // its shin, so this points forward however the leg swings and
+            // however low the rig puts its toe joint (CesiumMan's is 6 cm
+            // below the ankle and 3 cm ahead: its plain ankle→toe
+            // direction turns backward whenever the leg swings back).
+            let sole = |l: &Limb, t: DVec3| {
+                let (k, a) = (pt(l, 1, p), pt(l, 2, p));
+                let shin = (a - k).normalize_or_zero();
+                let v = t - a;
+                v - shin * v.dot(shin)
+            };
             let (a0, a1) = (pt(&l0, 2, p), pt(&l1, 2, p));
             let len = t0.distance(a0) + t1.distance(a1);
             if len > 0.0 {
-                fw[0] = (flat(t0 - a0) + flat(t1 - a1)) / len;
+                fw[0] = (flat(sole(&l0, t0)) + flat(sole(&l1, t1))) / len;
             }
         }
         for l in [&l0, &l1] {
@@ -1098,11 +1162,7 @@ fn leg_chain(
     let toe_k = if ankle_named.is_some() && foot_named.is_some_and(|f| f > ankle_k) {
         foot_named.map(|f| f - ankle_k - 1)
     } else {
-        first_role(tokens, toes, |r| r == Role::Toe).or(if toes.is_empty() {
-            None
-        } else {
-            Some(0)
-        })
+        first_role(tokens, toes, |r| r == Role::Toe).or_else(|| first_bent(g, tokens, ankle, toes))
     };
     let named = |j: usize, r: Role| role_of(tokens, j) == Some(r);
     let toe = toe_k.and_then(|k| toes.get(k).copied());
@@ -1131,6 +1191,38 @@ fn leg_chain(
         derive_end,
         subtree: g.subtree(start),
     })
+}
+
+/// The first of `toes` (the joints after the ankle along the leg's main
+/// path) that is not a straight pass-through: a joint in line with the one
+/// before it and the one after it (within 2°) in every sampled pose, with
+/// no body-part name, is skipped (Daz `lMetatarsals` between `lFoot` and
+/// `lToe`), unless the joint after it is a bare leaf marker (a `Toe_End`
+/// joint with no End Site), which is never the toe.
+fn first_bent(g: &Geo, tokens: &[Vec<String>], ankle: usize, toes: &[usize]) -> Option<usize> {
+    let marker = |j: usize| {
+        g.children[j].is_empty() && g.clip.joints[j].tail.is_none_or(|t| t.length() < g.eps)
+    };
+    let straight = |a: usize, b: usize, c: usize| {
+        g.poses.iter().all(|(p, _)| {
+            let u = (p[b] - p[a]).normalize_or_zero();
+            let v = (p[c] - p[b]).normalize_or_zero();
+            u.dot(v) >= 0.9994
+        })
+    };
+    if toes.is_empty() {
+        return None;
+    }
+    let k = (0..toes.len()).find(|&k| {
+        let prev = if k == 0 { ankle } else { toes[k - 1] };
+        match toes.get(k + 1) {
+            Some(&next) if !marker(next) && role_of(tokens, toes[k]).is_none() => {
+                !straight(prev, toes[k], next)
+            }
+            _ => true,
+        }
+    });
+    Some(k.unwrap_or(0))
 }
 
 fn arm_chain(
