@@ -1266,7 +1266,7 @@ fn idx(nodes: &[Node], name: &str) -> usize {
 
 /// A family of real rigs, as a re-shaping of the procedural skeleton
 /// (`Hips`, `Spine`, `Spine1` (the chest), `Neck`, `Head`; `Left`/`Right`
-/// + `Arm`, `ForeArm`, `Hand`, `UpLeg`, `Leg`, `Foot`, `ToeBase`): names,
+/// followed by `Arm`, `ForeArm`, `Hand`, `UpLeg`, `Leg`, `Foot`, `ToeBase`): names,
 /// pass-through joints along the torso and limbs, a joint carrying both
 /// thighs, and helper bones beside the body joints. [`shaped`] builds it.
 struct RigShape {
@@ -1999,11 +1999,11 @@ fn rerest(c: &Clip, top: usize, a: DQuat) -> Clip {
         }
     }
     for f in 0..c.frame_count() {
-        for i in 0..n {
+        for (i, &under) in below.iter().enumerate() {
             let k = f * n + i;
             if i == top {
                 out.rotations[k] = c.rotations[k] * a.inverse();
-            } else if below[i] {
+            } else if under {
                 out.rotations[k] = a * c.rotations[k] * a.inverse();
                 out.translations[k] = a * c.translations[k];
             }
