@@ -96,6 +96,28 @@ fn main() {
     // the chain of segments, and the walks' split.
     let via = [0u32, (72 + 30) as u32, (72 + 36 + 150) as u32];
     let pv = Planner::new(g.clone(), &via, 25.0, &o).unwrap();
+    // A grid of targets over the via (distances 4-16 m by 4 m × times
+    // 2-10 s by 2 s, 20 queries per iteration, some too fast for the
+    // graph), as `keyframe --grid` runs it: the extremes are kept across
+    // the queries.
+    grp.bench_function("via_grid_20_queries", |b| {
+        b.iter(|| {
+            for d in [4.0, 8.0, 12.0, 16.0] {
+                for t in [2.0, 4.0, 6.0, 8.0, 10.0] {
+                    black_box(
+                        pv.plan(
+                            &Targets::Global {
+                                distance: d,
+                                time: t,
+                            },
+                            &o,
+                        )
+                        .unwrap(),
+                    );
+                }
+            }
+        })
+    });
     for (name, o) in [("lattice", o), ("walks", walks)] {
         grp.bench_function(format!("via_{name}_10m_8s"), |b| {
             b.iter(|| {

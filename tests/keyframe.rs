@@ -1024,3 +1024,417 @@ fn the_search_meets_both_targets_within_1pct_when_some_path_does() {
         "Eq. 7 alone met all {cases}: the test shows nothing"
     );
 }
+
+/// Every simple path of frames from `from` to `to` (depth-first).
+fn simple_paths(g: &KeyGraph, from: u32, to: u32) -> Vec<Vec<u32>> {
+    fn go(g: &KeyGraph, to: u32, path: &mut Vec<u32>, on: &mut [bool], out: &mut Vec<Vec<u32>>) {
+        let u = *path.last().unwrap();
+        if u == to {
+            out.push(path.clone());
+            return;
+        }
+        for e in g.successors(u) {
+            if !on[e.to as usize] {
+                on[e.to as usize] = true;
+                path.push(e.to);
+                go(g, to, path, on, out);
+                path.pop();
+                on[e.to as usize] = false;
+            }
+        }
+    }
+    let mut on = vec![false; g.len()];
+    on[from as usize] = true;
+    let mut out = Vec::new();
+    go(g, to, &mut vec![from], &mut on, &mut out);
+    out
+}
+
+/// Every simple cycle of frames, as frame lists (each from its least
+/// frame, once).
+fn simple_cycles(g: &KeyGraph) -> Vec<Vec<u32>> {
+    fn go(g: &KeyGraph, v: u32, path: &mut Vec<u32>, on: &mut [bool], out: &mut Vec<Vec<u32>>) {
+        let u = *path.last().unwrap();
+        for e in g.successors(u) {
+            if e.to == v {
+                out.push(path.clone());
+            } else if e.to > v && !on[e.to as usize] {
+                on[e.to as usize] = true;
+                path.push(e.to);
+                go(g, v, path, on, out);
+                path.pop();
+                on[e.to as usize] = false;
+            }
+        }
+    }
+    let mut out = Vec::new();
+    let mut on = vec![false; g.len()];
+    for v in 0..g.len() as u32 {
+        on[v as usize] = true;
+        go(g, v, &mut vec![v], &mut on, &mut out);
+        on[v as usize] = false;
+    }
+    out
+}
+
+/// The measure of the steps of a closed (`closed`) or open frame list.
+fn frames_measure(g: &KeyGraph, frames: &[u32], closed: bool) -> Measure {
+    let mut m = Measure {
+        frames: if closed { 0 } else { 1 },
+        ..Default::default()
+    };
+    let mut steps: Vec<(u32, u32)> = frames.windows(2).map(|w| (w[0], w[1])).collect();
+    if closed {
+        steps.push((*frames.last().unwrap(), frames[0]));
+    }
+    for (a, b) in steps {
+        let e = g.edge(a, b).unwrap();
+        m.cost += e.cost;
+        m.distance += g.step[b as usize];
+        m.frames += 1;
+    }
+    m
+}
+
+/// The least Eq. 16 over every `n` whose loop frames stay within
+/// `budget` (exhaustive, depth-first).
+fn brute_counts(p: &Problem, budget: f64) -> f64 {
+    fn go(p: &Problem, i: usize, n: &mut Vec<u32>, left: f64, best: &mut f64) {
+        if i == p.loops.len() {
+            *best = best.min(p.cost(n));
+            return;
+        }
+        let mut k = 0;
+        loop {
+            n[i] = k;
+            go(p, i + 1, n, left - f64::from(k * p.loops[i].frames), best);
+            k += 1;
+            if f64::from(k * p.loops[i].frames) > left {
+                break;
+            }
+        }
+        n[i] = 0;
+    }
+    let mut best = f64::INFINITY;
+    go(
+        p,
+        0,
+        &mut vec![0; p.loops.len()],
+        budget.max(0.0),
+        &mut best,
+    );
+    best
+}
+
+/// The paper's search (walks plus repeated loops, `--search walks`) with
+/// its ILP repetition solver (Eqs. 23-25) finds the optimum of Eq. 13 that
+/// an exhaustive search finds on small random graphs: every simple frame
+/// path between the key-frames, every simple cycle sharing a frame with
+/// it, every repetition count up to where the time error alone exceeds
+/// the cost of none. The exact programme agrees too.
+#[test]
+fn walks_search_with_the_ilp_matches_brute_force_on_small_random_graphs() {
+    use surfmotion::keyframe::search::{Method, Solver};
+    let mut r = Lcg(53);
+    let mut compared = 0;
+    for case in 0..300 {
+        let g = random_graph(&mut r, 2, 5);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        if a == b {
+            continue;
+        }
+        let (d, t) = (0.3 + 2.5 * r.next(), 0.4 + 1.6 * r.next());
+        let target = Targets::Global {
+            distance: d,
+            time: t,
+        };
+        let ilp = SearchOptions {
+            method: Method::Walks,
+            solver: Solver::Ilp,
+            gap: 0.0,
+            ..Default::default()
+        };
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &ilp) else {
+            continue;
+        };
+        let plan = p.plan(&target, &ilp).unwrap();
+        if !plan.stats.bounds_hit.is_empty() {
+            continue;
+        }
+        let w = ilp.weights;
+        let cycles: Vec<(Vec<u32>, Measure)> = simple_cycles(&g)
+            .into_iter()
+            .map(|c| {
+                let m = frames_measure(&g, &c, true);
+                (c, m)
+            })
+            .collect();
+        let mut best = f64::INFINITY;
+        let paths = simple_paths(&g, a, b);
+        assert!(!paths.is_empty(), "case {case}");
+        for path in &paths {
+            let walk = frames_measure(&g, path, false);
+            let loops: Vec<Measure> = cycles
+                .iter()
+                .filter(|(c, _)| c.iter().any(|f| path.contains(f)))
+                .map(|x| x.1)
+                .collect();
+            let pr = Problem {
+                walk,
+                loops: &loops,
+                distance: d,
+                frames: t * 25.0,
+                w_dist: w.distance,
+                w_time: w.time,
+            };
+            let c0 = pr.cost(&vec![0; loops.len()]);
+            let budget = pr.frames - walk.frames as f64 + (c0 - walk.cost) / w.time;
+            best = best.min(brute_counts(&pr, budget));
+        }
+        assert!(
+            (plan.cost.total - best).abs() < 1e-6,
+            "case {case}: ilp {} brute force {best} ({a} -> {b}, {d} m, {t} s)",
+            plan.cost.total
+        );
+        let exact = SearchOptions {
+            solver: Solver::Exact,
+            ..ilp
+        };
+        let e = p.plan(&target, &exact).unwrap();
+        assert!((e.cost.total - best).abs() < 1e-6, "case {case}: exact");
+        compared += 1;
+    }
+    assert!(compared >= 30, "only {compared} cases");
+}
+
+/// Key-frames with two vias: the path starts and ends at the key-frames,
+/// passes both vias in order (each segment ends at its key-frame), every
+/// step is an edge of the graph and the measures are the path's, with the
+/// exact-length search and with the walks (each way of building a
+/// segment's path).
+#[test]
+fn paths_pass_two_vias_in_order_with_either_search() {
+    use surfmotion::keyframe::search::Method;
+    let mut r = Lcg(61);
+    let mut checked = [0usize; 2];
+    for case in 0..60 {
+        let g = random_graph(&mut r, 3, 18);
+        let keys: Vec<u32> = (0..4).map(|_| r.below(g.len()) as u32).collect();
+        let o = SearchOptions::default();
+        let Ok(p) = Planner::new(g.clone(), &keys, 25.0, &o) else {
+            continue;
+        };
+        for (mi, method) in [Method::Lattice, Method::Walks].into_iter().enumerate() {
+            let o = SearchOptions { method, ..o };
+            for targets in [
+                Targets::Global {
+                    distance: 4.0,
+                    time: 5.0,
+                },
+                Targets::PerSegment(vec![(1.0, 1.5), (2.0, 2.5), (1.5, 2.0)]),
+            ] {
+                let Ok(plan) = p.plan(&targets, &o) else {
+                    continue;
+                };
+                assert_eq!(plan.path[0], keys[0], "case {case}");
+                assert_eq!(*plan.path.last().unwrap(), keys[3], "case {case}");
+                assert_eq!(plan.segments.len(), 3);
+                for (i, s) in plan.segments.iter().enumerate() {
+                    assert_eq!((s.from, s.to), (keys[i], keys[i + 1]), "case {case}");
+                    assert_eq!(s.path[0], keys[i], "case {case}");
+                    assert_eq!(*s.path.last().unwrap(), keys[i + 1], "case {case}");
+                    // The walk with its loops is the segment's path.
+                    let loop_frames: usize = s
+                        .loops
+                        .iter()
+                        .map(|l| l.frames.len() * l.repeats as usize)
+                        .sum();
+                    assert_eq!(s.walk.len() + loop_frames, s.path.len(), "case {case}");
+                }
+                let (mut cost, mut dist) = (0.0, 0.0);
+                for w in plan.path.windows(2) {
+                    let e = g.edge(w[0], w[1]);
+                    assert!(e.is_some(), "case {case}: {} -> {} is no edge", w[0], w[1]);
+                    cost += e.unwrap().cost;
+                    dist += g.step[w[1] as usize];
+                }
+                assert_eq!(plan.measure.frames as usize, plan.path.len(), "case {case}");
+                assert!((plan.measure.distance - dist).abs() < 1e-9, "case {case}");
+                assert!((plan.measure.cost - cost).abs() < 1e-9, "case {case}");
+                checked[mi] += 1;
+            }
+        }
+    }
+    assert!(checked[0] > 10 && checked[1] > 10, "{checked:?} cases");
+}
+
+/// The heading term (`--heading`) counts in the walks-and-loops search
+/// too (the fallback of the exact-length search): with the heading
+/// target 60° off the plain result's facing, the path found costs no more
+/// under Eq. 7 plus the heading term than the plain one (whose facing
+/// misses by 60°), and the facing error drops on average. Before, the
+/// walks ignored the target and every error stayed 60°.
+#[test]
+fn heading_target_counts_in_the_walks_search() {
+    use surfmotion::keyframe::lattice::HeadingTarget;
+    use surfmotion::keyframe::search::Method;
+    let mut r = Lcg(67);
+    let (mut cases, mut sum) = (0, 0.0);
+    for case in 0..200 {
+        let g = turning_graph(&mut r);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let o = SearchOptions {
+            method: Method::Walks,
+            gap: 0.0,
+            ..Default::default()
+        };
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
+            continue;
+        };
+        let t = Targets::Global {
+            distance: 1.0 + 2.0 * r.next(),
+            time: 2.0 + 2.0 * r.next(),
+        };
+        let Ok(plain) = p.plan(&t, &o) else { continue };
+        let want = wrap_deg(plain.facing_deg + 60.0);
+        let h = SearchOptions {
+            heading: Some(HeadingTarget {
+                degrees: want,
+                weight: 1.0 / 30.0,
+                sectors: 8,
+            }),
+            ..o
+        };
+        let turned = p.plan(&t, &h).unwrap();
+        assert_eq!(turned.stats.exact_length, 0, "case {case}");
+        let err = wrap_deg(turned.facing_deg - want).abs();
+        assert!(
+            (turned.cost.heading - err / 30.0).abs() < 1e-9,
+            "case {case}"
+        );
+        let plain_total = plain.cost.total + 60.0 / 30.0;
+        assert!(
+            turned.cost.total <= plain_total + 1e-9,
+            "case {case}: {} > {plain_total}",
+            turned.cost.total
+        );
+        cases += 1;
+        sum += err;
+    }
+    let mean = sum / cases.max(1) as f64;
+    assert!(cases >= 50, "{cases} cases");
+    assert!(
+        mean < 50.0,
+        "mean facing error {mean:.1}° over {cases} cases"
+    );
+}
+
+/// The walks' split over several segments with a heading target: the
+/// same rule, the turn summed over the segments.
+#[test]
+fn heading_target_counts_in_the_walks_split_over_vias() {
+    use surfmotion::keyframe::lattice::HeadingTarget;
+    use surfmotion::keyframe::search::Method;
+    let mut r = Lcg(71);
+    let (mut cases, mut lower) = (0, 0);
+    for case in 0..150 {
+        let g = turning_graph(&mut r);
+        let keys: Vec<u32> = (0..3).map(|_| r.below(g.len()) as u32).collect();
+        let o = SearchOptions {
+            method: Method::Walks,
+            gap: 0.0,
+            ..Default::default()
+        };
+        let Ok(p) = Planner::new(g.clone(), &keys, 25.0, &o) else {
+            continue;
+        };
+        let t = Targets::Global {
+            distance: 2.0 + 2.0 * r.next(),
+            time: 3.0 + 2.0 * r.next(),
+        };
+        let Ok(plain) = p.plan(&t, &o) else { continue };
+        let want = wrap_deg(plain.facing_deg + 60.0);
+        let h = SearchOptions {
+            heading: Some(HeadingTarget {
+                degrees: want,
+                weight: 1.0 / 30.0,
+                sectors: 8,
+            }),
+            ..o
+        };
+        let turned = p.plan(&t, &h).unwrap();
+        let plain_total = plain.cost.total + 60.0 / 30.0;
+        assert!(
+            turned.cost.total <= plain_total + 1e-9,
+            "case {case}: {} > {plain_total}",
+            turned.cost.total
+        );
+        cases += 1;
+        lower += usize::from(turned.cost.total < plain_total - 1e-9);
+    }
+    assert!(cases >= 30, "{cases} cases");
+    assert!(lower * 5 >= cases, "{lower} of {cases} improved");
+}
+
+/// The relaxation of a union of loop sets merged from each set's hull is
+/// the relaxation of all the loops (the walks' split relies on it).
+#[test]
+fn merged_cones_equal_the_cone_of_all_loops() {
+    use surfmotion::keyframe::repeats::{cone, cone_gap, merge_cones};
+    let mut r = Lcg(73);
+    let mut buf = Vec::new();
+    for case in 0..300 {
+        let sets: Vec<Vec<Measure>> = (0..1 + r.below(3))
+            .map(|_| {
+                let mut v = Vec::new();
+                random_problem(&mut r, &mut v);
+                v
+            })
+            .collect();
+        let all: Vec<Measure> = sets.iter().flatten().copied().collect();
+        let cones: Vec<_> = sets.iter().map(|s| cone(s).unwrap()).collect();
+        let merged = merge_cones(cones.iter(), &mut buf).unwrap();
+        let direct = cone(&all).unwrap();
+        assert_eq!(merged, direct, "case {case}");
+        let (qd, qt) = (3.0 * r.next() - 0.5, 60.0 * r.next() - 5.0);
+        assert_eq!(
+            cone_gap(qd, qt, Some(&merged), 3.0, 0.1),
+            cone_gap(qd, qt, Some(&direct), 3.0, 0.1)
+        );
+    }
+}
+
+/// The exact-length extremes a chain keeps across queries are the table
+/// computed afresh, however far earlier queries grew it.
+#[test]
+fn extremes_kept_across_queries_equal_a_fresh_table() {
+    use surfmotion::keyframe::lattice::chain_extremes;
+    let mut r = Lcg(79);
+    let mut checked = 0;
+    for _ in 0..400 {
+        let g = random_graph(&mut r, 3, 16);
+        let keys: Vec<u32> = (0..3).map(|_| r.below(g.len()) as u32).collect();
+        let o = SearchOptions::default();
+        let Ok(p) = Planner::new(g, &keys, 25.0, &o) else {
+            continue;
+        };
+        let Some(c) = &p.chain else { continue };
+        for m in [30usize, 10, 70, 200, 150] {
+            let kept = c.extremes(m);
+            let fresh = chain_extremes(c, m);
+            assert!(kept.frames() >= m);
+            for u in 0..c.node_count() as u32 {
+                for k in 0..=m {
+                    let (a, b) = kept.at(u, k);
+                    let (x, y) = fresh.at(u, k);
+                    assert!(a == x && b == y, "node {u}, {k} frames");
+                }
+            }
+        }
+        checked += 1;
+        if checked == 20 {
+            break;
+        }
+    }
+    assert!(checked == 20, "{checked}");
+}

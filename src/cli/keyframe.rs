@@ -62,7 +62,7 @@ pub struct Args {
     pub via: Vec<String>,
     /// Target final facing, degrees relative to the start key-frame's
     /// (positive: from +Z towards +X); a cost term of the exact-length
-    /// search (--w-heading per degree).
+    /// search and of the walks' search (--w-heading per degree).
     #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = super::finite)]
     pub heading: Option<f64>,
     /// Weight of the heading error, per degree. Default: 1/30 (30° cost as

@@ -144,7 +144,9 @@ impl Heading {
 }
 
 /// The graph the programme walks: one segment's compressed graph, or
-/// several joined at their key-frames (module docs).
+/// several joined at their key-frames (module docs). It keeps its
+/// exact-length extremes (step 1) once computed, so that the queries of a
+/// grid share them ([`Chain::extremes`]).
 #[derive(Debug, Clone)]
 pub struct Chain {
     /// Arcs leaving every node (indices global over the segments).
@@ -158,6 +160,30 @@ pub struct Chain {
     count_start: bool,
     /// Fewest frames (start not counted) over all segments.
     least: u32,
+    /// The extremes computed so far (step 1 depends on the chain alone).
+    cache: ExtremesCache,
+}
+
+/// The extremes of a chain for the longest frame count asked so far.
+#[derive(Default)]
+struct ExtremesCache(std::sync::Mutex<Option<std::sync::Arc<Extremes>>>);
+
+impl Clone for ExtremesCache {
+    fn clone(&self) -> Self {
+        let v = self.0.lock().map(|g| g.clone()).unwrap_or_default();
+        ExtremesCache(std::sync::Mutex::new(v))
+    }
+}
+
+impl std::fmt::Debug for ExtremesCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let frames = self
+            .0
+            .lock()
+            .ok()
+            .and_then(|g| g.as_ref().map(|e| e.frames()));
+        write!(f, "ExtremesCache({frames:?} frames)")
+    }
 }
 
 impl Chain {
@@ -205,7 +231,32 @@ impl Chain {
             arc_offsets: arc_off[..k].to_vec(),
             count_start: segs[0].counts_start(),
             least: segs.iter().map(|s| s.least_frames()).sum(),
+            cache: ExtremesCache::default(),
         })
+    }
+
+    /// The exact-length extremes for at least `0..=m` frames (step 1),
+    /// computed once and shared by every query on the chain: a longer
+    /// table is computed (at least doubling the last) only when a query
+    /// needs more frames. The rows of `0..=m` do not depend on how far
+    /// the table goes, so the result is the one [`chain_extremes`] gives.
+    pub fn extremes(&self, m: usize) -> std::sync::Arc<Extremes> {
+        let mut g = match self.cache_lock() {
+            Some(g) => g,
+            None => return std::sync::Arc::new(chain_extremes(self, m)),
+        };
+        if let Some(e) = g.as_ref().filter(|e| e.frames() >= m) {
+            return e.clone();
+        }
+        let have = g.as_ref().map_or(0, |e| e.frames());
+        let e = std::sync::Arc::new(chain_extremes(self, m.max((2 * have).min(20_000))));
+        *g = Some(e.clone());
+        e
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn cache_lock(&self) -> Option<std::sync::MutexGuard<'_, Option<std::sync::Arc<Extremes>>>> {
+        self.cache.0.lock().ok()
     }
 
     /// Number of nodes.
@@ -234,6 +285,10 @@ pub struct Extremes {
 }
 
 impl Extremes {
+    /// The longest frame count the table covers.
+    pub fn frames(&self) -> usize {
+        (self.min.len() / self.nodes.max(1)).saturating_sub(1)
+    }
     /// `(r_min, r_max)` of node `u` in exactly `m` frames.
     pub fn at(&self, u: u32, m: usize) -> (f64, f64) {
         let i = m * self.nodes + u as usize;
@@ -301,6 +356,19 @@ struct Label {
     since: u32,
 }
 
+impl Label {
+    /// The label at the start (no parent, no transition yet).
+    const START: Label = Label {
+        node: 0,
+        parent: u32::MAX,
+        arc: u32::MAX,
+        distance: 0.0,
+        cost: 0.0,
+        turn: 0.0,
+        since: u32::MAX / 2,
+    };
+}
+
 /// The path found: its arcs and measure (frames counted as the segment
 /// counts them).
 #[derive(Debug, Clone, PartialEq)]
@@ -340,12 +408,7 @@ pub fn solve_exact_length(
     let mut layers: Vec<Vec<Label>> = vec![Vec::new(); frames + 1];
     layers[0].push(Label {
         node: start,
-        parent: u32::MAX,
-        arc: u32::MAX,
-        distance: 0.0,
-        cost: 0.0,
-        turn: 0.0,
-        since: u32::MAX / 2,
+        ..Label::START
     });
     let mut arena: Vec<Label> = Vec::new();
     // Bins per class of frames since the last transition (below
@@ -356,11 +419,32 @@ pub fn solve_exact_length(
     let sectors = heading.map_or(1, |h| h.sectors.max(1));
     let cells = bins * classes * sectors;
     let mut slot: Vec<Option<usize>> = vec![None; cells + 2];
+    // The slots set for the current node (reset for the next), and the
+    // labels they keep.
+    let mut touched: Vec<usize> = Vec::new();
+    let mut kept: Vec<usize> = Vec::new();
     let (lo_slot, hi_slot) = (cells, cells + 1);
     let mut best: Option<(u32, f64)> = None;
+    // Labels of a layer grouped by node (a stable counting sort).
+    let nodes = c.node_count();
+    let mut count = vec![0usize; nodes + 1];
+    let mut raw: Vec<Label> = Vec::new();
     for k in 0..=frames {
-        let mut raw = std::mem::take(&mut layers[k]);
-        raw.sort_unstable_by_key(|l| l.node);
+        let layer = std::mem::take(&mut layers[k]);
+        count.iter_mut().for_each(|x| *x = 0);
+        for l in &layer {
+            count[l.node as usize + 1] += 1;
+        }
+        for u in 0..nodes {
+            count[u + 1] += count[u];
+        }
+        raw.clear();
+        raw.resize(layer.len(), layer.first().copied().unwrap_or(Label::START));
+        for l in layer {
+            let at = &mut count[l.node as usize];
+            raw[*at] = l;
+            *at += 1;
+        }
         let mut i = 0;
         while i < raw.len() {
             let u = raw[i].node;
@@ -374,12 +458,20 @@ pub fn solve_exact_length(
             };
             let width = ((hi - lo) / bins as f64).max(1e-12);
             let mid = 0.5 * (lo + hi);
-            slot.iter_mut().for_each(|s| *s = None);
+            for b in touched.drain(..) {
+                slot[b] = None;
+            }
             for (r, l) in raw[i..j].iter().enumerate() {
                 if slot[lo_slot].is_none_or(|o| l.distance < raw[i + o].distance) {
+                    if slot[lo_slot].is_none() {
+                        touched.push(lo_slot);
+                    }
                     slot[lo_slot] = Some(r);
                 }
                 if slot[hi_slot].is_none_or(|o| l.distance > raw[i + o].distance) {
+                    if slot[hi_slot].is_none() {
+                        touched.push(hi_slot);
+                    }
                     slot[hi_slot] = Some(r);
                 }
                 let class = l.since.min(opts.min_run) as usize;
@@ -396,16 +488,17 @@ pub fn solve_exact_length(
                     }
                 };
                 if better {
+                    if slot[b].is_none() {
+                        touched.push(b);
+                    }
                     slot[b] = Some(r);
                 }
             }
-            slot.sort_unstable();
-            let mut last = None;
-            for s in slot.iter().flatten() {
-                if last == Some(*s) {
-                    continue;
-                }
-                last = Some(*s);
+            kept.clear();
+            kept.extend(touched.iter().filter_map(|&b| slot[b]));
+            kept.sort_unstable();
+            kept.dedup();
+            for &s in &kept {
                 let l = raw[i + s];
                 let id = arena.len() as u32;
                 arena.push(l);
@@ -510,7 +603,7 @@ pub fn search(
     if top < least {
         return None;
     }
-    let ext = chain_extremes(c, top as usize);
+    let ext = c.extremes(top as usize);
     let total = |f: &Found| {
         f.measure.cost
             + w.distance * (f.measure.distance - t.distance).abs()
@@ -612,7 +705,7 @@ pub fn oracle(c: &Chain, t: &Target, within: f64, bins: usize, min_run: u32) -> 
     if hi_n < 0 {
         return Reachability::OutOfRange;
     }
-    let ext = chain_extremes(c, hi_n as usize);
+    let ext = c.extremes(hi_n as usize);
     let dt = within * t.distance;
     let opts = LatticeOptions {
         bins,

@@ -224,6 +224,9 @@ pub struct Planner {
     pub facing: f64,
     /// Frames per second.
     pub fps: f64,
+    /// Each segment's own chain, for per-segment targets (its extremes
+    /// kept across queries, [`lattice::Chain::extremes`]).
+    seg_chains: Vec<Option<lattice::Chain>>,
     /// Seconds spent preparing.
     pub prepare_seconds: f64,
 }
@@ -345,11 +348,20 @@ impl Planner {
             .map(|(i, w)| Segment::new(&graph, w[0], w[1], i == 0, &opts.limits))
             .collect::<Result<Vec<_>, _>>()?;
         let chain = lattice::Chain::of(&segments);
+        let seg_chains = if segments.len() == 1 {
+            vec![chain.clone()]
+        } else {
+            segments
+                .iter()
+                .map(|s| lattice::Chain::of(std::slice::from_ref(s)))
+                .collect()
+        };
         Ok(Planner {
             graph,
             keys: keys.to_vec(),
             segments,
             chain,
+            seg_chains,
             facing: 0.0,
             fps,
             prepare_seconds: t0.elapsed().as_secs_f64(),
@@ -378,7 +390,11 @@ impl Planner {
     ) -> Result<SegmentPath, SearchError> {
         let s = &self.segments[i];
         if opts.method == Method::Lattice {
-            if let Some((p, _)) = s.solve_lattice(t, heading, opts) {
+            let found = match &self.seg_chains[i] {
+                Some(c) => s.solve_lattice_on(c, t, heading, opts),
+                None => None,
+            };
+            if let Some((p, _)) = found {
                 s.count(stats);
                 stats.exact_length += 1;
                 return Ok(p);
@@ -388,7 +404,7 @@ impl Planner {
             method: Method::Walks,
             ..*opts
         };
-        s.solve(t, &walks, stats)
+        s.solve(t, heading, &walks, stats)
     }
 
     /// The best path for the targets (Eq. 13 per segment, or over the
@@ -427,7 +443,7 @@ impl Planner {
                 } else if self.segments.len() == 1 {
                     vec![self.solve_one(0, &t, heading.as_ref(), opts, &mut stats)?]
                 } else {
-                    search::solve_split(&self.segments, &t, opts, &mut stats)?
+                    search::solve_split(&self.segments, &t, heading.as_ref(), opts, &mut stats)?
                 }
             }
             Targets::PerSegment(v) => {

@@ -148,12 +148,34 @@ pub fn cone(loops: &[Measure]) -> Option<Cone> {
             )
         })
         .collect();
+    lower_hull(&mut p)
+}
+
+/// The [`Cone`] of the union of several loop sets, from their cones: the
+/// lower hull of a union is the lower hull of the union of the hulls'
+/// vertices (a point on or above one set's hull is on or above the
+/// union's), so this equals [`cone`] of all the loops at the cost of a
+/// few vertices. `buf` is scratch space.
+pub fn merge_cones<'a>(
+    cones: impl IntoIterator<Item = &'a Cone>,
+    buf: &mut Vec<(f64, f64)>,
+) -> Option<Cone> {
+    buf.clear();
+    for c in cones {
+        buf.extend_from_slice(&c.hull);
+    }
+    lower_hull(buf)
+}
+
+/// The lower convex hull of `(speed, cost per frame)` points, by
+/// increasing speed (the points are sorted in place).
+fn lower_hull(p: &mut [(f64, f64)]) -> Option<Cone> {
     if p.is_empty() {
         return None;
     }
-    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    p.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
     let mut hull: Vec<(f64, f64)> = Vec::new();
-    for q in p {
+    for &q in p.iter() {
         if let Some(l) = hull.last() {
             if (q.0 - l.0).abs() <= 1e-15 {
                 continue; // same speed, higher cost (sorted)

@@ -120,7 +120,9 @@ pub struct SearchOptions {
     /// Default: 48.
     pub beam: usize,
     /// A target for the final facing (an extension, [`super::lattice`]):
-    /// used by the exact-length search only. Default: none.
+    /// a term of the exact-length search, and of the walks-and-loops
+    /// search when it is the fallback (each walk scored with the turn of
+    /// its repetitions, [`Segment::solve`]). Default: none.
     pub heading: Option<super::lattice::HeadingTarget>,
 }
 
@@ -215,6 +217,10 @@ struct Walk {
     measures: Vec<Measure>,
     /// Their relaxation.
     cone: Option<super::repeats::Cone>,
+    /// The walk's heading turn (radians) and each loop's, per repetition:
+    /// the path's turn is the walk's plus `n_i` times each loop's.
+    turn: f64,
+    loop_turns: Vec<f64>,
 }
 
 /// The compressed graph between two key-frames, with its cycles and the
@@ -689,7 +695,20 @@ impl Segment {
         opts: &SearchOptions,
     ) -> Option<(SegmentPath, super::lattice::Found)> {
         let c = super::lattice::Chain::of(std::slice::from_ref(self))?;
-        let (found, _) = super::lattice::search(&c, t, heading, opts)?;
+        self.solve_lattice_on(&c, t, heading, opts)
+    }
+
+    /// [`Segment::solve_lattice`] on this segment's chain `c` (built once
+    /// by the caller, [`super::lattice::Chain::of`] of this segment alone,
+    /// so that its extremes serve every query).
+    pub fn solve_lattice_on(
+        &self,
+        c: &super::lattice::Chain,
+        t: &Target,
+        heading: Option<&super::lattice::Heading>,
+        opts: &SearchOptions,
+    ) -> Option<(SegmentPath, super::lattice::Found)> {
+        let (found, _) = super::lattice::search(c, t, heading, opts)?;
         Some((self.decompose(&found.arcs), found))
     }
 
@@ -891,6 +910,11 @@ impl Segment {
                     .map(|&(_, c)| self.cycles[c as usize].m)
                     .collect();
                 let cone = super::repeats::cone(&measures);
+                let turn = self.arcs_turn(&arcs);
+                let loop_turns = loops
+                    .iter()
+                    .map(|&(_, c)| self.arcs_turn(&self.cycles[c as usize].arcs))
+                    .collect();
                 Walk {
                     nodes,
                     arcs,
@@ -898,6 +922,8 @@ impl Segment {
                     loops,
                     measures,
                     cone,
+                    turn,
+                    loop_turns,
                 }
             })
             .collect();
@@ -925,16 +951,25 @@ impl Segment {
     /// (its transition cost plus the linear relaxation of its loops,
     /// [`super::repeats::cone_gap`]), then the repetition problems in
     /// increasing bound until the bound reaches the best cost.
+    ///
+    /// With a `heading` term (an extension, [`super::lattice::Heading`]),
+    /// each walk's cost is Eq. 7 at its repetition counts plus the heading
+    /// term of the path's turn: the walk's turn plus `n_i` times each
+    /// loop's. The counts are Eq. 7's optimum for the walk (the heading
+    /// term is not part of the repetition programme), so the heading
+    /// chooses between walks, not between counts; the bounds stay valid
+    /// (the term is never negative).
     pub fn solve(
         &self,
         t: &Target,
+        heading: Option<&super::lattice::Heading>,
         opts: &SearchOptions,
         stats: &mut Stats,
     ) -> Result<SegmentPath, SearchError> {
         let w = opts.weights;
         self.count(stats);
         if opts.method == Method::Lattice {
-            if let Some((p, _)) = self.solve_lattice(t, None, opts) {
+            if let Some((p, _)) = self.solve_lattice(t, heading, opts) {
                 stats.exact_length += 1;
                 return Ok(p);
             }
@@ -968,6 +1003,7 @@ impl Segment {
             let wk = &self.walks[i];
             stats.loops_per_walk = stats.loops_per_walk.max(wk.measures.len());
             let (n, c) = self.solve_repeats(wk.m, &wk.measures, t, opts, best_cost, stats)?;
+            let c = c + heading.map_or(0.0, |h| h.cost(turn_with(wk.turn, &wk.loop_turns, &n)));
             stats.walks += 1;
             if c < best_cost {
                 best_cost = c;
@@ -1008,72 +1044,50 @@ impl Segment {
         }
     }
 
-    /// One repetition of a cycle starting at walk node `node`.
-    fn cycle_frames(&self, c: u32, node: u32) -> Vec<u32> {
+    /// One repetition of a cycle's arcs starting at walk node `node`.
+    fn cycle_arcs(&self, c: u32, node: u32) -> Vec<u32> {
         let cyc = &self.cycles[c as usize];
         let k = cyc
             .arcs
             .iter()
             .position(|&a| self.arc_from(a) == node)
             .unwrap_or(0);
-        let mut out = Vec::new();
-        for i in 0..cyc.arcs.len() {
-            self.arc_frames(cyc.arcs[(k + i) % cyc.arcs.len()], &mut out);
-        }
-        out
+        let len = cyc.arcs.len();
+        (0..len).map(|i| cyc.arcs[(k + i) % len]).collect()
     }
 
+    /// The path of a walk with `n[i]` repetitions of its attached loops
+    /// `att[i]` (each inserted where it attaches), as [`Segment::decompose`]
+    /// describes it.
     fn expand(&self, nodes: &[u32], warcs: &[u32], att: &[(usize, u32)], n: &[u32]) -> SegmentPath {
-        let walk_measure = self.walk_measure(warcs);
-        let mut loops: Vec<(usize, LoopUse)> = Vec::new();
-        for (&(at, c), &k) in att.iter().zip(n) {
-            if k == 0 {
-                continue;
-            }
-            let node = nodes[at];
-            loops.push((
-                at,
-                LoopUse {
-                    at: self.frames[node as usize],
-                    frames: self.cycle_frames(c, node),
-                    measure: self.cycles[c as usize].m,
-                    repeats: k,
-                },
-            ));
-        }
+        let mut loops: Vec<(usize, u32, u32)> = att
+            .iter()
+            .zip(n)
+            .filter(|&(_, &k)| k > 0)
+            .map(|(&(at, c), &k)| (at, c, k))
+            .collect();
         loops.sort_by_key(|l| l.0);
-        let mut walk = vec![self.from];
-        let mut path = vec![self.from];
+        let mut arcs = Vec::new();
         let mut li = 0;
-        for (k, &a) in warcs.iter().enumerate() {
+        for k in 0..=warcs.len() {
             while li < loops.len() && loops[li].0 == k {
-                for _ in 0..loops[li].1.repeats {
-                    path.extend_from_slice(&loops[li].1.frames);
+                let (at, c, reps) = loops[li];
+                let cyc = self.cycle_arcs(c, nodes[at]);
+                for _ in 0..reps {
+                    arcs.extend_from_slice(&cyc);
                 }
                 li += 1;
             }
-            self.arc_frames(a, &mut walk);
-            self.arc_frames(a, &mut path);
-        }
-        while li < loops.len() {
-            for _ in 0..loops[li].1.repeats {
-                path.extend_from_slice(&loops[li].1.frames);
+            if let Some(&a) = warcs.get(k) {
+                arcs.push(a);
             }
-            li += 1;
         }
-        let loops: Vec<LoopUse> = loops.into_iter().map(|l| l.1).collect();
-        let measure = loops
-            .iter()
-            .fold(walk_measure, |s, l| s.plus(l.measure.times(l.repeats)));
-        SegmentPath {
-            from: self.from,
-            to: self.to,
-            walk,
-            walk_measure,
-            loops,
-            measure,
-            path,
-        }
+        self.decompose(&arcs)
+    }
+
+    /// The heading's turn over arcs (radians).
+    fn arcs_turn(&self, arcs: &[u32]) -> f64 {
+        arcs.iter().map(|&a| self.arcs[a as usize].turn).sum()
     }
 
     /// Every walk (up to `limit`), as node lists with their measures,
@@ -1128,16 +1142,29 @@ impl Segment {
     }
 }
 
+/// The turn of a walk with `n[i]` repetitions of loops turning
+/// `loop_turns[i]` (radians).
+fn turn_with(walk: f64, loop_turns: &[f64], n: &[u32]) -> f64 {
+    walk + loop_turns
+        .iter()
+        .zip(n)
+        .map(|(t, &k)| t * f64::from(k))
+        .sum::<f64>()
+}
+
 /// One target split over several segments (Sec. 5.1, "a series of
 /// key-frames"): the best combination of one walk per segment with the
 /// loops of all of them, for the summed distance and time. Combinations
 /// are enumerated depth-first, a prefix cut when its cost plus the
 /// cheapest completion and the overshoot it must already make reaches the
 /// best cost; a full combination is skipped when its linear relaxation
-/// does.
+/// does (the relaxation of the union of the walks' loops, merged from
+/// each walk's, [`super::repeats::merge_cones`]). A `heading` term is
+/// added as in [`Segment::solve`], over the whole path's turn.
 pub fn solve_split(
     segs: &[Segment],
     t: &Target,
+    heading: Option<&super::lattice::Heading>,
     opts: &SearchOptions,
     stats: &mut Stats,
 ) -> Result<Vec<SegmentPath>, SearchError> {
@@ -1181,16 +1208,17 @@ pub fn solve_split(
     let mut acc = vec![Measure::default(); k + 1];
     let mut next = vec![0usize; k];
     let mut tried = 0usize;
+    let mut buf = Vec::new();
     // Iterative depth-first search over the segments' walks.
     let mut i = 0usize;
     loop {
         if i == k {
             tried += 1;
             let m = acc[k];
-            let loops: Vec<Measure> = (0..k)
-                .flat_map(|j| segs[j].walks[choice[j]].measures.iter().copied())
-                .collect();
-            let sp = super::repeats::cone(&loops);
+            let sp = super::repeats::merge_cones(
+                (0..k).filter_map(|j| segs[j].walks[choice[j]].cone.as_ref()),
+                &mut buf,
+            );
             let lb = m.cost
                 + super::repeats::cone_gap(
                     t.distance - m.distance,
@@ -1200,8 +1228,20 @@ pub fn solve_split(
                     w.time,
                 );
             if lb < best_cost - opts.gap.max(1e-12) {
+                let walks = (0..k).map(|j| &segs[j].walks[choice[j]]);
+                let loops: Vec<Measure> = walks
+                    .clone()
+                    .flat_map(|w| w.measures.iter().copied())
+                    .collect();
                 stats.loops_per_walk = stats.loops_per_walk.max(loops.len());
                 let (n, c) = segs[0].solve_repeats(m, &loops, t, opts, best_cost, stats)?;
+                let c = c + heading.map_or(0.0, |h| {
+                    let turns: Vec<f64> = walks
+                        .clone()
+                        .flat_map(|w| w.loop_turns.iter().copied())
+                        .collect();
+                    h.cost(turn_with(walks.map(|w| w.turn).sum(), &turns, &n))
+                });
                 stats.walks += 1;
                 if c < best_cost {
                     best_cost = c;
