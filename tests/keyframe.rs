@@ -1438,3 +1438,44 @@ fn extremes_kept_across_queries_equal_a_fresh_table() {
     }
     assert!(checked == 20, "{checked}");
 }
+
+/// The smoothness measure on a real database (Sec. 6.1): a jump from a
+/// frame to its own successor pairs every frame with itself, so it is 0
+/// (guards the pairing `M_i(m+k)` with `M_j(n+k)`, `n = entered − 1`, and
+/// the alignment); the surface distance never exceeds the vertex-set one;
+/// and the transitions re-chosen by measured distortion carry exactly the
+/// smoothness the reports measure for them, with windows in range.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn smoothness_is_zero_on_identical_overlaps_and_measured_transitions_report_their_cost() {
+    use surfmotion::keyframe::select::{SelectOptions, measured};
+    use surfmotion::keyframe::smoothness::{transition_smoothness, transition_smoothness_both};
+    let Some(d) = common::data_dir() else { return };
+    let ch = surfmotion::db::Character::load(walk_run_db(&d), &surfmotion::db::Quiet).unwrap();
+    let f = surfmotion::keyframe::parse_key(&ch, "02_01:40").unwrap();
+    assert_eq!(transition_smoothness(&ch, f, f + 1, 4), 0.0);
+    for t in ch.graph().transitions.iter().take(2) {
+        let a = ch.graph().frame_id(t.from, t.m);
+        let b = ch.graph().frame_id(t.to, t.n) + 1;
+        let s = transition_smoothness_both(&ch, a, b, t.window);
+        assert!(s.surface > 0.0 && s.surface <= s.vertex + 1e-12, "{s:?}");
+    }
+    // Fewer candidates and shorter windows than the defaults: the same
+    // code, in a few seconds.
+    let opts = SelectOptions {
+        candidates: 6,
+        stride: 16,
+        max_window: 6,
+    };
+    let chosen = measured(&ch, &opts);
+    assert!(!chosen.is_empty());
+    let lo = ch.graph().options.min_window;
+    for c in &chosen {
+        assert!((lo..=opts.max_window).contains(&c.window), "{c:?}");
+        let (sa, _) = ch.graph().frame_of(c.from);
+        let (sb, _) = ch.graph().frame_of(c.to - 1);
+        assert!(ch.graph().edges.iter().any(|e| e.from == sa && e.to == sb));
+        let s = transition_smoothness(&ch, c.from, c.to, c.window);
+        assert!((s - c.smoothness).abs() < 1e-12, "{c:?} measures {s}");
+    }
+}

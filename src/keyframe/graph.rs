@@ -13,6 +13,8 @@
 
 use crate::graph::FrameAdjacency;
 use crate::retarget::character::Character;
+use crate::retarget::timeline::Frames;
+use std::collections::HashMap;
 
 /// An arc of the frame graph as the search sees it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -48,6 +50,10 @@ pub struct KeyGraph {
     pub centre: Vec<[f64; 2]>,
     /// Sequence of every frame.
     pub sequence: Vec<u32>,
+    /// Blend half-window of every jump `(frame left, frame entered)` when
+    /// the jumps are not the Surface Motion Graph's (key-frame transitions
+    /// chosen by [`super::select`]); empty: the graph's windows.
+    pub windows: HashMap<(u32, u32), usize>,
 }
 
 impl KeyGraph {
@@ -89,6 +95,7 @@ impl KeyGraph {
             step,
             centre,
             sequence,
+            windows: HashMap::new(),
         }
     }
 
@@ -109,6 +116,12 @@ impl KeyGraph {
     /// every frame (mean of the vertices, metres, Y-up, projected on the
     /// floor).
     pub fn of_character(ch: &Character) -> KeyGraph {
+        Self::of_character_with(ch, None)
+    }
+
+    /// [`KeyGraph::of_character`] with the jumps replaced by `jumps`
+    /// (`(frame left, frame entered, cost, half-window)`) when given.
+    pub fn of_character_with(ch: &Character, jumps: Option<&[(u32, u32, f64, usize)]>) -> KeyGraph {
         let centre = frame_centres(ch);
         let mut sequence = vec![0u32; ch.frame_count()];
         for (s, span) in ch.graph().sequences.iter().enumerate() {
@@ -118,7 +131,29 @@ impl KeyGraph {
                 }
             }
         }
-        let mut g = KeyGraph::from_adjacency(ch.adjacency(), centre, sequence);
+        let mut g = match jumps {
+            None => KeyGraph::from_adjacency(ch.adjacency(), centre, sequence),
+            Some(jumps) => {
+                let n = ch.frame_count();
+                let mut succ: Vec<Vec<(u32, f64)>> = (0..n)
+                    .map(|f| {
+                        if f + 1 < n && sequence[f + 1] == sequence[f] {
+                            vec![(f as u32 + 1, 0.0)]
+                        } else {
+                            Vec::new()
+                        }
+                    })
+                    .collect();
+                for &(a, b, c, _) in jumps {
+                    if let Some(row) = succ.get_mut(a as usize) {
+                        row.push((b, c));
+                    }
+                }
+                let mut g = KeyGraph::new(&succ, centre, sequence);
+                g.windows = jumps.iter().map(|&(a, b, _, l)| ((a, b), l)).collect();
+                g
+            }
+        };
         // The placement's turn at every transition (as `place` turns).
         for f in 0..g.len() {
             let (lo, hi) = (g.offsets[f] as usize, g.offsets[f + 1] as usize);
@@ -154,6 +189,35 @@ impl KeyGraph {
             .filter(|e| e.to == b)
             .min_by(|x, y| x.cost.total_cmp(&y.cost))
             .copied()
+    }
+}
+
+/// The character's frame layout with the blend windows of a key graph's
+/// jumps ([`KeyGraph::windows`]; the graph's when empty), for
+/// [`crate::retarget::timeline::timeline`].
+pub struct KeyFrames<'a> {
+    /// The character.
+    pub ch: &'a Character,
+    /// The graph whose jumps are walked.
+    pub graph: &'a KeyGraph,
+}
+
+impl Frames for KeyFrames<'_> {
+    fn frame_of(&self, id: u32) -> (usize, usize) {
+        Frames::frame_of(self.ch, id)
+    }
+    fn id(&self, s: usize, t: usize) -> u32 {
+        Frames::id(self.ch, s, t)
+    }
+    fn len(&self, s: usize) -> usize {
+        Frames::len(self.ch, s)
+    }
+    fn transition_window(&self, from: u32, to_prev: u32) -> Option<usize> {
+        if self.graph.windows.is_empty() {
+            Frames::transition_window(self.ch, from, to_prev)
+        } else {
+            self.graph.windows.get(&(from, to_prev + 1)).copied()
+        }
     }
 }
 

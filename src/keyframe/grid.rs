@@ -26,7 +26,7 @@
 
 use super::lattice::{Reachability, oracle};
 use super::search::{Reach, SearchOptions, Target};
-use super::{Planner, Targets, mean_smoothness, transitions};
+use super::{Planner, Targets, mean_smoothness, mean_smoothness_vertex, transitions};
 use crate::retarget::character::Character;
 use crate::retarget::timeline::TimelineOptions;
 use serde::Serialize;
@@ -54,6 +54,8 @@ pub struct GridQuery {
     pub transitions: usize,
     /// Mean smoothness over them (metres).
     pub smoothness: Option<f64>,
+    /// The same with the vertex-set Hausdorff distance.
+    pub smoothness_vertex: Option<f64>,
     /// Search seconds.
     pub seconds: f64,
     /// A search bound was hit.
@@ -142,6 +144,9 @@ pub struct GridReport {
     pub smoothness: Spread,
     /// Mean smoothness.
     pub smoothness_mean: f64,
+    /// Mean smoothness with the vertex-set Hausdorff distance (the measure
+    /// reported before the surface one).
+    pub smoothness_vertex_mean: f64,
     /// Query time, milliseconds: mean.
     pub query_ms_mean: f64,
     /// Standard deviation.
@@ -231,10 +236,19 @@ pub fn reachable_by_speed(reach: &[Reach], fps: f64, d: f64, t: f64) -> bool {
     f >= frames as f64 && d >= dist && f > 0.0 && lo <= d / f && d / f <= hi
 }
 
-/// Smoothness of every transition of the character's graph at its own
-/// blend window ([`super::smoothness::transition_smoothness`]).
-pub fn graph_smoothness(ch: &Character) -> Vec<f64> {
+/// Smoothness of every transition the search may take at its own blend
+/// window ([`super::smoothness::transition_smoothness`]): the key graph's
+/// own jumps when it chose them ([`super::TransitionSet::Measured`]),
+/// else the Surface Motion Graph's.
+pub fn graph_smoothness(ch: &Character, g: &super::graph::KeyGraph) -> Vec<f64> {
     use rayon::prelude::*;
+    if !g.windows.is_empty() {
+        let jumps: Vec<(&(u32, u32), &usize)> = g.windows.iter().collect();
+        return jumps
+            .par_iter()
+            .map(|&(&(a, b), &l)| super::smoothness::transition_smoothness(ch, a, b, l))
+            .collect();
+    }
     ch.graph()
         .transitions
         .par_iter()
@@ -289,12 +303,13 @@ pub fn evaluate(
                 within_1pct: met,
                 transitions: tr.len(),
                 smoothness: mean_smoothness(&tr),
+                smoothness_vertex: mean_smoothness_vertex(&tr),
                 seconds,
                 bounded: !plan.stats.bounds_hit.is_empty(),
             });
         }
     }
-    let mut gsm = graph_smoothness(ch);
+    let mut gsm = graph_smoothness(ch, &planner.graph);
     gsm.sort_by(f64::total_cmp);
     let r: Vec<&GridQuery> = queries.iter().filter(|q| q.reachable).collect();
     let u: Vec<&GridQuery> = queries.iter().filter(|q| !q.reachable).collect();
@@ -315,6 +330,10 @@ pub fn evaluate(
         unreachable: Errors::of(&u),
         smoothness: Spread::of(sm.iter().copied()),
         smoothness_mean: sm.iter().sum::<f64>() / sm.len().max(1) as f64,
+        smoothness_vertex_mean: {
+            let v: Vec<f64> = queries.iter().filter_map(|q| q.smoothness_vertex).collect();
+            v.iter().sum::<f64>() / v.len().max(1) as f64
+        },
         query_ms_mean: mean,
         query_ms_std: std,
         query_ms_max: ms.iter().copied().fold(0.0, f64::max),

@@ -6,7 +6,8 @@
 //! [`search`] (walks, loops and pruning, Eqs. 13-22) with [`repeats`] (the
 //! loop repetition counts, Eqs. 20-25), [`place`] (blending across
 //! transitions and placement along the accumulated root motion),
-//! [`smoothness`] (Table III's transition smoothness) and [`grid`] (the
+//! [`smoothness`] (Table III's transition smoothness), [`select`] (the
+//! key-frame transitions re-chosen by that measured distortion) and [`grid`] (the
 //! Table III evaluation over a grid of targets); [`lattice`] is the
 //! exact-length search (the default) and [`pose`] resolves key-frames
 //! given as skeleton poses to database frames.
@@ -25,6 +26,7 @@ pub mod place;
 pub mod pose;
 pub mod repeats;
 pub mod search;
+pub mod select;
 pub mod smoothness;
 
 use crate::retarget::character::Character;
@@ -194,10 +196,35 @@ pub struct KeyframeOptions {
     pub timeline: TimelineOptions,
     /// What a transition costs the search.
     pub transition_cost: TransitionCost,
+    /// Which transitions the search may take.
+    pub transitions: TransitionSet,
+}
+
+/// Which transitions the key-frame search may take.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum TransitionSet {
+    /// The Surface Motion Graph's (top N local minima of the shape
+    /// matrix, Sec. 4.2), priced by [`TransitionCost`].
+    #[default]
+    Graph,
+    /// Re-chosen among the matrix's local minima by their measured
+    /// distortion, with their windows, priced by it ([`select`]; Sec. 4.2's
+    /// Eq. 5 with Sec. 6.1's weighted Hausdorff distance). Key-frame only:
+    /// the graph and `retarget` are unchanged.
+    Measured,
 }
 
 /// The frame graph of a character priced as `opts` asks.
 pub fn key_graph(ch: &Character, opts: &KeyframeOptions) -> KeyGraph {
+    if opts.transitions == TransitionSet::Measured {
+        let jumps: Vec<(u32, u32, f64, usize)> =
+            select::measured(ch, &select::SelectOptions::default())
+                .into_iter()
+                .map(|c| (c.from, c.to, c.smoothness, c.window))
+                .collect();
+        return KeyGraph::of_character_with(ch, Some(&jumps));
+    }
     let mut g = KeyGraph::of_character(ch);
     if opts.transition_cost == TransitionCost::Smoothness {
         price_by_smoothness(ch, &mut g);
@@ -547,6 +574,9 @@ pub struct Report {
     pub transitions: Vec<TransitionReport>,
     /// Mean smoothness over the transitions (metres; `None` without any).
     pub smoothness: Option<f64>,
+    /// The same with the vertex-set Hausdorff distance (the measure before
+    /// the surface one; [`smoothness::Smoothness::vertex`]).
+    pub smoothness_vertex: Option<f64>,
     /// Final placement rotation relative to the first key-frame's capture
     /// (degrees, the sum of the transitions' turns).
     pub final_heading_deg: f64,
@@ -584,8 +614,11 @@ pub struct TransitionReport {
     pub window: usize,
     /// Transition cost of the graph edge.
     pub cost: f64,
-    /// Weighted Hausdorff distance of the overlapping frames (metres).
+    /// Weighted surface Hausdorff distance of the overlapping frames
+    /// (metres, [`smoothness::Smoothness::surface`]).
     pub smoothness: f64,
+    /// Weighted vertex-set Hausdorff distance ([`smoothness::Smoothness::vertex`]).
+    pub smoothness_vertex: f64,
 }
 
 /// The report's segments.
@@ -634,22 +667,23 @@ pub fn transitions(
     g: &KeyGraph,
     path: &[u32],
     opts: &TimelineOptions,
-    cache: &mut std::collections::HashMap<(u32, u32, usize), f64>,
+    cache: &mut std::collections::HashMap<(u32, u32, usize), smoothness::Smoothness>,
 ) -> Vec<TransitionReport> {
-    let (_, jumps) = timeline(path, ch, opts);
+    let (_, jumps) = timeline(path, &graph::KeyFrames { ch, graph: g }, opts);
     jumps
         .iter()
         .map(|j| {
-            let s = *cache
-                .entry((j.from, j.to, j.window))
-                .or_insert_with(|| smoothness::transition_smoothness(ch, j.from, j.to, j.window));
+            let s = *cache.entry((j.from, j.to, j.window)).or_insert_with(|| {
+                smoothness::transition_smoothness_both(ch, j.from, j.to, j.window)
+            });
             TransitionReport {
                 at: j.at,
                 from: key_name(ch, j.from),
                 to: key_name(ch, j.to),
                 window: j.window,
                 cost: g.edge(j.from, j.to).map_or(0.0, |e| e.cost),
-                smoothness: s,
+                smoothness: s.surface,
+                smoothness_vertex: s.vertex,
             }
         })
         .collect()
@@ -704,9 +738,15 @@ pub fn price_by_smoothness(ch: &Character, g: &mut KeyGraph) {
     }
 }
 
-/// The mean of the transitions' smoothness.
+/// The mean of the transitions' smoothness (per transition, then over the
+/// path, as Sec. 6.1 averages).
 pub fn mean_smoothness(t: &[TransitionReport]) -> Option<f64> {
     (!t.is_empty()).then(|| t.iter().map(|x| x.smoothness).sum::<f64>() / t.len() as f64)
+}
+
+/// [`mean_smoothness`] of the vertex-set distance.
+pub fn mean_smoothness_vertex(t: &[TransitionReport]) -> Option<f64> {
+    (!t.is_empty()).then(|| t.iter().map(|x| x.smoothness_vertex).sum::<f64>() / t.len() as f64)
 }
 
 /// The synthesised key-frame animation.
@@ -766,6 +806,7 @@ pub fn synthesise(
         cost: plan.cost,
         segments: segment_reports(ch, &planner, &plan, targets),
         smoothness: mean_smoothness(&trans),
+        smoothness_vertex: mean_smoothness_vertex(&trans),
         transitions: trans,
         final_heading_deg: placed.heading.last().copied().unwrap_or(0.0).to_degrees(),
         final_facing_deg: plan.facing_deg,

@@ -81,7 +81,7 @@ pub fn place(
     path: &[u32],
     opts: &TimelineOptions,
 ) -> Result<Placed, SolveError> {
-    let (frames, jumps) = timeline(path, ch, opts);
+    let (frames, jumps) = timeline(path, &super::graph::KeyFrames { ch, graph: g }, opts);
     let (place, centre) = placements(ch, g, path);
     let topo = ch.topology_metres();
     let blender = Blender::new(&topo)?;

@@ -6,9 +6,17 @@
 //! about the vertical and translation that best fit their skeletons, as the
 //! output places it). Metres.
 //!
-//! The Hausdorff distance is over the vertex sets (symmetric, max of the
-//! two directed distances), with a uniform grid for the nearest neighbours:
-//! `O(n)` per frame pair for meshes of even density.
+//! The Hausdorff distance is between the two surfaces, as the paper says
+//! ("Hausdorff Distance for overlapping frames"): symmetric (max of the two
+//! directed distances), each directed distance the largest, over the
+//! vertices of one mesh, of the distance to the nearest point of the other
+//! mesh's *surface* (its triangles), not to its nearest vertex and not to
+//! the corresponding vertex. The nearest point is looked for on the
+//! triangles around the nearest vertex (found with a uniform grid, `O(n)`
+//! per frame pair for meshes of even density); it is never farther than
+//! that vertex. [`hausdorff`] (vertex set to vertex set, the measure used
+//! before) is kept and reported alongside as `smoothness_vertex`: it
+//! exceeds the surface distance by up to about half an edge length.
 
 use crate::retarget::Floor;
 use crate::retarget::character::Character;
@@ -80,7 +88,8 @@ fn key(p: DVec3, cell: f64) -> (i32, i32, i32) {
     )
 }
 
-/// Symmetric Hausdorff distance between two vertex sets.
+/// Symmetric Hausdorff distance between two vertex sets (nearest vertex,
+/// not nearest surface point; see [`hausdorff_surface`]).
 pub fn hausdorff(a: &[DVec3], b: &[DVec3]) -> f64 {
     if a.is_empty() || b.is_empty() {
         return 0.0;
@@ -93,19 +102,234 @@ pub fn hausdorff(a: &[DVec3], b: &[DVec3]) -> f64 {
     ab.max(ba)
 }
 
-/// The smoothness of a jump from frame `from` (of sequence `i`) to frame
-/// `to` (of `j`; `to − 1` pairs with `from`) with half-window `window`.
-pub fn transition_smoothness(ch: &Character, from: u32, to: u32, window: usize) -> f64 {
-    let (sa, ta) = ch.graph().frame_of(from);
-    let (sb, tb) = ch.graph().frame_of(to);
-    let tb = tb.saturating_sub(1);
-    let l = window.max(1) as i64;
-    let (la, lb) = (
-        ch.graph().sequences[sa].len as i64,
-        ch.graph().sequences[sb].len as i64,
-    );
+/// Triangles around every vertex of a mesh (for the nearest surface point).
+pub struct Surface {
+    tris: Vec<[u32; 3]>,
+    /// CSR: triangles of vertex `v` are `around[start[v]..start[v + 1]]`.
+    start: Vec<u32>,
+    around: Vec<u32>,
+}
+
+impl Surface {
+    /// Of a triangle list over `n` vertices (indices out of range are
+    /// skipped).
+    pub fn new(tris: &[[u32; 3]], n: usize) -> Surface {
+        let tris: Vec<[u32; 3]> = tris
+            .iter()
+            .copied()
+            .filter(|t| t.iter().all(|&v| (v as usize) < n))
+            .collect();
+        let mut count = vec![0u32; n + 1];
+        for t in &tris {
+            for &v in t {
+                count[v as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            count[i + 1] += count[i];
+        }
+        let start = count.clone();
+        let mut fill = count;
+        let mut around = vec![0u32; tris.len() * 3];
+        for (k, t) in tris.iter().enumerate() {
+            for &v in t {
+                around[fill[v as usize] as usize] = k as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        Surface {
+            tris,
+            start,
+            around,
+        }
+    }
+}
+
+/// Closest point to `p` on the triangle `(a, b, c)` (Ericson, *Real-Time
+/// Collision Detection*, 5.1.5).
+pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = va + vb + vc;
+    if denom.abs() < 1e-300 {
+        return a;
+    }
+    a + ab * (vb / denom) + ac * (vc / denom)
+}
+
+impl Grid {
+    /// The nearest point's index and distance (as [`Grid::nearest`]).
+    fn nearest_index(&self, q: DVec3) -> (usize, f64) {
+        let (cx, cy, cz) = key(q, self.cell);
+        let mut best = (usize::MAX, f64::INFINITY);
+        for r in 0..16i32 {
+            if ((r - 1).max(0) as f64 * self.cell).powi(2) > best.1 {
+                return (best.0, best.1.sqrt());
+            }
+            for dx in -r..=r {
+                for dy in -r..=r {
+                    for dz in -r..=r {
+                        if dx.abs().max(dy.abs()).max(dz.abs()) != r {
+                            continue;
+                        }
+                        if let Some(ids) = self.cells.get(&(cx + dx, cy + dy, cz + dz)) {
+                            for &i in ids {
+                                let d = self.points[i as usize].distance_squared(q);
+                                if d < best.1 {
+                                    best = (i as usize, d);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if best.1.is_finite() && (14.0 * self.cell).powi(2) >= best.1 {
+            return (best.0, best.1.sqrt());
+        }
+        for (i, p) in self.points.iter().enumerate() {
+            let d = p.distance_squared(q);
+            if d < best.1 {
+                best = (i, d);
+            }
+        }
+        (best.0, best.1.sqrt())
+    }
+}
+
+/// Largest distance from a point of `a` to the surface `(b, s)`: for each
+/// point, the nearest vertex of `b` and then the nearest point on the
+/// triangles around it.
+fn directed_to_surface(a: &[DVec3], b: &Grid, s: &Surface, stride: usize) -> f64 {
+    let mut worst = 0.0f64;
+    for &p in a.iter().step_by(stride.max(1)) {
+        let (v, mut d) = b.nearest_index(p);
+        if v == usize::MAX {
+            continue;
+        }
+        if let (Some(&lo), Some(&hi)) = (s.start.get(v), s.start.get(v + 1)) {
+            for &t in &s.around[lo as usize..hi as usize] {
+                let [i, j, k] = s.tris[t as usize];
+                let q = closest_on_triangle(
+                    p,
+                    b.points[i as usize],
+                    b.points[j as usize],
+                    b.points[k as usize],
+                );
+                d = d.min(p.distance(q));
+            }
+        }
+        worst = worst.max(d);
+    }
+    worst
+}
+
+/// Symmetric Hausdorff distance between two meshes of one topology `s`
+/// with vertices `a` and `b`: the larger of the two directed distances
+/// from the vertices of one to the surface of the other (module docs).
+pub fn hausdorff_surface(a: &[DVec3], b: &[DVec3], s: &Surface) -> f64 {
+    if a.is_empty() || b.is_empty() {
+        return 0.0;
+    }
+    let cell = 0.03;
+    let ga = Grid::new(a.to_vec(), cell);
+    let gb = Grid::new(b.to_vec(), cell);
+    directed_to_surface(a, &gb, s, 1).max(directed_to_surface(b, &ga, s, 1))
+}
+
+/// The surface Hausdorff distance of the centre frames of a jump `from →
+/// to` (`to − 1` pairs with `from`), aligned as [`profile`], measured from
+/// every `stride`-th vertex only (a lower bound of [`hausdorff_surface`],
+/// for screening candidates).
+pub fn hausdorff_surface_stride(
+    ch: &Character,
+    s: &Surface,
+    from: u32,
+    to: u32,
+    stride: usize,
+) -> f64 {
+    let (pa, pb) = aligned(ch, from, to.saturating_sub(1));
+    let cell = 0.03;
+    let ga = Grid::new(pa.clone(), cell);
+    let gb = Grid::new(pb.clone(), cell);
+    directed_to_surface(&pa, &gb, s, stride).max(directed_to_surface(&pb, &ga, s, stride))
+}
+
+/// Frames `ia` and `ib` in metres, `ib` moved on the floor onto `ia` (the
+/// rotation about the vertical and translation that best fit their
+/// skeletons, [`Floor::fit`]).
+fn aligned(ch: &Character, ia: u32, ib: u32) -> (Vec<DVec3>, Vec<DVec3>) {
     let mut a = vec![[0.0; 3]; ch.n()];
     let mut b = vec![[0.0; 3]; ch.n()];
+    ch.frame_metres(ia, &mut a);
+    ch.frame_metres(ib, &mut b);
+    let fit = Floor::fit(&ch.poses()[ib as usize], &ch.poses()[ia as usize]);
+    (
+        a.iter().map(|p| DVec3::from_array(*p)).collect(),
+        b.iter().map(|p| fit.apply(DVec3::from_array(*p))).collect(),
+    )
+}
+
+/// A transition's smoothness by both distances (metres).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct Smoothness {
+    /// Weighted surface Hausdorff distance ([`hausdorff_surface`]): the
+    /// paper's measure.
+    pub surface: f64,
+    /// Weighted vertex-set Hausdorff distance ([`hausdorff`]): the measure
+    /// reported before (an upper bound of `surface` up to sampling).
+    pub vertex: f64,
+}
+
+/// The smoothness of a jump from frame `from` (of sequence `i`) to frame
+/// `to` (of `j`; `to − 1` pairs with `from`) with half-window `window`:
+/// [`Smoothness::surface`].
+pub fn transition_smoothness(ch: &Character, from: u32, to: u32, window: usize) -> f64 {
+    transition_smoothness_both(ch, from, to, window).surface
+}
+
+/// [`transition_smoothness`] by both distances ([`Smoothness`]).
+pub fn transition_smoothness_both(ch: &Character, from: u32, to: u32, window: usize) -> Smoothness {
+    let surface = Surface::new(ch.topology().triangles(), ch.n());
+    let h = profile(ch, &surface, from, to, window.max(1), true);
+    Smoothness {
+        surface: weighted(&h, window, |x| x.0),
+        vertex: weighted(&h, window, |x| x.1),
+    }
+}
+
+/// The α′(k)-weighted average (Eq. 2) over `k ∈ [−L, L]` of a profile from
+/// [`profile`] (centred: entry `k + K` for `K = (len − 1) / 2`), `L =
+/// window`; frames outside the profile or outside their sequences are
+/// left out. 0 when nothing is left.
+pub fn weighted<T: Copy>(h: &[Option<T>], window: usize, f: impl Fn(T) -> f64) -> f64 {
+    let l = window.max(1) as i64;
+    let kk = (h.len() as i64 - 1) / 2;
     let (mut num, mut den) = (0.0, 0.0);
     for k in -l..=l {
         let alpha = (k + l) as f64 / (2 * l) as f64;
@@ -113,23 +337,50 @@ pub fn transition_smoothness(ch: &Character, from: u32, to: u32, window: usize) 
         if w <= 0.0 {
             continue;
         }
-        let (fa, fb) = (ta as i64 + k, tb as i64 + k);
-        if fa < 0 || fb < 0 || fa >= la || fb >= lb {
-            continue;
+        if let Some(Some(x)) = usize::try_from(k + kk).ok().and_then(|i| h.get(i)) {
+            num += w * f(*x);
+            den += w;
         }
-        let (ia, ib) = (
-            ch.graph().frame_id(sa, fa as usize),
-            ch.graph().frame_id(sb, fb as usize),
-        );
-        ch.frame_metres(ia, &mut a);
-        ch.frame_metres(ib, &mut b);
-        let fit = Floor::fit(&ch.poses()[ib as usize], &ch.poses()[ia as usize]);
-        let pa: Vec<DVec3> = a.iter().map(|p| DVec3::from_array(*p)).collect();
-        let pb: Vec<DVec3> = b.iter().map(|p| fit.apply(DVec3::from_array(*p))).collect();
-        num += w * hausdorff(&pa, &pb);
-        den += w;
     }
     if den > 0.0 { num / den } else { 0.0 }
+}
+
+/// The Hausdorff distances `(surface, vertex)` of the overlapping frames
+/// `M_i(m + k)`, `M_j(n + k)` for `k ∈ [−K, K]` (`None` where a frame is
+/// outside its sequence), the frame of `j` moved on the floor onto that of
+/// `i` (module docs). `vertex` is computed only when `both` (else 0).
+pub fn profile(
+    ch: &Character,
+    surface: &Surface,
+    from: u32,
+    to: u32,
+    half: usize,
+    both: bool,
+) -> Vec<Option<(f64, f64)>> {
+    let (sa, ta) = ch.graph().frame_of(from);
+    let (sb, tb) = ch.graph().frame_of(to);
+    let tb = tb.saturating_sub(1);
+    let l = half as i64;
+    let (la, lb) = (
+        ch.graph().sequences[sa].len as i64,
+        ch.graph().sequences[sb].len as i64,
+    );
+    (-l..=l)
+        .map(|k| {
+            let (fa, fb) = (ta as i64 + k, tb as i64 + k);
+            if fa < 0 || fb < 0 || fa >= la || fb >= lb {
+                return None;
+            }
+            let (ia, ib) = (
+                ch.graph().frame_id(sa, fa as usize),
+                ch.graph().frame_id(sb, fb as usize),
+            );
+            let (pa, pb) = aligned(ch, ia, ib);
+            let s = hausdorff_surface(&pa, &pb, surface);
+            let v = if both { hausdorff(&pa, &pb) } else { 0.0 };
+            Some((s, v))
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -164,5 +415,83 @@ mod tests {
             );
         assert!((hausdorff(&a, &b) - brute).abs() < 1e-12);
         assert_eq!(hausdorff(&a, &a), 0.0);
+    }
+
+    /// An open cylinder of radius 1: `rings` rings of `n` vertices, 0.1
+    /// apart, quads split in two; optionally turned about its axis.
+    fn cylinder(n: usize, rings: usize, turn: f64) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+        let mut v = Vec::new();
+        for r in 0..rings {
+            for i in 0..n {
+                let a = i as f64 * std::f64::consts::TAU / n as f64 + turn;
+                v.push(DVec3::new(a.cos(), 0.1 * r as f64, a.sin()));
+            }
+        }
+        let mut t = Vec::new();
+        for r in 0..rings - 1 {
+            for i in 0..n {
+                let (a, b) = ((r * n + i) as u32, (r * n + (i + 1) % n) as u32);
+                let (c, d) = (a + n as u32, b + n as u32);
+                t.push([a, b, d]);
+                t.push([a, d, c]);
+            }
+        }
+        (v, t)
+    }
+
+    #[test]
+    fn surface_hausdorff_of_a_turned_cylinder_is_the_sagitta_not_the_vertex_gap() {
+        // Turned by half a step, every vertex lies midway over a face of
+        // the other cylinder: 1 − cos(π/n) from its surface, 2 sin(π/2n)
+        // from its nearest vertex.
+        let n = 16;
+        let (a, tris) = cylinder(n, 6, 0.0);
+        let (b, _) = cylinder(n, 6, std::f64::consts::PI / n as f64);
+        let s = Surface::new(&tris, a.len());
+        let pi = std::f64::consts::PI;
+        let surface = hausdorff_surface(&a, &b, &s);
+        assert!(
+            (surface - (1.0 - (pi / n as f64).cos())).abs() < 1e-9,
+            "{surface}"
+        );
+        let vertex = hausdorff(&a, &b);
+        assert!((vertex - 2.0 * (pi / (2 * n) as f64).sin()).abs() < 1e-9);
+        // Identical meshes: 0; a rigid shift along the axis by 0.05 (half
+        // a ring): the end rings stick out by 0.05.
+        assert_eq!(hausdorff_surface(&a, &a, &s), 0.0);
+        let up: Vec<DVec3> = a.iter().map(|p| *p + DVec3::new(0.0, 0.05, 0.0)).collect();
+        assert!((hausdorff_surface(&a, &up, &s) - 0.05).abs() < 1e-9);
+    }
+
+    #[test]
+    fn closest_point_on_a_triangle_in_every_region() {
+        let (a, b, c) = (
+            DVec3::ZERO,
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, 2.0),
+        );
+        let cases = [
+            (DVec3::new(0.5, 3.0, 0.5), DVec3::new(0.5, 0.0, 0.5)), // face
+            (DVec3::new(-1.0, 1.0, -1.0), a),                       // vertex a
+            (DVec3::new(3.0, 0.0, -1.0), b),                        // vertex b
+            (DVec3::new(-1.0, 0.0, 3.0), c),                        // vertex c
+            (DVec3::new(1.0, 1.0, -2.0), DVec3::new(1.0, 0.0, 0.0)), // edge ab
+            (DVec3::new(-2.0, 0.0, 1.0), DVec3::new(0.0, 0.0, 1.0)), // edge ac
+            (DVec3::new(2.0, 0.0, 2.0), DVec3::new(1.0, 0.0, 1.0)), // edge bc
+        ];
+        for (p, want) in cases {
+            let got = closest_on_triangle(p, a, b, c);
+            assert!(got.distance(want) < 1e-12, "{p}: {got} != {want}");
+        }
+    }
+
+    #[test]
+    fn weights_are_eq_2_alpha_prime_and_skip_missing_frames() {
+        // L = 2: α = 0, ¼, ½, ¾, 1 → α′ = 0, ¼, ½, ¼, 0.
+        let h = [Some(9.0), Some(1.0), Some(2.0), Some(3.0), Some(9.0)];
+        let w = weighted(&h, 2, |x| x);
+        assert!((w - (0.25 * 1.0 + 0.5 * 2.0 + 0.25 * 3.0) / 1.0).abs() < 1e-12);
+        let h = [None, None, Some(2.0), Some(4.0), Some(9.0)];
+        assert!((weighted(&h, 2, |x| x) - (0.5 * 2.0 + 0.25 * 4.0) / 0.75).abs() < 1e-12);
     }
 }
