@@ -216,8 +216,13 @@ struct Hierarchy {
     stack: Vec<Option<usize>>,
     expecting_open: bool,
     done_root: bool,
-    /// Joint names seen, for renaming repeats.
+    /// Joint names taken, for renaming repeats, and the next suffix to
+    /// try for each repeated name (a file of 200,000 joints called `b`
+    /// must not search 1, 2, 3… for each).
     names: std::collections::HashSet<String>,
+    next_suffix: std::collections::HashMap<String, usize>,
+    /// Joints renamed so far (the first ten are warned of one by one).
+    renamed: usize,
     warnings: Vec<String>,
     path: std::path::PathBuf,
 }
@@ -233,6 +238,8 @@ impl Hierarchy {
             expecting_open: false,
             done_root: false,
             names: Default::default(),
+            next_suffix: Default::default(),
+            renamed: 0,
             warnings: Vec::new(),
             path: path.to_path_buf(),
         };
@@ -380,16 +387,22 @@ impl Hierarchy {
         if self.names.insert(name.clone()) {
             return name;
         }
-        let renamed = (1..)
-            .map(|k| format!("{name}.{k:03}"))
-            .find(|n| !self.names.contains(n))
-            .unwrap_or_default();
+        let k = self.next_suffix.entry(name.clone()).or_insert(1);
+        let renamed = loop {
+            let n = format!("{name}.{:03}", *k);
+            *k += 1;
+            if !self.names.contains(&n) {
+                break n;
+            }
+        };
         self.names.insert(renamed.clone());
-        raise_warning(
-            &mut self.warnings,
-            &self.path,
-            format!("line {line}: a second joint called '{name}'; renamed '{renamed}'"),
-        );
+        self.renamed += 1;
+        let msg = match self.renamed {
+            1..=10 => format!("line {line}: a second joint called '{name}'; renamed '{renamed}'"),
+            11 => format!("line {line} and after: more repeated joint names renamed likewise"),
+            _ => return renamed,
+        };
+        raise_warning(&mut self.warnings, &self.path, msg);
         renamed
     }
 
