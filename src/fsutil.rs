@@ -144,11 +144,44 @@ pub fn read_small_text(path: &Path) -> Result<String, FsError> {
 }
 
 fn read_text_limited(path: &Path, limit: u64) -> Result<String, FsError> {
-    let bytes = read_bytes_limited(path, limit)?;
-    Ok(match String::from_utf8(bytes) {
+    Ok(decode_text(read_bytes_limited(path, limit)?))
+}
+
+/// The text of a file's bytes, as every text reader wants it: a UTF-8
+/// byte-order mark dropped, UTF-16 (with its mark; Windows "Unicode" text)
+/// decoded, invalid UTF-8 replaced, and lone carriage returns (classic Mac
+/// line ends) turned into line feeds so that `str::lines` numbers lines as
+/// an editor does. CRLF is left alone (`str::lines` handles it).
+pub fn decode_text(mut bytes: Vec<u8>) -> String {
+    let utf16 = |be: bool, b: &[u8]| {
+        let units = b.chunks_exact(2).map(|c| {
+            if be {
+                u16::from_be_bytes([c[0], c[1]])
+            } else {
+                u16::from_le_bytes([c[0], c[1]])
+            }
+        });
+        char::decode_utf16(units)
+            .map(|c| c.unwrap_or(char::REPLACEMENT_CHARACTER))
+            .collect::<String>()
+            .into_bytes()
+    };
+    if bytes.starts_with(&[0xFF, 0xFE]) {
+        bytes = utf16(false, &bytes[2..]);
+    } else if bytes.starts_with(&[0xFE, 0xFF]) {
+        bytes = utf16(true, &bytes[2..]);
+    } else if bytes.starts_with(&[0xEF, 0xBB, 0xBF]) {
+        bytes.drain(..3);
+    }
+    for i in 0..bytes.len() {
+        if bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n') {
+            bytes[i] = b'\n';
+        }
+    }
+    match String::from_utf8(bytes) {
         Ok(s) => s,
         Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
-    })
+    }
 }
 
 /// Writes a file atomically: the bytes go to a temporary file in the same
@@ -173,18 +206,76 @@ pub fn write_atomic(
 /// its old content. For outputs too large to hold in memory (a point cache
 /// streamed frame by frame; issue 18, item 12).
 pub struct AtomicFile {
+    /// The output as named (for messages).
     path: PathBuf,
-    buf: std::io::BufWriter<tempfile::NamedTempFile>,
+    /// Where the temporary is renamed to: `path`, or the file a symbolic
+    /// link at `path` names.
+    target: PathBuf,
+    buf: std::io::BufWriter<Sink>,
+}
+
+/// Where an [`AtomicFile`]'s bytes go: a temporary renamed into place, or,
+/// for an output that exists and is not a regular file (`/dev/null`,
+/// `/dev/stdout`, a named pipe), the file itself. Renaming a temporary
+/// over a device would replace the device node (`-o /dev/full` turned
+/// `/dev/full` into a PNG and exited 0).
+enum Sink {
+    Temp(tempfile::NamedTempFile),
+    Direct(std::fs::File),
+}
+
+impl Write for Sink {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self {
+            Sink::Temp(t) => t.write(buf),
+            Sink::Direct(f) => f.write(buf),
+        }
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self {
+            Sink::Temp(t) => t.flush(),
+            Sink::Direct(f) => f.flush(),
+        }
+    }
 }
 
 impl AtomicFile {
-    /// Starts writing `path` (its folder is created).
+    /// Starts writing `path` (its folder is created). An existing folder
+    /// is refused; an existing device or pipe (`/dev/null`, `/dev/stdout`)
+    /// is written directly, since there is nothing to rename over; an
+    /// existing symbolic link keeps pointing at the file it names, which
+    /// is the one replaced.
     pub fn create(path: &Path) -> Result<AtomicFile, FsError> {
         let wrap = |source| FsError {
             path: path.to_path_buf(),
             source,
         };
-        let dir = match path.parent() {
+        // An existing output: a folder is refused, a device or pipe is
+        // written in place, and a symbolic link is followed (the file it
+        // names is replaced, not the link).
+        let mut target = path.to_path_buf();
+        if let Ok(meta) = std::fs::metadata(path) {
+            if meta.is_dir() {
+                return Err(wrap(std::io::Error::other(
+                    "is a folder, expected a file name",
+                )));
+            }
+            if !meta.is_file() {
+                let f = std::fs::OpenOptions::new()
+                    .write(true)
+                    .open(path)
+                    .map_err(wrap)?;
+                return Ok(AtomicFile {
+                    path: path.to_path_buf(),
+                    target,
+                    buf: std::io::BufWriter::with_capacity(1 << 20, Sink::Direct(f)),
+                });
+            }
+            if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+                target = std::fs::canonicalize(path).map_err(wrap)?;
+            }
+        }
+        let dir = match target.parent() {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
         };
@@ -196,7 +287,8 @@ impl AtomicFile {
             .map_err(wrap)?;
         Ok(AtomicFile {
             path: path.to_path_buf(),
-            buf: std::io::BufWriter::with_capacity(1 << 20, tmp),
+            target,
+            buf: std::io::BufWriter::with_capacity(1 << 20, Sink::Temp(tmp)),
         })
     }
 
@@ -211,24 +303,27 @@ impl AtomicFile {
     /// Flushes, syncs and renames the temporary over the path (with the
     /// permissions of the file it replaces, or 0644).
     pub fn commit(self) -> Result<(), FsError> {
-        let path = self.path;
+        let (path, target) = (self.path, self.target);
         let wrap = |source| FsError {
             path: path.clone(),
             source,
         };
-        let tmp = self.buf.into_inner().map_err(|e| wrap(e.into_error()))?;
+        let tmp = match self.buf.into_inner().map_err(|e| wrap(e.into_error()))? {
+            Sink::Temp(t) => t,
+            Sink::Direct(mut f) => return f.flush().map_err(wrap),
+        };
         tmp.as_file().sync_all().map_err(wrap)?;
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;
-            let mode = std::fs::metadata(&path)
+            let mode = std::fs::metadata(&target)
                 .map(|m| m.permissions().mode())
                 .unwrap_or(0o644);
             tmp.as_file()
                 .set_permissions(std::fs::Permissions::from_mode(mode))
                 .map_err(wrap)?;
         }
-        tmp.persist(&path).map_err(|e| wrap(e.error))?;
+        tmp.persist(&target).map_err(|e| wrap(e.error))?;
         Ok(())
     }
 }
@@ -290,6 +385,77 @@ mod tests {
         drop(f);
         assert_eq!(std::fs::read(&p).unwrap(), b"new content");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    /// Regression: `-o /dev/full` renamed the temporary over the device
+    /// node (it became a regular file, exit 0). A device is written in
+    /// place: /dev/null takes the bytes, /dev/full reports a full disk.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_device_output_is_written_in_place_not_replaced() {
+        use std::os::unix::fs::FileTypeExt;
+        write_bytes_atomic(Path::new("/dev/null"), b"bytes").unwrap();
+        assert!(
+            std::fs::metadata("/dev/null")
+                .unwrap()
+                .file_type()
+                .is_char_device()
+        );
+        if std::fs::metadata("/dev/full").is_ok_and(|m| m.file_type().is_char_device()) {
+            let e = write_bytes_atomic(Path::new("/dev/full"), b"bytes").unwrap_err();
+            assert!(e.to_string().starts_with("/dev/full: "), "{e}");
+            assert!(
+                std::fs::metadata("/dev/full")
+                    .unwrap()
+                    .file_type()
+                    .is_char_device()
+            );
+        }
+    }
+
+    /// A symbolic link to an output keeps pointing at it: the file it names
+    /// is replaced, not the link; a folder is refused.
+    #[cfg(unix)]
+    #[test]
+    fn a_symlinked_output_replaces_its_target_and_a_folder_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let real = dir.path().join("real.txt");
+        std::fs::write(&real, b"old").unwrap();
+        let link = dir.path().join("link.txt");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        write_bytes_atomic(&link, b"new").unwrap();
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
+        let e = write_bytes_atomic(dir.path(), b"x").unwrap_err();
+        assert!(e.to_string().contains("is a folder"), "{e}");
+    }
+
+    /// Regression: a byte-order mark hid an OBJ's first vertex and an
+    /// AMC's header; classic-Mac line ends made a BVH one line; UTF-16 text
+    /// was garbage.
+    #[test]
+    fn text_is_decoded_from_bom_utf16_and_lone_carriage_returns() {
+        assert_eq!(
+            decode_text(b"\xEF\xBB\xBFv 1\r\nv 2".to_vec()),
+            "v 1\r\nv 2"
+        );
+        assert_eq!(decode_text(b"a\rb\r\rc\r".to_vec()).lines().count(), 4);
+        let le: Vec<u8> = [0xFF, 0xFE]
+            .into_iter()
+            .chain("HIERARCHY\r\n".encode_utf16().flat_map(u16::to_le_bytes))
+            .collect();
+        assert_eq!(decode_text(le), "HIERARCHY\r\n");
+        let be: Vec<u8> = [0xFE, 0xFF]
+            .into_iter()
+            .chain("é".encode_utf16().flat_map(u16::to_be_bytes))
+            .collect();
+        assert_eq!(decode_text(be), "é");
+        assert_eq!(decode_text(b"caf\xe9".to_vec()), "caf\u{fffd}");
     }
 
     #[test]

@@ -18,7 +18,6 @@ use std::time::{Duration, Instant};
 /// `{db}` (the demo database: 6,304 vertices, walk + run), `{topo}` and
 /// `{lm}` (its topology and landmarks), `{d}` (the row's own folder).
 struct Fixture {
-    _tmp: tempfile::TempDir,
     walk: PathBuf,
     db: PathBuf,
 }
@@ -26,25 +25,18 @@ struct Fixture {
 fn fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
     F.get_or_init(|| {
-        let tmp = tempfile::tempdir().unwrap();
+        // A static is never dropped: the folder is common::fixture_dir's,
+        // emptied at the next run, not a temporary left behind.
+        let dir = common::fixture_dir("hostile");
         let run = |args: &[&str]| {
-            let o = Command::new(common::bin())
-                .args(args)
-                .current_dir(tmp.path())
-                .output()
-                .unwrap();
-            assert!(
-                o.status.success(),
-                "{args:?}: {}",
-                String::from_utf8_lossy(&o.stderr)
-            );
+            let r = common::run_cli(args, Some(&dir), &[]);
+            assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
         };
         run(&["mocap", "procedural", "--gait", "walk", "-o", "walk.bvh"]);
         run(&["demo", "-o", "demo"]);
         Fixture {
-            walk: tmp.path().join("walk.bvh"),
-            db: tmp.path().join("demo/database"),
-            _tmp: tmp,
+            walk: dir.join("walk.bvh"),
+            db: dir.join("demo/database"),
         }
     })
 }
@@ -343,6 +335,8 @@ fn rows() -> Vec<Row> {
         row("a binary manifest", "db info {d}/db", &["character.toml", "binary"])
             .file("db/character.toml", garbage(300)),
     ];
+    // Session 5 (hostile-input review): each row failed before its fix.
+    r.extend(session5_rows(obj_ok));
     // The sweep: verbs × malformed files, each message naming the file.
     let bvh_cut = {
         let t = walk_text();
@@ -459,6 +453,76 @@ fn rows() -> Vec<Row> {
     r
 }
 
+/// A 2-bone ASF (root and `a`) for the AMC rows.
+const TINY_ASF: &str = ":units\n length 0.45\n angle deg\n:root\n order TX TY TZ RX RY RZ\n axis XYZ\n position 0 0 0\n orientation 0 0 0\n:bonedata\n begin\n id 1\n name a\n direction 0 1 0\n length 2\n axis 0 0 0 XYZ\n dof rx ry rz\n end\n:hierarchy\n begin\n root a\n end\n";
+
+/// An AMC of `frames` frames for [`TINY_ASF`].
+fn tiny_amc(frames: usize) -> Vec<u8> {
+    let mut t = String::from(":FULLY-SPECIFIED\n:DEGREES\n");
+    for f in 1..=frames {
+        t.push_str(&format!("{f}\nroot 0 0 0 0 0 0\na 0 0 {f}\n"));
+    }
+    t.into_bytes()
+}
+
+/// A BVH whose root has one channel and `joints` children none: every
+/// frame line is one value, yet each frame holds all the joints.
+fn channel_less_joints_bvh(joints: usize, frames: usize) -> Vec<u8> {
+    let mut t = String::from("HIERARCHY\nROOT r\n{\nOFFSET 0 0 0\nCHANNELS 1 Xrotation\n");
+    for k in 0..joints {
+        t.push_str(&format!("JOINT j{k}\n{{\nOFFSET 0 1 0\nCHANNELS 0\n}}\n"));
+    }
+    t.push_str(&format!(
+        "}}\nMOTION\nFrames: {frames}\nFrame Time: 0.0333\n"
+    ));
+    t.push_str(&"0\n".repeat(frames));
+    t.into_bytes()
+}
+
+/// The rows of the session-5 review (each printed a wrong answer, took
+/// unbounded memory or exited 0 before its fix).
+fn session5_rows(obj_ok: &'static str) -> Vec<Row> {
+    let mut pc2_empty = b"POINTCACHE2\0".to_vec();
+    for v in [1i32, 4] {
+        pc2_empty.extend(v.to_le_bytes());
+    }
+    pc2_empty.extend(0f32.to_le_bytes());
+    pc2_empty.extend(1f32.to_le_bytes());
+    pc2_empty.extend(0i32.to_le_bytes());
+    vec![
+        row("mocap convert onto its own input", "mocap convert {d}/w.bvh {d}/w.bvh", &["w.bvh", "overwrite the input"])
+            .file("w.bvh", walk_text()),
+        row("a GLB of a mesh without triangles", "mesh convert {d}/p.obj {d}/o.glb", &["o.glb", "no triangles"])
+            .file("p.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"),
+        row("an OBJ vertex at 1e308", "mesh convert {d}/h.obj {d}/o.glb", &["h.obj:2", "1e308", "beyond"])
+            .file("h.obj", obj_ok.replacen("v 1 0 0", "v 1e308 0 0", 1)),
+        row("a PLY vertex at 1e300", "mesh convert {d}/h.ply {d}/o.glb", &["h.ply", "vertex 1", "beyond"])
+            .file("h.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1e300 0 0\n0 1 0\n3 0 1 2\n"),
+        row("a point cache of 0 samples", "mesh convert {d}/z.pc2 {d}/o.glb --topology {d}/t.obj", &["z.pc2", "0 samples"])
+            .file("z.pc2", pc2_empty).file("t.obj", obj_ok),
+        row("a BVH OFFSET of 1e308", "mocap convert {d}/o1.bvh {d}/o.bvh", &["o1.bvh:", "OFFSET", "beyond"])
+            .file("o1.bvh", walk_text().replacen("OFFSET 0 0.1 0", "OFFSET 0 1e308 0", 1)),
+        row("a BVH channel value of 1e300", "mocap convert {d}/v.bvh {d}/o.bvh", &["v.bvh:", "channel value", "beyond"])
+            .file("v.bvh", walk_value("1e300")),
+        row("channel-less joints: 1 byte of text, every joint held per frame", "inspect {d}/j.bvh", &["j.bvh", "20,000 frames", "2,001 joints", "SURFMOTION_MEMORY_LIMIT"])
+            .file("j.bvh", channel_less_joints_bvh(2000, 20_000)).env("SURFMOTION_MEMORY_LIMIT", SMALL),
+        row("an AMC of frame numbers alone", "mocap convert {d}/a/c.amc {d}/o.bvh", &["c.amc", "300,000 frames", "SURFMOTION_MEMORY_LIMIT"])
+            .file("a/t.asf", TINY_ASF)
+            .file("a/c.amc", format!(":FULLY-SPECIFIED\n:DEGREES\n{}", "1\n".repeat(300_000)))
+            .env("SURFMOTION_MEMORY_LIMIT", SMALL),
+        row("an ASF bone of negative length", "mocap convert {d}/n/c.amc {d}/o.bvh", &["t.asf:", "negative bone length"])
+            .file("n/t.asf", TINY_ASF.replace("length 2", "length -2")).file("n/c.amc", tiny_amc(3)),
+        row("an ASF bone with a length and no direction", "mocap convert {d}/n/c.amc {d}/o.bvh", &["t.asf:", "no direction"])
+            .file("n/t.asf", TINY_ASF.replace("direction 0 1 0", "direction 0 0 0")).file("n/c.amc", tiny_amc(3)),
+        row("an empty ASF", "mocap convert {d}/n/c.amc {d}/o.bvh", &["t.asf", "no bones"])
+            .file("n/t.asf", "").file("n/c.amc", tiny_amc(3)),
+        row("an AMC value of 1e300", "mocap convert {d}/n/c.amc {d}/o.bvh", &["c.amc:", "beyond"])
+            .file("n/t.asf", TINY_ASF).file("n/c.amc", String::from_utf8(tiny_amc(3)).unwrap().replacen("a 0 0 1", "a 0 0 1e300", 1)),
+        row("a mesh folder output onto an existing file", "mesh convert {topo} {d}/x", &["x", "not a folder"])
+            .file("x", "a file"),
+    ]
+}
+
 fn scaled_obj(k: f64) -> Vec<u8> {
     obj_map(|p| p.map(|x| x * k))
 }
@@ -499,6 +563,15 @@ fn expand(s: &str, d: &Path) -> Vec<String> {
         .collect()
 }
 
+/// A `.part` temporary of an atomic write left in the folder of `file`.
+fn leftover_part(file: &Path) -> Option<String> {
+    std::fs::read_dir(file.parent()?)
+        .ok()?
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .find(|n| n.ends_with(".part"))
+}
+
 /// Runs one row; returns what went wrong, if anything.
 fn check(r: &Row) -> Option<String> {
     let tmp = tempfile::tempdir().unwrap();
@@ -512,32 +585,15 @@ fn check(r: &Row) -> Option<String> {
         std::fs::write(p, bytes).unwrap();
     }
     let args = expand(r.args, d);
-    let t = Instant::now();
-    let mut cmd = Command::new(common::bin());
-    cmd.args(&args).current_dir(d).env_remove("SURFMOTION_LOG");
-    for (k, v) in &r.env {
-        cmd.env(k, v);
+    let run = common::run_cli(&args, Some(d), &r.env);
+    let mut problems = run.bad_input_problems(r.words);
+    if run.elapsed > Duration::from_secs(30) {
+        problems.push(format!("took {:?}", run.elapsed));
     }
-    let o = cmd.output().unwrap();
-    let secs = t.elapsed();
-    let err = String::from_utf8_lossy(&o.stderr);
-    let lower = err.to_lowercase();
-    let mut problems = Vec::new();
-    match o.status.code() {
-        Some(1) => {}
-        Some(c) => problems.push(format!("exit {c}")),
-        None => problems.push("killed by a signal".into()),
-    }
-    if lower.contains("internal error") || lower.contains("memory allocation") {
-        problems.push("internal error".into());
-    }
-    for w in r.words {
-        if !lower.contains(&w.to_lowercase()) {
-            problems.push(format!("no '{w}' in the message"));
+    for (name, _) in &r.files {
+        if let Some(k) = leftover_part(&d.join(name)) {
+            problems.push(format!("a temporary left behind: {k}"));
         }
-    }
-    if secs > Duration::from_secs(30) {
-        problems.push(format!("took {secs:?}"));
     }
     (!problems.is_empty()).then(|| {
         format!(
@@ -545,7 +601,7 @@ fn check(r: &Row) -> Option<String> {
             r.what,
             problems.join(", "),
             args.join(" "),
-            err.trim().replace('\n', "\n            ")
+            run.stderr.trim().replace('\n', "\n            ")
         )
     })
 }
@@ -953,4 +1009,545 @@ fn nearest_vertex_landmarks(mesh: &Path, points: &Path) -> Vec<u8> {
         out.insert(k.clone(), serde_json::json!(i));
     }
     serde_json::to_vec(&out).unwrap()
+}
+
+/// Regression (session 5): `render … -o /dev/full` renamed its temporary
+/// over the device node (`/dev/full` became a PNG, exit 0); `mesh convert
+/// … /dev/full` took it for a folder ("/dev/full/frame_0000.obj: File
+/// exists"). A device is written in place, and stays a device.
+#[cfg(target_os = "linux")]
+#[test]
+fn device_outputs_are_written_in_place() {
+    use std::os::unix::fs::FileTypeExt;
+    let is_dev = |p: &str| std::fs::metadata(p).is_ok_and(|m| m.file_type().is_char_device());
+    if !is_dev("/dev/full") || !is_dev("/dev/null") {
+        eprintln!("SKIPPED: no /dev/full or /dev/null character device here");
+        return;
+    }
+    let topo = fixture().db.join("topology.obj");
+    let topo = topo.to_str().unwrap();
+    common::run_cli(&["render", topo, "-o", "/dev/full"], None, &[])
+        .assert_bad_input("render -o /dev/full", &["/dev/full", "no space left"]);
+    assert!(is_dev("/dev/full"));
+    common::run_cli(&["mesh", "convert", topo, "/dev/full"], None, &[])
+        .assert_bad_input("mesh convert to /dev/full", &["/dev/full", "not a folder"]);
+    let null = common::run_cli(&["render", topo, "-o", "/dev/null"], None, &[]);
+    assert_eq!(null.code, Some(0), "{}", null.stderr);
+    assert!(is_dev("/dev/null"));
+}
+
+/// One BVH in the manner of another suite: each quirk seen in (or
+/// attributed to) an exporter, written by [`suite_bvh`].
+#[derive(Clone, Copy, Default)]
+struct Quirks {
+    /// Joint names: `Hips` … or the suite's own (spaces, colons).
+    names: [&'static str; 5],
+    /// Rotation channel order of every joint (each joint turns about one
+    /// axis only, so the pose does not depend on it).
+    order: &'static str,
+    /// Position channels on every joint (they equal the offsets).
+    positions_everywhere: bool,
+    /// Scale channels after the rotations of every joint.
+    scale: bool,
+    /// How an End Site opens: "End Site\n{", "End Site {", "End site\n{",
+    /// "EndSite\n{" or a braceless "End Site" with its OFFSET.
+    end_site: &'static str,
+    /// The leaf joints have no End Site at all (Kinect-style).
+    no_end_site: bool,
+    /// `Frames:` and `Frame Time:` lines as written.
+    frames_line: &'static str,
+    time_line: &'static str,
+    /// Indentation and line end.
+    indent: &'static str,
+    newline: &'static str,
+    bom: bool,
+    /// Blank lines between frames and no newline after the last.
+    loose_motion: bool,
+    /// Uppercase keywords lowered (`joint`, `offset`, `channels`).
+    lower_keywords: bool,
+}
+
+/// The five-joint chain (root, spine, head; a leg) with `q`'s quirks and
+/// three frames; every joint turns about one axis by a frame-dependent
+/// angle.
+fn suite_bvh(q: &Quirks) -> String {
+    let n = q.newline;
+    let names = if q.names[0].is_empty() {
+        ["Hips", "Spine", "Head", "LeftUpLeg", "LeftLeg"]
+    } else {
+        q.names
+    };
+    let kw = |k: &str| {
+        if q.lower_keywords {
+            k.to_lowercase()
+        } else {
+            k.to_string()
+        }
+    };
+    let axes: Vec<char> = q.order.chars().collect();
+    let rot: String = axes
+        .iter()
+        .map(|a| format!("{a}rotation"))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let scale = if q.scale { " Xscale Yscale Zscale" } else { "" };
+    // (name, parent, offset, leaf)
+    let joints: [(usize, Option<usize>, [f64; 3], bool); 5] = [
+        (0, None, [0.0, 90.0, 0.0], false),
+        (1, Some(0), [0.0, 10.0, 0.0], false),
+        (2, Some(1), [0.0, 50.0, 2.0], true),
+        (3, Some(0), [9.0, -5.0, 0.0], false),
+        (4, Some(3), [0.0, -42.0, 0.0], true),
+    ];
+    let mut t = String::new();
+    if q.bom {
+        t.push('\u{feff}');
+    }
+    t.push_str("HIERARCHY");
+    t.push_str(n);
+    #[allow(clippy::too_many_arguments)]
+    fn emit(
+        j: usize,
+        depth: usize,
+        joints: &[(usize, Option<usize>, [f64; 3], bool)],
+        names: &[&str; 5],
+        q: &Quirks,
+        kw: &dyn Fn(&str) -> String,
+        rot: &str,
+        scale: &str,
+        t: &mut String,
+    ) {
+        let n = q.newline;
+        let ind = q.indent.repeat(depth);
+        let (_, parent, o, leaf) = joints[j];
+        let key = if parent.is_none() { "ROOT" } else { "JOINT" };
+        t.push_str(&format!("{ind}{} {}{n}{ind}{{{n}", kw(key), names[j]));
+        t.push_str(&format!(
+            "{ind}{}{} {} {} {}{n}",
+            q.indent,
+            kw("OFFSET"),
+            o[0],
+            o[1],
+            o[2]
+        ));
+        let pos = parent.is_none() || q.positions_everywhere;
+        let count = 3 + if pos { 3 } else { 0 } + if q.scale { 3 } else { 0 };
+        let p = if pos {
+            "Xposition Yposition Zposition "
+        } else {
+            ""
+        };
+        t.push_str(&format!(
+            "{ind}{}{} {count} {p}{rot}{scale}{n}",
+            q.indent,
+            kw("CHANNELS")
+        ));
+        for c in joints.iter().filter(|c| c.1 == Some(j)) {
+            emit(c.0, depth + 1, joints, names, q, kw, rot, scale, t);
+        }
+        if leaf && !q.no_end_site {
+            let i2 = format!("{ind}{}", q.indent);
+            let open = q.end_site.replace('\n', &format!("{n}{i2}"));
+            t.push_str(&format!("{i2}{open}{n}"));
+            t.push_str(&format!("{i2}{}{} 0 7 0{n}", q.indent, kw("OFFSET")));
+            if q.end_site != "End Site" {
+                t.push_str(&format!("{i2}}}{n}"));
+            }
+        }
+        t.push_str(&format!("{ind}}}{n}"));
+    }
+    emit(0, 0, &joints, &names, q, &kw, &rot, scale, &mut t);
+    t.push_str(&format!("MOTION{n}{}{n}{}{n}", q.frames_line, q.time_line));
+    for f in 0..3 {
+        let mut vals: Vec<String> = Vec::new();
+        for (k, (_, parent, o, _)) in joints.iter().enumerate() {
+            if parent.is_none() {
+                vals.extend([f as f64 * 2.0, 90.0, 0.5].map(|v| v.to_string()));
+            } else if q.positions_everywhere {
+                vals.extend(o.map(|v| v.to_string()));
+            }
+            // Joint k turns about axis k mod 3 only.
+            let axis = ['X', 'Y', 'Z'][k % 3];
+            for a in &axes {
+                let v = if *a == axis {
+                    10.0 * (f + 1) as f64 + k as f64
+                } else {
+                    0.0
+                };
+                vals.push(v.to_string());
+            }
+            if q.scale {
+                vals.extend(["1", "1", "1"].map(String::from));
+            }
+        }
+        t.push_str(&vals.join(" "));
+        if f < 2 || !q.loose_motion {
+            t.push_str(n);
+        }
+        if q.loose_motion && f < 2 {
+            t.push_str(n);
+        }
+    }
+    t
+}
+
+/// BVH quirks of other suites and exporters (generated, not copied): each
+/// variant parses to the same skeleton and the same world positions as
+/// the plain file, with the joint names the suite gave.
+#[test]
+fn bvh_quirks_of_other_suites_parse_alike() {
+    use surfmotion::mocap::bvh::{BvhOptions, parse_bvh};
+    let plain = Quirks {
+        order: "ZYX",
+        end_site: "End Site\n{",
+        frames_line: "Frames: 3",
+        time_line: "Frame Time: 0.0333333",
+        indent: "\t",
+        newline: "\n",
+        ..Default::default()
+    };
+    let parse = |what: &str, text: &str| {
+        parse_bvh(text, Path::new("q.bvh"), &BvhOptions::default())
+            .unwrap_or_else(|e| panic!("{what}: {e}\n{text}"))
+    };
+    let base = parse("plain", &suite_bvh(&plain));
+    assert_eq!(base.joint_count(), 5);
+    let variants: Vec<(&str, Quirks)> = vec![
+        (
+            "Mixamo: namespaced names, XYZ order",
+            Quirks {
+                names: [
+                    "mixamorig:Hips",
+                    "mixamorig:Spine",
+                    "mixamorig:Head",
+                    "mixamorig:LeftUpLeg",
+                    "mixamorig:LeftLeg",
+                ],
+                order: "XYZ",
+                ..plain
+            },
+        ),
+        (
+            "Rokoko / LAFAN1 / Bandai Namco: positions on every joint",
+            Quirks {
+                positions_everywhere: true,
+                ..plain
+            },
+        ),
+        (
+            "Perception Neuron: YXZ, positions everywhere, CRLF",
+            Quirks {
+                order: "YXZ",
+                positions_everywhere: true,
+                newline: "\r\n",
+                ..plain
+            },
+        ),
+        (
+            "Xsens MVN: MVN names, spaces and tabs in the header",
+            Quirks {
+                names: ["Pelvis", "L5", "Head", "RightUpperLeg", "RightLowerLeg"],
+                frames_line: "Frames:  3",
+                time_line: "Frame Time:\t0.016667",
+                ..plain
+            },
+        ),
+        (
+            "OptiTrack Motive: prefixed names, ZXY",
+            Quirks {
+                names: [
+                    "Skeleton_001_Hip",
+                    "Skeleton_001_Ab",
+                    "Skeleton_001_Head",
+                    "Skeleton_001_LThigh",
+                    "Skeleton_001_LShin",
+                ],
+                order: "ZXY",
+                ..plain
+            },
+        ),
+        (
+            "Vicon Blade: colon namespaces, 'End site'",
+            Quirks {
+                names: [
+                    "Actor1:Hips",
+                    "Actor1:Spine",
+                    "Actor1:Head",
+                    "Actor1:LeftUpLeg",
+                    "Actor1:LeftLeg",
+                ],
+                end_site: "End site\n{",
+                ..plain
+            },
+        ),
+        (
+            "Truebones: brace on the End Site line, CRLF",
+            Quirks {
+                end_site: "End Site {",
+                newline: "\r\n",
+                ..plain
+            },
+        ),
+        (
+            "3ds Max Biped: names with spaces",
+            Quirks {
+                names: [
+                    "Bip01",
+                    "Bip01 Spine",
+                    "Bip01 Head",
+                    "Bip01 L Thigh",
+                    "Bip01 L Calf",
+                ],
+                ..plain
+            },
+        ),
+        (
+            "Daz: lower-camel names, YZX",
+            Quirks {
+                names: ["hip", "abdomen", "head", "lThigh", "lShin"],
+                order: "YZX",
+                ..plain
+            },
+        ),
+        (
+            "SMPL exports: underscore names, XZY",
+            Quirks {
+                names: ["Pelvis", "Spine1", "Head", "L_Hip", "L_Knee"],
+                order: "XZY",
+                ..plain
+            },
+        ),
+        (
+            "Kinect: leaves without End Site",
+            Quirks {
+                names: ["HipCenter", "Spine", "Head", "HipLeft", "KneeLeft"],
+                no_end_site: true,
+                ..plain
+            },
+        ),
+        (
+            "MotionBuilder: UTF-8 byte-order mark, no colon spacing",
+            Quirks {
+                bom: true,
+                frames_line: "Frames:3",
+                time_line: "Frame Time:0.0333333",
+                ..plain
+            },
+        ),
+        (
+            "SFU / CMU: four-space indent, blank lines in the motion, no final newline",
+            Quirks {
+                indent: "    ",
+                loose_motion: true,
+                ..plain
+            },
+        ),
+        (
+            "scale channels (9 per joint)",
+            Quirks {
+                scale: true,
+                positions_everywhere: true,
+                ..plain
+            },
+        ),
+        (
+            "classic Mac line ends",
+            Quirks {
+                newline: "\r",
+                ..plain
+            },
+        ),
+        (
+            "tabs between the header words",
+            Quirks {
+                frames_line: "Frames:\t3",
+                time_line: "Frame\tTime:\t0.0333333",
+                ..plain
+            },
+        ),
+        (
+            "lower-case keywords and header",
+            Quirks {
+                lower_keywords: true,
+                frames_line: "frames: 3",
+                time_line: "frame time: 0.0333333",
+                ..plain
+            },
+        ),
+        (
+            "'EndSite' as one word",
+            Quirks {
+                end_site: "EndSite\n{",
+                ..plain
+            },
+        ),
+        (
+            "End Site without braces",
+            Quirks {
+                end_site: "End Site",
+                ..plain
+            },
+        ),
+        (
+            "a Frames count that disagrees with the data",
+            Quirks {
+                frames_line: "Frames: 30",
+                ..plain
+            },
+        ),
+    ];
+    for (what, q) in &variants {
+        // Classic Mac line ends reach the parser as read_text makes them.
+        let text = surfmotion::fsutil::decode_text(suite_bvh(q).into_bytes());
+        let c = parse(what, &text);
+        assert_eq!(c.joint_count(), 5, "{what}");
+        assert_eq!(c.frame_count(), 3, "{what}");
+        assert!(
+            (c.fps() - base.fps()).abs() < 1e-3 * base.fps() || q.time_line != plain.time_line,
+            "{what}"
+        );
+        let want: Vec<&str> = if q.names[0].is_empty() {
+            base.joints.iter().map(|j| j.name.as_str()).collect()
+        } else {
+            q.names.to_vec()
+        };
+        let got: Vec<&str> = c.joints.iter().map(|j| j.name.as_str()).collect();
+        assert_eq!(got, want, "{what}");
+        for f in 0..3 {
+            let (a, b) = (base.world_positions(f), c.world_positions(f));
+            for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+                assert!(
+                    (*x - *y).length() < 1e-9,
+                    "{what}: frame {f}, joint {k}: {x} vs {y}"
+                );
+            }
+        }
+        if !q.no_end_site {
+            assert_eq!(c.joints[2].tail, base.joints[2].tail, "{what}: End Site");
+        }
+    }
+}
+
+/// Regression (session 5): two joints of one name (a hand-merged file)
+/// were both kept as `Spine`, so name lookups (rig maps) found the first;
+/// the second is now `Spine.001`, with a warning naming the line.
+#[test]
+fn repeated_joint_names_are_made_unique() {
+    use surfmotion::mocap::bvh::{BvhOptions, parse_bvh};
+    let text = walk_text().replacen("JOINT LeftArm", "JOINT Spine", 1);
+    let c = parse_bvh(&text, Path::new("d.bvh"), &BvhOptions::default()).unwrap();
+    let names: Vec<&str> = c.joints.iter().map(|j| j.name.as_str()).collect();
+    assert_eq!(
+        names.iter().filter(|n| **n == "Spine").count(),
+        1,
+        "{names:?}"
+    );
+    assert!(names.contains(&"Spine.001"), "{names:?}");
+    assert!(
+        c.warnings
+            .iter()
+            .any(|w| w.contains("line ") && w.contains("Spine.001")),
+        "{:?}",
+        c.warnings
+    );
+}
+
+/// The corpus pass over rig map files (the readers' pass is in
+/// tests/malformed.rs; fuzz/fuzz_targets/rigmap.rs explores further): the
+/// walk's own map, maps with derivation rules (self-referring, unknown
+/// joints, absurd fractions), their truncations and flipped bytes — each
+/// read and applied to the walk, never a panic.
+#[test]
+fn rig_map_corpus_never_panics() {
+    use surfmotion::mocap::bvh::{BvhOptions, parse_bvh};
+    use surfmotion::rig::RigMap;
+    let clip = parse_bvh(&walk_text(), Path::new("w.bvh"), &BvhOptions::default()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let map = dir.path().join("map.json");
+    let r = common::run_cli(
+        &[
+            "mocap".as_ref(),
+            "rigmap".as_ref(),
+            fixture().walk.as_os_str(),
+            "-o".as_ref(),
+            map.as_os_str(),
+        ],
+        None,
+        &[],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let own = std::fs::read_to_string(&map).unwrap();
+    // The map with `canon` placed by the rule `json` instead of a joint.
+    let rule = |canon: &str, json: &str| {
+        let mut v: serde_json::Value = serde_json::from_str(&own).unwrap();
+        v["joints"].as_object_mut().unwrap().remove(canon);
+        v["derived"] =
+            serde_json::json!({ canon: serde_json::from_str::<serde_json::Value>(json).unwrap() });
+        v.to_string()
+    };
+    let mut seeds = vec![
+        own.clone(),
+        rule("head", r#"{"rule": "end_site", "joint": "Head"}"#),
+        rule("head", r#"{"rule": "end_site", "joint": "NoSuchJoint"}"#),
+        rule(
+            "head",
+            r#"{"rule": "between", "from": "head", "to": "head", "t": 1e308}"#,
+        ),
+        rule(
+            "chest",
+            r#"{"rule": "between", "from": "r_toe", "to": "neck", "t": -1e300}"#,
+        ),
+        rule(
+            "l_toe",
+            r#"{"rule": "toe_from_ankle", "ankle": "l_toe", "fraction": 1e308}"#,
+        ),
+        rule(
+            "l_toe",
+            r#"{"rule": "toe_from_ankle", "ankle": "pelvis", "fraction": -3}"#,
+        ),
+        own.replace("\"Hips\"", "\"\""),
+        own.replace("\"LeftFoot\"", "\"Hips\""),
+    ];
+    let mut x = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    };
+    let base = seeds.clone();
+    for s in &base {
+        let b = s.as_bytes();
+        for _ in 0..20 {
+            let mut m = b.to_vec();
+            let k = (next() as usize) % m.len();
+            m[k] = next() as u8;
+            seeds.push(String::from_utf8_lossy(&m).into_owned());
+            seeds.push(String::from_utf8_lossy(&b[..(next() as usize) % b.len()]).into_owned());
+        }
+    }
+    let mut parsed = 0;
+    for s in &seeds {
+        if let Ok(m) = serde_json::from_str::<RigMap>(s) {
+            parsed += 1;
+            let _ = m.poses(&clip);
+        }
+    }
+    assert!(parsed >= 9, "only {parsed} of {} parsed", seeds.len());
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+    /// Any bytes decode as text without a panic, and no lone carriage
+    /// return survives (each became a line end).
+    #[test]
+    fn decoded_text_has_no_lone_carriage_returns(b in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..200)) {
+        let t = surfmotion::fsutil::decode_text(b);
+        let bytes = t.as_bytes();
+        for (i, &c) in bytes.iter().enumerate() {
+            if c == b'\r' {
+                proptest::prop_assert_eq!(bytes.get(i + 1), Some(&b'\n'));
+            }
+        }
+    }
 }

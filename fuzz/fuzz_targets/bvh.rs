@@ -5,6 +5,7 @@ use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {
-    let t = String::from_utf8_lossy(data);
+    // As files are read: byte-order marks, UTF-16 and lone CRs decoded.
+    let t = surfmotion::fsutil::decode_text(data.to_vec());
     let _ = surfmotion::mocap::bvh::parse_bvh(&t, Path::new("fuzz.bvh"), &Default::default());
 });

@@ -5,6 +5,7 @@ use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {
-    let t = String::from_utf8_lossy(data);
+    // As files are read: byte-order marks, UTF-16 and lone CRs decoded.
+    let t = surfmotion::fsutil::decode_text(data.to_vec());
     let _ = surfmotion::mesh::io::obj::parse_obj(&t, Path::new("fuzz.obj"));
 });

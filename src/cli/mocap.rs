@@ -157,6 +157,24 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             }
         }
         Cmd::Convert(a) => {
+            if !a
+                .output
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
+            {
+                bail!("{}: only .bvh output is supported", a.output.display());
+            }
+            // As `mesh convert` does: the input is never overwritten (it was,
+            // silently, re-serialised in place).
+            if let (Ok(i), Ok(o)) = (a.input.canonicalize(), a.output.canonicalize())
+                && i == o
+            {
+                bail!(
+                    "{}: writing it would overwrite the input {}; choose another output name",
+                    a.output.display(),
+                    a.input.display()
+                );
+            }
             let mut clip = load(&a.input, &a.opts)?;
             if a.metres {
                 clip.to_metres_y_up();
@@ -165,13 +183,6 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 clip = clip
                     .try_resampled(fps)
                     .with_context(|| a.input.display().to_string())?;
-            }
-            if !a
-                .output
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
-            {
-                bail!("{}: only .bvh output is supported", a.output.display());
             }
             surfmotion::mocap::bvh::write_bvh(&clip, &a.output)
                 .with_context(|| format!("writing {}", a.output.display()))?;

@@ -91,7 +91,13 @@ fn applied_in_order(axes: &[usize], radians: &[f64]) -> DQuat {
 }
 
 fn num(tok: &str, path: &Path, line: usize) -> Result<f64, MocapError> {
+    let max = super::bvh::MAX_ABS_VALUE;
     match tok.parse::<f64>() {
+        Ok(v) if v.is_finite() && v.abs() > max => Err(MocapError::parse(
+            path,
+            line,
+            format!("value {tok} is beyond ±{max:e}"),
+        )),
         Ok(v) if v.is_finite() => Ok(v),
         _ => Err(MocapError::parse(
             path,
@@ -117,6 +123,12 @@ pub fn parse_asf(text: &str, path: &Path) -> Result<AsfSkeleton, MocapError> {
         return Err(MocapError::invalid(
             path,
             "file ends inside a bone's begin/end",
+        ));
+    }
+    if asf.bones.is_empty() {
+        return Err(MocapError::invalid(
+            path,
+            "no bones (no ':bonedata' section with begin/end blocks)",
         ));
     }
     let index = index_bones(&asf.bones, path)?;
@@ -340,6 +352,13 @@ impl AsfText {
                 if b.name.is_empty() {
                     return Err(MocapError::parse(path, b.line, "bone without a name"));
                 }
+                if b.len > 0.0 && b.dir.length_squared() == 0.0 {
+                    return Err(MocapError::parse(
+                        path,
+                        b.line,
+                        format!("bone '{}' has a length but no direction", b.name),
+                    ));
+                }
                 if self.bones.len() > 100_000 {
                     return Err(MocapError::parse(path, line, "too many bones"));
                 }
@@ -362,7 +381,16 @@ impl AsfText {
                             num(toks[3], path, line)?,
                         )
                     }
-                    "length" if toks.len() > 1 => b.len = num(toks[1], path, line)?,
+                    "length" if toks.len() > 1 => {
+                        b.len = num(toks[1], path, line)?;
+                        if b.len < 0.0 {
+                            return Err(MocapError::parse(
+                                path,
+                                line,
+                                format!("negative bone length {}", toks[1]),
+                            ));
+                        }
+                    }
                     "axis" if toks.len() >= 4 => {
                         b.axis = [
                             num(toks[1], path, line)?,
@@ -652,8 +680,32 @@ pub fn parse_amc(
         .enumerate()
         .map(|(i, b)| (b.name.as_str(), i))
         .collect();
+    // The clip's size, from the frame-number lines, before anything is
+    // held: a 6 MB file of frame numbers alone asked for 10 GB.
+    let is_frame_number = |raw: &str| {
+        let l = raw.split('#').next().unwrap_or("").trim();
+        !l.is_empty() && l.bytes().all(|b| b.is_ascii_digit())
+    };
+    let frame_count = text.lines().filter(|l| is_frame_number(l)).count();
+    let per_frame: u128 = 24
+        + skel
+            .bones
+            .iter()
+            .map(|b| 24 + 8 * b.dof.len() as u128 + 56)
+            .sum::<u128>();
+    crate::budget::check(
+        || {
+            format!(
+                "{} frames × {} bones",
+                crate::budget::thousands(frame_count as u128),
+                crate::budget::thousands(skel.bones.len() as u128)
+            )
+        },
+        frame_count as u128 * per_frame,
+    )
+    .map_err(|e| MocapError::invalid(path, e.to_string()))?;
     let mut degrees = skel.degrees;
-    let mut frames: Vec<Vec<Vec<f64>>> = Vec::new();
+    let mut frames: Vec<Vec<Vec<f64>>> = Vec::with_capacity(frame_count);
     let mut cur: Option<Vec<Vec<f64>>> = None;
     let mut seen: Vec<bool> = vec![false; skel.bones.len()];
     let mut warnings = Vec::new();

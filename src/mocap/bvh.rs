@@ -26,77 +26,104 @@ pub struct BvhOptions {
     pub fps: Option<f64>,
 }
 
+/// Lines, numbered from 1, read lazily: memory stays that of the text
+/// (collecting them cost 24 bytes a line: 100 MB of empty lines took
+/// 2.4 GB).
+type Lines<'a> = std::iter::Peekable<
+    std::iter::Map<
+        std::iter::Enumerate<std::str::Lines<'a>>,
+        fn((usize, &'a str)) -> (usize, &'a str),
+    >,
+>;
+
+fn numbered<'a>(text: &'a str) -> Lines<'a> {
+    fn one_based(p: (usize, &str)) -> (usize, &str) {
+        (p.0 + 1, p.1)
+    }
+    let f: fn((usize, &'a str)) -> (usize, &'a str) = one_based;
+    text.lines().enumerate().map(f).peekable()
+}
+
+/// Tokens of the hierarchy: words, with `{` and `}` split off, read one at
+/// a time (a line of a million braces is not split up front).
 struct Tokens<'a> {
-    lines: Vec<(usize, &'a str)>,
-    li: usize,
-    toks: Vec<&'a str>,
-    ti: usize,
+    lines: Lines<'a>,
+    /// The unread part of the current line.
+    rest: &'a str,
     line_no: usize,
 }
 
-fn split_braces(line: &str) -> Vec<&str> {
-    let mut out = Vec::new();
-    for word in line.split_whitespace() {
-        let mut rest = word;
-        while !rest.is_empty() {
-            match rest.find(['{', '}']) {
-                Some(0) => {
-                    out.push(&rest[..1]);
-                    rest = &rest[1..];
-                }
-                Some(k) => {
-                    out.push(&rest[..k]);
-                    rest = &rest[k..];
-                }
-                None => {
-                    out.push(rest);
-                    rest = "";
-                }
-            }
-        }
+/// The next token of `rest` (a word, or a lone brace), advancing it.
+fn next_token<'a>(rest: &mut &'a str) -> Option<&'a str> {
+    let s = rest.trim_start();
+    if s.is_empty() {
+        *rest = s;
+        return None;
     }
-    out
+    let k = if s.starts_with(['{', '}']) {
+        1
+    } else {
+        s.find(|c: char| c.is_whitespace() || c == '{' || c == '}')
+            .unwrap_or(s.len())
+    };
+    *rest = &s[k..];
+    Some(&s[..k])
 }
+
+/// Most words a `JOINT` line's name may have.
+const MAX_NAME_WORDS: usize = 64;
 
 impl<'a> Tokens<'a> {
     fn new(text: &'a str) -> Self {
-        let lines = text.lines().enumerate().map(|(i, l)| (i + 1, l)).collect();
         Tokens {
-            lines,
-            li: 0,
-            toks: Vec::new(),
-            ti: 0,
+            lines: numbered(text),
+            rest: "",
             line_no: 0,
         }
     }
     /// Next token, with its line; `None` at end of input.
     fn next(&mut self) -> Option<(&'a str, usize)> {
         loop {
-            if self.ti < self.toks.len() {
-                self.ti += 1;
-                return Some((self.toks[self.ti - 1], self.line_no));
+            if let Some(t) = next_token(&mut self.rest) {
+                return Some((t, self.line_no));
             }
-            let (no, line) = *self.lines.get(self.li)?;
-            self.li += 1;
-            self.toks = split_braces(line);
-            self.ti = 0;
+            let (no, line) = self.lines.next()?;
+            self.rest = line;
             self.line_no = no;
         }
     }
-    /// The rest of the current line's tokens.
-    fn rest_of_line(&mut self) -> Vec<&'a str> {
-        let r = self.toks[self.ti..].to_vec();
-        self.ti = self.toks.len();
-        r
+    /// The next token of the current line only.
+    fn next_on_line(&mut self) -> Option<&'a str> {
+        next_token(&mut self.rest)
     }
-    /// Unconsumed whole lines after the current one.
-    fn remaining_lines(&self) -> &[(usize, &'a str)] {
-        &self.lines[self.li..]
+    /// The rest of the current line's tokens (at most
+    /// [`MAX_NAME_WORDS`] + 1: the caller refuses more).
+    fn rest_of_line(&mut self) -> Vec<&'a str> {
+        let mut r = Vec::new();
+        while let Some(t) = next_token(&mut self.rest) {
+            r.push(t);
+            if r.len() > MAX_NAME_WORDS + 1 {
+                break;
+            }
+        }
+        self.rest = "";
+        r
     }
 }
 
+/// Largest magnitude of an offset or channel value (file units or
+/// degrees): no capture comes near it, and beyond it sums overflow to
+/// infinity downstream (an OFFSET of 1e308 was read, and its unit printed
+/// as a 300-digit number).
+pub const MAX_ABS_VALUE: f64 = 1e9;
+
 fn parse_f64(tok: &str, path: &Path, line: usize, what: &str) -> Result<f64, MocapError> {
     match tok.parse::<f64>() {
+        Ok(v) if v.is_finite() && v.abs() > MAX_ABS_VALUE => Err(MocapError::parse(
+            path,
+            line,
+            format!("{what} is {tok}, beyond ±{MAX_ABS_VALUE:e}"),
+        )),
         Ok(v) if v.is_finite() => Ok(v),
         _ => Err(MocapError::parse(
             path,
@@ -119,11 +146,12 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
     let mut t = Tokens::new(text);
     let mut warnings = Vec::new();
     expect_hierarchy(&mut t, path)?;
-    let (joints, motion_line) = Hierarchy::parse(&mut t, text, path)?;
-    let rest = t.remaining_lines();
-    let header = MotionHeader::parse(rest, path, motion_line, opts, &mut warnings)?;
-    let (rotations, translations) =
-        parse_frames(&joints, &rest[header.data_start..], path, &mut warnings)?;
+    let (h, motion_line) = Hierarchy::parse(&mut t, text, path)?;
+    warnings.extend(h.warnings);
+    let joints = h.joints;
+    let mut rest = t.lines;
+    let header = MotionHeader::parse(&mut rest, path, motion_line, opts, &mut warnings)?;
+    let (rotations, translations) = parse_frames(&joints, &h.slots, rest, path, &mut warnings)?;
     let frames = rotations.len() / joints.len();
     if frames == 0 {
         return Err(MocapError::invalid(path, "no motion frames"));
@@ -181,21 +209,39 @@ fn expect_hierarchy(t: &mut Tokens, path: &Path) -> Result<(), MocapError> {
 /// The joint hierarchy as it is read.
 struct Hierarchy {
     joints: Vec<Joint>,
+    /// Each joint's channels as the frame lines hold them: `None` for a
+    /// scale channel (read past, not used).
+    slots: Vec<Vec<Option<Channel>>>,
     /// Open blocks: `Some(joint)`, or `None` for an End Site block.
     stack: Vec<Option<usize>>,
     expecting_open: bool,
     done_root: bool,
+    /// Joint names taken, for renaming repeats, and the next suffix to
+    /// try for each repeated name (a file of 200,000 joints called `b`
+    /// must not search 1, 2, 3… for each).
+    names: std::collections::HashSet<String>,
+    next_suffix: std::collections::HashMap<String, usize>,
+    /// Joints renamed so far (the first ten are warned of one by one).
+    renamed: usize,
+    warnings: Vec<String>,
+    path: std::path::PathBuf,
 }
 
 impl Hierarchy {
     /// Step 2 of [`parse_bvh`]: the joints, up to the `MOTION` keyword
     /// (returned with its line).
-    fn parse(t: &mut Tokens, text: &str, path: &Path) -> Result<(Vec<Joint>, usize), MocapError> {
+    fn parse(t: &mut Tokens, text: &str, path: &Path) -> Result<(Hierarchy, usize), MocapError> {
         let mut h = Hierarchy {
             joints: Vec::new(),
+            slots: Vec::new(),
             stack: Vec::new(),
             expecting_open: false,
             done_root: false,
+            names: Default::default(),
+            next_suffix: Default::default(),
+            renamed: 0,
+            warnings: Vec::new(),
+            path: path.to_path_buf(),
         };
         loop {
             let Some((tok, line)) = t.next() else {
@@ -207,6 +253,19 @@ impl Hierarchy {
                 ));
             };
             if h.expecting_open {
+                // `End Site` followed by its OFFSET without braces (seen
+                // in hand-edited and some exported files).
+                if h.stack.last() == Some(&None) && tok.eq_ignore_ascii_case("OFFSET") {
+                    h.stack.pop();
+                    h.expecting_open = false;
+                    h.offset(t, path, line, true)?;
+                    raise_warning(
+                        &mut h.warnings,
+                        path,
+                        format!("line {line}: End Site without braces"),
+                    );
+                    continue;
+                }
                 if tok != "{" {
                     return Err(MocapError::parse(
                         path,
@@ -221,7 +280,11 @@ impl Hierarchy {
             match key.as_str() {
                 "ROOT" | "JOINT" => h.joint(t, &key, path, line)?,
                 "END" => h.end_site(t, path, line)?,
-                "OFFSET" => h.offset(t, path, line)?,
+                "ENDSITE" => {
+                    h.open_end_site(path, line)?;
+                    h.expecting_open = !h.open_on_line(t);
+                }
+                "OFFSET" => h.offset(t, path, line, false)?,
                 "CHANNELS" => h.channels(t, path, line)?,
                 "{" => return Err(MocapError::parse(path, line, "unexpected '{'")),
                 "}" => {
@@ -243,7 +306,7 @@ impl Hierarchy {
                     if h.joints.is_empty() {
                         return Err(MocapError::parse(path, line, "MOTION before any ROOT"));
                     }
-                    return Ok((h.joints, line));
+                    return Ok((h, line));
                 }
                 _ => {
                     return Err(MocapError::parse(
@@ -286,6 +349,13 @@ impl Hierarchy {
                 format!("{key} without a name"),
             ));
         }
+        if words.len() > MAX_NAME_WORDS {
+            return Err(MocapError::parse(
+                path,
+                line,
+                format!("{key} name of more than {MAX_NAME_WORDS} words"),
+            ));
+        }
         let parent = match self.stack.last() {
             Some(Some(p)) => Some(JointId(*p as u32)),
             Some(None) => {
@@ -296,8 +366,10 @@ impl Hierarchy {
         if self.joints.len() >= u32::MAX as usize / 2 {
             return Err(MocapError::parse(path, line, "too many joints"));
         }
+        let name = self.unique_name(words.join(" "), line);
+        self.slots.push(Vec::new());
         self.joints.push(Joint {
-            name: words.join(" "),
+            name,
             parent,
             offset: DVec3::ZERO,
             channels: Vec::new(),
@@ -308,26 +380,68 @@ impl Hierarchy {
         Ok(())
     }
 
-    /// `End Site`.
+    /// A joint name not used before: a repeat (two joints called `Spine`)
+    /// gets a suffix, `Spine.001`, as Blender does, with a warning; rig
+    /// maps and joint lookups go by name.
+    fn unique_name(&mut self, name: String, line: usize) -> String {
+        if self.names.insert(name.clone()) {
+            return name;
+        }
+        let k = self.next_suffix.entry(name.clone()).or_insert(1);
+        let renamed = loop {
+            let n = format!("{name}.{:03}", *k);
+            *k += 1;
+            if !self.names.contains(&n) {
+                break n;
+            }
+        };
+        self.names.insert(renamed.clone());
+        self.renamed += 1;
+        let msg = match self.renamed {
+            1..=10 => format!("line {line}: a second joint called '{name}'; renamed '{renamed}'"),
+            11 => format!("line {line} and after: more repeated joint names renamed likewise"),
+            _ => return renamed,
+        };
+        raise_warning(&mut self.warnings, &self.path, msg);
+        renamed
+    }
+
+    /// `End Site` (also `End site`, and `EndSite` as one word).
     fn end_site(&mut self, t: &mut Tokens, path: &Path, line: usize) -> Result<(), MocapError> {
-        let words = t.rest_of_line();
-        let open_here = words.last() == Some(&"{");
-        let ok = words
-            .first()
+        let ok = t
+            .next_on_line()
             .is_some_and(|w| w.eq_ignore_ascii_case("SITE"));
         if !ok {
             return Err(MocapError::parse(path, line, "expected 'End Site'"));
         }
+        self.open_end_site(path, line)?;
+        self.expecting_open = !self.open_on_line(t);
+        Ok(())
+    }
+
+    fn open_end_site(&mut self, path: &Path, line: usize) -> Result<(), MocapError> {
         match self.stack.last() {
             Some(Some(_)) => self.stack.push(None),
             _ => return Err(MocapError::parse(path, line, "End Site outside of a joint")),
         }
-        self.expecting_open = !open_here;
         Ok(())
     }
 
-    /// `OFFSET x y z` of the open joint, or of its End Site (its tail).
-    fn offset(&mut self, t: &mut Tokens, path: &Path, line: usize) -> Result<(), MocapError> {
+    /// Whether the `End Site` line ends with its `{` (other words there,
+    /// a name some exporters add, are ignored).
+    fn open_on_line(&mut self, t: &mut Tokens) -> bool {
+        t.rest_of_line().last() == Some(&"{")
+    }
+
+    /// `OFFSET x y z` of the open joint, or of its End Site (its tail;
+    /// also when `tail`, an End Site without braces).
+    fn offset(
+        &mut self,
+        t: &mut Tokens,
+        path: &Path,
+        line: usize,
+        tail: bool,
+    ) -> Result<(), MocapError> {
         let mut v = [0.0; 3];
         for (k, c) in v.iter_mut().enumerate() {
             let (tok, l) = t
@@ -336,6 +450,13 @@ impl Hierarchy {
             *c = parse_f64(tok, path, l, &format!("OFFSET component {}", k + 1))?;
         }
         let v = DVec3::from(v);
+        if tail {
+            // A braceless End Site: its block was already closed.
+            if let Some(Some(j)) = self.stack.last() {
+                self.joints[*j].tail = Some(v);
+            }
+            return Ok(());
+        }
         match self.stack.last() {
             Some(Some(j)) => self.joints[*j].offset = v,
             Some(None) => {
@@ -350,7 +471,9 @@ impl Hierarchy {
         Ok(())
     }
 
-    /// `CHANNELS n name...` of the open joint (at most 6).
+    /// `CHANNELS n name...` of the open joint: at most 9, the position
+    /// and rotation channels, and scale channels (`Xscale`..., written by
+    /// some exporters), which are read past with a warning.
     fn channels(&mut self, t: &mut Tokens, path: &Path, line: usize) -> Result<(), MocapError> {
         let Some(Some(j)) = self.stack.last().copied() else {
             return Err(MocapError::parse(path, line, "CHANNELS outside of a joint"));
@@ -361,23 +484,43 @@ impl Hierarchy {
         let n: usize = tok
             .parse()
             .map_err(|_| MocapError::parse(path, l, format!("bad channel count '{tok}'")))?;
-        if n > 6 {
+        if n > 9 {
             return Err(MocapError::parse(
                 path,
                 l,
-                format!("{n} channels on one joint (at most 6)"),
+                format!("{n} channels on one joint (at most 9)"),
             ));
         }
-        let mut chans = Vec::with_capacity(n);
+        let mut slots = Vec::with_capacity(n);
         for _ in 0..n {
             let (tok, l) = t
                 .next()
                 .ok_or_else(|| MocapError::parse(path, line, "file ends inside CHANNELS"))?;
-            let c = Channel::parse(tok)
-                .ok_or_else(|| MocapError::parse(path, l, format!("unknown channel '{tok}'")))?;
-            chans.push(c);
+            let c = Channel::parse(tok);
+            let scale = ["xscale", "yscale", "zscale"]
+                .iter()
+                .any(|s| tok.eq_ignore_ascii_case(s));
+            if c.is_none() && !scale {
+                return Err(MocapError::parse(
+                    path,
+                    l,
+                    format!("unknown channel '{tok}'"),
+                ));
+            }
+            slots.push(c);
         }
-        self.joints[j].channels = chans;
+        if slots.iter().any(Option::is_none) {
+            raise_warning(
+                &mut self.warnings,
+                path,
+                format!(
+                    "line {line}: scale channels of joint '{}' ignored",
+                    self.joints[j].name
+                ),
+            );
+        }
+        self.joints[j].channels = slots.iter().flatten().copied().collect();
+        self.slots[j] = slots;
         Ok(())
     }
 }
@@ -393,8 +536,6 @@ struct MotionHeader {
     /// Line of `Frame Time:` and its value as written.
     time_line: usize,
     time_value: String,
-    /// Index, in the lines after `MOTION`, of the first frame line.
-    data_start: usize,
 }
 
 impl MotionHeader {
@@ -402,32 +543,26 @@ impl MotionHeader {
     /// (an unreadable count is a warning; a frame-rate override replaces a
     /// bad or missing frame time).
     fn parse(
-        rest: &[(usize, &str)],
+        rest: &mut Lines,
         path: &Path,
         motion_line: usize,
         opts: &BvhOptions,
         warnings: &mut Vec<String>,
     ) -> Result<MotionHeader, MocapError> {
-        let mut idx = 0;
-        let next_line = |idx: &mut usize| -> Option<(usize, &str)> {
-            while let Some(&(no, l)) = rest.get(*idx) {
-                *idx += 1;
-                if !l.trim().is_empty() {
-                    return Some((no, l.trim()));
-                }
-            }
-            None
+        let mut next_line = || -> Option<(usize, &str)> {
+            rest.by_ref()
+                .find(|(_, l)| !l.trim().is_empty())
+                .map(|(no, l)| (no, l.trim()))
         };
-        let (fl, frames_line) = next_line(&mut idx)
+        let (fl, frames_line) = next_line()
             .ok_or_else(|| MocapError::parse(path, motion_line, "missing 'Frames:' line"))?;
-        if !frames_line.to_ascii_lowercase().starts_with("frames") {
+        let Some(declared) = header_value(frames_line, &["frames"]) else {
             return Err(MocapError::parse(
                 path,
                 fl,
                 format!("expected 'Frames:', found '{frames_line}'"),
             ));
-        }
-        let declared = value_after(frames_line, 6);
+        };
         let declared: Option<u64> = declared.parse().ok();
         if declared.is_none() {
             raise_warning(
@@ -436,16 +571,17 @@ impl MotionHeader {
                 format!("line {fl}: unreadable frame count; using the data"),
             );
         }
-        let (tl, time_line) = next_line(&mut idx)
-            .ok_or_else(|| MocapError::parse(path, fl, "missing 'Frame Time:' line"))?;
-        if !time_line.to_ascii_lowercase().starts_with("frame time") {
+        let (tl, time_line) =
+            next_line().ok_or_else(|| MocapError::parse(path, fl, "missing 'Frame Time:' line"))?;
+        let Some(time_value) = header_value(time_line, &["frame", "time"])
+            .or_else(|| header_value(time_line, &["frametime"]))
+        else {
             return Err(MocapError::parse(
                 path,
                 tl,
                 format!("expected 'Frame Time:', found '{time_line}'"),
             ));
-        }
-        let time_value = value_after(time_line, 10);
+        };
         let file_ft: Option<f64> = time_value
             .parse()
             .ok()
@@ -477,7 +613,6 @@ impl MotionHeader {
             frame_time,
             time_line: tl,
             time_value,
-            data_start: idx,
         })
     }
 
@@ -509,10 +644,20 @@ impl MotionHeader {
     }
 }
 
-/// The value of a `Key: value` header line whose key is `key_len` bytes.
-fn value_after(l: &str, key_len: usize) -> String {
-    let v = l.get(key_len..).unwrap_or("");
-    v.trim_start().trim_start_matches(':').trim().to_string()
+/// The value of a `Key: value` header line whose key is the words `key`
+/// (any case, any spaces or tabs between them, the colon optional:
+/// `Frame Time: t`, `Frame\tTime:\tt`, `frame time t`, `Frames:120`).
+fn header_value(l: &str, key: &[&str]) -> Option<String> {
+    let mut rest = l.trim();
+    for k in key {
+        let w = rest.get(..k.len())?;
+        if !w.eq_ignore_ascii_case(k) {
+            return None;
+        }
+        rest = rest[k.len()..].trim_start();
+    }
+    let v = rest.strip_prefix(':').unwrap_or(rest).trim();
+    Some(v.to_string())
 }
 
 /// Step 4 of [`parse_bvh`]: each non-empty line of `lines` is one frame of
@@ -522,29 +667,45 @@ fn value_after(l: &str, key_len: usize) -> String {
 /// file) is dropped with a warning.
 fn parse_frames(
     joints: &[Joint],
-    lines: &[(usize, &str)],
+    slots: &[Vec<Option<Channel>>],
+    lines: Lines,
     path: &Path,
     warnings: &mut Vec<String>,
 ) -> Result<(Vec<DQuat>, Vec<DVec3>), MocapError> {
-    let total: usize = joints.iter().map(|j| j.channels.len()).sum();
-    if total == 0 {
+    let total: usize = slots.iter().map(Vec::len).sum();
+    if joints.iter().all(|j| j.channels.is_empty()) {
         return Err(MocapError::invalid(path, "no joint has channels"));
     }
-    let mut rotations = Vec::new();
-    let mut translations = Vec::new();
+    // The clip's size, known from the line count before anything is held:
+    // joints without channels cost memory in every frame but no text.
+    let mut data = lines.filter(|(_, l)| !l.trim().is_empty()).peekable();
+    let frames = data.clone().count();
+    let per_frame = (joints.len() * (size_of::<DQuat>() + size_of::<DVec3>())) as u128;
+    crate::budget::check(
+        || {
+            format!(
+                "{} frames × {} joints",
+                crate::budget::thousands(frames as u128),
+                crate::budget::thousands(joints.len() as u128)
+            )
+        },
+        frames as u128 * per_frame,
+    )
+    .map_err(|e| MocapError::invalid(path, e.to_string()))?;
+    let mut rotations = Vec::with_capacity(frames * joints.len());
+    let mut translations = Vec::with_capacity(frames * joints.len());
     let mut row = Vec::with_capacity(total);
-    let data: Vec<(usize, &str)> = lines
-        .iter()
-        .copied()
-        .filter(|(_, l)| !l.trim().is_empty())
-        .collect();
-    for (k, &(no, l)) in data.iter().enumerate() {
+    while let Some((no, l)) = data.next() {
         row.clear();
-        for tok in l.split_whitespace() {
+        let mut toks = l.split_whitespace();
+        for tok in toks.by_ref() {
             row.push(parse_f64(tok, path, no, "a channel value")?);
+            if row.len() > total {
+                break;
+            }
         }
         if row.len() != total {
-            if k + 1 == data.len() && row.len() < total {
+            if data.peek().is_none() && row.len() < total {
                 raise_warning(
                     warnings,
                     path,
@@ -558,20 +719,25 @@ fn parse_frames(
             return Err(MocapError::parse(
                 path,
                 no,
-                format!("{} values on a frame line, expected {total}", row.len()),
+                format!(
+                    "{} values on a frame line, expected {total}",
+                    row.len() + toks.count()
+                ),
             ));
         }
         let mut c = 0;
-        for j in joints {
+        for (j, js) in joints.iter().zip(slots) {
             let mut tr = j.offset;
             let mut q = DQuat::IDENTITY;
-            for ch in &j.channels {
+            for ch in js {
                 let v = row[c];
                 c += 1;
-                if ch.is_rotation() {
-                    q *= euler::axis_rotation(ch.axis(), v.to_radians());
-                } else {
-                    tr[ch.axis()] = v;
+                match ch {
+                    Some(ch) if ch.is_rotation() => {
+                        q *= euler::axis_rotation(ch.axis(), v.to_radians())
+                    }
+                    Some(ch) => tr[ch.axis()] = v,
+                    None => {}
                 }
             }
             rotations.push(q.normalize());

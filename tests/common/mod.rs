@@ -1,4 +1,5 @@
-//! Shared helpers for integration tests: locating ../shared/data.
+//! Shared helpers for integration tests: locating ../shared/data, fixture
+//! folders, and running the built binary (`run_cli`, `CliRun`).
 #![allow(dead_code)]
 
 use std::path::PathBuf;
@@ -144,4 +145,92 @@ pub fn npm_package(package: &str, what: &str) -> bool {
         eprintln!("SKIPPED: run `npm install --prefix .ci` to {what}");
     }
     have
+}
+
+/// What a run of the built binary gave: exit code (`None` when killed by a
+/// signal), standard output and error, and how long it took.
+pub struct CliRun {
+    /// Exit code; `None` if a signal ended the process.
+    pub code: Option<i32>,
+    /// Standard output, lossily decoded.
+    pub stdout: String,
+    /// Standard error, lossily decoded.
+    pub stderr: String,
+    /// Wall time of the run.
+    pub elapsed: std::time::Duration,
+}
+
+/// Runs the built binary with `args` in `cwd` (the test's own folder when
+/// `None`), `SURFMOTION_LOG` unset and `env` added; captures everything.
+pub fn run_cli<S: AsRef<std::ffi::OsStr>>(
+    args: &[S],
+    cwd: Option<&std::path::Path>,
+    env: &[(&str, &str)],
+) -> CliRun {
+    let mut cmd = std::process::Command::new(bin());
+    cmd.args(args).env_remove("SURFMOTION_LOG");
+    if let Some(d) = cwd {
+        cmd.current_dir(d);
+    }
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let t = std::time::Instant::now();
+    let o = cmd.output().unwrap();
+    CliRun {
+        code: o.status.code(),
+        stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
+        elapsed: t.elapsed(),
+    }
+}
+
+impl CliRun {
+    /// What is wrong with this run as the answer to bad input, by the
+    /// exit-code contract: exit 1 (not 2, a panic, nor a signal, an
+    /// aborted allocation), no internal error, one line on stderr (a clap
+    /// usage error: its first line, the reason), holding every one of
+    /// `words` (case-insensitive). Empty when all is well.
+    pub fn bad_input_problems(&self, words: &[&str]) -> Vec<String> {
+        let mut problems = Vec::new();
+        match self.code {
+            Some(1) => {}
+            Some(c) => problems.push(format!("exit {c}")),
+            None => problems.push("killed by a signal".into()),
+        }
+        let lower = self.stderr.to_lowercase();
+        if lower.contains("internal error") || lower.contains("memory allocation") {
+            problems.push("internal error".into());
+        }
+        let lines: Vec<&str> = self
+            .stderr
+            .lines()
+            .filter(|l| !l.trim().is_empty())
+            .collect();
+        let first = lines.first().copied().unwrap_or("").to_lowercase();
+        let clap = first.starts_with("error: ");
+        if lines.len() != 1 && !clap {
+            problems.push(format!("{} lines on stderr, expected one", lines.len()));
+        }
+        let said = if clap { first } else { lower };
+        for w in words {
+            if !said.contains(&w.to_lowercase()) {
+                problems.push(format!("no '{w}' in the message"));
+            }
+        }
+        problems
+    }
+
+    /// Panics unless [`CliRun::bad_input_problems`] finds nothing; `what`
+    /// names the case.
+    pub fn assert_bad_input(&self, what: &str, words: &[&str]) {
+        let p = self.bad_input_problems(words);
+        assert!(
+            p.is_empty(),
+            "{what}: {} (exit {:?})\n    stderr: {}",
+            p.join(", "),
+            self.code,
+            self.stderr.trim()
+        );
+    }
 }

@@ -333,6 +333,16 @@ pub fn encode_glb_with(
         .filter(|f| f.is_finite() && *f > 0.0)
         .unwrap_or(30.0);
     let animate = frames > 1 || (frames == 1 && seq.frame(0) != base);
+    if tris.is_empty() {
+        // glTF has no empty accessor (count ≥ 1): the file was written and
+        // the validator rejected it.
+        return Err(MeshError::invalid(
+            Path::new("<glb>"),
+            format!(
+                "a mesh of {nv} vertices and no triangles: a GLB needs triangles (write .ply or .obj for points)"
+            ),
+        ));
+    }
     if frames > MAX_FRAMES {
         return Err(MeshError::invalid(
             Path::new("<glb>"),

@@ -16,6 +16,34 @@ pub mod stream;
 use super::{MeshError, MeshSequence};
 use std::path::{Path, PathBuf};
 
+/// Largest coordinate magnitude a mesh reader accepts. No scan comes near
+/// it (a kilometre in nanometres), and beyond it the 32-bit floats every
+/// writer uses overflow: an OBJ vertex at 1e308 was read and written to a
+/// GLB as Infinity, which the glTF validator rejects.
+pub const MAX_ABS_COORDINATE: f64 = 1e12;
+
+/// Refuses a vertex with a coordinate beyond [`MAX_ABS_COORDINATE`],
+/// naming the vertex (0-based).
+pub(crate) fn refuse_huge_coordinates(
+    positions: &[[f64; 3]],
+    path: &Path,
+) -> Result<(), MeshError> {
+    match positions
+        .iter()
+        .enumerate()
+        .find(|(_, p)| p.iter().any(|x| x.abs() > MAX_ABS_COORDINATE))
+    {
+        Some((i, p)) => Err(MeshError::invalid(
+            path,
+            format!(
+                "vertex {i} at ({}, {}, {}) is beyond ±{MAX_ABS_COORDINATE:e}",
+                p[0], p[1], p[2]
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// A mesh file format, by extension (or a folder of OBJ files).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MeshFormat {
@@ -164,6 +192,14 @@ pub fn refuse_folder_as_file(out: &Path) -> Result<(), MeshError> {
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
+    if ext.is_empty() && out.exists() && !out.is_dir() {
+        // `-o /dev/full` (or an existing file without extension) named a
+        // folder of OBJ frames: "/dev/full/frame_0000.obj: File exists".
+        return Err(MeshError::invalid(
+            out,
+            "exists and is not a folder, but a name without extension asks for a folder of OBJ frames; give the output an extension (.glb .pc2 .mdd .obj .ply)",
+        ));
+    }
     if out.is_dir() && matches!(ext.as_str(), "obj" | "ply" | "pc2" | "mdd" | "gltf" | "glb") {
         return Err(MeshError::invalid(
             out,

@@ -98,10 +98,12 @@ pub fn parse_pc2(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
             format!("PC2 version {version}, expected 1"),
         ));
     }
-    if points <= 0 || samples < 0 {
+    if points <= 0 || samples <= 0 {
+        // No samples is no sequence: it was read, and written to a GLB
+        // of 0 frames (exit 0).
         return Err(MeshError::invalid(
             path,
-            format!("header: {points} points, {samples} samples"),
+            format!("header: {points} points, {samples} samples (a point cache needs both)"),
         ));
     }
     let need = (points as u128) * (samples as u128) * 12;
