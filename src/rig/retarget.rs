@@ -522,7 +522,6 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
     for (ankle, toe) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)] {
         let (a, k) = (ankle.index(), toe.index());
         let low = |p: &Pose| if p[a].y <= p[k].y { p[a] } else { p[k] };
-        let flat = |v: DVec3| DVec3::new(v.x, 0.0, v.z);
         let planted: Vec<bool> = (0..mocap.len())
             .map(|t| {
                 let (i, j) = if t > 0 {
