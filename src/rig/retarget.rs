@@ -502,7 +502,8 @@ pub struct Support {
 /// height its lowest joint reaches in it. A support within 3 cm of the
 /// clip's floor is the floor (a flat capture keeps one plane); a higher
 /// one is a step the clip stands on (CMU subject 03 walks over blocks
-/// 15-25 cm high). A frame touches the ground when any foot joint is within
+/// 15-25 cm high) when the foot bears weight (it is the lower foot in some
+/// frame of the footfall). A frame touches the ground when any foot joint is within
 /// 3 cm of the floor (as on a flat capture), or a planted foot's lowest
 /// joint is within 3 cm of its footfall's support; the lowest such support
 /// is the frame's ground.
@@ -551,6 +552,15 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
                 .map(|i| low(&mocap[i]).y)
                 .fold(f64::INFINITY, f64::min);
             let sup = if sup <= floor + 0.03 { floor } else { sup };
+            // A raised support bears weight: the foot is the lower of the
+            // two in some frame of the footfall (a leg held still in the
+            // air, the other foot on the floor, is no step).
+            let bears = run
+                .clone()
+                .any(|i| low(&mocap[i]).y <= foot_height(&mocap[i]) + 1e-9);
+            if sup > floor && !bears {
+                continue;
+            }
             for i in run {
                 if low(&mocap[i]).y <= sup + 0.03 {
                     ground[i] = Some(ground[i].map_or(sup, |g: f64| g.min(sup)));
@@ -1280,6 +1290,37 @@ mod tests {
         for (t, r) in raised.iter().enumerate() {
             let want = if t < 12 { 0.2 * s } else { 0.0 };
             assert!((r - want).abs() < 1e-9, "frame {t}: {r}");
+        }
+    }
+
+    #[test]
+    fn a_leg_held_still_in_the_air_is_no_step() {
+        // The body glides 3 cm per frame on its right foot (not planted),
+        // the left foot held 15 cm up and still in the air (a knee lift
+        // held); in frames 10-13 the right heel and toe rise 4 cm. The
+        // still left foot bears no weight: it is no step to stand on.
+        let st = standing();
+        let clip: Vec<Pose> = (0..20)
+            .map(|t| {
+                let mut p = st.map(|q| q + DVec3::X * 0.03 * t as f64);
+                for c in [C::LKnee, C::LAnkle, C::LToe] {
+                    p[c.index()] = st[c.index()] + DVec3::new(0.0, 0.15, 0.1);
+                }
+                if (10..14).contains(&t) {
+                    for c in [C::RAnkle, C::RToe] {
+                        p[c.index()] += DVec3::Y * 0.04;
+                    }
+                }
+                p
+            })
+            .collect();
+        let support = clip_support(&clip, leg_length(&st));
+        for (t, g) in support.ground.iter().enumerate() {
+            assert!(
+                g.is_none_or(|g| g < support.floor + 0.05),
+                "frame {t}: ground {g:?}, floor {}",
+                support.floor
+            );
         }
     }
 
