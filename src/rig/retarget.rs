@@ -499,11 +499,11 @@ pub struct Support {
 /// joint moves less than 2 % of the leg length per frame (a heel rising
 /// about a planted toe, or a toe lowering about a planted heel); a
 /// footfall is a run of planted frames, and its support is the lowest
-/// height its lowest joint reaches in it. A support within 3 cm of the
+/// height its lowest joint reaches in it. A support within 6 cm of the
 /// clip's floor is the floor (a flat capture keeps one plane); a higher
 /// one is a step the clip stands on (CMU subject 03 walks over blocks
-/// 15-25 cm high) when the foot bears weight (it is the lower foot in some
-/// frame of the footfall). A frame touches the ground when any foot joint is within
+/// 13-22 cm high) when the footfall lasts at least 5 frames and the foot
+/// bears weight (it is the lower foot in some frame of it). A frame touches the ground when any foot joint is within
 /// 3 cm of the floor (as on a flat capture), or a planted foot's lowest
 /// joint is within 3 cm of its footfall's support; the lowest such support
 /// is the frame's ground.
@@ -551,16 +551,18 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
                 .clone()
                 .map(|i| low(&mocap[i]).y)
                 .fold(f64::INFINITY, f64::min);
-            let sup = if sup <= floor + 0.03 { floor } else { sup };
-            // A raised support bears weight: the foot is the lower of the
-            // two in some frame of the footfall (a leg held still in the
-            // air, the other foot on the floor, is no step).
+            // A step is twice the contact band above the floor (6 cm; a
+            // kerb or a block), held at least 5 frames, and bears weight:
+            // the foot is the lower of the two in some frame of the
+            // footfall (a leg held still in the air, the other foot on the
+            // floor, is no step; nor a gliding foot hovering over it).
             let bears = run
                 .clone()
                 .any(|i| low(&mocap[i]).y <= foot_height(&mocap[i]) + 1e-9);
-            if sup > floor && !bears {
+            if sup > floor + 0.06 && !(bears && run.len() >= 5) {
                 continue;
             }
+            let sup = if sup <= floor + 0.06 { floor } else { sup };
             for i in run {
                 if low(&mocap[i]).y <= sup + 0.03 {
                     ground[i] = Some(ground[i].map_or(sup, |g: f64| g.min(sup)));
