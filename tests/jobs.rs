@@ -329,6 +329,13 @@ fn transfer_onto_scan_animates_the_procedural_humanoid_from_a_clip() {
     assert_eq!(out.positions.len(), 30 * n);
     assert!(out.positions.iter().flatten().all(|x| x.is_finite()));
     assert!(out.truth_error.is_none());
+    // The clip's own head range reaches transfer's plausibility, as in
+    // retarget, eval and synth (its head line: issue 17).
+    let p = out.plausibility.as_ref().expect("a rigged scan is checked");
+    let own = p
+        .clip_head_torso_deg
+        .expect("transfer passes the clip's head range");
+    assert!(own.p95.is_finite(), "{own:?}");
     // The body moves: some vertex of the last frame is away from the rest
     // scan by more than a centimetre (the humanoid is in metres).
     let rest = out.prepared.mesh.positions();

@@ -123,9 +123,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let run = job.run_to(&a.mocap, &a.output, keep_bytes)?;
         let r = &run.report;
         let measured = run.kept.len() / ch.n().max(1);
-        let plaus = job
-            .plausibility(&run.kept, run.deformed().then_some(r.turned_over))
-            .map(|p| p.0);
+        let plaus = job.plausibility_of_streamed(&run).map(|p| p.0);
         let partial = (measured < r.frames).then_some(measured);
         if let Some(k) = partial {
             tracing::info!(

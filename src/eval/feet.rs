@@ -107,7 +107,26 @@ impl Feet {
         metres_per_unit: f64,
         opts: &FootOptions,
     ) -> Sliding {
+        self.sliding_on(frames, n, up, floor, &[], fps, metres_per_unit, opts)
+    }
+
+    /// [`Feet::sliding`] on a ground raised by `raised[t]` metres above
+    /// the floor at frame `t` (a step the driving clip stands on; frames
+    /// past its end on the floor).
+    #[allow(clippy::too_many_arguments)]
+    pub fn sliding_on(
+        &self,
+        frames: &[[f64; 3]],
+        n: usize,
+        up: DVec3,
+        floor: f64,
+        raised: &[f64],
+        fps: f64,
+        metres_per_unit: f64,
+        opts: &FootOptions,
+    ) -> Sliding {
         let m = metres_per_unit;
+        let ground = |t: usize| floor * m + raised.get(t).copied().unwrap_or(0.0);
         let up = up.normalize_or(DVec3::Y);
         let count = frames.len() / n.max(1);
         let fps = if fps.is_finite() && fps > 0.0 {
@@ -143,10 +162,10 @@ impl Feet {
                     } else {
                         0.0
                     };
-                    track[t].1 - floor * m <= opts.contact_height && d * fps <= opts.contact_speed
+                    track[t].1 - ground(t) <= opts.contact_height && d * fps <= opts.contact_speed
                 })
                 .collect();
-            let touch = |t: usize| track[t].1 - floor * m <= opts.contact_height;
+            let touch = |t: usize| track[t].1 - ground(t) <= opts.contact_height;
             for t in 0..count {
                 if touch(t) {
                     s.touching_frames += 1;

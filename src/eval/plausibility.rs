@@ -105,6 +105,16 @@ pub struct Plausibility {
     /// whose head moves further than the database's does (a bow, a kick)
     /// is held to its own range: the head line is the larger p95 + margin.
     pub clip_head_torso_deg: Option<Summary>,
+    /// The driving clip's own foot glide while touching its ground, scaled
+    /// to the character (cm per touching foot-frame;
+    /// [`crate::rig::retarget::clip_foot_glide_cm`]), when known: a walk's
+    /// feet pass through the touching band at heel strike and toe-off, so
+    /// the result is warned about only when it glides more than its clip.
+    pub clip_foot_glide_cm_per_frame: Option<f64>,
+    /// Whether floating and penetration are measured from the driving
+    /// clip's own ground (its floor raised under each footfall on a step,
+    /// [`crate::rig::retarget::ground_offsets`]) rather than the floor.
+    pub on_clip_ground: bool,
     /// Where the result leaves the reference (or the absolute limits).
     pub warnings: Vec<String>,
     /// Signed head-to-torso angle per frame (degrees).
@@ -156,7 +166,11 @@ impl Checker {
         opts: PlausibilityOptions,
     ) -> Result<Checker, EvalError> {
         let rig_up = DVec3::from_array(rig.up);
-        let head = HeadTorso::new(rest, &rig.labels, rig_up, &opts.head)?;
+        let pelvis = rig
+            .joints
+            .get(crate::rig::Canonical::Pelvis.index())
+            .map(|j| DVec3::from_array(*j));
+        let head = HeadTorso::with_pelvis(rest, &rig.labels, rig_up, pelvis, &opts.head)?;
         let feet = Feet::new(rest, &rig.labels, rig_up, &opts.feet)?;
         let floor = floor.unwrap_or_else(|| {
             lowest_heights(rest, rest.len(), up)
@@ -225,6 +239,12 @@ impl Checker {
     }
 
     fn series(&self, frames: &[[f64; 3]], n: usize) -> Series {
+        self.series_on(frames, n, &[])
+    }
+
+    /// The series of `frames` with the ground raised by `raised[t]` metres
+    /// at frame `t` (lowest heights measured from it).
+    fn series_on(&self, frames: &[[f64; 3]], n: usize, raised: &[f64]) -> Series {
         let knee = frames
             .chunks_exact(n.max(1))
             .map(|f| {
@@ -239,14 +259,16 @@ impl Checker {
             head: self.head.series(frames, n),
             lowest: lowest_heights(frames, n, self.up)
                 .into_iter()
-                .map(|h| h * self.metres_per_unit)
+                .enumerate()
+                .map(|(t, h)| h * self.metres_per_unit - raised.get(t).copied().unwrap_or(0.0))
                 .collect(),
             knee,
-            sliding: self.feet.sliding(
+            sliding: self.feet.sliding_on(
                 frames,
                 n,
                 self.up,
                 self.floor,
+                raised,
                 self.fps,
                 self.metres_per_unit,
                 &self.opts.feet,
@@ -291,13 +313,27 @@ impl Checker {
         n: usize,
         turned_over: Option<TurnedOver>,
     ) -> Result<Plausibility, EvalError> {
+        self.measure_on(frames, n, turned_over, None)
+    }
+
+    /// [`Checker::measure`] with floating, penetration and foot contact
+    /// measured from a ground raised by `raised[t]` metres above the floor
+    /// at frame `t` (the driving clip's own ground,
+    /// [`crate::rig::retarget::ground_offsets`]), when given.
+    pub fn measure_on(
+        &self,
+        frames: &[[f64; 3]],
+        n: usize,
+        turned_over: Option<TurnedOver>,
+        raised: Option<&[f64]>,
+    ) -> Result<Plausibility, EvalError> {
         if n != self.head.vertex_count() {
             return Err(EvalError::VertexCount {
                 have: n,
                 want: self.head.vertex_count(),
             });
         }
-        let s = self.series(frames, n);
+        let s = self.series_on(frames, n, raised.unwrap_or(&[]));
         let mut p = Plausibility {
             frames: s.head.len(),
             head_torso_deg: HeadTorso::summary(&s.head),
@@ -309,6 +345,8 @@ impl Checker {
             turned_over,
             reference: self.reference.clone(),
             clip_head_torso_deg: None,
+            clip_foot_glide_cm_per_frame: None,
+            on_clip_ground: raised.is_some(),
             warnings: Vec::new(),
             head_torso_per_frame: s.head,
         };
@@ -368,11 +406,24 @@ pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
                 ));
             }
             let gl = p.foot_sliding.touching_mean_cm_per_frame;
-            if gl > r.foot_sliding.touching_mean_cm_per_frame + 2.0 * l.sliding_margin_cm {
-                w.push(format!(
-                    "feet glide {gl:.2} cm per frame while touching the floor (captured {:.2})",
-                    r.foot_sliding.touching_mean_cm_per_frame
-                ));
+            let captured = r.foot_sliding.touching_mean_cm_per_frame;
+            match p.clip_foot_glide_cm_per_frame {
+                // The clip's own glide, scaled: a walk's feet pass through
+                // the touching band at heel strike and toe-off.
+                Some(c) if c > captured => {
+                    if gl > c + 2.0 * l.sliding_margin_cm {
+                        w.push(format!(
+                            "feet glide {gl:.2} cm per frame while touching the floor (the clip's own, scaled: {c:.2}; captured {captured:.2})"
+                        ));
+                    }
+                }
+                _ => {
+                    if gl > captured + 2.0 * l.sliding_margin_cm {
+                        w.push(format!(
+                            "feet glide {gl:.2} cm per frame while touching the floor (captured {captured:.2})"
+                        ));
+                    }
+                }
             }
             let sl = p.foot_sliding.mean_cm_per_frame;
             if sl > r.foot_sliding.mean_cm_per_frame + l.sliding_margin_cm {
@@ -424,6 +475,17 @@ impl Plausibility {
         self
     }
 
+    /// Sets the driving clip's own foot glide while touching its ground
+    /// (cm per foot-frame, scaled to the character;
+    /// [`crate::rig::retarget::clip_foot_glide_cm`]) and recomputes the
+    /// warnings with `limits`: the feet are then warned about only when
+    /// they glide more than the larger of the captured glide and the clip's.
+    pub fn with_clip_glide(mut self, cm_per_frame: f64, limits: &Limits) -> Self {
+        self.clip_foot_glide_cm_per_frame = cm_per_frame.is_finite().then_some(cm_per_frame);
+        self.warnings = warnings(&self, limits);
+        self
+    }
+
     /// A short text block (a few lines) for the command line.
     pub fn text(&self) -> String {
         let r = self.reference.as_ref();
@@ -458,6 +520,12 @@ impl Plausibility {
                 r.foot_sliding.mean_cm_per_frame, r.foot_sliding.touching_mean_cm_per_frame
             ))
         );
+        if let Some(c) = self.clip_foot_glide_cm_per_frame {
+            s += &format!("  the clip's own foot glide while touching, scaled: {c:.2} cm/frame\n");
+        }
+        if self.on_clip_ground {
+            s += "  ground: measured from the clip's own ground (raised on its steps)\n";
+        }
         s += &format!(
             "  ground: penetration max {:.1} cm, floating median {:.1} cm; knees: hyper-extension max {:.1}°{}\n",
             self.ground.penetration_cm.max,
@@ -510,6 +578,8 @@ mod tests {
             turned_over: None,
             reference: Some(reference),
             clip_head_torso_deg: None,
+            clip_foot_glide_cm_per_frame: None,
+            on_clip_ground: false,
             warnings: Vec::new(),
             head_torso_per_frame: Vec::new(),
         };
@@ -522,5 +592,51 @@ mod tests {
         assert!(!head(&p.clone().with_clip_head(&own, &l)));
         // ... but not past it.
         assert!(head(&p.with_clip_head(&[12.0; 20], &l)));
+    }
+
+    #[test]
+    fn feet_are_warned_about_only_when_they_glide_more_than_their_clip() {
+        let reference = Reference {
+            source: "db".into(),
+            frames: 10,
+            head_torso_deg: summary(7.7),
+            foot_sliding: Sliding {
+                touching_mean_cm_per_frame: 1.0,
+                ..Sliding::default()
+            },
+            ground: Ground::default(),
+            knee_hyperextension_deg: Summary::default(),
+        };
+        let p = Plausibility {
+            frames: 10,
+            head_torso_deg: summary(2.0),
+            head_torso_rest_deg: 0.0,
+            foot_sliding: Sliding {
+                touching_mean_cm_per_frame: 3.3,
+                ..Sliding::default()
+            },
+            ground: Ground::default(),
+            floor_m: 0.0,
+            knee_hyperextension_deg: Summary::default(),
+            turned_over: None,
+            reference: Some(reference),
+            clip_head_torso_deg: None,
+            clip_foot_glide_cm_per_frame: None,
+            on_clip_ground: false,
+            warnings: Vec::new(),
+            head_torso_per_frame: Vec::new(),
+        };
+        let l = Limits::default();
+        let glide = |p: &Plausibility| p.warnings.iter().any(|w| w.contains("glide"));
+        // A walk (3.3 cm/frame) against a mostly planted dance (1.0): warned
+        // without the clip's own figure...
+        assert!(glide(&Plausibility {
+            warnings: warnings(&p, &l),
+            ..p.clone()
+        }));
+        // ... not when its clip glides as much (3.0, scaled) ...
+        assert!(!glide(&p.clone().with_clip_glide(3.0, &l)));
+        // ... and again when the result glides more than its clip.
+        assert!(glide(&p.with_clip_glide(1.5, &l)));
     }
 }

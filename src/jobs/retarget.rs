@@ -8,14 +8,13 @@ use crate::batch::{Converted, Converter};
 use crate::db::{BuildProgress, Character, CharacterOptions};
 use crate::deform::{DeformMode, TurnedOver};
 use crate::eval::{Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error};
-use crate::mesh::MeshSequence;
+use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
-use crate::mesh::io::{SaveOptions, save_sequence_with};
-use crate::retarget::query::{MocapPoses, load_mocap, to_character};
+use crate::retarget::query::{MocapPoses, load_mocap, to_database_character};
 use crate::retarget::{Output, Report, RetargetOptions, Timings, synthesise, synthesise_each};
 use crate::rig::LoadOptions;
-use crate::rig::retarget::clip_head_trunk_deg;
+use crate::rig::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, ground_offsets};
 use crate::skeleton::Pose;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -164,6 +163,18 @@ impl RetargetJob {
         plausibility(&self.character, positions, turned_over, None)
     }
 
+    /// [`RetargetJob::plausibility`] of the first frames `kept` of a
+    /// streamed run ([`RetargetJob::run_to`]), with the clip's own head
+    /// range, foot glide and ground as [`RetargetJob::plausibility_of`].
+    pub fn plausibility_of_streamed(&self, run: &StreamedRun) -> Option<(Plausibility, f64)> {
+        plausibility(
+            &self.character,
+            &run.kept,
+            run.deformed().then_some(run.report.turned_over),
+            Some(&run.mocap),
+        )
+    }
+
     /// [`RetargetJob::plausibility`] of a run's output, with the head held
     /// to the larger of the database's range and the clip's own
     /// ([`Plausibility::with_clip_head`]).
@@ -181,16 +192,13 @@ impl RetargetJob {
     /// (by extension); returns the files written.
     pub fn write(&self, positions: Vec<[f64; 3]>, out: &Path) -> Result<Vec<PathBuf>, JobError> {
         let ch = &self.character;
-        let fps = ch.manifest().fps;
-        let seq = MeshSequence::new(ch.topology_metres(), positions, Some(fps))?;
-        Ok(save_sequence_with(
-            &seq,
+        super::write_positions(
+            ch.topology_metres(),
+            positions,
+            ch.manifest().fps,
+            self.options.glb,
             out,
-            &SaveOptions {
-                fps: Some(fps),
-                glb: self.options.glb,
-            },
-        )?)
+        )
     }
 }
 
@@ -205,10 +213,19 @@ pub fn plausibility(
 ) -> Option<(Plausibility, f64)> {
     let opts = PlausibilityOptions::default();
     let checked = Checker::for_character(ch, opts).and_then(|c| {
-        let mut p = c.measure(positions, ch.n(), turned_over)?;
-        if let Some(m) = clip {
-            p = p.with_clip_head(&clip_head_trunk_deg(&m.reference, &m.poses), &opts.limits);
-        }
+        let Some(m) = clip else {
+            return Ok((c.measure(positions, ch.n(), turned_over)?, c.floor));
+        };
+        // Floating and penetration from the clip's own ground (its floor,
+        // raised under a footfall on a step), where the result stands.
+        let raised = ground_offsets(ch.rest_pose(), &m.reference, &m.poses);
+        let p = c
+            .measure_on(positions, ch.n(), turned_over, Some(&raised))?
+            .with_clip_head(&clip_head_trunk_deg(&m.reference, &m.poses), &opts.limits)
+            .with_clip_glide(
+                clip_foot_glide_cm(ch.rest_pose(), &m.reference, &m.poses),
+                &opts.limits,
+            );
         Ok((p, c.floor))
     });
     match checked {
@@ -247,7 +264,12 @@ impl RetargetRun {
     /// The joint-velocity error (Huang et al. 2015, Sec. 6.2) between the
     /// query on the character's bones and the skeleton read off the result.
     pub fn velocity_error(&self, ch: &Character) -> VelocityError {
-        let query = to_character(ch.rest_pose(), &self.mocap.reference, &self.mocap.poses);
+        let query = to_database_character(
+            ch.rest_pose(),
+            ch.poses(),
+            &self.mocap.reference,
+            &self.mocap.poses,
+        );
         let skel: Vec<Pose> = self
             .output
             .positions
@@ -400,7 +422,7 @@ pub fn evaluate_result(
     use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
     let fps = ch.manifest().fps;
     let clip = load_mocap(mocap, load, fps)?;
-    let query = to_character(ch.rest_pose(), &clip.reference, &clip.poses);
+    let query = to_database_character(ch.rest_pose(), ch.poses(), &clip.reference, &clip.poses);
     let res = load_sequence(&result.to_string_lossy(), &SeqLoad::default()).map_err(|e| {
         JobError::Context {
             what: result.display().to_string(),

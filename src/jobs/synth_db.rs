@@ -236,8 +236,16 @@ pub fn write_synthetic_database(
             )
             .and_then(|c| {
                 let clip = crate::rig::retarget::clip_head_trunk_deg(&reference, &poses);
-                Ok(c.measure(seq.all_positions(), rest.vertex_count(), None)?
-                    .with_clip_head(&clip, &c.opts.limits))
+                // Floating from the clip's own ground (raised on a step).
+                let character = rig.joints.map(glam::DVec3::from_array);
+                let raised = crate::rig::retarget::ground_offsets(&character, &reference, &poses);
+                Ok(c.measure_on(
+                    seq.all_positions(),
+                    rest.vertex_count(),
+                    None,
+                    Some(&raised),
+                )?
+                .with_clip_head(&clip, &c.opts.limits))
             })
             .map_err(|e| tracing::warn!("{name}: plausibility not measured: {e}"))
             .ok()

@@ -7,10 +7,10 @@
 use super::JobError;
 use crate::batch::{Converted, Converter};
 use crate::eval::{VelocityError, velocity_error};
+use crate::mesh::Mesh;
+use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
-use crate::mesh::io::{SaveOptions, save_sequence_with};
-use crate::mesh::{Mesh, MeshSequence};
 use crate::retarget::query::{MocapPoses, load_mocap, to_character};
 use crate::rig::LoadOptions;
 use crate::rig::embed::landmarks::Landmarks;
@@ -139,16 +139,13 @@ impl ScanTransferJob {
     /// Writes `positions` (the repaired scan's vertices, frame-major) to
     /// `out` (by extension); returns the files written.
     pub fn write(&self, positions: Vec<[f64; 3]>, out: &Path) -> Result<Vec<PathBuf>, JobError> {
-        let fps = self.options.fps;
-        let seq = MeshSequence::new(self.prepared.mesh.clone(), positions, Some(fps))?;
-        Ok(save_sequence_with(
-            &seq,
+        super::write_positions(
+            self.prepared.mesh.clone(),
+            positions,
+            self.options.fps,
+            self.options.glb,
             out,
-            &SaveOptions {
-                fps: Some(fps),
-                glb: self.options.glb,
-            },
-        )?)
+        )
     }
 }
 
@@ -464,6 +461,9 @@ fn transfer_inner(
     let template;
     let template_markers;
     let mut align = glam::DQuat::IDENTITY;
+    // The driving clip's own head-to-trunk angles: its head line
+    // (Plausibility::with_clip_head), as in retarget, eval and synth.
+    let mut clip_head: Option<Vec<f64>> = None;
     let (source, fps, what) = match &spec.source {
         TransferSource::Mocap(m) => {
             clip = load_mocap(m, &spec.options.load, spec.options.fps)?;
@@ -473,6 +473,10 @@ fn transfer_inner(
                     msg: "the clip has no frames".into(),
                 });
             }
+            clip_head = Some(crate::rig::retarget::clip_head_trunk_deg(
+                &clip.reference,
+                &clip.poses,
+            ));
             (
                 Source::Mocap(&clip.poses, &clip.reference),
                 spec.options.fps,
@@ -612,10 +616,15 @@ fn transfer_inner(
         metres_per_unit = Some(mpu);
         let rest = prepared.mesh.positions();
         let up = glam::DVec3::from_array(rig.up);
-        crate::eval::Checker::new(rest, rig, up, None, fps, Default::default())
+        let opts = crate::eval::PlausibilityOptions::default();
+        crate::eval::Checker::new(rest, rig, up, None, fps, opts)
             .and_then(|mut c| {
                 c.metres_per_unit = mpu;
                 c.measure(&positions, rest.len(), None)
+            })
+            .map(|p| match &clip_head {
+                Some(h) => p.with_clip_head(h, &opts.limits),
+                None => p,
             })
             .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
             .ok()
@@ -647,20 +656,13 @@ impl TransferOutcome {
         glb: GlbOptions,
         per_frame: bool,
     ) -> Result<TransferReport, JobError> {
-        let seq = MeshSequence::new(
+        let output = super::write_positions(
             self.prepared.mesh.clone(),
             std::mem::take(&mut self.positions),
-            Some(self.fps),
-        )?;
-        let output = save_sequence_with(
-            &seq,
+            self.fps,
+            glb,
             out,
-            &SaveOptions {
-                fps: Some(self.fps),
-                glb,
-            },
         )?;
-        drop(seq);
         Ok(self.report(output, per_frame))
     }
 

@@ -308,7 +308,7 @@ pub fn synthesise_each<E: From<RetargetError>>(
 ) -> Result<Streamed, E> {
     let mut timings = Timings::default();
     let t0 = Instant::now();
-    let query = query::to_character(ch.rest_pose(), reference, mocap);
+    let query = query::to_database_character(ch.rest_pose(), ch.poses(), reference, mocap);
     timings.query = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let successor = |id: u32| ch.successor(id);

@@ -14,7 +14,9 @@
 //! (Eq. 28).
 
 use crate::mocap::MocapError;
-use crate::rig::retarget::{ClipPoses, Reference, clip_poses, retarget};
+use crate::rig::retarget::{
+    ClipPoses, Reference, character_neutral, clip_poses, retarget, retarget_with_neutral,
+};
 use crate::rig::{LoadOptions, load_clip};
 use crate::rig::{RigError, detect_clip};
 use crate::skeleton::Pose;
@@ -101,6 +103,23 @@ pub fn load_mocap(path: &Path, opts: &LoadOptions, fps: f64) -> Result<MocapPose
 /// [`crate::rig::retarget`]).
 pub fn to_character(rest: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<Pose> {
     retarget(rest, reference, mocap)
+        .into_iter()
+        .map(|(p, _)| p)
+        .collect()
+}
+
+/// The clip's poses on a database character's skeleton (`rest`, its rest
+/// frame's joints), measured from the character's neutral pose: its rest
+/// frame when that stands upright, else the database frame of `frames`
+/// nearest neutral ([`character_neutral`]).
+pub fn to_database_character(
+    rest: &Pose,
+    frames: &[Pose],
+    reference: &Reference,
+    mocap: &[Pose],
+) -> Vec<Pose> {
+    let neutral = character_neutral(rest, frames);
+    retarget_with_neutral(rest, &neutral.pose, reference, mocap)
         .into_iter()
         .map(|(p, _)| p)
         .collect()

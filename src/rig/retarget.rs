@@ -39,9 +39,15 @@
 //!   ratio of leg lengths (character / reference); height above the floor
 //!   scaled the same way. The clip's ground is first levelled
 //!   ([`ground_tilt`]); then in every frame where the clip stands on its
-//!   floor the character's lowest sole point (toe joint, heel, toe tip)
-//!   is put on the character's floor (its rest frame's), the correction
+//!   ground ([`clip_support`]: its floor, or the support under a planted
+//!   foot's footfall, a step) the character's lowest sole point (toe
+//!   joint, heel, toe tip) is put on the character's floor (its rest
+//!   frame's) raised by that support, scaled; the correction is
 //!   interpolated across frames where the clip does not (a run's flight).
+//! - **The character's neutral** ([`character_neutral`]): its rest frame
+//!   when that stands upright, else the database frame nearest neutral;
+//!   [`retarget_with_neutral`] turns the torso, neck, head and feet from
+//!   it (`G_j(t) = A_j(t) H N_j`).
 //! - The neck's carriage is read on the clip's upright frames (trunk
 //!   within 10° of its most upright), so a clip mostly bent over does not
 //!   make head-down its neutral.
@@ -241,6 +247,74 @@ pub fn choose_reference(rest: Option<&Pose>, poses: &[Pose]) -> Result<Reference
     })
 }
 
+/// Where a character's neutral pose comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NeutralSource {
+    /// Its rest frame (the mesh the rig was embedded on), which stands
+    /// upright.
+    Rest,
+    /// The database frame nearest neutral (the rest frame did not stand
+    /// upright).
+    Frame(usize),
+}
+
+/// The character's neutral pose: what a clip standing neutrally gives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CharacterNeutral {
+    /// Canonical joint positions (the character's rest frame's space).
+    pub pose: Pose,
+    /// Where it came from.
+    pub source: NeutralSource,
+}
+
+/// How far a character's pose is from standing neutrally (radians): the
+/// trunk's tilt from the vertical, plus the mean knee bend, plus the mean
+/// angle of the thighs from the vertical (legs under the body, feet
+/// together), plus half the neck's bend from the trunk's line. 0 for a
+/// body standing straight with its legs under it and its head over its
+/// trunk, whatever its arms do (the limbs take the clip's directions).
+pub fn neutral_score(p: &Pose) -> f64 {
+    let thigh = |hip: C, knee: C| angle(p[knee.index()] - p[hip.index()], -DVec3::Y);
+    let neck = angle(
+        p[C::Head.index()] - p[C::Neck.index()],
+        p[C::Neck.index()] - p[C::Pelvis.index()],
+    );
+    neutrality(p) + 0.5 * (thigh(C::LHip, C::LKnee) + thigh(C::RHip, C::RKnee)) + 0.5 * neck
+}
+
+/// Chooses the character's neutral pose: its rest frame `rest` when that
+/// stands upright (trunk within 20° of the vertical, each hip → ankle
+/// within 30° of straight down), else the frame of `frames` (the
+/// database's per-frame skeletons, the rest frame's space) with the least
+/// [`neutral_score`]; the rest frame when no frame is finite.
+pub fn character_neutral(rest: &Pose, frames: &[Pose]) -> CharacterNeutral {
+    let leg_ok = |hip: C, ankle: C| {
+        angle(rest[ankle.index()] - rest[hip.index()], -DVec3::Y) < 30f64.to_radians()
+    };
+    let upright = trunk_tilt(rest) < 20f64.to_radians()
+        && leg_ok(C::LHip, C::LAnkle)
+        && leg_ok(C::RHip, C::RAnkle);
+    let as_rest = CharacterNeutral {
+        pose: *rest,
+        source: NeutralSource::Rest,
+    };
+    if upright {
+        return as_rest;
+    }
+    frames
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.iter().all(|x| x.is_finite()))
+        .map(|(i, p)| (neutral_score(p), i))
+        .filter(|(s, _)| s.is_finite())
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map_or(as_rest, |(_, i)| CharacterNeutral {
+            pose: frames[i],
+            source: NeutralSource::Frame(i),
+        })
+}
+
 /// Turn about the vertical taking `from`'s left-right axis (hips and
 /// shoulders) onto `to`'s.
 fn heading_between(from: &Pose, to: &Pose) -> DQuat {
@@ -274,6 +348,22 @@ pub fn retarget(
     reference: &Reference,
     mocap: &[Pose],
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
+    retarget_with_neutral(character, character, reference, mocap)
+}
+
+/// [`retarget`] with the character's neutral pose `neutral` (a pose of its
+/// skeleton in its rest frame's space, e.g. [`character_neutral`]'s)
+/// standing for its rest pose `character`: a clip standing neutrally
+/// gives the character's torso, neck, head and feet as in `neutral`
+/// (`G_j(t) = A_j(t) H N_j`, with `N` the rotations taking the rest bones
+/// onto the neutral's and `H` the turn facing the neutral the reference's
+/// way); bone lengths, the floor and the soles stay the rest pose's.
+pub fn retarget_with_neutral(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
     if mocap.is_empty() {
         return Vec::new();
     }
@@ -296,16 +386,13 @@ pub fn retarget(
     let stance_ref = flat_feet(r, mocap);
     let r = &stance_ref;
     let s = leg_length(character) / leg_length(r).max(1e-12);
-    let face = heading_between(character, r);
+    let face = heading_between(neutral, r);
+    // The rest bones onto the neutral's (identity when it is the rest).
+    let held = pose_rotations(character, neutral);
     let root = C::Pelvis.index();
-    // The clip's floor: a low percentile of its lowest foot joint.
-    let mut lows: Vec<f64> = mocap
-        .iter()
-        .map(foot_height)
-        .filter(|h| h.is_finite())
-        .collect();
-    lows.sort_by(f64::total_cmp);
-    let clip_floor = lows.get(lows.len() / 20).copied().unwrap_or(first[root].y);
+    // The clip's floor and the support under each of its footfalls.
+    let support = clip_support(mocap, leg_length(r));
+    let clip_floor = support.floor;
     let char_floor = foot_height(character);
     let rotations: Vec<[DQuat; Canonical::COUNT]> =
         mocap.par_iter().map(|m| pose_rotations(r, m)).collect();
@@ -332,27 +419,30 @@ pub fn retarget(
                     t[j] = t[p.index()] + g[p.index()] * (character[j] - character[p.index()]);
                 }
                 g[j] = match c {
-                    C::Neck | C::Head => (neck_g * face).normalize(),
-                    _ if is_torso(c) || is_foot(c) => (a[j] * face).normalize(),
+                    C::Neck | C::Head => (neck_g * face * held[j]).normalize(),
+                    _ if is_torso(c) || is_foot(c) => (a[j] * face * held[j]).normalize(),
                     _ => limb_rotation(character, m, &g, c),
                 };
             }
             (t, g)
         })
         .collect();
-    // Feet on the floor: in every frame where the clip stands on its floor
-    // (its lowest ankle or toe within 3 cm of it), the character's lowest
-    // sole point (a toe joint, or a heel under an ankle) stands on the
-    // character's; between such frames (a run's flight) the correction is
+    // Feet on the ground: in every frame where the clip stands on its
+    // ground (a foot planted, its lowest joint within 3 cm of that
+    // footfall's support), the character's lowest sole point (a toe joint,
+    // or a heel under an ankle) stands on the character's floor raised by
+    // the support's height above the clip's floor, scaled (a step, a
+    // kerb); between such frames (a run's flight) the correction is
     // interpolated. Whatever the two skeletons' hip offsets and foot
     // lengths (a longer foot dips its toe further when the heel lifts).
     let sole_rest = sole_height(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
     let fix: Vec<Option<f64>> = out
         .iter()
-        .zip(mocap)
-        .map(|((t, g), m)| {
+        .zip(&support.ground)
+        .map(|((t, g), ground)| {
             let h = sole_height(character, t, g);
-            (foot_height(m) <= clip_floor + 0.03 && h.is_finite()).then_some(sole_rest - h)
+            let raised = ground.map(|y| (y - clip_floor) * s)?;
+            h.is_finite().then_some(sole_rest + raised - h)
         })
         .collect();
     let lift = interpolate_gaps(&fix);
@@ -370,20 +460,194 @@ pub fn retarget(
 /// foot's horizontal length beyond the toe joint at its height (a foot
 /// pivoting on its toes dips the tips); both carried by the ankle.
 fn sole_height(character: &Pose, t: &Pose, g: &[DQuat; Canonical::COUNT]) -> f64 {
-    [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
+    let [l, r] = foot_soles(character, t, g);
+    l.min(r)
+}
+
+/// The lowest sole point of each foot (left, right) of the character
+/// posed as `t` with global rotations `g` (see [`sole_height`]).
+fn foot_soles(character: &Pose, t: &Pose, g: &[DQuat; Canonical::COUNT]) -> [f64; 2] {
+    [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)].map(|(a, k)| {
+        let (a, k) = (a.index(), k.index());
+        let heel = DVec3::new(
+            0.0,
+            character[k].y.min(character[a].y) - character[a].y,
+            0.0,
+        );
+        let f = character[k] - character[a];
+        let tip = DVec3::new(0.25 * f.x, 0.0, 0.25 * f.z);
+        [t[k].y, (t[a] + g[a] * heel).y, (t[k] + g[a] * tip).y]
+            .into_iter()
+            .fold(f64::INFINITY, f64::min)
+    })
+}
+
+/// Where a clip stands: its floor and, per frame, the height of the
+/// ground its planted foot stands on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Support {
+    /// The clip's floor: the 5th percentile of its lowest ankle or toe
+    /// joint over the frames.
+    pub floor: f64,
+    /// Per frame, the support under the clip's lowest planted foot when it
+    /// touches it (its lowest joint within 3 cm); `None` in the air.
+    pub ground: Vec<Option<f64>>,
+}
+
+/// The clip's support per footfall (poses levelled, Y-up, metres; `leg`
+/// the clip's leg length). A foot is planted while its ankle or its toe
+/// joint moves less than 2 % of the leg length per frame (a heel rising
+/// about a planted toe, or a toe lowering about a planted heel); a
+/// footfall is a run of planted frames, and its support is the lowest
+/// height its lowest joint reaches in it. A support within 6 cm of the
+/// clip's floor is the floor (a flat capture keeps one plane); a higher
+/// one is a step the clip stands on (CMU subject 03 walks over blocks
+/// 13-22 cm high) when the footfall lasts at least 5 frames and the foot
+/// bears weight (it is the lower foot in some frame of it). A frame touches the ground when any foot joint is within
+/// 3 cm of the floor (as on a flat capture), or a planted foot's lowest
+/// joint is within 3 cm of its footfall's support; the lowest such support
+/// is the frame's ground.
+pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
+    let mut lows: Vec<f64> = mocap
         .iter()
-        .flat_map(|&(a, k)| {
-            let (a, k) = (a.index(), k.index());
-            let heel = DVec3::new(
-                0.0,
-                character[k].y.min(character[a].y) - character[a].y,
-                0.0,
-            );
-            let f = character[k] - character[a];
-            let tip = DVec3::new(0.25 * f.x, 0.0, 0.25 * f.z);
-            [t[k].y, (t[a] + g[a] * heel).y, (t[k] + g[a] * tip).y]
-        })
-        .fold(f64::INFINITY, f64::min)
+        .map(foot_height)
+        .filter(|h| h.is_finite())
+        .collect();
+    lows.sort_by(f64::total_cmp);
+    let floor = lows
+        .get(lows.len() / 20)
+        .copied()
+        .unwrap_or_else(|| mocap.first().map_or(0.0, |p| p[C::Pelvis.index()].y));
+    let mut ground: Vec<Option<f64>> = vec![None; mocap.len()];
+    let still = 0.02 * leg.max(1e-9);
+    for (ankle, toe) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)] {
+        let (a, k) = (ankle.index(), toe.index());
+        let low = |p: &Pose| if p[a].y <= p[k].y { p[a] } else { p[k] };
+        let planted: Vec<bool> = (0..mocap.len())
+            .map(|t| {
+                let (i, j) = if t > 0 {
+                    (t - 1, t)
+                } else {
+                    (0, 1.min(mocap.len() - 1))
+                };
+                let d = (mocap[j][a] - mocap[i][a])
+                    .length()
+                    .min((mocap[j][k] - mocap[i][k]).length());
+                d <= still && low(&mocap[t]).is_finite()
+            })
+            .collect();
+        let mut t = 0;
+        while t < mocap.len() {
+            if !planted[t] {
+                t += 1;
+                continue;
+            }
+            let start = t;
+            while t < mocap.len() && planted[t] {
+                t += 1;
+            }
+            let run = start..t;
+            let sup = run
+                .clone()
+                .map(|i| low(&mocap[i]).y)
+                .fold(f64::INFINITY, f64::min);
+            // A step is twice the contact band above the floor (6 cm; a
+            // kerb or a block), held at least 5 frames, and bears weight:
+            // the foot is the lower of the two in some frame of the
+            // footfall (a leg held still in the air, the other foot on the
+            // floor, is no step; nor a gliding foot hovering over it).
+            let bears = run
+                .clone()
+                .any(|i| low(&mocap[i]).y <= foot_height(&mocap[i]) + 1e-9);
+            if sup > floor + 0.06 && !(bears && run.len() >= 5) {
+                continue;
+            }
+            let sup = if sup <= floor + 0.06 { floor } else { sup };
+            for i in run {
+                if low(&mocap[i]).y <= sup + 0.03 {
+                    ground[i] = Some(ground[i].map_or(sup, |g: f64| g.min(sup)));
+                }
+            }
+        }
+    }
+    // On the floor, as on a flat capture: any foot within 3 cm of it.
+    for (g, p) in ground.iter_mut().zip(mocap) {
+        if foot_height(p) <= floor + 0.03 {
+            *g = Some(floor);
+        }
+    }
+    Support { floor, ground }
+}
+
+/// The height of the clip's ground above its floor per frame, in the
+/// character's metres (the clip levelled as [`retarget`] levels it, scaled
+/// by the ratio of leg lengths, interpolated across frames in the air):
+/// where a result of [`retarget`] stands. The plausibility checks measure
+/// floating and penetration from the character's floor raised by it.
+pub fn ground_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+    if mocap.is_empty() {
+        return Vec::new();
+    }
+    let tilt = ground_tilt(mocap);
+    let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
+    let r = leg_length(&reference.pose).max(1e-12);
+    let s = leg_length(character) / r;
+    let support = clip_support(&levelled, r);
+    let raised: Vec<Option<f64>> = support
+        .ground
+        .iter()
+        .map(|g| g.map(|y| (y - support.floor) * s))
+        .collect();
+    interpolate_gaps(&raised)
+}
+
+/// The clip's own foot glide while touching its ground, on the
+/// character (cm per touching foot-frame): the clip retargeted onto the
+/// character's skeleton `character` ([`retarget`]), then per foot the
+/// horizontal travel from frame `t-1` to `t` of the midpoint of its ankle
+/// and toe joints while the foot's lowest sole point (toe joint, heel, toe
+/// tip, as the kernel puts on the floor) is within 3 cm of the character's
+/// floor raised by the clip's ground ([`ground_offsets`]) at both; summed
+/// and divided by the touching foot-frames. The skeleton analogue of the
+/// mesh measure [`crate::eval::Sliding::touching_mean_cm_per_frame`], on
+/// the same feet and floor: a walk's feet pass through the touching band
+/// at heel strike and toe-off, which a mostly planted capture (the samba
+/// dance) never does, so a result is held to its own clip's figure.
+pub fn clip_foot_glide_cm(character: &Pose, reference: &Reference, mocap: &[Pose]) -> f64 {
+    if mocap.len() < 2 {
+        return 0.0;
+    }
+    let out = retarget(character, reference, mocap);
+    let raised = ground_offsets(character, reference, mocap);
+    let rest = sole_height(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
+    let (mut travel, mut touching) = (0.0, 0usize);
+    for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
+        .into_iter()
+        .enumerate()
+    {
+        let (a, k) = (ankle.index(), toe.index());
+        let touch = |t: usize| {
+            let (p, g) = &out[t];
+            foot_soles(character, p, g)[foot] <= rest + raised[t] + 0.03
+        };
+        let mid = |t: usize| {
+            let p = &out[t].0;
+            let m = 0.5 * (p[a] + p[k]);
+            DVec3::new(m.x, 0.0, m.z)
+        };
+        for t in 0..out.len() {
+            if touch(t) {
+                touching += 1;
+                if t > 0 && touch(t - 1) {
+                    let d = mid(t).distance(mid(t - 1));
+                    if d.is_finite() {
+                        travel += d;
+                    }
+                }
+            }
+        }
+    }
+    100.0 * travel / touching.max(1) as f64
 }
 
 /// Fills the `None`s of `v` linearly between their known neighbours (the
@@ -957,5 +1221,147 @@ mod tests {
             trunk_tilt(&out[i].0).to_degrees()
         );
         assert!((head_tilt(&out[i].0) - head_tilt(&standing())).abs() < 0.1);
+    }
+
+    #[test]
+    fn a_bent_character_rest_frame_gives_way_to_its_most_neutral_database_frame() {
+        // The character's rest frame leaning 40° forward from its feet (a
+        // database whose mesh was captured mid-fall); its frames: leaning,
+        // upright, bowed.
+        let up = standing();
+        let lean = DQuat::from_rotation_x(40f64.to_radians());
+        let bowed_rest = map(&up, |p| lean * p);
+        let crouch = bowed(&up, 20f64.to_radians(), 0.0);
+        let n = character_neutral(&bowed_rest, &[bowed_rest, up, crouch]);
+        assert_eq!(n.source, NeutralSource::Frame(1));
+        // An upright rest frame is kept.
+        assert_eq!(
+            character_neutral(&up, &[bowed_rest, crouch]).source,
+            NeutralSource::Rest
+        );
+        // A clip standing neutrally: measured from the rest frame the
+        // character stands bowed; from the neutral frame, upright.
+        let clip = standing();
+        let rf = choose_reference(Some(&clip), &[clip]).unwrap();
+        let (from_rest, _) = &retarget(&bowed_rest, &rf, &[clip])[0];
+        assert!(trunk_tilt(from_rest) > 35f64.to_radians());
+        let (p, _) = &retarget_with_neutral(&bowed_rest, &n.pose, &rf, &[clip])[0];
+        assert!(trunk_tilt(p) < 1e-6, "{}", trunk_tilt(p).to_degrees());
+        // Still the character's own bones.
+        for (a, b) in bone_lengths(p).zip(bone_lengths(&bowed_rest)) {
+            assert!((a - b).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_clip_walking_on_a_block_stands_the_character_on_it_at_every_footfall() {
+        // The clip stands on a 20 cm block (CMU 03_01 starts on one), its
+        // knees bent a little, then steps down 40 cm forward onto the floor
+        // and stands straight.
+        let st = map(&standing(), |p| p * 1.1);
+        let mut bent = st;
+        for c in Canonical::ALL {
+            if !matches!(c, C::LAnkle | C::LToe | C::RAnkle | C::RToe) {
+                bent[c.index()] += DVec3::new(0.0, -0.03, 0.0);
+            }
+        }
+        for k in [C::LKnee, C::RKnee] {
+            bent[k.index()] += DVec3::new(0.0, 0.0, 0.1);
+        }
+        let mut clip: Vec<Pose> = vec![bent.map(|p| p + DVec3::Y * 0.2); 12];
+        clip.extend(vec![st.map(|p| p + DVec3::Z * 0.4); 12]);
+        let rf = choose_reference(Some(&st), &clip).unwrap();
+        let leg = leg_length(&rf.pose);
+        let support = clip_support(&clip, leg);
+        for (t, g) in support.ground.iter().enumerate() {
+            let want = if t < 12 { 0.2 } else { 0.0 };
+            let g = g.expect("standing: every frame on its ground");
+            assert!((g - support.floor - want).abs() < 1e-9, "frame {t}: {g}");
+        }
+        // The character's lowest sole point on the block, scaled.
+        let ch = standing();
+        let s = leg_length(&ch) / leg;
+        let rest = sole_height(&ch, &ch, &[DQuat::IDENTITY; Canonical::COUNT]);
+        for (t, (p, g)) in retarget(&ch, &rf, &clip).iter().enumerate() {
+            let want = if t < 12 { rest + 0.2 * s } else { rest };
+            let h = sole_height(&ch, p, g);
+            assert!((h - want).abs() < 1e-6, "frame {t}: {h} vs {want}");
+        }
+        // And the plausibility's ground follows it.
+        let raised = ground_offsets(&ch, &rf, &clip);
+        for (t, r) in raised.iter().enumerate() {
+            let want = if t < 12 { 0.2 * s } else { 0.0 };
+            assert!((r - want).abs() < 1e-9, "frame {t}: {r}");
+        }
+    }
+
+    #[test]
+    fn a_leg_held_still_in_the_air_is_no_step() {
+        // The body glides 3 cm per frame on its right foot (not planted),
+        // the left foot held 15 cm up and still in the air (a knee lift
+        // held); in frames 10-13 the right heel and toe rise 4 cm. The
+        // still left foot bears no weight: it is no step to stand on.
+        let st = standing();
+        let clip: Vec<Pose> = (0..20)
+            .map(|t| {
+                let mut p = st.map(|q| q + DVec3::X * 0.03 * t as f64);
+                for c in [C::LKnee, C::LAnkle, C::LToe] {
+                    p[c.index()] = st[c.index()] + DVec3::new(0.0, 0.15, 0.1);
+                }
+                if (10..14).contains(&t) {
+                    for c in [C::RAnkle, C::RToe] {
+                        p[c.index()] += DVec3::Y * 0.04;
+                    }
+                }
+                p
+            })
+            .collect();
+        let support = clip_support(&clip, leg_length(&st));
+        for (t, g) in support.ground.iter().enumerate() {
+            assert!(
+                g.is_none_or(|g| g < support.floor + 0.05),
+                "frame {t}: ground {g:?}, floor {}",
+                support.floor
+            );
+        }
+    }
+
+    #[test]
+    fn the_clip_foot_glide_reads_zero_standing_and_the_drag_when_dragged() {
+        let ch = standing();
+        let st = map(&standing(), |p| p * 2.0);
+        let rf = choose_reference(Some(&st), &[st]).unwrap();
+        let still = vec![st; 20];
+        assert!(clip_foot_glide_cm(&ch, &rf, &still) < 1e-9);
+        // Dragged 2 cm per frame along x, feet on the floor: 1 cm per
+        // frame at the character's half size.
+        let dragged: Vec<Pose> = (0..20)
+            .map(|t| st.map(|p| p + DVec3::X * 0.02 * t as f64))
+            .collect();
+        let g = clip_foot_glide_cm(&ch, &rf, &dragged);
+        // 19 of 20 touching frames move.
+        assert!((g - 0.95).abs() < 1e-6, "{g}");
+        // A foot swinging in the air (knee raised 60°) does not touch the
+        // floor: one foot moving in the air, the other planted, reads 0.
+        let lifted: Vec<Pose> = (0..20)
+            .map(|t| {
+                let mut p = st;
+                let (h, k, a, o) = (
+                    C::LHip.index(),
+                    C::LKnee.index(),
+                    C::LAnkle.index(),
+                    C::LToe.index(),
+                );
+                let (thigh, shin) = (p[h].distance(p[k]), p[k].distance(p[a]));
+                let foot = p[o] - p[a];
+                let drift = DVec3::X * 0.02 * t as f64;
+                p[k] = p[h] + DVec3::new(0.0, -0.5, 0.866) * thigh + drift;
+                p[a] = p[k] - DVec3::Y * shin;
+                p[o] = p[a] + foot;
+                p
+            })
+            .collect();
+        let g = clip_foot_glide_cm(&ch, &rf, &lifted);
+        assert!(g < 1e-9, "{g}");
     }
 }
