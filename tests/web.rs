@@ -402,6 +402,35 @@ fn exported_transitions_carry_precomputed_nonlinear_windows() {
     assert!(r2.geometry.bytes < r.geometry.bytes);
 }
 
+/// The export's window blend (each database frame decomposed once, the
+/// alignment applied to the decomposition) gives the frames the per-frame
+/// [`web::export::blend_windows_per_frame`] gives, with the default cache
+/// budget (whole groups per batch) and with a budget of one window per
+/// batch.
+#[test]
+fn fast_window_blend_matches_the_per_frame_blender() {
+    let db = demo_db();
+    let (_, g, graph) = web::load_db_geometry(&db).unwrap();
+    let table = web::export::transition_table(&graph, &g);
+    assert!(table.len() >= 2, "{} transitions", table.len());
+    assert!(
+        table.iter().any(|t| t.align[1].abs() > 1e-3),
+        "no transition turns the target: the analytic alignment is untested"
+    );
+    let want = web::export::blend_windows_per_frame(&g, &table).unwrap();
+    for cache_bytes in [web::WindowOptions::default().cache_bytes, 1] {
+        let got = web::blend_windows(&g, &table, &web::WindowOptions { cache_bytes }).unwrap();
+        assert_eq!(got.len(), want.len());
+        let mut worst: f64 = 0.0;
+        for (a, b) in got.iter().zip(&want) {
+            assert_eq!(a.len(), b.len());
+            worst = worst.max(max_dist(a, b));
+        }
+        eprintln!("cache {cache_bytes} B: largest difference {:.2e} m", worst);
+        assert!(worst < 1e-6, "cache {cache_bytes} B: {worst} m");
+    }
+}
+
 /// In a real browser: pressing the space's key enters the parametric
 /// space, and moving the speed slider changes the speed the engine
 /// achieves (root path per second) to the one asked.
