@@ -923,6 +923,13 @@ fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
            while (n < 3000 && !(e.blend && e.blend.i >= 2)) { surfmotion.step(1, false); n++; }
            surfmotion.step(0, true); return n; })()",
     );
+    // The status line names the window it shows (it said "block 7").
+    let status = b.eval("document.getElementById('status').textContent");
+    let status = status.as_str().unwrap_or_default();
+    assert!(
+        status.starts_with("transition ") && status.contains(", window frame "),
+        "{status}"
+    );
     let shot = shots_dir().join("demo-transition.png");
     b.screenshot(&shot);
     eprintln!("transition screenshot {}", shot.display());
