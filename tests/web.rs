@@ -227,34 +227,19 @@ fn chromium() -> Option<PathBuf> {
 /// `locomotion = [walk, run]` steered by speed and turn; made once.
 fn gaits_db() -> PathBuf {
     use std::sync::OnceLock;
-    use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
-    use surfmotion::synth::{Gait, gait_clip};
+    use surfmotion::jobs::SynthCharacter;
+    use surfmotion::synth::Gait;
     static DB: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
     DB.get_or_init(|| {
         let tmp = common::fixture_dir("web-gaits");
         let db = tmp.join("db");
-        std::fs::create_dir_all(&db).unwrap();
-        let fps = 30.0;
-        let clips: Vec<SynthClip> = [Gait::Walk, Gait::Run]
-            .into_iter()
-            .map(|g| SynthClip::from_clip(g.name(), &gait_clip(g, 3.0, fps)).unwrap())
-            .collect();
-        let opts = SynthOptions {
-            fps,
-            name: Some("gaits".into()),
-            truth: false,
-            plausibility: false,
-            ..Default::default()
-        };
-        let character = SynthCharacter::humanoid().unwrap();
-        write_synthetic_database(&db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
-        let spaces: toml::Table = toml::from_str(
-            "[[space]]\nname = \"locomotion\"\nsequences = [\"walk\", \"run\"]\nparameters = [\"speed\", \"turn\"]\n",
-        )
-        .unwrap();
-        let mut m = surfmotion::db::Manifest::load(&db).unwrap();
-        m.spaces = spaces["space"].clone().try_into().unwrap();
-        m.save(&db).unwrap();
+        common::gaits::gaits_database(
+            &db,
+            &SynthCharacter::humanoid().unwrap(),
+            &[Gait::Walk, Gait::Run],
+            "gaits",
+            &[("locomotion", &["walk", "run"], &["speed", "turn"])],
+        );
         (tmp, db)
     })
     .1
