@@ -769,7 +769,15 @@ fn run_page(b: &mut cdp::Browser, url: &str) -> serde_json::Value {
     // Headless Chromium with software GL has, rarely, left a page unstarted
     // (HTML loaded, no module run, no error): once in five full CI runs
     // here, never twice in a row. Load it once more before failing.
-    eprintln!("{url}: page not started after 90 s; loading it once more");
+    // What the page got, for the next time it happens: which resources
+    // arrived (status, bytes, when), whether the inline start and the
+    // module ran.
+    let state = b.eval(
+        "JSON.stringify({ready: document.readyState, boot: !!window.surfmotionBoot, app: !!window.surfmotion,
+           scripts: [...document.scripts].map((s) => s.src || 'inline'),
+           resources: performance.getEntriesByType('resource').map((e) => [e.name.split('/').pop(), e.responseStatus, e.transferSize, Math.round(e.startTime), Math.round(e.responseEnd)])})",
+    );
+    eprintln!("{url}: page not started after 90 s ({state}); loading it once more");
     b.navigate(url);
     b.wait_for(done, Duration::from_secs(90))
 }
