@@ -766,14 +766,18 @@ fn run_page(b: &mut cdp::Browser, url: &str) -> serde_json::Value {
     if let Some(v) = b.poll(done, Duration::from_secs(90)) {
         return v;
     }
-    // Headless Chromium with software GL has, rarely, left a page unstarted
-    // (HTML loaded, no module run, no error): once in five full CI runs
-    // here, never twice in a row. Load it once more before failing.
+    // Headless Chromium with software GL has, rarely, left a page without
+    // its self-test (once in five full CI runs, never twice in a row; seen
+    // again 2026-11-24 on the corrupt-data site, once in six runs at load
+    // 10: document complete, inline start and app.js run, `surfmotion`
+    // defined, so app.js's `main` was waiting on a promise that never
+    // settled, not "no module run"). Load it once more before failing.
     // What the page got, for the next time it happens: which resources
     // arrived (status, bytes, when), whether the inline start and the
     // module ran.
     let state = b.eval(
         "JSON.stringify({ready: document.readyState, boot: !!window.surfmotionBoot, app: !!window.surfmotion,
+           stages: window.surfmotion && surfmotion.stats.stages, error: window.surfmotion && surfmotion.error,
            scripts: [...document.scripts].map((s) => s.src || 'inline'),
            resources: performance.getEntriesByType('resource').map((e) => [e.name.split('/').pop(), e.responseStatus, e.transferSize, Math.round(e.startTime), Math.round(e.responseEnd)])})",
     );
