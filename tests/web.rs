@@ -152,6 +152,36 @@ fn http_status(addr: &str, path: &str) -> u16 {
         .unwrap_or(0)
 }
 
+/// A client that stops reading a large response (its socket buffers full)
+/// does not hold up the other requests: with one serving thread the page's
+/// `manifest.json` once never arrived.
+#[test]
+fn server_answers_while_another_response_is_stalled() {
+    let tmp = tempfile::tempdir().unwrap();
+    let site = tmp.path().join("site");
+    std::fs::create_dir_all(&site).unwrap();
+    std::fs::write(site.join("index.html"), "x").unwrap();
+    std::fs::write(site.join("big.bin"), vec![7u8; 48 << 20]).unwrap();
+    let server = SiteServer::bind(&site, "127.0.0.1:0").unwrap();
+    let addr = server
+        .url()
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_string();
+    server.spawn();
+    // Ask for the big file and never read it.
+    let mut stalled = std::net::TcpStream::connect(&addr).unwrap();
+    write!(stalled, "GET /big.bin HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let (tx, rx) = std::sync::mpsc::channel();
+    let a = addr.clone();
+    std::thread::spawn(move || {
+        let _ = tx.send(http_status(&a, "/index.html"));
+    });
+    assert_eq!(rx.recv_timeout(Duration::from_secs(20)), Ok(200));
+    drop(stalled);
+}
+
 #[test]
 fn server_refuses_paths_outside_the_site() {
     let tmp = tempfile::tempdir().unwrap();
