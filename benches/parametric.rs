@@ -8,11 +8,14 @@
 //! ε (Fig. 4) and the parameter errors across the valid ranges. Needs
 //! ../shared/data (the samba mesh); skips without it.
 
+#[path = "../tests/common/gaits.rs"]
+mod gaits;
+
 use criterion::Criterion;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
-use surfmotion::db::{Manifest, SpaceEntry};
-use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
+use surfmotion::db::Manifest;
+use surfmotion::jobs::SynthCharacter;
 use surfmotion::mesh::blend::Blender;
 use surfmotion::mesh::io::load_sequence;
 use surfmotion::parametric::hybrid::{HybridBlend, HybridOptions};
@@ -22,7 +25,7 @@ use surfmotion::parametric::transition::{Planner, TargetState};
 use surfmotion::parametric::{Control, Controller, Motion, MotionOptions};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::synth::{Gait, gait_clip};
+use surfmotion::synth::Gait;
 
 fn data() -> Option<PathBuf> {
     let p = std::env::var_os("SURFMOTION_DATA")
@@ -32,7 +35,6 @@ fn data() -> Option<PathBuf> {
 }
 
 fn database(d: &Path, db: &Path) -> Manifest {
-    let fps = 30.0;
     let rest = load_sequence(
         &d.join("4d/samba/samba.obj").to_string_lossy(),
         &Default::default(),
@@ -47,32 +49,16 @@ fn database(d: &Path, db: &Path) -> Manifest {
         rig,
         landmarks_json: std::fs::read(&fixture).unwrap(),
     };
-    let clips: Vec<SynthClip> = [Gait::Walk, Gait::Run, Gait::Turn]
-        .into_iter()
-        .map(|g| SynthClip::from_clip(g.name(), &gait_clip(g, 3.0, fps)).unwrap())
-        .collect();
-    let opts = SynthOptions {
-        fps,
-        name: Some("samba_gaits".into()),
-        truth: false,
-        plausibility: false,
-        force: true,
-        ..Default::default()
-    };
-    write_synthetic_database(db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
-    let space = |name: &str, seqs: [&str; 2], params: &[&str]| SpaceEntry {
-        name: name.into(),
-        sequences: seqs.iter().map(|s| s.to_string()).collect(),
-        parameters: params.iter().map(|s| s.to_string()).collect(),
-        epsilon_mm: None,
-    };
-    let mut m = Manifest::load(db).unwrap();
-    m.spaces = vec![
-        space("locomotion", ["walk", "run"], &["speed", "turn"]),
-        space("turning", ["walk", "turn"], &["turn"]),
-    ];
-    m.save(db).unwrap();
-    m
+    gaits::gaits_database(
+        db,
+        &character,
+        &[Gait::Walk, Gait::Run, Gait::Turn],
+        "samba_gaits",
+        &[
+            ("locomotion", &["walk", "run"], &["speed", "turn"]),
+            ("turning", &["walk", "turn"], &["turn"]),
+        ],
+    )
 }
 
 fn main() {

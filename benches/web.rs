@@ -3,8 +3,9 @@
 //! levels 3 and 6, decoding it (the Rust decoder; the page's is timed by
 //! `tests/web.rs`), and `web export` of a 1,050-frame database (samba's
 //! capture six times, graph cache warm; `--linear-transitions`, the
-//! precomputed non-linear windows timed once apart). No solve is involved, so the
-//! figures are bare times next to the raw float32 size. It also prints the
+//! precomputed non-linear windows timed once apart, and their blend alone
+//! per window frame as a ratio to the sparse-solve floor). The geometry
+//! figures involve no solve: bare times next to the raw float32 size. It also prints the
 //! other candidate measured for the README: per-sequence PCA of the vertex
 //! trajectories (snapshot method), the fewest components whose
 //! reconstruction keeps every vertex within 1 mm before any quantisation,
@@ -81,6 +82,27 @@ fn main() {
         r.transition_bytes,
         r.geometry.bytes
     );
+    // The windows' blend alone (each database frame decomposed once, one
+    // prefactored solve per window frame): per window frame and as a ratio
+    // to the sparse-solve floor (ARCHITECTURE.md: 0.74 ms per 3-column
+    // solve at 10K vertices).
+    let (_, g6, graph6) = web::load_db_geometry(&big).unwrap();
+    let table = web::export::transition_table(&graph6, &g6);
+    let frames: usize = table.iter().map(|t| 2 * t.window + 1).sum();
+    let t = std::time::Instant::now();
+    web::blend_windows(&g6, &table, &Default::default()).unwrap();
+    let per = t.elapsed().as_secs_f64() * 1e3 / frames as f64;
+    eprintln!(
+        "samba6 windows: {} transitions, {frames} frames, {:.2} ms per window frame on {} threads = {:.1}x the 0.74 ms solve floor",
+        table.len(),
+        per,
+        rayon::current_num_threads(),
+        per / 0.74
+    );
+    let part = &table[..table.len().min(24)];
+    grp.bench_function("blend_windows_samba6_24_transitions", |b| {
+        b.iter(|| web::blend_windows(black_box(&g6), part, &Default::default()).unwrap())
+    });
     let linear = ExportOptions {
         linear_transitions: true,
         ..ExportOptions::default()

@@ -10,26 +10,13 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use surfmotion::db::Manifest;
-use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
+use surfmotion::jobs::SynthCharacter;
 use surfmotion::mesh::blend::Blender;
 use surfmotion::parametric::hybrid::{HybridBlend, HybridOptions};
 use surfmotion::parametric::params::measure;
 use surfmotion::parametric::store::load_or_build;
 use surfmotion::parametric::{Control, Controller, Motion, MotionOptions, Parameter};
-use surfmotion::synth::{Gait, gait_clip};
-
-const SPACES: &str = r#"
-[[space]]
-name = "locomotion"
-sequences = ["walk", "run"]
-parameters = ["speed", "turn"]
-
-[[space]]
-name = "turning"
-sequences = ["walk", "turn"]
-parameters = ["turn"]
-"#;
+use surfmotion::synth::Gait;
 
 /// A small database of the demo humanoid walking, running and turning
 /// (3 s each), with two spaces; built once per test binary.
@@ -39,25 +26,16 @@ fn database() -> PathBuf {
     DB.get_or_init(|| {
         let tmp = common::fixture_dir("parametric-gaits");
         let db = tmp.join("db");
-        std::fs::create_dir_all(&db).unwrap();
-        let fps = 30.0;
-        let clips: Vec<SynthClip> = [Gait::Walk, Gait::Run, Gait::Turn]
-            .into_iter()
-            .map(|g| SynthClip::from_clip(g.name(), &gait_clip(g, 3.0, fps)).unwrap())
-            .collect();
-        let opts = SynthOptions {
-            fps,
-            name: Some("gaits".into()),
-            truth: false,
-            plausibility: false,
-            ..Default::default()
-        };
-        let character = SynthCharacter::humanoid().unwrap();
-        write_synthetic_database(&db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
-        let spaces: toml::Table = toml::from_str(SPACES).unwrap();
-        let mut m = Manifest::load(&db).unwrap();
-        m.spaces = spaces["space"].clone().try_into().unwrap();
-        m.save(&db).unwrap();
+        common::gaits::gaits_database(
+            &db,
+            &SynthCharacter::humanoid().unwrap(),
+            &[Gait::Walk, Gait::Run, Gait::Turn],
+            "gaits",
+            &[
+                ("locomotion", &["walk", "run"], &["speed", "turn"]),
+                ("turning", &["walk", "turn"], &["turn"]),
+            ],
+        );
         (tmp, db)
     })
     .1

@@ -233,7 +233,9 @@ fn blend_edges_avx2(
     g: &[[DVec3; 3]],
     out: &mut [[DVec3; 3]],
 ) {
-    blend_edges_body::<true>(a, b, alpha, g, out);
+    // Unfused: `mul_add` inside the lane closures (not inlined into this
+    // function, so built without FMA) became a call into libm's `fma`.
+    blend_edges_body::<false>(a, b, alpha, g, out);
 }
 
 /// `a · b + c`, fused where the build has FMA.

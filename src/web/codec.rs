@@ -339,11 +339,12 @@ pub fn encode(g: &Geometry, opts: &EncodeOptions) -> Result<(Vec<u8>, EncodeRepo
                 let q: Vec<[u16; 3]> = seq
                     .iter()
                     .map(|p| {
+                        // Round half up by truncation (`round` is a libm
+                        // call without SSE4.1: a tenth of an export's time);
+                        // negatives saturate to 0, as the clamp did.
                         std::array::from_fn(|c| {
-                            ((p[c] as f64 - origin[c] as f64) / step)
-                                .round()
-                                .clamp(0.0, (MAX_LEVELS - 1) as f64)
-                                as u16
+                            let x = (p[c] as f64 - origin[c] as f64) / step + 0.5;
+                            (x as u32).min(MAX_LEVELS - 1) as u16
                         })
                     })
                     .collect();

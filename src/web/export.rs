@@ -319,7 +319,7 @@ pub fn export_db(dir: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportR
     let mut extra = Extra::default();
     if !opts.linear_transitions && !transitions.is_empty() {
         let t1 = std::time::Instant::now();
-        let windows = blend_windows(&g, &transitions)?;
+        let windows = super::windows::blend_windows(&g, &transitions, &Default::default())?;
         for (t, w) in transitions.iter_mut().zip(windows) {
             t.blended = Some(g.sequences.len());
             extra.transition_frames += w.len() / g.vertices;
@@ -362,13 +362,28 @@ struct Extra {
     space_frames: usize,
 }
 
-/// The transitions' windows blended non-linearly (Huang et al. 2015,
-/// Sec. 4.4, the paper's fixed transitions): frame `i ∈ 0..=2L` is
+/// The reference mesh of the transition blend (the database's first frame,
+/// with the topology's triangles) and its prefactored [`Blender`].
+pub(crate) fn window_blender(g: &Geometry) -> Result<Blender, WebError> {
+    let reference = crate::mesh::Mesh::new(
+        frame(g, 0, 0).iter().map(|q| q.map(f64::from)).collect(),
+        g.triangles.clone(),
+    )
+    .map_err(crate::mesh::MeshError::from)?;
+    Ok(Blender::new(&reference).map_err(crate::parametric::ParamError::from)?)
+}
+
+/// The transitions' windows blended non-linearly frame by frame (Huang et
+/// al. 2015, Sec. 4.4, the paper's fixed transitions): frame `i ∈ 0..=2L` is
 /// `G(from[m−L+i], align·to[n−L+i], i / 2L)` with `G` the gradient-domain
 /// blend of [`Blender`] (slerped rotations, lerped stretches,
 /// Poisson-stitched), in the source's coordinates. Frames past a sequence's
 /// ends are clamped, as the page's linear blend does.
-pub fn blend_windows(
+///
+/// Every window frame decomposes both its inputs anew: the reference that
+/// [`super::windows::blend_windows`] (the export's path, each database frame
+/// decomposed once) is checked against.
+pub fn blend_windows_per_frame(
     g: &Geometry,
     table: &[SiteTransition],
 ) -> Result<Vec<Vec<[f32; 3]>>, WebError> {
@@ -379,9 +394,7 @@ pub fn blend_windows(
             .map(|q| [q[0] as f64, q[1] as f64, q[2] as f64])
             .collect()
     };
-    let reference = crate::mesh::Mesh::new(f64s(frame(g, 0, 0)), g.triangles.clone())
-        .map_err(crate::mesh::MeshError::from)?;
-    let blender = Blender::new(&reference).map_err(crate::parametric::ParamError::from)?;
+    let blender = window_blender(g)?;
     let frames = |s: usize| g.sequences[s].len() / n;
     Ok(table
         .par_iter()

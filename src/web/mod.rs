@@ -1,13 +1,15 @@
 //! The 4D character in a web browser (Volino, Huang & Hilton 2015): a
 //! compact streaming geometry format ([`codec`]), the static site export
 //! with the Surface Motion Graph's transition table ([`export`]), a local
-//! server that keeps to the site's folder ([`serve`]), and the page's
-//! engine and WebGL2 renderer ([`assets`], embedded in the binary).
+//! server that keeps to the site's folder ([`serve`]), the transition
+//! windows' non-linear blend precomputed for the page ([`windows`]), and the
+//! page's engine and WebGL2 renderer ([`assets`], embedded in the binary).
 
 pub mod assets;
 pub mod codec;
 pub mod export;
 pub mod serve;
+pub mod windows;
 
 pub use codec::{CodecError, Decoded, EncodeOptions, EncodeReport, Geometry, Predictor};
 pub use export::{
@@ -15,3 +17,4 @@ pub use export::{
     WebError, export_db, export_result, load_db_geometry,
 };
 pub use serve::{SiteServer, resolve_path};
+pub use windows::{WindowOptions, blend_windows};

@@ -4,6 +4,8 @@
 
 use std::path::PathBuf;
 
+pub mod gaits;
+
 /// Where the shared data folder is looked for: `$SURFMOTION_DATA`, else
 /// `../shared/data` beside the package (the same rule as `build.rs`).
 pub fn data_path() -> PathBuf {

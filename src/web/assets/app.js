@@ -200,6 +200,16 @@ async function main() {
     return { eye: e, at: cam.at.slice() };
   };
 
+  // What the geometry sequences after the motions are, for the status line:
+  // a transition's precomputed window, or a space's reference frames.
+  const partNames = new Map();
+  (m.transitions || []).forEach((t) => {
+    if (t.blended !== undefined && t.blended !== null) partNames.set(t.blended, `transition ${m.sequences[t.from].name} ${t.m} -> ${m.sequences[t.to].name} ${t.n}, window`);
+  });
+  (m.spaces || []).forEach((sp) => [sp.first_block, ...sp.pairs.flatMap((p) => p.blocks)].forEach((b) => partNames.set(b, `space ${sp.name} reference`)));
+  const where = (s) => (s < m.sequences.length ? m.sequences[s].name : partNames.get(s) || `geometry sequence ${s}`);
+  app.partName = where;
+
   const timing = { engine: [], gl: [] };
   let frames = 0;
   // Advances `ticks` frames and draws; returns {engineMs, glMs}.
@@ -226,7 +236,6 @@ async function main() {
       buttons.forEach((bt, i) => bt.classList.toggle('on', m.sequences[i].name === st.goal));
       spaceButtons.forEach((bt, i) => bt.classList.toggle('on', !!st.space && m.spaces[i].name === st.space.name));
     }
-    const where = (s) => (s < m.sequences.length ? m.sequences[s].name : `block ${s}`);
     $('status').textContent = result
       ? `frame ${scrubFrame + 1} / ${m.sequences[0].frames}`
       : st.space
