@@ -42,11 +42,18 @@ impl Budget {
     /// The budget of this process: [`MEMORY_ENV`] if set and readable, else
     /// half of physical memory, else 8 GiB.
     pub fn current() -> Budget {
-        if let Some(b) = std::env::var(MEMORY_ENV).ok().and_then(|v| parse_bytes(&v)) {
-            return Budget {
-                bytes: b,
-                source: "set by SURFMOTION_MEMORY_LIMIT",
-            };
+        if let Ok(v) = std::env::var(MEMORY_ENV) {
+            match parse_bytes(&v) {
+                Some(b) => {
+                    return Budget {
+                        bytes: b,
+                        source: "set by SURFMOTION_MEMORY_LIMIT",
+                    };
+                }
+                None => tracing::warn!(
+                    "{MEMORY_ENV}={v:?} is not a size (e.g. 8G, 512MB); using the default budget"
+                ),
+            }
         }
         match physical_memory() {
             Some(m) => Budget {
@@ -152,9 +159,15 @@ pub fn thousands(n: u128) -> String {
     out
 }
 
-/// `"8G"`, `"512M"`, `"1000000"` → bytes.
+/// `"8G"`, `"512M"`, `"512MB"`, `"2 GiB"`, `"1000000"` → bytes.
 pub fn parse_bytes(s: &str) -> Option<u64> {
     let s = s.trim();
+    // "512MB", "512MiB", "512M" and "1000B" alike.
+    let s = ["iB", "ib", "B", "b"]
+        .iter()
+        .find_map(|u| s.strip_suffix(u))
+        .unwrap_or(s)
+        .trim_end();
     let (num, mult) = match s.chars().last()?.to_ascii_uppercase() {
         'K' => (&s[..s.len() - 1], 1u64 << 10),
         'M' => (&s[..s.len() - 1], 1 << 20),
@@ -183,6 +196,9 @@ mod tests {
         assert_eq!(parse_bytes("8G"), Some(8 << 30));
         assert_eq!(parse_bytes("512m"), Some(512 << 20));
         assert_eq!(parse_bytes("1000"), Some(1000));
+        assert_eq!(parse_bytes("100MB"), Some(100 << 20));
+        assert_eq!(parse_bytes("2 GiB"), Some(2 << 30));
+        assert_eq!(parse_bytes("1000B"), Some(1000));
         assert_eq!(parse_bytes("-1"), None);
         assert_eq!(parse_bytes("x"), None);
         assert_eq!(Bytes(41_700_000_000).to_string(), "41.7 GB");

@@ -537,6 +537,38 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
         first.contains("--heading") && first.contains("expected a finite number"),
         "{e}"
     );
+    // A far-out-of-range target gives a long compromise path; one longer
+    // than the memory budget is refused before any mesh is built (it ran
+    // for minutes and gigabytes, unchecked).
+    let mut a: Vec<&std::ffi::OsStr> = vec!["keyframe".as_ref(), "--db".as_ref(), db.as_os_str()];
+    a.extend(
+        [
+            "--from",
+            "02_01:0",
+            "--to",
+            "02_03:30",
+            "--distance",
+            "1000",
+            "--time",
+            "4",
+            "-o",
+        ]
+        .map(std::ffi::OsStr::new),
+    );
+    a.push(x.as_os_str());
+    let o = Command::new(common::bin())
+        .args(&a)
+        .env("SURFMOTION_MEMORY_LIMIT", "8MB")
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    assert!(
+        e.contains("the key-frame path") && e.contains("lower --distance"),
+        "{e}"
+    );
+    assert!(!x.exists(), "nothing written: {}", x.display());
 }
 
 /// Every distinct (distance, cheapest transition cost) of the paths of

@@ -90,6 +90,10 @@ pub enum KeyframeError {
     /// The search failed.
     #[error("{0}")]
     Search(String),
+    /// The path found is longer than the memory budget can hold as a
+    /// mesh sequence (far-out-of-range targets give long compromises).
+    #[error("{0} (lower --distance or --time)")]
+    OverBudget(#[from] crate::budget::OverBudget),
 }
 
 /// Frame id of a key-frame written `SEQUENCE:FRAME`.
@@ -779,6 +783,8 @@ pub fn synthesise(
     let plan = planner
         .plan(targets, &opts.search)
         .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
+    // The positions below and the written copy of them.
+    crate::budget::check_frames("the key-frame path", plan.path.len(), ch.n(), 2)?;
     let t0 = Instant::now();
     let placed = place::place(ch, &planner.graph, &plan.path, &opts.timeline)
         .map_err(|e| KeyframeError::Search(format!("blending: {e}")))?;
