@@ -37,8 +37,9 @@ pub struct Source {
     /// Prediction of the geometry codec (measured: spatio-temporal is smaller).
     #[arg(long, value_enum, default_value_t = PredictorArg::SpatioTemporal)]
     pub predictor: PredictorArg,
-    /// DEFLATE level of the geometry (0-9): higher is smaller and slower.
-    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=9))]
+    /// DEFLATE level of the geometry (0-9): higher is smaller and slower
+    /// (level 6: 1.8 % smaller, 20 % slower to export).
+    #[arg(long, default_value_t = surfmotion::web::codec::DEFAULT_LEVEL, value_parser = clap::value_parser!(u32).range(0..=9))]
     pub level: u32,
     /// Let the page blend transitions linearly on the GPU instead of
     /// precomputing each window's non-linear blend (smaller, faster export).

@@ -93,18 +93,25 @@ pub struct EncodeOptions {
     /// The predictor. Default: [`Predictor::SpatioTemporal`] (the smaller
     /// output on samba, crane and synthetic databases; see the README).
     pub predictor: Predictor,
-    /// DEFLATE level 0-9 (flate2 on its zlib-rs backend). Default: 6 (on
-    /// samba: 1,604 KB; level 3: 1,687 KB; the 1,050-frame export takes
-    /// 3.2 s at level 6 and 1.6 s at level 3; see the README).
+    /// DEFLATE level 0-9 (flate2 on its zlib-rs backend). Default:
+    /// [`DEFAULT_LEVEL`].
     pub level: u32,
 }
+
+/// The default DEFLATE level, 5: the 1,050-frame `samba6` export with its
+/// precomputed transition windows takes 4.4 s on two idle cores at level 5
+/// (5.4 s at 6, 4.2 s at 4, 4.1 s at 3) for a file 1.8 % larger than at
+/// level 6 (2.3 % at 4, 4.2 % at 3); past level 5 zlib's match search
+/// (`longest_match`, 29 % of the export at level 6) buys under 2 %.
+/// Measured 2026-11-24, see the README's web section.
+pub const DEFAULT_LEVEL: u32 = 5;
 
 impl Default for EncodeOptions {
     fn default() -> Self {
         EncodeOptions {
             max_error: 0.001,
             predictor: Predictor::SpatioTemporal,
-            level: 6,
+            level: DEFAULT_LEVEL,
         }
     }
 }
