@@ -432,17 +432,15 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     assert_eq!(u32::from_be_bytes(bytes[20..24].try_into().unwrap()), 24);
     // Bad input: one line on stderr, exit 1.
     let x = tmp.path().join("x.pc2");
-    let bad = |args: &[&str], want: &str| {
+    let bad_with = |args: &[&str], env: &[(&str, &str)], want: &[&str]| {
         let mut a: Vec<&std::ffi::OsStr> =
             vec!["keyframe".as_ref(), "--db".as_ref(), db.as_os_str()];
         a.extend(args.iter().map(|s| std::ffi::OsStr::new(*s)));
         a.extend(["-o".as_ref(), x.as_os_str()]);
-        let o = run(&a);
-        let e = String::from_utf8_lossy(&o.stderr).to_string();
-        assert_eq!(o.status.code(), Some(1), "{args:?}: {e}");
-        assert_eq!(e.trim_end().lines().count(), 1, "{args:?}: {e}");
-        assert!(e.contains(want), "{args:?}: {e}");
+        common::run_cli(&a, None, env).assert_bad_input(&format!("{args:?}"), want);
+        assert!(!x.exists(), "{args:?}: nothing written");
     };
+    let bad = |args: &[&str], want: &str| bad_with(args, &[], &[want]);
     bad(
         &[
             "--from",
@@ -511,64 +509,24 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     );
     // A heading that is no number made every cost NaN, with exit 0; it is
     // now a usage error (clap's: the reason, then a pointer to --help).
-    let mut a: Vec<&std::ffi::OsStr> = vec!["keyframe".as_ref(), "--db".as_ref(), db.as_os_str()];
-    a.extend(
-        [
-            "--from",
-            "02_01:0",
-            "--to",
-            "02_03:30",
-            "--distance",
-            "1",
-            "--time",
-            "1",
-            "--heading",
-            "nan",
-            "-o",
+    let to_run = ["--from", "02_01:0", "--to", "02_03:30"];
+    bad_with(
+        &[
+            &to_run[..],
+            &["--distance", "1", "--time", "1", "--heading", "nan"],
         ]
-        .map(std::ffi::OsStr::new),
-    );
-    a.push(x.as_os_str());
-    let o = run(&a);
-    let e = String::from_utf8_lossy(&o.stderr).to_string();
-    assert_eq!(o.status.code(), Some(1), "{e}");
-    let first = e.lines().next().unwrap_or_default();
-    assert!(
-        first.contains("--heading") && first.contains("expected a finite number"),
-        "{e}"
+        .concat(),
+        &[],
+        &["--heading", "expected a finite number"],
     );
     // A far-out-of-range target gives a long compromise path; one longer
     // than the memory budget is refused before any mesh is built (it ran
     // for minutes and gigabytes, unchecked).
-    let mut a: Vec<&std::ffi::OsStr> = vec!["keyframe".as_ref(), "--db".as_ref(), db.as_os_str()];
-    a.extend(
-        [
-            "--from",
-            "02_01:0",
-            "--to",
-            "02_03:30",
-            "--distance",
-            "1000",
-            "--time",
-            "4",
-            "-o",
-        ]
-        .map(std::ffi::OsStr::new),
+    bad_with(
+        &[&to_run[..], &["--distance", "1000", "--time", "4"]].concat(),
+        &[("SURFMOTION_MEMORY_LIMIT", "8MB")],
+        &["the key-frame path", "lower --distance"],
     );
-    a.push(x.as_os_str());
-    let o = Command::new(common::bin())
-        .args(&a)
-        .env("SURFMOTION_MEMORY_LIMIT", "8MB")
-        .output()
-        .unwrap();
-    let e = String::from_utf8_lossy(&o.stderr).to_string();
-    assert_eq!(o.status.code(), Some(1), "{e}");
-    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
-    assert!(
-        e.contains("the key-frame path") && e.contains("lower --distance"),
-        "{e}"
-    );
-    assert!(!x.exists(), "nothing written: {}", x.display());
 }
 
 /// Every distinct (distance, cheapest transition cost) of the paths of
