@@ -49,35 +49,7 @@ impl Grid {
     /// in ring `r` is at least `(r − 1)·cell` away); all points when none
     /// is within 14 cells.
     fn nearest(&self, q: DVec3) -> f64 {
-        let (cx, cy, cz) = key(q, self.cell);
-        let mut best = f64::INFINITY;
-        for r in 0..16i32 {
-            if ((r - 1).max(0) as f64 * self.cell).powi(2) > best {
-                return best.sqrt();
-            }
-            for dx in -r..=r {
-                for dy in -r..=r {
-                    for dz in -r..=r {
-                        if dx.abs().max(dy.abs()).max(dz.abs()) != r {
-                            continue;
-                        }
-                        if let Some(ids) = self.cells.get(&(cx + dx, cy + dy, cz + dz)) {
-                            for &i in ids {
-                                best = best.min(self.points[i as usize].distance_squared(q));
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        if best.is_finite() && (14.0 * self.cell).powi(2) >= best {
-            return best.sqrt();
-        }
-        self.points
-            .iter()
-            .map(|p| p.distance_squared(q))
-            .fold(f64::INFINITY, f64::min)
-            .sqrt()
+        self.nearest_index(q).1
     }
 }
 
