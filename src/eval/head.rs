@@ -54,7 +54,9 @@ pub struct HeadTorso {
     pub chin: Vec<u32>,
     /// Hip (bottom of the torso part) vertices.
     pub hips: Vec<u32>,
-    /// `∠(chin→crown, hips→chin)` on the rest frame (degrees).
+    /// `∠(chin→crown, hips→chin)` of the pose the angle is measured from
+    /// (degrees): the rest frame's, or for a database character whose rest
+    /// frame is bent, its neutral frame's (`Checker::for_character`).
     pub rest_deg: f64,
     /// Vertices of the mesh.
     pub vertex_count: usize,

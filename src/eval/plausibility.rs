@@ -219,6 +219,19 @@ impl Checker {
             .flat_map(|f| lowest_heights(f, n, DVec3::Y))
             .collect();
         c.floor = floor_height(&lowest);
+        // The head's zero is the character's neutral: its rest frame when
+        // that stands upright, else the database frame nearest neutral
+        // (`rig::retarget::character_neutral`), the attitude a clip standing
+        // neutrally is retargeted onto. Measured from a bent rest frame (a
+        // stride, a bow) every frame would read its difference from that
+        // pose.
+        let neutral = crate::rig::retarget::character_neutral(ch.rest_pose(), ch.poses());
+        if let crate::rig::retarget::NeutralSource::Frame(i) = neutral.source
+            && i < ch.frame_count()
+        {
+            ch.frame_metres(i as u32, &mut buf);
+            c.head.rest_deg = c.head.raw_deg(&buf);
+        }
         let series: Vec<Series> = seqs.iter().map(|f| c.series(f, n)).collect();
         c.reference = Some(c.pool(
             &format!(
