@@ -4,13 +4,18 @@
 //!
 //! Three vertex sets are chosen once on the rest frame from the rig's part
 //! labels: the crown (head-part vertices in the top `band` of the head's
-//! extent along the body's up axis), the chin (head-part vertices in the
-//! bottom `band` of the head: the chin and the neck below it) and the hips
+//! extent along the body's up axis), the "chin" (head-part vertices in the
+//! bottom `band` of the head; the head part starts at the rig's neck joint,
+//! so on a rig embedded from landmarks this is the base of the neck, and
+//! the head axis chin → crown pivots at the neck joint as a skeleton's
+//! neck → head bone does) and the hips
 //! (torso-part vertices in a slab `band` of the torso's extent thick,
 //! centred at the height of the rig's pelvis joint; without a pelvis joint,
 //! the bottom `band` of the torso's extent). Per
 //! frame, with `c`, `k`, `h` the centroids of crown, chin and hips, the
-//! measure is `∠(k→c, h→k) − ∠_rest(k→c, h→k)` in degrees: zero on the rest
+//! measure is `∠(k→c, h→k) − ∠_rest(k→c, h→k)` in degrees (for a database
+//! character whose rest frame is bent, `∠_rest` is its neutral frame's, see
+//! `Checker::for_character`): zero on the rest
 //! frame and on any rigid motion (or uniform scaling) of the whole mesh; a
 //! head turned by `α` about an axis normal to the plane of the two axes
 //! reads `±α`. Its sign says whether the head leans further from (+) or
