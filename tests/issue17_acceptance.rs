@@ -426,3 +426,78 @@ fn a_walk_on_the_samba_capture_keeps_its_head_within_the_line() {
     }
     assert!((p95(&ep["head_torso_deg"]) - head).abs() < 0.05);
 }
+
+/// `rig embed` ends with its self-check, in the text and under `check` in
+/// `--json`: a generated woman-like body (1.66 m, hips ×1.25, T-pose, high
+/// crotch, turned and placed off the origin) passes with the pelvis on its
+/// mid-plane; the crane capture (loose jacket) warns, each warning naming
+/// the joint and the distance (units and % of the height).
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn rig_embed_reports_its_self_check_in_text_and_json() {
+    use surfmotion::synth::humanoid::{
+        DEMO_GRID, HumanoidShape, humanoid_landmarks_json_with, humanoid_mesh_with,
+    };
+    let Some(d) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let s = HumanoidShape {
+        height: 1.66,
+        hip_width: 1.25,
+        arm_angle: 0.0,
+        crotch_lift: 0.15,
+        yaw: -20.0,
+        offset: [-0.3, 0.0, 0.5],
+        ..HumanoidShape::default()
+    };
+    let body = t.join("woman.obj");
+    let m = humanoid_mesh_with(DEMO_GRID * s.height / 1.75, &s);
+    surfmotion::mesh::io::obj::write_obj(&m, None, &body).unwrap();
+    let lm = t.join("woman.landmarks.json");
+    std::fs::write(&lm, humanoid_landmarks_json_with(&s)).unwrap();
+    let crane_lm = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/crane.landmarks.json");
+    let crane = d.join("4d/crane/crane.obj");
+    let embed = |mesh: &std::path::Path, lm: &std::path::Path, json: bool| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "rig".as_ref(),
+            "embed".as_ref(),
+            mesh.as_os_str(),
+            "--landmarks".as_ref(),
+            lm.as_os_str(),
+            "-o".as_ref(),
+        ];
+        let out = t.join("rig.json");
+        args.push(out.as_os_str());
+        if json {
+            args.push("--json".as_ref());
+        }
+        let r = common::run_cli(&args, None, &[]);
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+        r.stdout
+    };
+    let v: serde_json::Value = serde_json::from_str(&embed(&body, &lm, true)).unwrap();
+    let c = &v["check"];
+    let off = c["pelvis_offset_percent"].as_f64().unwrap();
+    eprintln!("woman-like body: pelvis {off:.3}% of the height off its mid-plane");
+    assert!(off.abs() < 1.0, "{c}");
+    assert!(c["hip_asymmetry_percent"].as_f64().unwrap() < 1.0, "{c}");
+    assert_eq!(c["warnings"].as_array().unwrap().len(), 0, "{c}");
+    assert!(embed(&body, &lm, false).contains("self-check: pelvis"));
+    let v: serde_json::Value = serde_json::from_str(&embed(&crane, &crane_lm, true)).unwrap();
+    let w = v["check"]["warnings"].as_array().unwrap();
+    assert!(!w.is_empty());
+    for x in w {
+        let joint = x["joint"].as_str().unwrap();
+        assert!(Canonical::from_name(joint).is_some(), "{x}");
+        assert!(x["distance"].as_f64().unwrap() > 0.0, "{x}");
+        assert!(x["percent_of_height"].as_f64().unwrap() > 0.0, "{x}");
+        assert!(x["message"].as_str().unwrap().contains(joint), "{x}");
+    }
+    let text = embed(&crane, &crane_lm, false);
+    assert_eq!(
+        text.lines().filter(|l| l.contains("warning: ")).count(),
+        w.len(),
+        "{text}"
+    );
+}
