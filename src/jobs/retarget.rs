@@ -214,7 +214,7 @@ pub fn plausibility(
     let opts = PlausibilityOptions::default();
     let checked = Checker::for_character(ch, opts).and_then(|c| {
         let Some(m) = clip else {
-            return Ok((c.measure(positions, ch.n(), turned_over)?, c.floor));
+            return Ok((c.measure(positions, ch.n(), turned_over)?.logged(), c.floor));
         };
         // Floating and penetration from the clip's own ground (its floor,
         // raised under a footfall on a step), where the result stands.
@@ -225,7 +225,8 @@ pub fn plausibility(
             .with_clip_glide(
                 clip_foot_glide_cm(ch.rest_pose(), &m.reference, &m.poses),
                 &opts.limits,
-            );
+            )
+            .logged();
         Ok((p, c.floor))
     });
     match checked {

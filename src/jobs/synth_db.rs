@@ -245,7 +245,8 @@ pub fn write_synthetic_database(
                     None,
                     Some(&raised),
                 )?
-                .with_clip_head(&clip, &c.opts.limits))
+                .with_clip_head(&clip, &c.opts.limits)
+                .logged())
             })
             .map_err(|e| tracing::warn!("{name}: plausibility not measured: {e}"))
             .ok()

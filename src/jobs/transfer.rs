@@ -626,6 +626,7 @@ fn transfer_inner(
                 Some(h) => p.with_clip_head(h, &opts.limits),
                 None => p,
             })
+            .map(crate::eval::Plausibility::logged)
             .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
             .ok()
     });
