@@ -358,6 +358,13 @@ pub fn non_negative(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A count on the command line (pixels, frames) in `[lo, hi]`: clap's
+/// "0 is not in 16..=8192" instead of a silent clamp (`render --size 0`
+/// drew 16 pixels).
+pub fn bounded_count(lo: u64, hi: u64) -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::<usize>::new().range(lo..=hi)
+}
+
 /// A command line clap refused (it has printed why): exit 1.
 #[derive(Debug, thiserror::Error)]
 #[error("bad command line")]
