@@ -252,6 +252,7 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
             manifest.display()
         );
     }
+    super::length_unit("--units", &a.units)?;
     let canonical = |p: &Path| std::fs::canonicalize(p).with_context(|| format!("{}", p.display()));
     let mut sequences = Vec::new();
     for s in &a.sequences {
