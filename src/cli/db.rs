@@ -290,17 +290,34 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
     // The paths are absolute here, so the folder they resolve against is
     // not used.
     let topo = m.load_topology(&a.dir).context("--mesh")?;
+    // Another connectivity is `db info`'s problem to report (the manifest
+    // may be written first and the topology fixed after); a file that is
+    // not a mesh sequence is refused here.
     for s in &m.sequences {
-        let q = m
-            .load_sequence(&a.dir, s)
-            .with_context(|| format!("--sequence {}", s.name))?;
-        if q.mesh().vertex_count() != topo.vertex_count() {
-            bail!(
-                "--sequence {}: {}: {} vertices, the topology {} has {}",
+        let (count, noun) = match m.load_sequence(&a.dir, s) {
+            Ok(q) => (q.mesh().vertex_count(), "vertices"),
+            Err(e) => {
+                use surfmotion::mesh::io::{MeshFormat, mdd, pc2};
+                // A point cache of another vertex count does not load
+                // against this topology: read it on its own.
+                let cache = match MeshFormat::of(&s.path) {
+                    Some(MeshFormat::Pc2) => pc2::read_pc2(&s.path).ok(),
+                    Some(MeshFormat::Mdd) => mdd::read_mdd(&s.path).ok(),
+                    _ => None,
+                };
+                match cache {
+                    Some(c) if c.points != topo.vertex_count() => (c.points, "points per frame"),
+                    _ => {
+                        return Err(anyhow::Error::from(e).context(format!("--sequence {}", s.name)));
+                    }
+                }
+            }
+        };
+        if count != topo.vertex_count() {
+            tracing::warn!(
+                "sequence '{}' ({}): {count} {noun}, the topology has {} vertices; `db info` lists it",
                 s.name,
                 s.path.display(),
-                q.mesh().vertex_count(),
-                m.topology.display(),
                 topo.vertex_count()
             );
         }
