@@ -308,7 +308,9 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
                 match cache {
                     Some(c) if c.points != topo.vertex_count() => (c.points, "points per frame"),
                     _ => {
-                        return Err(anyhow::Error::from(e).context(format!("--sequence {}", s.name)));
+                        return Err(
+                            anyhow::Error::from(e).context(format!("--sequence {}", s.name))
+                        );
                     }
                 }
             }
