@@ -337,6 +337,8 @@ fn rows() -> Vec<Row> {
     ];
     // Session 5 (hostile-input review): each row failed before its fix.
     r.extend(session5_rows(obj_ok));
+    // Session 6 (review): each row exited 0, or aborted, before its fix.
+    r.extend(session6_rows());
     // The sweep: verbs × malformed files, each message naming the file.
     let bvh_cut = {
         let t = walk_text();
@@ -521,6 +523,136 @@ fn session5_rows(obj_ok: &'static str) -> Vec<Row> {
         row("a mesh folder output onto an existing file", "mesh convert {topo} {d}/x", &["x", "not a folder"])
             .file("x", "a file"),
     ]
+}
+
+/// The rows of the session-6 review: sizes that were clamped or aborted,
+/// and `db init` files that were written into the manifest unread.
+fn session6_rows() -> Vec<Row> {
+    vec![
+        // A size that makes no picture was drawn at 16 px, exit 0.
+        row("render --size 0", "render {topo} -o {d}/r.png --size 0", &["--size", "0 is not in 16..=8192"]),
+        row("render --size 100000", "render {topo} -o {d}/r.png --size 100000", &["--size", "100000 is not in 16..=8192"]),
+        // Aborted allocating 3 TB (exit 134).
+        row("graph --size 1000000", "graph {db} --matrix {d}/m.png --size 1000000", &["--size", "1000000 is not in 16..=8192"]),
+        row("graph --size 0", "graph {db} --matrix {d}/m.png --size 0", &["--size", "0 is not in 16..=8192"]),
+        row("retarget --preview-size 0", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --preview {d}/p.png --preview-size 0", &["--preview-size", "0 is not in 16..=4096"]),
+        row("retarget --preview-frames 0", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --preview {d}/p.png --preview-frames 0", &["--preview-frames", "0 is not in 1..=100"]),
+        row("transfer --preview-frames 1000000", "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --preview {d}/p.png --preview-frames 1000000", &["--preview-frames", "1000000 is not in 1..=100"]),
+        row("a contact sheet over the memory budget", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --preview {d}/p.png --preview-frames 100 --preview-size 4096", &["p.png", "contact sheet", "SURFMOTION_MEMORY_LIMIT"])
+            .env("SURFMOTION_MEMORY_LIMIT", SMALL),
+        // `db init` wrote these into the manifest (exit 0); `db info`
+        // refused them later, or took a BVH as a sequence.
+        row("db init --mesh FOLDER_OF_BVH", "db init {d}/x --mesh {d}/clips", &["--mesh", "clips", "no .obj files"])
+            .file("clips/a.bvh", walk_text()),
+        row("db init --mesh CLIP.bvh", "db init {d}/x --mesh {walk}", &["--mesh", "walk.bvh", "unknown mesh format"]),
+        row("db init --mesh garbage.obj", "db init {d}/x --mesh {d}/g.obj", &["--mesh", "g.obj"])
+            .file("g.obj", garbage(2000)),
+        row("db init --sequence NAME=CLIP.bvh", "db init {d}/x --mesh {topo} --sequence w={walk}", &["--sequence w", "walk.bvh", "unknown mesh format"]),
+        // Outputs onto inputs or onto each other: each exited 0 with a
+        // file lost (the clip, the result or the preview).
+        row("retarget --report onto its own clip", "retarget --db {db} --mocap {d}/w.bvh -o {d}/o.pc2 --report {d}/w.bvh", &["--report", "w.bvh", "overwrite the input"])
+            .file("w.bvh", walk_text()),
+        row("retarget --preview onto its own clip", "retarget --db {db} --mocap {d}/w.bvh -o {d}/o.pc2 --preview {d}/w.bvh", &["--preview", "w.bvh", "overwrite the input"])
+            .file("w.bvh", walk_text()),
+        row("retarget --report onto its -o", "retarget --db {db} --mocap {walk} -o {d}/o.glb --report {d}/o.glb", &["--report", "o.glb", "-o writes the same file"]),
+        row("retarget --preview onto the -o point cache's topology", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --preview {d}/o.obj", &["--preview", "o.obj", "-o writes the same file"]),
+        row("keyframe --report onto its -o", "keyframe --db {db} --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/k.glb --report {d}/k.glb", &["--report", "k.glb", "-o writes the same file"]),
+        row("keyframe -o onto a sequence of its database", "keyframe --db {d}/db --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/db/walk.pc2", &["-o", "walk.pc2", "overwrite the input"])
+            .with_db(),
+        row("transfer --report onto its own clip", "transfer --scan {topo} --landmarks {lm} --mocap {d}/w.bvh -o {d}/o.pc2 --report {d}/w.bvh", &["--report", "w.bvh", "overwrite the input"])
+            .file("w.bvh", walk_text()),
+        row("db init --sequence missing", "db init {d}/x --mesh {topo} --sequence w={d}/none.pc2", &["--sequence w", "none.pc2", "no such file"]),
+    ]
+}
+
+/// Regression (session 6 review): `db init` checks the mesh and every
+/// `--sequence` before it writes anything. It used to create the folder
+/// and write a manifest naming a folder of BVH clips as the mesh, which
+/// only `db info` refused; now each bad file is refused by name, no
+/// folder is left behind, and an existing manifest (`--force`) is kept.
+#[test]
+fn db_init_reads_every_file_before_writing() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::create_dir_all(d.join("clips")).unwrap();
+    std::fs::copy(&f.walk, d.join("clips/a.bvh")).unwrap();
+    let topo = f.db.join("topology.obj");
+    let walk_pc2 = f.db.join("walk.pc2");
+    let seq = |p: &Path| format!("walk={}", p.display());
+    let bad: [(&str, Vec<String>, &[&str]); 3] = [
+        (
+            "a folder of BVH clips as the mesh",
+            vec!["--mesh".into(), d.join("clips").display().to_string()],
+            &["clips", "no .obj files"],
+        ),
+        (
+            "a BVH as a sequence",
+            vec![
+                "--mesh".into(),
+                topo.display().to_string(),
+                "--sequence".into(),
+                seq(&f.walk),
+            ],
+            &["walk.bvh", "unknown mesh format"],
+        ),
+        (
+            "a folder of BVH clips as a sequence",
+            vec![
+                "--mesh".into(),
+                topo.display().to_string(),
+                "--sequence".into(),
+                seq(&d.join("clips")),
+            ],
+            &["clips", "no .obj files"],
+        ),
+    ];
+    for (what, args, words) in &bad {
+        let db = d.join("new");
+        let mut a = vec!["db".to_string(), "init".into(), db.display().to_string()];
+        a.extend(args.iter().cloned());
+        common::run_cli(&a, Some(d), &[]).assert_bad_input(what, words);
+        assert!(!db.exists(), "{what}: {} was created", db.display());
+        // Over an existing database, with --force: its manifest is kept.
+        let old = d.join("old");
+        let ok = [
+            "db",
+            "init",
+            old.to_str().unwrap(),
+            "--mesh",
+            topo.to_str().unwrap(),
+            "--sequence",
+            &seq(&walk_pc2),
+            "--force",
+        ];
+        assert_eq!(common::run_cli(&ok, Some(d), &[]).code, Some(0));
+        let before = std::fs::read(old.join("character.toml")).unwrap();
+        a[2] = old.display().to_string();
+        a.push("--force".into());
+        common::run_cli(&a, Some(d), &[]).assert_bad_input(what, words);
+        assert_eq!(
+            std::fs::read(old.join("character.toml")).unwrap(),
+            before,
+            "{what}"
+        );
+        assert_eq!(
+            std::fs::read_dir(&old).unwrap().count(),
+            1,
+            "{what}: a file left beside the manifest"
+        );
+    }
+    // The good database reads back as written: its sequence loads.
+    let r = common::run_cli(
+        &["db", "info", d.join("old").to_str().unwrap()],
+        Some(d),
+        &[],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(
+        r.stdout.contains("sequence walk") && r.stdout.contains("180 frames"),
+        "{}",
+        r.stdout
+    );
 }
 
 fn scaled_obj(k: f64) -> Vec<u8> {

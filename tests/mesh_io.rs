@@ -137,6 +137,47 @@ fn obj_groups_colours_and_polygons() {
     assert!(e.starts_with("bad.obj:3:"), "{e}");
 }
 
+/// Regression (session 6 review): a `\` at the end of an OBJ line (the
+/// format's line continuation, written by some exporters for long faces)
+/// was read as a coordinate or face index and the file refused
+/// ("bad face index '\'"). Statements now join across the break; an error
+/// names the statement's first line.
+#[test]
+fn obj_line_continuations_join_statements() {
+    let plain = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    let want = obj::parse_obj(plain, Path::new("plain.obj")).unwrap();
+    for text in [
+        // A face split over two lines, one with a CRLF ending.
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 \\\r\n 3 4\n",
+        // A vertex split after its keyword, a backslash with no space
+        // before it, trailing blanks after it, and a comment after it.
+        "v \\\n0 0 0\nv 1 0\\\n 0\nv 1 1 0\nv 0 1 0\nf 1 \\  \n2 \\ # more\n3 4\n",
+        // A face split three times, the last line ending the file.
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf \\\n1 \\\n2 \\\n3 4",
+        // A continuation on the last line.
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4 \\\n",
+    ] {
+        let m = obj::parse_obj(text, Path::new("c.obj")).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m, want, "{text:?}");
+    }
+    // The error of a joined statement names its first line, and the
+    // lines after it keep their own numbers.
+    let e = obj::parse_obj(
+        "v 0 0 0\nv 1 0 0\nf 1 \\\n2 \\\n9\nv 0 1 0\n",
+        Path::new("c.obj"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("c.obj:3:"), "{e}");
+    let e = obj::parse_obj("v 0 0 \\\n0\nv 1 0 0\nf 1 2 x\n", Path::new("c.obj"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("c.obj:4:"), "{e}");
+    // A comment line is not continued into: its `\` is part of the comment.
+    let m = obj::parse_obj(&format!("# C:\\path\\\n{plain}"), Path::new("c.obj")).unwrap();
+    assert_eq!(m, want);
+}
+
 #[test]
 fn ply_ascii_and_big_endian() {
     let ascii = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 255 0 0\n1 0 0 0 255 0\n1 1 0 0 0 255\n0 1 0 0 0 0\n4 0 1 2 3\n";

@@ -205,73 +205,12 @@ pub struct InfoArgs {
     pub json: bool,
 }
 
-/// A path as the manifest should store it: relative to `dir` when inside it, else absolute.
-fn store_path(dir: &Path, p: &Path) -> anyhow::Result<PathBuf> {
-    let abs = std::fs::canonicalize(p).with_context(|| format!("{}", p.display()))?;
-    let d = std::fs::canonicalize(dir).with_context(|| format!("{}", dir.display()))?;
-    Ok(abs.strip_prefix(&d).map(Path::to_path_buf).unwrap_or(abs))
-}
-
 /// Runs a db subcommand.
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
         Cmd::Skeleton(a) => return skeleton(a),
         Cmd::Build(a) => return build(a),
-        Cmd::Init(a) => {
-            std::fs::create_dir_all(&a.dir).with_context(|| format!("{}", a.dir.display()))?;
-            if a.dir.join(MANIFEST).exists() && !a.force {
-                bail!(
-                    "{}: a manifest exists already; pass --force to overwrite it",
-                    a.dir.join(MANIFEST).display()
-                );
-            }
-            let mut sequences = Vec::new();
-            for s in &a.sequences {
-                let Some((name, path)) = s.split_once('=') else {
-                    bail!("--sequence '{s}': expected NAME=PATH");
-                };
-                sequences.push(SequenceEntry {
-                    name: name.to_string(),
-                    path: store_path(&a.dir, Path::new(path))?,
-                    fps: None,
-                });
-            }
-            let opt = |p: &Option<PathBuf>| p.as_ref().map(|p| store_path(&a.dir, p)).transpose();
-            let name = a.name.clone().unwrap_or_else(|| {
-                std::fs::canonicalize(&a.dir)
-                    .ok()
-                    .and_then(|d| d.file_name().map(|n| n.to_string_lossy().into_owned()))
-                    .unwrap_or_else(|| "character".into())
-            });
-            let m = Manifest {
-                name,
-                topology: store_path(&a.dir, &a.mesh)?,
-                fps: a.fps,
-                units: a.units.clone(),
-                up: a.up.to_ascii_lowercase(),
-                colors: None,
-                sequences,
-                rig: RigSpec {
-                    landmarks: opt(&a.landmarks)?,
-                    parts: opt(&a.parts)?,
-                    gltf_skin: opt(&a.gltf_skin)?,
-                    rig_map: opt(&a.rig_map)?,
-                },
-                graph: Default::default(),
-                deform: Default::default(),
-                spaces: Vec::new(),
-            };
-            if let Err(msg) = m.validate() {
-                bail!("{msg}");
-            }
-            m.save(&a.dir)?;
-            eprintln!(
-                "wrote {} ({} sequences); check it with `surfmotion db info {}`",
-                a.dir.join(MANIFEST).display(),
-                m.sequences.len(),
-                a.dir.display()
-            );
-        }
+        Cmd::Init(a) => init(a)?,
         Cmd::Info(a) => {
             let i = info(&a.dir)?;
             if a.json {
@@ -298,6 +237,127 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             }
         }
     }
+    Ok(())
+}
+
+/// Runs `db init`. Every file is read before anything is written: a mesh
+/// path that is a folder of BVH clips, a BVH or a file that does not parse
+/// is refused here, naming the file, with nothing left behind (it used to
+/// be written into the manifest and refused only by `db info`).
+fn init(a: InitArgs) -> anyhow::Result<()> {
+    let manifest = a.dir.join(MANIFEST);
+    if manifest.exists() && !a.force {
+        bail!(
+            "{}: a manifest exists already; pass --force to overwrite it",
+            manifest.display()
+        );
+    }
+    super::length_unit("--units", &a.units)?;
+    let canonical = |p: &Path| std::fs::canonicalize(p).with_context(|| format!("{}", p.display()));
+    let mut sequences = Vec::new();
+    for s in &a.sequences {
+        let Some((name, path)) = s.split_once('=') else {
+            bail!("--sequence '{s}': expected NAME=PATH");
+        };
+        sequences.push(SequenceEntry {
+            name: name.to_string(),
+            path: canonical(Path::new(path)).with_context(|| format!("--sequence {name}"))?,
+            fps: None,
+        });
+    }
+    let opt = |p: &Option<PathBuf>| p.as_deref().map(canonical).transpose();
+    let mut m = Manifest {
+        name: a.name.clone().unwrap_or_default(),
+        topology: canonical(&a.mesh).context("--mesh")?,
+        fps: a.fps,
+        units: a.units.clone(),
+        up: a.up.to_ascii_lowercase(),
+        colors: None,
+        sequences,
+        rig: RigSpec {
+            landmarks: opt(&a.landmarks).context("--landmarks")?,
+            parts: opt(&a.parts).context("--parts")?,
+            gltf_skin: opt(&a.gltf_skin).context("--gltf-skin")?,
+            rig_map: opt(&a.rig_map).context("--rig-map")?,
+        },
+        graph: Default::default(),
+        deform: Default::default(),
+        spaces: Vec::new(),
+    };
+    if let Err(msg) = m.validate() {
+        bail!("{msg}");
+    }
+    // The paths are absolute here, so the folder they resolve against is
+    // not used.
+    let topo = m.load_topology(&a.dir).context("--mesh")?;
+    // Another connectivity is `db info`'s problem to report (the manifest
+    // may be written first and the topology fixed after); a file that is
+    // not a mesh sequence is refused here.
+    for s in &m.sequences {
+        let (count, noun) = match m.load_sequence(&a.dir, s) {
+            Ok(q) => (q.mesh().vertex_count(), "vertices"),
+            Err(e) => {
+                use surfmotion::mesh::io::{MeshFormat, mdd, pc2};
+                // A point cache of another vertex count does not load
+                // against this topology: read it on its own.
+                let cache = match MeshFormat::of(&s.path) {
+                    Some(MeshFormat::Pc2) => pc2::read_pc2(&s.path).ok(),
+                    Some(MeshFormat::Mdd) => mdd::read_mdd(&s.path).ok(),
+                    _ => None,
+                };
+                match cache {
+                    Some(c) if c.points != topo.vertex_count() => (c.points, "points per frame"),
+                    _ => {
+                        return Err(
+                            anyhow::Error::from(e).context(format!("--sequence {}", s.name))
+                        );
+                    }
+                }
+            }
+        };
+        if count != topo.vertex_count() {
+            tracing::warn!(
+                "sequence '{}' ({}): {count} {noun}, the topology has {} vertices; `db info` lists it",
+                s.name,
+                s.path.display(),
+                topo.vertex_count()
+            );
+        }
+    }
+    std::fs::create_dir_all(&a.dir).with_context(|| format!("{}", a.dir.display()))?;
+    let dir = canonical(&a.dir)?;
+    if m.name.is_empty() {
+        m.name = dir
+            .file_name()
+            .map_or_else(|| "character".into(), |n| n.to_string_lossy().into_owned());
+    }
+    // Stored relative to the database when inside it, else absolute.
+    let store = |p: &Path| {
+        p.strip_prefix(&dir)
+            .map_or_else(|_| p.to_path_buf(), Path::to_path_buf)
+    };
+    m.topology = store(&m.topology);
+    for s in &mut m.sequences {
+        s.path = store(&s.path);
+    }
+    for p in [
+        &mut m.rig.landmarks,
+        &mut m.rig.parts,
+        &mut m.rig.gltf_skin,
+        &mut m.rig.rig_map,
+    ]
+    .into_iter()
+    .flatten()
+    {
+        *p = store(p);
+    }
+    m.save(&a.dir)?;
+    eprintln!(
+        "wrote {} ({}); check it with `surfmotion db info {}`",
+        manifest.display(),
+        super::count(m.sequences.len(), "sequence"),
+        a.dir.display()
+    );
     Ok(())
 }
 

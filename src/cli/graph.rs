@@ -23,8 +23,8 @@ pub struct Args {
     /// (dark = similar; red crosses = transitions, pink = their windows).
     #[arg(long, value_name = "PNG")]
     pub matrix: Option<PathBuf>,
-    /// Size of the matrix picture in pixels.
-    #[arg(long, default_value_t = 800)]
+    /// Size of the matrix picture in pixels, 16 to 8192.
+    #[arg(long, default_value_t = 800, value_parser = super::bounded_count(16, super::render::MAX_SIZE))]
     pub size: usize,
 }
 

@@ -185,6 +185,17 @@ fn numbers(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
 
 /// Runs `keyframe`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    let mut outputs = Vec::new();
+    if let Some(o) = &a.output {
+        super::check_mesh_output(o)?;
+        outputs = super::mesh_outputs(o);
+    }
+    outputs.extend(a.report.clone().map(|p| ("--report", p)));
+    outputs.extend(a.plot.clone().map(|p| ("--plot", p)));
+    let mut inputs = super::database_inputs(&a.db);
+    inputs.extend(a.clip.asf.clone());
+    inputs.extend(a.clip.rig_map.clone());
+    super::refuse_colliding(&inputs, &outputs)?;
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
     let load = a.clip.load_options()?;
     let mut resolved = Vec::new();

@@ -233,6 +233,12 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             }
         }
         Cmd::Rigmap(a) => {
+            // `-o` onto the clip replaced the clip with the JSON map (exit 0).
+            if let Some(o) = &a.output {
+                let mut inputs = vec![a.clip.clone()];
+                inputs.extend(a.opts.asf.clone());
+                surfmotion::mesh::io::refuse_overwriting(&inputs, o)?;
+            }
             let opts = a.opts.load_options()?;
             let clip = load_clip(&a.clip, &opts)?;
             let det = match &opts.rig_map {

@@ -20,6 +20,7 @@ mod values;
 mod web;
 
 use clap::{CommandFactory, FromArgMatches, Subcommand};
+use std::path::{Path, PathBuf};
 
 /// surfmotion: drive 4D performance-capture characters from skeletal motion
 /// capture, and transfer mocap onto scanned meshes.
@@ -358,6 +359,129 @@ pub fn non_negative(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A count on the command line (pixels, frames) in `[lo, hi]`: clap's
+/// "0 is not in 16..=8192" instead of a silent clamp (`render --size 0`
+/// drew 16 pixels).
+pub fn bounded_count(lo: u64, hi: u64) -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::<usize>::new().range(lo..=hi)
+}
+
+/// Metres per unit a length unit given as a number may have: a
+/// micrometre to a kilometre. (`--assume-units 1e300` printed joint
+/// positions of 1e300 metres, exit 0.)
+pub const UNIT_RANGE: std::ops::RangeInclusive<f64> = 1e-6..=1e3;
+
+/// A length unit on the command line (`flag` names the option): a name
+/// or a number of metres per unit in [`UNIT_RANGE`].
+pub fn length_unit(flag: &str, u: &str) -> anyhow::Result<surfmotion::mocap::Units> {
+    let units = surfmotion::mocap::units::parse_unit(u).ok_or_else(|| {
+        anyhow::anyhow!("{flag} '{u}': expected m, cm, mm, dm, inch, cmu or a number")
+    })?;
+    if !UNIT_RANGE.contains(&units.metres_per_unit) {
+        anyhow::bail!(
+            "{flag} '{u}': {:e} metres per unit is not a length unit (expected {:e} to {})",
+            units.metres_per_unit,
+            UNIT_RANGE.start(),
+            UNIT_RANGE.end()
+        );
+    }
+    Ok(units)
+}
+
+/// Whether `a` and `b` name one file on disk, existing or not (compared by
+/// their canonical folder and file name).
+fn same_file(a: &Path, b: &Path) -> bool {
+    let key = |p: &Path| -> Option<PathBuf> {
+        if let Ok(c) = p.canonicalize() {
+            return Some(c);
+        }
+        let dir = p
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        Some(dir.canonicalize().ok()?.join(p.file_name()?))
+    };
+    matches!((key(a), key(b)), (Some(x), Some(y)) if x == y)
+}
+
+/// Refuses a command line that would write over one of its `inputs`, or
+/// write two of its `outputs` (option, path) to one file, before any work.
+/// (`retarget --report CLIP.bvh` replaced the clip with the report,
+/// `--report out.glb` the result, `--preview CLIP.bvh` the clip with a
+/// PNG; each exited 0.)
+pub fn refuse_colliding(inputs: &[PathBuf], outputs: &[(&str, PathBuf)]) -> anyhow::Result<()> {
+    for (k, (flag, o)) in outputs.iter().enumerate() {
+        if let Some(i) = inputs.iter().find(|i| same_file(i, o)) {
+            anyhow::bail!(
+                "{flag} {}: writing it would overwrite the input {}; choose another name",
+                o.display(),
+                i.display()
+            );
+        }
+        if let Some((other, _)) = outputs[..k].iter().find(|(_, p)| same_file(p, o)) {
+            anyhow::bail!(
+                "{flag} {}: {other} writes the same file; choose another name",
+                o.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The files `-o OUT` writes (a point cache's topology OBJ beside it),
+/// labelled for [`refuse_colliding`].
+pub fn mesh_outputs(out: &Path) -> Vec<(&'static str, PathBuf)> {
+    surfmotion::mesh::io::output_files(out)
+        .into_iter()
+        .map(|p| ("-o", p))
+        .collect()
+}
+
+/// Refuses a mesh output path before any work: a folder named like a
+/// file, or an extension no writer has (found only after the whole job).
+pub fn check_mesh_output(out: &Path) -> anyhow::Result<()> {
+    use surfmotion::mesh::io::MeshFormat;
+    surfmotion::mesh::io::refuse_folder_as_file(out)?;
+    match MeshFormat::of(out) {
+        None => anyhow::bail!(
+            "{}: unknown output format (use .glb .pc2 .mdd .obj .ply or a folder)",
+            out.display()
+        ),
+        Some(MeshFormat::Gltf) => {
+            anyhow::bail!(
+                "{}: writing .gltf is not supported; use .glb",
+                out.display()
+            )
+        }
+        Some(_) => Ok(()),
+    }
+}
+
+/// The files a database is read from (its manifest, topology, sequences
+/// and rig files), which no output may replace.
+pub fn database_inputs(db: &Path) -> Vec<PathBuf> {
+    use surfmotion::db::{MANIFEST, Manifest};
+    let mut v = vec![db.join(MANIFEST)];
+    if let Ok(m) = Manifest::load(db) {
+        v.push(Manifest::resolve(db, &m.topology));
+        for s in &m.sequences {
+            let p = Manifest::resolve(db, &s.path);
+            v.extend(surfmotion::mesh::io::input_files(
+                &p.to_string_lossy(),
+                None,
+            ));
+        }
+        let r = &m.rig;
+        for p in [&r.landmarks, &r.parts, &r.gltf_skin, &r.rig_map]
+            .into_iter()
+            .flatten()
+        {
+            v.push(Manifest::resolve(db, p));
+        }
+    }
+    v
+}
+
 /// A command line clap refused (it has printed why): exit 1.
 #[derive(Debug, thiserror::Error)]
 #[error("bad command line")]
@@ -436,11 +560,7 @@ impl ClipOpts {
     pub fn load_options(&self) -> anyhow::Result<surfmotion::rig::LoadOptions> {
         let units = match &self.assume_units {
             None => None,
-            Some(u) => Some(surfmotion::mocap::units::parse_unit(u).ok_or_else(|| {
-                anyhow::anyhow!(
-                    "--assume-units '{u}': expected m, cm, mm, dm, inch, cmu or a number"
-                )
-            })?),
+            Some(u) => Some(length_unit("--assume-units", u)?),
         };
         let up = match self.up.as_deref().map(str::to_ascii_lowercase).as_deref() {
             None => None,

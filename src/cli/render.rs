@@ -33,10 +33,20 @@ pub struct Args {
     /// `surfmotion::render::facing_of`).
     #[arg(long, allow_hyphen_values = true)]
     pub facing: Option<String>,
-    /// Image height in pixels (each view is square).
-    #[arg(long, default_value_t = 600)]
+    /// Image height in pixels, 16 to 8192 (each view is square).
+    #[arg(long, default_value_t = 600, value_parser = super::bounded_count(16, MAX_SIZE))]
     pub size: usize,
 }
+
+/// Largest `--size` of `render` (pixels): a picture of two 8192-pixel
+/// views is 400 MB of pixels.
+pub const MAX_SIZE: u64 = 8192;
+
+/// Largest `--preview-size` (pixels, each panel square).
+pub const MAX_PREVIEW_SIZE: u64 = 4096;
+
+/// Most frames on a contact sheet (`--preview-frames`).
+pub const MAX_PREVIEW_FRAMES: u64 = 100;
 
 /// Parses `x`, `-x`, `z`, `-z`, `y`, `-y`.
 pub fn parse_axis(s: &str) -> anyhow::Result<DVec3> {
@@ -100,7 +110,7 @@ pub fn draw_framed(
 /// meshes and both views), each centred horizontally on its own mesh, all
 /// sharing one vertical centre.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let size = a.size.clamp(16, 8192);
+    let size = a.size;
     let mut loaded = Vec::new();
     for mesh in &a.mesh {
         let s = load_sequence(mesh, &LoadOptions::default())?;
@@ -168,11 +178,12 @@ pub struct PreviewOpts {
     /// front views above and left-side views below, all at one scale.
     #[arg(long, value_name = "PNG")]
     pub preview: Option<PathBuf>,
-    /// Frames on the contact sheet.
-    #[arg(long, default_value_t = 5, value_name = "N")]
+    /// Frames on the contact sheet, 1 to 100 (all frames when the result
+    /// has fewer).
+    #[arg(long, default_value_t = 5, value_name = "N", value_parser = super::bounded_count(1, MAX_PREVIEW_FRAMES))]
     pub preview_frames: usize,
-    /// Size of each panel of the contact sheet (pixels, square).
-    #[arg(long, default_value_t = 300, value_name = "PX")]
+    /// Size of each panel of the contact sheet (pixels, square), 16 to 4096.
+    #[arg(long, default_value_t = 300, value_name = "PX", value_parser = super::bounded_count(16, MAX_PREVIEW_SIZE))]
     pub preview_size: usize,
 }
 
@@ -194,7 +205,7 @@ pub fn preview_image(
     if count == 0 {
         return None;
     }
-    let frames: Vec<&[[f64; 3]]> = surfmotion::render::sheet_frames(count, o.preview_frames.max(1))
+    let frames: Vec<&[[f64; 3]]> = surfmotion::render::sheet_frames(count, o.preview_frames)
         .into_iter()
         .map(|f| &positions[f * n..(f + 1) * n])
         .collect();
@@ -216,7 +227,7 @@ pub fn preview_image(
         colours.as_deref(),
         facing,
         floor,
-        o.preview_size.clamp(16, 4096),
+        o.preview_size,
     ))
 }
 
@@ -232,6 +243,18 @@ pub fn write_preview(
     floor: Option<f64>,
     o: &PreviewOpts,
 ) -> anyhow::Result<(usize, usize)> {
+    // Front and side views of each frame, RGB.
+    let panels = o.preview_frames.min(positions.len() / n.max(1)) as u128;
+    let px = o.preview_size as u128;
+    surfmotion::budget::check(
+        || {
+            format!(
+                "{}: a contact sheet of {panels} frames at {px} px",
+                path.display()
+            )
+        },
+        panels * 2 * px * px * 3,
+    )?;
     let img = preview_image(positions, n, triangles, rig, facing, floor, o)
         .ok_or_else(|| anyhow::anyhow!("{}: nothing to preview", path.display()))?;
     img.save_png(path)?;

@@ -105,7 +105,15 @@ impl JobOpts {
 
 /// Runs `retarget`: one [`RetargetJob`] and one clip.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
+    super::check_mesh_output(&a.output)?;
+    let mut inputs = vec![a.mocap.clone()];
+    inputs.extend(a.run.clip.asf.clone());
+    inputs.extend(a.run.clip.rig_map.clone());
+    inputs.extend(super::database_inputs(&a.db));
+    let mut outputs = super::mesh_outputs(&a.output);
+    outputs.extend(a.report.clone().map(|p| ("--report", p)));
+    outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
+    super::refuse_colliding(&inputs, &outputs)?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
         character: a.job.character(),

@@ -138,6 +138,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         inputs.extend(surfmotion::mesh::io::input_files(t, None));
     }
     surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
+    inputs.extend(a.mocap.clone());
+    let mut outputs = super::mesh_outputs(&a.output);
+    outputs.extend(a.report.clone().map(|p| ("--report", p)));
+    outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
+    super::refuse_colliding(&inputs, &outputs)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),

@@ -1,10 +1,40 @@
 //! Wavefront OBJ: positions, optional vertex colours (`v x y z r g b`),
 //! polygons (fan-triangulated), groups (`g`/`o`). Texture coordinates,
-//! normals, materials and smoothing groups are ignored.
+//! normals, materials and smoothing groups are ignored. A `\` at the end
+//! of a line continues the statement on the next line (the format's line
+//! continuation); errors name the statement's first line.
 
 use crate::mesh::{Group, Mesh, MeshError};
+use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::path::Path;
+
+/// The statements of OBJ text with comments removed: each with its first
+/// line (1-based), lines ending in `\` (after any comment is removed)
+/// joined with the next. Borrowed unless a continuation joined lines; a
+/// `\` on the last line ends the statement.
+fn statements(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
+    let mut lines = text.lines().enumerate();
+    std::iter::from_fn(move || {
+        let mut joined: Option<(usize, String)> = None;
+        for (i, raw) in lines.by_ref() {
+            let code = raw.split('#').next().unwrap_or("");
+            match (code.trim_end().strip_suffix('\\'), &mut joined) {
+                (Some(head), Some((_, s))) => {
+                    s.push_str(head);
+                    s.push(' ');
+                }
+                (Some(head), None) => joined = Some((i + 1, format!("{head} "))),
+                (None, Some((first, s))) => {
+                    s.push_str(code);
+                    return Some((*first, Cow::Owned(std::mem::take(s))));
+                }
+                (None, None) => return Some((i + 1, Cow::Borrowed(code))),
+            }
+        }
+        joined.map(|(first, s)| (first, Cow::Owned(s)))
+    })
+}
 
 /// Parses OBJ text; `path` names the source in errors.
 pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, MeshError> {
@@ -13,9 +43,8 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, MeshError> {
     let mut tris: Vec<[u32; 3]> = Vec::new();
     let mut groups: Vec<Group> = Vec::new();
     let mut poly: Vec<u32> = Vec::with_capacity(8);
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        let l = raw.split('#').next().unwrap_or("").trim();
+    for (line, code) in statements(text) {
+        let l = code.trim();
         let mut it = l.split_whitespace();
         let Some(key) = it.next() else { continue };
         match key {

@@ -30,6 +30,15 @@ fn natural_key(p: &Path) -> Vec<(String, u64)> {
 
 /// The `.obj` files of a folder in natural order.
 pub fn list_obj_frames(dir: &Path) -> Result<Vec<PathBuf>, MeshError> {
+    // A file without an extension (`/dev/null`, `scan`) is taken for a
+    // folder of frames by [`super::MeshFormat::of`]; "cannot list folder:
+    // Not a directory" did not say why.
+    if dir.exists() && !dir.is_dir() {
+        return Err(MeshError::invalid(
+            dir,
+            "not a folder, and no extension to tell its format (expected .obj .ply .pc2 .mdd .gltf .glb, or a folder of OBJ frames)",
+        ));
+    }
     let rd = std::fs::read_dir(dir)
         .map_err(|e| MeshError::invalid(dir, format!("cannot list folder: {e}")))?;
     let mut files: Vec<PathBuf> = rd
