@@ -164,15 +164,17 @@ fn procedural_retarget_through_the_graph_follows_the_query() {
     );
     assert!(walking * 2 > frames, "{walking} of {frames} walking frames");
     // Through the graph: each step repeats a frame, follows an edge of the
-    // frame graph (next frame of a sequence, or a transition), or is a cut
-    // the retrieval reports; the query outlasts the walk, so there is at
-    // least one jump.
+    // frame graph (next frame of a sequence, or a transition), skips one
+    // frame of a sequence (the trellis's counterpart of repetition,
+    // `TrellisOptions::skip`), or is a cut the retrieval reports; the
+    // query outlasts the walk, so there is at least one jump.
     for (k, w) in r.path.windows(2).enumerate() {
         let (a, b) = (w[0], w[1]);
         let edge = f.ch.adjacency().successors(a).any(|(t, _)| t == b);
+        let skip = f.ch.successor(a).and_then(|s| f.ch.successor(s)) == Some(b);
         assert!(
-            a == b || edge || r.cuts.contains(&(k + 1)),
-            "query frame {}: {a} -> {b} is neither a repeat, a graph edge nor a cut",
+            a == b || edge || skip || r.cuts.contains(&(k + 1)),
+            "query frame {}: {a} -> {b} is neither a repeat, a graph edge, a skip nor a cut",
             k + 1
         );
     }

@@ -11,7 +11,7 @@ use crate::eval::{Checker, Plausibility, PlausibilityOptions, VelocityError, vel
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
-use crate::retarget::query::{MocapPoses, load_mocap, to_database_character};
+use crate::retarget::query::{MocapPoses, load_mocap, to_database};
 use crate::retarget::{Output, Report, RetargetOptions, Timings, synthesise, synthesise_each};
 use crate::rig::LoadOptions;
 use crate::rig::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, ground_offsets};
@@ -265,12 +265,7 @@ impl RetargetRun {
     /// The joint-velocity error (Huang et al. 2015, Sec. 6.2) between the
     /// query on the character's bones and the skeleton read off the result.
     pub fn velocity_error(&self, ch: &Character) -> VelocityError {
-        let query = to_database_character(
-            ch.rest_pose(),
-            ch.poses(),
-            &self.mocap.reference,
-            &self.mocap.poses,
-        );
+        let query = to_database(ch, &self.mocap.reference, &self.mocap.poses);
         let skel: Vec<Pose> = self
             .output
             .positions
@@ -423,7 +418,7 @@ pub fn evaluate_result(
     use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
     let fps = ch.manifest().fps;
     let clip = load_mocap(mocap, load, fps)?;
-    let query = to_database_character(ch.rest_pose(), ch.poses(), &clip.reference, &clip.poses);
+    let query = to_database(ch, &clip.reference, &clip.poses);
     let res = load_sequence(&result.to_string_lossy(), &SeqLoad::default()).map_err(|e| {
         JobError::Context {
             what: result.display().to_string(),

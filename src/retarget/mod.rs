@@ -22,7 +22,7 @@ use crate::db::Character;
 use crate::deform::{DeformMode, DeformOptions, Deformer, TurnedOver};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
-use crate::rig::retarget::{Reference, ReferenceSource};
+use crate::rig::retarget::{Reference, ReferenceSource, ground_offsets};
 use crate::skeleton::{Pose, floor_fit, rotate_yaw};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -308,7 +308,7 @@ pub fn synthesise_each<E: From<RetargetError>>(
 ) -> Result<Streamed, E> {
     let mut timings = Timings::default();
     let t0 = Instant::now();
-    let query = query::to_database_character(ch.rest_pose(), ch.poses(), reference, mocap);
+    let query = query::to_database(ch, reference, mocap);
     timings.query = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let successor = |id: u32| ch.successor(id);
@@ -319,7 +319,18 @@ pub fn synthesise_each<E: From<RetargetError>>(
         successor: &successor,
         dissimilarity: &dissimilarity,
     };
-    let retrieval = retrieve(&query, &input, &opts.trellis);
+    // Retrieval compares poses as they stand on the database's floor: the
+    // clip's ground raised under a footfall on a step (a block CMU subject
+    // 03 climbs) is no part of the pose, and the database's frames all
+    // stand on one floor (Eq. 28 keeps height). The deformation still
+    // follows the raised query.
+    let raised = ground_offsets(ch.rest_pose(), reference, mocap);
+    let on_floor: Vec<Pose> = query
+        .iter()
+        .zip(raised.iter().chain(std::iter::repeat(&0.0)))
+        .map(|(p, &r)| p.map(|q| q - DVec3::Y * r))
+        .collect();
+    let retrieval = retrieve(&on_floor, &input, &opts.trellis);
     timings.retrieval = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
     let (frames, jumps) = timeline(&retrieval.path, ch, &opts.timeline);

@@ -13,6 +13,7 @@
 //! output); pose comparison aligns translation and heading per pair
 //! (Eq. 28).
 
+use crate::db::Character;
 use crate::mocap::MocapError;
 use crate::rig::retarget::{
     ClipPoses, Reference, character_neutral, clip_poses, retarget, retarget_with_neutral,
@@ -105,6 +106,45 @@ pub fn to_character(rest: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<P
     retarget(rest, reference, mocap)
         .into_iter()
         .map(|(p, _)| p)
+        .collect()
+}
+
+/// How far above its rest frame a database character's frames stand
+/// (metres): the median over its frames of the lowest vertex's height (the
+/// floor the plausibility checks measure from,
+/// [`crate::eval::floor_height`]) minus the rest frame's lowest vertex
+/// height. The retargeting stands the character's soles where they are at
+/// rest; a database whose frames stand higher (a `synth` database whose
+/// walks stand 1.3 cm above the samba rest frame) would otherwise see every
+/// result sunk into its floor by that much, and a swing foot passing low
+/// read as a foot gliding on it.
+pub fn database_floor_lift(ch: &Character) -> f64 {
+    let n = ch.n().max(1);
+    let lowest = |f: &[[f64; 3]]| f.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
+    let mut lows: Vec<f64> = ch
+        .frames()
+        .chunks_exact(n)
+        .map(lowest)
+        .filter(|h| h.is_finite())
+        .collect();
+    let rest = lowest(ch.topology_metres().positions());
+    if lows.is_empty() || !rest.is_finite() {
+        return 0.0;
+    }
+    lows.sort_by(f64::total_cmp);
+    lows[lows.len() / 2] - rest
+}
+
+/// The clip's poses on a loaded database character ([`to_database_character`]
+/// on its rest frame's joints and frame skeletons), raised by
+/// [`database_floor_lift`]: the character stands on the floor its own
+/// frames stand on. What `retarget` queries the database with and what
+/// its joint-velocity error is measured against.
+pub fn to_database(ch: &Character, reference: &Reference, mocap: &[Pose]) -> Vec<Pose> {
+    let lift = glam::DVec3::new(0.0, database_floor_lift(ch), 0.0);
+    to_database_character(ch.rest_pose(), ch.poses(), reference, mocap)
+        .into_iter()
+        .map(|p| p.map(|q| q + lift))
         .collect()
 }
 

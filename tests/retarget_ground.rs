@@ -1,0 +1,144 @@
+//! Where a retargeted character stands against its database (issue 17,
+//! "feet"): the query stands on the floor the database's own frames stand
+//! on, and retrieval compares poses as they stand on that floor, whatever
+//! step the clip climbs (Huang et al. 2015, Sec. 5.2.1, Eq. 28 keeps
+//! height). On a small generated character, so no ../shared is needed.
+
+use glam::DVec3;
+use std::path::Path;
+use std::sync::OnceLock;
+use surfmotion::db::{Character, Quiet};
+use surfmotion::deform::DeformMode;
+use surfmotion::eval::{floor_height, lowest_heights};
+use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
+use surfmotion::retarget::query::database_floor_lift;
+use surfmotion::retarget::{RetargetOptions, synthesise};
+use surfmotion::rig::embed::Embedding;
+use surfmotion::rig::retarget::{choose_reference, clip_poses};
+use surfmotion::skeleton::Pose;
+use surfmotion::synth::humanoid::{humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh};
+use surfmotion::synth::{Gait, gait_clip};
+
+const GRID: f64 = 0.035;
+const FPS: f64 = 30.0;
+
+mod common;
+
+/// A procedural database (a walk and a run of the procedural humanoid)
+/// written to `db`; its rest frame lowered by `drop` metres (the frames
+/// stay where they are: they stand that much above the rest frame).
+fn write_database(db: &Path, drop: f64) {
+    let rest = humanoid_mesh(GRID);
+    let rig = Embedding::new(&rest, &humanoid_landmarks(&rest), None).unwrap();
+    let character = SynthCharacter {
+        rest,
+        rig,
+        landmarks_json: humanoid_landmarks_json().into_bytes(),
+    };
+    let clips: Vec<SynthClip> = [(Gait::Walk, 3.0), (Gait::Run, 2.0)]
+        .into_iter()
+        .map(|(g, seconds)| SynthClip::from_clip(g.name(), &gait_clip(g, seconds, FPS)).unwrap())
+        .collect();
+    let opts = SynthOptions {
+        fps: FPS,
+        name: Some("ground".into()),
+        truth: false,
+        plausibility: false,
+        force: true,
+        ..Default::default()
+    };
+    write_synthetic_database(db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
+    if drop != 0.0 {
+        let topo = db.join("topology.obj");
+        let text = std::fs::read_to_string(&topo).unwrap();
+        let moved: String = text
+            .lines()
+            .map(|l| match l.strip_prefix("v ") {
+                Some(rest) => {
+                    let v: Vec<f64> = rest
+                        .split_whitespace()
+                        .map(|x| x.parse().unwrap())
+                        .collect();
+                    format!("v {} {} {}\n", v[0], v[1] - drop, v[2])
+                }
+                None => format!("{l}\n"),
+            })
+            .collect();
+        std::fs::write(&topo, moved).unwrap();
+    }
+}
+
+/// The database whose rest frame stands 3 cm below its frames.
+fn lowered() -> &'static Character {
+    static F: OnceLock<Character> = OnceLock::new();
+    F.get_or_init(|| {
+        let db = common::fixture_dir("retarget-ground").join("db");
+        std::fs::create_dir_all(&db).unwrap();
+        write_database(&db, 0.03);
+        Character::load(&db, &Quiet).unwrap()
+    })
+}
+
+fn options() -> RetargetOptions {
+    RetargetOptions {
+        deform: DeformMode::Lbs,
+        ..RetargetOptions::default()
+    }
+}
+
+#[test]
+fn a_result_stands_on_the_floor_its_database_frames_stand_on() {
+    let ch = lowered();
+    let n = ch.n();
+    let floor = floor_height(&lowest_heights(ch.frames(), n, DVec3::Y));
+    let lift = database_floor_lift(ch);
+    // The setup: the frames stand (at least) the 3 cm drop above the rest.
+    assert!(lift > 0.025, "database floor lift {lift}");
+    let clip = gait_clip(Gait::Walk, 2.0, FPS);
+    let map = surfmotion::rig::detect(&clip.point_names()).map;
+    let q = clip_poses(&clip, &map).unwrap();
+    let out = synthesise(ch, &q.poses, &q.reference, FPS, &options()).unwrap();
+    let result = floor_height(&lowest_heights(&out.positions, n, DVec3::Y));
+    // Standing on the rest frame's floor left it sunk by the lift (the
+    // 3 cm drop and the 1.5 cm the generated walk's soles stand above the
+    // rest frame's lowest point); the walk's own 1.2 cm remains.
+    assert!(
+        (result - floor).abs() < 0.02,
+        "the result's median lowest point {result:.4} m, the database's floor {floor:.4} m"
+    );
+}
+
+#[test]
+fn retrieval_compares_a_clip_on_a_step_as_it_stands_on_the_floor() {
+    let ch = lowered();
+    // A clip standing still: 15 frames on a 20 cm block, then 15 frames
+    // 40 cm forward on the floor.
+    let clip = gait_clip(Gait::Walk, 1.0, FPS);
+    let map = surfmotion::rig::detect(&clip.point_names()).map;
+    let q = clip_poses(&clip, &map).unwrap();
+    let stand: Pose = q.poses[0];
+    let mut poses: Vec<Pose> = vec![stand.map(|p| p + DVec3::Y * 0.2); 15];
+    poses.extend(vec![stand.map(|p| p + DVec3::Z * 0.4); 15]);
+    let reference = choose_reference(Some(&q.reference.pose), &poses).unwrap();
+    let out = synthesise(ch, &poses, &reference, FPS, &options()).unwrap();
+    // The query climbs the block (the deformation follows it) ...
+    let (up, down) = (&out.query[5], &out.query[20]);
+    let rise = up[0].y - down[0].y;
+    assert!(
+        rise > 0.1,
+        "the query's pelvis {rise:.3} m higher on the block"
+    );
+    // ... but is retrieved as it stands: on the block and on the floor
+    // the same pose costs the same (Eq. 28 keeps height: retrieving the
+    // raised pose cost 19 joints × the rise more).
+    let cost = &out.report.retrieval.skeleton_cost;
+    let mean = |r: std::ops::Range<usize>| {
+        let k = r.len() as f64;
+        cost[r].iter().sum::<f64>() / k
+    };
+    let (on_block, on_floor) = (mean(2..13), mean(17..28));
+    assert!(
+        (on_block - on_floor).abs() < 0.05,
+        "skeleton cost on the block {on_block:.3} m, on the floor {on_floor:.3} m"
+    );
+}
