@@ -464,6 +464,23 @@ fn dp(
             0.0
         }
     };
+    // Each slot is kept sorted by distance, with an upper bound on its
+    // costs (`top`): with costs ≥ 0, a label can only dominate or be
+    // dominated by one whose distance is within `reach / w_d` of its own
+    // (`reach` its cost, or the slot's top cost minus its cost).
+    let mut top = vec![0.0f64; tmax + 1];
+    let nonneg = p.loops.iter().all(|l| l.cost >= 0.0);
+    let near = |slot: &[Label], d: f64, reach: f64| -> (usize, usize) {
+        if !(nonneg && p.w_dist > 0.0 && reach.is_finite()) {
+            return (0, slot.len());
+        }
+        if reach < 0.0 {
+            return (0, 0);
+        }
+        let r = reach / p.w_dist + 1e-12;
+        let lo = slot.partition_point(|o| o.dist < d - r);
+        (lo, lo + slot[lo..].partition_point(|o| o.dist <= d + r))
+    };
     let sp = cone(p.loops);
     let lower = |c: f64, d: f64, tau: usize| {
         p.walk.cost
@@ -507,15 +524,24 @@ fn dp(
                     continue;
                 }
                 let slot = &mut labels[t2];
-                if slot
+                let (lo, hi) = near(slot, d2, c2);
+                if slot[lo..hi]
                     .iter()
                     .any(|o| o.cost + p.w_dist * (o.dist - d2).abs() + apart(o.turn, a2) <= c2)
                 {
                     continue;
                 }
-                let before = slot.len();
-                slot.retain(|o| c2 + p.w_dist * (d2 - o.dist).abs() + apart(a2, o.turn) > o.cost);
-                kept -= before - slot.len();
+                let (lo, hi) = near(slot, d2, top[t2] - c2);
+                let mut w = lo;
+                for r in lo..hi {
+                    let o = slot[r];
+                    if c2 + p.w_dist * (d2 - o.dist).abs() + apart(a2, o.turn) > o.cost {
+                        slot[w] = o;
+                        w += 1;
+                    }
+                }
+                slot.drain(w..hi);
+                kept -= hi - w;
                 let new = Label {
                     cost: c2,
                     dist: d2,
@@ -531,11 +557,16 @@ fn dp(
                             .max_by(|x, y| x.1.lb.total_cmp(&y.1.lb))
                             .filter(|(_, w)| w.lb > lb2)
                         {
-                            slot[worst] = new;
+                            slot.remove(worst);
+                            let at = slot.partition_point(|o| o.dist < d2);
+                            slot.insert(at, new);
+                            top[t2] = top[t2].max(c2);
                         }
                     }
                     _ => {
-                        slot.push(new);
+                        let at = slot.partition_point(|o| o.dist < d2);
+                        slot.insert(at, new);
+                        top[t2] = top[t2].max(c2);
                         kept += 1;
                     }
                 }
