@@ -593,6 +593,183 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     );
 }
 
+/// The largest distance between output frame `out` and database frame
+/// `db` moved by the floor motion (rotation about the vertical, then a
+/// floor translation) that best maps it there, and that rotation (radians,
+/// `x + iz` sense: the opposite of `rotate_yaw`'s).
+fn placed_residual(out: &[[f64; 3]], db: &[[f64; 3]]) -> (f64, f64) {
+    let centre = |p: &[[f64; 3]]| {
+        let n = p.len() as f64;
+        let s = p.iter().fold([0.0; 2], |s, q| [s[0] + q[0], s[1] + q[2]]);
+        [s[0] / n, s[1] / n]
+    };
+    let (co, cd) = (centre(out), centre(db));
+    // b ≈ w a for a, b as x + iz about their centres: w = Σ b conj(a).
+    let (mut re, mut im) = (0.0, 0.0);
+    for (o, a) in out.iter().zip(db) {
+        let (ax, az, bx, bz) = (a[0] - cd[0], a[2] - cd[1], o[0] - co[0], o[2] - co[1]);
+        re += bx * ax + bz * az;
+        im += bz * ax - bx * az;
+    }
+    let th = im.atan2(re);
+    let (c, s) = (th.cos(), th.sin());
+    let worst = out.iter().zip(db).fold(0.0f64, |m, (o, a)| {
+        let (ax, az) = (a[0] - cd[0], a[2] - cd[1]);
+        let (x, z) = (c * ax - s * az + co[0], s * ax + c * az + co[1]);
+        m.max(((o[0] - x).powi(2) + (o[1] - a[1]).powi(2) + (o[2] - z).powi(2)).sqrt())
+    });
+    (worst, th)
+}
+
+/// `keyframe` with one and with two `--via` key-frames (the second with a
+/// heading target), blended and with `--no-blend`: the written file lasts
+/// the time and travels the distance the report gives, in total and per
+/// segment (between the output frames of consecutive key-frames); the
+/// output frame at every key-frame position is that key-frame's database
+/// frame, placed (moved rigidly on the floor), so the output passes every
+/// via in order. A blended output is checked at the key-frames outside
+/// every transition's blend window (inside one the frame is a blend); the
+/// unblended output at all of them, and its final rotation is the report's
+/// final heading.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn cli_output_with_vias_passes_every_key_frame_in_the_written_file() {
+    let Some(d) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let db = walk_run_db(&d);
+    let ch = surfmotion::db::Character::load(db, &surfmotion::db::Quiet).unwrap();
+    let queries: [(&[&str], &str, &str, Option<&str>); 2] = [
+        (&["02_03:20"], "6", "4", None),
+        (&["02_03:20", "02_01:40"], "10", "7", Some("45")),
+    ];
+    let mut free_vias = 0;
+    for (qi, (vias, dist, time, heading)) in queries.iter().enumerate() {
+        for blend in [true, false] {
+            let name = format!("q{qi}{}", if blend { "" } else { "n" });
+            let out = tmp.path().join(format!("{name}.pc2"));
+            let report = tmp.path().join(format!("{name}.json"));
+            let mut a: Vec<std::ffi::OsString> = Vec::new();
+            for v in vias.iter() {
+                a.extend(["--via".into(), v.into()]);
+            }
+            a.extend(["--distance".into(), dist.into()]);
+            a.extend(["--time".into(), time.into()]);
+            if let Some(h) = heading {
+                a.extend(["--heading".into(), h.into()]);
+            }
+            if !blend {
+                a.push("--no-blend".into());
+            }
+            a.extend(["-o".into(), out.clone().into_os_string()]);
+            a.extend(["--report".into(), report.clone().into_os_string()]);
+            let a: Vec<&std::ffi::OsStr> = a.iter().map(|x| x.as_os_str()).collect();
+            let o = walk_to_run(db, &a);
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let r: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+            let seq =
+                surfmotion::mesh::io::load_sequence(out.to_str().unwrap(), &Default::default())
+                    .unwrap();
+            let n = seq.mesh().vertex_count();
+            let pos = seq.all_positions();
+            let fps = r["fps"].as_f64().unwrap();
+            assert_eq!(seq.frame_count(), r["frames"].as_u64().unwrap() as usize);
+            assert!((seq.frame_count() as f64 / fps - r["time"].as_f64().unwrap()).abs() < 1e-9);
+            let travelled = surfmotion::keyframe::graph::travelled(pos, n);
+            let want = r["distance"].as_f64().unwrap();
+            assert!(
+                (travelled - want).abs() < 1e-4,
+                "{name}: file {travelled} m, report {want} m"
+            );
+            // The key-frames in order and their output frames: the first
+            // segment counts its start frame, later ones share it.
+            let keys: Vec<&str> = r["keys"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|k| k.as_str().unwrap())
+                .collect();
+            let want_keys: Vec<&str> = std::iter::once("02_01:0")
+                .chain(vias.iter().copied())
+                .chain(std::iter::once("02_03:30"))
+                .collect();
+            assert_eq!(keys, want_keys, "{name}");
+            let segs = r["segments"].as_array().unwrap();
+            assert_eq!(segs.len(), keys.len() - 1, "{name}");
+            let mut at = vec![0usize];
+            for (i, s) in segs.iter().enumerate() {
+                assert_eq!(s["from"], keys[i], "{name}");
+                assert_eq!(s["to"], keys[i + 1], "{name}");
+                let frames = (s["time"].as_f64().unwrap() * fps).round() as usize;
+                at.push(at[i] + frames - usize::from(i == 0));
+                let span = &pos[at[i] * n..(at[i + 1] + 1) * n];
+                let (got, want) = (
+                    surfmotion::keyframe::graph::travelled(span, n),
+                    s["distance"].as_f64().unwrap(),
+                );
+                assert!(
+                    (got - want).abs() < 1e-4,
+                    "{name} segment {i}: file {got} m, report {want} m"
+                );
+            }
+            assert_eq!(*at.last().unwrap() + 1, seq.frame_count(), "{name}");
+            let windows: Vec<(usize, usize)> = r["transitions"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|t| {
+                    let (k, l) = (t["at"].as_u64().unwrap(), t["window"].as_u64().unwrap());
+                    (k.saturating_sub(l) as usize, (k + l) as usize)
+                })
+                .collect();
+            let mut turns = Vec::new();
+            for (i, (&k, &p)) in keys.iter().zip(&at).enumerate() {
+                let blended = windows.iter().any(|&(lo, hi)| lo <= p && p < hi);
+                if blend && blended {
+                    continue;
+                }
+                let id = surfmotion::keyframe::parse_key(&ch, k).unwrap();
+                let (res, th) = placed_residual(&pos[p * n..(p + 1) * n], ch.frame(id));
+                assert!(
+                    res < 1e-4,
+                    "{name}: output frame {p} is not key-frame {k} placed ({res} m off)"
+                );
+                turns.push(th);
+                if blend && i > 0 && i + 1 < keys.len() {
+                    free_vias += 1;
+                }
+            }
+            if !blend {
+                assert_eq!(turns.len(), keys.len(), "{name}");
+                let fitted = -(turns[turns.len() - 1] - turns[0]).to_degrees();
+                let report = r["final_heading_deg"].as_f64().unwrap();
+                assert!(
+                    wrap_deg(fitted - report).abs() < 0.01,
+                    "{name}: the file turns {fitted}°, the report {report}°"
+                );
+            }
+            if let Some(h) = heading {
+                let h: f64 = h.parse().unwrap();
+                assert_eq!(r["heading_target_deg"].as_f64(), Some(h));
+                let facing = r["final_facing_deg"].as_f64().unwrap();
+                let err = r["heading_error_deg"].as_f64().unwrap();
+                assert!((wrap_deg(facing - h) - err).abs() < 1e-9, "{name}");
+                // The default weight, 1/30 per degree.
+                let term = r["cost"]["heading"].as_f64().unwrap();
+                assert!(
+                    (term - err.abs() / 30.0).abs() < 1e-9,
+                    "{name}: {term}, {err}°"
+                );
+            }
+        }
+    }
+    // A via outside every blend window was checked in a blended output.
+    assert!(
+        free_vias >= 1,
+        "{free_vias} vias checked in the blended outputs"
+    );
+}
+
 /// Every distinct (distance, cheapest transition cost) of the paths of
 /// exactly `frames` frames (start counted) from `from` to `to` whose
 /// transitions are at least `min_run` frames apart: the exhaustive
