@@ -6,10 +6,15 @@
 //! every gait cycle and transitions between them, 42 in all, as `db build`
 //! finds on the synthetic database of the README). The figures in the
 //! README come from `surfmotion keyframe --grid` on real databases.
+//! `heading_*`: the same graph with a turn on every transition (±0.2-0.6
+//! rad) and a heading target, which the walks' search puts into each
+//! walk's repetition programme (the wrap of the facing error in the
+//! dominance rule of the exact programme).
 
 use criterion::Criterion;
 use std::hint::black_box;
 use surfmotion::keyframe::graph::KeyGraph;
+use surfmotion::keyframe::lattice::HeadingTarget;
 use surfmotion::keyframe::search::{Method, SearchOptions};
 use surfmotion::keyframe::{Planner, Targets};
 
@@ -122,6 +127,32 @@ fn main() {
         grp.bench_function(format!("via_{name}_10m_8s"), |b| {
             b.iter(|| {
                 pv.plan(
+                    black_box(&Targets::Global {
+                        distance: 10.0,
+                        time: 8.0,
+                    }),
+                    &o,
+                )
+                .unwrap()
+            })
+        });
+    }
+    // A heading target on a graph whose transitions turn.
+    let mut turning = g.clone();
+    for (k, e) in turning.edges.iter_mut().filter(|e| e.jump).enumerate() {
+        e.turn = [0.2, -0.4, 0.6, -0.3, 0.5][k % 5];
+    }
+    let ph = Planner::new(turning, &keys, 25.0, &o).unwrap();
+    let heading = Some(HeadingTarget {
+        degrees: 90.0,
+        weight: 1.0 / 30.0,
+        sectors: 8,
+    });
+    for (name, o) in [("lattice", o), ("walks", walks)] {
+        let o = SearchOptions { heading, ..o };
+        grp.bench_function(format!("heading_{name}_10m_8s"), |b| {
+            b.iter(|| {
+                ph.plan(
                     black_box(&Targets::Global {
                         distance: 10.0,
                         time: 8.0,

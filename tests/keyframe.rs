@@ -56,6 +56,7 @@ fn ilp_exact_and_brute_force_agree_on_random_repetition_problems() {
             frames: t,
             w_dist: 1.0 / 0.3,
             w_time: 0.1,
+            heading: None,
         };
         // No count past the frames at which the time error alone exceeds the
         // cost of n = 0 can be optimal: brute force up to there.
@@ -75,6 +76,69 @@ fn ilp_exact_and_brute_force_agree_on_random_repetition_problems() {
         );
         assert!((p.cost(&e.n) - e.cost).abs() < 1e-9);
     }
+}
+
+/// The repetition counts are chosen with the heading term (the final
+/// facing is the walk's turn plus `Σ θ_i n_i`, its error wrapped): the
+/// ILP (the wrap integer as one more sign-split term) and the exact
+/// programme (turn in the dominance rule) find the brute-force optimum of
+/// the whole cost. Scoring Eq. 7's own counts with the heading afterwards
+/// (the search before) misses it in many cases, which the test also
+/// checks so that it can tell the two apart.
+#[test]
+fn heading_is_optimised_jointly_with_the_repetition_counts() {
+    use surfmotion::keyframe::repeats::Turns;
+    let mut r = Lcg(19);
+    let mut loops = Vec::new();
+    let (mut cases, mut worse_after) = (0, 0);
+    for case in 0..200 {
+        let (walk, d, t) = random_problem(&mut r, &mut loops);
+        let turns: Vec<f64> = loops.iter().map(|_| 2.0 * r.next() - 1.0).collect();
+        let heading = Turns {
+            offset: std::f64::consts::PI * (2.0 * r.next() - 1.0),
+            loops: &turns,
+            // 1/30 per degree, per radian.
+            weight: 180.0 / (30.0 * std::f64::consts::PI),
+        };
+        let p = Problem {
+            walk,
+            loops: &loops,
+            distance: d,
+            frames: t,
+            w_dist: 1.0 / 0.3,
+            w_time: 0.1,
+            heading: Some(heading),
+        };
+        let c0 = p.cost(&vec![0; loops.len()]);
+        let frames = t - walk.frames as f64 + (c0 - walk.cost) / p.w_time;
+        let limit = (frames.max(0.0) / 3.0).ceil() as u32;
+        let b = brute_force(&p, limit);
+        let e = solve_exact(&p, f64::INFINITY, 1_000_000).unwrap();
+        let i = solve_ilp(&p).unwrap();
+        assert!(
+            (e.cost - b.cost).abs() < 1e-9,
+            "case {case}: exact {e:?} brute {b:?}"
+        );
+        assert!(
+            (i.cost - b.cost).abs() < 1e-6,
+            "case {case}: ilp {i:?} brute {b:?}"
+        );
+        assert!((p.cost(&e.n) - e.cost).abs() < 1e-9);
+        assert!((p.cost(&i.n) - i.cost).abs() < 1e-9);
+        // Eq. 7's counts, scored with the heading afterwards.
+        let plain = Problem {
+            heading: None,
+            ..p.clone()
+        };
+        let eq7 = solve_exact(&plain, f64::INFINITY, 1_000_000).unwrap();
+        assert!(p.cost(&eq7.n) >= b.cost - 1e-9, "case {case}");
+        worse_after += usize::from(p.cost(&eq7.n) > b.cost + 1e-6);
+        cases += 1;
+    }
+    assert!(
+        worse_after * 5 >= cases,
+        "the heading changed the counts in only {worse_after} of {cases} cases"
+    );
 }
 
 /// A random frame graph: `seqs` sequences of 20-40 frames walking at
@@ -526,6 +590,183 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
         &[&to_run[..], &["--distance", "1000", "--time", "4"]].concat(),
         &[("SURFMOTION_MEMORY_LIMIT", "8MB")],
         &["the key-frame path", "lower --distance"],
+    );
+}
+
+/// The largest distance between output frame `out` and database frame
+/// `db` moved by the floor motion (rotation about the vertical, then a
+/// floor translation) that best maps it there, and that rotation (radians,
+/// `x + iz` sense: the opposite of `rotate_yaw`'s).
+fn placed_residual(out: &[[f64; 3]], db: &[[f64; 3]]) -> (f64, f64) {
+    let centre = |p: &[[f64; 3]]| {
+        let n = p.len() as f64;
+        let s = p.iter().fold([0.0; 2], |s, q| [s[0] + q[0], s[1] + q[2]]);
+        [s[0] / n, s[1] / n]
+    };
+    let (co, cd) = (centre(out), centre(db));
+    // b ≈ w a for a, b as x + iz about their centres: w = Σ b conj(a).
+    let (mut re, mut im) = (0.0, 0.0);
+    for (o, a) in out.iter().zip(db) {
+        let (ax, az, bx, bz) = (a[0] - cd[0], a[2] - cd[1], o[0] - co[0], o[2] - co[1]);
+        re += bx * ax + bz * az;
+        im += bz * ax - bx * az;
+    }
+    let th = im.atan2(re);
+    let (c, s) = (th.cos(), th.sin());
+    let worst = out.iter().zip(db).fold(0.0f64, |m, (o, a)| {
+        let (ax, az) = (a[0] - cd[0], a[2] - cd[1]);
+        let (x, z) = (c * ax - s * az + co[0], s * ax + c * az + co[1]);
+        m.max(((o[0] - x).powi(2) + (o[1] - a[1]).powi(2) + (o[2] - z).powi(2)).sqrt())
+    });
+    (worst, th)
+}
+
+/// `keyframe` with one and with two `--via` key-frames (the second with a
+/// heading target), blended and with `--no-blend`: the written file lasts
+/// the time and travels the distance the report gives, in total and per
+/// segment (between the output frames of consecutive key-frames); the
+/// output frame at every key-frame position is that key-frame's database
+/// frame, placed (moved rigidly on the floor), so the output passes every
+/// via in order. A blended output is checked at the key-frames outside
+/// every transition's blend window (inside one the frame is a blend); the
+/// unblended output at all of them, and its final rotation is the report's
+/// final heading.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn cli_output_with_vias_passes_every_key_frame_in_the_written_file() {
+    let Some(d) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let db = walk_run_db(&d);
+    let ch = surfmotion::db::Character::load(db, &surfmotion::db::Quiet).unwrap();
+    let queries: [(&[&str], &str, &str, Option<&str>); 2] = [
+        (&["02_03:20"], "6", "4", None),
+        (&["02_03:20", "02_01:40"], "10", "7", Some("45")),
+    ];
+    let mut free_vias = 0;
+    for (qi, (vias, dist, time, heading)) in queries.iter().enumerate() {
+        for blend in [true, false] {
+            let name = format!("q{qi}{}", if blend { "" } else { "n" });
+            let out = tmp.path().join(format!("{name}.pc2"));
+            let report = tmp.path().join(format!("{name}.json"));
+            let mut a: Vec<std::ffi::OsString> = Vec::new();
+            for v in vias.iter() {
+                a.extend(["--via".into(), v.into()]);
+            }
+            a.extend(["--distance".into(), dist.into()]);
+            a.extend(["--time".into(), time.into()]);
+            if let Some(h) = heading {
+                a.extend(["--heading".into(), h.into()]);
+            }
+            if !blend {
+                a.push("--no-blend".into());
+            }
+            a.extend(["-o".into(), out.clone().into_os_string()]);
+            a.extend(["--report".into(), report.clone().into_os_string()]);
+            let a: Vec<&std::ffi::OsStr> = a.iter().map(|x| x.as_os_str()).collect();
+            let o = walk_to_run(db, &a);
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let r: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+            let seq =
+                surfmotion::mesh::io::load_sequence(out.to_str().unwrap(), &Default::default())
+                    .unwrap();
+            let n = seq.mesh().vertex_count();
+            let pos = seq.all_positions();
+            let fps = r["fps"].as_f64().unwrap();
+            assert_eq!(seq.frame_count(), r["frames"].as_u64().unwrap() as usize);
+            assert!((seq.frame_count() as f64 / fps - r["time"].as_f64().unwrap()).abs() < 1e-9);
+            let travelled = surfmotion::keyframe::graph::travelled(pos, n);
+            let want = r["distance"].as_f64().unwrap();
+            assert!(
+                (travelled - want).abs() < 1e-4,
+                "{name}: file {travelled} m, report {want} m"
+            );
+            // The key-frames in order and their output frames: the first
+            // segment counts its start frame, later ones share it.
+            let keys: Vec<&str> = r["keys"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|k| k.as_str().unwrap())
+                .collect();
+            let want_keys: Vec<&str> = std::iter::once("02_01:0")
+                .chain(vias.iter().copied())
+                .chain(std::iter::once("02_03:30"))
+                .collect();
+            assert_eq!(keys, want_keys, "{name}");
+            let segs = r["segments"].as_array().unwrap();
+            assert_eq!(segs.len(), keys.len() - 1, "{name}");
+            let mut at = vec![0usize];
+            for (i, s) in segs.iter().enumerate() {
+                assert_eq!(s["from"], keys[i], "{name}");
+                assert_eq!(s["to"], keys[i + 1], "{name}");
+                let frames = (s["time"].as_f64().unwrap() * fps).round() as usize;
+                at.push(at[i] + frames - usize::from(i == 0));
+                let span = &pos[at[i] * n..(at[i + 1] + 1) * n];
+                let (got, want) = (
+                    surfmotion::keyframe::graph::travelled(span, n),
+                    s["distance"].as_f64().unwrap(),
+                );
+                assert!(
+                    (got - want).abs() < 1e-4,
+                    "{name} segment {i}: file {got} m, report {want} m"
+                );
+            }
+            assert_eq!(*at.last().unwrap() + 1, seq.frame_count(), "{name}");
+            let windows: Vec<(usize, usize)> = r["transitions"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|t| {
+                    let (k, l) = (t["at"].as_u64().unwrap(), t["window"].as_u64().unwrap());
+                    (k.saturating_sub(l) as usize, (k + l) as usize)
+                })
+                .collect();
+            let mut turns = Vec::new();
+            for (i, (&k, &p)) in keys.iter().zip(&at).enumerate() {
+                let blended = windows.iter().any(|&(lo, hi)| lo <= p && p < hi);
+                if blend && blended {
+                    continue;
+                }
+                let id = surfmotion::keyframe::parse_key(&ch, k).unwrap();
+                let (res, th) = placed_residual(&pos[p * n..(p + 1) * n], ch.frame(id));
+                assert!(
+                    res < 1e-4,
+                    "{name}: output frame {p} is not key-frame {k} placed ({res} m off)"
+                );
+                turns.push(th);
+                if blend && i > 0 && i + 1 < keys.len() {
+                    free_vias += 1;
+                }
+            }
+            if !blend {
+                assert_eq!(turns.len(), keys.len(), "{name}");
+                let fitted = -(turns[turns.len() - 1] - turns[0]).to_degrees();
+                let report = r["final_heading_deg"].as_f64().unwrap();
+                assert!(
+                    wrap_deg(fitted - report).abs() < 0.01,
+                    "{name}: the file turns {fitted}°, the report {report}°"
+                );
+            }
+            if let Some(h) = heading {
+                let h: f64 = h.parse().unwrap();
+                assert_eq!(r["heading_target_deg"].as_f64(), Some(h));
+                let facing = r["final_facing_deg"].as_f64().unwrap();
+                let err = r["heading_error_deg"].as_f64().unwrap();
+                assert!((wrap_deg(facing - h) - err).abs() < 1e-9, "{name}");
+                // The default weight, 1/30 per degree.
+                let term = r["cost"]["heading"].as_f64().unwrap();
+                assert!(
+                    (term - err.abs() / 30.0).abs() < 1e-9,
+                    "{name}: {term}, {err}°"
+                );
+            }
+        }
+    }
+    // A via outside every blend window was checked in a blended output.
+    assert!(
+        free_vias >= 1,
+        "{free_vias} vias checked in the blended outputs"
     );
 }
 
@@ -1086,12 +1327,16 @@ fn frames_measure(g: &KeyGraph, frames: &[u32], closed: bool) -> Measure {
     m
 }
 
-/// The least Eq. 16 over every `n` whose loop frames stay within
-/// `budget` (exhaustive, depth-first).
-fn brute_counts(p: &Problem, budget: f64) -> f64 {
-    fn go(p: &Problem, i: usize, n: &mut Vec<u32>, left: f64, best: &mut f64) {
+/// The least Eq. 16 (with the problem's heading term) over every `n`
+/// whose loop frames stay within `budget`, and that `n` (exhaustive,
+/// depth-first).
+fn brute_counts(p: &Problem, budget: f64) -> (f64, Vec<u32>) {
+    fn go(p: &Problem, i: usize, n: &mut Vec<u32>, left: f64, best: &mut (f64, Vec<u32>)) {
         if i == p.loops.len() {
-            *best = best.min(p.cost(n));
+            let c = p.cost(n);
+            if c < best.0 {
+                *best = (c, n.clone());
+            }
             return;
         }
         let mut k = 0;
@@ -1105,7 +1350,7 @@ fn brute_counts(p: &Problem, budget: f64) -> f64 {
         }
         n[i] = 0;
     }
-    let mut best = f64::INFINITY;
+    let mut best = (f64::INFINITY, Vec::new());
     go(
         p,
         0,
@@ -1176,10 +1421,11 @@ fn walks_search_with_the_ilp_matches_brute_force_on_small_random_graphs() {
                 frames: t * 25.0,
                 w_dist: w.distance,
                 w_time: w.time,
+                heading: None,
             };
             let c0 = pr.cost(&vec![0; loops.len()]);
             let budget = pr.frames - walk.frames as f64 + (c0 - walk.cost) / w.time;
-            best = best.min(brute_counts(&pr, budget));
+            best = best.min(brute_counts(&pr, budget).0);
         }
         assert!(
             (plan.cost.total - best).abs() < 1e-6,
@@ -1195,6 +1441,135 @@ fn walks_search_with_the_ilp_matches_brute_force_on_small_random_graphs() {
         compared += 1;
     }
     assert!(compared >= 30, "only {compared} cases");
+}
+
+/// The turn of the steps of a closed (`closed`) or open frame list
+/// (radians, the sum of its edges' turns).
+fn frames_turn(g: &KeyGraph, frames: &[u32], closed: bool) -> f64 {
+    let mut steps: Vec<(u32, u32)> = frames.windows(2).map(|w| (w[0], w[1])).collect();
+    if closed {
+        steps.push((*frames.last().unwrap(), frames[0]));
+    }
+    steps.iter().map(|&(a, b)| g.edge(a, b).unwrap().turn).sum()
+}
+
+/// With a heading target, the walks' search (exact programme and ILP)
+/// finds the optimum of Eq. 13 plus the heading term that an exhaustive
+/// search finds on small random graphs with turning transitions: every
+/// simple path, every simple cycle sharing a frame with it, every count,
+/// the path's turn the walk's plus each loop's times its count. Before,
+/// the counts were Eq. 7's and the heading only chose between walks: the
+/// test checks that this gives a higher cost in some cases.
+#[test]
+fn walks_search_with_a_heading_target_matches_brute_force_on_small_random_graphs() {
+    use surfmotion::keyframe::lattice::HeadingTarget;
+    use surfmotion::keyframe::repeats::Turns;
+    use surfmotion::keyframe::search::{Method, Solver};
+    let mut r = Lcg(59);
+    let (mut compared, mut worse_after) = (0, 0);
+    for case in 0..200 {
+        let mut g = random_graph(&mut r, 2, 5);
+        for e in g.edges.iter_mut().filter(|e| e.jump) {
+            e.turn = 4.0 * r.next() - 2.0;
+        }
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        if a == b {
+            continue;
+        }
+        let (d, t) = (0.3 + 2.5 * r.next(), 0.4 + 1.6 * r.next());
+        let deg = 360.0 * r.next() - 180.0;
+        let target = Targets::Global {
+            distance: d,
+            time: t,
+        };
+        let per_degree = 1.0 / 30.0;
+        let ilp = SearchOptions {
+            method: Method::Walks,
+            solver: Solver::Ilp,
+            gap: 0.0,
+            heading: Some(HeadingTarget {
+                degrees: deg,
+                weight: per_degree,
+                sectors: 8,
+            }),
+            ..Default::default()
+        };
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &ilp) else {
+            continue;
+        };
+        let plan = p.plan(&target, &ilp).unwrap();
+        if !plan.stats.bounds_hit.is_empty() {
+            continue;
+        }
+        let w = ilp.weights;
+        let cycles: Vec<(Vec<u32>, Measure, f64)> = simple_cycles(&g)
+            .into_iter()
+            .map(|c| {
+                let m = frames_measure(&g, &c, true);
+                let turn = frames_turn(&g, &c, true);
+                (c, m, turn)
+            })
+            .collect();
+        let (mut best, mut after) = (f64::INFINITY, f64::INFINITY);
+        let paths = simple_paths(&g, a, b);
+        assert!(!paths.is_empty(), "case {case}");
+        for path in &paths {
+            let walk = frames_measure(&g, path, false);
+            let near: Vec<&(Vec<u32>, Measure, f64)> = cycles
+                .iter()
+                .filter(|(c, _, _)| c.iter().any(|f| path.contains(f)))
+                .collect();
+            let loops: Vec<Measure> = near.iter().map(|x| x.1).collect();
+            let turns: Vec<f64> = near.iter().map(|x| x.2).collect();
+            let pr = Problem {
+                walk,
+                loops: &loops,
+                distance: d,
+                frames: t * 25.0,
+                w_dist: w.distance,
+                w_time: w.time,
+                heading: Some(Turns {
+                    offset: frames_turn(&g, path, false) - deg.to_radians(),
+                    loops: &turns,
+                    weight: per_degree.to_degrees(),
+                }),
+            };
+            let c0 = pr.cost(&vec![0; loops.len()]);
+            let budget = pr.frames - walk.frames as f64 + (c0 - walk.cost) / w.time;
+            best = best.min(brute_counts(&pr, budget).0);
+            // Eq. 7's own counts, the heading added afterwards.
+            let plain = Problem {
+                heading: None,
+                ..pr.clone()
+            };
+            let c0 = plain.cost(&vec![0; loops.len()]);
+            let budget = pr.frames - walk.frames as f64 + (c0 - walk.cost) / w.time;
+            after = after.min(pr.cost(&brute_counts(&plain, budget).1));
+        }
+        assert!(
+            (plan.cost.total - best).abs() < 1e-6,
+            "case {case}: ilp {} brute force {best} ({a} -> {b}, {d} m, {t} s, {deg}°)",
+            plan.cost.total
+        );
+        let exact = SearchOptions {
+            solver: Solver::Exact,
+            ..ilp
+        };
+        let e = p.plan(&target, &exact).unwrap();
+        assert!(
+            (e.cost.total - best).abs() < 1e-6,
+            "case {case}: exact {} brute force {best}",
+            e.cost.total
+        );
+        assert!(after >= best - 1e-9, "case {case}");
+        worse_after += usize::from(after > best + 1e-6);
+        compared += 1;
+    }
+    assert!(compared >= 30, "only {compared} cases");
+    assert!(
+        worse_after >= 3,
+        "the joint optimum beat Eq. 7's counts in only {worse_after} of {compared} cases"
+    );
 }
 
 /// Key-frames with two vias: the path starts and ends at the key-frames,

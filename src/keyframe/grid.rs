@@ -60,6 +60,12 @@ pub struct GridQuery {
     pub seconds: f64,
     /// A search bound was hit.
     pub bounded: bool,
+    /// Final facing minus the heading target (degrees, wrapped to ±180;
+    /// `None` without `--heading`).
+    pub heading_error_deg: Option<f64>,
+    /// Segments found by the walks-and-loops search (the exact-length
+    /// search found the others).
+    pub walks_and_loops: usize,
 }
 
 /// Min, root mean square and max of a set of values.
@@ -171,6 +177,9 @@ pub struct GridReport {
     pub graph_smoothness: Spread,
     /// Its median.
     pub graph_smoothness_median: f64,
+    /// |Heading error| (degrees) over the queries (empty without
+    /// `--heading`).
+    pub heading_error_deg: Spread,
     /// Every query.
     pub queries: Vec<GridQuery>,
 }
@@ -306,6 +315,10 @@ pub fn evaluate(
                 smoothness_vertex: mean_smoothness_vertex(&tr),
                 seconds,
                 bounded: !plan.stats.bounds_hit.is_empty(),
+                heading_error_deg: search.heading.map(|h| {
+                    super::lattice::wrap((plan.facing_deg - h.degrees).to_radians()).to_degrees()
+                }),
+                walks_and_loops: plan.stats.walks_and_loops,
             });
         }
     }
@@ -355,6 +368,11 @@ pub fn evaluate(
         oracle_ms: 1e3 * oracle_s,
         graph_smoothness: Spread::of(gsm.iter().copied()),
         graph_smoothness_median: gsm.get(gsm.len() / 2).copied().unwrap_or(0.0),
+        heading_error_deg: Spread::of(
+            queries
+                .iter()
+                .filter_map(|q| q.heading_error_deg.map(f64::abs)),
+        ),
         queries,
     })
 }

@@ -9,24 +9,43 @@
 //! frames of the walk (`_0`) and of each loop, `Δd = d_0 − d_V`,
 //! `Δt = t_0 − t_V`. Every coefficient is ≥ 0 and every loop has `t_i ≥ 1`.
 //!
+//! **Heading** (an extension, [`super::lattice::Heading`]; [`Turns`]): with
+//! a target for the final facing the cost has a fourth term,
+//! `w_h ρ(Δθ + Σ n_i θ_i)`, with `θ_i` the turn of one repetition of loop
+//! `i`, `Δθ = θ_0 − θ_V` (the walk's turn minus the target) and
+//! `ρ(x) = |wrap(x)| = min_k |x − 2πk|` the angular error. The counts are
+//! chosen with it (the walk's final facing is its own turn plus
+//! `Σ θ_i n_i`), not scored with it afterwards.
+//!
 //! Three solvers, which the tests compare on random instances:
 //!
 //! - [`solve_ilp`]: the paper's method. `|·|` is split into its four sign
 //!   cases (Eqs. 23-25); each is an integer linear programme solved by the
-//!   pure-Rust `microlp` branch and bound through `good_lp`.
+//!   pure-Rust `microlp` branch and bound through `good_lp`. With a
+//!   heading, the wrap integer `k` is one more integer variable and
+//!   `|Δθ + Σ n_i θ_i − 2πk|` one more sign-split term (eight ILPs):
+//!   `min_{n,k} F(n) + w_h |x(n) − 2πk| = min_n F(n) + w_h min_k |x(n) − 2πk|
+//!   = min_n F(n) + w_h ρ(x(n))`, so the joint optimum is the heading
+//!   problem's; `k` is bounded by `⌊x_min/2π⌋ ≤ k ≤ ⌈x_max/2π⌉` over the
+//!   box of `n`, which holds the nearest `k = round(x/2π)` of every `n`.
 //! - [`solve_exact`]: a dynamic programme over the total loop frames
-//!   `τ = Σ n_i t_i`. For each `τ` it keeps the labels `(c, d)` (loop
-//!   transition cost and distance) that no other label at the same `τ`
-//!   dominates, where `(c', d')` dominates `(c, d)` when
-//!   `c' + w_d |d' − d| ≤ c`: by the triangle inequality any completion of
-//!   `(c, d)` is then matched by the same completion of `(c', d')`. Labels
+//!   `τ = Σ n_i t_i`. For each `τ` it keeps the labels `(c, d, θ)` (loop
+//!   transition cost, distance and turn) that no other label at the same
+//!   `τ` dominates, where `(c', d', θ')` dominates `(c, d, θ)` when
+//!   `c' + w_d |d' − d| + w_h ρ(θ' − θ) ≤ c`: by the triangle inequality
+//!   (`ρ` is a metric on the circle) any completion of `(c, d, θ)` is then
+//!   matched by the same completion of `(c', d', θ')`. Without a heading
+//!   `w_h = 0` and the turn plays no part. Labels
 //!   whose lower bound (`c_0 + c` plus the linear relaxation of what is
-//!   left, [`cone_gap`]) reaches the incumbent are dropped, and `τ` is
+//!   left, [`cone_gap`]; the heading term, never negative, is left out)
+//!   reaches the incumbent are dropped, and `τ` is
 //!   bounded by `w_t (Δt + τ) < bound`. Exact: every dropped label is provably no
 //!   better than a kept one.
 //! - [`brute_force`]: every `n` with `n_i ≤ limit`, for the tests.
 
+use super::lattice::wrap;
 use good_lp::{Expression, ProblemVariables, Solution, SolverModel, Variable, microlp, variable};
+use std::f64::consts::TAU;
 
 /// The cost of a walk or of one loop: transition cost, floor distance
 /// (metres), frames.
@@ -74,15 +93,48 @@ pub struct Problem<'a> {
     pub w_dist: f64,
     /// Weight of the time error, per frame.
     pub w_time: f64,
+    /// The heading term (an extension; `None`: Eq. 20 alone).
+    pub heading: Option<Turns<'a>>,
+}
+
+/// The heading term of a repetition problem (module docs):
+/// `w_h ρ(Δθ + Σ n_i θ_i)`, `ρ` the wrapped angular error.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Turns<'a> {
+    /// `Δθ`: the walk's turn minus the target turn (radians).
+    pub offset: f64,
+    /// `θ_i`: each loop's turn per repetition (radians), one per loop.
+    pub loops: &'a [f64],
+    /// `w_h`: cost per radian of error.
+    pub weight: f64,
+}
+
+impl Turns<'_> {
+    /// `θ_i` (0 past the list).
+    fn of(&self, i: usize) -> f64 {
+        self.loops.get(i).copied().unwrap_or(0.0)
+    }
+    /// `w_h ρ(x)`.
+    fn cost(&self, x: f64) -> f64 {
+        self.weight * wrap(x).abs()
+    }
 }
 
 impl Problem<'_> {
-    /// Eq. 16 for repetition counts `n`.
+    /// Eq. 16 for repetition counts `n` (plus the heading term).
     pub fn cost(&self, n: &[u32]) -> f64 {
         let m = self.total(n);
         m.cost
             + self.w_dist * (m.distance - self.distance).abs()
             + self.w_time * (m.frames as f64 - self.frames).abs()
+            + self.heading.map_or(0.0, |h| {
+                let turn: f64 = n.iter().enumerate().map(|(i, &k)| h.of(i) * k as f64).sum();
+                h.cost(h.offset + turn)
+            })
+    }
+    /// The heading term if it counts (a positive weight).
+    fn turns(&self) -> Option<Turns<'_>> {
+        self.heading.filter(|h| h.weight > 0.0)
     }
     /// The walk plus `n` repetitions of the loops.
     pub fn total(&self, n: &[u32]) -> Measure {
@@ -247,8 +299,10 @@ pub enum RepeatsError {
 /// (about 11 minutes at 25 fps).
 pub const MAX_LOOP_FRAMES: usize = 16_384;
 
-/// The paper's ILP (Eqs. 23-25), four `microlp` solves; every `n_i` is
-/// bounded by the loop frames past which the cost exceeds `n = 0`'s.
+/// The paper's ILP (Eqs. 23-25), four `microlp` solves (eight with a
+/// heading term: the wrap integer as one more variable, module docs);
+/// every `n_i` is bounded by the loop frames past which the cost exceeds
+/// `n = 0`'s.
 pub fn solve_ilp(p: &Problem) -> Result<Repeats, RepeatsError> {
     let zero = vec![0u32; p.loops.len()];
     let mut best = Repeats {
@@ -260,43 +314,77 @@ pub fn solve_ilp(p: &Problem) -> Result<Repeats, RepeatsError> {
     }
     let limit = p.frame_bound(best.cost).clamp(0.0, MAX_LOOP_FRAMES as f64);
     let (dd, dt) = p.delta();
-    for (sd, st) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
-        let mut vars = ProblemVariables::new();
-        let xs: Vec<Variable> = p
-            .loops
-            .iter()
-            .map(|l| {
-                let u = (limit / l.frames.max(1) as f64).floor();
-                vars.add(variable().integer().min(0).max(u))
-            })
-            .collect();
-        let mut obj = Expression::from(0.0);
-        let mut dist = Expression::from(dd);
-        let mut time = Expression::from(dt);
-        for (x, l) in xs.iter().zip(p.loops) {
-            let coef = l.cost + sd * p.w_dist * l.distance + st * p.w_time * l.frames as f64;
-            obj += coef * *x;
-            dist += l.distance * *x;
-            time += l.frames as f64 * *x;
+    let upper: Vec<f64> = p
+        .loops
+        .iter()
+        .map(|l| (limit / l.frames.max(1) as f64).floor())
+        .collect();
+    let heading = p.turns();
+    // The wrap integer's range over the box of `n`.
+    let wraps = heading.map(|h| {
+        let (mut lo, mut hi) = (h.offset, h.offset);
+        for (i, u) in upper.iter().enumerate() {
+            let x = h.of(i) * u;
+            lo += x.min(0.0);
+            hi += x.max(0.0);
         }
-        let model = vars
-            .minimise(obj)
-            .using(microlp)
-            .with((sd * dist).geq(0.0))
-            .with((st * time).geq(0.0));
-        match model.solve() {
-            Ok(sol) => {
-                let n: Vec<u32> = xs
-                    .iter()
-                    .map(|x| sol.value(*x).round().max(0.0) as u32)
-                    .collect();
-                let c = p.cost(&n);
-                if c < best.cost - 1e-12 {
-                    best = Repeats { n, cost: c };
-                }
+        ((lo / TAU).floor(), (hi / TAU).ceil())
+    });
+    let head_signs: &[f64] = if heading.is_some() {
+        &[1.0, -1.0]
+    } else {
+        &[0.0]
+    };
+    for (sd, st) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+        for &sh in head_signs {
+            let mut vars = ProblemVariables::new();
+            let xs: Vec<Variable> = upper
+                .iter()
+                .map(|&u| vars.add(variable().integer().min(0).max(u)))
+                .collect();
+            let k = wraps.map(|(lo, hi)| vars.add(variable().integer().min(lo).max(hi)));
+            let mut obj = Expression::from(0.0);
+            let mut dist = Expression::from(dd);
+            let mut time = Expression::from(dt);
+            let mut head = Expression::from(heading.map_or(0.0, |h| h.offset));
+            for (i, (x, l)) in xs.iter().zip(p.loops).enumerate() {
+                let th = heading.map_or(0.0, |h| h.of(i));
+                let wh = heading.map_or(0.0, |h| h.weight);
+                let coef = l.cost
+                    + sd * p.w_dist * l.distance
+                    + st * p.w_time * l.frames as f64
+                    + sh * wh * th;
+                obj += coef * *x;
+                dist += l.distance * *x;
+                time += l.frames as f64 * *x;
+                head += th * *x;
             }
-            Err(good_lp::ResolutionError::Infeasible) => {}
-            Err(e) => return Err(RepeatsError::Solver(e.to_string())),
+            if let (Some(k), Some(h)) = (k, heading) {
+                obj += (-sh * h.weight * TAU) * k;
+                head += (-TAU) * k;
+            }
+            let mut model = vars
+                .minimise(obj)
+                .using(microlp)
+                .with((sd * dist).geq(0.0))
+                .with((st * time).geq(0.0));
+            if heading.is_some() {
+                model = model.with((sh * head).geq(0.0));
+            }
+            match model.solve() {
+                Ok(sol) => {
+                    let n: Vec<u32> = xs
+                        .iter()
+                        .map(|x| sol.value(*x).round().max(0.0) as u32)
+                        .collect();
+                    let c = p.cost(&n);
+                    if c < best.cost - 1e-12 {
+                        best = Repeats { n, cost: c };
+                    }
+                }
+                Err(good_lp::ResolutionError::Infeasible) => {}
+                Err(e) => return Err(RepeatsError::Solver(e.to_string())),
+            }
         }
     }
     Ok(best)
@@ -306,6 +394,8 @@ pub fn solve_ilp(p: &Problem) -> Result<Repeats, RepeatsError> {
 struct Label {
     cost: f64,
     dist: f64,
+    /// `Σ n_i θ_i` (radians; 0 without a heading).
+    turn: f64,
     /// Lower bound of any completion.
     lb: f64,
     /// `(τ, index)` of the label this one extends, and the loop added.
@@ -358,10 +448,39 @@ fn dp(
     labels[0].push(Label {
         cost: 0.0,
         dist: 0.0,
+        turn: 0.0,
         lb: 0.0,
         parent: (u32::MAX, 0, 0),
     });
     let mut kept = 1usize;
+    let heading = p.turns();
+    let wh = heading.map_or(0.0, |h| h.weight);
+    let th0 = heading.map_or(0.0, |h| h.offset);
+    // `w_h ρ(a − b)`: the heading part of the dominance rule.
+    let apart = |a: f64, b: f64| {
+        if wh > 0.0 {
+            wh * wrap(a - b).abs()
+        } else {
+            0.0
+        }
+    };
+    // Each slot is kept sorted by distance, with an upper bound on its
+    // costs (`top`): with costs ≥ 0, a label can only dominate or be
+    // dominated by one whose distance is within `reach / w_d` of its own
+    // (`reach` its cost, or the slot's top cost minus its cost).
+    let mut top = vec![0.0f64; tmax + 1];
+    let nonneg = p.loops.iter().all(|l| l.cost >= 0.0);
+    let near = |slot: &[Label], d: f64, reach: f64| -> (usize, usize) {
+        if !(nonneg && p.w_dist > 0.0 && reach.is_finite()) {
+            return (0, slot.len());
+        }
+        if reach < 0.0 {
+            return (0, 0);
+        }
+        let r = reach / p.w_dist + 1e-12;
+        let lo = slot.partition_point(|o| o.dist < d - r);
+        (lo, lo + slot[lo..].partition_point(|o| o.dist <= d + r))
+    };
     let sp = cone(p.loops);
     let lower = |c: f64, d: f64, tau: usize| {
         p.walk.cost
@@ -382,7 +501,8 @@ fn dp(
                 let c = p.walk.cost
                     + l.cost
                     + p.w_dist * (dd + l.dist).abs()
-                    + p.w_time * (dt + tau as f64).abs();
+                    + p.w_time * (dt + tau as f64).abs()
+                    + apart(th0 + l.turn, 0.0);
                 if c < best_cost - 1e-12 {
                     best_cost = c;
                     best_at = Some((tau, k));
@@ -398,23 +518,34 @@ fn dp(
                     continue;
                 }
                 let (c2, d2) = (l.cost + lp.cost, l.dist + lp.distance);
+                let a2 = l.turn + heading.map_or(0.0, |h| h.of(i));
                 let lb2 = lower(c2, d2, t2);
                 if lb2 >= cut {
                     continue;
                 }
                 let slot = &mut labels[t2];
-                if slot
+                let (lo, hi) = near(slot, d2, c2);
+                if slot[lo..hi]
                     .iter()
-                    .any(|o| o.cost + p.w_dist * (o.dist - d2).abs() <= c2)
+                    .any(|o| o.cost + p.w_dist * (o.dist - d2).abs() + apart(o.turn, a2) <= c2)
                 {
                     continue;
                 }
-                let before = slot.len();
-                slot.retain(|o| c2 + p.w_dist * (d2 - o.dist).abs() > o.cost);
-                kept -= before - slot.len();
+                let (lo, hi) = near(slot, d2, top[t2] - c2);
+                let mut w = lo;
+                for r in lo..hi {
+                    let o = slot[r];
+                    if c2 + p.w_dist * (d2 - o.dist).abs() + apart(a2, o.turn) > o.cost {
+                        slot[w] = o;
+                        w += 1;
+                    }
+                }
+                slot.drain(w..hi);
+                kept -= hi - w;
                 let new = Label {
                     cost: c2,
                     dist: d2,
+                    turn: a2,
                     lb: lb2,
                     parent: (tau as u32, k as u32, i as u32),
                 };
@@ -426,11 +557,16 @@ fn dp(
                             .max_by(|x, y| x.1.lb.total_cmp(&y.1.lb))
                             .filter(|(_, w)| w.lb > lb2)
                         {
-                            slot[worst] = new;
+                            slot.remove(worst);
+                            let at = slot.partition_point(|o| o.dist < d2);
+                            slot.insert(at, new);
+                            top[t2] = top[t2].max(c2);
                         }
                     }
                     _ => {
-                        slot.push(new);
+                        let at = slot.partition_point(|o| o.dist < d2);
+                        slot.insert(at, new);
+                        top[t2] = top[t2].max(c2);
                         kept += 1;
                     }
                 }
@@ -506,6 +642,7 @@ mod tests {
             frames: 175.0,
             w_dist: 1.0 / 0.3,
             w_time: 0.1,
+            heading: None,
         };
         let e = solve_exact(&p, f64::INFINITY, 100_000).unwrap();
         assert_eq!(e.n, vec![5]);

@@ -19,7 +19,7 @@
 //! [`Stats::bounds_hit`].
 
 use super::graph::KeyGraph;
-use super::repeats::{Measure, Problem, RepeatsError, solve_bounded, solve_ilp};
+use super::repeats::{Measure, Problem, RepeatsError, Turns, solve_bounded, solve_ilp};
 use serde::Serialize;
 use std::collections::BinaryHeap;
 
@@ -121,8 +121,8 @@ pub struct SearchOptions {
     pub beam: usize,
     /// A target for the final facing (an extension, [`super::lattice`]):
     /// a term of the exact-length search, and of the walks-and-loops
-    /// search when it is the fallback (each walk scored with the turn of
-    /// its repetitions, [`Segment::solve`]). Default: none.
+    /// search (a term of each walk's repetition programme, so the counts
+    /// are chosen with it, [`Segment::solve`]). Default: none.
     pub heading: Option<super::lattice::HeadingTarget>,
 }
 
@@ -828,17 +828,23 @@ impl Segment {
                 }
             }
         }
-        // Distinct measures only.
+        // Distinct measures and turns only (the cheapest of each: two
+        // loops of the same frames and distance but different turns end
+        // facing different ways, which a heading target tells apart).
+        let turn = |c: u32| super::lattice::wrap(self.arcs_turn(&self.cycles[c as usize].arcs));
         seen.sort_by(|a, b| {
             let (x, y) = (&self.cycles[a.1 as usize].m, &self.cycles[b.1 as usize].m);
             x.frames
                 .cmp(&y.frames)
                 .then(x.distance.total_cmp(&y.distance))
+                .then(turn(a.1).total_cmp(&turn(b.1)))
                 .then(x.cost.total_cmp(&y.cost))
         });
         seen.dedup_by(|a, b| {
             let (x, y) = (&self.cycles[a.1 as usize].m, &self.cycles[b.1 as usize].m);
-            x.frames == y.frames && (x.distance - y.distance).abs() < 1e-9
+            x.frames == y.frames
+                && (x.distance - y.distance).abs() < 1e-9
+                && super::lattice::wrap(turn(a.1) - turn(b.1)).abs() < 1e-9
         });
         let capped = seen.len() > limit.max(2);
         if capped {
@@ -860,10 +866,14 @@ impl Segment {
         (seen, capped)
     }
 
+    /// The repetition counts of `loops` on `walk` (Eq. 20), with the
+    /// heading term `turns` when there is a heading target.
+    #[allow(clippy::too_many_arguments)]
     fn solve_repeats(
         &self,
         walk: Measure,
         loops: &[Measure],
+        turns: Option<Turns<'_>>,
         t: &Target,
         opts: &SearchOptions,
         bound: f64,
@@ -876,6 +886,7 @@ impl Segment {
             frames: t.frames,
             w_dist: opts.weights.distance,
             w_time: opts.weights.time,
+            heading: turns,
         };
         let r = match opts.solver {
             Solver::Exact => match solve_bounded(&p, bound, opts.gap, opts.limits.labels, None) {
@@ -953,12 +964,12 @@ impl Segment {
     /// increasing bound until the bound reaches the best cost.
     ///
     /// With a `heading` term (an extension, [`super::lattice::Heading`]),
-    /// each walk's cost is Eq. 7 at its repetition counts plus the heading
-    /// term of the path's turn: the walk's turn plus `n_i` times each
-    /// loop's. The counts are Eq. 7's optimum for the walk (the heading
-    /// term is not part of the repetition programme), so the heading
-    /// chooses between walks, not between counts; the bounds stay valid
-    /// (the term is never negative).
+    /// the path's turn is the walk's plus `n_i` times each loop's, and the
+    /// heading term of that turn is part of each walk's repetition
+    /// programme ([`super::repeats::Turns`]): the counts are chosen with
+    /// it. The bounds stay valid (the term is never negative); a walk
+    /// whose loops do not turn (or that has none) adds its own heading
+    /// term to its bound.
     pub fn solve(
         &self,
         t: &Target,
@@ -988,7 +999,8 @@ impl Segment {
                         wk.cone.as_ref(),
                         w.distance,
                         w.time,
-                    );
+                    )
+                    + heading.map_or(0.0, |h| fixed_heading(h, wk.turn, &wk.loop_turns));
                 (lb, i)
             })
             .collect();
@@ -1002,8 +1014,13 @@ impl Segment {
             }
             let wk = &self.walks[i];
             stats.loops_per_walk = stats.loops_per_walk.max(wk.measures.len());
-            let (n, c) = self.solve_repeats(wk.m, &wk.measures, t, opts, best_cost, stats)?;
-            let c = c + heading.map_or(0.0, |h| h.cost(turn_with(wk.turn, &wk.loop_turns, &n)));
+            let turns = heading.map(|h| Turns {
+                offset: wk.turn - h.turn,
+                loops: &wk.loop_turns,
+                weight: h.weight,
+            });
+            let (n, c) =
+                self.solve_repeats(wk.m, &wk.measures, turns, t, opts, best_cost, stats)?;
             stats.walks += 1;
             if c < best_cost {
                 best_cost = c;
@@ -1142,14 +1159,18 @@ impl Segment {
     }
 }
 
-/// The turn of a walk with `n[i]` repetitions of loops turning
-/// `loop_turns[i]` (radians).
-fn turn_with(walk: f64, loop_turns: &[f64], n: &[u32]) -> f64 {
-    walk + loop_turns
+/// The heading term of a walk turning `walk` radians whose loops do not
+/// turn (each a multiple of 2π), whatever their counts; 0 (a lower bound)
+/// when some loop turns.
+fn fixed_heading(h: &super::lattice::Heading, walk: f64, loop_turns: &[f64]) -> f64 {
+    if loop_turns
         .iter()
-        .zip(n)
-        .map(|(t, &k)| t * f64::from(k))
-        .sum::<f64>()
+        .all(|&t| super::lattice::wrap(t).abs() < 1e-12)
+    {
+        h.cost(walk)
+    } else {
+        0.0
+    }
 }
 
 /// One target split over several segments (Sec. 5.1, "a series of
@@ -1160,7 +1181,8 @@ fn turn_with(walk: f64, loop_turns: &[f64], n: &[u32]) -> f64 {
 /// best cost; a full combination is skipped when its linear relaxation
 /// does (the relaxation of the union of the walks' loops, merged from
 /// each walk's, [`super::repeats::merge_cones`]). A `heading` term is
-/// added as in [`Segment::solve`], over the whole path's turn.
+/// part of each combination's repetition programme as in
+/// [`Segment::solve`], over the whole path's turn.
 pub fn solve_split(
     segs: &[Segment],
     t: &Target,
@@ -1234,14 +1256,17 @@ pub fn solve_split(
                     .flat_map(|w| w.measures.iter().copied())
                     .collect();
                 stats.loops_per_walk = stats.loops_per_walk.max(loops.len());
-                let (n, c) = segs[0].solve_repeats(m, &loops, t, opts, best_cost, stats)?;
-                let c = c + heading.map_or(0.0, |h| {
-                    let turns: Vec<f64> = walks
-                        .clone()
-                        .flat_map(|w| w.loop_turns.iter().copied())
-                        .collect();
-                    h.cost(turn_with(walks.map(|w| w.turn).sum(), &turns, &n))
+                let loop_turns: Vec<f64> = walks
+                    .clone()
+                    .flat_map(|w| w.loop_turns.iter().copied())
+                    .collect();
+                let walk_turn: f64 = walks.map(|w| w.turn).sum();
+                let turns = heading.map(|h| Turns {
+                    offset: walk_turn - h.turn,
+                    loops: &loop_turns,
+                    weight: h.weight,
                 });
+                let (n, c) = segs[0].solve_repeats(m, &loops, turns, t, opts, best_cost, stats)?;
                 stats.walks += 1;
                 if c < best_cost {
                     best_cost = c;
