@@ -198,9 +198,9 @@ pub fn transition_floor(ch: &Character, frames: &FrameSet, opts: &FloorOptions) 
         stride: 1,
         cache: HashMap::new(),
     };
-    for i in 0..seqs.len() {
-        for j in i..seqs.len() {
-            let (li, lj) = (seqs[i].len, seqs[j].len);
+    for (i, si) in seqs.iter().enumerate() {
+        for (j, sj) in seqs.iter().enumerate().skip(i) {
+            let (li, lj) = (si.len, sj.len);
             // Coarse distances of every frame pair of the two sequences.
             let all: Vec<(u32, u32)> = (0..li)
                 .flat_map(|r| (0..lj).map(move |s| (r, s)))
@@ -291,12 +291,12 @@ pub fn transition_floor(ch: &Character, frames: &FrameSet, opts: &FloorOptions) 
                 }
             }
             pairs.push(PairFloor {
-                a: seqs[i].name.clone(),
-                b: seqs[j].name.clone(),
+                a: si.name.clone(),
+                b: sj.name.clone(),
                 best: best.map(|(e, m, n, l)| Window {
-                    from: seqs[i].name.clone(),
+                    from: si.name.clone(),
                     m,
-                    to: seqs[j].name.clone(),
+                    to: sj.name.clone(),
                     n,
                     window: l,
                     smoothness: e,
