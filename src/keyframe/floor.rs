@@ -361,12 +361,12 @@ pub fn path_floor(g: &KeyGraph, from: u32, to: u32, max_transitions: usize) -> P
     let mut by_count = Vec::new();
     for _ in 0..max_transitions {
         let mut next = vec![inf; n];
-        for f in 0..n {
-            if !d[f].is_finite() {
+        for (f, &df) in d.iter().enumerate() {
+            if !df.is_finite() {
                 continue;
             }
             for e in &g.edges[g.offsets[f] as usize..g.offsets[f + 1] as usize] {
-                let c = d[f] + e.cost;
+                let c = df + e.cost;
                 if e.jump && c < next[e.to as usize] {
                     next[e.to as usize] = c;
                 }
