@@ -96,5 +96,5 @@ fn floor_is_the_measure_minimised_over_every_frame_pair_and_bounds_the_graph() {
     let (kg, vg) = pg.best.expect("the graph joins walk and run");
     let (_, va) = pa.best.expect("so does every frame pair");
     assert!(va <= vg + 1e-9 && va >= 0.0, "{va} > {vg}");
-    assert!(kg >= 1 && kg <= 20);
+    assert!((1..=20).contains(&kg));
 }
