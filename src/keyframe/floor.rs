@@ -399,16 +399,19 @@ mod tests {
 
     #[test]
     fn best_window_is_the_least_alpha_prime_average_over_the_windows() {
-        // h(k) for k ∈ [−3, 3]; L = 1: α′ = 0, ½, 0 → h(0) = 1;
-        // L = 2: (¼·4 + ½·1 + ¼·0) / 1 = 1.5; L = 3: weights ⅓ ⅔... of
-        // (9, 4, 1, 0, ...) larger.
+        // h(k) for k ∈ [−3, 3]. L = 1: α′ = 0, ½, 0 → h(0) = 1; L = 2:
+        // ¼·1 + ½·1 + ¼·0 = 0.75 (weights sum to 1); L = 3: α′ = ⅙, ⅓, ½,
+        // ⅓, ⅙ over 4, 1, 1, 0, 9 → 3 / 1.5 = 2.
         let h = [9.0, 4.0, 1.0, 1.0, 0.0, 9.0, 9.0];
-        let (l, v) = best_window(&h, 1, 3);
+        let (l, v) = best_window(&h, 1, 1);
         assert_eq!(l, 1);
         assert!((v - 1.0).abs() < 1e-12);
-        let (l, v) = best_window(&h, 2, 3);
+        let (l, v) = best_window(&h, 1, 3);
         assert_eq!(l, 2);
-        assert!((v - (0.25 * 1.0 + 0.5 * 1.0 + 0.25 * 0.0) / 1.0).abs() < 1e-12);
+        assert!((v - 0.75).abs() < 1e-12);
+        let (l, v) = best_window(&h, 3, 3);
+        assert_eq!(l, 3);
+        assert!((v - 2.0).abs() < 1e-12);
     }
 
     /// Two sequences of 10 frames (0-9, 10-19) with the jumps given.
