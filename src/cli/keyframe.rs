@@ -93,7 +93,7 @@ pub struct Args {
         long,
         value_name = "M",
         allow_hyphen_values = true,
-        required_unless_present = "grid"
+        required_unless_present_any = ["grid", "floor"]
     )]
     pub distance: Option<String>,
     /// Target time in seconds (0: as short as possible); one value or one
@@ -102,11 +102,11 @@ pub struct Args {
         long,
         value_name = "S",
         allow_hyphen_values = true,
-        required_unless_present = "grid"
+        required_unless_present_any = ["grid", "floor"]
     )]
     pub time: Option<String>,
     /// Output: .glb, .pc2 (+ .obj), .mdd, or a folder of OBJ frames.
-    #[arg(short, long, required_unless_present = "grid")]
+    #[arg(short, long, required_unless_present_any = ["grid", "floor"])]
     pub output: Option<PathBuf>,
     /// Write the JSON report: path (segments, loops, repetitions), cost
     /// terms, achieved distance and time, transitions and smoothness,
@@ -171,6 +171,12 @@ pub struct Args {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Print the smoothness floor instead (Sec. 6.1's measure over every
+    /// frame pair and window of the database, and the least mean
+    /// smoothness of a path between each pair of consecutive key-frames;
+    /// `keyframe::floor`).
+    #[arg(long, conflicts_with = "grid")]
+    pub floor: bool,
 }
 
 fn numbers(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
@@ -277,8 +283,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.grid {
         return grid(&ch, &keys, &a, &opts, &head);
     }
+    if a.floor {
+        return floor(&ch, &keys, &a, &opts, &head);
+    }
     let (Some(d), Some(t), Some(out)) = (&a.distance, &a.time, &a.output) else {
-        anyhow::bail!("--distance, --time and -o are needed (or --grid)");
+        anyhow::bail!("--distance, --time and -o are needed (or --grid, --floor)");
     };
     let targets = Targets::from_lists(
         &numbers("distance", d)?,
@@ -408,6 +417,113 @@ fn grid(
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
     super::emit(&(head.to_string() + &grid_text(&g)))
+}
+
+/// `--floor`: the transition floor of the database and the path floor
+/// between consecutive key-frames, for paths of at most as many
+/// transitions as the longest `--times` can hold (one per 4 frames, the
+/// search's spacing; at most 250).
+fn floor(
+    ch: &Character,
+    keys: &[u32],
+    a: &Args,
+    opts: &KeyframeOptions,
+    head: &str,
+) -> anyhow::Result<()> {
+    use surfmotion::keyframe::floor::{FloorOptions, path_floor, transition_floor};
+    let ts = parse_range(&a.times).map_err(|e| anyhow::anyhow!("--times {e}"))?;
+    let fps = ch.manifest().fps;
+    let longest = ts.iter().copied().fold(0.0, f64::max);
+    let k_max = ((longest * fps / 4.0).ceil() as usize).clamp(1, 250);
+    let frames = surfmotion::keyframe::smoothness::FrameSet::new(ch);
+    let fopts = FloorOptions::of_graph(&ch.graph().options);
+    let t = transition_floor(ch, &frames, &fopts);
+    let priced = KeyframeOptions {
+        transition_cost: TransitionCost::Smoothness,
+        ..*opts
+    };
+    let graph = key_graph(ch, &priced);
+    let all = surfmotion::keyframe::graph::KeyGraph::of_character_with(ch, Some(&t.bounds));
+    let name = |f: u32| {
+        let (s, i) = ch.graph().frame_of(f);
+        format!("{}:{i}", ch.graph().sequences[s].name)
+    };
+    let paths: Vec<serde_json::Value> = keys
+        .windows(2)
+        .map(|w| {
+            serde_json::json!({
+                "from": name(w[0]),
+                "to": name(w[1]),
+                "max_transitions": k_max,
+                "graph": path_floor(&graph, w[0], w[1], k_max),
+                "every_frame_pair": path_floor(&all, w[0], w[1], k_max),
+            })
+        })
+        .collect();
+    if a.json {
+        let v = serde_json::json!({ "transitions": t, "paths": paths });
+        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+    }
+    let win = |w: &Option<surfmotion::keyframe::floor::Window>| {
+        w.as_ref().map_or("none".to_string(), |w| {
+            format!(
+                "{:.4} m ({}:{} ~ {}:{}, L = {})",
+                w.smoothness, w.from, w.m, w.to, w.n, w.window
+            )
+        })
+    };
+    let mut s = head.to_string();
+    s += &format!(
+        "transition floor over {} frame pairs (L in [{}, {}], gap {} within a sequence): {}\n",
+        t.candidates,
+        fopts.min_window,
+        fopts.max_window,
+        fopts.min_gap,
+        win(&t.best)
+    );
+    for p in &t.pairs {
+        s += &format!(
+            "  {} ~ {}: {}; <= {} m: {} distinct transitions ({} frame pairs by the bound); {} windows measured in full\n",
+            p.a,
+            p.b,
+            win(&p.best),
+            t.threshold,
+            p.under_distinct,
+            p.under_bound,
+            p.measured
+        );
+    }
+    for w in keys.windows(2) {
+        for (what, g) in [
+            ("graph transitions", &graph),
+            ("every frame pair (bound)", &all),
+        ] {
+            let p = path_floor(g, w[0], w[1], k_max);
+            let by = |k: usize| {
+                p.by_count
+                    .get(k - 1)
+                    .copied()
+                    .flatten()
+                    .map_or("-".to_string(), |v| format!("{v:.4}"))
+            };
+            s += &format!(
+                "path floor {} -> {}, {what}: k=1 {}, k=2 {}, k=3 {}; least over k <= {k_max}: {}{}\n",
+                name(w[0]),
+                name(w[1]),
+                by(1),
+                by(2),
+                by(3),
+                p.best
+                    .map_or("none".to_string(), |(k, v)| format!("{v:.4} m (k = {k})")),
+                if p.direct {
+                    "; a path without transitions exists"
+                } else {
+                    ""
+                }
+            );
+        }
+    }
+    super::emit(&s)
 }
 
 fn grid_text(g: &GridReport) -> String {

@@ -6,7 +6,8 @@
 //! [`search`] (walks, loops and pruning, Eqs. 13-22) with [`repeats`] (the
 //! loop repetition counts, Eqs. 20-25), [`place`] (blending across
 //! transitions and placement along the accumulated root motion),
-//! [`smoothness`] (Table III's transition smoothness), [`select`] (the
+//! [`smoothness`] (Table III's transition smoothness), [`floor`] (its
+//! lower bounds over a database), [`select`] (the
 //! key-frame transitions re-chosen by that measured distortion) and [`grid`] (the
 //! Table III evaluation over a grid of targets); [`lattice`] is the
 //! exact-length search (the default) and [`pose`] resolves key-frames
@@ -18,6 +19,7 @@
 //! distance travelled by the mesh centroid (Eq. 10) and `time = N_f Δt`
 //! (Eq. 12). Zero targets ask for the shortest path.
 
+pub mod floor;
 pub mod graph;
 pub mod grid;
 pub mod heatmap;

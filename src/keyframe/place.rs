@@ -14,6 +14,14 @@
 //! floor so that its mean vertex lies exactly at `X_k`. The output thus
 //! travels `Σ |c(b) − c(b−1)|`, the distance the search counted
 //! ([`super::graph::KeyGraph::step`]).
+//!
+//! Across a transition the blended frames move on the floor as the blend
+//! of the two sequences' root motions (Sec. 4.4 blends the geometry over
+//! the window; [`ease_steps`] does the same for the floor speed, with the
+//! window's path length kept, so the output still
+//! travels exactly the counted distance. Without it the whole body
+//! changed speed within one frame at a walk-to-run transition (1.0 to
+//! 2.4 m/s, 35 m/s² on every vertex).
 
 use super::graph::{KeyGraph, centre_of};
 use crate::mesh::blend::{Blender, FrameGradients};
@@ -74,6 +82,80 @@ pub fn placements(ch: &Character, g: &KeyGraph, path: &[u32]) -> (Vec<Floor>, Ve
     (out, centres)
 }
 
+/// Eases the floor speed across every jump `a → b` at output frame `at`
+/// with half-window `L`, as Sec. 4.4 blends the geometry: the steps
+/// `X_k − X_{k−1}` of the window `k = at + o`, `o ∈ [−L, L − 1]`, keep
+/// their directions and take the length `(1 − α) s_i(a + o + 1) + α
+/// s_j(b + o)`, `α = (o + L + ½) / 2L`, with `s_i`, `s_j` the floor steps
+/// of the two sequences ([`KeyGraph::step`]) around the frames the blend
+/// pairs (the one available where the other lies outside its sequence),
+/// all scaled so that the window's path length is unchanged; the frames
+/// after the window move with its end. A window with a standing step
+/// (shorter than 0.1 mm) is left as is.
+pub fn ease_steps(centre: &mut [[f64; 2]], jumps: &[Jump], g: &KeyGraph) {
+    let step = |f: i64, seq: u32| -> Option<f64> {
+        let i = usize::try_from(f).ok()?;
+        (i > 0 && g.sequence.get(i) == Some(&seq) && g.sequence.get(i - 1) == Some(&seq))
+            .then(|| g.step[i])
+    };
+    for j in jumps {
+        let l = j.window.max(1);
+        let lo = j.at.saturating_sub(l).max(1);
+        let hi = (j.at + l - 1).min(centre.len().saturating_sub(1));
+        if lo >= j.at || j.at > hi || j.from as usize >= g.sequence.len() {
+            continue;
+        }
+        let (si, sj) = (
+            g.sequence[j.from as usize],
+            g.sequence.get(j.to as usize).copied(),
+        );
+        let Some(sj) = sj else { continue };
+        let steps: Vec<[f64; 2]> = (lo..=hi)
+            .map(|k| {
+                [
+                    centre[k][0] - centre[k - 1][0],
+                    centre[k][1] - centre[k - 1][1],
+                ]
+            })
+            .collect();
+        let len: Vec<f64> = steps.iter().map(|v| v[0].hypot(v[1])).collect();
+        if len.iter().any(|&x| x < 1e-4) {
+            continue;
+        }
+        let want: Vec<f64> = (lo..=hi)
+            .zip(&len)
+            .map(|(k, &now)| {
+                let o = k as i64 - j.at as i64;
+                let alpha = (o + l as i64) as f64 / (2 * l) as f64 + 0.5 / (2 * l) as f64;
+                let left = step(j.from as i64 + o + 1, si);
+                let entered = step(j.to as i64 + o, sj);
+                match (left, entered) {
+                    (Some(x), Some(y)) => (1.0 - alpha) * x + alpha * y,
+                    (Some(x), None) | (None, Some(x)) => x,
+                    (None, None) => now,
+                }
+            })
+            .collect();
+        let sum: f64 = want.iter().sum();
+        if sum < 1e-4 {
+            continue;
+        }
+        let scale = len.iter().sum::<f64>() / sum;
+        let old_end = centre[hi];
+        let mut x = centre[lo - 1];
+        for (i, k) in (lo..=hi).enumerate() {
+            let f = want[i] * scale / len[i];
+            x = [x[0] + steps[i][0] * f, x[1] + steps[i][1] * f];
+            centre[k] = x;
+        }
+        let d = [x[0] - old_end[0], x[1] - old_end[1]];
+        for c in centre.iter_mut().skip(hi + 1) {
+            c[0] += d[0];
+            c[1] += d[1];
+        }
+    }
+}
+
 /// Blends and places the frames of `path`.
 pub fn place(
     ch: &Character,
@@ -82,7 +164,8 @@ pub fn place(
     opts: &TimelineOptions,
 ) -> Result<Placed, SolveError> {
     let (frames, jumps) = timeline(path, &super::graph::KeyFrames { ch, graph: g }, opts);
-    let (place, centre) = placements(ch, g, path);
+    let (place, mut centre) = placements(ch, g, path);
+    ease_steps(&mut centre, &jumps, g);
     let topo = ch.topology_metres();
     let blender = Blender::new(&topo)?;
     let n = ch.n();
@@ -120,4 +203,77 @@ pub fn place(
         heading: place.iter().map(|p| p.theta).collect(),
         centre,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn length(c: &[[f64; 2]]) -> f64 {
+        c.windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum()
+    }
+
+    #[test]
+    fn easing_a_walk_to_run_jump_blends_the_speeds_and_keeps_the_path_length() {
+        // Sequence 0 (frames 0-29) steps 1 cm per frame along x, sequence
+        // 1 (30-59) 2.5 cm along z; the path takes 0..=19, jumps 19 → 40
+        // (at output frame 20, L = 4) and goes on to 59.
+        let centre: Vec<[f64; 2]> = (0..60)
+            .map(|f| {
+                if f < 30 {
+                    [0.01 * f as f64, 0.0]
+                } else {
+                    [0.0, 0.025 * f as f64]
+                }
+            })
+            .collect();
+        let succ: Vec<Vec<(u32, f64)>> = (0..60u32)
+            .map(|f| {
+                if f % 30 != 29 {
+                    vec![(f + 1, 0.0)]
+                } else {
+                    vec![]
+                }
+            })
+            .collect();
+        let g = KeyGraph::new(&succ, centre, (0..60).map(|f| f / 30).collect());
+        let path: Vec<u32> = (0..20).chain(40..60).collect();
+        let mut c = vec![[0.0, 0.0]];
+        for k in 1..path.len() {
+            let p = c[k - 1];
+            c.push(if k < 20 {
+                [p[0] + 0.01, p[1]]
+            } else {
+                [p[0], p[1] + 0.025]
+            });
+        }
+        let before = c.clone();
+        let jump = Jump {
+            at: 20,
+            from: 19,
+            to: 40,
+            window: 4,
+            transition: true,
+        };
+        ease_steps(&mut c, &[jump], &g);
+        assert!((length(&c) - length(&before)).abs() < 1e-12);
+        let speed = |c: &[[f64; 2]], k: usize| (c[k][0] - c[k - 1][0]).hypot(c[k][1] - c[k - 1][1]);
+        // Largest change of speed between consecutive steps: 1.5 cm at
+        // the jump before; eight steps of 1.5/8 cm after.
+        let jerk = |c: &[[f64; 2]]| {
+            (2..40)
+                .map(|k| (speed(c, k) - speed(c, k - 1)).abs())
+                .fold(0.0, f64::max)
+        };
+        assert!((jerk(&before) - 0.015).abs() < 1e-12);
+        assert!(jerk(&c) < 0.015 / 7.0, "{}", jerk(&c));
+        // Outside the window nothing changes speed.
+        for k in (1..=15).chain(24..40) {
+            assert!((speed(&c, k) - speed(&before, k)).abs() < 1e-12, "{k}");
+        }
+        // Directions are kept: the steps before the jump stay along x.
+        assert!(c[19][1].abs() < 1e-12 && c[39][0] > 0.19);
+    }
 }

@@ -231,6 +231,86 @@ fn aligned(ch: &Character, ia: u32, ib: u32) -> (Vec<DVec3>, Vec<DVec3>) {
     )
 }
 
+/// Every frame of a character ready for the surface Hausdorff distance of
+/// any frame pair (the nearest-vertex grid of each frame built once), for
+/// measuring many pairs ([`super::floor`]). [`FrameSet::distance`] with
+/// stride 1 is the distance [`profile`] measures for the pair.
+pub struct FrameSet {
+    grids: Vec<Grid>,
+    surface: Surface,
+    poses: Vec<crate::skeleton::Pose>,
+}
+
+impl FrameSet {
+    /// Of every frame of `ch` (metres).
+    pub fn new(ch: &Character) -> FrameSet {
+        use rayon::prelude::*;
+        let n = ch.n();
+        let grids = (0..ch.frame_count() as u32)
+            .into_par_iter()
+            .map(|f| {
+                let mut a = vec![[0.0; 3]; n];
+                ch.frame_metres(f, &mut a);
+                Grid::new(a.iter().map(|p| DVec3::from_array(*p)).collect(), 0.03)
+            })
+            .collect();
+        FrameSet {
+            grids,
+            surface: Surface::new(ch.topology().triangles(), n),
+            poses: ch.poses().to_vec(),
+        }
+    }
+
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.grids.len()
+    }
+
+    /// True without frames.
+    pub fn is_empty(&self) -> bool {
+        self.grids.is_empty()
+    }
+
+    /// The symmetric surface Hausdorff distance of frames `a` and `b` (flat
+    /// ids), `b` moved on the floor onto `a` as [`profile`] does, measured
+    /// from every `stride`-th vertex of each: with `stride` 1 the distance
+    /// itself, with a larger stride a lower bound of it (a maximum over
+    /// fewer vertices). Each directed distance is taken in the frame of
+    /// the mesh measured against (the rigid floor motion moved onto the
+    /// query points instead), so no grid is rebuilt.
+    pub fn distance(&self, a: u32, b: u32, stride: usize) -> f64 {
+        let (ga, gb) = (&self.grids[a as usize], &self.grids[b as usize]);
+        let fit = Floor::fit(&self.poses[b as usize], &self.poses[a as usize]);
+        let inv = Floor {
+            theta: -fit.theta,
+            t: Floor {
+                theta: -fit.theta,
+                t: DVec3::ZERO,
+            }
+            .apply(-fit.t),
+        };
+        let step = stride.max(1);
+        let a_in_b: Vec<DVec3> = ga
+            .points
+            .iter()
+            .step_by(step)
+            .map(|p| inv.apply(*p))
+            .collect();
+        let b_in_a: Vec<DVec3> = gb
+            .points
+            .iter()
+            .step_by(step)
+            .map(|p| fit.apply(*p))
+            .collect();
+        directed_to_surface(&a_in_b, gb, &self.surface, 1).max(directed_to_surface(
+            &b_in_a,
+            ga,
+            &self.surface,
+            1,
+        ))
+    }
+}
+
 /// A transition's smoothness by both distances (metres).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct Smoothness {

@@ -1,0 +1,453 @@
+//! Lower bounds of Table III's smoothness (Huang et al. 2015, Sec. 6.1):
+//! how smooth can a transition, and a key-frame path, of a given database
+//! be at best?
+//!
+//! **Transition floor.** A transition `(m, n, L)` (Sec. 4.2) blends the
+//! frames `M_i(m+k)`, `M_j(n+k)`, `k ∈ [−L, L]`; its smoothness is the
+//! α′(k)-weighted average (Eq. 2's weights) of their surface Hausdorff
+//! distances ([`super::smoothness`]). The floor is the least smoothness
+//! over *every* frame pair `(m, n)` of every sequence pair (not only the
+//! local minima of the shape matrix the graph keeps), every window
+//! `L ∈ [min_window, max_window]` that fits both sequences (the graph's
+//! Sec. 4.2 rules: `L < 25`, within one sequence `|m − n| ≥ min_gap`).
+//! It is found exactly by bounding: the distance from every
+//! `coarse_stride`-th vertex is a lower bound of the distance (a maximum
+//! over fewer vertices), so is its weighted window; windows are visited in
+//! increasing coarse bound, refined with `fine_stride`, and measured in
+//! full only while their bound is under the best found.
+//!
+//! **Path floor.** The smoothness of a path is the mean of its
+//! transitions' (Table III averages it over the grid's paths). On a frame
+//! graph priced by smoothness, [`path_floor`] gives the least mean over
+//! all paths from one key-frame to another with `k` transitions, for every
+//! `k` up to a bound, by a dynamic programme over (frame, transitions so
+//! far): a lower bound of every query's smoothness between those
+//! key-frames (the search's 4-frame spacing of transitions is relaxed).
+
+use super::graph::KeyGraph;
+use super::smoothness::FrameSet;
+use crate::graph::transitions::TransitionOptions;
+use crate::retarget::character::Character;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::HashMap;
+
+/// Options of [`transition_floor`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FloorOptions {
+    /// Smallest half-window `L`.
+    pub min_window: usize,
+    /// Largest half-window `L`.
+    pub max_window: usize,
+    /// Within one sequence, the smallest `|m − n|`.
+    pub min_gap: usize,
+    /// Vertex stride of the first bound. Default: 64.
+    pub coarse_stride: usize,
+    /// Vertex stride of the second bound. Default: 8.
+    pub fine_stride: usize,
+    /// Transitions at most this smooth are counted (metres). Default: 0.04
+    /// (the goal).
+    pub threshold: f64,
+}
+
+impl FloorOptions {
+    /// The windows and gap of the graph's transition search (Sec. 4.2).
+    pub fn of_graph(t: &TransitionOptions) -> FloorOptions {
+        FloorOptions {
+            min_window: t.min_window.max(1),
+            max_window: t.max_window.max(t.min_window.max(1)),
+            min_gap: t.min_gap,
+            coarse_stride: 64,
+            fine_stride: 8,
+            threshold: 0.04,
+        }
+    }
+}
+
+/// One transition window `(m, n, L)` and its smoothness.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Window {
+    /// Sequence of `m`.
+    pub from: String,
+    /// Centre frame in `from`.
+    pub m: usize,
+    /// Sequence of `n`.
+    pub to: String,
+    /// Centre frame in `to`.
+    pub n: usize,
+    /// Half-window `L`.
+    pub window: usize,
+    /// Weighted surface Hausdorff distance (metres).
+    pub smoothness: f64,
+}
+
+/// The floor of one (unordered) sequence pair.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PairFloor {
+    /// First sequence.
+    pub a: String,
+    /// Second sequence (the same for transitions within one).
+    pub b: String,
+    /// The smoothest window (`None` when no window fits).
+    pub best: Option<Window>,
+    /// Frame pairs `(m, n)` whose window's fine lower bound is at most the
+    /// threshold (at least as many as are).
+    pub under_bound: usize,
+    /// Distinct transitions at most the threshold (measured in full): taken
+    /// greedily in increasing fine bound, each suppressing the others
+    /// within `min_gap` frames in both sequences (as the graph keeps its
+    /// top N).
+    pub under_distinct: usize,
+    /// Windows measured in full.
+    pub measured: usize,
+}
+
+/// [`transition_floor`]'s result.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TransitionFloor {
+    /// The smoothest window of the database.
+    pub best: Option<Window>,
+    /// Per sequence pair, as in [`TransitionFloor::best`].
+    pub pairs: Vec<PairFloor>,
+    /// The threshold of [`PairFloor::under_distinct`] (metres).
+    pub threshold: f64,
+    /// Frame pairs `(m, n)` with a window that fits.
+    pub candidates: usize,
+    /// Every frame pair with its window's coarse lower bound, as jumps
+    /// `(frame left, frame entered, bound, L)` in both directions (for
+    /// [`path_floor`] on [`KeyGraph::of_character_with`]).
+    #[serde(skip)]
+    pub bounds: Vec<(u32, u32, f64, usize)>,
+}
+
+/// The α′(k)-weighted average of `h(k)`, `k ∈ [−l, l]`, the least over
+/// `l ∈ [lo, hi]` and its `l` (as [`super::smoothness::weighted`], every
+/// frame present).
+fn best_window(h: &[f64], lo: usize, hi: usize) -> (usize, f64) {
+    let c = (h.len() - 1) / 2;
+    let mut best = (lo, f64::INFINITY);
+    for l in lo..=hi.min(c) {
+        let (mut num, mut den) = (0.0, 0.0);
+        for k in -(l as i64)..=(l as i64) {
+            let alpha = (k + l as i64) as f64 / (2 * l) as f64;
+            let w = alpha.min(1.0 - alpha);
+            if w > 0.0 {
+                num += w * h[(c as i64 + k) as usize];
+                den += w;
+            }
+        }
+        let v = if den > 0.0 { num / den } else { 0.0 };
+        if v < best.1 {
+            best = (l, v);
+        }
+    }
+    best
+}
+
+/// A distance of frame pairs at one stride, cached.
+struct Level<'a> {
+    frames: &'a FrameSet,
+    stride: usize,
+    cache: HashMap<(u32, u32), f64>,
+}
+
+impl Level<'_> {
+    /// The weighted window `(l, value)` of the diagonal `(a + k, b + k)`,
+    /// `k ∈ [−hi, hi]`, measuring missing pairs in parallel.
+    fn window(&mut self, a: u32, b: u32, lo: usize, hi: usize) -> (usize, f64) {
+        let pairs: Vec<(u32, u32)> = (-(hi as i64)..=hi as i64)
+            .map(|k| ((a as i64 + k) as u32, (b as i64 + k) as u32))
+            .map(|(x, y)| (x.min(y), x.max(y)))
+            .collect();
+        let missing: Vec<(u32, u32)> = pairs
+            .iter()
+            .copied()
+            .filter(|p| !self.cache.contains_key(p))
+            .collect();
+        let (frames, stride) = (self.frames, self.stride);
+        let got: Vec<((u32, u32), f64)> = missing
+            .par_iter()
+            .map(|&(x, y)| ((x, y), frames.distance(x, y, stride)))
+            .collect();
+        self.cache.extend(got);
+        let h: Vec<f64> = pairs.iter().map(|p| self.cache[p]).collect();
+        best_window(&h, lo, hi)
+    }
+}
+
+/// The smoothness floor of a character's database (module docs).
+pub fn transition_floor(ch: &Character, frames: &FrameSet, opts: &FloorOptions) -> TransitionFloor {
+    let g = ch.graph();
+    let seqs = &g.sequences;
+    let lo = opts.min_window.max(1);
+    let mut pairs = Vec::new();
+    let mut bounds = Vec::new();
+    let mut candidates = 0;
+    let mut coarse = Level {
+        frames,
+        stride: opts.coarse_stride.max(1),
+        cache: HashMap::new(),
+    };
+    let mut fine = Level {
+        frames,
+        stride: opts.fine_stride.max(1),
+        cache: HashMap::new(),
+    };
+    let mut exact = Level {
+        frames,
+        stride: 1,
+        cache: HashMap::new(),
+    };
+    for (i, si) in seqs.iter().enumerate() {
+        for (j, sj) in seqs.iter().enumerate().skip(i) {
+            let (li, lj) = (si.len, sj.len);
+            // Coarse distances of every frame pair of the two sequences.
+            let all: Vec<(u32, u32)> = (0..li)
+                .flat_map(|r| (0..lj).map(move |s| (r, s)))
+                .filter(|&(r, s)| i != j || s >= r + opts.min_gap)
+                .map(|(r, s)| {
+                    let (x, y) = (g.frame_id(i, r), g.frame_id(j, s));
+                    (x.min(y), x.max(y))
+                })
+                .filter(|p| !coarse.cache.contains_key(p))
+                .collect();
+            let stride = coarse.stride;
+            let got: Vec<((u32, u32), f64)> = all
+                .par_iter()
+                .map(|&(x, y)| ((x, y), frames.distance(x, y, stride)))
+                .collect();
+            coarse.cache.extend(got);
+            // Every window that fits, with its coarse bound.
+            let mut cands: Vec<(f64, usize, usize, usize)> = Vec::new();
+            for m in 0..li {
+                for n in 0..lj {
+                    if i == j && n < m + opts.min_gap {
+                        continue;
+                    }
+                    let hi = m
+                        .min(n)
+                        .min(li - 1 - m)
+                        .min(lj - 1 - n)
+                        .min(opts.max_window);
+                    if hi < lo {
+                        continue;
+                    }
+                    let (l, v) = coarse.window(g.frame_id(i, m), g.frame_id(j, n), lo, hi);
+                    cands.push((v, m, n, hi));
+                    let (a, b) = (g.frame_id(i, m), g.frame_id(j, n));
+                    if n + 1 < lj {
+                        bounds.push((a, b + 1, v, l));
+                    }
+                    if m + 1 < li {
+                        bounds.push((b, a + 1, v, l));
+                    }
+                }
+            }
+            candidates += cands.len();
+            cands.sort_by(|x, y| x.0.total_cmp(&y.0));
+            // The smoothest window: in increasing coarse bound, refined,
+            // measured in full while the bounds are under the best.
+            let mut best: Option<(f64, usize, usize, usize)> = None;
+            let mut measured = 0;
+            for &(v, m, n, hi) in &cands {
+                let bar = best.map_or(f64::INFINITY, |b| b.0);
+                if v >= bar {
+                    break;
+                }
+                let (a, b) = (g.frame_id(i, m), g.frame_id(j, n));
+                if fine.window(a, b, lo, hi).1 >= bar {
+                    continue;
+                }
+                let (l, e) = exact.window(a, b, lo, hi);
+                measured += 1;
+                if e < bar {
+                    best = Some((e, m, n, l));
+                }
+            }
+            // Windows under the threshold: every frame pair whose fine
+            // bound is (a superset), then distinct ones greedily in
+            // increasing fine bound, each measured in full unless a kept
+            // one within `min_gap` suppresses it.
+            let mut under: Vec<(f64, usize, usize, usize)> = cands
+                .iter()
+                .take_while(|c| c.0 <= opts.threshold)
+                .map(|&(_, m, n, hi)| {
+                    let f = fine.window(g.frame_id(i, m), g.frame_id(j, n), lo, hi).1;
+                    (f, m, n, hi)
+                })
+                .filter(|c| c.0 <= opts.threshold)
+                .collect();
+            under.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let mut kept: Vec<(usize, usize)> = Vec::new();
+            for &(_, m, n, hi) in &under {
+                let near = |a: usize, b: usize| a.abs_diff(b) <= opts.min_gap;
+                if kept.iter().any(|&(km, kn)| near(km, m) && near(kn, n)) {
+                    continue;
+                }
+                let (_, e) = exact.window(g.frame_id(i, m), g.frame_id(j, n), lo, hi);
+                measured += 1;
+                if e <= opts.threshold {
+                    kept.push((m, n));
+                }
+            }
+            pairs.push(PairFloor {
+                a: si.name.clone(),
+                b: sj.name.clone(),
+                best: best.map(|(e, m, n, l)| Window {
+                    from: si.name.clone(),
+                    m,
+                    to: sj.name.clone(),
+                    n,
+                    window: l,
+                    smoothness: e,
+                }),
+                under_bound: under.len(),
+                under_distinct: kept.len(),
+                measured,
+            });
+        }
+    }
+    let best = pairs
+        .iter()
+        .filter_map(|p| p.best.clone())
+        .min_by(|a, b| a.smoothness.total_cmp(&b.smoothness));
+    TransitionFloor {
+        best,
+        pairs,
+        threshold: opts.threshold,
+        candidates,
+        bounds,
+    }
+}
+
+/// [`path_floor`]'s result.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PathFloor {
+    /// A path without any transition reaches the end key-frame.
+    pub direct: bool,
+    /// The least mean transition cost of a path with exactly `k`
+    /// transitions, `k = 1, 2, …` (`None`: no such path).
+    pub by_count: Vec<Option<f64>>,
+    /// The least over `by_count`, with its `k`.
+    pub best: Option<(usize, f64)>,
+}
+
+/// The least mean jump cost over paths of `g` from frame `from` to frame
+/// `to` with `k ∈ [1, max_transitions]` jumps (module docs). With `g`
+/// priced by smoothness, a lower bound of the smoothness of every path
+/// between the two key-frames with at most that many transitions.
+pub fn path_floor(g: &KeyGraph, from: u32, to: u32, max_transitions: usize) -> PathFloor {
+    let n = g.step.len();
+    let inf = f64::INFINITY;
+    // Along a sequence: frames reachable without a jump.
+    let sweep = |d: &mut Vec<f64>| {
+        for f in 0..n {
+            if !d[f].is_finite() {
+                continue;
+            }
+            for e in &g.edges[g.offsets[f] as usize..g.offsets[f + 1] as usize] {
+                if !e.jump && d[f] < d[e.to as usize] {
+                    d[e.to as usize] = d[f];
+                }
+            }
+        }
+    };
+    let mut d = vec![inf; n];
+    if (from as usize) < n {
+        d[from as usize] = 0.0;
+    }
+    sweep(&mut d);
+    let direct = (to as usize) < n && d[to as usize].is_finite();
+    let mut by_count = Vec::new();
+    for _ in 0..max_transitions {
+        let mut next = vec![inf; n];
+        for (f, &df) in d.iter().enumerate() {
+            if !df.is_finite() {
+                continue;
+            }
+            for e in &g.edges[g.offsets[f] as usize..g.offsets[f + 1] as usize] {
+                let c = df + e.cost;
+                if e.jump && c < next[e.to as usize] {
+                    next[e.to as usize] = c;
+                }
+            }
+        }
+        sweep(&mut next);
+        d = next;
+        let k = by_count.len() + 1;
+        by_count.push(
+            d.get(to as usize)
+                .filter(|x| x.is_finite())
+                .map(|x| x / k as f64),
+        );
+    }
+    let best = by_count
+        .iter()
+        .enumerate()
+        .filter_map(|(k, v)| v.map(|v| (k + 1, v)))
+        .min_by(|a, b| a.1.total_cmp(&b.1));
+    PathFloor {
+        direct,
+        by_count,
+        best,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn best_window_is_the_least_alpha_prime_average_over_the_windows() {
+        // h(k) for k ∈ [−3, 3]. L = 1: α′ = 0, ½, 0 → h(0) = 1; L = 2:
+        // ¼·1 + ½·1 + ¼·0 = 0.75 (weights sum to 1); L = 3: α′ = ⅙, ⅓, ½,
+        // ⅓, ⅙ over 4, 1, 1, 0, 9 → 3 / 1.5 = 2.
+        let h = [9.0, 4.0, 1.0, 1.0, 0.0, 9.0, 9.0];
+        let (l, v) = best_window(&h, 1, 1);
+        assert_eq!(l, 1);
+        assert!((v - 1.0).abs() < 1e-12);
+        let (l, v) = best_window(&h, 1, 3);
+        assert_eq!(l, 2);
+        assert!((v - 0.75).abs() < 1e-12);
+        let (l, v) = best_window(&h, 3, 3);
+        assert_eq!(l, 3);
+        assert!((v - 2.0).abs() < 1e-12);
+    }
+
+    /// Two sequences of 10 frames (0-9, 10-19) with the jumps given.
+    fn two(jumps: &[(u32, u32, f64)]) -> KeyGraph {
+        let mut succ: Vec<Vec<(u32, f64)>> = (0..20u32)
+            .map(|f| {
+                if f % 10 != 9 {
+                    vec![(f + 1, 0.0)]
+                } else {
+                    vec![]
+                }
+            })
+            .collect();
+        for &(a, b, c) in jumps {
+            succ[a as usize].push((b, c));
+        }
+        let seq = (0..20).map(|f| f / 10).collect();
+        KeyGraph::new(&succ, vec![[0.0; 2]; 20], seq)
+    }
+
+    #[test]
+    fn path_floor_is_the_least_mean_over_paths_with_k_transitions() {
+        // 0 → 15 needs the jump 3 → 12 (0.3); the loop 16 → 11 (0.1)
+        // dilutes it: k = 2: (0.3 + 0.1) / 2; k = 3: 0.5 / 3.
+        let g = two(&[(3, 12, 0.3), (16, 11, 0.1), (5, 18, 0.9)]);
+        let p = path_floor(&g, 0, 15, 3);
+        assert!(!p.direct);
+        let want = [0.3, 0.2, 0.5 / 3.0];
+        for (got, want) in p.by_count.iter().zip(want) {
+            assert!((got.unwrap() - want).abs() < 1e-12, "{got:?} {want}");
+        }
+        assert_eq!(p.best.map(|b| b.0), Some(3));
+        // A key-frame later in the same sequence needs no transition; one
+        // before the start with no loop back cannot be reached.
+        assert!(path_floor(&g, 0, 7, 2).direct);
+        let back = path_floor(&g, 12, 2, 4);
+        assert!(!back.direct && back.best.is_none());
+    }
+}
