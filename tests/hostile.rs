@@ -561,6 +561,8 @@ fn session6_rows() -> Vec<Row> {
             .with_db(),
         row("transfer --report onto its own clip", "transfer --scan {topo} --landmarks {lm} --mocap {d}/w.bvh -o {d}/o.pc2 --report {d}/w.bvh", &["--report", "w.bvh", "overwrite the input"])
             .file("w.bvh", walk_text()),
+        // The costs overflowed to infinity: "no path" for a reachable target.
+        row("keyframe --w-time 1e308", "keyframe --db {db} --from walk:0 --to walk:100 --distance 3 --time 1 --w-time 1e308 --w-dist 1e308 -o {d}/k.glb", &["--w-time", "above 1e6"]),
         row("db init --sequence missing", "db init {d}/x --mesh {topo} --sequence w={d}/none.pc2", &["--sequence w", "none.pc2", "no such file"]),
     ]
 }

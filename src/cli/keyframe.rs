@@ -77,7 +77,7 @@ pub struct Args {
     pub heading: Option<f64>,
     /// Weight of the heading error, per degree. Default: 1/30 (30° cost as
     /// much as 0.3 m of distance).
-    #[arg(long, value_parser = super::non_negative)]
+    #[arg(long, value_parser = super::weight)]
     pub w_heading: Option<f64>,
     /// Prefer a path within this percentage of both the distance and the
     /// time target over a cheaper one (Eq. 7) that is not, when the graph
@@ -114,10 +114,10 @@ pub struct Args {
     #[arg(long, value_name = "JSON")]
     pub report: Option<PathBuf>,
     /// Weight of the distance error, per metre. Default: 1/0.3 (the paper).
-    #[arg(long, value_parser = super::non_negative)]
+    #[arg(long, value_parser = super::weight)]
     pub w_dist: Option<f64>,
     /// Weight of the time error, per frame. Default: 1/10 (the paper).
-    #[arg(long, value_parser = super::non_negative)]
+    #[arg(long, value_parser = super::weight)]
     pub w_time: Option<f64>,
     /// Optimality gap of the search (cost units: 1 = 30 cm of distance or
     /// 10 frames at the default weights; 0: the exact optimum).

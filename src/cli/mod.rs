@@ -359,6 +359,18 @@ pub fn non_negative(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A cost weight of Eq. 7 (`--w-dist`, `--w-time`, `--w-heading`): finite,
+/// ≥ 0 and at most 1e6. Larger weights overflow the search's costs to
+/// infinity (`--w-time 1e308` reported "no path" for a reachable target).
+pub fn weight(s: &str) -> Result<f64, String> {
+    let v = non_negative(s)?;
+    if v <= 1e6 {
+        Ok(v)
+    } else {
+        Err(format!("{s}: a weight above 1e6 overflows the path costs"))
+    }
+}
+
 /// A count on the command line (pixels, frames) in `[lo, hi]`: clap's
 /// "0 is not in 16..=8192" instead of a silent clamp (`render --size 0`
 /// drew 16 pixels).
