@@ -362,26 +362,7 @@ fn walk_to_run(db: &std::path::Path, rest: &[&std::ffi::OsStr]) -> std::process:
 /// samba character, 25 fps), built once for the tests that need it.
 fn walk_run_db(d: &std::path::Path) -> &'static std::path::Path {
     static DB: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
-    DB.get_or_init(|| {
-        let db = common::fixture_dir("keyframe-walk-run").join("db");
-        let m = d.join("mocap/cmu-amc/02");
-        let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fixtures/samba.landmarks.json");
-        let o = Command::new(common::bin())
-            .args(["synth", "--mesh"])
-            .arg(d.join("4d/samba/samba.obj"))
-            .arg("--landmarks")
-            .arg(&fixture)
-            .arg("--mocap")
-            .arg(m.join("02_01.amc"))
-            .arg(m.join("02_03.amc"))
-            .args(["--fps", "25", "-o"])
-            .arg(&db)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        db
-    })
+    DB.get_or_init(|| common::walk_run_db(d, "keyframe-walk-run"))
 }
 
 #[test]

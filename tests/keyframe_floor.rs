@@ -4,29 +4,11 @@
 
 mod common;
 
-use std::process::Command;
 use surfmotion::keyframe::floor::{FloorOptions, path_floor, transition_floor};
 use surfmotion::keyframe::smoothness::{FrameSet, Surface, profile, transition_smoothness};
 
 fn walk_run_db(d: &std::path::Path) -> std::path::PathBuf {
-    let db = common::fixture_dir("keyframe-floor-walk-run").join("db");
-    let m = d.join("mocap/cmu-amc/02");
-    let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/samba.landmarks.json");
-    let o = Command::new(common::bin())
-        .args(["synth", "--mesh"])
-        .arg(d.join("4d/samba/samba.obj"))
-        .arg("--landmarks")
-        .arg(&fixture)
-        .arg("--mocap")
-        .arg(m.join("02_01.amc"))
-        .arg(m.join("02_03.amc"))
-        .args(["--fps", "25", "-o"])
-        .arg(&db)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    db
+    common::walk_run_db(d, "keyframe-floor-walk-run")
 }
 
 /// The frame-pair distance of the floor is the measure's (stride 1) and a

@@ -2,7 +2,7 @@
 //! folders, and running the built binary (`run_cli`, `CliRun`).
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 pub mod gaits;
 
@@ -126,6 +126,30 @@ pub fn fixture_dir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&p);
     std::fs::create_dir_all(&p).unwrap();
     p
+}
+
+/// The small synthetic database of the key-frame tests (CMU walk 02_01
+/// and run 02_03 on the samba character, 25 fps, as `synth` writes it),
+/// built into `fixture_dir(name)/db` from the data folder `d`.
+pub fn walk_run_db(d: &Path, name: &str) -> PathBuf {
+    let db = fixture_dir(name).join("db");
+    let m = d.join("mocap/cmu-amc/02");
+    let landmarks =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
+    let o = std::process::Command::new(bin())
+        .args(["synth", "--mesh"])
+        .arg(d.join("4d/samba/samba.obj"))
+        .arg("--landmarks")
+        .arg(&landmarks)
+        .arg("--mocap")
+        .arg(m.join("02_01.amc"))
+        .arg(m.join("02_03.amc"))
+        .args(["--fps", "25", "-o"])
+        .arg(&db)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    db
 }
 
 /// Whether the npm package `package` is installed under `.ci/node_modules`
