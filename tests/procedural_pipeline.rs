@@ -13,16 +13,15 @@ use surfmotion::db::Character;
 use surfmotion::db::Quiet;
 use surfmotion::deform::DeformMode;
 use surfmotion::eval::velocity_error;
-use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::retarget::{Output, RetargetOptions, synthesise};
-use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::retarget::clip_poses;
 use surfmotion::skeleton::Pose;
-use surfmotion::synth::humanoid::{humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh};
 use surfmotion::synth::{Gait, gait_clip};
 
 /// Grid spacing of the test character (metres): coarser than the demo's
 /// 0.02, for speed.
+mod common;
+
 const GRID: f64 = 0.035;
 const FPS: f64 = 30.0;
 
@@ -35,44 +34,14 @@ struct Fixture {
 }
 
 fn write_database(db: &Path) {
-    let rest = humanoid_mesh(GRID);
-    let rig = Embedding::new(&rest, &humanoid_landmarks(&rest), None).unwrap();
-    let character = SynthCharacter {
-        rest,
-        rig,
-        landmarks_json: humanoid_landmarks_json().into_bytes(),
-    };
-    let clips: Vec<SynthClip> = [(Gait::Walk, 3.0), (Gait::Run, 2.0)]
-        .into_iter()
-        .map(|(g, seconds)| SynthClip::from_clip(g.name(), &gait_clip(g, seconds, FPS)).unwrap())
-        .collect();
-    let opts = SynthOptions {
-        fps: FPS,
-        name: Some("procedural".into()),
-        truth: false,
-        plausibility: false,
-        force: true,
-        ..Default::default()
-    };
-    write_synthetic_database(db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
-}
-
-/// `target/tmp/fixtures/NAME`, emptied: the fixture lives in a `static`,
-/// which is never dropped, so a temporary folder would be left behind.
-fn fixture_dir(name: &str) -> std::path::PathBuf {
-    let p = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("fixtures")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&p);
-    std::fs::create_dir_all(&p).unwrap();
-    p
+    common::procedural_walk_run_database(db, "procedural", GRID, FPS);
 }
 
 fn fixture() -> &'static Fixture {
     static F: OnceLock<Fixture> = OnceLock::new();
     F.get_or_init(|| {
         let t = std::time::Instant::now();
-        let db = fixture_dir("procedural-pipeline").join("db");
+        let db = common::fixture_dir("procedural-pipeline").join("db");
         std::fs::create_dir_all(&db).unwrap();
         write_database(&db);
         let ch = Character::load(&db, &Quiet).unwrap();

@@ -10,13 +10,10 @@ use std::sync::OnceLock;
 use surfmotion::db::{Character, Quiet};
 use surfmotion::deform::DeformMode;
 use surfmotion::eval::{floor_height, lowest_heights};
-use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::retarget::query::database_floor_lift;
 use surfmotion::retarget::{RetargetOptions, synthesise};
-use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::retarget::{choose_reference, clip_poses};
 use surfmotion::skeleton::Pose;
-use surfmotion::synth::humanoid::{humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh};
 use surfmotion::synth::{Gait, gait_clip};
 
 const GRID: f64 = 0.035;
@@ -28,26 +25,7 @@ mod common;
 /// written to `db`; its rest frame lowered by `drop` metres (the frames
 /// stay where they are: they stand that much above the rest frame).
 fn write_database(db: &Path, drop: f64) {
-    let rest = humanoid_mesh(GRID);
-    let rig = Embedding::new(&rest, &humanoid_landmarks(&rest), None).unwrap();
-    let character = SynthCharacter {
-        rest,
-        rig,
-        landmarks_json: humanoid_landmarks_json().into_bytes(),
-    };
-    let clips: Vec<SynthClip> = [(Gait::Walk, 3.0), (Gait::Run, 2.0)]
-        .into_iter()
-        .map(|(g, seconds)| SynthClip::from_clip(g.name(), &gait_clip(g, seconds, FPS)).unwrap())
-        .collect();
-    let opts = SynthOptions {
-        fps: FPS,
-        name: Some("ground".into()),
-        truth: false,
-        plausibility: false,
-        force: true,
-        ..Default::default()
-    };
-    write_synthetic_database(db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
+    common::procedural_walk_run_database(db, "ground", GRID, FPS);
     if drop != 0.0 {
         let topo = db.join("topology.obj");
         let text = std::fs::read_to_string(&topo).unwrap();

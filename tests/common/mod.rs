@@ -152,6 +152,37 @@ pub fn walk_run_db(d: &Path, name: &str) -> PathBuf {
     db
 }
 
+/// A procedural database written to `db` as `synth` writes one: the
+/// project's humanoid (meshed at `grid` metres) walking for 3 s and running
+/// for 2 s at `fps`, named `name` (tests/procedural_pipeline.rs,
+/// tests/retarget_ground.rs).
+pub fn procedural_walk_run_database(db: &Path, name: &str, grid: f64, fps: f64) {
+    use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
+    use surfmotion::rig::embed::Embedding;
+    use surfmotion::synth::humanoid::{humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh};
+    use surfmotion::synth::{Gait, gait_clip};
+    let rest = humanoid_mesh(grid);
+    let rig = Embedding::new(&rest, &humanoid_landmarks(&rest), None).unwrap();
+    let character = SynthCharacter {
+        rest,
+        rig,
+        landmarks_json: humanoid_landmarks_json().into_bytes(),
+    };
+    let clips: Vec<SynthClip> = [(Gait::Walk, 3.0), (Gait::Run, 2.0)]
+        .into_iter()
+        .map(|(g, seconds)| SynthClip::from_clip(g.name(), &gait_clip(g, seconds, fps)).unwrap())
+        .collect();
+    let opts = SynthOptions {
+        fps,
+        name: Some(name.into()),
+        truth: false,
+        plausibility: false,
+        force: true,
+        ..Default::default()
+    };
+    write_synthetic_database(db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
+}
+
 /// Whether the npm package `package` is installed under `.ci/node_modules`
 /// and `node` runs (`.ci/run` installs both). When not, the test should
 /// return early: this prints why (`what` it would have done), except under
