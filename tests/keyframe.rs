@@ -960,6 +960,37 @@ fn wrap_deg(x: f64) -> f64 {
     (x + 180.0).rem_euclid(360.0) - 180.0
 }
 
+/// The walks search (exact, no gap) through `keys` on `g` for `t`: the
+/// plain plan, the plan with a heading target 60° past the plain plan's
+/// facing (weight 1/30 per degree), and that target in degrees; `None`
+/// when there is no plain plan.
+fn walks_plain_and_turned_60(
+    g: &KeyGraph,
+    keys: &[u32],
+    t: &Targets,
+) -> Option<(surfmotion::keyframe::Plan, surfmotion::keyframe::Plan, f64)> {
+    use surfmotion::keyframe::lattice::HeadingTarget;
+    use surfmotion::keyframe::search::Method;
+    let o = SearchOptions {
+        method: Method::Walks,
+        gap: 0.0,
+        ..Default::default()
+    };
+    let p = Planner::new(g.clone(), keys, 25.0, &o).ok()?;
+    let plain = p.plan(t, &o).ok()?;
+    let want = wrap_deg(plain.facing_deg + 60.0);
+    let h = SearchOptions {
+        heading: Some(HeadingTarget {
+            degrees: want,
+            weight: 1.0 / 30.0,
+            sectors: 8,
+        }),
+        ..o
+    };
+    let turned = p.plan(t, &h).unwrap();
+    Some((plain, turned, want))
+}
+
 /// A heading target (`--heading`) turns the final facing towards it: the
 /// reported facing is the sum of the path's transition turns, and asking
 /// for 60° more than the plain result's facing brings the error well
@@ -1622,36 +1653,18 @@ fn paths_pass_two_vias_in_order_with_either_search() {
 /// walks ignored the target and every error stayed 60°.
 #[test]
 fn heading_target_counts_in_the_walks_search() {
-    use surfmotion::keyframe::lattice::HeadingTarget;
-    use surfmotion::keyframe::search::Method;
     let mut r = Lcg(67);
     let (mut cases, mut sum) = (0, 0.0);
     for case in 0..200 {
         let g = turning_graph(&mut r);
         let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
-        let o = SearchOptions {
-            method: Method::Walks,
-            gap: 0.0,
-            ..Default::default()
-        };
-        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
-            continue;
-        };
         let t = Targets::Global {
             distance: 1.0 + 2.0 * r.next(),
             time: 2.0 + 2.0 * r.next(),
         };
-        let Ok(plain) = p.plan(&t, &o) else { continue };
-        let want = wrap_deg(plain.facing_deg + 60.0);
-        let h = SearchOptions {
-            heading: Some(HeadingTarget {
-                degrees: want,
-                weight: 1.0 / 30.0,
-                sectors: 8,
-            }),
-            ..o
+        let Some((plain, turned, want)) = walks_plain_and_turned_60(&g, &[a, b], &t) else {
+            continue;
         };
-        let turned = p.plan(&t, &h).unwrap();
         assert_eq!(turned.stats.exact_length, 0, "case {case}");
         let err = wrap_deg(turned.facing_deg - want).abs();
         assert!(
@@ -1679,36 +1692,18 @@ fn heading_target_counts_in_the_walks_search() {
 /// same rule, the turn summed over the segments.
 #[test]
 fn heading_target_counts_in_the_walks_split_over_vias() {
-    use surfmotion::keyframe::lattice::HeadingTarget;
-    use surfmotion::keyframe::search::Method;
     let mut r = Lcg(71);
     let (mut cases, mut lower) = (0, 0);
     for case in 0..150 {
         let g = turning_graph(&mut r);
         let keys: Vec<u32> = (0..3).map(|_| r.below(g.len()) as u32).collect();
-        let o = SearchOptions {
-            method: Method::Walks,
-            gap: 0.0,
-            ..Default::default()
-        };
-        let Ok(p) = Planner::new(g.clone(), &keys, 25.0, &o) else {
-            continue;
-        };
         let t = Targets::Global {
             distance: 2.0 + 2.0 * r.next(),
             time: 3.0 + 2.0 * r.next(),
         };
-        let Ok(plain) = p.plan(&t, &o) else { continue };
-        let want = wrap_deg(plain.facing_deg + 60.0);
-        let h = SearchOptions {
-            heading: Some(HeadingTarget {
-                degrees: want,
-                weight: 1.0 / 30.0,
-                sectors: 8,
-            }),
-            ..o
+        let Some((plain, turned, _)) = walks_plain_and_turned_60(&g, &keys, &t) else {
+            continue;
         };
-        let turned = p.plan(&t, &h).unwrap();
         let plain_total = plain.cost.total + 60.0 / 30.0;
         assert!(
             turned.cost.total <= plain_total + 1e-9,
