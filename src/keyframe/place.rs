@@ -165,7 +165,11 @@ pub fn place(
 ) -> Result<Placed, SolveError> {
     let (frames, jumps) = timeline(path, &super::graph::KeyFrames { ch, graph: g }, opts);
     let (place, mut centre) = placements(ch, g, path);
-    ease_steps(&mut centre, &jumps, g);
+    if opts.blend {
+        // No blending (`--no-blend`): each frame keeps its own sequence's
+        // steps, as it keeps its own geometry.
+        ease_steps(&mut centre, &jumps, g);
+    }
     let topo = ch.topology_metres();
     let blender = Blender::new(&topo)?;
     let n = ch.n();
