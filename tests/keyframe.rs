@@ -43,6 +43,33 @@ fn random_problem(r: &mut Lcg, loops: &mut Vec<Measure>) -> (Measure, f64, f64) 
     (walk, 3.0 * r.next(), 40.0 * r.next())
 }
 
+/// The exact programme and the ILP find the brute-force optimum of `p`
+/// (case `case`, time target `t` frames); returns the brute-force optimum.
+/// No count past the frames at which the time error alone exceeds the
+/// cost of n = 0 can be optimal: brute force goes up to there.
+fn assert_solvers_agree(
+    p: &Problem,
+    t: f64,
+    case: usize,
+) -> surfmotion::keyframe::repeats::Repeats {
+    let c0 = p.cost(&vec![0; p.loops.len()]);
+    let frames = t - p.walk.frames as f64 + (c0 - p.walk.cost) / p.w_time;
+    let limit = (frames.max(0.0) / 3.0).ceil() as u32;
+    let b = brute_force(p, limit);
+    let e = solve_exact(p, f64::INFINITY, 1_000_000).unwrap();
+    let i = solve_ilp(p).unwrap();
+    assert!(
+        (e.cost - b.cost).abs() < 1e-9,
+        "case {case}: exact {e:?} brute {b:?}"
+    );
+    assert!(
+        (i.cost - b.cost).abs() < 1e-6,
+        "case {case}: ilp {i:?} brute {b:?}"
+    );
+    assert!((p.cost(&e.n) - e.cost).abs() < 1e-9);
+    b
+}
+
 #[test]
 fn ilp_exact_and_brute_force_agree_on_random_repetition_problems() {
     let mut r = Lcg(7);
@@ -58,23 +85,7 @@ fn ilp_exact_and_brute_force_agree_on_random_repetition_problems() {
             w_time: 0.1,
             heading: None,
         };
-        // No count past the frames at which the time error alone exceeds the
-        // cost of n = 0 can be optimal: brute force up to there.
-        let c0 = p.cost(&vec![0; loops.len()]);
-        let frames = t - walk.frames as f64 + (c0 - walk.cost) / p.w_time;
-        let limit = (frames.max(0.0) / 3.0).ceil() as u32;
-        let b = brute_force(&p, limit);
-        let e = solve_exact(&p, f64::INFINITY, 1_000_000).unwrap();
-        let i = solve_ilp(&p).unwrap();
-        assert!(
-            (e.cost - b.cost).abs() < 1e-9,
-            "case {case}: exact {e:?} brute {b:?}"
-        );
-        assert!(
-            (i.cost - b.cost).abs() < 1e-6,
-            "case {case}: ilp {i:?} brute {b:?}"
-        );
-        assert!((p.cost(&e.n) - e.cost).abs() < 1e-9);
+        assert_solvers_agree(&p, t, case);
     }
 }
 
@@ -109,21 +120,8 @@ fn heading_is_optimised_jointly_with_the_repetition_counts() {
             w_time: 0.1,
             heading: Some(heading),
         };
-        let c0 = p.cost(&vec![0; loops.len()]);
-        let frames = t - walk.frames as f64 + (c0 - walk.cost) / p.w_time;
-        let limit = (frames.max(0.0) / 3.0).ceil() as u32;
-        let b = brute_force(&p, limit);
-        let e = solve_exact(&p, f64::INFINITY, 1_000_000).unwrap();
+        let b = assert_solvers_agree(&p, t, case);
         let i = solve_ilp(&p).unwrap();
-        assert!(
-            (e.cost - b.cost).abs() < 1e-9,
-            "case {case}: exact {e:?} brute {b:?}"
-        );
-        assert!(
-            (i.cost - b.cost).abs() < 1e-6,
-            "case {case}: ilp {i:?} brute {b:?}"
-        );
-        assert!((p.cost(&e.n) - e.cost).abs() < 1e-9);
         assert!((p.cost(&i.n) - i.cost).abs() < 1e-9);
         // Eq. 7's counts, scored with the heading afterwards.
         let plain = Problem {
