@@ -228,7 +228,7 @@ fn foot_sliding_is_zero_when_planted_and_reads_a_dragged_foot() {
     let (mesh, rig) = humanoid();
     let rest = mesh.positions();
     let n = rest.len();
-    let c = Checker::new(rest, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
+    let c = Checker::new(&mesh, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
     // Planted: the whole body still, then moved only vertically above the
     // contact band (feet stay on the floor, the body bobs 1 cm).
     let still = animate(rest, 30, |_, _, p| p);
@@ -271,7 +271,7 @@ fn foot_sliding_is_zero_when_planted_and_reads_a_dragged_foot() {
 fn a_whole_body_gliding_fast_is_not_contact_but_is_seen_touching() {
     let (mesh, rig) = humanoid();
     let rest = mesh.positions();
-    let c = Checker::new(rest, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
+    let c = Checker::new(&mesh, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
     // 4 cm per frame = 1.2 m/s: a held pose carried at walking speed.
     let glide = animate(rest, 20, |t, _, p| p + DVec3::X * 0.04 * t as f64);
     let s = c.measure(&glide, rest.len(), None).unwrap().foot_sliding;
@@ -287,7 +287,7 @@ fn penetration_reads_the_depth_pushed_below_the_floor() {
     let (mesh, rig) = humanoid();
     let rest = mesh.positions();
     let n = rest.len();
-    let c = Checker::new(rest, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
+    let c = Checker::new(&mesh, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
     let floor = lowest_heights(rest, n, DVec3::Y)[0];
     assert!((c.floor - floor).abs() < 1e-12);
     for d in [0.01, 0.04, 0.1] {
