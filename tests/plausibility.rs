@@ -14,12 +14,11 @@ use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::rig::embed::parts::Part;
-use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
+use surfmotion::synth::humanoid::DEMO_GRID;
 
 fn humanoid() -> (Mesh, Embedding) {
-    let mesh = humanoid_mesh(DEMO_GRID);
-    let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
-    (mesh, rig)
+    let c = common::humanoid_character(DEMO_GRID);
+    (c.rest, c.rig)
 }
 
 fn centroid(p: &[[f64; 3]], ids: &[u32]) -> DVec3 {
@@ -480,17 +479,7 @@ fn retarget_json_and_eval_carry_the_report_and_preview_writes_a_sheet() {
     ]);
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
     let p = &v["plausibility"];
-    for key in [
-        "head_torso_deg",
-        "foot_sliding",
-        "ground",
-        "knee_hyperextension_deg",
-        "turned_over",
-        "reference",
-        "warnings",
-    ] {
-        assert!(!p[key].is_null(), "retarget --json: no plausibility.{key}");
-    }
+    common::assert_plausibility_fields(p, "retarget --json", &[]);
     assert!(p["head_torso_deg"]["p95"].as_f64().unwrap() >= 0.0);
     assert!(p["reference"]["head_torso_deg"]["p95"].is_number());
     assert_eq!(png_size(&sheet), (4 * 64, 2 * 64));

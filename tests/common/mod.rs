@@ -157,30 +157,48 @@ pub fn walk_run_db(d: &Path, name: &str) -> PathBuf {
 /// for 2 s at `fps`, named `name` (tests/procedural_pipeline.rs,
 /// tests/retarget_ground.rs).
 pub fn procedural_walk_run_database(db: &Path, name: &str, grid: f64, fps: f64) {
-    use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
+    use surfmotion::synth::Gait;
+    gaits::write_gaits(
+        db,
+        &humanoid_character(grid),
+        &[(Gait::Walk, 3.0), (Gait::Run, 2.0)],
+        name,
+        fps,
+    );
+}
+
+/// The project's procedural humanoid meshed at `grid` metres, with its rig
+/// embedded from its landmarks (`SynthCharacter::humanoid` at any grid).
+pub fn humanoid_character(grid: f64) -> surfmotion::jobs::SynthCharacter {
     use surfmotion::rig::embed::Embedding;
     use surfmotion::synth::humanoid::{humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh};
-    use surfmotion::synth::{Gait, gait_clip};
     let rest = humanoid_mesh(grid);
     let rig = Embedding::new(&rest, &humanoid_landmarks(&rest), None).unwrap();
-    let character = SynthCharacter {
+    surfmotion::jobs::SynthCharacter {
         rest,
         rig,
         landmarks_json: humanoid_landmarks_json().into_bytes(),
-    };
-    let clips: Vec<SynthClip> = [(Gait::Walk, 3.0), (Gait::Run, 2.0)]
-        .into_iter()
-        .map(|(g, seconds)| SynthClip::from_clip(g.name(), &gait_clip(g, seconds, fps)).unwrap())
-        .collect();
-    let opts = SynthOptions {
-        fps,
-        name: Some(name.into()),
-        truth: false,
-        plausibility: false,
-        force: true,
-        ..Default::default()
-    };
-    write_synthetic_database(db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
+    }
+}
+
+/// The fields of a plausibility report (`surfmotion::eval::Plausibility`
+/// as `--json` writes it) that every `retarget` and `eval` result carries.
+pub const PLAUSIBILITY_FIELDS: [&str; 7] = [
+    "head_torso_deg",
+    "foot_sliding",
+    "ground",
+    "knee_hyperextension_deg",
+    "turned_over",
+    "reference",
+    "warnings",
+];
+
+/// Asserts that the plausibility report `p` (JSON) of `what` has every one
+/// of [`PLAUSIBILITY_FIELDS`] and of `also`, none of them null.
+pub fn assert_plausibility_fields(p: &serde_json::Value, what: &str, also: &[&str]) {
+    for key in PLAUSIBILITY_FIELDS.iter().chain(also) {
+        assert!(!p[key].is_null(), "{what}: no plausibility.{key}");
+    }
 }
 
 /// Whether the npm package `package` is installed under `.ci/node_modules`
