@@ -21,6 +21,14 @@ fn humanoid() -> (Mesh, Embedding) {
     (c.rest, c.rig)
 }
 
+/// The procedural humanoid and a checker of it at 30 fps, Y-up, with the
+/// default options (the floor: its rest frame's lowest point).
+fn humanoid_checker() -> (Mesh, Embedding, Checker) {
+    let (mesh, rig) = humanoid();
+    let c = Checker::new(&mesh, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
+    (mesh, rig, c)
+}
+
 fn centroid(p: &[[f64; 3]], ids: &[u32]) -> DVec3 {
     ids.iter()
         .map(|&v| DVec3::from_array(p[v as usize]))
@@ -256,9 +264,8 @@ fn moved(p: &[[f64; 3]], q: DQuat, d: DVec3) -> Vec<[f64; 3]> {
 #[test]
 fn triangles_folded_over_on_purpose_are_counted_and_a_rigid_motion_counts_none() {
     use surfmotion::eval::triangles::{RestTriangles, TurnScratch};
-    let (mesh, rig) = humanoid();
+    let (mesh, rig, c) = humanoid_checker();
     let rest = mesh.positions();
-    let n = rest.len();
     let rt = RestTriangles::new(rest, mesh.triangles()).unwrap();
     let mut scratch = TurnScratch::default();
     let q = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, -0.5).normalize(), 2.6);
@@ -274,7 +281,7 @@ fn triangles_folded_over_on_purpose_are_counted_and_a_rigid_motion_counts_none()
     assert_eq!(rt.turned_over(&frame, &mut scratch), flipped);
     assert_eq!(rt.turned_over(&moved(&frame, q, d), &mut scratch), flipped);
     // Through the checker: a still second, then the folded frame at 0.5 s.
-    let c = Checker::new(&mesh, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
+    let n = rest.len();
     let still = animate(rest, 30, |_, _, p| p);
     let p = c.measure(&still, n, None).unwrap();
     assert_eq!(p.turned_over.triangle_frames, 0, "{:?}", p.turned_over);
@@ -350,10 +357,9 @@ fn animate(
 
 #[test]
 fn foot_sliding_is_zero_when_planted_and_reads_a_dragged_foot() {
-    let (mesh, rig) = humanoid();
+    let (mesh, rig, c) = humanoid_checker();
     let rest = mesh.positions();
     let n = rest.len();
-    let c = Checker::new(&mesh, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
     // Planted: the whole body still, then moved only vertically above the
     // contact band (feet stay on the floor, the body bobs 1 cm).
     let still = animate(rest, 30, |_, _, p| p);
@@ -394,9 +400,8 @@ fn foot_sliding_is_zero_when_planted_and_reads_a_dragged_foot() {
 
 #[test]
 fn a_whole_body_gliding_fast_is_not_contact_but_is_seen_touching() {
-    let (mesh, rig) = humanoid();
+    let (mesh, _, c) = humanoid_checker();
     let rest = mesh.positions();
-    let c = Checker::new(&mesh, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
     // 4 cm per frame = 1.2 m/s: a held pose carried at walking speed.
     let glide = animate(rest, 20, |t, _, p| p + DVec3::X * 0.04 * t as f64);
     let s = c.measure(&glide, rest.len(), None).unwrap().foot_sliding;
@@ -409,10 +414,9 @@ fn a_whole_body_gliding_fast_is_not_contact_but_is_seen_touching() {
 
 #[test]
 fn penetration_reads_the_depth_pushed_below_the_floor() {
-    let (mesh, rig) = humanoid();
+    let (mesh, _, c) = humanoid_checker();
     let rest = mesh.positions();
     let n = rest.len();
-    let c = Checker::new(&mesh, &rig, DVec3::Y, None, 30.0, Default::default()).unwrap();
     let floor = lowest_heights(rest, n, DVec3::Y)[0];
     assert!((c.floor - floor).abs() < 1e-12);
     for d in [0.01, 0.04, 0.1] {

@@ -628,14 +628,8 @@ impl Plausibility {
         );
         let t = &self.turned_over;
         s += &format!(
-            "  triangles turned over against the rest frame: {} triangle-frames ({:.3} % of {} a frame), in {} of {} frames, up to {} (frame {}){}\n",
-            t.triangle_frames,
-            100.0 * t.fraction,
-            t.triangles,
-            t.frames_with_any,
-            t.frames,
-            t.max_in_a_frame,
-            t.worst_frame,
+            "  triangles turned over against the rest frame: {}{}\n",
+            t.describe(),
             refd(&|r| format!(
                 "{} triangle-frames, up to {} in a frame",
                 r.turned_over.triangle_frames, r.turned_over.max_in_a_frame

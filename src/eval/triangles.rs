@@ -234,3 +234,20 @@ impl TurnedOverCount {
         }
     }
 }
+
+impl TurnedOverCount {
+    /// One line for the command line: triangle-frames, their share, the
+    /// frames with any and the worst frame.
+    pub fn describe(&self) -> String {
+        let share = 100.0 * self.fraction;
+        format!(
+            "{} triangle-frames ({share:.3} % of {} a frame), in {} of {} frames, up to {} (frame {})",
+            self.triangle_frames,
+            self.triangles,
+            self.frames_with_any,
+            self.frames,
+            self.max_in_a_frame,
+            self.worst_frame
+        )
+    }
+}

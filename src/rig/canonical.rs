@@ -56,17 +56,17 @@ impl Canonical {
     /// Number of canonical joints.
     pub const COUNT: usize = 19;
 
-    /// The leg joints, left then right, each from hip to toe.
-    pub const LEGS: [Canonical; 8] = [
-        Canonical::LHip,
-        Canonical::LKnee,
-        Canonical::LAnkle,
-        Canonical::LToe,
-        Canonical::RHip,
-        Canonical::RKnee,
-        Canonical::RAnkle,
-        Canonical::RToe,
-    ];
+    /// The leg joints, left then right, each from hip to toe (the last
+    /// eight of [`Canonical::ALL`]).
+    pub const LEGS: [Canonical; 8] = {
+        let mut out = [Canonical::LHip; 8];
+        let mut i = 0;
+        while i < out.len() {
+            out[i] = Canonical::ALL[Canonical::LHip as usize + i];
+            i += 1;
+        }
+        out
+    };
 
     /// The torso's joints below the neck (pelvis, spine, chest) and
     /// [`Canonical::LEGS`]: the joints that a CMU AMC clip and its
