@@ -20,6 +20,10 @@ pub struct Args {
     /// folder of OBJ frames (a path without extension).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write -o into a folder that already holds files (its OBJ frames are
+    /// replaced).
+    #[arg(long)]
+    pub force: bool,
     #[command(flatten)]
     pub job: JobOpts,
     /// Write a JSON report: the retrieved path (sequence, frame) per output
@@ -105,6 +109,7 @@ impl JobOpts {
 
 /// Runs `retarget`: one [`RetargetJob`] and one clip.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    super::warnings_in_summary(!a.run.json);
     super::check_mesh_output(&a.output)?;
     let mut inputs = vec![a.mocap.clone()];
     inputs.extend(a.run.clip.asf.clone());
@@ -114,6 +119,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
     super::refuse_colliding(&inputs, &outputs)?;
+    super::check_folder_output(&a.output, a.force)?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
         character: a.job.character(),
