@@ -127,6 +127,12 @@ pub enum InspectError {
     /// A bad landmark or marker file.
     #[error("{0}")]
     Json(String),
+    /// A character database folder, which `db info` describes.
+    #[error(
+        "{0}: a character database folder (it holds {m}); `surfmotion db info {0}` shows what it holds",
+        m = crate::db::MANIFEST
+    )]
+    Database(PathBuf),
     /// Not a format we read.
     #[error(
         "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj; .json landmarks or markers)"
@@ -202,6 +208,13 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
         return inspect_json(path).map(Report::Json);
     }
     let spec = path.to_string_lossy().to_string();
+    if let Some(e) = crate::mesh::io::bad_frame_ref(&spec) {
+        return Err(e.into());
+    }
+    // A database folder holds OBJ files, but is not a sequence of them.
+    if path.is_dir() && path.join(crate::db::MANIFEST).is_file() {
+        return Err(InspectError::Database(path.to_path_buf()));
+    }
     let (p, _) = crate::mesh::io::split_frame_ref(&spec);
     let Some(fmt) = MeshFormat::of(&p) else {
         return Err(InspectError::Unknown(path.to_path_buf()));

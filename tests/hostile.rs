@@ -554,10 +554,11 @@ fn session6_rows() -> Vec<Row> {
         // file lost (the clip, the result or the preview).
         row("retarget --report onto its own clip", "retarget --db {db} --mocap {d}/w.bvh -o {d}/o.pc2 --report {d}/w.bvh", &["--report", "w.bvh", "overwrite the input"])
             .file("w.bvh", walk_text()),
-        row("retarget --preview onto its own clip", "retarget --db {db} --mocap {d}/w.bvh -o {d}/o.pc2 --preview {d}/w.bvh", &["--preview", "w.bvh", "overwrite the input"])
+        // (Refused since session 7 by its name: a preview is a .png.)
+        row("retarget --preview onto its own clip", "retarget --db {db} --mocap {d}/w.bvh -o {d}/o.pc2 --preview {d}/w.bvh", &["--preview", "w.bvh", "expected a .png file name"])
             .file("w.bvh", walk_text()),
         row("retarget --report onto its -o", "retarget --db {db} --mocap {walk} -o {d}/o.glb --report {d}/o.glb", &["--report", "o.glb", "-o writes the same file"]),
-        row("retarget --preview onto the -o point cache's topology", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --preview {d}/o.obj", &["--preview", "o.obj", "-o writes the same file"]),
+        row("retarget --preview onto the -o point cache's topology", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --preview {d}/o.obj", &["--preview", "o.obj", "expected a .png file name"]),
         row("keyframe --report onto its -o", "keyframe --db {db} --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/k.glb --report {d}/k.glb", &["--report", "k.glb", "-o writes the same file"]),
         row("keyframe -o onto a sequence of its database", "keyframe --db {d}/db --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/db/walk.pc2", &["-o", "walk.pc2", "overwrite the input"])
             .with_db(),
@@ -621,8 +622,70 @@ fn session7_rows() -> Vec<Row> {
             "db init {d}/x --mesh {topo} --input-units furlong",
             &["--input-units", "furlong"],
         ),
+        // The new-user walk of session 7: each exited 0 or said something
+        // misleading before its fix.
+        row(
+            "db build on the manifest file",
+            "db build {db}/character.toml",
+            &[
+                "is a file, not a database folder",
+                "the folder that holds it",
+            ],
+        ),
+        row(
+            "inspect of a database folder",
+            "inspect {db}",
+            &["character database folder", "db info"],
+        ),
+        row(
+            "inspect PC2:-1",
+            "inspect {db}/walk.pc2:-1",
+            &["walk.pc2", "'-1' is not a frame number"],
+        ),
+        row(
+            "render -o a name that is not .png",
+            "render {topo} -o {d}/r.txt",
+            &["r.txt", "expected a .png file name"],
+        ),
+        row(
+            "graph --matrix a name that is not .png",
+            "graph {db} --matrix {d}/m.obj",
+            &["m.obj", "expected a .png file name"],
+        ),
+        row(
+            "rig embed --png a name that is not .png",
+            "rig embed {topo} --landmarks {lm} -o {d}/r.json --png {d}/r.jpg",
+            &["r.jpg", "expected a .png file name"],
+        ),
+        row(
+            "play -o into a folder holding files",
+            "play --db {d}/db --script {d}/s.json -o {d}/out",
+            &["-o", "out", "already holds 1 file", "--force"],
+        )
+        .with_db()
+        .file("db/character.toml", manifest_with(SPACE))
+        .file("s.json", SCRIPT)
+        .file("out/notes.txt", "mine"),
+        row(
+            "play -o onto a sequence of its database",
+            "play --db {d}/db --script {d}/s.json -o {d}/db/walk.pc2",
+            &["walk.pc2", "overwrite the input"],
+        )
+        .with_db()
+        .file("db/character.toml", manifest_with(SPACE))
+        .file("s.json", SCRIPT),
+        row(
+            "play --seconds 1e12",
+            "play --db {db} --script {d}/s.json -o {d}/p.glb --seconds 1e12",
+            &["--seconds", "expected seconds in (0, 3600]"],
+        )
+        .file("s.json", SCRIPT),
     ]
 }
+
+/// A parametric motion space of the demo database, and a script for it.
+const SPACE: &str = "[[space]]\nname = \"locomotion\"\nsequences = [\"walk\", \"run\"]\nparameters = [\"speed\", \"turn\"]\n";
+const SCRIPT: &str = "[{\"t\": 0, \"space\": \"locomotion\", \"speed\": 2}]";
 
 /// Regression (session 6 review): `db init` checks the mesh and every
 /// `--sequence` before it writes anything. It used to create the folder
@@ -2217,5 +2280,34 @@ fn unit_options_have_one_name_and_the_old_ones_still_work() {
             help.contains("--input-units") || help.contains("--output-units"),
             "{verb:?}"
         );
+    }
+}
+
+/// Regression (session 7 walk): with stdout and stderr both unwritable,
+/// `play --help 2>&1 | head -1` aborted (exit 134): the failed help
+/// print was reported with `eprintln!`, which panicked on the closed
+/// stderr, and so did the panic hook. Errors no stderr can take are
+/// dropped: exit 1, never a signal.
+#[cfg(target_os = "linux")]
+#[test]
+fn an_unwritable_stderr_never_aborts() {
+    if !std::fs::metadata("/dev/full").is_ok_and(|m| !m.is_file()) {
+        eprintln!("SKIPPED: no /dev/full here");
+        return;
+    }
+    for args in [&["play", "--help"][..], &["inspect", "/nonexistent.bvh"]] {
+        let full = || {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .open("/dev/full")
+                .unwrap()
+        };
+        let status = Command::new(common::bin())
+            .args(args)
+            .stdout(full())
+            .stderr(full())
+            .status()
+            .unwrap();
+        assert_eq!(status.code(), Some(1), "{args:?}: {status:?}");
     }
 }

@@ -128,7 +128,13 @@ pub fn main() -> anyhow::Result<()> {
         Ok(c) => c,
         Err(e) => {
             let usage = e.use_stderr();
-            e.print()?;
+            // Help read by `| head` closed the pipe: not an error (it said
+            // "surfmotion: Broken pipe (os error 32)", exit 1).
+            if let Err(p) = e.print()
+                && p.kind() != std::io::ErrorKind::BrokenPipe
+            {
+                return Err(p.into());
+            }
             return if usage { Err(Usage.into()) } else { Ok(()) };
         }
     };
@@ -390,6 +396,22 @@ pub fn weight(s: &str) -> Result<f64, String> {
         Ok(v)
     } else {
         Err(format!("{s}: a weight above 1e6 overflows the path costs"))
+    }
+}
+
+/// A picture output on the command line: a name ending in `.png`, or an
+/// existing device or pipe (`/dev/stdout`). Any other name had a PNG
+/// written into it (`render -o r.txt`, `graph --matrix m.obj`, exit 0).
+pub fn png_path(s: &str) -> Result<PathBuf, String> {
+    let p = PathBuf::from(s);
+    let png = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    let special = std::fs::metadata(&p).is_ok_and(|m| !m.is_file() && !m.is_dir());
+    if png || special {
+        Ok(p)
+    } else {
+        Err(format!(
+            "{s}: expected a .png file name (a PNG picture is written)"
+        ))
     }
 }
 
