@@ -674,6 +674,32 @@ fn session7_rows() -> Vec<Row> {
         .with_db()
         .file("db/character.toml", manifest_with(SPACE))
         .file("s.json", SCRIPT),
+        // A panic (index out of bounds in the trellis): the costs overflowed.
+        row(
+            "retarget --w-retr 1e308",
+            "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --w-retr 1e308",
+            &["--w-retr", "above 1e6"],
+        ),
+        row(
+            "retarget --t-skel 1e308",
+            "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --t-skel 1e308",
+            &["--t-skel", "expected metres in [0, 1000]"],
+        ),
+        row(
+            "web export --max-error 1e308",
+            "web export --db {db} -o {d}/site --max-error 1e308",
+            &["--max-error", "expected millimetres in (0, 100]"],
+        ),
+        row(
+            "web export --max-error NaN",
+            "web export --db {db} -o {d}/site --max-error NaN",
+            &["--max-error", "expected a finite number > 0"],
+        ),
+        row(
+            "mocap procedural -o x.obj",
+            "mocap procedural --gait walk -o {d}/x.obj",
+            &["x.obj", "expected a .bvh file"],
+        ),
         row(
             "play --seconds 1e12",
             "play --db {db} --script {d}/s.json -o {d}/p.glb --seconds 1e12",

@@ -227,6 +227,17 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             } else {
                 a.gait.iter().map(|&g| g.into()).collect()
             };
+            // `-o x.obj` made a folder named x.obj (an existing folder
+            // with a dot in its name is taken as given).
+            if let Some(e) = a.output.extension()
+                && !e.eq_ignore_ascii_case("bvh")
+                && !a.output.is_dir()
+            {
+                bail!(
+                    "-o {}: expected a .bvh file (with one --gait) or a folder name without extension",
+                    a.output.display()
+                );
+            }
             let single = gaits.len() == 1
                 && a.output
                     .extension()
