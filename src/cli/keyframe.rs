@@ -108,6 +108,10 @@ pub struct Args {
     /// Output: .glb, .pc2 (+ .obj), .mdd, or a folder of OBJ frames.
     #[arg(short, long, required_unless_present_any = ["grid", "floor"])]
     pub output: Option<PathBuf>,
+    /// Write -o into a folder that already holds files (its OBJ frames are
+    /// replaced).
+    #[arg(long)]
+    pub force: bool,
     /// Write the JSON report: path (segments, loops, repetitions), cost
     /// terms, achieved distance and time, transitions and smoothness,
     /// search time.
@@ -202,6 +206,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     inputs.extend(a.clip.asf.clone());
     inputs.extend(a.clip.rig_map.clone());
     super::refuse_colliding(&inputs, &outputs)?;
+    if let Some(o) = &a.output {
+        super::check_folder_output(o, a.force)?;
+    }
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
     let load = a.clip.load_options()?;
     let mut resolved = Vec::new();

@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(required = true, num_args = 1..)]
     pub mesh: Vec<String>,
     /// Output PNG.
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = super::png_path)]
     pub output: PathBuf,
     /// Colour vertices by body part and draw the skeleton of this rig
     /// embedding (from `rig embed`); the skeleton follows the frame.
@@ -176,7 +176,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 pub struct PreviewOpts {
     /// Write a contact sheet of the result: a few evenly spaced frames,
     /// front views above and left-side views below, all at one scale.
-    #[arg(long, value_name = "PNG")]
+    #[arg(long, value_name = "PNG", value_parser = super::png_path)]
     pub preview: Option<PathBuf>,
     /// Frames on the contact sheet, 1 to 100 (all frames when the result
     /// has fewer).

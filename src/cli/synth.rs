@@ -45,6 +45,7 @@ pub struct Args {
 /// Runs `synth`: the rig embedded here (errors name the mesh or the
 /// landmarks file), then [`write_synthetic_database`].
 pub fn run(a: Args) -> anyhow::Result<()> {
+    super::warnings_in_summary(!a.run.json);
     let dir = &a.output;
     if dir.join(surfmotion::db::MANIFEST).exists() && !a.force {
         bail!(
