@@ -574,6 +574,12 @@ fn session6_rows() -> Vec<Row> {
 /// exited 0 (or misread the file) before its fix.
 fn session7_rows() -> Vec<Row> {
     vec![
+        // The springs tore the surface from about 3 and exit was 0.
+        row(
+            "synth --dynamics beyond its range",
+            "synth --mesh {topo} --landmarks {lm} --mocap {walk} --dynamics 1e308 -o {d}/s",
+            &["1e308", "at most 2"],
+        ),
         // Frames were written among the folder's files (exit 0).
         row(
             "keyframe -o into a folder holding files",
