@@ -655,6 +655,62 @@ mod tests {
         assert!((hausdorff_surface(&a, &up, &s) - 0.05).abs() < 1e-9);
     }
 
+    /// The directed distances by a linear scan for the nearest vertex
+    /// (no grid, no early exit, no pruning).
+    fn brute_directed(a: &[DVec3], b: &[DVec3], s: &Surface) -> (f64, f64) {
+        let (mut ws, mut wv) = (0.0f64, 0.0f64);
+        for &p in a {
+            let (mut v, mut d) = (0, f64::INFINITY);
+            for (i, q) in b.iter().enumerate() {
+                if p.distance(*q) < d {
+                    (v, d) = (i, p.distance(*q));
+                }
+            }
+            wv = wv.max(d);
+            for &t in &s.around[s.start[v] as usize..s.start[v + 1] as usize] {
+                let [i, j, k] = s.tris[t as usize];
+                let q = closest_on_triangle(p, b[i as usize], b[j as usize], b[k as usize]);
+                d = d.min(p.distance(q));
+            }
+            ws = ws.max(d);
+        }
+        (ws, wv)
+    }
+
+    #[test]
+    fn fast_hausdorff_equals_a_linear_scan_near_and_far() {
+        // A cylinder against a copy bent and shaken by up to 0.6 m (points
+        // within a cell, several rings away, and past the 14 cells of the
+        // ring search): the grid with its early exit, Fx-hashed cells and
+        // box pruning gives the linear scan's maxima exactly.
+        let (a, tris) = cylinder(40, 30, 0.0);
+        let s = Surface::new(&tris, a.len());
+        let mut seed = 17u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for amp in [0.01, 0.1, 0.6] {
+            let b: Vec<DVec3> = a
+                .iter()
+                .map(|p| {
+                    let bend = DVec3::new(0.3 * p.y * p.y, 0.0, 0.0);
+                    *p + bend + amp * DVec3::new(rnd(), rnd(), rnd())
+                })
+                .collect();
+            let want = {
+                let (s1, v1) = brute_directed(&a, &b, &s);
+                let (s2, v2) = brute_directed(&b, &a, &s);
+                (s1.max(s2), v1.max(v2))
+            };
+            assert_eq!(hausdorff_both(&a, &b, &s), want, "amplitude {amp}");
+            assert_eq!(hausdorff_surface(&a, &b, &s), want.0);
+            assert_eq!(hausdorff(&a, &b), want.1);
+        }
+    }
+
     #[test]
     fn closest_point_on_a_triangle_in_every_region() {
         let (a, b, c) = (
