@@ -259,6 +259,16 @@ impl Chain {
         self.cache.0.lock().ok()
     }
 
+    /// The start node.
+    pub fn start_node(&self) -> u32 {
+        self.start
+    }
+
+    /// True when the first segment counts its start frame.
+    pub fn counts_start(&self) -> bool {
+        self.count_start
+    }
+
     /// Number of nodes.
     pub fn node_count(&self) -> usize {
         self.adj.len()
@@ -599,7 +609,12 @@ pub fn search(
     // Frames beyond which the time error alone exceeds the cost of
     // the nearest frame count's whole distance.
     let extra = (w.distance * t.distance / w.time.max(1e-9)).ceil() as i64;
-    let top = (target.max(least) + extra + i64::from(lo.frame_slack)).min(lo.max_frames as i64);
+    // ... and no longer than the horizon (a departure from Eq. 7 for
+    // targets out of reach, [`super::search::Horizon`]).
+    let horizon = (opts.horizon.frames(t.frames).floor() as i64 - cs).max(least);
+    let top = (target.max(least) + extra + i64::from(lo.frame_slack))
+        .min(lo.max_frames as i64)
+        .min(horizon);
     if top < least {
         return None;
     }
