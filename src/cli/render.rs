@@ -29,8 +29,8 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     pub frame: usize,
     /// Direction the character faces (x, -x, z, -z): sets the front view.
-    /// Defaults to the rig's facing, else the mesh's (see
-    /// `surfmotion::render::facing_of`).
+    /// Defaults to the rig's facing, else the first mesh's (see
+    /// `surfmotion::render::facing_of`), one camera for every panel.
     #[arg(long, allow_hyphen_values = true)]
     pub facing: Option<String>,
     /// Image height in pixels, 16 to 8192 (each view is square).
@@ -126,10 +126,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             Some(p) => Some(Embedding::load(p, s.mesh().vertex_count())?),
             None => None,
         };
-        let facing = match (&a.facing, &rig) {
-            (Some(f), _) => parse_axis(f)?,
-            (None, Some(r)) => DVec3::from_array(r.facing),
-            (None, None) => facing_of(s.frame(a.frame)),
+        // One camera for every panel: without `--facing` or a rig, the
+        // first mesh's facing is kept for the others, so frames of a path
+        // that turns are seen turning (each estimated alone, the views
+        // flipped between front and back as the path turned).
+        let facing = match (&a.facing, &rig, loaded.first()) {
+            (Some(f), _, _) => parse_axis(f)?,
+            (None, Some(r), _) => DVec3::from_array(r.facing),
+            (None, None, Some((_, _, first))) => *first,
+            (None, None, None) => facing_of(s.frame(a.frame)),
         };
         loaded.push((s, rig, facing));
     }
