@@ -420,7 +420,13 @@ pub fn solve_exact_length(
         node: start,
         ..Label::START
     });
-    let mut arena: Vec<Label> = Vec::new();
+    // The trace-back of every kept label: its parent's index and the arc
+    // from it (the labels themselves are not needed once expanded; 8 bytes
+    // a label instead of 40 keeps a long query's memory small).
+    let mut arena: Vec<(u32, u32)> = Vec::new();
+    // Emptied layers' buffers, reused for later layers (fewer allocations
+    // and page faults on long frame counts).
+    let mut pool: Vec<Vec<Label>> = Vec::new();
     // Bins per class of frames since the last transition (below
     // `min_run`, and at least) and per sector of turn, plus the labels of
     // least and most distance (they alone may reach the extremes of the
@@ -434,13 +440,13 @@ pub fn solve_exact_length(
     let mut touched: Vec<usize> = Vec::new();
     let mut kept: Vec<usize> = Vec::new();
     let (lo_slot, hi_slot) = (cells, cells + 1);
-    let mut best: Option<(u32, f64)> = None;
+    let mut best: Option<(u32, f64, Label)> = None;
     // Labels of a layer grouped by node (a stable counting sort).
     let nodes = c.node_count();
     let mut count = vec![0usize; nodes + 1];
     let mut raw: Vec<Label> = Vec::new();
     for k in 0..=frames {
-        let layer = std::mem::take(&mut layers[k]);
+        let mut layer = std::mem::take(&mut layers[k]);
         count.iter_mut().for_each(|x| *x = 0);
         for l in &layer {
             count[l.node as usize + 1] += 1;
@@ -450,10 +456,13 @@ pub fn solve_exact_length(
         }
         raw.clear();
         raw.resize(layer.len(), layer.first().copied().unwrap_or(Label::START));
-        for l in layer {
+        for l in layer.drain(..) {
             let at = &mut count[l.node as usize];
             raw[*at] = l;
             *at += 1;
+        }
+        if layer.capacity() > 0 {
+            pool.push(layer);
         }
         let mut i = 0;
         while i < raw.len() {
@@ -511,14 +520,14 @@ pub fn solve_exact_length(
             for &s in &kept {
                 let l = raw[i + s];
                 let id = arena.len() as u32;
-                arena.push(l);
+                arena.push((l.parent, l.arc));
                 if k == frames {
                     if u == c.goal {
                         let sc = l.cost
                             + w_dist * (l.distance - distance).abs()
                             + heading.map_or(0.0, |h| h.cost(l.turn));
-                        if best.is_none_or(|(_, b)| sc < b) {
-                            best = Some((id, sc));
+                        if best.is_none_or(|(_, b, _)| sc < b) {
+                            best = Some((id, sc, l));
                         }
                     }
                     continue;
@@ -531,19 +540,27 @@ pub fn solve_exact_length(
                     }
                     let d = l.distance + am.distance;
                     match window(arc.to, kk) {
-                        Some((lo, hi)) if d >= lo && d <= hi => layers[kk].push(Label {
-                            node: arc.to,
-                            parent: id,
-                            arc: arc.index,
-                            distance: d,
-                            cost: l.cost + am.cost,
-                            turn: l.turn + arc.turn,
-                            since: if arc.jump {
-                                am.frames
-                            } else {
-                                l.since.saturating_add(am.frames)
-                            },
-                        }),
+                        Some((lo, hi)) if d >= lo && d <= hi => {
+                            let next = &mut layers[kk];
+                            if next.capacity() == 0
+                                && let Some(buf) = pool.pop()
+                            {
+                                *next = buf;
+                            }
+                            next.push(Label {
+                                node: arc.to,
+                                parent: id,
+                                arc: arc.index,
+                                distance: d,
+                                cost: l.cost + am.cost,
+                                turn: l.turn + arc.turn,
+                                since: if arc.jump {
+                                    am.frames
+                                } else {
+                                    l.since.saturating_add(am.frames)
+                                },
+                            })
+                        }
                         _ => {}
                     }
                 }
@@ -551,15 +568,14 @@ pub fn solve_exact_length(
             i = j;
         }
     }
-    let (id, sc) = best?;
+    let (id, sc, l) = best?;
     let mut arcs = Vec::new();
     let mut at = id;
-    while arena[at as usize].parent != u32::MAX {
-        arcs.push(arena[at as usize].arc);
-        at = arena[at as usize].parent;
+    while arena[at as usize].0 != u32::MAX {
+        arcs.push(arena[at as usize].1);
+        at = arena[at as usize].0;
     }
     arcs.reverse();
-    let l = arena[id as usize];
     Some((
         Found {
             arcs,
@@ -666,7 +682,19 @@ pub fn search(
             .collect();
         ns.sort_by_key(|&n| (n - target).abs());
         let mut inside: Option<(Found, f64)> = None;
+        // A frame count whose time term alone reaches the cheapest landing
+        // path's cost cannot replace it (every other term of `total` is
+        // non-negative when the weights and arc costs are), so it is not
+        // searched: the same result without the programme.
+        let nonneg = w.distance >= 0.0
+            && w.time >= 0.0
+            && heading.is_none_or(|h| h.weight >= 0.0)
+            && c.adj.iter().flatten().all(|a| a.m.cost >= 0.0);
         for n in ns {
+            let time = w.time * ((n + cs) as f64 - t.frames).abs();
+            if nonneg && inside.as_ref().is_some_and(|b| time >= b.1) {
+                continue;
+            }
             let tol = dt * (1.0 - 1e-9);
             if let Some((found, _)) = solve_exact_length(
                 c, &ext, n as usize, t.distance, tol, w.distance, heading, &lo,
