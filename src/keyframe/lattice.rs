@@ -288,21 +288,21 @@ impl Chain {
 /// `r_min` and `r_max` of every node for `0..=m` frames (`m`-major).
 pub struct Extremes {
     nodes: usize,
-    /// Least distance to the goal in exactly `m` frames (`+∞`: none).
-    pub min: Vec<f64>,
-    /// Most distance (`−∞`: none).
-    pub max: Vec<f64>,
+    /// `[r_min, r_max]` side by side (one cache line per look-up in the
+    /// programme's inner loop): the least distance to the goal in exactly
+    /// `m` frames (`+∞`: none) and the most (`−∞`: none).
+    range: Vec<[f64; 2]>,
 }
 
 impl Extremes {
     /// The longest frame count the table covers.
     pub fn frames(&self) -> usize {
-        (self.min.len() / self.nodes.max(1)).saturating_sub(1)
+        (self.range.len() / self.nodes.max(1)).saturating_sub(1)
     }
     /// `(r_min, r_max)` of node `u` in exactly `m` frames.
     pub fn at(&self, u: u32, m: usize) -> (f64, f64) {
-        let i = m * self.nodes + u as usize;
-        (self.min[i], self.max[i])
+        let [lo, hi] = self.range[m * self.nodes + u as usize];
+        (lo, hi)
     }
 }
 
@@ -312,8 +312,7 @@ pub fn extremes(seg: &Segment, m: usize) -> Extremes {
         Some(c) => chain_extremes(&c, m),
         None => Extremes {
             nodes: 0,
-            min: Vec::new(),
-            max: Vec::new(),
+            range: Vec::new(),
         },
     }
 }
@@ -321,11 +320,9 @@ pub fn extremes(seg: &Segment, m: usize) -> Extremes {
 /// The exact-length extremes of a chain up to `m` frames (step 1).
 pub fn chain_extremes(c: &Chain, m: usize) -> Extremes {
     let n = c.node_count();
-    let mut min = vec![f64::INFINITY; n * (m + 1)];
-    let mut max = vec![f64::NEG_INFINITY; n * (m + 1)];
+    let mut range = vec![[f64::INFINITY, f64::NEG_INFINITY]; n * (m + 1)];
     let goal = c.goal as usize;
-    min[goal] = 0.0;
-    max[goal] = 0.0;
+    range[goal] = [0.0, 0.0];
     for k in 1..=m {
         for u in 0..n {
             if !c.relevant[u] {
@@ -337,17 +334,16 @@ pub fn chain_extremes(c: &Chain, m: usize) -> Extremes {
                 if l == 0 || l > k {
                     continue;
                 }
-                let j = (k - l) * n + a.to as usize;
-                if min[j].is_finite() {
-                    lo = lo.min(a.m.distance + min[j]);
-                    hi = hi.max(a.m.distance + max[j]);
+                let [rlo, rhi] = range[(k - l) * n + a.to as usize];
+                if rlo.is_finite() {
+                    lo = lo.min(a.m.distance + rlo);
+                    hi = hi.max(a.m.distance + rhi);
                 }
             }
-            min[k * n + u] = lo;
-            max[k * n + u] = hi;
+            range[k * n + u] = [lo, hi];
         }
     }
-    Extremes { nodes: n, min, max }
+    Extremes { nodes: n, range }
 }
 
 /// A label of the forward programme.
