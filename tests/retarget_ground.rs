@@ -128,22 +128,20 @@ fn synthetic_walk() -> &'static Character {
     F.get_or_init(|| {
         let d = common::data_dir().expect("shared data");
         let db = common::fixture_dir("retarget-ground-synth").join("db");
-        let out = std::process::Command::new(common::bin())
-            .args(["synth", "--fps", "25", "--mesh"])
-            .arg(d.join("4d/samba/samba.obj"))
-            .arg("--landmarks")
-            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json"))
-            .arg("--mocap")
-            .arg(d.join("mocap/cmu-amc/02/02_01.amc"))
-            .arg("-o")
-            .arg(&db)
-            .arg("--force")
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        common::run_ok(
+            std::process::Command::new(common::bin())
+                .args(["synth", "--fps", "25", "--mesh"])
+                .arg(d.join("4d/samba/samba.obj"))
+                .arg("--landmarks")
+                .arg(
+                    Path::new(env!("CARGO_MANIFEST_DIR"))
+                        .join("tests/fixtures/samba.landmarks.json"),
+                )
+                .arg("--mocap")
+                .arg(d.join("mocap/cmu-amc/02/02_01.amc"))
+                .arg("-o")
+                .arg(&db)
+                .arg("--force"),
         );
         Character::load(&db, &Quiet).unwrap()
     })

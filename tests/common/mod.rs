@@ -91,23 +91,18 @@ pub fn synthetic_db(d: &std::path::Path) -> PathBuf {
         let m = d.join("mocap");
         let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("tests/fixtures/samba.landmarks.json");
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_surfmotion"))
-            .args(["synth", "--mesh"])
-            .arg(d.join("4d/samba/samba.obj"))
-            .arg("--landmarks")
-            .arg(&fixture)
-            .arg("--mocap")
-            .arg(m.join("cmu-amc/02/02_01.amc"))
-            .arg(m.join("cmu-amc/02/02_03.amc"))
-            .arg(m.join("cmu-bvh/01_01.bvh"))
-            .args(["--seconds", "8", "-o"])
-            .arg(&db)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        run_ok(
+            std::process::Command::new(env!("CARGO_BIN_EXE_surfmotion"))
+                .args(["synth", "--mesh"])
+                .arg(d.join("4d/samba/samba.obj"))
+                .arg("--landmarks")
+                .arg(&fixture)
+                .arg("--mocap")
+                .arg(m.join("cmu-amc/02/02_01.amc"))
+                .arg(m.join("cmu-amc/02/02_03.amc"))
+                .arg(m.join("cmu-bvh/01_01.bvh"))
+                .args(["--seconds", "8", "-o"])
+                .arg(&db),
         );
         (tmp, db)
     })
@@ -237,6 +232,18 @@ pub struct CliRun {
 
 /// Runs the built binary with `args` in `cwd` (the test's own folder when
 /// `None`), `SURFMOTION_LOG` unset and `env` added; captures everything.
+/// Runs `cmd` and requires exit 0 (the command and its stderr in the
+/// failure message).
+pub fn run_ok(cmd: &mut std::process::Command) -> std::process::Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{cmd:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 pub fn run_cli<S: AsRef<std::ffi::OsStr>>(
     args: &[S],
     cwd: Option<&std::path::Path>,
