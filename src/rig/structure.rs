@@ -92,7 +92,15 @@ pub struct Body {
     pub side_confidence: f64,
     /// True when the joint names state sides opposite to the geometry.
     pub names_mirrored: bool,
+    /// True when the geometry gave no forward direction and the names'
+    /// sides decided left and right (`forward_from` is `none`).
+    pub sides_from_names: bool,
 }
+
+/// The words a [`NotHumanoid`] reason contains when the clip has a
+/// humanoid's chains (two legs, a spine with two limbs and a neck) on a
+/// horizontal body: a quadruped or a bird, whatever its joint names.
+pub const HORIZONTAL: &str = "a horizontal body";
 
 /// Why a clip is not a humanoid.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -647,7 +655,7 @@ fn body(
     // with its chest above its hips is at −0.53.
     if best_cos > -0.7 {
         return Err(NotHumanoid(format!(
-            "the chains below '{}' do not point away from the spine (cosine {best_cos:.2} in the rest pose or the median frame): a horizontal body",
+            "the chains below '{}' do not point away from the spine (cosine {best_cos:.2} in the rest pose or the median frame): {HORIZONTAL}",
             name(pelvis)
         )));
     }
@@ -698,6 +706,25 @@ fn body(
             node.iter()
                 .copied()
                 .find(|&j| role_of(tokens, j) == Some(Role::Pelvis))
+        })
+        .or_else(|| {
+            // A pelvis-named joint just above the junction with nothing
+            // else hanging off it (3ds Max Biped: `Bip01 Pelvis` → `Bip01
+            // Spine`, which carries the thighs and `Bip01 Spine1`): within
+            // half the significance threshold (6% of the body's size).
+            let mut k = g.parent[pelvis];
+            while let Some(a) = k {
+                if g.rest[a].distance(g.rest[pelvis]) > 0.5 * g.thr
+                    || g.node_children(g.rep[a]).len() > 1
+                {
+                    break;
+                }
+                if role_of(tokens, a) == Some(Role::Pelvis) {
+                    return Some(a);
+                }
+                k = g.parent[a];
+            }
+            None
         });
     set(
         &mut picks,
@@ -998,17 +1025,40 @@ fn body(
         Some(2) => "travel",
         _ => "none",
     };
+    // No forward direction (feet straight down or no toes, straight
+    // knees, no travel: the Biovision sample, mocapdata.com, a one-frame
+    // T-pose): the names' sides decide, each limb pair by the sides its
+    // joints' names state (first-listed limb left when they say nothing).
+    let named_sign = |a: &Limb, b: &Limb| -> f64 {
+        let s = |l: &Limb| -> i32 {
+            l.picks
+                .iter()
+                .flatten()
+                .map(|&(j, _)| match tokens.get(j).and_then(|t| side(t)) {
+                    Some(Side::Left) => 1,
+                    Some(Side::Right) => -1,
+                    None => 0,
+                })
+                .sum()
+        };
+        if s(a) < s(b) { -1.0 } else { 1.0 }
+    };
+    let sides_from_names = m.is_none();
     let (leg_sign, arm_sign, conf) = match m {
         Some(m) => (
             leg_s[m],
             arm_s[m],
             (leg_s[m].abs().min(arm_s[m].abs()) / votes[m]).clamp(0.0, 1.0),
         ),
-        None => (1.0, 1.0, 0.0),
+        None => (named_sign(&l0, &l1), named_sign(&a0, &a1), 0.0),
     };
     let (ll, rl) = if leg_sign >= 0.0 { (l0, l1) } else { (l1, l0) };
     let (la, ra) = if arm_sign >= 0.0 { (a0, a1) } else { (a1, a0) };
-    let sc = 0.5 + 0.5 * conf;
+    let sc = if sides_from_names {
+        0.9
+    } else {
+        0.5 + 0.5 * conf
+    };
     let mut named_sides = [0i32; 2];
     let lim = |picks: &mut Vec<Pick>,
                l: &Limb,
@@ -1080,6 +1130,7 @@ fn body(
         forward_from,
         side_confidence: conf,
         names_mirrored: named_sides[1] > named_sides[0],
+        sides_from_names,
     })
 }
 
