@@ -10,7 +10,9 @@
 //! `Armature|Hips`), common prefixes (`Character1_`, `Bip01 `, `CC_Base_`),
 //! ASF bones (`lfemur`, `lhumerus`), Daz/Poser (`lShldr`, `lThigh`), SMPL
 //! (`L_Hip`, `left_hip`), Kinect (`HipLeft`), Xsens (`RightUpperLeg`, `T8`),
-//! Unity (`LeftUpperArm`), 3ds Max Biped (`Bip01 L Calf`).
+//! Unity (`LeftUpperArm`), 3ds Max Biped (`Bip01 L Calf`), OptiTrack Motive
+//! (`LUArm`, `LFArm`, `Ab`), VRoid (`J_Bip_C_Hips`), the Biovision sample
+//! (`LeftLowArm`, `LeftLowLeg`).
 
 /// Which side of the body a name says a joint is on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]

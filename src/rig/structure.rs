@@ -32,11 +32,13 @@
 //!    the first joint after the ankle that is not a straight pass-through
 //!    (Daz `lMetatarsals`). A joint whose name has the matching role wins
 //!    inside its chain.
-//! 5. Left/right from the body's own frame, never from names: up =
+//! 5. Left/right from the body's own frame, not from names: up =
 //!    pelvis→neck, forward = the feet's ankle→toe direction across the shin
 //!    (else the knees'
 //!    bend, else the root's travel), left = up × forward (Y-up, facing +Z:
-//!    left is +X).
+//!    left is +X). Only when none of the three gives a forward direction
+//!    (feet straight down, straight knees, no travel: the Biovision sample,
+//!    mocapdata.com) do the sides the joints' names state decide.
 
 use super::canonical::Canonical;
 use super::map::Derive;
@@ -1028,8 +1030,8 @@ fn body(
     // No forward direction (feet straight down or no toes, straight
     // knees, no travel: the Biovision sample, mocapdata.com, a one-frame
     // T-pose): the names' sides decide, each limb pair by the sides its
-    // joints' names state (first-listed limb left when they say nothing).
-    let named_sign = |a: &Limb, b: &Limb| -> f64 {
+    // joints' names state.
+    let named_sign = |a: &Limb, b: &Limb| -> Option<f64> {
         let s = |l: &Limb| -> i32 {
             l.picks
                 .iter()
@@ -1041,16 +1043,23 @@ fn body(
                 })
                 .sum()
         };
-        if s(a) < s(b) { -1.0 } else { 1.0 }
+        match s(a).cmp(&s(b)) {
+            std::cmp::Ordering::Less => Some(-1.0),
+            std::cmp::Ordering::Greater => Some(1.0),
+            std::cmp::Ordering::Equal => None,
+        }
     };
-    let sides_from_names = m.is_none();
+    // Names that state no side (`joint_12`) leave the sides undecided
+    // (confidence 0: a skin asks for a rig map).
+    let (leg_named, arm_named) = (named_sign(&l0, &l1), named_sign(&a0, &a1));
+    let sides_from_names = m.is_none() && (leg_named.is_some() || arm_named.is_some());
     let (leg_sign, arm_sign, conf) = match m {
         Some(m) => (
             leg_s[m],
             arm_s[m],
             (leg_s[m].abs().min(arm_s[m].abs()) / votes[m]).clamp(0.0, 1.0),
         ),
-        None => (named_sign(&l0, &l1), named_sign(&a0, &a1), 0.0),
+        None => (leg_named.unwrap_or(1.0), arm_named.unwrap_or(1.0), 0.0),
     };
     let (ll, rl) = if leg_sign >= 0.0 { (l0, l1) } else { (l1, l0) };
     let (la, ra) = if arm_sign >= 0.0 { (a0, a1) } else { (a1, a0) };
@@ -1151,7 +1160,14 @@ fn leg_chain(
     if c.len() < 3 {
         return Err(short());
     }
-    let hip_k = first_role(tokens, &c, |r| r == Role::Thigh).unwrap_or(0);
+    // The hip: a thigh-named joint, else the first joint, unless a short
+    // bone (under a quarter of the significance threshold, 3% of the
+    // body's size) joins it to the next one with three more joints after:
+    // a buttock offset bone above the hip joint (CMU Daz-friendly
+    // `lButtock` → `lThigh`, 2.8 cm on a 1.75 m body).
+    let hip_k = first_role(tokens, &c, |r| r == Role::Thigh).unwrap_or_else(|| {
+        usize::from(c.len() >= 4 && g.rest[c[0]].distance(g.rest[c[1]]) < 0.25 * g.thr)
+    });
     let after = &c[hip_k + 1..];
     let ankle_named = first_role(tokens, after, |r| r == Role::Ankle);
     let foot_named = first_role(tokens, after, |r| r == Role::Foot);
