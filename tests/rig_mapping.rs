@@ -2341,7 +2341,7 @@ const SUITES: &[Suite] = &[
         "max_biped",
         BY_N,
         "from geometry",
-        "pelvis=Bip01 Pelvis;spine=Bip01 Spine1;chest=Bip01 Spine2;\
+        "pelvis=Bip01 Pelvis;spine=Bip01 Spine;chest=Bip01 Spine2;\
          neck=Bip01 Neck;head=Bip01 Head;\
          l_shoulder=Bip01 L UpperArm;l_elbow=Bip01 L Forearm;l_wrist=Bip01 L Hand;\
          r_shoulder=Bip01 R UpperArm;r_elbow=Bip01 R Forearm;r_wrist=Bip01 R Hand;\
@@ -2452,6 +2452,16 @@ const SUITES: &[Suite] = &[
          r_shoulder=rShldr;r_elbow=rForeArm;r_wrist=rHand;\
          l_hip=lThigh;l_knee=lShin;l_ankle=lFoot;l_toe=mToeLeft;\
          r_hip=rThigh;r_knee=rShin;r_ankle=rFoot;r_toe=mToeRight"
+    ),
+    suite!(
+        "hanim_loa1",
+        BY_S,
+        "from geometry",
+        "pelvis=sacroiliac;spine=vl5;chest=~;neck=skullbase;head=~;\
+         l_shoulder=l_shoulder;l_elbow=l_elbow;l_wrist=l_radiocarpal;\
+         r_shoulder=r_shoulder;r_elbow=r_elbow;r_wrist=r_radiocarpal;\
+         l_hip=l_hip;l_knee=l_knee;l_ankle=l_talocrural;l_toe=~;\
+         r_hip=r_hip;r_knee=r_knee;r_ankle=r_talocrural;r_toe=~"
     ),
 ];
 

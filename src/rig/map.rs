@@ -469,17 +469,16 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
     // no humanoid), and the convention's chest is the joint the arms and
     // neck branch from (Xsens MVN's Chest…Chest4 match the CMU 3dsMax
     // names, whose Chest2 would put the chest on the L3 vertebra).
-    if conv.missing.is_empty() {
-        if let Err(e) = &body
-            && e.0.contains(structure::HORIZONTAL)
-        {
-            return Err(RigError::NotHumanoid {
-                reason: format!(
-                    "{} (although every '{}' name is present)",
-                    e.0, conv.map.convention
-                ),
-            });
-        }
+    if conv.missing.is_empty()
+        && let Err(e) = &body
+        && e.0.contains(structure::HORIZONTAL)
+    {
+        return Err(RigError::NotHumanoid {
+            reason: format!(
+                "{} (although every '{}' name is present)",
+                e.0, conv.map.convention
+            ),
+        });
     }
     let conv_chest_agrees = |b: &structure::Body| {
         let (rest, _) = clip.rest_positions();

@@ -232,11 +232,12 @@ pub fn tokens(name: &str) -> Vec<String> {
     split
 }
 
-/// A vertebra label (`L5`, `L3`, `T12`, `T8`, `C7`): its letter and number.
+/// A vertebra label (`L5`, `L3`, `T12`, `T8`, `C7`; H-Anim's `vl5`, `vt10`,
+/// `vc7`): its letter and number.
 fn vertebra(tokens: &[String]) -> Option<(char, u32)> {
     match tokens {
-        [a, n] if matches!(a.as_str(), "l" | "t" | "c") => {
-            Some((a.chars().next()?, n.parse().ok()?))
+        [a, n] if matches!(a.as_str(), "l" | "t" | "c" | "vl" | "vt" | "vc") => {
+            Some((a.chars().last()?, n.parse().ok()?))
         }
         _ => None,
     }
@@ -297,7 +298,7 @@ pub fn role(tokens: &[String]) -> Option<Role> {
     let w = words.join("");
     Some(match w.as_str() {
         "hipjoint" => return None,
-        "hips" | "pelvis" | "root" | "spinebase" | "hip" if !sided => Role::Pelvis,
+        "hips" | "pelvis" | "root" | "spinebase" | "sacroiliac" | "hip" if !sided => Role::Pelvis,
         "spine" | "abdomen" | "abdomenlower" | "spinelower" | "ab" => match num {
             None | Some(0) => Role::Spine(3),
             Some(1) if w == "abdomen" => Role::Spine(3),
@@ -438,6 +439,11 @@ mod tests {
             ("J_Bip_L_UpperLeg", Some(Side::Left), Some(Role::Thigh)),
             ("J_Bip_R_LowerArm", Some(Side::Right), Some(Role::Elbow)),
             ("C7", None, Some(Role::Neck)),
+            // H-Anim.
+            ("vl5", None, Some(Role::Spine(1))),
+            ("vt6", None, Some(Role::Chest)),
+            ("sacroiliac", None, Some(Role::Pelvis)),
+            ("l_talocrural", Some(Side::Left), None),
             // Perception Neuron finger roots are helpers.
             ("RightInHandIndex", Some(Side::Right), None),
         ];

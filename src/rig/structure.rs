@@ -351,13 +351,16 @@ impl<'a> Geo<'a> {
     /// itself splits into two or more significant branches counting as
     /// those branches: a pelvis split across two joints (Daz Genesis: `hip`
     /// carries the spine and, a centimetre or two away, `pelvis` carries
-    /// the thighs) is one junction. Short: under a quarter of the
-    /// significance threshold (3% of the body's size).
+    /// the thighs; H-Anim: `humanoid_root` carries `vl5` and, 9 cm away,
+    /// `sacroiliac` carries the hips; 3ds Max Biped: `Bip01 Spine` carries
+    /// the thighs and `Bip01 Spine1` 9 cm above `Bip01 Pelvis`) is one
+    /// junction. Short: under half the significance threshold (6% of the
+    /// body's size).
     fn hip_branches(&self, r: usize) -> Vec<usize> {
         let mut out = Vec::new();
         for c in self.branches(r) {
             let sub = self.branches(self.rep[c]);
-            if self.len[c] < 0.25 * self.thr && sub.len() >= 2 {
+            if self.len[c] < 0.5 * self.thr && sub.len() >= 2 {
                 out.extend(sub);
             } else {
                 out.push(c);
@@ -694,7 +697,8 @@ fn body(
         };
     };
 
-    // Pelvis: a pelvis-named joint of the node, else the node.
+    // Pelvis: a pelvis-named joint of the node, else of the node the legs
+    // hang from, else the node.
     let node: Vec<usize> = (0..g.clip.joint_count())
         .filter(|&j| g.rep[j] == pelvis)
         .collect();
@@ -710,23 +714,13 @@ fn body(
                 .find(|&j| role_of(tokens, j) == Some(Role::Pelvis))
         })
         .or_else(|| {
-            // A pelvis-named joint just above the junction with nothing
-            // else hanging off it (3ds Max Biped: `Bip01 Pelvis` → `Bip01
-            // Spine`, which carries the thighs and `Bip01 Spine1`): within
-            // half the significance threshold (6% of the body's size).
-            let mut k = g.parent[pelvis];
-            while let Some(a) = k {
-                if g.rest[a].distance(g.rest[pelvis]) > 0.5 * g.thr
-                    || g.node_children(g.rep[a]).len() > 1
-                {
-                    break;
-                }
-                if role_of(tokens, a) == Some(Role::Pelvis) {
-                    return Some(a);
-                }
-                k = g.parent[a];
-            }
-            None
+            // A pelvis-named joint where the legs hang, a short bone below
+            // the junction (H-Anim's `sacroiliac` under `humanoid_root`).
+            let carrier = g.parent[legs[0]]
+                .map(|p| g.rep[p])
+                .filter(|&p| p != pelvis)?;
+            (0..g.clip.joint_count())
+                .find(|&j| g.rep[j] == carrier && role_of(tokens, j) == Some(Role::Pelvis))
         });
     set(
         &mut picks,
