@@ -2719,3 +2719,50 @@ fn real_suites_without_names_place_the_limbs_alike() {
     }
     assert!(fails.is_empty(), "{}", fails.join("\n"));
 }
+
+/// Every suite drives the procedural humanoid as `retarget` reads a clip
+/// (`load_clip`: unit and up axis guessed; metres, Y-up; detected map,
+/// reference pose, rotation transfer): a smoke run. Each result is finite
+/// and stands: head above the neck above the pelvis, knees well below the
+/// hips and ankles well below the knees, on the character's up axis (+Y).
+#[test]
+fn real_suites_drive_the_procedural_character() {
+    use Canonical as C;
+    use surfmotion::rig::embed::Embedding;
+    use surfmotion::rig::retarget::{clip_poses, retarget};
+    use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
+    let mesh = humanoid_mesh(DEMO_GRID);
+    let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
+    let character: Pose = rig.joints.map(DVec3::from_array);
+    let dir = tempfile::tempdir().unwrap();
+    let mut fails = Vec::new();
+    for s in SUITES {
+        let path = dir.path().join(format!("{}.bvh", s.name));
+        std::fs::write(&path, skel_to_bvh(s.skel)).unwrap();
+        let mut c = load_clip(&path, &Default::default()).unwrap();
+        c.to_metres_y_up();
+        let d = detect_clip(&c).unwrap();
+        let cp = clip_poses(&c, &d.map).unwrap_or_else(|e| panic!("{}: {e}", s.name));
+        for (f, (p, _)) in retarget(&character, &cp.reference, &cp.poses)
+            .into_iter()
+            .enumerate()
+        {
+            let y = |k: C| p[k.index()].y;
+            // A shin or thigh is about a quarter of the height: standing,
+            // each knee is over 0.15 H below its hip and each ankle over
+            // 0.15 H below its knee (a Z-up clip read as Y-up sits).
+            let h = rig.height;
+            let stands = p.iter().all(|q| q.is_finite())
+                && y(C::Head) > y(C::Neck)
+                && y(C::Neck) > y(C::Pelvis)
+                && [(C::LHip, C::LKnee), (C::RHip, C::RKnee)]
+                    .iter()
+                    .chain(&[(C::LKnee, C::LAnkle), (C::RKnee, C::RAnkle)])
+                    .all(|&(a, b)| y(b) < y(a) - 0.15 * h);
+            if !stands {
+                fails.push(format!("{} frame {f}: {p:?}", s.name));
+            }
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
