@@ -2144,3 +2144,625 @@ fn an_amc_clip_and_its_third_party_bvh_conversion_map_alike() {
     assert!(worst < 1e-5, "{worst} m");
     assert!(worst_deg < 0.1, "{worst_deg}°");
 }
+
+// ------------------------------------------------- real mocap suites (issue 17)
+
+/// A BVH from a compact skeleton description (`tests/fixtures/suites/*.skel`):
+/// `#` comment lines (the source each family was learnt from), an `order`
+/// line (the rotation channels), an optional `all6` line (six channels on
+/// every joint, as Perception Neuron writes them), then one joint per line,
+/// its depth the number of leading spaces: `name x y z [| ex ey ez]` (the
+/// offset and an optional End Site; names may contain spaces). The motion
+/// is two frames of the rest pose (every rotation zero, the root at its
+/// offset), so only the hierarchy and the rest geometry decide.
+fn skel_to_bvh(skel: &str) -> String {
+    let mut order = "Zrotation Xrotation Yrotation".to_string();
+    let mut all6 = false;
+    let mut rows: Vec<(usize, String, String, Option<String>)> = Vec::new();
+    for line in skel.lines() {
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        if let Some(o) = t.strip_prefix("order ") {
+            order = o.trim().to_string();
+            continue;
+        }
+        if t == "all6" {
+            all6 = true;
+            continue;
+        }
+        let depth = line.len() - line.trim_start_matches(' ').len();
+        let (body, end) = match t.split_once('|') {
+            Some((b, e)) => (b.trim(), Some(e.trim().to_string())),
+            None => (t, None),
+        };
+        let toks: Vec<&str> = body.split_whitespace().collect();
+        let k = toks.len() - 3;
+        rows.push((depth, toks[..k].join(" "), toks[k..].join(" "), end));
+    }
+    let mut out = vec!["HIERARCHY".to_string()];
+    let mut open: Vec<(usize, Option<String>)> = Vec::new();
+    let close = |open: &mut Vec<(usize, Option<String>)>, out: &mut Vec<String>, to: usize| {
+        while open.len() > to {
+            let (d, end) = open.pop().unwrap();
+            let ind = "  ".repeat(d);
+            if let Some(e) = end {
+                out.push(format!(
+                    "{ind}  End Site\n{ind}  {{\n{ind}    OFFSET {e}\n{ind}  }}"
+                ));
+            }
+            out.push(format!("{ind}}}"));
+        }
+    };
+    let mut frame = Vec::new();
+    for (d, name, off, end) in &rows {
+        close(&mut open, &mut out, *d);
+        let ind = "  ".repeat(*d);
+        let kw = if *d == 0 { "ROOT" } else { "JOINT" };
+        out.push(format!("{ind}{kw} {name}\n{ind}{{\n{ind}  OFFSET {off}"));
+        if *d == 0 || all6 {
+            out.push(format!(
+                "{ind}  CHANNELS 6 Xposition Yposition Zposition {order}"
+            ));
+            frame.push(format!("{off} 0 0 0"));
+        } else {
+            out.push(format!("{ind}  CHANNELS 3 {order}"));
+            frame.push("0 0 0".to_string());
+        }
+        open.push((*d, end.clone()));
+    }
+    close(&mut open, &mut out, 0);
+    let frame = frame.join(" ");
+    format!(
+        "{}\nMOTION\nFrames: 2\nFrame Time: 0.0333333\n{frame}\n{frame}\n",
+        out.join("\n")
+    )
+}
+
+/// A family of real-world humanoid BVH: its skeleton, the convention name
+/// `rigmap` must report, where left/right must come from, and the full
+/// canonical map (`canonical=joint` separated by `;`, `~` for a joint the
+/// map derives: a toe from the ankle's End Site, a head from the neck's).
+struct Suite {
+    name: &'static str,
+    skel: &'static str,
+    convention: &'static str,
+    sides: &'static str,
+    map: &'static str,
+}
+
+const BY_N: &str = surfmotion::rig::BY_NAMES;
+const BY_S: &str = surfmotion::rig::BY_STRUCTURE;
+
+macro_rules! suite {
+    ($name:literal, $conv:expr, $sides:literal, $map:literal) => {
+        Suite {
+            name: $name,
+            skel: include_str!(concat!("fixtures/suites/", $name, ".skel")),
+            convention: $conv,
+            sides: $sides,
+            map: $map,
+        }
+    };
+}
+
+/// The families (sources in each `.skel` file's comment).
+const SUITES: &[Suite] = &[
+    suite!(
+        "daz_friendly",
+        BY_N,
+        "from geometry",
+        "pelvis=hip;spine=abdomen;chest=chest;neck=neck;head=head;\
+         l_shoulder=lShldr;l_elbow=lForeArm;l_wrist=lHand;\
+         r_shoulder=rShldr;r_elbow=rForeArm;r_wrist=rHand;\
+         l_hip=lThigh;l_knee=lShin;l_ankle=lFoot;l_toe=~;\
+         r_hip=rThigh;r_knee=rShin;r_ankle=rFoot;r_toe=~"
+    ),
+    suite!(
+        "mocapdata_com",
+        BY_S,
+        "from names",
+        "pelvis=Hips;spine=Chest;chest=Chest2;neck=Neck;head=Head;\
+         l_shoulder=LeftShoulder;l_elbow=LeftElbow;l_wrist=LeftWrist;\
+         r_shoulder=RightShoulder;r_elbow=RightElbow;r_wrist=RightWrist;\
+         l_hip=LeftHip;l_knee=LeftKnee;l_ankle=LeftAnkle;l_toe=~;\
+         r_hip=RightHip;r_knee=RightKnee;r_ankle=RightAnkle;r_toe=~"
+    ),
+    suite!(
+        "biovision_classic",
+        BY_S,
+        "from names",
+        "pelvis=Hips;spine=Chest;chest=~;neck=Neck;head=Head;\
+         l_shoulder=LeftUpArm;l_elbow=LeftLowArm;l_wrist=LeftHand;\
+         r_shoulder=RightUpArm;r_elbow=RightLowArm;r_wrist=RightHand;\
+         l_hip=LeftUpLeg;l_knee=LeftLowLeg;l_ankle=LeftFoot;l_toe=~;\
+         r_hip=RightUpLeg;r_knee=RightLowLeg;r_ankle=RightFoot;r_toe=~"
+    ),
+    suite!(
+        "xsens_mvn",
+        BY_S,
+        "from geometry",
+        "pelvis=Hips;spine=Chest2;chest=Chest4;neck=Neck;head=Head;\
+         l_shoulder=LeftShoulder;l_elbow=LeftElbow;l_wrist=LeftWrist;\
+         r_shoulder=RightShoulder;r_elbow=RightElbow;r_wrist=RightWrist;\
+         l_hip=LeftHip;l_knee=LeftKnee;l_ankle=LeftAnkle;l_toe=LeftToe;\
+         r_hip=RightHip;r_knee=RightKnee;r_ankle=RightAnkle;r_toe=RightToe"
+    ),
+    suite!(
+        "perception_neuron",
+        BY_N,
+        "from geometry",
+        "pelvis=Hips;spine=Spine;chest=Spine3;neck=Neck;head=Head;\
+         l_shoulder=LeftArm;l_elbow=LeftForeArm;l_wrist=LeftHand;\
+         r_shoulder=RightArm;r_elbow=RightForeArm;r_wrist=RightHand;\
+         l_hip=LeftUpLeg;l_knee=LeftLeg;l_ankle=LeftFoot;l_toe=~;\
+         r_hip=RightUpLeg;r_knee=RightLeg;r_ankle=RightFoot;r_toe=~"
+    ),
+    suite!(
+        "louise",
+        BY_S,
+        "from geometry",
+        "pelvis=Hips;spine=Chest;chest=~;neck=Neck;head=Head;\
+         l_shoulder=LeftShoulder;l_elbow=LeftElbow;l_wrist=LeftWrist;\
+         r_shoulder=RightShoulder;r_elbow=RightElbow;r_wrist=RightWrist;\
+         l_hip=LeftHip;l_knee=LeftKnee;l_ankle=LeftAnkle;l_toe=~;\
+         r_hip=RightHip;r_knee=RightKnee;r_ankle=RightAnkle;r_toe=~"
+    ),
+    suite!(
+        "mixamo_numbered",
+        "Mixamo",
+        "from names, confirmed by geometry",
+        "pelvis=mixamorig7:Hips;spine=mixamorig7:Spine;chest=mixamorig7:Spine2;\
+         neck=mixamorig7:Neck;head=mixamorig7:Head;\
+         l_shoulder=mixamorig7:LeftArm;l_elbow=mixamorig7:LeftForeArm;\
+         l_wrist=mixamorig7:LeftHand;r_shoulder=mixamorig7:RightArm;\
+         r_elbow=mixamorig7:RightForeArm;r_wrist=mixamorig7:RightHand;\
+         l_hip=mixamorig7:LeftUpLeg;l_knee=mixamorig7:LeftLeg;\
+         l_ankle=mixamorig7:LeftFoot;l_toe=mixamorig7:LeftToeBase;\
+         r_hip=mixamorig7:RightUpLeg;r_knee=mixamorig7:RightLeg;\
+         r_ankle=mixamorig7:RightFoot;r_toe=mixamorig7:RightToeBase"
+    ),
+    suite!(
+        "humanik_rigmesh",
+        BY_N,
+        "from geometry",
+        "pelvis=Character1_Hips;spine=Character1_Spine;chest=Character1_Spine2;\
+         neck=Character1_Neck;head=Character1_Head;\
+         l_shoulder=Character1_LeftArm;l_elbow=Character1_LeftForeArm;\
+         l_wrist=Character1_LeftHand;r_shoulder=Character1_RightArm;\
+         r_elbow=Character1_RightForeArm;r_wrist=Character1_RightHand;\
+         l_hip=Character1_LeftUpLeg;l_knee=Character1_LeftLeg;\
+         l_ankle=Character1_LeftFoot;l_toe=Character1_LeftToeBase;\
+         r_hip=Character1_RightUpLeg;r_knee=Character1_RightLeg;\
+         r_ankle=Character1_RightFoot;r_toe=Character1_RightToeBase"
+    ),
+    suite!(
+        "max_biped",
+        BY_N,
+        "from geometry",
+        "pelvis=Bip01 Pelvis;spine=Bip01 Spine;chest=Bip01 Spine2;\
+         neck=Bip01 Neck;head=Bip01 Head;\
+         l_shoulder=Bip01 L UpperArm;l_elbow=Bip01 L Forearm;l_wrist=Bip01 L Hand;\
+         r_shoulder=Bip01 R UpperArm;r_elbow=Bip01 R Forearm;r_wrist=Bip01 R Hand;\
+         l_hip=Bip01 L Thigh;l_knee=Bip01 L Calf;l_ankle=Bip01 L Foot;l_toe=Bip01 L Toe0;\
+         r_hip=Bip01 R Thigh;r_knee=Bip01 R Calf;r_ankle=Bip01 R Foot;r_toe=Bip01 R Toe0"
+    ),
+    suite!(
+        "unreal_manny",
+        BY_N,
+        "from geometry",
+        "pelvis=pelvis;spine=spine_01;chest=spine_05;neck=neck_01;head=head;\
+         l_shoulder=upperarm_l;l_elbow=lowerarm_l;l_wrist=hand_l;\
+         r_shoulder=upperarm_r;r_elbow=lowerarm_r;r_wrist=hand_r;\
+         l_hip=thigh_l;l_knee=calf_l;l_ankle=foot_l;l_toe=ball_l;\
+         r_hip=thigh_r;r_knee=calf_r;r_ankle=foot_r;r_toe=ball_r"
+    ),
+    suite!(
+        "vroid",
+        BY_N,
+        "from geometry",
+        "pelvis=J_Bip_C_Hips;spine=J_Bip_C_Spine;chest=J_Bip_C_UpperChest;\
+         neck=J_Bip_C_Neck;head=J_Bip_C_Head;\
+         l_shoulder=J_Bip_L_UpperArm;l_elbow=J_Bip_L_LowerArm;l_wrist=J_Bip_L_Hand;\
+         r_shoulder=J_Bip_R_UpperArm;r_elbow=J_Bip_R_LowerArm;r_wrist=J_Bip_R_Hand;\
+         l_hip=J_Bip_L_UpperLeg;l_knee=J_Bip_L_LowerLeg;l_ankle=J_Bip_L_Foot;\
+         l_toe=J_Bip_L_ToeBase;r_hip=J_Bip_R_UpperLeg;r_knee=J_Bip_R_LowerLeg;\
+         r_ankle=J_Bip_R_Foot;r_toe=J_Bip_R_ToeBase"
+    ),
+    suite!(
+        "smpl",
+        BY_N,
+        "from geometry",
+        "pelvis=Pelvis;spine=Spine1;chest=Spine3;neck=Neck;head=Head;\
+         l_shoulder=L_Shoulder;l_elbow=L_Elbow;l_wrist=L_Wrist;\
+         r_shoulder=R_Shoulder;r_elbow=R_Elbow;r_wrist=R_Wrist;\
+         l_hip=L_Hip;l_knee=L_Knee;l_ankle=L_Ankle;l_toe=L_Foot;\
+         r_hip=R_Hip;r_knee=R_Knee;r_ankle=R_Ankle;r_toe=R_Foot"
+    ),
+    suite!(
+        "smplx_zup",
+        BY_N,
+        "from geometry",
+        "pelvis=pelvis;spine=spine1;chest=spine3;neck=neck;head=head;\
+         l_shoulder=left_shoulder;l_elbow=left_elbow;l_wrist=left_wrist;\
+         r_shoulder=right_shoulder;r_elbow=right_elbow;r_wrist=right_wrist;\
+         l_hip=left_hip;l_knee=left_knee;l_ankle=left_ankle;l_toe=left_foot;\
+         r_hip=right_hip;r_knee=right_knee;r_ankle=right_ankle;r_toe=right_foot"
+    ),
+    suite!(
+        "h36m_video2bvh",
+        BY_N,
+        "from geometry",
+        "pelvis=Hip;spine=Spine;chest=Thorax;neck=Neck;head=~;\
+         l_shoulder=LeftShoulder;l_elbow=LeftElbow;l_wrist=LeftWrist;\
+         r_shoulder=RightShoulder;r_elbow=RightElbow;r_wrist=RightWrist;\
+         l_hip=LeftHip;l_knee=LeftKnee;l_ankle=LeftAnkle;l_toe=~;\
+         r_hip=RightHip;r_knee=RightKnee;r_ankle=RightAnkle;r_toe=~"
+    ),
+    suite!(
+        "kinect_v2",
+        BY_N,
+        "from geometry",
+        "pelvis=SpineBase;spine=SpineMid;chest=SpineShoulder;neck=Neck;head=Head;\
+         l_shoulder=ShoulderLeft;l_elbow=ElbowLeft;l_wrist=WristLeft;\
+         r_shoulder=ShoulderRight;r_elbow=ElbowRight;r_wrist=WristRight;\
+         l_hip=HipLeft;l_knee=KneeLeft;l_ankle=AnkleLeft;l_toe=FootLeft;\
+         r_hip=HipRight;r_knee=KneeRight;r_ankle=AnkleRight;r_toe=FootRight"
+    ),
+    suite!(
+        "optitrack_motive",
+        BY_N,
+        "from geometry",
+        "pelvis=Skeleton1_Hip;spine=Skeleton1_Ab;chest=Skeleton1_Chest;\
+         neck=Skeleton1_Neck;head=Skeleton1_Head;\
+         l_shoulder=Skeleton1_LUArm;l_elbow=Skeleton1_LFArm;l_wrist=Skeleton1_LHand;\
+         r_shoulder=Skeleton1_RUArm;r_elbow=Skeleton1_RFArm;r_wrist=Skeleton1_RHand;\
+         l_hip=Skeleton1_LThigh;l_knee=Skeleton1_LShin;l_ankle=Skeleton1_LFoot;\
+         l_toe=Skeleton1_LToe;r_hip=Skeleton1_RThigh;r_knee=Skeleton1_RShin;\
+         r_ankle=Skeleton1_RFoot;r_toe=Skeleton1_RToe"
+    ),
+    suite!(
+        "blender_rigify",
+        BY_S,
+        "from geometry",
+        "pelvis=DEF-spine;spine=DEF-spine.001;chest=DEF-spine.003;\
+         neck=DEF-spine.004;head=DEF-spine.006;\
+         l_shoulder=DEF-upper_arm.L;l_elbow=DEF-forearm.L;l_wrist=DEF-hand.L;\
+         r_shoulder=DEF-upper_arm.R;r_elbow=DEF-forearm.R;r_wrist=DEF-hand.R;\
+         l_hip=DEF-thigh.L;l_knee=DEF-shin.L;l_ankle=DEF-foot.L;l_toe=DEF-toe.L;\
+         r_hip=DEF-thigh.R;r_knee=DEF-shin.R;r_ankle=DEF-foot.R;r_toe=DEF-toe.R"
+    ),
+    suite!(
+        "rokoko",
+        BY_N,
+        "from geometry",
+        "pelvis=Hips;spine=Spine1;chest=Spine4;neck=Neck;head=Head;\
+         l_shoulder=LeftArm;l_elbow=LeftForeArm;l_wrist=LeftHand;\
+         r_shoulder=RightArm;r_elbow=RightForeArm;r_wrist=RightHand;\
+         l_hip=LeftThigh;l_knee=LeftShin;l_ankle=LeftFoot;l_toe=LeftToe;\
+         r_hip=RightThigh;r_knee=RightShin;r_ankle=RightFoot;r_toe=RightToe"
+    ),
+    suite!(
+        "second_life_bento",
+        BY_N,
+        "from geometry",
+        "pelvis=hip;spine=abdomen;chest=chest;neck=neck;head=head;\
+         l_shoulder=lShldr;l_elbow=lForeArm;l_wrist=lHand;\
+         r_shoulder=rShldr;r_elbow=rForeArm;r_wrist=rHand;\
+         l_hip=lThigh;l_knee=lShin;l_ankle=lFoot;l_toe=mToeLeft;\
+         r_hip=rThigh;r_knee=rShin;r_ankle=rFoot;r_toe=mToeRight"
+    ),
+    suite!(
+        "hanim_loa1",
+        BY_S,
+        "from geometry",
+        "pelvis=sacroiliac;spine=vl5;chest=~;neck=skullbase;head=~;\
+         l_shoulder=l_shoulder;l_elbow=l_elbow;l_wrist=l_radiocarpal;\
+         r_shoulder=r_shoulder;r_elbow=r_elbow;r_wrist=r_radiocarpal;\
+         l_hip=l_hip;l_knee=l_knee;l_ankle=l_talocrural;l_toe=~;\
+         r_hip=r_hip;r_knee=r_knee;r_ankle=r_talocrural;r_toe=~"
+    ),
+];
+
+/// Non-humanoids in the suites (a Biped-named horse, a bird, a dog carrying
+/// every MotionBuilder HumanIK name).
+const NOT_HUMANOIDS: &[(&str, &str)] = &[
+    (
+        "truebones_horse",
+        include_str!("fixtures/suites/truebones_horse.skel"),
+    ),
+    ("bird", include_str!("fixtures/suites/bird.skel")),
+    (
+        "dog_humanik_names",
+        include_str!("fixtures/suites/dog_humanik_names.skel"),
+    ),
+];
+
+fn suite_clip(name: &str, skel: &str) -> Clip {
+    let text = skel_to_bvh(skel);
+    parse_bvh(
+        &text,
+        std::path::Path::new(&format!("{name}.bvh")),
+        &BvhOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}\n{text}"))
+}
+
+/// The expected map of a suite: canonical joint → joint name, `None` for
+/// a derived joint.
+fn expected(s: &Suite) -> Vec<(Canonical, Option<String>)> {
+    let rows: Vec<(Canonical, Option<String>)> = s
+        .map
+        .split(';')
+        .map(|kv| {
+            let (k, v) = kv.split_once('=').unwrap();
+            let c = Canonical::from_name(k.trim()).unwrap_or_else(|| panic!("{k}"));
+            let v = v.trim();
+            (c, (v != "~").then(|| v.to_string()))
+        })
+        .collect();
+    assert_eq!(rows.len(), Canonical::COUNT, "{}", s.name);
+    rows
+}
+
+/// What differs between a detection and `want` (joint names, derived
+/// joints), one line per canonical joint.
+fn map_errors(d: &surfmotion::rig::Detection, want: &[(Canonical, Option<String>)]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (c, name) in want {
+        let got = d.map.joints.get(c);
+        let ok = match name {
+            Some(n) => got == Some(n),
+            None => got.is_none() && d.map.derived.contains_key(c),
+        };
+        if !ok {
+            out.push(format!(
+                "{} = {} (want {})",
+                c.name(),
+                got.map_or("derived/missing", String::as_str),
+                name.as_deref().unwrap_or("derived")
+            ));
+        }
+    }
+    if !d.missing.is_empty() {
+        out.push(format!("missing {:?}", d.missing));
+    }
+    out
+}
+
+/// Every real-world family maps with no rig map to the full canonical map
+/// (left and right included), names the right convention (a known one only
+/// when it is one: Xsens MVN's names are not CMU's 3dsMax BVH), says where
+/// left and right came from, and places every canonical joint. All
+/// families are checked before failing, each failure listed.
+#[test]
+fn real_suites_map_every_canonical_joint() {
+    let mut fails = Vec::new();
+    for s in SUITES {
+        let c = suite_clip(s.name, s.skel);
+        let d = match detect_clip(&c) {
+            Ok(d) => d,
+            Err(e) => {
+                fails.push(format!("{}: {e}", s.name));
+                continue;
+            }
+        };
+        if d.map.convention != s.convention {
+            fails.push(format!("{}: convention '{}'", s.name, d.map.convention));
+        }
+        if !d.sides.starts_with(s.sides) {
+            fails.push(format!("{}: sides {}", s.name, d.sides));
+        }
+        for e in map_errors(&d, &expected(s)) {
+            fails.push(format!("{}: {e}", s.name));
+        }
+        let rest = d.map.rest_pose(&c).unwrap();
+        assert!(rest.iter().all(|p| p.is_finite()), "{}", s.name);
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+/// The same bodies mirrored (x negated, names kept): where the geometry
+/// says which way the body faces (feet forward), the joints named left are
+/// now on the right and map to the right canonical joints; where it cannot
+/// (mocapdata.com, the Biovision sample: feet straight down, straight
+/// knees, no travel) the names decide.
+#[test]
+fn real_suites_mirrored_map_left_and_right_from_geometry() {
+    let mut fails = Vec::new();
+    for s in SUITES {
+        let c = suite_clip(s.name, s.skel);
+        let m = via_bvh(&mirror(&c));
+        let d = match detect_clip(&m) {
+            Ok(d) => d,
+            Err(e) => {
+                fails.push(format!("{} mirrored: {e}", s.name));
+                continue;
+            }
+        };
+        let by_names = s.sides == "from names";
+        let want: Vec<(Canonical, Option<String>)> = expected(s)
+            .into_iter()
+            .map(|(k, v)| (if by_names { k } else { swap_side(k) }, v))
+            .collect();
+        for e in map_errors(&d, &want) {
+            fails.push(format!("{} mirrored: {e}", s.name));
+        }
+        if !by_names && !d.sides.contains("mirrored") {
+            fails.push(format!("{} mirrored: sides {}", s.name, d.sides));
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+/// Non-humanoids are refused with "not a humanoid: …", whatever their
+/// joint names (a dog with every HumanIK name was reported as "MotionBuilder
+/// HumanIK" before).
+#[test]
+fn suite_non_humanoids_are_refused_whatever_their_names() {
+    for (name, skel) in NOT_HUMANOIDS {
+        let c = suite_clip(name, skel);
+        match detect_clip(&c) {
+            Err(RigError::NotHumanoid { reason }) => {
+                assert!(reason.contains("horizontal"), "{name}: {reason}")
+            }
+            Ok(d) => panic!("{name} mapped as {}: {:?}", d.map.convention, d.map.joints),
+            Err(e) => panic!("{name}: {e}"),
+        }
+    }
+}
+
+/// `mocap rigmap` and `inspect --json` on every suite written as a BVH
+/// file: humanoids exit 0 and report the expected convention (never a
+/// known convention for a family that is not one); non-humanoids exit 1
+/// with "not a humanoid" and `inspect` says so instead of naming one.
+#[test]
+fn cli_maps_every_suite_and_refuses_the_animals() {
+    let dir = tempfile::tempdir().unwrap();
+    for s in SUITES {
+        let p = dir.path().join(format!("{}.bvh", s.name));
+        std::fs::write(&p, skel_to_bvh(s.skel)).unwrap();
+        let o = run_cli(&["mocap", "rigmap"], &p);
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{}: {}",
+            s.name,
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            out.lines()
+                .next()
+                .is_some_and(|l| l == format!("convention: {}", s.convention)),
+            "{}: {out}",
+            s.name
+        );
+        let o = run_cli(&["inspect", "--json"], &p);
+        assert!(o.status.success(), "{}", s.name);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["convention"].as_str(), Some(s.convention), "{}", s.name);
+    }
+    for (name, skel) in NOT_HUMANOIDS {
+        let p = dir.path().join(format!("{name}.bvh"));
+        std::fs::write(&p, skel_to_bvh(skel)).unwrap();
+        let o = run_cli(&["mocap", "rigmap"], &p);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains("not a humanoid"), "{name}: {e}");
+        let o = run_cli(&["inspect", "--json"], &p);
+        assert!(o.status.success(), "{name}");
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert!(
+            v["convention"]
+                .as_str()
+                .is_some_and(|c| c.starts_with("not a humanoid: ")),
+            "{name}: {v}"
+        );
+    }
+}
+
+/// Structure alone on the suites: every joint of a few families renamed
+/// `J<k>` (no name hints at all) puts the limbs' canonical joints (hips,
+/// knees, ankles, shoulders, elbows, wrists, left and right) where the
+/// names put them, in the rest pose.
+#[test]
+fn real_suites_without_names_place_the_limbs_alike() {
+    use Canonical as C;
+    let limbs = [
+        C::LHip,
+        C::LKnee,
+        C::LAnkle,
+        C::LShoulder,
+        C::LElbow,
+        C::LWrist,
+        C::RHip,
+        C::RKnee,
+        C::RAnkle,
+        C::RShoulder,
+        C::RElbow,
+        C::RWrist,
+    ];
+    let mut fails = Vec::new();
+    for s in SUITES {
+        let c = suite_clip(s.name, s.skel);
+        if s.sides == "from names" {
+            continue; // nothing but the names tells left from right
+        }
+        let named = detect_clip(&c).unwrap().map.rest_pose(&c).unwrap();
+        let mut bare = c.clone();
+        for (k, j) in bare.joints.iter_mut().enumerate() {
+            j.name = format!("J{k}");
+        }
+        let bare = via_bvh(&bare);
+        let d = match detect_clip(&bare) {
+            Ok(d) => d,
+            Err(e) => {
+                fails.push(format!("{} without names: {e}", s.name));
+                continue;
+            }
+        };
+        let p = d.map.rest_pose(&bare).unwrap();
+        let tol = 1e-6 * scale(&named);
+        for k in limbs {
+            let e = p[k.index()].distance(named[k.index()]);
+            if e > tol {
+                fails.push(format!(
+                    "{} without names: {} {:.3} from the named one ({})",
+                    s.name,
+                    k.name(),
+                    e,
+                    d.map.joints.get(&k).map_or("derived", String::as_str)
+                ));
+            }
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+/// Every suite drives the procedural humanoid as `retarget` reads a clip
+/// (`load_clip`: unit and up axis guessed; metres, Y-up; detected map,
+/// reference pose, rotation transfer): a smoke run. Each result is finite
+/// and stands: head above the neck above the pelvis, knees well below the
+/// hips and ankles well below the knees, on the character's up axis (+Y).
+#[test]
+fn real_suites_drive_the_procedural_character() {
+    use Canonical as C;
+    use surfmotion::rig::embed::Embedding;
+    use surfmotion::rig::retarget::{clip_poses, retarget};
+    use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
+    let mesh = humanoid_mesh(DEMO_GRID);
+    let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
+    let character: Pose = rig.joints.map(DVec3::from_array);
+    let dir = tempfile::tempdir().unwrap();
+    let mut fails = Vec::new();
+    for s in SUITES {
+        let path = dir.path().join(format!("{}.bvh", s.name));
+        std::fs::write(&path, skel_to_bvh(s.skel)).unwrap();
+        let mut c = load_clip(&path, &Default::default()).unwrap();
+        c.to_metres_y_up();
+        let d = detect_clip(&c).unwrap();
+        let cp = clip_poses(&c, &d.map).unwrap_or_else(|e| panic!("{}: {e}", s.name));
+        for (f, (p, _)) in retarget(&character, &cp.reference, &cp.poses)
+            .into_iter()
+            .enumerate()
+        {
+            let y = |k: C| p[k.index()].y;
+            // A shin or thigh is about a quarter of the height: standing,
+            // each knee is over 0.15 H below its hip and each ankle over
+            // 0.15 H below its knee (a Z-up clip read as Y-up sits).
+            let h = rig.height;
+            let stands = p.iter().all(|q| q.is_finite())
+                && y(C::Head) > y(C::Neck)
+                && y(C::Neck) > y(C::Pelvis)
+                && [(C::LHip, C::LKnee), (C::RHip, C::RKnee)]
+                    .iter()
+                    .chain(&[(C::LKnee, C::LAnkle), (C::RKnee, C::RAnkle)])
+                    .all(|&(a, b)| y(b) < y(a) - 0.15 * h);
+            if !stands {
+                fails.push(format!("{} frame {f}: {p:?}", s.name));
+            }
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}

@@ -464,7 +464,43 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
     let tokens = super::names::all_tokens(&names);
     let conv = detect(&names);
     let body = structure::analyse(clip, &tokens);
-    if conv.missing.is_empty() {
+    // A known convention's names, kept when the structure agrees: the
+    // structure finds no horizontal body (a dog rigged with HumanIK names is
+    // no humanoid), and the convention's chest is the joint the arms and
+    // neck branch from (Xsens MVN's Chest…Chest4 match the CMU 3dsMax
+    // names, whose Chest2 would put the chest on the L3 vertebra).
+    if conv.missing.is_empty()
+        && let Err(e) = &body
+        && e.0.contains(structure::HORIZONTAL)
+    {
+        return Err(RigError::NotHumanoid {
+            reason: format!(
+                "{} (although every '{}' name is present)",
+                e.0, conv.map.convention
+            ),
+        });
+    }
+    let conv_chest_agrees = |b: &structure::Body| {
+        let (rest, _) = clip.rest_positions();
+        let at = |c: Canonical| {
+            conv.map
+                .joints
+                .get(&c)
+                .and_then(|n| clip.joint(n))
+                .map(|j| rest[j.idx()])
+        };
+        let picked = |c: Canonical| b.picks[c.index()].joint.map(|j| rest[j]);
+        match (
+            at(Canonical::Chest),
+            picked(Canonical::Chest),
+            picked(Canonical::Pelvis),
+            picked(Canonical::Neck),
+        ) {
+            (Some(a), Some(c), Some(p), Some(n)) => a.distance(c) <= 0.2 * p.distance(n),
+            _ => true,
+        }
+    };
+    if conv.missing.is_empty() && body.as_ref().map_or(true, conv_chest_agrees) {
         let Ok(b) = &body else {
             let mut d = conv;
             d.sides = "from names (the structure analysis did not find a humanoid)".into();
@@ -546,23 +582,36 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
         joints,
         derived,
     };
+    let (side_confidence, sides) = if b.sides_from_names {
+        (
+            None,
+            "from names (the geometry gives no forward direction: no foot points \
+             forward, the knees are straight and the root does not travel)"
+                .to_string(),
+        )
+    } else {
+        (
+            Some(b.side_confidence),
+            format!(
+                "from geometry (forward from the {}, confidence {:.2}){}",
+                b.forward_from,
+                b.side_confidence,
+                if b.names_mirrored {
+                    "; the names' left/right are mirrored"
+                } else {
+                    ""
+                }
+            ),
+        )
+    };
     Ok(Detection {
         derived: map.derived.keys().copied().collect(),
         map,
         missing,
         signature: false,
         joints: reports,
-        side_confidence: Some(b.side_confidence),
-        sides: format!(
-            "from geometry (forward from the {}, confidence {:.2}){}",
-            b.forward_from,
-            b.side_confidence,
-            if b.names_mirrored {
-                "; the names' left/right are mirrored"
-            } else {
-                ""
-            }
-        ),
+        side_confidence,
+        sides,
     })
 }
 

@@ -10,7 +10,9 @@
 //! `Armature|Hips`), common prefixes (`Character1_`, `Bip01 `, `CC_Base_`),
 //! ASF bones (`lfemur`, `lhumerus`), Daz/Poser (`lShldr`, `lThigh`), SMPL
 //! (`L_Hip`, `left_hip`), Kinect (`HipLeft`), Xsens (`RightUpperLeg`, `T8`),
-//! Unity (`LeftUpperArm`), 3ds Max Biped (`Bip01 L Calf`).
+//! Unity (`LeftUpperArm`), 3ds Max Biped (`Bip01 L Calf`), OptiTrack Motive
+//! (`LUArm`, `LFArm`, `Ab`), VRoid (`J_Bip_C_Hips`), the Biovision sample
+//! (`LeftLowArm`, `LeftLowLeg`).
 
 /// Which side of the body a name says a joint is on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -115,8 +117,10 @@ const HELPER: &[&str] = &[
     "cheek",
 ];
 
-/// Leading tokens of rig prefixes (`Bip01 `, `CC_Base_`, `mixamorig`, `DEF-`).
+/// Leading tokens of rig prefixes (`Bip01 `, `CC_Base_`, `mixamorig`, `DEF-`,
+/// VRoid's `J_Bip_`).
 const RIG_PREFIX: &[&str] = &[
+    "j",
     "bip",
     "cc",
     "base",
@@ -135,6 +139,11 @@ const FUSED: &[&str] = &[
     "collar", "thigh", "shin", "shldr", "hipjoint", "fingers", "thumb", "forearm", "upperarm",
     "ankle", "knee", "elbow", "shoulder", "hip", "leg", "arm", "ulna", "calf",
 ];
+
+/// Limb abbreviations that follow a capital side letter in one capital run
+/// (OptiTrack Motive's `LUArm`, `LFArm`: left upper arm, left forearm),
+/// which camelCase splitting leaves as `lu arm`.
+const SIDE_ABBREV: &[(&str, &str)] = &[("u", "arm"), ("f", "arm")];
 
 /// Strips a `namespace:` or `path|` prefix (the part after the last `:` or `|`).
 pub fn strip_namespace(s: &str) -> &str {
@@ -195,7 +204,20 @@ pub fn tokens(name: &str) -> Vec<String> {
     push(&mut cur, &mut out);
     // Fused side letters: `lfemur`, `rhand`, `lhipjoint`.
     let mut split = Vec::with_capacity(out.len());
-    for t in out {
+    let mut out = out.into_iter().peekable();
+    while let Some(t) = out.next() {
+        // `LUArm` → `lu arm` → `l uarm`.
+        let abbrev = t.len() == 2
+            && (t.starts_with('l') || t.starts_with('r'))
+            && out
+                .peek()
+                .is_some_and(|n| SIDE_ABBREV.contains(&(&t[1..], n.as_str())));
+        if abbrev {
+            let next = out.next().unwrap_or_default();
+            split.push(t[..1].to_string());
+            split.push(format!("{}{next}", &t[1..]));
+            continue;
+        }
         let fused = (t.starts_with('l') || t.starts_with('r'))
             && t.len() > 2
             && FUSED.contains(&&t[1..])
@@ -210,11 +232,12 @@ pub fn tokens(name: &str) -> Vec<String> {
     split
 }
 
-/// A vertebra label (`L5`, `L3`, `T12`, `T8`, `C7`): its letter and number.
+/// A vertebra label (`L5`, `L3`, `T12`, `T8`, `C7`; H-Anim's `vl5`, `vt10`,
+/// `vc7`): its letter and number.
 fn vertebra(tokens: &[String]) -> Option<(char, u32)> {
     match tokens {
-        [a, n] if matches!(a.as_str(), "l" | "t" | "c") => {
-            Some((a.chars().next()?, n.parse().ok()?))
+        [a, n] if matches!(a.as_str(), "l" | "t" | "c" | "vl" | "vt" | "vc") => {
+            Some((a.chars().last()?, n.parse().ok()?))
         }
         _ => None,
     }
@@ -264,6 +287,10 @@ pub fn role(tokens: &[String]) -> Option<Role> {
         .filter(|t| !matches!(*t, "l" | "r" | "left" | "right" | "lft" | "rt"))
         .filter(|t| t.parse::<u32>().is_err())
         .collect();
+    // VRoid's centre marker (`J_Bip_C_Hips`).
+    if words.len() > 1 {
+        words.retain(|t| *t != "c");
+    }
     // Rig prefixes left over when not every joint carries them.
     while words.len() > 1 && RIG_PREFIX.contains(&words[0]) {
         words.remove(0);
@@ -271,8 +298,8 @@ pub fn role(tokens: &[String]) -> Option<Role> {
     let w = words.join("");
     Some(match w.as_str() {
         "hipjoint" => return None,
-        "hips" | "pelvis" | "root" | "spinebase" | "hip" if !sided => Role::Pelvis,
-        "spine" | "abdomen" | "abdomenlower" | "spinelower" => match num {
+        "hips" | "pelvis" | "root" | "spinebase" | "sacroiliac" | "hip" if !sided => Role::Pelvis,
+        "spine" | "abdomen" | "abdomenlower" | "spinelower" | "ab" => match num {
             None | Some(0) => Role::Spine(3),
             Some(1) if w == "abdomen" => Role::Spine(3),
             Some(2) if w == "abdomen" => Role::Spine(2),
@@ -287,12 +314,13 @@ pub fn role(tokens: &[String]) -> Option<Role> {
         "head" => Role::Head,
         "collar" | "clavicle" | "shoulderblade" | "scapula" => Role::Collar,
         "shoulder" => Role::ShoulderWord,
-        "upperarm" | "arm" | "shldr" | "humerus" | "uparm" | "shldrbend" => Role::UpperArm,
-        "forearm" | "lowerarm" | "elbow" | "radius" | "ulna" | "forearmbend" => Role::Elbow,
+        "upperarm" | "arm" | "shldr" | "humerus" | "uparm" | "shldrbend" | "uarm" => Role::UpperArm,
+        "forearm" | "lowerarm" | "elbow" | "radius" | "ulna" | "forearmbend" | "lowarm"
+        | "loarm" | "farm" => Role::Elbow,
         "wrist" => Role::Wrist,
         "hand" => Role::Hand,
         "thigh" | "upleg" | "upperleg" | "femur" | "hip" | "thighbend" => Role::Thigh,
-        "calf" | "shin" | "leg" | "lowerleg" | "knee" | "tibia" | "loleg" => Role::Knee,
+        "calf" | "shin" | "leg" | "lowerleg" | "knee" | "tibia" | "loleg" | "lowleg" => Role::Knee,
         "ankle" => Role::Ankle,
         "foot" => Role::Foot,
         "toe" | "toebase" | "toes" | "ball" => Role::Toe,
@@ -396,6 +424,28 @@ mod tests {
             ("thigh_l", Some(Side::Left), Some(Role::Thigh)),
             ("ball_r", Some(Side::Right), Some(Role::Toe)),
             ("upperarm_l", Some(Side::Left), Some(Role::UpperArm)),
+            // OptiTrack Motive: a side letter fused to an abbreviation.
+            ("LUArm", Some(Side::Left), Some(Role::UpperArm)),
+            ("RFArm", Some(Side::Right), Some(Role::Elbow)),
+            ("Ab", None, Some(Role::Spine(3))),
+            ("LShin", Some(Side::Left), Some(Role::Knee)),
+            // The Biovision sample.
+            ("LeftLowArm", Some(Side::Left), Some(Role::Elbow)),
+            ("RightLowLeg", Some(Side::Right), Some(Role::Knee)),
+            ("LeftUpArm", Some(Side::Left), Some(Role::UpperArm)),
+            // VRoid: `J_Bip_` prefix, `C` for the centre line.
+            ("J_Bip_C_Hips", None, Some(Role::Pelvis)),
+            ("J_Bip_C_UpperChest", None, Some(Role::Chest)),
+            ("J_Bip_L_UpperLeg", Some(Side::Left), Some(Role::Thigh)),
+            ("J_Bip_R_LowerArm", Some(Side::Right), Some(Role::Elbow)),
+            ("C7", None, Some(Role::Neck)),
+            // H-Anim.
+            ("vl5", None, Some(Role::Spine(1))),
+            ("vt6", None, Some(Role::Chest)),
+            ("sacroiliac", None, Some(Role::Pelvis)),
+            ("l_talocrural", Some(Side::Left), None),
+            // Perception Neuron finger roots are helpers.
+            ("RightInHandIndex", Some(Side::Right), None),
         ];
         for (n, s, r) in cases {
             let tk = t(n);

@@ -32,11 +32,13 @@
 //!    the first joint after the ankle that is not a straight pass-through
 //!    (Daz `lMetatarsals`). A joint whose name has the matching role wins
 //!    inside its chain.
-//! 5. Left/right from the body's own frame, never from names: up =
+//! 5. Left/right from the body's own frame, not from names: up =
 //!    pelvis→neck, forward = the feet's ankle→toe direction across the shin
 //!    (else the knees'
 //!    bend, else the root's travel), left = up × forward (Y-up, facing +Z:
-//!    left is +X).
+//!    left is +X). Only when none of the three gives a forward direction
+//!    (feet straight down, straight knees, no travel: the Biovision sample,
+//!    mocapdata.com) do the sides the joints' names state decide.
 
 use super::canonical::Canonical;
 use super::map::Derive;
@@ -92,7 +94,15 @@ pub struct Body {
     pub side_confidence: f64,
     /// True when the joint names state sides opposite to the geometry.
     pub names_mirrored: bool,
+    /// True when the geometry gave no forward direction and the names'
+    /// sides decided left and right (`forward_from` is `none`).
+    pub sides_from_names: bool,
 }
+
+/// The words a [`NotHumanoid`] reason contains when the clip has a
+/// humanoid's chains (two legs, a spine with two limbs and a neck) on a
+/// horizontal body: a quadruped or a bird, whatever its joint names.
+pub const HORIZONTAL: &str = "a horizontal body";
 
 /// Why a clip is not a humanoid.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -341,13 +351,16 @@ impl<'a> Geo<'a> {
     /// itself splits into two or more significant branches counting as
     /// those branches: a pelvis split across two joints (Daz Genesis: `hip`
     /// carries the spine and, a centimetre or two away, `pelvis` carries
-    /// the thighs) is one junction. Short: under a quarter of the
-    /// significance threshold (3% of the body's size).
+    /// the thighs; H-Anim: `humanoid_root` carries `vl5` and, 9 cm away,
+    /// `sacroiliac` carries the hips; 3ds Max Biped: `Bip01 Spine` carries
+    /// the thighs and `Bip01 Spine1` 9 cm above `Bip01 Pelvis`) is one
+    /// junction. Short: under half the significance threshold (6% of the
+    /// body's size).
     fn hip_branches(&self, r: usize) -> Vec<usize> {
         let mut out = Vec::new();
         for c in self.branches(r) {
             let sub = self.branches(self.rep[c]);
-            if self.len[c] < 0.25 * self.thr && sub.len() >= 2 {
+            if self.len[c] < 0.5 * self.thr && sub.len() >= 2 {
                 out.extend(sub);
             } else {
                 out.push(c);
@@ -647,7 +660,7 @@ fn body(
     // with its chest above its hips is at −0.53.
     if best_cos > -0.7 {
         return Err(NotHumanoid(format!(
-            "the chains below '{}' do not point away from the spine (cosine {best_cos:.2} in the rest pose or the median frame): a horizontal body",
+            "the chains below '{}' do not point away from the spine (cosine {best_cos:.2} in the rest pose or the median frame): {HORIZONTAL}",
             name(pelvis)
         )));
     }
@@ -684,7 +697,8 @@ fn body(
         };
     };
 
-    // Pelvis: a pelvis-named joint of the node, else the node.
+    // Pelvis: a pelvis-named joint of the node, else of the node the legs
+    // hang from, else the node.
     let node: Vec<usize> = (0..g.clip.joint_count())
         .filter(|&j| g.rep[j] == pelvis)
         .collect();
@@ -698,6 +712,15 @@ fn body(
             node.iter()
                 .copied()
                 .find(|&j| role_of(tokens, j) == Some(Role::Pelvis))
+        })
+        .or_else(|| {
+            // A pelvis-named joint where the legs hang, a short bone below
+            // the junction (H-Anim's `sacroiliac` under `humanoid_root`).
+            let carrier = g.parent[legs[0]]
+                .map(|p| g.rep[p])
+                .filter(|&p| p != pelvis)?;
+            (0..g.clip.joint_count())
+                .find(|&j| g.rep[j] == carrier && role_of(tokens, j) == Some(Role::Pelvis))
         });
     set(
         &mut picks,
@@ -998,17 +1021,47 @@ fn body(
         Some(2) => "travel",
         _ => "none",
     };
+    // No forward direction (feet straight down or no toes, straight
+    // knees, no travel: the Biovision sample, mocapdata.com, a one-frame
+    // T-pose): the names' sides decide, each limb pair by the sides its
+    // joints' names state.
+    let named_sign = |a: &Limb, b: &Limb| -> Option<f64> {
+        let s = |l: &Limb| -> i32 {
+            l.picks
+                .iter()
+                .flatten()
+                .map(|&(j, _)| match tokens.get(j).and_then(|t| side(t)) {
+                    Some(Side::Left) => 1,
+                    Some(Side::Right) => -1,
+                    None => 0,
+                })
+                .sum()
+        };
+        match s(a).cmp(&s(b)) {
+            std::cmp::Ordering::Less => Some(-1.0),
+            std::cmp::Ordering::Greater => Some(1.0),
+            std::cmp::Ordering::Equal => None,
+        }
+    };
+    // Names that state no side (`joint_12`) leave the sides undecided
+    // (confidence 0: a skin asks for a rig map).
+    let (leg_named, arm_named) = (named_sign(&l0, &l1), named_sign(&a0, &a1));
+    let sides_from_names = m.is_none() && (leg_named.is_some() || arm_named.is_some());
     let (leg_sign, arm_sign, conf) = match m {
         Some(m) => (
             leg_s[m],
             arm_s[m],
             (leg_s[m].abs().min(arm_s[m].abs()) / votes[m]).clamp(0.0, 1.0),
         ),
-        None => (1.0, 1.0, 0.0),
+        None => (leg_named.unwrap_or(1.0), arm_named.unwrap_or(1.0), 0.0),
     };
     let (ll, rl) = if leg_sign >= 0.0 { (l0, l1) } else { (l1, l0) };
     let (la, ra) = if arm_sign >= 0.0 { (a0, a1) } else { (a1, a0) };
-    let sc = 0.5 + 0.5 * conf;
+    let sc = if sides_from_names {
+        0.9
+    } else {
+        0.5 + 0.5 * conf
+    };
     let mut named_sides = [0i32; 2];
     let lim = |picks: &mut Vec<Pick>,
                l: &Limb,
@@ -1080,6 +1133,7 @@ fn body(
         forward_from,
         side_confidence: conf,
         names_mirrored: named_sides[1] > named_sides[0],
+        sides_from_names,
     })
 }
 
@@ -1100,7 +1154,14 @@ fn leg_chain(
     if c.len() < 3 {
         return Err(short());
     }
-    let hip_k = first_role(tokens, &c, |r| r == Role::Thigh).unwrap_or(0);
+    // The hip: a thigh-named joint, else the first joint, unless a short
+    // bone (under a quarter of the significance threshold, 3% of the
+    // body's size) joins it to the next one with three more joints after:
+    // a buttock offset bone above the hip joint (CMU Daz-friendly
+    // `lButtock` → `lThigh`, 2.8 cm on a 1.75 m body).
+    let hip_k = first_role(tokens, &c, |r| r == Role::Thigh).unwrap_or_else(|| {
+        usize::from(c.len() >= 4 && g.rest[c[0]].distance(g.rest[c[1]]) < 0.25 * g.thr)
+    });
     let after = &c[hip_k + 1..];
     let ankle_named = first_role(tokens, after, |r| r == Role::Ankle);
     let foot_named = first_role(tokens, after, |r| r == Role::Foot);
