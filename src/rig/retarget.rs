@@ -868,8 +868,8 @@ pub fn clip_head_trunk_deg(reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
         .collect()
 }
 
-/// The rotations of the clip's upright frames: those whose trunk is within
-/// 10° of the clip's most upright. The neck's carriage is read on them: a
+/// The rotations of the clip's upright frames: those whose trunk (pelvis
+/// → chest) is within 10° of the clip's most upright. The neck's carriage is read on them: a
 /// clip that spends most of its time bent over, head down (CMU 131_02),
 /// would otherwise make head-down its neutral, and its upright frames
 /// would throw the character's head back.
@@ -877,7 +877,12 @@ fn upright(
     mocap: &[Pose],
     rotations: &[[DQuat; Canonical::COUNT]],
 ) -> Vec<[DQuat; Canonical::COUNT]> {
-    let tilt: Vec<f64> = mocap.iter().map(trunk_tilt).collect();
+    // The trunk as the pelvis → chest line: where the neck sits on the
+    // chest (a conversion drops the thorax's length) must not choose them.
+    let tilt: Vec<f64> = mocap
+        .iter()
+        .map(|p| angle(p[C::Chest.index()] - p[C::Pelvis.index()], DVec3::Y))
+        .collect();
     let least = tilt
         .iter()
         .copied()
