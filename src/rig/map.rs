@@ -55,11 +55,7 @@ pub static CONVENTIONS: [Convention; 7] = [
             &["Hips"],
             &["Spine"],
             &["Spine1"],
-            // The base of the neck (ASF `lowerneck`, whose rotation this
-            // joint carries; the conversion drops the thorax's length, so
-            // it sits on `Spine1`), not `Neck1` (ASF `upperneck`): the
-            // neck's rotation and its bone to the head are then the AMC's.
-            &["Neck", "Neck1"],
+            &["Neck1", "Neck"],
             &["Head"],
         ],
         [
@@ -81,8 +77,7 @@ pub static CONVENTIONS: [Convention; 7] = [
             &["Hips"],
             &["Chest"],
             &["Chest2"],
-            // The base of the neck, as in the ASF (see the cgspeed entry).
-            &["lowerneck", "Neck"],
+            &["Neck", "lowerneck"],
             &["Head"],
         ],
         [
