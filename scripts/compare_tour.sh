@@ -49,8 +49,8 @@ run_tour() {
     step inspect "$S/mocap/cmu-bvh-ccrig/002_01.bvh"
     step inspect "$S/4d/samba/samba.pc2" --json
     step mocap positions "$S/mocap/cmu-amc/02/02_01.amc" --frames 0,10 --json
-    step mocap positions "$S/mocap/cmu-bvh/01_01.bvh" --frames 100 --units metres
-    step mocap convert "$S/mocap/cmu-amc/02/02_01.amc" walk.bvh --fps 30 --metres
+    step mocap positions "$S/mocap/cmu-bvh/01_01.bvh" --frames 100 --output-units metres
+    step mocap convert "$S/mocap/cmu-amc/02/02_01.amc" walk.bvh --fps 30 --output-units metres
     step mocap rigmap "$S/mocap/bandai-namco/dataset-1_walk_normal_001.bvh" -o map.json
     step mesh convert "$S/4d/samba/samba.pc2" samba.glb
     step mesh convert "$S/4d/samba/samba.pc2:60" samba_60.obj

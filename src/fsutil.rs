@@ -92,42 +92,96 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FsError> {
     read_bytes_limited(path, MAX_INPUT_BYTES)
 }
 
-/// Reads a whole file into memory, refusing more than `limit` bytes. The
-/// limit holds for devices, pipes and other files without a size too
-/// (`/dev/zero` was read to 4 GiB before failing; issue 18, item 17): at
-/// most `limit + 1` bytes are read.
+/// Opens an input file for reading, refusing anything that is not a
+/// regular file (after following symbolic links) before it is opened: a
+/// folder, a named pipe (opening one with no writer blocks forever: `inspect
+/// FIFO.bvh` hung), a device (`/dev/zero` is endless: a symlink to it read
+/// as a BVH was read to the 4 GiB limit before it was refused), a socket.
+/// Files over `limit` bytes are refused too. Every reader opens its input
+/// through this (directly or through [`read_bytes`] and friends).
+pub fn open_input(path: &Path, limit: u64) -> Result<std::fs::File, FsError> {
+    let wrap = |source| FsError {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(wrap)?;
+    check_regular(path, &meta, limit)?;
+    let file = std::fs::File::open(path).map_err(wrap)?;
+    // The file checked may have been replaced between the check and the
+    // open: check what was opened.
+    let opened = file.metadata().map_err(wrap)?;
+    check_regular(path, &opened, limit)?;
+    Ok(file)
+}
+
+/// Refuses `meta` unless it is a regular file of at most `limit` bytes.
+fn check_regular(path: &Path, meta: &std::fs::Metadata, limit: u64) -> Result<(), FsError> {
+    let refuse = |what: String| {
+        Err(FsError {
+            path: path.to_path_buf(),
+            source: std::io::Error::other(what),
+        })
+    };
+    if meta.is_dir() {
+        return refuse("is a directory, expected a file".into());
+    }
+    if !meta.is_file() {
+        return refuse(format!(
+            "is {}, not a regular file; refusing to read it (save the data to a file first)",
+            file_kind(meta)
+        ));
+    }
+    if meta.len() > limit {
+        return refuse(format!(
+            "file is {} bytes, larger than the {limit} byte limit",
+            meta.len()
+        ));
+    }
+    Ok(())
+}
+
+/// What a file that is not a regular file or a folder is, for messages.
+fn file_kind(meta: &std::fs::Metadata) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = meta.file_type();
+        if t.is_fifo() {
+            return "a named pipe (FIFO)";
+        }
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    let _ = meta;
+    "a special file"
+}
+
+/// Reads a whole file into memory, refusing more than `limit` bytes and
+/// anything but a regular file ([`open_input`]). At most `limit + 1` bytes
+/// are read even if the file grows while it is read.
 pub fn read_bytes_limited(path: &Path, limit: u64) -> Result<Vec<u8>, FsError> {
     use std::io::Read;
     let wrap = |source| FsError {
         path: path.to_path_buf(),
         source,
     };
-    let too_big = |what: String| wrap(std::io::Error::other(what));
-    let meta = std::fs::metadata(path).map_err(wrap)?;
-    if meta.is_dir() {
-        return Err(wrap(std::io::Error::other(
-            "is a directory, expected a file",
-        )));
-    }
-    if meta.is_file() && meta.len() > limit {
-        return Err(too_big(format!(
-            "file is {} bytes, larger than the {limit} byte limit",
-            meta.len()
-        )));
-    }
-    let file = std::fs::File::open(path).map_err(wrap)?;
-    let mut out = Vec::with_capacity(if meta.is_file() {
-        meta.len() as usize
-    } else {
-        0
-    });
+    let file = open_input(path, limit)?;
+    let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut out = Vec::with_capacity(len.min(limit) as usize);
     file.take(limit.saturating_add(1))
         .read_to_end(&mut out)
         .map_err(wrap)?;
     if out.len() as u64 > limit {
-        return Err(too_big(format!(
-            "more than the {limit} byte limit could be read (not a regular file?)"
-        )));
+        return Err(wrap(std::io::Error::other(format!(
+            "more than the {limit} byte limit could be read (the file grew while it was read?)"
+        ))));
     }
     Ok(out)
 }
@@ -456,6 +510,44 @@ mod tests {
             .collect();
         assert_eq!(decode_text(be), "é");
         assert_eq!(decode_text(b"caf\xe9".to_vec()), "caf\u{fffd}");
+    }
+
+    /// Regression (session 6 review): a symbolic link to `/dev/zero` read
+    /// as input was read to the 4 GiB limit (seconds, gigabytes) before it
+    /// was refused, and a named pipe with no writer blocked the reader
+    /// forever. Both are refused before they are opened.
+    #[cfg(unix)]
+    #[test]
+    fn devices_and_pipes_are_refused_before_they_are_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let link = dir.path().join("zero.bvh");
+        std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+        let t = std::time::Instant::now();
+        let e = read_bytes(&link).unwrap_err().to_string();
+        assert!(t.elapsed() < std::time::Duration::from_secs(1), "{e}");
+        assert!(
+            e.starts_with(&format!("{}: ", link.display())) && e.contains("not a regular file"),
+            "{e}"
+        );
+        assert!(e.contains("character device"), "{e}");
+        let fifo = dir.path().join("pipe.bvh");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if made.is_ok_and(|s| s.success()) {
+            // With no writer, opening it would block this test forever.
+            let e = read_text(&fifo).unwrap_err().to_string();
+            assert!(e.contains("named pipe") && e.contains("pipe.bvh"), "{e}");
+            assert!(open_input(&fifo, MAX_INPUT_BYTES).is_err());
+        }
+        let e = read_small_text(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("is a directory"), "{e}");
+        // A regular file (and a link to one) reads as before.
+        let f = dir.path().join("a.txt");
+        std::fs::write(&f, b"abc").unwrap();
+        let l = dir.path().join("l.txt");
+        std::os::unix::fs::symlink(&f, &l).unwrap();
+        assert_eq!(read_bytes(&l).unwrap(), b"abc");
+        let e = read_bytes_limited(&f, 2).unwrap_err().to_string();
+        assert!(e.contains("larger than the 2 byte limit"), "{e}");
     }
 
     #[test]

@@ -95,7 +95,9 @@ pub struct MeshReport {
 pub struct JsonReport {
     /// The file.
     pub path: PathBuf,
-    /// `landmarks` or `markers`.
+    /// What it is ([`json_kind`]): `landmarks`, `markers`, `rig`, `rig
+    /// map`, `skeletons`, `graph cache` or a `retarget|transfer|keyframe
+    /// report`.
     pub format: String,
     /// One line per fact.
     pub lines: Vec<String>,
@@ -125,6 +127,12 @@ pub enum InspectError {
     /// A bad landmark or marker file.
     #[error("{0}")]
     Json(String),
+    /// A character database folder, which `db info` describes.
+    #[error(
+        "{0}: a character database folder (it holds {m}); `surfmotion db info {0}` shows what it holds",
+        m = crate::db::MANIFEST
+    )]
+    Database(PathBuf),
     /// Not a format we read.
     #[error(
         "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj; .json landmarks or markers)"
@@ -200,6 +208,13 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
         return inspect_json(path).map(Report::Json);
     }
     let spec = path.to_string_lossy().to_string();
+    if let Some(e) = crate::mesh::io::bad_frame_ref(&spec) {
+        return Err(e.into());
+    }
+    // A database folder holds OBJ files, but is not a sequence of them.
+    if path.is_dir() && path.join(crate::db::MANIFEST).is_file() {
+        return Err(InspectError::Database(path.to_path_buf()));
+    }
     let (p, _) = crate::mesh::io::split_frame_ref(&spec);
     let Some(fmt) = MeshFormat::of(&p) else {
         return Err(InspectError::Unknown(path.to_path_buf()));
@@ -284,7 +299,46 @@ pub fn detection_text(d: &crate::rig::Detection) -> String {
     s
 }
 
-/// Landmarks (`{name: vertex | [x, y, z]}`) or markers (`{"markers": […]}`).
+/// What kind of JSON file `v` is, by its content: every JSON file the
+/// project reads or writes has its own top-level keys. `None`: none of
+/// them (a file is never read as landmarks unless it has a landmark name;
+/// `inspect DB/cache/graph-shape.json` said `unknown landmark "graph"`).
+pub fn json_kind(v: &serde_json::Value) -> Option<&'static str> {
+    let o = v.as_object()?;
+    let has = |k: &str| o.contains_key(k);
+    let kind = if has("key")
+        && o.get("graph")
+            .is_some_and(|g| g.get("transitions").is_some())
+    {
+        "graph cache"
+    } else if o.get("markers").is_some_and(|m| m.is_array()) {
+        "markers"
+    } else if has("vertex_count") && has("joints") && has("skin") {
+        "rig"
+    } else if has("convention") && o.get("joints").is_some_and(|j| j.is_object()) {
+        "rig map"
+    } else if has("sequence") && has("joints") && o.get("frames").is_some_and(|f| f.is_array()) {
+        "skeletons"
+    } else if has("keys") && has("segments") && has("targets") {
+        "keyframe report"
+    } else if has("retrieval") && has("frames") {
+        "retarget report"
+    } else if has("transfer") && has("scan") {
+        "transfer report"
+    } else if o
+        .keys()
+        .any(|k| crate::rig::embed::landmarks::Landmark::from_name(k).is_some())
+    {
+        "landmarks"
+    } else {
+        return None;
+    };
+    Some(kind)
+}
+
+/// Landmarks (`{name: vertex | [x, y, z]}`), markers (`{"markers": […]}`),
+/// and the other JSON files the project writes (rig, rig map, graph cache,
+/// skeletons, reports), told apart by [`json_kind`].
 fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
     use crate::rig::embed::landmarks::{Landmark, Landmarks, Mark};
     let err = |e: String| InspectError::Json(e);
@@ -292,52 +346,138 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
     let v: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| err(format!("{}: {e}", path.display())))?;
     let mut lines = Vec::new();
-    let format = if v.get("markers").is_some() {
-        let f = crate::transfer::MarkerFile::parse(&text, path, usize::MAX)
-            .map_err(|e| err(e.to_string()))?;
-        lines.push(format!(
-            "{} markers{}",
-            f.markers.len(),
-            f.triangle_count
-                .map(|t| format!(" on a mesh of {t} triangles"))
-                .unwrap_or_default()
-        ));
-        let mut per: std::collections::BTreeMap<String, usize> = Default::default();
-        for m in &f.markers {
-            let b = m
-                .bone
-                .map_or("(no bone)".to_string(), |b| b.name().to_string());
-            *per.entry(b).or_default() += 1;
-        }
-        lines.push(format!(
-            "by bone: {}",
-            per.iter()
-                .map(|(b, n)| format!("{b} {n}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
-        "markers"
-    } else {
-        let lm = Landmarks::parse(&text, path, usize::MAX).map_err(|e| err(e.to_string()))?;
-        for (l, m) in &lm.marks {
-            lines.push(match m {
-                Mark::Vertex(i) => format!("{:<11} vertex {i}", l.name()),
-                Mark::Point(p) => format!("{:<11} point [{}, {}, {}]", l.name(), p[0], p[1], p[2]),
-            });
-        }
-        let optional: Vec<&str> = Landmark::ALL
-            .iter()
-            .filter(|l| !lm.marks.contains_key(l))
-            .map(|l| l.name())
-            .collect();
-        if !optional.is_empty() {
+    let Some(format) = json_kind(&v) else {
+        let keys = match v.as_object() {
+            Some(o) if o.is_empty() => "an empty object".to_string(),
+            Some(o) => format!(
+                "top-level keys {}",
+                o.keys().take(8).cloned().collect::<Vec<_>>().join(", ")
+            ),
+            None => "not an object".to_string(),
+        };
+        return Err(err(format!(
+            "{}: unknown JSON ({keys}); inspect reads landmarks, markers, rigs, rig maps, skeletons, graph caches and retarget, transfer and keyframe reports",
+            path.display()
+        )));
+    };
+    let num = |v: &serde_json::Value, k: &str| v.get(k).and_then(|x| x.as_f64());
+    let len =
+        |v: &serde_json::Value, k: &str| v.get(k).and_then(|x| x.as_array()).map_or(0, |a| a.len());
+    match format {
+        "markers" => {
+            let f = crate::transfer::MarkerFile::parse(&text, path, usize::MAX)
+                .map_err(|e| err(e.to_string()))?;
             lines.push(format!(
-                "not given (optional, placed by body proportions): {}",
-                optional.join(", ")
+                "{} markers{}",
+                f.markers.len(),
+                f.triangle_count
+                    .map(|t| format!(" on a mesh of {t} triangles"))
+                    .unwrap_or_default()
+            ));
+            let mut per: std::collections::BTreeMap<String, usize> = Default::default();
+            for m in &f.markers {
+                let b = m
+                    .bone
+                    .map_or("(no bone)".to_string(), |b| b.name().to_string());
+                *per.entry(b).or_default() += 1;
+            }
+            lines.push(format!(
+                "by bone: {}",
+                per.iter()
+                    .map(|(b, n)| format!("{b} {n}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ));
         }
-        "landmarks"
-    };
+        "landmarks" => {
+            let lm = Landmarks::parse(&text, path, usize::MAX).map_err(|e| err(e.to_string()))?;
+            for (l, m) in &lm.marks {
+                lines.push(match m {
+                    Mark::Vertex(i) => format!("{:<11} vertex {i}", l.name()),
+                    Mark::Point(p) => {
+                        format!("{:<11} point [{}, {}, {}]", l.name(), p[0], p[1], p[2])
+                    }
+                });
+            }
+            let optional: Vec<&str> = Landmark::ALL
+                .iter()
+                .filter(|l| !lm.marks.contains_key(l))
+                .map(|l| l.name())
+                .collect();
+            if !optional.is_empty() {
+                lines.push(format!(
+                    "not given (optional, placed by body proportions): {}",
+                    optional.join(", ")
+                ));
+            }
+        }
+        "graph cache" => {
+            let g = &v["graph"];
+            lines.push(format!(
+                "the Surface Motion Graph cached by `db build` (measure {}); rebuilt whenever the database changes",
+                g["measure"].as_str().unwrap_or("?")
+            ));
+            let seqs: Vec<String> = g["sequences"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .map(|s| {
+                    format!(
+                        "{} ({} frames)",
+                        s["name"].as_str().unwrap_or("?"),
+                        s["len"]
+                    )
+                })
+                .collect();
+            lines.push(format!("{} sequences: {}", seqs.len(), seqs.join(", ")));
+            lines.push(format!(
+                "{} transitions, {} edges",
+                len(g, "transitions"),
+                len(g, "edges")
+            ));
+        }
+        "rig" => {
+            lines.push(format!(
+                "a rig embedded by `rig embed`: {} joints on a mesh of {} vertices, {:.3} m tall",
+                len(&v, "joints"),
+                v["vertex_count"],
+                num(&v, "height").unwrap_or(f64::NAN)
+            ));
+            for n in v["notes"].as_array().into_iter().flatten() {
+                lines.push(format!("note: {}", n.as_str().unwrap_or_default()));
+            }
+        }
+        "rig map" => {
+            lines.push(format!(
+                "a rig map (`mocap rigmap`, for --rig-map): convention {}, {} canonical joints mapped",
+                v["convention"].as_str().unwrap_or("?"),
+                v["joints"].as_object().map_or(0, |o| o.len())
+            ));
+        }
+        "skeletons" => {
+            lines.push(format!(
+                "per-frame skeletons of sequence {}: {} frames at {} fps, {} joints",
+                v["sequence"].as_str().unwrap_or("?"),
+                len(&v, "frames"),
+                num(&v, "fps").unwrap_or(f64::NAN),
+                len(&v, "joints")
+            ));
+        }
+        _ => {
+            lines.push(format!(
+                "a {format}: {} frames at {} fps",
+                v["frames"],
+                num(&v, "fps").unwrap_or(f64::NAN)
+            ));
+            if let (Some(d), Some(t)) = (num(&v, "distance"), num(&v, "time")) {
+                lines.push(format!(
+                    "travelled {d:.3} m in {t:.3} s over {} segments, {} transitions",
+                    len(&v, "segments"),
+                    len(&v, "transitions")
+                ));
+            }
+        }
+    }
     Ok(JsonReport {
         path: path.to_path_buf(),
         format: format.into(),

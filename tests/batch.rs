@@ -401,7 +401,8 @@ fn batch_has_the_per_clip_options_of_transfer_and_retarget() {
     let clip = [
         "--input-fps",
         "--asf",
-        "--assume-units",
+        // `--assume-units` before session 7 (still accepted, hidden).
+        "--input-units",
         "--up",
         "--rig-map",
     ];

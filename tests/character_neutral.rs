@@ -35,6 +35,18 @@ fn percentile(mut v: Vec<f64>, q: f64) -> f64 {
     v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
+/// The data folder and the crane capture (`4d/crane/crane.pc2`); `None`
+/// (the test skips) without the data.
+fn crane_capture() -> Option<(std::path::PathBuf, MeshSequence)> {
+    let d = common::data_dir()?;
+    let seq = load_sequence(
+        d.join("4d/crane/crane.pc2").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    Some((d, seq))
+}
+
 /// The crane capture's rig embedded on `frame`, its rest pose and the
 /// regressor skeletons of every frame (as a database loads them).
 fn character(seq: &MeshSequence, frame: usize, landmarks: &str) -> (Pose, Vec<Pose>) {
@@ -57,14 +69,9 @@ fn character(seq: &MeshSequence, frame: usize, landmarks: &str) -> (Pose, Vec<Po
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_bent_rest_frame_takes_the_neutral_from_the_database_and_retargets_as_the_upright_one() {
-    let Some(d) = common::data_dir() else {
+    let Some((d, seq)) = crane_capture() else {
         return;
     };
-    let seq = load_sequence(
-        d.join("4d/crane/crane.pc2").to_str().unwrap(),
-        &LoadOptions::default(),
-    )
-    .unwrap();
     let (up_rest, up_frames) = character(&seq, 0, "crane.landmarks.json");
     let (bent_rest, bent_frames) = character(&seq, 64, "crane64.landmarks.json");
     let up = character_neutral(&up_rest, &up_frames);
@@ -168,14 +175,9 @@ fn crane_db(seq: &MeshSequence, dir: &std::path::Path, rest: usize, landmarks: &
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn the_head_measure_of_a_bent_rest_database_starts_from_its_neutral_frame() {
-    let Some(d) = common::data_dir() else {
+    let Some((_, seq)) = crane_capture() else {
         return;
     };
-    let seq = load_sequence(
-        d.join("4d/crane/crane.pc2").to_str().unwrap(),
-        &LoadOptions::default(),
-    )
-    .unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let (du, db) = (tmp.path().join("up"), tmp.path().join("bent"));
     std::fs::create_dir_all(&du).unwrap();

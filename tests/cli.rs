@@ -558,3 +558,72 @@ fn outputs_never_overwrite_inputs() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("n.pc2") && stderr(&o).contains("n.obj"));
 }
+
+/// Columns of a square view `k` (of `size` pixels) that differ from its
+/// corner pixel: the drawn width of the body in that view.
+fn drawn_columns(path: &std::path::Path, size: usize, k: usize) -> usize {
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut r = dec.read_info().unwrap();
+    let mut buf = vec![0; r.output_buffer_size().unwrap()];
+    let info = r.next_frame(&mut buf).unwrap();
+    let px = info.color_type.samples();
+    let at = |x: usize, y: usize| &buf[(y * info.width as usize + x) * px..][..px];
+    let x0 = k * size;
+    (x0..x0 + size)
+        .filter(|&x| (0..size).any(|y| at(x, y) != at(x0, 0)))
+        .count()
+}
+
+/// A box `w` wide (x) and `d` deep (z), 1.7 tall.
+fn box_obj(w: f64, d: f64) -> String {
+    let mut s = String::new();
+    for i in 0..8 {
+        let (x, y, z) = (
+            if i & 1 == 0 { -w / 2.0 } else { w / 2.0 },
+            if i & 2 == 0 { 0.0 } else { 1.7 },
+            if i & 4 == 0 { -d / 2.0 } else { d / 2.0 },
+        );
+        s += &format!("v {x} {y} {z}\n");
+    }
+    for f in [
+        [1, 3, 4, 2],
+        [5, 6, 8, 7],
+        [1, 2, 6, 5],
+        [3, 7, 8, 4],
+        [1, 5, 7, 3],
+        [2, 4, 8, 6],
+    ] {
+        s += &format!(
+            "f {} {} {}\nf {} {} {}\n",
+            f[0], f[1], f[2], f[0], f[2], f[3]
+        );
+    }
+    s
+}
+
+#[test]
+fn render_draws_every_panel_from_one_camera() {
+    // The same body turned by 90°: drawn from one camera its front view is
+    // its side. Before, each panel took its own mesh's facing, so a path
+    // that turned was drawn as if it did not (and flipped front to back).
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("a.obj"), tmp.path().join("b.obj"));
+    std::fs::write(&a, box_obj(0.5, 0.2)).unwrap();
+    std::fs::write(&b, box_obj(0.2, 0.5)).unwrap();
+    let png = tmp.path().join("s.png");
+    let o = run(&[
+        "render",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--size",
+        "64",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let fronts = [0, 2].map(|k| drawn_columns(&png, 64, k));
+    let sides = [1, 3].map(|k| drawn_columns(&png, 64, k));
+    assert!(fronts[0] > fronts[1] * 2, "front views {fronts:?}");
+    assert!(sides[1] > sides[0] * 2, "side views {sides:?}");
+    assert!(fronts[0].abs_diff(sides[1]) <= 1, "{fronts:?} {sides:?}");
+}

@@ -319,15 +319,10 @@ fn decode_in_gltf_transform(files: &[&Path]) -> Option<Vec<Decoded>> {
     ) {
         return None;
     }
-    let out = std::process::Command::new("node")
-        .arg(root.join(".ci/decode-gltf.mjs"))
-        .args(files)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = common::run_ok(
+        std::process::Command::new("node")
+            .arg(root.join(".ci/decode-gltf.mjs"))
+            .args(files),
     );
     let text = String::from_utf8(out.stdout).unwrap();
     Some(

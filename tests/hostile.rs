@@ -330,8 +330,8 @@ fn rows() -> Vec<Row> {
             .file("flat.obj", flat_obj()),
         row("Frame Time 1e300", "mocap convert {d}/f.bvh {d}/o.bvh", &["f.bvh", "Frame Time 1e300"])
             .file("f.bvh", walk_with("Frame Time", "Frame Time: 1e300")),
-        row("landmarks from /dev/zero", "rig embed {topo} --landmarks /dev/zero -o {d}/r.json", &["/dev/zero", "limit"]),
-        row("markers from /dev/zero", "transfer --scan {topo} --markers /dev/zero --mocap {walk} -o {d}/o.pc2", &["/dev/zero", "limit"]),
+        row("landmarks from /dev/zero", "rig embed {topo} --landmarks /dev/zero -o {d}/r.json", &["/dev/zero", "not a regular file"]),
+        row("markers from /dev/zero", "transfer --scan {topo} --markers /dev/zero --mocap {walk} -o {d}/o.pc2", &["/dev/zero", "not a regular file"]),
         row("a binary manifest", "db info {d}/db", &["character.toml", "binary"])
             .file("db/character.toml", garbage(300)),
     ];
@@ -339,6 +339,8 @@ fn rows() -> Vec<Row> {
     r.extend(session5_rows(obj_ok));
     // Session 6 (review): each row exited 0, or aborted, before its fix.
     r.extend(session6_rows());
+    // Session 7: what the session-6 review reported and left.
+    r.extend(session7_rows());
     // The sweep: verbs × malformed files, each message naming the file.
     let bvh_cut = {
         let t = walk_text();
@@ -552,10 +554,11 @@ fn session6_rows() -> Vec<Row> {
         // file lost (the clip, the result or the preview).
         row("retarget --report onto its own clip", "retarget --db {db} --mocap {d}/w.bvh -o {d}/o.pc2 --report {d}/w.bvh", &["--report", "w.bvh", "overwrite the input"])
             .file("w.bvh", walk_text()),
-        row("retarget --preview onto its own clip", "retarget --db {db} --mocap {d}/w.bvh -o {d}/o.pc2 --preview {d}/w.bvh", &["--preview", "w.bvh", "overwrite the input"])
+        // (Refused since session 7 by its name: a preview is a .png.)
+        row("retarget --preview onto its own clip", "retarget --db {db} --mocap {d}/w.bvh -o {d}/o.pc2 --preview {d}/w.bvh", &["--preview", "w.bvh", "expected a .png file name"])
             .file("w.bvh", walk_text()),
         row("retarget --report onto its -o", "retarget --db {db} --mocap {walk} -o {d}/o.glb --report {d}/o.glb", &["--report", "o.glb", "-o writes the same file"]),
-        row("retarget --preview onto the -o point cache's topology", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --preview {d}/o.obj", &["--preview", "o.obj", "-o writes the same file"]),
+        row("retarget --preview onto the -o point cache's topology", "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --preview {d}/o.obj", &["--preview", "o.obj", "expected a .png file name"]),
         row("keyframe --report onto its -o", "keyframe --db {db} --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/k.glb --report {d}/k.glb", &["--report", "k.glb", "-o writes the same file"]),
         row("keyframe -o onto a sequence of its database", "keyframe --db {d}/db --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/db/walk.pc2", &["-o", "walk.pc2", "overwrite the input"])
             .with_db(),
@@ -566,6 +569,155 @@ fn session6_rows() -> Vec<Row> {
         row("db init --sequence missing", "db init {d}/x --mesh {topo} --sequence w={d}/none.pc2", &["--sequence w", "none.pc2", "no such file"]),
     ]
 }
+
+/// The rows of what the session-6 review reported and left unfixed: each
+/// exited 0 (or misread the file) before its fix.
+fn session7_rows() -> Vec<Row> {
+    vec![
+        // The springs tore the surface from about 3 and exit was 0.
+        row(
+            "synth --dynamics beyond its range",
+            "synth --mesh {topo} --landmarks {lm} --mocap {walk} --dynamics 1e308 -o {d}/s",
+            &["1e308", "at most 2"],
+        ),
+        // Frames were written among the folder's files (exit 0).
+        row(
+            "keyframe -o into a folder holding files",
+            "keyframe --db {db} --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/out",
+            &["-o", "out", "already holds 1 file", "--force"],
+        )
+        .file("out/notes.txt", "mine"),
+        row(
+            "retarget -o into a folder holding files",
+            "retarget --db {db} --mocap {walk} -o {d}/out",
+            &["-o", "out", "already holds 1 file", "--force"],
+        )
+        .file("out/notes.txt", "mine"),
+        row(
+            "transfer -o into a folder holding files",
+            "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/out",
+            &["-o", "out", "already holds 1 file", "--force"],
+        )
+        .file("out/notes.txt", "mine"),
+        row(
+            "mesh convert into a folder holding files",
+            "mesh convert {db}/walk.pc2 {d}/out",
+            &["-o", "out", "already holds 1 file", "--force"],
+        )
+        .file("out/frame_9999.obj", "v 0 0 0\n"),
+        // Read as landmarks: `unknown landmark "a"`.
+        row(
+            "inspect of a JSON file of no known kind",
+            "inspect {d}/u.json",
+            &["u.json", "unknown JSON", "top-level keys a"],
+        )
+        .file("u.json", "{\"a\": 1}"),
+        // The unit options' one name, in their messages.
+        row(
+            "--input-units out of range",
+            "inspect {walk} --input-units 1e9",
+            &["--input-units", "not a length unit"],
+        ),
+        row(
+            "--assume-units (its former name) out of range",
+            "inspect {walk} --assume-units 1e9",
+            &["--input-units", "not a length unit"],
+        ),
+        row(
+            "db init --input-units unknown",
+            "db init {d}/x --mesh {topo} --input-units furlong",
+            &["--input-units", "furlong"],
+        ),
+        // The new-user walk of session 7: each exited 0 or said something
+        // misleading before its fix.
+        row(
+            "db build on the manifest file",
+            "db build {db}/character.toml",
+            &[
+                "is a file, not a database folder",
+                "the folder that holds it",
+            ],
+        ),
+        row(
+            "inspect of a database folder",
+            "inspect {db}",
+            &["character database folder", "db info"],
+        ),
+        row(
+            "inspect PC2:-1",
+            "inspect {db}/walk.pc2:-1",
+            &["walk.pc2", "'-1' is not a frame number"],
+        ),
+        row(
+            "render -o a name that is not .png",
+            "render {topo} -o {d}/r.txt",
+            &["r.txt", "expected a .png file name"],
+        ),
+        row(
+            "graph --matrix a name that is not .png",
+            "graph {db} --matrix {d}/m.obj",
+            &["m.obj", "expected a .png file name"],
+        ),
+        row(
+            "rig embed --png a name that is not .png",
+            "rig embed {topo} --landmarks {lm} -o {d}/r.json --png {d}/r.jpg",
+            &["r.jpg", "expected a .png file name"],
+        ),
+        row(
+            "play -o into a folder holding files",
+            "play --db {d}/db --script {d}/s.json -o {d}/out",
+            &["-o", "out", "already holds 1 file", "--force"],
+        )
+        .with_db()
+        .file("db/character.toml", manifest_with(SPACE))
+        .file("s.json", SCRIPT)
+        .file("out/notes.txt", "mine"),
+        row(
+            "play -o onto a sequence of its database",
+            "play --db {d}/db --script {d}/s.json -o {d}/db/walk.pc2",
+            &["walk.pc2", "overwrite the input"],
+        )
+        .with_db()
+        .file("db/character.toml", manifest_with(SPACE))
+        .file("s.json", SCRIPT),
+        // A panic (index out of bounds in the trellis): the costs overflowed.
+        row(
+            "retarget --w-retr 1e308",
+            "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --w-retr 1e308",
+            &["--w-retr", "above 1e6"],
+        ),
+        row(
+            "retarget --t-skel 1e308",
+            "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --t-skel 1e308",
+            &["--t-skel", "expected metres in [0, 1000]"],
+        ),
+        row(
+            "web export --max-error 1e308",
+            "web export --db {db} -o {d}/site --max-error 1e308",
+            &["--max-error", "expected millimetres in (0, 100]"],
+        ),
+        row(
+            "web export --max-error NaN",
+            "web export --db {db} -o {d}/site --max-error NaN",
+            &["--max-error", "expected a finite number > 0"],
+        ),
+        row(
+            "mocap procedural -o x.obj",
+            "mocap procedural --gait walk -o {d}/x.obj",
+            &["x.obj", "expected a .bvh file"],
+        ),
+        row(
+            "play --seconds 1e12",
+            "play --db {db} --script {d}/s.json -o {d}/p.glb --seconds 1e12",
+            &["--seconds", "expected seconds in (0, 3600]"],
+        )
+        .file("s.json", SCRIPT),
+    ]
+}
+
+/// A parametric motion space of the demo database, and a script for it.
+const SPACE: &str = "[[space]]\nname = \"locomotion\"\nsequences = [\"walk\", \"run\"]\nparameters = [\"speed\", \"turn\"]\n";
+const SCRIPT: &str = "[{\"t\": 0, \"space\": \"locomotion\", \"speed\": 2}]";
 
 /// Regression (session 6 review): `db init` checks the mesh and every
 /// `--sequence` before it writes anything. It used to create the folder
@@ -1683,5 +1835,511 @@ proptest::proptest! {
                 proptest::prop_assert_eq!(bytes.get(i + 1), Some(&b'\n'));
             }
         }
+    }
+}
+
+/// Runs the binary with a time limit: `None` when it had to be killed
+/// (a reader blocked on a named pipe hangs forever).
+fn run_with_limit(args: &[String], cwd: &Path, limit: Duration) -> Option<common::CliRun> {
+    use std::process::Stdio;
+    let t = Instant::now();
+    let mut child = Command::new(common::bin())
+        .args(args)
+        .current_dir(cwd)
+        .env_remove("SURFMOTION_LOG")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    while child.try_wait().unwrap().is_none() {
+        if t.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let o = child.wait_with_output().unwrap();
+    Some(common::CliRun {
+        code: o.status.code(),
+        stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
+        elapsed: t.elapsed(),
+    })
+}
+
+/// Regression (session 6 review): a symbolic link to `/dev/zero` read as a
+/// BVH was read to the 4 GiB limit before it was refused (7.7 s, 4 GiB of
+/// memory), and a named pipe with no writer blocked `inspect` forever.
+/// Every reader refuses both, before opening them, naming the file:
+/// clips (BVH, AMC, ASF), meshes (OBJ, PLY, PC2, MDD, glTF, GLB),
+/// landmarks, markers, rig and rig-map JSON, the database manifest.
+#[cfg(unix)]
+#[test]
+fn devices_and_named_pipes_are_refused_by_every_reader() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("t.asf"), TINY_ASF).unwrap();
+    copy_dir(&f.db, &d.join("db"));
+    // NAME is the special file; each verb reads it as the kind it names.
+    let cases: &[(&str, &str)] = &[
+        ("c.bvh", "inspect {d}/NAME"),
+        ("c.bvh", "retarget --db {db} --mocap {d}/NAME -o {d}/o.pc2"),
+        ("c.amc", "inspect {d}/NAME --asf {d}/t.asf"),
+        ("c.asf", "inspect {d}/NAME"),
+        ("m.obj", "inspect {d}/NAME"),
+        ("m.ply", "render {d}/NAME -o {d}/o.png"),
+        ("m.pc2", "inspect {d}/NAME --topology {topo}"),
+        ("m.mdd", "mesh convert {d}/NAME {d}/o.glb --topology {topo}"),
+        ("m.gltf", "inspect {d}/NAME"),
+        ("m.glb", "inspect {d}/NAME"),
+        ("l.json", "inspect {d}/NAME"),
+        (
+            "l.json",
+            "rig embed {topo} --landmarks {d}/NAME -o {d}/r.json",
+        ),
+        (
+            "k.json",
+            "transfer --scan {topo} --markers {d}/NAME --mocap {walk} -o {d}/o.pc2",
+        ),
+        ("r.json", "render {topo} --rig {d}/NAME -o {d}/o.png"),
+        ("map.json", "mocap positions {walk} --rig-map {d}/NAME"),
+        ("db/character.toml", "db info {d}/db"),
+    ];
+    let mut failures = Vec::new();
+    for kind in ["/dev/zero", "FIFO"] {
+        for (name, args) in cases {
+            let p = d.join(name);
+            let _ = std::fs::remove_file(&p);
+            if kind == "FIFO" {
+                let made = Command::new("mkfifo").arg(&p).status();
+                if !made.is_ok_and(|s| s.success()) {
+                    eprintln!("no mkfifo: the named-pipe cases are skipped");
+                    break;
+                }
+            } else {
+                std::os::unix::fs::symlink(kind, &p).unwrap();
+            }
+            let args = expand(&args.replace("NAME", name), d);
+            let file = Path::new(name).file_name().unwrap().to_str().unwrap();
+            let what = format!("{kind} as {name}: surfmotion {}", args.join(" "));
+            match run_with_limit(&args, d, Duration::from_secs(20)) {
+                None => failures.push(format!("{what}: still running after 20 s")),
+                Some(r) => {
+                    let mut p = r.bad_input_problems(&[file, "not a regular file"]);
+                    if r.elapsed > Duration::from_secs(5) {
+                        p.push(format!("took {:?}", r.elapsed));
+                    }
+                    if !p.is_empty() {
+                        failures.push(format!("{what}: {}\n    {}", p.join(", "), r.stderr.trim()));
+                    }
+                }
+            }
+            let _ = std::fs::remove_file(&p);
+        }
+    }
+    // The manifest was replaced by the cases: put it back for nothing else.
+    assert!(failures.is_empty(), "\n{}", failures.join("\n"));
+}
+
+/// Regression (session 6 review): a corrupt graph or similarity cache in a
+/// database folder was rebuilt without a word (exit 0). It is still
+/// rebuilt, with one warning naming the file and why; never a panic; the
+/// rebuilt cache is clean (no warning the next time). A stale cache (the
+/// database changed) is rebuilt silently, as before.
+#[test]
+fn corrupt_caches_are_rebuilt_with_one_warning() {
+    let f = fixture();
+    let graph = std::fs::read(f.db.join("cache/graph-shape.json")).unwrap();
+    let sim = std::fs::read(f.db.join("cache/similarity-shape.bin")).unwrap();
+    let cases: Vec<(&str, &str, Vec<u8>, &str)> = vec![
+        (
+            "graph-shape.json",
+            "truncated",
+            graph[..graph.len() / 2].to_vec(),
+            "rebuilding",
+        ),
+        ("graph-shape.json", "empty", Vec::new(), "rebuilding"),
+        ("graph-shape.json", "garbage", garbage(5000), "rebuilding"),
+        (
+            "graph-shape.json",
+            "another JSON",
+            b"{\"key\": 1}".to_vec(),
+            "rebuilding",
+        ),
+        (
+            "similarity-shape.bin",
+            "truncated",
+            sim[..sim.len() - 100].to_vec(),
+            "recomputing",
+        ),
+        (
+            "similarity-shape.bin",
+            "cut in its header",
+            sim[..30].to_vec(),
+            "recomputing",
+        ),
+        (
+            "similarity-shape.bin",
+            "garbage",
+            garbage(5000),
+            "recomputing",
+        ),
+    ];
+    for (file, what, bytes, verb) in cases {
+        let tmp = tempfile::tempdir().unwrap();
+        let db = tmp.path().join("db");
+        copy_dir(&f.db, &db);
+        std::fs::write(db.join("cache").join(file), &bytes).unwrap();
+        let args = ["graph", db.to_str().unwrap(), "--json"];
+        let r = common::run_cli(&args, None, &[]);
+        assert_eq!(r.code, Some(0), "{file} {what}: {}", r.stderr);
+        let lines: Vec<&str> = r.stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert_eq!(
+            lines.len(),
+            1,
+            "{file} {what}: one warning expected: {}",
+            r.stderr
+        );
+        assert!(
+            lines[0].contains("WARN") && lines[0].contains(file) && lines[0].contains(verb),
+            "{file} {what}: {}",
+            lines[0]
+        );
+        let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+        assert!(!v["graph"]["transitions"].as_array().unwrap().is_empty());
+        let again = common::run_cli(&args, None, &[]);
+        assert_eq!(again.code, Some(0));
+        assert!(
+            again.stderr.trim().is_empty(),
+            "{file} {what}: {}",
+            again.stderr
+        );
+    }
+    // Stale (another database's key): rebuilt without a warning.
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    copy_dir(&f.db, &db);
+    let mut g: serde_json::Value = serde_json::from_slice(&graph).unwrap();
+    g["key"] = 12345.into();
+    std::fs::write(db.join("cache/graph-shape.json"), g.to_string()).unwrap();
+    let r = common::run_cli(&["graph", db.to_str().unwrap(), "--json"], None, &[]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(r.stderr.trim().is_empty(), "{}", r.stderr);
+}
+
+/// Regression (session 6 review): `inspect DB/cache/graph-shape.json` read
+/// the graph cache as landmarks (`unknown landmark "graph"`, exit 1). JSON
+/// files are told apart by their content, whatever their name.
+#[test]
+fn inspect_tells_json_files_apart_by_content() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let run = |args: &[&str]| {
+        let r = common::run_cli(args, Some(d), &[]);
+        assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
+        r
+    };
+    let walk = f.walk.to_str().unwrap();
+    let topo = f.db.join("topology.obj");
+    let lm = f.db.join("landmarks.json");
+    run(&["mocap", "rigmap", walk, "-o", "map.json"]);
+    run(&[
+        "rig",
+        "embed",
+        topo.to_str().unwrap(),
+        "--landmarks",
+        lm.to_str().unwrap(),
+        "-o",
+        "rig.json",
+    ]);
+    let report = f.db.parent().unwrap().join("turn.report.json");
+    let cases = [
+        (
+            f.db.join("cache/graph-shape.json"),
+            "graph cache",
+            "transitions",
+        ),
+        (lm.clone(), "landmarks", "chin"),
+        (d.join("map.json"), "rig map", "canonical joints mapped"),
+        (d.join("rig.json"), "rig", "19 joints"),
+        (report, "retarget report", "frames"),
+    ];
+    for (p, kind, word) in cases {
+        // Under a name that says nothing.
+        let copy = d.join("x.json");
+        std::fs::copy(&p, &copy).unwrap();
+        let r = run(&["inspect", "x.json", "--json"]);
+        let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+        assert_eq!(v["kind"], "json", "{}", p.display());
+        assert_eq!(v["format"], kind, "{}", p.display());
+        let text = run(&["inspect", "x.json"]).stdout;
+        assert!(text.contains(word), "{kind}: {text}");
+    }
+}
+
+/// Regression (session 6 review): `eval --result FOLDER` printed the path
+/// twice ("res: res: no .obj files in the folder").
+#[test]
+fn eval_names_the_result_folder_once() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::create_dir(tmp.path().join("res")).unwrap();
+    let args = [
+        "eval",
+        "--db",
+        f.db.to_str().unwrap(),
+        "--mocap",
+        f.walk.to_str().unwrap(),
+        "--result",
+        "res",
+    ];
+    let r = common::run_cli(&args, Some(tmp.path()), &[]);
+    r.assert_bad_input("eval --result FOLDER", &["no .obj files"]);
+    assert_eq!(
+        r.stderr.trim(),
+        "surfmotion: res: no .obj files in the folder"
+    );
+}
+
+/// Regression (session 6 review): `synth` printed each plausibility
+/// warning twice, once logged on stderr (without the sequence's name) and
+/// once in its summary. In the text summary it is said once, under its
+/// sequence; with `--json` it is in the JSON and logged once.
+#[test]
+fn plausibility_warnings_are_printed_once() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let run = |args: &[&str]| {
+        let r = common::run_cli(args, Some(d), &[]);
+        assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
+        r
+    };
+    // The procedural run floats above the demo character's floor.
+    run(&["mocap", "procedural", "--gait", "run", "-o", "run.bvh"]);
+    let topo = f.db.join("topology.obj");
+    let lm = f.db.join("landmarks.json");
+    let synth = |json: bool| {
+        let mut a = vec![
+            "synth",
+            "--mesh",
+            topo.to_str().unwrap(),
+            "--landmarks",
+            lm.to_str().unwrap(),
+            "--mocap",
+            "run.bvh",
+            "-o",
+            "s",
+            "--force",
+        ];
+        if json {
+            a.push("--json");
+        }
+        run(&a)
+    };
+    let text = synth(false);
+    let warnings: Vec<&str> = text
+        .stdout
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("warning: "))
+        .collect();
+    assert!(
+        !warnings.is_empty(),
+        "the case needs a warning: {}",
+        text.stdout
+    );
+    for w in &warnings {
+        let both = format!("{}{}", text.stdout, text.stderr);
+        assert_eq!(
+            both.matches(w).count(),
+            1,
+            "{w:?} said more than once:\n{both}"
+        );
+    }
+    let json = synth(true);
+    let v: serde_json::Value = serde_json::from_str(&json.stdout).unwrap();
+    let in_json = v["sequences"][0]["plausibility"]["warnings"]
+        .as_array()
+        .unwrap()
+        .len();
+    let logged = json.stderr.lines().filter(|l| l.contains("WARN")).count();
+    assert_eq!(
+        (in_json, logged),
+        (warnings.len(), warnings.len()),
+        "{}",
+        json.stderr
+    );
+}
+
+/// Regression (session 6 review): `keyframe -o DIR` wrote its frames into
+/// a folder that already held files (exit 0), so the folder read back
+/// with a longer run's last frames. Refused without `--force` (a row of
+/// `session7_rows`); with it, the old OBJ frames are replaced and other
+/// files kept.
+#[test]
+fn a_folder_output_holding_files_is_replaced_only_with_force() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    std::fs::write(out.join("frame_9999.obj"), "v 0 0 0\n").unwrap();
+    let db = f.db.to_str().unwrap();
+    let args = [
+        "keyframe",
+        "--db",
+        db,
+        "--from",
+        "walk:0",
+        "--to",
+        "walk:100",
+        "--distance",
+        "3",
+        "--time",
+        "3",
+        "-o",
+        "out",
+        "--json",
+    ];
+    let r = common::run_cli(&args, Some(tmp.path()), &[]);
+    r.assert_bad_input("keyframe -o DIR", &["already holds 2 files", "--force"]);
+    assert!(out.join("frame_9999.obj").exists());
+    let mut forced = args.to_vec();
+    forced.push("--force");
+    let r = common::run_cli(&forced, Some(tmp.path()), &[]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    let frames = v["frames"].as_u64().unwrap() as usize;
+    assert!(!out.join("frame_9999.obj").exists());
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    let objs = std::fs::read_dir(&out)
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .path()
+                .extension()
+                .is_some_and(|x| x == "obj")
+        })
+        .count();
+    assert_eq!(objs, frames);
+}
+
+/// Regression (session 6 review): the unit options had three names
+/// (`--units`, `--metres`, `--assume-units`). They are `--input-units`
+/// (files read) and `--output-units` (files written) on every verb; the
+/// old names still work, hidden from `--help`.
+#[test]
+fn unit_options_have_one_name_and_the_old_ones_still_work() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let walk = f.walk.to_str().unwrap();
+    let topo = f.db.join("topology.obj");
+    let run = |args: &[&str]| {
+        let r = common::run_cli(args, Some(d), &[]);
+        assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
+        r
+    };
+    for old in ["--assume-units", "--input-units"] {
+        let r = run(&["inspect", walk, old, "cm"]);
+        assert!(
+            r.stdout.contains("cm = 0.01 m per unit"),
+            "{old}: {}",
+            r.stdout
+        );
+    }
+    assert_eq!(
+        run(&["mocap", "positions", walk, "--units", "metres"]).stdout,
+        run(&["mocap", "positions", walk, "--output-units", "metres"]).stdout
+    );
+    run(&["mocap", "convert", walk, "a.bvh", "--metres"]);
+    run(&[
+        "mocap",
+        "convert",
+        walk,
+        "b.bvh",
+        "--output-units",
+        "metres",
+        "--input-units",
+        "m",
+    ]);
+    assert_eq!(
+        std::fs::read(d.join("a.bvh")).unwrap(),
+        std::fs::read(d.join("b.bvh")).unwrap()
+    );
+    for (dir, opt) in [("x", "--units"), ("y", "--input-units")] {
+        run(&[
+            "db",
+            "init",
+            dir,
+            "--mesh",
+            topo.to_str().unwrap(),
+            opt,
+            "cm",
+        ]);
+        let m = std::fs::read_to_string(d.join(dir).join("character.toml")).unwrap();
+        assert!(m.contains("units = \"cm\""), "{opt}: {m}");
+    }
+    // Help shows the one scheme only.
+    for verb in [
+        &["inspect"][..],
+        &["mocap", "positions"],
+        &["mocap", "convert"],
+        &["mocap", "rigmap"],
+        &["db", "init"],
+        &["retarget"],
+        &["transfer"],
+        &["synth"],
+        &["eval"],
+        &["batch"],
+        &["keyframe"],
+    ] {
+        let mut a = verb.to_vec();
+        a.push("--help");
+        let help = run(&a).stdout;
+        for old in ["--assume-units", "--units ", "--metres"] {
+            assert!(!help.contains(old), "{verb:?} --help shows {old}");
+        }
+        assert!(
+            help.contains("--input-units") || help.contains("--output-units"),
+            "{verb:?}"
+        );
+    }
+}
+
+/// Regression (session 7 walk): with stdout and stderr both unwritable,
+/// `play --help 2>&1 | head -1` aborted (exit 134): the failed help
+/// print was reported with `eprintln!`, which panicked on the closed
+/// stderr, and so did the panic hook. Errors no stderr can take are
+/// dropped: exit 1, never a signal.
+#[cfg(target_os = "linux")]
+#[test]
+fn an_unwritable_stderr_never_aborts() {
+    if !std::fs::metadata("/dev/full").is_ok_and(|m| !m.is_file()) {
+        eprintln!("SKIPPED: no /dev/full here");
+        return;
+    }
+    for args in [&["play", "--help"][..], &["inspect", "/nonexistent.bvh"]] {
+        let full = || {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .open("/dev/full")
+                .unwrap()
+        };
+        let status = Command::new(common::bin())
+            .args(args)
+            .stdout(full())
+            .stderr(full())
+            .status()
+            .unwrap();
+        assert_eq!(status.code(), Some(1), "{args:?}: {status:?}");
     }
 }

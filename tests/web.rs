@@ -19,16 +19,11 @@ fn demo_db() -> PathBuf {
     static DB: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
     DB.get_or_init(|| {
         let tmp = common::fixture_dir("web-demo");
-        let out = Command::new(common::bin())
-            .arg("demo")
-            .arg("-o")
-            .arg(tmp.join("demo"))
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        common::run_ok(
+            Command::new(common::bin())
+                .arg("demo")
+                .arg("-o")
+                .arg(tmp.join("demo")),
         );
         let db = tmp.join("demo/database");
         (tmp, db)

@@ -269,7 +269,7 @@ impl Earlier {
         files.sort_by_key(|p| (p.file_name().is_some_and(|n| n == own), p.clone()));
         let mut e = Earlier::default();
         for f in files {
-            let Ok(text) = std::fs::read_to_string(&f) else {
+            let Ok(text) = crate::fsutil::read_text(&f) else {
                 continue;
             };
             let Ok(v) = serde_json::from_str::<serde_json::Value>(&text) else {

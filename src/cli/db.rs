@@ -172,8 +172,14 @@ pub struct InitArgs {
     /// Frames per second of the captures.
     #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
     pub fps: f64,
-    /// Length unit of the files (m, cm, mm, dm, inch).
-    #[arg(long, default_value = "m")]
+    /// Length unit of the files (m, cm, mm, dm, inch, or metres per unit),
+    /// written as the manifest's `units`. (`--units` was its name before.)
+    #[arg(
+        long = "input-units",
+        alias = "units",
+        value_name = "UNIT",
+        default_value = "m"
+    )]
     pub units: String,
     /// Up axis of the files (y or z).
     #[arg(long, default_value = "y")]
@@ -252,7 +258,7 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
             manifest.display()
         );
     }
-    super::length_unit("--units", &a.units)?;
+    super::length_unit("--input-units", &a.units)?;
     let canonical = |p: &Path| std::fs::canonicalize(p).with_context(|| format!("{}", p.display()));
     let mut sequences = Vec::new();
     for s in &a.sequences {

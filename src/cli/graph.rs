@@ -21,7 +21,7 @@ pub struct Args {
     pub json: bool,
     /// Draw the similarity matrix with the transitions marked to this PNG
     /// (dark = similar; red crosses = transitions, pink = their windows).
-    #[arg(long, value_name = "PNG")]
+    #[arg(long, value_name = "PNG", value_parser = super::png_path)]
     pub matrix: Option<PathBuf>,
     /// Size of the matrix picture in pixels, 16 to 8192.
     #[arg(long, default_value_t = 800, value_parser = super::bounded_count(16, super::render::MAX_SIZE))]

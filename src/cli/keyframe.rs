@@ -79,6 +79,12 @@ pub struct Args {
     /// much as 0.3 m of distance).
     #[arg(long, value_parser = super::weight)]
     pub w_heading: Option<f64>,
+    /// The longest path a query may return is max(2 × --time, --time +
+    /// this many seconds): a target out of reach gets Eq. 7's best
+    /// compromise within that horizon (Eq. 7 alone can ask for a path
+    /// hundreds of times longer than the target, e.g. 1000 m in 3 s).
+    #[arg(long, value_name = "S", default_value_t = 10.0, value_parser = super::non_negative)]
+    pub horizon: f64,
     /// Prefer a path within this percentage of both the distance and the
     /// time target over a cheaper one (Eq. 7) that is not, when the graph
     /// has one (0: Eq. 7 alone).
@@ -108,6 +114,10 @@ pub struct Args {
     /// Output: .glb, .pc2 (+ .obj), .mdd, or a folder of OBJ frames.
     #[arg(short, long, required_unless_present_any = ["grid", "floor"])]
     pub output: Option<PathBuf>,
+    /// Write -o into a folder that already holds files (its OBJ frames are
+    /// replaced).
+    #[arg(long)]
+    pub force: bool,
     /// Write the JSON report: path (segments, loops, repetitions), cost
     /// terms, achieved distance and time, transitions and smoothness,
     /// search time.
@@ -202,6 +212,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     inputs.extend(a.clip.asf.clone());
     inputs.extend(a.clip.rig_map.clone());
     super::refuse_colliding(&inputs, &outputs)?;
+    if let Some(o) = &a.output {
+        super::check_folder_output(o, a.force)?;
+    }
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
     let load = a.clip.load_options()?;
     let mut resolved = Vec::new();
@@ -252,6 +265,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             limits: surfmotion::keyframe::search::Limits {
                 loops_per_walk: a.max_loops.max(2),
                 ..Default::default()
+            },
+            horizon: surfmotion::keyframe::search::Horizon {
+                factor: 2.0,
+                slack: a.horizon * ch.manifest().fps,
             },
             ..Default::default()
         },
@@ -333,8 +350,27 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     s += "\n";
     if let Some((dt, tt)) = missed {
         s += &format!(
-            "not met within 1 %: the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 (the graph may not reach it; --w-dist and --w-time weigh the two)\n"
+            "not met within 1 %: the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 within {} (the graph may not reach it; --w-dist and --w-time weigh the two)\n",
+            r.reach.map_or("the horizon".to_string(), |x| format!(
+                "the {:.1} s horizon",
+                x.horizon
+            ))
         );
+        if let Some(x) = r.reach {
+            s += &format!(
+                "reach: paths of {tt:.3} s travel {}; {dt:.3} m needs {}; at most {} within the horizon\n",
+                x.at_time.map_or(
+                    "- (no path has exactly that length)".to_string(),
+                    |(a, b)| format!("{a:.3}-{b:.3} m")
+                ),
+                x.min_time
+                    .map_or(format!("more than {:.1} s", x.horizon), |m| format!(
+                        "at least {m:.2} s"
+                    )),
+                x.max_in_horizon
+                    .map_or("-".to_string(), |m| format!("{m:.3} m"))
+            );
+        }
     }
     s += &format!("final facing {:+.1}°", r.final_facing_deg);
     if let (Some(h), Some(e)) = (r.heading_target_deg, r.heading_error_deg) {

@@ -26,6 +26,10 @@ pub struct ConvertArgs {
     /// Frame rate where the input has none (default 30).
     #[arg(long, value_parser = super::frame_rate)]
     pub fps: Option<f64>,
+    /// Write into a folder of OBJ frames that already holds files (its OBJ
+    /// frames are replaced).
+    #[arg(long)]
+    pub force: bool,
     #[command(flatten)]
     pub glb: GlbArgs,
 }
@@ -62,6 +66,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 &surfmotion::mesh::io::input_files(&a.input, a.topology.as_deref()),
                 &a.output,
             )?;
+            super::check_folder_output(&a.output, a.force)?;
             let seq = load_sequence(
                 &a.input,
                 &LoadOptions {

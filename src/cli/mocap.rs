@@ -42,8 +42,14 @@ pub struct PositionsArgs {
     /// Comma-separated 0-based frame indices.
     #[arg(long, value_delimiter = ',', default_value = "0")]
     pub frames: Vec<usize>,
-    /// Units of the output.
-    #[arg(long, value_enum, default_value = "file")]
+    /// Units of the output. (`--units` was its name before.)
+    #[arg(
+        long = "output-units",
+        alias = "units",
+        value_name = "UNITS",
+        value_enum,
+        default_value = "file"
+    )]
     pub units: OutUnits,
     /// Print JSON: {"joints": [...], "frames": {"0": [[x,y,z], ...]}}.
     #[arg(long)]
@@ -62,8 +68,17 @@ pub struct ConvertArgs {
     /// Resample to this frame rate (slerp of rotations, lerp of translations).
     #[arg(long, value_parser = super::frame_rate)]
     pub fps: Option<f64>,
-    /// Convert lengths to metres and the up axis to Y.
-    #[arg(long)]
+    /// Units of the output: `metres` converts lengths to metres and the up
+    /// axis to Y.
+    #[arg(
+        long = "output-units",
+        value_name = "UNITS",
+        value_enum,
+        default_value = "file"
+    )]
+    pub units: OutUnits,
+    /// `--output-units metres`, its name before.
+    #[arg(long, hide = true, conflicts_with = "units")]
     pub metres: bool,
     #[command(flatten)]
     pub opts: ClipOpts,
@@ -176,7 +191,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 );
             }
             let mut clip = load(&a.input, &a.opts)?;
-            if a.metres {
+            if a.metres || a.units == OutUnits::Metres {
                 clip.to_metres_y_up();
             }
             if let Some(fps) = a.fps {
@@ -212,6 +227,17 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             } else {
                 a.gait.iter().map(|&g| g.into()).collect()
             };
+            // `-o x.obj` made a folder named x.obj (an existing folder
+            // with a dot in its name is taken as given).
+            if let Some(e) = a.output.extension()
+                && !e.eq_ignore_ascii_case("bvh")
+                && !a.output.is_dir()
+            {
+                bail!(
+                    "-o {}: expected a .bvh file (with one --gait) or a folder name without extension",
+                    a.output.display()
+                );
+            }
             let single = gaits.len() == 1
                 && a.output
                     .extension()

@@ -128,7 +128,13 @@ pub fn main() -> anyhow::Result<()> {
         Ok(c) => c,
         Err(e) => {
             let usage = e.use_stderr();
-            e.print()?;
+            // Help read by `| head` closed the pipe: not an error (it said
+            // "surfmotion: Broken pipe (os error 32)", exit 1).
+            if let Err(p) = e.print()
+                && p.kind() != std::io::ErrorKind::BrokenPipe
+            {
+                return Err(p.into());
+            }
             return if usage { Err(Usage.into()) } else { Ok(()) };
         }
     };
@@ -142,6 +148,12 @@ pub fn main() -> anyhow::Result<()> {
     // the verbs print (inspect, rig check), so they are not printed again.
     let is_notice = |m: &tracing::Metadata<'_>| m.target() == surfmotion::jobs::batch::NOTICE;
     let is_reader_warning = |m: &tracing::Metadata<'_>| m.target() == surfmotion::fsutil::WARNING;
+    // A result's plausibility warnings, when the verb prints them in its
+    // text summary (see [`warnings_in_summary`]).
+    let is_summarised = |m: &tracing::Metadata<'_>| {
+        WARNINGS_IN_SUMMARY.load(std::sync::atomic::Ordering::Relaxed)
+            && m.module_path() == Some(PLAUSIBILITY_MODULE)
+    };
     tracing_subscriber::registry()
         .with(
             tracing_subscriber::fmt::layer()
@@ -156,7 +168,7 @@ pub fn main() -> anyhow::Result<()> {
                         .from_env_lossy(),
                 )
                 .with_filter(tracing_subscriber::filter::filter_fn(move |m| {
-                    !is_notice(m) && !is_reader_warning(m)
+                    !is_notice(m) && !is_reader_warning(m) && !is_summarised(m)
                 })),
         )
         .with(PlainNotices.with_filter(tracing_subscriber::filter::filter_fn(is_notice)))
@@ -181,6 +193,22 @@ pub fn main() -> anyhow::Result<()> {
         Command::Play(a) => play::run(a),
         Command::Web(c) => web::run(c),
     }
+}
+
+/// The module whose warnings are a result's plausibility warnings
+/// ([`surfmotion::eval::Plausibility`]'s `logged`).
+const PLAUSIBILITY_MODULE: &str = "surfmotion::eval::plausibility";
+
+static WARNINGS_IN_SUMMARY: std::sync::atomic::AtomicBool =
+    std::sync::atomic::AtomicBool::new(false);
+
+/// Called by a verb whose text summary prints the plausibility report with
+/// its warnings (`retarget`, `transfer`, `synth` without `--json`): the
+/// same warnings are then not logged on stderr as well (`synth` printed
+/// its penetration warning twice, once without the sequence's name). With
+/// `--json` they are logged, as the JSON goes to a program.
+pub fn warnings_in_summary(text: bool) {
+    WARNINGS_IN_SUMMARY.store(text, std::sync::atomic::Ordering::Relaxed);
 }
 
 /// A progress bar on a terminal (hidden when stderr is not one).
@@ -371,6 +399,22 @@ pub fn weight(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A picture output on the command line: a name ending in `.png`, or an
+/// existing device or pipe (`/dev/stdout`). Any other name had a PNG
+/// written into it (`render -o r.txt`, `graph --matrix m.obj`, exit 0).
+pub fn png_path(s: &str) -> Result<PathBuf, String> {
+    let p = PathBuf::from(s);
+    let png = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    let special = std::fs::metadata(&p).is_ok_and(|m| !m.is_file() && !m.is_dir());
+    if png || special {
+        Ok(p)
+    } else {
+        Err(format!(
+            "{s}: expected a .png file name (a PNG picture is written)"
+        ))
+    }
+}
+
 /// A count on the command line (pixels, frames) in `[lo, hi]`: clap's
 /// "0 is not in 16..=8192" instead of a silent clamp (`render --size 0`
 /// drew 16 pixels).
@@ -379,7 +423,7 @@ pub fn bounded_count(lo: u64, hi: u64) -> clap::builder::RangedU64ValueParser<us
 }
 
 /// Metres per unit a length unit given as a number may have: a
-/// micrometre to a kilometre. (`--assume-units 1e300` printed joint
+/// micrometre to a kilometre. (`--input-units 1e300` printed joint
 /// positions of 1e300 metres, exit 0.)
 pub const UNIT_RANGE: std::ops::RangeInclusive<f64> = 1e-6..=1e3;
 
@@ -469,6 +513,45 @@ pub fn check_mesh_output(out: &Path) -> anyhow::Result<()> {
     }
 }
 
+/// Refuses a folder-of-OBJ-frames output (a name without extension) that
+/// exists and already holds files, unless `force`, as `synth -o` and `db
+/// init` refuse an existing database: frames written among other files, or
+/// over a longer run's frames (whose last ones stayed behind and read back
+/// as part of the new sequence), made a folder that is not this run's
+/// result (`keyframe -o DIR` wrote into a folder of files, exit 0). With
+/// `force` the OBJ frames a previous run wrote there (`frame_*.obj`) are
+/// removed first; other files stay.
+pub fn check_folder_output(out: &Path, force: bool) -> anyhow::Result<()> {
+    if out.extension().is_some() || !out.is_dir() {
+        return Ok(());
+    }
+    let entries: Vec<PathBuf> = std::fs::read_dir(out)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .collect();
+    if entries.is_empty() {
+        return Ok(());
+    }
+    if !force {
+        anyhow::bail!(
+            "-o {}: the folder already holds {}; pass --force to replace its OBJ frames, or choose an empty or new folder",
+            out.display(),
+            count(entries.len(), "file")
+        );
+    }
+    let is_frame = |p: &Path| {
+        p.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+            && p.file_stem()
+                .and_then(|s| s.to_str())
+                .and_then(|s| s.strip_prefix("frame_"))
+                .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+    };
+    for p in entries.iter().filter(|p| is_frame(p) && p.is_file()) {
+        std::fs::remove_file(p).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+    }
+    Ok(())
+}
+
 /// The files a database is read from (its manifest, topology, sequences
 /// and rig files), which no output may replace.
 pub fn database_inputs(db: &Path) -> Vec<PathBuf> {
@@ -516,14 +599,28 @@ macro_rules! outln {
     ($($t:tt)*) => { $crate::cli::emit(&format!("{}\n", format!($($t)*))) };
 }
 
-/// An error and its causes on one line.
+/// An error and its causes on one line. A cause already said is left
+/// out, and a cause that begins with what its context said continues it
+/// rather than repeating it (`eval --result FOLDER` printed "FOLDER:
+/// FOLDER: no .obj files in the folder").
 pub fn one_line(e: &anyhow::Error) -> String {
     let mut s = e.to_string();
     for c in e.chain().skip(1) {
         let c = c.to_string();
-        if !s.contains(&c) {
-            s.push_str(": ");
-            s.push_str(&c);
+        if s.contains(&c) {
+            continue;
+        }
+        // The longest tail of `s` (whole, or after a ": ") that `c` begins with.
+        let tails = std::iter::once(0).chain(s.match_indices(": ").map(|(i, _)| i + 2));
+        match tails.into_iter().find(|&i| c.starts_with(&s[i..])) {
+            Some(i) => {
+                s.truncate(i);
+                s.push_str(&c);
+            }
+            None => {
+                s.push_str(": ");
+                s.push_str(&c);
+            }
         }
     }
     s.replace('\n', " ")
@@ -556,8 +653,11 @@ pub struct ClipOpts {
     /// Length unit of the input: m, cm, mm, dm, inch, cmu (1/0.45 inch) or a
     /// number of metres per unit. Default: from the ASF header, else guessed
     /// from the skeleton's size (see `inspect`).
-    #[arg(long = "assume-units", value_name = "UNIT")]
-    pub assume_units: Option<String>,
+    // Unit options are named alike on every verb: `--input-units` for the
+    // files read (with `--input-fps`), `--output-units` for what is
+    // written. `--assume-units` was this option's name before.
+    #[arg(long = "input-units", alias = "assume-units", value_name = "UNIT")]
+    pub input_units: Option<String>,
     /// Up axis of the input (y or z). Default: guessed from head above pelvis.
     #[arg(long, value_name = "AXIS")]
     pub up: Option<String>,
@@ -570,9 +670,9 @@ pub struct ClipOpts {
 impl ClipOpts {
     /// The library's load options.
     pub fn load_options(&self) -> anyhow::Result<surfmotion::rig::LoadOptions> {
-        let units = match &self.assume_units {
+        let units = match &self.input_units {
             None => None,
-            Some(u) => Some(length_unit("--assume-units", u)?),
+            Some(u) => Some(length_unit("--input-units", u)?),
         };
         let up = match self.up.as_deref().map(str::to_ascii_lowercase).as_deref() {
             None => None,
@@ -602,5 +702,30 @@ mod tests {
         assert_eq!(super::count(0, "transition"), "0 transitions");
         assert_eq!(super::count(3, "vertex"), "3 vertices");
         assert_eq!(super::count(2, "match"), "2 matches");
+    }
+
+    /// Regression (session 6 review): `eval --result FOLDER` printed the
+    /// folder twice; a cause that begins with its context continues it.
+    #[test]
+    fn one_line_says_each_part_once() {
+        #[derive(Debug, thiserror::Error)]
+        #[error("{0}")]
+        struct E(String, #[source] Option<Box<E>>);
+        let e = |s: &str, c: Option<E>| E(s.into(), c.map(Box::new));
+        let chain = |x: E| super::one_line(&anyhow::Error::new(x));
+        let inner = || e("out: no .obj files in the folder", None);
+        assert_eq!(
+            chain(e("out", Some(inner()))),
+            "out: no .obj files in the folder"
+        );
+        assert_eq!(
+            chain(e("eval: out", Some(inner()))),
+            "eval: out: no .obj files in the folder"
+        );
+        assert_eq!(
+            chain(e("loading", Some(inner()))),
+            "loading: out: no .obj files in the folder"
+        );
+        assert_eq!(chain(e("a: b", Some(e("b", None)))), "a: b");
     }
 }

@@ -26,8 +26,13 @@ pub struct Args {
     /// Output: .glb, .pc2 (+ .obj), .mdd, or a folder of OBJ frames.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Length of the session in seconds (default: the last request + 2 s).
-    #[arg(long, value_parser = super::positive)]
+    /// Write -o into a folder that already holds files (its OBJ frames are
+    /// replaced).
+    #[arg(long)]
+    pub force: bool,
+    /// Length of the session in seconds, at most 3600 (default: the last
+    /// request + 2 s).
+    #[arg(long, value_parser = session_seconds)]
     pub seconds: Option<f64>,
     /// Write the JSON report: parameters asked and achieved per second,
     /// transitions (request, start, end, latency, cost), notices, spaces.
@@ -38,8 +43,31 @@ pub struct Args {
     pub json: bool,
 }
 
+/// `--seconds`: a length in (0, [`MAX_SECONDS`]], as a script's times
+/// (`--seconds 1e12` was refused only by the memory budget, naming the
+/// script).
+fn session_seconds(s: &str) -> Result<f64, String> {
+    use surfmotion::parametric::script::MAX_SECONDS;
+    let v = super::positive(s)?;
+    if v <= MAX_SECONDS {
+        Ok(v)
+    } else {
+        Err(format!("{s}: expected seconds in (0, {MAX_SECONDS}]"))
+    }
+}
+
 /// Runs `play`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    // The output is checked before the work, as every verb does: its
+    // format, no input or other output overwritten, a folder that holds
+    // files only with --force (none of it was checked).
+    super::check_mesh_output(&a.output)?;
+    let mut inputs = super::database_inputs(&a.db);
+    inputs.push(a.script.clone());
+    let mut outputs = super::mesh_outputs(&a.output);
+    outputs.extend(a.report.clone().map(|p| ("--report", p)));
+    super::refuse_colliding(&inputs, &outputs)?;
+    super::check_folder_output(&a.output, a.force)?;
     let t0 = Instant::now();
     let (motion, cached) = load_or_build(&a.db, &MotionOptions::default(), false)?;
     let build_s = t0.elapsed().as_secs_f64();

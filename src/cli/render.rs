@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(required = true, num_args = 1..)]
     pub mesh: Vec<String>,
     /// Output PNG.
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = super::png_path)]
     pub output: PathBuf,
     /// Colour vertices by body part and draw the skeleton of this rig
     /// embedding (from `rig embed`); the skeleton follows the frame.
@@ -29,8 +29,8 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     pub frame: usize,
     /// Direction the character faces (x, -x, z, -z): sets the front view.
-    /// Defaults to the rig's facing, else the mesh's (see
-    /// `surfmotion::render::facing_of`).
+    /// Defaults to the rig's facing, else the first mesh's (see
+    /// `surfmotion::render::facing_of`), one camera for every panel.
     #[arg(long, allow_hyphen_values = true)]
     pub facing: Option<String>,
     /// Image height in pixels, 16 to 8192 (each view is square).
@@ -126,10 +126,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             Some(p) => Some(Embedding::load(p, s.mesh().vertex_count())?),
             None => None,
         };
-        let facing = match (&a.facing, &rig) {
-            (Some(f), _) => parse_axis(f)?,
-            (None, Some(r)) => DVec3::from_array(r.facing),
-            (None, None) => facing_of(s.frame(a.frame)),
+        // One camera for every panel: without `--facing` or a rig, the
+        // first mesh's facing is kept for the others, so frames of a path
+        // that turns are seen turning (each estimated alone, the views
+        // flipped between front and back as the path turned).
+        let facing = match (&a.facing, &rig, loaded.first()) {
+            (Some(f), _, _) => parse_axis(f)?,
+            (None, Some(r), _) => DVec3::from_array(r.facing),
+            (None, None, Some((_, _, first))) => *first,
+            (None, None, None) => facing_of(s.frame(a.frame)),
         };
         loaded.push((s, rig, facing));
     }
@@ -176,7 +181,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 pub struct PreviewOpts {
     /// Write a contact sheet of the result: a few evenly spaced frames,
     /// front views above and left-side views below, all at one scale.
-    #[arg(long, value_name = "PNG")]
+    #[arg(long, value_name = "PNG", value_parser = super::png_path)]
     pub preview: Option<PathBuf>,
     /// Frames on the contact sheet, 1 to 100 (all frames when the result
     /// has fewer).

@@ -20,6 +20,10 @@ pub struct Args {
     /// folder of OBJ frames (a path without extension).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write -o into a folder that already holds files (its OBJ frames are
+    /// replaced).
+    #[arg(long)]
+    pub force: bool,
     #[command(flatten)]
     pub job: JobOpts,
     /// Write a JSON report: the retrieved path (sequence, frame) per output
@@ -47,11 +51,13 @@ pub struct JobOpts {
     #[arg(long, value_enum, default_value_t = super::values::DeformModeArg::Part)]
     pub deform: super::values::DeformModeArg,
     /// Skeleton dissimilarity threshold T_skel (metres, summed over 19
-    /// joints). Default: chosen from the query's nearest-frame costs.
-    #[arg(long, value_parser = super::non_negative)]
+    /// joints), at most 1000. Default: chosen from the query's
+    /// nearest-frame costs.
+    #[arg(long, value_parser = t_skel)]
     pub t_skel: Option<f64>,
-    /// Weight of matching the skeleton against avoiding transitions.
-    #[arg(long, default_value_t = 1.0, value_parser = super::non_negative)]
+    /// Weight of matching the skeleton against avoiding transitions, at
+    /// most 1e6.
+    #[arg(long, default_value_t = 1.0, value_parser = super::weight)]
     pub w_retr: f64,
     /// No temporal interpolation of repeated frames.
     #[arg(long)]
@@ -65,6 +71,18 @@ pub struct JobOpts {
     /// rigid skeleton, or part centroids.
     #[arg(long, value_enum, default_value_t = super::values::SkeletonKindArg::Regressor)]
     pub skeleton: super::values::SkeletonKindArg,
+}
+
+/// `--t-skel`: metres summed over 19 joints, finite, ≥ 0 and at most 1000
+/// (every frame is admitted long before; `--t-skel 1e308` printed a
+/// 309-digit threshold).
+fn t_skel(s: &str) -> Result<f64, String> {
+    let v = super::non_negative(s)?;
+    if v <= 1e3 {
+        Ok(v)
+    } else {
+        Err(format!("{s}: expected metres in [0, 1000]"))
+    }
 }
 
 impl JobOpts {
@@ -105,6 +123,7 @@ impl JobOpts {
 
 /// Runs `retarget`: one [`RetargetJob`] and one clip.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    super::warnings_in_summary(!a.run.json);
     super::check_mesh_output(&a.output)?;
     let mut inputs = vec![a.mocap.clone()];
     inputs.extend(a.run.clip.asf.clone());
@@ -114,6 +133,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
     super::refuse_colliding(&inputs, &outputs)?;
+    super::check_folder_output(&a.output, a.force)?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
         character: a.job.character(),

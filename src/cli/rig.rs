@@ -47,7 +47,7 @@ pub struct EmbedArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Also draw the mesh coloured by part with the skeleton (PNG).
-    #[arg(long)]
+    #[arg(long, value_parser = super::png_path)]
     pub png: Option<PathBuf>,
     /// Print the summary as JSON.
     #[arg(long)]

@@ -63,6 +63,10 @@ pub struct Args {
     /// Output: .glb, .pc2 (+ .obj), .mdd, .obj (first frame) or a folder.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write -o into a folder that already holds files (its OBJ frames are
+    /// replaced).
+    #[arg(long)]
+    pub force: bool,
     /// Write a JSON report (markers, repair, timings, errors).
     #[arg(long, value_name = "JSON")]
     pub report: Option<PathBuf>,
@@ -133,6 +137,7 @@ impl JobOpts {
 
 /// Runs `transfer`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    super::warnings_in_summary(!a.run.json);
     let mut inputs = surfmotion::mesh::io::input_files(&a.scan, None);
     if let Some(t) = &a.template {
         inputs.extend(surfmotion::mesh::io::input_files(t, None));
@@ -144,6 +149,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
     super::refuse_colliding(&inputs, &outputs)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
+    super::check_folder_output(&a.output, a.force)?;
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
         "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",

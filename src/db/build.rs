@@ -81,6 +81,29 @@ struct GraphFile {
     graph: SurfaceMotionGraph,
 }
 
+/// The graph cache file at `path`: `None` when there is none, and also,
+/// with a warning naming the file and why, when it cannot be read or is
+/// not a graph cache (truncated, garbage: it was rebuilt silently). A file
+/// of another key is returned for the caller to compare.
+fn read_graph(path: &Path) -> Option<GraphFile> {
+    if std::fs::symlink_metadata(path).is_err_and(|e| e.kind() == std::io::ErrorKind::NotFound) {
+        return None;
+    }
+    let parsed = read_text(path)
+        .map_err(|e| e.source.to_string())
+        .and_then(|t| serde_json::from_str::<GraphFile>(&t).map_err(|e| e.to_string()));
+    match parsed {
+        Ok(g) => Some(g),
+        Err(why) => {
+            tracing::warn!(
+                "{}: the cached graph cannot be used ({why}); rebuilding it",
+                path.display()
+            );
+            None
+        }
+    }
+}
+
 /// Where the time of a similarity computation went.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Timing {
@@ -122,7 +145,18 @@ pub fn similarity(
     }
     let key = key.finish();
     let path = cache_dir(dir).join(format!("similarity-{}.bin", measure.name()));
-    if !force && let Some(mat) = cache::load_matrix(&path, key) {
+    let cached = if force {
+        None
+    } else {
+        cache::read_matrix(&path, key).unwrap_or_else(|why| {
+            tracing::warn!(
+                "{}: the cached similarity matrix cannot be used ({why}); recomputing it",
+                path.display()
+            );
+            None
+        })
+    };
+    if let Some(mat) = cached {
         // A valid key does not make the contents right: the spans must be
         // the manifest's sequences and every value a finite distance.
         let names_match = mat.spans.len() == m.sequences.len()
@@ -311,9 +345,7 @@ pub fn build(
     let cached: Option<SurfaceMotionGraph> = if opts.force {
         None
     } else {
-        read_text(&gpath)
-            .ok()
-            .and_then(|t| serde_json::from_str::<GraphFile>(&t).ok())
+        read_graph(&gpath)
             .filter(|g| g.key == graph_key)
             .map(|g| g.graph)
             .filter(|g| match g.validate(&mat) {

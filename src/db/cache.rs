@@ -81,7 +81,7 @@ impl KeyHasher {
             path: p.to_path_buf(),
             source: e,
         };
-        let mut f = std::fs::File::open(p).map_err(err)?;
+        let mut f = crate::fsutil::open_input(p, crate::fsutil::MAX_INPUT_BYTES)?;
         let mut buf = vec![0u8; 1 << 20];
         let mut total = 0u64;
         loop {
@@ -154,41 +154,70 @@ pub fn save_matrix(path: &Path, key: u64, m: &SimilarityMatrix) -> Result<(), Fs
 /// Reads a similarity matrix if the file exists, is well formed and has
 /// `key`; `None` otherwise (the caller recomputes).
 pub fn load_matrix(path: &Path, key: u64) -> Option<SimilarityMatrix> {
-    parse_matrix(&std::fs::read(path).ok()?, key)
+    read_matrix(path, key).ok().flatten()
+}
+
+/// Reads a similarity matrix: `Ok(None)` when there is no such file or it
+/// was computed from other inputs (another key: a normal change), `Err`
+/// saying why when the file is there but cannot be used (unreadable,
+/// truncated, not a similarity file). The caller recomputes either way,
+/// but says so in the second case (a corrupt cache was rebuilt silently).
+pub fn read_matrix(path: &Path, key: u64) -> Result<Option<SimilarityMatrix>, String> {
+    match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        _ => {}
+    }
+    let bytes = crate::fsutil::read_bytes(path).map_err(|e| e.source.to_string())?;
+    parse_matrix_checked(&bytes, key)
 }
 
 /// Parses a similarity file's bytes; `None` unless well formed with `key`.
 /// Sizes in the header are checked against the bytes present before any
 /// allocation follows them.
 pub fn parse_matrix(bytes: &[u8], key: u64) -> Option<SimilarityMatrix> {
+    parse_matrix_checked(bytes, key).ok().flatten()
+}
+
+/// [`parse_matrix`] saying why: `Ok(None)` for a well-formed header with
+/// another key, `Err` for bytes that are not a whole similarity file.
+pub fn parse_matrix_checked(bytes: &[u8], key: u64) -> Result<Option<SimilarityMatrix>, String> {
     let mut at = 0usize;
-    let mut take = |k: usize| -> Option<&[u8]> {
-        let s = bytes.get(at..at.checked_add(k)?)?;
+    let truncated = |at: usize| format!("truncated at byte {at} of {}", bytes.len());
+    let mut take = |k: usize| -> Result<&[u8], String> {
+        let s = at
+            .checked_add(k)
+            .and_then(|end| bytes.get(at..end))
+            .ok_or_else(|| truncated(at))?;
         at += k;
-        Some(s)
+        Ok(s)
     };
-    if take(8)? != MAGIC {
-        return None;
+    if take(8).ok() != Some(MAGIC.as_slice()) {
+        return Err("not a similarity cache file (no SMSIM001 header)".into());
     }
     let u64_of = |b: &[u8]| u64::from_le_bytes(b.try_into().unwrap_or([0; 8]));
     let u32_of = |b: &[u8]| u32::from_le_bytes(b.try_into().unwrap_or([0; 4]));
     if u64_of(take(8)?) != key {
-        return None;
+        return Ok(None);
     }
     let count = u32_of(take(4)?) as usize;
     let mut spans = Vec::new();
     let mut n = 0usize;
+    let too_big = || "a sequence length too large".to_string();
     for _ in 0..count {
         let len = u32_of(take(4)?) as usize;
-        let name = String::from_utf8(take(len)?.to_vec()).ok()?;
-        let start = usize::try_from(u64_of(take(8)?)).ok()?;
-        let len = usize::try_from(u64_of(take(8)?)).ok()?;
-        n = n.checked_add(len)?;
+        let name = String::from_utf8(take(len)?.to_vec())
+            .map_err(|_| "a sequence name that is not UTF-8".to_string())?;
+        let start = usize::try_from(u64_of(take(8)?)).map_err(|_| too_big())?;
+        let len = usize::try_from(u64_of(take(8)?)).map_err(|_| too_big())?;
+        n = n.checked_add(len).ok_or_else(too_big)?;
         spans.push(Span { name, start, len });
     }
-    let tri = n.checked_mul(n.checked_add(1)?)? / 2;
-    let body = take(tri.checked_mul(4)?)?;
-    let mut data = vec![0.0f32; n.checked_mul(n)?];
+    let tri = n
+        .checked_mul(n.checked_add(1).ok_or_else(too_big)?)
+        .ok_or_else(too_big)?
+        / 2;
+    let body = take(tri.checked_mul(4).ok_or_else(too_big)?)?;
+    let mut data = vec![0.0f32; n.checked_mul(n).ok_or_else(too_big)?];
     let mut k = 0;
     for a in 0..n {
         for b in a..n {
@@ -199,6 +228,8 @@ pub fn parse_matrix(bytes: &[u8], key: u64) -> Option<SimilarityMatrix> {
         }
     }
     SimilarityMatrix::new(spans, data)
+        .map(Some)
+        .ok_or_else(|| "its sequences do not tile its frames".into())
 }
 
 #[cfg(test)]
@@ -235,6 +266,38 @@ mod tests {
             std::fs::write(&p, &bytes[..cut]).unwrap();
             assert_eq!(load_matrix(&p, 42), None, "cut at {cut}");
         }
+    }
+
+    /// Regression (session 6 review): a corrupt cache was recomputed
+    /// without a word. A missing file or another key is a normal miss
+    /// (`Ok(None)`); garbage, a truncation or a folder say why.
+    #[test]
+    fn a_corrupt_matrix_says_why_and_a_stale_one_does_not() {
+        let m = SimilarityMatrix::new(
+            vec![Span {
+                name: "a".into(),
+                start: 0,
+                len: 2,
+            }],
+            vec![0.0, 1.0, 1.0, 0.0],
+        )
+        .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("s.bin");
+        assert_eq!(read_matrix(&p, 1), Ok(None));
+        save_matrix(&p, 1, &m).unwrap();
+        assert_eq!(read_matrix(&p, 1), Ok(Some(m)));
+        assert_eq!(read_matrix(&p, 2), Ok(None));
+        let bytes = std::fs::read(&p).unwrap();
+        std::fs::write(&p, &bytes[..bytes.len() - 3]).unwrap();
+        let e = read_matrix(&p, 1).unwrap_err();
+        assert!(e.starts_with("truncated at byte"), "{e}");
+        std::fs::write(&p, b"garbage").unwrap();
+        let e = read_matrix(&p, 1).unwrap_err();
+        assert!(e.contains("not a similarity cache file"), "{e}");
+        std::fs::remove_file(&p).unwrap();
+        std::fs::create_dir(&p).unwrap();
+        assert!(read_matrix(&p, 1).unwrap_err().contains("directory"));
     }
 
     #[test]

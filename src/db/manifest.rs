@@ -322,6 +322,25 @@ pub enum DbError {
 impl Manifest {
     /// Reads `DIR/character.toml` and checks its fields.
     pub fn load(dir: &Path) -> Result<Manifest, DbError> {
+        // A file given for the folder (the manifest itself, a clip) said
+        // "DIR/character.toml: Not a directory".
+        if dir.is_file() {
+            let hint = match dir.parent() {
+                Some(p) if dir.file_name().is_some_and(|n| n == MANIFEST) => format!(
+                    "; the database is the folder that holds it: {}",
+                    if p.as_os_str().is_empty() {
+                        ".".into()
+                    } else {
+                        p.display().to_string()
+                    }
+                ),
+                _ => " (`surfmotion db init` writes one)".into(),
+            };
+            return Err(DbError::Manifest {
+                path: dir.to_path_buf(),
+                msg: format!("is a file, not a database folder{hint}"),
+            });
+        }
         let path = dir.join(MANIFEST);
         let text = crate::fsutil::read_small_text(&path).map_err(|e| DbError::Manifest {
             path: path.clone(),

@@ -5,8 +5,9 @@
 //! Motion's self-transfer ([`vertex`]). Plausibility ([`plausibility`]):
 //! the head-to-torso angle measured on the mesh ([`head`]), foot sliding
 //! during contact ([`feet`]), ground penetration and floating ([`ground`]),
-//! knee hyper-extension ([`knee`]) and the turned-over triangles counted by
-//! the deformation, each against the character's captured range.
+//! knee hyper-extension ([`knee`]) and the triangles turned over against the
+//! rest frame ([`triangles`], the deformation's own test), each against the
+//! character's captured range.
 
 pub mod feet;
 pub mod ground;
@@ -14,6 +15,7 @@ pub mod head;
 pub mod knee;
 pub mod plausibility;
 pub mod summary;
+pub mod triangles;
 pub mod velocity;
 pub mod vertex;
 
@@ -23,6 +25,7 @@ pub use head::{HeadOptions, HeadTorso};
 pub use knee::knee_hyperextension;
 pub use plausibility::{Checker, Limits, Plausibility, PlausibilityOptions, Reference};
 pub use summary::Summary;
+pub use triangles::{RestTriangles, TurnedOverCount};
 pub use velocity::{VelocityError, velocity_error};
 pub use vertex::{VertexError, vertex_error};
 
@@ -42,6 +45,16 @@ pub enum EvalError {
     MissingPart {
         /// The part's name.
         part: &'static str,
+    },
+    /// A triangle naming a vertex the mesh does not have.
+    #[error("triangle {index} {corners:?} names a vertex past the mesh's {vertices}")]
+    Triangle {
+        /// Its index.
+        index: usize,
+        /// Its corners.
+        corners: [u32; 3],
+        /// Vertices of the mesh.
+        vertices: usize,
     },
     /// A sequence whose vertex count is not the character's.
     #[error("a sequence of {have} vertices for a character of {want}")]

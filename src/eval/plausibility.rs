@@ -11,8 +11,10 @@ use super::ground::{Ground, floor_height, ground, lowest_heights};
 use super::head::{HeadOptions, HeadTorso};
 use super::knee::knee_hyperextension;
 use super::summary::Summary;
+use super::triangles::{RestTriangles, TurnedOverCount};
 use crate::db::Character;
 use crate::deform::TurnedOver;
+use crate::mesh::Mesh;
 use crate::rig::embed::Embedding;
 use crate::rig::embed::regress::Regressor;
 use glam::DVec3;
@@ -34,6 +36,11 @@ pub struct Limits {
     pub knee_margin_deg: f64,
     /// Mean sliding per contact frame above the reference's (cm). Default: 0.5.
     pub sliding_margin_cm: f64,
+    /// Triangles turned over against the rest frame in one frame above the
+    /// reference's most in a frame (the rest frame's none, without a
+    /// reference), as a share of the mesh's triangles. Default: 0 (any
+    /// frame with more than the capture shows is warned about).
+    pub turned_over_margin: f64,
 }
 
 impl Default for Limits {
@@ -45,6 +52,7 @@ impl Default for Limits {
             floating_margin_cm: 3.0,
             knee_margin_deg: 5.0,
             sliding_margin_cm: 0.5,
+            turned_over_margin: 0.0,
         }
     }
 }
@@ -76,6 +84,9 @@ pub struct Reference {
     pub ground: Ground,
     /// Knee hyper-extension (degrees).
     pub knee_hyperextension_deg: Summary,
+    /// Triangles turned over against the rest frame in the captured frames
+    /// (a captured fold; none on a scan's rest frame).
+    pub turned_over: TurnedOverCount,
 }
 
 /// The plausibility of one result sequence.
@@ -95,8 +106,10 @@ pub struct Plausibility {
     pub floor_m: f64,
     /// Knee hyper-extension of the skeleton extracted from each frame (degrees).
     pub knee_hyperextension_deg: Summary,
-    /// Triangle-frames turned over by the deformation (retarget only).
-    pub turned_over: Option<TurnedOver>,
+    /// Triangles turned over against the character's rest frame
+    /// ([`super::triangles`]), with what the deformation's repair left
+    /// (`retarget` only) in its `deformation`.
+    pub turned_over: TurnedOverCount,
     /// The same checks on the character's own frames.
     pub reference: Option<Reference>,
     /// |head-to-trunk angle| of the driving clip on its own skeleton,
@@ -127,6 +140,7 @@ struct Series {
     lowest: Vec<f64>,
     knee: Vec<f64>,
     sliding: Sliding,
+    turned: Vec<usize>,
 }
 
 /// Everything a character's checks need, chosen once on its rest frame.
@@ -138,6 +152,8 @@ pub struct Checker {
     pub feet: Feet,
     /// Joint regressors of the rig (for the knees).
     pub regressors: Vec<Regressor>,
+    /// The rest frame the triangles are compared with.
+    pub triangles: RestTriangles,
     /// Up in the measured frames.
     pub up: DVec3,
     /// Floor height along `up` (units of the measured frames).
@@ -155,16 +171,18 @@ pub struct Checker {
 
 impl Checker {
     /// A checker for frames in metres along `up`, with the vertex sets
-    /// chosen on `rest` (in the rig's space, the rig's `up`). The floor is
-    /// `floor`, else the rest frame's lowest point along `up`.
+    /// chosen on `rest` (in the rig's space, the rig's `up`), whose
+    /// triangles are compared with the result's. The floor is `floor`,
+    /// else the rest frame's lowest point along `up`.
     pub fn new(
-        rest: &[[f64; 3]],
+        rest_mesh: &Mesh,
         rig: &Embedding,
         up: DVec3,
         floor: Option<f64>,
         fps: f64,
         opts: PlausibilityOptions,
     ) -> Result<Checker, EvalError> {
+        let rest = rest_mesh.positions();
         let rig_up = DVec3::from_array(rig.up);
         let pelvis = rig
             .joints
@@ -178,10 +196,12 @@ impl Checker {
                 .copied()
                 .unwrap_or(0.0)
         });
+        let triangles = RestTriangles::new(rest, rest_mesh.triangles())?;
         Ok(Checker {
             head,
             feet,
             regressors: rig.regressors.clone(),
+            triangles,
             up: up.normalize_or(DVec3::Y),
             floor,
             metres_per_unit: 1.0,
@@ -196,13 +216,17 @@ impl Checker {
     /// point of its frames) and its own figures as the reference.
     pub fn for_character(ch: &Character, opts: PlausibilityOptions) -> Result<Checker, EvalError> {
         let mut c = Checker::new(
-            ch.topology().positions(),
+            ch.topology(),
             ch.rig(),
             DVec3::Y,
             Some(0.0),
             ch.manifest().fps,
             opts,
         )?;
+        // The triangles against the rest frame in the frames' own metres
+        // (a rigid alignment relates axes, not units).
+        let rest = ch.topology_metres();
+        c.triangles = RestTriangles::new(rest.positions(), rest.triangles())?;
         let n = ch.n();
         let mut buf = vec![[0.0; 3]; n];
         let mut seqs: Vec<Vec<[f64; 3]>> = Vec::with_capacity(ch.graph().sequences.len());
@@ -286,6 +310,7 @@ impl Checker {
                 self.metres_per_unit,
                 &self.opts.feet,
             ),
+            turned: self.triangles.per_frame(frames),
         }
     }
 
@@ -314,6 +339,13 @@ impl Checker {
             foot_sliding: sliding,
             ground: ground(&cat(|s| &s.lowest), self.floor * self.metres_per_unit),
             knee_hyperextension_deg: Summary::of(&cat(|s| &s.knee)),
+            turned_over: TurnedOverCount::of(
+                &series
+                    .iter()
+                    .flat_map(|s| s.turned.iter().copied())
+                    .collect::<Vec<_>>(),
+                self.triangles.triangle_count(),
+            ),
         }
     }
 
@@ -358,7 +390,10 @@ impl Checker {
             ground: ground(&s.lowest, self.floor * self.metres_per_unit),
             floor_m: self.floor * self.metres_per_unit,
             knee_hyperextension_deg: Summary::of(&s.knee),
-            turned_over,
+            turned_over: TurnedOverCount {
+                deformation: turned_over,
+                ..TurnedOverCount::of(&s.turned, self.triangles.triangle_count())
+            },
             reference: self.reference.clone(),
             clip_head_torso_deg: None,
             clip_foot_glide_cm_per_frame: None,
@@ -469,12 +504,40 @@ pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
             }
         }
     }
-    if let Some(t) = p.turned_over
+    if let Some(t) = p.turned_over.deformation
         && t.after > 0
     {
         w.push(format!("{} triangle-frames stay turned over", t.after));
     }
+    if let Some(t) = turned_over_warning(p, l) {
+        w.push(t);
+    }
     w
+}
+
+/// The warning of a result with more triangles turned over against the
+/// rest frame in one frame than the captured frames show (the rest frame's
+/// none without a reference) + [`Limits::turned_over_margin`].
+fn turned_over_warning(p: &Plausibility, l: &Limits) -> Option<String> {
+    let t = &p.turned_over;
+    let captured = p.reference.as_ref().map(|r| r.turned_over.max_in_a_frame);
+    let line = captured.unwrap_or(0) as f64 + l.turned_over_margin * t.triangles as f64;
+    (t.max_in_a_frame as f64 > line).then(|| {
+        format!(
+            "{} of {} triangles turned over against the rest frame in frame {} ({} triangle-frames, {:.3} %, in {} of {} frames; {})",
+            t.max_in_a_frame,
+            t.triangles,
+            t.worst_frame,
+            t.triangle_frames,
+            100.0 * t.fraction,
+            t.frames_with_any,
+            t.frames,
+            match captured {
+                Some(c) => format!("captured: up to {c} in a frame"),
+                None => "the rest frame has none".into(),
+            }
+        )
+    })
 }
 
 impl Plausibility {
@@ -563,6 +626,21 @@ impl Plausibility {
                 r.knee_hyperextension_deg.max
             ))
         );
+        let t = &self.turned_over;
+        s += &format!(
+            "  triangles turned over against the rest frame: {}{}\n",
+            t.describe(),
+            refd(&|r| format!(
+                "{} triangle-frames, up to {} in a frame",
+                r.turned_over.triangle_frames, r.turned_over.max_in_a_frame
+            ))
+        );
+        if let Some(d) = t.deformation {
+            s += &format!(
+                "  the deformation's repair: {} triangle-frames turned over against the retrieved frames after the solve, {} after the repair\n",
+                d.before, d.after
+            );
+        }
         for w in &self.warnings {
             s += &format!("  warning: {w}\n");
         }
@@ -591,6 +669,7 @@ mod tests {
             foot_sliding: Sliding::default(),
             ground: Ground::default(),
             knee_hyperextension_deg: Summary::default(),
+            turned_over: TurnedOverCount::default(),
         };
         let p = Plausibility {
             frames: 10,
@@ -600,7 +679,7 @@ mod tests {
             ground: Ground::default(),
             floor_m: 0.0,
             knee_hyperextension_deg: Summary::default(),
-            turned_over: None,
+            turned_over: TurnedOverCount::default(),
             reference: Some(reference),
             clip_head_torso_deg: None,
             clip_foot_glide_cm_per_frame: None,
@@ -631,6 +710,7 @@ mod tests {
             },
             ground: Ground::default(),
             knee_hyperextension_deg: Summary::default(),
+            turned_over: TurnedOverCount::default(),
         };
         let p = Plausibility {
             frames: 10,
@@ -643,7 +723,7 @@ mod tests {
             ground: Ground::default(),
             floor_m: 0.0,
             knee_hyperextension_deg: Summary::default(),
-            turned_over: None,
+            turned_over: TurnedOverCount::default(),
             reference: Some(reference),
             clip_head_torso_deg: None,
             clip_foot_glide_cm_per_frame: None,

@@ -419,12 +419,9 @@ pub fn evaluate_result(
     let fps = ch.manifest().fps;
     let clip = load_mocap(mocap, load, fps)?;
     let query = to_database(ch, &clip.reference, &clip.poses);
-    let res = load_sequence(&result.to_string_lossy(), &SeqLoad::default()).map_err(|e| {
-        JobError::Context {
-            what: result.display().to_string(),
-            source: Box::new(e.into()),
-        }
-    })?;
+    // The reader's errors name the file already (a context of its path
+    // printed it twice: "out: out: no .obj files in the folder").
+    let res = load_sequence(&result.to_string_lossy(), &SeqLoad::default())?;
     if res.mesh().vertex_count() != ch.n() {
         return Err(JobError::Input {
             path: result.to_path_buf(),

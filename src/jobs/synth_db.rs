@@ -234,30 +234,24 @@ pub fn write_synthetic_database(
         let file = format!("{name}.pc2");
         save_sequence(&seq, &dir.join(&file), Some(fps))?;
         let plausibility = if opts.plausibility {
-            Checker::new(
-                rest.positions(),
-                rig,
-                glam::DVec3::Y,
-                None,
-                fps,
-                Default::default(),
-            )
-            .and_then(|c| {
-                let clip = crate::rig::retarget::clip_head_trunk_deg(&reference, &poses);
-                // Floating from the clip's own ground (raised on a step).
-                let character = rig.joints.map(glam::DVec3::from_array);
-                let raised = crate::rig::retarget::ground_offsets(&character, &reference, &poses);
-                Ok(c.measure_on(
-                    seq.all_positions(),
-                    rest.vertex_count(),
-                    None,
-                    Some(&raised),
-                )?
-                .with_clip_head(&clip, &c.opts.limits)
-                .logged())
-            })
-            .map_err(|e| tracing::warn!("{name}: plausibility not measured: {e}"))
-            .ok()
+            Checker::new(rest, rig, glam::DVec3::Y, None, fps, Default::default())
+                .and_then(|c| {
+                    let clip = crate::rig::retarget::clip_head_trunk_deg(&reference, &poses);
+                    // Floating from the clip's own ground (raised on a step).
+                    let character = rig.joints.map(glam::DVec3::from_array);
+                    let raised =
+                        crate::rig::retarget::ground_offsets(&character, &reference, &poses);
+                    Ok(c.measure_on(
+                        seq.all_positions(),
+                        rest.vertex_count(),
+                        None,
+                        Some(&raised),
+                    )?
+                    .with_clip_head(&clip, &c.opts.limits)
+                    .logged())
+                })
+                .map_err(|e| tracing::warn!("{name}: plausibility not measured: {e}"))
+                .ok()
         } else {
             None
         };

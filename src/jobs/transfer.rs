@@ -617,7 +617,7 @@ fn transfer_inner(
         let rest = prepared.mesh.positions();
         let up = glam::DVec3::from_array(rig.up);
         let opts = crate::eval::PlausibilityOptions::default();
-        crate::eval::Checker::new(rest, rig, up, None, fps, opts)
+        crate::eval::Checker::new(&prepared.mesh, rig, up, None, fps, opts)
             .and_then(|mut c| {
                 c.metres_per_unit = mpu;
                 c.measure(&positions, rest.len(), None)

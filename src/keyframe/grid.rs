@@ -30,7 +30,6 @@ use super::{Planner, Targets, mean_smoothness, mean_smoothness_vertex, transitio
 use crate::retarget::character::Character;
 use crate::retarget::timeline::TimelineOptions;
 use serde::Serialize;
-use std::collections::HashMap;
 use std::time::Instant;
 
 /// One query of the grid.
@@ -245,27 +244,37 @@ pub fn reachable_by_speed(reach: &[Reach], fps: f64, d: f64, t: f64) -> bool {
     f >= frames as f64 && d >= dist && f > 0.0 && lo <= d / f && d / f <= hi
 }
 
-/// Smoothness of every transition the search may take at its own blend
-/// window ([`super::smoothness::transition_smoothness`]): the key graph's
-/// own jumps when it chose them ([`super::TransitionSet::Measured`]),
-/// else the Surface Motion Graph's.
-pub fn graph_smoothness(ch: &Character, g: &super::graph::KeyGraph) -> Vec<f64> {
-    use rayon::prelude::*;
+/// Every transition the search may take, as `(from, to, window)` at its
+/// own blend window: the key graph's own jumps when it chose them
+/// ([`super::TransitionSet::Measured`]), else the Surface Motion Graph's.
+pub fn graph_jumps(ch: &Character, g: &super::graph::KeyGraph) -> Vec<(u32, u32, usize)> {
     if !g.windows.is_empty() {
-        let jumps: Vec<(&(u32, u32), &usize)> = g.windows.iter().collect();
-        return jumps
-            .par_iter()
-            .map(|&(&(a, b), &l)| super::smoothness::transition_smoothness(ch, a, b, l))
-            .collect();
+        return g.windows.iter().map(|(&(a, b), &l)| (a, b, l)).collect();
     }
     ch.graph()
         .transitions
-        .par_iter()
+        .iter()
         .map(|t| {
             let from = ch.graph().frame_id(t.from, t.m);
             let to = ch.graph().frame_id(t.to, t.n) + 1;
-            super::smoothness::transition_smoothness(ch, from, to, t.window)
+            (from, to, t.window)
         })
+        .collect()
+}
+
+/// Smoothness of every transition the search may take at its own blend
+/// window ([`graph_jumps`], [`super::smoothness::transition_smoothness`]),
+/// measured through `cache`.
+pub fn graph_smoothness(
+    ch: &Character,
+    g: &super::graph::KeyGraph,
+    cache: &mut super::smoothness::Measurer,
+) -> Vec<f64> {
+    let jumps = graph_jumps(ch, g);
+    cache.prefill(ch, &jumps);
+    jumps
+        .iter()
+        .map(|&(a, b, l)| cache.transition(ch, a, b, l).surface)
         .collect()
 }
 
@@ -279,7 +288,11 @@ pub fn evaluate(
     timeline: &TimelineOptions,
 ) -> Result<GridReport, super::search::SearchError> {
     let reach: Vec<Reach> = planner.segments.iter().map(|s| s.reach()).collect();
-    let mut cache = HashMap::new();
+    // Every frame pair of every transition the paths may take, measured
+    // once and in parallel before the queries (the timeline's shortened
+    // windows are subsets of these).
+    let mut cache = super::smoothness::Measurer::new(ch);
+    cache.prefill(ch, &graph_jumps(ch, &planner.graph));
     let mut oracle_s = 0.0;
     let mut queries = Vec::with_capacity(distances.len() * times.len());
     for &d in distances {
@@ -322,7 +335,7 @@ pub fn evaluate(
             });
         }
     }
-    let mut gsm = graph_smoothness(ch, &planner.graph);
+    let mut gsm = graph_smoothness(ch, &planner.graph, &mut cache);
     gsm.sort_by(f64::total_cmp);
     let r: Vec<&GridQuery> = queries.iter().filter(|q| q.reachable).collect();
     let u: Vec<&GridQuery> = queries.iter().filter(|q| !q.reachable).collect();

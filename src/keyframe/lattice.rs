@@ -259,6 +259,16 @@ impl Chain {
         self.cache.0.lock().ok()
     }
 
+    /// The start node.
+    pub fn start_node(&self) -> u32 {
+        self.start
+    }
+
+    /// True when the first segment counts its start frame.
+    pub fn counts_start(&self) -> bool {
+        self.count_start
+    }
+
     /// Number of nodes.
     pub fn node_count(&self) -> usize {
         self.adj.len()
@@ -278,21 +288,21 @@ impl Chain {
 /// `r_min` and `r_max` of every node for `0..=m` frames (`m`-major).
 pub struct Extremes {
     nodes: usize,
-    /// Least distance to the goal in exactly `m` frames (`+∞`: none).
-    pub min: Vec<f64>,
-    /// Most distance (`−∞`: none).
-    pub max: Vec<f64>,
+    /// `[r_min, r_max]` side by side (one cache line per look-up in the
+    /// programme's inner loop): the least distance to the goal in exactly
+    /// `m` frames (`+∞`: none) and the most (`−∞`: none).
+    range: Vec<[f64; 2]>,
 }
 
 impl Extremes {
     /// The longest frame count the table covers.
     pub fn frames(&self) -> usize {
-        (self.min.len() / self.nodes.max(1)).saturating_sub(1)
+        (self.range.len() / self.nodes.max(1)).saturating_sub(1)
     }
     /// `(r_min, r_max)` of node `u` in exactly `m` frames.
     pub fn at(&self, u: u32, m: usize) -> (f64, f64) {
-        let i = m * self.nodes + u as usize;
-        (self.min[i], self.max[i])
+        let [lo, hi] = self.range[m * self.nodes + u as usize];
+        (lo, hi)
     }
 }
 
@@ -302,8 +312,7 @@ pub fn extremes(seg: &Segment, m: usize) -> Extremes {
         Some(c) => chain_extremes(&c, m),
         None => Extremes {
             nodes: 0,
-            min: Vec::new(),
-            max: Vec::new(),
+            range: Vec::new(),
         },
     }
 }
@@ -311,11 +320,9 @@ pub fn extremes(seg: &Segment, m: usize) -> Extremes {
 /// The exact-length extremes of a chain up to `m` frames (step 1).
 pub fn chain_extremes(c: &Chain, m: usize) -> Extremes {
     let n = c.node_count();
-    let mut min = vec![f64::INFINITY; n * (m + 1)];
-    let mut max = vec![f64::NEG_INFINITY; n * (m + 1)];
+    let mut range = vec![[f64::INFINITY, f64::NEG_INFINITY]; n * (m + 1)];
     let goal = c.goal as usize;
-    min[goal] = 0.0;
-    max[goal] = 0.0;
+    range[goal] = [0.0, 0.0];
     for k in 1..=m {
         for u in 0..n {
             if !c.relevant[u] {
@@ -327,17 +334,16 @@ pub fn chain_extremes(c: &Chain, m: usize) -> Extremes {
                 if l == 0 || l > k {
                     continue;
                 }
-                let j = (k - l) * n + a.to as usize;
-                if min[j].is_finite() {
-                    lo = lo.min(a.m.distance + min[j]);
-                    hi = hi.max(a.m.distance + max[j]);
+                let [rlo, rhi] = range[(k - l) * n + a.to as usize];
+                if rlo.is_finite() {
+                    lo = lo.min(a.m.distance + rlo);
+                    hi = hi.max(a.m.distance + rhi);
                 }
             }
-            min[k * n + u] = lo;
-            max[k * n + u] = hi;
+            range[k * n + u] = [lo, hi];
         }
     }
-    Extremes { nodes: n, min, max }
+    Extremes { nodes: n, range }
 }
 
 /// A label of the forward programme.
@@ -410,7 +416,13 @@ pub fn solve_exact_length(
         node: start,
         ..Label::START
     });
-    let mut arena: Vec<Label> = Vec::new();
+    // The trace-back of every kept label: its parent's index and the arc
+    // from it (the labels themselves are not needed once expanded; 8 bytes
+    // a label instead of 40 keeps a long query's memory small).
+    let mut arena: Vec<(u32, u32)> = Vec::new();
+    // Emptied layers' buffers, reused for later layers (fewer allocations
+    // and page faults on long frame counts).
+    let mut pool: Vec<Vec<Label>> = Vec::new();
     // Bins per class of frames since the last transition (below
     // `min_run`, and at least) and per sector of turn, plus the labels of
     // least and most distance (they alone may reach the extremes of the
@@ -424,13 +436,13 @@ pub fn solve_exact_length(
     let mut touched: Vec<usize> = Vec::new();
     let mut kept: Vec<usize> = Vec::new();
     let (lo_slot, hi_slot) = (cells, cells + 1);
-    let mut best: Option<(u32, f64)> = None;
+    let mut best: Option<(u32, f64, Label)> = None;
     // Labels of a layer grouped by node (a stable counting sort).
     let nodes = c.node_count();
     let mut count = vec![0usize; nodes + 1];
     let mut raw: Vec<Label> = Vec::new();
     for k in 0..=frames {
-        let layer = std::mem::take(&mut layers[k]);
+        let mut layer = std::mem::take(&mut layers[k]);
         count.iter_mut().for_each(|x| *x = 0);
         for l in &layer {
             count[l.node as usize + 1] += 1;
@@ -440,10 +452,13 @@ pub fn solve_exact_length(
         }
         raw.clear();
         raw.resize(layer.len(), layer.first().copied().unwrap_or(Label::START));
-        for l in layer {
+        for l in layer.drain(..) {
             let at = &mut count[l.node as usize];
             raw[*at] = l;
             *at += 1;
+        }
+        if layer.capacity() > 0 {
+            pool.push(layer);
         }
         let mut i = 0;
         while i < raw.len() {
@@ -501,14 +516,14 @@ pub fn solve_exact_length(
             for &s in &kept {
                 let l = raw[i + s];
                 let id = arena.len() as u32;
-                arena.push(l);
+                arena.push((l.parent, l.arc));
                 if k == frames {
                     if u == c.goal {
                         let sc = l.cost
                             + w_dist * (l.distance - distance).abs()
                             + heading.map_or(0.0, |h| h.cost(l.turn));
-                        if best.is_none_or(|(_, b)| sc < b) {
-                            best = Some((id, sc));
+                        if best.is_none_or(|(_, b, _)| sc < b) {
+                            best = Some((id, sc, l));
                         }
                     }
                     continue;
@@ -521,19 +536,27 @@ pub fn solve_exact_length(
                     }
                     let d = l.distance + am.distance;
                     match window(arc.to, kk) {
-                        Some((lo, hi)) if d >= lo && d <= hi => layers[kk].push(Label {
-                            node: arc.to,
-                            parent: id,
-                            arc: arc.index,
-                            distance: d,
-                            cost: l.cost + am.cost,
-                            turn: l.turn + arc.turn,
-                            since: if arc.jump {
-                                am.frames
-                            } else {
-                                l.since.saturating_add(am.frames)
-                            },
-                        }),
+                        Some((lo, hi)) if d >= lo && d <= hi => {
+                            let next = &mut layers[kk];
+                            if next.capacity() == 0
+                                && let Some(buf) = pool.pop()
+                            {
+                                *next = buf;
+                            }
+                            next.push(Label {
+                                node: arc.to,
+                                parent: id,
+                                arc: arc.index,
+                                distance: d,
+                                cost: l.cost + am.cost,
+                                turn: l.turn + arc.turn,
+                                since: if arc.jump {
+                                    am.frames
+                                } else {
+                                    l.since.saturating_add(am.frames)
+                                },
+                            })
+                        }
                         _ => {}
                     }
                 }
@@ -541,15 +564,14 @@ pub fn solve_exact_length(
             i = j;
         }
     }
-    let (id, sc) = best?;
+    let (id, sc, l) = best?;
     let mut arcs = Vec::new();
     let mut at = id;
-    while arena[at as usize].parent != u32::MAX {
-        arcs.push(arena[at as usize].arc);
-        at = arena[at as usize].parent;
+    while arena[at as usize].0 != u32::MAX {
+        arcs.push(arena[at as usize].1);
+        at = arena[at as usize].0;
     }
     arcs.reverse();
-    let l = arena[id as usize];
     Some((
         Found {
             arcs,
@@ -599,7 +621,12 @@ pub fn search(
     // Frames beyond which the time error alone exceeds the cost of
     // the nearest frame count's whole distance.
     let extra = (w.distance * t.distance / w.time.max(1e-9)).ceil() as i64;
-    let top = (target.max(least) + extra + i64::from(lo.frame_slack)).min(lo.max_frames as i64);
+    // ... and no longer than the horizon (a departure from Eq. 7 for
+    // targets out of reach, [`super::search::Horizon`]).
+    let horizon = (opts.horizon.frames(t.frames).floor() as i64 - cs).max(least);
+    let top = (target.max(least) + extra + i64::from(lo.frame_slack))
+        .min(lo.max_frames as i64)
+        .min(horizon);
     if top < least {
         return None;
     }
@@ -651,7 +678,19 @@ pub fn search(
             .collect();
         ns.sort_by_key(|&n| (n - target).abs());
         let mut inside: Option<(Found, f64)> = None;
+        // A frame count whose time term alone reaches the cheapest landing
+        // path's cost cannot replace it (every other term of `total` is
+        // non-negative when the weights and arc costs are), so it is not
+        // searched: the same result without the programme.
+        let nonneg = w.distance >= 0.0
+            && w.time >= 0.0
+            && heading.is_none_or(|h| h.weight >= 0.0)
+            && c.adj.iter().flatten().all(|a| a.m.cost >= 0.0);
         for n in ns {
+            let time = w.time * ((n + cs) as f64 - t.frames).abs();
+            if nonneg && inside.as_ref().is_some_and(|b| time >= b.1) {
+                continue;
+            }
             let tol = dt * (1.0 - 1e-9);
             if let Some((found, _)) = solve_exact_length(
                 c, &ext, n as usize, t.distance, tol, w.distance, heading, &lo,

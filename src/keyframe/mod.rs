@@ -264,6 +264,21 @@ pub struct Planner {
     pub prepare_seconds: f64,
 }
 
+/// What the database can make of a global target ([`Planner::reach_of`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TargetReach {
+    /// Least and most distance (metres) of the paths of exactly the
+    /// target's frame count (`None`: no path has that length).
+    pub at_time: Option<(f64, f64)>,
+    /// Fewest seconds in which some frame count's extremes admit the
+    /// distance within 1 % (`None`: not within the horizon).
+    pub min_time: Option<f64>,
+    /// The query's horizon (seconds, [`search::Horizon`]).
+    pub horizon: f64,
+    /// The most distance of any path within the horizon (metres).
+    pub max_in_horizon: Option<f64>,
+}
+
 /// The cost terms of Eq. 7.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct CostTerms {
@@ -539,6 +554,40 @@ impl Planner {
         })
     }
 
+    /// What the key-frames can physically make of a global target, from
+    /// the chain's exact-length extremes (cheap: they are kept across
+    /// queries) up to the query's horizon ([`search::Horizon`]). `None`
+    /// without a chain or with a zero target.
+    pub fn reach_of(&self, distance: f64, time: f64, opts: &SearchOptions) -> Option<TargetReach> {
+        let c = self.chain.as_ref()?;
+        if distance <= 0.0 || time <= 0.0 || !distance.is_finite() || !time.is_finite() {
+            return None;
+        }
+        let cs = i64::from(c.counts_start());
+        let frames = time * self.fps;
+        let horizon = opts.horizon.frames(frames).floor() as i64;
+        let top = (horizon - cs).max(0) as usize;
+        let ext = c.extremes(top);
+        let n = (frames.round() as i64 - cs).clamp(0, top as i64) as usize;
+        let (a, b) = ext.at(c.start_node(), n);
+        let tol = 0.01 * distance;
+        let min_time = (0..=top)
+            .find(|&m| {
+                let (lo, hi) = ext.at(c.start_node(), m);
+                lo.is_finite() && lo < distance + tol && hi > distance - tol
+            })
+            .map(|m| (m as i64 + cs) as f64 / self.fps);
+        let max_in_horizon = (0..=top)
+            .map(|m| ext.at(c.start_node(), m).1)
+            .fold(f64::NEG_INFINITY, f64::max);
+        Some(TargetReach {
+            at_time: a.is_finite().then_some((a, b)),
+            min_time,
+            horizon: horizon as f64 / self.fps,
+            max_in_horizon: max_in_horizon.is_finite().then_some(max_in_horizon),
+        })
+    }
+
     /// The heading's turn along a frame path: the sum of its transitions'
     /// turns ([`graph::FrameEdge::turn`]).
     pub fn turn_of(&self, path: &[u32]) -> f64 {
@@ -605,6 +654,9 @@ pub struct Report {
     pub search_seconds: f64,
     /// Seconds blending and placing the meshes.
     pub mesh_seconds: f64,
+    /// What the database can make of a global target (`None` with
+    /// per-segment targets).
+    pub reach: Option<TargetReach>,
 }
 
 /// A transition of the output.
@@ -667,21 +719,22 @@ pub fn segment_reports(
 }
 
 /// Transitions of a path with their blend windows (from the timeline) and
-/// smoothness, computed through `cache` (keyed by `(from, to, window)`).
+/// smoothness, measured through `cache` (each overlapping frame pair once,
+/// [`smoothness::Measurer`]; the path's new pairs in parallel).
 pub fn transitions(
     ch: &Character,
     g: &KeyGraph,
     path: &[u32],
     opts: &TimelineOptions,
-    cache: &mut std::collections::HashMap<(u32, u32, usize), smoothness::Smoothness>,
+    cache: &mut smoothness::Measurer,
 ) -> Vec<TransitionReport> {
     let (_, jumps) = timeline(path, &graph::KeyFrames { ch, graph: g }, opts);
+    let asked: Vec<(u32, u32, usize)> = jumps.iter().map(|j| (j.from, j.to, j.window)).collect();
+    cache.prefill(ch, &asked);
     jumps
         .iter()
         .map(|j| {
-            let s = *cache.entry((j.from, j.to, j.window)).or_insert_with(|| {
-                smoothness::transition_smoothness_both(ch, j.from, j.to, j.window)
-            });
+            let s = cache.transition(ch, j.from, j.to, j.window);
             TransitionReport {
                 at: j.at,
                 from: key_name(ch, j.from),
@@ -791,7 +844,7 @@ pub fn synthesise(
     let placed = place::place(ch, &planner.graph, &plan.path, &opts.timeline)
         .map_err(|e| KeyframeError::Search(format!("blending: {e}")))?;
     let mesh_seconds = t0.elapsed().as_secs_f64();
-    let mut cache = std::collections::HashMap::new();
+    let mut cache = smoothness::Measurer::new(ch);
     let trans = transitions(ch, &planner.graph, &plan.path, &opts.timeline, &mut cache);
     let (de, te) = match targets {
         Targets::Global { distance, time } => (
@@ -828,6 +881,10 @@ pub fn synthesise(
         prepare_seconds: planner.prepare_seconds,
         search_seconds: plan.search_seconds,
         mesh_seconds,
+        reach: match targets {
+            Targets::Global { distance, time } => planner.reach_of(*distance, *time, &opts.search),
+            Targets::PerSegment(_) => None,
+        },
     };
     Ok(Output {
         positions: placed.positions,

@@ -95,6 +95,10 @@ pub struct Problem<'a> {
     pub w_time: f64,
     /// The heading term (an extension; `None`: Eq. 20 alone).
     pub heading: Option<Turns<'a>>,
+    /// Most loop frames `Σ n_i t_i` (the query's horizon less the walk's
+    /// frames, [`super::search::Horizon`]; `None`: unbounded). The
+    /// optimum is then Eq. 20's over the counts within it.
+    pub max_loop_frames: Option<u32>,
 }
 
 /// The heading term of a repetition problem (module docs):
@@ -149,14 +153,16 @@ impl Problem<'_> {
             self.walk.frames as f64 - self.frames,
         )
     }
-    /// Loop frames past which no `n` can cost less than `bound`.
+    /// Loop frames past which no `n` can cost less than `bound`, or may
+    /// not go ([`Problem::max_loop_frames`]).
     fn frame_bound(&self, bound: f64) -> f64 {
         let (_, dt) = self.delta();
-        if self.w_time > 0.0 {
+        let b = if self.w_time > 0.0 {
             -dt + (bound - self.walk.cost) / self.w_time
         } else {
             f64::INFINITY
-        }
+        };
+        self.max_loop_frames.map_or(b, |m| b.min(f64::from(m)))
     }
 }
 
@@ -363,11 +369,19 @@ pub fn solve_ilp(p: &Problem) -> Result<Repeats, RepeatsError> {
                 obj += (-sh * h.weight * TAU) * k;
                 head += (-TAU) * k;
             }
+            let loop_frames: Expression = xs
+                .iter()
+                .zip(p.loops)
+                .map(|(x, l)| l.frames as f64 * *x)
+                .sum();
             let mut model = vars
                 .minimise(obj)
                 .using(microlp)
                 .with((sd * dist).geq(0.0))
                 .with((st * time).geq(0.0));
+            if let Some(m) = p.max_loop_frames {
+                model = model.with(loop_frames.leq(f64::from(m)));
+            }
             if heading.is_some() {
                 model = model.with((sh * head).geq(0.0));
             }
@@ -589,7 +603,8 @@ fn dp(
     Ok(Repeats { n, cost: best_cost })
 }
 
-/// Every `n` with `n_i ≤ limit` (for tests; `(limit+1)^loops` evaluations).
+/// Every `n` with `n_i ≤ limit` (and within [`Problem::max_loop_frames`])
+/// (for tests; `(limit+1)^loops` evaluations).
 pub fn brute_force(p: &Problem, limit: u32) -> Repeats {
     let k = p.loops.len();
     let mut n = vec![0u32; k];
@@ -609,6 +624,11 @@ pub fn brute_force(p: &Problem, limit: u32) -> Repeats {
         }
         if i == k {
             return best;
+        }
+        if p.max_loop_frames
+            .is_some_and(|m| p.total(&n).frames - p.walk.frames > m)
+        {
+            continue;
         }
         let c = p.cost(&n);
         if c < best.cost - 1e-12 {
@@ -643,6 +663,7 @@ mod tests {
             w_dist: 1.0 / 0.3,
             w_time: 0.1,
             heading: None,
+            max_loop_frames: None,
         };
         let e = solve_exact(&p, f64::INFINITY, 100_000).unwrap();
         assert_eq!(e.n, vec![5]);

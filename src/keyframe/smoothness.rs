@@ -23,17 +23,43 @@ use crate::retarget::character::Character;
 use crate::rig::embed::surface::closest_on_triangle;
 use glam::DVec3;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A multiplicative hash of the cell keys (the Fx hash of rustc): the
+/// keys are small integer triples, so SipHash's protection against
+/// chosen keys buys nothing and cost most of the grid's time.
+#[derive(Default, Clone, Copy)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_i32(&mut self, x: i32) {
+        self.write_u64(u64::from(x as u32));
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+type Cells = HashMap<(i32, i32, i32), Vec<u32>, BuildHasherDefault<CellHasher>>;
 
 /// A uniform grid over a point set for nearest-neighbour queries.
 struct Grid {
     cell: f64,
-    cells: HashMap<(i32, i32, i32), Vec<u32>>,
+    cells: Cells,
     points: Vec<DVec3>,
 }
 
 impl Grid {
     fn new(points: Vec<DVec3>, cell: f64) -> Grid {
-        let mut cells: HashMap<(i32, i32, i32), Vec<u32>> = HashMap::new();
+        let mut cells = Cells::default();
         for (i, p) in points.iter().enumerate() {
             cells.entry(key(*p, cell)).or_default().push(i as u32);
         }
@@ -42,14 +68,6 @@ impl Grid {
             cells,
             points,
         }
-    }
-
-    /// Distance from `q` to the nearest point: rings of cells around
-    /// `q`'s until the next ring lies farther than the best found (a point
-    /// in ring `r` is at least `(r − 1)·cell` away); all points when none
-    /// is within 14 cells.
-    fn nearest(&self, q: DVec3) -> f64 {
-        self.nearest_index(q).1
     }
 }
 
@@ -70,10 +88,30 @@ pub fn hausdorff(a: &[DVec3], b: &[DVec3]) -> f64 {
     let cell = 0.03;
     let ga = Grid::new(a.to_vec(), cell);
     let gb = Grid::new(b.to_vec(), cell);
-    let ab = a.iter().map(|&p| gb.nearest(p)).fold(0.0, f64::max);
-    let ba = b.iter().map(|&p| ga.nearest(p)).fold(0.0, f64::max);
-    ab.max(ba)
+    directed_to_vertices(a, &gb).max(directed_to_vertices(b, &ga))
 }
+
+/// Largest distance from a point of `a` to its nearest point of `b`. A
+/// point whose search meets a point of `b` within the largest distance so
+/// far cannot raise it, so its search stops there (the maximum is the
+/// full search's, [`Grid::nearest_within`]).
+fn directed_to_vertices(a: &[DVec3], b: &Grid) -> f64 {
+    let mut worst = 0.0f64;
+    for pass in [COARSE, 1] {
+        for &p in a.iter().step_by(pass) {
+            let (v, d) = b.nearest_within(p, worst);
+            if v != usize::MAX {
+                worst = worst.max(d);
+            }
+        }
+    }
+    worst
+}
+
+/// The stride of the first pass of the directed distances: a sample of
+/// the points raises the running maximum early, so that most points of
+/// the full pass stop their search at the first near point.
+const COARSE: usize = 16;
 
 /// Triangles around every vertex of a mesh (for the nearest surface point).
 pub struct Surface {
@@ -119,28 +157,57 @@ impl Surface {
 }
 
 impl Grid {
-    /// The nearest point's index and distance (as [`Grid::nearest`]).
-    fn nearest_index(&self, q: DVec3) -> (usize, f64) {
-        let (cx, cy, cz) = key(q, self.cell);
+    /// The nearest point's index and distance, except that the search
+    /// stops at the first point found within `stop` of `q` (that point is
+    /// returned; callers that take a maximum of nearest distances need no
+    /// more). With `stop < 0` it is the full search: rings of cells around
+    /// `q`'s in the order `(dx, dy, dz)` until the next ring lies farther
+    /// than the best found (a point in ring `r` is at least `(r − 1)·cell`
+    /// away), the first nearest point kept, all points when none is within
+    /// 14 cells; a cell is skipped when its box lies farther than the best
+    /// so far (it cannot hold a nearer point, so the result is unchanged).
+    fn nearest_within(&self, q: DVec3, stop: f64) -> (usize, f64) {
+        let stop2 = if stop >= 0.0 { stop * stop } else { -1.0 };
+        let cell = self.cell;
+        let (cx, cy, cz) = key(q, cell);
+        // Distance from `q` to the slab of cells `c + d` along one axis.
+        let gap = |x: f64, c: i32, d: i32| -> f64 {
+            if d > 0 {
+                f64::from(c + d) * cell - x
+            } else if d < 0 {
+                x - f64::from(c + d + 1) * cell
+            } else {
+                0.0
+            }
+        };
         let mut best = (usize::MAX, f64::INFINITY);
         for r in 0..16i32 {
-            if ((r - 1).max(0) as f64 * self.cell).powi(2) > best.1 {
+            if ((r - 1).max(0) as f64 * cell).powi(2) > best.1 {
                 return (best.0, best.1.sqrt());
             }
             for dx in -r..=r {
+                let gx = gap(q.x, cx, dx).max(0.0).powi(2);
                 for dy in -r..=r {
-                    for dz in -r..=r {
-                        if dx.abs().max(dy.abs()).max(dz.abs()) != r {
-                            continue;
-                        }
-                        if let Some(ids) = self.cells.get(&(cx + dx, cy + dy, cz + dz)) {
-                            for &i in ids {
-                                let d = self.points[i as usize].distance_squared(q);
-                                if d < best.1 {
-                                    best = (i as usize, d);
+                    let gy = gx + gap(q.y, cy, dy).max(0.0).powi(2);
+                    let shell = dx.abs() == r || dy.abs() == r;
+                    let mut dz = -r;
+                    while dz <= r {
+                        let g = gy + gap(q.z, cz, dz).max(0.0).powi(2);
+                        // A margin for the rounding of `floor(p / cell)`.
+                        if g * (1.0 - 1e-9) - 1e-15 <= best.1 {
+                            if let Some(ids) = self.cells.get(&(cx + dx, cy + dy, cz + dz)) {
+                                for &i in ids {
+                                    let d = self.points[i as usize].distance_squared(q);
+                                    if d < best.1 {
+                                        best = (i as usize, d);
+                                        if d <= stop2 {
+                                            return (best.0, d.sqrt());
+                                        }
+                                    }
                                 }
                             }
                         }
+                        dz = if shell || dz == r { dz + 1 } else { r };
                     }
                 }
             }
@@ -158,31 +225,54 @@ impl Grid {
     }
 }
 
-/// Largest distance from a point of `a` to the surface `(b, s)`: for each
-/// point, the nearest vertex of `b` and then the nearest point on the
-/// triangles around it.
-fn directed_to_surface(a: &[DVec3], b: &Grid, s: &Surface, stride: usize) -> f64 {
-    let mut worst = 0.0f64;
-    for &p in a.iter().step_by(stride.max(1)) {
-        let (v, mut d) = b.nearest_index(p);
-        if v == usize::MAX {
-            continue;
-        }
-        if let (Some(&lo), Some(&hi)) = (s.start.get(v), s.start.get(v + 1)) {
-            for &t in &s.around[lo as usize..hi as usize] {
-                let [i, j, k] = s.tris[t as usize];
-                let q = closest_on_triangle(
-                    p,
-                    b.points[i as usize],
-                    b.points[j as usize],
-                    b.points[k as usize],
-                );
-                d = d.min(p.distance(q));
+/// Largest distance from a point of `a` (every `stride`-th) to the
+/// surface `(b, s)`, and to the nearest vertex of `b`: for each point, the
+/// nearest vertex of `b` and then the nearest point on the triangles
+/// around it. A point whose nearest-vertex search meets a vertex within
+/// the surface maximum so far cannot raise either maximum (its surface
+/// distance is at most its vertex distance, and the surface maximum is at
+/// most the vertex one), so it stops there; the maxima are those of the
+/// full search.
+fn directed_to_surface(a: &[DVec3], b: &Grid, s: &Surface, stride: usize) -> (f64, f64) {
+    let step = stride.max(1);
+    let (mut worst, mut worst_v) = (0.0f64, 0.0f64);
+    for pass in [COARSE * step, step] {
+        for &p in a.iter().step_by(pass) {
+            let (v, mut d) = b.nearest_within(p, worst);
+            if v == usize::MAX || d <= worst {
+                continue;
             }
+            worst_v = worst_v.max(d);
+            if let (Some(&lo), Some(&hi)) = (s.start.get(v), s.start.get(v + 1)) {
+                for &t in &s.around[lo as usize..hi as usize] {
+                    let [i, j, k] = s.tris[t as usize];
+                    let q = closest_on_triangle(
+                        p,
+                        b.points[i as usize],
+                        b.points[j as usize],
+                        b.points[k as usize],
+                    );
+                    d = d.min(p.distance(q));
+                }
+            }
+            worst = worst.max(d);
         }
-        worst = worst.max(d);
     }
-    worst
+    (worst, worst_v)
+}
+
+/// Both symmetric distances `(surface, vertex)` of two vertex sets of the
+/// topology `s`, each grid built once.
+fn hausdorff_both(a: &[DVec3], b: &[DVec3], s: &Surface) -> (f64, f64) {
+    if a.is_empty() || b.is_empty() {
+        return (0.0, 0.0);
+    }
+    let cell = 0.03;
+    let ga = Grid::new(a.to_vec(), cell);
+    let gb = Grid::new(b.to_vec(), cell);
+    let (sa, va) = directed_to_surface(a, &gb, s, 1);
+    let (sb, vb) = directed_to_surface(b, &ga, s, 1);
+    (sa.max(sb), va.max(vb))
 }
 
 /// Symmetric Hausdorff distance between two meshes of one topology `s`
@@ -192,10 +282,7 @@ pub fn hausdorff_surface(a: &[DVec3], b: &[DVec3], s: &Surface) -> f64 {
     if a.is_empty() || b.is_empty() {
         return 0.0;
     }
-    let cell = 0.03;
-    let ga = Grid::new(a.to_vec(), cell);
-    let gb = Grid::new(b.to_vec(), cell);
-    directed_to_surface(a, &gb, s, 1).max(directed_to_surface(b, &ga, s, 1))
+    hausdorff_both(a, b, s).0
 }
 
 /// The surface Hausdorff distance of the centre frames of a jump `from →
@@ -213,7 +300,9 @@ pub fn hausdorff_surface_stride(
     let cell = 0.03;
     let ga = Grid::new(pa.clone(), cell);
     let gb = Grid::new(pb.clone(), cell);
-    directed_to_surface(&pa, &gb, s, stride).max(directed_to_surface(&pb, &ga, s, stride))
+    directed_to_surface(&pa, &gb, s, stride)
+        .0
+        .max(directed_to_surface(&pb, &ga, s, stride).0)
 }
 
 /// Frames `ia` and `ib` in metres, `ib` moved on the floor onto `ia` (the
@@ -302,12 +391,9 @@ impl FrameSet {
             .step_by(step)
             .map(|p| fit.apply(*p))
             .collect();
-        directed_to_surface(&a_in_b, gb, &self.surface, 1).max(directed_to_surface(
-            &b_in_a,
-            ga,
-            &self.surface,
-            1,
-        ))
+        directed_to_surface(&a_in_b, gb, &self.surface, 1)
+            .0
+            .max(directed_to_surface(&b_in_a, ga, &self.surface, 1).0)
     }
 }
 
@@ -361,18 +447,10 @@ pub fn weighted<T: Copy>(h: &[Option<T>], window: usize, f: impl Fn(T) -> f64) -
     if den > 0.0 { num / den } else { 0.0 }
 }
 
-/// The Hausdorff distances `(surface, vertex)` of the overlapping frames
-/// `M_i(m + k)`, `M_j(n + k)` for `k ∈ [−K, K]` (`None` where a frame is
-/// outside its sequence), the frame of `j` moved on the floor onto that of
-/// `i` (module docs). `vertex` is computed only when `both` (else 0).
-pub fn profile(
-    ch: &Character,
-    surface: &Surface,
-    from: u32,
-    to: u32,
-    half: usize,
-    both: bool,
-) -> Vec<Option<(f64, f64)>> {
+/// The overlapping frame pairs `(M_i(m + k), M_j(n + k))` of a jump
+/// `from → to` for `k ∈ [−K, K]` (flat frame ids; `None` where a frame is
+/// outside its sequence).
+pub fn profile_pairs(ch: &Character, from: u32, to: u32, half: usize) -> Vec<Option<(u32, u32)>> {
     let (sa, ta) = ch.graph().frame_of(from);
     let (sb, tb) = ch.graph().frame_of(to);
     let tb = tb.saturating_sub(1);
@@ -387,16 +465,114 @@ pub fn profile(
             if fa < 0 || fb < 0 || fa >= la || fb >= lb {
                 return None;
             }
-            let (ia, ib) = (
+            Some((
                 ch.graph().frame_id(sa, fa as usize),
                 ch.graph().frame_id(sb, fb as usize),
-            );
-            let (pa, pb) = aligned(ch, ia, ib);
-            let s = hausdorff_surface(&pa, &pb, surface);
-            let v = if both { hausdorff(&pa, &pb) } else { 0.0 };
-            Some((s, v))
+            ))
         })
         .collect()
+}
+
+/// The distances `(surface, vertex)` of frames `ia` and `ib`, `ib` moved
+/// on the floor onto `ia` (module docs).
+fn pair_distances(ch: &Character, surface: &Surface, ia: u32, ib: u32) -> (f64, f64) {
+    let (pa, pb) = aligned(ch, ia, ib);
+    hausdorff_both(&pa, &pb, surface)
+}
+
+/// The Hausdorff distances `(surface, vertex)` of the overlapping frames
+/// `M_i(m + k)`, `M_j(n + k)` for `k ∈ [−K, K]` (`None` where a frame is
+/// outside its sequence), the frame of `j` moved on the floor onto that of
+/// `i` (module docs). Both distances come from the same grids, so `both`
+/// no longer changes the cost; `vertex` is 0 without it.
+pub fn profile(
+    ch: &Character,
+    surface: &Surface,
+    from: u32,
+    to: u32,
+    half: usize,
+    both: bool,
+) -> Vec<Option<(f64, f64)>> {
+    profile_pairs(ch, from, to, half)
+        .into_iter()
+        .map(|p| {
+            p.map(|(ia, ib)| {
+                let (s, v) = pair_distances(ch, surface, ia, ib);
+                (s, if both { v } else { 0.0 })
+            })
+        })
+        .collect()
+}
+
+/// Transitions' smoothness measured through a cache of frame pairs: every
+/// overlapping pair `(M_i(m + k), M_j(n + k))` is measured once, whatever
+/// transition or blend window asks for it (the timeline shortens the
+/// windows of close transitions, so one jump is asked for at several
+/// windows; a grid of queries asks for the same jumps again and again).
+/// The values are those of [`transition_smoothness_both`].
+pub struct Measurer {
+    surface: Surface,
+    pairs: HashMap<(u32, u32), (f64, f64)>,
+}
+
+impl Measurer {
+    /// For the frames of `ch`.
+    pub fn new(ch: &Character) -> Measurer {
+        Measurer {
+            surface: Surface::new(ch.topology().triangles(), ch.n()),
+            pairs: HashMap::new(),
+        }
+    }
+
+    /// Frame pairs measured so far.
+    pub fn len(&self) -> usize {
+        self.pairs.len()
+    }
+
+    /// True before any pair is measured.
+    pub fn is_empty(&self) -> bool {
+        self.pairs.is_empty()
+    }
+
+    /// Measures the pairs of every jump `(from, to, window)` not measured
+    /// yet, in parallel.
+    pub fn prefill(&mut self, ch: &Character, jumps: &[(u32, u32, usize)]) {
+        use rayon::prelude::*;
+        let mut todo: Vec<(u32, u32)> = jumps
+            .iter()
+            .flat_map(|&(a, b, l)| profile_pairs(ch, a, b, l.max(1)))
+            .flatten()
+            .filter(|p| !self.pairs.contains_key(p))
+            .collect();
+        todo.sort_unstable();
+        todo.dedup();
+        let surface = &self.surface;
+        let done: Vec<((u32, u32), (f64, f64))> = todo
+            .par_iter()
+            .map(|&(a, b)| ((a, b), pair_distances(ch, surface, a, b)))
+            .collect();
+        self.pairs.extend(done);
+    }
+
+    /// The smoothness of a jump `from → to` at half-window `window`
+    /// ([`transition_smoothness_both`]).
+    pub fn transition(&mut self, ch: &Character, from: u32, to: u32, window: usize) -> Smoothness {
+        let h: Vec<Option<(f64, f64)>> = profile_pairs(ch, from, to, window.max(1))
+            .into_iter()
+            .map(|p| {
+                p.map(|(a, b)| {
+                    *self
+                        .pairs
+                        .entry((a, b))
+                        .or_insert_with(|| pair_distances(ch, &self.surface, a, b))
+                })
+            })
+            .collect();
+        Smoothness {
+            surface: weighted(&h, window, |x| x.0),
+            vertex: weighted(&h, window, |x| x.1),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -477,6 +653,62 @@ mod tests {
         assert_eq!(hausdorff_surface(&a, &a, &s), 0.0);
         let up: Vec<DVec3> = a.iter().map(|p| *p + DVec3::new(0.0, 0.05, 0.0)).collect();
         assert!((hausdorff_surface(&a, &up, &s) - 0.05).abs() < 1e-9);
+    }
+
+    /// The directed distances by a linear scan for the nearest vertex
+    /// (no grid, no early exit, no pruning).
+    fn brute_directed(a: &[DVec3], b: &[DVec3], s: &Surface) -> (f64, f64) {
+        let (mut ws, mut wv) = (0.0f64, 0.0f64);
+        for &p in a {
+            let (mut v, mut d) = (0, f64::INFINITY);
+            for (i, q) in b.iter().enumerate() {
+                if p.distance(*q) < d {
+                    (v, d) = (i, p.distance(*q));
+                }
+            }
+            wv = wv.max(d);
+            for &t in &s.around[s.start[v] as usize..s.start[v + 1] as usize] {
+                let [i, j, k] = s.tris[t as usize];
+                let q = closest_on_triangle(p, b[i as usize], b[j as usize], b[k as usize]);
+                d = d.min(p.distance(q));
+            }
+            ws = ws.max(d);
+        }
+        (ws, wv)
+    }
+
+    #[test]
+    fn fast_hausdorff_equals_a_linear_scan_near_and_far() {
+        // A cylinder against a copy bent and shaken by up to 0.6 m (points
+        // within a cell, several rings away, and past the 14 cells of the
+        // ring search): the grid with its early exit, Fx-hashed cells and
+        // box pruning gives the linear scan's maxima exactly.
+        let (a, tris) = cylinder(40, 30, 0.0);
+        let s = Surface::new(&tris, a.len());
+        let mut seed = 17u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for amp in [0.01, 0.1, 0.6] {
+            let b: Vec<DVec3> = a
+                .iter()
+                .map(|p| {
+                    let bend = DVec3::new(0.3 * p.y * p.y, 0.0, 0.0);
+                    *p + bend + amp * DVec3::new(rnd(), rnd(), rnd())
+                })
+                .collect();
+            let want = {
+                let (s1, v1) = brute_directed(&a, &b, &s);
+                let (s2, v2) = brute_directed(&b, &a, &s);
+                (s1.max(s2), v1.max(v2))
+            };
+            assert_eq!(hausdorff_both(&a, &b, &s), want, "amplitude {amp}");
+            assert_eq!(hausdorff_surface(&a, &b, &s), want.0);
+            assert_eq!(hausdorff(&a, &b), want.1);
+        }
     }
 
     #[test]

@@ -195,7 +195,7 @@ pub fn load_or_build(
     }
     let key = key(dir, &m, opts)?;
     let path = cache_path(dir);
-    if !force && let Ok(bytes) = std::fs::read(&path) {
+    if !force && let Ok(bytes) = crate::fsutil::read_bytes(&path) {
         let topo = metres_topology(dir, &m)?;
         match parse(&bytes, key, &topo) {
             Ok(motion) => return Ok((motion, true)),

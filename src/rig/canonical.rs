@@ -56,6 +56,36 @@ impl Canonical {
     /// Number of canonical joints.
     pub const COUNT: usize = 19;
 
+    /// The leg joints, left then right, each from hip to toe (the last
+    /// eight of [`Canonical::ALL`]).
+    pub const LEGS: [Canonical; 8] = {
+        let mut out = [Canonical::LHip; 8];
+        let mut i = 0;
+        while i < out.len() {
+            out[i] = Canonical::ALL[Canonical::LHip as usize + i];
+            i += 1;
+        }
+        out
+    };
+
+    /// The torso's joints below the neck (pelvis, spine, chest) and
+    /// [`Canonical::LEGS`]: the joints that a CMU AMC clip and its
+    /// third-party BVH conversions place alike. The conversions hang the
+    /// neck and shoulders elsewhere on the thorax (11.7 cm lower on CMU
+    /// 01_01's cgspeed BVH than on its ASF), so the neck, head and arms
+    /// land apart (issue 17).
+    pub const TORSO_AND_LEGS: [Canonical; 11] = {
+        let mut out = [Canonical::Pelvis; 11];
+        out[1] = Canonical::Spine;
+        out[2] = Canonical::Chest;
+        let mut i = 0;
+        while i < Canonical::LEGS.len() {
+            out[3 + i] = Canonical::LEGS[i];
+            i += 1;
+        }
+        out
+    };
+
     /// Index into [`Canonical::ALL`].
     pub fn index(self) -> usize {
         self as usize

@@ -497,19 +497,9 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             };
             return Ok(d);
         }
-        let legs = [
-            C::LHip,
-            C::LKnee,
-            C::LAnkle,
-            C::LToe,
-            C::RHip,
-            C::RKnee,
-            C::RAnkle,
-            C::RToe,
-        ];
         let mut joints = BTreeMap::new();
         for (c, n) in &conv.map.joints {
-            let swap = if legs.contains(c) {
+            let swap = if C::LEGS.contains(c) {
                 legs_swapped
             } else {
                 arms_swapped

@@ -653,7 +653,7 @@ fn write_site(
 
 /// An empty folder, or one holding a site manifest.
 fn is_replaceable(out: &Path) -> bool {
-    if let Ok(t) = std::fs::read_to_string(out.join(MANIFEST_FILE)) {
+    if let Ok(t) = crate::fsutil::read_small_text(&out.join(MANIFEST_FILE)) {
         return t.contains(FORMAT);
     }
     std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_none())

@@ -135,7 +135,8 @@ impl SiteServer {
             return;
         }
         let file = resolve_path(&self.root, &url).and_then(|p| {
-            let f = std::fs::File::open(&p).ok()?;
+            // A named pipe in the folder would block this thread.
+            let f = crate::fsutil::open_input(&p, crate::fsutil::MAX_INPUT_BYTES).ok()?;
             Some((p, f))
         });
         let _ = match file {

@@ -22,21 +22,9 @@ pub fn gaits_database(
     name: &str,
     spaces: &[Space],
 ) -> Manifest {
-    let fps = 30.0;
     std::fs::create_dir_all(db).unwrap();
-    let clips: Vec<SynthClip> = gaits
-        .iter()
-        .map(|&g| SynthClip::from_clip(g.name(), &gait_clip(g, 3.0, fps)).unwrap())
-        .collect();
-    let opts = SynthOptions {
-        fps,
-        name: Some(name.into()),
-        truth: false,
-        plausibility: false,
-        force: true,
-        ..Default::default()
-    };
-    write_synthetic_database(db, character, &clips, &opts, &mut |_, _| {}).unwrap();
+    let timed: Vec<(Gait, f64)> = gaits.iter().map(|&g| (g, 3.0)).collect();
+    write_gaits(db, character, &timed, name, 30.0);
     let mut m = Manifest::load(db).unwrap();
     m.spaces = spaces
         .iter()
@@ -49,4 +37,29 @@ pub fn gaits_database(
         .collect();
     m.save(db).unwrap();
     m
+}
+
+/// Writes the database of `character` performing each `(gait, seconds)`
+/// at `fps` into `db` as `synth` writes one (replacing one there; no truth
+/// skeletons, no plausibility), named `name`.
+pub fn write_gaits(
+    db: &Path,
+    character: &SynthCharacter,
+    gaits: &[(Gait, f64)],
+    name: &str,
+    fps: f64,
+) {
+    let clips: Vec<SynthClip> = gaits
+        .iter()
+        .map(|&(g, seconds)| SynthClip::from_clip(g.name(), &gait_clip(g, seconds, fps)).unwrap())
+        .collect();
+    let opts = SynthOptions {
+        fps,
+        name: Some(name.into()),
+        truth: false,
+        plausibility: false,
+        force: true,
+        ..Default::default()
+    };
+    write_synthetic_database(db, character, &clips, &opts, &mut |_, _| {}).unwrap();
 }

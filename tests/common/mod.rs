@@ -91,23 +91,18 @@ pub fn synthetic_db(d: &std::path::Path) -> PathBuf {
         let m = d.join("mocap");
         let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("tests/fixtures/samba.landmarks.json");
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_surfmotion"))
-            .args(["synth", "--mesh"])
-            .arg(d.join("4d/samba/samba.obj"))
-            .arg("--landmarks")
-            .arg(&fixture)
-            .arg("--mocap")
-            .arg(m.join("cmu-amc/02/02_01.amc"))
-            .arg(m.join("cmu-amc/02/02_03.amc"))
-            .arg(m.join("cmu-bvh/01_01.bvh"))
-            .args(["--seconds", "8", "-o"])
-            .arg(&db)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        run_ok(
+            std::process::Command::new(env!("CARGO_BIN_EXE_surfmotion"))
+                .args(["synth", "--mesh"])
+                .arg(d.join("4d/samba/samba.obj"))
+                .arg("--landmarks")
+                .arg(&fixture)
+                .arg("--mocap")
+                .arg(m.join("cmu-amc/02/02_01.amc"))
+                .arg(m.join("cmu-amc/02/02_03.amc"))
+                .arg(m.join("cmu-bvh/01_01.bvh"))
+                .args(["--seconds", "8", "-o"])
+                .arg(&db),
         );
         (tmp, db)
     })
@@ -157,30 +152,48 @@ pub fn walk_run_db(d: &Path, name: &str) -> PathBuf {
 /// for 2 s at `fps`, named `name` (tests/procedural_pipeline.rs,
 /// tests/retarget_ground.rs).
 pub fn procedural_walk_run_database(db: &Path, name: &str, grid: f64, fps: f64) {
-    use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
+    use surfmotion::synth::Gait;
+    gaits::write_gaits(
+        db,
+        &humanoid_character(grid),
+        &[(Gait::Walk, 3.0), (Gait::Run, 2.0)],
+        name,
+        fps,
+    );
+}
+
+/// The project's procedural humanoid meshed at `grid` metres, with its rig
+/// embedded from its landmarks (`SynthCharacter::humanoid` at any grid).
+pub fn humanoid_character(grid: f64) -> surfmotion::jobs::SynthCharacter {
     use surfmotion::rig::embed::Embedding;
     use surfmotion::synth::humanoid::{humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh};
-    use surfmotion::synth::{Gait, gait_clip};
     let rest = humanoid_mesh(grid);
     let rig = Embedding::new(&rest, &humanoid_landmarks(&rest), None).unwrap();
-    let character = SynthCharacter {
+    surfmotion::jobs::SynthCharacter {
         rest,
         rig,
         landmarks_json: humanoid_landmarks_json().into_bytes(),
-    };
-    let clips: Vec<SynthClip> = [(Gait::Walk, 3.0), (Gait::Run, 2.0)]
-        .into_iter()
-        .map(|(g, seconds)| SynthClip::from_clip(g.name(), &gait_clip(g, seconds, fps)).unwrap())
-        .collect();
-    let opts = SynthOptions {
-        fps,
-        name: Some(name.into()),
-        truth: false,
-        plausibility: false,
-        force: true,
-        ..Default::default()
-    };
-    write_synthetic_database(db, &character, &clips, &opts, &mut |_, _| {}).unwrap();
+    }
+}
+
+/// The fields of a plausibility report (`surfmotion::eval::Plausibility`
+/// as `--json` writes it) that every `retarget` and `eval` result carries.
+pub const PLAUSIBILITY_FIELDS: [&str; 7] = [
+    "head_torso_deg",
+    "foot_sliding",
+    "ground",
+    "knee_hyperextension_deg",
+    "turned_over",
+    "reference",
+    "warnings",
+];
+
+/// Asserts that the plausibility report `p` (JSON) of `what` has every one
+/// of [`PLAUSIBILITY_FIELDS`] and of `also`, none of them null.
+pub fn assert_plausibility_fields(p: &serde_json::Value, what: &str, also: &[&str]) {
+    for key in PLAUSIBILITY_FIELDS.iter().chain(also) {
+        assert!(!p[key].is_null(), "{what}: no plausibility.{key}");
+    }
 }
 
 /// Whether the npm package `package` is installed under `.ci/node_modules`
@@ -219,6 +232,18 @@ pub struct CliRun {
 
 /// Runs the built binary with `args` in `cwd` (the test's own folder when
 /// `None`), `SURFMOTION_LOG` unset and `env` added; captures everything.
+/// Runs `cmd` and requires exit 0 (the command and its stderr in the
+/// failure message).
+pub fn run_ok(cmd: &mut std::process::Command) -> std::process::Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{cmd:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 pub fn run_cli<S: AsRef<std::ffi::OsStr>>(
     args: &[S],
     cwd: Option<&std::path::Path>,

@@ -99,6 +99,22 @@ pub fn split_frame_ref(spec: &str) -> (PathBuf, Option<usize>) {
     (PathBuf::from(spec), None)
 }
 
+/// The error of a `PATH:FRAME` whose file exists but whose frame is not a
+/// frame index (`walk.pc2:-1`, `walk.pc2:abc`), which otherwise read as a
+/// file named so ("unknown mesh format").
+pub fn bad_frame_ref(spec: &str) -> Option<MeshError> {
+    if Path::new(spec).exists() {
+        return None;
+    }
+    let (p, f) = spec.rsplit_once(':')?;
+    (!p.is_empty() && Path::new(p).exists() && f.parse::<usize>().is_err()).then(|| {
+        MeshError::invalid(
+            Path::new(p),
+            format!("'{f}' is not a frame number (PATH:FRAME takes a frame index from 0)"),
+        )
+    })
+}
+
 /// Options for [`load_sequence`].
 #[derive(Debug, Clone, Default)]
 pub struct LoadOptions {
@@ -214,6 +230,9 @@ pub fn refuse_folder_as_file(out: &Path) -> Result<(), MeshError> {
 /// Loads any supported mesh or sequence file as a sequence (a single mesh is
 /// a one-frame sequence). `spec` may name a frame: `samba.pc2:12`.
 pub fn load_sequence(spec: &str, opts: &LoadOptions) -> Result<MeshSequence, MeshError> {
+    if let Some(e) = bad_frame_ref(spec) {
+        return Err(e);
+    }
     let (path, frame) = split_frame_ref(spec);
     let path = path.as_path();
     let fmt = MeshFormat::of(path).ok_or_else(|| {
