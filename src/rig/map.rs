@@ -55,7 +55,9 @@ pub static CONVENTIONS: [Convention; 7] = [
             &["Hips"],
             &["Spine"],
             &["Spine1"],
-            &["Neck1", "Neck"],
+            // The base of the neck (ASF `lowerneck`, on `Spine1` with a
+            // zero offset), as the structure analysis picks it.
+            &["Neck", "Neck1"],
             &["Head"],
         ],
         [
@@ -77,7 +79,8 @@ pub static CONVENTIONS: [Convention; 7] = [
             &["Hips"],
             &["Chest"],
             &["Chest2"],
-            &["Neck", "lowerneck"],
+            // The base of the neck, as above.
+            &["lowerneck", "Neck"],
             &["Head"],
         ],
         [
