@@ -93,7 +93,7 @@ pub struct Reference {
     pub source: ReferenceSource,
     /// The clip's own joint rotations per frame ([`JointRotations`], one
     /// per pose the reference was chosen among, in the clip's axes; empty
-    /// when not known). [`retarget`] turns the pelvis and chest by them
+    /// when not known). [`retarget`] turns the chest by them
     /// when it is given that many poses, those the reference came with:
     /// poses changed since (moved, turned, resampled) must take a reference
     /// without them ([`Reference::without_rotations`]).
@@ -388,17 +388,20 @@ pub fn retarget(
 /// way); bone lengths, the floor and the soles stay the rest pose's.
 ///
 /// With the clip's joint rotations ([`Reference::rotations`], one per pose
-/// of `mocap`) the pelvis and chest turn by the rotations of the file
-/// joints mapped to them rather than by the fit to their children's bones.
-/// Those children (the neck, the shoulders, the hips, the spine) are
-/// carried by other file joints (the neck's, the clavicles', the lower
-/// back's), so the fit depended on where each sits on its parent: CMU
-/// 01_01's cgspeed BVH conversion drops the thorax's length and hangs the
-/// neck and shoulders 11.7 cm lower on the same rotations than the AMC,
-/// and its chest, then its neck, head and arms, turned differently. The
-/// result then depends on the clip's rotations, and on its bone directions
-/// only for the spine, neck and limbs (each one bone of the same file
-/// chain in either file), not on where its joints sit on their parents.
+/// of `mocap`) the chest turns by the rotation of the file joint mapped
+/// to it rather than by the fit to its children's bones. Those children
+/// (the neck, the shoulders) are carried by other file joints (the neck's
+/// base, the clavicles), so the fit depended on where each sits on the
+/// chest: CMU 01_01's cgspeed BVH conversion drops the thorax's length and
+/// hangs the neck and shoulders 11.7 cm lower on the same rotations than
+/// the AMC, and its chest, then its neck, head and arms, turned
+/// differently. The pelvis keeps the fit to its hips and spine bones: the
+/// root's own rotation leaves out the lower back's (CMU `lowerback`, a
+/// bone off the root in the ASF, a zero-length joint on `Hips` in the
+/// BVH, carries the spine), and the character's trunk then leaned up to
+/// 12° less than the clip's in CMU 131_01's lunges while its chest and
+/// head followed the clip (the head 3° past the clip's own line); the
+/// pelvis's bones sit alike in an AMC and its conversions.
 pub fn retarget_with_neutral(
     character: &Pose,
     neutral: &Pose,
@@ -922,7 +925,7 @@ fn neck_carriage(rotations: &[[DQuat; Canonical::COUNT]]) -> DQuat {
 /// The clip's global joint rotations since its reference per pose of
 /// `mocap` (the poses turned by `tilt`, `r` the reference's pose as the
 /// kernel uses it): the fit to the bones ([`pose_rotations`]), with the
-/// pelvis and chest (and the spine and neck on them) from the clip's own
+/// chest (and the spine and neck on it) from the clip's own
 /// joint rotations when the reference carries one per pose
 /// ([`Reference::rotations`], [`torso_from_file`]).
 fn clip_rotations(
@@ -953,12 +956,12 @@ fn clip_rotations(
     rotations
 }
 
-/// Replaces the torso's rotations `a` (taking the reference `r`'s bones
-/// onto `m`'s) of the joints with several children, the pelvis and the
-/// chest, by their file joints' rotations since the reference
-/// (`w · w_ref⁻¹`, when both are known), and re-derives the single-child
-/// spine and neck on them (the least rotation of their bone, composed on
-/// the new parent's, as [`pose_rotations`] does).
+/// Replaces the chest's rotation in `a` (the rotations taking the
+/// reference `r`'s bones onto `m`'s) by its file joint's rotation since
+/// the reference (`w · w_ref⁻¹`, when both are known), and re-derives the
+/// single-child spine and neck (the least rotation of their bone,
+/// composed on the parent's, as [`pose_rotations`] does). The pelvis keeps
+/// the fit to its hips and spine bones (see [`retarget_with_neutral`]).
 fn torso_from_file(
     a: &mut [DQuat; Canonical::COUNT],
     r: &Pose,
@@ -968,7 +971,10 @@ fn torso_from_file(
 ) {
     for c in [C::Pelvis, C::Spine, C::Chest, C::Neck] {
         let j = c.index();
-        if let C::Pelvis | C::Chest = c {
+        if c == C::Pelvis {
+            continue;
+        }
+        if c == C::Chest {
             if let (Some(q), Some(q0)) = (w[j], w_ref[j])
                 && (q * q0.inverse()).is_finite()
             {
