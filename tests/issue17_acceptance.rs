@@ -630,7 +630,7 @@ fn rig_embed_reports_its_self_check_in_text_and_json() {
 /// the skeleton's head-to-trunk angle (`∠(neck→head, pelvis→neck)` in
 /// the trunk's frame, from the character's rest; the measure of
 /// `rig::retarget::clip_head_trunk_deg`) at p95 within the clip's own p95
-/// + 3°. The pelvis turned by the root's own rotation (`Hips`) left out
+/// + 1.5°. The pelvis turned by the root's own rotation (`Hips`) left out
 /// the lower back's (`lowerback`, a zero-length joint on the hips carrying
 /// the spine), so the character's trunk leaned up to 12° less than the
 /// clip's while its chest and head followed the clip: on the samba
@@ -668,5 +668,7 @@ fn a_bow_in_the_lower_back_keeps_the_head_within_the_clips_line() {
         .map(|(p, _)| local(p).angle_between(zero).to_degrees())
         .collect());
     eprintln!("131_01 on the humanoid: head-to-trunk p95 {got:.1}° (the clip's own {own:.1}°)");
-    assert!(got <= own + 3.0, "{got} against the clip's {own}");
+    // Measured 12.7° against 12.6°; 1.5° of room (the samba skeleton with
+    // the pelvis on the root's rotation read 3.0° over).
+    assert!(got <= own + 1.5, "{got} against the clip's {own}");
 }
