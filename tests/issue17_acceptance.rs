@@ -629,8 +629,8 @@ fn rig_embed_reports_its_self_check_in_text_and_json() {
 /// lunges, the lower back bent) retargeted onto the procedural humanoid,
 /// the skeleton's head-to-trunk angle (`∠(neck→head, pelvis→neck)` in
 /// the trunk's frame, from the character's rest; the measure of
-/// `rig::retarget::clip_head_trunk_deg`) at p95 within the clip's own p95
-/// + 1.5°. The pelvis turned by the root's own rotation (`Hips`) left out
+/// `rig::retarget::clip_head_trunk_deg`) at p95 at most 1.5° above the
+/// clip's own p95. The pelvis turned by the root's own rotation (`Hips`) left out
 /// the lower back's (`lowerback`, a zero-length joint on the hips carrying
 /// the spine), so the character's trunk leaned up to 12° less than the
 /// clip's while its chest and head followed the clip: on the samba
