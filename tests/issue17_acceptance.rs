@@ -1,7 +1,8 @@
 //! Acceptance checks of issue 17 ("retargeting that looks right") that no
 //! other suite made: a third-party BVH conversion of an AMC clip drives a
-//! character like the AMC itself (torso and legs; neck, head and arms are
-//! a known gap, see the test); the file's own left/right names agree with
+//! character like the AMC itself, a zero-length joint carrying the neck on
+//! the chest is the neck (names and structure alike), and moving a clip's
+//! neck and clavicles on its thorax leaves the result unchanged; the file's own left/right names agree with
 //! the mapping on every clip in the data; a non-humanoid clip is refused
 //! by the verbs that drive a body (exit 1, "not a humanoid: "); what a run
 //! logs as warnings is what its plausibility report says.
@@ -42,21 +43,34 @@ fn driven(c: &Clip, character: &Pose) -> Vec<Pose> {
         .collect()
 }
 
+/// Largest distance over every frame and canonical joint between two
+/// driven clips, as a fraction of `height`, and where.
+fn worst(a: &[Pose], b: &[Pose], height: f64) -> (f64, usize, Canonical) {
+    let mut w = (0.0f64, 0, Canonical::Pelvis);
+    for (f, (p, q)) in a.iter().zip(b).enumerate() {
+        for c in Canonical::ALL {
+            let e = p[c.index()].distance(q[c.index()]) / height;
+            if e > w.0 {
+                w = (e, f, c);
+            }
+        }
+    }
+    w
+}
+
 /// CMU 01_01 as AMC and as the third-party cgspeed BVH conversion (frame
 /// 0 of the BVH an added T-pose, dropped), each mapped with no rig map and
-/// retargeted onto the procedural humanoid, all 2,751 frames: pelvis,
-/// spine, chest and legs land within 1e-5 of the character's height
-/// (measured 4e-6). The neck, head and arms do not meet the issue's 1e-3:
-/// the conversion's rest skeleton hangs the neck and shoulders 11.7 cm
-/// lower on the thorax than the ASF, and they land up to 4.1e-2 of the
-/// height apart (head, frame 208; arms 2.7e-2, though the arm bones'
-/// directions agree within 0.1°); bounded here at 5e-2 so that it gets no
-/// worse. (The Reallusion CC-rig "conversions" of 02_01-03 are retargets
-/// onto another body: 2-13 % of the height apart, pelvis included; not
-/// compared.)
+/// retargeted onto the procedural humanoid, all 2,751 frames: every
+/// canonical joint within the issue's 1e-3 of the height. The conversion
+/// drops the thorax's length, so its neck and shoulders hang 11.7 cm lower
+/// on the same rotations; the kernel turns the pelvis and chest by the file
+/// joints' rotations, not by the fit to those children (the arms were
+/// 2.7e-2 apart), and the neck is the base of the neck in both files (the
+/// BVH's zero-length `Neck` on `Spine1`, carrying ASF `lowerneck`'s
+/// rotation, not `Neck1` above it: the neck and head were 3.6e-2 apart).
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
-fn a_third_party_bvh_conversion_drives_torso_and_legs_like_its_amc() {
+fn a_third_party_bvh_conversion_drives_the_character_like_its_amc() {
     let Some(d) = common::data_dir() else { return };
     let m = d.join("mocap");
     let (character, height) = character();
@@ -69,44 +83,152 @@ fn a_third_party_bvh_conversion_drives_torso_and_legs_like_its_amc() {
     let b = driven(&drop_frames(&load("cmu-bvh/01_01.bvh"), 1), &character);
     assert_eq!(a.len(), 2751);
     assert_eq!(b.len(), a.len());
-    use Canonical as C;
-    let held = [
-        C::Pelvis,
-        C::Spine,
-        C::Chest,
-        C::LHip,
-        C::LKnee,
-        C::LAnkle,
-        C::LToe,
-        C::RHip,
-        C::RKnee,
-        C::RAnkle,
-        C::RToe,
-    ];
-    let mut worst_held = (0.0f64, C::Pelvis);
-    let mut worst_rest = (0.0f64, C::Pelvis);
-    for (p, q) in a.iter().zip(&b) {
-        for c in Canonical::ALL {
-            let e = p[c.index()].distance(q[c.index()]) / height;
-            let w = if held.contains(&c) {
-                &mut worst_held
+    let (e, f, c) = worst(&a, &b, height);
+    eprintln!(
+        "01_01 AMC vs cgspeed BVH on the humanoid: {e:.1e} of the height apart ({}, frame {f})",
+        c.name()
+    );
+    assert!(e < 1e-3, "{e} at frame {f}, {}", c.name());
+}
+
+/// `c` with a joint named `name` inserted above joint `child`, at its
+/// parent's place (zero offset) and turning by `child`'s rotation in
+/// every frame, `child` itself then turning by `lower⁻¹ · child` where
+/// `lower` is that rotation: every joint stays where it was. The shape of
+/// a conversion that drops a bone's length (CMU cgspeed's `Neck` on
+/// `Spine1`).
+fn insert_zero_joint_above(c: &Clip, child: usize, name: &str) -> Clip {
+    use surfmotion::mocap::JointId;
+    let n = c.joint_count();
+    let mut out = c.clone();
+    let mut base = c.joints[child].clone();
+    base.name = name.to_string();
+    base.offset = DVec3::ZERO;
+    base.tail = None;
+    let shift = |j: usize| if j >= child { j + 1 } else { j };
+    let mut joints = Vec::with_capacity(n + 1);
+    for (j, jt) in c.joints.iter().enumerate() {
+        if j == child {
+            joints.push(base.clone());
+        }
+        let mut jt = jt.clone();
+        jt.parent = if j == child {
+            Some(JointId(child as u32))
+        } else {
+            jt.parent.map(|p| JointId(shift(p.idx()) as u32))
+        };
+        joints.push(jt);
+    }
+    out.joints = joints;
+    out.rotations.clear();
+    out.translations.clear();
+    for f in 0..c.frame_count() {
+        for j in 0..n {
+            let (r, t) = (c.rotations[f * n + j], c.translations[f * n + j]);
+            if j == child {
+                // The new joint: the child's rotation at the parent's place.
+                out.rotations.push(r);
+                out.translations.push(DVec3::ZERO);
+                out.rotations.push(glam::DQuat::IDENTITY);
+                out.translations.push(r.inverse() * t);
             } else {
-                &mut worst_rest
-            };
-            if e > w.0 {
-                *w = (e, c);
+                out.rotations.push(r);
+                out.translations.push(t);
             }
         }
     }
-    eprintln!(
-        "01_01 AMC vs cgspeed BVH on the humanoid: torso and legs {:.1e} of the height apart ({}), neck, head and arms {:.1e} ({})",
-        worst_held.0,
-        worst_held.1.name(),
-        worst_rest.0,
-        worst_rest.1.name()
+    out.joints[child + 1].offset = c.joints[child].offset;
+    out
+}
+
+/// A joint on the chest with a zero offset that carries the neck chain
+/// (CMU cgspeed's `Neck` under `Spine1`, the 3dsMax-friendly `lowerneck`
+/// under `Chest2`: the ASF thorax's length dropped) is the neck, by names
+/// and by structure alike: its rotation turns the whole neck bone. The
+/// procedural walk with such a joint inserted under its neck (the neck's
+/// rotation moved onto it), once with names (`Neck` the new base, the old
+/// neck renamed `Neck1`) and once with every joint renamed `J<k>` (no
+/// name hints): both map the neck to the inserted joint and the head to
+/// the head.
+#[test]
+fn a_zero_length_joint_carrying_the_neck_on_the_chest_is_the_neck() {
+    use surfmotion::synth::{Gait, gait_clip};
+    let walk = gait_clip(Gait::Walk, 1.0, 30.0);
+    let neck = walk.joint("Neck").unwrap().idx();
+    let mut named = insert_zero_joint_above(&walk, neck, "Neck");
+    named.joints[neck + 1].name = "Neck1".into();
+    // Every joint where it was.
+    let (p0, _) = walk.rest_positions();
+    let (p1, _) = named.rest_positions();
+    assert!(p1[neck].distance(p0[neck - 1]) < 1e-12);
+    assert!(p1[neck + 1].distance(p0[neck]) < 1e-12);
+    let mut bare = named.clone();
+    for (k, j) in bare.joints.iter_mut().enumerate() {
+        j.name = format!("J{k}");
+    }
+    for (what, c) in [("named", &named), ("no names", &bare)] {
+        let d = detect_clip(c).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let at = |k: Canonical| c.joint(&d.map.joints[&k]).unwrap().idx();
+        assert_eq!(
+            at(Canonical::Neck),
+            neck,
+            "{what}: neck {} ({})",
+            d.map.joints[&Canonical::Neck],
+            d.map.convention
+        );
+        assert_eq!(at(Canonical::Head), neck + 2, "{what}");
+        assert_eq!(at(Canonical::Chest), neck - 1, "{what}");
+    }
+}
+
+/// The same clip with its neck and clavicles moved on the thorax (the
+/// joints' offsets, in the rest skeleton and every frame; the rotations
+/// untouched) drives the character to the same result: the neck and the
+/// clavicles moved onto the thorax's origin (as the cgspeed conversion
+/// has them), the neck then 2 cm forward. CMU 01_01 (AMC: jumps, the
+/// clavicles move) on the procedural humanoid, all frames, within 1e-3
+/// of the height (measured 1e-15). The kernel before read 1.9e-3 (the
+/// head): the clip's upright frames, where the neck's typical carriage is
+/// read, were chosen by the pelvis → neck line, which the moved neck
+/// tilts (now pelvis → chest).
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn moving_the_necks_and_clavicles_offsets_leaves_the_result_unchanged() {
+    let Some(d) = common::data_dir() else { return };
+    let mut clip = load_clip(&d.join("mocap/cmu-amc/01/01_01.amc"), &Default::default()).unwrap();
+    clip.to_metres_y_up();
+    let (character, height) = character();
+    let mut moved = clip.clone();
+    let n = moved.joint_count();
+    // The neck and both clavicles onto the thorax's own origin (the
+    // cgspeed conversion's geometry), the neck then 2 cm forward.
+    for (name, extra) in [
+        ("lowerneck", DVec3::new(0.0, 0.0, 0.02)),
+        ("lclavicle", DVec3::ZERO),
+        ("rclavicle", DVec3::ZERO),
+    ] {
+        let j = moved.joint(name).unwrap().idx();
+        let dv = extra - moved.joints[j].offset;
+        moved.joints[j].offset += dv;
+        for f in 0..moved.frame_count() {
+            moved.translations[f * n + j] += dv;
+        }
+    }
+    let a = driven(&clip, &character);
+    let b = driven(&moved, &character);
+    // The change is real: the clip's own neck and shoulders moved.
+    let (pa, pb) = (
+        clip_poses(&clip, &detect_clip(&clip).unwrap().map).unwrap(),
+        clip_poses(&moved, &detect_clip(&moved).unwrap().map).unwrap(),
     );
-    assert!(worst_held.0 < 1e-5, "{worst_held:?}");
-    assert!(worst_rest.0 < 5e-2, "{worst_rest:?}");
+    let neck = Canonical::Neck.index();
+    assert!(pa.poses[0][neck].distance(pb.poses[0][neck]) > 0.05);
+    let (e, f, c) = worst(&a, &b, height);
+    eprintln!(
+        "01_01 with its neck and clavicles moved: {e:.1e} of the height apart ({}, frame {f})",
+        c.name()
+    );
+    assert!(e < 1e-3, "{e} at frame {f}, {}", c.name());
 }
 
 /// The side a file joint's own name states (`None` when it states none).
@@ -500,4 +622,53 @@ fn rig_embed_reports_its_self_check_in_text_and_json() {
         w.len(),
         "{text}"
     );
+}
+
+/// The trunk of a bow leans as the clip's, so the head stays within the
+/// clip's own head line: CMU 131_01 (3dsMax-friendly BVH: kicks and
+/// lunges, the lower back bent) retargeted onto the procedural humanoid,
+/// the skeleton's head-to-trunk angle (`∠(neck→head, pelvis→neck)` in
+/// the trunk's frame, from the character's rest; the measure of
+/// `rig::retarget::clip_head_trunk_deg`) at p95 at most 1.5° above the
+/// clip's own p95. The pelvis turned by the root's own rotation (`Hips`) left out
+/// the lower back's (`lowerback`, a zero-length joint on the hips carrying
+/// the spine), so the character's trunk leaned up to 12° less than the
+/// clip's while its chest and head followed the clip: on the samba
+/// skeleton p95 15.6° against the clip's 12.6° (12.0° with the pelvis
+/// fitted to its hips and spine bones).
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn a_bow_in_the_lower_back_keeps_the_head_within_the_clips_line() {
+    use Canonical as C;
+    use surfmotion::rig::retarget::clip_head_trunk_deg;
+    let Some(d) = common::data_dir() else { return };
+    let mut clip = load_clip(&d.join("mocap/cmu-bvh/131_01.bvh"), &Default::default()).unwrap();
+    clip.to_metres_y_up();
+    let (character, _) = character();
+    let cp = clip_poses(&clip, &detect_clip(&clip).unwrap().map).unwrap();
+    let local = |p: &Pose| {
+        let y = (p[C::Neck.index()] - p[C::Pelvis.index()]).normalize();
+        let l = (p[C::LHip.index()] - p[C::RHip.index()])
+            + (p[C::LShoulder.index()] - p[C::RShoulder.index()]);
+        let x = (l - y * l.dot(y)).normalize();
+        let h = p[C::Head.index()] - p[C::Neck.index()];
+        DVec3::new(h.dot(x), h.dot(y), h.dot(x.cross(y)))
+    };
+    let p95 = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[(v.len() - 1) * 95 / 100]
+    };
+    let own = p95(clip_head_trunk_deg(&cp.reference, &cp.poses)
+        .into_iter()
+        .map(f64::abs)
+        .collect());
+    let zero = local(&character);
+    let got = p95(retarget(&character, &cp.reference, &cp.poses)
+        .iter()
+        .map(|(p, _)| local(p).angle_between(zero).to_degrees())
+        .collect());
+    eprintln!("131_01 on the humanoid: head-to-trunk p95 {got:.1}° (the clip's own {own:.1}°)");
+    // Measured 12.7° against 12.6°; 1.5° of room (the samba skeleton with
+    // the pelvis on the root's rotation read 3.0° over).
+    assert!(got <= own + 1.5, "{got} against the clip's {own}");
 }

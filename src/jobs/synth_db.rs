@@ -198,11 +198,19 @@ pub fn write_synthetic_database(
                 name.clone(),
                 source.clone(),
                 poses.poses.clone(),
-                poses.reference,
+                poses.reference.clone(),
             ),
         };
+        let mut reference = reference;
         if let Some(s) = opts.seconds {
             poses.truncate(((s * fps).round() as usize).max(1));
+            // The clip's joint rotations go with their poses.
+            reference.rotations = reference
+                .rotations
+                .iter()
+                .take(poses.len())
+                .copied()
+                .collect();
         }
         // Skinned frames, their dynamics copy and the sequence: refuse a
         // clip that cannot fit before allocating (issue 18, item 12).

@@ -55,7 +55,9 @@ pub static CONVENTIONS: [Convention; 7] = [
             &["Hips"],
             &["Spine"],
             &["Spine1"],
-            &["Neck1", "Neck"],
+            // The base of the neck (ASF `lowerneck`, on `Spine1` with a
+            // zero offset), as the structure analysis picks it.
+            &["Neck", "Neck1"],
             &["Head"],
         ],
         [
@@ -77,7 +79,8 @@ pub static CONVENTIONS: [Convention; 7] = [
             &["Hips"],
             &["Chest"],
             &["Chest2"],
-            &["Neck", "lowerneck"],
+            // The base of the neck, as above.
+            &["lowerneck", "Neck"],
             &["Head"],
         ],
         [
@@ -663,6 +666,32 @@ impl RigMap {
             .collect())
     }
 
+    /// [`RigMap::poses`] with, per frame, the world rotation of the file
+    /// joint each canonical joint is mapped to (the rotation that carries
+    /// that joint's own bones; `None` for a derived joint), in the clip's
+    /// axes. A rest skeleton's are the identity (every local rotation is).
+    pub fn poses_and_rotations(&self, clip: &Clip) -> Result<PosesAndRotations, RigError> {
+        use rayon::prelude::*;
+        let slots = self.plan(clip)?;
+        let n = clip.joint_count();
+        Ok((0..clip.frame_count())
+            .into_par_iter()
+            .map_init(
+                || (vec![DVec3::ZERO; n], vec![DQuat::IDENTITY; n]),
+                |(p, r), f| {
+                    clip.world_into(f, p, r);
+                    let mut q = [None; Canonical::COUNT];
+                    for (c, s) in slots.iter().enumerate() {
+                        if let Slot::Joint(j) = *s {
+                            q[c] = Some(r[j]);
+                        }
+                    }
+                    (place(&slots, p, r), q)
+                },
+            )
+            .unzip())
+    }
+
     /// Canonical joint positions of the clip's rest skeleton (every local
     /// rotation the identity, offsets as in the file), in the clip's units.
     pub fn rest_pose(&self, clip: &Clip) -> Result<Pose, RigError> {
@@ -760,6 +789,10 @@ impl RigMap {
         Ok(slots.into_iter().flatten().collect())
     }
 }
+
+/// Per-frame canonical poses and the world rotations of the mapped file
+/// joints ([`RigMap::poses_and_rotations`]).
+pub type PosesAndRotations = (Vec<Pose>, Vec<[Option<DQuat>; Canonical::COUNT]>);
 
 /// Canonical positions of one frame from world joint positions and rotations.
 fn place(slots: &[Slot], p: &[DVec3], r: &[DQuat]) -> Pose {

@@ -63,6 +63,7 @@ use crate::mocap::Clip;
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::Arc;
 
 /// Where a clip's neutral reference pose comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -84,20 +85,44 @@ impl std::fmt::Display for ReferenceSource {
 }
 
 /// A clip's neutral reference pose.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Reference {
     /// Canonical joint positions (the clip's units and axes).
     pub pose: Pose,
     /// Where it came from.
     pub source: ReferenceSource,
+    /// The clip's own joint rotations per frame ([`JointRotations`], one
+    /// per pose the reference was chosen among, in the clip's axes; empty
+    /// when not known). [`retarget`] turns the chest by them
+    /// when it is given that many poses, those the reference came with:
+    /// poses changed since (moved, turned, resampled) must take a reference
+    /// without them ([`Reference::without_rotations`]).
+    pub rotations: Arc<[JointRotations]>,
 }
+
+impl Reference {
+    /// The reference with no joint rotations: [`retarget`] turns the torso
+    /// by the fit to the poses' bones alone.
+    pub fn without_rotations(&self) -> Reference {
+        Reference {
+            rotations: Arc::from(Vec::new()),
+            ..self.clone()
+        }
+    }
+}
+
+/// Per canonical joint, the world rotation of the clip's file joint mapped
+/// to it (the rotation carrying that joint's own bones), `None` for a
+/// joint the map derives; the clip's axes. See [`RigMap::poses_and_rotations`].
+pub type JointRotations = [Option<DQuat>; Canonical::COUNT];
 
 /// A clip as canonical poses with its neutral reference.
 #[derive(Debug, Clone)]
 pub struct ClipPoses {
     /// One pose per frame (the clip's units and axes).
     pub poses: Vec<Pose>,
-    /// The neutral reference the retargeting measures rotations from.
+    /// The neutral reference the retargeting measures rotations from
+    /// (with the file joints' rotations of every frame).
     pub reference: Reference,
 }
 
@@ -105,9 +130,10 @@ pub struct ClipPoses {
 /// Convert the clip to metres, Y-up, first (`Clip::to_metres_y_up`): the
 /// reference is chosen against the vertical.
 pub fn clip_poses(clip: &Clip, map: &RigMap) -> Result<ClipPoses, RigError> {
-    let poses = map.poses(clip)?;
+    let (poses, rotations) = map.poses_and_rotations(clip)?;
     let rest = map.rest_pose(clip)?;
-    let reference = choose_reference(Some(&rest), &poses)?;
+    let mut reference = choose_reference(Some(&rest), &poses)?;
+    reference.rotations = Arc::from(rotations);
     Ok(ClipPoses { poses, reference })
 }
 
@@ -212,6 +238,7 @@ pub fn choose_reference(rest: Option<&Pose>, poses: &[Pose]) -> Result<Reference
         return Ok(Reference {
             pose: *r,
             source: ReferenceSource::Rest,
+            rotations: Arc::from(Vec::new()),
         });
     }
     let mut best: Option<(f64, usize)> = None;
@@ -244,6 +271,7 @@ pub fn choose_reference(rest: Option<&Pose>, poses: &[Pose]) -> Result<Reference
     Ok(Reference {
         pose,
         source: ReferenceSource::Frame(i),
+        rotations: Arc::from(Vec::new()),
     })
 }
 
@@ -358,6 +386,22 @@ pub fn retarget(
 /// (`G_j(t) = A_j(t) H N_j`, with `N` the rotations taking the rest bones
 /// onto the neutral's and `H` the turn facing the neutral the reference's
 /// way); bone lengths, the floor and the soles stay the rest pose's.
+///
+/// With the clip's joint rotations ([`Reference::rotations`], one per pose
+/// of `mocap`) the chest turns by the rotation of the file joint mapped
+/// to it rather than by the fit to its children's bones. Those children
+/// (the neck, the shoulders) are carried by other file joints (the neck's
+/// base, the clavicles), so the fit depended on where each sits on the
+/// chest: CMU 01_01's cgspeed BVH conversion drops the thorax's length and
+/// hangs the neck and shoulders 11.7 cm lower on the same rotations than
+/// the AMC, and its chest, then its neck, head and arms, turned
+/// differently. The pelvis keeps the fit to its hips and spine bones: the
+/// root's own rotation leaves out the lower back's (CMU `lowerback`, a
+/// bone off the root in the ASF, a zero-length joint on `Hips` in the
+/// BVH, carries the spine), and the character's trunk then leaned up to
+/// 12° less than the clip's in CMU 131_01's lunges while its chest and
+/// head followed the clip (the head 3° past the clip's own line); the
+/// pelvis's bones sit alike in an AMC and its conversions.
 pub fn retarget_with_neutral(
     character: &Pose,
     neutral: &Pose,
@@ -394,8 +438,7 @@ pub fn retarget_with_neutral(
     let support = clip_support(mocap, leg_length(r));
     let clip_floor = support.floor;
     let char_floor = foot_height(character);
-    let rotations: Vec<[DQuat; Canonical::COUNT]> =
-        mocap.par_iter().map(|m| pose_rotations(r, m)).collect();
+    let rotations = clip_rotations(r, mocap, reference, tilt);
     let carriage_inv = neck_carriage(&upright(mocap, &rotations)).inverse();
     let (chest, neck) = (C::Chest.index(), C::Neck.index());
     let mut out: Vec<(Pose, [DQuat; Canonical::COUNT])> = mocap
@@ -817,8 +860,7 @@ pub fn clip_head_trunk_deg(reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
         DVec3::new(h.dot(x), h.dot(y), h.dot(z))
     };
     let r = &reference.pose;
-    let rotations: Vec<[DQuat; Canonical::COUNT]> =
-        mocap.iter().map(|m| pose_rotations(r, m)).collect();
+    let rotations = clip_rotations(r, mocap, reference, DQuat::IDENTITY);
     let mut neutral = *r;
     let (n, h) = (C::Neck.index(), C::Head.index());
     neutral[h] = r[n] + neck_carriage(&upright(mocap, &rotations)) * (r[h] - r[n]);
@@ -829,8 +871,8 @@ pub fn clip_head_trunk_deg(reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
         .collect()
 }
 
-/// The rotations of the clip's upright frames: those whose trunk is within
-/// 10° of the clip's most upright. The neck's carriage is read on them: a
+/// The rotations of the clip's upright frames: those whose trunk (pelvis
+/// → chest) is within 10° of the clip's most upright. The neck's carriage is read on them: a
 /// clip that spends most of its time bent over, head down (CMU 131_02),
 /// would otherwise make head-down its neutral, and its upright frames
 /// would throw the character's head back.
@@ -838,7 +880,12 @@ fn upright(
     mocap: &[Pose],
     rotations: &[[DQuat; Canonical::COUNT]],
 ) -> Vec<[DQuat; Canonical::COUNT]> {
-    let tilt: Vec<f64> = mocap.iter().map(trunk_tilt).collect();
+    // The trunk as the pelvis → chest line: where the neck sits on the
+    // chest (a conversion drops the thorax's length) must not choose them.
+    let tilt: Vec<f64> = mocap
+        .iter()
+        .map(|p| angle(p[C::Chest.index()] - p[C::Pelvis.index()], DVec3::Y))
+        .collect();
     let least = tilt
         .iter()
         .copied()
@@ -872,6 +919,78 @@ fn neck_carriage(rotations: &[[DQuat; Canonical::COUNT]]) -> DQuat {
         q.normalize()
     } else {
         DQuat::IDENTITY
+    }
+}
+
+/// The clip's global joint rotations since its reference per pose of
+/// `mocap` (the poses turned by `tilt`, `r` the reference's pose as the
+/// kernel uses it): the fit to the bones ([`pose_rotations`]), with the
+/// chest (and the spine and neck on it) from the clip's own
+/// joint rotations when the reference carries one per pose
+/// ([`Reference::rotations`], [`torso_from_file`]).
+fn clip_rotations(
+    r: &Pose,
+    mocap: &[Pose],
+    reference: &Reference,
+    tilt: DQuat,
+) -> Vec<[DQuat; Canonical::COUNT]> {
+    let mut rotations: Vec<[DQuat; Canonical::COUNT]> =
+        mocap.par_iter().map(|m| pose_rotations(r, m)).collect();
+    let file = &reference.rotations;
+    // The reference's own file rotations: the rest skeleton's are the
+    // identity; a frame's, turned as the poses are.
+    let at_ref: Option<JointRotations> = match reference.source {
+        ReferenceSource::Rest => Some([Some(DQuat::IDENTITY); Canonical::COUNT]),
+        ReferenceSource::Frame(i) => file.get(i).map(|w| w.map(|q| q.map(|q| tilt * q))),
+    };
+    if let Some(at_ref) = at_ref
+        && file.len() == mocap.len()
+    {
+        rotations
+            .par_iter_mut()
+            .zip(mocap.par_iter().zip(file.par_iter()))
+            .for_each(|(a, (m, w))| {
+                torso_from_file(a, r, m, &w.map(|q| q.map(|q| tilt * q)), &at_ref)
+            });
+    }
+    rotations
+}
+
+/// Replaces the chest's rotation in `a` (the rotations taking the
+/// reference `r`'s bones onto `m`'s) by its file joint's rotation since
+/// the reference (`w · w_ref⁻¹`, when both are known), and re-derives the
+/// single-child spine and neck (the least rotation of their bone,
+/// composed on the parent's, as [`pose_rotations`] does). The pelvis keeps
+/// the fit to its hips and spine bones (see [`retarget_with_neutral`]).
+fn torso_from_file(
+    a: &mut [DQuat; Canonical::COUNT],
+    r: &Pose,
+    m: &Pose,
+    w: &JointRotations,
+    w_ref: &JointRotations,
+) {
+    for c in [C::Pelvis, C::Spine, C::Chest, C::Neck] {
+        let j = c.index();
+        if c == C::Pelvis {
+            continue;
+        }
+        if c == C::Chest {
+            if let (Some(q), Some(q0)) = (w[j], w_ref[j])
+                && (q * q0.inverse()).is_finite()
+            {
+                a[j] = (q * q0.inverse()).normalize();
+            }
+            continue;
+        }
+        let pr = c.parent().map_or(DQuat::IDENTITY, |p| a[p.index()]);
+        let k = if c == C::Spine { C::Chest } else { C::Head }.index();
+        let from = (pr * (r[k] - r[j])).normalize_or_zero();
+        let to = (m[k] - m[j]).normalize_or_zero();
+        a[j] = if from == DVec3::ZERO || to == DVec3::ZERO {
+            pr
+        } else {
+            (DQuat::from_rotation_arc(from, to) * pr).normalize()
+        };
     }
 }
 

@@ -27,8 +27,12 @@
 //!    sits under 0.6 of the next one's distance from the mid-plane; the
 //!    spine is the joint nearest 40% of the pelvis→chest arc; the neck the
 //!    first joint above the chest (a helper-named one when the chain has
-//!    nothing else, CC's NeckTwist01); the head the first joint above it
-//!    whose node branches (jaw, eyes), else the chain's last joint; the toe
+//!    nothing else, CC's NeckTwist01), or the joint carrying it when that
+//!    sits on the chest with a zero offset (the base of the neck, whose
+//!    rotation turns the whole neck bone: CMU cgspeed's `Neck`, where the
+//!    conversion dropped the thorax's length); the head the first joint
+//!    above the first one off the chest whose node branches (jaw, eyes),
+//!    else the chain's last joint; the toe
 //!    the first joint after the ankle that is not a straight pass-through
 //!    (Daz `lMetatarsals`). A joint whose name has the matching role wins
 //!    inside its chain.
@@ -844,12 +848,35 @@ fn body(
         }
         _ => neck_c,
     };
+    // The base of the neck: a joint of the chest's zero-length node, not
+    // the chest itself, that carries the neck chain and nothing else (no
+    // helper, not named for another role). Its rotation turns the whole
+    // neck bone, as an ASF `lowerneck`'s does: a conversion that drops the
+    // thorax's length hangs that joint on the chest with a zero offset
+    // (CMU cgspeed `Neck` under `Spine1`, the 3dsMax-friendly release's
+    // `lowerneck` under `Chest2`), and the first joint above it is then the
+    // top of the lower neck, not its base.
+    let neck_base = g.parent[neck_start].filter(|&p| {
+        p != chest
+            && g.rep[p] == g.rep[chest]
+            && !g.helper[p]
+            && matches!(role_of(tokens, p), None | Some(Role::Neck))
+            && g.children[p]
+                .iter()
+                .all(|&c| c == neck_start || !g.useful[c])
+    });
     let (neck_j, head_c): (usize, Vec<usize>) = match neck_from_chest {
         Some(nj) => (nj, neck_c.clone()),
         None => {
             let k = first_role(tokens, &neck_c, |r| r == Role::Neck).unwrap_or(0);
             let Some(&nj) = neck_c.get(k) else {
                 return Err(NotHumanoid(format!("no neck above '{}'", name(chest))));
+            };
+            // The head is looked for above the first neck joint either way;
+            // the base is the neck unless names put the neck further up.
+            let nj = match neck_base {
+                Some(b) if k == 0 => b,
+                _ => nj,
             };
             (nj, neck_c[k + 1..].to_vec())
         }
