@@ -63,8 +63,8 @@
 //! `tests/keyframe.rs::cost_pruning_keeps_the_unpruned_result_on_random_graphs`
 //! compares the two.
 //!
-//! **Threads**. A layer of at least [`LatticeOptions::parallel_from`]
-//! labels is cut into runs of whole nodes, one per thread of the current
+//! **Threads** (opt-in). A layer of at least
+//! [`LatticeOptions::parallel_from`] labels is cut into runs of whole nodes, one per thread of the current
 //! rayon pool (at most 8), each binned and extended apart; their outputs
 //! are appended in node order, so the labels, their order and the result
 //! are those of one thread.
@@ -117,7 +117,10 @@ pub struct LatticeOptions {
     pub prune: bool,
     /// Labels a layer must hold before its nodes are shared among the
     /// threads of the current rayon pool (the result does not depend on
-    /// it, module docs, "Threads"). Default: 4096.
+    /// it, module docs, "Threads"). Default: `usize::MAX`, never: on the
+    /// shared 2-core machine a second thread made the bench's bandai9
+    /// query slower (1.18 s → 1.85 s at load average 4); 4096 suits idle
+    /// cores.
     pub parallel_from: usize,
 }
 
@@ -132,7 +135,7 @@ impl Default for LatticeOptions {
             min_run: 4,
             within: 0.01,
             prune: true,
-            parallel_from: 4096,
+            parallel_from: usize::MAX,
         }
     }
 }
