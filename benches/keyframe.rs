@@ -10,6 +10,13 @@
 //! rad) and a heading target, which the walks' search puts into each
 //! walk's repetition programme (the wrap of the facing error in the
 //! dominance rule of the exact programme).
+//! `bandai9_*`: a graph of the one-performer database's shape (9 clips of
+//! 105 frames at the speeds of the Bandai walks, runs, dash and bow, 314
+//! transitions at the spread of the graph's costs, 0.0007-0.008), one
+//! query of
+//! 40 m in 38 s (950 frames) by the exact-length search on one thread
+//! without and with the cost pruning, and on two threads (layers of 4096
+//! labels or more shared).
 
 use criterion::Criterion;
 use std::hint::black_box;
@@ -61,6 +68,45 @@ fn graph() -> KeyGraph {
         (2, 1, 117, 30),
     ] {
         succ[start[a] + m].push(((start[b] + k + 1) as u32, 0.004));
+    }
+    KeyGraph::new(&succ, centre, sequence)
+}
+
+/// The one-performer database's shape (module docs).
+fn bandai9_graph() -> KeyGraph {
+    let speeds = [0.05, 0.055, 0.04, 0.035, 0.045, 0.12, 0.13, 0.16, 0.002];
+    let len = 105usize;
+    let mut centre = Vec::new();
+    let mut sequence = Vec::new();
+    for (s, &v) in speeds.iter().enumerate() {
+        for f in 0..len {
+            centre.push([v * f as f64, 0.03 * (f as f64 * 0.25).sin()]);
+            sequence.push(s as u32);
+        }
+    }
+    let n = centre.len();
+    let mut succ: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
+    for f in 0..n - 1 {
+        if sequence[f] == sequence[f + 1] {
+            succ[f].push((f as u32 + 1, 0.0));
+        }
+    }
+    let mut x = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        x = x
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut added = 0;
+    while added < 314 {
+        let (a, b) = ((next() * 9.0) as usize, (next() * 9.0) as usize);
+        let m = a * len + 2 + (next() * (len - 4) as f64) as usize;
+        let to = b * len + 2 + (next() * (len - 4) as f64) as usize;
+        if to != m + 1 && !succ[m].iter().any(|e| e.0 == to as u32) {
+            succ[m].push((to as u32, 0.0007 + 0.0074 * next()));
+            added += 1;
+        }
     }
     KeyGraph::new(&succ, centre, sequence)
 }
@@ -160,6 +206,49 @@ fn main() {
                     &o,
                 )
                 .unwrap()
+            })
+        });
+    }
+    // The one-performer database's shape (module docs).
+    let pb = Planner::new(bandai9_graph(), &[0, (6 * 105 + 100) as u32], 25.0, &o).unwrap();
+    let unpruned = SearchOptions {
+        lattice: surfmotion::keyframe::lattice::LatticeOptions {
+            prune: false,
+            ..o.lattice
+        },
+        ..o
+    };
+    for (name, o, threads) in [
+        ("unpruned_1thread", unpruned, 1),
+        ("pruned_1thread", o, 1),
+        (
+            "pruned_2threads",
+            SearchOptions {
+                lattice: surfmotion::keyframe::lattice::LatticeOptions {
+                    parallel_from: 4096,
+                    ..o.lattice
+                },
+                ..o
+            },
+            2,
+        ),
+    ] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        grp.bench_function(format!("bandai9_{name}_40m_38s"), |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    pb.plan(
+                        black_box(&Targets::Global {
+                            distance: 40.0,
+                            time: 38.0,
+                        }),
+                        &o,
+                    )
+                    .unwrap()
+                })
             })
         });
     }

@@ -1904,3 +1904,157 @@ fn a_far_target_gets_the_best_compromise_within_the_horizon() {
     }
     assert!(checked >= 10, "only {checked} connected cases");
 }
+
+/// As `random_graph`, with transitions dear enough (0.05-0.5) for the
+/// cost pruning of the exact-length search to bite.
+fn random_dear_graph(r: &mut Lcg, seqs: usize, jumps: usize) -> KeyGraph {
+    let mut centre = Vec::new();
+    let mut sequence = Vec::new();
+    let mut starts = Vec::new();
+    for s in 0..seqs {
+        let len = 20 + r.below(21);
+        let speed = 0.01 + 0.08 * r.next();
+        starts.push((centre.len(), len));
+        for f in 0..len {
+            centre.push([f as f64 * speed, 0.02 * (f as f64 * 0.7).sin()]);
+            sequence.push(s as u32);
+        }
+    }
+    let n = centre.len();
+    let mut succ: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
+    for f in 0..n - 1 {
+        if sequence[f] == sequence[f + 1] {
+            succ[f].push((f as u32 + 1, 0.0));
+        }
+    }
+    for _ in 0..jumps {
+        let (a0, la) = starts[r.below(seqs)];
+        let (b0, lb) = starts[r.below(seqs)];
+        let m = a0 + r.below(la);
+        let to = b0 + 1 + r.below(lb - 1);
+        if to != m + 1 {
+            succ[m].push((to as u32, 0.05 + 0.45 * r.next()));
+        }
+    }
+    KeyGraph::new(&succ, centre, sequence)
+}
+
+/// The cost pruning of the exact-length search (a frame count or a label
+/// whose least cost to the goal reaches the best total so far is not
+/// searched further) returns what the unpruned search returns, on random
+/// graphs with dear transitions; the programme under a cap just above its
+/// own result's cost returns that result, the least cost to the goal
+/// bounds it, and a cap just below it changes the outcome in some cases
+/// (the pruning does cut labels here, so the comparison is not vacuous).
+#[test]
+fn cost_pruning_keeps_the_unpruned_result_on_random_graphs() {
+    use surfmotion::keyframe::lattice::{LatticeOptions, solve_capped, solve_exact_length};
+    let mut r = Lcg(97);
+    let o = SearchOptions::default();
+    let off = SearchOptions {
+        lattice: LatticeOptions {
+            prune: false,
+            ..o.lattice
+        },
+        ..o
+    };
+    let (mut compared, mut found, mut bit) = (0, 0, 0);
+    for case in 0..300 {
+        let g = random_dear_graph(&mut r, 3, 16);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
+            continue;
+        };
+        for _ in 0..4 {
+            let t = Targets::Global {
+                distance: 0.2 + 3.0 * r.next(),
+                time: 0.6 + 2.4 * r.next(),
+            };
+            match (p.plan(&t, &o), p.plan(&t, &off)) {
+                (Ok(x), Ok(y)) => {
+                    assert_eq!(x.path, y.path, "case {case} {t:?}");
+                    assert_eq!(x.measure, y.measure, "case {case} {t:?}");
+                    assert_eq!(x.cost, y.cost, "case {case} {t:?}");
+                    found += usize::from(x.stats.exact_length > 0);
+                }
+                (Err(x), Err(y)) => assert_eq!(x, y, "case {case}"),
+                (x, y) => panic!("case {case} {t:?}: {x:?} against {y:?}"),
+            }
+            compared += 1;
+        }
+        let Some(c) = &p.chain else { continue };
+        let frames = 30 + r.below(50);
+        let ext = c.extremes(frames);
+        let (lo, hi) = ext.at(c.start_node(), frames);
+        if !lo.is_finite() {
+            continue;
+        }
+        let d = lo + (hi - lo) * r.next();
+        let (tol, wd, lat) = (0.02 * d + 0.01, 1.0 / 0.3, o.lattice);
+        let Some((f, _)) = solve_exact_length(c, &ext, frames, d, tol, wd, None, &lat) else {
+            continue;
+        };
+        let cost = f.measure.cost;
+        assert!(ext.least_cost(c.start_node(), frames) <= cost + 1e-12);
+        let same = solve_capped(c, &ext, frames, d, tol, wd, None, &lat, cost + 1e-9);
+        assert_eq!(same.map(|x| x.0), Some(f.clone()), "case {case}");
+        let below = solve_capped(c, &ext, frames, d, tol, wd, None, &lat, cost - 1e-6);
+        bit += usize::from(below.is_none_or(|x| x.0 != f));
+    }
+    eprintln!("{compared} searches compared ({found} by the programme), pruning bit {bit} times");
+    assert!(compared >= 400 && found >= 100, "{compared} / {found}");
+    assert!(bit >= 20, "a cap below the optimum changed {bit} results");
+}
+
+/// The exact-length programme shares its larger layers among the threads
+/// of the rayon pool and appends their outputs in node order: the same
+/// path, measure and cost on 1, 2 and 3 threads (every layer shared here).
+#[test]
+fn exact_length_search_gives_the_same_path_on_any_number_of_threads() {
+    let mut r = Lcg(101);
+    let o = SearchOptions {
+        lattice: surfmotion::keyframe::lattice::LatticeOptions {
+            parallel_from: 1,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let pools: Vec<rayon::ThreadPool> = [1, 2, 3]
+        .into_iter()
+        .map(|n| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+        })
+        .collect();
+    let mut found = 0;
+    for case in 0..120 {
+        let g = random_dear_graph(&mut r, 4, 30);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
+            continue;
+        };
+        let t = Targets::Global {
+            distance: 0.5 + 4.0 * r.next(),
+            time: 1.0 + 4.0 * r.next(),
+        };
+        let runs: Vec<_> = pools
+            .iter()
+            .map(|pool| pool.install(|| p.plan(&t, &o)))
+            .collect();
+        for x in &runs[1..] {
+            match (&runs[0], x) {
+                (Ok(a), Ok(b)) => {
+                    assert_eq!(a.path, b.path, "case {case}");
+                    assert_eq!(a.measure, b.measure, "case {case}");
+                    assert_eq!(a.cost, b.cost, "case {case}");
+                }
+                (Err(a), Err(b)) => assert_eq!(a, b, "case {case}"),
+                (a, b) => panic!("case {case}: {a:?} against {b:?}"),
+            }
+        }
+        found += usize::from(runs[0].as_ref().is_ok_and(|x| x.stats.exact_length > 0));
+    }
+    assert!(found >= 30, "only {found} paths by the exact-length search");
+}

@@ -41,6 +41,34 @@
 //! that one global target is split over the segments optimally (any path
 //! through the key-frames in order is a path of the chain).
 //!
+//! **Pruning** ([`LatticeOptions::prune`]). Step 1 also keeps
+//! `c_min(u, m)`, the least transition cost from `u` to the goal in
+//! exactly `m` frames ([`Extremes::least_cost`]). Every term of Eq. 7 but
+//! the transition cost is non-negative, so a frame count `N` whose
+//! `c_min(start, N)` plus its lower bound reaches the best total found so
+//! far is not searched, and within the programme a label of cost `C` at
+//! `(u, k)` with `C + c_min(u, N − k)` at that cap is kept but not
+//! extended ([`solve_capped`]): any path through it costs at least the
+//! best already found. `c_min` obeys `c_min(u, m) ≤ cost(a) + c_min(v, m −
+//! frames(a))` along every arc `a = u → v`, so the descendants of a label
+//! not extended would not have been either, and a bin whose cheapest
+//! label is missing for that reason holds only labels at least as dear,
+//! not extended either: the labels extended are those the unpruned
+//! programme extends whose bound is below the cap, and the result is the
+//! unpruned one whenever it beats the cap (else it was not taken anyway).
+//! The one exception is the labels of least and most distance of a node,
+//! chosen by distance, not cost: if the extreme one is missing, the next
+//! one is kept in its place and may be extended. The grids of the README
+//! give the same reports with and without pruning, and
+//! `tests/keyframe.rs::cost_pruning_keeps_the_unpruned_result_on_random_graphs`
+//! compares the two.
+//!
+//! **Threads** (opt-in). A layer of at least
+//! [`LatticeOptions::parallel_from`] labels is cut into runs of whole nodes, one per thread of the current
+//! rayon pool (at most 8), each binned and extended apart; their outputs
+//! are appended in node order, so the labels, their order and the result
+//! are those of one thread.
+//!
 //! Extensions of Eq. 7 (documented departures from the paper):
 //! - **Heading** ([`Heading`]): labels carry the heading's accumulated turn
 //!   (the placement's rotation at every transition, [`super::place`]); a
@@ -81,6 +109,19 @@ pub struct LatticeOptions {
     /// (Eq. 7) one that is not (module docs); 0: Eq. 7 alone. Default:
     /// 0.01 (the 1 % of the figures).
     pub within: f64,
+    /// Prune by cost (module docs, "Pruning"): a frame count, or a label,
+    /// whose cost bound reaches the best total found so far is not
+    /// searched, or not extended. The result is the one without pruning
+    /// (module docs); `false` searches everything (tests compare the two).
+    /// Default: true.
+    pub prune: bool,
+    /// Labels a layer must hold before its nodes are shared among the
+    /// threads of the current rayon pool (the result does not depend on
+    /// it, module docs, "Threads"). Default: `usize::MAX`, never: on the
+    /// shared 2-core machine a second thread made the bench's bandai9
+    /// query slower (1.18 s → 1.85 s at load average 4); 4096 suits idle
+    /// cores.
+    pub parallel_from: usize,
 }
 
 impl Default for LatticeOptions {
@@ -93,6 +134,8 @@ impl Default for LatticeOptions {
             max_frames: 20_000,
             min_run: 4,
             within: 0.01,
+            prune: true,
+            parallel_from: usize::MAX,
         }
     }
 }
@@ -292,6 +335,10 @@ pub struct Extremes {
     /// programme's inner loop): the least distance to the goal in exactly
     /// `m` frames (`+∞`: none) and the most (`−∞`: none).
     range: Vec<[f64; 2]>,
+    /// The least transition cost (Eq. 8) to the goal in exactly `m`
+    /// frames (`+∞`: none): the cost bound of the programme's pruning
+    /// ([`LatticeOptions::prune`]).
+    cost: Vec<f64>,
 }
 
 impl Extremes {
@@ -304,6 +351,12 @@ impl Extremes {
         let [lo, hi] = self.range[m * self.nodes + u as usize];
         (lo, hi)
     }
+    /// The least transition cost (Eq. 8) of a path from node `u` to the
+    /// goal in exactly `m` frames (`+∞`: none; the rule of
+    /// [`LatticeOptions::min_run`] ignored, so a lower bound).
+    pub fn least_cost(&self, u: u32, m: usize) -> f64 {
+        self.cost[m * self.nodes + u as usize]
+    }
 }
 
 /// The exact-length extremes of a segment up to `m` frames (step 1).
@@ -313,6 +366,7 @@ pub fn extremes(seg: &Segment, m: usize) -> Extremes {
         None => Extremes {
             nodes: 0,
             range: Vec::new(),
+            cost: Vec::new(),
         },
     }
 }
@@ -321,29 +375,39 @@ pub fn extremes(seg: &Segment, m: usize) -> Extremes {
 pub fn chain_extremes(c: &Chain, m: usize) -> Extremes {
     let n = c.node_count();
     let mut range = vec![[f64::INFINITY, f64::NEG_INFINITY]; n * (m + 1)];
+    let mut cost = vec![f64::INFINITY; n * (m + 1)];
     let goal = c.goal as usize;
     range[goal] = [0.0, 0.0];
+    cost[goal] = 0.0;
     for k in 1..=m {
         for u in 0..n {
             if !c.relevant[u] {
                 continue;
             }
             let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            let mut least = f64::INFINITY;
             for a in &c.adj[u] {
                 let l = a.m.frames as usize;
                 if l == 0 || l > k {
                     continue;
                 }
-                let [rlo, rhi] = range[(k - l) * n + a.to as usize];
+                let at = (k - l) * n + a.to as usize;
+                let [rlo, rhi] = range[at];
                 if rlo.is_finite() {
                     lo = lo.min(a.m.distance + rlo);
                     hi = hi.max(a.m.distance + rhi);
+                    least = least.min(a.m.cost + cost[at]);
                 }
             }
             range[k * n + u] = [lo, hi];
+            cost[k * n + u] = least;
         }
     }
-    Extremes { nodes: n, range }
+    Extremes {
+        nodes: n,
+        range,
+        cost,
+    }
 }
 
 /// A label of the forward programme.
@@ -403,14 +467,59 @@ pub fn solve_exact_length(
     heading: Option<&Heading>,
     opts: &LatticeOptions,
 ) -> Option<(Found, f64)> {
+    solve_capped(
+        c,
+        ext,
+        frames,
+        distance,
+        tol,
+        w_dist,
+        heading,
+        opts,
+        f64::INFINITY,
+    )
+}
+
+/// [`solve_exact_length`], extending only the labels whose transition
+/// cost plus [`Extremes::least_cost`] to the goal stays below `cap` (module
+/// docs, "Pruning"): the same result whenever that result's transition
+/// cost is below `cap`, else a result of at least that cost, or `None`.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_capped(
+    c: &Chain,
+    ext: &Extremes,
+    frames: usize,
+    distance: f64,
+    tol: f64,
+    w_dist: f64,
+    heading: Option<&Heading>,
+    opts: &LatticeOptions,
+    cap: f64,
+) -> Option<(Found, f64)> {
     let bins = opts.bins.max(1);
-    let window = |u: u32, k: usize| -> Option<(f64, f64)> {
-        let (lo, hi) = ext.at(u, frames - k);
-        lo.is_finite()
-            .then_some((distance - hi - tol, distance - lo + tol))
+    // Bins per class of frames since the last transition (below
+    // `min_run`, and at least) and per sector of turn, plus the labels of
+    // least and most distance (they alone may reach the extremes of the
+    // window).
+    let classes = opts.min_run as usize + 1;
+    let sectors = heading.map_or(1, |h| h.sectors.max(1));
+    let cells = bins * classes * sectors;
+    let ctx = Layer {
+        c,
+        ext,
+        frames,
+        distance,
+        tol,
+        w_dist,
+        heading,
+        min_run: opts.min_run,
+        cap,
+        bins,
+        classes,
+        cells,
     };
     let start = c.start;
-    window(start, 0)?;
+    ctx.window(start, 0)?;
     let mut layers: Vec<Vec<Label>> = vec![Vec::new(); frames + 1];
     layers[0].push(Label {
         node: start,
@@ -423,24 +532,17 @@ pub fn solve_exact_length(
     // Emptied layers' buffers, reused for later layers (fewer allocations
     // and page faults on long frame counts).
     let mut pool: Vec<Vec<Label>> = Vec::new();
-    // Bins per class of frames since the last transition (below
-    // `min_run`, and at least) and per sector of turn, plus the labels of
-    // least and most distance (they alone may reach the extremes of the
-    // window).
-    let classes = opts.min_run as usize + 1;
-    let sectors = heading.map_or(1, |h| h.sectors.max(1));
-    let cells = bins * classes * sectors;
-    let mut slot: Vec<Option<usize>> = vec![None; cells + 2];
-    // The slots set for the current node (reset for the next), and the
-    // labels they keep.
-    let mut touched: Vec<usize> = Vec::new();
-    let mut kept: Vec<usize> = Vec::new();
-    let (lo_slot, hi_slot) = (cells, cells + 1);
+    // One worker per thread (at most 8) on the larger layers, each with
+    // its scratch and its part of the output.
+    let workers = rayon::current_num_threads().clamp(1, 8);
+    let mut scratch: Vec<Scratch> = (0..workers).map(|_| Scratch::new(cells)).collect();
+    let mut parts: Vec<Part> = (0..workers).map(|_| Part::default()).collect();
     let mut best: Option<(u32, f64, Label)> = None;
     // Labels of a layer grouped by node (a stable counting sort).
     let nodes = c.node_count();
     let mut count = vec![0usize; nodes + 1];
     let mut raw: Vec<Label> = Vec::new();
+    let mut cuts: Vec<usize> = Vec::new();
     for k in 0..=frames {
         let mut layer = std::mem::take(&mut layers[k]);
         count.iter_mut().for_each(|x| *x = 0);
@@ -460,108 +562,59 @@ pub fn solve_exact_length(
         if layer.capacity() > 0 {
             pool.push(layer);
         }
-        let mut i = 0;
-        while i < raw.len() {
-            let u = raw[i].node;
-            let mut j = i;
-            while j < raw.len() && raw[j].node == u {
-                j += 1;
+        // Cut the layer into runs of whole nodes of about equal size (the
+        // parts are merged in order below, so the result does not depend
+        // on the number of workers).
+        let used = if raw.len() >= opts.parallel_from.max(1) {
+            workers
+        } else {
+            1
+        };
+        cuts.clear();
+        cuts.push(0);
+        for p in 1..used {
+            let mut at = (raw.len() * p / used).max(cuts[p - 1]);
+            while at > 0 && at < raw.len() && raw[at].node == raw[at - 1].node {
+                at += 1;
             }
-            let Some((lo, hi)) = window(u, k) else {
-                i = j;
-                continue;
-            };
-            let width = ((hi - lo) / bins as f64).max(1e-12);
-            let mid = 0.5 * (lo + hi);
-            for b in touched.drain(..) {
-                slot[b] = None;
+            cuts.push(at);
+        }
+        cuts.push(raw.len());
+        if used == 1 {
+            ctx.expand(&raw, k, &mut scratch[0], &mut parts[0]);
+        } else {
+            let raw = &raw;
+            let cuts = &cuts;
+            let ctx = &ctx;
+            rayon::scope(|s| {
+                for (p, (sc, out)) in scratch
+                    .iter_mut()
+                    .zip(parts.iter_mut())
+                    .take(used)
+                    .enumerate()
+                {
+                    s.spawn(move |_| ctx.expand(&raw[cuts[p]..cuts[p + 1]], k, sc, out));
+                }
+            });
+        }
+        for part in parts.iter_mut().take(used) {
+            let base = arena.len() as u32;
+            arena.append(&mut part.arena);
+            for (kk, mut l) in part.pushes.drain(..) {
+                l.parent += base;
+                let next = &mut layers[kk as usize];
+                if next.capacity() == 0
+                    && let Some(buf) = pool.pop()
+                {
+                    *next = buf;
+                }
+                next.push(l);
             }
-            for (r, l) in raw[i..j].iter().enumerate() {
-                if slot[lo_slot].is_none_or(|o| l.distance < raw[i + o].distance) {
-                    if slot[lo_slot].is_none() {
-                        touched.push(lo_slot);
-                    }
-                    slot[lo_slot] = Some(r);
-                }
-                if slot[hi_slot].is_none_or(|o| l.distance > raw[i + o].distance) {
-                    if slot[hi_slot].is_none() {
-                        touched.push(hi_slot);
-                    }
-                    slot[hi_slot] = Some(r);
-                }
-                let class = l.since.min(opts.min_run) as usize;
-                let sector = heading.map_or(0, |h| h.sector(l.turn));
-                let b = (sector * classes + class) * bins
-                    + (((l.distance - lo) / width) as usize).min(bins - 1);
-                let better = match slot[b] {
-                    None => true,
-                    Some(o) => {
-                        let o = &raw[i + o];
-                        l.cost < o.cost - 1e-12
-                            || (l.cost <= o.cost + 1e-12
-                                && (l.distance - mid).abs() < (o.distance - mid).abs())
-                    }
-                };
-                if better {
-                    if slot[b].is_none() {
-                        touched.push(b);
-                    }
-                    slot[b] = Some(r);
-                }
+            if let Some((id, sc, l)) = part.best.take()
+                && best.is_none_or(|(_, b, _)| sc < b)
+            {
+                best = Some((id + base, sc, l));
             }
-            kept.clear();
-            kept.extend(touched.iter().filter_map(|&b| slot[b]));
-            kept.sort_unstable();
-            kept.dedup();
-            for &s in &kept {
-                let l = raw[i + s];
-                let id = arena.len() as u32;
-                arena.push((l.parent, l.arc));
-                if k == frames {
-                    if u == c.goal {
-                        let sc = l.cost
-                            + w_dist * (l.distance - distance).abs()
-                            + heading.map_or(0.0, |h| h.cost(l.turn));
-                        if best.is_none_or(|(_, b, _)| sc < b) {
-                            best = Some((id, sc, l));
-                        }
-                    }
-                    continue;
-                }
-                for arc in &c.adj[u as usize] {
-                    let am = arc.m;
-                    let kk = k + am.frames as usize;
-                    if am.frames == 0 || kk > frames || (arc.jump && l.since < opts.min_run) {
-                        continue;
-                    }
-                    let d = l.distance + am.distance;
-                    match window(arc.to, kk) {
-                        Some((lo, hi)) if d >= lo && d <= hi => {
-                            let next = &mut layers[kk];
-                            if next.capacity() == 0
-                                && let Some(buf) = pool.pop()
-                            {
-                                *next = buf;
-                            }
-                            next.push(Label {
-                                node: arc.to,
-                                parent: id,
-                                arc: arc.index,
-                                distance: d,
-                                cost: l.cost + am.cost,
-                                turn: l.turn + arc.turn,
-                                since: if arc.jump {
-                                    am.frames
-                                } else {
-                                    l.since.saturating_add(am.frames)
-                                },
-                            })
-                        }
-                        _ => {}
-                    }
-                }
-            }
-            i = j;
         }
     }
     let (id, sc, l) = best?;
@@ -584,6 +637,173 @@ pub fn solve_exact_length(
         },
         sc,
     ))
+}
+
+/// What one call of the programme fixes (steps 2-3).
+struct Layer<'a> {
+    c: &'a Chain,
+    ext: &'a Extremes,
+    frames: usize,
+    distance: f64,
+    tol: f64,
+    w_dist: f64,
+    heading: Option<&'a Heading>,
+    min_run: u32,
+    cap: f64,
+    bins: usize,
+    classes: usize,
+    cells: usize,
+}
+
+/// A worker's bins: the slots set for the current node (reset for the
+/// next), and the labels they keep.
+struct Scratch {
+    slot: Vec<Option<usize>>,
+    touched: Vec<usize>,
+    kept: Vec<usize>,
+}
+
+impl Scratch {
+    fn new(cells: usize) -> Scratch {
+        Scratch {
+            slot: vec![None; cells + 2],
+            touched: Vec::new(),
+            kept: Vec::new(),
+        }
+    }
+}
+
+/// A worker's output for a run of nodes: the trace-back of the labels it
+/// kept (parents global, indices local), the labels they extend to (layer,
+/// label with a local parent index), and its best label at the goal.
+#[derive(Default)]
+struct Part {
+    arena: Vec<(u32, u32)>,
+    pushes: Vec<(u32, Label)>,
+    best: Option<(u32, f64, Label)>,
+}
+
+impl Layer<'_> {
+    /// The window of distances so far at node `u` after `k` frames.
+    fn window(&self, u: u32, k: usize) -> Option<(f64, f64)> {
+        let (lo, hi) = self.ext.at(u, self.frames - k);
+        lo.is_finite()
+            .then_some((self.distance - hi - self.tol, self.distance - lo + self.tol))
+    }
+
+    /// Bins the labels of `raw` (whole nodes of layer `k`, sorted by node)
+    /// and extends the kept ones into `out`.
+    fn expand(&self, raw: &[Label], k: usize, sc: &mut Scratch, out: &mut Part) {
+        let (bins, classes, frames) = (self.bins, self.classes, self.frames);
+        let (lo_slot, hi_slot) = (self.cells, self.cells + 1);
+        let Scratch {
+            slot,
+            touched,
+            kept,
+        } = sc;
+        let mut i = 0;
+        while i < raw.len() {
+            let u = raw[i].node;
+            let mut j = i;
+            while j < raw.len() && raw[j].node == u {
+                j += 1;
+            }
+            let Some((lo, hi)) = self.window(u, k) else {
+                i = j;
+                continue;
+            };
+            let width = ((hi - lo) / bins as f64).max(1e-12);
+            let mid = 0.5 * (lo + hi);
+            for b in touched.drain(..) {
+                slot[b] = None;
+            }
+            for (r, l) in raw[i..j].iter().enumerate() {
+                if slot[lo_slot].is_none_or(|o| l.distance < raw[i + o].distance) {
+                    if slot[lo_slot].is_none() {
+                        touched.push(lo_slot);
+                    }
+                    slot[lo_slot] = Some(r);
+                }
+                if slot[hi_slot].is_none_or(|o| l.distance > raw[i + o].distance) {
+                    if slot[hi_slot].is_none() {
+                        touched.push(hi_slot);
+                    }
+                    slot[hi_slot] = Some(r);
+                }
+                let class = l.since.min(self.min_run) as usize;
+                let sector = self.heading.map_or(0, |h| h.sector(l.turn));
+                let b = (sector * classes + class) * bins
+                    + (((l.distance - lo) / width) as usize).min(bins - 1);
+                let better = match slot[b] {
+                    None => true,
+                    Some(o) => {
+                        let o = &raw[i + o];
+                        l.cost < o.cost - 1e-12
+                            || (l.cost <= o.cost + 1e-12
+                                && (l.distance - mid).abs() < (o.distance - mid).abs())
+                    }
+                };
+                if better {
+                    if slot[b].is_none() {
+                        touched.push(b);
+                    }
+                    slot[b] = Some(r);
+                }
+            }
+            kept.clear();
+            kept.extend(touched.iter().filter_map(|&b| slot[b]));
+            kept.sort_unstable();
+            kept.dedup();
+            for &s in kept.iter() {
+                let l = raw[i + s];
+                let id = out.arena.len() as u32;
+                out.arena.push((l.parent, l.arc));
+                if k == frames {
+                    if u == self.c.goal {
+                        let sc = l.cost
+                            + self.w_dist * (l.distance - self.distance).abs()
+                            + self.heading.map_or(0.0, |h| h.cost(l.turn));
+                        if out.best.is_none_or(|(_, b, _)| sc < b) {
+                            out.best = Some((id, sc, l));
+                        }
+                    }
+                    continue;
+                }
+                // No path on from here can cost less than the cap.
+                if l.cost + self.ext.least_cost(u, frames - k) >= self.cap {
+                    continue;
+                }
+                for arc in &self.c.adj[u as usize] {
+                    let am = arc.m;
+                    let kk = k + am.frames as usize;
+                    if am.frames == 0 || kk > frames || (arc.jump && l.since < self.min_run) {
+                        continue;
+                    }
+                    let d = l.distance + am.distance;
+                    match self.window(arc.to, kk) {
+                        Some((lo, hi)) if d >= lo && d <= hi => out.pushes.push((
+                            kk as u32,
+                            Label {
+                                node: arc.to,
+                                parent: id,
+                                arc: arc.index,
+                                distance: d,
+                                cost: l.cost + am.cost,
+                                turn: l.turn + arc.turn,
+                                since: if arc.jump {
+                                    am.frames
+                                } else {
+                                    l.since.saturating_add(am.frames)
+                                },
+                            },
+                        )),
+                        _ => {}
+                    }
+                }
+            }
+            i = j;
+        }
+    }
 }
 
 /// Is `(distance, frames)` (start counted) within `within` of the targets?
@@ -649,14 +869,28 @@ pub fn search(
         })
         .collect();
     order.sort_by(|x, y| x.0.total_cmp(&y.0));
+    order.truncate(8);
     let tol = lo.tolerance * t.distance + lo.tolerance_m;
+    // Cost pruning needs every term of `total` but the transition cost
+    // non-negative (then `total ≥ cost + bound`).
+    let prune =
+        lo.prune && w.distance >= 0.0 && w.time >= 0.0 && heading.is_none_or(|h| h.weight >= 0.0);
+    // The frame counts in order, each pruned against the best so far
+    // (module docs, "Pruning").
     let mut best: Option<(Found, f64)> = None;
-    for &(bound, n, aim) in order.iter().take(8) {
+    for &(bound, n, aim) in &order {
         if best.as_ref().is_some_and(|b| bound >= b.1) {
             break;
         }
+        let cap = match &best {
+            Some(b) if prune => b.1 - bound + slack(b.1),
+            _ => f64::INFINITY,
+        };
+        if ext.least_cost(c.start, n as usize) >= cap {
+            continue;
+        }
         if let Some((found, _)) =
-            solve_exact_length(c, &ext, n as usize, aim, tol, w.distance, heading, &lo)
+            solve_capped(c, &ext, n as usize, aim, tol, w.distance, heading, &lo, cap)
         {
             let cost = total(&found);
             if best.as_ref().is_none_or(|b| cost < b.1) {
@@ -691,9 +925,19 @@ pub fn search(
             if nonneg && inside.as_ref().is_some_and(|b| time >= b.1) {
                 continue;
             }
+            // Nor is one whose least transition cost plus its time term
+            // reaches it; the labels are pruned against it (`total ≥ cost
+            // + time` for a landing path).
+            let cap = match &inside {
+                Some(b) if prune => b.1 - time + slack(b.1),
+                _ => f64::INFINITY,
+            };
+            if ext.least_cost(c.start, n as usize) >= cap {
+                continue;
+            }
             let tol = dt * (1.0 - 1e-9);
-            if let Some((found, _)) = solve_exact_length(
-                c, &ext, n as usize, t.distance, tol, w.distance, heading, &lo,
+            if let Some((found, _)) = solve_capped(
+                c, &ext, n as usize, t.distance, tol, w.distance, heading, &lo, cap,
             ) {
                 let cost = total(&found);
                 if lands(&found, cs, t, within) && inside.as_ref().is_none_or(|b| cost < b.1) {
@@ -706,6 +950,12 @@ pub fn search(
         }
     }
     best
+}
+
+/// The margin a cost cap leaves above a total `b` (rounding of the sums
+/// of bounds must not prune a path whose total is below `b`).
+fn slack(b: f64) -> f64 {
+    1e-9 * (1.0 + b.abs())
 }
 
 /// What the exact-length programme says about a target `(d, t)` at a
