@@ -155,7 +155,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
                 bar.println(line);
             }
         } else {
-            eprintln!("{line}");
+            crate::errln!("{line}");
         }
     };
     let r = batch_folder(&a.mocap_dir, &a.output, converter.as_ref(), &opts, &log)?;

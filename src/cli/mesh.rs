@@ -83,7 +83,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 },
             )?;
             let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
-            eprintln!(
+            crate::errln!(
                 "wrote {}: {}, {}, {}",
                 names.join(" and "),
                 super::count(seq.mesh().vertex_count(), "vertex"),
@@ -93,12 +93,12 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             let glb = surfmotion::mesh::io::MeshFormat::of(&a.output)
                 == Some(surfmotion::mesh::io::MeshFormat::Glb);
             if (a.glb.glb_quantize || a.glb.glb_no_normals) && !glb {
-                eprintln!("note: the --glb-* options apply to .glb output only; ignored");
+                crate::errln!("note: the --glb-* options apply to .glb output only; ignored");
             } else if a.glb.glb_quantize {
                 // The error of what a reader gets back, through our reader.
                 let back = load_sequence(&a.output.display().to_string(), &LoadOptions::default())?;
                 let e = max_vertex_error(seq.all_positions(), back.all_positions());
-                eprintln!(
+                crate::errln!(
                     "quantised: max vertex error {e:.3e} ({:.2e} of the bounding-box diagonal)",
                     e / seq.bounds().diagonal().max(f64::MIN_POSITIVE)
                 );

@@ -201,7 +201,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             }
             surfmotion::mocap::bvh::write_bvh(&clip, &a.output)
                 .with_context(|| format!("writing {}", a.output.display()))?;
-            eprintln!(
+            crate::errln!(
                 "wrote {} ({}, {} at {:.3} fps)",
                 a.output.display(),
                 super::count(clip.joint_count(), "joint"),
@@ -250,7 +250,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     a.output.join(format!("{}.bvh", g.name()))
                 };
                 surfmotion::mocap::bvh::write_bvh(&clip, &path)?;
-                eprintln!(
+                crate::errln!(
                     "wrote {} ({} at {} fps)",
                     path.display(),
                     super::count(clip.frame_count(), "frame"),

@@ -276,7 +276,7 @@ impl<S: tracing::Subscriber> tracing_subscriber::Layer<S> for PlainNotices {
         }
         let mut m = Message(String::new());
         e.record(&mut m);
-        eprintln!("{}", m.0);
+        crate::errln!("{}", m.0);
     }
 }
 
@@ -597,6 +597,17 @@ pub fn emit(text: &str) -> anyhow::Result<()> {
 #[macro_export]
 macro_rules! outln {
     ($($t:tt)*) => { $crate::cli::emit(&format!("{}\n", format!($($t)*))) };
+}
+
+/// `eprintln!` that never panics: a line on stderr, dropped when stderr
+/// is closed or full (`eprintln!` panicked there: `mesh convert A B
+/// 2>&-` and every other verb that reports on stderr exited 2).
+#[macro_export]
+macro_rules! errln {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($t)*);
+    }};
 }
 
 /// An error and its causes on one line. A cause already said is left

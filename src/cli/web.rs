@@ -166,13 +166,13 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     let t = tempfile::tempdir()?;
                     let site = t.path().join("site");
                     let r = export(&a.source, &site)?;
-                    eprint!("{}", summary(&r));
+                    crate::errln!("{}", summary(&r).trim_end());
                     _tmp = t;
                     site
                 }
             };
             let server = web::SiteServer::bind(&root, &format!("{}:{}", a.bind, a.port))?;
-            println!("serving {} at {}", root.display(), server.url());
+            crate::outln!("serving {} at {}", root.display(), server.url())?;
             server.run();
             Ok(())
         }

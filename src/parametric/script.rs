@@ -45,6 +45,28 @@ pub struct Request {
 /// Longest session a script may ask for (seconds): one hour.
 pub const MAX_SECONDS: f64 = 3600.0;
 
+/// Largest speed a script may ask for (m/s, either sign): far beyond any
+/// space's range, which the controller clamps to; a larger value
+/// (`"speed": 1e300`) is a typo, and was echoed as a 300-digit number.
+pub const MAX_SPEED: f64 = 100.0;
+
+/// Largest turn rate a script may ask for (deg/s, either sign): ten turns
+/// a second. The steering turn is not clamped by a space's range, so
+/// `"turn": -1e300` played a character spun by 1e300 degrees a second
+/// (exit 0).
+pub const MAX_TURN: f64 = 3600.0;
+
+/// A number as a person reads it in a message: plain in [1e-4, 1e6),
+/// else in scientific notation (`{}` of 1e300 prints 301 digits).
+pub fn short_number(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// Parses and checks a script against the model's spaces and parameters.
 pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Request>, ScriptError> {
     let err = |msg: String| ScriptError {
@@ -80,18 +102,26 @@ pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Requ
                     .as_f64()
                     .filter(|v| v.is_finite())
                     .map(Some)
-                    .ok_or_else(|| at(format!("\"{k}\" is {x}, expected a number"))),
+                    .ok_or_else(|| {
+                        at(format!(
+                            "\"{k}\" is {}, expected a number",
+                            crate::db::manifest::printable(&x.to_string(), 40)
+                        ))
+                    }),
             }
         };
         let t = num("t")?.ok_or_else(|| at("no \"t\" (the request's time in seconds)".into()))?;
         if !(0.0..=MAX_SECONDS).contains(&t) {
             return Err(at(format!(
-                "t = {t}: expected seconds in [0, {MAX_SECONDS}]"
+                "t = {}: expected seconds in [0, {MAX_SECONDS}]",
+                short_number(t)
             )));
         }
         if t < last {
             return Err(at(format!(
-                "t = {t} is before the previous request's {last}: requests must be in time order"
+                "t = {} is before the previous request's {}: requests must be in time order",
+                short_number(t),
+                short_number(last)
             )));
         }
         last = t;
@@ -126,11 +156,20 @@ pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Requ
                 Some(s.to_string())
             }
         };
+        let bounded = |k: &str, max: f64, unit: &str| -> Result<Option<f64>, ScriptError> {
+            match num(k)? {
+                Some(v) if v.abs() > max => Err(at(format!(
+                    "\"{k}\" is {} {unit}: expected at most {max} {unit} either way",
+                    short_number(v)
+                ))),
+                v => Ok(v),
+            }
+        };
         out.push(Request {
             t,
             space,
-            speed: num("speed")?,
-            turn: num("turn")?,
+            speed: bounded("speed", MAX_SPEED, "m/s")?,
+            turn: bounded("turn", MAX_TURN, "deg/s")?,
         });
     }
     Ok(out)
