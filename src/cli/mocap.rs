@@ -263,6 +263,8 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             if let Some(o) = &a.output {
                 let mut inputs = vec![a.clip.clone()];
                 inputs.extend(a.opts.asf.clone());
+                // And onto the --rig-map it reads (rewritten in place, exit 0).
+                inputs.extend(a.opts.rig_map.clone());
                 surfmotion::mesh::io::refuse_overwriting(&inputs, o)?;
             }
             let opts = a.opts.load_options()?;

@@ -589,7 +589,8 @@ pub fn emit(text: &str) -> anyhow::Result<()> {
     match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
         Ok(()) => Ok(()),
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(OutputClosed.into()),
-        Err(e) => Err(e.into()),
+        // Named: "surfmotion: No space left on device" did not say where.
+        Err(e) => Err(anyhow::anyhow!("writing to standard output: {e}")),
     }
 }
 

@@ -69,6 +69,22 @@ pub fn short_number(v: f64) -> String {
 
 /// Parses and checks a script against the model's spaces and parameters.
 pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Request>, ScriptError> {
+    let spaces: Vec<(&str, &[Parameter])> = motion
+        .spaces
+        .iter()
+        .map(|s| (s.name.as_str(), s.parameters.as_slice()))
+        .collect();
+    parse_script_for(text, path, &spaces)
+}
+
+/// [`parse_script`] against spaces given by name and parameters (what a
+/// script is checked against; the fuzz target and the malformed-input
+/// tests call it without building a model).
+pub fn parse_script_for(
+    text: &str,
+    path: &Path,
+    spaces: &[(&str, &[Parameter])],
+) -> Result<Vec<Request>, ScriptError> {
     let err = |msg: String| ScriptError {
         path: path.to_path_buf(),
         msg,
@@ -82,12 +98,11 @@ pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Requ
     if list.is_empty() {
         return Err(err("the script has no requests".into()));
     }
-    let declared: Vec<&str> = motion
-        .spaces
+    let declared: Vec<&str> = spaces
         .iter()
-        .flat_map(|s| s.parameters.iter().map(|p| p.name()))
+        .flat_map(|(_, ps)| ps.iter().map(|p| p.name()))
         .collect();
-    let names: Vec<&str> = motion.spaces.iter().map(|s| s.name.as_str()).collect();
+    let names: Vec<&str> = spaces.iter().map(|(n, _)| *n).collect();
     let mut out = Vec::with_capacity(list.len());
     let mut last = 0.0;
     for (i, r) in list.iter().enumerate() {
