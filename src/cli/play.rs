@@ -94,7 +94,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         surfmotion::parametric::script::parse_script_for(&text, &a.script, &spaces)?;
     }
     let t0 = Instant::now();
-    let (motion, cached) = load_or_build(&a.db, &MotionOptions::default(), false)?;
+    let bar = super::spinner("loading or building the parametric model");
+    let built = load_or_build(&a.db, &MotionOptions::default(), false);
+    bar.finish_and_clear();
+    let (motion, cached) = built?;
     let build_s = t0.elapsed().as_secs_f64();
     let script = parse_script(&text, &a.script, &motion)?;
     let seconds = a
@@ -111,7 +114,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let report = play(&motion, &script, Some(seconds), |p| {
         frames.extend_from_slice(p)
     });
-    for n in &report.notices {
+    // The text summary ends with the notices (`note: ...`); only for
+    // --json, whose stdout goes to a program, are they logged on stderr
+    // (each was printed twice, as a WARN and as a note).
+    for n in report.notices.iter().filter(|_| a.json) {
         tracing::warn!(
             "{}: request {} (t = {} s): {}",
             a.script.display(),
