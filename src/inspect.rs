@@ -138,6 +138,11 @@ pub enum InspectError {
         "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj; .json landmarks or markers)"
     )]
     Unknown(PathBuf),
+    /// A mesh path that is not UTF-8: mesh paths are read as text
+    /// (`SEQ.pc2:FRAME`), and a lossy copy named another file ("No such
+    /// file or directory" for a file that is there).
+    #[error("{}: a mesh file name that is not UTF-8 is not supported; rename it", .0.display())]
+    NotUtf8(PathBuf),
 }
 
 /// Options for [`inspect`].
@@ -207,7 +212,10 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
     {
         return inspect_json(path).map(Report::Json);
     }
-    let spec = path.to_string_lossy().to_string();
+    let spec = path
+        .to_str()
+        .ok_or_else(|| InspectError::NotUtf8(path.to_path_buf()))?
+        .to_string();
     if let Some(e) = crate::mesh::io::bad_frame_ref(&spec) {
         return Err(e.into());
     }

@@ -341,6 +341,9 @@ fn rows() -> Vec<Row> {
     r.extend(session6_rows());
     // Session 7: what the session-6 review reported and left.
     r.extend(session7_rows());
+    // Session 8: the new-user and attacker walk; each row exited 0 (or
+    // printed a 300-digit number) before its fix.
+    r.extend(session8_rows());
     // The sweep: verbs × malformed files, each message naming the file.
     let bvh_cut = {
         let t = walk_text();
@@ -712,6 +715,93 @@ fn session7_rows() -> Vec<Row> {
             &["--seconds", "expected seconds in (0, 3600]"],
         )
         .file("s.json", SCRIPT),
+    ]
+}
+
+fn session8_rows() -> Vec<Row> {
+    vec![
+        // `t = 1000…000` (301 digits).
+        row(
+            "play: a script time of 1e300 is printed short",
+            "play --db {d}/db --script {d}/s.json -o {d}/p.pc2",
+            &["s.json", "request 0", "t = 1e300", "[0, 3600]"],
+        )
+        .with_db()
+        .file("db/character.toml", manifest_with(SPACE))
+        .file(
+            "s.json",
+            "[{\"t\": 1e300, \"space\": \"locomotion\", \"speed\": 2}]",
+        ),
+        // Exit 0: the steering turn is not clamped, and the character
+        // spun 1e300 degrees a second.
+        row(
+            "play: a turn of -1e300 deg/s",
+            "play --db {d}/db --script {d}/s.json -o {d}/p.pc2",
+            &[
+                "s.json",
+                "request 0",
+                "\"turn\" is -1e300 deg/s",
+                "at most 3600",
+            ],
+        )
+        .with_db()
+        .file("db/character.toml", manifest_with(SPACE))
+        .file(
+            "s.json",
+            "[{\"t\": 0, \"space\": \"locomotion\", \"turn\": -1e300}]",
+        ),
+        // Exit 0, clamped, with the 301-digit number in the note.
+        row(
+            "play: a speed of 1e300 m/s",
+            "play --db {d}/db --script {d}/s.json -o {d}/p.pc2",
+            &[
+                "s.json",
+                "request 1",
+                "\"speed\" is 1e300 m/s",
+                "at most 100",
+            ],
+        )
+        .with_db()
+        .file("db/character.toml", manifest_with(SPACE))
+        .file(
+            "s.json",
+            "[{\"t\": 0, \"space\": \"locomotion\"}, {\"t\": 1, \"speed\": 1e300}]",
+        ),
+        // Exit 0: the embedding replaced the landmarks it was made from.
+        row(
+            "rig embed -o onto its --landmarks",
+            "rig embed {topo} --landmarks {d}/l.json -o {d}/l.json",
+            &["-o", "l.json", "overwrite the input"],
+        )
+        .file("l.json", landmarks_json()),
+        row(
+            "rig embed --png onto its -o",
+            "rig embed {topo} --landmarks {lm} -o {d}/r.png --png {d}/r.png",
+            &["--png", "r.png", "-o writes the same file"],
+        ),
+        // Exit 0: the database's own walk.pc2 counted as the clip's
+        // complete output ("already done").
+        row(
+            "batch -o into the database folder",
+            "batch --db {d}/db --mocap-dir {d}/lib -o {d}/db --format pc2",
+            &["walk.bvh", "walk.pc2", "overwrite the input"],
+        )
+        .with_db()
+        .file("lib/walk.bvh", walk_text()),
+        // Ran one clip at a time, silently.
+        row(
+            "batch --jobs 0",
+            "batch --db {db} --mocap-dir {d}/lib -o {d}/out --jobs 0",
+            &["--jobs", "0"],
+        )
+        .file("lib/walk.bvh", walk_text()),
+        // Exit 0: the map was rewritten in place.
+        row(
+            "mocap rigmap -o onto its --rig-map",
+            "mocap rigmap {walk} --rig-map {d}/m.json -o {d}/m.json",
+            &["m.json", "overwrite the input"],
+        )
+        .file("m.json", "{}"),
     ]
 }
 
@@ -2342,4 +2432,200 @@ fn an_unwritable_stderr_never_aborts() {
             .unwrap();
         assert_eq!(status.code(), Some(1), "{args:?}: {status:?}");
     }
+}
+
+/// Regression (session 8 walk): a chain of 100,000 joints, which the BVH
+/// reader accepts, overflowed the stack in the BVH writer (`mocap
+/// convert` aborted, exit 134); it converts, and the output reads back
+/// with every joint.
+#[test]
+fn a_deep_joint_chain_converts_without_overflowing_the_stack() {
+    let tmp = tempfile::tempdir().unwrap();
+    let n = 100_000;
+    let mut s = String::from(
+        "HIERARCHY\nROOT r\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n",
+    );
+    for i in 0..n {
+        s.push_str(&format!(
+            "JOINT j{i}\n{{\nOFFSET 0 1 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n"
+        ));
+    }
+    s.push_str("End Site\n{\nOFFSET 0 1 0\n}\n");
+    s.push_str(&"}\n".repeat(n + 1));
+    s.push_str("MOTION\nFrames: 1\nFrame Time: 0.0333333\n");
+    s.push_str(&vec!["0"; 3 * (n + 1)].join(" "));
+    s.push('\n');
+    let input = tmp.path().join("deep.bvh");
+    std::fs::write(&input, s).unwrap();
+    let out = tmp.path().join("out.bvh");
+    let r = common::run_cli(
+        &[
+            "mocap".as_ref(),
+            "convert".as_ref(),
+            input.as_os_str(),
+            out.as_os_str(),
+        ],
+        None,
+        &[],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let back = surfmotion::mocap::bvh::read_bvh(&out, &Default::default()).unwrap();
+    assert_eq!(back.joint_count(), n + 1);
+    // The indentation stops deepening: the text stays linear in the depth.
+    let size = std::fs::metadata(&out).unwrap().len();
+    assert!(size < 400 * (n as u64 + 1), "{size} bytes");
+}
+
+/// Regression (session 8 walk): `inspect` of a mesh whose file name is not
+/// UTF-8 said "No such file or directory" for a file that is there (a
+/// lossy copy of the name was opened); it says the name is not supported.
+#[cfg(unix)]
+#[test]
+fn a_mesh_name_that_is_not_utf8_is_named_as_such() {
+    use std::os::unix::ffi::OsStrExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let name = std::ffi::OsStr::from_bytes(b"n\xff.obj");
+    let p = tmp.path().join(name);
+    std::fs::write(&p, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let r = common::run_cli(&["inspect".as_ref(), p.as_os_str()], None, &[]);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(r.stderr.contains("not UTF-8"), "{}", r.stderr);
+    assert!(!r.stderr.contains("No such file"), "{}", r.stderr);
+}
+
+/// Regression (session 8 walk): the verbs that report on stderr with
+/// `eprintln!` (`mesh convert`, `mocap convert`, `mocap procedural`, `db
+/// init`, `graph --matrix`, `batch`, `web serve`) panicked when stderr
+/// could not be written (exit 2 after the work was done); the line is
+/// dropped and the verb succeeds. And a full stdout is named as such.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_full_stderr_never_fails_a_verb_that_succeeded() {
+    if !std::fs::metadata("/dev/full").is_ok_and(|m| !m.is_file()) {
+        eprintln!("SKIPPED: no /dev/full here");
+        return;
+    }
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let topo = f.db.join("topology.obj");
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    let p = |s: &str| d.join(s).display().to_string();
+    let cases: Vec<Vec<String>> = vec![
+        vec![
+            "mesh".into(),
+            "convert".into(),
+            topo.display().to_string(),
+            p("m.obj"),
+        ],
+        vec![
+            "mocap".into(),
+            "convert".into(),
+            f.walk.display().to_string(),
+            p("w.bvh"),
+        ],
+        vec![
+            "mocap".into(),
+            "procedural".into(),
+            "--gait".into(),
+            "walk".into(),
+            "-o".into(),
+            p("g.bvh"),
+        ],
+        vec![
+            "db".into(),
+            "init".into(),
+            p("x"),
+            "--mesh".into(),
+            topo.display().to_string(),
+        ],
+    ];
+    for args in &cases {
+        let status = Command::new(common::bin())
+            .args(args)
+            .stdout(std::process::Stdio::null())
+            .stderr(full())
+            .status()
+            .unwrap();
+        assert_eq!(status.code(), Some(0), "{args:?}: {status:?}");
+    }
+    let out = Command::new(common::bin())
+        .args(["inspect".as_ref(), f.walk.as_os_str()])
+        .stdout(full())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("writing to standard output"), "{err}");
+}
+
+/// Regression (session 8 walk): `play` built the parametric model (7.5 s
+/// on the demo database, minutes on a real one) before it read the
+/// script, so a typo in the script was reported only after the build.
+/// The script is now checked against the manifest's spaces first: no
+/// model is built (no `cache/parametric.bin` appears).
+#[test]
+fn a_bad_play_script_is_refused_before_the_model_is_built() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    copy_dir(&fixture().db, &d.join("db"));
+    std::fs::write(d.join("db/character.toml"), manifest_with(SPACE)).unwrap();
+    let _ = std::fs::remove_file(d.join("db/cache/parametric.bin"));
+    std::fs::write(d.join("s.json"), "[{\"t\": 0, \"space\": \"locomotoin\"}]").unwrap();
+    let args: Vec<String> = expand("play --db {d}/db --script {d}/s.json -o {d}/p.pc2", d);
+    let r = common::run_cli(&args, None, &[]);
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(r.stderr.contains("no space 'locomotoin'"), "{}", r.stderr);
+    assert!(
+        !d.join("db/cache/parametric.bin").exists(),
+        "the model was built before the script was read"
+    );
+}
+
+/// Regression (session 8 walk): a `play` notice (a speed clamped to the
+/// space's range) was printed twice, as a WARN on stderr and as a `note:`
+/// line of the summary; the summary keeps it and stderr stays quiet
+/// (with --json, where stdout goes to a program, it is logged instead).
+#[test]
+fn play_notices_are_printed_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    copy_dir(&fixture().db, &d.join("db"));
+    std::fs::write(d.join("db/character.toml"), manifest_with(SPACE)).unwrap();
+    std::fs::write(
+        d.join("s.json"),
+        "[{\"t\": 0, \"space\": \"locomotion\", \"speed\": 9}]",
+    )
+    .unwrap();
+    let args = expand("play --db {d}/db --script {d}/s.json -o {d}/p.pc2", d);
+    let r = common::run_cli(&args, None, &[]);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let said = |s: &str| s.matches("speed 9 m/s is outside").count();
+    assert_eq!(said(&r.stdout), 1, "{}", r.stdout);
+    assert_eq!(said(&r.stderr), 0, "{}", r.stderr);
+}
+
+/// Regression (session 8 walk): `mesh convert` and `mocap convert` had no
+/// `--json` (every other verb that writes a file has one); with it they
+/// print what they wrote as JSON on stdout.
+#[test]
+fn mesh_and_mocap_convert_print_json() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let json = |args: Vec<String>| -> serde_json::Value {
+        let r = common::run_cli(&args, None, &[]);
+        assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
+        serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{e}: {}", r.stdout))
+    };
+    let v = json(expand("mesh convert {db}/walk.pc2 {d}/w.glb --json", d));
+    assert_eq!(v["vertices"], 6304);
+    assert_eq!(v["frames"], 180);
+    let v = json(expand("mocap convert {walk} {d}/w.bvh --fps 60 --json", d));
+    assert_eq!(v["joints"], 19);
+    assert!((v["fps"].as_f64().unwrap() - 60.0).abs() < 1e-6, "{v}");
 }

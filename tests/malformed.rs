@@ -67,6 +67,45 @@ fn readers() -> Vec<(&'static str, Reader)> {
                 4,
             ))
         }),
+        // Session 8: the readers the fuzz targets cover and this run did
+        // not (fuzz/fuzz_targets/{rigmap,sm4d,script,motion,embedding,cache}.rs).
+        ("rigmap", |b| {
+            drop(serde_json::from_str::<surfmotion::rig::RigMap>(&text(b)))
+        }),
+        ("sm4d", |b| drop(surfmotion::web::codec::decode(b))),
+        ("script", |b| {
+            use surfmotion::parametric::Parameter;
+            let spaces: [(&str, &[Parameter]); 1] =
+                [("locomotion", &[Parameter::Speed, Parameter::Turn])];
+            drop(surfmotion::parametric::script::parse_script_for(
+                &text(b),
+                Path::new("s.json"),
+                &spaces,
+            ))
+        }),
+        ("motion", |b| {
+            let mesh = surfmotion::mesh::Mesh::new(
+                vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                vec![[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]],
+            )
+            .unwrap();
+            let key = b
+                .get(8..16)
+                .map_or(0, |k| u64::from_le_bytes(k.try_into().unwrap()));
+            drop(surfmotion::parametric::store::parse(b, key, &mesh))
+        }),
+        ("embedding", |b| {
+            drop(surfmotion::rig::embed::Embedding::parse(
+                &text(b),
+                Path::new("rig.json"),
+                4,
+            ))
+        }),
+        ("manifest", |b| {
+            if let Ok(m) = toml::from_str::<surfmotion::db::Manifest>(&text(b)) {
+                let _ = m.validate();
+            }
+        }),
     ]
 }
 
@@ -108,6 +147,12 @@ fn seeds(fmt: &str) -> Vec<Vec<u8>> {
         "landmarks" => vec![br#"{"chin": 1, "groin": [0, 1, 0], "l_wrist": 2, "r_wrist": 3, "l_elbow": 4, "r_elbow": 5, "l_knee": 6, "r_knee": [1e308, -0.5, 0]}"#.to_vec()],
         "markers" => vec![br#"{"triangle_count": 100, "markers": [{"name": "l_forearm/0/1", "triangle": 7, "bone": "l_elbow"}, {"name": "x", "triangle": 99}]}"#.to_vec()],
         "parts" => vec![br#"{"torso": [0, 1], "head": [2], "l_shin": [3, 3]}"#.to_vec()],
+        "rigmap" => vec![br#"{"convention": "x", "joints": {"pelvis": "Hips", "spine": "Spine", "l_knee": "L"}}"#.to_vec()],
+        "sm4d" => vec![[&b"SM4DGEO\0"[..], &[4, 0, 0, 0, 2, 0, 0, 0, 255, 255, 255, 127], &[0u8; 64]].concat()],
+        "script" => vec![br#"[{"t": 0, "space": "locomotion", "speed": 1.2}, {"t": 3, "turn": 30}, {"t": 4.5, "speed": -99.5}]"#.to_vec()],
+        "motion" => vec![[&b"SMPAR001"[..], &[7u8; 8], &[4, 0, 0, 0, 255, 255, 255, 255], &[0u8; 64]].concat()],
+        "embedding" => vec![br#"{"vertex_count": 4, "labels": [0, 1, 2, 3], "skin": [], "regressors": [], "regions": [], "joints": [], "facing": [1, 0, 0], "height": 1.7}"#.to_vec()],
+        "manifest" => vec![b"name = \"x\"\ntopology = \"t.obj\"\nfps = 30.0\nunits = \"m\"\nup = \"y\"\n[[sequence]]\nname = \"a\"\npath = \"a.pc2\"\n[rig]\nlandmarks = \"l.json\"\n[graph]\ntop_n = 3\n[[space]]\nname = \"s\"\nsequences = [\"a\"]\nparameters = [\"speed\"]\n".to_vec()],
         _ => vec![],
     }
 }

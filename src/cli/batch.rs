@@ -33,8 +33,9 @@ pub struct Args {
     /// (shards of one split may share it): batch.lock holds its pid.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Clips converted at once (default: the number of cores).
-    #[arg(long)]
+    /// Clips converted at once, 1 to 1024 (default: the number of cores).
+    /// (`--jobs 0` ran one at a time without a word.)
+    #[arg(long, value_parser = super::bounded_count(1, 1024))]
     pub jobs: Option<usize>,
     /// Only shard i of n (1-based), e.g. `--shard $SLURM_ARRAY_TASK_ID/8`:
     /// clip k of the sorted list goes to shard k mod n + 1.
@@ -80,6 +81,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         );
     }
     let format = Format::from(a.format);
+    refuse_outputs_over_inputs(&a, format)?;
     let load = a.clip.load_options()?;
     let scan_job = a.scan_job.job()?;
     let retarget_opts = a.retarget_job.options();
@@ -155,7 +157,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
                 bar.println(line);
             }
         } else {
-            eprintln!("{line}");
+            crate::errln!("{line}");
         }
     };
     let r = batch_folder(&a.mocap_dir, &a.output, converter.as_ref(), &opts, &log)?;
@@ -189,5 +191,36 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         s.clips,
         files[0].display()
     );
+    Ok(())
+}
+
+/// Refuses, before any work, a clip whose output would replace one of the
+/// batch's inputs: `-o` the database folder made clip `walk.bvh`'s output
+/// the database's own `walk.pc2` (reported as "already done", exit 0, or
+/// replaced with --force), and `-o` the scan's folder would write a
+/// clip's topology OBJ over the scan of the same name.
+fn refuse_outputs_over_inputs(a: &Args, format: Format) -> anyhow::Result<()> {
+    let mut inputs = Vec::new();
+    if let Some(db) = &a.db {
+        inputs.extend(super::database_inputs(db));
+    }
+    if let Some(scan) = &a.scan {
+        inputs.extend(surfmotion::mesh::io::input_files(scan, None));
+    }
+    inputs.extend(a.landmarks.clone());
+    inputs.extend(a.clip.rig_map.clone());
+    inputs.extend(a.clip.asf.clone());
+    let Ok(clips) = surfmotion::batch::find_clips(&a.mocap_dir) else {
+        return Ok(()); // the batch itself reports an unreadable folder
+    };
+    for rel in &clips {
+        let out = surfmotion::batch::output_path(&a.output, rel, format);
+        let mut outputs = vec![("-o", out.clone())];
+        if format == Format::Pc2 {
+            outputs.push(("-o", out.with_extension("obj")));
+        }
+        super::refuse_colliding(&inputs, &outputs)
+            .map_err(|e| anyhow::anyhow!("clip {}: {}", a.mocap_dir.join(rel).display(), e))?;
+    }
     Ok(())
 }

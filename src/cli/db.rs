@@ -358,7 +358,7 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         *p = store(p);
     }
     m.save(&a.dir)?;
-    eprintln!(
+    crate::errln!(
         "wrote {} ({}); check it with `surfmotion db info {}`",
         manifest.display(),
         super::count(m.sequences.len(), "sequence"),

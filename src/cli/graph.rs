@@ -37,7 +37,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let (mat, g, _) = surfmotion::db::build(&a.dir, &opts, &super::db::Bars::new())?;
     if let Some(p) = &a.matrix {
         matrix_image(&mat, &g, a.size).save_png(p)?;
-        eprintln!("wrote {}", p.display());
+        crate::errln!("wrote {}", p.display());
     }
     if a.dot {
         return super::emit(&g.to_dot());

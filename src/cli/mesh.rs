@@ -18,9 +18,11 @@ pub enum Cmd {
 pub struct ConvertArgs {
     /// Input mesh or sequence (PATH:FRAME picks one frame).
     pub input: String,
-    /// Output path.
+    /// Output path; its extension picks the format (see above). A point
+    /// cache also writes its topology OBJ beside it.
     pub output: PathBuf,
-    /// Topology for a point cache input.
+    /// Topology for a point cache input (default: the .obj of the same
+    /// name beside it).
     #[arg(long, value_name = "MESH")]
     pub topology: Option<PathBuf>,
     /// Frame rate where the input has none (default 30).
@@ -32,6 +34,11 @@ pub struct ConvertArgs {
     pub force: bool,
     #[command(flatten)]
     pub glb: GlbArgs,
+    /// Print what was written as JSON on stdout (files, vertices,
+    /// triangles, frames, fps, and for --glb-quantize the measured error
+    /// in metres) instead of the line on stderr.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// GLB output options, shared by every verb that writes meshes.
@@ -82,25 +89,42 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     glb: a.glb.options(),
                 },
             )?;
+            let glb = surfmotion::mesh::io::MeshFormat::of(&a.output)
+                == Some(surfmotion::mesh::io::MeshFormat::Glb);
+            let ignored = (a.glb.glb_quantize || a.glb.glb_no_normals) && !glb;
+            // The error of what a reader gets back, through our reader.
+            let error = if a.glb.glb_quantize && glb {
+                let back = load_sequence(&a.output.display().to_string(), &LoadOptions::default())?;
+                let e = max_vertex_error(seq.all_positions(), back.all_positions());
+                Some((e, e / seq.bounds().diagonal().max(f64::MIN_POSITIVE)))
+            } else {
+                None
+            };
+            if a.json {
+                let v = serde_json::json!({
+                    "output": files,
+                    "vertices": seq.mesh().vertex_count(),
+                    "triangles": seq.mesh().triangle_count(),
+                    "frames": seq.frame_count(),
+                    "fps": seq.fps,
+                    "glb_options_ignored": ignored,
+                    "quantised_max_vertex_error": error.map(|e| e.0),
+                });
+                return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
+            }
             let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
-            eprintln!(
+            crate::errln!(
                 "wrote {}: {}, {}, {}",
                 names.join(" and "),
                 super::count(seq.mesh().vertex_count(), "vertex"),
                 super::count(seq.mesh().triangle_count(), "triangle"),
                 super::count(seq.frame_count(), "frame")
             );
-            let glb = surfmotion::mesh::io::MeshFormat::of(&a.output)
-                == Some(surfmotion::mesh::io::MeshFormat::Glb);
-            if (a.glb.glb_quantize || a.glb.glb_no_normals) && !glb {
-                eprintln!("note: the --glb-* options apply to .glb output only; ignored");
-            } else if a.glb.glb_quantize {
-                // The error of what a reader gets back, through our reader.
-                let back = load_sequence(&a.output.display().to_string(), &LoadOptions::default())?;
-                let e = max_vertex_error(seq.all_positions(), back.all_positions());
-                eprintln!(
-                    "quantised: max vertex error {e:.3e} ({:.2e} of the bounding-box diagonal)",
-                    e / seq.bounds().diagonal().max(f64::MIN_POSITIVE)
+            if ignored {
+                crate::errln!("note: the --glb-* options apply to .glb output only; ignored");
+            } else if let Some((e, rel)) = error {
+                crate::errln!(
+                    "quantised: max vertex error {e:.3e} ({rel:.2e} of the bounding-box diagonal)"
                 );
             }
         }

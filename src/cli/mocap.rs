@@ -61,11 +61,12 @@ pub struct PositionsArgs {
 /// Arguments of `mocap convert`.
 #[derive(clap::Args)]
 pub struct ConvertArgs {
-    /// Input clip.
+    /// Input clip (.bvh, or .amc with its .asf).
     pub input: PathBuf,
-    /// Output .bvh.
+    /// Output .bvh (written atomically).
     pub output: PathBuf,
-    /// Resample to this frame rate (slerp of rotations, lerp of translations).
+    /// Resample to this frame rate, frames per second in [1, 1000]
+    /// (slerp of rotations, lerp of translations). Default: the input's.
     #[arg(long, value_parser = super::frame_rate)]
     pub fps: Option<f64>,
     /// Units of the output: `metres` converts lengths to metres and the up
@@ -80,6 +81,10 @@ pub struct ConvertArgs {
     /// `--output-units metres`, its name before.
     #[arg(long, hide = true, conflicts_with = "units")]
     pub metres: bool,
+    /// Print what was written as JSON on stdout (output, joints, frames,
+    /// fps) instead of the line on stderr.
+    #[arg(long)]
+    pub json: bool,
     #[command(flatten)]
     pub opts: ClipOpts,
 }
@@ -201,7 +206,16 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             }
             surfmotion::mocap::bvh::write_bvh(&clip, &a.output)
                 .with_context(|| format!("writing {}", a.output.display()))?;
-            eprintln!(
+            if a.json {
+                let v = serde_json::json!({
+                    "output": a.output,
+                    "joints": clip.joint_count(),
+                    "frames": clip.frame_count(),
+                    "fps": clip.fps(),
+                });
+                return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
+            }
+            crate::errln!(
                 "wrote {} ({}, {} at {:.3} fps)",
                 a.output.display(),
                 super::count(clip.joint_count(), "joint"),
@@ -250,7 +264,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     a.output.join(format!("{}.bvh", g.name()))
                 };
                 surfmotion::mocap::bvh::write_bvh(&clip, &path)?;
-                eprintln!(
+                crate::errln!(
                     "wrote {} ({} at {} fps)",
                     path.display(),
                     super::count(clip.frame_count(), "frame"),
@@ -263,6 +277,8 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             if let Some(o) = &a.output {
                 let mut inputs = vec![a.clip.clone()];
                 inputs.extend(a.opts.asf.clone());
+                // And onto the --rig-map it reads (rewritten in place, exit 0).
+                inputs.extend(a.opts.rig_map.clone());
                 surfmotion::mesh::io::refuse_overwriting(&inputs, o)?;
             }
             let opts = a.opts.load_options()?;

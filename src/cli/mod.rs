@@ -227,6 +227,25 @@ pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
     bar
 }
 
+/// A spinner with a message and the elapsed time on a terminal (hidden
+/// when stderr is not one), for work whose library call reports no
+/// progress (`web export`: 10 s on samba with nothing on the screen;
+/// `play`'s model build). Clear it with `finish_and_clear`.
+pub fn spinner(what: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    bar.set_message(what.to_string());
+    bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    bar
+}
+
 /// The first frame of a mesh file, keeping only the named OBJ groups when
 /// any are given.
 pub fn load_mesh_groups(spec: &str, groups: &[String]) -> anyhow::Result<surfmotion::mesh::Mesh> {
@@ -276,7 +295,7 @@ impl<S: tracing::Subscriber> tracing_subscriber::Layer<S> for PlainNotices {
         }
         let mut m = Message(String::new());
         e.record(&mut m);
-        eprintln!("{}", m.0);
+        crate::errln!("{}", m.0);
     }
 }
 
@@ -589,7 +608,8 @@ pub fn emit(text: &str) -> anyhow::Result<()> {
     match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
         Ok(()) => Ok(()),
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(OutputClosed.into()),
-        Err(e) => Err(e.into()),
+        // Named: "surfmotion: No space left on device" did not say where.
+        Err(e) => Err(anyhow::anyhow!("writing to standard output: {e}")),
     }
 }
 
@@ -597,6 +617,17 @@ pub fn emit(text: &str) -> anyhow::Result<()> {
 #[macro_export]
 macro_rules! outln {
     ($($t:tt)*) => { $crate::cli::emit(&format!("{}\n", format!($($t)*))) };
+}
+
+/// `eprintln!` that never panics: a line on stderr, dropped when stderr
+/// is closed or full (`eprintln!` panicked there: `mesh convert A B
+/// 2>&-` and every other verb that reports on stderr exited 2).
+#[macro_export]
+macro_rules! errln {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($t)*);
+    }};
 }
 
 /// An error and its causes on one line. A cause already said is left

@@ -62,6 +62,18 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
 }
 
 fn embed(a: EmbedArgs) -> anyhow::Result<()> {
+    // No output over an input, checked before any work (`-o LANDMARKS.json`
+    // replaced the landmarks with the embedding, exit 0).
+    let mut inputs = surfmotion::mesh::io::input_files(&a.mesh, None);
+    inputs.extend(
+        [&a.landmarks, &a.skin, &a.rig_map, &a.parts]
+            .into_iter()
+            .flatten()
+            .cloned(),
+    );
+    let mut outputs = vec![("-o", a.output.clone())];
+    outputs.extend(a.png.clone().map(|p| ("--png", p)));
+    super::refuse_colliding(&inputs, &outputs)?;
     let mut mesh = super::load_mesh_groups(&a.mesh, &a.group)?;
     let parts = match &a.parts {
         Some(p) => Some(parse_parts(&read_text(p)?, p, mesh.triangles(), mesh.vertex_count())?.0),

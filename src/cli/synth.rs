@@ -127,20 +127,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         )?;
     } else {
         crate::outln!(
-            "wrote {} ({} sequences, {} frames): rig embedded in {:.2} s, {} frames synthesised in {:.2} s ({:.0} frames/s)",
+            "wrote {} ({}, {}): rig embedded in {:.2} s, {} synthesised in {:.2} s ({:.0} frames/s)",
             dir.display(),
-            r.sequences.len(),
-            r.frames,
+            super::count(r.sequences.len(), "sequence"),
+            super::count(r.frames, "frame"),
             embed_s,
-            r.frames,
+            super::count(r.frames, "frame"),
             r.synth_seconds,
             r.frames as f64 / r.synth_seconds.max(1e-9)
         )?;
         for s in &r.sequences {
             crate::outln!(
-                "  {}: {} frames from {}",
+                "  {}: {} from {}",
                 s.sequence,
-                s.frames,
+                super::count(s.frames, "frame"),
                 s.source.display()
             )?;
         }

@@ -147,7 +147,10 @@ fn summary(r: &web::ExportReport) -> String {
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
         Cmd::Export(a) => {
-            let r = export(&a.source, &a.out)?;
+            let bar = super::spinner("exporting the site (geometry, transitions, spaces)");
+            let r = export(&a.source, &a.out);
+            bar.finish_and_clear();
+            let r = r?;
             if a.json {
                 super::emit(&(serde_json::to_string_pretty(&r)? + "\n"))
             } else {
@@ -165,14 +168,17 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 None => {
                     let t = tempfile::tempdir()?;
                     let site = t.path().join("site");
-                    let r = export(&a.source, &site)?;
-                    eprint!("{}", summary(&r));
+                    let bar = super::spinner("exporting the site");
+                    let r = export(&a.source, &site);
+                    bar.finish_and_clear();
+                    let r = r?;
+                    crate::errln!("{}", summary(&r).trim_end());
                     _tmp = t;
                     site
                 }
             };
             let server = web::SiteServer::bind(&root, &format!("{}:{}", a.bind, a.port))?;
-            println!("serving {} at {}", root.display(), server.url());
+            crate::outln!("serving {} at {}", root.display(), server.url())?;
             server.run();
             Ok(())
         }

@@ -765,55 +765,65 @@ pub fn format_bvh(clip: &Clip) -> String {
     let mut order = Vec::with_capacity(n);
     let mut s = String::new();
     s.push_str("HIERARCHY\n");
-    fn emit(
-        clip: &Clip,
-        children: &[Vec<JointId>],
-        j: usize,
-        depth: usize,
-        s: &mut String,
-        order: &mut Vec<(usize, bool, [usize; 3])>,
-    ) {
-        let ind = "\t".repeat(depth);
-        let joint = &clip.joints[j];
-        let kw = if joint.parent.is_none() {
-            "ROOT"
-        } else {
-            "JOINT"
-        };
-        let _ = writeln!(s, "{ind}{kw} {}\n{ind}{{", joint.name);
-        let o = joint.offset;
-        let _ = writeln!(s, "{ind}\tOFFSET {} {} {}", o.x, o.y, o.z);
-        let pos = joint.parent.is_none() || joint.has_position_channels();
-        let rot = euler::writable_rotation_order(&joint.channels);
-        let names = ["Xrotation", "Yrotation", "Zrotation"];
-        if pos {
-            let _ = writeln!(
-                s,
-                "{ind}\tCHANNELS 6 Xposition Yposition Zposition {} {} {}",
-                names[rot[0]], names[rot[1]], names[rot[2]]
-            );
-        } else {
-            let _ = writeln!(
-                s,
-                "{ind}\tCHANNELS 3 {} {} {}",
-                names[rot[0]], names[rot[1]], names[rot[2]]
-            );
-        }
-        order.push((j, pos, rot));
-        for c in &children[j] {
-            emit(clip, children, c.idx(), depth + 1, s, order);
-        }
-        if children[j].is_empty() {
-            let t = joint.tail.unwrap_or(DVec3::ZERO);
-            let _ = writeln!(
-                s,
-                "{ind}\tEnd Site\n{ind}\t{{\n{ind}\t\tOFFSET {} {} {}\n{ind}\t}}",
-                t.x, t.y, t.z
-            );
-        }
-        let _ = writeln!(s, "{ind}}}");
+    // An explicit stack, not recursion: a chain of 100,000 joints (which
+    // the reader accepts) overflowed the stack (`mocap convert` aborted);
+    // the indentation stops deepening at MAX_INDENT tabs, as one tab per
+    // level made such a file's text quadratic in its depth.
+    const MAX_INDENT: usize = 32;
+    enum Step {
+        Open(usize, usize),
+        Close(usize, usize),
     }
-    emit(clip, &children, 0, 0, &mut s, &mut order);
+    let mut stack = vec![Step::Open(0, 0)];
+    while let Some(step) = stack.pop() {
+        match step {
+            Step::Open(j, depth) => {
+                let ind = "\t".repeat(depth.min(MAX_INDENT));
+                let joint = &clip.joints[j];
+                let kw = if joint.parent.is_none() {
+                    "ROOT"
+                } else {
+                    "JOINT"
+                };
+                let _ = writeln!(s, "{ind}{kw} {}\n{ind}{{", joint.name);
+                let o = joint.offset;
+                let _ = writeln!(s, "{ind}\tOFFSET {} {} {}", o.x, o.y, o.z);
+                let pos = joint.parent.is_none() || joint.has_position_channels();
+                let rot = euler::writable_rotation_order(&joint.channels);
+                let names = ["Xrotation", "Yrotation", "Zrotation"];
+                if pos {
+                    let _ = writeln!(
+                        s,
+                        "{ind}\tCHANNELS 6 Xposition Yposition Zposition {} {} {}",
+                        names[rot[0]], names[rot[1]], names[rot[2]]
+                    );
+                } else {
+                    let _ = writeln!(
+                        s,
+                        "{ind}\tCHANNELS 3 {} {} {}",
+                        names[rot[0]], names[rot[1]], names[rot[2]]
+                    );
+                }
+                order.push((j, pos, rot));
+                stack.push(Step::Close(j, depth));
+                for c in children[j].iter().rev() {
+                    stack.push(Step::Open(c.idx(), depth + 1));
+                }
+            }
+            Step::Close(j, depth) => {
+                let ind = "\t".repeat(depth.min(MAX_INDENT));
+                if children[j].is_empty() {
+                    let t = clip.joints[j].tail.unwrap_or(DVec3::ZERO);
+                    let _ = writeln!(
+                        s,
+                        "{ind}\tEnd Site\n{ind}\t{{\n{ind}\t\tOFFSET {} {} {}\n{ind}\t}}",
+                        t.x, t.y, t.z
+                    );
+                }
+                let _ = writeln!(s, "{ind}}}");
+            }
+        }
+    }
     let _ = writeln!(
         s,
         "MOTION\nFrames: {}\nFrame Time: {}",

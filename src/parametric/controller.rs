@@ -70,8 +70,9 @@ impl std::fmt::Display for Notice {
                 range,
             } => write!(
                 f,
-                "space '{space}': {} {asked} {u} is outside the valid range [{:.3}, {:.3}] {u}: clamped to {used:.3}",
+                "space '{space}': {} {} {u} is outside the valid range [{:.3}, {:.3}] {u}: clamped to {used:.3}",
                 parameter.name(),
+                super::script::short_number(*asked),
                 range[0],
                 range[1],
                 u = parameter.unit()

@@ -45,8 +45,46 @@ pub struct Request {
 /// Longest session a script may ask for (seconds): one hour.
 pub const MAX_SECONDS: f64 = 3600.0;
 
+/// Largest speed a script may ask for (m/s, either sign): far beyond any
+/// space's range, which the controller clamps to; a larger value
+/// (`"speed": 1e300`) is a typo, and was echoed as a 300-digit number.
+pub const MAX_SPEED: f64 = 100.0;
+
+/// Largest turn rate a script may ask for (deg/s, either sign): ten turns
+/// a second. The steering turn is not clamped by a space's range, so
+/// `"turn": -1e300` played a character spun by 1e300 degrees a second
+/// (exit 0).
+pub const MAX_TURN: f64 = 3600.0;
+
+/// A number as a person reads it in a message: plain in [1e-4, 1e6),
+/// else in scientific notation (`{}` of 1e300 prints 301 digits).
+pub fn short_number(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// Parses and checks a script against the model's spaces and parameters.
 pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Request>, ScriptError> {
+    let spaces: Vec<(&str, &[Parameter])> = motion
+        .spaces
+        .iter()
+        .map(|s| (s.name.as_str(), s.parameters.as_slice()))
+        .collect();
+    parse_script_for(text, path, &spaces)
+}
+
+/// [`parse_script`] against spaces given by name and parameters (what a
+/// script is checked against; the fuzz target and the malformed-input
+/// tests call it without building a model).
+pub fn parse_script_for(
+    text: &str,
+    path: &Path,
+    spaces: &[(&str, &[Parameter])],
+) -> Result<Vec<Request>, ScriptError> {
     let err = |msg: String| ScriptError {
         path: path.to_path_buf(),
         msg,
@@ -60,12 +98,11 @@ pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Requ
     if list.is_empty() {
         return Err(err("the script has no requests".into()));
     }
-    let declared: Vec<&str> = motion
-        .spaces
+    let declared: Vec<&str> = spaces
         .iter()
-        .flat_map(|s| s.parameters.iter().map(|p| p.name()))
+        .flat_map(|(_, ps)| ps.iter().map(|p| p.name()))
         .collect();
-    let names: Vec<&str> = motion.spaces.iter().map(|s| s.name.as_str()).collect();
+    let names: Vec<&str> = spaces.iter().map(|(n, _)| *n).collect();
     let mut out = Vec::with_capacity(list.len());
     let mut last = 0.0;
     for (i, r) in list.iter().enumerate() {
@@ -80,18 +117,26 @@ pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Requ
                     .as_f64()
                     .filter(|v| v.is_finite())
                     .map(Some)
-                    .ok_or_else(|| at(format!("\"{k}\" is {x}, expected a number"))),
+                    .ok_or_else(|| {
+                        at(format!(
+                            "\"{k}\" is {}, expected a number",
+                            crate::db::manifest::printable(&x.to_string(), 40)
+                        ))
+                    }),
             }
         };
         let t = num("t")?.ok_or_else(|| at("no \"t\" (the request's time in seconds)".into()))?;
         if !(0.0..=MAX_SECONDS).contains(&t) {
             return Err(at(format!(
-                "t = {t}: expected seconds in [0, {MAX_SECONDS}]"
+                "t = {}: expected seconds in [0, {MAX_SECONDS}]",
+                short_number(t)
             )));
         }
         if t < last {
             return Err(at(format!(
-                "t = {t} is before the previous request's {last}: requests must be in time order"
+                "t = {} is before the previous request's {}: requests must be in time order",
+                short_number(t),
+                short_number(last)
             )));
         }
         last = t;
@@ -126,11 +171,20 @@ pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Requ
                 Some(s.to_string())
             }
         };
+        let bounded = |k: &str, max: f64, unit: &str| -> Result<Option<f64>, ScriptError> {
+            match num(k)? {
+                Some(v) if v.abs() > max => Err(at(format!(
+                    "\"{k}\" is {} {unit}: expected at most {max} {unit} either way",
+                    short_number(v)
+                ))),
+                v => Ok(v),
+            }
+        };
         out.push(Request {
             t,
             space,
-            speed: num("speed")?,
-            turn: num("turn")?,
+            speed: bounded("speed", MAX_SPEED, "m/s")?,
+            turn: bounded("turn", MAX_TURN, "deg/s")?,
         });
     }
     Ok(out)

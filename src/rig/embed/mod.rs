@@ -362,11 +362,15 @@ impl Embedding {
 
     /// Reads an embedding and checks it against the mesh's vertex count.
     pub fn load(path: &Path, vertex_count: usize) -> Result<Embedding, EmbedError> {
-        let e: Embedding =
-            serde_json::from_str(&read_text(path)?).map_err(|e| EmbedError::File {
-                path: path.to_path_buf(),
-                reason: e.to_string(),
-            })?;
+        Self::parse(&read_text(path)?, path, vertex_count)
+    }
+
+    /// [`Embedding::load`] of a file's text (`path` names it in errors).
+    pub fn parse(text: &str, path: &Path, vertex_count: usize) -> Result<Embedding, EmbedError> {
+        let e: Embedding = serde_json::from_str(text).map_err(|e| EmbedError::File {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
         let bad = |reason: &str| EmbedError::File {
             path: path.to_path_buf(),
             reason: reason.into(),
