@@ -40,11 +40,10 @@
 //!   scaled the same way. The clip's ground is first levelled
 //!   ([`ground_tilt`]); then in every frame where the clip stands on its
 //!   ground ([`clip_support`]: its floor, or the support under a planted
-//!   foot's footfall, a step) the lowest sole point (toe joint, heel,
-//!   toe tip) of each character foot that touches is put on the
-//!   character's floor (its rest frame's) raised by the support that foot
-//!   touches, scaled; the correction is interpolated across frames where
-//!   the clip does not (a run's flight).
+//!   foot's footfall, a step) the character's lowest sole point (toe
+//!   joint, heel, toe tip) is put on the character's floor (its rest
+//!   frame's) raised by that support, scaled; the correction is
+//!   interpolated across frames where the clip does not (a run's flight).
 //! - **The character's neutral** ([`character_neutral`]): its rest frame
 //!   when that stands upright, else the database frame nearest neutral;
 //!   [`retarget_with_neutral`] turns the torso, neck, head and feet from
@@ -471,33 +470,22 @@ pub fn retarget_with_neutral(
             (t, g)
         })
         .collect();
-    // Feet on the ground: in every frame where a foot of the clip touches
-    // its ground (planted, its lowest joint within 3 cm of that
-    // footfall's support, or within 3 cm of the floor), the same foot of
-    // the character has its lowest sole point (its toe joint, or a heel
-    // under its ankle) on the character's floor raised by that support's
-    // height above the clip's floor, scaled (a step, a kerb); when both
-    // feet touch, the one that needs the body higher holds it (no sole
-    // through its support). Between such frames (a run's flight) the
-    // correction is interpolated. Whatever the two skeletons' hip offsets
-    // and foot lengths. Each foot is measured against its own support: a
-    // foot still lifting off the floor (or stepping down to it) while the
-    // other stands on a block is not put on the block's top, which stood
-    // the body 10-22 cm up for a frame or more at each footfall of CMU
-    // 03_02 (the query jumped by that much between frames).
-    let rest_soles = foot_soles(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
+    // Feet on the ground: in every frame where the clip stands on its
+    // ground (a foot planted, its lowest joint within 3 cm of that
+    // footfall's support), the character's lowest sole point (a toe joint,
+    // or a heel under an ankle) stands on the character's floor raised by
+    // the support's height above the clip's floor, scaled (a step, a
+    // kerb); between such frames (a run's flight) the correction is
+    // interpolated. Whatever the two skeletons' hip offsets and foot
+    // lengths (a longer foot dips its toe further when the heel lifts).
+    let sole_rest = sole_height(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
     let fix: Vec<Option<f64>> = out
         .iter()
-        .enumerate()
-        .map(|(i, (t, g))| {
-            let soles = foot_soles(character, t, g);
-            (0..2)
-                .filter_map(|f| {
-                    let raised = (support.touch[f][i]? - clip_floor) * s;
-                    let d = rest_soles[f] + raised - soles[f];
-                    d.is_finite().then_some(d)
-                })
-                .reduce(f64::max)
+        .zip(&support.ground)
+        .map(|((t, g), ground)| {
+            let h = sole_height(character, t, g);
+            let raised = ground.map(|y| (y - clip_floor) * s)?;
+            h.is_finite().then_some(sole_rest + raised - h)
         })
         .collect();
     let lift = interpolate_gaps(&fix);
@@ -511,13 +499,9 @@ pub fn retarget_with_neutral(
 
 /// The lowest sole point of the character posed as `t` with global
 /// rotations `g`: its toe joints; under each ankle a heel point at the
-/// height of the toe in the rest pose `character`; and a toe tip a
-/// quarter of the foot's horizontal length beyond the toe joint at its
-/// height (a foot pivoting on its toes dips the tips: a skinned mesh's
-/// toes do not bend); both carried by the ankle. Keeping the tips at the
-/// toe joint's height (real toes bend) brought the samba self-transfer's
-/// vertex error 3.53 -> 3.34 % but stood `synth` databases 0.95 cm below
-/// their rest floor (tests/retarget_ground); not kept.
+/// height of the toe in the rest pose `character`; and a toe tip a quarter of the
+/// foot's horizontal length beyond the toe joint at its height (a foot
+/// pivoting on its toes dips the tips); both carried by the ankle.
 fn sole_height(character: &Pose, t: &Pose, g: &[DQuat; Canonical::COUNT]) -> f64 {
     let [l, r] = foot_soles(character, t, g);
     l.min(r)
@@ -551,11 +535,6 @@ pub struct Support {
     /// Per frame, the support under the clip's lowest planted foot when it
     /// touches it (its lowest joint within 3 cm); `None` in the air.
     pub ground: Vec<Option<f64>>,
-    /// Per foot (left, right) and frame, the support the foot touches: its
-    /// footfall's when its lowest joint is within 3 cm of it, the floor
-    /// when within 3 cm of the floor; `None` otherwise. `ground` is the
-    /// lowest of the two.
-    pub touch: [Vec<Option<f64>>; 2],
 }
 
 /// The clip's support per footfall (poses levelled, Y-up, metres; `leg`
@@ -583,12 +562,8 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
         .copied()
         .unwrap_or_else(|| mocap.first().map_or(0.0, |p| p[C::Pelvis.index()].y));
     let mut ground: Vec<Option<f64>> = vec![None; mocap.len()];
-    let mut touch: [Vec<Option<f64>>; 2] = [vec![None; mocap.len()], vec![None; mocap.len()]];
     let still = 0.02 * leg.max(1e-9);
-    for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
-        .into_iter()
-        .enumerate()
-    {
+    for (ankle, toe) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)] {
         let (a, k) = (ankle.index(), toe.index());
         let low = |p: &Pose| if p[a].y <= p[k].y { p[a] } else { p[k] };
         let planted: Vec<bool> = (0..mocap.len())
@@ -633,28 +608,18 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
             let sup = if sup <= floor + 0.06 { floor } else { sup };
             for i in run {
                 if low(&mocap[i]).y <= sup + 0.03 {
-                    touch[foot][i] = Some(sup);
+                    ground[i] = Some(ground[i].map_or(sup, |g: f64| g.min(sup)));
                 }
             }
         }
-        // On the floor, as on a flat capture: the foot within 3 cm of it.
-        for (i, p) in mocap.iter().enumerate() {
-            if low(p).y <= floor + 0.03 {
-                touch[foot][i] = Some(floor);
-            }
+    }
+    // On the floor, as on a flat capture: any foot within 3 cm of it.
+    for (g, p) in ground.iter_mut().zip(mocap) {
+        if foot_height(p) <= floor + 0.03 {
+            *g = Some(floor);
         }
     }
-    for (i, g) in ground.iter_mut().enumerate() {
-        *g = match (touch[0][i], touch[1][i]) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        };
-    }
-    Support {
-        floor,
-        ground,
-        touch,
-    }
+    Support { floor, ground }
 }
 
 /// The height of the clip's ground above its floor per frame, in the
