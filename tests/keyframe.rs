@@ -145,6 +145,12 @@ fn heading_is_optimised_jointly_with_the_repetition_counts() {
 /// A random frame graph: `seqs` sequences of 20-40 frames walking at
 /// different speeds (with a lateral sway), and random transitions.
 fn random_graph(r: &mut Lcg, seqs: usize, jumps: usize) -> KeyGraph {
+    random_graph_costing(r, seqs, jumps, 0.001, 0.01)
+}
+
+/// `random_graph` with each transition costing `least + span · u`,
+/// `u` uniform in [0, 1).
+fn random_graph_costing(r: &mut Lcg, seqs: usize, jumps: usize, least: f64, span: f64) -> KeyGraph {
     let mut centre = Vec::new();
     let mut sequence = Vec::new();
     let mut starts = Vec::new();
@@ -171,7 +177,7 @@ fn random_graph(r: &mut Lcg, seqs: usize, jumps: usize) -> KeyGraph {
         let m = a0 + r.below(la);
         let to = b0 + 1 + r.below(lb - 1);
         if to != m + 1 {
-            succ[m].push((to as u32, 0.001 + 0.01 * r.next()));
+            succ[m].push((to as u32, least + span * r.next()));
         }
     }
     KeyGraph::new(&succ, centre, sequence)
@@ -1908,35 +1914,7 @@ fn a_far_target_gets_the_best_compromise_within_the_horizon() {
 /// As `random_graph`, with transitions dear enough (0.05-0.5) for the
 /// cost pruning of the exact-length search to bite.
 fn random_dear_graph(r: &mut Lcg, seqs: usize, jumps: usize) -> KeyGraph {
-    let mut centre = Vec::new();
-    let mut sequence = Vec::new();
-    let mut starts = Vec::new();
-    for s in 0..seqs {
-        let len = 20 + r.below(21);
-        let speed = 0.01 + 0.08 * r.next();
-        starts.push((centre.len(), len));
-        for f in 0..len {
-            centre.push([f as f64 * speed, 0.02 * (f as f64 * 0.7).sin()]);
-            sequence.push(s as u32);
-        }
-    }
-    let n = centre.len();
-    let mut succ: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
-    for f in 0..n - 1 {
-        if sequence[f] == sequence[f + 1] {
-            succ[f].push((f as u32 + 1, 0.0));
-        }
-    }
-    for _ in 0..jumps {
-        let (a0, la) = starts[r.below(seqs)];
-        let (b0, lb) = starts[r.below(seqs)];
-        let m = a0 + r.below(la);
-        let to = b0 + 1 + r.below(lb - 1);
-        if to != m + 1 {
-            succ[m].push((to as u32, 0.05 + 0.45 * r.next()));
-        }
-    }
-    KeyGraph::new(&succ, centre, sequence)
+    random_graph_costing(r, seqs, jumps, 0.05, 0.45)
 }
 
 /// The cost pruning of the exact-length search (a frame count or a label
