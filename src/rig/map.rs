@@ -651,19 +651,7 @@ impl RigMap {
     /// so each is the joint origin (also for ASF/AMC clips, whose native
     /// points are bone ends); derived joints follow their [`Derive`] rule.
     pub fn poses(&self, clip: &Clip) -> Result<Vec<Pose>, RigError> {
-        use rayon::prelude::*;
-        let slots = self.plan(clip)?;
-        let n = clip.joint_count();
-        Ok((0..clip.frame_count())
-            .into_par_iter()
-            .map_init(
-                || (vec![DVec3::ZERO; n], vec![DQuat::IDENTITY; n]),
-                |(p, r), f| {
-                    clip.world_into(f, p, r);
-                    place(&slots, p, r)
-                },
-            )
-            .collect())
+        Ok(self.poses_and_rotations(clip)?.0)
     }
 
     /// [`RigMap::poses`] with, per frame, the world rotation of the file
