@@ -660,22 +660,31 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_clip_whose_head_moves_more_than_the_database_is_held_to_its_own_range() {
+    fn sliding(touching_mean_cm_per_frame: f64) -> Sliding {
+        Sliding {
+            touching_mean_cm_per_frame,
+            ..Sliding::default()
+        }
+    }
+
+    /// A 10-frame result with head-to-torso p95 `head` (degrees) and feet
+    /// gliding `glide` cm/frame when they touch, against a database whose
+    /// head p95 is 7.7° and whose feet glide `db_glide`.
+    fn result(head: f64, glide: f64, db_glide: f64) -> Plausibility {
         let reference = Reference {
             source: "db".into(),
             frames: 10,
             head_torso_deg: summary(7.7),
-            foot_sliding: Sliding::default(),
+            foot_sliding: sliding(db_glide),
             ground: Ground::default(),
             knee_hyperextension_deg: Summary::default(),
             turned_over: TurnedOverCount::default(),
         };
-        let p = Plausibility {
+        Plausibility {
             frames: 10,
-            head_torso_deg: summary(20.0),
+            head_torso_deg: summary(head),
             head_torso_rest_deg: 0.0,
-            foot_sliding: Sliding::default(),
+            foot_sliding: sliding(glide),
             ground: Ground::default(),
             floor_m: 0.0,
             knee_hyperextension_deg: Summary::default(),
@@ -686,7 +695,12 @@ mod tests {
             on_clip_ground: false,
             warnings: Vec::new(),
             head_torso_per_frame: Vec::new(),
-        };
+        }
+    }
+
+    #[test]
+    fn a_clip_whose_head_moves_more_than_the_database_is_held_to_its_own_range() {
+        let p = result(20.0, 0.0, 0.0);
         let l = Limits::default();
         let head = |p: &Plausibility| p.warnings.iter().any(|w| w.contains("head-to-torso"));
         // Against the database alone: 20° > 7.7° + 3°.
@@ -700,37 +714,7 @@ mod tests {
 
     #[test]
     fn feet_are_warned_about_only_when_they_glide_more_than_their_clip() {
-        let reference = Reference {
-            source: "db".into(),
-            frames: 10,
-            head_torso_deg: summary(7.7),
-            foot_sliding: Sliding {
-                touching_mean_cm_per_frame: 1.0,
-                ..Sliding::default()
-            },
-            ground: Ground::default(),
-            knee_hyperextension_deg: Summary::default(),
-            turned_over: TurnedOverCount::default(),
-        };
-        let p = Plausibility {
-            frames: 10,
-            head_torso_deg: summary(2.0),
-            head_torso_rest_deg: 0.0,
-            foot_sliding: Sliding {
-                touching_mean_cm_per_frame: 3.3,
-                ..Sliding::default()
-            },
-            ground: Ground::default(),
-            floor_m: 0.0,
-            knee_hyperextension_deg: Summary::default(),
-            turned_over: TurnedOverCount::default(),
-            reference: Some(reference),
-            clip_head_torso_deg: None,
-            clip_foot_glide_cm_per_frame: None,
-            on_clip_ground: false,
-            warnings: Vec::new(),
-            head_torso_per_frame: Vec::new(),
-        };
+        let p = result(2.0, 3.3, 1.0);
         let l = Limits::default();
         let glide = |p: &Plausibility| p.warnings.iter().any(|w| w.contains("glide"));
         // A walk (3.3 cm/frame) against a mostly planted dance (1.0): warned
