@@ -1,5 +1,8 @@
 //! `inspect`: what any supported file holds, what was assumed, and problems.
 
+mod other;
+
+use crate::batch::summary::count;
 use crate::mesh::io::{MeshFormat, gltf::read_gltf};
 use crate::mesh::{Bounds, MeshError};
 use crate::mocap::{MocapError, MocapFormat, Units, UpAxis, units::rest_extent};
@@ -113,6 +116,9 @@ pub enum Report {
     Mesh(MeshReport),
     /// A landmark or marker file.
     Json(JsonReport),
+    /// Any other file the tool reads or writes (a database manifest, web
+    /// geometry, a site, a cache, a picture), described in lines.
+    File(JsonReport),
 }
 
 /// Error of [`inspect`].
@@ -135,7 +141,7 @@ pub enum InspectError {
     Database(PathBuf),
     /// Not a format we read.
     #[error(
-        "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj; .json landmarks or markers)"
+        "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj; the JSON files, manifests, caches, pictures and web sites the tool writes)"
     )]
     Unknown(PathBuf),
     /// A mesh path that is not UTF-8: mesh paths are read as text
@@ -211,6 +217,9 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
         .is_some_and(|e| e.eq_ignore_ascii_case("json"))
     {
         return inspect_json(path).map(Report::Json);
+    }
+    if let Some(r) = other::inspect_other(path) {
+        return r.map(Report::File);
     }
     let spec = path
         .to_str()
@@ -312,6 +321,16 @@ pub fn detection_text(d: &crate::rig::Detection) -> String {
 /// them (a file is never read as landmarks unless it has a landmark name;
 /// `inspect DB/cache/graph-shape.json` said `unknown landmark "graph"`).
 pub fn json_kind(v: &serde_json::Value) -> Option<&'static str> {
+    if let Some(a) = v.as_array() {
+        let triple = |x: &serde_json::Value| x.as_array().is_some_and(|p| p.len() == 3);
+        return if !a.is_empty() && a.iter().all(triple) {
+            Some("pose")
+        } else if !a.is_empty() && a.iter().all(|r| r.get("t").is_some()) {
+            Some("play script")
+        } else {
+            None
+        };
+    }
     let o = v.as_object()?;
     let has = |k: &str| o.contains_key(k);
     let kind = if has("key")
@@ -329,10 +348,26 @@ pub fn json_kind(v: &serde_json::Value) -> Option<&'static str> {
         "skeletons"
     } else if has("keys") && has("segments") && has("targets") {
         "keyframe report"
+    } else if has("keys") && has("distances") && has("times") && has("reachable") {
+        "keyframe grid report"
+    } else if has("outcomes") && has("clips_per_minute") {
+        "batch report"
+    } else if has("per_second") && has("realtime_factor") {
+        "play report"
+    } else if o.get("format").and_then(|f| f.as_str()) == Some("surfmotion-web") {
+        "web site manifest"
     } else if has("retrieval") && has("frames") {
         "retarget report"
     } else if has("transfer") && has("scan") {
         "transfer report"
+    } else if !o.is_empty()
+        && o.iter()
+            .all(|(k, v)| crate::rig::embed::parts::Part::from_name(k).is_some() && v.is_array())
+        && o.values()
+            .flat_map(|v| v.as_array().into_iter().flatten())
+            .all(|x| x.is_u64())
+    {
+        "parts"
     } else if o
         .keys()
         .any(|k| crate::rig::embed::landmarks::Landmark::from_name(k).is_some())
@@ -364,13 +399,14 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
             None => "not an object".to_string(),
         };
         return Err(err(format!(
-            "{}: unknown JSON ({keys}); inspect reads landmarks, markers, rigs, rig maps, skeletons, graph caches and retarget, transfer and keyframe reports",
+            "{}: unknown JSON ({keys}); inspect reads landmarks, markers, rigs, rig maps, skeletons, poses, play scripts, graph caches, web site manifests and retarget, transfer, keyframe, grid, batch and play reports",
             path.display()
         )));
     };
     let num = |v: &serde_json::Value, k: &str| v.get(k).and_then(|x| x.as_f64());
     let len =
         |v: &serde_json::Value, k: &str| v.get(k).and_then(|x| x.as_array()).map_or(0, |a| a.len());
+    let len_of = |v: &serde_json::Value| v.as_array().map_or(0, |a| a.len());
     match format {
         "markers" => {
             let f = crate::transfer::MarkerFile::parse(&text, path, usize::MAX)
@@ -425,18 +461,7 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
                 "the Surface Motion Graph cached by `db build` (measure {}); rebuilt whenever the database changes",
                 g["measure"].as_str().unwrap_or("?")
             ));
-            let seqs: Vec<String> = g["sequences"]
-                .as_array()
-                .into_iter()
-                .flatten()
-                .map(|s| {
-                    format!(
-                        "{} ({} frames)",
-                        s["name"].as_str().unwrap_or("?"),
-                        s["len"]
-                    )
-                })
-                .collect();
+            let seqs = named_frames(g, "len");
             lines.push(format!("{} sequences: {}", seqs.len(), seqs.join(", ")));
             lines.push(format!(
                 "{} transitions, {} edges",
@@ -454,6 +479,98 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
             for n in v["notes"].as_array().into_iter().flatten() {
                 lines.push(format!("note: {}", n.as_str().unwrap_or_default()));
             }
+        }
+        "parts" => {
+            let o = v.as_object().into_iter().flatten();
+            lines.push(format!(
+                "part labels (`db init --parts`): {}",
+                o.map(|(k, ids)| format!("{k} {}", len_of(ids)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        "pose" => {
+            let n = len_of(&v);
+            lines.push(format!(
+                "a key-frame pose (`keyframe --from POSE.json`): {n} joints [x, y, z] in metres, Y up{}",
+                if n == crate::rig::Canonical::COUNT {
+                    String::new()
+                } else {
+                    format!(" (keyframe needs {})", crate::rig::Canonical::COUNT)
+                }
+            ));
+        }
+        "play script" => {
+            let a = v.as_array().map_or(&[][..], |a| a.as_slice());
+            let last = a.iter().filter_map(|r| r["t"].as_f64()).fold(0.0, f64::max);
+            let mut spaces: Vec<&str> = a.iter().filter_map(|r| r["space"].as_str()).collect();
+            spaces.dedup();
+            lines.push(format!(
+                "a `play` script: {} over {} s, spaces {}; `play --db DB --script` checks it against the database's spaces",
+                count(a.len(), "request"),
+                crate::parametric::script::short_number(last),
+                if spaces.is_empty() { "-".to_string() } else { spaces.join(", ") }
+            ));
+        }
+        "keyframe grid report" => {
+            let keys: Vec<&str> = v["keys"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter_map(|k| k.as_str())
+                .collect();
+            lines.push(format!(
+                "a key-frame grid (`keyframe --grid --report`): {}, {} × {}",
+                keys.join(" -> "),
+                count(len(&v, "distances"), "distance"),
+                count(len(&v, "times"), "time")
+            ));
+            lines.push(format!(
+                "reachable {}, unreachable {}; query time {:.2} ms mean",
+                v["reachable"]["distance_m"]["count"],
+                v["unreachable"]["distance_m"]["count"],
+                num(&v, "query_ms_mean").unwrap_or(f64::NAN)
+            ));
+        }
+        "batch report" => {
+            lines.push(format!(
+                "a `batch` report: {}: {}, {} converted, {} already done, {} failed{}",
+                v["what"].as_str().unwrap_or("?"),
+                count(len(&v, "outcomes"), "clip"),
+                v["done"],
+                v["skipped"],
+                v["failed"],
+                if v["finished"] == false {
+                    " (the run did not finish)"
+                } else {
+                    ""
+                }
+            ));
+        }
+        "play report" => {
+            lines.push(format!(
+                "a `play` report: {} at {} fps ({:.2} s), {}, {}",
+                count(v["frames"].as_u64().unwrap_or(0) as usize, "frame"),
+                num(&v, "fps").unwrap_or(f64::NAN),
+                num(&v, "seconds").unwrap_or(f64::NAN),
+                count(len(&v, "transitions"), "transition"),
+                count(len(&v, "notices"), "notice")
+            ));
+        }
+        "web site manifest" => {
+            let seqs = named_frames(&v, "frames");
+            lines.push(format!(
+                "the manifest of a site written by `web export` ({} mode, character '{}'): geometry {}, max vertex error {:.3} mm",
+                v["mode"].as_str().unwrap_or("?"),
+                v["name"].as_str().unwrap_or("?"),
+                v["geometry"].as_str().unwrap_or("?"),
+                1e3 * num(&v, "max_error").unwrap_or(f64::NAN)
+            ));
+            lines.push(format!(
+                "{}: {}",
+                count(seqs.len(), "sequence"),
+                seqs.join(", ")
+            ));
         }
         "rig map" => {
             lines.push(format!(
@@ -479,9 +596,9 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
             ));
             if let (Some(d), Some(t)) = (num(&v, "distance"), num(&v, "time")) {
                 lines.push(format!(
-                    "travelled {d:.3} m in {t:.3} s over {} segments, {} transitions",
-                    len(&v, "segments"),
-                    len(&v, "transitions")
+                    "travelled {d:.3} m in {t:.3} s over {}, {}",
+                    count(len(&v, "segments"), "segment"),
+                    count(len(&v, "transitions"), "transition")
                 ));
             }
         }
@@ -491,6 +608,23 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
         format: format.into(),
         lines,
     })
+}
+
+/// `name (N frames)` of each entry of `v["sequences"]`, its frame count
+/// read from the key `frames` (a graph cache calls it `len`).
+fn named_frames(v: &serde_json::Value, frames: &str) -> Vec<String> {
+    v["sequences"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|s| {
+            format!(
+                "{} ({} frames)",
+                s["name"].as_str().unwrap_or("?"),
+                s[frames]
+            )
+        })
+        .collect()
 }
 
 impl Report {
@@ -580,7 +714,7 @@ impl Report {
                     let _ = writeln!(s, "  problem: {p}");
                 }
             }
-            Report::Json(r) => {
+            Report::Json(r) | Report::File(r) => {
                 let _ = writeln!(s, "{} ({})", r.path.display(), r.format);
                 for l in &r.lines {
                     let _ = writeln!(s, "  {l}");

@@ -344,6 +344,9 @@ fn rows() -> Vec<Row> {
     // Session 8: the new-user and attacker walk; each row exited 0 (or
     // printed a 300-digit number) before its fix.
     r.extend(session8_rows());
+    // Session 9: the new-user walk; each row exited 0 or said something
+    // misleading before its fix.
+    r.extend(session9_rows());
     // The sweep: verbs × malformed files, each message naming the file.
     let bvh_cut = {
         let t = walk_text();
@@ -573,6 +576,20 @@ fn session6_rows() -> Vec<Row> {
     ]
 }
 
+/// A row whose output folder `{d}/out` already holds the file `name`:
+/// refused unless `--force`.
+fn into_full_folder(what: &'static str, args: &'static str, name: &str) -> Row {
+    row(
+        what,
+        args,
+        &["-o", "out", "already holds 1 file", "--force"],
+    )
+    .file(
+        Box::leak(format!("out/{name}").into_boxed_str()),
+        "v 0 0 0\n",
+    )
+}
+
 /// The rows of what the session-6 review reported and left unfixed: each
 /// exited 0 (or misread the file) before its fix.
 fn session7_rows() -> Vec<Row> {
@@ -584,30 +601,26 @@ fn session7_rows() -> Vec<Row> {
             &["1e308", "at most 2"],
         ),
         // Frames were written among the folder's files (exit 0).
-        row(
+        into_full_folder(
             "keyframe -o into a folder holding files",
             "keyframe --db {db} --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/out",
-            &["-o", "out", "already holds 1 file", "--force"],
-        )
-        .file("out/notes.txt", "mine"),
-        row(
+            "notes.txt",
+        ),
+        into_full_folder(
             "retarget -o into a folder holding files",
             "retarget --db {db} --mocap {walk} -o {d}/out",
-            &["-o", "out", "already holds 1 file", "--force"],
-        )
-        .file("out/notes.txt", "mine"),
-        row(
+            "notes.txt",
+        ),
+        into_full_folder(
             "transfer -o into a folder holding files",
             "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/out",
-            &["-o", "out", "already holds 1 file", "--force"],
-        )
-        .file("out/notes.txt", "mine"),
-        row(
+            "notes.txt",
+        ),
+        into_full_folder(
             "mesh convert into a folder holding files",
             "mesh convert {db}/walk.pc2 {d}/out",
-            &["-o", "out", "already holds 1 file", "--force"],
-        )
-        .file("out/frame_9999.obj", "v 0 0 0\n"),
+            "frame_9999.obj",
+        ),
         // Read as landmarks: `unknown landmark "a"`.
         row(
             "inspect of a JSON file of no known kind",
@@ -805,6 +818,201 @@ fn session8_rows() -> Vec<Row> {
     ]
 }
 
+/// The new-user walk of session 9 (`{nl}` is a newline).
+fn session9_rows() -> Vec<Row> {
+    vec![
+        // Exit 0: the manifest's name was two lines, and so was `db info`.
+        row(
+            "db init --name with a newline",
+            "db init {d}/x --mesh {topo} --name a{nl}b",
+            &["--name", "a\\nb", "control characters"],
+        ),
+        // "expected SEQUENCE:FRAME" for a frame number too long to read.
+        row(
+            "keyframe --from a frame past any number",
+            "keyframe --db {db} --from walk:99999999999999999999 --to walk:100 --distance 3 --time 3 -o {d}/k.glb",
+            &["walk:99999999999999999999", "180 frames"],
+        ),
+        // Each aborted on an allocation of 43 GB or 216 GB (exit 134).
+        row(
+            "keyframe --time 1e6",
+            "keyframe --db {db} --from walk:0 --to walk:150 --distance 5 --time 1e6 -o {d}/k.pc2",
+            &["time 1000000", "at most 3600 s"],
+        ),
+        row(
+            "keyframe --horizon 1e7",
+            "keyframe --db {db} --from walk:0 --to walk:150 --distance 5 --time 5 --horizon 1e7 -o {d}/k.pc2",
+            &["--horizon", "1e7", "at most 3600"],
+        ),
+        // Ran for minutes (killed at 120 s).
+        row(
+            "keyframe --grid --times 1e6",
+            "keyframe --db {db} --from walk:0 --to walk:150 --grid --times 1e6 --distances 5",
+            &["--times 1000000", "at most 3600 s"],
+        ),
+        // Exit 0 after the whole grid, with a PNG in g.txt.
+        row(
+            "keyframe --grid --plot g.txt",
+            "keyframe --db {db} --from walk:0 --to walk:150 --grid --times 1 --distances 1 --plot {d}/g.txt",
+            &["g.txt", ".svg or .png"],
+        ),
+        // "3 frames, but the clip gives 150": the database's topology and
+        // sequence OBJs read as a folder of frames.
+        row(
+            "eval --result a database folder",
+            "eval --db {db} --mocap {walk} --result {db}",
+            &["database", "character.toml", "not a folder of OBJ frames"],
+        ),
+        // "o.pc2/rig.json: File exists (os error 17)", after the work.
+        row(
+            "db skeleton -o a file",
+            "db skeleton {db} -o {d}/o.pc2",
+            &["-o", "o.pc2", "a file, not a folder"],
+        )
+        .file("o.pc2", "x"),
+        row(
+            "batch --mocap-dir a clip",
+            "batch --db {db} --mocap-dir {walk} -o {d}/out",
+            &["--mocap-dir", "walk.bvh", "a file, not a folder"],
+        ),
+        row(
+            "batch -o a file",
+            "batch --db {db} --mocap-dir {d}/lib -o {d}/o.txt",
+            &["-o", "o.txt", "a file, not a folder"],
+        )
+        .file("lib/walk.bvh", walk_text())
+        .file("o.txt", "x"),
+        row(
+            "mesh convert of a database folder",
+            "mesh convert {db} {d}/o.glb",
+            &["database", "character.toml", "not a folder of OBJ frames"],
+        ),
+    ]
+}
+
+/// Regression (session 8 leftover): a non-UTF-8 value gave clap's
+/// "invalid UTF-8 was detected in one or more arguments" and its usage,
+/// naming neither the argument nor its option; now one line names both.
+#[test]
+fn a_non_utf8_argument_is_named() {
+    use std::ffi::OsString;
+    use std::os::unix::ffi::OsStringExt;
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let os = |s: &str| OsString::from(s);
+    let bad = |b: &[u8]| OsString::from_vec(b.to_vec());
+    let topo = f.db.join("topology.obj").into_os_string();
+    let cases: [(Vec<OsString>, &[&str]); 3] = [
+        (
+            vec![
+                os("db"),
+                os("init"),
+                tmp.path().join("x").into(),
+                os("--mesh"),
+                topo.clone(),
+                os("--name"),
+                bad(b"a\xffb"),
+            ],
+            &["--name", "a\\xFFb", "argument 7", "UTF-8"],
+        ),
+        (
+            vec![os("inspect"), topo.clone(), bad(b"--input-units=c\xfem")],
+            &["--input-units", "c\\xFEm", "UTF-8"],
+        ),
+        (
+            vec![os("render"), bad(b"m\xff.obj"), os("-o"), os("r.png")],
+            &["argument 2", "m\\xFF.obj", "UTF-8"],
+        ),
+    ];
+    for (args, words) in cases {
+        let r = common::run_cli(&args, Some(tmp.path()), &[]);
+        r.assert_bad_input(&format!("{args:?}"), words);
+        assert!(!r.stderr.contains("Usage"), "{}", r.stderr);
+    }
+    assert!(!tmp.path().join("x").exists());
+}
+
+/// Regression (session 8 leftovers and the session 9 walk): `batch` said
+/// "1 clips" and "1 jobs"; `web export` said "0 spaces (0 frames, 0 KB)"
+/// for a database without motion spaces and "(0 precomputed frames, 0
+/// KB, 0.00 s)" for transitions the page blends; `inspect` said "unknown
+/// file type" of the manifest, the site, its geometry, the caches, the
+/// pictures and pages, and "unknown JSON" of the batch report, the site's
+/// manifest, poses and play scripts; `render`, `mocap procedural` and
+/// `db init` had no `--json`.
+#[test]
+fn what_was_written_is_counted_and_inspected() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let ok = |args: &str| {
+        let r = common::run_cli(&expand(args, d), None, &[]);
+        assert_eq!(r.code, Some(0), "{args}: {}", r.stderr);
+        r
+    };
+    std::fs::create_dir_all(d.join("lib")).unwrap();
+    std::fs::copy(&f.walk, d.join("lib/walk.bvh")).unwrap();
+    let r = ok("batch --db {db} --mocap-dir {d}/lib -o {d}/out --format pc2 --jobs 1");
+    let all = r.stdout.clone() + &r.stderr;
+    assert!(all.contains(": 1 clip: 1 converted"), "{all}");
+    assert!(all.contains("frames/s, 1 job)"), "{all}");
+    let r = ok("web export --db {db} -o {d}/site --linear-transitions");
+    assert!(!r.stdout.contains("spaces"), "{}", r.stdout);
+    assert!(r.stdout.contains("6304 vertices"), "{}", r.stdout);
+    assert!(
+        r.stdout.contains("transitions (blended by the page)"),
+        "{}",
+        r.stdout
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&ok("render {topo} -o {d}/r.png --size 64 --json").stdout).unwrap();
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(128), Some(64))
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&ok("mocap procedural -o {d}/clips --gait run --json").stdout)
+            .unwrap();
+    assert_eq!(v[0]["gait"], "run");
+    let v: serde_json::Value =
+        serde_json::from_str(&ok("db init {d}/newdb --mesh {topo} --json").stdout).unwrap();
+    assert_eq!(v["name"], "newdb");
+    let pose = serde_json::to_string(&vec![[0.0, 1.0, 0.0]; 19]).unwrap();
+    std::fs::write(d.join("pose.json"), pose).unwrap();
+    std::fs::write(d.join("script.json"), SCRIPT).unwrap();
+    std::fs::write(d.join("parts.json"), r#"{"head": [1, 2, 3], "torso": [4]}"#).unwrap();
+    for (file, kind, words) in [
+        ("{d}/out/batch.json", "batch report", "1 clip, 1 converted"),
+        ("{d}/out/batch.svg", "SVG picture", "a picture of"),
+        ("{d}/out/batch.html", "HTML page", "web browser"),
+        ("{d}/r.png", "PNG picture", "128 × 64 pixels"),
+        ("{d}/site", "web site", "web serve --site"),
+        (
+            "{d}/site/manifest.json",
+            "web site manifest",
+            "2 sequences: walk (180 frames)",
+        ),
+        ("{d}/site/character.sm4d", "web geometry", "6304 vertices"),
+        ("{db}/character.toml", "database manifest", "sequence walk"),
+        (
+            "{db}/cache/similarity-shape.bin",
+            "similarity cache",
+            "db build",
+        ),
+        ("{d}/pose.json", "pose", "19 joints"),
+        ("{d}/script.json", "play script", "1 request"),
+        ("{d}/parts.json", "parts", "head 3, torso 1"),
+    ] {
+        let r = ok(&format!("inspect {file}"));
+        assert!(
+            r.stdout.contains(&format!("({kind})")),
+            "{file}: {}",
+            r.stdout
+        );
+        assert!(r.stdout.contains(words), "{file}: {}", r.stdout);
+    }
+}
+
 /// A parametric motion space of the demo database, and a script for it.
 const SPACE: &str = "[[space]]\nname = \"locomotion\"\nsequences = [\"walk\", \"run\"]\nparameters = [\"speed\", \"turn\"]\n";
 const SCRIPT: &str = "[{\"t\": 0, \"space\": \"locomotion\", \"speed\": 2}]";
@@ -935,6 +1143,7 @@ fn expand(s: &str, d: &Path) -> Vec<String> {
                 .replace("{topo}", &f.db.join("topology.obj").display().to_string())
                 .replace("{lm}", &f.db.join("landmarks.json").display().to_string())
                 .replace("{d}", &d.display().to_string())
+                .replace("{nl}", "\n")
         })
         .collect()
 }

@@ -91,9 +91,9 @@ impl Summary {
     /// One line of totals: clips converted, skipped, failed, frames, speed.
     pub fn line(&self) -> String {
         format!(
-            "{}: {} clips: {} converted, {} already done, {} failed; {} frames written in {:.1} s, {} in the outputs ({:.1} clips/min, {:.0} frames/s, {} jobs{})",
+            "{}: {}: {} converted, {} already done, {} failed; {} frames written in {:.1} s, {} in the outputs ({:.1} clips/min, {:.0} frames/s, {}{})",
             self.what,
-            self.clips,
+            count(self.clips, "clip"),
             self.done,
             self.skipped,
             self.failed,
@@ -102,12 +102,32 @@ impl Summary {
             self.frames,
             self.clips_per_minute,
             self.frames_per_second,
-            self.jobs,
+            count(self.jobs, "job"),
             self.shard
                 .as_ref()
                 .map(|x| format!(", shard {x}"))
                 .unwrap_or_default()
         )
+    }
+}
+
+/// `n` and `noun`, in the plural unless `n` is 1 ("1 clip", "2 jobs",
+/// "3 vertices", "2 matches", "9 queries"; the batch line said "1 clips"
+/// and "1 jobs").
+pub fn count(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else if let Some(stem) = noun.strip_suffix("ex") {
+        format!("{n} {stem}ices")
+    } else if let Some(stem) = noun
+        .strip_suffix('y')
+        .filter(|s| !s.ends_with(['a', 'e', 'o', 'u']))
+    {
+        format!("{n} {stem}ies")
+    } else if noun.ends_with('s') || noun.ends_with('x') || noun.ends_with("ch") {
+        format!("{n} {noun}es")
+    } else {
+        format!("{n} {noun}s")
     }
 }
 

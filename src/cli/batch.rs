@@ -80,6 +80,21 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db"
         );
     }
+    // Said before the character loads: "X: Not a directory (os error
+    // 20)" for a clip given as the folder, "/dev/full: File exists (os
+    // error 17)" for a file as -o.
+    if a.mocap_dir.exists() && !a.mocap_dir.is_dir() {
+        anyhow::bail!(
+            "--mocap-dir {}: a file, not a folder (batch converts every clip under a folder; `retarget` or `transfer` converts one)",
+            a.mocap_dir.display()
+        );
+    }
+    if a.output.exists() && !a.output.is_dir() {
+        anyhow::bail!(
+            "-o {}: a file, not a folder (batch writes one output per clip and batch.json, .html and .svg into a folder)",
+            a.output.display()
+        );
+    }
     let format = Format::from(a.format);
     refuse_outputs_over_inputs(&a, format)?;
     let load = a.clip.load_options()?;

@@ -199,6 +199,9 @@ pub struct InitArgs {
     /// Overwrite an existing manifest.
     #[arg(long)]
     pub force: bool,
+    /// Print the manifest written as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `db info`.
@@ -259,6 +262,14 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         );
     }
     super::length_unit("--input-units", &a.units)?;
+    if let Some(n) = &a.name
+        && (n.is_empty() || n.len() > 200 || n.chars().any(char::is_control))
+    {
+        bail!(
+            "--name \"{}\": expected one line of 1 to 200 bytes, without control characters",
+            surfmotion::db::manifest::printable(n, 60)
+        );
+    }
     let canonical = |p: &Path| std::fs::canonicalize(p).with_context(|| format!("{}", p.display()));
     let mut sequences = Vec::new();
     for s in &a.sequences {
@@ -336,6 +347,10 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         m.name = dir
             .file_name()
             .map_or_else(|| "character".into(), |n| n.to_string_lossy().into_owned());
+        // A folder name with a newline or a tab: the name is one line.
+        if m.name.chars().any(char::is_control) {
+            m.name = m.name.replace(char::is_control, " ");
+        }
     }
     // Stored relative to the database when inside it, else absolute.
     let store = |p: &Path| {
@@ -358,6 +373,11 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         *p = store(p);
     }
     m.save(&a.dir)?;
+    if a.json {
+        let mut v = serde_json::to_value(&m)?;
+        v["manifest"] = serde_json::to_value(&manifest)?;
+        crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
+    }
     crate::errln!(
         "wrote {} ({}); check it with `surfmotion db info {}`",
         manifest.display(),
@@ -368,6 +388,23 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
 }
 
 fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
+    // Checked before the skeletons are extracted: `-o FILE` said
+    // "FILE/rig.json: File exists (os error 17)" after the work.
+    let out = a.output.clone().unwrap_or_else(|| a.dir.join("skeletons"));
+    if out.exists() && !out.is_dir() {
+        bail!(
+            "-o {}: a file, not a folder (db skeleton writes rig.json and each sequence's SEQ.skeleton.json and SEQ.bvh into a folder)",
+            out.display()
+        );
+    }
+    if let Ok(m) = Manifest::load(&a.dir) {
+        let mut outputs = vec![("-o", out.join("rig.json"))];
+        for s in &m.sequences {
+            outputs.push(("-o", out.join(format!("{}.skeleton.json", s.name))));
+            outputs.push(("-o", out.join(format!("{}.bvh", s.name))));
+        }
+        super::refuse_colliding(&super::database_inputs(&a.dir), &outputs)?;
+    }
     let opts = SkeletonsOptions {
         kind: a.kind.into(),
         output: a.output.clone(),

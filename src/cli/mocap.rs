@@ -104,6 +104,9 @@ pub struct ProceduralArgs {
     /// Frames per second.
     #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
     pub fps: f64,
+    /// Print the clips written as JSON (path, gait, frames, fps).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `mocap rigmap`.
@@ -256,6 +259,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 && a.output
                     .extension()
                     .is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
+            let mut written = Vec::new();
             for g in gaits {
                 let clip = surfmotion::synth::gait_clip(g, a.seconds, a.fps);
                 let path = if single {
@@ -270,6 +274,15 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     super::count(clip.frame_count(), "frame"),
                     a.fps
                 );
+                written.push(serde_json::json!({
+                    "path": path,
+                    "gait": g.name(),
+                    "frames": clip.frame_count(),
+                    "fps": a.fps,
+                }));
+            }
+            if a.json {
+                crate::outln!("{}", serde_json::to_string_pretty(&written)?)?;
             }
         }
         Cmd::Rigmap(a) => {

@@ -126,6 +126,11 @@ pub fn main() -> anyhow::Result<()> {
         .and_then(|m| Cli::from_arg_matches(&m))
     {
         Ok(c) => c,
+        // clap's "invalid UTF-8 was detected in one or more arguments"
+        // and its usage text named neither the argument nor the option.
+        Err(e) if e.kind() == clap::error::ErrorKind::InvalidUtf8 => {
+            anyhow::bail!(non_utf8_argument(std::env::args_os().collect()))
+        }
         Err(e) => {
             let usage = e.use_stderr();
             // Help read by `| head` closed the pipe: not an error (it said
@@ -192,6 +197,38 @@ pub fn main() -> anyhow::Result<()> {
         Command::Batch(a) => batch::run_batch(*a),
         Command::Play(a) => play::run(a),
         Command::Web(c) => web::run(c),
+    }
+}
+
+/// The one line for a command line whose argument is not UTF-8: which
+/// argument, the option it belongs to, and its bytes (`\xFF` for each one
+/// that is not UTF-8). Options and mesh specs (`SEQ.pc2:FRAME`) are text.
+fn non_utf8_argument(args: Vec<std::ffi::OsString>) -> String {
+    let Some(i) = args.iter().position(|a| a.to_str().is_none()) else {
+        return "an argument is not valid UTF-8".into();
+    };
+    let mut shown = String::new();
+    for c in args[i].as_encoded_bytes().utf8_chunks() {
+        shown.extend(c.valid().chars().flat_map(char::escape_debug));
+        for b in c.invalid() {
+            shown += &format!("\\x{b:02X}");
+        }
+    }
+    let option = match shown.split_once('=') {
+        Some((o, v)) if o.starts_with("--") => Some((o.to_string(), v.to_string())),
+        _ => args[..i]
+            .last()
+            .and_then(|p| p.to_str())
+            .filter(|p| i > 1 && p.starts_with('-') && p.len() > 1 && !p.contains('='))
+            .map(|p| (p.to_string(), shown.clone())),
+    };
+    match option {
+        Some((o, v)) => format!(
+            "{o} '{v}': not valid UTF-8 (argument {i}); this value is read as text: pass it in UTF-8 (rename the file if it is one)"
+        ),
+        None => format!(
+            "argument {i} '{shown}' is not valid UTF-8; this value is read as text: pass it in UTF-8 (rename the file if it is one)"
+        ),
     }
 }
 
@@ -305,17 +342,9 @@ impl<S: tracing::Subscriber> tracing_subscriber::Layer<S> for PlainNotices {
 pub struct OutputClosed;
 
 /// `n` and a noun, plural when `n` is not one: "1 frame", "2 frames",
-/// "3 vertices".
+/// "3 vertices" ([`surfmotion::batch::summary::count`]).
 pub fn count(n: usize, noun: &str) -> String {
-    if n == 1 {
-        format!("1 {noun}")
-    } else if let Some(stem) = noun.strip_suffix("ex") {
-        format!("{n} {stem}ices")
-    } else if noun.ends_with('s') || noun.ends_with('x') || noun.ends_with("ch") {
-        format!("{n} {noun}es")
-    } else {
-        format!("{n} {noun}s")
-    }
+    surfmotion::batch::summary::count(n, noun)
 }
 
 /// Every option of every verb takes negative numbers as values, so that
@@ -733,6 +762,8 @@ mod tests {
         assert_eq!(super::count(0, "transition"), "0 transitions");
         assert_eq!(super::count(3, "vertex"), "3 vertices");
         assert_eq!(super::count(2, "match"), "2 matches");
+        assert_eq!(super::count(9, "query"), "9 queries");
+        assert_eq!(super::count(2, "key"), "2 keys");
     }
 
     /// Regression (session 6 review): `eval --result FOLDER` printed the

@@ -36,6 +36,9 @@ pub struct Args {
     /// Image height in pixels, 16 to 8192 (each view is square).
     #[arg(long, default_value_t = 600, value_parser = super::bounded_count(16, MAX_SIZE))]
     pub size: usize,
+    /// Print what was written as JSON (picture, size, meshes, frame).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Largest `--size` of `render` (pixels): a picture of two 8192-pixel
@@ -167,6 +170,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         anyhow::bail!("no mesh given");
     };
     img.save_png(&a.output)?;
+    if a.json {
+        let v = serde_json::json!({
+            "output": a.output,
+            "width": img.width,
+            "height": img.height,
+            "meshes": a.mesh,
+            "frame": a.frame,
+        });
+        return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
+    }
     crate::outln!(
         "wrote {} ({}x{}: front and left side of each, one scale)",
         a.output.display(),

@@ -120,27 +120,45 @@ fn export(s: &Source, out: &std::path::Path) -> anyhow::Result<web::ExportReport
     })
 }
 
+/// The one-line summary of an export. Transitions and motion spaces are
+/// said only when there are some ("0 spaces (0 frames, 0 KB)" was printed
+/// for every database without a `[[space]]`).
 fn summary(r: &web::ExportReport) -> String {
+    use super::count;
     let g = &r.geometry;
-    format!(
-        "wrote {}: {} frames × {} vertices, geometry {:.0} KB ({:.1} KB/frame, {:.1}× smaller than float32), max vertex error {:.3} mm (step {:.3} mm), {} transitions ({} precomputed frames, {:.0} KB, {:.2} s), {} spaces ({} frames, {:.0} KB), {:.2} s\n",
+    let mut s = format!(
+        "wrote {}: {} × {}, geometry {:.0} KB ({:.1} KB/frame, {:.1}× smaller than float32), max vertex error {:.3} mm (step {:.3} mm)",
         r.site.display(),
-        g.frames,
-        r.vertices,
+        count(g.frames, "frame"),
+        count(r.vertices, "vertex"),
         g.bytes as f64 / 1e3,
         g.bytes as f64 / 1e3 / g.frames.max(1) as f64,
         r.raw_bytes as f64 / g.bytes.max(1) as f64,
         g.max_error * 1e3,
         g.step * 1e3,
-        r.transitions,
-        r.transition_frames,
-        r.transition_bytes as f64 / 1e3,
-        r.transition_seconds,
-        r.spaces,
-        r.space_frames,
-        r.space_bytes as f64 / 1e3,
-        r.seconds
-    )
+    );
+    match (r.transitions, r.transition_frames) {
+        (0, _) => s += ", no transitions",
+        (t, 0) => s += &format!(", {} (blended by the page)", count(t, "transition")),
+        (t, f) => {
+            s += &format!(
+                ", {} ({} precomputed, {:.0} KB, {:.2} s)",
+                count(t, "transition"),
+                count(f, "frame"),
+                r.transition_bytes as f64 / 1e3,
+                r.transition_seconds
+            )
+        }
+    }
+    if r.spaces > 0 {
+        s += &format!(
+            ", {} ({}, {:.0} KB)",
+            count(r.spaces, "motion space"),
+            count(r.space_frames, "frame"),
+            r.space_bytes as f64 / 1e3
+        );
+    }
+    s + &format!(", {:.2} s\n", r.seconds)
 }
 
 /// Runs `web`.

@@ -366,6 +366,15 @@ impl Manifest {
 
     /// Checks values that TOML types cannot.
     pub fn validate(&self) -> Result<(), String> {
+        // The character's name is printed on one line (`db info`) and
+        // shown by the web page: one line of text (`db init --name` took
+        // a newline, and `db info` printed the name over two lines).
+        if self.name.len() > 200 || self.name.chars().any(char::is_control) {
+            return Err(format!(
+                "name = \"{}\": expected one line of at most 200 bytes, without control characters",
+                printable(&self.name, 60)
+            ));
+        }
         if !crate::budget::is_frame_rate(self.fps) {
             return Err(format!(
                 "fps = {} is not a frame rate (expected a number in [{}, {MAX_FPS}])",

@@ -4,6 +4,7 @@
 //! [`RetargetRun::velocity_error`]), checked for plausibility and written.
 
 use super::JobError;
+use crate::batch::summary::count;
 use crate::batch::{Converted, Converter};
 use crate::db::{BuildProgress, Character, CharacterOptions};
 use crate::deform::{DeformMode, TurnedOver};
@@ -393,15 +394,6 @@ pub struct EvalReport {
     /// Frames the velocity error is measured over.
     #[serde(skip)]
     pub velocity_frames: usize,
-}
-
-/// `n` and `noun`, in the plural unless `n` is 1 ("1 frame", "2 frames").
-fn count(n: usize, noun: &str) -> String {
-    if n == 1 {
-        format!("1 {noun}")
-    } else {
-        format!("{n} {noun}s")
-    }
 }
 
 /// Scores `result` (a sequence on `ch`'s vertices, metres, Y-up, as

@@ -76,6 +76,18 @@ pub enum KeyframeError {
         /// The value.
         value: f64,
     },
+    /// A target beyond [`MAX_TARGET_SECONDS`] or [`MAX_TARGET_METRES`].
+    #[error("{what} {value}: at most {max} {unit} (the search's horizon grows with the target)")]
+    TooLarge {
+        /// Which target.
+        what: String,
+        /// The value.
+        value: f64,
+        /// The largest accepted.
+        max: f64,
+        /// Its unit.
+        unit: &'static str,
+    },
     /// Per-segment targets whose count does not match the segments.
     #[error("{what}: {given} values for {segments} segments (give one, or one per segment)")]
     Count {
@@ -97,6 +109,14 @@ pub enum KeyframeError {
     #[error("{0} (lower --distance or --time)")]
     OverBudget(#[from] crate::budget::OverBudget),
 }
+
+/// The longest target time of a query, in seconds (an hour, as `play
+/// --seconds`): the search's horizon grows with it, and `--time 1e6`
+/// aborted on a 43 GB allocation.
+pub const MAX_TARGET_SECONDS: f64 = 3600.0;
+
+/// The longest target distance of a query, in metres.
+pub const MAX_TARGET_METRES: f64 = 100_000.0;
 
 /// Frame id of a key-frame written `SEQUENCE:FRAME`.
 pub fn parse_key(ch: &Character, key: &str) -> Result<u32, KeyframeError> {
@@ -121,10 +141,14 @@ pub fn parse_key(ch: &Character, key: &str) -> Result<u32, KeyframeError> {
                 .join(", "),
         })?;
     let len = ch.graph().sequences[s].len;
-    let f: usize = f
-        .trim()
-        .parse()
-        .map_err(|_| KeyframeError::Syntax(key.into()))?;
+    let f = f.trim();
+    // All digits but too many for a number (`walk:99999999999999999999`):
+    // out of range, not a syntax error.
+    let f: usize = match f.parse() {
+        Ok(f) => f,
+        Err(_) if !f.is_empty() && f.bytes().all(|b| b.is_ascii_digit()) => usize::MAX,
+        Err(_) => return Err(KeyframeError::Syntax(key.into())),
+    };
     if f >= len {
         return Err(KeyframeError::Frame {
             key: key.into(),
@@ -163,11 +187,22 @@ impl Targets {
         time: &[f64],
         segments: usize,
     ) -> Result<Targets, KeyframeError> {
-        for (what, v) in [("distance", distance), ("time", time)] {
+        for (what, v, max, unit) in [
+            ("distance", distance, MAX_TARGET_METRES, "m"),
+            ("time", time, MAX_TARGET_SECONDS, "s"),
+        ] {
             if let Some(&x) = v.iter().find(|x| !x.is_finite() || **x < 0.0) {
                 return Err(KeyframeError::Target {
                     what: what.into(),
                     value: x,
+                });
+            }
+            if let Some(&x) = v.iter().find(|x| **x > max) {
+                return Err(KeyframeError::TooLarge {
+                    what: what.into(),
+                    value: x,
+                    max,
+                    unit,
                 });
             }
             if v.len() != 1 && v.len() != segments {

@@ -39,6 +39,16 @@ pub fn list_obj_frames(dir: &Path) -> Result<Vec<PathBuf>, MeshError> {
             "not a folder, and no extension to tell its format (expected .obj .ply .pc2 .mdd .gltf .glb, or a folder of OBJ frames)",
         ));
     }
+    // A database folder holds OBJ files (its topology and each sequence's
+    // topology), but they are not frames: `eval --result DB` read one as
+    // "3 frames" and `mesh convert DB out.glb` wrote them as an animation.
+    // (`db::MANIFEST`, named here: `mesh` comes before `db`.)
+    if dir.join("character.toml").is_file() {
+        return Err(MeshError::invalid(
+            dir,
+            "a character database folder (it holds character.toml), not a folder of OBJ frames; `surfmotion db info` shows what it holds",
+        ));
+    }
     let rd = std::fs::read_dir(dir)
         .map_err(|e| MeshError::invalid(dir, format!("cannot list folder: {e}")))?;
     let mut files: Vec<PathBuf> = rd
