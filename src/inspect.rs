@@ -49,6 +49,10 @@ pub struct MocapReport {
     pub derived_canonical: Vec<String>,
     /// How left and right were decided.
     pub sides: String,
+    /// The pose the rig structure was read on when the rest skeleton is
+    /// not a standing body (empty: the rest skeleton).
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub structure_pose: String,
     /// Problems found while reading.
     pub warnings: Vec<String>,
 }
@@ -173,13 +177,17 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
             )),
             None => crate::rig::detect_clip(&clip),
         };
+        let mut structure_pose = String::new();
         let (convention, unmapped_canonical, rig_joints, derived_canonical, sides) = match det {
             Ok(d) => (
                 d.map.convention.clone(),
                 d.missing.iter().map(|c| c.name().to_string()).collect(),
                 d.joints,
                 d.derived.iter().map(|c| c.name().to_string()).collect(),
-                d.sides,
+                {
+                    structure_pose = d.structure_pose;
+                    d.sides
+                },
             ),
             Err(e) => (
                 e.to_string(),
@@ -209,6 +217,7 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
             rig_joints,
             derived_canonical,
             sides,
+            structure_pose,
             warnings: clip.warnings.clone(),
         }));
     }
@@ -295,6 +304,9 @@ pub fn detection_text(d: &crate::rig::Detection) -> String {
     let _ = writeln!(s, "convention: {}", d.map.convention);
     if !d.sides.is_empty() {
         let _ = writeln!(s, "left/right: {}", d.sides);
+    }
+    if !d.structure_pose.is_empty() {
+        let _ = writeln!(s, "structure: {}", d.structure_pose);
     }
     for j in &d.joints {
         let what = match (&j.joint, d.map.derived.get(&j.canonical)) {
@@ -654,6 +666,9 @@ impl Report {
                 let _ = writeln!(s, "  convention  {}", r.convention);
                 if !r.unmapped_canonical.is_empty() && !r.rig_joints.is_empty() {
                     let _ = writeln!(s, "  unmapped    {}", r.unmapped_canonical.join(", "));
+                }
+                if !r.structure_pose.is_empty() {
+                    let _ = writeln!(s, "  structure   {}", r.structure_pose);
                 }
                 write_mapping(&mut s, &r.sides, &r.rig_joints);
                 let _ = writeln!(s, "  joint names {}", r.joint_names.join(" "));

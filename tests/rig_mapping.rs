@@ -2151,14 +2151,18 @@ fn an_amc_clip_and_its_third_party_bvh_conversion_map_alike() {
 /// `#` comment lines (the source each family was learnt from), an `order`
 /// line (the rotation channels), an optional `all6` line (six channels on
 /// every joint, as Perception Neuron writes them), then one joint per line,
-/// its depth the number of leading spaces: `name x y z [| ex ey ez]` (the
-/// offset and an optional End Site; names may contain spaces). The motion
-/// is two frames of the rest pose (every rotation zero, the root at its
-/// offset), so only the hierarchy and the rest geometry decide.
+/// its depth the number of leading spaces: `name x y z [| ex ey ez] [@ r1
+/// r2 r3] [% order]` (the offset, an optional End Site, optional rotation
+/// channel values for the frames, and an optional rotation channel order
+/// of its own, else the `order` line's; names may contain spaces). The motion is two frames of the rest pose (every rotation zero
+/// unless given, the root at its offset), so only the hierarchy and the
+/// rest geometry decide, unless rotations stand up a rest that does not
+/// stand (LAFAN1).
 fn skel_to_bvh(skel: &str) -> String {
     let mut order = "Zrotation Xrotation Yrotation".to_string();
     let mut all6 = false;
-    let mut rows: Vec<(usize, String, String, Option<String>)> = Vec::new();
+    type Row = (usize, String, String, Option<String>, String, String);
+    let mut rows: Vec<Row> = Vec::new();
     for line in skel.lines() {
         let t = line.trim();
         if t.is_empty() || t.starts_with('#') {
@@ -2173,13 +2177,28 @@ fn skel_to_bvh(skel: &str) -> String {
             continue;
         }
         let depth = line.len() - line.trim_start_matches(' ').len();
+        let (t, own) = match t.split_once('%') {
+            Some((b, o)) => (b.trim(), o.trim().to_string()),
+            None => (t, order.clone()),
+        };
+        let (t, rot) = match t.split_once('@') {
+            Some((b, r)) => (b.trim(), r.trim().to_string()),
+            None => (t, "0 0 0".to_string()),
+        };
         let (body, end) = match t.split_once('|') {
             Some((b, e)) => (b.trim(), Some(e.trim().to_string())),
             None => (t, None),
         };
         let toks: Vec<&str> = body.split_whitespace().collect();
         let k = toks.len() - 3;
-        rows.push((depth, toks[..k].join(" "), toks[k..].join(" "), end));
+        rows.push((
+            depth,
+            toks[..k].join(" "),
+            toks[k..].join(" "),
+            end,
+            rot,
+            own,
+        ));
     }
     let mut out = vec!["HIERARCHY".to_string()];
     let mut open: Vec<(usize, Option<String>)> = Vec::new();
@@ -2196,7 +2215,7 @@ fn skel_to_bvh(skel: &str) -> String {
         }
     };
     let mut frame = Vec::new();
-    for (d, name, off, end) in &rows {
+    for (d, name, off, end, rot, order) in &rows {
         close(&mut open, &mut out, *d);
         let ind = "  ".repeat(*d);
         let kw = if *d == 0 { "ROOT" } else { "JOINT" };
@@ -2205,10 +2224,10 @@ fn skel_to_bvh(skel: &str) -> String {
             out.push(format!(
                 "{ind}  CHANNELS 6 Xposition Yposition Zposition {order}"
             ));
-            frame.push(format!("{off} 0 0 0"));
+            frame.push(format!("{off} {rot}"));
         } else {
             out.push(format!("{ind}  CHANNELS 3 {order}"));
-            frame.push("0 0 0".to_string());
+            frame.push(rot.clone());
         }
         open.push((*d, end.clone()));
     }
@@ -2452,6 +2471,26 @@ const SUITES: &[Suite] = &[
          r_shoulder=rShldr;r_elbow=rForeArm;r_wrist=rHand;\
          l_hip=lThigh;l_knee=lShin;l_ankle=lFoot;l_toe=mToeLeft;\
          r_hip=rThigh;r_knee=rShin;r_ankle=rFoot;r_toe=mToeRight"
+    ),
+    suite!(
+        "poser_sl",
+        BY_N,
+        "from geometry",
+        "pelvis=hip;spine=abdomen;chest=chest;neck=neck;head=head;\
+         l_shoulder=lShldr;l_elbow=lForeArm;l_wrist=lHand;\
+         r_shoulder=rShldr;r_elbow=rForeArm;r_wrist=rHand;\
+         l_hip=lThigh;l_knee=lShin;l_ankle=lFoot;l_toe=~;\
+         r_hip=rThigh;r_knee=rShin;r_ankle=rFoot;r_toe=~"
+    ),
+    suite!(
+        "lafan1",
+        BY_N,
+        "from geometry",
+        "pelvis=Hips;spine=Spine;chest=Spine2;neck=Neck;head=Head;\
+         l_shoulder=LeftArm;l_elbow=LeftForeArm;l_wrist=LeftHand;\
+         r_shoulder=RightArm;r_elbow=RightForeArm;r_wrist=RightHand;\
+         l_hip=LeftUpLeg;l_knee=LeftLeg;l_ankle=LeftFoot;l_toe=LeftToe;\
+         r_hip=RightUpLeg;r_knee=RightLeg;r_ankle=RightFoot;r_toe=RightToe"
     ),
     suite!(
         "hanim_loa1",
@@ -2761,6 +2800,297 @@ fn real_suites_drive_the_procedural_character() {
                     .all(|&(a, b)| y(b) < y(a) - 0.15 * h);
             if !stands {
                 fails.push(format!("{} frame {f}: {p:?}", s.name));
+            }
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+// ------------------------------------------- units, and rests that do not stand
+
+/// The unit a suite's `.skel` comment states (`cm,`, `inches,`, `m,` ...),
+/// as [`surfmotion::mocap::units::BVH_UNITS`] names it.
+fn stated_unit(skel: &str) -> &'static str {
+    for line in skel.lines().filter(|l| l.starts_with('#')) {
+        for w in line.split_whitespace() {
+            match w.trim_end_matches([',', '.']) {
+                "mm" => return "mm",
+                "cm" => return "cm",
+                "inches" | "inch" => return "inch",
+                "dm" => return "dm",
+                "ft" | "feet" => return "ft",
+                "m" => return "m",
+                _ => {}
+            }
+        }
+    }
+    panic!("no unit stated in {skel}")
+}
+
+fn metres_per(unit: &str) -> f64 {
+    surfmotion::mocap::units::BVH_UNITS
+        .iter()
+        .find(|u| u.1 == unit)
+        .unwrap_or_else(|| panic!("{unit}"))
+        .0
+}
+
+/// Every length of a clip (offsets, End Sites, translations) times `k`.
+fn scaled(c: &Clip, k: f64) -> Clip {
+    let mut out = c.clone();
+    for j in &mut out.joints {
+        j.offset *= k;
+        j.tail = j.tail.map(|t| t * k);
+    }
+    for t in &mut out.translations {
+        *t *= k;
+    }
+    out
+}
+
+/// `load_clip` on a clip written as a BVH file (units and up axis decided
+/// as every verb decides them).
+fn load_written(dir: &std::path::Path, name: &str, c: &Clip) -> Clip {
+    let p = dir.join(format!("{name}.bvh"));
+    std::fs::write(&p, format_bvh(c)).unwrap();
+    load_clip(&p, &Default::default()).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// Every suite is read in the unit its source writes (inches for the
+/// Biovision sample, mocapdata.com and Second Life, which were read as
+/// centimetres: the Biovision body came out 0.60 m tall), and the same
+/// skeleton written in each unit real suites use (mm, cm, inch, dm, ft,
+/// m) is read in that unit, its stature the same in metres (within 1e-9)
+/// and between 1.4 and 2.0 m; `inspect --json` says which unit and why.
+#[test]
+fn every_suite_is_read_in_its_unit_and_in_every_unit_it_is_written_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut fails = Vec::new();
+    for s in SUITES {
+        let c = suite_clip(s.name, s.skel);
+        let unit = stated_unit(s.skel);
+        let got = load_written(dir.path(), s.name, &c);
+        if got.units.name != unit {
+            fails.push(format!(
+                "{}: read in {} ({}), written in {unit}",
+                s.name, got.units.name, got.units.reason
+            ));
+        }
+        let map = detect_clip(&c).unwrap().map;
+        let (h, _) = surfmotion::rig::load::stature(&c, &map).unwrap();
+        let h_m = h * metres_per(unit);
+        if !(1.4..=2.0).contains(&h_m) {
+            fails.push(format!("{}: stature {h_m:.3} m", s.name));
+        }
+        for (u, uname) in surfmotion::mocap::units::BVH_UNITS {
+            let v = scaled(&c, metres_per(unit) / u);
+            let got = load_written(dir.path(), &format!("{}_{uname}", s.name), &v);
+            let (hv, _) = surfmotion::rig::load::stature(&v, &map).unwrap();
+            if got.units.name != uname || (hv * u - h_m).abs() > 1e-9 * h_m {
+                fails.push(format!(
+                    "{} written in {uname}: read in {} ({})",
+                    s.name, got.units.name, got.units.reason
+                ));
+            }
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+    // The report and the override.
+    let p = dir.path().join("biovision_classic.bvh");
+    let o = run_cli(&["inspect", "--json"], &p);
+    assert!(o.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["units"]["name"], "inch", "{v}");
+    let why = v["units"]["reason"].as_str().unwrap();
+    assert!(
+        why.contains("stature 1.") && why.contains("in cm it would be"),
+        "{why}"
+    );
+    let o = run_cli(&["inspect", "--json", "--input-units", "cm"], &p);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["units"]["name"], "cm", "{v}");
+    assert_eq!(v["units"]["reason"], "given by the user", "{v}");
+}
+
+/// Children and tall adults: the same body scaled to a stature of 0.9 to
+/// 2.0 m, written in centimetres and in inches (a factor 2.54 apart, the
+/// closest pair of units), is read in the unit it was written in; so are
+/// metres and feet (3.28 apart) down to 0.8 m.
+#[test]
+fn children_and_tall_adults_are_read_in_their_unit() {
+    let s = SUITES.iter().find(|s| s.name == "daz_friendly").unwrap();
+    let c = suite_clip(s.name, s.skel);
+    let map = detect_clip(&c).unwrap().map;
+    let (h, _) = surfmotion::rig::load::stature(&c, &map).unwrap();
+    let h_m = h * metres_per("cm");
+    let dir = tempfile::tempdir().unwrap();
+    let mut fails = Vec::new();
+    for (stature, units) in [
+        (0.9, &["cm", "inch", "m", "ft"][..]),
+        (1.1, &["cm", "inch", "mm", "m", "ft", "dm"][..]),
+        (1.5, &["cm", "inch", "mm", "m", "ft", "dm"][..]),
+        (1.95, &["cm", "inch", "mm", "m", "ft", "dm"][..]),
+        (0.8, &["m", "ft"][..]),
+    ] {
+        for unit in units {
+            let v = scaled(&c, stature / h_m * metres_per("cm") / metres_per(unit));
+            let got = load_written(dir.path(), &format!("h{stature}_{unit}"), &v);
+            if got.units.name != *unit {
+                fails.push(format!(
+                    "{stature} m in {unit}: read in {} ({})",
+                    got.units.name, got.units.reason
+                ));
+            }
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+/// The same motion over another rest skeleton: joint `j`'s bone frame
+/// turned by `a[j]` (its rest offsets to children, End Site and per-frame
+/// child translations expressed in the turned frame: `a[j]⁻¹ · o`; its
+/// local rotation `a[parent]⁻¹ · q · a[j]`, the root's `q · a[root]`), so
+/// every frame's world positions are unchanged while the rest pose is any
+/// other: lying down (one rotation for all), folded (every bone along its
+/// parent's +X, as LAFAN1 writes it), or random.
+fn rerest_all(c: &Clip, a: &[DQuat]) -> Clip {
+    let n = c.joint_count();
+    let pa = |j: usize| c.joints[j].parent.map_or(DQuat::IDENTITY, |p| a[p.idx()]);
+    let mut out = c.clone();
+    for (j, jt) in out.joints.iter_mut().enumerate() {
+        if jt.parent.is_some() {
+            jt.offset = pa(j).inverse() * jt.offset;
+        }
+        jt.tail = jt.tail.map(|t| a[j].inverse() * t);
+    }
+    for f in 0..c.frame_count() {
+        for (j, aj) in a.iter().enumerate().take(n) {
+            let k = f * n + j;
+            out.rotations[k] = pa(j).inverse() * c.rotations[k] * *aj;
+            if c.joints[j].parent.is_some() {
+                out.translations[k] = pa(j).inverse() * c.translations[k];
+            }
+        }
+    }
+    out
+}
+
+/// The turn of each joint's frame that lays its longest child bone (or its
+/// End Site) along +X: LAFAN1's folded rest.
+fn folding(c: &Clip) -> Vec<DQuat> {
+    (0..c.joint_count())
+        .map(|j| {
+            let d = c
+                .joints
+                .iter()
+                .filter(|k| k.parent.is_some_and(|p| p.idx() == j))
+                .map(|k| k.offset)
+                .chain(c.joints[j].tail)
+                .max_by(|a, b| a.length().total_cmp(&b.length()))
+                .unwrap_or(DVec3::X);
+            if d.length() < 1e-12 {
+                DQuat::IDENTITY
+            } else {
+                DQuat::from_rotation_arc(DVec3::X, d.normalize())
+            }
+        })
+        .collect()
+}
+
+/// A zero rest: every offset zero and six channels on every joint, the
+/// frames' position channels carrying the bones (as some exporters write).
+fn zero_rest(c: &Clip) -> Clip {
+    let mut out = c.clone();
+    for j in &mut out.joints {
+        if j.parent.is_some() {
+            j.offset = DVec3::ZERO;
+        }
+        let rot: Vec<Channel> = j
+            .channels
+            .iter()
+            .copied()
+            .filter(|c| c.is_rotation())
+            .collect();
+        j.channels = [Channel::Xposition, Channel::Yposition, Channel::Zposition]
+            .into_iter()
+            .chain(if rot.len() == 3 {
+                rot
+            } else {
+                Channel::ROT_ZYX.to_vec()
+            })
+            .collect();
+    }
+    out
+}
+
+/// The variants of a clip whose rest does not stand, the motion unchanged:
+/// its rest turned 90° about Z and about X (the inverse in the frames),
+/// folded (LAFAN1), turned at random per joint, and zero.
+fn non_standing_rests(c: &Clip) -> Vec<(&'static str, Clip)> {
+    let n = c.joint_count();
+    let all = |q: DQuat| vec![q; n];
+    let mut seed = 0x9e3779b97f4a7c15u64;
+    let mut rnd = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let random: Vec<DQuat> = (0..n)
+        .map(|_| {
+            let axis = DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize_or(DVec3::Y);
+            DQuat::from_axis_angle(axis, (rnd() - 0.5) * 2.0 * std::f64::consts::PI)
+        })
+        .collect();
+    let h = std::f64::consts::FRAC_PI_2;
+    vec![
+        (
+            "rest lying along X",
+            rerest_all(c, &all(DQuat::from_rotation_z(-h))),
+        ),
+        (
+            "rest lying along Z",
+            rerest_all(c, &all(DQuat::from_rotation_x(h))),
+        ),
+        ("rest folded along X (LAFAN1)", rerest_all(c, &folding(c))),
+        ("rest turned at random per joint", rerest_all(c, &random)),
+        ("zero rest, offsets in the frames", zero_rest(c)),
+    ]
+}
+
+/// A rest skeleton that does not stand (lying, folded as LAFAN1's, turned
+/// at random, zero) with the inverse in the frames maps every suite
+/// exactly as the standing rest does (the structure is read on a frame's
+/// pose instead), gives the same stature (so the same unit), and every
+/// non-humanoid is still refused.
+#[test]
+fn rests_that_do_not_stand_map_like_the_standing_one() {
+    let mut fails = Vec::new();
+    for s in SUITES {
+        let c = suite_clip(s.name, s.skel);
+        let want = detect_clip(&c).unwrap().map;
+        let (h, _) = surfmotion::rig::load::stature(&c, &want).unwrap();
+        for (what, v) in non_standing_rests(&c) {
+            let v = via_bvh(&v);
+            match detect_clip(&v) {
+                Ok(d) if d.map == want => {
+                    let (hv, _) = surfmotion::rig::load::stature(&v, &d.map).unwrap();
+                    if (hv - h).abs() > 1e-6 * h {
+                        fails.push(format!("{} {what}: stature {hv} vs {h}", s.name));
+                    }
+                }
+                Ok(d) => fails.push(format!("{} {what}: {:?}\n  want {:?}", s.name, d.map, want)),
+                Err(e) => fails.push(format!("{} {what}: {e}", s.name)),
+            }
+        }
+    }
+    for (name, skel) in NOT_HUMANOIDS {
+        let c = suite_clip(name, skel);
+        for (what, v) in non_standing_rests(&c) {
+            match detect_clip(&via_bvh(&v)) {
+                Err(RigError::NotHumanoid { .. }) => {}
+                Ok(d) => fails.push(format!("{name} {what}: mapped as {:?}", d.map)),
+                Err(e) => fails.push(format!("{name} {what}: {e}")),
             }
         }
     }

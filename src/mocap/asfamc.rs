@@ -14,6 +14,7 @@
 //! parent's bone vector as offset and its own bone vector as `tail`; the clip's
 //! points are the root position and the bone end points.
 
+use super::bvh::quoted;
 use super::clip::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
 use super::error::MocapError;
 use super::euler;
@@ -102,7 +103,7 @@ fn num(tok: &str, path: &Path, line: usize) -> Result<f64, MocapError> {
         _ => Err(MocapError::parse(
             path,
             line,
-            format!("expected a number, found '{tok}'"),
+            format!("expected a number, found {}", quoted(tok)),
         )),
     }
 }
@@ -288,14 +289,14 @@ impl AsfText {
                 let mut d = Vec::new();
                 for t in &toks[1..] {
                     d.push(dof_code(t).ok_or_else(|| {
-                        MocapError::parse(path, line, format!("unknown root channel '{t}'"))
+                        MocapError::parse(path, line, format!("unknown root channel {}", quoted(t)))
                     })?);
                 }
                 self.root_dof = d;
             }
             "axis" if toks.len() > 1 => {
                 self.root_axis_order = order_axes(toks[1]).ok_or_else(|| {
-                    MocapError::parse(path, line, format!("bad axis order '{}'", toks[1]))
+                    MocapError::parse(path, line, format!("bad axis order {}", quoted(toks[1])))
                 })?;
             }
             "position" | "orientation" if toks.len() >= 4 => {
@@ -314,7 +315,7 @@ impl AsfText {
                 return Err(MocapError::parse(
                     path,
                     line,
-                    format!("unexpected '{l}' in :root"),
+                    format!("unexpected {} in :root", quoted(l)),
                 ));
             }
         }
@@ -356,7 +357,7 @@ impl AsfText {
                     return Err(MocapError::parse(
                         path,
                         b.line,
-                        format!("bone '{}' has a length but no direction", b.name),
+                        format!("bone {} has a length but no direction", quoted(&b.name)),
                     ));
                 }
                 if self.bones.len() > 100_000 {
@@ -369,7 +370,7 @@ impl AsfText {
                     return Err(MocapError::parse(
                         path,
                         line,
-                        format!("'{}' outside begin/end", toks[0]),
+                        format!("{} outside begin/end", quoted(toks[0])),
                     ));
                 };
                 match key {
@@ -399,14 +400,18 @@ impl AsfText {
                         ];
                         if let Some(o) = toks.get(4) {
                             b.order = order_axes(o).ok_or_else(|| {
-                                MocapError::parse(path, line, format!("bad axis order '{o}'"))
+                                MocapError::parse(
+                                    path,
+                                    line,
+                                    format!("bad axis order {}", quoted(o)),
+                                )
                             })?;
                         }
                     }
                     "dof" => {
                         for t in &toks[1..] {
                             b.dof.push(dof_code(t).ok_or_else(|| {
-                                MocapError::parse(path, line, format!("unknown dof '{t}'"))
+                                MocapError::parse(path, line, format!("unknown dof {}", quoted(t)))
                             })?);
                         }
                     }
@@ -439,7 +444,7 @@ fn index_bones<'a>(
             return Err(MocapError::parse(
                 path,
                 b.line,
-                format!("duplicate bone '{}'", b.name),
+                format!("duplicate bone {}", quoted(&b.name)),
             ));
         }
     }
@@ -458,20 +463,24 @@ fn link_hierarchy<'a>(
     let mut has_parent = vec![false; bone_count];
     for (p, c, line) in edges {
         let ci = *index.get(c.as_str()).ok_or_else(|| {
-            MocapError::parse(path, *line, format!("hierarchy names unknown bone '{c}'"))
+            MocapError::parse(
+                path,
+                *line,
+                format!("hierarchy names unknown bone {}", quoted(c)),
+            )
         })?;
         if p != "root" && !index.contains_key(p.as_str()) {
             return Err(MocapError::parse(
                 path,
                 *line,
-                format!("hierarchy names unknown bone '{p}'"),
+                format!("hierarchy names unknown bone {}", quoted(p)),
             ));
         }
         if has_parent[ci] {
             return Err(MocapError::parse(
                 path,
                 *line,
-                format!("bone '{c}' has two parents"),
+                format!("bone {} has two parents", quoted(c)),
             ));
         }
         has_parent[ci] = true;
@@ -764,11 +773,15 @@ pub fn parse_amc(
             return Err(MocapError::parse(
                 path,
                 line,
-                format!("'{}' before the first frame number", toks[0]),
+                format!("{} before the first frame number", quoted(toks[0])),
             ));
         };
         let bi = *index.get(toks[0]).ok_or_else(|| {
-            MocapError::parse(path, line, format!("bone '{}' is not in the ASF", toks[0]))
+            MocapError::parse(
+                path,
+                line,
+                format!("bone {} is not in the ASF", quoted(toks[0])),
+            )
         })?;
         let dof = &skel.bones[bi].dof;
         if toks.len() - 1 != dof.len() {
@@ -776,8 +789,8 @@ pub fn parse_amc(
                 path,
                 line,
                 format!(
-                    "bone '{}' has {} values, its ASF dof lists {}",
-                    toks[0],
+                    "bone {} has {} values, its ASF dof lists {}",
+                    quoted(toks[0]),
                     toks.len() - 1,
                     dof.len()
                 ),

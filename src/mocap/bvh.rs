@@ -111,6 +111,49 @@ impl<'a> Tokens<'a> {
     }
 }
 
+/// Most characters of file text an error or warning quotes.
+pub const QUOTE_CHARS: usize = 40;
+
+/// File text as errors and warnings quote it, in single quotes: at most
+/// [`QUOTE_CHARS`] characters (then `…`), and every character that does
+/// not print (control characters, the replacement character that stands
+/// for bytes that are not text, other format or unassigned-looking code
+/// points) escaped as `\xNN` (below U+0100) or `\u{NNNN}`, a backslash
+/// and a quote as `\\` and `\'`. Binary garbage read as a BVH is named, not
+/// copied to the terminal.
+pub fn quoted(s: &str) -> String {
+    let mut out = String::from("'");
+    for (n, c) in s.chars().enumerate() {
+        if n == QUOTE_CHARS {
+            out.push('…');
+            break;
+        }
+        match c {
+            '\\' => out.push_str("\\\\"),
+            '\'' => out.push_str("\\'"),
+            ' ' => out.push(' '),
+            c if c.is_control()
+                || c.is_whitespace()
+                || c == char::REPLACEMENT_CHARACTER
+                || ('\u{200b}'..='\u{200f}').contains(&c)
+                || ('\u{2028}'..='\u{202e}').contains(&c)
+                || ('\u{2060}'..='\u{206f}').contains(&c)
+                || c == '\u{feff}'
+                || ('\u{e000}'..='\u{f8ff}').contains(&c) =>
+            {
+                if (c as u32) < 0x100 {
+                    out.push_str(&format!("\\x{:02x}", c as u32));
+                } else {
+                    out.push_str(&format!("\\u{{{:04x}}}", c as u32));
+                }
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('\'');
+    out
+}
+
 /// Largest magnitude of an offset or channel value (file units or
 /// degrees): no capture comes near it, and beyond it sums overflow to
 /// infinity downstream (an OFFSET of 1e308 was read, and its unit printed
@@ -122,13 +165,13 @@ fn parse_f64(tok: &str, path: &Path, line: usize, what: &str) -> Result<f64, Moc
         Ok(v) if v.is_finite() && v.abs() > MAX_ABS_VALUE => Err(MocapError::parse(
             path,
             line,
-            format!("{what} is {tok}, beyond ±{MAX_ABS_VALUE:e}"),
+            format!("{what} is {}, beyond ±{MAX_ABS_VALUE:e}", quoted(tok)),
         )),
         Ok(v) if v.is_finite() => Ok(v),
         _ => Err(MocapError::parse(
             path,
             line,
-            format!("expected a number for {what}, found '{tok}'"),
+            format!("expected a number for {what}, found {}", quoted(tok)),
         )),
     }
 }
@@ -200,7 +243,7 @@ fn expect_hierarchy(t: &mut Tokens, path: &Path) -> Result<(), MocapError> {
         Some((k, l)) => Err(MocapError::parse(
             path,
             l,
-            format!("expected HIERARCHY, found '{k}'"),
+            format!("expected HIERARCHY, found {}", quoted(k)),
         )),
         None => Err(MocapError::invalid(path, "empty file")),
     }
@@ -270,7 +313,7 @@ impl Hierarchy {
                     return Err(MocapError::parse(
                         path,
                         line,
-                        format!("expected '{{', found '{tok}'"),
+                        format!("expected '{{', found {}", quoted(tok)),
                     ));
                 }
                 h.expecting_open = false;
@@ -312,7 +355,7 @@ impl Hierarchy {
                     return Err(MocapError::parse(
                         path,
                         line,
-                        format!("unknown keyword '{tok}'"),
+                        format!("unknown keyword {}", quoted(tok)),
                     ));
                 }
             }
@@ -398,7 +441,11 @@ impl Hierarchy {
         self.names.insert(renamed.clone());
         self.renamed += 1;
         let msg = match self.renamed {
-            1..=10 => format!("line {line}: a second joint called '{name}'; renamed '{renamed}'"),
+            1..=10 => format!(
+                "line {line}: a second joint called {}; renamed {}",
+                quoted(&name),
+                quoted(&renamed)
+            ),
             11 => format!("line {line} and after: more repeated joint names renamed likewise"),
             _ => return renamed,
         };
@@ -481,9 +528,9 @@ impl Hierarchy {
         let (tok, l) = t
             .next()
             .ok_or_else(|| MocapError::parse(path, line, "CHANNELS needs a count"))?;
-        let n: usize = tok
-            .parse()
-            .map_err(|_| MocapError::parse(path, l, format!("bad channel count '{tok}'")))?;
+        let n: usize = tok.parse().map_err(|_| {
+            MocapError::parse(path, l, format!("bad channel count {}", quoted(tok)))
+        })?;
         if n > 9 {
             return Err(MocapError::parse(
                 path,
@@ -504,7 +551,7 @@ impl Hierarchy {
                 return Err(MocapError::parse(
                     path,
                     l,
-                    format!("unknown channel '{tok}'"),
+                    format!("unknown channel {}", quoted(tok)),
                 ));
             }
             slots.push(c);
@@ -514,8 +561,8 @@ impl Hierarchy {
                 &mut self.warnings,
                 path,
                 format!(
-                    "line {line}: scale channels of joint '{}' ignored",
-                    self.joints[j].name
+                    "line {line}: scale channels of joint {} ignored",
+                    quoted(&self.joints[j].name)
                 ),
             );
         }
@@ -560,7 +607,7 @@ impl MotionHeader {
             return Err(MocapError::parse(
                 path,
                 fl,
-                format!("expected 'Frames:', found '{frames_line}'"),
+                format!("expected 'Frames:', found {}", quoted(frames_line)),
             ));
         };
         let declared: Option<u64> = declared.parse().ok();
@@ -579,7 +626,7 @@ impl MotionHeader {
             return Err(MocapError::parse(
                 path,
                 tl,
-                format!("expected 'Frame Time:', found '{time_line}'"),
+                format!("expected 'Frame Time:', found {}", quoted(time_line)),
             ));
         };
         let file_ft: Option<f64> = time_value
@@ -603,7 +650,10 @@ impl MotionHeader {
                 return Err(MocapError::parse(
                     path,
                     tl,
-                    format!("bad Frame Time '{time_value}'; give the frame rate with --input-fps"),
+                    format!(
+                        "bad Frame Time {}; give the frame rate with --input-fps",
+                        quoted(&time_value)
+                    ),
                 ));
             }
         };
@@ -914,6 +964,49 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("t.bvh:19:"), "{e}");
+    }
+
+    /// Binary garbage read as a BVH: the error names the file and line and
+    /// quotes at most 40 characters of what it found, escaped (no raw
+    /// control bytes or undecodable bytes reach the terminal).
+    #[test]
+    fn binary_garbage_is_quoted_escaped_and_bounded() {
+        let mut bytes: Vec<u8> = b"\x89PNG\x1b[2J\x07\x00".to_vec();
+        let mut x = 12345u32;
+        for _ in 0..5000 {
+            x = x.wrapping_mul(1_103_515_245).wrapping_add(12345);
+            let b = (x >> 16) as u8;
+            let blank = b.is_ascii_whitespace() || matches!(b, 0x0b | b'{' | b'}');
+            bytes.push(if blank { b'a' } else { b });
+        }
+        let text = crate::fsutil::decode_text(bytes);
+        let e = parse_bvh(&text, Path::new("g.bvh"), &BvhOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("g.bvh:1: expected HIERARCHY, found '"), "{e}");
+        assert!(!e.chars().any(|c| c.is_control()), "{e:?}");
+        assert!(e.contains("\\u{fffd}PNG\\x1b[2J\\x07\\x00"), "{e}");
+        // 40 characters quoted, each at most 8 once escaped (`\u{fffd}`).
+        assert!(
+            e.ends_with("…'") && e.chars().count() <= 40 + 8 * QUOTE_CHARS,
+            "{e}"
+        );
+        // A garbage keyword and a garbage number inside a valid file, too.
+        let bad = SMALL.replace("OFFSET", "\u{1}\u{fffd}OFF");
+        let e = parse_bvh(&bad, Path::new("t.bvh"), &BvhOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unknown keyword '\\x01\\u{fffd}OFF'"), "{e}");
+        let bad = SMALL.replace(
+            "1 2 3 0 0 0 90 0 0",
+            &format!("1 2 {} 0 0 0 90 0 0", "9".repeat(500)),
+        );
+        let e = parse_bvh(&bad, Path::new("t.bvh"), &BvhOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("t.bvh:19:") && e.len() < 200, "{e}");
+        assert_eq!(quoted("a'b\\c\td"), "'a\\'b\\\\c\\x09d'");
+        assert_eq!(quoted(&"é".repeat(40)), format!("'{}'", "é".repeat(40)));
     }
 
     #[test]

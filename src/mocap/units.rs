@@ -1,10 +1,15 @@
 //! Deciding a clip's length unit and up axis when the file does not say.
 //!
-//! BVH stores neither. The unit is chosen from the rest skeleton's extent
-//! (its largest span, which is the standing height or the arm span of a
-//! T-pose; both ≈ 1.7 m for an adult) as the candidate unit that brings it
-//! nearest 1.7 m. The up axis is the dominant axis of head − pelvis over a
-//! few frames (the rest pose of some rigs lies down: Bandai Namco).
+//! BVH stores neither. For a humanoid the unit is chosen from the body's
+//! stature estimated from its limb bones ([`units_from_stature`]: thigh +
+//! shin and upper arm + forearm, bone lengths that no pose changes, so a
+//! crouching, lying or folded rest skeleton, or a zero rest whose frames
+//! carry the offsets, gives the same answer), as the unit among those real
+//! suites write (mm, cm, inch, dm, ft, m; CMU's 1/0.45 inch for CMU rigs)
+//! that makes it a plausible human stature. Without a humanoid the rest
+//! skeleton's extent decides ([`guess_units`]). The up axis is the dominant
+//! axis of head − pelvis over a few frames (the rest pose of some rigs lies
+//! down: Bandai Namco).
 
 use super::clip::JointId;
 use super::clip::{Clip, Units, UpAxis};
@@ -24,7 +29,7 @@ pub fn y_up(p: [f64; 3], z_up: bool) -> DVec3 {
 /// CMU's length unit: 1/0.45 inch.
 pub const CMU_UNIT_M: f64 = 0.0254 / 0.45;
 
-/// A unit name users may give (`m`, `cm`, `mm`, `dm`, `inch`, `cmu`) or a
+/// A unit name users may give (`m`, `cm`, `mm`, `dm`, `inch`, `ft`, `cmu`) or a
 /// plain number of metres per file unit.
 pub fn parse_unit(s: &str) -> Option<Units> {
     let (m, name) = match s.to_ascii_lowercase().as_str() {
@@ -33,6 +38,7 @@ pub fn parse_unit(s: &str) -> Option<Units> {
         "cm" => (0.01, "cm"),
         "mm" => (0.001, "mm"),
         "in" | "inch" | "inches" => (0.0254, "inch"),
+        "ft" | "foot" | "feet" => (0.3048, "ft"),
         "cmu" => (CMU_UNIT_M, "CMU (1/0.45 inch)"),
         other => {
             let v: f64 = other
@@ -65,7 +71,9 @@ pub fn rest_extent(clip: &Clip) -> f64 {
     (hi - lo).max_element().max(0.0)
 }
 
-/// Guesses the unit of a BVH clip. `cmu` says the names follow a CMU convention.
+/// Guesses the unit of a BVH clip from its rest skeleton's extent (the
+/// fallback when no humanoid's limbs are found: [`units_from_stature`] is
+/// the rule for humanoids). `cmu` says the names follow a CMU convention.
 pub fn guess_units(clip: &Clip, cmu: bool) -> Units {
     let h = rest_extent(clip);
     let mut cands: Vec<(f64, &str)> = vec![(1.0, "m"), (0.01, "cm"), (0.001, "mm")];
@@ -90,6 +98,89 @@ pub fn guess_units(clip: &Clip, cmu: bool) -> Units {
             h * best.0,
             best.1,
             if cmu { " (CMU rig names)" } else { "" }
+        ),
+    }
+}
+
+/// The units BVH files from real suites are written in, metres per unit:
+/// millimetres (some optical systems), centimetres (MotionBuilder, Maya,
+/// Xsens, Bandai, LAFAN1), inches (Biovision, Poser/Daz, Second Life),
+/// decimetres, feet and metres (Blender, SMPL exporters).
+pub const BVH_UNITS: [(f64, &str); 6] = [
+    (0.001, "mm"),
+    (0.01, "cm"),
+    (0.0254, "inch"),
+    (0.1, "dm"),
+    (0.3048, "ft"),
+    (1.0, "m"),
+];
+
+/// The stature (m) the unit choice centres on, in log scale: the unit that
+/// brings the estimate nearest it wins. 1.3 m puts the boundary between
+/// centimetres and inches (a factor 2.54) at 0.82 m read as centimetres,
+/// 2.07 m read as inches: children from about 0.85 m (3 years) in
+/// centimetres and adults up to about 2.0 m in inches are read right.
+/// Between metres and feet the boundary is 0.72 m read as metres.
+pub const STATURE_CENTRE_M: f64 = 1.3;
+
+/// Statures (m) for which a CMU-named rig keeps CMU's unit: the CMU
+/// database's subjects are adults (1.50 and 1.60 m by [`stature_from_limbs`]
+/// on subjects 131 and 01). Narrow on purpose: Xsens MVN carries every CMU
+/// 3dsMax name, and an Xsens body of 1.49 m written in decimetres reads
+/// 0.84 m in CMU units.
+pub const CMU_STATURE_M: (f64, f64) = (1.2, 2.2);
+
+/// The fractions of the stature `H` the limb bones span (Drillis & Contini
+/// 1966, joint centre to joint centre): thigh 0.245 H + shin 0.246 H, and
+/// upper arm 0.186 H + forearm 0.146 H.
+pub const LEG_OF_STATURE: f64 = 0.491;
+/// See [`LEG_OF_STATURE`].
+pub const ARM_OF_STATURE: f64 = 0.332;
+
+/// A humanoid's stature from its limb bones, in file units: (thigh + shin,
+/// mean of both legs) and (upper arm + forearm, mean of both arms) summed
+/// over [`LEG_OF_STATURE`] + [`ARM_OF_STATURE`]. `None` unless both are
+/// positive and finite.
+pub fn stature_from_limbs(leg: f64, arm: f64) -> Option<f64> {
+    let h = (leg + arm) / (LEG_OF_STATURE + ARM_OF_STATURE);
+    (leg > 0.0 && arm > 0.0 && h.is_finite()).then_some(h)
+}
+
+/// The unit of a humanoid clip whose stature is `h` file units (`basis`
+/// says what it was measured from): a CMU rig (`cmu`) keeps CMU's unit
+/// when that gives an adult's stature ([`CMU_STATURE_M`]); else the
+/// unit of [`BVH_UNITS`] that brings the stature nearest
+/// [`STATURE_CENTRE_M`] in log scale. The reason names the stature, the
+/// runner-up and what `--input-units` does.
+pub fn units_from_stature(h: f64, basis: &str, cmu: bool) -> Units {
+    let off = |u: f64| (h * u / STATURE_CENTRE_M).ln().abs();
+    let mut ranked: Vec<(f64, &str)> = BVH_UNITS.to_vec();
+    ranked.sort_by(|a, b| off(a.0).total_cmp(&off(b.0)));
+    let (lo, hi) = CMU_STATURE_M;
+    let cmu_h = h * CMU_UNIT_M;
+    let (best, why) = if cmu && (lo..=hi).contains(&cmu_h) {
+        (
+            (CMU_UNIT_M, "CMU (1/0.45 inch)"),
+            "CMU rig names and an adult's stature".to_string(),
+        )
+    } else {
+        (
+            ranked[0],
+            format!("the unit nearest a {STATURE_CENTRE_M} m centre among mm, cm, inch, dm, ft, m"),
+        )
+    };
+    let runner = ranked
+        .iter()
+        .find(|u| u.1 != best.1)
+        .map(|u| format!("; in {} it would be {:.2} m", u.1, h * u.0))
+        .unwrap_or_default();
+    Units {
+        metres_per_unit: best.0,
+        name: best.1.into(),
+        reason: format!(
+            "stature {:.2} m in {} ({h:.3} file units from {basis}; {why}){runner}; --input-units overrides",
+            h * best.0,
+            best.1
         ),
     }
 }

@@ -6,7 +6,7 @@
 
 use super::{Canonical, RigMap, detect, detect_clip};
 use crate::mocap::read_clip;
-use crate::mocap::units::{guess_units, up_from_joints};
+use crate::mocap::units::{guess_units, stature_from_limbs, units_from_stature, up_from_joints};
 use crate::mocap::{Clip, MocapError, MocapFormat, Units, UpAxis};
 use std::path::{Path, PathBuf};
 
@@ -31,10 +31,40 @@ pub struct LoadOptions {
 pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
     let mut clip = read_clip(path, opts.fps, opts.asf.as_deref())?;
     if MocapFormat::of(path) == Some(MocapFormat::Bvh) {
-        let det = detect(&clip.point_names());
-        let cmu = det.map.convention.starts_with("CMU");
-        clip.units = guess_units(&clip, cmu);
-        let (up, why) = guess_up(&clip, opts.rig_map.as_ref());
+        let cmu = detect(&clip.point_names())
+            .map
+            .convention
+            .starts_with("CMU");
+        // The map (names and structure) is scale-free: it comes first, and
+        // its limbs give the stature the unit is chosen by.
+        let detected = match &opts.rig_map {
+            Some(_) => None,
+            None => Some(detect_clip(&clip)),
+        };
+        let map = opts.rig_map.as_ref().or_else(|| {
+            detected
+                .as_ref()
+                .and_then(|d| d.as_ref().ok())
+                .map(|d| &d.map)
+        });
+        clip.units = match map.and_then(|m| stature(&clip, m)) {
+            Some((h, basis)) => units_from_stature(h, &basis, cmu),
+            None => {
+                let mut u = guess_units(&clip, cmu);
+                u.reason = format!("no humanoid limbs to measure; {}", u.reason);
+                u
+            }
+        };
+        // Without a humanoid, the names' best map (as `guess_up` does).
+        let names_map;
+        let up_map = match map {
+            Some(m) => m,
+            None => {
+                names_map = detect(&clip.point_names()).map;
+                &names_map
+            }
+        };
+        let (up, why) = guess_up(&clip, Some(up_map));
         clip.up = up;
         clip.up_reason = why;
     }
@@ -46,6 +76,71 @@ pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
         clip.up_reason = "given by the user".into();
     }
     Ok(clip)
+}
+
+/// Per joint, the length of the bone from its parent to it, in file units:
+/// the median over up to 32 frames of its local translation (the offset,
+/// or the position channels that replace it), so a file whose rest
+/// offsets are zero and whose frames carry them measures alike.
+pub fn bone_lengths(clip: &Clip) -> Vec<f64> {
+    let n = clip.joint_count();
+    let frames = clip.frame_count();
+    let step = (frames / 32).max(1);
+    (0..n)
+        .map(|j| {
+            let mut v: Vec<f64> = (0..frames)
+                .step_by(step)
+                .filter_map(|f| clip.translations.get(f * n + j))
+                .map(|t| t.length())
+                .filter(|l| l.is_finite())
+                .collect();
+            if v.is_empty() {
+                return clip.joints[j].offset.length();
+            }
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        })
+        .collect()
+}
+
+/// The stature of a humanoid clip in file units, from the limb bones the
+/// map names ([`stature_from_limbs`]: thigh + shin and upper arm + forearm,
+/// each the sum of the bone lengths along the hierarchy, [`bone_lengths`]),
+/// with what it was measured from. `None` when a limb joint is missing or
+/// derived, or one is not below the other.
+pub fn stature(clip: &Clip, map: &RigMap) -> Option<(f64, String)> {
+    let len = bone_lengths(clip);
+    let id = |c: Canonical| {
+        map.joints
+            .get(&c)
+            .and_then(|n| clip.joint(n))
+            .map(|j| j.idx())
+    };
+    // Bone lengths summed from `top` down to `below` (a descendant).
+    let arc = |top: Canonical, below: Canonical| -> Option<f64> {
+        let (a, mut k) = (id(top)?, id(below)?);
+        let mut sum = 0.0;
+        for _ in 0..clip.joint_count() {
+            if k == a {
+                return Some(sum);
+            }
+            sum += len[k];
+            k = clip.joints[k].parent?.idx();
+        }
+        None
+    };
+    use Canonical as C;
+    let limb = |a: C, b: C, c: C| Some(arc(a, b)? + arc(b, c)?);
+    let leg = 0.5 * (limb(C::LHip, C::LKnee, C::LAnkle)? + limb(C::RHip, C::RKnee, C::RAnkle)?);
+    let arm = 0.5
+        * (limb(C::LShoulder, C::LElbow, C::LWrist)? + limb(C::RShoulder, C::RElbow, C::RWrist)?);
+    let h = stature_from_limbs(leg, arm)?;
+    Some((
+        h,
+        format!(
+            "legs {leg:.3} and arms {arm:.3} long: thigh + shin 0.491 H, upper arm + forearm 0.332 H"
+        ),
+    ))
 }
 
 /// Guesses the up axis from head − pelvis over the motion

@@ -332,6 +332,11 @@ pub struct Detection {
     /// How sure the geometry is of left and right (0-1), when the sides
     /// were decided from geometry alone (a mapping by structure).
     pub side_confidence: Option<f64>,
+    /// The pose the structure was read on: empty for the rest skeleton (or
+    /// no structure analysis), else which frame stood in for a rest
+    /// skeleton that is not a standing body, and why.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub structure_pose: String,
 }
 
 impl Detection {
@@ -367,6 +372,7 @@ impl Detection {
             map,
             sides: sides.to_string(),
             side_confidence: None,
+            structure_pose: String::new(),
         }
     }
 }
@@ -483,8 +489,14 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             ),
         });
     }
+    let pose_note = |b: &structure::Body| match b.reference_frame {
+        Some(f) => format!(
+            "frame {f}: the rest skeleton is not a standing body (its legs do not point away from its spine, or it has no extent), so the structure was read on this frame's pose"
+        ),
+        None => String::new(),
+    };
     let conv_chest_agrees = |b: &structure::Body| {
-        let (rest, _) = clip.rest_positions();
+        let rest = &b.reference;
         let at = |c: Canonical| {
             conv.map
                 .joints
@@ -526,6 +538,7 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             && within(C::RShoulder, &b.right_arm);
         if !(legs_swapped || arms_swapped) {
             let mut d = conv;
+            d.structure_pose = pose_note(b);
             d.sides = if confirmed {
                 format!(
                     "from names, confirmed by geometry (forward from the {}, confidence {:.2})",
@@ -551,6 +564,7 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             derived: BTreeMap::new(),
         };
         let mut d = Detection::from_map(map, Source::Names, 0.9, "");
+        d.structure_pose = pose_note(b);
         d.sides = format!(
             "from geometry (forward from the {}, confidence {:.2}); the names' left/right are mirrored",
             b.forward_from, b.side_confidence
@@ -615,6 +629,7 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
         joints: reports,
         side_confidence,
         sides,
+        structure_pose: pose_note(&b),
     })
 }
 

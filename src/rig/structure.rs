@@ -101,6 +101,15 @@ pub struct Body {
     /// True when the geometry gave no forward direction and the names'
     /// sides decided left and right (`forward_from` is `none`).
     pub sides_from_names: bool,
+    /// True when the rest skeleton is a standing body (its legs point away
+    /// from its spine) and the structure was read on it.
+    pub rest_stands: bool,
+    /// The frame whose pose stood in for the rest skeleton (which is not a
+    /// standing body), or `None` when the rest skeleton was used.
+    pub reference_frame: Option<usize>,
+    /// The joints' positions in the pose the structure was read on (the
+    /// rest skeleton, or `reference_frame`), file units.
+    pub reference: Vec<DVec3>,
 }
 
 /// The words a [`NotHumanoid`] reason contains when the clip has a
@@ -129,12 +138,21 @@ struct Geo<'a> {
     tail_rest: Vec<Option<DVec3>>,
     eps: f64,
     thr: f64,
-    /// Sampled poses: (positions, rotations); the rest pose first.
+    /// Sampled poses: (positions, rotations); the reference pose (the rest
+    /// pose, or the frame `from_frame`) first.
     poses: Vec<(Vec<DVec3>, Vec<DQuat>)>,
+    /// The frame standing in for the rest pose (its world positions are
+    /// `rest`, its local translations the bone lengths), when the rest
+    /// pose is not a standing body.
+    from_frame: Option<usize>,
 }
 
 impl<'a> Geo<'a> {
-    fn new(clip: &'a Clip, tokens: &[Vec<String>]) -> Result<Geo<'a>, NotHumanoid> {
+    fn new(
+        clip: &'a Clip,
+        tokens: &[Vec<String>],
+        from_frame: Option<usize>,
+    ) -> Result<Geo<'a>, NotHumanoid> {
         let n = clip.joint_count();
         let parent: Vec<Option<usize>> = clip
             .joints
@@ -147,16 +165,33 @@ impl<'a> Geo<'a> {
                 children[*p].push(i);
             }
         }
-        let len: Vec<f64> = clip.joints.iter().map(|j| j.offset.length()).collect();
+        // Bone lengths, and the reference pose: the rest skeleton, or the
+        // frame standing in for it (its world pose; its local translations,
+        // which position channels may set, the bones).
+        let (len, rest, rot0): (Vec<f64>, Vec<DVec3>, Vec<DQuat>) = match from_frame {
+            Some(f) if f < clip.frame_count() => {
+                let mut p = vec![DVec3::ZERO; n];
+                let mut r = vec![DQuat::IDENTITY; n];
+                clip.world_into(f, &mut p, &mut r);
+                let len = (0..n)
+                    .map(|i| clip.translations.get(f * n + i).map_or(0.0, |t| t.length()))
+                    .collect();
+                (len, p, r)
+            }
+            _ => (
+                clip.joints.iter().map(|j| j.offset.length()).collect(),
+                clip.rest_positions().0,
+                vec![DQuat::IDENTITY; n],
+            ),
+        };
         let mut helper: Vec<bool> = (0..n)
             .map(|i| tokens.get(i).is_some_and(|t| is_helper(t)))
             .collect();
-        let (rest, _) = clip.rest_positions();
         let tail_rest: Vec<Option<DVec3>> = clip
             .joints
             .iter()
             .enumerate()
-            .map(|(i, j)| j.tail.map(|t| rest[i] + t))
+            .map(|(i, j)| j.tail.map(|t| rest[i] + rot0[i] * t))
             .collect();
         let bbox_diag = |pts: &mut dyn Iterator<Item = DVec3>| {
             let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
@@ -168,12 +203,15 @@ impl<'a> Geo<'a> {
         };
         let diag = bbox_diag(&mut rest.iter().chain(tail_rest.iter().flatten()).copied());
         if !(diag.is_finite() && diag > 0.0) {
-            return Err(NotHumanoid("the rest skeleton has no extent".into()));
+            return Err(NotHumanoid(match from_frame {
+                Some(f) => format!("the skeleton has no extent at frame {f}"),
+                None => "the rest skeleton has no extent".into(),
+            }));
         }
         let eps = 1e-3 * diag;
         let mut poses = Vec::new();
         let mut rot = vec![DQuat::IDENTITY; n];
-        poses.push((rest.clone(), rot.clone()));
+        poses.push((rest.clone(), rot0));
         let frames = clip.frame_count();
         let step = (frames / MAX_FRAMES).max(1);
         let mut pos = vec![DVec3::ZERO; n];
@@ -331,6 +369,7 @@ impl<'a> Geo<'a> {
             eps,
             thr: 0.12 * size,
             poses,
+            from_frame,
         })
     }
 
@@ -517,8 +556,65 @@ struct Limb {
 
 /// Maps a clip's joints onto the canonical skeleton by structure, using
 /// `tokens` (from [`super::names::all_tokens`]) as hints inside chains.
+///
+/// The hierarchy is read on the rest skeleton when it is a standing body
+/// (legs pointing away from the spine). When it is not (LAFAN1's rest has
+/// every bone along +X, legs and spine alike; some exporters write a zero
+/// or collapsed rest and put the offsets in position channels), or no
+/// humanoid is found on it, the analysis is done again on a representative
+/// frame's pose (forward kinematics: [`representative_frame`]) standing in
+/// for the rest; the body found there is kept when it is one (its legs
+/// point away from its spine in the median sampled frame, as for any
+/// clip), else the rest's answer stands.
 pub fn analyse(clip: &Clip, tokens: &[Vec<String>]) -> Result<Body, NotHumanoid> {
-    let g = Geo::new(clip, tokens)?;
+    let at_rest = analyse_at(clip, tokens, None);
+    if at_rest.as_ref().is_ok_and(|b| b.rest_stands) {
+        return at_rest;
+    }
+    let Some(f) = representative_frame(clip) else {
+        return at_rest;
+    };
+    match analyse_at(clip, tokens, Some(f)) {
+        Ok(b) => Ok(b),
+        Err(e) => match at_rest {
+            Ok(b) => Ok(b),
+            Err(r) if r.0.contains(HORIZONTAL) || !e.0.contains(HORIZONTAL) => Err(r),
+            Err(_) => Err(e),
+        },
+    }
+}
+
+/// The frame whose pose stands in for a rest skeleton that is not a
+/// standing body: of up to 24 sampled frames, the one of largest extent
+/// (bounding-box diagonal of its joints), a pose with the limbs spread
+/// rather than folded. `None` without frames.
+pub fn representative_frame(clip: &Clip) -> Option<usize> {
+    let n = clip.joint_count();
+    let frames = clip.frame_count();
+    let step = (frames / MAX_FRAMES).max(1);
+    let (mut p, mut r) = (vec![DVec3::ZERO; n], vec![DQuat::IDENTITY; n]);
+    let mut best: Option<(f64, usize)> = None;
+    for f in (0..frames).step_by(step) {
+        clip.world_into(f, &mut p, &mut r);
+        let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+        for q in &p {
+            lo = lo.min(*q);
+            hi = hi.max(*q);
+        }
+        let d = (hi - lo).length();
+        if d.is_finite() && best.is_none_or(|(b, _)| d > b) {
+            best = Some((d, f));
+        }
+    }
+    best.map(|(_, f)| f)
+}
+
+fn analyse_at(
+    clip: &Clip,
+    tokens: &[Vec<String>],
+    from_frame: Option<usize>,
+) -> Result<Body, NotHumanoid> {
+    let g = Geo::new(clip, tokens, from_frame)?;
     let n = clip.joint_count();
     let mut reasons: Vec<String> = Vec::new();
     for p in 0..n {
@@ -659,13 +755,25 @@ fn body(
     let mut frames: Vec<f64> = cosines.iter().skip(1).copied().collect();
     frames.sort_by(f64::total_cmp);
     let median = frames.get(frames.len() / 2).copied().unwrap_or(f64::MAX);
-    let best_cos = cosines.first().copied().unwrap_or(f64::MAX).min(median);
+    // A frame standing in for the rest counts as one frame among the others.
+    let first = cosines.first().copied().unwrap_or(f64::MAX);
+    let rest_stands = g.from_frame.is_none() && first <= -0.7;
+    let best_cos = if g.from_frame.is_some() {
+        median
+    } else {
+        first.min(median)
+    };
     // −0.7 (134°): humans walk and run at −0.85 to −1; a fox standing
     // with its chest above its hips is at −0.53.
     if best_cos > -0.7 {
         return Err(NotHumanoid(format!(
-            "the chains below '{}' do not point away from the spine (cosine {best_cos:.2} in the rest pose or the median frame): {HORIZONTAL}",
-            name(pelvis)
+            "the chains below '{}' do not point away from the spine (cosine {best_cos:.2} in the {}median frame): {HORIZONTAL}",
+            name(pelvis),
+            if g.from_frame.is_some() {
+                ""
+            } else {
+                "rest pose or the "
+            }
         )));
     }
     let Some(neck_start) = neck_start else {
@@ -988,7 +1096,10 @@ fn body(
     let mut votes = [0.0f64; 3]; // feet, knees, travel
     let mut leg_s = [0.0f64; 3];
     let mut arm_s = [0.0f64; 3];
-    for (p, r) in &g.poses {
+    // A frame standing in for the rest is also among the sampled frames:
+    // it votes once.
+    let skip = usize::from(g.from_frame.is_some());
+    for (p, r) in g.poses.iter().skip(skip) {
         let up = (p[neck_j] - p[pj]).normalize_or_zero();
         let flat = |v: DVec3| v - up * v.dot(up);
         let mut fw = [DVec3::ZERO; 3];
@@ -1161,6 +1272,9 @@ fn body(
         side_confidence: conf,
         names_mirrored: named_sides[1] > named_sides[0],
         sides_from_names,
+        rest_stands,
+        reference_frame: g.from_frame,
+        reference: g.rest.clone(),
     })
 }
 
