@@ -2036,3 +2036,83 @@ fn exact_length_search_gives_the_same_path_on_any_number_of_threads() {
     }
     assert!(found >= 30, "only {found} paths by the exact-length search");
 }
+
+/// The exact-length programme follows a label through the nodes that
+/// leave it one arc only (the frames after a transition, before another
+/// may be taken, and transition heads that start no transition) instead
+/// of binning it at each, and drops a label that a label of a higher
+/// class (more frames since its last transition) in the same bin
+/// dominates: no path is lost. On random graphs with fine bins (so that
+/// binning hardly merges), both that programme and the layer-by-layer
+/// one with every class apart land within the tolerance exactly when
+/// some path of that length does, at the exhaustive optimum of
+/// transition cost + `w_dist |D − d|` up to the bins' resolution, never
+/// below it.
+#[test]
+fn following_one_arc_nodes_loses_no_path_against_an_exhaustive_search() {
+    use surfmotion::keyframe::lattice::{LatticeOptions, solve_exact_length};
+    let mut r = Lcg(131);
+    let (mut compared, mut landed, mut same) = (0, 0, 0);
+    for case in 0..300 {
+        let jumps = 6 + r.below(20);
+        let g = random_graph(&mut r, 3, jumps);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let o = SearchOptions::default();
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
+            continue;
+        };
+        let Some(c) = &p.chain else { continue };
+        let frames = 20 + r.below(40);
+        let all = all_exact_length(&g, a, b, frames, o.lattice.min_run);
+        if all.len() < 2 {
+            continue;
+        }
+        let (lo, hi) = (all[0].0, all[all.len() - 1].0);
+        let d = lo + (hi - lo) * r.next();
+        if d < 0.05 {
+            continue;
+        }
+        let (tol, wd) = (0.02 * d + 0.01, 1.0 / 0.3);
+        let best = all
+            .iter()
+            .filter(|&&(x, _)| (x - d).abs() <= tol)
+            .map(|&(x, c)| c + wd * (x - d).abs())
+            .fold(f64::INFINITY, f64::min);
+        let ext = c.extremes(frames);
+        let mut got = Vec::new();
+        for follow in [true, false] {
+            let lat = LatticeOptions {
+                bins: 4096,
+                follow,
+                dominance: follow,
+                ..o.lattice
+            };
+            // The start frame counts: `frames − 1` arc frames.
+            let f = solve_exact_length(c, &ext, frames - 1, d, tol, wd, None, &lat);
+            assert_eq!(
+                f.is_some(),
+                best.is_finite(),
+                "case {case} follow {follow}: found {f:?}, exhaustive best {best}"
+            );
+            if let Some((f, sc)) = f {
+                assert!(
+                    sc >= best - 1e-9,
+                    "case {case} follow {follow}: {sc} < {best}"
+                );
+                assert!(
+                    sc <= best + 0.01,
+                    "case {case} follow {follow}: {sc} vs {best}"
+                );
+                assert_eq!(f.measure.frames as usize, frames - 1, "case {case}");
+                got.push(sc);
+            }
+        }
+        compared += 1;
+        if let [x, y] = got[..] {
+            landed += 1;
+            same += usize::from((x - y).abs() < 1e-9);
+        }
+    }
+    eprintln!("{compared} compared, {landed} landed, {same} at the same cost either way");
+    assert!(compared >= 20 && landed >= 10, "{compared} / {landed}");
+}

@@ -63,6 +63,31 @@
 //! `tests/keyframe.rs::cost_pruning_keeps_the_unpruned_result_on_random_graphs`
 //! compares the two.
 //!
+//! **Following** ([`LatticeOptions::follow`]). A node that leaves a label
+//! one usable arc only (a transition's head that starts no transition,
+//! and every node in the [`LatticeOptions::min_run`] frames after a
+//! transition, where only the run of plain frames may be taken) offers no
+//! choice: the label is followed through such nodes to the next node
+//! with a choice, or the goal, and binned there only (the steps are
+//! recorded for the trace-back). No path is lost (a label that reaches a
+//! dead end or overruns the frame count is dropped: it had no
+//! continuation); what changes is only where labels are merged.
+//!
+//! **Classes** ([`LatticeOptions::dominance`]). The bins are split by the
+//! frames since the last transition, capped at `min_run` (a label that
+//! may not jump yet must not be merged with one that may). A label with
+//! more frames since its last transition has every continuation of one
+//! with fewer (the same arcs, and a class at least as high after each), so
+//! in one distance bin (the binning's own equivalence) it dominates any
+//! label of a lower class that costs no less; those are dropped.
+//!
+//! Neither loses a path, but labels are merged at other places, so a
+//! result may differ where the binning decides (README: samba's grid
+//! is unchanged, 3 of synth3's 800 queries take other transitions; on
+//! bandai9 they cut the programme's CPU time by about a quarter);
+//! `tests/keyframe.rs::following_one_arc_nodes_loses_no_path_against_an_exhaustive_search`
+//! compares both settings with an exhaustive search on random graphs.
+//!
 //! **Threads** (opt-in). A layer of at least
 //! [`LatticeOptions::parallel_from`] labels is cut into runs of whole nodes, one per thread of the current
 //! rayon pool (at most 8), each binned and extended apart; their outputs
@@ -122,6 +147,17 @@ pub struct LatticeOptions {
     /// query slower (1.18 s → 1.85 s at load average 4); 4096 suits idle
     /// cores.
     pub parallel_from: usize,
+    /// Dominance across the classes of frames since the last transition
+    /// (module docs, "Classes"): in one distance bin, a label with more
+    /// frames since its last transition (capped at
+    /// [`LatticeOptions::min_run`]) that costs no more replaces the one
+    /// with fewer. `false`: every class keeps its own bins (tests compare
+    /// the two). Default: true.
+    pub dominance: bool,
+    /// Follow a label through the nodes that leave it one arc only (module
+    /// docs, "Following") instead of binning it at each. `false`: every
+    /// node is a layer's cell (tests compare the two). Default: true.
+    pub follow: bool,
 }
 
 impl Default for LatticeOptions {
@@ -136,6 +172,8 @@ impl Default for LatticeOptions {
             within: 0.01,
             prune: true,
             parallel_from: usize::MAX,
+            dominance: true,
+            follow: true,
         }
     }
 }
@@ -517,6 +555,8 @@ pub fn solve_capped(
         bins,
         classes,
         cells,
+        dominance: opts.dominance,
+        follow: opts.follow,
     };
     let start = c.start;
     ctx.window(start, 0)?;
@@ -600,6 +640,9 @@ pub fn solve_capped(
         for part in parts.iter_mut().take(used) {
             let base = arena.len() as u32;
             arena.append(&mut part.arena);
+            for x in part.local.drain(..) {
+                arena[(base + x) as usize].0 += base;
+            }
             for (kk, mut l) in part.pushes.drain(..) {
                 l.parent += base;
                 let next = &mut layers[kk as usize];
@@ -653,6 +696,8 @@ struct Layer<'a> {
     bins: usize,
     classes: usize,
     cells: usize,
+    dominance: bool,
+    follow: bool,
 }
 
 /// A worker's bins: the slots set for the current node (reset for the
@@ -681,9 +726,60 @@ struct Part {
     arena: Vec<(u32, u32)>,
     pushes: Vec<(u32, Label)>,
     best: Option<(u32, f64, Label)>,
+    /// Arena entries whose parent is local (steps followed through).
+    local: Vec<u32>,
 }
 
 impl Layer<'_> {
+    /// Follows `l` (at layer `kk`) through the nodes that leave it one
+    /// arc only, recording each step in `out`'s arena; false when it
+    /// cannot reach the goal at the last layer.
+    fn forced(&self, l: &mut Label, kk: &mut usize, out: &mut Part) -> bool {
+        loop {
+            let v = l.node;
+            if v == self.c.goal {
+                return true;
+            }
+            if *kk >= self.frames {
+                return false;
+            }
+            let mut one = None;
+            let mut n = 0;
+            for a in &self.c.adj[v as usize] {
+                if a.m.frames == 0 || (a.jump && l.since < self.min_run) {
+                    continue;
+                }
+                n += 1;
+                one = Some(a);
+                if n > 1 {
+                    return true;
+                }
+            }
+            let Some(a) = one else { return false };
+            let k2 = *kk + a.m.frames as usize;
+            if k2 > self.frames {
+                return false;
+            }
+            let id = out.arena.len() as u32;
+            out.arena.push((l.parent, l.arc));
+            out.local.push(id);
+            *l = Label {
+                node: a.to,
+                parent: id,
+                arc: a.index,
+                distance: l.distance + a.m.distance,
+                cost: l.cost + a.m.cost,
+                turn: l.turn + a.turn,
+                since: if a.jump {
+                    a.m.frames
+                } else {
+                    l.since.saturating_add(a.m.frames)
+                },
+            };
+            *kk = k2;
+        }
+    }
+
     /// The window of distances so far at node `u` after `k` frames.
     fn window(&self, u: u32, k: usize) -> Option<(f64, f64)> {
         let (lo, hi) = self.ext.at(u, self.frames - k);
@@ -732,8 +828,9 @@ impl Layer<'_> {
                 }
                 let class = l.since.min(self.min_run) as usize;
                 let sector = self.heading.map_or(0, |h| h.sector(l.turn));
-                let b = (sector * classes + class) * bins
-                    + (((l.distance - lo) / width) as usize).min(bins - 1);
+                let b = (sector * bins + (((l.distance - lo) / width) as usize).min(bins - 1))
+                    * classes
+                    + class;
                 let better = match slot[b] {
                     None => true,
                     Some(o) => {
@@ -748,6 +845,25 @@ impl Layer<'_> {
                         touched.push(b);
                     }
                     slot[b] = Some(r);
+                }
+            }
+            if self.dominance {
+                // A label with more frames since its last transition has
+                // every continuation of one with fewer: in the same bin,
+                // it dominates any such label that is not cheaper.
+                for &b in touched.iter() {
+                    if b >= self.cells {
+                        continue;
+                    }
+                    let Some(r) = slot[b] else { continue };
+                    let class = b % classes;
+                    let c = raw[i + r].cost;
+                    let base = b - class;
+                    if (class + 1..classes)
+                        .any(|h| slot[base + h].is_some_and(|o| raw[i + o].cost <= c))
+                    {
+                        slot[b] = None;
+                    }
                 }
             }
             kept.clear();
@@ -779,24 +895,27 @@ impl Layer<'_> {
                     if am.frames == 0 || kk > frames || (arc.jump && l.since < self.min_run) {
                         continue;
                     }
-                    let d = l.distance + am.distance;
-                    match self.window(arc.to, kk) {
-                        Some((lo, hi)) if d >= lo && d <= hi => out.pushes.push((
-                            kk as u32,
-                            Label {
-                                node: arc.to,
-                                parent: id,
-                                arc: arc.index,
-                                distance: d,
-                                cost: l.cost + am.cost,
-                                turn: l.turn + arc.turn,
-                                since: if arc.jump {
-                                    am.frames
-                                } else {
-                                    l.since.saturating_add(am.frames)
-                                },
-                            },
-                        )),
+                    let mut nl = Label {
+                        node: arc.to,
+                        parent: id,
+                        arc: arc.index,
+                        distance: l.distance + am.distance,
+                        cost: l.cost + am.cost,
+                        turn: l.turn + arc.turn,
+                        since: if arc.jump {
+                            am.frames
+                        } else {
+                            l.since.saturating_add(am.frames)
+                        },
+                    };
+                    let mut kk = kk;
+                    if self.follow && !self.forced(&mut nl, &mut kk, out) {
+                        continue;
+                    }
+                    match self.window(nl.node, kk) {
+                        Some((lo, hi)) if nl.distance >= lo && nl.distance <= hi => {
+                            out.pushes.push((kk as u32, nl))
+                        }
                         _ => {}
                     }
                 }
