@@ -22,7 +22,7 @@ use crate::db::Character;
 use crate::deform::{DeformMode, DeformOptions, Deformer, TurnedOver};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
-use crate::rig::retarget::{Reference, ReferenceSource, ground_offsets};
+use crate::rig::retarget::{Reference, ReferenceSource, stance_offsets};
 use crate::skeleton::{Pose, floor_fit, rotate_yaw};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -324,7 +324,7 @@ pub fn synthesise_each<E: From<RetargetError>>(
     // 03 climbs) is no part of the pose, and the database's frames all
     // stand on one floor (Eq. 28 keeps height). The deformation still
     // follows the raised query.
-    let raised = ground_offsets(ch.rest_pose(), reference, mocap);
+    let raised = stance_offsets(ch.rest_pose(), reference, mocap);
     let on_floor: Vec<Pose> = query
         .iter()
         .zip(raised.iter().chain(std::iter::repeat(&0.0)))

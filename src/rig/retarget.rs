@@ -470,22 +470,41 @@ pub fn retarget_with_neutral(
             (t, g)
         })
         .collect();
-    // Feet on the ground: in every frame where the clip stands on its
-    // ground (a foot planted, its lowest joint within 3 cm of that
-    // footfall's support), the character's lowest sole point (a toe joint,
-    // or a heel under an ankle) stands on the character's floor raised by
-    // the support's height above the clip's floor, scaled (a step, a
-    // kerb); between such frames (a run's flight) the correction is
+    // Feet on the ground: in every frame where a foot of the clip touches
+    // its ground (planted, its lowest joint within 3 cm of that footfall's
+    // support, or within 3 cm of the floor), the body is lifted (or
+    // lowered) so that each character foot stands on or above the ground
+    // under it ([`Support::under`]: the support the foot touches, raised
+    // above the character's floor by its height above the clip's floor,
+    // scaled; for a foot in the air, the lower of the supports it left
+    // and lands on unless it is above the higher's top); the foot that
+    // needs the body highest stands on its
+    // ground. Between such frames (a run's flight) the correction is
     // interpolated. Whatever the two skeletons' hip offsets and foot
-    // lengths (a longer foot dips its toe further when the heel lifts).
-    let sole_rest = sole_height(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
+    // lengths. Each foot is held to its own ground: CMU 03_02 stands one
+    // foot on a block while the other leaves the floor, and the body's
+    // lowest sole put on the block stood the character 10-22 cm up for a
+    // frame or more at each footfall. A foot the clip does not touch with
+    // still counts (its ground is [`Support::under`]'s): the
+    // clip has no heel point, so a heel strike's foot is off the ground
+    // by its joints, and standing the body on the other foot alone (its
+    // toes, leaving) sank the striking heel 5-7 cm through the floor.
+    let rest_soles = foot_soles(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
     let fix: Vec<Option<f64>> = out
         .iter()
-        .zip(&support.ground)
-        .map(|((t, g), ground)| {
-            let h = sole_height(character, t, g);
-            let raised = ground.map(|y| (y - clip_floor) * s)?;
-            h.is_finite().then_some(sole_rest + raised - h)
+        .enumerate()
+        .map(|(i, (t, g))| {
+            if support.touch.iter().all(|f| f[i].is_none()) {
+                return None;
+            }
+            let soles = foot_soles(character, t, g);
+            (0..2)
+                .filter_map(|f| {
+                    let raised = (support.under[f][i]? - clip_floor) * s;
+                    let d = rest_soles[f] + raised - soles[f];
+                    d.is_finite().then_some(d)
+                })
+                .reduce(f64::max)
         })
         .collect();
     let lift = interpolate_gaps(&fix);
@@ -533,8 +552,52 @@ pub struct Support {
     /// joint over the frames.
     pub floor: f64,
     /// Per frame, the support under the clip's lowest planted foot when it
-    /// touches it (its lowest joint within 3 cm); `None` in the air.
+    /// touches it (its lowest joint within 3 cm); `None` in the air. The
+    /// lowest of the two feet's [`Support::touch`].
     pub ground: Vec<Option<f64>>,
+    /// Per foot (left, right) and frame, the support the foot touches: its
+    /// footfall's when its lowest joint is within 3 cm of it, the floor
+    /// when within 3 cm of the floor; `None` otherwise.
+    pub touch: [Vec<Option<f64>>; 2],
+    /// Per foot and frame, the ground under the foot: the support it
+    /// touches; in the air, the higher of the last support it touched and
+    /// the next when its lowest joint is above that one's top (a heel
+    /// striking a block, a heel rising on it), else the lower (a foot
+    /// stepping down from a block, or leaving the floor beside one, is
+    /// over the floor); the only one before its first touch or after its
+    /// last; `None` for a foot that never touches.
+    pub under: [Vec<Option<f64>>; 2],
+}
+
+/// The ground under a foot per frame (see [`Support::under`]) from the
+/// supports it touches, `touch`, and its lowest joint's height, `low`:
+/// where it touches, that support; in the air, the higher of the last
+/// support it touched and the next that the foot is not below (a foot
+/// above a block's top may be over it: at a heel strike on it, or its
+/// heel rising on it), else the lower.
+fn ground_under(touch: &[Option<f64>], low: &[f64]) -> Vec<Option<f64>> {
+    let mut last = vec![None; touch.len()];
+    let mut l: Option<f64> = None;
+    for (o, t) in last.iter_mut().zip(touch) {
+        l = t.or(l);
+        *o = l;
+    }
+    let mut next = vec![None; touch.len()];
+    let mut n: Option<f64> = None;
+    for (o, t) in next.iter_mut().zip(touch).rev() {
+        n = t.or(n);
+        *o = n;
+    }
+    (0..touch.len())
+        .map(|i| match (touch[i], last[i], next[i]) {
+            (Some(t), _, _) => Some(t),
+            (None, Some(a), Some(b)) => {
+                let (lo, hi) = (a.min(b), a.max(b));
+                Some(if low[i] >= hi { hi } else { lo })
+            }
+            (None, a, b) => a.or(b),
+        })
+        .collect()
 }
 
 /// The clip's support per footfall (poses levelled, Y-up, metres; `leg`
@@ -561,9 +624,12 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
         .get(lows.len() / 20)
         .copied()
         .unwrap_or_else(|| mocap.first().map_or(0.0, |p| p[C::Pelvis.index()].y));
-    let mut ground: Vec<Option<f64>> = vec![None; mocap.len()];
+    let mut touch: [Vec<Option<f64>>; 2] = [vec![None; mocap.len()], vec![None; mocap.len()]];
     let still = 0.02 * leg.max(1e-9);
-    for (ankle, toe) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)] {
+    for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
+        .into_iter()
+        .enumerate()
+    {
         let (a, k) = (ankle.index(), toe.index());
         let low = |p: &Pose| if p[a].y <= p[k].y { p[a] } else { p[k] };
         let planted: Vec<bool> = (0..mocap.len())
@@ -608,26 +674,82 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
             let sup = if sup <= floor + 0.06 { floor } else { sup };
             for i in run {
                 if low(&mocap[i]).y <= sup + 0.03 {
-                    ground[i] = Some(ground[i].map_or(sup, |g: f64| g.min(sup)));
+                    touch[foot][i] = Some(sup);
                 }
             }
         }
-    }
-    // On the floor, as on a flat capture: any foot within 3 cm of it.
-    for (g, p) in ground.iter_mut().zip(mocap) {
-        if foot_height(p) <= floor + 0.03 {
-            *g = Some(floor);
+        // On the floor, as on a flat capture: the foot within 3 cm of it.
+        for (i, p) in mocap.iter().enumerate() {
+            if low(p).y <= floor + 0.03 {
+                touch[foot][i] = Some(floor);
+            }
         }
     }
-    Support { floor, ground }
+    let ground = (0..mocap.len())
+        .map(|i| match (touch[0][i], touch[1][i]) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        })
+        .collect();
+    let lows = |a: C, k: C| -> Vec<f64> {
+        mocap
+            .iter()
+            .map(|p| p[a.index()].y.min(p[k.index()].y))
+            .collect()
+    };
+    let under = [
+        ground_under(&touch[0], &lows(C::LAnkle, C::LToe)),
+        ground_under(&touch[1], &lows(C::RAnkle, C::RToe)),
+    ];
+    Support {
+        floor,
+        ground,
+        touch,
+        under,
+    }
 }
 
-/// The height of the clip's ground above its floor per frame, in the
-/// character's metres (the clip levelled as [`retarget`] levels it, scaled
-/// by the ratio of leg lengths, interpolated across frames in the air):
-/// where a result of [`retarget`] stands. The plausibility checks measure
-/// floating and penetration from the character's floor raised by it.
+/// The height of the ground under the character's lower foot above its
+/// floor per frame, in the character's metres: the clip retargeted onto
+/// the character's skeleton `character` ([`retarget`]), then per frame
+/// the [`Support::under`] of the foot whose lowest sole point is lower
+/// (the clip levelled as [`retarget`] levels it, scaled by the ratio of
+/// leg lengths, interpolated across frames where no foot has a ground):
+/// where the lowest point of a result of [`retarget`] stands. The
+/// plausibility checks measure floating and penetration from the
+/// character's floor raised by it. With one foot on a block and the other
+/// lower, in the air over the floor, it is the floor.
 pub fn ground_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+    let out = retarget(character, reference, mocap);
+    offsets(character, reference, mocap, |s| {
+        out.iter()
+            .enumerate()
+            .map(|(i, (t, g))| {
+                let [l, r] = foot_soles(character, t, g);
+                let (a, b) = if r < l { (1, 0) } else { (0, 1) };
+                s.under[a][i].or(s.under[b][i])
+            })
+            .collect()
+    })
+}
+
+/// The height the character's body stands raised above its floor per
+/// frame, in the character's metres: the lowest support a foot of the
+/// clip touches ([`Support::ground`]), interpolated across frames in the
+/// air. Retrieval takes it off the query, comparing poses as they stand
+/// on the database's floor.
+pub fn stance_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+    offsets(character, reference, mocap, |s| s.ground.clone())
+}
+
+/// One per-frame height of the clip's [`Support`] (chosen by `pick`)
+/// above its floor, scaled onto the character, gaps interpolated.
+fn offsets(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    pick: impl Fn(&Support) -> Vec<Option<f64>>,
+) -> Vec<f64> {
     if mocap.is_empty() {
         return Vec::new();
     }
@@ -636,8 +758,7 @@ pub fn ground_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -
     let r = leg_length(&reference.pose).max(1e-12);
     let s = leg_length(character) / r;
     let support = clip_support(&levelled, r);
-    let raised: Vec<Option<f64>> = support
-        .ground
+    let raised: Vec<Option<f64>> = pick(&support)
         .iter()
         .map(|g| g.map(|y| (y - support.floor) * s))
         .collect();
