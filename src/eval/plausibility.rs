@@ -11,7 +11,7 @@ use super::ground::{Ground, floor_height, ground, lowest_heights};
 use super::head::{HeadOptions, HeadTorso};
 use super::knee::knee_hyperextension;
 use super::summary::Summary;
-use super::triangles::{RestTriangles, TurnedOverCount};
+use super::triangles::{OffRing, RestTriangles, TurnedOverCount};
 use crate::db::Character;
 use crate::deform::TurnedOver;
 use crate::mesh::Mesh;
@@ -41,6 +41,12 @@ pub struct Limits {
     /// reference), as a share of the mesh's triangles. Default: 0 (any
     /// frame with more than the capture shows is warned about).
     pub turned_over_margin: f64,
+    /// A vertex's distance from the centroid of its one-ring above the
+    /// reference's largest (the rest frame's, without a reference), in its
+    /// mean rest edge lengths ([`OffRing`]). Default: 4 (the real samba
+    /// capture reads up to 1.6 and results retargeted onto it up to 4.1;
+    /// the single-vertex spikes a faulty repair made read 9.5 to 98).
+    pub off_ring_margin: f64,
 }
 
 impl Default for Limits {
@@ -53,6 +59,7 @@ impl Default for Limits {
             knee_margin_deg: 5.0,
             sliding_margin_cm: 0.5,
             turned_over_margin: 0.0,
+            off_ring_margin: 4.0,
         }
     }
 }
@@ -87,6 +94,9 @@ pub struct Reference {
     /// Triangles turned over against the rest frame in the captured frames
     /// (a captured fold; none on a scan's rest frame).
     pub turned_over: TurnedOverCount,
+    /// The vertex farthest off its one-ring in the captured frames (frames
+    /// counted across the sequences).
+    pub off_ring: OffRing,
 }
 
 /// The plausibility of one result sequence.
@@ -110,6 +120,9 @@ pub struct Plausibility {
     /// ([`super::triangles`]), with what the deformation's repair left
     /// (`retarget` only) in its `deformation`.
     pub turned_over: TurnedOverCount,
+    /// The vertex farthest off its one-ring ([`OffRing`]): a single vertex
+    /// shot off the surface.
+    pub off_ring: OffRing,
     /// The same checks on the character's own frames.
     pub reference: Option<Reference>,
     /// |head-to-trunk angle| of the driving clip on its own skeleton,
@@ -141,6 +154,7 @@ struct Series {
     knee: Vec<f64>,
     sliding: Sliding,
     turned: Vec<usize>,
+    off_ring: Vec<(f64, u32, f64)>,
 }
 
 /// Everything a character's checks need, chosen once on its rest frame.
@@ -311,6 +325,7 @@ impl Checker {
                 &self.opts.feet,
             ),
             turned: self.triangles.per_frame(frames),
+            off_ring: self.triangles.off_ring_per_frame(frames),
         }
     }
 
@@ -346,7 +361,17 @@ impl Checker {
                     .collect::<Vec<_>>(),
                 self.triangles.triangle_count(),
             ),
+            off_ring: self.off_ring_of(
+                &series
+                    .iter()
+                    .flat_map(|s| s.off_ring.iter().copied())
+                    .collect::<Vec<_>>(),
+            ),
         }
+    }
+
+    fn off_ring_of(&self, per_frame: &[(f64, u32, f64)]) -> OffRing {
+        OffRing::of(per_frame, self.metres_per_unit, &self.triangles)
     }
 
     /// The plausibility of `frames` (frame-major, `n` vertices each, metres
@@ -394,6 +419,7 @@ impl Checker {
                 deformation: turned_over,
                 ..TurnedOverCount::of(&s.turned, self.triangles.triangle_count())
             },
+            off_ring: self.off_ring_of(&s.off_ring),
             reference: self.reference.clone(),
             clip_head_torso_deg: None,
             clip_foot_glide_cm_per_frame: None,
@@ -512,7 +538,33 @@ pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
     if let Some(t) = turned_over_warning(p, l) {
         w.push(t);
     }
+    if let Some(t) = off_ring_warning(p, l) {
+        w.push(t);
+    }
     w
+}
+
+/// The warning of a result with a vertex farther off its one-ring than the
+/// captured frames show (the rest frame without a reference) +
+/// [`Limits::off_ring_margin`].
+fn off_ring_warning(p: &Plausibility, l: &Limits) -> Option<String> {
+    let o = &p.off_ring;
+    let captured = p.reference.as_ref().map(|r| r.off_ring.max_edge_lengths);
+    let base = captured.unwrap_or(o.rest_edge_lengths);
+    (o.max_edge_lengths > base + l.off_ring_margin).then(|| {
+        format!(
+            "vertex {} leaves its one-ring by {:.1} cm ({:.1} edge lengths) in frame {} ({}: up to {base:.1})",
+            o.vertex,
+            o.max_cm,
+            o.max_edge_lengths,
+            o.frame,
+            if captured.is_some() {
+                "captured"
+            } else {
+                "the rest frame"
+            }
+        )
+    })
 }
 
 /// The warning of a result with more triangles turned over against the
@@ -635,6 +687,11 @@ impl Plausibility {
                 r.turned_over.triangle_frames, r.turned_over.max_in_a_frame
             ))
         );
+        s += &format!(
+            "  vertices off their one-ring: {}{}\n",
+            self.off_ring.describe(),
+            refd(&|r| format!("up to {:.1}", r.off_ring.max_edge_lengths))
+        );
         if let Some(d) = t.deformation {
             s += &format!(
                 "  the deformation's repair: {} triangle-frames turned over against the retrieved frames after the solve, {} after the repair\n",
@@ -679,6 +736,7 @@ mod tests {
             ground: Ground::default(),
             knee_hyperextension_deg: Summary::default(),
             turned_over: TurnedOverCount::default(),
+            off_ring: OffRing::default(),
         };
         Plausibility {
             frames: 10,
@@ -689,6 +747,7 @@ mod tests {
             floor_m: 0.0,
             knee_hyperextension_deg: Summary::default(),
             turned_over: TurnedOverCount::default(),
+            off_ring: OffRing::default(),
             reference: Some(reference),
             clip_head_torso_deg: None,
             clip_foot_glide_cm_per_frame: None,
