@@ -2116,3 +2116,55 @@ fn following_one_arc_nodes_loses_no_path_against_an_exhaustive_search() {
     eprintln!("{compared} compared, {landed} landed, {same} at the same cost either way");
     assert!(compared >= 20 && landed >= 10, "{compared} / {landed}");
 }
+
+/// The reach line of a missed target never contradicts itself: it said
+/// "5.000 m needs more than 14.0 s; at most 41.491 m within the horizon"
+/// on the demo database (a distance no path length's range holds, though
+/// longer paths travel farther). "More than the horizon" is said only of
+/// a distance beyond the most any path within it travels.
+#[test]
+fn a_missed_targets_reach_line_does_not_contradict_itself() {
+    let d = common::fixture_dir("keyframe-reach-words");
+    common::run_ok(
+        std::process::Command::new(common::bin())
+            .arg("demo")
+            .arg("-o")
+            .arg(&d),
+    );
+    let db = d.join("database");
+    let mut lines = 0;
+    for distance in ["2", "5", "9", "12", "1000"] {
+        let o = common::run_ok(
+            std::process::Command::new(common::bin())
+                .args(["keyframe", "--db"])
+                .arg(&db)
+                .args(["--from", "walk:0", "--to", "run:50", "--time", "4"])
+                .args(["--distance", distance, "-o"])
+                .arg(d.join("kf.pc2")),
+        );
+        let out = String::from_utf8_lossy(&o.stdout).to_string();
+        let Some(line) = out.lines().find(|l| l.starts_with("reach:")) else {
+            continue;
+        };
+        lines += 1;
+        let most: f64 = line
+            .rsplit("at most ")
+            .next()
+            .and_then(|s| s.split(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or_else(|| panic!("no 'at most' in {line:?}"));
+        let target: f64 = distance.parse().unwrap();
+        if line.contains("needs more than") {
+            assert!(most < target, "{distance} m: {line}");
+        } else if most >= target {
+            assert!(
+                line.contains("needs at least") || line.contains("none within"),
+                "{distance} m: {line}"
+            );
+        }
+    }
+    assert!(
+        lines >= 3,
+        "only {lines} targets missed: the check saw too little"
+    );
+}

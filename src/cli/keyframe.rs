@@ -413,10 +413,17 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                     "- (no path has exactly that length)".to_string(),
                     |(a, b)| format!("{a:.3}-{b:.3} m")
                 ),
-                x.min_time
-                    .map_or(format!("more than {:.1} s", x.horizon), |m| format!(
-                        "at least {m:.2} s"
-                    )),
+                match (x.min_time, x.max_in_horizon) {
+                    (Some(m), _) => format!("at least {m:.2} s"),
+                    // Paths within the horizon travel farther, but no one
+                    // length's range holds the distance within 1 % (it is
+                    // below every path's, or between two lengths').
+                    (None, Some(most)) if most >= dt => format!(
+                        "a path length none within the {:.1} s horizon has (none of their distance ranges holds it)",
+                        x.horizon
+                    ),
+                    (None, _) => format!("more than {:.1} s", x.horizon),
+                },
                 x.max_in_horizon
                     .map_or("-".to_string(), |m| format!("{m:.3} m"))
             );
