@@ -18,7 +18,10 @@
 //! without and with the cost pruning, and on two threads (layers of 4096
 //! labels or more shared); `bandai9_layered_1thread` is the programme
 //! without following one-arc nodes and without the dominance across
-//! classes (the search before, for a before/after in one run).
+//! classes (the search before, for a before/after in one run);
+//! `bandai9_fine_1thread` keeps all 32 bins in every cell (before the
+//! coarse bins far from the goal, `LatticeOptions::coarse_bins`), and
+//! `bandai9_pruned_1thread` is the default search.
 
 use criterion::Criterion;
 use std::hint::black_box;
@@ -230,8 +233,17 @@ fn main() {
         },
         ..o
     };
+    // Every cell keeps all its bins (module docs, "Coarse bins").
+    let fine = SearchOptions {
+        lattice: surfmotion::keyframe::lattice::LatticeOptions {
+            coarse_from: f64::INFINITY,
+            ..o.lattice
+        },
+        ..o
+    };
     for (name, o, threads) in [
         ("layered_1thread", layered, 1),
+        ("fine_1thread", fine, 1),
         ("unpruned_1thread", unpruned, 1),
         ("pruned_1thread", o, 1),
         (

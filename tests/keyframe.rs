@@ -1213,7 +1213,7 @@ fn reachability_oracle_agrees_with_an_exhaustive_search() {
             distance: d,
             frames: frames as f64,
         };
-        let said = oracle(&c, &t, 0.01, 256, o.lattice.min_run);
+        let said = oracle(&c, &t, 0.01, 256, o.lattice.min_run).unwrap();
         assert_eq!(
             said == Reachability::Reachable,
             truth,
@@ -1780,8 +1780,8 @@ fn extremes_kept_across_queries_equal_a_fresh_table() {
         };
         let Some(c) = &p.chain else { continue };
         for m in [30usize, 10, 70, 200, 150] {
-            let kept = c.extremes(m);
-            let fresh = chain_extremes(c, m);
+            let kept = c.extremes(m).unwrap();
+            let fresh = chain_extremes(c, m).unwrap();
             assert!(kept.frames() >= m);
             for u in 0..c.node_count() as u32 {
                 for k in 0..=m {
@@ -1962,7 +1962,7 @@ fn cost_pruning_keeps_the_unpruned_result_on_random_graphs() {
         }
         let Some(c) = &p.chain else { continue };
         let frames = 30 + r.below(50);
-        let ext = c.extremes(frames);
+        let ext = c.extremes(frames).unwrap();
         let (lo, hi) = ext.at(c.start_node(), frames);
         if !lo.is_finite() {
             continue;
@@ -2078,7 +2078,7 @@ fn following_one_arc_nodes_loses_no_path_against_an_exhaustive_search() {
             .filter(|&&(x, _)| (x - d).abs() <= tol)
             .map(|&(x, c)| c + wd * (x - d).abs())
             .fold(f64::INFINITY, f64::min);
-        let ext = c.extremes(frames);
+        let ext = c.extremes(frames).unwrap();
         let mut got = Vec::new();
         for follow in [true, false] {
             let lat = LatticeOptions {
@@ -2166,5 +2166,76 @@ fn a_missed_targets_reach_line_does_not_contradict_itself() {
     assert!(
         lines >= 3,
         "only {lines} targets missed: the check saw too little"
+    );
+}
+
+/// The coarse bins far from the goal (`LatticeOptions::coarse_bins`,
+/// module docs of `keyframe::lattice`, "Coarse bins") against the fine
+/// search (every cell keeps all its bins) on random graphs and long paths
+/// (windows many times the final one): every target the fine search
+/// meets within 1 % (distance and time) the coarse one meets too, and its
+/// Eq. 7 total is within 0.05 of the fine one's (the bound the README
+/// claims for the fine search against an exhaustive one).
+#[test]
+fn coarse_bins_far_from_the_goal_meet_what_the_fine_search_meets() {
+    use surfmotion::keyframe::lattice::LatticeOptions;
+    let mut r = Lcg(131);
+    let coarse = SearchOptions::default();
+    assert!(
+        coarse.lattice.coarse_bins < coarse.lattice.bins && coarse.lattice.coarse_from.is_finite()
+    );
+    let fine = SearchOptions {
+        lattice: LatticeOptions {
+            coarse_from: f64::INFINITY,
+            ..coarse.lattice
+        },
+        ..coarse
+    };
+    let (mut met, mut differ, mut worst) = (0, 0, 0.0f64);
+    for _ in 0..160 {
+        let g = random_graph(&mut r, 3, 24);
+        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &coarse) else {
+            continue;
+        };
+        let frames = 80 + r.below(160);
+        // Speeds the graph's sequences make (0.01-0.09 m a frame).
+        let d = frames as f64 * (0.012 + 0.07 * r.next());
+        let t = frames as f64 / 25.0;
+        let target = Targets::Global {
+            distance: d,
+            time: t,
+        };
+        let within = |pl: &surfmotion::keyframe::Plan| {
+            (pl.measure.distance - d).abs() < 0.01 * d
+                && (pl.measure.frames as f64 / 25.0 - t).abs() < 0.01 * t
+        };
+        let f = p.plan(&target, &fine).unwrap();
+        let c = p.plan(&target, &coarse).unwrap();
+        if f.path != c.path {
+            differ += 1;
+        }
+        if within(&f) {
+            met += 1;
+            assert!(
+                within(&c),
+                "{d} m in {t} s: fine {:?}, coarse {:?}",
+                f.measure,
+                c.measure
+            );
+            worst = worst.max(c.cost.total - f.cost.total);
+        }
+    }
+    eprintln!(
+        "{met} met by the fine search; {differ} paths differ; coarse total at most {worst:.4} above"
+    );
+    assert!(met >= 30, "{met} targets met");
+    assert!(
+        differ >= 1,
+        "no path differs: the coarse bins were not exercised"
+    );
+    assert!(
+        worst <= 0.05,
+        "coarse Eq. 7 total {worst} above the fine one"
     );
 }

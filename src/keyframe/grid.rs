@@ -212,19 +212,24 @@ pub const ORACLE_BINS: usize = 256;
 
 /// Is `(d, t)` reachable (module docs)? `met`: the query's result landed
 /// within 1 % (a witness).
-pub fn reachability(planner: &Planner, d: f64, t: f64, met: bool) -> Reachability {
+pub fn reachability(
+    planner: &Planner,
+    d: f64,
+    t: f64,
+    met: bool,
+) -> Result<Reachability, super::search::SearchError> {
     if met {
-        return Reachability::Reachable;
+        return Ok(Reachability::Reachable);
     }
     let Some(c) = &planner.chain else {
-        return Reachability::Gap;
+        return Ok(Reachability::Gap);
     };
     let t = Target {
         distance: d,
         frames: t * planner.fps,
     };
     let min_run = SearchOptions::default().lattice.min_run;
-    oracle(c, &t, 0.01, ORACLE_BINS, min_run)
+    Ok(oracle(c, &t, 0.01, ORACLE_BINS, min_run)?)
 }
 
 /// The asymptotic criterion: at least the shortest walk's frames and
@@ -313,7 +318,7 @@ pub fn evaluate(
             );
             let met = (ad - d).abs() < 0.01 * d && (at - t).abs() < 0.01 * t;
             let o0 = Instant::now();
-            let class = reachability(planner, d, t, met);
+            let class = reachability(planner, d, t, met)?;
             oracle_s += o0.elapsed().as_secs_f64();
             queries.push(GridQuery {
                 distance: d,

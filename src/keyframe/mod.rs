@@ -474,7 +474,7 @@ impl Planner {
         let s = &self.segments[i];
         if opts.method == Method::Lattice {
             let found = match &self.seg_chains[i] {
-                Some(c) => s.solve_lattice_on(c, t, heading, opts),
+                Some(c) => s.solve_lattice_on(c, t, heading, opts)?,
                 None => None,
             };
             if let Some((p, _)) = found {
@@ -509,7 +509,7 @@ impl Planner {
                 };
                 let found = match (&self.chain, opts.method) {
                     (Some(c), Method::Lattice) if self.segments.len() > 1 => {
-                        lattice::search(c, &t, heading.as_ref(), opts)
+                        lattice::search(c, &t, heading.as_ref(), opts)?
                     }
                     _ => None,
                 };
@@ -602,7 +602,7 @@ impl Planner {
         let frames = time * self.fps;
         let horizon = opts.horizon.frames(frames).floor() as i64;
         let top = (horizon - cs).max(0) as usize;
-        let ext = c.extremes(top);
+        let ext = c.extremes(top).ok()?;
         let n = (frames.round() as i64 - cs).clamp(0, top as i64) as usize;
         let (a, b) = ext.at(c.start_node(), n);
         let tol = 0.01 * distance;

@@ -205,6 +205,10 @@ pub enum SearchError {
     /// The repetition solver failed.
     #[error(transparent)]
     Repeats(#[from] RepeatsError),
+    /// The exact-length search's table for the query's horizon exceeds
+    /// the memory budget.
+    #[error("{0} (lower --distance or --time)")]
+    OverBudget(#[from] crate::budget::OverBudget),
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -709,7 +713,8 @@ impl Segment {
 
     /// Is `(distance, frames)` reachable exactly: some path of exactly
     /// `frames` frames travels at most `distance` and some at least
-    /// ([`super::lattice`])? `None` when `frames` is beyond `limit`.
+    /// ([`super::lattice`])? `None` when `frames` is beyond `limit`, or
+    /// when the table for it exceeds the memory budget.
     pub fn reaches_exactly(&self, distance: f64, frames: f64, limit: usize) -> Option<bool> {
         let f = frames.round() as i64 - i64::from(self.count_start);
         if f < 0 {
@@ -719,7 +724,7 @@ impl Segment {
         if f > limit {
             return None;
         }
-        let ext = super::lattice::extremes(self, f);
+        let ext = super::lattice::extremes(self, f).ok()?;
         let (lo, hi) = ext.at(self.start, f);
         Some(lo <= distance + 1e-9 && distance <= hi + 1e-9)
     }
@@ -731,8 +736,10 @@ impl Segment {
         t: &Target,
         heading: Option<&super::lattice::Heading>,
         opts: &SearchOptions,
-    ) -> Option<(SegmentPath, super::lattice::Found)> {
-        let c = super::lattice::Chain::of(std::slice::from_ref(self))?;
+    ) -> Result<Option<(SegmentPath, super::lattice::Found)>, SearchError> {
+        let Some(c) = super::lattice::Chain::of(std::slice::from_ref(self)) else {
+            return Ok(None);
+        };
         self.solve_lattice_on(&c, t, heading, opts)
     }
 
@@ -745,9 +752,9 @@ impl Segment {
         t: &Target,
         heading: Option<&super::lattice::Heading>,
         opts: &SearchOptions,
-    ) -> Option<(SegmentPath, super::lattice::Found)> {
-        let (found, _) = super::lattice::search(c, t, heading, opts)?;
-        Some((self.decompose(&found.arcs), found))
+    ) -> Result<Option<(SegmentPath, super::lattice::Found)>, SearchError> {
+        Ok(super::lattice::search(c, t, heading, opts)?
+            .map(|(found, _)| (self.decompose(&found.arcs), found)))
     }
 
     /// A path of arcs as its loop-free walk plus the loops cut out of it
@@ -1024,7 +1031,7 @@ impl Segment {
         let w = opts.weights;
         self.count(stats);
         if opts.method == Method::Lattice {
-            if let Some((p, _)) = self.solve_lattice(t, heading, opts) {
+            if let Some((p, _)) = self.solve_lattice(t, heading, opts)? {
                 stats.exact_length += 1;
                 return Ok(p);
             }
