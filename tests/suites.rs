@@ -45,6 +45,9 @@ struct Skel {
     all6: bool,
     crlf: bool,
     tabs: bool,
+    /// Offsets already in the file's frame (the `tests/fixtures/suites`
+    /// descriptions), `axes` only saying which frame that is.
+    raw: bool,
     rows: Vec<Row>,
 }
 
@@ -66,6 +69,7 @@ fn parse_skel(text: &str) -> Skel {
         all6: false,
         crlf: false,
         tabs: false,
+        raw: false,
         rows: Vec::new(),
     };
     let v3 = |t: &str| {
@@ -152,7 +156,11 @@ impl Skel {
 
     /// The joints, in file order and frame, with two frames of the rest.
     fn clip(&self) -> Clip {
-        let a = self.axes();
+        let a = if self.raw {
+            DQuat::IDENTITY
+        } else {
+            self.axes()
+        };
         let mut parents: Vec<Option<usize>> = Vec::new();
         let mut stack: Vec<(usize, usize)> = Vec::new();
         let mut joints = Vec::new();
@@ -878,6 +886,47 @@ Top 0 75 0
     ),
 ];
 
+/// A description of `tests/fixtures/suites` (the families of
+/// `tests/rig_mapping.rs`): offsets in the file's frame, the unit and the
+/// frame as its comment states them (`cm, Z-up, facing -Y`). `None` for a
+/// rest given by rotations (LAFAN1's `@`).
+fn fixture_skel(text: &str) -> Option<Skel> {
+    if text.lines().any(|l| !l.starts_with('#') && l.contains('@')) {
+        return None;
+    }
+    let mut k = parse_skel(text);
+    k.raw = true;
+    let comment: String = text
+        .lines()
+        .filter(|l| l.starts_with('#'))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let words: Vec<&str> = comment
+        .split_whitespace()
+        .map(|w| w.trim_end_matches([',', '.', ';']))
+        .collect();
+    k.unit = words
+        .iter()
+        .rev()
+        .find_map(|w| match *w {
+            "mm" | "cm" | "m" => Some(w.to_string()),
+            "inches" | "inch" => Some("inch".to_string()),
+            _ => None,
+        })
+        .expect("a unit in the comment");
+    k.axes = if comment.contains("Z-up, facing -Y") {
+        "zup-y"
+    } else if comment.contains("Z-up, facing +Y") {
+        "zup+y"
+    } else if comment.contains("(-Z") {
+        "y-z"
+    } else {
+        "y"
+    }
+    .to_string();
+    Some(k)
+}
+
 // ---------------------------------------------------------------- helpers
 
 /// The clip as a BVH file reads back (through the project's reader).
@@ -890,6 +939,10 @@ fn via_text(s: &Skel, c: &Clip, name: &str) -> Clip {
     )
     .unwrap_or_else(|e| panic!("{name}: {e}"))
 }
+
+/// A map to expect: per canonical joint, the accepted joint names (none:
+/// derived).
+type Want = Vec<(Canonical, Vec<String>)>;
 
 /// The expected map: canonical joint → accepted joint names (empty: derived).
 fn expected(s: &Suite) -> Vec<(Canonical, Vec<String>)> {
@@ -1315,16 +1368,42 @@ fn the_walk_on_every_suite_skeleton_retargets_like_the_walk() {
     let base = from_travel(&drive(&wpath).unwrap());
     let h = rig.height;
     let mut fails = Vec::new();
-    for s in SUITES {
-        let k = parse_skel(s.skel);
-        let rest = via_text(&k, &k.clip(), s.name);
-        let moved = walk_onto(&k, &rest, &expected(s), &walk);
-        let path = dir.path().join(format!("{}.bvh", s.name));
+    // This file's families with their expected maps; the fixtures'
+    // families with their detected maps (checked against their expected
+    // maps in tests/rig_mapping.rs).
+    let mut cases: Vec<(String, Skel, Want)> = SUITES
+        .iter()
+        .map(|s| (s.name.to_string(), parse_skel(s.skel), expected(s)))
+        .collect();
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/suites");
+    let mut files: Vec<_> = std::fs::read_dir(&fixtures)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    for f in files {
+        let name = f.file_stem().unwrap().to_string_lossy().to_string();
+        let Some(k) = fixture_skel(&std::fs::read_to_string(&f).unwrap()) else {
+            continue;
+        };
+        let Ok(d) = detect_clip(&via_text(&k, &k.clip(), &name)) else {
+            continue; // the animals
+        };
+        let want = Canonical::ALL
+            .iter()
+            .map(|c| (*c, d.map.joints.get(c).into_iter().cloned().collect()))
+            .collect();
+        cases.push((format!("fixture {name}"), k, want));
+    }
+    for (name, k, want) in &cases {
+        let rest = via_text(k, &k.clip(), name);
+        let moved = walk_onto(k, &rest, want, &walk);
+        let path = dir.path().join(format!("{}.bvh", name.replace(' ', "_")));
         std::fs::write(&path, k.text(&moved)).unwrap();
         let got = match drive(&path) {
             Ok(p) => from_travel(&p),
             Err(e) => {
-                fails.push(format!("{}: {e}", s.name));
+                fails.push(format!("{name}: {e}"));
                 continue;
             }
         };
@@ -1341,15 +1420,36 @@ fn the_walk_on_every_suite_skeleton_retargets_like_the_walk() {
         }
         let dist = |p: &[Pose]| p.last().unwrap()[0].length();
         let ratio = dist(&got) / dist(&base);
-        eprintln!(
-            "{}: worst {:.3} H at {at}; travel ratio {ratio:.3}",
-            s.name, worst
-        );
+        eprintln!("{name}: worst {worst:.3} H at {at}; travel ratio {ratio:.3}");
         if worst > 0.06 || !(0.85..=1.15).contains(&ratio) {
             fails.push(format!(
-                "{}: worst {worst:.3} H at {at}; travel ratio {ratio:.3}",
-                s.name
+                "{name}: worst {worst:.3} H at {at}; travel ratio {ratio:.3}"
             ));
+        }
+        // Mirrored (x negated in the file, names kept): the character walks
+        // the mirror image, its left leg doing what the right one did.
+        let mpath = dir
+            .path()
+            .join(format!("{}_mirrored.bvh", name.replace(' ', "_")));
+        std::fs::write(&mpath, k.text(&mirror(&moved))).unwrap();
+        let got = match drive(&mpath) {
+            Ok(p) => from_travel(&p),
+            Err(e) => {
+                fails.push(format!("{name} mirrored: {e}"));
+                continue;
+            }
+        };
+        let flip = |v: DVec3| DVec3::new(-v.x, v.y, v.z);
+        let mut worst = 0.0f64;
+        for (g, b) in got.iter().zip(&base) {
+            for c in Canonical::ALL {
+                let want = flip(b[swap_side(c).index()] - b[0]);
+                worst = worst.max(((g[c.index()] - g[0]) - want).length() / h);
+            }
+        }
+        eprintln!("{name} mirrored: worst {worst:.3} H");
+        if worst > 0.06 {
+            fails.push(format!("{name} mirrored: worst {worst:.3} H"));
         }
     }
     assert!(fails.is_empty(), "{}", fails.join("\n"));

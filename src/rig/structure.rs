@@ -1166,6 +1166,30 @@ fn body(
             DVec3::ZERO
         }
     };
+    // A foot that lies along its shin in the reference pose (an ankle End
+    // Site straight down: the Biovision sample, mocapdata.com) gives no
+    // forward: its part across the shin is the ankle's flexion, whose
+    // sign turns it backward when the toes lift (a walk on the Biovision
+    // skeleton came out mirrored, 'forward from the feet, confidence
+    // 0.99'). Along: within 15° (CesiumMan's toe, 3 cm ahead of and 6 cm
+    // below its ankle, is 27° off its shin and counts).
+    let foot_across = |l: &Limb| -> bool {
+        let (Some((k, _)), Some((a, _))) = (l.picks[1], l.picks[2]) else {
+            return false;
+        };
+        let t = match (l.picks[3], &l.derive_end) {
+            (Some((t, _)), _) => g.rest[t],
+            (None, Some(Derive::EndSite { .. })) => match g.tail_rest[a] {
+                Some(t) => t,
+                None => return false,
+            },
+            _ => return false,
+        };
+        let shin = (g.rest[a] - g.rest[k]).normalize_or_zero();
+        let v = t - g.rest[a];
+        (v - shin * v.dot(shin)).length() > 15f64.to_radians().sin() * v.length()
+    };
+    let feet_point = foot_across(&l0) && foot_across(&l1);
     let mut votes = [0.0f64; 3]; // feet, knees, travel
     let mut leg_s = [0.0f64; 3];
     let mut arm_s = [0.0f64; 3];
@@ -1176,7 +1200,7 @@ fn body(
         let up = (p[neck_j] - p[pj]).normalize_or_zero();
         let flat = |v: DVec3| v - up * v.dot(up);
         let mut fw = [DVec3::ZERO; 3];
-        if let (Some(t0), Some(t1)) = (toe_pt(&l0, p, r), toe_pt(&l1, p, r)) {
+        if feet_point && let (Some(t0), Some(t1)) = (toe_pt(&l0, p, r), toe_pt(&l1, p, r)) {
             // The sole: ankle→toe across the shin (its part along the
             // knee→ankle axis removed). A foot stands at right angles to
             // its shin, so this points forward however the leg swings and
