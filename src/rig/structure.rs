@@ -1166,28 +1166,30 @@ fn body(
             DVec3::ZERO
         }
     };
-    // A foot that lies along its shin in the reference pose (an ankle End
-    // Site straight down: the Biovision sample, mocapdata.com) gives no
-    // forward: its part across the shin is the ankle's flexion, whose
-    // sign turns it backward when the toes lift (a walk on the Biovision
-    // skeleton came out mirrored, 'forward from the feet, confidence
-    // 0.99'). Along: within 15° (CesiumMan's toe, 3 cm ahead of and 6 cm
-    // below its ankle, is 27° off its shin and counts).
+    // A foot that lies along its shin (an ankle End Site straight down:
+    // the Biovision sample, mocapdata.com) gives no forward: its part
+    // across the shin is the ankle's flexion, whose sign turns it backward
+    // when the toes lift (a walk on the Biovision skeleton came out
+    // mirrored, 'forward from the feet, confidence 0.99'). Along: within
+    // 15° in the median sampled pose (CesiumMan's toe, 3 cm ahead of and
+    // 6 cm below its ankle, is 27° off its shin and counts; Bandai's rest
+    // lays every bone along +X, so the rest alone cannot say).
     let foot_across = |l: &Limb| -> bool {
-        let (Some((k, _)), Some((a, _))) = (l.picks[1], l.picks[2]) else {
-            return false;
-        };
-        let t = match (l.picks[3], &l.derive_end) {
-            (Some((t, _)), _) => g.rest[t],
-            (None, Some(Derive::EndSite { .. })) => match g.tail_rest[a] {
-                Some(t) => t,
-                None => return false,
-            },
-            _ => return false,
-        };
-        let shin = (g.rest[a] - g.rest[k]).normalize_or_zero();
-        let v = t - g.rest[a];
-        (v - shin * v.dot(shin)).length() > 15f64.to_radians().sin() * v.length()
+        let mut f: Vec<f64> = g
+            .poses
+            .iter()
+            .filter_map(|(p, r)| {
+                let t = toe_pt(l, p, r)?;
+                let (k, a) = (pt(l, 1, p), pt(l, 2, p));
+                let shin = (a - k).normalize_or_zero();
+                let v = t - a;
+                let len = v.length();
+                (len > 0.0).then(|| (v - shin * v.dot(shin)).length() / len)
+            })
+            .collect();
+        f.sort_by(f64::total_cmp);
+        f.get(f.len() / 2)
+            .is_some_and(|&m| m > 15f64.to_radians().sin())
     };
     let feet_point = foot_across(&l0) && foot_across(&l1);
     let mut votes = [0.0f64; 3]; // feet, knees, travel
