@@ -516,6 +516,10 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
         }
     };
     if conv.missing.is_empty() && body.as_ref().map_or(true, conv_chest_agrees) {
+        let mut conv = conv;
+        if let Ok(b) = &body {
+            chest_at_branch(&mut conv, clip, b);
+        }
         let Ok(b) = &body else {
             let mut d = conv;
             d.sides = "from names (the structure analysis did not find a humanoid)".into();
@@ -631,6 +635,43 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
         sides,
         structure_pose: pose_note(&b),
     })
+}
+
+/// A convention's chest moved up the spine to the joint the arms and the
+/// neck branch from, when that joint (the structure's chest) lies above it
+/// on the same chain: HumanIK names on a rig with more spine joints than
+/// the convention's (BEAT and ZEGGS carry the arms on `Spine3`; the chest
+/// was `Spine2`, a vertebra low, and its file rotation left out
+/// `Spine3`'s).
+fn chest_at_branch(d: &mut Detection, clip: &Clip, b: &structure::Body) {
+    let Some(picked) = b.picks[Canonical::Chest.index()].joint else {
+        return;
+    };
+    let Some(named) = d
+        .map
+        .joints
+        .get(&Canonical::Chest)
+        .and_then(|n| clip.joint(n))
+        .map(|j| j.idx())
+    else {
+        return;
+    };
+    if picked == named || b.reference[picked].distance(b.reference[named]) < 1e-9 {
+        return;
+    }
+    let mut j = picked;
+    while let Some(p) = clip.joints[j].parent.map(|p| p.idx()) {
+        if p == named {
+            let name = clip.joints[picked].name.clone();
+            d.map.joints.insert(Canonical::Chest, name.clone());
+            if let Some(r) = d.joints.get_mut(Canonical::Chest.index()) {
+                r.joint = Some(name);
+                r.source = Source::Structure;
+            }
+            return;
+        }
+        j = p;
+    }
 }
 
 /// One canonical joint resolved on a clip.
@@ -798,12 +839,23 @@ impl RigMap {
 pub type PosesAndRotations = (Vec<Pose>, Vec<[Option<DQuat>; Canonical::COUNT]>);
 
 /// Canonical positions of one frame from world joint positions and rotations.
+/// Joints and End Sites are placed first, then the rules in canonical
+/// order, so a rule may use any joint: a derived chest between the spine
+/// and the neck was placed before the neck, halfway between the spine and
+/// the world origin (a skeleton whose arms branch off its first joint
+/// above the pelvis: the Biovision sample, H-Anim LOA1, KIT's MMM).
 fn place(slots: &[Slot], p: &[DVec3], r: &[DQuat]) -> Pose {
     let mut out: Pose = [DVec3::ZERO; 19];
     for (c, s) in slots.iter().enumerate() {
+        match *s {
+            Slot::Joint(j) => out[c] = p[j],
+            Slot::EndSite(j, t) => out[c] = p[j] + r[j] * t,
+            _ => {}
+        }
+    }
+    for (c, s) in slots.iter().enumerate() {
         out[c] = match *s {
-            Slot::Joint(j) => p[j],
-            Slot::EndSite(j, t) => p[j] + r[j] * t,
+            Slot::Joint(_) | Slot::EndSite(..) => continue,
             Slot::Between(a, b, t) => out[a] + t * (out[b] - out[a]),
             Slot::Toe(a, f) => {
                 use Canonical as C;

@@ -413,6 +413,36 @@ impl<'a> Geo<'a> {
         out
     }
 
+    /// The two leg chains among five chains leaving one joint (two legs,
+    /// two arms and a neck off a torso joint): the pair whose far ends lie
+    /// farthest from the mean far end of the other three (the feet below
+    /// the hands and the head, arms down or up). `None` when no pair stands
+    /// out (its distance not the largest by 20%).
+    fn hub_legs(&self, b: &[usize]) -> Option<[usize; 2]> {
+        let end = |c: usize| {
+            let path = self.path(c);
+            let e = *path.last().unwrap_or(&c);
+            self.tail_rest[e].unwrap_or(self.rest[e])
+        };
+        let ends: Vec<DVec3> = b.iter().map(|&c| end(c)).collect();
+        let mut scores: Vec<(f64, usize, usize)> = Vec::new();
+        for i in 0..b.len() {
+            for j in i + 1..b.len() {
+                let pair = 0.5 * (ends[i] + ends[j]);
+                let others: DVec3 = (0..b.len())
+                    .filter(|&k| k != i && k != j)
+                    .map(|k| ends[k])
+                    .sum::<DVec3>()
+                    / (b.len() - 2) as f64;
+                scores.push((pair.distance(others), i, j));
+            }
+        }
+        scores.sort_by(|x, y| y.0.total_cmp(&x.0));
+        let (best, i, j) = *scores.first()?;
+        let second = scores.get(1).map_or(0.0, |s| s.0);
+        (best > 1.2 * second).then_some([b[i], b[j]])
+    }
+
     /// Useful (non-helper-only) children leaving the node of `r`, any length.
     fn node_children(&self, r: usize) -> Vec<usize> {
         let mut out = Vec::new();
@@ -625,6 +655,17 @@ fn analyse_at(
         if b.len() < 3 {
             continue;
         }
+        if b.len() == 5
+            && let Some(legs) = g.hub_legs(&b)
+        {
+            // Legs, arms and neck off one joint (Kinect v1 / OpenNI's
+            // `Torso`): pelvis and chest are that joint's node.
+            match body(&g, tokens, p, p, p, legs) {
+                Ok(body) => return Ok(body),
+                Err(e) => reasons.push(e.0),
+            }
+            continue;
+        }
         if b.len() > 3 {
             reasons.push(format!(
                 "{} chains meet at '{}' (two legs and a spine expected)",
@@ -681,7 +722,14 @@ fn body(
             reach(legs[1])
         )));
     }
-    let cb = g.branches(chest);
+    // Legs, arms and neck off one joint: the chest's branches are the
+    // others, and the trunk's up runs to the neck.
+    let hub = g.rep[chest] == g.rep[pelvis];
+    let cb: Vec<usize> = g
+        .branches(chest)
+        .into_iter()
+        .filter(|c| !hub || !legs.contains(c))
+        .collect();
     let (arms, neck_start) = match cb.len() {
         2 | 3 => {
             // The neck continues the spine: the child most aligned with pelvis→chest.
@@ -742,7 +790,11 @@ fn body(
         .poses
         .iter()
         .map(|(p, _)| {
-            let up = (p[chest] - p[pelvis]).normalize_or_zero();
+            let top = match neck_start {
+                Some(n) if hub => p[n],
+                _ => p[chest],
+            };
+            let up = (top - p[pelvis]).normalize_or_zero();
             legs.iter()
                 .map(|&l| {
                     let path = g.path(l);
@@ -844,7 +896,7 @@ fn body(
     // Spine chain between the pelvis and the chest.
     let mut between = Vec::new();
     let mut j = chest;
-    while let Some(p) = g.parent[j] {
+    while let Some(p) = g.parent[j].filter(|_| !hub) {
         if g.rep[p] == pelvis {
             break;
         }
@@ -995,7 +1047,28 @@ fn body(
         neck_j,
         role_of(tokens, neck_j) == Some(Role::Neck),
     );
-    if chest_derived {
+    if hub {
+        // No spine joint: spine and chest on the pelvis→neck line where the
+        // procedural skeleton has them (0.19 and 0.6 of the way).
+        derive(
+            &mut picks,
+            Canonical::Spine,
+            Derive::Between {
+                from: Canonical::Pelvis,
+                to: Canonical::Neck,
+                t: 0.2,
+            },
+        );
+        derive(
+            &mut picks,
+            Canonical::Chest,
+            Derive::Between {
+                from: Canonical::Pelvis,
+                to: Canonical::Neck,
+                t: 0.6,
+            },
+        );
+    } else if chest_derived {
         derive(
             &mut picks,
             Canonical::Chest,
@@ -1093,6 +1166,32 @@ fn body(
             DVec3::ZERO
         }
     };
+    // A foot that lies along its shin (an ankle End Site straight down:
+    // the Biovision sample, mocapdata.com) gives no forward: its part
+    // across the shin is the ankle's flexion, whose sign turns it backward
+    // when the toes lift (a walk on the Biovision skeleton came out
+    // mirrored, 'forward from the feet, confidence 0.99'). Along: within
+    // 15° in the median sampled pose (CesiumMan's toe, 3 cm ahead of and
+    // 6 cm below its ankle, is 27° off its shin and counts; Bandai's rest
+    // lays every bone along +X, so the rest alone cannot say).
+    let foot_across = |l: &Limb| -> bool {
+        let mut f: Vec<f64> = g
+            .poses
+            .iter()
+            .filter_map(|(p, r)| {
+                let t = toe_pt(l, p, r)?;
+                let (k, a) = (pt(l, 1, p), pt(l, 2, p));
+                let shin = (a - k).normalize_or_zero();
+                let v = t - a;
+                let len = v.length();
+                (len > 0.0).then(|| (v - shin * v.dot(shin)).length() / len)
+            })
+            .collect();
+        f.sort_by(f64::total_cmp);
+        f.get(f.len() / 2)
+            .is_some_and(|&m| m > 15f64.to_radians().sin())
+    };
+    let feet_point = foot_across(&l0) && foot_across(&l1);
     let mut votes = [0.0f64; 3]; // feet, knees, travel
     let mut leg_s = [0.0f64; 3];
     let mut arm_s = [0.0f64; 3];
@@ -1103,7 +1202,7 @@ fn body(
         let up = (p[neck_j] - p[pj]).normalize_or_zero();
         let flat = |v: DVec3| v - up * v.dot(up);
         let mut fw = [DVec3::ZERO; 3];
-        if let (Some(t0), Some(t1)) = (toe_pt(&l0, p, r), toe_pt(&l1, p, r)) {
+        if feet_point && let (Some(t0), Some(t1)) = (toe_pt(&l0, p, r), toe_pt(&l1, p, r)) {
             // The sole: ankle→toe across the shin (its part along the
             // knee→ankle axis removed). A foot stands at right angles to
             // its shin, so this points forward however the leg swings and

@@ -1,0 +1,1456 @@
+//! BVH skeletons of more mocap suites, game-engine rigs and research
+//! datasets (issue 17), each written as a compact skeleton description
+//! learnt from public sources (named in each one's comment), with the
+//! quirks of its files: a root node above the pelvis, six channels on
+//! several joints, channel orders other than ZXY, CRLF line ends and tabs,
+//! Z-up, mm/cm/m, T-, A- and psi-pose rests, helper, twist, prop and end
+//! joints with channels, zero-length single-axis chains, a clavicle named
+//! "shoulder".
+//!
+//! Each is checked as `mocap rigmap` and `inspect` read it (full canonical
+//! map with no rig map, the convention named right or "unknown
+//! convention, mapped by …", left/right from geometry also when mirrored,
+//! unit and up axis), and the project's procedural walk is written onto
+//! each skeleton (bone by bone, through its own rest) and retargeted onto
+//! the procedural character as `retarget` reads a clip: the result must be
+//! the walk the original skeleton gives, standing and walking forward.
+//! Non-humanoids are refused with "not a humanoid: …" and exit 1.
+
+mod common;
+
+use glam::{DQuat, DVec3};
+use surfmotion::mocap::bvh::{BvhOptions, format_bvh, parse_bvh};
+use surfmotion::mocap::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
+use surfmotion::rig::{BY_NAMES, BY_STRUCTURE, Canonical, RigError, detect_clip, load_clip};
+use surfmotion::skeleton::Pose;
+use surfmotion::synth::clips::{Gait, gait_clip};
+
+// ------------------------------------------------------------ the skeletons
+
+/// A skeleton description. Lines: `#` comments (the source); directives
+/// `unit U` (the unit the file is written in: `mm`, `cm`, `m`, `inch`),
+/// `axes A` (the file's frame: `y` Y-up facing +Z; `y-z` Y-up facing -Z;
+/// `zup-y` Z-up facing -Y; `zup+y` Z-up facing +Y), `scale K` (file units
+/// per unit written below), `order …` (rotation channels), `all6` (six
+/// channels on every joint), `crlf`, `tabs`; then one joint per line, its
+/// depth the number of leading spaces: `name x y z [| ex ey ez] [% [6]
+/// order]` (offset and optional End Site, written Y-up facing +Z with the
+/// body's left at +X and turned into `axes` when the file is written; `% 6`
+/// gives that joint position channels; `% order` its own rotation order).
+struct Skel {
+    unit: String,
+    axes: String,
+    scale: f64,
+    order: String,
+    all6: bool,
+    crlf: bool,
+    tabs: bool,
+    /// Offsets already in the file's frame (the `tests/fixtures/suites`
+    /// descriptions), `axes` only saying which frame that is.
+    raw: bool,
+    rows: Vec<Row>,
+}
+
+struct Row {
+    depth: usize,
+    name: String,
+    offset: DVec3,
+    end: Option<DVec3>,
+    pos: bool,
+    order: String,
+}
+
+fn parse_skel(text: &str) -> Skel {
+    let mut s = Skel {
+        unit: "cm".into(),
+        axes: "y".into(),
+        scale: 1.0,
+        order: "Zrotation Xrotation Yrotation".into(),
+        all6: false,
+        crlf: false,
+        tabs: false,
+        raw: false,
+        rows: Vec::new(),
+    };
+    let v3 = |t: &str| {
+        let v: Vec<f64> = t.split_whitespace().map(|x| x.parse().unwrap()).collect();
+        DVec3::new(v[0], v[1], v[2])
+    };
+    for line in text.lines() {
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let (key, rest) = t.split_once(' ').unwrap_or((t, ""));
+        match key {
+            "unit" => s.unit = rest.trim().into(),
+            "axes" => s.axes = rest.trim().into(),
+            "scale" => s.scale = rest.trim().parse().unwrap(),
+            "order" => s.order = rest.trim().into(),
+            "all6" => s.all6 = true,
+            "crlf" => s.crlf = true,
+            "tabs" => s.tabs = true,
+            _ => {
+                let depth = line.len() - line.trim_start_matches(' ').len();
+                let (t, own) = match t.split_once('%') {
+                    Some((b, o)) => (b.trim(), Some(o.trim())),
+                    None => (t, None),
+                };
+                let (pos, order) = match own {
+                    Some(o) => match o.strip_prefix('6') {
+                        Some(r) if r.trim().is_empty() => (true, s.order.clone()),
+                        Some(r) => (true, r.trim().to_string()),
+                        None => (false, o.to_string()),
+                    },
+                    None => (false, s.order.clone()),
+                };
+                let (body, end) = match t.split_once('|') {
+                    Some((b, e)) => (b.trim(), Some(v3(e))),
+                    None => (t, None),
+                };
+                let toks: Vec<&str> = body.split_whitespace().collect();
+                let k = toks.len() - 3;
+                s.rows.push(Row {
+                    depth,
+                    name: toks[..k].join(" "),
+                    offset: v3(&toks[k..].join(" ")),
+                    end,
+                    pos,
+                    order,
+                });
+            }
+        }
+    }
+    s
+}
+
+impl Skel {
+    /// The rotation taking the description's frame (Y-up, facing +Z) to
+    /// the file's.
+    fn axes(&self) -> DQuat {
+        use std::f64::consts::{FRAC_PI_2, PI};
+        match self.axes.as_str() {
+            "y" => DQuat::IDENTITY,
+            "y-z" => DQuat::from_rotation_y(PI),
+            // +Y → +Z, +Z → -Y, +X → +X.
+            "zup-y" => DQuat::from_rotation_x(FRAC_PI_2),
+            // +Y → +Z, +Z → +Y, +X → -X.
+            "zup+y" => DQuat::from_rotation_z(PI) * DQuat::from_rotation_x(FRAC_PI_2),
+            a => panic!("axes {a}"),
+        }
+    }
+
+    fn z_up(&self) -> bool {
+        self.axes.starts_with("zup")
+    }
+
+    fn metres_per_unit(&self) -> f64 {
+        match self.unit.as_str() {
+            "mm" => 0.001,
+            "cm" => 0.01,
+            "m" => 1.0,
+            "inch" => 0.0254,
+            u => panic!("unit {u}"),
+        }
+    }
+
+    /// The joints, in file order and frame, with two frames of the rest.
+    fn clip(&self) -> Clip {
+        let a = if self.raw {
+            DQuat::IDENTITY
+        } else {
+            self.axes()
+        };
+        let mut parents: Vec<Option<usize>> = Vec::new();
+        let mut stack: Vec<(usize, usize)> = Vec::new();
+        let mut joints = Vec::new();
+        for (i, r) in self.rows.iter().enumerate() {
+            while stack.last().is_some_and(|&(d, _)| d >= r.depth) {
+                stack.pop();
+            }
+            let parent = stack.last().map(|&(_, j)| j);
+            parents.push(parent);
+            stack.push((r.depth, i));
+            let rot: Vec<Channel> = r
+                .order
+                .split_whitespace()
+                .map(|c| Channel::parse(c).unwrap())
+                .collect();
+            let channels = if parent.is_none() || r.pos || self.all6 {
+                let mut c = vec![Channel::Xposition, Channel::Yposition, Channel::Zposition];
+                c.extend(rot);
+                c
+            } else {
+                rot
+            };
+            joints.push(Joint {
+                name: r.name.clone(),
+                parent: parent.map(|p| JointId(p as u32)),
+                offset: a * r.offset * self.scale,
+                channels,
+                tail: r.end.map(|e| a * e * self.scale),
+            });
+        }
+        let n = joints.len();
+        let rot = vec![DQuat::IDENTITY; 2 * n];
+        let tr: Vec<DVec3> = (0..2)
+            .flat_map(|_| joints.iter().map(|j| j.offset))
+            .collect();
+        Clip::new(
+            joints,
+            1.0 / 30.0,
+            rot,
+            tr,
+            self.units(),
+            if self.z_up() { UpAxis::Z } else { UpAxis::Y },
+            PointConvention::JointOrigins,
+        )
+        .unwrap()
+    }
+
+    fn units(&self) -> Units {
+        Units {
+            metres_per_unit: self.metres_per_unit(),
+            name: self.unit.clone(),
+            reason: "stated".into(),
+        }
+    }
+
+    /// The BVH text of `c` with this family's line ends and indentation.
+    fn text(&self, c: &Clip) -> String {
+        let mut t = format_bvh(c);
+        if self.tabs {
+            t = t
+                .lines()
+                .map(|l| {
+                    let n = l.len() - l.trim_start_matches(' ').len();
+                    format!("{}{}", "\t".repeat(n / 2), l.trim_start_matches(' '))
+                })
+                .collect::<Vec<_>>()
+                .join("\n")
+                + "\n";
+        }
+        if self.crlf {
+            t = t.replace('\n', "\r\n");
+        }
+        t
+    }
+}
+
+/// A family: the skeleton, the convention `rigmap` must name, how
+/// left/right must be decided, and the full canonical map
+/// (`canonical=joint` separated by `;`; `~` a joint the map derives; `a|b`
+/// either of two joints at one place, e.g. in a zero-length chain).
+struct Suite {
+    name: &'static str,
+    skel: &'static str,
+    convention: &'static str,
+    sides: &'static str,
+    map: &'static str,
+}
+
+const BY_N: &str = BY_NAMES;
+const BY_S: &str = BY_STRUCTURE;
+
+const SUITES: &[Suite] = &[
+    Suite {
+        name: "deepmotion",
+        convention: BY_N,
+        sides: "from geometry",
+        map: "pelvis=hips_JNT;spine=spine_JNT;chest=spine2_JNT;neck=neck_JNT;head=head_JNT;\
+              l_shoulder=l_arm_JNT;l_elbow=l_forearm_JNT;l_wrist=l_hand_JNT;\
+              r_shoulder=r_arm_JNT;r_elbow=r_forearm_JNT;r_wrist=r_hand_JNT;\
+              l_hip=l_upleg_JNT;l_knee=l_leg_JNT;l_ankle=l_foot_JNT;l_toe=l_toebase_JNT;\
+              r_hip=r_upleg_JNT;r_knee=r_leg_JNT;r_ankle=r_foot_JNT;r_toe=r_toebase_JNT",
+        skel: "
+# DeepMotion Animate 3D BVH: `_JNT` suffixes, hips_JNT, spine_JNT,
+# spine1_JNT, spine2_JNT, neck_JNT, head_JNT, l_shoulder_JNT (the
+# clavicle: the upper arm is l_arm_JNT), l_forearm_JNT, l_hand_JNT,
+# l_handIndex1_JNT.. fingers, l_upleg_JNT, l_leg_JNT, l_foot_JNT,
+# l_toebase_JNT. Names and tree from a public Blender rigging script's
+# _bones_deepmotion() template (\"52 bones, DeepMotion naming _JNT\") and a
+# motion-stream spec listing hips_JNT as root, T-pose, metres, Y-up; this
+# file in cm.
+unit cm
+axes y
+order Zrotation Xrotation Yrotation
+hips_JNT 0 100 0
+ l_upleg_JNT 9 -5 0
+  l_leg_JNT 0 -44 1
+   l_foot_JNT 0 -42 -2
+    l_toebase_JNT 0 -7 13 | 0 0 7
+ r_upleg_JNT -9 -5 0
+  r_leg_JNT 0 -44 1
+   r_foot_JNT 0 -42 -2
+    r_toebase_JNT 0 -7 13 | 0 0 7
+ spine_JNT 0 10 -1
+  spine1_JNT 0 12 0
+   spine2_JNT 0 13 0
+    neck_JNT 0 16 1
+     head_JNT 0 10 2 | 0 18 0
+    l_shoulder_JNT 3 12 0
+     l_arm_JNT 13 0 0
+      l_forearm_JNT 27 0 0
+       l_hand_JNT 25 0 0
+        l_handIndex1_JNT 9 0 2
+         l_handIndex2_JNT 4 0 0
+          l_handIndex3_JNT 3 0 0 | 2 0 0
+        l_handThumb1_JNT 3 -1 3
+         l_handThumb2_JNT 3 0 2
+          l_handThumb3_JNT 2 0 1 | 2 0 1
+    r_shoulder_JNT -3 12 0
+     r_arm_JNT -13 0 0
+      r_forearm_JNT -27 0 0
+       r_hand_JNT -25 0 0
+        r_handIndex1_JNT -9 0 2
+         r_handIndex2_JNT -4 0 0
+          r_handIndex3_JNT -3 0 0 | -2 0 0
+        r_handThumb1_JNT -3 -1 3
+         r_handThumb2_JNT -3 0 2
+          r_handThumb3_JNT -2 0 1 | -2 0 1
+",
+    },
+    Suite {
+        name: "genea_talking_with_hands",
+        convention: BY_N,
+        sides: "from geometry",
+        map: "pelvis=b_root;spine=b_spine0;chest=b_spine3;neck=b_neck0;head=b_head;\
+              l_shoulder=b_l_arm;l_elbow=b_l_forearm;l_wrist=b_l_wrist;\
+              r_shoulder=b_r_arm;r_elbow=b_r_forearm;r_wrist=b_r_wrist;\
+              l_hip=b_l_upleg;l_knee=b_l_leg;l_ankle=b_l_foot;l_toe=~;\
+              r_hip=b_r_upleg;r_knee=b_r_leg;r_ankle=b_r_foot;r_toe=~",
+        skel: "
+# GENEA 2022 challenge (Talking With Hands 16.2M) BVH: body_world at the
+# origin above b_root (both translating), b_l_upleg, b_l_leg,
+# b_l_foot_twist, b_l_foot, b_spine0..3, b_neck0, b_head, b_l_shoulder (the
+# clavicle) carrying the prop p_l_scap and b_l_arm, b_l_arm_twist,
+# b_l_forearm, b_l_wrist_twist, b_l_wrist, fingers b_l_index1.., the prop
+# p_navel; right side first. Joint list and parents from public GENEA
+# processing scripts (target_joints, corps_name_GENEA_2022, a PARENTS
+# table). cm, Y-up, facing +Z, T-pose; X Y Z rotation order.
+unit cm
+axes y
+order Xrotation Yrotation Zrotation
+body_world 0 0 0
+ b_root 0 98 0 % 6
+  b_r_upleg -10 -4 0
+   b_r_leg 0 -43 0
+    b_r_foot_twist 0 -43 0
+     b_r_foot 0 0 0 | 0 -6 14
+  b_l_upleg 10 -4 0
+   b_l_leg 0 -43 0
+    b_l_foot_twist 0 -43 0
+     b_l_foot 0 0 0 | 0 -6 14
+  b_spine0 0 8 0
+   p_navel 0 2 11 | 0 0 2
+   b_spine1 0 10 0
+    b_spine2 0 10 0
+     b_spine3 0 10 0
+      b_neck0 0 14 0
+       b_head 0 10 2 | 0 17 0
+      b_r_shoulder -3 10 0
+       p_r_scap -4 -4 -7 | 0 -8 0
+       b_r_arm -14 0 0
+        b_r_arm_twist -14 0 0
+         b_r_forearm -14 0 0
+          b_r_wrist_twist -13 0 0
+           b_r_wrist -13 0 0
+            b_r_index1 -9 0 2
+             b_r_index2 -4 0 0 | -3 0 0
+            b_r_thumb0 -2 -1 2
+             b_r_thumb1 -3 0 2 | -2 0 1
+      b_l_shoulder 3 10 0
+       p_l_scap 4 -4 -7 | 0 -8 0
+       b_l_arm 14 0 0
+        b_l_arm_twist 14 0 0
+         b_l_forearm 14 0 0
+          b_l_wrist_twist 13 0 0
+           b_l_wrist 13 0 0
+            b_l_index1 9 0 2
+             b_l_index2 4 0 0 | 3 0 0
+            b_l_thumb0 2 -1 2
+             b_l_thumb1 3 0 2 | 2 0 1
+",
+    },
+    Suite {
+        name: "beat_zeggs",
+        convention: "MotionBuilder HumanIK",
+        sides: "from names, confirmed by geometry",
+        map: "pelvis=Hips;spine=Spine;chest=Spine3;neck=Neck;head=Head;\
+              l_shoulder=LeftArm;l_elbow=LeftForeArm;l_wrist=LeftHand;\
+              r_shoulder=RightArm;r_elbow=RightForeArm;r_wrist=RightHand;\
+              l_hip=LeftUpLeg;l_knee=LeftLeg;l_ankle=LeftFoot;l_toe=LeftToeBase;\
+              r_hip=RightUpLeg;r_knee=RightLeg;r_ankle=RightFoot;r_toe=RightToeBase",
+        skel: "
+# BEAT (and ZEGGS) gesture datasets: 75 joints, Hips, Spine..Spine3, Neck,
+# Neck1, Head, HeadEnd (a joint with channels), RightShoulder, RightArm,
+# RightForeArm, RightHand, RightHandMiddle1..4 and other fingers,
+# RightUpLeg, RightLeg, RightFoot, RightForeFoot (mid-foot, between the
+# ankle and the toes), RightToeBase, RightToeBaseEnd (a joint); right side
+# first. Names and kinematic tree from a public BEAT loader (BEAT_JOINTS,
+# BEAT_75_KINTREE, NAME_MAPPER). cm, Y-up, facing +Z, T-pose; CRLF.
+unit cm
+axes y
+order Yrotation Xrotation Zrotation
+crlf
+Hips 0 95 0
+ Spine 0 9 -1
+  Spine1 0 9 0
+   Spine2 0 9 0
+    Spine3 0 9 0
+     Neck 0 15 1
+      Neck1 0 5 0
+       Head 0 6 1
+        HeadEnd 0 17 0 | 0 1 0
+     RightShoulder -3 11 0
+      RightArm -13 0 0
+       RightForeArm -27 0 0
+        RightHand -25 0 0
+         RightHandMiddle1 -9 0 0
+          RightHandMiddle2 -4 0 0
+           RightHandMiddle3 -3 0 0
+            RightHandMiddle4 -2 0 0 | -1 0 0
+         RightHandThumb1 -3 -1 3
+          RightHandThumb2 -3 0 2
+           RightHandThumb3 -2 0 1
+            RightHandThumb4 -2 0 1 | -1 0 0
+     LeftShoulder 3 11 0
+      LeftArm 13 0 0
+       LeftForeArm 27 0 0
+        LeftHand 25 0 0
+         LeftHandMiddle1 9 0 0
+          LeftHandMiddle2 4 0 0
+           LeftHandMiddle3 3 0 0
+            LeftHandMiddle4 2 0 0 | 1 0 0
+         LeftHandThumb1 3 -1 3
+          LeftHandThumb2 3 0 2
+           LeftHandThumb3 2 0 1
+            LeftHandThumb4 2 0 1 | 1 0 0
+ RightUpLeg -9 -4 0
+  RightLeg 0 -42 0
+   RightFoot 0 -42 -1
+    RightForeFoot 0 -5 8
+     RightToeBase 0 -3 6
+      RightToeBaseEnd 0 0 5 | 0 0 1
+ LeftUpLeg 9 -4 0
+  LeftLeg 0 -42 0
+   LeftFoot 0 -42 -1
+    LeftForeFoot 0 -5 8
+     LeftToeBase 0 -3 6
+      LeftToeBaseEnd 0 0 5 | 0 0 1
+",
+    },
+    Suite {
+        name: "smpl_fbx_unity",
+        convention: BY_N,
+        sides: "from geometry",
+        map: "pelvis=m_avg_Pelvis;spine=m_avg_Spine1;chest=m_avg_Spine3;neck=m_avg_Neck;\
+              head=m_avg_Head;l_shoulder=m_avg_L_Shoulder;l_elbow=m_avg_L_Elbow;\
+              l_wrist=m_avg_L_Wrist;r_shoulder=m_avg_R_Shoulder;r_elbow=m_avg_R_Elbow;\
+              r_wrist=m_avg_R_Wrist;l_hip=m_avg_L_Hip;l_knee=m_avg_L_Knee;\
+              l_ankle=m_avg_L_Ankle;l_toe=m_avg_L_Foot;r_hip=m_avg_R_Hip;\
+              r_knee=m_avg_R_Knee;r_ankle=m_avg_R_Ankle;r_toe=m_avg_R_Foot",
+        skel: "
+# SMPL's FBX/Unity model exported to BVH (VIBE, ROMP, 4DHumans, EDGE and
+# AIST++ tools write it): every joint prefixed `m_avg_`, an m_avg_root node
+# at the origin above m_avg_Pelvis (both translating), m_avg_L_Collar,
+# m_avg_L_Shoulder (the upper arm), m_avg_L_Hand. Names from public
+# SMPL-to-FBX scripts (SmplObjects.joints, JOINT_NAMES); rest offsets
+# from a public UNITY_OFFSETS table (x negated: right-handed). m, Y-up,
+# facing +Z, T-pose; tabs.
+unit m
+axes y
+order Zrotation Yrotation Xrotation
+tabs
+m_avg_root 0 0 0
+ m_avg_Pelvis 0.0022 0.9726 0.0286 % 6
+  m_avg_L_Hip 0.0586 -0.0823 -0.0177
+   m_avg_L_Knee 0.0435 -0.3865 0.0081
+    m_avg_L_Ankle -0.0148 -0.4269 -0.0374
+     m_avg_L_Foot 0.0411 -0.0603 0.1220 | 0 0 0.05
+  m_avg_R_Hip -0.0603 -0.0905 -0.0135
+   m_avg_R_Knee -0.0433 -0.3837 -0.0048
+    m_avg_R_Ankle 0.0191 -0.4200 -0.0346
+     m_avg_R_Foot -0.0348 -0.0621 0.1303 | 0 0 0.05
+  m_avg_Spine1 -0.0044 0.1244 -0.0384
+   m_avg_Spine2 0.0045 0.1380 0.0268
+    m_avg_Spine3 -0.0023 0.0560 0.0029
+     m_avg_Neck -0.0134 0.2116 -0.0335
+      m_avg_Head 0.0101 0.0889 0.0504 | 0 0.15 0
+     m_avg_L_Collar 0.0717 0.1140 -0.0189
+      m_avg_L_Shoulder 0.1229 0.0452 -0.0190
+       m_avg_L_Elbow 0.2553 -0.0156 -0.0229
+        m_avg_L_Wrist 0.2657 0.0127 -0.0073
+         m_avg_L_Hand 0.0867 -0.0106 -0.0156 | 0.06 0 0
+     m_avg_R_Collar -0.0830 0.1125 -0.0237
+      m_avg_R_Shoulder -0.1132 0.0468 -0.0085
+       m_avg_R_Elbow -0.2601 -0.0143 -0.0313
+        m_avg_R_Wrist -0.2691 0.0068 -0.0060
+         m_avg_R_Hand -0.0888 -0.0087 -0.0102 | -0.06 0 0
+",
+    },
+    Suite {
+        name: "hdm05_asf_names",
+        convention: "CMU ASF/AMC",
+        sides: "from names, confirmed by geometry",
+        map: "pelvis=root;spine=upperback;chest=thorax;neck=lowerneck;head=head;\
+              l_shoulder=lhumerus;l_elbow=lradius;l_wrist=lwrist;\
+              r_shoulder=rhumerus;r_elbow=rradius;r_wrist=rwrist;\
+              l_hip=lfemur;l_knee=ltibia;l_ankle=lfoot;l_toe=ltoes;\
+              r_hip=rfemur;r_knee=rtibia;r_ankle=rfoot;r_toe=rtoes",
+        skel: "
+# HDM05 (Müller et al. 2007) and other ASF/AMC collections converted to
+# BVH with the ASF bone names kept: each BVH joint is an ASF bone, placed
+# at the end of its parent bone (root, lhipjoint, lfemur at the hip,
+# ltibia, lfoot, ltoes; lowerback, upperback, thorax, lowerneck,
+# upperneck, head; lclavicle, lhumerus, lradius, lwrist, lhand, lfingers,
+# lthumb). Bone names from the HDM05/CMU ASF skeleton (public ASF files
+# and parsers). Arms down at 45 degrees (the ASF's axis-aligned arms bent
+# down as converters write them); inches, Y-up, facing +Z.
+unit inch
+axes y
+scale 0.3937
+order Zrotation Yrotation Xrotation
+root 0 96 0
+ lhipjoint 0 0 0
+  lfemur 9 -8 2
+   ltibia 0 -42 0
+    lfoot 0 -41 0
+     ltoes 0 -3 13 | 0 0 5
+ rhipjoint 0 0 0
+  rfemur -9 -8 2
+   rtibia 0 -42 0
+    rfoot 0 -41 0
+     rtoes 0 -3 13 | 0 0 5
+ lowerback 0 0 0
+  upperback 0 12 -1
+   thorax 0 12 0
+    lowerneck 0 13 0
+     upperneck 0 8 1
+      head 0 7 1 | 0 17 0
+    lclavicle 0 13 0
+     lhumerus 17 3 0
+      lradius 20 -20 0
+       lwrist 18 -18 0
+        lhand 2 -2 0
+         lfingers 4 -4 0 | 3 -3 0
+        lthumb 1 -2 2 | 2 -2 2
+    rclavicle 0 13 0
+     rhumerus -17 3 0
+      rradius -20 -20 0
+       rwrist -18 -18 0
+        rhand -2 -2 0
+         rfingers -4 -4 0 | -3 -3 0
+        rthumb -1 -2 2 | -2 -2 2
+",
+    },
+    Suite {
+        name: "kit_mmm",
+        convention: BY_S,
+        sides: "from geometry",
+        map: "pelvis=BPx_joint|BPy_joint|BPz_joint;spine=BTx_joint|BTy_joint|BTz_joint;\
+              chest=~;neck=BLNx_joint|BLNy_joint|BLNz_joint;\
+              head=BUNx_joint|BUNy_joint|BUNz_joint;\
+              l_shoulder=LSx_joint|LSy_joint|LSz_joint;l_elbow=LEx_joint|LEz_joint;\
+              l_wrist=LWx_joint|LWy_joint;\
+              r_shoulder=RSx_joint|RSy_joint|RSz_joint;r_elbow=REx_joint|REz_joint;\
+              r_wrist=RWx_joint|RWy_joint;\
+              l_hip=LHx_joint|LHy_joint|LHz_joint;l_knee=LKx_joint;\
+              l_ankle=LAx_joint|LAy_joint|LAz_joint;l_toe=LFx_joint;\
+              r_hip=RHx_joint|RHy_joint|RHz_joint;r_knee=RKx_joint;\
+              r_ankle=RAx_joint|RAy_joint|RAz_joint;r_toe=RFx_joint",
+        skel: "
+# KIT Whole-Body Human Motion Database, MMM reference model, as a BVH that
+# writes each single-axis MMM joint as its own BVH joint: chains of
+# zero-length joints (BPx, BPy, BPz pelvis; BTx.. torso; BLNx.. lower neck;
+# BUNx.. upper neck; LSx, LSy, LSz shoulder; LEx, LEz elbow; LWx, LWy
+# wrist; LHx.. hip; LKx knee; LAx.. ankle; LFx foot). Joint names from
+# public KIT-ML/MMM loaders (joint_names: BLNx_joint, BPx_joint, ...,
+# LMrot_joint). Names carry no usable words: structure decides. Arms down;
+# mm, Z-up, facing +Y (left at -X).
+unit mm
+axes zup+y
+scale 10
+order Xrotation Yrotation Zrotation
+BPx_joint 0 95 0
+ BPy_joint 0 0 0
+  BPz_joint 0 0 0
+   LHx_joint 9 -6 0
+    LHy_joint 0 0 0
+     LHz_joint 0 0 0
+      LKx_joint 0 -42 0
+       LAx_joint 0 -42 0
+        LAy_joint 0 0 0
+         LAz_joint 0 0 0
+          LFx_joint 0 -4 12 | 0 0 6
+   RHx_joint -9 -6 0
+    RHy_joint 0 0 0
+     RHz_joint 0 0 0
+      RKx_joint 0 -42 0
+       RAx_joint 0 -42 0
+        RAy_joint 0 0 0
+         RAz_joint 0 0 0
+          RFx_joint 0 -4 12 | 0 0 6
+   BTx_joint 0 12 0
+    BTy_joint 0 0 0
+     BTz_joint 0 0 0
+      BLNx_joint 0 36 0
+       BLNy_joint 0 0 0
+        BLNz_joint 0 0 0
+         BUNx_joint 0 10 1
+          BUNy_joint 0 0 0
+           BUNz_joint 0 0 0 | 0 21 0
+      LSx_joint 18 31 0
+       LSy_joint 0 0 0
+        LSz_joint 0 0 0
+         LEx_joint 0 -29 0
+          LEz_joint 0 0 0
+           LWx_joint 0 -26 0
+            LWy_joint 0 0 0 | 0 -9 0
+      RSx_joint -18 31 0
+       RSy_joint 0 0 0
+        RSz_joint 0 0 0
+         REx_joint 0 -29 0
+          REz_joint 0 0 0
+           RWx_joint 0 -26 0
+            RWy_joint 0 0 0 | 0 -9 0
+",
+    },
+    Suite {
+        name: "motionbuilder_reference",
+        convention: "MotionBuilder HumanIK",
+        sides: "from names, confirmed by geometry",
+        map: "pelvis=Hips;spine=Spine;chest=Spine2;neck=Neck;head=Head;\
+              l_shoulder=LeftArm;l_elbow=LeftForeArm;l_wrist=LeftHand;\
+              r_shoulder=RightArm;r_elbow=RightForeArm;r_wrist=RightHand;\
+              l_hip=LeftUpLeg;l_knee=LeftLeg;l_ankle=LeftFoot;l_toe=LeftToeBase;\
+              r_hip=RightUpLeg;r_knee=RightLeg;r_ankle=RightFoot;r_toe=RightToeBase",
+        skel: "
+# MotionBuilder (HumanIK) BVH export of a characterised skeleton: a
+# Reference node at the origin above Hips (both with position channels),
+# HumanIK names with the roll helpers (LeftUpLegRoll, LeftLegRoll,
+# LeftArmRoll, LeftForeArmRoll) as leaves beside the limb bones,
+# LeftFootExtraFinger1, LeftHandThumb1.., HeadEnd. Names from the HumanIK
+# bone list (public HumanIK mapping tables: LeftUpLegRoll, LeftForeArmRoll,
+# Reference). cm, Y-up, facing +Z, T-pose; X Y Z rotation order; CRLF.
+unit cm
+axes y
+order Xrotation Yrotation Zrotation
+crlf
+Reference 0 0 0
+ Hips 0 99 0 % 6
+  LeftUpLeg 9 -4 0
+   LeftUpLegRoll 0 -21 0 | 0 -5 0
+   LeftLeg 0 -43 0
+    LeftLegRoll 0 -21 0 | 0 -5 0
+    LeftFoot 0 -43 -1
+     LeftToeBase 0 -7 13
+      LeftFootExtraFinger1 0 0 5 | 0 0 2
+  RightUpLeg -9 -4 0
+   RightUpLegRoll 0 -21 0 | 0 -5 0
+   RightLeg 0 -43 0
+    RightLegRoll 0 -21 0 | 0 -5 0
+    RightFoot 0 -43 -1
+     RightToeBase 0 -7 13
+      RightFootExtraFinger1 0 0 5 | 0 0 2
+  Spine 0 10 -1
+   Spine1 0 12 0
+    Spine2 0 12 0
+     Neck 0 16 1
+      Head 0 10 2
+       HeadEnd 0 18 0 | 0 1 0
+     LeftShoulder 3 12 0
+      LeftArm 13 0 0
+       LeftArmRoll 14 0 0 | 4 0 0
+       LeftForeArm 27 0 0
+        LeftForeArmRoll 13 0 0 | 4 0 0
+        LeftHand 25 0 0
+         LeftHandThumb1 3 -1 3
+          LeftHandThumb2 3 0 2 | 2 0 1
+         LeftHandIndex1 9 0 2
+          LeftHandIndex2 4 0 0 | 3 0 0
+     RightShoulder -3 12 0
+      RightArm -13 0 0
+       RightArmRoll -14 0 0 | -4 0 0
+       RightForeArm -27 0 0
+        RightForeArmRoll -13 0 0 | -4 0 0
+        RightHand -25 0 0
+         RightHandThumb1 -3 -1 3
+          RightHandThumb2 -3 0 2 | -2 0 1
+         RightHandIndex1 -9 0 2
+          RightHandIndex2 -4 0 0 | -3 0 0
+",
+    },
+    Suite {
+        name: "unity_humanoid",
+        convention: BY_N,
+        sides: "from geometry",
+        map: "pelvis=Hips;spine=Spine;chest=UpperChest;neck=Neck;head=Head;\
+              l_shoulder=LeftUpperArm;l_elbow=LeftLowerArm;l_wrist=LeftHand;\
+              r_shoulder=RightUpperArm;r_elbow=RightLowerArm;r_wrist=RightHand;\
+              l_hip=LeftUpperLeg;l_knee=LeftLowerLeg;l_ankle=LeftFoot;l_toe=LeftToes;\
+              r_hip=RightUpperLeg;r_knee=RightLowerLeg;r_ankle=RightFoot;r_toe=RightToes",
+        skel: "
+# A Unity Humanoid avatar recorded to BVH (Unity BVH recorders name the
+# bones by HumanBodyBones): Hips, Spine, Chest, UpperChest, Neck, Head,
+# LeftEye, RightEye, Jaw, LeftShoulder, LeftUpperArm, LeftLowerArm,
+# LeftHand, LeftUpperLeg, LeftLowerLeg, LeftFoot, LeftToes. Names from
+# Unity's HumanBodyBones enumeration (public docs). m, Y-up, facing +Z,
+# A-pose (arms 40 degrees below horizontal); tabs.
+unit m
+axes y
+order Zrotation Xrotation Yrotation
+tabs
+Hips 0 0.97 0
+ LeftUpperLeg 0.09 -0.05 0
+  LeftLowerLeg 0 -0.43 0.01
+   LeftFoot 0 -0.42 -0.02
+    LeftToes 0 -0.06 0.13 | 0 0 0.06
+ RightUpperLeg -0.09 -0.05 0
+  RightLowerLeg 0 -0.43 0.01
+   RightFoot 0 -0.42 -0.02
+    RightToes 0 -0.06 0.13 | 0 0 0.06
+ Spine 0 0.09 0
+  Chest 0 0.12 0
+   UpperChest 0 0.13 0
+    Neck 0 0.15 0.01
+     Head 0 0.09 0.02 | 0 0.18 0
+      LeftEye 0.03 0.07 0.08 | 0 0 0.02
+      RightEye -0.03 0.07 0.08 | 0 0 0.02
+      Jaw 0 -0.01 0.04 | 0 -0.03 0.06
+    LeftShoulder 0.03 0.11 0
+     LeftUpperArm 0.12 0 0
+      LeftLowerArm 0.207 -0.174 0
+       LeftHand 0.192 -0.161 0 | 0.07 -0.06 0
+    RightShoulder -0.03 0.11 0
+     RightUpperArm -0.12 0 0
+      RightLowerArm -0.207 -0.174 0
+       RightHand -0.192 -0.161 0 | -0.07 -0.06 0
+",
+    },
+    Suite {
+        name: "mixamo_split_san",
+        convention: "MotionBuilder HumanIK",
+        sides: "from names, confirmed by geometry",
+        map: "pelvis=Hips;spine=Spine;chest=Spine2;neck=Neck;head=Head;\
+              l_shoulder=LeftArm;l_elbow=LeftForeArm;l_wrist=LeftHand;\
+              r_shoulder=RightArm;r_elbow=RightForeArm;r_wrist=RightHand;\
+              l_hip=LeftUpLeg;l_knee=LeftLeg;l_ankle=LeftFoot;l_toe=LeftToeBase;\
+              r_hip=RightUpLeg;r_knee=RightLeg;r_ankle=RightFoot;r_toe=RightToeBase",
+        skel: "
+# Mixamo characters as the skeleton-aware networks' data set writes them
+# (deep-motion-editing, 'mixamo2_m'): no `mixamorig:` prefix, helper joints
+# `Spine1_split` and `LeftShoulder_split` splitting bones in two, end
+# joints with channels (`LeftToe_End`, `HeadTop_End`). Joint list from a
+# public SAN BVH_file class (corps_name_mixamo2_m). cm, Y-up, facing +Z,
+# T-pose; six channels on every joint.
+unit cm
+axes y
+order Zrotation Yrotation Xrotation
+all6
+Hips 0 104 0
+ LeftUpLeg 9 -7 0
+  LeftLeg 0 -45 0
+   LeftFoot 0 -44 -2
+    LeftToeBase 0 -7 13
+     LeftToe_End 0 0 8 | 0 0 1
+ RightUpLeg -9 -7 0
+  RightLeg 0 -45 0
+   RightFoot 0 -44 -2
+    RightToeBase 0 -7 13
+     RightToe_End 0 0 8 | 0 0 1
+ Spine 0 10 0
+  Spine1 0 6 0
+   Spine1_split 0 6 0
+    Spine2 0 13 0
+     Neck 0 16 1
+      Head 0 10 2
+       HeadTop_End 0 19 0 | 0 1 0
+     LeftShoulder 3 12 0
+      LeftShoulder_split 6 0 0
+       LeftArm 7 0 0
+        LeftForeArm 27 0 0
+         LeftHand 25 0 0 | 8 0 0
+     RightShoulder -3 12 0
+      RightShoulder_split -6 0 0
+       RightArm -7 0 0
+        RightForeArm -27 0 0
+         RightHand -25 0 0 | -8 0 0
+",
+    },
+    Suite {
+        name: "kinect_openni",
+        convention: BY_N,
+        sides: "from geometry",
+        map: "pelvis=Torso;spine=~;chest=~;neck=Neck;head=Head;\
+              l_shoulder=LeftShoulder;l_elbow=LeftElbow;l_wrist=LeftHand;\
+              r_shoulder=RightShoulder;r_elbow=RightElbow;r_wrist=RightHand;\
+              l_hip=LeftHip;l_knee=LeftKnee;l_ankle=LeftFoot;l_toe=~;\
+              r_hip=RightHip;r_knee=RightKnee;r_ankle=RightFoot;r_toe=~",
+        skel: "
+# Kinect v1 through OpenNI/NiTE written as BVH: the 15 tracked joints
+# (XnSkeletonJoint: TORSO, NECK, HEAD, LEFT_SHOULDER, LEFT_ELBOW,
+# LEFT_HAND, LEFT_HIP, LEFT_KNEE, LEFT_FOOT, ...), the root the torso
+# centre with the neck, both shoulders and both hips off it: no pelvis
+# joint, no spine, no toes; 'Hand' is the wrist and 'Foot' the ankle. Rest
+# in the calibration 'psi' pose (upper arms out, forearms up). mm, Y-up,
+# the person facing the camera (-Z, left at -X).
+unit mm
+axes y-z
+scale 10
+order Zrotation Xrotation Yrotation
+Torso 0 112 0
+ Neck 0 34 0
+  Head 0 16 1 | 0 15 0
+ LeftShoulder 17 31 0
+  LeftElbow 28 0 0
+   LeftHand 0 26 0 | 0 9 0
+ RightShoulder -17 31 0
+  RightElbow -28 0 0
+   RightHand 0 26 0 | 0 9 0
+ LeftHip 9 -22 0
+  LeftKnee 0 -44 1
+   LeftFoot 0 -43 -2 | 0 -4 12
+ RightHip -9 -22 0
+  RightKnee 0 -44 1
+   RightFoot 0 -43 -2 | 0 -4 12
+",
+    },
+];
+
+/// Non-humanoids: a rope hanging from a humanoid-named root, a spider
+/// with Left/Right legs, a table (four legs straight down, no spine).
+const NOT_HUMANOIDS: &[(&str, &str)] = &[
+    (
+        "rope",
+        "
+# A single chain (a rope or a tail rig), named as a spine: no legs, no arms.
+unit cm
+Hips 0 150 0
+ Spine 0 -12 0
+  Spine1 0 -12 0
+   Spine2 0 -12 0
+    Spine3 0 -12 0
+     Neck 0 -12 0
+      Head 0 -12 0 | 0 -12 0
+",
+    ),
+    (
+        "spider",
+        "
+# A spider: eight legs off a body (LeftLeg1..4, RightLeg1..4), an abdomen.
+unit cm
+Body 0 20 0
+ LeftLeg1 4 0 6
+  LeftKnee1 14 10 14
+   LeftFoot1 10 -30 10 | 2 -2 2
+ LeftLeg2 5 0 2
+  LeftKnee2 18 10 6
+   LeftFoot2 14 -30 4 | 2 -2 0
+ LeftLeg3 5 0 -2
+  LeftKnee3 18 10 -6
+   LeftFoot3 14 -30 -4 | 2 -2 0
+ LeftLeg4 4 0 -6
+  LeftKnee4 14 10 -14
+   LeftFoot4 10 -30 -10 | 2 -2 -2
+ RightLeg1 -4 0 6
+  RightKnee1 -14 10 14
+   RightFoot1 -10 -30 10 | -2 -2 2
+ RightLeg2 -5 0 2
+  RightKnee2 -18 10 6
+   RightFoot2 -14 -30 4 | -2 -2 0
+ RightLeg3 -5 0 -2
+  RightKnee3 -18 10 -6
+   RightFoot3 -14 -30 -4 | -2 -2 0
+ RightLeg4 -4 0 -6
+  RightKnee4 -14 10 -14
+   RightFoot4 -10 -30 -10 | -2 -2 -2
+ Abdomen 0 2 -10 | 0 0 -20
+",
+    ),
+    (
+        "table",
+        "
+# A table rig: a top and four legs straight down (two named left, two right).
+unit cm
+Top 0 75 0
+ LeftFrontLeg 50 0 30
+  LeftFrontFoot 0 -75 0 | 0 -1 0
+ RightFrontLeg -50 0 30
+  RightFrontFoot 0 -75 0 | 0 -1 0
+ LeftBackLeg 50 0 -30
+  LeftBackFoot 0 -75 0 | 0 -1 0
+ RightBackLeg -50 0 -30
+  RightBackFoot 0 -75 0 | 0 -1 0
+",
+    ),
+];
+
+/// A description of `tests/fixtures/suites` (the families of
+/// `tests/rig_mapping.rs`): offsets in the file's frame, the unit and the
+/// frame as its comment states them (`cm, Z-up, facing -Y`). `None` for a
+/// rest given by rotations (LAFAN1's `@`).
+fn fixture_skel(text: &str) -> Option<Skel> {
+    if text.lines().any(|l| !l.starts_with('#') && l.contains('@')) {
+        return None;
+    }
+    let mut k = parse_skel(text);
+    k.raw = true;
+    let comment: String = text
+        .lines()
+        .filter(|l| l.starts_with('#'))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let words: Vec<&str> = comment
+        .split_whitespace()
+        .map(|w| w.trim_end_matches([',', '.', ';']))
+        .collect();
+    k.unit = words
+        .iter()
+        .rev()
+        .find_map(|w| match *w {
+            "mm" | "cm" | "m" => Some(w.to_string()),
+            "inches" | "inch" => Some("inch".to_string()),
+            _ => None,
+        })
+        .expect("a unit in the comment");
+    k.axes = if comment.contains("Z-up, facing -Y") {
+        "zup-y"
+    } else if comment.contains("Z-up, facing +Y") {
+        "zup+y"
+    } else if comment.contains("(-Z") {
+        "y-z"
+    } else {
+        "y"
+    }
+    .to_string();
+    Some(k)
+}
+
+// ---------------------------------------------------------------- helpers
+
+/// The clip as a BVH file reads back (through the project's reader).
+fn via_text(s: &Skel, c: &Clip, name: &str) -> Clip {
+    let text = s.text(c);
+    parse_bvh(
+        &text,
+        std::path::Path::new(&format!("{name}.bvh")),
+        &BvhOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// A map to expect: per canonical joint, the accepted joint names (none:
+/// derived).
+type Want = Vec<(Canonical, Vec<String>)>;
+
+/// The expected map: canonical joint → accepted joint names (empty: derived).
+fn expected(s: &Suite) -> Vec<(Canonical, Vec<String>)> {
+    let rows: Vec<(Canonical, Vec<String>)> = s
+        .map
+        .split(';')
+        .map(|kv| {
+            let (k, v) = kv.split_once('=').unwrap();
+            let c = Canonical::from_name(k.trim()).unwrap_or_else(|| panic!("{k}"));
+            let v = v.trim();
+            let names = if v == "~" {
+                Vec::new()
+            } else {
+                v.split('|').map(str::to_string).collect()
+            };
+            (c, names)
+        })
+        .collect();
+    assert_eq!(rows.len(), Canonical::COUNT, "{}", s.name);
+    rows
+}
+
+fn swap_side(c: Canonical) -> Canonical {
+    let n = c.name();
+    let s = if let Some(r) = n.strip_prefix("l_") {
+        format!("r_{r}")
+    } else if let Some(r) = n.strip_prefix("r_") {
+        format!("l_{r}")
+    } else {
+        n.to_string()
+    };
+    Canonical::from_name(&s).unwrap()
+}
+
+fn map_errors(d: &surfmotion::rig::Detection, want: &[(Canonical, Vec<String>)]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (c, names) in want {
+        let got = d.map.joints.get(c);
+        let ok = if names.is_empty() {
+            got.is_none() && d.map.derived.contains_key(c)
+        } else {
+            got.is_some_and(|g| names.contains(g))
+        };
+        if !ok {
+            out.push(format!(
+                "{} = {} (want {})",
+                c.name(),
+                got.map_or("derived/missing", String::as_str),
+                if names.is_empty() {
+                    "derived".to_string()
+                } else {
+                    names.join("|")
+                }
+            ));
+        }
+    }
+    if !d.missing.is_empty() {
+        out.push(format!("missing {:?}", d.missing));
+    }
+    out
+}
+
+/// The clip mirrored left/right (x negated in the file's frame; the names
+/// kept).
+fn mirror(c: &Clip) -> Clip {
+    let flip = |v: DVec3| DVec3::new(-v.x, v.y, v.z);
+    let fq = |q: DQuat| DQuat::from_xyzw(q.x, -q.y, -q.z, q.w);
+    let mut joints = c.joints.clone();
+    for j in &mut joints {
+        j.offset = flip(j.offset);
+        j.tail = j.tail.map(flip);
+    }
+    let n = c.joint_count();
+    let mut rot = Vec::new();
+    let mut tr = Vec::new();
+    for f in 0..c.frame_count() {
+        rot.extend(c.frame_rotations(f).iter().map(|&q| fq(q)));
+        tr.extend(c.frame_translations(f).iter().map(|&t| flip(t)));
+    }
+    let _ = n;
+    Clip::new(
+        joints,
+        c.frame_time,
+        rot,
+        tr,
+        c.units.clone(),
+        c.up,
+        PointConvention::JointOrigins,
+    )
+    .unwrap()
+}
+
+// ------------------------------------------------------------ the mapping
+
+/// A known convention must be named exactly; a family that is none may be
+/// reported as mapped by names or by structure (never as a known one).
+fn convention_ok(want: &str, got: &str) -> bool {
+    if want == BY_N || want == BY_S {
+        got == BY_N || got == BY_S
+    } else {
+        got == want
+    }
+}
+
+/// Every family maps with no rig map to the full canonical map, names the
+/// convention it should (a known one only when it is one), and says where
+/// left and right came from. Every family is checked before failing.
+#[test]
+fn more_suites_map_every_canonical_joint() {
+    let mut fails = Vec::new();
+    for s in SUITES {
+        let k = parse_skel(s.skel);
+        let c = via_text(&k, &k.clip(), s.name);
+        let d = match detect_clip(&c) {
+            Ok(d) => d,
+            Err(e) => {
+                fails.push(format!("{}: {e}", s.name));
+                continue;
+            }
+        };
+        if !convention_ok(s.convention, &d.map.convention) {
+            fails.push(format!("{}: convention '{}'", s.name, d.map.convention));
+        }
+        if !d.sides.starts_with(s.sides) {
+            fails.push(format!("{}: sides {}", s.name, d.sides));
+        }
+        for e in map_errors(&d, &expected(s)) {
+            fails.push(format!("{}: {e}", s.name));
+        }
+        // A derived chest sits halfway up spine→neck in every pose (it was
+        // placed before the neck: halfway to the world origin).
+        if d.map.derived.contains_key(&Canonical::Chest) {
+            let moved = walk_onto(&k, &c, &expected(s), &gait_clip(Gait::Walk, 0.5, 30.0));
+            for (f, p) in d.map.poses(&moved).unwrap().iter().enumerate() {
+                let at = |c: Canonical| p[c.index()];
+                let mid = 0.5 * (at(Canonical::Spine) + at(Canonical::Neck));
+                if at(Canonical::Chest).distance(mid) > 1e-9 * mid.length().max(1.0) {
+                    fails.push(format!(
+                        "{}: derived chest off spine-neck in frame {f}",
+                        s.name
+                    ));
+                    break;
+                }
+            }
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+/// The same bodies mirrored (names kept): the joints named left now stand
+/// on the right and map to the right canonical joints, from geometry.
+#[test]
+fn more_suites_mirrored_map_left_and_right_from_geometry() {
+    let mut fails = Vec::new();
+    for s in SUITES {
+        let k = parse_skel(s.skel);
+        let m = via_text(&k, &mirror(&k.clip()), s.name);
+        let d = match detect_clip(&m) {
+            Ok(d) => d,
+            Err(e) => {
+                fails.push(format!("{} mirrored: {e}", s.name));
+                continue;
+            }
+        };
+        let want: Vec<(Canonical, Vec<String>)> = expected(s)
+            .into_iter()
+            .map(|(k, v)| (swap_side(k), v))
+            .collect();
+        for e in map_errors(&d, &want) {
+            fails.push(format!("{} mirrored: {e}", s.name));
+        }
+        if !d.sides.contains("mirrored") {
+            fails.push(format!("{} mirrored: sides {}", s.name, d.sides));
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+/// Non-humanoids are refused with "not a humanoid: …".
+#[test]
+fn more_non_humanoids_are_refused() {
+    let mut fails = Vec::new();
+    for (name, skel) in NOT_HUMANOIDS {
+        let k = parse_skel(skel);
+        let c = via_text(&k, &k.clip(), name);
+        match detect_clip(&c) {
+            Err(RigError::NotHumanoid { .. }) => {}
+            Ok(d) => fails.push(format!(
+                "{name} mapped as {}: {:?}",
+                d.map.convention, d.map.joints
+            )),
+            Err(e) => fails.push(format!("{name}: {e}")),
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+/// `mocap rigmap` and `inspect --json` on every family written as a file
+/// (its line ends and indentation): exit 0, the convention, the unit and
+/// the up axis of the file; non-humanoids exit 1 with "not a humanoid".
+#[test]
+fn cli_reads_every_suite_in_its_unit_and_up_axis() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut fails = Vec::new();
+    for s in SUITES {
+        let k = parse_skel(s.skel);
+        let p = dir.path().join(format!("{}.bvh", s.name));
+        std::fs::write(&p, k.text(&k.clip())).unwrap();
+        let o = std::process::Command::new(common::bin())
+            .args(["mocap", "rigmap"])
+            .arg(&p)
+            .output()
+            .unwrap();
+        let out = String::from_utf8_lossy(&o.stdout);
+        let line = out.lines().next().unwrap_or("");
+        if !convention_ok(s.convention, line.trim_start_matches("convention: ")) {
+            fails.push(format!(
+                "{} rigmap: {}",
+                s.name,
+                out.lines().next().unwrap_or("")
+            ));
+        }
+        let o = common::run_ok(
+            std::process::Command::new(common::bin())
+                .args(["inspect", "--json"])
+                .arg(&p),
+        );
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        if !convention_ok(s.convention, v["convention"].as_str().unwrap_or("")) {
+            fails.push(format!(
+                "{} inspect: convention {}",
+                s.name, v["convention"]
+            ));
+        }
+        let up = if k.z_up() { "Z" } else { "Y" };
+        if v["up"].as_str() != Some(up) {
+            fails.push(format!(
+                "{} inspect: up {} ({})",
+                s.name, v["up"], v["up_reason"]
+            ));
+        }
+        let m = v["units"]["metres_per_unit"].as_f64().unwrap_or(0.0);
+        if (m / k.metres_per_unit() - 1.0).abs() > 1e-6 {
+            fails.push(format!("{} inspect: units {}", s.name, v["units"]));
+        }
+    }
+    for (name, skel) in NOT_HUMANOIDS {
+        let k = parse_skel(skel);
+        let p = dir.path().join(format!("{name}.bvh"));
+        std::fs::write(&p, k.text(&k.clip())).unwrap();
+        let o = std::process::Command::new(common::bin())
+            .args(["mocap", "rigmap"])
+            .arg(&p)
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        if o.status.code() != Some(1) || !e.contains("not a humanoid: ") {
+            fails.push(format!("{name}: exit {:?}: {e}", o.status.code()));
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+// ------------------------------------------------- the walk on each skeleton
+
+/// The canonical joint whose bone direction turns joint `c`'s rest into
+/// the walk's rest (the limb bones: a T- or A-pose arm comes down; thighs
+/// and shins of a skeleton whose legs splay a little come straight).
+fn bone_child(c: Canonical) -> Option<Canonical> {
+    use Canonical as C;
+    Some(match c {
+        C::LHip => C::LKnee,
+        C::LKnee => C::LAnkle,
+        C::RHip => C::RKnee,
+        C::RKnee => C::RAnkle,
+        C::LShoulder => C::LElbow,
+        C::LElbow => C::LWrist,
+        C::RShoulder => C::RElbow,
+        C::RElbow => C::RWrist,
+        _ => return None,
+    })
+}
+
+/// The procedural walk written onto the skeleton `rest` (a clip of
+/// `k`'s file, in its frame and unit) through its mapped joints `want`:
+/// each mapped joint turns in the world as the walk's joint does from its
+/// rest, after the swing taking this skeleton's rest limb bone onto the
+/// walk's (T- and A-pose arms come down); joints between mapped ones
+/// follow their nearest mapped ancestor, joints above the pelvis stay at
+/// rest; the pelvis travels as the walk's, scaled by the legs' heights.
+fn walk_onto(k: &Skel, rest: &Clip, want: &[(Canonical, Vec<String>)], walk: &Clip) -> Clip {
+    let wmap = detect_clip(walk).unwrap().map;
+    let (wposes, wrots) = wmap.poses_and_rotations(walk).unwrap();
+    let wrest = wmap.rest_pose(walk).unwrap();
+    let a = k.axes();
+    let ai = a.inverse();
+    let (trest, _) = rest.rest_positions();
+    let joint_of = |c: Canonical| -> Option<usize> {
+        want.iter()
+            .find(|(k, _)| *k == c)
+            .and_then(|(_, v)| v.first())
+            .and_then(|n| rest.joint(n))
+            .map(|j| j.idx())
+    };
+    let n = rest.joint_count();
+    let mut owner: Vec<Option<Canonical>> = vec![None; n];
+    for c in Canonical::ALL {
+        if let Some(j) = joint_of(c) {
+            owner[j] = Some(c);
+        }
+    }
+    for j in 0..n {
+        if owner[j].is_none()
+            && let Some(p) = rest.joints[j].parent
+        {
+            owner[j] = owner[p.idx()];
+        }
+    }
+    // Swing of each canonical joint (walk frame).
+    let mut swing = [DQuat::IDENTITY; Canonical::COUNT];
+    for c in Canonical::ALL {
+        if let (Some(ch), Some(j)) = (bone_child(c), joint_of(c))
+            && let Some(cj) = joint_of(ch)
+        {
+            let dt = (ai * (trest[cj] - trest[j])).normalize();
+            let dw = (wrest[ch.index()] - wrest[c.index()]).normalize();
+            swing[c.index()] = DQuat::from_rotation_arc(dt, dw);
+        }
+    }
+    use Canonical as C;
+    for (w, e) in [(C::LWrist, C::LElbow), (C::RWrist, C::RElbow)] {
+        swing[w.index()] = swing[e.index()];
+    }
+    let pj = joint_of(C::Pelvis).unwrap();
+    let legs = |p: &[DVec3], pel: DVec3| pel.y - p.iter().map(|q| q.y).fold(f64::MAX, f64::min);
+    let tall: Vec<DVec3> = trest.iter().map(|&p| ai * p).collect();
+    let scale = legs(&tall, tall[pj]) / legs(&wrest, wrest[C::Pelvis.index()]);
+    // The pelvis's own position channels carry the travel when it has
+    // them (a Reference node above it stays put), else the root's do.
+    let pelvis_moves = rest.joints[pj].has_position_channels();
+    let frames = walk.frame_count();
+    let mut rot = Vec::with_capacity(frames * n);
+    let mut tr = Vec::with_capacity(frames * n);
+    for f in 0..frames {
+        let world: Vec<DQuat> = (0..n)
+            .map(|j| match owner[j] {
+                Some(c) => {
+                    let g = wrots[f][c.index()].unwrap_or(DQuat::IDENTITY);
+                    a * (g * swing[c.index()]) * ai
+                }
+                None => DQuat::IDENTITY,
+            })
+            .collect();
+        let travel = wposes[f][C::Pelvis.index()] - wrest[C::Pelvis.index()];
+        let pelvis_at = trest[pj] + a * (travel * scale);
+        for (j, joint) in rest.joints.iter().enumerate() {
+            let pw = joint.parent.map_or(DQuat::IDENTITY, |p| world[p.idx()]);
+            rot.push(pw.inverse() * world[j]);
+            let above = joint.parent.map_or(DVec3::ZERO, |p| trest[p.idx()]);
+            let t = if j == pj && pelvis_moves {
+                pelvis_at - above
+            } else if joint.parent.is_none() && !pelvis_moves {
+                joint.offset + (pelvis_at - trest[pj])
+            } else {
+                joint.offset
+            };
+            tr.push(t);
+        }
+    }
+    Clip::new(
+        rest.joints.clone(),
+        walk.frame_time,
+        rot,
+        tr,
+        rest.units.clone(),
+        rest.up,
+        PointConvention::JointOrigins,
+    )
+    .unwrap()
+}
+
+/// A retargeted sequence seen from its own travel: positions relative to
+/// the first frame's pelvis, turned about +Y so the travel is along +Z.
+fn from_travel(poses: &[Pose]) -> Vec<Pose> {
+    let p0 = poses[0][Canonical::Pelvis.index()];
+    let d = poses.last().unwrap()[Canonical::Pelvis.index()] - p0;
+    let yaw = d.x.atan2(d.z);
+    let q = DQuat::from_rotation_y(-yaw);
+    poses.iter().map(|p| p.map(|x| q * (x - p0))).collect()
+}
+
+/// The procedural walk written onto every family's skeleton (in its file's
+/// frame, unit, channel layout, line ends) and retargeted onto the
+/// procedural character as `retarget` reads a clip (`load_clip`: unit and
+/// up axis guessed; detected map; reference pose; rotation transfer) gives
+/// the character the walk the procedural skeleton itself gives it: every
+/// joint within 6% of the character's height of it in every frame, seen
+/// from the travel direction (a mirrored map swaps the legs by ~40%, a
+/// wrong up axis or a backward walk moves everything), and the same
+/// travel distance within 15%.
+#[test]
+fn the_walk_on_every_suite_skeleton_retargets_like_the_walk() {
+    use surfmotion::rig::embed::Embedding;
+    use surfmotion::rig::retarget::{clip_poses, retarget};
+    use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
+    let mesh = humanoid_mesh(DEMO_GRID);
+    let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
+    let character: Pose = rig.joints.map(DVec3::from_array);
+    let dir = tempfile::tempdir().unwrap();
+    let walk = gait_clip(Gait::Walk, 2.0, 30.0);
+    let drive = |path: &std::path::Path| -> Result<Vec<Pose>, String> {
+        let mut c = load_clip(path, &Default::default()).map_err(|e| e.to_string())?;
+        c.to_metres_y_up();
+        let d = detect_clip(&c).map_err(|e| e.to_string())?;
+        let cp = clip_poses(&c, &d.map).map_err(|e| e.to_string())?;
+        Ok(retarget(&character, &cp.reference, &cp.poses)
+            .into_iter()
+            .map(|(p, _)| p)
+            .collect())
+    };
+    let wpath = dir.path().join("walk.bvh");
+    std::fs::write(&wpath, format_bvh(&walk)).unwrap();
+    let base = from_travel(&drive(&wpath).unwrap());
+    let h = rig.height;
+    let mut fails = Vec::new();
+    // This file's families with their expected maps; the fixtures'
+    // families with their detected maps (checked against their expected
+    // maps in tests/rig_mapping.rs).
+    let mut cases: Vec<(String, Skel, Want)> = SUITES
+        .iter()
+        .map(|s| (s.name.to_string(), parse_skel(s.skel), expected(s)))
+        .collect();
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/suites");
+    let mut files: Vec<_> = std::fs::read_dir(&fixtures)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    for f in files {
+        let name = f.file_stem().unwrap().to_string_lossy().to_string();
+        let Some(k) = fixture_skel(&std::fs::read_to_string(&f).unwrap()) else {
+            continue;
+        };
+        let Ok(d) = detect_clip(&via_text(&k, &k.clip(), &name)) else {
+            continue; // the animals
+        };
+        let want = Canonical::ALL
+            .iter()
+            .map(|c| (*c, d.map.joints.get(c).into_iter().cloned().collect()))
+            .collect();
+        cases.push((format!("fixture {name}"), k, want));
+    }
+    for (name, k, want) in &cases {
+        let rest = via_text(k, &k.clip(), name);
+        let moved = walk_onto(k, &rest, want, &walk);
+        let path = dir.path().join(format!("{}.bvh", name.replace(' ', "_")));
+        std::fs::write(&path, k.text(&moved)).unwrap();
+        let got = match drive(&path) {
+            Ok(p) => from_travel(&p),
+            Err(e) => {
+                fails.push(format!("{name}: {e}"));
+                continue;
+            }
+        };
+        let (mut worst, mut at) = (0.0f64, String::new());
+        for (f, (g, b)) in got.iter().zip(&base).enumerate() {
+            let (pg, pb) = (g[0], b[0]);
+            for c in Canonical::ALL {
+                let e = ((g[c.index()] - pg) - (b[c.index()] - pb)).length() / h;
+                if e > worst {
+                    worst = e;
+                    at = format!("{} frame {f}", c.name());
+                }
+            }
+        }
+        let dist = |p: &[Pose]| p.last().unwrap()[0].length();
+        let ratio = dist(&got) / dist(&base);
+        eprintln!("{name}: worst {worst:.3} H at {at}; travel ratio {ratio:.3}");
+        if worst > 0.06 || !(0.85..=1.15).contains(&ratio) {
+            fails.push(format!(
+                "{name}: worst {worst:.3} H at {at}; travel ratio {ratio:.3}"
+            ));
+        }
+        // Mirrored (x negated in the file, names kept): the character walks
+        // the mirror image, its left leg doing what the right one did.
+        let mpath = dir
+            .path()
+            .join(format!("{}_mirrored.bvh", name.replace(' ', "_")));
+        std::fs::write(&mpath, k.text(&mirror(&moved))).unwrap();
+        let got = match drive(&mpath) {
+            Ok(p) => from_travel(&p),
+            Err(e) => {
+                fails.push(format!("{name} mirrored: {e}"));
+                continue;
+            }
+        };
+        let flip = |v: DVec3| DVec3::new(-v.x, v.y, v.z);
+        let mut worst = 0.0f64;
+        for (g, b) in got.iter().zip(&base) {
+            for c in Canonical::ALL {
+                let want = flip(b[swap_side(c).index()] - b[0]);
+                worst = worst.max(((g[c.index()] - g[0]) - want).length() / h);
+            }
+        }
+        eprintln!("{name} mirrored: worst {worst:.3} H");
+        if worst > 0.06 {
+            fails.push(format!("{name} mirrored: worst {worst:.3} H"));
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
