@@ -367,11 +367,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let seq = MeshSequence::new(ch.topology_metres(), o.positions, Some(fps))?;
     let written = save_sequence(&seq, out, Some(fps))?;
     let r = &o.report;
+    let missed = missed_targets(r);
+    // The report and --json say which targets were missed, as the text does.
+    let mut v = serde_json::to_value(r)?;
+    v["missed"] = serde_json::to_value(&missed)?;
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(r)?.as_bytes())?;
+        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
     }
     if a.json {
-        let mut v = serde_json::to_value(r)?;
         v["output"] = serde_json::to_value(&written)?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
@@ -388,17 +391,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         fps
     );
     s += &format!("achieved: {:.3} m in {:.3} s", r.distance, r.time);
-    let mut missed = None;
+    let mut compromise = None;
     if let (Some(de), Some(te)) = (r.distance_error, r.time_error) {
         s += &format!(" (error {de:+.3} m, {te:+.3} s)");
         // Flag a compromise: an error over 1 % of a non-zero target.
-        let (dt, tt) = (r.distance - de, r.time - te);
-        if (dt > 0.0 && de.abs() > 0.01 * dt) || (tt > 0.0 && te.abs() > 0.01 * tt) {
-            missed = Some((dt, tt));
+        if missed.contains(&"distance") || missed.contains(&"time") {
+            compromise = Some((r.distance - de, r.time - te));
         }
     }
     s += "\n";
-    if let Some((dt, tt)) = missed {
+    if let Some((dt, tt)) = compromise {
         s += &format!(
             "not met within 1 %: the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 within {} (the graph may not reach it; --w-dist and --w-time weigh the two)\n",
             r.reach.map_or("the horizon".to_string(), |x| format!(
@@ -434,6 +436,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         s += &format!(" (target {h:+.1}°, error {e:+.1}°)");
     }
     s += "\n";
+    if let (true, Some(h)) = (missed.contains(&"heading"), r.heading_target_deg) {
+        s += &format!(
+            "heading not met within {HEADING_TOLERANCE_DEG}° (1 % of a turn): {:+.1}° for {h:+.1}°, the best compromise under Eq. 7 (the graph's transitions may not turn that far in this time; --w-heading weighs it against distance and time)\n",
+            r.final_facing_deg
+        );
+    }
     s += &format!(
         "cost: transitions {:.4} + distance {:.4} + time {:.4}{} = {:.4}\n",
         r.cost.transition,
@@ -495,6 +503,32 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         s += &format!("bound hit: {b}\n");
     }
     super::emit(&s)
+}
+
+/// A heading target is flagged when the final facing misses it by more
+/// than this (degrees): 1 % of a turn, as distance and time are flagged
+/// beyond 1 % of their targets.
+pub const HEADING_TOLERANCE_DEG: f64 = 3.6;
+
+/// The targets a path misses: "distance" or "time" by more than 1 % of a
+/// non-zero target, "heading" by more than [`HEADING_TOLERANCE_DEG`].
+fn missed_targets(r: &surfmotion::keyframe::Report) -> Vec<&'static str> {
+    let mut out = Vec::new();
+    if let (Some(de), Some(te)) = (r.distance_error, r.time_error) {
+        let (dt, tt) = (r.distance - de, r.time - te);
+        if dt > 0.0 && de.abs() > 0.01 * dt {
+            out.push("distance");
+        }
+        if tt > 0.0 && te.abs() > 0.01 * tt {
+            out.push("time");
+        }
+    }
+    if r.heading_error_deg
+        .is_some_and(|e| e.abs() > HEADING_TOLERANCE_DEG)
+    {
+        out.push("heading");
+    }
+    out
 }
 
 fn grid(

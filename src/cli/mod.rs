@@ -131,6 +131,17 @@ pub fn main() -> anyhow::Result<()> {
         Err(e) if e.kind() == clap::error::ErrorKind::InvalidUtf8 => {
             anyhow::bail!(non_utf8_argument(std::env::args_os().collect()))
         }
+        // A value the option does not take: one line in the tool's words
+        // (`render --frame -1` printed clap's "invalid digit found in
+        // string" and three lines of usage).
+        Err(e)
+            if matches!(
+                e.kind(),
+                clap::error::ErrorKind::ValueValidation | clap::error::ErrorKind::InvalidValue
+            ) =>
+        {
+            anyhow::bail!(bad_value(&e))
+        }
         Err(e) => {
             let usage = e.use_stderr();
             // Help read by `| head` closed the pipe: not an error (it said
@@ -359,6 +370,50 @@ fn allow_negative_numbers(cmd: clap::Command) -> clap::Command {
         }
     })
     .mut_subcommands(allow_negative_numbers)
+}
+
+/// One line for a value an option does not take: the option, the value
+/// and what it takes (a whole number ≥ 0 for counts and frame indices,
+/// the possible values of a choice, or the option's own check).
+fn bad_value(e: &clap::Error) -> String {
+    use clap::error::{ContextKind, ContextValue};
+    use std::num::IntErrorKind;
+    let text = |k| match e.get(k) {
+        Some(ContextValue::String(s)) => Some(s.clone()),
+        _ => None,
+    };
+    // "--frame <FRAME>" → "--frame"; a positional "<DIR>" stays.
+    let arg = text(ContextKind::InvalidArg).unwrap_or_else(|| "an argument".into());
+    let flag = if arg.starts_with('-') {
+        arg.split([' ', '=']).next().unwrap_or(&arg).to_string()
+    } else {
+        arg.clone()
+    };
+    let value = text(ContextKind::InvalidValue).unwrap_or_default();
+    let source = std::error::Error::source(e);
+    let why = if let Some(p) = source.and_then(|s| s.downcast_ref::<std::num::ParseIntError>()) {
+        match p.kind() {
+            IntErrorKind::Empty => "expected a whole number, got nothing".to_string(),
+            IntErrorKind::PosOverflow | IntErrorKind::NegOverflow => {
+                "a whole number too large for this option".to_string()
+            }
+            _ if flag == "--frame" || flag == "--frames" => {
+                "expected a frame number: a whole number from 0 (the first frame)".to_string()
+            }
+            _ => "expected a whole number ≥ 0".to_string(),
+        }
+    } else if let Some(s) = source {
+        s.to_string()
+    } else if let Some(ContextValue::Strings(v)) = e.get(ContextKind::ValidValue)
+        && !v.is_empty()
+    {
+        format!("expected one of {}", v.join(", "))
+    } else if value.is_empty() {
+        return format!("{flag} needs a value");
+    } else {
+        "not a value this option takes".to_string()
+    };
+    format!("{flag} '{value}': {why}")
 }
 
 /// A frame rate on the command line: a finite number in
