@@ -893,6 +893,32 @@ fn session9_rows() -> Vec<Row> {
     ]
 }
 
+/// A one-triangle glTF with its buffer as a data URI; `extra` is added to
+/// the primitive (after its attributes).
+fn gltf_triangle(extra: &str) -> String {
+    let data = format!("data:application/octet-stream;base64,{}", "A".repeat(48));
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"uri":"{data}","byteLength":36}}],"bufferViews":[{{"buffer":0,"byteLength":36}}],"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,1]}}],"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}{extra}}}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}]}}"#
+    )
+}
+
+/// Missing files are named without the OS's error number ("x.bvh: No
+/// such file or directory (os error 2)").
+#[test]
+fn os_error_numbers_are_not_printed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    for args in [
+        vec!["inspect", "none.bvh"],
+        vec!["mesh", "convert", "none.pc2", "o.glb"],
+        vec!["mocap", "convert", "none.bvh", "o.bvh"],
+    ] {
+        let r = common::run_cli(&args, Some(d), &[]);
+        r.assert_bad_input(&args.join(" "), &["none.", "no such file"]);
+        assert!(!r.stderr.contains("os error"), "{args:?}: {}", r.stderr);
+    }
+}
+
 fn session10_rows() -> Vec<Row> {
     vec![
         // "no path from key-frame walk:0 to run:5" named no frame to move
@@ -952,6 +978,58 @@ fn session10_rows() -> Vec<Row> {
                 "surfmotion: --search 'fast'",
                 "expected one of lattice, walks",
             ],
+        ),
+        // "expected t, space, speed, turn, turn": each space's parameters.
+        row(
+            "play script key named against two spaces steering by turn",
+            "play --db {d}/db --script {d}/s.json -o {d}/p.pc2",
+            &["s.json", "unknown key \"sped\"", "(expected t, space, speed, turn)"],
+        )
+        .with_db()
+        .file(
+            "db/character.toml",
+            manifest_with(
+                "[[space]]\nname = \"a\"\nsequences = [\"walk\", \"run\"]\nparameters = [\"speed\", \"turn\"]\n\n[[space]]\nname = \"b\"\nsequences = [\"walk\", \"run\"]\nparameters = [\"turn\"]",
+            ),
+        )
+        .file("s.json", r#"[{"t": 0, "space": "a", "sped": 1.4}]"#),
+        // Exit 0: ignored without a word.
+        row(
+            "keyframe --times without --grid",
+            "keyframe --db {db} --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/k.pc2 --times NaN",
+            &["--times", "--grid", "--time"],
+        ),
+        row(
+            "transfer --template-markers with --mocap",
+            "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --template-markers {d}/m.json",
+            &["--template-markers", "--template", "--mocap"],
+        )
+        .file("m.json", "{}"),
+        row(
+            "transfer --template-frame with --mocap",
+            "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --template-frame 5",
+            &["--template-frame", "--template", "--mocap"],
+        ),
+        // Exit 0: a FLOAT VEC3 accessor read as triangle indices.
+        row(
+            "a glTF whose indices are floats",
+            "mesh convert {d}/f.gltf {d}/o.obj",
+            &["f.gltf", "indices", "unsigned integer"],
+        )
+        .file("f.gltf", gltf_triangle(r#","indices":0"#)),
+        // "missing.bin: No such file or directory (os error 2)": neither
+        // the glTF nor the buffer named, and the OS's number.
+        row(
+            "a glTF whose buffer file is missing",
+            "inspect {d}/m.gltf",
+            &["m.gltf", "buffer 0", "missing.bin", "no such file"],
+        )
+        .file("m.gltf", gltf_triangle("").replace("data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA", "missing.bin")),
+        // Exit 0, printing back a 309-digit target.
+        row(
+            "keyframe --heading 1e308",
+            "keyframe --db {db} --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/k.pc2 --heading 1e308",
+            &["--heading", "1e308", "[-360, 360]"],
         ),
         // Exit 0: the outputs, batch.json/.html/.svg and batch.lock were
         // written among the clips.

@@ -73,7 +73,7 @@ pub struct Args {
     /// Target final facing, degrees relative to the start key-frame's
     /// (positive: from +Z towards +X); a cost term of the exact-length
     /// search and of the walks' search (--w-heading per degree).
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = super::finite)]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = heading)]
     pub heading: Option<f64>,
     /// Weight of the heading error, per degree. Default: 1/30 (30° cost as
     /// much as 0.3 m of distance).
@@ -169,10 +169,10 @@ pub struct Args {
     #[arg(long)]
     pub grid: bool,
     /// Grid distances (metres), A:B:STEP or a comma list.
-    #[arg(long, default_value = "1:20:1")]
+    #[arg(long, default_value = DEFAULT_DISTANCES)]
     pub distances: String,
     /// Grid times (seconds), A:B:STEP or a comma list.
-    #[arg(long, default_value = "1:40:1")]
+    #[arg(long, default_value = DEFAULT_TIMES)]
     pub times: String,
     /// With --grid: a heat-map of the errors over the grid (.svg with
     /// axes and legend, or .png).
@@ -189,6 +189,11 @@ pub struct Args {
     pub floor: bool,
 }
 
+/// The grid's distances by default (metres; the paper's Table III).
+const DEFAULT_DISTANCES: &str = "1:20:1";
+/// The grid's times by default (seconds).
+const DEFAULT_TIMES: &str = "1:40:1";
+
 /// `--horizon`: seconds in [0, MAX_TARGET_SECONDS] (`--horizon 1e7`
 /// aborted on a 216 GB allocation).
 fn horizon(s: &str) -> Result<f64, String> {
@@ -198,6 +203,17 @@ fn horizon(s: &str) -> Result<f64, String> {
         Ok(v)
     } else {
         Err(format!("{s}: at most {MAX_TARGET_SECONDS} seconds"))
+    }
+}
+
+/// `--heading`: degrees in [-360, 360] (`--heading 1e308` was taken and
+/// printed back as a 309-digit target).
+fn heading(s: &str) -> Result<f64, String> {
+    let v = super::finite(s)?;
+    if v.abs() <= 360.0 {
+        Ok(v)
+    } else {
+        Err(format!("{s}: expected degrees in [-360, 360]"))
     }
 }
 
@@ -259,6 +275,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.grid || a.floor {
         // Refused before the database loads (and its graph builds).
         grid_targets(&a)?;
+    } else if a.distances != DEFAULT_DISTANCES || a.times != DEFAULT_TIMES {
+        // Ignored without a word (`--times NaN` ran the single query).
+        anyhow::bail!(
+            "--distances and --times are the grid's (with --grid or --floor); one query takes --distance and --time"
+        );
     }
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
     let load = a.clip.load_options()?;

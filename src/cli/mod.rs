@@ -738,7 +738,27 @@ pub fn one_line(e: &anyhow::Error) -> String {
             }
         }
     }
-    s.replace('\n', " ")
+    without_os_error_numbers(&s.replace('\n', " "))
+}
+
+/// `s` without the OS's " (os error N)" suffixes: "x.bvh: No such file or
+/// directory (os error 2)" says what is wrong without them.
+fn without_os_error_numbers(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut rest = s;
+    while let Some(i) = rest.find(" (os error ") {
+        let tail = &rest[i + " (os error ".len()..];
+        let digits = tail.bytes().take_while(u8::is_ascii_digit).count();
+        if digits > 0 && tail[digits..].starts_with(')') {
+            out.push_str(&rest[..i]);
+            rest = &tail[digits + 1..];
+        } else {
+            out.push_str(&rest[..i + 1]);
+            rest = &rest[i + 1..];
+        }
+    }
+    out.push_str(rest);
+    out
 }
 
 /// Options shared by the verbs that read clips and show their result
@@ -819,6 +839,21 @@ mod tests {
         assert_eq!(super::count(2, "match"), "2 matches");
         assert_eq!(super::count(9, "query"), "9 queries");
         assert_eq!(super::count(2, "key"), "2 keys");
+    }
+
+    /// The OS's error numbers are not printed.
+    #[test]
+    fn os_error_numbers_are_left_out() {
+        assert_eq!(
+            super::without_os_error_numbers(
+                "a.bvh: No such file or directory (os error 2); b: Permission denied (os error 13)"
+            ),
+            "a.bvh: No such file or directory; b: Permission denied"
+        );
+        assert_eq!(
+            super::without_os_error_numbers("x (os error y) (os error 7"),
+            "x (os error y) (os error 7"
+        );
     }
 
     /// Regression (session 6 review): `eval --result FOLDER` printed the
