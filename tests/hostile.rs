@@ -1025,6 +1025,32 @@ fn session10_rows() -> Vec<Row> {
             &["m.gltf", "buffer 0", "missing.bin", "no such file"],
         )
         .file("m.gltf", gltf_triangle("").replace("data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA", "missing.bin")),
+        // The whole site was exported (seconds on the demo, minutes on a
+        // real capture) before the address failed.
+        row(
+            "web serve --bind of no address",
+            "web serve --db {db} --bind 999.1.1.1",
+            &["--bind", "999.1.1.1", "IP address"],
+        ),
+        row(
+            "web serve --bind of an address this machine does not have",
+            "web serve --db {db} --bind 192.0.2.1 --port 0",
+            &["cannot listen on 192.0.2.1:0"],
+        ),
+        // Exit 0: resolved to walk:0 "at NaN m", and to the frame least
+        // unlike a point.
+        row(
+            "keyframe --from a pose 1e308 m wide",
+            "keyframe --db {db} --from {d}/p.json --to walk:100 --distance 3 --time 3 -o {d}/k.pc2",
+            &["p.json", "span", "19 joints"],
+        )
+        .file("p.json", format!("[{}[1e308, 1e308, 1e308]]", "[0, 1, 0], ".repeat(18))),
+        row(
+            "keyframe --from a pose of joints at one point",
+            "keyframe --db {db} --from {d}/p.json --to walk:100 --distance 3 --time 3 -o {d}/k.pc2",
+            &["p.json", "at one point"],
+        )
+        .file("p.json", format!("[{}[0, 0, 0]]", "[0, 0, 0], ".repeat(18))),
         // Exit 0, printing back a 309-digit target.
         row(
             "keyframe --heading 1e308",

@@ -28,13 +28,14 @@ pub struct Args {
     /// .asf beside them). Links are followed; each clip is converted once.
     #[arg(long)]
     pub mocap_dir: PathBuf,
-    /// Output folder: one output per clip in the same folder tree, plus
-    /// batch.json, batch.html and batch.svg. One run at a time writes there
-    /// (shards of one split may share it): batch.lock holds its pid.
+    /// Output folder, outside --mocap-dir: one output per clip in the same
+    /// folder tree, plus batch.json, batch.html and batch.svg. One run at a
+    /// time writes there (shards of one split may share it): batch.lock
+    /// holds its pid.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Clips converted at once, 1 to 1024 (default: the number of cores).
-    /// (`--jobs 0` ran one at a time without a word.)
+    // (`--jobs 0` ran one at a time without a word.)
     #[arg(long, value_parser = super::bounded_count(1, 1024))]
     pub jobs: Option<usize>,
     /// Only shard i of n (1-based), e.g. `--shard $SLURM_ARRAY_TASK_ID/8`:

@@ -287,6 +287,21 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut key = |k: &str| -> anyhow::Result<u32> {
         if pose::is_pose_key(k) {
             let p = pose::read_pose(&ch, k, &load)?;
+            // A pose of joints 1e308 m away resolved to walk:0 at "NaN m",
+            // and 19 joints at one point to the frame least unlike a point.
+            let span = p
+                .iter()
+                .flat_map(|a| p.iter().map(move |b| a.distance(*b)))
+                .fold(0.0, f64::max);
+            anyhow::ensure!(
+                span.is_finite() && span <= 100.0,
+                "key-frame '{k}': its joints span {} m: expected a body's 19 joints in metres, Y up",
+                surfmotion::parametric::script::short_number(span)
+            );
+            anyhow::ensure!(
+                span > 0.01,
+                "key-frame '{k}': its 19 joints are at one point: expected a body's joints in metres, Y up"
+            );
             let r = pose::nearest_frame(&ch, k, &p);
             let id = r.id;
             resolved.push(r);
