@@ -28,13 +28,14 @@ pub struct Args {
     /// .asf beside them). Links are followed; each clip is converted once.
     #[arg(long)]
     pub mocap_dir: PathBuf,
-    /// Output folder: one output per clip in the same folder tree, plus
-    /// batch.json, batch.html and batch.svg. One run at a time writes there
-    /// (shards of one split may share it): batch.lock holds its pid.
+    /// Output folder, outside --mocap-dir: one output per clip in the same
+    /// folder tree, plus batch.json, batch.html and batch.svg. One run at a
+    /// time writes there (shards of one split may share it): batch.lock
+    /// holds its pid.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Clips converted at once, 1 to 1024 (default: the number of cores).
-    /// (`--jobs 0` ran one at a time without a word.)
+    // (`--jobs 0` ran one at a time without a word.)
     #[arg(long, value_parser = super::bounded_count(1, 1024))]
     pub jobs: Option<usize>,
     /// Only shard i of n (1-based), e.g. `--shard $SLURM_ARRAY_TASK_ID/8`:
@@ -95,6 +96,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             a.output.display()
         );
     }
+    refuse_output_in_clip_folder(&a)?;
     let format = Format::from(a.format);
     refuse_outputs_over_inputs(&a, format)?;
     let load = a.clip.load_options()?;
@@ -207,6 +209,65 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         files[0].display()
     );
     Ok(())
+}
+
+/// Refuses `-o` equal to `--mocap-dir` or inside it: the outputs,
+/// batch.json/.html/.svg and batch.lock were written among the user's
+/// clips (and a later batch of the library walked the outputs' tree as
+/// part of it). Paths are compared resolved (links, `.`, `..`), an `-o`
+/// that does not exist yet by its nearest existing parent.
+fn refuse_output_in_clip_folder(a: &Args) -> anyhow::Result<()> {
+    let Ok(clips) = a.mocap_dir.canonicalize() else {
+        return Ok(()); // the batch itself reports a missing folder
+    };
+    let out = resolved(&a.output);
+    if out == clips {
+        anyhow::bail!(
+            "-o {}: the clip folder itself (--mocap-dir); the outputs and batch.json, .html and .svg would be written among the clips: give another folder, e.g. -o {}",
+            a.output.display(),
+            sibling(&clips).display()
+        );
+    }
+    if out.starts_with(&clips) {
+        anyhow::bail!(
+            "-o {}: inside the clip folder --mocap-dir {}; the outputs would become part of the library the batch reads: give a folder outside it, e.g. -o {}",
+            a.output.display(),
+            a.mocap_dir.display(),
+            sibling(&clips).display()
+        );
+    }
+    Ok(())
+}
+
+/// `p` with links, `.` and `..` resolved; a path that does not exist yet
+/// by its nearest existing ancestor, the rest appended.
+fn resolved(p: &std::path::Path) -> PathBuf {
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let mut rest = Vec::new();
+    let mut at = abs.as_path();
+    loop {
+        if let Ok(c) = at.canonicalize() {
+            let mut out = c;
+            for part in rest.iter().rev() {
+                out.push(part);
+            }
+            return out;
+        }
+        match (at.parent(), at.file_name()) {
+            (Some(parent), Some(name)) => {
+                rest.push(name.to_os_string());
+                at = parent;
+            }
+            _ => return abs,
+        }
+    }
+}
+
+/// `DIR-out` beside the clip folder, for the refusal's example.
+fn sibling(clips: &std::path::Path) -> PathBuf {
+    let mut name = clips.file_name().unwrap_or_default().to_os_string();
+    name.push("-out");
+    clips.with_file_name(name)
 }
 
 /// Refuses, before any work, a clip whose output would replace one of the

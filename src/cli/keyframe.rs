@@ -73,7 +73,7 @@ pub struct Args {
     /// Target final facing, degrees relative to the start key-frame's
     /// (positive: from +Z towards +X); a cost term of the exact-length
     /// search and of the walks' search (--w-heading per degree).
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = super::finite)]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = heading)]
     pub heading: Option<f64>,
     /// Weight of the heading error, per degree. Default: 1/30 (30° cost as
     /// much as 0.3 m of distance).
@@ -169,10 +169,10 @@ pub struct Args {
     #[arg(long)]
     pub grid: bool,
     /// Grid distances (metres), A:B:STEP or a comma list.
-    #[arg(long, default_value = "1:20:1")]
+    #[arg(long, default_value = DEFAULT_DISTANCES)]
     pub distances: String,
     /// Grid times (seconds), A:B:STEP or a comma list.
-    #[arg(long, default_value = "1:40:1")]
+    #[arg(long, default_value = DEFAULT_TIMES)]
     pub times: String,
     /// With --grid: a heat-map of the errors over the grid (.svg with
     /// axes and legend, or .png).
@@ -189,6 +189,11 @@ pub struct Args {
     pub floor: bool,
 }
 
+/// The grid's distances by default (metres; the paper's Table III).
+const DEFAULT_DISTANCES: &str = "1:20:1";
+/// The grid's times by default (seconds).
+const DEFAULT_TIMES: &str = "1:40:1";
+
 /// `--horizon`: seconds in [0, MAX_TARGET_SECONDS] (`--horizon 1e7`
 /// aborted on a 216 GB allocation).
 fn horizon(s: &str) -> Result<f64, String> {
@@ -198,6 +203,17 @@ fn horizon(s: &str) -> Result<f64, String> {
         Ok(v)
     } else {
         Err(format!("{s}: at most {MAX_TARGET_SECONDS} seconds"))
+    }
+}
+
+/// `--heading`: degrees in [-360, 360] (`--heading 1e308` was taken and
+/// printed back as a 309-digit target).
+fn heading(s: &str) -> Result<f64, String> {
+    let v = super::finite(s)?;
+    if v.abs() <= 360.0 {
+        Ok(v)
+    } else {
+        Err(format!("{s}: expected degrees in [-360, 360]"))
     }
 }
 
@@ -259,6 +275,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.grid || a.floor {
         // Refused before the database loads (and its graph builds).
         grid_targets(&a)?;
+    } else if a.distances != DEFAULT_DISTANCES || a.times != DEFAULT_TIMES {
+        // Ignored without a word (`--times NaN` ran the single query).
+        anyhow::bail!(
+            "--distances and --times are the grid's (with --grid or --floor); one query takes --distance and --time"
+        );
     }
     let ch = Character::load(&a.db, &super::db::Bars::new())?;
     let load = a.clip.load_options()?;
@@ -266,6 +287,21 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut key = |k: &str| -> anyhow::Result<u32> {
         if pose::is_pose_key(k) {
             let p = pose::read_pose(&ch, k, &load)?;
+            // A pose of joints 1e308 m away resolved to walk:0 at "NaN m",
+            // and 19 joints at one point to the frame least unlike a point.
+            let span = p
+                .iter()
+                .flat_map(|a| p.iter().map(move |b| a.distance(*b)))
+                .fold(0.0, f64::max);
+            anyhow::ensure!(
+                span.is_finite() && span <= 100.0,
+                "key-frame '{k}': its joints span {} m: expected a body's 19 joints in metres, Y up",
+                surfmotion::parametric::script::short_number(span)
+            );
+            anyhow::ensure!(
+                span > 0.01,
+                "key-frame '{k}': its 19 joints are at one point: expected a body's joints in metres, Y up"
+            );
             let r = pose::nearest_frame(&ch, k, &p);
             let id = r.id;
             resolved.push(r);
@@ -367,11 +403,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let seq = MeshSequence::new(ch.topology_metres(), o.positions, Some(fps))?;
     let written = save_sequence(&seq, out, Some(fps))?;
     let r = &o.report;
+    let missed = missed_targets(r);
+    // The report and --json say which targets were missed, as the text does.
+    let mut v = serde_json::to_value(r)?;
+    v["missed"] = serde_json::to_value(&missed)?;
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(r)?.as_bytes())?;
+        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
     }
     if a.json {
-        let mut v = serde_json::to_value(r)?;
         v["output"] = serde_json::to_value(&written)?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
@@ -388,17 +427,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         fps
     );
     s += &format!("achieved: {:.3} m in {:.3} s", r.distance, r.time);
-    let mut missed = None;
+    let mut compromise = None;
     if let (Some(de), Some(te)) = (r.distance_error, r.time_error) {
         s += &format!(" (error {de:+.3} m, {te:+.3} s)");
         // Flag a compromise: an error over 1 % of a non-zero target.
-        let (dt, tt) = (r.distance - de, r.time - te);
-        if (dt > 0.0 && de.abs() > 0.01 * dt) || (tt > 0.0 && te.abs() > 0.01 * tt) {
-            missed = Some((dt, tt));
+        if missed.contains(&"distance") || missed.contains(&"time") {
+            compromise = Some((r.distance - de, r.time - te));
         }
     }
     s += "\n";
-    if let Some((dt, tt)) = missed {
+    if let Some((dt, tt)) = compromise {
         s += &format!(
             "not met within 1 %: the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 within {} (the graph may not reach it; --w-dist and --w-time weigh the two)\n",
             r.reach.map_or("the horizon".to_string(), |x| format!(
@@ -434,6 +472,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         s += &format!(" (target {h:+.1}°, error {e:+.1}°)");
     }
     s += "\n";
+    if let (true, Some(h)) = (missed.contains(&"heading"), r.heading_target_deg) {
+        s += &format!(
+            "heading not met within {HEADING_TOLERANCE_DEG}° (1 % of a turn): {:+.1}° for {h:+.1}°, the best compromise under Eq. 7 (the graph's transitions may not turn that far in this time; --w-heading weighs it against distance and time)\n",
+            r.final_facing_deg
+        );
+    }
     s += &format!(
         "cost: transitions {:.4} + distance {:.4} + time {:.4}{} = {:.4}\n",
         r.cost.transition,
@@ -495,6 +539,32 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         s += &format!("bound hit: {b}\n");
     }
     super::emit(&s)
+}
+
+/// A heading target is flagged when the final facing misses it by more
+/// than this (degrees): 1 % of a turn, as distance and time are flagged
+/// beyond 1 % of their targets.
+pub const HEADING_TOLERANCE_DEG: f64 = 3.6;
+
+/// The targets a path misses: "distance" or "time" by more than 1 % of a
+/// non-zero target, "heading" by more than [`HEADING_TOLERANCE_DEG`].
+fn missed_targets(r: &surfmotion::keyframe::Report) -> Vec<&'static str> {
+    let mut out = Vec::new();
+    if let (Some(de), Some(te)) = (r.distance_error, r.time_error) {
+        let (dt, tt) = (r.distance - de, r.time - te);
+        if dt > 0.0 && de.abs() > 0.01 * dt {
+            out.push("distance");
+        }
+        if tt > 0.0 && te.abs() > 0.01 * tt {
+            out.push("time");
+        }
+    }
+    if r.heading_error_deg
+        .is_some_and(|e| e.abs() > HEADING_TOLERANCE_DEG)
+    {
+        out.push("heading");
+    }
+    out
 }
 
 fn grid(

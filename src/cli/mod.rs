@@ -131,6 +131,17 @@ pub fn main() -> anyhow::Result<()> {
         Err(e) if e.kind() == clap::error::ErrorKind::InvalidUtf8 => {
             anyhow::bail!(non_utf8_argument(std::env::args_os().collect()))
         }
+        // A value the option does not take: one line in the tool's words
+        // (`render --frame -1` printed clap's "invalid digit found in
+        // string" and three lines of usage).
+        Err(e)
+            if matches!(
+                e.kind(),
+                clap::error::ErrorKind::ValueValidation | clap::error::ErrorKind::InvalidValue
+            ) =>
+        {
+            anyhow::bail!(bad_value(&e))
+        }
         Err(e) => {
             let usage = e.use_stderr();
             // Help read by `| head` closed the pipe: not an error (it said
@@ -359,6 +370,50 @@ fn allow_negative_numbers(cmd: clap::Command) -> clap::Command {
         }
     })
     .mut_subcommands(allow_negative_numbers)
+}
+
+/// One line for a value an option does not take: the option, the value
+/// and what it takes (a whole number ≥ 0 for counts and frame indices,
+/// the possible values of a choice, or the option's own check).
+fn bad_value(e: &clap::Error) -> String {
+    use clap::error::{ContextKind, ContextValue};
+    use std::num::IntErrorKind;
+    let text = |k| match e.get(k) {
+        Some(ContextValue::String(s)) => Some(s.clone()),
+        _ => None,
+    };
+    // "--frame <FRAME>" → "--frame"; a positional "<DIR>" stays.
+    let arg = text(ContextKind::InvalidArg).unwrap_or_else(|| "an argument".into());
+    let flag = if arg.starts_with('-') {
+        arg.split([' ', '=']).next().unwrap_or(&arg).to_string()
+    } else {
+        arg.clone()
+    };
+    let value = text(ContextKind::InvalidValue).unwrap_or_default();
+    let source = std::error::Error::source(e);
+    let why = if let Some(p) = source.and_then(|s| s.downcast_ref::<std::num::ParseIntError>()) {
+        match p.kind() {
+            IntErrorKind::Empty => "expected a whole number, got nothing".to_string(),
+            IntErrorKind::PosOverflow | IntErrorKind::NegOverflow => {
+                "a whole number too large for this option".to_string()
+            }
+            _ if flag == "--frame" || flag == "--frames" => {
+                "expected a frame number: a whole number from 0 (the first frame)".to_string()
+            }
+            _ => "expected a whole number ≥ 0".to_string(),
+        }
+    } else if let Some(s) = source {
+        s.to_string()
+    } else if let Some(ContextValue::Strings(v)) = e.get(ContextKind::ValidValue)
+        && !v.is_empty()
+    {
+        format!("expected one of {}", v.join(", "))
+    } else if value.is_empty() {
+        return format!("{flag} needs a value");
+    } else {
+        "not a value this option takes".to_string()
+    };
+    format!("{flag} '{value}': {why}")
 }
 
 /// A frame rate on the command line: a finite number in
@@ -683,7 +738,27 @@ pub fn one_line(e: &anyhow::Error) -> String {
             }
         }
     }
-    s.replace('\n', " ")
+    without_os_error_numbers(&s.replace('\n', " "))
+}
+
+/// `s` without the OS's " (os error N)" suffixes: "x.bvh: No such file or
+/// directory (os error 2)" says what is wrong without them.
+fn without_os_error_numbers(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut rest = s;
+    while let Some(i) = rest.find(" (os error ") {
+        let tail = &rest[i + " (os error ".len()..];
+        let digits = tail.bytes().take_while(u8::is_ascii_digit).count();
+        if digits > 0 && tail[digits..].starts_with(')') {
+            out.push_str(&rest[..i]);
+            rest = &tail[digits + 1..];
+        } else {
+            out.push_str(&rest[..i + 1]);
+            rest = &rest[i + 1..];
+        }
+    }
+    out.push_str(rest);
+    out
 }
 
 /// Options shared by the verbs that read clips and show their result
@@ -764,6 +839,21 @@ mod tests {
         assert_eq!(super::count(2, "match"), "2 matches");
         assert_eq!(super::count(9, "query"), "9 queries");
         assert_eq!(super::count(2, "key"), "2 keys");
+    }
+
+    /// The OS's error numbers are not printed.
+    #[test]
+    fn os_error_numbers_are_left_out() {
+        assert_eq!(
+            super::without_os_error_numbers(
+                "a.bvh: No such file or directory (os error 2); b: Permission denied (os error 13)"
+            ),
+            "a.bvh: No such file or directory; b: Permission denied"
+        );
+        assert_eq!(
+            super::without_os_error_numbers("x (os error y) (os error 7"),
+            "x (os error y) (os error 7"
+        );
     }
 
     /// Regression (session 6 review): `eval --result FOLDER` printed the

@@ -138,6 +138,20 @@ impl JobOpts {
 /// Runs `transfer`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::warnings_in_summary(!a.run.json);
+    // clap's `requires` let these through with --mocap, and they were
+    // ignored without a word.
+    if a.template.is_none() {
+        for (flag, given) in [
+            ("--template-markers", a.template_markers.is_some()),
+            ("--template-landmarks", a.template_landmarks.is_some()),
+            ("--template-frame", a.template_frame != 0),
+        ] {
+            anyhow::ensure!(
+                !given,
+                "{flag} applies to --template (a moving template mesh), not to --mocap"
+            );
+        }
+    }
     let mut inputs = surfmotion::mesh::io::input_files(&a.scan, None);
     if let Some(t) = &a.template {
         inputs.extend(surfmotion::mesh::io::input_files(t, None));

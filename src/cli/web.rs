@@ -92,9 +92,20 @@ pub struct ServeArgs {
     /// Port (0 picks a free one).
     #[arg(long, default_value_t = 8080)]
     pub port: u16,
-    /// Address to listen on.
-    #[arg(long, default_value = "127.0.0.1")]
+    /// Address to listen on: an IP address of this machine (127.0.0.1,
+    /// 0.0.0.0 for every interface, ::1) or localhost.
+    #[arg(long, default_value = "127.0.0.1", value_parser = bind_address)]
     pub bind: String,
+}
+
+/// `--bind`: an IP address or `localhost` (`--bind 999.1.1.1` exported
+/// the whole site, then failed on a name lookup).
+fn bind_address(s: &str) -> Result<String, String> {
+    if s == "localhost" || s.parse::<std::net::IpAddr>().is_ok() {
+        Ok(s.to_string())
+    } else {
+        Err("expected an IP address (127.0.0.1, 0.0.0.0, ::1) or localhost".into())
+    }
 }
 
 fn options(s: &Source) -> anyhow::Result<ExportOptions> {
@@ -176,6 +187,14 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             }
         }
         Cmd::Serve(a) => {
+            // The address is tried before the export (seconds to minutes):
+            // one this machine does not have, or a port in use, failed
+            // only after it.
+            let addr = format!("{}:{}", a.bind, a.port);
+            drop(
+                std::net::TcpListener::bind(addr.as_str())
+                    .map_err(|e| anyhow::anyhow!("cannot listen on {addr}: {e}"))?,
+            );
             let _tmp;
             let root = match &a.site {
                 Some(s) if !s.join("index.html").is_file() => anyhow::bail!(
@@ -195,7 +214,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     site
                 }
             };
-            let server = web::SiteServer::bind(&root, &format!("{}:{}", a.bind, a.port))?;
+            let server = web::SiteServer::bind(&root, &addr)?;
             crate::outln!("serving {} at {}", root.display(), server.url())?;
             server.run();
             Ok(())

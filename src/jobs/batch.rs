@@ -117,8 +117,8 @@ pub fn batch_folder(
         notice(
             &mut notices,
             format!(
-                "{} clips would write the same output; named with their extension:\n  {}",
-                renamed.len(),
+                "{} would write the same output; named with their extension:\n  {}",
+                crate::batch::summary::count(renamed.len(), "clip"),
                 renamed.join("\n  ")
             ),
         );

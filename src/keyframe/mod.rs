@@ -943,10 +943,58 @@ pub fn facing_change(ch: &Character, keys: &[u32]) -> f64 {
 pub fn describe(ch: &Character, e: &SearchError) -> String {
     match e {
         SearchError::NoPath { from, to } => format!(
-            "no path from key-frame {} to {} in the graph (no sequence of transitions joins them; see `surfmotion graph`)",
+            "no path from key-frame {} to {} in the graph (no sequence of transitions joins them{}; see `surfmotion graph`)",
             key_name(ch, *from),
-            key_name(ch, *to)
+            key_name(ch, *to),
+            no_path_hint(ch, *from, *to)
         ),
         other => other.to_string(),
     }
+}
+
+/// Which key-frame to move when no path joins `from` to `to`: the earliest
+/// frame of `to`'s sequence a transition of the graph enters (a frame
+/// before it is reached only along its own sequence), and the last frame
+/// of `from`'s sequence a transition leaves. Empty when neither explains it.
+fn no_path_hint(ch: &Character, from: u32, to: u32) -> String {
+    let g = ch.graph();
+    let adj = ch.adjacency();
+    let n = g.frame_count() as u32;
+    let ((sf, ff), (st, ft)) = (g.frame_of(from), g.frame_of(to));
+    let (mut entered, mut left): (Option<usize>, Option<usize>) = (None, None);
+    for f in 0..n.min(adj.offsets.len().saturating_sub(1) as u32) {
+        for (t, _) in adj.successors(f) {
+            if t == f + 1 || t >= n {
+                continue;
+            }
+            let ((sa, a), (sb, b)) = (g.frame_of(f), g.frame_of(t));
+            if sb == st {
+                entered = Some(entered.map_or(b, |e| e.min(b)));
+            }
+            if sa == sf {
+                left = Some(left.map_or(a, |l| l.max(a)));
+            }
+        }
+    }
+    let seq = |s: usize| &g.sequences[s].name;
+    let mut out = Vec::new();
+    // `to` is reachable along its own sequence from an earlier `from`.
+    let along = sf == st && ff <= ft;
+    match entered {
+        Some(e) if ft < e && !along => out.push(format!(
+            "; the earliest frame of {0} a transition enters is {0}:{e}: move key-frame {0}:{ft} to {0}:{e} or later",
+            seq(st)
+        )),
+        None if !along => out.push(format!("; no transition enters {}", seq(st))),
+        _ => {}
+    }
+    match left {
+        Some(l) if ff > l && !along => out.push(format!(
+            "; the last frame of {0} a transition leaves is {0}:{l}: move key-frame {0}:{ff} to {0}:{l} or earlier",
+            seq(sf)
+        )),
+        None if !along => out.push(format!("; no transition leaves {}", seq(sf))),
+        _ => {}
+    }
+    out.concat()
 }

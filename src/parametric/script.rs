@@ -98,10 +98,17 @@ pub fn parse_script_for(
     if list.is_empty() {
         return Err(err("the script has no requests".into()));
     }
-    let declared: Vec<&str> = spaces
+    // Each name once ("expected t, space, speed, turn, turn" with two
+    // spaces steering by turn).
+    let mut declared: Vec<&str> = Vec::new();
+    for p in spaces
         .iter()
         .flat_map(|(_, ps)| ps.iter().map(|p| p.name()))
-        .collect();
+    {
+        if !declared.contains(&p) {
+            declared.push(p);
+        }
+    }
     let names: Vec<&str> = spaces.iter().map(|(n, _)| *n).collect();
     let mut out = Vec::with_capacity(list.len());
     let mut last = 0.0;

@@ -381,7 +381,11 @@ fn load_buffers(
                 } else {
                     let rel = uri.replace("%20", " ");
                     let p = path.parent().unwrap_or(Path::new(".")).join(rel);
-                    crate::fsutil::read_bytes(&p)?
+                    // Named with the glTF that refers to it ("missing.bin:
+                    // No such file" named neither the .gltf nor the buffer).
+                    crate::fsutil::read_bytes(&p).map_err(|e| {
+                        MeshError::invalid(path, format!("buffer {}: {e}", b.index()))
+                    })?
                 }
             }
         };
@@ -794,12 +798,34 @@ impl Geometry {
             None => self.colors.extend(std::iter::repeat_n([1.0; 3], nv)),
         }
         let idx: Vec<u32> = match prim.indices() {
-            Some(ia) => ctx
-                .read_f32(&ia, "indices")?
-                .0
-                .into_iter()
-                .map(|v| v as u32)
-                .collect(),
+            // Unsigned integer scalars only (a FLOAT VEC3 accessor was read
+            // as indices, truncated, and the mesh accepted), read exactly
+            // (through an f32, indices above 2²⁴ were rounded).
+            Some(ia)
+                if ia.dimensions() != Dimensions::Scalar
+                    || ia.normalized()
+                    || !matches!(ia.data_type(), DataType::U8 | DataType::U16 | DataType::U32) =>
+            {
+                return Err(ctx.err(format!(
+                    "mesh {mesh_index}: indices (accessor {}) are {:?} {:?}, expected unsigned integer scalars",
+                    ia.index(),
+                    ia.data_type(),
+                    ia.dimensions()
+                )));
+            }
+            Some(ia) => match (ia.view(), ia.sparse()) {
+                (Some(view), None) => ctx
+                    .read_indices(&view, ia.offset(), ia.count(), ia.data_type(), "indices")?
+                    .into_iter()
+                    .map(|v| v.min(u32::MAX as usize) as u32)
+                    .collect(),
+                _ => ctx
+                    .read_f32(&ia, "indices")?
+                    .0
+                    .into_iter()
+                    .map(|v| v as u32)
+                    .collect(),
+            },
             None => (0..nv as u32).collect(),
         };
         for t in idx.chunks_exact(3) {
