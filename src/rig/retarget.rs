@@ -733,6 +733,22 @@ pub fn ground_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -
     })
 }
 
+/// The height of the ground under each foot (left, right) above the
+/// character's floor per frame, in the character's metres: the clip's
+/// [`Support::under`] of that foot (levelled as [`retarget`] levels the
+/// clip, scaled by the ratio of leg lengths, interpolated across frames
+/// where the foot has none). Where [`retarget`] stands each foot: on or
+/// above its own ground. The plausibility checks measure penetration as
+/// any foot below its ground, floating as the foot nearest its ground
+/// above it.
+pub fn foot_ground_offsets(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+) -> [Vec<f64>; 2] {
+    [0, 1].map(|f| offsets(character, reference, mocap, |s| s.under[f].clone()))
+}
+
 /// The height the character's body stands raised above its floor per
 /// frame, in the character's metres: the lowest support a foot of the
 /// clip touches ([`Support::ground`]), interpolated across frames in the
@@ -771,7 +787,8 @@ fn offsets(
 /// horizontal travel from frame `t-1` to `t` of the midpoint of its ankle
 /// and toe joints while the foot's lowest sole point (toe joint, heel, toe
 /// tip, as the kernel puts on the floor) is within 3 cm of the character's
-/// floor raised by the clip's ground ([`ground_offsets`]) at both; summed
+/// floor raised by the clip's ground under that foot
+/// ([`foot_ground_offsets`]) at both; summed
 /// and divided by the touching foot-frames. The skeleton analogue of the
 /// mesh measure [`crate::eval::Sliding::touching_mean_cm_per_frame`], on
 /// the same feet and floor: a walk's feet pass through the touching band
@@ -782,7 +799,7 @@ pub fn clip_foot_glide_cm(character: &Pose, reference: &Reference, mocap: &[Pose
         return 0.0;
     }
     let out = retarget(character, reference, mocap);
-    let raised = ground_offsets(character, reference, mocap);
+    let raised = foot_ground_offsets(character, reference, mocap);
     let rest = sole_height(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
     let (mut travel, mut touching) = (0.0, 0usize);
     for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
@@ -792,7 +809,7 @@ pub fn clip_foot_glide_cm(character: &Pose, reference: &Reference, mocap: &[Pose
         let (a, k) = (ankle.index(), toe.index());
         let touch = |t: usize| {
             let (p, g) = &out[t];
-            foot_soles(character, p, g)[foot] <= rest + raised[t] + 0.03
+            foot_soles(character, p, g)[foot] <= rest + raised[foot][t] + 0.03
         };
         let mid = |t: usize| {
             let p = &out[t].0;
