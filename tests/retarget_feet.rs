@@ -249,3 +249,102 @@ fn a_heel_striking_beside_a_foot_leaving_on_its_toes_stays_on_the_floor() {
         }
     }
 }
+
+/// Stepping onto a block with a foot that
+/// touches the floor only on its toes: the right foot stands flat on the
+/// block all along; the left foot, heel up by `heel` degrees (rising by
+/// 8° more over `toe_off` frames), pivots on its toe joint on the floor,
+/// then swings up, flattening, over 12 frames and stands flat on the block
+/// for 16 while the right foot lifts off it. The body rises with it.
+fn step_up_off_toes(block: f64, heel: f64, toe_off: usize) -> Vec<Pose> {
+    let st = standing(0.06);
+    let swing = toe_off + 12;
+    (0..swing + 16)
+        .map(|t| {
+            let u = ((t as f64 - toe_off as f64) / 12.0).clamp(0.0, 1.0);
+            let mut p = st;
+            for c in Canonical::ALL {
+                p[c.index()].y += block * u;
+            }
+            // The right foot lifts off the block 4 frames after the left
+            // lands (the next step), leaving the left to bear the weight.
+            let next = ((t as f64 - swing as f64 - 4.0) / 4.0).clamp(0.0, 1.0);
+            for c in &leg(false)[1..] {
+                p[c.index()] = st[c.index()] + DVec3::Y * (block + 0.05 * next);
+            }
+            // The left foot: heel up about its toe joint, flattening as
+            // it swings, flat on the block from frame `swing`.
+            let pitch = if t < toe_off {
+                heel + 8.0 * t as f64 / toe_off as f64
+            } else {
+                (heel + 8.0) * (1.0 - u)
+            };
+            let lift = if t < toe_off {
+                0.0
+            } else {
+                block * u + 0.08 * (std::f64::consts::PI * u).sin()
+            };
+            for c in &leg(true)[1..] {
+                p[c.index()] = st[c.index()] + DVec3::Y * lift;
+            }
+            let toe = p[C::LToe.index()];
+            pitch_foot(&mut p, true, toe, -pitch.to_radians());
+            for left in [true, false] {
+                let [k, a, _] = leg(left);
+                let h = if left { C::LHip } else { C::RHip };
+                let (l1, l2) = (
+                    st[h.index()].distance(st[k.index()]),
+                    st[k.index()].distance(st[a.index()]),
+                );
+                p[k.index()] = knee(p[h.index()], p[a.index()], l1, l2);
+            }
+            p
+        })
+        .collect()
+}
+
+/// The elevation (degrees) of a pose's left foot bone, ankle to toe.
+fn left_foot_elevation(p: &Pose) -> f64 {
+    let f = p[C::LToe.index()] - p[C::LAnkle.index()];
+    (f.y / f.length()).asin().to_degrees()
+}
+
+/// A foot the clip stands flat on a block stands flat on the character,
+/// though the only frames it touches the floor in are a toe-off (or,
+/// stepping down, a landing on the toes): its foot bone keeps the
+/// character's rest elevation within 3° while the clip's foot is flat on
+/// the block. On `main` the foot's flat elevation was read off the frames
+/// where its ankle and toe are lowest, the toe-off here: the character's
+/// left foot stood on the block toes up by the heel's lift (CMU 03_02:
+/// 50-60°, its heel 3-4 cm through the block's top on the samba
+/// character). Blocks of 12 and 20 cm, toe-offs 30-55° lasting 6 to 10
+/// frames, characters ×0.85 and ×1.2 with a taller foot.
+#[test]
+fn a_foot_flat_on_a_block_is_flat_on_the_character_though_it_only_leaves_the_floor_on_its_toes() {
+    for block in [0.12, 0.2] {
+        for (heel, toe_off) in [(30.0, 6), (45.0, 10), (40.0, 8)] {
+            // A 30 cm block, or this clip played backwards (stepping down
+            // off a 20 cm block onto the toes), still fails: there the
+            // levelled clip's block footfall is not taken for a step (not
+            // fixed).
+            let up = step_up_off_toes(block, heel, toe_off);
+            for (name, clip, flat) in [("up", &up, toe_off + 14..up.len())] {
+                let rf = choose_reference(Some(&standing(0.06)), clip).unwrap();
+                for (scale, ankle) in [(0.85, 0.06), (1.2, 0.09)] {
+                    let ch = standing(ankle).map(|p| p * scale);
+                    let rest = left_foot_elevation(&ch);
+                    let out = retarget(&ch, &rf, clip);
+                    for t in flat.clone() {
+                        let e = left_foot_elevation(&out[t].0);
+                        assert!(
+                            (e - rest).abs() < 3.0,
+                            "block {block} m, stepping {name}, toe-off {heel}° over \
+                             {toe_off} frames, character ×{scale}, frame {t}: the left foot \
+                             at {e:.1}°, flat at {rest:.1}°"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

@@ -107,12 +107,13 @@ impl Feet {
         metres_per_unit: f64,
         opts: &FootOptions,
     ) -> Sliding {
-        self.sliding_on(frames, n, up, floor, &[], fps, metres_per_unit, opts)
+        self.sliding_on(frames, n, up, floor, [&[], &[]], fps, metres_per_unit, opts)
     }
 
-    /// [`Feet::sliding`] on a ground raised by `raised[t]` metres above
-    /// the floor at frame `t` (a step the driving clip stands on; frames
-    /// past its end on the floor).
+    /// [`Feet::sliding`] on grounds raised by `raised[f][t]` metres above
+    /// the floor under foot `f` (left, right) at frame `t` (a step the
+    /// driving clip stands that foot on; frames past its end on the
+    /// floor).
     #[allow(clippy::too_many_arguments)]
     pub fn sliding_on(
         &self,
@@ -120,13 +121,12 @@ impl Feet {
         n: usize,
         up: DVec3,
         floor: f64,
-        raised: &[f64],
+        raised: [&[f64]; 2],
         fps: f64,
         metres_per_unit: f64,
         opts: &FootOptions,
     ) -> Sliding {
         let m = metres_per_unit;
-        let ground = |t: usize| floor * m + raised.get(t).copied().unwrap_or(0.0);
         let up = up.normalize_or(DVec3::Y);
         let count = frames.len() / n.max(1);
         let fps = if fps.is_finite() && fps > 0.0 {
@@ -136,7 +136,8 @@ impl Feet {
         };
         let mut s = Sliding::default();
         let mut touching_cm = 0.0;
-        for sole in &self.soles {
+        for (sole, raised) in self.soles.iter().zip(raised) {
+            let ground = |t: usize| floor * m + raised.get(t).copied().unwrap_or(0.0);
             // Horizontal centroid and lowest height per frame.
             let track: Vec<(DVec3, f64)> = (0..count)
                 .map(|f| {

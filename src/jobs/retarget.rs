@@ -15,7 +15,7 @@ use crate::mesh::io::stream::SequenceWriter;
 use crate::retarget::query::{MocapPoses, load_mocap, to_database};
 use crate::retarget::{Output, Report, RetargetOptions, Timings, synthesise, synthesise_each};
 use crate::rig::LoadOptions;
-use crate::rig::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, ground_offsets};
+use crate::rig::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets};
 use crate::skeleton::Pose;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -217,9 +217,10 @@ pub fn plausibility(
         let Some(m) = clip else {
             return Ok((c.measure(positions, ch.n(), turned_over)?.logged(), c.floor));
         };
-        // Floating and penetration from the clip's own ground (its floor,
-        // raised under a footfall on a step), where the result stands.
-        let raised = ground_offsets(ch.rest_pose(), &m.reference, &m.poses);
+        // Floating and penetration from the clip's own ground under each
+        // foot (its floor, raised under a footfall on a step), where the
+        // result stands.
+        let raised = foot_ground_offsets(ch.rest_pose(), &m.reference, &m.poses);
         let p = c
             .measure_on(positions, ch.n(), turned_over, Some(&raised))?
             .with_clip_head(&clip_head_trunk_deg(&m.reference, &m.poses), &opts.limits)

@@ -237,10 +237,11 @@ pub fn write_synthetic_database(
             Checker::new(rest, rig, glam::DVec3::Y, None, fps, Default::default())
                 .and_then(|c| {
                     let clip = crate::rig::retarget::clip_head_trunk_deg(&reference, &poses);
-                    // Floating from the clip's own ground (raised on a step).
+                    // Floating from the clip's own ground under each foot
+                    // (raised on a step).
                     let character = rig.joints.map(glam::DVec3::from_array);
                     let raised =
-                        crate::rig::retarget::ground_offsets(&character, &reference, &poses);
+                        crate::rig::retarget::foot_ground_offsets(&character, &reference, &poses);
                     Ok(c.measure_on(
                         seq.all_positions(),
                         rest.vertex_count(),

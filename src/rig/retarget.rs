@@ -426,16 +426,17 @@ pub fn retarget_with_neutral(
         }
         _ => &reference.pose,
     };
-    // The feet measured from how the clip holds them flat on its floor.
-    let stance_ref = flat_feet(r, mocap);
+    // The clip's floor and the support under each of its footfalls (the
+    // leg's length does not depend on the feet).
+    let support = clip_support(mocap, leg_length(r));
+    // The feet measured from how the clip holds them flat on its ground.
+    let stance_ref = flat_feet(r, mocap, &support);
     let r = &stance_ref;
     let s = leg_length(character) / leg_length(r).max(1e-12);
     let face = heading_between(neutral, r);
     // The rest bones onto the neutral's (identity when it is the rest).
     let held = pose_rotations(character, neutral);
     let root = C::Pelvis.index();
-    // The clip's floor and the support under each of its footfalls.
-    let support = clip_support(mocap, leg_length(r));
     let clip_floor = support.floor;
     let char_floor = foot_height(character);
     let rotations = clip_rotations(r, mocap, reference, tilt);
@@ -733,6 +734,22 @@ pub fn ground_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -
     })
 }
 
+/// The height of the ground under each foot (left, right) above the
+/// character's floor per frame, in the character's metres: the clip's
+/// [`Support::under`] of that foot (levelled as [`retarget`] levels the
+/// clip, scaled by the ratio of leg lengths, interpolated across frames
+/// where the foot has none). Where [`retarget`] stands each foot: on or
+/// above its own ground. The plausibility checks measure penetration as
+/// any foot below its ground, floating as the foot nearest its ground
+/// above it.
+pub fn foot_ground_offsets(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+) -> [Vec<f64>; 2] {
+    [0, 1].map(|f| offsets(character, reference, mocap, |s| s.under[f].clone()))
+}
+
 /// The height the character's body stands raised above its floor per
 /// frame, in the character's metres: the lowest support a foot of the
 /// clip touches ([`Support::ground`]), interpolated across frames in the
@@ -771,7 +788,8 @@ fn offsets(
 /// horizontal travel from frame `t-1` to `t` of the midpoint of its ankle
 /// and toe joints while the foot's lowest sole point (toe joint, heel, toe
 /// tip, as the kernel puts on the floor) is within 3 cm of the character's
-/// floor raised by the clip's ground ([`ground_offsets`]) at both; summed
+/// floor raised by the clip's ground under that foot
+/// ([`foot_ground_offsets`]) at both; summed
 /// and divided by the touching foot-frames. The skeleton analogue of the
 /// mesh measure [`crate::eval::Sliding::touching_mean_cm_per_frame`], on
 /// the same feet and floor: a walk's feet pass through the touching band
@@ -782,7 +800,7 @@ pub fn clip_foot_glide_cm(character: &Pose, reference: &Reference, mocap: &[Pose
         return 0.0;
     }
     let out = retarget(character, reference, mocap);
-    let raised = ground_offsets(character, reference, mocap);
+    let raised = foot_ground_offsets(character, reference, mocap);
     let rest = sole_height(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
     let (mut travel, mut touching) = (0.0, 0usize);
     for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
@@ -792,7 +810,7 @@ pub fn clip_foot_glide_cm(character: &Pose, reference: &Reference, mocap: &[Pose
         let (a, k) = (ankle.index(), toe.index());
         let touch = |t: usize| {
             let (p, g) = &out[t];
-            foot_soles(character, p, g)[foot] <= rest + raised[t] + 0.03
+            foot_soles(character, p, g)[foot] <= rest + raised[foot][t] + 0.03
         };
         let mid = |t: usize| {
             let p = &out[t].0;
@@ -848,13 +866,25 @@ fn interpolate_gaps(v: &[Option<f64>]) -> Vec<f64> {
 }
 
 /// `r` with each foot bone (ankle → toe) turned about its lateral axis to
-/// the elevation the clip's foot has when flat on the floor: the median
+/// the elevation the clip's foot has when flat on its ground: the median
 /// over the frames where both the foot's ankle and toe are within 2 cm of
-/// their lowest (5th percentile) heights. A rest skeleton's foot bone need
-/// not point as the standing foot's does (CMU's ASF rest skeleton points it
-/// 15° further down than the walks' stance, and copying that left the
-/// character's heels 2 cm up); `r` unchanged for a foot never flat.
-fn flat_feet(r: &Pose, mocap: &[Pose]) -> Pose {
+/// their lowest (5th percentile) heights, unless it is more than 5° off
+/// the elevation the foot holds longest while planted on a support
+/// ([`held_elevation`] over the frames where it touches the floor or a
+/// block it stands on, `support`'s [`Support::touch`], with its ankle and
+/// toe joints each moving less than 2 % of the leg's length from the
+/// frame before), which is then taken. A rest skeleton's foot bone need
+/// not point as the standing foot's does (CMU's ASF rest skeleton points
+/// it 15° further down than the walks' stance, and copying that left the
+/// character's heels 2 cm up); `r` unchanged for a foot never flat. The
+/// lowest heights alone are not enough on uneven ground: CMU 03_02's left
+/// foot touches the floor only while leaving it on its toes, then stands
+/// on blocks, and that toe-off (−82° against the −14° it holds on the
+/// blocks) was taken for flat: on the blocks the character's left foot
+/// stood toes up by 50-60°, its heel 3-4 cm through the block's top. On
+/// a flat capture the two agree (within 3° on the README's walks and
+/// runs) and the lowest heights are kept.
+fn flat_feet(r: &Pose, mocap: &[Pose], support: &Support) -> Pose {
     let mut out = *r;
     let low = |c: C| {
         let mut h: Vec<f64> = mocap
@@ -866,30 +896,78 @@ fn flat_feet(r: &Pose, mocap: &[Pose]) -> Pose {
         h.get(h.len() / 20).copied()
     };
     let elevation = |f: DVec3| (f.y / f.length()).clamp(-1.0, 1.0).asin();
-    for (ankle, toe) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)] {
+    let still = 0.02 * leg_length(r).max(1e-9);
+    for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
+        .into_iter()
+        .enumerate()
+    {
         let (a, t) = (ankle.index(), toe.index());
-        let (Some(la), Some(lt)) = (low(ankle), low(toe)) else {
-            continue;
+        let moved = |i: usize, j: usize| {
+            mocap[i][a]
+                .distance(mocap[j][a])
+                .max(mocap[i][t].distance(mocap[j][t]))
         };
-        let mut e: Vec<f64> = mocap
-            .iter()
-            .filter(|p| p[a].y <= la + 0.02 && p[t].y <= lt + 0.02)
-            .map(|p| elevation(p[t] - p[a]))
+        let planted = |i: usize| {
+            let j = if i > 0 { i - 1 } else { 1.min(mocap.len() - 1) };
+            support.touch[foot].get(i).is_some_and(|g| g.is_some()) && moved(i, j) <= still
+        };
+        let mut held: Vec<f64> = (0..mocap.len())
+            .filter(|&i| planted(i))
+            .map(|i| elevation(mocap[i][t] - mocap[i][a]))
             .filter(|e| e.is_finite())
             .collect();
-        if e.len() < 5 {
-            continue;
-        }
-        e.sort_by(f64::total_cmp);
+        held.sort_by(f64::total_cmp);
+        let held = (held.len() >= 5).then(|| held_elevation(&held));
+        let lowest = match (low(ankle), low(toe)) {
+            (Some(la), Some(lt)) => {
+                let mut e: Vec<f64> = mocap
+                    .iter()
+                    .filter(|p| p[a].y <= la + 0.02 && p[t].y <= lt + 0.02)
+                    .map(|p| elevation(p[t] - p[a]))
+                    .filter(|e| e.is_finite())
+                    .collect();
+                e.sort_by(f64::total_cmp);
+                (e.len() >= 5).then(|| e[e.len() / 2])
+            }
+            _ => None,
+        };
+        let flat = match (lowest, held) {
+            (Some(l), Some(h)) if (l - h).abs() > 5f64.to_radians() => h,
+            (Some(l), _) => l,
+            (None, Some(h)) => h,
+            (None, None) => continue,
+        };
         let f = r[t] - r[a];
         let axis = f.cross(DVec3::Y).normalize_or_zero();
         if axis == DVec3::ZERO || !f.is_finite() {
             continue;
         }
-        let turn = DQuat::from_axis_angle(axis, e[e.len() / 2] - elevation(f));
+        let turn = DQuat::from_axis_angle(axis, flat - elevation(f));
         out[t] = r[a] + turn * f;
     }
     out
+}
+
+/// The elevation a foot holds longest among `e` (radians, sorted
+/// ascending): the median of the largest set of them within 3° of one of
+/// them. A foot at rest on its support holds one elevation; rolling onto
+/// it (a heel strike) or off it (a heel rising about the toe, slowly
+/// enough to count as planted) passes through the others.
+fn held_elevation(e: &[f64]) -> f64 {
+    let band = 3f64.to_radians();
+    let (mut best, mut lo, mut hi) = (0, 0, 0);
+    let mut j = 0;
+    for i in 0..e.len() {
+        while e[i] - e[j] > band {
+            j += 1;
+        }
+        // e[j..=i] all within `band` below e[i].
+        if i + 1 - j > best {
+            (best, lo, hi) = (i + 1 - j, j, i + 1);
+        }
+    }
+    let w = &e[lo..hi];
+    w.get(w.len() / 2).copied().unwrap_or(0.0)
 }
 
 /// The rotation that makes a clip's ground level: a plane
