@@ -35,6 +35,12 @@
 //!   as the torso does, with the reference's foot bones set to the
 //!   elevation the clip's feet have when flat on its floor: a flat foot
 //!   gives the character's flat foot.
+//! - **Toes** ([`Toes`]): rigid with the foot for a surface whose foot
+//!   part turns with the ankle (the part-based deformation); for one that
+//!   turns the toes by the toe joint (`transfer`'s markers) they bend at
+//!   the ball where the ground stops them, and the body stands on the
+//!   ball or the heel rather than on a rigid toe tip below the ball
+//!   ([`retarget_toes`]).
 //! - **Root**: horizontal travel from the clip's first frame scaled by the
 //!   ratio of leg lengths (character / reference); height above the floor
 //!   scaled the same way. The clip's ground is first levelled
@@ -408,6 +414,42 @@ pub fn retarget_with_neutral(
     reference: &Reference,
     mocap: &[Pose],
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
+    retarget_toes(character, neutral, reference, mocap, Toes::Rigid)
+}
+
+/// How the surface a result drives moves its toes, which decides the
+/// sole the kernel stands on the ground.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Toes {
+    /// The toes move with the foot (the part-based deformation's foot
+    /// part turns with the ankle): the sole's toe tip, a quarter of the
+    /// foot's horizontal length beyond the toe joint, is carried by the
+    /// ankle and dips below the toe joint when the foot pitches down
+    /// onto its ball, so the body stands on it.
+    #[default]
+    Rigid,
+    /// The toes bend at the toe joint (the ball) where the ground stops
+    /// them, as a foot's do: the body stands on the toe joint or the heel
+    /// alone, and the toe joint's rotation turns the toes up about the
+    /// ball just enough to keep their tip on the foot's ground (level
+    /// at most). A foot in the air keeps its toes in line with it. For a
+    /// deformation that turns the toes by the toe joint's rotation (the
+    /// Confluent Motion markers of `transfer`).
+    Bending,
+}
+
+/// [`retarget_with_neutral`] with the character's toes moving as `toes`
+/// says: [`Toes::Rigid`] is [`retarget_with_neutral`]; with
+/// [`Toes::Bending`] a foot pitched down onto its ball stands on the ball,
+/// not on a rigid toe tip below it, and the toes' rotation
+/// (`G_toe`, the ankle's without bending) turns them up about the ball.
+pub fn retarget_toes(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    toes: Toes,
+) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
     if mocap.is_empty() {
         return Vec::new();
     }
@@ -498,7 +540,7 @@ pub fn retarget_with_neutral(
             if support.touch.iter().all(|f| f[i].is_none()) {
                 return None;
             }
-            let soles = foot_soles(character, t, g);
+            let soles = soles_of(character, t, g, toes);
             (0..2)
                 .filter_map(|f| {
                     let raised = (support.under[f][i]? - clip_floor) * s;
@@ -509,6 +551,18 @@ pub fn retarget_with_neutral(
         })
         .collect();
     let lift = interpolate_gaps(&fix);
+    if toes == Toes::Bending {
+        for (i, (t, g)) in out.iter_mut().enumerate() {
+            let d = lift[i];
+            for (f, sole) in rest_soles.iter().enumerate() {
+                let Some(u) = support.under[f][i] else {
+                    continue;
+                };
+                let ground = sole + (u - clip_floor) * s - d;
+                bend_toes(character, t, g, f, ground);
+            }
+        }
+    }
     for ((t, _), d) in out.iter_mut().zip(lift) {
         for p in t.iter_mut() {
             p.y += d;
@@ -530,19 +584,76 @@ fn sole_height(character: &Pose, t: &Pose, g: &[DQuat; Canonical::COUNT]) -> f64
 /// The lowest sole point of each foot (left, right) of the character
 /// posed as `t` with global rotations `g` (see [`sole_height`]).
 fn foot_soles(character: &Pose, t: &Pose, g: &[DQuat; Canonical::COUNT]) -> [f64; 2] {
-    [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)].map(|(a, k)| {
+    soles_of(character, t, g, Toes::Rigid)
+}
+
+/// The ankle and toe joints of each foot (left, right).
+const FEET: [(C, C); 2] = [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)];
+
+/// The sole's toe tip of a foot of `character` in its rest pose, from its
+/// toe joint: a quarter of the foot's horizontal length (ankle → toe
+/// joint) beyond it, at its height.
+fn toe_tip(character: &Pose, foot: usize) -> DVec3 {
+    let (a, k) = FEET[foot];
+    let f = character[k.index()] - character[a.index()];
+    DVec3::new(0.25 * f.x, 0.0, 0.25 * f.z)
+}
+
+/// The lowest sole point of each foot (left, right) of the character
+/// posed as `t` with global rotations `g`, its toes moving as `toes`
+/// says: the toe joint, a heel point under the ankle at the rest pose's
+/// toe height, and for rigid toes the toe tip ([`toe_tip`]) carried by
+/// the ankle (bending toes never take their tip below the toe joint's
+/// ground: [`bend_toes`]).
+fn soles_of(character: &Pose, t: &Pose, g: &[DQuat; Canonical::COUNT], toes: Toes) -> [f64; 2] {
+    [0, 1].map(|foot| {
+        let (a, k) = FEET[foot];
         let (a, k) = (a.index(), k.index());
         let heel = DVec3::new(
             0.0,
             character[k].y.min(character[a].y) - character[a].y,
             0.0,
         );
-        let f = character[k] - character[a];
-        let tip = DVec3::new(0.25 * f.x, 0.0, 0.25 * f.z);
-        [t[k].y, (t[a] + g[a] * heel).y, (t[k] + g[a] * tip).y]
+        let tip = match toes {
+            Toes::Rigid => (t[k] + g[a] * toe_tip(character, foot)).y,
+            Toes::Bending => f64::INFINITY,
+        };
+        [t[k].y, (t[a] + g[a] * heel).y, tip]
             .into_iter()
             .fold(f64::INFINITY, f64::min)
     })
+}
+
+/// Turns foot `foot`'s toes (its toe joint's rotation in `g`, the
+/// ankle's until now) up about the toe joint of `t` so that the toe tip
+/// ([`toe_tip`], carried by the ankle) is no lower than `ground` (the
+/// foot's ground, the character's metres): by the least angle in the
+/// vertical plane through the tip, and no further than level (a toe joint
+/// below its ground leaves the toes level). Toes whose tip is on or above
+/// the ground are left with the foot.
+fn bend_toes(
+    character: &Pose,
+    t: &Pose,
+    g: &mut [DQuat; Canonical::COUNT],
+    foot: usize,
+    ground: f64,
+) {
+    let (a, k) = FEET[foot];
+    let (a, k) = (a.index(), k.index());
+    let v = g[a] * toe_tip(character, foot);
+    let len = v.length();
+    if len.is_nan() || len <= 1e-12 || !ground.is_finite() || t[k].y + v.y >= ground {
+        return;
+    }
+    let axis = v.cross(DVec3::Y).normalize_or_zero();
+    if axis == DVec3::ZERO {
+        return;
+    }
+    let now = (v.y / len).clamp(-1.0, 1.0).asin();
+    let wanted = ((ground - t[k].y) / len).clamp(-1.0, 0.0).asin();
+    if wanted > now {
+        g[k] = (DQuat::from_axis_angle(axis, wanted - now) * g[a]).normalize();
+    }
 }
 
 /// Where a clip stands: its floor and, per frame, the height of the

@@ -8,7 +8,7 @@ use super::scan::PreparedScan;
 use super::source::{MarkerMotion, TemplateMarkers, from_skeleton, from_template};
 use crate::mesh::{Bounds, MeshSequence};
 use crate::rig::embed::Embedding;
-use crate::rig::retarget::{Reference, retarget};
+use crate::rig::retarget::{Reference, Toes, retarget_toes};
 use crate::skeleton::Pose;
 use glam::{DMat3, DQuat, DVec3};
 use std::collections::HashMap;
@@ -127,7 +127,8 @@ pub fn mocap_motion(
     let p = scan.mesh.positions();
     let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
     let rest: Pose = rig.joints.map(DVec3::from_array);
-    let frames = retarget(&rest, reference, poses);
+    // The markers on the toes turn with the toe joint: the toes bend.
+    let frames = retarget_toes(&rest, &rest, reference, poses, Toes::Bending);
     let bones: Vec<_> = used.iter().filter_map(|m| m.bone).collect();
     let cs: Vec<DVec3> = used
         .iter()
