@@ -350,6 +350,9 @@ fn rows() -> Vec<Row> {
     // Session 10: session 9's leftovers and the new-user walk; each row
     // exited 0, or printed clap's or a vaguer message, before its fix.
     r.extend(session10_rows());
+    // Session 11: session 10's leftovers and the new-user walk; each row
+    // exited 0, or printed clap's or a vaguer message, before its fix.
+    r.extend(session11_rows());
     // The sweep: verbs × malformed files, each message naming the file.
     let bvh_cut = {
         let t = walk_text();
@@ -840,7 +843,7 @@ fn session9_rows() -> Vec<Row> {
         row(
             "keyframe --time 1e6",
             "keyframe --db {db} --from walk:0 --to walk:150 --distance 5 --time 1e6 -o {d}/k.pc2",
-            &["time 1000000", "at most 3600 s"],
+            &["--time 1e6", "at most 3600 s"],
         ),
         row(
             "keyframe --horizon 1e7",
@@ -1078,6 +1081,65 @@ fn session10_rows() -> Vec<Row> {
             &["-o", "inside the clip folder", "--mocap-dir"],
         )
         .file("lib/walk.bvh", walk_text()),
+    ]
+}
+
+fn session11_rows() -> Vec<Row> {
+    vec![
+        // clap's "unexpected argument '-i' found" and three lines of usage:
+        // clap takes only digits, one dot and one exponent for a negative
+        // number.
+        row(
+            "retarget --t-skel -inf",
+            "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --t-skel -inf",
+            &["--t-skel", "-inf", "finite number"],
+        ),
+        row(
+            "retarget --w-retr -nan",
+            "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --w-retr -nan",
+            &["--w-retr", "-nan", "finite number"],
+        ),
+        row(
+            "blend --alpha -.5",
+            "blend {db}/walk.pc2:0 {db}/walk.pc2:1 --alpha -.5 -o {d}/o.obj",
+            &["--alpha", "-.5", "[0, 1]"],
+        ),
+        row(
+            "synth --fps -inf",
+            "synth --mesh {topo} --landmarks {lm} --mocap {walk} -o {d}/s --fps -inf",
+            &["--fps", "-inf", "frame rate"],
+        ),
+        row(
+            "transfer --marker-count -inf",
+            "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --marker-count -inf",
+            &["--marker-count", "-inf", "whole number"],
+        ),
+        row(
+            "web serve --port -1e3",
+            "web serve --db {db} --port -1e3",
+            &["--port", "-1e3", "whole number"],
+        ),
+        row(
+            "keyframe --w-dist -infinity",
+            "keyframe --db {db} --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/k.pc2 --w-dist -infinity",
+            &["--w-dist", "-infinity", "finite number"],
+        ),
+        row(
+            "keyframe --distances -1:5:1",
+            "keyframe --db {db} --from walk:0 --to walk:100 --grid --distances -1:5:1",
+            &["--distances", "-1"],
+        ),
+        // Printed back as 309 digits.
+        row(
+            "keyframe --distance 1e308",
+            "keyframe --db {db} --from walk:0 --to walk:100 --distance 1e308 --time 3 -o {d}/k.pc2",
+            &["--distance 1e308", "at most 100000 m"],
+        ),
+        row(
+            "keyframe --time 3,1e300 (one per segment)",
+            "keyframe --db {db} --from walk:0 --via walk:50 --to walk:100 --distance 3 --time 3,1e300 -o {d}/k.pc2",
+            &["--time 1e300", "at most 3600 s"],
+        ),
     ]
 }
 
