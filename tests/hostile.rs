@@ -1140,6 +1140,19 @@ fn session11_rows() -> Vec<Row> {
             "keyframe --db {db} --from walk:0 --via walk:50 --to walk:100 --distance 3 --time 3,1e300 -o {d}/k.pc2",
             &["--time 1e300", "at most 3600 s"],
         ),
+        // Exit 0: the report replaced the scan's landmarks.
+        row(
+            "transfer --report onto its --landmarks",
+            "transfer --scan {d}/db/topology.obj --landmarks {d}/db/landmarks.json --mocap {walk} -o {d}/o.pc2 --report {d}/db/landmarks.json",
+            &["--report", "landmarks.json", "overwrite the input"],
+        )
+        .with_db(),
+        row(
+            "transfer --save-markers onto its --rig-map",
+            "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --rig-map {d}/map.json --save-markers {d}/map.json",
+            &["--save-markers", "map.json", "overwrite the input"],
+        )
+        .file("map.json", b"{}".to_vec()),
     ]
 }
 
