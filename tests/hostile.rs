@@ -1153,6 +1153,14 @@ fn session11_rows() -> Vec<Row> {
             &["--save-markers", "map.json", "overwrite the input"],
         )
         .file("map.json", b"{}".to_vec()),
+        // "missing field `convention`" for the map the help describes
+        // (canonical joint → joint name), with a joint it does not know.
+        row(
+            "a flat rig map naming an unknown canonical joint",
+            "mocap rigmap {walk} --rig-map {d}/m.json -o {d}/o.json",
+            &["m.json", "Hips", "expected {\"pelvis\": \"Hips\""],
+        )
+        .file("m.json", br#"{"Hips": "Hips"}"#.to_vec()),
     ]
 }
 
