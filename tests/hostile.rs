@@ -1084,7 +1084,27 @@ fn session10_rows() -> Vec<Row> {
     ]
 }
 
+/// A one-triangle glTF whose buffer is the file `uri` (36 bytes: three
+/// points), and those bytes.
+fn gltf_with_buffer(uri: &str) -> (String, Vec<u8>) {
+    let json = gltf_triangle("").replace(
+        &format!("data:application/octet-stream;base64,{}", "A".repeat(48)),
+        uri,
+    );
+    let bin: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    (json, bin)
+}
+
 fn session11_rows() -> Vec<Row> {
+    let (up2, bin) = gltf_with_buffer("../../x.bin");
+    let (abs, _) = gltf_with_buffer("/etc/hostname");
+    let (file, _) = gltf_with_buffer("file:///etc/hostname");
+    let (http, _) = gltf_with_buffer("http://example.com/x.bin");
+    let (pct, _) = gltf_with_buffer("%2e%2e/%2E%2E/x.bin");
+    let (deep, _) = gltf_with_buffer("b/../../../x.bin");
     vec![
         // clap's "unexpected argument '-i' found" and three lines of usage:
         // clap takes only digits, one dot and one exponent for a negative
@@ -1161,7 +1181,79 @@ fn session11_rows() -> Vec<Row> {
             &["m.json", "Hips", "expected {\"pelvis\": \"Hips\""],
         )
         .file("m.json", br#"{"Hips": "Hips"}"#.to_vec()),
+        // Exit 0: each buffer below was read from outside the glTF's
+        // folder and its sibling folders.
+        row(
+            "a glTF buffer two folders above the glTF",
+            "mesh convert {d}/a/b/m.gltf {d}/o.obj",
+            &["m.gltf", "buffer 0", "'../../x.bin'", "more than one folder above"],
+        )
+        .file("a/b/m.gltf", up2)
+        .file("x.bin", bin.clone()),
+        row(
+            "a glTF buffer two folders above, percent-encoded",
+            "inspect {d}/a/b/m.gltf",
+            &["m.gltf", "buffer 0", "'%2e%2e/%2E%2E/x.bin'", "more than one folder above"],
+        )
+        .file("a/b/m.gltf", pct)
+        .file("x.bin", bin.clone()),
+        row(
+            "a glTF buffer climbing out through a subfolder",
+            "inspect {d}/a/b/m.gltf",
+            &["m.gltf", "buffer 0", "'b/../../../x.bin'", "more than one folder above"],
+        )
+        .file("a/b/m.gltf", deep)
+        .file("x.bin", bin),
+        row(
+            "a glTF buffer at an absolute path",
+            "inspect {d}/m.gltf",
+            &["m.gltf", "buffer 0", "'/etc/hostname'", "absolute path"],
+        )
+        .file("m.gltf", abs),
+        row(
+            "a glTF buffer as a file: URI",
+            "inspect {d}/m.gltf",
+            &["m.gltf", "buffer 0", "'file:///etc/hostname'", "scheme"],
+        )
+        .file("m.gltf", file),
+        row(
+            "a glTF buffer as an http: URI",
+            "inspect {d}/m.gltf",
+            &["m.gltf", "buffer 0", "'http://example.com/x.bin'", "scheme"],
+        )
+        .file("m.gltf", http),
     ]
+}
+
+/// The glTF buffer rule's other side: a buffer beside the glTF, below it,
+/// in a sibling folder (one `..`), or named with percent escapes is read.
+#[test]
+fn gltf_buffers_beside_below_and_in_a_sibling_folder_are_read() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    for (gltf, uri, bin) in [
+        ("m.gltf", "x.bin", "x.bin"),
+        ("m.gltf", "bufs/x.bin", "bufs/x.bin"),
+        ("a/m.gltf", "../bufs/x.bin", "bufs/x.bin"),
+        ("a/m.gltf", "./c/../../bufs/x%20y.bin", "bufs/x y.bin"),
+        ("a/m.gltf", "../b%C3%BC/x.bin", "bü/x.bin"),
+    ] {
+        let (json, bytes) = gltf_with_buffer(uri);
+        for (name, b) in [(gltf, json.into_bytes()), (bin, bytes)] {
+            let p = d.join(name);
+            std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+            std::fs::write(p, b).unwrap();
+        }
+        let r = common::run_cli(&["inspect", gltf], Some(d), &[]);
+        assert_eq!(r.code, Some(0), "{gltf} with buffer {uri}: {}", r.stderr);
+        // The buffer's bytes were read: the second point is (1, 0, 0).
+        assert!(
+            r.stdout.contains("vertices    3") && r.stdout.contains("[1.0000 1.0000 0.0000]"),
+            "{gltf} with buffer {uri}: {}",
+            r.stdout
+        );
+        std::fs::remove_file(d.join(gltf)).unwrap();
+    }
 }
 
 /// Regression (session 9 leftover): a missed `--heading` target was
