@@ -1256,6 +1256,49 @@ fn gltf_buffers_beside_below_and_in_a_sibling_folder_are_read() {
     }
 }
 
+/// A folder of OBJ frames is named once in the summary line, with its
+/// count and first and last frame: `mesh convert` listed all 180 frames
+/// joined by "and" (a line of 5 kB), `retarget` all of them by commas.
+#[test]
+fn a_folder_of_frames_is_summarised_in_one_short_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let f = fixture();
+    let walk = f.db.join("walk.pc2");
+    let r = common::run_cli(
+        &["mesh", "convert", walk.to_str().unwrap(), "frames"],
+        Some(d),
+        &[],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let line = r.stderr.lines().next().unwrap_or_default();
+    assert!(
+        line.contains("180 OBJ frames, frame_0000.obj .. frame_0179.obj") && line.len() < 200,
+        "{line}"
+    );
+    assert_eq!(std::fs::read_dir(d.join("frames")).unwrap().count(), 180);
+    let r = common::run_cli(
+        &[
+            "retarget",
+            "--db",
+            f.db.to_str().unwrap(),
+            "--mocap",
+            f.walk.to_str().unwrap(),
+            "-o",
+            "r",
+        ],
+        Some(d),
+        &[],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let all = format!("{}{}", r.stdout, r.stderr);
+    let line = all.lines().find(|l| l.contains(" -> ")).unwrap_or_default();
+    assert!(
+        line.contains("OBJ frames, frame_0000.obj ..") && line.len() < 300,
+        "{all}"
+    );
+}
+
 /// Regression (session 9 leftover): a missed `--heading` target was
 /// printed with its error but not flagged, while a distance or time
 /// missed by over 1 % was ("not met within 1 %"); now the text says

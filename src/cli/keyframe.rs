@@ -439,11 +439,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     s += &format!(
         "{} -> {}: {} at {} fps\n",
         r.keys.join(" -> "),
-        written
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
+        super::written_list(&written, ", "),
         super::count(r.frames, "frame"),
         fps
     );

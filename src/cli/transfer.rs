@@ -298,11 +298,7 @@ fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::
     let mut s = format!(
         "{} -> {}: {} frames at {} fps from {}\n",
         a.scan,
-        r.output
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
+        super::written_list(&r.output, ", "),
         r.frames,
         r.fps,
         r.source
