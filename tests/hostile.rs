@@ -1299,6 +1299,43 @@ fn a_folder_of_frames_is_summarised_in_one_short_line() {
     );
 }
 
+/// `inspect` of a play script names a time `play` refuses whatever the
+/// database (it printed "1 request over 1e308 s" as if the script were
+/// sound); a sound script has no problem line.
+#[test]
+fn inspect_names_a_play_script_time_that_play_refuses() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    for (text, want) in [
+        (
+            r#"[{"t": 1e308, "space": "x"}]"#,
+            Some("request 0: t = 1e308"),
+        ),
+        (
+            r#"[{"t": 0, "space": "x"}, {"t": -1, "space": "x"}]"#,
+            Some("request 1: t = -1"),
+        ),
+        (
+            r#"[{"t": 5, "space": "x"}, {"t": 2, "space": "x"}]"#,
+            Some("request 1: t = 2"),
+        ),
+        (r#"[{"t": 0, "space": "x"}, {"t": 2, "space": "x"}]"#, None),
+    ] {
+        std::fs::write(d.join("s.json"), text).unwrap();
+        let r = common::run_cli(&["inspect", "s.json"], Some(d), &[]);
+        assert_eq!(r.code, Some(0), "{text}: {}", r.stderr);
+        assert!(r.stdout.contains("a `play` script"), "{text}: {}", r.stdout);
+        match want {
+            Some(w) => assert!(
+                r.stdout.contains("problem: ") && r.stdout.contains(w),
+                "{text}: {}",
+                r.stdout
+            ),
+            None => assert!(!r.stdout.contains("problem"), "{text}: {}", r.stdout),
+        }
+    }
+}
+
 /// Regression (session 9 leftover): a missed `--heading` target was
 /// printed with its error but not flagged, while a distance or time
 /// missed by over 1 % was ("not met within 1 %"); now the text says
