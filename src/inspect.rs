@@ -523,6 +523,26 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
                 crate::parametric::script::short_number(last),
                 if spaces.is_empty() { "-".to_string() } else { spaces.join(", ") }
             ));
+            // The times `play` refuses whatever the database ("1 request
+            // over 1e308 s" was printed as if the script were sound).
+            use crate::parametric::script::{MAX_SECONDS, short_number};
+            let mut before = 0.0;
+            for (i, r) in a.iter().enumerate() {
+                let Some(t) = r["t"].as_f64() else {
+                    lines.push(format!(
+                        "problem: request {i}: no \"t\" (seconds); `play` refuses it"
+                    ));
+                    break;
+                };
+                if !(0.0..=MAX_SECONDS).contains(&t) || t < before {
+                    lines.push(format!(
+                        "problem: request {i}: t = {}: expected seconds in [0, {MAX_SECONDS}], in time order; `play` refuses it",
+                        short_number(t)
+                    ));
+                    break;
+                }
+                before = t;
+            }
         }
         "keyframe grid report" => {
             let keys: Vec<&str> = v["keys"]

@@ -350,6 +350,9 @@ fn rows() -> Vec<Row> {
     // Session 10: session 9's leftovers and the new-user walk; each row
     // exited 0, or printed clap's or a vaguer message, before its fix.
     r.extend(session10_rows());
+    // Session 11: session 10's leftovers and the new-user walk; each row
+    // exited 0, or printed clap's or a vaguer message, before its fix.
+    r.extend(session11_rows());
     // The sweep: verbs × malformed files, each message naming the file.
     let bvh_cut = {
         let t = walk_text();
@@ -840,7 +843,7 @@ fn session9_rows() -> Vec<Row> {
         row(
             "keyframe --time 1e6",
             "keyframe --db {db} --from walk:0 --to walk:150 --distance 5 --time 1e6 -o {d}/k.pc2",
-            &["time 1000000", "at most 3600 s"],
+            &["--time 1e6", "at most 3600 s"],
         ),
         row(
             "keyframe --horizon 1e7",
@@ -1079,6 +1082,258 @@ fn session10_rows() -> Vec<Row> {
         )
         .file("lib/walk.bvh", walk_text()),
     ]
+}
+
+/// A one-triangle glTF whose buffer is the file `uri` (36 bytes: three
+/// points), and those bytes.
+fn gltf_with_buffer(uri: &str) -> (String, Vec<u8>) {
+    let json = gltf_triangle("").replace(
+        &format!("data:application/octet-stream;base64,{}", "A".repeat(48)),
+        uri,
+    );
+    let bin: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    (json, bin)
+}
+
+fn session11_rows() -> Vec<Row> {
+    let (up2, bin) = gltf_with_buffer("../../x.bin");
+    let (abs, _) = gltf_with_buffer("/etc/hostname");
+    let (file, _) = gltf_with_buffer("file:///etc/hostname");
+    let (http, _) = gltf_with_buffer("http://example.com/x.bin");
+    let (pct, _) = gltf_with_buffer("%2e%2e/%2E%2E/x.bin");
+    let (deep, _) = gltf_with_buffer("b/../../../x.bin");
+    vec![
+        // clap's "unexpected argument '-i' found" and three lines of usage:
+        // clap takes only digits, one dot and one exponent for a negative
+        // number.
+        row(
+            "retarget --t-skel -inf",
+            "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --t-skel -inf",
+            &["--t-skel", "-inf", "finite number"],
+        ),
+        row(
+            "retarget --w-retr -nan",
+            "retarget --db {db} --mocap {walk} -o {d}/o.pc2 --w-retr -nan",
+            &["--w-retr", "-nan", "finite number"],
+        ),
+        row(
+            "blend --alpha -.5",
+            "blend {db}/walk.pc2:0 {db}/walk.pc2:1 --alpha -.5 -o {d}/o.obj",
+            &["--alpha", "-.5", "[0, 1]"],
+        ),
+        row(
+            "synth --fps -inf",
+            "synth --mesh {topo} --landmarks {lm} --mocap {walk} -o {d}/s --fps -inf",
+            &["--fps", "-inf", "frame rate"],
+        ),
+        row(
+            "transfer --marker-count -inf",
+            "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --marker-count -inf",
+            &["--marker-count", "-inf", "whole number"],
+        ),
+        row(
+            "web serve --port -1e3",
+            "web serve --db {db} --port -1e3",
+            &["--port", "-1e3", "whole number"],
+        ),
+        row(
+            "keyframe --w-dist -infinity",
+            "keyframe --db {db} --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/k.pc2 --w-dist -infinity",
+            &["--w-dist", "-infinity", "finite number"],
+        ),
+        row(
+            "keyframe --distances -1:5:1",
+            "keyframe --db {db} --from walk:0 --to walk:100 --grid --distances -1:5:1",
+            &["--distances", "-1"],
+        ),
+        // Printed back as 309 digits.
+        row(
+            "keyframe --distance 1e308",
+            "keyframe --db {db} --from walk:0 --to walk:100 --distance 1e308 --time 3 -o {d}/k.pc2",
+            &["--distance 1e308", "at most 100000 m"],
+        ),
+        row(
+            "keyframe --time 3,1e300 (one per segment)",
+            "keyframe --db {db} --from walk:0 --via walk:50 --to walk:100 --distance 3 --time 3,1e300 -o {d}/k.pc2",
+            &["--time 1e300", "at most 3600 s"],
+        ),
+        // Exit 0: the report replaced the scan's landmarks.
+        row(
+            "transfer --report onto its --landmarks",
+            "transfer --scan {d}/db/topology.obj --landmarks {d}/db/landmarks.json --mocap {walk} -o {d}/o.pc2 --report {d}/db/landmarks.json",
+            &["--report", "landmarks.json", "overwrite the input"],
+        )
+        .with_db(),
+        row(
+            "transfer --save-markers onto its --rig-map",
+            "transfer --scan {topo} --landmarks {lm} --mocap {walk} -o {d}/o.pc2 --rig-map {d}/map.json --save-markers {d}/map.json",
+            &["--save-markers", "map.json", "overwrite the input"],
+        )
+        .file("map.json", b"{}".to_vec()),
+        // "missing field `convention`" for the map the help describes
+        // (canonical joint → joint name), with a joint it does not know.
+        row(
+            "a flat rig map naming an unknown canonical joint",
+            "mocap rigmap {walk} --rig-map {d}/m.json -o {d}/o.json",
+            &["m.json", "Hips", "expected {\"pelvis\": \"Hips\""],
+        )
+        .file("m.json", br#"{"Hips": "Hips"}"#.to_vec()),
+        // Exit 0: each buffer below was read from outside the glTF's
+        // folder and its sibling folders.
+        row(
+            "a glTF buffer two folders above the glTF",
+            "mesh convert {d}/a/b/m.gltf {d}/o.obj",
+            &["m.gltf", "buffer 0", "'../../x.bin'", "more than one folder above"],
+        )
+        .file("a/b/m.gltf", up2)
+        .file("x.bin", bin.clone()),
+        row(
+            "a glTF buffer two folders above, percent-encoded",
+            "inspect {d}/a/b/m.gltf",
+            &["m.gltf", "buffer 0", "'%2e%2e/%2E%2E/x.bin'", "more than one folder above"],
+        )
+        .file("a/b/m.gltf", pct)
+        .file("x.bin", bin.clone()),
+        row(
+            "a glTF buffer climbing out through a subfolder",
+            "inspect {d}/a/b/m.gltf",
+            &["m.gltf", "buffer 0", "'b/../../../x.bin'", "more than one folder above"],
+        )
+        .file("a/b/m.gltf", deep)
+        .file("x.bin", bin),
+        row(
+            "a glTF buffer at an absolute path",
+            "inspect {d}/m.gltf",
+            &["m.gltf", "buffer 0", "'/etc/hostname'", "absolute path"],
+        )
+        .file("m.gltf", abs),
+        row(
+            "a glTF buffer as a file: URI",
+            "inspect {d}/m.gltf",
+            &["m.gltf", "buffer 0", "'file:///etc/hostname'", "scheme"],
+        )
+        .file("m.gltf", file),
+        row(
+            "a glTF buffer as an http: URI",
+            "inspect {d}/m.gltf",
+            &["m.gltf", "buffer 0", "'http://example.com/x.bin'", "scheme"],
+        )
+        .file("m.gltf", http),
+    ]
+}
+
+/// The glTF buffer rule's other side: a buffer beside the glTF, below it,
+/// in a sibling folder (one `..`), or named with percent escapes is read.
+#[test]
+fn gltf_buffers_beside_below_and_in_a_sibling_folder_are_read() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    for (gltf, uri, bin) in [
+        ("m.gltf", "x.bin", "x.bin"),
+        ("m.gltf", "bufs/x.bin", "bufs/x.bin"),
+        ("a/m.gltf", "../bufs/x.bin", "bufs/x.bin"),
+        ("a/m.gltf", "./c/../../bufs/x%20y.bin", "bufs/x y.bin"),
+        ("a/m.gltf", "../b%C3%BC/x.bin", "bü/x.bin"),
+    ] {
+        let (json, bytes) = gltf_with_buffer(uri);
+        for (name, b) in [(gltf, json.into_bytes()), (bin, bytes)] {
+            let p = d.join(name);
+            std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+            std::fs::write(p, b).unwrap();
+        }
+        let r = common::run_cli(&["inspect", gltf], Some(d), &[]);
+        assert_eq!(r.code, Some(0), "{gltf} with buffer {uri}: {}", r.stderr);
+        // The buffer's bytes were read: the second point is (1, 0, 0).
+        assert!(
+            r.stdout.contains("vertices    3") && r.stdout.contains("[1.0000 1.0000 0.0000]"),
+            "{gltf} with buffer {uri}: {}",
+            r.stdout
+        );
+        std::fs::remove_file(d.join(gltf)).unwrap();
+    }
+}
+
+/// A folder of OBJ frames is named once in the summary line, with its
+/// count and first and last frame: `mesh convert` listed all 180 frames
+/// joined by "and" (a line of 5 kB), `retarget` all of them by commas.
+#[test]
+fn a_folder_of_frames_is_summarised_in_one_short_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let f = fixture();
+    let walk = f.db.join("walk.pc2");
+    let r = common::run_cli(
+        &["mesh", "convert", walk.to_str().unwrap(), "frames"],
+        Some(d),
+        &[],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let line = r.stderr.lines().next().unwrap_or_default();
+    assert!(
+        line.contains("180 OBJ frames, frame_0000.obj .. frame_0179.obj") && line.len() < 200,
+        "{line}"
+    );
+    assert_eq!(std::fs::read_dir(d.join("frames")).unwrap().count(), 180);
+    let r = common::run_cli(
+        &[
+            "retarget",
+            "--db",
+            f.db.to_str().unwrap(),
+            "--mocap",
+            f.walk.to_str().unwrap(),
+            "-o",
+            "r",
+        ],
+        Some(d),
+        &[],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let all = format!("{}{}", r.stdout, r.stderr);
+    let line = all.lines().find(|l| l.contains(" -> ")).unwrap_or_default();
+    assert!(
+        line.contains("OBJ frames, frame_0000.obj ..") && line.len() < 300,
+        "{all}"
+    );
+}
+
+/// `inspect` of a play script names a time `play` refuses whatever the
+/// database (it printed "1 request over 1e308 s" as if the script were
+/// sound); a sound script has no problem line.
+#[test]
+fn inspect_names_a_play_script_time_that_play_refuses() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    for (text, want) in [
+        (
+            r#"[{"t": 1e308, "space": "x"}]"#,
+            Some("request 0: t = 1e308"),
+        ),
+        (
+            r#"[{"t": 0, "space": "x"}, {"t": -1, "space": "x"}]"#,
+            Some("request 1: t = -1"),
+        ),
+        (
+            r#"[{"t": 5, "space": "x"}, {"t": 2, "space": "x"}]"#,
+            Some("request 1: t = 2"),
+        ),
+        (r#"[{"t": 0, "space": "x"}, {"t": 2, "space": "x"}]"#, None),
+    ] {
+        std::fs::write(d.join("s.json"), text).unwrap();
+        let r = common::run_cli(&["inspect", "s.json"], Some(d), &[]);
+        assert_eq!(r.code, Some(0), "{text}: {}", r.stderr);
+        assert!(r.stdout.contains("a `play` script"), "{text}: {}", r.stdout);
+        match want {
+            Some(w) => assert!(
+                r.stdout.contains("problem: ") && r.stdout.contains(w),
+                "{text}: {}",
+                r.stdout
+            ),
+            None => assert!(!r.stdout.contains("problem"), "{text}: {}", r.stdout),
+        }
+    }
 }
 
 /// Regression (session 9 leftover): a missed `--heading` target was

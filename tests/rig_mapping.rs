@@ -6,6 +6,8 @@
 
 mod common;
 
+use common::skel::{Suite, expected, map_errors, mirror, skel_to_bvh, swap_side};
+
 use glam::{DQuat, DVec3};
 use proptest::prelude::*;
 use surfmotion::mocap::bvh::{BvhOptions, format_bvh, parse_bvh};
@@ -590,36 +592,6 @@ fn toeless_and_headless_skeletons_derive_the_missing_joints() {
             }
         }
     }
-}
-
-fn swap_side(c: Canonical) -> Canonical {
-    let n = c.name();
-    let o = if let Some(r) = n.strip_prefix("l_") {
-        format!("r_{r}")
-    } else if let Some(r) = n.strip_prefix("r_") {
-        format!("l_{r}")
-    } else {
-        n.to_string()
-    };
-    Canonical::from_name(&o).unwrap_or(c)
-}
-
-fn mirror(c: &Clip) -> Clip {
-    let m = DVec3::new(-1.0, 1.0, 1.0);
-    let mut out = c.clone();
-    for j in &mut out.joints {
-        j.offset *= m;
-        if let Some(t) = &mut j.tail {
-            *t *= m;
-        }
-    }
-    for t in &mut out.translations {
-        *t *= m;
-    }
-    for q in &mut out.rotations {
-        *q = DQuat::from_xyzw(q.x, -q.y, -q.z, q.w);
-    }
-    out
 }
 
 #[test]
@@ -2147,110 +2119,6 @@ fn an_amc_clip_and_its_third_party_bvh_conversion_map_alike() {
 
 // ------------------------------------------------- real mocap suites (issue 17)
 
-/// A BVH from a compact skeleton description (`tests/fixtures/suites/*.skel`):
-/// `#` comment lines (the source each family was learnt from), an `order`
-/// line (the rotation channels), an optional `all6` line (six channels on
-/// every joint, as Perception Neuron writes them), then one joint per line,
-/// its depth the number of leading spaces: `name x y z [| ex ey ez] [@ r1
-/// r2 r3] [% order]` (the offset, an optional End Site, optional rotation
-/// channel values for the frames, and an optional rotation channel order
-/// of its own, else the `order` line's; names may contain spaces). The motion is two frames of the rest pose (every rotation zero
-/// unless given, the root at its offset), so only the hierarchy and the
-/// rest geometry decide, unless rotations stand up a rest that does not
-/// stand (LAFAN1).
-fn skel_to_bvh(skel: &str) -> String {
-    let mut order = "Zrotation Xrotation Yrotation".to_string();
-    let mut all6 = false;
-    type Row = (usize, String, String, Option<String>, String, String);
-    let mut rows: Vec<Row> = Vec::new();
-    for line in skel.lines() {
-        let t = line.trim();
-        if t.is_empty() || t.starts_with('#') {
-            continue;
-        }
-        if let Some(o) = t.strip_prefix("order ") {
-            order = o.trim().to_string();
-            continue;
-        }
-        if t == "all6" {
-            all6 = true;
-            continue;
-        }
-        let depth = line.len() - line.trim_start_matches(' ').len();
-        let (t, own) = match t.split_once('%') {
-            Some((b, o)) => (b.trim(), o.trim().to_string()),
-            None => (t, order.clone()),
-        };
-        let (t, rot) = match t.split_once('@') {
-            Some((b, r)) => (b.trim(), r.trim().to_string()),
-            None => (t, "0 0 0".to_string()),
-        };
-        let (body, end) = match t.split_once('|') {
-            Some((b, e)) => (b.trim(), Some(e.trim().to_string())),
-            None => (t, None),
-        };
-        let toks: Vec<&str> = body.split_whitespace().collect();
-        let k = toks.len() - 3;
-        rows.push((
-            depth,
-            toks[..k].join(" "),
-            toks[k..].join(" "),
-            end,
-            rot,
-            own,
-        ));
-    }
-    let mut out = vec!["HIERARCHY".to_string()];
-    let mut open: Vec<(usize, Option<String>)> = Vec::new();
-    let close = |open: &mut Vec<(usize, Option<String>)>, out: &mut Vec<String>, to: usize| {
-        while open.len() > to {
-            let (d, end) = open.pop().unwrap();
-            let ind = "  ".repeat(d);
-            if let Some(e) = end {
-                out.push(format!(
-                    "{ind}  End Site\n{ind}  {{\n{ind}    OFFSET {e}\n{ind}  }}"
-                ));
-            }
-            out.push(format!("{ind}}}"));
-        }
-    };
-    let mut frame = Vec::new();
-    for (d, name, off, end, rot, order) in &rows {
-        close(&mut open, &mut out, *d);
-        let ind = "  ".repeat(*d);
-        let kw = if *d == 0 { "ROOT" } else { "JOINT" };
-        out.push(format!("{ind}{kw} {name}\n{ind}{{\n{ind}  OFFSET {off}"));
-        if *d == 0 || all6 {
-            out.push(format!(
-                "{ind}  CHANNELS 6 Xposition Yposition Zposition {order}"
-            ));
-            frame.push(format!("{off} {rot}"));
-        } else {
-            out.push(format!("{ind}  CHANNELS 3 {order}"));
-            frame.push(rot.clone());
-        }
-        open.push((*d, end.clone()));
-    }
-    close(&mut open, &mut out, 0);
-    let frame = frame.join(" ");
-    format!(
-        "{}\nMOTION\nFrames: 2\nFrame Time: 0.0333333\n{frame}\n{frame}\n",
-        out.join("\n")
-    )
-}
-
-/// A family of real-world humanoid BVH: its skeleton, the convention name
-/// `rigmap` must report, where left/right must come from, and the full
-/// canonical map (`canonical=joint` separated by `;`, `~` for a joint the
-/// map derives: a toe from the ankle's End Site, a head from the neck's).
-struct Suite {
-    name: &'static str,
-    skel: &'static str,
-    convention: &'static str,
-    sides: &'static str,
-    map: &'static str,
-}
-
 const BY_N: &str = surfmotion::rig::BY_NAMES;
 const BY_S: &str = surfmotion::rig::BY_STRUCTURE;
 
@@ -2528,48 +2396,6 @@ fn suite_clip(name: &str, skel: &str) -> Clip {
     .unwrap_or_else(|e| panic!("{name}: {e}\n{text}"))
 }
 
-/// The expected map of a suite: canonical joint → joint name, `None` for
-/// a derived joint.
-fn expected(s: &Suite) -> Vec<(Canonical, Option<String>)> {
-    let rows: Vec<(Canonical, Option<String>)> = s
-        .map
-        .split(';')
-        .map(|kv| {
-            let (k, v) = kv.split_once('=').unwrap();
-            let c = Canonical::from_name(k.trim()).unwrap_or_else(|| panic!("{k}"));
-            let v = v.trim();
-            (c, (v != "~").then(|| v.to_string()))
-        })
-        .collect();
-    assert_eq!(rows.len(), Canonical::COUNT, "{}", s.name);
-    rows
-}
-
-/// What differs between a detection and `want` (joint names, derived
-/// joints), one line per canonical joint.
-fn map_errors(d: &surfmotion::rig::Detection, want: &[(Canonical, Option<String>)]) -> Vec<String> {
-    let mut out = Vec::new();
-    for (c, name) in want {
-        let got = d.map.joints.get(c);
-        let ok = match name {
-            Some(n) => got == Some(n),
-            None => got.is_none() && d.map.derived.contains_key(c),
-        };
-        if !ok {
-            out.push(format!(
-                "{} = {} (want {})",
-                c.name(),
-                got.map_or("derived/missing", String::as_str),
-                name.as_deref().unwrap_or("derived")
-            ));
-        }
-    }
-    if !d.missing.is_empty() {
-        out.push(format!("missing {:?}", d.missing));
-    }
-    out
-}
-
 /// Every real-world family maps with no rig map to the full canonical map
 /// (left and right included), names the right convention (a known one only
 /// when it is one: Xsens MVN's names are not CMU's 3dsMax BVH), says where
@@ -2621,7 +2447,7 @@ fn real_suites_mirrored_map_left_and_right_from_geometry() {
             }
         };
         let by_names = s.sides == "from names";
-        let want: Vec<(Canonical, Option<String>)> = expected(s)
+        let want: Vec<(Canonical, Vec<String>)> = expected(s)
             .into_iter()
             .map(|(k, v)| (if by_names { k } else { swap_side(k) }, v))
             .collect();

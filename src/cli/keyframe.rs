@@ -169,10 +169,10 @@ pub struct Args {
     #[arg(long)]
     pub grid: bool,
     /// Grid distances (metres), A:B:STEP or a comma list.
-    #[arg(long, default_value = DEFAULT_DISTANCES)]
+    #[arg(long, default_value = DEFAULT_DISTANCES, allow_hyphen_values = true)]
     pub distances: String,
     /// Grid times (seconds), A:B:STEP or a comma list.
-    #[arg(long, default_value = DEFAULT_TIMES)]
+    #[arg(long, default_value = DEFAULT_TIMES, allow_hyphen_values = true)]
     pub times: String,
     /// With --grid: a heat-map of the errors over the grid (.svg with
     /// axes and legend, or .png).
@@ -238,6 +238,12 @@ fn grid_targets(a: &Args) -> anyhow::Result<(Vec<f64>, Vec<f64>)> {
         ("--times", &ts, MAX_TARGET_SECONDS, "s"),
     ] {
         if let Some(x) = v.iter().find(|x| **x > max) {
+            // `{x}` of 1e308 is 309 digits.
+            let x = if *x < 1e9 {
+                x.to_string()
+            } else {
+                format!("{x:e}")
+            };
             anyhow::bail!(
                 "{flag} {x}: at most {max} {unit} (the search's horizon grows with the target)"
             );
@@ -246,12 +252,27 @@ fn grid_targets(a: &Args) -> anyhow::Result<(Vec<f64>, Vec<f64>)> {
     Ok((ds, ts))
 }
 
+/// `--distance`/`--time`: a number or a comma list. A value above the
+/// search's bound is refused here, quoted as typed (`--distance 1e308` was
+/// printed back as 309 digits).
 fn numbers(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
+    use surfmotion::keyframe::{MAX_TARGET_METRES, MAX_TARGET_SECONDS};
+    let (max, unit) = if what == "distance" {
+        (MAX_TARGET_METRES, "m")
+    } else {
+        (MAX_TARGET_SECONDS, "s")
+    };
     s.split(',')
         .map(|x| {
-            x.trim()
-                .parse::<f64>()
-                .map_err(|_| anyhow::anyhow!("--{what} '{s}': expected a number or a comma list"))
+            let v = x.trim().parse::<f64>().map_err(|_| {
+                anyhow::anyhow!("--{what} '{s}': expected a number or a comma list")
+            })?;
+            anyhow::ensure!(
+                v.is_nan() || v <= max,
+                "--{what} {}: at most {max} {unit} (the search's horizon grows with the target)",
+                x.trim()
+            );
+            Ok(v)
         })
         .collect()
 }
@@ -418,11 +439,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     s += &format!(
         "{} -> {}: {} at {} fps\n",
         r.keys.join(" -> "),
-        written
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
+        super::written_list(&written, ", "),
         super::count(r.frames, "frame"),
         fps
     );

@@ -112,10 +112,9 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 });
                 return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
             }
-            let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
             crate::errln!(
                 "wrote {}: {}, {}, {}",
-                names.join(" and "),
+                super::written_list(&files, " and "),
                 super::count(seq.mesh().vertex_count(), "vertex"),
                 super::count(seq.mesh().triangle_count(), "triangle"),
                 super::count(seq.frame_count(), "frame")

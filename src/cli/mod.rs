@@ -360,16 +360,48 @@ pub fn count(n: usize, noun: &str) -> String {
 
 /// Every option of every verb takes negative numbers as values, so that
 /// `--fps -30` reaches the option's parser ("expected a frame rate") instead
-/// of being read as a flag `-3` (issue 18, item 17).
+/// of being read as a flag `-3` (issue 18, item 17). A numeric option (one
+/// value, parsed as a number) takes any value beginning with `-`, so that
+/// `--t-skel -inf`, `-nan` or `-.5` reach its check too instead of clap's
+/// "unexpected argument '-i'" (clap counts only digits, one dot and one
+/// exponent as a negative number).
 fn allow_negative_numbers(cmd: clap::Command) -> clap::Command {
     cmd.mut_args(|a| {
-        if a.get_action().takes_values() {
-            a.allow_negative_numbers(true)
-        } else {
+        if !a.get_action().takes_values() {
             a
+        } else if is_numeric_option(&a) {
+            a.allow_hyphen_values(true)
+        } else {
+            a.allow_negative_numbers(true)
         }
     })
     .mut_subcommands(allow_negative_numbers)
+}
+
+/// An option (not a positional) that takes one value parsed as a number.
+/// Options taking a list stay as they are, so `--frames 1,2 --out x` still
+/// ends the list at `--out`.
+fn is_numeric_option(a: &clap::Arg) -> bool {
+    use std::any::TypeId;
+    let one_value = a
+        .get_num_args()
+        .is_none_or(|n| n.max_values() == 1 && n.min_values() == 1);
+    let t = a.get_value_parser().type_id();
+    let numeric = [
+        TypeId::of::<f64>(),
+        TypeId::of::<f32>(),
+        TypeId::of::<usize>(),
+        TypeId::of::<u64>(),
+        TypeId::of::<u32>(),
+        TypeId::of::<u16>(),
+        TypeId::of::<u8>(),
+        TypeId::of::<i64>(),
+        TypeId::of::<i32>(),
+        TypeId::of::<isize>(),
+    ]
+    .into_iter()
+    .any(|n| t == n);
+    a.get_long().is_some() && one_value && numeric && a.get_value_delimiter().is_none()
 }
 
 /// One line for a value an option does not take: the option, the value
@@ -585,6 +617,30 @@ pub fn refuse_colliding(inputs: &[PathBuf], outputs: &[(&str, PathBuf)]) -> anyh
         }
     }
     Ok(())
+}
+
+/// The files a mesh output wrote, for a summary line: each named, except
+/// a folder of OBJ frames, named once with its count and first and last
+/// frame (`mesh convert x.pc2 frames` listed all 180 frames joined by
+/// "and", a line of 5 kB).
+pub fn written_list(files: &[PathBuf], sep: &str) -> String {
+    let name = |p: &PathBuf| p.display().to_string();
+    let folder = files.first().and_then(|f| f.parent());
+    let frames = files.len() > 2
+        && files.iter().all(|f| {
+            f.parent() == folder && f.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+        });
+    match (frames, folder, files.first(), files.last()) {
+        (true, Some(dir), Some(a), Some(b)) => format!(
+            "{}{} ({} OBJ frames, {} .. {})",
+            dir.display(),
+            std::path::MAIN_SEPARATOR,
+            files.len(),
+            a.file_name().unwrap_or_default().to_string_lossy(),
+            b.file_name().unwrap_or_default().to_string_lossy()
+        ),
+        _ => files.iter().map(name).collect::<Vec<_>>().join(sep),
+    }
 }
 
 /// The files `-o OUT` writes (a point cache's topology OBJ beside it),

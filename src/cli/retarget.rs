@@ -216,11 +216,7 @@ fn print_report(
     let mut s = format!(
         "{} -> {}: {} at {} fps ({} rig)\n",
         a.mocap.display(),
-        written
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
+        super::written_list(&written, ", "),
         super::count(r.frames, "frame"),
         fps,
         convention

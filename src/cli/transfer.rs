@@ -158,9 +158,28 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
     inputs.extend(a.mocap.clone());
+    // `--report LANDMARKS.json` replaced the scan's landmarks with the
+    // report and exited 0: every file read is an input.
+    if let Some(t) = &a.truth {
+        inputs.extend(surfmotion::mesh::io::input_files(t, None));
+    }
+    inputs.extend(
+        [
+            &a.landmarks,
+            &a.markers,
+            &a.template_markers,
+            &a.template_landmarks,
+            &a.run.clip.asf,
+            &a.run.clip.rig_map,
+        ]
+        .into_iter()
+        .flatten()
+        .cloned(),
+    );
     let mut outputs = super::mesh_outputs(&a.output);
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
+    outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
     super::refuse_colliding(&inputs, &outputs)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
     super::check_folder_output(&a.output, a.force)?;
@@ -279,11 +298,7 @@ fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::
     let mut s = format!(
         "{} -> {}: {} frames at {} fps from {}\n",
         a.scan,
-        r.output
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
+        super::written_list(&r.output, ", "),
         r.frames,
         r.fps,
         r.source

@@ -1,5 +1,5 @@
 use crate::fsutil::{FileError, FsError};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Errors of mesh construction, readers and writers: the shared file-error
 /// shape ([`FileError`]: the file could not be read, an error at a line of a
@@ -13,6 +13,20 @@ pub enum MeshError {
     /// A mesh that breaks an invariant (index out of range, non-finite value).
     #[error("{0}")]
     Topology(#[from] TopologyError),
+    /// A glTF buffer URI the reader does not follow: absolute, with a
+    /// scheme other than `data:`, or climbing more than one folder above
+    /// the glTF's (the rule: `mesh::io::gltf`, README "Mesh formats").
+    #[error("{}: buffer {buffer}: URI '{uri}' {why}", gltf.display())]
+    BufferUri {
+        /// The glTF file.
+        gltf: PathBuf,
+        /// The buffer's index.
+        buffer: usize,
+        /// The URI as written in the file.
+        uri: String,
+        /// Why it is not followed.
+        why: String,
+    },
 }
 
 impl From<FsError> for MeshError {

@@ -690,9 +690,31 @@ impl RigMap {
             path: path.into(),
             msg: e.source.to_string(),
         })?;
-        serde_json::from_str(&text).map_err(|e| RigError::File {
+        // The help says "canonical joint → joint name": a flat object
+        // `{"pelvis": "Hips", ...}` is read as the `joints` of a map (it
+        // gave "missing field `convention`").
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| RigError::File {
             path: path.into(),
             msg: e.to_string(),
+        })?;
+        let flat = v
+            .as_object()
+            .is_some_and(|o| !o.contains_key("joints") && o.values().all(|x| x.is_string()));
+        let parsed = if flat {
+            serde_json::from_value::<BTreeMap<Canonical, String>>(v).map(|joints| RigMap {
+                convention: "rig map".into(),
+                joints,
+                derived: BTreeMap::new(),
+            })
+        } else {
+            serde_json::from_value(v)
+        };
+        parsed.map_err(|e| RigError::File {
+            path: path.into(),
+            msg: format!(
+                "{e}; expected {{\"pelvis\": \"Hips\", ...}} or the form `mocap rigmap -o` \
+                 writes, {{\"convention\": \"...\", \"joints\": {{\"pelvis\": \"Hips\", ...}}}}"
+            ),
         })
     }
 

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 pub mod gaits;
+pub mod skel;
 
 /// Where the shared data folder is looked for: `$SURFMOTION_DATA`, else
 /// `../shared/data` beside the package (the same rule as `build.rs`).

@@ -379,8 +379,7 @@ fn load_buffers(
                             )
                         })?
                 } else {
-                    let rel = uri.replace("%20", " ");
-                    let p = path.parent().unwrap_or(Path::new(".")).join(rel);
+                    let p = buffer_path(path, b.index(), uri)?;
                     // Named with the glTF that refers to it ("missing.bin:
                     // No such file" named neither the .gltf nor the buffer).
                     crate::fsutil::read_bytes(&p).map_err(|e| {
@@ -403,6 +402,89 @@ fn load_buffers(
         out.push(data);
     }
     Ok(out)
+}
+
+/// The file a buffer's external URI names, or why it is not followed.
+///
+/// The rule (README, "Mesh formats"): a buffer URI is a relative reference
+/// (glTF 2.0 spec, 2.8 "URIs"), percent-decoded and resolved against the
+/// glTF's own folder. It may name a file in that folder, below it, or in a
+/// sibling folder (`../buffers/x.bin`: one `..` above the glTF's folder at
+/// most, counted after `a/../` pairs cancel). Refused, with the glTF, the
+/// buffer and the URI named: an absolute path (`/x.bin`, `C:\x.bin`,
+/// `\\server\x`), any scheme but `data:` (`file://`, `http://`), and a
+/// path climbing two or more folders above the glTF's (`../../x.bin`). A
+/// downloaded glTF thus cannot make a conversion read, and write into its
+/// output, a file elsewhere on the disk.
+fn buffer_path(gltf: &Path, buffer: usize, uri: &str) -> Result<std::path::PathBuf, MeshError> {
+    use std::path::PathBuf;
+    let refuse = |why: &str| MeshError::BufferUri {
+        gltf: gltf.to_path_buf(),
+        buffer,
+        uri: uri.to_string(),
+        why: why.to_string(),
+    };
+    // A scheme: letters, digits, '+', '-', '.' before the first ':',
+    // starting with a letter (RFC 3986, 3.1). One letter is a drive.
+    if let Some((scheme, _)) = uri.split_once(':')
+        && scheme.starts_with(|c: char| c.is_ascii_alphabetic())
+        && scheme
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.'))
+    {
+        return Err(if scheme.len() == 1 {
+            refuse("is an absolute path (a drive letter); name the file relative to the glTF")
+        } else {
+            refuse("has a scheme; only data: URIs and paths relative to the glTF are read")
+        });
+    }
+    let decoded = percent_decode(uri)
+        .ok_or_else(|| refuse("has a bad percent escape (expected %XX of UTF-8 bytes)"))?;
+    if decoded.starts_with(['/', '\\']) {
+        return Err(refuse(
+            "is an absolute path; name the file relative to the glTF",
+        ));
+    }
+    // The path with `a/..` pairs cancelled (lexically, as the URI reads:
+    // `a/c/../x.bin` needs no folder `c`), and how many `..` lead it.
+    let mut parts: Vec<&str> = Vec::new();
+    for part in decoded.split(['/', '\\']) {
+        match part {
+            "" | "." => {}
+            ".." if parts.last().is_some_and(|p| *p != "..") => {
+                parts.pop();
+            }
+            p => parts.push(p),
+        }
+    }
+    let up = parts.iter().take_while(|p| **p == "..").count();
+    let rel: PathBuf = parts.iter().collect();
+    if up > 1 {
+        return Err(refuse(
+            "climbs more than one folder above the glTF's folder; \
+             copy the buffer beside the glTF, or into a folder next to it",
+        ));
+    }
+    Ok(gltf.parent().unwrap_or(Path::new(".")).join(rel))
+}
+
+/// `%XX` escapes decoded (RFC 3986, 2.1); `None` for a bad escape or bytes
+/// that are not UTF-8.
+fn percent_decode(s: &str) -> Option<String> {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' {
+            let hex = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
 }
 
 /// A point through a node's world matrix (f32 entries, f64 arithmetic; the
