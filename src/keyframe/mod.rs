@@ -589,8 +589,8 @@ impl Planner {
             path,
             measure,
             stats,
-            search_seconds: t0.wall(),
             search_cpu_seconds: t0.cpu(),
+            search_seconds: t0.wall(),
         })
     }
 
