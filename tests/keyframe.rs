@@ -405,6 +405,19 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     let time = r["time"].as_f64().unwrap();
     assert_eq!(seq.frame_count(), r["frames"].as_u64().unwrap() as usize);
     assert!((seq.frame_count() as f64 / fps - time).abs() < 1e-9);
+    // The search's CPU time beside its wall time (Linux: the thread's
+    // run time; one thread, so never more than the wall time).
+    let (wall, cpu) = (
+        r["search_seconds"].as_f64().unwrap(),
+        &r["search_cpu_seconds"],
+    );
+    if cfg!(target_os = "linux") {
+        let cpu = cpu.as_f64().unwrap();
+        assert!(
+            cpu >= 0.0 && cpu <= wall + 1e-3,
+            "cpu {cpu} s, wall {wall} s"
+        );
+    }
     // f32 positions in the file: agreement to 0.1 mm over the path.
     assert!(
         (travelled - dist).abs() < 1e-4,
@@ -467,6 +480,28 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
         serde_json::from_str(&std::fs::read_to_string(&grid_report).unwrap()).unwrap();
     let queries = g["queries"].as_array().unwrap();
     assert_eq!(queries.len(), 6);
+    // Every query's CPU time beside its wall time, and their spread (the
+    // wall-time keys kept).
+    for key in ["query_ms_mean", "query_ms_std", "query_ms_max"] {
+        assert!(g[key].as_f64().is_some(), "{key}");
+    }
+    if cfg!(target_os = "linux") {
+        for q in queries {
+            let (wall, cpu) = (
+                q["seconds"].as_f64().unwrap(),
+                q["cpu_seconds"].as_f64().unwrap(),
+            );
+            assert!(
+                cpu >= 0.0 && cpu <= wall + 1e-3,
+                "cpu {cpu} s, wall {wall} s"
+            );
+        }
+        let (mean, max) = (
+            g["query_cpu_ms_mean"].as_f64().unwrap(),
+            g["query_cpu_ms_max"].as_f64().unwrap(),
+        );
+        assert!(mean <= max && max <= g["query_ms_max"].as_f64().unwrap() + 1.0);
+    }
     let text = std::fs::read_to_string(&svg).unwrap();
     assert_eq!(text.matches("<title>").count(), 6, "{text}");
     let q = &queries[0];

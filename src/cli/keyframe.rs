@@ -543,13 +543,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             .map_or("- (none)".to_string(), |x| format!("{x:.4} m"))
     );
     s += &format!(
-        "search: {} nodes, {}, {} solved, {} pruned; {:.1} ms preparing, {:.1} ms searching, {:.2} s meshes\n",
+        "search: {} nodes, {}, {} solved, {} pruned; {:.1} ms preparing, {:.1} ms searching{}, {:.2} s meshes\n",
         r.stats.nodes,
         super::count(r.stats.cycles, "loop"),
         super::count(r.stats.walks, "walk"),
         r.stats.pruned,
         1e3 * r.prepare_seconds,
         1e3 * r.search_seconds,
+        r.search_cpu_seconds
+            .map_or(String::new(), |c| format!(" ({:.1} ms CPU)", 1e3 * c)),
         r.mesh_seconds
     );
     for b in &r.stats.bounds_hit {
@@ -787,8 +789,12 @@ fn grid_text(g: &GridReport) -> String {
         g.graph_smoothness_median,
         g.graph_smoothness.max
     );
+    let cpu = match (g.query_cpu_ms_mean, g.query_cpu_ms_std, g.query_cpu_ms_max) {
+        (Some(m), Some(sd), Some(x)) => format!(" (CPU {m:.2} ± {sd:.2} ms, max {x:.1} ms)"),
+        _ => String::new(),
+    };
     s += &format!(
-        "query time {:.2} ± {:.2} ms (max {:.1} ms); preparation {:.1} ms once; {} hit a search bound; reachability oracle {:.0} ms in all\n",
+        "query time {:.2} ± {:.2} ms (max {:.1} ms){cpu}; preparation {:.1} ms once; {} hit a search bound; reachability oracle {:.0} ms in all\n",
         g.query_ms_mean, g.query_ms_std, g.query_ms_max, g.prepare_ms, g.bounded, g.oracle_ms
     );
     s

@@ -57,6 +57,9 @@ pub struct GridQuery {
     pub smoothness_vertex: Option<f64>,
     /// Search seconds.
     pub seconds: f64,
+    /// Search CPU seconds of the querying thread ([`super::clock`];
+    /// `None` where the platform does not say).
+    pub cpu_seconds: Option<f64>,
     /// A search bound was hit.
     pub bounded: bool,
     /// Final facing minus the heading target (degrees, wrapped to ±180;
@@ -158,6 +161,14 @@ pub struct GridReport {
     pub query_ms_std: f64,
     /// Largest.
     pub query_ms_max: f64,
+    /// Query CPU time of the querying thread, milliseconds
+    /// ([`super::clock`]; load-independent, unlike the wall time above):
+    /// mean (`None` where the platform does not say).
+    pub query_cpu_ms_mean: Option<f64>,
+    /// Standard deviation.
+    pub query_cpu_ms_std: Option<f64>,
+    /// Largest.
+    pub query_cpu_ms_max: Option<f64>,
     /// Preparation (once per key-frame list), milliseconds.
     pub prepare_ms: f64,
     /// Queries where a search bound was hit.
@@ -302,7 +313,6 @@ pub fn evaluate(
     let mut queries = Vec::with_capacity(distances.len() * times.len());
     for &d in distances {
         for &t in times {
-            let t0 = Instant::now();
             let plan = planner.plan(
                 &Targets::Global {
                     distance: d,
@@ -310,7 +320,7 @@ pub fn evaluate(
                 },
                 search,
             )?;
-            let seconds = t0.elapsed().as_secs_f64();
+            let (seconds, cpu_seconds) = (plan.search_seconds, plan.search_cpu_seconds);
             let tr = transitions(ch, &planner.graph, &plan.path, timeline, &mut cache);
             let (ad, at) = (
                 plan.measure.distance,
@@ -332,6 +342,7 @@ pub fn evaluate(
                 smoothness: mean_smoothness(&tr),
                 smoothness_vertex: mean_smoothness_vertex(&tr),
                 seconds,
+                cpu_seconds,
                 bounded: !plan.stats.bounds_hit.is_empty(),
                 heading_error_deg: search.heading.map(|h| {
                     super::lattice::wrap((plan.facing_deg - h.degrees).to_radians()).to_degrees()
@@ -346,8 +357,12 @@ pub fn evaluate(
     let u: Vec<&GridQuery> = queries.iter().filter(|q| !q.reachable).collect();
     let sm: Vec<f64> = queries.iter().filter_map(|q| q.smoothness).collect();
     let ms: Vec<f64> = queries.iter().map(|q| 1e3 * q.seconds).collect();
-    let mean = ms.iter().sum::<f64>() / ms.len().max(1) as f64;
-    let std = (ms.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / ms.len().max(1) as f64).sqrt();
+    let (mean, std, max) = mean_std_max(&ms);
+    let cpu: Option<Vec<f64>> = queries
+        .iter()
+        .map(|q| q.cpu_seconds.map(|s| 1e3 * s))
+        .collect();
+    let cpu = cpu.filter(|v| !v.is_empty()).map(|v| mean_std_max(&v));
     Ok(GridReport {
         keys: planner
             .keys
@@ -367,7 +382,10 @@ pub fn evaluate(
         },
         query_ms_mean: mean,
         query_ms_std: std,
-        query_ms_max: ms.iter().copied().fold(0.0, f64::max),
+        query_ms_max: max,
+        query_cpu_ms_mean: cpu.map(|c| c.0),
+        query_cpu_ms_std: cpu.map(|c| c.1),
+        query_cpu_ms_max: cpu.map(|c| c.2),
         prepare_ms: 1e3 * planner.prepare_seconds,
         bounded: queries.iter().filter(|q| q.bounded).count(),
         out_of_range: queries
@@ -393,4 +411,12 @@ pub fn evaluate(
         ),
         queries,
     })
+}
+
+/// Mean, standard deviation and largest of `v` (zeros when empty).
+fn mean_std_max(v: &[f64]) -> (f64, f64, f64) {
+    let n = v.len().max(1) as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let std = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt();
+    (mean, std, v.iter().copied().fold(0.0, f64::max))
 }

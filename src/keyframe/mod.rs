@@ -19,6 +19,7 @@
 //! distance travelled by the mesh centroid (Eq. 10) and `time = N_f Δt`
 //! (Eq. 12). Zero targets ask for the shortest path.
 
+pub mod clock;
 pub mod floor;
 pub mod graph;
 pub mod grid;
@@ -388,6 +389,9 @@ pub struct Plan {
     pub stats: Stats,
     /// Seconds of the search (preparation excluded).
     pub search_seconds: f64,
+    /// CPU seconds of the calling thread during the search ([`clock`];
+    /// `None` where the platform does not say).
+    pub search_cpu_seconds: Option<f64>,
 }
 
 /// The frame path of consecutive segments (each shares its first frame
@@ -497,7 +501,7 @@ impl Planner {
     /// ([`SearchOptions::heading`]) applies to the last segment with per
     /// segment targets, after the turns of the earlier ones.
     pub fn plan(&self, targets: &Targets, opts: &SearchOptions) -> Result<Plan, SearchError> {
-        let t0 = Instant::now();
+        let t0 = clock::Stopwatch::start();
         let mut stats = Stats::default();
         let w = opts.weights;
         let heading = self.heading(opts);
@@ -585,7 +589,8 @@ impl Planner {
             path,
             measure,
             stats,
-            search_seconds: t0.elapsed().as_secs_f64(),
+            search_cpu_seconds: t0.cpu(),
+            search_seconds: t0.wall(),
         })
     }
 
@@ -687,6 +692,9 @@ pub struct Report {
     pub prepare_seconds: f64,
     /// Seconds searching.
     pub search_seconds: f64,
+    /// CPU seconds of the searching thread ([`clock`]; `None` where the
+    /// platform does not say).
+    pub search_cpu_seconds: Option<f64>,
     /// Seconds blending and placing the meshes.
     pub mesh_seconds: f64,
     /// What the database can make of a global target (`None` with
@@ -915,6 +923,7 @@ pub fn synthesise(
         stats: plan.stats.clone(),
         prepare_seconds: planner.prepare_seconds,
         search_seconds: plan.search_seconds,
+        search_cpu_seconds: plan.search_cpu_seconds,
         mesh_seconds,
         reach: match targets {
             Targets::Global { distance, time } => planner.reach_of(*distance, *time, &opts.search),
