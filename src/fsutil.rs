@@ -387,6 +387,26 @@ pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), FsError> {
     write_atomic(path, |w| w.write_all(bytes))
 }
 
+/// `%XX` escapes decoded (RFC 3986, 2.1): the paths of glTF buffer URIs and
+/// of the web viewer's requests. `None` for a bad escape or bytes that are
+/// not UTF-8.
+pub fn percent_decode(s: &str) -> Option<String> {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' {
+            let hex = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 /// fragment are ignored.
 pub fn resolve_path(root: &Path, url: &str) -> Option<PathBuf> {
     let path = url.split(['?', '#']).next().unwrap_or("");
-    let path = percent_decode(path)?;
+    let path = crate::fsutil::percent_decode(path)?;
     let rel = path.strip_prefix('/')?;
     let rel = if rel.is_empty() { "index.html" } else { rel };
     let mut out = root.to_path_buf();
@@ -29,24 +29,6 @@ pub fn resolve_path(root: &Path, url: &str) -> Option<PathBuf> {
     let real = out.canonicalize().ok()?;
     let root = root.canonicalize().ok()?;
     (real.starts_with(&root) && real.is_file()).then_some(real)
-}
-
-/// `%XX` decoding; `None` on a bad escape or non-UTF-8 result.
-fn percent_decode(s: &str) -> Option<String> {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' {
-            let h = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(h, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(b[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
 }
 
 fn content_type(p: &Path) -> &'static str {

@@ -438,7 +438,7 @@ fn buffer_path(gltf: &Path, buffer: usize, uri: &str) -> Result<std::path::PathB
             refuse("has a scheme; only data: URIs and paths relative to the glTF are read")
         });
     }
-    let decoded = percent_decode(uri)
+    let decoded = crate::fsutil::percent_decode(uri)
         .ok_or_else(|| refuse("has a bad percent escape (expected %XX of UTF-8 bytes)"))?;
     if decoded.starts_with(['/', '\\']) {
         return Err(refuse(
@@ -466,25 +466,6 @@ fn buffer_path(gltf: &Path, buffer: usize, uri: &str) -> Result<std::path::PathB
         ));
     }
     Ok(gltf.parent().unwrap_or(Path::new(".")).join(rel))
-}
-
-/// `%XX` escapes decoded (RFC 3986, 2.1); `None` for a bad escape or bytes
-/// that are not UTF-8.
-fn percent_decode(s: &str) -> Option<String> {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' {
-            let hex = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(b[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
 }
 
 /// A point through a node's world matrix (f32 entries, f64 arithmetic; the
