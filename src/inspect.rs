@@ -1,6 +1,10 @@
 //! `inspect`: what any supported file holds, what was assumed, and problems.
 
+mod database;
+mod dot;
 mod other;
+
+pub use database::{CacheEntry, CacheReport, DatabaseReport, DbSequence, DbSkeleton};
 
 use crate::batch::summary::count;
 use crate::mesh::io::{MeshFormat, gltf::read_gltf};
@@ -121,8 +125,13 @@ pub enum Report {
     /// A landmark or marker file.
     Json(JsonReport),
     /// Any other file the tool reads or writes (a database manifest, web
-    /// geometry, a site, a cache, a picture), described in lines.
+    /// geometry, a site, a cache, a picture, a Graphviz graph), described
+    /// in lines.
     File(JsonReport),
+    /// A character database folder.
+    Database(DatabaseReport),
+    /// The cache folder of a character database.
+    Cache(CacheReport),
 }
 
 /// Error of [`inspect`].
@@ -137,15 +146,9 @@ pub enum InspectError {
     /// A bad landmark or marker file.
     #[error("{0}")]
     Json(String),
-    /// A character database folder, which `db info` describes.
-    #[error(
-        "{0}: a character database folder (it holds {m}); `surfmotion db info {0}` shows what it holds",
-        m = crate::db::MANIFEST
-    )]
-    Database(PathBuf),
     /// Not a format we read.
     #[error(
-        "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj; the JSON files, manifests, caches, pictures and web sites the tool writes)"
+        "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj; a database folder or its cache; the JSON files, manifests, caches, Graphviz graphs, pictures and web sites the tool writes)"
     )]
     Unknown(PathBuf),
     /// A mesh path that is not UTF-8: mesh paths are read as text
@@ -227,6 +230,19 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
     {
         return inspect_json(path).map(Report::Json);
     }
+    // A database folder holds OBJ files, but is not a sequence of them.
+    if database::is_database(path) {
+        return database::inspect_database(path).map(Report::Database);
+    }
+    if let Some(db) = database::database_of_cache(path) {
+        return database::inspect_cache(path, &db).map(Report::Cache);
+    }
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("dot") || e.eq_ignore_ascii_case("gv"))
+    {
+        return dot::inspect_dot(path).map(Report::File);
+    }
     if let Some(r) = other::inspect_other(path) {
         return r.map(Report::File);
     }
@@ -236,10 +252,6 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
         .to_string();
     if let Some(e) = crate::mesh::io::bad_frame_ref(&spec) {
         return Err(e.into());
-    }
-    // A database folder holds OBJ files, but is not a sequence of them.
-    if path.is_dir() && path.join(crate::db::MANIFEST).is_file() {
-        return Err(InspectError::Database(path.to_path_buf()));
     }
     let (p, _) = crate::mesh::io::split_frame_ref(&spec);
     let Some(fmt) = MeshFormat::of(&p) else {
@@ -755,6 +767,8 @@ impl Report {
                     let _ = writeln!(s, "  {l}");
                 }
             }
+            Report::Database(r) => s = r.to_text(),
+            Report::Cache(r) => s = r.to_text(),
         }
         s
     }

@@ -29,8 +29,7 @@ fn fixture() -> &'static Fixture {
         // emptied at the next run, not a temporary left behind.
         let dir = common::fixture_dir("hostile");
         let run = |args: &[&str]| {
-            let r = common::run_cli(args, Some(&dir), &[]);
-            assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
+            common::cli_ok(args, Some(&dir));
         };
         run(&["mocap", "procedural", "--gait", "walk", "-o", "walk.bvh"]);
         run(&["demo", "-o", "demo"]);
@@ -353,6 +352,9 @@ fn rows() -> Vec<Row> {
     // Session 11: session 10's leftovers and the new-user walk; each row
     // exited 0, or printed clap's or a vaguer message, before its fix.
     r.extend(session11_rows());
+    // Session 12: the new-user walk; each row printed an OS error ("File
+    // exists", "Not a directory") or named the current folder before its fix.
+    r.extend(session12_rows());
     // The sweep: verbs × malformed files, each message naming the file.
     let bvh_cut = {
         let t = walk_text();
@@ -661,10 +663,23 @@ fn session7_rows() -> Vec<Row> {
             ],
         ),
         row(
-            "inspect of a database folder",
-            "inspect {db}",
-            &["character database folder", "db info"],
-        ),
+            "inspect of a .dot file that is not Graphviz",
+            "inspect {d}/g.dot",
+            &["g.dot:1", "not a Graphviz file"],
+        )
+        .file("g.dot", "hello\n"),
+        row(
+            "inspect of an empty .dot file",
+            "inspect {d}/g.dot",
+            &["g.dot:1", "not a Graphviz file"],
+        )
+        .file("g.dot", ""),
+        row(
+            "inspect of a .dot folder",
+            "inspect {d}/g.dot",
+            &["g.dot", "is a directory"],
+        )
+        .file("g.dot/x", ""),
         row(
             "inspect PC2:-1",
             "inspect {db}/walk.pc2:-1",
@@ -1098,6 +1113,48 @@ fn gltf_with_buffer(uri: &str) -> (String, Vec<u8>) {
     (json, bin)
 }
 
+fn session12_rows() -> Vec<Row> {
+    let file = |r: Row| r.file("f.txt", "x");
+    let mut r = vec![
+        file(row(
+            "db init onto a file",
+            "db init {d}/f.txt --mesh {topo}",
+            &["f.txt: a file, not a folder", "character.toml"],
+        )),
+        file(row(
+            "db init under a file",
+            "db init {d}/f.txt/db --mesh {topo}",
+            &["f.txt is a file, not a folder"],
+        )),
+        file(row(
+            "synth -o a file",
+            "synth --mesh {topo} --landmarks {lm} --mocap {walk} -o {d}/f.txt",
+            &["-o", "f.txt: a file, not a folder", "database folder"],
+        )),
+        row(
+            "mocap procedural -o a file, all gaits",
+            "mocap procedural -o {d}/f.bvh",
+            &["-o", "f.bvh: a file, not a folder", "--gait"],
+        )
+        .file("f.bvh", "x"),
+    ];
+    // An empty mesh argument named the current folder (a database there:
+    // "`: a character database folder`").
+    for args in [
+        "render {empty} -o {d}/r.png",
+        "blend {empty} {topo} -o {d}/b.obj",
+        "mesh convert {empty} {d}/o.obj",
+        "repair {empty} -o {d}/r.obj",
+        "rig embed {empty} --landmarks {lm} -o {d}/r.json",
+        "synth --mesh {empty} --landmarks {lm} --mocap {walk} -o {d}/s",
+        "transfer --scan {empty} --landmarks {lm} --mocap {walk} -o {d}/t.pc2",
+        "batch --scan {empty} --landmarks {lm} --mocap-dir {d} -o {d}/b",
+    ] {
+        r.push(row(args, args, &["expected a mesh file", "got nothing"]));
+    }
+    r
+}
+
 fn session11_rows() -> Vec<Row> {
     let (up2, bin) = gltf_with_buffer("../../x.bin");
     let (abs, _) = gltf_with_buffer("/etc/hostname");
@@ -1244,8 +1301,7 @@ fn gltf_buffers_beside_below_and_in_a_sibling_folder_are_read() {
             std::fs::create_dir_all(p.parent().unwrap()).unwrap();
             std::fs::write(p, b).unwrap();
         }
-        let r = common::run_cli(&["inspect", gltf], Some(d), &[]);
-        assert_eq!(r.code, Some(0), "{gltf} with buffer {uri}: {}", r.stderr);
+        let r = common::cli_ok(&["inspect", gltf], Some(d));
         // The buffer's bytes were read: the second point is (1, 0, 0).
         assert!(
             r.stdout.contains("vertices    3") && r.stdout.contains("[1.0000 1.0000 0.0000]"),
@@ -1265,19 +1321,17 @@ fn a_folder_of_frames_is_summarised_in_one_short_line() {
     let d = tmp.path();
     let f = fixture();
     let walk = f.db.join("walk.pc2");
-    let r = common::run_cli(
+    let r = common::cli_ok(
         &["mesh", "convert", walk.to_str().unwrap(), "frames"],
         Some(d),
-        &[],
     );
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
     let line = r.stderr.lines().next().unwrap_or_default();
     assert!(
         line.contains("180 OBJ frames, frame_0000.obj .. frame_0179.obj") && line.len() < 200,
         "{line}"
     );
     assert_eq!(std::fs::read_dir(d.join("frames")).unwrap().count(), 180);
-    let r = common::run_cli(
+    let r = common::cli_ok(
         &[
             "retarget",
             "--db",
@@ -1288,9 +1342,7 @@ fn a_folder_of_frames_is_summarised_in_one_short_line() {
             "r",
         ],
         Some(d),
-        &[],
     );
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
     let all = format!("{}{}", r.stdout, r.stderr);
     let line = all.lines().find(|l| l.contains(" -> ")).unwrap_or_default();
     assert!(
@@ -1322,8 +1374,7 @@ fn inspect_names_a_play_script_time_that_play_refuses() {
         (r#"[{"t": 0, "space": "x"}, {"t": 2, "space": "x"}]"#, None),
     ] {
         std::fs::write(d.join("s.json"), text).unwrap();
-        let r = common::run_cli(&["inspect", "s.json"], Some(d), &[]);
-        assert_eq!(r.code, Some(0), "{text}: {}", r.stderr);
+        let r = common::cli_ok(&["inspect", "s.json"], Some(d));
         assert!(r.stdout.contains("a `play` script"), "{text}: {}", r.stdout);
         match want {
             Some(w) => assert!(
@@ -1371,8 +1422,7 @@ fn a_missed_heading_is_flagged_as_distance_and_time_are() {
         .iter()
         .map(|s| s.to_string())
         .collect();
-        let r = common::run_cli(&args, Some(d), &[]);
-        assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
+        let r = common::cli_ok(&args, Some(d));
         let v: serde_json::Value =
             serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
         (r.stdout, v)
@@ -1459,11 +1509,7 @@ fn what_was_written_is_counted_and_inspected() {
     let f = fixture();
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let ok = |args: &str| {
-        let r = common::run_cli(&expand(args, d), None, &[]);
-        assert_eq!(r.code, Some(0), "{args}: {}", r.stderr);
-        r
-    };
+    let ok = |args: &str| common::cli_ok(&expand(args, d), None);
     std::fs::create_dir_all(d.join("lib")).unwrap();
     std::fs::copy(&f.walk, d.join("lib/walk.bvh")).unwrap();
     let r = ok("batch --db {db} --mocap-dir {d}/lib -o {d}/out --format pc2 --jobs 1");
@@ -1524,6 +1570,131 @@ fn what_was_written_is_counted_and_inspected() {
             r.stdout
         );
         assert!(r.stdout.contains(words), "{file}: {}", r.stdout);
+    }
+}
+
+/// Regression (session 12): `inspect DB`, `inspect DB/cache` and `inspect
+/// graph.dot` (what `graph --dot` writes) refused; each now summarises,
+/// and a cache file is up to date only while its inputs are unchanged.
+#[test]
+fn inspect_reads_a_database_its_cache_and_its_graph() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    copy_dir(&fixture().db, &d.join("db"));
+    let json = |args: &str| -> serde_json::Value {
+        let r = common::cli_ok(&expand(args, d), Some(d));
+        serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{args}: {e}: {}", r.stdout))
+    };
+    let g = json("graph {d}/db --json");
+    let transitions = g["graph"]["transitions"].as_array().unwrap().len();
+    let v = json("inspect {d}/db --json");
+    assert_eq!(v["kind"], "database");
+    let seq: Vec<&str> = v["sequences"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|q| q["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(seq, ["walk", "run"], "{v}");
+    let frames: u64 = v["sequences"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|q| q["frames"].as_u64().unwrap())
+        .sum();
+    assert_eq!(v["total_frames"].as_u64(), Some(frames));
+    let entry = |v: &serde_json::Value, what: &str| {
+        v["cache"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e["what"] == what)
+            .unwrap_or_else(|| panic!("no {what}: {v}"))
+            .clone()
+    };
+    let graph = entry(&v, "graph (shape)");
+    assert_eq!(graph["up_to_date"], true, "{graph}");
+    assert_eq!(graph["transitions"].as_u64(), Some(transitions as u64));
+    assert_eq!(graph["frames"].as_u64(), Some(frames));
+    assert_eq!(entry(&v, "similarity matrix (shape)")["up_to_date"], true);
+    // A changed graph option: the graph is stale, the matrix is not.
+    let manifest = d.join("db/character.toml");
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    std::fs::write(&manifest, format!("{text}\n[graph]\nmin_gap = 17\n")).unwrap();
+    let c = json("inspect {d}/db/cache --json");
+    assert_eq!(c["kind"], "cache");
+    let graph = entry(&c, "graph (shape)");
+    assert_eq!(graph["up_to_date"], false, "{graph}");
+    assert!(
+        graph["state"].as_str().unwrap().contains("stale"),
+        "{graph}"
+    );
+    assert_eq!(entry(&c, "similarity matrix (shape)")["up_to_date"], true);
+    // A truncated matrix reads as unreadable, not as up to date.
+    let sim = d.join("db/cache/similarity-shape.bin");
+    std::fs::write(&sim, b"SMSIM001").unwrap();
+    let c = json("inspect {d}/db/cache --json");
+    let e = entry(&c, "similarity matrix (shape)");
+    assert!(e["state"].as_str().unwrap().contains("unreadable"), "{e}");
+    // The DOT file of the graph: the same sequences and transitions.
+    std::fs::write(&manifest, text).unwrap();
+    let r = common::cli_ok(&expand("graph {d}/db --dot", d), Some(d));
+    std::fs::write(d.join("graph.dot"), &r.stdout).unwrap();
+    let r = common::cli_ok(&expand("inspect {d}/graph.dot", d), Some(d));
+    assert!(r.stdout.contains("(Graphviz graph)"), "{}", r.stdout);
+    assert!(
+        r.stdout
+            .contains(&format!("2 sequences ({frames} frames in all): walk (")),
+        "{}",
+        r.stdout
+    );
+    assert!(
+        r.stdout.contains(&format!("{transitions} transitions, ")),
+        "{}",
+        r.stdout
+    );
+}
+
+/// Every verb's `--help` ends with an example command line (a new user's
+/// walk of session 12 found none).
+#[test]
+fn every_verb_s_help_shows_an_example() {
+    for verb in [
+        "demo",
+        "inspect",
+        "mocap positions",
+        "mocap convert",
+        "mocap procedural",
+        "mocap rigmap",
+        "mesh convert",
+        "db init",
+        "db info",
+        "db skeleton",
+        "db build",
+        "blend",
+        "repair",
+        "render",
+        "rig embed",
+        "synth",
+        "graph",
+        "retarget",
+        "keyframe",
+        "eval",
+        "transfer",
+        "batch",
+        "play",
+        "web export",
+        "web serve",
+    ] {
+        let mut args: Vec<&str> = verb.split(' ').collect();
+        args.push("--help");
+        let r = common::cli_ok(&args, None);
+        let example = r.stdout.split("Example").nth(1).unwrap_or_default();
+        assert!(
+            example.contains(&format!("surfmotion {verb} ")),
+            "{verb}: no example in --help:\n{}",
+            r.stdout
+        );
     }
 }
 
@@ -1608,12 +1779,7 @@ fn db_init_reads_every_file_before_writing() {
         );
     }
     // The good database reads back as written: its sequence loads.
-    let r = common::run_cli(
-        &["db", "info", d.join("old").to_str().unwrap()],
-        Some(d),
-        &[],
-    );
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let r = common::cli_ok(&["db", "info", d.join("old").to_str().unwrap()], Some(d));
     assert!(
         r.stdout.contains("sequence walk") && r.stdout.contains("180 frames"),
         "{}",
@@ -1658,6 +1824,7 @@ fn expand(s: &str, d: &Path) -> Vec<String> {
                 .replace("{lm}", &f.db.join("landmarks.json").display().to_string())
                 .replace("{d}", &d.display().to_string())
                 .replace("{nl}", "\n")
+                .replace("{empty}", "")
         })
         .collect()
 }
@@ -2563,7 +2730,7 @@ fn rig_map_corpus_never_panics() {
     let clip = parse_bvh(&walk_text(), Path::new("w.bvh"), &BvhOptions::default()).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let map = dir.path().join("map.json");
-    let r = common::run_cli(
+    common::cli_ok(
         &[
             "mocap".as_ref(),
             "rigmap".as_ref(),
@@ -2572,9 +2739,7 @@ fn rig_map_corpus_never_panics() {
             map.as_os_str(),
         ],
         None,
-        &[],
     );
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
     let own = std::fs::read_to_string(&map).unwrap();
     // The map with `canon` placed by the rule `json` instead of a joint.
     let rule = |canon: &str, json: &str| {
@@ -2807,8 +2972,7 @@ fn corrupt_caches_are_rebuilt_with_one_warning() {
         copy_dir(&f.db, &db);
         std::fs::write(db.join("cache").join(file), &bytes).unwrap();
         let args = ["graph", db.to_str().unwrap(), "--json"];
-        let r = common::run_cli(&args, None, &[]);
-        assert_eq!(r.code, Some(0), "{file} {what}: {}", r.stderr);
+        let r = common::cli_ok(&args, None);
         let lines: Vec<&str> = r.stderr.lines().filter(|l| !l.trim().is_empty()).collect();
         assert_eq!(
             lines.len(),
@@ -2838,8 +3002,7 @@ fn corrupt_caches_are_rebuilt_with_one_warning() {
     let mut g: serde_json::Value = serde_json::from_slice(&graph).unwrap();
     g["key"] = 12345.into();
     std::fs::write(db.join("cache/graph-shape.json"), g.to_string()).unwrap();
-    let r = common::run_cli(&["graph", db.to_str().unwrap(), "--json"], None, &[]);
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let r = common::cli_ok(&["graph", db.to_str().unwrap(), "--json"], None);
     assert!(r.stderr.trim().is_empty(), "{}", r.stderr);
 }
 
@@ -2851,11 +3014,7 @@ fn inspect_tells_json_files_apart_by_content() {
     let f = fixture();
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let run = |args: &[&str]| {
-        let r = common::run_cli(args, Some(d), &[]);
-        assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
-        r
-    };
+    let run = |args: &[&str]| common::cli_ok(args, Some(d));
     let walk = f.walk.to_str().unwrap();
     let topo = f.db.join("topology.obj");
     let lm = f.db.join("landmarks.json");
@@ -2927,11 +3086,7 @@ fn plausibility_warnings_are_printed_once() {
     let f = fixture();
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    let run = |args: &[&str]| {
-        let r = common::run_cli(args, Some(d), &[]);
-        assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
-        r
-    };
+    let run = |args: &[&str]| common::cli_ok(args, Some(d));
     // The procedural run floats above the demo character's floor.
     run(&["mocap", "procedural", "--gait", "run", "-o", "run.bvh"]);
     let topo = f.db.join("topology.obj");
@@ -3023,8 +3178,7 @@ fn a_folder_output_holding_files_is_replaced_only_with_force() {
     assert!(out.join("frame_9999.obj").exists());
     let mut forced = args.to_vec();
     forced.push("--force");
-    let r = common::run_cli(&forced, Some(tmp.path()), &[]);
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let r = common::cli_ok(&forced, Some(tmp.path()));
     let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
     let frames = v["frames"].as_u64().unwrap() as usize;
     assert!(!out.join("frame_9999.obj").exists());
@@ -3056,11 +3210,7 @@ fn unit_options_have_one_name_and_the_old_ones_still_work() {
     let d = tmp.path();
     let walk = f.walk.to_str().unwrap();
     let topo = f.db.join("topology.obj");
-    let run = |args: &[&str]| {
-        let r = common::run_cli(args, Some(d), &[]);
-        assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
-        r
-    };
+    let run = |args: &[&str]| common::cli_ok(args, Some(d));
     for old in ["--assume-units", "--input-units"] {
         let r = run(&["inspect", walk, old, "cm"]);
         assert!(
@@ -3181,7 +3331,7 @@ fn a_deep_joint_chain_converts_without_overflowing_the_stack() {
     let input = tmp.path().join("deep.bvh");
     std::fs::write(&input, s).unwrap();
     let out = tmp.path().join("out.bvh");
-    let r = common::run_cli(
+    common::cli_ok(
         &[
             "mocap".as_ref(),
             "convert".as_ref(),
@@ -3189,9 +3339,7 @@ fn a_deep_joint_chain_converts_without_overflowing_the_stack() {
             out.as_os_str(),
         ],
         None,
-        &[],
     );
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
     let back = surfmotion::mocap::bvh::read_bvh(&out, &Default::default()).unwrap();
     assert_eq!(back.joint_count(), n + 1);
     // The indentation stops deepening: the text stays linear in the depth.
@@ -3326,8 +3474,7 @@ fn play_notices_are_printed_once() {
     )
     .unwrap();
     let args = expand("play --db {d}/db --script {d}/s.json -o {d}/p.pc2", d);
-    let r = common::run_cli(&args, None, &[]);
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let r = common::cli_ok(&args, None);
     let said = |s: &str| s.matches("speed 9 m/s is outside").count();
     assert_eq!(said(&r.stdout), 1, "{}", r.stdout);
     assert_eq!(said(&r.stderr), 0, "{}", r.stderr);
@@ -3341,8 +3488,7 @@ fn mesh_and_mocap_convert_print_json() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     let json = |args: Vec<String>| -> serde_json::Value {
-        let r = common::run_cli(&args, None, &[]);
-        assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
+        let r = common::cli_ok(&args, None);
         serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{e}: {}", r.stdout))
     };
     let v = json(expand("mesh convert {db}/walk.pc2 {d}/w.glb --json", d));

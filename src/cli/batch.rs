@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(long)]
     pub db: Option<PathBuf>,
     /// Or transfer onto this static mesh (as `transfer`; needs --landmarks).
-    #[arg(long, requires = "landmarks")]
+    #[arg(long, requires = "landmarks", value_parser = super::mesh_spec)]
     pub scan: Option<String>,
     /// Landmarks on the scan.
     #[arg(long)]
@@ -90,12 +90,11 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             a.mocap_dir.display()
         );
     }
-    if a.output.exists() && !a.output.is_dir() {
-        anyhow::bail!(
-            "-o {}: a file, not a folder (batch writes one output per clip and batch.json, .html and .svg into a folder)",
-            a.output.display()
-        );
-    }
+    super::output_folder(
+        "-o",
+        &a.output,
+        "batch writes one output per clip and batch.json, .html and .svg into a folder",
+    )?;
     refuse_output_in_clip_folder(&a)?;
     let format = Format::from(a.format);
     refuse_outputs_over_inputs(&a, format)?;

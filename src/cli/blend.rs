@@ -11,8 +11,10 @@ use surfmotion::mesh::measure::distortion;
 #[derive(clap::Args)]
 pub struct Args {
     /// First mesh (a file, or SEQ.pc2:FRAME).
+    #[arg(value_parser = super::mesh_spec)]
     pub a: String,
     /// Second mesh, same connectivity.
+    #[arg(value_parser = super::mesh_spec)]
     pub b: String,
     /// Blend weight: 0 gives A, 1 gives B.
     #[arg(long, default_value_t = 0.5, value_parser = super::fraction)]

@@ -12,9 +12,13 @@ use surfmotion::jobs::skeletons::SkeletonsOptions;
 pub enum Cmd {
     /// Write DIR/character.toml for a character: its topology mesh, its
     /// captured sequences, frame rate, units, up axis and rig annotation.
+    #[command(
+        after_help = "Example:\n  surfmotion db init samba_db --mesh samba.obj --sequence dance=samba.pc2 --landmarks samba.landmarks.json"
+    )]
     Init(InitArgs),
     /// Load every part of a database and report what it holds and what is
     /// wrong (connectivity or frame-rate mismatch, missing rig, ...).
+    #[command(after_help = "Example:\n  surfmotion db info samba_db")]
     Info(InfoArgs),
     /// Extract the canonical skeleton of every frame of every sequence: the
     /// rig is embedded from the manifest's landmarks, each joint is read off
@@ -24,6 +28,7 @@ pub enum Cmd {
     /// paper's part centres). Writes per sequence SEQ.skeleton.json and
     /// SEQ.bvh (for any mocap viewer), and rig.json, into --output (default
     /// DIR/skeletons).
+    #[command(after_help = "Example:\n  surfmotion db skeleton samba_db")]
     Skeleton(SkeletonArgs),
     /// Build the Surface Motion Graph: compare every frame with every other
     /// (3D shape histograms minimised over rotation about the vertical, or
@@ -31,6 +36,9 @@ pub enum Cmd {
     /// filtering (top N per sequence pair, half-window L < 25), and cache the
     /// matrix and graph in DIR/cache. A second build with unchanged inputs
     /// loads the cache and does no work. Settings: the manifest's [graph].
+    #[command(
+        after_help = "Examples:\n  surfmotion db build samba_db\n  surfmotion inspect samba_db      # is the cache up to date?"
+    )]
     Build(BuildArgs),
 }
 
@@ -254,6 +262,11 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
 /// is refused here, naming the file, with nothing left behind (it used to
 /// be written into the manifest and refused only by `db info`).
 fn init(a: InitArgs) -> anyhow::Result<()> {
+    super::output_folder(
+        "",
+        &a.dir,
+        "db init writes the database's character.toml into a folder",
+    )?;
     let manifest = a.dir.join(MANIFEST);
     if manifest.exists() && !a.force {
         bail!(
@@ -391,12 +404,11 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     // Checked before the skeletons are extracted: `-o FILE` said
     // "FILE/rig.json: File exists (os error 17)" after the work.
     let out = a.output.clone().unwrap_or_else(|| a.dir.join("skeletons"));
-    if out.exists() && !out.is_dir() {
-        bail!(
-            "-o {}: a file, not a folder (db skeleton writes rig.json and each sequence's SEQ.skeleton.json and SEQ.bvh into a folder)",
-            out.display()
-        );
-    }
+    super::output_folder(
+        "-o",
+        &out,
+        "db skeleton writes rig.json and each sequence's SEQ.skeleton.json and SEQ.bvh into a folder",
+    )?;
     if let Ok(m) = Manifest::load(&a.dir) {
         let mut outputs = vec![("-o", out.join("rig.json"))];
         for s in &m.sequences {

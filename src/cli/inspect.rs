@@ -7,8 +7,10 @@ use surfmotion::inspect::{InspectOptions, inspect};
 /// Arguments of `inspect`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// A mocap clip (.bvh .amc .asf) or a mesh / sequence (.obj .ply .pc2 .mdd
-    /// .gltf .glb, a folder of .obj frames, or SEQ.pc2:FRAME).
+    /// A mocap clip (.bvh .amc .asf), a mesh / sequence (.obj .ply .pc2 .mdd
+    /// .gltf .glb, a folder of .obj frames, or SEQ.pc2:FRAME), a database
+    /// folder or its cache folder, or any file the tool writes (JSON
+    /// reports, manifests, caches, .dot graphs, pictures, web sites).
     pub file: PathBuf,
     /// Print JSON instead of text.
     #[arg(long)]

@@ -10,6 +10,9 @@ pub enum Cmd {
     /// beside it) to samba.glb, an OBJ folder to .pc2, SEQ.pc2:12 to one .obj.
     /// Output by extension: .glb, .pc2 (+ .obj), .mdd (+ .obj), .obj, .ply,
     /// or a path without extension for a folder of OBJ frames.
+    #[command(
+        after_help = "Examples:\n  surfmotion mesh convert samba.pc2 samba.glb\n  surfmotion mesh convert samba.pc2:60 samba_60.obj"
+    )]
     Convert(ConvertArgs),
 }
 
@@ -17,6 +20,7 @@ pub enum Cmd {
 #[derive(clap::Args)]
 pub struct ConvertArgs {
     /// Input mesh or sequence (PATH:FRAME picks one frame).
+    #[arg(value_parser = super::mesh_spec)]
     pub input: String,
     /// Output path; its extension picks the format (see above). A point
     /// cache also writes its topology OBJ beside it.

@@ -39,10 +39,16 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run the embedded demo (no files needed).
+    #[command(after_help = "Example:\n  surfmotion demo -o demo_out")]
     Demo(demo::Args),
     /// Show what any supported file holds: joints, frames, fps, units and up
     /// axis assumed, rig convention; or vertices, triangles, frames, bounds,
-    /// skin, morph targets; and any problems found.
+    /// skin, morph targets; a database folder's sequences, skeletons and
+    /// cache state; any report, manifest, cache, graph or picture the tool
+    /// writes; and any problems found.
+    #[command(
+        after_help = "Examples:\n  surfmotion inspect walk.bvh\n  surfmotion inspect samba.pc2 --json\n  surfmotion inspect samba_db            # a database: sequences, skeletons, cache up to date?\n  surfmotion inspect graph.dot           # what `graph --dot` wrote"
+    )]
     Inspect(inspect::Args),
     /// Mocap clips: joint positions, conversion, rig maps.
     #[command(subcommand)]
@@ -50,18 +56,26 @@ enum Command {
     /// Meshes and mesh sequences: conversion between formats.
     #[command(subcommand)]
     Mesh(mesh::Cmd),
-    /// Character databases: write a manifest, check what it holds.
+    /// Character databases: write a manifest, check what it holds, extract
+    /// per-frame skeletons, build the Surface Motion Graph.
     #[command(subcommand)]
     Db(db::Cmd),
     /// Blend two meshes of one connectivity: non-linear (rotations slerped,
     /// stretch lerped, Poisson-stitched) or --linear; reports edge-length and
     /// volume distortion of both.
+    #[command(
+        after_help = "Example:\n  surfmotion blend crane.pc2:0 crane.pc2:100 --alpha 0.5 -o mid.obj"
+    )]
     Blend(blend::Args),
     /// Repair a mesh: weld duplicate vertices, drop degenerate and duplicate
     /// triangles and unreferenced vertices, report connected components.
+    #[command(after_help = "Example:\n  surfmotion repair scan.obj -o body.obj --keep-largest")]
     Repair(repair::Args),
     /// Draw a mesh (or a frame of a sequence) to PNG, front and side views;
     /// with --rig, coloured by body part with the skeleton drawn in.
+    #[command(
+        after_help = "Example:\n  surfmotion render samba.pc2 --frame 90 --rig samba.rig.json -o samba_90.png"
+    )]
     Render(render::Args),
     /// Rigs: embed the canonical skeleton, skin weights, body parts and joint
     /// regressors in a rest mesh from a few landmarks.
@@ -71,10 +85,16 @@ enum Command {
     /// landmarks and mocap clips: linear blend skinning with the embedded
     /// weights plus secondary dynamics (a damped-spring lag on soft regions
     /// and loose clothing). The driving skeletons are kept in DIR/truth.
+    #[command(
+        after_help = "Example:\n  surfmotion synth --mesh samba.obj --landmarks samba.landmarks.json --mocap 02_01.amc 02_03.amc -o samba_synth"
+    )]
     Synth(synth::Args),
     /// Export a database's Surface Motion Graph (sequences as nodes,
     /// transitions as edges) as DOT or JSON, or draw its similarity matrix
     /// with the transitions marked (--matrix OUT.png).
+    #[command(
+        after_help = "Examples:\n  surfmotion graph samba_synth --matrix samba_synth.png\n  surfmotion graph samba_synth --dot > graph.dot   # dot -Tsvg graph.dot -o graph.svg"
+    )]
     Graph(graph::Args),
     /// Drive a 4D character from a mocap clip (Huang et al. 2015, Sec. 5.2):
     /// find the path through the database's Surface Motion Graph whose
@@ -82,6 +102,9 @@ enum Command {
     /// blend across transitions and interpolate repeated frames with
     /// non-linear mesh blending, and place the result on the clip's root
     /// trajectory.
+    #[command(
+        after_help = "Example:\n  surfmotion retarget --db samba_synth --mocap 02_02.amc -o walk.glb --report walk.json"
+    )]
     Retarget(retarget::Args),
     /// Key-frame animation (Huang et al. 2015, Sec. 5.1): the path through
     /// the Surface Motion Graph from one database frame to another (via
@@ -89,10 +112,16 @@ enum Command {
     /// repeated as an integer programme decides, transitions blended, the
     /// character placed along its accumulated travel. --grid evaluates a
     /// grid of targets (Table III).
+    #[command(
+        after_help = "Example:\n  surfmotion keyframe --db synth3 --from 02_01:0 --to dataset-1_walk_normal_001:150 --distance 15 --time 10 -o kf.pc2"
+    )]
     Keyframe(Box<keyframe::Args>),
     /// Score a retargeted result: the average joint-velocity difference
     /// (cm/frame) between the clip on the character's skeleton and the
     /// skeleton extracted from the result (Huang et al. 2015, Sec. 6.2).
+    #[command(
+        after_help = "Example:\n  surfmotion eval --db samba_synth --mocap 02_02.amc --result walk.glb"
+    )]
     Eval(retarget::EvalArgs),
     /// Animate a static scan from a mocap clip or a moving template mesh
     /// (Confluent Motion, de Aguiar et al. 2007): marker triangles on the
@@ -100,6 +129,9 @@ enum Command {
     /// from the clip's bones or the template's triangles; the rotations are
     /// spread over the scan as harmonic quaternion fields and the mesh is
     /// rebuilt by a prefactored Poisson solve each frame.
+    #[command(
+        after_help = "Example:\n  surfmotion transfer --scan armadillo.obj --landmarks armadillo.landmarks.json --mocap 02_01.amc -o arm.pc2"
+    )]
     Transfer(Box<transfer::Args>),
     /// Convert a whole mocap library: every BVH/AMC clip under a folder,
     /// driven onto a 4D character (--db) or transferred onto a scan
@@ -107,8 +139,14 @@ enum Command {
     /// tree. Resumable (complete outputs are skipped), shardable for
     /// cluster array jobs (--shard i/n); bad clips are reported, not fatal
     /// (exit 1 if any failed). Writes batch.json/.html/.svg.
+    #[command(
+        after_help = "Example:\n  surfmotion batch --db samba_synth --mocap-dir clips -o out"
+    )]
     Batch(Box<batch::Args>),
     /// Play a scripted session of parametric motion (Casas et al. 2013): the database's [[space]] motion spaces steered by timed requests (space, speed, turn), with online transitions; writes any mesh output and a report of parameters asked vs achieved.
+    #[command(
+        after_help = "Example:\n  surfmotion play --db gaits --script control.json -o session.glb --report session.json"
+    )]
     Play(play::Args),
     /// The character in a web browser (Volino et al. 2015): export a
     /// static site (compact 4D geometry, the Surface Motion Graph, a WebGL2
@@ -446,6 +484,40 @@ fn bad_value(e: &clap::Error) -> String {
         "not a value this option takes".to_string()
     };
     format!("{flag} '{value}': {why}")
+}
+
+/// Refuses an output folder that is a file or lies under one, before any
+/// work (it said "X: File exists (os error 17)" or "Not a directory" after
+/// it). `flag` names the option (empty for a positional argument), `writes`
+/// says what goes into the folder.
+pub fn output_folder(flag: &str, dir: &Path, writes: &str) -> anyhow::Result<()> {
+    let named = if flag.is_empty() {
+        dir.display().to_string()
+    } else {
+        format!("{flag} {}", dir.display())
+    };
+    for p in dir.ancestors().filter(|p| !p.as_os_str().is_empty()) {
+        if p.exists() && !p.is_dir() {
+            let what = if p == dir {
+                "a file".to_string()
+            } else {
+                format!("{} is a file", p.display())
+            };
+            anyhow::bail!("{named}: {what}, not a folder ({writes})");
+        }
+    }
+    Ok(())
+}
+
+/// A mesh argument (a file, a folder of frames or `SEQ.pc2:FRAME`): not
+/// empty. (An empty one named the current folder: "`: a character
+/// database folder`" or "no .obj files in the folder".)
+pub fn mesh_spec(s: &str) -> Result<String, String> {
+    if s.trim().is_empty() {
+        Err("expected a mesh file (.obj .ply .pc2 .mdd .gltf .glb), a folder of .obj frames or SEQ.pc2:FRAME; got nothing".into())
+    } else {
+        Ok(s.to_string())
+    }
 }
 
 /// A frame rate on the command line: a finite number in

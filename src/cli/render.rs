@@ -16,7 +16,7 @@ pub struct Args {
     /// Mesh or sequence (a file, or SEQ.pc2:FRAME for one frame); several
     /// are drawn side by side (e.g. the same frame of results made
     /// differently).
-    #[arg(required = true, num_args = 1..)]
+    #[arg(required = true, num_args = 1.., value_parser = super::mesh_spec)]
     pub mesh: Vec<String>,
     /// Output PNG.
     #[arg(short, long, value_parser = super::png_path)]

@@ -9,6 +9,7 @@ use surfmotion::mesh::repair::{RepairOptions, repair};
 #[derive(clap::Args)]
 pub struct Args {
     /// Input mesh (a file, or SEQ.pc2:FRAME).
+    #[arg(value_parser = super::mesh_spec)]
     pub input: String,
     /// Output mesh.
     #[arg(short, long)]

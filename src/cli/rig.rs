@@ -16,6 +16,9 @@ pub enum Cmd {
     /// elbows, knees; optionally shoulders, ankles, toes, head_top) given as
     /// JSON points or vertex indices. Writes joints, bone-heat skin weights,
     /// contiguous body parts with overlapping regions and joint regressors.
+    #[command(
+        after_help = "Example:\n  surfmotion rig embed samba.obj --landmarks samba.landmarks.json -o samba.rig.json --png samba_rig.png"
+    )]
     Embed(EmbedArgs),
 }
 
@@ -23,6 +26,7 @@ pub enum Cmd {
 #[derive(clap::Args)]
 pub struct EmbedArgs {
     /// Rest mesh (a file, or SEQ.pc2:FRAME).
+    #[arg(value_parser = super::mesh_spec)]
     pub mesh: String,
     /// Only these OBJ groups of the mesh (repeatable), e.g. `body`; the
     /// embedding is for the groups' vertices alone (renumbered in order).

@@ -15,7 +15,7 @@ use surfmotion::synth::database::Dynamics;
 #[derive(clap::Args)]
 pub struct Args {
     /// Rest mesh of the character (a file, or SEQ.pc2:FRAME), metres, Y-up.
-    #[arg(long)]
+    #[arg(long, value_parser = super::mesh_spec)]
     pub mesh: String,
     /// Landmarks on the rest mesh (JSON; see `rig embed --help`).
     #[arg(long)]
@@ -63,6 +63,11 @@ fn dynamics_amount(s: &str) -> Result<f64, String> {
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::warnings_in_summary(!a.run.json);
     let dir = &a.output;
+    super::output_folder(
+        "-o",
+        dir,
+        "synth writes a database folder: the manifest, topology, sequences and truth/",
+    )?;
     if dir.join(surfmotion::db::MANIFEST).exists() && !a.force {
         bail!(
             "{}: a database exists there already; pass --force to overwrite it",

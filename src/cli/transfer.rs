@@ -16,7 +16,7 @@ pub struct Args {
     /// The static mesh to animate (OBJ, PLY, glTF, or SEQ.pc2:FRAME). It is
     /// repaired first (welded, degenerate triangles and unused vertices
     /// dropped); pieces no marker reaches are dropped.
-    #[arg(long)]
+    #[arg(long, value_parser = super::mesh_spec)]
     pub scan: String,
     #[command(flatten)]
     pub job: JobOpts,
@@ -37,7 +37,7 @@ pub struct Args {
     pub mocap: Option<PathBuf>,
     /// A moving template mesh (any sequence format) whose performance the
     /// scan copies.
-    #[arg(long)]
+    #[arg(long, value_parser = super::mesh_spec)]
     pub template: Option<String>,
     /// Markers on the template, paired with the scan's by name.
     #[arg(long, requires = "template")]

@@ -23,9 +23,11 @@ pub enum Cmd {
     /// renderer (JavaScript modules, WebGL2), the compact 4D geometry and
     /// the Surface Motion Graph's transition table. Any static host serves
     /// it; no network access at run time.
+    #[command(after_help = "Example:\n  surfmotion web export --db samba_synth -o site")]
     Export(ExportArgs),
     /// Export into a temporary folder and serve it on 127.0.0.1 (prints the
     /// URL; Ctrl-C stops).
+    #[command(after_help = "Example:\n  surfmotion web serve --db samba_synth")]
     Serve(ServeArgs),
 }
 

@@ -104,6 +104,85 @@ fn read_graph(path: &Path) -> Option<GraphFile> {
     }
 }
 
+/// The measure `db build` uses without `--measure`: the manifest's `[graph]
+/// measure`, else the paper's 6D colour measure when the database names
+/// vertex colours, else 3D shape.
+pub fn default_measure(m: &Manifest) -> Measure {
+    m.graph.measure.unwrap_or(if m.colors.is_some() {
+        Measure::Colour
+    } else {
+        Measure::Shape
+    })
+}
+
+fn vertex_options(m: &Manifest) -> VertexOptions {
+    VertexOptions {
+        velocity_weight: m.graph.velocity_weight.unwrap_or(1.0),
+    }
+}
+
+/// The similarity cache file of `measure` in the database `dir`.
+pub fn similarity_path(dir: &Path, measure: Measure) -> PathBuf {
+    cache_dir(dir).join(format!("similarity-{}.bin", measure.name()))
+}
+
+/// The graph cache file of `measure` in the database `dir`.
+pub fn graph_path(dir: &Path, measure: Measure) -> PathBuf {
+    cache_dir(dir).join(format!("graph-{}.json", measure.name()))
+}
+
+/// The key a current similarity cache of `measure` carries: the hash of
+/// the frames, the measure and its parameters (reads every sequence file).
+pub fn similarity_key(dir: &Path, m: &Manifest, measure: Measure) -> Result<u64, DbError> {
+    let mut key = frames_key(dir, m)?;
+    key.text("measure", measure.name());
+    match measure {
+        Measure::Shape => {
+            key.text("voxels", &ShapeSet::VOXELS_PER_HEIGHT.to_string());
+        }
+        Measure::Vertex => {
+            key.text(
+                "velocity_weight",
+                &vertex_options(m).velocity_weight.to_string(),
+            );
+        }
+        Measure::Skeleton => add_rig(&mut key, dir, m)?,
+        Measure::Colour => {
+            if let Some(c) = &m.colors {
+                key.path(&Manifest::resolve(dir, c))?;
+            }
+        }
+    }
+    Ok(key.finish())
+}
+
+/// The key a current graph cache carries: the similarity matrix's key,
+/// the transition options and the graph edits of the manifest.
+pub fn graph_key(m: &Manifest, similarity_key: u64) -> u64 {
+    let mut gk = KeyHasher::default();
+    gk.text("similarity", &similarity_key.to_string());
+    gk.text(
+        "options",
+        &serde_json::to_string(&m.graph.transition_options()).unwrap_or_default(),
+    );
+    gk.text(
+        "edits",
+        &serde_json::to_string(&m.graph.edits()).unwrap_or_default(),
+    );
+    gk.finish()
+}
+
+/// The key and graph of a graph cache file, without checking either:
+/// `Err` naming why it cannot be read.
+pub fn read_graph_cache(path: &Path) -> Result<(u64, SurfaceMotionGraph), String> {
+    read_text(path)
+        .map_err(|e| e.to_string())
+        .and_then(|t| {
+            serde_json::from_str::<GraphFile>(&t).map_err(|e| format!("{}: {e}", path.display()))
+        })
+        .map(|g| (g.key, g.graph))
+}
+
 /// Where the time of a similarity computation went.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Timing {
@@ -124,27 +203,9 @@ pub fn similarity(
     force: bool,
     progress: &dyn BuildProgress,
 ) -> Result<(SimilarityMatrix, u64, Option<Timing>), DbError> {
-    let mut key = frames_key(dir, m)?;
-    key.text("measure", measure.name());
-    let vopts = VertexOptions {
-        velocity_weight: m.graph.velocity_weight.unwrap_or(1.0),
-    };
-    match measure {
-        Measure::Shape => {
-            key.text("voxels", &ShapeSet::VOXELS_PER_HEIGHT.to_string());
-        }
-        Measure::Vertex => {
-            key.text("velocity_weight", &vopts.velocity_weight.to_string());
-        }
-        Measure::Skeleton => add_rig(&mut key, dir, m)?,
-        Measure::Colour => {
-            if let Some(c) = &m.colors {
-                key.path(&Manifest::resolve(dir, c))?;
-            }
-        }
-    }
-    let key = key.finish();
-    let path = cache_dir(dir).join(format!("similarity-{}.bin", measure.name()));
+    let vopts = vertex_options(m);
+    let key = similarity_key(dir, m, measure)?;
+    let path = similarity_path(dir, measure);
     let cached = if force {
         None
     } else {
@@ -323,25 +384,12 @@ pub fn build(
                     .into(),
         });
     }
-    // The paper's 6D measure when the database has colours, else 3D shape.
-    let default = if m.colors.is_some() {
-        Measure::Colour
-    } else {
-        Measure::Shape
-    };
-    let measure = opts.measure.or(m.graph.measure).unwrap_or(default);
+    let measure = opts.measure.unwrap_or_else(|| default_measure(&m));
     let (mat, sim_key, timing) = similarity(dir, &m, measure, opts.force, progress)?;
     let topts = m.graph.transition_options();
     let edits = m.graph.edits();
-    let mut gk = KeyHasher::default();
-    gk.text("similarity", &sim_key.to_string());
-    gk.text(
-        "options",
-        &serde_json::to_string(&topts).unwrap_or_default(),
-    );
-    gk.text("edits", &serde_json::to_string(&edits).unwrap_or_default());
-    let graph_key = gk.finish();
-    let gpath = cache_dir(dir).join(format!("graph-{}.json", measure.name()));
+    let graph_key = graph_key(&m, sim_key);
+    let gpath = graph_path(dir, measure);
     let cached: Option<SurfaceMotionGraph> = if opts.force {
         None
     } else {

@@ -163,7 +163,7 @@ pub fn inspect_other(path: &Path) -> Option<Result<JsonReport, InspectError>> {
 }
 
 /// The first `n` bytes of a regular file (fewer if it is shorter).
-fn head(path: &Path, n: usize) -> Result<Vec<u8>, InspectError> {
+pub(super) fn head(path: &Path, n: usize) -> Result<Vec<u8>, InspectError> {
     let f = open_input(path, MAX_INPUT_BYTES).map_err(|e| InspectError::Json(e.to_string()))?;
     let mut b = Vec::with_capacity(n);
     f.take(n as u64)

@@ -268,6 +268,40 @@ pub fn run_cli<S: AsRef<std::ffi::OsStr>>(
     }
 }
 
+/// A key-frame graph of one sequence of `n` frames walking `step` metres
+/// a frame along +x, with the extra arcs `loops` (`from`, `to`, cost).
+pub fn line_key_graph(
+    n: usize,
+    step: f64,
+    loops: &[(usize, u32, f64)],
+) -> surfmotion::keyframe::graph::KeyGraph {
+    let centre: Vec<[f64; 2]> = (0..n).map(|f| [step * f as f64, 0.0]).collect();
+    let mut succ: Vec<Vec<(u32, f64)>> = (0..n)
+        .map(|f| {
+            if f + 1 < n {
+                vec![(f as u32 + 1, 0.0)]
+            } else {
+                Vec::new()
+            }
+        })
+        .collect();
+    for &(from, to, cost) in loops {
+        succ[from].push((to, cost));
+    }
+    surfmotion::keyframe::graph::KeyGraph::new(&succ, centre, vec![0; n])
+}
+
+/// [`run_cli`] without extra environment that must exit 0 (the panic
+/// names the arguments and carries stderr).
+pub fn cli_ok<S: AsRef<std::ffi::OsStr> + std::fmt::Debug>(
+    args: &[S],
+    cwd: Option<&std::path::Path>,
+) -> CliRun {
+    let r = run_cli(args, cwd, &[]);
+    assert_eq!(r.code, Some(0), "{args:?}: {}", r.stderr);
+    r
+}
+
 impl CliRun {
     /// What is wrong with this run as the answer to bad input, by the
     /// exit-code contract: exit 1 (not 2, a panic, nor a signal, an

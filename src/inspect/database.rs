@@ -1,0 +1,423 @@
+//! `inspect DB` and `inspect DB/cache`: what a character database holds
+//! (sequences, frames, skeletons) and the state of its cache (which files
+//! `db build` wrote, whether each is up to date with the database, the
+//! graph's size). `inspect` used to refuse the folder and call the cache
+//! folder "no .obj files".
+//!
+//! Up to date means the key a cache file carries is the key its inputs hash
+//! to now ([`crate::db::cache`]): computing it reads every sequence file
+//! once, as `db build` does before it reuses a cache.
+
+use super::InspectError;
+use crate::db::build::{
+    default_measure, graph_key, graph_path, read_graph_cache, similarity_key, similarity_path,
+};
+use crate::db::cache::cache_dir;
+use crate::db::{MANIFEST, Manifest};
+use crate::similarity::Measure;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// A sequence of a database.
+#[derive(Debug, Clone, Serialize)]
+pub struct DbSequence {
+    /// Name.
+    pub name: String,
+    /// Frames (0 when it does not load: see `problems`).
+    pub frames: usize,
+    /// Frames per second.
+    pub fps: f64,
+}
+
+/// A per-frame skeleton file in the database folder (`db skeleton` writes
+/// `skeletons/SEQ.skeleton.json`, `synth` the ground truth
+/// `truth/SEQ.skeleton.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct DbSkeleton {
+    /// The file.
+    pub file: PathBuf,
+    /// Its sequence.
+    pub sequence: String,
+    /// Frames it holds (`None`: it does not read).
+    pub frames: Option<usize>,
+    /// `matches the sequence`, or what is wrong.
+    pub state: String,
+}
+
+/// A file of the cache folder.
+#[derive(Debug, Clone, Serialize)]
+pub struct CacheEntry {
+    /// The file.
+    pub file: PathBuf,
+    /// `similarity matrix (MEASURE)`, `graph (MEASURE)`, `parametric
+    /// model` or `not a file db build writes`.
+    pub what: String,
+    /// Whether `db build` (or `play`) would use it as it is.
+    pub up_to_date: bool,
+    /// `up to date`, or why not (stale, unreadable).
+    pub state: String,
+    /// A graph's transitions.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transitions: Option<usize>,
+    /// A graph's sequence edges.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub edges: Option<usize>,
+    /// A graph's frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames: Option<usize>,
+}
+
+/// What a database folder holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct DatabaseReport {
+    /// The folder.
+    pub path: PathBuf,
+    /// Character name.
+    pub name: String,
+    /// Frames per second of the manifest.
+    pub fps: f64,
+    /// Length unit of the meshes.
+    pub units: String,
+    /// Up axis.
+    pub up: String,
+    /// Topology file.
+    pub topology: PathBuf,
+    /// Topology vertex count.
+    pub vertices: usize,
+    /// Topology triangle count.
+    pub triangles: usize,
+    /// Sequences.
+    pub sequences: Vec<DbSequence>,
+    /// Frames in all sequences.
+    pub total_frames: usize,
+    /// The rig the manifest names (`landmarks FILE`, ...; empty: none).
+    pub rig: Vec<String>,
+    /// Per-frame skeleton files found.
+    pub skeletons: Vec<DbSkeleton>,
+    /// The measure `db build`, `graph` and `retarget` use by default.
+    pub measure: String,
+    /// The cache folder.
+    pub cache_dir: PathBuf,
+    /// Its files.
+    pub cache: Vec<CacheEntry>,
+    /// Problems `db info` reports.
+    pub problems: Vec<String>,
+}
+
+/// What a database's cache folder holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct CacheReport {
+    /// The cache folder.
+    pub path: PathBuf,
+    /// Its database.
+    pub database: PathBuf,
+    /// The measure `db build` uses by default.
+    pub measure: String,
+    /// Its files.
+    pub cache: Vec<CacheEntry>,
+}
+
+/// The database folder `path` is (it holds [`MANIFEST`]).
+pub fn is_database(path: &Path) -> bool {
+    path.is_dir() && path.join(MANIFEST).is_file()
+}
+
+/// The database whose cache folder `path` is.
+pub fn database_of_cache(path: &Path) -> Option<PathBuf> {
+    if !path.is_dir() || path.file_name()? != "cache" {
+        return None;
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    is_database(&parent).then_some(parent)
+}
+
+fn err(e: impl std::fmt::Display) -> InspectError {
+    InspectError::Json(e.to_string())
+}
+
+/// Reads the database `dir`: its manifest, every sequence (as `db info`),
+/// its skeleton files and its cache.
+pub fn inspect_database(dir: &Path) -> Result<DatabaseReport, InspectError> {
+    let m = Manifest::load(dir).map_err(err)?;
+    let info = crate::db::info(dir).map_err(err)?;
+    let sequences: Vec<DbSequence> = info
+        .sequences
+        .iter()
+        .map(|s| DbSequence {
+            name: s.name.clone(),
+            frames: s.frames,
+            fps: s.fps,
+        })
+        .collect();
+    let rig = [
+        ("landmarks", &m.rig.landmarks),
+        ("parts", &m.rig.parts),
+        ("glTF skin", &m.rig.gltf_skin),
+        ("rig map", &m.rig.rig_map),
+    ]
+    .into_iter()
+    .filter_map(|(what, p)| p.as_ref().map(|p| format!("{what} {}", p.display())))
+    .collect();
+    let mut skeletons = Vec::new();
+    for sub in ["skeletons", "truth"] {
+        let Ok(rd) = std::fs::read_dir(dir.join(sub)) else {
+            continue;
+        };
+        let mut files: Vec<PathBuf> = rd
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.to_string_lossy().ends_with(".skeleton.json"))
+            .collect();
+        files.sort();
+        skeletons.extend(files.into_iter().map(|f| skeleton_file(f, &sequences)));
+    }
+    Ok(DatabaseReport {
+        path: dir.to_path_buf(),
+        name: m.name.clone(),
+        fps: m.fps,
+        units: m.units.clone(),
+        up: m.up.clone(),
+        topology: m.topology.clone(),
+        vertices: info.vertices,
+        triangles: info.triangles,
+        total_frames: info.total_frames,
+        sequences,
+        rig,
+        skeletons,
+        measure: default_measure(&m).name().into(),
+        cache_dir: cache_dir(dir),
+        cache: cache_entries(dir, &m)?,
+        problems: info.problems,
+    })
+}
+
+/// Reads the cache folder of the database `db`.
+pub fn inspect_cache(path: &Path, db: &Path) -> Result<CacheReport, InspectError> {
+    let m = Manifest::load(db).map_err(err)?;
+    Ok(CacheReport {
+        path: path.to_path_buf(),
+        database: db.to_path_buf(),
+        measure: default_measure(&m).name().into(),
+        cache: cache_entries(db, &m)?,
+    })
+}
+
+/// A skeleton file's frames against its sequence's.
+fn skeleton_file(file: PathBuf, sequences: &[DbSequence]) -> DbSkeleton {
+    let name = file.file_name().map(|n| n.to_string_lossy().into_owned());
+    let sequence = name
+        .as_deref()
+        .and_then(|n| n.strip_suffix(".skeleton.json"))
+        .unwrap_or_default()
+        .to_string();
+    let frames = crate::fsutil::read_small_text(&file)
+        .map_err(|e| e.to_string())
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).map_err(|e| e.to_string()))
+        .and_then(|v| {
+            v["frames"]
+                .as_array()
+                .map(Vec::len)
+                .ok_or_else(|| "no \"frames\" list".to_string())
+        });
+    let state = match (&frames, sequences.iter().find(|s| s.name == sequence)) {
+        (Err(why), _) => format!("does not read: {why}"),
+        (Ok(_), None) => "no sequence of that name in the manifest".into(),
+        (Ok(f), Some(s)) if *f == s.frames => "matches the sequence".into(),
+        (Ok(f), Some(s)) => format!(
+            "{f} frames, the sequence has {}: made before the sequence changed",
+            s.frames
+        ),
+    };
+    DbSkeleton {
+        file,
+        sequence,
+        frames: frames.ok(),
+        state,
+    }
+}
+
+/// Every file of the cache folder of `dir`, with its state.
+fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectError> {
+    let cdir = cache_dir(dir);
+    let Ok(rd) = std::fs::read_dir(&cdir) else {
+        return Ok(Vec::new());
+    };
+    let mut files: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    files.sort();
+    // Keys are computed once a measure (each reads every sequence).
+    let mut keys: BTreeMap<&'static str, Result<u64, String>> = BTreeMap::new();
+    let mut key_of = |measure: Measure| {
+        keys.entry(measure.name())
+            .or_insert_with(|| similarity_key(dir, m, measure).map_err(|e| e.to_string()))
+            .clone()
+    };
+    let measures = [
+        Measure::Shape,
+        Measure::Vertex,
+        Measure::Skeleton,
+        Measure::Colour,
+    ];
+    let mut out = Vec::new();
+    for file in files {
+        let mut e = CacheEntry {
+            file: file.clone(),
+            what: "not a file db build writes".into(),
+            up_to_date: false,
+            state: "left alone by the tool".into(),
+            transitions: None,
+            edges: None,
+            frames: None,
+        };
+        let judge = |e: &mut CacheEntry, found: Result<u64, String>, want: Result<u64, String>| {
+            (e.up_to_date, e.state) = match (found, want) {
+                (Err(why), _) => (false, format!("unreadable ({why}): `db build` rebuilds it")),
+                (_, Err(why)) => (false, format!("cannot tell: {why}")),
+                (Ok(f), Ok(w)) if f == w => (true, "up to date".into()),
+                _ => (
+                    false,
+                    "stale: the database changed since it was built; `db build` rebuilds it".into(),
+                ),
+            }
+        };
+        if let Some(measure) = measures
+            .into_iter()
+            .find(|&q| file == similarity_path(dir, q))
+        {
+            e.what = format!("similarity matrix ({})", measure.name());
+            judge(&mut e, header_key(&file, b"SMSIM001"), key_of(measure));
+        } else if let Some(measure) = measures.into_iter().find(|&q| file == graph_path(dir, q)) {
+            e.what = format!("graph ({})", measure.name());
+            let read = read_graph_cache(&file);
+            if let Ok((_, g)) = &read {
+                e.transitions = Some(g.transitions.len());
+                e.edges = Some(g.edges.len());
+                e.frames = Some(g.sequences.iter().map(|s| s.len).sum());
+            }
+            judge(
+                &mut e,
+                read.map(|(k, _)| k),
+                key_of(measure).map(|k| graph_key(m, k)),
+            );
+        } else if file == crate::parametric::store::cache_path(dir) {
+            e.what = "parametric model (`play`)".into();
+            let want =
+                crate::parametric::store::key(dir, m, &crate::parametric::MotionOptions::default())
+                    .map_err(|e| e.to_string());
+            judge(&mut e, header_key(&file, b"SMPAR001"), want);
+        }
+        out.push(e);
+    }
+    Ok(out)
+}
+
+/// The key after an 8-byte magic at the start of a cache file.
+fn header_key(path: &Path, magic: &[u8; 8]) -> Result<u64, String> {
+    let b = super::other::head(path, 16).map_err(|e| e.to_string())?;
+    if b.len() < 16 || &b[..8] != magic {
+        return Err("not a cache file of its kind".into());
+    }
+    let mut k = [0u8; 8];
+    k.copy_from_slice(&b[8..16]);
+    Ok(u64::from_le_bytes(k))
+}
+
+/// The cache lines of a text report.
+fn write_cache(s: &mut String, measure: &str, cache: &[CacheEntry]) {
+    if cache.is_empty() {
+        let _ = writeln!(
+            s,
+            "  cache       empty: `surfmotion db build` fills it (measure {measure})"
+        );
+    }
+    for e in cache {
+        let name = e.file.file_name().unwrap_or_default().to_string_lossy();
+        let size = match (e.transitions, e.edges, e.frames) {
+            (Some(t), Some(g), Some(f)) => format!(
+                ", {} between {}, {}",
+                crate::batch::summary::count(t, "transition"),
+                crate::batch::summary::count(f, "frame"),
+                crate::batch::summary::count(g, "sequence edge")
+            ),
+            _ => String::new(),
+        };
+        let _ = writeln!(s, "  cache       {name}: {}{size}; {}", e.what, e.state);
+    }
+}
+
+impl DatabaseReport {
+    /// A human-readable summary.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "{} (character database '{}')",
+            self.path.display(),
+            self.name
+        );
+        let _ = writeln!(
+            s,
+            "  topology    {} ({} vertices, {} triangles), units {}, up {}",
+            self.topology.display(),
+            self.vertices,
+            self.triangles,
+            self.units,
+            self.up
+        );
+        for q in &self.sequences {
+            let _ = writeln!(
+                s,
+                "  sequence    {} ({} frames at {} fps)",
+                q.name, q.frames, q.fps
+            );
+        }
+        let _ = writeln!(
+            s,
+            "  frames      {} in {}",
+            self.total_frames,
+            crate::batch::summary::count(self.sequences.len(), "sequence")
+        );
+        let _ = writeln!(
+            s,
+            "  rig         {}",
+            if self.rig.is_empty() {
+                "none".into()
+            } else {
+                self.rig.join(", ")
+            }
+        );
+        if self.skeletons.is_empty() {
+            let _ = writeln!(
+                s,
+                "  skeletons   none: `surfmotion db skeleton {}` writes them",
+                self.path.display()
+            );
+        }
+        for k in &self.skeletons {
+            let _ = writeln!(s, "  skeleton    {}: {}", k.file.display(), k.state);
+        }
+        write_cache(&mut s, &self.measure, &self.cache);
+        for p in &self.problems {
+            let _ = writeln!(s, "  problem: {p}");
+        }
+        s
+    }
+}
+
+impl CacheReport {
+    /// A human-readable summary.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "{} (the cache of the database {})",
+            self.path.display(),
+            self.database.display()
+        );
+        write_cache(&mut s, &self.measure, &self.cache);
+        s
+    }
+}
