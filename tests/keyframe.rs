@@ -291,41 +291,33 @@ fn paths_start_and_end_at_the_key_frames_pass_every_via_and_follow_edges() {
             assert_eq!(plan.segments[0].to, keys[1]);
             assert_eq!(*plan.segments[0].path.last().unwrap(), keys[1]);
             assert_eq!(plan.segments[1].path[0], keys[1]);
-            // Every step is an arc of the graph; the measures are the path's.
-            let mut cost = 0.0;
-            let mut dist = 0.0;
-            for w in path.windows(2) {
-                let e = g.edge(w[0], w[1]);
-                assert!(e.is_some(), "case {case}: {} -> {} is no edge", w[0], w[1]);
-                cost += e.unwrap().cost;
-                dist += g.step[w[1] as usize];
-            }
-            assert_eq!(plan.measure.frames as usize, path.len(), "case {case}");
-            assert!((plan.measure.distance - dist).abs() < 1e-9, "case {case}");
-            assert!((plan.measure.cost - cost).abs() < 1e-9, "case {case}");
+            assert_walks_the_graph(&g, &plan, case);
             checked += 1;
         }
     }
     assert!(checked > 10, "only {checked} connected cases");
 }
 
+/// Every step of the plan's path is an arc of `g`, and the plan's
+/// measures (frames, distance, cost) are the path's.
+fn assert_walks_the_graph(g: &KeyGraph, plan: &surfmotion::keyframe::Plan, case: usize) {
+    let (mut cost, mut dist) = (0.0, 0.0);
+    for w in plan.path.windows(2) {
+        let e = g.edge(w[0], w[1]);
+        assert!(e.is_some(), "case {case}: {} -> {} is no edge", w[0], w[1]);
+        cost += e.unwrap().cost;
+        dist += g.step[w[1] as usize];
+    }
+    assert_eq!(plan.measure.frames as usize, plan.path.len(), "case {case}");
+    assert!((plan.measure.distance - dist).abs() < 1e-9, "case {case}");
+    assert!((plan.measure.cost - cost).abs() < 1e-9, "case {case}");
+}
+
 #[test]
 fn loops_are_repeated_to_meet_a_reachable_target() {
     // One sequence walking 0.05 m per frame with a loop 30 -> 11 (20 frames,
     // 1 m): 0 -> 39 plus k loops makes 1.95 + k m in 40 + 20k frames.
-    let n = 40;
-    let centre: Vec<[f64; 2]> = (0..n).map(|f| [0.05 * f as f64, 0.0]).collect();
-    let mut succ: Vec<Vec<(u32, f64)>> = (0..n)
-        .map(|f| {
-            if f + 1 < n {
-                vec![(f as u32 + 1, 0.0)]
-            } else {
-                vec![]
-            }
-        })
-        .collect();
-    succ[30].push((11, 0.002));
-    let g = KeyGraph::new(&succ, centre, vec![0; n]);
+    let g = common::line_key_graph(40, 0.05, &[(30, 11, 0.002)]);
     let o = exact();
     let p = Planner::new(g, &[0, 39], 20.0, &o).unwrap();
     let plan = p
@@ -1682,16 +1674,7 @@ fn paths_pass_two_vias_in_order_with_either_search() {
                         .sum();
                     assert_eq!(s.walk.len() + loop_frames, s.path.len(), "case {case}");
                 }
-                let (mut cost, mut dist) = (0.0, 0.0);
-                for w in plan.path.windows(2) {
-                    let e = g.edge(w[0], w[1]);
-                    assert!(e.is_some(), "case {case}: {} -> {} is no edge", w[0], w[1]);
-                    cost += e.unwrap().cost;
-                    dist += g.step[w[1] as usize];
-                }
-                assert_eq!(plan.measure.frames as usize, plan.path.len(), "case {case}");
-                assert!((plan.measure.distance - dist).abs() < 1e-9, "case {case}");
-                assert!((plan.measure.cost - cost).abs() < 1e-9, "case {case}");
+                assert_walks_the_graph(&g, &plan, case);
                 checked[mi] += 1;
             }
         }

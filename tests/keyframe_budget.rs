@@ -3,26 +3,15 @@
 //! aborting on the allocation. One test in its own binary: it sets the
 //! process's environment.
 
+mod common;
+
 use surfmotion::keyframe::graph::KeyGraph;
 use surfmotion::keyframe::search::{SearchError, SearchOptions};
 use surfmotion::keyframe::{Planner, Targets};
 
 /// One sequence of 60 frames walking 2 cm a frame, with two loops back.
 fn looped() -> KeyGraph {
-    let n = 60;
-    let centre: Vec<[f64; 2]> = (0..n).map(|f| [0.02 * f as f64, 0.0]).collect();
-    let mut succ: Vec<Vec<(u32, f64)>> = (0..n)
-        .map(|f| {
-            if f + 1 < n {
-                vec![(f as u32 + 1, 0.0)]
-            } else {
-                Vec::new()
-            }
-        })
-        .collect();
-    succ[40].push((10, 0.01));
-    succ[55].push((30, 0.02));
-    KeyGraph::new(&succ, centre, vec![0; n])
+    common::line_key_graph(60, 0.02, &[(40, 10, 0.01), (55, 30, 0.02)])
 }
 
 #[test]

@@ -59,10 +59,7 @@ hips_JNT 0 100 0
   l_leg_JNT 0 -44 1
    l_foot_JNT 0 -42 -2
     l_toebase_JNT 0 -7 13 | 0 0 7
- r_upleg_JNT -9 -5 0
-  r_leg_JNT 0 -44 1
-   r_foot_JNT 0 -42 -2
-    r_toebase_JNT 0 -7 13 | 0 0 7
+ mirror l_upleg_JNT l_=>r_
  spine_JNT 0 10 -1
   spine1_JNT 0 12 0
    spine2_JNT 0 13 0
@@ -78,16 +75,7 @@ hips_JNT 0 100 0
         l_handThumb1_JNT 3 -1 3
          l_handThumb2_JNT 3 0 2
           l_handThumb3_JNT 2 0 1 | 2 0 1
-    r_shoulder_JNT -3 12 0
-     r_arm_JNT -13 0 0
-      r_forearm_JNT -27 0 0
-       r_hand_JNT -25 0 0
-        r_handIndex1_JNT -9 0 2
-         r_handIndex2_JNT -4 0 0
-          r_handIndex3_JNT -3 0 0 | -2 0 0
-        r_handThumb1_JNT -3 -1 3
-         r_handThumb2_JNT -3 0 2
-          r_handThumb3_JNT -2 0 1 | -2 0 1
+    mirror l_shoulder_JNT l_=>r_
 ",
     },
     Suite {
@@ -117,10 +105,7 @@ body_world 0 0 0
    b_r_leg 0 -43 0
     b_r_foot_twist 0 -43 0
      b_r_foot 0 0 0 | 0 -6 14
-  b_l_upleg 10 -4 0
-   b_l_leg 0 -43 0
-    b_l_foot_twist 0 -43 0
-     b_l_foot 0 0 0 | 0 -6 14
+  mirror b_r_upleg r_=>l_
   b_spine0 0 8 0
    p_navel 0 2 11 | 0 0 2
    b_spine1 0 10 0
@@ -139,17 +124,7 @@ body_world 0 0 0
              b_r_index2 -4 0 0 | -3 0 0
             b_r_thumb0 -2 -1 2
              b_r_thumb1 -3 0 2 | -2 0 1
-      b_l_shoulder 3 10 0
-       p_l_scap 4 -4 -7 | 0 -8 0
-       b_l_arm 14 0 0
-        b_l_arm_twist 14 0 0
-         b_l_forearm 14 0 0
-          b_l_wrist_twist 13 0 0
-           b_l_wrist 13 0 0
-            b_l_index1 9 0 2
-             b_l_index2 4 0 0 | 3 0 0
-            b_l_thumb0 2 -1 2
-             b_l_thumb1 3 0 2 | 2 0 1
+      mirror b_r_shoulder r_=>l_
 ",
     },
     Suite {
@@ -194,30 +169,14 @@ Hips 0 95 0
           RightHandThumb2 -3 0 2
            RightHandThumb3 -2 0 1
             RightHandThumb4 -2 0 1 | -1 0 0
-     LeftShoulder 3 11 0
-      LeftArm 13 0 0
-       LeftForeArm 27 0 0
-        LeftHand 25 0 0
-         LeftHandMiddle1 9 0 0
-          LeftHandMiddle2 4 0 0
-           LeftHandMiddle3 3 0 0
-            LeftHandMiddle4 2 0 0 | 1 0 0
-         LeftHandThumb1 3 -1 3
-          LeftHandThumb2 3 0 2
-           LeftHandThumb3 2 0 1
-            LeftHandThumb4 2 0 1 | 1 0 0
+     mirror RightShoulder Right=>Left
  RightUpLeg -9 -4 0
   RightLeg 0 -42 0
    RightFoot 0 -42 -1
     RightForeFoot 0 -5 8
      RightToeBase 0 -3 6
       RightToeBaseEnd 0 0 5 | 0 0 1
- LeftUpLeg 9 -4 0
-  LeftLeg 0 -42 0
-   LeftFoot 0 -42 -1
-    LeftForeFoot 0 -5 8
-     LeftToeBase 0 -3 6
-      LeftToeBaseEnd 0 0 5 | 0 0 1
+ mirror RightUpLeg Right=>Left
 ",
     },
     Suite {
@@ -363,14 +322,7 @@ BPx_joint 0 95 0
         LAy_joint 0 0 0
          LAz_joint 0 0 0
           LFx_joint 0 -4 12 | 0 0 6
-   RHx_joint -9 -6 0
-    RHy_joint 0 0 0
-     RHz_joint 0 0 0
-      RKx_joint 0 -42 0
-       RAx_joint 0 -42 0
-        RAy_joint 0 0 0
-         RAz_joint 0 0 0
-          RFx_joint 0 -4 12 | 0 0 6
+   mirror LHx_joint L=>R
    BTx_joint 0 12 0
     BTy_joint 0 0 0
      BTz_joint 0 0 0
@@ -387,13 +339,7 @@ BPx_joint 0 95 0
           LEz_joint 0 0 0
            LWx_joint 0 -26 0
             LWy_joint 0 0 0 | 0 -9 0
-      RSx_joint -18 31 0
-       RSy_joint 0 0 0
-        RSz_joint 0 0 0
-         REx_joint 0 -29 0
-          REz_joint 0 0 0
-           RWx_joint 0 -26 0
-            RWy_joint 0 0 0 | 0 -9 0
+      mirror LSx_joint L=>R
 ",
     },
     Suite {
@@ -426,13 +372,7 @@ Reference 0 0 0
     LeftFoot 0 -43 -1
      LeftToeBase 0 -7 13
       LeftFootExtraFinger1 0 0 5 | 0 0 2
-  RightUpLeg -9 -4 0
-   RightUpLegRoll 0 -21 0 | 0 -5 0
-   RightLeg 0 -43 0
-    RightLegRoll 0 -21 0 | 0 -5 0
-    RightFoot 0 -43 -1
-     RightToeBase 0 -7 13
-      RightFootExtraFinger1 0 0 5 | 0 0 2
+  mirror LeftUpLeg Left=>Right
   Spine 0 10 -1
    Spine1 0 12 0
     Spine2 0 12 0
@@ -449,16 +389,7 @@ Reference 0 0 0
           LeftHandThumb2 3 0 2 | 2 0 1
          LeftHandIndex1 9 0 2
           LeftHandIndex2 4 0 0 | 3 0 0
-     RightShoulder -3 12 0
-      RightArm -13 0 0
-       RightArmRoll -14 0 0 | -4 0 0
-       RightForeArm -27 0 0
-        RightForeArmRoll -13 0 0 | -4 0 0
-        RightHand -25 0 0
-         RightHandThumb1 -3 -1 3
-          RightHandThumb2 -3 0 2 | -2 0 1
-         RightHandIndex1 -9 0 2
-          RightHandIndex2 -4 0 0 | -3 0 0
+     mirror LeftShoulder Left=>Right
 ",
     },
     Suite {
@@ -486,10 +417,7 @@ Hips 0 0.97 0
   LeftLowerLeg 0 -0.43 0.01
    LeftFoot 0 -0.42 -0.02
     LeftToes 0 -0.06 0.13 | 0 0 0.06
- RightUpperLeg -0.09 -0.05 0
-  RightLowerLeg 0 -0.43 0.01
-   RightFoot 0 -0.42 -0.02
-    RightToes 0 -0.06 0.13 | 0 0 0.06
+ mirror LeftUpperLeg Left=>Right
  Spine 0 0.09 0
   Chest 0 0.12 0
    UpperChest 0 0.13 0
@@ -502,10 +430,7 @@ Hips 0 0.97 0
      LeftUpperArm 0.12 0 0
       LeftLowerArm 0.207 -0.174 0
        LeftHand 0.192 -0.161 0 | 0.07 -0.06 0
-    RightShoulder -0.03 0.11 0
-     RightUpperArm -0.12 0 0
-      RightLowerArm -0.207 -0.174 0
-       RightHand -0.192 -0.161 0 | -0.07 -0.06 0
+    mirror LeftShoulder Left=>Right
 ",
     },
     Suite {
@@ -534,11 +459,7 @@ Hips 0 104 0
    LeftFoot 0 -44 -2
     LeftToeBase 0 -7 13
      LeftToe_End 0 0 8 | 0 0 1
- RightUpLeg -9 -7 0
-  RightLeg 0 -45 0
-   RightFoot 0 -44 -2
-    RightToeBase 0 -7 13
-     RightToe_End 0 0 8 | 0 0 1
+ mirror LeftUpLeg Left=>Right
  Spine 0 10 0
   Spine1 0 6 0
    Spine1_split 0 6 0
@@ -551,11 +472,7 @@ Hips 0 104 0
        LeftArm 7 0 0
         LeftForeArm 27 0 0
          LeftHand 25 0 0 | 8 0 0
-     RightShoulder -3 12 0
-      RightShoulder_split -6 0 0
-       RightArm -7 0 0
-        RightForeArm -27 0 0
-         RightHand -25 0 0 | -8 0 0
+     mirror LeftShoulder Left=>Right
 ",
     },
     Suite {
@@ -585,15 +502,11 @@ Torso 0 112 0
  LeftShoulder 17 31 0
   LeftElbow 28 0 0
    LeftHand 0 26 0 | 0 9 0
- RightShoulder -17 31 0
-  RightElbow -28 0 0
-   RightHand 0 26 0 | 0 9 0
+ mirror LeftShoulder Left=>Right
  LeftHip 9 -22 0
   LeftKnee 0 -44 1
    LeftFoot 0 -43 -2 | 0 -4 12
- RightHip -9 -22 0
-  RightKnee 0 -44 1
-   RightFoot 0 -43 -2 | 0 -4 12
+ mirror LeftHip Left=>Right
 ",
     },
 ];

@@ -15,7 +15,9 @@
 //! offset; an optional End Site; optional rotation channel values of the
 //! two frames, else zero; `% 6` gives that joint position channels, `%
 //! order` its own rotation order, else the `order` line's; names may hold
-//! spaces). Offsets are written Y-up facing +Z with the body's left at +X
+//! spaces); `mirror NAME FROM=>TO` at a depth stands for the subtree of
+//! the joint NAME above with x negated and FROM replaced by TO in its
+//! names (a right arm written as the left one). Offsets are written Y-up facing +Z with the body's left at +X
 //! and turned into `axes` when the file is written, unless the description
 //! is `raw` (the fixtures' files: offsets already in the file's frame).
 
@@ -88,6 +90,11 @@ pub fn parse_skel(text: &str) -> Skel {
             "all6" => s.all6 = true,
             "crlf" => s.crlf = true,
             "tabs" => s.tabs = true,
+            "mirror" => {
+                let depth = line.len() - line.trim_start_matches(' ').len();
+                let rows = mirrored(&s.rows, rest, depth);
+                s.rows.extend(rows);
+            }
             _ => {
                 let depth = line.len() - line.trim_start_matches(' ').len();
                 let (t, own) = match t.split_once('%') {
@@ -125,6 +132,42 @@ pub fn parse_skel(text: &str) -> Skel {
         }
     }
     s
+}
+
+/// The rows of `mirror NAME FROM=>TO` at `depth`: the subtree of the
+/// joint NAME given before, its left and right swapped (x negated, FROM
+/// replaced by TO in every name), rooted at `depth`. Most rigs' right side
+/// is their left side so mirrored.
+fn mirrored(rows: &[Row], spec: &str, depth: usize) -> Vec<Row> {
+    let (name, swap) = spec
+        .trim()
+        .rsplit_once(' ')
+        .unwrap_or_else(|| panic!("mirror {spec}: expected NAME FROM=>TO"));
+    let (from, to) = swap
+        .split_once("=>")
+        .unwrap_or_else(|| panic!("mirror {spec}: expected FROM=>TO"));
+    let root = rows
+        .iter()
+        .rposition(|r| r.name == name)
+        .unwrap_or_else(|| panic!("mirror {spec}: no joint {name} before it"));
+    let d0 = rows[root].depth;
+    let flip = |v: DVec3| DVec3::new(0.0 - v.x, v.y, v.z);
+    let below = rows[root + 1..].iter().take_while(|r| r.depth > d0);
+    std::iter::once(&rows[root])
+        .chain(below)
+        .map(|r| {
+            assert!(r.rot.is_none(), "mirror {spec}: {} has rotations", r.name);
+            Row {
+                depth: r.depth - d0 + depth,
+                name: r.name.replace(from, to),
+                offset: flip(r.offset),
+                end: r.end.map(flip),
+                rot: None,
+                pos: r.pos,
+                order: r.order.clone(),
+            }
+        })
+        .collect()
 }
 
 /// A BVH from a `tests/fixtures/suites` description (raw: offsets in the
