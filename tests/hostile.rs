@@ -1636,8 +1636,32 @@ fn inspect_reads_a_database_its_cache_and_its_graph() {
     let c = json("inspect {d}/db/cache --json");
     let e = entry(&c, "similarity matrix (shape)");
     assert!(e["state"].as_str().unwrap().contains("unreadable"), "{e}");
-    // The DOT file of the graph: the same sequences and transitions.
+    // Skeletons match their sequences until a sequence goes; its problem
+    // line carries no OS error number.
     std::fs::write(&manifest, text).unwrap();
+    common::cli_ok(&expand("db skeleton {d}/db", d), Some(d));
+    let v = json("inspect {d}/db --json");
+    let states: Vec<&str> = v["skeletons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|k| k["state"].as_str().unwrap())
+        .collect();
+    assert_eq!(states, ["matches the sequence"; 2], "{v}");
+    let run = d.join("db/run.pc2");
+    let run_bytes = std::fs::read(&run).unwrap();
+    std::fs::remove_file(&run).unwrap();
+    let r = common::cli_ok(&expand("inspect {d}/db", d), Some(d));
+    assert!(r.stdout.contains("problem: sequence 'run'"), "{}", r.stdout);
+    assert!(!r.stdout.contains("os error"), "{}", r.stdout);
+    assert!(
+        r.stdout
+            .contains("run.skeleton.json: its sequence does not load"),
+        "{}",
+        r.stdout
+    );
+    std::fs::write(&run, run_bytes).unwrap();
+    // The DOT file of the graph: the same sequences and transitions.
     let r = common::cli_ok(&expand("graph {d}/db --dot", d), Some(d));
     std::fs::write(d.join("graph.dot"), &r.stdout).unwrap();
     let r = common::cli_ok(&expand("inspect {d}/graph.dot", d), Some(d));

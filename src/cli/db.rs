@@ -229,7 +229,10 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
         Cmd::Build(a) => return build(a),
         Cmd::Init(a) => init(a)?,
         Cmd::Info(a) => {
-            let i = info(&a.dir)?;
+            let mut i = info(&a.dir)?;
+            for p in &mut i.problems {
+                *p = super::without_os_error_numbers(p);
+            }
             if a.json {
                 crate::outln!("{}", serde_json::to_string_pretty(&i)?)?;
             } else {

@@ -31,7 +31,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             fps: None,
         },
     };
-    let r = inspect(&a.file, &opts)?;
+    let mut r = inspect(&a.file, &opts)?;
+    if let surfmotion::inspect::Report::Database(d) = &mut r {
+        for p in &mut d.problems {
+            *p = super::without_os_error_numbers(p);
+        }
+    }
     if a.json {
         crate::outln!("{}", serde_json::to_string_pretty(&r)?)?;
     } else {

@@ -871,7 +871,7 @@ pub fn one_line(e: &anyhow::Error) -> String {
 
 /// `s` without the OS's " (os error N)" suffixes: "x.bvh: No such file or
 /// directory (os error 2)" says what is wrong without them.
-fn without_os_error_numbers(s: &str) -> String {
+pub fn without_os_error_numbers(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     let mut rest = s;
     while let Some(i) = rest.find(" (os error ") {

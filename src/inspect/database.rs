@@ -226,6 +226,7 @@ fn skeleton_file(file: PathBuf, sequences: &[DbSequence]) -> DbSkeleton {
     let state = match (&frames, sequences.iter().find(|s| s.name == sequence)) {
         (Err(why), _) => format!("does not read: {why}"),
         (Ok(_), None) => "no sequence of that name in the manifest".into(),
+        (Ok(_), Some(s)) if s.frames == 0 => "its sequence does not load (see the problems)".into(),
         (Ok(f), Some(s)) if *f == s.frames => "matches the sequence".into(),
         (Ok(f), Some(s)) => format!(
             "{f} frames, the sequence has {}: made before the sequence changed",
