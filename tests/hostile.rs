@@ -1138,6 +1138,21 @@ fn session12_rows() -> Vec<Row> {
         )
         .file("f.bvh", "x"),
     ];
+    r.push(row(
+        "keyframe --grid --distances with too many values",
+        "keyframe --db {db} --from walk:0 --to walk:100 --grid --distances 0:1000:0.0001",
+        &[
+            "--distances",
+            "10000001 values",
+            "at most 100001",
+            "larger STEP",
+        ],
+    ));
+    r.push(row(
+        "render --facing q",
+        "render {topo} -o {d}/r.png --facing q",
+        &["--facing", "\"q\"", "expected x, -x"],
+    ));
     // An empty mesh argument named the current folder (a database there:
     // "`: a character database folder`").
     for args in [

@@ -60,7 +60,7 @@ pub fn parse_axis(s: &str) -> anyhow::Result<DVec3> {
         "-y" => DVec3::NEG_Y,
         "z" | "+z" => DVec3::Z,
         "-z" => DVec3::NEG_Z,
-        _ => anyhow::bail!("axis {s:?}: expected x, -x, y, -y, z or -z"),
+        _ => anyhow::bail!("--facing {s:?}: expected x, -x, y, -y, z or -z"),
     })
 }
 

@@ -202,8 +202,15 @@ pub fn parse_range(s: &str) -> Result<Vec<f64>, String> {
             .split(':')
             .map(|x| x.trim().parse::<f64>().map_err(|_| bad()))
             .collect::<Result<_, _>>()?;
-        if p.len() != 3 || p[2] <= 0.0 || p[1] < p[0] || (p[1] - p[0]) / p[2] > 1e5 {
+        if p.len() != 3 || p[2] <= 0.0 || p[1] < p[0] {
             return Err(bad());
+        }
+        // Said "expected A:B:STEP" of a well-formed range that was too long.
+        if (p[1] - p[0]) / p[2] > 1e5 {
+            return Err(format!(
+                "'{s}': {:.0} values, at most 100001: choose a larger STEP",
+                ((p[1] - p[0]) / p[2]).floor() + 1.0
+            ));
         }
         let n = ((p[1] - p[0]) / p[2] + 1e-9).floor() as usize;
         (0..=n).map(|k| p[0] + k as f64 * p[2]).collect()
