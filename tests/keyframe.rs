@@ -494,6 +494,28 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
         );
         assert!(mean <= max && max <= g["query_ms_max"].as_f64().unwrap() + 1.0);
     }
+    // Smoothness split by transition kind: the key-frames lie in two
+    // sequences, so every path crosses at least once; the taken
+    // transitions add up to the queries', and the graph's split to its
+    // whole.
+    let (mut total, mut across) = (0, 0);
+    for q in queries {
+        let (n, a) = (
+            q["transitions"].as_u64().unwrap(),
+            q["across"].as_u64().unwrap(),
+        );
+        assert!(a >= 1 && a <= n, "{q}");
+        total += n;
+        across += a;
+    }
+    let count = |k: &str| g[k]["count"].as_u64().unwrap();
+    assert_eq!(count("taken_across"), across);
+    assert_eq!(count("taken_within") + across, total);
+    assert_eq!(
+        count("graph_smoothness_within") + count("graph_smoothness_across"),
+        count("graph_smoothness")
+    );
+    assert!(count("graph_smoothness_within") > 0 && count("graph_smoothness_across") > 0);
     let text = std::fs::read_to_string(&svg).unwrap();
     assert_eq!(text.matches("<title>").count(), 6, "{text}");
     let q = &queries[0];

@@ -51,6 +51,9 @@ pub struct GridQuery {
     pub within_1pct: bool,
     /// Transitions taken.
     pub transitions: usize,
+    /// Of them, transitions between two different sequences
+    /// ([`is_across`]).
+    pub across: usize,
     /// Mean smoothness over them (metres).
     pub smoothness: Option<f64>,
     /// The same with the vertex-set Hausdorff distance.
@@ -187,6 +190,18 @@ pub struct GridReport {
     pub graph_smoothness: Spread,
     /// Its median.
     pub graph_smoothness_median: f64,
+    /// [`GridReport::graph_smoothness`] of the transitions within one
+    /// sequence (a loop or a skip of one capture).
+    pub graph_smoothness_within: Spread,
+    /// [`GridReport::graph_smoothness`] of the transitions between two
+    /// sequences ([`is_across`]): with key-frames in different sequences
+    /// every path takes at least one of them.
+    pub graph_smoothness_across: Spread,
+    /// Smoothness of every transition the grid's paths take (each time
+    /// it is taken), within one sequence.
+    pub taken_within: Spread,
+    /// The same, between two sequences.
+    pub taken_across: Spread,
     /// |Heading error| (degrees) over the queries (empty without
     /// `--heading`).
     pub heading_error_deg: Spread,
@@ -301,6 +316,45 @@ pub fn graph_smoothness(
         .collect()
 }
 
+/// True when the jump `from → to` (flat frame ids; `to − 1` pairs with
+/// `from`) joins two different sequences.
+pub fn is_across(ch: &Character, from: u32, to: u32) -> bool {
+    ch.graph().frame_of(from).0 != ch.graph().frame_of(to.saturating_sub(1)).0
+}
+
+/// [`is_across`] of a transition report's frames (`SEQ:F` names; the
+/// frame entered is in the sequence it enters).
+pub fn names_across(from: &str, to: &str) -> bool {
+    let seq = |k: &str| {
+        k.rsplit_once(':')
+            .map_or(k.to_string(), |(s, _)| s.to_string())
+    };
+    seq(from) != seq(to)
+}
+
+/// [`graph_smoothness`] split into the transitions within one sequence
+/// and those between two ([`is_across`]), each sorted.
+pub fn graph_smoothness_split(
+    ch: &Character,
+    g: &super::graph::KeyGraph,
+    cache: &mut super::smoothness::Measurer,
+) -> (Vec<f64>, Vec<f64>) {
+    let jumps = graph_jumps(ch, g);
+    cache.prefill(ch, &jumps);
+    let (mut within, mut across) = (Vec::new(), Vec::new());
+    for &(a, b, l) in &jumps {
+        let v = cache.transition(ch, a, b, l).surface;
+        if is_across(ch, a, b) {
+            across.push(v);
+        } else {
+            within.push(v);
+        }
+    }
+    within.sort_by(f64::total_cmp);
+    across.sort_by(f64::total_cmp);
+    (within, across)
+}
+
 /// Runs the grid (one global target per query).
 pub fn evaluate(
     ch: &Character,
@@ -317,6 +371,7 @@ pub fn evaluate(
     let mut cache = super::smoothness::Measurer::new(ch);
     cache.prefill(ch, &graph_jumps(ch, &planner.graph));
     let mut oracle_s = 0.0;
+    let (mut taken_within, mut taken_across) = (Vec::new(), Vec::new());
     let mut queries = Vec::with_capacity(distances.len() * times.len());
     for &d in distances {
         for &t in times {
@@ -329,6 +384,15 @@ pub fn evaluate(
             )?;
             let (seconds, cpu_seconds) = (plan.search_seconds, plan.search_cpu_seconds);
             let tr = transitions(ch, &planner.graph, &plan.path, timeline, &mut cache);
+            let mut across = 0;
+            for x in &tr {
+                if names_across(&x.from, &x.to) {
+                    across += 1;
+                    taken_across.push(x.smoothness);
+                } else {
+                    taken_within.push(x.smoothness);
+                }
+            }
             let (ad, at) = (
                 plan.measure.distance,
                 plan.measure.frames as f64 / planner.fps,
@@ -346,6 +410,7 @@ pub fn evaluate(
                 reach: class,
                 within_1pct: met,
                 transitions: tr.len(),
+                across,
                 smoothness: mean_smoothness(&tr),
                 smoothness_vertex: mean_smoothness_vertex(&tr),
                 seconds,
@@ -358,7 +423,8 @@ pub fn evaluate(
             });
         }
     }
-    let mut gsm = graph_smoothness(ch, &planner.graph, &mut cache);
+    let (gw, ga) = graph_smoothness_split(ch, &planner.graph, &mut cache);
+    let mut gsm: Vec<f64> = gw.iter().chain(&ga).copied().collect();
     gsm.sort_by(f64::total_cmp);
     let r: Vec<&GridQuery> = queries.iter().filter(|q| q.reachable).collect();
     let u: Vec<&GridQuery> = queries.iter().filter(|q| !q.reachable).collect();
@@ -411,6 +477,10 @@ pub fn evaluate(
         oracle_ms: 1e3 * oracle_s,
         graph_smoothness: Spread::of(gsm.iter().copied()),
         graph_smoothness_median: gsm.get(gsm.len() / 2).copied().unwrap_or(0.0),
+        graph_smoothness_within: Spread::of(gw.into_iter()),
+        graph_smoothness_across: Spread::of(ga.into_iter()),
+        taken_within: Spread::of(taken_within.into_iter()),
+        taken_across: Spread::of(taken_across.into_iter()),
         heading_error_deg: Spread::of(
             queries
                 .iter()
@@ -426,4 +496,18 @@ fn mean_std_max(v: &[f64]) -> (f64, f64, f64) {
     let mean = v.iter().sum::<f64>() / n;
     let std = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n).sqrt();
     (mean, std, v.iter().copied().fold(0.0, f64::max))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_across_compares_the_sequences_not_the_frames() {
+        assert!(!names_across("walk:38", "walk:11"));
+        assert!(names_across("walk:29", "walk-left:30"));
+        // Sequence names may hold colons; the frame is after the last.
+        assert!(!names_across("a:b:3", "a:b:40"));
+        assert!(names_across("a:b:3", "a:c:3"));
+    }
 }
