@@ -417,6 +417,13 @@ pub fn retarget_with_neutral(
     retarget_toes(character, neutral, reference, mocap, Toes::Rigid)
 }
 
+/// A retargeted clip (per frame the character's joint positions and global
+/// rotations) and each foot's ground per frame ([`retarget_on_grounds`]).
+type RetargetedOnGrounds = (
+    Vec<(Pose, [DQuat; Canonical::COUNT])>,
+    [Vec<Option<f64>>; 2],
+);
+
 /// How the surface a result drives moves its toes, which decides the
 /// sole the kernel stands on the ground.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -450,8 +457,21 @@ pub fn retarget_toes(
     mocap: &[Pose],
     toes: Toes,
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
+    retarget_on_grounds(character, neutral, reference, mocap, toes).0
+}
+
+/// [`retarget_toes`] and the ground each foot of the result stands on or
+/// above per frame, raised above the character's floor (character's
+/// metres; `None` for a foot that never touches): see [`place_feet`].
+fn retarget_on_grounds(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    toes: Toes,
+) -> RetargetedOnGrounds {
     if mocap.is_empty() {
-        return Vec::new();
+        return (Vec::new(), [Vec::new(), Vec::new()]);
     }
     // The clip's ground made level (a capture volume's floor is often a
     // degree or two off its vertical axis; CMU subject 02's rises 8 cm
@@ -520,7 +540,8 @@ pub fn retarget_toes(
     // under it ([`Support::under`]: the support the foot touches, raised
     // above the character's floor by its height above the clip's floor,
     // scaled; for a foot in the air, the lower of the supports it left
-    // and lands on unless it is above the higher's top); the foot that
+    // and lands on unless its sole is above the higher's top:
+    // [`place_feet`]); the foot that
     // needs the body highest stands on its
     // ground. Between such frames (a run's flight) the correction is
     // interpolated. Whatever the two skeletons' hip offsets and foot
@@ -532,30 +553,84 @@ pub fn retarget_toes(
     // clip has no heel point, so a heel strike's foot is off the ground
     // by its joints, and standing the body on the other foot alone (its
     // toes, leaving) sank the striking heel 5-7 cm through the floor.
+    let grounds = place_feet(character, &support, s, toes, &mut out);
+    (out, grounds)
+}
+
+/// Lifts (or lowers) every pose of `out` (the character's, before its
+/// vertical correction) so that each foot stands on or above its ground,
+/// and with [`Toes::Bending`] turns the toes up onto it; returns each
+/// foot's ground per frame (raised above the character's floor by its
+/// height above the clip's floor `support.floor`, scaled by `s`; `None`
+/// where the foot has none). See [`retarget_toes`].
+///
+/// A foot in the air between two supports is over the higher one's top
+/// only when the character's own sole is above it, the body placed by the
+/// feet on their grounds and the air feet over their lower ones; else it
+/// is over the lower ground ([`Support::under`] decides by the clip's
+/// joints, which sit above the character's sole: a toe tip pitched down
+/// reaches 5 cm below them). So a foot in the air never lifts the body
+/// onto a higher top: CMU 03_02's left foot, swinging up from the floor
+/// beside the block the right foot stands on, passed the next block's top
+/// (24 cm) by its joints in frame 8 while the character's toe tip was 5
+/// cm lower, and stood on that top the whole body lifted 7.6 cm in one
+/// frame (samba) while the clip's root rose 1.6 cm. On flat ground both
+/// supports are the floor and nothing changes.
+fn place_feet(
+    character: &Pose,
+    support: &Support,
+    s: f64,
+    toes: Toes,
+    out: &mut [(Pose, [DQuat; Canonical::COUNT])],
+) -> [Vec<Option<f64>>; 2] {
+    let clip_floor = support.floor;
     let rest_soles = foot_soles(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
-    let fix: Vec<Option<f64>> = out
+    let soles: Vec<[f64; 2]> = out
         .iter()
-        .enumerate()
-        .map(|(i, (t, g))| {
+        .map(|(t, g)| soles_of(character, t, g, toes))
+        .collect();
+    // How far frame `i` must be lifted for foot `f` to stand on ground
+    // `y` (the clip's height).
+    let need = |f: usize, i: usize, y: f64| rest_soles[f] + (y - clip_floor) * s - soles[i][f];
+    let sides = support.touch.each_ref().map(|t| grounds_either_side(t));
+    // A foot's ground when touching; in the air, the lower of the
+    // supports it left and lands on.
+    let lower = |f: usize, i: usize| -> Option<f64> {
+        support.touch[f][i].or(match sides[f][i] {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        })
+    };
+    let fix: Vec<Option<f64>> = (0..out.len())
+        .map(|i| {
             if support.touch.iter().all(|f| f[i].is_none()) {
                 return None;
             }
-            let soles = soles_of(character, t, g, toes);
             (0..2)
-                .filter_map(|f| {
-                    let raised = (support.under[f][i]? - clip_floor) * s;
-                    let d = rest_soles[f] + raised - soles[f];
-                    d.is_finite().then_some(d)
-                })
+                .filter_map(|f| Some(need(f, i, lower(f, i)?)))
+                .filter(|d| d.is_finite())
                 .reduce(f64::max)
         })
         .collect();
     let lift = interpolate_gaps(&fix);
+    // The higher top under a foot in the air where the clip's joints are
+    // above it and the character's sole, lifted, is too.
+    let grounds: [Vec<Option<f64>>; 2] = [0, 1].map(|f| {
+        (0..out.len())
+            .map(|i| {
+                let lo = lower(f, i)?;
+                match support.under[f][i] {
+                    Some(u) if u > lo && need(f, i, u) <= lift[i] + 1e-9 => Some(u),
+                    _ => Some(lo),
+                }
+            })
+            .collect()
+    });
     if toes == Toes::Bending {
         for (i, (t, g)) in out.iter_mut().enumerate() {
             let d = lift[i];
             for (f, sole) in rest_soles.iter().enumerate() {
-                let Some(u) = support.under[f][i] else {
+                let Some(u) = grounds[f][i] else {
                     continue;
                 };
                 let ground = sole + (u - clip_floor) * s - d;
@@ -563,12 +638,16 @@ pub fn retarget_toes(
             }
         }
     }
-    for ((t, _), d) in out.iter_mut().zip(lift) {
+    for ((t, _), d) in out.iter_mut().zip(&lift) {
         for p in t.iter_mut() {
             p.y += d;
         }
     }
-    out
+    grounds.map(|g| {
+        g.into_iter()
+            .map(|y| y.map(|y| (y - clip_floor) * s))
+            .collect()
+    })
 }
 
 /// The lowest sole point of the character posed as `t` with global
@@ -688,20 +767,10 @@ pub struct Support {
 /// above a block's top may be over it: at a heel strike on it, or its
 /// heel rising on it), else the lower.
 fn ground_under(touch: &[Option<f64>], low: &[f64]) -> Vec<Option<f64>> {
-    let mut last = vec![None; touch.len()];
-    let mut l: Option<f64> = None;
-    for (o, t) in last.iter_mut().zip(touch) {
-        l = t.or(l);
-        *o = l;
-    }
-    let mut next = vec![None; touch.len()];
-    let mut n: Option<f64> = None;
-    for (o, t) in next.iter_mut().zip(touch).rev() {
-        n = t.or(n);
-        *o = n;
-    }
-    (0..touch.len())
-        .map(|i| match (touch[i], last[i], next[i]) {
+    grounds_either_side(touch)
+        .into_iter()
+        .enumerate()
+        .map(|(i, (last, next))| match (touch[i], last, next) {
             (Some(t), _, _) => Some(t),
             (None, Some(a), Some(b)) => {
                 let (lo, hi) = (a.min(b), a.max(b));
@@ -710,6 +779,23 @@ fn ground_under(touch: &[Option<f64>], low: &[f64]) -> Vec<Option<f64>> {
             (None, a, b) => a.or(b),
         })
         .collect()
+}
+
+/// Per frame, the last support a foot touched (this frame's when it
+/// touches one) and the next, from the supports it touches, `touch`.
+fn grounds_either_side(touch: &[Option<f64>]) -> Vec<(Option<f64>, Option<f64>)> {
+    let mut out = vec![(None, None); touch.len()];
+    let mut l: Option<f64> = None;
+    for (o, t) in out.iter_mut().zip(touch) {
+        l = t.or(l);
+        o.0 = l;
+    }
+    let mut n: Option<f64> = None;
+    for (o, t) in out.iter_mut().zip(touch).rev() {
+        n = t.or(n);
+        o.1 = n;
+    }
+    out
 }
 
 /// The clip's support per footfall (poses levelled, Y-up, metres; `leg`
@@ -846,19 +932,22 @@ pub fn ground_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -
 }
 
 /// The height of the ground under each foot (left, right) above the
-/// character's floor per frame, in the character's metres: the clip's
-/// [`Support::under`] of that foot (levelled as [`retarget`] levels the
-/// clip, scaled by the ratio of leg lengths, interpolated across frames
-/// where the foot has none). Where [`retarget`] stands each foot: on or
-/// above its own ground. The plausibility checks measure penetration as
-/// any foot below its ground, floating as the foot nearest its ground
-/// above it.
+/// character's floor per frame, in the character's metres: the ground
+/// [`retarget`] stands that foot on or above (the clip's
+/// [`Support::under`] of that foot, levelled as [`retarget`] levels the
+/// clip and scaled by the ratio of leg lengths, except that a foot in the
+/// air is over a higher top only when the character's sole is above it:
+/// [`place_feet`]; interpolated across frames where the foot has none).
+/// The plausibility checks measure penetration as any foot below its
+/// ground, floating as the foot nearest its ground above it.
 pub fn foot_ground_offsets(
     character: &Pose,
     reference: &Reference,
     mocap: &[Pose],
 ) -> [Vec<f64>; 2] {
-    [0, 1].map(|f| offsets(character, reference, mocap, |s| s.under[f].clone()))
+    retarget_on_grounds(character, character, reference, mocap, Toes::Rigid)
+        .1
+        .map(|g| interpolate_gaps(&g))
 }
 
 /// The height the character's body stands raised above its floor per
