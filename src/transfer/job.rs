@@ -5,10 +5,11 @@
 use super::confluent::{Confluent, ConfluentError};
 use super::markers::Marker;
 use super::scan::PreparedScan;
-use super::source::{MarkerMotion, TemplateMarkers, from_skeleton, from_template};
+use super::source::{FootGround, MarkerMotion, TemplateMarkers, from_skeleton, from_template};
 use crate::mesh::{Bounds, MeshSequence};
 use crate::rig::embed::Embedding;
-use crate::rig::retarget::{Reference, Toes, retarget_toes};
+use crate::rig::embed::parts::Part;
+use crate::rig::retarget::{Reference, Toes, clip_support, ground_tilt, leg_length, retarget_toes};
 use crate::skeleton::Pose;
 use glam::{DMat3, DQuat, DVec3};
 use std::collections::HashMap;
@@ -140,7 +141,57 @@ pub fn mocap_motion(
                 / 3.0
         })
         .collect();
-    Ok(from_skeleton(&rest, &frames, &bones, &cs))
+    let mut motion = from_skeleton(&rest, &frames, &bones, &cs);
+    motion.feet = foot_ground(scan, rig, poses, reference);
+    Ok(motion)
+}
+
+/// Where the scan's feet touch the floor per frame ([`FootGround`]):
+/// the clip's contacts as the kernel reads them (levelled,
+/// [`crate::rig::retarget::Support::touch`]), each foot's vertices from
+/// the rig's parts. `None` when the rig's labels are not the mesh's or a
+/// foot has no vertex.
+fn foot_ground(
+    scan: &PreparedScan,
+    rig: &Embedding,
+    poses: &[Pose],
+    reference: &Reference,
+) -> Option<FootGround> {
+    let p = scan.mesh.positions();
+    if rig.labels.len() != p.len() || poses.is_empty() {
+        return None;
+    }
+    let vertices = [Part::LFoot, Part::RFoot].map(|part| {
+        (0..p.len() as u32)
+            .filter(|&v| rig.labels[v as usize] as usize == part.index())
+            .collect::<Vec<u32>>()
+    });
+    let rest_low = [0, 1].map(|f| {
+        vertices[f]
+            .iter()
+            .map(|&v| p[v as usize][1])
+            .fold(f64::INFINITY, f64::min)
+    });
+    if rest_low.iter().any(|h| !h.is_finite()) {
+        return None;
+    }
+    let tilt = ground_tilt(poses);
+    let levelled: Vec<Pose> = poses.iter().map(|m| m.map(|q| tilt * q)).collect();
+    let support = clip_support(&levelled, leg_length(&reference.pose));
+    let touch = (0..poses.len())
+        .map(|i| {
+            let t = [0, 1].map(|f| support.touch[f][i]);
+            // `clip_support` gives a floor contact the floor itself.
+            let block = t.iter().flatten().any(|&g| g != support.floor);
+            let on = t.map(|g| g.is_some());
+            (!block && (on[0] || on[1])).then_some(on)
+        })
+        .collect();
+    Some(FootGround {
+        vertices,
+        rest_low,
+        touch,
+    })
 }
 
 impl Job {

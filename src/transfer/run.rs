@@ -82,6 +82,9 @@ pub fn transfer_each<E>(
     let mut solve_seconds = 0.0;
     let motion = &*motion;
     let mut weak = 0;
+    // The shift given to the frame before this chunk, once some frame's
+    // is known.
+    let mut carried: Option<f64> = None;
     for first in (0..frames).step_by(chunk) {
         let count = chunk.min(frames - first);
         let t = Instant::now();
@@ -101,6 +104,17 @@ pub fn transfer_each<E>(
             .unwrap_or(0);
         solve_seconds += t.elapsed().as_secs_f64();
         weak = weak.max(w);
+        if let Some(feet) = &motion.feet {
+            let known: Vec<Option<f64>> = (0..count)
+                .map(|k| feet.shift(first + k, &buf[k * n..(k + 1) * n]))
+                .collect();
+            let shifts = chunk_shifts(&known, &mut carried);
+            for (k, d) in shifts.iter().enumerate() {
+                for p in &mut buf[k * n..(k + 1) * n] {
+                    p[1] += d;
+                }
+            }
+        }
         for k in 0..count {
             each(first + k, &buf[k * n..(k + 1) * n])?;
         }
@@ -113,4 +127,58 @@ pub fn transfer_each<E>(
         solve_seconds,
     };
     Ok(stats)
+}
+
+/// The vertical shift of each frame of a chunk ([`super::source::FootGround`]):
+/// the `known` ones (frames where a foot touches); between two known
+/// ones, linear; before the chunk's first, linear from `carried` (the
+/// shift given to the frame before the chunk), or the first when there
+/// is none; after the last, the last held (the next chunk's frames go
+/// on from it). Frames are handed on chunk by chunk, so a shift is never
+/// revised once given. Updates `carried`.
+fn chunk_shifts(known: &[Option<f64>], carried: &mut Option<f64>) -> Vec<f64> {
+    let count = known.len();
+    let pts: Vec<(f64, f64)> = known
+        .iter()
+        .enumerate()
+        .filter_map(|(k, d)| d.map(|d| (k as f64, d)))
+        .collect();
+    let before = carried.map(|d| (-1.0, d));
+    let out: Vec<f64> = (0..count)
+        .map(|k| {
+            let x = k as f64;
+            let prev = pts.iter().rev().find(|p| p.0 <= x).copied().or(before);
+            let next = pts.iter().find(|p| p.0 >= x).copied();
+            match (prev, next) {
+                (Some(a), Some(b)) if b.0 > a.0 => a.1 + (b.1 - a.1) * (x - a.0) / (b.0 - a.0),
+                (Some(a), _) => a.1,
+                (None, Some(b)) => b.1,
+                (None, None) => 0.0,
+            }
+        })
+        .collect();
+    if carried.is_some() || !pts.is_empty() {
+        *carried = out.last().copied().or(*carried);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::chunk_shifts;
+
+    #[test]
+    fn shifts_interpolate_across_chunks_and_hold_at_the_ends() {
+        let mut c = None;
+        let a = chunk_shifts(&[None, Some(1.0), None, Some(3.0), None], &mut c);
+        assert_eq!(a, vec![1.0, 1.0, 2.0, 3.0, 3.0]);
+        assert_eq!(c, Some(3.0));
+        // The gap over the boundary: held before it, then linear from the
+        // frame before this chunk to the next known one.
+        let b = chunk_shifts(&[None, None, None, Some(7.0)], &mut c);
+        assert_eq!(b, vec![4.0, 5.0, 6.0, 7.0]);
+        let mut none = None;
+        assert_eq!(chunk_shifts(&[None, None], &mut none), vec![0.0, 0.0]);
+        assert_eq!(none, None);
+    }
 }

@@ -27,6 +27,59 @@ pub struct MarkerMotion {
     pub rotations: Vec<DQuat>,
     /// Target centroid position.
     pub targets: Vec<DVec3>,
+    /// Where the feet stand, per frame (mocap sources): the solved surface
+    /// is stood on it ([`FootGround::shifts`]).
+    pub feet: Option<FootGround>,
+}
+
+/// The floor each foot of the scan touches per frame, from the clip's
+/// support (the kernel's [`crate::rig::retarget::Support::touch`]): the
+/// kernel stands a sole model of the skeleton (toe joint, heel point) on
+/// the ground, but the surface the markers deform has its own sole: on
+/// the samba self-transfer the solved feet stood a median 1.7 cm above
+/// the floor at 20 markers, and a CMU walk's went 5 cm through it. The
+/// kernel's rule, applied to the surface: in a frame where a foot of the
+/// clip touches the floor, the surface moves vertically (Y) so that each
+/// touching foot's lowest vertex is on or above the floor (its height in
+/// the rest scan) and the foot that needs it highest stands on it; a
+/// foot in the air is held above the floor only. Frames where a foot
+/// stands on a block, and frames in the air, take the shift
+/// interpolated between floor frames: on blocks the kernel's ground is
+/// its own (taking its block tops stood CMU 03_02's surface 11 cm up on
+/// a block its swinging foot was over). A clip standing as the rest
+/// frame gives the rest scan.
+#[derive(Debug, Clone, Default)]
+pub struct FootGround {
+    /// Vertices of each foot (left, right): its part of the rig's labels.
+    pub vertices: [Vec<u32>; 2],
+    /// Each foot's lowest vertex height in the rest scan: the floor.
+    pub rest_low: [f64; 2],
+    /// Per foot and frame, whether it touches the floor; `None` for a
+    /// frame where a foot stands on a block or none touches.
+    pub touch: Vec<Option<[bool; 2]>>,
+}
+
+impl FootGround {
+    /// The vertical shift of frame `f` solved as `positions`: `None`
+    /// when no foot touches the floor or one stands on a block (the
+    /// caller interpolates).
+    pub fn shift(&self, f: usize, positions: &[[f64; 3]]) -> Option<f64> {
+        let touch = self.touch.get(f).copied().flatten()?;
+        let d = (0..2)
+            .filter_map(|foot| {
+                let low = self.vertices[foot]
+                    .iter()
+                    .filter_map(|&v| positions.get(v as usize).map(|p| p[1]))
+                    .fold(f64::INFINITY, f64::min);
+                let d = self.rest_low[foot] - low;
+                d.is_finite().then_some((touch[foot], d))
+            })
+            .collect::<Vec<_>>();
+        // The touching feet stand on the floor; a foot in the air only
+        // stays above it.
+        let on = d.iter().filter(|x| x.0).map(|x| x.1).reduce(f64::max)?;
+        Some(d.iter().map(|x| x.1).fold(on, f64::max))
+    }
 }
 
 impl MarkerMotion {
@@ -56,6 +109,7 @@ pub fn from_skeleton(
         markers: bones.len(),
         rotations: Vec::with_capacity(frames.len() * bones.len()),
         targets: Vec::with_capacity(frames.len() * bones.len()),
+        feet: None,
     };
     for (pose, g) in frames {
         for (&b, &c) in bones.iter().zip(centroids) {
@@ -156,6 +210,7 @@ pub fn from_template(
         markers: k,
         rotations: Vec::with_capacity(frames.len() * k),
         targets: Vec::with_capacity(frames.len() * k),
+        feet: None,
     };
     for p in frames {
         for (mi, patch) in markers.patches.iter().enumerate() {
