@@ -253,8 +253,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
     let prepared = &outcome.prepared;
     if let Some(path) = &a.run.preview.preview {
-        let up = prepared.rig.as_ref().map(|r| glam::DVec3::from_array(r.up));
-        let y_up = up.is_none_or(|u| u.y > 0.9);
+        let up = prepared.rig.as_ref().map(surfmotion::transfer::up_axis);
+        let y_up = up.is_none_or(|u| u == glam::DVec3::Y);
         super::render::write_preview(
             path,
             &outcome.positions,

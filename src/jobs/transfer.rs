@@ -615,7 +615,8 @@ fn transfer_inner(
         let mpu = guess_metres_per_unit(rig.height);
         metres_per_unit = Some(mpu);
         let rest = prepared.mesh.positions();
-        let up = glam::DVec3::from_array(rig.up);
+        // The axis the scan stands along, as the transfer stood it.
+        let up = crate::transfer::up_axis(rig);
         let opts = crate::eval::PlausibilityOptions::default();
         crate::eval::Checker::new(&prepared.mesh, rig, up, None, fps, opts)
             .and_then(|mut c| {

@@ -128,8 +128,26 @@ pub fn mocap_motion(
     let p = scan.mesh.positions();
     let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
     let rest: Pose = rig.joints.map(DVec3::from_array);
+    // The kernel works Y-up, as the clip's canonical poses are: a scan
+    // standing along another axis is turned onto Y for it and the frames
+    // turned back (until this, a Z-up scan's walk climbed 2.5 m into the
+    // air in 40 frames).
+    let up = up_axis(rig);
+    let to_scan = DQuat::from_rotation_arc(DVec3::Y, up);
+    let upright = |p: &Pose, q: DQuat| -> Pose { p.map(|j| q * j) };
+    let rest_y = upright(&rest, to_scan.inverse());
     // The markers on the toes turn with the toe joint: the toes bend.
-    let frames = retarget_toes(&rest, &rest, reference, poses, Toes::Bending);
+    let mut frames = retarget_toes(&rest_y, &rest_y, reference, poses, Toes::Bending);
+    if up != DVec3::Y {
+        // Positions turn with the world; each joint's turn from the rest
+        // pose is conjugated (the markers' targets are `p + g (c − rest)`).
+        for (pose, g) in &mut frames {
+            *pose = upright(pose, to_scan);
+            for q in g.iter_mut() {
+                *q = to_scan * *q * to_scan.inverse();
+            }
+        }
+    }
     let bones: Vec<_> = used.iter().filter_map(|m| m.bone).collect();
     let cs: Vec<DVec3> = used
         .iter()
@@ -144,6 +162,19 @@ pub fn mocap_motion(
     let mut motion = from_skeleton(&rest, &frames, &bones, &cs);
     motion.feet = foot_ground(scan, rig, poses, reference);
     Ok(motion)
+}
+
+/// The axis the scan stands along: its embedding's up snapped to the
+/// nearest of ±X, ±Y, ±Z (scans are stored axis-aligned; the embedding's
+/// estimate leans with the pose, e.g. 9° on the samba scan).
+pub fn up_axis(rig: &Embedding) -> DVec3 {
+    let u = DVec3::from_array(rig.up);
+    let axes = [DVec3::Y, DVec3::Z, DVec3::X];
+    let a = axes
+        .into_iter()
+        .max_by(|a, b| a.dot(u).abs().total_cmp(&b.dot(u).abs()))
+        .unwrap_or(DVec3::Y);
+    if a.dot(u) < 0.0 { -a } else { a }
 }
 
 /// Where the scan's feet touch the floor per frame ([`FootGround`]):
@@ -166,10 +197,11 @@ fn foot_ground(
             .filter(|&v| rig.labels[v as usize] as usize == part.index())
             .collect::<Vec<u32>>()
     });
+    let up = up_axis(rig);
     let rest_low = [0, 1].map(|f| {
         vertices[f]
             .iter()
-            .map(|&v| p[v as usize][1])
+            .map(|&v| DVec3::from_array(p[v as usize]).dot(up))
             .fold(f64::INFINITY, f64::min)
     });
     if rest_low.iter().any(|h| !h.is_finite()) {
@@ -188,6 +220,7 @@ fn foot_ground(
         })
         .collect();
     Some(FootGround {
+        up: up.to_array(),
         vertices,
         rest_low,
         touch,

@@ -111,7 +111,9 @@ pub fn transfer_each<E>(
             let shifts = chunk_shifts(&known, &mut carried);
             for (k, d) in shifts.iter().enumerate() {
                 for p in &mut buf[k * n..(k + 1) * n] {
-                    p[1] += d;
+                    for (x, u) in p.iter_mut().zip(feet.up) {
+                        *x += d * u;
+                    }
                 }
             }
         }

@@ -39,7 +39,7 @@ pub struct MarkerMotion {
 /// the samba self-transfer the solved feet stood a median 1.7 cm above
 /// the floor at 20 markers, and a CMU walk's went 5 cm through it. The
 /// kernel's rule, applied to the surface: in a frame where a foot of the
-/// clip touches the floor, the surface moves vertically (Y) so that each
+/// clip touches the floor, the surface moves along the scan's up axis so that each
 /// touching foot's lowest vertex is on or above the floor (its height in
 /// the rest scan) and the foot that needs it highest stands on it; a
 /// foot in the air is held above the floor only. Frames where a foot
@@ -50,6 +50,8 @@ pub struct MarkerMotion {
 /// frame gives the rest scan.
 #[derive(Debug, Clone, Default)]
 pub struct FootGround {
+    /// The scan's up axis (unit; heights and the shift are along it).
+    pub up: [f64; 3],
     /// Vertices of each foot (left, right): its part of the rig's labels.
     pub vertices: [Vec<u32>; 2],
     /// Each foot's lowest vertex height in the rest scan: the floor.
@@ -57,6 +59,10 @@ pub struct FootGround {
     /// Per foot and frame, whether it touches the floor; `None` for a
     /// frame where a foot stands on a block or none touches.
     pub touch: Vec<Option<[bool; 2]>>,
+}
+
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 impl FootGround {
@@ -69,7 +75,7 @@ impl FootGround {
             .filter_map(|foot| {
                 let low = self.vertices[foot]
                     .iter()
-                    .filter_map(|&v| positions.get(v as usize).map(|p| p[1]))
+                    .filter_map(|&v| positions.get(v as usize).map(|p| dot(p, &self.up)))
                     .fold(f64::INFINITY, f64::min);
                 let d = self.rest_low[foot] - low;
                 d.is_finite().then_some((touch[foot], d))
