@@ -32,19 +32,51 @@ fn on_the_ball(rest: &Pose, deg: f64, still: usize, held: usize) -> Vec<Pose> {
     out
 }
 
-#[test]
-#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
-fn the_surface_stands_on_the_ground_where_the_clip_does() {
-    let Some(d) = common::data_dir() else { return };
+/// Frame 0 of the real samba capture (the scan) and its landmark file's
+/// text.
+fn samba_scan(d: &std::path::Path) -> (surfmotion::mesh::Mesh, String) {
     let seq = load_sequence(
         d.join("4d/samba/samba.pc2").to_str().unwrap(),
         &LoadOptions::default(),
     )
     .unwrap();
-    let scan = seq.frame_mesh(0);
-    let lm = Landmarks::load(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("tests/fixtures/samba.landmarks.json"),
+    )
+    .unwrap();
+    (seq.frame_mesh(0), text)
+}
+
+/// The lowest point along `up` of each foot (left, right: the rig's foot
+/// parts) of the positions `p`.
+fn feet_low(
+    rig: &surfmotion::rig::embed::Embedding,
+    up: DVec3,
+) -> impl Fn(&[[f64; 3]]) -> [f64; 2] + '_ {
+    let feet = [Part::LFoot, Part::RFoot].map(|part| {
+        (0..rig.labels.len())
+            .filter(|&v| rig.labels[v] as usize == part.index())
+            .collect::<Vec<_>>()
+    });
+    move |p| {
+        [0, 1].map(|f| {
+            feet[f]
+                .iter()
+                .map(|&v| DVec3::from_array(p[v]).dot(up))
+                .fold(f64::INFINITY, f64::min)
+        })
+    }
+}
+
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn the_surface_stands_on_the_ground_where_the_clip_does() {
+    let Some(d) = common::data_dir() else { return };
+    let (scan, text) = samba_scan(&d);
+    let lm = Landmarks::parse(
+        &text,
+        std::path::Path::new("samba.landmarks.json"),
         scan.vertex_count(),
     )
     .unwrap();
@@ -56,19 +88,8 @@ fn the_surface_stands_on_the_ground_where_the_clip_does() {
     let rig = prepared.rig.as_ref().unwrap();
     let rest: Pose = rig.joints.map(DVec3::from_array);
     let n = prepared.mesh.vertex_count();
-    let p0 = prepared.mesh.positions();
-    let feet = [Part::LFoot, Part::RFoot].map(|part| {
-        (0..n)
-            .filter(|&v| rig.labels[v] as usize == part.index())
-            .collect::<Vec<_>>()
-    });
-    let low = |p: &[[f64; 3]], f: usize| {
-        feet[f]
-            .iter()
-            .map(|&v| p[v][1])
-            .fold(f64::INFINITY, f64::min)
-    };
-    let rest_low = [low(p0, 0), low(p0, 1)];
+    let low = feet_low(rig, DVec3::Y);
+    let rest_low = low(prepared.mesh.positions());
     for deg in [12.0, 25.0, 40.0] {
         for (still, held) in [(6, 24), (10, 40)] {
             let poses = on_the_ball(&rest, deg, still, held);
@@ -84,7 +105,8 @@ fn the_surface_stands_on_the_ground_where_the_clip_does() {
                 // Both feet stand on the floor in every frame: none below
                 // it, the lower on it (1 mm; the surface moves with the
                 // skeleton, so a lifted body stands every foot above).
-                let gaps = [low(p, 0) - rest_low[0], low(p, 1) - rest_low[1]];
+                let l = low(p);
+                let gaps = [l[0] - rest_low[0], l[1] - rest_low[1]];
                 let lower = gaps[0].min(gaps[1]);
                 assert!(
                     lower.abs() < 1e-3,
@@ -110,17 +132,7 @@ fn the_surface_stands_on_the_ground_where_the_clip_does() {
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_scan_standing_along_another_axis_moves_as_the_y_up_one() {
     let Some(d) = common::data_dir() else { return };
-    let seq = load_sequence(
-        d.join("4d/samba/samba.pc2").to_str().unwrap(),
-        &LoadOptions::default(),
-    )
-    .unwrap();
-    let scan = seq.frame_mesh(0);
-    let text = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fixtures/samba.landmarks.json"),
-    )
-    .unwrap();
+    let (scan, text) = samba_scan(&d);
     let opts = MarkerOptions {
         count: 20,
         ..Default::default()
@@ -174,22 +186,14 @@ fn a_scan_standing_along_another_axis_moves_as_the_y_up_one() {
             &|_| {},
         );
         let n = prepared.mesh.vertex_count();
-        let p0 = prepared.mesh.positions();
-        let feet = [Part::LFoot, Part::RFoot].map(|part| {
-            (0..n)
-                .filter(|&v| rig.labels[v] as usize == part.index())
-                .collect::<Vec<_>>()
-        });
-        let low = |p: &[[f64; 3]], f: usize| {
-            feet[f]
-                .iter()
-                .map(|&v| DVec3::from_array(p[v]).dot(up))
-                .fold(f64::INFINITY, f64::min)
-        };
-        let rest_low = [low(p0, 0), low(p0, 1)];
+        let low = feet_low(rig, up);
+        let rest_low = low(prepared.mesh.positions());
         let gaps = out
             .chunks(n)
-            .map(|p| (low(p, 0) - rest_low[0]).min(low(p, 1) - rest_low[1]))
+            .map(|p| {
+                let l = low(p);
+                (l[0] - rest_low[0]).min(l[1] - rest_low[1])
+            })
             .collect();
         let back = out
             .iter()
