@@ -32,6 +32,24 @@ fn on_the_ball(rest: &Pose, deg: f64, still: usize, held: usize) -> Vec<Pose> {
     out
 }
 
+/// The clip `poses` (of the skeleton `rest`, its reference chosen as
+/// `transfer` does) transferred onto `prepared`: frame-major positions.
+fn solve(
+    prepared: &surfmotion::transfer::PreparedScan,
+    rest: &Pose,
+    poses: &[Pose],
+) -> Vec<[f64; 3]> {
+    let reference = choose_reference(Some(rest), poses).unwrap();
+    let mut job = Job::new(prepared, Source::Mocap(poses, &reference)).unwrap();
+    transfer(
+        &job.confluent,
+        &mut job.motion,
+        &Default::default(),
+        &|_| {},
+    )
+    .0
+}
+
 /// Frame 0 of the real samba capture (the scan) and its landmark file's
 /// text.
 fn samba_scan(d: &std::path::Path) -> (surfmotion::mesh::Mesh, String) {
@@ -93,14 +111,7 @@ fn the_surface_stands_on_the_ground_where_the_clip_does() {
     for deg in [12.0, 25.0, 40.0] {
         for (still, held) in [(6, 24), (10, 40)] {
             let poses = on_the_ball(&rest, deg, still, held);
-            let reference = choose_reference(Some(&rest), &poses).unwrap();
-            let mut job = Job::new(&prepared, Source::Mocap(&poses, &reference)).unwrap();
-            let (out, _) = transfer(
-                &job.confluent,
-                &mut job.motion,
-                &Default::default(),
-                &|_| {},
-            );
+            let out = solve(&prepared, &rest, &poses);
             for (i, p) in out.chunks(n).enumerate() {
                 // Both feet stand on the floor in every frame: none below
                 // it, the lower on it (1 mm; the surface moves with the
@@ -177,14 +188,7 @@ fn a_scan_standing_along_another_axis_moves_as_the_y_up_one() {
                 *j += DVec3::new(0.0, 0.0, 0.02 * i as f64);
             }
         }
-        let reference = choose_reference(Some(&rest), &poses).unwrap();
-        let mut job = Job::new(&prepared, Source::Mocap(&poses, &reference)).unwrap();
-        let (out, _) = transfer(
-            &job.confluent,
-            &mut job.motion,
-            &Default::default(),
-            &|_| {},
-        );
+        let out = solve(&prepared, &rest, &poses);
         let n = prepared.mesh.vertex_count();
         let low = feet_low(rig, up);
         let rest_low = low(prepared.mesh.positions());
