@@ -77,3 +77,108 @@ fn init_and_info_on_samba_and_crane() {
     assert_eq!(o.status.code(), Some(1));
     assert!(e.contains("character.toml") && e.contains("fps"), "{e}");
 }
+
+/// `db init --up auto` (the default) reads the up axis off the landmarks'
+/// groin→chin direction in the file's coordinates: the samba mesh and its
+/// landmarks turned Z-up give `up = "z"`, the original `y`; an explicit
+/// axis the landmarks contradict is kept with a warning, and a body lying
+/// along ±X or −Y is refused in one line (the database reads Y-up or Z-up
+/// files). Without the check a Z-up capture initialised as Y-up built and
+/// retargeted into a contorted character, CMU 02_02's vertices up to 2.1 m
+/// from the Y-up database's.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn init_reads_the_up_axis_off_the_landmarks() {
+    let Some(d) = common::data_dir() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let obj = std::fs::read_to_string(d.join("4d/samba/samba.obj")).unwrap();
+    let lm: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("tests/fixtures/samba.landmarks.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    // Each placement turns (x, y, z) of the Y-up capture.
+    type Turn = fn([f64; 3]) -> [f64; 3];
+    let placements: [(&str, Turn, Option<&str>); 4] = [
+        ("y_up", |p| p, Some("y")),
+        ("z_up", |[x, y, z]| [x, -z, y], Some("z")),
+        ("x_up", |[x, y, z]| [y, -x, z], None),
+        ("y_down", |[x, y, z]| [x, -y, -z], None),
+    ];
+    for (name, turn, want) in placements {
+        let mesh = dir.path().join(format!("{name}.obj"));
+        let text: String = obj
+            .lines()
+            .map(|l| match l.strip_prefix("v ") {
+                Some(rest) => {
+                    let v: Vec<f64> = rest
+                        .split_whitespace()
+                        .map(|t| t.parse().unwrap())
+                        .collect();
+                    let [x, y, z] = turn([v[0], v[1], v[2]]);
+                    format!("v {x} {y} {z}\n")
+                }
+                None => format!("{l}\n"),
+            })
+            .collect();
+        std::fs::write(&mesh, text).unwrap();
+        let mut marks = lm.clone();
+        for (_, v) in marks.as_object_mut().unwrap() {
+            if let Some(a) = v.as_array() {
+                let p: Vec<f64> = a.iter().map(|c| c.as_f64().unwrap()).collect();
+                *v = serde_json::json!(turn([p[0], p[1], p[2]]));
+            }
+        }
+        let lm_path = dir.path().join(format!("{name}.landmarks.json"));
+        std::fs::write(&lm_path, marks.to_string()).unwrap();
+        let init = |db: &str, up: &[&str]| {
+            let db = dir.path().join(db);
+            let mut args = vec![
+                "db",
+                "init",
+                db.to_str().unwrap(),
+                "--mesh",
+                mesh.to_str().unwrap(),
+                "--landmarks",
+                lm_path.to_str().unwrap(),
+            ];
+            args.extend_from_slice(up);
+            let o = run(&args);
+            let toml = std::fs::read_to_string(db.join("character.toml")).unwrap_or_default();
+            (o, toml)
+        };
+        let (o, toml) = init(&format!("{name}_auto"), &[]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        match want {
+            Some(axis) => {
+                assert!(o.status.success(), "{name}: {err}");
+                assert!(toml.contains(&format!("up = \"{axis}\"")), "{name}: {toml}");
+                // The other axis, given explicitly, is written with a warning.
+                let other = if axis == "y" { "z" } else { "y" };
+                let (o, toml) = init(&format!("{name}_{other}"), &["--up", other]);
+                let err = String::from_utf8_lossy(&o.stderr);
+                assert!(o.status.success(), "{name}: {err}");
+                assert!(
+                    toml.contains(&format!("up = \"{other}\"")),
+                    "{name}: {toml}"
+                );
+                assert!(
+                    err.contains(&format!("--up {other}, but the landmarks")),
+                    "{name}: no warning: {err}"
+                );
+                let (o, _) = init(&format!("{name}_{axis}"), &["--up", axis]);
+                let err = String::from_utf8_lossy(&o.stderr);
+                assert!(!err.contains("WARN"), "{name}: {err}");
+            }
+            None => {
+                assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+                assert_eq!(err.trim().lines().count(), 1, "{name}: {err}");
+                assert!(err.contains("within 45° of neither"), "{name}: {err}");
+                assert!(toml.is_empty(), "{name}: a manifest was written");
+            }
+        }
+    }
+}

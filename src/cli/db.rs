@@ -6,6 +6,7 @@ use surfmotion::db::skeletons::SkeletonKind;
 use surfmotion::db::{MANIFEST, Manifest, RigSpec, SequenceEntry, info};
 use surfmotion::jobs::export_skeletons;
 use surfmotion::jobs::skeletons::SkeletonsOptions;
+use surfmotion::mesh::Mesh;
 
 /// Database subcommands.
 #[derive(clap::Subcommand)]
@@ -189,8 +190,10 @@ pub struct InitArgs {
         default_value = "m"
     )]
     pub units: String,
-    /// Up axis of the files (y or z).
-    #[arg(long, default_value = "y")]
+    /// Up axis of the files: y, z, or auto (the landmarks' groin→chin
+    /// direction decides; y without landmarks). An explicit axis the
+    /// landmarks contradict is written as given, with a warning.
+    #[arg(long, default_value = "auto")]
     pub up: String,
     /// Landmarks JSON on the rest frame.
     #[arg(long)]
@@ -304,7 +307,7 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         topology: canonical(&a.mesh).context("--mesh")?,
         fps: a.fps,
         units: a.units.clone(),
-        up: a.up.to_ascii_lowercase(),
+        up: "y".into(),
         colors: None,
         sequences,
         rig: RigSpec {
@@ -317,12 +320,17 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         deform: Default::default(),
         spaces: Vec::new(),
     };
+    let up = a.up.to_ascii_lowercase();
+    if !matches!(up.as_str(), "y" | "z" | "auto") {
+        bail!("--up {}: expected y, z or auto", a.up);
+    }
     if let Err(msg) = m.validate() {
         bail!("{msg}");
     }
     // The paths are absolute here, so the folder they resolve against is
-    // not used.
+    // not used. Loaded with `up = y`: the file's own coordinates.
     let topo = m.load_topology(&a.dir).context("--mesh")?;
+    m.up = resolve_up(&up, &topo, a.landmarks.as_deref())?;
     // Another connectivity is `db info`'s problem to report (the manifest
     // may be written first and the topology fixed after); a file that is
     // not a mesh sequence is refused here.
@@ -401,6 +409,72 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         a.dir.display()
     );
     Ok(())
+}
+
+/// The manifest's up axis for `db init --up UP`: the landmarks' body axis
+/// (groin to chin) read in the mesh file's coordinates decides `auto`
+/// (the axis among +Y and +Z it lies within 45° of), and is checked
+/// against an explicit `y`/`z`: a capture whose body stands along +Z
+/// written as Y-up retargets into a contorted, tilted character with only
+/// indirect warnings (knee hyper-extension, turned-over triangles).
+fn resolve_up(up: &str, topo: &Mesh, landmarks: Option<&Path>) -> anyhow::Result<String> {
+    use surfmotion::rig::embed::landmarks::{Landmark, Landmarks};
+    let axis = landmarks.and_then(|p| {
+        // An unreadable landmarks file is reported by `db build`, which
+        // embeds the rig; here it only leaves the axis undecided.
+        let lm = Landmarks::load(p, topo.vertex_count()).ok()?;
+        let pos = topo.positions();
+        let (c, g) = (
+            lm.point(Landmark::Chin, pos)?,
+            lm.point(Landmark::Groin, pos)?,
+        );
+        let b = [c[0] - g[0], c[1] - g[1], c[2] - g[2]];
+        let n = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]).sqrt();
+        (n > 0.0 && n.is_finite()).then(|| [b[0] / n, b[1] / n, b[2] / n])
+    });
+    let cos45 = std::f64::consts::FRAC_1_SQRT_2;
+    let found = axis.map(|b| {
+        if b[1] >= cos45 {
+            Ok("y")
+        } else if b[2] >= cos45 {
+            Ok("z")
+        } else {
+            Err(b)
+        }
+    });
+    let describe = |b: [f64; 3]| format!("({:.2}, {:.2}, {:.2})", b[0], b[1], b[2]);
+    Ok(match (up, found) {
+        ("auto", None) => "y".into(),
+        ("auto", Some(Ok(axis))) => {
+            if axis == "z" {
+                crate::errln!(
+                    "--up auto: the landmarks' groin→chin direction is along +Z: the files are read as Z-up"
+                );
+            }
+            axis.into()
+        }
+        ("auto", Some(Err(b))) => bail!(
+            "--up auto: the landmarks' groin→chin direction {} is within 45° of neither +Y nor +Z; \
+             the database reads Y-up or Z-up files: turn the mesh and its sequences, or pass --up y or --up z",
+            describe(b)
+        ),
+        (given, Some(Ok(axis))) if axis != given => {
+            tracing::warn!(
+                "--up {given}, but the landmarks' groin→chin direction is along +{}: is the capture {}-up? (pass --up {axis} or --up auto)",
+                axis.to_ascii_uppercase(),
+                axis.to_ascii_uppercase()
+            );
+            given.into()
+        }
+        (given, Some(Err(b))) => {
+            tracing::warn!(
+                "--up {given}, but the landmarks' groin→chin direction {} is within 45° of neither +Y nor +Z",
+                describe(b)
+            );
+            given.into()
+        }
+        (given, _) => given.into(),
+    })
 }
 
 fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
