@@ -79,7 +79,8 @@ fn init_and_info_on_samba_and_crane() {
 }
 
 /// `db init --up auto` (the default) reads the up axis off the landmarks'
-/// groin→chin direction in the file's coordinates: the samba mesh and its
+/// groin→chin direction in the file's coordinates, and `--input-units auto`
+/// the unit off the rest frame's height along it (m, cm or mm): the samba mesh and its
 /// landmarks turned Z-up give `up = "z"`, the original `y`; an explicit
 /// axis the landmarks contradict is kept with a warning, and a body lying
 /// along ±X or −Y is refused in one line (the database reads Y-up or Z-up
@@ -88,7 +89,7 @@ fn init_and_info_on_samba_and_crane() {
 /// from the Y-up database's.
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
-fn init_reads_the_up_axis_off_the_landmarks() {
+fn init_reads_the_up_axis_and_unit_off_the_capture() {
     let Some(d) = common::data_dir() else { return };
     let dir = tempfile::tempdir().unwrap();
     let obj = std::fs::read_to_string(d.join("4d/samba/samba.obj")).unwrap();
@@ -101,14 +102,23 @@ fn init_reads_the_up_axis_off_the_landmarks() {
     )
     .unwrap();
     // Each placement turns (x, y, z) of the Y-up capture.
+    // Each placement turns (x, y, z) of the Y-up capture in metres, and
+    // gives the up axis and unit `auto` must read.
     type Turn = fn([f64; 3]) -> [f64; 3];
-    let placements: [(&str, Turn, Option<&str>); 4] = [
-        ("y_up", |p| p, Some("y")),
-        ("z_up", |[x, y, z]| [x, -z, y], Some("z")),
-        ("x_up", |[x, y, z]| [y, -x, z], None),
-        ("y_down", |[x, y, z]| [x, -y, -z], None),
+    let placements: [(&str, Turn, Option<&str>, &str); 6] = [
+        ("y_up", |p| p, Some("y"), "m"),
+        ("z_up", |[x, y, z]| [x, -z, y], Some("z"), "m"),
+        ("x_up", |[x, y, z]| [y, -x, z], None, ""),
+        ("y_down", |[x, y, z]| [x, -y, -z], None, ""),
+        (
+            "z_up_mm",
+            |[x, y, z]| [x * 1e3, -z * 1e3, y * 1e3],
+            Some("z"),
+            "mm",
+        ),
+        ("y_up_cm", |p| p.map(|c| c * 100.0), Some("y"), "cm"),
     ];
-    for (name, turn, want) in placements {
+    for (name, turn, want, unit) in placements {
         let mesh = dir.path().join(format!("{name}.obj"));
         let text: String = obj
             .lines()
@@ -156,6 +166,16 @@ fn init_reads_the_up_axis_off_the_landmarks() {
             Some(axis) => {
                 assert!(o.status.success(), "{name}: {err}");
                 assert!(toml.contains(&format!("up = \"{axis}\"")), "{name}: {toml}");
+                assert!(
+                    toml.contains(&format!("units = \"{unit}\"")),
+                    "{name}: {toml}"
+                );
+                // A unit that makes the body 1.7 km or 1.7 mm tall warns.
+                if unit != "m" {
+                    let (o, _) = init(&format!("{name}_in_m"), &["--input-units", "m"]);
+                    let err = String::from_utf8_lossy(&o.stderr);
+                    assert!(err.contains("is the unit right?"), "{name}: {err}");
+                }
                 // The other axis, given explicitly, is written with a warning.
                 let other = if axis == "y" { "z" } else { "y" };
                 let (o, toml) = init(&format!("{name}_{other}"), &["--up", other]);

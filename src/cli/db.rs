@@ -181,13 +181,15 @@ pub struct InitArgs {
     /// Frames per second of the captures.
     #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
     pub fps: f64,
-    /// Length unit of the files (m, cm, mm, dm, inch, or metres per unit),
-    /// written as the manifest's `units`. (`--units` was its name before.)
+    /// Length unit of the files (m, cm, mm, dm, inch, metres per unit, or
+    /// auto: m, cm or mm, whichever makes the rest frame's largest side
+    /// nearest 1.7 m), written as the manifest's `units`. (`--units` was its name
+    /// before.)
     #[arg(
         long = "input-units",
         alias = "units",
         value_name = "UNIT",
-        default_value = "m"
+        default_value = "auto"
     )]
     pub units: String,
     /// Up axis of the files: y, z, or auto (the landmarks' groin→chin
@@ -280,7 +282,9 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
             manifest.display()
         );
     }
-    super::length_unit("--input-units", &a.units)?;
+    if !a.units.eq_ignore_ascii_case("auto") {
+        super::length_unit("--input-units", &a.units)?;
+    }
     if let Some(n) = &a.name
         && (n.is_empty() || n.len() > 200 || n.chars().any(char::is_control))
     {
@@ -306,7 +310,7 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         name: a.name.clone().unwrap_or_default(),
         topology: canonical(&a.mesh).context("--mesh")?,
         fps: a.fps,
-        units: a.units.clone(),
+        units: "m".into(),
         up: "y".into(),
         colors: None,
         sequences,
@@ -331,6 +335,7 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
     // not used. Loaded with `up = y`: the file's own coordinates.
     let topo = m.load_topology(&a.dir).context("--mesh")?;
     m.up = resolve_up(&up, &topo, a.landmarks.as_deref())?;
+    m.units = resolve_units(&a.units, &topo);
     // Another connectivity is `db info`'s problem to report (the manifest
     // may be written first and the topology fixed after); a file that is
     // not a mesh sequence is refused here.
@@ -475,6 +480,61 @@ fn resolve_up(up: &str, topo: &Mesh, landmarks: Option<&Path>) -> anyhow::Result
         }
         (given, _) => given.into(),
     })
+}
+
+/// The manifest's length unit for `db init --input-units UNIT`: `auto`
+/// takes m, cm or mm, whichever makes the rest frame's size (its bounding
+/// box's largest side) nearest 1.7 m (a person; the unit's log distance, so 0.85-3.4 m
+/// all read as metres); an explicit unit that makes the body shorter than
+/// 0.3 m or taller than 3 m is kept with a warning. A capture in
+/// millimetres read as metres built a 1.7 km dancer whose retargets
+/// reported 4.5 m of ground penetration.
+fn resolve_units(units: &str, topo: &Mesh) -> String {
+    // The bounding box's largest side: the height standing, the span in a
+    // T-pose (about the height), and the same whatever the up axis.
+    let h = (0..3)
+        .map(|axis| {
+            let (lo, hi) = topo
+                .positions()
+                .iter()
+                .map(|p| p[axis])
+                .filter(|v| v.is_finite())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                });
+            hi - lo
+        })
+        .fold(f64::NEG_INFINITY, f64::max);
+    if !(h > 0.0 && h.is_finite()) {
+        return if units.eq_ignore_ascii_case("auto") {
+            "m".into()
+        } else {
+            units.into()
+        };
+    }
+    if units.eq_ignore_ascii_case("auto") {
+        let off = |u: f64| (h * u / 1.7).ln().abs();
+        let (u, name) = [(1.0, "m"), (0.01, "cm"), (0.001, "mm")]
+            .into_iter()
+            .min_by(|a, b| off(a.0).total_cmp(&off(b.0)))
+            .unwrap_or((1.0, "m"));
+        if name != "m" {
+            crate::errln!(
+                "--input-units auto: the rest frame is {h:.1} file units tall or wide: read as {name} ({:.2} m)",
+                h * u
+            );
+        }
+        return name.into();
+    }
+    if let Some(u) = surfmotion::mocap::units::parse_unit(units) {
+        let metres = h * u.metres_per_unit;
+        if !(0.3..=3.0).contains(&metres) {
+            tracing::warn!(
+                "--input-units {units}: the rest frame is {metres:.3} m tall or wide in it; is the unit right? (--input-units auto guesses it)"
+            );
+        }
+    }
+    units.into()
 }
 
 fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
