@@ -40,7 +40,10 @@
 //! A vertex whose fan still has a turned-over triangle after `steps`
 //! projections continues from where it stopped, the budget doubling up to
 //! `max_steps`; a vertex that succeeds stops early as before, and one
-//! that still fails keeps the position its first `steps` gave. Measured on
+//! that still fails keeps the position its first `steps` gave. The
+//! deformation runs it with the fixed budget (`max_steps` = `steps`) and
+//! the adaptive one only as a last resort, on a frame the fixed budget and
+//! the patch repair leave turned over (`Deformer::repair`). Measured on
 //! CMU 131_01 retargeted onto the samba capture with the at-rest block
 //! support: frame 110 (a deep lunge) left triangle 3674 on the inner
 //! thigh turned over with 32 projections; 64 sweeps of 256 untangled it.
