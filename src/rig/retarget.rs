@@ -576,6 +576,23 @@ fn retarget_on_grounds(
 /// cm lower, and stood on that top the whole body lifted 7.6 cm in one
 /// frame (samba) while the clip's root rose 1.6 cm. On flat ground both
 /// supports are the floor and nothing changes.
+///
+/// So does a foot touching a step it is arriving on or leaving, not at
+/// rest on it ([`Support::rests`]), the step higher than the lower of the
+/// supports the foot rests on before and after, while the other foot
+/// stands on a support as high (the floor, or a step it rests on, within
+/// the contact band of the step or above it): with a footfall's support the
+/// height the foot holds at rest ([`clip_support`]), the frames it comes
+/// up onto a block in, its lowest joint within the contact band below
+/// the top, touch the top, and the character's sole there is lower than
+/// the clip's joints (a heel pitched down is 6 cm under the ankle): the
+/// generated step up onto 20 cm at 30 fps lifted the body 2.7 cm in one
+/// frame more than the clip's 1.7 cm. A foot that holds the body alone
+/// (the other in the air) or above a lower support stays on the step it
+/// touches: stepping down off a block (CMU 03_01 on samba, frame 90),
+/// the rear foot on its toes on the block holds the body up while the
+/// front one strikes the floor; counted in the air, its toes went 4 cm
+/// into the block for that frame.
 fn place_feet(
     character: &Pose,
     support: &Support,
@@ -592,18 +609,51 @@ fn place_feet(
     // How far frame `i` must be lifted for foot `f` to stand on ground
     // `y` (the clip's height).
     let need = |f: usize, i: usize, y: f64| rest_soles[f] + (y - clip_floor) * s - soles[i][f];
-    let sides = support.touch.each_ref().map(|t| grounds_either_side(t));
+    let n = out.len();
+    // The supports each foot is settled on: the floor, or a step while
+    // the foot rests on it.
+    let settled: [Vec<Option<f64>>; 2] = [0, 1].map(|f| {
+        (0..n)
+            .map(|i| support.touch[f][i].filter(|&u| u <= clip_floor || support.rests[f][i]))
+            .collect()
+    });
+    let settled_sides = settled.each_ref().map(|t| grounds_either_side(t));
+    // A foot touching a step it is arriving on or leaving (not at rest on
+    // it, and the step above the lower of the supports it settles on
+    // before and after) while the other foot is settled on a support as
+    // high (within the contact band) counts as in the air: the step is its
+    // ground only once its sole is above the top.
+    let touch: [Vec<Option<f64>>; 2] = [0, 1].map(|f| {
+        (0..n)
+            .map(|i| {
+                let t = support.touch[f][i];
+                let (Some(u), None) = (t, settled[f][i]) else {
+                    return t;
+                };
+                let lo = match settled_sides[f][i] {
+                    (Some(a), Some(b)) => a.min(b),
+                    (a, b) => a.or(b).unwrap_or(u),
+                };
+                if u > lo && settled[1 - f][i].is_some_and(|o| o >= u - CONTACT) {
+                    None
+                } else {
+                    t
+                }
+            })
+            .collect()
+    });
+    let sides = touch.each_ref().map(|t| grounds_either_side(t));
     // A foot's ground when touching; in the air, the lower of the
     // supports it left and lands on.
     let lower = |f: usize, i: usize| -> Option<f64> {
-        support.touch[f][i].or(match sides[f][i] {
+        touch[f][i].or(match sides[f][i] {
             (Some(a), Some(b)) => Some(a.min(b)),
             (a, b) => a.or(b),
         })
     };
     let fix: Vec<Option<f64>> = (0..out.len())
         .map(|i| {
-            if support.touch.iter().all(|f| f[i].is_none()) {
+            if touch.iter().all(|f| f[i].is_none()) {
                 return None;
             }
             (0..2)
@@ -758,6 +808,15 @@ pub struct Support {
     /// over the floor); the only one before its first touch or after its
     /// last; `None` for a foot that never touches.
     pub under: [Vec<Option<f64>>; 2],
+    /// Per foot and frame, whether the foot stands on a footfall's
+    /// support: its lowest joint within the contact band of the height
+    /// the footfall holds, on the floor, a step, or a block too low to
+    /// be told from the floor (3-6 cm, which it does not touch).
+    pub held: [Vec<bool>; 2],
+    /// Per foot and frame, whether the foot is at rest: its ankle and toe
+    /// joints both moving less than 0.5 % of the leg's length from the
+    /// frame before (the first frame: to the next).
+    pub rests: [Vec<bool>; 2],
 }
 
 /// The ground under a foot per frame (see [`Support::under`]) from the
@@ -798,19 +857,60 @@ fn grounds_either_side(touch: &[Option<f64>]) -> Vec<(Option<f64>, Option<f64>)>
     out
 }
 
+/// The contact band (m): a foot whose lowest joint is within it of a
+/// support touches that support.
+const CONTACT: f64 = 0.03;
+
+/// The height a footfall holds its lowest joint at, from its heights
+/// `h` in the frames the foot is at rest (metres, sorted ascending): the
+/// lowest of the largest set of them within the contact band of one
+/// another (the first such set). `INFINITY` for no heights.
+fn held_height(h: &[f64]) -> f64 {
+    let (mut best, mut lo, mut j) = (0, f64::INFINITY, 0);
+    for i in 0..h.len() {
+        while h[i] - h[j] > CONTACT {
+            j += 1;
+        }
+        if i + 1 - j > best {
+            (best, lo) = (i + 1 - j, h[j]);
+        }
+    }
+    lo
+}
+
 /// The clip's support per footfall (poses levelled, Y-up, metres; `leg`
 /// the clip's leg length). A foot is planted while its ankle or its toe
 /// joint moves less than 2 % of the leg length per frame (a heel rising
 /// about a planted toe, or a toe lowering about a planted heel); a
-/// footfall is a run of planted frames, and its support is the lowest
-/// height its lowest joint reaches in it. A support within 6 cm of the
-/// clip's floor is the floor (a flat capture keeps one plane); a higher
-/// one is a step the clip stands on (CMU subject 03 walks over blocks
-/// 13-22 cm high) when the footfall lasts at least 5 frames and the foot
-/// bears weight (it is the lower foot in some frame of it). A frame touches the ground when any foot joint is within
-/// 3 cm of the floor (as on a flat capture), or a planted foot's lowest
-/// joint is within 3 cm of its footfall's support; the lowest such support
-/// is the frame's ground.
+/// footfall is a run of planted frames, and its support is the height
+/// its lowest joint holds in it while the foot is at rest, its ankle and
+/// toe both moving less than 0.5 % of the leg length per frame
+/// ([`held_height`]: the lowest of the largest set of those heights
+/// within the 3 cm contact band; of all its heights when it never rests). A support
+/// within twice the contact band of the clip's floor is the floor (a flat
+/// capture keeps one plane); a higher one is a step the clip stands on
+/// (CMU subject 03 walks over blocks 11-25 cm high) when the footfall
+/// lasts at least 5 frames, the foot rests in some and bears weight (it
+/// is the lower foot in some frame of it). A frame touches the ground when any foot
+/// joint is within 3 cm of the floor (as on a flat capture), or a planted
+/// foot's lowest joint is within 3 cm of its footfall's support; the
+/// lowest such support is the frame's ground.
+///
+/// The support was the lowest height the footfall's lowest joint
+/// reached, and steps began 6 cm above the floor. A run of planted frames
+/// also holds the frames where the foot comes down onto a block toe
+/// first, or leaves it over the edge onto its toes, its ankle moving
+/// slowly (more such frames the higher the frame rate, the bound being
+/// per frame): on a 30 cm block the toe was 5 cm below the top when the
+/// run began, stepping down off 20 cm it dropped 4 cm past the edge, and
+/// the frames flat on the block, more than 3 cm above that lowest
+/// height, touched nothing (the foot's flat elevation was then read off
+/// its toe-off, [`flat_feet`], and it stood toes up on the block). On the
+/// README's walks at 30 frames per second the resting frames' lowest
+/// height is the footfall's lowest. A block 3-6 cm high is still the
+/// floor (CMU 131_02 holds a foot 3.8 cm above its floor for 6 frames;
+/// as a step it raised samba's penetration maximum 0.50 → 1.18 cm),
+/// which the foot on it does not touch; [`Support::held`] has it.
 pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
     let mut lows: Vec<f64> = mocap
         .iter()
@@ -823,6 +923,8 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
         .copied()
         .unwrap_or_else(|| mocap.first().map_or(0.0, |p| p[C::Pelvis.index()].y));
     let mut touch: [Vec<Option<f64>>; 2] = [vec![None; mocap.len()], vec![None; mocap.len()]];
+    let mut held: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];
+    let mut rests: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];
     let still = 0.02 * leg.max(1e-9);
     for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
         .into_iter()
@@ -830,19 +932,30 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
     {
         let (a, k) = (ankle.index(), toe.index());
         let low = |p: &Pose| if p[a].y <= p[k].y { p[a] } else { p[k] };
-        let planted: Vec<bool> = (0..mocap.len())
+        // Per frame, how far the ankle and the toe joint moved from the
+        // frame before (the first frame: to the next).
+        let moved: Vec<(f64, f64)> = (0..mocap.len())
             .map(|t| {
                 let (i, j) = if t > 0 {
                     (t - 1, t)
                 } else {
                     (0, 1.min(mocap.len() - 1))
                 };
-                let d = (mocap[j][a] - mocap[i][a])
-                    .length()
-                    .min((mocap[j][k] - mocap[i][k]).length());
-                d <= still && low(&mocap[t]).is_finite()
+                (
+                    (mocap[j][a] - mocap[i][a]).length(),
+                    (mocap[j][k] - mocap[i][k]).length(),
+                )
             })
             .collect();
+        let planted: Vec<bool> = (0..mocap.len())
+            .map(|t| moved[t].0.min(moved[t].1) <= still && low(&mocap[t]).is_finite())
+            .collect();
+        // At rest: the whole foot, ankle and toe, still (a quarter of the
+        // planted bound).
+        let resting = |t: usize| moved[t].0.max(moved[t].1) <= 0.25 * still;
+        for (t, r) in rests[foot].iter_mut().enumerate() {
+            *r = resting(t);
+        }
         let mut t = 0;
         while t < mocap.len() {
             if !planted[t] {
@@ -854,31 +967,50 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
                 t += 1;
             }
             let run = start..t;
-            let sup = run
-                .clone()
-                .map(|i| low(&mocap[i]).y)
-                .fold(f64::INFINITY, f64::min);
+            let height = |i: usize| low(&mocap[i]).y;
+            let mut rests: Vec<f64> = run.clone().filter(|&i| resting(i)).map(height).collect();
+            rests.sort_by(f64::total_cmp);
+            let sup = if rests.is_empty() {
+                let mut lows: Vec<f64> = run.clone().map(height).collect();
+                lows.sort_by(f64::total_cmp);
+                held_height(&lows)
+            } else {
+                held_height(&rests)
+            };
             // A step is twice the contact band above the floor (6 cm; a
-            // kerb or a block), held at least 5 frames, and bears weight:
-            // the foot is the lower of the two in some frame of the
-            // footfall (a leg held still in the air, the other foot on the
-            // floor, is no step; nor a gliding foot hovering over it).
+            // kerb or a block), held at least 5 frames with the foot at
+            // rest in some, and bears weight: the foot is the lower of
+            // the two in some frame of the footfall (a leg held still in
+            // the air, the other foot on the floor, is no step; nor a
+            // gliding foot hovering over it).
             let bears = run
                 .clone()
                 .any(|i| low(&mocap[i]).y <= foot_height(&mocap[i]) + 1e-9);
-            if sup > floor + 0.06 && !(bears && run.len() >= 5) {
+            if sup > floor + 2.0 * CONTACT && !(bears && !rests.is_empty() && run.len() >= 5) {
                 continue;
             }
-            let sup = if sup <= floor + 0.06 { floor } else { sup };
+            for i in run.clone() {
+                if (low(&mocap[i]).y - sup).abs() <= CONTACT {
+                    held[foot][i] = true;
+                }
+            }
+            let sup = if sup <= floor + 2.0 * CONTACT {
+                floor
+            } else {
+                sup
+            };
+            // The frames within the contact band of it: not those where
+            // the foot, still counted planted, has dropped past the
+            // block's edge (stepping down) or not yet come down onto it.
             for i in run {
-                if low(&mocap[i]).y <= sup + 0.03 {
+                if (low(&mocap[i]).y - sup).abs() <= CONTACT {
                     touch[foot][i] = Some(sup);
                 }
             }
         }
         // On the floor, as on a flat capture: the foot within 3 cm of it.
         for (i, p) in mocap.iter().enumerate() {
-            if low(p).y <= floor + 0.03 {
+            if low(p).y <= floor + CONTACT {
                 touch[foot][i] = Some(floor);
             }
         }
@@ -904,6 +1036,8 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
         ground,
         touch,
         under,
+        held,
+        rests,
     }
 }
 
@@ -1071,7 +1205,8 @@ fn interpolate_gaps(v: &[Option<f64>]) -> Vec<f64> {
 /// their lowest (5th percentile) heights, unless it is more than 5° off
 /// the elevation the foot holds longest while planted on a support
 /// ([`held_elevation`] over the frames where it touches the floor or a
-/// block it stands on, `support`'s [`Support::touch`], with its ankle and
+/// block it stands on, `support`'s [`Support::touch`], or stands on a
+/// block too low to be told from the floor, [`Support::held`], with its ankle and
 /// toe joints each moving less than 2 % of the leg's length from the
 /// frame before), which is then taken. A rest skeleton's foot bone need
 /// not point as the standing foot's does (CMU's ASF rest skeleton points
@@ -1109,7 +1244,9 @@ fn flat_feet(r: &Pose, mocap: &[Pose], support: &Support) -> Pose {
         };
         let planted = |i: usize| {
             let j = if i > 0 { i - 1 } else { 1.min(mocap.len() - 1) };
-            support.touch[foot].get(i).is_some_and(|g| g.is_some()) && moved(i, j) <= still
+            let on = support.touch[foot].get(i).is_some_and(|g| g.is_some())
+                || support.held[foot].get(i).is_some_and(|&h| h);
+            on && moved(i, j) <= still
         };
         let mut held: Vec<f64> = (0..mocap.len())
             .filter(|&i| planted(i))
