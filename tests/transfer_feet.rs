@@ -50,6 +50,20 @@ fn solve(
     .0
 }
 
+/// Frames either side of a clip's one-frame rise onto the ball over
+/// which the smoothed floor shift may leave the lower foot above the
+/// floor (by at most the ankle's rise in that frame): the rise changes
+/// the shift standing the feet on the floor in one frame, and the shift
+/// is smoothed over time (a cut-off of about 8 frames), never below the
+/// floor.
+const RISE_FRAMES: usize = 5;
+
+/// How high the left ankle rises from frame `from` to frame `to`.
+fn ankle_rise(poses: &[Pose], from: usize, to: usize) -> f64 {
+    let a = C::LAnkle.index();
+    poses[to][a].y - poses[from][a].y
+}
+
 /// Frame 0 of the real samba capture (the scan) and its landmark file's
 /// text.
 fn samba_scan(d: &std::path::Path) -> (surfmotion::mesh::Mesh, String) {
@@ -115,12 +129,21 @@ fn the_surface_stands_on_the_ground_where_the_clip_does() {
             for (i, p) in out.chunks(n).enumerate() {
                 // Both feet stand on the floor in every frame: none below
                 // it, the lower on it (1 mm; the surface moves with the
-                // skeleton, so a lifted body stands every foot above).
+                // skeleton, so a lifted body stands every foot above)
+                // except next to the one-frame rise, over which the
+                // shift is smoothed (`RISE_FRAMES` either side: at most
+                // the ankle's rise above).
                 let l = low(p);
                 let gaps = [l[0] - rest_low[0], l[1] - rest_low[1]];
                 let lower = gaps[0].min(gaps[1]);
+                let near = i.abs_diff(still) <= RISE_FRAMES;
+                let above = if near {
+                    ankle_rise(&poses, 0, still)
+                } else {
+                    1e-3
+                };
                 assert!(
-                    lower.abs() < 1e-3,
+                    lower > -1e-6 && lower < above,
                     "{deg}°, {still}+{held} frames, frame {i}: the lower foot is {:.2} cm off the floor (left {:.2}, right {:.2})",
                     100.0 * lower,
                     100.0 * gaps[0],
@@ -152,7 +175,7 @@ fn a_scan_standing_along_another_axis_moves_as_the_y_up_one() {
     // ball, then walking its root forward) on the scan turned by `q`;
     // returns the frames turned back, and each frame's lower foot's gap
     // to the floor along the scan's axis.
-    let run = |q: DQuat| -> (Vec<[f64; 3]>, Vec<f64>, f64) {
+    let run = |q: DQuat| -> (Vec<[f64; 3]>, Vec<f64>, f64, f64) {
         let turn = |p: [f64; 3]| (q * DVec3::from_array(p)).to_array();
         let mesh = scan
             .with_positions(
@@ -202,9 +225,9 @@ fn a_scan_standing_along_another_axis_moves_as_the_y_up_one() {
         let back = out
             .iter()
             .map(|&p| (q.inverse() * DVec3::from_array(p)).to_array());
-        (back.collect(), gaps, rig.height)
+        (back.collect(), gaps, rig.height, ankle_rise(&poses, 0, 6))
     };
-    let (y, _, height) = run(DQuat::IDENTITY);
+    let (y, _, height, _) = run(DQuat::IDENTITY);
     let turns = [
         ("Z-up", DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2)),
         ("X-up", DQuat::from_rotation_z(-std::f64::consts::FRAC_PI_2)),
@@ -212,7 +235,7 @@ fn a_scan_standing_along_another_axis_moves_as_the_y_up_one() {
     ];
     for (name, q) in turns {
         assert!((q * DVec3::Y).abs().max_element() > 0.999);
-        let (out, gaps, _) = run(q);
+        let (out, gaps, _, rise) = run(q);
         assert_eq!(out.len(), y.len());
         let worst = out
             .iter()
@@ -226,11 +249,100 @@ fn a_scan_standing_along_another_axis_moves_as_the_y_up_one() {
             100.0 * worst / height
         );
         for (i, g) in gaps.iter().enumerate() {
+            let above = if i.abs_diff(6) <= RISE_FRAMES {
+                rise
+            } else {
+                1e-3
+            };
             assert!(
-                g.abs() < 1e-3,
+                *g > -1e-6 && *g < above,
                 "{name}, frame {i}: the lower foot is {:.2} cm off the floor along the scan's axis",
                 100.0 * g
             );
         }
+    }
+}
+
+/// The scan's own skeleton standing as at rest, one foot (`foot` 0 left,
+/// 1 right) pitched toes-up by `deg` about its ankle in every other
+/// frame: the foot's lowest vertex passes from the sole to the heel and
+/// back frame by frame, as a walking foot's does between heel and toes.
+fn rocking(rest: &Pose, foot: usize, deg: f64, frames: usize) -> Vec<Pose> {
+    let (a, k) = [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)][foot];
+    let (a, k) = (a.index(), k.index());
+    let f = rest[k] - rest[a];
+    let axis = f.cross(DVec3::Y).normalize();
+    let q = DQuat::from_axis_angle(axis, deg.to_radians());
+    let mut up = *rest;
+    up[k] = rest[a] + q * f;
+    (0..frames)
+        .map(|i| if i % 2 == 1 { up } else { *rest })
+        .collect()
+}
+
+/// The surface's vertical motion stays smooth where the lowest vertex of
+/// a touching foot alternates between heel and sole frame by frame (the
+/// floor correction of the twelfth session stood it on the floor frame by
+/// frame: CMU 02_02's centroid acceleration p95 1.09 → 1.83 cm/frame²):
+/// no foot goes below the floor in any frame, and the centroid's largest
+/// vertical second difference is at most half that of the same result
+/// stood on the floor frame by frame (the centroid less the lower foot's
+/// height above the floor). Either foot, 8° and 15°, 40 frames and 100
+/// (across the 64-frame chunks the frames are streamed in).
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn a_foot_rocking_between_heel_and_sole_moves_the_surface_smoothly() {
+    let Some(d) = common::data_dir() else { return };
+    let (scan, text) = samba_scan(&d);
+    let lm = Landmarks::parse(
+        &text,
+        std::path::Path::new("samba.landmarks.json"),
+        scan.vertex_count(),
+    )
+    .unwrap();
+    let opts = MarkerOptions {
+        count: 20,
+        ..Default::default()
+    };
+    let prepared = prepare(&scan, MarkerSpec::Landmarks(&lm, opts)).unwrap();
+    let rig = prepared.rig.as_ref().unwrap();
+    let rest: Pose = rig.joints.map(DVec3::from_array);
+    let n = prepared.mesh.vertex_count();
+    let low = feet_low(rig, DVec3::Y);
+    let rest_low = low(prepared.mesh.positions());
+    let d2 = |v: &[f64]| {
+        v.windows(3)
+            .map(|w| (w[0] - 2.0 * w[1] + w[2]).abs())
+            .fold(0.0, f64::max)
+    };
+    for (foot, deg, frames) in [(0, 8.0, 40), (1, 15.0, 40), (0, 15.0, 100), (1, 8.0, 100)] {
+        let poses = rocking(&rest, foot, deg, frames);
+        let out = solve(&prepared, &rest, &poses);
+        let mut centroid = Vec::new();
+        let mut stood = Vec::new();
+        for (i, p) in out.chunks(n).enumerate() {
+            let l = low(p);
+            let gap = (l[0] - rest_low[0]).min(l[1] - rest_low[1]);
+            assert!(
+                gap > -1e-6,
+                "foot {foot}, {deg}°, {frames} frames, frame {i}: a foot is {:.2} cm below the floor",
+                -100.0 * gap
+            );
+            let c = p.iter().map(|v| v[1]).sum::<f64>() / n as f64;
+            centroid.push(c);
+            stood.push(c - gap);
+        }
+        let (smooth, raw) = (d2(&centroid), d2(&stood));
+        eprintln!(
+            "foot {foot}, {deg}°, {frames} frames: centroid second difference max {:.3} cm, stood frame by frame {:.3} cm",
+            100.0 * smooth,
+            100.0 * raw
+        );
+        assert!(
+            raw > 1e-3 && smooth <= 0.5 * raw,
+            "foot {foot}, {deg}°, {frames} frames: the centroid's vertical second difference is {:.3} cm at most, stood frame by frame {:.3} cm",
+            100.0 * smooth,
+            100.0 * raw
+        );
     }
 }

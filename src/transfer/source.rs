@@ -46,8 +46,9 @@ pub struct MarkerMotion {
 /// stands on a block, and frames in the air, take the shift
 /// interpolated between floor frames: on blocks the kernel's ground is
 /// its own (taking its block tops stood CMU 03_02's surface 11 cm up on
-/// a block its swinging foot was over). A clip standing as the rest
-/// frame gives the rest scan.
+/// a block its swinging foot was over). The shifts are then smoothed over
+/// time, never below a touching frame's own (`transfer::run`'s
+/// `chunk_shifts`). A clip standing as the rest frame gives the rest scan.
 #[derive(Debug, Clone, Default)]
 pub struct FootGround {
     /// The scan's up axis (unit; heights and the shift are along it).
