@@ -509,6 +509,345 @@ Torso 0 112 0
  mirror LeftHip Left=>Right
 ",
     },
+    Suite {
+        name: "qualisys_qtm",
+        convention: BY_N,
+        sides: "from geometry",
+        map: "pelvis=Hips;spine=Waist;chest=Chest;neck=Neck;head=Head;\
+              l_shoulder=LeftShoulder;l_elbow=LeftElbow;l_wrist=LeftWrist;\
+              r_shoulder=RightShoulder;r_elbow=RightElbow;r_wrist=RightWrist;\
+              l_hip=LeftHip;l_knee=LeftKnee;l_ankle=LeftAnkle;l_toe=LeftFoot;\
+              r_hip=RightHip;r_knee=RightKnee;r_ankle=RightAnkle;r_toe=RightFoot",
+        skel: "
+# Qualisys Track Manager's skeleton solver (segments Hips, Waist, Chest,
+# LeftCollar, LeftShoulder = the upper arm, LeftElbow = the forearm,
+# LeftWrist, Neck, Head, LeftHip = the thigh, LeftKnee, LeftAnkle,
+# LeftFoot = the forefoot), as its BVH export names them. Segment names,
+# parents and positions from the skeleton XML example of Qualisys's public
+# real-time protocol documentation (lab frame: Z-up, the subject facing
+# -Y). mm, Z-up, facing -Y; the neck off the chest 30 cm above it.
+unit mm
+axes zup-y
+scale 10
+order Zrotation Xrotation Yrotation
+Hips 0 99 0
+ Waist 0 12 0
+  Chest 0 12 -1
+   LeftCollar 5 25 1
+    LeftShoulder 13 -4 2
+     LeftElbow 26 1 0
+      LeftWrist 25 -5 0 | 8 0 0
+   mirror LeftCollar Left=>Right
+   Neck 0 30 -2
+    Head 0 9 3 | 0 18 0
+ LeftHip 9 -2 -5
+  LeftKnee 1 -43 0
+   LeftAnkle 0 -46 -1
+    LeftFoot 0 -7 12 | 0 0 5
+ mirror LeftHip Left=>Right
+",
+    },
+    Suite {
+        name: "mmd_japanese",
+        convention: BY_S,
+        sides: "from geometry",
+        map: "pelvis=腰|下半身;spine=上半身;chest=上半身2;neck=首;head=頭;\
+              l_shoulder=左腕;l_elbow=左ひじ;l_wrist=左手首;\
+              r_shoulder=右腕;r_elbow=右ひじ;r_wrist=右手首;\
+              l_hip=左足;l_knee=左ひざ;l_ankle=左足首;l_toe=左つま先;\
+              r_hip=右足;r_knee=右ひざ;r_ankle=右足首;r_toe=右つま先",
+        skel: "
+# MikuMikuDance (PMX) standard bones as VMD/PMX-to-BVH converters write
+# them, in Japanese: 全ての親 (all parents) at the floor, センター (centre),
+# グルーブ, 腰 (waist) carrying 上半身 (upper body) → 上半身2 → 首 → 頭 and
+# 下半身 (lower body, a short bone down) carrying the legs 左足 → 左ひざ →
+# 左足首 → 左つま先; arms 左肩P → 左肩 (clavicle) → 左腕 → 左腕捩 (twist) →
+# 左ひじ → 左手捩 → 左手首, thumb 左親指０..; eyes 左目; leg IK chains
+# 左足ＩＫ親 → 左足ＩＫ → 左つま先ＩＫ (full-width letters) under 全ての親;
+# skirt chains (スカート前, スカート後, スカート左, ...: no word the names
+# know) off 下半身 beside the legs, as many PMX models carry.
+# Bone names and parents from public VMD standard-bone tables and MMD bone
+# reference charts. MMD units (8 cm) read as dm; Y-up, facing -Z; A-pose.
+# No name is an ASCII word: structure decides, sides from geometry.
+unit dm
+axes y-z
+scale 0.1
+order Zrotation Xrotation Yrotation
+全ての親 0 0 0
+ センター 0 88 0 % 6
+  グルーブ 0 2 0
+   腰 0 6 0
+    上半身 0 2 0
+     上半身2 0 12 0
+      首 0 22 0
+       頭 0 8 1 | 0 16 0
+        左目 3 6 7 | 0 0 1
+        右目 -3 6 7 | 0 0 1
+      左肩P 3 20 0
+       左肩 0 0 0
+        左腕 12 0 0
+         左腕捩 10 -9 0
+          左ひじ 10 -9 0
+           左手捩 9 -8 0
+            左手首 9 -8 0
+             左親指０ 2 -3 2
+              左親指１ 2 -2 1 | 1 -1 1
+      mirror 左肩P 左=>右
+    下半身 0 -1 0
+     スカート前 0 -2 9
+      スカート前2 0 -16 3 | 0 -14 2
+     スカート後 0 -2 -9
+      スカート後2 0 -16 -3 | 0 -14 -2
+     スカート左 11 -2 0
+      スカート左2 4 -16 0 | 2 -14 0
+     mirror スカート左 左=>右
+     左足 9 -8 0
+      左ひざ 0 -42 1
+       左足首 0 -42 -2
+        左つま先 0 -7 12 | 0 0 2
+     mirror 左足 左=>右
+ 左足ＩＫ親 9 0 -2
+  左足ＩＫ 0 8 0
+   左つま先ＩＫ 0 -8 12 | 0 0 2
+ mirror 左足ＩＫ親 左=>右
+",
+    },
+    Suite {
+        name: "mmd_english",
+        convention: BY_S,
+        sides: "from geometry",
+        map: "pelvis=waist|lower body;spine=upper body;chest=upper body2;neck=neck;head=head;\
+              l_shoulder=arm_L;l_elbow=elbow_L;l_wrist=wrist_L;\
+              r_shoulder=arm_R;r_elbow=elbow_R;r_wrist=wrist_R;\
+              l_hip=leg_L;l_knee=knee_L;l_ankle=ankle_L;l_toe=toe_L;\
+              r_hip=leg_R;r_knee=knee_R;r_ankle=ankle_R;r_toe=toe_R",
+        skel: "
+# The same MMD skeleton with the semi-standard English bone names (spaces
+# inside names: `upper body`, `lower body`, `arm twist_L`, `leg IK_L`;
+# `leg_L` is the thigh, `arm_L` the upper arm, `shoulder_L` the clavicle).
+# Names from public MMD bone translation tables. Written in cm, tabs, CRLF.
+unit cm
+axes y-z
+order Zrotation Xrotation Yrotation
+tabs
+crlf
+all parents 0 0 0
+ center 0 88 0 % 6
+  groove 0 2 0
+   waist 0 6 0
+    upper body 0 2 0
+     upper body2 0 12 0
+      neck 0 22 0
+       head 0 8 1 | 0 16 0
+        eye_L 3 6 7 | 0 0 1
+        eye_R -3 6 7 | 0 0 1
+      shoulderP_L 3 20 0
+       shoulder_L 0 0 0
+        arm_L 12 0 0
+         arm twist_L 10 -9 0
+          elbow_L 10 -9 0
+           wrist twist_L 9 -8 0
+            wrist_L 9 -8 0 | 3 -3 0
+      mirror shoulderP_L _L=>_R
+    lower body 0 -1 0
+     leg_L 9 -8 0
+      knee_L 0 -42 1
+       ankle_L 0 -42 -2
+        toe_L 0 -7 12 | 0 0 2
+     mirror leg_L _L=>_R
+ leg IKP_L 9 0 -2
+  leg IK_L 0 8 0
+   toe IK_L 0 -8 12 | 0 0 2
+ mirror leg IKP_L _L=>_R
+",
+    },
+    Suite {
+        name: "makehuman",
+        convention: BY_S,
+        sides: "from geometry",
+        map: "pelvis=root;spine=spine04|spine03;chest=spine01;neck=neck01;head=head;\
+              l_shoulder=shoulder01.L|upperarm01.L;l_elbow=lowerarm01.L;l_wrist=wrist.L;\
+              r_shoulder=shoulder01.R|upperarm01.R;r_elbow=lowerarm01.R;r_wrist=wrist.R;\
+              l_hip=upperleg01.L;l_knee=lowerleg01.L;l_ankle=foot.L;l_toe=toe1-1.L;\
+              r_hip=upperleg01.R;r_knee=lowerleg01.R;r_ankle=foot.R;r_toe=toe1-1.R",
+        skel: "
+# MakeHuman's default skeleton exported to BVH: root → spine05..spine01,
+# neck01..neck03, head; clavicle.L → shoulder01.L → upperarm01.L →
+# upperarm02.L (the upper arm in two twist halves) → lowerarm01.L →
+# lowerarm02.L → wrist.L; root → pelvis.L (the hip bone) → upperleg01.L →
+# upperleg02.L → lowerleg01.L → lowerleg02.L → foot.L → toe1-1.L. Bone
+# names from MakeHuman's public skeleton files and its BVH exporter and
+# retarget tables. dm (MakeHuman's unit), Y-up, facing +Z, A-pose arms.
+unit dm
+scale 0.1
+order Zrotation Xrotation Yrotation
+root 0 100 -1
+ spine05 0 3 -1
+  spine04 0 7 0
+   spine03 0 8 0
+    spine02 0 9 0
+     spine01 0 9 0
+      neck01 0 8 0
+       neck02 0 4 0
+        neck03 0 4 1
+         head 0 3 1 | 0 17 0
+      clavicle.L 2 6 2
+       shoulder01.L 13 0 -3
+        upperarm01.L 3 -2 0
+         upperarm02.L 10 -8 0
+          lowerarm01.L 10 -9 0
+           lowerarm02.L 10 -9 0
+            wrist.L 10 -8 0 | 6 -5 0
+      mirror clavicle.L .L=>.R
+ pelvis.L 2 -1 0
+  upperleg01.L 7 -4 0
+   upperleg02.L 0 -21 0
+    lowerleg01.L 0 -22 0
+     lowerleg02.L 0 -21 0
+      foot.L 0 -21 0
+       toe1-1.L 0 -6 12 | 0 0 3
+ mirror pelvis.L .L=>.R
+",
+    },
+    Suite {
+        name: "vroid_tail_skirt",
+        convention: BY_N,
+        sides: "from geometry",
+        map: "pelvis=J_Bip_C_Hips;spine=J_Bip_C_Spine;chest=J_Bip_C_UpperChest;neck=J_Bip_C_Neck;\
+              head=J_Bip_C_Head;l_shoulder=J_Bip_L_UpperArm;l_elbow=J_Bip_L_LowerArm;\
+              l_wrist=J_Bip_L_Hand;r_shoulder=J_Bip_R_UpperArm;r_elbow=J_Bip_R_LowerArm;\
+              r_wrist=J_Bip_R_Hand;l_hip=J_Bip_L_UpperLeg;l_knee=J_Bip_L_LowerLeg;\
+              l_ankle=J_Bip_L_Foot;l_toe=J_Bip_L_ToeBase;r_hip=J_Bip_R_UpperLeg;\
+              r_knee=J_Bip_R_LowerLeg;r_ankle=J_Bip_R_Foot;r_toe=J_Bip_R_ToeBase",
+        skel: "
+# A VRoid character in a skirt with a tail (VRoid Studio's skirt and
+# accessory springs: J_Sec_L_SkirtFront_01.., J_Sec_L_SkirtSide_01..,
+# J_Sec_L_SkirtBack_01.., a J_Sec_Tail chain, long J_Sec_Hair chains from
+# the head down the back), all off the hips beside the legs: nine chains
+# meet at J_Bip_C_Hips. Bone names from VRoid's public bone lists (J_Bip_*,
+# J_Sec_*). m, Y-up, facing +Z, T-pose.
+unit m
+scale 0.01
+order Zrotation Xrotation Yrotation
+J_Bip_C_Hips 0 95 0
+ J_Sec_Tail_01 0 -2 -8
+  J_Sec_Tail_02 0 -15 -5
+   J_Sec_Tail_03 0 -20 -3
+    J_Sec_Tail_04 0 -20 -2 | 0 -15 0
+ J_Sec_L_SkirtFront_01 6 -2 8
+  J_Sec_L_SkirtFront_02 2 -15 2 | 1 -15 1
+ J_Sec_L_SkirtBack_01 6 -2 -8
+  J_Sec_L_SkirtBack_02 2 -15 -2 | 1 -15 -1
+ J_Sec_L_SkirtSide_01 12 -2 0
+  J_Sec_L_SkirtSide_02 4 -15 0 | 2 -15 0
+ mirror J_Sec_L_SkirtFront_01 _L_=>_R_
+ mirror J_Sec_L_SkirtBack_01 _L_=>_R_
+ mirror J_Sec_L_SkirtSide_01 _L_=>_R_
+ J_Bip_L_UpperLeg 9 -5 0
+  J_Bip_L_LowerLeg 0 -42 0
+   J_Bip_L_Foot 0 -42 0
+    J_Bip_L_ToeBase 0 -6 12 | 0 0 4
+ mirror J_Bip_L_UpperLeg _L_=>_R_
+ J_Bip_C_Spine 0 10 0
+  J_Bip_C_Chest 0 12 0
+   J_Bip_C_UpperChest 0 12 0
+    J_Bip_C_Neck 0 15 0
+     J_Bip_C_Head 0 10 1 | 0 18 0
+      J_Sec_Hair1_01 0 10 -10
+       J_Sec_Hair1_02 0 -25 -3
+        J_Sec_Hair1_03 0 -25 -2
+         J_Sec_Hair1_04 0 -25 -1 | 0 -20 0
+    J_Bip_L_Shoulder 3 12 0
+     J_Bip_L_UpperArm 10 0 0
+      J_Bip_L_LowerArm 26 0 0
+       J_Bip_L_Hand 25 0 0 | 8 0 0
+    mirror J_Bip_L_Shoulder _L_=>_R_
+",
+    },
+    Suite {
+        name: "unreal_cape",
+        convention: BY_N,
+        sides: "from geometry",
+        map: "pelvis=pelvis;spine=spine_01|spine_02;chest=spine_03;neck=neck_01;head=head;\
+              l_shoulder=upperarm_l;l_elbow=lowerarm_l;l_wrist=hand_l;\
+              r_shoulder=upperarm_r;r_elbow=lowerarm_r;r_wrist=hand_r;\
+              l_hip=thigh_l;l_knee=calf_l;l_ankle=foot_l;l_toe=ball_l;\
+              r_hip=thigh_r;r_knee=calf_r;r_ankle=foot_r;r_toe=ball_r",
+        skel: "
+# An Unreal (UE4 mannequin names) game character with a cape: cloth
+# chains cape_l_01.., cape_m_01.., cape_r_01.. hanging from spine_03 down
+# the back beside the clavicles and the neck (six chains off the chest
+# node). UE4 bone names from public retarget tables (pelvis,
+# spine_01..03, clavicle_l, upperarm_l, lowerarm_l, hand_l, thigh_l,
+# calf_l, foot_l, ball_l); the cloth chains as game rigs name them. cm,
+# Y-up, facing +Z, T-pose.
+unit cm
+order Zrotation Xrotation Yrotation
+pelvis 0 95 0
+ thigh_l 9 -5 0
+  calf_l 0 -43 0
+   foot_l 0 -42 0
+    ball_l 0 -6 12 | 0 0 4
+ mirror thigh_l _l=>_r
+ spine_01 0 10 0
+  spine_02 0 12 0
+   spine_03 0 12 0
+    neck_01 0 15 0
+     head 0 10 1 | 0 17 0
+    cape_l_01 8 10 -10
+     cape_l_02 1 -25 -3
+      cape_l_03 1 -25 -2
+       cape_l_04 1 -25 -2 | 0 -20 0
+    cape_m_01 0 10 -10
+     cape_m_02 0 -25 -3
+      cape_m_03 0 -25 -2
+       cape_m_04 0 -25 -2 | 0 -20 0
+    mirror cape_l_01 _l_=>_r_
+    clavicle_l 3 12 0
+     upperarm_l 10 0 0
+      lowerarm_l 26 0 0
+       hand_l 25 0 0 | 8 0 0
+    mirror clavicle_l _l=>_r
+",
+    },
+    Suite {
+        name: "threed_pose_tracker",
+        convention: BY_N,
+        sides: "from geometry",
+        map: "pelvis=Hip|Waist;spine=Chest;chest=UpperChest;neck=Neck;head=Head;\
+              l_shoulder=LeftUpperArm;l_elbow=LeftLowerArm;l_wrist=LeftHand;\
+              r_shoulder=RightUpperArm;r_elbow=RightLowerArm;r_wrist=RightHand;\
+              l_hip=LeftUpperLeg;l_knee=LeftLowerLeg;l_ankle=LeftFoot;l_toe=LeftToes;\
+              r_hip=RightUpperLeg;r_knee=RightLowerLeg;r_ankle=RightFoot;r_toe=RightToes",
+        skel: "
+# Pose-estimation-to-VRM BVH (ThreeDPoseTracker-style exporters): ROOT Hip
+# with a zero-length Waist, Chest, UpperChest, LeftShoulder (clavicle),
+# LeftUpperArm, LeftLowerArm, LeftHand, LeftUpperLeg.. LeftToes off Hip.
+# Names and offsets (metres, the left arm at -X) from BVH headers stored in
+# public repositories (ROOT Hip / CenterHip → Waist → Chest → UpperChest).
+# m, Y-up, facing -Z.
+unit m
+axes y-z
+scale 0.01
+order Zrotation Xrotation Yrotation
+Hip 0 95 0
+ Waist 0 0 0
+  Chest 0 20 0
+   UpperChest 0 12 0
+    LeftShoulder 3 12 0
+     LeftUpperArm 10 2 0
+      LeftLowerArm 26 0 0
+       LeftHand 25 0 0 | 8 0 0
+    mirror LeftShoulder Left=>Right
+    Neck 0 15 0
+     Head 0 10 1 | 0 15 0
+ LeftUpperLeg 9 -5 0
+  LeftLowerLeg 0 -42 0
+   LeftFoot 0 -42 0
+    LeftToes 0 -6 12 | 0 0 4
+ mirror LeftUpperLeg Left=>Right
+",
+    },
 ];
 
 /// Non-humanoids: a rope hanging from a humanoid-named root, a spider
@@ -559,6 +898,65 @@ Body 0 20 0
   RightKnee4 -14 10 -14
    RightFoot4 -10 -30 -10 | -2 -2 -2
  Abdomen 0 2 -10 | 0 0 -20
+",
+    ),
+    (
+        "trex_humanik_names",
+        "
+# A Truebones-style T-rex carrying every HumanIK name: body horizontal,
+# tiny arms (too short to count as limbs), a long tail off the hips beside
+# the legs, the neck forward. Names decide nothing for a horizontal body.
+unit cm
+Hips 0 300 0
+ Spine 0 10 50
+  Spine1 0 10 80
+   Neck 0 20 80
+    Head 0 20 60 | 0 0 80
+   LeftArm 30 -20 30
+    LeftForeArm 0 -30 20
+     LeftHand 0 -20 10 | 0 -5 5
+   mirror LeftArm Left=>Right
+ Tail 0 0 -80
+  Tail1 0 -10 -120
+   Tail2 0 -10 -150
+    Tail3 0 -10 -150 | 0 -5 -100
+ LeftUpLeg 40 -20 0
+  LeftLeg 0 -130 -20
+   LeftFoot 0 -140 -30
+    LeftToeBase 0 -10 50 | 0 0 20
+ mirror LeftUpLeg Left=>Right
+",
+    ),
+    (
+        "legs_only",
+        "
+# A gait-lab lower-body model: pelvis, femurs, tibias, feet; no trunk.
+unit mm
+scale 10
+Pelvis 0 95 0
+ LFemur 9 -5 0
+  LTibia 0 -43 0
+   LFoot 0 -42 0
+    LToes 0 -6 12 | 0 0 4
+ mirror LFemur L=>R
+",
+    ),
+    (
+        "upper_body_only",
+        "
+# An upper-body gesture rig (no legs): Hips, spine, neck, head, arms down.
+unit cm
+Hips 0 95 0
+ Spine 0 10 0
+  Spine1 0 12 0
+   Spine2 0 12 0
+    Neck 0 15 0
+     Head 0 10 1 | 0 17 0
+    LeftShoulder 3 12 0
+     LeftArm 10 0 0
+      LeftForeArm 0 -26 0
+       LeftHand 0 -25 0 | 0 -8 0
+    mirror LeftShoulder Left=>Right
 ",
     ),
     (

@@ -197,7 +197,14 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
     let (rotations, translations) = parse_frames(&joints, &h.slots, rest, path, &mut warnings)?;
     let frames = rotations.len() / joints.len();
     if frames == 0 {
-        return Err(MocapError::invalid(path, "no motion frames"));
+        return Err(MocapError::parse(
+            path,
+            header.time_line,
+            format!(
+                "no motion frames after 'Frame Time:' (the header says Frames: {}): a skeleton without motion",
+                header.declared.map_or("?".into(), |d| d.to_string())
+            ),
+        ));
     }
     header.check_rate(frames, path, opts)?;
     match header.declared {
@@ -646,6 +653,19 @@ impl MotionHeader {
                 ));
             }
             (None, Some(ft)) => ft,
+            // A single pose (a bind or reference pose) has no rate to
+            // speak of: exporters write `Frame Time: 0` for it.
+            (None, None) if declared.is_some_and(|d| d <= 1) => {
+                raise_warning(
+                    warnings,
+                    path,
+                    format!(
+                        "line {tl}: Frame Time {} with a single frame; 30 fps assumed",
+                        quoted(&time_value)
+                    ),
+                );
+                1.0 / 30.0
+            }
             (None, None) => {
                 return Err(MocapError::parse(
                     path,
@@ -672,6 +692,16 @@ impl MotionHeader {
     /// to speak of; an override was checked when read.
     fn check_rate(&self, frames: usize, path: &Path, opts: &BvhOptions) -> Result<(), MocapError> {
         let frame_time = self.frame_time;
+        if opts.fps.is_none() && frames > 1 && self.file_frame_time.is_none() {
+            return Err(MocapError::parse(
+                path,
+                self.time_line,
+                format!(
+                    "bad Frame Time {} for {frames} frames; give the frame rate with --input-fps",
+                    quoted(&self.time_value)
+                ),
+            ));
+        }
         if opts.fps.is_none() && frames > 1 && !crate::budget::is_frame_rate(1.0 / frame_time) {
             return Err(MocapError::parse(
                 path,
@@ -755,7 +785,7 @@ fn parse_frames(
             }
         }
         if row.len() != total {
-            if data.peek().is_none() && row.len() < total {
+            if data.peek().is_none() && row.len() < total && !rotations.is_empty() {
                 raise_warning(
                     warnings,
                     path,
@@ -1015,6 +1045,52 @@ mod tests {
         assert!(parse_bvh(&bad, Path::new("t.bvh"), &BvhOptions::default()).is_err());
         let c = parse_bvh(&bad, Path::new("t.bvh"), &BvhOptions { fps: Some(30.0) }).unwrap();
         assert!((c.fps() - 30.0).abs() < 1e-9);
+    }
+
+    /// A single pose written with `Frame Time: 0` (bind poses) reads at an
+    /// assumed 30 fps with a warning; with two frames it is still an error.
+    #[test]
+    fn a_single_frame_needs_no_frame_time() {
+        let one = SMALL
+            .replace("Frames: 5", "Frames: 1")
+            .replace("Frame Time: .5", "Frame Time: 0")
+            .replace("1 2 3 0 0 0 90 0 0\r\n", "");
+        let c = parse_bvh(&one, Path::new("t.bvh"), &BvhOptions::default()).unwrap();
+        assert_eq!(c.frame_count(), 1);
+        assert!((c.fps() - 30.0).abs() < 1e-9);
+        assert!(
+            c.warnings.iter().any(|w| w.contains("single frame")),
+            "{:?}",
+            c.warnings
+        );
+        let two = one.replace(
+            "1 2 3 90 0 0 0 0 0\r\n",
+            "1 2 3 90 0 0 0 0 0\r\n1 2 3 0 0 0 90 0 0\r\n",
+        );
+        let e = parse_bvh(&two, Path::new("t.bvh"), &BvhOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("t.bvh:") && e.contains("for 2 frames"), "{e}");
+    }
+
+    /// A file without frames (`Frames: 0`, or its only frame line short of
+    /// values) is refused naming the line, not read as a truncated file.
+    #[test]
+    fn no_frames_and_a_short_only_frame_name_the_line() {
+        let (head, _) = SMALL.split_once("MOTION").unwrap();
+        let none = format!("{head}MOTION\nFrames: 0\nFrame Time: .5\n");
+        let e = parse_bvh(&none, Path::new("t.bvh"), &BvhOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("t.bvh:17: no motion frames") && e.contains("Frames: 0"),
+            "{e}"
+        );
+        let short = format!("{head}MOTION\nFrames: 1\nFrame Time: .5\n1 2 3 90 0 0 0 0\n");
+        let e = parse_bvh(&short, Path::new("t.bvh"), &BvhOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "t.bvh:18: 8 values on a frame line, expected 9");
     }
 
     #[test]

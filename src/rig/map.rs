@@ -460,6 +460,48 @@ fn swap_side(c: Canonical) -> Canonical {
     }
 }
 
+/// How far a map's legs point from its trunk: per pose, the mean over both
+/// legs of the cosine between pelvis→ankle and pelvis→head (neck, else
+/// chest); the smaller of the rest pose's and the median of up to 24
+/// sampled frames' (a standing human is near −1, a horizontal body near
+/// 0). `None` when the map lacks those joints.
+fn named_stance(clip: &Clip, map: &RigMap) -> Option<f64> {
+    use Canonical as C;
+    let id = |c: C| {
+        map.joints
+            .get(&c)
+            .and_then(|n| clip.joint(n))
+            .map(|j| j.idx())
+    };
+    let pelvis = id(C::Pelvis)?;
+    let top = id(C::Head)
+        .or_else(|| id(C::Neck))
+        .or_else(|| id(C::Chest))?;
+    let feet = [id(C::LAnkle)?, id(C::RAnkle)?];
+    let cos = |p: &[DVec3]| {
+        let up = (p[top] - p[pelvis]).normalize_or_zero();
+        feet.iter()
+            .map(|&f| 0.5 * (p[f] - p[pelvis]).normalize_or_zero().dot(up))
+            .sum::<f64>()
+    };
+    let rest = cos(&clip.rest_positions().0);
+    let n = clip.joint_count();
+    let frames = clip.frame_count();
+    let step = (frames / 24).max(1);
+    let (mut p, mut r) = (vec![DVec3::ZERO; n], vec![DQuat::IDENTITY; n]);
+    let mut all: Vec<f64> = (0..frames)
+        .step_by(step)
+        .map(|f| {
+            clip.world_into(f, &mut p, &mut r);
+            cos(&p)
+        })
+        .filter(|c| c.is_finite())
+        .collect();
+    all.sort_by(f64::total_cmp);
+    let median = all.get(all.len() / 2).copied().unwrap_or(rest);
+    Some(rest.min(median))
+}
+
 /// Maps a clip onto the canonical skeleton with no rig map: a known
 /// convention when all its names match (its left/right checked against the
 /// body's geometry, see [`super::structure`]), else the structure of the
@@ -521,6 +563,28 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             chest_at_branch(&mut conv, clip, b);
         }
         let Ok(b) = &body else {
+            // Names alone decide: still no humanoid when the named legs do
+            // not point away from the named trunk (a T-rex or a lizard
+            // carrying every HumanIK name, its arms too short to count).
+            if let Some(cos) = named_stance(clip, &conv.map)
+                && cos > -0.7
+            {
+                return Err(RigError::NotHumanoid {
+                    reason: format!(
+                        "the legs named '{}' and '{}' do not point away from the spine (cosine {cos:.2} in the rest pose and the median frame): {} (although every '{}' name is present)",
+                        conv.map
+                            .joints
+                            .get(&Canonical::LHip)
+                            .map_or("", String::as_str),
+                        conv.map
+                            .joints
+                            .get(&Canonical::RHip)
+                            .map_or("", String::as_str),
+                        structure::HORIZONTAL,
+                        conv.map.convention
+                    ),
+                });
+            }
             let mut d = conv;
             d.sides = "from names (the structure analysis did not find a humanoid)".into();
             return Ok(d);

@@ -109,6 +109,16 @@ const HELPER: &[&str] = &[
     "ref",
     "reference",
     "tail",
+    // Cloth and accessory chains (game and VRoid rigs hang them off the
+    // hips and the chest beside the limbs). Not wings: a bird's or a
+    // dragon's are its forelimbs, and the structure must see them.
+    "cape",
+    "cloak",
+    "skirt",
+    "coat",
+    "cloth",
+    "ribbon",
+    "scarf",
     "carpal",
     "metacarpal",
     "lid",
@@ -173,10 +183,63 @@ pub fn common_prefix(names: &[&str]) -> Option<String> {
         .map(|(p, _)| p.to_string())
 }
 
+/// MikuMikuDance's standard bone words (Japanese), as the English words
+/// the tokens know, longest first (`足首` before `足`, `手首` before `首`):
+/// sides `左`/`右`, limb joints, twist (`捩`) and finger bones as helpers.
+/// `足` (leg) is the thigh joint, `腕` (arm) the upper arm, `肩`
+/// (shoulder) the clavicle. From public VMD/PMX standard-bone tables.
+const MMD_WORDS: &[(&str, &str)] = &[
+    ("つま先", "toe"),
+    ("足首", "ankle"),
+    ("手首", "wrist"),
+    ("ひざ", "knee"),
+    ("ひじ", "elbow"),
+    ("親指", "thumb"),
+    ("人指", "index"),
+    ("中指", "middle"),
+    ("薬指", "ring"),
+    ("小指", "pinky"),
+    ("上半身", "upper body"),
+    ("下半身", "lower body"),
+    ("左", "left"),
+    ("右", "right"),
+    ("足", "thigh"),
+    ("腕", "upper arm"),
+    ("肩", "clavicle"),
+    ("首", "neck"),
+    ("頭", "head"),
+    ("目", "eye"),
+    ("捩", "twist"),
+];
+
+/// A name with full-width letters and digits made ASCII (`ＩＫ` → `IK`)
+/// and MMD's Japanese bone words replaced by English ones, each between
+/// spaces (`左足首` → ` left  ankle `). ASCII names are returned as given.
+fn ascii_words(name: &str) -> std::borrow::Cow<'_, str> {
+    if name.is_ascii() {
+        return std::borrow::Cow::Borrowed(name);
+    }
+    let mut s: String = name
+        .chars()
+        .map(|c| match c {
+            '\u{ff01}'..='\u{ff5e}' => char::from_u32(c as u32 - 0xfee0).unwrap_or(c),
+            c => c,
+        })
+        .collect();
+    for (jp, en) in MMD_WORDS {
+        if s.contains(jp) {
+            s = s.replace(jp, &format!(" {en} "));
+        }
+    }
+    std::borrow::Cow::Owned(s)
+}
+
 /// Splits a name into lower-case tokens at separators, camelCase humps and
 /// letter/digit boundaries (`LeftUpLeg` → `left up leg`, `Spine01` →
-/// `spine 01`, `LThumb` → `l thumb`, `lfemur` → `l femur`).
+/// `spine 01`, `LThumb` → `l thumb`, `lfemur` → `l femur`; MMD's Japanese
+/// `左足首` → `left ankle`, see [`MMD_WORDS`]).
 pub fn tokens(name: &str) -> Vec<String> {
+    let name = ascii_words(name);
     let chars: Vec<char> = name.chars().collect();
     let mut out: Vec<String> = Vec::new();
     let mut cur = String::new();
@@ -369,6 +432,10 @@ mod tests {
         assert_eq!(t("HipLeft"), ["hip", "left"]);
         assert_eq!(t("UpperLeg_L"), ["upper", "leg", "l"]);
         assert_eq!(t("hand.R"), ["hand", "r"]);
+        assert_eq!(t("左足首"), ["left", "ankle"]);
+        assert_eq!(t("右腕捩"), ["right", "upper", "arm", "twist"]);
+        assert_eq!(t("左つま先ＩＫ"), ["left", "toe", "ik"]);
+        assert_eq!(t("上半身2"), ["upper", "body", "2"]);
     }
 
     #[test]

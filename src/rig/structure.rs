@@ -443,6 +443,78 @@ impl<'a> Geo<'a> {
         (best > 1.2 * second).then_some([b[i], b[j]])
     }
 
+    /// Spine, chest and legs among more than three significant chains
+    /// leaving the pelvis node `p` (VRoid/anime rigs hang a tail, skirt and
+    /// cloth chains off the hips; game rigs a holster): the spine is the
+    /// only chain branching into limbs further on (its first junction the
+    /// chest); the legs are the pair of the others whose far ends reach
+    /// lowest below the pelvis (along pelvis→chest) and which mirror each
+    /// other best (their far ends and their starts at the same heights and
+    /// the same distances from the trunk's axis: a tail or a front skirt
+    /// chain lies on the mid-plane, a side skirt is short). Each leg's end
+    /// must lie below the pelvis; the pair's reaches within 1.6×. `None`
+    /// when no chain or several reach a junction, or no pair qualifies.
+    fn legs_among(&self, p: usize, b: &[usize]) -> Option<(usize, usize, [usize; 2])> {
+        let with: Vec<(usize, usize)> = b
+            .iter()
+            .filter_map(|&c| self.junction_below(c).map(|j| (c, j)))
+            .collect();
+        let [(spine, chest)] = with[..] else {
+            return None;
+        };
+        let origin = self.rest[p];
+        let up = (self.rest[chest] - origin).normalize_or_zero();
+        if up == DVec3::ZERO {
+            return None;
+        }
+        // Height along `up` and distance from the trunk's axis.
+        let split = |q: DVec3| {
+            let d = q - origin;
+            let h = d.dot(up);
+            (h, (d - h * up).length())
+        };
+        // A candidate leg: its first joint, its far end's and its start's
+        // (height, distance from the axis), its reach.
+        struct Leg {
+            c: usize,
+            end: (f64, f64),
+            start: (f64, f64),
+            reach: f64,
+        }
+        let legs: Vec<Leg> = b
+            .iter()
+            .filter(|&&c| c != spine)
+            .map(|&c| {
+                let path = self.path(c);
+                let e = *path.last().unwrap_or(&c);
+                Leg {
+                    c,
+                    end: split(self.tail_rest[e].unwrap_or(self.rest[e])),
+                    start: split(self.rest[c]),
+                    reach: self.len[c] + self.reach[c],
+                }
+            })
+            .filter(|l| l.end.0 < 0.0)
+            .collect();
+        let mut best: Option<(f64, [usize; 2])> = None;
+        for (i, a) in legs.iter().enumerate() {
+            for c in &legs[i + 1..] {
+                if a.reach.max(c.reach) > 1.6 * a.reach.min(c.reach) {
+                    continue;
+                }
+                let mismatch = (a.end.0 - c.end.0).abs()
+                    + (a.end.1 - c.end.1).abs()
+                    + (a.start.0 - c.start.0).abs()
+                    + (a.start.1 - c.start.1).abs();
+                let score = -(a.end.0 + c.end.0) - mismatch;
+                if best.is_none_or(|(s, _)| score > s) {
+                    best = Some((score, [a.c, c.c]));
+                }
+            }
+        }
+        best.map(|(_, legs)| (spine, chest, legs))
+    }
+
     /// Useful (non-helper-only) children leaving the node of `r`, any length.
     fn node_children(&self, r: usize) -> Vec<usize> {
         let mut out = Vec::new();
@@ -667,11 +739,21 @@ fn analyse_at(
             continue;
         }
         if b.len() > 3 {
-            reasons.push(format!(
-                "{} chains meet at '{}' (two legs and a spine expected)",
-                b.len(),
-                g.names[p]
-            ));
+            // Accessory chains beside the legs (a tail, skirt or cloth
+            // chains, a holster): the spine is the one branch that reaches
+            // the arms, the legs the pair the others cannot match.
+            let Some((s, chest, legs)) = g.legs_among(p, &b) else {
+                reasons.push(format!(
+                    "{} chains meet at '{}' (two legs and a spine expected)",
+                    b.len(),
+                    g.names[p]
+                ));
+                continue;
+            };
+            match body(&g, tokens, p, s, chest, legs) {
+                Ok(body) => return Ok(body),
+                Err(e) => reasons.push(e.0),
+            }
             continue;
         }
         let junctions: Vec<Option<usize>> = b.iter().map(|&s| g.junction_below(s)).collect();

@@ -5,7 +5,7 @@
 //! detection from it, left/right mirroring).
 //!
 //! A description, line by line: `#` comments (the source); directives
-//! `unit U` (the unit the file is written in: `mm`, `cm`, `m`, `inch`),
+//! `unit U` (the unit the file is written in: `mm`, `cm`, `dm`, `m`, `inch`),
 //! `axes A` (the file's frame: `y` Y-up facing +Z; `y-z` Y-up facing -Z;
 //! `zup-y` Z-up facing -Y; `zup+y` Z-up facing +Y), `scale K` (file units
 //! per unit written below), `order …` (the rotation channels), `all6` (six
@@ -205,6 +205,7 @@ impl Skel {
         match self.unit.as_str() {
             "mm" => 0.001,
             "cm" => 0.01,
+            "dm" => 0.1,
             "m" => 1.0,
             "inch" => 0.0254,
             u => panic!("unit {u}"),
