@@ -38,9 +38,11 @@ pub type Weights = Vec<[f64; Canonical::COUNT]>;
 /// was decided by rounding, so moving the mesh by 1e-9 m flipped the heat
 /// source of whole caps of vertices (shoulder tops, the crotch) and up to
 /// 1.1 % of the crane's labels. Distances within `1e-9` of the mesh's
-/// bounding-box diagonal are a tie, broken by the geometry: the bone the
-/// vertex lies more alongside (the least overshoot of its projection past
-/// the segment's ends), then the bone order.
+/// bounding-box diagonal are a tie, won by the first bone in `bones`: in
+/// [`super::bones`]' order (tree order, parents first) the proximal one, so
+/// a shoulder top beyond the shoulder joint is heated by the chest's bone
+/// and the side of the hip above the hip joint by the pelvis's (what an
+/// exact tie gave before).
 pub fn nearest_bones(positions: &[[f64; 3]], bones: &[Bone]) -> Vec<(usize, f64)> {
     let (lo, hi) = positions.iter().fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
@@ -62,25 +64,10 @@ pub fn nearest_bones(positions: &[[f64; 3]], bones: &[Bone]) -> Vec<(usize, f64)
             let Some(best) = d.iter().copied().min_by(f64::total_cmp) else {
                 return (0, 1.0);
             };
-            let i = (0..bones.len())
-                .filter(|&i| d[i] <= best + tie)
-                .min_by(|&x, &y| overshoot(p, &bones[x]).total_cmp(&overshoot(p, &bones[y])))
-                .unwrap_or(0);
+            let i = (0..bones.len()).find(|&i| d[i] <= best + tie).unwrap_or(0);
             (i, d[i])
         })
         .collect()
-}
-
-/// How far the projection of `p` onto the bone's line falls outside the
-/// segment (0 alongside it).
-fn overshoot(p: DVec3, b: &Bone) -> f64 {
-    let ab = b.b - b.a;
-    let len = ab.length();
-    if len == 0.0 {
-        return p.distance(b.a);
-    }
-    let s = (p - b.a).dot(ab) / len;
-    (-s).max(s - len).max(0.0)
 }
 
 /// Bone-heat weights for every vertex of `mesh`.
