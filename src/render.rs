@@ -35,6 +35,21 @@ impl View {
     }
 }
 
+/// The turn that stands a mesh whose up is `up` Y-up, as the views
+/// assume (`render --up`): the shortest arc from `up` to +Y, half a turn
+/// about X for -Y. A bare `.pc2` from a Z-up scan carries no up of its
+/// own; turned by this, it is drawn standing.
+pub fn y_up_turn(up: DVec3) -> glam::DQuat {
+    let u = up.normalize_or(DVec3::Y);
+    if u.dot(DVec3::Y) > 1.0 - 1e-12 {
+        glam::DQuat::IDENTITY
+    } else if u.dot(DVec3::Y) < -1.0 + 1e-12 {
+        glam::DQuat::from_rotation_x(std::f64::consts::PI)
+    } else {
+        glam::DQuat::from_rotation_arc(u, DVec3::Y)
+    }
+}
+
 /// An RGB image.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Image {
@@ -444,6 +459,24 @@ pub fn label_colour(k: usize) -> [u8; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_axis_is_turned_onto_y() {
+        for up in [
+            DVec3::X,
+            DVec3::NEG_X,
+            DVec3::Y,
+            DVec3::NEG_Y,
+            DVec3::Z,
+            DVec3::NEG_Z,
+        ] {
+            let q = y_up_turn(up);
+            assert!((q * up - DVec3::Y).length() < 1e-12, "{up}");
+            // A turn, not a reflection: the character's left stays its left.
+            let (a, b) = (q * DVec3::X, q * DVec3::Z);
+            assert!((a.cross(b) - q * DVec3::X.cross(DVec3::Z)).length() < 1e-12);
+        }
+    }
 
     #[test]
     fn renders_a_shape_and_round_trips_png() {

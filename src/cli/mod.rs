@@ -74,7 +74,7 @@ enum Command {
     /// Draw a mesh (or a frame of a sequence) to PNG, front and side views;
     /// with --rig, coloured by body part with the skeleton drawn in.
     #[command(
-        after_help = "Example:\n  surfmotion render samba.pc2 --frame 90 --rig samba.rig.json -o samba_90.png"
+        after_help = "Examples:\n  surfmotion render samba.pc2 --frame 90 --rig samba.rig.json -o samba_90.png\n  surfmotion render out.pc2:40 --up +z -o out_40.png   # a result on a Z-up scan, drawn standing"
     )]
     Render(render::Args),
     /// Rigs: embed the canonical skeleton, skin weights, body parts and joint

@@ -33,6 +33,13 @@ pub struct Args {
     /// `surfmotion::render::facing_of`), one camera for every panel.
     #[arg(long, allow_hyphen_values = true)]
     pub facing: Option<String>,
+    /// The mesh's up axis (+y, -y, +z, -z, +x, -x): the frames are turned
+    /// to stand Y-up before they are drawn (a bare `.pc2` carries no up; a
+    /// Z-up scan's is read as lying). Defaults to the rig's up snapped to
+    /// the nearest axis when `--rig` is given, else +y. `--facing` is in
+    /// the file's own axes.
+    #[arg(long, allow_hyphen_values = true)]
+    pub up: Option<String>,
     /// Image height in pixels, 16 to 8192 (each view is square).
     #[arg(long, default_value_t = 600, value_parser = super::bounded_count(16, MAX_SIZE))]
     pub size: usize,
@@ -51,17 +58,36 @@ pub const MAX_PREVIEW_SIZE: u64 = 4096;
 /// Most frames on a contact sheet (`--preview-frames`).
 pub const MAX_PREVIEW_FRAMES: u64 = 100;
 
-/// Parses `x`, `-x`, `z`, `-z`, `y`, `-y`.
+/// Parses `x`, `-x`, `z`, `-z`, `y`, `-y` (`+` allowed).
 pub fn parse_axis(s: &str) -> anyhow::Result<DVec3> {
-    Ok(match s.trim().to_ascii_lowercase().as_str() {
+    axis_named(s).ok_or_else(|| anyhow::anyhow!("--facing {s:?}: expected x, -x, y, -y, z or -z"))
+}
+
+fn axis_named(s: &str) -> Option<DVec3> {
+    Some(match s.trim().to_ascii_lowercase().as_str() {
         "x" | "+x" => DVec3::X,
         "-x" => DVec3::NEG_X,
         "y" | "+y" => DVec3::Y,
         "-y" => DVec3::NEG_Y,
         "z" | "+z" => DVec3::Z,
         "-z" => DVec3::NEG_Z,
-        _ => anyhow::bail!("--facing {s:?}: expected x, -x, y, -y, z or -z"),
+        _ => return None,
     })
+}
+
+/// The nearest of the six axis directions to `v`.
+fn snapped(v: DVec3) -> DVec3 {
+    [
+        DVec3::X,
+        DVec3::NEG_X,
+        DVec3::Y,
+        DVec3::NEG_Y,
+        DVec3::Z,
+        DVec3::NEG_Z,
+    ]
+    .into_iter()
+    .max_by(|a, b| a.dot(v).total_cmp(&b.dot(v)))
+    .unwrap_or(DVec3::Y)
 }
 
 /// Front and side views of a frame, with part colours and bones when a rig is given.
@@ -114,6 +140,13 @@ pub fn draw_framed(
 /// sharing one vertical centre.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let size = a.size;
+    let up = match &a.up {
+        Some(u) => Some(
+            axis_named(u)
+                .ok_or_else(|| anyhow::anyhow!("--up {u:?}: expected +y, -y, +z, -z, +x or -x"))?,
+        ),
+        None => None,
+    };
     let mut loaded = Vec::new();
     for mesh in &a.mesh {
         let s = load_sequence(mesh, &LoadOptions::default())?;
@@ -133,28 +166,34 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         // first mesh's facing is kept for the others, so frames of a path
         // that turns are seen turning (each estimated alone, the views
         // flipped between front and back as the path turned).
+        // Stood Y-up (the views assume it): by `--up`, else the rig's.
+        let up = up.or_else(|| rig.as_ref().map(|r| snapped(DVec3::from_array(r.up))));
+        let turn = surfmotion::render::y_up_turn(up.unwrap_or(DVec3::Y));
+        let pos: Vec<[f64; 3]> = s
+            .frame(a.frame)
+            .iter()
+            .map(|p| (turn * DVec3::from_array(*p)).to_array())
+            .collect();
         let facing = match (&a.facing, &rig, loaded.first()) {
-            (Some(f), _, _) => parse_axis(f)?,
-            (None, Some(r), _) => DVec3::from_array(r.facing),
-            (None, None, Some((_, _, first))) => *first,
-            (None, None, None) => facing_of(s.frame(a.frame)),
+            (Some(f), _, _) => turn * parse_axis(f)?,
+            (None, Some(r), _) => turn * DVec3::from_array(r.facing),
+            (None, None, Some((_, _, first, _))) => *first,
+            (None, None, None) => facing_of(&pos),
         };
-        loaded.push((s, rig, facing));
+        loaded.push((s, rig, facing, pos));
     }
     // One scale across all panels.
     let bounds: Vec<[([f64; 2], [f64; 2]); 2]> = loaded
         .iter()
-        .map(|(s, _, f)| {
-            [View::front(*f), View::side(*f)].map(|v| view_bounds(s.frame(a.frame), v))
-        })
+        .map(|(_, _, f, pos)| [View::front(*f), View::side(*f)].map(|v| view_bounds(pos, v)))
         .collect();
     let flat: Vec<([f64; 2], [f64; 2])> = bounds.iter().flatten().copied().collect();
     let (framings, _) = surfmotion::render::shared_framing(&flat, size);
     let mut out: Option<Image> = None;
-    for (i, (s, rig, facing)) in loaded.iter().enumerate() {
+    for (i, (s, rig, facing, pos)) in loaded.iter().enumerate() {
         let framing = [0, 1].map(|k| Some(framings[2 * i + k]));
         let img = draw_framed(
-            s.frame(a.frame),
+            pos,
             s.mesh().triangles(),
             rig.as_ref(),
             *facing,

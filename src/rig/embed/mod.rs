@@ -271,16 +271,12 @@ impl Embedding {
     ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
         check_body(mesh)?;
-        // The vertical as `place_joints` takes it: +Y unless the body lies
-        // down (groin to chin far from +Y).
+        // The vertical as `place_joints` takes it ([`joints::body_up`]).
         let up = match (
             lm.point(landmarks::Landmark::Chin, p),
             lm.point(landmarks::Landmark::Groin, p),
         ) {
-            (Some(c), Some(g)) => {
-                let b = (DVec3::from_array(c) - DVec3::from_array(g)).normalize_or(DVec3::Y);
-                if b.dot(DVec3::Y) > 0.7 { DVec3::Y } else { b }
-            }
+            (Some(c), Some(g)) => joints::body_up(DVec3::from_array(c) - DVec3::from_array(g)),
             _ => DVec3::Y,
         };
         lm.validate(p, t, up.to_array())?;

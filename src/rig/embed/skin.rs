@@ -210,12 +210,7 @@ fn frame_of(
 ) -> JointEstimate {
     use Canonical as C;
     let j = |c: C| joints[c.index()];
-    let body = (j(C::Head) - j(C::Pelvis)).normalize_or(DVec3::Y);
-    let up = if body.dot(DVec3::Y) > 0.7 {
-        DVec3::Y
-    } else {
-        body
-    };
+    let up = super::joints::body_up(j(C::Head) - j(C::Pelvis));
     let side = (j(C::LHip) - j(C::RHip)) + (j(C::LShoulder) - j(C::RShoulder));
     let left = (side - up * side.dot(up)).normalize_or(up.any_orthonormal_vector());
     let facing = left.cross(up);
