@@ -108,6 +108,7 @@ impl ScanTransferJob {
             1,
         )?;
         let mut motion = mocap_motion(&self.prepared, &mocap.poses, &mocap.reference)?;
+        motion.set_fps(self.options.fps);
         let (positions, stats) = transfer(
             &self.confluent,
             &mut motion,
@@ -171,6 +172,7 @@ impl Converter for ScanTransferJob {
         }
         let mut motion = mocap_motion(&self.prepared, &mocap.poses, &mocap.reference)
             .map_err(|e| msg(e.into()))?;
+        motion.set_fps(self.options.fps);
         let fps = self.options.fps;
         let mut writer = SequenceWriter::create(
             &self.prepared.mesh,

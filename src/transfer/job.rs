@@ -224,6 +224,7 @@ fn foot_ground(
         vertices,
         rest_low,
         touch,
+        fps: 30.0,
     })
 }
 

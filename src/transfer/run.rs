@@ -108,7 +108,7 @@ pub fn transfer_each<E>(
             let known: Vec<Option<f64>> = (0..count)
                 .map(|k| feet.shift(first + k, &buf[k * n..(k + 1) * n]))
                 .collect();
-            let shifts = chunk_shifts(&known, &mut given);
+            let shifts = chunk_shifts(&known, &mut given, feet.fps);
             for (k, d) in shifts.iter().enumerate() {
                 for p in &mut buf[k * n..(k + 1) * n] {
                     for (x, u) in p.iter_mut().zip(feet.up) {
@@ -144,13 +144,20 @@ pub fn transfer_each<E>(
 /// second differences running on from the shifts `given` to the frames
 /// before the chunk: frames are handed on chunk by chunk, so a shift is
 /// never revised once given. Updates `given` (its last two).
-fn chunk_shifts(known: &[Option<f64>], given: &mut Vec<f64>) -> Vec<f64> {
+fn chunk_shifts(known: &[Option<f64>], given: &mut Vec<f64>, fps: f64) -> Vec<f64> {
     let mut carried = given.last().copied();
     let t = interpolate_shifts(known, &mut carried);
     if carried.is_none() {
         return t;
     }
-    let out = smooth_above(&t, known, given, SMOOTHING);
+    // The cut-off is a time: the weight of second differences in frames
+    // grows as the fourth power of the frame rate.
+    let rate = if fps.is_finite() && fps > 0.0 {
+        fps / 30.0
+    } else {
+        1.0
+    };
+    let out = smooth_above(&t, known, given, SMOOTHING * rate.powi(4));
     given.extend_from_slice(&out);
     let keep = given.len().saturating_sub(2);
     given.drain(..keep);
@@ -158,7 +165,7 @@ fn chunk_shifts(known: &[Option<f64>], given: &mut Vec<f64>) -> Vec<f64> {
 }
 
 /// The weight of the second differences in [`chunk_shifts`] (frames at
-/// the transfer's 30 fps, shifts in metres): a Whittaker smoother's
+/// 30 fps, scaled to the clip's rate by [`chunk_shifts`]; shifts in metres): a Whittaker smoother's
 /// cut-off period of about `2π·SMOOTHING^¼` ≈ 8 frames (0.28 s), shorter
 /// than a step (15-20 frames), longer than the heel-to-toes switches of
 /// the lowest vertex (one frame).
@@ -317,7 +324,10 @@ mod tests {
         assert_eq!(interpolate_shifts(&[None, None], &mut none), vec![0.0, 0.0]);
         assert_eq!(none, None);
         let mut given = Vec::new();
-        assert_eq!(chunk_shifts(&[None, None], &mut given), vec![0.0, 0.0]);
+        assert_eq!(
+            chunk_shifts(&[None, None], &mut given, 30.0),
+            vec![0.0, 0.0]
+        );
         assert!(given.is_empty());
     }
 

@@ -60,6 +60,9 @@ pub struct FootGround {
     /// Per foot and frame, whether it touches the floor; `None` for a
     /// frame where a foot stands on a block or none touches.
     pub touch: Vec<Option<[bool; 2]>>,
+    /// Frames per second of the motion (the floor shift's smoothing is
+    /// set in seconds).
+    pub fps: f64,
 }
 
 fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
@@ -90,6 +93,14 @@ impl FootGround {
 }
 
 impl MarkerMotion {
+    /// The frame rate of the motion, for what is set in seconds (the
+    /// floor shift's smoothing; 30 fps unless set).
+    pub fn set_fps(&mut self, fps: f64) {
+        if let Some(f) = self.feet.as_mut() {
+            f.fps = fps;
+        }
+    }
+
     /// Number of frames.
     pub fn frames(&self) -> usize {
         self.rotations.len() / self.markers.max(1)
