@@ -277,5 +277,51 @@ fn main() {
             })
         });
     }
+    // Session 13: a costly target of the paper's grid (18 m in 35 s) and
+    // the heading query (10 m in 38 s facing +90°, transitions turning
+    // ±0.2-0.6 rad) on the same graph, with the search of session 12
+    // (`before`: no probe) and the default (the probe runs with a
+    // heading target only, so the 18 m query is the same search twice).
+    let before = surfmotion::keyframe::lattice::LatticeOptions {
+        probe_bins: 0,
+        ..o.lattice
+    };
+    let mut turning9 = bandai9_graph();
+    for (k, e) in turning9.edges.iter_mut().filter(|e| e.jump).enumerate() {
+        e.turn = [0.2, -0.4, 0.6, -0.3, 0.5][k % 5];
+    }
+    let ph9 = Planner::new(turning9, &[0, (6 * 105 + 100) as u32], 25.0, &o).unwrap();
+    for (name, lattice) in [("before", before), ("default", o.lattice)] {
+        let plain = SearchOptions { lattice, ..o };
+        grp.bench_function(format!("bandai9_{name}_18m_35s"), |b| {
+            b.iter(|| {
+                pb.plan(
+                    black_box(&Targets::Global {
+                        distance: 18.0,
+                        time: 35.0,
+                    }),
+                    &plain,
+                )
+                .unwrap()
+            })
+        });
+        let headed = SearchOptions {
+            lattice,
+            heading,
+            ..o
+        };
+        grp.bench_function(format!("bandai9_heading_{name}_10m_38s"), |b| {
+            b.iter(|| {
+                ph9.plan(
+                    black_box(&Targets::Global {
+                        distance: 10.0,
+                        time: 38.0,
+                    }),
+                    &headed,
+                )
+                .unwrap()
+            })
+        });
+    }
     grp.finish();
 }

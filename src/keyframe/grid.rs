@@ -49,6 +49,10 @@ pub struct GridQuery {
     pub reach: Reachability,
     /// Distance and time both within 1 % of the target.
     pub within_1pct: bool,
+    /// Eq. 7's total of the path found (transition cost plus the
+    /// distance, time and heading terms), so that two searches can be
+    /// compared query by query.
+    pub total: f64,
     /// Transitions taken.
     pub transitions: usize,
     /// Of them, transitions between two different sequences
@@ -409,6 +413,7 @@ pub fn evaluate(
                 reachable: class == Reachability::Reachable,
                 reach: class,
                 within_1pct: met,
+                total: plan.cost.total,
                 transitions: tr.len(),
                 across,
                 smoothness: mean_smoothness(&tr),
