@@ -9,6 +9,7 @@ use surfmotion::render::{
 };
 use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::Embedding;
+use surfmotion::rig::embed::joints::nearest_axis;
 
 /// Arguments of `render`.
 #[derive(clap::Args)]
@@ -73,21 +74,6 @@ fn axis_named(s: &str) -> Option<DVec3> {
         "-z" => DVec3::NEG_Z,
         _ => return None,
     })
-}
-
-/// The nearest of the six axis directions to `v`.
-fn snapped(v: DVec3) -> DVec3 {
-    [
-        DVec3::X,
-        DVec3::NEG_X,
-        DVec3::Y,
-        DVec3::NEG_Y,
-        DVec3::Z,
-        DVec3::NEG_Z,
-    ]
-    .into_iter()
-    .max_by(|a, b| a.dot(v).total_cmp(&b.dot(v)))
-    .unwrap_or(DVec3::Y)
 }
 
 /// Front and side views of a frame, with part colours and bones when a rig is given.
@@ -167,7 +153,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         // that turns are seen turning (each estimated alone, the views
         // flipped between front and back as the path turned).
         // Stood Y-up (the views assume it): by `--up`, else the rig's.
-        let up = up.or_else(|| rig.as_ref().map(|r| snapped(DVec3::from_array(r.up))));
+        let up = up.or_else(|| rig.as_ref().map(|r| nearest_axis(DVec3::from_array(r.up))));
         let turn = surfmotion::render::y_up_turn(up.unwrap_or(DVec3::Y));
         let pos: Vec<[f64; 3]> = s
             .frame(a.frame)

@@ -168,13 +168,7 @@ pub fn mocap_motion(
 /// nearest of ±X, ±Y, ±Z (scans are stored axis-aligned; the embedding's
 /// estimate leans with the pose, e.g. 9° on the samba scan).
 pub fn up_axis(rig: &Embedding) -> DVec3 {
-    let u = DVec3::from_array(rig.up);
-    let axes = [DVec3::Y, DVec3::Z, DVec3::X];
-    let a = axes
-        .into_iter()
-        .max_by(|a, b| a.dot(u).abs().total_cmp(&b.dot(u).abs()))
-        .unwrap_or(DVec3::Y);
-    if a.dot(u) < 0.0 { -a } else { a }
+    crate::rig::embed::joints::nearest_axis(DVec3::from_array(rig.up))
 }
 
 /// Where the scan's feet touch the floor per frame ([`FootGround`]):

@@ -113,19 +113,24 @@ impl Ctx<'_> {
 /// of the height) from the turned Y-up ones.
 pub fn body_up(body: DVec3) -> DVec3 {
     let body = body.normalize_or(DVec3::Y);
-    let axes = [
-        DVec3::X,
-        DVec3::NEG_X,
+    let best = nearest_axis(body);
+    if best.dot(body) > 0.7 { best } else { body }
+}
+
+/// The nearest of the six axis directions (±X, ±Y, ±Z) to `v` (+Y first on
+/// a tie; +Y for a zero or non-finite `v`).
+pub fn nearest_axis(v: DVec3) -> DVec3 {
+    [
         DVec3::Y,
         DVec3::NEG_Y,
         DVec3::Z,
         DVec3::NEG_Z,
-    ];
-    let best = axes
-        .into_iter()
-        .max_by(|a, b| a.dot(body).total_cmp(&b.dot(body)))
-        .unwrap_or(DVec3::Y);
-    if best.dot(body) > 0.7 { best } else { body }
+        DVec3::X,
+        DVec3::NEG_X,
+    ]
+    .into_iter()
+    .reduce(|a, b| if b.dot(v) > a.dot(v) { b } else { a })
+    .unwrap_or(DVec3::Y)
 }
 
 /// The point of the line through `a` and `b` nearest to `p`.
