@@ -80,6 +80,22 @@ fn samba_scan(d: &std::path::Path) -> (surfmotion::mesh::Mesh, String) {
     (seq.frame_mesh(0), text)
 }
 
+/// The samba scan prepared for transfer with 20 markers from its landmarks.
+fn samba_prepared(d: &std::path::Path) -> surfmotion::transfer::PreparedScan {
+    let (scan, text) = samba_scan(d);
+    let lm = Landmarks::parse(
+        &text,
+        std::path::Path::new("samba.landmarks.json"),
+        scan.vertex_count(),
+    )
+    .unwrap();
+    let opts = MarkerOptions {
+        count: 20,
+        ..Default::default()
+    };
+    prepare(&scan, MarkerSpec::Landmarks(&lm, opts)).unwrap()
+}
+
 /// The lowest point along `up` of each foot (left, right: the rig's foot
 /// parts) of the positions `p`.
 fn feet_low(
@@ -105,18 +121,7 @@ fn feet_low(
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn the_surface_stands_on_the_ground_where_the_clip_does() {
     let Some(d) = common::data_dir() else { return };
-    let (scan, text) = samba_scan(&d);
-    let lm = Landmarks::parse(
-        &text,
-        std::path::Path::new("samba.landmarks.json"),
-        scan.vertex_count(),
-    )
-    .unwrap();
-    let opts = MarkerOptions {
-        count: 20,
-        ..Default::default()
-    };
-    let prepared = prepare(&scan, MarkerSpec::Landmarks(&lm, opts)).unwrap();
+    let prepared = samba_prepared(&d);
     let rig = prepared.rig.as_ref().unwrap();
     let rest: Pose = rig.joints.map(DVec3::from_array);
     let n = prepared.mesh.vertex_count();
@@ -293,18 +298,7 @@ fn rocking(rest: &Pose, foot: usize, deg: f64, frames: usize) -> Vec<Pose> {
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_foot_rocking_between_heel_and_sole_moves_the_surface_smoothly() {
     let Some(d) = common::data_dir() else { return };
-    let (scan, text) = samba_scan(&d);
-    let lm = Landmarks::parse(
-        &text,
-        std::path::Path::new("samba.landmarks.json"),
-        scan.vertex_count(),
-    )
-    .unwrap();
-    let opts = MarkerOptions {
-        count: 20,
-        ..Default::default()
-    };
-    let prepared = prepare(&scan, MarkerSpec::Landmarks(&lm, opts)).unwrap();
+    let prepared = samba_prepared(&d);
     let rig = prepared.rig.as_ref().unwrap();
     let rest: Pose = rig.joints.map(DVec3::from_array);
     let n = prepared.mesh.vertex_count();
