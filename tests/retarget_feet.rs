@@ -289,15 +289,7 @@ fn step_up_off_toes(block: f64, heel: f64, toe_off: usize) -> Vec<Pose> {
             }
             let toe = p[C::LToe.index()];
             pitch_foot(&mut p, true, toe, -pitch.to_radians());
-            for left in [true, false] {
-                let [k, a, _] = leg(left);
-                let h = if left { C::LHip } else { C::RHip };
-                let (l1, l2) = (
-                    st[h.index()].distance(st[k.index()]),
-                    st[k.index()].distance(st[a.index()]),
-                );
-                p[k.index()] = knee(p[h.index()], p[a.index()], l1, l2);
-            }
+            bend_knees(&mut p, &st);
             p
         })
         .collect()
@@ -417,15 +409,7 @@ fn block_step(block: f64, heel: f64, toe_off: f64, fps: f64) -> Vec<Pose> {
             }
             let toe = p[C::LToe.index()];
             pitch_foot(&mut p, true, toe, -pitch.to_radians());
-            for left in [true, false] {
-                let [k, a, _] = leg(left);
-                let h = if left { C::LHip } else { C::RHip };
-                let (l1, l2) = (
-                    st[h.index()].distance(st[k.index()]),
-                    st[k.index()].distance(st[a.index()]),
-                );
-                p[k.index()] = knee(p[h.index()], p[a.index()], l1, l2);
-            }
+            bend_knees(&mut p, &st);
             p
         })
         .collect()
@@ -541,4 +525,18 @@ fn a_foot_flat_on_a_block_of_any_height_stands_flat_stepping_up_or_down() {
         failures.len(),
         failures.join("\n")
     );
+}
+
+/// Puts each knee where the hip and ankle of `p` and the thigh and shin
+/// lengths of the standing pose `st` put it.
+fn bend_knees(p: &mut Pose, st: &Pose) {
+    for left in [true, false] {
+        let [k, a, _] = leg(left);
+        let h = if left { C::LHip } else { C::RHip };
+        let (l1, l2) = (
+            st[h.index()].distance(st[k.index()]),
+            st[k.index()].distance(st[a.index()]),
+        );
+        p[k.index()] = knee(p[h.index()], p[a.index()], l1, l2);
+    }
 }
