@@ -217,7 +217,10 @@ fn root_steps(al: &Alignment, i: usize, track: &RootTrack) -> RootSteps {
         let mut x = ta;
         while x < tb - 1e-9 {
             let (f, _, fr) = al.wrapped(i, x);
-            let end = tb.min(x + (1.0 - fr));
+            // Always forward: a wrapped fraction a rounding short of 1
+            // made `x + (1 - fr)` round to `x` itself, and the loop never
+            // ended (`db build` of the README's gaits spaces spun for good).
+            let end = tb.min((x + (1.0 - fr)).max(x + 1e-9));
             let w = (end - x).max(1e-9);
             let d = per_frame(f);
             for c in 0..3 {
