@@ -5,7 +5,9 @@
 //! `mocap/` are the repository's, and `surfmotion` (also what
 //! `cargo run --release --` becomes) is the binary under test. Blocks marked
 //! ```` ```sh no-run ```` are illustrations (a cluster job, the test command
-//! itself) and are kept few.
+//! itself) and are kept few. Every repository path the README names must
+//! exist, and every page of docs/ (the investigation history moved out of
+//! the README) must be linked from it, with its own links resolving.
 
 mod common;
 
@@ -219,4 +221,106 @@ fn the_readme_plan_flags_untagged_and_cargo_blocks() {
     assert_eq!(problems.len(), 2, "{problems:#?}");
     assert!(problems[0].starts_with("README.md:13: a block of commands without a tag"));
     assert!(problems[1].starts_with("README.md:16: a runnable block calls cargo"));
+}
+
+/// The repository paths a Markdown text names: words starting with one of
+/// the repository's top-level folders (`src/`, `tests/`, `docs/`, ...) after
+/// a space, a backtick, `(` or `[` (so `$S/mocap/...`, a path in the shared
+/// data, is not one), and the targets of relative links `](...)`. A path
+/// ends at the first character that cannot be in one (`:`, a backtick, a
+/// space, `)`, ...); a trailing `.` ends a sentence.
+fn named_paths(text: &str) -> Vec<String> {
+    const ROOTS: [&str; 9] = [
+        ".ci/",
+        "src/",
+        "tests/",
+        "docs/",
+        "scripts/",
+        "benches/",
+        "examples/",
+        "fuzz/",
+        "mocap/",
+    ];
+    let path_char = |c: char| c.is_ascii_alphanumeric() || "_.-/".contains(c);
+    let mut out = Vec::new();
+    let bytes: Vec<char> = text.chars().collect();
+    for (i, _) in bytes.iter().enumerate() {
+        let before = if i == 0 { ' ' } else { bytes[i - 1] };
+        let rest: String = bytes[i..].iter().take_while(|c| path_char(**c)).collect();
+        let is_link = before == '(' && i >= 2 && bytes[i - 2] == ']';
+        let starts = ROOTS.iter().any(|r| rest.starts_with(r));
+        if (starts && (before.is_whitespace() || "`([".contains(before)))
+            || (is_link && !rest.is_empty())
+        {
+            let p = rest.trim_end_matches('.').to_string();
+            if is_link && (p.starts_with("http") || p.starts_with('#')) {
+                continue;
+            }
+            out.push(p);
+        }
+    }
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// Every file or folder the README names exists in the repository, and so
+/// does every relative link of the docs/ pages (relative to docs/): a
+/// moved or renamed file leaves no dangling reference in the manual.
+#[test]
+fn every_path_the_readme_and_docs_name_exists() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(repo.join("README.md")).unwrap();
+    let mut missing = Vec::new();
+    let paths = named_paths(&readme);
+    assert!(
+        paths.len() > 40,
+        "only {} paths found: {paths:?}",
+        paths.len()
+    );
+    for p in &paths {
+        if !repo.join(p).exists() {
+            missing.push(format!("README.md names {p}"));
+        }
+    }
+    let mut pages = 0;
+    for e in std::fs::read_dir(repo.join("docs")).unwrap() {
+        let f = e.unwrap().path();
+        if f.extension().is_none_or(|x| x != "md") {
+            continue;
+        }
+        pages += 1;
+        let name = format!("docs/{}", f.file_name().unwrap().to_string_lossy());
+        assert!(
+            readme.contains(&format!("]({name})")),
+            "{name} is not linked from README.md"
+        );
+        let text = std::fs::read_to_string(&f).unwrap();
+        for l in text.match_indices("](").map(|(i, _)| &text[i + 2..]) {
+            let target: String = l.chars().take_while(|c| *c != ')').collect();
+            if target.starts_with("http") || target.starts_with('#') {
+                continue;
+            }
+            if !repo.join("docs").join(&target).exists() {
+                missing.push(format!("{name} links {target}"));
+            }
+        }
+    }
+    assert!(pages >= 5, "only {pages} docs pages");
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
+
+#[test]
+fn named_paths_finds_repository_paths_only() {
+    let text = "see `src/rig/names.rs`, tests/db.rs. and $S/mocap/cmu-amc/02_01.amc \
+        [a](docs/x.md) [b](https://example.org) (`tests/common::data_dir`) 1/2 src";
+    assert_eq!(
+        named_paths(text),
+        [
+            "docs/x.md",
+            "src/rig/names.rs",
+            "tests/common",
+            "tests/db.rs"
+        ]
+    );
 }
