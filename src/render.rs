@@ -277,23 +277,80 @@ fn fill_triangle(img: &mut Image, depth: &mut [f64], p: [(f64, f64, f64); 3], rg
     }
 }
 
-/// The direction a Y-up character faces, from its mesh alone: the
-/// horizontal axis of least spread (a body is wider across the shoulders
-/// than deep), signed towards where the soles (lowest 3 % of the height)
-/// reach past the shins above them (the toes point forward).
-/// `+z` when the mesh gives no answer (empty, or no horizontal spread).
+/// The direction a Y-up character faces, from its mesh alone.
+///
+/// The axis is the horizontal axis of least spread of the *shoulder band*
+/// (75-85 % of the height): a body is wider across the shoulders than deep
+/// there, whatever its legs and hands do (over the whole mesh a stride or
+/// a swinging arm is deeper than the body is wide, and mid-stride frames
+/// of walks came out side-on: wrong on 60-90 % of the frames of synthetic
+/// walks and runs, against 0-7 % with the band). The sign is
+/// [`facing_vote`]'s. `+z` when the mesh gives no answer (empty, or no
+/// horizontal spread).
 pub fn facing_of(positions: &[[f64; 3]]) -> DVec3 {
-    let n = positions.len();
-    if n == 0 {
+    let Some((axis, _)) = shoulder_axis(positions) else {
         return DVec3::Z;
+    };
+    if facing_vote(positions, axis) < 0.0 {
+        -axis
+    } else {
+        axis
     }
-    let c = positions
+}
+
+/// The facing of frame `at` of a sequence: each frame's shoulder axis
+/// ([`facing_of`]), its sign carried from frame to frame by continuity
+/// (a body turns far less than a quarter turn between two frames), and
+/// the sign of the whole chain decided by the sum of every frame's
+/// [`facing_vote`]: one frame's knees and feet can mislead (a leg kicked
+/// back, a foot pointing down), hundreds of frames together do not.
+pub fn facing_of_frames(frames: &[&[[f64; 3]]], at: usize) -> DVec3 {
+    let Some(here) = frames.get(at) else {
+        return DVec3::Z;
+    };
+    let Some((axis_at, _)) = shoulder_axis(here) else {
+        return DVec3::Z;
+    };
+    // Chain outwards from `at` in both directions; `axis_at` has sign +1.
+    let mut vote = facing_vote(here, axis_at);
+    for dir in [-1isize, 1] {
+        let mut prev = axis_at;
+        let mut i = at as isize + dir;
+        while i >= 0 && (i as usize) < frames.len() {
+            if let Some((a, _)) = shoulder_axis(frames[i as usize]) {
+                let a = if a.dot(prev) < 0.0 { -a } else { a };
+                vote += facing_vote(frames[i as usize], a);
+                prev = a;
+            }
+            i += dir;
+        }
+    }
+    if vote < 0.0 { -axis_at } else { axis_at }
+}
+
+/// The horizontal axes of least and most spread of the band at 75-85 % of
+/// the height (the whole mesh if the band holds fewer than 3 points).
+fn shoulder_axis(positions: &[[f64; 3]]) -> Option<(DVec3, DVec3)> {
+    let (lo, hi) = positions
         .iter()
-        .map(|p| DVec3::from_array(*p))
-        .sum::<DVec3>()
-        / n as f64;
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p[1]), b.max(p[1]))
+        });
+    let (from, to) = (lo + 0.75 * (hi - lo), lo + 0.85 * (hi - lo));
+    let in_band = |p: &&[f64; 3]| (from..=to).contains(&p[1]);
+    let band = positions.iter().filter(in_band).count();
+    let pick = |p: &&[f64; 3]| band < 3 || in_band(p);
+    let (mut n, mut c) = (0usize, DVec3::ZERO);
+    for p in positions.iter().filter(pick) {
+        n += 1;
+        c += DVec3::from_array(*p);
+    }
+    if n == 0 {
+        return None;
+    }
+    let c = c / n as f64;
     let (mut xx, mut xz, mut zz) = (0.0, 0.0, 0.0);
-    for p in positions {
+    for p in positions.iter().filter(pick) {
         let (x, z) = (p[0] - c.x, p[2] - c.z);
         xx += x * x;
         xz += x * z;
@@ -303,7 +360,7 @@ pub fn facing_of(positions: &[[f64; 3]]) -> DVec3 {
     let half = 0.5 * (xx - zz);
     let r = (half * half + xz * xz).sqrt();
     if !(r.is_finite() && xx + zz > 0.0) {
-        return DVec3::Z;
+        return None;
     }
     let small = 0.5 * (xx + zz) - r;
     let axis = if xz.abs() > 1e-12 * (xx + zz) {
@@ -314,15 +371,63 @@ pub fn facing_of(positions: &[[f64; 3]]) -> DVec3 {
         DVec3::Z
     }
     .normalize_or(DVec3::Z);
-    // Soles (bottom 3 % of the height) against the shins above them (6-12 %):
-    // a foot reaches forward of its ankle.
+    Some((axis, DVec3::new(-axis.z, 0.0, axis.x)))
+}
+
+/// Evidence (metres, signed) that a Y-up body faces `+axis` rather than
+/// `-axis`: each leg's knee (the middle of the leg's height) lies in front
+/// of the line from its hip to its ankle, since knees bend forward; the
+/// legs are the two halves of the lower body split by the lateral axis.
+/// When the knees say nothing (straight legs), the soles: a foot reaches
+/// forward of its shin.
+fn facing_vote(positions: &[[f64; 3]], axis: DVec3) -> f64 {
     let (lo, hi) = positions
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
             (a.min(p[1]), b.max(p[1]))
         });
+    let h = hi - lo;
+    if !(h > 0.0 && h.is_finite()) {
+        return 0.0;
+    }
+    let lateral = DVec3::new(-axis.z, 0.0, axis.x);
+    let lower = |p: &&[f64; 3]| p[1] <= lo + 0.5 * h;
+    let (mut n, mut c) = (0usize, DVec3::ZERO);
+    for p in positions.iter().filter(lower) {
+        n += 1;
+        c += DVec3::from_array(*p);
+    }
+    let c = c / n.max(1) as f64;
+    let mut knees = 0.0;
+    for side in [1.0, -1.0] {
+        let leg: Vec<DVec3> = positions
+            .iter()
+            .filter(lower)
+            .map(|p| DVec3::from_array(*p))
+            .filter(|p| side * (*p - c).dot(lateral) > 0.0)
+            .collect();
+        let (ll, lh) = leg
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p.y), b.max(p.y))
+            });
+        let mean = |a: f64, b: f64| {
+            let (from, to) = (ll + a * (lh - ll), ll + b * (lh - ll));
+            let pts: Vec<&DVec3> = leg.iter().filter(|p| (from..=to).contains(&p.y)).collect();
+            (!pts.is_empty()).then(|| pts.iter().copied().sum::<DVec3>() / pts.len() as f64)
+        };
+        if let (Some(ankle), Some(knee), Some(hip)) =
+            (mean(0.1, 0.2), mean(0.45, 0.6), mean(0.85, 1.0))
+        {
+            knees += (knee - 0.5 * (ankle + hip)).dot(axis);
+        }
+    }
+    if knees.abs() > 1e-3 * h {
+        return knees;
+    }
+    // Soles (bottom 3 % of the height) against the shins above them (6-12 %).
     let band = |a: f64, b: f64| {
-        let (from, to) = (lo + a * (hi - lo), lo + b * (hi - lo));
+        let (from, to) = (lo + a * h, lo + b * h);
         let pts: Vec<DVec3> = positions
             .iter()
             .filter(|p| (from..=to).contains(&p[1]))
@@ -330,12 +435,7 @@ pub fn facing_of(positions: &[[f64; 3]]) -> DVec3 {
             .collect();
         pts.iter().sum::<DVec3>() / pts.len().max(1) as f64
     };
-    let (lc, c) = (band(0.0, 0.03), band(0.06, 0.12));
-    if (lc - c).dot(axis) < 0.0 {
-        -axis
-    } else {
-        axis
-    }
+    knees + (band(0.0, 0.03) - band(0.06, 0.12)).dot(axis)
 }
 
 /// One scale for many panels: a framing per panel of view-space `bounds`
@@ -519,6 +619,82 @@ mod tests {
             let f = facing_of(&p);
             assert!(f.dot(q * want) > 0.95, "turn {turn}: {f} vs {}", q * want);
         }
+    }
+
+    /// A walker mid-stride, facing +z: a shoulder box wider than deep, and
+    /// two legs a long stride apart (the whole body deeper than wide),
+    /// knees bent forward, feet pointing forward. `phase` in [-1, 1] swings
+    /// the legs.
+    fn walker(phase: f64) -> Vec<[f64; 3]> {
+        let mut p = Vec::new();
+        let mut line = |a: DVec3, b: DVec3, n: usize| {
+            for i in 0..=n {
+                p.push(a.lerp(b, i as f64 / n as f64).to_array());
+            }
+        };
+        for k in 0..=10 {
+            let y = 0.95 + 0.06 * k as f64;
+            for (x, z) in [(-0.2, -0.1), (0.2, -0.1), (0.2, 0.1), (-0.2, 0.1)] {
+                line(DVec3::new(x, y, z), DVec3::new(-z * 2.0, y, x * 0.5), 8);
+            }
+        }
+        line(DVec3::new(0.0, 1.55, 0.0), DVec3::new(0.0, 1.75, 0.0), 10);
+        for (x, s) in [(0.1, 1.0), (-0.1, -1.0)] {
+            let foot = DVec3::new(x, 0.05, 0.45 * s * phase);
+            let hip = DVec3::new(x, 0.95, 0.0);
+            let knee = (hip + foot) * 0.5 + DVec3::new(0.0, 0.0, 0.08);
+            line(hip, knee, 20);
+            line(knee, foot, 20);
+            line(
+                foot - DVec3::new(0.0, 0.05, 0.05),
+                foot + DVec3::new(0.0, -0.05, 0.2),
+                10,
+            );
+        }
+        p
+    }
+
+    #[test]
+    fn facing_holds_mid_stride() {
+        let spread = |p: &[[f64; 3]], i: usize| {
+            let (a, b) = p
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+                    (a.min(q[i]), b.max(q[i]))
+                });
+            b - a
+        };
+        let stride = walker(1.0);
+        assert!(
+            spread(&stride, 2) > spread(&stride, 0),
+            "the test's walker must be deeper than wide"
+        );
+        let frames: Vec<Vec<[f64; 3]>> = (0..40).map(|f| walker((f as f64 * 0.3).sin())).collect();
+        for turn in [0.0, 0.7, 2.0, -2.6] {
+            let q = glam::DQuat::from_rotation_y(turn);
+            let turned: Vec<Vec<[f64; 3]>> = frames
+                .iter()
+                .map(|p| {
+                    p.iter()
+                        .map(|x| (q * DVec3::from_array(*x)).to_array())
+                        .collect()
+                })
+                .collect();
+            let want = q * DVec3::Z;
+            for (i, p) in turned.iter().enumerate() {
+                let f = facing_of(p);
+                assert!(f.dot(want) > 0.95, "turn {turn}, frame {i}: {f} vs {want}");
+            }
+            let refs: Vec<&[[f64; 3]]> = turned.iter().map(Vec::as_slice).collect();
+            for at in [0, 17, 39] {
+                let f = facing_of_frames(&refs, at);
+                assert!(
+                    f.dot(want) > 0.95,
+                    "turn {turn}, sequence at {at}: {f} vs {want}"
+                );
+            }
+        }
+        assert_eq!(facing_of_frames(&[], 3), DVec3::Z);
     }
 
     #[test]

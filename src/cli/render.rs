@@ -5,7 +5,7 @@ use glam::DVec3;
 use std::path::PathBuf;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::render::{
-    Framing, Image, Scene, View, facing_of, label_colour, render_framed, view_bounds,
+    Framing, Image, Scene, View, facing_of_frames, label_colour, render_framed, view_bounds,
 };
 use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::Embedding;
@@ -30,8 +30,9 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     pub frame: usize,
     /// Direction the character faces (x, -x, z, -z): sets the front view.
-    /// Defaults to the rig's facing, else the first mesh's (see
-    /// `surfmotion::render::facing_of`), one camera for every panel.
+    /// Defaults to the rig's facing, else the first mesh's, read off its
+    /// shoulders and knees over the frames around the one drawn (see
+    /// `surfmotion::render::facing_of_frames`); one camera for every panel.
     #[arg(long, allow_hyphen_values = true)]
     pub facing: Option<String>,
     /// The mesh's up axis (+y, -y, +z, -z, +x, -x): the frames are turned
@@ -164,7 +165,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             (Some(f), _, _) => turn * parse_axis(f)?,
             (None, Some(r), _) => turn * DVec3::from_array(r.facing),
             (None, None, Some((_, _, first, _))) => *first,
-            (None, None, None) => facing_of(&pos),
+            (None, None, None) => {
+                // Up to 150 frames either side: their votes settle the sign.
+                let (from, to) = (
+                    a.frame.saturating_sub(150),
+                    (a.frame + 151).min(s.frame_count()),
+                );
+                let around: Vec<Vec<[f64; 3]>> = (from..to)
+                    .map(|f| {
+                        s.frame(f)
+                            .iter()
+                            .map(|p| (turn * DVec3::from_array(*p)).to_array())
+                            .collect()
+                    })
+                    .collect();
+                let refs: Vec<&[[f64; 3]]> = around.iter().map(Vec::as_slice).collect();
+                facing_of_frames(&refs, a.frame - from)
+            }
         };
         loaded.push((s, rig, facing, pos));
     }
