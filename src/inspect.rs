@@ -53,8 +53,9 @@ pub struct MocapReport {
     pub derived_canonical: Vec<String>,
     /// How left and right were decided.
     pub sides: String,
-    /// The pose the rig structure was read on when the rest skeleton is
-    /// not a standing body (empty: the rest skeleton).
+    /// Notes on the rig structure: the pose it was read on when the rest
+    /// skeleton is not a standing body, chains off the chest it ignored
+    /// (empty: none).
     #[serde(skip_serializing_if = "String::is_empty")]
     pub structure_pose: String,
     /// Problems found while reading.

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::skel::{Suite, expected, map_errors, mirror, skel_to_bvh, swap_side};
+use common::skel::{Suite, expected, map_errors, mirror, scaled, skel_to_bvh, swap_side};
 
 use glam::{DQuat, DVec3};
 use proptest::prelude::*;
@@ -2659,19 +2659,6 @@ fn metres_per(unit: &str) -> f64 {
         .find(|u| u.1 == unit)
         .unwrap_or_else(|| panic!("{unit}"))
         .0
-}
-
-/// Every length of a clip (offsets, End Sites, translations) times `k`.
-fn scaled(c: &Clip, k: f64) -> Clip {
-    let mut out = c.clone();
-    for j in &mut out.joints {
-        j.offset *= k;
-        j.tail = j.tail.map(|t| t * k);
-    }
-    for t in &mut out.translations {
-        *t *= k;
-    }
-    out
 }
 
 /// `load_clip` on a clip written as a BVH file (units and up axis decided

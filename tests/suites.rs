@@ -567,11 +567,11 @@ Hips 0 99 0
 # skirt chains (スカート前, スカート後, スカート左, ...: no word the names
 # know) off 下半身 beside the legs, as many PMX models carry.
 # Bone names and parents from public VMD standard-bone tables and MMD bone
-# reference charts. MMD units (8 cm) read as dm; Y-up, facing -Z; A-pose.
+# reference charts. MMD units (8 cm); Y-up, facing -Z; A-pose.
 # No name is an ASCII word: structure decides, sides from geometry.
-unit dm
+unit mmd
 axes y-z
-scale 0.1
+scale 0.125
 order Zrotation Xrotation Yrotation
 全ての親 0 0 0
  センター 0 88 0 % 6
@@ -848,6 +848,117 @@ Hip 0 95 0
  mirror LeftUpperLeg Left=>Right
 ",
     },
+    Suite {
+        name: "winged_unnamed",
+        convention: BY_N,
+        sides: "from geometry",
+        map: "pelvis=Hips;spine=Spine;chest=Spine2;neck=Neck;head=Head;\
+              l_shoulder=LeftUpperArm;l_elbow=LeftForeArm;l_wrist=LeftHand;\
+              r_shoulder=RightUpperArm;r_elbow=RightForeArm;r_wrist=RightHand;\
+              l_hip=LeftUpperLeg;l_knee=LeftLeg;l_ankle=LeftFoot;l_toe=LeftToeBase;\
+              r_hip=RightUpperLeg;r_knee=RightLeg;r_ankle=RightFoot;r_toe=RightToeBase",
+        skel: "
+# A winged game character (angel, dragon-man): wing chains LeftPinion1..4
+# off the upper chest beside the clavicles, spreading back, out and up,
+# longer than the legs; a cape chain Drape1..4 hanging down the back and a
+# Dangle1..4 chain off the chest's front (a necklace or a tabard), a
+# Sway1..4 tail off the hips, and three short Claw chains on each hand:
+# seven chains off Spine2, none named as a helper or as a wing. Written
+# after the wings and cloth of public game rigs (Unity humanoid names for
+# the body). cm, Y-up, facing +Z, T-pose.
+unit cm
+order Zrotation Xrotation Yrotation
+Hips 0 95 0
+ LeftUpperLeg 9 -5 0
+  LeftLeg 0 -43 0
+   LeftFoot 0 -42 0
+    LeftToeBase 0 -6 12 | 0 0 4
+ mirror LeftUpperLeg Left=>Right
+ Sway1 0 -3 -9
+  Sway2 0 -20 -12
+   Sway3 0 -20 -10
+    Sway4 0 -18 -8 | 0 -12 -5
+ Spine 0 10 0
+  Spine1 0 12 0
+   Spine2 0 12 0
+    Neck 0 15 0
+     Head 0 10 1 | 0 17 0
+    LeftPinion1 6 8 -10
+     LeftPinion2 20 20 -15
+      LeftPinion3 30 10 -10
+       LeftPinion4 30 -10 -5 | 20 -10 0
+    mirror LeftPinion1 Left=>Right
+    Drape1 0 8 -12
+     Drape2 0 -25 -4
+      Drape3 0 -25 -3
+       Drape4 0 -25 -2 | 0 -20 0
+    Dangle1 0 6 10
+     Dangle2 0 -15 3
+      Dangle3 0 -15 1 | 0 -10 0
+    LeftShoulder 3 12 0
+     LeftUpperArm 10 0 0
+      LeftForeArm 26 0 0
+       LeftHand 25 0 0
+        LeftClawA 8 0 3 | 4 0 1
+        LeftClawB 8 0 0 | 4 0 0
+        LeftClawC 8 0 -3 | 4 0 -1
+    mirror LeftShoulder Left=>Right
+",
+    },
+    Suite {
+        name: "winged_anonymous",
+        convention: BY_S,
+        sides: "from geometry",
+        map: "pelvis=b00;spine=b10;chest=b12;neck=b13;head=b14;\
+              l_shoulder=b31;l_elbow=b32;l_wrist=b33;\
+              r_shoulder=b41;r_elbow=b42;r_wrist=b43;\
+              l_hip=b01;l_knee=b02;l_ankle=b03;l_toe=b04;\
+              r_hip=b05;r_knee=b06;r_ankle=b07;r_toe=b08",
+        skel: "
+# The winged character with every name replaced by a number (an exporter
+# that writes bone indices), the wings shorter (as long as the legs) and
+# off the chest's back, in an A-pose, children in another order (wings
+# and cape before the neck and arms, the right side first), in mm, Y-up,
+# facing -Z: structure alone decides.
+unit mm
+axes y-z
+scale 10
+order Zrotation Xrotation Yrotation
+b00 0 95 0
+ b10 0 10 0
+  b11 0 12 0
+   b12 0 12 0
+    b50 0 8 -12
+     b51 0 -25 -4
+      b52 0 -25 -3 | 0 -20 0
+    b25 -6 8 -10
+     b26 -15 15 -12
+      b27 -25 8 -8
+       b28 -25 -8 -4 | -15 -8 0
+    b20 6 8 -10
+     b21 15 15 -12
+      b22 25 8 -8
+       b23 25 -8 -4 | 15 -8 0
+    b40 -3 12 0
+     b41 -10 0 0
+      b42 -18 -18 0
+       b43 -18 -18 0 | -6 -6 0
+    b13 0 15 0
+     b14 0 10 1 | 0 17 0
+    b30 3 12 0
+     b31 10 0 0
+      b32 18 -18 0
+       b33 18 -18 0 | 6 -6 0
+ b05 -9 -5 0
+  b06 0 -43 0
+   b07 0 -42 0
+    b08 0 -6 12 | 0 0 4
+ b01 9 -5 0
+  b02 0 -43 0
+   b03 0 -42 0
+    b04 0 -6 12 | 0 0 4
+",
+    },
 ];
 
 /// Non-humanoids: a rope hanging from a humanoid-named root, a spider
@@ -957,6 +1068,69 @@ Hips 0 95 0
       LeftForeArm 0 -26 0
        LeftHand 0 -25 0 | 0 -8 0
     mirror LeftShoulder Left=>Right
+",
+    ),
+    (
+        "crab",
+        "
+# A crab: a flat body, eight walking legs and two claws splayed around it,
+# eye stalks; no names the rig words know.
+unit cm
+Carapace 0 20 0
+ Leg1a 10 0 8
+  Leg1b 15 5 5
+   Leg1c 10 -25 3 | 2 -5 0
+ Leg2a 12 0 3
+  Leg2b 16 5 2
+   Leg2c 10 -25 1 | 2 -5 0
+ Leg3a 12 0 -3
+  Leg3b 16 5 -2
+   Leg3c 10 -25 -1 | 2 -5 0
+ Leg4a 10 0 -8
+  Leg4b 15 5 -5
+   Leg4c 10 -25 -3 | 2 -5 0
+ Pincer1 8 2 12
+  Pincer2 10 5 12
+   Pincer3 5 0 10 | 0 0 6
+ mirror Leg1a Leg=>Gel
+ mirror Leg2a Leg=>Gel
+ mirror Leg3a Leg=>Gel
+ mirror Leg4a Leg=>Gel
+ mirror Pincer1 Pincer=>Nipper
+ Stalk1 2 5 12 | 0 3 0
+ mirror Stalk1 Stalk=>Klats
+",
+    ),
+    (
+        "winged_quadruped",
+        "
+# A griffin: four legs, wings off the withers, a neck and head forward, a
+# tail; HumanIK names on the body, the wings unnamed. Horizontal.
+unit cm
+Hips 0 110 0
+ LeftUpLeg 12 -10 0
+  LeftLeg 0 -45 5
+   LeftFoot 0 -45 -5
+    LeftToeBase 0 -8 10 | 0 0 5
+ mirror LeftUpLeg Left=>Right
+ Tail 0 5 -15
+  Tail1 0 -5 -30
+   Tail2 0 -5 -30 | 0 -5 -20
+ Spine 0 5 30
+  Spine1 0 3 30
+   Spine2 0 2 30
+    Neck 0 25 20
+     Head 0 15 15 | 0 0 25
+    LeftShoulder 10 -5 5
+     LeftArm 3 -20 5
+      LeftForeArm 0 -40 0
+       LeftHand 0 -40 0 | 0 -5 10
+    mirror LeftShoulder Left=>Right
+    LeftPinion1 8 12 -5
+     LeftPinion2 30 25 -10
+      LeftPinion3 40 10 -10
+       LeftPinion4 35 -10 -5 | 20 -10 0
+    mirror LeftPinion1 Left=>Right
 ",
     ),
     (
@@ -1114,7 +1288,13 @@ fn more_suites_mirrored_map_left_and_right_from_geometry() {
         for e in map_errors(&d, &want) {
             fails.push(format!("{} mirrored: {e}", s.name));
         }
-        if !d.sides.contains("mirrored") {
+        // Names that state sides are reported as mirrored (a rig of bone
+        // numbers has none to contradict).
+        let sided = m.point_names().iter().any(|n| {
+            use surfmotion::rig::names::{side, tokens};
+            side(&tokens(n)).is_some()
+        });
+        if sided && !d.sides.contains("mirrored") {
             fails.push(format!("{} mirrored: sides {}", s.name, d.sides));
         }
     }
@@ -1204,6 +1384,133 @@ fn cli_reads_every_suite_in_its_unit_and_up_axis() {
         }
     }
     assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+/// A non-humanoid's up axis comes from its feet on the ground, not from
+/// head − pelvis (the Y-up T-rex, whose head is ahead of its pelvis, was
+/// reported Z-up): each one written Y-up and Z-up is reported in its own
+/// axis, or as unknown; the T-rex, the legs-only rig, the crab, the table
+/// and the griffin, which stand on two or more feet, never as unknown. A
+/// winged humanoid's `mocap rigmap` and `inspect` name the chains ignored.
+#[test]
+fn non_humanoids_report_their_up_axis_from_the_ground() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut fails = Vec::new();
+    for (name, skel) in NOT_HUMANOIDS {
+        for axes in ["y", "y-z", "zup-y", "zup+y"] {
+            let mut k = parse_skel(skel);
+            k.axes = axes.into();
+            let p = dir.path().join(format!("{name}_{axes}.bvh"));
+            std::fs::write(&p, k.text(&k.clip())).unwrap();
+            let o = common::run_ok(
+                std::process::Command::new(common::bin())
+                    .args(["inspect", "--json"])
+                    .arg(&p),
+            );
+            let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+            let why = v["up_reason"].as_str().unwrap_or("");
+            let want = if k.z_up() { "Z" } else { "Y" };
+            let stands = [
+                "trex_humanik_names",
+                "legs_only",
+                "crab",
+                "table",
+                "winged_quadruped",
+            ]
+            .contains(name);
+            let unknown = why.starts_with("unknown");
+            if (v["up"].as_str() != Some(want) && !unknown) || (stands && unknown) {
+                fails.push(format!("{name} {axes}: up {} ({why})", v["up"]));
+            }
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+    let s = SUITES.iter().find(|s| s.name == "winged_unnamed").unwrap();
+    let k = parse_skel(s.skel);
+    let p = dir.path().join("winged.bvh");
+    std::fs::write(&p, k.text(&k.clip())).unwrap();
+    for verb in [&["mocap", "rigmap"][..], &["inspect"][..]] {
+        let o = common::run_ok(std::process::Command::new(common::bin()).args(verb).arg(&p));
+        let out = String::from_utf8_lossy(&o.stdout);
+        let line = out
+            .lines()
+            .find(|l| l.contains("are neither arms nor the neck and are ignored: "))
+            .unwrap_or("");
+        assert!(
+            ["LeftPinion1", "RightPinion1", "Drape1", "Dangle1"]
+                .iter()
+                .all(|c| line.contains(c)),
+            "{verb:?}: {out}"
+        );
+    }
+}
+
+// ------------------------------------------------------------------ units
+
+/// An MMD figure (Japanese and English bone names, both as given and
+/// mirrored, and with a namespace) written in m, cm, mm, inches, feet and
+/// MMD's own 8 cm unit reads to the same stature in every one (within 3%;
+/// MMD units were read as decimetres, a 1.64 m figure as 2.05 m), and
+/// `inspect` says which unit it assumed and why.
+#[test]
+fn an_mmd_figure_reads_to_one_stature_in_every_unit() {
+    use surfmotion::rig::load::stature;
+    let dir = tempfile::tempdir().unwrap();
+    let mut fails = Vec::new();
+    for name in ["mmd_japanese", "mmd_english"] {
+        let s = SUITES.iter().find(|s| s.name == name).unwrap();
+        let k = parse_skel(s.skel);
+        let c = k.clip();
+        let map = detect_clip(&c).unwrap().map;
+        let truth = stature(&c, &map).unwrap().0 * k.metres_per_unit();
+        assert!((1.5..1.8).contains(&truth), "{name}: {truth} m");
+        let mut spaced = c.clone();
+        for j in &mut spaced.joints {
+            j.name = format!("Model|{}", j.name);
+        }
+        for (variant, v) in [
+            ("", c.clone()),
+            (" mirrored", mirror(&c)),
+            (" namespaced", spaced),
+        ] {
+            for (unit, m) in [
+                ("m", 1.0),
+                ("cm", 0.01),
+                ("mm", 0.001),
+                ("inch", 0.0254),
+                ("ft", 0.3048),
+                ("mmd", 0.08),
+            ] {
+                let w = common::skel::scaled(&v, k.metres_per_unit() / m);
+                let p = dir.path().join(format!("{name}_{unit}.bvh"));
+                std::fs::write(&p, format_bvh(&w)).unwrap();
+                let got = load_clip(&p, &Default::default()).unwrap();
+                let map = detect_clip(&got).unwrap().map;
+                let h = stature(&got, &map).unwrap().0 * got.units.metres_per_unit;
+                if (h / truth - 1.0).abs() > 0.03 {
+                    fails.push(format!(
+                        "{name}{variant} in {unit}: {h:.3} m, not {truth:.3} ({})",
+                        got.units.reason
+                    ));
+                }
+            }
+        }
+    }
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+    // `inspect` names the unit, the stature and why.
+    let p = dir.path().join("mmd_english_mmd.bvh");
+    let o = common::run_ok(
+        std::process::Command::new(common::bin())
+            .args(["inspect", "--json"])
+            .arg(&p),
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let why = v["units"]["reason"].as_str().unwrap_or("");
+    assert_eq!(v["units"]["metres_per_unit"], 0.08, "{v}");
+    assert!(
+        why.contains("MMD bone names") && why.contains("human stature"),
+        "{why}"
+    );
 }
 
 // ------------------------------------------------- the walk on each skeleton

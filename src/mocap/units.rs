@@ -6,7 +6,9 @@
 //! crouching, lying or folded rest skeleton, or a zero rest whose frames
 //! carry the offsets, gives the same answer), as the unit among those real
 //! suites write (mm, cm, inch, dm, ft, m; CMU's 1/0.45 inch for CMU rigs)
-//! that makes it a plausible human stature. Without a humanoid the rest
+//! that makes it a plausible human stature (MMD's 8 cm unit instead of dm
+//! for a rig with MMD's bone names; scaled to an adult's stature when no
+//! unit gives a human one). Without a humanoid the rest
 //! skeleton's extent decides ([`guess_units`]). The up axis is the dominant
 //! axis of head − pelvis over a few frames (the rest pose of some rigs lies
 //! down: Bandai Namco).
@@ -29,7 +31,8 @@ pub fn y_up(p: [f64; 3], z_up: bool) -> DVec3 {
 /// CMU's length unit: 1/0.45 inch.
 pub const CMU_UNIT_M: f64 = 0.0254 / 0.45;
 
-/// A unit name users may give (`m`, `cm`, `mm`, `dm`, `inch`, `ft`, `cmu`) or a
+/// A unit name users may give (`m`, `cm`, `mm`, `dm`, `inch`, `ft`, `cmu`,
+/// `mmd`) or a
 /// plain number of metres per file unit.
 pub fn parse_unit(s: &str) -> Option<Units> {
     let (m, name) = match s.to_ascii_lowercase().as_str() {
@@ -40,6 +43,7 @@ pub fn parse_unit(s: &str) -> Option<Units> {
         "in" | "inch" | "inches" => (0.0254, "inch"),
         "ft" | "foot" | "feet" => (0.3048, "ft"),
         "cmu" => (CMU_UNIT_M, "CMU (1/0.45 inch)"),
+        "mmd" => (MMD_UNIT_M, "MMD (8 cm)"),
         other => {
             let v: f64 = other
                 .parse()
@@ -146,27 +150,89 @@ pub fn stature_from_limbs(leg: f64, arm: f64) -> Option<f64> {
     (leg > 0.0 && arm > 0.0 && h.is_finite()).then_some(h)
 }
 
+/// MikuMikuDance's length unit, 8 cm per unit (a PMX figure 20 units tall
+/// is 1.6 m). Not in [`BVH_UNITS`]: a body alone cannot tell it from
+/// decimetres (20.5 units is 1.64 m in MMD units, 2.05 m in dm, both
+/// human statures), so it replaces dm among the candidates only when the
+/// rig carries MMD's standard trunk bones ([`crate::rig::names::mmd_rig`]:
+/// MMD exports are never written in dm, MakeHuman's dm rigs carry no MMD
+/// name).
+pub const MMD_UNIT_M: f64 = 0.08;
+
+/// Statures (m) of human bodies, toddlers to the tallest adults: a unit is
+/// chosen only if it gives one. When none of the candidate units does (a
+/// game rig in an arbitrary unit), the clip is scaled to
+/// [`NOMINAL_STATURE_M`] instead, and the reason says so.
+pub const HUMAN_STATURE_M: (f64, f64) = (0.75, 2.2);
+
+/// The stature (m) a humanoid whose unit no candidate explains is scaled
+/// to: an adult's (the mean of men and women, about 1.70 m).
+pub const NOMINAL_STATURE_M: f64 = 1.7;
+
+/// Which family of exporters a rig's names point to, for the unit
+/// candidates of [`units_from_stature`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum UnitFamily {
+    /// CMU names: CMU's 1/0.45 inch for an adult's stature.
+    Cmu,
+    /// MikuMikuDance's standard bones: [`MMD_UNIT_M`] instead of dm.
+    Mmd,
+    /// Any other rig: [`BVH_UNITS`].
+    Other,
+}
+
 /// The unit of a humanoid clip whose stature is `h` file units (`basis`
-/// says what it was measured from): a CMU rig (`cmu`) keeps CMU's unit
-/// when that gives an adult's stature ([`CMU_STATURE_M`]); else the
-/// unit of [`BVH_UNITS`] that brings the stature nearest
-/// [`STATURE_CENTRE_M`] in log scale. The reason names the stature, the
+/// says what it was measured from), decided by the body: among the
+/// candidate units (those of [`BVH_UNITS`]; for an MMD rig, MMD's 8 cm
+/// instead of dm) the ones that give a human stature ([`HUMAN_STATURE_M`]),
+/// and of those the one that brings the stature nearest
+/// [`STATURE_CENTRE_M`] in log scale. A CMU rig keeps CMU's unit when
+/// that gives an adult's stature ([`CMU_STATURE_M`]). When no candidate
+/// gives a human stature, the clip is scaled to [`NOMINAL_STATURE_M`]. The
+/// reason names the stature, what the reader assumed and why, the
 /// runner-up and what `--input-units` does.
-pub fn units_from_stature(h: f64, basis: &str, cmu: bool) -> Units {
+pub fn units_from_stature(h: f64, basis: &str, family: UnitFamily) -> Units {
     let off = |u: f64| (h * u / STATURE_CENTRE_M).ln().abs();
     let mut ranked: Vec<(f64, &str)> = BVH_UNITS.to_vec();
+    if family == UnitFamily::Mmd {
+        ranked.retain(|u| u.1 != "dm");
+        ranked.push((MMD_UNIT_M, "MMD (8 cm)"));
+    }
     ranked.sort_by(|a, b| off(a.0).total_cmp(&off(b.0)));
+    let human = |u: f64| (HUMAN_STATURE_M.0..=HUMAN_STATURE_M.1).contains(&(h * u));
+    let names: Vec<&str> = ranked.iter().map(|u| u.1).collect();
     let (lo, hi) = CMU_STATURE_M;
     let cmu_h = h * CMU_UNIT_M;
-    let (best, why) = if cmu && (lo..=hi).contains(&cmu_h) {
+    let mmd = if family == UnitFamily::Mmd {
+        "; MMD bone names: MMD's 8 cm unit replaces dm"
+    } else {
+        ""
+    };
+    let (best, why) = if family == UnitFamily::Cmu && (lo..=hi).contains(&cmu_h) {
         (
-            (CMU_UNIT_M, "CMU (1/0.45 inch)"),
+            (CMU_UNIT_M, "CMU (1/0.45 inch)".to_string()),
             "CMU rig names and an adult's stature".to_string(),
         )
-    } else {
+    } else if let Some(u) = ranked.iter().find(|u| human(u.0)) {
         (
-            ranked[0],
-            format!("the unit nearest a {STATURE_CENTRE_M} m centre among mm, cm, inch, dm, ft, m"),
+            (u.0, u.1.to_string()),
+            format!(
+                "of {}, the unit giving a human stature ({}-{} m) nearest a {STATURE_CENTRE_M} m centre{mmd}",
+                names.join(", "),
+                HUMAN_STATURE_M.0,
+                HUMAN_STATURE_M.1
+            ),
+        )
+    } else {
+        let k = NOMINAL_STATURE_M / h.max(f64::MIN_POSITIVE);
+        (
+            (k, format!("{k:.4} m")),
+            format!(
+                "none of {} gives a human stature ({}-{} m): scaled to a {NOMINAL_STATURE_M} m adult{mmd}",
+                names.join(", "),
+                HUMAN_STATURE_M.0,
+                HUMAN_STATURE_M.1
+            ),
         )
     };
     let runner = ranked
@@ -176,7 +242,7 @@ pub fn units_from_stature(h: f64, basis: &str, cmu: bool) -> Units {
         .unwrap_or_default();
     Units {
         metres_per_unit: best.0,
-        name: best.1.into(),
+        name: best.1.clone(),
         reason: format!(
             "stature {:.2} m in {} ({h:.3} file units from {basis}; {why}){runner}; --input-units overrides",
             h * best.0,
@@ -245,6 +311,76 @@ pub fn up_from_joints(
                 d.x, d.y, d.z
             ),
         ),
+    }
+}
+
+/// The up axis of a clip with no humanoid to read it from (a T-rex, a
+/// quadruped, a legs-only rig), from what a rest skeleton reliably shows:
+/// its feet on the ground. An axis (+Y or +Z) is supported when at least
+/// two end points (End Sites and leaf joints) share the lowest level along
+/// it (within 2% of the rest extent) and the root stands at least 10% of
+/// the extent above that level. One supported axis is the answer; of two,
+/// the one with more end points on the ground, else the one along which
+/// the root stands higher (by 1.5×) above them; otherwise the rest pose
+/// does not say, and BVH's own convention
+/// (Y-up) is assumed and the reason says the axis is unknown. Head − pelvis
+/// is not used: a horizontal body's head lies ahead of its pelvis.
+pub fn up_from_ground(clip: &Clip) -> (UpAxis, String) {
+    let (pos, mut ends) = clip.rest_positions();
+    let mut parent_of = vec![false; pos.len()];
+    for j in &clip.joints {
+        if let Some(p) = j.parent {
+            parent_of[p.idx()] = true;
+        }
+    }
+    for (j, jt) in clip.joints.iter().enumerate() {
+        if !parent_of[j] && jt.tail.is_none() {
+            ends.push(pos[j]);
+        }
+    }
+    let extent = rest_extent(clip);
+    let root = pos.first().copied().unwrap_or(DVec3::ZERO);
+    let on_ground = |axis: DVec3| -> Option<(usize, f64)> {
+        let lo = ends
+            .iter()
+            .map(|e| e.dot(axis))
+            .fold(f64::INFINITY, f64::min);
+        let feet = ends
+            .iter()
+            .filter(|e| e.dot(axis) <= lo + 0.02 * extent)
+            .count();
+        let above = root.dot(axis) - lo;
+        (extent > 0.0 && feet >= 2 && above >= 0.1 * extent).then_some((feet, above / extent))
+    };
+    let say = |axis: &str, (n, h): (usize, f64)| {
+        format!(
+            "no humanoid; {n} end points share the lowest level along {axis} and the root stands {:.0}% of the rest extent above them (as feet on the ground)",
+            100.0 * h
+        )
+    };
+    let unknown = |what: &str| {
+        (
+            UpAxis::Y,
+            format!(
+                "unknown: no humanoid, and the rest pose shows feet on the ground along {what}; assumed Y-up (BVH's convention)"
+            ),
+        )
+    };
+    match (on_ground(DVec3::Y), on_ground(DVec3::Z)) {
+        (Some(y), None) => (UpAxis::Y, say("+Y", y)),
+        (None, Some(z)) => (UpAxis::Z, say("+Z", z)),
+        // Both: more feet on the ground, else the root standing clearly
+        // higher above them (a body is taller than its toes reach forward).
+        (Some(y), Some(z)) if y.0 > z.0 || (y.0 == z.0 && y.1 > 1.5 * z.1) => (
+            UpAxis::Y,
+            say("+Y", y) + &format!(" (along +Z only {} and {:.0}%)", z.0, 100.0 * z.1),
+        ),
+        (Some(y), Some(z)) if z.0 > y.0 || (y.0 == z.0 && z.1 > 1.5 * y.1) => (
+            UpAxis::Z,
+            say("+Z", z) + &format!(" (along +Y only {} and {:.0}%)", y.0, 100.0 * y.1),
+        ),
+        (Some(_), Some(_)) => unknown("+Y and +Z alike"),
+        (None, None) => unknown("neither +Y nor +Z"),
     }
 }
 

@@ -6,7 +6,9 @@
 
 use super::{Canonical, RigMap, detect, detect_clip};
 use crate::mocap::read_clip;
-use crate::mocap::units::{guess_units, stature_from_limbs, units_from_stature, up_from_joints};
+use crate::mocap::units::{
+    UnitFamily, guess_units, stature_from_limbs, units_from_stature, up_from_ground, up_from_joints,
+};
 use crate::mocap::{Clip, MocapError, MocapFormat, Units, UpAxis};
 use std::path::{Path, PathBuf};
 
@@ -31,10 +33,15 @@ pub struct LoadOptions {
 pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
     let mut clip = read_clip(path, opts.fps, opts.asf.as_deref())?;
     if MocapFormat::of(path) == Some(MocapFormat::Bvh) {
-        let cmu = detect(&clip.point_names())
-            .map
-            .convention
-            .starts_with("CMU");
+        let names = clip.point_names();
+        let family = if detect(&names).map.convention.starts_with("CMU") {
+            UnitFamily::Cmu
+        } else if super::names::mmd_rig(&names) {
+            UnitFamily::Mmd
+        } else {
+            UnitFamily::Other
+        };
+        let cmu = family == UnitFamily::Cmu;
         // The map (names and structure) is scale-free: it comes first, and
         // its limbs give the stature the unit is chosen by.
         let detected = match &opts.rig_map {
@@ -48,23 +55,19 @@ pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
                 .map(|d| &d.map)
         });
         clip.units = match map.and_then(|m| stature(&clip, m)) {
-            Some((h, basis)) => units_from_stature(h, &basis, cmu),
+            Some((h, basis)) => units_from_stature(h, &basis, family),
             None => {
                 let mut u = guess_units(&clip, cmu);
                 u.reason = format!("no humanoid limbs to measure; {}", u.reason);
                 u
             }
         };
-        // Without a humanoid, the names' best map (as `guess_up` does).
-        let names_map;
-        let up_map = match map {
-            Some(m) => m,
-            None => {
-                names_map = detect(&clip.point_names()).map;
-                &names_map
-            }
+        // Without a humanoid, head − pelvis says nothing (a horizontal
+        // body's head is ahead of its pelvis): the feet on the ground do.
+        let (up, why) = match map {
+            Some(m) => guess_up(&clip, Some(m)),
+            None => up_from_ground(&clip),
         };
-        let (up, why) = guess_up(&clip, Some(up_map));
         clip.up = up;
         clip.up_reason = why;
     }

@@ -332,9 +332,10 @@ pub struct Detection {
     /// How sure the geometry is of left and right (0-1), when the sides
     /// were decided from geometry alone (a mapping by structure).
     pub side_confidence: Option<f64>,
-    /// The pose the structure was read on: empty for the rest skeleton (or
-    /// no structure analysis), else which frame stood in for a rest
-    /// skeleton that is not a standing body, and why.
+    /// Notes on the structure analysis: the pose it was read on (empty for
+    /// the rest skeleton, or no structure analysis; else which frame stood
+    /// in for a rest skeleton that is not a standing body, and why), and
+    /// the chains off the chest it ignored (wings, a cape).
     #[serde(skip_serializing_if = "String::is_empty")]
     pub structure_pose: String,
 }
@@ -531,11 +532,21 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             ),
         });
     }
-    let pose_note = |b: &structure::Body| match b.reference_frame {
-        Some(f) => format!(
-            "frame {f}: the rest skeleton is not a standing body (its legs do not point away from its spine, or it has no extent), so the structure was read on this frame's pose"
-        ),
-        None => String::new(),
+    let pose_note = |b: &structure::Body| {
+        let mut notes: Vec<String> = Vec::new();
+        if let Some(f) = b.reference_frame {
+            notes.push(format!(
+                "frame {f}: the rest skeleton is not a standing body (its legs do not point away from its spine, or it has no extent), so the structure was read on this frame's pose"
+            ));
+        }
+        if !b.ignored.is_empty() {
+            notes.push(format!(
+                "{} chain(s) off the chest are neither arms nor the neck and are ignored: {}",
+                b.ignored.len(),
+                b.ignored.join(", ")
+            ));
+        }
+        notes.join("; ")
     };
     let conv_chest_agrees = |b: &structure::Body| {
         let rest = &b.reference;

@@ -234,6 +234,34 @@ fn ascii_words(name: &str) -> std::borrow::Cow<'_, str> {
     std::borrow::Cow::Owned(s)
 }
 
+/// MikuMikuDance's standard trunk bones, as the tokens of their English
+/// names and their Japanese names: all parents (全ての親), centre
+/// (センター), groove (グルーブ), upper body (上半身), lower body (下半身).
+const MMD_TRUNK: &[(&str, &str)] = &[
+    ("all parents", "全ての親"),
+    ("center", "センター"),
+    ("groove", "グルーブ"),
+    ("upper body", "上半身"),
+    ("lower body", "下半身"),
+];
+
+/// True when at least two of MikuMikuDance's standard trunk bones
+/// ([`MMD_TRUNK`]) name joints of the rig (namespaces stripped), in
+/// Japanese or in English: a clip exported from MMD, whose length unit is
+/// 8 cm ([`crate::mocap::units::MMD_UNIT_M`]).
+pub fn mmd_rig(names: &[String]) -> bool {
+    MMD_TRUNK
+        .iter()
+        .filter(|(en, jp)| {
+            names.iter().any(|n| {
+                let n = strip_namespace(n);
+                n == *jp || tokens(n).join(" ") == *en
+            })
+        })
+        .count()
+        >= 2
+}
+
 /// Splits a name into lower-case tokens at separators, camelCase humps and
 /// letter/digit boundaries (`LeftUpLeg` → `left up leg`, `Spine01` →
 /// `spine 01`, `LThumb` → `l thumb`, `lfemur` → `l femur`; MMD's Japanese

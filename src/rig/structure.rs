@@ -110,6 +110,9 @@ pub struct Body {
     /// The joints' positions in the pose the structure was read on (the
     /// rest skeleton, or `reference_frame`), file units.
     pub reference: Vec<DVec3>,
+    /// The first joints of chains off the chest that are neither arms nor
+    /// the neck (wings, a cape), left out of the map.
+    pub ignored: Vec<String>,
 }
 
 /// The words a [`NotHumanoid`] reason contains when the clip has a
@@ -807,6 +810,9 @@ fn body(
     // Legs, arms and neck off one joint: the chest's branches are the
     // others, and the trunk's up runs to the neck.
     let hub = g.rep[chest] == g.rep[pelvis];
+    // Chains off the chest that are neither arms nor the neck (wings, a
+    // cape, a holster: named in the report).
+    let mut ignored: Vec<String> = Vec::new();
     let cb: Vec<usize> = g
         .branches(chest)
         .into_iter()
@@ -853,6 +859,18 @@ fn body(
                 ([cb[0], cb[1]], neck)
             }
         }
+        k if k >= 4 => match arms_among(g, tokens, pelvis, chest, &cb, legs) {
+            Some((arms, neck, rest)) => {
+                ignored.extend(rest.iter().map(|&c| name(c)));
+                (arms, Some(neck))
+            }
+            None => {
+                return Err(NotHumanoid(format!(
+                    "{k} limbs branch off '{}' and no two of them mirror each other as arms",
+                    name(chest)
+                )));
+            }
+        },
         k => {
             return Err(NotHumanoid(format!(
                 "{k} limbs branch off '{}' (two arms expected)",
@@ -1456,8 +1474,115 @@ fn body(
         rest_stands,
         reference_frame: g.from_frame,
         reference: g.rest.clone(),
+        ignored,
     })
 }
+
+/// The neck and the two arms among four or more significant chains off
+/// the chest `chest` (wings, a cape, extra limb-like chains beside the
+/// arms, none of them named as helpers), and the chains left over. The
+/// neck is the chain whose path names a neck or head, else the one whose
+/// far end points most along pelvis→chest. The arms are the pair of the
+/// others that
+/// - lie on opposite sides of the trunk's axis (their far ends' offsets
+///   across it over 120° apart: a cape or a tail on the mid-plane pairs
+///   with nothing),
+/// - mirror each other (starts and far ends at the same heights along the
+///   axis and the same distances from it, as [`Geo::legs_among`] pairs
+///   legs), and
+/// - are as long as arms are beside these legs: the chain's reach (collar
+///   to fingertip end) about [`ARM_OF_LEG`] of the legs' (hip to toe tip),
+///
+/// scored by the mirror mismatch over the body's size plus the log ratio
+/// of the pair's reach to that length, a pair whose both chains name an
+/// arm joint (collar, shoulder, upper arm, elbow, wrist, hand) ahead by
+/// one. `None` when no pair lies on opposite sides.
+fn arms_among(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    pelvis: usize,
+    chest: usize,
+    cb: &[usize],
+    legs: [usize; 2],
+) -> Option<([usize; 2], usize, Vec<usize>)> {
+    let origin = g.rest[chest];
+    let up = (origin - g.rest[pelvis]).normalize_or_zero();
+    if up == DVec3::ZERO {
+        return None;
+    }
+    let far_end = |c: usize| {
+        let path = g.path(c);
+        let e = *path.last().unwrap_or(&c);
+        g.tail_rest[e].unwrap_or(g.rest[e])
+    };
+    let named = |c: usize, f: &dyn Fn(Role) -> bool| {
+        g.path(c).iter().any(|&j| role_of(tokens, j).is_some_and(f))
+    };
+    let neck = cb
+        .iter()
+        .copied()
+        .find(|&c| named(c, &|r| matches!(r, Role::Neck | Role::Head)))
+        .or_else(|| {
+            cb.iter().copied().max_by(|&a, &b| {
+                let d = |c: usize| (far_end(c) - origin).normalize_or_zero().dot(up);
+                d(a).total_cmp(&d(b))
+            })
+        })?;
+    let reach = |j: usize| g.len[j] + g.reach[j];
+    let leg_reach = 0.5 * (reach(legs[0]) + reach(legs[1]));
+    let size = g.thr / 0.12;
+    // Height along the axis and the offset across it.
+    let split = |q: DVec3| {
+        let d = q - origin;
+        let h = d.dot(up);
+        (h, d - h * up)
+    };
+    let armish = |c: usize| {
+        named(c, &|r| {
+            matches!(
+                r,
+                Role::Collar
+                    | Role::ShoulderWord
+                    | Role::UpperArm
+                    | Role::Elbow
+                    | Role::Wrist
+                    | Role::Hand
+            )
+        })
+    };
+    let others: Vec<usize> = cb.iter().copied().filter(|&c| c != neck).collect();
+    let mut best: Option<(f64, [usize; 2])> = None;
+    for (i, &a) in others.iter().enumerate() {
+        for &b in &others[i + 1..] {
+            let (ea, eb) = (split(far_end(a)), split(far_end(b)));
+            let (sa, sb) = (split(g.rest[a]), split(g.rest[b]));
+            if ea.1.dot(eb.1) > -0.5 * ea.1.length() * eb.1.length() {
+                continue; // not on opposite sides (over 120 degrees apart)
+            }
+            let mismatch = (ea.0 - eb.0).abs()
+                + (ea.1.length() - eb.1.length()).abs()
+                + (sa.0 - sb.0).abs()
+                + (sa.1.length() - sb.1.length()).abs();
+            let length = (0.5 * (reach(a) + reach(b)) / (ARM_OF_LEG * leg_reach))
+                .ln()
+                .abs();
+            let bonus = if armish(a) && armish(b) { 1.0 } else { 0.0 };
+            let score = mismatch / size + length - bonus;
+            if best.is_none_or(|(s, _)| score < s) {
+                best = Some((score, [a, b]));
+            }
+        }
+    }
+    let (_, arms) = best?;
+    let rest = others.into_iter().filter(|c| !arms.contains(c)).collect();
+    Some((arms, neck, rest))
+}
+
+/// An arm chain's reach (collar to the fingertip end) over a leg chain's
+/// (hip to the toe tip), both from the bone joining them to the trunk:
+/// 0.67 on Bandai's rig, 0.65 and 0.61 on CMU 01 and 131 (cgspeed BVH),
+/// 0.83 on CC's (its fingers reach further than its hand's end).
+pub const ARM_OF_LEG: f64 = 0.7;
 
 fn leg_chain(
     g: &Geo,

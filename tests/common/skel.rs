@@ -5,7 +5,8 @@
 //! detection from it, left/right mirroring).
 //!
 //! A description, line by line: `#` comments (the source); directives
-//! `unit U` (the unit the file is written in: `mm`, `cm`, `dm`, `m`, `inch`),
+//! `unit U` (the unit the file is written in: `mm`, `cm`, `dm`, `m`, `inch`,
+//! `ft`, `mmd`: MikuMikuDance's 8 cm),
 //! `axes A` (the file's frame: `y` Y-up facing +Z; `y-z` Y-up facing -Z;
 //! `zup-y` Z-up facing -Y; `zup+y` Z-up facing +Y), `scale K` (file units
 //! per unit written below), `order …` (the rotation channels), `all6` (six
@@ -208,6 +209,8 @@ impl Skel {
             "dm" => 0.1,
             "m" => 1.0,
             "inch" => 0.0254,
+            "ft" => 0.3048,
+            "mmd" => 0.08,
             u => panic!("unit {u}"),
         }
     }
@@ -478,6 +481,19 @@ pub fn mirror(c: &Clip) -> Clip {
     }
     for q in &mut out.rotations {
         *q = DQuat::from_xyzw(q.x, -q.y, -q.z, q.w);
+    }
+    out
+}
+
+/// Every length of a clip (offsets, End Sites, translations) times `k`.
+pub fn scaled(c: &Clip, k: f64) -> Clip {
+    let mut out = c.clone();
+    for j in &mut out.joints {
+        j.offset *= k;
+        j.tail = j.tail.map(|t| t * k);
+    }
+    for t in &mut out.translations {
+        *t *= k;
     }
     out
 }
