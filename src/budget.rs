@@ -8,9 +8,14 @@
 //! (frames × vertices × bytes) and refused with the numbers when it
 //! exceeds the budget.
 //!
-//! The budget is half of the machine's physical memory (`/proc/meminfo`;
-//! 8 GiB where that cannot be read), or `SURFMOTION_MEMORY_LIMIT` (bytes,
-//! or a number with a K, M, G or T suffix, powers of 1024).
+//! The budget is half of the least of the machine's physical memory
+//! (`/proc/meminfo`), the process's address-space limit (`ulimit -v`,
+//! `/proc/self/limits`) and its control group's memory limit (cgroup v2
+//! `memory.max` or v1 `memory.limit_in_bytes`); 8 GiB where none can be
+//! read; or `SURFMOTION_MEMORY_LIMIT` (bytes, or a number with a K, M, G or
+//! T suffix, powers of 1024). Without the last two, a job under `ulimit -v`
+//! or in a container was accepted against the whole machine's memory and
+//! then aborted on an allocation.
 
 use std::fmt;
 
@@ -55,10 +60,25 @@ impl Budget {
                 ),
             }
         }
-        match physical_memory() {
-            Some(m) => Budget {
+        let limits = [
+            (physical_memory(), "half of physical memory"),
+            (
+                address_space_limit(),
+                "half of the address-space limit (ulimit -v)",
+            ),
+            (
+                cgroup_memory_limit(),
+                "half of the control group's memory limit",
+            ),
+        ];
+        match limits
+            .into_iter()
+            .filter_map(|(b, s)| b.map(|b| (b, s)))
+            .min_by_key(|(b, _)| *b)
+        {
+            Some((m, source)) => Budget {
                 bytes: m / 2,
-                source: "half of physical memory",
+                source,
             },
             None => Budget {
                 bytes: 8 << 30,
@@ -187,6 +207,45 @@ fn physical_memory() -> Option<u64> {
     Some(kb * 1024)
 }
 
+/// The soft address-space limit of this process (`ulimit -v`), from the
+/// "Max address space" line of `/proc/self/limits`; `None` when unlimited.
+fn address_space_limit() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
+    limits_address_space(&text)
+}
+
+/// The "Max address space" soft limit of a `/proc/self/limits` text.
+fn limits_address_space(text: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+    line["Max address space".len()..]
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
+}
+
+/// The memory limit of this process's control group: cgroup v2
+/// `memory.max` of its own group (from `/proc/self/cgroup`) or of the
+/// root, else v1 `memory.limit_in_bytes`; `None` when unlimited ("max", or
+/// v1's page-rounded 2^63).
+fn cgroup_memory_limit() -> Option<u64> {
+    let own = std::fs::read_to_string("/proc/self/cgroup")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find_map(|l| l.strip_prefix("0::"))
+                .map(|p| format!("/sys/fs/cgroup{}/memory.max", p.trim_end_matches('/')))
+        });
+    let candidates = own.into_iter().chain([
+        "/sys/fs/cgroup/memory.max".to_string(),
+        "/sys/fs/cgroup/memory/memory.limit_in_bytes".to_string(),
+    ]);
+    candidates
+        .filter_map(|p| std::fs::read_to_string(p).ok())
+        .filter_map(|t| t.trim().parse::<u64>().ok())
+        .find(|&b| b < 1 << 60)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -216,6 +275,18 @@ mod tests {
         let e = b.check(|| "3 frames".into(), 5 << 30).unwrap_err();
         let s = e.to_string();
         assert!(s.contains("3 frames") && s.contains("5.4 GB") && s.contains("1.1 GB"));
+    }
+
+    #[test]
+    fn the_address_space_limit_is_read_off_proc_limits() {
+        let limited = "Limit                     Soft Limit           Hard Limit           Units     \n\
+                       Max stack size            8388608              unlimited            bytes     \n\
+                       Max address space         1228800000           unlimited            bytes     \n";
+        assert_eq!(limits_address_space(limited), Some(1_228_800_000));
+        let unlimited =
+            "Max address space         unlimited            unlimited            bytes     \n";
+        assert_eq!(limits_address_space(unlimited), None);
+        assert_eq!(limits_address_space(""), None);
     }
 
     #[test]

@@ -1973,6 +1973,37 @@ fn assert_streamed_pc2(out: &Path, frames: usize, dir: &Path) {
     assert!(!names.iter().any(|n| n.ends_with(".part")), "{names:?}");
 }
 
+/// The memory budget follows the process's address-space limit (`ulimit
+/// -v`): a resample that fits half the machine's memory but not half the
+/// limit is refused with the limit named, where it was accepted and then
+/// aborted on an allocation ("memory allocation of N bytes failed", exit
+/// 134; found by an attack run on `keyframe` under `ulimit -v`).
+#[test]
+fn the_memory_budget_follows_ulimit_v() {
+    let tmp = tempfile::tempdir().unwrap();
+    let clip = tmp.path().join("long.bvh");
+    // 30,000 frames of the procedural walk resampled to 1000 fps: over a
+    // million frames, about 1 GB of joint rotations and translations.
+    std::fs::write(&clip, long_walk(30_000)).unwrap();
+    let out = tmp.path().join("o.bvh");
+    let script = format!(
+        "ulimit -v 1500000 && exec \"$0\" mocap convert {} {} --fps 1000",
+        clip.display(),
+        out.display()
+    );
+    let o = Command::new("sh")
+        .args(["-c", &script])
+        .arg(common::bin())
+        .env_remove("SURFMOTION_MEMORY_LIMIT")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("address-space limit"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(!out.exists());
+}
+
 /// Regression (issue 18, item 12): a retarget whose frames exceed the
 /// memory budget was refused before it began ("the retarget at 30 fps:
 /// 3,000 frames × 6,304 vertices would need about …"); its point cache now
