@@ -63,6 +63,10 @@ impl Poisson {
             .map(|(i, j, v)| (i, j, -v))
             .collect();
         let solver = FixedSolver::new(reference.vertex_count(), k, anchors)?;
+        Ok(Self::from_solver(reference, solver, anchors))
+    }
+
+    fn from_solver(reference: &Mesh, solver: FixedSolver, anchors: &[u32]) -> Poisson {
         let p = reference.positions();
         let w = half_cotangents(p, reference.triangles());
         let weighted_edges: Vec<[DVec3; 3]> = reference
@@ -80,13 +84,59 @@ impl Poisson {
             .iter()
             .map(|we| std::array::from_fn(|k| we[(k + 2) % 3] - we[(k + 1) % 3]))
             .collect();
-        Ok(Poisson {
+        Poisson {
             triangles: reference.triangles().to_vec(),
             corner_vectors,
             solver,
             anchors: anchors.to_vec(),
             reference: p.iter().map(|&q| dvec(q).to_array()).collect(),
-        })
+        }
+    }
+
+    /// Factors the system with no anchor and the centroid of each of
+    /// `triangles` pulled towards a target with weight `weight` (soft
+    /// constraints): `E(x) + weight Σ_m ‖c_m(x) − t_m‖²`, `c_m` the mean of
+    /// triangle m's corners. Definite when every connected component has
+    /// one of `triangles`; [`Poisson::pull_centroids`] adds the targets to
+    /// `b` before [`Poisson::solve`].
+    pub fn with_soft_centroids(
+        reference: &Mesh,
+        triangles: &[[u32; 3]],
+        weight: f64,
+    ) -> Result<Poisson, SolveError> {
+        let mut k: Vec<(u32, u32, f64)> = cotan_triplets(reference)
+            .into_iter()
+            .map(|(i, j, v)| (i, j, -v))
+            .collect();
+        let w = weight / 9.0;
+        for t in triangles {
+            for &a in t {
+                for &b in t {
+                    k.push((a, b, w));
+                }
+            }
+        }
+        let solver = FixedSolver::definite(reference.vertex_count(), k)?;
+        Ok(Self::from_solver(reference, solver, &[]))
+    }
+
+    /// Adds the pull of [`Poisson::with_soft_centroids`] towards `targets`
+    /// (one per triangle, in its order) to the assembled `ws.b`.
+    pub fn pull_centroids(
+        ws: &mut PoissonWorkspace,
+        triangles: &[[u32; 3]],
+        targets: &[DVec3],
+        weight: f64,
+    ) {
+        for (t, c) in triangles.iter().zip(targets) {
+            let d = *c * (weight / 3.0);
+            for &v in t {
+                let r = &mut ws.b[v as usize];
+                r[0] += d.x;
+                r[1] += d.y;
+                r[2] += d.z;
+            }
+        }
     }
 
     /// The reference triangles.
