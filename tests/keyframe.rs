@@ -2368,3 +2368,54 @@ fn coarse_bins_far_from_the_goal_meet_what_the_fine_search_meets() {
         "coarse Eq. 7 total {worst} above the fine one"
     );
 }
+
+/// A time target longer than the longest path the exact-length search
+/// considers (`LatticeOptions::max_frames`) is reported as a bound hit:
+/// `--time 3600` at 25 fps (90,000 frames against 20,000) returned an
+/// 800 s path and said nothing (attack run, s14). Here the cap is 100
+/// frames and the target 8 s (200 frames at 25 fps); a target under the
+/// cap hits no such bound.
+#[test]
+fn a_time_target_past_the_search_cap_is_reported_as_a_bound_hit() {
+    use surfmotion::keyframe::lattice::LatticeOptions;
+    let mut r = Lcg(41);
+    let mut checked = 0;
+    for _ in 0..20 {
+        let g = random_graph(&mut r, 3, 16);
+        let from = r.below(g.len()) as u32;
+        let to = r.below(g.len()) as u32;
+        let Ok(p) = Planner::new(g, &[from, to], 25.0, &SearchOptions::default()) else {
+            continue;
+        };
+        let o = SearchOptions {
+            lattice: LatticeOptions {
+                max_frames: 100,
+                ..SearchOptions::default().lattice
+            },
+            ..SearchOptions::default()
+        };
+        let capped = |time: f64| {
+            p.plan(
+                &Targets::Global {
+                    distance: 2.0,
+                    time,
+                },
+                &o,
+            )
+            .map(|plan| {
+                plan.stats
+                    .bounds_hit
+                    .iter()
+                    .any(|b| b.contains("longest path the exact-length search considers"))
+            })
+            .ok()
+        };
+        let (Some(long), Some(short)) = (capped(8.0), capped(2.0)) else {
+            continue;
+        };
+        assert!(long, "an 8 s target past a 100-frame cap hit no bound");
+        assert!(!short, "a 2 s target under the cap reported the cap");
+        checked += 1;
+    }
+    assert!(checked >= 5, "only {checked} connected cases");
+}

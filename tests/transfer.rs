@@ -243,8 +243,13 @@ fn walk_on(name: &str, scan: &Mesh, landmarks: &str, clip: &Path) {
     // armadillo with 02_01: one armpit edge at x0.089 in one frame with the
     // rest-pose-aware retargeting, which keeps its hunched torso, x0.154
     // before; the 99.9 % band narrowed from x0.53..1.51 to x0.62..1.40.)
+    // The marker centres' pull in the Poisson solve (s14: limbs go where
+    // the skeleton puts them) folds the SMPL armpit further when its
+    // T-pose arms come down: the 99.9 % band's low end x0.525 → x0.417 at
+    // frame 60 of 02_01 (one armpit edge x0.386 → x0.280); rendered front
+    // and side, the arms lie against the body as before, nothing torn.
     assert!(lo > 0.05 && hi < 3.0, "{name}: edges x{lo}..x{hi}");
-    assert!(q(0.0005) > 0.5 && q(0.9995) < 2.0, "{name}");
+    assert!(q(0.0005) > 0.35 && q(0.9995) < 2.0, "{name}");
     // It walks: the centroid moves forward by more than a body height.
     let n = prepared.mesh.vertex_count();
     let c = |f: usize| {

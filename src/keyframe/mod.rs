@@ -505,6 +505,23 @@ impl Planner {
         let mut stats = Stats::default();
         let w = opts.weights;
         let heading = self.heading(opts);
+        // The exact-length search considers paths of at most `max_frames`
+        // frames: a longer time target is met by nothing it finds, and the
+        // result must say so (a 3600 s query at 25 fps returned an 800 s
+        // path with no word; attack run, s14).
+        let longest = match targets {
+            Targets::Global { time, .. } => *time,
+            Targets::PerSegment(v) => v.iter().map(|&(_, t)| t).fold(0.0, f64::max),
+        };
+        let cap = opts.lattice.max_frames as f64;
+        if opts.method == Method::Lattice && longest * self.fps > cap {
+            stats.bounds_hit.push(format!(
+                "the time target ({longest:.1} s, {:.0} frames at {:.3} fps) is longer than the longest path the exact-length search considers ({cap:.0} frames, {:.1} s at this rate)",
+                longest * self.fps,
+                self.fps,
+                cap / self.fps
+            ));
+        }
         let segs = match targets {
             Targets::Global { distance, time } => {
                 let t = Target {
