@@ -247,6 +247,9 @@ fn cross(
 fn rows() -> Vec<Row> {
     let obj_ok = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
     let mut r = vec![
+        // A channel named twice was read silently (attack run, s14).
+        row("a BVH channel named twice", "inspect {d}/dup.bvh", &["dup.bvh:5", "'Xrotation' repeated", "'Hips'"])
+            .file("dup.bvh", "HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Xrotation Xrotation Zrotation\n End Site\n {\n  OFFSET 0 1 0\n }\n}\nMOTION\nFrames: 1\nFrame Time: 0.033\n0 0 0 10 20 30\n"),
         // Item 12: unbounded allocations.
         row("BVH Frame Time in milliseconds", "retarget --db {db} --mocap {d}/ms.bvh -o {d}/o.pc2", &["ms.bvh", "Frame Time", "milliseconds", "--input-fps"])
             .file("ms.bvh", walk_with("Frame Time", "Frame Time: 33.333333")),
@@ -3567,4 +3570,86 @@ fn mesh_and_mocap_convert_print_json() {
     let v = json(expand("mocap convert {walk} {d}/w.bvh --fps 60 --json", d));
     assert_eq!(v["joints"], 19);
     assert!((v["fps"].as_f64().unwrap() - 60.0).abs() < 1e-6, "{v}");
+}
+
+/// A single pose whose `Frame Time` is an absurd rate (1e-30 s) is read at
+/// 30 fps with a warning, as `Frame Time 0` is: it was kept, and `mocap
+/// convert` wrote `Frame Time: 0.000000000000000000000000000001` (attack
+/// run, s14). `eval` of such a one-frame result says the velocity is not
+/// measured instead of "-0.00 ± -0.00 cm/frame over 0 frames".
+#[test]
+fn a_single_pose_with_an_absurd_rate_is_read_at_30_fps_and_evaluated_plainly() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let text = walk_text();
+    let lines: Vec<&str> = text.lines().collect();
+    let m = lines.iter().position(|l| *l == "MOTION").unwrap();
+    let mut one: Vec<String> = lines[..=m].iter().map(|s| s.to_string()).collect();
+    one.push("Frames: 1".into());
+    one.push("Frame Time: 1e-30".into());
+    one.push(lines[m + 3].to_string());
+    let clip = tmp.path().join("one.bvh");
+    std::fs::write(&clip, one.join("\n")).unwrap();
+    let out = tmp.path().join("o.bvh");
+    let o = Command::new(common::bin())
+        .args(["mocap", "convert"])
+        .arg(&clip)
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let o = Command::new(common::bin())
+        .arg("inspect")
+        .arg(&clip)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        said.contains("30 fps assumed") && said.contains("at 30.000 fps"),
+        "{said}"
+    );
+    let written = std::fs::read_to_string(&out).unwrap();
+    let ft = written
+        .lines()
+        .find_map(|l| l.strip_prefix("Frame Time:"))
+        .unwrap()
+        .trim()
+        .parse::<f64>()
+        .unwrap();
+    assert!((ft - 1.0 / 30.0).abs() < 1e-6, "{ft}");
+    let result = tmp.path().join("r.pc2");
+    let o = Command::new(common::bin())
+        .args(["retarget", "--db"])
+        .arg(&f.db)
+        .arg("--mocap")
+        .arg(&clip)
+        .arg("-o")
+        .arg(&result)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = Command::new(common::bin())
+        .args(["eval", "--db"])
+        .arg(&f.db)
+        .arg("--mocap")
+        .arg(&clip)
+        .arg("--result")
+        .arg(&result)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(text.contains("not measured"), "{text}");
+    assert!(!text.contains("-0.00"), "{text}");
 }

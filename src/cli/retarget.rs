@@ -312,14 +312,23 @@ pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
         let v = serde_json::to_value(&r)?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
-    let mut s = format!(
-        "joint-velocity error {:.2} ± {:.2} cm/frame over {} frames (query {} frames, result {})\n",
-        r.velocity_error_cm_per_frame,
-        r.std_cm_per_frame,
-        r.velocity_frames,
-        r.query_frames,
-        r.result_frames
-    );
+    // A velocity needs two frames: with fewer the figure is not a
+    // measurement (it printed "-0.00 ± -0.00 cm/frame over 0 frames").
+    let mut s = if r.velocity_frames == 0 {
+        format!(
+            "joint-velocity error: not measured (a velocity needs two frames; query {} frames, result {})\n",
+            r.query_frames, r.result_frames
+        )
+    } else {
+        format!(
+            "joint-velocity error {:.2} ± {:.2} cm/frame over {} frames (query {} frames, result {})\n",
+            r.velocity_error_cm_per_frame,
+            r.std_cm_per_frame,
+            r.velocity_frames,
+            r.query_frames,
+            r.result_frames
+        )
+    };
     if let Some(p) = &r.plausibility {
         s += &p.text();
     }

@@ -193,7 +193,7 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
     warnings.extend(h.warnings);
     let joints = h.joints;
     let mut rest = t.lines;
-    let header = MotionHeader::parse(&mut rest, path, motion_line, opts, &mut warnings)?;
+    let mut header = MotionHeader::parse(&mut rest, path, motion_line, opts, &mut warnings)?;
     let (rotations, translations) = parse_frames(&joints, &h.slots, rest, path, &mut warnings)?;
     let frames = rotations.len() / joints.len();
     if frames == 0 {
@@ -206,7 +206,7 @@ pub fn parse_bvh(text: &str, path: &Path, opts: &BvhOptions) -> Result<Clip, Moc
             ),
         ));
     }
-    header.check_rate(frames, path, opts)?;
+    header.check_rate(frames, path, opts, &mut warnings)?;
     match header.declared {
         Some(d) if d != frames as u64 => raise_warning(
             &mut warnings,
@@ -561,6 +561,19 @@ impl Hierarchy {
                     format!("unknown channel {}", quoted(tok)),
                 ));
             }
+            // A channel named twice (`Xrotation Xrotation`) was read as two
+            // rotations summed and two positions of which the last won.
+            if c.is_some() && slots.contains(&c) {
+                return Err(MocapError::parse(
+                    path,
+                    l,
+                    format!(
+                        "channel {} repeated on joint {}",
+                        quoted(tok),
+                        quoted(&self.joints[j].name)
+                    ),
+                ));
+            }
             slots.push(c);
         }
         if slots.iter().any(Option::is_none) {
@@ -690,7 +703,31 @@ impl MotionHeader {
     /// Time in milliseconds, or 1e300) would ask for absurd frame counts
     /// downstream (issue 18, items 12 and 17). A single frame has no rate
     /// to speak of; an override was checked when read.
-    fn check_rate(&self, frames: usize, path: &Path, opts: &BvhOptions) -> Result<(), MocapError> {
+    fn check_rate(
+        &mut self,
+        frames: usize,
+        path: &Path,
+        opts: &BvhOptions,
+        warnings: &mut Vec<String>,
+    ) -> Result<(), MocapError> {
+        // A single pose with an absurd rate (`Frame Time 1e-30`) was kept,
+        // and `mocap convert` wrote the absurd rate back out: take 30 fps,
+        // as for a single pose's `Frame Time 0`.
+        if opts.fps.is_none() && frames <= 1 && !crate::budget::is_frame_rate(1.0 / self.frame_time)
+        {
+            raise_warning(
+                warnings,
+                path,
+                format!(
+                    "line {}: Frame Time {} with a single frame is outside [{}, {}] frames per second; 30 fps assumed",
+                    self.time_line,
+                    quoted(&self.time_value),
+                    crate::budget::MIN_FPS,
+                    crate::budget::MAX_FPS
+                ),
+            );
+            self.frame_time = 1.0 / 30.0;
+        }
         let frame_time = self.frame_time;
         if opts.fps.is_none() && frames > 1 && self.file_frame_time.is_none() {
             return Err(MocapError::parse(
