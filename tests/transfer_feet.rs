@@ -82,6 +82,12 @@ fn samba_scan(d: &std::path::Path) -> (surfmotion::mesh::Mesh, String) {
 
 /// The samba scan prepared for transfer with 20 markers from its landmarks.
 fn samba_prepared(d: &std::path::Path) -> surfmotion::transfer::PreparedScan {
+    samba_prepared_with(d, 20)
+}
+
+/// The samba scan prepared for transfer with `count` markers from its
+/// landmarks.
+fn samba_prepared_with(d: &std::path::Path, count: usize) -> surfmotion::transfer::PreparedScan {
     let (scan, text) = samba_scan(d);
     let lm = Landmarks::parse(
         &text,
@@ -90,7 +96,7 @@ fn samba_prepared(d: &std::path::Path) -> surfmotion::transfer::PreparedScan {
     )
     .unwrap();
     let opts = MarkerOptions {
-        count: 20,
+        count,
         ..Default::default()
     };
     prepare(&scan, MarkerSpec::Landmarks(&lm, opts)).unwrap()
@@ -413,18 +419,7 @@ fn spread_legs_carry_their_feet_where_the_skeleton_does() {
     use surfmotion::rig::retarget::{Toes, retarget_toes};
     use surfmotion::transfer::mocap_motion;
     let Some(d) = common::data_dir() else { return };
-    let (scan, text) = samba_scan(&d);
-    let lm = Landmarks::parse(
-        &text,
-        std::path::Path::new("samba.landmarks.json"),
-        scan.vertex_count(),
-    )
-    .unwrap();
-    let opts = MarkerOptions {
-        count: 80,
-        ..Default::default()
-    };
-    let prepared = prepare(&scan, MarkerSpec::Landmarks(&lm, opts)).unwrap();
+    let prepared = samba_prepared_with(&d, 80);
     let rig = prepared.rig.as_ref().unwrap();
     let rest: Pose = rig.joints.map(DVec3::from_array);
     let height = rig.height;
