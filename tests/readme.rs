@@ -7,7 +7,9 @@
 //! ```` ```sh no-run ```` are illustrations (a cluster job, the test command
 //! itself) and are kept few. Every repository path the README names must
 //! exist, and every page of docs/ (the investigation history moved out of
-//! the README) must be linked from it, with its own links resolving.
+//! the README) must be linked from it, with its own links resolving; a
+//! link to a section (`#anchor`, in the README or a page) must land on a
+//! heading.
 
 mod common;
 
@@ -296,18 +298,94 @@ fn every_path_the_readme_and_docs_name_exists() {
             "{name} is not linked from README.md"
         );
         let text = std::fs::read_to_string(&f).unwrap();
-        for l in text.match_indices("](").map(|(i, _)| &text[i + 2..]) {
-            let target: String = l.chars().take_while(|c| *c != ')').collect();
-            if target.starts_with("http") || target.starts_with('#') {
+        for target in link_targets(&text) {
+            if target.starts_with("http") {
                 continue;
             }
-            if !repo.join("docs").join(&target).exists() {
+            let (file, anchor) = target.split_once('#').unwrap_or((&target, ""));
+            let path = if file.is_empty() {
+                f.clone()
+            } else {
+                repo.join("docs").join(file)
+            };
+            if !path.exists() {
                 missing.push(format!("{name} links {target}"));
+            } else if !anchor.is_empty() && !has_anchor(&path, anchor) {
+                missing.push(format!("{name} links {target}: no such heading"));
             }
+        }
+    }
+    // The README's own links with an anchor (its contents, and sections of
+    // docs/ pages) land on a heading.
+    for target in link_targets(&readme) {
+        let Some((file, anchor)) = target.split_once('#') else {
+            continue;
+        };
+        if target.starts_with("http") {
+            continue;
+        }
+        let path = repo.join(if file.is_empty() { "README.md" } else { file });
+        if !has_anchor(&path, anchor) {
+            missing.push(format!("README.md links {target}: no such heading"));
         }
     }
     assert!(pages >= 5, "only {pages} docs pages");
     assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
+
+/// The targets of a Markdown text's links `](...)`.
+fn link_targets(text: &str) -> Vec<String> {
+    text.match_indices("](")
+        .map(|(i, _)| text[i + 2..].chars().take_while(|c| *c != ')').collect())
+        .collect()
+}
+
+/// GitHub's anchor of a heading: lower case, spaces to `-`, every other
+/// character but letters, digits, `-` and `_` dropped.
+fn slug(heading: &str) -> String {
+    let mut out = String::new();
+    for c in heading.trim().chars() {
+        if c.is_alphanumeric() || c == '-' || c == '_' {
+            out.extend(c.to_lowercase());
+        } else if c == ' ' {
+            out.push('-');
+        }
+    }
+    out
+}
+
+/// The anchors of a Markdown file's headings (outside fenced blocks).
+fn anchors(text: &str) -> Vec<String> {
+    let mut fenced = false;
+    let mut out = Vec::new();
+    for l in text.lines() {
+        if l.trim_start().starts_with("```") {
+            fenced = !fenced;
+        } else if !fenced && l.starts_with('#') {
+            out.push(slug(l.trim_start_matches('#')));
+        }
+    }
+    out
+}
+
+fn has_anchor(file: &Path, anchor: &str) -> bool {
+    std::fs::read_to_string(file).is_ok_and(|t| anchors(&t).iter().any(|a| a == anchor))
+}
+
+#[test]
+fn anchors_are_githubs() {
+    let text = "# surfmotion\n```sh\n# a comment\n```\n\
+        ### Key-frame animation (Huang et al. 2015, Sec. 5.1)\n\
+        ## Geometry kernels (`mesh::`)\n## Retargeting: what is matched and why\n";
+    assert_eq!(
+        anchors(text),
+        [
+            "surfmotion",
+            "key-frame-animation-huang-et-al-2015-sec-51",
+            "geometry-kernels-mesh",
+            "retargeting-what-is-matched-and-why"
+        ]
+    );
 }
 
 #[test]
