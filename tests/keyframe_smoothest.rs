@@ -228,3 +228,80 @@ fn least_mean_agrees_with_an_exhaustive_search_and_the_bound_holds() {
         "{bounded_above_min} of {compared}"
     );
 }
+
+/// `keyframe --grid --least-mean` on the small synthetic database (CMU
+/// walk 02_01 and run 02_03 on the samba character, 25 fps): every path
+/// it reports lands within 1 % of both targets, its mean is never below
+/// the exact lower bound, and on every target the default grid meets its
+/// mean smoothness is not above the default path's.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn least_mean_grid_lands_within_1pct_and_is_no_worse_than_the_default_paths() {
+    let Some(d) = common::data_dir() else { return };
+    let db = common::walk_run_db(&d, "keyframe-smoothest-walk-run");
+    let out = common::fixture_dir("keyframe-smoothest-out");
+    let grid = |extra: &[&str], report: &std::path::Path| {
+        let mut a: Vec<std::ffi::OsString> = vec![
+            "keyframe".into(),
+            "--db".into(),
+            db.clone().into(),
+            "--from".into(),
+            "02_01:0".into(),
+            "--to".into(),
+            "02_03:30".into(),
+            "--grid".into(),
+            "--distances".into(),
+            "1:7:1".into(),
+            "--times".into(),
+            "1:6:1".into(),
+            "--report".into(),
+            report.into(),
+        ];
+        a.extend(extra.iter().map(|s| s.into()));
+        common::run_ok(std::process::Command::new(common::bin()).args(&a));
+        let text = std::fs::read_to_string(report).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()
+    };
+    let lm = grid(&["--least-mean"], &out.join("least.json"));
+    let def = grid(&[], &out.join("default.json"));
+    let key = |q: &serde_json::Value| (q["distance"].to_string(), q["time"].to_string());
+    let by: HashMap<_, _> = def["queries"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|q| (key(q), q.clone()))
+        .collect();
+    let (mut landed, mut compared) = (0, 0);
+    for q in lm["queries"].as_array().unwrap() {
+        let (dv, tv) = (q["distance"].as_f64().unwrap(), q["time"].as_f64().unwrap());
+        if let Some(m) = q["least_mean"].as_f64() {
+            landed += 1;
+            let a = q["achieved"].as_array().unwrap();
+            let (ad, at) = (a[0].as_f64().unwrap(), a[1].as_f64().unwrap());
+            assert!((ad - dv).abs() < 0.01 * dv, "{dv} m: {ad}");
+            assert!((at - tv).abs() < 0.01 * tv, "{tv} s: {at}");
+            if let Some(lb) = q["lower_bound"].as_f64() {
+                assert!(lb <= m + 1e-9, "{dv} m in {tv} s: bound {lb} above {m}");
+            }
+            assert!(q["transitions"].as_u64().unwrap() >= 1);
+        }
+        let dq = &by[&key(q)];
+        if dq["within_1pct"].as_bool().unwrap()
+            && let Some(ds) = dq["smoothness"].as_f64()
+        {
+            compared += 1;
+            let m = q["least_mean_measured"]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{dv} m in {tv} s: the default meets it, no least mean"));
+            assert!(
+                m <= ds + 1e-9,
+                "{dv} m in {tv} s: {m} above the default's {ds}"
+            );
+        }
+    }
+    assert!(
+        compared >= 3 && landed >= compared,
+        "{landed} landed, {compared} compared"
+    );
+    assert_eq!(lm["kept"], lm["reachable"]);
+}
