@@ -192,8 +192,9 @@ pub struct Args {
     /// floor of the grid's smoothness figure: Dinkelbach's method over
     /// the exact-length search, the graph's transitions priced by their
     /// measured smoothness), with an exact lower bound (a Lagrangian
-    /// relaxation of the distance band); `keyframe::smoothest`.
-    #[arg(long, requires = "grid")]
+    /// relaxation of the distance band); `keyframe::smoothest`. Without
+    /// a heading target; no heat-map.
+    #[arg(long, requires = "grid", conflicts_with_all = ["plot", "heading"])]
     pub least_mean: bool,
 }
 
