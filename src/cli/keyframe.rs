@@ -187,6 +187,15 @@ pub struct Args {
     /// `keyframe::floor`).
     #[arg(long, conflicts_with = "grid")]
     pub floor: bool,
+    /// With --grid: print instead, per target, the least mean smoothness
+    /// of any path within 1 % of both the distance and the time (the
+    /// floor of the grid's smoothness figure: Dinkelbach's method over
+    /// the exact-length search, the graph's transitions priced by their
+    /// measured smoothness), with an exact lower bound (a Lagrangian
+    /// relaxation of the distance band); `keyframe::smoothest`. Without
+    /// a heading target; no heat-map.
+    #[arg(long, requires = "grid", conflicts_with_all = ["plot", "heading"])]
+    pub least_mean: bool,
 }
 
 /// The grid's distances by default (metres; the paper's Table III).
@@ -593,6 +602,9 @@ fn grid(
     opts: &KeyframeOptions,
     head: &str,
 ) -> anyhow::Result<()> {
+    if a.least_mean {
+        return least_mean(ch, keys, a, opts, head);
+    }
     let mut planner = Planner::new(key_graph(ch, opts), keys, ch.manifest().fps, &opts.search)
         .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     planner.facing = surfmotion::keyframe::facing_change(ch, keys);
@@ -621,6 +633,65 @@ fn grid(
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
     super::emit(&(head.to_string() + &grid_text(&g)))
+}
+
+/// `--grid --least-mean`: the least mean smoothness per target
+/// (`keyframe::smoothest::floor_grid`).
+fn least_mean(
+    ch: &Character,
+    keys: &[u32],
+    a: &Args,
+    opts: &KeyframeOptions,
+    head: &str,
+) -> anyhow::Result<()> {
+    use surfmotion::keyframe::smoothest::{Summary, floor_grid};
+    let priced = KeyframeOptions {
+        transition_cost: TransitionCost::Smoothness,
+        ..*opts
+    };
+    let planner = Planner::new(
+        key_graph(ch, &priced),
+        keys,
+        ch.manifest().fps,
+        &opts.search,
+    )
+    .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
+    let (ds, ts) = grid_targets(a)?;
+    let bar = super::spinner(&format!(
+        "least mean smoothness over the grid: {}",
+        super::count(ds.len() * ts.len(), "target")
+    ));
+    let t0 = std::time::Instant::now();
+    let r = floor_grid(ch, &planner, &ds, &ts, &opts.search.lattice, &opts.timeline);
+    bar.finish_and_clear();
+    let r = r.map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
+    if let Some(p) = &a.report {
+        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&r)?.as_bytes())?;
+    }
+    if a.json {
+        let mut v = serde_json::to_value(&r)?;
+        if let Some(o) = v.as_object_mut() {
+            o.remove("queries");
+        }
+        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+    }
+    let sum = |s: &Option<Summary>| match s {
+        Some(s) => format!(
+            "mean {:.4} m, median {:.4}, min {:.4}, max {:.4} (over {})",
+            s.mean, s.median, s.min, s.max, s.n
+        ),
+        None => "-".to_string(),
+    };
+    let text = format!(
+        "least mean smoothness of a path within 1 % of distance and time, over the reachable targets ({} reachable, {} with such a path found, {:.1} s):\n  priced (each transition at its own window): {}\n  as the grid measures it: {}\n  exact lower bound (Lagrangian relaxation of the distance band): {}\n",
+        r.reachable,
+        r.kept,
+        t0.elapsed().as_secs_f64(),
+        sum(&r.least_mean),
+        sum(&r.least_mean_measured),
+        sum(&r.lower_bound),
+    );
+    super::emit(&(head.to_string() + &text))
 }
 
 /// `--floor`: the transition floor of the database and the path floor

@@ -416,6 +416,39 @@ impl Chain {
         self.adj.len()
     }
 
+    /// The same chain with every arc's cost replaced by `f(arc)`, and no
+    /// extremes computed yet: the ratio search of [`super::smoothest`]
+    /// prices a transition `s − λ`, negative when it is smoother than `λ`.
+    pub fn repriced(&self, f: impl Fn(&ArcView) -> f64) -> Chain {
+        let mut c = self.clone();
+        for a in c.adj.iter_mut().flatten() {
+            a.m.cost = f(a);
+        }
+        c.cache = ExtremesCache::default();
+        c
+    }
+
+    /// Every arc of the chain by its global index (`None` for an index
+    /// no node leaves by).
+    pub fn arcs_by_index(&self) -> Vec<Option<ArcView>> {
+        let n = self
+            .adj
+            .iter()
+            .flatten()
+            .map(|a| a.index as usize + 1)
+            .max();
+        let mut out = vec![None; n.unwrap_or(0)];
+        for a in self.adj.iter().flatten() {
+            out[a.index as usize] = Some(*a);
+        }
+        out
+    }
+
+    /// Fewest arc frames of any path (start not counted).
+    pub fn least_frames(&self) -> u32 {
+        self.least
+    }
+
     /// Global arcs cut into each segment's own arcs.
     pub fn split(&self, arcs: &[u32]) -> Vec<Vec<u32>> {
         let mut out = vec![Vec::new(); self.arc_offsets.len()];

@@ -30,6 +30,7 @@ pub mod pose;
 pub mod repeats;
 pub mod search;
 pub mod select;
+pub mod smoothest;
 pub mod smoothness;
 
 use crate::retarget::character::Character;
