@@ -5,11 +5,11 @@ use std::path::PathBuf;
 use surfmotion::keyframe::grid::{GridReport, evaluate, parse_range};
 use surfmotion::keyframe::search::{Method, SearchOptions, Solver, Weights};
 use surfmotion::keyframe::{
-    KeyframeOptions, Planner, Targets, TransitionCost, describe, key_graph, parse_key, pose,
-    synthesise,
+    KeyframeOptions, Planner, Streamed, Targets, TransitionCost, describe, key_graph, parse_key,
+    plan_path, pose,
 };
-use surfmotion::mesh::MeshSequence;
-use surfmotion::mesh::io::save_sequence;
+use surfmotion::mesh::io::SaveOptions;
+use surfmotion::mesh::io::stream::SequenceWriter;
 use surfmotion::retarget::character::Character;
 
 /// Repetition solver on the command line.
@@ -416,13 +416,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // 10-20 s on the README's synth3 (preparing, searching, blending the
     // meshes) with nothing on the screen before.
     let bar = super::spinner("finding the path and blending its meshes");
-    let o = synthesise(&ch, &keys, &targets, &opts);
+    let o = write_path(&ch, &keys, &targets, &opts, out);
     bar.finish_and_clear();
-    let mut o = o?;
+    let (mut o, written) = o?;
     o.report.poses = resolved;
     let fps = ch.manifest().fps;
-    let seq = MeshSequence::new(ch.topology_metres(), o.positions, Some(fps))?;
-    let written = save_sequence(&seq, out, Some(fps))?;
     let r = &o.report;
     let missed = missed_targets(r);
     // The report and --json say which targets were missed, as the text does.
@@ -558,6 +556,36 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         s += &format!("bound hit: {b}\n");
     }
     super::emit(&s)
+}
+
+/// Finds the path and writes its meshes to `out` frame by frame (a
+/// [`SequenceWriter`]: point caches and OBJ folders stream, a GLB is
+/// checked against the memory budget before the first frame is made);
+/// returns the report and the files written. Every frame was held, then
+/// the whole file's bytes (attack s14, item 3: 8.6 MB per output second,
+/// 7.1 GB for an hour).
+fn write_path(
+    ch: &Character,
+    keys: &[u32],
+    targets: &Targets,
+    opts: &KeyframeOptions,
+    out: &std::path::Path,
+) -> anyhow::Result<(Streamed, Vec<PathBuf>)> {
+    let planned = plan_path(ch, keys, targets, opts)?;
+    let fps = ch.manifest().fps;
+    let mut writer = SequenceWriter::create(
+        &ch.topology_metres(),
+        out,
+        planned.frames(),
+        &SaveOptions {
+            fps: Some(fps),
+            ..Default::default()
+        },
+    )?;
+    let s = planned.synthesise_each(ch, targets, opts, |_, p| -> anyhow::Result<()> {
+        Ok(writer.push(p)?)
+    })?;
+    Ok((s, writer.finish()?))
 }
 
 /// A heading target is flagged when the final facing misses it by more
