@@ -11,6 +11,44 @@ use std::process::Command;
 use surfmotion::jobs::SynthCharacter;
 use surfmotion::synth::Gait;
 
+/// The small synthetic database (CMU walk 02_01 and run 02_03 on the
+/// samba character, 25 fps), built once for this binary.
+fn walk_run(d: &Path) -> &'static Path {
+    static DB: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+    DB.get_or_init(|| common::walk_run_db(d, "stream-walk-run"))
+}
+
+/// The smoothness floor tells its progress (in frame pairs of the
+/// sequence pairs) from 0 to the end, never backwards, more often than
+/// once per sequence pair (`keyframe --floor` ran 116 s on synth3 with
+/// nothing on the screen).
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn the_transition_floor_reports_its_progress_to_the_end() {
+    use surfmotion::keyframe::floor::{FloorOptions, transition_floor_with};
+    let Some(d) = common::data_dir() else { return };
+    let ch = surfmotion::retarget::character::Character::load(walk_run(&d), &surfmotion::db::Quiet)
+        .unwrap();
+    let g = ch.graph();
+    let total: u64 = (0..g.sequences.len())
+        .flat_map(|i| (i..g.sequences.len()).map(move |j| (i, j)))
+        .map(|(i, j)| (g.sequences[i].len * g.sequences[j].len) as u64)
+        .sum();
+    let frames = surfmotion::keyframe::smoothness::FrameSet::new(&ch);
+    let mut seen = Vec::new();
+    let t = transition_floor_with(
+        &ch,
+        &frames,
+        &FloorOptions::of_graph(&g.options),
+        &mut |d, t| seen.push((d, t)),
+    );
+    assert_eq!(t.pairs.len(), 3);
+    assert_eq!(seen.first(), Some(&(0, total)));
+    assert_eq!(seen.last(), Some(&(total, total)));
+    assert!(seen.windows(2).all(|w| w[0].0 <= w[1].0 && w[1].1 == total));
+    assert!(seen.len() > 3 * 4, "{} reports", seen.len());
+}
+
 /// The key-frame path written by the CLI (streamed) is byte for byte the
 /// library's held frames written whole, for a point cache and a GLB.
 #[test]
@@ -18,9 +56,9 @@ use surfmotion::synth::Gait;
 fn a_streamed_keyframe_output_is_the_whole_sequence_written_at_once() {
     use surfmotion::keyframe::{KeyframeOptions, Targets, parse_key, synthesise};
     let Some(d) = common::data_dir() else { return };
-    let db = common::walk_run_db(&d, "stream-walk-run");
+    let db = walk_run(&d);
     let tmp = tempfile::tempdir().unwrap();
-    let ch = surfmotion::retarget::character::Character::load(&db, &surfmotion::db::Quiet).unwrap();
+    let ch = surfmotion::retarget::character::Character::load(db, &surfmotion::db::Quiet).unwrap();
     let keys = [
         parse_key(&ch, "02_01:0").unwrap(),
         parse_key(&ch, "02_03:30").unwrap(),
@@ -45,7 +83,7 @@ fn a_streamed_keyframe_output_is_the_whole_sequence_written_at_once() {
         let files = surfmotion::mesh::io::save_sequence(&seq, &whole, Some(fps)).unwrap();
         let o = Command::new(common::bin())
             .args(["keyframe", "--db"])
-            .arg(&db)
+            .arg(db)
             .args([
                 "--from",
                 "02_01:0",

@@ -415,8 +415,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     )?;
     // 10-20 s on the README's synth3 (preparing, searching, blending the
     // meshes) with nothing on the screen before.
-    let bar = super::spinner("finding the path and blending its meshes");
-    let o = write_path(&ch, &keys, &targets, &opts, out);
+    let bar = if a.json {
+        indicatif::ProgressBar::hidden()
+    } else {
+        super::spinner("finding the path and blending its meshes")
+    };
+    let o = write_path(&ch, &keys, &targets, &opts, out, &bar);
     bar.finish_and_clear();
     let (mut o, written) = o?;
     o.report.poses = resolved;
@@ -570,8 +574,12 @@ fn write_path(
     targets: &Targets,
     opts: &KeyframeOptions,
     out: &std::path::Path,
+    bar: &indicatif::ProgressBar,
 ) -> anyhow::Result<(Streamed, Vec<PathBuf>)> {
-    let planned = plan_path(ch, keys, targets, opts)?;
+    let planned = plan_path(ch, keys, targets, opts, &mut |what| {
+        bar.set_message(what.to_string())
+    })?;
+    let total = planned.frames();
     let fps = ch.manifest().fps;
     let mut writer = SequenceWriter::create(
         &ch.topology_metres(),
@@ -582,7 +590,15 @@ fn write_path(
             ..Default::default()
         },
     )?;
-    let s = planned.synthesise_each(ch, targets, opts, |_, p| -> anyhow::Result<()> {
+    let s = planned.synthesise_each(ch, targets, opts, |k, p| -> anyhow::Result<()> {
+        if k % 16 == 0 {
+            bar.set_message(format!(
+                "blending and writing the meshes: frame {k}/{total}"
+            ));
+        }
+        if k + 1 == total {
+            bar.set_message("measuring the transitions' smoothness");
+        }
         Ok(writer.push(p)?)
     })?;
     Ok((s, writer.finish()?))
@@ -662,14 +678,35 @@ fn floor(
     opts: &KeyframeOptions,
     head: &str,
 ) -> anyhow::Result<()> {
-    use surfmotion::keyframe::floor::{FloorOptions, path_floor, transition_floor};
+    use surfmotion::keyframe::floor::{FloorOptions, path_floor, transition_floor_with};
     let (_, ts) = grid_targets(a)?;
     let fps = ch.manifest().fps;
     let longest = ts.iter().copied().fold(0.0, f64::max);
     let k_max = ((longest * fps / 4.0).ceil() as usize).clamp(1, 250);
+    // Progress on a terminal, none with --json (116 s on synth3 with
+    // nothing on the screen).
+    let spin = |what: &str| {
+        if a.json {
+            indicatif::ProgressBar::hidden()
+        } else {
+            super::spinner(what)
+        }
+    };
+    let sp = spin("measuring the frames' surfaces");
     let frames = surfmotion::keyframe::smoothness::FrameSet::new(ch);
+    sp.finish_and_clear();
     let fopts = FloorOptions::of_graph(&ch.graph().options);
-    let t = transition_floor(ch, &frames, &fopts);
+    let bar = if a.json {
+        indicatif::ProgressBar::hidden()
+    } else {
+        super::progress(0, "frame pairs: transition floor")
+    };
+    let t = transition_floor_with(ch, &frames, &fopts, &mut |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    });
+    bar.finish_and_clear();
+    let sp = spin("pricing the graph by smoothness; path floors");
     let priced = KeyframeOptions {
         transition_cost: TransitionCost::Smoothness,
         ..*opts
@@ -693,6 +730,7 @@ fn floor(
         })
         .collect();
     if a.json {
+        sp.finish_and_clear();
         let v = serde_json::json!({ "transitions": t, "paths": paths });
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
@@ -755,6 +793,7 @@ fn floor(
             );
         }
     }
+    sp.finish_and_clear();
     super::emit(&s)
 }
 

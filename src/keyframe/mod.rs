@@ -259,12 +259,26 @@ pub enum TransitionSet {
 
 /// The frame graph of a character priced as `opts` asks.
 pub fn key_graph(ch: &Character, opts: &KeyframeOptions) -> KeyGraph {
+    key_graph_with(ch, opts, &mut |_| {})
+}
+
+/// [`key_graph`], telling `progress` what it is doing (the measured
+/// transitions' sequence pairs: 35 s on synth3).
+pub fn key_graph_with(
+    ch: &Character,
+    opts: &KeyframeOptions,
+    progress: &mut dyn FnMut(&str),
+) -> KeyGraph {
     if opts.transitions == TransitionSet::Measured {
         let jumps: Vec<(u32, u32, f64, usize)> =
-            select::measured(ch, &select::SelectOptions::default())
-                .into_iter()
-                .map(|c| (c.from, c.to, c.smoothness, c.window))
-                .collect();
+            select::measured_with(ch, &select::SelectOptions::default(), &mut |d, t| {
+                progress(&format!(
+                    "choosing transitions by measured smoothness: {d}/{t} sequence pairs"
+                ))
+            })
+            .into_iter()
+            .map(|c| (c.from, c.to, c.smoothness, c.window))
+            .collect();
         return KeyGraph::of_character_with(ch, Some(&jumps));
     }
     let mut g = KeyGraph::of_character(ch);
@@ -889,7 +903,7 @@ pub fn synthesise(
     targets: &Targets,
     opts: &KeyframeOptions,
 ) -> Result<Output, KeyframeError> {
-    let planned = plan_path(ch, keys, targets, opts)?;
+    let planned = plan_path(ch, keys, targets, opts, &mut |_| {})?;
     // The positions held below.
     crate::budget::check_frames("the key-frame path", planned.frames(), ch.n(), 1)?;
     let mut positions = Vec::with_capacity(planned.frames() * ch.n());
@@ -922,20 +936,25 @@ pub struct Streamed {
 /// Finds the path through key-frame ids `keys` (at least two) for the
 /// targets (Eq. 7). Errors: too few keys, or the search's (no path
 /// between two key-frames).
+/// `progress` is told each stage (the graph, preparing, searching).
 pub fn plan_path(
     ch: &Character,
     keys: &[u32],
     targets: &Targets,
     opts: &KeyframeOptions,
+    progress: &mut dyn FnMut(&str),
 ) -> Result<Planned, KeyframeError> {
     if keys.len() < 2 {
         return Err(KeyframeError::TooFew);
     }
     let fps = ch.manifest().fps;
-    let g = key_graph(ch, opts);
+    progress("the frame graph");
+    let g = key_graph_with(ch, opts, progress);
+    progress("preparing the search (segments, loops)");
     let mut planner = Planner::new(g, keys, fps, &opts.search)
         .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
     planner.facing = facing_change(ch, keys);
+    progress("searching");
     let plan = planner
         .plan(targets, &opts.search)
         .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
