@@ -274,14 +274,16 @@ fn main() {
             b.iter(|| {
                 let r = play(&motion, &script, Some(60.0), |f| {
                     black_box(f);
+                    Ok::<(), std::convert::Infallible>(())
                 });
-                black_box(r.frames)
+                black_box(r.map(|r| r.frames))
             })
         },
     );
     group.finish();
-    let r = play(&motion, &script, Some(60.0), |f| {
+    let Ok(r) = play(&motion, &script, Some(60.0), |f| {
         black_box(f);
+        Ok::<(), std::convert::Infallible>(())
     });
     eprintln!(
         "session: {} frames in {:.3} s = {:.0}× real time; transitions: {}",

@@ -622,12 +622,20 @@ fn cli_output_travels_what_the_report_says_and_refuses_bad_input() {
     );
     // A far-out-of-range target gives a long compromise path; one longer
     // than the memory budget is refused before any mesh is built (it ran
-    // for minutes and gigabytes, unchecked).
-    bad_with(
-        &[&to_run[..], &["--distance", "1000", "--time", "4"]].concat(),
-        &[("SURFMOTION_MEMORY_LIMIT", "8MB")],
-        &["the key-frame path", "lower --distance"],
+    // for minutes and gigabytes, unchecked) when the output holds every
+    // frame (a GLB); a point cache streams it (s15).
+    let glb = tmp.path().join("x.glb");
+    let mut a: Vec<&std::ffi::OsStr> = vec!["keyframe".as_ref(), "--db".as_ref(), db.as_os_str()];
+    a.extend(
+        [&to_run[..], &["--distance", "1000", "--time", "4", "-o"]]
+            .concat()
+            .iter()
+            .map(|s| std::ffi::OsStr::new(*s)),
     );
+    a.push(glb.as_os_str());
+    common::run_cli(&a, None, &[("SURFMOTION_MEMORY_LIMIT", "8MB")])
+        .assert_bad_input("a long path to a GLB", &["a GLB of", "would need"]);
+    assert!(!glb.exists());
 }
 
 /// The largest distance between output frame `out` and database frame

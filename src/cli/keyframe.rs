@@ -5,11 +5,11 @@ use std::path::PathBuf;
 use surfmotion::keyframe::grid::{GridReport, evaluate, parse_range};
 use surfmotion::keyframe::search::{Method, SearchOptions, Solver, Weights};
 use surfmotion::keyframe::{
-    KeyframeOptions, Planner, Targets, TransitionCost, describe, key_graph, parse_key, pose,
-    synthesise,
+    KeyframeOptions, Planner, Streamed, Targets, TransitionCost, describe, key_graph, parse_key,
+    plan_path, pose,
 };
-use surfmotion::mesh::MeshSequence;
-use surfmotion::mesh::io::save_sequence;
+use surfmotion::mesh::io::SaveOptions;
+use surfmotion::mesh::io::stream::SequenceWriter;
 use surfmotion::retarget::character::Character;
 
 /// Repetition solver on the command line.
@@ -424,14 +424,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     )?;
     // 10-20 s on the README's synth3 (preparing, searching, blending the
     // meshes) with nothing on the screen before.
-    let bar = super::spinner("finding the path and blending its meshes");
-    let o = synthesise(&ch, &keys, &targets, &opts);
+    let bar = if a.json {
+        indicatif::ProgressBar::hidden()
+    } else {
+        super::spinner("finding the path and blending its meshes")
+    };
+    let o = write_path(&ch, &keys, &targets, &opts, out, &bar);
     bar.finish_and_clear();
-    let mut o = o?;
+    let (mut o, written) = o?;
     o.report.poses = resolved;
     let fps = ch.manifest().fps;
-    let seq = MeshSequence::new(ch.topology_metres(), o.positions, Some(fps))?;
-    let written = save_sequence(&seq, out, Some(fps))?;
     let r = &o.report;
     let missed = missed_targets(r);
     // The report and --json say which targets were missed, as the text does.
@@ -567,6 +569,48 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         s += &format!("bound hit: {b}\n");
     }
     super::emit(&s)
+}
+
+/// Finds the path and writes its meshes to `out` frame by frame (a
+/// [`SequenceWriter`]: point caches and OBJ folders stream, a GLB is
+/// checked against the memory budget before the first frame is made);
+/// returns the report and the files written. Every frame was held, then
+/// the whole file's bytes (attack s14, item 3: 8.6 MB per output second,
+/// 7.1 GB for an hour).
+fn write_path(
+    ch: &Character,
+    keys: &[u32],
+    targets: &Targets,
+    opts: &KeyframeOptions,
+    out: &std::path::Path,
+    bar: &indicatif::ProgressBar,
+) -> anyhow::Result<(Streamed, Vec<PathBuf>)> {
+    let planned = plan_path(ch, keys, targets, opts, &mut |what| {
+        bar.set_message(what.to_string())
+    })?;
+    let total = planned.frames();
+    let fps = ch.manifest().fps;
+    let mut writer = SequenceWriter::create(
+        &ch.topology_metres(),
+        out,
+        planned.frames(),
+        &SaveOptions {
+            fps: Some(fps),
+            ..Default::default()
+        },
+    )?;
+    let s = planned.synthesise_each(ch, targets, opts, |k, p| -> anyhow::Result<()> {
+        if k % 16 == 0 {
+            bar.set_message(format!(
+                "blending and writing the meshes: frame {k}/{total}"
+            ));
+        }
+        if k + 1 == total {
+            bar.set_message("measuring the transitions' smoothness");
+        }
+        Ok(writer.push(p)?)
+    })?;
+    Ok((s, writer.finish()?))
 }
 
 /// A heading target is flagged when the final facing misses it by more
@@ -705,14 +749,35 @@ fn floor(
     opts: &KeyframeOptions,
     head: &str,
 ) -> anyhow::Result<()> {
-    use surfmotion::keyframe::floor::{FloorOptions, path_floor, transition_floor};
+    use surfmotion::keyframe::floor::{FloorOptions, path_floor, transition_floor_with};
     let (_, ts) = grid_targets(a)?;
     let fps = ch.manifest().fps;
     let longest = ts.iter().copied().fold(0.0, f64::max);
     let k_max = ((longest * fps / 4.0).ceil() as usize).clamp(1, 250);
+    // Progress on a terminal, none with --json (116 s on synth3 with
+    // nothing on the screen).
+    let spin = |what: &str| {
+        if a.json {
+            indicatif::ProgressBar::hidden()
+        } else {
+            super::spinner(what)
+        }
+    };
+    let sp = spin("measuring the frames' surfaces");
     let frames = surfmotion::keyframe::smoothness::FrameSet::new(ch);
+    sp.finish_and_clear();
     let fopts = FloorOptions::of_graph(&ch.graph().options);
-    let t = transition_floor(ch, &frames, &fopts);
+    let bar = if a.json {
+        indicatif::ProgressBar::hidden()
+    } else {
+        super::progress(0, "frame pairs: transition floor")
+    };
+    let t = transition_floor_with(ch, &frames, &fopts, &mut |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    });
+    bar.finish_and_clear();
+    let sp = spin("pricing the graph by smoothness; path floors");
     let priced = KeyframeOptions {
         transition_cost: TransitionCost::Smoothness,
         ..*opts
@@ -736,6 +801,7 @@ fn floor(
         })
         .collect();
     if a.json {
+        sp.finish_and_clear();
         let v = serde_json::json!({ "transitions": t, "paths": paths });
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
@@ -798,6 +864,7 @@ fn floor(
             );
         }
     }
+    sp.finish_and_clear();
     super::emit(&s)
 }
 

@@ -28,7 +28,7 @@ use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
 use crate::retarget::character::Character;
 use crate::retarget::timeline::{Jump, OutFrame, TimelineOptions, timeline};
-use crate::retarget::{BlendScratch, Floor, blend_placed};
+use crate::retarget::{BlendScratch, CHUNK_FRAMES, Floor, blend_placed};
 use crate::skeleton::rotate_yaw;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -156,13 +156,56 @@ pub fn ease_steps(centre: &mut [[f64; 2]], jumps: &[Jump], g: &KeyGraph) {
     }
 }
 
-/// Blends and places the frames of `path`.
+/// Blends and places the frames of `path`, every frame held
+/// ([`place_each`] into one buffer; for short paths and tests).
 pub fn place(
     ch: &Character,
     g: &KeyGraph,
     path: &[u32],
     opts: &TimelineOptions,
 ) -> Result<Placed, SolveError> {
+    let mut positions = Vec::with_capacity(path.len() * ch.n());
+    let track = place_each(ch, g, path, opts, |_, p| -> Result<(), SolveError> {
+        positions.extend_from_slice(p);
+        Ok(())
+    })?;
+    Ok(Placed {
+        positions,
+        frames: track.frames,
+        jumps: track.jumps,
+        heading: track.heading,
+        centre: track.centre,
+    })
+}
+
+/// What [`place_each`] returns: [`Placed`] without the positions, which
+/// went to the caller frame by frame.
+pub struct Track {
+    /// What each output frame blends.
+    pub frames: Vec<OutFrame>,
+    /// The jumps with their blend windows.
+    pub jumps: Vec<Jump>,
+    /// Heading (radians about Y) of every output frame.
+    pub heading: Vec<f64>,
+    /// Floor centroid `(x, z)` of every output frame.
+    pub centre: Vec<[f64; 2]>,
+}
+
+/// Blends and places the frames of `path`, handing each (its index and
+/// the character's vertices) to `each` in order. Every output frame is
+/// blended on its own (its window's frames and weights come from the
+/// timeline, its floor placement from the track computed first for the
+/// whole path), so frames are made [`CHUNK_FRAMES`] at a time in
+/// parallel: a path of any length needs the memory of one chunk, not of
+/// every frame (attack s14, item 3: 8.6 MB per output second). The frames
+/// are those of [`place`], bit for bit.
+pub fn place_each<E: From<SolveError>>(
+    ch: &Character,
+    g: &KeyGraph,
+    path: &[u32],
+    opts: &TimelineOptions,
+    mut each: impl FnMut(usize, &[[f64; 3]]) -> Result<(), E>,
+) -> Result<Track, E> {
     let (frames, jumps) = timeline(path, &super::graph::KeyFrames { ch, graph: g }, opts);
     let (place, mut centre) = placements(ch, g, path);
     if opts.blend {
@@ -172,24 +215,40 @@ pub fn place(
     }
     let topo = ch.topology_metres();
     let blender = Blender::new(&topo)?;
-    let n = ch.n();
-    let mut positions = vec![[0.0; 3]; frames.len() * n];
-    positions
-        .par_chunks_mut(n.max(1))
-        .enumerate()
-        .for_each_init(
-            || {
-                (
-                    blender.workspace(),
-                    vec![[0.0; 3]; n],
-                    vec![FrameGradients::default(); 4],
-                )
-            },
-            |(ws, buf, grads), (k, dst)| {
+    let n = ch.n().max(1);
+    let chunk = CHUNK_FRAMES.min(frames.len()).max(1);
+    let mut buffer = vec![[0.0; 3]; chunk * n];
+    // Per-worker scratch, taken and given back frame by frame (allocated
+    // once per worker, not per frame or chunk).
+    type Worker = (
+        crate::mesh::blend::BlendWorkspace,
+        Vec<[f64; 3]>,
+        Vec<FrameGradients>,
+    );
+    let pool = std::sync::Mutex::new(Vec::<Worker>::new());
+    for start in (0..frames.len()).step_by(chunk) {
+        let m = chunk.min(frames.len() - start);
+        buffer[..m * n]
+            .par_chunks_mut(n)
+            .enumerate()
+            .for_each(|(i, dst)| {
+                let k = start + i;
+                let taken = pool.lock().ok().and_then(|mut p| p.pop());
+                let (mut ws, mut buf, mut grads) = taken.unwrap_or_else(|| {
+                    (
+                        blender.workspace(),
+                        vec![[0.0; 3]; n],
+                        vec![FrameGradients::default(); 4],
+                    )
+                });
                 let o = &frames[k];
                 let r = path[k];
                 let same = |id: u32| g.sequence[id as usize] == g.sequence[r as usize];
-                let mut scratch = BlendScratch { ws, buf, grads };
+                let mut scratch = BlendScratch {
+                    ws: &mut ws,
+                    buf: &mut buf,
+                    grads: &mut grads,
+                };
                 blend_placed(ch, &blender, o.used(), r, place[k], same, &mut scratch, dst);
                 // Exactly on the accumulated floor track.
                 let c = centre_of(dst);
@@ -198,10 +257,15 @@ pub fn place(
                     p[0] += dx;
                     p[2] += dz;
                 }
-            },
-        );
-    Ok(Placed {
-        positions,
+                if let Ok(mut p) = pool.lock() {
+                    p.push((ws, buf, grads));
+                }
+            });
+        for (i, f) in buffer[..m * n].chunks(n).enumerate() {
+            each(start + i, f)?;
+        }
+    }
+    Ok(Track {
         frames,
         jumps,
         heading: place.iter().map(|p| p.theta).collect(),

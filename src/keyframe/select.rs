@@ -69,6 +69,15 @@ pub struct Chosen {
 /// The transitions of the character's graph re-chosen by measured
 /// distortion (module docs), best first within each sequence pair.
 pub fn measured(ch: &Character, opts: &SelectOptions) -> Vec<Chosen> {
+    measured_with(ch, opts, &mut |_, _| {})
+}
+
+/// [`measured`], telling `progress(done, total)` the sequence pairs done.
+pub fn measured_with(
+    ch: &Character,
+    opts: &SelectOptions,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Vec<Chosen> {
     let g = ch.graph();
     let topts = g.options;
     let lo = topts.min_window.max(1);
@@ -84,7 +93,9 @@ pub fn measured(ch: &Character, opts: &SelectOptions) -> Vec<Chosen> {
     pairs.sort_unstable();
     pairs.dedup();
     let mut out = Vec::new();
-    for (i, j) in pairs {
+    let total = pairs.len();
+    for (done, (i, j)) in pairs.into_iter().enumerate() {
+        progress(done, total);
         let c = |r: usize, s: usize| ch.matrix().between(i, r, j, s);
         let (li, lj) = (g.sequences[i].len, g.sequences[j].len);
         let cands: Vec<(usize, usize)> = transitions::find(&c, li, lj, i == j, &fopts)
@@ -139,6 +150,7 @@ pub fn measured(ch: &Character, opts: &SelectOptions) -> Vec<Chosen> {
         chosen.sort_by(|a, b| a.smoothness.total_cmp(&b.smoothness));
         out.extend(chosen);
     }
+    progress(total, total);
     out
 }
 

@@ -254,19 +254,28 @@ pub struct SessionReport {
     pub spaces: Vec<SpaceSummary>,
 }
 
-/// Plays a script: every frame's mesh goes to `sink`. The session lasts
-/// `seconds` (default: the last request's time + 2 s).
-pub fn play(
-    motion: &Motion,
-    script: &[Request],
-    seconds: Option<f64>,
-    mut sink: impl FnMut(&[[f64; 3]]),
-) -> SessionReport {
-    let fps = motion.fps;
+/// Frames of a session of `seconds` (default: the last request's time +
+/// 2 s, at most [`MAX_SECONDS`]) at `fps`: those [`play`] makes.
+pub fn session_frames(script: &[Request], seconds: Option<f64>, fps: f64) -> usize {
     let seconds = seconds
         .unwrap_or_else(|| script.last().map_or(0.0, |r| r.t) + 2.0)
         .clamp(0.0, MAX_SECONDS);
-    let frames = (seconds * fps).round() as usize;
+    (seconds * fps).round() as usize
+}
+
+/// Plays a script: every frame's mesh goes to `sink` as it is made (a
+/// session of any length needs the memory of one frame); the first error
+/// of `sink` ends the session. The session lasts `seconds` (default: the
+/// last request's time + 2 s), [`session_frames`] frames. The report's
+/// synthesis time leaves out the time spent in `sink`.
+pub fn play<E>(
+    motion: &Motion,
+    script: &[Request],
+    seconds: Option<f64>,
+    mut sink: impl FnMut(&[[f64; 3]]) -> Result<(), E>,
+) -> Result<SessionReport, E> {
+    let fps = motion.fps;
+    let frames = session_frames(script, seconds, fps);
     let first = script
         .iter()
         .find_map(|r| r.space.as_deref())
@@ -281,6 +290,7 @@ pub fn play(
     let mut sec_transition = false;
     let per = fps.round().max(1.0) as usize;
     let t0 = Instant::now();
+    let mut in_sink = 0.0;
     for f in 0..frames {
         let time = f as f64 / fps;
         while next < script.len() && script[next].t <= time + 1e-9 {
@@ -306,7 +316,10 @@ pub fn play(
             }
             next += 1;
         }
-        sink(c.advance());
+        let frame = c.advance();
+        let ts = Instant::now();
+        sink(frame)?;
+        in_sink += ts.elapsed().as_secs_f64();
         sec_transition |= c.in_transition();
         sec_path += (c.root() - sec_root).length();
         sec_root = c.root();
@@ -328,8 +341,8 @@ pub fn play(
             sec_transition = false;
         }
     }
-    let synthesis_seconds = t0.elapsed().as_secs_f64();
-    SessionReport {
+    let synthesis_seconds = (t0.elapsed().as_secs_f64() - in_sink).max(0.0);
+    Ok(SessionReport {
         frames,
         fps,
         seconds: frames as f64 / fps,
@@ -339,5 +352,5 @@ pub fn play(
         transitions: c.transitions.clone(),
         notices,
         spaces: motion.summary(),
-    }
+    })
 }

@@ -157,21 +157,72 @@ pub fn header(points: i32, frames: i32) -> [u8; 32] {
     h
 }
 
-/// Encodes positions (`frames × points`, frame-major) as PC2.
+/// Appends points as packed f32 xyz triples (little or big endian): a
+/// PC2 or MDD frame. The one encoder of frames, for the whole-file writers
+/// and the streamed one ([`super::stream::SequenceWriter`]).
+pub(crate) fn encode_points(out: &mut Vec<u8>, points: &[[f64; 3]], big_endian: bool) {
+    out.reserve(points.len() * 12);
+    for p in points {
+        for &v in p {
+            let v = v as f32;
+            out.extend_from_slice(&if big_endian {
+                v.to_be_bytes()
+            } else {
+                v.to_le_bytes()
+            });
+        }
+    }
+}
+
+/// Encodes positions (`frames × points`, frame-major) as PC2, in memory
+/// (for small caches; [`write_pc2`] writes a file frame by frame).
 pub fn encode_pc2(points: usize, positions: &[[f64; 3]]) -> Vec<u8> {
     let frames = positions.len() / points.max(1);
     let mut out = Vec::with_capacity(32 + positions.len() * 12);
     out.extend_from_slice(&header(points as i32, frames as i32));
-    for p in positions {
-        for v in p {
-            out.extend_from_slice(&(*v as f32).to_le_bytes());
-        }
-    }
+    encode_points(&mut out, positions, false);
     out
 }
 
-/// Writes a PC2 file atomically.
+/// Writes a PC2 file atomically, a frame at a time (the file's bytes are
+/// never held whole: they were, a second copy of every position, 12 bytes
+/// per vertex and frame). The bytes are those of [`encode_pc2`].
 pub fn write_pc2(points: usize, positions: &[[f64; 3]], path: &Path) -> Result<(), MeshError> {
-    crate::fsutil::write_bytes_atomic(path, &encode_pc2(points, positions))?;
+    let frames = positions.len() / points.max(1);
+    let mut file = crate::fsutil::AtomicFile::create(path)?;
+    file.write_all(&header(points as i32, frames as i32))?;
+    let mut bytes = Vec::with_capacity(points.max(1) * 12);
+    for frame in positions.chunks(points.max(1)) {
+        bytes.clear();
+        encode_points(&mut bytes, frame, false);
+        file.write_all(&bytes)?;
+    }
+    file.commit()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The file written frame by frame is the in-memory encoding, byte
+    /// for byte, and reads back as the positions (to f32).
+    #[test]
+    fn the_streamed_file_is_the_encoding() {
+        let dir = tempfile::tempdir().unwrap();
+        let positions: Vec<[f64; 3]> = (0..7 * 5)
+            .map(|i| [i as f64 * 0.25, -(i as f64) / 3.0, 1e3 + i as f64])
+            .collect();
+        let p = dir.path().join("a.pc2");
+        write_pc2(5, &positions, &p).unwrap();
+        let bytes = std::fs::read(&p).unwrap();
+        assert_eq!(bytes, encode_pc2(5, &positions));
+        let back = parse_pc2(&bytes, &p).unwrap();
+        assert_eq!(back.frame_count(), 7);
+        for (a, b) in back.positions.iter().zip(&positions) {
+            for k in 0..3 {
+                assert_eq!(a[k], b[k] as f32 as f64);
+            }
+        }
+    }
 }

@@ -220,16 +220,7 @@ impl SequenceWriter {
         match &mut self.sink {
             Sink::Cache { file, big_endian } => {
                 let mut bytes = Vec::with_capacity(12 * n);
-                for p in frame {
-                    for &c in p {
-                        let c = c as f32;
-                        bytes.extend_from_slice(&if *big_endian {
-                            c.to_be_bytes()
-                        } else {
-                            c.to_le_bytes()
-                        });
-                    }
-                }
+                pc2::encode_points(&mut bytes, frame, *big_endian);
                 file.write_all(&bytes)?;
             }
             Sink::Folder { width, files } => {
