@@ -106,8 +106,9 @@ pub enum KeyframeError {
     #[error("{0}")]
     Search(String),
     /// The path found is longer than the memory budget can hold as a
-    /// mesh sequence (far-out-of-range targets give long compromises).
-    #[error("{0} (lower --distance or --time)")]
+    /// mesh sequence (far-out-of-range targets give long compromises, and
+    /// many key-frames long paths; the text says which).
+    #[error("{0}")]
     OverBudget(#[from] crate::budget::OverBudget),
 }
 
@@ -899,7 +900,15 @@ pub fn synthesise(
         .plan(targets, &opts.search)
         .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
     // The positions below and the written copy of them.
-    crate::budget::check_frames("the key-frame path", plan.path.len(), ch.n(), 2)?;
+    let what = if keys.len() > 2 {
+        format!(
+            "the key-frame path through {} key-frames (use fewer --via, or lower --distance or --time)",
+            keys.len()
+        )
+    } else {
+        "the key-frame path (lower --distance or --time)".to_string()
+    };
+    crate::budget::check_frames(&what, plan.path.len(), ch.n(), 2)?;
     let t0 = Instant::now();
     let placed = place::place(ch, &planner.graph, &plan.path, &opts.timeline)
         .map_err(|e| KeyframeError::Search(format!("blending: {e}")))?;
