@@ -34,7 +34,7 @@ fn main() {
         .iter()
         .map(|p| DVec3::from_array(*p))
         .collect();
-    let grid = ShapeSet::grid_for(&rest_pts);
+    let grid = ShapeSet::grid_for(&rest_pts, rest.triangles());
     let mut shape = ShapeSet::new(grid);
     shape.push_sequence(seq.all_positions(), n, rest.triangles(), false);
     let mut vertex = VertexSet::new(n, Default::default());

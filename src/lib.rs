@@ -89,6 +89,7 @@ pub mod budget;
 pub mod eval;
 pub mod fsutil;
 pub mod inspect;
+pub mod numfmt;
 pub mod render;
 pub mod synth;
 pub mod web;

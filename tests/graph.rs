@@ -123,7 +123,7 @@ fn shape_distance_ignores_rotation_about_the_vertical() {
         .iter()
         .map(|p| DVec3::from_array(*p))
         .collect();
-    let mut shape = ShapeSet::new(ShapeSet::grid_for(&rest));
+    let mut shape = ShapeSet::new(ShapeSet::grid_for(&rest, topo.triangles()));
     let mut vertex = VertexSet::new(n, Default::default());
     let f0 = frame(0);
     // Frame 0, frame 0 turned by angles off the search grid, frame 60.
@@ -345,7 +345,8 @@ fn colour_measure_on_a_coloured_samba() {
         .colors()
         .unwrap()
         .to_vec();
-    let mut set = surfmotion::similarity::ColourSet::new(ShapeSet::grid_for(&rest), col);
+    let mut set =
+        surfmotion::similarity::ColourSet::new(ShapeSet::grid_for(&rest, topo.triangles()), col);
     set.push_sequence(&f0, n, topo.triangles(), false);
     set.push_sequence(&turned, n, topo.triangles(), false);
     set.push_sequence(&all.positions[60 * n..61 * n], n, topo.triangles(), false);

@@ -40,6 +40,19 @@ fn fixture() -> &'static Fixture {
     })
 }
 
+/// `retarget --db DB --mocap CLIP -o OUT`, ready for more arguments or
+/// an environment.
+fn retarget(db: &Path, clip: &Path, out: &Path) -> Command {
+    let mut c = Command::new(common::bin());
+    c.args(["retarget", "--db"])
+        .arg(db)
+        .arg("--mocap")
+        .arg(clip)
+        .arg("-o")
+        .arg(out);
+    c
+}
+
 fn walk_text() -> String {
     std::fs::read_to_string(&fixture().walk).unwrap()
 }
@@ -2019,13 +2032,7 @@ fn a_long_retarget_streams_within_a_small_memory_budget() {
     let frames = 1000;
     std::fs::write(&clip, long_walk(frames)).unwrap();
     let out = tmp.path().join("o.pc2");
-    let o = Command::new(common::bin())
-        .args(["retarget", "--db"])
-        .arg(&f.db)
-        .arg("--mocap")
-        .arg(&clip)
-        .arg("-o")
-        .arg(&out)
+    let o = retarget(&f.db, &clip, &out)
         .env("SURFMOTION_MEMORY_LIMIT", SMALL)
         .output()
         .unwrap();
@@ -3619,15 +3626,7 @@ fn a_single_pose_with_an_absurd_rate_is_read_at_30_fps_and_evaluated_plainly() {
         .unwrap();
     assert!((ft - 1.0 / 30.0).abs() < 1e-6, "{ft}");
     let result = tmp.path().join("r.pc2");
-    let o = Command::new(common::bin())
-        .args(["retarget", "--db"])
-        .arg(&f.db)
-        .arg("--mocap")
-        .arg(&clip)
-        .arg("-o")
-        .arg(&result)
-        .output()
-        .unwrap();
+    let o = retarget(&f.db, &clip, &result).output().unwrap();
     assert_eq!(
         o.status.code(),
         Some(0),
@@ -3652,4 +3651,492 @@ fn a_single_pose_with_an_absurd_rate_is_read_at_30_fps_and_evaluated_plainly() {
     );
     assert!(text.contains("not measured"), "{text}");
     assert!(!text.contains("-0.00"), "{text}");
+}
+
+/// Generated solids: the faces of an axis-aligned box of `size`, corner at
+/// `at`, outward-facing quads.
+fn box_obj(size: [f64; 3], at: [f64; 3]) -> String {
+    let mut s = String::new();
+    for i in 0..8 {
+        let v: Vec<f64> = (0..3)
+            .map(|a| at[a] + if (i >> a) & 1 == 1 { size[a] } else { 0.0 })
+            .collect();
+        s += &format!("v {} {} {}\n", v[0], v[1], v[2]);
+    }
+    s + "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n"
+}
+
+/// Regression (s14 attack, shape_cube_slow): `db build` on an 8-vertex
+/// cube filled 160³ = 4.1 M voxels a frame (1.3 s a frame) because the
+/// voxel was height/160 whatever the mesh. The voxel now grows until the
+/// rest volume is at most `VOXEL_BUDGET` voxels: boxes of any proportion
+/// and scale and capsules stay within it (a few % over for the partial
+/// columns at the boundary), and a body-like capsule keeps height/160.
+#[test]
+fn compact_solids_are_voxelised_within_the_budget() {
+    use glam::DVec3;
+    use surfmotion::similarity::ShapeSet;
+    use surfmotion::similarity::voxel::{VoxelScratch, occupancy};
+    let budget = ShapeSet::VOXEL_BUDGET;
+    let mut sc = VoxelScratch::default();
+    let mut check = |what: &str, p: Vec<DVec3>, t: Vec<[u32; 3]>, coarsened: bool| {
+        let g = ShapeSet::grid_for(&p, &t);
+        let c = p.iter().copied().sum::<DVec3>() / p.len() as f64;
+        let r = p.iter().map(|q| q.distance(c)).fold(0.0, f64::max);
+        let h = (p.iter().map(|q| q.y).fold(f64::NEG_INFINITY, f64::max)
+            - p.iter().map(|q| q.y).fold(f64::INFINITY, f64::min))
+        .max(r);
+        let n = occupancy(&p, &t, g.voxel, &mut sc, |_, _| ());
+        assert!(n <= 1.15 * budget, "{what}: {n} voxels at {}", g.voxel);
+        assert!(g.voxel.is_finite() && g.voxel > 0.0, "{what}");
+        if coarsened {
+            assert!(g.voxel > h / ShapeSet::VOXELS_PER_HEIGHT, "{what}");
+            // Not coarser than needed: at least half the budget is used.
+            assert!(n >= 0.5 * budget, "{what}: only {n} voxels");
+        } else {
+            assert_eq!(g.voxel, h / ShapeSet::VOXELS_PER_HEIGHT, "{what}");
+        }
+    };
+    for scale in [0.01, 1.0, 170.0] {
+        for size in [
+            [1.0, 1.0, 1.0],
+            [2.0, 1.0, 1.0],
+            [1.0, 3.0, 1.0],
+            [1.0, 1.0, 0.4],
+        ] {
+            let size = size.map(|x| x * scale);
+            let m = surfmotion::mesh::io::obj::parse_obj(
+                &box_obj(size, [0.3, -0.2, 5.0]),
+                Path::new("box.obj"),
+            )
+            .unwrap_or_else(|e| panic!("{e}"));
+            let p: Vec<DVec3> = m
+                .positions()
+                .iter()
+                .map(|q| DVec3::from_array(*q))
+                .collect();
+            check(&format!("box {size:?}"), p, m.triangles().to_vec(), true);
+        }
+    }
+    // Capsules along Y: a fat one is coarsened, a limb-thin one (radius
+    // 1/20 of its height, thinner than a body) is not.
+    for (r, len, coarsened) in [(0.5, 0.5, true), (0.05, 0.9, false)] {
+        let m = surfmotion::synth::shapes::capsule_mesh(r, len, 48, 24);
+        let p: Vec<DVec3> = m
+            .positions()
+            .iter()
+            .map(|q| DVec3::from_array(*q))
+            .collect();
+        check(
+            &format!("capsule {r} {len}"),
+            p,
+            m.triangles().to_vec(),
+            coarsened,
+        );
+    }
+}
+
+/// The samba capture (a human body, 6.5·10⁴ voxels) keeps the voxel of
+/// height/160 exactly, so its similarity matrix is unchanged by the budget.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn a_body_keeps_the_voxel_of_its_height() {
+    use glam::DVec3;
+    use surfmotion::similarity::ShapeSet;
+    let d = common::data_dir().expect("shared data");
+    for f in ["4d/samba/samba.obj", "4d/crane/crane.obj"] {
+        let m = surfmotion::mesh::io::obj::read_obj(&d.join(f)).unwrap();
+        let p: Vec<DVec3> = m
+            .positions()
+            .iter()
+            .map(|q| DVec3::from_array(*q))
+            .collect();
+        let g = ShapeSet::grid_for(&p, m.triangles());
+        let c = p.iter().copied().sum::<DVec3>() / p.len() as f64;
+        let r = p.iter().map(|q| q.distance(c)).fold(0.0, f64::max);
+        let (lo, hi) = p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, q| {
+            (a.0.min(q.y), a.1.max(q.y))
+        });
+        assert_eq!(
+            g.voxel,
+            (hi - lo).max(r) / ShapeSet::VOXELS_PER_HEIGHT,
+            "{f}"
+        );
+    }
+}
+
+/// Regression (s14 attack, rigmap_inverted_accepted): a --rig-map with
+/// pelvis and head swapped, both wrists on one joint, the left arm on the
+/// right arm's joints or a knee on the hips was taken with exit 0. Each
+/// variant of the walk's own map is now refused naming the map file and
+/// the entries; the map itself and its whole-body mirror still pass.
+#[test]
+fn a_nonsensical_rig_map_is_refused_naming_the_entry() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let own = tmp.path().join("own.json");
+    common::cli_ok(
+        &[
+            "mocap".as_ref(),
+            "rigmap".as_ref(),
+            f.walk.as_os_str(),
+            "-o".as_ref(),
+            own.as_os_str(),
+        ],
+        None,
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&own).unwrap()).unwrap();
+    let joints = v["joints"].as_object().unwrap().clone();
+    let name = |c: &str| joints.get(c).and_then(|v| v.as_str()).map(str::to_string);
+    let with = |edits: &[(&str, Option<String>)]| {
+        let mut j = joints.clone();
+        for (c, n) in edits {
+            if let Some(n) = n {
+                j.insert(c.to_string(), serde_json::Value::String(n.clone()));
+            }
+        }
+        serde_json::json!({"convention": "edited", "joints": j}).to_string()
+    };
+    let swap = |pairs: &[(&str, &str)]| {
+        let mut e = Vec::new();
+        for (a, b) in pairs {
+            e.push((*a, name(b)));
+            e.push((*b, name(a)));
+        }
+        with(&e)
+    };
+    let arms = [
+        ("l_shoulder", "r_shoulder"),
+        ("l_elbow", "r_elbow"),
+        ("l_wrist", "r_wrist"),
+    ];
+    let legs = [
+        ("l_hip", "r_hip"),
+        ("l_knee", "r_knee"),
+        ("l_ankle", "r_ankle"),
+        ("l_toe", "r_toe"),
+    ];
+    let mut all = arms.to_vec();
+    all.extend(legs);
+    let cases: Vec<(&str, String, Option<&[&str]>)> = vec![
+        ("own", with(&[]), None),
+        ("mirrored", swap(&all), None),
+        (
+            "inverted",
+            swap(&[("pelvis", "head")]),
+            Some(&["pelvis", "ancestor"]),
+        ),
+        (
+            "neck_head",
+            swap(&[("neck", "head")]),
+            Some(&["head", "ancestor"]),
+        ),
+        (
+            "samewrist",
+            with(&[("l_wrist", name("r_wrist"))]),
+            Some(&["l_wrist", "r_wrist", "both"]),
+        ),
+        (
+            "sameankle",
+            with(&[("r_ankle", name("l_ankle"))]),
+            Some(&["l_ankle", "r_ankle", "both"]),
+        ),
+        (
+            "knee_on_hips",
+            with(&[("l_knee", name("pelvis"))]),
+            Some(&["pelvis", "l_knee", "both"]),
+        ),
+        (
+            "elbow_wrist",
+            swap(&[("l_elbow", "l_wrist")]),
+            Some(&["l_wrist", "ancestor"]),
+        ),
+        (
+            "arms_crossed",
+            swap(&arms),
+            Some(&["crossed", "l_shoulder", "l_hip"]),
+        ),
+        (
+            "legs_crossed",
+            swap(&legs),
+            Some(&["crossed", "l_shoulder", "l_hip"]),
+        ),
+        (
+            "wrists_crossed",
+            swap(&[("l_wrist", "r_wrist")]),
+            Some(&["l_wrist", "crossed"]),
+        ),
+    ];
+    for (what, text, words) in cases {
+        let map = tmp.path().join(format!("{what}.json"));
+        std::fs::write(&map, text).unwrap();
+        let out = tmp.path().join(format!("{what}.pc2"));
+        let o = retarget(&f.db, &f.walk, &out)
+            .arg("--rig-map")
+            .arg(&map)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        match words {
+            None => assert_eq!(o.status.code(), Some(0), "{what}: {err}"),
+            Some(words) => {
+                assert_eq!(o.status.code(), Some(1), "{what}: {err}");
+                assert!(err.contains(&format!("{what}.json")), "{what}: {err}");
+                for w in words {
+                    assert!(err.contains(w), "{what}: '{w}' not in {err}");
+                }
+                assert!(!out.exists(), "{what}");
+            }
+        }
+    }
+}
+
+/// Every clip of the shared data with the map detection gives it passes
+/// the check a --rig-map gets (no refusal of a real rig).
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn every_detected_map_of_the_data_passes_the_rig_map_check() {
+    let d = common::data_dir().expect("shared data");
+    let mut files = Vec::new();
+    let mut stack = vec![d.join("mocap")];
+    while let Some(p) = stack.pop() {
+        for e in std::fs::read_dir(&p).unwrap().flatten() {
+            let q = e.path();
+            if q.is_dir() {
+                stack.push(q);
+            } else if q.extension().is_some_and(|x| x == "bvh" || x == "amc") {
+                files.push(q);
+            }
+        }
+    }
+    files.sort();
+    let mut checked = 0;
+    for f in &files {
+        let Ok(clip) = surfmotion::rig::load_clip(f, &Default::default()) else {
+            continue;
+        };
+        let Ok(det) = surfmotion::rig::detect_clip(&clip) else {
+            continue;
+        };
+        if let Err(e) = det.map.check(&clip) {
+            panic!("{}: {e}", f.display());
+        }
+        checked += 1;
+    }
+    assert!(
+        checked >= 20,
+        "only {checked} of {} clips checked",
+        files.len()
+    );
+}
+
+/// Regression (s14 attack, template_frame_check_order): `transfer
+/// --template-frame N` past the template's end failed on a landmark (or
+/// said "template reference frame 180 is out of range (0..180)", naming
+/// neither the flag nor the file). The range comes first, with both.
+#[test]
+fn a_template_frame_past_the_end_names_the_flag_and_the_file() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let index = tmp.path().join("index.json");
+    std::fs::write(&index, index_landmarks(0)).unwrap();
+    let lm = f.db.join("landmarks.json");
+    for n in [180u64, 181, 1000, 4_000_000_000] {
+        for tl in [&lm, &index] {
+            let o = Command::new(common::bin())
+                .args(["transfer", "--scan"])
+                .arg(f.db.join("topology.obj"))
+                .arg("--landmarks")
+                .arg(&lm)
+                .arg("--template")
+                .arg(f.db.join("walk.pc2"))
+                .arg("--template-landmarks")
+                .arg(tl)
+                .arg("--template-frame")
+                .arg(n.to_string())
+                .arg("-o")
+                .arg(tmp.path().join("o.pc2"))
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(1), "{n}: {err}");
+            assert!(
+                err.contains(&format!("--template-frame {n}"))
+                    && err.contains("walk.pc2")
+                    && err.contains("180 frames"),
+                "{n}: {err}"
+            );
+            assert!(!err.contains("landmark"), "{n}: {err}");
+        }
+    }
+}
+
+/// Regression (s14 attack, long_numbers_in_messages): `web export
+/// --max-error 1e-300` printed a 397-character line and a Frame Time of
+/// 1e-30 s "999999999999999879147136483328.0000 frames per second". Every
+/// magnitude now prints short.
+#[test]
+fn extreme_numbers_print_short_in_messages() {
+    use surfmotion::numfmt::Short;
+    let mut x = 1e-308_f64;
+    while x < 1e308 {
+        for v in [x, -x, x * 3.7, x * 9.99995]
+            .into_iter()
+            .filter(|v| v.is_finite())
+        {
+            let s = Short(v).to_string();
+            assert!(s.len() <= 13, "{v}: {s}");
+            let back: f64 = s.parse().unwrap();
+            // Plain form: 4 decimals; scientific: 4 significant digits.
+            let tol = if (1e-3..1e7).contains(&v.abs()) {
+                5e-5 / v.abs()
+            } else {
+                5e-4
+            };
+            assert!(((back - v) / v).abs() <= tol * 1.001, "{v}: {s} = {back}");
+        }
+        x *= 10.0;
+    }
+    assert_eq!(Short(1e-300).to_string(), "1e-300");
+    assert_eq!(Short(30.0).to_string(), "30");
+    assert_eq!(Short(0.0015).to_string(), "0.0015");
+    assert_eq!(Short(-0.0).to_string(), "0");
+    assert_eq!(Short(f64::INFINITY).to_string(), "inf");
+
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("cube.obj"), box_obj([1.0, 1.0, 1.0], [0.0; 3])).unwrap();
+    // Two frames of the cube, the second moved 1 cm.
+    let mut pc2 = b"POINTCACHE2\0".to_vec();
+    for x in [1i32.to_le_bytes(), 8i32.to_le_bytes()] {
+        pc2.extend(x);
+    }
+    pc2.extend(0f32.to_le_bytes());
+    pc2.extend(1f32.to_le_bytes());
+    pc2.extend(2i32.to_le_bytes());
+    for k in 0..2 {
+        for i in 0..8 {
+            for a in 0..3 {
+                let v = ((i >> a) & 1) as f32 + if a == 0 { 0.01 * k as f32 } else { 0.0 };
+                pc2.extend(v.to_le_bytes());
+            }
+        }
+    }
+    std::fs::write(d.join("cube.pc2"), pc2).unwrap();
+    let long_digits = |s: &str| {
+        s.lines().any(|l| l.chars().count() > 400)
+            || s.as_bytes()
+                .windows(16)
+                .any(|w| w.iter().all(|b| b.is_ascii_digit()))
+    };
+    for e in ["1e-300", "1e-30", "1e-12", "0.000000001"] {
+        let o = Command::new(common::bin())
+            .args(["web", "export", "--result"])
+            .arg(d.join("cube.pc2"))
+            .arg("--topology")
+            .arg(d.join("cube.obj"))
+            .arg("-o")
+            .arg(d.join(format!("site{e}")))
+            .args(["--max-error", e])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{e}: {err}");
+        assert!(!long_digits(&err), "{e}: {err}");
+        assert!(err.contains("error bound"), "{e}: {err}");
+    }
+    let walk = walk_text();
+    let at = walk.find("Frame Time:").unwrap();
+    let end = at + walk[at..].find('\n').unwrap();
+    for ft in ["1e-30", "1e-300", "1e-9", "0.0000000001"] {
+        let clip = d.join("fast.bvh");
+        std::fs::write(
+            &clip,
+            format!("{}Frame Time: {ft}{}", &walk[..at], &walk[end..]),
+        )
+        .unwrap();
+        let o = Command::new(common::bin())
+            .arg("inspect")
+            .arg(&clip)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{ft}: {err}");
+        assert!(
+            err.contains("frames per second") && !long_digits(&err),
+            "{ft}: {err}"
+        );
+    }
+}
+
+/// Regression (s14 attack, keyframe_many_via): with many --via the
+/// over-budget hint said "lower --distance or --time" and the result said
+/// "the best compromise ... within the 13.0 s horizon" for a 55.6 s path.
+/// Now the key-frames are named where they are the cause, and the target
+/// where it is.
+#[test]
+fn many_via_key_frames_are_named_as_the_cause() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let kf = |extra: &[String], target: &str, limit: Option<&str>| {
+        let mut c = Command::new(common::bin());
+        c.args(["keyframe", "--db"])
+            .arg(&f.db)
+            .args(["--from", "walk:0"])
+            .args(extra)
+            .args([
+                "--to",
+                "walk:50",
+                "--distance",
+                target,
+                "--time",
+                target,
+                "-o",
+            ])
+            .arg(tmp.path().join("k.pc2"));
+        match limit {
+            Some(l) => c.env("SURFMOTION_MEMORY_LIMIT", l),
+            None => c.env_remove("SURFMOTION_MEMORY_LIMIT"),
+        };
+        let o = c.output().unwrap();
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        (
+            o.status.code(),
+            text,
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let vias = |n: usize| -> Vec<String> {
+        (0..n)
+            .flat_map(|i| ["--via".to_string(), format!("walk:{}", 20 + (i % 2) * 140)])
+            .collect()
+    };
+    for n in [6, 10] {
+        // The path through the key-frames (2 s a segment) is far longer
+        // than the 10.5 s horizon of 0.5 m in 0.5 s.
+        let (code, text, err) = kf(&vias(n), "0.5", None);
+        assert_eq!(code, Some(0), "{n}: {err}");
+        assert!(
+            text.contains(&format!("the path through the {} key-frames takes", n + 2))
+                && text.contains("longer than the 10.5 s horizon")
+                && !text.contains("best compromise"),
+            "{n}: {text}"
+        );
+        let (code, _, err) = kf(&vias(n), "0.5", Some("2M"));
+        assert_eq!(code, Some(1), "{n}: {err}");
+        assert!(
+            err.contains(&format!("between {} key-frames", n + 2))
+                && err.contains("use fewer --via")
+                && !err.contains("--distance"),
+            "{n}: {err}"
+        );
+    }
+    // Without --via the target is the cause.
+    let (code, _, err) = kf(&[], "100", Some("4M"));
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("lower --distance or --time") && !err.contains("--via"),
+        "{err}"
+    );
 }

@@ -466,11 +466,25 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     s += "\n";
     if let Some((dt, tt)) = compromise {
         s += &format!(
-            "not met within 1 %: the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 within {} (the graph may not reach it; --w-dist and --w-time weigh the two)\n",
-            r.reach.map_or("the horizon".to_string(), |x| format!(
-                "the {:.1} s horizon",
-                x.horizon
-            ))
+            "not met within 1 %: {}\n",
+            match r.reach {
+                // The key-frames' own path is longer than the target's
+                // horizon: it is taken as it is, no compromise is searched
+                // (1000 --via gave "within the 13.0 s horizon" for 55.6 s).
+                Some(x) if r.time > x.horizon + 0.5 / fps => format!(
+                    "the path through the {} key-frames takes {:.1} s, longer than the {:.1} s horizon of {dt:.3} m in {tt:.3} s, and is taken as it is (fewer or nearer --via shorten it)",
+                    r.keys.len(),
+                    r.time,
+                    x.horizon
+                ),
+                reach => format!(
+                    "the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 within {} (the graph may not reach it; --w-dist and --w-time weigh the two)",
+                    reach.map_or("the horizon".to_string(), |x| format!(
+                        "the {:.1} s horizon",
+                        x.horizon
+                    ))
+                ),
+            }
         );
         if let Some(x) = r.reach {
             s += &format!(

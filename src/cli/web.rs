@@ -140,15 +140,15 @@ fn summary(r: &web::ExportReport) -> String {
     use super::count;
     let g = &r.geometry;
     let mut s = format!(
-        "wrote {}: {} × {}, geometry {:.0} KB ({:.1} KB/frame, {:.1}× smaller than float32), max vertex error {:.3} mm (step {:.3} mm)",
+        "wrote {}: {} × {}, geometry {:.0} KB ({:.1} KB/frame, {:.1}× smaller than float32), max vertex error {} mm (step {} mm)",
         r.site.display(),
         count(g.frames, "frame"),
         count(r.vertices, "vertex"),
         g.bytes as f64 / 1e3,
         g.bytes as f64 / 1e3 / g.frames.max(1) as f64,
         r.raw_bytes as f64 / g.bytes.max(1) as f64,
-        g.max_error * 1e3,
-        g.step * 1e3,
+        surfmotion::numfmt::Short(g.max_error * 1e3),
+        surfmotion::numfmt::Short(g.step * 1e3),
     );
     match (r.transitions, r.transition_frames) {
         (0, _) => s += ", no transitions",

@@ -252,7 +252,7 @@ pub fn similarity(
     match measure {
         Measure::Shape => {
             let rest: Vec<_> = topo.positions().iter().map(|p| y_up(*p, z_up)).collect();
-            shape = Some(ShapeSet::new(ShapeSet::grid_for(&rest)));
+            shape = Some(ShapeSet::new(ShapeSet::grid_for(&rest, topo.triangles())));
         }
         Measure::Vertex => vertex = Some(VertexSet::new(n, vopts)),
         Measure::Skeleton => {
@@ -261,7 +261,10 @@ pub fn similarity(
         Measure::Colour => {
             let colours = vertex_colours(dir, m, &topo)?;
             let rest: Vec<_> = topo.positions().iter().map(|p| y_up(*p, z_up)).collect();
-            colour = Some(ColourSet::new(ShapeSet::grid_for(&rest), colours));
+            colour = Some(ColourSet::new(
+                ShapeSet::grid_for(&rest, topo.triangles()),
+                colours,
+            ));
         }
     }
     progress.start("sequences described", m.sequences.len() as u64);

@@ -492,7 +492,19 @@ fn transfer_inner(
             frame,
         } => {
             template = load_sequence(tspec, &SeqLoad::default())?;
-            let tmesh = template.frame_mesh((*frame).min(template.frame_count() - 1));
+            // The range first: a frame past the end used to reach the
+            // landmark check on the last frame and fail there.
+            if *frame >= template.frame_count() {
+                return Err(JobError::Input {
+                    path: tspec.into(),
+                    msg: format!(
+                        "--template-frame {frame} is past the end: the template has {} (0..={})",
+                        crate::batch::summary::count(template.frame_count(), "frame"),
+                        template.frame_count().saturating_sub(1)
+                    ),
+                });
+            }
+            let tmesh = template.frame_mesh(*frame);
             template_markers = if let Some(p) = markers {
                 MarkerFile::load(p, tmesh.triangle_count())?.markers
             } else {

@@ -510,6 +510,29 @@ pub fn extremes_bytes(nodes: usize, m: usize) -> u128 {
     nodes as u128 * (m as u128 + 1) * 24
 }
 
+/// What to change when a chain's table for `m` frames is over `budget`
+/// bytes: the table is nodes (every segment's graph, one segment between
+/// each two key-frames) × frame counts (the horizon of the target, or the
+/// key-frames' own path when longer). When one segment's share of the
+/// nodes would fit, the number of key-frames is the cause (1000 `--via`
+/// were told "lower --distance or --time" for a 3 m / 3 s target).
+fn budget_hint(c: &Chain, m: usize, budget: u128) -> String {
+    let segments = c.arc_offsets.len().max(1);
+    if segments == 1 {
+        return "; lower --distance or --time".into();
+    }
+    let keys = format!(
+        "{segments} segments between {} key-frames (at least {} frames through them)",
+        segments + 1,
+        c.least
+    );
+    if extremes_bytes(c.node_count().div_ceil(segments), m) <= budget {
+        format!("; it grows with the {keys}: use fewer --via")
+    } else {
+        format!("; {keys}: use fewer --via, or lower --distance or --time")
+    }
+}
+
 /// The exact-length extremes of a chain up to `m` frames (step 1);
 /// refused before anything is allocated when the table ([`extremes_bytes`])
 /// exceeds the memory budget ([`crate::budget`]).
@@ -518,8 +541,9 @@ pub fn chain_extremes(c: &Chain, m: usize) -> Result<Extremes, OverBudget> {
     crate::budget::check(
         || {
             format!(
-                "the key-frame search's exact-length table ({n} nodes × {} frame counts)",
-                m as u128 + 1
+                "the key-frame search's exact-length table ({n} nodes × {} frame counts{})",
+                m as u128 + 1,
+                budget_hint(c, m, crate::budget::Budget::current().bytes as u128)
             )
         },
         extremes_bytes(n, m),

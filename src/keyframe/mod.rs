@@ -107,8 +107,9 @@ pub enum KeyframeError {
     #[error("{0}")]
     Search(String),
     /// The path found is longer than the memory budget can hold as a
-    /// mesh sequence (far-out-of-range targets give long compromises).
-    #[error("{0} (lower --distance or --time)")]
+    /// mesh sequence (far-out-of-range targets give long compromises, and
+    /// many key-frames long paths; the text says which).
+    #[error("{0}")]
     OverBudget(#[from] crate::budget::OverBudget),
 }
 
@@ -906,7 +907,15 @@ pub fn synthesise(
 ) -> Result<Output, KeyframeError> {
     let planned = plan_path(ch, keys, targets, opts, &mut |_| {})?;
     // The positions held below.
-    crate::budget::check_frames("the key-frame path", planned.frames(), ch.n(), 1)?;
+    let what = if keys.len() > 2 {
+        format!(
+            "the key-frame path through {} key-frames (use fewer --via, or lower --distance or --time)",
+            keys.len()
+        )
+    } else {
+        "the key-frame path (lower --distance or --time)".to_string()
+    };
+    crate::budget::check_frames(&what, planned.frames(), ch.n(), 1)?;
     let mut positions = Vec::with_capacity(planned.frames() * ch.n());
     let s = planned.synthesise_each(ch, targets, opts, |_, p| -> Result<(), KeyframeError> {
         positions.extend_from_slice(p);

@@ -206,8 +206,9 @@ pub enum SearchError {
     #[error(transparent)]
     Repeats(#[from] RepeatsError),
     /// The exact-length search's table for the query's horizon exceeds
-    /// the memory budget.
-    #[error("{0} (lower --distance or --time)")]
+    /// the memory budget (its text says what to change: the key-frames or
+    /// the target, [`super::lattice::chain_extremes`]).
+    #[error("{0}")]
     OverBudget(#[from] crate::budget::OverBudget),
 }
 

@@ -744,9 +744,9 @@ impl MotionHeader {
                 path,
                 self.time_line,
                 format!(
-                    "Frame Time {} s is {:.4} frames per second, outside [{}, {}]{}; give the frame rate with --input-fps",
+                    "Frame Time {} s is {} frames per second, outside [{}, {}]{}; give the frame rate with --input-fps",
                     self.time_value,
-                    1.0 / frame_time,
+                    crate::numfmt::Short(1.0 / frame_time),
                     crate::budget::MIN_FPS,
                     crate::budget::MAX_FPS,
                     if frame_time > 1.0 && frame_time < 1000.0 {

@@ -32,6 +32,16 @@ pub struct LoadOptions {
 /// the skeleton's size) or taken from `opts`.
 pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
     let mut clip = read_clip(path, opts.fps, opts.asf.as_deref())?;
+    // A given map is checked against the clip's hierarchy and rest pose
+    // (a map with pelvis and head swapped was taken without a word).
+    if let Some(m) = &opts.rig_map {
+        m.check(&clip).map_err(|msg| {
+            MocapError::invalid(
+                m.file.as_deref().unwrap_or(path),
+                format!("{msg} (rig map for {})", path.display()),
+            )
+        })?;
+    }
     if MocapFormat::of(path) == Some(MocapFormat::Bvh) {
         let names = clip.point_names();
         let family = if detect(&names).map.convention.starts_with("CMU") {

@@ -258,6 +258,11 @@ pub struct RigMap {
     /// Canonical joints with no joint in the file and the rule placing them.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub derived: BTreeMap<Canonical, Derive>,
+    /// The file the map was read from ([`RigMap::load`]); a map with a
+    /// file is the user's, checked against each clip it is applied to
+    /// ([`RigMap::check`]).
+    #[serde(skip)]
+    pub file: Option<std::path::PathBuf>,
 }
 
 /// Error of rig mapping.
@@ -420,6 +425,7 @@ pub fn detect(names: &[String]) -> Detection {
                 },
                 joints,
                 derived: BTreeMap::new(),
+                file: None,
             };
             let mut d = Detection::from_map(map, Source::Convention, 1.0, "from names");
             d.signature = signature;
@@ -432,6 +438,7 @@ pub fn detect(names: &[String]) -> Detection {
                 convention: "none".into(),
                 joints: BTreeMap::new(),
                 derived: BTreeMap::new(),
+                file: None,
             },
             Source::Convention,
             0.0,
@@ -641,6 +648,7 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             convention: BY_NAMES.into(),
             joints,
             derived: BTreeMap::new(),
+            file: None,
         };
         let mut d = Detection::from_map(map, Source::Names, 0.9, "");
         d.structure_pose = pose_note(b);
@@ -677,6 +685,7 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
         convention: if all_named { BY_NAMES } else { BY_STRUCTURE }.into(),
         joints,
         derived,
+        file: None,
     };
     let (side_confidence, sides) = if b.sides_from_names {
         (
@@ -780,17 +789,162 @@ impl RigMap {
                 convention: "rig map".into(),
                 joints,
                 derived: BTreeMap::new(),
+                file: None,
             })
         } else {
             serde_json::from_value(v)
         };
-        parsed.map_err(|e| RigError::File {
+        let mut map = parsed.map_err(|e| RigError::File {
             path: path.into(),
             msg: format!(
                 "{e}; expected {{\"pelvis\": \"Hips\", ...}} or the form `mocap rigmap -o` \
                  writes, {{\"convention\": \"...\", \"joints\": {{\"pelvis\": \"Hips\", ...}}}}"
             ),
-        })
+        })?;
+        map.file = Some(path.into());
+        Ok(map)
+    }
+
+    /// What can be checked of a map against the clip it is applied to,
+    /// without a threshold: each file joint carries one canonical joint;
+    /// along each canonical chain (pelvis → spine → chest → neck → head,
+    /// chest → shoulder → elbow → wrist, pelvis → hip → knee → ankle →
+    /// toe) no mapped joint is an ancestor of the previous mapped one in
+    /// the file's hierarchy (pelvis and head swapped fails here; "below"
+    /// would be too strict: a CC rig's spine and pelvis are siblings under
+    /// its hip joint); and in most
+    /// of up to 33 frames spread over the clip, left minus right of every
+    /// mapped pair (shoulders, elbows, wrists, hips, knees, ankles),
+    /// across the pelvis → head axis, points to the same side as the
+    /// first pair's (the left arm on the right arm's joints, the legs not,
+    /// fails here). A map mirrored as a whole is consistent and passes:
+    /// which side is left needs the file's handedness. Joints the clip
+    /// lacks are left to [`RigMap::resolve`]. Cost: forward kinematics of
+    /// 33 frames.
+    /// The error names the canonical entries and the file joints.
+    pub fn check(&self, clip: &Clip) -> Result<(), String> {
+        use Canonical::*;
+        let mut seen: BTreeMap<&str, Canonical> = BTreeMap::new();
+        for (&c, name) in &self.joints {
+            if let Some(first) = seen.insert(name.as_str(), c) {
+                return Err(format!(
+                    "\"{}\" and \"{}\" both name '{name}': each canonical joint needs a joint of its own",
+                    first.name(),
+                    c.name()
+                ));
+            }
+        }
+        let id = |c: Canonical| {
+            self.joints
+                .get(&c)
+                .and_then(|n| clip.joint(n).map(|j| (c, j)))
+        };
+        // Is `a` an ancestor of (or) `b` in the file's hierarchy?
+        let above = |a: JointId, b: JointId| {
+            let mut j = Some(b);
+            while let Some(k) = j {
+                if k == a {
+                    return true;
+                }
+                j = clip.joints.get(k.idx()).and_then(|x| x.parent);
+            }
+            false
+        };
+        const CHAINS: [&[Canonical]; 5] = [
+            &[Pelvis, Spine, Chest, Neck, Head],
+            &[Chest, LShoulder, LElbow, LWrist],
+            &[Chest, RShoulder, RElbow, RWrist],
+            &[Pelvis, LHip, LKnee, LAnkle, LToe],
+            &[Pelvis, RHip, RKnee, RAnkle, RToe],
+        ];
+        for chain in CHAINS {
+            let mapped: Vec<(Canonical, JointId)> = chain.iter().filter_map(|&c| id(c)).collect();
+            for w in mapped.windows(2) {
+                let ((pc, pj), (cc, cj)) = (w[0], w[1]);
+                if above(cj, pj) {
+                    return Err(format!(
+                        "\"{}\" names '{}', an ancestor of \"{}\" ('{}') in the file's hierarchy: the chain runs the wrong way",
+                        cc.name(),
+                        self.joints[&cc],
+                        pc.name(),
+                        self.joints[&pc]
+                    ));
+                }
+            }
+        }
+        let Ok(slots) = self.plan(clip) else {
+            return Ok(());
+        };
+        let pairs = [
+            (LHip, RHip),
+            (LKnee, RKnee),
+            (LAnkle, RAnkle),
+            (LShoulder, RShoulder),
+            (LElbow, RElbow),
+            (LWrist, RWrist),
+        ];
+        let pairs: Vec<(Canonical, Canonical)> = pairs
+            .into_iter()
+            .filter(|(l, r)| self.joints.contains_key(l) && self.joints.contains_key(r))
+            .collect();
+        // Up to 33 frames spread over the clip, not the rest skeleton: its
+        // offsets can hold any pose (the Bandai files' rest skeleton has
+        // the arms' left and right the other way round from the legs').
+        // In each, left minus right of every pair across the pelvis → head
+        // axis is compared with the first pair's; a pair crossed in most
+        // frames is crossed.
+        let n = clip.joint_count();
+        let frames = clip.frame_count();
+        let (mut p, mut r) = (vec![DVec3::ZERO; n], vec![DQuat::IDENTITY; n]);
+        let mut votes = vec![(0usize, 0usize); pairs.len()];
+        for f in (0..frames).step_by((frames / 32).max(1)) {
+            clip.world_into(f, &mut p, &mut r);
+            let pose = place(&slots, &p, &r);
+            let axis = (pose[Head.index()] - pose[Pelvis.index()]).normalize_or_zero();
+            let across = |(l, r): (Canonical, Canonical)| {
+                let d = pose[l.index()] - pose[r.index()];
+                d - axis * d.dot(axis)
+            };
+            let Some(reference) = pairs.first().map(|&q| across(q)) else {
+                break;
+            };
+            for (v, &q) in votes.iter_mut().zip(&pairs) {
+                let d = across(q).dot(reference);
+                if d > 0.0 {
+                    v.0 += 1;
+                } else if d < 0.0 {
+                    v.1 += 1;
+                }
+            }
+        }
+        type Voted<'a> = (&'a (Canonical, Canonical), &'a (usize, usize));
+        let (same, crossed): (Vec<Voted>, Vec<Voted>) = pairs
+            .iter()
+            .zip(&votes)
+            .filter(|(_, v)| v.0 + v.1 > 0)
+            .partition(|(_, v)| v.0 >= v.1);
+        if crossed.is_empty() {
+            return Ok(());
+        }
+        let list = |v: &[Voted]| {
+            v.iter()
+                .map(|((l, r), _)| {
+                    format!(
+                        "{}/{} ('{}'/'{}')",
+                        l.name(),
+                        r.name(),
+                        self.joints[l],
+                        self.joints[r]
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        Err(format!(
+            "left and right are crossed: in most frames left minus right of {} points one way, of {} the other",
+            list(&same),
+            list(&crossed)
+        ))
     }
 
     /// Writes the map as pretty JSON, atomically.

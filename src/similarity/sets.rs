@@ -100,20 +100,47 @@ impl ShapeSet {
     /// 0.002 from itself, against 0.03 for a different pose (96: 0.005).
     pub const VOXELS_PER_HEIGHT: f64 = 160.0;
 
-    /// The binning for a database whose rest frame is `rest` (Y-up): voxel
-    /// size from the height, `r_max` 1.25× the rest frame's largest distance
-    /// from its centroid (bigger reaches fall in the outer bin).
-    pub fn grid_for(rest: &[DVec3]) -> ShapeGrid {
-        let (lo, hi) = rest
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(p.y), hi.max(p.y))
-            });
+    /// Most voxels a frame of the rest frame's volume may fill: where
+    /// `height / VOXELS_PER_HEIGHT` would give more, the voxel grows until
+    /// the rest volume is this many voxels. About six human bodies (a samba
+    /// or crane frame is 6.5-7.5·10⁴, the armadillo scan 2.8·10⁵), so only
+    /// compact solids are coarsened: a unit cube at height/160 was
+    /// 160³ = 4.1·10⁶ voxels and 1.3 s a frame.
+    pub const VOXEL_BUDGET: f64 = 4.0e5;
+
+    /// The binning for a database whose rest frame is `(rest, triangles)`
+    /// (Y-up): voxel size from the height, coarsened so that the rest
+    /// volume is at most [`Self::VOXEL_BUDGET`] voxels, and `r_max` 1.25× the
+    /// rest frame's largest distance from its centroid (bigger reaches fall
+    /// in the outer bin). The volume is the enclosed one (divergence
+    /// theorem about the centroid), bounded by the bounding box's for an
+    /// open or inconsistently oriented surface. O(V + T).
+    pub fn grid_for(rest: &[DVec3], triangles: &[[u32; 3]]) -> ShapeGrid {
+        let (lo, hi) = rest.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
         let c = rest.iter().copied().sum::<DVec3>() / rest.len().max(1) as f64;
         let r = rest.iter().map(|p| p.distance(c)).fold(0.0, f64::max);
-        let height = (hi - lo).max(r).max(f64::MIN_POSITIVE);
+        let height = (hi.y - lo.y).max(r).max(f64::MIN_POSITIVE);
+        let enclosed = triangles
+            .iter()
+            .filter_map(|t| {
+                let [a, b, d] = t.map(|v| rest.get(v as usize).map(|p| *p - c));
+                Some(a?.dot(b?.cross(d?)))
+            })
+            .sum::<f64>()
+            .abs()
+            / 6.0;
+        let boxed = if rest.is_empty() {
+            0.0
+        } else {
+            (hi - lo).x * (hi - lo).y * (hi - lo).z
+        };
+        let volume = enclosed.min(boxed);
+        let voxel = (height / Self::VOXELS_PER_HEIGHT).max((volume / Self::VOXEL_BUDGET).cbrt());
         ShapeGrid {
-            voxel: height / Self::VOXELS_PER_HEIGHT,
+            voxel,
             r_max: 1.25 * r.max(f64::MIN_POSITIVE),
         }
     }

@@ -44,6 +44,7 @@
 //! bound after encoding (in f32, as the GPU evaluates it) and shrinks the
 //! step until it holds.
 
+use crate::numfmt::Short;
 use flate2::Compression;
 use flate2::read::DeflateDecoder;
 use flate2::write::DeflateEncoder;
@@ -273,7 +274,7 @@ pub fn encode(g: &Geometry, opts: &EncodeOptions) -> Result<(Vec<u8>, EncodeRepo
     if !(opts.max_error.is_finite() && opts.max_error > 0.0) {
         return Err(CodecError::Input(format!(
             "the error bound must be positive, got {} m",
-            opts.max_error
+            Short(opts.max_error)
         )));
     }
     if let Some((i, t)) = g
@@ -332,11 +333,11 @@ pub fn encode(g: &Geometry, opts: &EncodeOptions) -> Result<(Vec<u8>, EncodeRepo
             std::array::from_fn(|c| (((hi[c] - origin[c] as f64) / step).round() as u32) + 1);
         if levels.iter().any(|&l| l > MAX_LEVELS) {
             return Err(CodecError::Input(format!(
-                "the bounds ({:.3} × {:.3} × {:.3} m) need more than {MAX_LEVELS} steps of {:.3} mm per axis: raise the error bound",
-                hi[0] - lo[0],
-                hi[1] - lo[1],
-                hi[2] - lo[2],
-                step * 1e3
+                "the bounds ({} × {} × {} m) need more than {MAX_LEVELS} steps of {} mm per axis: raise the error bound",
+                Short(hi[0] - lo[0]),
+                Short(hi[1] - lo[1]),
+                Short(hi[2] - lo[2]),
+                Short(step * 1e3)
             )));
         }
         let quantised: Vec<(Vec<[u16; 3]>, f64)> = g
@@ -431,7 +432,7 @@ pub fn encode(g: &Geometry, opts: &EncodeOptions) -> Result<(Vec<u8>, EncodeRepo
     }
     Err(CodecError::Input(format!(
         "the error bound {} m was not met after 64 attempts",
-        opts.max_error
+        Short(opts.max_error)
     )))
 }
 
