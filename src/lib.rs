@@ -63,6 +63,8 @@
 //!   allocating.
 //! - [`fsutil`]: atomic writes, bounded reads and the shared file-error
 //!   shape.
+//! - [`numfmt`]: numbers in messages printed in a short form whatever
+//!   their magnitude.
 #![warn(missing_docs)]
 
 // Input.
