@@ -11,20 +11,7 @@ use surfmotion::keyframe::repeats::{Measure, Problem, brute_force, solve_exact, 
 use surfmotion::keyframe::search::SearchOptions;
 use surfmotion::keyframe::{Planner, Targets};
 
-/// A small deterministic generator (no dependency).
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn below(&mut self, n: usize) -> usize {
-        ((self.next() * n as f64) as usize).min(n - 1)
-    }
-}
+use common::keygraph::Lcg;
 
 fn random_problem(r: &mut Lcg, loops: &mut Vec<Measure>) -> (Measure, f64, f64) {
     loops.clear();
@@ -151,36 +138,12 @@ fn random_graph(r: &mut Lcg, seqs: usize, jumps: usize) -> KeyGraph {
 /// `random_graph` with each transition costing `least + span · u`,
 /// `u` uniform in [0, 1).
 fn random_graph_costing(r: &mut Lcg, seqs: usize, jumps: usize, least: f64, span: f64) -> KeyGraph {
-    let mut centre = Vec::new();
-    let mut sequence = Vec::new();
-    let mut starts = Vec::new();
-    for s in 0..seqs {
-        let len = 20 + r.below(21);
-        let speed = 0.01 + 0.08 * r.next();
-        starts.push((centre.len(), len));
-        for f in 0..len {
-            let x = f as f64 * speed;
-            centre.push([x, 0.02 * (f as f64 * 0.7).sin()]);
-            sequence.push(s as u32);
-        }
-    }
-    let n = centre.len();
-    let mut succ: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
-    for f in 0..n - 1 {
-        if sequence[f] == sequence[f + 1] {
-            succ[f].push((f as u32 + 1, 0.0));
-        }
-    }
-    for _ in 0..jumps {
-        let (a0, la) = starts[r.below(seqs)];
-        let (b0, lb) = starts[r.below(seqs)];
-        let m = a0 + r.below(la);
-        let to = b0 + 1 + r.below(lb - 1);
-        if to != m + 1 {
-            succ[m].push((to as u32, least + span * r.next()));
-        }
-    }
-    KeyGraph::new(&succ, centre, sequence)
+    let shape = common::keygraph::Shape {
+        frames: (20, 21),
+        cost: (least, span),
+        distinct: false,
+    };
+    common::keygraph::random_graph(r, seqs, jumps, &shape)
 }
 
 /// Dijkstra on the frame graph with the zero-target cost of a step:

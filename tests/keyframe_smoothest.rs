@@ -11,53 +11,17 @@ use surfmotion::keyframe::graph::KeyGraph;
 use surfmotion::keyframe::search::{SearchOptions, Target};
 use surfmotion::keyframe::smoothest::{least_mean, lower_bound};
 
-/// A small deterministic generator (no dependency).
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn below(&mut self, n: usize) -> usize {
-        ((self.next() * n as f64) as usize).min(n - 1)
-    }
-}
+use common::keygraph::Lcg;
 
 /// `seqs` sequences of 15-30 frames walking at different speeds, and
 /// `jumps` random transitions priced 0.02-0.2 (a smoothness in metres).
 fn random_graph(r: &mut Lcg, seqs: usize, jumps: usize) -> KeyGraph {
-    let mut centre = Vec::new();
-    let mut sequence = Vec::new();
-    let mut starts = Vec::new();
-    for s in 0..seqs {
-        let len = 15 + r.below(16);
-        let speed = 0.01 + 0.08 * r.next();
-        starts.push((centre.len(), len));
-        for f in 0..len {
-            centre.push([f as f64 * speed, 0.02 * (f as f64 * 0.7).sin()]);
-            sequence.push(s as u32);
-        }
-    }
-    let n = centre.len();
-    let mut succ: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
-    for f in 0..n - 1 {
-        if sequence[f] == sequence[f + 1] {
-            succ[f].push((f as u32 + 1, 0.0));
-        }
-    }
-    for _ in 0..jumps {
-        let (a0, la) = starts[r.below(seqs)];
-        let (b0, lb) = starts[r.below(seqs)];
-        let m = a0 + r.below(la);
-        let to = b0 + 1 + r.below(lb - 1);
-        if to != m + 1 && !succ[m].iter().any(|&(t, _)| t as usize == to) {
-            succ[m].push((to as u32, 0.02 + 0.18 * r.next()));
-        }
-    }
-    KeyGraph::new(&succ, centre, sequence)
+    let shape = common::keygraph::Shape {
+        frames: (15, 16),
+        cost: (0.02, 0.18),
+        distinct: true,
+    };
+    common::keygraph::random_graph(r, seqs, jumps, &shape)
 }
 
 /// Every path of exactly `frames` frames (start counted) from `from` to

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 pub mod gaits;
+pub mod keygraph;
 pub mod skel;
 
 /// Where the shared data folder is looked for: `$SURFMOTION_DATA`, else
