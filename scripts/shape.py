@@ -13,7 +13,8 @@ Prints, for the library and binary under SRC_DIR:
   3. `mod.rs` files: total lines and lines of logic (not `mod`, `use`, attributes, comments);
   4. `src/cli` lines, and its files;
   5. visibility: `pub` items vs `pub(crate)`/`pub(super)`, and public struct fields;
-  6. the number of test binaries (`tests/*.rs`), benches and examples.
+  6. the number of test binaries (`tests/*.rs`), benches and examples;
+  7. library string literals that name a CLI flag (`--word`), per file.
 
 Comments, string literals and everything from a file's first `#[cfg(test)]` on (the house
 puts test modules at the end) are left out of 1, 2 and 5. Standard library only."""
@@ -362,16 +363,20 @@ print(f"src/cli: {sum(n for n, _ in cli)} lines in {len(cli)} files; over 250 li
 print()
 print("== 5. visibility (library: src/ without src/cli and main.rs; test code excluded)")
 pub_items = restricted = pub_fields = 0
+kinds = defaultdict(int)
 KIND = r"(?:fn|struct|enum|trait|type|const|static|mod|use|unsafe|async|union|extern)\b"
 for mod, code in code_of.items():
     if not mod or mod[0] in ("cli", "<main>"):
         if mod:
             continue
-    pub_items += len(re.findall(r"(?<![A-Za-z0-9_])pub\s+" + KIND, code))
+    for k in re.findall(r"(?<![A-Za-z0-9_])pub\s+(" + KIND[3:-4] + r")\b", code):
+        kinds[k] += 1
+        pub_items += 1
     restricted += len(re.findall(r"(?<![A-Za-z0-9_])pub\s*\((?:crate|super|in [^)]*)\)", code))
     pub_fields += len(re.findall(r"(?m)^\s*pub\s+" + IDENT + r"\s*:", code))
 print(f"pub items: {pub_items}; pub(crate)/pub(super)/pub(in ..): {restricted}; "
       f"pub struct fields: {pub_fields}")
+print("pub items by kind: " + ", ".join(f"{k} {n}" for k, n in sorted(kinds.items(), key=lambda kv: -kv[1])))
 
 # --------------------------------------------------------------------------- binaries
 print()
@@ -381,3 +386,22 @@ def count(d):
     return sorted(f for f in os.listdir(p) if f.endswith(".rs")) if os.path.isdir(p) else []
 print(f"tests/*.rs (one binary each): {len(count('tests'))}; benches: {len(count('benches'))}; "
       f"examples: {len(count('examples'))}")
+
+# --------------------------------------------------------------------------- flags
+print()
+print("== 7. library string literals naming a CLI flag (`--word`; src/cli, main.rs, comments, tests excluded)")
+STR = re.compile(r'"((?:[^"\\]|\\.)*)"')
+per_file = {}
+for mod, path in files.items():
+    if not mod or mod[0] in ("cli", "<main>"):
+        if mod:
+            continue
+    raw = open(path, encoding="utf-8").read()
+    cut = raw.find("#[cfg(test)]")
+    raw = raw if cut < 0 else raw[:cut]
+    raw = "\n".join(l for l in raw.split("\n") if not l.strip().startswith("//"))
+    n = sum(1 for m in STR.finditer(raw) if re.search(r"(?<![A-Za-z0-9-])--[a-z][a-z-]+", m.group(1)))
+    if n:
+        per_file[rel_of[path]] = n
+print(f"literals: {sum(per_file.values())} in {len(per_file)} files: "
+      + ", ".join(f"{p} {n}" for p, n in sorted(per_file.items(), key=lambda kv: -kv[1])))
