@@ -164,21 +164,20 @@ def children(mod):
     return {k[-1] for k in files if len(k) == len(mod) + 1 and k[:len(mod)] == mod}
 
 
-def absolute(mod, is_dir, parts):
+def absolute(mod, parts):
     """A path as written in module `mod` -> absolute segments, or None if external."""
-    here = mod
     first = parts[0]
     if first == "crate":
         return list(parts[1:])
     if first in ("self", "super"):
         segs = list(parts)
-        cur = list(here)
+        cur = list(mod)
         while segs and segs[0] in ("self", "super"):
             if segs.pop(0) == "super":
                 cur = cur[:-1]
         return cur + segs
     if first in children(mod):
-        return list(here) + list(parts)
+        return list(mod) + list(parts)
     return None
 
 
@@ -194,13 +193,13 @@ def resolve(segs, depth=0):
         # an import or re-export of this name in `cur`: follow it
         for is_pub, parts, alias, _ in uses.get(cur, ()):
             if alias == seg:
-                target = absolute(cur, True, parts)
+                target = absolute(cur, parts)
                 if target is None:
                     return cur
                 return resolve(target + list(segs[k + 1:]), depth + 1)
         for is_pub, parts, alias, _ in uses.get(cur, ()):
             if alias == "*":
-                target = absolute(cur, True, parts[:-1])
+                target = absolute(cur, parts[:-1])
                 if target is not None:
                     t = resolve(target + [seg], depth + 1)
                     if t != tuple(target[:len(t)]) or seg in defined.get(t, ()):
@@ -218,12 +217,12 @@ for mod, code in code_of.items():
     for is_pub, parts, alias, line in uses[mod]:
         if is_pub:  # a re-export is not a dependency of the file's own logic
             continue
-        a = absolute(mod, True, parts)
+        a = absolute(mod, parts)
         if a is not None:
             found.append((resolve(a), line))
     no_use = USE.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), code)
     for m in INLINE.finditer(no_use):
-        a = absolute(mod, True, m.group(1).split("::"))
+        a = absolute(mod, m.group(1).split("::"))
         if a is not None:
             found.append((resolve(a), line_of(no_use, m.start())))
     kids = children(mod)
@@ -366,9 +365,8 @@ pub_items = restricted = pub_fields = 0
 kinds = defaultdict(int)
 KIND = r"(?:fn|struct|enum|trait|type|const|static|mod|use|unsafe|async|union|extern)\b"
 for mod, code in code_of.items():
-    if not mod or mod[0] in ("cli", "<main>"):
-        if mod:
-            continue
+    if mod and mod[0] in ("cli", "<main>"):
+        continue
     for k in re.findall(r"(?<![A-Za-z0-9_])pub\s+(" + KIND[3:-4] + r")\b", code):
         kinds[k] += 1
         pub_items += 1
@@ -393,9 +391,8 @@ print("== 7. library string literals naming a CLI flag (`--word`; src/cli, main.
 STR = re.compile(r'"((?:[^"\\]|\\.)*)"')
 per_file = {}
 for mod, path in files.items():
-    if not mod or mod[0] in ("cli", "<main>"):
-        if mod:
-            continue
+    if mod and mod[0] in ("cli", "<main>"):
+        continue
     raw = open(path, encoding="utf-8").read()
     cut = raw.find("#[cfg(test)]")
     raw = raw if cut < 0 else raw[:cut]
