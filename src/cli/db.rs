@@ -18,7 +18,9 @@ pub enum Cmd {
     )]
     Init(InitArgs),
     /// Load every part of a database and report what it holds and what is
-    /// wrong (connectivity or frame-rate mismatch, missing rig, ...).
+    /// wrong (connectivity or frame-rate mismatch, a rest frame not a
+    /// person's size in its unit, a landmark file no rig can be embedded
+    /// from, ...): exit 1 when it lists a problem. No rig is a note.
     #[command(after_help = "Example:\n  surfmotion db info samba_db")]
     Info(InfoArgs),
     /// Extract the canonical skeleton of every frame of every sequence: the
