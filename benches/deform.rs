@@ -26,6 +26,7 @@ fn main() {
         fps: 30.0,
         units: "m".into(),
         up: "y".into(),
+        human_sized: true,
         colors: None,
         sequences: vec![surfmotion::db::SequenceEntry {
             name: "dance".into(),

@@ -32,6 +32,7 @@ fn samba_db(d: &Path, tmp: &Path, seqs: &[(&str, usize, usize)]) -> Manifest {
         fps: 30.0,
         units: "m".into(),
         up: "y".into(),
+        human_sized: true,
         colors: None,
         sequences,
         rig: surfmotion::db::RigSpec {

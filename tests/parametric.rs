@@ -333,13 +333,14 @@ fn an_unreachable_speed_clamps_to_the_range_and_says_so() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(
-        stdout.contains("speed 50 m/s is outside the valid range") && stdout.contains("clamped to"),
-        "{stdout}"
+        stderr.contains("speed 50 m/s is outside the valid range") && stderr.contains("clamped to"),
+        "{stderr}"
     );
-    // Said once, on stdout (a second copy on stderr was the defect
-    // `play_notices_are_printed_once` guards).
-    assert_eq!(stdout.matches("clamped to").count(), 1, "{stdout}");
-    assert!(!stderr.contains("clamped to"), "{stderr}");
+    // Said once, on stderr as the README says (issue 39, item 9: it went
+    // to stdout; two copies were the defect `play_notices_are_printed_once`
+    // guards).
+    assert_eq!(stderr.matches("clamped to").count(), 1, "{stderr}");
+    assert!(!stdout.contains("clamped to"), "{stdout}");
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(tmp.path().join("r.json")).unwrap()).unwrap();
     assert_eq!(r["notices"][0]["notice"]["kind"], "clamped");
@@ -442,6 +443,49 @@ fn malformed_spaces_and_scripts_give_one_line_errors() {
         assert!(
             stderr.contains(expect) && stderr.contains("character.toml"),
             "{space}: {stderr}"
+        );
+    }
+}
+
+/// Regression (issue 39, item 9): `play` on a database that declares no
+/// `[[space]]` said `unknown key "speed" (expected t, space)`, blaming the
+/// script; it says the database declares no space and how to add one.
+#[test]
+fn play_on_a_database_without_spaces_names_the_database() {
+    let db = database();
+    let tmp = tempfile::tempdir().unwrap();
+    let base = std::fs::read_to_string(db.join("character.toml")).unwrap();
+    let d = tmp.path().join("nospace");
+    std::fs::create_dir_all(&d).unwrap();
+    for f in [
+        "topology.obj",
+        "landmarks.json",
+        "walk.pc2",
+        "run.pc2",
+        "turn.pc2",
+    ] {
+        std::fs::copy(db.join(f), d.join(f)).unwrap();
+    }
+    std::fs::write(
+        d.join("character.toml"),
+        &base[..base.find("[[space]]").unwrap()],
+    )
+    .unwrap();
+    for script in [
+        r#"[{"t": 0, "speed": 1.2}]"#,
+        r#"[{"t": 0, "space": "locomotion", "speed": 1.2, "turn": 10}]"#,
+        r#"[{"t": 0}]"#,
+    ] {
+        let out = play(&d, script, tmp.path());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{script}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{script}: {stderr}");
+        assert!(
+            stderr.contains("character.toml")
+                && stderr.contains("declares no [[space]]")
+                && stderr.contains("sequences = [\"walk\", \"run\"]")
+                && !stderr.contains("unknown key"),
+            "{script}: {stderr}"
         );
     }
 }

@@ -18,7 +18,9 @@ pub enum Cmd {
     )]
     Init(InitArgs),
     /// Load every part of a database and report what it holds and what is
-    /// wrong (connectivity or frame-rate mismatch, missing rig, ...).
+    /// wrong (connectivity or frame-rate mismatch, a rest frame not a
+    /// person's size in its unit, a landmark file no rig can be embedded
+    /// from, ...): exit 1 when it lists a problem. No rig is a note.
     #[command(after_help = "Example:\n  surfmotion db info samba_db")]
     Info(InfoArgs),
     /// Extract the canonical skeleton of every frame of every sequence: the
@@ -209,6 +211,12 @@ pub struct InitArgs {
     /// A rig map for the glTF skin's joint names (when not detected).
     #[arg(long = "rig-map", requires = "gltf_skin")]
     pub rig_map: Option<PathBuf>,
+    /// The character is not a person's size (a figurine, a giant, an
+    /// animal): its rest frame may measure outside 0.5-3 m in
+    /// --input-units (written as the manifest's `human_sized = false`).
+    /// Without it such a size is refused as a wrong unit.
+    #[arg(long = "not-human-sized")]
+    pub not_human_sized: bool,
     /// Overwrite an existing manifest.
     #[arg(long)]
     pub force: bool,
@@ -238,8 +246,20 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             for p in &mut i.problems {
                 *p = super::without_os_error_numbers(p);
             }
+            // A problem is exit 1, so that scripts can rely on `db info`
+            // (issue 39, item 6: it listed problems and exited 0).
+            let failed = |i: &surfmotion::db::DbInfo, where_: &str| {
+                anyhow::anyhow!(
+                    "{}: {} ({where_})",
+                    a.dir.display(),
+                    super::count(i.problems.len(), "problem")
+                )
+            };
             if a.json {
                 crate::outln!("{}", serde_json::to_string_pretty(&i)?)?;
+                if !i.problems.is_empty() {
+                    return Err(failed(&i, "\"problems\" in the JSON"));
+                }
             } else {
                 crate::outln!(
                     "{} ({} vertices, {} triangles)",
@@ -258,6 +278,12 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 crate::outln!("  total    {:>23} frames", i.total_frames)?;
                 for p in &i.problems {
                     crate::outln!("  problem: {p}")?;
+                }
+                for n in &i.notes {
+                    crate::outln!("  note: {n}")?;
+                }
+                if !i.problems.is_empty() {
+                    return Err(failed(&i, "listed above"));
                 }
             }
         }
@@ -312,6 +338,7 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         fps: a.fps,
         units: "m".into(),
         up: "y".into(),
+        human_sized: !a.not_human_sized,
         colors: None,
         sequences,
         rig: RigSpec {
@@ -334,14 +361,48 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
     // The paths are absolute here, so the folder they resolve against is
     // not used. Loaded with `up = y`: the file's own coordinates.
     let topo = m.load_topology(&a.dir).context("--mesh")?;
+    // A landmark file that does not read or lacks a required landmark is
+    // refused here, before the up axis is read off it (issue 39, item 7:
+    // it was accepted and refused only by `retarget`); the checks on the
+    // landmarks' places follow once the axis is known.
+    if let Some(p) = &m.rig.landmarks {
+        use surfmotion::rig::embed::landmarks::Landmarks;
+        Landmarks::load(p, topo.vertex_count()).context("--landmarks")?;
+    }
     m.up = resolve_up(&up, &topo, a.landmarks.as_deref())?;
     m.units = resolve_units(&a.units, &topo);
-    // Another connectivity is `db info`'s problem to report (the manifest
-    // may be written first and the topology fixed after); a file that is
-    // not a mesh sequence is refused here.
+    if let Some(p) = &m.rig.landmarks {
+        surfmotion::rig::embed::landmarks::Landmarks::load_checked(p, &topo)
+            .with_context(|| format!("--landmarks {}", p.display()))?;
+    }
+    // A person-sized character outside 0.5-3 m in the unit is a wrong
+    // unit, refused by every verb that opens the database: refused here
+    // (issue 39, item 5: one WARN, then a 1.8 cm character retargeted
+    // without a word).
+    if let Err(surfmotion::db::DbError::Size {
+        metres, suggest, ..
+    }) = m.check_size(&a.dir, &topo)
+    {
+        bail!(
+            "--input-units {}: the rest frame is {metres:.3} m tall or wide in {}, not a person's 0.5-3 m: is the unit right?{}; \
+             for a character that is not a person's size, pass --not-human-sized",
+            a.units,
+            m.units,
+            suggest.map_or(String::new(), |(u, v)| format!(
+                " (--input-units {u} makes it {v:.2} m)"
+            ))
+        );
+    }
+    // Every sequence must share the topology's vertices: one of another
+    // mesh is refused, with nothing written (issue 39, item 6: it was
+    // written with a warning, exit 0, and refused later by `db build`).
     for s in &m.sequences {
-        let (count, noun) = match m.load_sequence(&a.dir, s) {
-            Ok(q) => (q.mesh().vertex_count(), "vertices"),
+        let (count, noun, triangles) = match m.load_sequence(&a.dir, s) {
+            Ok(q) => (
+                q.mesh().vertex_count(),
+                "vertices",
+                q.mesh().triangles() == topo.triangles(),
+            ),
             Err(e) => {
                 use surfmotion::mesh::io::{MeshFormat, mdd, pc2};
                 // A point cache of another vertex count does not load
@@ -352,7 +413,9 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
                     _ => None,
                 };
                 match cache {
-                    Some(c) if c.points != topo.vertex_count() => (c.points, "points per frame"),
+                    Some(c) if c.points != topo.vertex_count() => {
+                        (c.points, "points per frame", true)
+                    }
                     _ => {
                         return Err(
                             anyhow::Error::from(e).context(format!("--sequence {}", s.name))
@@ -362,11 +425,19 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
             }
         };
         if count != topo.vertex_count() {
-            tracing::warn!(
-                "sequence '{}' ({}): {count} {noun}, the topology has {} vertices; `db info` lists it",
+            bail!(
+                "--sequence {} ({}): {count} {noun}, the topology (--mesh) has {} vertices: a sequence of another mesh? \
+                 Every sequence must have the topology's vertices",
                 s.name,
                 s.path.display(),
                 topo.vertex_count()
+            );
+        }
+        if !triangles {
+            bail!(
+                "--sequence {} ({}): its triangles differ from the topology's (--mesh): every sequence must share its connectivity",
+                s.name,
+                s.path.display()
             );
         }
     }
@@ -492,26 +563,13 @@ fn resolve_up(up: &str, topo: &Mesh, landmarks: Option<&Path>) -> anyhow::Result
 fn resolve_units(units: &str, topo: &Mesh) -> String {
     // The bounding box's largest side: the height standing, the span in a
     // T-pose (about the height), and the same whatever the up axis.
-    let h = (0..3)
-        .map(|axis| {
-            let (lo, hi) = topo
-                .positions()
-                .iter()
-                .map(|p| p[axis])
-                .filter(|v| v.is_finite())
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-                    (lo.min(v), hi.max(v))
-                });
-            hi - lo
-        })
-        .fold(f64::NEG_INFINITY, f64::max);
-    if !(h > 0.0 && h.is_finite()) {
+    let Some(h) = surfmotion::db::manifest::extent(topo.positions()) else {
         return if units.eq_ignore_ascii_case("auto") {
             "m".into()
         } else {
             units.into()
         };
-    }
+    };
     if units.eq_ignore_ascii_case("auto") {
         let off = |u: f64| (h * u / 1.7).ln().abs();
         let (u, name) = [(1.0, "m"), (0.01, "cm"), (0.001, "mm")]
@@ -525,14 +583,6 @@ fn resolve_units(units: &str, topo: &Mesh) -> String {
             );
         }
         return name.into();
-    }
-    if let Some(u) = surfmotion::mocap::units::parse_unit(units) {
-        let metres = h * u.metres_per_unit;
-        if !(0.3..=3.0).contains(&metres) {
-            tracing::warn!(
-                "--input-units {units}: the rest frame is {metres:.3} m tall or wide in it; is the unit right? (--input-units auto guesses it)"
-            );
-        }
     }
     units.into()
 }

@@ -75,6 +75,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .with_context(|| a.script.display().to_string())?;
     if let Ok(m) = surfmotion::db::Manifest::load(&a.db) {
         use surfmotion::parametric::Parameter;
+        // A database without spaces is the database's fault, not the
+        // script's (it said `unknown key "speed" (expected t, space)`).
+        m.require_spaces(&a.db)?;
         let params: Vec<Vec<Parameter>> = m
             .spaces
             .iter()
@@ -126,9 +129,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         write_s += t.elapsed().as_secs_f64();
         r
     })?;
-    // The text summary ends with the notices (`note: ...`); only for
-    // --json, whose stdout goes to a program, are they logged on stderr
-    // (each was printed twice, as a WARN and as a note).
+    // What could not be done (a speed clamped to the space's range) is
+    // said once, on stderr, as the README says (issue 39, item 9: it went
+    // to stdout); --json logs it as a warning, text mode as a note.
     for n in report.notices.iter().filter(|_| a.json) {
         tracing::warn!(
             "{}: request {} (t = {} s): {}",
@@ -199,7 +202,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         )?;
     }
     for n in &report.notices {
-        crate::outln!("note: request {} (t = {} s): {}", n.request, n.t, n.message)?;
+        crate::errln!("note: request {} (t = {} s): {}", n.request, n.t, n.message);
     }
     Ok(())
 }

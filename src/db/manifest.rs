@@ -88,6 +88,14 @@ pub fn check_name(name: &str) -> Result<(), &'static str> {
 /// File name of the manifest inside a database directory.
 pub const MANIFEST: &str = "character.toml";
 
+/// The sizes of a person in metres (the rest frame's bounding box's
+/// largest side: the height standing, about the height in a T-pose): a
+/// manifest whose `units` put a person-sized character ([`Manifest::human_sized`])
+/// outside them is refused by [`Manifest::load`]. Regression (issue 39,
+/// item 5): `units = "cm"` on a mesh in metres built a 1.8 cm dancer that
+/// `retarget` wrote without a word.
+pub const HUMAN_SIZE_M: std::ops::RangeInclusive<f64> = 0.5..=3.0;
+
 /// One captured sequence.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -135,6 +143,12 @@ fn default_units() -> String {
 }
 fn default_up() -> String {
     "y".into()
+}
+fn default_true() -> bool {
+    true
+}
+fn is_true(b: &bool) -> bool {
+    *b
 }
 
 /// How the Surface Motion Graph is built (`[graph]`; every field optional).
@@ -274,6 +288,13 @@ pub struct Manifest {
     /// Up axis of the files (`y` or `z`). Default: y.
     #[serde(default = "default_up")]
     pub up: String,
+    /// True when the character is a person's size: its rest frame, in
+    /// `units`, must measure [`HUMAN_SIZE_M`] (0.5-3 m) along its
+    /// bounding box's largest side, or every reader refuses the database
+    /// (a wrong `units`). Set `human_sized = false` for a figurine, a
+    /// giant or an animal. Default: true.
+    #[serde(default = "default_true", skip_serializing_if = "is_true")]
+    pub human_sized: bool,
     /// Per-vertex colours (a mesh with the topology's vertex count), if separate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub colors: Option<PathBuf>,
@@ -317,11 +338,110 @@ pub enum DbError {
     /// A graph edit in the manifest names something that does not exist.
     #[error("character.toml: {0}")]
     Graph(#[from] crate::graph::smg::EditError),
+    /// A person-sized character whose rest frame, in the manifest's
+    /// `units`, is not a person's size ([`HUMAN_SIZE_M`]): a wrong unit.
+    #[error("{path}: {}", size_message(*metres, units, *suggest))]
+    Size {
+        /// The manifest.
+        path: PathBuf,
+        /// The rest frame's size in metres (bounding box's largest side).
+        metres: f64,
+        /// The manifest's `units`.
+        units: String,
+        /// A unit that makes it a person's size, and the size it gives.
+        suggest: Option<(&'static str, f64)>,
+    },
+}
+
+/// The text of [`DbError::Size`] (also a `db info` problem).
+pub fn size_message(metres: f64, units: &str, suggest: Option<(&str, f64)>) -> String {
+    let hint = suggest.map_or(String::new(), |(u, m)| {
+        format!(" (units = \"{u}\" makes it {m:.2} m)")
+    });
+    format!(
+        "the rest frame is {metres:.3} m tall or wide with units = \"{}\", not a person's {}-{} m: \
+         is the unit right?{hint}; for a character that is not a person's size, set human_sized = false in the manifest",
+        printable(units, 20),
+        HUMAN_SIZE_M.start(),
+        HUMAN_SIZE_M.end()
+    )
+}
+
+/// The largest side of the bounding box of `positions` (finite
+/// coordinates only), in their units; `None` for an empty or flat-to-a-point set.
+pub fn extent(positions: &[[f64; 3]]) -> Option<f64> {
+    let h = (0..3)
+        .map(|axis| {
+            let (lo, hi) = positions
+                .iter()
+                .map(|p| p[axis])
+                .filter(|v| v.is_finite())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                });
+            hi - lo
+        })
+        .fold(f64::NEG_INFINITY, f64::max);
+    (h > 0.0 && h.is_finite()).then_some(h)
 }
 
 impl Manifest {
-    /// Reads `DIR/character.toml` and checks its fields.
+    /// Opens the database in `dir`: [`Manifest::read`], then the checks
+    /// that need the topology: a person-sized character
+    /// ([`Manifest::human_sized`]) must be a person's size in the
+    /// manifest's `units` ([`Manifest::check_size`]). Every verb that reads
+    /// a database opens it here, so all refuse a wrong unit alike.
     pub fn load(dir: &Path) -> Result<Manifest, DbError> {
+        let m = Self::read(dir)?;
+        if m.human_sized {
+            let topo = m.load_topology(dir)?;
+            m.check_size(dir, &topo)?;
+        }
+        Ok(m)
+    }
+
+    /// The rest frame's size in metres: the largest side of the topology's
+    /// bounding box in the manifest's `units` (`None`: no extent).
+    pub fn size_metres(&self, topology: &Mesh) -> Option<f64> {
+        let u = crate::mocap::units::parse_unit(&self.units)?;
+        extent(topology.positions()).map(|h| h * u.metres_per_unit)
+    }
+
+    /// Refuses a person-sized character ([`Manifest::human_sized`]) whose
+    /// rest frame `topology` is outside [`HUMAN_SIZE_M`] in the manifest's
+    /// `units` ([`DbError::Size`], with a unit that fits if one does).
+    /// `dir` names the manifest in the error.
+    pub fn check_size(&self, dir: &Path, topology: &Mesh) -> Result<(), DbError> {
+        if !self.human_sized {
+            return Ok(());
+        }
+        let Some(metres) = self.size_metres(topology) else {
+            return Ok(());
+        };
+        if HUMAN_SIZE_M.contains(&metres) {
+            return Ok(());
+        }
+        let file = extent(topology.positions()).unwrap_or(0.0);
+        let suggest = crate::mocap::units::parse_unit(&self.units).and_then(|_| {
+            ["m", "cm", "mm", "dm", "inch"]
+                .into_iter()
+                .filter_map(|u| {
+                    let m = file * crate::mocap::units::parse_unit(u)?.metres_per_unit;
+                    HUMAN_SIZE_M.contains(&m).then_some((u, m))
+                })
+                .min_by(|a, b| (a.1 / 1.7).ln().abs().total_cmp(&(b.1 / 1.7).ln().abs()))
+        });
+        Err(DbError::Size {
+            path: dir.join(MANIFEST),
+            metres,
+            units: self.units.clone(),
+            suggest,
+        })
+    }
+
+    /// Reads `DIR/character.toml` and checks its fields (not the files it
+    /// names: [`Manifest::load`] opens the database).
+    pub fn read(dir: &Path) -> Result<Manifest, DbError> {
         // A file given for the folder (the manifest itself, a clip) said
         // "DIR/character.toml: Not a directory".
         if dir.is_file() {
@@ -478,6 +598,36 @@ impl Manifest {
         Ok(())
     }
 
+    /// Refuses a manifest without `[[space]]` entries where a parametric
+    /// motion space is needed, saying how to declare one (with this
+    /// database's sequence names). `dir` names the manifest. Regression
+    /// (issue 39, item 9): `play` on such a database said `unknown key
+    /// "speed" (expected t, space)`, blaming the script.
+    pub fn require_spaces(&self, dir: &Path) -> Result<(), DbError> {
+        if !self.spaces.is_empty() {
+            return Ok(());
+        }
+        let seqs: Vec<String> = self
+            .sequences
+            .iter()
+            .take(2)
+            .map(|s| format!("\"{}\"", printable(&s.name, 40)))
+            .collect();
+        let seqs = if seqs.is_empty() {
+            "\"walk\", \"run\"".to_string()
+        } else {
+            seqs.join(", ")
+        };
+        Err(DbError::Manifest {
+            path: dir.join(MANIFEST),
+            msg: format!(
+                "the database declares no [[space]] (a parametric motion space, which parametric motion steers): \
+                 add one to the manifest, e.g. [[space]] name = \"locomotion\" sequences = [{seqs}] parameters = [\"speed\"] \
+                 (each on its own line; sequences names [[sequence]] entries; see the README's \"Parametric motion\")"
+            ),
+        })
+    }
+
     /// Writes the manifest to `DIR/character.toml`, atomically.
     pub fn save(&self, dir: &Path) -> Result<(), DbError> {
         let text = toml::to_string_pretty(self).map_err(|e| DbError::Manifest {
@@ -543,19 +693,37 @@ pub struct DbInfo {
     pub sequences: Vec<SequenceInfo>,
     /// Total frames.
     pub total_frames: usize,
-    /// Problems found (connectivity or frame-rate mismatch, missing rig, ...).
+    /// Problems found (connectivity or frame-rate mismatch, a rest frame
+    /// not a person's size, a landmark file no rig can be embedded from,
+    /// a missing file, ...): the database cannot be used as it is.
     pub problems: Vec<String>,
+    /// What the database lacks for some uses only (no rig: mocap-driven
+    /// synthesis needs one; the graph and key-frame paths do not).
+    pub notes: Vec<String>,
 }
 
 /// Loads every part of a database and reports what it holds and what is wrong.
 pub fn info(dir: &Path) -> Result<DbInfo, DbError> {
-    let m = Manifest::load(dir)?;
+    let m = Manifest::read(dir)?;
     let topo = m.load_topology(dir)?;
     let mut problems: Vec<String> = topo
         .problems()
         .into_iter()
         .map(|p| format!("topology: {p}"))
         .collect();
+    let mut notes = Vec::new();
+    if let Err(DbError::Size {
+        metres,
+        units,
+        suggest,
+        ..
+    }) = m.check_size(dir, &topo)
+    {
+        problems.push(format!(
+            "topology: {}",
+            size_message(metres, &units, suggest)
+        ));
+    }
     let mut seqs = Vec::new();
     for s in &m.sequences {
         let fps = s.fps.unwrap_or(m.fps);
@@ -601,7 +769,7 @@ pub fn info(dir: &Path) -> Result<DbInfo, DbError> {
         problems.push("no sequences".into());
     }
     if m.rig.is_empty() {
-        problems.push(
+        notes.push(
             "no rig: add [rig] landmarks, parts or gltf_skin (needed for mocap-driven synthesis)"
                 .into(),
         );
@@ -622,6 +790,17 @@ pub fn info(dir: &Path) -> Result<DbInfo, DbError> {
             ));
         }
     }
+    // A landmark file no rig can be embedded from (a required landmark
+    // missing, landmarks of another mesh) was accepted here and refused
+    // only by `db skeleton`, `retarget` or `transfer` (issue 39, item 7).
+    if let Some(p) = &m.rig.landmarks {
+        let p = Manifest::resolve(dir, p);
+        if p.exists()
+            && let Err(e) = crate::rig::embed::landmarks::Landmarks::load_checked(&p, &topo)
+        {
+            problems.push(format!("landmarks: {e}"));
+        }
+    }
     Ok(DbInfo {
         name: m.name.clone(),
         vertices: topo.vertex_count(),
@@ -629,6 +808,7 @@ pub fn info(dir: &Path) -> Result<DbInfo, DbError> {
         total_frames: seqs.iter().map(|s| s.frames).sum(),
         sequences: seqs,
         problems,
+        notes,
     })
 }
 
@@ -683,6 +863,7 @@ mod tests {
             fps: 25.0,
             units: "cm".into(),
             up: "z".into(),
+            human_sized: false,
             colors: None,
             sequences: vec![SequenceEntry {
                 name: "a".into(),

@@ -102,8 +102,11 @@ pub struct DatabaseReport {
     pub cache_dir: PathBuf,
     /// Its files.
     pub cache: Vec<CacheEntry>,
-    /// Problems `db info` reports.
+    /// Problems `db info` reports (a rest frame not a person's size, a
+    /// landmark file no rig can be embedded from, ...).
     pub problems: Vec<String>,
+    /// Notes `db info` reports (no rig).
+    pub notes: Vec<String>,
 }
 
 /// What a database's cache folder holds.
@@ -143,7 +146,9 @@ fn err(e: impl std::fmt::Display) -> InspectError {
 /// Reads the database `dir`: its manifest, every sequence (as `db info`),
 /// its skeleton files and its cache.
 pub fn inspect_database(dir: &Path) -> Result<DatabaseReport, InspectError> {
-    let m = Manifest::load(dir).map_err(err)?;
+    // Read, not opened: what would refuse it (a wrong unit) is listed
+    // among the problems.
+    let m = Manifest::read(dir).map_err(err)?;
     let info = crate::db::info(dir).map_err(err)?;
     let sequences: Vec<DbSequence> = info
         .sequences
@@ -192,12 +197,13 @@ pub fn inspect_database(dir: &Path) -> Result<DatabaseReport, InspectError> {
         cache_dir: cache_dir(dir),
         cache: cache_entries(dir, &m)?,
         problems: info.problems,
+        notes: info.notes,
     })
 }
 
 /// Reads the cache folder of the database `db`.
 pub fn inspect_cache(path: &Path, db: &Path) -> Result<CacheReport, InspectError> {
-    let m = Manifest::load(db).map_err(err)?;
+    let m = Manifest::read(db).map_err(err)?;
     Ok(CacheReport {
         path: path.to_path_buf(),
         database: db.to_path_buf(),
@@ -403,6 +409,9 @@ impl DatabaseReport {
         write_cache(&mut s, &self.measure, &self.cache);
         for p in &self.problems {
             let _ = writeln!(s, "  problem: {p}");
+        }
+        for n in &self.notes {
+            let _ = writeln!(s, "  note: {n}");
         }
         s
     }

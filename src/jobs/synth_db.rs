@@ -289,6 +289,7 @@ pub fn write_synthetic_database(
         fps,
         units: "m".into(),
         up: "y".into(),
+        human_sized: true,
         colors: None,
         sequences,
         rig: RigSpec {

@@ -14,7 +14,7 @@ use super::ParamError;
 use super::space::{Motion, MotionOptions, MotionSpace};
 use super::transition::SimilarityTable;
 use crate::db::cache::{KeyHasher, cache_dir, frames_key};
-use crate::db::{DbError, MANIFEST, Manifest};
+use crate::db::{DbError, Manifest};
 use crate::fsutil::write_atomic;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -186,13 +186,7 @@ pub fn load_or_build(
     force: bool,
 ) -> Result<(Motion, bool), ParamError> {
     let m = Manifest::load(dir)?;
-    if m.spaces.is_empty() {
-        return Err(DbError::Manifest {
-            path: dir.join(MANIFEST),
-            msg: "no [[space]] entries: declare a parametric motion space (name, sequences, parameters; see the README's \"Parametric motion\")".into(),
-        }
-        .into());
-    }
+    m.require_spaces(dir)?;
     let key = key(dir, &m, opts)?;
     let path = cache_path(dir);
     if !force && let Ok(bytes) = crate::fsutil::read_bytes(&path) {

@@ -130,8 +130,13 @@ pub enum LandmarkError {
         /// The mesh's.
         actual: usize,
     },
-    /// A required landmark is absent.
-    #[error("{path}: missing required landmark(s): {missing}")]
+    /// A required landmark is absent. The message says how to proceed
+    /// (issue 39, item 7: a headless body's file without a chin was
+    /// accepted by `db init` and refused only by `retarget`).
+    #[error(
+        "{path}: missing required landmark(s): {missing}; {}",
+        missing_hint(missing)
+    )]
     Missing {
         /// The file.
         path: PathBuf,
@@ -196,6 +201,18 @@ pub enum LandmarkError {
         /// As a percentage of the height.
         percent: f64,
     },
+}
+
+/// What to do about the missing required landmarks `missing`
+/// (comma-separated names).
+fn missing_hint(missing: &str) -> String {
+    let mut s = "a rig is embedded from all of chin, groin, l_wrist, r_wrist, l_elbow, r_elbow, l_knee and r_knee: \
+                 mark each on the rest frame (a vertex index or [x, y, z])"
+        .to_string();
+    if missing.split(", ").any(|m| m == "chin") {
+        s += "; the chin ends the neck: for a body without a head, place it at the top of the neck";
+    }
+    s
 }
 
 /// Where a landmark was given.
@@ -290,6 +307,24 @@ impl Landmarks {
     /// Reads a landmark file.
     pub fn load(path: &Path, vertex_count: usize) -> Result<Landmarks, LandmarkError> {
         Landmarks::parse(&read_small_text(path)?, path, vertex_count)
+    }
+
+    /// Reads a landmark file made for the rest frame `mesh` and checks it
+    /// as the rig embedding does before using it ([`Landmarks::validate`],
+    /// the vertical from the groin→chin direction): what `db init`, `db
+    /// info` and `inspect` check, so that a file no rig can be embedded
+    /// from is refused there and not first by `retarget`.
+    pub fn load_checked(path: &Path, mesh: &crate::mesh::Mesh) -> Result<Landmarks, LandmarkError> {
+        let lm = Landmarks::load(path, mesh.vertex_count())?;
+        let p = mesh.positions();
+        let up = match (lm.point(Landmark::Chin, p), lm.point(Landmark::Groin, p)) {
+            (Some(c), Some(g)) => {
+                super::joints::body_up(glam::DVec3::from_array(c) - glam::DVec3::from_array(g))
+            }
+            _ => glam::DVec3::Y,
+        };
+        lm.validate(p, mesh.triangles(), up.to_array())?;
+        Ok(lm)
     }
 
     /// Refuses landmark sets no rig can be embedded from, naming the
