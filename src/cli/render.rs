@@ -134,6 +134,22 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ),
         None => None,
     };
+    // The picture's size against the memory budget, before anything is
+    // read: front and side views of each mesh side by side (RGB), built
+    // panel by panel (each joined copy is a new picture: twice the
+    // picture at the peak), plus one panel's depth buffer.
+    let (width, height) = (2 * a.mesh.len() as u128 * size as u128, size as u128);
+    surfmotion::budget::check(
+        || {
+            format!(
+                "{}: a picture of {} mesh(es) at --size {size} ({width} × {height} pixels)",
+                a.output.display(),
+                a.mesh.len()
+            )
+        },
+        2 * width * height * 3 + height * height * 11,
+    )
+    .map_err(|e| anyhow::anyhow!("{e}; lower --size or draw fewer meshes"))?;
     let mut loaded = Vec::new();
     for mesh in &a.mesh {
         let s = load_sequence(mesh, &LoadOptions::default())?;
