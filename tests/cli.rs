@@ -608,12 +608,9 @@ fn turned_points(p: &[[f64; 3]], q: glam::DQuat) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// The panels of `render --json`: (facing, up) in the file's axes.
-fn render_panels(args: &[&str]) -> Vec<(glam::DVec3, glam::DVec3)> {
-    let mut all = args.to_vec();
-    all.push("--json");
-    let o = run(&all);
-    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+/// The panels of `render --json` (its output `o`): (facing, up) in the
+/// file's axes.
+fn render_panels(o: &Output) -> Vec<(glam::DVec3, glam::DVec3)> {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let vec3 = |v: &serde_json::Value| {
         glam::DVec3::from_array(std::array::from_fn(|k| v[k].as_f64().unwrap()))
@@ -702,18 +699,9 @@ fn render_faces_each_panel_from_its_own_body() {
         let mut args = vec!["render"];
         args.extend(files.iter().map(String::as_str));
         args.extend(extra);
-        args.extend(["--size", "64", "-o", png]);
-        let panels = render_panels(&args);
-        assert_eq!(panels.len(), yaws.len());
-        for (&deg, (facing, up)) in yaws.iter().zip(&panels) {
-            let want = DQuat::from_rotation_y(deg.to_radians()) * front;
-            let off = facing.angle_between(want).to_degrees();
-            assert!(
-                off < 25.0,
-                "{what}, yaw {deg}°: facing {facing} vs {want} ({off:.0}° off)"
-            );
-            assert!(up.distance(DVec3::Y) < 1e-9, "{what}, yaw {deg}°: up {up}");
-        }
+        args.extend(["--size", "64", "-o", png, "--json"]);
+        let o = run(&args);
+        assert!(o.status.success(), "{what}: {}", stderr(&o));
         // Standing, every front view is wider than its side view (mid-
         // stride the legs can be deeper than the shoulders are wide).
         for k in (0..yaws.len()).filter(|_| what.starts_with("standing")) {
@@ -726,6 +714,17 @@ fn render_faces_each_panel_from_its_own_body() {
                 "{what}, yaw {}°: front {f} px wide, side {s}",
                 yaws[k]
             );
+        }
+        let panels = render_panels(&o);
+        assert_eq!(panels.len(), yaws.len());
+        for (&deg, (facing, up)) in yaws.iter().zip(&panels) {
+            let want = DQuat::from_rotation_y(deg.to_radians()) * front;
+            let off = facing.angle_between(want).to_degrees();
+            assert!(
+                off < 25.0,
+                "{what}, yaw {deg}°: facing {facing} vs {want} ({off:.0}° off)"
+            );
+            assert!(up.distance(DVec3::Y) < 1e-9, "{what}, yaw {deg}°: up {up}");
         }
     };
     check("standing", &rests, &[]);
