@@ -378,8 +378,7 @@ fn shoulder_axis(positions: &[[f64; 3]]) -> Option<(DVec3, DVec3)> {
 /// `-axis`: each leg's knee (the middle of the leg's height) lies in front
 /// of the line from its hip to its ankle, since knees bend forward; the
 /// legs are the two halves of the lower body split by the lateral axis.
-/// When the knees say nothing (straight legs), the soles: a foot reaches
-/// forward of its shin.
+/// Plus the soles: a foot reaches forward of its shin.
 fn facing_vote(positions: &[[f64; 3]], axis: DVec3) -> f64 {
     let (lo, hi) = positions
         .iter()
@@ -422,10 +421,11 @@ fn facing_vote(positions: &[[f64; 3]], axis: DVec3) -> f64 {
             knees += (knee - 0.5 * (ankle + hip)).dot(axis);
         }
     }
-    if knees.abs() > 1e-3 * h {
-        return knees;
-    }
-    // Soles (bottom 3 % of the height) against the shins above them (6-12 %).
+    // Soles (bottom 3 % of the height) against the shins above them (6-12
+    // %), always counted: on straight legs the knees say next to nothing
+    // and may say it wrongly (the calves bulge back: the SMPL template's
+    // T-pose gave -0.4 cm against its feet's +11 cm, and its back was
+    // drawn as its front).
     let band = |a: f64, b: f64| {
         let (from, to) = (lo + a * h, lo + b * h);
         let pts: Vec<DVec3> = positions
@@ -436,6 +436,25 @@ fn facing_vote(positions: &[[f64; 3]], axis: DVec3) -> f64 {
         pts.iter().sum::<DVec3>() / pts.len().max(1) as f64
     };
     knees + (band(0.0, 0.03) - band(0.06, 0.12)).dot(axis)
+}
+
+/// The floor line of a panel: a grey segment at height `y` (along Y)
+/// across the whole `size`-pixel panel seen along `view` placed by
+/// `framing`.
+pub fn floor_line(
+    view: View,
+    framing: Framing,
+    y: f64,
+    size: usize,
+) -> ([f64; 3], [f64; 3], [u8; 3]) {
+    let (right, _, _) = axes(view);
+    let half = 0.5 * size as f64 / framing.scale;
+    let mid = right * framing.centre[0] + DVec3::Y * y;
+    (
+        (mid - right * half).to_array(),
+        (mid + right * half).to_array(),
+        [150, 150, 150],
+    )
 }
 
 /// One scale for many panels: a framing per panel of view-space `bounds`

@@ -570,7 +570,7 @@ fn drawn_columns(path: &std::path::Path, size: usize, k: usize) -> usize {
     let at = |x: usize, y: usize| &buf[(y * info.width as usize + x) * px..][..px];
     let x0 = k * size;
     (x0..x0 + size)
-        .filter(|&x| (0..size).any(|y| at(x, y) != at(x0, 0)))
+        .filter(|&x| (0..size).any(|y| at(x, y) != at(x0, 0) && at(x, y)[..3] != [150, 150, 150]))
         .count()
 }
 
@@ -601,29 +601,190 @@ fn box_obj(w: f64, d: f64) -> String {
     s
 }
 
+/// Turns every point of `p` by `q`.
+fn turned_points(p: &[[f64; 3]], q: glam::DQuat) -> Vec<[f64; 3]> {
+    p.iter()
+        .map(|x| (q * glam::DVec3::from_array(*x)).to_array())
+        .collect()
+}
+
+/// The panels of `render --json` (its output `o`): (facing, up) in the
+/// file's axes.
+fn render_panels(o: &Output) -> Vec<(glam::DVec3, glam::DVec3)> {
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let vec3 = |v: &serde_json::Value| {
+        glam::DVec3::from_array(std::array::from_fn(|k| v[k].as_f64().unwrap()))
+    };
+    v["panels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| (vec3(&p["facing"]), vec3(&p["up"])))
+        .collect()
+}
+
+/// Regression (issue 39, item 10): `render` drew the back as "front" on
+/// bodies other than the samba dancer, every panel took the first mesh's
+/// camera (a result that turns was seen from behind), and a rig embedded
+/// in a Z-up rest mesh drew Y-up frames lying down. The project's humanoid,
+/// standing straight and mid-stride, turned to every 30° of yaw: each
+/// panel's front view looks at the body's front (within 25°), from the
+/// mesh alone and from its rig, and its front view is wider than its side.
 #[test]
-fn render_draws_every_panel_from_one_camera() {
-    // The same body turned by 90°: drawn from one camera its front view is
-    // its side. Before, each panel took its own mesh's facing, so a path
-    // that turned was drawn as if it did not (and flipped front to back).
+fn render_faces_each_panel_from_its_own_body() {
+    use glam::{DQuat, DVec3};
+    use surfmotion::mesh::MeshSequence;
+    use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
+    let dir = common::fixture_dir("render_facing");
+    let grid = 0.04;
+    let ch = common::humanoid_character(grid);
+    let front = DVec3::from_array(ch.rig.facing);
+    common::gaits::write_gaits(
+        &dir.join("db"),
+        &ch,
+        &[(surfmotion::synth::Gait::Walk, 1.5)],
+        "render_facing",
+        30.0,
+    );
+    let walk = load_sequence(
+        dir.join("db/walk.pc2").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let rig = dir.join("rig.json");
+    ch.rig.save(&rig).unwrap();
+    // The same rig embedded in the rest mesh lying along +z (as a glTF's
+    // bind pose can lie while its animation stands).
+    let lie = DQuat::from_rotation_x(-std::f64::consts::FRAC_PI_2);
+    let mut zup = ch.rig.clone();
+    let t = |p: &mut [f64; 3]| *p = (lie * DVec3::from_array(*p)).to_array();
+    zup.joints.iter_mut().for_each(t);
+    [
+        &mut zup.head_top,
+        &mut zup.up,
+        &mut zup.facing,
+        &mut zup.left,
+    ]
+    .into_iter()
+    .for_each(t);
+    zup.hand_tips
+        .iter_mut()
+        .chain(zup.toe_tips.iter_mut())
+        .for_each(t);
+    let zup_rig = dir.join("rig_zup.json");
+    zup.save(&zup_rig).unwrap();
+    let yaws: Vec<f64> = (0..12).map(|k| (k * 30) as f64).collect();
+    let (mut rests, mut walks) = (Vec::new(), Vec::new());
+    for &deg in &yaws {
+        let q = DQuat::from_rotation_y(deg.to_radians());
+        let rest = dir.join(format!("rest_{deg}.obj"));
+        let mesh = surfmotion::mesh::Mesh::new(
+            turned_points(ch.rest.positions(), q),
+            ch.rest.triangles().to_vec(),
+        )
+        .unwrap();
+        save_sequence(&MeshSequence::single(mesh), &rest, None).unwrap();
+        rests.push(rest.to_str().unwrap().to_string());
+        let frames: Vec<[f64; 3]> = (0..walk.frame_count())
+            .flat_map(|f| turned_points(walk.frame(f), q))
+            .collect();
+        let seq = MeshSequence::new(walk.mesh().clone(), frames, Some(30.0)).unwrap();
+        let w = dir.join(format!("walk_{deg}.pc2"));
+        save_sequence(&seq, &w, None).unwrap();
+        walks.push(w.to_str().unwrap().to_string());
+    }
+    let png = dir.join("r.png");
+    let png = png.to_str().unwrap();
+    let check = |what: &str, files: &[String], extra: &[&str]| {
+        let mut args = vec!["render"];
+        args.extend(files.iter().map(String::as_str));
+        args.extend(extra);
+        args.extend(["--size", "64", "-o", png, "--json"]);
+        let o = run(&args);
+        assert!(o.status.success(), "{what}: {}", stderr(&o));
+        // Standing, every front view is wider than its side view (mid-
+        // stride the legs can be deeper than the shoulders are wide).
+        for k in (0..yaws.len()).filter(|_| what.starts_with("standing")) {
+            let (f, s) = (
+                drawn_columns(std::path::Path::new(png), 64, 2 * k),
+                drawn_columns(std::path::Path::new(png), 64, 2 * k + 1),
+            );
+            assert!(
+                f > s,
+                "{what}, yaw {}°: front {f} px wide, side {s}",
+                yaws[k]
+            );
+        }
+        let panels = render_panels(&o);
+        assert_eq!(panels.len(), yaws.len());
+        for (&deg, (facing, up)) in yaws.iter().zip(&panels) {
+            let want = DQuat::from_rotation_y(deg.to_radians()) * front;
+            let off = facing.angle_between(want).to_degrees();
+            assert!(
+                off < 25.0,
+                "{what}, yaw {deg}°: facing {facing} vs {want} ({off:.0}° off)"
+            );
+            assert!(up.distance(DVec3::Y) < 1e-9, "{what}, yaw {deg}°: up {up}");
+        }
+    };
+    check("standing", &rests, &[]);
+    check("standing, rig", &rests, &["--rig", rig.to_str().unwrap()]);
+    check(
+        "standing, Z-up rig",
+        &rests,
+        &["--rig", zup_rig.to_str().unwrap()],
+    );
+    // Feet together, mid-stride, and between.
+    for frame in ["0", "8", "15", "23"] {
+        check(&format!("walk frame {frame}"), &walks, &["--frame", frame]);
+        check(
+            &format!("walk frame {frame}, rig"),
+            &walks,
+            &["--frame", frame, "--rig", rig.to_str().unwrap()],
+        );
+    }
+    check(
+        "walk, Z-up rig",
+        &walks,
+        &["--frame", "8", "--rig", zup_rig.to_str().unwrap()],
+    );
+}
+
+/// Regression (issue 39, item 10): `render` drew no floor line. Each
+/// panel has one at the lowest point of its sequence, across the panel.
+#[test]
+fn render_draws_a_floor_line() {
     let tmp = tempfile::tempdir().unwrap();
-    let (a, b) = (tmp.path().join("a.obj"), tmp.path().join("b.obj"));
+    let a = tmp.path().join("a.obj");
     std::fs::write(&a, box_obj(0.5, 0.2)).unwrap();
-    std::fs::write(&b, box_obj(0.2, 0.5)).unwrap();
     let png = tmp.path().join("s.png");
     let o = run(&[
         "render",
         a.to_str().unwrap(),
-        b.to_str().unwrap(),
         "--size",
         "64",
         "-o",
         png.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let fronts = [0, 2].map(|k| drawn_columns(&png, 64, k));
-    let sides = [1, 3].map(|k| drawn_columns(&png, 64, k));
-    assert!(fronts[0] > fronts[1] * 2, "front views {fronts:?}");
-    assert!(sides[1] > sides[0] * 2, "side views {sides:?}");
-    assert!(fronts[0].abs_diff(sides[1]) <= 1, "{fronts:?} {sides:?}");
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let mut r = dec.read_info().unwrap();
+    let mut buf = vec![0; r.output_buffer_size().unwrap()];
+    let info = r.next_frame(&mut buf).unwrap();
+    let w = info.width as usize;
+    for k in 0..2 {
+        // The box spans rows 2.5-61.5: its bottom edge is the floor.
+        let grey_rows: Vec<usize> = (0..64)
+            .filter(|&y| {
+                (k * 64..(k + 1) * 64)
+                    .filter(|&x| buf[(y * w + x) * 3..][..3] == [150, 150, 150])
+                    .count()
+                    > 56
+            })
+            .collect();
+        assert!(
+            !grey_rows.is_empty() && grey_rows.iter().all(|&y| (58..64).contains(&y)),
+            "panel {k}: grey rows {grey_rows:?}"
+        );
+    }
 }

@@ -4143,3 +4143,51 @@ fn many_via_key_frames_are_named_as_the_cause() {
         "{err}"
     );
 }
+
+/// Regression (issue 46, item 7): `render` of 16 meshes at `--size 8192`
+/// allocated until it aborted after a minute (8 meshes: 6.2 GB, 49 s).
+/// The picture's size is checked against the memory budget before any
+/// mesh is read or pixel allocated: one line naming the size and what to
+/// lower.
+#[test]
+fn render_picture_over_the_budget_is_refused_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("t.obj");
+    std::fs::write(
+        &mesh,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n",
+    )
+    .unwrap();
+    let out = dir.path().join("r.png");
+    let args = |n: usize, size: &str| {
+        let mut a = vec!["render".to_string()];
+        a.extend(std::iter::repeat_n(mesh.to_str().unwrap().to_string(), n));
+        a.extend(["--size".into(), size.into(), "-o".into()]);
+        a.push(out.to_str().unwrap().into());
+        a
+    };
+    // A small one: 4 meshes at 2048 px (100 MB of pixels) against 64 MB.
+    common::run_cli(
+        &args(4, "2048"),
+        None,
+        &[("SURFMOTION_MEMORY_LIMIT", "64M")],
+    )
+    .assert_bad_input("render 4 meshes at 2048 px", &["2048", "--size", "budget"]);
+    // The reported case: 16 × 2 views of 8192² pixels, 6.4 GB of RGB.
+    let t = std::time::Instant::now();
+    common::run_cli(
+        &args(16, "8192"),
+        None,
+        &[("SURFMOTION_MEMORY_LIMIT", "2G")],
+    )
+    .assert_bad_input("render 16 meshes at 8192 px", &["8192", "--size", "budget"]);
+    assert!(
+        t.elapsed().as_secs() < 10,
+        "refused after {:?}",
+        t.elapsed()
+    );
+    assert!(!out.exists(), "nothing is written when refused");
+    // Within the budget it draws.
+    let ok = common::run_cli(&args(2, "64"), None, &[("SURFMOTION_MEMORY_LIMIT", "64M")]);
+    assert_eq!(ok.code, Some(0), "{}", ok.stderr);
+}

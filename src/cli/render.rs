@@ -29,16 +29,18 @@ pub struct Args {
     /// Frame of a sequence to draw.
     #[arg(long, default_value_t = 0)]
     pub frame: usize,
-    /// Direction the character faces (x, -x, z, -z): sets the front view.
-    /// Defaults to the rig's facing, else the first mesh's, read off its
-    /// shoulders and knees over the frames around the one drawn (see
-    /// `surfmotion::render::facing_of_frames`); one camera for every panel.
+    /// Direction the character faces (x, -x, z, -z): sets the front view
+    /// of every panel. Defaults to each panel's own: across the hips and
+    /// shoulders of the rig's skeleton on the frame drawn, else read off
+    /// the mesh's shoulders and knees over the frames around the one drawn
+    /// (see `surfmotion::render::facing_of_frames`).
     #[arg(long, allow_hyphen_values = true)]
     pub facing: Option<String>,
     /// The mesh's up axis (+y, -y, +z, -z, +x, -x): the frames are turned
     /// to stand Y-up before they are drawn (a bare `.pc2` carries no up; a
-    /// Z-up scan's is read as lying). Defaults to the rig's up snapped to
-    /// the nearest axis when `--rig` is given, else +y. `--facing` is in
+    /// Z-up scan's is read as lying). Defaults to the up of the rig's skeleton
+    /// on the frame drawn (pelvis to neck) snapped to the nearest axis
+    /// when `--rig` is given, else +y. `--facing` is in
     /// the file's own axes.
     #[arg(long, allow_hyphen_values = true)]
     pub up: Option<String>,
@@ -85,7 +87,7 @@ pub fn draw(
     facing: DVec3,
     size: usize,
 ) -> Image {
-    draw_framed(positions, triangles, rig, facing, size, [None, None])
+    draw_framed(positions, triangles, rig, facing, size, [None, None], None)
 }
 
 /// [`draw`] with each view placed by its framing (`None`: fitted to the frame).
@@ -96,6 +98,7 @@ pub fn draw_framed(
     facing: DVec3,
     size: usize,
     framing: [Option<Framing>; 2],
+    floor: Option<f64>,
 ) -> Image {
     let colours: Option<Vec<[u8; 3]>> =
         rig.map(|r| r.labels.iter().map(|&l| label_colour(l as usize)).collect());
@@ -117,9 +120,57 @@ pub fn draw_framed(
     let views = [View::front(facing), View::side(facing)];
     let [front, side] = [0, 1].map(|k| {
         let f = framing[k].unwrap_or_else(|| Framing::fit(positions, views[k], size));
+        let mut lines = lines.clone();
+        if let Some(y) = floor.filter(|y| y.is_finite()) {
+            lines.insert(0, surfmotion::render::floor_line(views[k], f, y, size));
+        }
+        let scene = Scene {
+            lines: &lines,
+            ..scene
+        };
         render_framed(&scene, views[k], size, f)
     });
     front.beside(&side)
+}
+
+/// One mesh of `render`, stood Y-up.
+struct Panel {
+    seq: surfmotion::mesh::MeshSequence,
+    rig: Option<Embedding>,
+    /// Facing (Y-up, horizontal).
+    facing: DVec3,
+    /// The frame drawn.
+    pos: Vec<[f64; 3]>,
+    /// Height of the floor line.
+    floor: f64,
+    /// The turn from the file's axes to Y-up.
+    turn: glam::DQuat,
+}
+
+/// The character's left-right line in `j` (hips and shoulders, each
+/// normalised, across `up`).
+fn left_of(j: &surfmotion::skeleton::Pose, up: DVec3) -> DVec3 {
+    let across = |l: Canonical, r: Canonical| {
+        let d = j[l.index()] - j[r.index()];
+        (d - up * d.dot(up)).normalize_or_zero()
+    };
+    across(Canonical::LHip, Canonical::RHip) + across(Canonical::LShoulder, Canonical::RShoulder)
+}
+
+/// The facing of a Y-up frame whose rig skeleton is `j`: across its hips
+/// and shoulders (left × up), signed as the rig's own rest facing is
+/// against its rest skeleton (so a rig whose sides are named the other
+/// way round still faces forward). `None` when the skeleton has no width.
+pub fn rig_facing(r: &Embedding, j: &surfmotion::skeleton::Pose) -> Option<DVec3> {
+    let rest_up = DVec3::from_array(r.up).normalize_or(DVec3::Y);
+    let rest = left_of(&r.joints.map(DVec3::from_array), rest_up).cross(rest_up);
+    let sign = if rest.dot(DVec3::from_array(r.facing)) < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    let f = left_of(j, DVec3::Y).cross(DVec3::Y) * sign;
+    (f.length() > 1e-9 && f.is_finite()).then(|| f.normalize())
 }
 
 /// Runs `render`: every panel at one scale (the largest extent over all
@@ -134,6 +185,22 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ),
         None => None,
     };
+    // The picture's size against the memory budget, before anything is
+    // read: front and side views of each mesh side by side (RGB), built
+    // panel by panel (each joined copy is a new picture: twice the
+    // picture at the peak), plus one panel's depth buffer.
+    let (width, height) = (2 * a.mesh.len() as u128 * size as u128, size as u128);
+    surfmotion::budget::check(
+        || {
+            format!(
+                "{}: a picture of {} mesh(es) at --size {size} ({width} × {height} pixels)",
+                a.output.display(),
+                a.mesh.len()
+            )
+        },
+        2 * width * height * 3 + height * height * 11,
+    )
+    .map_err(|e| anyhow::anyhow!("{e}; lower --size or draw fewer meshes"))?;
     let mut loaded = Vec::new();
     for mesh in &a.mesh {
         let s = load_sequence(mesh, &LoadOptions::default())?;
@@ -149,59 +216,82 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             Some(p) => Some(Embedding::load(p, s.mesh().vertex_count())?),
             None => None,
         };
-        // One camera for every panel: without `--facing` or a rig, the
-        // first mesh's facing is kept for the others, so frames of a path
-        // that turns are seen turning (each estimated alone, the views
-        // flipped between front and back as the path turned).
-        // Stood Y-up (the views assume it): by `--up`, else the rig's.
-        let up = up.or_else(|| rig.as_ref().map(|r| nearest_axis(DVec3::from_array(r.up))));
+        // The rig's skeleton on the frame drawn, in the file's axes.
+        let joints = rig.as_ref().map(|r| r.skeleton(s.frame(a.frame)));
+        // Stood Y-up (the views assume it): by `--up`, else by the rig's
+        // skeleton on this frame (pelvis to neck, snapped to an axis). The
+        // rig's rest up held only for frames in the axes of the mesh it was
+        // embedded in: a glTF's animation is in the scene's axes, its bind
+        // pose in the mesh's (CesiumMan was drawn lying down).
+        let up = up.or_else(|| {
+            let (r, j) = (rig.as_ref()?, joints.as_ref()?);
+            let spine = j[Canonical::Neck.index()] - j[Canonical::Pelvis.index()];
+            Some(if spine.length() > 0.0 && spine.is_finite() {
+                nearest_axis(spine)
+            } else {
+                nearest_axis(DVec3::from_array(r.up))
+            })
+        });
         let turn = surfmotion::render::y_up_turn(up.unwrap_or(DVec3::Y));
-        let pos: Vec<[f64; 3]> = s
-            .frame(a.frame)
-            .iter()
-            .map(|p| (turn * DVec3::from_array(*p)).to_array())
-            .collect();
-        let facing = match (&a.facing, &rig, loaded.first()) {
+        let stood = |f: usize| -> Vec<[f64; 3]> {
+            s.frame(f)
+                .iter()
+                .map(|p| (turn * DVec3::from_array(*p)).to_array())
+                .collect()
+        };
+        let pos = stood(a.frame);
+        // Each panel faced from its own body: a result that turns is seen
+        // from the front in every panel (one camera for all showed the
+        // later frames of a turn from behind).
+        let facing = match (&a.facing, &rig, &joints) {
             (Some(f), _, _) => turn * parse_axis(f)?,
-            (None, Some(r), _) => turn * DVec3::from_array(r.facing),
-            (None, None, Some((_, _, first, _))) => *first,
-            (None, None, None) => {
+            (None, Some(r), Some(j)) => {
+                let j = j.map(|p| turn * p);
+                rig_facing(r, &j).unwrap_or(turn * DVec3::from_array(r.facing))
+            }
+            _ => {
                 // Up to 150 frames either side: their votes settle the sign.
                 let (from, to) = (
                     a.frame.saturating_sub(150),
                     (a.frame + 151).min(s.frame_count()),
                 );
-                let around: Vec<Vec<[f64; 3]>> = (from..to)
-                    .map(|f| {
-                        s.frame(f)
-                            .iter()
-                            .map(|p| (turn * DVec3::from_array(*p)).to_array())
-                            .collect()
-                    })
-                    .collect();
+                let around: Vec<Vec<[f64; 3]>> = (from..to).map(stood).collect();
                 let refs: Vec<&[[f64; 3]]> = around.iter().map(Vec::as_slice).collect();
                 facing_of_frames(&refs, a.frame - from)
             }
         };
-        loaded.push((s, rig, facing, pos));
+        // The floor: the lowest point of the whole sequence, stood up (a
+        // jump is drawn above it).
+        let floor = (0..s.frame_count())
+            .flat_map(|f| s.frame(f).iter().map(|p| (turn * DVec3::from_array(*p)).y))
+            .fold(f64::INFINITY, f64::min);
+        loaded.push(Panel {
+            seq: s,
+            rig,
+            facing,
+            pos,
+            floor,
+            turn,
+        });
     }
     // One scale across all panels.
     let bounds: Vec<[([f64; 2], [f64; 2]); 2]> = loaded
         .iter()
-        .map(|(_, _, f, pos)| [View::front(*f), View::side(*f)].map(|v| view_bounds(pos, v)))
+        .map(|p| [View::front(p.facing), View::side(p.facing)].map(|v| view_bounds(&p.pos, v)))
         .collect();
     let flat: Vec<([f64; 2], [f64; 2])> = bounds.iter().flatten().copied().collect();
     let (framings, _) = surfmotion::render::shared_framing(&flat, size);
     let mut out: Option<Image> = None;
-    for (i, (s, rig, facing, pos)) in loaded.iter().enumerate() {
+    for (i, p) in loaded.iter().enumerate() {
         let framing = [0, 1].map(|k| Some(framings[2 * i + k]));
         let img = draw_framed(
-            pos,
-            s.mesh().triangles(),
-            rig.as_ref(),
-            *facing,
+            &p.pos,
+            p.seq.mesh().triangles(),
+            p.rig.as_ref(),
+            p.facing,
             size,
             framing,
+            Some(p.floor),
         );
         out = Some(match out {
             None => img,
@@ -219,6 +309,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "height": img.height,
             "meshes": a.mesh,
             "frame": a.frame,
+            "panels": loaded.iter().zip(&a.mesh).map(|(p, m)| {
+                // In the file's own axes.
+                let back = p.turn.inverse();
+                serde_json::json!({
+                    "mesh": m,
+                    "facing": (back * p.facing).to_array(),
+                    "up": (back * DVec3::Y).to_array(),
+                    "floor": p.floor,
+                })
+            }).collect::<Vec<_>>(),
         });
         return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
     }
