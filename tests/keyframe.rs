@@ -2390,3 +2390,55 @@ fn a_time_target_past_the_search_cap_is_reported_as_a_bound_hit() {
     }
     assert!(checked >= 5, "only {checked} connected cases");
 }
+
+/// Issue 39.11, a false "no path": on a four-clip synthetic database (CMU
+/// 02_01, 02_03, Bandai walk and walk-left, 30 fps) `--from 02_01:0 --to
+/// 02_03:20 --distance 20 --time 10.5` exited 1 with "no sequence of
+/// transitions joins them" while 10 s and 11 s were answered: the
+/// exact-length search found nothing near its aim in the eight frame
+/// counts it tried, and the walks' search, whose enumeration stopped
+/// before reaching the goal (0 walks), had nothing to fall back on.
+/// Whenever a path joins the key-frames, every target gets one (the best
+/// compromise), with either search, even with the walk enumeration
+/// bounded to (almost) nothing as it was on that graph.
+#[test]
+fn joined_key_frames_never_give_a_false_no_path() {
+    use surfmotion::keyframe::search::{Limits, Method};
+    let mut r = Lcg(3911);
+    let bounded = Limits {
+        expansions: 1,
+        cycles: 8,
+        ..Default::default()
+    };
+    let mut cases = 0;
+    for case in 0..60 {
+        let (seqs, jumps) = (3 + r.below(3), 10 + r.below(30));
+        let g = random_graph(&mut r, seqs, jumps);
+        let keys: Vec<u32> = (0..2 + r.below(2))
+            .map(|_| r.below(g.len()) as u32)
+            .collect();
+        for limits in [Limits::default(), bounded] {
+            let base = SearchOptions {
+                limits,
+                ..Default::default()
+            };
+            let Ok(p) = Planner::new(g.clone(), &keys, 25.0, &base) else {
+                continue;
+            };
+            for _ in 0..6 {
+                let distance = 0.05 + 8.0 * r.next();
+                let time = 0.1 + 12.0 * r.next();
+                for method in [Method::Lattice, Method::Walks] {
+                    let o = SearchOptions { method, ..base };
+                    let t = Targets::Global { distance, time };
+                    let plan = p.plan(&t, &o).unwrap_or_else(|e| {
+                        panic!("case {case} {keys:?} {method:?} {distance} m {time} s: {e}")
+                    });
+                    assert_walks_the_graph(&g, &plan, case);
+                    cases += 1;
+                }
+            }
+        }
+    }
+    assert!(cases >= 200, "{cases} cases");
+}
