@@ -2442,3 +2442,23 @@ fn joined_key_frames_never_give_a_false_no_path() {
     }
     assert!(cases >= 200, "{cases} cases");
 }
+
+/// Issue 46.12: `--times '0:3600:0.036'` was refused as "100001 values,
+/// at most 100001" (the check divided without the rounding slack of the
+/// values it makes). A range is refused only above its cap, with the
+/// count it would make.
+#[test]
+fn a_range_of_100001_values_is_not_refused_as_more_than_100001() {
+    use surfmotion::keyframe::grid::{MAX_RANGE_VALUES, parse_range};
+    for s in ["0:3600:0.036", "0:100000:1", "0:1:0.00001"] {
+        let v = parse_range(s).unwrap_or_else(|e| panic!("{s}: {e}"));
+        assert_eq!(v.len(), MAX_RANGE_VALUES, "{s}");
+    }
+    for (s, n) in [
+        ("0:3600:0.0359", "100279 values"),
+        ("0:100001:1", "100002 values"),
+    ] {
+        let e = parse_range(s).unwrap_err();
+        assert!(e.contains(n) && e.contains("at most 100001"), "{s}: {e}");
+    }
+}

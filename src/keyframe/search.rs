@@ -210,6 +210,9 @@ pub enum SearchError {
     /// the target, [`super::lattice::chain_extremes`]).
     #[error("{0}")]
     OverBudget(#[from] crate::budget::OverBudget),
+    /// A grid of targets too large to run ([`super::grid::check_grid`]).
+    #[error(transparent)]
+    Grid(#[from] super::grid::GridError),
 }
 
 #[derive(Debug, Clone, Copy)]
