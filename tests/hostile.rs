@@ -870,6 +870,18 @@ fn session9_rows() -> Vec<Row> {
             "keyframe --db {db} --from walk:99999999999999999999 --to walk:100 --distance 3 --time 3 -o {d}/k.glb",
             &["walk:99999999999999999999", "180 frames"],
         ),
+        // Each axis under its cap, 8.9e9 targets: aborted on an allocation
+        // of 1.28 TB (issue 46.4). Refused before the database loads.
+        row(
+            "keyframe --grid of 8.9e9 targets",
+            "keyframe --db {db} --from walk:0 --to walk:100 --grid --distances 0:99:0.001 --times 0:3600:0.04",
+            &[
+                "--distances × --times",
+                "8,910,189,001 targets",
+                "at most 100,000",
+                "lower the number of distances or times",
+            ],
+        ),
         // Each aborted on an allocation of 43 GB or 216 GB (exit 134).
         row(
             "keyframe --time 1e6",

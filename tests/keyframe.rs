@@ -2390,3 +2390,75 @@ fn a_time_target_past_the_search_cap_is_reported_as_a_bound_hit() {
     }
     assert!(checked >= 5, "only {checked} connected cases");
 }
+
+/// Issue 39.11, a false "no path": on a four-clip synthetic database (CMU
+/// 02_01, 02_03, Bandai walk and walk-left, 30 fps) `--from 02_01:0 --to
+/// 02_03:20 --distance 20 --time 10.5` exited 1 with "no sequence of
+/// transitions joins them" while 10 s and 11 s were answered: the
+/// exact-length search found nothing near its aim in the eight frame
+/// counts it tried, and the walks' search, whose enumeration stopped
+/// before reaching the goal (0 walks), had nothing to fall back on.
+/// Whenever a path joins the key-frames, every target gets one (the best
+/// compromise), with either search, even with the walk enumeration
+/// bounded to (almost) nothing as it was on that graph.
+#[test]
+fn joined_key_frames_never_give_a_false_no_path() {
+    use surfmotion::keyframe::search::{Limits, Method};
+    let mut r = Lcg(3911);
+    let bounded = Limits {
+        expansions: 1,
+        cycles: 8,
+        ..Default::default()
+    };
+    let mut cases = 0;
+    for case in 0..60 {
+        let (seqs, jumps) = (3 + r.below(3), 10 + r.below(30));
+        let g = random_graph(&mut r, seqs, jumps);
+        let keys: Vec<u32> = (0..2 + r.below(2))
+            .map(|_| r.below(g.len()) as u32)
+            .collect();
+        for limits in [Limits::default(), bounded] {
+            let base = SearchOptions {
+                limits,
+                ..Default::default()
+            };
+            let Ok(p) = Planner::new(g.clone(), &keys, 25.0, &base) else {
+                continue;
+            };
+            for _ in 0..6 {
+                let distance = 0.05 + 8.0 * r.next();
+                let time = 0.1 + 12.0 * r.next();
+                for method in [Method::Lattice, Method::Walks] {
+                    let o = SearchOptions { method, ..base };
+                    let t = Targets::Global { distance, time };
+                    let plan = p.plan(&t, &o).unwrap_or_else(|e| {
+                        panic!("case {case} {keys:?} {method:?} {distance} m {time} s: {e}")
+                    });
+                    assert_walks_the_graph(&g, &plan, case);
+                    cases += 1;
+                }
+            }
+        }
+    }
+    assert!(cases >= 200, "{cases} cases");
+}
+
+/// Issue 46.12: `--times '0:3600:0.036'` was refused as "100001 values,
+/// at most 100001" (the check divided without the rounding slack of the
+/// values it makes). A range is refused only above its cap, with the
+/// count it would make.
+#[test]
+fn a_range_of_100001_values_is_not_refused_as_more_than_100001() {
+    use surfmotion::keyframe::grid::{MAX_RANGE_VALUES, parse_range};
+    for s in ["0:3600:0.036", "0:100000:1", "0:1:0.00001"] {
+        let v = parse_range(s).unwrap_or_else(|e| panic!("{s}: {e}"));
+        assert_eq!(v.len(), MAX_RANGE_VALUES, "{s}");
+    }
+    for (s, n) in [
+        ("0:3600:0.0359", "100279 values"),
+        ("0:100001:1", "100002 values"),
+    ] {
+        let e = parse_range(s).unwrap_err();
+        assert!(e.contains(n) && e.contains("at most 100001"), "{s}: {e}");
+    }
+}

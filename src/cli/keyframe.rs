@@ -2,7 +2,7 @@
 //! Graph (Huang et al. 2015, Sec. 5.1), and its Table III grid evaluation.
 
 use std::path::PathBuf;
-use surfmotion::keyframe::grid::{GridReport, evaluate, parse_range};
+use surfmotion::keyframe::grid::{GridReport, evaluate_with, parse_range};
 use surfmotion::keyframe::search::{Method, SearchOptions, Solver, Weights};
 use surfmotion::keyframe::{
     KeyframeOptions, Planner, Streamed, Targets, TransitionCost, describe, key_graph, parse_key,
@@ -286,6 +286,25 @@ fn numbers(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
         .collect()
 }
 
+/// A database whose cache was never built, in a folder that cannot be
+/// written, said only "Read-only file system" (issue 46.12): the error
+/// then says that the cache must be built first, where it can be written.
+fn cache_unwritable(db: &std::path::Path, e: surfmotion::db::DbError) -> anyhow::Error {
+    let text = e.to_string();
+    let denied = text.contains("Read-only file system")
+        || text.contains("os error 30")
+        || text.contains("Permission denied");
+    if denied && !db.join("cache").is_dir() {
+        anyhow::anyhow!(
+            "{text}: the database's cache is not built and cannot be written in {}; build it with `surfmotion db build {}` in a writable folder (copy the database to one first)",
+            db.display(),
+            db.display()
+        )
+    } else {
+        e.into()
+    }
+}
+
 /// Runs `keyframe`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let mut outputs = Vec::new();
@@ -304,14 +323,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     if a.grid || a.floor {
         // Refused before the database loads (and its graph builds).
-        grid_targets(&a)?;
+        let (ds, ts) = grid_targets(&a)?;
+        if a.grid {
+            // 8.9e9 targets aborted on a 1.28 TB allocation (issue 46.4).
+            surfmotion::keyframe::grid::check_grid(ds.len(), ts.len())
+                .map_err(|e| anyhow::anyhow!("--distances × --times: {e}"))?;
+        }
     } else if a.distances != DEFAULT_DISTANCES || a.times != DEFAULT_TIMES {
         // Ignored without a word (`--times NaN` ran the single query).
         anyhow::bail!(
             "--distances and --times are the grid's (with --grid or --floor); one query takes --distance and --time"
         );
     }
-    let ch = Character::load(&a.db, &super::db::Bars::new())?;
+    let ch =
+        Character::load(&a.db, &super::db::Bars::new()).map_err(|e| cache_unwritable(&a.db, e))?;
     let load = a.clip.load_options()?;
     let mut resolved = Vec::new();
     let mut key = |k: &str| -> anyhow::Result<u32> {
@@ -612,7 +637,21 @@ fn write_path(
             fps: Some(fps),
             ..Default::default()
         },
-    )?;
+    )
+    .map_err(|e| {
+        // "a GLB of 16,559 frames would need 11.9 GB" for `--time 3600`
+        // without a word that the search had stopped short of the target
+        // (issue 46.12).
+        let notes = planned.bounds_hit();
+        if notes.is_empty() {
+            anyhow::Error::from(e)
+        } else {
+            anyhow::anyhow!(
+                "{e} (the path found has {total} frames; search bound: {})",
+                notes.join("; ")
+            )
+        }
+    })?;
     let s = planned.synthesise_each(ch, targets, opts, |k, p| -> anyhow::Result<()> {
         if k % 16 == 0 {
             bar.set_message(format!(
@@ -667,14 +706,48 @@ fn grid(
         .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     planner.facing = surfmotion::keyframe::facing_change(ch, keys);
     let (ds, ts) = grid_targets(a)?;
-    // Minutes on a large database with nothing on the screen before.
-    let bar = super::spinner(&format!(
-        "evaluating the grid: {} ({} × {})",
-        super::count(ds.len() * ts.len(), "query"),
-        super::count(ds.len(), "distance"),
-        super::count(ts.len(), "time")
-    ));
-    let g = evaluate(ch, &planner, &ds, &ts, &opts.search, &opts.timeline);
+    // Minutes on a large database with nothing on the screen before, and
+    // no word of how long (issue 46.4): a bar with its ETA on a terminal,
+    // and each target's row printed as it finishes (none with --json).
+    let bar = if a.json {
+        indicatif::ProgressBar::hidden()
+    } else {
+        super::progress((ds.len() * ts.len()) as u64, "grid queries")
+    };
+    if !a.json {
+        super::emit(
+            &(head.to_string()
+                + "distance (m)  time (s)  achieved (m)  achieved (s)  within 1 %  reach  ms\n"),
+        )?;
+    }
+    let mut closed = false;
+    let g = evaluate_with(
+        ch,
+        &planner,
+        &ds,
+        &ts,
+        &opts.search,
+        &opts.timeline,
+        &mut |q| {
+            bar.inc(1);
+            if !a.json && !closed {
+                let row = format!(
+                    "{} {} {:.3} {:.3} {} {} {:.1}\n",
+                    q.distance,
+                    q.time,
+                    q.achieved_distance,
+                    q.achieved_time,
+                    if q.within_1pct { "yes" } else { "no" },
+                    serde_json::to_value(q.reach)
+                        .ok()
+                        .and_then(|v| v.as_str().map(str::to_string))
+                        .unwrap_or_default(),
+                    1e3 * q.seconds
+                );
+                closed = bar.suspend(|| super::emit(&row)).is_err();
+            }
+        },
+    );
     bar.finish_and_clear();
     let g = g.map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     if let Some(p) = &a.report {
@@ -690,7 +763,7 @@ fn grid(
         }
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
-    super::emit(&(head.to_string() + &grid_text(&g)))
+    super::emit(&grid_text(&g))
 }
 
 /// `--grid --least-mean`: the least mean smoothness per target
@@ -702,7 +775,7 @@ fn least_mean(
     opts: &KeyframeOptions,
     head: &str,
 ) -> anyhow::Result<()> {
-    use surfmotion::keyframe::smoothest::{Summary, floor_grid};
+    use surfmotion::keyframe::smoothest::{Summary, floor_grid_with};
     let priced = KeyframeOptions {
         transition_cost: TransitionCost::Smoothness,
         ..*opts
@@ -715,12 +788,48 @@ fn least_mean(
     )
     .map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     let (ds, ts) = grid_targets(a)?;
-    let bar = super::spinner(&format!(
-        "least mean smoothness over the grid: {}",
-        super::count(ds.len() * ts.len(), "target")
-    ));
+    // A 100 × 100 grid ran for many minutes with no output (issue 46.4):
+    // a bar with its ETA, and each target's row as it finishes.
+    let bar = if a.json {
+        indicatif::ProgressBar::hidden()
+    } else {
+        super::progress(
+            (ds.len() * ts.len()) as u64,
+            "targets: least mean smoothness",
+        )
+    };
+    if !a.json {
+        super::emit(
+            &(head.to_string()
+                + "distance (m)  time (s)  reachable  least mean (m)  lower bound (m)  s\n"),
+        )?;
+    }
     let t0 = std::time::Instant::now();
-    let r = floor_grid(ch, &planner, &ds, &ts, &opts.search.lattice, &opts.timeline);
+    let mut closed = false;
+    let opt = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.4}"));
+    let r = floor_grid_with(
+        ch,
+        &planner,
+        &ds,
+        &ts,
+        &opts.search.lattice,
+        &opts.timeline,
+        &mut |q| {
+            bar.inc(1);
+            if !a.json && !closed {
+                let row = format!(
+                    "{} {} {} {} {} {:.2}\n",
+                    q.distance,
+                    q.time,
+                    if q.reachable { "yes" } else { "no" },
+                    opt(q.least_mean),
+                    opt(q.lower_bound),
+                    q.seconds
+                );
+                closed = bar.suspend(|| super::emit(&row)).is_err();
+            }
+        },
+    );
     bar.finish_and_clear();
     let r = r.map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     if let Some(p) = &a.report {
@@ -749,7 +858,7 @@ fn least_mean(
         sum(&r.least_mean_measured),
         sum(&r.lower_bound),
     );
-    super::emit(&(head.to_string() + &text))
+    super::emit(&text)
 }
 
 /// `--floor`: the transition floor of the database and the path floor

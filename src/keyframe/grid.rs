@@ -213,6 +213,63 @@ pub struct GridReport {
     pub queries: Vec<GridQuery>,
 }
 
+/// Most values of one range of [`parse_range`].
+pub const MAX_RANGE_VALUES: usize = 100_001;
+
+/// Most targets of one grid (distances × times), the work of
+/// [`evaluate`] and of [`super::smoothest::floor_grid`] (one query, and
+/// for the floor several programmes, per target): each axis under
+/// [`MAX_RANGE_VALUES`] still made 8.9e9 targets, a 1.28 TB allocation
+/// (issue 46.4). The default grid has 800.
+pub const MAX_GRID_TARGETS: usize = 100_000;
+
+/// A grid too large to run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GridError {
+    /// More targets than [`MAX_GRID_TARGETS`].
+    #[error(
+        "a grid of {} targets ({} distances × {} times): at most {}; lower the number of distances or times (a larger step or a shorter range)",
+        crate::budget::thousands(*.count),
+        crate::budget::thousands(*.distances as u128),
+        crate::budget::thousands(*.times as u128),
+        crate::budget::thousands(*.max as u128)
+    )]
+    TooMany {
+        /// Targets asked for.
+        count: u128,
+        /// Distances.
+        distances: usize,
+        /// Times.
+        times: usize,
+        /// The cap.
+        max: usize,
+    },
+    /// Its queries' records exceed the memory budget.
+    #[error("{0}")]
+    OverBudget(#[from] crate::budget::OverBudget),
+}
+
+/// Refuses a grid of `distances × times` targets before any query runs:
+/// more than [`MAX_GRID_TARGETS`], or records beyond the memory budget.
+pub fn check_grid(distances: usize, times: usize) -> Result<(), GridError> {
+    let count = distances as u128 * times as u128;
+    if count > MAX_GRID_TARGETS as u128 {
+        return Err(GridError::TooMany {
+            count,
+            distances,
+            times,
+            max: MAX_GRID_TARGETS,
+        });
+    }
+    let each =
+        std::mem::size_of::<GridQuery>().max(std::mem::size_of::<super::smoothest::FloorQuery>());
+    crate::budget::check(
+        || format!("a grid of {} targets", crate::budget::thousands(count)),
+        count * each as u128,
+    )?;
+    Ok(())
+}
+
 /// A range `a:b:step` (inclusive) or a comma list.
 pub fn parse_range(s: &str) -> Result<Vec<f64>, String> {
     let bad = || format!("'{s}': expected A:B:STEP or a comma list of numbers ≥ 0");
@@ -225,14 +282,17 @@ pub fn parse_range(s: &str) -> Result<Vec<f64>, String> {
             return Err(bad());
         }
         // Said "expected A:B:STEP" of a well-formed range that was too long.
-        if (p[1] - p[0]) / p[2] > 1e5 {
+        // The count is the one generated below (`0:3600:0.036` was refused
+        // as "100001 values, at most 100001": the test divided without the
+        // rounding slack the generation uses).
+        let n = ((p[1] - p[0]) / p[2] + 1e-9).floor();
+        if n + 1.0 > MAX_RANGE_VALUES as f64 {
             return Err(format!(
-                "'{s}': {:.0} values, at most 100001: choose a larger STEP",
-                ((p[1] - p[0]) / p[2]).floor() + 1.0
+                "'{s}': {:.0} values, at most {MAX_RANGE_VALUES}: choose a larger STEP",
+                n + 1.0
             ));
         }
-        let n = ((p[1] - p[0]) / p[2] + 1e-9).floor() as usize;
-        (0..=n).map(|k| p[0] + k as f64 * p[2]).collect()
+        (0..=n as usize).map(|k| p[0] + k as f64 * p[2]).collect()
     } else {
         s.split(',')
             .map(|x| x.trim().parse::<f64>().map_err(|_| bad()))
@@ -368,6 +428,23 @@ pub fn evaluate(
     search: &SearchOptions,
     timeline: &TimelineOptions,
 ) -> Result<GridReport, super::search::SearchError> {
+    evaluate_with(ch, planner, distances, times, search, timeline, &mut |_| {})
+}
+
+/// [`evaluate`], calling `done` with every query as it finishes (in
+/// order: distances outer, times inner), so that a caller can show
+/// progress and rows before the grid ends. Errors: the grid's size
+/// ([`check_grid`]) or the search's.
+pub fn evaluate_with(
+    ch: &Character,
+    planner: &Planner,
+    distances: &[f64],
+    times: &[f64],
+    search: &SearchOptions,
+    timeline: &TimelineOptions,
+    done: &mut dyn FnMut(&GridQuery),
+) -> Result<GridReport, super::search::SearchError> {
+    check_grid(distances.len(), times.len())?;
     let reach: Vec<Reach> = planner.segments.iter().map(|s| s.reach()).collect();
     // Every frame pair of every transition the paths may take, measured
     // once and in parallel before the queries (the timeline's shortened
@@ -426,6 +503,9 @@ pub fn evaluate(
                 }),
                 walks_and_loops: plan.stats.walks_and_loops,
             });
+            if let Some(q) = queries.last() {
+                done(q);
+            }
         }
     }
     let (gw, ga) = graph_smoothness_split(ch, &planner.graph, &mut cache);

@@ -1136,6 +1136,8 @@ pub fn search(
         })
         .collect();
     order.sort_by(|x, y| x.0.total_cmp(&y.0));
+    // Every frame count in order, for the fallback below.
+    let every = order.clone();
     order.truncate(8);
     let tol = lo.tolerance * t.distance + lo.tolerance_m;
     // Cost pruning needs every term of `total` but the transition cost
@@ -1234,8 +1236,46 @@ pub fn search(
             best = inside;
         }
     }
+    if best.is_none() {
+        // Nothing landed within the tolerance of its aim in the frame
+        // counts above (their extremes ignore `min_run`, and the distances
+        // of one length have gaps): a joined pair of key-frames then got
+        // no path at all and the walks' search, bounded on a large graph,
+        // none either ("no path" for 20 m in 10.5 s while 10 s and 11 s
+        // were answered, issue 39.11). The frame counts in the same order,
+        // each with a tolerance that keeps every path of that length (its
+        // extremes lie within it), give the best compromise instead; at
+        // most [`FALLBACK_COUNTS`] of them are searched.
+        for &(bound, n, aim) in every.iter().take(FALLBACK_COUNTS) {
+            if best.as_ref().is_some_and(|b| bound >= b.1) {
+                break;
+            }
+            let (a, b) = ext.at(c.start, n as usize);
+            let wide = (aim - a).max(b - aim).max(0.0) + tol;
+            if let Some((found, _)) = solve_capped(
+                c,
+                &ext,
+                n as usize,
+                aim,
+                wide,
+                w.distance,
+                heading,
+                &lo,
+                f64::INFINITY,
+            ) {
+                let cost = total(&found);
+                if best.as_ref().is_none_or(|b| cost < b.1) {
+                    best = Some((found, cost));
+                }
+            }
+        }
+    }
     Ok(best)
 }
+
+/// Frame counts the exact-length search's fallback tries, nearest bound
+/// first, when no path landed near its aim ([`search`]).
+pub const FALLBACK_COUNTS: usize = 64;
 
 /// [`solve_capped`] preceded, with a heading target, when no cap bounds
 /// it yet and pruning is on, by the probe (module docs, "Probe"): a programme with fewer bins

@@ -934,6 +934,14 @@ pub struct Planned {
     plan: Plan,
 }
 
+impl Planned {
+    /// Bounds the search hit (e.g. a time target beyond the longest path
+    /// it considers), for messages about the path it found.
+    pub fn bounds_hit(&self) -> &[String] {
+        &self.plan.stats.bounds_hit
+    }
+}
+
 /// [`Output`] without the positions, which went to the caller frame by
 /// frame ([`Planned::synthesise_each`]).
 pub struct Streamed {

@@ -210,6 +210,9 @@ pub enum SearchError {
     /// the target, [`super::lattice::chain_extremes`]).
     #[error("{0}")]
     OverBudget(#[from] crate::budget::OverBudget),
+    /// A grid of targets too large to run ([`super::grid::check_grid`]).
+    #[error(transparent)]
+    Grid(#[from] super::grid::GridError),
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -957,7 +960,14 @@ impl Segment {
     /// Every walk from the start to the goal (depth-first, bounded), each
     /// with its distinct attached loops.
     fn find_walks(&mut self, limits: &Limits) {
-        let (found, capped) = self.all_walks(limits.walks, limits.expansions);
+        let (mut found, capped) = self.all_walks(limits.walks, limits.expansions);
+        if found.is_empty() {
+            // The enumeration stopped before it reached the goal (on a
+            // large graph it can spend every expansion in one corner): the
+            // walk of fewest frames, so that the search always has a path
+            // when one joins the key-frames (issue 39.11).
+            found.extend(self.shortest_walk());
+        }
         if capped {
             self.bounds_hit
                 .push(format!("walk enumeration stopped at {} walks", found.len()));
@@ -996,6 +1006,32 @@ impl Segment {
                 limits.loops_per_walk
             ));
         }
+    }
+
+    /// The walk of fewest frames from the start to the goal, by the
+    /// bounds `h` (each step takes an arc on a shortest path; frames are
+    /// positive, so it is loop-free); `None` when the goal is not reached.
+    #[allow(clippy::type_complexity)]
+    fn shortest_walk(&self) -> Option<(Vec<u32>, Vec<u32>, Measure)> {
+        let mut u = self.start;
+        let (mut nodes, mut arcs) = (vec![u], Vec::new());
+        while u != self.goal {
+            let hu = self.h[u as usize].frames;
+            let a = *self.out[u as usize].iter().find(|&&a| {
+                let arc = &self.arcs[a as usize];
+                self.relevant[arc.to as usize]
+                    && arc.m.frames > 0
+                    && arc.m.frames + self.h[arc.to as usize].frames == hu
+            })?;
+            u = self.arcs[a as usize].to;
+            nodes.push(u);
+            arcs.push(a);
+            if nodes.len() > self.frames.len() {
+                return None;
+            }
+        }
+        let m = self.walk_measure(&arcs);
+        Some((nodes, arcs, m))
     }
 
     /// Adds the segment's nodes, arcs and cycles to `stats`.

@@ -352,6 +352,22 @@ pub fn floor_grid(
     opts: &LatticeOptions,
     timeline: &TimelineOptions,
 ) -> Result<FloorReport, SearchError> {
+    floor_grid_with(ch, planner, distances, times, opts, timeline, &mut |_| {})
+}
+
+/// [`floor_grid`], calling `done` with every target as it finishes
+/// (distances outer, times inner). Errors: the grid's size
+/// ([`super::grid::check_grid`]) or the search's.
+pub fn floor_grid_with(
+    ch: &Character,
+    planner: &Planner,
+    distances: &[f64],
+    times: &[f64],
+    opts: &LatticeOptions,
+    timeline: &TimelineOptions,
+    done: &mut dyn FnMut(&FloorQuery),
+) -> Result<FloorReport, SearchError> {
+    super::grid::check_grid(distances.len(), times.len())?;
     let Some(c) = &planner.chain else {
         return Ok(FloorReport {
             reachable: 0,
@@ -411,6 +427,9 @@ pub fn floor_grid(
                 lower_bound: lb,
                 seconds,
             });
+            if let Some(q) = queries.last() {
+                done(q);
+            }
         }
     }
     let r: Vec<&FloorQuery> = queries.iter().filter(|q| q.reachable).collect();
