@@ -4140,3 +4140,131 @@ fn many_via_key_frames_are_named_as_the_cause() {
         "{err}"
     );
 }
+
+/// The status code of `GET path` on a fresh connection to `addr`, or
+/// `None` when no status line arrives within `wait`.
+fn http_status_within(addr: &str, path: &str, wait: Duration) -> Option<u16> {
+    use std::io::{Read, Write};
+    let sa: std::net::SocketAddr = addr.parse().ok()?;
+    let mut s = std::net::TcpStream::connect_timeout(&sa, wait).ok()?;
+    s.set_read_timeout(Some(wait)).ok()?;
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
+    )
+    .ok()?;
+    let mut buf = [0u8; 12];
+    s.read_exact(&mut buf).ok()?;
+    std::str::from_utf8(&buf[9..12]).ok()?.parse().ok()
+}
+
+/// A site folder with an `index.html` and a 64 MB `big.bin`, served on
+/// 127.0.0.1 with `opts` (the default limits when `None`): its address.
+fn served_site(dir: &Path, opts: Option<surfmotion::web::ServeOptions>) -> String {
+    let site = dir.join("site");
+    std::fs::create_dir_all(&site).unwrap();
+    std::fs::write(site.join("index.html"), "<p>hi</p>").unwrap();
+    std::fs::write(site.join("big.bin"), vec![7u8; 64 << 20]).unwrap();
+    let server = match opts {
+        Some(o) => surfmotion::web::SiteServer::bind_with(&site, "127.0.0.1:0", o),
+        None => surfmotion::web::SiteServer::bind(&site, "127.0.0.1:0"),
+    }
+    .unwrap();
+    let addr = server
+        .url()
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_string();
+    server.spawn();
+    addr
+}
+
+/// Regression (issue 46, item 8): six clients that asked for a 64 MB file
+/// and stopped reading held all four threads of `web serve`, and an
+/// ordinary `GET /` got no answer within 5 s. Now, with six such readers,
+/// twenty half-open requests (half a head, then silence) and eighty idle
+/// keep-alive connections (more than the 64-connection cap) all open on
+/// loopback, `GET /` is answered 200 within 5 s.
+#[test]
+fn web_serve_answers_while_slow_clients_hold_connections() {
+    use std::io::{Read, Write};
+    let tmp = tempfile::tempdir().unwrap();
+    let addr = served_site(tmp.path(), None);
+    let connect = || std::net::TcpStream::connect(&addr).unwrap();
+    let mut held = Vec::new();
+    for _ in 0..6 {
+        let mut s = connect();
+        write!(s, "GET /big.bin HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+        held.push(s);
+    }
+    for _ in 0..20 {
+        let mut s = connect();
+        write!(s, "GET /index.html HTTP/1.1\r\nHo").unwrap();
+        held.push(s);
+    }
+    for _ in 0..80 {
+        let mut s = connect();
+        // Answered (200) or, past the cap, refused (503): either way the
+        // connection stays open on the client's side.
+        let _ = write!(s, "GET / HTTP/1.1\r\nHost: x\r\n\r\n");
+        s.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
+        let _ = s.read(&mut [0u8; 256]);
+        held.push(s);
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let t = Instant::now();
+    let mut last = None;
+    while t.elapsed() < Duration::from_secs(5) && last != Some(200) {
+        last = http_status_within(&addr, "/", Duration::from_secs(5) - t.elapsed());
+        if last != Some(200) {
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+    assert_eq!(
+        last,
+        Some(200),
+        "GET / after {:.1} s with {} slow connections open",
+        t.elapsed().as_secs_f64(),
+        held.len()
+    );
+    drop(held);
+}
+
+/// A client that reads a large response too slowly is cut off at the
+/// response's deadline (write time-out plus the body at the slowest
+/// rate), and one that sends half a request head at the head time-out:
+/// neither holds its thread for ever.
+#[test]
+fn web_serve_cuts_off_stalled_readers_and_half_open_requests() {
+    use std::io::{Read, Write};
+    let tmp = tempfile::tempdir().unwrap();
+    let opts = surfmotion::web::ServeOptions {
+        write_timeout: Duration::from_millis(500),
+        min_rate: 1 << 30,
+        head_timeout: Duration::from_millis(500),
+        ..surfmotion::web::ServeOptions::DEFAULT
+    };
+    let addr = served_site(tmp.path(), Some(opts));
+    let mut slow = std::net::TcpStream::connect(&addr).unwrap();
+    write!(slow, "GET /big.bin HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+    let mut half = std::net::TcpStream::connect(&addr).unwrap();
+    write!(half, "GET /index.html HTTP/1.1\r\nHo").unwrap();
+    std::thread::sleep(Duration::from_secs(2));
+    // The half-open request is answered 408 and closed.
+    half.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    let mut text = String::new();
+    let _ = half.read_to_string(&mut text);
+    assert!(text.starts_with("HTTP/1.1 408"), "{text:?}");
+    // The stalled reader finds the response cut short: what it can still
+    // read ends (EOF or reset) before the 64 MB.
+    slow.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    let mut got = 0usize;
+    let mut buf = vec![0u8; 1 << 20];
+    while let Ok(n) = slow.read(&mut buf) {
+        if n == 0 {
+            break;
+        }
+        got += n;
+    }
+    assert!(got < 64 << 20, "{got} bytes: the whole file was sent");
+}
