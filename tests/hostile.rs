@@ -4268,3 +4268,116 @@ fn web_serve_cuts_off_stalled_readers_and_half_open_requests() {
     }
     assert!(got < 64 << 20, "{got} bytes: the whole file was sent");
 }
+
+/// Regression (issue 39, item 12): a `kill -9` during a write left its
+/// full-size temporary beside the output for good. The next run that
+/// writes the same output removes the temporaries of its naming whose
+/// process is gone, and says so; one of a running process stays.
+#[cfg(unix)]
+#[test]
+fn a_killed_writes_temporary_is_removed_by_the_next_write() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut child = Command::new("true").spawn().unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    let name = std::ffi::OsStr::new("walk.bvh");
+    let stale = tmp.path().join(format!(
+        "{}Zz99Yy.part",
+        surfmotion::fsutil::temp_prefix(dead, name)
+    ));
+    let alive = tmp.path().join(format!(
+        "{}Zz99Yy.part",
+        surfmotion::fsutil::temp_prefix(std::process::id(), name)
+    ));
+    std::fs::write(&stale, vec![0u8; 1 << 20]).unwrap();
+    std::fs::write(&alive, b"in progress").unwrap();
+    let out = Command::new(common::bin())
+        .args(["mocap", "procedural", "--gait", "walk", "-o", "walk.bvh"])
+        .current_dir(tmp.path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!stale.exists(), "{err}");
+    assert!(alive.exists());
+    assert!(
+        err.contains("removed") && err.contains(&format!("({dead}) is gone")),
+        "{err}"
+    );
+}
+
+/// Regression (issue 46, item 13): `web serve --db` stopped with SIGTERM
+/// left its temporary export in the temporary folder. It is removed on
+/// SIGTERM and SIGINT, and a start removes the exports of earlier runs
+/// whose process is gone (only folders of its naming, marked with their
+/// process id); others stay.
+#[cfg(unix)]
+#[test]
+fn web_serve_removes_its_export_on_sigterm_and_stale_ones_at_start() {
+    use std::io::BufRead;
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let mut child = Command::new("true").spawn().unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    let stale = tmp.path().join(format!("surfmotion-serve-{dead}-Ab12Cd"));
+    std::fs::create_dir_all(stale.join("site")).unwrap();
+    std::fs::write(stale.join("surfmotion-serve.pid"), dead.to_string()).unwrap();
+    // Not provably its own: no marker, another marker, a live process.
+    let unmarked = tmp.path().join(format!("surfmotion-serve-{dead}-Xy34Zw"));
+    std::fs::create_dir_all(&unmarked).unwrap();
+    let live = tmp
+        .path()
+        .join(format!("surfmotion-serve-{}-Qq56Rr", std::process::id()));
+    std::fs::create_dir_all(&live).unwrap();
+    std::fs::write(
+        live.join("surfmotion-serve.pid"),
+        std::process::id().to_string(),
+    )
+    .unwrap();
+    for sig in ["TERM", "INT"] {
+        let mut c = Command::new(common::bin())
+            .args(["web", "serve", "--port", "0", "--db"])
+            .arg(&f.db)
+            .env("TMPDIR", tmp.path())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut line = String::new();
+        std::io::BufReader::new(c.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        assert!(line.starts_with("serving "), "{line}");
+        let exports: Vec<_> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| ![&unmarked, &live].contains(&p))
+            .collect();
+        assert_eq!(exports.len(), 1, "{exports:?}");
+        assert_ne!(exports[0], stale);
+        let killed = Command::new("kill")
+            .args([format!("-{sig}"), c.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let t = Instant::now();
+        while c.try_wait().unwrap().is_none() && t.elapsed() < Duration::from_secs(10) {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let _ = c.kill();
+        let out = c.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "SIG{sig}: {:?} {err}", out.status);
+        assert!(!exports[0].exists(), "SIG{sig}: {err}");
+        assert!(err.contains("removed the temporary export"), "{err}");
+        if sig == "TERM" {
+            assert!(
+                err.contains(&format!("removed {}", stale.display())),
+                "{err}"
+            );
+        }
+        assert!(!stale.exists() && unmarked.exists() && live.exists());
+    }
+}

@@ -17,4 +17,5 @@ pub use export::{
     WebError, export_db, export_result, load_db_geometry,
 };
 pub use serve::{ServeOptions, SiteServer, resolve_path};
+pub use serve::{export_folder, remove_stale_exports};
 pub use windows::{WindowOptions, blend_windows};

@@ -471,6 +471,63 @@ fn write_all_by(s: &mut TcpStream, mut bytes: &[u8], deadline: Instant) -> bool 
     true
 }
 
+/// Prefix of the temporary folders `web serve --db/--result` exports into
+/// (in the system's temporary folder): `surfmotion-serve-<PID>-XXXXXX`,
+/// holding the file [`EXPORT_MARKER`] with the process id.
+pub const EXPORT_DIR_PREFIX: &str = "surfmotion-serve-";
+
+/// The file in a serve export folder that names the process that made it.
+pub const EXPORT_MARKER: &str = "surfmotion-serve.pid";
+
+/// A new temporary folder in `parent` for a served export, named and
+/// marked with this process's id (removed when dropped).
+pub fn export_folder(parent: &Path) -> std::io::Result<tempfile::TempDir> {
+    let pid = std::process::id();
+    let t = tempfile::Builder::new()
+        .prefix(&format!("{EXPORT_DIR_PREFIX}{pid}-"))
+        .tempdir_in(parent)?;
+    std::fs::write(t.path().join(EXPORT_MARKER), pid.to_string())?;
+    Ok(t)
+}
+
+/// Removes from `parent` the export folders of `web serve` runs that ended
+/// without cleaning up (issue 46, item 13: one stopped by SIGTERM left its
+/// 1.7 MB export behind): only folders it can prove are such — named
+/// `surfmotion-serve-<PID>-XXXXXX`, a real folder owned by this user,
+/// holding an [`EXPORT_MARKER`] with the same process id — whose process
+/// is gone. Returns the folders removed.
+pub fn remove_stale_exports(parent: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let Ok(rd) = std::fs::read_dir(parent) else {
+        return out;
+    };
+    for e in rd.flatten() {
+        let name = e.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(EXPORT_DIR_PREFIX))
+            .and_then(|r| r.split_once('-'))
+            .filter(|(_, x)| x.len() == 6 && x.bytes().all(|b| b.is_ascii_alphanumeric()))
+            .and_then(|(p, _)| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let dir = e.path();
+        let own = std::fs::symlink_metadata(&dir)
+            .is_ok_and(|m| m.is_dir() && crate::fsutil::owned_by_me(&m))
+            && std::fs::read_to_string(dir.join(EXPORT_MARKER))
+                .is_ok_and(|m| m.trim() == pid.to_string());
+        if own
+            && pid != std::process::id()
+            && crate::fsutil::process_alive(pid) == Some(false)
+            && std::fs::remove_dir_all(&dir).is_ok()
+        {
+            out.push(dir);
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
