@@ -4381,3 +4381,136 @@ fn web_serve_removes_its_export_on_sigterm_and_stale_ones_at_start() {
         assert!(!stale.exists() && unmarked.exists() && live.exists());
     }
 }
+
+/// Regression (issue 46, item 9): `inspect` of a site whose
+/// `character.sm4d` was cut in half exited 0 and named no problem. A site
+/// check reads each file the site lists: exit 1, naming the file.
+#[test]
+fn inspect_of_a_site_whose_geometry_is_cut_in_half_names_it() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let site = tmp.path().join("site");
+    let out = Command::new(common::bin())
+        .args(["web", "export", "--db"])
+        .arg(&f.db)
+        .arg("-o")
+        .arg(&site)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let inspect = || {
+        let o = Command::new(common::bin())
+            .arg("inspect")
+            .arg(&site)
+            .output()
+            .unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr),
+        )
+    };
+    let (code, text) = inspect();
+    assert_eq!(code, Some(0), "{text}");
+    let geo = site.join("character.sm4d");
+    let bytes = std::fs::read(&geo).unwrap();
+    std::fs::write(&geo, &bytes[..bytes.len() / 2]).unwrap();
+    let (code, text) = inspect();
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.contains("character.sm4d"), "{text}");
+    // Same size, bytes garbled: it must decode.
+    let mut bad = bytes.clone();
+    let n = bad.len();
+    bad[n / 2..].fill(0x5a);
+    std::fs::write(&geo, &bad).unwrap();
+    let (code, text) = inspect();
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.contains("character.sm4d"), "{text}");
+    // A script the page loads, gone.
+    std::fs::write(&geo, &bytes).unwrap();
+    std::fs::remove_file(site.join("engine.js")).unwrap();
+    let (code, text) = inspect();
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.contains("engine.js"), "{text}");
+}
+
+/// Regression (issue 46, item 3): `keyframe -o DIR --force`, where `DIR`
+/// is the database folder whose topology (`frame_0000.obj`) lives in it,
+/// removed the topology before loading the database, then failed with
+/// `frame_0000.obj: No such file or directory`. `--force` never extends to
+/// inputs: a folder output that holds an input is refused, naming it,
+/// before anything is removed — in every verb that takes `--force` and a
+/// folder of frames.
+#[test]
+fn force_into_a_folder_that_holds_an_input_removes_nothing() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    std::fs::create_dir_all(&db).unwrap();
+    for e in std::fs::read_dir(&f.db).unwrap().flatten() {
+        if e.file_type().unwrap().is_file() {
+            std::fs::copy(e.path(), db.join(e.file_name())).unwrap();
+        }
+    }
+    std::fs::rename(db.join("topology.obj"), db.join("frame_0000.obj")).unwrap();
+    let toml = std::fs::read_to_string(db.join("character.toml")).unwrap();
+    std::fs::write(
+        db.join("character.toml"),
+        toml.replace("topology.obj", "frame_0000.obj"),
+    )
+    .unwrap();
+    let topo = std::fs::read(db.join("frame_0000.obj")).unwrap();
+    let frames = tmp.path().join("frames");
+    common::cli_ok(
+        &["mesh", "convert", "db/walk.pc2:0", "frames"],
+        Some(tmp.path()),
+    );
+    let d = tmp.path().display().to_string();
+    let script = tmp.path().join("s.json");
+    std::fs::write(&script, "[]").unwrap();
+    let cases: Vec<(String, &Path, &str)> = vec![
+        (
+            format!(
+                "keyframe --db {d}/db --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/db --force"
+            ),
+            &db,
+            "frame_0000.obj",
+        ),
+        (
+            format!("play --db {d}/db --script {d}/s.json -o {d}/db --force"),
+            &db,
+            "frame_0000.obj",
+        ),
+        (
+            format!(
+                "retarget --db {d}/db --mocap {} -o {d}/db --force",
+                f.walk.display()
+            ),
+            &db,
+            "frame_0000.obj",
+        ),
+        (
+            format!("mesh convert {d}/frames/frame_0000.obj {d}/frames --force"),
+            &frames,
+            "frame_0000.obj",
+        ),
+    ];
+    for (args, dir, file) in &cases {
+        let before = std::fs::read(dir.join(file)).unwrap();
+        let out = Command::new(common::bin())
+            .args(args.split(' '))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args}: {err}");
+        assert!(
+            err.contains(file) && err.contains("input") && err.contains("--force"),
+            "{args}: {err}"
+        );
+        assert_eq!(std::fs::read(dir.join(file)).ok(), Some(before), "{args}");
+    }
+    assert_eq!(std::fs::read(db.join("frame_0000.obj")).unwrap(), topo);
+}
