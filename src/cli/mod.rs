@@ -775,7 +775,14 @@ pub fn check_folder_output(out: &Path, force: bool, inputs: &[PathBuf]) -> anyho
             i.canonicalize()
                 .is_ok_and(|c| c == dir || c.parent() == Some(dir.as_path()))
         };
-        if let Some(i) = inputs.iter().find(inside) {
+        // An input among the frames --force would remove is named first.
+        let frame = |p: &PathBuf| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .and_then(|n| n.strip_prefix("frame_"))
+                .is_some_and(|n| n.to_ascii_lowercase().ends_with(".obj"))
+        };
+        if let Some(i) = inputs.iter().filter(inside).min_by_key(|p| !frame(p)) {
             anyhow::bail!(
                 "-o {}: the folder holds the input {}; write the frames to another folder (--force replaces earlier outputs, never inputs)",
                 out.display(),
