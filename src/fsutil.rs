@@ -254,8 +254,10 @@ pub fn write_atomic(
 }
 
 /// A file written piece by piece and made visible at once: the bytes go to
-/// a temporary file beside `path` (`.surfmotion-XXXXXX.part`), which
-/// [`AtomicFile::commit`] flushes and renames over `path`. Dropped without
+/// a temporary file beside `path` (`.surfmotion-pid<PID>o<HASH><XXXXXX>.part`,
+/// see [`temp_prefix`]), which [`AtomicFile::commit`] flushes and renames
+/// over `path`. Temporaries of the same output left by a process that is
+/// gone (a `kill -9`) are removed first, with a warning. Dropped without
 /// a commit (an error, a panic), the temporary is removed and `path` keeps
 /// its old content. For outputs too large to hold in memory (a point cache
 /// streamed frame by frame; issue 18, item 12).
@@ -334,8 +336,17 @@ impl AtomicFile {
             _ => PathBuf::from("."),
         };
         std::fs::create_dir_all(&dir).map_err(wrap)?;
+        let name = target.file_name().unwrap_or_default();
+        for stale in remove_stale_temporaries(&dir, name) {
+            tracing::warn!(
+                "removed {}: the temporary of an earlier write of {} whose process ({}) is gone",
+                stale.path.display(),
+                path.display(),
+                stale.pid
+            );
+        }
         let tmp = tempfile::Builder::new()
-            .prefix(".surfmotion-")
+            .prefix(&temp_prefix(std::process::id(), name))
             .suffix(".part")
             .tempfile_in(&dir)
             .map_err(wrap)?;
@@ -379,6 +390,112 @@ impl AtomicFile {
         }
         tmp.persist(&target).map_err(|e| wrap(e.error))?;
         Ok(())
+    }
+}
+
+/// The prefix of the temporaries [`AtomicFile`] writes for an output named
+/// `name` by process `pid`: `.surfmotion-pid<PID>o<HASH>`, where `HASH` is
+/// 8 hexadecimal digits of the name's xxh3 hash; 6 random letters and
+/// `.part` follow. The process and the output it was for can be read back
+/// from the name ([`stale_temporary_pid`]), so a temporary left by a killed
+/// run is provably stale once its process is gone (issue 39, item 12: a
+/// `kill -9` during a write left a 150 MB `.surfmotion-XXXXXX.part` beside
+/// the output for good). Letters and digits only after the prefix, as
+/// `batch`'s clean-up expects.
+pub fn temp_prefix(pid: u32, name: &std::ffi::OsStr) -> String {
+    let hash = xxhash_rust::xxh3::xxh3_64(name.as_encoded_bytes()) as u32;
+    format!(".surfmotion-pid{pid}o{hash:08x}")
+}
+
+/// The process id in a temporary's file name `file`, when it is one that
+/// [`AtomicFile`] writes for an output named `name`; `None` otherwise.
+pub fn stale_temporary_pid(file: &str, name: &std::ffi::OsStr) -> Option<u32> {
+    let rest = file.strip_prefix(".surfmotion-pid")?;
+    let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+    let pid: u32 = rest[..digits].parse().ok()?;
+    let tail = file
+        .strip_prefix(&temp_prefix(pid, name))?
+        .strip_suffix(".part")?;
+    (tail.len() == 6 && tail.bytes().all(|b| b.is_ascii_alphanumeric())).then_some(pid)
+}
+
+/// Whether process `pid` runs: `Some(false)` only when the system says
+/// there is no such process, `None` when that cannot be told (not Unix).
+pub fn process_alive(pid: u32) -> Option<bool> {
+    #[cfg(unix)]
+    {
+        let p = i32::try_from(pid).ok().filter(|&p| p > 0)?;
+        // SAFETY: signal 0 sends nothing; it only checks the process.
+        if unsafe { libc::kill(p, 0) } == 0 {
+            return Some(true);
+        }
+        match std::io::Error::last_os_error().raw_os_error() {
+            Some(libc::ESRCH) => Some(false),
+            Some(libc::EPERM) => Some(true),
+            _ => None,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = pid;
+        None
+    }
+}
+
+/// A stale temporary removed by [`remove_stale_temporaries`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StaleTemporary {
+    /// The file removed.
+    pub path: PathBuf,
+    /// The process that wrote it (gone).
+    pub pid: u32,
+}
+
+/// Removes, in `dir`, the temporaries [`AtomicFile`] wrote for an output
+/// named `name` whose process is gone: regular files of that naming, owned
+/// by this user, written by another process that no longer runs. Anything
+/// it cannot prove stale stays. Returns what it removed.
+pub fn remove_stale_temporaries(dir: &Path, name: &std::ffi::OsStr) -> Vec<StaleTemporary> {
+    let mut out = Vec::new();
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return out;
+    };
+    for e in rd.flatten() {
+        let file = e.file_name();
+        let Some(pid) = file.to_str().and_then(|f| stale_temporary_pid(f, name)) else {
+            continue;
+        };
+        if pid == std::process::id() || process_alive(pid) != Some(false) {
+            continue;
+        }
+        let Ok(meta) = std::fs::symlink_metadata(e.path()) else {
+            continue;
+        };
+        if !meta.is_file() || !owned_by_me(&meta) {
+            continue;
+        }
+        if std::fs::remove_file(e.path()).is_ok() {
+            out.push(StaleTemporary {
+                path: e.path(),
+                pid,
+            });
+        }
+    }
+    out
+}
+
+/// Whether this process's user owns the file (always true off Unix).
+pub fn owned_by_me(meta: &std::fs::Metadata) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        // SAFETY: geteuid has no preconditions and cannot fail.
+        meta.uid() == unsafe { libc::geteuid() }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        true
     }
 }
 
@@ -568,6 +685,53 @@ mod tests {
         assert_eq!(read_bytes(&l).unwrap(), b"abc");
         let e = read_bytes_limited(&f, 2).unwrap_err().to_string();
         assert!(e.contains("larger than the 2 byte limit"), "{e}");
+    }
+
+    /// The temporaries' naming names the process and the output: only
+    /// those of the same output whose process is gone are removed.
+    #[cfg(unix)]
+    #[test]
+    fn stale_temporaries_of_the_same_output_are_removed_others_stay() {
+        let dir = tempfile::tempdir().unwrap();
+        let name = std::ffi::OsStr::new("out.pc2");
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let me = std::process::id();
+        let stale = format!("{}Ab12Cd.part", temp_prefix(dead, name));
+        assert_eq!(stale_temporary_pid(&stale, name), Some(dead));
+        assert_eq!(
+            stale_temporary_pid(&stale, std::ffi::OsStr::new("other.pc2")),
+            None
+        );
+        let keep = [
+            format!("{}Ab12Cd.part", temp_prefix(me, name)),
+            format!("{}Ab12Cd.part", temp_prefix(dead, "other.pc2".as_ref())),
+            ".surfmotion-Ab12Cd.part".to_string(),
+            format!("{}Ab12Cd.part.txt", temp_prefix(dead, name)),
+        ];
+        for f in keep.iter().chain([&stale]) {
+            std::fs::write(dir.path().join(f), b"x").unwrap();
+        }
+        let removed = remove_stale_temporaries(dir.path(), name);
+        assert_eq!(
+            removed,
+            vec![StaleTemporary {
+                path: dir.path().join(&stale),
+                pid: dead
+            }]
+        );
+        for f in &keep {
+            assert!(dir.path().join(f).exists(), "{f}");
+        }
+        // A write of the output removes it too.
+        std::fs::write(dir.path().join(&stale), b"x").unwrap();
+        write_bytes_atomic(&dir.path().join("out.pc2"), b"new").unwrap();
+        assert!(!dir.path().join(&stale).exists());
+        assert!(crate::batch::clips::is_temporary(&format!(
+            "{}Ab12Cd.part",
+            temp_prefix(me, name)
+        )));
     }
 
     #[test]

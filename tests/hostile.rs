@@ -4203,3 +4203,377 @@ fn render_picture_over_the_budget_is_refused_up_front() {
     let ok = common::run_cli(&args(2, "64"), None, &[("SURFMOTION_MEMORY_LIMIT", "64M")]);
     assert_eq!(ok.code, Some(0), "{}", ok.stderr);
 }
+
+/// The status code of `GET path` on a fresh connection to `addr`, or
+/// `None` when no status line arrives within `wait`.
+fn http_status_within(addr: &str, path: &str, wait: Duration) -> Option<u16> {
+    use std::io::{Read, Write};
+    let sa: std::net::SocketAddr = addr.parse().ok()?;
+    let mut s = std::net::TcpStream::connect_timeout(&sa, wait).ok()?;
+    s.set_read_timeout(Some(wait)).ok()?;
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
+    )
+    .ok()?;
+    let mut buf = [0u8; 12];
+    s.read_exact(&mut buf).ok()?;
+    std::str::from_utf8(&buf[9..12]).ok()?.parse().ok()
+}
+
+/// A site folder with an `index.html` and a 64 MB `big.bin`, served on
+/// 127.0.0.1 with `opts` (the default limits when `None`): its address.
+fn served_site(dir: &Path, opts: Option<surfmotion::web::ServeOptions>) -> String {
+    let site = dir.join("site");
+    std::fs::create_dir_all(&site).unwrap();
+    std::fs::write(site.join("index.html"), "<p>hi</p>").unwrap();
+    std::fs::write(site.join("big.bin"), vec![7u8; 64 << 20]).unwrap();
+    let server = match opts {
+        Some(o) => surfmotion::web::SiteServer::bind_with(&site, "127.0.0.1:0", o),
+        None => surfmotion::web::SiteServer::bind(&site, "127.0.0.1:0"),
+    }
+    .unwrap();
+    let addr = server
+        .url()
+        .trim_start_matches("http://")
+        .trim_end_matches('/')
+        .to_string();
+    server.spawn();
+    addr
+}
+
+/// Regression (issue 46, item 8): six clients that asked for a 64 MB file
+/// and stopped reading held all four threads of `web serve`, and an
+/// ordinary `GET /` got no answer within 5 s. Now, with six such readers,
+/// twenty half-open requests (half a head, then silence) and eighty idle
+/// keep-alive connections (more than the 64-connection cap) all open on
+/// loopback, `GET /` is answered 200 within 5 s.
+#[test]
+fn web_serve_answers_while_slow_clients_hold_connections() {
+    use std::io::{Read, Write};
+    let tmp = tempfile::tempdir().unwrap();
+    let addr = served_site(tmp.path(), None);
+    let connect = || std::net::TcpStream::connect(&addr).unwrap();
+    let mut held = Vec::new();
+    for _ in 0..6 {
+        let mut s = connect();
+        write!(s, "GET /big.bin HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+        held.push(s);
+    }
+    for _ in 0..20 {
+        let mut s = connect();
+        write!(s, "GET /index.html HTTP/1.1\r\nHo").unwrap();
+        held.push(s);
+    }
+    for _ in 0..80 {
+        let mut s = connect();
+        // Answered (200) or, past the cap, refused (503): either way the
+        // connection stays open on the client's side.
+        let _ = write!(s, "GET / HTTP/1.1\r\nHost: x\r\n\r\n");
+        s.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
+        let _ = s.read(&mut [0u8; 256]);
+        held.push(s);
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let t = Instant::now();
+    let mut last = None;
+    while t.elapsed() < Duration::from_secs(5) && last != Some(200) {
+        last = http_status_within(&addr, "/", Duration::from_secs(5) - t.elapsed());
+        if last != Some(200) {
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+    assert_eq!(
+        last,
+        Some(200),
+        "GET / after {:.1} s with {} slow connections open",
+        t.elapsed().as_secs_f64(),
+        held.len()
+    );
+    drop(held);
+}
+
+/// A client that reads a large response too slowly is cut off at the
+/// response's deadline (write time-out plus the body at the slowest
+/// rate), and one that sends half a request head at the head time-out:
+/// neither holds its thread for ever.
+#[test]
+fn web_serve_cuts_off_stalled_readers_and_half_open_requests() {
+    use std::io::{Read, Write};
+    let tmp = tempfile::tempdir().unwrap();
+    let opts = surfmotion::web::ServeOptions {
+        write_timeout: Duration::from_millis(500),
+        min_rate: 1 << 30,
+        head_timeout: Duration::from_millis(500),
+        ..surfmotion::web::ServeOptions::DEFAULT
+    };
+    let addr = served_site(tmp.path(), Some(opts));
+    let mut slow = std::net::TcpStream::connect(&addr).unwrap();
+    write!(slow, "GET /big.bin HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+    let mut half = std::net::TcpStream::connect(&addr).unwrap();
+    write!(half, "GET /index.html HTTP/1.1\r\nHo").unwrap();
+    std::thread::sleep(Duration::from_secs(2));
+    // The half-open request is answered 408 and closed.
+    half.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    let mut text = String::new();
+    let _ = half.read_to_string(&mut text);
+    assert!(text.starts_with("HTTP/1.1 408"), "{text:?}");
+    // The stalled reader finds the response cut short: what it can still
+    // read ends (EOF or reset) before the 64 MB.
+    slow.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    let mut got = 0usize;
+    let mut buf = vec![0u8; 1 << 20];
+    while let Ok(n) = slow.read(&mut buf) {
+        if n == 0 {
+            break;
+        }
+        got += n;
+    }
+    assert!(got < 64 << 20, "{got} bytes: the whole file was sent");
+}
+
+/// Regression (issue 39, item 12): a `kill -9` during a write left its
+/// full-size temporary beside the output for good. The next run that
+/// writes the same output removes the temporaries of its naming whose
+/// process is gone, and says so; one of a running process stays.
+#[cfg(unix)]
+#[test]
+fn a_killed_writes_temporary_is_removed_by_the_next_write() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut child = Command::new("true").spawn().unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    let name = std::ffi::OsStr::new("walk.bvh");
+    let stale = tmp.path().join(format!(
+        "{}Zz99Yy.part",
+        surfmotion::fsutil::temp_prefix(dead, name)
+    ));
+    let alive = tmp.path().join(format!(
+        "{}Zz99Yy.part",
+        surfmotion::fsutil::temp_prefix(std::process::id(), name)
+    ));
+    std::fs::write(&stale, vec![0u8; 1 << 20]).unwrap();
+    std::fs::write(&alive, b"in progress").unwrap();
+    let out = Command::new(common::bin())
+        .args(["mocap", "procedural", "--gait", "walk", "-o", "walk.bvh"])
+        .current_dir(tmp.path())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!stale.exists(), "{err}");
+    assert!(alive.exists());
+    assert!(
+        err.contains("removed") && err.contains(&format!("({dead}) is gone")),
+        "{err}"
+    );
+}
+
+/// Regression (issue 46, item 13): `web serve --db` stopped with SIGTERM
+/// left its temporary export in the temporary folder. It is removed on
+/// SIGTERM and SIGINT, and a start removes the exports of earlier runs
+/// whose process is gone (only folders of its naming, marked with their
+/// process id); others stay.
+#[cfg(unix)]
+#[test]
+fn web_serve_removes_its_export_on_sigterm_and_stale_ones_at_start() {
+    use std::io::BufRead;
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let mut child = Command::new("true").spawn().unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    let stale = tmp.path().join(format!("surfmotion-serve-{dead}-Ab12Cd"));
+    std::fs::create_dir_all(stale.join("site")).unwrap();
+    std::fs::write(stale.join("surfmotion-serve.pid"), dead.to_string()).unwrap();
+    // Not provably its own: no marker, another marker, a live process.
+    let unmarked = tmp.path().join(format!("surfmotion-serve-{dead}-Xy34Zw"));
+    std::fs::create_dir_all(&unmarked).unwrap();
+    let live = tmp
+        .path()
+        .join(format!("surfmotion-serve-{}-Qq56Rr", std::process::id()));
+    std::fs::create_dir_all(&live).unwrap();
+    std::fs::write(
+        live.join("surfmotion-serve.pid"),
+        std::process::id().to_string(),
+    )
+    .unwrap();
+    for sig in ["TERM", "INT"] {
+        let mut c = Command::new(common::bin())
+            .args(["web", "serve", "--port", "0", "--db"])
+            .arg(&f.db)
+            .env("TMPDIR", tmp.path())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut line = String::new();
+        std::io::BufReader::new(c.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        assert!(line.starts_with("serving "), "{line}");
+        let exports: Vec<_> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| ![&unmarked, &live].contains(&p))
+            .collect();
+        assert_eq!(exports.len(), 1, "{exports:?}");
+        assert_ne!(exports[0], stale);
+        let killed = Command::new("kill")
+            .args([format!("-{sig}"), c.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let t = Instant::now();
+        while c.try_wait().unwrap().is_none() && t.elapsed() < Duration::from_secs(10) {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let _ = c.kill();
+        let out = c.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "SIG{sig}: {:?} {err}", out.status);
+        assert!(!exports[0].exists(), "SIG{sig}: {err}");
+        assert!(err.contains("removed the temporary export"), "{err}");
+        if sig == "TERM" {
+            assert!(
+                err.contains(&format!("removed {}", stale.display())),
+                "{err}"
+            );
+        }
+        assert!(!stale.exists() && unmarked.exists() && live.exists());
+    }
+}
+
+/// Regression (issue 46, item 9): `inspect` of a site whose
+/// `character.sm4d` was cut in half exited 0 and named no problem. A site
+/// check reads each file the site lists: exit 1, naming the file.
+#[test]
+fn inspect_of_a_site_whose_geometry_is_cut_in_half_names_it() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let site = tmp.path().join("site");
+    let out = Command::new(common::bin())
+        .args(["web", "export", "--db"])
+        .arg(&f.db)
+        .arg("-o")
+        .arg(&site)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let inspect = || {
+        let o = Command::new(common::bin())
+            .arg("inspect")
+            .arg(&site)
+            .output()
+            .unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr),
+        )
+    };
+    let (code, text) = inspect();
+    assert_eq!(code, Some(0), "{text}");
+    let geo = site.join("character.sm4d");
+    let bytes = std::fs::read(&geo).unwrap();
+    std::fs::write(&geo, &bytes[..bytes.len() / 2]).unwrap();
+    let (code, text) = inspect();
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.contains("character.sm4d"), "{text}");
+    // Same size, bytes garbled: it must decode.
+    let mut bad = bytes.clone();
+    let n = bad.len();
+    bad[n / 2..].fill(0x5a);
+    std::fs::write(&geo, &bad).unwrap();
+    let (code, text) = inspect();
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.contains("character.sm4d"), "{text}");
+    // A script the page loads, gone.
+    std::fs::write(&geo, &bytes).unwrap();
+    std::fs::remove_file(site.join("engine.js")).unwrap();
+    let (code, text) = inspect();
+    assert_eq!(code, Some(1), "{text}");
+    assert!(text.contains("engine.js"), "{text}");
+}
+
+/// Regression (issue 46, item 3): `keyframe -o DIR --force`, where `DIR`
+/// is the database folder whose topology (`frame_0000.obj`) lives in it,
+/// removed the topology before loading the database, then failed with
+/// `frame_0000.obj: No such file or directory`. `--force` never extends to
+/// inputs: a folder output that holds an input is refused, naming it,
+/// before anything is removed — in every verb that takes `--force` and a
+/// folder of frames.
+#[test]
+fn force_into_a_folder_that_holds_an_input_removes_nothing() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    std::fs::create_dir_all(&db).unwrap();
+    for e in std::fs::read_dir(&f.db).unwrap().flatten() {
+        if e.file_type().unwrap().is_file() {
+            std::fs::copy(e.path(), db.join(e.file_name())).unwrap();
+        }
+    }
+    std::fs::rename(db.join("topology.obj"), db.join("frame_0000.obj")).unwrap();
+    let toml = std::fs::read_to_string(db.join("character.toml")).unwrap();
+    std::fs::write(
+        db.join("character.toml"),
+        toml.replace("topology.obj", "frame_0000.obj"),
+    )
+    .unwrap();
+    let topo = std::fs::read(db.join("frame_0000.obj")).unwrap();
+    let frames = tmp.path().join("frames");
+    common::cli_ok(
+        &["mesh", "convert", "db/walk.pc2:0", "frames"],
+        Some(tmp.path()),
+    );
+    let d = tmp.path().display().to_string();
+    let script = tmp.path().join("s.json");
+    std::fs::write(&script, "[]").unwrap();
+    let cases: Vec<(String, &Path, &str)> = vec![
+        (
+            format!(
+                "keyframe --db {d}/db --from walk:0 --to walk:100 --distance 3 --time 3 -o {d}/db --force"
+            ),
+            &db,
+            "frame_0000.obj",
+        ),
+        (
+            format!("play --db {d}/db --script {d}/s.json -o {d}/db --force"),
+            &db,
+            "frame_0000.obj",
+        ),
+        (
+            format!(
+                "retarget --db {d}/db --mocap {} -o {d}/db --force",
+                f.walk.display()
+            ),
+            &db,
+            "frame_0000.obj",
+        ),
+        (
+            format!("mesh convert {d}/frames/frame_0000.obj {d}/frames --force"),
+            &frames,
+            "frame_0000.obj",
+        ),
+    ];
+    for (args, dir, file) in &cases {
+        let before = std::fs::read(dir.join(file)).unwrap();
+        let out = Command::new(common::bin())
+            .args(args.split(' '))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args}: {err}");
+        assert!(
+            err.contains(file) && err.contains("input") && err.contains("--force"),
+            "{args}: {err}"
+        );
+        assert_eq!(std::fs::read(dir.join(file)).ok(), Some(before), "{args}");
+    }
+    assert_eq!(std::fs::read(db.join("frame_0000.obj")).unwrap(), topo);
+}

@@ -186,6 +186,15 @@ fn convert_one(
         })?;
     if let Some(t) = partial {
         if out.is_dir() {
+            // Only a folder of an earlier run's OBJ frames is replaced: a
+            // file of the user's (or an input) in it is never removed.
+            if let Some(foreign) = foreign_file(out) {
+                return Err(format!(
+                    "{}: holds {}, which no batch wrote; move it away or choose another -o (the clip's frames were not written)",
+                    out.display(),
+                    foreign.display()
+                ));
+            }
             std::fs::remove_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
         }
         std::fs::rename(t.path(), out).map_err(|e| format!("{}: {e}", out.display()))?;
@@ -195,9 +204,57 @@ fn convert_one(
     Ok(r)
 }
 
+/// The first entry of `dir` that is not an OBJ frame a writer names
+/// (`frame_<digits>.obj`, a regular file), if any.
+fn foreign_file(dir: &Path) -> Option<std::path::PathBuf> {
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return Some(dir.to_path_buf());
+    };
+    rd.flatten()
+        .find(|e| {
+            let name = e.file_name();
+            let frame = name
+                .to_str()
+                .and_then(|n| n.strip_prefix("frame_"))
+                .and_then(|n| n.strip_suffix(".obj"))
+                .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
+            !(frame && e.file_type().is_ok_and(|t| t.is_file()))
+        })
+        .map(|e| e.path())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 46's class (an output that deletes the user's files): an OBJ
+    /// clip's output folder was removed whole before the new frames were
+    /// renamed in, whatever else it held.
+    #[test]
+    fn a_batch_obj_output_keeps_the_users_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("walk-bvh");
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join("frame_0000.obj"), b"old").unwrap();
+        std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+        let convert = |_: &Path, o: &Path| {
+            std::fs::write(o.join("frame_0000.obj"), b"new").unwrap();
+            Ok(Converted {
+                frames: 1,
+                error_cm: None,
+            })
+        };
+        let e = convert_one(Path::new("walk.bvh"), &out, Format::Obj, &convert).unwrap_err();
+        assert!(e.contains("notes.txt"), "{e}");
+        assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"mine");
+        assert_eq!(std::fs::read(out.join("frame_0000.obj")).unwrap(), b"old");
+        // An earlier run's frames alone are replaced.
+        std::fs::remove_file(out.join("notes.txt")).unwrap();
+        convert_one(Path::new("walk.bvh"), &out, Format::Obj, &convert).unwrap();
+        assert_eq!(std::fs::read(out.join("frame_0000.obj")).unwrap(), b"new");
+        let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(left.len(), 1, "a temporary stayed");
+    }
 
     #[test]
     fn failures_and_panics_are_outcomes_and_finished_clips_are_skipped() {

@@ -319,7 +319,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     inputs.extend(a.clip.rig_map.clone());
     super::refuse_colliding(&inputs, &outputs)?;
     if let Some(o) = &a.output {
-        super::check_folder_output(o, a.force)?;
+        super::check_folder_output(o, a.force, &inputs)?;
     }
     if a.grid || a.floor {
         // Refused before the database loads (and its graph builds).

@@ -73,11 +73,9 @@ impl GlbArgs {
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
         Cmd::Convert(a) => {
-            surfmotion::mesh::io::refuse_overwriting(
-                &surfmotion::mesh::io::input_files(&a.input, a.topology.as_deref()),
-                &a.output,
-            )?;
-            super::check_folder_output(&a.output, a.force)?;
+            let inputs = surfmotion::mesh::io::input_files(&a.input, a.topology.as_deref());
+            surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
+            super::check_folder_output(&a.output, a.force, &inputs)?;
             let seq = load_sequence(
                 &a.input,
                 &LoadOptions {

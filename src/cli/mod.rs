@@ -752,7 +752,14 @@ pub fn check_mesh_output(out: &Path) -> anyhow::Result<()> {
 /// result (`keyframe -o DIR` wrote into a folder of files, exit 0). With
 /// `force` the OBJ frames a previous run wrote there (`frame_*.obj`) are
 /// removed first; other files stay.
-pub fn check_folder_output(out: &Path, force: bool) -> anyhow::Result<()> {
+///
+/// `--force` never extends to inputs: a folder that is or holds one of
+/// `inputs` (the verb's input files and folders, resolved before this is
+/// called) is
+/// refused, naming it, before anything is removed (issue 46, item 3:
+/// `keyframe -o DB --force` removed the database's own `frame_*.obj`
+/// sequence and topology, then failed to load it).
+pub fn check_folder_output(out: &Path, force: bool, inputs: &[PathBuf]) -> anyhow::Result<()> {
     if out.extension().is_some() || !out.is_dir() {
         return Ok(());
     }
@@ -762,6 +769,26 @@ pub fn check_folder_output(out: &Path, force: bool) -> anyhow::Result<()> {
         .collect();
     if entries.is_empty() {
         return Ok(());
+    }
+    if let Ok(dir) = out.canonicalize() {
+        let inside = |i: &&PathBuf| {
+            i.canonicalize()
+                .is_ok_and(|c| c == dir || c.parent() == Some(dir.as_path()))
+        };
+        // An input among the frames --force would remove is named first.
+        let frame = |p: &PathBuf| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .and_then(|n| n.strip_prefix("frame_"))
+                .is_some_and(|n| n.to_ascii_lowercase().ends_with(".obj"))
+        };
+        if let Some(i) = inputs.iter().filter(inside).min_by_key(|p| !frame(p)) {
+            anyhow::bail!(
+                "-o {}: the folder holds the input {}; write the frames to another folder (--force replaces earlier outputs, never inputs)",
+                out.display(),
+                i.display()
+            );
+        }
     }
     if !force {
         anyhow::bail!(

@@ -67,7 +67,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut outputs = super::mesh_outputs(&a.output);
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     super::refuse_colliding(&inputs, &outputs)?;
-    super::check_folder_output(&a.output, a.force)?;
+    super::check_folder_output(&a.output, a.force, &inputs)?;
     // The script is checked against the manifest's spaces before the
     // model is built (a typo was reported only after the build: 7.5 s on
     // the demo database, minutes on a real one).

@@ -133,7 +133,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
     super::refuse_colliding(&inputs, &outputs)?;
-    super::check_folder_output(&a.output, a.force)?;
+    super::check_folder_output(&a.output, a.force, &inputs)?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
         character: a.job.character(),

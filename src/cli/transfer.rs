@@ -182,7 +182,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
     super::refuse_colliding(&inputs, &outputs)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
-    super::check_folder_output(&a.output, a.force)?;
+    super::check_folder_output(&a.output, a.force, &inputs)?;
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
         "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",

@@ -174,6 +174,26 @@ fn summary(r: &web::ExportReport) -> String {
     s + &format!(", {:.2} s\n", r.seconds)
 }
 
+/// Set by SIGINT or SIGTERM while `web serve` serves.
+static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+#[cfg(unix)]
+extern "C" fn on_stop_signal(_: libc::c_int) {
+    // Only an atomic store: async-signal-safe.
+    STOP.store(true, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Makes SIGINT and SIGTERM set [`STOP`] instead of ending the process.
+fn stop_on_signals() {
+    #[cfg(unix)]
+    // SAFETY: the handler only stores to an atomic.
+    unsafe {
+        let h = on_stop_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
+        libc::signal(libc::SIGINT, h);
+        libc::signal(libc::SIGTERM, h);
+    }
+}
+
 /// Runs `web`.
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
@@ -197,7 +217,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 std::net::TcpListener::bind(addr.as_str())
                     .map_err(|e| anyhow::anyhow!("cannot listen on {addr}: {e}"))?,
             );
-            let _tmp;
+            let mut _tmp = None;
             let root = match &a.site {
                 Some(s) if !s.join("index.html").is_file() => anyhow::bail!(
                     "{}: not an exported site (no index.html); make one with `surfmotion web export`",
@@ -205,20 +225,41 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 ),
                 Some(s) => s.clone(),
                 None => {
-                    let t = tempfile::tempdir()?;
+                    let tmp = std::env::temp_dir();
+                    for d in web::remove_stale_exports(&tmp) {
+                        crate::errln!(
+                            "removed {}: the export of an earlier `web serve` that was stopped",
+                            d.display()
+                        );
+                    }
+                    let t = web::export_folder(&tmp)
+                        .map_err(|e| anyhow::anyhow!("{}: {e}", tmp.display()))?;
                     let site = t.path().join("site");
                     let bar = super::spinner("exporting the site");
                     let r = export(&a.source, &site);
                     bar.finish_and_clear();
                     let r = r?;
                     crate::errln!("{}", summary(&r).trim_end());
-                    _tmp = t;
+                    _tmp = Some(t);
                     site
                 }
             };
             let server = web::SiteServer::bind(&root, &addr)?;
+            // Ctrl-C or SIGTERM stop the server and the temporary export
+            // is removed (it stayed behind). A signal during the export
+            // still ends the process: the next `web serve` removes it.
+            stop_on_signals();
             crate::outln!("serving {} at {}", root.display(), server.url())?;
-            server.run();
+            server.run_until(&STOP);
+            if let Some(t) = _tmp {
+                let p = t.path().to_path_buf();
+                match t.close() {
+                    Ok(()) => {
+                        crate::errln!("stopped; removed the temporary export {}", p.display())
+                    }
+                    Err(e) => crate::errln!("stopped; could not remove {}: {e}", p.display()),
+                }
+            }
             Ok(())
         }
     }

@@ -10,6 +10,90 @@ use crate::fsutil::{MAX_INPUT_BYTES, open_input, read_bytes, read_small_text};
 use std::io::Read;
 use std::path::Path;
 
+/// Reads every file a site lists and says what it found, or names the
+/// first file that is missing or does not decode (issue 46, item 9: a site
+/// whose `character.sm4d` was cut in half was reported with exit 0): the
+/// geometry its `manifest.json` names (its size against the manifest's,
+/// decoded, its blocks and frames against the manifest's), and each local
+/// file `index.html` loads (`src=` and `href=`).
+fn check_site(site: &Path) -> Result<Vec<String>, String> {
+    let manifest_path = site.join("manifest.json");
+    let text = read_small_text(&manifest_path).map_err(|e| e.to_string())?;
+    let m: crate::web::SiteManifest = serde_json::from_str(&text)
+        .map_err(|e| format!("{}: not a site manifest: {e}", manifest_path.display()))?;
+    let url = format!("/{}", m.geometry);
+    let geo = crate::web::resolve_path(site, &url).ok_or_else(|| {
+        format!(
+            "{}: the geometry file it names is missing or outside the site",
+            site.join(&m.geometry).display()
+        )
+    })?;
+    let bytes = read_bytes(&geo).map_err(|e| e.to_string())?;
+    let shown = site.join(&m.geometry);
+    if bytes.len() != m.geometry_bytes {
+        return Err(format!(
+            "{}: {} bytes, the site's manifest.json says {} (cut short or replaced; export the site again)",
+            shown.display(),
+            bytes.len(),
+            m.geometry_bytes
+        ));
+    }
+    let d = crate::web::codec::decode(&bytes).map_err(|e| format!("{}: {e}", shown.display()))?;
+    if d.sequences.len() != m.geometry_sequences {
+        return Err(format!(
+            "{}: {} blocks of frames, the site's manifest.json says {}",
+            shown.display(),
+            d.sequences.len(),
+            m.geometry_sequences
+        ));
+    }
+    for (i, (q, s)) in d.sequences.iter().zip(&m.sequences).enumerate() {
+        let frames = q.len() / d.vertices.max(1);
+        if frames != s.frames {
+            return Err(format!(
+                "{}: block {i} ('{}') has {frames} frames, the site's manifest.json says {}",
+                shown.display(),
+                s.name,
+                s.frames
+            ));
+        }
+    }
+    let index = site.join("index.html");
+    let html = read_small_text(&index).map_err(|e| e.to_string())?;
+    let mut assets = Vec::new();
+    for key in ["src=\"", "href=\""] {
+        for part in html.split(key).skip(1) {
+            let Some(target) = part.split('"').next() else {
+                continue;
+            };
+            let local = !target.is_empty()
+                && !target.starts_with('#')
+                && !target.contains(':')
+                && !target.starts_with("//");
+            if local && !assets.contains(&target) {
+                assets.push(target);
+            }
+        }
+    }
+    for a in &assets {
+        let url = format!("/{}", a.trim_start_matches("./"));
+        let Some(p) = crate::web::resolve_path(site, &url) else {
+            return Err(format!(
+                "{}: index.html loads {a}, which is missing",
+                site.display()
+            ));
+        };
+        open_input(&p, MAX_INPUT_BYTES).map_err(|e| e.to_string())?;
+    }
+    Ok(vec![format!(
+        "checked: {} ({} bytes, {} decoded) and the {} index.html loads",
+        m.geometry,
+        bytes.len(),
+        count(d.sequences.len(), "block"),
+        count(assets.len(), "file")
+    )])
+}
+
 /// The report of `path` when it is one of these kinds; `None` otherwise.
 pub fn inspect_other(path: &Path) -> Option<Result<JsonReport, InspectError>> {
     let ext = path
@@ -26,13 +110,14 @@ pub fn inspect_other(path: &Path) -> Option<Result<JsonReport, InspectError>> {
         if !(path.join("index.html").is_file() && manifest.is_file()) {
             return None;
         }
-        return Some(super::inspect_json(&manifest).map(|m| {
+        return Some(super::inspect_json(&manifest).and_then(|m| {
             let mut lines = m.lines;
+            lines.extend(check_site(path).map_err(err)?);
             lines.push(format!(
                 "open it with `surfmotion web serve --site {}` (or any static web server)",
                 path.display()
             ));
-            report("web site", lines)
+            Ok(report("web site", lines))
         }));
     }
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned());

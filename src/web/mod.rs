@@ -16,5 +16,6 @@ pub use export::{
     ExportOptions, ExportReport, SiteManifest, SitePair, SiteSequence, SiteSpace, SiteTransition,
     WebError, export_db, export_result, load_db_geometry,
 };
-pub use serve::{SiteServer, resolve_path};
+pub use serve::{ServeOptions, SiteServer, resolve_path};
+pub use serve::{export_folder, remove_stale_exports};
 pub use windows::{WindowOptions, blend_windows};
