@@ -134,6 +134,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
     super::refuse_colliding(&inputs, &outputs)?;
     super::check_folder_output(&a.output, a.force)?;
+    a.glb.refuse_unless_glb(
+        super::mesh::GlbArgs::is_glb(&a.output),
+        &a.output.display().to_string(),
+    )?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
         character: a.job.character(),

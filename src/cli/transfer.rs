@@ -183,6 +183,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     super::refuse_colliding(&inputs, &outputs)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
     super::check_folder_output(&a.output, a.force)?;
+    a.glb.refuse_unless_glb(
+        super::mesh::GlbArgs::is_glb(&a.output),
+        &a.output.display().to_string(),
+    )?;
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
         "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",
