@@ -128,7 +128,7 @@ pub fn parse(
     if !crate::budget::is_frame_rate(header.fps) {
         return Err(format!(
             "frame rate {} (expected {}-{} fps)",
-            header.fps,
+            crate::numfmt::Short(header.fps),
             crate::budget::MIN_FPS,
             crate::budget::MAX_FPS
         ));
@@ -318,7 +318,8 @@ fn read_cached(
         } else {
             Err(format!(
                 "frame rate {} fps, the database's is {} fps",
-                motion.fps, m.fps
+                crate::numfmt::Short(motion.fps),
+                crate::numfmt::Short(m.fps)
             ))
         }
     }))
