@@ -428,6 +428,15 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
             path.display()
         )));
     };
+    // A file that has a kind's keys but not its values is malformed, not
+    // that kind ("a keyframe report: 238 frames at NaN fps", exit 0, for a
+    // report whose `fps` was `[[[[1e308]]]]`).
+    if let Err(why) = check_fields(&v, format) {
+        return Err(err(format!(
+            "{}: a malformed {format}: {why}",
+            path.display()
+        )));
+    }
     let num = |v: &serde_json::Value, k: &str| v.get(k).and_then(|x| x.as_f64());
     let len =
         |v: &serde_json::Value, k: &str| v.get(k).and_then(|x| x.as_array()).map_or(0, |a| a.len());
@@ -653,6 +662,155 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
         format: format.into(),
         lines,
     })
+}
+
+/// What a field of a file [`inspect`] recognises must hold.
+#[derive(Debug, Clone, Copy)]
+enum Field {
+    /// A whole number ≥ 0.
+    Count,
+    /// A frame rate ([`crate::budget::is_frame_rate`]).
+    Fps,
+    /// A finite number.
+    Number,
+    /// A string.
+    Text,
+    /// `true` or `false`.
+    Flag,
+    /// An array.
+    List,
+    /// An array of finite numbers.
+    Numbers,
+    /// An array of strings.
+    Texts,
+    /// An object.
+    Object,
+}
+
+impl Field {
+    fn holds(self, x: &serde_json::Value) -> bool {
+        let finite = |x: &serde_json::Value| x.as_f64().is_some_and(f64::is_finite);
+        match self {
+            Field::Count => x.is_u64(),
+            Field::Fps => x.as_f64().is_some_and(crate::budget::is_frame_rate),
+            Field::Number => finite(x),
+            Field::Text => x.is_string(),
+            Field::Flag => x.is_boolean(),
+            Field::List => x.is_array(),
+            Field::Numbers => x.as_array().is_some_and(|a| a.iter().all(finite)),
+            Field::Texts => x
+                .as_array()
+                .is_some_and(|a| a.iter().all(|s| s.is_string())),
+            Field::Object => x.is_object(),
+        }
+    }
+
+    fn expected(self) -> String {
+        match self {
+            Field::Count => "a whole number".into(),
+            Field::Fps => format!(
+                "a frame rate of {}-{} fps",
+                crate::budget::MIN_FPS,
+                crate::budget::MAX_FPS
+            ),
+            Field::Number => "a finite number".into(),
+            Field::Text => "a string".into(),
+            Field::Flag => "true or false".into(),
+            Field::List => "an array".into(),
+            Field::Numbers => "an array of finite numbers".into(),
+            Field::Texts => "an array of strings".into(),
+            Field::Object => "an object".into(),
+        }
+    }
+}
+
+/// The fields each kind of file [`json_kind`] recognises must hold, as the
+/// tool writes them (those `inspect` reads and those that identify it).
+fn fields_of(kind: &str) -> &'static [(&'static str, Field)] {
+    use Field::*;
+    match kind {
+        "keyframe report" => &[
+            ("keys", Texts),
+            ("fps", Fps),
+            ("frames", Count),
+            ("distance", Number),
+            ("time", Number),
+            ("cost", Object),
+            ("segments", List),
+            ("transitions", List),
+        ],
+        "keyframe grid report" => &[
+            ("keys", Texts),
+            ("distances", Numbers),
+            ("times", Numbers),
+            ("reachable", Object),
+            ("unreachable", Object),
+            ("query_ms_mean", Number),
+        ],
+        "batch report" => &[
+            ("what", Text),
+            ("finished", Flag),
+            ("done", Count),
+            ("skipped", Count),
+            ("failed", Count),
+            ("clips_per_minute", Number),
+            ("outcomes", List),
+        ],
+        "play report" => &[
+            ("frames", Count),
+            ("fps", Fps),
+            ("seconds", Number),
+            ("realtime_factor", Number),
+            ("per_second", List),
+            ("transitions", List),
+            ("notices", List),
+        ],
+        "retarget report" => &[
+            ("frames", Count),
+            ("fps", Fps),
+            ("retrieval", Object),
+            ("jumps", List),
+            ("steps", List),
+        ],
+        "transfer report" => &[
+            ("frames", Count),
+            ("fps", Fps),
+            ("scan", Object),
+            ("transfer", Object),
+        ],
+        "skeletons" => &[
+            ("sequence", Text),
+            ("fps", Fps),
+            ("frames", List),
+            ("joints", List),
+        ],
+        "graph cache" => &[("key", Count), ("graph", Object)],
+        "rig" => &[("vertex_count", Count), ("joints", List)],
+        "rig map" => &[("convention", Text), ("joints", Object)],
+        _ => &[],
+    }
+}
+
+/// `Err` naming the first field of `v` that does not hold what a `kind`
+/// file holds there (missing, or of another type or range).
+fn check_fields(v: &serde_json::Value, kind: &str) -> Result<(), String> {
+    for &(key, field) in fields_of(kind) {
+        match v.get(key) {
+            None => return Err(format!("no field \"{key}\" ({})", field.expected())),
+            Some(x) if !field.holds(x) => {
+                let mut found = x.to_string();
+                if found.len() > 40 {
+                    found = format!("{}…", found.chars().take(40).collect::<String>());
+                }
+                return Err(format!(
+                    "field \"{key}\" is {found}, expected {}",
+                    field.expected()
+                ));
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// `name (N frames)` of each entry of `v["sequences"]`, its frame count

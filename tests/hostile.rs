@@ -4577,3 +4577,233 @@ fn force_into_a_folder_that_holds_an_input_removes_nothing() {
     }
     assert_eq!(std::fs::read(db.join("frame_0000.obj")).unwrap(), topo);
 }
+
+/// A `.sm4d` file of `vertices` vertices, no triangles and one sequence of
+/// `frames` frames that all sit at the origin (every residual 0): a few
+/// hundred kilobytes that declare hundreds of millions of values.
+fn still_sm4d(vertices: u32, frames: u32) -> Vec<u8> {
+    use std::io::Write;
+    let deflate = |raw: &[u8]| {
+        let mut e = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::fast());
+        e.write_all(raw).unwrap();
+        e.finish().unwrap()
+    };
+    let topo = deflate(&[]);
+    let zeros = vec![0u8; 1 << 20];
+    let mut e = flate2::write::DeflateEncoder::new(Vec::new(), flate2::Compression::fast());
+    let mut left = vertices as u64 * frames as u64 * 3;
+    while left > 0 {
+        let k = left.min(zeros.len() as u64) as usize;
+        e.write_all(&zeros[..k]).unwrap();
+        left -= k as u64;
+    }
+    let seq = e.finish().unwrap();
+    let mut b = surfmotion::web::codec::MAGIC.to_vec();
+    for x in [1u32, 0, vertices, 0, 1] {
+        b.extend_from_slice(&x.to_le_bytes());
+    }
+    for f in [0.001f32, 0.0, 0.0, 0.0] {
+        b.extend_from_slice(&f.to_le_bytes());
+    }
+    for x in [1u32, 1, 1] {
+        b.extend_from_slice(&x.to_le_bytes());
+    }
+    b.extend_from_slice(&0f32.to_le_bytes());
+    b.extend_from_slice(&(topo.len() as u32).to_le_bytes());
+    b.extend_from_slice(&frames.to_le_bytes());
+    b.extend_from_slice(&(seq.len() as u32).to_le_bytes());
+    b.extend_from_slice(&topo);
+    b.extend_from_slice(&seq);
+    b
+}
+
+/// Regression (issue 46, item 5): a 1.9 MB `.sm4d` that declared 66.7
+/// million frames of 10 vertices made `inspect` hold the inflated block,
+/// its 2·10⁹ residuals as `i32` and the positions: 8 GB, then an abort.
+/// `inspect` now checks the file frame by frame holding two frames; here 5
+/// million frames (150 million residuals, 1.05 GB before the fix) under a
+/// 600 MB address-space limit. `decode`, which returns every position,
+/// checks them against the memory budget first.
+#[test]
+fn inspect_of_an_sm4d_declaring_millions_of_frames_does_not_load_them() {
+    let tmp = tempfile::tempdir().unwrap();
+    let f = tmp.path().join("still.sm4d");
+    std::fs::write(&f, still_sm4d(10, 5_000_000)).unwrap();
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 600000 && exec \"$0\" inspect \"$1\"")
+        .arg(common::bin())
+        .arg(&f)
+        .env_remove("SURFMOTION_LOG")
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert_eq!(out.status.code(), Some(0), "{stdout}{stderr}");
+    assert!(stdout.contains("5000000 in all"), "{stdout}");
+    // A decoder that returns the positions refuses them over the budget.
+    let bytes = std::fs::read(&f).unwrap();
+    let budget = surfmotion::budget::Budget::current().bytes as u128;
+    if budget < 5_000_000 * 10 * 6 {
+        assert!(matches!(
+            surfmotion::web::codec::decode(&bytes),
+            Err(surfmotion::web::CodecError::OverBudget(_))
+        ));
+    }
+}
+
+/// Regression (issue 46, item 10): `inspect` of a report with its fields
+/// replaced (`cost` a string, `fps` `[[[[1e308]]]]`) printed "a keyframe
+/// report: 238 frames at NaN fps" and exited 0. A malformed report of
+/// every kind inspect recognises is now named as such, with the field, and
+/// exits 1; a sound one still reads.
+#[test]
+fn inspect_names_a_malformed_report_and_its_field() {
+    use serde_json::json;
+    let tmp = tempfile::tempdir().unwrap();
+    let keyframe = json!({"keys": ["a", "b"], "targets": {}, "segments": [], "fps": 25.0,
+        "frames": 238, "distance": 3.0, "time": 9.5, "cost": {}, "transitions": []});
+    let grid = json!({"keys": ["a", "b"], "distances": [1.0], "times": [2.0],
+        "reachable": {}, "unreachable": {}, "query_ms_mean": 1.0});
+    let batch = json!({"what": "retarget", "finished": true, "done": 1, "skipped": 0,
+        "failed": 0, "clips_per_minute": 3.0, "outcomes": []});
+    let play = json!({"frames": 10, "fps": 30.0, "seconds": 0.33, "realtime_factor": 9.0,
+        "per_second": [], "transitions": [], "notices": []});
+    let retarget = json!({"frames": 10, "fps": 30.0, "retrieval": {}, "jumps": [], "steps": []});
+    let transfer = json!({"frames": 10, "fps": 30.0, "scan": {}, "transfer": {}});
+    let with = |v: &serde_json::Value, k: &str, x: serde_json::Value| {
+        let mut v = v.clone();
+        v[k] = x;
+        v
+    };
+    let cases = [
+        (
+            "keyframe report",
+            with(&keyframe, "fps", json!([[[[1e308]]]])),
+            "\"fps\"",
+        ),
+        (
+            "keyframe report",
+            with(&keyframe, "cost", json!("cheap")),
+            "\"cost\"",
+        ),
+        (
+            "keyframe report",
+            with(&keyframe, "frames", json!(-3)),
+            "\"frames\"",
+        ),
+        (
+            "keyframe grid report",
+            with(&grid, "times", json!("soon")),
+            "\"times\"",
+        ),
+        (
+            "batch report",
+            with(&batch, "done", json!("all")),
+            "\"done\"",
+        ),
+        ("play report", with(&play, "fps", json!(1e308)), "\"fps\""),
+        (
+            "retarget report",
+            with(&retarget, "fps", json!(0)),
+            "\"fps\"",
+        ),
+        (
+            "transfer report",
+            with(&transfer, "frames", json!(1.5)),
+            "\"frames\"",
+        ),
+    ];
+    let f = tmp.path().join("r.json");
+    for (kind, v, field) in &cases {
+        std::fs::write(&f, v.to_string()).unwrap();
+        let r = common::run_cli(&["inspect".as_ref(), f.as_os_str()], None, &[]);
+        let problems = r.bad_input_problems(&["malformed", kind, field]);
+        assert!(
+            problems.is_empty(),
+            "{kind} {field}: {problems:?}: {}",
+            r.stderr
+        );
+    }
+    for (kind, v) in [
+        ("keyframe report", &keyframe),
+        ("keyframe grid report", &grid),
+        ("batch report", &batch),
+        ("play report", &play),
+        ("retarget report", &retarget),
+        ("transfer report", &transfer),
+    ] {
+        std::fs::write(&f, v.to_string()).unwrap();
+        let r = common::run_cli(&["inspect".as_ref(), f.as_os_str()], None, &[]);
+        assert_eq!(r.code, Some(0), "{kind}: {}", r.stderr);
+        assert!(!r.stdout.contains("NaN"), "{kind}: {}", r.stdout);
+    }
+}
+
+/// Regression (issue 46, item 11): `mesh convert … --glb-quantize` of a
+/// sequence whose vertices all sit at one point printed "max vertex error
+/// 4.065e-5 (1.83e303 of the bounding-box diagonal)"; the GLB options
+/// given for a .pc2 or folder output were dropped without a word by
+/// `retarget`, `transfer` and `batch`. The box of no size is said as
+/// such; the options are refused for other outputs (`mesh convert` names
+/// them as ignored, as it did).
+#[test]
+fn glb_options_name_a_pointlike_box_and_are_refused_for_other_outputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(
+        d.join("point.obj"),
+        "v 0.1 0.2 0.7\nv 0.1 0.2 0.7\nv 0.1 0.2 0.7\nf 1 2 3\n",
+    )
+    .unwrap();
+    let r = common::run_cli(
+        &[
+            "mesh",
+            "convert",
+            "point.obj",
+            "point.glb",
+            "--glb-quantize",
+        ],
+        Some(d),
+        &[],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("every vertex sits at one point")
+            && !r.stderr.contains("of the bounding-box diagonal"),
+        "{}",
+        r.stderr
+    );
+    let r = common::run_cli(
+        &["mesh", "convert", "point.obj", "p.pc2", "--glb-quantize"],
+        Some(d),
+        &[],
+    );
+    assert!(
+        r.code == Some(0) && r.stderr.contains("ignored"),
+        "{}",
+        r.stderr
+    );
+    std::fs::create_dir_all(d.join("clips")).unwrap();
+    for (args, words) in [
+        (
+            "retarget --db db --mocap w.bvh -o out.pc2 --glb-quantize",
+            &["--glb-quantize", "out.pc2", ".glb"][..],
+        ),
+        (
+            "transfer --scan point.obj --landmarks l.json --mocap w.bvh -o out --glb-no-normals",
+            &["--glb-no-normals", ".glb"][..],
+        ),
+        (
+            "batch --db db --mocap-dir clips -o outs --format pc2 --glb-quantize --glb-no-normals",
+            &["--glb-quantize and --glb-no-normals", "--format pc2"][..],
+        ),
+    ] {
+        let args: Vec<&str> = args.split(' ').collect();
+        let r = common::run_cli(&args, Some(d), &[]);
+        let problems = r.bad_input_problems(words);
+        assert!(problems.is_empty(), "{args:?}: {problems:?}: {}", r.stderr);
+    }
+}

@@ -92,7 +92,12 @@ fn readers() -> Vec<(&'static str, Reader)> {
             let key = b
                 .get(8..16)
                 .map_or(0, |k| u64::from_le_bytes(k.try_into().unwrap()));
-            drop(surfmotion::parametric::store::parse(b, key, &mesh))
+            drop(surfmotion::parametric::store::parse(
+                b,
+                key,
+                &mesh,
+                &Default::default(),
+            ))
         }),
         ("embedding", |b| {
             drop(surfmotion::rig::embed::Embedding::parse(

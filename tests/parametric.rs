@@ -522,3 +522,105 @@ fn the_cache_is_reused_and_a_damaged_one_rebuilt() {
     assert_eq!(m.spaces.len(), 2);
     assert!(Parameter::parse("speed").is_some());
 }
+
+/// `bytes` of a parametric cache with its JSON header changed by `f` and
+/// its key kept.
+fn tampered(bytes: &[u8], f: impl Fn(&mut serde_json::Value)) -> Vec<u8> {
+    let hl = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
+    let mut h: serde_json::Value = serde_json::from_slice(&bytes[24..24 + hl]).unwrap();
+    f(&mut h);
+    let h = serde_json::to_vec(&h).unwrap();
+    let mut out = bytes[..16].to_vec();
+    out.extend_from_slice(&(h.len() as u64).to_le_bytes());
+    out.extend_from_slice(&h);
+    out.extend_from_slice(&bytes[24 + hl..]);
+    out
+}
+
+/// Regression (issue 46, items 6 and 12): a `parametric.bin` whose header
+/// said block index 10¹², or a transition depth of 10⁹, with its key
+/// intact, made `play` abort on a 24 TB allocation; a corrupt frame rate
+/// made `play` blame its output ("18446744073709551615 frames … do not
+/// fit"); `inspect` of the cache said "up to date". Each is now refused
+/// on load, naming the cause, and the cache rebuilt.
+#[test]
+fn a_tampered_parametric_cache_is_refused_and_rebuilt_not_trusted() {
+    use surfmotion::parametric::store::{cache_path, parse};
+    let db = database();
+    let m = motion();
+    let bytes = std::fs::read(cache_path(&db)).unwrap();
+    let key = u64::from_le_bytes(bytes[8..16].try_into().unwrap());
+    let opts = MotionOptions::default();
+    assert!(parse(&bytes, key, &m.topology, &opts).is_ok());
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "block index 1e12",
+            tampered(&bytes, |h| {
+                h["spaces"][0]["pairs"][0]["blocks"][1] = 1_000_000_000_000u64.into()
+            }),
+            "reference blocks",
+        ),
+        (
+            "transition depth 1e9",
+            tampered(&bytes, |h| {
+                h["options"]["transition"]["depth"] = 1_000_000_000u64.into()
+            }),
+            "options",
+        ),
+        (
+            "fps 1e-300",
+            tampered(&bytes, |h| h["fps"] = 1e-300.into()),
+            "frame rate",
+        ),
+        (
+            "phase grid 1e15",
+            tampered(&bytes, |h| {
+                h["spaces"][0]["alignment"]["grid"] = 1_000_000_000_000_000u64.into()
+            }),
+            "phase grid",
+        ),
+        (
+            "one reference weight",
+            tampered(&bytes, |h| {
+                h["spaces"][1]["pairs"][0]["weights"] = serde_json::json!([0.0])
+            }),
+            "reference weights",
+        ),
+    ];
+    for (what, b, words) in &cases {
+        match parse(b, key, &m.topology, &opts) {
+            Ok(_) => panic!("{what}: trusted"),
+            Err(why) => assert!(why.contains(words), "{what}: {why}"),
+        }
+    }
+    // In a database: `inspect` of the cache says so, `play`'s loader
+    // rebuilds it.
+    let tmp = tempfile::tempdir().unwrap();
+    let copy = tmp.path().join("db");
+    std::fs::create_dir_all(copy.join("cache")).unwrap();
+    for f in [
+        "character.toml",
+        "topology.obj",
+        "landmarks.json",
+        "walk.pc2",
+        "run.pc2",
+        "turn.pc2",
+    ] {
+        std::fs::copy(db.join(f), copy.join(f)).unwrap();
+    }
+    std::fs::write(cache_path(&copy), &cases[2].1).unwrap();
+    let r = common::cli_ok(&["inspect".as_ref(), copy.join("cache").as_os_str()], None);
+    let line = r
+        .stdout
+        .lines()
+        .find(|l| l.contains("parametric.bin"))
+        .unwrap_or_default()
+        .to_string();
+    assert!(
+        line.contains("damaged") && line.contains("frame rate") && !line.contains("up to date"),
+        "{}",
+        r.stdout
+    );
+    let (_, cached) = load_or_build(&copy, &opts, false).unwrap();
+    assert!(!cached, "a cache with a corrupt frame rate was trusted");
+}

@@ -19,5 +19,5 @@ fuzz_target!(|data: &[u8]| {
     let key = data
         .get(8..16)
         .map_or(0, |k| u64::from_le_bytes(k.try_into().unwrap()));
-    let _ = surfmotion::parametric::store::parse(data, key, mesh);
+    let _ = surfmotion::parametric::store::parse(data, key, mesh, &Default::default());
 });

@@ -70,6 +70,10 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
     if let Some(s) = &a.shard {
         Shard::parse(s).map_err(anyhow::Error::msg)?;
     }
+    a.glb.refuse_unless_glb(
+        matches!(a.format, super::values::FormatArg::Glb),
+        &format!("--format {}", format!("{:?}", a.format).to_lowercase()),
+    )?;
     if a.db.is_some() {
         anyhow::ensure!(
             a.scan_job.is_default(),

@@ -60,6 +60,33 @@ pub struct GlbArgs {
 }
 
 impl GlbArgs {
+    /// Refuses these flags for an output that is not a GLB (`output` names
+    /// it, e.g. "out.pc2" or "--format pc2"): they were dropped without a
+    /// word (issue 46, item 11).
+    pub fn refuse_unless_glb(&self, glb: bool, output: &str) -> anyhow::Result<()> {
+        let given: Vec<&str> = [
+            (self.glb_quantize, "--glb-quantize"),
+            (self.glb_no_normals, "--glb-no-normals"),
+        ]
+        .into_iter()
+        .filter_map(|(on, flag)| on.then_some(flag))
+        .collect();
+        if !glb && !given.is_empty() {
+            anyhow::bail!(
+                "{} {} to .glb output only, not {output}: leave {} out or write a .glb",
+                given.join(" and "),
+                if given.len() > 1 { "apply" } else { "applies" },
+                if given.len() > 1 { "them" } else { "it" }
+            );
+        }
+        Ok(())
+    }
+
+    /// True when `path` is written as a GLB.
+    pub fn is_glb(path: &std::path::Path) -> bool {
+        surfmotion::mesh::io::MeshFormat::of(path) == Some(surfmotion::mesh::io::MeshFormat::Glb)
+    }
+
     /// The writer options these flags ask for.
     pub fn options(&self) -> surfmotion::mesh::io::glb::GlbOptions {
         surfmotion::mesh::io::glb::GlbOptions {
@@ -98,7 +125,10 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             let error = if a.glb.glb_quantize && glb {
                 let back = load_sequence(&a.output.display().to_string(), &LoadOptions::default())?;
                 let e = max_vertex_error(seq.all_positions(), back.all_positions());
-                Some((e, e / seq.bounds().diagonal().max(f64::MIN_POSITIVE)))
+                // A box of no size has no ratio ("1.83e303 of the
+                // bounding-box diagonal" for vertices all at one point).
+                let d = seq.bounds().diagonal();
+                Some((e, (d.is_finite() && d > 0.0).then(|| e / d)))
             } else {
                 None
             };
@@ -111,6 +141,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     "fps": seq.fps,
                     "glb_options_ignored": ignored,
                     "quantised_max_vertex_error": error.map(|e| e.0),
+                    "quantised_error_of_diagonal": error.and_then(|e| e.1),
                 });
                 return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
             }
@@ -124,9 +155,14 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             if ignored {
                 crate::errln!("note: the --glb-* options apply to .glb output only; ignored");
             } else if let Some((e, rel)) = error {
-                crate::errln!(
-                    "quantised: max vertex error {e:.3e} ({rel:.2e} of the bounding-box diagonal)"
-                );
+                match rel {
+                    Some(rel) => crate::errln!(
+                        "quantised: max vertex error {e:.3e} ({rel:.2e} of the bounding-box diagonal)"
+                    ),
+                    None => crate::errln!(
+                        "quantised: max vertex error {e:.3e} m (every vertex sits at one point: the bounding box has no size to compare it with)"
+                    ),
+                }
             }
         }
     }

@@ -133,6 +133,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
     super::refuse_colliding(&inputs, &outputs)?;
+    a.glb.refuse_unless_glb(
+        super::mesh::GlbArgs::is_glb(&a.output),
+        &a.output.display().to_string(),
+    )?;
     super::check_folder_output(&a.output, a.force, &inputs)?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),

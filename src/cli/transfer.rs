@@ -182,6 +182,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
     super::refuse_colliding(&inputs, &outputs)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
+    a.glb.refuse_unless_glb(
+        super::mesh::GlbArgs::is_glb(&a.output),
+        &a.output.display().to_string(),
+    )?;
     super::check_folder_output(&a.output, a.force, &inputs)?;
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),

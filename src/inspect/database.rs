@@ -296,6 +296,15 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
         {
             e.what = format!("similarity matrix ({})", measure.name());
             judge(&mut e, header_key(&file, b"SMSIM001"), key_of(measure));
+            // A key does not make the contents right: read it as `db
+            // build` does before reusing it.
+            if e.up_to_date
+                && let Ok(k) = key_of(measure)
+                && let Err(why) = check_matrix(&file, k, m)
+            {
+                (e.up_to_date, e.state) =
+                    (false, format!("damaged ({why}): `db build` rebuilds it"));
+            }
         } else if let Some(measure) = measures.into_iter().find(|&q| file == graph_path(dir, q)) {
             e.what = format!("graph ({})", measure.name());
             let read = read_graph_cache(&file);
@@ -304,21 +313,64 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
                 e.edges = Some(g.edges.len());
                 e.frames = Some(g.sequences.iter().map(|s| s.len).sum());
             }
+            let graph = read.as_ref().ok().map(|(_, g)| g.clone());
             judge(
                 &mut e,
                 read.map(|(k, _)| k),
                 key_of(measure).map(|k| graph_key(m, k)),
             );
+            // Checked against its similarity matrix, as `db build` does.
+            if e.up_to_date
+                && let (Some(g), Ok(k)) = (graph, key_of(measure))
+                && let Ok(Some(mat)) =
+                    crate::db::cache::read_matrix(&similarity_path(dir, measure), k)
+                && let Err(why) = g.validate(&mat)
+            {
+                (e.up_to_date, e.state) =
+                    (false, format!("damaged ({why}): `db build` rebuilds it"));
+            }
         } else if file == crate::parametric::store::cache_path(dir) {
             e.what = "parametric model (`play`)".into();
             let want =
                 crate::parametric::store::key(dir, m, &crate::parametric::MotionOptions::default())
                     .map_err(|e| e.to_string());
             judge(&mut e, header_key(&file, b"SMPAR001"), want);
+            // A key does not make the contents right: read it as `play`
+            // does (a tampered block count said "up to date").
+            if e.up_to_date
+                && let Err(why) = crate::parametric::store::check_file(dir, m, &file)
+            {
+                (e.up_to_date, e.state) = (
+                    false,
+                    format!("damaged ({why}): `play` or `db build` rebuilds it"),
+                );
+            }
         }
         out.push(e);
     }
     Ok(out)
+}
+
+/// A similarity cache of key `key` read whole and checked as `db build`
+/// checks it before reuse: its spans are the manifest's sequences and
+/// every value a finite distance.
+fn check_matrix(path: &Path, key: u64, m: &Manifest) -> Result<(), String> {
+    let Some(mat) = crate::db::cache::read_matrix(path, key)? else {
+        return Ok(());
+    };
+    let names = mat.spans.len() == m.sequences.len()
+        && mat
+            .spans
+            .iter()
+            .zip(&m.sequences)
+            .all(|(s, q)| s.name == q.name);
+    if !names {
+        return Err("its sequences are not the manifest's".into());
+    }
+    if !(0..mat.len()).all(|a| mat.row(a).iter().all(|v| v.is_finite() && *v >= 0.0)) {
+        return Err("a value that is not a finite distance".into());
+    }
+    Ok(())
 }
 
 /// The key after an 8-byte magic at the start of a cache file.

@@ -95,8 +95,19 @@ struct HeaderRef<'a> {
 }
 
 /// Parses a cache file's bytes for `key` against the topology (`n`
-/// vertices); `Err(reason)` when it is stale or malformed.
-pub fn parse(bytes: &[u8], key: u64, topology: &crate::mesh::Mesh) -> Result<Motion, String> {
+/// vertices) and the options `opts` the key was made with; `Err(reason)`
+/// when it is stale or malformed. A key does not make the contents right
+/// (issue 46, item 6: a header whose block index said 10¹², or whose
+/// transition depth said 10⁹, with its key intact, made `play` abort on a
+/// 24 TB allocation): the options must be `opts`, the frame rate a rate
+/// ([`crate::budget::is_frame_rate`]), every count must fit the bytes that
+/// follow, every index its array and every weight `[0, 1]`, in order.
+pub fn parse(
+    bytes: &[u8],
+    key: u64,
+    topology: &crate::mesh::Mesh,
+    opts: &MotionOptions,
+) -> Result<Motion, String> {
     let mut at = 0usize;
     let mut take = |k: usize| -> Result<&[u8], String> {
         let s = bytes
@@ -114,7 +125,24 @@ pub fn parse(bytes: &[u8], key: u64, topology: &crate::mesh::Mesh) -> Result<Mot
     }
     let hl = usize::try_from(u64_of(take(8)?)).map_err(|_| "header size")?;
     let header: Header = serde_json::from_slice(take(hl)?).map_err(|e| format!("header: {e}"))?;
+    if !crate::budget::is_frame_rate(header.fps) {
+        return Err(format!(
+            "frame rate {} (expected {}-{} fps)",
+            crate::numfmt::Short(header.fps),
+            crate::budget::MIN_FPS,
+            crate::budget::MAX_FPS
+        ));
+    }
+    if header.options != *opts {
+        return Err(format!(
+            "its options ({}) are not the ones its key was made with ({})",
+            serde_json::to_string(&header.options).unwrap_or_default(),
+            serde_json::to_string(opts).unwrap_or_default()
+        ));
+    }
     let n = topology.vertex_count();
+    // What is left after the header: every block below must fit it.
+    let body = bytes.len().saturating_sub(24 + hl);
     let mut floats = |expect: usize, what: &str| -> Result<Vec<f32>, String> {
         let len = usize::try_from(u64_of(take(8)?)).map_err(|_| "count")?;
         if len != expect {
@@ -133,23 +161,58 @@ pub fn parse(bytes: &[u8], key: u64, topology: &crate::mesh::Mesh) -> Result<Mot
     let mut spaces = header.spaces;
     for s in &mut spaces {
         let k = s.alignment.grid;
+        let per_block = k
+            .checked_mul(n)
+            .and_then(|x| x.checked_mul(3))
+            .filter(|&x| x > 0 && x <= body / 4)
+            .ok_or_else(|| {
+                format!(
+                    "space '{}': a phase grid of {k} samples does not fit the file",
+                    s.name
+                )
+            })?;
         let blocks = s
             .pairs
             .iter()
             .flat_map(|p| p.blocks.iter().copied())
             .max()
-            .map_or(1, |b| b + 1);
-        if k == 0
+            .map_or(1, |b| b.saturating_add(1))
+            .max(s.sequences.len());
+        // Each block is a count and its values: more than the bytes left
+        // can hold is a lie, refused before anything is allocated for it.
+        if blocks > body / (8 + 4 * per_block) {
+            return Err(format!(
+                "space '{}': {blocks} reference blocks of {per_block} values do not fit the file",
+                s.name
+            ));
+        }
+        if s.sequences.is_empty()
             || s.steps.len() != s.sequences.len()
+            || s.pairs.len() + 1 != s.sequences.len()
             || s.steps
                 .iter()
                 .any(|r| r.step.len() != k || r.duration.len() != k)
         {
             return Err(format!("space '{}': inconsistent header", s.name));
         }
+        for (i, p) in s.pairs.iter().enumerate() {
+            let ordered = p
+                .weights
+                .windows(2)
+                .all(|w| w[0] <= w[1] && (0.0..=1.0).contains(&w[0]))
+                && p.weights.last().is_some_and(|w| (0.0..=1.0).contains(w));
+            if p.weights.len() < 2 || p.weights.len() != p.blocks.len() || !ordered {
+                return Err(format!(
+                    "space '{}', pair {i}: {} reference weights for {} blocks (at least 2, in [0, 1], increasing)",
+                    s.name,
+                    p.weights.len(),
+                    p.blocks.len()
+                ));
+            }
+        }
         let mut out = Vec::with_capacity(blocks);
         for b in 0..blocks {
-            out.push(floats(k * n * 3, &format!("space '{}' block {b}", s.name))?);
+            out.push(floats(per_block, &format!("space '{}' block {b}", s.name))?);
         }
         s.blend = super::hybrid::HybridBlend {
             n,
@@ -162,8 +225,32 @@ pub fn parse(bytes: &[u8], key: u64, topology: &crate::mesh::Mesh) -> Result<Mot
     if tables.len() != spaces.len() * spaces.len() {
         return Err("table count".into());
     }
-    for t in &mut tables {
-        t.sim = floats(t.expected_len(), "similarity table")?;
+    for (i, t) in tables.iter_mut().enumerate() {
+        let (src, tgt) = (&spaces[i / spaces.len()], &spaces[i % spaces.len()]);
+        let diagonal = i / spaces.len() == i % spaces.len();
+        let sorted =
+            |u: &[f64]| u.windows(2).all(|w| w[0] <= w[1]) && u.iter().all(|x| x.is_finite());
+        let consistent = if diagonal {
+            t.ks == 0 && t.kt == 0
+        } else {
+            t.ks == src.alignment.grid && t.kt == tgt.alignment.grid
+        };
+        let expect =
+            t.us.len()
+                .checked_mul(t.ut.len())
+                .and_then(|x| x.checked_mul(t.ks))
+                .and_then(|x| x.checked_mul(t.kt))
+                .filter(|&x| x <= body / 4);
+        let Some(expect) = expect.filter(|_| consistent && sorted(&t.us) && sorted(&t.ut)) else {
+            return Err(format!(
+                "similarity table {i}: {} × {} references and {} × {} phase samples do not match its spaces or the file",
+                t.us.len(),
+                t.ut.len(),
+                t.ks,
+                t.kt
+            ));
+        };
+        t.sim = floats(expect, "similarity table")?;
         if t.sim.iter().any(|x| !(0.0..=1.0).contains(x)) {
             return Err("a similarity outside [0, 1]".into());
         }
@@ -190,8 +277,7 @@ pub fn load_or_build(
     let key = key(dir, &m, opts)?;
     let path = cache_path(dir);
     if !force && let Ok(bytes) = crate::fsutil::read_bytes(&path) {
-        let topo = metres_topology(dir, &m)?;
-        match parse(&bytes, key, &topo) {
+        match read_cached(dir, &m, &bytes, key, opts)? {
             Ok(motion) => return Ok((motion, true)),
             Err(why) => {
                 if !why.starts_with("stale") {
@@ -203,6 +289,47 @@ pub fn load_or_build(
     let motion = Motion::build(dir, &m, opts)?;
     save(&path, key, &motion)?;
     Ok((motion, false))
+}
+
+/// The model in a cache file's `bytes` for the database in `dir` (manifest
+/// `m`), its `key` and `opts`: `Ok(Err(why))` when the file is stale or
+/// cannot be trusted ([`parse`], and a frame rate other than the
+/// database's), `Err` when the database itself does not load.
+fn read_cached(
+    dir: &Path,
+    m: &Manifest,
+    bytes: &[u8],
+    key: u64,
+    opts: &MotionOptions,
+) -> Result<Result<Motion, String>, ParamError> {
+    let topo = metres_topology(dir, m)?;
+    Ok(parse(bytes, key, &topo, opts).and_then(|motion| {
+        // The model plays at the database's rate: a cache that says
+        // otherwise is not the database's (a corrupt rate made `play`
+        // blame its output: "18446744073709551615 frames do not fit").
+        if motion.fps == m.fps {
+            Ok(motion)
+        } else {
+            Err(format!(
+                "frame rate {} fps, the database's is {} fps",
+                crate::numfmt::Short(motion.fps),
+                crate::numfmt::Short(m.fps)
+            ))
+        }
+    }))
+}
+
+/// Checks the cache file at `path` of the database in `dir` as `play`
+/// would before trusting it (`inspect` of the cache): `Ok(())` when `play`
+/// would use it with the default options, else why not ("stale ..." for a
+/// file of other inputs).
+pub fn check_file(dir: &Path, m: &Manifest, path: &Path) -> Result<(), String> {
+    let opts = MotionOptions::default();
+    let key = key(dir, m, &opts).map_err(|e| e.to_string())?;
+    let bytes = crate::fsutil::read_bytes(path).map_err(|e| e.to_string())?;
+    read_cached(dir, m, &bytes, key, &opts)
+        .map_err(|e| e.to_string())?
+        .map(|_| ())
 }
 
 /// The topology in metres, Y-up.

@@ -143,6 +143,9 @@ pub enum CodecError {
         /// What is wrong.
         msg: String,
     },
+    /// A valid file whose geometry does not fit the memory budget.
+    #[error(transparent)]
+    OverBudget(#[from] crate::budget::OverBudget),
 }
 
 /// What [`encode`] measured.
@@ -465,52 +468,125 @@ impl Reader<'_> {
     }
 }
 
-/// Inflates one block and reads `count` zigzag varints from it.
-fn read_block(data: &[u8], offset: usize, count: usize) -> Result<Vec<i32>, CodecError> {
-    let bad = |msg: String| CodecError::Corrupt { offset, msg };
-    // DEFLATE expands at most 1,032:1: a count no block of this size can
-    // hold is corrupt (and must not size an allocation).
-    if count > data.len().saturating_mul(1100) {
-        return Err(bad(format!(
-            "{count} values cannot come from a block of {} bytes",
-            data.len()
-        )));
-    }
-    let mut raw = Vec::with_capacity(count.min(data.len() * 8));
-    // At most 5 bytes per varint: a bigger stream is corrupt (and this caps
-    // what a hostile file can make us allocate).
-    DeflateDecoder::new(data)
-        .take(count as u64 * 5 + 1)
-        .read_to_end(&mut raw)
-        .map_err(|e| bad(format!("the block does not inflate ({e})")))?;
-    let mut out = Vec::with_capacity(count.min(raw.len()));
-    let mut z = 0u32;
-    let mut shift = 0;
-    for &b in &raw {
-        if shift > 28 {
-            return Err(bad("a varint longer than 5 bytes".into()));
+/// The zigzag varints of one block, inflated as they are read: a block is
+/// never held inflated (a 1.9 MB file can declare 2·10⁹ values, 8 GB as
+/// `i32`s; issue 46, item 5).
+struct Varints<'a> {
+    z: std::io::Take<DeflateDecoder<&'a [u8]>>,
+    buf: Box<[u8]>,
+    pos: usize,
+    len: usize,
+    /// Byte offset of the block in the file (for errors).
+    offset: usize,
+    /// Values the block must hold.
+    count: usize,
+    /// Values read so far.
+    read: usize,
+}
+
+impl<'a> Varints<'a> {
+    /// The block `data` at file offset `offset`, holding `count` values.
+    fn new(data: &'a [u8], offset: usize, count: usize) -> Result<Varints<'a>, CodecError> {
+        // DEFLATE expands at most 1,032:1: a count no block of this size
+        // can hold is corrupt.
+        if count > data.len().saturating_mul(1100) {
+            return Err(CodecError::Corrupt {
+                offset,
+                msg: format!(
+                    "{count} values cannot come from a block of {} bytes",
+                    data.len()
+                ),
+            });
         }
-        z |= ((b & 0x7f) as u32) << shift;
-        if b & 0x80 == 0 {
-            out.push(unzigzag(z));
-            z = 0;
-            shift = 0;
-        } else {
+        Ok(Varints {
+            // At most 5 bytes per varint: a bigger stream is corrupt.
+            z: DeflateDecoder::new(data).take((count as u64).saturating_mul(5) + 1),
+            buf: vec![0u8; 1 << 16].into_boxed_slice(),
+            pos: 0,
+            len: 0,
+            offset,
+            count,
+            read: 0,
+        })
+    }
+
+    fn bad(&self, msg: String) -> CodecError {
+        CodecError::Corrupt {
+            offset: self.offset,
+            msg,
+        }
+    }
+
+    /// The next inflated byte; `None` at the end of the stream.
+    fn byte(&mut self) -> Result<Option<u8>, CodecError> {
+        if self.pos == self.len {
+            self.len = self
+                .z
+                .read(&mut self.buf)
+                .map_err(|e| self.bad(format!("the block does not inflate ({e})")))?;
+            self.pos = 0;
+            if self.len == 0 {
+                return Ok(None);
+            }
+        }
+        self.pos += 1;
+        Ok(Some(self.buf[self.pos - 1]))
+    }
+
+    /// The next value; an error when the block ends before `count` values.
+    fn next(&mut self) -> Result<i32, CodecError> {
+        let mut z = 0u32;
+        let mut shift = 0;
+        loop {
+            let Some(b) = self.byte()? else {
+                return Err(self.bad(format!(
+                    "the block holds {} values, expected {}",
+                    self.read, self.count
+                )));
+            };
+            if shift > 28 {
+                return Err(self.bad("a varint longer than 5 bytes".into()));
+            }
+            z |= ((b & 0x7f) as u32) << shift;
+            if b & 0x80 == 0 {
+                self.read += 1;
+                return Ok(unzigzag(z));
+            }
             shift += 7;
         }
     }
-    if out.len() != count || shift != 0 {
-        return Err(bad(format!(
-            "the block holds {} values, expected {count}",
-            out.len()
-        )));
+
+    /// Checks that nothing follows the `count` values read.
+    fn finish(mut self) -> Result<(), CodecError> {
+        if self.byte()?.is_some() {
+            return Err(self.bad(format!(
+                "the block holds more than the {} values expected",
+                self.count
+            )));
+        }
+        Ok(())
     }
-    Ok(out)
 }
 
-/// Reads a `.sm4d` file; every size, index and value is checked, and the
-/// error names the byte offset of the field or block at fault.
-pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
+/// What [`read_header`] found before the sequence blocks.
+struct Parsed {
+    predictor: Predictor,
+    vertices: usize,
+    triangles: Vec<[u32; 3]>,
+    step: f32,
+    origin: [f32; 3],
+    levels: [u32; 3],
+    max_error: f32,
+    /// Per sequence: frames, bytes of its block.
+    table: Vec<(usize, usize)>,
+    /// Offset of the first sequence block.
+    at: usize,
+}
+
+/// The header, the table and the topology of a `.sm4d` file, checked: the
+/// triangle count against the topology block's size and against the
+/// memory budget before the triangles are allocated.
+fn read_header(b: &[u8]) -> Result<Parsed, CodecError> {
     if b.len() < 8 || &b[..8] != MAGIC {
         return Err(CodecError::Corrupt {
             offset: 0,
@@ -558,38 +634,76 @@ pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
     for _ in 0..ns {
         table.push((r.u32()? as usize, r.u32()? as usize));
     }
-    let mut at = r.at;
-    let block = |at: usize, len: usize| {
-        b.get(at..at.saturating_add(len))
-            .ok_or_else(|| CodecError::Corrupt {
-                offset: at,
-                msg: format!(
-                    "a block of {len} bytes runs past the end of the file ({} bytes): truncated?",
-                    b.len()
-                ),
-            })
-    };
-    let idx = read_block(block(at, topo_bytes)?, at, nt.saturating_mul(3))?;
+    let at = r.at;
+    let topo = block(b, at, topo_bytes)?;
+    let mut idx = Varints::new(topo, at, nt.saturating_mul(3))?;
+    // Triangles (12 bytes), the parents (4 per vertex) and two frames of
+    // quantised positions (12 per vertex).
+    crate::budget::check(
+        || {
+            format!(
+                "reading {} triangles and {} vertices of 4D geometry",
+                crate::budget::thousands(nt as u128),
+                crate::budget::thousands(n as u128)
+            )
+        },
+        nt as u128 * 12 + n as u128 * 16,
+    )?;
     let mut triangles = Vec::with_capacity(nt);
     let mut last = 0i64;
-    for (k, d) in idx.chunks_exact(3).enumerate() {
+    for k in 0..nt {
         let mut t = [0u32; 3];
-        for c in 0..3 {
-            last += d[c] as i64;
+        for c in t.iter_mut() {
+            last += idx.next()? as i64;
             if last < 0 || last as usize >= n {
                 return Err(CodecError::Corrupt {
                     offset: at,
                     msg: format!("triangle {k} names vertex {last} of {n}"),
                 });
             }
-            t[c] = last as u32;
+            *c = last as u32;
         }
         triangles.push(t);
     }
-    at += topo_bytes;
-    let parent = parents(n, &triangles);
-    let mut sequences = Vec::with_capacity(ns);
-    for (s, &(frames, len)) in table.iter().enumerate() {
+    idx.finish()?;
+    Ok(Parsed {
+        predictor,
+        vertices: n,
+        triangles,
+        step,
+        origin,
+        levels,
+        max_error,
+        table,
+        at: at + topo_bytes,
+    })
+}
+
+/// The `len` bytes at `at`, or an error naming the truncation.
+fn block(b: &[u8], at: usize, len: usize) -> Result<&[u8], CodecError> {
+    b.get(at..at.saturating_add(len))
+        .ok_or_else(|| CodecError::Corrupt {
+            offset: at,
+            msg: format!(
+                "a block of {len} bytes runs past the end of the file ({} bytes): truncated?",
+                b.len()
+            ),
+        })
+}
+
+/// Decodes every frame of `p`'s sequences from `b` in order, holding two
+/// frames at a time, and hands each to `frame(sequence, t, positions)`.
+fn walk(
+    b: &[u8],
+    p: &Parsed,
+    mut frame: impl FnMut(usize, usize, &[[u16; 3]]),
+) -> Result<(), CodecError> {
+    let n = p.vertices;
+    let parent = parents(n, &p.triangles);
+    let mut prev = vec![[0u16; 3]; n];
+    let mut cur = vec![[0u16; 3]; n];
+    let mut at = p.at;
+    for (s, &(frames, len)) in p.table.iter().enumerate() {
         let count = frames
             .checked_mul(n * 3)
             .filter(|&c| c <= len.saturating_mul(1100))
@@ -597,39 +711,39 @@ pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
                 offset: HEADER_BYTES + 8 * s,
                 msg: format!("sequence {s}: {frames} frames cannot come from {len} bytes"),
             })?;
-        let res = read_block(block(at, len)?, at, count)?;
-        let mut q = vec![[0u16; 3]; frames * n];
+        let mut res = Varints::new(block(b, at, len)?, at, count)?;
         for t in 0..frames {
             for c in 0..3 {
                 for v in 0..n {
                     let u = parent[v] as usize;
-                    let e = res[(t * 3 + c) * n + v] as i64;
+                    let e = res.next()? as i64;
                     let pred = if t == 0 {
-                        if u != v { q[u][c] as i64 } else { 0 }
+                        if u != v { cur[u][c] as i64 } else { 0 }
                     } else {
-                        let p = (t - 1) * n;
-                        match predictor {
+                        match p.predictor {
                             Predictor::SpatioTemporal if u != v => {
-                                q[p + v][c] as i64 + q[t * n + u][c] as i64 - q[p + u][c] as i64
+                                prev[v][c] as i64 + cur[u][c] as i64 - prev[u][c] as i64
                             }
-                            _ => q[p + v][c] as i64,
+                            _ => prev[v][c] as i64,
                         }
                     };
                     let x = pred + e;
-                    if x < 0 || x >= levels[c] as i64 {
+                    if x < 0 || x >= p.levels[c] as i64 {
                         return Err(CodecError::Corrupt {
                             offset: at,
                             msg: format!(
                                 "sequence {s}, frame {t}, vertex {v}: position {x} outside 0..{}",
-                                levels[c]
+                                p.levels[c]
                             ),
                         });
                     }
-                    q[t * n + v][c] = x as u16;
+                    cur[v][c] = x as u16;
                 }
             }
+            frame(s, t, &cur);
+            std::mem::swap(&mut prev, &mut cur);
         }
-        sequences.push(q);
+        res.finish()?;
         at += len;
     }
     if at != b.len() {
@@ -638,13 +752,83 @@ pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
             msg: format!("{} bytes after the last block", b.len() - at),
         });
     }
+    Ok(())
+}
+
+/// What [`verify`] found: the counts of a valid `.sm4d` file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// The predictor the file used.
+    pub predictor: Predictor,
+    /// Vertices per frame.
+    pub vertices: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// Frames of each sequence.
+    pub frames: Vec<usize>,
+    /// Metres per quantisation unit.
+    pub step: f32,
+    /// The error the encoder measured (metres).
+    pub max_error: f32,
+}
+
+/// Checks a whole `.sm4d` file as [`decode`] does (every size, index and
+/// position) while holding only two frames: what `inspect` uses, so a file
+/// that declares millions of frames is checked, not loaded.
+pub fn verify(b: &[u8]) -> Result<Summary, CodecError> {
+    let p = read_header(b)?;
+    walk(b, &p, |_, _, _| {})?;
+    Ok(Summary {
+        predictor: p.predictor,
+        vertices: p.vertices,
+        triangles: p.triangles.len(),
+        frames: p.table.iter().map(|t| t.0).collect(),
+        step: p.step,
+        max_error: p.max_error,
+    })
+}
+
+/// Reads a `.sm4d` file; every size, index and value is checked, and the
+/// error names the byte offset of the field or block at fault. The
+/// positions the file declares (6 bytes per vertex and frame) are checked
+/// against the block sizes and the memory budget ([`crate::budget`])
+/// before they are allocated.
+pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
+    let p = read_header(b)?;
+    let n = p.vertices;
+    let mut total = 0u128;
+    for (s, &(frames, len)) in p.table.iter().enumerate() {
+        if (frames as u128) * (n as u128) * 3 > (len as u128) * 1100 {
+            return Err(CodecError::Corrupt {
+                offset: HEADER_BYTES + 8 * s,
+                msg: format!("sequence {s}: {frames} frames cannot come from {len} bytes"),
+            });
+        }
+        total += frames as u128 * n as u128;
+    }
+    crate::budget::check(
+        || {
+            format!(
+                "decoding {} frames of {} vertices",
+                crate::budget::thousands(p.table.iter().map(|t| t.0 as u128).sum()),
+                crate::budget::thousands(n as u128)
+            )
+        },
+        total * 6,
+    )?;
+    let mut sequences: Vec<Vec<[u16; 3]>> = p
+        .table
+        .iter()
+        .map(|&(frames, _)| Vec::with_capacity(frames * n))
+        .collect();
+    walk(b, &p, |s, _, q| sequences[s].extend_from_slice(q))?;
     Ok(Decoded {
-        predictor,
+        predictor: p.predictor,
         vertices: n,
-        triangles,
-        step,
-        origin,
-        max_error,
+        triangles: p.triangles,
+        step: p.step,
+        origin: p.origin,
+        max_error: p.max_error,
         sequences,
     })
 }

@@ -235,6 +235,13 @@ impl Ctx<'_> {
                 if count > 100_000_000 {
                     return Err(self.err(format!("{what}: absurd count {count}")));
                 }
+                // Zeros that no byte of the file backs: a few bytes of JSON
+                // declared 6.4 GB (issue 46, item 5).
+                crate::budget::check(
+                    || format!("{what}: {count} elements of {comps} zeros (no bufferView)"),
+                    count as u128 * comps as u128 * 4,
+                )
+                .map_err(|e| self.err(e.to_string()))?;
                 vec![0.0; count * comps]
             }
         };
@@ -1371,6 +1378,9 @@ impl GltfAsset {
         let g = &self.graph;
         let frames = ((anim.duration as f64 * fps).floor() as usize + 1).min(100_000);
         let nv = self.mesh.vertex_count();
+        // 100,000 frames of a mesh the file declares: checked before held.
+        crate::budget::check_frames("a skinned glTF animation", frames, nv, 1)
+            .map_err(|e| bad(e.to_string()))?;
         let mut out = Vec::with_capacity(frames * nv);
         let mut trs = g.rest.clone();
         let mut world = vec![DMat4::IDENTITY; trs.len()];
@@ -1480,6 +1490,10 @@ impl GltfAsset {
             return Ok(MeshSequence::single(self.mesh.clone()));
         };
         let base = self.mesh.positions();
+        // A key per frame of the whole mesh: a small weights accessor
+        // declares many frames (issue 46, item 5).
+        crate::budget::check_frames("a glTF morph-weights animation", keys.len(), base.len(), 1)
+            .map_err(|e| MeshError::invalid(std::path::Path::new("<gltf>"), e.to_string()))?;
         let mut frames = Vec::with_capacity(keys.len() * base.len());
         for w in keys {
             let start = frames.len();
