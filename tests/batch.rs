@@ -875,3 +875,100 @@ fn temporaries_of_a_killed_write_are_removed_by_the_next_run() {
     assert!(!part.exists() && !partial.exists());
     assert!(mine.exists() && out.join("a.glb").exists() && out.join("sub/b.glb").exists());
 }
+
+/// Regression (issue 39, item 4): `batch.json` and the page held only the
+/// joint-velocity error while `eval` on a clip the batch marked "done"
+/// warned. Each clip's warnings (kind, count, worst frame) are in the
+/// report, as many as `eval` gives on the same result, and the summary
+/// counts the clips with warnings.
+#[test]
+fn batch_keeps_the_plausibility_warnings_eval_gives() {
+    let db = demo_db();
+    let tmp = tempfile::tempdir().unwrap();
+    let lib = tmp.path().join("lib");
+    std::fs::create_dir_all(&lib).unwrap();
+    std::fs::write(lib.join("run.bvh"), short_clip("run", 40)).unwrap();
+    // The walk with every joint turned four times as far: knees bent
+    // backwards, feet through the floor, folds (eval warns of 73 turned
+    // over triangles in frame 37).
+    let walk = short_clip("walk", 40);
+    let (head, motion) = walk.split_once("MOTION\n").unwrap();
+    let mut wild = format!("{head}MOTION\n");
+    for (i, l) in motion.lines().enumerate() {
+        if i < 2 {
+            wild += &format!("{l}\n");
+            continue;
+        }
+        let v: Vec<String> = l
+            .split_whitespace()
+            .enumerate()
+            .map(|(k, x)| match k {
+                0..3 => x.to_string(),
+                _ => format!("{:.4}", 4.0 * x.parse::<f64>().unwrap()),
+            })
+            .collect();
+        wild += &format!("{}\n", v.join(" "));
+    }
+    std::fs::write(lib.join("wild.bvh"), wild).unwrap();
+    let out = tmp.path().join("out");
+    let o = Command::new(common::bin())
+        .args(["batch", "--db"])
+        .arg(&db)
+        .arg("--mocap-dir")
+        .arg(&lib)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    ok(&o);
+    let s = summary(&out, "batch.json");
+    let mut warned = 0;
+    for o in outcomes(&s) {
+        assert_eq!(o["status"], "done", "{o}");
+        let clip = lib.join(o["clip"].as_str().unwrap());
+        let result = out.join(o["output"].as_str().unwrap());
+        let e = Command::new(common::bin())
+            .args(["eval", "--json", "--db"])
+            .arg(&db)
+            .arg("--mocap")
+            .arg(&clip)
+            .arg("--result")
+            .arg(&result)
+            .output()
+            .unwrap();
+        assert!(e.status.success(), "{}", String::from_utf8_lossy(&e.stderr));
+        let ev: serde_json::Value = serde_json::from_slice(&e.stdout).unwrap();
+        let want: Vec<&str> = ev["plausibility"]["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|w| w.as_str().unwrap())
+            .collect();
+        let have = o["warnings"]
+            .as_array()
+            .unwrap_or_else(|| panic!("no warnings in {o}"));
+        eprintln!("{}: eval {want:?}, batch {have:?}", o["clip"]);
+        assert_eq!(have.len(), want.len(), "{}", o["clip"]);
+        for w in have {
+            assert!(w["kind"].is_string() && !w["message"].as_str().unwrap().is_empty());
+            if w["kind"] == "turned_over" {
+                assert!(
+                    w["count"].as_u64().unwrap() > 0 && w["worst_frame"].is_u64(),
+                    "{w}"
+                );
+            }
+        }
+        warned += usize::from(!have.is_empty());
+    }
+    assert!(warned > 0, "the wild clip was not warned about");
+    assert_eq!(s["with_warnings"].as_u64(), Some(warned as u64));
+    let page = std::fs::read_to_string(out.join("batch.html")).unwrap();
+    assert!(page.contains("<th>warnings</th>"));
+    for o in outcomes(&s) {
+        for w in o["warnings"].as_array().unwrap() {
+            let m = w["message"].as_str().unwrap();
+            let first = m.split(' ').take(3).collect::<Vec<_>>().join(" ");
+            assert!(page.contains(&first), "the page lacks {m}");
+        }
+    }
+}

@@ -224,6 +224,7 @@ impl Converter for Echo {
         Ok(Converted {
             frames: 3,
             error_cm: None,
+            warnings: Vec::new(),
         })
     }
 }

@@ -746,3 +746,52 @@ fn each_foot_is_measured_from_the_ground_under_it() {
         }
     }
 }
+
+/// Regression (issue 39, item 8): `retarget` printed "0 after the repair"
+/// and then "1647 … turned over" in one report. Every line that counts
+/// turned-over triangles says what it counts them against.
+#[test]
+fn retarget_says_what_each_turned_over_count_is_against() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("demo");
+    let ok = |o: std::process::Output| {
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8(o.stdout).unwrap() + &String::from_utf8(o.stderr).unwrap()
+    };
+    let cmd = || std::process::Command::new(common::bin());
+    ok(cmd().arg("demo").arg("-o").arg(&dir).output().unwrap());
+    let text = ok(cmd()
+        .args(["retarget", "--db"])
+        .arg(dir.join("database"))
+        .arg("--mocap")
+        .arg(dir.join("query_turn.bvh"))
+        .arg("-o")
+        .arg(tmp.path().join("r.glb"))
+        .output()
+        .unwrap());
+    let lines: Vec<&str> = text
+        .lines()
+        .filter(|l| l.contains("turned over") || l.contains("turned-over"))
+        .collect();
+    assert!(lines.len() >= 2, "{text}");
+    for l in &lines {
+        assert!(
+            l.contains("against the retrieved frames") && l.contains("after the repair")
+                || l.contains("against the rest frame"),
+            "{l}"
+        );
+    }
+    let repair = lines
+        .iter()
+        .find(|l| l.contains("after the repair"))
+        .unwrap();
+    assert!(repair.contains("retrieved frames"), "{repair}");
+    let rest = lines
+        .iter()
+        .find(|l| {
+            l.trim_start()
+                .starts_with("triangles turned over against the rest frame")
+        })
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(rest.contains("not the retrieved frames"), "{rest}");
+}

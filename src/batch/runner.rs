@@ -36,12 +36,75 @@ impl Default for RunOptions {
 }
 
 /// What a converter reports for one clip.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Converted {
     /// Frames written.
     pub frames: usize,
     /// Joint-velocity error of the result against the clip (cm/frame).
     pub error_cm: Option<f64>,
+    /// The plausibility warnings of the result (as `eval` prints them).
+    pub warnings: Vec<ClipWarning>,
+}
+
+/// One plausibility warning of a clip's result.
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+pub struct ClipWarning {
+    /// What is wrong (`turned_over`, `off_ring`, `head`, `penetration`,
+    /// `floating`, `knee`, `feet`, `repair`, `other`).
+    pub kind: String,
+    /// How many (triangles turned over in the worst frame, triangle-frames
+    /// left by the repair, vertices off their ring), when it counts things.
+    pub count: Option<usize>,
+    /// The frame where it is worst, when known.
+    pub worst_frame: Option<usize>,
+    /// The warning as `eval` words it.
+    pub message: String,
+}
+
+impl ClipWarning {
+    /// The warnings of a plausibility report, each with its kind, count
+    /// and worst frame.
+    pub fn of(p: &crate::eval::Plausibility) -> Vec<ClipWarning> {
+        p.warnings
+            .iter()
+            .map(|m| {
+                let (kind, count, worst_frame) = if m.contains("turned over against the rest frame")
+                {
+                    (
+                        "turned_over",
+                        Some(p.turned_over.max_in_a_frame),
+                        Some(p.turned_over.worst_frame),
+                    )
+                } else if m.contains("stay turned over") {
+                    (
+                        "repair",
+                        p.turned_over.deformation.as_ref().map(|d| d.after),
+                        None,
+                    )
+                } else if m.contains("one-ring") {
+                    ("off_ring", Some(1), Some(p.off_ring.frame))
+                } else if m.starts_with("head") {
+                    ("head", None, None)
+                } else if m.starts_with("ground penetration") {
+                    ("penetration", None, None)
+                } else if m.starts_with("floating") {
+                    ("floating", None, None)
+                } else if m.starts_with("knee") {
+                    ("knee", None, None)
+                } else if m.starts_with("feet") || m.starts_with("foot") {
+                    ("feet", None, None)
+                } else {
+                    ("other", None, None)
+                };
+                ClipWarning {
+                    kind: kind.into(),
+                    count,
+                    worst_frame,
+                    message: m.clone(),
+                }
+            })
+            .collect()
+    }
 }
 
 /// How a clip ended.
@@ -71,6 +134,9 @@ pub struct ClipOutcome {
     pub seconds: f64,
     /// Joint-velocity error (cm/frame), if measured.
     pub error_cm: Option<f64>,
+    /// The result's plausibility warnings (none when it was not measured).
+    #[serde(default)]
+    pub warnings: Vec<ClipWarning>,
     /// Why it failed.
     pub reason: Option<String>,
     /// True when frames, seconds and error of a skipped clip come from the
@@ -120,6 +186,7 @@ pub fn run(
             frames: 0,
             seconds: 0.0,
             error_cm: None,
+            warnings: Vec::new(),
             reason: None,
             earlier: false,
         };
@@ -134,6 +201,7 @@ pub fn run(
                 o.status = ClipStatus::Done;
                 o.frames = c.frames;
                 o.error_cm = c.error_cm;
+                o.warnings = c.warnings;
             }
             Err(e) => {
                 o.status = ClipStatus::Failed;
@@ -276,6 +344,7 @@ mod tests {
                     Ok(Converted {
                         frames: 3,
                         error_cm: None,
+                        warnings: Vec::new(),
                     })
                 }
             }

@@ -47,6 +47,9 @@ pub struct Summary {
     pub jobs: usize,
     /// The shard, `i/n`.
     pub shard: Option<String>,
+    /// Clips whose result has plausibility warnings.
+    #[serde(default)]
+    pub with_warnings: usize,
     /// Every clip.
     pub outcomes: Vec<ClipOutcome>,
 }
@@ -82,6 +85,7 @@ impl Summary {
             frames_per_second: frames_written as f64 / seconds.max(1e-9),
             jobs,
             shard,
+            with_warnings: outcomes.iter().filter(|o| !o.warnings.is_empty()).count(),
             outcomes,
         }
     }
@@ -91,12 +95,13 @@ impl Summary {
     /// One line of totals: clips converted, skipped, failed, frames, speed.
     pub fn line(&self) -> String {
         format!(
-            "{}: {}: {} converted, {} already done, {} failed; {} frames written in {:.1} s, {} in the outputs ({:.1} clips/min, {:.0} frames/s, {}{})",
+            "{}: {}: {} converted, {} already done, {} failed, {} with plausibility warnings; {} frames written in {:.1} s, {} in the outputs ({:.1} clips/min, {:.0} frames/s, {}{})",
             self.what,
             count(self.clips, "clip"),
             self.done,
             self.skipped,
             self.failed,
+            self.with_warnings,
             self.frames_written,
             self.seconds,
             self.frames,
@@ -214,7 +219,7 @@ pub fn html(s: &Summary) -> String {
         h.push_str("<p class=\"running\"><b>running</b> (or stopped before its end): the clips listed are those finished so far.</p>\n");
     }
     h.push_str(&plot_svg(s));
-    h.push_str("<table>\n<tr><th>clip</th><th>status</th><th>frames</th><th>seconds</th><th>error (cm/frame)</th><th>output / reason</th></tr>\n");
+    h.push_str("<table>\n<tr><th>clip</th><th>status</th><th>frames</th><th>seconds</th><th>error (cm/frame)</th><th>warnings</th><th>output / reason</th></tr>\n");
     for o in &s.outcomes {
         let status = match o.status {
             ClipStatus::Done => "done",
@@ -228,11 +233,16 @@ pub fn html(s: &Summary) -> String {
         };
         let _ = writeln!(
             h,
-            "<tr class=\"{status}\"><td>{}</td><td>{label}</td><td>{}</td><td>{:.2}</td><td>{}</td><td>{}</td></tr>",
+            "<tr class=\"{status}\"><td>{}</td><td>{label}</td><td>{}</td><td>{:.2}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             esc(&o.clip.display().to_string()),
             o.frames,
             o.seconds,
             o.error_cm.map(|e| format!("{e:.2}")).unwrap_or_default(),
+            o.warnings
+                .iter()
+                .map(|w| esc(&w.message))
+                .collect::<Vec<_>>()
+                .join("<br>"),
             esc(&o
                 .reason
                 .clone()
@@ -262,11 +272,20 @@ pub fn write_summary(dir: &Path, s: &Summary) -> Result<Vec<PathBuf>, FsError> {
 }
 
 /// What earlier reports in an output folder recorded for the outputs they
-/// converted: output path → (clip, frames, seconds, error).
+/// converted: output path → (clip, frames, seconds, error, warnings).
 #[derive(Debug, Default)]
 pub struct Earlier {
-    by_output: HashMap<PathBuf, (PathBuf, usize, f64, Option<f64>)>,
+    by_output: HashMap<PathBuf, Recorded>,
 }
+
+/// What an earlier report recorded of one output.
+type Recorded = (
+    PathBuf,
+    usize,
+    f64,
+    Option<f64>,
+    Vec<crate::batch::ClipWarning>,
+);
 
 impl Earlier {
     /// Reads every `batch*.json` in `dir` (any shard split, so a folder
@@ -312,6 +331,7 @@ impl Earlier {
                             frames as usize,
                             o["seconds"].as_f64().unwrap_or(0.0),
                             o["error_cm"].as_f64(),
+                            serde_json::from_value(o["warnings"].clone()).unwrap_or_default(),
                         ),
                     );
                 }
@@ -326,12 +346,13 @@ impl Earlier {
         if o.status != ClipStatus::Skipped {
             return;
         }
-        if let Some((clip, frames, seconds, error)) = self.by_output.get(&o.output)
+        if let Some((clip, frames, seconds, error, warnings)) = self.by_output.get(&o.output)
             && *clip == o.clip
         {
             o.frames = *frames;
             o.seconds = *seconds;
             o.error_cm = *error;
+            o.warnings = warnings.clone();
             o.earlier = true;
         }
     }

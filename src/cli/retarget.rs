@@ -270,7 +270,7 @@ fn print_report(
         surfmotion::deform::DeformMode::Part | surfmotion::deform::DeformMode::Global
     ) {
         s += &format!(
-            "turned-over triangle-frames: {} after the solve, {} after the repair\n",
+            "triangle-frames turned over against the retrieved frames (the database frames each output frame blends): {} after the solve, {} after the repair (the plausibility below counts against the rest frame)\n",
             r.turned_over.before, r.turned_over.after
         );
     }

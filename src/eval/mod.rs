@@ -19,7 +19,7 @@ pub mod triangles;
 pub mod velocity;
 pub mod vertex;
 
-pub use feet::{Feet, FootOptions, Sliding};
+pub use feet::{ClipSliding, Feet, FootOptions, Sliding, clip_sliding, track_sliding};
 pub use ground::{Ground, floor_height, ground, lowest_heights};
 pub use head::{HeadOptions, HeadTorso};
 pub use knee::knee_hyperextension;

@@ -718,7 +718,7 @@ impl Plausibility {
         );
         let t = &self.turned_over;
         s += &format!(
-            "  triangles turned over against the rest frame: {}{}\n",
+            "  triangles turned over against the rest frame (not the retrieved frames the repair counts against): {}{}\n",
             t.describe(),
             refd(&|r| format!(
                 "{} triangle-frames, up to {} in a frame",

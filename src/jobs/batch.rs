@@ -179,6 +179,7 @@ pub fn batch_folder(
                     frames: 0,
                     seconds: 0.0,
                     error_cm: None,
+                    warnings: Vec::new(),
                     reason: None,
                     earlier: false,
                 };

@@ -360,13 +360,23 @@ impl Converter for RetargetJob {
     /// memory of one chunk of frames (issue 18, item 12); only a GLB,
     /// written whole, is checked against the budget.
     fn convert(&self, clip: &Path, out: &Path) -> Result<Converted, String> {
-        let run = self.run_to(clip, out, 0).map_err(|e| match e {
+        // The first frames are kept for the plausibility measure, as
+        // `retarget` keeps them (issue 39, item 4: batch dropped every
+        // warning `eval` gives).
+        let keep_bytes = super::transfer::PLAUSIBILITY_BYTES
+            .min((crate::budget::Budget::current().bytes / 8) as usize);
+        let run = self.run_to(clip, out, keep_bytes).map_err(|e| match e {
             JobError::Input { msg, .. } => msg,
             e => e.to_string(),
         })?;
+        let warnings = self
+            .plausibility_of_streamed(&run)
+            .map(|(p, _)| crate::batch::runner::ClipWarning::of(&p))
+            .unwrap_or_default();
         Ok(Converted {
             frames: run.report.frames,
             error_cm: Some(run.velocity.mean_cm),
+            warnings,
         })
     }
 }

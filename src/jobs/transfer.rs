@@ -202,6 +202,7 @@ impl Converter for ScanTransferJob {
         Ok(Converted {
             frames: stats.frames,
             error_cm: Some(velocity_error(&query, &skel).mean_cm),
+            warnings: Vec::new(),
         })
     }
 }

@@ -89,10 +89,20 @@ pub fn skeleton() -> Vec<Bone> {
 struct Params {
     speed: f64,
     strides: f64,
-    hip: f64,
-    knee: f64,
+    /// Share of a stride each foot is on the floor.
+    stance: f64,
+    /// Share of the stance the foot is flat (then its heel rises about the
+    /// toe joint, which stays put, until toe-off).
+    flat: f64,
+    /// Heel rise at toe-off (degrees).
+    heel: f64,
+    /// Swing foot lift at mid-swing (metres).
+    lift: f64,
     arm: f64,
     elbow: f64,
+    /// Pelvis height above its rest height at mid-stance and its bob
+    /// (metres): `drop + bob cos(4π u)`, lowest at each mid-stance.
+    drop: f64,
     bob: f64,
     lean: f64,
 }
@@ -101,28 +111,150 @@ fn params(g: Gait) -> Params {
     match g {
         Gait::Walk | Gait::Turn => Params {
             speed: 1.4,
-            strides: 0.9,
-            hip: 25.0,
-            knee: 45.0,
+            strides: 0.95,
+            stance: 0.6,
+            flat: 0.55,
+            heel: 35.0,
+            lift: 0.10,
             arm: 18.0,
             elbow: 15.0,
-            bob: 0.025,
+            drop: -0.06,
+            bob: 0.015,
             lean: 3.0,
         },
         Gait::Run => Params {
             speed: 3.2,
-            strides: 1.4,
-            hip: 40.0,
-            knee: 95.0,
+            strides: 1.45,
+            stance: 0.32,
+            flat: 0.5,
+            heel: 40.0,
+            lift: 0.25,
             arm: 35.0,
             elbow: 85.0,
-            bob: 0.06,
+            drop: -0.07,
+            bob: 0.04,
             lean: 10.0,
         },
     }
 }
 
-/// Generates `seconds` of a gait at `fps`. Deterministic.
+/// Radius of the `Turn` circle (metres).
+const TURN_RADIUS: f64 = 2.0;
+/// Thigh and shin length (metres).
+const BONE: f64 = 0.42;
+/// The toe joint from the ankle in the rest (flat-foot) pose.
+const TOE: DVec3 = DVec3::new(0.0, -0.06, 0.12);
+/// Ankle height above the floor with the foot flat (metres).
+const ANKLE_Y: f64 = 0.07;
+/// Longest hip-to-ankle distance the IK asks of a leg (metres).
+const REACH: f64 = 0.985 * 2.0 * BONE;
+
+/// The root's place on its path after `dist` metres, and its heading
+/// (radians about +Y from +Z).
+fn path(g: Gait, dist: f64) -> (DVec3, f64) {
+    match g {
+        Gait::Turn => {
+            let a = dist / TURN_RADIUS;
+            (
+                DVec3::new(TURN_RADIUS * (1.0 - a.cos()), 0.0, TURN_RADIUS * a.sin()),
+                a,
+            )
+        }
+        _ => (DVec3::new(0.0, 0.0, dist), 0.0),
+    }
+}
+
+/// Where one foot is at time `t`: ankle (world), the foot's yaw and its
+/// heel rise (radians), and whether it is in stance.
+struct FootState {
+    ankle: DVec3,
+    yaw: f64,
+    heel: f64,
+    stance: bool,
+}
+
+/// The foot of leg `side` (+1 left, −1 right) at time `t`. The leg's
+/// phase is `u = frac(f t + o)` (`o`: 0 left, ½ right); it is in stance
+/// for `u < stance`. Footprint `k` (the stance that begins at cycle `k`)
+/// is the ankle under the hip at the middle of the flat part, on the path
+/// and `side · 0.09` m to its left: the ankle stays there while the foot
+/// is flat, then the heel rises about the toe joint, which stays put, up
+/// to `heel` at toe-off. The swing carries the ankle from toe-off to the
+/// next footprint (smoothstep along the ground between 10 % and 85 % of the
+/// swing, `lift · sin(π s)` up), so the foot lifts off and lands vertically.
+fn foot(g: Gait, p: &Params, side: f64, t: f64) -> FootState {
+    let offset = if side > 0.0 { 0.0 } else { 0.5 };
+    let cyc = p.strides * t + offset;
+    let k = cyc.floor();
+    let u = cyc - k;
+    let print = |k: f64| -> (DVec3, f64) {
+        // Time of the middle of footprint k's flat part.
+        let tm = (k + 0.5 * p.stance * p.flat - offset) / p.strides;
+        let (pos, yaw) = path(g, p.speed * tm);
+        let lateral = DQuat::from_rotation_y(yaw) * DVec3::new(side * 0.09, 0.0, 0.0);
+        (pos + lateral + DVec3::new(0.0, ANKLE_Y, 0.0), yaw)
+    };
+    // The ankle about the fixed toe joint with the heel up by `h`.
+    let rolled = |a: DVec3, yaw: f64, h: f64| {
+        let q = DQuat::from_rotation_y(yaw);
+        let toe = a + q * TOE;
+        toe - q * (DQuat::from_rotation_x(h) * TOE)
+    };
+    let heel_max = p.heel.to_radians();
+    let rise = |u: f64| {
+        let r = ((u - p.stance * p.flat) / (p.stance * (1.0 - p.flat))).clamp(0.0, 1.0);
+        heel_max * r * r
+    };
+    if u < p.stance {
+        let (a, yaw) = print(k);
+        let h = rise(u);
+        FootState {
+            ankle: rolled(a, yaw, h),
+            yaw,
+            heel: h,
+            stance: true,
+        }
+    } else {
+        let s = (u - p.stance) / (1.0 - p.stance);
+        let (a0, y0) = print(k);
+        let from = rolled(a0, y0, heel_max);
+        let (to, y1) = print(k + 1.0);
+        // Along the ground between 10 % and 85 % of the swing: the foot
+        // lifts off and comes down vertically.
+        let w = ((s - 0.1) / 0.75).clamp(0.0, 1.0);
+        let e = w * w * (3.0 - 2.0 * w);
+        let mut ankle = from.lerp(to, e);
+        ankle.y += p.lift * (PI * s).sin();
+        let h = heel_max * (1.0 - (s / 0.6).min(1.0)).powi(2);
+        FootState {
+            ankle,
+            yaw: y0 + (y1 - y0) * e,
+            heel: h,
+            stance: false,
+        }
+    }
+}
+
+/// Local rotations of thigh and knee (about the hips' frame `root`) that
+/// put the ankle at `ankle` from the hip joint at `hip`: two-bone IK, the
+/// knee bending forward in the plane of the leg; the ankle is pulled in to
+/// [`REACH`] when it is farther.
+fn leg_ik(root: DQuat, hip: DVec3, ankle: DVec3) -> (DQuat, DQuat) {
+    let d = root.inverse() * (ankle - hip);
+    let len = d.length().clamp(1e-6, REACH);
+    let dir = d.normalize_or(DVec3::NEG_Y);
+    let alpha = (len / (2.0 * BONE)).clamp(-1.0, 1.0).acos();
+    let swing = DQuat::from_rotation_arc(DVec3::NEG_Y, dir);
+    (
+        swing * DQuat::from_rotation_x(-alpha),
+        DQuat::from_rotation_x(2.0 * alpha),
+    )
+}
+
+/// Generates `seconds` of a gait at `fps`. Deterministic. The stance foot
+/// is planted: its ankle (then, once the heel rises, its toe joint) holds
+/// its world position while the root advances, the legs being solved by
+/// IK ([`leg_ik`]); the swing foot lifts and lands with zero speed.
 pub fn gait_clip(g: Gait, seconds: f64, fps: f64) -> Clip {
     let bones = skeleton();
     let joints: Vec<Joint> = bones
@@ -145,70 +277,67 @@ pub fn gait_clip(g: Gait, seconds: f64, fps: f64) -> Clip {
     let mut rotations = Vec::with_capacity(frames * n);
     let mut translations = Vec::with_capacity(frames * n);
     let rad = |d: f64| d.to_radians();
-    let radius = 2.0;
+    let hip_off = |side: f64| DVec3::new(side * 0.09, -0.04, 0.0);
     for f in 0..frames {
         let t = f as f64 / fps;
         let ph = TAU * p.strides * t;
-        // Root: forward along +Z, or along a circle for Turn.
-        let dist = p.speed * t;
-        let (pos, heading) = match g {
-            Gait::Turn => {
-                let a = dist / radius;
-                (
-                    DVec3::new(radius * (1.0 - a.cos()), 0.0, radius * a.sin()),
-                    a,
-                )
-            }
-            _ => (DVec3::new(0.0, 0.0, dist), 0.0),
-        };
-        let bob = p.bob * (2.0 * ph).cos();
-        let root_t = pos + DVec3::new(0.0, 0.95 + bob, 0.0);
+        let (pos, heading) = path(g, p.speed * t);
+        let feet = [foot(g, &p, 1.0, t), foot(g, &p, -1.0, t)];
         let yaw = heading + rad(4.0) * ph.sin();
         let root_q = DQuat::from_rotation_y(yaw) * DQuat::from_rotation_x(rad(p.lean));
-        for (j, (name, _, off, _)) in bones.iter().enumerate() {
-            let (q, tr) = match *name {
-                "Hips" => (root_q, root_t),
-                "Spine" => (
-                    DQuat::from_rotation_y(-rad(3.0) * ph.sin()),
-                    DVec3::from_array(*off),
-                ),
-                "Spine1" => (
-                    DQuat::from_rotation_y(-rad(4.0) * ph.sin()),
-                    DVec3::from_array(*off),
-                ),
-                "Head" => (
-                    DQuat::from_rotation_x(-rad(p.lean) * 0.8),
-                    DVec3::from_array(*off),
-                ),
-                _ => {
-                    let left = name.starts_with("Left");
-                    let s = if left { 0.0 } else { PI };
-                    let q = if name.ends_with("UpLeg") {
-                        // Negative about x swings the leg forward (+Z).
-                        DQuat::from_rotation_x(-rad(p.hip) * (ph + s).sin())
-                    } else if name.ends_with("Leg") {
-                        DQuat::from_rotation_x(
-                            rad(p.knee) * (ph + s - PI / 2.0).sin().max(0.0) + rad(5.0),
-                        )
-                    } else if name.ends_with("Foot") {
-                        DQuat::from_rotation_x(rad(10.0) * (ph + s + PI / 3.0).sin())
-                    } else if name.ends_with("ForeArm") {
-                        DQuat::from_rotation_x(
-                            -rad(p.elbow) - rad(10.0) * (ph + s + PI).sin().max(0.0),
-                        )
-                    } else if name.ends_with("Arm") {
-                        let out = if left { -1.0 } else { 1.0 };
-                        DQuat::from_rotation_z(out * rad(6.0))
-                            * DQuat::from_rotation_x(-rad(p.arm) * (ph + s + PI).sin())
-                    } else {
-                        DQuat::IDENTITY
-                    };
-                    (q, DVec3::from_array(*off))
+        // Pelvis: lowest at each mid-stance, and no higher than the
+        // stance legs reach.
+        let mut y = 0.95 + p.drop + p.bob * (2.0 * ph).cos();
+        for (side, ft) in [1.0, -1.0].into_iter().zip(&feet) {
+            if !ft.stance {
+                continue;
+            }
+            let hip = pos + DVec3::new(0.0, y, 0.0) + root_q * hip_off(side);
+            let h = DVec3::new(hip.x - ft.ankle.x, 0.0, hip.z - ft.ankle.z).length();
+            let top = ft.ankle.y + (REACH * REACH - h * h).max(0.0).sqrt();
+            y -= (hip.y - top).max(0.0);
+        }
+        let root_t = pos + DVec3::new(0.0, y, 0.0);
+        let mut legs = [(DQuat::IDENTITY, DQuat::IDENTITY, DQuat::IDENTITY); 2];
+        for (leg, (side, ft)) in legs.iter_mut().zip([1.0, -1.0].into_iter().zip(&feet)) {
+            let hip = root_t + root_q * hip_off(side);
+            let (qh, qk) = leg_ik(root_q, hip, ft.ankle);
+            let world = DQuat::from_rotation_y(ft.yaw) * DQuat::from_rotation_x(ft.heel);
+            let qf = (root_q * qh * qk).inverse() * world;
+            *leg = (qh, qk, qf);
+        }
+        for (name, _, off, _) in bones.iter() {
+            let left = name.starts_with("Left");
+            let s = if left { 0.0 } else { PI };
+            let leg = legs[usize::from(!left)];
+            let heel = feet[usize::from(!left)].heel;
+            let q = match *name {
+                "Hips" => root_q,
+                "Spine" => DQuat::from_rotation_y(-rad(3.0) * ph.sin()),
+                "Spine1" => DQuat::from_rotation_y(-rad(4.0) * ph.sin()),
+                "Head" => DQuat::from_rotation_x(-rad(p.lean) * 0.8),
+                _ if name.ends_with("UpLeg") => leg.0,
+                _ if name.ends_with("Leg") => leg.1,
+                _ if name.ends_with("Foot") => leg.2,
+                // The toes stay flat while the heel rises.
+                _ if name.ends_with("ToeBase") => DQuat::from_rotation_x(-heel),
+                _ if name.ends_with("ForeArm") => {
+                    DQuat::from_rotation_x(-rad(p.elbow) - rad(10.0) * (ph + s + PI).sin().max(0.0))
                 }
+                _ if name.ends_with("Arm") => {
+                    let out = if left { -1.0 } else { 1.0 };
+                    // The arm swings against its own leg.
+                    DQuat::from_rotation_z(out * rad(6.0))
+                        * DQuat::from_rotation_x(rad(p.arm) * (ph + s).cos())
+                }
+                _ => DQuat::IDENTITY,
             };
-            let _ = j;
             rotations.push(q.normalize());
-            translations.push(tr);
+            translations.push(if *name == "Hips" {
+                root_t
+            } else {
+                DVec3::from_array(*off)
+            });
         }
     }
     let units = Units {
