@@ -310,6 +310,7 @@ mod tests {
             Ok(Converted {
                 frames: 1,
                 error_cm: None,
+                warnings: Vec::new(),
             })
         };
         let e = convert_one(Path::new("walk.bvh"), &out, Format::Obj, &convert).unwrap_err();
