@@ -103,6 +103,8 @@ fn character_is_in_metres_once_and_its_skeleton_kind_is_selectable() {
     let mut m = Manifest::load(&db).unwrap();
     m.units = "cm".into();
     m.up = "z".into();
+    // Read as cm the body is 1.7 cm tall: not a person's size.
+    m.human_sized = false;
     m.save(&db).unwrap();
     let (_, report) = build_database(&db, &Default::default(), &Quiet).unwrap();
     assert_eq!(report.frames, 105);

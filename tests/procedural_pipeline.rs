@@ -223,6 +223,8 @@ fn keyframe_frame_centres_read_frames_converted_once_on_load() {
     let mut manifest = surfmotion::db::Manifest::load(&db).unwrap();
     manifest.units = "cm".into();
     manifest.up = "z".into();
+    // Read as cm the body is 1.7 cm tall: not a person's size.
+    manifest.human_sized = false;
     manifest.save(&db).unwrap();
     let ch = Character::load(&db, &Quiet).unwrap();
     assert_eq!(ch.metres_per_unit(), 0.01);
