@@ -1141,7 +1141,7 @@ fn page_starts_geometry_download_before_its_modules() {
     let fetch = html
         .find("fetch('manifest.json')")
         .expect("and the manifest");
-    let module = html.find("<script type=\"module\"").unwrap();
+    let module = html.find("<script src=\"engine.js\"").unwrap();
     assert!(boot < module && fetch < module);
     assert!(html.contains(&format!("'{}'", web::export::GEOMETRY_FILE)));
     let app = std::fs::read_to_string(site.join("app.js")).unwrap();
