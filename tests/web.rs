@@ -1141,9 +1141,189 @@ fn page_starts_geometry_download_before_its_modules() {
     let fetch = html
         .find("fetch('manifest.json')")
         .expect("and the manifest");
-    let module = html.find("<script type=\"module\"").unwrap();
+    let module = html.find("<script src=\"engine.js\"").unwrap();
     assert!(boot < module && fetch < module);
     assert!(html.contains(&format!("'{}'", web::export::GEOMETRY_FILE)));
     let app = std::fs::read_to_string(site.join("app.js")).unwrap();
     assert!(app.contains("window.surfmotionBoot"));
+}
+
+/// A small result to export: `dir/kf.obj` (a 6 × 6 grid standing up, 1.8 m
+/// tall) and `dir/kf.pc2`, 12 frames swaying; returns the `.pc2`.
+fn small_result(dir: &Path) -> PathBuf {
+    use surfmotion::mesh::{Mesh, io};
+    std::fs::create_dir_all(dir).unwrap();
+    let k = 6;
+    let rest: Vec<[f64; 3]> = (0..k * k)
+        .map(|i| [0.1 * (i % k) as f64, 0.36 * (i / k) as f64, 0.0])
+        .collect();
+    let mut tris = Vec::new();
+    for y in 0..k - 1 {
+        for x in 0..k - 1 {
+            let v = (y * k + x) as u32;
+            let k = k as u32;
+            tris.push([v, v + 1, v + k]);
+            tris.push([v + 1, v + k + 1, v + k]);
+        }
+    }
+    let mesh = Mesh::new(rest.clone(), tris).unwrap();
+    io::obj::write_obj(&mesh, None, &dir.join("kf.obj")).unwrap();
+    let frames: Vec<[f64; 3]> = (0..12)
+        .flat_map(|f| {
+            rest.iter()
+                .map(move |p| [p[0] + 0.05 * p[1] * (f as f64 * 0.5).sin(), p[1], p[2]])
+        })
+        .collect();
+    let pc2 = dir.join("kf.pc2");
+    io::pc2::write_pc2(k * k, &frames, &pc2).unwrap();
+    pc2
+}
+
+/// Every file under `dir` (relative path, contents).
+fn tree(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                ));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Issue 46.1: `web export -o proj` where `proj/` holds the user's `main.rs`
+/// and some `manifest.json` replaced the folder (main.rs deleted, exit 0);
+/// re-exporting into an earlier export the user added `notes.txt` and
+/// `mine/data.bin` to deleted both. The export refuses, naming the file, and
+/// leaves the folder as it was; an untouched earlier export is replaced.
+#[test]
+fn web_export_keeps_the_users_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let pc2 = small_result(&tmp.path().join("in"));
+    let opts = ExportOptions::default();
+    // A project folder with a manifest.json that even says it is a site.
+    let proj = tmp.path().join("proj");
+    std::fs::create_dir_all(&proj).unwrap();
+    std::fs::write(proj.join("main.rs"), "fn main() {}\n").unwrap();
+    std::fs::write(
+        proj.join("manifest.json"),
+        r#"{"format": "surfmotion-web", "note": "mine"}"#,
+    )
+    .unwrap();
+    let before = tree(&proj);
+    let e = web::export_result(&pc2, None, &proj, &opts).unwrap_err();
+    let msg = e.to_string();
+    assert!(msg.contains("main.rs"), "{msg}");
+    assert_eq!(tree(&proj), before, "the folder changed");
+    // Through the CLI: exit 1, one line naming the file.
+    let out = Command::new(common::bin())
+        .args(["web", "export", "--result"])
+        .arg(&pc2)
+        .arg("-o")
+        .arg(&proj)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("main.rs"),
+        "{out:?}"
+    );
+    assert_eq!(tree(&proj), before);
+
+    // An earlier export the user added to.
+    let site = tmp.path().join("site");
+    web::export_result(&pc2, None, &site, &opts).unwrap();
+    // Untouched, it is replaced (and the record lists what it wrote).
+    web::export_result(&pc2, None, &site, &opts).unwrap();
+    assert!(site.join(".surfmotion-export.json").is_file());
+    std::fs::write(site.join("notes.txt"), "my notes").unwrap();
+    std::fs::create_dir_all(site.join("mine")).unwrap();
+    std::fs::write(site.join("mine/data.bin"), [1u8, 2, 3]).unwrap();
+    let before = tree(&site);
+    let msg = web::export_result(&pc2, None, &site, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("mine"), "{msg}");
+    assert_eq!(tree(&site), before);
+    std::fs::remove_dir_all(site.join("mine")).unwrap();
+    let msg = web::export_result(&pc2, None, &site, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("notes.txt"), "{msg}");
+    // A file of the export the user edited is theirs now.
+    std::fs::remove_file(site.join("notes.txt")).unwrap();
+    std::fs::write(site.join("index.html"), "<p>my page</p>").unwrap();
+    let before = tree(&site);
+    let msg = web::export_result(&pc2, None, &site, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("index.html") && msg.contains("changed"),
+        "{msg}"
+    );
+    assert_eq!(tree(&site), before);
+    // No stray temporary folders beside the outputs.
+    let stray: Vec<_> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(stray.is_empty(), "{stray:?}");
+}
+
+/// Issue 46.2: `web export --result site/kf.pc2 -o site` deleted its own
+/// input (`site/kf.pc2`, `site/kf.obj`) and exited 0. An input inside the
+/// output folder is refused with a one-line reason, the input kept; the
+/// same for a database.
+#[test]
+fn web_export_never_deletes_its_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let opts = ExportOptions::default();
+    let site = tmp.path().join("site");
+    let src = small_result(&tmp.path().join("src"));
+    web::export_result(&src, None, &site, &opts).unwrap();
+    // The result put into the earlier export, as the issue did.
+    let pc2 = site.join("kf.pc2");
+    std::fs::copy(&src, &pc2).unwrap();
+    std::fs::copy(src.with_extension("obj"), site.join("kf.obj")).unwrap();
+    let before = tree(&site);
+    let out = Command::new(common::bin())
+        .args(["web", "export", "--result"])
+        .arg(&pc2)
+        .arg("-o")
+        .arg(&site)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("kf.pc2") && err.contains("input"), "{err}");
+    assert_eq!(tree(&site), before, "the folder changed");
+    // Even if the folder held nothing but the record's files and the
+    // input: an input never goes.
+    let e = web::export_result(&pc2, None, &site.join("."), &opts).unwrap_err();
+    assert!(e.to_string().contains("input"), "{e}");
+    assert!(pc2.is_file() && site.join("kf.obj").is_file());
+    // A database exported into its own folder, or into a folder above it.
+    let db = tmp.path().join("up/db");
+    small_result(&db);
+    std::fs::write(
+        db.join("character.toml"),
+        "name = \"grid\"\ntopology = \"kf.obj\"\n[[sequence]]\nname = \"sway\"\npath = \"kf.pc2\"\n",
+    )
+    .unwrap();
+    let before = tree(&tmp.path().join("up"));
+    for out in [db.clone(), tmp.path().join("up")] {
+        let e = web::export_db(&db, &out, &opts).unwrap_err();
+        assert!(e.to_string().contains("input"), "{e}");
+        assert_eq!(tree(&tmp.path().join("up")), before);
+    }
 }
