@@ -1141,9 +1141,281 @@ fn page_starts_geometry_download_before_its_modules() {
     let fetch = html
         .find("fetch('manifest.json')")
         .expect("and the manifest");
-    let module = html.find("<script type=\"module\"").unwrap();
+    let module = html.find("<script src=\"engine.js\"").unwrap();
     assert!(boot < module && fetch < module);
     assert!(html.contains(&format!("'{}'", web::export::GEOMETRY_FILE)));
     let app = std::fs::read_to_string(site.join("app.js")).unwrap();
     assert!(app.contains("window.surfmotionBoot"));
+}
+
+/// A small result to export: `dir/kf.obj` (a 6 × 6 grid standing up, 1.8 m
+/// tall) and `dir/kf.pc2`, 12 frames swaying; returns the `.pc2`.
+fn small_result(dir: &Path) -> PathBuf {
+    use surfmotion::mesh::{Mesh, io};
+    std::fs::create_dir_all(dir).unwrap();
+    let k = 6;
+    let rest: Vec<[f64; 3]> = (0..k * k)
+        .map(|i| [0.1 * (i % k) as f64, 0.36 * (i / k) as f64, 0.0])
+        .collect();
+    let mut tris = Vec::new();
+    for y in 0..k - 1 {
+        for x in 0..k - 1 {
+            let v = (y * k + x) as u32;
+            let k = k as u32;
+            tris.push([v, v + 1, v + k]);
+            tris.push([v + 1, v + k + 1, v + k]);
+        }
+    }
+    let mesh = Mesh::new(rest.clone(), tris).unwrap();
+    io::obj::write_obj(&mesh, None, &dir.join("kf.obj")).unwrap();
+    let frames: Vec<[f64; 3]> = (0..12)
+        .flat_map(|f| {
+            rest.iter()
+                .map(move |p| [p[0] + 0.05 * p[1] * (f as f64 * 0.5).sin(), p[1], p[2]])
+        })
+        .collect();
+    let pc2 = dir.join("kf.pc2");
+    io::pc2::write_pc2(k * k, &frames, &pc2).unwrap();
+    pc2
+}
+
+/// Every file under `dir` (relative path, contents).
+fn tree(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                ));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Issue 46.1: `web export -o proj` where `proj/` holds the user's `main.rs`
+/// and some `manifest.json` replaced the folder (main.rs deleted, exit 0);
+/// re-exporting into an earlier export the user added `notes.txt` and
+/// `mine/data.bin` to deleted both. The export refuses, naming the file, and
+/// leaves the folder as it was; an untouched earlier export is replaced.
+#[test]
+fn web_export_keeps_the_users_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let pc2 = small_result(&tmp.path().join("in"));
+    let opts = ExportOptions::default();
+    // A project folder with a manifest.json that even says it is a site.
+    let proj = tmp.path().join("proj");
+    std::fs::create_dir_all(&proj).unwrap();
+    std::fs::write(proj.join("main.rs"), "fn main() {}\n").unwrap();
+    std::fs::write(
+        proj.join("manifest.json"),
+        r#"{"format": "surfmotion-web", "note": "mine"}"#,
+    )
+    .unwrap();
+    let before = tree(&proj);
+    let e = web::export_result(&pc2, None, &proj, &opts).unwrap_err();
+    let msg = e.to_string();
+    assert!(msg.contains("main.rs"), "{msg}");
+    assert_eq!(tree(&proj), before, "the folder changed");
+    // Through the CLI: exit 1, one line naming the file.
+    let out = Command::new(common::bin())
+        .args(["web", "export", "--result"])
+        .arg(&pc2)
+        .arg("-o")
+        .arg(&proj)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("main.rs"),
+        "{out:?}"
+    );
+    assert_eq!(tree(&proj), before);
+
+    // An earlier export the user added to.
+    let site = tmp.path().join("site");
+    web::export_result(&pc2, None, &site, &opts).unwrap();
+    // Untouched, it is replaced (and the record lists what it wrote).
+    web::export_result(&pc2, None, &site, &opts).unwrap();
+    assert!(site.join(".surfmotion-export.json").is_file());
+    std::fs::write(site.join("notes.txt"), "my notes").unwrap();
+    std::fs::create_dir_all(site.join("mine")).unwrap();
+    std::fs::write(site.join("mine/data.bin"), [1u8, 2, 3]).unwrap();
+    let before = tree(&site);
+    let msg = web::export_result(&pc2, None, &site, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("mine"), "{msg}");
+    assert_eq!(tree(&site), before);
+    std::fs::remove_dir_all(site.join("mine")).unwrap();
+    let msg = web::export_result(&pc2, None, &site, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("notes.txt"), "{msg}");
+    // A file of the export the user edited is theirs now.
+    std::fs::remove_file(site.join("notes.txt")).unwrap();
+    std::fs::write(site.join("index.html"), "<p>my page</p>").unwrap();
+    let before = tree(&site);
+    let msg = web::export_result(&pc2, None, &site, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("index.html") && msg.contains("changed"),
+        "{msg}"
+    );
+    assert_eq!(tree(&site), before);
+    // No stray temporary folders beside the outputs.
+    let stray: Vec<_> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(stray.is_empty(), "{stray:?}");
+}
+
+/// Issue 46.2: `web export --result site/kf.pc2 -o site` deleted its own
+/// input (`site/kf.pc2`, `site/kf.obj`) and exited 0. An input inside the
+/// output folder is refused with a one-line reason, the input kept; the
+/// same for a database.
+#[test]
+fn web_export_never_deletes_its_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let opts = ExportOptions::default();
+    let site = tmp.path().join("site");
+    let src = small_result(&tmp.path().join("src"));
+    web::export_result(&src, None, &site, &opts).unwrap();
+    // The result put into the earlier export, as the issue did.
+    let pc2 = site.join("kf.pc2");
+    std::fs::copy(&src, &pc2).unwrap();
+    std::fs::copy(src.with_extension("obj"), site.join("kf.obj")).unwrap();
+    let before = tree(&site);
+    let out = Command::new(common::bin())
+        .args(["web", "export", "--result"])
+        .arg(&pc2)
+        .arg("-o")
+        .arg(&site)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("kf.pc2") && err.contains("input"), "{err}");
+    assert_eq!(tree(&site), before, "the folder changed");
+    // Even if the folder held nothing but the record's files and the
+    // input: an input never goes.
+    let e = web::export_result(&pc2, None, &site.join("."), &opts).unwrap_err();
+    assert!(e.to_string().contains("input"), "{e}");
+    assert!(pc2.is_file() && site.join("kf.obj").is_file());
+    // A database exported into its own folder, or into a folder above it.
+    let db = tmp.path().join("up/db");
+    small_result(&db);
+    std::fs::write(
+        db.join("character.toml"),
+        "name = \"grid\"\ntopology = \"kf.obj\"\n[[sequence]]\nname = \"sway\"\npath = \"kf.pc2\"\n",
+    )
+    .unwrap();
+    let before = tree(&tmp.path().join("up"));
+    for out in [db.clone(), tmp.path().join("up")] {
+        let e = web::export_db(&db, &out, &opts).unwrap_err();
+        assert!(e.to_string().contains("input"), "{e}");
+        assert_eq!(tree(&tmp.path().join("up")), before);
+    }
+}
+
+/// Pixels of a page screenshot (PNG) in the character's warm colour
+/// (red above blue by more than 40: the skin-tone material; the sky,
+/// ground, grid, shadow and controls are grey or blue).
+fn character_pixels(png_path: &Path) -> (usize, usize) {
+    let dec = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(png_path).unwrap(),
+    ));
+    let mut r = dec.read_info().unwrap();
+    let mut buf = vec![0; r.output_buffer_size().unwrap()];
+    let info = r.next_frame(&mut buf).unwrap();
+    let step = info.color_type.samples();
+    let px = &buf[..info.buffer_size()];
+    let warm = px
+        .chunks_exact(step)
+        .filter(|p| p[0] as i32 > p[2] as i32 + 40)
+        .count();
+    (warm, px.len() / step)
+}
+
+/// Regression (issue 39, items 1 and 2): `web export --result` pages came
+/// up blank on most loads (the first animation tick could be negative,
+/// frame −1 was drawn and the camera target became NaN for good), and a
+/// site opened from disk showed "loading…" forever (module scripts and
+/// `fetch` are refused on `file://`). The old browser test never saw the
+/// first because it drove the page with a scripted first step. Here every
+/// kind of site (a database, a result, a parametric space) is loaded as a
+/// person loads it — no `selftest`, nothing scripted — ten times in a row
+/// served and three times from `file://`; after a second of playback the
+/// screenshot's character pixels must cover a sensible area every time.
+#[test]
+fn browser_plays_every_kind_of_site_as_a_person_loads_it() {
+    let Some(browser) = browser_or_skip() else {
+        return;
+    };
+    let _one = one_browser();
+    let tmp = tempfile::tempdir().unwrap();
+    let demo = demo_db();
+    web::export_db(
+        &demo,
+        &tmp.path().join("database"),
+        &ExportOptions::default(),
+    )
+    .unwrap();
+    web::export_db(
+        &gaits_db(),
+        &tmp.path().join("parametric"),
+        &ExportOptions::default(),
+    )
+    .unwrap();
+    let result = demo.parent().unwrap().join("turn.glb");
+    common::run_ok(
+        Command::new(common::bin())
+            .args(["web", "export", "--result"])
+            .arg(&result)
+            .arg("-o")
+            .arg(tmp.path().join("result")),
+    );
+    let server = SiteServer::bind(tmp.path(), "127.0.0.1:0").unwrap();
+    let url = server.url();
+    server.spawn();
+    let mut b = cdp::Browser::launch(&browser);
+    let shots = shots_dir();
+    let ready = "window.surfmotion && (surfmotion.ready || surfmotion.error) ? true : null";
+    for kind in ["result", "database", "parametric"] {
+        let served = format!("{url}{kind}/index.html");
+        let disk = format!("file://{}/{kind}/index.html", tmp.path().display());
+        let loads = std::iter::repeat_n(("served", &served), 10)
+            .chain(std::iter::repeat_n(("file", &disk), 3));
+        for (i, (origin, page)) in loads.enumerate() {
+            b.clear_events();
+            b.navigate(page);
+            b.wait_for(ready, Duration::from_secs(90));
+            let error = b.eval("surfmotion.error");
+            assert!(error.is_null(), "{kind} {origin} load {i}: {error}");
+            std::thread::sleep(Duration::from_millis(1000));
+            let shot = shots.join(format!("person-{kind}-{origin}-{i}.png"));
+            b.screenshot(&shot);
+            let (warm, all) = character_pixels(&shot);
+            let state = b.eval(
+                "JSON.stringify({status: (document.getElementById('status') || {}).textContent})",
+            );
+            assert!(
+                warm > all / 1000 && warm < all / 3,
+                "{kind} {origin} load {i}: {warm} character pixels of {all} ({state}); {}",
+                shot.display()
+            );
+            let errors = b.errors();
+            assert!(errors.is_empty(), "{kind} {origin} load {i}: {errors:?}");
+        }
+    }
 }

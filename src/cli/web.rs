@@ -75,7 +75,8 @@ pub enum PredictorArg {
 pub struct ExportArgs {
     #[command(flatten)]
     pub source: Source,
-    /// The site folder to write (replaced if it holds an earlier export).
+    /// The site folder to write (an earlier export there is replaced; a
+    /// folder holding anything else, or an input, is refused).
     #[arg(short, long)]
     pub out: PathBuf,
     /// Print the report as JSON.

@@ -6,7 +6,11 @@
 //! carries the target's frames onto the source's.
 //!
 //! The folder is written into a temporary sibling and renamed into place:
-//! an interrupted export never leaves a half-written site.
+//! an interrupted export never leaves a half-written site. The export
+//! records what it wrote (name, size and hash of every file) in
+//! [`RECORD_FILE`]; a later export replaces a folder only when it holds
+//! nothing else (it refuses, naming the first file it did not write), and
+//! never when an input lies inside it.
 
 use super::codec::{self, CodecError, EncodeOptions, EncodeReport, Geometry};
 use crate::db::{BuildOptions, DbError, Manifest, Quiet};
@@ -22,6 +26,14 @@ pub const GEOMETRY_FILE: &str = "character.sm4d";
 pub const MANIFEST_FILE: &str = "manifest.json";
 /// The `format` field of a site manifest.
 pub const FORMAT: &str = "surfmotion-web";
+/// The record of the files an export wrote (the marker that lets a later
+/// export replace the folder).
+pub const RECORD_FILE: &str = ".surfmotion-export.json";
+/// The geometry and manifest as a classic script (`window.surfmotionData`),
+/// for the page opened from disk (`file://`), where browsers refuse `fetch`.
+pub const SCRIPT_DATA_FILE: &str = "character.sm4d.js";
+/// The `format` field of [`RECORD_FILE`].
+const RECORD_FORMAT: &str = "surfmotion-web-export-files";
 
 /// Errors of the export.
 #[derive(Debug, thiserror::Error)]
@@ -39,6 +51,15 @@ pub enum WebError {
     /// could not be built.
     #[error(transparent)]
     Param(#[from] crate::parametric::ParamError),
+    /// The output folder holds something this export may not replace, or
+    /// an input lies inside it.
+    #[error("{path}: {msg}")]
+    Refused {
+        /// The file or folder.
+        path: PathBuf,
+        /// Why.
+        msg: String,
+    },
     /// Writing the site failed.
     #[error("{path}: {msg}")]
     Io {
@@ -299,6 +320,8 @@ fn frame(g: &Geometry, s: usize, f: usize) -> &[[f32; 3]] {
 /// site there; refusing to replace any other non-empty folder).
 pub fn export_db(dir: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportReport, WebError> {
     let t0 = std::time::Instant::now();
+    let inputs = db_inputs(dir);
+    check_output(out, &inputs)?;
     let (m, mut g, graph) = load_db_geometry(dir)?;
     let sequences = m
         .sequences
@@ -348,8 +371,20 @@ pub fn export_db(dir: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportR
         spaces,
         extra,
         opts,
+        &inputs,
         t0,
     )
+}
+
+/// The files a database export reads: the folder, and the topology and
+/// sequences its manifest names (they may lie outside it).
+fn db_inputs(dir: &Path) -> Vec<PathBuf> {
+    let mut v = vec![dir.to_path_buf()];
+    if let Ok(m) = Manifest::load(dir) {
+        v.push(Manifest::resolve(dir, &m.topology));
+        v.extend(m.sequences.iter().map(|s| Manifest::resolve(dir, &s.path)));
+    }
+    v
 }
 
 /// What the export adds to the database's own sequences.
@@ -517,6 +552,11 @@ pub fn export_result(
     opts: &ExportOptions,
 ) -> Result<ExportReport, WebError> {
     let t0 = std::time::Instant::now();
+    // The result, its topology, and the `.obj` of the same name the loader
+    // takes when no topology is given.
+    let mut inputs = vec![result.to_path_buf(), result.with_extension("obj")];
+    inputs.extend(topology.map(Path::to_path_buf));
+    check_output(out, &inputs)?;
     let seq = load_sequence(
         &result.to_string_lossy(),
         &LoadOptions {
@@ -551,6 +591,7 @@ pub fn export_result(
         Vec::new(),
         Extra::default(),
         opts,
+        &inputs,
         t0,
     )
 }
@@ -566,6 +607,7 @@ fn write_site(
     spaces: Vec<SiteSpace>,
     extra: Extra,
     opts: &ExportOptions,
+    inputs: &[PathBuf],
     t0: std::time::Instant,
 ) -> Result<ExportReport, WebError> {
     let (bytes, rep) = codec::encode(g, &opts.codec)?;
@@ -596,29 +638,42 @@ fn write_site(
         _ => PathBuf::from("."),
     };
     std::fs::create_dir_all(&parent).map_err(io(&parent))?;
-    if out.exists() && !is_replaceable(out) {
-        return Err(WebError::Io {
-            path: out.to_path_buf(),
-            msg: "exists and is not a site written by `surfmotion web export`; not replacing it"
-                .into(),
-        });
-    }
+    // Checked again: the folder may have changed while the geometry encoded.
+    check_output(out, inputs)?;
+    let json = serde_json::to_string_pretty(&manifest).map_err(|e| WebError::Io {
+        path: out.join(MANIFEST_FILE),
+        msg: e.to_string(),
+    })?;
+    let script = script_data(&json, &bytes);
+    let mut files: Vec<(&str, &[u8])> = super::assets::FILES.to_vec();
+    files.push((GEOMETRY_FILE, &bytes));
+    files.push((MANIFEST_FILE, json.as_bytes()));
+    files.push((SCRIPT_DATA_FILE, script.as_bytes()));
+    let record = Record {
+        format: RECORD_FORMAT.into(),
+        version: 1,
+        files: files
+            .iter()
+            .map(|(name, body)| RecordedFile {
+                name: (*name).into(),
+                bytes: body.len() as u64,
+                xxh3: format!("{:016x}", xxhash_rust::xxh3::xxh3_64(body)),
+            })
+            .collect(),
+    };
+    let record = serde_json::to_string_pretty(&record).map_err(|e| WebError::Io {
+        path: out.join(RECORD_FILE),
+        msg: e.to_string(),
+    })?;
+    files.push((RECORD_FILE, record.as_bytes()));
     let tmp = tempfile::Builder::new()
         .prefix(".surfmotion-site-")
         .tempdir_in(&parent)
         .map_err(io(&parent))?;
-    for (file, body) in super::assets::FILES {
+    for (file, body) in &files {
         let p = tmp.path().join(file);
         std::fs::write(&p, body).map_err(io(&p))?;
     }
-    let p = tmp.path().join(GEOMETRY_FILE);
-    std::fs::write(&p, &bytes).map_err(io(&p))?;
-    let p = tmp.path().join(MANIFEST_FILE);
-    let json = serde_json::to_string_pretty(&manifest).map_err(|e| WebError::Io {
-        path: p.clone(),
-        msg: e.to_string(),
-    })?;
-    std::fs::write(&p, json).map_err(io(&p))?;
     // Folders are created private; a site is for serving.
     #[cfg(unix)]
     {
@@ -626,14 +681,28 @@ fn write_site(
         std::fs::set_permissions(tmp.path(), std::fs::Permissions::from_mode(0o755))
             .map_err(io(tmp.path()))?;
     }
-    let tmp = tmp.keep();
-    if out.exists() {
-        let old = parent.join(format!(".surfmotion-old-site-{}", std::process::id()));
-        std::fs::rename(out, &old).map_err(io(out))?;
-        std::fs::rename(&tmp, out).map_err(io(out))?;
-        std::fs::remove_dir_all(&old).map_err(io(&old))?;
+    if out.symlink_metadata().is_ok() {
+        // Only an earlier export of this tool's own, holding nothing else,
+        // gets here (check_output): it is moved aside, the new site moved
+        // in, then the old one removed; a failed move puts it back.
+        let old = tempfile::Builder::new()
+            .prefix(".surfmotion-old-site-")
+            .tempdir_in(&parent)
+            .map_err(io(&parent))?;
+        let old_site = old.path().join("site");
+        std::fs::rename(out, &old_site).map_err(io(out))?;
+        if let Err(e) = std::fs::rename(tmp.path(), out) {
+            let _ = std::fs::rename(&old_site, out);
+            return Err(io(out)(e));
+        }
+        let _ = tmp.keep();
+        old.close().map_err(|e| WebError::Io {
+            path: old_site,
+            msg: format!("the earlier site was replaced but not removed: {e}"),
+        })?;
     } else {
-        std::fs::rename(&tmp, out).map_err(io(out))?;
+        std::fs::rename(tmp.path(), out).map_err(io(out))?;
+        let _ = tmp.keep();
     }
     Ok(ExportReport {
         site: out.to_path_buf(),
@@ -651,12 +720,136 @@ fn write_site(
     })
 }
 
-/// An empty folder, or one holding a site manifest.
-fn is_replaceable(out: &Path) -> bool {
-    if let Ok(t) = crate::fsutil::read_small_text(&out.join(MANIFEST_FILE)) {
-        return t.contains(FORMAT);
+/// The record of an export's files ([`RECORD_FILE`]).
+#[derive(Debug, Serialize, Deserialize)]
+struct Record {
+    format: String,
+    version: u32,
+    files: Vec<RecordedFile>,
+}
+
+/// One file an export wrote.
+#[derive(Debug, Serialize, Deserialize)]
+struct RecordedFile {
+    name: String,
+    bytes: u64,
+    /// XXH3-64 of the contents, hex.
+    xxh3: String,
+}
+
+/// The geometry and manifest as a classic script: a page opened from disk
+/// (`file://`) loads it with a `<script>` tag where `fetch` is refused.
+fn script_data(manifest_json: &str, geometry: &[u8]) -> String {
+    use base64::Engine as _;
+    format!(
+        "// The manifest and geometry of this site for a page opened from disk (file://),\n\
+         // where browsers refuse fetch(); written by `surfmotion web export`.\n\
+         window.surfmotionData = {{ manifest: {}, geometry: \"{}\" }};\n",
+        manifest_json,
+        base64::engine::general_purpose::STANDARD.encode(geometry)
+    )
+}
+
+/// Refuses an output folder that an input lies in (an export replaces the
+/// folder), or that holds anything an earlier export did not write: a
+/// folder may be replaced only when it is empty, or holds exactly files
+/// recorded in its [`RECORD_FILE`] with their recorded size and hash (or,
+/// for a site of an earlier version without the record, only the files such
+/// a site holds, with its manifest). Names the first file it refuses for.
+pub fn check_output(out: &Path, inputs: &[PathBuf]) -> Result<(), WebError> {
+    let Ok(meta) = out.symlink_metadata() else {
+        return Ok(());
+    };
+    let refuse = |path: PathBuf, msg: String| Err(WebError::Refused { path, msg });
+    if !meta.is_dir() {
+        return refuse(
+            out.to_path_buf(),
+            "exists and is not a folder; not replacing it with a site".into(),
+        );
     }
-    std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_none())
+    if let Ok(o) = out.canonicalize() {
+        for i in inputs {
+            // A pattern or a file not there yet: its folder.
+            let c = i.canonicalize().or_else(|_| {
+                i.parent()
+                    .map_or(Err(()), |p| p.canonicalize().map_err(|_| ()))
+            });
+            if c.is_ok_and(|c| c.starts_with(&o)) {
+                return refuse(
+                    i.clone(),
+                    format!(
+                        "an input of the export lies in the output folder {}, which the export replaces; write the site to another folder",
+                        out.display()
+                    ),
+                );
+            }
+        }
+    }
+    let mut names: Vec<std::ffi::OsString> = std::fs::read_dir(out)
+        .map_err(io(out))?
+        .map(|e| e.map(|e| e.file_name()))
+        .collect::<Result<_, _>>()
+        .map_err(io(out))?;
+    names.sort();
+    if names.is_empty() {
+        return Ok(());
+    }
+    let record: Option<Record> = crate::fsutil::read_small_text(&out.join(RECORD_FILE))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .filter(|r: &Record| r.format == RECORD_FORMAT);
+    // A site of an earlier version: its manifest, no record.
+    let legacy = record.is_none()
+        && crate::fsutil::read_small_text(&out.join(MANIFEST_FILE))
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .is_some_and(|v| v["format"] == FORMAT);
+    for name in &names {
+        let name_s = name.to_string_lossy();
+        let path = out.join(name);
+        let is_file = path.symlink_metadata().is_ok_and(|m| m.is_file());
+        let foreign = |why: &str| {
+            refuse(
+                path.clone(),
+                format!(
+                    "{why}; not replacing {} (move the file away or choose another output folder)",
+                    out.display()
+                ),
+            )
+        };
+        if let Some(r) = &record {
+            if name_s == RECORD_FILE && is_file {
+                continue;
+            }
+            let Some(f) = r.files.iter().find(|f| f.name == name_s) else {
+                return foreign("not written by the earlier `web export` in this folder");
+            };
+            let body = if is_file {
+                crate::fsutil::read_bytes(&path).ok()
+            } else {
+                None
+            };
+            let same = body.is_some_and(|b| {
+                b.len() as u64 == f.bytes
+                    && format!("{:016x}", xxhash_rust::xxh3::xxh3_64(&b)) == f.xxh3
+            });
+            if !same {
+                return foreign("changed since the earlier `web export` wrote it");
+            }
+        } else if legacy {
+            let known = super::assets::FILES.iter().any(|(f, _)| *f == name_s)
+                || name_s == GEOMETRY_FILE
+                || name_s == MANIFEST_FILE;
+            if !(known && is_file) {
+                return foreign("not a file of a `web export` site");
+            }
+        } else {
+            return foreign(
+                "the folder is not empty and holds no earlier `web export` (no record of its files)",
+            );
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -4,8 +4,15 @@
 // `?selftest=1` runs the browser test's draw checks and timings and leaves
 // them in `window.surfmotion.selftest`; tests/web.rs drives keys and
 // sliders and reads the state through the DevTools protocol.
-import { Engine, IDENTITY, mat4, apply, STEER } from './engine.js';
-import { Renderer } from './render.js';
+// A classic script, as are the others: a page opened from disk (file://)
+// refuses modules, workers and fetch; there the manifest and geometry come
+// from character.sm4d.js and are decoded on this thread.
+(() => {
+'use strict';
+const { Engine, IDENTITY, mat4, apply, STEER } = window.SurfEngine;
+const { Renderer } = window.SurfRender;
+const FROM_DISK = location.protocol === 'file:';
+const SERVE_HINT = 'open the site through a web server instead: `surfmotion web serve --site FOLDER` prints the address';
 
 const $ = (id) => document.getElementById(id);
 const params = new URLSearchParams(location.search);
@@ -26,7 +33,7 @@ function showError(msg) {
   app.error = String(msg);
   $('loading').hidden = true;
   const box = $('error');
-  box.textContent = 'Cannot show this character: ' + app.error;
+  box.textContent = 'Cannot show this character: ' + app.error + (FROM_DISK ? '\n(opened from disk: ' + SERVE_HINT + ')' : '');
   box.hidden = false;
   if (SELFTEST) app.selftest = { ok: false, error: app.error, errorVisible: !box.hidden && box.offsetHeight > 0 };
 }
@@ -67,11 +74,40 @@ function checkGeometry(m, g) {
 
 function decodeInWorker(url) {
   return new Promise((resolve, reject) => {
-    const w = new Worker('worker.js', { type: 'module' });
+    const w = new Worker('worker.js');
     w.onmessage = (e) => { if (e.data.started) return; w.terminate(); e.data.ok ? resolve(e.data) : reject(new Error(e.data.error)); };
     w.onerror = (e) => { w.terminate(); reject(new Error('the decoder worker failed: ' + (e.message || 'unknown error'))); };
     w.postMessage({ url });
   });
+}
+
+// The page opened from disk: the manifest and geometry from
+// character.sm4d.js (a classic script; browsers refuse fetch from file://),
+// decoded on this thread.
+function loadScript(src) {
+  return new Promise((resolve, reject) => {
+    const el = document.createElement('script');
+    el.src = src;
+    el.onload = resolve;
+    el.onerror = () => reject(new Error(`${src} did not load (is it beside index.html?)`));
+    document.head.appendChild(el);
+  });
+}
+
+async function loadFromDisk() {
+  if (!window.surfmotionData) await loadScript('character.sm4d.js');
+  const data = window.surfmotionData;
+  if (!data || !data.manifest || typeof data.geometry !== 'string') throw new Error('character.sm4d.js: no site data in it');
+  const t0 = performance.now();
+  let bin;
+  try { bin = atob(data.geometry); } catch (e) { throw new Error('character.sm4d.js: the geometry is not base64'); }
+  const bytes = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+  const t1 = performance.now();
+  if (typeof DecompressionStream === 'undefined') throw new Error('this browser cannot inflate the geometry (no DecompressionStream)');
+  const g = await window.SurfDecode.decodeSm4d(bytes.buffer);
+  const centres = window.SurfDecode.centres(g);
+  return { manifest: data.manifest, d: { g, centres, bytes: bytes.length, fetchMs: t1 - t0, decodeMs: performance.now() - t1 } };
 }
 
 async function main() {
@@ -79,22 +115,30 @@ async function main() {
   const stages = app.stats.stages = { start: t0 };
   // index.html started the manifest's download and the geometry's decode;
   // the WebGL2 context (0.4-0.5 s under software GL) starts meanwhile.
-  const boot = window.surfmotionBoot;
-  const fetched = boot ? boot.manifest : fetch('manifest.json');
-  // A worker starts through this thread, which creating the context blocks
-  // for 0.4-0.5 s: let the decoder start first (at most 300 ms).
-  if (boot) await Promise.race([boot.ready, new Promise((r) => setTimeout(r, 300))]);
-  stages.workerStarted = performance.now();
-  const renderer = new Renderer($('view'));
-  stages.webgl = performance.now();
-  const r = await fetched;
-  if (!r.ok) throw new Error(`manifest.json: HTTP ${r.status}`);
-  let m;
-  try { m = await r.json(); } catch (e) { throw new Error('manifest.json: not JSON (' + e.message + ')'); }
-  checkManifest(m);
-  stages.manifest = performance.now();
-  const pending = boot && boot.url === m.geometry ? boot.geometry : decodeInWorker(m.geometry);
-  const d = await pending;
+  const boot = FROM_DISK ? null : window.surfmotionBoot;
+  let m, d, renderer;
+  if (FROM_DISK) {
+    renderer = new Renderer($('view'));
+    stages.webgl = performance.now();
+    ({ manifest: m, d } = await loadFromDisk());
+    checkManifest(m);
+    stages.manifest = performance.now();
+  } else {
+    const fetched = boot ? boot.manifest : fetch('manifest.json');
+    // A worker starts through this thread, which creating the context blocks
+    // for 0.4-0.5 s: let the decoder start first (at most 300 ms).
+    if (boot) await Promise.race([boot.ready, new Promise((r) => setTimeout(r, 300))]);
+    stages.workerStarted = performance.now();
+    renderer = new Renderer($('view'));
+    stages.webgl = performance.now();
+    const r = await fetched;
+    if (!r.ok) throw new Error(`manifest.json: HTTP ${r.status}`);
+    try { m = await r.json(); } catch (e) { throw new Error('manifest.json: not JSON (' + e.message + ')'); }
+    checkManifest(m);
+    stages.manifest = performance.now();
+    const pending = boot && boot.url === m.geometry ? boot.geometry : decodeInWorker(m.geometry);
+    d = await pending;
+  }
   const g = d.g;
   checkGeometry(m, g);
   stages.decoded = performance.now();
@@ -191,11 +235,17 @@ async function main() {
     return [x, c[3 * v.f + 1], z];
   };
   let first = true;
+  const finite = (p) => p.every(Number.isFinite);
   const camAt = (v) => {
     const c = centre(v.parts.reduce((a, b) => (b.w > a.w ? b : a)));
-    // Far off (a restart or a jump while not drawing): look there at once.
-    if (first || Math.hypot(c[0] - cam.at[0], c[2] - cam.at[2]) > 3) { cam.at = c; first = false; }
-    for (let i = 0; i < 3; i++) cam.at[i] += (c[i] - cam.at[i]) * 0.15;
+    // A target that is not a number never sticks (a frame index out of
+    // range once made it NaN for good: a blank page).
+    if (!finite(cam.at)) { cam.at = [0, 1, 0]; first = true; }
+    if (finite(c)) {
+      // Far off (a restart or a jump while not drawing): look there at once.
+      if (first || Math.hypot(c[0] - cam.at[0], c[2] - cam.at[2]) > 3) { cam.at = c.slice(); first = false; }
+      for (let i = 0; i < 3; i++) cam.at[i] += (c[i] - cam.at[i]) * 0.15;
+    }
     const e = [cam.at[0] + cam.dist * Math.cos(cam.pitch) * Math.sin(cam.yaw), cam.at[1] + cam.dist * Math.sin(cam.pitch), cam.at[2] + cam.dist * Math.cos(cam.pitch) * Math.cos(cam.yaw)];
     return { eye: e, at: cam.at.slice() };
   };
@@ -217,7 +267,10 @@ async function main() {
     const a = performance.now();
     let v;
     if (result) {
-      if (playing && ticks) scrubFrame = (scrubFrame + ticks) % m.sequences[0].frames;
+      const total = m.sequences[0].frames;
+      if (playing && ticks > 0) scrubFrame = (scrubFrame + ticks) % total;
+      // Always a frame of the sequence (a negative first tick drew frame -1).
+      scrubFrame = Number.isFinite(scrubFrame) ? Math.min(total - 1, Math.max(0, Math.floor(scrubFrame))) : 0;
       $('scrub').value = scrubFrame;
       v = { parts: [{ s: 0, f: scrubFrame, W: IDENTITY, w: 1 }] };
     } else {
@@ -231,6 +284,7 @@ async function main() {
     if (finish) renderer.gl.finish();
     const e = performance.now();
     frames++;
+    app.stats.drawn = frames;
     const st = result ? null : engine.state();
     if (!result) {
       buttons.forEach((bt, i) => bt.classList.toggle('on', m.sequences[i].name === st.goal));
@@ -253,8 +307,11 @@ async function main() {
   if (SELFTEST) { selftest(app, step, renderer, m); return; }
   let acc = 0, last = performance.now();
   const loop = (now) => {
-    acc += Math.min(0.25, (now - last) / 1000); last = now;
-    const ticks = Math.floor(acc * fps); acc -= ticks / fps;
+    // The first callback's time can precede `last` (it is the frame's
+    // start): a negative step is no step.
+    const dt = (now - last) / 1000; last = Math.max(last, now);
+    if (dt > 0) acc += Math.min(0.25, dt);
+    const ticks = Math.max(0, Math.floor(acc * fps)); acc -= ticks / fps;
     const t = step(ticks, false);
     timing.engine.push(t.engineMs); if (timing.engine.length > 120) timing.engine.shift();
     app.stats.engineMs = timing.engine.reduce((x, y) => x + y, 0) / timing.engine.length;
@@ -320,3 +377,4 @@ async function selftest(app, step, renderer, m) {
 }
 
 main().catch((e) => showError(e.message || e));
+})();

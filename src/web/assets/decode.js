@@ -1,10 +1,14 @@
+// A classic script (pages opened from disk refuse modules): its names
+// are in `self.SurfDecode`.
+self.SurfDecode = (() => {
+'use strict';
 // Decoder of the surfmotion compact 4D geometry (.sm4d, version 1); the
 // layout is documented in src/web/codec.rs. Raw DEFLATE blocks are inflated
 // by the browser (DecompressionStream "deflate-raw"); the varint residuals
 // are undone here into quantised u16 positions, which the vertex shader
 // turns into metres (origin + step * q).
 
-export const VERSION = 1;
+const VERSION = 1;
 const HEADER = 64;
 
 function fail(offset, msg) {
@@ -41,7 +45,7 @@ function varints(raw, count, offset) {
 }
 
 // parent[v]: the smallest index sharing a triangle with v when smaller than v, else v.
-export function parents(n, tris) {
+function parents(n, tris) {
   const p = new Uint32Array(n);
   for (let v = 0; v < n; v++) p[v] = v;
   for (let i = 0; i < tris.length; i += 3) {
@@ -98,7 +102,7 @@ function reconstruct(raw, frames, n, parent, predictor, levels, offset, s) {
   return q;
 }
 
-export async function decodeSm4d(buffer) {
+async function decodeSm4d(buffer) {
   const b = new Uint8Array(buffer);
   const magic = 'SM4DGEO\0';
   if (b.length < 8 || [...magic].some((c, i) => b[i] !== c.charCodeAt(0)))
@@ -161,7 +165,7 @@ export async function decodeSm4d(buffer) {
 }
 
 // Per-frame centre (metres) of every sequence: the camera follows it.
-export function centres(g) {
+function centres(g) {
   const n = g.vertices;
   return g.sequences.map(({ frames, q }) => {
     const out = new Float32Array(frames * 3);
@@ -176,3 +180,5 @@ export function centres(g) {
     return out;
   });
 }
+return { VERSION, parents, decodeSm4d, centres };
+})();

@@ -1,3 +1,7 @@
+// A classic script (pages opened from disk refuse modules): its names
+// are in `self.SurfEngine`.
+self.SurfEngine = (() => {
+'use strict';
 // The character animation engine (Volino, Huang & Hilton 2015, Sec. 5):
 // it walks the Surface Motion Graph exported by `surfmotion web export`.
 // A motion request joins a queue; the engine plans the shortest path in
@@ -21,29 +25,29 @@
 // src/parametric/controller.rs.
 
 // Ground-plane rigid motions [c, s, tx, tz]: x' = c x + s z + tx, z' = -s x + c z + tz.
-export const IDENTITY = [1, 0, 0, 0];
-export function compose(w, t) {
+const IDENTITY = [1, 0, 0, 0];
+function compose(w, t) {
   const [a, b, ex, ez] = w, [c, s, tx, tz] = t;
   return [a * c - b * s, a * s + b * c, a * tx + b * tz + ex, -b * tx + a * tz + ez];
 }
-export function apply(w, x, z) {
+function apply(w, x, z) {
   return [w[0] * x + w[1] * z + w[2], -w[1] * x + w[0] * z + w[3]];
 }
-export function mat4(w) {
+function mat4(w) {
   const [c, s, tx, tz] = w;
   return new Float32Array([c, 0, -s, 0, 0, 1, 0, 0, s, 0, c, 0, tx, 0, tz, 1]);
 }
 
 const RESTART_PENALTY = 60;
 // Largest change of the weight coordinate per second (controller.rs).
-export const WEIGHT_RATE = 1.5;
+const WEIGHT_RATE = 1.5;
 // Frames of the cross-fade into and out of a space.
-export const FADE = 8;
+const FADE = 8;
 // Steering range of a later `turn` parameter around the blend's own, deg/s.
-export const STEER = 90;
+const STEER = 90;
 
 // The blended root step k at weight u: [x, z, dheading, duration] (params.rs).
-export function blendedStep(steps, u, k) {
+function blendedStep(steps, u, k) {
   const last = steps.length - 1;
   u = Math.max(0, Math.min(last, u));
   const a = Math.min(Math.floor(u), Math.max(0, last - 1));
@@ -54,7 +58,7 @@ export function blendedStep(steps, u, k) {
 }
 
 // Plays `frames` frames from `phase` at weight u: [new phase, [x, z, dheading]] (space.rs).
-export function playPhase(sp, u, phase, frames) {
+function playPhase(sp, u, phase, frames) {
   const K = sp.grid;
   let p = ((phase % K) + K) % K, left = frames;
   const acc = [0, 0, 0];
@@ -73,7 +77,7 @@ export function playPhase(sp, u, phase, frames) {
 }
 
 // The measured [speed, turn] at u (interpolated, space.rs).
-export function measuredAt(sp, u) {
+function measuredAt(sp, u) {
   const s = sp.measured;
   if (s.length < 2) return s.length ? [s[0][1], s[0][2]] : [0, 0];
   const x = Math.max(0, Math.min(s.length - 1, u / 0.05));
@@ -82,7 +86,7 @@ export function measuredAt(sp, u) {
 }
 
 // u = h^-1(p), clamped to the valid range (params.rs).
-export function inverse(map, p) {
+function inverse(map, p) {
   const [lo, hi] = map.range;
   p = Math.max(lo, Math.min(hi, isFinite(p) ? p : lo));
   const S = map.samples;
@@ -107,7 +111,7 @@ export function inverse(map, p) {
 }
 
 // [block0, block1, t]: the references bracketing u (geometry sequences; hybrid.rs).
-export function bracket(sp, u) {
+function bracket(sp, u) {
   if (sp.pairs.length === 0) return [sp.first_block, sp.first_block, 0];
   u = Math.max(0, Math.min(sp.pairs.length, u));
   const a = Math.min(Math.floor(u), sp.pairs.length - 1), s = u - a, p = sp.pairs[a];
@@ -122,7 +126,7 @@ export function bracket(sp, u) {
 // Ground-plane placement of heading h at root (x, z).
 const placement = (h, x, z) => [Math.cos(h), Math.sin(h), x, z];
 
-export class Engine {
+class Engine {
   constructor(manifest) {
     this.seqs = manifest.sequences;
     this.trans = manifest.transitions;
@@ -424,3 +428,5 @@ export class Engine {
     };
   }
 }
+return { IDENTITY, compose, apply, mat4, WEIGHT_RATE, FADE, STEER, blendedStep, playPhase, measuredAt, inverse, bracket, Engine };
+})();

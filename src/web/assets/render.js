@@ -1,3 +1,7 @@
+// A classic script (pages opened from disk refuse modules): its names
+// are in `self.SurfRender`.
+self.SurfRender = (() => {
+'use strict';
 // WebGL2 renderer: the character (quantised positions dequantised and up
 // to four placed frames blended in the vertex shader: two across a linear
 // transition, four for a parametric space's bilinear blend; faceted normals
@@ -83,11 +87,11 @@ function compile(gl, vs, fs) {
 }
 
 // Column-major 4x4 helpers.
-export function perspective(fovy, aspect, near, far) {
+function perspective(fovy, aspect, near, far) {
   const f = 1 / Math.tan(fovy / 2), nf = 1 / (near - far);
   return new Float32Array([f / aspect, 0, 0, 0, 0, f, 0, 0, 0, 0, (far + near) * nf, -1, 0, 0, 2 * far * near * nf, 0]);
 }
-export function lookAt(eye, at, up) {
+function lookAt(eye, at, up) {
   const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
   const norm = (a) => { const l = Math.hypot(...a) || 1; return a.map((x) => x / l); };
   const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
@@ -95,7 +99,7 @@ export function lookAt(eye, at, up) {
   const z = norm(sub(eye, at)), x = norm(cross(up, z)), y = cross(z, x);
   return new Float32Array([x[0], y[0], z[0], 0, x[1], y[1], z[1], 0, x[2], y[2], z[2], 0, -dot(x, eye), -dot(y, eye), -dot(z, eye), 1]);
 }
-export function mul(a, b) {
+function mul(a, b) {
   const o = new Float32Array(16);
   for (let c = 0; c < 4; c++) for (let r = 0; r < 4; r++) {
     let s = 0; for (let k = 0; k < 4; k++) s += a[k * 4 + r] * b[c * 4 + k]; o[c * 4 + r] = s;
@@ -103,7 +107,7 @@ export function mul(a, b) {
   return o;
 }
 
-export class Renderer {
+class Renderer {
   constructor(canvas) {
     const gl = canvas.getContext('webgl2', { antialias: true, stencil: true, preserveDrawingBuffer: false });
     if (!gl) throw new Error('this browser has no WebGL2 context');
@@ -199,3 +203,5 @@ export class Renderer {
     gl.bindVertexArray(null);
   }
 }
+return { perspective, lookAt, mul, Renderer };
+})();

@@ -1,5 +1,6 @@
-// Fetches and decodes the geometry off the main thread.
-import { decodeSm4d, centres } from './decode.js';
+// Fetches and decodes the geometry off the main thread (a classic worker).
+importScripts('decode.js');
+const { decodeSm4d, centres } = self.SurfDecode;
 
 self.onmessage = async (e) => {
   try {
