@@ -286,25 +286,6 @@ fn numbers(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
         .collect()
 }
 
-/// A database whose cache was never built, in a folder that cannot be
-/// written, said only "Read-only file system" (issue 46.12): the error
-/// then says that the cache must be built first, where it can be written.
-fn cache_unwritable(db: &std::path::Path, e: surfmotion::db::DbError) -> anyhow::Error {
-    let text = e.to_string();
-    let denied = text.contains("Read-only file system")
-        || text.contains("os error 30")
-        || text.contains("Permission denied");
-    if denied && !db.join("cache").is_dir() {
-        anyhow::anyhow!(
-            "{text}: the database's cache is not built and cannot be written in {}; build it with `surfmotion db build {}` in a writable folder (copy the database to one first)",
-            db.display(),
-            db.display()
-        )
-    } else {
-        e.into()
-    }
-}
-
 /// Runs `keyframe`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let mut outputs = Vec::new();
@@ -335,8 +316,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "--distances and --times are the grid's (with --grid or --floor); one query takes --distance and --time"
         );
     }
-    let ch =
-        Character::load(&a.db, &super::db::Bars::new()).map_err(|e| cache_unwritable(&a.db, e))?;
+    let ch = Character::load(&a.db, &super::db::Bars::new())?;
     let load = a.clip.load_options()?;
     let mut resolved = Vec::new();
     let mut key = |k: &str| -> anyhow::Result<u32> {

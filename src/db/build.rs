@@ -323,7 +323,7 @@ pub fn similarity(
         path: dir.join(super::MANIFEST),
         msg: "internal: frame counts disagree".into(),
     })?;
-    cache::save_matrix(&path, key, &mat)?;
+    cache::save_matrix(&path, key, &mat).map_err(|e| DbError::cache_write(dir, e))?;
     let pairs = (frames as u64) * (frames as u64 + 1) / 2;
     Ok((
         mat,
@@ -423,7 +423,8 @@ pub fn build(
                 path: gpath.clone(),
                 msg: e.to_string(),
             })?;
-            write_bytes_atomic(&gpath, text.as_bytes())?;
+            write_bytes_atomic(&gpath, text.as_bytes())
+                .map_err(|e| DbError::cache_write(dir, e))?;
             (g, false)
         }
     };

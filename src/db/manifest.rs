@@ -338,6 +338,19 @@ pub enum DbError {
     /// A graph edit in the manifest names something that does not exist.
     #[error("character.toml: {0}")]
     Graph(#[from] crate::graph::smg::EditError),
+    /// The database's cache (similarity matrix, graph) could not be
+    /// written: a database never built, in a read-only folder (issue
+    /// 46.12: the error said only "Read-only file system").
+    #[error(
+        "{source}: the database's cache is built once, in the database's folder, and cannot be written in {}; build it (`db build`) where it can be written (copy the database to a writable folder first)",
+        dir.display()
+    )]
+    CacheUnwritable {
+        /// The database folder.
+        dir: PathBuf,
+        /// The write that failed.
+        source: crate::fsutil::FsError,
+    },
     /// A person-sized character whose rest frame, in the manifest's
     /// `units`, is not a person's size ([`HUMAN_SIZE_M`]): a wrong unit.
     #[error("{path}: {}", size_message(*metres, units, *suggest))]
@@ -351,6 +364,21 @@ pub enum DbError {
         /// A unit that makes it a person's size, and the size it gives.
         suggest: Option<(&'static str, f64)>,
     },
+}
+
+impl DbError {
+    /// A failed write of the cache of the database at `dir`: refused
+    /// permission or a read-only file system is [`DbError::CacheUnwritable`].
+    pub fn cache_write(dir: &std::path::Path, e: crate::fsutil::FsError) -> DbError {
+        use std::io::ErrorKind as K;
+        match e.source.kind() {
+            K::PermissionDenied | K::ReadOnlyFilesystem => DbError::CacheUnwritable {
+                dir: dir.to_path_buf(),
+                source: e,
+            },
+            _ => DbError::Io(e),
+        }
+    }
 }
 
 /// The text of [`DbError::Size`] (also a `db info` problem).
@@ -814,6 +842,36 @@ pub fn info(dir: &Path) -> Result<DbInfo, DbError> {
 
 #[cfg(test)]
 mod tests {
+
+    /// Regression (issue 46, item 12): `keyframe`/`db build` on a database
+    /// never built, in a read-only folder, said only "Read-only file
+    /// system". A refused cache write now says that the cache is written
+    /// once, where, and what to do; other write errors stay as they were.
+    #[test]
+    fn an_unwritable_cache_says_the_cache_must_be_built_where_it_can_be_written() {
+        use std::io::{Error, ErrorKind};
+        let dir = Path::new("/data/db");
+        for kind in [ErrorKind::ReadOnlyFilesystem, ErrorKind::PermissionDenied] {
+            let e = crate::fsutil::FsError {
+                path: dir.join("cache/similarity-shape.bin"),
+                source: Error::from(kind),
+            };
+            let msg = DbError::cache_write(dir, e).to_string();
+            assert!(
+                msg.contains("cache/similarity-shape.bin")
+                    && msg.contains("cache is built once")
+                    && msg.contains("db build")
+                    && msg.contains("writable folder"),
+                "{msg}"
+            );
+        }
+        let e = crate::fsutil::FsError {
+            path: dir.join("cache/graph-shape.json"),
+            source: Error::from(ErrorKind::StorageFull),
+        };
+        assert!(matches!(DbError::cache_write(dir, e), DbError::Io(_)));
+    }
+
     use super::*;
 
     /// Regression (issue 19): `[graph] min_window` was documented with
