@@ -33,7 +33,13 @@ function showError(msg) {
   app.error = String(msg);
   $('loading').hidden = true;
   const box = $('error');
-  box.textContent = 'Cannot show this character: ' + app.error + (FROM_DISK ? '\n(opened from disk: ' + SERVE_HINT + ')' : '');
+  // A missing WebGL2 context is the browser's or its graphics driver's,
+  // wherever the page came from: the file:// hint would mislead there.
+  const webgl = /WebGL/.test(app.error);
+  const hint = webgl
+    ? '\n(this browser or its graphics driver gives no WebGL2 context: try another browser, or turn on hardware acceleration)'
+    : FROM_DISK ? '\n(opened from disk: ' + SERVE_HINT + ')' : '';
+  box.textContent = 'Cannot show this character: ' + app.error + hint;
   box.hidden = false;
   if (SELFTEST) app.selftest = { ok: false, error: app.error, errorVisible: !box.hidden && box.offsetHeight > 0 };
 }
