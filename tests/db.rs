@@ -292,15 +292,20 @@ fn a_wrong_unit_at_db_init_is_refused_not_a_shrunk_character() {
         let mesh = t.join(format!("samba_{k}.obj"));
         scaled_samba(&d, k, &mesh);
         let db = t.join(format!("db_{k}_{unit}"));
-        let o = run(&[
-            "db",
-            "init",
-            db.to_str().unwrap(),
-            "--mesh",
-            mesh.to_str().unwrap(),
-            "--input-units",
-            unit,
-        ]);
+        let init = |extra: &[&str]| {
+            let mut args = vec![
+                "db",
+                "init",
+                db.to_str().unwrap(),
+                "--mesh",
+                mesh.to_str().unwrap(),
+                "--input-units",
+                unit,
+            ];
+            args.extend_from_slice(extra);
+            run(&args)
+        };
+        let o = init(&[]);
         let (_, err) = text(&o);
         let what = format!("×{k} in {unit}");
         if ok {
@@ -315,16 +320,7 @@ fn a_wrong_unit_at_db_init_is_refused_not_a_shrunk_character() {
         );
         assert!(!db.exists(), "{what}: {} was written", db.display());
         // Not a person's size: accepted, and said in the manifest.
-        let o = run(&[
-            "db",
-            "init",
-            db.to_str().unwrap(),
-            "--mesh",
-            mesh.to_str().unwrap(),
-            "--input-units",
-            unit,
-            "--not-human-sized",
-        ]);
+        let o = init(&["--not-human-sized"]);
         assert!(o.status.success(), "{what}: {}", text(&o).1);
         let m = std::fs::read_to_string(db.join("character.toml")).unwrap();
         assert!(m.contains("human_sized = false"), "{what}: {m}");
