@@ -1,15 +1,10 @@
 //! `surfmotion play`: a scripted session of parametric motion (Casas et
 //! al. 2013, Sec. 3): the database's `[[space]]` motion spaces steered by
 //! timed requests (space, speed, turn), written to any mesh output.
+//! Parses, calls [`surfmotion::jobs::play`] and prints.
 
-use anyhow::Context;
 use std::path::PathBuf;
-use std::time::Instant;
-use surfmotion::mesh::io::SaveOptions;
-use surfmotion::mesh::io::stream::SequenceWriter;
-use surfmotion::parametric::MotionOptions;
-use surfmotion::parametric::script::{parse_script, play};
-use surfmotion::parametric::store::load_or_build;
+use surfmotion::jobs::play::{PlayOptions, PlayStage, play_session};
 
 /// Arguments of `play`.
 #[derive(clap::Args)]
@@ -68,67 +63,24 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     super::refuse_colliding(&inputs, &outputs)?;
     super::check_folder_output(&a.output, a.force, &inputs)?;
-    // The script is checked against the manifest's spaces before the
-    // model is built (a typo was reported only after the build: 7.5 s on
-    // the demo database, minutes on a real one).
-    let text = surfmotion::fsutil::read_small_text(&a.script)
-        .with_context(|| a.script.display().to_string())?;
-    if let Ok(m) = surfmotion::db::Manifest::load(&a.db) {
-        use surfmotion::parametric::Parameter;
-        // A database without spaces is the database's fault, not the
-        // script's (it said `unknown key "speed" (expected t, space)`).
-        m.require_spaces(&a.db)?;
-        let params: Vec<Vec<Parameter>> = m
-            .spaces
-            .iter()
-            .map(|s| {
-                s.parameters
-                    .iter()
-                    .filter_map(|p| Parameter::parse(p))
-                    .collect()
-            })
-            .collect();
-        let spaces: Vec<(&str, &[Parameter])> = m
-            .spaces
-            .iter()
-            .zip(&params)
-            .map(|(s, p)| (s.name.as_str(), p.as_slice()))
-            .collect();
-        surfmotion::parametric::script::parse_script_for(&text, &a.script, &spaces)?;
-    }
-    let t0 = Instant::now();
-    let bar = super::spinner("loading or building the parametric model");
-    let built = load_or_build(&a.db, &MotionOptions::default(), false);
-    bar.finish_and_clear();
-    let (motion, cached) = built?;
-    let build_s = t0.elapsed().as_secs_f64();
-    let script = parse_script(&text, &a.script, &motion)?;
-    let seconds = a
-        .seconds
-        .unwrap_or_else(|| script.last().map_or(0.0, |r| r.t) + 2.0);
-    let n = motion.topology.vertex_count();
-    // Frames go to the output as they are made (point caches and OBJ
-    // folders stream; a GLB, written whole, is checked against the memory
-    // budget here, before the first frame). Every frame was held, then
-    // the whole file's bytes: 1.1 GB for `--seconds 100` (attack s14,
-    // item 3).
-    let frames = surfmotion::parametric::script::session_frames(&script, Some(seconds), motion.fps);
-    let mut writer = SequenceWriter::create(
-        &motion.topology,
+    let opts = PlayOptions {
+        seconds: a.seconds,
+        ..Default::default()
+    };
+    let mut bar = None;
+    let run = play_session(
+        &a.db,
+        &a.script,
         &a.output,
-        frames,
-        &SaveOptions {
-            fps: Some(motion.fps),
-            ..Default::default()
+        &opts,
+        &mut |stage| match stage {
+            PlayStage::Model => {
+                bar = Some(super::spinner("loading or building the parametric model"))
+            }
+            PlayStage::Playing => bar.take().iter().for_each(|b| b.finish_and_clear()),
         },
     )?;
-    let mut write_s = 0.0;
-    let report = play(&motion, &script, Some(seconds), |p| {
-        let t = Instant::now();
-        let r = writer.push(p);
-        write_s += t.elapsed().as_secs_f64();
-        r
-    })?;
+    let report = &run.report;
     // What could not be done (a speed clamped to the space's range) is
     // said once, on stderr, as the README says (issue 39, item 9: it went
     // to stdout); --json logs it as a warning, text mode as a note.
@@ -141,21 +93,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             n.message
         );
     }
-    let t1 = Instant::now();
-    let written = writer.finish()?;
-    let write_s = write_s + t1.elapsed().as_secs_f64();
     if let Some(p) = &a.report {
         surfmotion::fsutil::write_bytes_atomic(
             p,
-            serde_json::to_string_pretty(&report)?.as_bytes(),
+            serde_json::to_string_pretty(report)?.as_bytes(),
         )?;
     }
     if a.json {
-        let mut v = serde_json::to_value(&report)?;
-        v["output"] = serde_json::to_value(&written)?;
-        v["model_cached"] = cached.into();
-        v["model_seconds"] = build_s.into();
-        v["write_seconds"] = write_s.into();
+        let v = serde_json::to_value(&run)?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
     crate::outln!(
@@ -163,16 +108,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         super::count(report.frames, "frame"),
         report.seconds,
         report.fps,
-        n,
+        run.vertices,
         a.output.display()
     )?;
     crate::outln!(
         "synthesis {:.3} s ({:.0}× real time); model {} in {:.2} s; writing {:.2} s",
         report.synthesis_seconds,
         report.realtime_factor,
-        if cached { "from the cache" } else { "built" },
-        build_s,
-        write_s
+        if run.model_cached {
+            "from the cache"
+        } else {
+            "built"
+        },
+        run.model_seconds,
+        run.write_seconds
     )?;
     for t in &report.transitions {
         crate::outln!(

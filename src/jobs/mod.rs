@@ -23,6 +23,8 @@
 
 pub mod batch;
 pub mod database;
+pub mod keyframe;
+pub mod play;
 pub mod retarget;
 pub mod skeletons;
 pub mod synth_db;
