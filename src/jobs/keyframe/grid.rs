@@ -141,3 +141,29 @@ pub fn least_mean(
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_targets_over_the_bound_name_the_option_not_a_flag() {
+        let e = GridTargets::new(vec![1.0, 1e308], vec![1.0]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "distances 1e308: at most 100000 m (the search's horizon grows with the target)"
+        );
+        let e = GridTargets::new(vec![1.0], vec![3600.5]).unwrap_err();
+        assert!(
+            e.to_string().starts_with("times 3600.5: at most 3600 s"),
+            "{e}"
+        );
+        let t = GridTargets::new(vec![1.0; 1000], vec![1.0; 1000]).unwrap();
+        let e = t.check_size().unwrap_err().to_string();
+        assert!(
+            e.starts_with("distances × times: a grid of 1,000,000 targets"),
+            "{e}"
+        );
+        assert!(!e.contains("--"), "{e}");
+    }
+}
