@@ -296,7 +296,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
 /// is refused here, naming the file, with nothing left behind (it used to
 /// be written into the manifest and refused only by `db info`).
 fn init(a: InitArgs) -> anyhow::Result<()> {
-    super::output_folder(
+    surfmotion::jobs::outputs::check_output_folder(
         "",
         &a.dir,
         "db init writes the database's character.toml into a folder",
@@ -591,7 +591,7 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     // Checked before the skeletons are extracted: `-o FILE` said
     // "FILE/rig.json: File exists (os error 17)" after the work.
     let out = a.output.clone().unwrap_or_else(|| a.dir.join("skeletons"));
-    super::output_folder(
+    surfmotion::jobs::outputs::check_output_folder(
         "-o",
         &out,
         "db skeleton writes rig.json and each sequence's SEQ.skeleton.json and SEQ.bvh into a folder",
@@ -602,7 +602,10 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
             outputs.push(("-o", out.join(format!("{}.skeleton.json", s.name))));
             outputs.push(("-o", out.join(format!("{}.bvh", s.name))));
         }
-        super::refuse_colliding(&super::database_inputs(&a.dir), &outputs)?;
+        surfmotion::jobs::outputs::refuse_colliding(
+            &surfmotion::jobs::outputs::database_inputs(&a.dir),
+            &outputs,
+        )?;
     }
     let opts = SkeletonsOptions {
         kind: a.kind.into(),

@@ -266,7 +266,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     .extension()
                     .is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
             if !single {
-                super::output_folder(
+                surfmotion::jobs::outputs::check_output_folder(
                     "-o",
                     &a.output,
                     "one clip per gait goes into a folder; with one --gait, -o may name a .bvh",

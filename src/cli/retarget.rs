@@ -124,20 +124,20 @@ impl JobOpts {
 /// Runs `retarget`: one [`RetargetJob`] and one clip.
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::warnings_in_summary(!a.run.json);
-    super::check_mesh_output(&a.output)?;
+    surfmotion::jobs::outputs::check_mesh_output(&a.output)?;
     let mut inputs = vec![a.mocap.clone()];
     inputs.extend(a.run.clip.asf.clone());
     inputs.extend(a.run.clip.rig_map.clone());
-    inputs.extend(super::database_inputs(&a.db));
+    inputs.extend(surfmotion::jobs::outputs::database_inputs(&a.db));
     let mut outputs = super::mesh_outputs(&a.output);
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
-    super::refuse_colliding(&inputs, &outputs)?;
+    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
     a.glb.refuse_unless_glb(
         super::mesh::GlbArgs::is_glb(&a.output),
         &a.output.display().to_string(),
     )?;
-    super::check_folder_output(&a.output, a.force, &inputs)?;
+    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
         character: a.job.character(),

@@ -63,7 +63,7 @@ fn dynamics_amount(s: &str) -> Result<f64, String> {
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::warnings_in_summary(!a.run.json);
     let dir = &a.output;
-    super::output_folder(
+    surfmotion::jobs::outputs::check_output_folder(
         "-o",
         dir,
         "synth writes a database folder: the manifest, topology, sequences and truth/",

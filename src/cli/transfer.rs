@@ -180,13 +180,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
     outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
-    super::refuse_colliding(&inputs, &outputs)?;
+    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
     a.glb.refuse_unless_glb(
         super::mesh::GlbArgs::is_glb(&a.output),
         &a.output.display().to_string(),
     )?;
-    super::check_folder_output(&a.output, a.force, &inputs)?;
+    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
         "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",

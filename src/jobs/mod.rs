@@ -17,12 +17,15 @@
 //! 6. [`batch`]: convert a folder of clips with any [`Converter`]
 //!    (implemented by the retarget and transfer jobs).
 //!
+//! [`outputs`] is the output policy every job checks before any work.
+//!
 //! JSON reports are meant to be printed through `serde_json::Value`
 //! (`serde_json::to_value`), whose objects keep their keys sorted, as the
 //! CLI always has.
 
 pub mod batch;
 pub mod database;
+pub mod outputs;
 pub mod retarget;
 pub mod skeletons;
 pub mod synth_db;

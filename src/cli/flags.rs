@@ -1,0 +1,28 @@
+//! The library's messages name options as its callers set them, in
+//! backticks (`` `force` ``, `` `mocap_dir` ``); the CLI prints its flags
+//! instead, so a refusal names what the user types.
+
+/// Option names in the library's messages and the flag each is on the
+/// command line. Each entry is replaced as written, backticks included.
+const FLAGS: &[(&str, &str)] = &[("`force`", "--force"), ("`mocap_dir`", "--mocap-dir")];
+
+/// `message` with each option name of [`FLAGS`] replaced by its flag.
+pub fn as_flags(message: &str) -> String {
+    FLAGS.iter().fold(message.to_string(), |s, (option, flag)| {
+        s.replace(option, flag)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    /// A refusal of the output policy reads as it did when the CLI
+    /// formatted it itself.
+    #[test]
+    fn option_names_become_flags() {
+        assert_eq!(
+            super::as_flags("-o out: the folder already holds 2 files; pass `force` to replace"),
+            "-o out: the folder already holds 2 files; pass --force to replace"
+        );
+        assert_eq!(super::as_flags("no option here"), "no option here");
+    }
+}
