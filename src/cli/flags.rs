@@ -4,7 +4,24 @@
 
 /// Option names in the library's messages and the flag each is on the
 /// command line. Each entry is replaced as written, backticks included.
-const FLAGS: &[(&str, &str)] = &[("`force`", "--force"), ("`mocap_dir`", "--mocap-dir")];
+/// Longer phrases come first.
+const FLAGS: &[(&str, &str)] = &[
+    (
+        "set `InitOptions::human_sized` to false",
+        "pass --not-human-sized",
+    ),
+    ("`InitOptions::gltf_skin`", "--gltf-skin"),
+    ("`InitOptions::landmarks`", "--landmarks"),
+    ("`InitOptions::mesh`", "--mesh"),
+    ("`InitOptions::name`", "--name"),
+    ("`InitOptions::parts`", "--parts"),
+    ("`InitOptions::rig_map`", "--rig-map"),
+    ("`InitOptions::sequences`", "--sequence"),
+    ("`InitOptions::units`", "--input-units"),
+    ("`InitOptions::up`", "--up"),
+    ("`force`", "--force"),
+    ("`mocap_dir`", "--mocap-dir"),
+];
 
 /// `message` with each option name of [`FLAGS`] replaced by its flag.
 pub fn as_flags(message: &str) -> String {

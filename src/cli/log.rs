@@ -43,7 +43,7 @@ pub fn init() {
                 .without_time()
                 .with_target(false)
                 .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
-                .with_writer(std::io::stderr)
+                .with_writer(|| FlagWriter(Vec::new()))
                 .with_filter(
                     tracing_subscriber::EnvFilter::builder()
                         .with_default_directive(tracing::level_filters::LevelFilter::WARN.into())
@@ -78,6 +78,29 @@ impl<S: tracing::Subscriber> tracing_subscriber::Layer<S> for PlainNotices {
         }
         let mut m = Message(String::new());
         e.record(&mut m);
-        crate::errln!("{}", m.0);
+        crate::errln!("{}", super::flags::as_flags(&m.0));
+    }
+}
+
+/// A log line with the library's option names as the CLI's flags
+/// ([`super::flags::as_flags`]): buffered, written to stderr when dropped
+/// (the log formats each event into one buffer, then drops its writer).
+struct FlagWriter(Vec<u8>);
+
+impl std::io::Write for FlagWriter {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Drop for FlagWriter {
+    fn drop(&mut self) {
+        use std::io::Write as _;
+        let line = super::flags::as_flags(&String::from_utf8_lossy(&self.0));
+        let _ = std::io::stderr().write_all(line.as_bytes());
     }
 }

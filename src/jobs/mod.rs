@@ -5,7 +5,8 @@
 //!
 //! In pipeline order:
 //!
-//! 1. [`database`]: build a character database's Surface Motion Graph
+//! 1. [`db_init`]: write a character database's manifest from its files;
+//!    [`database`]: build a character database's Surface Motion Graph
 //!    (Huang et al. 2015, Sec. 4) and load it for synthesis.
 //! 2. [`skeletons`]: export every frame's skeleton of a database (JSON and
 //!    BVH); the one skeleton JSON schema ([`skeletons::SkeletonFile`]).
@@ -25,6 +26,7 @@
 
 pub mod batch;
 pub mod database;
+pub mod db_init;
 pub mod outputs;
 pub mod retarget;
 pub mod skeletons;
@@ -34,6 +36,7 @@ pub mod transfer;
 pub use crate::batch::Converter;
 pub use batch::{BatchEvent, BatchOptions, BatchReport, batch_folder};
 pub use database::{build_database, load_database};
+pub use db_init::{InitReport, init_database};
 pub use retarget::{RetargetJob, RetargetJobOptions, RetargetRun, RetargetSummary, StreamedRun};
 pub use skeletons::{SkeletonFile, SkeletonsReport, export_skeletons};
 pub use synth_db::{
@@ -98,6 +101,12 @@ pub enum JobError {
     /// A landmark file could not be read.
     #[error(transparent)]
     Landmarks(#[from] crate::rig::embed::landmarks::LandmarkError),
+    /// An output refused before any work.
+    #[error(transparent)]
+    Output(#[from] outputs::OutputError),
+    /// A manifest not written.
+    #[error(transparent)]
+    Init(#[from] crate::db::init::InitError),
     /// Options that do not make a job (what to give instead).
     #[error("{0}")]
     Usage(String),
