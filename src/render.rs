@@ -3,6 +3,8 @@
 //! optional skeleton overlay; written as PNG. Used to check rig embeddings
 //! and deformations by eye, and by `surfmotion render`.
 
+pub mod preview;
+
 use crate::fsutil::{FsError, write_atomic};
 use glam::DVec3;
 use std::path::Path;

@@ -170,20 +170,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let plaus = job.plausibility_of(&run);
     if let Some(path) = &a.run.preview.preview {
         let facing = surfmotion::mocap::units::y_up(ch.rig().facing, ch.z_up());
-        super::render::write_preview(
+        surfmotion::render::preview::write_preview(
             path,
             &out.positions,
             ch.n(),
             ch.topology().triangles(),
             Some(ch.rig()),
-            Some(super::render::turned_facing(
+            Some(surfmotion::render::preview::turned_facing(
                 ch.rest_pose(),
                 facing,
                 &ch.rig()
                     .skeleton(&out.positions[..ch.n().min(out.positions.len())]),
             )),
             plaus.as_ref().map(|p| p.1),
-            &a.run.preview,
+            &a.run.preview.options(),
         )?;
     }
     let plaus = plaus.map(|p| p.0);

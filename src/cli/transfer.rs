@@ -259,7 +259,7 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
     if let Some(path) = &a.run.preview.preview {
         let up = prepared.rig.as_ref().map(surfmotion::transfer::up_axis);
         let y_up = up.is_none_or(|u| u == glam::DVec3::Y);
-        super::render::write_preview(
+        surfmotion::render::preview::write_preview(
             path,
             &outcome.positions,
             prepared.mesh.vertex_count(),
@@ -274,7 +274,7 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
                 .as_ref()
                 .filter(|_| y_up)
                 .map(|p| p.floor_m / outcome.metres_per_unit.unwrap_or(1.0)),
-            &a.run.preview,
+            &a.run.preview.options(),
         )?;
     }
     let report = outcome.write(&a.output, a.glb.options(), a.report.is_some())?;
