@@ -623,6 +623,61 @@ fn render_panels(o: &Output) -> Vec<(glam::DVec3, glam::DVec3)> {
         .collect()
 }
 
+/// Regression (issue 39, item 10, left open): the `--preview` contact
+/// sheets of `retarget`, `synth` and `transfer` drew every panel with one
+/// facing (the first frame's), so a result that turns showed its later
+/// frames side-on or from behind. The project's humanoid standing, turned
+/// to every 30° of yaw, one yaw a frame: every panel of the sheet faces the
+/// body's front (within 25°), from its rig and from the mesh alone, and
+/// each front view is drawn wider than its side view.
+#[test]
+fn preview_faces_each_panel_from_its_own_body() {
+    use glam::{DQuat, DVec3};
+    use surfmotion::render::preview::{PreviewOptions, panel_facing, preview_image};
+    let ch = common::humanoid_character(0.04);
+    let front = DVec3::from_array(ch.rig.facing);
+    let yaws: Vec<f64> = (0..12).map(|k| (k * 30) as f64).collect();
+    let positions: Vec<[f64; 3]> = yaws
+        .iter()
+        .flat_map(|deg| {
+            turned_points(
+                ch.rest.positions(),
+                DQuat::from_rotation_y(deg.to_radians()),
+            )
+        })
+        .collect();
+    let n = ch.rest.vertex_count();
+    let frames: Vec<&[[f64; 3]]> = positions.chunks_exact(n).collect();
+    for (rig, what) in [(Some(&ch.rig), "rig"), (None, "mesh")] {
+        for (k, deg) in yaws.iter().enumerate() {
+            let want = DQuat::from_rotation_y(deg.to_radians()) * front;
+            let got = panel_facing(&frames, k, rig);
+            let off = got.angle_between(want).to_degrees();
+            assert!(
+                off < 25.0,
+                "{what}, yaw {deg}°: facing {got} is {off:.0}° off {want}"
+            );
+        }
+        let size = 64;
+        let o = PreviewOptions {
+            frames: yaws.len(),
+            size,
+        };
+        let img = preview_image(&positions, n, ch.rest.triangles(), rig, None, None, &o).unwrap();
+        assert_eq!((img.width, img.height), (yaws.len() * size, 2 * size));
+        let px = |x: usize, y: usize| &img.rgb[3 * (y * img.width + x)..][..3];
+        let drawn = |panel: usize, row: usize| {
+            (panel * size..(panel + 1) * size)
+                .filter(|&x| (row * size..(row + 1) * size).any(|y| px(x, y) != px(0, 0)))
+                .count()
+        };
+        for (k, deg) in yaws.iter().enumerate() {
+            let (f, s) = (drawn(k, 0), drawn(k, 1));
+            assert!(f > s, "{what}, yaw {deg}°: front {f} px wide, side {s}");
+        }
+    }
+}
+
 /// Regression (issue 39, item 10): `render` drew the back as "front" on
 /// bodies other than the samba dancer, every panel took the first mesh's
 /// camera (a result that turns was seen from behind), and a rig embedded

@@ -169,19 +169,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let (out, convention) = (&run.output, &run.mocap.convention);
     let plaus = job.plausibility_of(&run);
     if let Some(path) = &a.run.preview.preview {
-        let facing = surfmotion::mocap::units::y_up(ch.rig().facing, ch.z_up());
+        // Each panel faced from its own body (`render`'s rule).
         surfmotion::render::preview::write_preview(
             path,
             &out.positions,
             ch.n(),
             ch.topology().triangles(),
             Some(ch.rig()),
-            Some(surfmotion::render::preview::turned_facing(
-                ch.rest_pose(),
-                facing,
-                &ch.rig()
-                    .skeleton(&out.positions[..ch.n().min(out.positions.len())]),
-            )),
+            None,
             plaus.as_ref().map(|p| p.1),
             &a.run.preview.options(),
         )?;

@@ -265,9 +265,12 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
             prepared.mesh.vertex_count(),
             prepared.mesh.triangles(),
             prepared.rig.as_ref(),
+            // Each panel faced from its own body (`render`'s rule) when
+            // the scan stands Y-up, else the rig's rest facing.
             prepared
                 .rig
                 .as_ref()
+                .filter(|_| !y_up)
                 .map(|r| glam::DVec3::from_array(r.facing)),
             outcome
                 .plausibility

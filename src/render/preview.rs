@@ -41,9 +41,10 @@ pub enum PreviewError {
 }
 
 /// The contact sheet of `positions` (frame-major, `n` vertices each, Y-up):
-/// part colours from `rig`'s labels when given, facing `facing` (else the
-/// rig's facing turned with the first frame's hips, else estimated from the
-/// first frame's mesh), the floor line at `floor`.
+/// part colours from `rig`'s labels when given, the floor line at `floor`,
+/// every panel facing `facing` when given, else each panel faced from its
+/// own body by [`panel_facing`] (the rule of `surfmotion render`): a
+/// result that turns is seen from the front in every panel.
 #[allow(clippy::too_many_arguments)]
 pub fn preview_image(
     positions: &[[f64; 3]],
@@ -65,23 +66,37 @@ pub fn preview_image(
     let colours: Option<Vec<[u8; 3]>> = rig
         .filter(|r| r.labels.len() == n)
         .map(|r| r.labels.iter().map(|&l| label_colour(l as usize)).collect());
-    let facing = facing.unwrap_or_else(|| match rig.filter(|r| r.labels.len() == n) {
-        // The rig's rest facing, turned as the first frame's hips turned.
-        Some(r) => turned_facing(
-            &r.joints.map(DVec3::from_array),
-            DVec3::from_array(r.facing),
-            &r.skeleton(frames[0]),
-        ),
-        None => super::facing_of(frames[0]),
-    });
+    let all: Vec<&[[f64; 3]]> = positions.chunks_exact(n.max(1)).collect();
+    let facings: Vec<DVec3> = super::sheet_frames(count, o.frames)
+        .into_iter()
+        .map(|f| {
+            facing.unwrap_or_else(|| panel_facing(&all, f, rig.filter(|r| r.labels.len() == n)))
+        })
+        .collect();
     Some(super::contact_sheet(
         &frames,
         triangles,
         colours.as_deref(),
-        facing,
+        &facings,
         floor,
         o.size,
     ))
+}
+
+/// The facing of frame `at` of `frames` (Y-up), as `surfmotion render`
+/// faces a panel: across the hips and shoulders of `rig`'s skeleton on the
+/// frame ([`rig_facing`]), else (no rig, or a skeleton without width)
+/// read off the mesh's shoulders, knees and feet over up to 150 frames
+/// either side ([`super::facing_of_frames`]).
+pub fn panel_facing(frames: &[&[[f64; 3]]], at: usize, rig: Option<&Embedding>) -> DVec3 {
+    if let Some(f) = rig
+        .zip(frames.get(at))
+        .and_then(|(r, p)| rig_facing(r, &r.skeleton(p)))
+    {
+        return f;
+    }
+    let (from, to) = (at.saturating_sub(150), (at + 151).min(frames.len()));
+    super::facing_of_frames(&frames[from..to], at - from)
 }
 
 /// Writes [`preview_image`] to `path`; returns the image size.
@@ -112,27 +127,6 @@ pub fn write_preview(
         .ok_or_else(|| PreviewError::Empty(path.to_path_buf()))?;
     img.save_png(path)?;
     Ok((img.width, img.height))
-}
-
-/// The facing of a posed frame (Y-up): the rest facing `rest_facing` turned
-/// about Y by the turn that takes the rest pose's hip line (left hip minus
-/// right hip, horizontal) onto the frame's.
-pub fn turned_facing(
-    rest: &crate::skeleton::Pose,
-    rest_facing: DVec3,
-    now: &crate::skeleton::Pose,
-) -> DVec3 {
-    let hips = |p: &crate::skeleton::Pose| {
-        let d = p[Canonical::LHip.index()] - p[Canonical::RHip.index()];
-        DVec3::new(d.x, 0.0, d.z).normalize_or_zero()
-    };
-    let (a, b) = (hips(rest), hips(now));
-    let f = DVec3::new(rest_facing.x, 0.0, rest_facing.z).normalize_or(DVec3::Z);
-    if a == DVec3::ZERO || b == DVec3::ZERO {
-        return f;
-    }
-    let angle = a.z.atan2(a.x) - b.z.atan2(b.x);
-    crate::skeleton::rotate_yaw(f, angle.cos(), angle.sin())
 }
 
 /// The character's left-right line in `j` (hips and shoulders, each
