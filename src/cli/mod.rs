@@ -6,6 +6,7 @@ mod batch;
 mod blend;
 mod db;
 mod demo;
+mod eval;
 mod flags;
 mod graph;
 mod inspect;
@@ -141,7 +142,7 @@ enum Command {
     #[command(
         after_help = "Example:\n  surfmotion eval --db samba_synth --mocap 02_02.amc --result walk.glb"
     )]
-    Eval(retarget::EvalArgs),
+    Eval(eval::Args),
     /// Animate a static scan from a mocap clip or a moving template mesh
     /// (Confluent Motion, de Aguiar et al. 2007): marker triangles on the
     /// scan (placed from landmarks, or from a file) take their rotations
@@ -226,7 +227,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Graph(a) => graph::run(a),
         Command::Retarget(a) => retarget::run(a),
         Command::Keyframe(a) => keyframe::run(*a),
-        Command::Eval(a) => retarget::eval(a),
+        Command::Eval(a) => eval::run(a),
         Command::Transfer(a) => transfer::run(*a),
         Command::Batch(a) => batch::run_batch(*a),
         Command::Play(a) => play::run(a),
