@@ -180,7 +180,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             ClipStatus::Failed => format!(
                 "FAILED {}: {}",
                 o.clip.display(),
-                o.reason.as_deref().unwrap_or("")
+                super::flags::as_flags(o.reason.as_deref().unwrap_or(""))
             ),
         };
         if term {
@@ -215,7 +215,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             out += &format!(
                 "failed: {}: {}\n",
                 o.clip.display(),
-                o.reason.as_deref().unwrap_or("")
+                super::flags::as_flags(o.reason.as_deref().unwrap_or(""))
             );
         }
         super::emit(&out)?;

@@ -244,7 +244,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
         Cmd::Info(a) => {
             let mut i = info(&a.dir)?;
             for p in &mut i.problems {
-                *p = super::without_os_error_numbers(p);
+                *p = super::flags::as_flags(&super::without_os_error_numbers(p));
             }
             // A problem is exit 1, so that scripts can rely on `db info`
             // (issue 39, item 6: it listed problems and exited 0).

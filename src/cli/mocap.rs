@@ -164,7 +164,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 let out = serde_json::json!({
                     "units": clip.units.name,
                     "metres_per_unit": clip.units.metres_per_unit,
-                    "units_reason": clip.units.reason,
+                    "units_reason": super::flags::as_flags(&clip.units.reason),
                     "up": if clip.up == UpAxis::Z { "z" } else { "y" },
                     "joints": names,
                     "frames": frames,
@@ -174,7 +174,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 crate::outln!(
                     "units: {} ({}), {}-up",
                     clip.units.name,
-                    clip.units.reason,
+                    super::flags::as_flags(&clip.units.reason),
                     if clip.up == UpAxis::Z { "z" } else { "y" }
                 )?;
                 for (f, p) in frames {
