@@ -628,7 +628,7 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
         }
         "rig map" => {
             lines.push(format!(
-                "a rig map (`mocap rigmap`, for --rig-map): convention {}, {} canonical joints mapped",
+                "a rig map (`mocap rigmap`, for `LoadOptions::rig_map`): convention {}, {} canonical joints mapped",
                 v["convention"].as_str().unwrap_or("?"),
                 v["joints"].as_object().map_or(0, |o| o.len())
             ));

@@ -3,6 +3,8 @@
 //! optional skeleton overlay; written as PNG. Used to check rig embeddings
 //! and deformations by eye, and by `surfmotion render`.
 
+pub mod preview;
+
 use crate::fsutil::{FsError, write_atomic};
 use glam::DVec3;
 use std::path::Path;
@@ -492,25 +494,34 @@ pub fn shared_framing(bounds: &[([f64; 2], [f64; 2])], size: usize) -> (Vec<Fram
 /// largest extent over all frames and both views), so that sizes and
 /// heights compare across panels. Each panel is centred horizontally on its
 /// own frame; vertically all share one centre, so the floor is one line.
-/// `floor` (height along Y) draws a grey floor line.
+/// Frame `i` is seen facing `facings[i]` (the last one for frames beyond
+/// it; +Z when empty). `floor` (height along Y) draws a grey floor line.
 pub fn contact_sheet(
     frames: &[&[[f64; 3]]],
     triangles: &[[u32; 3]],
     colours: Option<&[[u8; 3]]>,
-    facing: DVec3,
+    facings: &[DVec3],
     floor: Option<f64>,
     size: usize,
 ) -> Image {
-    let views = [View::front(facing), View::side(facing)];
+    let views_of = |i: usize| {
+        let facing = facings
+            .get(i)
+            .or(facings.last())
+            .copied()
+            .unwrap_or(DVec3::Z);
+        [View::front(facing), View::side(facing)]
+    };
     let bounds: Vec<[([f64; 2], [f64; 2]); 2]> = frames
         .iter()
-        .map(|f| views.map(|v| view_bounds(f, v)))
+        .enumerate()
+        .map(|(i, f)| views_of(i).map(|v| view_bounds(f, v)))
         .collect();
     let flat: Vec<([f64; 2], [f64; 2])> = bounds.iter().flatten().copied().collect();
     let (framings, extent) = shared_framing(&flat, size);
     let mut rows: [Option<Image>; 2] = [None, None];
     for (i, f) in frames.iter().enumerate() {
-        for (k, view) in views.into_iter().enumerate() {
+        for (k, view) in views_of(i).into_iter().enumerate() {
             let framing = framings[2 * i + k];
             let (right, _, _) = axes(view);
             let lines: Vec<([f64; 3], [f64; 3], [u8; 3])> = floor
@@ -724,7 +735,7 @@ mod tests {
             &[m.positions(), &small],
             m.triangles(),
             None,
-            DVec3::Z,
+            &[DVec3::Z],
             None,
             64,
         );

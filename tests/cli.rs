@@ -623,6 +623,139 @@ fn render_panels(o: &Output) -> Vec<(glam::DVec3, glam::DVec3)> {
         .collect()
 }
 
+/// The figures of the README's `render` facing paragraph (run by hand):
+/// for every frame of the sequences in `SURFMOTION_FACING_FILES` (on the
+/// samba mesh: synth3's walks and run, a `keyframe` and a `play` output),
+/// the facing from the mesh alone against the truth (the rest facing
+/// turned by the yaw that best fits the frame's torso vertices to the rest
+/// frame's): wrong (more than 45° off) from one frame ([`facing_of`]) and
+/// with the vote over up to 150 frames either side that `render` and the
+/// contact sheets use ([`facing_of_frames`]), and the shoulder axis's
+/// median angle to the truth (sign left out).
+///
+/// `SURFMOTION_FACING_FILES="A.pc2 B.glb" cargo test --release --test cli
+/// facing_figures -- --ignored --nocapture`
+#[test]
+#[ignore = "a measurement for the README: needs SURFMOTION_FACING_FILES and ../shared/data"]
+fn facing_figures() {
+    use glam::{DQuat, DVec3};
+    use surfmotion::mesh::io::{LoadOptions, load_sequence};
+    use surfmotion::render::{facing_of, facing_of_frames};
+    use surfmotion::rig::embed::{Embedding, landmarks::Landmarks, parts::Part};
+    let (Some(data), Ok(files)) = (common::data_dir(), std::env::var("SURFMOTION_FACING_FILES"))
+    else {
+        return;
+    };
+    let rest = load_sequence(
+        data.join("4d/samba/samba.obj").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap()
+    .frame_mesh(0);
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let lm = Landmarks::load(&fixtures.join("samba.landmarks.json"), rest.vertex_count()).unwrap();
+    let rig = Embedding::new(&rest, &lm, None).unwrap();
+    let torso: Vec<usize> = (0..rest.vertex_count())
+        .filter(|&v| rig.labels[v] as usize == Part::Torso as usize)
+        .collect();
+    let front = DVec3::from_array(rig.facing);
+    let flat = |p: &[[f64; 3]]| -> Vec<(f64, f64)> {
+        let n = torso.len() as f64;
+        let (cx, cz) = torso
+            .iter()
+            .fold((0.0, 0.0), |a, &v| (a.0 + p[v][0] / n, a.1 + p[v][2] / n));
+        torso
+            .iter()
+            .map(|&v| (p[v][0] - cx, p[v][2] - cz))
+            .collect()
+    };
+    let at_rest = flat(rest.positions());
+    for file in files.split_whitespace() {
+        let seq = load_sequence(file, &LoadOptions::default()).unwrap();
+        let frames: Vec<&[[f64; 3]]> = (0..seq.frame_count()).map(|f| seq.frame(f)).collect();
+        let (mut one, mut vote, mut axis) = (0usize, 0usize, Vec::new());
+        for (f, p) in frames.iter().enumerate() {
+            // The yaw taking the rest torso onto this frame's (2-D Procrustes).
+            let (mut sin, mut cos) = (0.0, 0.0);
+            for (r, q) in at_rest.iter().zip(flat(p)) {
+                sin += q.0 * r.1 - q.1 * r.0;
+                cos += q.0 * r.0 + q.1 * r.1;
+            }
+            let truth = DQuat::from_rotation_y(f64::atan2(sin, cos)) * front;
+            let off = |d: DVec3| d.angle_between(truth).to_degrees();
+            let single = facing_of(p);
+            one += (off(single) > 45.0) as usize;
+            let (from, to) = (f.saturating_sub(150), (f + 151).min(frames.len()));
+            vote += (off(facing_of_frames(&frames[from..to], f - from)) > 45.0) as usize;
+            axis.push(off(single).min(180.0 - off(single)));
+        }
+        axis.sort_by(f64::total_cmp);
+        let n = frames.len().max(1) as f64;
+        println!(
+            "{file}: {} frames; wrong from one frame {:.0} %, with the vote {:.0} %; shoulder axis {:.1}° median",
+            frames.len(),
+            100.0 * one as f64 / n,
+            100.0 * vote as f64 / n,
+            axis.get(axis.len() / 2).copied().unwrap_or(f64::NAN)
+        );
+    }
+}
+
+/// Regression (issue 39, item 10, left open): the `--preview` contact
+/// sheets of `retarget`, `synth` and `transfer` drew every panel with one
+/// facing (the first frame's), so a result that turns showed its later
+/// frames side-on or from behind. The project's humanoid standing, turned
+/// to every 30° of yaw, one yaw a frame: every panel of the sheet faces the
+/// body's front (within 25°), from its rig and from the mesh alone, and
+/// each front view is drawn wider than its side view.
+#[test]
+fn preview_faces_each_panel_from_its_own_body() {
+    use glam::{DQuat, DVec3};
+    use surfmotion::render::preview::{PreviewOptions, panel_facing, preview_image};
+    let ch = common::humanoid_character(0.04);
+    let front = DVec3::from_array(ch.rig.facing);
+    let yaws: Vec<f64> = (0..12).map(|k| (k * 30) as f64).collect();
+    let positions: Vec<[f64; 3]> = yaws
+        .iter()
+        .flat_map(|deg| {
+            turned_points(
+                ch.rest.positions(),
+                DQuat::from_rotation_y(deg.to_radians()),
+            )
+        })
+        .collect();
+    let n = ch.rest.vertex_count();
+    let frames: Vec<&[[f64; 3]]> = positions.chunks_exact(n).collect();
+    for (rig, what) in [(Some(&ch.rig), "rig"), (None, "mesh")] {
+        for (k, deg) in yaws.iter().enumerate() {
+            let want = DQuat::from_rotation_y(deg.to_radians()) * front;
+            let got = panel_facing(&frames, k, rig);
+            let off = got.angle_between(want).to_degrees();
+            assert!(
+                off < 25.0,
+                "{what}, yaw {deg}°: facing {got} is {off:.0}° off {want}"
+            );
+        }
+        let size = 64;
+        let o = PreviewOptions {
+            frames: yaws.len(),
+            size,
+        };
+        let img = preview_image(&positions, n, ch.rest.triangles(), rig, None, None, &o).unwrap();
+        assert_eq!((img.width, img.height), (yaws.len() * size, 2 * size));
+        let px = |x: usize, y: usize| &img.rgb[3 * (y * img.width + x)..][..3];
+        let drawn = |panel: usize, row: usize| {
+            (panel * size..(panel + 1) * size)
+                .filter(|&x| (row * size..(row + 1) * size).any(|y| px(x, y) != px(0, 0)))
+                .count()
+        };
+        for (k, deg) in yaws.iter().enumerate() {
+            let (f, s) = (drawn(k, 0), drawn(k, 1));
+            assert!(f > s, "{what}, yaw {deg}°: front {f} px wide, side {s}");
+        }
+    }
+}
+
 /// Regression (issue 39, item 10): `render` drew the back as "front" on
 /// bodies other than the samba dancer, every panel took the first mesh's
 /// camera (a result that turns was seen from behind), and a rig embedded

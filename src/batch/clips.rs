@@ -32,13 +32,17 @@ impl Shard {
     pub fn parse(s: &str) -> Result<Shard, String> {
         let (i, n) = s
             .split_once('/')
-            .ok_or_else(|| format!("--shard {s:?}: expected i/n, e.g. 2/8"))?;
+            .ok_or_else(|| format!("`BatchOptions::shard` {s:?}: expected i/n, e.g. 2/8"))?;
         let (i, n): (usize, usize) = match (i.trim().parse(), n.trim().parse()) {
             (Ok(i), Ok(n)) => (i, n),
-            _ => return Err(format!("--shard {s:?}: expected two whole numbers i/n")),
+            _ => {
+                return Err(format!(
+                    "`BatchOptions::shard` {s:?}: expected two whole numbers i/n"
+                ));
+            }
         };
         if n == 0 || i == 0 || i > n {
-            return Err(format!("--shard {s:?}: need 1 ≤ i ≤ n"));
+            return Err(format!("`BatchOptions::shard` {s:?}: need 1 ≤ i ≤ n"));
         }
         Ok(Shard { index: i, count: n })
     }

@@ -94,14 +94,30 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             a.mocap_dir.display()
         );
     }
-    super::output_folder(
+    surfmotion::jobs::outputs::check_output_folder(
         "-o",
         &a.output,
         "batch writes one output per clip and batch.json, .html and .svg into a folder",
     )?;
-    refuse_output_in_clip_folder(&a)?;
+    surfmotion::jobs::outputs::refuse_output_in_clip_folder("-o", &a.output, &a.mocap_dir)?;
     let format = Format::from(a.format);
-    refuse_outputs_over_inputs(&a, format)?;
+    let mut inputs = Vec::new();
+    if let Some(db) = &a.db {
+        inputs.extend(surfmotion::jobs::outputs::database_inputs(db));
+    }
+    if let Some(scan) = &a.scan {
+        inputs.extend(surfmotion::mesh::io::input_files(scan, None));
+    }
+    inputs.extend(a.landmarks.clone());
+    inputs.extend(a.clip.rig_map.clone());
+    inputs.extend(a.clip.asf.clone());
+    surfmotion::jobs::outputs::refuse_outputs_over_inputs(
+        &inputs,
+        &a.mocap_dir,
+        "-o",
+        &a.output,
+        format,
+    )?;
     let load = a.clip.load_options()?;
     let scan_job = a.scan_job.job()?;
     let retarget_opts = a.retarget_job.options();
@@ -164,7 +180,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             ClipStatus::Failed => format!(
                 "FAILED {}: {}",
                 o.clip.display(),
-                o.reason.as_deref().unwrap_or("")
+                super::flags::as_flags(o.reason.as_deref().unwrap_or(""))
             ),
         };
         if term {
@@ -199,7 +215,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             out += &format!(
                 "failed: {}: {}\n",
                 o.clip.display(),
-                o.reason.as_deref().unwrap_or("")
+                super::flags::as_flags(o.reason.as_deref().unwrap_or(""))
             );
         }
         super::emit(&out)?;
@@ -211,95 +227,5 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         s.clips,
         files[0].display()
     );
-    Ok(())
-}
-
-/// Refuses `-o` equal to `--mocap-dir` or inside it: the outputs,
-/// batch.json/.html/.svg and batch.lock were written among the user's
-/// clips (and a later batch of the library walked the outputs' tree as
-/// part of it). Paths are compared resolved (links, `.`, `..`), an `-o`
-/// that does not exist yet by its nearest existing parent.
-fn refuse_output_in_clip_folder(a: &Args) -> anyhow::Result<()> {
-    let Ok(clips) = a.mocap_dir.canonicalize() else {
-        return Ok(()); // the batch itself reports a missing folder
-    };
-    let out = resolved(&a.output);
-    if out == clips {
-        anyhow::bail!(
-            "-o {}: the clip folder itself (--mocap-dir); the outputs and batch.json, .html and .svg would be written among the clips: give another folder, e.g. -o {}",
-            a.output.display(),
-            sibling(&clips).display()
-        );
-    }
-    if out.starts_with(&clips) {
-        anyhow::bail!(
-            "-o {}: inside the clip folder --mocap-dir {}; the outputs would become part of the library the batch reads: give a folder outside it, e.g. -o {}",
-            a.output.display(),
-            a.mocap_dir.display(),
-            sibling(&clips).display()
-        );
-    }
-    Ok(())
-}
-
-/// `p` with links, `.` and `..` resolved; a path that does not exist yet
-/// by its nearest existing ancestor, the rest appended.
-fn resolved(p: &std::path::Path) -> PathBuf {
-    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-    let mut rest = Vec::new();
-    let mut at = abs.as_path();
-    loop {
-        if let Ok(c) = at.canonicalize() {
-            let mut out = c;
-            for part in rest.iter().rev() {
-                out.push(part);
-            }
-            return out;
-        }
-        match (at.parent(), at.file_name()) {
-            (Some(parent), Some(name)) => {
-                rest.push(name.to_os_string());
-                at = parent;
-            }
-            _ => return abs,
-        }
-    }
-}
-
-/// `DIR-out` beside the clip folder, for the refusal's example.
-fn sibling(clips: &std::path::Path) -> PathBuf {
-    let mut name = clips.file_name().unwrap_or_default().to_os_string();
-    name.push("-out");
-    clips.with_file_name(name)
-}
-
-/// Refuses, before any work, a clip whose output would replace one of the
-/// batch's inputs: `-o` the database folder made clip `walk.bvh`'s output
-/// the database's own `walk.pc2` (reported as "already done", exit 0, or
-/// replaced with --force), and `-o` the scan's folder would write a
-/// clip's topology OBJ over the scan of the same name.
-fn refuse_outputs_over_inputs(a: &Args, format: Format) -> anyhow::Result<()> {
-    let mut inputs = Vec::new();
-    if let Some(db) = &a.db {
-        inputs.extend(super::database_inputs(db));
-    }
-    if let Some(scan) = &a.scan {
-        inputs.extend(surfmotion::mesh::io::input_files(scan, None));
-    }
-    inputs.extend(a.landmarks.clone());
-    inputs.extend(a.clip.rig_map.clone());
-    inputs.extend(a.clip.asf.clone());
-    let Ok(clips) = surfmotion::batch::find_clips(&a.mocap_dir) else {
-        return Ok(()); // the batch itself reports an unreadable folder
-    };
-    for rel in &clips {
-        let out = surfmotion::batch::output_path(&a.output, rel, format);
-        let mut outputs = vec![("-o", out.clone())];
-        if format == Format::Pc2 {
-            outputs.push(("-o", out.with_extension("obj")));
-        }
-        super::refuse_colliding(&inputs, &outputs)
-            .map_err(|e| anyhow::anyhow!("clip {}: {}", a.mocap_dir.join(rel).display(), e))?;
-    }
     Ok(())
 }

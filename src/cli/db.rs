@@ -1,12 +1,12 @@
 //! `surfmotion db init|info`.
 
-use anyhow::{Context, bail};
-use std::path::{Path, PathBuf};
+use anyhow::bail;
+use std::path::PathBuf;
+use surfmotion::db::init::InitOptions;
 use surfmotion::db::skeletons::SkeletonKind;
-use surfmotion::db::{MANIFEST, Manifest, RigSpec, SequenceEntry, info};
-use surfmotion::jobs::export_skeletons;
+use surfmotion::db::{Manifest, info};
 use surfmotion::jobs::skeletons::SkeletonsOptions;
-use surfmotion::mesh::Mesh;
+use surfmotion::jobs::{export_skeletons, init_database};
 
 /// Database subcommands.
 #[derive(clap::Subcommand)]
@@ -244,7 +244,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
         Cmd::Info(a) => {
             let mut i = info(&a.dir)?;
             for p in &mut i.problems {
-                *p = super::without_os_error_numbers(p);
+                *p = super::flags::as_flags(&super::without_os_error_numbers(p));
             }
             // A problem is exit 1, so that scripts can rely on `db info`
             // (issue 39, item 6: it listed problems and exited 0).
@@ -291,307 +291,56 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Runs `db init`. Every file is read before anything is written: a mesh
-/// path that is a folder of BVH clips, a BVH or a file that does not parse
-/// is refused here, naming the file, with nothing left behind (it used to
-/// be written into the manifest and refused only by `db info`).
+/// Runs `db init` ([`init_database`]): the `NAME=PATH` pairs and the unit
+/// are parsed here, everything else is the library's.
 fn init(a: InitArgs) -> anyhow::Result<()> {
-    super::output_folder(
-        "",
-        &a.dir,
-        "db init writes the database's character.toml into a folder",
-    )?;
-    let manifest = a.dir.join(MANIFEST);
-    if manifest.exists() && !a.force {
-        bail!(
-            "{}: a manifest exists already; pass --force to overwrite it",
-            manifest.display()
-        );
-    }
-    if !a.units.eq_ignore_ascii_case("auto") {
-        super::length_unit("--input-units", &a.units)?;
-    }
-    if let Some(n) = &a.name
-        && (n.is_empty() || n.len() > 200 || n.chars().any(char::is_control))
-    {
-        bail!(
-            "--name \"{}\": expected one line of 1 to 200 bytes, without control characters",
-            surfmotion::db::manifest::printable(n, 60)
-        );
-    }
-    let canonical = |p: &Path| std::fs::canonicalize(p).with_context(|| format!("{}", p.display()));
     let mut sequences = Vec::new();
     for s in &a.sequences {
         let Some((name, path)) = s.split_once('=') else {
             bail!("--sequence '{s}': expected NAME=PATH");
         };
-        sequences.push(SequenceEntry {
-            name: name.to_string(),
-            path: canonical(Path::new(path)).with_context(|| format!("--sequence {name}"))?,
-            fps: None,
-        });
+        sequences.push((name.to_string(), PathBuf::from(path)));
     }
-    let opt = |p: &Option<PathBuf>| p.as_deref().map(canonical).transpose();
-    let mut m = Manifest {
-        name: a.name.clone().unwrap_or_default(),
-        topology: canonical(&a.mesh).context("--mesh")?,
-        fps: a.fps,
-        units: "m".into(),
-        up: "y".into(),
-        human_sized: !a.not_human_sized,
-        colors: None,
+    if !a.units.eq_ignore_ascii_case("auto") {
+        super::length_unit("--input-units", &a.units)?;
+    }
+    let opts = InitOptions {
+        mesh: a.mesh,
         sequences,
-        rig: RigSpec {
-            landmarks: opt(&a.landmarks).context("--landmarks")?,
-            parts: opt(&a.parts).context("--parts")?,
-            gltf_skin: opt(&a.gltf_skin).context("--gltf-skin")?,
-            rig_map: opt(&a.rig_map).context("--rig-map")?,
-        },
-        graph: Default::default(),
-        deform: Default::default(),
-        spaces: Vec::new(),
+        name: a.name,
+        fps: a.fps,
+        units: a.units,
+        up: a.up,
+        landmarks: a.landmarks,
+        parts: a.parts,
+        gltf_skin: a.gltf_skin,
+        rig_map: a.rig_map,
+        human_sized: !a.not_human_sized,
+        force: a.force,
     };
-    let up = a.up.to_ascii_lowercase();
-    if !matches!(up.as_str(), "y" | "z" | "auto") {
-        bail!("--up {}: expected y, z or auto", a.up);
+    let r = init_database(&a.dir, &opts)?;
+    for n in &r.notes {
+        crate::errln!("{}", super::flags::as_flags(n));
     }
-    if let Err(msg) = m.validate() {
-        bail!("{msg}");
-    }
-    // The paths are absolute here, so the folder they resolve against is
-    // not used. Loaded with `up = y`: the file's own coordinates.
-    let topo = m.load_topology(&a.dir).context("--mesh")?;
-    // A landmark file that does not read or lacks a required landmark is
-    // refused here, before the up axis is read off it (issue 39, item 7:
-    // it was accepted and refused only by `retarget`); the checks on the
-    // landmarks' places follow once the axis is known.
-    if let Some(p) = &m.rig.landmarks {
-        use surfmotion::rig::embed::landmarks::Landmarks;
-        Landmarks::load(p, topo.vertex_count()).context("--landmarks")?;
-    }
-    m.up = resolve_up(&up, &topo, a.landmarks.as_deref())?;
-    m.units = resolve_units(&a.units, &topo);
-    if let Some(p) = &m.rig.landmarks {
-        surfmotion::rig::embed::landmarks::Landmarks::load_checked(p, &topo)
-            .with_context(|| format!("--landmarks {}", p.display()))?;
-    }
-    // A person-sized character outside 0.5-3 m in the unit is a wrong
-    // unit, refused by every verb that opens the database: refused here
-    // (issue 39, item 5: one WARN, then a 1.8 cm character retargeted
-    // without a word).
-    if let Err(surfmotion::db::DbError::Size {
-        metres, suggest, ..
-    }) = m.check_size(&a.dir, &topo)
-    {
-        bail!(
-            "--input-units {}: the rest frame is {metres:.3} m tall or wide in {}, not a person's 0.5-3 m: is the unit right?{}; \
-             for a character that is not a person's size, pass --not-human-sized",
-            a.units,
-            m.units,
-            suggest.map_or(String::new(), |(u, v)| format!(
-                " (--input-units {u} makes it {v:.2} m)"
-            ))
-        );
-    }
-    // Every sequence must share the topology's vertices: one of another
-    // mesh is refused, with nothing written (issue 39, item 6: it was
-    // written with a warning, exit 0, and refused later by `db build`).
-    for s in &m.sequences {
-        let (count, noun, triangles) = match m.load_sequence(&a.dir, s) {
-            Ok(q) => (
-                q.mesh().vertex_count(),
-                "vertices",
-                q.mesh().triangles() == topo.triangles(),
-            ),
-            Err(e) => {
-                use surfmotion::mesh::io::{MeshFormat, mdd, pc2};
-                // A point cache of another vertex count does not load
-                // against this topology: read it on its own.
-                let cache = match MeshFormat::of(&s.path) {
-                    Some(MeshFormat::Pc2) => pc2::read_pc2(&s.path).ok(),
-                    Some(MeshFormat::Mdd) => mdd::read_mdd(&s.path).ok(),
-                    _ => None,
-                };
-                match cache {
-                    Some(c) if c.points != topo.vertex_count() => {
-                        (c.points, "points per frame", true)
-                    }
-                    _ => {
-                        return Err(
-                            anyhow::Error::from(e).context(format!("--sequence {}", s.name))
-                        );
-                    }
-                }
-            }
-        };
-        if count != topo.vertex_count() {
-            bail!(
-                "--sequence {} ({}): {count} {noun}, the topology (--mesh) has {} vertices: a sequence of another mesh? \
-                 Every sequence must have the topology's vertices",
-                s.name,
-                s.path.display(),
-                topo.vertex_count()
-            );
-        }
-        if !triangles {
-            bail!(
-                "--sequence {} ({}): its triangles differ from the topology's (--mesh): every sequence must share its connectivity",
-                s.name,
-                s.path.display()
-            );
-        }
-    }
-    std::fs::create_dir_all(&a.dir).with_context(|| format!("{}", a.dir.display()))?;
-    let dir = canonical(&a.dir)?;
-    if m.name.is_empty() {
-        m.name = dir
-            .file_name()
-            .map_or_else(|| "character".into(), |n| n.to_string_lossy().into_owned());
-        // A folder name with a newline or a tab: the name is one line.
-        if m.name.chars().any(char::is_control) {
-            m.name = m.name.replace(char::is_control, " ");
-        }
-    }
-    // Stored relative to the database when inside it, else absolute.
-    let store = |p: &Path| {
-        p.strip_prefix(&dir)
-            .map_or_else(|_| p.to_path_buf(), Path::to_path_buf)
-    };
-    m.topology = store(&m.topology);
-    for s in &mut m.sequences {
-        s.path = store(&s.path);
-    }
-    for p in [
-        &mut m.rig.landmarks,
-        &mut m.rig.parts,
-        &mut m.rig.gltf_skin,
-        &mut m.rig.rig_map,
-    ]
-    .into_iter()
-    .flatten()
-    {
-        *p = store(p);
-    }
-    m.save(&a.dir)?;
     if a.json {
-        let mut v = serde_json::to_value(&m)?;
-        v["manifest"] = serde_json::to_value(&manifest)?;
+        let mut v = serde_json::to_value(&r.manifest)?;
+        v["manifest"] = serde_json::to_value(&r.path)?;
         crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
     }
     crate::errln!(
         "wrote {} ({}); check it with `surfmotion db info {}`",
-        manifest.display(),
-        super::count(m.sequences.len(), "sequence"),
+        r.path.display(),
+        super::count(r.manifest.sequences.len(), "sequence"),
         a.dir.display()
     );
     Ok(())
-}
-
-/// The manifest's up axis for `db init --up UP`: the landmarks' body axis
-/// (groin to chin) read in the mesh file's coordinates decides `auto`
-/// (the axis among +Y and +Z it lies within 45° of), and is checked
-/// against an explicit `y`/`z`: a capture whose body stands along +Z
-/// written as Y-up retargets into a contorted, tilted character with only
-/// indirect warnings (knee hyper-extension, turned-over triangles).
-fn resolve_up(up: &str, topo: &Mesh, landmarks: Option<&Path>) -> anyhow::Result<String> {
-    use surfmotion::rig::embed::landmarks::{Landmark, Landmarks};
-    let axis = landmarks.and_then(|p| {
-        // An unreadable landmarks file is reported by `db build`, which
-        // embeds the rig; here it only leaves the axis undecided.
-        let lm = Landmarks::load(p, topo.vertex_count()).ok()?;
-        let pos = topo.positions();
-        let (c, g) = (
-            lm.point(Landmark::Chin, pos)?,
-            lm.point(Landmark::Groin, pos)?,
-        );
-        let b = [c[0] - g[0], c[1] - g[1], c[2] - g[2]];
-        let n = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]).sqrt();
-        (n > 0.0 && n.is_finite()).then(|| [b[0] / n, b[1] / n, b[2] / n])
-    });
-    let cos45 = std::f64::consts::FRAC_1_SQRT_2;
-    let found = axis.map(|b| {
-        if b[1] >= cos45 {
-            Ok("y")
-        } else if b[2] >= cos45 {
-            Ok("z")
-        } else {
-            Err(b)
-        }
-    });
-    let describe = |b: [f64; 3]| format!("({:.2}, {:.2}, {:.2})", b[0], b[1], b[2]);
-    Ok(match (up, found) {
-        ("auto", None) => "y".into(),
-        ("auto", Some(Ok(axis))) => {
-            if axis == "z" {
-                crate::errln!(
-                    "--up auto: the landmarks' groin→chin direction is along +Z: the files are read as Z-up"
-                );
-            }
-            axis.into()
-        }
-        ("auto", Some(Err(b))) => bail!(
-            "--up auto: the landmarks' groin→chin direction {} is within 45° of neither +Y nor +Z; \
-             the database reads Y-up or Z-up files: turn the mesh and its sequences, or pass --up y or --up z",
-            describe(b)
-        ),
-        (given, Some(Ok(axis))) if axis != given => {
-            tracing::warn!(
-                "--up {given}, but the landmarks' groin→chin direction is along +{}: is the capture {}-up? (pass --up {axis} or --up auto)",
-                axis.to_ascii_uppercase(),
-                axis.to_ascii_uppercase()
-            );
-            given.into()
-        }
-        (given, Some(Err(b))) => {
-            tracing::warn!(
-                "--up {given}, but the landmarks' groin→chin direction {} is within 45° of neither +Y nor +Z",
-                describe(b)
-            );
-            given.into()
-        }
-        (given, _) => given.into(),
-    })
-}
-
-/// The manifest's length unit for `db init --input-units UNIT`: `auto`
-/// takes m, cm or mm, whichever makes the rest frame's size (its bounding
-/// box's largest side) nearest 1.7 m (a person; the unit's log distance, so 0.85-3.4 m
-/// all read as metres); an explicit unit that makes the body shorter than
-/// 0.3 m or taller than 3 m is kept with a warning. A capture in
-/// millimetres read as metres built a 1.7 km dancer whose retargets
-/// reported 4.5 m of ground penetration.
-fn resolve_units(units: &str, topo: &Mesh) -> String {
-    // The bounding box's largest side: the height standing, the span in a
-    // T-pose (about the height), and the same whatever the up axis.
-    let Some(h) = surfmotion::db::manifest::extent(topo.positions()) else {
-        return if units.eq_ignore_ascii_case("auto") {
-            "m".into()
-        } else {
-            units.into()
-        };
-    };
-    if units.eq_ignore_ascii_case("auto") {
-        let off = |u: f64| (h * u / 1.7).ln().abs();
-        let (u, name) = [(1.0, "m"), (0.01, "cm"), (0.001, "mm")]
-            .into_iter()
-            .min_by(|a, b| off(a.0).total_cmp(&off(b.0)))
-            .unwrap_or((1.0, "m"));
-        if name != "m" {
-            crate::errln!(
-                "--input-units auto: the rest frame is {h:.1} file units tall or wide: read as {name} ({:.2} m)",
-                h * u
-            );
-        }
-        return name.into();
-    }
-    units.into()
 }
 
 fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     // Checked before the skeletons are extracted: `-o FILE` said
     // "FILE/rig.json: File exists (os error 17)" after the work.
     let out = a.output.clone().unwrap_or_else(|| a.dir.join("skeletons"));
-    super::output_folder(
+    surfmotion::jobs::outputs::check_output_folder(
         "-o",
         &out,
         "db skeleton writes rig.json and each sequence's SEQ.skeleton.json and SEQ.bvh into a folder",
@@ -602,7 +351,10 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
             outputs.push(("-o", out.join(format!("{}.skeleton.json", s.name))));
             outputs.push(("-o", out.join(format!("{}.bvh", s.name))));
         }
-        super::refuse_colliding(&super::database_inputs(&a.dir), &outputs)?;
+        surfmotion::jobs::outputs::refuse_colliding(
+            &surfmotion::jobs::outputs::database_inputs(&a.dir),
+            &outputs,
+        )?;
     }
     let opts = SkeletonsOptions {
         kind: a.kind.into(),

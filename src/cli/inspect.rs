@@ -22,7 +22,8 @@ pub struct Args {
     pub clip: ClipOpts,
 }
 
-/// Runs `inspect`.
+/// Runs `inspect` (the library's option names in the report, such as the
+/// units guess's, printed as flags).
 pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = InspectOptions {
         mocap: a.clip.load_options()?,
@@ -38,9 +39,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
     }
     if a.json {
-        crate::outln!("{}", serde_json::to_string_pretty(&r)?)?;
+        let json = serde_json::to_string_pretty(&r)?;
+        crate::outln!("{}", super::flags::as_flags(&json))?;
     } else {
-        crate::cli::emit(&r.to_text())?;
+        crate::cli::emit(&super::flags::as_flags(&r.to_text()))?;
     }
     Ok(())
 }

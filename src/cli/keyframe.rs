@@ -20,17 +20,17 @@ use surfmotion::retarget::character::Character;
 fn check_outputs(a: &Args) -> anyhow::Result<()> {
     let mut outputs = Vec::new();
     if let Some(o) = &a.output {
-        super::check_mesh_output(o)?;
+        surfmotion::jobs::outputs::check_mesh_output(o)?;
         outputs = super::mesh_outputs(o);
     }
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.plot.clone().map(|p| ("--plot", p)));
-    let mut inputs = super::database_inputs(&a.db);
+    let mut inputs = surfmotion::jobs::outputs::database_inputs(&a.db);
     inputs.extend(a.clip.asf.clone());
     inputs.extend(a.clip.rig_map.clone());
-    super::refuse_colliding(&inputs, &outputs)?;
+    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
     if let Some(o) = &a.output {
-        super::check_folder_output(o, a.force, &inputs)?;
+        surfmotion::jobs::outputs::check_folder_output("-o", o, a.force, &inputs)?;
     }
     Ok(())
 }

@@ -102,7 +102,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
         Cmd::Convert(a) => {
             let inputs = surfmotion::mesh::io::input_files(&a.input, a.topology.as_deref());
             surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
-            super::check_folder_output(&a.output, a.force, &inputs)?;
+            surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
             let seq = load_sequence(
                 &a.input,
                 &LoadOptions {

@@ -164,7 +164,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 let out = serde_json::json!({
                     "units": clip.units.name,
                     "metres_per_unit": clip.units.metres_per_unit,
-                    "units_reason": clip.units.reason,
+                    "units_reason": super::flags::as_flags(&clip.units.reason),
                     "up": if clip.up == UpAxis::Z { "z" } else { "y" },
                     "joints": names,
                     "frames": frames,
@@ -174,7 +174,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 crate::outln!(
                     "units: {} ({}), {}-up",
                     clip.units.name,
-                    clip.units.reason,
+                    super::flags::as_flags(&clip.units.reason),
                     if clip.up == UpAxis::Z { "z" } else { "y" }
                 )?;
                 for (f, p) in frames {
@@ -266,7 +266,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     .extension()
                     .is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
             if !single {
-                super::output_folder(
+                surfmotion::jobs::outputs::check_output_folder(
                     "-o",
                     &a.output,
                     "one clip per gait goes into a folder; with one --gait, -o may name a .bvh",

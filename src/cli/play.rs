@@ -56,13 +56,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // The output is checked before the work, as every verb does: its
     // format, no input or other output overwritten, a folder that holds
     // files only with --force (none of it was checked).
-    super::check_mesh_output(&a.output)?;
-    let mut inputs = super::database_inputs(&a.db);
+    surfmotion::jobs::outputs::check_mesh_output(&a.output)?;
+    let mut inputs = surfmotion::jobs::outputs::database_inputs(&a.db);
     inputs.push(a.script.clone());
     let mut outputs = super::mesh_outputs(&a.output);
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
-    super::refuse_colliding(&inputs, &outputs)?;
-    super::check_folder_output(&a.output, a.force, &inputs)?;
+    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
+    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
     let opts = PlayOptions {
         seconds: a.seconds,
         ..Default::default()

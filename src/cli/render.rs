@@ -4,6 +4,7 @@
 use glam::DVec3;
 use std::path::PathBuf;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::render::preview::PreviewOptions;
 use surfmotion::render::{
     Framing, Image, Scene, View, facing_of_frames, label_colour, render_framed, view_bounds,
 };
@@ -147,32 +148,6 @@ struct Panel {
     turn: glam::DQuat,
 }
 
-/// The character's left-right line in `j` (hips and shoulders, each
-/// normalised, across `up`).
-fn left_of(j: &surfmotion::skeleton::Pose, up: DVec3) -> DVec3 {
-    let across = |l: Canonical, r: Canonical| {
-        let d = j[l.index()] - j[r.index()];
-        (d - up * d.dot(up)).normalize_or_zero()
-    };
-    across(Canonical::LHip, Canonical::RHip) + across(Canonical::LShoulder, Canonical::RShoulder)
-}
-
-/// The facing of a Y-up frame whose rig skeleton is `j`: across its hips
-/// and shoulders (left × up), signed as the rig's own rest facing is
-/// against its rest skeleton (so a rig whose sides are named the other
-/// way round still faces forward). `None` when the skeleton has no width.
-pub fn rig_facing(r: &Embedding, j: &surfmotion::skeleton::Pose) -> Option<DVec3> {
-    let rest_up = DVec3::from_array(r.up).normalize_or(DVec3::Y);
-    let rest = left_of(&r.joints.map(DVec3::from_array), rest_up).cross(rest_up);
-    let sign = if rest.dot(DVec3::from_array(r.facing)) < 0.0 {
-        -1.0
-    } else {
-        1.0
-    };
-    let f = left_of(j, DVec3::Y).cross(DVec3::Y) * sign;
-    (f.length() > 1e-9 && f.is_finite()).then(|| f.normalize())
-}
-
 /// Runs `render`: every panel at one scale (the largest extent over all
 /// meshes and both views), each centred horizontally on its own mesh, all
 /// sharing one vertical centre.
@@ -247,7 +222,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             (Some(f), _, _) => turn * parse_axis(f)?,
             (None, Some(r), Some(j)) => {
                 let j = j.map(|p| turn * p);
-                rig_facing(r, &j).unwrap_or(turn * DVec3::from_array(r.facing))
+                surfmotion::render::preview::rig_facing(r, &j)
+                    .unwrap_or(turn * DVec3::from_array(r.facing))
             }
             _ => {
                 // Up to 150 frames either side: their votes settle the sign.
@@ -347,97 +323,12 @@ pub struct PreviewOpts {
     pub preview_size: usize,
 }
 
-/// The contact sheet of `positions` (frame-major, `n` vertices each, Y-up):
-/// part colours from `rig`'s labels when given, facing `facing` (else the
-/// rig's facing turned with the first frame's hips, else estimated from the
-/// first frame's mesh), the floor line at `floor`.
-#[allow(clippy::too_many_arguments)]
-pub fn preview_image(
-    positions: &[[f64; 3]],
-    n: usize,
-    triangles: &[[u32; 3]],
-    rig: Option<&Embedding>,
-    facing: Option<DVec3>,
-    floor: Option<f64>,
-    o: &PreviewOpts,
-) -> Option<Image> {
-    let count = positions.len() / n.max(1);
-    if count == 0 {
-        return None;
+impl PreviewOpts {
+    /// The library's options.
+    pub fn options(&self) -> PreviewOptions {
+        PreviewOptions {
+            frames: self.preview_frames,
+            size: self.preview_size,
+        }
     }
-    let frames: Vec<&[[f64; 3]]> = surfmotion::render::sheet_frames(count, o.preview_frames)
-        .into_iter()
-        .map(|f| &positions[f * n..(f + 1) * n])
-        .collect();
-    let colours: Option<Vec<[u8; 3]>> = rig
-        .filter(|r| r.labels.len() == n)
-        .map(|r| r.labels.iter().map(|&l| label_colour(l as usize)).collect());
-    let facing = facing.unwrap_or_else(|| match rig.filter(|r| r.labels.len() == n) {
-        // The rig's rest facing, turned as the first frame's hips turned.
-        Some(r) => turned_facing(
-            &r.joints.map(DVec3::from_array),
-            DVec3::from_array(r.facing),
-            &r.skeleton(frames[0]),
-        ),
-        None => surfmotion::render::facing_of(frames[0]),
-    });
-    Some(surfmotion::render::contact_sheet(
-        &frames,
-        triangles,
-        colours.as_deref(),
-        facing,
-        floor,
-        o.preview_size,
-    ))
-}
-
-/// Writes [`preview_image`] to `path`; returns the image size.
-#[allow(clippy::too_many_arguments)]
-pub fn write_preview(
-    path: &std::path::Path,
-    positions: &[[f64; 3]],
-    n: usize,
-    triangles: &[[u32; 3]],
-    rig: Option<&Embedding>,
-    facing: Option<DVec3>,
-    floor: Option<f64>,
-    o: &PreviewOpts,
-) -> anyhow::Result<(usize, usize)> {
-    // Front and side views of each frame, RGB.
-    let panels = o.preview_frames.min(positions.len() / n.max(1)) as u128;
-    let px = o.preview_size as u128;
-    surfmotion::budget::check(
-        || {
-            format!(
-                "{}: a contact sheet of {panels} frames at {px} px",
-                path.display()
-            )
-        },
-        panels * 2 * px * px * 3,
-    )?;
-    let img = preview_image(positions, n, triangles, rig, facing, floor, o)
-        .ok_or_else(|| anyhow::anyhow!("{}: nothing to preview", path.display()))?;
-    img.save_png(path)?;
-    Ok((img.width, img.height))
-}
-
-/// The facing of a posed frame (Y-up): the rest facing `rest_facing` turned
-/// about Y by the turn that takes the rest pose's hip line (left hip minus
-/// right hip, horizontal) onto the frame's.
-pub fn turned_facing(
-    rest: &surfmotion::skeleton::Pose,
-    rest_facing: DVec3,
-    now: &surfmotion::skeleton::Pose,
-) -> DVec3 {
-    let hips = |p: &surfmotion::skeleton::Pose| {
-        let d = p[Canonical::LHip.index()] - p[Canonical::RHip.index()];
-        DVec3::new(d.x, 0.0, d.z).normalize_or_zero()
-    };
-    let (a, b) = (hips(rest), hips(now));
-    let f = DVec3::new(rest_facing.x, 0.0, rest_facing.z).normalize_or(DVec3::Z);
-    if a == DVec3::ZERO || b == DVec3::ZERO {
-        return f;
-    }
-    let angle = a.z.atan2(a.x) - b.z.atan2(b.x);
-    surfmotion::skeleton::rotate_yaw(f, angle.cos(), angle.sin())
 }

@@ -1,8 +1,8 @@
-//! `surfmotion retarget` and `surfmotion eval`.
+//! `surfmotion retarget`.
 
 use std::path::PathBuf;
-use surfmotion::db::{Character, CharacterOptions};
-use surfmotion::jobs::retarget::{evaluate_result, per_frame_seconds};
+use surfmotion::db::CharacterOptions;
+use surfmotion::jobs::retarget::per_frame_seconds;
 use surfmotion::jobs::transfer::PLAUSIBILITY_BYTES;
 use surfmotion::jobs::{RetargetJob, RetargetJobOptions, RetargetSummary};
 use surfmotion::retarget::RetargetOptions;
@@ -124,20 +124,20 @@ impl JobOpts {
 /// Runs `retarget`: one [`RetargetJob`] and one clip.
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::warnings_in_summary(!a.run.json);
-    super::check_mesh_output(&a.output)?;
+    surfmotion::jobs::outputs::check_mesh_output(&a.output)?;
     let mut inputs = vec![a.mocap.clone()];
     inputs.extend(a.run.clip.asf.clone());
     inputs.extend(a.run.clip.rig_map.clone());
-    inputs.extend(super::database_inputs(&a.db));
+    inputs.extend(surfmotion::jobs::outputs::database_inputs(&a.db));
     let mut outputs = super::mesh_outputs(&a.output);
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
-    super::refuse_colliding(&inputs, &outputs)?;
+    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
     a.glb.refuse_unless_glb(
         super::mesh::GlbArgs::is_glb(&a.output),
         &a.output.display().to_string(),
     )?;
-    super::check_folder_output(&a.output, a.force, &inputs)?;
+    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
         character: a.job.character(),
@@ -169,21 +169,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let (out, convention) = (&run.output, &run.mocap.convention);
     let plaus = job.plausibility_of(&run);
     if let Some(path) = &a.run.preview.preview {
-        let facing = surfmotion::mocap::units::y_up(ch.rig().facing, ch.z_up());
-        super::render::write_preview(
+        // Each panel faced from its own body (`render`'s rule).
+        surfmotion::render::preview::write_preview(
             path,
             &out.positions,
             ch.n(),
             ch.topology().triangles(),
             Some(ch.rig()),
-            Some(super::render::turned_facing(
-                ch.rest_pose(),
-                facing,
-                &ch.rig()
-                    .skeleton(&out.positions[..ch.n().min(out.positions.len())]),
-            )),
+            None,
             plaus.as_ref().map(|p| p.1),
-            &a.run.preview,
+            &a.run.preview.options(),
         )?;
     }
     let plaus = plaus.map(|p| p.0);
@@ -282,58 +277,6 @@ fn print_report(
                 r.frames
             );
         }
-        s += &p.text();
-    }
-    super::emit(&s)
-}
-
-/// Arguments of `eval`.
-#[derive(clap::Args)]
-pub struct EvalArgs {
-    /// The character database the result was made from.
-    #[arg(long)]
-    pub db: PathBuf,
-    /// The mocap clip that drove it.
-    #[arg(long)]
-    pub mocap: PathBuf,
-    /// The result (any sequence format `retarget` writes).
-    #[arg(long)]
-    pub result: PathBuf,
-    /// Print the result as JSON.
-    #[arg(long)]
-    pub json: bool,
-    #[command(flatten)]
-    pub clip: super::ClipOpts,
-}
-
-/// Runs `eval`: the joint-velocity error of Huang et al. 2015, Sec. 6.2,
-/// and the plausibility of the result (metres, Y-up, as `retarget` writes)
-/// against the database's own frames.
-pub fn eval(a: EvalArgs) -> anyhow::Result<()> {
-    let ch = Character::load(&a.db, &super::db::Bars::new())?;
-    let r = evaluate_result(&ch, &a.mocap, &a.result, &a.clip.load_options()?)?;
-    if a.json {
-        let v = serde_json::to_value(&r)?;
-        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
-    }
-    // A velocity needs two frames: with fewer the figure is not a
-    // measurement (it printed "-0.00 ± -0.00 cm/frame over 0 frames").
-    let mut s = if r.velocity_frames == 0 {
-        format!(
-            "joint-velocity error: not measured (a velocity needs two frames; query {} frames, result {})\n",
-            r.query_frames, r.result_frames
-        )
-    } else {
-        format!(
-            "joint-velocity error {:.2} ± {:.2} cm/frame over {} frames (query {} frames, result {})\n",
-            r.velocity_error_cm_per_frame,
-            r.std_cm_per_frame,
-            r.velocity_frames,
-            r.query_frames,
-            r.result_frames
-        )
-    };
-    if let Some(p) = &r.plausibility {
         s += &p.text();
     }
     super::emit(&s)

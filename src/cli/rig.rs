@@ -77,7 +77,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
     );
     let mut outputs = vec![("-o", a.output.clone())];
     outputs.extend(a.png.clone().map(|p| ("--png", p)));
-    super::refuse_colliding(&inputs, &outputs)?;
+    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
     let mut mesh = super::load_mesh_groups(&a.mesh, &a.group)?;
     let parts = match &a.parts {
         Some(p) => Some(parse_parts(&read_text(p)?, p, mesh.triangles(), mesh.vertex_count())?.0),

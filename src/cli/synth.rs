@@ -63,7 +63,7 @@ fn dynamics_amount(s: &str) -> Result<f64, String> {
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::warnings_in_summary(!a.run.json);
     let dir = &a.output;
-    super::output_folder(
+    surfmotion::jobs::outputs::check_output_folder(
         "-o",
         dir,
         "synth writes a database folder: the manifest, topology, sequences and truth/",
@@ -110,14 +110,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             plaus_text.push(format!("{}: {}", row.sequence, p.text()));
         }
         if a.run.preview.preview.is_some() {
-            sheets.extend(super::render::preview_image(
+            sheets.extend(surfmotion::render::preview::preview_image(
                 positions,
                 rest.vertex_count(),
                 rest.triangles(),
                 Some(rig),
                 None,
                 row.plausibility.as_ref().map(|p| p.floor_m),
-                &a.run.preview,
+                &a.run.preview.options(),
             ));
         }
         bar.inc(1);

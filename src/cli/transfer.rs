@@ -180,13 +180,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
     outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
-    super::refuse_colliding(&inputs, &outputs)?;
+    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
     a.glb.refuse_unless_glb(
         super::mesh::GlbArgs::is_glb(&a.output),
         &a.output.display().to_string(),
     )?;
-    super::check_folder_output(&a.output, a.force, &inputs)?;
+    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
         "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",
@@ -259,22 +259,25 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
     if let Some(path) = &a.run.preview.preview {
         let up = prepared.rig.as_ref().map(surfmotion::transfer::up_axis);
         let y_up = up.is_none_or(|u| u == glam::DVec3::Y);
-        super::render::write_preview(
+        surfmotion::render::preview::write_preview(
             path,
             &outcome.positions,
             prepared.mesh.vertex_count(),
             prepared.mesh.triangles(),
             prepared.rig.as_ref(),
+            // Each panel faced from its own body (`render`'s rule) when
+            // the scan stands Y-up, else the rig's rest facing.
             prepared
                 .rig
                 .as_ref()
+                .filter(|_| !y_up)
                 .map(|r| glam::DVec3::from_array(r.facing)),
             outcome
                 .plausibility
                 .as_ref()
                 .filter(|_| y_up)
                 .map(|p| p.floor_m / outcome.metres_per_unit.unwrap_or(1.0)),
-            &a.run.preview,
+            &a.run.preview.options(),
         )?;
     }
     let report = outcome.write(&a.output, a.glb.options(), a.report.is_some())?;

@@ -5,7 +5,8 @@
 //!
 //! In pipeline order:
 //!
-//! 1. [`database`]: build a character database's Surface Motion Graph
+//! 1. [`db_init`]: write a character database's manifest from its files;
+//!    [`database`]: build a character database's Surface Motion Graph
 //!    (Huang et al. 2015, Sec. 4) and load it for synthesis.
 //! 2. [`skeletons`]: export every frame's skeleton of a database (JSON and
 //!    BVH); the one skeleton JSON schema ([`skeletons::SkeletonFile`]).
@@ -17,13 +18,17 @@
 //! 6. [`batch`]: convert a folder of clips with any [`Converter`]
 //!    (implemented by the retarget and transfer jobs).
 //!
+//! [`outputs`] is the output policy every job checks before any work.
+//!
 //! JSON reports are meant to be printed through `serde_json::Value`
 //! (`serde_json::to_value`), whose objects keep their keys sorted, as the
 //! CLI always has.
 
 pub mod batch;
 pub mod database;
+pub mod db_init;
 pub mod keyframe;
+pub mod outputs;
 pub mod play;
 pub mod retarget;
 pub mod skeletons;
@@ -33,6 +38,7 @@ pub mod transfer;
 pub use crate::batch::Converter;
 pub use batch::{BatchEvent, BatchOptions, BatchReport, batch_folder};
 pub use database::{build_database, load_database};
+pub use db_init::{InitReport, init_database};
 pub use retarget::{RetargetJob, RetargetJobOptions, RetargetRun, RetargetSummary, StreamedRun};
 pub use skeletons::{SkeletonFile, SkeletonsReport, export_skeletons};
 pub use synth_db::{
@@ -97,6 +103,12 @@ pub enum JobError {
     /// A landmark file could not be read.
     #[error(transparent)]
     Landmarks(#[from] crate::rig::embed::landmarks::LandmarkError),
+    /// An output refused before any work.
+    #[error(transparent)]
+    Output(#[from] outputs::OutputError),
+    /// A manifest not written.
+    #[error(transparent)]
+    Init(#[from] crate::db::init::InitError),
     /// Options that do not make a job (what to give instead).
     #[error("{0}")]
     Usage(String),

@@ -441,7 +441,7 @@ pub fn evaluate_result(
         return Err(JobError::Input {
             path: result.to_path_buf(),
             msg: format!(
-                "{}, but {} at the database's {} fps gives {}; was it made from this clip (and with --input-fps as given)?",
+                "{}, but {} at the database's {} fps gives {}; was it made from this clip (and with `LoadOptions::fps` as given)?",
                 count(res.frame_count(), "frame"),
                 mocap.display(),
                 fps,

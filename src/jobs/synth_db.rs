@@ -163,7 +163,7 @@ pub fn write_synthetic_database(
     if dir.join(crate::db::MANIFEST).exists() && !opts.force {
         return Err(JobError::Input {
             path: dir.to_path_buf(),
-            msg: "a database exists there already; pass --force to overwrite it".into(),
+            msg: "a database exists there already; pass `force` to overwrite it".into(),
         });
     }
     std::fs::create_dir_all(dir).map_err(|e| JobError::Input {

@@ -444,7 +444,11 @@ fn transfer_inner(
                     .unwrap_or(Path::new("?"))
                     .display()
             )))?,
-        (None, None) => return Err(JobError::Usage("give --landmarks or --markers".into())),
+        (None, None) => {
+            return Err(JobError::Usage(
+                "give `TransferSpec::landmarks` or `TransferSpec::markers`".into(),
+            ));
+        }
     };
     if let Some(p) = &spec.save_markers {
         MarkerFile {
@@ -499,7 +503,7 @@ fn transfer_inner(
                 return Err(JobError::Input {
                     path: tspec.into(),
                     msg: format!(
-                        "--template-frame {frame} is past the end: the template has {} (0..={})",
+                        "`TransferSource::Template` frame {frame} is past the end: the template has {} (0..={})",
                         crate::batch::summary::count(template.frame_count(), "frame"),
                         template.frame_count().saturating_sub(1)
                     ),
@@ -519,7 +523,7 @@ fn transfer_inner(
                     }
                     _ => {
                         return Err(JobError::Usage(
-                            "the template needs markers: give --template-markers or --template-landmarks"
+                            "the template needs markers: give the `TransferSource::Template` markers or landmarks"
                                 .into(),
                         ));
                     }

@@ -519,7 +519,7 @@ pub fn extremes_bytes(nodes: usize, m: usize) -> u128 {
 fn budget_hint(c: &Chain, m: usize, budget: u128) -> String {
     let segments = c.arc_offsets.len().max(1);
     if segments == 1 {
-        return "; lower --distance or --time".into();
+        return "; lower `Targets::distance` or `Targets::time`".into();
     }
     let keys = format!(
         "{segments} segments between {} key-frames (at least {} frames through them)",
@@ -527,9 +527,11 @@ fn budget_hint(c: &Chain, m: usize, budget: u128) -> String {
         c.least
     );
     if extremes_bytes(c.node_count().div_ceil(segments), m) <= budget {
-        format!("; it grows with the {keys}: use fewer --via")
+        format!("; it grows with the {keys}: use fewer via key-frames")
     } else {
-        format!("; {keys}: use fewer --via, or lower --distance or --time")
+        format!(
+            "; {keys}: use fewer via key-frames, or lower `Targets::distance` or `Targets::time`"
+        )
     }
 }
 

@@ -909,11 +909,11 @@ pub fn synthesise(
     // The positions held below.
     let what = if keys.len() > 2 {
         format!(
-            "the key-frame path through {} key-frames (use fewer --via, or lower --distance or --time)",
+            "the key-frame path through {} key-frames (use fewer via key-frames, or lower `Targets::distance` or `Targets::time`)",
             keys.len()
         )
     } else {
-        "the key-frame path (lower --distance or --time)".to_string()
+        "the key-frame path (lower `Targets::distance` or `Targets::time`)".to_string()
     };
     crate::budget::check_frames(&what, planned.frames(), ch.n(), 1)?;
     let mut positions = Vec::with_capacity(planned.frames() * ch.n());

@@ -811,7 +811,7 @@ pub fn parse_amc(
         return Err(MocapError::invalid(
             path,
             format!(
-                "--input-fps {fps}: expected a frame rate in [{}, {}]",
+                "`AmcOptions::fps` {fps}: expected a frame rate in [{}, {}]",
                 crate::budget::MIN_FPS,
                 crate::budget::MAX_FPS
             ),
@@ -822,7 +822,8 @@ pub fn parse_amc(
         raise_warning(
             &mut warnings,
             path,
-            "AMC stores no frame rate; assumed 120 fps (CMU); override with --input-fps".into(),
+            "AMC stores no frame rate; assumed 120 fps (CMU); override with `AmcOptions::fps`"
+                .into(),
         );
     }
     clip.warnings = warnings;

@@ -659,7 +659,7 @@ impl MotionHeader {
                 return Err(MocapError::invalid(
                     path,
                     format!(
-                        "--input-fps {fps}: expected a frame rate in [{}, {}]",
+                        "`BvhOptions::fps` {fps}: expected a frame rate in [{}, {}]",
                         crate::budget::MIN_FPS,
                         crate::budget::MAX_FPS
                     ),
@@ -684,7 +684,7 @@ impl MotionHeader {
                     path,
                     tl,
                     format!(
-                        "bad Frame Time {}; give the frame rate with --input-fps",
+                        "bad Frame Time {}; give the frame rate with `BvhOptions::fps`",
                         quoted(&time_value)
                     ),
                 ));
@@ -734,7 +734,7 @@ impl MotionHeader {
                 path,
                 self.time_line,
                 format!(
-                    "bad Frame Time {} for {frames} frames; give the frame rate with --input-fps",
+                    "bad Frame Time {} for {frames} frames; give the frame rate with `BvhOptions::fps`",
                     quoted(&self.time_value)
                 ),
             ));
@@ -744,7 +744,7 @@ impl MotionHeader {
                 path,
                 self.time_line,
                 format!(
-                    "Frame Time {} s is {} frames per second, outside [{}, {}]{}; give the frame rate with --input-fps",
+                    "Frame Time {} s is {} frames per second, outside [{}, {}]{}; give the frame rate with `BvhOptions::fps`",
                     self.time_value,
                     crate::numfmt::Short(1.0 / frame_time),
                     crate::budget::MIN_FPS,
@@ -1007,7 +1007,7 @@ mod tests {
                 .unwrap_err()
                 .to_string();
             assert!(
-                e.starts_with("t.bvh:17:") && e.contains("--input-fps"),
+                e.starts_with("t.bvh:17:") && e.contains("`BvhOptions::fps`"),
                 "{e}"
             );
         }

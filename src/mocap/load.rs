@@ -52,11 +52,17 @@ pub fn find_asf(amc: &Path) -> Result<PathBuf, MocapError> {
         1 => Ok(found.remove(0)),
         0 => Err(MocapError::invalid(
             amc,
-            format!("no .asf skeleton in {}; give one with --asf", dir.display()),
+            format!(
+                "no .asf skeleton in {}; give one with `LoadOptions::asf`",
+                dir.display()
+            ),
         )),
         k => Err(MocapError::invalid(
             amc,
-            format!("{k} .asf files in {}; choose one with --asf", dir.display()),
+            format!(
+                "{k} .asf files in {}; choose one with `LoadOptions::asf`",
+                dir.display()
+            ),
         )),
     }
 }

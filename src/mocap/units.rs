@@ -244,7 +244,7 @@ pub fn units_from_stature(h: f64, basis: &str, family: UnitFamily) -> Units {
         metres_per_unit: best.0,
         name: best.1.clone(),
         reason: format!(
-            "stature {:.2} m in {} ({h:.3} file units from {basis}; {why}){runner}; --input-units overrides",
+            "stature {:.2} m in {} ({h:.3} file units from {basis}; {why}){runner}; `LoadOptions::units` overrides",
             h * best.0,
             best.1
         ),

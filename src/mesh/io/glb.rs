@@ -648,7 +648,7 @@ pub fn encode_glb_with(
         return Err(MeshError::invalid(
             Path::new("<glb>"),
             format!(
-                "{total} bytes: too large for GLB (4 GiB); quantise (--glb-quantize), \
+                "{total} bytes: too large for GLB (4 GiB); quantise (`GlbOptions::quantize`), \
                  leave out normals (--glb-no-normals) or split the sequence"
             ),
         ));

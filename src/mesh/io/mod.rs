@@ -133,7 +133,7 @@ fn cache_topology(path: &Path, opts: &LoadOptions) -> Result<super::Mesh, MeshEr
                 return Err(MeshError::invalid(
                     path,
                     format!(
-                        "a point cache needs a topology: no {} beside it; give one with --topology",
+                        "a point cache needs a topology: no {} beside it; give one with `LoadOptions::topology`",
                         p.display()
                     ),
                 ));

@@ -147,7 +147,7 @@ impl SequenceWriter {
                     return Err(MeshError::invalid(
                         out,
                         format!(
-                            "{frames} frames × {n} vertices make a GLB of about {}, over the format's 4 GiB; quantise (--glb-quantize), leave out normals (--glb-no-normals), or write .pc2, .mdd or a folder, which stream any length",
+                            "{frames} frames × {n} vertices make a GLB of about {}, over the format's 4 GiB; quantise (`GlbOptions::quantize`), leave out normals (`GlbOptions::normals` false), or write .pc2, .mdd or a folder, which stream any length",
                             crate::budget::Bytes(file)
                         ),
                     ));

@@ -1,0 +1,65 @@
+//! The library's messages name options as its callers set them, in
+//! backticks (`` `force` ``, `` `mocap_dir` ``); the CLI prints its flags
+//! instead, so a refusal names what the user types.
+
+/// Option names in the library's messages and the flag each is on the
+/// command line. Each entry is replaced as written, backticks included.
+/// Longer phrases come first.
+const FLAGS: &[(&str, &str)] = &[
+    (
+        "set `InitOptions::human_sized` to false",
+        "pass --not-human-sized",
+    ),
+    (
+        "give the `TransferSource::Template` markers or landmarks",
+        "give --template-markers or --template-landmarks",
+    ),
+    ("`TransferSource::Template` frame", "--template-frame"),
+    ("`GlbOptions::normals` false", "--glb-no-normals"),
+    ("fewer via key-frames", "fewer --via"),
+    ("`AmcOptions::fps`", "--input-fps"),
+    ("`BatchOptions::shard`", "--shard"),
+    ("`BvhOptions::fps`", "--input-fps"),
+    ("`GlbOptions::quantize`", "--glb-quantize"),
+    ("`InitOptions::gltf_skin`", "--gltf-skin"),
+    ("`InitOptions::landmarks`", "--landmarks"),
+    ("`InitOptions::mesh`", "--mesh"),
+    ("`InitOptions::name`", "--name"),
+    ("`InitOptions::parts`", "--parts"),
+    ("`InitOptions::rig_map`", "--rig-map"),
+    ("`InitOptions::sequences`", "--sequence"),
+    ("`InitOptions::units`", "--input-units"),
+    ("`InitOptions::up`", "--up"),
+    ("`LoadOptions::asf`", "--asf"),
+    ("`LoadOptions::fps`", "--input-fps"),
+    ("`LoadOptions::rig_map`", "--rig-map"),
+    ("`LoadOptions::topology`", "--topology"),
+    ("`LoadOptions::units`", "--input-units"),
+    ("`Targets::distance`", "--distance"),
+    ("`Targets::time`", "--time"),
+    ("`TransferSpec::landmarks`", "--landmarks"),
+    ("`TransferSpec::markers`", "--markers"),
+    ("`force`", "--force"),
+    ("`mocap_dir`", "--mocap-dir"),
+];
+
+/// `message` with each option name of [`FLAGS`] replaced by its flag.
+pub fn as_flags(message: &str) -> String {
+    FLAGS.iter().fold(message.to_string(), |s, (option, flag)| {
+        s.replace(option, flag)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    /// A refusal of the output policy reads as it did when the CLI
+    /// formatted it itself.
+    #[test]
+    fn option_names_become_flags() {
+        assert_eq!(
+            super::as_flags("-o out: the folder already holds 2 files; pass `force` to replace"),
+            "-o out: the folder already holds 2 files; pass --force to replace"
+        );
+        assert_eq!(super::as_flags("no option here"), "no option here");
+    }
+}

@@ -1,0 +1,212 @@
+//! What the CLI prints: stdout through [`emit`] (a closed pipe is not an
+//! error), errors on one line, counts, progress bars, written files.
+
+use std::path::{Path, PathBuf};
+
+/// Writes to stdout; a closed pipe becomes [`OutputClosed`] instead of a panic.
+pub fn emit(text: &str) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Err(OutputClosed.into()),
+        // Named: "surfmotion: No space left on device" did not say where.
+        Err(e) => Err(anyhow::anyhow!("writing to standard output: {e}")),
+    }
+}
+
+/// `println!` through [`emit`].
+#[macro_export]
+macro_rules! outln {
+    ($($t:tt)*) => { $crate::cli::emit(&format!("{}\n", format!($($t)*))) };
+}
+
+/// `eprintln!` that never panics: a line on stderr, dropped when stderr
+/// is closed or full (`eprintln!` panicked there: `mesh convert A B
+/// 2>&-` and every other verb that reports on stderr exited 2).
+#[macro_export]
+macro_rules! errln {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($t)*);
+    }};
+}
+
+/// An error and its causes on one line. A cause already said is left
+/// out, and a cause that begins with what its context said continues it
+/// rather than repeating it (`eval --result FOLDER` printed "FOLDER:
+/// FOLDER: no .obj files in the folder").
+pub fn one_line(e: &anyhow::Error) -> String {
+    let mut s = e.to_string();
+    for c in e.chain().skip(1) {
+        let c = c.to_string();
+        if s.contains(&c) {
+            continue;
+        }
+        // The longest tail of `s` (whole, or after a ": ") that `c` begins with.
+        let tails = std::iter::once(0).chain(s.match_indices(": ").map(|(i, _)| i + 2));
+        match tails.into_iter().find(|&i| c.starts_with(&s[i..])) {
+            Some(i) => {
+                s.truncate(i);
+                s.push_str(&c);
+            }
+            None => {
+                s.push_str(": ");
+                s.push_str(&c);
+            }
+        }
+    }
+    super::flags::as_flags(&without_os_error_numbers(&s.replace('\n', " ")))
+}
+
+/// `s` without the OS's " (os error N)" suffixes: "x.bvh: No such file or
+/// directory (os error 2)" says what is wrong without them.
+pub fn without_os_error_numbers(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut rest = s;
+    while let Some(i) = rest.find(" (os error ") {
+        let tail = &rest[i + " (os error ".len()..];
+        let digits = tail.bytes().take_while(u8::is_ascii_digit).count();
+        if digits > 0 && tail[digits..].starts_with(')') {
+            out.push_str(&rest[..i]);
+            rest = &tail[digits + 1..];
+        } else {
+            out.push_str(&rest[..i + 1]);
+            rest = &rest[i + 1..];
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Stdout was closed by the reader (e.g. `| head`): not an error.
+#[derive(Debug, thiserror::Error)]
+#[error("output closed")]
+pub struct OutputClosed;
+
+/// `n` and a noun, plural when `n` is not one: "1 frame", "2 frames",
+/// "3 vertices" ([`surfmotion::batch::summary::count`]).
+pub fn count(n: usize, noun: &str) -> String {
+    surfmotion::batch::summary::count(n, noun)
+}
+
+/// A progress bar on a terminal (hidden when stderr is not one).
+pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{{bar:40}} {{pos}}/{{len}} {what} {{elapsed}} (eta {{eta}}) {{msg}}"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+/// A spinner with a message and the elapsed time on a terminal (hidden
+/// when stderr is not one), for work whose library call reports no
+/// progress (`web export`: 10 s on samba with nothing on the screen;
+/// `play`'s model build). Clear it with `finish_and_clear`.
+pub fn spinner(what: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    bar.set_message(what.to_string());
+    bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    bar
+}
+
+/// The files a mesh output wrote, for a summary line: each named, except
+/// a folder of OBJ frames, named once with its count and first and last
+/// frame (`mesh convert x.pc2 frames` listed all 180 frames joined by
+/// "and", a line of 5 kB).
+pub fn written_list(files: &[PathBuf], sep: &str) -> String {
+    let name = |p: &PathBuf| p.display().to_string();
+    let folder = files.first().and_then(|f| f.parent());
+    let frames = files.len() > 2
+        && files.iter().all(|f| {
+            f.parent() == folder && f.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+        });
+    match (frames, folder, files.first(), files.last()) {
+        (true, Some(dir), Some(a), Some(b)) => format!(
+            "{}{} ({} OBJ frames, {} .. {})",
+            dir.display(),
+            std::path::MAIN_SEPARATOR,
+            files.len(),
+            a.file_name().unwrap_or_default().to_string_lossy(),
+            b.file_name().unwrap_or_default().to_string_lossy()
+        ),
+        _ => files.iter().map(name).collect::<Vec<_>>().join(sep),
+    }
+}
+
+/// The files `-o OUT` writes (a point cache's topology OBJ beside it),
+/// labelled for [`refuse_colliding`].
+pub fn mesh_outputs(out: &Path) -> Vec<(&'static str, PathBuf)> {
+    surfmotion::mesh::io::output_files(out)
+        .into_iter()
+        .map(|p| ("-o", p))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn count_says_one_frame_and_two_vertices() {
+        assert_eq!(super::count(1, "frame"), "1 frame");
+        assert_eq!(super::count(0, "transition"), "0 transitions");
+        assert_eq!(super::count(3, "vertex"), "3 vertices");
+        assert_eq!(super::count(2, "match"), "2 matches");
+        assert_eq!(super::count(9, "query"), "9 queries");
+        assert_eq!(super::count(2, "key"), "2 keys");
+    }
+
+    /// The OS's error numbers are not printed.
+    #[test]
+    fn os_error_numbers_are_left_out() {
+        assert_eq!(
+            super::without_os_error_numbers(
+                "a.bvh: No such file or directory (os error 2); b: Permission denied (os error 13)"
+            ),
+            "a.bvh: No such file or directory; b: Permission denied"
+        );
+        assert_eq!(
+            super::without_os_error_numbers("x (os error y) (os error 7"),
+            "x (os error y) (os error 7"
+        );
+    }
+
+    /// Regression (session 6 review): `eval --result FOLDER` printed the
+    /// folder twice; a cause that begins with its context continues it.
+    #[test]
+    fn one_line_says_each_part_once() {
+        #[derive(Debug, thiserror::Error)]
+        #[error("{0}")]
+        struct E(String, #[source] Option<Box<E>>);
+        let e = |s: &str, c: Option<E>| E(s.into(), c.map(Box::new));
+        let chain = |x: E| super::one_line(&anyhow::Error::new(x));
+        let inner = || e("out: no .obj files in the folder", None);
+        assert_eq!(
+            chain(e("out", Some(inner()))),
+            "out: no .obj files in the folder"
+        );
+        assert_eq!(
+            chain(e("eval: out", Some(inner()))),
+            "eval: out: no .obj files in the folder"
+        );
+        assert_eq!(
+            chain(e("loading", Some(inner()))),
+            "loading: out: no .obj files in the folder"
+        );
+        assert_eq!(chain(e("a: b", Some(e("b", None)))), "a: b");
+    }
+}
