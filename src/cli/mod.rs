@@ -731,7 +731,7 @@ pub fn check_mesh_output(out: &Path) -> anyhow::Result<()> {
     surfmotion::mesh::io::refuse_folder_as_file(out)?;
     match MeshFormat::of(out) {
         None => anyhow::bail!(
-            "{}: unknown output format (use .glb .pc2 .mdd .obj .ply or a folder)",
+            "{}: unknown output format (use .glb .pc2 .mdd .obj .ply .usda or a folder)",
             out.display()
         ),
         Some(MeshFormat::Gltf) => {
@@ -940,6 +940,10 @@ pub struct ClipOpts {
     /// The ASF skeleton of an AMC clip (default: the only .asf beside it).
     #[arg(long, value_name = "PATH")]
     pub asf: Option<std::path::PathBuf>,
+    /// The take (animation stack) of an FBX clip, by name (default: the
+    /// first with keyed curves; `inspect` lists them).
+    #[arg(long, value_name = "NAME")]
+    pub take: Option<String>,
     /// Length unit of the input: m, cm, mm, dm, inch, cmu (1/0.45 inch) or a
     /// number of metres per unit. Default: from the ASF header, else guessed
     /// from the skeleton's size (see `inspect`).
@@ -977,6 +981,7 @@ impl ClipOpts {
         Ok(surfmotion::rig::LoadOptions {
             fps: self.input_fps,
             asf: self.asf.clone(),
+            take: self.take.clone(),
             units,
             up,
             rig_map,
