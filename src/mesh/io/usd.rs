@@ -161,8 +161,8 @@ impl UsdaWriter {
             -f32::INFINITY,
         ];
         for p in frame {
-            for a in 0..3 {
-                let x = p[a] as f32;
+            for (a, &c) in p.iter().enumerate() {
+                let x = c as f32;
                 e[a] = e[a].min(x);
                 e[a + 3] = e[a + 3].max(x);
             }
