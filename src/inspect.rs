@@ -2,6 +2,7 @@
 
 mod database;
 mod dot;
+mod fbx;
 mod other;
 
 pub use database::{CacheEntry, CacheReport, DatabaseReport, DbSequence, DbSkeleton};
@@ -149,7 +150,7 @@ pub enum InspectError {
     Json(String),
     /// Not a format we read.
     #[error(
-        "{0}: unknown file type (mocap: .bvh .amc .asf; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj; a database folder or its cache; the JSON files, manifests, caches, Graphviz graphs, pictures and web sites the tool writes)"
+        "{0}: unknown file type (mocap: .bvh .amc .asf .fbx; meshes: .obj .ply .pc2 .mdd .gltf .glb or a folder of .obj; a database folder or its cache; the JSON files, manifests, caches, Graphviz graphs, pictures and web sites the tool writes)"
     )]
     Unknown(PathBuf),
     /// A mesh path that is not UTF-8: mesh paths are read as text
@@ -206,7 +207,10 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
         };
         return Ok(Report::Mocap(MocapReport {
             path: path.to_path_buf(),
-            format: format!("{fmt:?}").to_lowercase(),
+            format: match fmt {
+                MocapFormat::Fbx => fbx::describe(path, opts.mocap.take.as_deref()),
+                _ => format!("{fmt:?}").to_lowercase(),
+            },
             joints: clip.joint_count(),
             joint_names: clip.point_names(),
             frames: clip.frame_count(),

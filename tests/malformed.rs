@@ -111,6 +111,18 @@ fn readers() -> Vec<(&'static str, Reader)> {
                 let _ = m.validate();
             }
         }),
+        // Sampled at 1 fps: a flipped take length must not make a run of
+        // hours (the reader's own limit is 200 million samples).
+        ("fbx", |b| {
+            drop(surfmotion::mocap::fbx::parse_fbx(
+                b,
+                Path::new("f.fbx"),
+                &surfmotion::mocap::fbx::FbxOptions {
+                    fps: Some(1.0),
+                    take: None,
+                },
+            ))
+        }),
     ]
 }
 
@@ -157,6 +169,10 @@ fn seeds(fmt: &str) -> Vec<Vec<u8>> {
         "script" => vec![br#"[{"t": 0, "space": "locomotion", "speed": 1.2}, {"t": 3, "turn": 30}, {"t": 4.5, "speed": -99.5}]"#.to_vec()],
         "motion" => vec![[&b"SMPAR001"[..], &[7u8; 8], &[4, 0, 0, 0, 255, 255, 255, 255], &[0u8; 64]].concat()],
         "embedding" => vec![br#"{"vertex_count": 4, "labels": [0, 1, 2, 3], "skin": [], "regressors": [], "regions": [], "joints": [], "facing": [1, 0, 0], "height": 1.7}"#.to_vec()],
+        "fbx" => vec![
+            b"Kaydara FBX Binary  \0\x1a\0\xe8\x1c\0\0".to_vec(),
+            b"; FBX 7.5.0 project file\nObjects:  {\n Model: 1, \"Model::Hips\", \"LimbNode\" {\n }\n}\n".to_vec(),
+        ],
         "manifest" => vec![b"name = \"x\"\ntopology = \"t.obj\"\nfps = 30.0\nunits = \"m\"\nup = \"y\"\n[[sequence]]\nname = \"a\"\npath = \"a.pc2\"\n[rig]\nlandmarks = \"l.json\"\n[graph]\ntop_n = 3\n[[space]]\nname = \"s\"\nsequences = [\"a\"]\nparameters = [\"speed\"]\n".to_vec()],
         _ => vec![],
     }
@@ -173,6 +189,10 @@ fn real_seeds(fmt: &str) -> Vec<Vec<u8>> {
         ],
         "asf" => &["mocap/cmu-amc/02/02.asf"],
         "gltf" => &["gltf/RiggedSimple/RiggedSimple.glb", "gltf/Fox/Fox.glb"],
+        "fbx" => &[
+            "fbx/ufbx/max_transformed_skin_7500_binary.fbx",
+            "fbx/ufbx/maya_game_sausage_7500_ascii_combined.fbx",
+        ],
         _ => &[],
     };
     files
@@ -337,5 +357,79 @@ proptest::proptest! {
         if let Ok(m) = toml::from_str::<surfmotion::db::Manifest>(&text) {
             let _ = m.validate();
         }
+    }
+}
+
+/// Issue 44: a malformed FBX (zero length, garbage, the wrong magic, a
+/// truncated real file, a node claiming a huge count) gives one line naming
+/// the file, through the same dispatch every verb uses (`read_clip`, by
+/// extension and by magic bytes), never a panic.
+#[test]
+fn malformed_fbx_gives_one_line_naming_the_file() {
+    use surfmotion::mocap::read_clip;
+    let dir = tempfile::tempdir().unwrap();
+    let mut cases: Vec<(&str, Vec<u8>)> = vec![
+        ("empty.fbx", vec![]),
+        ("garbage.fbx", b"\x00\x01garbage\xff".repeat(50)),
+        ("bvh-inside.fbx", b"HIERARCHY\nROOT Hips\n{\n}\n".to_vec()),
+        (
+            "header-only.fbx",
+            b"Kaydara FBX Binary  \0\x1a\0\xe8\x1c\0\0".to_vec(),
+        ),
+        (
+            "ascii-no-skeleton.fbx",
+            b"; FBX 7.5.0 project file\n".to_vec(),
+        ),
+    ];
+    // A binary node whose array claims 2^32 - 1 elements.
+    let mut huge = b"Kaydara FBX Binary  \0\x1a\0".to_vec();
+    huge.extend_from_slice(&7400u32.to_le_bytes());
+    let name = b"Vertices";
+    let mut prop = vec![b'd'];
+    prop.extend_from_slice(&u32::MAX.to_le_bytes()); // array length
+    prop.extend_from_slice(&0u32.to_le_bytes()); // encoding
+    prop.extend_from_slice(&16u32.to_le_bytes()); // compressed length
+    prop.extend_from_slice(&[0u8; 16]);
+    let end = (huge.len() + 13 + name.len() + prop.len()) as u32;
+    huge.extend_from_slice(&end.to_le_bytes());
+    huge.extend_from_slice(&1u32.to_le_bytes());
+    huge.extend_from_slice(&(prop.len() as u32).to_le_bytes());
+    huge.push(name.len() as u8);
+    huge.extend_from_slice(name);
+    huge.extend_from_slice(&prop);
+    huge.extend_from_slice(&[0u8; 13]);
+    cases.push(("huge-count.fbx", huge));
+    if let Some(d) = common::optional_data_dir() {
+        let real = std::fs::read(d.join("fbx/threejs/Samba Dancing.fbx")).unwrap();
+        cases.push(("truncated.fbx", real[..real.len() / 3].to_vec()));
+        cases.push(("truncated-header.fbx", real[..40].to_vec()));
+        // FBX bytes under another extension are found by their magic.
+        let small = std::fs::read(d.join("fbx/ufbx/max_transformed_skin_7500_binary.fbx")).unwrap();
+        let p = dir.path().join("clip.mocap");
+        std::fs::write(&p, &small).unwrap();
+        let c = read_clip(&p, None, None, None).unwrap();
+        assert_eq!(c.joint_count(), 5);
+    }
+    for (name, bytes) in &cases {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        let e = read_clip(&p, None, None, None)
+            .err()
+            .unwrap_or_else(|| panic!("{name} was read"))
+            .to_string();
+        assert!(e.starts_with(&p.display().to_string()), "{name}: {e}");
+        assert_eq!(e.lines().count(), 1, "{name}: {e}");
+        eprintln!("{name}: {e}");
+    }
+    // A take that does not exist names the takes there are.
+    if let Some(d) = common::optional_data_dir() {
+        let p = d.join("fbx/ufbx/maya_game_sausage_7500_ascii_combined.fbx");
+        let e = read_clip(&p, None, None, Some("walk"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no take named 'walk'") && e.contains("'spin'"),
+            "{e}"
+        );
     }
 }

@@ -57,7 +57,7 @@ impl Shard {
     }
 }
 
-/// Every `.bvh` and `.amc` file under `dir` (any case), as paths relative
+/// Every `.bvh`, `.amc` and `.fbx` file under `dir` (any case), as paths relative
 /// to `dir`, sorted. Unreadable folders are skipped. Symbolic links are
 /// followed, but every folder is entered once and every clip listed once
 /// (by its canonical path), so a link back up the tree neither loops nor
@@ -127,9 +127,11 @@ pub fn find_clips(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
 }
 
 fn is_clip(p: &Path) -> bool {
-    p.extension()
-        .and_then(|x| x.to_str())
-        .is_some_and(|x| x.eq_ignore_ascii_case("bvh") || x.eq_ignore_ascii_case("amc"))
+    p.extension().and_then(|x| x.to_str()).is_some_and(|x| {
+        ["bvh", "amc", "fbx"]
+            .iter()
+            .any(|e| x.eq_ignore_ascii_case(e))
+    })
 }
 
 /// Where clip `rel` goes under `out_dir`: the same folders, the clip's

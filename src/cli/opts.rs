@@ -24,6 +24,10 @@ pub struct ClipOpts {
     /// The ASF skeleton of an AMC clip (default: the only .asf beside it).
     #[arg(long, value_name = "PATH")]
     pub asf: Option<std::path::PathBuf>,
+    /// The take (animation stack) of an FBX clip, by name (default: the
+    /// first with keyed curves; `inspect` lists them).
+    #[arg(long, value_name = "NAME")]
+    pub take: Option<String>,
     /// Length unit of the input: m, cm, mm, dm, inch, cmu (1/0.45 inch) or a
     /// number of metres per unit. Default: from the ASF header, else guessed
     /// from the skeleton's size (see `inspect`).
@@ -61,6 +65,7 @@ impl ClipOpts {
         Ok(surfmotion::rig::LoadOptions {
             fps: self.input_fps,
             asf: self.asf.clone(),
+            take: self.take.clone(),
             units,
             up,
             rig_map,

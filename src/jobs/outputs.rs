@@ -43,7 +43,7 @@ pub enum OutputError {
     },
     /// A mesh output of no format a writer has.
     #[error(
-        "{}: unknown output format (use .glb .pc2 .mdd .obj .ply or a folder)",
+        "{}: unknown output format (use .glb .pc2 .mdd .obj .ply .usda or a folder)",
         .0.display()
     )]
     UnknownFormat(PathBuf),

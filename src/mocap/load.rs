@@ -1,10 +1,12 @@
-//! Reading any supported clip file by its extension (the rig-aware
+//! Reading any supported clip file by its extension, or by its first bytes
+//! for an FBX file with another name (the rig-aware
 //! loader that decides a BVH's units and up axis is [`crate::rig::load_clip`]).
 
 use super::asfamc::{AmcOptions, read_amc, read_asf};
 use super::bvh::{BvhOptions, read_bvh};
 use super::clip::Clip;
 use super::error::MocapError;
+use super::fbx::{FbxOptions, is_fbx, read_fbx};
 use std::path::{Path, PathBuf};
 
 /// A mocap file format.
@@ -16,6 +18,8 @@ pub enum MocapFormat {
     Amc,
     /// Acclaim skeleton (read as a one-frame rest pose).
     Asf,
+    /// Autodesk FBX, binary or ASCII (skeleton and one take).
+    Fbx,
 }
 
 impl MocapFormat {
@@ -26,7 +30,20 @@ impl MocapFormat {
             "bvh" => MocapFormat::Bvh,
             "amc" => MocapFormat::Amc,
             "asf" => MocapFormat::Asf,
+            "fbx" => MocapFormat::Fbx,
             _ => return None,
+        })
+    }
+
+    /// The format of a path by extension, else by its first bytes (an FBX
+    /// file's magic: `Kaydara FBX Binary` or `; FBX`).
+    pub fn detect(path: &Path) -> Option<MocapFormat> {
+        MocapFormat::of(path).or_else(|| {
+            use std::io::Read;
+            let mut head = [0u8; 64];
+            let f = crate::fsutil::open_input(path, crate::fsutil::MAX_INPUT_BYTES).ok()?;
+            let k = f.take(64).read(&mut head).ok()?;
+            is_fbx(&head[..k]).then_some(MocapFormat::Fbx)
         })
     }
 }
@@ -67,15 +84,30 @@ pub fn find_asf(amc: &Path) -> Result<PathBuf, MocapError> {
     }
 }
 
-/// Reads a BVH, AMC (with its ASF) or ASF file, in file units. AMC and ASF
-/// clips carry their units and up axis; a BVH's are left at the reader's
+/// Reads a BVH, AMC (with its ASF), ASF or FBX file, in file units. AMC,
+/// ASF and FBX clips carry their units and up axis; a BVH's are left at the reader's
 /// defaults (deciding them needs the rig convention:
 /// [`crate::rig::load_clip`] does it). `fps` overrides the frame rate, `asf`
-/// names the ASF of an AMC (default: the only `.asf` in its folder).
-pub fn read_clip(path: &Path, fps: Option<f64>, asf: Option<&Path>) -> Result<Clip, MocapError> {
-    let fmt = MocapFormat::of(path).ok_or_else(|| {
-        MocapError::invalid(path, "unknown mocap format (expected .bvh, .amc or .asf)")
+/// names the ASF of an AMC (default: the only `.asf` in its folder), `take`
+/// the FBX animation stack (default: the first with keyed curves).
+pub fn read_clip(
+    path: &Path,
+    fps: Option<f64>,
+    asf: Option<&Path>,
+    take: Option<&str>,
+) -> Result<Clip, MocapError> {
+    let fmt = MocapFormat::detect(path).ok_or_else(|| {
+        MocapError::invalid(
+            path,
+            "unknown mocap format (expected .bvh, .amc, .asf or .fbx)",
+        )
     })?;
+    if take.is_some() && fmt != MocapFormat::Fbx {
+        return Err(MocapError::invalid(
+            path,
+            "--take names an FBX animation stack; this is not an FBX file",
+        ));
+    }
     Ok(match fmt {
         MocapFormat::Bvh => read_bvh(path, &BvhOptions { fps })?,
         MocapFormat::Amc => {
@@ -89,5 +121,12 @@ pub fn read_clip(path: &Path, fps: Option<f64>, asf: Option<&Path>) -> Result<Cl
             let skel = read_asf(path)?;
             skel.rest_clip(path)?
         }
+        MocapFormat::Fbx => read_fbx(
+            path,
+            &FbxOptions {
+                fps,
+                take: take.map(str::to_string),
+            },
+        )?,
     })
 }

@@ -1,4 +1,4 @@
-//! Skeletal motion capture: the [`Clip`], its readers (BVH, ASF/AMC), BVH
+//! Skeletal motion capture: the [`Clip`], its readers (BVH, ASF/AMC, FBX), BVH
 //! writer, forward kinematics, resampling and unit/up-axis normalisation.
 
 pub mod asfamc;
@@ -6,6 +6,7 @@ pub mod bvh;
 mod clip;
 mod error;
 pub mod euler;
+pub mod fbx;
 mod fk;
 mod load;
 mod resample;

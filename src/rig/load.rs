@@ -19,6 +19,8 @@ pub struct LoadOptions {
     pub fps: Option<f64>,
     /// The ASF for an AMC file. Default: the only `.asf` in the AMC's folder.
     pub asf: Option<PathBuf>,
+    /// The FBX take (animation stack). Default: the first with keyed curves.
+    pub take: Option<String>,
     /// Unit override.
     pub units: Option<Units>,
     /// Up-axis override.
@@ -31,7 +33,7 @@ pub struct LoadOptions {
 /// clip's `units` and `up` decided (from the header, the rig convention and
 /// the skeleton's size) or taken from `opts`.
 pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
-    let mut clip = read_clip(path, opts.fps, opts.asf.as_deref())?;
+    let mut clip = read_clip(path, opts.fps, opts.asf.as_deref(), opts.take.as_deref())?;
     // A given map is checked against the clip's hierarchy and rest pose
     // (a map with pelvis and head swapped was taken without a word).
     if let Some(m) = &opts.rig_map {

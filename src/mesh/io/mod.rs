@@ -1,6 +1,6 @@
 //! Mesh and mesh-sequence file formats. In: OBJ, PLY, PC2, MDD, OBJ folders,
 //! glTF/GLB. Out: GLB (morph-target animation), PC2 + OBJ, MDD + OBJ, OBJ,
-//! OBJ folders, PLY. Every write is atomic. [`stream::SequenceWriter`]
+//! OBJ folders, PLY, USD text (`.usda`, time-sampled points). Every write is atomic. [`stream::SequenceWriter`]
 //! writes a sequence frame by frame (point caches and OBJ folders without
 //! holding the frames).
 
@@ -12,6 +12,7 @@ pub mod objseq;
 pub mod pc2;
 pub mod ply;
 pub mod stream;
+pub mod usd;
 
 use super::{MeshError, MeshSequence};
 use std::path::{Path, PathBuf};
@@ -61,6 +62,8 @@ pub enum MeshFormat {
     Glb,
     /// A folder of OBJ frames.
     ObjFolder,
+    /// USD text layer (written only).
+    Usda,
 }
 
 impl MeshFormat {
@@ -79,6 +82,7 @@ impl MeshFormat {
             "mdd" => MeshFormat::Mdd,
             "gltf" => MeshFormat::Gltf,
             "glb" => MeshFormat::Glb,
+            "usda" => MeshFormat::Usda,
             _ => return None,
         })
     }
@@ -213,10 +217,15 @@ pub fn refuse_folder_as_file(out: &Path) -> Result<(), MeshError> {
         // folder of OBJ frames: "/dev/full/frame_0000.obj: File exists".
         return Err(MeshError::invalid(
             out,
-            "exists and is not a folder, but a name without extension asks for a folder of OBJ frames; give the output an extension (.glb .pc2 .mdd .obj .ply)",
+            "exists and is not a folder, but a name without extension asks for a folder of OBJ frames; give the output an extension (.glb .pc2 .mdd .obj .ply .usda)",
         ));
     }
-    if out.is_dir() && matches!(ext.as_str(), "obj" | "ply" | "pc2" | "mdd" | "gltf" | "glb") {
+    if out.is_dir()
+        && matches!(
+            ext.as_str(),
+            "obj" | "ply" | "pc2" | "mdd" | "gltf" | "glb" | "usda"
+        )
+    {
         return Err(MeshError::invalid(
             out,
             format!(
@@ -272,6 +281,12 @@ pub fn load_sequence(spec: &str, opts: &LoadOptions) -> Result<MeshSequence, Mes
             .to_sequence()
             .map_err(|e| e.in_file(path))?,
         MeshFormat::ObjFolder => objseq::read_obj_folder(path)?,
+        MeshFormat::Usda => {
+            return Err(MeshError::invalid(
+                path,
+                "reading .usda is not supported (it is an output format)",
+            ));
+        }
     };
     if seq.fps.is_none() {
         seq.fps = opts.fps;
@@ -323,7 +338,7 @@ pub fn save_sequence_with(
     let fmt = MeshFormat::of(out).ok_or_else(|| {
         MeshError::invalid(
             out,
-            "unknown output format (use .glb .pc2 .mdd .obj .ply or a folder)",
+            "unknown output format (use .glb .pc2 .mdd .obj .ply .usda or a folder)",
         )
     })?;
     let fps_v = seq.fps.or(fps).unwrap_or(30.0);
@@ -368,5 +383,9 @@ pub fn save_sequence_with(
             vec![out.to_path_buf()]
         }
         MeshFormat::ObjFolder => objseq::write_obj_folder(seq, out)?,
+        MeshFormat::Usda => {
+            usd::write_usda(seq, fps_v, out)?;
+            vec![out.to_path_buf()]
+        }
     })
 }

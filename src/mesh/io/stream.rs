@@ -47,6 +47,8 @@ enum Sink {
     Folder { width: usize, files: Vec<PathBuf> },
     /// Held, written by [`super::save_sequence_with`] at the end.
     Hold(Vec<[f64; 3]>),
+    /// A USD layer appended frame by frame.
+    Usd(super::usd::UsdaWriter),
 }
 
 /// A sequence output written one frame at a time; see the module docs.
@@ -74,7 +76,7 @@ impl SequenceWriter {
         let fmt = MeshFormat::of(out).ok_or_else(|| {
             MeshError::invalid(
                 out,
-                "unknown output format (use .glb .pc2 .mdd .obj .ply or a folder)",
+                "unknown output format (use .glb .pc2 .mdd .obj .ply .usda or a folder)",
             )
         })?;
         let n = mesh.vertex_count();
@@ -111,6 +113,7 @@ impl SequenceWriter {
                     big_endian: fmt == MeshFormat::Mdd,
                 }
             }
+            MeshFormat::Usda => Sink::Usd(super::usd::UsdaWriter::create(mesh, out, frames, fps)?),
             MeshFormat::ObjFolder => Sink::Folder {
                 width: frames.saturating_sub(1).to_string().len().max(4),
                 files: Vec::new(),
@@ -230,6 +233,7 @@ impl SequenceWriter {
                 files.push(p);
             }
             Sink::Hold(all) => all.extend_from_slice(frame),
+            Sink::Usd(w) => w.push(frame)?,
         }
         self.written += 1;
         Ok(())
@@ -256,6 +260,10 @@ impl SequenceWriter {
                 Ok(vec![self.out, topo])
             }
             Sink::Folder { files, .. } => Ok(files),
+            Sink::Usd(w) => {
+                w.finish()?;
+                Ok(vec![self.out])
+            }
             Sink::Hold(all) => {
                 let seq = MeshSequence::new(self.mesh, all, self.opts.fps)
                     .map_err(|e| MeshError::from(e).in_file(&self.out))?;
