@@ -2,6 +2,7 @@
 //! Graph (Huang et al. 2015, Sec. 5.1), and its Table III grid evaluation.
 
 use std::path::PathBuf;
+use surfmotion::db::Character;
 use surfmotion::keyframe::grid::{GridReport, evaluate_with, parse_range};
 use surfmotion::keyframe::search::{Method, SearchOptions, Solver, Weights};
 use surfmotion::keyframe::{
@@ -10,7 +11,6 @@ use surfmotion::keyframe::{
 };
 use surfmotion::mesh::io::SaveOptions;
 use surfmotion::mesh::io::stream::SequenceWriter;
-use surfmotion::retarget::character::Character;
 
 /// Repetition solver on the command line.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -388,7 +388,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             },
             ..Default::default()
         },
-        timeline: surfmotion::retarget::timeline::TimelineOptions {
+        timeline: surfmotion::drive::timeline::TimelineOptions {
             blend: !a.no_blend,
             ..Default::default()
         },

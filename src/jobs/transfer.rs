@@ -6,12 +6,12 @@
 
 use super::JobError;
 use crate::batch::{Converted, Converter};
+use crate::drive::query::{MocapPoses, load_mocap, to_character};
 use crate::eval::{VelocityError, velocity_error};
 use crate::mesh::Mesh;
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
-use crate::retarget::query::{MocapPoses, load_mocap, to_character};
 use crate::rig::LoadOptions;
 use crate::rig::embed::landmarks::Landmarks;
 use crate::skeleton::Pose;

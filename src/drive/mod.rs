@@ -9,11 +9,6 @@
 //! and the floor translation that best fit the frame's skeleton onto the
 //! query pose, smoothed over time) and blended non-linearly.
 
-/// The loaded character (now [`crate::db::character`]; kept here so
-/// `retarget::character::Character` paths keep working).
-pub mod character {
-    pub use crate::db::character::*;
-}
 pub mod query;
 pub mod timeline;
 pub mod trellis;
