@@ -10,13 +10,16 @@
 //! query pose, smoothed over time) and blended non-linearly.
 
 pub mod placement;
+pub mod prepared;
 pub mod query;
+pub mod sink;
 pub mod synthesis;
 pub mod timeline;
 pub mod trellis;
 
 pub use placement::{BlendScratch, Floor, blend_placed};
+pub use prepared::{Analysed, PrepareTimings, Prepared};
+pub use sink::{Each, FrameSink};
 pub use synthesis::{
-    CHUNK_FRAMES, Output, Report, RetargetError, RetargetOptions, Step, Streamed, Timings,
-    synthesise, synthesise_each,
+    CHUNK_FRAMES, Output, Report, RetargetError, RetargetOptions, Step, Timings, synthesise,
 };

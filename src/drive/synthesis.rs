@@ -2,16 +2,16 @@
 //! timeline, placement, blending and deformation, frame by frame.
 
 use super::placement::{BlendScratch, blend_placed, placements};
-use super::query;
+use super::prepared::{Analysed, Prepared};
+use super::sink::FrameSink;
 use super::timeline::{Jump, TimelineOptions, timeline};
 use super::trellis::{Retrieval, TrellisInput, TrellisOptions, retrieve};
 use crate::db::Character;
-use crate::deform::{DeformMode, DeformOptions, Deformer, TurnedOver};
-use crate::mesh::blend::{Blender, FrameGradients};
+use crate::deform::{DeformMode, DeformOptions, TurnedOver};
+use crate::mesh::blend::FrameGradients;
 use crate::mesh::solver::SolveError;
-use crate::rig::retarget::{Reference, ReferenceSource, stance_offsets};
+use crate::rig::retarget::{Reference, ReferenceSource};
 use crate::skeleton::Pose;
-use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
@@ -120,18 +120,31 @@ pub enum RetargetError {
     /// The output would not fit in memory (checked before allocating).
     #[error(transparent)]
     Budget(#[from] crate::budget::OverBudget),
+    /// The prepared character was made for another character or another
+    /// deformation ([`Prepared::fits`]).
+    #[error("the prepared character does not fit this run: {0}")]
+    Unprepared(String),
 }
 
-/// Output frames made at once by [`synthesise_each`]: blended and deformed
-/// in parallel, then handed on in order. A chunk holds two copies of the
-/// character's vertices per frame (64 × 6,304 vertices × 48 B ≈ 19 MB).
+impl From<std::convert::Infallible> for RetargetError {
+    fn from(e: std::convert::Infallible) -> Self {
+        match e {}
+    }
+}
+
+/// Output frames made at once by [`Prepared::synthesise`]: blended and
+/// deformed in parallel, then handed on in order. A chunk holds two copies
+/// of the character's vertices per frame (64 × 6,304 vertices × 48 B ≈ 19
+/// MB).
 pub const CHUNK_FRAMES: usize = 64;
 
 /// Drives the character by the mocap poses (metres, Y-up, the clip's own
 /// skeleton at the database frame rate) and the clip's neutral `reference`
-/// ([`query::load_mocap`] gives both): Sec. 5.2 up to interpolation. Every
-/// output frame is held: the memory is checked against
-/// [`crate::budget`] first. [`synthesise_each`] streams instead.
+/// ([`super::query::load_mocap`] gives both): Sec. 5.2 up to interpolation. A
+/// one-off: the character is prepared ([`Prepared::new`]) for this call
+/// and every output frame is held (the memory is checked against
+/// [`crate::budget`] first). A job driving several clips prepares once and
+/// calls [`Prepared::synthesise`] with any [`FrameSink`].
 pub fn synthesise(
     ch: &Character,
     mocap: &[Pose],
@@ -147,207 +160,200 @@ pub fn synthesise(
         ch.n(),
         1,
     )?;
+    let prepared = Prepared::new(ch, opts)?;
+    let clip = prepared.analyse(ch, reference, mocap);
     let mut positions = Vec::with_capacity(mocap.len() * ch.n());
-    let s = synthesise_each(ch, mocap, reference, fps, opts, |_, p| {
-        positions.extend_from_slice(p);
-        Ok::<(), RetargetError>(())
-    })?;
+    let report = prepared.synthesise::<_, RetargetError>(
+        ch,
+        &clip,
+        reference.source,
+        fps,
+        opts,
+        &mut positions,
+    )?;
     Ok(Output {
         positions,
-        query: s.query,
-        report: s.report,
+        query: clip.query,
+        report,
     })
 }
 
-/// What [`synthesise_each`] returns once every frame is handed on.
-pub struct Streamed {
-    /// The query on the character's skeleton (metres, Y-up).
-    pub query: Vec<Pose>,
-    /// What was done.
-    pub report: Report,
-}
-
-/// [`synthesise`] handing each output frame (its index and the character's
-/// vertices, metres, Y-up) to `each` in order, so a clip of any length
-/// needs the memory of [`CHUNK_FRAMES`] frames, not of every frame (issue
-/// 18, item 12). The frames are those of [`synthesise`], bit for bit: the
-/// placements on the root trajectory (Sec. 5.2) are computed for every
-/// frame first (they are smoothed over time), then chunks of frames are
-/// blended (Sec. 4.4) and deformed (Sec. 5.2.3) in parallel, each frame
-/// independently, with per-worker scratch reused from chunk to chunk. The
-/// report's timings count the blending and deformation, not `each`. The
-/// first error of `each` stops the job and is returned.
-pub fn synthesise_each<E: From<RetargetError>>(
-    ch: &Character,
-    mocap: &[Pose],
-    reference: &Reference,
-    fps: f64,
-    opts: &RetargetOptions,
-    mut each: impl FnMut(usize, &[[f64; 3]]) -> Result<(), E>,
-) -> Result<Streamed, E> {
-    let mut timings = Timings::default();
-    let t0 = Instant::now();
-    let query = query::to_database(ch, reference, mocap);
-    timings.query = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
-    let successor = |id: u32| ch.successor(id);
-    let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
-    let input = TrellisInput {
-        poses: ch.poses(),
-        adjacency: ch.adjacency(),
-        successor: &successor,
-        dissimilarity: &dissimilarity,
-    };
-    // Retrieval compares poses as they stand on the database's floor: the
-    // clip's ground raised under a footfall on a step (a block CMU subject
-    // 03 climbs) is no part of the pose, and the database's frames all
-    // stand on one floor (Eq. 28 keeps height). The deformation still
-    // follows the raised query.
-    let raised = stance_offsets(ch.rest_pose(), reference, mocap);
-    let on_floor: Vec<Pose> = query
-        .iter()
-        .zip(raised.iter().chain(std::iter::repeat(&0.0)))
-        .map(|(p, &r)| p.map(|q| q - DVec3::Y * r))
-        .collect();
-    let retrieval = retrieve(&on_floor, &input, &opts.trellis);
-    timings.retrieval = t1.elapsed().as_secs_f64();
-    let t2 = Instant::now();
-    let (frames, jumps) = timeline(&retrieval.path, ch, &opts.timeline);
-    timings.timeline = t2.elapsed().as_secs_f64();
-    let t3 = Instant::now();
-    let topo = ch.topology_metres();
-    let blender = Blender::new(&topo).map_err(RetargetError::from)?;
-    timings.factor = t3.elapsed().as_secs_f64();
-    let t4 = Instant::now();
-    let placed = placements(ch, &retrieval.path, &frames, &query, opts.smooth);
-    timings.meshes = t4.elapsed().as_secs_f64();
-    let deformer = if opts.deform != DeformMode::None {
-        let t5 = Instant::now();
-        let d =
-            Deformer::new(ch, opts.deform, &opts.deform_options).map_err(RetargetError::from)?;
-        timings.deform_factor = t5.elapsed().as_secs_f64();
-        Some(d)
-    } else {
-        None
-    };
-    let n = ch.n().max(1);
-    let chunk = CHUNK_FRAMES.min(frames.len()).max(1);
-    // The chunk's blended frames, then (when deforming) its deformed ones.
-    let mut blended = vec![[0.0; 3]; chunk * n];
-    let mut deformed = if deformer.is_some() {
-        vec![[0.0; 3]; chunk * n]
-    } else {
-        Vec::new()
-    };
-    // Per-worker scratch, taken and given back frame by frame (allocated
-    // once per worker, not per frame).
-    let blend_pool = std::sync::Mutex::new(Vec::<BlendWorker>::new());
-    let deform_pool = std::sync::Mutex::new(Vec::<crate::deform::DeformWorkspace>::new());
-    let mut turned_over = TurnedOver::default();
-    for start in (0..frames.len()).step_by(chunk) {
-        let m = chunk.min(frames.len() - start);
-        let t = Instant::now();
-        blended[..m * n]
-            .par_chunks_mut(n)
-            .enumerate()
-            .for_each(|(i, dst)| {
-                let k = start + i;
-                let mut w = take(&blend_pool).unwrap_or_else(|| BlendWorker {
-                    ws: blender.workspace(),
-                    buf: vec![[0.0; 3]; n],
-                    grads: vec![FrameGradients::default(); 4],
-                });
-                let primary = frames[k].primary();
-                let mut scratch = BlendScratch {
-                    ws: &mut w.ws,
-                    buf: &mut w.buf,
-                    grads: &mut w.grads,
-                };
-                blend_placed(
-                    ch,
-                    &blender,
-                    frames[k].used(),
-                    primary,
-                    placed[k],
-                    |id| id == primary,
-                    &mut scratch,
-                    dst,
-                );
-                give(&blend_pool, w);
-            });
-        timings.meshes += t.elapsed().as_secs_f64();
-        let out: &[[f64; 3]] = match &deformer {
-            Some(d) => {
-                let t = Instant::now();
-                let sum = deformed[..m * n]
-                    .par_chunks_mut(n)
-                    .zip(blended[..m * n].par_chunks(n))
-                    .zip(query[start..start + m].par_iter())
-                    .map(|((dst, src), target)| {
-                        let mut ws = take(&deform_pool).unwrap_or_else(|| d.workspace());
-                        let sp = ch.rig().skeleton(src);
-                        let c = d.deform(ch, src, &sp, target, dst, &mut ws);
-                        give(&deform_pool, ws);
-                        c
-                    })
-                    .reduce(TurnedOver::default, |a, b| TurnedOver {
-                        before: a.before + b.before,
-                        after: a.after + b.after,
-                    });
-                turned_over.before += sum.before;
-                turned_over.after += sum.after;
-                timings.deform += t.elapsed().as_secs_f64();
-                &deformed[..m * n]
-            }
-            None => &blended[..m * n],
-        };
-        for (i, f) in out.chunks(n).enumerate() {
-            each(start + i, f)?;
+impl Prepared {
+    /// The clip `clip` ([`Prepared::analyse`]) driving the character, each
+    /// output frame (the character's vertices, metres, Y-up) handed to
+    /// `sink` in order, so a clip of any length needs the memory of
+    /// [`CHUNK_FRAMES`] frames when the sink streams (issue 18, item 12).
+    /// The placements on the root trajectory (Sec. 5.2) are computed for
+    /// every frame first (they are smoothed over time), then chunks of
+    /// frames are blended (Sec. 4.4) and deformed (Sec. 5.2.3) in
+    /// parallel, each frame independently, with per-worker scratch reused
+    /// from chunk to chunk. The report's timings count the blending and
+    /// deformation, not the sink, and give the preparation's factoring
+    /// times (made once). The first error of the sink stops the job and is
+    /// returned. `reference` is the source of the clip's neutral pose, for
+    /// the report.
+    pub fn synthesise<S: FrameSink, E: From<RetargetError> + From<S::Error>>(
+        &self,
+        ch: &Character,
+        clip: &Analysed,
+        reference: ReferenceSource,
+        fps: f64,
+        opts: &RetargetOptions,
+        mut sink: S,
+    ) -> Result<Report, E> {
+        if !self.fits(ch, opts) {
+            return Err(RetargetError::Unprepared(format!(
+                "prepared for {} vertices, {:?} deformation; asked for {} vertices, {:?} deformation",
+                self.topology_metres().vertex_count(),
+                self.deform(),
+                ch.n(),
+                opts.deform
+            ))
+            .into());
         }
-    }
-    let name = |id: u32| {
-        let (s, t) = ch.graph().frame_of(id);
-        (ch.graph().sequences[s].name.clone(), t)
-    };
-    let steps = retrieval
-        .path
-        .iter()
-        .zip(&retrieval.skeleton_cost)
-        .zip(&frames)
-        .map(|((&id, &c), o)| {
-            let (sequence, frame) = name(id);
-            Step {
-                sequence,
-                frame,
-                skeleton_cost: c,
-                blend: o
-                    .used()
-                    .iter()
-                    .map(|&(f, w)| {
-                        let (s, t) = name(f);
-                        (s, t, w)
-                    })
-                    .collect(),
+        let query = &clip.query;
+        let prepared = self.timings();
+        let mut timings = Timings {
+            query: clip.seconds,
+            factor: prepared.factor,
+            deform_factor: prepared.deform_factor,
+            ..Timings::default()
+        };
+        let t1 = Instant::now();
+        let successor = |id: u32| ch.successor(id);
+        let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
+        let input = TrellisInput {
+            poses: ch.poses(),
+            adjacency: ch.adjacency(),
+            successor: &successor,
+            dissimilarity: &dissimilarity,
+        };
+        let retrieval = retrieve(&clip.on_floor, &input, &opts.trellis);
+        timings.retrieval = t1.elapsed().as_secs_f64();
+        let t2 = Instant::now();
+        let (frames, jumps) = timeline(&retrieval.path, ch, &opts.timeline);
+        timings.timeline = t2.elapsed().as_secs_f64();
+        let blender = self.blender();
+        let t4 = Instant::now();
+        let placed = placements(ch, &retrieval.path, &frames, query, opts.smooth);
+        timings.meshes = t4.elapsed().as_secs_f64();
+        let deformer = self.deformer();
+        let n = ch.n().max(1);
+        let chunk = CHUNK_FRAMES.min(frames.len()).max(1);
+        // The chunk's blended frames, then (when deforming) its deformed ones.
+        let mut blended = vec![[0.0; 3]; chunk * n];
+        let mut deformed = if deformer.is_some() {
+            vec![[0.0; 3]; chunk * n]
+        } else {
+            Vec::new()
+        };
+        // Per-worker scratch, taken and given back frame by frame (allocated
+        // once per worker, not per frame).
+        let blend_pool = std::sync::Mutex::new(Vec::<BlendWorker>::new());
+        let deform_pool = std::sync::Mutex::new(Vec::<crate::deform::DeformWorkspace>::new());
+        let mut turned_over = TurnedOver::default();
+        for start in (0..frames.len()).step_by(chunk) {
+            let m = chunk.min(frames.len() - start);
+            let t = Instant::now();
+            blended[..m * n]
+                .par_chunks_mut(n)
+                .enumerate()
+                .for_each(|(i, dst)| {
+                    let k = start + i;
+                    let mut w = take(&blend_pool).unwrap_or_else(|| BlendWorker {
+                        ws: blender.workspace(),
+                        buf: vec![[0.0; 3]; n],
+                        grads: vec![FrameGradients::default(); 4],
+                    });
+                    let primary = frames[k].primary();
+                    let mut scratch = BlendScratch {
+                        ws: &mut w.ws,
+                        buf: &mut w.buf,
+                        grads: &mut w.grads,
+                    };
+                    blend_placed(
+                        ch,
+                        blender,
+                        frames[k].used(),
+                        primary,
+                        placed[k],
+                        |id| id == primary,
+                        &mut scratch,
+                        dst,
+                    );
+                    give(&blend_pool, w);
+                });
+            timings.meshes += t.elapsed().as_secs_f64();
+            let out: &[[f64; 3]] = match &deformer {
+                Some(d) => {
+                    let t = Instant::now();
+                    let sum = deformed[..m * n]
+                        .par_chunks_mut(n)
+                        .zip(blended[..m * n].par_chunks(n))
+                        .zip(query[start..start + m].par_iter())
+                        .map(|((dst, src), target)| {
+                            let mut ws = take(&deform_pool).unwrap_or_else(|| d.workspace());
+                            let sp = ch.rig().skeleton(src);
+                            let c = d.deform(ch, src, &sp, target, dst, &mut ws);
+                            give(&deform_pool, ws);
+                            c
+                        })
+                        .reduce(TurnedOver::default, |a, b| TurnedOver {
+                            before: a.before + b.before,
+                            after: a.after + b.after,
+                        });
+                    turned_over.before += sum.before;
+                    turned_over.after += sum.after;
+                    timings.deform += t.elapsed().as_secs_f64();
+                    &deformed[..m * n]
+                }
+                None => &blended[..m * n],
+            };
+            for f in out.chunks(n) {
+                sink.push(f)?;
             }
-        })
-        .collect();
-    Ok(Streamed {
-        query,
-        report: Report {
+        }
+        let name = |id: u32| {
+            let (s, t) = ch.graph().frame_of(id);
+            (ch.graph().sequences[s].name.clone(), t)
+        };
+        let steps = retrieval
+            .path
+            .iter()
+            .zip(&retrieval.skeleton_cost)
+            .zip(&frames)
+            .map(|((&id, &c), o)| {
+                let (sequence, frame) = name(id);
+                Step {
+                    sequence,
+                    frame,
+                    skeleton_cost: c,
+                    blend: o
+                        .used()
+                        .iter()
+                        .map(|&(f, w)| {
+                            let (s, t) = name(f);
+                            (s, t, w)
+                        })
+                        .collect(),
+                }
+            })
+            .collect();
+        Ok(Report {
             frames: frames.len(),
             fps,
-            reference: reference.source,
+            reference,
             retrieval,
             jumps,
             steps,
             timings,
             deform: opts.deform,
             turned_over,
-        },
-    })
+        })
+    }
 }
 
-/// One worker's blending scratch in [`synthesise_each`].
+/// One worker's blending scratch in [`Prepared::synthesise`].
 struct BlendWorker {
     ws: crate::mesh::blend::BlendWorkspace,
     buf: Vec<[f64; 3]>,
