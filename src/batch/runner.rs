@@ -44,9 +44,11 @@ pub struct Converted {
     pub error_cm: Option<f64>,
     /// The plausibility warnings of the result (as `eval` prints them).
     pub warnings: Vec<ClipWarning>,
-    /// Seconds of the clip's conversion that are no per-frame work (the
-    /// clip read and analysed, the checks set up; the wall clock minus
-    /// retrieval, blending, deformation and writing), when measured.
+    /// Seconds of the clip's conversion that are no per-frame work, when
+    /// measured: the wall clock minus the solve (retrieval, blending,
+    /// deformation; or the transfer), the frames written and the
+    /// plausibility measure. What stays: the clip read and mapped, the
+    /// pose kernel, the output opened.
     pub fixed_seconds: Option<f64>,
 }
 

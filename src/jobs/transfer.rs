@@ -249,6 +249,7 @@ impl Converter for ScanTransferJob {
         sink_seconds += t.elapsed().as_secs_f64();
         let rest: Pose = rig.joints.map(glam::DVec3::from_array);
         let query = to_character(&rest, &mocap.reference, &mocap.poses);
+        let checks = Instant::now();
         let warnings = self
             .checker()
             .and_then(|c| {
@@ -269,7 +270,7 @@ impl Converter for ScanTransferJob {
             })
             .map(|p| ClipWarning::of(&p))
             .unwrap_or_default();
-        let per_frame = stats.solve_seconds + sink_seconds;
+        let per_frame = stats.solve_seconds + sink_seconds + checks.elapsed().as_secs_f64();
         Ok(Converted {
             frames: stats.frames,
             error_cm: Some(velocity_error(&query, &skel).mean_cm),
