@@ -323,32 +323,40 @@ pub fn plausibility_with(
     turned_over: Option<TurnedOver>,
     clip: Option<&MocapPoses>,
 ) -> Option<(Plausibility, f64)> {
-    let opts = c.opts;
-    let checked = (|| -> Result<(Plausibility, f64), crate::eval::EvalError> {
-        let Some(m) = clip else {
-            return Ok((c.measure(positions, ch.n(), turned_over)?.logged(), c.floor));
-        };
-        // Floating and penetration from the clip's own ground under each
-        // foot (its floor, raised under a footfall on a step), where the
-        // result stands.
-        let raised = foot_ground_offsets(ch.rest_pose(), &m.reference, &m.poses);
-        let p = c
-            .measure_on(positions, ch.n(), turned_over, Some(&raised))?
-            .with_clip_head(&clip_head_trunk_deg(&m.reference, &m.poses), &opts.limits)
-            .with_clip_glide(
-                clip_foot_glide_cm(ch.rest_pose(), &m.reference, &m.poses),
-                &opts.limits,
-            )
-            .logged();
-        Ok((p, c.floor))
-    })();
-    match checked {
+    match measure(c, ch, positions, turned_over, clip) {
         Ok(p) => Some(p),
         Err(e) => {
             tracing::warn!("plausibility not measured: {e}");
             None
         }
     }
+}
+
+/// [`plausibility_with`]'s measure, its error kept.
+fn measure(
+    c: &Checker,
+    ch: &Character,
+    positions: &[[f64; 3]],
+    turned_over: Option<TurnedOver>,
+    clip: Option<&MocapPoses>,
+) -> Result<(Plausibility, f64), crate::eval::EvalError> {
+    let opts = c.opts;
+    let Some(m) = clip else {
+        return Ok((c.measure(positions, ch.n(), turned_over)?.logged(), c.floor));
+    };
+    // Floating and penetration from the clip's own ground under each
+    // foot (its floor, raised under a footfall on a step), where the
+    // result stands.
+    let raised = foot_ground_offsets(ch.rest_pose(), &m.reference, &m.poses);
+    let p = c
+        .measure_on(positions, ch.n(), turned_over, Some(&raised))?
+        .with_clip_head(&clip_head_trunk_deg(&m.reference, &m.poses), &opts.limits)
+        .with_clip_glide(
+            clip_foot_glide_cm(ch.rest_pose(), &m.reference, &m.poses),
+            &opts.limits,
+        )
+        .logged();
+    Ok((p, c.floor))
 }
 
 /// One clip retargeted straight to a file ([`RetargetJob::run_to`]).
