@@ -11,10 +11,10 @@ use std::hint::black_box;
 use surfmotion::db::Character;
 use surfmotion::deform::unflip::RepairOptions;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
+use surfmotion::drive::query::load_mocap;
+use surfmotion::drive::{RetargetOptions, synthesise};
 use surfmotion::mesh::laplacian::uniform_region_rows;
 use surfmotion::mesh::solver::FixedSolver;
-use surfmotion::retarget::query::load_mocap;
-use surfmotion::retarget::{RetargetOptions, synthesise};
 
 fn main() {
     let Some(d) = common::data() else { return };

@@ -32,8 +32,8 @@
 //!   the distance/time path optimisation (Huang Sec. 5.1).
 //!
 //! Synthesis:
-//! - [`retarget`]: mocap-driven synthesis: skeletal trellis retrieval,
-//!   timeline, blending and placement (Huang Sec. 5.2).
+//! - [`drive`]: surface synthesis driven by mocap: skeletal trellis
+//!   retrieval, timeline, blending and placement (Huang Sec. 5.2).
 //! - [`deform`]: skeleton-driven editing of retrieved frames: skinning
 //!   constraints and the part-based PCA Laplacian deformation (Huang Eq. 32).
 //! - [`parametric`]: 4D parametric motion: aligned sequences blended by
@@ -80,8 +80,8 @@ pub mod keyframe;
 pub mod similarity;
 // Synthesis.
 pub mod deform;
+pub mod drive;
 pub mod parametric;
-pub mod retarget;
 pub mod transfer;
 // Jobs.
 pub mod batch;

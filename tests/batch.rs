@@ -972,3 +972,89 @@ fn batch_keeps_the_plausibility_warnings_eval_gives() {
         }
     }
 }
+
+/// `clip` (a BVH of the committed clips' rig) with both knees turned 100°
+/// backwards in every frame: a result that stands on bent-back legs,
+/// floating over the floor (plausibility warnings).
+fn knees_bent_backwards(clip: &str) -> String {
+    let (head, motion) = clip.split_once("MOTION\n").unwrap();
+    let (mut joints, mut index) = (Vec::new(), std::collections::HashMap::new());
+    let mut k = 0;
+    for line in head.lines() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        match w.first() {
+            Some(&"ROOT") | Some(&"JOINT") => joints.push(w[1].to_string()),
+            Some(&"CHANNELS") => {
+                for c in &w[2..] {
+                    index.insert((joints.last().unwrap().clone(), c.to_string()), k);
+                    k += 1;
+                }
+            }
+            _ => {}
+        }
+    }
+    let knees = ["LeftLeg", "RightLeg"].map(|j| index[&(j.to_string(), "Xrotation".to_string())]);
+    let mut lines = motion.lines();
+    let mut out = format!(
+        "{head}MOTION\n{}\n{}\n",
+        lines.next().unwrap(),
+        lines.next().unwrap()
+    );
+    for l in lines.filter(|l| !l.trim().is_empty()) {
+        let mut v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+        for &i in &knees {
+            v[i] -= 100.0;
+        }
+        let row: Vec<String> = v.iter().map(|x| x.to_string()).collect();
+        out += &(row.join(" ") + "\n");
+    }
+    out
+}
+
+/// Issue 39 (a): `batch --scan` recorded no plausibility warnings (its
+/// clips' `warnings` were always empty) where `batch --db` records them; a
+/// clip whose result `transfer` warns about now has those warnings in
+/// `batch.json`, the same ones.
+#[test]
+fn batch_scan_records_the_warnings_transfer_gives() {
+    let tmp = tempfile::tempdir().unwrap();
+    let lib = tmp.path().join("lib");
+    std::fs::create_dir_all(&lib).unwrap();
+    let clip = lib.join("bent.bvh");
+    std::fs::write(&clip, knees_bent_backwards(&short_clip("walk", 40))).unwrap();
+    let out = tmp.path().join("out");
+    ok(&hbatch(&lib, &out, &["--format", "pc2"]));
+    let s = summary(&out, "batch.json");
+    let recorded: Vec<String> = outcomes(&s)[0]["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["message"].as_str().unwrap().to_string())
+        .collect();
+    let (scan, lm) = humanoid();
+    let o = Command::new(common::bin())
+        .args(["transfer", "--scan"])
+        .arg(&scan)
+        .arg("--landmarks")
+        .arg(&lm)
+        .arg("--mocap")
+        .arg(&clip)
+        .arg("-o")
+        .arg(tmp.path().join("one.pc2"))
+        .arg("--json")
+        .output()
+        .unwrap();
+    ok(&o);
+    let t: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let given: Vec<String> = t["plausibility"]["warnings"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no plausibility in {t}"))
+        .iter()
+        .map(|w| w.as_str().unwrap().to_string())
+        .collect();
+    assert!(!given.is_empty(), "the clip gives no warning: {t}");
+    assert_eq!(recorded, given, "{s}");
+    assert_eq!(s["with_warnings"], 1, "{s}");
+    // The report counts the scan's factorisation once.
+    assert_eq!(s["factorisations"], 1, "{s}");
+}

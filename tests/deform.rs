@@ -5,8 +5,8 @@ mod common;
 use glam::DVec3;
 use surfmotion::db::Character;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
-use surfmotion::retarget::query::{MocapPoses, load_mocap};
-use surfmotion::retarget::{Output, RetargetOptions, synthesise};
+use surfmotion::drive::query::{MocapPoses, load_mocap};
+use surfmotion::drive::{Output, RetargetOptions, synthesise};
 use surfmotion::skeleton::Pose;
 
 fn height(p: &[[f64; 3]]) -> f64 {

@@ -227,6 +227,7 @@ impl Converter for Echo {
             frames: 3,
             error_cm: None,
             warnings: Vec::new(),
+            fixed_seconds: None,
         })
     }
 }

@@ -12,8 +12,8 @@ use std::sync::OnceLock;
 use surfmotion::db::Character;
 use surfmotion::db::Quiet;
 use surfmotion::deform::DeformMode;
+use surfmotion::drive::{Output, RetargetOptions, synthesise};
 use surfmotion::eval::velocity_error;
-use surfmotion::retarget::{Output, RetargetOptions, synthesise};
 use surfmotion::rig::retarget::clip_poses;
 use surfmotion::skeleton::Pose;
 use surfmotion::synth::{Gait, gait_clip};
@@ -260,7 +260,7 @@ fn streamed_retarget_writes_the_bytes_of_the_held_one() {
     surfmotion::mocap::bvh::write_bvh(&gait_clip(Gait::Turn, 4.0, FPS), &clip).unwrap();
     let job = RetargetJob::load(&f.db, RetargetJobOptions::default(), &Quiet).unwrap();
     let held = job.run(&clip).unwrap();
-    assert!(held.output.report.frames > surfmotion::retarget::CHUNK_FRAMES);
+    assert!(held.output.report.frames > surfmotion::drive::CHUNK_FRAMES);
     let held_error = held.velocity_error(&job.character);
     let held_report = serde_json::to_value(&held.output.report.steps).unwrap();
     let held_turned = held.output.report.turned_over;

@@ -6,10 +6,10 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use surfmotion::db::Character;
+use surfmotion::drive::query::load_mocap;
+use surfmotion::drive::timeline::plays_on;
+use surfmotion::drive::{RetargetOptions, synthesise};
 use surfmotion::eval::velocity_error;
-use surfmotion::retarget::query::load_mocap;
-use surfmotion::retarget::timeline::plays_on;
-use surfmotion::retarget::{RetargetOptions, synthesise};
 use surfmotion::similarity::VertexSet;
 use surfmotion::similarity::vertex::VertexOptions;
 
@@ -21,11 +21,7 @@ fn database(d: &Path) -> PathBuf {
     common::synthetic_db(d)
 }
 
-fn run(
-    ch: &Character,
-    clip: &Path,
-    opts: &RetargetOptions,
-) -> (surfmotion::retarget::Output, usize) {
+fn run(ch: &Character, clip: &Path, opts: &RetargetOptions) -> (surfmotion::drive::Output, usize) {
     let fps = ch.manifest().fps;
     let m = load_mocap(clip, &Default::default(), fps).unwrap();
     let out = synthesise(ch, &m.poses, &m.reference, fps, opts).unwrap();
@@ -268,7 +264,7 @@ fn cli_writes_glb_report_and_evaluates() {
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn an_amc_clip_and_its_bvh_conversions_drive_the_character_alike() {
-    use surfmotion::retarget::query::to_character;
+    use surfmotion::drive::query::to_character;
     use surfmotion::rig::embed::Embedding;
     use surfmotion::rig::retarget::ReferenceSource;
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};

@@ -9,9 +9,9 @@ use std::path::Path;
 use std::sync::OnceLock;
 use surfmotion::db::{Character, Quiet};
 use surfmotion::deform::DeformMode;
+use surfmotion::drive::query::database_floor_lift;
+use surfmotion::drive::{RetargetOptions, synthesise};
 use surfmotion::eval::{floor_height, lowest_heights};
-use surfmotion::retarget::query::database_floor_lift;
-use surfmotion::retarget::{RetargetOptions, synthesise};
 use surfmotion::rig::retarget::{choose_reference, clip_poses};
 use surfmotion::skeleton::Pose;
 use surfmotion::synth::{Gait, gait_clip};
@@ -188,7 +188,7 @@ fn a_walk_retargeted_onto_a_synth_database_stands_on_its_floor() {
     let ch = synthetic_walk();
     let n = ch.n();
     let floor = floor_height(&lowest_heights(ch.frames(), n, DVec3::Y));
-    let m = surfmotion::retarget::query::load_mocap(
+    let m = surfmotion::drive::query::load_mocap(
         &d.join("mocap/cmu-amc/02/02_02.amc"),
         &Default::default(),
         25.0,

@@ -27,8 +27,7 @@ fn walk_run(d: &Path) -> &'static Path {
 fn the_transition_floor_reports_its_progress_to_the_end() {
     use surfmotion::keyframe::floor::{FloorOptions, transition_floor_with};
     let Some(d) = common::data_dir() else { return };
-    let ch = surfmotion::retarget::character::Character::load(walk_run(&d), &surfmotion::db::Quiet)
-        .unwrap();
+    let ch = surfmotion::db::Character::load(walk_run(&d), &surfmotion::db::Quiet).unwrap();
     let g = ch.graph();
     let total: u64 = (0..g.sequences.len())
         .flat_map(|i| (i..g.sequences.len()).map(move |j| (i, j)))
@@ -58,7 +57,7 @@ fn a_streamed_keyframe_output_is_the_whole_sequence_written_at_once() {
     let Some(d) = common::data_dir() else { return };
     let db = walk_run(&d);
     let tmp = tempfile::tempdir().unwrap();
-    let ch = surfmotion::retarget::character::Character::load(db, &surfmotion::db::Quiet).unwrap();
+    let ch = surfmotion::db::Character::load(db, &surfmotion::db::Quiet).unwrap();
     let keys = [
         parse_key(&ch, "02_01:0").unwrap(),
         parse_key(&ch, "02_03:30").unwrap(),
@@ -73,7 +72,7 @@ fn a_streamed_keyframe_output_is_the_whole_sequence_written_at_once() {
         .unwrap();
     // More than one chunk of frames (the blending works in chunks).
     assert!(
-        seq.frame_count() > surfmotion::retarget::CHUNK_FRAMES,
+        seq.frame_count() > surfmotion::drive::CHUNK_FRAMES,
         "{} frames",
         seq.frame_count()
     );

@@ -15,5 +15,7 @@ pub mod summary;
 
 pub use clips::{CollisionError, Format, Planned, Shard, find_clips, output_path, plan};
 pub use lock::{FolderLock, LockError, clean_temporaries, lock_folder};
-pub use runner::{ClipOutcome, ClipStatus, ClipWarning, Converted, Converter, RunOptions, run};
+pub use runner::{
+    ClipOutcome, ClipStatus, ClipWarning, Converted, Converter, Preparation, RunOptions, run,
+};
 pub use summary::{Earlier, Summary, report_stem, write_json, write_summary};

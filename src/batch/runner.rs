@@ -44,6 +44,23 @@ pub struct Converted {
     pub error_cm: Option<f64>,
     /// The plausibility warnings of the result (as `eval` prints them).
     pub warnings: Vec<ClipWarning>,
+    /// Seconds of the clip's conversion that are no per-frame work, when
+    /// measured: the wall clock minus the solve (retrieval, blending,
+    /// deformation; or the transfer), the frames written and the
+    /// plausibility measure. What stays: the clip read and mapped, the
+    /// pose kernel, the output opened.
+    pub fixed_seconds: Option<f64>,
+}
+
+/// What a converter prepared once for all its clips (the character's or
+/// the scan's factorisations).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Preparation {
+    /// Times the system was factored (1 when every clip shared one
+    /// preparation).
+    pub factorisations: usize,
+    /// Seconds preparing (once).
+    pub seconds: f64,
 }
 
 /// One plausibility warning of a clip's result.
@@ -139,6 +156,9 @@ pub struct ClipOutcome {
     pub warnings: Vec<ClipWarning>,
     /// Why it failed.
     pub reason: Option<String>,
+    /// Seconds that are no per-frame work ([`Converted::fixed_seconds`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fixed_seconds: Option<f64>,
     /// True when frames, seconds and error of a skipped clip come from the
     /// report of the run that wrote its output.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
@@ -163,6 +183,10 @@ pub trait Converter: Sync {
     /// write (for OBJ folders, the folder it is given). Errors are the
     /// message the report keeps.
     fn convert(&self, clip: &Path, output: &Path) -> Result<Converted, String>;
+    /// What was prepared once for every clip. Default: nothing.
+    fn preparation(&self) -> Preparation {
+        Preparation::default()
+    }
 }
 
 /// Converts the `clips` of a plan (relative to `src`) into their outputs.
@@ -188,6 +212,7 @@ pub fn run(
             error_cm: None,
             warnings: Vec::new(),
             reason: None,
+            fixed_seconds: None,
             earlier: false,
         };
         if !opts.force && complete(out, opts.format) {
@@ -202,6 +227,7 @@ pub fn run(
                 o.frames = c.frames;
                 o.error_cm = c.error_cm;
                 o.warnings = c.warnings;
+                o.fixed_seconds = c.fixed_seconds;
             }
             Err(e) => {
                 o.status = ClipStatus::Failed;
@@ -311,6 +337,7 @@ mod tests {
                 frames: 1,
                 error_cm: None,
                 warnings: Vec::new(),
+                fixed_seconds: None,
             })
         };
         let e = convert_one(Path::new("walk.bvh"), &out, Format::Obj, &convert).unwrap_err();
@@ -346,6 +373,7 @@ mod tests {
                         frames: 3,
                         error_cm: None,
                         warnings: Vec::new(),
+                        fixed_seconds: None,
                     })
                 }
             }

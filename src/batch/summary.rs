@@ -9,7 +9,7 @@
 //! false`, and the page says "running"), so a killed run leaves a valid
 //! report of what it finished.
 
-use super::runner::{ClipOutcome, ClipStatus};
+use super::runner::{ClipOutcome, ClipStatus, Preparation};
 use crate::fsutil::{FsError, write_bytes_atomic};
 use serde::Serialize;
 use std::collections::HashMap;
@@ -50,6 +50,15 @@ pub struct Summary {
     /// Clips whose result has plausibility warnings.
     #[serde(default)]
     pub with_warnings: usize,
+    /// Times the converter factored its system (the character's blender
+    /// and deformer, or the scan's): once for the whole batch.
+    pub factorisations: usize,
+    /// Seconds that preparation took (once).
+    pub prepare_seconds: f64,
+    /// Mean per-clip fixed cost of the clips converted now (seconds: the
+    /// wall clock minus the per-frame work, [`ClipOutcome::fixed_seconds`]),
+    /// when measured.
+    pub fixed_seconds_per_clip: Option<f64>,
     /// Every clip.
     pub outcomes: Vec<ClipOutcome>,
 }
@@ -86,8 +95,24 @@ impl Summary {
             jobs,
             shard,
             with_warnings: outcomes.iter().filter(|o| !o.warnings.is_empty()).count(),
+            factorisations: 0,
+            prepare_seconds: 0.0,
+            fixed_seconds_per_clip: {
+                let fixed: Vec<f64> = outcomes
+                    .iter()
+                    .filter(|o| o.status == ClipStatus::Done)
+                    .filter_map(|o| o.fixed_seconds)
+                    .collect();
+                (!fixed.is_empty()).then(|| fixed.iter().sum::<f64>() / fixed.len() as f64)
+            },
             outcomes,
         }
+    }
+
+    /// Records what the converter prepared once ([`Preparation`]).
+    pub fn set_preparation(&mut self, p: Preparation) {
+        self.factorisations = p.factorisations;
+        self.prepare_seconds = p.seconds;
     }
 }
 
@@ -95,7 +120,7 @@ impl Summary {
     /// One line of totals: clips converted, skipped, failed, frames, speed.
     pub fn line(&self) -> String {
         format!(
-            "{}: {}: {} converted, {} already done, {} failed, {} with plausibility warnings; {} frames written in {:.1} s, {} in the outputs ({:.1} clips/min, {:.0} frames/s, {}{})",
+            "{}: {}: {} converted, {} already done, {} failed, {} with plausibility warnings; {} frames written in {:.1} s, {} in the outputs ({:.1} clips/min, {:.0} frames/s, {}{}); {} ({:.1} s){}",
             self.what,
             count(self.clips, "clip"),
             self.done,
@@ -111,6 +136,11 @@ impl Summary {
             self.shard
                 .as_ref()
                 .map(|x| format!(", shard {x}"))
+                .unwrap_or_default(),
+            count(self.factorisations, "factorisation"),
+            self.prepare_seconds,
+            self.fixed_seconds_per_clip
+                .map(|s| format!(", {s:.2} s fixed cost per clip"))
                 .unwrap_or_default()
         )
     }

@@ -8,12 +8,12 @@ mod print;
 
 pub use args::Args;
 use parse::{flagged, grid_targets, numbers};
+use surfmotion::db::Character;
 use surfmotion::jobs::keyframe::text::{self, GRID_HEADER, LEAST_MEAN_HEADER};
 use surfmotion::jobs::keyframe::{
     self as job, DEFAULT_DISTANCES, DEFAULT_TIMES, FloorStage, GridTargets, Keys,
 };
 use surfmotion::keyframe::{KeyframeOptions, Targets};
-use surfmotion::retarget::character::Character;
 
 /// Refuses outputs over the inputs or over each other, and a folder
 /// output that holds files without `--force`.

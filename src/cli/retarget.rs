@@ -2,10 +2,10 @@
 
 use std::path::PathBuf;
 use surfmotion::db::CharacterOptions;
+use surfmotion::drive::RetargetOptions;
 use surfmotion::jobs::retarget::per_frame_seconds;
 use surfmotion::jobs::transfer::PLAUSIBILITY_BYTES;
 use surfmotion::jobs::{RetargetJob, RetargetJobOptions, RetargetSummary};
-use surfmotion::retarget::RetargetOptions;
 
 /// Arguments of `retarget`.
 #[derive(clap::Args)]
@@ -192,7 +192,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 /// (`partial`: the plausibility was measured on that many first frames).
 fn print_report(
     a: &Args,
-    r: &surfmotion::retarget::Report,
+    r: &surfmotion::drive::Report,
     written: Vec<PathBuf>,
     convention: &str,
     plaus: Option<surfmotion::eval::Plausibility>,

@@ -378,7 +378,17 @@ pub fn build(
     opts: &BuildOptions,
     progress: &dyn BuildProgress,
 ) -> Result<(SimilarityMatrix, SurfaceMotionGraph, BuildReport), DbError> {
-    let m = Manifest::load(dir)?;
+    build_opened(dir, &Manifest::load(dir)?, opts, progress)
+}
+
+/// [`build`] of a database whose manifest `m` is opened already
+/// ([`Manifest::load`] or [`Manifest::open`]).
+pub fn build_opened(
+    dir: &Path,
+    m: &Manifest,
+    opts: &BuildOptions,
+    progress: &dyn BuildProgress,
+) -> Result<(SimilarityMatrix, SurfaceMotionGraph, BuildReport), DbError> {
     if m.sequences.is_empty() {
         return Err(DbError::Manifest {
             path: dir.join(super::MANIFEST),
@@ -387,11 +397,11 @@ pub fn build(
                     .into(),
         });
     }
-    let measure = opts.measure.unwrap_or_else(|| default_measure(&m));
-    let (mat, sim_key, timing) = similarity(dir, &m, measure, opts.force, progress)?;
+    let measure = opts.measure.unwrap_or_else(|| default_measure(m));
+    let (mat, sim_key, timing) = similarity(dir, m, measure, opts.force, progress)?;
     let topts = m.graph.transition_options();
     let edits = m.graph.edits();
-    let graph_key = graph_key(&m, sim_key);
+    let graph_key = graph_key(m, sim_key);
     let gpath = graph_path(dir, measure);
     let cached: Option<SurfaceMotionGraph> = if opts.force {
         None

@@ -14,7 +14,7 @@
 //! `skeleton` measure reads the regressor joints in `db build`; `db
 //! skeleton` writes [`SkeletonKind::Rigid`] by default.
 
-use crate::db::build::{BuildOptions, BuildProgress, build};
+use crate::db::build::{BuildOptions, BuildProgress, build_opened};
 use crate::db::skeletons::{SkeletonKind, embed_rig, poses};
 use crate::db::{DbError, MANIFEST, Manifest};
 use crate::graph::{FrameAdjacency, FrameId, SurfaceMotionGraph};
@@ -92,9 +92,9 @@ impl Character {
         progress: &dyn BuildProgress,
         opts: &CharacterOptions,
     ) -> Result<Character, DbError> {
-        let (matrix, graph, _) = build(dir, &BuildOptions::default(), progress)?;
-        let manifest = Manifest::load(dir)?;
-        let topology = manifest.load_topology(dir)?;
+        // The topology read once: the size check and the character share it.
+        let (manifest, topology) = Manifest::open(dir)?;
+        let (matrix, graph, _) = build_opened(dir, &manifest, &BuildOptions::default(), progress)?;
         let rig = embed_rig(dir, &manifest, &topology)?;
         let n = topology.vertex_count();
         let mut frames = Vec::with_capacity(matrix.len() * n);

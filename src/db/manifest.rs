@@ -428,6 +428,17 @@ impl Manifest {
         Ok(m)
     }
 
+    /// [`Manifest::load`] for a caller that needs the topology too: it is
+    /// read once, checked ([`Manifest::check_size`]) and returned with the
+    /// manifest (issue 39: [`crate::db::Character::load_with`] read it
+    /// three times, twice only for the size check).
+    pub fn open(dir: &Path) -> Result<(Manifest, Mesh), DbError> {
+        let m = Self::read(dir)?;
+        let topo = m.load_topology(dir)?;
+        m.check_size(dir, &topo)?;
+        Ok((m, topo))
+    }
+
     /// The rest frame's size in metres: the largest side of the topology's
     /// bounding box in the manifest's `units` (`None`: no extent).
     pub fn size_metres(&self, topology: &Mesh) -> Option<f64> {

@@ -181,6 +181,7 @@ pub fn batch_folder(
                     error_cm: None,
                     warnings: Vec::new(),
                     reason: None,
+                    fixed_seconds: None,
                     earlier: false,
                 };
                 earlier.fill(&mut o);
@@ -199,6 +200,7 @@ pub fn batch_folder(
             opts.shard.clone(),
         );
         s.finished = false;
+        s.set_preparation(converter.preparation());
         // All three files, each atomically: a killed run leaves a JSON,
         // page and plot of what it finished (issue 18, item 3).
         if let Err(e) = write_summary(output, &s) {
@@ -235,6 +237,8 @@ pub fn batch_folder(
         run_opts.jobs,
         opts.shard.clone(),
     );
+    let mut summary = summary;
+    summary.set_preparation(converter.preparation());
     let files = write_summary(output, &summary)?;
     drop(lock);
     Ok(BatchReport {

@@ -66,7 +66,7 @@ pub enum JobError {
     Topology(#[from] crate::mesh::TopologyError),
     /// A clip could not be read.
     #[error(transparent)]
-    Query(#[from] crate::retarget::query::QueryError),
+    Query(#[from] crate::drive::query::QueryError),
     /// A clip's canonical poses could not be made.
     #[error(transparent)]
     Rig(#[from] crate::rig::RigError),
@@ -78,7 +78,7 @@ pub enum JobError {
     Clip(#[from] crate::mocap::ClipError),
     /// Synthesis failed (a solver could not be factored).
     #[error(transparent)]
-    Retarget(#[from] crate::retarget::RetargetError),
+    Retarget(#[from] crate::drive::RetargetError),
     /// The rig could not be embedded.
     #[error(transparent)]
     Embed(#[from] crate::rig::embed::EmbedError),

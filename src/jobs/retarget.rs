@@ -5,20 +5,23 @@
 
 use super::JobError;
 use crate::batch::summary::count;
-use crate::batch::{Converted, Converter};
+use crate::batch::{Converted, Converter, Preparation};
 use crate::db::{BuildProgress, Character, CharacterOptions};
 use crate::deform::{DeformMode, TurnedOver};
+use crate::drive::query::{MocapPoses, load_mocap, to_database};
+use crate::drive::{Each, Output, Prepared, Report, RetargetOptions, Timings};
 use crate::eval::{Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error};
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
-use crate::retarget::query::{MocapPoses, load_mocap, to_database};
-use crate::retarget::{Output, Report, RetargetOptions, Timings, synthesise, synthesise_each};
 use crate::rig::LoadOptions;
 use crate::rig::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets};
 use crate::skeleton::Pose;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
 
 /// Options of a [`RetargetJob`].
 #[derive(Debug, Clone, Default)]
@@ -34,7 +37,11 @@ pub struct RetargetJobOptions {
     pub glb: GlbOptions,
 }
 
-/// A database loaded once for retargeting many clips.
+/// A database loaded and prepared once for retargeting many clips: the
+/// character, its preparation for synthesis ([`Prepared`]: the blender's
+/// and the deformer's factorisations, the neutral pose, the floor lift)
+/// and, when first asked for, the plausibility checker; every clip reads
+/// them by reference.
 pub struct RetargetJob {
     /// The loaded character.
     pub character: Character,
@@ -42,6 +49,14 @@ pub struct RetargetJob {
     pub options: RetargetJobOptions,
     /// The database folder.
     pub db: PathBuf,
+    /// The character prepared for `options.retarget`'s deformation.
+    prepared: Prepared,
+    /// Preparations made (one on load; one more per run whose options no
+    /// longer fit it).
+    preparations: AtomicUsize,
+    /// The plausibility checker of the character (built on first use;
+    /// `None` when the rig cannot support the checks).
+    checker: OnceLock<Option<Checker>>,
 }
 
 /// One clip retargeted.
@@ -60,11 +75,52 @@ impl RetargetJob {
         progress: &dyn BuildProgress,
     ) -> Result<RetargetJob, JobError> {
         let character = Character::load_with(db, progress, &options.character)?;
+        let prepared = Prepared::new(&character, &options.retarget)?;
         Ok(RetargetJob {
             character,
             options,
             db: db.to_path_buf(),
+            prepared,
+            preparations: AtomicUsize::new(1),
+            checker: OnceLock::new(),
         })
+    }
+
+    /// The prepared character (made on load with the options then given).
+    pub fn prepared(&self) -> &Prepared {
+        &self.prepared
+    }
+
+    /// How many times the character was prepared (its blender and deformer
+    /// factored): 1 for a job whose options did not change after
+    /// [`RetargetJob::load`], whatever the number of clips.
+    pub fn preparations(&self) -> usize {
+        self.preparations.load(Ordering::Relaxed)
+    }
+
+    /// A new preparation when `options.retarget`'s deformation was changed
+    /// since [`RetargetJob::load`] (the one made on load no longer fits);
+    /// `None` when that one serves.
+    fn fresh_preparation(&self) -> Result<Option<Prepared>, JobError> {
+        if self.prepared.fits(&self.character, &self.options.retarget) {
+            return Ok(None);
+        }
+        self.preparations.fetch_add(1, Ordering::Relaxed);
+        Ok(Some(Prepared::new(
+            &self.character,
+            &self.options.retarget,
+        )?))
+    }
+
+    /// The character's plausibility checker, built once.
+    fn checker(&self) -> Option<&Checker> {
+        self.checker
+            .get_or_init(|| {
+                Checker::for_character(&self.character, PlausibilityOptions::default())
+                    .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
+                    .ok()
+            })
+            .as_ref()
     }
 
     /// The clip at `clip` at the database's frame rate, refused when it
@@ -85,18 +141,37 @@ impl RetargetJob {
         let ch = &self.character;
         let fps = ch.manifest().fps;
         let mocap = self.load_clip(clip)?;
-        let output = synthesise(
+        // One output frame per query frame, each holding the character's
+        // vertices: refuse before allocating (issue 18, item 12).
+        crate::budget::check_frames(
+            &format!("the retarget at {fps} fps"),
+            mocap.poses.len(),
+            ch.n(),
+            1,
+        )
+        .map_err(crate::drive::RetargetError::from)?;
+        let fresh = self.fresh_preparation()?;
+        let prepared = fresh.as_ref().unwrap_or(&self.prepared);
+        let analysed = prepared.analyse(ch, &mocap.reference, &mocap.poses);
+        let mut positions = Vec::with_capacity(mocap.poses.len() * ch.n());
+        let report = prepared.synthesise::<_, crate::drive::RetargetError>(
             ch,
-            &mocap.poses,
-            &mocap.reference,
+            &analysed,
+            mocap.reference.source,
             fps,
             &self.options.retarget,
+            &mut positions,
         )?;
+        let output = Output {
+            positions,
+            query: analysed.query,
+            report,
+        };
         Ok(RetargetRun { mocap, output })
     }
 
     /// Retargets the clip at `clip` straight to `out` (by extension), each
-    /// frame written as it is made ([`synthesise_each`] into a
+    /// frame written as it is made ([`Prepared::synthesise`] into a
     /// [`SequenceWriter`]), so a clip of any length needs the memory of one
     /// chunk of frames, not of every frame (issue 18, item 12): point caches
     /// and OBJ folders stream; a GLB, written whole, is checked against the
@@ -116,8 +191,10 @@ impl RetargetJob {
         let mocap = self.load_clip(clip)?;
         let n = ch.n();
         let frames = mocap.poses.len();
+        let fresh = self.fresh_preparation()?;
+        let prepared = fresh.as_ref().unwrap_or(&self.prepared);
         let mut writer = SequenceWriter::create(
-            &ch.topology_metres(),
+            prepared.topology_metres(),
             out,
             frames,
             &SaveOptions {
@@ -128,28 +205,36 @@ impl RetargetJob {
         let keep = (keep_bytes / (24 * n.max(1))).clamp(1, frames);
         let mut kept = Vec::with_capacity(keep * n);
         let mut skeletons: Vec<Pose> = Vec::with_capacity(frames);
-        let s = synthesise_each(
+        let analysed = prepared.analyse(ch, &mocap.reference, &mocap.poses);
+        let mut sink_seconds = 0.0;
+        let report = prepared.synthesise::<_, JobError>(
             ch,
-            &mocap.poses,
-            &mocap.reference,
+            &analysed,
+            mocap.reference.source,
             fps,
             &self.options.retarget,
-            |f, p| -> Result<(), JobError> {
-                if f < keep {
+            Each(|p: &[[f64; 3]]| -> Result<(), JobError> {
+                let t = Instant::now();
+                if skeletons.len() < keep {
                     kept.extend_from_slice(p);
                 }
                 skeletons.push(ch.rig().skeleton(p));
-                Ok(writer.push(p)?)
-            },
+                writer.push(p)?;
+                sink_seconds += t.elapsed().as_secs_f64();
+                Ok(())
+            }),
         )?;
+        let t = Instant::now();
         let written = writer.finish()?;
-        let velocity = velocity_error(&s.query, &skeletons);
+        sink_seconds += t.elapsed().as_secs_f64();
+        let velocity = velocity_error(&analysed.query, &skeletons);
         Ok(StreamedRun {
             mocap,
-            report: s.report,
+            report,
             written,
             kept,
             velocity,
+            sink_seconds,
         })
     }
 
@@ -161,14 +246,21 @@ impl RetargetJob {
         positions: &[[f64; 3]],
         turned_over: Option<TurnedOver>,
     ) -> Option<(Plausibility, f64)> {
-        plausibility(&self.character, positions, turned_over, None)
+        plausibility_with(
+            self.checker()?,
+            &self.character,
+            positions,
+            turned_over,
+            None,
+        )
     }
 
     /// [`RetargetJob::plausibility`] of the first frames `kept` of a
     /// streamed run ([`RetargetJob::run_to`]), with the clip's own head
     /// range, foot glide and ground as [`RetargetJob::plausibility_of`].
     pub fn plausibility_of_streamed(&self, run: &StreamedRun) -> Option<(Plausibility, f64)> {
-        plausibility(
+        plausibility_with(
+            self.checker()?,
             &self.character,
             &run.kept,
             run.deformed().then_some(run.report.turned_over),
@@ -181,7 +273,8 @@ impl RetargetJob {
     /// ([`Plausibility::with_clip_head`]).
     pub fn plausibility_of(&self, run: &RetargetRun) -> Option<(Plausibility, f64)> {
         let out = &run.output;
-        plausibility(
+        plausibility_with(
+            self.checker()?,
             &self.character,
             &out.positions,
             run.deformed().then_some(out.report.turned_over),
@@ -194,7 +287,7 @@ impl RetargetJob {
     pub fn write(&self, positions: Vec<[f64; 3]>, out: &Path) -> Result<Vec<PathBuf>, JobError> {
         let ch = &self.character;
         super::write_positions(
-            ch.topology_metres(),
+            self.prepared.topology_metres().clone(),
             positions,
             ch.manifest().fps,
             self.options.glb,
@@ -212,32 +305,58 @@ pub fn plausibility(
     turned_over: Option<TurnedOver>,
     clip: Option<&MocapPoses>,
 ) -> Option<(Plausibility, f64)> {
-    let opts = PlausibilityOptions::default();
-    let checked = Checker::for_character(ch, opts).and_then(|c| {
-        let Some(m) = clip else {
-            return Ok((c.measure(positions, ch.n(), turned_over)?.logged(), c.floor));
-        };
-        // Floating and penetration from the clip's own ground under each
-        // foot (its floor, raised under a footfall on a step), where the
-        // result stands.
-        let raised = foot_ground_offsets(ch.rest_pose(), &m.reference, &m.poses);
-        let p = c
-            .measure_on(positions, ch.n(), turned_over, Some(&raised))?
-            .with_clip_head(&clip_head_trunk_deg(&m.reference, &m.poses), &opts.limits)
-            .with_clip_glide(
-                clip_foot_glide_cm(ch.rest_pose(), &m.reference, &m.poses),
-                &opts.limits,
-            )
-            .logged();
-        Ok((p, c.floor))
-    });
-    match checked {
+    match Checker::for_character(ch, PlausibilityOptions::default()) {
+        Ok(c) => plausibility_with(&c, ch, positions, turned_over, clip),
+        Err(e) => {
+            tracing::warn!("plausibility not measured: {e}");
+            None
+        }
+    }
+}
+
+/// [`plausibility`] with the character's checker `c` built already
+/// ([`Checker::for_character`]; a [`RetargetJob`] builds it once).
+pub fn plausibility_with(
+    c: &Checker,
+    ch: &Character,
+    positions: &[[f64; 3]],
+    turned_over: Option<TurnedOver>,
+    clip: Option<&MocapPoses>,
+) -> Option<(Plausibility, f64)> {
+    match measure(c, ch, positions, turned_over, clip) {
         Ok(p) => Some(p),
         Err(e) => {
             tracing::warn!("plausibility not measured: {e}");
             None
         }
     }
+}
+
+/// [`plausibility_with`]'s measure, its error kept.
+fn measure(
+    c: &Checker,
+    ch: &Character,
+    positions: &[[f64; 3]],
+    turned_over: Option<TurnedOver>,
+    clip: Option<&MocapPoses>,
+) -> Result<(Plausibility, f64), crate::eval::EvalError> {
+    let opts = c.opts;
+    let Some(m) = clip else {
+        return Ok((c.measure(positions, ch.n(), turned_over)?.logged(), c.floor));
+    };
+    // Floating and penetration from the clip's own ground under each
+    // foot (its floor, raised under a footfall on a step), where the
+    // result stands.
+    let raised = foot_ground_offsets(ch.rest_pose(), &m.reference, &m.poses);
+    let p = c
+        .measure_on(positions, ch.n(), turned_over, Some(&raised))?
+        .with_clip_head(&clip_head_trunk_deg(&m.reference, &m.poses), &opts.limits)
+        .with_clip_glide(
+            clip_foot_glide_cm(ch.rest_pose(), &m.reference, &m.poses),
+            &opts.limits,
+        )
+        .logged();
+    Ok((p, c.floor))
 }
 
 /// One clip retargeted straight to a file ([`RetargetJob::run_to`]).
@@ -254,6 +373,8 @@ pub struct StreamedRun {
     /// The joint-velocity error (Huang et al. 2015, Sec. 6.2) over every
     /// frame, as [`RetargetRun::velocity_error`].
     pub velocity: VelocityError,
+    /// Seconds handing frames on (skeletons read, frames written).
+    pub sink_seconds: f64,
 }
 
 impl StreamedRun {
@@ -266,15 +387,17 @@ impl StreamedRun {
 impl RetargetRun {
     /// The joint-velocity error (Huang et al. 2015, Sec. 6.2) between the
     /// query on the character's bones and the skeleton read off the result.
+    /// The query is the run's own ([`Output::query`], the clip analysed
+    /// once), bit for bit what [`to_database`] gives.
     pub fn velocity_error(&self, ch: &Character) -> VelocityError {
-        let query = to_database(ch, &self.mocap.reference, &self.mocap.poses);
+        let query = &self.output.query;
         let skel: Vec<Pose> = self
             .output
             .positions
             .chunks(ch.n().max(1))
             .map(|p| ch.rig().skeleton(p))
             .collect();
-        velocity_error(&query, &skel)
+        velocity_error(query, &skel)
     }
 
     /// True when the deformation ran (its repair counts are meaningful).
@@ -360,6 +483,7 @@ impl Converter for RetargetJob {
     /// memory of one chunk of frames (issue 18, item 12); only a GLB,
     /// written whole, is checked against the budget.
     fn convert(&self, clip: &Path, out: &Path) -> Result<Converted, String> {
+        let t = Instant::now();
         // The first frames are kept for the plausibility measure, as
         // `retarget` keeps them (issue 39, item 4: batch dropped every
         // warning `eval` gives).
@@ -369,15 +493,31 @@ impl Converter for RetargetJob {
             JobError::Input { msg, .. } => msg,
             e => e.to_string(),
         })?;
+        let checks = Instant::now();
         let warnings = self
             .plausibility_of_streamed(&run)
             .map(|(p, _)| crate::batch::runner::ClipWarning::of(&p))
             .unwrap_or_default();
+        let checks = checks.elapsed().as_secs_f64();
+        // The per-frame work: retrieval, timeline, meshes, deformation, the
+        // frames handed on and measured; the rest (the clip read, its rig
+        // mapped, the pose kernel, the output opened; before issue 40 also
+        // the factorisations and the checker) is the clip's fixed cost.
+        let per_frame =
+            per_frame_seconds(&run.report) * run.report.frames as f64 + run.sink_seconds + checks;
         Ok(Converted {
             frames: run.report.frames,
             error_cm: Some(run.velocity.mean_cm),
             warnings,
+            fixed_seconds: Some((t.elapsed().as_secs_f64() - per_frame).max(0.0)),
         })
+    }
+
+    fn preparation(&self) -> Preparation {
+        Preparation {
+            factorisations: self.preparations(),
+            seconds: self.prepared.timings().total(),
+        }
     }
 }
 

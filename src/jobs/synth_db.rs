@@ -183,7 +183,7 @@ pub fn write_synthetic_database(
     for clip in clips {
         let (stem, source, mut poses, reference) = match clip {
             SynthClip::File(path) => {
-                let c = crate::retarget::query::load_mocap(path, &opts.load, fps)?;
+                let c = crate::drive::query::load_mocap(path, &opts.load, fps)?;
                 let stem = path
                     .file_stem()
                     .map(|s| s.to_string_lossy().into_owned())

@@ -5,21 +5,24 @@
 //! a one-off ([`crate::transfer::Job::new`]).
 
 use super::JobError;
-use crate::batch::{Converted, Converter};
-use crate::eval::{VelocityError, velocity_error};
+use crate::batch::{ClipWarning, Converted, Converter, Preparation};
+use crate::drive::Each;
+use crate::drive::query::{MocapPoses, load_mocap, to_character};
+use crate::eval::{Checker, PlausibilityOptions, VelocityError, velocity_error};
 use crate::mesh::Mesh;
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
-use crate::retarget::query::{MocapPoses, load_mocap, to_character};
 use crate::rig::LoadOptions;
 use crate::rig::embed::landmarks::Landmarks;
 use crate::skeleton::Pose;
 use crate::transfer::{
     Confluent, MarkerOptions, MarkerSpec, PreparedScan, TransferOptions, TransferStats,
-    mocap_motion, prepare, transfer, transfer_each,
+    mocap_motion, prepare, transfer, transfer_into,
 };
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::time::Instant;
 
 /// Options of a [`ScanTransferJob`].
 #[derive(Debug, Clone)]
@@ -59,6 +62,12 @@ pub struct ScanTransferJob {
     pub options: ScanTransferOptions,
     /// What the job is, for reports (`transfer --scan SCAN`).
     pub what: String,
+    /// Seconds repairing, placing markers and factoring (once).
+    prepare_seconds: f64,
+    /// The plausibility checker of the scan (built on first use; `None`
+    /// without a rig or when the checks cannot run), as `transfer`
+    /// measures its result.
+    checker: OnceLock<Option<Checker>>,
 }
 
 /// One clip transferred.
@@ -80,6 +89,7 @@ impl ScanTransferJob {
         name: &str,
         options: ScanTransferOptions,
     ) -> Result<ScanTransferJob, JobError> {
+        let t = Instant::now();
         let prepared = prepare(scan, MarkerSpec::Landmarks(landmarks, options.markers))?;
         let (confluent, _) = crate::transfer::Job::factor_mocap(&prepared)?;
         Ok(ScanTransferJob {
@@ -87,7 +97,29 @@ impl ScanTransferJob {
             confluent,
             options,
             what: format!("transfer --scan {name}"),
+            prepare_seconds: t.elapsed().as_secs_f64(),
+            checker: OnceLock::new(),
         })
+    }
+
+    /// The scan's plausibility checker, built once: against the scan's
+    /// rest frame (floor: its lowest point), in metres guessed from the
+    /// rig's height, as `transfer` measures its result.
+    fn checker(&self) -> Option<&Checker> {
+        self.checker
+            .get_or_init(|| {
+                let rig = self.prepared.rig.as_ref()?;
+                let up = crate::transfer::up_axis(rig);
+                let opts = PlausibilityOptions::default();
+                Checker::new(&self.prepared.mesh, rig, up, None, self.options.fps, opts)
+                    .map(|mut c| {
+                        c.metres_per_unit = guess_metres_per_unit(rig.height);
+                        c
+                    })
+                    .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
+                    .ok()
+            })
+            .as_ref()
     }
 
     /// Transfers the clip at `clip` onto the scan.
@@ -155,11 +187,15 @@ impl Converter for ScanTransferJob {
         self.what.clone()
     }
 
-    /// Streams the frames to `out` as they are solved ([`transfer_each`]
-    /// into a [`SequenceWriter`]): a clip of any length converts with the
+    /// Streams the frames to `out` as they are solved ([`transfer_into`]
+    /// a [`SequenceWriter`]): a clip of any length converts with the
     /// memory of its marker motion and one chunk of frames (issue 18, item
-    /// 12); only a GLB, written whole, is checked against the budget.
+    /// 12); only a GLB, written whole, is checked against the budget. The
+    /// first frames are kept for the plausibility measure, whose warnings
+    /// the report records as `transfer` prints them (issue 39: they were
+    /// dropped).
     fn convert(&self, clip: &Path, out: &Path) -> Result<Converted, String> {
+        let t0 = Instant::now();
         let msg = |e: JobError| match e {
             JobError::Input { msg, .. } => msg,
             e => e.to_string(),
@@ -184,26 +220,70 @@ impl Converter for ScanTransferJob {
             },
         )
         .map_err(|e| e.to_string())?;
+        let n = self.prepared.mesh.vertex_count();
+        let keep_bytes =
+            PLAUSIBILITY_BYTES.min((crate::budget::Budget::current().bytes / 8) as usize);
+        let keep = (keep_bytes / (24 * n.max(1))).clamp(1, motion.frames().max(1));
+        let mut kept: Vec<[f64; 3]> = Vec::with_capacity(keep * n);
         let mut skel: Vec<Pose> = Vec::with_capacity(motion.frames());
-        let stats = transfer_each(
+        let mut sink_seconds = 0.0;
+        let stats = transfer_into(
             &self.confluent,
             &mut motion,
             &self.options.transfer,
             &|_| {},
-            |_, p| {
+            Each(|p: &[[f64; 3]]| {
+                let t = Instant::now();
+                if skel.len() < keep {
+                    kept.extend_from_slice(p);
+                }
                 skel.push(rig.skeleton(p));
-                writer.push(p)
-            },
+                let r = writer.push(p);
+                sink_seconds += t.elapsed().as_secs_f64();
+                r
+            }),
         )
         .map_err(|e| e.to_string())?;
+        let t = Instant::now();
         writer.finish().map_err(|e| e.to_string())?;
+        sink_seconds += t.elapsed().as_secs_f64();
         let rest: Pose = rig.joints.map(glam::DVec3::from_array);
         let query = to_character(&rest, &mocap.reference, &mocap.poses);
+        let checks = Instant::now();
+        let warnings = self
+            .checker()
+            .and_then(|c| {
+                let opts = c.opts;
+                c.measure(&kept, n, None)
+                    .map(|p| {
+                        p.with_clip_head(
+                            &crate::rig::retarget::clip_head_trunk_deg(
+                                &mocap.reference,
+                                &mocap.poses,
+                            ),
+                            &opts.limits,
+                        )
+                        .logged()
+                    })
+                    .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
+                    .ok()
+            })
+            .map(|p| ClipWarning::of(&p))
+            .unwrap_or_default();
+        let per_frame = stats.solve_seconds + sink_seconds + checks.elapsed().as_secs_f64();
         Ok(Converted {
             frames: stats.frames,
             error_cm: Some(velocity_error(&query, &skel).mean_cm),
-            warnings: Vec::new(),
+            warnings,
+            fixed_seconds: Some((t0.elapsed().as_secs_f64() - per_frame).max(0.0)),
         })
+    }
+
+    fn preparation(&self) -> Preparation {
+        Preparation {
+            factorisations: 1,
+            seconds: self.prepare_seconds,
+        }
     }
 }
 
@@ -586,17 +666,17 @@ fn transfer_inner(
                 PLAUSIBILITY_BYTES.min((crate::budget::Budget::current().bytes / 4) as usize);
             let keep = (keep_bytes / (24 * n.max(1))).clamp(1, frames);
             let mut kept = Vec::with_capacity(keep * n);
-            let stats = transfer_each(
+            let stats = transfer_into(
                 &job.confluent,
                 &mut job.motion,
                 &spec.options.transfer,
                 progress,
-                |f, p| {
-                    if f < keep {
+                Each(|p: &[[f64; 3]]| {
+                    if kept.len() < keep * n {
                         kept.extend_from_slice(p);
                     }
                     writer.push(p)
-                },
+                }),
             )?;
             if keep < frames {
                 tracing::info!(

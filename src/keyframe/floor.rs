@@ -26,8 +26,8 @@
 
 use super::graph::KeyGraph;
 use super::smoothness::FrameSet;
+use crate::db::Character;
 use crate::graph::transitions::TransitionOptions;
-use crate::retarget::character::Character;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;

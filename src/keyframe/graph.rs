@@ -11,9 +11,9 @@
 //! one left off ([`super::place`] places the output so, and the output
 //! travels exactly this distance).
 
+use crate::db::Character;
+use crate::drive::timeline::Frames;
 use crate::graph::FrameAdjacency;
-use crate::retarget::character::Character;
-use crate::retarget::timeline::Frames;
 use std::collections::HashMap;
 
 /// An arc of the frame graph as the search sees it.
@@ -160,7 +160,7 @@ impl KeyGraph {
             for e in &mut g.edges[lo..hi] {
                 let b = e.to as usize;
                 if e.jump && b > 0 && b < ch.poses().len() && f < ch.poses().len() {
-                    e.turn = crate::retarget::Floor::fit(&ch.poses()[b - 1], &ch.poses()[f]).theta;
+                    e.turn = crate::drive::Floor::fit(&ch.poses()[b - 1], &ch.poses()[f]).theta;
                 }
             }
         }
@@ -194,7 +194,7 @@ impl KeyGraph {
 
 /// The character's frame layout with the blend windows of a key graph's
 /// jumps ([`KeyGraph::windows`]; the graph's when empty), for
-/// [`crate::retarget::timeline::timeline`].
+/// [`crate::drive::timeline::timeline`].
 pub struct KeyFrames<'a> {
     /// The character.
     pub ch: &'a Character,

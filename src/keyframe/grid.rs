@@ -27,8 +27,8 @@
 use super::lattice::{Reachability, oracle};
 use super::search::{Reach, SearchOptions, Target};
 use super::{Planner, Targets, mean_smoothness, mean_smoothness_vertex, transitions};
-use crate::retarget::character::Character;
-use crate::retarget::timeline::TimelineOptions;
+use crate::db::Character;
+use crate::drive::timeline::TimelineOptions;
 use serde::Serialize;
 use std::time::Instant;
 

@@ -33,8 +33,8 @@ pub mod select;
 pub mod smoothest;
 pub mod smoothness;
 
-use crate::retarget::character::Character;
-use crate::retarget::timeline::{TimelineOptions, timeline};
+use crate::db::Character;
+use crate::drive::timeline::{TimelineOptions, timeline};
 use graph::KeyGraph;
 use repeats::Measure;
 use search::{Method, SearchError, SearchOptions, Segment, SegmentPath, Stats, Target};

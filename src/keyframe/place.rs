@@ -1,5 +1,5 @@
 //! From a key-frame path to meshes (Huang et al. 2015, Secs. 4.4 and 5.1):
-//! the frames are blended across transitions as [`crate::retarget`] does
+//! the frames are blended across transitions as [`crate::drive`] does
 //! ([`timeline`]: the transition's window, non-linear blending), and the
 //! character is placed on the floor by accumulating the root motion of
 //! every frame across transitions.
@@ -24,11 +24,11 @@
 //! 2.4 m/s, 35 m/s² on every vertex).
 
 use super::graph::{KeyGraph, centre_of};
+use crate::db::Character;
+use crate::drive::timeline::{Jump, OutFrame, TimelineOptions, timeline};
+use crate::drive::{BlendScratch, CHUNK_FRAMES, Floor, blend_placed};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
-use crate::retarget::character::Character;
-use crate::retarget::timeline::{Jump, OutFrame, TimelineOptions, timeline};
-use crate::retarget::{BlendScratch, CHUNK_FRAMES, Floor, blend_placed};
 use crate::skeleton::rotate_yaw;
 use glam::DVec3;
 use rayon::prelude::*;

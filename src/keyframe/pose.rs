@@ -11,8 +11,8 @@
 //! ([`Canonical::ALL`] order) as `[x, y, z]` in
 //! metres, Y up, on the character's skeleton (e.g. one of its own frames).
 
-use crate::retarget::character::Character;
-use crate::retarget::query::{load_mocap, to_character};
+use crate::db::Character;
+use crate::drive::query::{load_mocap, to_character};
 use crate::rig::Canonical;
 use crate::rig::LoadOptions;
 use crate::skeleton::{Pose, skeleton_distance};

@@ -28,8 +28,8 @@
 //! the graph (and so `retarget`) is unchanged.
 
 use super::smoothness::{Surface, hausdorff_surface_stride, profile, weighted};
+use crate::db::Character;
 use crate::graph::transitions::{self, TransitionOptions};
-use crate::retarget::character::Character;
 use rayon::prelude::*;
 
 /// Options of the measured selection.

@@ -18,8 +18,8 @@
 //! before) is kept and reported alongside as `smoothness_vertex`: it
 //! exceeds the surface distance by up to about half an edge length.
 
-use crate::retarget::Floor;
-use crate::retarget::character::Character;
+use crate::db::Character;
+use crate::drive::Floor;
 use crate::rig::embed::surface::closest_on_triangle;
 use glam::DVec3;
 use std::collections::HashMap;

@@ -17,7 +17,7 @@ use std::collections::HashMap;
 /// What drives the scan.
 pub enum Source<'a> {
     /// Canonical poses of a clip (metres, Y-up) and its neutral reference,
-    /// as [`crate::retarget::query::load_mocap`] gives them.
+    /// as [`crate::drive::query::load_mocap`] gives them.
     Mocap(&'a [Pose], &'a Reference),
     /// A moving template mesh with its markers (paired with the scan's by
     /// name) and the frame that is its reference pose.

@@ -20,7 +20,7 @@ pub mod source;
 pub use confluent::{Confluent, ConfluentError};
 pub use job::{Job, JobError, Source, alignment, mocap_motion, up_axis};
 pub use markers::{Marker, MarkerError, MarkerFile, MarkerOptions};
-pub use run::{TransferOptions, TransferStats, transfer, transfer_each};
+pub use run::{TransferOptions, TransferStats, transfer, transfer_into};
 pub use scan::{MarkerSpec, PreparedScan, ScanError, prepare};
 pub use signs::SignMode;
 pub use source::MarkerMotion;

@@ -5,6 +5,7 @@
 use super::confluent::{Confluent, orient_frames};
 use super::signs::SignMode;
 use super::source::MarkerMotion;
+use crate::drive::FrameSink;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
@@ -34,7 +35,7 @@ pub struct TransferStats {
     pub solve_seconds: f64,
 }
 
-/// Frames solved together by [`transfer_each`] (in parallel) before they
+/// Frames solved together by [`transfer_into`] (in parallel) before they
 /// are handed on: the memory of a streamed transfer is this many frames of
 /// the scan, whatever the clip's length.
 pub const CHUNK_FRAMES: usize = 64;
@@ -42,7 +43,7 @@ pub const CHUNK_FRAMES: usize = 64;
 /// Poses the scan for every frame of `motion` (its rotations are re-signed
 /// in place). Returns positions, frames × vertices, row-major. `progress`
 /// is called with the number of frames finished so far (from any thread).
-/// Holds every frame: [`transfer_each`] streams them.
+/// Holds every frame: [`transfer_into`] with a streaming sink does not.
 pub fn transfer(
     c: &Confluent,
     motion: &mut MarkerMotion,
@@ -50,28 +51,23 @@ pub fn transfer(
     progress: &(dyn Fn(usize) + Sync),
 ) -> (Vec<[f64; 3]>, TransferStats) {
     let n = c.vertex_count();
-    let mut out = Vec::with_capacity(motion.frames() * n);
-    let r: Result<TransferStats, std::convert::Infallible> =
-        transfer_each(c, motion, opts, progress, |_, p| {
-            out.extend_from_slice(p);
-            Ok(())
-        });
-    let Ok(stats) = r;
+    let mut out: Vec<[f64; 3]> = Vec::with_capacity(motion.frames() * n);
+    let Ok(stats) = transfer_into(c, motion, opts, progress, &mut out);
     (out, stats)
 }
 
-/// [`transfer`] without holding the result: frames are solved
-/// [`CHUNK_FRAMES`] at a time (in parallel) and handed to `each(frame,
-/// positions)` in frame order, so a clip of any length needs the memory of
-/// one chunk (issue 18, item 12). The first error of `each` stops the
-/// transfer and is returned.
-pub fn transfer_each<E>(
+/// [`transfer`] into any [`FrameSink`]: frames are solved [`CHUNK_FRAMES`]
+/// at a time (in parallel) and handed to `sink` in frame order, so a clip
+/// of any length needs the memory of one chunk when the sink streams
+/// (issue 18, item 12). The first error of the sink stops the transfer and
+/// is returned.
+pub fn transfer_into<S: FrameSink>(
     c: &Confluent,
     motion: &mut MarkerMotion,
     opts: &TransferOptions,
     progress: &(dyn Fn(usize) + Sync),
-    mut each: impl FnMut(usize, &[[f64; 3]]) -> Result<(), E>,
-) -> Result<TransferStats, E> {
+    mut sink: S,
+) -> Result<TransferStats, S::Error> {
     let m = motion.markers;
     let singular = orient_frames(&mut motion.rotations, m, opts.signs);
     let n = c.vertex_count();
@@ -118,7 +114,7 @@ pub fn transfer_each<E>(
             }
         }
         for k in 0..count {
-            each(first + k, &buf[k * n..(k + 1) * n])?;
+            sink.push(&buf[k * n..(k + 1) * n])?;
         }
     }
     let stats = TransferStats {

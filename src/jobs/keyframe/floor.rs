@@ -2,13 +2,13 @@
 //! consecutive key-frames (`keyframe::floor`, Sec. 6.1's measure).
 
 use super::grid::GridTargets;
+use crate::db::Character;
 use crate::keyframe::floor::{
     FloorOptions, PathFloor, TransitionFloor, path_floor, transition_floor_with,
 };
 use crate::keyframe::graph::KeyGraph;
 use crate::keyframe::smoothness::FrameSet;
 use crate::keyframe::{KeyframeOptions, TransitionCost, key_graph, key_name};
-use crate::retarget::character::Character;
 use serde::Serialize;
 
 /// The stage [`floor`] is at.

@@ -2,9 +2,9 @@
 //! resolved to database frames.
 
 use super::KeyframeJobError;
+use crate::db::Character;
 use crate::keyframe::parse_key;
 use crate::keyframe::pose::{self, Resolved};
-use crate::retarget::character::Character;
 use crate::rig::LoadOptions;
 
 /// Key-frames resolved to database frame ids.

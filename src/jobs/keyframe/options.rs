@@ -1,9 +1,9 @@
 //! The options of a key-frame job, with the command line's defaults.
 
+use crate::drive::timeline::TimelineOptions;
 use crate::keyframe::lattice::{HeadingTarget, LatticeOptions};
 use crate::keyframe::search::{Horizon, Limits, Method, SearchOptions, Solver, Weights};
 use crate::keyframe::{KeyframeOptions, TransitionCost, TransitionSet};
-use crate::retarget::timeline::TimelineOptions;
 
 /// The grid's distances by default (metres; the paper's Table III), as
 /// [`crate::keyframe::grid::parse_range`] reads them.

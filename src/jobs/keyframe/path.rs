@@ -3,10 +3,10 @@
 use super::KeyframeJobError;
 use super::keys::Keys;
 use super::verdict::{Missed, missed_targets};
+use crate::db::Character;
 use crate::keyframe::{KeyframeOptions, Plan, Report, Targets, plan_path};
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::stream::SequenceWriter;
-use crate::retarget::character::Character;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

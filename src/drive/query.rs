@@ -128,6 +128,13 @@ pub fn to_character(rest: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<P
 /// tipped feet; results on it floated 1.0 cm (median) with the lift and
 /// sank 0.2-0.9 cm (penetration median) without it.
 pub fn database_floor_lift(ch: &Character) -> f64 {
+    database_floor_lift_on(ch, &ch.topology_metres())
+}
+
+/// [`database_floor_lift`] given the character's topology in metres
+/// (`topology`, [`Character::topology_metres`]; a prepared character holds
+/// it).
+pub fn database_floor_lift_on(ch: &Character, topology: &crate::mesh::Mesh) -> f64 {
     let n = ch.n().max(1);
     let lowest = |f: &[[f64; 3]]| f.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
     let mut lows: Vec<f64> = ch
@@ -136,7 +143,7 @@ pub fn database_floor_lift(ch: &Character) -> f64 {
         .map(lowest)
         .filter(|h| h.is_finite())
         .collect();
-    let rest = lowest(ch.topology_metres().positions());
+    let rest = lowest(topology.positions());
     if lows.is_empty() || !rest.is_finite() {
         return 0.0;
     }
@@ -149,11 +156,34 @@ pub fn database_floor_lift(ch: &Character) -> f64 {
 /// [`database_floor_lift`]: the character stands on the floor its own
 /// frames stand on. What `retarget` queries the database with and what
 /// its joint-velocity error is measured against.
+/// A prepared character ([`super::Prepared::analyse`]) holds the neutral
+/// pose and the lift instead of finding them per call.
 pub fn to_database(ch: &Character, reference: &Reference, mocap: &[Pose]) -> Vec<Pose> {
-    let lift = glam::DVec3::new(0.0, database_floor_lift(ch), 0.0);
-    to_database_character(ch.rest_pose(), ch.poses(), reference, mocap)
+    let neutral = character_neutral(ch.rest_pose(), ch.poses());
+    on_character(
+        ch.rest_pose(),
+        &neutral.pose,
+        database_floor_lift(ch),
+        reference,
+        mocap,
+    )
+}
+
+/// The clip's poses on the character's skeleton `rest` measured from its
+/// neutral pose `neutral` ([`retarget_with_neutral`]), raised by `lift`
+/// metres: [`to_database`] with the character's neutral pose and floor
+/// lift given.
+pub fn on_character(
+    rest: &Pose,
+    neutral: &Pose,
+    lift: f64,
+    reference: &Reference,
+    mocap: &[Pose],
+) -> Vec<Pose> {
+    let lift = glam::DVec3::new(0.0, lift, 0.0);
+    retarget_with_neutral(rest, neutral, reference, mocap)
         .into_iter()
-        .map(|p| p.map(|q| q + lift))
+        .map(|(p, _)| p.map(|q| q + lift))
         .collect()
 }
 

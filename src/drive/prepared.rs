@@ -1,0 +1,187 @@
+//! The prepared character (faer's "factor once, solve many"): everything
+//! surface synthesis needs that depends only on the character and the
+//! deformation options — the topology in metres, the blender's
+//! factorisation, the deformer's per-region factorisations (Huang et al.
+//! 2015, Eq. 32), the character's neutral pose and the database's floor
+//! lift — built once per job ([`Prepared::new`]) and read, by reference,
+//! by every clip of a batch and every run of the `retarget` verb
+//! ([`Prepared::synthesise`]). [`Prepared::analyse`] makes the per-clip
+//! value ([`Analysed`]): the clip on the character's skeleton, once, read
+//! by retrieval, placement, deformation and the joint-velocity error.
+//!
+//! What it depends on, by reading the code: [`Blender::new`] reads the
+//! topology only; [`Deformer::new`] reads the character (topology, rig,
+//! frames, manifest overrides) and the [`DeformMode`] and
+//! [`DeformOptions`]: a prepared character is keyed on those two
+//! ([`Prepared::fits`]). The trellis, timeline and smoothing options are
+//! per clip.
+
+use super::query::{database_floor_lift_on, on_character};
+use super::synthesis::{RetargetError, RetargetOptions};
+use crate::db::Character;
+use crate::deform::{DeformMode, DeformOptions, Deformer};
+use crate::mesh::Mesh;
+use crate::mesh::blend::Blender;
+use crate::rig::retarget::{CharacterNeutral, Reference, character_neutral, stance_offsets};
+use crate::skeleton::Pose;
+use glam::DVec3;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Seconds spent preparing a character (once per job).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct PrepareTimings {
+    /// The topology in metres, the neutral pose and the floor lift.
+    pub character: f64,
+    /// Factoring the blender.
+    pub factor: f64,
+    /// Prefactoring the deformation (zero for `lbs` and `none`).
+    pub deform_factor: f64,
+}
+
+impl PrepareTimings {
+    /// All of it.
+    pub fn total(&self) -> f64 {
+        self.character + self.factor + self.deform_factor
+    }
+}
+
+/// A character prepared for synthesis: built once, shared (it is `Sync`)
+/// by every clip driven through it.
+pub struct Prepared {
+    topology: Mesh,
+    blender: Blender,
+    deformer: Option<Deformer>,
+    deform: DeformMode,
+    deform_options: DeformOptions,
+    neutral: CharacterNeutral,
+    floor_lift: f64,
+    timings: PrepareTimings,
+    vertices: usize,
+    frames: usize,
+}
+
+/// One clip analysed against a prepared character: made once per clip by
+/// [`Prepared::analyse`].
+#[derive(Debug, Clone)]
+pub struct Analysed {
+    /// The clip on the character's skeleton, measured from its neutral
+    /// pose and standing on the database's floor (metres, Y-up): what
+    /// placement and deformation follow and the joint-velocity error is
+    /// measured against ([`super::query::to_database`], bit for bit).
+    pub query: Vec<Pose>,
+    /// The query with the clip's stance height taken off: retrieval
+    /// compares poses as they stand on the database's floor (a block CMU
+    /// subject 03 climbs is no part of the pose).
+    pub on_floor: Vec<Pose>,
+    /// Seconds analysing.
+    pub seconds: f64,
+}
+
+impl Prepared {
+    /// Prepares `ch` for synthesis with the deformation of `opts`
+    /// (factorisations made here, once).
+    pub fn new(ch: &Character, opts: &RetargetOptions) -> Result<Prepared, RetargetError> {
+        let t = Instant::now();
+        let topology = ch.topology_metres();
+        let neutral = character_neutral(ch.rest_pose(), ch.poses());
+        let floor_lift = database_floor_lift_on(ch, &topology);
+        let mut timings = PrepareTimings {
+            character: t.elapsed().as_secs_f64(),
+            ..PrepareTimings::default()
+        };
+        let t = Instant::now();
+        let blender = Blender::new(&topology)?;
+        timings.factor = t.elapsed().as_secs_f64();
+        let deformer = if opts.deform != DeformMode::None {
+            let t = Instant::now();
+            let d = Deformer::new(ch, opts.deform, &opts.deform_options)?;
+            timings.deform_factor = t.elapsed().as_secs_f64();
+            Some(d)
+        } else {
+            None
+        };
+        Ok(Prepared {
+            topology,
+            blender,
+            deformer,
+            deform: opts.deform,
+            deform_options: opts.deform_options,
+            neutral,
+            floor_lift,
+            timings,
+            vertices: ch.n(),
+            frames: ch.frame_count(),
+        })
+    }
+
+    /// True when this preparation serves `ch` driven with `opts` (same
+    /// deformation mode and options; the character's vertex and frame
+    /// counts as prepared).
+    pub fn fits(&self, ch: &Character, opts: &RetargetOptions) -> bool {
+        self.deform == opts.deform
+            && self.deform_options == opts.deform_options
+            && self.vertices == ch.n()
+            && self.frames == ch.frame_count()
+    }
+
+    /// The topology in metres, Y-up (what outputs are written with).
+    pub fn topology_metres(&self) -> &Mesh {
+        &self.topology
+    }
+
+    /// The factored blender.
+    pub fn blender(&self) -> &Blender {
+        &self.blender
+    }
+
+    /// The prefactored deformation (`None` for [`DeformMode::None`]).
+    pub fn deformer(&self) -> Option<&Deformer> {
+        self.deformer.as_ref()
+    }
+
+    /// The deformation mode prepared.
+    pub fn deform(&self) -> DeformMode {
+        self.deform
+    }
+
+    /// The character's neutral pose ([`character_neutral`]).
+    pub fn neutral(&self) -> &CharacterNeutral {
+        &self.neutral
+    }
+
+    /// The database's floor lift ([`super::query::database_floor_lift`]).
+    pub fn floor_lift(&self) -> f64 {
+        self.floor_lift
+    }
+
+    /// Seconds spent preparing.
+    pub fn timings(&self) -> PrepareTimings {
+        self.timings
+    }
+
+    /// The clip `mocap` (the clip's own joints, metres, Y-up, the
+    /// database's rate) with its neutral `reference`, analysed for `ch`
+    /// (the pose kernel runs once here).
+    pub fn analyse(&self, ch: &Character, reference: &Reference, mocap: &[Pose]) -> Analysed {
+        let t = Instant::now();
+        let query = on_character(
+            ch.rest_pose(),
+            &self.neutral.pose,
+            self.floor_lift,
+            reference,
+            mocap,
+        );
+        let raised = stance_offsets(ch.rest_pose(), reference, mocap);
+        let on_floor = query
+            .iter()
+            .zip(raised.iter().chain(std::iter::repeat(&0.0)))
+            .map(|(p, &r)| p.map(|q| q - DVec3::Y * r))
+            .collect();
+        Analysed {
+            query,
+            on_floor,
+            seconds: t.elapsed().as_secs_f64(),
+        }
+    }
+}
