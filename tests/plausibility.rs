@@ -6,15 +6,15 @@ mod common;
 
 use glam::{DQuat, DVec3};
 use std::path::Path;
-use surfmotion::eval::{
-    Checker, FootOptions, HeadOptions, HeadTorso, PlausibilityOptions, lowest_heights,
-};
 use surfmotion::mesh::Mesh;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::rig::embed::parts::Part;
 use surfmotion::synth::humanoid::DEMO_GRID;
+use surfmotion::tools::eval::{
+    Checker, FootOptions, HeadOptions, HeadTorso, PlausibilityOptions, lowest_heights,
+};
 
 fn humanoid() -> (Mesh, Embedding) {
     let c = common::humanoid_character(DEMO_GRID);
@@ -207,7 +207,7 @@ fn knee_hyperextension_on_real_captures_is_small() {
     for name in ["samba", "crane"] {
         let (seq, _, rig) = capture(&d, name);
         let worst = (0..seq.frame_count())
-            .flat_map(|f| surfmotion::eval::knee_hyperextension(&rig.skeleton(seq.frame(f))))
+            .flat_map(|f| surfmotion::tools::eval::knee_hyperextension(&rig.skeleton(seq.frame(f))))
             .fold(0.0f64, f64::max);
         println!("{name}: worst knee hyper-extension {worst:.1}°");
         assert!(worst < 12.0, "{name}: {worst:.1}°");
@@ -263,7 +263,7 @@ fn moved(p: &[[f64; 3]], q: DQuat, d: DVec3) -> Vec<[f64; 3]> {
 /// `synth` and `transfer` reported `turned_over: null`.)
 #[test]
 fn triangles_folded_over_on_purpose_are_counted_and_a_rigid_motion_counts_none() {
-    use surfmotion::eval::triangles::{RestTriangles, TurnScratch};
+    use surfmotion::tools::eval::triangles::{RestTriangles, TurnScratch};
     let (mesh, rig, c) = humanoid_checker();
     let rest = mesh.positions();
     let rt = RestTriangles::new(rest, mesh.triangles()).unwrap();
@@ -328,7 +328,7 @@ fn triangles_folded_over_on_purpose_are_counted_and_a_rigid_motion_counts_none()
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn captured_folds_are_few_and_a_limb_turning_about_its_bone_is_not_one() {
-    use surfmotion::eval::triangles::{RestTriangles, TurnedOverCount};
+    use surfmotion::tools::eval::triangles::{RestTriangles, TurnedOverCount};
     let Some(d) = common::data_dir() else { return };
     for name in ["samba", "crane"] {
         let (seq, rest, _) = capture(&d, name);
@@ -346,7 +346,7 @@ fn captured_folds_are_few_and_a_limb_turning_about_its_bone_is_not_one() {
 /// within its ring are not.
 #[test]
 fn a_vertex_shot_off_the_surface_is_reported_and_warned() {
-    use surfmotion::eval::triangles::RestTriangles;
+    use surfmotion::tools::eval::triangles::RestTriangles;
     let (mesh, _, c) = humanoid_checker();
     let rest = mesh.positions();
     let n = rest.len();
@@ -426,7 +426,7 @@ fn a_vertex_shot_off_the_surface_is_reported_and_warned() {
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn captured_vertices_stay_in_their_rings() {
-    use surfmotion::eval::triangles::{OffRing, RestTriangles};
+    use surfmotion::tools::eval::triangles::{OffRing, RestTriangles};
     let Some(d) = common::data_dir() else { return };
     for name in ["samba", "crane"] {
         let (seq, rest, _) = capture(&d, name);
@@ -434,7 +434,7 @@ fn captured_vertices_stay_in_their_rings() {
         let o = OffRing::of(&rt.off_ring_per_frame(seq.all_positions()), 1.0, &rt);
         println!("{name} capture: {o:?}");
         assert!(o.max_edge_lengths < 2.0, "{name}: {o:?}");
-        let line = o.rest_edge_lengths + surfmotion::eval::Limits::default().off_ring_margin;
+        let line = o.rest_edge_lengths + surfmotion::tools::eval::Limits::default().off_ring_margin;
         assert!(o.max_edge_lengths < line, "{name}: {o:?}");
     }
 }

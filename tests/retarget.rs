@@ -6,12 +6,12 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use surfmotion::db::Character;
-use surfmotion::eval::velocity_error;
 use surfmotion::retarget::query::load_mocap;
 use surfmotion::retarget::timeline::plays_on;
 use surfmotion::retarget::{RetargetOptions, synthesise};
 use surfmotion::similarity::VertexSet;
 use surfmotion::similarity::vertex::VertexOptions;
+use surfmotion::tools::eval::velocity_error;
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_surfmotion")

@@ -9,12 +9,12 @@ use std::path::Path;
 use std::sync::OnceLock;
 use surfmotion::db::{Character, Quiet};
 use surfmotion::deform::DeformMode;
-use surfmotion::eval::{floor_height, lowest_heights};
 use surfmotion::retarget::query::database_floor_lift;
 use surfmotion::retarget::{RetargetOptions, synthesise};
 use surfmotion::rig::retarget::{choose_reference, clip_poses};
 use surfmotion::skeleton::Pose;
 use surfmotion::synth::{Gait, gait_clip};
+use surfmotion::tools::eval::{floor_height, lowest_heights};
 
 const GRID: f64 = 0.035;
 const FPS: f64 = 30.0;

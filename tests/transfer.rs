@@ -6,11 +6,11 @@ mod common;
 
 use glam::{DQuat, DVec3};
 use std::path::Path;
-use surfmotion::eval::vertex_error;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::mesh::{Mesh, MeshSequence};
 use surfmotion::retarget::query::load_mocap;
 use surfmotion::rig::embed::landmarks::Landmarks;
+use surfmotion::tools::eval::vertex_error;
 use surfmotion::transfer::markers::generate;
 use surfmotion::transfer::{
     Job, MarkerOptions, MarkerSpec, SignMode, Source, TransferOptions, TransferStats, prepare,

@@ -445,7 +445,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut v = serde_json::to_value(r)?;
     v["missed"] = serde_json::to_value(&missed)?;
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
+        surfmotion::util::fsutil::write_bytes_atomic(
+            p,
+            serde_json::to_string_pretty(&v)?.as_bytes(),
+        )?;
     }
     if a.json {
         v["output"] = serde_json::to_value(&written)?;
@@ -731,7 +734,10 @@ fn grid(
     bar.finish_and_clear();
     let g = g.map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&g)?.as_bytes())?;
+        surfmotion::util::fsutil::write_bytes_atomic(
+            p,
+            serde_json::to_string_pretty(&g)?.as_bytes(),
+        )?;
     }
     if let Some(p) = &a.plot {
         surfmotion::keyframe::heatmap::save(&g, p)?;
@@ -813,7 +819,10 @@ fn least_mean(
     bar.finish_and_clear();
     let r = r.map_err(|e| anyhow::anyhow!(describe(ch, &e)))?;
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&r)?.as_bytes())?;
+        surfmotion::util::fsutil::write_bytes_atomic(
+            p,
+            serde_json::to_string_pretty(&r)?.as_bytes(),
+        )?;
     }
     if a.json {
         let mut v = serde_json::to_value(&r)?;

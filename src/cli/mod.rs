@@ -201,7 +201,8 @@ pub fn main() -> anyhow::Result<()> {
     // Reader warnings (target `surfmotion::warning`) are kept in the reports
     // the verbs print (inspect, rig check), so they are not printed again.
     let is_notice = |m: &tracing::Metadata<'_>| m.target() == surfmotion::jobs::batch::NOTICE;
-    let is_reader_warning = |m: &tracing::Metadata<'_>| m.target() == surfmotion::fsutil::WARNING;
+    let is_reader_warning =
+        |m: &tracing::Metadata<'_>| m.target() == surfmotion::util::fsutil::WARNING;
     // A result's plausibility warnings, when the verb prints them in its
     // text summary (see [`warnings_in_summary`]).
     let is_summarised = |m: &tracing::Metadata<'_>| {
@@ -282,8 +283,8 @@ fn non_utf8_argument(args: Vec<std::ffi::OsString>) -> String {
 }
 
 /// The module whose warnings are a result's plausibility warnings
-/// ([`surfmotion::eval::Plausibility`]'s `logged`).
-const PLAUSIBILITY_MODULE: &str = "surfmotion::eval::plausibility";
+/// ([`surfmotion::tools::eval::Plausibility`]'s `logged`).
+const PLAUSIBILITY_MODULE: &str = "surfmotion::tools::eval::plausibility";
 
 static WARNINGS_IN_SUMMARY: std::sync::atomic::AtomicBool =
     std::sync::atomic::AtomicBool::new(false);
@@ -521,12 +522,12 @@ pub fn mesh_spec(s: &str) -> Result<String, String> {
 }
 
 /// A frame rate on the command line: a finite number in
-/// [[`MIN_FPS`](surfmotion::budget::MIN_FPS),
-/// [`MAX_FPS`](surfmotion::budget::MAX_FPS)] (1-1000). (A typo such as
+/// [[`MIN_FPS`](surfmotion::util::budget::MIN_FPS),
+/// [`MAX_FPS`](surfmotion::util::budget::MAX_FPS)] (1-1000). (A typo such as
 /// `--input-fps 1e-4` or `--fps 1e9` would otherwise ask for billions of
 /// frames; issue 18, item 12.)
 pub fn frame_rate(s: &str) -> Result<f64, String> {
-    use surfmotion::budget::{MAX_FPS, MIN_FPS, is_frame_rate};
+    use surfmotion::util::budget::{MAX_FPS, MIN_FPS, is_frame_rate};
     let v: f64 = s
         .trim()
         .parse()

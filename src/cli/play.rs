@@ -71,7 +71,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // The script is checked against the manifest's spaces before the
     // model is built (a typo was reported only after the build: 7.5 s on
     // the demo database, minutes on a real one).
-    let text = surfmotion::fsutil::read_small_text(&a.script)
+    let text = surfmotion::util::fsutil::read_small_text(&a.script)
         .with_context(|| a.script.display().to_string())?;
     if let Ok(m) = surfmotion::db::Manifest::load(&a.db) {
         use surfmotion::parametric::Parameter;
@@ -145,7 +145,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let written = writer.finish()?;
     let write_s = write_s + t1.elapsed().as_secs_f64();
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(
+        surfmotion::util::fsutil::write_bytes_atomic(
             p,
             serde_json::to_string_pretty(&report)?.as_bytes(),
         )?;

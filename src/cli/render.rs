@@ -4,12 +4,12 @@
 use glam::DVec3;
 use std::path::PathBuf;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
-use surfmotion::render::{
-    Framing, Image, Scene, View, facing_of_frames, label_colour, render_framed, view_bounds,
-};
 use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::joints::nearest_axis;
+use surfmotion::tools::render::{
+    Framing, Image, Scene, View, facing_of_frames, label_colour, render_framed, view_bounds,
+};
 
 /// Arguments of `render`.
 #[derive(clap::Args)]
@@ -33,7 +33,7 @@ pub struct Args {
     /// of every panel. Defaults to each panel's own: across the hips and
     /// shoulders of the rig's skeleton on the frame drawn, else read off
     /// the mesh's shoulders and knees over the frames around the one drawn
-    /// (see `surfmotion::render::facing_of_frames`).
+    /// (see `surfmotion::tools::render::facing_of_frames`).
     #[arg(long, allow_hyphen_values = true)]
     pub facing: Option<String>,
     /// The mesh's up axis (+y, -y, +z, -z, +x, -x): the frames are turned
@@ -122,7 +122,10 @@ pub fn draw_framed(
         let f = framing[k].unwrap_or_else(|| Framing::fit(positions, views[k], size));
         let mut lines = lines.clone();
         if let Some(y) = floor.filter(|y| y.is_finite()) {
-            lines.insert(0, surfmotion::render::floor_line(views[k], f, y, size));
+            lines.insert(
+                0,
+                surfmotion::tools::render::floor_line(views[k], f, y, size),
+            );
         }
         let scene = Scene {
             lines: &lines,
@@ -190,7 +193,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // panel by panel (each joined copy is a new picture: twice the
     // picture at the peak), plus one panel's depth buffer.
     let (width, height) = (2 * a.mesh.len() as u128 * size as u128, size as u128);
-    surfmotion::budget::check(
+    surfmotion::util::budget::check(
         || {
             format!(
                 "{}: a picture of {} mesh(es) at --size {size} ({width} × {height} pixels)",
@@ -232,7 +235,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 nearest_axis(DVec3::from_array(r.up))
             })
         });
-        let turn = surfmotion::render::y_up_turn(up.unwrap_or(DVec3::Y));
+        let turn = surfmotion::tools::render::y_up_turn(up.unwrap_or(DVec3::Y));
         let stood = |f: usize| -> Vec<[f64; 3]> {
             s.frame(f)
                 .iter()
@@ -280,7 +283,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .map(|p| [View::front(p.facing), View::side(p.facing)].map(|v| view_bounds(&p.pos, v)))
         .collect();
     let flat: Vec<([f64; 2], [f64; 2])> = bounds.iter().flatten().copied().collect();
-    let (framings, _) = surfmotion::render::shared_framing(&flat, size);
+    let (framings, _) = surfmotion::tools::render::shared_framing(&flat, size);
     let mut out: Option<Image> = None;
     for (i, p) in loaded.iter().enumerate() {
         let framing = [0, 1].map(|k| Some(framings[2 * i + k]));
@@ -365,7 +368,7 @@ pub fn preview_image(
     if count == 0 {
         return None;
     }
-    let frames: Vec<&[[f64; 3]]> = surfmotion::render::sheet_frames(count, o.preview_frames)
+    let frames: Vec<&[[f64; 3]]> = surfmotion::tools::render::sheet_frames(count, o.preview_frames)
         .into_iter()
         .map(|f| &positions[f * n..(f + 1) * n])
         .collect();
@@ -379,9 +382,9 @@ pub fn preview_image(
             DVec3::from_array(r.facing),
             &r.skeleton(frames[0]),
         ),
-        None => surfmotion::render::facing_of(frames[0]),
+        None => surfmotion::tools::render::facing_of(frames[0]),
     });
-    Some(surfmotion::render::contact_sheet(
+    Some(surfmotion::tools::render::contact_sheet(
         &frames,
         triangles,
         colours.as_deref(),
@@ -406,7 +409,7 @@ pub fn write_preview(
     // Front and side views of each frame, RGB.
     let panels = o.preview_frames.min(positions.len() / n.max(1)) as u128;
     let px = o.preview_size as u128;
-    surfmotion::budget::check(
+    surfmotion::util::budget::check(
         || {
             format!(
                 "{}: a contact sheet of {panels} frames at {px} px",

@@ -150,8 +150,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         // Nothing needs every frame at once: they go to the output as they
         // are made (issue 18, item 12); the plausibility is measured on the
         // first frames, as `transfer` does.
-        let keep_bytes =
-            PLAUSIBILITY_BYTES.min((surfmotion::budget::Budget::current().bytes / 4) as usize);
+        let keep_bytes = PLAUSIBILITY_BYTES
+            .min((surfmotion::util::budget::Budget::current().bytes / 4) as usize);
         let run = job.run_to(&a.mocap, &a.output, keep_bytes)?;
         let r = &run.report;
         let measured = run.kept.len() / ch.n().max(1);
@@ -200,7 +200,7 @@ fn print_report(
     r: &surfmotion::retarget::Report,
     written: Vec<PathBuf>,
     convention: &str,
-    plaus: Option<surfmotion::eval::Plausibility>,
+    plaus: Option<surfmotion::tools::eval::Plausibility>,
     partial: Option<usize>,
 ) -> anyhow::Result<()> {
     let fps = r.fps;
@@ -210,7 +210,10 @@ fn print_report(
         if let Some(k) = partial {
             v["plausibility_frames"] = serde_json::to_value(k)?;
         }
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
+        surfmotion::util::fsutil::write_bytes_atomic(
+            p,
+            serde_json::to_string_pretty(&v)?.as_bytes(),
+        )?;
     }
     let per_frame = per_frame_seconds(r);
     if a.run.json {

@@ -88,7 +88,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let character = SynthCharacter {
         rest,
         rig,
-        landmarks_json: surfmotion::fsutil::read_bytes(&a.landmarks)?,
+        landmarks_json: surfmotion::util::fsutil::read_bytes(&a.landmarks)?,
     };
     let (rest, rig) = (&character.rest, &character.rig);
     let opts = SynthOptions {

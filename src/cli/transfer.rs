@@ -285,7 +285,7 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
 fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::Result<()> {
     let dropped = report.scan.dropped_components.len();
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(
+        surfmotion::util::fsutil::write_bytes_atomic(
             p,
             serde_json::to_string_pretty(&serde_json::to_value(report)?)?.as_bytes(),
         )?;

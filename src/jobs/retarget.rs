@@ -8,7 +8,6 @@ use crate::batch::summary::count;
 use crate::batch::{Converted, Converter};
 use crate::db::{BuildProgress, Character, CharacterOptions};
 use crate::deform::{DeformMode, TurnedOver};
-use crate::eval::{Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error};
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
@@ -17,6 +16,9 @@ use crate::retarget::{Output, Report, RetargetOptions, Timings, synthesise, synt
 use crate::rig::LoadOptions;
 use crate::rig::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets};
 use crate::skeleton::Pose;
+use crate::tools::eval::{
+    Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error,
+};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -364,7 +366,7 @@ impl Converter for RetargetJob {
         // `retarget` keeps them (issue 39, item 4: batch dropped every
         // warning `eval` gives).
         let keep_bytes = super::transfer::PLAUSIBILITY_BYTES
-            .min((crate::budget::Budget::current().bytes / 8) as usize);
+            .min((crate::util::budget::Budget::current().bytes / 8) as usize);
         let run = self.run_to(clip, out, keep_bytes).map_err(|e| match e {
             JobError::Input { msg, .. } => msg,
             e => e.to_string(),

@@ -110,7 +110,7 @@ pub enum KeyframeError {
     /// mesh sequence (far-out-of-range targets give long compromises, and
     /// many key-frames long paths; the text says which).
     #[error("{0}")]
-    OverBudget(#[from] crate::budget::OverBudget),
+    OverBudget(#[from] crate::util::budget::OverBudget),
 }
 
 /// The longest target time of a query, in seconds (an hour, as `play
@@ -915,7 +915,7 @@ pub fn synthesise(
     } else {
         "the key-frame path (lower --distance or --time)".to_string()
     };
-    crate::budget::check_frames(&what, planned.frames(), ch.n(), 1)?;
+    crate::util::budget::check_frames(&what, planned.frames(), ch.n(), 1)?;
     let mut positions = Vec::with_capacity(planned.frames() * ch.n());
     let s = planned.synthesise_each(ch, targets, opts, |_, p| -> Result<(), KeyframeError> {
         positions.extend_from_slice(p);

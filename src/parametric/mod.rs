@@ -47,5 +47,5 @@ pub enum ParamError {
     Solve(#[from] crate::mesh::solver::SolveError),
     /// Writing the cache failed.
     #[error(transparent)]
-    Io(#[from] crate::fsutil::FsError),
+    Io(#[from] crate::util::fsutil::FsError),
 }

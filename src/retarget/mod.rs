@@ -240,7 +240,7 @@ pub enum RetargetError {
     Solve(#[from] SolveError),
     /// The output would not fit in memory (checked before allocating).
     #[error(transparent)]
-    Budget(#[from] crate::budget::OverBudget),
+    Budget(#[from] crate::util::budget::OverBudget),
 }
 
 /// Output frames made at once by [`synthesise_each`]: blended and deformed
@@ -252,7 +252,7 @@ pub const CHUNK_FRAMES: usize = 64;
 /// skeleton at the database frame rate) and the clip's neutral `reference`
 /// ([`query::load_mocap`] gives both): Sec. 5.2 up to interpolation. Every
 /// output frame is held: the memory is checked against
-/// [`crate::budget`] first. [`synthesise_each`] streams instead.
+/// [`crate::util::budget`] first. [`synthesise_each`] streams instead.
 pub fn synthesise(
     ch: &Character,
     mocap: &[Pose],
@@ -262,7 +262,7 @@ pub fn synthesise(
 ) -> Result<Output, RetargetError> {
     // One output frame per query frame, each holding the character's
     // vertices: refuse before allocating (issue 18, item 12).
-    crate::budget::check_frames(
+    crate::util::budget::check_frames(
         &format!("the retarget at {fps} fps"),
         mocap.len(),
         ch.n(),

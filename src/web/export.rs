@@ -794,13 +794,13 @@ pub fn check_output(out: &Path, inputs: &[PathBuf]) -> Result<(), WebError> {
     if names.is_empty() {
         return Ok(());
     }
-    let record: Option<Record> = crate::fsutil::read_small_text(&out.join(RECORD_FILE))
+    let record: Option<Record> = crate::util::fsutil::read_small_text(&out.join(RECORD_FILE))
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .filter(|r: &Record| r.format == RECORD_FORMAT);
     // A site of an earlier version: its manifest, no record.
     let legacy = record.is_none()
-        && crate::fsutil::read_small_text(&out.join(MANIFEST_FILE))
+        && crate::util::fsutil::read_small_text(&out.join(MANIFEST_FILE))
             .ok()
             .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
             .is_some_and(|v| v["format"] == FORMAT);
@@ -825,7 +825,7 @@ pub fn check_output(out: &Path, inputs: &[PathBuf]) -> Result<(), WebError> {
                 return foreign("not written by the earlier `web export` in this folder");
             };
             let body = if is_file {
-                crate::fsutil::read_bytes(&path).ok()
+                crate::util::fsutil::read_bytes(&path).ok()
             } else {
                 None
             };

@@ -220,7 +220,7 @@ fn skeleton_file(file: PathBuf, sequences: &[DbSequence]) -> DbSkeleton {
         .and_then(|n| n.strip_suffix(".skeleton.json"))
         .unwrap_or_default()
         .to_string();
-    let frames = crate::fsutil::read_small_text(&file)
+    let frames = crate::util::fsutil::read_small_text(&file)
         .map_err(|e| e.to_string())
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).map_err(|e| e.to_string()))
         .and_then(|v| {

@@ -3,7 +3,7 @@
 //! optional skeleton overlay; written as PNG. Used to check rig embeddings
 //! and deformations by eye, and by `surfmotion render`.
 
-use crate::fsutil::{FsError, write_atomic};
+use crate::util::fsutil::{FsError, write_atomic};
 use glam::DVec3;
 use std::path::Path;
 

@@ -6,7 +6,7 @@
 
 use super::{InspectError, JsonReport};
 use crate::batch::summary::count;
-use crate::fsutil::{MAX_INPUT_BYTES, open_input, read_bytes, read_small_text};
+use crate::util::fsutil::{MAX_INPUT_BYTES, open_input, read_bytes, read_small_text};
 use std::io::Read;
 use std::path::Path;
 

@@ -410,7 +410,7 @@ pub fn json_kind(v: &serde_json::Value) -> Option<&'static str> {
 fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
     use crate::rig::embed::landmarks::{Landmark, Landmarks, Mark};
     let err = |e: String| InspectError::Json(e);
-    let text = crate::fsutil::read_text(path).map_err(|e| err(e.to_string()))?;
+    let text = crate::util::fsutil::read_text(path).map_err(|e| err(e.to_string()))?;
     let v: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| err(format!("{}: {e}", path.display())))?;
     let mut lines = Vec::new();
@@ -669,7 +669,7 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
 enum Field {
     /// A whole number ≥ 0.
     Count,
-    /// A frame rate ([`crate::budget::is_frame_rate`]).
+    /// A frame rate ([`crate::util::budget::is_frame_rate`]).
     Fps,
     /// A finite number.
     Number,
@@ -692,7 +692,7 @@ impl Field {
         let finite = |x: &serde_json::Value| x.as_f64().is_some_and(f64::is_finite);
         match self {
             Field::Count => x.is_u64(),
-            Field::Fps => x.as_f64().is_some_and(crate::budget::is_frame_rate),
+            Field::Fps => x.as_f64().is_some_and(crate::util::budget::is_frame_rate),
             Field::Number => finite(x),
             Field::Text => x.is_string(),
             Field::Flag => x.is_boolean(),
@@ -710,8 +710,8 @@ impl Field {
             Field::Count => "a whole number".into(),
             Field::Fps => format!(
                 "a frame rate of {}-{} fps",
-                crate::budget::MIN_FPS,
-                crate::budget::MAX_FPS
+                crate::util::budget::MIN_FPS,
+                crate::util::budget::MAX_FPS
             ),
             Field::Number => "a finite number".into(),
             Field::Text => "a string".into(),
