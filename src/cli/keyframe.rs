@@ -331,7 +331,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             anyhow::ensure!(
                 span.is_finite() && span <= 100.0,
                 "key-frame '{k}': its joints span {} m: expected a body's 19 joints in metres, Y up",
-                surfmotion::parametric::script::short_number(span)
+                surfmotion::util::numfmt::Short(span)
             );
             anyhow::ensure!(
                 span > 0.01,

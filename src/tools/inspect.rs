@@ -542,12 +542,13 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
             lines.push(format!(
                 "a `play` script: {} over {} s, spaces {}; `play --db DB --script` checks it against the database's spaces",
                 count(a.len(), "request"),
-                crate::parametric::script::short_number(last),
+                crate::util::numfmt::Short(last),
                 if spaces.is_empty() { "-".to_string() } else { spaces.join(", ") }
             ));
             // The times `play` refuses whatever the database ("1 request
             // over 1e308 s" was printed as if the script were sound).
-            use crate::parametric::script::{MAX_SECONDS, short_number};
+            use crate::parametric::script::MAX_SECONDS;
+            use crate::util::numfmt::Short;
             let mut before = 0.0;
             for (i, r) in a.iter().enumerate() {
                 let Some(t) = r["t"].as_f64() else {
@@ -559,7 +560,7 @@ fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
                 if !(0.0..=MAX_SECONDS).contains(&t) || t < before {
                     lines.push(format!(
                         "problem: request {i}: t = {}: expected seconds in [0, {MAX_SECONDS}], in time order; `play` refuses it",
-                        short_number(t)
+                        Short(t)
                     ));
                     break;
                 }
