@@ -991,7 +991,7 @@ impl Geometry {
             target_normals.clear();
         }
         let path = ctx.path;
-        super::refuse_huge_coordinates(&positions, path)?;
+        super::format::refuse_huge_coordinates(&positions, path)?;
         let mut mesh = Mesh::new(positions, tris).map_err(|e| MeshError::from(e).in_file(path))?;
         if any_color {
             mesh = mesh

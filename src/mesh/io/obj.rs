@@ -66,13 +66,13 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, MeshError> {
                         .ok_or_else(|| {
                             MeshError::parse(path, line, format!("bad coordinate '{tok}'"))
                         })?;
-                    if v[k].abs() > super::MAX_ABS_COORDINATE {
+                    if v[k].abs() > super::format::MAX_ABS_COORDINATE {
                         return Err(MeshError::parse(
                             path,
                             line,
                             format!(
                                 "coordinate {tok} is beyond ±{:e}",
-                                super::MAX_ABS_COORDINATE
+                                super::format::MAX_ABS_COORDINATE
                             ),
                         ));
                     }

@@ -343,7 +343,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
     if !has_vertex {
         return Err(MeshError::invalid(path, "no vertex element"));
     }
-    super::refuse_huge_coordinates(&positions, path)?;
+    super::format::refuse_huge_coordinates(&positions, path)?;
     let mut mesh = Mesh::new(positions, tris).map_err(|e| MeshError::from(e).in_file(path))?;
     if !colors.is_empty() {
         mesh = mesh
