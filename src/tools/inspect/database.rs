@@ -8,7 +8,7 @@
 //! to now ([`crate::db::cache`]): computing it reads every sequence file
 //! once, as `db build` does before it reuses a cache.
 
-use super::InspectError;
+use super::error::InspectError;
 use crate::db::build::{
     default_measure, graph_key, graph_path, read_graph_cache, similarity_key, similarity_path,
 };

@@ -4,7 +4,8 @@
 //! its transitions (`m→n (L=w, cost)`, one a line). Another DOT file is
 //! described by its node and edge statements.
 
-use super::{InspectError, JsonReport};
+use super::error::InspectError;
+use super::json::JsonReport;
 use crate::batch::summary::count;
 use std::path::Path;
 
