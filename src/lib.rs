@@ -48,23 +48,20 @@
 //!   sharded.
 //!
 //! Tools:
-//! - [`eval`]: the papers' metrics (joint-velocity error) and plausibility
-//!   checks of a result.
-//! - [`render`]: a small software rasteriser for PNG views of meshes and
-//!   rigs.
-//! - [`inspect`]: what any supported file holds, what was assumed, and
-//!   problems.
+//! - [`tools`]: [`tools::eval`], the papers' metrics (joint-velocity error)
+//!   and plausibility checks of a result; [`tools::render`], a small
+//!   software rasteriser for PNG views of meshes and rigs;
+//!   [`tools::inspect`], what any supported file holds, what was assumed,
+//!   and problems.
 //! - [`web`]: the character in a web browser (Volino et al. 2015): compact
 //!   4D geometry, a static site with a WebGL2 page and an animation engine
 //!   over the graph, and a local server.
 //! - [`synth`]: synthetic data made by the project's own code: procedural
 //!   clips, the procedural humanoid and synthetic databases.
-//! - [`budget`]: limits on what one job may ask for, checked before
-//!   allocating.
-//! - [`fsutil`]: atomic writes, bounded reads and the shared file-error
-//!   shape.
-//! - [`numfmt`]: numbers in messages printed in a short form whatever
-//!   their magnitude.
+//! - [`util`]: [`util::budget`], limits on what one job may ask for,
+//!   checked before allocating; [`util::fsutil`], atomic writes, bounded
+//!   reads and the shared file-error shape; [`util::numfmt`], numbers in
+//!   messages printed in a short form whatever their magnitude.
 #![warn(missing_docs)]
 
 // Input.
@@ -87,11 +84,7 @@ pub mod transfer;
 pub mod batch;
 pub mod jobs;
 // Tools.
-pub mod budget;
-pub mod eval;
-pub mod fsutil;
-pub mod inspect;
-pub mod numfmt;
-pub mod render;
 pub mod synth;
+pub mod tools;
+pub mod util;
 pub mod web;

@@ -15,7 +15,6 @@ mod common;
 use glam::DVec3;
 use surfmotion::db::Character;
 use surfmotion::drive::query::load_mocap;
-use surfmotion::eval::{Checker, PlausibilityOptions};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
 use surfmotion::rig::embed::Embedding;
@@ -23,6 +22,7 @@ use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::rig::retarget::{NeutralSource, character_neutral, retarget_with_neutral};
 use surfmotion::rig::{Canonical as C, LoadOptions as ClipOptions};
 use surfmotion::skeleton::Pose;
+use surfmotion::tools::eval::{Checker, PlausibilityOptions};
 
 /// The neck → head bone's angle to the pelvis → neck line (degrees).
 fn head_trunk(p: &Pose) -> f64 {

@@ -640,8 +640,8 @@ fn render_panels(o: &Output) -> Vec<(glam::DVec3, glam::DVec3)> {
 fn facing_figures() {
     use glam::{DQuat, DVec3};
     use surfmotion::mesh::io::{LoadOptions, load_sequence};
-    use surfmotion::render::{facing_of, facing_of_frames};
     use surfmotion::rig::embed::{Embedding, landmarks::Landmarks, parts::Part};
+    use surfmotion::tools::render::{facing_of, facing_of_frames};
     let (Some(data), Ok(files)) = (common::data_dir(), std::env::var("SURFMOTION_FACING_FILES"))
     else {
         return;
@@ -711,7 +711,7 @@ fn facing_figures() {
 #[test]
 fn preview_faces_each_panel_from_its_own_body() {
     use glam::{DQuat, DVec3};
-    use surfmotion::render::preview::{PreviewOptions, panel_facing, preview_image};
+    use surfmotion::tools::render::preview::{PreviewOptions, panel_facing, preview_image};
     let ch = common::humanoid_character(0.04);
     let front = DVec3::from_array(ch.rig.facing);
     let yaws: Vec<f64> = (0..12).map(|k| (k * 30) as f64).collect();

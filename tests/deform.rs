@@ -353,7 +353,7 @@ fn an_edge_on_triangle_does_not_send_its_vertex_off_the_surface() {
 
 /// CMU 131_01 retargeted onto the real samba capture: no vertex leaves its
 /// one-ring by more than the captured frames do + the plausibility check's
-/// margin ([`surfmotion::eval::Limits::off_ring_margin`], 4 mean rest edge
+/// margin ([`surfmotion::tools::eval::Limits::off_ring_margin`], 4 mean rest edge
 /// lengths). The repair's untangling once shot vertex 2357 0.39 m (27 edge
 /// lengths) off its ring in frame 108, against the capture's 1.6. The
 /// frames around it are deformed (the library's `deform`, as `retarget`
@@ -362,7 +362,7 @@ fn an_edge_on_triangle_does_not_send_its_vertex_off_the_surface() {
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_real_retarget_keeps_every_vertex_in_its_ring() {
-    use surfmotion::eval::triangles::RestTriangles;
+    use surfmotion::tools::eval::triangles::RestTriangles;
     let Some(d) = common::data_dir() else { return };
     let ch = Character::load(&samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
     let n = ch.n();
@@ -374,7 +374,7 @@ fn a_real_retarget_keeps_every_vertex_in_its_ring() {
         ch.frame_metres(f, &mut buf);
         captured = captured.max(rt.off_ring(&buf).0);
     }
-    let line = captured + surfmotion::eval::Limits::default().off_ring_margin;
+    let line = captured + surfmotion::tools::eval::Limits::default().off_ring_margin;
     let mut m = load_mocap(
         &d.join("mocap/cmu-bvh/131_01.bvh"),
         &Default::default(),

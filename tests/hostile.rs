@@ -1993,7 +1993,7 @@ fn assert_streamed_pc2(out: &Path, frames: usize, dir: &Path) {
     let count = i32::from_le_bytes(bytes[28..32].try_into().unwrap()) as usize;
     assert_eq!(count, frames);
     assert_eq!(bytes.len(), 32 + 12 * n * frames);
-    assert!((n * frames * 24) as u64 > surfmotion::budget::parse_bytes(SMALL).unwrap());
+    assert!((n * frames * 24) as u64 > surfmotion::util::budget::parse_bytes(SMALL).unwrap());
     let names: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -2756,7 +2756,7 @@ fn bvh_quirks_of_other_suites_parse_alike() {
     ];
     for (what, q) in &variants {
         // Classic Mac line ends reach the parser as read_text makes them.
-        let text = surfmotion::fsutil::decode_text(suite_bvh(q).into_bytes());
+        let text = surfmotion::util::fsutil::decode_text(suite_bvh(q).into_bytes());
         let c = parse(what, &text);
         assert_eq!(c.joint_count(), 5, "{what}");
         assert_eq!(c.frame_count(), 3, "{what}");
@@ -2898,7 +2898,7 @@ proptest::proptest! {
     /// return survives (each became a line end).
     #[test]
     fn decoded_text_has_no_lone_carriage_returns(b in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..200)) {
-        let t = surfmotion::fsutil::decode_text(b);
+        let t = surfmotion::util::fsutil::decode_text(b);
         let bytes = t.as_bytes();
         for (i, &c) in bytes.iter().enumerate() {
             if c == b'\r' {
@@ -3993,7 +3993,7 @@ fn a_template_frame_past_the_end_names_the_flag_and_the_file() {
 /// magnitude now prints short.
 #[test]
 fn extreme_numbers_print_short_in_messages() {
-    use surfmotion::numfmt::Short;
+    use surfmotion::util::numfmt::Short;
     let mut x = 1e-308_f64;
     while x < 1e308 {
         for v in [x, -x, x * 3.7, x * 9.99995]
@@ -4346,11 +4346,11 @@ fn a_killed_writes_temporary_is_removed_by_the_next_write() {
     let name = std::ffi::OsStr::new("walk.bvh");
     let stale = tmp.path().join(format!(
         "{}Zz99Yy.part",
-        surfmotion::fsutil::temp_prefix(dead, name)
+        surfmotion::util::fsutil::temp_prefix(dead, name)
     ));
     let alive = tmp.path().join(format!(
         "{}Zz99Yy.part",
-        surfmotion::fsutil::temp_prefix(std::process::id(), name)
+        surfmotion::util::fsutil::temp_prefix(std::process::id(), name)
     ));
     std::fs::write(&stale, vec![0u8; 1 << 20]).unwrap();
     std::fs::write(&alive, b"in progress").unwrap();
@@ -4645,7 +4645,7 @@ fn inspect_of_an_sm4d_declaring_millions_of_frames_does_not_load_them() {
     assert!(stdout.contains("5000000 in all"), "{stdout}");
     // A decoder that returns the positions refuses them over the budget.
     let bytes = std::fs::read(&f).unwrap();
-    let budget = surfmotion::budget::Budget::current().bytes as u128;
+    let budget = surfmotion::util::budget::Budget::current().bytes as u128;
     if budget < 5_000_000 * 10 * 6 {
         assert!(matches!(
             surfmotion::web::codec::decode(&bytes),

@@ -3,9 +3,9 @@
 mod common;
 
 use std::path::Path;
-use surfmotion::eval::{FootOptions, clip_sliding};
 use surfmotion::rig::{LoadOptions, load_clip};
 use surfmotion::synth::{Gait, gait_clip};
+use surfmotion::tools::eval::{FootOptions, clip_sliding};
 
 #[test]
 fn committed_clips_match_the_generator() {

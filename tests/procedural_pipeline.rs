@@ -13,10 +13,10 @@ use surfmotion::db::Character;
 use surfmotion::db::Quiet;
 use surfmotion::deform::DeformMode;
 use surfmotion::drive::{Output, RetargetOptions, synthesise};
-use surfmotion::eval::velocity_error;
 use surfmotion::rig::retarget::clip_poses;
 use surfmotion::skeleton::Pose;
 use surfmotion::synth::{Gait, gait_clip};
+use surfmotion::tools::eval::velocity_error;
 
 /// Grid spacing of the test character (metres): coarser than the demo's
 /// 0.02, for speed.

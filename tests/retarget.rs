@@ -9,9 +9,9 @@ use surfmotion::db::Character;
 use surfmotion::drive::query::load_mocap;
 use surfmotion::drive::timeline::plays_on;
 use surfmotion::drive::{RetargetOptions, synthesise};
-use surfmotion::eval::velocity_error;
 use surfmotion::similarity::VertexSet;
 use surfmotion::similarity::vertex::VertexOptions;
+use surfmotion::tools::eval::velocity_error;
 
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_surfmotion")

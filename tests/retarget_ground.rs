@@ -11,10 +11,10 @@ use surfmotion::db::{Character, Quiet};
 use surfmotion::deform::DeformMode;
 use surfmotion::drive::query::database_floor_lift;
 use surfmotion::drive::{RetargetOptions, synthesise};
-use surfmotion::eval::{floor_height, lowest_heights};
 use surfmotion::rig::retarget::{choose_reference, clip_poses};
 use surfmotion::skeleton::Pose;
 use surfmotion::synth::{Gait, gait_clip};
+use surfmotion::tools::eval::{floor_height, lowest_heights};
 
 const GRID: f64 = 0.035;
 const FPS: f64 = 30.0;

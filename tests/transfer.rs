@@ -7,10 +7,10 @@ mod common;
 use glam::{DQuat, DVec3};
 use std::path::Path;
 use surfmotion::drive::query::load_mocap;
-use surfmotion::eval::vertex_error;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::mesh::{Mesh, MeshSequence};
 use surfmotion::rig::embed::landmarks::Landmarks;
+use surfmotion::tools::eval::vertex_error;
 use surfmotion::transfer::markers::generate;
 use surfmotion::transfer::{
     Job, MarkerOptions, MarkerSpec, SignMode, Source, TransferOptions, TransferStats, prepare,

@@ -1,10 +1,10 @@
 //! Reader warnings are `tracing` events where they are raised (issue 19),
-//! target `surfmotion::fsutil::WARNING`, and are still collected in the
+//! target `surfmotion::util::fsutil::WARNING`, and are still collected in the
 //! struct the reader returns.
 #![cfg(feature = "cli")]
 
 use std::sync::{Arc, Mutex};
-use surfmotion::fsutil::WARNING;
+use surfmotion::util::fsutil::WARNING;
 use tracing::field::{Field, Visit};
 use tracing_subscriber::layer::{Context, Layer, SubscriberExt};
 

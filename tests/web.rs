@@ -414,7 +414,7 @@ fn exported_transitions_carry_precomputed_nonlinear_windows() {
 
 /// The export's window blend (each database frame decomposed once, the
 /// alignment applied to the decomposition) gives the frames the per-frame
-/// [`web::export::blend_windows_per_frame`] gives, with the default cache
+/// [`web::windows::blend_windows_per_frame`] gives, with the default cache
 /// budget (whole groups per batch) and with a budget of one window per
 /// batch.
 #[test]
@@ -427,7 +427,7 @@ fn fast_window_blend_matches_the_per_frame_blender() {
         table.iter().any(|t| t.align[1].abs() > 1e-3),
         "no transition turns the target: the analytic alignment is untested"
     );
-    let want = web::export::blend_windows_per_frame(&g, &table).unwrap();
+    let want = web::windows::blend_windows_per_frame(&g, &table).unwrap();
     for cache_bytes in [web::WindowOptions::default().cache_bytes, 1] {
         let got = web::blend_windows(&g, &table, &web::WindowOptions { cache_bytes }).unwrap();
         assert_eq!(got.len(), want.len());

@@ -2,12 +2,12 @@
 //! The first byte picks the file name (a JSON report, pose, skeleton,
 //! rig, play script or site manifest; a manifest; a PNG; a similarity
 //! cache), the rest is the file: the JSON classifier and each kind's
-//! summary (`surfmotion::inspect::json_kind` and what follows) read it as
+//! summary (`surfmotion::tools::inspect::json_kind` and what follows) read it as
 //! `inspect` reads files the user points it at.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use surfmotion::inspect::{InspectOptions, inspect};
+use surfmotion::tools::inspect::{InspectOptions, inspect};
 
 const NAMES: [&str; 6] = [
     "f.json",

@@ -15,7 +15,7 @@ fuzz_target!(|data: &[u8]| {
         surfmotion::mocap::bvh::parse_bvh(BVH, Path::new("f.bvh"), &Default::default())
             .expect("fixed BVH parses")
     });
-    let t = surfmotion::fsutil::decode_text(data.to_vec());
+    let t = surfmotion::util::fsutil::decode_text(data.to_vec());
     if let Ok(map) = serde_json::from_str::<surfmotion::rig::RigMap>(&t) {
         let _ = map.poses(clip);
     }

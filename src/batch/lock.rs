@@ -114,7 +114,7 @@ fn compatible(a: &Option<String>, b: &Option<String>) -> bool {
 }
 
 fn read_holder(p: &Path) -> Option<Holder> {
-    serde_json::from_str(&crate::fsutil::read_small_text(p).ok()?).ok()
+    serde_json::from_str(&crate::util::fsutil::read_small_text(p).ok()?).ok()
 }
 
 /// Takes the lock `dir/STEM.lock` for a run of `shard` (None: the whole

@@ -81,7 +81,7 @@ pub struct ClipWarning {
 impl ClipWarning {
     /// The warnings of a plausibility report, each with its kind, count
     /// and worst frame.
-    pub fn of(p: &crate::eval::Plausibility) -> Vec<ClipWarning> {
+    pub fn of(p: &crate::tools::eval::Plausibility) -> Vec<ClipWarning> {
         p.warnings
             .iter()
             .map(|m| {

@@ -10,7 +10,7 @@
 //! report of what it finished.
 
 use super::runner::{ClipOutcome, ClipStatus, Preparation};
-use crate::fsutil::{FsError, write_bytes_atomic};
+use crate::util::fsutil::{FsError, write_bytes_atomic};
 use serde::Serialize;
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -338,7 +338,7 @@ impl Earlier {
         files.sort_by_key(|p| (p.file_name().is_some_and(|n| n == own), p.clone()));
         let mut e = Earlier::default();
         for f in files {
-            let Ok(text) = crate::fsutil::read_text(&f) else {
+            let Ok(text) = crate::util::fsutil::read_text(&f) else {
                 continue;
             };
             let Ok(v) = serde_json::from_str::<serde_json::Value>(&text) else {

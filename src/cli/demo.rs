@@ -4,14 +4,14 @@ use std::path::PathBuf;
 use std::time::Instant;
 use surfmotion::db::Character;
 use surfmotion::drive::{RetargetOptions, synthesise};
-use surfmotion::eval::velocity_error;
 use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::save_sequence;
-use surfmotion::render::{Scene, View, render};
 use surfmotion::rig::retarget::clip_poses;
 use surfmotion::synth::humanoid::humanoid_landmarks;
 use surfmotion::synth::{Gait, gait_clip};
+use surfmotion::tools::eval::velocity_error;
+use surfmotion::tools::render::{Scene, View, render};
 
 /// Arguments of `demo`.
 #[derive(clap::Args)]
@@ -73,7 +73,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let seq = MeshSequence::new(ch.topology_metres(), out.positions.clone(), Some(fps))?;
     save_sequence(&seq, &result, Some(fps))?;
     let r = &out.report;
-    surfmotion::fsutil::write_bytes_atomic(
+    surfmotion::util::fsutil::write_bytes_atomic(
         &dir.join("turn.report.json"),
         serde_json::to_string_pretty(r)?.as_bytes(),
     )?;
@@ -86,7 +86,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // A strip of frames, seen from the side of the path.
     let n = ch.n();
     let frames = r.frames;
-    let mut strip: Option<surfmotion::render::Image> = None;
+    let mut strip: Option<surfmotion::tools::render::Image> = None;
     for k in [
         0,
         frames / 4,

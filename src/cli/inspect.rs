@@ -2,7 +2,7 @@
 
 use super::ClipOpts;
 use std::path::PathBuf;
-use surfmotion::inspect::{InspectOptions, inspect};
+use surfmotion::tools::inspect::{InspectOptions, inspect};
 
 /// Arguments of `inspect`.
 #[derive(clap::Args)]
@@ -33,7 +33,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         },
     };
     let mut r = inspect(&a.file, &opts)?;
-    if let surfmotion::inspect::Report::Database(d) = &mut r {
+    if let surfmotion::tools::inspect::Report::Database(d) = &mut r {
         for p in &mut d.problems {
             *p = super::without_os_error_numbers(p);
         }

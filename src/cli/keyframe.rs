@@ -97,7 +97,10 @@ fn path(
     // The report and --json say which targets were missed, as the text does.
     let mut v = serde_json::to_value(&run.report)?;
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
+        surfmotion::util::fsutil::write_bytes_atomic(
+            p,
+            serde_json::to_string_pretty(&v)?.as_bytes(),
+        )?;
     }
     if a.json {
         v["output"] = serde_json::to_value(&run.written)?;
@@ -158,7 +161,7 @@ fn grid(
         let r = r.map_err(flagged)?;
         if let Some(p) = &a.report {
             let json = serde_json::to_string_pretty(&r.report)?;
-            surfmotion::fsutil::write_bytes_atomic(p, json.as_bytes())?;
+            surfmotion::util::fsutil::write_bytes_atomic(p, json.as_bytes())?;
         }
         if a.json {
             return emit_json(&r.report);
@@ -174,7 +177,10 @@ fn grid(
     bar.finish_and_clear();
     let g = g.map_err(flagged)?;
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&g)?.as_bytes())?;
+        surfmotion::util::fsutil::write_bytes_atomic(
+            p,
+            serde_json::to_string_pretty(&g)?.as_bytes(),
+        )?;
     }
     if let Some(p) = &a.plot {
         surfmotion::keyframe::heatmap::save(&g, p)?;

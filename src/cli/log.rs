@@ -3,8 +3,8 @@
 //! to the summary that prints them.
 
 /// The module whose warnings are a result's plausibility warnings
-/// ([`surfmotion::eval::Plausibility`]'s `logged`).
-const PLAUSIBILITY_MODULE: &str = "surfmotion::eval::plausibility";
+/// ([`surfmotion::tools::eval::Plausibility`]'s `logged`).
+const PLAUSIBILITY_MODULE: &str = "surfmotion::tools::eval::plausibility";
 
 static WARNINGS_IN_SUMMARY: std::sync::atomic::AtomicBool =
     std::sync::atomic::AtomicBool::new(false);
@@ -30,7 +30,8 @@ pub fn init() {
     // Reader warnings (target `surfmotion::warning`) are kept in the reports
     // the verbs print (inspect, rig check), so they are not printed again.
     let is_notice = |m: &tracing::Metadata<'_>| m.target() == surfmotion::jobs::batch::NOTICE;
-    let is_reader_warning = |m: &tracing::Metadata<'_>| m.target() == surfmotion::fsutil::WARNING;
+    let is_reader_warning =
+        |m: &tracing::Metadata<'_>| m.target() == surfmotion::util::fsutil::WARNING;
     // A result's plausibility warnings, when the verb prints them in its
     // text summary (see [`warnings_in_summary`]).
     let is_summarised = |m: &tracing::Metadata<'_>| {

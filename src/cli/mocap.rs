@@ -330,7 +330,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             if a.json {
                 crate::outln!("{}", serde_json::to_string_pretty(&det)?)?;
             } else {
-                crate::cli::emit(&surfmotion::inspect::detection_text(&det))?;
+                crate::cli::emit(&surfmotion::tools::inspect::detection_text(&det))?;
                 if !det.missing.is_empty() {
                     let m: Vec<&str> = det.missing.iter().map(|c| c.name()).collect();
                     crate::outln!(

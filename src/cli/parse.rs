@@ -15,12 +15,12 @@ pub fn mesh_spec(s: &str) -> Result<String, String> {
 }
 
 /// A frame rate on the command line: a finite number in
-/// [[`MIN_FPS`](surfmotion::budget::MIN_FPS),
-/// [`MAX_FPS`](surfmotion::budget::MAX_FPS)] (1-1000). (A typo such as
+/// [[`MIN_FPS`](surfmotion::util::budget::MIN_FPS),
+/// [`MAX_FPS`](surfmotion::util::budget::MAX_FPS)] (1-1000). (A typo such as
 /// `--input-fps 1e-4` or `--fps 1e9` would otherwise ask for billions of
 /// frames; issue 18, item 12.)
 pub fn frame_rate(s: &str) -> Result<f64, String> {
-    use surfmotion::budget::{MAX_FPS, MIN_FPS, is_frame_rate};
+    use surfmotion::util::budget::{MAX_FPS, MIN_FPS, is_frame_rate};
     let v: f64 = s
         .trim()
         .parse()

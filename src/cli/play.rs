@@ -94,7 +94,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         );
     }
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(
+        surfmotion::util::fsutil::write_bytes_atomic(
             p,
             serde_json::to_string_pretty(report)?.as_bytes(),
         )?;

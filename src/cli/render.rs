@@ -4,13 +4,13 @@
 use glam::DVec3;
 use std::path::PathBuf;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
-use surfmotion::render::preview::PreviewOptions;
-use surfmotion::render::{
-    Framing, Image, Scene, View, facing_of_frames, label_colour, render_framed, view_bounds,
-};
 use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::Embedding;
 use surfmotion::rig::embed::joints::nearest_axis;
+use surfmotion::tools::render::preview::PreviewOptions;
+use surfmotion::tools::render::{
+    Framing, Image, Scene, View, facing_of_frames, label_colour, render_framed, view_bounds,
+};
 
 /// Arguments of `render`.
 #[derive(clap::Args)]
@@ -34,7 +34,7 @@ pub struct Args {
     /// of every panel. Defaults to each panel's own: across the hips and
     /// shoulders of the rig's skeleton on the frame drawn, else read off
     /// the mesh's shoulders and knees over the frames around the one drawn
-    /// (see `surfmotion::render::facing_of_frames`).
+    /// (see `surfmotion::tools::render::facing_of_frames`).
     #[arg(long, allow_hyphen_values = true)]
     pub facing: Option<String>,
     /// The mesh's up axis (+y, -y, +z, -z, +x, -x): the frames are turned
@@ -123,7 +123,10 @@ pub fn draw_framed(
         let f = framing[k].unwrap_or_else(|| Framing::fit(positions, views[k], size));
         let mut lines = lines.clone();
         if let Some(y) = floor.filter(|y| y.is_finite()) {
-            lines.insert(0, surfmotion::render::floor_line(views[k], f, y, size));
+            lines.insert(
+                0,
+                surfmotion::tools::render::floor_line(views[k], f, y, size),
+            );
         }
         let scene = Scene {
             lines: &lines,
@@ -165,7 +168,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // panel by panel (each joined copy is a new picture: twice the
     // picture at the peak), plus one panel's depth buffer.
     let (width, height) = (2 * a.mesh.len() as u128 * size as u128, size as u128);
-    surfmotion::budget::check(
+    surfmotion::util::budget::check(
         || {
             format!(
                 "{}: a picture of {} mesh(es) at --size {size} ({width} × {height} pixels)",
@@ -207,7 +210,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 nearest_axis(DVec3::from_array(r.up))
             })
         });
-        let turn = surfmotion::render::y_up_turn(up.unwrap_or(DVec3::Y));
+        let turn = surfmotion::tools::render::y_up_turn(up.unwrap_or(DVec3::Y));
         let stood = |f: usize| -> Vec<[f64; 3]> {
             s.frame(f)
                 .iter()
@@ -222,7 +225,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             (Some(f), _, _) => turn * parse_axis(f)?,
             (None, Some(r), Some(j)) => {
                 let j = j.map(|p| turn * p);
-                surfmotion::render::preview::rig_facing(r, &j)
+                surfmotion::tools::render::preview::rig_facing(r, &j)
                     .unwrap_or(turn * DVec3::from_array(r.facing))
             }
             _ => {
@@ -256,7 +259,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         .map(|p| [View::front(p.facing), View::side(p.facing)].map(|v| view_bounds(&p.pos, v)))
         .collect();
     let flat: Vec<([f64; 2], [f64; 2])> = bounds.iter().flatten().copied().collect();
-    let (framings, _) = surfmotion::render::shared_framing(&flat, size);
+    let (framings, _) = surfmotion::tools::render::shared_framing(&flat, size);
     let mut out: Option<Image> = None;
     for (i, p) in loaded.iter().enumerate() {
         let framing = [0, 1].map(|k| Some(framings[2 * i + k]));

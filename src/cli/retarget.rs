@@ -150,8 +150,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         // Nothing needs every frame at once: they go to the output as they
         // are made (issue 18, item 12); the plausibility is measured on the
         // first frames, as `transfer` does.
-        let keep_bytes =
-            PLAUSIBILITY_BYTES.min((surfmotion::budget::Budget::current().bytes / 4) as usize);
+        let keep_bytes = PLAUSIBILITY_BYTES
+            .min((surfmotion::util::budget::Budget::current().bytes / 4) as usize);
         let run = job.run_to(&a.mocap, &a.output, keep_bytes)?;
         let r = &run.report;
         let measured = run.kept.len() / ch.n().max(1);
@@ -170,7 +170,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let plaus = job.plausibility_of(&run);
     if let Some(path) = &a.run.preview.preview {
         // Each panel faced from its own body (`render`'s rule).
-        surfmotion::render::preview::write_preview(
+        surfmotion::tools::render::preview::write_preview(
             path,
             &out.positions,
             ch.n(),
@@ -195,7 +195,7 @@ fn print_report(
     r: &surfmotion::drive::Report,
     written: Vec<PathBuf>,
     convention: &str,
-    plaus: Option<surfmotion::eval::Plausibility>,
+    plaus: Option<surfmotion::tools::eval::Plausibility>,
     partial: Option<usize>,
 ) -> anyhow::Result<()> {
     let fps = r.fps;
@@ -205,7 +205,10 @@ fn print_report(
         if let Some(k) = partial {
             v["plausibility_frames"] = serde_json::to_value(k)?;
         }
-        surfmotion::fsutil::write_bytes_atomic(p, serde_json::to_string_pretty(&v)?.as_bytes())?;
+        surfmotion::util::fsutil::write_bytes_atomic(
+            p,
+            serde_json::to_string_pretty(&v)?.as_bytes(),
+        )?;
     }
     let per_frame = per_frame_seconds(r);
     if a.run.json {

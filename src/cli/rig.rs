@@ -3,11 +3,11 @@
 
 use std::path::PathBuf;
 use std::time::Instant;
-use surfmotion::fsutil::read_text;
 use surfmotion::rig::Canonical;
 use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::rig::embed::parts::{Part, neighbours, piece_counts};
 use surfmotion::rig::embed::{Embedding, parse_parts};
+use surfmotion::util::fsutil::read_text;
 
 /// `rig` subcommands.
 #[derive(clap::Subcommand)]

@@ -88,7 +88,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let character = SynthCharacter {
         rest,
         rig,
-        landmarks_json: surfmotion::fsutil::read_bytes(&a.landmarks)?,
+        landmarks_json: surfmotion::util::fsutil::read_bytes(&a.landmarks)?,
     };
     let (rest, rig) = (&character.rest, &character.rig);
     let opts = SynthOptions {
@@ -110,7 +110,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             plaus_text.push(format!("{}: {}", row.sequence, p.text()));
         }
         if a.run.preview.preview.is_some() {
-            sheets.extend(surfmotion::render::preview::preview_image(
+            sheets.extend(surfmotion::tools::render::preview::preview_image(
                 positions,
                 rest.vertex_count(),
                 rest.triangles(),

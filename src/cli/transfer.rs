@@ -259,7 +259,7 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
     if let Some(path) = &a.run.preview.preview {
         let up = prepared.rig.as_ref().map(surfmotion::transfer::up_axis);
         let y_up = up.is_none_or(|u| u == glam::DVec3::Y);
-        surfmotion::render::preview::write_preview(
+        surfmotion::tools::render::preview::write_preview(
             path,
             &outcome.positions,
             prepared.mesh.vertex_count(),
@@ -288,7 +288,7 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
 fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::Result<()> {
     let dropped = report.scan.dropped_components.len();
     if let Some(p) = &a.report {
-        surfmotion::fsutil::write_bytes_atomic(
+        surfmotion::util::fsutil::write_bytes_atomic(
             p,
             serde_json::to_string_pretty(&serde_json::to_value(report)?)?.as_bytes(),
         )?;

@@ -148,8 +148,8 @@ fn summary(r: &web::ExportReport) -> String {
         g.bytes as f64 / 1e3,
         g.bytes as f64 / 1e3 / g.frames.max(1) as f64,
         r.raw_bytes as f64 / g.bytes.max(1) as f64,
-        surfmotion::numfmt::Short(g.max_error * 1e3),
-        surfmotion::numfmt::Short(g.step * 1e3),
+        surfmotion::util::numfmt::Short(g.max_error * 1e3),
+        surfmotion::util::numfmt::Short(g.step * 1e3),
     );
     match (r.transitions, r.transition_frames) {
         (0, _) => s += ", no transitions",

@@ -8,7 +8,6 @@
 use super::cache::{self, KeyHasher, add_rig, cache_dir, frames_key};
 use super::manifest::{DbError, Manifest};
 use super::skeletons::{SkeletonKind, embed_rig, poses};
-use crate::fsutil::{read_text, write_bytes_atomic};
 use crate::graph::SurfaceMotionGraph;
 use crate::mocap::units::y_up;
 use crate::similarity::vertex::VertexOptions;
@@ -16,6 +15,7 @@ use crate::similarity::{
     ColourSet, Measure, PairDistance, ShapeSet, SimilarityMatrix, SkeletonSet, Span, VertexSet,
     all_pairs,
 };
+use crate::util::fsutil::{read_text, write_bytes_atomic};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;

@@ -13,8 +13,8 @@
 //! with the diagonal, row by row, as `n (n + 1) / 2` f32.
 
 use super::manifest::{DbError, Manifest};
-use crate::fsutil::{FsError, write_atomic};
 use crate::similarity::{SimilarityMatrix, Span};
+use crate::util::fsutil::{FsError, write_atomic};
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use xxhash_rust::xxh3::Xxh3;
@@ -81,7 +81,7 @@ impl KeyHasher {
             path: p.to_path_buf(),
             source: e,
         };
-        let mut f = crate::fsutil::open_input(p, crate::fsutil::MAX_INPUT_BYTES)?;
+        let mut f = crate::util::fsutil::open_input(p, crate::util::fsutil::MAX_INPUT_BYTES)?;
         let mut buf = vec![0u8; 1 << 20];
         let mut total = 0u64;
         loop {
@@ -167,7 +167,7 @@ pub fn read_matrix(path: &Path, key: u64) -> Result<Option<SimilarityMatrix>, St
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         _ => {}
     }
-    let bytes = crate::fsutil::read_bytes(path).map_err(|e| e.source.to_string())?;
+    let bytes = crate::util::fsutil::read_bytes(path).map_err(|e| e.source.to_string())?;
     parse_matrix_checked(&bytes, key)
 }
 

@@ -141,7 +141,7 @@ impl Character {
             None => None,
             Some(p) => {
                 let p = Manifest::resolve(dir, p);
-                let text = crate::fsutil::read_text(&p)?;
+                let text = crate::util::fsutil::read_text(&p)?;
                 let ids: Vec<u32> = serde_json::from_str(&text).map_err(|e| {
                     bad(format!(
                         "{}: expected a JSON array of vertex ids ({e})",

@@ -29,8 +29,8 @@ use std::path::{Path, PathBuf};
 
 /// The highest frame rate a manifest may name (frames per second): a
 /// larger one is a typo that would make `retarget` resample to billions of
-/// frames. The lowest is [`crate::budget::MIN_FPS`].
-pub const MAX_FPS: f64 = crate::budget::MAX_FPS;
+/// frames. The lowest is [`crate::util::budget::MIN_FPS`].
+pub const MAX_FPS: f64 = crate::util::budget::MAX_FPS;
 
 /// True for text with NUL bytes or many invalid UTF-8 sequences (read
 /// lossily as U+FFFD): a binary file, whose bytes must not be echoed into
@@ -331,7 +331,7 @@ pub enum DbError {
     Mesh(#[from] MeshError),
     /// Writing failed.
     #[error(transparent)]
-    Io(#[from] crate::fsutil::FsError),
+    Io(#[from] crate::util::fsutil::FsError),
     /// The rig could not be embedded.
     #[error(transparent)]
     Rig(#[from] crate::rig::embed::EmbedError),
@@ -349,7 +349,7 @@ pub enum DbError {
         /// The database folder.
         dir: PathBuf,
         /// The write that failed.
-        source: crate::fsutil::FsError,
+        source: crate::util::fsutil::FsError,
     },
     /// A person-sized character whose rest frame, in the manifest's
     /// `units`, is not a person's size ([`HUMAN_SIZE_M`]): a wrong unit.
@@ -369,7 +369,7 @@ pub enum DbError {
 impl DbError {
     /// A failed write of the cache of the database at `dir`: refused
     /// permission or a read-only file system is [`DbError::CacheUnwritable`].
-    pub fn cache_write(dir: &std::path::Path, e: crate::fsutil::FsError) -> DbError {
+    pub fn cache_write(dir: &std::path::Path, e: crate::util::fsutil::FsError) -> DbError {
         use std::io::ErrorKind as K;
         match e.source.kind() {
             K::PermissionDenied | K::ReadOnlyFilesystem => DbError::CacheUnwritable {
@@ -501,7 +501,7 @@ impl Manifest {
             });
         }
         let path = dir.join(MANIFEST);
-        let text = crate::fsutil::read_small_text(&path).map_err(|e| DbError::Manifest {
+        let text = crate::util::fsutil::read_small_text(&path).map_err(|e| DbError::Manifest {
             path: path.clone(),
             msg: format!(
                 "{} (is this a database directory? `surfmotion db init` writes one)",
@@ -534,11 +534,11 @@ impl Manifest {
                 printable(&self.name, 60)
             ));
         }
-        if !crate::budget::is_frame_rate(self.fps) {
+        if !crate::util::budget::is_frame_rate(self.fps) {
             return Err(format!(
                 "fps = {} is not a frame rate (expected a number in [{}, {MAX_FPS}])",
                 self.fps,
-                crate::budget::MIN_FPS
+                crate::util::budget::MIN_FPS
             ));
         }
         if crate::mocap::units::parse_unit(&self.units).is_none() {
@@ -557,12 +557,12 @@ impl Manifest {
                 return Err(format!("two sequences are called '{}'", s.name));
             }
             if let Some(f) = s.fps
-                && !crate::budget::is_frame_rate(f)
+                && !crate::util::budget::is_frame_rate(f)
             {
                 return Err(format!(
                     "sequence '{}': fps = {f} is not a frame rate (expected a number in [{}, {MAX_FPS}])",
                     s.name,
-                    crate::budget::MIN_FPS
+                    crate::util::budget::MIN_FPS
                 ));
             }
         }
@@ -673,7 +673,7 @@ impl Manifest {
             path: dir.join(MANIFEST),
             msg: e.to_string(),
         })?;
-        crate::fsutil::write_bytes_atomic(&dir.join(MANIFEST), text.as_bytes())?;
+        crate::util::fsutil::write_bytes_atomic(&dir.join(MANIFEST), text.as_bytes())?;
         Ok(())
     }
 
@@ -863,7 +863,7 @@ mod tests {
         use std::io::{Error, ErrorKind};
         let dir = Path::new("/data/db");
         for kind in [ErrorKind::ReadOnlyFilesystem, ErrorKind::PermissionDenied] {
-            let e = crate::fsutil::FsError {
+            let e = crate::util::fsutil::FsError {
                 path: dir.join("cache/similarity-shape.bin"),
                 source: Error::from(kind),
             };
@@ -876,7 +876,7 @@ mod tests {
                 "{msg}"
             );
         }
-        let e = crate::fsutil::FsError {
+        let e = crate::util::fsutil::FsError {
             path: dir.join("cache/graph-shape.json"),
             source: Error::from(ErrorKind::StorageFull),
         };

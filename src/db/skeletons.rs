@@ -6,12 +6,12 @@
 
 use super::manifest::{DbError, Manifest};
 use super::rigid::{Fit, FitOptions, RigidSkeleton};
-use crate::fsutil::read_text;
 use crate::mesh::Mesh;
 use crate::rig::Canonical;
 use crate::rig::embed::landmarks::Landmarks;
 use crate::rig::embed::{Embedding, parse_parts};
 use crate::skeleton::{Pose, bone_lengths};
+use crate::util::fsutil::read_text;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;

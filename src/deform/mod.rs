@@ -676,7 +676,7 @@ impl Deformer {
     /// vertices the fixed budget and the repair would have fixed anyway,
     /// further into their fans' thin feasible sets; those turn the right
     /// way against the reference normals but not against the rest frame's
-    /// neighbourhoods (`crate::eval::triangles`): CMU 03_02 on samba, where
+    /// neighbourhoods (`crate::tools::eval::triangles`): CMU 03_02 on samba, where
     /// nothing is left turned over either way, read 110 → 121 triangles
     /// turned over against the rest frame in its worst frame (s12-blocks3).
     fn repair(

@@ -35,7 +35,7 @@ pub enum QueryError {
         /// The clip.
         path: PathBuf,
         /// The estimate.
-        source: crate::budget::OverBudget,
+        source: crate::util::budget::OverBudget,
     },
     /// The clip's rig could not be mapped to the canonical joints.
     #[error("{path}: {msg}")]
@@ -112,7 +112,7 @@ pub fn to_character(rest: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<P
 /// How far above its rest frame a database character's frames stand
 /// (metres): the median over its frames of the lowest vertex's height (the
 /// floor the plausibility checks measure from,
-/// [`crate::eval::floor_height`]) minus the rest frame's lowest vertex
+/// [`crate::tools::eval::floor_height`]) minus the rest frame's lowest vertex
 /// height. The retargeting stands the character's soles where they are at
 /// rest; a database whose frames stand higher (a rest mesh scanned or
 /// posed apart from the capture) would otherwise see every result sunk

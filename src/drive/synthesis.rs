@@ -119,7 +119,7 @@ pub enum RetargetError {
     Solve(#[from] SolveError),
     /// The output would not fit in memory (checked before allocating).
     #[error(transparent)]
-    Budget(#[from] crate::budget::OverBudget),
+    Budget(#[from] crate::util::budget::OverBudget),
     /// The prepared character was made for another character or another
     /// deformation ([`Prepared::fits`]).
     #[error("the prepared character does not fit this run: {0}")]
@@ -143,7 +143,7 @@ pub const CHUNK_FRAMES: usize = 64;
 /// ([`super::query::load_mocap`] gives both): Sec. 5.2 up to interpolation. A
 /// one-off: the character is prepared ([`Prepared::new`]) for this call
 /// and every output frame is held (the memory is checked against
-/// [`crate::budget`] first). A job driving several clips prepares once and
+/// [`crate::util::budget`] first). A job driving several clips prepares once and
 /// calls [`Prepared::synthesise`] with any [`FrameSink`].
 pub fn synthesise(
     ch: &Character,
@@ -154,7 +154,7 @@ pub fn synthesise(
 ) -> Result<Output, RetargetError> {
     // One output frame per query frame, each holding the character's
     // vertices: refuse before allocating (issue 18, item 12).
-    crate::budget::check_frames(
+    crate::util::budget::check_frames(
         &format!("the retarget at {fps} fps"),
         mocap.len(),
         ch.n(),

@@ -5,8 +5,8 @@
 //! along the diagonal.
 
 use super::SurfaceMotionGraph;
-use crate::render::Image;
 use crate::similarity::SimilarityMatrix;
+use crate::tools::render::Image;
 
 /// Five stops of the viridis colour map.
 const RAMP: [[f64; 3]; 5] = [

@@ -63,7 +63,7 @@ pub enum BatchError {
     Lock(#[from] crate::batch::LockError),
     /// A report could not be written.
     #[error(transparent)]
-    Fs(#[from] crate::fsutil::FsError),
+    Fs(#[from] crate::util::fsutil::FsError),
 }
 
 /// The report of [`batch_folder`].
@@ -127,7 +127,7 @@ pub fn batch_folder(
         Some(s) => s.select(&planned),
         None => planned,
     };
-    std::fs::create_dir_all(output).map_err(|source| crate::fsutil::FsError {
+    std::fs::create_dir_all(output).map_err(|source| crate::util::fsutil::FsError {
         path: output.to_path_buf(),
         source,
     })?;

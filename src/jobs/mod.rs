@@ -90,10 +90,10 @@ pub enum JobError {
     Transfer(#[from] crate::transfer::JobError),
     /// A file could not be read or written.
     #[error(transparent)]
-    Fs(#[from] crate::fsutil::FsError),
+    Fs(#[from] crate::util::fsutil::FsError),
     /// The job would not fit in memory (checked before allocating).
     #[error(transparent)]
-    Budget(#[from] crate::budget::OverBudget),
+    Budget(#[from] crate::util::budget::OverBudget),
     /// A report could not be serialised.
     #[error(transparent)]
     Json(#[from] serde_json::Error),

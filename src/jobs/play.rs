@@ -31,7 +31,7 @@ pub struct PlayOptions {
 pub enum PlayError {
     /// The script could not be read, or a report written.
     #[error(transparent)]
-    Fs(#[from] crate::fsutil::FsError),
+    Fs(#[from] crate::util::fsutil::FsError),
     /// The database has no `[[space]]`, or its manifest is wrong.
     #[error(transparent)]
     Db(#[from] crate::db::DbError),
@@ -81,7 +81,7 @@ pub struct PlayRun {
 /// script error. A manifest that cannot be read is left to the model's
 /// loader.
 pub fn read_script(db: &Path, script: &Path) -> Result<String, PlayError> {
-    let text = crate::fsutil::read_small_text(script)?;
+    let text = crate::util::fsutil::read_small_text(script)?;
     if let Ok(m) = Manifest::load(db) {
         m.require_spaces(db)?;
         let params: Vec<Vec<Parameter>> = m

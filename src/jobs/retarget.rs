@@ -10,13 +10,15 @@ use crate::db::{BuildProgress, Character, CharacterOptions};
 use crate::deform::{DeformMode, TurnedOver};
 use crate::drive::query::{MocapPoses, load_mocap, to_database};
 use crate::drive::{Each, Output, Prepared, Report, RetargetOptions, Timings};
-use crate::eval::{Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error};
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
 use crate::rig::LoadOptions;
 use crate::rig::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets};
 use crate::skeleton::Pose;
+use crate::tools::eval::{
+    Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error,
+};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -143,7 +145,7 @@ impl RetargetJob {
         let mocap = self.load_clip(clip)?;
         // One output frame per query frame, each holding the character's
         // vertices: refuse before allocating (issue 18, item 12).
-        crate::budget::check_frames(
+        crate::util::budget::check_frames(
             &format!("the retarget at {fps} fps"),
             mocap.poses.len(),
             ch.n(),
@@ -339,7 +341,7 @@ fn measure(
     positions: &[[f64; 3]],
     turned_over: Option<TurnedOver>,
     clip: Option<&MocapPoses>,
-) -> Result<(Plausibility, f64), crate::eval::EvalError> {
+) -> Result<(Plausibility, f64), crate::tools::eval::EvalError> {
     let opts = c.opts;
     let Some(m) = clip else {
         return Ok((c.measure(positions, ch.n(), turned_over)?.logged(), c.floor));
@@ -488,7 +490,7 @@ impl Converter for RetargetJob {
         // `retarget` keeps them (issue 39, item 4: batch dropped every
         // warning `eval` gives).
         let keep_bytes = super::transfer::PLAUSIBILITY_BYTES
-            .min((crate::budget::Budget::current().bytes / 8) as usize);
+            .min((crate::util::budget::Budget::current().bytes / 8) as usize);
         let run = self.run_to(clip, out, keep_bytes).map_err(|e| match e {
             JobError::Input { msg, .. } => msg,
             e => e.to_string(),

@@ -55,7 +55,7 @@ impl SkeletonFile {
     /// Writes it (compact JSON, sorted keys) atomically.
     pub fn save(&self, path: &Path) -> Result<(), JobError> {
         let v = serde_json::to_value(self)?;
-        crate::fsutil::write_bytes_atomic(path, serde_json::to_string(&v)?.as_bytes())?;
+        crate::util::fsutil::write_bytes_atomic(path, serde_json::to_string(&v)?.as_bytes())?;
         Ok(())
     }
 }

@@ -9,13 +9,13 @@
 
 use super::{JobError, SkeletonFile};
 use crate::db::{Manifest, RigSpec, SequenceEntry};
-use crate::eval::{Checker, Plausibility};
 use crate::mesh::io::save_sequence;
 use crate::mesh::{Mesh, MeshSequence};
 use crate::rig::LoadOptions;
 use crate::rig::embed::Embedding;
 use crate::rig::retarget::ClipPoses;
 use crate::synth::database::{Dynamics, drive};
+use crate::tools::eval::{Checker, Plausibility};
 use serde::Serialize;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -175,7 +175,7 @@ pub fn write_synthetic_database(
         &dir.join("topology.obj"),
         None,
     )?;
-    crate::fsutil::write_bytes_atomic(&dir.join("landmarks.json"), landmarks_json)?;
+    crate::util::fsutil::write_bytes_atomic(&dir.join("landmarks.json"), landmarks_json)?;
     let fps = opts.fps;
     let t1 = Instant::now();
     let (mut sequences, mut rows, mut names) = (Vec::new(), Vec::new(), BTreeSet::new());
@@ -214,7 +214,7 @@ pub fn write_synthetic_database(
         }
         // Skinned frames, their dynamics copy and the sequence: refuse a
         // clip that cannot fit before allocating (issue 18, item 12).
-        crate::budget::check_frames(
+        crate::util::budget::check_frames(
             &format!("{}", source.display()),
             poses.len(),
             rest.vertex_count(),

@@ -8,7 +8,6 @@ use super::JobError;
 use crate::batch::{ClipWarning, Converted, Converter, Preparation};
 use crate::drive::Each;
 use crate::drive::query::{MocapPoses, load_mocap, to_character};
-use crate::eval::{Checker, PlausibilityOptions, VelocityError, velocity_error};
 use crate::mesh::Mesh;
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
@@ -16,6 +15,7 @@ use crate::mesh::io::stream::SequenceWriter;
 use crate::rig::LoadOptions;
 use crate::rig::embed::landmarks::Landmarks;
 use crate::skeleton::Pose;
+use crate::tools::eval::{Checker, PlausibilityOptions, VelocityError, velocity_error};
 use crate::transfer::{
     Confluent, MarkerOptions, MarkerSpec, PreparedScan, TransferOptions, TransferStats,
     mocap_motion, prepare, transfer, transfer_into,
@@ -133,7 +133,7 @@ impl ScanTransferJob {
         }
         // Every output frame is held: refuse what cannot fit before
         // anything is allocated ([`Converter::convert`] streams instead).
-        crate::budget::check_frames(
+        crate::util::budget::check_frames(
             "the transfer",
             mocap.poses.len(),
             self.prepared.mesh.vertex_count(),
@@ -222,7 +222,7 @@ impl Converter for ScanTransferJob {
         .map_err(|e| e.to_string())?;
         let n = self.prepared.mesh.vertex_count();
         let keep_bytes =
-            PLAUSIBILITY_BYTES.min((crate::budget::Budget::current().bytes / 8) as usize);
+            PLAUSIBILITY_BYTES.min((crate::util::budget::Budget::current().bytes / 8) as usize);
         let keep = (keep_bytes / (24 * n.max(1))).clamp(1, motion.frames().max(1));
         let mut kept: Vec<[f64; 3]> = Vec::with_capacity(keep * n);
         let mut skel: Vec<Pose> = Vec::with_capacity(motion.frames());
@@ -361,11 +361,11 @@ pub struct TransferOutcome {
     /// What the transfer did.
     pub stats: TransferStats,
     /// Error against the ground truth, when one was given.
-    pub truth_error: Option<crate::eval::VertexError>,
+    pub truth_error: Option<crate::tools::eval::VertexError>,
     /// Metres per scan unit assumed for the plausibility measure.
     pub metres_per_unit: Option<f64>,
     /// Plausibility against the scan's rest frame (with a rig).
-    pub plausibility: Option<crate::eval::Plausibility>,
+    pub plausibility: Option<crate::tools::eval::Plausibility>,
     /// Seconds from the start to the factorisation.
     pub setup_seconds: f64,
     /// Seconds to set up the job (factor the system, build the motion).
@@ -411,7 +411,7 @@ pub struct TransferReport {
     /// Metres per scan unit assumed.
     pub metres_per_unit_assumed: Option<f64>,
     /// Plausibility of the result.
-    pub plausibility: Option<crate::eval::Plausibility>,
+    pub plausibility: Option<crate::tools::eval::Plausibility>,
 }
 
 /// Metres per unit of a scan whose rig is `height` units tall, assuming a
@@ -642,7 +642,7 @@ fn transfer_inner(
         None => {
             // Every output frame is held: refuse what cannot fit before
             // anything is allocated (issue 18, item 12).
-            crate::budget::check_frames("the transfer", frames, n, 1)?;
+            crate::util::budget::check_frames("the transfer", frames, n, 1)?;
             let (positions, stats) = transfer(
                 &job.confluent,
                 &mut job.motion,
@@ -663,7 +663,7 @@ fn transfer_inner(
             )?;
             // The first frames, for the plausibility measure.
             let keep_bytes =
-                PLAUSIBILITY_BYTES.min((crate::budget::Budget::current().bytes / 4) as usize);
+                PLAUSIBILITY_BYTES.min((crate::util::budget::Budget::current().bytes / 4) as usize);
             let keep = (keep_bytes / (24 * n.max(1))).clamp(1, frames);
             let mut kept = Vec::with_capacity(keep * n);
             let stats = transfer_into(
@@ -699,7 +699,7 @@ fn transfer_inner(
                     ),
                 });
             }
-            Some(crate::eval::vertex_error(
+            Some(crate::tools::eval::vertex_error(
                 &positions,
                 t.all_positions(),
                 prepared.mesh.vertex_count(),
@@ -716,8 +716,8 @@ fn transfer_inner(
         let rest = prepared.mesh.positions();
         // The axis the scan stands along, as the transfer stood it.
         let up = crate::transfer::up_axis(rig);
-        let opts = crate::eval::PlausibilityOptions::default();
-        crate::eval::Checker::new(&prepared.mesh, rig, up, None, fps, opts)
+        let opts = crate::tools::eval::PlausibilityOptions::default();
+        crate::tools::eval::Checker::new(&prepared.mesh, rig, up, None, fps, opts)
             .and_then(|mut c| {
                 c.metres_per_unit = mpu;
                 c.measure(&positions, rest.len(), None)
@@ -726,7 +726,7 @@ fn transfer_inner(
                 Some(h) => p.with_clip_head(h, &opts.limits),
                 None => p,
             })
-            .map(crate::eval::Plausibility::logged)
+            .map(crate::tools::eval::Plausibility::logged)
             .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
             .ok()
     });

@@ -229,10 +229,10 @@ pub enum GridError {
     /// More targets than [`MAX_GRID_TARGETS`].
     #[error(
         "a grid of {} targets ({} distances × {} times): at most {}; lower the number of distances or times (a larger step or a shorter range)",
-        crate::budget::thousands(*.count),
-        crate::budget::thousands(*.distances as u128),
-        crate::budget::thousands(*.times as u128),
-        crate::budget::thousands(*.max as u128)
+        crate::util::budget::thousands(*.count),
+        crate::util::budget::thousands(*.distances as u128),
+        crate::util::budget::thousands(*.times as u128),
+        crate::util::budget::thousands(*.max as u128)
     )]
     TooMany {
         /// Targets asked for.
@@ -246,7 +246,7 @@ pub enum GridError {
     },
     /// Its queries' records exceed the memory budget.
     #[error("{0}")]
-    OverBudget(#[from] crate::budget::OverBudget),
+    OverBudget(#[from] crate::util::budget::OverBudget),
 }
 
 /// Refuses a grid of `distances × times` targets before any query runs:
@@ -263,8 +263,13 @@ pub fn check_grid(distances: usize, times: usize) -> Result<(), GridError> {
     }
     let each =
         std::mem::size_of::<GridQuery>().max(std::mem::size_of::<super::smoothest::FloorQuery>());
-    crate::budget::check(
-        || format!("a grid of {} targets", crate::budget::thousands(count)),
+    crate::util::budget::check(
+        || {
+            format!(
+                "a grid of {} targets",
+                crate::util::budget::thousands(count)
+            )
+        },
         count * each as u128,
     )?;
     Ok(())

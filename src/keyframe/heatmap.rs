@@ -6,8 +6,8 @@
 //! PNG is the cells alone (8 px each).
 
 use super::grid::{GridQuery, GridReport};
-use crate::fsutil::{FsError, write_bytes_atomic};
-use crate::render::Image;
+use crate::tools::render::Image;
+use crate::util::fsutil::{FsError, write_bytes_atomic};
 use std::path::Path;
 
 /// The larger of the two errors, percent of the target.

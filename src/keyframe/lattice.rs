@@ -145,7 +145,7 @@
 
 use super::repeats::Measure;
 use super::search::{ArcView, SearchOptions, Segment, Target};
-use crate::budget::OverBudget;
+use crate::util::budget::OverBudget;
 
 /// Options of the exact-length search.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -378,7 +378,7 @@ impl Chain {
     /// needs more frames. The rows of `0..=m` do not depend on how far
     /// the table goes, so the result is the one [`chain_extremes`] gives.
     /// An error when the table for `m` frames exceeds the memory budget
-    /// ([`crate::budget`]; the doubled table is only taken when it fits).
+    /// ([`crate::util::budget`]; the doubled table is only taken when it fits).
     pub fn extremes(&self, m: usize) -> Result<std::sync::Arc<Extremes>, OverBudget> {
         let mut g = match self.cache_lock() {
             Some(g) => g,
@@ -389,7 +389,7 @@ impl Chain {
         }
         let have = g.as_ref().map_or(0, |e| e.frames());
         let more = m.max((2 * have).min(20_000));
-        let fits = crate::budget::Budget::current().bytes as u128
+        let fits = crate::util::budget::Budget::current().bytes as u128
             >= extremes_bytes(self.node_count(), more);
         let e = std::sync::Arc::new(chain_extremes(self, if fits { more } else { m })?);
         *g = Some(e.clone());
@@ -537,15 +537,15 @@ fn budget_hint(c: &Chain, m: usize, budget: u128) -> String {
 
 /// The exact-length extremes of a chain up to `m` frames (step 1);
 /// refused before anything is allocated when the table ([`extremes_bytes`])
-/// exceeds the memory budget ([`crate::budget`]).
+/// exceeds the memory budget ([`crate::util::budget`]).
 pub fn chain_extremes(c: &Chain, m: usize) -> Result<Extremes, OverBudget> {
     let n = c.node_count();
-    crate::budget::check(
+    crate::util::budget::check(
         || {
             format!(
                 "the key-frame search's exact-length table ({n} nodes × {} frame counts{})",
                 m as u128 + 1,
-                budget_hint(c, m, crate::budget::Budget::current().bytes as u128)
+                budget_hint(c, m, crate::util::budget::Budget::current().bytes as u128)
             )
         },
         extremes_bytes(n, m),

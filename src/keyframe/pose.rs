@@ -108,7 +108,7 @@ pub fn read_pose(ch: &Character, key: &str, load: &LoadOptions) -> Result<Pose, 
 }
 
 fn read_json(p: &Path) -> Result<Pose, String> {
-    let text = crate::fsutil::read_small_text(p).map_err(|e| e.to_string())?;
+    let text = crate::util::fsutil::read_small_text(p).map_err(|e| e.to_string())?;
     let v: Vec<[f64; 3]> = serde_json::from_str(&text).map_err(|e| {
         format!(
             "{}: {e} (expected {} [x, y, z] joints, metres, Y up)",

@@ -209,7 +209,7 @@ pub enum SearchError {
     /// the memory budget (its text says what to change: the key-frames or
     /// the target, [`super::lattice::chain_extremes`]).
     #[error("{0}")]
-    OverBudget(#[from] crate::budget::OverBudget),
+    OverBudget(#[from] crate::util::budget::OverBudget),
     /// A grid of targets too large to run ([`super::grid::check_grid`]).
     #[error(transparent)]
     Grid(#[from] super::grid::GridError),

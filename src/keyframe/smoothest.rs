@@ -42,9 +42,9 @@
 use super::lattice::{Chain, Found, LatticeOptions, chain_extremes, solve_capped};
 use super::search::{SearchError, Target};
 use super::{Planner, join, mean_smoothness, transitions};
-use crate::budget::OverBudget;
 use crate::db::Character;
 use crate::drive::timeline::TimelineOptions;
+use crate::util::budget::OverBudget;
 use serde::Serialize;
 
 /// The smoothest path found for one target.

@@ -1,4 +1,4 @@
-use crate::fsutil::{FileError, FsError};
+use crate::util::fsutil::{FileError, FsError};
 use std::path::{Path, PathBuf};
 
 /// Errors of mesh construction, readers and writers: the shared file-error

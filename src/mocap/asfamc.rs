@@ -18,7 +18,7 @@ use super::bvh::quoted;
 use super::clip::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
 use super::error::MocapError;
 use super::euler;
-use crate::fsutil::raise_warning;
+use crate::util::fsutil::raise_warning;
 use glam::{DQuat, DVec3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -552,7 +552,7 @@ fn build_tree(
 
 /// Reads an ASF file.
 pub fn read_asf(path: &Path) -> Result<AsfSkeleton, MocapError> {
-    parse_asf(&crate::fsutil::read_text(path)?, path)
+    parse_asf(&crate::util::fsutil::read_text(path)?, path)
 }
 
 impl AsfSkeleton {
@@ -702,12 +702,12 @@ pub fn parse_amc(
             .iter()
             .map(|b| 24 + 8 * b.dof.len() as u128 + 56)
             .sum::<u128>();
-    crate::budget::check(
+    crate::util::budget::check(
         || {
             format!(
                 "{} frames × {} bones",
-                crate::budget::thousands(frame_count as u128),
-                crate::budget::thousands(skel.bones.len() as u128)
+                crate::util::budget::thousands(frame_count as u128),
+                crate::util::budget::thousands(skel.bones.len() as u128)
             )
         },
         frame_count as u128 * per_frame,
@@ -807,13 +807,13 @@ pub fn parse_amc(
         return Err(MocapError::invalid(path, "no frames"));
     }
     let fps = opts.fps.unwrap_or(120.0);
-    if !crate::budget::is_frame_rate(fps) {
+    if !crate::util::budget::is_frame_rate(fps) {
         return Err(MocapError::invalid(
             path,
             format!(
                 "`AmcOptions::fps` {fps}: expected a frame rate in [{}, {}]",
-                crate::budget::MIN_FPS,
-                crate::budget::MAX_FPS
+                crate::util::budget::MIN_FPS,
+                crate::util::budget::MAX_FPS
             ),
         ));
     }
@@ -833,5 +833,5 @@ pub fn parse_amc(
 /// Reads an AMC file with its ASF.
 pub fn read_amc(amc: &Path, asf: &Path, opts: &AmcOptions) -> Result<Clip, MocapError> {
     let skel = read_asf(asf)?;
-    parse_amc(&crate::fsutil::read_text(amc)?, amc, &skel, opts)
+    parse_amc(&crate::util::fsutil::read_text(amc)?, amc, &skel, opts)
 }

@@ -13,7 +13,7 @@
 use super::clip::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
 use super::error::MocapError;
 use super::euler;
-use crate::fsutil::raise_warning;
+use crate::util::fsutil::raise_warning;
 use glam::{DQuat, DVec3};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -654,14 +654,14 @@ impl MotionHeader {
             .ok()
             .filter(|v: &f64| v.is_finite() && *v > 0.0);
         let frame_time = match (opts.fps, file_ft) {
-            (Some(fps), _) if crate::budget::is_frame_rate(fps) => 1.0 / fps,
+            (Some(fps), _) if crate::util::budget::is_frame_rate(fps) => 1.0 / fps,
             (Some(fps), _) => {
                 return Err(MocapError::invalid(
                     path,
                     format!(
                         "`BvhOptions::fps` {fps}: expected a frame rate in [{}, {}]",
-                        crate::budget::MIN_FPS,
-                        crate::budget::MAX_FPS
+                        crate::util::budget::MIN_FPS,
+                        crate::util::budget::MAX_FPS
                     ),
                 ));
             }
@@ -713,7 +713,9 @@ impl MotionHeader {
         // A single pose with an absurd rate (`Frame Time 1e-30`) was kept,
         // and `mocap convert` wrote the absurd rate back out: take 30 fps,
         // as for a single pose's `Frame Time 0`.
-        if opts.fps.is_none() && frames <= 1 && !crate::budget::is_frame_rate(1.0 / self.frame_time)
+        if opts.fps.is_none()
+            && frames <= 1
+            && !crate::util::budget::is_frame_rate(1.0 / self.frame_time)
         {
             raise_warning(
                 warnings,
@@ -722,8 +724,8 @@ impl MotionHeader {
                     "line {}: Frame Time {} with a single frame is outside [{}, {}] frames per second; 30 fps assumed",
                     self.time_line,
                     quoted(&self.time_value),
-                    crate::budget::MIN_FPS,
-                    crate::budget::MAX_FPS
+                    crate::util::budget::MIN_FPS,
+                    crate::util::budget::MAX_FPS
                 ),
             );
             self.frame_time = 1.0 / 30.0;
@@ -739,16 +741,17 @@ impl MotionHeader {
                 ),
             ));
         }
-        if opts.fps.is_none() && frames > 1 && !crate::budget::is_frame_rate(1.0 / frame_time) {
+        if opts.fps.is_none() && frames > 1 && !crate::util::budget::is_frame_rate(1.0 / frame_time)
+        {
             return Err(MocapError::parse(
                 path,
                 self.time_line,
                 format!(
                     "Frame Time {} s is {} frames per second, outside [{}, {}]{}; give the frame rate with `BvhOptions::fps`",
                     self.time_value,
-                    crate::numfmt::Short(1.0 / frame_time),
-                    crate::budget::MIN_FPS,
-                    crate::budget::MAX_FPS,
+                    crate::util::numfmt::Short(1.0 / frame_time),
+                    crate::util::budget::MIN_FPS,
+                    crate::util::budget::MAX_FPS,
                     if frame_time > 1.0 && frame_time < 1000.0 {
                         " (milliseconds instead of seconds?)"
                     } else {
@@ -798,12 +801,12 @@ fn parse_frames(
     let mut data = lines.filter(|(_, l)| !l.trim().is_empty()).peekable();
     let frames = data.clone().count();
     let per_frame = (joints.len() * (size_of::<DQuat>() + size_of::<DVec3>())) as u128;
-    crate::budget::check(
+    crate::util::budget::check(
         || {
             format!(
                 "{} frames × {} joints",
-                crate::budget::thousands(frames as u128),
-                crate::budget::thousands(joints.len() as u128)
+                crate::util::budget::thousands(frames as u128),
+                crate::util::budget::thousands(joints.len() as u128)
             )
         },
         frames as u128 * per_frame,
@@ -866,7 +869,7 @@ fn parse_frames(
 
 /// Reads a BVH file.
 pub fn read_bvh(path: &Path, opts: &BvhOptions) -> Result<Clip, MocapError> {
-    let text = crate::fsutil::read_text(path)?;
+    let text = crate::util::fsutil::read_text(path)?;
     parse_bvh(&text, path, opts)
 }
 
@@ -976,7 +979,7 @@ pub fn format_bvh(clip: &Clip) -> String {
 /// Writes a clip as BVH, atomically.
 pub fn write_bvh(clip: &Clip, path: &Path) -> Result<(), MocapError> {
     let text = format_bvh(clip);
-    crate::fsutil::write_bytes_atomic(path, text.as_bytes())?;
+    crate::util::fsutil::write_bytes_atomic(path, text.as_bytes())?;
     Ok(())
 }
 
@@ -1046,7 +1049,7 @@ mod tests {
             let blank = b.is_ascii_whitespace() || matches!(b, 0x0b | b'{' | b'}');
             bytes.push(if blank { b'a' } else { b });
         }
-        let text = crate::fsutil::decode_text(bytes);
+        let text = crate::util::fsutil::decode_text(bytes);
         let e = parse_bvh(&text, Path::new("g.bvh"), &BvhOptions::default())
             .unwrap_err()
             .to_string();

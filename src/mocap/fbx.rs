@@ -23,8 +23,8 @@
 
 use super::clip::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
 use super::error::MocapError;
-use crate::fsutil::{raise_warning, read_bytes};
-use crate::numfmt::Short;
+use crate::util::fsutil::{raise_warning, read_bytes};
+use crate::util::numfmt::Short;
 use glam::{DMat3, DQuat, DVec3};
 use std::path::Path;
 

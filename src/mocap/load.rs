@@ -41,7 +41,8 @@ impl MocapFormat {
         MocapFormat::of(path).or_else(|| {
             use std::io::Read;
             let mut head = [0u8; 64];
-            let f = crate::fsutil::open_input(path, crate::fsutil::MAX_INPUT_BYTES).ok()?;
+            let f =
+                crate::util::fsutil::open_input(path, crate::util::fsutil::MAX_INPUT_BYTES).ok()?;
             let k = f.take(64).read(&mut head).ok()?;
             is_fbx(&head[..k]).then_some(MocapFormat::Fbx)
         })

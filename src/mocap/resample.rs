@@ -32,16 +32,16 @@ impl Clip {
     }
 
     /// [`Clip::resampled`] after checking that the result fits the memory
-    /// budget ([`crate::budget`]).
-    pub fn try_resampled(&self, fps: f64) -> Result<Clip, crate::budget::OverBudget> {
+    /// budget ([`crate::util::budget`]).
+    pub fn try_resampled(&self, fps: f64) -> Result<Clip, crate::util::budget::OverBudget> {
         let frames = self.resampled_frame_count(fps).unwrap_or(0);
         let joints = self.joint_count() as u128;
-        crate::budget::check(
+        crate::util::budget::check(
             || {
                 format!(
                     "{:.3} s of motion at {fps} fps ({} frames of {} joints)",
                     self.duration(),
-                    crate::budget::thousands(frames),
+                    crate::util::budget::thousands(frames),
                     joints
                 )
             },

@@ -72,7 +72,7 @@ impl std::fmt::Display for Notice {
                 f,
                 "space '{space}': {} {} {u} is outside the valid range [{:.3}, {:.3}] {u}: clamped to {used:.3}",
                 parameter.name(),
-                super::script::short_number(*asked),
+                crate::util::numfmt::Short(*asked),
                 range[0],
                 range[1],
                 u = parameter.unit()

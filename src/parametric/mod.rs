@@ -14,6 +14,7 @@
 
 pub mod align;
 pub mod controller;
+pub mod error;
 pub mod hybrid;
 pub mod local;
 pub mod params;
@@ -23,29 +24,6 @@ pub mod store;
 pub mod transition;
 
 pub use controller::{Control, Controller, Notice, TransitionRecord};
+pub use error::ParamError;
 pub use params::Parameter;
 pub use space::{Motion, MotionOptions, MotionSpace};
-
-/// Errors of the parametric layer.
-#[derive(Debug, thiserror::Error)]
-pub enum ParamError {
-    /// A `[[space]]` entry of the manifest cannot be built.
-    #[error("{path}: space '{space}': {msg}")]
-    Space {
-        /// The manifest.
-        path: std::path::PathBuf,
-        /// The space's name.
-        space: String,
-        /// What is wrong.
-        msg: String,
-    },
-    /// The database failed to load.
-    #[error(transparent)]
-    Db(#[from] crate::db::DbError),
-    /// The blender could not be factored on the topology.
-    #[error("the topology cannot be factored for blending: {0}")]
-    Solve(#[from] crate::mesh::solver::SolveError),
-    /// Writing the cache failed.
-    #[error(transparent)]
-    Io(#[from] crate::fsutil::FsError),
-}

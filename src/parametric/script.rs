@@ -15,6 +15,7 @@
 use super::Parameter;
 use super::controller::{Control, Controller, Notice, TransitionRecord};
 use super::space::{Motion, SpaceSummary};
+use crate::util::numfmt::Short;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -55,17 +56,6 @@ pub const MAX_SPEED: f64 = 100.0;
 /// `"turn": -1e300` played a character spun by 1e300 degrees a second
 /// (exit 0).
 pub const MAX_TURN: f64 = 3600.0;
-
-/// A number as a person reads it in a message: plain in [1e-4, 1e6),
-/// else in scientific notation (`{}` of 1e300 prints 301 digits).
-pub fn short_number(v: f64) -> String {
-    let a = v.abs();
-    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&a) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
-}
 
 /// Parses and checks a script against the model's spaces and parameters.
 pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Request>, ScriptError> {
@@ -136,14 +126,14 @@ pub fn parse_script_for(
         if !(0.0..=MAX_SECONDS).contains(&t) {
             return Err(at(format!(
                 "t = {}: expected seconds in [0, {MAX_SECONDS}]",
-                short_number(t)
+                Short(t)
             )));
         }
         if t < last {
             return Err(at(format!(
                 "t = {} is before the previous request's {}: requests must be in time order",
-                short_number(t),
-                short_number(last)
+                Short(t),
+                Short(last)
             )));
         }
         last = t;
@@ -182,7 +172,7 @@ pub fn parse_script_for(
             match num(k)? {
                 Some(v) if v.abs() > max => Err(at(format!(
                     "\"{k}\" is {} {unit}: expected at most {max} {unit} either way",
-                    short_number(v)
+                    Short(v)
                 ))),
                 v => Ok(v),
             }

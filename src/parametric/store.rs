@@ -15,7 +15,7 @@ use super::space::{Motion, MotionOptions, MotionSpace};
 use super::transition::SimilarityTable;
 use crate::db::cache::{KeyHasher, cache_dir, frames_key};
 use crate::db::{DbError, Manifest};
-use crate::fsutil::write_atomic;
+use crate::util::fsutil::write_atomic;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -100,7 +100,7 @@ struct HeaderRef<'a> {
 /// (issue 46, item 6: a header whose block index said 10¹², or whose
 /// transition depth said 10⁹, with its key intact, made `play` abort on a
 /// 24 TB allocation): the options must be `opts`, the frame rate a rate
-/// ([`crate::budget::is_frame_rate`]), every count must fit the bytes that
+/// ([`crate::util::budget::is_frame_rate`]), every count must fit the bytes that
 /// follow, every index its array and every weight `[0, 1]`, in order.
 pub fn parse(
     bytes: &[u8],
@@ -125,12 +125,12 @@ pub fn parse(
     }
     let hl = usize::try_from(u64_of(take(8)?)).map_err(|_| "header size")?;
     let header: Header = serde_json::from_slice(take(hl)?).map_err(|e| format!("header: {e}"))?;
-    if !crate::budget::is_frame_rate(header.fps) {
+    if !crate::util::budget::is_frame_rate(header.fps) {
         return Err(format!(
             "frame rate {} (expected {}-{} fps)",
-            crate::numfmt::Short(header.fps),
-            crate::budget::MIN_FPS,
-            crate::budget::MAX_FPS
+            crate::util::numfmt::Short(header.fps),
+            crate::util::budget::MIN_FPS,
+            crate::util::budget::MAX_FPS
         ));
     }
     if header.options != *opts {
@@ -276,7 +276,7 @@ pub fn load_or_build(
     m.require_spaces(dir)?;
     let key = key(dir, &m, opts)?;
     let path = cache_path(dir);
-    if !force && let Ok(bytes) = crate::fsutil::read_bytes(&path) {
+    if !force && let Ok(bytes) = crate::util::fsutil::read_bytes(&path) {
         match read_cached(dir, &m, &bytes, key, opts)? {
             Ok(motion) => return Ok((motion, true)),
             Err(why) => {
@@ -312,8 +312,8 @@ fn read_cached(
         } else {
             Err(format!(
                 "frame rate {} fps, the database's is {} fps",
-                crate::numfmt::Short(motion.fps),
-                crate::numfmt::Short(m.fps)
+                crate::util::numfmt::Short(motion.fps),
+                crate::util::numfmt::Short(m.fps)
             ))
         }
     }))
@@ -326,7 +326,7 @@ fn read_cached(
 pub fn check_file(dir: &Path, m: &Manifest, path: &Path) -> Result<(), String> {
     let opts = MotionOptions::default();
     let key = key(dir, m, &opts).map_err(|e| e.to_string())?;
-    let bytes = crate::fsutil::read_bytes(path).map_err(|e| e.to_string())?;
+    let bytes = crate::util::fsutil::read_bytes(path).map_err(|e| e.to_string())?;
     read_cached(dir, m, &bytes, key, &opts)
         .map_err(|e| e.to_string())?
         .map(|_| ())

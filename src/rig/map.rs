@@ -770,7 +770,7 @@ enum Slot {
 impl RigMap {
     /// Reads a JSON map file.
     pub fn load(path: &Path) -> Result<RigMap, RigError> {
-        let text = crate::fsutil::read_small_text(path).map_err(|e| RigError::File {
+        let text = crate::util::fsutil::read_small_text(path).map_err(|e| RigError::File {
             path: path.into(),
             msg: e.source.to_string(),
         })?;
@@ -948,9 +948,9 @@ impl RigMap {
     }
 
     /// Writes the map as pretty JSON, atomically.
-    pub fn save(&self, path: &Path) -> Result<(), crate::fsutil::FsError> {
+    pub fn save(&self, path: &Path) -> Result<(), crate::util::fsutil::FsError> {
         let s = serde_json::to_string_pretty(self).unwrap_or_default();
-        crate::fsutil::write_bytes_atomic(path, s.as_bytes())
+        crate::util::fsutil::write_bytes_atomic(path, s.as_bytes())
     }
 
     /// Canonical joint positions of every frame of `clip`, in the clip's

@@ -1152,7 +1152,7 @@ fn offsets(
 /// floor raised by the clip's ground under that foot
 /// ([`foot_ground_offsets`]) at both; summed
 /// and divided by the touching foot-frames. The skeleton analogue of the
-/// mesh measure [`crate::eval::Sliding::touching_mean_cm_per_frame`], on
+/// mesh measure [`crate::tools::eval::Sliding::touching_mean_cm_per_frame`], on
 /// the same feet and floor: a walk's feet pass through the touching band
 /// at heel strike and toe-off, which a mostly planted capture (the samba
 /// dance) never does, so a result is held to its own clip's figure.
@@ -1408,7 +1408,7 @@ pub fn ground_tilt(mocap: &[Pose]) -> DQuat {
 /// clip's neutral (the reference pose with the neck turned to the clip's
 /// typical carriage relative to the chest, which the retargeting maps onto
 /// the character's rest). The skeleton analogue of the mesh measure
-/// [`crate::eval::HeadTorso`]: what a result's head should do relative to
+/// [`crate::tools::eval::HeadTorso`]: what a result's head should do relative to
 /// the character's rest when it follows the clip's head.
 pub fn clip_head_trunk_deg(reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
     // The neck → head bone in a frame attached to the trunk (up pelvis →

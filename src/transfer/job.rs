@@ -93,7 +93,7 @@ pub enum JobError {
     Confluent(#[from] ConfluentError),
     /// The output would not fit in memory (checked before allocating).
     #[error(transparent)]
-    Budget(#[from] crate::budget::OverBudget),
+    Budget(#[from] crate::util::budget::OverBudget),
 }
 
 /// Bytes of one marker in one frame of a [`MarkerMotion`] (a quaternion
@@ -115,11 +115,11 @@ pub fn mocap_motion(
     // transfer holds none): refuse a clip whose motion cannot fit before
     // anything is allocated (issue 18, item 12).
     let used_markers = scan.markers.iter().filter(|m| m.bone.is_some()).count();
-    crate::budget::check(
+    crate::util::budget::check(
         || {
             format!(
                 "the marker motion: {} frames × {} markers",
-                crate::budget::thousands(poses.len() as u128),
+                crate::util::budget::thousands(poses.len() as u128),
                 used_markers
             )
         },

@@ -44,7 +44,7 @@
 //! bound after encoding (in f32, as the GPU evaluates it) and shrinks the
 //! step until it holds.
 
-use crate::numfmt::Short;
+use crate::util::numfmt::Short;
 use flate2::Compression;
 use flate2::read::DeflateDecoder;
 use flate2::write::DeflateEncoder;
@@ -145,7 +145,7 @@ pub enum CodecError {
     },
     /// A valid file whose geometry does not fit the memory budget.
     #[error(transparent)]
-    OverBudget(#[from] crate::budget::OverBudget),
+    OverBudget(#[from] crate::util::budget::OverBudget),
 }
 
 /// What [`encode`] measured.
@@ -639,12 +639,12 @@ fn read_header(b: &[u8]) -> Result<Parsed, CodecError> {
     let mut idx = Varints::new(topo, at, nt.saturating_mul(3))?;
     // Triangles (12 bytes), the parents (4 per vertex) and two frames of
     // quantised positions (12 per vertex).
-    crate::budget::check(
+    crate::util::budget::check(
         || {
             format!(
                 "reading {} triangles and {} vertices of 4D geometry",
-                crate::budget::thousands(nt as u128),
-                crate::budget::thousands(n as u128)
+                crate::util::budget::thousands(nt as u128),
+                crate::util::budget::thousands(n as u128)
             )
         },
         nt as u128 * 12 + n as u128 * 16,
@@ -791,7 +791,7 @@ pub fn verify(b: &[u8]) -> Result<Summary, CodecError> {
 /// Reads a `.sm4d` file; every size, index and value is checked, and the
 /// error names the byte offset of the field or block at fault. The
 /// positions the file declares (6 bytes per vertex and frame) are checked
-/// against the block sizes and the memory budget ([`crate::budget`])
+/// against the block sizes and the memory budget ([`crate::util::budget`])
 /// before they are allocated.
 pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
     let p = read_header(b)?;
@@ -806,12 +806,12 @@ pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
         }
         total += frames as u128 * n as u128;
     }
-    crate::budget::check(
+    crate::util::budget::check(
         || {
             format!(
                 "decoding {} frames of {} vertices",
-                crate::budget::thousands(p.table.iter().map(|t| t.0 as u128).sum()),
-                crate::budget::thousands(n as u128)
+                crate::util::budget::thousands(p.table.iter().map(|t| t.0 as u128).sum()),
+                crate::util::budget::thousands(n as u128)
             )
         },
         total * 6,

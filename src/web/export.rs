@@ -12,10 +12,11 @@
 //! nothing else (it refuses, naming the first file it did not write), and
 //! never when an input lies inside it.
 
-use super::codec::{self, CodecError, EncodeOptions, EncodeReport, Geometry};
+use super::codec::{self, EncodeOptions, EncodeReport, Geometry};
+use super::site::{SiteManifest, SitePair, SiteSequence, SiteSpace, SiteTransition, WebError};
+use super::windows::frame;
 use crate::db::{BuildOptions, DbError, Manifest, Quiet};
 use crate::graph::SurfaceMotionGraph;
-use crate::mesh::blend::Blender;
 use crate::mesh::io::{LoadOptions, load_sequence};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -35,41 +36,6 @@ pub const SCRIPT_DATA_FILE: &str = "character.sm4d.js";
 /// The `format` field of [`RECORD_FILE`].
 const RECORD_FORMAT: &str = "surfmotion-web-export-files";
 
-/// Errors of the export.
-#[derive(Debug, thiserror::Error)]
-pub enum WebError {
-    /// The database failed to load.
-    #[error(transparent)]
-    Db(#[from] DbError),
-    /// A result file failed to load.
-    #[error(transparent)]
-    Mesh(#[from] crate::mesh::MeshError),
-    /// The geometry could not be encoded or decoded.
-    #[error(transparent)]
-    Codec(#[from] CodecError),
-    /// The parametric model (motion spaces) or the transition blender
-    /// could not be built.
-    #[error(transparent)]
-    Param(#[from] crate::parametric::ParamError),
-    /// The output folder holds something this export may not replace, or
-    /// an input lies inside it.
-    #[error("{path}: {msg}")]
-    Refused {
-        /// The file or folder.
-        path: PathBuf,
-        /// Why.
-        msg: String,
-    },
-    /// Writing the site failed.
-    #[error("{path}: {msg}")]
-    Io {
-        /// The file or folder.
-        path: PathBuf,
-        /// What went wrong.
-        msg: String,
-    },
-}
-
 fn io(path: &Path) -> impl Fn(std::io::Error) -> WebError + '_ {
     move |e| WebError::Io {
         path: path.to_path_buf(),
@@ -86,125 +52,6 @@ pub struct ExportOptions {
     /// of precomputing each window's non-linear blend (Huang et al. 2015,
     /// Sec. 4.4; default false: precomputed).
     pub linear_transitions: bool,
-}
-
-/// A sequence as the page sees it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SiteSequence {
-    /// Name (the button's label).
-    pub name: String,
-    /// Frames.
-    pub frames: usize,
-    /// Frames per second.
-    pub fps: f64,
-    /// Ground-plane alignment `[cos θ, sin θ, tx, tz]` carrying frame 0 onto
-    /// the last frame: the page's fallback when a motion ends with no
-    /// transition to take.
-    pub restart: [f64; 4],
-}
-
-/// One transition of the Surface Motion Graph, as the page's engine plays
-/// it: frames `m−L..=m+L` of `from` blended into `n−L..=n+L` of `to`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SiteTransition {
-    /// Source sequence index.
-    pub from: usize,
-    /// Target sequence index.
-    pub to: usize,
-    /// Centre frame in the source.
-    pub m: usize,
-    /// Centre frame in the target.
-    pub n: usize,
-    /// Half-window L.
-    pub window: usize,
-    /// The graph's cost.
-    pub cost: f64,
-    /// Ground-plane alignment `[cos θ, sin θ, tx, tz]` carrying the target's
-    /// frame `n` onto the source's frame `m` (a rotation about +Y, then a
-    /// translation in x and z; least squares over all vertices).
-    pub align: [f64; 4],
-    /// The geometry sequence holding the window's `2L + 1` frames blended
-    /// non-linearly (Huang et al. 2015, Sec. 4.4: frame `i` is
-    /// `G(from[m−L+i], align·to[n−L+i], i / 2L)`, [`crate::mesh::blend::Blender`]),
-    /// in the source's coordinates; absent: the page blends linearly.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub blended: Option<usize>,
-}
-
-/// A parametric motion space (Casas et al. 2013, Sec. 3) as the page plays
-/// it: the hybrid blend's stored reference frames (Eq. 3; each a geometry
-/// sequence of `grid` phase samples in the body frame, metres), the root
-/// motion per phase step, and the parameter maps with their valid ranges.
-/// A frame is the bilinear blend of four stored frames: the two references
-/// bracketing the weight, each at the two phase samples around the phase.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SiteSpace {
-    /// Name (the button's label).
-    pub name: String,
-    /// Its sequences, in blend order (weight coordinate `u = i` is sequence `i`).
-    pub sequences: Vec<String>,
-    /// Its parameters (`"speed"`, `"turn"`); the first is blended, a later
-    /// `turn` steers the heading.
-    pub parameters: Vec<String>,
-    /// Phase samples per cycle, `K`.
-    pub grid: usize,
-    /// Frames per second of the model.
-    pub fps: f64,
-    /// Per pair of neighbouring sequences: reference weights in `[0, 1]`
-    /// (increasing, 0 and 1 included) and the geometry sequence of each.
-    pub pairs: Vec<SitePair>,
-    /// The geometry sequence of the space's first block (its sequence 0;
-    /// the whole blend when the space has a single sequence).
-    pub first_block: usize,
-    /// Root motion per sequence and phase step: travel `(x, z)` in the
-    /// body frame (metres), heading change (radians), duration (frames).
-    pub steps: Vec<Vec<[f64; 4]>>,
-    /// `(u, speed m/s, turn deg/s)` measured at weight step 0.05.
-    pub measured: Vec<[f64; 3]>,
-    /// The inverse map `u = h⁻¹(p)` of the first parameter (Sec. 3.1.4).
-    pub axis: Option<crate::parametric::params::ParamMap>,
-    /// Valid range `[min, max]` of each parameter (a steering `turn`: the
-    /// blend's own turning; the page allows ±90°/s around it).
-    pub ranges: Vec<[f64; 2]>,
-}
-
-/// The references between two neighbouring sequences of a space.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SitePair {
-    /// Reference weights in `[0, 1]`, increasing.
-    pub weights: Vec<f64>,
-    /// The geometry sequence of each reference.
-    pub blocks: Vec<usize>,
-}
-
-/// `manifest.json` of a site.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SiteManifest {
-    /// Always [`FORMAT`].
-    pub format: String,
-    /// Layout version of the manifest (1).
-    pub version: u32,
-    /// `"character"` (the interactive engine) or `"result"` (a timeline).
-    pub mode: String,
-    /// Character or result name.
-    pub name: String,
-    /// The geometry file.
-    pub geometry: String,
-    /// Its size in bytes.
-    pub geometry_bytes: usize,
-    /// The measured maximum vertex error of the geometry (metres).
-    pub max_error: f64,
-    /// Sequences (one for a result).
-    pub sequences: Vec<SiteSequence>,
-    /// The transition table (empty for a result).
-    pub transitions: Vec<SiteTransition>,
-    /// Parametric motion spaces (absent without `[[space]]` entries).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub spaces: Vec<SiteSpace>,
-    /// Sequences in the geometry file: the `sequences` above first, then
-    /// the spaces' reference blocks and the blended transition windows.
-    #[serde(default)]
-    pub geometry_sequences: usize,
 }
 
 /// What an export wrote.
@@ -312,10 +159,6 @@ pub fn align_ground(a: &[[f32; 3]], b: &[[f32; 3]]) -> [f64; 4] {
     [c, s, tx, tz]
 }
 
-fn frame(g: &Geometry, s: usize, f: usize) -> &[[f32; 3]] {
-    &g.sequences[s][f * g.vertices..(f + 1) * g.vertices]
-}
-
 /// Writes the site for database `dir` into `out` (replacing an earlier
 /// site there; refusing to replace any other non-empty folder).
 pub fn export_db(dir: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportReport, WebError> {
@@ -395,74 +238,6 @@ struct Extra {
     transition_seconds: f64,
     space_seqs: Vec<usize>,
     space_frames: usize,
-}
-
-/// The reference mesh of the transition blend (the database's first frame,
-/// with the topology's triangles) and its prefactored [`Blender`].
-pub(crate) fn window_blender(g: &Geometry) -> Result<Blender, WebError> {
-    let reference = crate::mesh::Mesh::new(
-        frame(g, 0, 0).iter().map(|q| q.map(f64::from)).collect(),
-        g.triangles.clone(),
-    )
-    .map_err(crate::mesh::MeshError::from)?;
-    Ok(Blender::new(&reference).map_err(crate::parametric::ParamError::from)?)
-}
-
-/// The transitions' windows blended non-linearly frame by frame (Huang et
-/// al. 2015, Sec. 4.4, the paper's fixed transitions): frame `i ∈ 0..=2L` is
-/// `G(from[m−L+i], align·to[n−L+i], i / 2L)` with `G` the gradient-domain
-/// blend of [`Blender`] (slerped rotations, lerped stretches,
-/// Poisson-stitched), in the source's coordinates. Frames past a sequence's
-/// ends are clamped, as the page's linear blend does.
-///
-/// Every window frame decomposes both its inputs anew: the reference that
-/// [`super::windows::blend_windows`] (the export's path, each database frame
-/// decomposed once) is checked against.
-pub fn blend_windows_per_frame(
-    g: &Geometry,
-    table: &[SiteTransition],
-) -> Result<Vec<Vec<[f32; 3]>>, WebError> {
-    use rayon::prelude::*;
-    let n = g.vertices;
-    let f64s = |p: &[[f32; 3]]| -> Vec<[f64; 3]> {
-        p.iter()
-            .map(|q| [q[0] as f64, q[1] as f64, q[2] as f64])
-            .collect()
-    };
-    let blender = window_blender(g)?;
-    let frames = |s: usize| g.sequences[s].len() / n;
-    Ok(table
-        .par_iter()
-        .map_init(
-            || (blender.workspace(), vec![[0.0f64; 3]; n]),
-            |(ws, out), t| {
-                let l = t.window as isize;
-                let clamp = |s: usize, f: isize| f.clamp(0, frames(s) as isize - 1) as usize;
-                let [c, si, tx, tz] = t.align;
-                let mut w = Vec::with_capacity((2 * t.window + 1) * n);
-                for i in 0..=2 * l {
-                    let a = f64s(frame(g, t.from, clamp(t.from, t.m as isize - l + i)));
-                    let b: Vec<[f64; 3]> = frame(g, t.to, clamp(t.to, t.n as isize - l + i))
-                        .iter()
-                        .map(|q| {
-                            let (x, z) = (q[0] as f64, q[2] as f64);
-                            [c * x + si * z + tx, q[1] as f64, -si * x + c * z + tz]
-                        })
-                        .collect();
-                    let alpha = if l == 0 {
-                        1.0
-                    } else {
-                        i as f64 / (2 * l) as f64
-                    };
-                    let ga = blender.decompose(&a, ws);
-                    let gb = blender.decompose(&b, ws);
-                    blender.blend(&ga, &gb, alpha, out, ws);
-                    w.extend(out.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]));
-                }
-                w
-            },
-        )
-        .collect())
 }
 
 /// The database's parametric model ([`crate::parametric`], built or read
@@ -794,13 +569,13 @@ pub fn check_output(out: &Path, inputs: &[PathBuf]) -> Result<(), WebError> {
     if names.is_empty() {
         return Ok(());
     }
-    let record: Option<Record> = crate::fsutil::read_small_text(&out.join(RECORD_FILE))
+    let record: Option<Record> = crate::util::fsutil::read_small_text(&out.join(RECORD_FILE))
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .filter(|r: &Record| r.format == RECORD_FORMAT);
     // A site of an earlier version: its manifest, no record.
     let legacy = record.is_none()
-        && crate::fsutil::read_small_text(&out.join(MANIFEST_FILE))
+        && crate::util::fsutil::read_small_text(&out.join(MANIFEST_FILE))
             .ok()
             .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
             .is_some_and(|v| v["format"] == FORMAT);
@@ -825,7 +600,7 @@ pub fn check_output(out: &Path, inputs: &[PathBuf]) -> Result<(), WebError> {
                 return foreign("not written by the earlier `web export` in this folder");
             };
             let body = if is_file {
-                crate::fsutil::read_bytes(&path).ok()
+                crate::util::fsutil::read_bytes(&path).ok()
             } else {
                 None
             };

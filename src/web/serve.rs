@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 /// fragment are ignored.
 pub fn resolve_path(root: &Path, url: &str) -> Option<PathBuf> {
     let path = url.split(['?', '#']).next().unwrap_or("");
-    let path = crate::fsutil::percent_decode(path)?;
+    let path = crate::util::fsutil::percent_decode(path)?;
     let rel = path.strip_prefix('/')?;
     let rel = if rel.is_empty() { "index.html" } else { rel };
     let mut out = root.to_path_buf();
@@ -405,7 +405,7 @@ fn respond(sh: &Shared, s: &mut TcpStream, head: &Head) -> bool {
     }
     let file = resolve_path(&sh.root, &head.target).and_then(|p| {
         // A named pipe in the folder would block this thread.
-        let f = crate::fsutil::open_input(&p, crate::fsutil::MAX_INPUT_BYTES).ok()?;
+        let f = crate::util::fsutil::open_input(&p, crate::util::fsutil::MAX_INPUT_BYTES).ok()?;
         let len = f.metadata().ok()?.len();
         Some((p, f, len))
     });
@@ -514,12 +514,12 @@ pub fn remove_stale_exports(parent: &Path) -> Vec<PathBuf> {
         };
         let dir = e.path();
         let own = std::fs::symlink_metadata(&dir)
-            .is_ok_and(|m| m.is_dir() && crate::fsutil::owned_by_me(&m))
+            .is_ok_and(|m| m.is_dir() && crate::util::fsutil::owned_by_me(&m))
             && std::fs::read_to_string(dir.join(EXPORT_MARKER))
                 .is_ok_and(|m| m.trim() == pid.to_string());
         if own
             && pid != std::process::id()
-            && crate::fsutil::process_alive(pid) == Some(false)
+            && crate::util::fsutil::process_alive(pid) == Some(false)
             && std::fs::remove_dir_all(&dir).is_ok()
         {
             out.push(dir);

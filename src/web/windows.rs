@@ -21,7 +21,7 @@
 //! memory budget ([`WindowOptions::cache_bytes`]).
 
 use super::codec::Geometry;
-use super::export::{SiteTransition, WebError};
+use super::site::{SiteTransition, WebError};
 use crate::mesh::blend::{Blender, FrameGradients, sym3};
 use crate::mesh::frames::{RestFrames, polar};
 use glam::{DMat3, DQuat, DVec3};
@@ -74,7 +74,7 @@ fn root(parent: &mut [usize], mut x: usize) -> usize {
 }
 
 /// The transitions' windows blended non-linearly, in the source's
-/// coordinates: the same frames as [`super::export::blend_windows_per_frame`]
+/// coordinates: the same frames as [`blend_windows_per_frame`]
 /// (up to rounding), each database frame decomposed once.
 pub fn blend_windows(
     g: &Geometry,
@@ -85,7 +85,7 @@ pub fn blend_windows(
     if table.is_empty() || n == 0 {
         return Ok(vec![Vec::new(); table.len()]);
     }
-    let blender = super::export::window_blender(g)?;
+    let blender = window_blender(g)?;
     let reference: Vec<[f64; 3]> = g.sequences[0][..n]
         .iter()
         .map(|q| q.map(f64::from))
@@ -396,4 +396,77 @@ fn newton_lanes(m: [DMat3; LANES]) -> Option<[DMat3; LANES]> {
 #[inline(always)]
 fn l(f: impl FnMut(usize) -> f64) -> Lane {
     std::array::from_fn(f)
+}
+
+/// Frame `f` of geometry sequence `s`.
+pub(crate) fn frame(g: &Geometry, s: usize, f: usize) -> &[[f32; 3]] {
+    &g.sequences[s][f * g.vertices..(f + 1) * g.vertices]
+}
+
+/// The reference mesh of the transition blend (the database's first frame,
+/// with the topology's triangles) and its prefactored [`Blender`].
+pub(crate) fn window_blender(g: &Geometry) -> Result<Blender, WebError> {
+    let reference = crate::mesh::Mesh::new(
+        frame(g, 0, 0).iter().map(|q| q.map(f64::from)).collect(),
+        g.triangles.clone(),
+    )
+    .map_err(crate::mesh::MeshError::from)?;
+    Ok(Blender::new(&reference).map_err(crate::parametric::ParamError::from)?)
+}
+
+/// The transitions' windows blended non-linearly frame by frame (Huang et
+/// al. 2015, Sec. 4.4, the paper's fixed transitions): frame `i ∈ 0..=2L` is
+/// `G(from[m−L+i], align·to[n−L+i], i / 2L)` with `G` the gradient-domain
+/// blend of [`Blender`] (slerped rotations, lerped stretches,
+/// Poisson-stitched), in the source's coordinates. Frames past a sequence's
+/// ends are clamped, as the page's linear blend does.
+///
+/// Every window frame decomposes both its inputs anew: the reference that
+/// [`blend_windows`] (the export's path, each database frame
+/// decomposed once) is checked against.
+pub fn blend_windows_per_frame(
+    g: &Geometry,
+    table: &[SiteTransition],
+) -> Result<Vec<Vec<[f32; 3]>>, WebError> {
+    use rayon::prelude::*;
+    let n = g.vertices;
+    let f64s = |p: &[[f32; 3]]| -> Vec<[f64; 3]> {
+        p.iter()
+            .map(|q| [q[0] as f64, q[1] as f64, q[2] as f64])
+            .collect()
+    };
+    let blender = window_blender(g)?;
+    let frames = |s: usize| g.sequences[s].len() / n;
+    Ok(table
+        .par_iter()
+        .map_init(
+            || (blender.workspace(), vec![[0.0f64; 3]; n]),
+            |(ws, out), t| {
+                let l = t.window as isize;
+                let clamp = |s: usize, f: isize| f.clamp(0, frames(s) as isize - 1) as usize;
+                let [c, si, tx, tz] = t.align;
+                let mut w = Vec::with_capacity((2 * t.window + 1) * n);
+                for i in 0..=2 * l {
+                    let a = f64s(frame(g, t.from, clamp(t.from, t.m as isize - l + i)));
+                    let b: Vec<[f64; 3]> = frame(g, t.to, clamp(t.to, t.n as isize - l + i))
+                        .iter()
+                        .map(|q| {
+                            let (x, z) = (q[0] as f64, q[2] as f64);
+                            [c * x + si * z + tx, q[1] as f64, -si * x + c * z + tz]
+                        })
+                        .collect();
+                    let alpha = if l == 0 {
+                        1.0
+                    } else {
+                        i as f64 / (2 * l) as f64
+                    };
+                    let ga = blender.decompose(&a, ws);
+                    let gb = blender.decompose(&b, ws);
+                    blender.blend(&ga, &gb, alpha, out, ws);
+                    w.extend(out.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]));
+                }
+                w
+            },
+        )
+        .collect())
 }

@@ -178,7 +178,7 @@ pub fn humanoid_character(grid: f64) -> surfmotion::jobs::SynthCharacter {
     }
 }
 
-/// The fields of a plausibility report (`surfmotion::eval::Plausibility`
+/// The fields of a plausibility report (`surfmotion::tools::eval::Plausibility`
 /// as `--json` writes it) that every `retarget` and `eval` result carries.
 pub const PLAUSIBILITY_FIELDS: [&str; 7] = [
     "head_torso_deg",

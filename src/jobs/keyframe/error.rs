@@ -55,7 +55,7 @@ pub enum KeyframeJobError {
     Mesh(#[from] crate::mesh::MeshError),
     /// A file could not be written.
     #[error(transparent)]
-    Fs(#[from] crate::fsutil::FsError),
+    Fs(#[from] crate::util::fsutil::FsError),
     /// A report could not be serialised.
     #[error(transparent)]
     Json(#[from] serde_json::Error),

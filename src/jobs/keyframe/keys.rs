@@ -48,7 +48,7 @@ pub fn resolve_keys(
         if !(span.is_finite() && span <= 100.0) {
             return Err(bad(format!(
                 "its joints span {} m: expected a body's 19 joints in metres, Y up",
-                crate::parametric::script::short_number(span)
+                crate::util::numfmt::Short(span)
             )));
         }
         if span <= 0.01 {

@@ -25,9 +25,9 @@
 //! mesh and every halved displacement fit in 16 bits: the error of a vertex
 //! is at most `s` per axis. 12 bytes per vertex and frame instead of 24.
 
-use crate::fsutil::FileError;
 use crate::mesh::normals::vertex_normals_into;
 use crate::mesh::{MeshError, MeshSequence};
+use crate::util::fsutil::FileError;
 use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use std::collections::BTreeMap;
@@ -682,6 +682,6 @@ pub fn write_glb_with(
         MeshError::File(FileError::Invalid { msg, .. }) => MeshError::invalid(path, msg),
         e => e,
     })?;
-    crate::fsutil::write_bytes_atomic(path, &bytes)?;
+    crate::util::fsutil::write_bytes_atomic(path, &bytes)?;
     Ok(())
 }

@@ -237,7 +237,7 @@ impl Ctx<'_> {
                 }
                 // Zeros that no byte of the file backs: a few bytes of JSON
                 // declared 6.4 GB (issue 46, item 5).
-                crate::budget::check(
+                crate::util::budget::check(
                     || format!("{what}: {count} elements of {comps} zeros (no bufferView)"),
                     count as u128 * comps as u128 * 4,
                 )
@@ -389,7 +389,7 @@ fn load_buffers(
                     let p = buffer_path(path, b.index(), uri)?;
                     // Named with the glTF that refers to it ("missing.bin:
                     // No such file" named neither the .gltf nor the buffer).
-                    crate::fsutil::read_bytes(&p).map_err(|e| {
+                    crate::util::fsutil::read_bytes(&p).map_err(|e| {
                         MeshError::invalid(path, format!("buffer {}: {e}", b.index()))
                     })?
                 }
@@ -445,7 +445,7 @@ fn buffer_path(gltf: &Path, buffer: usize, uri: &str) -> Result<std::path::PathB
             refuse("has a scheme; only data: URIs and paths relative to the glTF are read")
         });
     }
-    let decoded = crate::fsutil::percent_decode(uri)
+    let decoded = crate::util::fsutil::percent_decode(uri)
         .ok_or_else(|| refuse("has a bad percent escape (expected %XX of UTF-8 bytes)"))?;
     if decoded.starts_with(['/', '\\']) {
         return Err(refuse(
@@ -991,7 +991,7 @@ impl Geometry {
             target_normals.clear();
         }
         let path = ctx.path;
-        super::refuse_huge_coordinates(&positions, path)?;
+        super::format::refuse_huge_coordinates(&positions, path)?;
         let mut mesh = Mesh::new(positions, tris).map_err(|e| MeshError::from(e).in_file(path))?;
         if any_color {
             mesh = mesh
@@ -1257,7 +1257,7 @@ fn node_graph(
 
 /// Reads a `.gltf` or `.glb` file.
 pub fn read_gltf(path: &Path) -> Result<GltfAsset, MeshError> {
-    parse_gltf(&crate::fsutil::read_bytes(path)?, path)
+    parse_gltf(&crate::util::fsutil::read_bytes(path)?, path)
 }
 
 /// Samples one channel at time `t`.
@@ -1379,7 +1379,7 @@ impl GltfAsset {
         let frames = ((anim.duration as f64 * fps).floor() as usize + 1).min(100_000);
         let nv = self.mesh.vertex_count();
         // 100,000 frames of a mesh the file declares: checked before held.
-        crate::budget::check_frames("a skinned glTF animation", frames, nv, 1)
+        crate::util::budget::check_frames("a skinned glTF animation", frames, nv, 1)
             .map_err(|e| bad(e.to_string()))?;
         let mut out = Vec::with_capacity(frames * nv);
         let mut trs = g.rest.clone();
@@ -1492,8 +1492,13 @@ impl GltfAsset {
         let base = self.mesh.positions();
         // A key per frame of the whole mesh: a small weights accessor
         // declares many frames (issue 46, item 5).
-        crate::budget::check_frames("a glTF morph-weights animation", keys.len(), base.len(), 1)
-            .map_err(|e| MeshError::invalid(std::path::Path::new("<gltf>"), e.to_string()))?;
+        crate::util::budget::check_frames(
+            "a glTF morph-weights animation",
+            keys.len(),
+            base.len(),
+            1,
+        )
+        .map_err(|e| MeshError::invalid(std::path::Path::new("<gltf>"), e.to_string()))?;
         let mut frames = Vec::with_capacity(keys.len() * base.len());
         for w in keys {
             let start = frames.len();

@@ -34,7 +34,7 @@ pub fn parse_mdd(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
     }
     let mut warnings = Vec::new();
     if (bytes.len() as u128) > need {
-        crate::fsutil::raise_warning(
+        crate::util::fsutil::raise_warning(
             &mut warnings,
             path,
             format!(
@@ -62,7 +62,7 @@ pub fn parse_mdd(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
 
 /// Reads an MDD file.
 pub fn read_mdd(path: &Path) -> Result<PointCache, MeshError> {
-    parse_mdd(&crate::fsutil::read_bytes(path)?, path)
+    parse_mdd(&crate::util::fsutil::read_bytes(path)?, path)
 }
 
 /// Encodes positions as MDD with frame times `k / fps`.
@@ -89,6 +89,6 @@ pub fn write_mdd(
     fps: f64,
     path: &Path,
 ) -> Result<(), MeshError> {
-    crate::fsutil::write_bytes_atomic(path, &encode_mdd(points, positions, fps))?;
+    crate::util::fsutil::write_bytes_atomic(path, &encode_mdd(points, positions, fps))?;
     Ok(())
 }

@@ -66,13 +66,13 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, MeshError> {
                         .ok_or_else(|| {
                             MeshError::parse(path, line, format!("bad coordinate '{tok}'"))
                         })?;
-                    if v[k].abs() > super::MAX_ABS_COORDINATE {
+                    if v[k].abs() > super::format::MAX_ABS_COORDINATE {
                         return Err(MeshError::parse(
                             path,
                             line,
                             format!(
                                 "coordinate {tok} is beyond ±{:e}",
-                                super::MAX_ABS_COORDINATE
+                                super::format::MAX_ABS_COORDINATE
                             ),
                         ));
                     }
@@ -174,7 +174,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Mesh, MeshError> {
 
 /// Reads an OBJ file.
 pub fn read_obj(path: &Path) -> Result<Mesh, MeshError> {
-    parse_obj(&crate::fsutil::read_text(path)?, path)
+    parse_obj(&crate::util::fsutil::read_text(path)?, path)
 }
 
 /// Formats a mesh as OBJ with the given positions (the mesh's own if `None`).
@@ -213,6 +213,6 @@ pub fn write_obj(
     positions: Option<&[[f64; 3]]>,
     path: &Path,
 ) -> Result<(), MeshError> {
-    crate::fsutil::write_bytes_atomic(path, format_obj(mesh, positions).as_bytes())?;
+    crate::util::fsutil::write_bytes_atomic(path, format_obj(mesh, positions).as_bytes())?;
     Ok(())
 }

@@ -118,7 +118,7 @@ pub fn parse_pc2(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
     }
     let mut warnings = Vec::new();
     if have > need {
-        crate::fsutil::raise_warning(
+        crate::util::fsutil::raise_warning(
             &mut warnings,
             path,
             format!("{} bytes after the last frame ignored", have - need),
@@ -141,7 +141,7 @@ pub fn parse_pc2(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
 
 /// Reads a PC2 file.
 pub fn read_pc2(path: &Path) -> Result<PointCache, MeshError> {
-    parse_pc2(&crate::fsutil::read_bytes(path)?, path)
+    parse_pc2(&crate::util::fsutil::read_bytes(path)?, path)
 }
 
 /// The 32-byte PC2 header of `frames` frames of `points` points (start
@@ -189,7 +189,7 @@ pub fn encode_pc2(points: usize, positions: &[[f64; 3]]) -> Vec<u8> {
 /// per vertex and frame). The bytes are those of [`encode_pc2`].
 pub fn write_pc2(points: usize, positions: &[[f64; 3]], path: &Path) -> Result<(), MeshError> {
     let frames = positions.len() / points.max(1);
-    let mut file = crate::fsutil::AtomicFile::create(path)?;
+    let mut file = crate::util::fsutil::AtomicFile::create(path)?;
     file.write_all(&header(points as i32, frames as i32))?;
     let mut bytes = Vec::with_capacity(points.max(1) * 12);
     for frame in positions.chunks(points.max(1)) {

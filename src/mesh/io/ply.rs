@@ -343,7 +343,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
     if !has_vertex {
         return Err(MeshError::invalid(path, "no vertex element"));
     }
-    super::refuse_huge_coordinates(&positions, path)?;
+    super::format::refuse_huge_coordinates(&positions, path)?;
     let mut mesh = Mesh::new(positions, tris).map_err(|e| MeshError::from(e).in_file(path))?;
     if !colors.is_empty() {
         mesh = mesh
@@ -355,7 +355,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
 
 /// Reads a PLY file.
 pub fn read_ply(path: &Path) -> Result<Mesh, MeshError> {
-    parse_ply(&crate::fsutil::read_bytes(path)?, path)
+    parse_ply(&crate::util::fsutil::read_bytes(path)?, path)
 }
 
 /// Encodes a mesh as binary little-endian PLY (float xyz, uchar colours).
@@ -400,6 +400,6 @@ pub fn write_ply(
     positions: Option<&[[f64; 3]]>,
     path: &Path,
 ) -> Result<(), MeshError> {
-    crate::fsutil::write_bytes_atomic(path, &encode_ply(mesh, positions))?;
+    crate::util::fsutil::write_bytes_atomic(path, &encode_ply(mesh, positions))?;
     Ok(())
 }

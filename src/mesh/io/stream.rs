@@ -10,22 +10,22 @@
 //! (atomically) as it comes. GLB needs every frame at once (its JSON header
 //! holds every target's bounds, and quantisation one grid for all frames),
 //! as do `.obj`/`.ply` (one frame): those frames are held, after the memory
-//! they need is checked against [`crate::budget`], and a GLB over its 4 GiB
+//! they need is checked against [`crate::util::budget`], and a GLB over its 4 GiB
 //! format limit is refused before the first frame is computed.
 //!
 //! The bytes written are those of [`super::save_sequence_with`] for the same
 //! frames.
 
 use super::{MeshFormat, SaveOptions, glb, obj, pc2};
-use crate::fsutil::AtomicFile;
 use crate::mesh::{Mesh, MeshError, MeshSequence};
+use crate::util::fsutil::AtomicFile;
 use std::path::{Path, PathBuf};
 
 /// Bytes per vertex and frame a held GLB needs at its peak: the positions
 /// (`[f64; 3]`), the binary buffer and its copy in the file's bytes.
 fn glb_peak_bytes(opts: &glb::GlbOptions) -> u128 {
     let per = glb_file_bytes(opts);
-    crate::budget::VERTEX_BYTES + 2 * per
+    crate::util::budget::VERTEX_BYTES + 2 * per
 }
 
 /// Bytes per vertex and frame in a GLB file (position and normal
@@ -151,16 +151,16 @@ impl SequenceWriter {
                         out,
                         format!(
                             "{frames} frames × {n} vertices make a GLB of about {}, over the format's 4 GiB; quantise (`GlbOptions::quantize`), leave out normals (`GlbOptions::normals` false), or write .pc2, .mdd or a folder, which stream any length",
-                            crate::budget::Bytes(file)
+                            crate::util::budget::Bytes(file)
                         ),
                     ));
                 }
-                crate::budget::check(
+                crate::util::budget::check(
                     || {
                         format!(
                             "a GLB of {} frames × {} vertices (a GLB is written whole; .pc2, .mdd and folders stream)",
-                            crate::budget::thousands(frames as u128),
-                            crate::budget::thousands(n as u128)
+                            crate::util::budget::thousands(frames as u128),
+                            crate::util::budget::thousands(n as u128)
                         )
                     },
                     (frames as u128) * (n as u128) * glb_peak_bytes(&opts.glb),

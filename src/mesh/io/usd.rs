@@ -17,8 +17,8 @@
 //! frame is in. Checked in `tests/mesh_io.rs` by Pixar's `usd-core`
 //! (its validators pass; points read back equal ours).
 
-use crate::fsutil::AtomicFile;
 use crate::mesh::{Mesh, MeshError, MeshSequence};
+use crate::util::fsutil::AtomicFile;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -82,7 +82,7 @@ impl UsdaWriter {
                 out,
                 format!(
                     "frame rate {} is not a positive number",
-                    crate::numfmt::Short(fps)
+                    crate::util::numfmt::Short(fps)
                 ),
             ));
         }

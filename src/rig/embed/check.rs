@@ -195,7 +195,7 @@ pub fn check_with(e: &Embedding, mesh: &Mesh, o: &CheckOptions) -> EmbedCheck {
     );
     let mut warnings = Vec::new();
     let mut warn = |problem: Problem, joint: &str, distance: f64, message: String| {
-        tracing::warn!(target: crate::fsutil::WARNING, joint, "{message}");
+        tracing::warn!(target: crate::util::fsutil::WARNING, joint, "{message}");
         warnings.push(Warning {
             problem,
             joint: joint.to_string(),

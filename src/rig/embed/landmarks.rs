@@ -8,7 +8,7 @@
 //! { "chin": 4512, "groin": [0.01, 0.93, 0.02], "l_wrist": 812, ... }
 //! ```
 
-use crate::fsutil::read_small_text;
+use crate::util::fsutil::read_small_text;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -88,7 +88,7 @@ impl Landmark {
 pub enum LandmarkError {
     /// The file could not be read.
     #[error(transparent)]
-    Io(#[from] crate::fsutil::FsError),
+    Io(#[from] crate::util::fsutil::FsError),
     /// Not JSON, or not an object.
     #[error("{path}: {reason}")]
     Json {

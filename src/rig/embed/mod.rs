@@ -17,10 +17,10 @@ pub mod surface;
 
 pub use check::{EmbedCheck, check};
 
-use crate::fsutil::{FsError, read_text, write_atomic};
 use crate::mesh::Mesh;
 use crate::mesh::solver::SolveError;
 use crate::rig::Canonical;
+use crate::util::fsutil::{FsError, read_text, write_atomic};
 use glam::DVec3;
 use heat::{Bone, bone_heat, sparsify};
 use joints::{JointEstimate, place_joints};

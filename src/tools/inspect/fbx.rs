@@ -3,7 +3,7 @@
 //! stack), marking the one read.
 
 use crate::mocap::fbx::fbx_info;
-use crate::numfmt::Short;
+use crate::util::numfmt::Short;
 use std::path::Path;
 
 /// The report's `format` for an FBX file: `fbx 7700 binary; units …; axes

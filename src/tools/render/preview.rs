@@ -31,10 +31,10 @@ impl Default for PreviewOptions {
 pub enum PreviewError {
     /// The sheet would not fit in memory (checked before drawing).
     #[error(transparent)]
-    Budget(#[from] crate::budget::OverBudget),
+    Budget(#[from] crate::util::budget::OverBudget),
     /// The picture could not be written.
     #[error(transparent)]
-    Fs(#[from] crate::fsutil::FsError),
+    Fs(#[from] crate::util::fsutil::FsError),
     /// The result has no frame.
     #[error("{}: nothing to preview", .0.display())]
     Empty(std::path::PathBuf),
@@ -114,7 +114,7 @@ pub fn write_preview(
     // Front and side views of each frame, RGB.
     let panels = o.frames.min(positions.len() / n.max(1)) as u128;
     let px = o.size as u128;
-    crate::budget::check(
+    crate::util::budget::check(
         || {
             format!(
                 "{}: a contact sheet of {panels} frames at {px} px",

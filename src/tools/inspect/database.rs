@@ -8,7 +8,7 @@
 //! to now ([`crate::db::cache`]): computing it reads every sequence file
 //! once, as `db build` does before it reuses a cache.
 
-use super::InspectError;
+use super::error::InspectError;
 use crate::db::build::{
     default_measure, graph_key, graph_path, read_graph_cache, similarity_key, similarity_path,
 };
@@ -220,7 +220,7 @@ fn skeleton_file(file: PathBuf, sequences: &[DbSequence]) -> DbSkeleton {
         .and_then(|n| n.strip_suffix(".skeleton.json"))
         .unwrap_or_default()
         .to_string();
-    let frames = crate::fsutil::read_small_text(&file)
+    let frames = crate::util::fsutil::read_small_text(&file)
         .map_err(|e| e.to_string())
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).map_err(|e| e.to_string()))
         .and_then(|v| {

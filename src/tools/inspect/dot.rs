@@ -4,7 +4,8 @@
 //! its transitions (`m→n (L=w, cost)`, one a line). Another DOT file is
 //! described by its node and edge statements.
 
-use super::{InspectError, JsonReport};
+use super::error::InspectError;
+use super::json::JsonReport;
 use crate::batch::summary::count;
 use std::path::Path;
 
@@ -55,8 +56,8 @@ fn statement(line: &str) -> Option<(Vec<&str>, String)> {
 
 /// Describes the DOT file `path`.
 pub fn inspect_dot(path: &Path) -> Result<JsonReport, InspectError> {
-    let text =
-        crate::fsutil::read_small_text(path).map_err(|e| InspectError::Json(e.to_string()))?;
+    let text = crate::util::fsutil::read_small_text(path)
+        .map_err(|e| InspectError::Json(e.to_string()))?;
     let first = text
         .lines()
         .map(str::trim)

@@ -4,9 +4,10 @@
 //! (`inspect` said "unknown file type" for each, though the tool writes
 //! or reads every one of them).
 
-use super::{InspectError, JsonReport};
+use super::error::InspectError;
+use super::json::JsonReport;
 use crate::batch::summary::count;
-use crate::fsutil::{MAX_INPUT_BYTES, open_input, read_bytes, read_small_text};
+use crate::util::fsutil::{MAX_INPUT_BYTES, open_input, read_bytes, read_small_text};
 use std::io::Read;
 use std::path::Path;
 
@@ -110,7 +111,7 @@ pub fn inspect_other(path: &Path) -> Option<Result<JsonReport, InspectError>> {
         if !(path.join("index.html").is_file() && manifest.is_file()) {
             return None;
         }
-        return Some(super::inspect_json(&manifest).and_then(|m| {
+        return Some(super::json::inspect_json(&manifest).and_then(|m| {
             let mut lines = m.lines;
             lines.extend(check_site(path).map_err(err)?);
             lines.push(format!(

@@ -1,0 +1,216 @@
+//! A planned path made into frames: synthesis along the timeline, held or
+//! streamed.
+
+use super::planner::*;
+use super::problem::*;
+use super::report::*;
+use super::{lattice, place, pose, smoothness};
+use crate::db::Character;
+use std::time::Instant;
+
+/// The synthesised key-frame animation.
+pub struct Output {
+    /// Positions, frame-major (metres, Y-up).
+    pub positions: Vec<[f64; 3]>,
+    /// The plan.
+    pub plan: Plan,
+    /// The report.
+    pub report: Report,
+}
+
+/// Plans and synthesises: key-frame ids `keys` (at least two), targets,
+/// options. Errors: the search's (no path between two key-frames) or a
+/// failed factorisation of the blender. Every frame is held
+/// ([`plan_path`] then [`Planned::synthesise_each`] into one buffer);
+/// the CLI streams its output instead.
+pub fn synthesise(
+    ch: &Character,
+    keys: &[u32],
+    targets: &Targets,
+    opts: &KeyframeOptions,
+) -> Result<Output, KeyframeError> {
+    let planned = plan_path(ch, keys, targets, opts, &mut |_| {})?;
+    // The positions held below.
+    let what = if keys.len() > 2 {
+        format!(
+            "the key-frame path through {} key-frames (use fewer via key-frames, or lower `Targets::distance` or `Targets::time`)",
+            keys.len()
+        )
+    } else {
+        "the key-frame path (lower `Targets::distance` or `Targets::time`)".to_string()
+    };
+    crate::util::budget::check_frames(&what, planned.frames(), ch.n(), 1)?;
+    let mut positions = Vec::with_capacity(planned.frames() * ch.n());
+    let s = planned.synthesise_each(ch, targets, opts, |_, p| -> Result<(), KeyframeError> {
+        positions.extend_from_slice(p);
+        Ok(())
+    })?;
+    Ok(Output {
+        positions,
+        plan: s.plan,
+        report: s.report,
+    })
+}
+
+/// A key-frame path found ([`plan_path`]), its meshes not yet made.
+pub struct Planned {
+    planner: Planner,
+    plan: Plan,
+}
+
+impl Planned {
+    /// Bounds the search hit (e.g. a time target beyond the longest path
+    /// it considers), for messages about the path it found.
+    pub fn bounds_hit(&self) -> &[String] {
+        &self.plan.stats.bounds_hit
+    }
+}
+
+/// [`Output`] without the positions, which went to the caller frame by
+/// frame ([`Planned::synthesise_each`]).
+pub struct Streamed {
+    /// The plan.
+    pub plan: Plan,
+    /// The report.
+    pub report: Report,
+}
+
+/// Finds the path through key-frame ids `keys` (at least two) for the
+/// targets (Eq. 7). Errors: too few keys, or the search's (no path
+/// between two key-frames).
+/// `progress` is told each stage (the graph, preparing, searching).
+pub fn plan_path(
+    ch: &Character,
+    keys: &[u32],
+    targets: &Targets,
+    opts: &KeyframeOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Planned, KeyframeError> {
+    if keys.len() < 2 {
+        return Err(KeyframeError::TooFew);
+    }
+    let fps = ch.manifest().fps;
+    progress("the frame graph");
+    let g = key_graph_with(ch, opts, progress);
+    progress("preparing the search (segments, loops)");
+    let mut planner = Planner::new(g, keys, fps, &opts.search)
+        .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
+    planner.facing = facing_change(ch, keys);
+    progress("searching");
+    let plan = planner
+        .plan(targets, &opts.search)
+        .map_err(|e| KeyframeError::Search(describe(ch, &e)))?;
+    Ok(Planned { planner, plan })
+}
+
+/// An error of [`Planned::synthesise_each`]: the blender's, or the
+/// caller's.
+enum EachError<E> {
+    Solve(crate::mesh::solver::SolveError),
+    Caller(E),
+}
+
+impl<E> From<crate::mesh::solver::SolveError> for EachError<E> {
+    fn from(e: crate::mesh::solver::SolveError) -> Self {
+        EachError::Solve(e)
+    }
+}
+
+impl Planned {
+    /// Output frames of the path.
+    pub fn frames(&self) -> usize {
+        self.plan.path.len()
+    }
+
+    /// Blends and places the path's meshes ([`place::place_each`]),
+    /// handing each output frame (its index and the character's vertices,
+    /// metres, Y-up) to `each` in order, and reports. A path of any length
+    /// needs the memory of one chunk of frames, not of every frame. The
+    /// report's `mesh_seconds` leaves out the time spent in `each`.
+    pub fn synthesise_each<E: From<KeyframeError>>(
+        self,
+        ch: &Character,
+        targets: &Targets,
+        opts: &KeyframeOptions,
+        mut each: impl FnMut(usize, &[[f64; 3]]) -> Result<(), E>,
+    ) -> Result<Streamed, E> {
+        let Planned { planner, plan } = self;
+        let fps = ch.manifest().fps;
+        let t0 = Instant::now();
+        let mut in_each = 0.0;
+        let track = place::place_each(
+            ch,
+            &planner.graph,
+            &plan.path,
+            &opts.timeline,
+            |k, p| -> Result<(), EachError<E>> {
+                let t = Instant::now();
+                let r = each(k, p).map_err(EachError::Caller);
+                in_each += t.elapsed().as_secs_f64();
+                r
+            },
+        )
+        .map_err(|e| match e {
+            EachError::Solve(e) => E::from(KeyframeError::Search(format!("blending: {e}"))),
+            EachError::Caller(e) => e,
+        })?;
+        let mesh_seconds = (t0.elapsed().as_secs_f64() - in_each).max(0.0);
+        let mut cache = smoothness::Measurer::new(ch);
+        let trans = transitions(ch, &planner.graph, &plan.path, &opts.timeline, &mut cache);
+        let (de, te) = match targets {
+            Targets::Global { distance, time } => (
+                Some(plan.measure.distance - distance),
+                Some(plan.measure.frames as f64 / fps - time),
+            ),
+            Targets::PerSegment(_) => (None, None),
+        };
+        let report = Report {
+            keys: planner.keys.iter().map(|&k| key_name(ch, k)).collect(),
+            targets: targets.clone(),
+            weights: opts.search.weights,
+            solver: opts.search.solver,
+            fps,
+            frames: plan.path.len(),
+            distance: plan.measure.distance,
+            time: plan.measure.frames as f64 / fps,
+            distance_error: de,
+            time_error: te,
+            cost: plan.cost,
+            segments: segment_reports(ch, &planner, &plan, targets),
+            smoothness: mean_smoothness(&trans),
+            smoothness_vertex: mean_smoothness_vertex(&trans),
+            transitions: trans,
+            final_heading_deg: track.heading.last().copied().unwrap_or(0.0).to_degrees(),
+            final_facing_deg: plan.facing_deg,
+            heading_target_deg: opts.search.heading.map(|h| h.degrees),
+            heading_error_deg: opts
+                .search
+                .heading
+                .map(|h| lattice::wrap((plan.facing_deg - h.degrees).to_radians()).to_degrees()),
+            poses: Vec::new(),
+            stats: plan.stats.clone(),
+            prepare_seconds: planner.prepare_seconds,
+            search_seconds: plan.search_seconds,
+            search_cpu_seconds: plan.search_cpu_seconds,
+            mesh_seconds,
+            reach: match targets {
+                Targets::Global { distance, time } => {
+                    planner.reach_of(*distance, *time, &opts.search)
+                }
+                Targets::PerSegment(_) => None,
+            },
+        };
+        Ok(Streamed { plan, report })
+    }
+}
+
+/// The end key-frame's facing minus the start's (radians, from their
+/// skeletons; [`Planner::facing`]).
+pub fn facing_change(ch: &Character, keys: &[u32]) -> f64 {
+    match (keys.first(), keys.last()) {
+        (Some(&a), Some(&b)) if (a.max(b) as usize) < ch.poses().len() => {
+            pose::facing(&ch.poses()[b as usize]) - pose::facing(&ch.poses()[a as usize])
+        }
+        _ => 0.0,
+    }
+}
