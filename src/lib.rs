@@ -12,12 +12,15 @@
 //! Input:
 //! - [`mocap`]: motion-capture clips: BVH and ASF/AMC readers, BVH writer,
 //!   forward kinematics, resampling, units and up axis.
-//! - [`rig`]: the canonical 19-joint skeleton, the mapping of any humanoid
-//!   rig onto it, and rig embedding from landmarks on a rest mesh.
+//! - [`rig`]: the canonical 19-joint skeleton and the mapping of any
+//!   humanoid rig onto it.
 //!
 //! Geometry:
 //! - [`mesh`]: triangle meshes and mesh sequences, Laplacians, Poisson and
 //!   harmonic solves, non-linear blending, repair, and their file formats.
+//! - [`embed`]: rig embedding from landmarks on a rest mesh (joints, skin,
+//!   parts, regressors), the per-frame joints read off a character's
+//!   frames and the rigid skeleton fitted to them.
 //! - [`skeleton`]: canonical poses, their alignment and the skeletal
 //!   dissimilarity `c_skel` (Huang Eq. 28).
 //!
@@ -71,6 +74,7 @@
 pub mod mocap;
 pub mod rig;
 // Geometry.
+pub mod embed;
 pub mod mesh;
 pub mod skeleton;
 // Character.

@@ -14,12 +14,12 @@ mod common;
 
 use glam::DVec3;
 use surfmotion::db::Character;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::eval::{Checker, PlausibilityOptions};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
 use surfmotion::retarget::query::load_mocap;
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::rig::retarget::{NeutralSource, character_neutral, retarget_with_neutral};
 use surfmotion::rig::{Canonical as C, LoadOptions as ClipOptions};
 use surfmotion::skeleton::Pose;

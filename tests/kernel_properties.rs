@@ -167,7 +167,7 @@ proptest! {
     /// from them than the pose they were made from.
     #[test]
     fn the_rigid_fit_returns_a_posed_skeleton_and_beats_the_true_pose(seed in 1u64..u64::MAX, spread in 0.0f64..3.0, noise in 0.0f64..0.05) {
-        use surfmotion::db::rigid::{FitOptions, RigidSkeleton};
+        use surfmotion::embed::rigid::{FitOptions, RigidSkeleton};
         use surfmotion::skeleton::bone_lengths;
         let mut rnd = uniform(seed);
         let rest = rest_skeleton();
@@ -192,7 +192,7 @@ proptest! {
 /// fit; a skeleton calibrated from no frames keeps its rest lengths.
 #[test]
 fn the_rigid_fit_survives_non_finite_joints() {
-    use surfmotion::db::rigid::{FitOptions, RigidSkeleton};
+    use surfmotion::embed::rigid::{FitOptions, RigidSkeleton};
     let rest = rest_skeleton();
     let sk = RigidSkeleton::calibrate(&rest, &[]);
     assert_eq!(

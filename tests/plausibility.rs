@@ -6,14 +6,14 @@ mod common;
 
 use glam::{DQuat, DVec3};
 use std::path::Path;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::embed::parts::Part;
 use surfmotion::eval::{
     Checker, FootOptions, HeadOptions, HeadTorso, PlausibilityOptions, lowest_heights,
 };
 use surfmotion::mesh::Mesh;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::embed::parts::Part;
 use surfmotion::synth::humanoid::DEMO_GRID;
 
 fn humanoid() -> (Mesh, Embedding) {

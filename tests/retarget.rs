@@ -268,8 +268,8 @@ fn cli_writes_glb_report_and_evaluates() {
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn an_amc_clip_and_its_bvh_conversions_drive_the_character_alike() {
+    use surfmotion::embed::Embedding;
     use surfmotion::retarget::query::to_character;
-    use surfmotion::rig::embed::Embedding;
     use surfmotion::rig::retarget::ReferenceSource;
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let Some(d) = common::data_dir() else { return };

@@ -16,7 +16,7 @@ use surfmotion::skeleton::Pose;
 
 /// The procedural humanoid's embedded rest skeleton.
 fn character() -> Pose {
-    use surfmotion::rig::embed::Embedding;
+    use surfmotion::embed::Embedding;
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();

@@ -7,11 +7,11 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use surfmotion::db::skeletons::{SkeletonKind, bone_length_spread, poses};
+use surfmotion::embed::Embedding;
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::embed::parts::{Part, neighbours, piece_counts};
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::Canonical;
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::embed::parts::{Part, neighbours, piece_counts};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -310,10 +310,10 @@ fn rig_embed_cli_reports_errors_with_the_file() {
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_rigged_gltf_skin_gives_the_rig_matched_by_position() {
     let Some(d) = common::data_dir() else { return };
+    use surfmotion::embed::skin::from_skin;
     use surfmotion::mesh::Mesh;
     use surfmotion::mesh::io::gltf::read_gltf;
     use surfmotion::rig::RigMap;
-    use surfmotion::rig::embed::skin::from_skin;
     let g = d.join("gltf/CesiumMan/CesiumMan.glb");
     let asset = read_gltf(&g).unwrap();
     let map = RigMap::load(&fixture("cesiumman.rigmap.json")).unwrap();

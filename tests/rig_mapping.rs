@@ -1866,7 +1866,7 @@ fn rigged_gltf_skins_map_by_structure_like_clips() {
             let c = d.side_confidence.unwrap();
             eprintln!("CesiumMan: {} ({})", d.map.convention, d.sides);
             assert!(
-                c >= surfmotion::rig::embed::skin::MIN_SIDE_CONFIDENCE,
+                c >= surfmotion::embed::skin::MIN_SIDE_CONFIDENCE,
                 "CesiumMan: side confidence {c}"
             );
             let hand_made = RigMap::load(
@@ -1877,10 +1877,10 @@ fn rigged_gltf_skins_map_by_structure_like_clips() {
             assert_eq!(d.map.joints, hand_made.joints, "CesiumMan");
             assert_eq!(d.map.convention, surfmotion::rig::BY_STRUCTURE);
             // And the rig embedding takes it with no rig map.
-            let rig = surfmotion::rig::embed::skin::from_skin(&a.mesh, &a, None, &f)
+            let rig = surfmotion::embed::skin::from_skin(&a.mesh, &a, None, &f)
                 .unwrap_or_else(|e| panic!("CesiumMan without a map: {e}"));
             let with_map =
-                surfmotion::rig::embed::skin::from_skin(&a.mesh, &a, Some(&hand_made), &f).unwrap();
+                surfmotion::embed::skin::from_skin(&a.mesh, &a, Some(&hand_made), &f).unwrap();
             assert_eq!(rig.joints, with_map.joints);
             continue;
         }
@@ -2593,7 +2593,7 @@ fn real_suites_without_names_place_the_limbs_alike() {
 #[test]
 fn real_suites_drive_the_procedural_character() {
     use Canonical as C;
-    use surfmotion::rig::embed::Embedding;
+    use surfmotion::embed::Embedding;
     use surfmotion::rig::retarget::{clip_poses, retarget};
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);

@@ -1652,7 +1652,7 @@ fn from_travel(poses: &[Pose]) -> Vec<Pose> {
 /// travel distance within 15%.
 #[test]
 fn the_walk_on_every_suite_skeleton_retargets_like_the_walk() {
-    use surfmotion::rig::embed::Embedding;
+    use surfmotion::embed::Embedding;
     use surfmotion::rig::retarget::{clip_poses, retarget};
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);

@@ -6,11 +6,11 @@ mod common;
 
 use glam::{DQuat, DVec3};
 use std::path::Path;
+use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::eval::vertex_error;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::mesh::{Mesh, MeshSequence};
 use surfmotion::retarget::query::load_mocap;
-use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::transfer::markers::generate;
 use surfmotion::transfer::{
     Job, MarkerOptions, MarkerSpec, SignMode, Source, TransferOptions, TransferStats, prepare,
@@ -373,7 +373,7 @@ fn a_performance_moves_onto_another_character() {
     .unwrap();
     let prepared = prepare(&crane, MarkerSpec::Landmarks(&lc, opts)).unwrap();
     let crig = prepared.rig.as_ref().unwrap();
-    let srig = surfmotion::rig::embed::Embedding::new(&samba.frame_mesh(0), &ls, None).unwrap();
+    let srig = surfmotion::embed::Embedding::new(&samba.frame_mesh(0), &ls, None).unwrap();
     let align = surfmotion::transfer::alignment(&srig, crig);
     let tm = generate(&samba.frame_mesh(0), &srig, &opts);
     let mut job = Job::new(

@@ -5,10 +5,10 @@
 mod common;
 
 use glam::{DQuat, DVec3};
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::embed::parts::Part;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::Canonical as C;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::embed::parts::Part;
 use surfmotion::rig::retarget::choose_reference;
 use surfmotion::skeleton::Pose;
 use surfmotion::transfer::{Job, MarkerOptions, MarkerSpec, Source, prepare, transfer};
@@ -105,7 +105,7 @@ fn samba_prepared_with(d: &std::path::Path, count: usize) -> surfmotion::transfe
 /// The lowest point along `up` of each foot (left, right: the rig's foot
 /// parts) of the positions `p`.
 fn feet_low(
-    rig: &surfmotion::rig::embed::Embedding,
+    rig: &surfmotion::embed::Embedding,
     up: DVec3,
 ) -> impl Fn(&[[f64; 3]]) -> [f64; 2] + '_ {
     let feet = [Part::LFoot, Part::RFoot].map(|part| {

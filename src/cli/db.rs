@@ -366,13 +366,13 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
     // it was accepted and refused only by `retarget`); the checks on the
     // landmarks' places follow once the axis is known.
     if let Some(p) = &m.rig.landmarks {
-        use surfmotion::rig::embed::landmarks::Landmarks;
+        use surfmotion::embed::landmarks::Landmarks;
         Landmarks::load(p, topo.vertex_count()).context("--landmarks")?;
     }
     m.up = resolve_up(&up, &topo, a.landmarks.as_deref())?;
     m.units = resolve_units(&a.units, &topo);
     if let Some(p) = &m.rig.landmarks {
-        surfmotion::rig::embed::landmarks::Landmarks::load_checked(p, &topo)
+        surfmotion::embed::landmarks::Landmarks::load_checked(p, &topo)
             .with_context(|| format!("--landmarks {}", p.display()))?;
     }
     // A person-sized character outside 0.5-3 m in the unit is a wrong
@@ -494,7 +494,7 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
 /// written as Y-up retargets into a contorted, tilted character with only
 /// indirect warnings (knee hyper-extension, turned-over triangles).
 fn resolve_up(up: &str, topo: &Mesh, landmarks: Option<&Path>) -> anyhow::Result<String> {
-    use surfmotion::rig::embed::landmarks::{Landmark, Landmarks};
+    use surfmotion::embed::landmarks::{Landmark, Landmarks};
     let axis = landmarks.and_then(|p| {
         // An unreadable landmarks file is reported by `db build`, which
         // embeds the rig; here it only leaves the axis undecided.

@@ -3,13 +3,13 @@
 
 use glam::DVec3;
 use std::path::PathBuf;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::joints::nearest_axis;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::render::{
     Framing, Image, Scene, View, facing_of_frames, label_colour, render_framed, view_bounds,
 };
 use surfmotion::rig::Canonical;
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::joints::nearest_axis;
 
 /// Arguments of `render`.
 #[derive(clap::Args)]

@@ -17,10 +17,10 @@
 use crate::db::build::{BuildOptions, BuildProgress, build};
 use crate::db::skeletons::{SkeletonKind, embed_rig, poses};
 use crate::db::{DbError, MANIFEST, Manifest};
+use crate::embed::Embedding;
 use crate::graph::{FrameAdjacency, FrameId, SurfaceMotionGraph};
 use crate::mesh::Mesh;
 use crate::mocap::units::y_up;
-use crate::rig::embed::Embedding;
 use crate::similarity::SimilarityMatrix;
 use crate::skeleton::Pose;
 use glam::DVec3;

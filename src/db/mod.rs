@@ -6,7 +6,6 @@ pub mod build;
 pub mod cache;
 pub mod character;
 pub mod manifest;
-pub mod rigid;
 pub mod skeletons;
 
 pub use crate::graph::FrameId;

@@ -2,15 +2,15 @@
 //! the rig embedded once on the topology's rest frame, then every frame's
 //! canonical joints from the embedding's regressors (or, as in the paper,
 //! the plain centres of the joints' vertex sets), and by default the one
-//! rigid skeleton of the character posed to explain them ([`super::rigid`]).
+//! rigid skeleton of the character posed to explain them ([`crate::embed::rigid`]).
 
 use super::manifest::{DbError, Manifest};
-use super::rigid::{Fit, FitOptions, RigidSkeleton};
+use crate::embed::landmarks::Landmarks;
+use crate::embed::rigid::{Fit, FitOptions, RigidSkeleton};
+use crate::embed::{Embedding, parse_parts};
 use crate::fsutil::read_text;
 use crate::mesh::Mesh;
 use crate::rig::Canonical;
-use crate::rig::embed::landmarks::Landmarks;
-use crate::rig::embed::{Embedding, parse_parts};
 use crate::skeleton::{Pose, bone_lengths};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -76,7 +76,7 @@ pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding,
                 ),
                 None => None,
             };
-            return crate::rig::embed::skin::from_skin(topology, &asset, map.as_ref(), &g)
+            return crate::embed::skin::from_skin(topology, &asset, map.as_ref(), &g)
                 .map_err(DbError::Rig);
         }
         return Err(DbError::Manifest {

@@ -7,9 +7,9 @@
 //! kernel.
 
 use crate::db::Character;
+use crate::embed::Embedding;
+use crate::embed::bones_of;
 use crate::rig::Canonical;
-use crate::rig::embed::Embedding;
-use crate::rig::embed::bones_of;
 use crate::skeleton::Pose;
 use glam::{DQuat, DVec3};
 

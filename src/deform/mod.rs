@@ -41,10 +41,10 @@ pub mod unflip;
 pub mod untangle;
 
 use crate::db::Character;
+use crate::embed::parts::Part;
 use crate::mesh::laplacian::uniform_region_rows;
 use crate::mesh::solver::SolveError;
 use crate::rig::Canonical;
-use crate::rig::embed::parts::Part;
 use crate::skeleton::{Pose, pose_rotations};
 use glam::{DQuat, DVec3};
 use part_laplacian::{RegionSolver, RegionWorkspace, apply};

@@ -14,9 +14,9 @@ use super::summary::Summary;
 use super::triangles::{OffRing, RestTriangles, TurnedOverCount};
 use crate::db::Character;
 use crate::deform::TurnedOver;
+use crate::embed::Embedding;
+use crate::embed::regress::Regressor;
 use crate::mesh::Mesh;
-use crate::rig::embed::Embedding;
-use crate::rig::embed::regress::Regressor;
 use glam::DVec3;
 use serde::Serialize;
 

@@ -73,7 +73,7 @@ pub enum JobError {
     Retarget(#[from] crate::retarget::RetargetError),
     /// The rig could not be embedded.
     #[error(transparent)]
-    Embed(#[from] crate::rig::embed::EmbedError),
+    Embed(#[from] crate::embed::EmbedError),
     /// A scan could not be prepared.
     #[error(transparent)]
     Scan(#[from] crate::transfer::ScanError),
@@ -94,7 +94,7 @@ pub enum JobError {
     Markers(#[from] crate::transfer::MarkerError),
     /// A landmark file could not be read.
     #[error(transparent)]
-    Landmarks(#[from] crate::rig::embed::landmarks::LandmarkError),
+    Landmarks(#[from] crate::embed::landmarks::LandmarkError),
     /// Options that do not make a job (what to give instead).
     #[error("{0}")]
     Usage(String),

@@ -2,7 +2,7 @@
 //! canonical joints ([`SkeletonFile`], written by `db skeleton` and as the
 //! ground truth of a synthetic database), and [`export_skeletons`], which
 //! extracts every frame's skeleton of a database (Huang et al. 2015,
-//! Sec. 3; the rigid fit of [`crate::db::rigid`]) and writes JSON and BVH.
+//! Sec. 3; the rigid fit of [`crate::embed::rigid`]) and writes JSON and BVH.
 
 use super::JobError;
 use crate::db::Manifest;

@@ -9,11 +9,11 @@
 
 use super::{JobError, SkeletonFile};
 use crate::db::{Manifest, RigSpec, SequenceEntry};
+use crate::embed::Embedding;
 use crate::eval::{Checker, Plausibility};
 use crate::mesh::io::save_sequence;
 use crate::mesh::{Mesh, MeshSequence};
 use crate::rig::LoadOptions;
-use crate::rig::embed::Embedding;
 use crate::rig::retarget::ClipPoses;
 use crate::synth::database::{Dynamics, drive};
 use serde::Serialize;

@@ -6,6 +6,7 @@
 
 use super::JobError;
 use crate::batch::{Converted, Converter};
+use crate::embed::landmarks::Landmarks;
 use crate::eval::{VelocityError, velocity_error};
 use crate::mesh::Mesh;
 use crate::mesh::io::SaveOptions;
@@ -13,7 +14,6 @@ use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
 use crate::retarget::query::{MocapPoses, load_mocap, to_character};
 use crate::rig::LoadOptions;
-use crate::rig::embed::landmarks::Landmarks;
 use crate::skeleton::Pose;
 use crate::transfer::{
     Confluent, MarkerOptions, MarkerSpec, PreparedScan, TransferOptions, TransferStats,
@@ -524,7 +524,7 @@ fn transfer_inner(
                         ));
                     }
                 };
-                let rig = crate::rig::embed::Embedding::new(&tmesh, &tl, None)?;
+                let rig = crate::embed::Embedding::new(&tmesh, &tl, None)?;
                 if let Some(scan_rig) = &prepared.rig {
                     align = crate::transfer::alignment(&rig, scan_rig);
                 }

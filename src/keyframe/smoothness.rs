@@ -18,9 +18,9 @@
 //! before) is kept and reported alongside as `smoothness_vertex`: it
 //! exceeds the surface distance by up to about half an edge length.
 
+use crate::embed::surface::closest_on_triangle;
 use crate::retarget::Floor;
 use crate::retarget::character::Character;
-use crate::rig::embed::surface::closest_on_triangle;
 use glam::DVec3;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};

@@ -1,7 +1,6 @@
 //! The canonical skeleton and the mapping of rig conventions onto it.
 
 mod canonical;
-pub mod embed;
 pub mod load;
 mod map;
 pub mod names;

@@ -17,8 +17,8 @@
 
 use crate::deform::lbs::skin_into;
 use crate::deform::soft::softness;
+use crate::embed::Embedding;
 use crate::mesh::Mesh;
-use crate::rig::embed::Embedding;
 use crate::rig::retarget::{Reference, retarget};
 use crate::skeleton::Pose;
 use glam::DVec3;

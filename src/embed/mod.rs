@@ -11,6 +11,7 @@ pub mod landmarks;
 pub mod midplane;
 pub mod parts;
 pub mod regress;
+pub mod rigid;
 pub mod section;
 pub mod skin;
 pub mod surface;
