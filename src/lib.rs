@@ -21,8 +21,10 @@
 //! - [`embed`]: rig embedding from landmarks on a rest mesh (joints, skin,
 //!   parts, regressors), the per-frame joints read off a character's
 //!   frames and the rigid skeleton fitted to them.
-//! - [`skeleton`]: canonical poses, their alignment and the skeletal
-//!   dissimilarity `c_skel` (Huang Eq. 28).
+//! - [`pose`]: canonical poses and the rotations that explain them, their
+//!   alignment and the skeletal dissimilarity `c_skel` (Huang Eq. 28)
+//!   ([`pose::measure`]), and the retargeting kernel that puts a clip's
+//!   poses onto a character's skeleton ([`pose::retarget`]).
 //!
 //! Character:
 //! - [`db`]: character databases: the manifest, per-frame skeletons, and
@@ -76,7 +78,7 @@ pub mod rig;
 // Geometry.
 pub mod embed;
 pub mod mesh;
-pub mod skeleton;
+pub mod pose;
 // Character.
 pub mod db;
 pub mod graph;

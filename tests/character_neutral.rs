@@ -1,5 +1,5 @@
 //! The character's neutral pose on a real database whose rest frame is
-//! bent (issue 17): `rig::retarget::character_neutral` takes the database
+//! bent (issue 17): `pose::retarget::character_neutral` takes the database
 //! frame nearest neutral, and a clip retargeted onto that character matches
 //! the one retargeted onto the same capture with an upright rest frame.
 //!
@@ -19,10 +19,10 @@ use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::eval::{Checker, PlausibilityOptions};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{NeutralSource, character_neutral, retarget_with_neutral};
 use surfmotion::retarget::query::load_mocap;
-use surfmotion::rig::retarget::{NeutralSource, character_neutral, retarget_with_neutral};
 use surfmotion::rig::{Canonical as C, LoadOptions as ClipOptions};
-use surfmotion::skeleton::Pose;
 
 /// The neck → head bone's angle to the pelvis → neck line (degrees).
 fn head_trunk(p: &Pose) -> f64 {

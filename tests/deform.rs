@@ -5,9 +5,9 @@ mod common;
 use glam::DVec3;
 use surfmotion::db::Character;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
+use surfmotion::pose::Pose;
 use surfmotion::retarget::query::{MocapPoses, load_mocap};
 use surfmotion::retarget::{Output, RetargetOptions, synthesise};
-use surfmotion::skeleton::Pose;
 
 fn height(p: &[[f64; 3]]) -> f64 {
     let (lo, hi) = p
@@ -96,7 +96,7 @@ fn turned_over(ch: &Character, raw: &Output, res: &Output) -> usize {
             &raw.positions[k * n..(k + 1) * n],
             &res.positions[k * n..(k + 1) * n],
         );
-        let g = surfmotion::skeleton::pose_rotations(&ch.rig().skeleton(a), &raw.query[k]);
+        let g = surfmotion::pose::pose_rotations(&ch.rig().skeleton(a), &raw.query[k]);
         surfmotion::deform::unflip::skin_turns(&ch.rig().skin, &g, &mut turn);
         count += surfmotion::deform::unflip::turned_over(tris, a, b, &turn).len();
     }

@@ -13,9 +13,9 @@ use surfmotion::db::Character;
 use surfmotion::db::Quiet;
 use surfmotion::deform::DeformMode;
 use surfmotion::eval::velocity_error;
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::clip_poses;
 use surfmotion::retarget::{Output, RetargetOptions, synthesise};
-use surfmotion::rig::retarget::clip_poses;
-use surfmotion::skeleton::Pose;
 use surfmotion::synth::{Gait, gait_clip};
 
 /// Grid spacing of the test character (metres): coarser than the demo's
@@ -30,7 +30,7 @@ struct Fixture {
     /// The database folder.
     db: std::path::PathBuf,
     ch: Character,
-    query: surfmotion::rig::retarget::ClipPoses,
+    query: surfmotion::pose::retarget::ClipPoses,
 }
 
 fn write_database(db: &Path) {

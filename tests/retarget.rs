@@ -115,7 +115,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
     assert!(e.mean_cm < 0.5, "{e:?}");
 }
 
-fn skeletons(ch: &Character, p: &[[f64; 3]]) -> Vec<surfmotion::skeleton::Pose> {
+fn skeletons(ch: &Character, p: &[[f64; 3]]) -> Vec<surfmotion::pose::Pose> {
     p.chunks(ch.n()).map(|f| ch.rig().skeleton(f)).collect()
 }
 
@@ -269,8 +269,8 @@ fn cli_writes_glb_report_and_evaluates() {
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn an_amc_clip_and_its_bvh_conversions_drive_the_character_alike() {
     use surfmotion::embed::Embedding;
+    use surfmotion::pose::retarget::ReferenceSource;
     use surfmotion::retarget::query::to_character;
-    use surfmotion::rig::retarget::ReferenceSource;
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let Some(d) = common::data_dir() else { return };
     let mesh = humanoid_mesh(DEMO_GRID);

@@ -8,9 +8,9 @@
 
 use glam::{DQuat, DVec3};
 use surfmotion::embed::rigid::{FitOptions, RigidSkeleton};
-use surfmotion::rig::retarget::{clip_poses, retarget};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{clip_poses, retarget};
 use surfmotion::rig::{Canonical, detect_clip};
-use surfmotion::skeleton::Pose;
 
 /// The procedural humanoid's embedded rest skeleton and its height.
 fn character() -> (Pose, f64) {

@@ -10,10 +10,10 @@ use std::sync::OnceLock;
 use surfmotion::db::{Character, Quiet};
 use surfmotion::deform::DeformMode;
 use surfmotion::eval::{floor_height, lowest_heights};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{choose_reference, clip_poses};
 use surfmotion::retarget::query::database_floor_lift;
 use surfmotion::retarget::{RetargetOptions, synthesise};
-use surfmotion::rig::retarget::{choose_reference, clip_poses};
-use surfmotion::skeleton::Pose;
 use surfmotion::synth::{Gait, gait_clip};
 
 const GRID: f64 = 0.035;

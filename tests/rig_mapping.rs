@@ -12,9 +12,9 @@ use glam::{DQuat, DVec3};
 use proptest::prelude::*;
 use surfmotion::mocap::bvh::{BvhOptions, format_bvh, parse_bvh};
 use surfmotion::mocap::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
+use surfmotion::pose::Pose;
 use surfmotion::rig::load_clip;
 use surfmotion::rig::{Canonical, RigError, RigMap, Source, detect_clip};
-use surfmotion::skeleton::Pose;
 
 /// A joint of an edited hierarchy: where its per-frame data comes from.
 #[derive(Clone)]
@@ -1987,11 +1987,11 @@ fn rerest(c: &Clip, top: usize, a: DQuat) -> Clip {
 /// A T-pose and an A-pose version of one clip (the arms' rest bones turned
 /// 90° and 45° out from hanging down; the motion identical) map to the same
 /// joints by names and by structure alone, and drive a character to the
-/// same poses (`rig::retarget`, each version's rest skeleton as its
+/// same poses (`pose::retarget`, each version's rest skeleton as its
 /// neutral reference) within 1e-6 of its height.
 #[test]
 fn t_and_a_pose_versions_of_a_clip_map_and_retarget_alike() {
-    use surfmotion::rig::retarget::{ReferenceSource, clip_poses, retarget};
+    use surfmotion::pose::retarget::{ReferenceSource, clip_poses, retarget};
     let walk = via_bvh(&surfmotion::synth::gait_clip(
         surfmotion::synth::Gait::Walk,
         2.0,
@@ -2594,7 +2594,7 @@ fn real_suites_without_names_place_the_limbs_alike() {
 fn real_suites_drive_the_procedural_character() {
     use Canonical as C;
     use surfmotion::embed::Embedding;
-    use surfmotion::rig::retarget::{clip_poses, retarget};
+    use surfmotion::pose::retarget::{clip_poses, retarget};
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();

@@ -7,9 +7,9 @@ use surfmotion::eval::velocity_error;
 use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::save_sequence;
+use surfmotion::pose::retarget::clip_poses;
 use surfmotion::render::{Scene, View, render};
 use surfmotion::retarget::{RetargetOptions, synthesise};
-use surfmotion::rig::retarget::clip_poses;
 use surfmotion::synth::humanoid::humanoid_landmarks;
 use surfmotion::synth::{Gait, gait_clip};
 

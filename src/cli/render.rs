@@ -149,7 +149,7 @@ struct Panel {
 
 /// The character's left-right line in `j` (hips and shoulders, each
 /// normalised, across `up`).
-fn left_of(j: &surfmotion::skeleton::Pose, up: DVec3) -> DVec3 {
+fn left_of(j: &surfmotion::pose::Pose, up: DVec3) -> DVec3 {
     let across = |l: Canonical, r: Canonical| {
         let d = j[l.index()] - j[r.index()];
         (d - up * d.dot(up)).normalize_or_zero()
@@ -161,7 +161,7 @@ fn left_of(j: &surfmotion::skeleton::Pose, up: DVec3) -> DVec3 {
 /// and shoulders (left × up), signed as the rig's own rest facing is
 /// against its rest skeleton (so a rig whose sides are named the other
 /// way round still faces forward). `None` when the skeleton has no width.
-pub fn rig_facing(r: &Embedding, j: &surfmotion::skeleton::Pose) -> Option<DVec3> {
+pub fn rig_facing(r: &Embedding, j: &surfmotion::pose::Pose) -> Option<DVec3> {
     let rest_up = DVec3::from_array(r.up).normalize_or(DVec3::Y);
     let rest = left_of(&r.joints.map(DVec3::from_array), rest_up).cross(rest_up);
     let sign = if rest.dot(DVec3::from_array(r.facing)) < 0.0 {
@@ -425,11 +425,11 @@ pub fn write_preview(
 /// about Y by the turn that takes the rest pose's hip line (left hip minus
 /// right hip, horizontal) onto the frame's.
 pub fn turned_facing(
-    rest: &surfmotion::skeleton::Pose,
+    rest: &surfmotion::pose::Pose,
     rest_facing: DVec3,
-    now: &surfmotion::skeleton::Pose,
+    now: &surfmotion::pose::Pose,
 ) -> DVec3 {
-    let hips = |p: &surfmotion::skeleton::Pose| {
+    let hips = |p: &surfmotion::pose::Pose| {
         let d = p[Canonical::LHip.index()] - p[Canonical::RHip.index()];
         DVec3::new(d.x, 0.0, d.z).normalize_or_zero()
     };
@@ -439,5 +439,5 @@ pub fn turned_facing(
         return f;
     }
     let angle = a.z.atan2(a.x) - b.z.atan2(b.x);
-    surfmotion::skeleton::rotate_yaw(f, angle.cos(), angle.sin())
+    surfmotion::pose::measure::rotate_yaw(f, angle.cos(), angle.sin())
 }

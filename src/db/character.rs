@@ -21,8 +21,8 @@ use crate::embed::Embedding;
 use crate::graph::{FrameAdjacency, FrameId, SurfaceMotionGraph};
 use crate::mesh::Mesh;
 use crate::mocap::units::y_up;
+use crate::pose::Pose;
 use crate::similarity::SimilarityMatrix;
-use crate::skeleton::Pose;
 use glam::DVec3;
 use std::path::Path;
 

@@ -12,11 +12,11 @@ use crate::eval::{Checker, Plausibility, PlausibilityOptions, VelocityError, vel
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
+use crate::pose::Pose;
+use crate::pose::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets};
 use crate::retarget::query::{MocapPoses, load_mocap, to_database};
 use crate::retarget::{Output, Report, RetargetOptions, Timings, synthesise, synthesise_each};
 use crate::rig::LoadOptions;
-use crate::rig::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets};
-use crate::skeleton::Pose;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

@@ -7,8 +7,11 @@
 use super::JobError;
 use crate::db::Manifest;
 use crate::db::skeletons::{SkeletonKind, bone_length_spread, extract};
+use crate::pose::{
+    Pose,
+    measure::{BVH_NAMES, pose_clip},
+};
 use crate::rig::Canonical;
-use crate::skeleton::{BVH_NAMES, Pose, pose_clip};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -12,9 +12,9 @@ use crate::mesh::Mesh;
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
+use crate::pose::Pose;
 use crate::retarget::query::{MocapPoses, load_mocap, to_character};
 use crate::rig::LoadOptions;
-use crate::skeleton::Pose;
 use crate::transfer::{
     Confluent, MarkerOptions, MarkerSpec, PreparedScan, TransferOptions, TransferStats,
     mocap_motion, prepare, transfer, transfer_each,
@@ -476,7 +476,7 @@ fn transfer_inner(
                     msg: "the clip has no frames".into(),
                 });
             }
-            clip_head = Some(crate::rig::retarget::clip_head_trunk_deg(
+            clip_head = Some(crate::pose::retarget::clip_head_trunk_deg(
                 &clip.reference,
                 &clip.poses,
             ));

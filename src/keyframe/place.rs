@@ -26,10 +26,10 @@
 use super::graph::{KeyGraph, centre_of};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
+use crate::pose::measure::rotate_yaw;
 use crate::retarget::character::Character;
 use crate::retarget::timeline::{Jump, OutFrame, TimelineOptions, timeline};
 use crate::retarget::{BlendScratch, CHUNK_FRAMES, Floor, blend_placed};
-use crate::skeleton::rotate_yaw;
 use glam::DVec3;
 use rayon::prelude::*;
 

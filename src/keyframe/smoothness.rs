@@ -327,7 +327,7 @@ fn aligned(ch: &Character, ia: u32, ib: u32) -> (Vec<DVec3>, Vec<DVec3>) {
 pub struct FrameSet {
     grids: Vec<Grid>,
     surface: Surface,
-    poses: Vec<crate::skeleton::Pose>,
+    poses: Vec<crate::pose::Pose>,
 }
 
 impl FrameSet {

@@ -22,8 +22,11 @@ use crate::db::Character;
 use crate::deform::{DeformMode, DeformOptions, Deformer, TurnedOver};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
-use crate::rig::retarget::{Reference, ReferenceSource, stance_offsets};
-use crate::skeleton::{Pose, floor_fit, rotate_yaw};
+use crate::pose::retarget::{Reference, ReferenceSource, stance_offsets};
+use crate::pose::{
+    Pose,
+    measure::{floor_fit, rotate_yaw},
+};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -99,7 +102,7 @@ pub struct Report {
     /// Frames per second.
     pub fps: f64,
     /// The clip's neutral reference pose the retargeting measured the
-    /// torso's rotations from (see [`crate::rig::retarget`]).
+    /// torso's rotations from (see [`crate::pose::retarget`]).
     pub reference: ReferenceSource,
     /// The retrieval (path, threshold, costs, widened rows, cuts).
     pub retrieval: Retrieval,

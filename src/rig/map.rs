@@ -2,7 +2,6 @@
 //! auto-detection and JSON map files.
 
 use super::canonical::Canonical;
-use super::pose::Pose;
 use super::structure::{self, Source};
 use crate::mocap::{Clip, JointId};
 use glam::{DQuat, DVec3};
@@ -957,7 +956,9 @@ impl RigMap {
     /// units. Rig maps name a canonical joint by the bone that starts there,
     /// so each is the joint origin (also for ASF/AMC clips, whose native
     /// points are bone ends); derived joints follow their [`Derive`] rule.
-    pub fn poses(&self, clip: &Clip) -> Result<Vec<Pose>, RigError> {
+    /// Each frame is a [`crate::pose::Pose`] (spelled out here: the pose
+    /// stage builds on this one, not the other way round).
+    pub fn poses(&self, clip: &Clip) -> Result<Vec<[DVec3; Canonical::COUNT]>, RigError> {
         Ok(self.poses_and_rotations(clip)?.0)
     }
 
@@ -989,7 +990,7 @@ impl RigMap {
 
     /// Canonical joint positions of the clip's rest skeleton (every local
     /// rotation the identity, offsets as in the file), in the clip's units.
-    pub fn rest_pose(&self, clip: &Clip) -> Result<Pose, RigError> {
+    pub fn rest_pose(&self, clip: &Clip) -> Result<[DVec3; Canonical::COUNT], RigError> {
         let slots = self.plan(clip)?;
         let (p, _) = clip.rest_positions();
         let r = vec![DQuat::IDENTITY; p.len()];
@@ -1087,7 +1088,10 @@ impl RigMap {
 
 /// Per-frame canonical poses and the world rotations of the mapped file
 /// joints ([`RigMap::poses_and_rotations`]).
-pub type PosesAndRotations = (Vec<Pose>, Vec<[Option<DQuat>; Canonical::COUNT]>);
+pub type PosesAndRotations = (
+    Vec<[DVec3; Canonical::COUNT]>,
+    Vec<[Option<DQuat>; Canonical::COUNT]>,
+);
 
 /// Canonical positions of one frame from world joint positions and rotations.
 /// Joints and End Sites are placed first, then the rules in canonical
@@ -1095,8 +1099,8 @@ pub type PosesAndRotations = (Vec<Pose>, Vec<[Option<DQuat>; Canonical::COUNT]>)
 /// and the neck was placed before the neck, halfway between the spine and
 /// the world origin (a skeleton whose arms branch off its first joint
 /// above the pelvis: the Biovision sample, H-Anim LOA1, KIT's MMM).
-fn place(slots: &[Slot], p: &[DVec3], r: &[DQuat]) -> Pose {
-    let mut out: Pose = [DVec3::ZERO; 19];
+fn place(slots: &[Slot], p: &[DVec3], r: &[DQuat]) -> [DVec3; Canonical::COUNT] {
+    let mut out: [DVec3; Canonical::COUNT] = [DVec3::ZERO; 19];
     for (c, s) in slots.iter().enumerate() {
         match *s {
             Slot::Joint(j) => out[c] = p[j],

@@ -4,8 +4,6 @@ mod canonical;
 pub mod load;
 mod map;
 pub mod names;
-pub mod pose;
-pub mod retarget;
 pub mod structure;
 
 pub use canonical::Canonical;

@@ -9,8 +9,10 @@ use super::source::{FootGround, MarkerMotion, TemplateMarkers, from_skeleton, fr
 use crate::embed::Embedding;
 use crate::embed::parts::Part;
 use crate::mesh::{Bounds, MeshSequence};
-use crate::rig::retarget::{Reference, Toes, clip_support, ground_tilt, leg_length, retarget_toes};
-use crate::skeleton::Pose;
+use crate::pose::Pose;
+use crate::pose::retarget::{
+    Reference, Toes, clip_support, ground_tilt, leg_length, retarget_toes,
+};
 use glam::{DMat3, DQuat, DVec3};
 use std::collections::HashMap;
 
@@ -173,7 +175,7 @@ pub fn up_axis(rig: &Embedding) -> DVec3 {
 
 /// Where the scan's feet touch the floor per frame ([`FootGround`]):
 /// the clip's contacts as the kernel reads them (levelled,
-/// [`crate::rig::retarget::Support::touch`]), each foot's vertices from
+/// [`crate::pose::retarget::Support::touch`]), each foot's vertices from
 /// the rig's parts. `None` when the rig's labels are not the mesh's or a
 /// foot has no vertex.
 fn foot_ground(

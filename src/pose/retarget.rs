@@ -63,9 +63,9 @@
 //! within 30°, bones as long as in the motion), else its most neutral frame
 //! (trunk nearest vertical, knees straightest).
 
-use super::pose::{Pose, pose_rotations};
-use super::{Canonical, RigError, RigMap};
 use crate::mocap::Clip;
+use crate::pose::{Pose, pose_rotations};
+use crate::rig::{Canonical, RigError, RigMap};
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -1776,7 +1776,7 @@ mod tests {
 
     #[test]
     fn t_and_a_pose_versions_of_a_clip_give_the_same_result() {
-        use crate::skeleton::pose_clip;
+        use crate::pose::measure::pose_clip;
         use crate::synth::{Gait, gait_clip};
         let clip = gait_clip(Gait::Walk, 2.0, 30.0);
         let poses = crate::rig::detect(&clip.point_names())
@@ -1896,7 +1896,7 @@ mod tests {
 
     #[test]
     fn a_bent_rest_skeleton_falls_back_to_the_most_neutral_frame() {
-        use crate::skeleton::pose_clip;
+        use crate::pose::measure::pose_clip;
         use crate::synth::{Gait, gait_clip};
         let clip = gait_clip(Gait::Walk, 2.0, 30.0);
         let poses = crate::rig::detect(&clip.point_names())
