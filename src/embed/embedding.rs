@@ -1,0 +1,481 @@
+//! The [`Embedding`] of a character's rig, made once from its rest frame
+//! ([`Embedding::new`]: joints placed from landmarks, bone-heat skin,
+//! contiguous parts and overlapping regions, per-joint regressors), its
+//! file form and the joints it reads off any frame.
+
+use super::heat::{Bone, bone_heat, sparsify};
+use super::joints::{JointEstimate, place_joints};
+use super::landmarks::{LandmarkError, Landmarks};
+use super::parts::{Part, contiguous_labels, make_contiguous, neighbours, part_weights, regions};
+use super::regress::Regressor;
+use crate::fsutil::{FsError, read_text, write_atomic};
+use crate::mesh::Mesh;
+use crate::mesh::solver::SolveError;
+use crate::rig::Canonical;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Why a rig cannot be embedded.
+#[derive(Debug, thiserror::Error)]
+pub enum EmbedError {
+    /// Bad landmark file.
+    #[error(transparent)]
+    Landmarks(#[from] LandmarkError),
+    /// The heat system could not be solved (mesh problems).
+    #[error("bone-heat weights: {0}")]
+    Solve(#[from] SolveError),
+    /// A bad part-label or embedding file.
+    #[error("{path}: {reason}")]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Reading or writing failed.
+    #[error(transparent)]
+    Io(#[from] FsError),
+    /// The mesh cannot hold a rig: no triangles, or flat.
+    #[error("the mesh {0}: a rig needs a closed body surface")]
+    Mesh(String),
+    /// No regressor could be fitted for a joint.
+    #[error(
+        "joint {joint}: no vertices around it span a volume (is the landmark on the right body part?)"
+    )]
+    Regressor {
+        /// The joint.
+        joint: &'static str,
+    },
+    /// The embedding was made for a different mesh.
+    #[error("{path}: the embedding has {have} vertices, the mesh {want}")]
+    Mismatch {
+        /// The file.
+        path: PathBuf,
+        /// Its vertex count.
+        have: usize,
+        /// The mesh's.
+        want: usize,
+    },
+}
+
+/// A character's rig: everything derived once from its rest frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Embedding {
+    /// Number of vertices of the mesh it was made for.
+    pub vertex_count: usize,
+    /// Rest-frame joint positions, in [`Canonical::ALL`] order.
+    pub joints: [[f64; 3]; Canonical::COUNT],
+    /// Top of the head.
+    pub head_top: [f64; 3],
+    /// Left and right hand tips.
+    pub hand_tips: [[f64; 3]; 2],
+    /// Left and right toe tips.
+    pub toe_tips: [[f64; 3]; 2],
+    /// Up, facing and left directions of the rest frame.
+    pub up: [f64; 3],
+    /// Facing direction.
+    pub facing: [f64; 3],
+    /// The character's left.
+    pub left: [f64; 3],
+    /// Height of the rest frame along `up`.
+    pub height: f64,
+    /// Part of each vertex ([`Part::ALL`] index); every part one connected region.
+    pub labels: Vec<u8>,
+    /// Overlapping region of each part (vertex lists, [`Part::ALL`] order).
+    pub regions: Vec<Vec<u32>>,
+    /// Skin: up to four (joint index, weight) per vertex, weights summing to 1.
+    pub skin: Vec<([u8; 4], [f64; 4])>,
+    /// One regressor per joint, [`Canonical::ALL`] order.
+    pub regressors: Vec<Regressor>,
+    /// What was assumed while embedding.
+    pub notes: Vec<String>,
+}
+
+/// Refuses meshes no rig can be embedded in, with the reason (a face-less,
+/// tiny or flat mesh used to fail later with "joint pelvis: no vertices
+/// around it span a volume"; issue 18, item 17).
+pub fn check_body(mesh: &Mesh) -> Result<(), EmbedError> {
+    if mesh.triangle_count() == 0 {
+        return Err(EmbedError::Mesh(format!(
+            "has {} vertices and no triangles (a point cloud?)",
+            mesh.vertex_count()
+        )));
+    }
+    if mesh.vertex_count() < 4 || mesh.triangle_count() < 4 {
+        return Err(EmbedError::Mesh(format!(
+            "has only {} vertices and {} triangles",
+            mesh.vertex_count(),
+            mesh.triangle_count()
+        )));
+    }
+    let b = mesh.bounds();
+    let ext: Vec<f64> = (0..3).map(|k| b.max[k] - b.min[k]).collect();
+    let big = ext.iter().copied().fold(0.0, f64::max);
+    if let Some(k) = (0..3).find(|&k| ext[k].is_nan() || ext[k] <= 1e-3 * big) {
+        return Err(EmbedError::Mesh(format!(
+            "is flat: its extent along {} is {:.3e} against {:.3e} along the largest axis",
+            ["x", "y", "z"][k],
+            ext[k],
+            big
+        )));
+    }
+    Ok(())
+}
+
+/// The bone segments of an estimate, each with its driving joint: every
+/// joint's segments to its children, plus end segments to the head top,
+/// hand tips and toe tips.
+pub fn bones(est: &JointEstimate) -> Vec<Bone> {
+    bone_list(&est.joints, est.head_top, est.hand_tips, est.toe_tips)
+}
+
+/// [`bones`] of a stored embedding.
+pub fn bones_of(e: &Embedding) -> Vec<Bone> {
+    let v = DVec3::from_array;
+    bone_list(
+        &e.joints.map(v),
+        v(e.head_top),
+        e.hand_tips.map(v),
+        e.toe_tips.map(v),
+    )
+}
+
+fn bone_list(
+    joints: &[DVec3; Canonical::COUNT],
+    head_top: DVec3,
+    hand_tips: [DVec3; 2],
+    toe_tips: [DVec3; 2],
+) -> Vec<Bone> {
+    let mut out = Vec::new();
+    for c in Canonical::ALL {
+        if let Some(p) = c.parent() {
+            out.push(Bone {
+                joint: p,
+                a: joints[p.index()],
+                b: joints[c.index()],
+            });
+        }
+    }
+    let ends = [
+        (Canonical::Head, head_top),
+        (Canonical::LWrist, hand_tips[0]),
+        (Canonical::RWrist, hand_tips[1]),
+        (Canonical::LToe, toe_tips[0]),
+        (Canonical::RToe, toe_tips[1]),
+    ];
+    for (j, tip) in ends {
+        out.push(Bone {
+            joint: j,
+            a: joints[j.index()],
+            b: tip,
+        });
+    }
+    out
+}
+
+/// Parses explicit part labels `{part: [vertex ids]}`. A vertex listed for
+/// several parts takes the first in [`Part::ALL`] order; vertices listed for
+/// none take the part of the nearest labelled vertex along the mesh.
+pub fn parse_parts(
+    text: &str,
+    path: &Path,
+    triangles: &[[u32; 3]],
+    n: usize,
+) -> Result<(Vec<u8>, usize), EmbedError> {
+    let bad = |reason: String| EmbedError::File {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+    let obj = v
+        .as_object()
+        .ok_or_else(|| bad("expected a JSON object {part: [vertex ids]}".into()))?;
+    let mut labels = vec![u8::MAX; n];
+    let mut listed: Vec<(Part, Vec<u32>)> = Vec::new();
+    for (k, ids) in obj {
+        let part = Part::from_name(k).ok_or_else(|| {
+            let known: Vec<&str> = Part::ALL.iter().map(|p| p.name()).collect();
+            bad(format!("unknown part {k:?} (known: {})", known.join(", ")))
+        })?;
+        let arr = ids
+            .as_array()
+            .ok_or_else(|| bad(format!("part {k}: expected an array of vertex ids")))?;
+        let mut vs = Vec::with_capacity(arr.len());
+        for (i, x) in arr.iter().enumerate() {
+            match x.as_u64() {
+                Some(v) if (v as usize) < n => vs.push(v as u32),
+                _ => {
+                    return Err(bad(format!(
+                        "part {k}, entry {i}: {x} is not a vertex id below {n}"
+                    )));
+                }
+            }
+        }
+        listed.push((part, vs));
+    }
+    listed.sort_by_key(|(p, _)| std::cmp::Reverse(*p));
+    for (p, vs) in &listed {
+        for &v in vs {
+            labels[v as usize] = p.index() as u8;
+        }
+    }
+    // Unlabelled vertices: breadth-first from the labelled ones.
+    let nb = neighbours(n, triangles);
+    let mut queue: std::collections::VecDeque<u32> = (0..n as u32)
+        .filter(|&v| labels[v as usize] != u8::MAX)
+        .collect();
+    if queue.is_empty() {
+        return Err(bad("no vertex is labelled".into()));
+    }
+    let filled = n - queue.len();
+    while let Some(v) = queue.pop_front() {
+        for &u in &nb[v as usize] {
+            if labels[u as usize] == u8::MAX {
+                labels[u as usize] = labels[v as usize];
+                queue.push_back(u);
+            }
+        }
+    }
+    for l in &mut labels {
+        if *l == u8::MAX {
+            *l = 0;
+        }
+    }
+    Ok((labels, filled))
+}
+
+impl Embedding {
+    /// Embeds the rig in a rest mesh from landmarks; `parts` overrides the
+    /// computed part labels (see [`parse_parts`]). Degenerate landmark sets
+    /// are refused first ([`Landmarks::validate`]); [`check`] judges the
+    /// result.
+    pub fn new(
+        mesh: &Mesh,
+        lm: &Landmarks,
+        parts: Option<Vec<u8>>,
+    ) -> Result<Embedding, EmbedError> {
+        let (p, t) = (mesh.positions(), mesh.triangles());
+        check_body(mesh)?;
+        // The vertical as `place_joints` takes it ([`super::joints::body_up`]).
+        let up = match (
+            lm.point(super::landmarks::Landmark::Chin, p),
+            lm.point(super::landmarks::Landmark::Groin, p),
+        ) {
+            (Some(c), Some(g)) => {
+                super::joints::body_up(DVec3::from_array(c) - DVec3::from_array(g))
+            }
+            _ => DVec3::Y,
+        };
+        lm.validate(p, t, up.to_array())?;
+        let est = place_joints(p, t, lm);
+        let bs = bones(&est);
+        let w = bone_heat(mesh, &bs)?;
+        Embedding::assemble(mesh, est, &w, parts)
+    }
+
+    /// The embedding of joints `est` and dense skin weights `w` (one row
+    /// of [`Canonical::COUNT`] per vertex): part labels (or the given
+    /// ones, made contiguous), overlapping regions, sparse skin, regressors.
+    pub fn assemble(
+        mesh: &Mesh,
+        est: JointEstimate,
+        w: &super::heat::Weights,
+        parts: Option<Vec<u8>>,
+    ) -> Result<Embedding, EmbedError> {
+        let (p, t) = (mesh.positions(), mesh.triangles());
+        let pw = part_weights(w);
+        let nb = neighbours(p.len(), t);
+        let mut notes = est.notes.clone();
+        let labels = match parts {
+            Some(mut l) => {
+                make_contiguous(&mut l, &nb);
+                notes.push("part labels: given explicitly".into());
+                l
+            }
+            None => contiguous_labels(&pw, &nb),
+        };
+        let regions = regions(&labels, &pw, 0.1);
+        let skin = sparsify::<4>(w, 0.01);
+        let mut regressors = Vec::with_capacity(Canonical::COUNT);
+        for j in Canonical::ALL {
+            regressors.push(
+                fit_regressor(p, &labels, &est, j)
+                    .ok_or(EmbedError::Regressor { joint: j.name() })?,
+            );
+        }
+        let a = |v: DVec3| v.to_array();
+        Ok(Embedding {
+            vertex_count: p.len(),
+            joints: est.joints.map(a),
+            head_top: a(est.head_top),
+            hand_tips: est.hand_tips.map(a),
+            toe_tips: est.toe_tips.map(a),
+            up: a(est.up),
+            facing: a(est.facing),
+            left: a(est.left),
+            height: est.height,
+            labels,
+            regions,
+            skin,
+            regressors,
+            notes,
+        })
+    }
+
+    /// The joints of a frame by the regressors, [`Canonical::ALL`] order.
+    pub fn skeleton(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
+        std::array::from_fn(|j| self.regressors[j].apply(positions))
+    }
+
+    /// The joints of a frame as plain centres of each joint's vertex set
+    /// (the part-centroid skeleton of Huang et al. 2015, Sec. 3).
+    pub fn centroid_skeleton(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
+        std::array::from_fn(|j| self.regressors[j].centroid(positions))
+    }
+
+    /// Writes the embedding as JSON (atomically).
+    pub fn save(&self, path: &Path) -> Result<(), EmbedError> {
+        let s = serde_json::to_vec(self).map_err(|e| EmbedError::File {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        write_atomic(path, |w| w.write_all(&s))?;
+        Ok(())
+    }
+
+    /// Reads an embedding and checks it against the mesh's vertex count.
+    pub fn load(path: &Path, vertex_count: usize) -> Result<Embedding, EmbedError> {
+        Self::parse(&read_text(path)?, path, vertex_count)
+    }
+
+    /// [`Embedding::load`] of a file's text (`path` names it in errors).
+    pub fn parse(text: &str, path: &Path, vertex_count: usize) -> Result<Embedding, EmbedError> {
+        let e: Embedding = serde_json::from_str(text).map_err(|e| EmbedError::File {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        let bad = |reason: &str| EmbedError::File {
+            path: path.to_path_buf(),
+            reason: reason.into(),
+        };
+        if e.vertex_count != vertex_count {
+            return Err(EmbedError::Mismatch {
+                path: path.to_path_buf(),
+                have: e.vertex_count,
+                want: vertex_count,
+            });
+        }
+        let n = vertex_count;
+        if e.labels.len() != n || e.skin.len() != n || e.regressors.len() != Canonical::COUNT {
+            return Err(bad("inconsistent sizes"));
+        }
+        let in_range = |v: &u32| (*v as usize) < n;
+        if e.regressors
+            .iter()
+            .any(|r| r.vertices.len() != r.weights.len() || !r.vertices.iter().all(in_range))
+            || e.regions.iter().any(|r| !r.iter().all(in_range))
+            || e.labels.iter().any(|&l| l as usize >= Part::COUNT)
+            || e.skin
+                .iter()
+                .any(|(j, _)| j.iter().any(|&x| x as usize >= Canonical::COUNT))
+        {
+            return Err(bad("an index is out of range"));
+        }
+        Ok(e)
+    }
+}
+
+/// The regressor of joint `j`: a band of vertices just beyond the joint on
+/// its distal side (in the parts the joint drives), widened until it spans
+/// a volume. A joint is a fixed point of the segment it drives, so the
+/// surface right next to it on that side moves rigidly with it, while the
+/// proximal side slides and bulges as the joint bends.
+fn fit_regressor(
+    p: &[[f64; 3]],
+    labels: &[u8],
+    est: &JointEstimate,
+    j: Canonical,
+) -> Option<Regressor> {
+    use Canonical as C;
+    let jp = |c: Canonical| est.joints[c.index()];
+    let here = jp(j);
+    let child = Canonical::ALL.into_iter().find(|c| c.parent() == Some(j));
+    let tip = match j {
+        C::Head => Some(est.head_top),
+        C::LWrist => Some(est.hand_tips[0]),
+        C::RWrist => Some(est.hand_tips[1]),
+        C::LToe => Some(est.toe_tips[0]),
+        C::RToe => Some(est.toe_tips[1]),
+        _ => None,
+    };
+    let out = match (child, tip) {
+        (Some(c), _) => jp(c) - here,
+        (None, Some(t)) => t - here,
+        (None, None) => j.parent().map_or(est.up, |par| here - jp(par)),
+    };
+    let axis = out.normalize_or(est.up);
+    // Hips and neck sit at fixed places in the pelvis and chest (the
+    // shoulder girdle, by contrast, moves on the chest): their band is taken
+    // from the parent's part, on both sides.
+    let branch = j
+        .parent()
+        .filter(|_| matches!(j, C::LHip | C::RHip | C::Neck));
+    let parts: Vec<u8> = match branch {
+        Some(par) => vec![Part::of_joint(par).index() as u8],
+        None => {
+            let mut v = vec![Part::of_joint(j).index() as u8];
+            if let Some(c) = child {
+                v.push(Part::of_joint(c).index() as u8);
+            }
+            v
+        }
+    };
+    let behind = if branch.is_some() {
+        f64::INFINITY
+    } else {
+        0.01
+    };
+    let h = est.height;
+    for slab in [0.02, 0.04, 0.08, 0.16] {
+        let mut cand: Vec<(f64, u32)> = (0..p.len() as u32)
+            .filter_map(|v| {
+                let d = DVec3::from_array(p[v as usize]) - here;
+                let along = d.dot(axis);
+                (parts.contains(&labels[v as usize])
+                    && along > -behind.min(slab) * h
+                    && along < slab * h
+                    && d.length() < 0.25 * h)
+                    .then_some((d.length(), v))
+            })
+            .collect();
+        if cand.len() < 12 {
+            continue;
+        }
+        // Keep the tight ring: vertices not much farther from the joint
+        // than its nearest fifth. Loose clothing (a skirt over a knee) and
+        // the far side of a bulky part move less rigidly with the joint.
+        cand.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let r0 = cand[cand.len() / 5].0;
+        let tight: Vec<u32> = cand
+            .iter()
+            .filter(|(d, _)| *d <= 1.6 * r0)
+            .map(|&(_, v)| v)
+            .collect();
+        let support = if tight.len() >= 12 {
+            tight
+        } else {
+            cand.iter().map(|&(_, v)| v).collect()
+        };
+        if let Some(r) = Regressor::fit(p, support, here) {
+            return Some(r);
+        }
+    }
+    let mut near: Vec<u32> = (0..p.len() as u32).collect();
+    near.sort_by(|&a, &b| {
+        let d = |v: u32| DVec3::from_array(p[v as usize]).distance(here);
+        d(a).total_cmp(&d(b))
+    });
+    near.truncate(64);
+    Regressor::fit(p, near, here)
+}
