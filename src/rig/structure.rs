@@ -45,7 +45,7 @@
 //!    mocapdata.com) do the sides the joints' names state decide.
 
 use super::canonical::Canonical;
-use super::map::Derive;
+use super::derive::Derive;
 use super::names::{Role, Side, is_helper, role, side};
 use crate::mocap::Clip;
 use glam::{DQuat, DVec3};
