@@ -7,8 +7,8 @@ mod common;
 
 use criterion::Criterion;
 use std::hint::black_box;
-use surfmotion::db::skeletons::{SkeletonKind, poses};
 use surfmotion::embed::Embedding;
+use surfmotion::embed::frames::{SkeletonKind, poses};
 use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::pose::retarget::clip_poses;
 use surfmotion::synth::database::{Dynamics, drive};

@@ -59,9 +59,9 @@ fn character(seq: &MeshSequence, frame: usize, landmarks: &str) -> (Pose, Vec<Po
     )
     .unwrap();
     let rig = Embedding::new(&mesh, &lm, None).unwrap();
-    let rest = rig.skeleton(seq.frame(frame));
+    let rest = rig.frame_joints(seq.frame(frame));
     let poses = (0..seq.frame_count())
-        .map(|t| rig.skeleton(seq.frame(t)))
+        .map(|t| rig.frame_joints(seq.frame(t)))
         .collect();
     (rest, poses)
 }

@@ -207,7 +207,7 @@ fn knee_hyperextension_on_real_captures_is_small() {
     for name in ["samba", "crane"] {
         let (seq, _, rig) = capture(&d, name);
         let worst = (0..seq.frame_count())
-            .flat_map(|f| surfmotion::eval::knee_hyperextension(&rig.skeleton(seq.frame(f))))
+            .flat_map(|f| surfmotion::eval::knee_hyperextension(&rig.frame_joints(seq.frame(f))))
             .fold(0.0f64, f64::max);
         println!("{name}: worst knee hyper-extension {worst:.1}°");
         assert!(worst < 12.0, "{name}: {worst:.1}°");

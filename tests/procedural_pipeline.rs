@@ -76,7 +76,7 @@ fn retarget(mode: DeformMode) -> Output {
 fn output_skeletons(ch: &Character, out: &Output) -> Vec<Pose> {
     out.positions
         .chunks(ch.n())
-        .map(|f| ch.rig().skeleton(f))
+        .map(|f| ch.rig().frame_joints(f))
         .collect()
 }
 

@@ -68,7 +68,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
         // pelvis follows the query's pelvis.
         let pelvis: Vec<f64> = (0..frames)
             .map(|f| {
-                let s = ch.rig().skeleton(&out.positions[f * n..(f + 1) * n]);
+                let s = ch.rig().frame_joints(&out.positions[f * n..(f + 1) * n]);
                 let (a, b) = (s[0], out.query[f][0]);
                 glam::DVec2::new(a.x - b.x, a.z - b.z).length()
             })
@@ -116,7 +116,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
 }
 
 fn skeletons(ch: &Character, p: &[[f64; 3]]) -> Vec<surfmotion::pose::Pose> {
-    p.chunks(ch.n()).map(|f| ch.rig().skeleton(f)).collect()
+    p.chunks(ch.n()).map(|f| ch.rig().frame_joints(f)).collect()
 }
 
 #[test]

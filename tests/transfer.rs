@@ -409,9 +409,9 @@ fn a_performance_moves_onto_another_character() {
     let n = crane.vertex_count();
     let (mut with, mut without, mut k) = (0.0, 0.0, 0);
     for f in (0..samba.frame_count()).step_by(5) {
-        let sj = srig.skeleton(samba.frame(f));
-        let cj = crig.skeleton(&out[f * n..(f + 1) * n]);
-        let c0 = crig.skeleton(crane.positions());
+        let sj = srig.frame_joints(samba.frame(f));
+        let cj = crig.frame_joints(&out[f * n..(f + 1) * n]);
+        let c0 = crig.frame_joints(crane.positions());
         for (a, b) in limbs {
             let want = align * (sj[b.index()] - sj[a.index()]).normalize();
             let got = (cj[b.index()] - cj[a.index()]).normalize();

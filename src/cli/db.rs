@@ -2,8 +2,8 @@
 
 use anyhow::{Context, bail};
 use std::path::{Path, PathBuf};
-use surfmotion::db::skeletons::SkeletonKind;
 use surfmotion::db::{MANIFEST, Manifest, RigSpec, SequenceEntry, info};
+use surfmotion::embed::frames::SkeletonKind;
 use surfmotion::jobs::export_skeletons;
 use surfmotion::jobs::skeletons::SkeletonsOptions;
 use surfmotion::mesh::Mesh;

@@ -80,7 +80,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let skel: Vec<_> = out
         .positions
         .chunks(ch.n())
-        .map(|f| ch.rig().skeleton(f))
+        .map(|f| ch.rig().frame_joints(f))
         .collect();
     let err = velocity_error(&out.query, &skel);
     // A strip of frames, seen from the side of the path.

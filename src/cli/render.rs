@@ -104,7 +104,7 @@ pub fn draw_framed(
         rig.map(|r| r.labels.iter().map(|&l| label_colour(l as usize)).collect());
     let mut lines = Vec::new();
     if let Some(r) = rig {
-        let j = r.skeleton(positions);
+        let j = r.frame_joints(positions);
         for c in Canonical::ALL {
             if let Some(p) = c.parent() {
                 lines.push((j[p.index()].to_array(), j[c.index()].to_array(), [0, 0, 0]));
@@ -217,7 +217,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             None => None,
         };
         // The rig's skeleton on the frame drawn, in the file's axes.
-        let joints = rig.as_ref().map(|r| r.skeleton(s.frame(a.frame)));
+        let joints = rig.as_ref().map(|r| r.frame_joints(s.frame(a.frame)));
         // Stood Y-up (the views assume it): by `--up`, else by the rig's
         // skeleton on this frame (pelvis to neck, snapped to an axis). The
         // rig's rest up held only for frames in the axes of the mesh it was
@@ -377,7 +377,7 @@ pub fn preview_image(
         Some(r) => turned_facing(
             &r.joints.map(DVec3::from_array),
             DVec3::from_array(r.facing),
-            &r.skeleton(frames[0]),
+            &r.frame_joints(frames[0]),
         ),
         None => surfmotion::render::facing_of(frames[0]),
     });

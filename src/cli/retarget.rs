@@ -180,7 +180,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 ch.rest_pose(),
                 facing,
                 &ch.rig()
-                    .skeleton(&out.positions[..ch.n().min(out.positions.len())]),
+                    .frame_joints(&out.positions[..ch.n().min(out.positions.len())]),
             )),
             plaus.as_ref().map(|p| p.1),
             &a.run.preview,

@@ -15,9 +15,10 @@
 //! skeleton` writes [`SkeletonKind::Rigid`] by default.
 
 use crate::db::build::{BuildOptions, BuildProgress, build};
-use crate::db::skeletons::{SkeletonKind, embed_rig, poses};
+use crate::db::skeletons::embed_rig;
 use crate::db::{DbError, MANIFEST, Manifest};
 use crate::embed::Embedding;
+use crate::embed::frames::{SkeletonKind, poses};
 use crate::graph::{FrameAdjacency, FrameId, SurfaceMotionGraph};
 use crate::mesh::Mesh;
 use crate::mocap::units::y_up;

@@ -794,7 +794,7 @@ impl Deformer {
                 || (self.workspace(), vec![[0.0; 3]; n]),
                 |(ws, src), (f, t)| {
                     src.copy_from_slice(f);
-                    let sp = ch.rig().skeleton(src);
+                    let sp = ch.rig().frame_joints(src);
                     self.deform(ch, src, &sp, t, f, ws)
                 },
             )

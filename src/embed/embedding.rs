@@ -324,13 +324,13 @@ impl Embedding {
     }
 
     /// The joints of a frame by the regressors, [`Canonical::ALL`] order.
-    pub fn skeleton(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
+    pub fn frame_joints(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
         std::array::from_fn(|j| self.regressors[j].apply(positions))
     }
 
     /// The joints of a frame as plain centres of each joint's vertex set
     /// (the part-centroid skeleton of Huang et al. 2015, Sec. 3).
-    pub fn centroid_skeleton(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
+    pub fn centroid_joints(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
         std::array::from_fn(|j| self.regressors[j].centroid(positions))
     }
 

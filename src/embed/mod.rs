@@ -6,6 +6,7 @@
 
 pub mod check;
 mod embedding;
+pub mod frames;
 pub mod heat;
 pub mod joints;
 pub mod landmarks;

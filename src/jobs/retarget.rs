@@ -138,7 +138,7 @@ impl RetargetJob {
                 if f < keep {
                     kept.extend_from_slice(p);
                 }
-                skeletons.push(ch.rig().skeleton(p));
+                skeletons.push(ch.rig().frame_joints(p));
                 Ok(writer.push(p)?)
             },
         )?;
@@ -272,7 +272,7 @@ impl RetargetRun {
             .output
             .positions
             .chunks(ch.n().max(1))
-            .map(|p| ch.rig().skeleton(p))
+            .map(|p| ch.rig().frame_joints(p))
             .collect();
         velocity_error(&query, &skel)
     }
@@ -450,7 +450,7 @@ pub fn evaluate_result(
         });
     }
     let out: Vec<Pose> = (0..res.frame_count())
-        .map(|f| ch.rig().skeleton(res.frame(f)))
+        .map(|f| ch.rig().frame_joints(res.frame(f)))
         .collect();
     let e = velocity_error(&query, &out);
     let plaus = plausibility(ch, res.all_positions(), None, Some(&clip)).map(|p| p.0);

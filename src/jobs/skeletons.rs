@@ -6,7 +6,8 @@
 
 use super::JobError;
 use crate::db::Manifest;
-use crate::db::skeletons::{SkeletonKind, bone_length_spread, extract};
+use crate::db::skeletons::extract;
+use crate::embed::frames::{SkeletonKind, bone_length_spread};
 use crate::pose::{
     Pose,
     measure::{BVH_NAMES, pose_clip},

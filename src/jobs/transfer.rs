@@ -132,7 +132,7 @@ impl ScanTransferJob {
         let skel: Vec<Pose> = run
             .positions
             .chunks(n.max(1))
-            .map(|p| rig.skeleton(p))
+            .map(|p| rig.frame_joints(p))
             .collect();
         Some(velocity_error(&query, &skel))
     }
@@ -191,7 +191,7 @@ impl Converter for ScanTransferJob {
             &self.options.transfer,
             &|_| {},
             |_, p| {
-                skel.push(rig.skeleton(p));
+                skel.push(rig.frame_joints(p));
                 writer.push(p)
             },
         )

@@ -409,7 +409,7 @@ pub fn synthesise_each<E: From<RetargetError>>(
                     .zip(query[start..start + m].par_iter())
                     .map(|((dst, src), target)| {
                         let mut ws = take(&deform_pool).unwrap_or_else(|| d.workspace());
-                        let sp = ch.rig().skeleton(src);
+                        let sp = ch.rig().frame_joints(src);
                         let c = d.deform(ch, src, &sp, target, dst, &mut ws);
                         give(&deform_pool, ws);
                         c
