@@ -3,7 +3,6 @@
 //! foot bones set to the elevation the clip's feet have when flat.
 
 use super::ground::{CONTACT, Support, grounds_either_side, interpolate_gaps};
-use super::kernel::Toes;
 use super::reference::leg_length;
 use crate::pose::Pose;
 use crate::rig::Canonical;
@@ -377,4 +376,25 @@ pub(super) fn held_elevation(e: &[f64]) -> f64 {
     }
     let w = &e[lo..hi];
     w.get(w.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// How the surface a result drives moves its toes, which decides the
+/// sole the kernel stands on the ground.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Toes {
+    /// The toes move with the foot (the part-based deformation's foot
+    /// part turns with the ankle): the sole's toe tip, a quarter of the
+    /// foot's horizontal length beyond the toe joint, is carried by the
+    /// ankle and dips below the toe joint when the foot pitches down
+    /// onto its ball, so the body stands on it.
+    #[default]
+    Rigid,
+    /// The toes bend at the toe joint (the ball) where the ground stops
+    /// them, as a foot's do: the body stands on the toe joint or the heel
+    /// alone, and the toe joint's rotation turns the toes up about the
+    /// ball just enough to keep their tip on the foot's ground (level
+    /// at most). A foot in the air keeps its toes in line with it. For a
+    /// deformation that turns the toes by the toe joint's rotation (the
+    /// Confluent Motion markers of `transfer`).
+    Bending,
 }

@@ -2,7 +2,7 @@
 //! (torso, neck and head, limbs, feet, toes), the root placed by the feet
 //! on their grounds. See the [module docs](super) for what is matched.
 
-use super::feet::{flat_feet, place_feet};
+use super::feet::{Toes, flat_feet, place_feet};
 use super::ground::{clip_support, foot_height, ground_tilt};
 use super::reference::{Reference, ReferenceSource, leg_length};
 use super::torso::{clip_rotations, neck_carriage, upright};
@@ -92,27 +92,6 @@ pub(super) type RetargetedOnGrounds = (
     Vec<(Pose, [DQuat; Canonical::COUNT])>,
     [Vec<Option<f64>>; 2],
 );
-
-/// How the surface a result drives moves its toes, which decides the
-/// sole the kernel stands on the ground.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Toes {
-    /// The toes move with the foot (the part-based deformation's foot
-    /// part turns with the ankle): the sole's toe tip, a quarter of the
-    /// foot's horizontal length beyond the toe joint, is carried by the
-    /// ankle and dips below the toe joint when the foot pitches down
-    /// onto its ball, so the body stands on it.
-    #[default]
-    Rigid,
-    /// The toes bend at the toe joint (the ball) where the ground stops
-    /// them, as a foot's do: the body stands on the toe joint or the heel
-    /// alone, and the toe joint's rotation turns the toes up about the
-    /// ball just enough to keep their tip on the foot's ground (level
-    /// at most). A foot in the air keeps its toes in line with it. For a
-    /// deformation that turns the toes by the toe joint's rotation (the
-    /// Confluent Motion markers of `transfer`).
-    Bending,
-}
 
 /// [`retarget_with_neutral`] with the character's toes moving as `toes`
 /// says: [`Toes::Rigid`] is [`retarget_with_neutral`]; with

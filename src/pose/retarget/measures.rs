@@ -1,10 +1,13 @@
 //! Measures of a clip retargeted onto a character that a result is held
-//! to: the clip's own foot glide and head-to-trunk angle.
+//! to: the per-frame heights of the ground under the character's feet
+//! (read by the plausibility checks and by retrieval), the clip's own foot
+//! glide and head-to-trunk angle.
 
+use super::feet::Toes;
 use super::feet::{foot_soles, sole_height};
-use super::ground::foot_ground_offsets;
-use super::kernel::retarget;
-use super::reference::{Reference, angle};
+use super::ground::{Support, clip_support, ground_tilt, interpolate_gaps};
+use super::kernel::{retarget, retarget_on_grounds};
+use super::reference::{Reference, angle, leg_length};
 use super::torso::{clip_rotations, neck_carriage, upright};
 use crate::pose::Pose;
 use crate::rig::Canonical;
@@ -91,4 +94,79 @@ pub fn clip_head_trunk_deg(reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
         .iter()
         .map(|p| angle(local(p), zero).to_degrees())
         .collect()
+}
+
+/// The height of the ground under the character's lower foot above its
+/// floor per frame, in the character's metres: the clip retargeted onto
+/// the character's skeleton `character` ([`retarget`]), then per frame
+/// the [`Support::under`] of the foot whose lowest sole point is lower
+/// (the clip levelled as [`retarget`] levels it, scaled by the ratio of
+/// leg lengths, interpolated across frames where no foot has a ground):
+/// where the lowest point of a result of [`retarget`] stands. The
+/// plausibility checks measure floating and penetration from the
+/// character's floor raised by it. With one foot on a block and the other
+/// lower, in the air over the floor, it is the floor.
+pub fn ground_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+    let out = retarget(character, reference, mocap);
+    offsets(character, reference, mocap, |s| {
+        out.iter()
+            .enumerate()
+            .map(|(i, (t, g))| {
+                let [l, r] = foot_soles(character, t, g);
+                let (a, b) = if r < l { (1, 0) } else { (0, 1) };
+                s.under[a][i].or(s.under[b][i])
+            })
+            .collect()
+    })
+}
+
+/// The height of the ground under each foot (left, right) above the
+/// character's floor per frame, in the character's metres: the ground
+/// [`retarget`] stands that foot on or above (the clip's
+/// [`Support::under`] of that foot, levelled as [`retarget`] levels the
+/// clip and scaled by the ratio of leg lengths, except that a foot in the
+/// air is over a higher top only when the character's sole is above it:
+/// [`place_feet`](super::feet::place_feet); interpolated across frames where the foot has none).
+/// The plausibility checks measure penetration as any foot below its
+/// ground, floating as the foot nearest its ground above it.
+pub fn foot_ground_offsets(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+) -> [Vec<f64>; 2] {
+    retarget_on_grounds(character, character, reference, mocap, Toes::Rigid)
+        .1
+        .map(|g| interpolate_gaps(&g))
+}
+
+/// The height the character's body stands raised above its floor per
+/// frame, in the character's metres: the lowest support a foot of the
+/// clip touches ([`Support::ground`]), interpolated across frames in the
+/// air. Retrieval takes it off the query, comparing poses as they stand
+/// on the database's floor.
+pub fn stance_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+    offsets(character, reference, mocap, |s| s.ground.clone())
+}
+
+/// One per-frame height of the clip's [`Support`] (chosen by `pick`)
+/// above its floor, scaled onto the character, gaps interpolated.
+pub(super) fn offsets(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    pick: impl Fn(&Support) -> Vec<Option<f64>>,
+) -> Vec<f64> {
+    if mocap.is_empty() {
+        return Vec::new();
+    }
+    let tilt = ground_tilt(mocap);
+    let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
+    let r = leg_length(&reference.pose).max(1e-12);
+    let s = leg_length(character) / r;
+    let support = clip_support(&levelled, r);
+    let raised: Vec<Option<f64>> = pick(&support)
+        .iter()
+        .map(|g| g.map(|y| (y - support.floor) * s))
+        .collect();
+    interpolate_gaps(&raised)
 }

@@ -70,11 +70,12 @@ mod measures;
 mod reference;
 mod torso;
 
-pub use ground::{
-    Support, clip_support, foot_ground_offsets, ground_offsets, ground_tilt, stance_offsets,
+pub use feet::Toes;
+pub use ground::{Support, clip_support, ground_tilt};
+pub use kernel::{retarget, retarget_toes, retarget_with_neutral};
+pub use measures::{
+    clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets, ground_offsets, stance_offsets,
 };
-pub use kernel::{Toes, retarget, retarget_toes, retarget_with_neutral};
-pub use measures::{clip_foot_glide_cm, clip_head_trunk_deg};
 pub use reference::{
     CharacterNeutral, ClipPoses, JointRotations, NeutralSource, Reference, ReferenceSource,
     character_neutral, choose_reference, clip_poses, leg_length, neutral_score,
