@@ -4,7 +4,7 @@
 use glam::DVec3;
 use std::path::PathBuf;
 use surfmotion::embed::Embedding;
-use surfmotion::embed::joints::nearest_axis;
+use surfmotion::embed::axes::nearest_axis;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::render::{
     Framing, Image, Scene, View, facing_of_frames, label_colour, render_framed, view_bounds,

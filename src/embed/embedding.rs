@@ -257,14 +257,12 @@ impl Embedding {
     ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
         check_body(mesh)?;
-        // The vertical as `place_joints` takes it ([`super::joints::body_up`]).
+        // The vertical as `place_joints` takes it ([`super::axes::body_up`]).
         let up = match (
             lm.point(super::landmarks::Landmark::Chin, p),
             lm.point(super::landmarks::Landmark::Groin, p),
         ) {
-            (Some(c), Some(g)) => {
-                super::joints::body_up(DVec3::from_array(c) - DVec3::from_array(g))
-            }
+            (Some(c), Some(g)) => super::axes::body_up(DVec3::from_array(c) - DVec3::from_array(g)),
             _ => DVec3::Y,
         };
         lm.validate(p, t, up.to_array())?;

@@ -170,7 +170,7 @@ pub fn mocap_motion(
 /// nearest of ±X, ±Y, ±Z (scans are stored axis-aligned; the embedding's
 /// estimate leans with the pose, e.g. 9° on the samba scan).
 pub fn up_axis(rig: &Embedding) -> DVec3 {
-    crate::embed::joints::nearest_axis(DVec3::from_array(rig.up))
+    crate::embed::axes::nearest_axis(DVec3::from_array(rig.up))
 }
 
 /// Where the scan's feet touch the floor per frame ([`FootGround`]):
