@@ -1360,122 +1360,10 @@ fn sides(
     neck_j: usize,
     limbs: [Limb; 4],
 ) -> Sides {
-    let [l0, l1, a0, a1] = limbs;
     // Left/right from the body frame.
     let pj = picks[Canonical::Pelvis.index()].joint.unwrap_or(pelvis);
-    let toe_pt = |l: &Limb, p: &[DVec3], r: &[DQuat]| -> Option<DVec3> {
-        match (l.picks[3], &l.derive_end) {
-            (Some((t, _)), _) => Some(p[t]),
-            (None, Some(Derive::EndSite { .. })) => {
-                let a = l.picks[2]?.0;
-                Some(p[a] + r[a] * g.clip.joints[a].tail?)
-            }
-            _ => None,
-        }
-    };
-    let pt = |l: &Limb, k: usize, p: &[DVec3]| l.picks[k].map(|(j, _)| p[j]).unwrap_or(DVec3::ZERO);
-    // Hips and shoulders: rigidly lateral to the trunk in every pose.
-    let mean3 = |l: &Limb, p: &[DVec3]| pt(l, 0, p);
-    let travel = {
-        let f = g.clip.frame_count();
-        if f >= 2 {
-            let (mut a, mut b) = (
-                vec![DVec3::ZERO; g.clip.joint_count()],
-                vec![DQuat::IDENTITY; g.clip.joint_count()],
-            );
-            g.clip.world_into(0, &mut a, &mut b);
-            let first = a[pj];
-            g.clip.world_into(f - 1, &mut a, &mut b);
-            a[pj] - first
-        } else {
-            DVec3::ZERO
-        }
-    };
-    // A foot that lies along its shin (an ankle End Site straight down:
-    // the Biovision sample, mocapdata.com) gives no forward: its part
-    // across the shin is the ankle's flexion, whose sign turns it backward
-    // when the toes lift (a walk on the Biovision skeleton came out
-    // mirrored, 'forward from the feet, confidence 0.99'). Along: within
-    // 15° in the median sampled pose (CesiumMan's toe, 3 cm ahead of and
-    // 6 cm below its ankle, is 27° off its shin and counts; Bandai's rest
-    // lays every bone along +X, so the rest alone cannot say).
-    let foot_across = |l: &Limb| -> bool {
-        let mut f: Vec<f64> = g
-            .poses
-            .iter()
-            .filter_map(|(p, r)| {
-                let t = toe_pt(l, p, r)?;
-                let (k, a) = (pt(l, 1, p), pt(l, 2, p));
-                let shin = (a - k).normalize_or_zero();
-                let v = t - a;
-                let len = v.length();
-                (len > 0.0).then(|| (v - shin * v.dot(shin)).length() / len)
-            })
-            .collect();
-        f.sort_by(f64::total_cmp);
-        f.get(f.len() / 2)
-            .is_some_and(|&m| m > 15f64.to_radians().sin())
-    };
-    let feet_point = foot_across(&l0) && foot_across(&l1);
-    let mut votes = [0.0f64; 3]; // feet, knees, travel
-    let mut leg_s = [0.0f64; 3];
-    let mut arm_s = [0.0f64; 3];
-    // A frame standing in for the rest is also among the sampled frames:
-    // it votes once.
-    let skip = usize::from(g.from_frame.is_some());
-    for (p, r) in g.poses.iter().skip(skip) {
-        let up = (p[neck_j] - p[pj]).normalize_or_zero();
-        let flat = |v: DVec3| v - up * v.dot(up);
-        let mut fw = [DVec3::ZERO; 3];
-        if feet_point && let (Some(t0), Some(t1)) = (toe_pt(&l0, p, r), toe_pt(&l1, p, r)) {
-            // The sole: ankle→toe across the shin (its part along the
-            // knee→ankle axis removed). A foot stands at right angles to
-            // its shin, so this points forward however the leg swings and
-            // however low the rig puts its toe joint (CesiumMan's is 6 cm
-            // below the ankle and 3 cm ahead: its plain ankle→toe
-            // direction turns backward whenever the leg swings back).
-            let sole = |l: &Limb, t: DVec3| {
-                let (k, a) = (pt(l, 1, p), pt(l, 2, p));
-                let shin = (a - k).normalize_or_zero();
-                let v = t - a;
-                v - shin * v.dot(shin)
-            };
-            let (a0, a1) = (pt(&l0, 2, p), pt(&l1, 2, p));
-            let len = t0.distance(a0) + t1.distance(a1);
-            if len > 0.0 {
-                fw[0] = (flat(sole(&l0, t0)) + flat(sole(&l1, t1))) / len;
-            }
-        }
-        for l in [&l0, &l1] {
-            let (h, k, a) = (pt(l, 0, p), pt(l, 1, p), pt(l, 2, p));
-            let axis = (a - h).normalize_or_zero();
-            let off = (k - h) - axis * (k - h).dot(axis);
-            let len = (a - h).length();
-            if len > 0.0 && off.length() > 0.02 * len {
-                fw[1] += flat(off) / len;
-            }
-        }
-        let tl = travel.length();
-        if tl > 0.0 {
-            fw[2] = flat(travel) / tl;
-        }
-        for m in 0..3 {
-            let w = fw[m].length();
-            if w < 1e-9 {
-                continue;
-            }
-            let left = up.cross(fw[m] / w);
-            votes[m] += w;
-            leg_s[m] += w
-                * (mean3(&l0, p) - mean3(&l1, p))
-                    .normalize_or_zero()
-                    .dot(left);
-            arm_s[m] += w
-                * (mean3(&a0, p) - mean3(&a1, p))
-                    .normalize_or_zero()
-                    .dot(left);
-        }
-    }
+    let [votes, leg_s, arm_s] = side_votes(g, pj, neck_j, &limbs);
+    let [l0, l1, a0, a1] = limbs;
     let m = (0..3).find(|&m| votes[m] > 0.0 && leg_s[m].abs() > 0.1 * votes[m]);
     let forward_from = match m {
         Some(0) => "feet",
@@ -1593,6 +1481,128 @@ fn sides(
         names_mirrored: named_sides[1] > named_sides[0],
         sides_from_names,
     }
+}
+
+/// Step 5's votes: per way of telling forward (the feet, the knees, the
+/// travel), summed over the sampled poses, its weight and how far the
+/// first leg and the first arm (of `limbs`: two legs, then two arms) lie
+/// to the body's left of the second (up = pelvis `pj` → neck `neck_j`).
+fn side_votes(g: &Geo, pj: usize, neck_j: usize, limbs: &[Limb; 4]) -> [[f64; 3]; 3] {
+    let [l0, l1, a0, a1] = limbs;
+    let toe_pt = |l: &Limb, p: &[DVec3], r: &[DQuat]| -> Option<DVec3> {
+        match (l.picks[3], &l.derive_end) {
+            (Some((t, _)), _) => Some(p[t]),
+            (None, Some(Derive::EndSite { .. })) => {
+                let a = l.picks[2]?.0;
+                Some(p[a] + r[a] * g.clip.joints[a].tail?)
+            }
+            _ => None,
+        }
+    };
+    let pt = |l: &Limb, k: usize, p: &[DVec3]| l.picks[k].map(|(j, _)| p[j]).unwrap_or(DVec3::ZERO);
+    // Hips and shoulders: rigidly lateral to the trunk in every pose.
+    let mean3 = |l: &Limb, p: &[DVec3]| pt(l, 0, p);
+    let travel = {
+        let f = g.clip.frame_count();
+        if f >= 2 {
+            let (mut a, mut b) = (
+                vec![DVec3::ZERO; g.clip.joint_count()],
+                vec![DQuat::IDENTITY; g.clip.joint_count()],
+            );
+            g.clip.world_into(0, &mut a, &mut b);
+            let first = a[pj];
+            g.clip.world_into(f - 1, &mut a, &mut b);
+            a[pj] - first
+        } else {
+            DVec3::ZERO
+        }
+    };
+    // A foot that lies along its shin (an ankle End Site straight down:
+    // the Biovision sample, mocapdata.com) gives no forward: its part
+    // across the shin is the ankle's flexion, whose sign turns it backward
+    // when the toes lift (a walk on the Biovision skeleton came out
+    // mirrored, 'forward from the feet, confidence 0.99'). Along: within
+    // 15° in the median sampled pose (CesiumMan's toe, 3 cm ahead of and
+    // 6 cm below its ankle, is 27° off its shin and counts; Bandai's rest
+    // lays every bone along +X, so the rest alone cannot say).
+    let foot_across = |l: &Limb| -> bool {
+        let mut f: Vec<f64> = g
+            .poses
+            .iter()
+            .filter_map(|(p, r)| {
+                let t = toe_pt(l, p, r)?;
+                let (k, a) = (pt(l, 1, p), pt(l, 2, p));
+                let shin = (a - k).normalize_or_zero();
+                let v = t - a;
+                let len = v.length();
+                (len > 0.0).then(|| (v - shin * v.dot(shin)).length() / len)
+            })
+            .collect();
+        f.sort_by(f64::total_cmp);
+        f.get(f.len() / 2)
+            .is_some_and(|&m| m > 15f64.to_radians().sin())
+    };
+    let feet_point = foot_across(&l0) && foot_across(&l1);
+    let mut votes = [0.0f64; 3]; // feet, knees, travel
+    let mut leg_s = [0.0f64; 3];
+    let mut arm_s = [0.0f64; 3];
+    // A frame standing in for the rest is also among the sampled frames:
+    // it votes once.
+    let skip = usize::from(g.from_frame.is_some());
+    for (p, r) in g.poses.iter().skip(skip) {
+        let up = (p[neck_j] - p[pj]).normalize_or_zero();
+        let flat = |v: DVec3| v - up * v.dot(up);
+        let mut fw = [DVec3::ZERO; 3];
+        if feet_point && let (Some(t0), Some(t1)) = (toe_pt(&l0, p, r), toe_pt(&l1, p, r)) {
+            // The sole: ankle→toe across the shin (its part along the
+            // knee→ankle axis removed). A foot stands at right angles to
+            // its shin, so this points forward however the leg swings and
+            // however low the rig puts its toe joint (CesiumMan's is 6 cm
+            // below the ankle and 3 cm ahead: its plain ankle→toe
+            // direction turns backward whenever the leg swings back).
+            let sole = |l: &Limb, t: DVec3| {
+                let (k, a) = (pt(l, 1, p), pt(l, 2, p));
+                let shin = (a - k).normalize_or_zero();
+                let v = t - a;
+                v - shin * v.dot(shin)
+            };
+            let (a0, a1) = (pt(&l0, 2, p), pt(&l1, 2, p));
+            let len = t0.distance(a0) + t1.distance(a1);
+            if len > 0.0 {
+                fw[0] = (flat(sole(&l0, t0)) + flat(sole(&l1, t1))) / len;
+            }
+        }
+        for l in [&l0, &l1] {
+            let (h, k, a) = (pt(l, 0, p), pt(l, 1, p), pt(l, 2, p));
+            let axis = (a - h).normalize_or_zero();
+            let off = (k - h) - axis * (k - h).dot(axis);
+            let len = (a - h).length();
+            if len > 0.0 && off.length() > 0.02 * len {
+                fw[1] += flat(off) / len;
+            }
+        }
+        let tl = travel.length();
+        if tl > 0.0 {
+            fw[2] = flat(travel) / tl;
+        }
+        for m in 0..3 {
+            let w = fw[m].length();
+            if w < 1e-9 {
+                continue;
+            }
+            let left = up.cross(fw[m] / w);
+            votes[m] += w;
+            leg_s[m] += w
+                * (mean3(&l0, p) - mean3(&l1, p))
+                    .normalize_or_zero()
+                    .dot(left);
+            arm_s[m] += w
+                * (mean3(&a0, p) - mean3(&a1, p))
+                    .normalize_or_zero()
+                    .dot(left);
+        }
+    }
+    [votes, leg_s, arm_s]
 }
 
 /// The neck and the two arms among four or more significant chains off
