@@ -1542,7 +1542,7 @@ fn side_votes(g: &Geo, pj: usize, neck_j: usize, limbs: &[Limb; 4]) -> [[f64; 3]
         f.get(f.len() / 2)
             .is_some_and(|&m| m > 15f64.to_radians().sin())
     };
-    let feet_point = foot_across(&l0) && foot_across(&l1);
+    let feet_point = foot_across(l0) && foot_across(l1);
     let mut votes = [0.0f64; 3]; // feet, knees, travel
     let mut leg_s = [0.0f64; 3];
     let mut arm_s = [0.0f64; 3];
@@ -1553,7 +1553,7 @@ fn side_votes(g: &Geo, pj: usize, neck_j: usize, limbs: &[Limb; 4]) -> [[f64; 3]
         let up = (p[neck_j] - p[pj]).normalize_or_zero();
         let flat = |v: DVec3| v - up * v.dot(up);
         let mut fw = [DVec3::ZERO; 3];
-        if feet_point && let (Some(t0), Some(t1)) = (toe_pt(&l0, p, r), toe_pt(&l1, p, r)) {
+        if feet_point && let (Some(t0), Some(t1)) = (toe_pt(l0, p, r), toe_pt(l1, p, r)) {
             // The sole: ankle→toe across the shin (its part along the
             // knee→ankle axis removed). A foot stands at right angles to
             // its shin, so this points forward however the leg swings and
@@ -1566,13 +1566,13 @@ fn side_votes(g: &Geo, pj: usize, neck_j: usize, limbs: &[Limb; 4]) -> [[f64; 3]
                 let v = t - a;
                 v - shin * v.dot(shin)
             };
-            let (a0, a1) = (pt(&l0, 2, p), pt(&l1, 2, p));
+            let (a0, a1) = (pt(l0, 2, p), pt(l1, 2, p));
             let len = t0.distance(a0) + t1.distance(a1);
             if len > 0.0 {
-                fw[0] = (flat(sole(&l0, t0)) + flat(sole(&l1, t1))) / len;
+                fw[0] = (flat(sole(l0, t0)) + flat(sole(l1, t1))) / len;
             }
         }
-        for l in [&l0, &l1] {
+        for l in [l0, l1] {
             let (h, k, a) = (pt(l, 0, p), pt(l, 1, p), pt(l, 2, p));
             let axis = (a - h).normalize_or_zero();
             let off = (k - h) - axis * (k - h).dot(axis);
@@ -1592,14 +1592,8 @@ fn side_votes(g: &Geo, pj: usize, neck_j: usize, limbs: &[Limb; 4]) -> [[f64; 3]
             }
             let left = up.cross(fw[m] / w);
             votes[m] += w;
-            leg_s[m] += w
-                * (mean3(&l0, p) - mean3(&l1, p))
-                    .normalize_or_zero()
-                    .dot(left);
-            arm_s[m] += w
-                * (mean3(&a0, p) - mean3(&a1, p))
-                    .normalize_or_zero()
-                    .dot(left);
+            leg_s[m] += w * (mean3(l0, p) - mean3(l1, p)).normalize_or_zero().dot(left);
+            arm_s[m] += w * (mean3(a0, p) - mean3(a1, p)).normalize_or_zero().dot(left);
         }
     }
     [votes, leg_s, arm_s]
