@@ -7,10 +7,10 @@ mod common;
 
 use criterion::Criterion;
 use std::hint::black_box;
-use surfmotion::db::skeletons::{SkeletonKind, poses};
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::retarget::clip_poses;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::frames::{SkeletonKind, poses};
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::pose::retarget::clip_poses;
 use surfmotion::synth::database::{Dynamics, drive};
 use surfmotion::synth::{Gait, gait_clip};
 

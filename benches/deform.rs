@@ -60,7 +60,7 @@ fn main() {
     let skeletons: Vec<_> = raw
         .positions
         .chunks(n)
-        .map(|f| ch.rig().skeleton(f))
+        .map(|f| ch.rig().frame_joints(f))
         .collect();
 
     let mut c = Criterion::default().configure_from_args();

@@ -15,6 +15,8 @@ use criterion::Criterion;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use surfmotion::db::Manifest;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::jobs::SynthCharacter;
 use surfmotion::mesh::blend::Blender;
 use surfmotion::mesh::io::load_sequence;
@@ -23,8 +25,6 @@ use surfmotion::parametric::params::measure;
 use surfmotion::parametric::script::{Request, play};
 use surfmotion::parametric::transition::{Planner, TargetState};
 use surfmotion::parametric::{Control, Controller, Motion, MotionOptions};
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::synth::Gait;
 
 fn data() -> Option<PathBuf> {

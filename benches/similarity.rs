@@ -9,10 +9,10 @@ mod common;
 use criterion::Criterion;
 use glam::DVec3;
 use std::hint::black_box;
-use surfmotion::db::skeletons::{SkeletonKind, poses};
+use surfmotion::embed::Embedding;
+use surfmotion::embed::frames::{SkeletonKind, poses};
+use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::graph::transitions::{TransitionOptions, find};
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, ShapeScratch, describe};
 use surfmotion::similarity::{
     PairDistance, ShapeSet, SimilarityMatrix, SkeletonSet, Span, VertexSet, all_pairs,

@@ -6,9 +6,9 @@
 //!     ../shared/data/scans/armadillo/armadillo.obj tests/fixtures/armadillo.landmarks.json \
 //!     ../shared/data/mocap/cmu-amc/02/02_01.amc armadillo_walk.glb
 
+use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::jobs::ScanTransferJob;
 use surfmotion::mesh::io::load_sequence;
-use surfmotion::rig::embed::landmarks::Landmarks;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let a: Vec<String> = std::env::args().skip(1).collect();

@@ -12,14 +12,19 @@
 //! Input:
 //! - [`mocap`]: motion-capture clips: BVH and ASF/AMC readers, BVH writer,
 //!   forward kinematics, resampling, units and up axis.
-//! - [`rig`]: the canonical 19-joint skeleton, the mapping of any humanoid
-//!   rig onto it, and rig embedding from landmarks on a rest mesh.
+//! - [`rig`]: the canonical 19-joint skeleton and the mapping of any
+//!   humanoid rig onto it.
 //!
 //! Geometry:
 //! - [`mesh`]: triangle meshes and mesh sequences, Laplacians, Poisson and
 //!   harmonic solves, non-linear blending, repair, and their file formats.
-//! - [`skeleton`]: canonical poses, their alignment and the skeletal
-//!   dissimilarity `c_skel` (Huang Eq. 28).
+//! - [`embed`]: rig embedding from landmarks on a rest mesh (joints, skin,
+//!   parts, regressors), the per-frame joints read off a character's
+//!   frames and the rigid skeleton fitted to them.
+//! - [`pose`]: canonical poses and the rotations that explain them, their
+//!   alignment and the skeletal dissimilarity `c_skel` (Huang Eq. 28)
+//!   ([`pose::measure`]), and the retargeting kernel that puts a clip's
+//!   poses onto a character's skeleton ([`pose::retarget`]).
 //!
 //! Character:
 //! - [`db`]: character databases: the manifest, per-frame skeletons, and
@@ -68,8 +73,9 @@
 pub mod mocap;
 pub mod rig;
 // Geometry.
+pub mod embed;
 pub mod mesh;
-pub mod skeleton;
+pub mod pose;
 // Character.
 pub mod db;
 pub mod graph;

@@ -15,13 +15,13 @@ mod common;
 use glam::DVec3;
 use surfmotion::db::Character;
 use surfmotion::drive::query::load_mocap;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence, save_sequence};
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::retarget::{NeutralSource, character_neutral, retarget_with_neutral};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{NeutralSource, character_neutral, retarget_with_neutral};
 use surfmotion::rig::{Canonical as C, LoadOptions as ClipOptions};
-use surfmotion::skeleton::Pose;
 use surfmotion::tools::eval::{Checker, PlausibilityOptions};
 
 /// The neck → head bone's angle to the pelvis → neck line (degrees).
@@ -59,9 +59,9 @@ fn character(seq: &MeshSequence, frame: usize, landmarks: &str) -> (Pose, Vec<Po
     )
     .unwrap();
     let rig = Embedding::new(&mesh, &lm, None).unwrap();
-    let rest = rig.skeleton(seq.frame(frame));
+    let rest = rig.frame_joints(seq.frame(frame));
     let poses = (0..seq.frame_count())
-        .map(|t| rig.skeleton(seq.frame(t)))
+        .map(|t| rig.frame_joints(seq.frame(t)))
         .collect();
     (rest, poses)
 }

@@ -639,8 +639,8 @@ fn render_panels(o: &Output) -> Vec<(glam::DVec3, glam::DVec3)> {
 #[ignore = "a measurement for the README: needs SURFMOTION_FACING_FILES and ../shared/data"]
 fn facing_figures() {
     use glam::{DQuat, DVec3};
+    use surfmotion::embed::{Embedding, landmarks::Landmarks, parts::Part};
     use surfmotion::mesh::io::{LoadOptions, load_sequence};
-    use surfmotion::rig::embed::{Embedding, landmarks::Landmarks, parts::Part};
     use surfmotion::tools::render::{facing_of, facing_of_frames};
     let (Some(data), Ok(files)) = (common::data_dir(), std::env::var("SURFMOTION_FACING_FILES"))
     else {

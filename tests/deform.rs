@@ -7,7 +7,7 @@ use surfmotion::db::Character;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
 use surfmotion::drive::query::{MocapPoses, load_mocap};
 use surfmotion::drive::{Output, RetargetOptions, synthesise};
-use surfmotion::skeleton::Pose;
+use surfmotion::pose::Pose;
 
 fn height(p: &[[f64; 3]]) -> f64 {
     let (lo, hi) = p
@@ -67,7 +67,7 @@ fn skeleton_error(ch: &Character, p: &[[f64; 3]], q: &[Pose]) -> f64 {
     let n = ch.n();
     let mut s = 0.0;
     for (k, t) in q.iter().enumerate() {
-        let e = ch.rig().skeleton(&p[k * n..(k + 1) * n]);
+        let e = ch.rig().frame_joints(&p[k * n..(k + 1) * n]);
         s += e.iter().zip(t).map(|(a, b)| a.distance(*b)).sum::<f64>() / 19.0;
     }
     s / q.len() as f64
@@ -96,7 +96,7 @@ fn turned_over(ch: &Character, raw: &Output, res: &Output) -> usize {
             &raw.positions[k * n..(k + 1) * n],
             &res.positions[k * n..(k + 1) * n],
         );
-        let g = surfmotion::skeleton::pose_rotations(&ch.rig().skeleton(a), &raw.query[k]);
+        let g = surfmotion::pose::pose_rotations(&ch.rig().frame_joints(a), &raw.query[k]);
         surfmotion::deform::unflip::skin_turns(&ch.rig().skin, &g, &mut turn);
         count += surfmotion::deform::unflip::turned_over(tris, a, b, &turn).len();
     }
@@ -394,7 +394,7 @@ fn a_real_retarget_keeps_every_vertex_in_its_ring() {
         let t = def.deform(
             &ch,
             src,
-            &ch.rig().skeleton(src),
+            &ch.rig().frame_joints(src),
             &raw.query[f],
             &mut out,
             &mut ws,

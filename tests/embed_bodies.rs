@@ -14,13 +14,13 @@ mod common;
 
 use glam::DVec3;
 use std::path::{Path, PathBuf};
+use surfmotion::embed::check::{Problem, check};
+use surfmotion::embed::landmarks::{Landmark, LandmarkError, Landmarks, Mark};
+use surfmotion::embed::parts::{Part, neighbours, piece_counts};
+use surfmotion::embed::surface::is_inside;
+use surfmotion::embed::{EmbedError, Embedding};
 use surfmotion::mesh::Mesh;
 use surfmotion::rig::Canonical;
-use surfmotion::rig::embed::check::{Problem, check};
-use surfmotion::rig::embed::landmarks::{Landmark, LandmarkError, Landmarks, Mark};
-use surfmotion::rig::embed::parts::{Part, neighbours, piece_counts};
-use surfmotion::rig::embed::surface::is_inside;
-use surfmotion::rig::embed::{EmbedError, Embedding};
 use surfmotion::synth::humanoid::{
     DEMO_GRID, HumanoidShape, humanoid_landmarks_json_with, humanoid_landmarks_with,
     humanoid_mesh_with,

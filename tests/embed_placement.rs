@@ -12,11 +12,11 @@
 mod common;
 
 use glam::{DMat3, DVec3};
+use surfmotion::embed::Embedding;
+use surfmotion::embed::landmarks::{Landmark, Landmarks, Mark};
+use surfmotion::embed::parts::Part;
 use surfmotion::mesh::Mesh;
 use surfmotion::rig::Canonical;
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::{Landmark, Landmarks, Mark};
-use surfmotion::rig::embed::parts::Part;
 use surfmotion::synth::humanoid::{
     DEMO_GRID, HumanoidShape, humanoid_landmarks_with, humanoid_mesh_with,
 };

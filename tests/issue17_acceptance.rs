@@ -11,13 +11,13 @@ mod common;
 
 use glam::DVec3;
 use surfmotion::mocap::Clip;
-use surfmotion::rig::retarget::{clip_poses, retarget};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{clip_poses, retarget};
 use surfmotion::rig::{Canonical, detect_clip, load_clip};
-use surfmotion::skeleton::Pose;
 
 /// The procedural humanoid's embedded rest skeleton and its height.
 fn character() -> (Pose, f64) {
-    use surfmotion::rig::embed::Embedding;
+    use surfmotion::embed::Embedding;
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
@@ -629,7 +629,7 @@ fn rig_embed_reports_its_self_check_in_text_and_json() {
 /// lunges, the lower back bent) retargeted onto the procedural humanoid,
 /// the skeleton's head-to-trunk angle (`∠(neck→head, pelvis→neck)` in
 /// the trunk's frame, from the character's rest; the measure of
-/// `rig::retarget::clip_head_trunk_deg`) at p95 at most 1.5° above the
+/// `pose::retarget::clip_head_trunk_deg`) at p95 at most 1.5° above the
 /// clip's own p95. The pelvis turned by the root's own rotation (`Hips`) left out
 /// the lower back's (`lowerback`, a zero-length joint on the hips carrying
 /// the spine), so the character's trunk leaned up to 12° less than the
@@ -640,7 +640,7 @@ fn rig_embed_reports_its_self_check_in_text_and_json() {
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_bow_in_the_lower_back_keeps_the_head_within_the_clips_line() {
     use Canonical as C;
-    use surfmotion::rig::retarget::clip_head_trunk_deg;
+    use surfmotion::pose::retarget::clip_head_trunk_deg;
     let Some(d) = common::data_dir() else { return };
     let mut clip = load_clip(&d.join("mocap/cmu-bvh/131_01.bvh"), &Default::default()).unwrap();
     clip.to_metres_y_up();

@@ -9,8 +9,8 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use surfmotion::batch::{Converted, Converter};
-use surfmotion::db::skeletons::SkeletonKind;
 use surfmotion::db::{Character, CharacterOptions, Manifest, Quiet};
+use surfmotion::embed::frames::SkeletonKind;
 use surfmotion::jobs::skeletons::SkeletonsOptions;
 use surfmotion::jobs::{
     BatchOptions, RetargetJob, RetargetSummary, SynthCharacter, SynthClip, SynthOptions,

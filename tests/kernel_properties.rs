@@ -110,7 +110,7 @@ proptest! {
 }
 
 /// A standing character's canonical joints (metres, Y up, facing +Z).
-fn rest_skeleton() -> surfmotion::skeleton::Pose {
+fn rest_skeleton() -> surfmotion::pose::Pose {
     [
         [0.0, 1.0, 0.0],
         [0.0, 1.15, 0.0],
@@ -138,7 +138,7 @@ fn rest_skeleton() -> surfmotion::skeleton::Pose {
 /// The rest skeleton with every bone turned by a random rotation about its
 /// parent joint (the spine and the two hips by one: the pelvis is rigid),
 /// moved.
-fn random_pose(rnd: &mut impl FnMut() -> f64, spread: f64) -> surfmotion::skeleton::Pose {
+fn random_pose(rnd: &mut impl FnMut() -> f64, spread: f64) -> surfmotion::pose::Pose {
     use surfmotion::rig::Canonical;
     let rest = rest_skeleton();
     let rot = |rnd: &mut dyn FnMut() -> f64| {
@@ -167,8 +167,8 @@ proptest! {
     /// from them than the pose they were made from.
     #[test]
     fn the_rigid_fit_returns_a_posed_skeleton_and_beats_the_true_pose(seed in 1u64..u64::MAX, spread in 0.0f64..3.0, noise in 0.0f64..0.05) {
-        use surfmotion::db::rigid::{FitOptions, RigidSkeleton};
-        use surfmotion::skeleton::bone_lengths;
+        use surfmotion::embed::rigid::{FitOptions, RigidSkeleton};
+        use surfmotion::pose::measure::bone_lengths;
         let mut rnd = uniform(seed);
         let rest = rest_skeleton();
         let sk = RigidSkeleton::calibrate(&rest, &[rest]);
@@ -181,7 +181,7 @@ proptest! {
         for b in 1..want.len() {
             prop_assert!((got[b] - want[b]).abs() < 1e-9, "bone {b}: {} vs {}", got[b], want[b]);
         }
-        let e = |p: &surfmotion::skeleton::Pose| -> f64 {
+        let e = |p: &surfmotion::pose::Pose| -> f64 {
             p.iter().zip(&measured).map(|(a, b)| a.distance_squared(*b)).sum()
         };
         prop_assert!(e(&fit.pose) <= e(&truth) + 1e-12, "fit {} > truth {}", e(&fit.pose), e(&truth));
@@ -192,12 +192,12 @@ proptest! {
 /// fit; a skeleton calibrated from no frames keeps its rest lengths.
 #[test]
 fn the_rigid_fit_survives_non_finite_joints() {
-    use surfmotion::db::rigid::{FitOptions, RigidSkeleton};
+    use surfmotion::embed::rigid::{FitOptions, RigidSkeleton};
     let rest = rest_skeleton();
     let sk = RigidSkeleton::calibrate(&rest, &[]);
     assert_eq!(
         sk.lengths(),
-        surfmotion::skeleton::bone_lengths(&rest),
+        surfmotion::pose::measure::bone_lengths(&rest),
         "no frames: rest lengths"
     );
     for bad in [f64::NAN, f64::INFINITY] {

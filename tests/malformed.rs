@@ -45,7 +45,7 @@ fn readers() -> Vec<(&'static str, Reader)> {
         ("mdd", |b| drop(mdd::parse_mdd(b, Path::new("f.mdd")))),
         ("gltf", |b| drop(gltf::parse_gltf(b, Path::new("f.glb")))),
         ("landmarks", |b| {
-            drop(surfmotion::rig::embed::landmarks::Landmarks::parse(
+            drop(surfmotion::embed::landmarks::Landmarks::parse(
                 &text(b),
                 Path::new("f.json"),
                 100,
@@ -60,7 +60,7 @@ fn readers() -> Vec<(&'static str, Reader)> {
         }),
         ("parts", |b| {
             let tris = [[0u32, 1, 2], [0, 2, 3]];
-            drop(surfmotion::rig::embed::parse_parts(
+            drop(surfmotion::embed::parse_parts(
                 &text(b),
                 Path::new("p.json"),
                 &tris,
@@ -100,7 +100,7 @@ fn readers() -> Vec<(&'static str, Reader)> {
             ))
         }),
         ("embedding", |b| {
-            drop(surfmotion::rig::embed::Embedding::parse(
+            drop(surfmotion::embed::Embedding::parse(
                 &text(b),
                 Path::new("rig.json"),
                 4,

@@ -6,11 +6,11 @@ mod common;
 
 use glam::{DQuat, DVec3};
 use std::path::Path;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::embed::parts::Part;
 use surfmotion::mesh::Mesh;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::embed::parts::Part;
 use surfmotion::synth::humanoid::DEMO_GRID;
 use surfmotion::tools::eval::{
     Checker, HeadOptions, HeadTorso, PlausibilityOptions, lowest_heights,
@@ -207,7 +207,9 @@ fn knee_hyperextension_on_real_captures_is_small() {
     for name in ["samba", "crane"] {
         let (seq, _, rig) = capture(&d, name);
         let worst = (0..seq.frame_count())
-            .flat_map(|f| surfmotion::tools::eval::knee_hyperextension(&rig.skeleton(seq.frame(f))))
+            .flat_map(|f| {
+                surfmotion::tools::eval::knee_hyperextension(&rig.frame_joints(seq.frame(f)))
+            })
             .fold(0.0f64, f64::max);
         println!("{name}: worst knee hyper-extension {worst:.1}°");
         assert!(worst < 12.0, "{name}: {worst:.1}°");

@@ -13,8 +13,8 @@ use surfmotion::db::Character;
 use surfmotion::db::Quiet;
 use surfmotion::deform::DeformMode;
 use surfmotion::drive::{Output, RetargetOptions, synthesise};
-use surfmotion::rig::retarget::clip_poses;
-use surfmotion::skeleton::Pose;
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::clip_poses;
 use surfmotion::synth::{Gait, gait_clip};
 use surfmotion::tools::eval::velocity_error;
 
@@ -30,7 +30,7 @@ struct Fixture {
     /// The database folder.
     db: std::path::PathBuf,
     ch: Character,
-    query: surfmotion::rig::retarget::ClipPoses,
+    query: surfmotion::pose::retarget::ClipPoses,
 }
 
 fn write_database(db: &Path) {
@@ -76,7 +76,7 @@ fn retarget(mode: DeformMode) -> Output {
 fn output_skeletons(ch: &Character, out: &Output) -> Vec<Pose> {
     out.positions
         .chunks(ch.n())
-        .map(|f| ch.rig().skeleton(f))
+        .map(|f| ch.rig().frame_joints(f))
         .collect()
 }
 

@@ -64,7 +64,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
         // pelvis follows the query's pelvis.
         let pelvis: Vec<f64> = (0..frames)
             .map(|f| {
-                let s = ch.rig().skeleton(&out.positions[f * n..(f + 1) * n]);
+                let s = ch.rig().frame_joints(&out.positions[f * n..(f + 1) * n]);
                 let (a, b) = (s[0], out.query[f][0]);
                 glam::DVec2::new(a.x - b.x, a.z - b.z).length()
             })
@@ -111,8 +111,8 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
     assert!(e.mean_cm < 0.5, "{e:?}");
 }
 
-fn skeletons(ch: &Character, p: &[[f64; 3]]) -> Vec<surfmotion::skeleton::Pose> {
-    p.chunks(ch.n()).map(|f| ch.rig().skeleton(f)).collect()
+fn skeletons(ch: &Character, p: &[[f64; 3]]) -> Vec<surfmotion::pose::Pose> {
+    p.chunks(ch.n()).map(|f| ch.rig().frame_joints(f)).collect()
 }
 
 #[test]
@@ -265,8 +265,8 @@ fn cli_writes_glb_report_and_evaluates() {
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn an_amc_clip_and_its_bvh_conversions_drive_the_character_alike() {
     use surfmotion::drive::query::to_character;
-    use surfmotion::rig::embed::Embedding;
-    use surfmotion::rig::retarget::ReferenceSource;
+    use surfmotion::embed::Embedding;
+    use surfmotion::pose::retarget::ReferenceSource;
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let Some(d) = common::data_dir() else { return };
     let mesh = humanoid_mesh(DEMO_GRID);

@@ -7,14 +7,14 @@
 //! as the clip's shoulders do.
 
 use glam::{DQuat, DVec3};
-use surfmotion::db::rigid::{FitOptions, RigidSkeleton};
-use surfmotion::rig::retarget::{clip_poses, retarget};
+use surfmotion::embed::rigid::{FitOptions, RigidSkeleton};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{clip_poses, retarget};
 use surfmotion::rig::{Canonical, detect_clip};
-use surfmotion::skeleton::Pose;
 
 /// The procedural humanoid's embedded rest skeleton and its height.
 fn character() -> (Pose, f64) {
-    use surfmotion::rig::embed::Embedding;
+    use surfmotion::embed::Embedding;
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();

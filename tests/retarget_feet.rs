@@ -1,5 +1,5 @@
 //! Where the retargeting kernel stands the character's feet (issue 17,
-//! "feet"; `surfmotion::rig::retarget`), on generated clips (no
+//! "feet"; `surfmotion::pose::retarget`), on generated clips (no
 //! ../shared needed): each foot stands on the ground under it, not on the
 //! other foot's. A foot on a block does not lift the body when the other
 //! foot leaves the floor (the kernel on `main` stood the body's lowest
@@ -10,9 +10,9 @@
 //! walk_happy 8 cm and CMU 03_01 15 cm into a synthetic database's floor).
 
 use glam::{DQuat, DVec3};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{choose_reference, ground_offsets, leg_length, retarget};
 use surfmotion::rig::Canonical;
-use surfmotion::rig::retarget::{choose_reference, ground_offsets, leg_length, retarget};
-use surfmotion::skeleton::Pose;
 
 use Canonical as C;
 

@@ -11,8 +11,8 @@ use surfmotion::db::{Character, Quiet};
 use surfmotion::deform::DeformMode;
 use surfmotion::drive::query::database_floor_lift;
 use surfmotion::drive::{RetargetOptions, synthesise};
-use surfmotion::rig::retarget::{choose_reference, clip_poses};
-use surfmotion::skeleton::Pose;
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{choose_reference, clip_poses};
 use surfmotion::synth::{Gait, gait_clip};
 use surfmotion::tools::eval::{floor_height, lowest_heights};
 

@@ -1,5 +1,5 @@
 //! The character's vertical placement from frame to frame (issue 17,
-//! "jump"; `surfmotion::rig::retarget`), on generated clips (no
+//! "jump"; `surfmotion::pose::retarget`), on generated clips (no
 //! ../shared needed): a foot's ground switching from one support to
 //! another does not teleport the body. CMU 03_02's left foot, swinging
 //! up from the floor beside the block the right foot stands on, passes
@@ -8,9 +8,9 @@
 //! lifted 7.6 cm in one frame on samba while the clip's root rose 1.6 cm.
 
 use glam::DVec3;
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{choose_reference, leg_length, retarget};
 use surfmotion::rig::Canonical;
-use surfmotion::rig::retarget::{choose_reference, leg_length, retarget};
-use surfmotion::skeleton::Pose;
 
 use Canonical as C;
 

@@ -1,5 +1,5 @@
 //! A foot pitched down onto its ball through the retargeting kernel
-//! (`rig::retarget::retarget_toes`). A real foot standing on its ball
+//! (`pose::retarget::retarget_toes`). A real foot standing on its ball
 //! bends its toes flat at the ball: its lowest point is the ball, not a
 //! rigid toe tip below it. With toes that bend ([`Toes::Bending`], what
 //! `transfer` drives: its markers on the toes turn with the toe joint)
@@ -10,13 +10,13 @@
 //! samba stood 1-2 cm high while the dancer was on her ball).
 
 use glam::{DQuat, DVec3};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{Toes, choose_reference, retarget_toes};
 use surfmotion::rig::Canonical as C;
-use surfmotion::rig::retarget::{Toes, choose_reference, retarget_toes};
-use surfmotion::skeleton::Pose;
 
 /// The procedural humanoid's embedded rest skeleton.
 fn character() -> Pose {
-    use surfmotion::rig::embed::Embedding;
+    use surfmotion::embed::Embedding;
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();

@@ -6,12 +6,12 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use surfmotion::db::skeletons::{SkeletonKind, bone_length_spread, poses};
+use surfmotion::embed::Embedding;
+use surfmotion::embed::frames::{SkeletonKind, bone_length_spread, poses};
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::embed::parts::{Part, neighbours, piece_counts};
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::Canonical;
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::embed::parts::{Part, neighbours, piece_counts};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -81,7 +81,7 @@ fn landmarks_give_contiguous_parts_exact_regressors_and_steady_bones() {
             assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-9);
         }
         // Regressors reproduce the embedded joints on the rest frame.
-        let j = e.skeleton(rest.positions());
+        let j = e.frame_joints(rest.positions());
         for k in Canonical::ALL {
             let err = (j[k.index()] - glam::DVec3::from_array(e.joints[k.index()])).length();
             assert!(err < 1e-9, "{} {}: {err}", c.name, k.name());
@@ -310,10 +310,10 @@ fn rig_embed_cli_reports_errors_with_the_file() {
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_rigged_gltf_skin_gives_the_rig_matched_by_position() {
     let Some(d) = common::data_dir() else { return };
+    use surfmotion::embed::skin::from_skin;
     use surfmotion::mesh::Mesh;
     use surfmotion::mesh::io::gltf::read_gltf;
     use surfmotion::rig::RigMap;
-    use surfmotion::rig::embed::skin::from_skin;
     let g = d.join("gltf/CesiumMan/CesiumMan.glb");
     let asset = read_gltf(&g).unwrap();
     let map = RigMap::load(&fixture("cesiumman.rigmap.json")).unwrap();
@@ -331,7 +331,7 @@ fn a_rigged_gltf_skin_gives_the_rig_matched_by_position() {
     let pelvis = rig.joints[Canonical::Pelvis.index()];
     assert!((pelvis[2] - root.w_axis.z as f64).abs() < 1e-6);
     // The regressors reproduce the joints on the rest frame.
-    let sk = rig.skeleton(mesh.positions());
+    let sk = rig.frame_joints(mesh.positions());
     for c in Canonical::ALL {
         let want = glam::DVec3::from_array(rig.joints[c.index()]);
         assert!((sk[c.index()] - want).length() < 1e-6, "{}", c.name());

@@ -12,9 +12,9 @@ use glam::{DQuat, DVec3};
 use proptest::prelude::*;
 use surfmotion::mocap::bvh::{BvhOptions, format_bvh, parse_bvh};
 use surfmotion::mocap::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
+use surfmotion::pose::Pose;
 use surfmotion::rig::load_clip;
 use surfmotion::rig::{Canonical, RigError, RigMap, Source, detect_clip};
-use surfmotion::skeleton::Pose;
 
 /// A joint of an edited hierarchy: where its per-frame data comes from.
 #[derive(Clone)]
@@ -1866,7 +1866,7 @@ fn rigged_gltf_skins_map_by_structure_like_clips() {
             let c = d.side_confidence.unwrap();
             eprintln!("CesiumMan: {} ({})", d.map.convention, d.sides);
             assert!(
-                c >= surfmotion::rig::embed::skin::MIN_SIDE_CONFIDENCE,
+                c >= surfmotion::embed::skin::MIN_SIDE_CONFIDENCE,
                 "CesiumMan: side confidence {c}"
             );
             let hand_made = RigMap::load(
@@ -1877,10 +1877,10 @@ fn rigged_gltf_skins_map_by_structure_like_clips() {
             assert_eq!(d.map.joints, hand_made.joints, "CesiumMan");
             assert_eq!(d.map.convention, surfmotion::rig::BY_STRUCTURE);
             // And the rig embedding takes it with no rig map.
-            let rig = surfmotion::rig::embed::skin::from_skin(&a.mesh, &a, None, &f)
+            let rig = surfmotion::embed::skin::from_skin(&a.mesh, &a, None, &f)
                 .unwrap_or_else(|e| panic!("CesiumMan without a map: {e}"));
             let with_map =
-                surfmotion::rig::embed::skin::from_skin(&a.mesh, &a, Some(&hand_made), &f).unwrap();
+                surfmotion::embed::skin::from_skin(&a.mesh, &a, Some(&hand_made), &f).unwrap();
             assert_eq!(rig.joints, with_map.joints);
             continue;
         }
@@ -1987,11 +1987,11 @@ fn rerest(c: &Clip, top: usize, a: DQuat) -> Clip {
 /// A T-pose and an A-pose version of one clip (the arms' rest bones turned
 /// 90° and 45° out from hanging down; the motion identical) map to the same
 /// joints by names and by structure alone, and drive a character to the
-/// same poses (`rig::retarget`, each version's rest skeleton as its
+/// same poses (`pose::retarget`, each version's rest skeleton as its
 /// neutral reference) within 1e-6 of its height.
 #[test]
 fn t_and_a_pose_versions_of_a_clip_map_and_retarget_alike() {
-    use surfmotion::rig::retarget::{ReferenceSource, clip_poses, retarget};
+    use surfmotion::pose::retarget::{ReferenceSource, clip_poses, retarget};
     let walk = via_bvh(&surfmotion::synth::gait_clip(
         surfmotion::synth::Gait::Walk,
         2.0,
@@ -2593,8 +2593,8 @@ fn real_suites_without_names_place_the_limbs_alike() {
 #[test]
 fn real_suites_drive_the_procedural_character() {
     use Canonical as C;
-    use surfmotion::rig::embed::Embedding;
-    use surfmotion::rig::retarget::{clip_poses, retarget};
+    use surfmotion::embed::Embedding;
+    use surfmotion::pose::retarget::{clip_poses, retarget};
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();

@@ -23,8 +23,8 @@ use common::skel::{Skel, Suite, expected, map_errors, mirror, parse_skel, swap_s
 use glam::{DQuat, DVec3};
 use surfmotion::mocap::bvh::{BvhOptions, format_bvh, parse_bvh};
 use surfmotion::mocap::{Clip, PointConvention};
+use surfmotion::pose::Pose;
 use surfmotion::rig::{BY_NAMES, BY_STRUCTURE, Canonical, RigError, detect_clip, load_clip};
-use surfmotion::skeleton::Pose;
 use surfmotion::synth::clips::{Gait, gait_clip};
 
 // ------------------------------------------------------------ the skeletons
@@ -1652,8 +1652,8 @@ fn from_travel(poses: &[Pose]) -> Vec<Pose> {
 /// travel distance within 15%.
 #[test]
 fn the_walk_on_every_suite_skeleton_retargets_like_the_walk() {
-    use surfmotion::rig::embed::Embedding;
-    use surfmotion::rig::retarget::{clip_poses, retarget};
+    use surfmotion::embed::Embedding;
+    use surfmotion::pose::retarget::{clip_poses, retarget};
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();

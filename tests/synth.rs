@@ -4,14 +4,14 @@ mod common;
 
 use std::path::Path;
 use std::process::Command;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::embed::parts::Part;
 use surfmotion::mesh::io::obj::read_obj;
+use surfmotion::pose::measure::bone_lengths;
+use surfmotion::pose::retarget::clip_poses;
 use surfmotion::rig::Canonical;
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::embed::parts::Part;
 use surfmotion::rig::load_clip;
-use surfmotion::rig::retarget::clip_poses;
-use surfmotion::skeleton::bone_lengths;
 use surfmotion::synth::database::{Dynamics, drive};
 
 fn samba_rig(d: &Path) -> (surfmotion::mesh::Mesh, Embedding) {

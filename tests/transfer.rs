@@ -7,9 +7,9 @@ mod common;
 use glam::{DQuat, DVec3};
 use std::path::Path;
 use surfmotion::drive::query::load_mocap;
+use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::mesh::{Mesh, MeshSequence};
-use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::tools::eval::vertex_error;
 use surfmotion::transfer::markers::generate;
 use surfmotion::transfer::{
@@ -373,7 +373,7 @@ fn a_performance_moves_onto_another_character() {
     .unwrap();
     let prepared = prepare(&crane, MarkerSpec::Landmarks(&lc, opts)).unwrap();
     let crig = prepared.rig.as_ref().unwrap();
-    let srig = surfmotion::rig::embed::Embedding::new(&samba.frame_mesh(0), &ls, None).unwrap();
+    let srig = surfmotion::embed::Embedding::new(&samba.frame_mesh(0), &ls, None).unwrap();
     let align = surfmotion::transfer::alignment(&srig, crig);
     let tm = generate(&samba.frame_mesh(0), &srig, &opts);
     let mut job = Job::new(
@@ -409,9 +409,9 @@ fn a_performance_moves_onto_another_character() {
     let n = crane.vertex_count();
     let (mut with, mut without, mut k) = (0.0, 0.0, 0);
     for f in (0..samba.frame_count()).step_by(5) {
-        let sj = srig.skeleton(samba.frame(f));
-        let cj = crig.skeleton(&out[f * n..(f + 1) * n]);
-        let c0 = crig.skeleton(crane.positions());
+        let sj = srig.frame_joints(samba.frame(f));
+        let cj = crig.frame_joints(&out[f * n..(f + 1) * n]);
+        let c0 = crig.frame_joints(crane.positions());
         for (a, b) in limbs {
             let want = align * (sj[b.index()] - sj[a.index()]).normalize();
             let got = (cj[b.index()] - cj[a.index()]).normalize();

@@ -5,12 +5,12 @@
 mod common;
 
 use glam::{DQuat, DVec3};
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::embed::parts::Part;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::choose_reference;
 use surfmotion::rig::Canonical as C;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::embed::parts::Part;
-use surfmotion::rig::retarget::choose_reference;
-use surfmotion::skeleton::Pose;
 use surfmotion::transfer::{Job, MarkerOptions, MarkerSpec, Source, prepare, transfer};
 
 /// The scan's own skeleton standing as at rest for `still` frames, then
@@ -105,7 +105,7 @@ fn samba_prepared_with(d: &std::path::Path, count: usize) -> surfmotion::transfe
 /// The lowest point along `up` of each foot (left, right: the rig's foot
 /// parts) of the positions `p`.
 fn feet_low(
-    rig: &surfmotion::rig::embed::Embedding,
+    rig: &surfmotion::embed::Embedding,
     up: DVec3,
 ) -> impl Fn(&[[f64; 3]]) -> [f64; 2] + '_ {
     let feet = [Part::LFoot, Part::RFoot].map(|part| {
@@ -416,7 +416,7 @@ fn legs_apart(
 fn spread_legs_carry_their_feet_where_the_skeleton_does() {
     // Before the markers' pull: 1.9-4.6 %; with it 0.9-1.7 %.
     const TOL: f64 = 2.0;
-    use surfmotion::rig::retarget::{Toes, retarget_toes};
+    use surfmotion::pose::retarget::{Toes, retarget_toes};
     use surfmotion::transfer::mocap_motion;
     let Some(d) = common::data_dir() else { return };
     let prepared = samba_prepared_with(&d, 80);

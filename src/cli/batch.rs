@@ -6,11 +6,11 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
 use surfmotion::batch::{ClipStatus, Converter, Format, Shard};
+use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::jobs::{
     BatchEvent, BatchOptions, RetargetJob, RetargetJobOptions, ScanTransferJob,
     ScanTransferOptions, batch_folder,
 };
-use surfmotion::rig::embed::landmarks::Landmarks;
 /// Arguments of `batch`.
 #[derive(clap::Args)]
 #[command(group(clap::ArgGroup::new("target").required(true).args(["db", "scan"])))]

@@ -3,8 +3,8 @@
 use anyhow::bail;
 use std::path::PathBuf;
 use surfmotion::db::init::InitOptions;
-use surfmotion::db::skeletons::SkeletonKind;
 use surfmotion::db::{Manifest, info};
+use surfmotion::embed::frames::SkeletonKind;
 use surfmotion::jobs::skeletons::SkeletonsOptions;
 use surfmotion::jobs::{export_skeletons, init_database};
 

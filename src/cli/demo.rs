@@ -7,7 +7,7 @@ use surfmotion::drive::{RetargetOptions, synthesise};
 use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::save_sequence;
-use surfmotion::rig::retarget::clip_poses;
+use surfmotion::pose::retarget::clip_poses;
 use surfmotion::synth::humanoid::humanoid_landmarks;
 use surfmotion::synth::{Gait, gait_clip};
 use surfmotion::tools::eval::velocity_error;
@@ -80,7 +80,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let skel: Vec<_> = out
         .positions
         .chunks(ch.n())
-        .map(|f| ch.rig().skeleton(f))
+        .map(|f| ch.rig().frame_joints(f))
         .collect();
     let err = velocity_error(&out.query, &skel);
     // A strip of frames, seen from the side of the path.

@@ -3,10 +3,10 @@
 
 use glam::DVec3;
 use std::path::PathBuf;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::axes::nearest_axis;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::Canonical;
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::joints::nearest_axis;
 use surfmotion::tools::render::preview::PreviewOptions;
 use surfmotion::tools::render::{
     Framing, Image, Scene, View, facing_of_frames, label_colour, render_framed, view_bounds,
@@ -105,7 +105,7 @@ pub fn draw_framed(
         rig.map(|r| r.labels.iter().map(|&l| label_colour(l as usize)).collect());
     let mut lines = Vec::new();
     if let Some(r) = rig {
-        let j = r.skeleton(positions);
+        let j = r.frame_joints(positions);
         for c in Canonical::ALL {
             if let Some(p) = c.parent() {
                 lines.push((j[p.index()].to_array(), j[c.index()].to_array(), [0, 0, 0]));
@@ -195,7 +195,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             None => None,
         };
         // The rig's skeleton on the frame drawn, in the file's axes.
-        let joints = rig.as_ref().map(|r| r.skeleton(s.frame(a.frame)));
+        let joints = rig.as_ref().map(|r| r.frame_joints(s.frame(a.frame)));
         // Stood Y-up (the views assume it): by `--up`, else by the rig's
         // skeleton on this frame (pelvis to neck, snapped to an axis). The
         // rig's rest up held only for frames in the axes of the mesh it was

@@ -3,10 +3,10 @@
 
 use std::path::PathBuf;
 use std::time::Instant;
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::embed::parts::{Part, neighbours, piece_counts};
+use surfmotion::embed::{Embedding, parse_parts};
 use surfmotion::rig::Canonical;
-use surfmotion::rig::embed::landmarks::Landmarks;
-use surfmotion::rig::embed::parts::{Part, neighbours, piece_counts};
-use surfmotion::rig::embed::{Embedding, parse_parts};
 use surfmotion::util::fsutil::read_text;
 
 /// `rig` subcommands.
@@ -101,16 +101,16 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
                     .collect();
                 for (l, p) in points {
                     lm.marks
-                        .insert(l, surfmotion::rig::embed::landmarks::Mark::Point(p));
+                        .insert(l, surfmotion::embed::landmarks::Mark::Point(p));
                 }
                 mesh = surfmotion::mesh::repair::repair(&mesh, &Default::default()).0;
             }
             // A degenerate landmark set is the landmark file's fault: name it.
             Embedding::new(&mesh, &lm, parts).map_err(|e| match e {
-                surfmotion::rig::embed::EmbedError::Landmarks(le) => {
+                surfmotion::embed::EmbedError::Landmarks(le) => {
                     anyhow::anyhow!("{}: {le}", l.display())
                 }
-                e @ surfmotion::rig::embed::EmbedError::Mesh(_) => {
+                e @ surfmotion::embed::EmbedError::Mesh(_) => {
                     anyhow::anyhow!("{}: {e}", a.mesh)
                 }
                 other => other.into(),
@@ -130,13 +130,13 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
                 Some(m) => Some(surfmotion::rig::RigMap::load(m)?),
                 None => None,
             };
-            surfmotion::rig::embed::skin::from_skin(&mesh, &asset, map.as_ref(), g)?
+            surfmotion::embed::skin::from_skin(&mesh, &asset, map.as_ref(), g)?
         }
         (None, None) => anyhow::bail!("give --landmarks or --skin"),
     };
     let secs = t.elapsed().as_secs_f64();
     e.save(&a.output)?;
-    let verdict = surfmotion::rig::embed::check(&e, &mesh);
+    let verdict = surfmotion::embed::check(&e, &mesh);
     if let Some(p) = &a.png {
         let img = super::render::draw(
             mesh.positions(),

@@ -4,11 +4,11 @@
 use anyhow::bail;
 use std::path::PathBuf;
 use std::time::Instant;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::jobs::synth_db::SynthSequence;
 use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
-use surfmotion::rig::embed::Embedding;
-use surfmotion::rig::embed::landmarks::Landmarks;
 use surfmotion::synth::database::Dynamics;
 
 /// Arguments of `synth`.
@@ -78,8 +78,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let rest = load_sequence(&a.mesh, &LoadOptions::default())?.frame_mesh(0);
     let lm = Landmarks::load(&a.landmarks, rest.vertex_count())?;
     let rig = Embedding::new(&rest, &lm, None).map_err(|e| match e {
-        e @ surfmotion::rig::embed::EmbedError::Mesh(_) => anyhow::anyhow!("{}: {e}", a.mesh),
-        surfmotion::rig::embed::EmbedError::Landmarks(le) => {
+        e @ surfmotion::embed::EmbedError::Mesh(_) => anyhow::anyhow!("{}: {e}", a.mesh),
+        surfmotion::embed::EmbedError::Landmarks(le) => {
             anyhow::anyhow!("{}: {le}", a.landmarks.display())
         }
         other => other.into(),

@@ -4,8 +4,8 @@
 //! into it with `From`.
 
 use surfmotion::batch::Format;
-use surfmotion::db::skeletons::SkeletonKind;
 use surfmotion::deform::DeformMode;
+use surfmotion::embed::frames::SkeletonKind;
 use surfmotion::similarity::Measure;
 use surfmotion::synth::Gait;
 

@@ -7,7 +7,8 @@
 
 use super::cache::{self, KeyHasher, add_rig, cache_dir, frames_key};
 use super::manifest::{DbError, Manifest};
-use super::skeletons::{SkeletonKind, embed_rig, poses};
+use super::skeletons::embed_rig;
+use crate::embed::frames::{SkeletonKind, poses};
 use crate::graph::SurfaceMotionGraph;
 use crate::mocap::units::y_up;
 use crate::similarity::vertex::VertexOptions;

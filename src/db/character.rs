@@ -15,14 +15,15 @@
 //! skeleton` writes [`SkeletonKind::Rigid`] by default.
 
 use crate::db::build::{BuildOptions, BuildProgress, build_opened};
-use crate::db::skeletons::{SkeletonKind, embed_rig, poses};
+use crate::db::skeletons::embed_rig;
 use crate::db::{DbError, MANIFEST, Manifest};
+use crate::embed::Embedding;
+use crate::embed::frames::{SkeletonKind, poses};
 use crate::graph::{FrameAdjacency, FrameId, SurfaceMotionGraph};
 use crate::mesh::Mesh;
 use crate::mocap::units::y_up;
-use crate::rig::embed::Embedding;
+use crate::pose::Pose;
 use crate::similarity::SimilarityMatrix;
-use crate::skeleton::Pose;
 use glam::DVec3;
 use std::path::Path;
 

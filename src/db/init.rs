@@ -8,8 +8,8 @@
 
 use super::manifest::{extent, printable};
 use super::{DbError, MANIFEST, Manifest, RigSpec, SequenceEntry};
+use crate::embed::landmarks::{Landmark, Landmarks};
 use crate::mesh::Mesh;
-use crate::rig::embed::landmarks::{Landmark, Landmarks};
 use std::path::{Path, PathBuf};
 
 /// What a manifest is written from. The defaults are `db init`'s.

@@ -334,7 +334,7 @@ pub enum DbError {
     Io(#[from] crate::util::fsutil::FsError),
     /// The rig could not be embedded.
     #[error(transparent)]
-    Rig(#[from] crate::rig::embed::EmbedError),
+    Rig(#[from] crate::embed::EmbedError),
     /// A graph edit in the manifest names something that does not exist.
     #[error("character.toml: {0}")]
     Graph(#[from] crate::graph::smg::EditError),
@@ -835,7 +835,7 @@ pub fn info(dir: &Path) -> Result<DbInfo, DbError> {
     if let Some(p) = &m.rig.landmarks {
         let p = Manifest::resolve(dir, p);
         if p.exists()
-            && let Err(e) = crate::rig::embed::landmarks::Landmarks::load_checked(&p, &topo)
+            && let Err(e) = crate::embed::landmarks::Landmarks::load_checked(&p, &topo)
         {
             problems.push(format!("landmarks: {e}"));
         }

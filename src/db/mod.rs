@@ -7,7 +7,6 @@ pub mod cache;
 pub mod character;
 pub mod init;
 pub mod manifest;
-pub mod rigid;
 pub mod skeletons;
 
 pub use crate::graph::FrameId;

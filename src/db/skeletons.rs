@@ -1,45 +1,20 @@
 //! Per-frame skeletons of a character database (Huang et al. 2015, Sec. 3):
 //! the rig embedded once on the topology's rest frame, then every frame's
-//! canonical joints from the embedding's regressors (or, as in the paper,
-//! the plain centres of the joints' vertex sets), and by default the one
-//! rigid skeleton of the character posed to explain them ([`super::rigid`]).
+//! canonical joints read off it ([`crate::embed::frames`]: the embedding's
+//! regressors or, as in the paper, the plain centres of the joints' vertex
+//! sets), and by default the one rigid skeleton of the character posed to
+//! explain them ([`crate::embed::rigid`]).
 
 use super::manifest::{DbError, Manifest};
-use super::rigid::{Fit, FitOptions, RigidSkeleton};
+use crate::embed::frames::{SkeletonKind, poses, rigid_fit};
+use crate::embed::landmarks::Landmarks;
+use crate::embed::rigid::{Fit, RigidSkeleton};
+use crate::embed::{Embedding, parse_parts};
 use crate::mesh::Mesh;
-use crate::rig::Canonical;
-use crate::rig::embed::landmarks::Landmarks;
-use crate::rig::embed::{Embedding, parse_parts};
-use crate::skeleton::{Pose, bone_lengths};
+use crate::pose::Pose;
 use crate::util::fsutil::read_text;
-use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
-
-/// How joints are read off a frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SkeletonKind {
-    /// The character's rigid skeleton (bone lengths calibrated over the
-    /// database) posed per frame nearest the regressor joints.
-    #[default]
-    Rigid,
-    /// Affine regressors: exact on the rest frame, rigid-motion equivariant.
-    Regressor,
-    /// Plain centres of each joint's vertex set (Huang et al. 2015, Sec. 3).
-    Centroid,
-}
-
-impl std::fmt::Display for SkeletonKind {
-    /// The words a report uses for the kind.
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Self::Rigid => "rigid skeleton fitted to the regressed joints",
-            Self::Regressor => "regressed joints",
-            Self::Centroid => "centres of the joints' vertex sets",
-        })
-    }
-}
 
 /// The skeletons of one sequence.
 #[derive(Debug, Clone, Serialize)]
@@ -76,7 +51,7 @@ pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding,
                 ),
                 None => None,
             };
-            return crate::rig::embed::skin::from_skin(topology, &asset, map.as_ref(), &g)
+            return crate::embed::skin::from_skin(topology, &asset, map.as_ref(), &g)
                 .map_err(DbError::Rig);
         }
         return Err(DbError::Manifest {
@@ -100,60 +75,6 @@ pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding,
         None => None,
     };
     Embedding::new(topology, &lm, parts).map_err(DbError::Rig)
-}
-
-/// The poses of frames laid out one after another (`n` positions each).
-/// [`SkeletonKind::Rigid`] calibrates the bone lengths over these frames.
-pub fn poses(rig: &Embedding, frames: &[[f64; 3]], n: usize, kind: SkeletonKind) -> Vec<Pose> {
-    let measure = |kind| -> Vec<Pose> {
-        frames
-            .par_chunks(n.max(1))
-            .map(|f| match kind {
-                SkeletonKind::Centroid => rig.centroid_skeleton(f),
-                _ => rig.skeleton(f),
-            })
-            .collect()
-    };
-    match kind {
-        SkeletonKind::Rigid => {
-            let m = measure(SkeletonKind::Regressor);
-            let (_, fits) = rigid_fit(rig, &[&m]);
-            fits.into_iter().flatten().map(|f| f.pose).collect()
-        }
-        k => measure(k),
-    }
-}
-
-/// Calibrates the character's rigid skeleton over every measured sequence
-/// (one bone length for all) and fits it to each frame, in parallel.
-pub fn rigid_fit(rig: &Embedding, measured: &[&[Pose]]) -> (RigidSkeleton, Vec<Vec<Fit>>) {
-    let all: Vec<Pose> = measured.iter().flat_map(|s| s.iter().copied()).collect();
-    let rest = rig.joints.map(glam::DVec3::from_array);
-    let sk = RigidSkeleton::calibrate(&rest, &all);
-    let opts = FitOptions::default();
-    let fits = measured
-        .iter()
-        .map(|s| s.par_iter().map(|m| sk.fit(m, &opts)).collect())
-        .collect();
-    (sk, fits)
-}
-
-/// Largest relative deviation of each bone's length from its median over
-/// the poses (indexed by the child joint; 0 for the root).
-pub fn bone_length_spread(poses: &[Pose]) -> [f64; Canonical::COUNT] {
-    let lens: Vec<[f64; Canonical::COUNT]> = poses.iter().map(bone_lengths).collect();
-    std::array::from_fn(|b| {
-        let mut v: Vec<f64> = lens.iter().map(|l| l[b]).collect();
-        if v.is_empty() {
-            return 0.0;
-        }
-        v.sort_by(f64::total_cmp);
-        let med = v[v.len() / 2];
-        if med <= 0.0 {
-            return 0.0;
-        }
-        v.iter().map(|x| (x / med - 1.0).abs()).fold(0.0, f64::max)
-    })
 }
 
 /// Skeletons of every sequence of the database in `dir`; for

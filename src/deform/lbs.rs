@@ -7,17 +7,17 @@
 //! kernel.
 
 use crate::db::Character;
+use crate::embed::Embedding;
+use crate::embed::bones_of;
+use crate::pose::Pose;
 use crate::rig::Canonical;
-use crate::rig::embed::Embedding;
-use crate::rig::embed::bones_of;
-use crate::skeleton::Pose;
 use glam::{DQuat, DVec3};
 
 /// Linear blend skinning of `rest` positions into `out` (one entry per
 /// vertex): `x' = Σ_j w_j (g_j (x − r_j) + p_j)` with the rig's four
 /// weights per vertex, `r` the `rest_pose` joints, `p` the `pose` joints
 /// and `g` each joint's global rotation from rest to pose
-/// ([`crate::skeleton::pose_rotations`]). O(4 V), no allocation.
+/// ([`crate::pose::pose_rotations`]). O(4 V), no allocation.
 pub fn skin_into(
     rest: &[[f64; 3]],
     rig: &Embedding,

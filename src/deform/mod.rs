@@ -41,11 +41,11 @@ pub mod unflip;
 pub mod untangle;
 
 use crate::db::Character;
+use crate::embed::parts::Part;
 use crate::mesh::laplacian::uniform_region_rows;
 use crate::mesh::solver::SolveError;
+use crate::pose::{Pose, pose_rotations};
 use crate::rig::Canonical;
-use crate::rig::embed::parts::Part;
-use crate::skeleton::{Pose, pose_rotations};
 use glam::{DQuat, DVec3};
 use part_laplacian::{RegionSolver, RegionWorkspace, apply};
 use rayon::prelude::*;
@@ -794,7 +794,7 @@ impl Deformer {
                 || (self.workspace(), vec![[0.0; 3]; n]),
                 |(ws, src), (f, t)| {
                     src.copy_from_slice(f);
-                    let sp = ch.rig().skeleton(src);
+                    let sp = ch.rig().frame_joints(src);
                     self.deform(ch, src, &sp, t, f, ws)
                 },
             )

@@ -6,17 +6,17 @@
 //! skinning would weld a skirt to a thigh, so soft vertices are never
 //! constraints of Huang et al. 2015, Eq. 32).
 
+use crate::embed::Embedding;
+use crate::embed::heat::nearest_bones;
+use crate::embed::parts::Part;
 use crate::mesh::Mesh;
-use crate::rig::embed::Embedding;
-use crate::rig::embed::heat::nearest_bones;
-use crate::rig::embed::parts::Part;
 
 /// Softness of every vertex in [0, 1]: 0 up to 1.5 times the body's median
 /// distance from skin to bone, rising to 1 at 2.5 times (a skirt, a loose
 /// sleeve); always 0 on the head and feet. One entry per vertex of `rest`;
 /// O(V · bones).
 pub fn softness(rest: &Mesh, rig: &Embedding) -> Vec<f64> {
-    let est_bones = crate::rig::embed::bones_of(rig);
+    let est_bones = crate::embed::bones_of(rig);
     let near = nearest_bones(rest.positions(), &est_bones);
     let mut all: Vec<f64> = near.iter().map(|x| x.1).collect();
     all.sort_by(f64::total_cmp);

@@ -4,7 +4,8 @@
 use super::timeline::{self, Frames, OutFrame};
 use crate::db::Character;
 use crate::mesh::blend::{Blender, FrameGradients};
-use crate::skeleton::{Pose, floor_fit, rotate_yaw};
+use crate::pose::Pose;
+use crate::pose::measure::{floor_fit, rotate_yaw};
 use glam::DVec3;
 
 /// Scratch of [`blend_placed`]: a blending workspace, a frame buffer and

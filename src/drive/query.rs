@@ -5,7 +5,7 @@
 //! rig map), converted to metres and Y-up, resampled to the database's
 //! frame rate and reduced to the 19 canonical joints, with the clip's
 //! neutral reference pose. It is then retargeted to the character
-//! ([`crate::rig::retarget`]): the torso turns by the clip's rotations since
+//! ([`crate::pose::retarget`]): the torso turns by the clip's rotations since
 //! that reference (the character keeps its captured attitude), the limbs
 //! take the clip's bone directions, every bone the character's length, and
 //! the root follows the clip's pelvis scaled by the ratio of leg lengths.
@@ -15,12 +15,12 @@
 
 use crate::db::Character;
 use crate::mocap::MocapError;
-use crate::rig::retarget::{
+use crate::pose::Pose;
+use crate::pose::retarget::{
     ClipPoses, Reference, character_neutral, clip_poses, retarget, retarget_with_neutral,
 };
 use crate::rig::{LoadOptions, load_clip};
 use crate::rig::{RigError, detect_clip};
-use crate::skeleton::Pose;
 use std::path::{Path, PathBuf};
 
 /// Errors of query preparation.
@@ -101,7 +101,7 @@ pub fn load_mocap(path: &Path, opts: &LoadOptions, fps: f64) -> Result<MocapPose
 }
 
 /// The clip's poses on the character's skeleton `rest` (see
-/// [`crate::rig::retarget`]).
+/// [`crate::pose::retarget`]).
 pub fn to_character(rest: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<Pose> {
     retarget(rest, reference, mocap)
         .into_iter()
@@ -123,7 +123,7 @@ pub fn to_character(rest: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<P
 /// walks on the rest frame's floor). The 1.27 cm once measured on the
 /// synthetic database `synth3` was that database's age, not a floor: it
 /// was made before the clip's ground was levelled
-/// ([`crate::rig::retarget::ground_tilt`]) and the feet turned by the
+/// ([`crate::pose::retarget::ground_tilt`]) and the feet turned by the
 /// clip's rotation, its 02_01 climbing CMU subject 02's sloping floor on
 /// tipped feet; results on it floated 1.0 cm (median) with the lift and
 /// sank 0.2-0.9 cm (penetration median) without it.

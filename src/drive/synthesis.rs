@@ -10,8 +10,8 @@ use crate::db::Character;
 use crate::deform::{DeformMode, DeformOptions, TurnedOver};
 use crate::mesh::blend::FrameGradients;
 use crate::mesh::solver::SolveError;
-use crate::rig::retarget::{Reference, ReferenceSource};
-use crate::skeleton::Pose;
+use crate::pose::Pose;
+use crate::pose::retarget::{Reference, ReferenceSource};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
@@ -84,7 +84,7 @@ pub struct Report {
     /// Frames per second.
     pub fps: f64,
     /// The clip's neutral reference pose the retargeting measured the
-    /// torso's rotations from (see [`crate::rig::retarget`]).
+    /// torso's rotations from (see [`crate::pose::retarget`]).
     pub reference: ReferenceSource,
     /// The retrieval (path, threshold, costs, widened rows, cuts).
     pub retrieval: Retrieval,
@@ -293,7 +293,7 @@ impl Prepared {
                         .zip(query[start..start + m].par_iter())
                         .map(|((dst, src), target)| {
                             let mut ws = take(&deform_pool).unwrap_or_else(|| d.workspace());
-                            let sp = ch.rig().skeleton(src);
+                            let sp = ch.rig().frame_joints(src);
                             let c = d.deform(ch, src, &sp, target, dst, &mut ws);
                             give(&deform_pool, ws);
                             c

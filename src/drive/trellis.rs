@@ -35,7 +35,7 @@
 //! search going and is reported.
 
 use crate::graph::FrameAdjacency;
-use crate::skeleton::{Pose, skeleton_distance};
+use crate::pose::{Pose, measure::skeleton_distance};
 use rayon::prelude::*;
 use serde::Serialize;
 

@@ -81,7 +81,7 @@ pub enum JobError {
     Retarget(#[from] crate::drive::RetargetError),
     /// The rig could not be embedded.
     #[error(transparent)]
-    Embed(#[from] crate::rig::embed::EmbedError),
+    Embed(#[from] crate::embed::EmbedError),
     /// A scan could not be prepared.
     #[error(transparent)]
     Scan(#[from] crate::transfer::ScanError),
@@ -102,7 +102,7 @@ pub enum JobError {
     Markers(#[from] crate::transfer::MarkerError),
     /// A landmark file could not be read.
     #[error(transparent)]
-    Landmarks(#[from] crate::rig::embed::landmarks::LandmarkError),
+    Landmarks(#[from] crate::embed::landmarks::LandmarkError),
     /// An output refused before any work.
     #[error(transparent)]
     Output(#[from] outputs::OutputError),

@@ -13,9 +13,9 @@ use crate::drive::{Each, Output, Prepared, Report, RetargetOptions, Timings};
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
+use crate::pose::Pose;
+use crate::pose::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets};
 use crate::rig::LoadOptions;
-use crate::rig::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets};
-use crate::skeleton::Pose;
 use crate::tools::eval::{
     Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error,
 };
@@ -220,7 +220,7 @@ impl RetargetJob {
                 if skeletons.len() < keep {
                     kept.extend_from_slice(p);
                 }
-                skeletons.push(ch.rig().skeleton(p));
+                skeletons.push(ch.rig().frame_joints(p));
                 writer.push(p)?;
                 sink_seconds += t.elapsed().as_secs_f64();
                 Ok(())
@@ -397,7 +397,7 @@ impl RetargetRun {
             .output
             .positions
             .chunks(ch.n().max(1))
-            .map(|p| ch.rig().skeleton(p))
+            .map(|p| ch.rig().frame_joints(p))
             .collect();
         velocity_error(query, &skel)
     }
@@ -592,7 +592,7 @@ pub fn evaluate_result(
         });
     }
     let out: Vec<Pose> = (0..res.frame_count())
-        .map(|f| ch.rig().skeleton(res.frame(f)))
+        .map(|f| ch.rig().frame_joints(res.frame(f)))
         .collect();
     let e = velocity_error(&query, &out);
     let plaus = plausibility(ch, res.all_positions(), None, Some(&clip)).map(|p| p.0);

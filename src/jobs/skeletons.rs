@@ -2,13 +2,17 @@
 //! canonical joints ([`SkeletonFile`], written by `db skeleton` and as the
 //! ground truth of a synthetic database), and [`export_skeletons`], which
 //! extracts every frame's skeleton of a database (Huang et al. 2015,
-//! Sec. 3; the rigid fit of [`crate::db::rigid`]) and writes JSON and BVH.
+//! Sec. 3; the rigid fit of [`crate::embed::rigid`]) and writes JSON and BVH.
 
 use super::JobError;
 use crate::db::Manifest;
-use crate::db::skeletons::{SkeletonKind, bone_length_spread, extract};
+use crate::db::skeletons::extract;
+use crate::embed::frames::{SkeletonKind, bone_length_spread};
+use crate::pose::{
+    Pose,
+    measure::{BVH_NAMES, pose_clip},
+};
 use crate::rig::Canonical;
-use crate::skeleton::{BVH_NAMES, Pose, pose_clip};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

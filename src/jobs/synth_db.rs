@@ -9,11 +9,11 @@
 
 use super::{JobError, SkeletonFile};
 use crate::db::{Manifest, RigSpec, SequenceEntry};
+use crate::embed::Embedding;
 use crate::mesh::io::save_sequence;
 use crate::mesh::{Mesh, MeshSequence};
+use crate::pose::retarget::ClipPoses;
 use crate::rig::LoadOptions;
-use crate::rig::embed::Embedding;
-use crate::rig::retarget::ClipPoses;
 use crate::synth::database::{Dynamics, drive};
 use crate::tools::eval::{Checker, Plausibility};
 use serde::Serialize;
@@ -46,7 +46,7 @@ impl SynthClip {
         Ok(SynthClip::Poses {
             name: name.to_string(),
             source: PathBuf::from(name),
-            poses: Box::new(crate::rig::retarget::clip_poses(clip, &map)?),
+            poses: Box::new(crate::pose::retarget::clip_poses(clip, &map)?),
         })
     }
 }
@@ -236,12 +236,12 @@ pub fn write_synthetic_database(
         let plausibility = if opts.plausibility {
             Checker::new(rest, rig, glam::DVec3::Y, None, fps, Default::default())
                 .and_then(|c| {
-                    let clip = crate::rig::retarget::clip_head_trunk_deg(&reference, &poses);
+                    let clip = crate::pose::retarget::clip_head_trunk_deg(&reference, &poses);
                     // Floating from the clip's own ground under each foot
                     // (raised on a step).
                     let character = rig.joints.map(glam::DVec3::from_array);
                     let raised =
-                        crate::rig::retarget::foot_ground_offsets(&character, &reference, &poses);
+                        crate::pose::retarget::foot_ground_offsets(&character, &reference, &poses);
                     Ok(c.measure_on(
                         seq.all_positions(),
                         rest.vertex_count(),

@@ -8,13 +8,13 @@ use super::JobError;
 use crate::batch::{ClipWarning, Converted, Converter, Preparation};
 use crate::drive::Each;
 use crate::drive::query::{MocapPoses, load_mocap, to_character};
+use crate::embed::landmarks::Landmarks;
 use crate::mesh::Mesh;
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
+use crate::pose::Pose;
 use crate::rig::LoadOptions;
-use crate::rig::embed::landmarks::Landmarks;
-use crate::skeleton::Pose;
 use crate::tools::eval::{Checker, PlausibilityOptions, VelocityError, velocity_error};
 use crate::transfer::{
     Confluent, MarkerOptions, MarkerSpec, PreparedScan, TransferOptions, TransferStats,
@@ -164,7 +164,7 @@ impl ScanTransferJob {
         let skel: Vec<Pose> = run
             .positions
             .chunks(n.max(1))
-            .map(|p| rig.skeleton(p))
+            .map(|p| rig.frame_joints(p))
             .collect();
         Some(velocity_error(&query, &skel))
     }
@@ -237,7 +237,7 @@ impl Converter for ScanTransferJob {
                 if skel.len() < keep {
                     kept.extend_from_slice(p);
                 }
-                skel.push(rig.skeleton(p));
+                skel.push(rig.frame_joints(p));
                 let r = writer.push(p);
                 sink_seconds += t.elapsed().as_secs_f64();
                 r
@@ -257,7 +257,7 @@ impl Converter for ScanTransferJob {
                 c.measure(&kept, n, None)
                     .map(|p| {
                         p.with_clip_head(
-                            &crate::rig::retarget::clip_head_trunk_deg(
+                            &crate::pose::retarget::clip_head_trunk_deg(
                                 &mocap.reference,
                                 &mocap.poses,
                             ),
@@ -560,7 +560,7 @@ fn transfer_inner(
                     msg: "the clip has no frames".into(),
                 });
             }
-            clip_head = Some(crate::rig::retarget::clip_head_trunk_deg(
+            clip_head = Some(crate::pose::retarget::clip_head_trunk_deg(
                 &clip.reference,
                 &clip.poses,
             ));
@@ -608,7 +608,7 @@ fn transfer_inner(
                         ));
                     }
                 };
-                let rig = crate::rig::embed::Embedding::new(&tmesh, &tl, None)?;
+                let rig = crate::embed::Embedding::new(&tmesh, &tl, None)?;
                 if let Some(scan_rig) = &prepared.rig {
                     align = crate::transfer::alignment(&rig, scan_rig);
                 }

@@ -27,7 +27,7 @@ pub struct FrameEdge {
     /// sequence.
     pub jump: bool,
     /// The turn of the output's heading at this arc (radians about Y,
-    /// [`crate::skeleton::rotate_yaw`]'s sense): for a transition `a → b`
+    /// [`crate::pose::measure::rotate_yaw`]'s sense): for a transition `a → b`
     /// the floor rotation fitting the skeleton of `b − 1` onto that of `a`
     /// ([`super::place`]); 0 along a sequence and in graphs built without
     /// skeletons.

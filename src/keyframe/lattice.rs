@@ -238,7 +238,7 @@ impl Default for LatticeOptions {
 /// key-frame's.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct HeadingTarget {
-    /// Degrees about the vertical ([`crate::skeleton::rotate_yaw`]'s
+    /// Degrees about the vertical ([`crate::pose::measure::rotate_yaw`]'s
     /// sense: positive turns from +Z towards +X).
     pub degrees: f64,
     /// Cost per degree of error. Default in the CLI: 1/30 (a 30° error

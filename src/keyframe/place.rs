@@ -29,7 +29,7 @@ use crate::drive::timeline::{Jump, OutFrame, TimelineOptions, timeline};
 use crate::drive::{BlendScratch, CHUNK_FRAMES, Floor, blend_placed};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
-use crate::skeleton::rotate_yaw;
+use crate::pose::measure::rotate_yaw;
 use glam::DVec3;
 use rayon::prelude::*;
 

@@ -2,7 +2,7 @@
 //! key-frame a database frame or a skeleton pose"): the pose is resolved
 //! to the database frame nearest by the skeleton measure the database
 //! already uses for retrieval, `c_skel` of Eq. 28
-//! ([`crate::skeleton::skeleton_distance`]: joints summed after the floor
+//! ([`crate::pose::measure::skeleton_distance`]: joints summed after the floor
 //! alignment in position and heading).
 //!
 //! A pose is written `CLIP.bvh:F` or `CLIP.amc:F` (frame `F` of a mocap
@@ -13,9 +13,10 @@
 
 use crate::db::Character;
 use crate::drive::query::{load_mocap, to_character};
+use crate::pose::Pose;
+use crate::pose::measure::skeleton_distance;
 use crate::rig::Canonical;
 use crate::rig::LoadOptions;
-use crate::skeleton::{Pose, skeleton_distance};
 use glam::DVec3;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -160,7 +161,7 @@ pub fn nearest_frame(ch: &Character, key: &str, pose: &Pose) -> Resolved {
 }
 
 /// The facing of a pose about the vertical (radians,
-/// [`crate::skeleton::rotate_yaw`]'s sense): the direction of the hips'
+/// [`crate::pose::measure::rotate_yaw`]'s sense): the direction of the hips'
 /// left-to-right axis, so that differences of facings are rotations.
 pub fn facing(p: &Pose) -> f64 {
     let h = p[Canonical::LHip.index()] - p[Canonical::RHip.index()];

@@ -20,7 +20,7 @@
 
 use crate::db::Character;
 use crate::drive::Floor;
-use crate::rig::embed::surface::closest_on_triangle;
+use crate::embed::surface::closest_on_triangle;
 use glam::DVec3;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -327,7 +327,7 @@ fn aligned(ch: &Character, ia: u32, ib: u32) -> (Vec<DVec3>, Vec<DVec3>) {
 pub struct FrameSet {
     grids: Vec<Grid>,
     surface: Surface,
-    poses: Vec<crate::skeleton::Pose>,
+    poses: Vec<crate::pose::Pose>,
 }
 
 impl FrameSet {

@@ -2,7 +2,7 @@
 //! auto-detection and JSON map files.
 
 use super::canonical::Canonical;
-use super::pose::Pose;
+use super::derive::Derive;
 use super::structure::{self, Source};
 use crate::mocap::{Clip, JointId};
 use glam::{DQuat, DVec3};
@@ -208,41 +208,6 @@ pub static CONVENTIONS: [Convention; 7] = [
 pub fn normalise_name(s: &str) -> String {
     let s = s.rsplit([':', '|']).next().unwrap_or(s);
     s.trim().to_ascii_lowercase()
-}
-
-/// How to place a canonical joint for which the clip has no joint. Rules
-/// are evaluated in [`Canonical::ALL`] order on the frame's canonical
-/// positions, so a rule may use joints (or earlier derived joints) only.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "rule", rename_all = "snake_case")]
-pub enum Derive {
-    /// The End Site (bone tail) of the named joint, e.g. the head from a
-    /// leaf neck or the toe from a leaf ankle.
-    EndSite {
-        /// Joint name in the file.
-        joint: String,
-    },
-    /// `from + t · (to − from)`: the chest half-way from spine to neck
-    /// (`t = 0.5`), the head a third of a neck length above the neck along
-    /// chest→neck (`from = chest, to = neck, t = 4/3`).
-    Between {
-        /// Start joint.
-        from: Canonical,
-        /// End joint.
-        to: Canonical,
-        /// Fraction along from→to (may exceed 1).
-        t: f64,
-    },
-    /// A toe forward of and below the ankle: `ankle + fraction · |knee −
-    /// ankle| · (cos 20° · forward − sin 20° · up)`, with up = pelvis→neck
-    /// and forward = (l_hip − r_hip) × up (the body's left × up).
-    ToeFromAnkle {
-        /// The ankle (`l_ankle` or `r_ankle`); the knee is its parent.
-        ankle: Canonical,
-        /// Toe distance as a fraction of the shin length (0.35 ≈ foot
-        /// length 0.152 H over shin 0.246 H · 0.57 for the toe base).
-        fraction: f64,
-    },
 }
 
 /// A map from canonical joints to a clip's joint names. Saved and loaded as
@@ -957,7 +922,9 @@ impl RigMap {
     /// units. Rig maps name a canonical joint by the bone that starts there,
     /// so each is the joint origin (also for ASF/AMC clips, whose native
     /// points are bone ends); derived joints follow their [`Derive`] rule.
-    pub fn poses(&self, clip: &Clip) -> Result<Vec<Pose>, RigError> {
+    /// Each frame is a [`crate::pose::Pose`] (spelled out here: the pose
+    /// stage builds on this one, not the other way round).
+    pub fn poses(&self, clip: &Clip) -> Result<Vec<[DVec3; Canonical::COUNT]>, RigError> {
         Ok(self.poses_and_rotations(clip)?.0)
     }
 
@@ -989,7 +956,7 @@ impl RigMap {
 
     /// Canonical joint positions of the clip's rest skeleton (every local
     /// rotation the identity, offsets as in the file), in the clip's units.
-    pub fn rest_pose(&self, clip: &Clip) -> Result<Pose, RigError> {
+    pub fn rest_pose(&self, clip: &Clip) -> Result<[DVec3; Canonical::COUNT], RigError> {
         let slots = self.plan(clip)?;
         let (p, _) = clip.rest_positions();
         let r = vec![DQuat::IDENTITY; p.len()];
@@ -1087,7 +1054,10 @@ impl RigMap {
 
 /// Per-frame canonical poses and the world rotations of the mapped file
 /// joints ([`RigMap::poses_and_rotations`]).
-pub type PosesAndRotations = (Vec<Pose>, Vec<[Option<DQuat>; Canonical::COUNT]>);
+pub type PosesAndRotations = (
+    Vec<[DVec3; Canonical::COUNT]>,
+    Vec<[Option<DQuat>; Canonical::COUNT]>,
+);
 
 /// Canonical positions of one frame from world joint positions and rotations.
 /// Joints and End Sites are placed first, then the rules in canonical
@@ -1095,8 +1065,8 @@ pub type PosesAndRotations = (Vec<Pose>, Vec<[Option<DQuat>; Canonical::COUNT]>)
 /// and the neck was placed before the neck, halfway between the spine and
 /// the world origin (a skeleton whose arms branch off its first joint
 /// above the pelvis: the Biovision sample, H-Anim LOA1, KIT's MMM).
-fn place(slots: &[Slot], p: &[DVec3], r: &[DQuat]) -> Pose {
-    let mut out: Pose = [DVec3::ZERO; 19];
+fn place(slots: &[Slot], p: &[DVec3], r: &[DQuat]) -> [DVec3; Canonical::COUNT] {
+    let mut out: [DVec3; Canonical::COUNT] = [DVec3::ZERO; 19];
     for (c, s) in slots.iter().enumerate() {
         match *s {
             Slot::Joint(j) => out[c] = p[j],

@@ -1,18 +1,17 @@
 //! The canonical skeleton and the mapping of rig conventions onto it.
 
 mod canonical;
-pub mod embed;
+mod derive;
 pub mod load;
 mod map;
 pub mod names;
-pub mod pose;
-pub mod retarget;
 pub mod structure;
 
 pub use canonical::Canonical;
+pub use derive::Derive;
 pub use load::{LoadOptions, guess_up, load_clip};
 pub use map::{
-    BY_NAMES, BY_STRUCTURE, CONVENTIONS, Convention, Derive, Detection, JointReport, RigError,
-    RigMap, detect, detect_clip, normalise_name,
+    BY_NAMES, BY_STRUCTURE, CONVENTIONS, Convention, Detection, JointReport, RigError, RigMap,
+    detect, detect_clip, normalise_name,
 };
 pub use structure::Source;

@@ -45,7 +45,7 @@
 //!    mocapdata.com) do the sides the joints' names state decide.
 
 use super::canonical::Canonical;
-use super::map::Derive;
+use super::derive::Derive;
 use super::names::{Role, Side, is_helper, role, side};
 use crate::mocap::Clip;
 use glam::{DQuat, DVec3};
@@ -787,6 +787,13 @@ fn analyse_at(
     Err(NotHumanoid(reasons.join("; ")))
 }
 
+/// Step 3 and 4 on a candidate pelvis: the body whose pelvis is `pelvis`,
+/// its spine starting at `spine_start` and reaching the chest `chest`, its
+/// legs starting at `legs`: the trunk checked ([`trunk`]), then the
+/// joints picked along each chain (pelvis, spine and chest:
+/// [`spine_and_chest`]; neck and head: [`neck_and_head`]; the limbs:
+/// [`leg_chain`], [`arm_chain`]), then step 5, left and right
+/// ([`sides`]).
 fn body(
     g: &Geo,
     tokens: &[Vec<String>],
@@ -795,6 +802,105 @@ fn body(
     chest: usize,
     legs: [usize; 2],
 ) -> Result<Body, NotHumanoid> {
+    let _ = spine_start;
+    let trunk = trunk(g, tokens, pelvis, chest, legs)?;
+
+    let mut picks: Vec<Pick> = (0..Canonical::COUNT)
+        .map(|_| Pick {
+            joint: None,
+            source: Source::Structure,
+            confidence: 0.0,
+            derive: None,
+        })
+        .collect();
+    let (neck_from_chest, chest_derived) =
+        spine_and_chest(g, tokens, &mut picks, pelvis, chest, legs, trunk.hub);
+    let neck_j = neck_and_head(
+        g,
+        tokens,
+        &mut picks,
+        chest,
+        &trunk,
+        neck_from_chest,
+        chest_derived,
+    )?;
+
+    // Limbs.
+    let leg = |start: usize| -> Result<Limb, NotHumanoid> { leg_chain(g, tokens, pelvis, start) };
+    let arm =
+        |start: usize| -> Result<Limb, NotHumanoid> { arm_chain(g, tokens, legs, chest, start) };
+    let limbs = [
+        leg(legs[0])?,
+        leg(legs[1])?,
+        arm(trunk.arms[0])?,
+        arm(trunk.arms[1])?,
+    ];
+    let s = sides(g, tokens, &mut picks, pelvis, neck_j, limbs);
+    Ok(Body {
+        picks,
+        left_leg: s.left_leg,
+        right_leg: s.right_leg,
+        left_arm: s.left_arm,
+        right_arm: s.right_arm,
+        forward_from: s.forward_from,
+        side_confidence: s.side_confidence,
+        names_mirrored: s.names_mirrored,
+        sides_from_names: s.sides_from_names,
+        rest_stands: trunk.rest_stands,
+        reference_frame: g.from_frame,
+        reference: g.rest.clone(),
+        ignored: trunk.ignored,
+    })
+}
+
+/// A pick of `j` for canonical joint `c`, by its name or by structure.
+fn set_pick(picks: &mut [Pick], c: Canonical, j: usize, named: bool) {
+    picks[c.index()] = Pick {
+        joint: Some(j),
+        source: if named {
+            Source::Names
+        } else {
+            Source::Structure
+        },
+        confidence: if named { 0.95 } else { 0.8 },
+        derive: None,
+    };
+}
+
+/// Canonical joint `c` derived by the rule `d`.
+fn derive_pick(picks: &mut [Pick], c: Canonical, d: Derive) {
+    picks[c.index()] = Pick {
+        joint: None,
+        source: Source::Derived,
+        confidence: 0.5,
+        derive: Some(d),
+    };
+}
+
+/// The trunk found by step 3: the arms and the neck off the chest, checked.
+struct Trunk {
+    /// Legs, arms and neck off one joint (pelvis and chest one node).
+    hub: bool,
+    /// Where the two arm chains start.
+    arms: [usize; 2],
+    /// Where the neck chain starts.
+    neck_start: usize,
+    /// The legs point away from the chest in the rest pose.
+    rest_stands: bool,
+    /// Chains off the chest that are neither arms nor the neck.
+    ignored: Vec<String>,
+}
+
+/// Step 3's checks of a candidate trunk: legs and arms of like lengths,
+/// the arms and the neck among the chest's chains, and the legs pointing
+/// away from the chest (in the rest pose or the median sampled frame).
+fn trunk(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    pelvis: usize,
+    chest: usize,
+    legs: [usize; 2],
+) -> Result<Trunk, NotHumanoid> {
     let name = |j: usize| g.names[j].clone();
     // Leg/arm symmetry and the legs pointing away from the chest.
     let reach = |j: usize| g.len[j] + g.reach[j];
@@ -931,36 +1037,27 @@ fn body(
     let Some(neck_start) = neck_start else {
         return Err(NotHumanoid(format!("no neck above '{}'", name(chest))));
     };
+    Ok(Trunk {
+        hub,
+        arms,
+        neck_start,
+        rest_stands,
+        ignored,
+    })
+}
 
-    let mut picks: Vec<Pick> = (0..Canonical::COUNT)
-        .map(|_| Pick {
-            joint: None,
-            source: Source::Structure,
-            confidence: 0.0,
-            derive: None,
-        })
-        .collect();
-    let set = |picks: &mut Vec<Pick>, c: Canonical, j: usize, named: bool| {
-        picks[c.index()] = Pick {
-            joint: Some(j),
-            source: if named {
-                Source::Names
-            } else {
-                Source::Structure
-            },
-            confidence: if named { 0.95 } else { 0.8 },
-            derive: None,
-        };
-    };
-    let derive = |picks: &mut Vec<Pick>, c: Canonical, d: Derive| {
-        picks[c.index()] = Pick {
-            joint: None,
-            source: Source::Derived,
-            confidence: 0.5,
-            derive: Some(d),
-        };
-    };
-
+/// Step 4 on the trunk: the pelvis, spine and chest picks. Returns the
+/// neck when the chest's joint is named as one (then the chest is the
+/// spine chain's last joint), and whether the chest is left to derive.
+fn spine_and_chest(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    picks: &mut [Pick],
+    pelvis: usize,
+    chest: usize,
+    legs: [usize; 2],
+    hub: bool,
+) -> (Option<usize>, bool) {
     // Pelvis: a pelvis-named joint of the node, else of the node the legs
     // hang from, else the node.
     let node: Vec<usize> = (0..g.clip.joint_count())
@@ -986,12 +1083,7 @@ fn body(
             (0..g.clip.joint_count())
                 .find(|&j| g.rep[j] == carrier && role_of(tokens, j) == Some(Role::Pelvis))
         });
-    set(
-        &mut picks,
-        Canonical::Pelvis,
-        pj.unwrap_or(pelvis),
-        pj.is_some(),
-    );
+    set_pick(picks, Canonical::Pelvis, pj.unwrap_or(pelvis), pj.is_some());
 
     // Spine chain between the pelvis and the chest.
     let mut between = Vec::new();
@@ -1004,7 +1096,6 @@ fn body(
         j = p;
     }
     between.reverse();
-    let _ = spine_start;
     let chest_named_neck = role_of(tokens, chest) == Some(Role::Neck);
     let spine_c: Vec<usize> = g
         .candidates(tokens, g.rest[pelvis], &between, false)
@@ -1032,7 +1123,7 @@ fn body(
     };
     let spine_j = match best_spine {
         Some((_, j)) => {
-            set(&mut picks, Canonical::Spine, j, true);
+            set_pick(picks, Canonical::Spine, j, true);
             j
         }
         None => {
@@ -1064,11 +1155,11 @@ fn body(
                 });
             match pick {
                 Some(j) => {
-                    set(&mut picks, Canonical::Spine, j, false);
+                    set_pick(picks, Canonical::Spine, j, false);
                     j
                 }
                 None => {
-                    set(&mut picks, Canonical::Spine, chest, false);
+                    set_pick(picks, Canonical::Spine, chest, false);
                     chest
                 }
             }
@@ -1076,8 +1167,8 @@ fn body(
     };
     let chest_derived = match chest_j {
         Some(c) if c != spine_j => {
-            set(
-                &mut picks,
+            set_pick(
+                picks,
                 Canonical::Chest,
                 c,
                 role_of(tokens, c) == Some(Role::Chest),
@@ -1086,7 +1177,23 @@ fn body(
         }
         _ => true,
     };
+    (neck_from_chest, chest_derived)
+}
 
+/// Step 4 above the chest: the neck and head picks (a hub body's spine
+/// and chest, and a chest left to derive, on the pelvis → neck line).
+/// Returns the neck's joint.
+fn neck_and_head(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    picks: &mut [Pick],
+    chest: usize,
+    trunk: &Trunk,
+    neck_from_chest: Option<usize>,
+    chest_derived: bool,
+) -> Result<usize, NotHumanoid> {
+    let name = |j: usize| g.names[j].clone();
+    let (hub, neck_start) = (trunk.hub, trunk.neck_start);
     // Neck and head.
     let neck_path = g.path(neck_start);
     let neck_c = g.candidates(tokens, g.rest[chest], &neck_path, false);
@@ -1141,8 +1248,8 @@ fn body(
             (nj, neck_c[k + 1..].to_vec())
         }
     };
-    set(
-        &mut picks,
+    set_pick(
+        picks,
         Canonical::Neck,
         neck_j,
         role_of(tokens, neck_j) == Some(Role::Neck),
@@ -1150,8 +1257,8 @@ fn body(
     if hub {
         // No spine joint: spine and chest on the pelvis→neck line where the
         // procedural skeleton has them (0.19 and 0.6 of the way).
-        derive(
-            &mut picks,
+        derive_pick(
+            picks,
             Canonical::Spine,
             Derive::Between {
                 from: Canonical::Pelvis,
@@ -1159,8 +1266,8 @@ fn body(
                 t: 0.2,
             },
         );
-        derive(
-            &mut picks,
+        derive_pick(
+            picks,
             Canonical::Chest,
             Derive::Between {
                 from: Canonical::Pelvis,
@@ -1169,8 +1276,8 @@ fn body(
             },
         );
     } else if chest_derived {
-        derive(
-            &mut picks,
+        derive_pick(
+            picks,
             Canonical::Chest,
             Derive::Between {
                 from: Canonical::Spine,
@@ -1200,8 +1307,8 @@ fn body(
     match first_role(tokens, &head_c, |r| r == Role::Head).or_else(head_geo) {
         Some(k) => {
             let h = head_c[k];
-            set(
-                &mut picks,
+            set_pick(
+                picks,
                 Canonical::Head,
                 h,
                 role_of(tokens, h) == Some(Role::Head),
@@ -1223,21 +1330,165 @@ fn body(
                     t: 4.0 / 3.0,
                 },
             };
-            derive(&mut picks, Canonical::Head, d);
+            derive_pick(picks, Canonical::Head, d);
         }
     }
+    Ok(neck_j)
+}
 
-    // Limbs.
-    let leg = |start: usize| -> Result<Limb, NotHumanoid> { leg_chain(g, tokens, pelvis, start) };
-    let arm =
-        |start: usize| -> Result<Limb, NotHumanoid> { arm_chain(g, tokens, legs, chest, start) };
-    let l0 = leg(legs[0])?;
-    let l1 = leg(legs[1])?;
-    let a0 = arm(arms[0])?;
-    let a1 = arm(arms[1])?;
+/// Step 5's answer: the limbs sorted into left and right, and how.
+struct Sides {
+    left_leg: Vec<usize>,
+    right_leg: Vec<usize>,
+    left_arm: Vec<usize>,
+    right_arm: Vec<usize>,
+    forward_from: &'static str,
+    side_confidence: f64,
+    names_mirrored: bool,
+    sides_from_names: bool,
+}
 
+/// Step 5: left and right from the body's own frame (up = pelvis → neck
+/// `neck_j`, forward from the feet, else the knees, else the travel),
+/// else from the sides the names state; picks the limbs' joints
+/// (`limbs`: two legs, then two arms) on their sides.
+fn sides(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    picks: &mut [Pick],
+    pelvis: usize,
+    neck_j: usize,
+    limbs: [Limb; 4],
+) -> Sides {
     // Left/right from the body frame.
     let pj = picks[Canonical::Pelvis.index()].joint.unwrap_or(pelvis);
+    let [votes, leg_s, arm_s] = side_votes(g, pj, neck_j, &limbs);
+    let [l0, l1, a0, a1] = limbs;
+    let m = (0..3).find(|&m| votes[m] > 0.0 && leg_s[m].abs() > 0.1 * votes[m]);
+    let forward_from = match m {
+        Some(0) => "feet",
+        Some(1) => "knees",
+        Some(2) => "travel",
+        _ => "none",
+    };
+    // No forward direction (feet straight down or no toes, straight
+    // knees, no travel: the Biovision sample, mocapdata.com, a one-frame
+    // T-pose): the names' sides decide, each limb pair by the sides its
+    // joints' names state.
+    let named_sign = |a: &Limb, b: &Limb| -> Option<f64> {
+        let s = |l: &Limb| -> i32 {
+            l.picks
+                .iter()
+                .flatten()
+                .map(|&(j, _)| match tokens.get(j).and_then(|t| side(t)) {
+                    Some(Side::Left) => 1,
+                    Some(Side::Right) => -1,
+                    None => 0,
+                })
+                .sum()
+        };
+        match s(a).cmp(&s(b)) {
+            std::cmp::Ordering::Less => Some(-1.0),
+            std::cmp::Ordering::Greater => Some(1.0),
+            std::cmp::Ordering::Equal => None,
+        }
+    };
+    // Names that state no side (`joint_12`) leave the sides undecided
+    // (confidence 0: a skin asks for a rig map).
+    let (leg_named, arm_named) = (named_sign(&l0, &l1), named_sign(&a0, &a1));
+    let sides_from_names = m.is_none() && (leg_named.is_some() || arm_named.is_some());
+    let (leg_sign, arm_sign, conf) = match m {
+        Some(m) => (
+            leg_s[m],
+            arm_s[m],
+            (leg_s[m].abs().min(arm_s[m].abs()) / votes[m]).clamp(0.0, 1.0),
+        ),
+        None => (leg_named.unwrap_or(1.0), arm_named.unwrap_or(1.0), 0.0),
+    };
+    let (ll, rl) = if leg_sign >= 0.0 { (l0, l1) } else { (l1, l0) };
+    let (la, ra) = if arm_sign >= 0.0 { (a0, a1) } else { (a1, a0) };
+    let sc = if sides_from_names {
+        0.9
+    } else {
+        0.5 + 0.5 * conf
+    };
+    let mut named_sides = [0i32; 2];
+    let lim =
+        |picks: &mut [Pick], l: &Limb, cs: [Canonical; 4], s: Side, named_sides: &mut [i32; 2]| {
+            for (k, c) in cs.into_iter().enumerate() {
+                match l.picks[k] {
+                    Some((j, named)) => {
+                        set_pick(picks, c, j, named);
+                        picks[c.index()].confidence *= sc;
+                        match tokens.get(j).and_then(|t| side(t)) {
+                            Some(ns) if ns == s => named_sides[0] += 1,
+                            Some(_) => named_sides[1] += 1,
+                            None => {}
+                        }
+                    }
+                    None => {
+                        if let Some(d) = &l.derive_end {
+                            derive_pick(picks, c, d.clone());
+                            picks[c.index()].confidence *= sc;
+                        }
+                    }
+                }
+            }
+        };
+    use Canonical as C;
+    lim(
+        picks,
+        &ll,
+        [C::LHip, C::LKnee, C::LAnkle, C::LToe],
+        Side::Left,
+        &mut named_sides,
+    );
+    lim(
+        picks,
+        &rl,
+        [C::RHip, C::RKnee, C::RAnkle, C::RToe],
+        Side::Right,
+        &mut named_sides,
+    );
+    lim(
+        picks,
+        &la,
+        [C::LShoulder, C::LElbow, C::LWrist, C::LToe],
+        Side::Left,
+        &mut named_sides,
+    );
+    lim(
+        picks,
+        &ra,
+        [C::RShoulder, C::RElbow, C::RWrist, C::RToe],
+        Side::Right,
+        &mut named_sides,
+    );
+    // Arms fill 3 joints; the 4th slot above is a placeholder never set for arms.
+    // Toe derivation needs the side's canonical ankle.
+    for (c, a) in [(C::LToe, C::LAnkle), (C::RToe, C::RAnkle)] {
+        if let Some(Derive::ToeFromAnkle { ankle, .. }) = &mut picks[c.index()].derive {
+            *ankle = a;
+        }
+    }
+    Sides {
+        left_leg: ll.subtree,
+        right_leg: rl.subtree,
+        left_arm: la.subtree,
+        right_arm: ra.subtree,
+        forward_from,
+        side_confidence: conf,
+        names_mirrored: named_sides[1] > named_sides[0],
+        sides_from_names,
+    }
+}
+
+/// Step 5's votes: per way of telling forward (the feet, the knees, the
+/// travel), summed over the sampled poses, its weight and how far the
+/// first leg and the first arm (of `limbs`: two legs, then two arms) lie
+/// to the body's left of the second (up = pelvis `pj` → neck `neck_j`).
+fn side_votes(g: &Geo, pj: usize, neck_j: usize, limbs: &[Limb; 4]) -> [[f64; 3]; 3] {
+    let [l0, l1, a0, a1] = limbs;
     let toe_pt = |l: &Limb, p: &[DVec3], r: &[DQuat]| -> Option<DVec3> {
         match (l.picks[3], &l.derive_end) {
             (Some((t, _)), _) => Some(p[t]),
@@ -1291,7 +1542,7 @@ fn body(
         f.get(f.len() / 2)
             .is_some_and(|&m| m > 15f64.to_radians().sin())
     };
-    let feet_point = foot_across(&l0) && foot_across(&l1);
+    let feet_point = foot_across(l0) && foot_across(l1);
     let mut votes = [0.0f64; 3]; // feet, knees, travel
     let mut leg_s = [0.0f64; 3];
     let mut arm_s = [0.0f64; 3];
@@ -1302,7 +1553,7 @@ fn body(
         let up = (p[neck_j] - p[pj]).normalize_or_zero();
         let flat = |v: DVec3| v - up * v.dot(up);
         let mut fw = [DVec3::ZERO; 3];
-        if feet_point && let (Some(t0), Some(t1)) = (toe_pt(&l0, p, r), toe_pt(&l1, p, r)) {
+        if feet_point && let (Some(t0), Some(t1)) = (toe_pt(l0, p, r), toe_pt(l1, p, r)) {
             // The sole: ankle→toe across the shin (its part along the
             // knee→ankle axis removed). A foot stands at right angles to
             // its shin, so this points forward however the leg swings and
@@ -1315,13 +1566,13 @@ fn body(
                 let v = t - a;
                 v - shin * v.dot(shin)
             };
-            let (a0, a1) = (pt(&l0, 2, p), pt(&l1, 2, p));
+            let (a0, a1) = (pt(l0, 2, p), pt(l1, 2, p));
             let len = t0.distance(a0) + t1.distance(a1);
             if len > 0.0 {
-                fw[0] = (flat(sole(&l0, t0)) + flat(sole(&l1, t1))) / len;
+                fw[0] = (flat(sole(l0, t0)) + flat(sole(l1, t1))) / len;
             }
         }
-        for l in [&l0, &l1] {
+        for l in [l0, l1] {
             let (h, k, a) = (pt(l, 0, p), pt(l, 1, p), pt(l, 2, p));
             let axis = (a - h).normalize_or_zero();
             let off = (k - h) - axis * (k - h).dot(axis);
@@ -1341,141 +1592,11 @@ fn body(
             }
             let left = up.cross(fw[m] / w);
             votes[m] += w;
-            leg_s[m] += w
-                * (mean3(&l0, p) - mean3(&l1, p))
-                    .normalize_or_zero()
-                    .dot(left);
-            arm_s[m] += w
-                * (mean3(&a0, p) - mean3(&a1, p))
-                    .normalize_or_zero()
-                    .dot(left);
+            leg_s[m] += w * (mean3(l0, p) - mean3(l1, p)).normalize_or_zero().dot(left);
+            arm_s[m] += w * (mean3(a0, p) - mean3(a1, p)).normalize_or_zero().dot(left);
         }
     }
-    let m = (0..3).find(|&m| votes[m] > 0.0 && leg_s[m].abs() > 0.1 * votes[m]);
-    let forward_from = match m {
-        Some(0) => "feet",
-        Some(1) => "knees",
-        Some(2) => "travel",
-        _ => "none",
-    };
-    // No forward direction (feet straight down or no toes, straight
-    // knees, no travel: the Biovision sample, mocapdata.com, a one-frame
-    // T-pose): the names' sides decide, each limb pair by the sides its
-    // joints' names state.
-    let named_sign = |a: &Limb, b: &Limb| -> Option<f64> {
-        let s = |l: &Limb| -> i32 {
-            l.picks
-                .iter()
-                .flatten()
-                .map(|&(j, _)| match tokens.get(j).and_then(|t| side(t)) {
-                    Some(Side::Left) => 1,
-                    Some(Side::Right) => -1,
-                    None => 0,
-                })
-                .sum()
-        };
-        match s(a).cmp(&s(b)) {
-            std::cmp::Ordering::Less => Some(-1.0),
-            std::cmp::Ordering::Greater => Some(1.0),
-            std::cmp::Ordering::Equal => None,
-        }
-    };
-    // Names that state no side (`joint_12`) leave the sides undecided
-    // (confidence 0: a skin asks for a rig map).
-    let (leg_named, arm_named) = (named_sign(&l0, &l1), named_sign(&a0, &a1));
-    let sides_from_names = m.is_none() && (leg_named.is_some() || arm_named.is_some());
-    let (leg_sign, arm_sign, conf) = match m {
-        Some(m) => (
-            leg_s[m],
-            arm_s[m],
-            (leg_s[m].abs().min(arm_s[m].abs()) / votes[m]).clamp(0.0, 1.0),
-        ),
-        None => (leg_named.unwrap_or(1.0), arm_named.unwrap_or(1.0), 0.0),
-    };
-    let (ll, rl) = if leg_sign >= 0.0 { (l0, l1) } else { (l1, l0) };
-    let (la, ra) = if arm_sign >= 0.0 { (a0, a1) } else { (a1, a0) };
-    let sc = if sides_from_names {
-        0.9
-    } else {
-        0.5 + 0.5 * conf
-    };
-    let mut named_sides = [0i32; 2];
-    let lim = |picks: &mut Vec<Pick>,
-               l: &Limb,
-               cs: [Canonical; 4],
-               s: Side,
-               named_sides: &mut [i32; 2]| {
-        for (k, c) in cs.into_iter().enumerate() {
-            match l.picks[k] {
-                Some((j, named)) => {
-                    set(picks, c, j, named);
-                    picks[c.index()].confidence *= sc;
-                    match tokens.get(j).and_then(|t| side(t)) {
-                        Some(ns) if ns == s => named_sides[0] += 1,
-                        Some(_) => named_sides[1] += 1,
-                        None => {}
-                    }
-                }
-                None => {
-                    if let Some(d) = &l.derive_end {
-                        derive(picks, c, d.clone());
-                        picks[c.index()].confidence *= sc;
-                    }
-                }
-            }
-        }
-    };
-    use Canonical as C;
-    lim(
-        &mut picks,
-        &ll,
-        [C::LHip, C::LKnee, C::LAnkle, C::LToe],
-        Side::Left,
-        &mut named_sides,
-    );
-    lim(
-        &mut picks,
-        &rl,
-        [C::RHip, C::RKnee, C::RAnkle, C::RToe],
-        Side::Right,
-        &mut named_sides,
-    );
-    lim(
-        &mut picks,
-        &la,
-        [C::LShoulder, C::LElbow, C::LWrist, C::LToe],
-        Side::Left,
-        &mut named_sides,
-    );
-    lim(
-        &mut picks,
-        &ra,
-        [C::RShoulder, C::RElbow, C::RWrist, C::RToe],
-        Side::Right,
-        &mut named_sides,
-    );
-    // Arms fill 3 joints; the 4th slot above is a placeholder never set for arms.
-    // Toe derivation needs the side's canonical ankle.
-    for (c, a) in [(C::LToe, C::LAnkle), (C::RToe, C::RAnkle)] {
-        if let Some(Derive::ToeFromAnkle { ankle, .. }) = &mut picks[c.index()].derive {
-            *ankle = a;
-        }
-    }
-    Ok(Body {
-        picks,
-        left_leg: ll.subtree,
-        right_leg: rl.subtree,
-        left_arm: la.subtree,
-        right_arm: ra.subtree,
-        forward_from,
-        side_confidence: conf,
-        names_mirrored: named_sides[1] > named_sides[0],
-        sides_from_names,
-        rest_stands,
-        reference_frame: g.from_frame,
-        reference: g.rest.clone(),
-        ignored,
-    })
+    [votes, leg_s, arm_s]
 }
 
 /// The neck and the two arms among four or more significant chains off

@@ -2,7 +2,7 @@
 //! Sec. 4.1): volumetric shape histograms minimised over rotation about the
 //! vertical ([`histogram`] on [`voxel`] occupancy), vertex distance with a
 //! velocity term ([`vertex`]), and skeletal distance (Eq. 28,
-//! [`crate::skeleton::skeleton_distance`]); per-frame descriptors
+//! [`crate::pose::measure::skeleton_distance`]); per-frame descriptors
 //! ([`sets`]) compared all-pairs in parallel ([`matrix`]).
 
 pub mod colour;

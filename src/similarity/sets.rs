@@ -5,7 +5,7 @@
 use super::histogram::{self, DESCRIPTOR_LEN, PHI_SUB, ShapeGrid, ShapeKernel, ShapeScratch};
 use super::matrix::PairDistance;
 use super::vertex::{self, VertexOptions};
-use crate::skeleton::{Pose, skeleton_distance};
+use crate::pose::{Pose, measure::skeleton_distance};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};

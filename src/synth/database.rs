@@ -5,7 +5,7 @@
 //! is kept as ground truth.
 //!
 //! Skinning: [`crate::deform::lbs::skin_into`]; softness:
-//! [`crate::deform::soft::softness`]. Retargeting: [`crate::rig::retarget`] (the torso turns by the clip's
+//! [`crate::deform::soft::softness`]. Retargeting: [`crate::pose::retarget`] (the torso turns by the clip's
 //! rotations since its neutral reference, the limbs take the clip's bone
 //! directions, bone lengths are the character's).
 //!
@@ -17,10 +17,10 @@
 
 use crate::deform::lbs::skin_into;
 use crate::deform::soft::softness;
+use crate::embed::Embedding;
 use crate::mesh::Mesh;
-use crate::rig::embed::Embedding;
-use crate::rig::retarget::{Reference, retarget};
-use crate::skeleton::Pose;
+use crate::pose::Pose;
+use crate::pose::retarget::{Reference, retarget};
 use glam::DVec3;
 use rayon::prelude::*;
 

@@ -6,8 +6,8 @@
 //! crossings, and one quad per crossed grid edge joining the four cells
 //! around it, split into two triangles.
 
+use crate::embed::landmarks::Landmarks;
 use crate::mesh::Mesh;
-use crate::rig::embed::landmarks::Landmarks;
 use glam::DVec3;
 
 /// A capsule `(a, b, radius)`.
@@ -549,9 +549,9 @@ mod tests {
         let b = m.bounds();
         assert!((b.max[1] - b.min[1] - 1.75).abs() < 0.05);
         // The landmarks embed a rig with one connected region per part.
-        let rig = crate::rig::embed::Embedding::new(&m, &humanoid_landmarks(&m), None).unwrap();
-        let nb = crate::rig::embed::parts::neighbours(m.vertex_count(), m.triangles());
-        let counts = crate::rig::embed::parts::piece_counts(&rig.labels, &nb);
+        let rig = crate::embed::Embedding::new(&m, &humanoid_landmarks(&m), None).unwrap();
+        let nb = crate::embed::parts::neighbours(m.vertex_count(), m.triangles());
+        let counts = crate::embed::parts::piece_counts(&rig.labels, &nb);
         assert!(counts.iter().all(|&c| c <= 1), "{counts:?} {:?}", rig.notes);
     }
 }

@@ -637,7 +637,7 @@ mod tests {
     fn facing_from_the_mesh_follows_a_turn() {
         let mesh = crate::synth::humanoid::humanoid_mesh(crate::synth::humanoid::DEMO_GRID);
         let lm = crate::synth::humanoid::humanoid_landmarks(&mesh);
-        let rig = crate::rig::embed::Embedding::new(&mesh, &lm, None).unwrap();
+        let rig = crate::embed::Embedding::new(&mesh, &lm, None).unwrap();
         let want = DVec3::from_array(rig.facing);
         for turn in [0.0, 1.0, 2.5, -2.0] {
             let q = glam::DQuat::from_rotation_y(turn);

@@ -6,11 +6,13 @@ use super::confluent::{Confluent, ConfluentError};
 use super::markers::Marker;
 use super::scan::PreparedScan;
 use super::source::{FootGround, MarkerMotion, TemplateMarkers, from_skeleton, from_template};
+use crate::embed::Embedding;
+use crate::embed::parts::Part;
 use crate::mesh::{Bounds, MeshSequence};
-use crate::rig::embed::Embedding;
-use crate::rig::embed::parts::Part;
-use crate::rig::retarget::{Reference, Toes, clip_support, ground_tilt, leg_length, retarget_toes};
-use crate::skeleton::Pose;
+use crate::pose::Pose;
+use crate::pose::retarget::{
+    Reference, Toes, clip_support, ground_tilt, leg_length, retarget_toes,
+};
 use glam::{DMat3, DQuat, DVec3};
 use std::collections::HashMap;
 
@@ -168,12 +170,12 @@ pub fn mocap_motion(
 /// nearest of ±X, ±Y, ±Z (scans are stored axis-aligned; the embedding's
 /// estimate leans with the pose, e.g. 9° on the samba scan).
 pub fn up_axis(rig: &Embedding) -> DVec3 {
-    crate::rig::embed::joints::nearest_axis(DVec3::from_array(rig.up))
+    crate::embed::axes::nearest_axis(DVec3::from_array(rig.up))
 }
 
 /// Where the scan's feet touch the floor per frame ([`FootGround`]):
 /// the clip's contacts as the kernel reads them (levelled,
-/// [`crate::rig::retarget::Support::touch`]), each foot's vertices from
+/// [`crate::pose::retarget::Support::touch`]), each foot's vertices from
 /// the rig's parts. `None` when the rig's labels are not the mesh's or a
 /// foot has no vertex.
 fn foot_ground(

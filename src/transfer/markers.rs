@@ -12,10 +12,10 @@
 //! marker's name (`bone/ring/ray`) depends only on the rule, so markers made
 //! with the same options on two characters pair up by name.
 
+use crate::embed::Embedding;
+use crate::embed::parts::Part;
 use crate::mesh::Mesh;
 use crate::rig::Canonical;
-use crate::rig::embed::Embedding;
-use crate::rig::embed::parts::Part;
 use crate::util::fsutil::{FsError, read_small_text, write_atomic};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};

@@ -5,11 +5,11 @@
 //! cannot be factored gives a typed error from [`super::Confluent::new`].
 
 use super::markers::{Marker, MarkerError, MarkerFile, MarkerOptions, generate};
+use crate::embed::landmarks::{Landmarks, Mark};
+use crate::embed::{EmbedError, Embedding};
 use crate::mesh::Mesh;
 use crate::mesh::components::components;
 use crate::mesh::repair::{RepairOptions, RepairReport, repair};
-use crate::rig::embed::landmarks::{Landmarks, Mark};
-use crate::rig::embed::{EmbedError, Embedding};
 use serde::Serialize;
 use std::collections::HashMap;
 

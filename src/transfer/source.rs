@@ -14,8 +14,8 @@
 //!   body heights.
 
 use crate::mesh::frames::{polar, triangle_frame};
+use crate::pose::Pose;
 use crate::rig::Canonical;
-use crate::skeleton::Pose;
 use glam::{DMat3, DQuat, DVec3};
 
 /// Marker rotations and targets for every frame, row-major frames × markers.
@@ -33,7 +33,7 @@ pub struct MarkerMotion {
 }
 
 /// The floor each foot of the scan touches per frame, from the clip's
-/// support (the kernel's [`crate::rig::retarget::Support::touch`]): the
+/// support (the kernel's [`crate::pose::retarget::Support::touch`]): the
 /// kernel stands a sole model of the skeleton (toe joint, heel point) on
 /// the ground, but the surface the markers deform has its own sole: on
 /// the samba self-transfer the solved feet stood a median 1.7 cm above

@@ -167,7 +167,7 @@ pub fn procedural_walk_run_database(db: &Path, name: &str, grid: f64, fps: f64) 
 /// The project's procedural humanoid meshed at `grid` metres, with its rig
 /// embedded from its landmarks (`SynthCharacter::humanoid` at any grid).
 pub fn humanoid_character(grid: f64) -> surfmotion::jobs::SynthCharacter {
-    use surfmotion::rig::embed::Embedding;
+    use surfmotion::embed::Embedding;
     use surfmotion::synth::humanoid::{humanoid_landmarks, humanoid_landmarks_json, humanoid_mesh};
     let rest = humanoid_mesh(grid);
     let rig = Embedding::new(&rest, &humanoid_landmarks(&rest), None).unwrap();

@@ -12,7 +12,7 @@
 //! carried along the floor reads its speed per frame.
 
 use super::EvalError;
-use crate::rig::embed::parts::Part;
+use crate::embed::parts::Part;
 use glam::DVec3;
 use serde::Serialize;
 

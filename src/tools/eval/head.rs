@@ -33,7 +33,7 @@
 
 use super::EvalError;
 use super::summary::Summary;
-use crate::rig::embed::parts::Part;
+use crate::embed::parts::Part;
 use glam::DVec3;
 
 /// Options of [`HeadTorso`].

@@ -15,8 +15,8 @@
 //! leg turned out at the hip moves the bend out of the sagittal plane,
 //! which only shrinks `(u × s)·L`: the measure errs towards zero there.
 
+use crate::pose::Pose;
 use crate::rig::Canonical;
-use crate::skeleton::Pose;
 
 /// Hyper-extension of the left and right knee of `p` (degrees, ≥ 0).
 pub fn knee_hyperextension(p: &Pose) -> [f64; 2] {

@@ -14,9 +14,9 @@ use super::summary::Summary;
 use super::triangles::{OffRing, RestTriangles, TurnedOverCount};
 use crate::db::Character;
 use crate::deform::TurnedOver;
+use crate::embed::Embedding;
+use crate::embed::regress::Regressor;
 use crate::mesh::Mesh;
-use crate::rig::embed::Embedding;
-use crate::rig::embed::regress::Regressor;
 use glam::DVec3;
 use serde::Serialize;
 
@@ -127,19 +127,19 @@ pub struct Plausibility {
     pub reference: Option<Reference>,
     /// |head-to-trunk angle| of the driving clip on its own skeleton,
     /// relative to its neutral carriage (degrees;
-    /// [`crate::rig::retarget::clip_head_trunk_deg`]), when known. A clip
+    /// [`crate::pose::retarget::clip_head_trunk_deg`]), when known. A clip
     /// whose head moves further than the database's does (a bow, a kick)
     /// is held to its own range: the head line is the larger p95 + margin.
     pub clip_head_torso_deg: Option<Summary>,
     /// The driving clip's own foot glide while touching its ground, scaled
     /// to the character (cm per touching foot-frame;
-    /// [`crate::rig::retarget::clip_foot_glide_cm`]), when known: a walk's
+    /// [`crate::pose::retarget::clip_foot_glide_cm`]), when known: a walk's
     /// feet pass through the touching band at heel strike and toe-off, so
     /// the result is warned about only when it glides more than its clip.
     pub clip_foot_glide_cm_per_frame: Option<f64>,
     /// Whether floating and penetration are measured from the driving
     /// clip's own ground under each foot (its floor raised under each
-    /// footfall on a step, [`crate::rig::retarget::foot_ground_offsets`])
+    /// footfall on a step, [`crate::pose::retarget::foot_ground_offsets`])
     /// rather than the floor.
     pub on_clip_ground: bool,
     /// Where the result leaves the reference (or the absolute limits).
@@ -260,12 +260,12 @@ impl Checker {
         c.floor = floor_height(&lowest);
         // The head's zero is the character's neutral: its rest frame when
         // that stands upright, else the database frame nearest neutral
-        // (`rig::retarget::character_neutral`), the attitude a clip standing
+        // (`pose::retarget::character_neutral`), the attitude a clip standing
         // neutrally is retargeted onto. Measured from a bent rest frame (a
         // stride, a bow) every frame would read its difference from that
         // pose.
-        let neutral = crate::rig::retarget::character_neutral(ch.rest_pose(), ch.poses());
-        if let crate::rig::retarget::NeutralSource::Frame(i) = neutral.source
+        let neutral = crate::pose::retarget::character_neutral(ch.rest_pose(), ch.poses());
+        if let crate::pose::retarget::NeutralSource::Frame(i) = neutral.source
             && i < ch.frame_count()
         {
             ch.frame_metres(i as u32, &mut buf);
@@ -427,7 +427,7 @@ impl Checker {
     /// measured from the ground under each foot (left, right) raised by
     /// `raised[f][t]` metres above the floor at frame `t` (the driving
     /// clip's own ground under that foot,
-    /// [`crate::rig::retarget::foot_ground_offsets`]), when given.
+    /// [`crate::pose::retarget::foot_ground_offsets`]), when given.
     pub fn measure_on(
         &self,
         frames: &[[f64; 3]],
@@ -632,7 +632,7 @@ fn turned_over_warning(p: &Plausibility, l: &Limits) -> Option<String> {
 
 impl Plausibility {
     /// Sets the driving clip's own head-to-trunk angles (`series`, per
-    /// frame, degrees; [`crate::rig::retarget::clip_head_trunk_deg`]) and
+    /// frame, degrees; [`crate::pose::retarget::clip_head_trunk_deg`]) and
     /// recomputes the warnings with `limits`: the head is then held to the
     /// larger of the captured range and the clip's own.
     pub fn with_clip_head(mut self, series: &[f64], limits: &Limits) -> Self {
@@ -643,7 +643,7 @@ impl Plausibility {
 
     /// Sets the driving clip's own foot glide while touching its ground
     /// (cm per foot-frame, scaled to the character;
-    /// [`crate::rig::retarget::clip_foot_glide_cm`]) and recomputes the
+    /// [`crate::pose::retarget::clip_foot_glide_cm`]) and recomputes the
     /// warnings with `limits`: the feet are then warned about only when
     /// they glide more than the larger of the captured glide and the clip's.
     pub fn with_clip_glide(mut self, cm_per_frame: f64, limits: &Limits) -> Self {

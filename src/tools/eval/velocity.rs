@@ -4,7 +4,7 @@
 //! character's bones) and `o` the skeleton extracted from the output mesh;
 //! in cm/frame, with the standard deviation of the per-frame means.
 
-use crate::skeleton::Pose;
+use crate::pose::Pose;
 use serde::Serialize;
 
 /// Joint-velocity error of an output against its query.

@@ -65,7 +65,7 @@ pub fn json_kind(v: &serde_json::Value) -> Option<&'static str> {
         "transfer report"
     } else if !o.is_empty()
         && o.iter()
-            .all(|(k, v)| crate::rig::embed::parts::Part::from_name(k).is_some() && v.is_array())
+            .all(|(k, v)| crate::embed::parts::Part::from_name(k).is_some() && v.is_array())
         && o.values()
             .flat_map(|v| v.as_array().into_iter().flatten())
             .all(|x| x.is_u64())
@@ -73,7 +73,7 @@ pub fn json_kind(v: &serde_json::Value) -> Option<&'static str> {
         "parts"
     } else if o
         .keys()
-        .any(|k| crate::rig::embed::landmarks::Landmark::from_name(k).is_some())
+        .any(|k| crate::embed::landmarks::Landmark::from_name(k).is_some())
     {
         "landmarks"
     } else {
@@ -86,7 +86,7 @@ pub fn json_kind(v: &serde_json::Value) -> Option<&'static str> {
 /// and the other JSON files the project writes (rig, rig map, graph cache,
 /// skeletons, reports), told apart by [`json_kind`].
 pub(super) fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
-    use crate::rig::embed::landmarks::{Landmark, Landmarks, Mark};
+    use crate::embed::landmarks::{Landmark, Landmarks, Mark};
     let err = |e: String| InspectError::Json(e);
     let text = crate::util::fsutil::read_text(path).map_err(|e| err(e.to_string()))?;
     let v: serde_json::Value =

@@ -3,8 +3,8 @@
 //! below, all at one scale.
 
 use super::{Image, label_colour};
+use crate::embed::Embedding;
 use crate::rig::Canonical;
-use crate::rig::embed::Embedding;
 use glam::DVec3;
 
 /// What a contact sheet shows. The defaults are the CLI's.
@@ -91,7 +91,7 @@ pub fn preview_image(
 pub fn panel_facing(frames: &[&[[f64; 3]]], at: usize, rig: Option<&Embedding>) -> DVec3 {
     if let Some(f) = rig
         .zip(frames.get(at))
-        .and_then(|(r, p)| rig_facing(r, &r.skeleton(p)))
+        .and_then(|(r, p)| rig_facing(r, &r.frame_joints(p)))
     {
         return f;
     }
@@ -131,7 +131,7 @@ pub fn write_preview(
 
 /// The character's left-right line in `j` (hips and shoulders, each
 /// normalised, across `up`).
-fn left_of(j: &crate::skeleton::Pose, up: DVec3) -> DVec3 {
+fn left_of(j: &crate::pose::Pose, up: DVec3) -> DVec3 {
     let across = |l: Canonical, r: Canonical| {
         let d = j[l.index()] - j[r.index()];
         (d - up * d.dot(up)).normalize_or_zero()
@@ -143,7 +143,7 @@ fn left_of(j: &crate::skeleton::Pose, up: DVec3) -> DVec3 {
 /// and shoulders (left × up), signed as the rig's own rest facing is
 /// against its rest skeleton (so a rig whose sides are named the other
 /// way round still faces forward). `None` when the skeleton has no width.
-pub fn rig_facing(r: &Embedding, j: &crate::skeleton::Pose) -> Option<DVec3> {
+pub fn rig_facing(r: &Embedding, j: &crate::pose::Pose) -> Option<DVec3> {
     let rest_up = DVec3::from_array(r.up).normalize_or(DVec3::Y);
     let rest = left_of(&r.joints.map(DVec3::from_array), rest_up).cross(rest_up);
     let sign = if rest.dot(DVec3::from_array(r.facing)) < 0.0 {

@@ -35,8 +35,12 @@
 //! stack); no heap allocation.
 
 use crate::mocap::{Channel, Clip, ClipError, Joint, JointId};
+use crate::pose::{
+    Pose,
+    measure::{BVH_NAMES, extracted_clip},
+    pose_rotations,
+};
 use crate::rig::Canonical;
-use crate::skeleton::{BVH_NAMES, Pose, extracted_clip, pose_rotations};
 use glam::{DQuat, DVec3};
 
 const N: usize = Canonical::COUNT;

@@ -319,7 +319,7 @@ impl Landmarks {
         let p = mesh.positions();
         let up = match (lm.point(Landmark::Chin, p), lm.point(Landmark::Groin, p)) {
             (Some(c), Some(g)) => {
-                super::joints::body_up(glam::DVec3::from_array(c) - glam::DVec3::from_array(g))
+                super::axes::body_up(glam::DVec3::from_array(c) - glam::DVec3::from_array(g))
             }
             _ => glam::DVec3::Y,
         };

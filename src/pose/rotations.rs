@@ -5,10 +5,10 @@
 //! `Σ d oᵀ`) for a joint with several; end joints inherit their parent's.
 //! Twist about a bone is not observable from positions and is carried down
 //! from the parent. Drives linear blend skinning and pose retargeting;
-//! [`crate::skeleton`] re-exports these and builds BVH clips from poses.
+//! [`crate::pose::measure`] builds BVH clips from poses.
 
-use super::canonical::Canonical;
 use crate::mesh::frames::polar;
+use crate::rig::Canonical;
 use glam::{DMat3, DQuat, DVec3};
 
 /// Canonical joint positions of one frame, [`Canonical::ALL`] order.

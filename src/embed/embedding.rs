@@ -1,32 +1,18 @@
-//! Rig embedding: from a few landmarks on a character's rest frame to the
-//! canonical joints inside it, bone-heat skin weights, contiguous body-part
-//! labels with overlapping regions, and per-joint regressors that give the
-//! skeleton of any frame of the character's sequences (Huang et al. 2015,
-//! Sec. 3, skeleton extraction).
+//! The [`Embedding`] of a character's rig, made once from its rest frame
+//! ([`Embedding::new`]: joints placed from landmarks, bone-heat skin,
+//! contiguous parts and overlapping regions, per-joint regressors), its
+//! file form and the joints it reads off any frame.
 
-pub mod check;
-pub mod heat;
-pub mod joints;
-pub mod landmarks;
-pub mod midplane;
-pub mod parts;
-pub mod regress;
-pub mod section;
-pub mod skin;
-pub mod surface;
-
-pub use check::{EmbedCheck, check};
-
+use super::heat::{Bone, bone_heat, sparsify};
+use super::joints::{JointEstimate, place_joints};
+use super::landmarks::{LandmarkError, Landmarks};
+use super::parts::{Part, contiguous_labels, make_contiguous, neighbours, part_weights, regions};
+use super::regress::Regressor;
 use crate::mesh::Mesh;
 use crate::mesh::solver::SolveError;
 use crate::rig::Canonical;
 use crate::util::fsutil::{FsError, read_text, write_atomic};
 use glam::DVec3;
-use heat::{Bone, bone_heat, sparsify};
-use joints::{JointEstimate, place_joints};
-use landmarks::{LandmarkError, Landmarks};
-use parts::{Part, contiguous_labels, make_contiguous, neighbours, part_weights, regions};
-use regress::Regressor;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -271,12 +257,12 @@ impl Embedding {
     ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
         check_body(mesh)?;
-        // The vertical as `place_joints` takes it ([`joints::body_up`]).
+        // The vertical as `place_joints` takes it ([`super::axes::body_up`]).
         let up = match (
-            lm.point(landmarks::Landmark::Chin, p),
-            lm.point(landmarks::Landmark::Groin, p),
+            lm.point(super::landmarks::Landmark::Chin, p),
+            lm.point(super::landmarks::Landmark::Groin, p),
         ) {
-            (Some(c), Some(g)) => joints::body_up(DVec3::from_array(c) - DVec3::from_array(g)),
+            (Some(c), Some(g)) => super::axes::body_up(DVec3::from_array(c) - DVec3::from_array(g)),
             _ => DVec3::Y,
         };
         lm.validate(p, t, up.to_array())?;
@@ -292,7 +278,7 @@ impl Embedding {
     pub fn assemble(
         mesh: &Mesh,
         est: JointEstimate,
-        w: &heat::Weights,
+        w: &super::heat::Weights,
         parts: Option<Vec<u8>>,
     ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
@@ -336,13 +322,13 @@ impl Embedding {
     }
 
     /// The joints of a frame by the regressors, [`Canonical::ALL`] order.
-    pub fn skeleton(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
+    pub fn frame_joints(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
         std::array::from_fn(|j| self.regressors[j].apply(positions))
     }
 
     /// The joints of a frame as plain centres of each joint's vertex set
     /// (the part-centroid skeleton of Huang et al. 2015, Sec. 3).
-    pub fn centroid_skeleton(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
+    pub fn centroid_joints(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
         std::array::from_fn(|j| self.regressors[j].centroid(positions))
     }
 

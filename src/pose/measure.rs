@@ -11,6 +11,7 @@
 //! skeletons into BVH clips any mocap viewer can play.
 
 use crate::mocap::{Channel, Clip, ClipError, Joint, JointId, PointConvention, Units, UpAxis};
+use crate::pose::{Pose, children, pose_rotations};
 use crate::rig::Canonical;
 use glam::{DQuat, DVec3};
 
@@ -37,8 +38,6 @@ pub const BVH_NAMES: [&str; Canonical::COUNT] = [
     "RightFoot",
     "RightToeBase",
 ];
-
-pub use crate::rig::pose::{Pose, children, pose_rotations};
 
 /// A BVH-ready clip of poses on a skeleton whose bone offsets are `rest`'s:
 /// the root carries the pelvis position, every joint its local rotation.

@@ -210,7 +210,7 @@ fn frame_of(
 ) -> JointEstimate {
     use Canonical as C;
     let j = |c: C| joints[c.index()];
-    let up = super::joints::body_up(j(C::Head) - j(C::Pelvis));
+    let up = super::axes::body_up(j(C::Head) - j(C::Pelvis));
     let side = (j(C::LHip) - j(C::RHip)) + (j(C::LShoulder) - j(C::RShoulder));
     let left = (side - up * side.dot(up)).normalize_or(up.any_orthonormal_vector());
     let facing = left.cross(up);

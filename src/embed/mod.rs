@@ -1,0 +1,23 @@
+//! Rig embedding: from a few landmarks on a character's rest frame to the
+//! canonical joints inside it, bone-heat skin weights, contiguous body-part
+//! labels with overlapping regions, and per-joint regressors that give the
+//! skeleton of any frame of the character's sequences (Huang et al. 2015,
+//! Sec. 3, skeleton extraction).
+
+pub mod axes;
+pub mod check;
+mod embedding;
+pub mod frames;
+pub mod heat;
+pub mod joints;
+pub mod landmarks;
+pub mod midplane;
+pub mod parts;
+pub mod regress;
+pub mod rigid;
+pub mod section;
+pub mod skin;
+pub mod surface;
+
+pub use check::{EmbedCheck, check};
+pub use embedding::{EmbedError, Embedding, bones, bones_of, check_body, parse_parts};

@@ -1,0 +1,374 @@
+//! The clip's ground: levelling its floor and the supports its feet stand
+//! on (floor and steps).
+
+use crate::pose::Pose;
+use crate::rig::Canonical;
+use glam::{DQuat, DVec3};
+
+use Canonical as C;
+
+/// Lowest ankle or toe joint height of a pose.
+pub(super) fn foot_height(p: &Pose) -> f64 {
+    [C::LAnkle, C::LToe, C::RAnkle, C::RToe]
+        .iter()
+        .map(|c| p[c.index()].y)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Where a clip stands: its floor and, per frame, the height of the
+/// ground its planted foot stands on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Support {
+    /// The clip's floor: the 5th percentile of its lowest ankle or toe
+    /// joint over the frames.
+    pub floor: f64,
+    /// Per frame, the support under the clip's lowest planted foot when it
+    /// touches it (its lowest joint within 3 cm); `None` in the air. The
+    /// lowest of the two feet's [`Support::touch`].
+    pub ground: Vec<Option<f64>>,
+    /// Per foot (left, right) and frame, the support the foot touches: its
+    /// footfall's when its lowest joint is within 3 cm of it, the floor
+    /// when within 3 cm of the floor; `None` otherwise.
+    pub touch: [Vec<Option<f64>>; 2],
+    /// Per foot and frame, the ground under the foot: the support it
+    /// touches; in the air, the higher of the last support it touched and
+    /// the next when its lowest joint is above that one's top (a heel
+    /// striking a block, a heel rising on it), else the lower (a foot
+    /// stepping down from a block, or leaving the floor beside one, is
+    /// over the floor); the only one before its first touch or after its
+    /// last; `None` for a foot that never touches.
+    pub under: [Vec<Option<f64>>; 2],
+    /// Per foot and frame, whether the foot stands on a footfall's
+    /// support: its lowest joint within the contact band of the height
+    /// the footfall holds, on the floor, a step, or a block too low to
+    /// be told from the floor (3-6 cm, which it does not touch).
+    pub held: [Vec<bool>; 2],
+    /// Per foot and frame, whether the foot is at rest: its ankle and toe
+    /// joints both moving less than 0.5 % of the leg's length from the
+    /// frame before (the first frame: to the next).
+    pub rests: [Vec<bool>; 2],
+}
+
+/// The ground under a foot per frame (see [`Support::under`]) from the
+/// supports it touches, `touch`, and its lowest joint's height, `low`:
+/// where it touches, that support; in the air, the higher of the last
+/// support it touched and the next that the foot is not below (a foot
+/// above a block's top may be over it: at a heel strike on it, or its
+/// heel rising on it), else the lower.
+pub(super) fn ground_under(touch: &[Option<f64>], low: &[f64]) -> Vec<Option<f64>> {
+    grounds_either_side(touch)
+        .into_iter()
+        .enumerate()
+        .map(|(i, (last, next))| match (touch[i], last, next) {
+            (Some(t), _, _) => Some(t),
+            (None, Some(a), Some(b)) => {
+                let (lo, hi) = (a.min(b), a.max(b));
+                Some(if low[i] >= hi { hi } else { lo })
+            }
+            (None, a, b) => a.or(b),
+        })
+        .collect()
+}
+
+/// Per frame, the last support a foot touched (this frame's when it
+/// touches one) and the next, from the supports it touches, `touch`.
+pub(super) fn grounds_either_side(touch: &[Option<f64>]) -> Vec<(Option<f64>, Option<f64>)> {
+    let mut out = vec![(None, None); touch.len()];
+    let mut l: Option<f64> = None;
+    for (o, t) in out.iter_mut().zip(touch) {
+        l = t.or(l);
+        o.0 = l;
+    }
+    let mut n: Option<f64> = None;
+    for (o, t) in out.iter_mut().zip(touch).rev() {
+        n = t.or(n);
+        o.1 = n;
+    }
+    out
+}
+
+/// The contact band (m): a foot whose lowest joint is within it of a
+/// support touches that support.
+pub(super) const CONTACT: f64 = 0.03;
+
+/// The height a footfall holds its lowest joint at, from its heights
+/// `h` in the frames the foot is at rest (metres, sorted ascending): the
+/// lowest of the largest set of them within the contact band of one
+/// another (the first such set). `INFINITY` for no heights.
+pub(super) fn held_height(h: &[f64]) -> f64 {
+    let (mut best, mut lo, mut j) = (0, f64::INFINITY, 0);
+    for i in 0..h.len() {
+        while h[i] - h[j] > CONTACT {
+            j += 1;
+        }
+        if i + 1 - j > best {
+            (best, lo) = (i + 1 - j, h[j]);
+        }
+    }
+    lo
+}
+
+/// The clip's support per footfall (poses levelled, Y-up, metres; `leg`
+/// the clip's leg length). A foot is planted while its ankle or its toe
+/// joint moves less than 2 % of the leg length per frame (a heel rising
+/// about a planted toe, or a toe lowering about a planted heel); a
+/// footfall is a run of planted frames, and its support is the height
+/// its lowest joint holds in it while the foot is at rest, its ankle and
+/// toe both moving less than 0.5 % of the leg length per frame
+/// ([`held_height`]: the lowest of the largest set of those heights
+/// within the 3 cm contact band; of all its heights when it never rests). A support
+/// within twice the contact band of the clip's floor is the floor (a flat
+/// capture keeps one plane); a higher one is a step the clip stands on
+/// (CMU subject 03 walks over blocks 11-25 cm high) when the footfall
+/// lasts at least 5 frames, the foot rests in some and bears weight (it
+/// is the lower foot in some frame of it). A frame touches the ground when any foot
+/// joint is within 3 cm of the floor (as on a flat capture), or a planted
+/// foot's lowest joint is within 3 cm of its footfall's support; the
+/// lowest such support is the frame's ground.
+///
+/// The support was the lowest height the footfall's lowest joint
+/// reached, and steps began 6 cm above the floor. A run of planted frames
+/// also holds the frames where the foot comes down onto a block toe
+/// first, or leaves it over the edge onto its toes, its ankle moving
+/// slowly (more such frames the higher the frame rate, the bound being
+/// per frame): on a 30 cm block the toe was 5 cm below the top when the
+/// run began, stepping down off 20 cm it dropped 4 cm past the edge, and
+/// the frames flat on the block, more than 3 cm above that lowest
+/// height, touched nothing (the foot's flat elevation was then read off
+/// its toe-off, [`flat_feet`](super::feet::flat_feet), and it stood toes up on the block). On the
+/// README's walks at 30 frames per second the resting frames' lowest
+/// height is the footfall's lowest. A block 3-6 cm high is still the
+/// floor (CMU 131_02 holds a foot 3.8 cm above its floor for 6 frames;
+/// as a step it raised samba's penetration maximum 0.50 → 1.18 cm),
+/// which the foot on it does not touch; [`Support::held`] has it.
+pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
+    let mut lows: Vec<f64> = mocap
+        .iter()
+        .map(foot_height)
+        .filter(|h| h.is_finite())
+        .collect();
+    lows.sort_by(f64::total_cmp);
+    let floor = lows
+        .get(lows.len() / 20)
+        .copied()
+        .unwrap_or_else(|| mocap.first().map_or(0.0, |p| p[C::Pelvis.index()].y));
+    let mut touch: [Vec<Option<f64>>; 2] = [vec![None; mocap.len()], vec![None; mocap.len()]];
+    let mut held: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];
+    let mut rests: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];
+    let still = 0.02 * leg.max(1e-9);
+    for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
+        .into_iter()
+        .enumerate()
+    {
+        let (a, k) = (ankle.index(), toe.index());
+        let low = |p: &Pose| if p[a].y <= p[k].y { p[a] } else { p[k] };
+        // Per frame, how far the ankle and the toe joint moved from the
+        // frame before (the first frame: to the next).
+        let moved: Vec<(f64, f64)> = (0..mocap.len())
+            .map(|t| {
+                let (i, j) = if t > 0 {
+                    (t - 1, t)
+                } else {
+                    (0, 1.min(mocap.len() - 1))
+                };
+                (
+                    (mocap[j][a] - mocap[i][a]).length(),
+                    (mocap[j][k] - mocap[i][k]).length(),
+                )
+            })
+            .collect();
+        let planted: Vec<bool> = (0..mocap.len())
+            .map(|t| moved[t].0.min(moved[t].1) <= still && low(&mocap[t]).is_finite())
+            .collect();
+        // At rest: the whole foot, ankle and toe, still (a quarter of the
+        // planted bound).
+        let resting = |t: usize| moved[t].0.max(moved[t].1) <= 0.25 * still;
+        for (t, r) in rests[foot].iter_mut().enumerate() {
+            *r = resting(t);
+        }
+        let mut t = 0;
+        while t < mocap.len() {
+            if !planted[t] {
+                t += 1;
+                continue;
+            }
+            let start = t;
+            while t < mocap.len() && planted[t] {
+                t += 1;
+            }
+            let run = start..t;
+            let height = |i: usize| low(&mocap[i]).y;
+            let mut rests: Vec<f64> = run.clone().filter(|&i| resting(i)).map(height).collect();
+            rests.sort_by(f64::total_cmp);
+            let sup = if rests.is_empty() {
+                let mut lows: Vec<f64> = run.clone().map(height).collect();
+                lows.sort_by(f64::total_cmp);
+                held_height(&lows)
+            } else {
+                held_height(&rests)
+            };
+            // A step is twice the contact band above the floor (6 cm; a
+            // kerb or a block), held at least 5 frames with the foot at
+            // rest in some, and bears weight: the foot is the lower of
+            // the two in some frame of the footfall (a leg held still in
+            // the air, the other foot on the floor, is no step; nor a
+            // gliding foot hovering over it).
+            let bears = run
+                .clone()
+                .any(|i| low(&mocap[i]).y <= foot_height(&mocap[i]) + 1e-9);
+            if sup > floor + 2.0 * CONTACT && !(bears && !rests.is_empty() && run.len() >= 5) {
+                continue;
+            }
+            for i in run.clone() {
+                if (low(&mocap[i]).y - sup).abs() <= CONTACT {
+                    held[foot][i] = true;
+                }
+            }
+            let sup = if sup <= floor + 2.0 * CONTACT {
+                floor
+            } else {
+                sup
+            };
+            // The frames within the contact band of it: not those where
+            // the foot, still counted planted, has dropped past the
+            // block's edge (stepping down) or not yet come down onto it.
+            for i in run {
+                if (low(&mocap[i]).y - sup).abs() <= CONTACT {
+                    touch[foot][i] = Some(sup);
+                }
+            }
+        }
+        // On the floor, as on a flat capture: the foot within 3 cm of it.
+        for (i, p) in mocap.iter().enumerate() {
+            if low(p).y <= floor + CONTACT {
+                touch[foot][i] = Some(floor);
+            }
+        }
+    }
+    let ground = (0..mocap.len())
+        .map(|i| match (touch[0][i], touch[1][i]) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        })
+        .collect();
+    let lows = |a: C, k: C| -> Vec<f64> {
+        mocap
+            .iter()
+            .map(|p| p[a.index()].y.min(p[k.index()].y))
+            .collect()
+    };
+    let under = [
+        ground_under(&touch[0], &lows(C::LAnkle, C::LToe)),
+        ground_under(&touch[1], &lows(C::RAnkle, C::RToe)),
+    ];
+    Support {
+        floor,
+        ground,
+        touch,
+        under,
+        held,
+        rests,
+    }
+}
+
+/// Fills the `None`s of `v` linearly between their known neighbours (the
+/// nearest known value past either end; all zeros when none is known).
+pub(super) fn interpolate_gaps(v: &[Option<f64>]) -> Vec<f64> {
+    let known: Vec<(usize, f64)> = v
+        .iter()
+        .enumerate()
+        .filter_map(|(i, x)| x.map(|x| (i, x)))
+        .collect();
+    let (Some(&first), Some(&last)) = (known.first(), known.last()) else {
+        return vec![0.0; v.len()];
+    };
+    let mut out = Vec::with_capacity(v.len());
+    let mut k = 0;
+    for i in 0..v.len() {
+        while k + 1 < known.len() && known[k + 1].0 <= i {
+            k += 1;
+        }
+        out.push(if i <= first.0 {
+            first.1
+        } else if i >= last.0 {
+            last.1
+        } else {
+            let ((i0, a), (i1, b)) = (known[k], known[k + 1]);
+            if i1 == i0 {
+                a
+            } else {
+                a + (b - a) * (i - i0) as f64 / (i1 - i0) as f64
+            }
+        });
+    }
+    out
+}
+
+/// The rotation that makes a clip's ground level: a plane
+/// `y = a + b·x + c·z` fitted to the lowest ankle or toe joint of every
+/// frame (least squares, then three times on the lower half of the
+/// residuals, so that lifted feet and jumps do not count), its slope
+/// shrunk by a ridge of (0.22 m)² so that a clip standing in place has
+/// none, turned onto the horizontal. Identity for a clip of fewer than 10
+/// frames or a slope past 5° (a ramp or stairs, not a tilted floor).
+pub fn ground_tilt(mocap: &[Pose]) -> DQuat {
+    let feet = [C::LAnkle, C::LToe, C::RAnkle, C::RToe];
+    let samples: Vec<DVec3> = mocap
+        .iter()
+        .filter_map(|p| {
+            feet.iter()
+                .map(|c| p[c.index()])
+                .filter(|q| q.is_finite())
+                .min_by(|a, b| a.y.total_cmp(&b.y))
+        })
+        .collect();
+    if samples.len() < 10 {
+        return DQuat::IDENTITY;
+    }
+    const RIDGE: f64 = 0.05;
+    let fit = |keep: &[DVec3]| -> Option<(f64, f64, f64, DVec3)> {
+        let n = keep.len() as f64;
+        let mean = keep.iter().copied().sum::<DVec3>() / n;
+        let (mut sxx, mut sxz, mut szz, mut sxy, mut szy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for q in keep {
+            let d = *q - mean;
+            sxx += d.x * d.x;
+            sxz += d.x * d.z;
+            szz += d.z * d.z;
+            sxy += d.x * d.y;
+            szy += d.z * d.y;
+        }
+        let (sxx, szz) = (sxx + n * RIDGE, szz + n * RIDGE);
+        let det = sxx * szz - sxz * sxz;
+        if !(det.is_finite() && det > 0.0) {
+            return None;
+        }
+        let b = (sxy * szz - szy * sxz) / det;
+        let c = (szy * sxx - sxy * sxz) / det;
+        Some((mean.y, b, c, mean))
+    };
+    let Some(mut plane) = fit(&samples) else {
+        return DQuat::IDENTITY;
+    };
+    for _ in 0..3 {
+        let (a, b, c, m) = plane;
+        let res = |q: &DVec3| q.y - (a + b * (q.x - m.x) + c * (q.z - m.z));
+        let mut r: Vec<f64> = samples.iter().map(res).collect();
+        r.sort_by(f64::total_cmp);
+        let cut = r[r.len() / 2];
+        let low: Vec<DVec3> = samples.iter().copied().filter(|q| res(q) <= cut).collect();
+        if low.len() < 5 {
+            break;
+        }
+        match fit(&low) {
+            Some(p) => plane = p,
+            None => break,
+        }
+    }
+    let (_, b, c, _) = plane;
+    let normal = DVec3::new(-b, 1.0, -c).normalize();
+    if normal.angle_between(DVec3::Y) > 5f64.to_radians() || !normal.is_finite() {
+        return DQuat::IDENTITY;
+    }
+    DQuat::from_rotation_arc(normal, DVec3::Y)
+}

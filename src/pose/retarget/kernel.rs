@@ -1,0 +1,228 @@
+//! The kernel: a clip's poses onto the character's skeleton, bone by bone
+//! (torso, neck and head, limbs, feet, toes), the root placed by the feet
+//! on their grounds. See the [module docs](super) for what is matched.
+
+use super::feet::{Toes, flat_feet, place_feet};
+use super::ground::{clip_support, foot_height, ground_tilt};
+use super::reference::{Reference, ReferenceSource, leg_length};
+use super::torso::{clip_rotations, neck_carriage, upright};
+use crate::pose::{Pose, pose_rotations};
+use crate::rig::Canonical;
+use glam::{DQuat, DVec3};
+use rayon::prelude::*;
+
+use Canonical as C;
+
+pub(super) const TORSO: [Canonical; 5] = [C::Pelvis, C::Spine, C::Chest, C::Neck, C::Head];
+
+pub(super) fn is_torso(c: Canonical) -> bool {
+    TORSO.contains(&c)
+}
+
+/// The feet turn by the clip's rotation since its reference, like the
+/// torso: a flat foot in the clip is the character's flat foot, whatever
+/// the angle each skeleton's ankle-to-toe bone makes with the sole.
+pub(super) fn is_foot(c: Canonical) -> bool {
+    matches!(c, C::LAnkle | C::RAnkle)
+}
+
+/// Turn about the vertical taking `from`'s left-right axis (hips and
+/// shoulders) onto `to`'s.
+pub(super) fn heading_between(from: &Pose, to: &Pose) -> DQuat {
+    let lateral = |p: &Pose| {
+        let v = (p[C::LHip.index()] - p[C::RHip.index()])
+            + (p[C::LShoulder.index()] - p[C::RShoulder.index()]);
+        DVec3::new(v.x, 0.0, v.z).normalize_or_zero()
+    };
+    let (a, b) = (lateral(from), lateral(to));
+    if a == DVec3::ZERO || b == DVec3::ZERO {
+        return DQuat::IDENTITY;
+    }
+    DQuat::from_rotation_y(a.z.atan2(a.x) - b.z.atan2(b.x))
+}
+
+/// The character's joint positions and global joint rotations (taking its
+/// rest bones, `character`, onto the posed ones) in every clip pose
+/// (metres, Y-up). See the module docs for what is matched. Skinning with
+/// these rotations and positions is consistent: every joint sits where its
+/// parent's rotation carries the rest bone.
+pub fn retarget(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
+    retarget_with_neutral(character, character, reference, mocap)
+}
+
+/// [`retarget`] with the character's neutral pose `neutral` (a pose of its
+/// skeleton in its rest frame's space, e.g. [`character_neutral`](super::character_neutral)'s)
+/// standing for its rest pose `character`: a clip standing neutrally
+/// gives the character's torso, neck, head and feet as in `neutral`
+/// (`G_j(t) = A_j(t) H N_j`, with `N` the rotations taking the rest bones
+/// onto the neutral's and `H` the turn facing the neutral the reference's
+/// way); bone lengths, the floor and the soles stay the rest pose's.
+///
+/// With the clip's joint rotations ([`Reference::rotations`], one per pose
+/// of `mocap`) the chest turns by the rotation of the file joint mapped
+/// to it rather than by the fit to its children's bones. Those children
+/// (the neck, the shoulders) are carried by other file joints (the neck's
+/// base, the clavicles), so the fit depended on where each sits on the
+/// chest: CMU 01_01's cgspeed BVH conversion drops the thorax's length and
+/// hangs the neck and shoulders 11.7 cm lower on the same rotations than
+/// the AMC, and its chest, then its neck, head and arms, turned
+/// differently. The pelvis keeps the fit to its hips and spine bones: the
+/// root's own rotation leaves out the lower back's (CMU `lowerback`, a
+/// bone off the root in the ASF, a zero-length joint on `Hips` in the
+/// BVH, carries the spine), and the character's trunk then leaned up to
+/// 12° less than the clip's in CMU 131_01's lunges while its chest and
+/// head followed the clip (the head 3° past the clip's own line); the
+/// pelvis's bones sit alike in an AMC and its conversions.
+pub fn retarget_with_neutral(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
+    retarget_toes(character, neutral, reference, mocap, Toes::Rigid)
+}
+
+/// A retargeted clip (per frame the character's joint positions and global
+/// rotations) and each foot's ground per frame ([`retarget_on_grounds`]).
+pub(super) type RetargetedOnGrounds = (
+    Vec<(Pose, [DQuat; Canonical::COUNT])>,
+    [Vec<Option<f64>>; 2],
+);
+
+/// [`retarget_with_neutral`] with the character's toes moving as `toes`
+/// says: [`Toes::Rigid`] is [`retarget_with_neutral`]; with
+/// [`Toes::Bending`] a foot pitched down onto its ball stands on the ball,
+/// not on a rigid toe tip below it, and the toes' rotation
+/// (`G_toe`, the ankle's without bending) turns them up about the ball.
+pub fn retarget_toes(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    toes: Toes,
+) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
+    retarget_on_grounds(character, neutral, reference, mocap, toes).0
+}
+
+/// [`retarget_toes`] and the ground each foot of the result stands on or
+/// above per frame, raised above the character's floor (character's
+/// metres; `None` for a foot that never touches): see [`place_feet`].
+pub(super) fn retarget_on_grounds(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    toes: Toes,
+) -> RetargetedOnGrounds {
+    if mocap.is_empty() {
+        return (Vec::new(), [Vec::new(), Vec::new()]);
+    }
+    // The clip's ground made level (a capture volume's floor is often a
+    // degree or two off its vertical axis; CMU subject 02's rises 8 cm
+    // over a 4 m walk), so that one floor height holds for every frame.
+    let tilt = ground_tilt(mocap);
+    let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
+    let mocap = &levelled[..];
+    let first = &mocap[0];
+    let level_ref;
+    let r = match reference.source {
+        ReferenceSource::Frame(i) if i < mocap.len() => {
+            level_ref = mocap[i];
+            &level_ref
+        }
+        _ => &reference.pose,
+    };
+    // The clip's floor and the support under each of its footfalls (the
+    // leg's length does not depend on the feet).
+    let support = clip_support(mocap, leg_length(r));
+    // The feet measured from how the clip holds them flat on its ground.
+    let stance_ref = flat_feet(r, mocap, &support);
+    let r = &stance_ref;
+    let s = leg_length(character) / leg_length(r).max(1e-12);
+    let face = heading_between(neutral, r);
+    // The rest bones onto the neutral's (identity when it is the rest).
+    let held = pose_rotations(character, neutral);
+    let root = C::Pelvis.index();
+    let clip_floor = support.floor;
+    let char_floor = foot_height(character);
+    let rotations = clip_rotations(r, mocap, reference, tilt);
+    let carriage_inv = neck_carriage(&upright(mocap, &rotations)).inverse();
+    let (chest, neck) = (C::Chest.index(), C::Neck.index());
+    let mut out: Vec<(Pose, [DQuat; Canonical::COUNT])> = mocap
+        .par_iter()
+        .zip(&rotations)
+        .map(|(m, a)| {
+            let mut g = [DQuat::IDENTITY; Canonical::COUNT];
+            let mut t = [DVec3::ZERO; Canonical::COUNT];
+            let d = (m[root] - first[root]) * s;
+            t[root] = DVec3::new(
+                character[root].x + d.x,
+                char_floor + (m[root].y - clip_floor) * s,
+                character[root].z + d.z,
+            );
+            // The neck's turn relative to the chest, around the clip's
+            // typical carriage.
+            let neck_g = a[chest] * carriage_inv * a[chest].inverse() * a[neck];
+            for c in Canonical::ALL {
+                let j = c.index();
+                if let Some(p) = c.parent() {
+                    t[j] = t[p.index()] + g[p.index()] * (character[j] - character[p.index()]);
+                }
+                g[j] = match c {
+                    C::Neck | C::Head => (neck_g * face * held[j]).normalize(),
+                    _ if is_torso(c) || is_foot(c) => (a[j] * face * held[j]).normalize(),
+                    _ => limb_rotation(character, m, &g, c),
+                };
+            }
+            (t, g)
+        })
+        .collect();
+    // Feet on the ground: in every frame where a foot of the clip touches
+    // its ground (planted, its lowest joint within 3 cm of that footfall's
+    // support, or within 3 cm of the floor), the body is lifted (or
+    // lowered) so that each character foot stands on or above the ground
+    // under it ([`Support::under`]: the support the foot touches, raised
+    // above the character's floor by its height above the clip's floor,
+    // scaled; for a foot in the air, the lower of the supports it left
+    // and lands on unless its sole is above the higher's top:
+    // [`place_feet`]); the foot that
+    // needs the body highest stands on its
+    // ground. Between such frames (a run's flight) the correction is
+    // interpolated. Whatever the two skeletons' hip offsets and foot
+    // lengths. Each foot is held to its own ground: CMU 03_02 stands one
+    // foot on a block while the other leaves the floor, and the body's
+    // lowest sole put on the block stood the character 10-22 cm up for a
+    // frame or more at each footfall. A foot the clip does not touch with
+    // still counts (its ground is [`Support::under`]'s): the
+    // clip has no heel point, so a heel strike's foot is off the ground
+    // by its joints, and standing the body on the other foot alone (its
+    // toes, leaving) sank the striking heel 5-7 cm through the floor.
+    let grounds = place_feet(character, &support, s, toes, &mut out);
+    (out, grounds)
+}
+
+/// A limb joint's global rotation: the least rotation from where its
+/// parent carries the character's rest bone onto the clip's bone direction,
+/// composed on the parent's (an end joint keeps its parent's).
+pub(super) fn limb_rotation(
+    character: &Pose,
+    m: &Pose,
+    g: &[DQuat; Canonical::COUNT],
+    c: Canonical,
+) -> DQuat {
+    let pr = c.parent().map_or(DQuat::IDENTITY, |p| g[p.index()]);
+    let Some(child) = Canonical::ALL.iter().find(|k| k.parent() == Some(c)) else {
+        return pr;
+    };
+    let (j, k) = (c.index(), child.index());
+    let from = (pr * (character[k] - character[j])).normalize_or_zero();
+    let to = (m[k] - m[j]).normalize_or_zero();
+    if from == DVec3::ZERO || to == DVec3::ZERO {
+        return pr;
+    }
+    (DQuat::from_rotation_arc(from, to) * pr).normalize()
+}

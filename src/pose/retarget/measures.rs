@@ -1,0 +1,172 @@
+//! Measures of a clip retargeted onto a character that a result is held
+//! to: the per-frame heights of the ground under the character's feet
+//! (read by the plausibility checks and by retrieval), the clip's own foot
+//! glide and head-to-trunk angle.
+
+use super::feet::Toes;
+use super::feet::{foot_soles, sole_height};
+use super::ground::{Support, clip_support, ground_tilt, interpolate_gaps};
+use super::kernel::{retarget, retarget_on_grounds};
+use super::reference::{Reference, angle, leg_length};
+use super::torso::{clip_rotations, neck_carriage, upright};
+use crate::pose::Pose;
+use crate::rig::Canonical;
+use glam::{DQuat, DVec3};
+
+use Canonical as C;
+
+/// The clip's own foot glide while touching its ground, on the
+/// character (cm per touching foot-frame): the clip retargeted onto the
+/// character's skeleton `character` ([`retarget`]), then per foot the
+/// horizontal travel from frame `t-1` to `t` of the midpoint of its ankle
+/// and toe joints while the foot's lowest sole point (toe joint, heel, toe
+/// tip, as the kernel puts on the floor) is within 3 cm of the character's
+/// floor raised by the clip's ground under that foot
+/// ([`foot_ground_offsets`]) at both; summed
+/// and divided by the touching foot-frames. The skeleton analogue of the
+/// mesh measure [`crate::eval::Sliding::touching_mean_cm_per_frame`], on
+/// the same feet and floor: a walk's feet pass through the touching band
+/// at heel strike and toe-off, which a mostly planted capture (the samba
+/// dance) never does, so a result is held to its own clip's figure.
+pub fn clip_foot_glide_cm(character: &Pose, reference: &Reference, mocap: &[Pose]) -> f64 {
+    if mocap.len() < 2 {
+        return 0.0;
+    }
+    let out = retarget(character, reference, mocap);
+    let raised = foot_ground_offsets(character, reference, mocap);
+    let rest = sole_height(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
+    let (mut travel, mut touching) = (0.0, 0usize);
+    for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
+        .into_iter()
+        .enumerate()
+    {
+        let (a, k) = (ankle.index(), toe.index());
+        let touch = |t: usize| {
+            let (p, g) = &out[t];
+            foot_soles(character, p, g)[foot] <= rest + raised[foot][t] + 0.03
+        };
+        let mid = |t: usize| {
+            let p = &out[t].0;
+            let m = 0.5 * (p[a] + p[k]);
+            DVec3::new(m.x, 0.0, m.z)
+        };
+        for t in 0..out.len() {
+            if touch(t) {
+                touching += 1;
+                if t > 0 && touch(t - 1) {
+                    let d = mid(t).distance(mid(t - 1));
+                    if d.is_finite() {
+                        travel += d;
+                    }
+                }
+            }
+        }
+    }
+    100.0 * travel / touching.max(1) as f64
+}
+
+/// The clip's own head-to-trunk angle per frame (degrees, signed): the
+/// angle `∠(neck→head, pelvis→neck)` of each pose minus its value in the
+/// clip's neutral (the reference pose with the neck turned to the clip's
+/// typical carriage relative to the chest, which the retargeting maps onto
+/// the character's rest). The skeleton analogue of the mesh measure
+/// [`crate::eval::HeadTorso`]: what a result's head should do relative to
+/// the character's rest when it follows the clip's head.
+pub fn clip_head_trunk_deg(reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+    // The neck → head bone in a frame attached to the trunk (up pelvis →
+    // neck, lateral from the hips and shoulders).
+    let local = |p: &Pose| {
+        let y = (p[C::Neck.index()] - p[C::Pelvis.index()]).normalize_or_zero();
+        let l = (p[C::LHip.index()] - p[C::RHip.index()])
+            + (p[C::LShoulder.index()] - p[C::RShoulder.index()]);
+        let x = (l - y * l.dot(y)).normalize_or_zero();
+        let z = x.cross(y);
+        let h = p[C::Head.index()] - p[C::Neck.index()];
+        DVec3::new(h.dot(x), h.dot(y), h.dot(z))
+    };
+    let r = &reference.pose;
+    let rotations = clip_rotations(r, mocap, reference, DQuat::IDENTITY);
+    let mut neutral = *r;
+    let (n, h) = (C::Neck.index(), C::Head.index());
+    neutral[h] = r[n] + neck_carriage(&upright(mocap, &rotations)) * (r[h] - r[n]);
+    let zero = local(&neutral);
+    mocap
+        .iter()
+        .map(|p| angle(local(p), zero).to_degrees())
+        .collect()
+}
+
+/// The height of the ground under the character's lower foot above its
+/// floor per frame, in the character's metres: the clip retargeted onto
+/// the character's skeleton `character` ([`retarget`]), then per frame
+/// the [`Support::under`] of the foot whose lowest sole point is lower
+/// (the clip levelled as [`retarget`] levels it, scaled by the ratio of
+/// leg lengths, interpolated across frames where no foot has a ground):
+/// where the lowest point of a result of [`retarget`] stands. The
+/// plausibility checks measure floating and penetration from the
+/// character's floor raised by it. With one foot on a block and the other
+/// lower, in the air over the floor, it is the floor.
+pub fn ground_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+    let out = retarget(character, reference, mocap);
+    offsets(character, reference, mocap, |s| {
+        out.iter()
+            .enumerate()
+            .map(|(i, (t, g))| {
+                let [l, r] = foot_soles(character, t, g);
+                let (a, b) = if r < l { (1, 0) } else { (0, 1) };
+                s.under[a][i].or(s.under[b][i])
+            })
+            .collect()
+    })
+}
+
+/// The height of the ground under each foot (left, right) above the
+/// character's floor per frame, in the character's metres: the ground
+/// [`retarget`] stands that foot on or above (the clip's
+/// [`Support::under`] of that foot, levelled as [`retarget`] levels the
+/// clip and scaled by the ratio of leg lengths, except that a foot in the
+/// air is over a higher top only when the character's sole is above it:
+/// [`place_feet`](super::feet::place_feet); interpolated across frames where the foot has none).
+/// The plausibility checks measure penetration as any foot below its
+/// ground, floating as the foot nearest its ground above it.
+pub fn foot_ground_offsets(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+) -> [Vec<f64>; 2] {
+    retarget_on_grounds(character, character, reference, mocap, Toes::Rigid)
+        .1
+        .map(|g| interpolate_gaps(&g))
+}
+
+/// The height the character's body stands raised above its floor per
+/// frame, in the character's metres: the lowest support a foot of the
+/// clip touches ([`Support::ground`]), interpolated across frames in the
+/// air. Retrieval takes it off the query, comparing poses as they stand
+/// on the database's floor.
+pub fn stance_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+    offsets(character, reference, mocap, |s| s.ground.clone())
+}
+
+/// One per-frame height of the clip's [`Support`] (chosen by `pick`)
+/// above its floor, scaled onto the character, gaps interpolated.
+pub(super) fn offsets(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    pick: impl Fn(&Support) -> Vec<Option<f64>>,
+) -> Vec<f64> {
+    if mocap.is_empty() {
+        return Vec::new();
+    }
+    let tilt = ground_tilt(mocap);
+    let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
+    let r = leg_length(&reference.pose).max(1e-12);
+    let s = leg_length(character) / r;
+    let support = clip_support(&levelled, r);
+    let raised: Vec<Option<f64>> = pick(&support)
+        .iter()
+        .map(|g| g.map(|y| (y - support.floor) * s))
+        .collect();
+    interpolate_gaps(&raised)
+}
