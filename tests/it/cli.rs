@@ -1,6 +1,6 @@
 //! The binary as a user runs it: real files, bad files, exit codes.
 
-mod common;
+use crate::common;
 
 use std::process::{Command, Output};
 

@@ -1,6 +1,6 @@
 //! Part-based PCA Laplacian deformation on the samba character.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use surfmotion::db::Character;

@@ -1,6 +1,6 @@
 //! Surface Motion Graph on real 4D data: similarity, transitions, cache.
 
-mod common;
+use crate::common;
 
 use glam::{DQuat, DVec3};
 use std::path::Path;

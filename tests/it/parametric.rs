@@ -6,7 +6,7 @@
 //! humanoid, so the parameters are known and no data is needed; the real
 //! samba capture checks blending accuracy.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

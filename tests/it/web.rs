@@ -4,7 +4,7 @@
 //! a WebGL2 context, draws the character, follows a motion key, logs no
 //! error, and shows a message (not a blank page) for corrupt data.
 
-mod common;
+use crate::common;
 
 use base64::Engine as _;
 use std::io::{Read, Write};

@@ -352,3 +352,32 @@ impl CliRun {
         );
     }
 }
+
+/// For a test that changes state every thread of the process reads (the
+/// environment): whether this process is one it may change it in. The test
+/// binary runs its tests on parallel threads, so in the ordinary run this
+/// starts the binary again with only the test `module::test` (`--exact`,
+/// one thread), requires that run to pass, and returns `false` (the caller
+/// returns); in that child it returns `true`. `module` is the caller's
+/// `module_path!()`.
+pub fn alone_in_process(module: &str, test: &str) -> bool {
+    const CHILD: &str = "SURFMOTION_TEST_ALONE";
+    let module = module.split_once("::").map_or(module, |(_, m)| m);
+    let name = format!("{module}::{test}");
+    if std::env::var(CHILD).is_ok_and(|v| v == name) {
+        return true;
+    }
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args([name.as_str(), "--exact", "--test-threads", "1"])
+        .env(CHILD, &name)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && stdout.contains("1 passed"),
+        "{name} alone in its own process: {}\n{stdout}{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    false
+}

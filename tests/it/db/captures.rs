@@ -1,6 +1,6 @@
 //! Character database manifests on the real 4D captures.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

@@ -1,6 +1,6 @@
 //! Synthetic 4D databases: the samba dancer driven by CMU clips.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

@@ -20,7 +20,7 @@ use surfmotion::synth::{Gait, gait_clip};
 
 /// Grid spacing of the test character (metres): coarser than the demo's
 /// 0.02, for speed.
-mod common;
+use crate::common;
 
 const GRID: f64 = 0.035;
 const FPS: f64 = 30.0;

@@ -1,7 +1,7 @@
 //! Mocap-driven synthesis on a synthetic samba database made from CMU
 //! clips (walk 02_01, run 02_03, 01_01), queried with other clips.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -10,7 +10,7 @@
 //! section is the two thighs apart, and the pelvis and both hips were put
 //! at the centre of one thigh (5-6 % of the height to the side).
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use std::path::{Path, PathBuf};

@@ -2,7 +2,7 @@
 //! landmark fixtures in tests/fixtures (written for this project; the
 //! labelled meshes were checked by rendering them with `rig embed --png`).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

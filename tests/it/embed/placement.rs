@@ -9,7 +9,7 @@
 //! scan turned Z-up was embedded about an up leaning 9° with the pose:
 //! joints up to 2.8 cm from the turned Y-up joints, and other labels.
 
-mod common;
+use crate::common;
 
 use glam::{DMat3, DVec3};
 use surfmotion::mesh::Mesh;

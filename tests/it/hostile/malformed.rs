@@ -3,7 +3,7 @@
 //! typed error) promptly. The cargo-fuzz targets in fuzz/ explore further;
 //! this is the quick corpus run of the normal suite.
 
-mod common;
+use crate::common;
 
 use proptest::prelude::*;
 use std::path::Path;

@@ -7,7 +7,7 @@
 //! clip, the demo's database) come from the binary itself: no ../shared
 //! needed, except for the rows at the end.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -2,7 +2,7 @@
 //! is marked so that, without it, the runner lists it as ignored with the
 //! reason (see `build.rs`), and the mark matches the folder on disk.
 
-mod common;
+use crate::common;
 
 use proc_macro2::{TokenStream, TokenTree};
 use quote::ToTokens;
@@ -128,19 +128,22 @@ fn check_source(file: &str, src: &str) -> (Vec<String>, usize) {
 
 #[test]
 fn every_test_on_shared_data_is_reported_as_ignored_without_it() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    // Every module of the test binary (`tests/it/**.rs`); the helpers in
+    // `common` hold no test.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/it");
     let mut problems = Vec::new();
     let mut gated = 0;
     let mut files = 0;
-    for e in std::fs::read_dir(&dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.extension().is_some_and(|x| x == "rs") {
-            let src = std::fs::read_to_string(&p).unwrap();
-            let (pr, g) = check_source(&p.file_name().unwrap().to_string_lossy(), &src);
-            problems.extend(pr);
-            gated += g;
-            files += 1;
+    for p in common::files_with_ext(&dir, "rs") {
+        let name = p.strip_prefix(&dir).unwrap().to_string_lossy().into_owned();
+        if name.starts_with("common/") {
+            continue;
         }
+        let src = std::fs::read_to_string(&p).unwrap();
+        let (pr, g) = check_source(&name, &src);
+        problems.extend(pr);
+        gated += g;
+        files += 1;
     }
     assert!(
         problems.is_empty(),

@@ -11,7 +11,7 @@
 //! link to a section (`#anchor`, in the README or a page) must land on a
 //! heading.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

@@ -1,7 +1,7 @@
 //! `surfmotion batch` as a user runs it: whole CMU folders, a killed run
 //! resumed, a corrupt clip among good ones, shards.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

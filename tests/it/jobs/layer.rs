@@ -4,7 +4,7 @@
 //! any converter; the loaded character in metres once, with its skeleton
 //! kind selectable.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};

@@ -4,7 +4,7 @@
 //! files are those of the whole-sequence writer, and a long session is
 //! written under an address-space limit its frames would not fit.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

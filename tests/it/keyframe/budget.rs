@@ -1,9 +1,10 @@
 //! The exact-length search's table is refused, with a typed error, when it
 //! exceeds the memory budget (`SURFMOTION_MEMORY_LIMIT`), instead of
-//! aborting on the allocation. One test in its own binary: it sets the
-//! process's environment.
+//! aborting on the allocation. The test sets the process's environment, so
+//! it runs alone in a child process of the test binary
+//! (`common::alone_in_process`).
 
-mod common;
+use crate::common;
 
 use surfmotion::keyframe::graph::KeyGraph;
 use surfmotion::keyframe::search::{SearchError, SearchOptions};
@@ -16,6 +17,12 @@ fn looped() -> KeyGraph {
 
 #[test]
 fn an_exact_length_table_over_the_memory_budget_is_a_typed_error() {
+    if !common::alone_in_process(
+        module_path!(),
+        "an_exact_length_table_over_the_memory_budget_is_a_typed_error",
+    ) {
+        return;
+    }
     let o = SearchOptions::default();
     let p = Planner::new(looped(), &[0, 59], 25.0, &o).unwrap();
     let c = p.chain.as_ref().unwrap();
@@ -28,8 +35,8 @@ fn an_exact_length_table_over_the_memory_budget_is_a_typed_error() {
     // A budget below the table the query needs (nodes × frames × 24 bytes).
     let need = surfmotion::keyframe::lattice::extremes_bytes(c.node_count(), 4000);
     assert!(need > 4096, "{need} bytes");
-    // SAFETY: this binary holds this one test; nothing else reads the
-    // environment concurrently.
+    // SAFETY: this process runs this one test (`alone_in_process`); nothing
+    // else reads the environment concurrently.
     unsafe { std::env::set_var("SURFMOTION_MEMORY_LIMIT", "4K") };
     let fresh = Planner::new(looped(), &[0, 59], 25.0, &o).unwrap();
     let e = fresh

@@ -2,7 +2,7 @@
 //! a small synthetic database (CMU walk 02_01 and run 02_03 on the samba
 //! character, 25 fps).
 
-mod common;
+use crate::common;
 
 use surfmotion::keyframe::floor::{FloorOptions, path_floor, transition_floor};
 use surfmotion::keyframe::smoothness::{FrameSet, Surface, profile, transition_smoothness};

@@ -2,7 +2,7 @@
 //! synthetic frame graphs (walks, loops, repetitions against brute force
 //! and Dijkstra) and the `keyframe` command on a small synthetic database.
 
-mod common;
+use crate::common;
 
 use std::collections::BinaryHeap;
 use std::process::Command;

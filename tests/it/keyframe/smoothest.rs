@@ -4,7 +4,7 @@
 //! against an exhaustive search on random graphs, its exact lower bound,
 //! and `keyframe --grid --least-mean` on a small synthetic database.
 
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 use surfmotion::keyframe::graph::KeyGraph;

@@ -4,7 +4,7 @@
 //! these run without `../shared`; the Khronos validator and the real-data
 //! figures are in `tests/mesh_io.rs`.
 
-mod common;
+use crate::common;
 
 use glam::{DQuat, DVec3};
 use std::path::Path;

@@ -1,6 +1,6 @@
 //! Mesh readers on real data, and every writer round-tripped through its reader.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use surfmotion::mesh::io::{LoadOptions, glb, load_sequence, obj, objseq, pc2, save_sequence};

@@ -1,6 +1,6 @@
 //! Geometry kernels on real data, against libigl where a peer value exists.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use surfmotion::mesh::blend::{Blender, linear_blend};

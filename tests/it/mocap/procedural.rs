@@ -1,6 +1,6 @@
 //! The clips in mocap/ are what the project's own code generates.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use surfmotion::eval::{FootOptions, clip_sliding};

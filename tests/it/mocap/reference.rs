@@ -1,7 +1,7 @@
 //! Forward kinematics against peer libraries (bvhio, AMCParser) on every clip
 //! in ../shared/data/mocap, and BVH write/read round trips.
 
-mod common;
+use crate::common;
 
 use serde_json::Value;
 use surfmotion::mocap::bvh;

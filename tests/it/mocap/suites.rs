@@ -16,7 +16,7 @@
 //! the walk the original skeleton gives, standing and walking forward.
 //! Non-humanoids are refused with "not a humanoid: …" and exit 1.
 
-mod common;
+use crate::common;
 
 use common::skel::{Skel, Suite, expected, map_errors, mirror, parse_skel, swap_side};
 

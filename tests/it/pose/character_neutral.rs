@@ -10,7 +10,7 @@
 //! (and the ankle, toe and shoulder joints of the frame-0 rig) each moved by
 //! the mean displacement of its 30 nearest vertices from frame 0 to 64.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use surfmotion::db::Character;

@@ -19,7 +19,7 @@ use surfmotion::synth::{Gait, gait_clip};
 const GRID: f64 = 0.035;
 const FPS: f64 = 30.0;
 
-mod common;
+use crate::common;
 
 /// A procedural database (a walk and a run of the procedural humanoid)
 /// written to `db`; its rest frame lowered by `drop` metres (the frames

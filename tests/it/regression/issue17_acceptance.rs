@@ -7,7 +7,7 @@
 //! by the verbs that drive a body (exit 1, "not a humanoid: "); what a run
 //! logs as warnings is what its plausibility report says.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use surfmotion::mocap::Clip;

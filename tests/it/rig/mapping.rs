@@ -4,7 +4,7 @@
 //! read back, map to the same canonical joints; non-humanoids are refused;
 //! weird hierarchies never panic.
 
-mod common;
+use crate::common;
 
 use common::skel::{Suite, expected, map_errors, mirror, scaled, skel_to_bvh, swap_side};
 
@@ -2126,7 +2126,7 @@ macro_rules! suite {
     ($name:literal, $conv:expr, $sides:literal, $map:literal) => {
         Suite {
             name: $name,
-            skel: include_str!(concat!("fixtures/suites/", $name, ".skel")),
+            skel: include_str!(concat!("../../fixtures/suites/", $name, ".skel")),
             convention: $conv,
             sides: $sides,
             map: $map,
@@ -2377,12 +2377,12 @@ const SUITES: &[Suite] = &[
 const NOT_HUMANOIDS: &[(&str, &str)] = &[
     (
         "truebones_horse",
-        include_str!("fixtures/suites/truebones_horse.skel"),
+        include_str!("../../fixtures/suites/truebones_horse.skel"),
     ),
-    ("bird", include_str!("fixtures/suites/bird.skel")),
+    ("bird", include_str!("../../fixtures/suites/bird.skel")),
     (
         "dog_humanik_names",
-        include_str!("fixtures/suites/dog_humanik_names.skel"),
+        include_str!("../../fixtures/suites/dog_humanik_names.skel"),
     ),
 ];
 

@@ -2,7 +2,7 @@
 //! mesh, foot sliding, ground penetration, and their wiring into the CLI.
 //! Procedural tests run without data; the real-capture ones skip without it.
 
-mod common;
+use crate::common;
 
 use glam::{DQuat, DVec3};
 use std::path::Path;

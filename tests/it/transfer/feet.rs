@@ -2,7 +2,7 @@
 //! (Confluent Motion, de Aguiar et al. 2007, Sec. 5, driven by the
 //! retargeting kernel): generated clips of the scan's own skeleton.
 
-mod common;
+use crate::common;
 
 use glam::{DQuat, DVec3};
 use surfmotion::mesh::io::{LoadOptions, load_sequence};

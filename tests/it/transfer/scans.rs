@@ -2,7 +2,7 @@
 //! transfer of the samba and crane captures, identity and rigid motions,
 //! the candy-wrapper case, a CMU walk on the armadillo, raw-scan repair.
 
-mod common;
+use crate::common;
 
 use glam::{DQuat, DVec3};
 use std::path::Path;
