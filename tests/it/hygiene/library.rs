@@ -73,3 +73,71 @@ fn crate_docs_list_every_module() {
         "the crate docs list a module lib.rs does not declare"
     );
 }
+
+/// The integration tests are one binary (issue 40): cargo makes a binary of
+/// every `tests/*.rs` and `tests/*/main.rs`, so only `tests/it/main.rs` may
+/// be one; and a file under `tests/it/` that no `mod` line declares is
+/// never compiled, its tests silently never run.
+#[test]
+fn the_tests_are_one_binary_and_every_file_under_it_is_a_module() {
+    let tests = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    let mut problems = Vec::new();
+    for e in std::fs::read_dir(&tests).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().into_owned();
+        if p.extension().is_some_and(|x| x == "rs") {
+            problems.push(format!(
+                "tests/{name} is a test binary of its own: make it a module under tests/it/"
+            ));
+        } else if p.join("main.rs").is_file() && name != "it" {
+            problems.push(format!("tests/{name}/main.rs is a second test binary"));
+        }
+    }
+    let it = tests.join("it");
+    let mut files = Vec::new();
+    rust_files(&it, &mut files);
+    let declares = |parent: &Path, module: &str| {
+        std::fs::read_to_string(parent).is_ok_and(|text| {
+            text.lines().any(|l| {
+                let l = l.trim_start();
+                let l = l.strip_prefix("pub ").unwrap_or(l);
+                l.strip_prefix("mod ")
+                    .and_then(|rest| rest.strip_prefix(module))
+                    .is_some_and(|rest| rest.starts_with(';'))
+            })
+        })
+    };
+    for f in &files {
+        let rel = f.strip_prefix(&it).unwrap();
+        if rel == Path::new("main.rs") {
+            continue;
+        }
+        // `a/b.rs` is declared in `a/mod.rs`; `a/mod.rs` and `b.rs` in the
+        // folder above (`main.rs` at the top).
+        let (dir, module) = if f.file_name().unwrap() == "mod.rs" {
+            let d = f.parent().unwrap();
+            (d.parent().unwrap(), d.file_name().unwrap())
+        } else {
+            (f.parent().unwrap(), f.file_stem().unwrap())
+        };
+        let parent = if dir == it {
+            it.join("main.rs")
+        } else {
+            dir.join("mod.rs")
+        };
+        let module = module.to_string_lossy();
+        if !declares(&parent, &module) {
+            problems.push(format!(
+                "tests/it/{}: no `mod {module};` in {}, so it is never compiled",
+                rel.display(),
+                parent.strip_prefix(&tests).unwrap().display()
+            ));
+        }
+    }
+    assert!(
+        files.len() > 40,
+        "only {} files under tests/it",
+        files.len()
+    );
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
