@@ -6,14 +6,14 @@
 //! This script sets `no_shared_data` when the folder (its `README.md`) is
 //! absent and `CI` is not `true`, so a plain `cargo test` lists those tests as
 //! ignored, with the reason, in its summary; under `CI=true` they run and fail
-//! on the missing data (`tests/common/mod.rs::data_dir`).
+//! on the missing data (`tests/it/common/mod.rs::data_dir`).
 //!
 //! What is watched, and why:
 //! - present: the folder's `README.md`, so removing the data reruns this
 //!   script (an existing file costs nothing on later builds);
 //! - absent: nothing on disk. Cargo treats a watched path that does not exist
 //!   as changed on every build, which would rebuild the whole crate each time.
-//!   When the data appears after such a build, `tests/data_gate.rs` fails and
+//!   When the data appears after such a build, `tests/it/hygiene/data_gate.rs` fails and
 //!   says to `touch build.rs` (or set `SURFMOTION_DATA`).
 
 use std::path::PathBuf;

@@ -8,7 +8,7 @@
 //! ε (Fig. 4) and the parameter errors across the valid ranges. Needs
 //! ../shared/data (the samba mesh); skips without it.
 
-#[path = "../tests/common/gaits.rs"]
+#[path = "../tests/it/common/gaits.rs"]
 mod gaits;
 
 use criterion::Criterion;

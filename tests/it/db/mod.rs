@@ -1,0 +1,4 @@
+//! Character databases: the real captures' manifests, synthetic databases.
+
+mod captures;
+mod synth;

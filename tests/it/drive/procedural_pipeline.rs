@@ -1,0 +1,292 @@
+//! Retarget and deform end to end on a small generated character, so a
+//! fresh clone without ../shared exercises retrieval through the Surface
+//! Motion Graph and the part-based deformation (issue 19, "Tests without
+//! ../shared"). The character is the procedural humanoid
+//! (`synth::humanoid`) at a coarse grid; its database is a walk and a run
+//! synthesised from procedural clips (`synth::clips`) with skinning and
+//! soft-tissue lag; the query is a walk along a circle, a motion not in
+//! the database (Huang et al. 2015, Sec. 5.2).
+
+use std::path::Path;
+use std::sync::OnceLock;
+use surfmotion::db::Character;
+use surfmotion::db::Quiet;
+use surfmotion::deform::DeformMode;
+use surfmotion::drive::{Output, RetargetOptions, synthesise};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::clip_poses;
+use surfmotion::synth::{Gait, gait_clip};
+use surfmotion::tools::eval::velocity_error;
+
+/// Grid spacing of the test character (metres): coarser than the demo's
+/// 0.02, for speed.
+use crate::common;
+
+const GRID: f64 = 0.035;
+const FPS: f64 = 30.0;
+
+/// The database (built once per test binary) and the query poses.
+struct Fixture {
+    /// The database folder.
+    db: std::path::PathBuf,
+    ch: Character,
+    query: surfmotion::pose::retarget::ClipPoses,
+}
+
+fn write_database(db: &Path) {
+    common::procedural_walk_run_database(db, "procedural", GRID, FPS);
+}
+
+fn fixture() -> &'static Fixture {
+    static F: OnceLock<Fixture> = OnceLock::new();
+    F.get_or_init(|| {
+        let t = std::time::Instant::now();
+        let db = common::fixture_dir("procedural-pipeline").join("db");
+        std::fs::create_dir_all(&db).unwrap();
+        write_database(&db);
+        let ch = Character::load(&db, &Quiet).unwrap();
+        // Longer than the database's walk (3 s), so the path must leave it.
+        let clip = gait_clip(Gait::Turn, 4.0, FPS);
+        let map = surfmotion::rig::detect(&clip.point_names()).map;
+        let query = clip_poses(&clip, &map).unwrap();
+        eprintln!(
+            "fixture: {} vertices, {} database frames, {} transitions, in {:.2} s",
+            ch.n(),
+            ch.frame_count(),
+            ch.graph().transitions.len(),
+            t.elapsed().as_secs_f64()
+        );
+        Fixture { db, ch, query }
+    })
+}
+
+fn retarget(mode: DeformMode) -> Output {
+    let f = fixture();
+    let opts = RetargetOptions {
+        deform: mode,
+        ..RetargetOptions::default()
+    };
+    let t = std::time::Instant::now();
+    let out = synthesise(&f.ch, &f.query.poses, &f.query.reference, FPS, &opts).unwrap();
+    eprintln!("retarget ({mode}): {:.2} s", t.elapsed().as_secs_f64());
+    out
+}
+
+/// The skeleton the rig reads off each output frame.
+fn output_skeletons(ch: &Character, out: &Output) -> Vec<Pose> {
+    out.positions
+        .chunks(ch.n())
+        .map(|f| ch.rig().frame_joints(f))
+        .collect()
+}
+
+/// Mean distance (metres) between the output's joints and the query's.
+fn mean_joint_distance(query: &[Pose], output: &[Pose]) -> f64 {
+    let mut s = 0.0;
+    let mut k = 0usize;
+    for (q, o) in query.iter().zip(output) {
+        for (a, b) in q.iter().zip(o.iter()) {
+            s += (*a - *b).length();
+            k += 1;
+        }
+    }
+    s / k as f64
+}
+
+#[test]
+fn procedural_database_has_a_graph_with_transitions() {
+    let f = fixture();
+    // 3 s of walk and 2 s of run at 30 fps.
+    assert_eq!(f.ch.frame_count(), 150);
+    assert!(f.ch.n() > 500, "{} vertices", f.ch.n());
+    assert!(
+        !f.ch.graph().transitions.is_empty(),
+        "a walk and a run of one character must have transitions"
+    );
+}
+
+#[test]
+fn procedural_retarget_through_the_graph_follows_the_query() {
+    let f = fixture();
+    let out = retarget(DeformMode::Part);
+    let frames = f.query.poses.len();
+    assert_eq!(frames, 120);
+    assert_eq!(out.report.frames, frames);
+    assert_eq!(out.positions.len(), frames * f.ch.n());
+    assert_eq!(out.query.len(), frames);
+    assert!(out.positions.iter().flatten().all(|c| c.is_finite()));
+    // Retrieval: one database frame per query frame, mostly walking (the
+    // query walks along a circle; the database walks straight or runs).
+    let r = &out.report.retrieval;
+    assert_eq!(r.path.len(), frames);
+    assert!(r.path.iter().all(|&id| (id as usize) < f.ch.frame_count()));
+    assert_eq!(out.report.steps.len(), frames);
+    let walking = out
+        .report
+        .steps
+        .iter()
+        .filter(|s| s.sequence == "walk")
+        .count();
+    eprintln!(
+        "walk frames: {walking} of {frames}; jumps {:?}",
+        out.report.jumps
+    );
+    assert!(walking * 2 > frames, "{walking} of {frames} walking frames");
+    // Through the graph: each step repeats a frame, follows an edge of the
+    // frame graph (next frame of a sequence, or a transition), skips one
+    // frame of a sequence (the trellis's counterpart of repetition,
+    // `TrellisOptions::skip`), or is a cut the retrieval reports; the
+    // query outlasts the walk, so there is at least one jump.
+    for (k, w) in r.path.windows(2).enumerate() {
+        let (a, b) = (w[0], w[1]);
+        let edge = f.ch.adjacency().successors(a).any(|(t, _)| t == b);
+        let skip = f.ch.successor(a).and_then(|s| f.ch.successor(s)) == Some(b);
+        assert!(
+            a == b || edge || skip || r.cuts.contains(&(k + 1)),
+            "query frame {}: {a} -> {b} is neither a repeat, a graph edge, a skip nor a cut",
+            k + 1
+        );
+    }
+    // Measured: two jumps, both transitions of the graph.
+    assert!(
+        out.report.jumps.iter().any(|j| j.transition),
+        "no transition used in {frames} frames: {:?}",
+        out.report.jumps
+    );
+    // The paper's joint-velocity metric (Huang et al. 2015, Sec. 6.2).
+    let skel = output_skeletons(&f.ch, &out);
+    let err = velocity_error(&out.query, &skel);
+    let dist = mean_joint_distance(&out.query, &skel);
+    eprintln!(
+        "part: velocity error {:.3} ± {:.3} cm/frame, mean joint distance {:.4} m",
+        err.mean_cm, err.std_cm, dist
+    );
+    assert!(err.mean_cm.is_finite());
+    assert!(
+        err.mean_cm < 100.0,
+        "velocity error {} cm/frame",
+        err.mean_cm
+    );
+}
+
+#[test]
+fn procedural_part_deformation_brings_the_mesh_to_the_driving_skeleton() {
+    let f = fixture();
+    let part = retarget(DeformMode::Part);
+    let none = retarget(DeformMode::None);
+    // The same retrieval: the deformation only edits the retrieved frames.
+    assert_eq!(part.report.retrieval.path, none.report.retrieval.path);
+    let d_part = mean_joint_distance(&part.query, &output_skeletons(&f.ch, &part));
+    let d_none = mean_joint_distance(&none.query, &output_skeletons(&f.ch, &none));
+    eprintln!("mean joint distance to the query: part {d_part:.4} m, none {d_none:.4} m");
+    // Measured: part 2.1 mm, none 6.8 mm.
+    assert!(d_part < 0.6 * d_none, "part {d_part} vs none {d_none}");
+    // The deformation edits the retrieved frames, it does not rebuild
+    // them: measured at most 3.1 cm per vertex.
+    let max_move = part
+        .positions
+        .iter()
+        .zip(&none.positions)
+        .map(|(a, b)| {
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max);
+    eprintln!("largest vertex displacement by the deformation: {max_move:.4} m");
+    assert!(max_move > 0.0);
+    assert!(max_move < 0.15, "{max_move} m");
+}
+
+/// Copies the files of `from` (and its sub-folders) into `to`.
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let dest = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &dest);
+        } else {
+            std::fs::copy(e.path(), dest).unwrap();
+        }
+    }
+}
+
+/// The key-frame graph's floor centres read the character's frames, which
+/// are in metres, Y-up once on load: they must not be converted again
+/// (they were scaled by the units twice on a database not in metres).
+#[test]
+fn keyframe_frame_centres_read_frames_converted_once_on_load() {
+    use surfmotion::keyframe::graph::{centre_of, frame_centres};
+    let f = fixture();
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("db");
+    copy_dir(&f.db, &db);
+    let mut manifest = surfmotion::db::Manifest::load(&db).unwrap();
+    manifest.units = "cm".into();
+    manifest.up = "z".into();
+    // Read as cm the body is 1.7 cm tall: not a person's size.
+    manifest.human_sized = false;
+    manifest.save(&db).unwrap();
+    let ch = Character::load(&db, &Quiet).unwrap();
+    assert_eq!(ch.metres_per_unit(), 0.01);
+    assert!(ch.z_up());
+    let centres = frame_centres(&ch);
+    assert_eq!(centres.len(), ch.frame_count());
+    for (i, c) in centres.iter().enumerate() {
+        let want = centre_of(ch.frame(i as u32));
+        assert!(
+            (c[0] - want[0]).abs() < 1e-12 && (c[1] - want[1]).abs() < 1e-12,
+            "frame {i}: centre {c:?}, its frame's centre {want:?}"
+        );
+    }
+    // Not vacuous: the centres are away from the origin by more than a
+    // second conversion to centimetres would leave.
+    assert!(
+        centres.iter().any(|c| c[0].hypot(c[1]) > 1e-3),
+        "the walk's centres all sit at the origin"
+    );
+}
+
+/// Regression (issue 18, item 12): a retarget streamed to its output
+/// (`RetargetJob::run_to`, chunks of 64 frames handed on in order) writes
+/// the bytes the held path (`run` then `write`) writes, with the same
+/// report (turned-over counts, steps) and joint-velocity error; the
+/// 120-frame query crosses a chunk boundary.
+#[test]
+fn streamed_retarget_writes_the_bytes_of_the_held_one() {
+    use surfmotion::jobs::{RetargetJob, RetargetJobOptions};
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let clip = tmp.path().join("turn.bvh");
+    surfmotion::mocap::bvh::write_bvh(&gait_clip(Gait::Turn, 4.0, FPS), &clip).unwrap();
+    let job = RetargetJob::load(&f.db, RetargetJobOptions::default(), &Quiet).unwrap();
+    let held = job.run(&clip).unwrap();
+    assert!(held.output.report.frames > surfmotion::drive::CHUNK_FRAMES);
+    let held_error = held.velocity_error(&job.character);
+    let held_report = serde_json::to_value(&held.output.report.steps).unwrap();
+    let held_turned = held.output.report.turned_over;
+    let first: Vec<[f64; 3]> = held.output.positions[..job.character.n()].to_vec();
+    let held_files = job
+        .write(held.output.positions, &tmp.path().join("held.pc2"))
+        .unwrap();
+    let streamed = job
+        .run_to(&clip, &tmp.path().join("streamed.pc2"), 0)
+        .unwrap();
+    assert_eq!(held_files.len(), streamed.written.len());
+    for (a, b) in held_files.iter().zip(&streamed.written) {
+        let (a, b) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+        assert!(
+            a == b,
+            "{} bytes held, {} streamed, differ",
+            a.len(),
+            b.len()
+        );
+    }
+    assert_eq!(streamed.report.turned_over, held_turned);
+    assert_eq!(
+        serde_json::to_value(&streamed.report.steps).unwrap(),
+        held_report
+    );
+    assert_eq!(streamed.velocity.mean_cm, held_error.mean_cm);
+    // No bytes asked for: one frame is kept, the first.
+    assert_eq!(streamed.kept, first);
+}

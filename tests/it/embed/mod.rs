@@ -1,0 +1,5 @@
+//! Rig embedding on a mesh: landmarks, parts, joints, regressors.
+
+mod bodies;
+mod captures;
+mod placement;

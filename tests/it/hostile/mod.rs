@@ -1,0 +1,4 @@
+//! Hostile and malformed input: every verb and every reader.
+
+mod malformed;
+mod verbs;

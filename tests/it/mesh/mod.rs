@@ -1,0 +1,6 @@
+//! Geometry kernels and mesh I/O.
+
+mod glb_output;
+mod io;
+mod kernel_properties;
+mod kernels;

@@ -1,0 +1,5 @@
+//! Mocap input: the readers against reference implementations, other suites' skeletons, the bundled clips.
+
+mod procedural;
+mod reference;
+mod suites;

@@ -1,0 +1,8 @@
+//! The pose kernel: a clip's poses on a character's skeleton (feet, toes, chest, ground, placement, neutral frame).
+
+mod character_neutral;
+mod chest;
+mod feet;
+mod ground;
+mod placement;
+mod toes;

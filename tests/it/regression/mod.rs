@@ -1,0 +1,3 @@
+//! Regressions and issue acceptance tests named after what they pin.
+
+mod issue17_acceptance;

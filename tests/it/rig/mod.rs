@@ -1,0 +1,3 @@
+//! Canonical mapping: any humanoid clip's joints onto the canonical skeleton.
+
+mod mapping;

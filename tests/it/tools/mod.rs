@@ -1,0 +1,3 @@
+//! Tools: the plausibility evaluation.
+
+mod plausibility;

@@ -1,0 +1,4 @@
+//! Scan transfer (Confluent Motion).
+
+mod feet;
+mod scans;
