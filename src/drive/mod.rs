@@ -9,6 +9,7 @@
 //! and the floor translation that best fit the frame's skeleton onto the
 //! query pose, smoothed over time) and blended non-linearly.
 
+pub mod options;
 pub mod placement;
 pub mod prepared;
 pub mod query;
@@ -17,9 +18,8 @@ pub mod synthesis;
 pub mod timeline;
 pub mod trellis;
 
+pub use options::{RetargetError, RetargetOptions};
 pub use placement::{BlendScratch, Floor, blend_placed};
 pub use prepared::{Analysed, PrepareTimings, Prepared};
 pub use sink::{Each, FrameSink};
-pub use synthesis::{
-    CHUNK_FRAMES, Output, Report, RetargetError, RetargetOptions, Step, Timings, synthesise,
-};
+pub use synthesis::{CHUNK_FRAMES, Output, Report, Step, Timings, synthesise};

@@ -16,8 +16,8 @@
 //! ([`Prepared::fits`]). The trellis, timeline and smoothing options are
 //! per clip.
 
+use super::options::{RetargetError, RetargetOptions};
 use super::query::{database_floor_lift_on, on_character};
-use super::synthesis::{RetargetError, RetargetOptions};
 use crate::db::Character;
 use crate::deform::{DeformMode, DeformOptions, Deformer};
 use crate::mesh::Mesh;

@@ -1,48 +1,20 @@
 //! Surface synthesis of one clip (Huang et al. 2015, Sec. 5.2): retrieval,
 //! timeline, placement, blending and deformation, frame by frame.
 
+use super::options::{RetargetError, RetargetOptions};
 use super::placement::{BlendScratch, blend_placed, placements};
 use super::prepared::{Analysed, Prepared};
 use super::sink::FrameSink;
-use super::timeline::{Jump, TimelineOptions, timeline};
-use super::trellis::{Retrieval, TrellisInput, TrellisOptions, retrieve};
+use super::timeline::{Jump, timeline};
+use super::trellis::{Retrieval, TrellisInput, retrieve};
 use crate::db::Character;
-use crate::deform::{DeformMode, DeformOptions, TurnedOver};
+use crate::deform::{DeformMode, TurnedOver};
 use crate::mesh::blend::FrameGradients;
-use crate::mesh::solver::SolveError;
 use crate::pose::Pose;
 use crate::pose::retarget::{Reference, ReferenceSource};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
-
-/// Options of [`synthesise`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RetargetOptions {
-    /// Retrieval.
-    pub trellis: TrellisOptions,
-    /// Interpolation and blending.
-    pub timeline: TimelineOptions,
-    /// Half-width (frames) of the moving average applied to the placement
-    /// on the root trajectory. Default: 3.
-    pub smooth: usize,
-    /// Deformation towards the query skeleton (Sec. 5.2.3). Default: part.
-    pub deform: DeformMode,
-    /// Its settings.
-    pub deform_options: DeformOptions,
-}
-
-impl Default for RetargetOptions {
-    fn default() -> Self {
-        RetargetOptions {
-            trellis: TrellisOptions::default(),
-            timeline: TimelineOptions::default(),
-            smooth: 3,
-            deform: DeformMode::Part,
-            deform_options: DeformOptions::default(),
-        }
-    }
-}
 
 /// One output frame in the report.
 #[derive(Debug, Clone, Serialize)]
@@ -109,27 +81,6 @@ pub struct Output {
     pub query: Vec<Pose>,
     /// What was done.
     pub report: Report,
-}
-
-/// Why a retarget cannot run.
-#[derive(Debug, thiserror::Error)]
-pub enum RetargetError {
-    /// A solver could not be factored (mesh problems).
-    #[error(transparent)]
-    Solve(#[from] SolveError),
-    /// The output would not fit in memory (checked before allocating).
-    #[error(transparent)]
-    Budget(#[from] crate::util::budget::OverBudget),
-    /// The prepared character was made for another character or another
-    /// deformation ([`Prepared::fits`]).
-    #[error("the prepared character does not fit this run: {0}")]
-    Unprepared(String),
-}
-
-impl From<std::convert::Infallible> for RetargetError {
-    fn from(e: std::convert::Infallible) -> Self {
-        match e {}
-    }
 }
 
 /// Output frames made at once by [`Prepared::synthesise`]: blended and
