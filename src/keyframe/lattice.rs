@@ -60,7 +60,7 @@
 //! chosen by distance, not cost: if the extreme one is missing, the next
 //! one is kept in its place and may be extended. The grids of the README
 //! give the same reports with and without pruning, and
-//! `tests/keyframe.rs::cost_pruning_keeps_the_unpruned_result_on_random_graphs`
+//! `tests/it/keyframe/search.rs::cost_pruning_keeps_the_unpruned_result_on_random_graphs`
 //! compares the two.
 //!
 //! **Probe** ([`LatticeOptions::probe_bins`], with a heading target). The
@@ -103,7 +103,7 @@
 //! result may differ where the binning decides (README: samba's grid
 //! is unchanged, 3 of synth3's 800 queries take other transitions; on
 //! bandai9 they cut the programme's CPU time by about a quarter);
-//! `tests/keyframe.rs::following_one_arc_nodes_loses_no_path_against_an_exhaustive_search`
+//! `tests/it/keyframe/search.rs::following_one_arc_nodes_loses_no_path_against_an_exhaustive_search`
 //! compares both settings with an exhaustive search on random graphs.
 //!
 //! **Coarse bins** ([`LatticeOptions::coarse_bins`],
@@ -119,7 +119,7 @@
 //! bandai9's 200-target grid (walk → run_happy) the query CPU time fell
 //! by about 3.5× with every target met within 1 % before still met, and
 //! the mean Eq. 7 total over them 0.0600 → 0.0623 (README);
-//! `tests/keyframe.rs::coarse_bins_far_from_the_goal_meet_what_the_fine_search_meets`
+//! `tests/it/keyframe/search.rs::coarse_bins_far_from_the_goal_meet_what_the_fine_search_meets`
 //! compares the two on random graphs. The reachability oracle keeps the
 //! fine bins everywhere.
 //!

@@ -16,7 +16,7 @@
 //! (`UpAxis`, `FrontAxis`, `CoordAxis` with their signs) turned into Y up,
 //! front +Z. Lengths stay in file units; [`Clip::units`] carries
 //! `UnitScaleFactor`. Forward kinematics of the clip reproduces the
-//! evaluator's joint positions (checked in `tests/mocap_reference.rs`).
+//! evaluator's joint positions (checked in `tests/it/mocap/reference.rs`).
 //!
 //! The take is the first animation stack with keyed curves (Mixamo files
 //! carry an empty `Take 001` before the real one) unless one is named.

@@ -528,8 +528,8 @@ pub fn percent_decode(s: &str) -> Option<String> {
 mod tests {
     use super::*;
 
-    /// The messages of the shared file-error shape (tests/malformed.rs and
-    /// tests/hostile.rs check them through every reader).
+    /// The messages of the shared file-error shape (tests/it/hostile/malformed.rs and
+    /// tests/it/hostile/verbs.rs check them through every reader).
     #[test]
     fn file_error_messages_name_file_and_line() {
         let p = Path::new("dir/a.bvh");

@@ -2,7 +2,7 @@
 //! printed in a short form whatever its magnitude. `{}` of an `f64` never
 //! uses an exponent, so `--max-error 1e-300` printed a 397-character line
 //! and a Frame Time of 1e-30 s "999999999999999879147136483328.0000 frames
-//! per second". Tested in tests/hostile.rs
+//! per second". Tested in tests/it/hostile/verbs.rs
 //! (`extreme_numbers_print_short_in_messages`).
 
 use std::fmt;

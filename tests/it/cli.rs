@@ -633,8 +633,8 @@ fn render_panels(o: &Output) -> Vec<(glam::DVec3, glam::DVec3)> {
 /// contact sheets use ([`facing_of_frames`]), and the shoulder axis's
 /// median angle to the truth (sign left out).
 ///
-/// `SURFMOTION_FACING_FILES="A.pc2 B.glb" cargo test --release --test cli
-/// facing_figures -- --ignored --nocapture`
+/// `SURFMOTION_FACING_FILES="A.pc2 B.glb" cargo test --release --test it
+/// cli::facing_figures -- --ignored --nocapture`
 #[test]
 #[ignore = "a measurement for the README: needs SURFMOTION_FACING_FILES and ../shared/data"]
 fn facing_figures() {
@@ -642,8 +642,10 @@ fn facing_figures() {
     use surfmotion::embed::{Embedding, landmarks::Landmarks, parts::Part};
     use surfmotion::mesh::io::{LoadOptions, load_sequence};
     use surfmotion::tools::render::{facing_of, facing_of_frames};
-    let (Some(data), Ok(files)) = (common::data_dir(), std::env::var("SURFMOTION_FACING_FILES"))
-    else {
+    let (Some(data), Ok(files)) = (
+        common::optional_data_dir(),
+        std::env::var("SURFMOTION_FACING_FILES"),
+    ) else {
         return;
     };
     let rest = load_sequence(

@@ -547,7 +547,7 @@ fn check_enums(root: &gltf::json::Root, path: &Path) -> Result<(), MeshError> {
 
 /// Rejects mesh attributes naming an accessor that does not exist: the
 /// `gltf` crate's validation indexes the POSITION accessor unchecked (a
-/// panic; found by `tests/malformed.rs` on a bit-flipped GLB).
+/// panic; found by `tests/it/hostile/malformed.rs` on a bit-flipped GLB).
 fn check_attribute_indices(root: &gltf::json::Root, path: &Path) -> Result<(), MeshError> {
     let n = root.accessors.len();
     for (i, m) in root.meshes.iter().enumerate() {

@@ -14,7 +14,7 @@
 //! count, which a [`super::stream::SequenceWriter`] knows up front; each
 //! frame's points are appended as they come, and the extents (six numbers
 //! a frame) follow the last frame. Atomic: the file appears when the last
-//! frame is in. Checked in `tests/mesh_io.rs` by Pixar's `usd-core`
+//! frame is in. Checked in `tests/it/mesh/io.rs` by Pixar's `usd-core`
 //! (its validators pass; points read back equal ours).
 
 use crate::mesh::{Mesh, MeshError, MeshSequence};

@@ -68,7 +68,7 @@ fn synthetic_database_is_one_call_and_skeletons_share_one_schema() {
         &SynthOptions::default(),
         &mut |_, _| {},
     );
-    assert!(again.unwrap_err().to_string().contains("--force"));
+    assert!(again.unwrap_err().to_string().contains("`force`"));
     // Ground truth and extracted skeletons: one schema, sorted keys.
     assert_eq!(
         keys(&db.join("truth/walk.skeleton.json")),
