@@ -14,6 +14,10 @@
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
+/// The largest affine weight a regressor may give one vertex: a joint
+/// inside its support's spread needs less (see [`Regressor::fit`]).
+pub const MAX_WEIGHT: f64 = 1.0;
+
 /// One joint's regressor.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Regressor {
@@ -53,6 +57,15 @@ impl Regressor {
             .iter()
             .map(|p| 1.0 / k as f64 + (*p - c).dot(y))
             .collect();
+        // A support that is nearly flat where the joint lies off it passes
+        // the condition test yet needs weights far beyond the vertices' own
+        // (CesiumMan's spine: −22 to +15 from a thin band): the joint is
+        // exact on the rest frame and flies off the body in every posed one.
+        // An affine weight beyond ±1 is refused, so the caller takes a
+        // wider support.
+        if weights.iter().any(|w| w.abs() > MAX_WEIGHT) {
+            return None;
+        }
         Some(Regressor {
             vertices: support,
             weights,
@@ -101,6 +114,16 @@ mod tests {
             .map(|p| (q * DVec3::from_array(*p) + t).to_array())
             .collect();
         assert!((r.apply(&moved) - (q * j + t)).length() < 1e-12);
+        // A nearly flat support reaches off its plane only with weights far
+        // beyond ±1: refused (issue 39 item 10, CesiumMan's spine).
+        let thin: Vec<[f64; 3]> = (0..12)
+            .map(|i| {
+                let a = i as f64 * std::f64::consts::TAU / 12.0;
+                [a.cos(), a.sin(), if i % 2 == 0 { 0.001 } else { -0.001 }]
+            })
+            .collect();
+        assert!(Regressor::fit(&thin, (0..12).collect(), DVec3::new(0.0, 0.0, 0.5)).is_none());
+        assert!(Regressor::fit(&thin, (0..12).collect(), DVec3::new(0.1, 0.2, 0.0)).is_some());
         // A flat support cannot reach off its plane.
         let flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         assert!(Regressor::fit(&flat, vec![0, 1, 2], DVec3::Z).is_none());

@@ -336,6 +336,18 @@ fn a_rigged_gltf_skin_gives_the_rig_matched_by_position() {
         let want = glam::DVec3::from_array(rig.joints[c.index()]);
         assert!((sk[c.index()] - want).length() < 1e-6, "{}", c.name());
     }
+    // Regression (issue 39 item 10): the spine's regressor was fitted on a
+    // thin band with weights from -22 to +15, exact on the rest frame and
+    // drawn off the body in every posed one (`render --rig`). Every weight
+    // stays within the bound.
+    for (c, r) in Canonical::ALL.iter().zip(&rig.regressors) {
+        let worst = r.weights.iter().fold(0.0f64, |m, w| m.max(w.abs()));
+        assert!(
+            worst <= surfmotion::embed::regress::MAX_WEIGHT,
+            "{}: a weight of {worst}",
+            c.name()
+        );
+    }
     // Every part labelled somewhere; the limbs are one region each (the
     // head is split by the file's UV seams, which are cuts in the mesh).
     let pieces = piece_counts(
