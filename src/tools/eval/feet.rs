@@ -4,12 +4,12 @@
 //! The sole of each foot is chosen once on the rest frame: the foot-part
 //! vertices in the bottom `sole_band` of the foot's extent along up. A foot
 //! is in contact at frame `t` when its lowest sole vertex is within
-//! `contact_height` of the ground, at any speed (as [`track_sliding`] does
-//! for skeletons; issue 39: a speed limit on contact hid a foot gliding
-//! along the floor). Sliding at `t` is the horizontal travel of the sole
-//! centroid from `t−1` to `t` when the foot is in contact at both, relative
-//! to the ground, not the body. A planted foot reads ~0; a foot dragged or
-//! carried along the floor reads its speed per frame.
+//! `contact_height` of the floor and its sole centroid moves slower than
+//! `contact_speed` horizontally (backward difference; the first frame
+//! uses the forward one). Sliding at `t` is the horizontal travel of the
+//! sole centroid from `t−1` to `t` when the foot is in contact at both.
+//! A planted foot reads ~0; a foot dragged along the floor slower than
+//! `contact_speed` reads its speed per frame.
 
 use super::EvalError;
 use crate::embed::parts::Part;
@@ -24,6 +24,10 @@ pub struct FootOptions {
     /// Height above the floor within which a sole touches it (metres).
     /// Default: 0.03.
     pub contact_height: f64,
+    /// Horizontal speed below which a touching foot is in contact (m/s).
+    /// Default: 0.5 (1.7 cm per frame at 30 fps; a walking swing foot moves
+    /// 3-5 m/s).
+    pub contact_speed: f64,
 }
 
 impl Default for FootOptions {
@@ -31,6 +35,7 @@ impl Default for FootOptions {
         FootOptions {
             sole_band: 0.2,
             contact_height: 0.03,
+            contact_speed: 0.5,
         }
     }
 }
@@ -53,12 +58,11 @@ pub struct Sliding {
     pub mean_cm_per_frame: f64,
     /// Largest travel in one contact frame (cm).
     pub max_cm_per_frame: f64,
-    /// Foot-frames touching the floor: the same count as `contact_frames`
-    /// now that contact is by height alone (kept for the reports that
-    /// read it).
+    /// Foot-frames touching the floor (height test only, at any speed).
     pub touching_frames: usize,
-    /// Mean travel per touching frame (cm/frame): the same as
-    /// `mean_cm_per_frame` now that contact is by height alone.
+    /// Mean travel per touching frame (cm/frame): sees a foot gliding
+    /// faster than `contact_speed` (e.g. a held pose carried along a
+    /// trajectory), which the contact test excludes.
     pub touching_mean_cm_per_frame: f64,
 }
 
@@ -90,9 +94,8 @@ impl Feet {
     }
 
     /// Sliding over `frames` (frame-major, `n` vertices each, in units of
-    /// `metres_per_unit` metres), the floor at height `floor` along `up`
-    /// (same units). Travel is per frame; `fps` is not read since contact is
-    /// by height alone (kept so callers need not change).
+    /// `metres_per_unit` metres) at `fps`, the floor at height `floor` along
+    /// `up` (same units).
     #[allow(clippy::too_many_arguments)]
     pub fn sliding(
         &self,
@@ -119,13 +122,18 @@ impl Feet {
         up: DVec3,
         floor: f64,
         raised: [&[f64]; 2],
-        _fps: f64,
+        fps: f64,
         metres_per_unit: f64,
         opts: &FootOptions,
     ) -> Sliding {
         let m = metres_per_unit;
         let up = up.normalize_or(DVec3::Y);
         let count = frames.len() / n.max(1);
+        let fps = if fps.is_finite() && fps > 0.0 {
+            fps
+        } else {
+            30.0
+        };
         let mut s = Sliding::default();
         let mut touching_cm = 0.0;
         for (sole, raised) in self.soles.iter().zip(raised) {
@@ -146,8 +154,19 @@ impl Feet {
                 })
                 .collect();
             let step = |t: usize| (track[t].0 - track[t - 1].0).length();
+            let contact: Vec<bool> = (0..count)
+                .map(|t| {
+                    let d = if t > 0 {
+                        step(t)
+                    } else if count > 1 {
+                        step(1)
+                    } else {
+                        0.0
+                    };
+                    track[t].1 - ground(t) <= opts.contact_height && d * fps <= opts.contact_speed
+                })
+                .collect();
             let touch = |t: usize| track[t].1 - ground(t) <= opts.contact_height;
-            let contact: Vec<bool> = (0..count).map(touch).collect();
             for t in 0..count {
                 if touch(t) {
                     s.touching_frames += 1;
