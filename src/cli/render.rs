@@ -154,6 +154,35 @@ struct Panel {
 /// Runs `render`: every panel at one scale (the largest extent over all
 /// meshes and both views), each centred horizontally on its own mesh, all
 /// sharing one vertical centre.
+/// The facing of frame `at`: each frame's shoulder axis over up to 150
+/// frames either side, whose votes settle the sign (`facing_of_frames`).
+fn facing_around(count: usize, at: usize, stood: &dyn Fn(usize) -> Vec<[f64; 3]>) -> DVec3 {
+    let (from, to) = (at.saturating_sub(150), (at + 151).min(count));
+    let around: Vec<Vec<[f64; 3]>> = (from..to).map(stood).collect();
+    let refs: Vec<&[[f64; 3]]> = around.iter().map(Vec::as_slice).collect();
+    facing_of_frames(&refs, at - from)
+}
+
+/// For a `SEQ:F` spec, the facing of frame F voted in the whole sequence
+/// (stood up by `turn`); `None` for a file of its own or one that does not load.
+fn facing_in_sequence(spec: &str, turn: glam::DQuat) -> Option<DVec3> {
+    let (path, Some(at)) = surfmotion::mesh::io::split_frame_ref(spec) else {
+        return None;
+    };
+    let whole = load_sequence(path.to_str()?, &LoadOptions::default()).ok()?;
+    if at >= whole.frame_count() {
+        return None;
+    }
+    let stood = |f: usize| -> Vec<[f64; 3]> {
+        whole
+            .frame(f)
+            .iter()
+            .map(|p| (turn * DVec3::from_array(*p)).to_array())
+            .collect()
+    };
+    Some(facing_around(whole.frame_count(), at, &stood))
+}
+
 pub fn run(a: Args) -> anyhow::Result<()> {
     let size = a.size;
     let up = match &a.up {
@@ -228,16 +257,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 surfmotion::tools::render::preview::rig_facing(r, &j)
                     .unwrap_or(turn * DVec3::from_array(r.facing))
             }
-            _ => {
-                // Up to 150 frames either side: their votes settle the sign.
-                let (from, to) = (
-                    a.frame.saturating_sub(150),
-                    (a.frame + 151).min(s.frame_count()),
-                );
-                let around: Vec<Vec<[f64; 3]>> = (from..to).map(stood).collect();
-                let refs: Vec<&[[f64; 3]]> = around.iter().map(Vec::as_slice).collect();
-                facing_of_frames(&refs, a.frame - from)
-            }
+            // A `SEQ:F` spec loads frame F alone: its facing is voted over
+            // the frames around it in the whole sequence (one frame's vote
+            // drew the back of a straight walk as its front, CMU 02_02 on
+            // samba frame 60).
+            _ => match facing_in_sequence(mesh, turn) {
+                Some(f) => f,
+                None => facing_around(s.frame_count(), a.frame, &stood),
+            },
         };
         // The floor: the lowest point of the whole sequence, stood up (a
         // jump is drawn above it).

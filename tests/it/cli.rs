@@ -923,3 +923,64 @@ fn render_draws_a_floor_line() {
         );
     }
 }
+
+/// Regression (issue 39 item 10, seen in the session's last look): a
+/// `SEQ:F` spec loads frame F alone, so its facing was one frame's vote:
+/// `render walk.pc2:60` of CMU 02_02 retargeted onto the samba capture (a
+/// straight walk, centroid along +Z) drew her back as the front, and frame
+/// 0 too. Each frame is now faced by the votes of the whole sequence: every
+/// panel of the walk faces one way.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn render_of_single_frames_of_a_walk_faces_them_all_one_way() {
+    let Some(d) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("samba");
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    common::run_ok(
+        std::process::Command::new(common::bin())
+            .args(["db", "init"])
+            .arg(&db)
+            .arg("--mesh")
+            .arg(d.join("4d/samba/samba.obj"))
+            .arg("--sequence")
+            .arg(format!("dance={}", d.join("4d/samba/samba.pc2").display()))
+            .arg("--landmarks")
+            .arg(fixtures.join("samba.landmarks.json")),
+    );
+    let walk = tmp.path().join("walk.pc2");
+    common::run_ok(
+        std::process::Command::new(common::bin())
+            .args(["retarget", "--db"])
+            .arg(&db)
+            .arg("--mocap")
+            .arg(d.join("mocap/cmu-amc/02/02_02.amc"))
+            .arg("-o")
+            .arg(&walk),
+    );
+    let specs: Vec<String> = (0..75)
+        .step_by(5)
+        .map(|f| format!("{}:{f}", walk.display()))
+        .collect();
+    let o = common::run_ok(
+        std::process::Command::new(common::bin())
+            .arg("render")
+            .args(&specs)
+            .arg("--json")
+            .arg("-o")
+            .arg(tmp.path().join("sheet.png")),
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let z: Vec<f64> = v["panels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["facing"][2].as_f64().unwrap())
+        .collect();
+    assert_eq!(z.len(), specs.len());
+    assert!(
+        z.iter()
+            .all(|f| f.abs() > 0.9 && f.signum() == z[0].signum()),
+        "facing (z) per panel of a straight walk: {z:?}"
+    );
+}
