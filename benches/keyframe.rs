@@ -26,8 +26,8 @@
 use criterion::Criterion;
 use std::hint::black_box;
 use surfmotion::keyframe::graph::KeyGraph;
-use surfmotion::keyframe::lattice::HeadingTarget;
-use surfmotion::keyframe::search::{Method, SearchOptions};
+use surfmotion::keyframe::heading::HeadingTarget;
+use surfmotion::keyframe::options::{Method, SearchOptions};
 use surfmotion::keyframe::{Planner, Targets};
 
 fn graph() -> KeyGraph {
@@ -217,7 +217,7 @@ fn main() {
     // The one-performer database's shape (module docs).
     let pb = Planner::new(bandai9_graph(), &[0, (6 * 105 + 100) as u32], 25.0, &o).unwrap();
     let unpruned = SearchOptions {
-        lattice: surfmotion::keyframe::lattice::LatticeOptions {
+        lattice: surfmotion::keyframe::options::LatticeOptions {
             prune: false,
             ..o.lattice
         },
@@ -226,7 +226,7 @@ fn main() {
     // The programme as it was before following one-arc nodes and the
     // dominance across classes (module docs of `keyframe::lattice`).
     let layered = SearchOptions {
-        lattice: surfmotion::keyframe::lattice::LatticeOptions {
+        lattice: surfmotion::keyframe::options::LatticeOptions {
             follow: false,
             dominance: false,
             ..o.lattice
@@ -235,7 +235,7 @@ fn main() {
     };
     // Every cell keeps all its bins (module docs, "Coarse bins").
     let fine = SearchOptions {
-        lattice: surfmotion::keyframe::lattice::LatticeOptions {
+        lattice: surfmotion::keyframe::options::LatticeOptions {
             coarse_from: f64::INFINITY,
             ..o.lattice
         },
@@ -249,7 +249,7 @@ fn main() {
         (
             "pruned_2threads",
             SearchOptions {
-                lattice: surfmotion::keyframe::lattice::LatticeOptions {
+                lattice: surfmotion::keyframe::options::LatticeOptions {
                     parallel_from: 4096,
                     ..o.lattice
                 },
@@ -282,7 +282,7 @@ fn main() {
     // ±0.2-0.6 rad) on the same graph, with the search of session 12
     // (`before`: no probe) and the default (the probe runs with a
     // heading target only, so the 18 m query is the same search twice).
-    let before = surfmotion::keyframe::lattice::LatticeOptions {
+    let before = surfmotion::keyframe::options::LatticeOptions {
         probe_bins: 0,
         ..o.lattice
     };

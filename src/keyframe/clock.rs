@@ -10,7 +10,7 @@
 //! elsewhere, or when the call fails, there is no figure (`None`)
 //! and the reports give the wall time alone. Work the search hands to
 //! other threads (the opt-in
-//! [`super::lattice::LatticeOptions::parallel_from`]) is not counted.
+//! [`super::options::LatticeOptions::parallel_from`]) is not counted.
 
 /// CPU seconds the calling thread has run so far, or `None` where the
 /// platform does not say.

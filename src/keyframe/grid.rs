@@ -5,7 +5,7 @@
 //! time.
 //!
 //! A target `(d, t)` is *reachable* when some path through the key-frames
-//! (transitions at least [`super::lattice::LatticeOptions::min_run`] frames
+//! (transitions at least [`super::options::LatticeOptions::min_run`] frames
 //! apart, as the search's paths) travels within 1 % of `d` in a time within
 //! 1 % of `t`. It is decided per target ([`super::lattice::oracle`]): the
 //! query's own result when it lands within 1 % (a witness); else *out of
@@ -24,8 +24,10 @@
 //! every transition of the graph, the floor any path with a transition
 //! can reach.
 
+use super::error::{GridError, SearchError};
 use super::lattice::{Reachability, oracle};
-use super::search::{Reach, SearchOptions, Target};
+use super::options::SearchOptions;
+use super::segment::{Reach, Target};
 use super::{Planner, Targets, mean_smoothness, mean_smoothness_vertex, transitions};
 use crate::db::Character;
 use crate::drive::timeline::TimelineOptions;
@@ -213,6 +215,33 @@ pub struct GridReport {
     pub queries: Vec<GridQuery>,
 }
 
+/// One target of [`super::smoothest::floor_grid`] (here beside
+/// [`GridQuery`], so that [`check_grid`] bounds the records of both grids).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FloorQuery {
+    /// Target distance (metres).
+    pub distance: f64,
+    /// Target time (seconds).
+    pub time: f64,
+    /// Reachable within 1 % ([`reachability`]).
+    pub reachable: bool,
+    /// The smoothest path's mean price (the graph's transitions at their
+    /// own windows, metres); `None`: no path with a transition found
+    /// within the bands.
+    pub least_mean: Option<f64>,
+    /// The same path's mean smoothness as the grid measures it (the
+    /// timeline's windows).
+    pub least_mean_measured: Option<f64>,
+    /// Its transitions.
+    pub transitions: usize,
+    /// Its achieved distance (metres) and time (seconds).
+    pub achieved: Option<(f64, f64)>,
+    /// The exact lower bound ([`super::smoothest::lower_bound`]).
+    pub lower_bound: Option<f64>,
+    /// Seconds of [`super::smoothest::least_mean`] for this target.
+    pub seconds: f64,
+}
+
 /// Most values of one range of [`parse_range`].
 pub const MAX_RANGE_VALUES: usize = 100_001;
 
@@ -222,32 +251,6 @@ pub const MAX_RANGE_VALUES: usize = 100_001;
 /// [`MAX_RANGE_VALUES`] still made 8.9e9 targets, a 1.28 TB allocation
 /// (issue 46.4). The default grid has 800.
 pub const MAX_GRID_TARGETS: usize = 100_000;
-
-/// A grid too large to run.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum GridError {
-    /// More targets than [`MAX_GRID_TARGETS`].
-    #[error(
-        "a grid of {} targets ({} distances × {} times): at most {}; lower the number of distances or times (a larger step or a shorter range)",
-        crate::util::budget::thousands(*.count),
-        crate::util::budget::thousands(*.distances as u128),
-        crate::util::budget::thousands(*.times as u128),
-        crate::util::budget::thousands(*.max as u128)
-    )]
-    TooMany {
-        /// Targets asked for.
-        count: u128,
-        /// Distances.
-        distances: usize,
-        /// Times.
-        times: usize,
-        /// The cap.
-        max: usize,
-    },
-    /// Its queries' records exceed the memory budget.
-    #[error("{0}")]
-    OverBudget(#[from] crate::util::budget::OverBudget),
-}
 
 /// Refuses a grid of `distances × times` targets before any query runs:
 /// more than [`MAX_GRID_TARGETS`], or records beyond the memory budget.
@@ -261,8 +264,7 @@ pub fn check_grid(distances: usize, times: usize) -> Result<(), GridError> {
             max: MAX_GRID_TARGETS,
         });
     }
-    let each =
-        std::mem::size_of::<GridQuery>().max(std::mem::size_of::<super::smoothest::FloorQuery>());
+    let each = std::mem::size_of::<GridQuery>().max(std::mem::size_of::<FloorQuery>());
     crate::util::budget::check(
         || {
             format!(
@@ -319,7 +321,7 @@ pub fn reachability(
     d: f64,
     t: f64,
     met: bool,
-) -> Result<Reachability, super::search::SearchError> {
+) -> Result<Reachability, SearchError> {
     if met {
         return Ok(Reachability::Reachable);
     }
@@ -432,7 +434,7 @@ pub fn evaluate(
     times: &[f64],
     search: &SearchOptions,
     timeline: &TimelineOptions,
-) -> Result<GridReport, super::search::SearchError> {
+) -> Result<GridReport, SearchError> {
     evaluate_with(ch, planner, distances, times, search, timeline, &mut |_| {})
 }
 
@@ -448,7 +450,7 @@ pub fn evaluate_with(
     search: &SearchOptions,
     timeline: &TimelineOptions,
     done: &mut dyn FnMut(&GridQuery),
-) -> Result<GridReport, super::search::SearchError> {
+) -> Result<GridReport, SearchError> {
     check_grid(distances.len(), times.len())?;
     let reach: Vec<Reach> = planner.segments.iter().map(|s| s.reach()).collect();
     // Every frame pair of every transition the paths may take, measured
@@ -504,7 +506,7 @@ pub fn evaluate_with(
                 cpu_seconds,
                 bounded: !plan.stats.bounds_hit.is_empty(),
                 heading_error_deg: search.heading.map(|h| {
-                    super::lattice::wrap((plan.facing_deg - h.degrees).to_radians()).to_degrees()
+                    super::heading::wrap((plan.facing_deg - h.degrees).to_radians()).to_degrees()
                 }),
                 walks_and_loops: plan.stats.walks_and_loops,
             });

@@ -30,7 +30,7 @@
 //! they stay valid bounds.
 //!
 //! The binning makes this a bounded search (like a beam), not a proof of
-//! optimality: [`super::search::Segment::solve`] keeps the paper's search
+//! optimality: [`super::segment::Segment::solve`] keeps the paper's search
 //! as the fallback when no path lands within `T`, and reports which one
 //! found the result. `r_min(start, N) ≤ d_V ≤ r_max(start, N)` is necessary
 //! for a path of `N` frames to travel `d_V` ([`extremes`]), not sufficient:
@@ -143,142 +143,11 @@
 //!   error; an animator asking for 6 m in 4 s wants both met when the
 //!   graph can).
 
+use super::heading::Heading;
+use super::options::{LatticeOptions, SearchOptions};
 use super::repeats::Measure;
-use super::search::{ArcView, SearchOptions, Segment, Target};
+use super::segment::{ArcView, Segment, Target};
 use crate::util::budget::OverBudget;
-
-/// Options of the exact-length search.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct LatticeOptions {
-    /// Bins per `(node, frame count)`. Default: 32.
-    pub bins: usize,
-    /// Tolerance on the final distance, as a fraction of the target.
-    /// Default: 0.02.
-    pub tolerance: f64,
-    /// Plus this many metres. Default: 0.01.
-    pub tolerance_m: f64,
-    /// Frame counts tried on either side of the target's (each must beat
-    /// the best cost by its time term). Default: 3.
-    pub frame_slack: u32,
-    /// Longest path considered (frames). Default: 20 000.
-    pub max_frames: usize,
-    /// Fewest frames between two transitions (so that each keeps a blend
-    /// window; the timeline shortens windows that would overlap).
-    /// Default: 4.
-    pub min_run: u32,
-    /// Prefer a path within this fraction of both targets over a cheaper
-    /// (Eq. 7) one that is not (module docs); 0: Eq. 7 alone. Default:
-    /// 0.01 (the 1 % of the figures).
-    pub within: f64,
-    /// Prune by cost (module docs, "Pruning"): a frame count, or a label,
-    /// whose cost bound reaches the best total found so far is not
-    /// searched, or not extended. The result is the one without pruning
-    /// (module docs); `false` searches everything (tests compare the two).
-    /// Default: true.
-    pub prune: bool,
-    /// Labels a layer must hold before its nodes are shared among the
-    /// threads of the current rayon pool (the result does not depend on
-    /// it, module docs, "Threads"). Default: `usize::MAX`, never: on the
-    /// shared 2-core machine a second thread made the bench's bandai9
-    /// query slower (1.18 s → 1.85 s at load average 4); 4096 suits idle
-    /// cores.
-    pub parallel_from: usize,
-    /// Dominance across the classes of frames since the last transition
-    /// (module docs, "Classes"): in one distance bin, a label with more
-    /// frames since its last transition (capped at
-    /// [`LatticeOptions::min_run`]) that costs no more replaces the one
-    /// with fewer. `false`: every class keeps its own bins (tests compare
-    /// the two). Default: true.
-    pub dominance: bool,
-    /// Follow a label through the nodes that leave it one arc only (module
-    /// docs, "Following") instead of binning it at each. `false`: every
-    /// node is a layer's cell (tests compare the two). Default: true.
-    pub follow: bool,
-    /// Bins of a cell whose window is wider than
-    /// [`LatticeOptions::coarse_from`] times the final window `2T` (module
-    /// docs, "Coarse bins"); at most [`LatticeOptions::bins`]. Default: 4.
-    pub coarse_bins: usize,
-    /// The window width, in units of the final window `2T`, beyond which a
-    /// cell keeps [`LatticeOptions::coarse_bins`] bins; `f64::INFINITY`:
-    /// every cell keeps [`LatticeOptions::bins`] (the search before).
-    /// Default: 4.
-    pub coarse_from: f64,
-    /// Coarse bins of the probe (module docs, "Probe"), a cheaper
-    /// programme run first, with a heading target, when no path bounds a
-    /// frame count yet; its path's score caps the full programme. 0: no
-    /// probe. Default: 1.
-    pub probe_bins: usize,
-    /// Bins of the probe's cells near the goal. Default: 8.
-    pub probe_fine: usize,
-}
-
-impl Default for LatticeOptions {
-    fn default() -> Self {
-        LatticeOptions {
-            bins: 32,
-            tolerance: 0.02,
-            tolerance_m: 0.01,
-            frame_slack: 3,
-            max_frames: 20_000,
-            min_run: 4,
-            within: 0.01,
-            prune: true,
-            parallel_from: usize::MAX,
-            dominance: true,
-            follow: true,
-            coarse_bins: 4,
-            coarse_from: 4.0,
-            probe_bins: 1,
-            probe_fine: 8,
-        }
-    }
-}
-
-/// The animator's heading target: the final facing relative to the start
-/// key-frame's.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct HeadingTarget {
-    /// Degrees about the vertical ([`crate::pose::measure::rotate_yaw`]'s
-    /// sense: positive turns from +Z towards +X).
-    pub degrees: f64,
-    /// Cost per degree of error. Default in the CLI: 1/30 (a 30° error
-    /// costs 1, as much as 0.3 m of distance error at the paper's
-    /// `w_dist`).
-    pub weight: f64,
-    /// Sectors of turn the search's bins are split into. Default: 8.
-    pub sectors: usize,
-}
-
-/// A heading target as the programme uses it (module docs).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Heading {
-    /// Target turn of the placement over the path (radians; the facing
-    /// target minus the key-frames' own facing difference).
-    pub turn: f64,
-    /// Cost per radian of error.
-    pub weight: f64,
-    /// Sectors of turn the bins are split into. Default in the CLI: 8.
-    pub sectors: usize,
-}
-
-/// `x` wrapped to `(−π, π]`.
-pub fn wrap(x: f64) -> f64 {
-    let t = std::f64::consts::TAU;
-    let y = x.rem_euclid(t);
-    if y > std::f64::consts::PI { y - t } else { y }
-}
-
-impl Heading {
-    /// The heading term of a path that turns `turn` radians.
-    pub fn cost(&self, turn: f64) -> f64 {
-        self.weight * wrap(turn - self.turn).abs()
-    }
-    fn sector(&self, turn: f64) -> usize {
-        let s = self.sectors.max(1);
-        let x = (wrap(turn - self.turn) + std::f64::consts::PI) / std::f64::consts::TAU;
-        ((x * s as f64) as usize).min(s - 1)
-    }
-}
 
 /// The graph the programme walks: one segment's compressed graph, or
 /// several joined at their key-frames (module docs). It keeps its
@@ -1111,7 +980,7 @@ pub fn search(
     // the nearest frame count's whole distance.
     let extra = (w.distance * t.distance / w.time.max(1e-9)).ceil() as i64;
     // ... and no longer than the horizon (a departure from Eq. 7 for
-    // targets out of reach, [`super::search::Horizon`]).
+    // targets out of reach, [`super::options::Horizon`]).
     let horizon = (opts.horizon.frames(t.frames).floor() as i64 - cs).max(least);
     let top = (target.max(least) + extra + i64::from(lo.frame_slack))
         .min(lo.max_frames as i64)

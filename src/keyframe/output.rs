@@ -1,10 +1,11 @@
 //! A planned path made into frames: synthesis along the timeline, held or
 //! streamed.
 
+use super::heading::wrap;
 use super::planner::*;
 use super::problem::*;
 use super::report::*;
-use super::{lattice, place, pose, smoothness};
+use super::{place, pose, smoothness};
 use crate::db::Character;
 use std::time::Instant;
 
@@ -186,7 +187,7 @@ impl Planned {
             heading_error_deg: opts
                 .search
                 .heading
-                .map(|h| lattice::wrap((plan.facing_deg - h.degrees).to_radians()).to_degrees()),
+                .map(|h| wrap((plan.facing_deg - h.degrees).to_radians()).to_degrees()),
             poses: Vec::new(),
             stats: plan.stats.clone(),
             prepare_seconds: planner.prepare_seconds,

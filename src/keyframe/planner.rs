@@ -1,10 +1,13 @@
 //! The planner: one search per pair of key-frames, loops, and the plan they
 //! make.
 
+use super::error::SearchError;
 use super::graph::KeyGraph;
+use super::heading::{Heading, wrap};
+use super::options::{Method, SearchOptions};
 use super::problem::*;
 use super::repeats::Measure;
-use super::search::{Method, SearchError, SearchOptions, Segment, SegmentPath, Stats, Target};
+use super::segment::{Segment, SegmentPath, Stats, Target};
 use super::{clock, lattice, search};
 use crate::db::Character;
 use serde::Serialize;
@@ -45,7 +48,7 @@ pub struct TargetReach {
     /// Fewest seconds in which some frame count's extremes admit the
     /// distance within 1 % (`None`: not within the horizon).
     pub min_time: Option<f64>,
-    /// The query's horizon (seconds, [`search::Horizon`]).
+    /// The query's horizon (seconds, [`super::options::Horizon`]).
     pub horizon: f64,
     /// The most distance of any path within the horizon (metres).
     pub max_in_horizon: Option<f64>,
@@ -193,8 +196,8 @@ impl Planner {
 
     /// The heading term of the search for a target facing (module docs
     /// of [`lattice`]).
-    fn heading(&self, opts: &SearchOptions) -> Option<lattice::Heading> {
-        opts.heading.map(|h| lattice::Heading {
+    fn heading(&self, opts: &SearchOptions) -> Option<Heading> {
+        opts.heading.map(|h| Heading {
             turn: h.degrees.to_radians() - self.facing,
             weight: h.weight.to_degrees(),
             sectors: h.sectors,
@@ -207,7 +210,7 @@ impl Planner {
         &self,
         i: usize,
         t: &Target,
-        heading: Option<&lattice::Heading>,
+        heading: Option<&Heading>,
         opts: &SearchOptions,
         stats: &mut Stats,
     ) -> Result<SegmentPath, SearchError> {
@@ -337,7 +340,7 @@ impl Planner {
                 total: measure.cost + dterm + tterm + hterm,
             },
             turn,
-            facing_deg: lattice::wrap(turn + self.facing).to_degrees(),
+            facing_deg: wrap(turn + self.facing).to_degrees(),
             segments: segs,
             path,
             measure,
@@ -349,7 +352,7 @@ impl Planner {
 
     /// What the key-frames can physically make of a global target, from
     /// the chain's exact-length extremes (cheap: they are kept across
-    /// queries) up to the query's horizon ([`search::Horizon`]). `None`
+    /// queries) up to the query's horizon ([`super::options::Horizon`]). `None`
     /// without a chain or with a zero target.
     pub fn reach_of(&self, distance: f64, time: f64, opts: &SearchOptions) -> Option<TargetReach> {
         let c = self.chain.as_ref()?;

@@ -2,7 +2,7 @@
 //! the key graph.
 
 use super::graph::KeyGraph;
-use super::search::SearchOptions;
+use super::options::SearchOptions;
 use super::{select, smoothness};
 use crate::db::Character;
 use crate::drive::timeline::TimelineOptions;

@@ -9,7 +9,7 @@
 //! frames of the walk (`_0`) and of each loop, `Δd = d_0 − d_V`,
 //! `Δt = t_0 − t_V`. Every coefficient is ≥ 0 and every loop has `t_i ≥ 1`.
 //!
-//! **Heading** (an extension, [`super::lattice::Heading`]; [`Turns`]): with
+//! **Heading** (an extension, [`super::heading::Heading`]; [`Turns`]): with
 //! a target for the final facing the cost has a fourth term,
 //! `w_h ρ(Δθ + Σ n_i θ_i)`, with `θ_i` the turn of one repetition of loop
 //! `i`, `Δθ = θ_0 − θ_V` (the walk's turn minus the target) and
@@ -43,7 +43,7 @@
 //!   better than a kept one.
 //! - [`brute_force`]: every `n` with `n_i ≤ limit`, for the tests.
 
-use super::lattice::wrap;
+use super::heading::wrap;
 use good_lp::{Expression, ProblemVariables, Solution, SolverModel, Variable, microlp, variable};
 use std::f64::consts::TAU;
 
@@ -96,7 +96,7 @@ pub struct Problem<'a> {
     /// The heading term (an extension; `None`: Eq. 20 alone).
     pub heading: Option<Turns<'a>>,
     /// Most loop frames `Σ n_i t_i` (the query's horizon less the walk's
-    /// frames, [`super::search::Horizon`]; `None`: unbounded). The
+    /// frames, [`super::options::Horizon`]; `None`: unbounded). The
     /// optimum is then Eq. 20's over the counts within it.
     pub max_loop_frames: Option<u32>,
 }

@@ -1,11 +1,12 @@
 //! What a plan reports: per segment, per transition, its smoothness, and why no
 //! path joins two key-frames.
 
+use super::error::SearchError;
 use super::graph::KeyGraph;
 use super::planner::*;
 use super::problem::*;
-use super::search::{SearchError, Stats};
-use super::{graph, pose, search, smoothness};
+use super::segment::Stats;
+use super::{graph, options, pose, smoothness};
 use crate::db::Character;
 use crate::drive::timeline::{TimelineOptions, timeline};
 use serde::Serialize;
@@ -18,9 +19,9 @@ pub struct Report {
     /// The targets.
     pub targets: Targets,
     /// Weights used (per metre, per frame).
-    pub weights: search::Weights,
+    pub weights: options::Weights,
     /// Repetition solver.
-    pub solver: search::Solver,
+    pub solver: options::Solver,
     /// Frames per second.
     pub fps: f64,
     /// Output frames.

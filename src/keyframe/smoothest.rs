@@ -28,7 +28,7 @@
 //! of [`super::lattice`]), so the path returned is a feasible path whose
 //! mean is an **upper bound** on the least mean; [`lower_bound`] gives an
 //! exact **lower bound** (a Lagrangian relaxation of the distance band,
-//! without [`super::lattice::LatticeOptions::min_run`], by bisection on
+//! without [`super::options::LatticeOptions::min_run`], by bisection on
 //! `λ` over the extremes' least cost), so the least mean lies between the
 //! two.
 //!
@@ -39,8 +39,11 @@
 //! closer than their windows), so [`floor_grid`] reports the path's mean
 //! measured as the grid measures it as well.
 
-use super::lattice::{Chain, Found, LatticeOptions, chain_extremes, solve_capped};
-use super::search::{SearchError, Target};
+use super::error::SearchError;
+use super::grid::FloorQuery;
+use super::lattice::{Chain, Found, chain_extremes, solve_capped};
+use super::options::LatticeOptions;
+use super::segment::{ArcView, Target};
 use super::{Planner, join, mean_smoothness, transitions};
 use crate::db::Character;
 use crate::drive::timeline::TimelineOptions;
@@ -79,7 +82,7 @@ fn band(c: &Chain, t: &Target, within: f64, max_frames: usize) -> Option<(Vec<us
 }
 
 /// Transitions and their summed price along `arcs`.
-fn tally(arcs: &[u32], by_index: &[Option<super::search::ArcView>]) -> (usize, f64) {
+fn tally(arcs: &[u32], by_index: &[Option<ArcView>]) -> (usize, f64) {
     let mut k = 0;
     let mut sum = 0.0;
     for &a in arcs {
@@ -265,32 +268,6 @@ pub fn lower_bound(
         }
     }
     Ok(Some(lo))
-}
-
-/// One target of [`floor_grid`].
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FloorQuery {
-    /// Target distance (metres).
-    pub distance: f64,
-    /// Target time (seconds).
-    pub time: f64,
-    /// Reachable within 1 % ([`super::grid::reachability`]).
-    pub reachable: bool,
-    /// The smoothest path's mean price (the graph's transitions at their
-    /// own windows, metres); `None`: no path with a transition found
-    /// within the bands.
-    pub least_mean: Option<f64>,
-    /// The same path's mean smoothness as the grid measures it (the
-    /// timeline's windows).
-    pub least_mean_measured: Option<f64>,
-    /// Its transitions.
-    pub transitions: usize,
-    /// Its achieved distance (metres) and time (seconds).
-    pub achieved: Option<(f64, f64)>,
-    /// The exact lower bound ([`lower_bound`]).
-    pub lower_bound: Option<f64>,
-    /// Seconds of [`least_mean`] for this target.
-    pub seconds: f64,
 }
 
 /// Min / mean / median / max of a set.

@@ -5,7 +5,7 @@
 use super::args::{Args, CostArg, MethodArg, SolverArg, TransitionsArg};
 use surfmotion::jobs::keyframe::{GridTargets, KeyframeJobError, KeyframeJobOptions};
 use surfmotion::keyframe::grid::parse_range;
-use surfmotion::keyframe::search::{Method, Solver};
+use surfmotion::keyframe::options::{Method, Solver};
 use surfmotion::keyframe::{MAX_TARGET_METRES, MAX_TARGET_SECONDS, TransitionCost, TransitionSet};
 
 /// The job's defaults.

@@ -25,7 +25,7 @@ pub enum KeyframeJobError {
     },
     /// A grid too large to run.
     #[error("distances × times: {0}")]
-    Grid(#[from] crate::keyframe::grid::GridError),
+    Grid(#[from] crate::keyframe::error::GridError),
     /// A target above the search's bound.
     #[error("{option} {value}: at most {max} {unit} (the search's horizon grows with the target)")]
     TooLarge {

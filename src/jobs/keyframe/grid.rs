@@ -3,8 +3,8 @@
 
 use super::KeyframeJobError;
 use crate::db::Character;
-use crate::keyframe::grid::{GridQuery, GridReport, check_grid, evaluate_with};
-use crate::keyframe::smoothest::{FloorQuery, FloorReport, floor_grid_with};
+use crate::keyframe::grid::{FloorQuery, GridQuery, GridReport, check_grid, evaluate_with};
+use crate::keyframe::smoothest::{FloorReport, floor_grid_with};
 use crate::keyframe::{
     KeyframeError, KeyframeOptions, MAX_TARGET_METRES, MAX_TARGET_SECONDS, Planner, TransitionCost,
     describe, facing_change, key_graph,

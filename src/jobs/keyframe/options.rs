@@ -1,8 +1,10 @@
 //! The options of a key-frame job, with the command line's defaults.
 
 use crate::drive::timeline::TimelineOptions;
-use crate::keyframe::lattice::{HeadingTarget, LatticeOptions};
-use crate::keyframe::search::{Horizon, Limits, Method, SearchOptions, Solver, Weights};
+use crate::keyframe::heading::HeadingTarget;
+use crate::keyframe::options::{
+    Horizon, LatticeOptions, Limits, Method, SearchOptions, Solver, Weights,
+};
 use crate::keyframe::{KeyframeOptions, TransitionCost, TransitionSet};
 
 /// The grid's distances by default (metres; the paper's Table III), as

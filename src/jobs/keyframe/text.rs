@@ -4,8 +4,8 @@
 use super::floor::FloorReport;
 use super::grid::LeastMean;
 use crate::keyframe::floor::{PathFloor, Window};
-use crate::keyframe::grid::{GridQuery, GridReport};
-use crate::keyframe::smoothest::{FloorQuery, Summary};
+use crate::keyframe::grid::{FloorQuery, GridQuery, GridReport};
+use crate::keyframe::smoothest::Summary;
 
 /// The header of [`grid_row`]'s lines.
 pub const GRID_HEADER: &str =

@@ -256,23 +256,7 @@ mod file_level {
     /// removing in parallel (rig map/structure, rig embed joints/landmarks):
     /// allowed until their branches merge; the lead empties this list then.
     /// Any other circle fails.
-    pub const KNOWN_CIRCLES: &[&[&str]] = &[
-        // Not yet broken by `shape` (issue 40): key-frame search, lattice,
-        // repeats and grid share types both ways; next step: their shared
-        // types (Target, Segment, SearchOptions, SearchError, GridError,
-        // Measure, wrap) into a file of their own.
-        &[
-            "src/keyframe/grid.rs",
-            "src/keyframe/lattice.rs",
-            "src/keyframe/planner.rs",
-            "src/keyframe/pose.rs",
-            "src/keyframe/problem.rs",
-            "src/keyframe/repeats.rs",
-            "src/keyframe/report.rs",
-            "src/keyframe/search.rs",
-            "src/keyframe/smoothest.rs",
-        ],
-    ];
+    pub const KNOWN_CIRCLES: &[&[&str]] = &[];
 
     type Module = Vec<String>;
 

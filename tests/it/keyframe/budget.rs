@@ -6,8 +6,9 @@
 
 use crate::common;
 
+use surfmotion::keyframe::error::SearchError;
 use surfmotion::keyframe::graph::KeyGraph;
-use surfmotion::keyframe::search::{SearchError, SearchOptions};
+use surfmotion::keyframe::options::SearchOptions;
 use surfmotion::keyframe::{Planner, Targets};
 
 /// One sequence of 60 frames walking 2 cm a frame, with two loops back.

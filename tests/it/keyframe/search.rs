@@ -7,8 +7,8 @@ use crate::common;
 use std::collections::BinaryHeap;
 use std::process::Command;
 use surfmotion::keyframe::graph::KeyGraph;
+use surfmotion::keyframe::options::SearchOptions;
 use surfmotion::keyframe::repeats::{Measure, Problem, brute_force, solve_exact, solve_ilp};
-use surfmotion::keyframe::search::SearchOptions;
 use surfmotion::keyframe::{Planner, Targets};
 
 use common::keygraph::Lcg;
@@ -1005,8 +1005,8 @@ fn walks_plain_and_turned_60(
     keys: &[u32],
     t: &Targets,
 ) -> Option<(surfmotion::keyframe::Plan, surfmotion::keyframe::Plan, f64)> {
-    use surfmotion::keyframe::lattice::HeadingTarget;
-    use surfmotion::keyframe::search::Method;
+    use surfmotion::keyframe::heading::HeadingTarget;
+    use surfmotion::keyframe::options::Method;
     let o = SearchOptions {
         method: Method::Walks,
         gap: 0.0,
@@ -1033,7 +1033,7 @@ fn walks_plain_and_turned_60(
 /// under 60° in most cases.
 #[test]
 fn heading_target_turns_the_final_facing() {
-    use surfmotion::keyframe::lattice::HeadingTarget;
+    use surfmotion::keyframe::heading::HeadingTarget;
     let mut r = Lcg(31);
     let (mut cases, mut closer, mut sum) = (0, 0, 0.0);
     for _ in 0..300 {
@@ -1149,7 +1149,7 @@ fn one_global_target_over_via_keyframes_is_split_by_the_exact_length_search() {
     let (mut compared, mut within, mut walks_within) = (0, 0, 0);
     let o = SearchOptions::default();
     let walks = SearchOptions {
-        method: surfmotion::keyframe::search::Method::Walks,
+        method: surfmotion::keyframe::options::Method::Walks,
         ..o
     };
     let w = o.weights;
@@ -1210,7 +1210,7 @@ fn one_global_target_over_via_keyframes_is_split_by_the_exact_length_search() {
 #[test]
 fn reachability_oracle_agrees_with_an_exhaustive_search() {
     use surfmotion::keyframe::lattice::{Chain, Reachability, oracle};
-    use surfmotion::keyframe::search::Target;
+    use surfmotion::keyframe::segment::Target;
     let mut r = Lcg(53);
     let o = SearchOptions::default();
     let (mut yes, mut no) = (0, 0);
@@ -1256,14 +1256,14 @@ fn reachability_oracle_agrees_with_an_exhaustive_search() {
 fn the_search_meets_both_targets_within_1pct_when_some_path_does() {
     let mut r = Lcg(61);
     let base = SearchOptions {
-        weights: surfmotion::keyframe::search::Weights {
+        weights: surfmotion::keyframe::options::Weights {
             distance: 1.0 / 0.3,
             time: 0.001,
         },
         ..Default::default()
     };
     let plain = SearchOptions {
-        lattice: surfmotion::keyframe::lattice::LatticeOptions {
+        lattice: surfmotion::keyframe::options::LatticeOptions {
             within: 0.0,
             ..base.lattice
         },
@@ -1417,7 +1417,7 @@ fn brute_counts(p: &Problem, budget: f64) -> (f64, Vec<u32>) {
 /// the cost of none. The exact programme agrees too.
 #[test]
 fn walks_search_with_the_ilp_matches_brute_force_on_small_random_graphs() {
-    use surfmotion::keyframe::search::{Method, Solver};
+    use surfmotion::keyframe::options::{Method, Solver};
     let mut r = Lcg(53);
     let mut compared = 0;
     for case in 0..300 {
@@ -1511,9 +1511,9 @@ fn frames_turn(g: &KeyGraph, frames: &[u32], closed: bool) -> f64 {
 /// test checks that this gives a higher cost in some cases.
 #[test]
 fn walks_search_with_a_heading_target_matches_brute_force_on_small_random_graphs() {
-    use surfmotion::keyframe::lattice::HeadingTarget;
+    use surfmotion::keyframe::heading::HeadingTarget;
+    use surfmotion::keyframe::options::{Method, Solver};
     use surfmotion::keyframe::repeats::Turns;
-    use surfmotion::keyframe::search::{Method, Solver};
     let mut r = Lcg(59);
     let (mut compared, mut worse_after) = (0, 0);
     for case in 0..200 {
@@ -1630,7 +1630,7 @@ fn walks_search_with_a_heading_target_matches_brute_force_on_small_random_graphs
 /// segment's path).
 #[test]
 fn paths_pass_two_vias_in_order_with_either_search() {
-    use surfmotion::keyframe::search::Method;
+    use surfmotion::keyframe::options::Method;
     let mut r = Lcg(61);
     let mut checked = [0usize; 2];
     for case in 0..60 {
@@ -1873,7 +1873,7 @@ fn smoothness_is_zero_on_identical_overlaps_and_measured_transitions_report_thei
 }
 
 /// A target far out of reach (1000 m in 3 s) gets Eq. 7's best compromise
-/// within the horizon (`search::Horizon`: here max(2 × 75, 75 + 250) = 325
+/// within the horizon (`options::Horizon`: here max(2 × 75, 75 + 250) = 325
 /// frames), flagged by its error, from either search: before the horizon
 /// the exact-length search returned a path of thousands of frames (Eq. 7
 /// trades 0.1 per frame of time error for up to 0.3 per frame of distance
@@ -1883,7 +1883,7 @@ fn smoothness_is_zero_on_identical_overlaps_and_measured_transitions_report_thei
 /// out of reach.
 #[test]
 fn a_far_target_gets_the_best_compromise_within_the_horizon() {
-    use surfmotion::keyframe::search::Method;
+    use surfmotion::keyframe::options::Method;
     let mut r = Lcg(29);
     let mut checked = 0;
     for case in 0..40 {
@@ -1937,7 +1937,8 @@ fn random_dear_graph(r: &mut Lcg, seqs: usize, jumps: usize) -> KeyGraph {
 /// (the pruning does cut labels here, so the comparison is not vacuous).
 #[test]
 fn cost_pruning_keeps_the_unpruned_result_on_random_graphs() {
-    use surfmotion::keyframe::lattice::{LatticeOptions, solve_capped, solve_exact_length};
+    use surfmotion::keyframe::lattice::{solve_capped, solve_exact_length};
+    use surfmotion::keyframe::options::LatticeOptions;
     let mut r = Lcg(97);
     let o = SearchOptions::default();
     let off = SearchOptions {
@@ -2006,7 +2007,8 @@ fn cost_pruning_keeps_the_unpruned_result_on_random_graphs() {
 /// made a path dearer or lost a met target fails it.)
 #[test]
 fn the_probe_gives_no_dearer_path_than_the_search_without_it() {
-    use surfmotion::keyframe::lattice::{HeadingTarget, LatticeOptions};
+    use surfmotion::keyframe::heading::HeadingTarget;
+    use surfmotion::keyframe::options::LatticeOptions;
     let mut r = Lcg(131);
     let heading = Some(HeadingTarget {
         degrees: 90.0,
@@ -2091,7 +2093,7 @@ fn the_probe_gives_no_dearer_path_than_the_search_without_it() {
 fn exact_length_search_gives_the_same_path_on_any_number_of_threads() {
     let mut r = Lcg(101);
     let o = SearchOptions {
-        lattice: surfmotion::keyframe::lattice::LatticeOptions {
+        lattice: surfmotion::keyframe::options::LatticeOptions {
             parallel_from: 1,
             ..Default::default()
         },
@@ -2150,7 +2152,8 @@ fn exact_length_search_gives_the_same_path_on_any_number_of_threads() {
 /// below it.
 #[test]
 fn following_one_arc_nodes_loses_no_path_against_an_exhaustive_search() {
-    use surfmotion::keyframe::lattice::{LatticeOptions, solve_exact_length};
+    use surfmotion::keyframe::lattice::solve_exact_length;
+    use surfmotion::keyframe::options::LatticeOptions;
     let mut r = Lcg(131);
     let (mut compared, mut landed, mut same) = (0, 0, 0);
     for case in 0..300 {
@@ -2278,7 +2281,7 @@ fn a_missed_targets_reach_line_does_not_contradict_itself() {
 /// claims for the fine search against an exhaustive one).
 #[test]
 fn coarse_bins_far_from_the_goal_meet_what_the_fine_search_meets() {
-    use surfmotion::keyframe::lattice::LatticeOptions;
+    use surfmotion::keyframe::options::LatticeOptions;
     let mut r = Lcg(131);
     let coarse = SearchOptions::default();
     assert!(
@@ -2348,7 +2351,7 @@ fn coarse_bins_far_from_the_goal_meet_what_the_fine_search_meets() {
 /// cap hits no such bound.
 #[test]
 fn a_time_target_past_the_search_cap_is_reported_as_a_bound_hit() {
-    use surfmotion::keyframe::lattice::LatticeOptions;
+    use surfmotion::keyframe::options::LatticeOptions;
     let mut r = Lcg(41);
     let mut checked = 0;
     for _ in 0..20 {
@@ -2403,7 +2406,7 @@ fn a_time_target_past_the_search_cap_is_reported_as_a_bound_hit() {
 /// bounded to (almost) nothing as it was on that graph.
 #[test]
 fn joined_key_frames_never_give_a_false_no_path() {
-    use surfmotion::keyframe::search::{Limits, Method};
+    use surfmotion::keyframe::options::{Limits, Method};
     let mut r = Lcg(3911);
     let bounded = Limits {
         expansions: 1,

@@ -8,7 +8,8 @@ use crate::common;
 
 use std::collections::HashMap;
 use surfmotion::keyframe::graph::KeyGraph;
-use surfmotion::keyframe::search::{SearchOptions, Target};
+use surfmotion::keyframe::options::SearchOptions;
+use surfmotion::keyframe::segment::Target;
 use surfmotion::keyframe::smoothest::{least_mean, lower_bound};
 
 use common::keygraph::Lcg;
