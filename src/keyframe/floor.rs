@@ -27,6 +27,7 @@
 use super::graph::KeyGraph;
 use super::smoothness::FrameSet;
 use crate::db::Character;
+use crate::graph::SurfaceMotionGraph;
 use crate::graph::transitions::TransitionOptions;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -199,121 +200,41 @@ pub fn transition_floor_with(
         .sum();
     let mut done = 0u64;
     progress(0, total);
-    let lo = opts.min_window.max(1);
     let mut pairs = Vec::new();
     let mut bounds = Vec::new();
     let mut candidates = 0;
-    let mut coarse = Level {
+    let level = |stride: usize| Level {
         frames,
-        stride: opts.coarse_stride.max(1),
+        stride,
         cache: HashMap::new(),
     };
-    let mut fine = Level {
-        frames,
-        stride: opts.fine_stride.max(1),
-        cache: HashMap::new(),
-    };
-    let mut exact = Level {
-        frames,
-        stride: 1,
-        cache: HashMap::new(),
+    let mut lv = Levels {
+        coarse: level(opts.coarse_stride.max(1)),
+        fine: level(opts.fine_stride.max(1)),
+        exact: level(1),
     };
     for (i, si) in seqs.iter().enumerate() {
         for (j, sj) in seqs.iter().enumerate().skip(i) {
-            let (li, lj) = (si.len, sj.len);
-            let size = (li * lj) as u64;
+            let p = Pair {
+                g,
+                i,
+                j,
+                li: si.len,
+                lj: sj.len,
+                lo: opts.min_window.max(1),
+                opts,
+            };
+            let size = (p.li * p.lj) as u64;
             // Coarse distances of every frame pair of the two sequences.
-            let all: Vec<(u32, u32)> = (0..li)
-                .flat_map(|r| (0..lj).map(move |s| (r, s)))
-                .filter(|&(r, s)| i != j || s >= r + opts.min_gap)
-                .map(|(r, s)| {
-                    let (x, y) = (g.frame_id(i, r), g.frame_id(j, s));
-                    (x.min(y), x.max(y))
-                })
-                .filter(|p| !coarse.cache.contains_key(p))
-                .collect();
-            let stride = coarse.stride;
-            let got: Vec<((u32, u32), f64)> = all
-                .par_iter()
-                .map(|&(x, y)| ((x, y), frames.distance(x, y, stride)))
-                .collect();
-            coarse.cache.extend(got);
+            lv.fill_coarse(&p);
             progress(done + size / 3, total);
-            // Every window that fits, with its coarse bound.
-            let mut cands: Vec<(f64, usize, usize, usize)> = Vec::new();
-            for m in 0..li {
-                progress(done + size / 3 + size * m as u64 / (3 * li as u64), total);
-                for n in 0..lj {
-                    if i == j && n < m + opts.min_gap {
-                        continue;
-                    }
-                    let hi = m
-                        .min(n)
-                        .min(li - 1 - m)
-                        .min(lj - 1 - n)
-                        .min(opts.max_window);
-                    if hi < lo {
-                        continue;
-                    }
-                    let (l, v) = coarse.window(g.frame_id(i, m), g.frame_id(j, n), lo, hi);
-                    cands.push((v, m, n, hi));
-                    let (a, b) = (g.frame_id(i, m), g.frame_id(j, n));
-                    if n + 1 < lj {
-                        bounds.push((a, b + 1, v, l));
-                    }
-                    if m + 1 < li {
-                        bounds.push((b, a + 1, v, l));
-                    }
-                }
-            }
+            let mut cands = lv.candidates(&p, &mut bounds, &mut |at| progress(done + at, total));
             candidates += cands.len();
             progress(done + 2 * size / 3, total);
             cands.sort_by(|x, y| x.0.total_cmp(&y.0));
-            // The smoothest window: in increasing coarse bound, refined,
-            // measured in full while the bounds are under the best.
-            let mut best: Option<(f64, usize, usize, usize)> = None;
-            let mut measured = 0;
-            for &(v, m, n, hi) in &cands {
-                let bar = best.map_or(f64::INFINITY, |b| b.0);
-                if v >= bar {
-                    break;
-                }
-                let (a, b) = (g.frame_id(i, m), g.frame_id(j, n));
-                if fine.window(a, b, lo, hi).1 >= bar {
-                    continue;
-                }
-                let (l, e) = exact.window(a, b, lo, hi);
-                measured += 1;
-                if e < bar {
-                    best = Some((e, m, n, l));
-                }
-            }
-            // Windows under the threshold: every frame pair whose fine
-            // bound is (a superset), then distinct ones greedily in
-            // increasing fine bound, each measured in full unless a kept
-            // one within `min_gap` suppresses it.
-            let mut under: Vec<(f64, usize, usize, usize)> = cands
-                .iter()
-                .take_while(|c| c.0 <= opts.threshold)
-                .map(|&(_, m, n, hi)| {
-                    let f = fine.window(g.frame_id(i, m), g.frame_id(j, n), lo, hi).1;
-                    (f, m, n, hi)
-                })
-                .filter(|c| c.0 <= opts.threshold)
-                .collect();
-            under.sort_by(|x, y| x.0.total_cmp(&y.0));
-            let mut kept: Vec<(usize, usize)> = Vec::new();
-            for &(_, m, n, hi) in &under {
-                let near = |a: usize, b: usize| a.abs_diff(b) <= opts.min_gap;
-                if kept.iter().any(|&(km, kn)| near(km, m) && near(kn, n)) {
-                    continue;
-                }
-                let (_, e) = exact.window(g.frame_id(i, m), g.frame_id(j, n), lo, hi);
-                measured += 1;
-                if e <= opts.threshold {
-                    kept.push((m, n));
-                }
-            }
+            let (best, mut measured) = lv.smoothest(&p, &cands);
+            let (under, kept, more) = lv.distinct_under(&p, &cands);
+            measured += more;
             done += size;
             progress(done, total);
             pairs.push(PairFloor {
@@ -327,8 +248,8 @@ pub fn transition_floor_with(
                     window: l,
                     smoothness: e,
                 }),
-                under_bound: under.len(),
-                under_distinct: kept.len(),
+                under_bound: under,
+                under_distinct: kept,
                 measured,
             });
         }
@@ -343,6 +264,158 @@ pub fn transition_floor_with(
         threshold: opts.threshold,
         candidates,
         bounds,
+    }
+}
+
+/// One sequence pair `(i, j)` of [`transition_floor_with`] (`i ≤ j`), of
+/// `li` and `lj` frames, windows at least `lo`.
+struct Pair<'a> {
+    g: &'a SurfaceMotionGraph,
+    i: usize,
+    j: usize,
+    li: usize,
+    lj: usize,
+    lo: usize,
+    opts: &'a FloorOptions,
+}
+
+impl Pair<'_> {
+    /// The frame ids of frame `m` of sequence `i` and `n` of `j`.
+    fn ids(&self, m: usize, n: usize) -> (u32, u32) {
+        (self.g.frame_id(self.i, m), self.g.frame_id(self.j, n))
+    }
+}
+
+/// A window that fits a pair: `(coarse bound or value, m, n, widest L)`.
+type Candidate = (f64, usize, usize, usize);
+
+/// The three levels a window is measured at (module docs): coarse, fine
+/// and every vertex.
+struct Levels<'a> {
+    coarse: Level<'a>,
+    fine: Level<'a>,
+    exact: Level<'a>,
+}
+
+impl Levels<'_> {
+    /// The coarse distances of every frame pair of `p` not yet cached,
+    /// measured in parallel.
+    fn fill_coarse(&mut self, p: &Pair) {
+        let (g, i, j, opts) = (p.g, p.i, p.j, p.opts);
+        let coarse = &mut self.coarse;
+        let all: Vec<(u32, u32)> = (0..p.li)
+            .flat_map(|r| (0..p.lj).map(move |s| (r, s)))
+            .filter(|&(r, s)| i != j || s >= r + opts.min_gap)
+            .map(|(r, s)| {
+                let (x, y) = (g.frame_id(i, r), g.frame_id(j, s));
+                (x.min(y), x.max(y))
+            })
+            .filter(|p| !coarse.cache.contains_key(p))
+            .collect();
+        let (frames, stride) = (coarse.frames, coarse.stride);
+        let got: Vec<((u32, u32), f64)> = all
+            .par_iter()
+            .map(|&(x, y)| ((x, y), frames.distance(x, y, stride)))
+            .collect();
+        coarse.cache.extend(got);
+    }
+
+    /// Every window that fits `p`, with its coarse bound; each frame pair's
+    /// bound also goes to `bounds` as jumps in both directions. `at` is
+    /// told the progress within the pair (the second third of its size).
+    fn candidates(
+        &mut self,
+        p: &Pair,
+        bounds: &mut Vec<(u32, u32, f64, usize)>,
+        at: &mut dyn FnMut(u64),
+    ) -> Vec<Candidate> {
+        let (li, lj, opts) = (p.li, p.lj, p.opts);
+        let size = (li * lj) as u64;
+        let mut cands: Vec<Candidate> = Vec::new();
+        for m in 0..li {
+            at(size / 3 + size * m as u64 / (3 * li as u64));
+            for n in 0..lj {
+                if p.i == p.j && n < m + opts.min_gap {
+                    continue;
+                }
+                let hi = m
+                    .min(n)
+                    .min(li - 1 - m)
+                    .min(lj - 1 - n)
+                    .min(opts.max_window);
+                if hi < p.lo {
+                    continue;
+                }
+                let (a, b) = p.ids(m, n);
+                let (l, v) = self.coarse.window(a, b, p.lo, hi);
+                cands.push((v, m, n, hi));
+                if n + 1 < lj {
+                    bounds.push((a, b + 1, v, l));
+                }
+                if m + 1 < li {
+                    bounds.push((b, a + 1, v, l));
+                }
+            }
+        }
+        cands
+    }
+
+    /// The smoothest window of a pair, `(value, m, n, L)`, from its
+    /// candidates in increasing coarse bound: refined, measured in full
+    /// while the bounds are under the best; and the windows measured.
+    fn smoothest(&mut self, p: &Pair, cands: &[Candidate]) -> (Option<Candidate>, usize) {
+        let mut best: Option<Candidate> = None;
+        let mut measured = 0;
+        for &(v, m, n, hi) in cands {
+            let bar = best.map_or(f64::INFINITY, |b| b.0);
+            if v >= bar {
+                break;
+            }
+            let (a, b) = p.ids(m, n);
+            if self.fine.window(a, b, p.lo, hi).1 >= bar {
+                continue;
+            }
+            let (l, e) = self.exact.window(a, b, p.lo, hi);
+            measured += 1;
+            if e < bar {
+                best = Some((e, m, n, l));
+            }
+        }
+        (best, measured)
+    }
+
+    /// Windows under the threshold: every frame pair whose fine bound is
+    /// (a superset), then distinct ones greedily in increasing fine bound,
+    /// each measured in full unless a kept one within `min_gap` suppresses
+    /// it. Returns the counts of both and the windows measured.
+    fn distinct_under(&mut self, p: &Pair, cands: &[Candidate]) -> (usize, usize, usize) {
+        let opts = p.opts;
+        let mut under: Vec<Candidate> = cands
+            .iter()
+            .take_while(|c| c.0 <= opts.threshold)
+            .map(|&(_, m, n, hi)| {
+                let (a, b) = p.ids(m, n);
+                let f = self.fine.window(a, b, p.lo, hi).1;
+                (f, m, n, hi)
+            })
+            .filter(|c| c.0 <= opts.threshold)
+            .collect();
+        under.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut kept: Vec<(usize, usize)> = Vec::new();
+        let mut measured = 0;
+        for &(_, m, n, hi) in &under {
+            let near = |a: usize, b: usize| a.abs_diff(b) <= opts.min_gap;
+            if kept.iter().any(|&(km, kn)| near(km, m) && near(kn, n)) {
+                continue;
+            }
+            let (a, b) = p.ids(m, n);
+            let (_, e) = self.exact.window(a, b, p.lo, hi);
+            measured += 1;
+            if e <= opts.threshold {
+                kept.push((m, n));
+            }
+        }
+        (under.len(), kept.len(), measured)
     }
 }
 

@@ -459,63 +459,105 @@ pub fn evaluate_with(
     let mut cache = super::smoothness::Measurer::new(ch);
     cache.prefill(ch, &graph_jumps(ch, &planner.graph));
     let mut oracle_s = 0.0;
-    let (mut taken_within, mut taken_across) = (Vec::new(), Vec::new());
+    let mut taken = (Vec::new(), Vec::new());
     let mut queries = Vec::with_capacity(distances.len() * times.len());
     for &d in distances {
         for &t in times {
-            let plan = planner.plan(
-                &Targets::Global {
-                    distance: d,
-                    time: t,
-                },
-                search,
-            )?;
-            let (seconds, cpu_seconds) = (plan.search_seconds, plan.search_cpu_seconds);
-            let tr = transitions(ch, &planner.graph, &plan.path, timeline, &mut cache);
-            let mut across = 0;
-            for x in &tr {
-                if names_across(&x.from, &x.to) {
-                    across += 1;
-                    taken_across.push(x.smoothness);
-                } else {
-                    taken_within.push(x.smoothness);
-                }
-            }
-            let (ad, at) = (
-                plan.measure.distance,
-                plan.measure.frames as f64 / planner.fps,
-            );
-            let met = (ad - d).abs() < 0.01 * d && (at - t).abs() < 0.01 * t;
-            let o0 = Instant::now();
-            let class = reachability(planner, d, t, met)?;
-            oracle_s += o0.elapsed().as_secs_f64();
-            queries.push(GridQuery {
-                distance: d,
-                time: t,
-                achieved_distance: ad,
-                achieved_time: at,
-                reachable: class == Reachability::Reachable,
-                reach: class,
-                within_1pct: met,
-                total: plan.cost.total,
-                transitions: tr.len(),
-                across,
-                smoothness: mean_smoothness(&tr),
-                smoothness_vertex: mean_smoothness_vertex(&tr),
-                seconds,
-                cpu_seconds,
-                bounded: !plan.stats.bounds_hit.is_empty(),
-                heading_error_deg: search.heading.map(|h| {
-                    super::heading::wrap((plan.facing_deg - h.degrees).to_radians()).to_degrees()
-                }),
-                walks_and_loops: plan.stats.walks_and_loops,
-            });
+            let q = query(ch, planner, d, t, search, timeline, &mut cache, &mut taken)?;
+            oracle_s += q.1;
+            queries.push(q.0);
             if let Some(q) = queries.last() {
                 done(q);
             }
         }
     }
-    let (gw, ga) = graph_smoothness_split(ch, &planner.graph, &mut cache);
+    Ok(report(
+        ch, planner, distances, times, reach, &mut cache, oracle_s, taken, queries,
+    ))
+}
+
+/// One query of the grid (module docs) and the seconds of its
+/// reachability oracle; the smoothness of the transitions it takes goes to
+/// `taken` (within one sequence, across two).
+#[allow(clippy::too_many_arguments)]
+fn query(
+    ch: &Character,
+    planner: &Planner,
+    d: f64,
+    t: f64,
+    search: &SearchOptions,
+    timeline: &TimelineOptions,
+    cache: &mut super::smoothness::Measurer,
+    taken: &mut (Vec<f64>, Vec<f64>),
+) -> Result<(GridQuery, f64), SearchError> {
+    let (taken_within, taken_across) = taken;
+    let plan = planner.plan(
+        &Targets::Global {
+            distance: d,
+            time: t,
+        },
+        search,
+    )?;
+    let (seconds, cpu_seconds) = (plan.search_seconds, plan.search_cpu_seconds);
+    let tr = transitions(ch, &planner.graph, &plan.path, timeline, cache);
+    let mut across = 0;
+    for x in &tr {
+        if names_across(&x.from, &x.to) {
+            across += 1;
+            taken_across.push(x.smoothness);
+        } else {
+            taken_within.push(x.smoothness);
+        }
+    }
+    let (ad, at) = (
+        plan.measure.distance,
+        plan.measure.frames as f64 / planner.fps,
+    );
+    let met = (ad - d).abs() < 0.01 * d && (at - t).abs() < 0.01 * t;
+    let o0 = Instant::now();
+    let class = reachability(planner, d, t, met)?;
+    let oracle_s = o0.elapsed().as_secs_f64();
+    Ok((
+        GridQuery {
+            distance: d,
+            time: t,
+            achieved_distance: ad,
+            achieved_time: at,
+            reachable: class == Reachability::Reachable,
+            reach: class,
+            within_1pct: met,
+            total: plan.cost.total,
+            transitions: tr.len(),
+            across,
+            smoothness: mean_smoothness(&tr),
+            smoothness_vertex: mean_smoothness_vertex(&tr),
+            seconds,
+            cpu_seconds,
+            bounded: !plan.stats.bounds_hit.is_empty(),
+            heading_error_deg: search.heading.map(|h| {
+                super::heading::wrap((plan.facing_deg - h.degrees).to_radians()).to_degrees()
+            }),
+            walks_and_loops: plan.stats.walks_and_loops,
+        },
+        oracle_s,
+    ))
+}
+
+/// The grid's report over its `queries` (module docs), with the
+/// smoothness of every transition of the graph for comparison.
+#[allow(clippy::too_many_arguments)]
+fn report(
+    ch: &Character,
+    planner: &Planner,
+    distances: &[f64],
+    times: &[f64],
+    reach: Vec<Reach>,
+    cache: &mut super::smoothness::Measurer,
+    oracle_s: f64,
+    (taken_within, taken_across): (Vec<f64>, Vec<f64>),
+    queries: Vec<GridQuery>,
+) -> GridReport {
+    let (gw, ga) = graph_smoothness_split(ch, &planner.graph, cache);
     let mut gsm: Vec<f64> = gw.iter().chain(&ga).copied().collect();
     gsm.sort_by(f64::total_cmp);
     let r: Vec<&GridQuery> = queries.iter().filter(|q| q.reachable).collect();
@@ -528,7 +570,7 @@ pub fn evaluate_with(
         .map(|q| q.cpu_seconds.map(|s| 1e3 * s))
         .collect();
     let cpu = cpu.filter(|v| !v.is_empty()).map(|v| mean_std_max(&v));
-    Ok(GridReport {
+    GridReport {
         keys: planner
             .keys
             .iter()
@@ -579,7 +621,7 @@ pub fn evaluate_with(
                 .filter_map(|q| q.heading_error_deg.map(f64::abs)),
         ),
         queries,
-    })
+    }
 }
 
 /// Mean, standard deviation and largest of `v` (zeros when empty).

@@ -144,7 +144,7 @@
 //!   graph can).
 
 use super::heading::Heading;
-use super::options::{LatticeOptions, SearchOptions};
+use super::options::{LatticeOptions, SearchOptions, Weights};
 use super::repeats::Measure;
 use super::segment::{ArcView, Segment, Target};
 use crate::util::budget::OverBudget;
@@ -594,41 +594,16 @@ pub fn solve_capped(
     let mut cuts: Vec<usize> = Vec::new();
     for k in 0..=frames {
         let mut layer = std::mem::take(&mut layers[k]);
-        count.iter_mut().for_each(|x| *x = 0);
-        for l in &layer {
-            count[l.node as usize + 1] += 1;
-        }
-        for u in 0..nodes {
-            count[u + 1] += count[u];
-        }
-        raw.clear();
-        raw.resize(layer.len(), layer.first().copied().unwrap_or(Label::START));
-        for l in layer.drain(..) {
-            let at = &mut count[l.node as usize];
-            raw[*at] = l;
-            *at += 1;
-        }
+        group_by_node(&mut layer, nodes, &mut count, &mut raw);
         if layer.capacity() > 0 {
             pool.push(layer);
         }
-        // Cut the layer into runs of whole nodes of about equal size (the
-        // parts are merged in order below, so the result does not depend
-        // on the number of workers).
         let used = if raw.len() >= opts.parallel_from.max(1) {
             workers
         } else {
             1
         };
-        cuts.clear();
-        cuts.push(0);
-        for p in 1..used {
-            let mut at = (raw.len() * p / used).max(cuts[p - 1]);
-            while at > 0 && at < raw.len() && raw[at].node == raw[at - 1].node {
-                at += 1;
-            }
-            cuts.push(at);
-        }
-        cuts.push(raw.len());
+        cut_layer(&raw, used, &mut cuts);
         if used == 1 {
             ctx.expand(&raw, k, &mut scratch[0], &mut parts[0]);
         } else {
@@ -647,39 +622,13 @@ pub fn solve_capped(
             });
         }
         for part in parts.iter_mut().take(used) {
-            let base = arena.len() as u32;
-            arena.append(&mut part.arena);
-            for x in part.local.drain(..) {
-                arena[(base + x) as usize].0 += base;
-            }
-            for (kk, mut l) in part.pushes.drain(..) {
-                l.parent += base;
-                let next = &mut layers[kk as usize];
-                if next.capacity() == 0
-                    && let Some(buf) = pool.pop()
-                {
-                    *next = buf;
-                }
-                next.push(l);
-            }
-            if let Some((id, sc, l)) = part.best.take()
-                && best.is_none_or(|(_, b, _)| sc < b)
-            {
-                best = Some((id + base, sc, l));
-            }
+            merge_part(part, &mut arena, &mut layers, &mut pool, &mut best);
         }
     }
     let (id, sc, l) = best?;
-    let mut arcs = Vec::new();
-    let mut at = id;
-    while arena[at as usize].0 != u32::MAX {
-        arcs.push(arena[at as usize].1);
-        at = arena[at as usize].0;
-    }
-    arcs.reverse();
     Some((
         Found {
-            arcs,
+            arcs: trace_back(&arena, id),
             measure: Measure {
                 cost: l.cost,
                 distance: l.distance,
@@ -689,6 +638,85 @@ pub fn solve_capped(
         },
         sc,
     ))
+}
+
+/// Groups the labels of `layer` by node into `raw` (a stable counting
+/// sort over `nodes` nodes, `count` its scratch), emptying `layer`.
+fn group_by_node(layer: &mut Vec<Label>, nodes: usize, count: &mut [usize], raw: &mut Vec<Label>) {
+    count.iter_mut().for_each(|x| *x = 0);
+    for l in layer.iter() {
+        count[l.node as usize + 1] += 1;
+    }
+    for u in 0..nodes {
+        count[u + 1] += count[u];
+    }
+    raw.clear();
+    raw.resize(layer.len(), layer.first().copied().unwrap_or(Label::START));
+    for l in layer.drain(..) {
+        let at = &mut count[l.node as usize];
+        raw[*at] = l;
+        *at += 1;
+    }
+}
+
+/// Cuts a layer grouped by node into `used` runs of whole nodes of about
+/// equal size, as `cuts` (their bounds; the parts are merged in order, so
+/// the result does not depend on the number of workers).
+fn cut_layer(raw: &[Label], used: usize, cuts: &mut Vec<usize>) {
+    cuts.clear();
+    cuts.push(0);
+    for p in 1..used {
+        let mut at = (raw.len() * p / used).max(cuts[p - 1]);
+        while at > 0 && at < raw.len() && raw[at].node == raw[at - 1].node {
+            at += 1;
+        }
+        cuts.push(at);
+    }
+    cuts.push(raw.len());
+}
+
+/// Merges one worker's output into the programme: its trace-back entries
+/// into `arena` (indices rebased), its labels into the later `layers`
+/// (reusing emptied buffers from `pool`), its best label into `best`.
+fn merge_part(
+    part: &mut Part,
+    arena: &mut Vec<(u32, u32)>,
+    layers: &mut [Vec<Label>],
+    pool: &mut Vec<Vec<Label>>,
+    best: &mut Option<(u32, f64, Label)>,
+) {
+    let base = arena.len() as u32;
+    arena.append(&mut part.arena);
+    for x in part.local.drain(..) {
+        arena[(base + x) as usize].0 += base;
+    }
+    for (kk, mut l) in part.pushes.drain(..) {
+        l.parent += base;
+        let next = &mut layers[kk as usize];
+        if next.capacity() == 0
+            && let Some(buf) = pool.pop()
+        {
+            *next = buf;
+        }
+        next.push(l);
+    }
+    if let Some((id, sc, l)) = part.best.take()
+        && best.is_none_or(|(_, b, _)| sc < b)
+    {
+        *best = Some((id + base, sc, l));
+    }
+}
+
+/// The arcs of the path ending at label `id`, from the trace-back `arena`.
+fn trace_back(arena: &[(u32, u32)], id: u32) -> Vec<u32> {
+    let mut arcs = Vec::new();
+    let mut at = id;
+    while arena[at as usize].0 != u32::MAX {
+        arcs.push(arena[at as usize].1);
+        at = arena[at as usize].0;
+    }
+    arcs.reverse();
+    arcs
 }
 
 /// What one call of the programme fixes (steps 2-3).
@@ -801,8 +829,6 @@ impl Layer<'_> {
     /// Bins the labels of `raw` (whole nodes of layer `k`, sorted by node)
     /// and extends the kept ones into `out`.
     fn expand(&self, raw: &[Label], k: usize, sc: &mut Scratch, out: &mut Part) {
-        let (bins, classes, frames) = (self.bins, self.classes, self.frames);
-        let (lo_slot, hi_slot) = (self.cells, self.cells + 1);
         let Scratch {
             slot,
             touched,
@@ -819,126 +845,152 @@ impl Layer<'_> {
                 i = j;
                 continue;
             };
-            // Far from the goal the window is wide, and few bins keep it
-            // (module docs, "Coarse bins").
-            let nb = if hi - lo > self.coarse_from * 2.0 * self.tol {
-                self.coarse_bins
-            } else {
-                bins
-            };
-            let width = ((hi - lo) / nb as f64).max(1e-12);
-            let mid = 0.5 * (lo + hi);
+            let labels = &raw[i..j];
             for b in touched.drain(..) {
                 slot[b] = None;
             }
-            for (r, l) in raw[i..j].iter().enumerate() {
-                if slot[lo_slot].is_none_or(|o| l.distance < raw[i + o].distance) {
-                    if slot[lo_slot].is_none() {
-                        touched.push(lo_slot);
-                    }
-                    slot[lo_slot] = Some(r);
-                }
-                if slot[hi_slot].is_none_or(|o| l.distance > raw[i + o].distance) {
-                    if slot[hi_slot].is_none() {
-                        touched.push(hi_slot);
-                    }
-                    slot[hi_slot] = Some(r);
-                }
-                let class = l.since.min(self.min_run) as usize;
-                let sector = self.heading.map_or(0, |h| h.sector(l.turn));
-                let b = (sector * bins + (((l.distance - lo) / width) as usize).min(nb - 1))
-                    * classes
-                    + class;
-                let better = match slot[b] {
-                    None => true,
-                    Some(o) => {
-                        let o = &raw[i + o];
-                        l.cost < o.cost - 1e-12
-                            || (l.cost <= o.cost + 1e-12
-                                && (l.distance - mid).abs() < (o.distance - mid).abs())
-                    }
-                };
-                if better {
-                    if slot[b].is_none() {
-                        touched.push(b);
-                    }
-                    slot[b] = Some(r);
-                }
-            }
+            self.bin(labels, lo, hi, slot, touched);
             if self.dominance {
-                // A label with more frames since its last transition has
-                // every continuation of one with fewer: in the same bin,
-                // it dominates any such label that is not cheaper.
-                for &b in touched.iter() {
-                    if b >= self.cells {
-                        continue;
-                    }
-                    let Some(r) = slot[b] else { continue };
-                    let class = b % classes;
-                    let c = raw[i + r].cost;
-                    let base = b - class;
-                    if (class + 1..classes)
-                        .any(|h| slot[base + h].is_some_and(|o| raw[i + o].cost <= c))
-                    {
-                        slot[b] = None;
-                    }
-                }
+                self.drop_dominated(labels, slot, touched);
             }
             kept.clear();
             kept.extend(touched.iter().filter_map(|&b| slot[b]));
             kept.sort_unstable();
             kept.dedup();
             for &s in kept.iter() {
-                let l = raw[i + s];
-                let id = out.arena.len() as u32;
-                out.arena.push((l.parent, l.arc));
-                if k == frames {
-                    if u == self.c.goal {
-                        let sc = l.cost
-                            + self.w_dist * (l.distance - self.distance).abs()
-                            + self.heading.map_or(0.0, |h| h.cost(l.turn));
-                        if out.best.is_none_or(|(_, b, _)| sc < b) {
-                            out.best = Some((id, sc, l));
-                        }
-                    }
-                    continue;
-                }
-                // No path on from here can cost less than the cap.
-                if l.cost + self.ext.least_cost(u, frames - k) >= self.cap {
-                    continue;
-                }
-                for arc in &self.c.adj[u as usize] {
-                    let am = arc.m;
-                    let kk = k + am.frames as usize;
-                    if am.frames == 0 || kk > frames || (arc.jump && l.since < self.min_run) {
-                        continue;
-                    }
-                    let mut nl = Label {
-                        node: arc.to,
-                        parent: id,
-                        arc: arc.index,
-                        distance: l.distance + am.distance,
-                        cost: l.cost + am.cost,
-                        turn: l.turn + arc.turn,
-                        since: if arc.jump {
-                            am.frames
-                        } else {
-                            l.since.saturating_add(am.frames)
-                        },
-                    };
-                    let mut kk = kk;
-                    if self.follow && !self.forced(&mut nl, &mut kk, out) {
-                        continue;
-                    }
-                    match self.window(nl.node, kk) {
-                        Some((lo, hi)) if nl.distance >= lo && nl.distance <= hi => {
-                            out.pushes.push((kk as u32, nl))
-                        }
-                        _ => {}
-                    }
-                }
+                self.extend(labels[s], u, k, out);
             }
             i = j;
+        }
+    }
+
+    /// Bins the labels of one node (window `[lo, hi]`): per bin the
+    /// cheapest (ties: nearest the window's middle), plus the labels of
+    /// least and most distance; `touched` lists the bins filled.
+    fn bin(
+        &self,
+        labels: &[Label],
+        lo: f64,
+        hi: f64,
+        slot: &mut [Option<usize>],
+        touched: &mut Vec<usize>,
+    ) {
+        let (bins, classes) = (self.bins, self.classes);
+        let (lo_slot, hi_slot) = (self.cells, self.cells + 1);
+        // Far from the goal the window is wide, and few bins keep it
+        // (module docs, "Coarse bins").
+        let nb = if hi - lo > self.coarse_from * 2.0 * self.tol {
+            self.coarse_bins
+        } else {
+            bins
+        };
+        let width = ((hi - lo) / nb as f64).max(1e-12);
+        let mid = 0.5 * (lo + hi);
+        for (r, l) in labels.iter().enumerate() {
+            if slot[lo_slot].is_none_or(|o| l.distance < labels[o].distance) {
+                if slot[lo_slot].is_none() {
+                    touched.push(lo_slot);
+                }
+                slot[lo_slot] = Some(r);
+            }
+            if slot[hi_slot].is_none_or(|o| l.distance > labels[o].distance) {
+                if slot[hi_slot].is_none() {
+                    touched.push(hi_slot);
+                }
+                slot[hi_slot] = Some(r);
+            }
+            let class = l.since.min(self.min_run) as usize;
+            let sector = self.heading.map_or(0, |h| h.sector(l.turn));
+            let b = (sector * bins + (((l.distance - lo) / width) as usize).min(nb - 1)) * classes
+                + class;
+            let better = match slot[b] {
+                None => true,
+                Some(o) => {
+                    let o = &labels[o];
+                    l.cost < o.cost - 1e-12
+                        || (l.cost <= o.cost + 1e-12
+                            && (l.distance - mid).abs() < (o.distance - mid).abs())
+                }
+            };
+            if better {
+                if slot[b].is_none() {
+                    touched.push(b);
+                }
+                slot[b] = Some(r);
+            }
+        }
+    }
+
+    /// A label with more frames since its last transition has every
+    /// continuation of one with fewer: in the same bin, it dominates any
+    /// such label that is not cheaper (module docs, "Classes").
+    fn drop_dominated(&self, labels: &[Label], slot: &mut [Option<usize>], touched: &[usize]) {
+        let classes = self.classes;
+        for &b in touched.iter() {
+            if b >= self.cells {
+                continue;
+            }
+            let Some(r) = slot[b] else { continue };
+            let class = b % classes;
+            let c = labels[r].cost;
+            let base = b - class;
+            if (class + 1..classes).any(|h| slot[base + h].is_some_and(|o| labels[o].cost <= c)) {
+                slot[b] = None;
+            }
+        }
+    }
+
+    /// Keeps label `l` of node `u` at frame count `k` (its trace-back in
+    /// `out.arena`): at the last layer, scored at the goal; else extended
+    /// along every arc that keeps it in its window (and under the cap).
+    fn extend(&self, l: Label, u: u32, k: usize, out: &mut Part) {
+        let frames = self.frames;
+        let id = out.arena.len() as u32;
+        out.arena.push((l.parent, l.arc));
+        if k == frames {
+            if u == self.c.goal {
+                let sc = l.cost
+                    + self.w_dist * (l.distance - self.distance).abs()
+                    + self.heading.map_or(0.0, |h| h.cost(l.turn));
+                if out.best.is_none_or(|(_, b, _)| sc < b) {
+                    out.best = Some((id, sc, l));
+                }
+            }
+            return;
+        }
+        // No path on from here can cost less than the cap.
+        if l.cost + self.ext.least_cost(u, frames - k) >= self.cap {
+            return;
+        }
+        for arc in &self.c.adj[u as usize] {
+            let am = arc.m;
+            let kk = k + am.frames as usize;
+            if am.frames == 0 || kk > frames || (arc.jump && l.since < self.min_run) {
+                continue;
+            }
+            let mut nl = Label {
+                node: arc.to,
+                parent: id,
+                arc: arc.index,
+                distance: l.distance + am.distance,
+                cost: l.cost + am.cost,
+                turn: l.turn + arc.turn,
+                since: if arc.jump {
+                    am.frames
+                } else {
+                    l.since.saturating_add(am.frames)
+                },
+            };
+            let mut kk = kk;
+            if self.follow && !self.forced(&mut nl, &mut kk, out) {
+                continue;
+            }
+            match self.window(nl.node, kk) {
+                Some((lo, hi)) if nl.distance >= lo && nl.distance <= hi => {
+                    out.pushes.push((kk as u32, nl))
+                }
+                _ => {}
+            }
         }
     }
 }
@@ -989,77 +1041,150 @@ pub fn search(
         return Ok(None);
     }
     let ext = c.extremes(top as usize)?;
-    let total = |f: &Found| {
-        f.measure.cost
-            + w.distance * (f.measure.distance - t.distance).abs()
-            + w.time * ((i64::from(f.measure.frames) + cs) as f64 - t.frames).abs()
-            + heading.map_or(0.0, |h| h.cost(f.turn))
+    let q = Query {
+        c,
+        ext: &ext,
+        t,
+        heading,
+        lo,
+        w: opts.weights,
+        cs,
+        target,
+        least,
+        top,
+        // Cost pruning needs every term of `total` but the transition
+        // cost non-negative (then `total ≥ cost + bound`).
+        prune: lo.prune
+            && w.distance >= 0.0
+            && w.time >= 0.0
+            && heading.is_none_or(|h| h.weight >= 0.0),
     };
-    let mut order: Vec<(f64, i64, f64)> = (least..=top)
-        .filter_map(|n| {
-            let (a, b) = ext.at(c.start, n as usize);
-            if !a.is_finite() {
-                return None;
-            }
-            let aim = t.distance.clamp(a, b);
-            let time = w.time * ((n + cs) as f64 - t.frames).abs();
-            Some((w.distance * (aim - t.distance).abs() + time, n, aim))
-        })
-        .collect();
-    order.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut order = q.frame_counts();
     // Every frame count in order, for the fallback below.
     let every = order.clone();
     order.truncate(8);
     let tol = lo.tolerance * t.distance + lo.tolerance_m;
-    // Cost pruning needs every term of `total` but the transition cost
-    // non-negative (then `total ≥ cost + bound`).
-    let prune =
-        lo.prune && w.distance >= 0.0 && w.time >= 0.0 && heading.is_none_or(|h| h.weight >= 0.0);
-    // The frame counts in order, each pruned against the best so far
-    // (module docs, "Pruning").
-    let mut best: Option<(Found, f64)> = None;
-    let within = lo.within;
-    for &(bound, n, aim) in &order {
-        if best.as_ref().is_some_and(|b| bound >= b.1) {
-            break;
-        }
-        let cap = match &best {
-            Some(b) if prune => b.1 - bound + slack(b.1),
-            _ => f64::INFINITY,
-        };
-        if ext.least_cost(c.start, n as usize) >= cap {
-            continue;
-        }
-        if let Some((found, _)) = solve_probed(
-            c,
-            &ext,
-            n as usize,
-            aim,
-            tol,
-            w.distance,
-            heading,
-            &lo,
-            cap,
-            &|f: &Found| lands(f, cs, t, within),
-        ) {
-            let cost = total(&found);
-            if best.as_ref().is_none_or(|b| cost < b.1) {
-                best = Some((found, cost));
-            }
+    let mut best = q.best_first(&order, tol);
+    if lo.within > 0.0 && best.as_ref().is_none_or(|b| !q.lands(&b.0)) {
+        if let Some(inside) = q.within_tolerance() {
+            best = Some(inside);
         }
     }
-    if within > 0.0 && best.as_ref().is_none_or(|b| !lands(&b.0, cs, t, within)) {
-        // Frame counts within the time tolerance whose extremes admit a
-        // distance within the distance tolerance, nearest the target first.
+    if best.is_none() {
+        best = q.fallback(&every, tol);
+    }
+    Ok(best)
+}
+
+/// One query of [`search`] on a chain: the target, the options and the
+/// range of frame counts every step of the search reads.
+struct Query<'a> {
+    c: &'a Chain,
+    ext: &'a Extremes,
+    t: &'a Target,
+    heading: Option<&'a Heading>,
+    lo: LatticeOptions,
+    w: Weights,
+    /// The first segment counts its start frame (1) or not (0).
+    cs: i64,
+    /// The target's frame count (start not counted).
+    target: i64,
+    /// Fewest and most frames searched.
+    least: i64,
+    top: i64,
+    /// Prune by cost (module docs, "Pruning").
+    prune: bool,
+}
+
+impl Query<'_> {
+    /// Eq. 7 plus the heading term of a path found.
+    fn total(&self, f: &Found) -> f64 {
+        let (w, t) = (self.w, self.t);
+        f.measure.cost
+            + w.distance * (f.measure.distance - t.distance).abs()
+            + w.time * ((i64::from(f.measure.frames) + self.cs) as f64 - t.frames).abs()
+            + self.heading.map_or(0.0, |h| h.cost(f.turn))
+    }
+
+    /// Does a path land within [`LatticeOptions::within`] of both targets?
+    fn lands(&self, f: &Found) -> bool {
+        lands(f, self.cs, self.t, self.lo.within)
+    }
+
+    /// The frame counts with a path, as `(bound, frames, aim)` in
+    /// increasing order of their lower bound (the distance no path of that
+    /// length can avoid missing, plus the time error), each aiming at the
+    /// reachable distance nearest the target.
+    fn frame_counts(&self) -> Vec<(f64, i64, f64)> {
+        let (w, t) = (self.w, self.t);
+        let mut order: Vec<(f64, i64, f64)> = (self.least..=self.top)
+            .filter_map(|n| {
+                let (a, b) = self.ext.at(self.c.start, n as usize);
+                if !a.is_finite() {
+                    return None;
+                }
+                let aim = t.distance.clamp(a, b);
+                let time = w.time * ((n + self.cs) as f64 - t.frames).abs();
+                Some((w.distance * (aim - t.distance).abs() + time, n, aim))
+            })
+            .collect();
+        order.sort_by(|x, y| x.0.total_cmp(&y.0));
+        order
+    }
+
+    /// The frame counts of `order` in turn, each pruned against the best
+    /// so far (module docs, "Pruning"), each path within `tol` of its aim:
+    /// the cheapest by Eq. 7.
+    fn best_first(&self, order: &[(f64, i64, f64)], tol: f64) -> Option<(Found, f64)> {
+        let c = self.c;
+        let mut best: Option<(Found, f64)> = None;
+        for &(bound, n, aim) in order {
+            if best.as_ref().is_some_and(|b| bound >= b.1) {
+                break;
+            }
+            let cap = match &best {
+                Some(b) if self.prune => b.1 - bound + slack(b.1),
+                _ => f64::INFINITY,
+            };
+            if self.ext.least_cost(c.start, n as usize) >= cap {
+                continue;
+            }
+            if let Some((found, _)) = solve_probed(
+                c,
+                self.ext,
+                n as usize,
+                aim,
+                tol,
+                self.w.distance,
+                self.heading,
+                &self.lo,
+                cap,
+                &|f: &Found| self.lands(f),
+            ) {
+                let cost = self.total(&found);
+                if best.as_ref().is_none_or(|b| cost < b.1) {
+                    best = Some((found, cost));
+                }
+            }
+        }
+        best
+    }
+
+    /// The cheapest path within [`LatticeOptions::within`] of both
+    /// targets, when the Eq. 7 optimum is not (module docs): the frame
+    /// counts within the time tolerance whose extremes admit a distance
+    /// within the distance tolerance, nearest the target first.
+    fn within_tolerance(&self) -> Option<(Found, f64)> {
+        let (c, t, w, within) = (self.c, self.t, self.w, self.lo.within);
         let dt = within * t.distance;
-        let mut ns: Vec<i64> = (least..=top)
-            .filter(|&n| ((n + cs) as f64 - t.frames).abs() < within * t.frames)
+        let mut ns: Vec<i64> = (self.least..=self.top)
+            .filter(|&n| ((n + self.cs) as f64 - t.frames).abs() < within * t.frames)
             .filter(|&n| {
-                let (a, b) = ext.at(c.start, n as usize);
+                let (a, b) = self.ext.at(c.start, n as usize);
                 a.is_finite() && a < t.distance + dt && b > t.distance - dt
             })
             .collect();
-        ns.sort_by_key(|&n| (n - target).abs());
+        ns.sort_by_key(|&n| (n - self.target).abs());
         let mut inside: Option<(Found, f64)> = None;
         // A frame count whose time term alone reaches the cheapest landing
         // path's cost cannot replace it (every other term of `total` is
@@ -1067,10 +1192,10 @@ pub fn search(
         // searched: the same result without the programme.
         let nonneg = w.distance >= 0.0
             && w.time >= 0.0
-            && heading.is_none_or(|h| h.weight >= 0.0)
+            && self.heading.is_none_or(|h| h.weight >= 0.0)
             && c.adj.iter().flatten().all(|a| a.m.cost >= 0.0);
         for n in ns {
-            let time = w.time * ((n + cs) as f64 - t.frames).abs();
+            let time = w.time * ((n + self.cs) as f64 - t.frames).abs();
             if nonneg && inside.as_ref().is_some_and(|b| time >= b.1) {
                 continue;
             }
@@ -1078,70 +1203,71 @@ pub fn search(
             // reaches it; the labels are pruned against it (`total ≥ cost
             // + time` for a landing path).
             let cap = match &inside {
-                Some(b) if prune => b.1 - time + slack(b.1),
+                Some(b) if self.prune => b.1 - time + slack(b.1),
                 _ => f64::INFINITY,
             };
-            if ext.least_cost(c.start, n as usize) >= cap {
+            if self.ext.least_cost(c.start, n as usize) >= cap {
                 continue;
             }
             let tol = dt * (1.0 - 1e-9);
             if let Some((found, _)) = solve_probed(
                 c,
-                &ext,
+                self.ext,
                 n as usize,
                 t.distance,
                 tol,
                 w.distance,
-                heading,
-                &lo,
+                self.heading,
+                &self.lo,
                 cap,
-                &|f: &Found| lands(f, cs, t, within),
+                &|f: &Found| self.lands(f),
             ) {
-                let cost = total(&found);
-                if lands(&found, cs, t, within) && inside.as_ref().is_none_or(|b| cost < b.1) {
+                let cost = self.total(&found);
+                if self.lands(&found) && inside.as_ref().is_none_or(|b| cost < b.1) {
                     inside = Some((found, cost));
                 }
             }
         }
-        if inside.is_some() {
-            best = inside;
-        }
+        inside
     }
-    if best.is_none() {
-        // Nothing landed within the tolerance of its aim in the frame
-        // counts above (their extremes ignore `min_run`, and the distances
-        // of one length have gaps): a joined pair of key-frames then got
-        // no path at all and the walks' search, bounded on a large graph,
-        // none either ("no path" for 20 m in 10.5 s while 10 s and 11 s
-        // were answered, issue 39.11). The frame counts in the same order,
-        // each with a tolerance that keeps every path of that length (its
-        // extremes lie within it), give the best compromise instead; at
-        // most [`FALLBACK_COUNTS`] of them are searched.
+
+    /// Nothing landed within the tolerance of its aim in the frame counts
+    /// of [`Query::best_first`] (their extremes ignore `min_run`, and the
+    /// distances of one length have gaps): a joined pair of key-frames then
+    /// got no path at all and the walks' search, bounded on a large graph,
+    /// none either ("no path" for 20 m in 10.5 s while 10 s and 11 s were
+    /// answered, issue 39.11). The frame counts of `every` in the same
+    /// order, each with a tolerance that keeps every path of that length
+    /// (its extremes lie within it), give the best compromise instead; at
+    /// most [`FALLBACK_COUNTS`] of them are searched.
+    fn fallback(&self, every: &[(f64, i64, f64)], tol: f64) -> Option<(Found, f64)> {
+        let c = self.c;
+        let mut best: Option<(Found, f64)> = None;
         for &(bound, n, aim) in every.iter().take(FALLBACK_COUNTS) {
             if best.as_ref().is_some_and(|b| bound >= b.1) {
                 break;
             }
-            let (a, b) = ext.at(c.start, n as usize);
+            let (a, b) = self.ext.at(c.start, n as usize);
             let wide = (aim - a).max(b - aim).max(0.0) + tol;
             if let Some((found, _)) = solve_capped(
                 c,
-                &ext,
+                self.ext,
                 n as usize,
                 aim,
                 wide,
-                w.distance,
-                heading,
-                &lo,
+                self.w.distance,
+                self.heading,
+                &self.lo,
                 f64::INFINITY,
             ) {
-                let cost = total(&found);
+                let cost = self.total(&found);
                 if best.as_ref().is_none_or(|b| cost < b.1) {
                     best = Some((found, cost));
                 }
             }
         }
+        best
     }
-    Ok(best)
 }
 
 /// Frame counts the exact-length search's fallback tries, nearest bound

@@ -437,6 +437,10 @@ pub fn solve_bounded(
     dp(p, bound, gap, max_labels, beam)
 }
 
+/// [`solve_bounded`]'s programme over the loop frame count `τ` (module
+/// docs): labels `(cost, distance, turn)` per `τ`, extended by one loop at
+/// a time, dominated labels dropped ([`Dp::offer`]), the best label traced
+/// back to its repetition counts.
 fn dp(
     p: &Problem,
     bound: f64,
@@ -468,45 +472,19 @@ fn dp(
     });
     let mut kept = 1usize;
     let heading = p.turns();
-    let wh = heading.map_or(0.0, |h| h.weight);
-    let th0 = heading.map_or(0.0, |h| h.offset);
-    // `w_h ρ(a − b)`: the heading part of the dominance rule.
-    let apart = |a: f64, b: f64| {
-        if wh > 0.0 {
-            wh * wrap(a - b).abs()
-        } else {
-            0.0
-        }
+    let dp = Dp {
+        p,
+        dd,
+        dt,
+        wh: heading.map_or(0.0, |h| h.weight),
+        th0: heading.map_or(0.0, |h| h.offset),
+        nonneg: p.loops.iter().all(|l| l.cost >= 0.0),
+        sp: cone(p.loops),
+        beam,
     };
     // Each slot is kept sorted by distance, with an upper bound on its
-    // costs (`top`): with costs ≥ 0, a label can only dominate or be
-    // dominated by one whose distance is within `reach / w_d` of its own
-    // (`reach` its cost, or the slot's top cost minus its cost).
+    // costs (`top`, [`Dp::near`]).
     let mut top = vec![0.0f64; tmax + 1];
-    let nonneg = p.loops.iter().all(|l| l.cost >= 0.0);
-    let near = |slot: &[Label], d: f64, reach: f64| -> (usize, usize) {
-        if !(nonneg && p.w_dist > 0.0 && reach.is_finite()) {
-            return (0, slot.len());
-        }
-        if reach < 0.0 {
-            return (0, 0);
-        }
-        let r = reach / p.w_dist + 1e-12;
-        let lo = slot.partition_point(|o| o.dist < d - r);
-        (lo, lo + slot[lo..].partition_point(|o| o.dist <= d + r))
-    };
-    let sp = cone(p.loops);
-    let lower = |c: f64, d: f64, tau: usize| {
-        p.walk.cost
-            + c
-            + cone_gap(
-                -(dd + d),
-                -(dt + tau as f64),
-                sp.as_ref(),
-                p.w_dist,
-                p.w_time,
-            )
-    };
     for tau in 0..=tmax {
         let here = std::mem::take(&mut labels[tau]);
         for (k, l) in here.iter().enumerate() {
@@ -516,14 +494,14 @@ fn dp(
                     + l.cost
                     + p.w_dist * (dd + l.dist).abs()
                     + p.w_time * (dt + tau as f64).abs()
-                    + apart(th0 + l.turn, 0.0);
+                    + dp.apart(dp.th0 + l.turn, 0.0);
                 if c < best_cost - 1e-12 {
                     best_cost = c;
                     best_at = Some((tau, k));
                 }
             }
             let cut = best_cost.min(bound) - gap;
-            if lower(l.cost, l.dist, tau) >= cut {
+            if dp.lower(l.cost, l.dist, tau) >= cut {
                 continue;
             }
             for (i, lp) in p.loops.iter().enumerate() {
@@ -533,29 +511,10 @@ fn dp(
                 }
                 let (c2, d2) = (l.cost + lp.cost, l.dist + lp.distance);
                 let a2 = l.turn + heading.map_or(0.0, |h| h.of(i));
-                let lb2 = lower(c2, d2, t2);
+                let lb2 = dp.lower(c2, d2, t2);
                 if lb2 >= cut {
                     continue;
                 }
-                let slot = &mut labels[t2];
-                let (lo, hi) = near(slot, d2, c2);
-                if slot[lo..hi]
-                    .iter()
-                    .any(|o| o.cost + p.w_dist * (o.dist - d2).abs() + apart(o.turn, a2) <= c2)
-                {
-                    continue;
-                }
-                let (lo, hi) = near(slot, d2, top[t2] - c2);
-                let mut w = lo;
-                for r in lo..hi {
-                    let o = slot[r];
-                    if c2 + p.w_dist * (d2 - o.dist).abs() + apart(a2, o.turn) > o.cost {
-                        slot[w] = o;
-                        w += 1;
-                    }
-                }
-                slot.drain(w..hi);
-                kept -= hi - w;
                 let new = Label {
                     cost: c2,
                     dist: d2,
@@ -563,28 +522,7 @@ fn dp(
                     lb: lb2,
                     parent: (tau as u32, k as u32, i as u32),
                 };
-                match beam {
-                    Some(b) if slot.len() >= b => {
-                        if let Some((worst, _)) = slot
-                            .iter()
-                            .enumerate()
-                            .max_by(|x, y| x.1.lb.total_cmp(&y.1.lb))
-                            .filter(|(_, w)| w.lb > lb2)
-                        {
-                            slot.remove(worst);
-                            let at = slot.partition_point(|o| o.dist < d2);
-                            slot.insert(at, new);
-                            top[t2] = top[t2].max(c2);
-                        }
-                    }
-                    _ => {
-                        let at = slot.partition_point(|o| o.dist < d2);
-                        slot.insert(at, new);
-                        top[t2] = top[t2].max(c2);
-                        kept += 1;
-                    }
-                }
-                if kept > max_labels {
+                if dp.offer(&mut labels[t2], &mut top[t2], new, &mut kept) && kept > max_labels {
                     return Err(RepeatsError::Labels(max_labels));
                 }
             }
@@ -601,6 +539,118 @@ fn dp(
         }
     }
     Ok(Repeats { n, cost: best_cost })
+}
+
+/// What one run of [`dp`] fixes: the problem, its offsets from the target
+/// and the heading term.
+struct Dp<'a> {
+    p: &'a Problem<'a>,
+    /// The walk's distance and frames minus the target's.
+    dd: f64,
+    dt: f64,
+    /// The heading term's weight (0 when it does not count) and the
+    /// walk's offset.
+    wh: f64,
+    th0: f64,
+    /// Every loop's cost is non-negative.
+    nonneg: bool,
+    /// The loops' relaxation.
+    sp: Option<Cone>,
+    /// Labels kept per loop frame count ([`solve_bounded`]).
+    beam: Option<usize>,
+}
+
+impl Dp<'_> {
+    /// `w_h ρ(a − b)`: the heading part of the dominance rule.
+    fn apart(&self, a: f64, b: f64) -> f64 {
+        if self.wh > 0.0 {
+            self.wh * wrap(a - b).abs()
+        } else {
+            0.0
+        }
+    }
+
+    /// The labels of a slot (sorted by distance) that may dominate or be
+    /// dominated by a label at distance `d`: with costs ≥ 0, those whose
+    /// distance is within `reach / w_d` of `d` (`reach` the label's cost,
+    /// or the slot's top cost minus its cost).
+    fn near(&self, slot: &[Label], d: f64, reach: f64) -> (usize, usize) {
+        let p = self.p;
+        if !(self.nonneg && p.w_dist > 0.0 && reach.is_finite()) {
+            return (0, slot.len());
+        }
+        if reach < 0.0 {
+            return (0, 0);
+        }
+        let r = reach / p.w_dist + 1e-12;
+        let lo = slot.partition_point(|o| o.dist < d - r);
+        (lo, lo + slot[lo..].partition_point(|o| o.dist <= d + r))
+    }
+
+    /// The lower bound of any completion of a label of cost `c`, distance
+    /// `d` at loop frame count `tau`.
+    fn lower(&self, c: f64, d: f64, tau: usize) -> f64 {
+        let p = self.p;
+        p.walk.cost
+            + c
+            + cone_gap(
+                -(self.dd + d),
+                -(self.dt + tau as f64),
+                self.sp.as_ref(),
+                p.w_dist,
+                p.w_time,
+            )
+    }
+
+    /// Offers `new` to its `slot` (top cost `top`): `false` when a label
+    /// there dominates it; else the labels it dominates are dropped and it
+    /// is inserted in distance order (with a beam, in place of the label
+    /// of largest bound when that bound is larger than its own), `kept`
+    /// counting the labels held.
+    fn offer(&self, slot: &mut Vec<Label>, top: &mut f64, new: Label, kept: &mut usize) -> bool {
+        let w_dist = self.p.w_dist;
+        let (c2, d2, a2, lb2) = (new.cost, new.dist, new.turn, new.lb);
+        let (lo, hi) = self.near(slot, d2, c2);
+        if slot[lo..hi]
+            .iter()
+            .any(|o| o.cost + w_dist * (o.dist - d2).abs() + self.apart(o.turn, a2) <= c2)
+        {
+            return false;
+        }
+        let (lo, hi) = self.near(slot, d2, *top - c2);
+        let mut w = lo;
+        for r in lo..hi {
+            let o = slot[r];
+            if c2 + w_dist * (d2 - o.dist).abs() + self.apart(a2, o.turn) > o.cost {
+                slot[w] = o;
+                w += 1;
+            }
+        }
+        slot.drain(w..hi);
+        *kept -= hi - w;
+        match self.beam {
+            Some(b) if slot.len() >= b => {
+                if let Some((worst, _)) = slot
+                    .iter()
+                    .enumerate()
+                    .max_by(|x, y| x.1.lb.total_cmp(&y.1.lb))
+                    .filter(|(_, w)| w.lb > lb2)
+                {
+                    slot.remove(worst);
+                    let at = slot.partition_point(|o| o.dist < d2);
+                    slot.insert(at, new);
+                    *top = top.max(c2);
+                }
+            }
+            _ => {
+                let at = slot.partition_point(|o| o.dist < d2);
+                slot.insert(at, new);
+                *top = top.max(c2);
+                *kept += 1;
+            }
+        }
+        true
+    }
 }
 
 /// Every `n` with `n_i ≤ limit` (and within [`Problem::max_loop_frames`])

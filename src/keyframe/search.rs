@@ -233,19 +233,7 @@ pub fn solve_split(
         }
     }
     let k = segs.len();
-    // Cheapest completion of the remaining segments, per measure.
-    let mut rest = vec![Measure::default(); k + 1];
-    for i in (0..k).rev() {
-        let ws = &segs[i].walks;
-        rest[i] = rest[i + 1].plus(Measure {
-            cost: ws.iter().map(|x| x.m.cost).fold(f64::INFINITY, f64::min),
-            distance: ws
-                .iter()
-                .map(|x| x.m.distance)
-                .fold(f64::INFINITY, f64::min),
-            frames: ws.iter().map(|x| x.m.frames).min().unwrap_or(0),
-        });
-    }
+    let rest = cheapest_rest(segs);
     let lower = |m: &Measure, i: usize| {
         let r = rest[i];
         m.cost
@@ -265,44 +253,14 @@ pub fn solve_split(
     loop {
         if i == k {
             tried += 1;
-            let m = acc[k];
-            let sp = repeats::merge_cones(
-                (0..k).filter_map(|j| segs[j].walks[choice[j]].cone.as_ref()),
-                &mut buf,
-            );
-            let lb = m.cost
-                + repeats::cone_gap(
-                    t.distance - m.distance,
-                    t.frames - m.frames as f64,
-                    sp.as_ref(),
-                    w.distance,
-                    w.time,
-                );
-            if lb < best_cost - opts.gap.max(1e-12) {
-                let walks = (0..k).map(|j| &segs[j].walks[choice[j]]);
-                let loops: Vec<Measure> = walks
-                    .clone()
-                    .flat_map(|w| w.measures.iter().copied())
-                    .collect();
-                stats.loops_per_walk = stats.loops_per_walk.max(loops.len());
-                let loop_turns: Vec<f64> = walks
-                    .clone()
-                    .flat_map(|w| w.loop_turns.iter().copied())
-                    .collect();
-                let walk_turn: f64 = walks.map(|w| w.turn).sum();
-                let turns = heading.map(|h| Turns {
-                    offset: walk_turn - h.turn,
-                    loops: &loop_turns,
-                    weight: h.weight,
-                });
-                let (n, c) = segs[0].solve_repeats(m, &loops, turns, t, opts, best_cost, stats)?;
-                stats.walks += 1;
-                if c < best_cost {
-                    best_cost = c;
-                    best = Some((choice.clone(), n));
-                }
-            } else {
-                stats.pruned += 1;
+            let found = solve_combination(
+                segs, &choice, acc[k], t, heading, opts, best_cost, stats, &mut buf,
+            )?;
+            if let Some((n, c)) = found
+                && c < best_cost
+            {
+                best_cost = c;
+                best = Some((choice.clone(), n));
             }
             if tried >= opts.limits.combinations {
                 stats.bounds_hit.push(format!(
@@ -348,4 +306,79 @@ pub fn solve_split(
         out.push(s.expand(&wk.nodes, &wk.arcs, &wk.loops, ni));
     }
     Ok(out)
+}
+
+/// The cheapest completion of the segments from each on, per measure
+/// (each minimised on its own over the walks; `rest[k]` is zero).
+fn cheapest_rest(segs: &[Segment]) -> Vec<Measure> {
+    let k = segs.len();
+    let mut rest = vec![Measure::default(); k + 1];
+    for i in (0..k).rev() {
+        let ws = &segs[i].walks;
+        rest[i] = rest[i + 1].plus(Measure {
+            cost: ws.iter().map(|x| x.m.cost).fold(f64::INFINITY, f64::min),
+            distance: ws
+                .iter()
+                .map(|x| x.m.distance)
+                .fold(f64::INFINITY, f64::min),
+            frames: ws.iter().map(|x| x.m.frames).min().unwrap_or(0),
+        });
+    }
+    rest
+}
+
+/// One full combination of [`solve_split`] (walk `choice[j]` of segment
+/// `j`, together measuring `m`): `None` (counted as pruned) when the
+/// relaxation of its loops cannot beat `best_cost`, else the repetition
+/// counts of all its loops and their cost.
+#[allow(clippy::too_many_arguments)]
+fn solve_combination(
+    segs: &[Segment],
+    choice: &[usize],
+    m: Measure,
+    t: &Target,
+    heading: Option<&Heading>,
+    opts: &SearchOptions,
+    best_cost: f64,
+    stats: &mut Stats,
+    buf: &mut Vec<(f64, f64)>,
+) -> Result<Option<(Vec<u32>, f64)>, SearchError> {
+    let (k, w) = (segs.len(), opts.weights);
+    let sp = repeats::merge_cones(
+        (0..k).filter_map(|j| segs[j].walks[choice[j]].cone.as_ref()),
+        buf,
+    );
+    let lb = m.cost
+        + repeats::cone_gap(
+            t.distance - m.distance,
+            t.frames - m.frames as f64,
+            sp.as_ref(),
+            w.distance,
+            w.time,
+        );
+    // Pruned also when `lb` is not a number (as the search always was).
+    let beats = lb < best_cost - opts.gap.max(1e-12);
+    if !beats {
+        stats.pruned += 1;
+        return Ok(None);
+    }
+    let walks = (0..k).map(|j| &segs[j].walks[choice[j]]);
+    let loops: Vec<Measure> = walks
+        .clone()
+        .flat_map(|w| w.measures.iter().copied())
+        .collect();
+    stats.loops_per_walk = stats.loops_per_walk.max(loops.len());
+    let loop_turns: Vec<f64> = walks
+        .clone()
+        .flat_map(|w| w.loop_turns.iter().copied())
+        .collect();
+    let walk_turn: f64 = walks.map(|w| w.turn).sum();
+    let turns = heading.map(|h| Turns {
+        offset: walk_turn - h.turn,
+        loops: &loop_turns,
+        weight: h.weight,
+    });
+    let (n, c) = segs[0].solve_repeats(m, &loops, turns, t, opts, best_cost, stats)?;
+    stats.walks += 1;
+    Ok(Some((n, c)))
 }

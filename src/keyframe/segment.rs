@@ -214,6 +214,126 @@ fn min_cost_paths(n: usize, rev: &[Vec<(u32, f64)>], goal: u32) -> Vec<f64> {
     d
 }
 
+/// The compressed graph between `from` and `to` (module docs): its nodes
+/// (the key-frames and every transition's ends) as frame ids, each frame's
+/// node index (`u32::MAX` for a plain frame), the arcs, and the arcs
+/// leaving every node.
+#[allow(clippy::type_complexity)]
+fn compress(g: &KeyGraph, from: u32, to: u32) -> (Vec<u32>, Vec<u32>, Vec<Arc>, Vec<Vec<u32>>) {
+    // Nodes: key-frames and transition ends.
+    let nf = g.len();
+    let mut is_node = vec![false; nf];
+    is_node[from as usize] = true;
+    is_node[to as usize] = true;
+    for f in 0..nf as u32 {
+        for e in g.successors(f) {
+            if e.jump {
+                is_node[f as usize] = true;
+                is_node[e.to as usize] = true;
+            }
+        }
+    }
+    let frames: Vec<u32> = (0..nf as u32).filter(|&f| is_node[f as usize]).collect();
+    let mut index = vec![u32::MAX; nf];
+    for (i, &f) in frames.iter().enumerate() {
+        index[f as usize] = i as u32;
+    }
+    let mut arcs = Vec::new();
+    let mut out = vec![Vec::new(); frames.len()];
+    for (i, &u) in frames.iter().enumerate() {
+        // The run of plain frames to the next node.
+        let mut f = u;
+        let mut m = Measure::default();
+        while let Some(e) = g.successors(f).iter().find(|e| !e.jump) {
+            f = e.to;
+            m.distance += g.step[f as usize];
+            m.frames += 1;
+            if is_node[f as usize] {
+                out[i].push(arcs.len() as u32);
+                arcs.push(Arc {
+                    to: index[f as usize],
+                    m,
+                    from_frame: u,
+                    to_frame: f,
+                    jump: false,
+                    turn: 0.0,
+                });
+                break;
+            }
+        }
+        for e in g.successors(u).iter().filter(|e| e.jump) {
+            out[i].push(arcs.len() as u32);
+            arcs.push(Arc {
+                to: index[e.to as usize],
+                m: Measure {
+                    cost: e.cost.max(0.0),
+                    distance: g.step[e.to as usize],
+                    frames: 1,
+                },
+                from_frame: u,
+                to_frame: e.to,
+                jump: true,
+                turn: e.turn,
+            });
+        }
+    }
+    (frames, index, arcs, out)
+}
+
+/// The nodes reachable from `seed` by `next` (of `n` nodes).
+fn reachable(n: usize, seed: u32, next: &dyn Fn(u32) -> Vec<u32>) -> Vec<bool> {
+    let mut seen = vec![false; n];
+    let mut stack = vec![seed];
+    seen[seed as usize] = true;
+    while let Some(u) = stack.pop() {
+        for v in next(u) {
+            if !seen[v as usize] {
+                seen[v as usize] = true;
+                stack.push(v);
+            }
+        }
+    }
+    seen
+}
+
+/// The cheapest cost, distance and frames from every node to the goal
+/// over the relevant nodes, each measure minimised on its own (lower
+/// bounds); `rev` the arcs entering every node.
+fn bounds_to_goal(
+    rev: &[Vec<(u32, u32)>],
+    arcs: &[Arc],
+    relevant: &[bool],
+    goal: u32,
+) -> Vec<Measure> {
+    let n = rev.len();
+    let h_of = |w: &dyn Fn(&Measure) -> f64| {
+        let r: Vec<Vec<(u32, f64)>> = rev
+            .iter()
+            .map(|row| {
+                row.iter()
+                    .filter(|(u, _)| relevant[*u as usize])
+                    .map(|&(u, a)| (u, w(&arcs[a as usize].m)))
+                    .collect()
+            })
+            .collect();
+        min_cost_paths(n, &r, goal)
+    };
+    let hc = h_of(&|m| m.cost);
+    let hd = h_of(&|m| m.distance);
+    let hf = h_of(&|m| m.frames as f64);
+    (0..n)
+        .map(|u| Measure {
+            cost: hc[u],
+            distance: hd[u],
+            frames: if hf[u].is_finite() {
+                hf[u] as u32
+            } else {
+                u32::MAX / 4
+            },
+        })
+        .collect()
+}
+
 impl Segment {
     /// Prepares the search from frame `from` to frame `to`. `count_start`
     /// counts `from` in the frames (the first segment of a path; later
@@ -230,63 +350,7 @@ impl Segment {
                 return Err(SearchError::Frame(f, g.len()));
             }
         }
-        // Nodes: key-frames and transition ends.
-        let nf = g.len();
-        let mut is_node = vec![false; nf];
-        is_node[from as usize] = true;
-        is_node[to as usize] = true;
-        for f in 0..nf as u32 {
-            for e in g.successors(f) {
-                if e.jump {
-                    is_node[f as usize] = true;
-                    is_node[e.to as usize] = true;
-                }
-            }
-        }
-        let frames: Vec<u32> = (0..nf as u32).filter(|&f| is_node[f as usize]).collect();
-        let mut index = vec![u32::MAX; nf];
-        for (i, &f) in frames.iter().enumerate() {
-            index[f as usize] = i as u32;
-        }
-        let mut arcs = Vec::new();
-        let mut out = vec![Vec::new(); frames.len()];
-        for (i, &u) in frames.iter().enumerate() {
-            // The run of plain frames to the next node.
-            let mut f = u;
-            let mut m = Measure::default();
-            while let Some(e) = g.successors(f).iter().find(|e| !e.jump) {
-                f = e.to;
-                m.distance += g.step[f as usize];
-                m.frames += 1;
-                if is_node[f as usize] {
-                    out[i].push(arcs.len() as u32);
-                    arcs.push(Arc {
-                        to: index[f as usize],
-                        m,
-                        from_frame: u,
-                        to_frame: f,
-                        jump: false,
-                        turn: 0.0,
-                    });
-                    break;
-                }
-            }
-            for e in g.successors(u).iter().filter(|e| e.jump) {
-                out[i].push(arcs.len() as u32);
-                arcs.push(Arc {
-                    to: index[e.to as usize],
-                    m: Measure {
-                        cost: e.cost.max(0.0),
-                        distance: g.step[e.to as usize],
-                        frames: 1,
-                    },
-                    from_frame: u,
-                    to_frame: e.to,
-                    jump: true,
-                    turn: e.turn,
-                });
-            }
-        }
+        let (frames, index, arcs, out) = compress(g, from, to);
         let n = frames.len();
         let (start, goal) = (index[from as usize], index[to as usize]);
         // Reachable from the start and reaching the goal.
@@ -296,58 +360,18 @@ impl Segment {
                 rev[arcs[a as usize].to as usize].push((u as u32, a));
             }
         }
-        let reach = |seed: u32, next: &dyn Fn(u32) -> Vec<u32>| {
-            let mut seen = vec![false; n];
-            let mut stack = vec![seed];
-            seen[seed as usize] = true;
-            while let Some(u) = stack.pop() {
-                for v in next(u) {
-                    if !seen[v as usize] {
-                        seen[v as usize] = true;
-                        stack.push(v);
-                    }
-                }
-            }
-            seen
-        };
-        let fwd = reach(start, &|u| {
+        let fwd = reachable(n, start, &|u| {
             out[u as usize]
                 .iter()
                 .map(|&a| arcs[a as usize].to)
                 .collect()
         });
-        let bwd = reach(goal, &|u| rev[u as usize].iter().map(|x| x.0).collect());
+        let bwd = reachable(n, goal, &|u| rev[u as usize].iter().map(|x| x.0).collect());
         if !fwd[goal as usize] {
             return Err(SearchError::NoPath { from, to });
         }
         let relevant: Vec<bool> = (0..n).map(|u| fwd[u] && bwd[u]).collect();
-        // Lower bounds to the goal, each measure on its own.
-        let h_of = |w: &dyn Fn(&Measure) -> f64| {
-            let r: Vec<Vec<(u32, f64)>> = rev
-                .iter()
-                .map(|row| {
-                    row.iter()
-                        .filter(|(u, _)| relevant[*u as usize])
-                        .map(|&(u, a)| (u, w(&arcs[a as usize].m)))
-                        .collect()
-                })
-                .collect();
-            min_cost_paths(n, &r, goal)
-        };
-        let hc = h_of(&|m| m.cost);
-        let hd = h_of(&|m| m.distance);
-        let hf = h_of(&|m| m.frames as f64);
-        let h: Vec<Measure> = (0..n)
-            .map(|u| Measure {
-                cost: hc[u],
-                distance: hd[u],
-                frames: if hf[u].is_finite() {
-                    hf[u] as u32
-                } else {
-                    u32::MAX / 4
-                },
-            })
-            .collect();
+        let h = bounds_to_goal(&rev, &arcs, &relevant, goal);
         let mut seg = Segment {
             from,
             to,
@@ -368,7 +392,6 @@ impl Segment {
         seg.find_walks(limits);
         Ok(seg)
     }
-
     /// Simple cycles among the relevant nodes: from each node `v`, a DFS
     /// over nodes numbered above `v` back to `v`.
     fn find_cycles(&mut self, limits: &Limits) {
