@@ -47,7 +47,7 @@ pub mod select;
 pub mod smoothest;
 pub mod smoothness;
 
-pub use output::{Output, Planned, Streamed, facing_change, plan_path, synthesise};
+pub use output::{Output, Planned, Streamed, facing_change, plan_path, prepare, synthesise};
 pub use planner::{CostTerms, LoopReport, Plan, Planner, SegmentReport, TargetReach, join, runs};
 pub use problem::{
     KeyframeError, KeyframeOptions, MAX_TARGET_METRES, MAX_TARGET_SECONDS, Targets, TransitionCost,

@@ -1,5 +1,6 @@
-//! A planned path made into frames: synthesis along the timeline, held or
-//! streamed.
+//! A planned path made into frames: synthesis along the timeline with the
+//! character's prepared blender ([`Prepared`]), into any [`FrameSink`]
+//! (held or streamed: one path).
 
 use super::heading::wrap;
 use super::planner::*;
@@ -7,6 +8,8 @@ use super::problem::*;
 use super::report::*;
 use super::{place, pose, smoothness};
 use crate::db::Character;
+use crate::deform::DeformMode;
+use crate::drive::{FrameSink, Prepared, RetargetOptions};
 use std::time::Instant;
 
 /// The synthesised key-frame animation.
@@ -21,9 +24,10 @@ pub struct Output {
 
 /// Plans and synthesises: key-frame ids `keys` (at least two), targets,
 /// options. Errors: the search's (no path between two key-frames) or a
-/// failed factorisation of the blender. Every frame is held
-/// ([`plan_path`] then [`Planned::synthesise_each`] into one buffer);
-/// the CLI streams its output instead.
+/// failed factorisation of the blender. A one-off: the character is
+/// prepared ([`prepare`]) for this call and every frame is held
+/// ([`plan_path`] then [`Planned::synthesise_into`] the sink `Vec`); the
+/// CLI streams its output instead.
 pub fn synthesise(
     ch: &Character,
     keys: &[u32],
@@ -41,11 +45,15 @@ pub fn synthesise(
         "the key-frame path (lower `Targets::distance` or `Targets::time`)".to_string()
     };
     crate::util::budget::check_frames(&what, planned.frames(), ch.n(), 1)?;
+    let prepared = prepare(ch)?;
     let mut positions = Vec::with_capacity(planned.frames() * ch.n());
-    let s = planned.synthesise_each(ch, targets, opts, |_, p| -> Result<(), KeyframeError> {
-        positions.extend_from_slice(p);
-        Ok(())
-    })?;
+    let s = planned.synthesise_into::<_, KeyframeError>(
+        ch,
+        &prepared,
+        targets,
+        opts,
+        &mut positions,
+    )?;
     Ok(Output {
         positions,
         plan: s.plan,
@@ -67,8 +75,20 @@ impl Planned {
     }
 }
 
-/// [`Output`] without the positions, which went to the caller frame by
-/// frame ([`Planned::synthesise_each`]).
+/// The character prepared for key-frame synthesis ([`Prepared::new`]
+/// without a deformation: the topology in metres and the factored
+/// blender, built once per job and read by every query). Errors: a failed
+/// factorisation of the blender.
+pub fn prepare(ch: &Character) -> Result<Prepared, KeyframeError> {
+    let opts = RetargetOptions {
+        deform: DeformMode::None,
+        ..RetargetOptions::default()
+    };
+    Prepared::new(ch, &opts).map_err(|e| KeyframeError::Search(format!("blending: {e}")))
+}
+
+/// [`Output`] without the positions, which went to a sink frame by frame
+/// ([`Planned::synthesise_into`]).
 pub struct Streamed {
     /// The plan.
     pub plan: Plan,
@@ -104,16 +124,19 @@ pub fn plan_path(
     Ok(Planned { planner, plan })
 }
 
-/// An error of [`Planned::synthesise_each`]: the blender's, or the
-/// caller's.
-enum EachError<E> {
-    Solve(crate::mesh::solver::SolveError),
-    Caller(E),
+/// A sink that counts the seconds spent in the sink it wraps.
+struct Timed<S> {
+    sink: S,
+    seconds: f64,
 }
 
-impl<E> From<crate::mesh::solver::SolveError> for EachError<E> {
-    fn from(e: crate::mesh::solver::SolveError) -> Self {
-        EachError::Solve(e)
+impl<S: FrameSink> FrameSink for Timed<S> {
+    type Error = S::Error;
+    fn push(&mut self, frame: &[[f64; 3]]) -> Result<(), S::Error> {
+        let t = Instant::now();
+        let r = self.sink.push(frame);
+        self.seconds += t.elapsed().as_secs_f64();
+        r
     }
 }
 
@@ -123,39 +146,42 @@ impl Planned {
         self.plan.path.len()
     }
 
-    /// Blends and places the path's meshes ([`place::place_each`]),
-    /// handing each output frame (its index and the character's vertices,
-    /// metres, Y-up) to `each` in order, and reports. A path of any length
-    /// needs the memory of one chunk of frames, not of every frame. The
-    /// report's `mesh_seconds` leaves out the time spent in `each`.
-    pub fn synthesise_each<E: From<KeyframeError>>(
+    /// Blends and places the path's meshes ([`place::place_into`]) with
+    /// the character's prepared blender ([`prepare`], or any
+    /// [`Prepared`] of this character), handing each output frame (the
+    /// character's vertices, metres, Y-up) to `sink` in order, and
+    /// reports. A path of any length needs the memory of one chunk of
+    /// frames, not of every frame, when the sink streams. The report's
+    /// `mesh_seconds` leaves out the time spent in the sink. Errors: a
+    /// preparation of another character, or the sink's first error.
+    pub fn synthesise_into<S: FrameSink, E: From<KeyframeError> + From<S::Error>>(
         self,
         ch: &Character,
+        prepared: &Prepared,
         targets: &Targets,
         opts: &KeyframeOptions,
-        mut each: impl FnMut(usize, &[[f64; 3]]) -> Result<(), E>,
+        sink: S,
     ) -> Result<Streamed, E> {
+        let vertices = prepared.topology_metres().vertex_count();
+        if vertices != ch.n() {
+            return Err(E::from(KeyframeError::Unprepared(format!(
+                "prepared for {vertices} vertices; the database has {}",
+                ch.n()
+            ))));
+        }
         let Planned { planner, plan } = self;
         let fps = ch.manifest().fps;
         let t0 = Instant::now();
-        let mut in_each = 0.0;
-        let track = place::place_each(
+        let mut timed = Timed { sink, seconds: 0.0 };
+        let track = place::place_into(
             ch,
+            prepared.blender(),
             &planner.graph,
             &plan.path,
             &opts.timeline,
-            |k, p| -> Result<(), EachError<E>> {
-                let t = Instant::now();
-                let r = each(k, p).map_err(EachError::Caller);
-                in_each += t.elapsed().as_secs_f64();
-                r
-            },
-        )
-        .map_err(|e| match e {
-            EachError::Solve(e) => E::from(KeyframeError::Search(format!("blending: {e}"))),
-            EachError::Caller(e) => e,
-        })?;
-        let mesh_seconds = (t0.elapsed().as_secs_f64() - in_each).max(0.0);
+            &mut timed,
+        )?;
+        let mesh_seconds = (t0.elapsed().as_secs_f64() - timed.seconds).max(0.0);
         let mut cache = smoothness::Measurer::new(ch);
         let trans = transitions(ch, &planner.graph, &plan.path, &opts.timeline, &mut cache);
         let (de, te) = match targets {

@@ -22,11 +22,16 @@
 //! travels exactly the counted distance. Without it the whole body
 //! changed speed within one frame at a walk-to-run transition (1.0 to
 //! 2.4 m/s, 35 m/s² on every vertex).
+//!
+//! The frames are blended with the character's prepared blender
+//! ([`crate::drive::Prepared`], factored once per job) and handed to a
+//! [`FrameSink`], as surface synthesis and transfer do: held
+//! ([`place`]) and streamed output ([`place_into`]) are one path.
 
 use super::graph::{KeyGraph, centre_of};
 use crate::db::Character;
 use crate::drive::timeline::{Jump, OutFrame, TimelineOptions, timeline};
-use crate::drive::{BlendScratch, CHUNK_FRAMES, Floor, blend_placed};
+use crate::drive::{BlendScratch, CHUNK_FRAMES, Floor, FrameSink, blend_placed};
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
 use crate::pose::measure::rotate_yaw;
@@ -157,18 +162,20 @@ pub fn ease_steps(centre: &mut [[f64; 2]], jumps: &[Jump], g: &KeyGraph) {
 }
 
 /// Blends and places the frames of `path`, every frame held
-/// ([`place_each`] into one buffer; for short paths and tests).
+/// ([`place_into`] the sink `Vec`; for short paths and tests). A one-off:
+/// the blender is factored here for this call.
 pub fn place(
     ch: &Character,
     g: &KeyGraph,
     path: &[u32],
     opts: &TimelineOptions,
 ) -> Result<Placed, SolveError> {
+    let blender = Blender::new(&ch.topology_metres())?;
     let mut positions = Vec::with_capacity(path.len() * ch.n());
-    let track = place_each(ch, g, path, opts, |_, p| -> Result<(), SolveError> {
-        positions.extend_from_slice(p);
-        Ok(())
-    })?;
+    let track = match place_into(ch, &blender, g, path, opts, &mut positions) {
+        Ok(track) => track,
+        Err(never) => match never {},
+    };
     Ok(Placed {
         positions,
         frames: track.frames,
@@ -178,8 +185,8 @@ pub fn place(
     })
 }
 
-/// What [`place_each`] returns: [`Placed`] without the positions, which
-/// went to the caller frame by frame.
+/// What [`place_into`] returns: [`Placed`] without the positions, which
+/// went to the sink frame by frame.
 pub struct Track {
     /// What each output frame blends.
     pub frames: Vec<OutFrame>,
@@ -191,21 +198,24 @@ pub struct Track {
     pub centre: Vec<[f64; 2]>,
 }
 
-/// Blends and places the frames of `path`, handing each (its index and
-/// the character's vertices) to `each` in order. Every output frame is
-/// blended on its own (its window's frames and weights come from the
-/// timeline, its floor placement from the track computed first for the
-/// whole path), so frames are made [`CHUNK_FRAMES`] at a time in
-/// parallel: a path of any length needs the memory of one chunk, not of
-/// every frame (attack s14, item 3: 8.6 MB per output second). The frames
-/// are those of [`place`], bit for bit.
-pub fn place_each<E: From<SolveError>>(
+/// Blends (with `blender`, factored on the character's topology in
+/// metres: [`crate::drive::Prepared::blender`]) and places the frames of
+/// `path`, handing each (the character's vertices) to `sink` in order.
+/// Every output frame is blended on its own (its window's frames and
+/// weights come from the timeline, its floor placement from the track
+/// computed first for the whole path), so frames are made
+/// [`CHUNK_FRAMES`] at a time in parallel: a path of any length needs the
+/// memory of one chunk, not of every frame (attack s14, item 3: 8.6 MB per
+/// output second). The frames are those of [`place`], bit for bit. The
+/// first error of the sink stops the placement and is returned.
+pub fn place_into<S: FrameSink>(
     ch: &Character,
+    blender: &Blender,
     g: &KeyGraph,
     path: &[u32],
     opts: &TimelineOptions,
-    mut each: impl FnMut(usize, &[[f64; 3]]) -> Result<(), E>,
-) -> Result<Track, E> {
+    mut sink: S,
+) -> Result<Track, S::Error> {
     let (frames, jumps) = timeline(path, &super::graph::KeyFrames { ch, graph: g }, opts);
     let (place, mut centre) = placements(ch, g, path);
     if opts.blend {
@@ -213,8 +223,6 @@ pub fn place_each<E: From<SolveError>>(
         // steps, as it keeps its own geometry.
         ease_steps(&mut centre, &jumps, g);
     }
-    let topo = ch.topology_metres();
-    let blender = Blender::new(&topo)?;
     let n = ch.n().max(1);
     let chunk = CHUNK_FRAMES.min(frames.len()).max(1);
     let mut buffer = vec![[0.0; 3]; chunk * n];
@@ -249,7 +257,7 @@ pub fn place_each<E: From<SolveError>>(
                     buf: &mut buf,
                     grads: &mut grads,
                 };
-                blend_placed(ch, &blender, o.used(), r, place[k], same, &mut scratch, dst);
+                blend_placed(ch, blender, o.used(), r, place[k], same, &mut scratch, dst);
                 // Exactly on the accumulated floor track.
                 let c = centre_of(dst);
                 let (dx, dz) = (centre[k][0] - c[0], centre[k][1] - c[1]);
@@ -261,8 +269,8 @@ pub fn place_each<E: From<SolveError>>(
                     p.push((ws, buf, grads));
                 }
             });
-        for (i, f) in buffer[..m * n].chunks(n).enumerate() {
-            each(start + i, f)?;
+        for f in buffer[..m * n].chunks(n) {
+            sink.push(f)?;
         }
     }
     Ok(Track {

@@ -73,11 +73,21 @@ pub enum KeyframeError {
     /// The search failed.
     #[error("{0}")]
     Search(String),
+    /// The prepared character ([`crate::drive::Prepared`]) was made for
+    /// another character.
+    #[error("the prepared character does not fit this key-frame query: {0}")]
+    Unprepared(String),
     /// The path found is longer than the memory budget can hold as a
     /// mesh sequence (far-out-of-range targets give long compromises, and
     /// many key-frames long paths; the text says which).
     #[error("{0}")]
     OverBudget(#[from] crate::util::budget::OverBudget),
+}
+
+impl From<std::convert::Infallible> for KeyframeError {
+    fn from(e: std::convert::Infallible) -> Self {
+        match e {}
+    }
 }
 
 /// The longest target time of a query, in seconds (an hour, as `play

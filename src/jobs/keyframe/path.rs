@@ -4,7 +4,8 @@ use super::KeyframeJobError;
 use super::keys::Keys;
 use super::verdict::{Missed, missed_targets};
 use crate::db::Character;
-use crate::keyframe::{KeyframeOptions, Plan, Report, Targets, plan_path};
+use crate::drive::Each;
+use crate::keyframe::{KeyframeOptions, Plan, Report, Targets, plan_path, prepare};
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::stream::SequenceWriter;
 use serde::Serialize;
@@ -34,7 +35,9 @@ pub struct PathRun {
 /// Finds the path through `keys` for `targets` (Eq. 7) and writes its
 /// meshes to `out` frame by frame (a [`SequenceWriter`]: point caches and
 /// OBJ folders stream, a GLB is checked against the memory budget before
-/// the first frame is made), telling `progress` each stage. Every frame
+/// the first frame is made), telling `progress` each stage. The character
+/// is prepared once ([`prepare`]: the topology in metres, the factored
+/// blender) for the writer and the synthesis. Every frame
 /// was held, then the whole file's bytes (attack s14, item 3: 8.6 MB per
 /// output second, 7.1 GB for an hour).
 pub fn write_path(
@@ -52,8 +55,9 @@ pub fn write_path(
         fps: Some(fps),
         ..Default::default()
     };
-    let mut writer =
-        SequenceWriter::create(&ch.topology_metres(), out, total, &save).map_err(|e| {
+    let prepared = prepare(ch)?;
+    let mut writer = SequenceWriter::create(prepared.topology_metres(), out, total, &save)
+        .map_err(|e| {
             // "a GLB of 16,559 frames would need 11.9 GB" for a one-hour
             // time without a word that the search had stopped short of
             // the target (issue 46.12).
@@ -68,7 +72,8 @@ pub fn write_path(
                 }
             }
         })?;
-    let s = planned.synthesise_each(ch, targets, opts, |k, p| -> Result<(), KeyframeJobError> {
+    let mut k = 0;
+    let sink = Each(|p: &[[f64; 3]]| -> Result<(), KeyframeJobError> {
         if k % 16 == 0 {
             progress(&format!(
                 "blending and writing the meshes: frame {k}/{total}"
@@ -77,8 +82,10 @@ pub fn write_path(
         if k + 1 == total {
             progress("measuring the transitions' smoothness");
         }
+        k += 1;
         Ok(writer.push(p)?)
-    })?;
+    });
+    let s = planned.synthesise_into::<_, KeyframeJobError>(ch, &prepared, targets, opts, sink)?;
     let written = writer.finish()?;
     let mut report = s.report;
     report.poses = keys.resolved.clone();
