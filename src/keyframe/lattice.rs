@@ -529,6 +529,13 @@ pub fn solve_exact_length(
 /// cost plus [`Extremes::least_cost`] to the goal stays below `cap` (module
 /// docs, "Pruning"): the same result whenever that result's transition
 /// cost is below `cap`, else a result of at least that cost, or `None`.
+///
+/// 109 lines (house limit ~100), left whole: the layer loop is the
+/// programme's steps 2-3 as the module docs give them (group a layer's
+/// labels by node, cut it among the workers, expand, merge in order),
+/// each step already its own function (`group_by_node`, `cut_layer`,
+/// `Layer::expand`, `merge_part`, `trace_back`); what remains is the
+/// buffers they share across layers.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_capped(
     c: &Chain,

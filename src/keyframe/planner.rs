@@ -239,6 +239,12 @@ impl Planner {
     /// walks-and-loops split [`search::solve_split`]). A heading target
     /// ([`SearchOptions::heading`]) applies to the last segment with per
     /// segment targets, after the turns of the earlier ones.
+    ///
+    /// 110 lines (house limit ~100), left whole: it reads as the query's
+    /// steps in order (the horizon note, the segments' paths for a global
+    /// or per-segment target, the bounds hit, the cost terms of Eq. 7),
+    /// each a few lines calling [`lattice::search`], `solve_one`
+    /// or [`search::solve_split`]; the two target kinds share its locals.
     pub fn plan(&self, targets: &Targets, opts: &SearchOptions) -> Result<Plan, SearchError> {
         let t0 = clock::Stopwatch::start();
         let mut stats = Stats::default();
