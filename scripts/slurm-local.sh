@@ -8,6 +8,7 @@
 #   LIB=DIR                  the clip folder (default ../shared/data/mocap/cmu-amc/02)
 #   TARGET="--db DIR"        the batch's target (default: samba_db, made in WORKDIR)
 #   BIN=PATH                 the binary (default target/release/surfmotion)
+#   PORT=16817               slurmctld's port (slurmd takes PORT+1)
 #   KEEP=1                   leave the daemons running at the end
 #
 # Everything Slurm needs lives in WORKDIR: slurm.conf (SLURM_CONF points the
@@ -58,8 +59,8 @@ cat > "$SLURM_CONF" <<EOF
 # written by surfmotion scripts/slurm-local.sh: one node, local only
 ClusterName=surfmotion-local
 SlurmctldHost=$host
-SlurmctldPort=16817
-SlurmdPort=16818
+SlurmctldPort=${PORT:-16817}
+SlurmdPort=$((${PORT:-16817} + 1))
 AuthType=auth/munge
 AuthInfo=socket=$W/munge/munge.socket
 CredType=cred/munge

@@ -276,6 +276,8 @@ fn the_slurm_script_runs_a_real_array() {
             format!("--scan {} --landmarks {}", mesh.display(), lm.display()),
         )
         .env("BIN", common::bin())
+        // Beside a Slurm of the script's default ports, if one runs.
+        .env("PORT", "16917")
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
