@@ -585,7 +585,8 @@ mod tests {
         let line = || Line((0..n).map(|i| (i as f64 * 0.01).sin()).collect(), 0.into());
         let whole = all_pairs(&line(), &|_| {});
         let tmp = tempfile::tempdir().unwrap();
-        let path = tmp.path().join("similarity-shape.bin");
+        // In a cache folder that does not exist yet (a first build).
+        let path = tmp.path().join("cache/similarity-shape.bin");
         // An uninterrupted checkpointed run.
         let set = line();
         let (data, ck) = compare_frames(tmp.path(), &path, 7, &set, &Quiet).unwrap();

@@ -200,6 +200,10 @@ impl Checkpoint {
             path: path.to_path_buf(),
             source,
         };
+        // The database's cache folder may not exist yet.
+        if let Some(d) = path.parent() {
+            std::fs::create_dir_all(d).map_err(fs)?;
+        }
         let mut file = std::fs::OpenOptions::new()
             .create(true)
             .truncate(false)

@@ -197,7 +197,8 @@ fn scheduler_conflicts_are_one_line_errors() {
         }
         c.output().unwrap()
     };
-    let cases: [(&[&str], &[(&str, &str)], &str); 5] = [
+    type Case<'a> = (&'a [&'a str], &'a [(&'a str, &'a str)], &'a str);
+    let cases: [Case; 5] = [
         (&[], &[("JOB_COMPLETION_INDEX", "1")], "not --shard-count"),
         (&["--shard-count", "3"], &[], "needs a shard index"),
         (
