@@ -16,9 +16,12 @@ pub enum Format {
     Obj,
 }
 
-/// One shard `index` of `count` (1-based, as Slurm array indices are
-/// usually written): clip k (in sorted order) belongs to shard
-/// `k mod count + 1`.
+/// One shard `index` of `count` (1-based): a clip belongs to shard
+/// `h mod count + 1`, where `h` is [`clip_hash`] of its path relative to
+/// the mocap folder. The split depends on each clip's own path only, so
+/// adding clips to a library never moves a clip already converted to
+/// another shard (the sorted-list split `k mod count` did: every clip
+/// after a new one moved); shards are balanced only on average.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Shard {
     /// Which shard, 1..=count.
@@ -47,14 +50,58 @@ impl Shard {
         Ok(Shard { index: i, count: n })
     }
 
-    /// The clips of this shard.
-    pub fn select<T: Clone>(&self, all: &[T]) -> Vec<T> {
+    /// True when the clip `rel` (relative to the mocap folder) belongs to
+    /// this shard.
+    pub fn contains(&self, rel: &Path) -> bool {
+        shard_of(rel, self.count) == self.index
+    }
+
+    /// The planned clips of this shard, in their order.
+    pub fn select(&self, all: &[Planned]) -> Vec<Planned> {
         all.iter()
-            .enumerate()
-            .filter(|(k, _)| k % self.count + 1 == self.index)
-            .map(|(_, c)| c.clone())
+            .filter(|p| self.contains(&p.clip))
+            .cloned()
             .collect()
     }
+
+    /// `i/n`, as [`Shard::parse`] reads it (and `batch-iofn` names files).
+    pub fn spelled(&self) -> String {
+        format!("{}/{}", self.index, self.count)
+    }
+}
+
+/// A stable 64-bit hash of a clip's path relative to the mocap folder: FNV-1a
+/// over its components joined by `/` (so `a/./b` and `a//b` are `a/b`),
+/// finished by the SplitMix64 mixer so that `h mod n` is even for any `n`.
+/// The same on every machine, build and run; pinned by a test.
+pub fn clip_hash(rel: &Path) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut feed = |b: u8| {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    };
+    let mut first = true;
+    for c in rel.components() {
+        let std::path::Component::Normal(c) = c else {
+            continue;
+        };
+        if !first {
+            feed(b'/');
+        }
+        first = false;
+        for &b in c.as_encoded_bytes() {
+            feed(b);
+        }
+    }
+    let mut z = h.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// The shard (1..=count) of the clip `rel` in a split of `count`.
+pub fn shard_of(rel: &Path, count: usize) -> usize {
+    (clip_hash(rel) % count.max(1) as u64) as usize + 1
 }
 
 /// Every `.bvh`, `.amc` and `.fbx` file under `dir` (any case), as paths relative
@@ -343,15 +390,31 @@ pub fn is_temporary(name: &str) -> bool {
 mod tests {
     use super::*;
 
+    fn planned(names: &[String]) -> Vec<Planned> {
+        names
+            .iter()
+            .map(|n| Planned {
+                clip: PathBuf::from(n),
+                output: PathBuf::from("out").join(n),
+            })
+            .collect()
+    }
+
     #[test]
     fn shards_cover_the_list_once() {
-        let all: Vec<usize> = (0..10).collect();
+        let names: Vec<String> = (0..40).map(|i| format!("d{}/c{i}.bvh", i % 3)).collect();
+        let all = planned(&names);
         let mut seen = Vec::new();
         for i in 1..=3 {
-            seen.extend(Shard::parse(&format!("{i}/3")).unwrap().select(&all));
+            let part = Shard::parse(&format!("{i}/3")).unwrap().select(&all);
+            // 40 clips in 3 shards: none empty, none with most of them.
+            assert!((5..=25).contains(&part.len()), "{}", part.len());
+            seen.extend(part.into_iter().map(|p| p.clip));
         }
         seen.sort();
-        assert_eq!(seen, all);
+        let mut want: Vec<PathBuf> = all.iter().map(|p| p.clip.clone()).collect();
+        want.sort();
+        assert_eq!(seen, want);
         assert!(Shard::parse("0/3").is_err());
         assert!(Shard::parse("4/3").is_err());
         assert!(Shard::parse("a/b").is_err());
@@ -419,6 +482,71 @@ mod tests {
         assert!(is_temporary(".surfmotion-ab12CD-partial"));
         assert!(!is_temporary(".surfmotion-ab12CD-partial-bvh"));
         assert_eq!(p[1].output, Path::new("out/.surfmotion-ab12CD-partial-bvh"));
+    }
+
+    /// Clips added to a library (before, among and after the old ones in
+    /// sorted order) leave every old clip in its shard; the sorted-list
+    /// split `k mod n` moved most of them.
+    #[test]
+    fn adding_clips_does_not_reshuffle_finished_ones() {
+        let old: Vec<String> = (0..30).map(|i| format!("lib/{:03}.bvh", 2 * i)).collect();
+        let mut grown = old.clone();
+        grown.extend((0..30).map(|i| format!("lib/{:03}.bvh", 2 * i + 1)));
+        grown.extend(["aaa/first.amc".to_string(), "zzz/last.bvh".to_string()]);
+        grown.sort();
+        for n in [2, 4, 7] {
+            let shard_in = |list: &[String]| -> HashMap<PathBuf, usize> {
+                let all = planned(list);
+                (1..=n)
+                    .flat_map(|i| {
+                        Shard { index: i, count: n }
+                            .select(&all)
+                            .into_iter()
+                            .map(move |p| (p.clip, i))
+                    })
+                    .collect()
+            };
+            let (before, after) = (shard_in(&old), shard_in(&grown));
+            assert_eq!(after.len(), grown.len());
+            for (clip, i) in &before {
+                assert_eq!(
+                    after[clip],
+                    *i,
+                    "{} moved in a split of {n}",
+                    clip.display()
+                );
+            }
+            // What the old split did: clip k of the sorted list in shard k mod n + 1.
+            let by_rank = |list: &[String]| -> HashMap<String, usize> {
+                let mut l = list.to_vec();
+                l.sort();
+                l.into_iter()
+                    .enumerate()
+                    .map(|(k, c)| (c, k % n + 1))
+                    .collect()
+            };
+            let (rb, ra) = (by_rank(&old), by_rank(&grown));
+            assert!(old.iter().filter(|c| rb[*c] != ra[*c]).count() > old.len() / 3);
+        }
+    }
+
+    /// The hash is part of the format of a split (finished shards are found
+    /// again by it): pinned to the value Python computes from the
+    /// definition (FNV-1a 64, then SplitMix64's finaliser), and blind to
+    /// how the path is spelled.
+    #[test]
+    fn the_clip_hash_is_pinned() {
+        assert_eq!(clip_hash(Path::new("02/02_01.amc")), 0x366f_3262_0665_7db5);
+        assert_eq!(
+            clip_hash(Path::new("02/02_01.amc")),
+            clip_hash(Path::new("./02//02_01.amc"))
+        );
+        assert_ne!(
+            clip_hash(Path::new("02/02_01.amc")),
+            clip_hash(Path::new("02_01.amc"))
+        );
+        assert_eq!(shard_of(Path::new("anything.bvh"), 1), 1);
+        assert_eq!(Shard::parse("02/4").unwrap().spelled(), "2/4");
     }
 
     #[test]

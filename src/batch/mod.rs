@@ -6,15 +6,22 @@
 //! renaming collisions) → [`lock`] (one run per output folder, leftovers of
 //! killed runs removed) → [`runner`] (parallel, resume, per-clip outcome) →
 //! [`summary`] (JSON after each clip, HTML, SVG; earlier runs' records
-//! kept).
+//! kept). A sharded batch takes its shard from the scheduler
+//! ([`schedule`]: Slurm arrays, Kubernetes Indexed Jobs) and [`merge`]
+//! combines the shards' reports.
 
 pub mod clips;
 pub mod lock;
+pub mod merge;
 pub mod runner;
+pub mod schedule;
 pub mod summary;
 
-pub use clips::{CollisionError, Format, Planned, Shard, find_clips, output_path, plan};
+pub use clips::{
+    CollisionError, Format, Planned, Shard, clip_hash, find_clips, output_path, plan, shard_of,
+};
 pub use lock::{FolderLock, LockError, clean_temporaries, lock_folder};
+pub use merge::{MergeError, ShardReport, find_reports, merge, read_report};
 pub use runner::{
     ClipOutcome, ClipStatus, ClipWarning, Converted, Converter, Preparation, RunOptions, run,
 };

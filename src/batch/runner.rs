@@ -125,7 +125,7 @@ impl ClipWarning {
 }
 
 /// How a clip ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ClipStatus {
     /// Converted now.
@@ -137,7 +137,7 @@ pub enum ClipStatus {
 }
 
 /// One clip's outcome.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
 pub struct ClipOutcome {
     /// The clip, relative to the mocap folder.
     pub clip: PathBuf,
@@ -157,11 +157,11 @@ pub struct ClipOutcome {
     /// Why it failed.
     pub reason: Option<String>,
     /// Seconds that are no per-frame work ([`Converted::fixed_seconds`]).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fixed_seconds: Option<f64>,
     /// True when frames, seconds and error of a skipped clip come from the
     /// report of the run that wrote its output.
-    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub earlier: bool,
 }
 

@@ -11,13 +11,13 @@
 
 use super::runner::{ClipOutcome, ClipStatus, Preparation};
 use crate::util::fsutil::{FsError, write_bytes_atomic};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Totals of a batch.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Summary {
     /// What was run (e.g. `retarget --db DIR`).
     pub what: String,
@@ -59,6 +59,13 @@ pub struct Summary {
     /// wall clock minus the per-frame work, [`ClipOutcome::fixed_seconds`]),
     /// when measured.
     pub fixed_seconds_per_clip: Option<f64>,
+    /// Clips in the whole library before sharding (a shard's report only:
+    /// `batch merge` checks that the shards add up to it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub library_clips: Option<usize>,
+    /// The shard reports a merged report was made of (`batch merge`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub merged_from: Vec<PathBuf>,
     /// Every clip.
     pub outcomes: Vec<ClipOutcome>,
 }
@@ -105,6 +112,8 @@ impl Summary {
                     .collect();
                 (!fixed.is_empty()).then(|| fixed.iter().sum::<f64>() / fixed.len() as f64)
             },
+            library_clips: None,
+            merged_from: Vec::new(),
             outcomes,
         }
     }
@@ -245,6 +254,19 @@ pub fn html(s: &Summary) -> String {
         "<!doctype html>\n<meta charset=\"utf-8\">\n<title>surfmotion batch</title>\n<style>body{font-family:sans-serif;margin:2em}td,th{padding:2px 8px;text-align:left}.failed{color:#b00}</style>\n",
     );
     let _ = writeln!(h, "<h1>surfmotion batch</h1>\n<p>{}.</p>", esc(&s.line()));
+    if !s.merged_from.is_empty() {
+        let _ = writeln!(
+            h,
+            "<p class=\"merged\">Merged from {}: {}.</p>",
+            count(s.merged_from.len(), "shard report"),
+            esc(&s
+                .merged_from
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "))
+        );
+    }
     if !s.finished {
         h.push_str("<p class=\"running\"><b>running</b> (or stopped before its end): the clips listed are those finished so far.</p>\n");
     }

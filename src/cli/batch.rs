@@ -5,7 +5,8 @@
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
-use surfmotion::batch::{ClipStatus, Converter, Format, Shard};
+use surfmotion::batch::schedule::ShardSource;
+use surfmotion::batch::{ClipStatus, Converter, Format};
 use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::jobs::{
     BatchEvent, BatchOptions, RetargetJob, RetargetJobOptions, ScanTransferJob,
@@ -14,7 +15,11 @@ use surfmotion::jobs::{
 /// Arguments of `batch`.
 #[derive(clap::Args)]
 #[command(group(clap::ArgGroup::new("target").required(true).args(["db", "scan"])))]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Args {
+    /// `batch merge`: the shards' reports into one.
+    #[command(subcommand)]
+    pub command: Option<Sub>,
     /// Drive this 4D character database (as `retarget`).
     #[arg(long)]
     pub db: Option<PathBuf>,
@@ -26,22 +31,32 @@ pub struct Args {
     pub landmarks: Option<PathBuf>,
     /// The folder of clips: every .bvh and .amc below it (AMC clips use the
     /// .asf beside them). Links are followed; each clip is converted once.
-    #[arg(long)]
-    pub mocap_dir: PathBuf,
+    #[arg(long, required = true)]
+    pub mocap_dir: Option<PathBuf>,
     /// Output folder, outside --mocap-dir: one output per clip in the same
     /// folder tree, plus batch.json, batch.html and batch.svg. One run at a
     /// time writes there (shards of one split may share it): batch.lock
     /// holds its pid.
-    #[arg(short, long)]
-    pub output: PathBuf,
+    #[arg(short, long, required = true)]
+    pub output: Option<PathBuf>,
     /// Clips converted at once, 1 to 1024 (default: the number of cores).
     // (`--jobs 0` ran one at a time without a word.)
     #[arg(long, value_parser = super::bounded_count(1, 1024))]
     pub jobs: Option<usize>,
-    /// Only shard i of n (1-based), e.g. `--shard $SLURM_ARRAY_TASK_ID/8`:
-    /// clip k of the sorted list goes to shard k mod n + 1.
+    /// Only shard i of n (1-based): a clip goes to shard h mod n + 1, h a
+    /// stable hash of its path under --mocap-dir (adding clips never moves
+    /// the others). Without it, a Slurm array task takes its shard from
+    /// SLURM_ARRAY_TASK_ID, _MIN, _STEP and _COUNT, and a Kubernetes
+    /// Indexed Job from JOB_COMPLETION_INDEX with --shard-count; --shard
+    /// wins over both (--shard 1/1: the whole library inside an array).
+    /// Merge the shards' reports with `batch merge`.
     #[arg(long, value_name = "i/n")]
     pub shard: Option<String>,
+    /// The number of shards, for a Kubernetes Indexed Job (its
+    /// completions; the index is JOB_COMPLETION_INDEX). A Slurm array
+    /// states its own size.
+    #[arg(long, value_name = "N", value_parser = super::bounded_count(1, 1_000_000))]
+    pub shard_count: Option<usize>,
     /// Output format.
     #[arg(long, value_enum, default_value_t = super::values::FormatArg::Glb)]
     pub format: super::values::FormatArg,
@@ -64,12 +79,82 @@ pub struct Args {
     pub glb: super::mesh::GlbArgs,
 }
 
+/// Subcommands of `batch`.
+#[derive(clap::Subcommand)]
+pub enum Sub {
+    /// Merge the reports of a sharded batch (batch-1ofN.json …
+    /// batch-NofN.json, in one shared output folder or one folder per
+    /// shard) into the report of the whole library: batch.json, .html and
+    /// .svg, the clips in the order one unsharded run lists them. Refuses
+    /// shards missing or twice, shards of different splits or jobs, and
+    /// shards still running or killed, with the reason.
+    #[command(
+        after_help = "Example (a Slurm array of 4 into one folder, then):\n  surfmotion batch merge out"
+    )]
+    Merge(MergeArgs),
+}
+
+/// Arguments of `batch merge`.
+#[derive(clap::Args)]
+pub struct MergeArgs {
+    /// The output folders of the shards.
+    #[arg(required = true, value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// Where the merged report goes (default: the one folder given).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Print the merged summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `batch merge`.
+fn run_merge(a: MergeArgs) -> anyhow::Result<()> {
+    let r = surfmotion::jobs::batch::merge_batches(&a.dirs, a.output.as_deref())?;
+    let s = &r.summary;
+    if a.json {
+        super::emit(&(serde_json::to_string_pretty(s)? + "\n"))?;
+    } else {
+        super::emit(&format!(
+            "merged {}: {}\nreport: {}\n",
+            surfmotion::batch::summary::count(r.reports.len(), "shard report"),
+            s.line(),
+            r.files
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))?;
+    }
+    anyhow::ensure!(
+        s.failed == 0,
+        "{} of {} clips failed (see {})",
+        s.failed,
+        s.clips,
+        r.files[0].display()
+    );
+    Ok(())
+}
+
 /// Runs `batch`: the retarget or transfer job (loaded or factored once)
 /// as the converter of [`batch_folder`].
 pub fn run_batch(a: Args) -> anyhow::Result<()> {
-    if let Some(s) = &a.shard {
-        Shard::parse(s).map_err(anyhow::Error::msg)?;
+    if let Some(Sub::Merge(m)) = a.command {
+        return run_merge(m);
     }
+    let (Some(mocap_dir), Some(output)) = (a.mocap_dir.clone(), a.output.clone()) else {
+        anyhow::bail!("give --mocap-dir and -o (or `batch merge DIR...`)");
+    };
+    let resolved =
+        surfmotion::batch::schedule::resolve(a.shard.as_deref(), a.shard_count, &|k: &str| {
+            std::env::var(k).ok()
+        })?;
+    if let Some((s, source)) = &resolved
+        && !matches!(source, ShardSource::Flag { ignored } if ignored.is_empty())
+    {
+        crate::errln!("{}", source.describe(s));
+    }
+    let shard = resolved.map(|(s, _)| s.spelled());
     a.glb.refuse_unless_glb(
         matches!(a.format, super::values::FormatArg::Glb),
         &format!("--format {}", format!("{:?}", a.format).to_lowercase()),
@@ -88,18 +173,18 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
     // Said before the character loads: "X: Not a directory (os error
     // 20)" for a clip given as the folder, "/dev/full: File exists (os
     // error 17)" for a file as -o.
-    if a.mocap_dir.exists() && !a.mocap_dir.is_dir() {
+    if mocap_dir.exists() && !mocap_dir.is_dir() {
         anyhow::bail!(
             "--mocap-dir {}: a file, not a folder (batch converts every clip under a folder; `retarget` or `transfer` converts one)",
-            a.mocap_dir.display()
+            mocap_dir.display()
         );
     }
     surfmotion::jobs::outputs::check_output_folder(
         "-o",
-        &a.output,
+        &output,
         "batch writes one output per clip and batch.json, .html and .svg into a folder",
     )?;
-    surfmotion::jobs::outputs::refuse_output_in_clip_folder("-o", &a.output, &a.mocap_dir)?;
+    surfmotion::jobs::outputs::refuse_output_in_clip_folder("-o", &output, &mocap_dir)?;
     let format = Format::from(a.format);
     let mut inputs = Vec::new();
     if let Some(db) = &a.db {
@@ -112,17 +197,13 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
     inputs.extend(a.clip.rig_map.clone());
     inputs.extend(a.clip.asf.clone());
     surfmotion::jobs::outputs::refuse_outputs_over_inputs(
-        &inputs,
-        &a.mocap_dir,
-        "-o",
-        &a.output,
-        format,
+        &inputs, &mocap_dir, "-o", &output, format,
     )?;
     let load = a.clip.load_options()?;
     let scan_job = a.scan_job.job()?;
     let retarget_opts = a.retarget_job.options();
     let mut opts = BatchOptions {
-        shard: a.shard.clone(),
+        shard,
         format,
         force: a.force,
         ..Default::default()
@@ -196,7 +277,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             crate::errln!("{line}");
         }
     };
-    let r = batch_folder(&a.mocap_dir, &a.output, converter.as_ref(), &opts, &log)?;
+    let r = batch_folder(&mocap_dir, &output, converter.as_ref(), &opts, &log)?;
     bar.finish_and_clear();
     let (s, files) = (&r.summary, &r.files);
     if a.json {

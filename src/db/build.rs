@@ -315,16 +315,17 @@ pub fn similarity(
         _ => unreachable!("one set is built per measure"),
     };
     let frames = set.frames();
-    progress.start("frames compared", frames as u64);
     let t1 = Instant::now();
-    let data = all_pairs(set, &|k| progress.advance(k));
+    let (data, checkpoint) = compare_frames(dir, &path, key, set, progress)?;
     let pairs_s = t1.elapsed().as_secs_f64();
-    progress.finish();
     let mat = SimilarityMatrix::new(spans, data).ok_or_else(|| DbError::Manifest {
         path: dir.join(super::MANIFEST),
         msg: "internal: frame counts disagree".into(),
     })?;
     cache::save_matrix(&path, key, &mat).map_err(|e| DbError::cache_write(dir, e))?;
+    if let Some(c) = checkpoint {
+        c.remove();
+    }
     let pairs = (frames as u64) * (frames as u64 + 1) / 2;
     Ok((
         mat,
@@ -335,6 +336,103 @@ pub fn similarity(
             pairs,
         }),
     ))
+}
+
+/// Databases of at least this many frames compute their similarity matrix
+/// in about 50 slices of rows, each appended to a checkpoint
+/// (`cache/similarity-MEASURE.partial`) as it finishes, so that a killed
+/// `db build` resumes from its last finished slice; smaller ones (seconds
+/// of work) at once, as before.
+pub const CHECKPOINT_FRAMES: usize = 1024;
+
+/// A `tracing` notice (the CLI prints these as plain lines).
+fn notice(msg: String) {
+    tracing::info!(target: "surfmotion::notice", "{msg}");
+}
+
+/// Every pair of `set` (the upper triangle mirrored): at once below
+/// [`CHECKPOINT_FRAMES`], else in checkpointed slices resumed from an
+/// earlier run's checkpoint of the same key. The matrix's memory is
+/// checked against the budget first, and said up front for large builds,
+/// with progress and an estimate of the time left after each tenth.
+fn compare_frames(
+    dir: &Path,
+    path: &Path,
+    key: u64,
+    set: &dyn PairDistance,
+    progress: &dyn BuildProgress,
+) -> Result<(Vec<f32>, Option<cache::Checkpoint>), DbError> {
+    use crate::similarity::matrix::ROW_BLOCK;
+    use crate::util::budget::{Bytes, thousands};
+    let n = set.frames();
+    let need = (n as u128) * (n as u128) * 4;
+    crate::util::budget::check(
+        || format!("the similarity matrix of {} frames", thousands(n as u128)),
+        need,
+    )
+    .map_err(|e| DbError::Manifest {
+        path: dir.join(super::MANIFEST),
+        msg: e.to_string(),
+    })?;
+    if n < CHECKPOINT_FRAMES {
+        progress.start("frames compared", n as u64);
+        let data = all_pairs(set, &|k| progress.advance(k));
+        progress.finish();
+        return Ok((data, None));
+    }
+    let mut data = vec![0.0f32; n * n];
+    let ck_path = cache::partial_path(path);
+    let done = cache::resume_rows(&ck_path, key, n, ROW_BLOCK, &mut data);
+    let pairs_of = |rows: std::ops::Range<usize>| -> u64 { rows.map(|a| (n - a) as u64).sum() };
+    let total = pairs_of(0..n);
+    let before = pairs_of(0..done);
+    notice(format!(
+        "similarity of {} frames: {} pairs; the matrix takes {} of memory (budget {}); checkpointed to {}{}",
+        thousands(n as u128),
+        thousands(total as u128),
+        Bytes(need),
+        Bytes(crate::util::budget::Budget::current().bytes as u128),
+        ck_path.display(),
+        if done > 0 {
+            format!(
+                "; resumed after row {done} of {n} ({:.0} % of the pairs done by an earlier run)",
+                100.0 * before as f64 / total as f64
+            )
+        } else {
+            String::new()
+        }
+    ));
+    let mut ck = cache::Checkpoint::open(&ck_path, key, n, done)
+        .map_err(|e| DbError::cache_write(dir, e))?;
+    let threads = rayon::current_num_threads().max(1);
+    let slice = (n.div_ceil(50).div_ceil(ROW_BLOCK).max(2 * threads)) * ROW_BLOCK;
+    progress.start("pairs compared", total - before);
+    let t = Instant::now();
+    let mut first = done;
+    let mut told = (100 * before / total.max(1)) / 10;
+    while first < n {
+        let end = (first + slice).min(n);
+        crate::similarity::upper_rows(set, first, &mut data[first * n..end * n], &|_, p| {
+            progress.advance(p)
+        });
+        ck.append(first, &data[first * n..end * n])
+            .map_err(|e| DbError::cache_write(dir, e))?;
+        first = end;
+        let now = pairs_of(0..first);
+        let tenth = (100 * now / total.max(1)) / 10;
+        if tenth > told && first < n {
+            told = tenth;
+            let secs = t.elapsed().as_secs_f64();
+            let left = secs / (now - before).max(1) as f64 * (total - now) as f64;
+            notice(format!(
+                "similarity: {:.0} % of the pairs ({first} of {n} rows) in {secs:.0} s, about {left:.0} s left",
+                100.0 * now as f64 / total as f64
+            ));
+        }
+    }
+    progress.finish();
+    crate::similarity::mirror_upper(&mut data, n);
+    Ok((data, Some(ck)))
 }
 
 /// The database's per-vertex colours: the manifest's `colors` mesh, else
@@ -459,4 +557,63 @@ pub fn build_opened(
         cache: cache_dir(dir),
     };
     Ok((mat, graph, report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// Frames on a line, counting the distances evaluated.
+    struct Line(Vec<f64>, AtomicU64);
+    impl PairDistance for Line {
+        fn frames(&self) -> usize {
+            self.0.len()
+        }
+        fn distance(&self, a: usize, b: usize) -> f64 {
+            self.1.fetch_add(1, Ordering::Relaxed);
+            (self.0[a] - self.0[b]).abs()
+        }
+    }
+
+    /// A build killed after some slices resumes from its checkpoint: only
+    /// the pairs of the rows left are evaluated, and the matrix equals the
+    /// one computed at once.
+    #[test]
+    fn a_killed_comparison_resumes_from_its_last_slice() {
+        let n = CHECKPOINT_FRAMES + 37;
+        let line = || Line((0..n).map(|i| (i as f64 * 0.01).sin()).collect(), 0.into());
+        let whole = all_pairs(&line(), &|_| {});
+        let tmp = tempfile::tempdir().unwrap();
+        // In a cache folder that does not exist yet (a first build).
+        let path = tmp.path().join("cache/similarity-shape.bin");
+        // An uninterrupted checkpointed run.
+        let set = line();
+        let (data, ck) = compare_frames(tmp.path(), &path, 7, &set, &Quiet).unwrap();
+        assert_eq!(data, whole);
+        let total = (n * (n + 1) / 2) as u64;
+        assert_eq!(set.1.load(Ordering::Relaxed), total);
+        // The checkpoint holds every row; "kill" the run after 200 rows by
+        // cutting the file there plus a torn half row.
+        let ck_path = cache::partial_path(&path);
+        let full = std::fs::read(&ck_path).unwrap();
+        drop(ck);
+        let rows = 200;
+        let keep = 24 + (0..rows).map(|a| (n - a) * 4).sum::<usize>();
+        std::fs::write(&ck_path, &full[..keep + 2 * (n - rows)]).unwrap();
+        let set = line();
+        let (data, ck) = compare_frames(tmp.path(), &path, 7, &set, &Quiet).unwrap();
+        assert_eq!(data, whole);
+        let rest: u64 = (rows..n).map(|a| (n - a) as u64).sum();
+        assert_eq!(set.1.load(Ordering::Relaxed), rest);
+        assert_eq!(std::fs::read(&ck_path).unwrap(), full);
+        ck.unwrap().remove();
+        assert!(!ck_path.exists());
+        // Another key starts again.
+        std::fs::write(&ck_path, &full[..keep]).unwrap();
+        let set = line();
+        let (data, _) = compare_frames(tmp.path(), &path, 8, &set, &Quiet).unwrap();
+        assert_eq!(data, whole);
+        assert_eq!(set.1.load(Ordering::Relaxed), total);
+    }
 }

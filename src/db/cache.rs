@@ -129,6 +129,133 @@ pub fn add_rig(h: &mut KeyHasher, dir: &Path, m: &Manifest) -> Result<(), DbErro
     Ok(())
 }
 
+/// Header of a similarity build's checkpoint (`similarity-*.partial`).
+const PARTIAL_MAGIC: &[u8; 8] = b"SMPART01";
+const PARTIAL_HEADER: u64 = 24;
+
+/// The checkpoint of a build of the similarity file `matrix`: the rows it
+/// finished, so that a killed `db build` resumes from its last block.
+pub fn partial_path(matrix: &Path) -> PathBuf {
+    matrix.with_extension("partial")
+}
+
+/// Bytes of upper-triangle rows `0..rows` of an `n`-frame matrix.
+fn partial_bytes(n: usize, rows: usize) -> u64 {
+    (0..rows).map(|a| (n - a) as u64 * 4).sum()
+}
+
+/// Reads the finished rows of a checkpoint written for `key` and `n`
+/// frames into `data` (`n × n`, upper triangle) and returns how many (a
+/// multiple of `block`, or `n`): 0 without a checkpoint, for another key or
+/// size, or one not even a block long. A torn last block is ignored.
+pub fn resume_rows(path: &Path, key: u64, n: usize, block: usize, data: &mut [f32]) -> usize {
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return 0;
+    };
+    let mut head = [0u8; PARTIAL_HEADER as usize];
+    if f.read_exact(&mut head).is_err()
+        || &head[..8] != PARTIAL_MAGIC
+        || head[8..16] != key.to_le_bytes()
+        || head[16..24] != (n as u64).to_le_bytes()
+        || data.len() != n * n
+    {
+        return 0;
+    }
+    let len = f.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut rows = 0;
+    while rows < n && PARTIAL_HEADER + partial_bytes(n, (rows + block).min(n)) <= len {
+        rows = (rows + block).min(n);
+    }
+    let mut buf = vec![0u8; n * 4];
+    for a in 0..rows {
+        let row = &mut buf[..(n - a) * 4];
+        if f.read_exact(row).is_err() {
+            return 0;
+        }
+        for (v, b) in data[a * n + a..(a + 1) * n]
+            .iter_mut()
+            .zip(row.chunks_exact(4))
+        {
+            *v = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        }
+    }
+    rows
+}
+
+/// The checkpoint of a similarity build being written: finished rows are
+/// appended (and synced) as they come.
+#[derive(Debug)]
+pub struct Checkpoint {
+    path: PathBuf,
+    file: std::fs::File,
+    n: usize,
+}
+
+impl Checkpoint {
+    /// Opens the checkpoint `path` for `key` and `n` frames, keeping its
+    /// first `rows` rows (those [`resume_rows`] read) or starting it anew.
+    pub fn open(path: &Path, key: u64, n: usize, rows: usize) -> Result<Checkpoint, FsError> {
+        use std::io::{Seek, SeekFrom, Write};
+        let fs = |source| FsError {
+            path: path.to_path_buf(),
+            source,
+        };
+        // The database's cache folder may not exist yet.
+        if let Some(d) = path.parent() {
+            std::fs::create_dir_all(d).map_err(fs)?;
+        }
+        let mut file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .read(true)
+            .write(true)
+            .open(path)
+            .map_err(fs)?;
+        let keep = if rows == 0 {
+            0
+        } else {
+            PARTIAL_HEADER + partial_bytes(n, rows)
+        };
+        file.set_len(keep).map_err(fs)?;
+        if rows == 0 {
+            file.write_all(PARTIAL_MAGIC).map_err(fs)?;
+            file.write_all(&key.to_le_bytes()).map_err(fs)?;
+            file.write_all(&(n as u64).to_le_bytes()).map_err(fs)?;
+        }
+        file.seek(SeekFrom::End(0)).map_err(fs)?;
+        Ok(Checkpoint {
+            path: path.to_path_buf(),
+            file,
+            n,
+        })
+    }
+
+    /// Appends the finished rows `first..` held in `rows` (whole rows of
+    /// `n` values; the upper triangle of each is written) and syncs them.
+    pub fn append(&mut self, first: usize, rows: &[f32]) -> Result<(), FsError> {
+        use std::io::Write;
+        let n = self.n;
+        let mut bytes = Vec::with_capacity(rows.len() * 4);
+        for (i, row) in rows.chunks_exact(n.max(1)).enumerate() {
+            for v in &row[first + i..] {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        self.file
+            .write_all(&bytes)
+            .and_then(|_| self.file.sync_data())
+            .map_err(|source| FsError {
+                path: self.path.clone(),
+                source,
+            })
+    }
+
+    /// Removes the checkpoint (the whole matrix is saved).
+    pub fn remove(self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
 /// Writes a similarity matrix with its key, atomically (streamed: no copy
 /// of the matrix is made).
 pub fn save_matrix(path: &Path, key: u64, m: &SimilarityMatrix) -> Result<(), FsError> {

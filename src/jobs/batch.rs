@@ -6,8 +6,9 @@
 //! raised as `tracing` events with target [`NOTICE`] and kept in the report.
 
 use crate::batch::{
-    ClipOutcome, ClipStatus, Converter, Earlier, Format, RunOptions, Shard, Summary,
-    clean_temporaries, find_clips, lock_folder, plan, report_stem, run, write_summary,
+    ClipOutcome, ClipStatus, Converter, Earlier, Format, MergeError, RunOptions, Shard, Summary,
+    clean_temporaries, find_clips, find_reports, lock_folder, merge, plan, read_report,
+    report_stem, run, write_summary,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -105,6 +106,13 @@ pub fn batch_folder(
         Some(s) => Some(Shard::parse(s).map_err(BatchError::Shard)?),
         None => None,
     };
+    // `02/4` is shard 2/4 and writes batch-2of4.json.
+    let shard_name = shard.map(|s| s.spelled());
+    let library_clips = |s: &mut Summary, n: usize| {
+        if shard.is_some() {
+            s.library_clips = Some(n);
+        }
+    };
     let mut notices = Vec::new();
     let all = find_clips(mocap_dir).map_err(|source| BatchError::List {
         path: mocap_dir.to_path_buf(),
@@ -123,6 +131,7 @@ pub fn batch_folder(
             ),
         );
     }
+    let library = planned.len();
     let clips = match shard {
         Some(s) => s.select(&planned),
         None => planned,
@@ -131,8 +140,8 @@ pub fn batch_folder(
         path: output.to_path_buf(),
         source,
     })?;
-    let stem = report_stem(opts.shard.as_deref());
-    let lock = lock_folder(output, &stem, opts.shard.as_deref())?;
+    let stem = report_stem(shard_name.as_deref());
+    let lock = lock_folder(output, &stem, shard_name.as_deref())?;
     for p in &lock.stale_removed {
         notice(
             &mut notices,
@@ -197,9 +206,10 @@ pub fn batch_folder(
             slots.iter().flatten().cloned().collect(),
             t0.elapsed().as_secs_f64(),
             run_opts.jobs,
-            opts.shard.clone(),
+            shard_name.clone(),
         );
         s.finished = false;
+        library_clips(&mut s, library);
         s.set_preparation(converter.preparation());
         // All three files, each atomically: a killed run leaves a JSON,
         // page and plot of what it finished (issue 18, item 3).
@@ -235,15 +245,89 @@ pub fn batch_folder(
         outcomes,
         t0.elapsed().as_secs_f64(),
         run_opts.jobs,
-        opts.shard.clone(),
+        shard_name.clone(),
     );
     let mut summary = summary;
     summary.set_preparation(converter.preparation());
+    library_clips(&mut summary, library);
     let files = write_summary(output, &summary)?;
     drop(lock);
     Ok(BatchReport {
         summary,
         files,
         notices,
+    })
+}
+
+/// What can stop [`merge_batches`].
+#[derive(Debug, thiserror::Error)]
+pub enum MergeBatchError {
+    /// The shard reports do not make one whole split.
+    #[error(transparent)]
+    Merge(#[from] MergeError),
+    /// Several folders and no output folder for the merged report.
+    #[error("the shards' reports are in {0} folders: give -o, the folder for the merged report")]
+    NoOutput(usize),
+    /// The output folder holds the report of an unsharded run.
+    #[error(
+        "{0}: the report of an unsharded run, which the merged report would replace; merge into another folder (-o) or remove it"
+    )]
+    WouldReplace(PathBuf),
+    /// A report could not be written.
+    #[error(transparent)]
+    Fs(#[from] crate::util::fsutil::FsError),
+}
+
+/// The report of [`merge_batches`].
+#[derive(Debug, Clone)]
+pub struct MergeReport {
+    /// The merged summary (also written as `batch.json`, `.html`, `.svg`).
+    pub summary: Summary,
+    /// The files written.
+    pub files: Vec<PathBuf>,
+    /// The shard reports read.
+    pub reports: Vec<PathBuf>,
+}
+
+/// Merges the shard reports (`batch-IofN.json`) found in `dirs` into the
+/// report of the whole library (`batch.json`, `batch.html`, `batch.svg`)
+/// in `output`, or in the one folder of `dirs` when `output` is None.
+/// Refuses, with the reason, a split with shards missing or twice, shards
+/// of different splits or jobs, unfinished shards, and an output folder
+/// whose `batch.json` is an unsharded run's own report.
+pub fn merge_batches(
+    dirs: &[PathBuf],
+    output: Option<&Path>,
+) -> Result<MergeReport, MergeBatchError> {
+    let out = match (output, dirs) {
+        (Some(o), _) => o.to_path_buf(),
+        (None, [one]) => one.clone(),
+        (None, many) => return Err(MergeBatchError::NoOutput(many.len())),
+    };
+    let paths = find_reports(dirs)?;
+    let reports = paths
+        .iter()
+        .map(|p| read_report(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let summary = merge(&reports, dirs)?;
+    let own = out.join("batch.json");
+    if own.is_file() {
+        let text = crate::util::fsutil::read_text(&own)?;
+        let merged = serde_json::from_str::<Summary>(&text)
+            .map(|s| !s.merged_from.is_empty())
+            .unwrap_or(false);
+        if !merged {
+            return Err(MergeBatchError::WouldReplace(own));
+        }
+    }
+    std::fs::create_dir_all(&out).map_err(|source| crate::util::fsutil::FsError {
+        path: out.clone(),
+        source,
+    })?;
+    let files = write_summary(&out, &summary)?;
+    Ok(MergeReport {
+        summary,
+        files,
+        reports: paths,
     })
 }

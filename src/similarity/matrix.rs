@@ -88,10 +88,30 @@ impl SimilarityMatrix {
 pub fn all_pairs(set: &dyn PairDistance, progress: &(dyn Fn(u64) + Sync)) -> Vec<f32> {
     let n = set.frames();
     let mut data = vec![0.0f32; n * n];
-    data.par_chunks_mut((ROW_BLOCK * n).max(1))
+    upper_rows(set, 0, &mut data, &|rows, _| progress(rows));
+    mirror_upper(&mut data, n);
+    data
+}
+
+/// Evaluates the upper triangle (diagonal included) of the rows `first..`
+/// that `rows` holds (`rows.len() / n` whole rows of `n = set.frames()`
+/// values, row-major; `first` a multiple of [`ROW_BLOCK`]), in parallel
+/// blocks of [`ROW_BLOCK`] rows; values left of the diagonal are not
+/// touched. `progress` hears the rows of each finished block. The values
+/// are those [`all_pairs`] computes, whichever rows a call covers, so a
+/// matrix may be computed a slice of rows at a time (`db build` resuming
+/// after a kill).
+pub fn upper_rows(
+    set: &dyn PairDistance,
+    first: usize,
+    rows: &mut [f32],
+    progress: &(dyn Fn(u64, u64) + Sync),
+) {
+    let n = set.frames();
+    rows.par_chunks_mut((ROW_BLOCK * n).max(1))
         .enumerate()
         .for_each(|(blk, rows)| {
-            let a0 = blk * ROW_BLOCK;
+            let a0 = first + blk * ROW_BLOCK;
             let na = rows.len() / n.max(1);
             for b in a0..n {
                 for i in 0..na {
@@ -101,14 +121,18 @@ pub fn all_pairs(set: &dyn PairDistance, progress: &(dyn Fn(u64) + Sync)) -> Vec
                     }
                 }
             }
-            progress(na as u64);
+            let pairs: usize = (a0..a0 + na).map(|a| n - a).sum();
+            progress(na as u64, pairs as u64);
         });
+}
+
+/// Copies the upper triangle of the `n × n` row-major `data` onto the lower.
+pub fn mirror_upper(data: &mut [f32], n: usize) {
     for a in 0..n {
         for b in a + 1..n {
             data[b * n + a] = data[a * n + b];
         }
     }
-    data
 }
 
 #[cfg(test)]
@@ -158,5 +182,19 @@ mod tests {
             }
         }
         assert_eq!(m.between(1, 2, 0, 3), m.get(22, 3));
+    }
+
+    #[test]
+    fn rows_computed_in_slices_equal_all_pairs() {
+        let set = Line((0..45).map(|i| (i as f64 * 0.3).cos()).collect());
+        let n = 45;
+        let whole = all_pairs(&set, &|_| {});
+        let mut data = vec![0.0f32; n * n];
+        for first in (0..n).step_by(2 * ROW_BLOCK) {
+            let end = (first + 2 * ROW_BLOCK).min(n);
+            upper_rows(&set, first, &mut data[first * n..end * n], &|_, _| {});
+        }
+        mirror_upper(&mut data, n);
+        assert_eq!(data, whole);
     }
 }

@@ -12,5 +12,5 @@ pub mod sets;
 pub mod vertex;
 pub mod voxel;
 
-pub use matrix::{PairDistance, SimilarityMatrix, Span, all_pairs};
+pub use matrix::{PairDistance, SimilarityMatrix, Span, all_pairs, mirror_upper, upper_rows};
 pub use sets::{ColourSet, Measure, ShapeSet, SkeletonSet, VertexSet, y_up};

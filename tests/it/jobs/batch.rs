@@ -14,6 +14,8 @@ fn fixture(n: &str) -> String {
 fn batch(d: &Path, mocap_dir: &Path, out: &Path, extra: &[&str]) -> Output {
     let scan = d.join("scans/armadillo/armadillo.obj");
     Command::new(common::bin())
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("JOB_COMPLETION_INDEX")
         .args(["batch", "--scan", scan.to_str().unwrap(), "--landmarks"])
         .arg(fixture("armadillo.landmarks.json"))
         .arg("--mocap-dir")
@@ -25,7 +27,7 @@ fn batch(d: &Path, mocap_dir: &Path, out: &Path, extra: &[&str]) -> Output {
         .unwrap()
 }
 
-fn summary(out: &Path, name: &str) -> serde_json::Value {
+pub(super) fn summary(out: &Path, name: &str) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(out.join(name)).unwrap()).unwrap()
 }
 
@@ -286,7 +288,7 @@ fn batch_scan_prepares_a_raw_scan_like_transfer() {
 // ---------------------------------------------------------------------
 
 /// The demo humanoid as a scan (OBJ) and its landmarks, written once.
-fn humanoid() -> (PathBuf, PathBuf) {
+pub(super) fn humanoid() -> (PathBuf, PathBuf) {
     use std::sync::OnceLock;
     static H: OnceLock<(PathBuf, PathBuf, PathBuf)> = OnceLock::new();
     let h = H.get_or_init(|| {
@@ -335,7 +337,7 @@ fn short_clip(name: &str, frames: usize) -> String {
 }
 
 /// Writes `short_clip("walk", frames)` to each of `rels` under `lib`.
-fn library(lib: &Path, rels: &[&str], frames: usize) {
+pub(super) fn library(lib: &Path, rels: &[&str], frames: usize) {
     let clip = short_clip("walk", frames);
     for r in rels {
         let p = lib.join(r);
@@ -345,13 +347,16 @@ fn library(lib: &Path, rels: &[&str], frames: usize) {
 }
 
 /// `batch --scan` onto the humanoid.
-fn hbatch(lib: &Path, out: &Path, extra: &[&str]) -> Output {
+pub(super) fn hbatch(lib: &Path, out: &Path, extra: &[&str]) -> Output {
     hbatch_cmd(lib, out, extra).output().unwrap()
 }
 
-fn hbatch_cmd(lib: &Path, out: &Path, extra: &[&str]) -> Command {
+pub(super) fn hbatch_cmd(lib: &Path, out: &Path, extra: &[&str]) -> Command {
     let (scan, lm) = humanoid();
     let mut c = Command::new(common::bin());
+    // Not a shard of whatever scheduler runs the tests.
+    c.env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("JOB_COMPLETION_INDEX");
     c.args(["batch", "--scan"])
         .arg(&scan)
         .arg("--landmarks")
@@ -364,7 +369,7 @@ fn hbatch_cmd(lib: &Path, out: &Path, extra: &[&str]) -> Command {
     c
 }
 
-fn ok(o: &Output) -> String {
+pub(super) fn ok(o: &Output) -> String {
     let err = String::from_utf8_lossy(&o.stderr).to_string();
     assert!(o.status.success(), "{err}");
     err

@@ -2,4 +2,5 @@
 
 mod batch;
 mod layer;
+mod scale_out;
 mod stream_output;
