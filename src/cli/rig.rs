@@ -138,7 +138,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
     e.save(&a.output)?;
     let verdict = surfmotion::embed::check(&e, &mesh);
     if let Some(p) = &a.png {
-        let img = super::render::draw(
+        let img = surfmotion::jobs::render::draw(
             mesh.positions(),
             mesh.triangles(),
             Some(&e),
