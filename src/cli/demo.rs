@@ -53,7 +53,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     write_synthetic_database(&db, &character, &clips, &opts, &mut |_, _| {})?;
     let t_db = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let ch = Character::load(&db, &super::db::Bars::new())?;
+    let ch = Character::load(&db, &super::Bars::new())?;
     let t_graph = t1.elapsed().as_secs_f64();
     // The query: walking along a curve (not in the database).
     let query_clip = gait_clip(Gait::Turn, 5.0, fps);

@@ -158,6 +158,38 @@ pub fn mesh_outputs(out: &Path) -> Vec<(&'static str, PathBuf)> {
         .collect()
 }
 
+/// Progress bars for a build.
+pub struct Bars(std::sync::Mutex<Option<indicatif::ProgressBar>>);
+
+impl Bars {
+    /// No bar yet.
+    pub fn new() -> Bars {
+        Bars(std::sync::Mutex::new(None))
+    }
+}
+
+impl surfmotion::db::BuildProgress for Bars {
+    fn start(&self, what: &str, total: u64) {
+        if let Ok(mut b) = self.0.lock() {
+            *b = Some(progress(total, what));
+        }
+    }
+    fn advance(&self, k: u64) {
+        if let Ok(b) = self.0.lock()
+            && let Some(b) = b.as_ref()
+        {
+            b.inc(k);
+        }
+    }
+    fn finish(&self) {
+        if let Ok(mut b) = self.0.lock()
+            && let Some(b) = b.take()
+        {
+            b.finish_and_clear();
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

@@ -144,7 +144,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         load: a.run.clip.load_options()?,
         glb: a.glb.options(),
     };
-    let job = RetargetJob::load(&a.db, opts, &super::db::Bars::new())?;
+    let job = RetargetJob::load(&a.db, opts, &super::Bars::new())?;
     let ch = &job.character;
     if a.run.preview.preview.is_none() {
         // Nothing needs every frame at once: they go to the output as they

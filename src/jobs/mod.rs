@@ -35,6 +35,7 @@ pub mod render;
 pub mod retarget;
 pub mod skeletons;
 pub mod synth_db;
+pub mod text;
 pub mod transfer;
 
 pub use crate::batch::Converter;
