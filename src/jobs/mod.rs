@@ -109,6 +109,9 @@ pub enum JobError {
     /// An output refused before any work.
     #[error(transparent)]
     Output(#[from] outputs::OutputError),
+    /// A contact sheet not drawn.
+    #[error(transparent)]
+    Preview(#[from] crate::tools::render::preview::PreviewError),
     /// A manifest not written.
     #[error(transparent)]
     Init(#[from] crate::db::init::InitError),

@@ -128,3 +128,105 @@ pub fn skeletons(r: &SkeletonsReport) -> String {
     }
     out
 }
+
+/// `retarget`'s summary of `clip` retargeted: files, retrieval, the path
+/// (its first 12 runs), timings, deformation, plausibility.
+pub fn retarget(clip: &Path, c: &super::retarget::ClipResult) -> String {
+    let r = &c.report;
+    let mut s = format!(
+        "{} -> {}: {} at {} fps ({} rig)\n",
+        clip.display(),
+        written_list(&c.written, ", "),
+        count(r.frames, "frame"),
+        r.fps,
+        c.convention
+    );
+    let _ = writeln!(
+        s,
+        "retrieval: T_skel {:.3} m (summed over the 19 joints), {}, {}, {}, {}",
+        r.retrieval.t_skel,
+        count(r.retrieval.nodes, "trellis node"),
+        count(
+            r.jumps.iter().filter(|j| j.transition).count(),
+            "transition"
+        ),
+        count(r.retrieval.cuts.len(), "cut"),
+        count(r.retrieval.widened.len(), "widened frame")
+    );
+    let mut runs: Vec<(String, usize, usize)> = Vec::new();
+    for st in &r.steps {
+        match runs.last_mut() {
+            Some((n, _, b)) if *n == st.sequence && (st.frame == *b || st.frame == *b + 1) => {
+                *b = st.frame
+            }
+            _ => runs.push((st.sequence.clone(), st.frame, st.frame)),
+        }
+    }
+    s += "path:";
+    for (n, a0, b0) in runs.iter().take(12) {
+        let _ = write!(s, " {n}[{a0}..{b0}]");
+    }
+    if runs.len() > 12 {
+        s += " ...";
+    }
+    s += "\n";
+    let _ = writeln!(
+        s,
+        "time: query {:.3} s, retrieval {:.3} s, timeline {:.3} s, blend factor {:.3} s, meshes {:.3} s, deform factor {:.3} s, deform {:.3} s ({:.2} ms per output frame)",
+        r.timings.query,
+        r.timings.retrieval,
+        r.timings.timeline,
+        r.timings.factor,
+        r.timings.meshes,
+        r.timings.deform_factor,
+        r.timings.deform,
+        1e3 * super::retarget::per_frame_seconds(r)
+    );
+    let _ = writeln!(s, "deformation: {}", r.deform);
+    if matches!(
+        r.deform,
+        crate::deform::DeformMode::Part | crate::deform::DeformMode::Global
+    ) {
+        let _ = writeln!(
+            s,
+            "triangle-frames turned over against the retrieved frames (the database frames each output frame blends): {} after the solve, {} after the repair (the plausibility below counts against the rest frame)",
+            r.turned_over.before, r.turned_over.after
+        );
+    }
+    if let Some(p) = &c.plausibility {
+        if let Some(k) = c.partial {
+            let _ = writeln!(
+                s,
+                "plausibility measured on the first {} of {} (streamed output):",
+                count(k, "frame"),
+                r.frames
+            );
+        }
+        s += &p.text();
+    }
+    s
+}
+
+/// The files a mesh output wrote, for a summary line: each named, except
+/// a folder of OBJ frames, named once with its count and first and last
+/// frame (`mesh convert x.pc2 frames` listed all 180 frames joined by
+/// "and", a line of 5 kB).
+pub fn written_list(files: &[std::path::PathBuf], sep: &str) -> String {
+    let name = |p: &std::path::PathBuf| p.display().to_string();
+    let folder = files.first().and_then(|f| f.parent());
+    let frames = files.len() > 2
+        && files.iter().all(|f| {
+            f.parent() == folder && f.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+        });
+    match (frames, folder, files.first(), files.last()) {
+        (true, Some(dir), Some(a), Some(b)) => format!(
+            "{}{} ({} OBJ frames, {} .. {})",
+            dir.display(),
+            std::path::MAIN_SEPARATOR,
+            files.len(),
+            a.file_name().unwrap_or_default().to_string_lossy(),
+            b.file_name().unwrap_or_default().to_string_lossy()
+        ),
+        _ => files.iter().map(name).collect::<Vec<_>>().join(sep),
+    }
+}
