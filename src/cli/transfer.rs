@@ -255,30 +255,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 
 /// Writes the preview and the result of a transfer and prints its report.
 fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
-    let prepared = &outcome.prepared;
     if let Some(path) = &a.run.preview.preview {
-        let up = prepared.rig.as_ref().map(surfmotion::transfer::up_axis);
-        let y_up = up.is_none_or(|u| u == glam::DVec3::Y);
-        surfmotion::tools::render::preview::write_preview(
-            path,
-            &outcome.positions,
-            prepared.mesh.vertex_count(),
-            prepared.mesh.triangles(),
-            prepared.rig.as_ref(),
-            // Each panel faced from its own body (`render`'s rule) when
-            // the scan stands Y-up, else the rig's rest facing.
-            prepared
-                .rig
-                .as_ref()
-                .filter(|_| !y_up)
-                .map(|r| glam::DVec3::from_array(r.facing)),
-            outcome
-                .plausibility
-                .as_ref()
-                .filter(|_| y_up)
-                .map(|p| p.floor_m / outcome.metres_per_unit.unwrap_or(1.0)),
-            &a.run.preview.options(),
-        )?;
+        outcome.write_preview(path, &a.run.preview.options())?;
     }
     let report = outcome.write(&a.output, a.glb.options(), a.report.is_some())?;
     print_report(a, &report)
@@ -286,53 +264,17 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
 
 /// Writes the JSON report if asked and prints the summary of a transfer.
 fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::Result<()> {
-    let dropped = report.scan.dropped_components.len();
     if let Some(p) = &a.report {
-        surfmotion::util::fsutil::write_bytes_atomic(
-            p,
-            serde_json::to_string_pretty(&serde_json::to_value(report)?)?.as_bytes(),
-        )?;
+        let v = serde_json::to_string_pretty(&serde_json::to_value(report)?)?;
+        surfmotion::util::fsutil::write_bytes_atomic(p, v.as_bytes())?;
     }
     if a.run.json {
-        let mut short = serde_json::to_value(report)?;
-        short.as_object_mut().map(|o| o.remove("markers_used"));
-        if let Some(t) = short.get_mut("truth_error").and_then(|t| t.as_object_mut()) {
-            t.remove("per_frame_pct");
-        }
-        return super::emit(&(serde_json::to_string_pretty(&short)? + "\n"));
+        let v = serde_json::to_string_pretty(&report.short_json()?)?;
+        return super::emit(&(v + "\n"));
     }
-    let r = report;
-    let mut s = format!(
-        "{} -> {}: {} frames at {} fps from {}\n",
-        a.scan,
-        super::written_list(&r.output, ", "),
-        r.frames,
-        r.fps,
-        r.source
-    );
-    s += &format!(
-        "scan: {} vertices, {} triangles; {} markers ({} unpaired); {} components dropped\n",
-        r.vertices, r.triangles, r.markers, r.unpaired_markers, dropped
-    );
-    s += &format!(
-        "time: setup {:.2} s, factor {:.2} s, {:.2} ms/frame ({:.0} frames/s); {} frames near 180°\n",
-        r.setup_seconds,
-        r.factor_seconds,
-        r.ms_per_frame,
-        r.frames_per_second,
-        r.transfer.singular_frames
-    );
-    if let Some(e) = &r.truth_error {
-        s += &format!(
-            "error against {}: mean {:.3}%, p95 {:.3}%, max {:.3}% of height\n",
-            a.truth.as_deref().unwrap_or(""),
-            e.mean_pct,
-            e.p95_pct,
-            e.max_pct
-        );
-    }
-    if let Some(p) = &r.plausibility {
-        s += &p.text();
-    }
-    super::emit(&s)
+    super::emit(&surfmotion::jobs::text::transfer(
+        &a.scan,
+        a.truth.as_deref(),
+        report,
+    ))
 }

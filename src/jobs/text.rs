@@ -230,3 +230,49 @@ pub fn written_list(files: &[std::path::PathBuf], sep: &str) -> String {
         _ => files.iter().map(name).collect::<Vec<_>>().join(sep),
     }
 }
+
+/// `transfer`'s summary of `scan` transferred (`truth`: the sequence the
+/// error was measured against): files, scan and markers, timings, truth
+/// error, plausibility.
+pub fn transfer(scan: &str, truth: Option<&str>, r: &super::TransferReport) -> String {
+    let mut s = format!(
+        "{} -> {}: {} frames at {} fps from {}\n",
+        scan,
+        written_list(&r.output, ", "),
+        r.frames,
+        r.fps,
+        r.source
+    );
+    let _ = writeln!(
+        s,
+        "scan: {} vertices, {} triangles; {} markers ({} unpaired); {} components dropped",
+        r.vertices,
+        r.triangles,
+        r.markers,
+        r.unpaired_markers,
+        r.scan.dropped_components.len()
+    );
+    let _ = writeln!(
+        s,
+        "time: setup {:.2} s, factor {:.2} s, {:.2} ms/frame ({:.0} frames/s); {} frames near 180°",
+        r.setup_seconds,
+        r.factor_seconds,
+        r.ms_per_frame,
+        r.frames_per_second,
+        r.transfer.singular_frames
+    );
+    if let Some(e) = &r.truth_error {
+        let _ = writeln!(
+            s,
+            "error against {}: mean {:.3}%, p95 {:.3}%, max {:.3}% of height",
+            truth.unwrap_or(""),
+            e.mean_pct,
+            e.p95_pct,
+            e.max_pct
+        );
+    }
+    if let Some(p) = &r.plausibility {
+        s += &p.text();
+    }
+    s
+}
