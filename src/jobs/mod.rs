@@ -33,6 +33,7 @@ pub mod outputs;
 pub mod play;
 pub mod render;
 pub mod retarget;
+pub mod rig;
 pub mod skeletons;
 pub mod synth_db;
 pub mod text;

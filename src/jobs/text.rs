@@ -276,3 +276,109 @@ pub fn transfer(scan: &str, truth: Option<&str>, r: &super::TransferReport) -> S
     }
     s
 }
+
+/// The one-line summary of an export. Transitions and motion spaces are
+/// said only when there are some ("0 spaces (0 frames, 0 KB)" was printed
+/// for every database without a `[[space]]`).
+pub fn web_export(r: &crate::web::ExportReport) -> String {
+    let g = &r.geometry;
+    let mut s = format!(
+        "wrote {}: {} × {}, geometry {:.0} KB ({:.1} KB/frame, {:.1}× smaller than float32), max vertex error {} mm (step {} mm)",
+        r.site.display(),
+        count(g.frames, "frame"),
+        count(r.vertices, "vertex"),
+        g.bytes as f64 / 1e3,
+        g.bytes as f64 / 1e3 / g.frames.max(1) as f64,
+        r.raw_bytes as f64 / g.bytes.max(1) as f64,
+        crate::util::numfmt::Short(g.max_error * 1e3),
+        crate::util::numfmt::Short(g.step * 1e3),
+    );
+    match (r.transitions, r.transition_frames) {
+        (0, _) => s += ", no transitions",
+        (t, 0) => s += &format!(", {} (blended by the page)", count(t, "transition")),
+        (t, f) => {
+            s += &format!(
+                ", {} ({} precomputed, {:.0} KB, {:.2} s)",
+                count(t, "transition"),
+                count(f, "frame"),
+                r.transition_bytes as f64 / 1e3,
+                r.transition_seconds
+            )
+        }
+    }
+    if r.spaces > 0 {
+        s += &format!(
+            ", {} ({}, {:.0} KB)",
+            count(r.spaces, "motion space"),
+            count(r.space_frames, "frame"),
+            r.space_bytes as f64 / 1e3
+        );
+    }
+    s + &format!(", {:.2} s\n", r.seconds)
+}
+
+/// `rig embed`'s summary: joints in the canonical order, parts, notes, the
+/// self-check and its warnings.
+pub fn rig_embed(r: &super::rig::RigEmbedReport) -> String {
+    let mut s = format!(
+        "embedded a rig in {} ({} vertices) in {:.2} s → {}\n",
+        r.mesh,
+        r.vertices,
+        r.seconds,
+        r.output.display()
+    );
+    let f = r.facing;
+    let _ = writeln!(
+        s,
+        "  height {:.3}, facing ({:.2}, {:.2}, {:.2})",
+        r.height, f[0], f[1], f[2]
+    );
+    s += "  joints:\n";
+    for c in crate::rig::Canonical::ALL {
+        if let Some(p) = r.joints.get(c.name()) {
+            let _ = writeln!(
+                s,
+                "    {:<11} ({:>7.3}, {:>7.3}, {:>7.3})",
+                c.name(),
+                p[0],
+                p[1],
+                p[2]
+            );
+        }
+    }
+    s += "  parts (labelled vertices / overlapping region / pieces):\n";
+    for p in crate::embed::parts::Part::ALL {
+        if let Some(c) = r.parts.get(p.name()) {
+            let _ = writeln!(
+                s,
+                "    {:<12} {:>6} {:>6} {:>3}",
+                p.name(),
+                c.vertices,
+                c.region,
+                c.pieces
+            );
+        }
+    }
+    for n in &r.notes {
+        let _ = writeln!(s, "  note: {n}");
+    }
+    let v = &r.check;
+    let _ = writeln!(
+        s,
+        "  self-check: pelvis {:.2}% of the height off the mid-plane, hips {:.2}% asymmetric: {}",
+        v.pelvis_offset_percent,
+        v.hip_asymmetry_percent,
+        if v.passed() {
+            "passed".to_string()
+        } else {
+            format!("{} warning(s)", v.warnings.len())
+        }
+    );
+    for w in &v.warnings {
+        let _ = writeln!(s, "  warning: {}", w.message);
+    }
+    if let Some(p) = &r.png {
+        let _ = writeln!(s, "  drew {}", p.display());
+    }
+    s
+}
