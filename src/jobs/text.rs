@@ -382,3 +382,99 @@ pub fn rig_embed(r: &super::rig::RigEmbedReport) -> String {
     }
     s
 }
+
+/// The demo's summary: what was made, how long it took, what to try next.
+pub fn demo(r: &super::demo::DemoReport) -> String {
+    let (n, frames) = (r.vertices, r.query_frames);
+    let (t_db, t_graph, t_retarget) = (r.seconds.database, r.seconds.graph, r.seconds.retarget);
+    format!(
+        "surfmotion demo: a procedural humanoid driven through its Surface Motion Graph\n\
+         \n\
+         character   {n} vertices (surface nets over capsules), rig from {} landmarks\n\
+         database    walk + run, {} frames synthesised (skinning + soft-tissue lag) in {t_db:.2} s\n\
+         graph       {} transitions (3D shape histograms) in {t_graph:.2} s\n\
+         query       a procedural walk along a curve, {frames} frames (the database walks straight)\n\
+         retarget    {} transitions, {} cuts, in {t_retarget:.2} s ({:.1} ms per frame)\n\
+         accuracy    joint-velocity error {:.2} ± {:.2} cm/frame (Huang et al. 2015 report ~2 for walks)\n\
+         \n\
+         wrote {}\n\
+         \x20     {}  (result: open in any glTF viewer)\n\
+         \x20     {}  (5 frames)\n\
+         \x20     {}  (the query clip)\n\
+         \n\
+         Next: `surfmotion retarget --db {} --mocap CLIP.bvh -o out.glb` with any BVH or AMC clip,\n\
+         or build a database from a real capture (see README: Character databases).\n\
+         The result is retrieved, blended, interpolated and then deformed part by part\n\
+         (PCA Laplacian, Sec. 5.2.3) to follow the query skeleton.\n",
+        r.landmarks,
+        r.database_frames,
+        r.transitions,
+        r.used,
+        r.cuts,
+        1e3 * t_retarget / frames.max(1) as f64,
+        r.velocity_error_cm_per_frame,
+        r.velocity_error_std,
+        r.database.display(),
+        r.result.display(),
+        r.picture.display(),
+        r.query.display(),
+        r.database.display(),
+    )
+}
+
+/// `play`'s summary of a session written to `output`: frames, timings,
+/// transitions, and the parameters asked and achieved per second.
+pub fn play(run: &super::play::PlayRun, output: &Path) -> String {
+    let report = &run.report;
+    let mut s = format!(
+        "{} ({:.1} s at {} fps, {} vertices) → {}\n",
+        count(report.frames, "frame"),
+        report.seconds,
+        report.fps,
+        run.vertices,
+        output.display()
+    );
+    let _ = writeln!(
+        s,
+        "synthesis {:.3} s ({:.0}× real time); model {} in {:.2} s; writing {:.2} s",
+        report.synthesis_seconds,
+        report.realtime_factor,
+        if run.model_cached {
+            "from the cache"
+        } else {
+            "built"
+        },
+        run.model_seconds,
+        run.write_seconds
+    );
+    for t in &report.transitions {
+        let _ = writeln!(
+            s,
+            "transition {} → {}: requested {:.2} s, start {:.2} s, end {:.2} s, latency {:.2} s, similarity {:.3}, cost {:.3}",
+            t.from,
+            t.to,
+            t.request_frame as f64 / report.fps,
+            t.start_frame as f64 / report.fps,
+            t.end_frame as f64 / report.fps,
+            t.latency,
+            t.similarity,
+            t.cost
+        );
+    }
+    s += "second  space  speed asked/achieved (m/s)  turn asked/achieved (deg/s)\n";
+    let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.2}"));
+    for q in &report.per_second {
+        let _ = writeln!(
+            s,
+            "{:>4}  {}{}  {} / {:.2}  {} / {:.1}",
+            q.second,
+            q.space,
+            if q.transition { " (transition)" } else { "" },
+            opt(q.speed_asked),
+            q.speed,
+            opt(q.turn_asked),
+            q.turn
+        );
+    }
+    s
+}
