@@ -19,6 +19,7 @@ const FLAGS: &[(&str, &str)] = &[
     ("fewer via key-frames", "fewer --via"),
     ("`AmcOptions::fps`", "--input-fps"),
     ("`BatchOptions::shard`", "--shard"),
+    ("`BlendOptions::alpha`", "--alpha"),
     ("`BvhOptions::fps`", "--input-fps"),
     ("`GlbOptions::quantize`", "--glb-quantize"),
     ("`InitOptions::gltf_skin`", "--gltf-skin"),
