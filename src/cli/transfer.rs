@@ -138,60 +138,7 @@ impl JobOpts {
 /// Runs `transfer`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::warnings_in_summary(!a.run.json);
-    // clap's `requires` let these through with --mocap, and they were
-    // ignored without a word.
-    if a.template.is_none() {
-        for (flag, given) in [
-            ("--template-markers", a.template_markers.is_some()),
-            ("--template-landmarks", a.template_landmarks.is_some()),
-            ("--template-frame", a.template_frame != 0),
-        ] {
-            anyhow::ensure!(
-                !given,
-                "{flag} applies to --template (a moving template mesh), not to --mocap"
-            );
-        }
-    }
-    let mut inputs = surfmotion::mesh::io::input_files(&a.scan, None);
-    if let Some(t) = &a.template {
-        inputs.extend(surfmotion::mesh::io::input_files(t, None));
-    }
-    surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
-    inputs.extend(a.mocap.clone());
-    // `--report LANDMARKS.json` replaced the scan's landmarks with the
-    // report and exited 0: every file read is an input.
-    if let Some(t) = &a.truth {
-        inputs.extend(surfmotion::mesh::io::input_files(t, None));
-    }
-    inputs.extend(
-        [
-            &a.landmarks,
-            &a.markers,
-            &a.template_markers,
-            &a.template_landmarks,
-            &a.run.clip.asf,
-            &a.run.clip.rig_map,
-        ]
-        .into_iter()
-        .flatten()
-        .cloned(),
-    );
-    let mut outputs = super::mesh_outputs(&a.output);
-    outputs.extend(a.report.clone().map(|p| ("--report", p)));
-    outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
-    outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
-    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
-    surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
-    a.glb.refuse_unless_glb(
-        super::mesh::GlbArgs::is_glb(&a.output),
-        &a.output.display().to_string(),
-    )?;
-    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
-    anyhow::ensure!(
-        surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
-        "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",
-        a.output.display()
-    );
+    check_options_and_outputs(&a)?;
     let job_opts = a.job.job()?;
     let scan = super::load_mesh_groups(&a.scan, &job_opts.groups)?;
     let source = match (&a.mocap, &a.template) {
@@ -251,6 +198,67 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     })?;
     bar.finish_and_clear();
     print_outcome(&a, outcome)
+}
+
+/// Refuses, before any work, template options without a template and
+/// outputs that would replace an input or another output, are not a
+/// mesh format, or a folder that holds files without --force.
+fn check_options_and_outputs(a: &Args) -> anyhow::Result<()> {
+    // clap's `requires` let these through with --mocap, and they were
+    // ignored without a word.
+    if a.template.is_none() {
+        for (flag, given) in [
+            ("--template-markers", a.template_markers.is_some()),
+            ("--template-landmarks", a.template_landmarks.is_some()),
+            ("--template-frame", a.template_frame != 0),
+        ] {
+            anyhow::ensure!(
+                !given,
+                "{flag} applies to --template (a moving template mesh), not to --mocap"
+            );
+        }
+    }
+    let mut inputs = surfmotion::mesh::io::input_files(&a.scan, None);
+    if let Some(t) = &a.template {
+        inputs.extend(surfmotion::mesh::io::input_files(t, None));
+    }
+    surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
+    inputs.extend(a.mocap.clone());
+    // `--report LANDMARKS.json` replaced the scan's landmarks with the
+    // report and exited 0: every file read is an input.
+    if let Some(t) = &a.truth {
+        inputs.extend(surfmotion::mesh::io::input_files(t, None));
+    }
+    inputs.extend(
+        [
+            &a.landmarks,
+            &a.markers,
+            &a.template_markers,
+            &a.template_landmarks,
+            &a.run.clip.asf,
+            &a.run.clip.rig_map,
+        ]
+        .into_iter()
+        .flatten()
+        .cloned(),
+    );
+    let mut outputs = super::mesh_outputs(&a.output);
+    outputs.extend(a.report.clone().map(|p| ("--report", p)));
+    outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
+    outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
+    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
+    surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
+    a.glb.refuse_unless_glb(
+        super::mesh::GlbArgs::is_glb(&a.output),
+        &a.output.display().to_string(),
+    )?;
+    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
+    anyhow::ensure!(
+        surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
+        "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",
+        a.output.display()
+    );
+    Ok(())
 }
 
 /// Writes the preview and the result of a transfer and prints its report.
