@@ -3,3 +3,4 @@
 mod batch;
 mod layer;
 mod stream_output;
+mod verbs;
