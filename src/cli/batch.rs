@@ -220,7 +220,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
                 load,
                 glb: a.glb.options(),
             },
-            &super::db::Bars::new(),
+            &super::Bars::new(),
         )?),
         (None, Some(scan), Some(lm)) => {
             let mesh = super::load_mesh_groups(scan, &scan_job.groups)?;

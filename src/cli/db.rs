@@ -2,11 +2,10 @@
 
 use anyhow::bail;
 use std::path::PathBuf;
+use surfmotion::db::info;
 use surfmotion::db::init::InitOptions;
-use surfmotion::db::{Manifest, info};
-use surfmotion::embed::frames::SkeletonKind;
 use surfmotion::jobs::skeletons::SkeletonsOptions;
-use surfmotion::jobs::{export_skeletons, init_database};
+use surfmotion::jobs::{export_skeletons, init_database, text};
 
 /// Database subcommands.
 #[derive(clap::Subcommand)]
@@ -61,90 +60,16 @@ pub struct BuildArgs {
     pub json: bool,
 }
 
-/// Progress bars for a build.
-pub struct Bars(std::sync::Mutex<Option<indicatif::ProgressBar>>);
-
-impl Bars {
-    /// No bar yet.
-    pub fn new() -> Bars {
-        Bars(std::sync::Mutex::new(None))
-    }
-}
-
-impl surfmotion::db::BuildProgress for Bars {
-    fn start(&self, what: &str, total: u64) {
-        if let Ok(mut b) = self.0.lock() {
-            *b = Some(super::progress(total, what));
-        }
-    }
-    fn advance(&self, k: u64) {
-        if let Ok(b) = self.0.lock()
-            && let Some(b) = b.as_ref()
-        {
-            b.inc(k);
-        }
-    }
-    fn finish(&self) {
-        if let Ok(mut b) = self.0.lock()
-            && let Some(b) = b.take()
-        {
-            b.finish_and_clear();
-        }
-    }
-}
-
 fn build(a: BuildArgs) -> anyhow::Result<()> {
     let opts = surfmotion::db::BuildOptions {
         measure: a.measure.map(Into::into),
         force: a.force,
     };
-    let (graph, r) = surfmotion::jobs::build_database(&a.dir, &opts, &Bars::new())?;
+    let (graph, r) = surfmotion::jobs::build_database(&a.dir, &opts, &super::Bars::new())?;
     if a.json {
         return super::emit(&(serde_json::to_string_pretty(&r)? + "\n"));
     }
-    let mut out = format!(
-        "{}: {} in {}, measure {} ({})\n",
-        a.dir.display(),
-        super::count(r.frames, "frame"),
-        super::count(r.sequences.len(), "sequence"),
-        r.measure.name(),
-        r.unit
-    );
-    if r.similarity_cached {
-        out += "similarity: cached\n";
-    } else {
-        out += &format!(
-            "similarity: {} pairs in {:.2} s (descriptors {:.2} s, {:.1} µs per pair)\n",
-            r.pairs,
-            r.pairs_seconds + r.describe_seconds,
-            r.describe_seconds,
-            1e6 * r.pairs_seconds / (r.pairs.max(1) as f64)
-        );
-    }
-    out += &format!(
-        "graph: {} on {}{} in {:.3} s\n",
-        super::count(r.transitions, "transition"),
-        super::count(r.edges, "sequence edge"),
-        if r.graph_cached { " (cached)" } else { "" },
-        r.graph_seconds
-    );
-    for t in graph.transitions.iter().take(40) {
-        out += &format!(
-            "  {}:{} -> {}:{}  L = {:2}  cost {:.4}\n",
-            graph.sequences[t.from].name, t.m, graph.sequences[t.to].name, t.n, t.window, t.cost
-        );
-    }
-    if graph.transitions.len() > 40 {
-        out += &format!(
-            "  ... (`surfmotion graph {} --json` lists all)\n",
-            a.dir.display()
-        );
-    }
-    for e in &graph.removed {
-        out += &format!("  removed by the manifest: {e}\n");
-    }
-    out += &format!("cache: {}\n", r.cache.display());
-    super::emit(&out)
+    super::emit(&text::database(&a.dir, &graph, &r))
 }
 
 /// Arguments of `db skeleton`.
@@ -261,27 +186,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     return Err(failed(&i, "\"problems\" in the JSON"));
                 }
             } else {
-                crate::outln!(
-                    "{} ({} vertices, {} triangles)",
-                    i.name,
-                    i.vertices,
-                    i.triangles
-                )?;
-                for s in &i.sequences {
-                    crate::outln!(
-                        "  sequence {:<16} {:>6} frames at {} fps",
-                        s.name,
-                        s.frames,
-                        s.fps
-                    )?;
-                }
-                crate::outln!("  total    {:>23} frames", i.total_frames)?;
-                for p in &i.problems {
-                    crate::outln!("  problem: {p}")?;
-                }
-                for n in &i.notes {
-                    crate::outln!("  note: {n}")?;
-                }
+                super::emit(&text::info(&i))?;
                 if !i.problems.is_empty() {
                     return Err(failed(&i, "listed above"));
                 }
@@ -337,25 +242,8 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
 }
 
 fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
-    // Checked before the skeletons are extracted: `-o FILE` said
-    // "FILE/rig.json: File exists (os error 17)" after the work.
     let out = a.output.clone().unwrap_or_else(|| a.dir.join("skeletons"));
-    surfmotion::jobs::outputs::check_output_folder(
-        "-o",
-        &out,
-        "db skeleton writes rig.json and each sequence's SEQ.skeleton.json and SEQ.bvh into a folder",
-    )?;
-    if let Ok(m) = Manifest::load(&a.dir) {
-        let mut outputs = vec![("-o", out.join("rig.json"))];
-        for s in &m.sequences {
-            outputs.push(("-o", out.join(format!("{}.skeleton.json", s.name))));
-            outputs.push(("-o", out.join(format!("{}.bvh", s.name))));
-        }
-        surfmotion::jobs::outputs::refuse_colliding(
-            &surfmotion::jobs::outputs::database_inputs(&a.dir),
-            &outputs,
-        )?;
-    }
+    surfmotion::jobs::outputs::check_skeleton_outputs("-o", &a.dir, &out)?;
     let opts = SkeletonsOptions {
         kind: a.kind.into(),
         output: a.output.clone(),
@@ -363,48 +251,8 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     let r = export_skeletons(&a.dir, &opts)?;
     if a.json {
         // Lengths and fit residuals are in the database's units.
-        crate::outln!(
-            "{}",
-            serde_json::to_string_pretty(&serde_json::to_value(&r)?)?
-        )?;
-        return Ok(());
+        let v = serde_json::to_value(&r)?;
+        return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
     }
-    let frames: usize = r.sequences.iter().map(|s| s.frames).sum();
-    // Millimetres per model unit, from the manifest's units.
-    let mm = Manifest::load(&a.dir)
-        .ok()
-        .and_then(|m| surfmotion::mocap::units::parse_unit(&m.units))
-        .map_or(1e3, |u| 1e3 * u.metres_per_unit);
-    crate::outln!(
-        "embedded the rig and extracted {} ({}) in {:.3} s → {}",
-        super::count(frames, "skeleton"),
-        SkeletonKind::from(a.kind),
-        r.seconds,
-        r.output.display()
-    )?;
-    for s in &r.sequences {
-        crate::outln!(
-            "  {}: {} frames; bone lengths within {:.1}% of their median (worst: {})",
-            s.sequence,
-            s.frames,
-            100.0 * s.worst_deviation,
-            s.worst_bone
-        )?;
-        if let Some(f) = &s.rigid {
-            crate::outln!(
-                "    rigid fit to the regressor joints (whose bones vary by up to {:.1}%, {}): \
-                 joints off by {:.1} mm RMS in the median frame, {:.1} mm RMS in the worst, \
-                 {:.1} mm at most",
-                100.0 * f.regressor_worst_deviation,
-                f.regressor_worst_bone,
-                mm * f.fit_rms_median,
-                mm * f.fit_rms_max,
-                mm * f.fit_joint_max,
-            )?;
-        }
-    }
-    for n in &r.notes {
-        crate::outln!("  note: {n}")?;
-    }
-    Ok(())
+    super::emit(&text::skeletons(&r))
 }

@@ -27,7 +27,7 @@ pub struct Args {
 /// and the plausibility of the result (metres, Y-up, as `retarget` writes)
 /// against the database's own frames.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let ch = Character::load(&a.db, &super::db::Bars::new())?;
+    let ch = Character::load(&a.db, &super::Bars::new())?;
     let r = evaluate_result(&ch, &a.mocap, &a.result, &a.clip.load_options()?)?;
     if a.json {
         let v = serde_json::to_value(&r)?;

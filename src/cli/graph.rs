@@ -34,7 +34,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         measure: a.measure.map(Into::into),
         force: false,
     };
-    let (mat, g, _) = surfmotion::db::build(&a.dir, &opts, &super::db::Bars::new())?;
+    let (mat, g, _) = surfmotion::db::build(&a.dir, &opts, &super::Bars::new())?;
     if let Some(p) = &a.matrix {
         matrix_image(&mat, &g, a.size).save_png(p)?;
         crate::errln!("wrote {}", p.display());

@@ -54,7 +54,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     } else {
         None
     };
-    let ch = Character::load(&a.db, &super::db::Bars::new())?;
+    let ch = Character::load(&a.db, &super::Bars::new())?;
     let load = a.clip.load_options()?;
     let mut names = vec![a.from.as_str()];
     names.extend(a.via.iter().map(String::as_str));

@@ -1,7 +1,7 @@
 //! `surfmotion mesh ...`.
 
 use std::path::PathBuf;
-use surfmotion::mesh::io::{LoadOptions, SaveOptions, load_sequence, save_sequence_with};
+use surfmotion::jobs::mesh::{MeshConvertOptions, convert_mesh};
 
 /// Mesh subcommands.
 #[derive(clap::Subcommand)]
@@ -100,62 +100,29 @@ impl GlbArgs {
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
         Cmd::Convert(a) => {
-            let inputs = surfmotion::mesh::io::input_files(&a.input, a.topology.as_deref());
-            surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
-            surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
-            let seq = load_sequence(
-                &a.input,
-                &LoadOptions {
-                    topology: a.topology,
-                    fps: a.fps,
-                },
-            )?;
-            let files = save_sequence_with(
-                &seq,
-                &a.output,
-                &SaveOptions {
-                    fps: a.fps,
-                    glb: a.glb.options(),
-                },
-            )?;
-            let glb = surfmotion::mesh::io::MeshFormat::of(&a.output)
-                == Some(surfmotion::mesh::io::MeshFormat::Glb);
-            let ignored = (a.glb.glb_quantize || a.glb.glb_no_normals) && !glb;
-            // The error of what a reader gets back, through our reader.
-            let error = if a.glb.glb_quantize && glb {
-                let back = load_sequence(&a.output.display().to_string(), &LoadOptions::default())?;
-                let e = max_vertex_error(seq.all_positions(), back.all_positions());
-                // A box of no size has no ratio ("1.83e303 of the
-                // bounding-box diagonal" for vertices all at one point).
-                let d = seq.bounds().diagonal();
-                Some((e, (d.is_finite() && d > 0.0).then(|| e / d)))
-            } else {
-                None
-            };
+            let r = convert_mesh(&MeshConvertOptions {
+                input: a.input,
+                output: a.output,
+                topology: a.topology,
+                fps: a.fps,
+                force: a.force,
+                glb: a.glb.options(),
+            })?;
             if a.json {
-                let v = serde_json::json!({
-                    "output": files,
-                    "vertices": seq.mesh().vertex_count(),
-                    "triangles": seq.mesh().triangle_count(),
-                    "frames": seq.frame_count(),
-                    "fps": seq.fps,
-                    "glb_options_ignored": ignored,
-                    "quantised_max_vertex_error": error.map(|e| e.0),
-                    "quantised_error_of_diagonal": error.and_then(|e| e.1),
-                });
+                let v = serde_json::to_value(&r)?;
                 return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
             }
             crate::errln!(
                 "wrote {}: {}, {}, {}",
-                super::written_list(&files, " and "),
-                super::count(seq.mesh().vertex_count(), "vertex"),
-                super::count(seq.mesh().triangle_count(), "triangle"),
-                super::count(seq.frame_count(), "frame")
+                super::written_list(&r.output, " and "),
+                super::count(r.vertices, "vertex"),
+                super::count(r.triangles, "triangle"),
+                super::count(r.frames, "frame")
             );
-            if ignored {
+            if r.glb_options_ignored {
                 crate::errln!("note: the --glb-* options apply to .glb output only; ignored");
-            } else if let Some((e, rel)) = error {
-                match rel {
+            } else if let Some(e) = r.quantised_max_vertex_error {
+                match r.quantised_error_of_diagonal {
                     Some(rel) => crate::errln!(
                         "quantised: max vertex error {e:.3e} ({rel:.2e} of the bounding-box diagonal)"
                     ),
@@ -167,16 +134,4 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-/// Largest distance between corresponding points (infinite if the counts
-/// differ).
-fn max_vertex_error(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    if a.len() != b.len() {
-        return f64::INFINITY;
-    }
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| glam::DVec3::from_array(*p).distance(glam::DVec3::from_array(*q)))
-        .fold(0.0, f64::max)
 }

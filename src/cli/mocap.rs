@@ -1,11 +1,8 @@
 //! `surfmotion mocap ...`: positions, convert, rigmap.
 
 use super::ClipOpts;
-use anyhow::{Context, bail};
-use std::collections::BTreeMap;
 use std::path::PathBuf;
-use surfmotion::mocap::{Clip, UpAxis};
-use surfmotion::rig::load_clip;
+use surfmotion::jobs::mocap;
 
 /// Mocap subcommands.
 #[derive(clap::Subcommand)]
@@ -130,216 +127,93 @@ pub struct RigmapArgs {
     pub opts: ClipOpts,
 }
 
-fn load(path: &std::path::Path, o: &ClipOpts) -> anyhow::Result<Clip> {
-    Ok(load_clip(path, &o.load_options()?)?)
-}
-
 /// Runs a mocap subcommand.
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
-        Cmd::Positions(a) => {
-            let mut clip = load(&a.clip, &a.opts)?;
-            if a.units == OutUnits::Metres {
-                clip.to_metres_y_up();
-            }
-            let n = clip.frame_count();
-            let mut frames = BTreeMap::new();
-            for &f in &a.frames {
-                if f >= n {
-                    bail!(
-                        "{}: frame {f} out of range (the clip has {n} frames, 0..{})",
-                        a.clip.display(),
-                        n - 1
-                    );
-                }
-                let p: Vec<[f64; 3]> = clip.points_at(f).iter().map(|v| v.to_array()).collect();
-                frames.insert(f, p);
-            }
-            let names = clip.point_names();
-            if a.json {
-                let frames: BTreeMap<String, _> = frames
-                    .into_iter()
-                    .map(|(k, v)| (k.to_string(), v))
-                    .collect();
-                let out = serde_json::json!({
-                    "units": clip.units.name,
-                    "metres_per_unit": clip.units.metres_per_unit,
-                    "units_reason": super::flags::as_flags(&clip.units.reason),
-                    "up": if clip.up == UpAxis::Z { "z" } else { "y" },
-                    "joints": names,
-                    "frames": frames,
-                });
-                crate::outln!("{}", serde_json::to_string(&out)?)?;
-            } else {
-                crate::outln!(
-                    "units: {} ({}), {}-up",
-                    clip.units.name,
-                    super::flags::as_flags(&clip.units.reason),
-                    if clip.up == UpAxis::Z { "z" } else { "y" }
-                )?;
-                for (f, p) in frames {
-                    crate::outln!("frame {f}")?;
-                    for (n, v) in names.iter().zip(p) {
-                        crate::outln!("  {n:<24} {:>12.6} {:>12.6} {:>12.6}", v[0], v[1], v[2])?;
-                    }
-                }
-            }
-        }
+        Cmd::Positions(a) => positions(a),
         Cmd::Convert(a) => {
-            if !a
-                .output
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("bvh"))
-            {
-                bail!("{}: only .bvh output is supported", a.output.display());
-            }
-            // As `mesh convert` does: the input is never overwritten (it was,
-            // silently, re-serialised in place).
-            if let (Ok(i), Ok(o)) = (a.input.canonicalize(), a.output.canonicalize())
-                && i == o
-            {
-                bail!(
-                    "{}: writing it would overwrite the input {}; choose another output name",
-                    a.output.display(),
-                    a.input.display()
-                );
-            }
-            let mut clip = load(&a.input, &a.opts)?;
-            if a.metres || a.units == OutUnits::Metres {
-                clip.to_metres_y_up();
-            }
-            if let Some(fps) = a.fps {
-                clip = clip
-                    .try_resampled(fps)
-                    .with_context(|| a.input.display().to_string())?;
-            }
-            surfmotion::mocap::bvh::write_bvh(&clip, &a.output)
-                .with_context(|| format!("writing {}", a.output.display()))?;
+            let metres = a.metres || a.units == OutUnits::Metres;
+            // The output is checked before the options are read.
+            mocap::check_convert_output(&a.input, &a.output)?;
+            let load = a.opts.load_options()?;
+            let r = mocap::convert(&a.input, &load, &a.output, a.fps, metres)?;
             if a.json {
-                let v = serde_json::json!({
-                    "output": a.output,
-                    "joints": clip.joint_count(),
-                    "frames": clip.frame_count(),
-                    "fps": clip.fps(),
-                });
+                let v = serde_json::to_value(&r)?;
                 return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
             }
             crate::errln!(
                 "wrote {} ({}, {} at {:.3} fps)",
-                a.output.display(),
-                super::count(clip.joint_count(), "joint"),
-                super::count(clip.frame_count(), "frame"),
-                clip.fps()
+                r.output.display(),
+                super::count(r.joints, "joint"),
+                super::count(r.frames, "frame"),
+                r.fps
             );
+            Ok(())
         }
         Cmd::Procedural(a) => {
-            if !(a.fps.is_finite()
-                && a.fps > 0.0
-                && a.seconds.is_finite()
-                && a.seconds > 0.0
-                && a.seconds * a.fps < 1e6)
-            {
-                bail!(
-                    "--seconds {} --fps {}: expected positive numbers (under a million frames)",
-                    a.seconds,
-                    a.fps
-                );
-            }
-            let gaits = if a.gait.is_empty() {
-                surfmotion::synth::Gait::ALL.to_vec()
-            } else {
-                a.gait.iter().map(|&g| g.into()).collect()
+            let opts = mocap::ProceduralOptions {
+                output: a.output,
+                gaits: a.gait.iter().map(|&g| g.into()).collect(),
+                seconds: a.seconds,
+                fps: a.fps,
             };
-            // `-o x.obj` made a folder named x.obj (an existing folder
-            // with a dot in its name is taken as given).
-            if let Some(e) = a.output.extension()
-                && !e.eq_ignore_ascii_case("bvh")
-                && !a.output.is_dir()
-            {
-                bail!(
-                    "-o {}: expected a .bvh file (with one --gait) or a folder name without extension",
-                    a.output.display()
-                );
-            }
-            let single = gaits.len() == 1
-                && a.output
-                    .extension()
-                    .is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
-            if !single {
-                surfmotion::jobs::outputs::check_output_folder(
-                    "-o",
-                    &a.output,
-                    "one clip per gait goes into a folder; with one --gait, -o may name a .bvh",
-                )?;
-            }
-            let mut written = Vec::new();
-            for g in gaits {
-                let clip = surfmotion::synth::gait_clip(g, a.seconds, a.fps);
-                let path = if single {
-                    a.output.clone()
-                } else {
-                    a.output.join(format!("{}.bvh", g.name()))
-                };
-                surfmotion::mocap::bvh::write_bvh(&clip, &path)?;
+            let written = mocap::procedural(&opts, &mut |c| {
                 crate::errln!(
                     "wrote {} ({} at {} fps)",
-                    path.display(),
-                    super::count(clip.frame_count(), "frame"),
-                    a.fps
+                    c.path.display(),
+                    super::count(c.frames, "frame"),
+                    c.fps
                 );
-                written.push(serde_json::json!({
-                    "path": path,
-                    "gait": g.name(),
-                    "frames": clip.frame_count(),
-                    "fps": a.fps,
-                }));
-            }
+            })?;
             if a.json {
-                crate::outln!("{}", serde_json::to_string_pretty(&written)?)?;
+                let v = serde_json::to_value(&written)?;
+                crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
             }
+            Ok(())
         }
-        Cmd::Rigmap(a) => {
-            // `-o` onto the clip replaced the clip with the JSON map (exit 0).
-            if let Some(o) = &a.output {
-                let mut inputs = vec![a.clip.clone()];
-                inputs.extend(a.opts.asf.clone());
-                // And onto the --rig-map it reads (rewritten in place, exit 0).
-                inputs.extend(a.opts.rig_map.clone());
-                surfmotion::mesh::io::refuse_overwriting(&inputs, o)?;
-            }
-            let opts = a.opts.load_options()?;
-            let clip = load_clip(&a.clip, &opts)?;
-            let det = match &opts.rig_map {
-                // A given map: check that it places every joint on this clip.
-                Some(m) => {
-                    m.rest_pose(&clip)
-                        .with_context(|| format!("{}", a.clip.display()))?;
-                    surfmotion::rig::Detection::from_map(
-                        m.clone(),
-                        surfmotion::rig::Source::MapFile,
-                        1.0,
-                        "from the map file",
-                    )
-                }
-                None => surfmotion::rig::detect_clip(&clip)
-                    .with_context(|| format!("{}", a.clip.display()))?,
-            };
-            if let Some(o) = &a.output {
-                det.map.save(o)?;
-            }
-            if a.json {
-                crate::outln!("{}", serde_json::to_string_pretty(&det)?)?;
-            } else {
-                crate::cli::emit(&surfmotion::tools::inspect::detection_text(&det))?;
-                if !det.missing.is_empty() {
-                    let m: Vec<&str> = det.missing.iter().map(|c| c.name()).collect();
-                    crate::outln!(
-                        "unmapped: {} (save with -o, fill them in, pass back with --rig-map)",
-                        m.join(", ")
-                    )?;
-                }
-            }
+        Cmd::Rigmap(a) => rigmap(a),
+    }
+}
+
+/// Runs `mocap positions`.
+fn positions(a: PositionsArgs) -> anyhow::Result<()> {
+    let load = a.opts.load_options()?;
+    let mut p = mocap::positions(&a.clip, &load, &a.frames, a.units == OutUnits::Metres)?;
+    p.units_reason = super::flags::as_flags(&p.units_reason);
+    if a.json {
+        return crate::outln!("{}", serde_json::to_string(&serde_json::to_value(&p)?)?);
+    }
+    crate::outln!("units: {} ({}), {}-up", p.units, p.units_reason, p.up)?;
+    for (f, pts) in &p.frames {
+        crate::outln!("frame {f}")?;
+        for (n, v) in p.joints.iter().zip(pts) {
+            crate::outln!("  {n:<24} {:>12.6} {:>12.6} {:>12.6}", v[0], v[1], v[2])?;
         }
+    }
+    Ok(())
+}
+
+/// Runs `mocap rigmap`.
+fn rigmap(a: RigmapArgs) -> anyhow::Result<()> {
+    // `-o` onto the clip replaced the clip with the JSON map (exit 0).
+    if let Some(o) = &a.output {
+        let mut inputs = vec![a.clip.clone()];
+        inputs.extend(a.opts.asf.clone());
+        // And onto the --rig-map it reads (rewritten in place, exit 0).
+        inputs.extend(a.opts.rig_map.clone());
+        surfmotion::mesh::io::refuse_overwriting(&inputs, o)?;
+    }
+    let det = mocap::rigmap(&a.clip, &a.opts.load_options()?, a.output.as_deref())?;
+    if a.json {
+        return crate::outln!("{}", serde_json::to_string_pretty(&det)?);
+    }
+    crate::cli::emit(&surfmotion::tools::inspect::detection_text(&det))?;
+    if !det.missing.is_empty() {
+        let m: Vec<&str> = det.missing.iter().map(|c| c.name()).collect();
+        crate::outln!(
+            "unmapped: {} (save with -o, fill them in, pass back with --rig-map)",
+            m.join(", ")
+        )?;
     }
     Ok(())
 }

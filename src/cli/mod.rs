@@ -31,13 +31,14 @@ pub use argv::Usage;
 pub use log::warnings_in_summary;
 pub use opts::{ClipOpts, RunOpts, load_mesh_groups};
 pub use out::{
-    OutputClosed, count, emit, mesh_outputs, one_line, progress, spinner, without_os_error_numbers,
-    written_list,
+    Bars, OutputClosed, count, emit, mesh_outputs, one_line, progress, spinner,
+    without_os_error_numbers,
 };
 pub use parse::{
     bounded_count, finite, fraction, frame_rate, length_unit, mesh_spec, non_negative, png_path,
     positive, weight,
 };
+pub use surfmotion::jobs::text::written_list;
 
 use argv::{allow_negative_numbers, bad_value, non_utf8_argument};
 use clap::{CommandFactory, FromArgMatches, Subcommand};

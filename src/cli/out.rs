@@ -125,30 +125,6 @@ pub fn spinner(what: &str) -> indicatif::ProgressBar {
     bar
 }
 
-/// The files a mesh output wrote, for a summary line: each named, except
-/// a folder of OBJ frames, named once with its count and first and last
-/// frame (`mesh convert x.pc2 frames` listed all 180 frames joined by
-/// "and", a line of 5 kB).
-pub fn written_list(files: &[PathBuf], sep: &str) -> String {
-    let name = |p: &PathBuf| p.display().to_string();
-    let folder = files.first().and_then(|f| f.parent());
-    let frames = files.len() > 2
-        && files.iter().all(|f| {
-            f.parent() == folder && f.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"))
-        });
-    match (frames, folder, files.first(), files.last()) {
-        (true, Some(dir), Some(a), Some(b)) => format!(
-            "{}{} ({} OBJ frames, {} .. {})",
-            dir.display(),
-            std::path::MAIN_SEPARATOR,
-            files.len(),
-            a.file_name().unwrap_or_default().to_string_lossy(),
-            b.file_name().unwrap_or_default().to_string_lossy()
-        ),
-        _ => files.iter().map(name).collect::<Vec<_>>().join(sep),
-    }
-}
-
 /// The files `-o OUT` writes (a point cache's topology OBJ beside it),
 /// labelled for [`refuse_colliding`].
 pub fn mesh_outputs(out: &Path) -> Vec<(&'static str, PathBuf)> {
@@ -156,6 +132,38 @@ pub fn mesh_outputs(out: &Path) -> Vec<(&'static str, PathBuf)> {
         .into_iter()
         .map(|p| ("-o", p))
         .collect()
+}
+
+/// Progress bars for a build.
+pub struct Bars(std::sync::Mutex<Option<indicatif::ProgressBar>>);
+
+impl Bars {
+    /// No bar yet.
+    pub fn new() -> Bars {
+        Bars(std::sync::Mutex::new(None))
+    }
+}
+
+impl surfmotion::db::BuildProgress for Bars {
+    fn start(&self, what: &str, total: u64) {
+        if let Ok(mut b) = self.0.lock() {
+            *b = Some(progress(total, what));
+        }
+    }
+    fn advance(&self, k: u64) {
+        if let Ok(b) = self.0.lock()
+            && let Some(b) = b.as_ref()
+        {
+            b.inc(k);
+        }
+    }
+    fn finish(&self) {
+        if let Ok(mut b) = self.0.lock()
+            && let Some(b) = b.take()
+        {
+            b.finish_and_clear();
+        }
+    }
 }
 
 #[cfg(test)]

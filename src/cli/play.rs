@@ -103,53 +103,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let v = serde_json::to_value(&run)?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
-    crate::outln!(
-        "{} ({:.1} s at {} fps, {} vertices) → {}",
-        super::count(report.frames, "frame"),
-        report.seconds,
-        report.fps,
-        run.vertices,
-        a.output.display()
-    )?;
-    crate::outln!(
-        "synthesis {:.3} s ({:.0}× real time); model {} in {:.2} s; writing {:.2} s",
-        report.synthesis_seconds,
-        report.realtime_factor,
-        if run.model_cached {
-            "from the cache"
-        } else {
-            "built"
-        },
-        run.model_seconds,
-        run.write_seconds
-    )?;
-    for t in &report.transitions {
-        crate::outln!(
-            "transition {} → {}: requested {:.2} s, start {:.2} s, end {:.2} s, latency {:.2} s, similarity {:.3}, cost {:.3}",
-            t.from,
-            t.to,
-            t.request_frame as f64 / report.fps,
-            t.start_frame as f64 / report.fps,
-            t.end_frame as f64 / report.fps,
-            t.latency,
-            t.similarity,
-            t.cost
-        )?;
-    }
-    crate::outln!("second  space  speed asked/achieved (m/s)  turn asked/achieved (deg/s)")?;
-    let opt = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.2}"));
-    for s in &report.per_second {
-        crate::outln!(
-            "{:>4}  {}{}  {} / {:.2}  {} / {:.1}",
-            s.second,
-            s.space,
-            if s.transition { " (transition)" } else { "" },
-            opt(s.speed_asked),
-            s.speed,
-            opt(s.turn_asked),
-            s.turn
-        )?;
-    }
+    super::emit(&surfmotion::jobs::text::play(&run, &a.output))?;
     for n in &report.notices {
         crate::errln!("note: request {} (t = {} s): {}", n.request, n.t, n.message);
     }

@@ -3,9 +3,7 @@
 use std::path::PathBuf;
 use surfmotion::db::CharacterOptions;
 use surfmotion::drive::RetargetOptions;
-use surfmotion::jobs::retarget::per_frame_seconds;
-use surfmotion::jobs::transfer::PLAUSIBILITY_BYTES;
-use surfmotion::jobs::{RetargetJob, RetargetJobOptions, RetargetSummary};
+use surfmotion::jobs::{RetargetJob, RetargetJobOptions};
 
 /// Arguments of `retarget`.
 #[derive(clap::Args)]
@@ -144,143 +142,17 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         load: a.run.clip.load_options()?,
         glb: a.glb.options(),
     };
-    let job = RetargetJob::load(&a.db, opts, &super::db::Bars::new())?;
-    let ch = &job.character;
-    if a.run.preview.preview.is_none() {
-        // Nothing needs every frame at once: they go to the output as they
-        // are made (issue 18, item 12); the plausibility is measured on the
-        // first frames, as `transfer` does.
-        let keep_bytes = PLAUSIBILITY_BYTES
-            .min((surfmotion::util::budget::Budget::current().bytes / 4) as usize);
-        let run = job.run_to(&a.mocap, &a.output, keep_bytes)?;
-        let r = &run.report;
-        let measured = run.kept.len() / ch.n().max(1);
-        let plaus = job.plausibility_of_streamed(&run).map(|p| p.0);
-        let partial = (measured < r.frames).then_some(measured);
-        if let Some(k) = partial {
-            tracing::info!(
-                "plausibility measured on the first {k} of {} frames (streamed output)",
-                r.frames
-            );
-        }
-        return print_report(&a, r, run.written, &run.mocap.convention, plaus, partial);
-    }
-    let run = job.run(&a.mocap)?;
-    let (out, convention) = (&run.output, &run.mocap.convention);
-    let plaus = job.plausibility_of(&run);
-    if let Some(path) = &a.run.preview.preview {
-        // Each panel faced from its own body (`render`'s rule).
-        surfmotion::tools::render::preview::write_preview(
-            path,
-            &out.positions,
-            ch.n(),
-            ch.topology().triangles(),
-            Some(ch.rig()),
-            None,
-            plaus.as_ref().map(|p| p.1),
-            &a.run.preview.options(),
-        )?;
-    }
-    let plaus = plaus.map(|p| p.0);
-    let convention = convention.clone();
-    let r = &run.output.report;
-    let written = job.write(run.output.positions, &a.output)?;
-    print_report(&a, r, written, &convention, plaus, None)
-}
-
-/// Writes the `--report` file and prints the summary of a retarget
-/// (`partial`: the plausibility was measured on that many first frames).
-fn print_report(
-    a: &Args,
-    r: &surfmotion::drive::Report,
-    written: Vec<PathBuf>,
-    convention: &str,
-    plaus: Option<surfmotion::tools::eval::Plausibility>,
-    partial: Option<usize>,
-) -> anyhow::Result<()> {
-    let fps = r.fps;
+    let job = RetargetJob::load(&a.db, opts, &super::Bars::new())?;
+    let preview = a.run.preview.options();
+    let preview = a.run.preview.preview.as_deref().map(|p| (p, &preview));
+    let c = job.run_clip(&a.mocap, &a.output, preview)?;
     if let Some(p) = &a.report {
-        let mut v = serde_json::to_value(r)?;
-        v["plausibility"] = serde_json::to_value(&plaus)?;
-        if let Some(k) = partial {
-            v["plausibility_frames"] = serde_json::to_value(k)?;
-        }
-        surfmotion::util::fsutil::write_bytes_atomic(
-            p,
-            serde_json::to_string_pretty(&v)?.as_bytes(),
-        )?;
+        let v = serde_json::to_string_pretty(&c.report_json()?)?;
+        surfmotion::util::fsutil::write_bytes_atomic(p, v.as_bytes())?;
     }
-    let per_frame = per_frame_seconds(r);
     if a.run.json {
-        let v = serde_json::to_value(RetargetSummary::new(written, r, plaus))?;
+        let v = serde_json::to_value(c.summary())?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
-    let mut s = format!(
-        "{} -> {}: {} at {} fps ({} rig)\n",
-        a.mocap.display(),
-        super::written_list(&written, ", "),
-        super::count(r.frames, "frame"),
-        fps,
-        convention
-    );
-    s += &format!(
-        "retrieval: T_skel {:.3} m (summed over the 19 joints), {}, {}, {}, {}\n",
-        r.retrieval.t_skel,
-        super::count(r.retrieval.nodes, "trellis node"),
-        super::count(
-            r.jumps.iter().filter(|j| j.transition).count(),
-            "transition"
-        ),
-        super::count(r.retrieval.cuts.len(), "cut"),
-        super::count(r.retrieval.widened.len(), "widened frame")
-    );
-    let mut runs: Vec<(String, usize, usize)> = Vec::new();
-    for st in &r.steps {
-        match runs.last_mut() {
-            Some((n, _, b)) if *n == st.sequence && (st.frame == *b || st.frame == *b + 1) => {
-                *b = st.frame
-            }
-            _ => runs.push((st.sequence.clone(), st.frame, st.frame)),
-        }
-    }
-    s += "path:";
-    for (n, a0, b0) in runs.iter().take(12) {
-        s += &format!(" {n}[{a0}..{b0}]");
-    }
-    if runs.len() > 12 {
-        s += " ...";
-    }
-    s += "\n";
-    s += &format!(
-        "time: query {:.3} s, retrieval {:.3} s, timeline {:.3} s, blend factor {:.3} s, meshes {:.3} s, deform factor {:.3} s, deform {:.3} s ({:.2} ms per output frame)\n",
-        r.timings.query,
-        r.timings.retrieval,
-        r.timings.timeline,
-        r.timings.factor,
-        r.timings.meshes,
-        r.timings.deform_factor,
-        r.timings.deform,
-        1e3 * per_frame
-    );
-    s += &format!("deformation: {}\n", r.deform);
-    if matches!(
-        r.deform,
-        surfmotion::deform::DeformMode::Part | surfmotion::deform::DeformMode::Global
-    ) {
-        s += &format!(
-            "triangle-frames turned over against the retrieved frames (the database frames each output frame blends): {} after the solve, {} after the repair (the plausibility below counts against the rest frame)\n",
-            r.turned_over.before, r.turned_over.after
-        );
-    }
-    if let Some(p) = &plaus {
-        if let Some(k) = partial {
-            s += &format!(
-                "plausibility measured on the first {} of {} (streamed output):\n",
-                super::count(k, "frame"),
-                r.frames
-            );
-        }
-        s += &p.text();
-    }
-    super::emit(&s)
+    super::emit(&surfmotion::jobs::text::retarget(&a.mocap, &c))
 }

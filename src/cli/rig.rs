@@ -2,12 +2,7 @@
 //! body parts and joint regressors.
 
 use std::path::PathBuf;
-use std::time::Instant;
-use surfmotion::embed::landmarks::Landmarks;
-use surfmotion::embed::parts::{Part, neighbours, piece_counts};
-use surfmotion::embed::{Embedding, parse_parts};
-use surfmotion::rig::Canonical;
-use surfmotion::util::fsutil::read_text;
+use surfmotion::jobs::rig::{RigEmbedOptions, embed_rig};
 
 /// `rig` subcommands.
 #[derive(clap::Subcommand)]
@@ -78,149 +73,23 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
     let mut outputs = vec![("-o", a.output.clone())];
     outputs.extend(a.png.clone().map(|p| ("--png", p)));
     surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
-    let mut mesh = super::load_mesh_groups(&a.mesh, &a.group)?;
-    let parts = match &a.parts {
-        Some(p) => Some(parse_parts(&read_text(p)?, p, mesh.triangles(), mesh.vertex_count())?.0),
-        None => None,
-    };
-    let t = Instant::now();
-    let e = match (&a.landmarks, &a.skin) {
-        (Some(l), _) => {
-            let mut lm = Landmarks::load(l, mesh.vertex_count())?;
-            if !a.group.is_empty() {
-                // Only the groups' vertices: landmarks given as vertex ids
-                // of the file become points first.
-                anyhow::ensure!(
-                    parts.is_none(),
-                    "--parts with --group: part labels name the file's vertices"
-                );
-                let points: Vec<_> = lm
-                    .marks
-                    .keys()
-                    .filter_map(|&l| lm.point(l, mesh.positions()).map(|p| (l, p)))
-                    .collect();
-                for (l, p) in points {
-                    lm.marks
-                        .insert(l, surfmotion::embed::landmarks::Mark::Point(p));
-                }
-                mesh = surfmotion::mesh::repair::repair(&mesh, &Default::default()).0;
-            }
-            // A degenerate landmark set is the landmark file's fault: name it.
-            Embedding::new(&mesh, &lm, parts).map_err(|e| match e {
-                surfmotion::embed::EmbedError::Landmarks(le) => {
-                    anyhow::anyhow!("{}: {le}", l.display())
-                }
-                e @ surfmotion::embed::EmbedError::Mesh(_) => {
-                    anyhow::anyhow!("{}: {e}", a.mesh)
-                }
-                other => other.into(),
-            })?
-        }
-        (None, Some(g)) => {
-            anyhow::ensure!(
-                parts.is_none(),
-                "--parts goes with --landmarks; a skin gives its own parts"
-            );
-            let asset = surfmotion::mesh::io::gltf::read_gltf(g)?;
-            // The glTF itself as the mesh: its bind pose, not its animation.
-            if std::path::Path::new(&a.mesh) == g.as_path() {
-                mesh = asset.mesh.clone();
-            }
-            let map = match &a.rig_map {
-                Some(m) => Some(surfmotion::rig::RigMap::load(m)?),
-                None => None,
-            };
-            surfmotion::embed::skin::from_skin(&mesh, &asset, map.as_ref(), g)?
-        }
-        (None, None) => anyhow::bail!("give --landmarks or --skin"),
-    };
-    let secs = t.elapsed().as_secs_f64();
-    e.save(&a.output)?;
-    let verdict = surfmotion::embed::check(&e, &mesh);
-    if let Some(p) = &a.png {
-        let img = super::render::draw(
-            mesh.positions(),
-            mesh.triangles(),
-            Some(&e),
-            glam::DVec3::from_array(e.facing),
-            600,
-        );
-        img.save_png(p)?;
-    }
-    let nb = neighbours(mesh.vertex_count(), mesh.triangles());
-    let pieces = piece_counts(&e.labels, &nb);
-    let mut sizes = [0usize; Part::COUNT];
-    for &l in &e.labels {
-        sizes[l as usize] += 1;
-    }
+    let mesh = super::load_mesh_groups(&a.mesh, &a.group)?;
+    let r = embed_rig(
+        mesh,
+        &RigEmbedOptions {
+            mesh: a.mesh,
+            groups: !a.group.is_empty(),
+            landmarks: a.landmarks,
+            skin: a.skin,
+            rig_map: a.rig_map,
+            parts: a.parts,
+            output: a.output,
+            png: a.png,
+        },
+    )?;
     if a.json {
-        let v = serde_json::json!({
-            "output": a.output,
-            "seconds": secs,
-            "joints": Canonical::ALL.iter().map(|c| (c.name(), e.joints[c.index()])).collect::<std::collections::BTreeMap<_, _>>(),
-            "parts": Part::ALL.iter().map(|p| (p.name(), serde_json::json!({"vertices": sizes[p.index()], "region": e.regions[p.index()].len(), "pieces": pieces[p.index()]}))).collect::<std::collections::BTreeMap<_, _>>(),
-            "facing": e.facing,
-            "height": e.height,
-            "notes": e.notes,
-            "check": verdict,
-        });
-        crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
-        return Ok(());
+        let v = serde_json::to_value(&r)?;
+        return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
     }
-    crate::outln!(
-        "embedded a rig in {} ({} vertices) in {:.2} s → {}",
-        a.mesh,
-        mesh.vertex_count(),
-        secs,
-        a.output.display()
-    )?;
-    let f = e.facing;
-    crate::outln!(
-        "  height {:.3}, facing ({:.2}, {:.2}, {:.2})",
-        e.height,
-        f[0],
-        f[1],
-        f[2]
-    )?;
-    crate::outln!("  joints:")?;
-    for c in Canonical::ALL {
-        let p = e.joints[c.index()];
-        crate::outln!(
-            "    {:<11} ({:>7.3}, {:>7.3}, {:>7.3})",
-            c.name(),
-            p[0],
-            p[1],
-            p[2]
-        )?;
-    }
-    crate::outln!("  parts (labelled vertices / overlapping region / pieces):")?;
-    for p in Part::ALL {
-        crate::outln!(
-            "    {:<12} {:>6} {:>6} {:>3}",
-            p.name(),
-            sizes[p.index()],
-            e.regions[p.index()].len(),
-            pieces[p.index()]
-        )?;
-    }
-    for n in &e.notes {
-        crate::outln!("  note: {n}")?;
-    }
-    crate::outln!(
-        "  self-check: pelvis {:.2}% of the height off the mid-plane, hips {:.2}% asymmetric: {}",
-        verdict.pelvis_offset_percent,
-        verdict.hip_asymmetry_percent,
-        if verdict.passed() {
-            "passed".to_string()
-        } else {
-            format!("{} warning(s)", verdict.warnings.len())
-        }
-    )?;
-    for w in &verdict.warnings {
-        crate::outln!("  warning: {}", w.message)?;
-    }
-    if let Some(p) = &a.png {
-        crate::outln!("  drew {}", p.display())?;
-    }
-    Ok(())
+    super::emit(&surfmotion::jobs::text::rig_embed(&r))
 }

@@ -1,14 +1,9 @@
 //! `surfmotion synth`: a multi-motion 4D database from a rest mesh, its
 //! landmarks and mocap clips (skinning plus secondary dynamics).
 
-use anyhow::bail;
 use std::path::PathBuf;
-use std::time::Instant;
-use surfmotion::embed::Embedding;
-use surfmotion::embed::landmarks::Landmarks;
-use surfmotion::jobs::synth_db::SynthSequence;
-use surfmotion::jobs::{SynthCharacter, SynthClip, SynthOptions, write_synthetic_database};
-use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::jobs::SynthOptions;
+use surfmotion::jobs::synth::synth_from_files;
 use surfmotion::synth::database::Dynamics;
 
 /// Arguments of `synth`.
@@ -58,39 +53,10 @@ fn dynamics_amount(s: &str) -> Result<f64, String> {
     }
 }
 
-/// Runs `synth`: the rig embedded here (errors name the mesh or the
-/// landmarks file), then [`write_synthetic_database`].
+/// Runs `synth` ([`surfmotion::jobs::synth::synth_from_files`]).
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::warnings_in_summary(!a.run.json);
     let dir = &a.output;
-    surfmotion::jobs::outputs::check_output_folder(
-        "-o",
-        dir,
-        "synth writes a database folder: the manifest, topology, sequences and truth/",
-    )?;
-    if dir.join(surfmotion::db::MANIFEST).exists() && !a.force {
-        bail!(
-            "{}: a database exists there already; pass --force to overwrite it",
-            dir.display()
-        );
-    }
-    let t0 = Instant::now();
-    let rest = load_sequence(&a.mesh, &LoadOptions::default())?.frame_mesh(0);
-    let lm = Landmarks::load(&a.landmarks, rest.vertex_count())?;
-    let rig = Embedding::new(&rest, &lm, None).map_err(|e| match e {
-        e @ surfmotion::embed::EmbedError::Mesh(_) => anyhow::anyhow!("{}: {e}", a.mesh),
-        surfmotion::embed::EmbedError::Landmarks(le) => {
-            anyhow::anyhow!("{}: {le}", a.landmarks.display())
-        }
-        other => other.into(),
-    })?;
-    let embed_s = t0.elapsed().as_secs_f64();
-    let character = SynthCharacter {
-        rest,
-        rig,
-        landmarks_json: surfmotion::util::fsutil::read_bytes(&a.landmarks)?,
-    };
-    let (rest, rig) = (&character.rest, &character.rig);
     let opts = SynthOptions {
         fps: a.fps,
         seconds: a.seconds,
@@ -98,37 +64,32 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             amount: a.dynamics.max(0.0),
             ..Dynamics::default()
         },
-        force: true,
+        force: a.force,
         load: a.run.clip.load_options()?,
         ..Default::default()
     };
-    let clips: Vec<SynthClip> = a.mocap.iter().cloned().map(SynthClip::File).collect();
     let bar = super::progress(a.mocap.len() as u64, "clips");
-    let (mut plaus_text, mut sheets) = (Vec::<String>::new(), Vec::new());
-    let mut each = |row: &SynthSequence, positions: &[[f64; 3]]| {
-        if let Some(p) = &row.plausibility {
-            plaus_text.push(format!("{}: {}", row.sequence, p.text()));
-        }
-        if a.run.preview.preview.is_some() {
-            sheets.extend(surfmotion::tools::render::preview::preview_image(
-                positions,
-                rest.vertex_count(),
-                rest.triangles(),
-                Some(rig),
-                None,
-                row.plausibility.as_ref().map(|p| p.floor_m),
-                &a.run.preview.options(),
-            ));
-        }
-        bar.inc(1);
-    };
-    let mut r = write_synthetic_database(dir, &character, &clips, &opts, &mut each)?;
+    let preview = a
+        .run
+        .preview
+        .preview
+        .as_ref()
+        .map(|_| a.run.preview.options());
+    let run = synth_from_files(
+        dir,
+        &a.mesh,
+        &a.landmarks,
+        &a.mocap,
+        &opts,
+        preview.as_ref(),
+        &mut || bar.inc(1),
+    )?;
     bar.finish_and_clear();
-    r.embed_seconds = embed_s;
+    let r = &run.report;
     if a.run.json {
         crate::outln!(
             "{}",
-            serde_json::to_string_pretty(&serde_json::to_value(&r)?)?
+            serde_json::to_string_pretty(&serde_json::to_value(r)?)?
         )?;
     } else {
         crate::outln!(
@@ -136,7 +97,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             dir.display(),
             super::count(r.sequences.len(), "sequence"),
             super::count(r.frames, "frame"),
-            embed_s,
+            r.embed_seconds,
             super::count(r.frames, "frame"),
             r.synth_seconds,
             r.frames as f64 / r.synth_seconds.max(1e-9)
@@ -151,14 +112,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
     }
     // The contact sheets of all sequences, one above the other; plausibility.
-    if let (Some(p), Some(first)) = (&a.run.preview.preview, sheets.first()) {
-        let img = sheets[1..]
-            .iter()
-            .fold(first.clone(), |acc, s| acc.above(s));
+    if let (Some(p), Some(img)) = (&a.run.preview.preview, &run.sheet) {
         img.save_png(p)?;
     }
     if !a.run.json {
-        crate::outln!("{}", plaus_text.concat().trim_end())?;
+        crate::outln!("{}", run.plausibility.trim_end())?;
     }
     Ok(())
 }

@@ -138,60 +138,7 @@ impl JobOpts {
 /// Runs `transfer`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::warnings_in_summary(!a.run.json);
-    // clap's `requires` let these through with --mocap, and they were
-    // ignored without a word.
-    if a.template.is_none() {
-        for (flag, given) in [
-            ("--template-markers", a.template_markers.is_some()),
-            ("--template-landmarks", a.template_landmarks.is_some()),
-            ("--template-frame", a.template_frame != 0),
-        ] {
-            anyhow::ensure!(
-                !given,
-                "{flag} applies to --template (a moving template mesh), not to --mocap"
-            );
-        }
-    }
-    let mut inputs = surfmotion::mesh::io::input_files(&a.scan, None);
-    if let Some(t) = &a.template {
-        inputs.extend(surfmotion::mesh::io::input_files(t, None));
-    }
-    surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
-    inputs.extend(a.mocap.clone());
-    // `--report LANDMARKS.json` replaced the scan's landmarks with the
-    // report and exited 0: every file read is an input.
-    if let Some(t) = &a.truth {
-        inputs.extend(surfmotion::mesh::io::input_files(t, None));
-    }
-    inputs.extend(
-        [
-            &a.landmarks,
-            &a.markers,
-            &a.template_markers,
-            &a.template_landmarks,
-            &a.run.clip.asf,
-            &a.run.clip.rig_map,
-        ]
-        .into_iter()
-        .flatten()
-        .cloned(),
-    );
-    let mut outputs = super::mesh_outputs(&a.output);
-    outputs.extend(a.report.clone().map(|p| ("--report", p)));
-    outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
-    outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
-    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
-    surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
-    a.glb.refuse_unless_glb(
-        super::mesh::GlbArgs::is_glb(&a.output),
-        &a.output.display().to_string(),
-    )?;
-    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
-    anyhow::ensure!(
-        surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
-        "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",
-        a.output.display()
-    );
+    check_options_and_outputs(&a)?;
     let job_opts = a.job.job()?;
     let scan = super::load_mesh_groups(&a.scan, &job_opts.groups)?;
     let source = match (&a.mocap, &a.template) {
@@ -253,32 +200,71 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     print_outcome(&a, outcome)
 }
 
+/// Refuses, before any work, template options without a template and
+/// outputs that would replace an input or another output, are not a
+/// mesh format, or a folder that holds files without --force.
+fn check_options_and_outputs(a: &Args) -> anyhow::Result<()> {
+    // clap's `requires` let these through with --mocap, and they were
+    // ignored without a word.
+    if a.template.is_none() {
+        for (flag, given) in [
+            ("--template-markers", a.template_markers.is_some()),
+            ("--template-landmarks", a.template_landmarks.is_some()),
+            ("--template-frame", a.template_frame != 0),
+        ] {
+            anyhow::ensure!(
+                !given,
+                "{flag} applies to --template (a moving template mesh), not to --mocap"
+            );
+        }
+    }
+    let mut inputs = surfmotion::mesh::io::input_files(&a.scan, None);
+    if let Some(t) = &a.template {
+        inputs.extend(surfmotion::mesh::io::input_files(t, None));
+    }
+    surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
+    inputs.extend(a.mocap.clone());
+    // `--report LANDMARKS.json` replaced the scan's landmarks with the
+    // report and exited 0: every file read is an input.
+    if let Some(t) = &a.truth {
+        inputs.extend(surfmotion::mesh::io::input_files(t, None));
+    }
+    inputs.extend(
+        [
+            &a.landmarks,
+            &a.markers,
+            &a.template_markers,
+            &a.template_landmarks,
+            &a.run.clip.asf,
+            &a.run.clip.rig_map,
+        ]
+        .into_iter()
+        .flatten()
+        .cloned(),
+    );
+    let mut outputs = super::mesh_outputs(&a.output);
+    outputs.extend(a.report.clone().map(|p| ("--report", p)));
+    outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
+    outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
+    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
+    surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
+    a.glb.refuse_unless_glb(
+        super::mesh::GlbArgs::is_glb(&a.output),
+        &a.output.display().to_string(),
+    )?;
+    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
+    anyhow::ensure!(
+        surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
+        "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",
+        a.output.display()
+    );
+    Ok(())
+}
+
 /// Writes the preview and the result of a transfer and prints its report.
 fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
-    let prepared = &outcome.prepared;
     if let Some(path) = &a.run.preview.preview {
-        let up = prepared.rig.as_ref().map(surfmotion::transfer::up_axis);
-        let y_up = up.is_none_or(|u| u == glam::DVec3::Y);
-        surfmotion::tools::render::preview::write_preview(
-            path,
-            &outcome.positions,
-            prepared.mesh.vertex_count(),
-            prepared.mesh.triangles(),
-            prepared.rig.as_ref(),
-            // Each panel faced from its own body (`render`'s rule) when
-            // the scan stands Y-up, else the rig's rest facing.
-            prepared
-                .rig
-                .as_ref()
-                .filter(|_| !y_up)
-                .map(|r| glam::DVec3::from_array(r.facing)),
-            outcome
-                .plausibility
-                .as_ref()
-                .filter(|_| y_up)
-                .map(|p| p.floor_m / outcome.metres_per_unit.unwrap_or(1.0)),
-            &a.run.preview.options(),
-        )?;
+        outcome.write_preview(path, &a.run.preview.options())?;
     }
     let report = outcome.write(&a.output, a.glb.options(), a.report.is_some())?;
     print_report(a, &report)
@@ -286,53 +272,17 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
 
 /// Writes the JSON report if asked and prints the summary of a transfer.
 fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::Result<()> {
-    let dropped = report.scan.dropped_components.len();
     if let Some(p) = &a.report {
-        surfmotion::util::fsutil::write_bytes_atomic(
-            p,
-            serde_json::to_string_pretty(&serde_json::to_value(report)?)?.as_bytes(),
-        )?;
+        let v = serde_json::to_string_pretty(&serde_json::to_value(report)?)?;
+        surfmotion::util::fsutil::write_bytes_atomic(p, v.as_bytes())?;
     }
     if a.run.json {
-        let mut short = serde_json::to_value(report)?;
-        short.as_object_mut().map(|o| o.remove("markers_used"));
-        if let Some(t) = short.get_mut("truth_error").and_then(|t| t.as_object_mut()) {
-            t.remove("per_frame_pct");
-        }
-        return super::emit(&(serde_json::to_string_pretty(&short)? + "\n"));
+        let v = serde_json::to_string_pretty(&report.short_json()?)?;
+        return super::emit(&(v + "\n"));
     }
-    let r = report;
-    let mut s = format!(
-        "{} -> {}: {} frames at {} fps from {}\n",
-        a.scan,
-        super::written_list(&r.output, ", "),
-        r.frames,
-        r.fps,
-        r.source
-    );
-    s += &format!(
-        "scan: {} vertices, {} triangles; {} markers ({} unpaired); {} components dropped\n",
-        r.vertices, r.triangles, r.markers, r.unpaired_markers, dropped
-    );
-    s += &format!(
-        "time: setup {:.2} s, factor {:.2} s, {:.2} ms/frame ({:.0} frames/s); {} frames near 180°\n",
-        r.setup_seconds,
-        r.factor_seconds,
-        r.ms_per_frame,
-        r.frames_per_second,
-        r.transfer.singular_frames
-    );
-    if let Some(e) = &r.truth_error {
-        s += &format!(
-            "error against {}: mean {:.3}%, p95 {:.3}%, max {:.3}% of height\n",
-            a.truth.as_deref().unwrap_or(""),
-            e.mean_pct,
-            e.p95_pct,
-            e.max_pct
-        );
-    }
-    if let Some(p) = &r.plausibility {
-        s += &p.text();
-    }
-    super::emit(&s)
+    super::emit(&surfmotion::jobs::text::transfer(
+        &a.scan,
+        a.truth.as_deref(),
+        report,
+    ))
 }

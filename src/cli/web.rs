@@ -134,47 +134,6 @@ fn export(s: &Source, out: &std::path::Path) -> anyhow::Result<web::ExportReport
     })
 }
 
-/// The one-line summary of an export. Transitions and motion spaces are
-/// said only when there are some ("0 spaces (0 frames, 0 KB)" was printed
-/// for every database without a `[[space]]`).
-fn summary(r: &web::ExportReport) -> String {
-    use super::count;
-    let g = &r.geometry;
-    let mut s = format!(
-        "wrote {}: {} × {}, geometry {:.0} KB ({:.1} KB/frame, {:.1}× smaller than float32), max vertex error {} mm (step {} mm)",
-        r.site.display(),
-        count(g.frames, "frame"),
-        count(r.vertices, "vertex"),
-        g.bytes as f64 / 1e3,
-        g.bytes as f64 / 1e3 / g.frames.max(1) as f64,
-        r.raw_bytes as f64 / g.bytes.max(1) as f64,
-        surfmotion::util::numfmt::Short(g.max_error * 1e3),
-        surfmotion::util::numfmt::Short(g.step * 1e3),
-    );
-    match (r.transitions, r.transition_frames) {
-        (0, _) => s += ", no transitions",
-        (t, 0) => s += &format!(", {} (blended by the page)", count(t, "transition")),
-        (t, f) => {
-            s += &format!(
-                ", {} ({} precomputed, {:.0} KB, {:.2} s)",
-                count(t, "transition"),
-                count(f, "frame"),
-                r.transition_bytes as f64 / 1e3,
-                r.transition_seconds
-            )
-        }
-    }
-    if r.spaces > 0 {
-        s += &format!(
-            ", {} ({}, {:.0} KB)",
-            count(r.spaces, "motion space"),
-            count(r.space_frames, "frame"),
-            r.space_bytes as f64 / 1e3
-        );
-    }
-    s + &format!(", {:.2} s\n", r.seconds)
-}
-
 /// Set by SIGINT or SIGTERM while `web serve` serves.
 static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
@@ -206,7 +165,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             if a.json {
                 super::emit(&(serde_json::to_string_pretty(&r)? + "\n"))
             } else {
-                super::emit(&summary(&r))
+                super::emit(&surfmotion::jobs::text::web_export(&r))
             }
         }
         Cmd::Serve(a) => {
@@ -240,7 +199,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                     let r = export(&a.source, &site);
                     bar.finish_and_clear();
                     let r = r?;
-                    crate::errln!("{}", summary(&r).trim_end());
+                    crate::errln!("{}", surfmotion::jobs::text::web_export(&r).trim_end());
                     _tmp = Some(t);
                     site
                 }

@@ -25,14 +25,22 @@
 //! CLI always has.
 
 pub mod batch;
+pub mod blend;
 pub mod database;
 pub mod db_init;
+pub mod demo;
 pub mod keyframe;
+pub mod mesh;
+pub mod mocap;
 pub mod outputs;
 pub mod play;
+pub mod render;
 pub mod retarget;
+pub mod rig;
 pub mod skeletons;
+pub mod synth;
 pub mod synth_db;
+pub mod text;
 pub mod transfer;
 
 pub use crate::batch::Converter;
@@ -106,6 +114,12 @@ pub enum JobError {
     /// An output refused before any work.
     #[error(transparent)]
     Output(#[from] outputs::OutputError),
+    /// A solver could not be factored.
+    #[error(transparent)]
+    Solve(#[from] crate::mesh::solver::SolveError),
+    /// A contact sheet not drawn.
+    #[error(transparent)]
+    Preview(#[from] crate::tools::render::preview::PreviewError),
     /// A manifest not written.
     #[error(transparent)]
     Init(#[from] crate::db::init::InitError),

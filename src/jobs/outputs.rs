@@ -417,3 +417,25 @@ pub fn refuse_outputs_over_inputs(
     }
     Ok(())
 }
+
+/// Refuses a `db skeleton` output folder `out` (given as `option`) that is
+/// a file, or whose rig.json, SEQ.skeleton.json or SEQ.bvh would replace
+/// one of the database's inputs; checked before the skeletons are
+/// extracted (`-o FILE` said "FILE/rig.json: File exists (os error 17)"
+/// after the work).
+pub fn check_skeleton_outputs(option: &str, db: &Path, out: &Path) -> Result<(), OutputError> {
+    check_output_folder(
+        option,
+        out,
+        "db skeleton writes rig.json and each sequence's SEQ.skeleton.json and SEQ.bvh into a folder",
+    )?;
+    if let Ok(m) = Manifest::load(db) {
+        let mut outputs = vec![(option, out.join("rig.json"))];
+        for s in &m.sequences {
+            outputs.push((option, out.join(format!("{}.skeleton.json", s.name))));
+            outputs.push((option, out.join(format!("{}.bvh", s.name))));
+        }
+        refuse_colliding(&database_inputs(db), &outputs)?;
+    }
+    Ok(())
+}

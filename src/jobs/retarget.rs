@@ -19,6 +19,7 @@ use crate::rig::LoadOptions;
 use crate::tools::eval::{
     Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error,
 };
+use crate::tools::render::preview::PreviewOptions;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -607,4 +608,100 @@ pub fn evaluate_result(
         plausibility: plaus,
         velocity_frames: e.frames,
     })
+}
+
+/// One clip retargeted to a file by [`RetargetJob::run_clip`]: what the
+/// `retarget` verb reports.
+#[derive(Debug, Clone)]
+pub struct ClipResult {
+    /// What was done.
+    pub report: Report,
+    /// Files written.
+    pub written: Vec<PathBuf>,
+    /// The clip's rig convention.
+    pub convention: String,
+    /// Plausibility against the database's frames.
+    pub plausibility: Option<Plausibility>,
+    /// The plausibility was measured on this many first frames (streamed
+    /// output); `None` when on every frame.
+    pub partial: Option<usize>,
+}
+
+impl RetargetJob {
+    /// Retargets `clip` to the file `out`. Without a `preview` the frames
+    /// go to the output as they are made (issue 18, item 12) and the
+    /// plausibility is measured on the first frames, as `transfer` does;
+    /// with one, every frame is held, the contact sheet drawn (each panel
+    /// faced from its own body, `render`'s rule), then the output written.
+    pub fn run_clip(
+        &self,
+        clip: &Path,
+        out: &Path,
+        preview: Option<(&Path, &PreviewOptions)>,
+    ) -> Result<ClipResult, JobError> {
+        let ch = &self.character;
+        let Some((path, opts)) = preview else {
+            let keep_bytes = super::transfer::PLAUSIBILITY_BYTES
+                .min((crate::util::budget::Budget::current().bytes / 4) as usize);
+            let run = self.run_to(clip, out, keep_bytes)?;
+            let measured = run.kept.len() / ch.n().max(1);
+            let plausibility = self.plausibility_of_streamed(&run).map(|p| p.0);
+            let partial = (measured < run.report.frames).then_some(measured);
+            if let Some(k) = partial {
+                tracing::info!(
+                    "plausibility measured on the first {k} of {} frames (streamed output)",
+                    run.report.frames
+                );
+            }
+            return Ok(ClipResult {
+                report: run.report,
+                written: run.written,
+                convention: run.mocap.convention,
+                plausibility,
+                partial,
+            });
+        };
+        let run = self.run(clip)?;
+        let plaus = self.plausibility_of(&run);
+        crate::tools::render::preview::write_preview(
+            path,
+            &run.output.positions,
+            ch.n(),
+            ch.topology().triangles(),
+            Some(ch.rig()),
+            None,
+            plaus.as_ref().map(|p| p.1),
+            opts,
+        )?;
+        let written = self.write(run.output.positions, out)?;
+        Ok(ClipResult {
+            report: run.output.report,
+            written,
+            convention: run.mocap.convention,
+            plausibility: plaus.map(|p| p.0),
+            partial: None,
+        })
+    }
+}
+
+impl ClipResult {
+    /// The `--report` file's JSON: the report, its plausibility and (when
+    /// measured on the first frames only) their number.
+    pub fn report_json(&self) -> Result<serde_json::Value, JobError> {
+        let mut v = serde_json::to_value(&self.report)?;
+        v["plausibility"] = serde_json::to_value(&self.plausibility)?;
+        if let Some(k) = self.partial {
+            v["plausibility_frames"] = serde_json::to_value(k)?;
+        }
+        Ok(v)
+    }
+
+    /// The summary `retarget --json` prints.
+    pub fn summary(&self) -> RetargetSummary {
+        RetargetSummary::new(
+            self.written.clone(),
+            &self.report,
+            self.plausibility.clone(),
+        )
+    }
 }

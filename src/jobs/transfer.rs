@@ -798,3 +798,49 @@ impl TransferOutcome {
         }
     }
 }
+
+impl TransferOutcome {
+    /// Draws the contact sheet of the result to `path`: each panel faced
+    /// from its own body (`render`'s rule) on its floor when the scan
+    /// stands Y-up, else faced by the rig's rest facing.
+    pub fn write_preview(
+        &self,
+        path: &Path,
+        opts: &crate::tools::render::preview::PreviewOptions,
+    ) -> Result<(), JobError> {
+        let prepared = &self.prepared;
+        let up = prepared.rig.as_ref().map(crate::transfer::up_axis);
+        let y_up = up.is_none_or(|u| u == glam::DVec3::Y);
+        crate::tools::render::preview::write_preview(
+            path,
+            &self.positions,
+            prepared.mesh.vertex_count(),
+            prepared.mesh.triangles(),
+            prepared.rig.as_ref(),
+            prepared
+                .rig
+                .as_ref()
+                .filter(|_| !y_up)
+                .map(|r| glam::DVec3::from_array(r.facing)),
+            self.plausibility
+                .as_ref()
+                .filter(|_| y_up)
+                .map(|p| p.floor_m / self.metres_per_unit.unwrap_or(1.0)),
+            opts,
+        )?;
+        Ok(())
+    }
+}
+
+impl TransferReport {
+    /// The report `transfer --json` prints: without the markers used and
+    /// the per-frame truth error (the `--report` file keeps them).
+    pub fn short_json(&self) -> Result<serde_json::Value, JobError> {
+        let mut short = serde_json::to_value(self)?;
+        short.as_object_mut().map(|o| o.remove("markers_used"));
+        if let Some(t) = short.get_mut("truth_error").and_then(|t| t.as_object_mut()) {
+            t.remove("per_frame_pct");
+        }
+        Ok(short)
+    }
+}

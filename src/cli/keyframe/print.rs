@@ -42,50 +42,8 @@ pub fn path_summary(run: &PathRun, fps: f64) -> String {
         }
     }
     s += "\n";
-    if let Some((dt, tt)) = compromise {
-        s += &format!(
-            "not met within 1 %: {}\n",
-            match r.reach {
-                // The key-frames' own path is longer than the target's
-                // horizon: it is taken as it is, no compromise is searched
-                // (1000 --via gave "within the 13.0 s horizon" for 55.6 s).
-                Some(x) if r.time > x.horizon + 0.5 / fps => format!(
-                    "the path through the {} key-frames takes {:.1} s, longer than the {:.1} s horizon of {dt:.3} m in {tt:.3} s, and is taken as it is (fewer or nearer --via shorten it)",
-                    r.keys.len(),
-                    r.time,
-                    x.horizon
-                ),
-                reach => format!(
-                    "the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 within {} (the graph may not reach it; --w-dist and --w-time weigh the two)",
-                    reach.map_or("the horizon".to_string(), |x| format!(
-                        "the {:.1} s horizon",
-                        x.horizon
-                    ))
-                ),
-            }
-        );
-        if let Some(x) = r.reach {
-            s += &format!(
-                "reach: paths of {tt:.3} s travel {}; {dt:.3} m needs {}; at most {} within the horizon\n",
-                x.at_time.map_or(
-                    "- (no path has exactly that length)".to_string(),
-                    |(a, b)| format!("{a:.3}-{b:.3} m")
-                ),
-                match (x.min_time, x.max_in_horizon) {
-                    (Some(m), _) => format!("at least {m:.2} s"),
-                    // Paths within the horizon travel farther, but no one
-                    // length's range holds the distance within 1 % (it is
-                    // below every path's, or between two lengths').
-                    (None, Some(most)) if most >= dt => format!(
-                        "a path length none within the {:.1} s horizon has (none of their distance ranges holds it)",
-                        x.horizon
-                    ),
-                    (None, _) => format!("more than {:.1} s", x.horizon),
-                },
-                x.max_in_horizon
-                    .map_or("-".to_string(), |m| format!("{m:.3} m"))
-            );
-        }
+    if let Some(target) = compromise {
+        s += &not_met(r, target, fps);
     }
     s += &format!("final facing {:+.1}°", r.final_facing_deg);
     if let (Some(h), Some(e)) = (r.heading_target_deg, r.heading_error_deg) {
@@ -110,6 +68,85 @@ pub fn path_summary(run: &PathRun, fps: f64) -> String {
         },
         r.cost.total
     );
+    s += &segments(r);
+    s += &format!(
+        "{}, smoothness {}\n",
+        crate::cli::count(r.transitions.len(), "transition"),
+        r.smoothness
+            .map_or("- (none)".to_string(), |x| format!("{x:.4} m"))
+    );
+    s += &format!(
+        "search: {} nodes, {}, {} solved, {} pruned; {:.1} ms preparing, {:.1} ms searching{}, {:.2} s meshes\n",
+        r.stats.nodes,
+        crate::cli::count(r.stats.cycles, "loop"),
+        crate::cli::count(r.stats.walks, "walk"),
+        r.stats.pruned,
+        1e3 * r.prepare_seconds,
+        1e3 * r.search_seconds,
+        r.search_cpu_seconds
+            .map_or(String::new(), |c| format!(" ({:.1} ms CPU)", 1e3 * c)),
+        r.mesh_seconds
+    );
+    for b in &r.stats.bounds_hit {
+        s += &format!("bound hit: {b}\n");
+    }
+    s
+}
+
+/// Why the distance and time targets `(dt, tt)` were not met within 1 %,
+/// and what the graph reaches.
+fn not_met(r: &surfmotion::keyframe::Report, (dt, tt): (f64, f64), fps: f64) -> String {
+    let mut s = String::new();
+    s += &format!(
+        "not met within 1 %: {}\n",
+        match r.reach {
+            // The key-frames' own path is longer than the target's
+            // horizon: it is taken as it is, no compromise is searched
+            // (1000 --via gave "within the 13.0 s horizon" for 55.6 s).
+            Some(x) if r.time > x.horizon + 0.5 / fps => format!(
+                "the path through the {} key-frames takes {:.1} s, longer than the {:.1} s horizon of {dt:.3} m in {tt:.3} s, and is taken as it is (fewer or nearer --via shorten it)",
+                r.keys.len(),
+                r.time,
+                x.horizon
+            ),
+            reach => format!(
+                "the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 within {} (the graph may not reach it; --w-dist and --w-time weigh the two)",
+                reach.map_or("the horizon".to_string(), |x| format!(
+                    "the {:.1} s horizon",
+                    x.horizon
+                ))
+            ),
+        }
+    );
+    if let Some(x) = r.reach {
+        s += &format!(
+            "reach: paths of {tt:.3} s travel {}; {dt:.3} m needs {}; at most {} within the horizon\n",
+            x.at_time.map_or(
+                "- (no path has exactly that length)".to_string(),
+                |(a, b)| format!("{a:.3}-{b:.3} m")
+            ),
+            match (x.min_time, x.max_in_horizon) {
+                (Some(m), _) => format!("at least {m:.2} s"),
+                // Paths within the horizon travel farther, but no one
+                // length's range holds the distance within 1 % (it is
+                // below every path's, or between two lengths').
+                (None, Some(most)) if most >= dt => format!(
+                    "a path length none within the {:.1} s horizon has (none of their distance ranges holds it)",
+                    x.horizon
+                ),
+                (None, _) => format!("more than {:.1} s", x.horizon),
+            },
+            x.max_in_horizon
+                .map_or("-".to_string(), |m| format!("{m:.3} m"))
+        );
+    }
+    s
+}
+
+/// Each segment's distance and time (with its targets and errors), walk
+/// and loops, and how many missed their targets.
+fn segments(r: &surfmotion::keyframe::Report) -> String {
+    let mut s = String::new();
     // Per-segment targets: each segment's target and error (the summary
     // printed the achieved totals alone, with no word that 11.6 m in 6.5 s
     // missed 5 m in 4 s twice).
@@ -138,27 +175,6 @@ pub fn path_summary(run: &PathRun, fps: f64) -> String {
             crate::cli::count(missed_segments, "segment"),
             r.segments.len()
         );
-    }
-    s += &format!(
-        "{}, smoothness {}\n",
-        crate::cli::count(r.transitions.len(), "transition"),
-        r.smoothness
-            .map_or("- (none)".to_string(), |x| format!("{x:.4} m"))
-    );
-    s += &format!(
-        "search: {} nodes, {}, {} solved, {} pruned; {:.1} ms preparing, {:.1} ms searching{}, {:.2} s meshes\n",
-        r.stats.nodes,
-        crate::cli::count(r.stats.cycles, "loop"),
-        crate::cli::count(r.stats.walks, "walk"),
-        r.stats.pruned,
-        1e3 * r.prepare_seconds,
-        1e3 * r.search_seconds,
-        r.search_cpu_seconds
-            .map_or(String::new(), |c| format!(" ({:.1} ms CPU)", 1e3 * c)),
-        r.mesh_seconds
-    );
-    for b in &r.stats.bounds_hit {
-        s += &format!("bound hit: {b}\n");
     }
     s
 }

@@ -4,3 +4,4 @@ mod batch;
 mod layer;
 mod scale_out;
 mod stream_output;
+mod verbs;

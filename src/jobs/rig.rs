@@ -1,0 +1,188 @@
+//! `rig embed`: landmarks on a rest mesh (or a rigged glTF's skin) → the
+//! canonical joints, skin weights, body parts and joint regressors, saved
+//! as JSON, with the embedding's self-check.
+
+use crate::embed::landmarks::{Landmarks, Mark};
+use crate::embed::parts::{Part, neighbours, piece_counts};
+use crate::embed::{EmbedCheck, EmbedError, Embedding, parse_parts};
+use crate::mesh::Mesh;
+use crate::rig::Canonical;
+use crate::util::fsutil::read_text;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use super::JobError;
+
+/// Where the rig comes from and where it goes.
+#[derive(Clone, Debug, Default)]
+pub struct RigEmbedOptions {
+    /// The rest mesh's name (a file, or `SEQ.pc2:FRAME`), for messages and
+    /// to tell a glTF given as both mesh and skin.
+    pub mesh: String,
+    /// Only some OBJ groups of the file were kept (landmarks given as
+    /// vertex ids become points; part labels are refused).
+    pub groups: bool,
+    /// Landmark JSON.
+    pub landmarks: Option<PathBuf>,
+    /// Or a rigged glTF whose skin gives the rig.
+    pub skin: Option<PathBuf>,
+    /// A rig map for the skin's joint names.
+    pub rig_map: Option<PathBuf>,
+    /// Explicit part labels, JSON `{part: [vertex ids]}`.
+    pub parts: Option<PathBuf>,
+    /// The embedding written (JSON).
+    pub output: PathBuf,
+    /// A picture of the mesh coloured by part with the skeleton (PNG).
+    pub png: Option<PathBuf>,
+}
+
+/// One body part of an embedding.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PartCount {
+    /// Vertices labelled with it.
+    pub vertices: usize,
+    /// Vertices of its overlapping region.
+    pub region: usize,
+    /// Its connected pieces.
+    pub pieces: usize,
+}
+
+/// What `rig embed` made.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct RigEmbedReport {
+    /// The embedding written.
+    pub output: PathBuf,
+    /// Embedding time.
+    pub seconds: f64,
+    /// Each canonical joint's position.
+    pub joints: BTreeMap<&'static str, [f64; 3]>,
+    /// Each body part.
+    pub parts: BTreeMap<&'static str, PartCount>,
+    /// The direction the body faces.
+    pub facing: [f64; 3],
+    /// Its height.
+    pub height: f64,
+    /// Notes of the embedding.
+    pub notes: Vec<String>,
+    /// The self-check.
+    pub check: EmbedCheck,
+    /// The mesh's name.
+    #[serde(skip)]
+    pub mesh: String,
+    /// Vertices of the mesh embedded in.
+    #[serde(skip)]
+    pub vertices: usize,
+    /// The picture drawn.
+    #[serde(skip)]
+    pub png: Option<PathBuf>,
+}
+
+/// Embeds a rig in `mesh` as `o` says, saves it to `o.output` (and the
+/// picture to `o.png`), and reports joints, parts and the self-check.
+pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, JobError> {
+    let parts = match &o.parts {
+        Some(p) => Some(parse_parts(&read_text(p)?, p, mesh.triangles(), mesh.vertex_count())?.0),
+        None => None,
+    };
+    let t = Instant::now();
+    let e = match (&o.landmarks, &o.skin) {
+        (Some(l), _) => {
+            let mut lm = Landmarks::load(l, mesh.vertex_count())?;
+            if o.groups {
+                // Only the groups' vertices: landmarks given as vertex ids
+                // of the file become points first.
+                if parts.is_some() {
+                    return Err(JobError::Usage(
+                        "`RigEmbedOptions::parts` with `RigEmbedOptions::groups`: part labels name the file's vertices".into(),
+                    ));
+                }
+                let points: Vec<_> = lm
+                    .marks
+                    .keys()
+                    .filter_map(|&l| lm.point(l, mesh.positions()).map(|p| (l, p)))
+                    .collect();
+                for (l, p) in points {
+                    lm.marks.insert(l, Mark::Point(p));
+                }
+                mesh = crate::mesh::repair::repair(&mesh, &Default::default()).0;
+            }
+            // A degenerate landmark set is the landmark file's fault: name it.
+            Embedding::new(&mesh, &lm, parts).map_err(|e| match e {
+                EmbedError::Landmarks(le) => JobError::Input {
+                    path: l.clone(),
+                    msg: le.to_string(),
+                },
+                e @ EmbedError::Mesh(_) => JobError::Usage(format!("{}: {e}", o.mesh)),
+                other => other.into(),
+            })?
+        }
+        (None, Some(g)) => {
+            if parts.is_some() {
+                return Err(JobError::Usage(
+                    "`RigEmbedOptions::parts` goes with `RigEmbedOptions::landmarks`; a skin gives its own parts".into(),
+                ));
+            }
+            let asset = crate::mesh::io::gltf::read_gltf(g)?;
+            // The glTF itself as the mesh: its bind pose, not its animation.
+            if std::path::Path::new(&o.mesh) == g.as_path() {
+                mesh = asset.mesh.clone();
+            }
+            let map = match &o.rig_map {
+                Some(m) => Some(crate::rig::RigMap::load(m)?),
+                None => None,
+            };
+            crate::embed::skin::from_skin(&mesh, &asset, map.as_ref(), g)?
+        }
+        (None, None) => {
+            return Err(JobError::Usage(
+                "give `RigEmbedOptions::landmarks` or `RigEmbedOptions::skin`".into(),
+            ));
+        }
+    };
+    let seconds = t.elapsed().as_secs_f64();
+    e.save(&o.output)?;
+    let check = crate::embed::check(&e, &mesh);
+    if let Some(p) = &o.png {
+        let img = super::render::draw(
+            mesh.positions(),
+            mesh.triangles(),
+            Some(&e),
+            glam::DVec3::from_array(e.facing),
+            600,
+        );
+        img.save_png(p)?;
+    }
+    let nb = neighbours(mesh.vertex_count(), mesh.triangles());
+    let pieces = piece_counts(&e.labels, &nb);
+    let mut sizes = [0usize; Part::COUNT];
+    for &l in &e.labels {
+        sizes[l as usize] += 1;
+    }
+    Ok(RigEmbedReport {
+        output: o.output.clone(),
+        seconds,
+        joints: Canonical::ALL
+            .iter()
+            .map(|c| (c.name(), e.joints[c.index()]))
+            .collect(),
+        parts: Part::ALL
+            .iter()
+            .map(|p| {
+                let c = PartCount {
+                    vertices: sizes[p.index()],
+                    region: e.regions[p.index()].len(),
+                    pieces: pieces[p.index()],
+                };
+                (p.name(), c)
+            })
+            .collect(),
+        facing: e.facing,
+        height: e.height,
+        notes: e.notes.clone(),
+        check,
+        mesh: o.mesh.clone(),
+        vertices: mesh.vertex_count(),
+        png: o.png.clone(),
+    })
+}
