@@ -35,9 +35,9 @@ pub struct EmbedArgs {
     /// Landmark JSON.
     #[arg(long, required_unless_present = "skin", conflicts_with = "skin")]
     pub landmarks: Option<PathBuf>,
-    /// Or take the rig from a rigged glTF (.glb/.gltf) of this character:
-    /// its skin's joints and weights, matched to the mesh by vertex
-    /// position.
+    /// Or take the rig from a rigged glTF (.glb/.gltf) or FBX (.fbx) of
+    /// this character: its skin's joints and weights, matched to the mesh
+    /// by vertex position (an FBX in metres by its UnitScaleFactor, Y up).
     #[arg(long)]
     pub skin: Option<PathBuf>,
     /// A rig map (canonical joint → skin joint name) for a skin whose
@@ -121,7 +121,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
                 parts.is_none(),
                 "--parts goes with --landmarks; a skin gives its own parts"
             );
-            let asset = surfmotion::mesh::io::gltf::read_gltf(g)?;
+            let asset = surfmotion::mesh::io::read_rigged(g)?;
             // The glTF itself as the mesh: its bind pose, not its animation.
             if std::path::Path::new(&a.mesh) == g.as_path() {
                 mesh = asset.mesh.clone();

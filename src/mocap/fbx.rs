@@ -23,6 +23,7 @@
 
 use super::clip::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
 use super::error::MocapError;
+use super::units::{HUMAN_STATURE_M, UnitFamily, units_from_stature};
 use crate::util::fsutil::{raise_warning, read_bytes};
 use crate::util::numfmt::Short;
 use glam::{DMat3, DQuat, DVec3};
@@ -79,8 +80,11 @@ pub struct FbxInfo {
     pub ascii: bool,
     /// Creator string of the header.
     pub creator: String,
-    /// Metres per file unit (`UnitScaleFactor` / 100).
+    /// Metres per file unit (`UnitScaleFactor` / 100; 0.01 without one).
     pub metres_per_unit: f64,
+    /// False when the file has no `UnitScaleFactor` (the unit is then
+    /// judged from the body: [`units_with_stature`]).
+    pub unit_declared: bool,
     /// The file's axes, e.g. `right +X, up +Y, front +Z`.
     pub axes: String,
     /// Frames per second of the file's `TimeMode`.
@@ -102,20 +106,21 @@ pub fn read_fbx(path: &Path, opts: &FbxOptions) -> Result<Clip, MocapError> {
 
 /// [`read_fbx`] of bytes already in memory; `path` names them in errors.
 pub fn parse_fbx(bytes: &[u8], path: &Path, opts: &FbxOptions) -> Result<Clip, MocapError> {
-    let scene = load_scene(bytes, path)?;
+    let scene = load_scene(bytes, path, false)?;
     clip_of_scene(&scene, path, opts)
 }
 
 /// Lists what an FBX file holds: version, units, axes, takes.
 pub fn fbx_info(path: &Path) -> Result<FbxInfo, MocapError> {
     let bytes = read_bytes(path)?;
-    let scene = load_scene(&bytes, path)?;
+    let scene = load_scene(&bytes, path, false)?;
     let takes = takes(&scene);
     Ok(FbxInfo {
         version: scene.metadata.version,
         ascii: scene.metadata.ascii,
         creator: scene.metadata.creator.to_string(),
         metres_per_unit: scene.settings.unit_meters,
+        unit_declared: ufbx::find_prop(&scene.settings.props, "UnitScaleFactor").is_some(),
         axes: axes_name(&scene.settings.axes),
         fps: scene.settings.frames_per_second,
         default_take: default_take(&takes),
@@ -128,9 +133,13 @@ pub fn fbx_info(path: &Path) -> Result<FbxInfo, MocapError> {
     })
 }
 
-/// Parses the bytes with ufbx (FBX only, geometry skipped), after checking
-/// the magic bytes.
-fn load_scene(bytes: &[u8], path: &Path) -> Result<ufbx::SceneRoot, MocapError> {
+/// Parses the bytes with ufbx (FBX only; geometry skipped unless
+/// `geometry`), after checking the magic bytes.
+pub(crate) fn load_scene(
+    bytes: &[u8],
+    path: &Path,
+    geometry: bool,
+) -> Result<ufbx::SceneRoot, MocapError> {
     if bytes.is_empty() {
         return Err(MocapError::invalid(path, "empty file, not an FBX file"));
     }
@@ -148,7 +157,7 @@ fn load_scene(bytes: &[u8], path: &Path) -> Result<ufbx::SceneRoot, MocapError> 
         ..Default::default()
     };
     let opts = ufbx::LoadOpts {
-        ignore_geometry: true,
+        ignore_geometry: !geometry,
         ignore_embedded: true,
         file_format: ufbx::FileFormat::Fbx,
         no_format_from_extension: true,
@@ -212,7 +221,7 @@ fn axis_vec(a: ufbx::CoordinateAxis) -> Option<DVec3> {
 /// The linear map from the file's axes to the project's (right +X, up +Y,
 /// front +Z), and a description. A left-handed file gives a reflection:
 /// positions are mirrored, rotations conjugated (still rotations).
-fn basis(axes: &ufbx::CoordinateAxes) -> (DMat3, String) {
+pub(crate) fn basis(axes: &ufbx::CoordinateAxes) -> (DMat3, String) {
     let (r, u, f) = (
         axis_vec(axes.right),
         axis_vec(axes.up),
@@ -438,7 +447,7 @@ fn skeleton(
 
 /// Names without namespaces, unless that makes two alike (then the full
 /// names).
-fn names_without_namespaces(full: Vec<String>) -> Vec<String> {
+pub(crate) fn names_without_namespaces(full: Vec<String>) -> Vec<String> {
     let names: Vec<String> = full
         .iter()
         .map(|s| strip_namespace(s).to_string())
@@ -685,14 +694,18 @@ fn joints_of(skel: &Skeleton, rest: &Rest, translations: &[DVec3], frames: usize
 }
 
 /// Step 6 of [`clip_of_scene`]: the file's unit, `UnitScaleFactor` (cm
-/// when unusable).
-fn file_units(settings: &ufbx::SceneSettings) -> Units {
+/// when missing, FBX's default, or unusable). [`units_with_stature`] then
+/// checks it against the body.
+pub(crate) fn file_units(settings: &ufbx::SceneSettings) -> Units {
     let mpu = settings.unit_meters;
     let mpu_ok = mpu.is_finite() && mpu > 0.0;
+    let declared = ufbx::find_prop(&settings.props, "UnitScaleFactor").is_some();
     Units {
-        metres_per_unit: if mpu_ok { mpu } else { 0.01 },
-        name: unit_name(if mpu_ok { mpu } else { 0.01 }),
-        reason: if mpu_ok {
+        metres_per_unit: if mpu_ok && declared { mpu } else { 0.01 },
+        name: unit_name(if mpu_ok && declared { mpu } else { 0.01 }),
+        reason: if !declared {
+            format!("{NO_UNIT_SCALE}; centimetres (FBX's default) assumed")
+        } else if mpu_ok {
             format!("FBX GlobalSettings UnitScaleFactor {}", Short(mpu * 100.0))
         } else {
             format!(
@@ -701,6 +714,50 @@ fn file_units(settings: &ufbx::SceneSettings) -> Units {
             )
         },
     }
+}
+
+/// How [`file_units`] says the file has no `UnitScaleFactor`.
+const NO_UNIT_SCALE: &str = "no UnitScaleFactor in the FBX GlobalSettings";
+
+/// The unit of an FBX clip judged with its body, the rule BVH files get
+/// ([`units_from_stature`]) where the file's own unit is missing or
+/// contradicts the body. `file` is the clip's unit as read
+/// ([`file_units`]); `stature` the humanoid's stature in file units and
+/// what it was measured from (`rig::load::stature`), `None` without a
+/// humanoid. The file's `UnitScaleFactor` stands when it gives a human
+/// stature ([`HUMAN_STATURE_M`]); a body of 170 m (an actor in cm
+/// declared as m) or one without the factor is measured instead.
+pub fn units_with_stature(file: &Units, stature: Option<(f64, String)>) -> Units {
+    let Some((h, basis)) = stature.filter(|(h, _)| h.is_finite() && *h > 0.0) else {
+        return Units {
+            reason: format!("{}; no humanoid limbs to check it against", file.reason),
+            ..file.clone()
+        };
+    };
+    let declared = !file.reason.starts_with(NO_UNIT_SCALE);
+    let metres = h * file.metres_per_unit;
+    let (lo, hi) = HUMAN_STATURE_M;
+    if declared && (lo..=hi).contains(&metres) {
+        return Units {
+            reason: format!(
+                "{}; the body agrees (stature {metres:.2} m from {basis})",
+                file.reason
+            ),
+            ..file.clone()
+        };
+    }
+    let mut u = units_from_stature(h, &basis, UnitFamily::Other);
+    u.reason = if declared {
+        format!(
+            "{} gives a stature of {} m, not a human one ({lo}-{hi} m), so the body decides: {}",
+            file.reason,
+            Short(metres),
+            u.reason
+        )
+    } else {
+        format!("{NO_UNIT_SCALE}, so the body decides: {}", u.reason)
+    };
+    u
 }
 
 fn unit_name(mpu: f64) -> String {

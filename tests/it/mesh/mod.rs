@@ -1,5 +1,6 @@
 //! Geometry kernels and mesh I/O.
 
+mod fbx_character;
 mod glb_output;
 mod io;
 mod kernel_properties;
