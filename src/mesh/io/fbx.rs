@@ -180,9 +180,9 @@ fn joints(scene: &ufbx::Scene, conv: DMat4) -> Joints {
     let mut of_node = vec![None; count];
     let mut nodes = Vec::new();
     // ufbx lists nodes parents first.
-    for i in 0..count {
+    for (i, slot) in of_node.iter_mut().enumerate() {
         if is_joint(i) {
-            of_node[i] = Some(nodes.len());
+            *slot = Some(nodes.len());
             nodes.push(i);
         }
     }
