@@ -5,3 +5,4 @@ mod glb_output;
 mod io;
 mod kernel_properties;
 mod kernels;
+mod usda_verbs;
