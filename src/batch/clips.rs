@@ -14,6 +14,8 @@ pub enum Format {
     Pc2,
     /// A folder of OBJ frames.
     Obj,
+    /// USD text layer, time-sampled points (`mesh::io::usd`).
+    Usda,
 }
 
 /// One shard `index` of `count` (1-based): a clip belongs to shard
@@ -196,6 +198,7 @@ fn with_format(stem: PathBuf, format: Format) -> PathBuf {
     match format {
         Format::Glb => name(".glb"),
         Format::Pc2 => name(".pc2"),
+        Format::Usda => name(".usda"),
         Format::Obj => stem,
     }
 }

@@ -168,7 +168,7 @@ pub struct ClipOutcome {
 /// True when the output of a clip exists in full.
 pub fn complete(out: &Path, format: Format) -> bool {
     match format {
-        Format::Glb => out.is_file(),
+        Format::Glb | Format::Usda => out.is_file(),
         Format::Pc2 => out.is_file() && out.with_extension("obj").is_file(),
         Format::Obj => out.is_dir(),
     }

@@ -30,9 +30,9 @@ pub struct EmbedArgs {
     /// Landmark JSON.
     #[arg(long, required_unless_present = "skin", conflicts_with = "skin")]
     pub landmarks: Option<PathBuf>,
-    /// Or take the rig from a rigged glTF (.glb/.gltf) of this character:
-    /// its skin's joints and weights, matched to the mesh by vertex
-    /// position.
+    /// Or take the rig from a rigged glTF (.glb/.gltf) or FBX (.fbx) of
+    /// this character: its skin's joints and weights, matched to the mesh
+    /// by vertex position (an FBX in metres by its UnitScaleFactor, Y up).
     #[arg(long)]
     pub skin: Option<PathBuf>,
     /// A rig map (canonical joint → skin joint name) for a skin whose

@@ -87,6 +87,8 @@ pub enum FormatArg {
     Pc2,
     /// A folder of OBJ frames.
     Obj,
+    /// USD text layer (time-sampled points), one `.usda` per clip.
+    Usda,
 }
 
 impl From<FormatArg> for Format {
@@ -95,6 +97,7 @@ impl From<FormatArg> for Format {
             FormatArg::Glb => Format::Glb,
             FormatArg::Pc2 => Format::Pc2,
             FormatArg::Obj => Format::Obj,
+            FormatArg::Usda => Format::Usda,
         }
     }
 }

@@ -224,6 +224,7 @@ pub fn check_mesh_output(out: &Path) -> Result<(), OutputError> {
     match MeshFormat::of(out) {
         None => Err(OutputError::UnknownFormat(out.to_path_buf())),
         Some(MeshFormat::Gltf) => Err(OutputError::Gltf(out.to_path_buf())),
+        Some(f @ MeshFormat::Fbx) => Err(crate::mesh::io::format::not_written(out, f).into()),
         Some(_) => Ok(()),
     }
 }

@@ -23,6 +23,7 @@
 
 use super::clip::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
 use super::error::MocapError;
+use super::units::{HUMAN_STATURE_M, UnitFamily, units_from_stature};
 use crate::util::fsutil::{raise_warning, read_bytes};
 use crate::util::numfmt::Short;
 use glam::{DMat3, DQuat, DVec3};
@@ -79,8 +80,11 @@ pub struct FbxInfo {
     pub ascii: bool,
     /// Creator string of the header.
     pub creator: String,
-    /// Metres per file unit (`UnitScaleFactor` / 100).
+    /// Metres per file unit (`UnitScaleFactor` / 100; 0.01 without one).
     pub metres_per_unit: f64,
+    /// False when the file has no `UnitScaleFactor` (the unit is then
+    /// judged from the body: [`units_with_stature`]).
+    pub unit_declared: bool,
     /// The file's axes, e.g. `right +X, up +Y, front +Z`.
     pub axes: String,
     /// Frames per second of the file's `TimeMode`.
@@ -102,20 +106,21 @@ pub fn read_fbx(path: &Path, opts: &FbxOptions) -> Result<Clip, MocapError> {
 
 /// [`read_fbx`] of bytes already in memory; `path` names them in errors.
 pub fn parse_fbx(bytes: &[u8], path: &Path, opts: &FbxOptions) -> Result<Clip, MocapError> {
-    let scene = load_scene(bytes, path)?;
+    let scene = load_scene(bytes, path, false)?;
     clip_of_scene(&scene, path, opts)
 }
 
 /// Lists what an FBX file holds: version, units, axes, takes.
 pub fn fbx_info(path: &Path) -> Result<FbxInfo, MocapError> {
     let bytes = read_bytes(path)?;
-    let scene = load_scene(&bytes, path)?;
+    let scene = load_scene(&bytes, path, false)?;
     let takes = takes(&scene);
     Ok(FbxInfo {
         version: scene.metadata.version,
         ascii: scene.metadata.ascii,
         creator: scene.metadata.creator.to_string(),
         metres_per_unit: scene.settings.unit_meters,
+        unit_declared: ufbx::find_prop(&scene.settings.props, "UnitScaleFactor").is_some(),
         axes: axes_name(&scene.settings.axes),
         fps: scene.settings.frames_per_second,
         default_take: default_take(&takes),
@@ -128,9 +133,13 @@ pub fn fbx_info(path: &Path) -> Result<FbxInfo, MocapError> {
     })
 }
 
-/// Parses the bytes with ufbx (FBX only, geometry skipped), after checking
-/// the magic bytes.
-fn load_scene(bytes: &[u8], path: &Path) -> Result<ufbx::SceneRoot, MocapError> {
+/// Parses the bytes with ufbx (FBX only; geometry skipped unless
+/// `geometry`), after checking the magic bytes.
+pub(crate) fn load_scene(
+    bytes: &[u8],
+    path: &Path,
+    geometry: bool,
+) -> Result<ufbx::SceneRoot, MocapError> {
     if bytes.is_empty() {
         return Err(MocapError::invalid(path, "empty file, not an FBX file"));
     }
@@ -148,7 +157,7 @@ fn load_scene(bytes: &[u8], path: &Path) -> Result<ufbx::SceneRoot, MocapError> 
         ..Default::default()
     };
     let opts = ufbx::LoadOpts {
-        ignore_geometry: true,
+        ignore_geometry: !geometry,
         ignore_embedded: true,
         file_format: ufbx::FileFormat::Fbx,
         no_format_from_extension: true,
@@ -212,7 +221,7 @@ fn axis_vec(a: ufbx::CoordinateAxis) -> Option<DVec3> {
 /// The linear map from the file's axes to the project's (right +X, up +Y,
 /// front +Z), and a description. A left-handed file gives a reflection:
 /// positions are mirrored, rotations conjugated (still rotations).
-fn basis(axes: &ufbx::CoordinateAxes) -> (DMat3, String) {
+pub(crate) fn basis(axes: &ufbx::CoordinateAxes) -> (DMat3, String) {
     let (r, u, f) = (
         axis_vec(axes.right),
         axis_vec(axes.up),
@@ -292,9 +301,66 @@ fn split(m: &ufbx::Matrix) -> (DMat3, DVec3) {
     (DMat3::from_cols(x, y, x.cross(y)), t)
 }
 
+/// The bones read as the clip's skeleton: scene node indices in depth-first
+/// order (parents first), each one's parent among them, and joint names.
+struct Skeleton {
+    /// Scene node index of each joint.
+    order: Vec<usize>,
+    /// Parent joint of each joint (an index into `order`).
+    parent: Vec<Option<usize>>,
+    /// Joint names without namespaces (unless that makes two alike).
+    names: Vec<String>,
+}
+
+/// How the take is sampled: its animation (`None`: the rest pose), the
+/// first frame's time, the frame count and rate.
+struct Sampling<'a> {
+    anim: Option<&'a ufbx::Anim>,
+    start: f64,
+    frames: usize,
+    fps: f64,
+}
+
+/// The rest (unanimated) skeleton in the project's axes: each joint's
+/// world rotation inverted (the motion is expressed relative to it), its
+/// world position and its offset from its parent.
+struct Rest {
+    rot_inv: Vec<DMat3>,
+    pos: Vec<DVec3>,
+    offsets: Vec<DVec3>,
+}
+
 fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<Clip, MocapError> {
     let mut warnings = Vec::new();
-    // The skeleton: bone nodes; the root bone with the largest subtree.
+    let skel = skeleton(scene, path, &mut warnings)?;
+    let n = skel.order.len();
+    let sampling = sampling(scene, path, opts, n, &mut warnings)?;
+    let (m, up_reason) = basis(&scene.settings.axes);
+    let rest = rest_skeleton(scene, &skel, m);
+    let (rotations, translations) = sample_motion(scene, path, &skel, &rest, &sampling, m)?;
+    let joints = joints_of(&skel, &rest, &translations, sampling.frames);
+    let mut clip = Clip::new(
+        joints,
+        1.0 / sampling.fps,
+        rotations,
+        translations,
+        file_units(&scene.settings),
+        UpAxis::Y,
+        PointConvention::JointOrigins,
+    )
+    .map_err(|e| MocapError::invalid(path, e.to_string()))?;
+    clip.up_reason = up_reason;
+    clip.warnings = warnings;
+    Ok(clip)
+}
+
+/// Step 1 of [`clip_of_scene`]: the skeleton, the subtree of the root bone
+/// with the most joints (a warning names the others).
+fn skeleton(
+    scene: &ufbx::Scene,
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<Skeleton, MocapError> {
     let nodes: Vec<&ufbx::Node> = scene.nodes.iter().map(|n| &**n).collect();
     let is_bone = |n: &ufbx::Node| n.attrib_type == ufbx::ElementType::Bone;
     let index_of = |n: &ufbx::Node| nodes.iter().position(|m| std::ptr::eq(*m, n));
@@ -348,7 +414,7 @@ fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<
             .map(|&r| format!("'{}'", nodes[r].element.name))
             .collect();
         raise_warning(
-            &mut warnings,
+            warnings,
             path,
             format!(
                 "{} root bones; reading the largest skeleton, under '{}' ({} joints), and not {}",
@@ -360,33 +426,50 @@ fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<
         );
     }
     let order = best;
-    let n = order.len();
     let mut slot = vec![usize::MAX; nodes.len()];
     for (k, &i) in order.iter().enumerate() {
         slot[i] = k;
     }
-    let parent: Vec<Option<usize>> = order
+    let parent = order
         .iter()
         .map(|&i| parent_bone(nodes[i]).map(|p| slot[p]))
         .collect();
-
-    // Names without namespaces, unless that makes two alike.
     let full: Vec<String> = order
         .iter()
         .map(|&i| nodes[i].element.name.to_string())
         .collect();
-    let mut names: Vec<String> = full
+    Ok(Skeleton {
+        order,
+        parent,
+        names: names_without_namespaces(full),
+    })
+}
+
+/// Names without namespaces, unless that makes two alike (then the full
+/// names).
+pub(crate) fn names_without_namespaces(full: Vec<String>) -> Vec<String> {
+    let names: Vec<String> = full
         .iter()
         .map(|s| strip_namespace(s).to_string())
         .collect();
-    {
-        let mut seen = std::collections::HashSet::new();
-        if !names.iter().all(|s| seen.insert(s.clone())) {
-            names = full.clone();
-        }
+    let mut seen = std::collections::HashSet::new();
+    if names.iter().all(|s| seen.insert(s.clone())) {
+        names
+    } else {
+        full
     }
+}
 
-    // The take.
+/// Step 2 of [`clip_of_scene`]: the take (named, else the reader's
+/// default), the frame rate (asked for, else the file's, else 30) and the
+/// frame count, bounded by [`MAX_SAMPLES`] for `joints` joints.
+fn sampling<'a>(
+    scene: &'a ufbx::Scene,
+    path: &Path,
+    opts: &FbxOptions,
+    joints: usize,
+    warnings: &mut Vec<String>,
+) -> Result<Sampling<'a>, MocapError> {
     let all = takes(scene);
     let take = match &opts.take {
         Some(want) => Some(all.iter().position(|t| &t.name == want).ok_or_else(|| {
@@ -411,7 +494,7 @@ fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<
         None if file_fps.is_finite() && file_fps > 0.0 => file_fps,
         None => {
             raise_warning(
-                &mut warnings,
+                warnings,
                 path,
                 format!(
                     "the file's frame rate ({}) is not usable; sampling at 30 fps",
@@ -427,91 +510,117 @@ fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<
             format!("frame rate {} is not a positive number", Short(fps)),
         ));
     }
-    let (anim, start, frames) = match take {
-        Some(t) => {
-            let stack = &scene.anim_stacks[t];
-            let (a, b) = (stack.time_begin, stack.time_end);
-            let span = if a.is_finite() && b.is_finite() && b >= a {
-                b - a
-            } else {
-                raise_warning(
-                    &mut warnings,
-                    path,
-                    format!(
-                        "take '{}' has no usable time range ({} to {} s); one frame read",
-                        all[t].name,
-                        Short(a),
-                        Short(b)
-                    ),
-                );
-                0.0
-            };
-            let count = (span * fps).round() + 1.0;
-            if count * n as f64 > MAX_SAMPLES {
-                return Err(MocapError::invalid(
-                    path,
-                    format!(
-                        "take '{}' is {} s long: {} frames of {n} joints is more than the {} samples a clip may hold",
-                        all[t].name,
-                        Short(span),
-                        Short(count),
-                        Short(MAX_SAMPLES)
-                    ),
-                ));
-            }
-            if all[t].curves == 0 {
-                raise_warning(
-                    &mut warnings,
-                    path,
-                    format!(
-                        "take '{}' has no keyed curves: the clip does not move",
-                        all[t].name
-                    ),
-                );
-            }
-            (
-                Some(&*stack.anim),
-                if a.is_finite() { a } else { 0.0 },
-                count as usize,
-            )
-        }
-        None => {
-            raise_warning(
-                &mut warnings,
-                path,
-                "the file has no takes: one frame of its rest pose read".to_string(),
-            );
-            (None, 0.0, 1)
-        }
+    let Some(t) = take else {
+        raise_warning(
+            warnings,
+            path,
+            "the file has no takes: one frame of its rest pose read".to_string(),
+        );
+        return Ok(Sampling {
+            anim: None,
+            start: 0.0,
+            frames: 1,
+            fps,
+        });
     };
+    let stack = &scene.anim_stacks[t];
+    let (a, b) = (stack.time_begin, stack.time_end);
+    let span = if a.is_finite() && b.is_finite() && b >= a {
+        b - a
+    } else {
+        raise_warning(
+            warnings,
+            path,
+            format!(
+                "take '{}' has no usable time range ({} to {} s); one frame read",
+                all[t].name,
+                Short(a),
+                Short(b)
+            ),
+        );
+        0.0
+    };
+    let count = (span * fps).round() + 1.0;
+    if count * joints as f64 > MAX_SAMPLES {
+        return Err(MocapError::invalid(
+            path,
+            format!(
+                "take '{}' is {} s long: {} frames of {joints} joints is more than the {} samples a clip may hold",
+                all[t].name,
+                Short(span),
+                Short(count),
+                Short(MAX_SAMPLES)
+            ),
+        ));
+    }
+    if all[t].curves == 0 {
+        raise_warning(
+            warnings,
+            path,
+            format!(
+                "take '{}' has no keyed curves: the clip does not move",
+                all[t].name
+            ),
+        );
+    }
+    Ok(Sampling {
+        anim: Some(&*stack.anim),
+        start: if a.is_finite() { a } else { 0.0 },
+        frames: count as usize,
+        fps,
+    })
+}
 
-    let (m, up_reason) = basis(&scene.settings.axes);
+/// Step 3 of [`clip_of_scene`]: the unanimated scene's world frames of the
+/// skeleton, positions in the project's axes (`m`).
+fn rest_skeleton(scene: &ufbx::Scene, skel: &Skeleton, m: DMat3) -> Rest {
+    let rest: Vec<(DMat3, DVec3)> = skel
+        .order
+        .iter()
+        .map(|&i| split(&scene.nodes[i].node_to_world))
+        .collect();
+    let rot_inv = rest.iter().map(|(r, _)| r.transpose()).collect();
+    let pos: Vec<DVec3> = rest.iter().map(|(_, p)| m * *p).collect();
+    let offsets = skel
+        .parent
+        .iter()
+        .enumerate()
+        .map(|(k, p)| match p {
+            Some(p) => pos[k] - pos[*p],
+            None => pos[k],
+        })
+        .collect();
+    Rest {
+        rot_inv,
+        pos,
+        offsets,
+    }
+}
+
+/// Step 4 of [`clip_of_scene`]: every frame through ufbx's evaluator, as
+/// local rotations (relative to the rest) and translations in the parent's
+/// rotated frame, frame-major.
+fn sample_motion(
+    scene: &ufbx::Scene,
+    path: &Path,
+    skel: &Skeleton,
+    rest: &Rest,
+    s: &Sampling,
+    m: DMat3,
+) -> Result<(Vec<DQuat>, Vec<DVec3>), MocapError> {
+    let n = skel.order.len();
     let m_inv = m.inverse();
     let to_project = |r: DMat3, p: DVec3| -> (DQuat, DVec3) {
         (DQuat::from_mat3(&(m * r * m_inv)).normalize(), m * p)
     };
-    // Rest: the unanimated scene's world frames.
-    let rest: Vec<(DMat3, DVec3)> = order
-        .iter()
-        .map(|&i| split(&nodes[i].node_to_world))
-        .collect();
-    let rest_inv: Vec<DMat3> = rest.iter().map(|(r, _)| r.transpose()).collect();
-    let rest_pos: Vec<DVec3> = rest.iter().map(|(_, p)| m * *p).collect();
-    let offsets: Vec<DVec3> = (0..n)
-        .map(|k| match parent[k] {
-            Some(p) => rest_pos[k] - rest_pos[p],
-            None => rest_pos[k],
-        })
-        .collect();
-
-    let mut rotations = Vec::with_capacity(frames * n);
-    let mut translations = Vec::with_capacity(frames * n);
+    let mut rotations = Vec::with_capacity(s.frames * n);
+    let mut translations = Vec::with_capacity(s.frames * n);
     let mut world_q = vec![DQuat::IDENTITY; n];
     let mut world_p = vec![DVec3::ZERO; n];
-    for f in 0..frames {
-        let t = start + f as f64 / fps;
+    for f in 0..s.frames {
+        let t = s.start + f as f64 / s.fps;
         let evaluated;
-        let frame_nodes: &ufbx::Scene = match anim {
+        let frame_nodes: &ufbx::Scene = match s.anim {
             Some(a) => {
                 evaluated = ufbx::evaluate_scene(scene, a, t, ufbx::EvaluateOpts::default())
                     .map_err(|e| {
@@ -528,17 +637,17 @@ fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<
             }
             None => scene,
         };
-        for (k, &i) in order.iter().enumerate() {
+        for (k, &i) in skel.order.iter().enumerate() {
             let node = frame_nodes
                 .nodes
                 .get(i)
                 .ok_or_else(|| MocapError::invalid(path, "the evaluated scene lost a node"))?;
             let (r, p) = split(&node.node_to_world);
             // World rotation relative to the rest frame.
-            let (q, p) = to_project(r * rest_inv[k], p);
+            let (q, p) = to_project(r * rest.rot_inv[k], p);
             world_q[k] = q;
             world_p[k] = p;
-            match parent[k] {
+            match skel.parent[k] {
                 None => {
                     rotations.push(q);
                     translations.push(p);
@@ -551,22 +660,28 @@ fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<
             }
         }
     }
+    Ok((rotations, translations))
+}
 
-    // Channels: six for the root and for every joint whose translation
-    // moves away from its offset; three rotations for the rest.
-    let extent = rest_pos
+/// Step 5 of [`clip_of_scene`]: the joints, with six channels for the root
+/// and for every joint whose translation moves away from its offset, three
+/// rotations for the rest.
+fn joints_of(skel: &Skeleton, rest: &Rest, translations: &[DVec3], frames: usize) -> Vec<Joint> {
+    let n = skel.order.len();
+    let extent = rest
+        .pos
         .iter()
         .fold(0.0f64, |a, p| a.max(p.abs().max_element()))
         .max(1e-9);
-    let joints: Vec<Joint> = (0..n)
+    (0..n)
         .map(|k| {
-            let moves = parent[k].is_none()
+            let moves = skel.parent[k].is_none()
                 || (0..frames)
-                    .any(|f| (translations[f * n + k] - offsets[k]).length() > 1e-6 * extent);
+                    .any(|f| (translations[f * n + k] - rest.offsets[k]).length() > 1e-6 * extent);
             Joint {
-                name: names[k].clone(),
-                parent: parent[k].map(|p| JointId(p as u32)),
-                offset: offsets[k],
+                name: skel.names[k].clone(),
+                parent: skel.parent[k].map(|p| JointId(p as u32)),
+                offset: rest.offsets[k],
                 channels: if moves {
                     Channel::ROOT6.to_vec()
                 } else {
@@ -575,13 +690,22 @@ fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<
                 tail: None,
             }
         })
-        .collect();
-    let mpu = scene.settings.unit_meters;
+        .collect()
+}
+
+/// Step 6 of [`clip_of_scene`]: the file's unit, `UnitScaleFactor` (cm
+/// when missing, FBX's default, or unusable). [`units_with_stature`] then
+/// checks it against the body.
+pub(crate) fn file_units(settings: &ufbx::SceneSettings) -> Units {
+    let mpu = settings.unit_meters;
     let mpu_ok = mpu.is_finite() && mpu > 0.0;
-    let units = Units {
-        metres_per_unit: if mpu_ok { mpu } else { 0.01 },
-        name: unit_name(if mpu_ok { mpu } else { 0.01 }),
-        reason: if mpu_ok {
+    let declared = ufbx::find_prop(&settings.props, "UnitScaleFactor").is_some();
+    Units {
+        metres_per_unit: if mpu_ok && declared { mpu } else { 0.01 },
+        name: unit_name(if mpu_ok && declared { mpu } else { 0.01 }),
+        reason: if !declared {
+            format!("{NO_UNIT_SCALE}; centimetres (FBX's default) assumed")
+        } else if mpu_ok {
             format!("FBX GlobalSettings UnitScaleFactor {}", Short(mpu * 100.0))
         } else {
             format!(
@@ -589,20 +713,51 @@ fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<
                 Short(mpu * 100.0)
             )
         },
+    }
+}
+
+/// How [`file_units`] says the file has no `UnitScaleFactor`.
+const NO_UNIT_SCALE: &str = "no UnitScaleFactor in the FBX GlobalSettings";
+
+/// The unit of an FBX clip judged with its body, the rule BVH files get
+/// ([`units_from_stature`]) where the file's own unit is missing or
+/// contradicts the body. `file` is the clip's unit as read
+/// ([`file_units`]); `stature` the humanoid's stature in file units and
+/// what it was measured from (`rig::load::stature`), `None` without a
+/// humanoid. The file's `UnitScaleFactor` stands when it gives a human
+/// stature ([`HUMAN_STATURE_M`]); a body of 170 m (an actor in cm
+/// declared as m) or one without the factor is measured instead.
+pub fn units_with_stature(file: &Units, stature: Option<(f64, String)>) -> Units {
+    let Some((h, basis)) = stature.filter(|(h, _)| h.is_finite() && *h > 0.0) else {
+        return Units {
+            reason: format!("{}; no humanoid limbs to check it against", file.reason),
+            ..file.clone()
+        };
     };
-    let mut clip = Clip::new(
-        joints,
-        1.0 / fps,
-        rotations,
-        translations,
-        units,
-        UpAxis::Y,
-        PointConvention::JointOrigins,
-    )
-    .map_err(|e| MocapError::invalid(path, e.to_string()))?;
-    clip.up_reason = up_reason;
-    clip.warnings = warnings;
-    Ok(clip)
+    let declared = !file.reason.starts_with(NO_UNIT_SCALE);
+    let metres = h * file.metres_per_unit;
+    let (lo, hi) = HUMAN_STATURE_M;
+    if declared && (lo..=hi).contains(&metres) {
+        return Units {
+            reason: format!(
+                "{}; the body agrees (stature {metres:.2} m from {basis})",
+                file.reason
+            ),
+            ..file.clone()
+        };
+    }
+    let mut u = units_from_stature(h, &basis, UnitFamily::Other);
+    u.reason = if declared {
+        format!(
+            "{} gives a stature of {} m, not a human one ({lo}-{hi} m), so the body decides: {}",
+            file.reason,
+            Short(metres),
+            u.reason
+        )
+    } else {
+        format!("{NO_UNIT_SCALE}, so the body decides: {}", u.reason)
+    };
+    u
 }
 
 fn unit_name(mpu: f64) -> String {

@@ -83,6 +83,12 @@ pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
         clip.up = up;
         clip.up_reason = why;
     }
+    if MocapFormat::of(path) == Some(MocapFormat::Fbx) && opts.units.is_none() {
+        // The file's UnitScaleFactor, checked against the body's stature.
+        let map = (opts.rig_map.clone()).or_else(|| detect_clip(&clip).ok().map(|d| d.map));
+        let h = map.as_ref().and_then(|m| stature(&clip, m));
+        clip.units = crate::mocap::fbx::units_with_stature(&clip.units, h);
+    }
     if let Some(u) = &opts.units {
         clip.units = u.clone();
     }

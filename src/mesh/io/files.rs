@@ -77,7 +77,7 @@ pub fn refuse_folder_as_file(out: &Path) -> Result<(), MeshError> {
     if out.is_dir()
         && matches!(
             ext.as_str(),
-            "obj" | "ply" | "pc2" | "mdd" | "gltf" | "glb" | "usda"
+            "obj" | "ply" | "pc2" | "mdd" | "gltf" | "glb" | "usda" | "fbx"
         )
     {
         return Err(MeshError::invalid(

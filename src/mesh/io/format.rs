@@ -51,6 +51,9 @@ pub enum MeshFormat {
     ObjFolder,
     /// USD text layer (written only).
     Usda,
+    /// FBX, read only: a rigged character's meshes in their bind pose
+    /// ([`super::fbx`]).
+    Fbx,
 }
 
 impl MeshFormat {
@@ -70,9 +73,22 @@ impl MeshFormat {
             "gltf" => MeshFormat::Gltf,
             "glb" => MeshFormat::Glb,
             "usda" => MeshFormat::Usda,
+            "fbx" => MeshFormat::Fbx,
             _ => return None,
         })
     }
+}
+
+/// The error of an output in a format that is only read: `.gltf` (write
+/// `.glb`) and `.fbx`.
+pub(crate) fn not_written(out: &Path, fmt: MeshFormat) -> MeshError {
+    MeshError::invalid(
+        out,
+        match fmt {
+            MeshFormat::Gltf => "writing .gltf is not supported; use .glb",
+            _ => "writing .fbx is not supported; use .glb, .usda, .pc2 or .mdd",
+        },
+    )
 }
 
 /// Splits `PATH:FRAME` (a 0-based frame of a sequence file) into its parts.

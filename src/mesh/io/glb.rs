@@ -321,25 +321,39 @@ pub fn encode_glb_with(
     fps: Option<f64>,
     opts: &GlbOptions,
 ) -> Result<Vec<u8>, MeshError> {
-    use json::accessor::Type as T;
     let mesh = seq.mesh();
-    let base = mesh.positions();
-    let tris = mesh.triangles();
-    let nv = base.len();
     let frames = seq.frame_count();
     let fps = seq
         .fps
         .or(fps)
         .filter(|f| f.is_finite() && *f > 0.0)
         .unwrap_or(30.0);
-    let animate = frames > 1 || (frames == 1 && seq.frame(0) != base);
-    if tris.is_empty() {
-        // glTF has no empty accessor (count ≥ 1): the file was written and
-        // the validator rejected it.
+    let animate = frames > 1 || (frames == 1 && seq.frame(0) != mesh.positions());
+    refuse_unencodable(mesh.vertex_count(), mesh.triangles().is_empty(), frames)?;
+    let grid = opts
+        .quantize
+        .then(|| Grid::new(seq, if opts.normals && animate { 2.0 } else { 1.0 }));
+    let key_weight = grid.map_or(1.0, |g| g.w) as f32;
+    let mut e = Encoder::new(grid.is_some());
+    let indices = e.indices(mesh);
+    let rest = e.rest_attributes(mesh, grid, opts.normals);
+    let targets = animate.then(|| e.morph_targets(seq, grid, &rest, opts.normals));
+    let node = e.scene(mesh, rest.attributes, indices, targets, grid);
+    if animate {
+        e.weights_animation(frames, fps, key_weight, node);
+    }
+    e.finish()
+}
+
+/// Step 1 of [`encode_glb_with`]: what no GLB can hold, refused (glTF has
+/// no empty accessor, count ≥ 1: a mesh without triangles was written and
+/// the validator rejected it; more than [`MAX_FRAMES`] morph targets).
+fn refuse_unencodable(vertices: usize, no_triangles: bool, frames: usize) -> Result<(), MeshError> {
+    if no_triangles {
         return Err(MeshError::invalid(
             Path::new("<glb>"),
             format!(
-                "a mesh of {nv} vertices and no triangles: a GLB needs triangles (write .ply or .obj for points)"
+                "a mesh of {vertices} vertices and no triangles: a GLB needs triangles (write .ply or .obj for points)"
             ),
         ));
     }
@@ -349,92 +363,153 @@ pub fn encode_glb_with(
             format!("{frames} frames: a GLB holds at most {MAX_FRAMES} (one morph target each)"),
         ));
     }
-    let grid = opts
-        .quantize
-        .then(|| Grid::new(seq, if opts.normals && animate { 2.0 } else { 1.0 }));
-    let key_weight = grid.map_or(1.0, |g| g.w) as f32;
-    let mut root = json::Root {
-        asset: json::Asset {
-            generator: Some("surfmotion".into()),
+    Ok(())
+}
+
+/// A GLB being built: the JSON document and the binary chunk, pushed to in
+/// the order the file lays them out.
+struct Encoder {
+    root: json::Root,
+    bin: Bin,
+}
+
+/// The rest mesh's vertex attributes, with what the morph targets are
+/// displacements from: the quantised rest positions (empty without a grid)
+/// and the rest normals (empty without normals).
+struct RestAttributes {
+    attributes:
+        BTreeMap<json::validation::Checked<json::mesh::Semantic>, json::Index<json::Accessor>>,
+    qbase: Vec<[i16; 3]>,
+    normals: Vec<[f64; 3]>,
+}
+
+const ARRAY: Option<json::buffer::Target> = Some(json::buffer::Target::ArrayBuffer);
+
+impl Encoder {
+    fn new(quantized: bool) -> Encoder {
+        let mut root = json::Root {
+            asset: json::Asset {
+                generator: Some("surfmotion".into()),
+                ..Default::default()
+            },
             ..Default::default()
-        },
-        ..Default::default()
-    };
-    if grid.is_some() {
-        root.extensions_used = vec![KHR_MESH_QUANTIZATION.into()];
-        root.extensions_required = vec![KHR_MESH_QUANTIZATION.into()];
+        };
+        if quantized {
+            root.extensions_used = vec![KHR_MESH_QUANTIZATION.into()];
+            root.extensions_required = vec![KHR_MESH_QUANTIZATION.into()];
+        }
+        Encoder {
+            root,
+            bin: Bin { data: Vec::new() },
+        }
     }
-    let mut bin = Bin { data: Vec::new() };
-    let array = Some(json::buffer::Target::ArrayBuffer);
 
-    let idx = bin.push_u32s(tris.iter().flatten().copied());
-    let idx_view = view(
-        &mut root,
-        idx,
-        Some(json::buffer::Target::ElementArrayBuffer),
-        None,
-    );
-    let idx_acc = accessor(
-        &mut root,
-        Some(idx_view),
-        0,
-        mesh.triangle_count() * 3,
-        U32,
-        T::Scalar,
-        None,
-    );
+    /// Step 2: the triangle indices.
+    fn indices(&mut self, mesh: &crate::mesh::Mesh) -> json::Index<json::Accessor> {
+        use json::accessor::Type as T;
+        let idx = self
+            .bin
+            .push_u32s(mesh.triangles().iter().flatten().copied());
+        let idx_view = view(
+            &mut self.root,
+            idx,
+            Some(json::buffer::Target::ElementArrayBuffer),
+            None,
+        );
+        accessor(
+            &mut self.root,
+            Some(idx_view),
+            0,
+            mesh.triangle_count() * 3,
+            U32,
+            T::Scalar,
+            None,
+        )
+    }
 
-    // Rest positions.
-    let qbase: Vec<[i16; 3]> =
-        grid.map_or_else(Vec::new, |g| base.iter().map(|p| g.base(*p)).collect());
-    let pos_acc = match grid {
-        Some(_) => {
-            let s = bin.start();
-            qbase.iter().for_each(|q| bin.i16x3(*q));
-            let v = view(&mut root, bin.region(s), array, Some(8));
-            let mm = bounds_i16(qbase.iter().copied());
-            accessor(&mut root, Some(v), 0, nv, I16, T::Vec3, Some(mm))
-        }
-        None => {
-            let r = bin.push_f32s(base.iter().flatten().map(|&v| v as f32));
-            let v = view(&mut root, r, array, None);
-            let mm = bounds_f32(base.iter().map(|p| f32x3(*p)));
-            accessor(&mut root, Some(v), 0, nv, F32, T::Vec3, Some(mm))
-        }
-    };
-    let mut attributes = BTreeMap::new();
-    attributes.insert(Valid(json::mesh::Semantic::Positions), pos_acc);
-
-    // Rest normals (unit; +z where a vertex has no area).
-    let mut base_normals = Vec::new();
-    if opts.normals {
-        normals_or(base, tris, &vec![[0.0, 0.0, 1.0]; nv], &mut base_normals);
-        let acc = match grid {
+    /// Step 3: rest positions (on the grid when quantised), rest normals
+    /// (unit; +z where a vertex has no area) and vertex colours.
+    fn rest_attributes(
+        &mut self,
+        mesh: &crate::mesh::Mesh,
+        grid: Option<Grid>,
+        normals: bool,
+    ) -> RestAttributes {
+        use json::accessor::Type as T;
+        let (root, bin) = (&mut self.root, &mut self.bin);
+        let base = mesh.positions();
+        let nv = base.len();
+        let qbase: Vec<[i16; 3]> =
+            grid.map_or_else(Vec::new, |g| base.iter().map(|p| g.base(*p)).collect());
+        let pos_acc = match grid {
             Some(_) => {
                 let s = bin.start();
-                base_normals.iter().for_each(|n| bin.i16x3(n.map(snorm16)));
-                let v = view(&mut root, bin.region(s), array, Some(8));
-                accessor(&mut root, Some(v), 0, nv, I16_NORM, T::Vec3, None)
+                qbase.iter().for_each(|q| bin.i16x3(*q));
+                let v = view(root, bin.region(s), ARRAY, Some(8));
+                let mm = bounds_i16(qbase.iter().copied());
+                accessor(root, Some(v), 0, nv, I16, T::Vec3, Some(mm))
             }
             None => {
-                let r = bin.push_f32s(base_normals.iter().flatten().map(|&v| v as f32));
-                let v = view(&mut root, r, array, None);
-                accessor(&mut root, Some(v), 0, nv, F32, T::Vec3, None)
+                let r = bin.push_f32s(base.iter().flatten().map(|&v| v as f32));
+                let v = view(root, r, ARRAY, None);
+                let mm = bounds_f32(base.iter().map(|p| f32x3(*p)));
+                accessor(root, Some(v), 0, nv, F32, T::Vec3, Some(mm))
             }
         };
-        attributes.insert(Valid(json::mesh::Semantic::Normals), acc);
-    }
-    if let Some(c) = mesh.colors() {
-        let cv = bin.push_f32s(c.iter().flatten().map(|&v| v as f32));
-        let cview = view(&mut root, cv, array, None);
-        let cacc = accessor(&mut root, Some(cview), 0, nv, F32, T::Vec3, None);
-        attributes.insert(Valid(json::mesh::Semantic::Colors(0)), cacc);
+        let mut attributes = BTreeMap::new();
+        attributes.insert(Valid(json::mesh::Semantic::Positions), pos_acc);
+        let mut base_normals = Vec::new();
+        if normals {
+            normals_or(
+                base,
+                mesh.triangles(),
+                &vec![[0.0, 0.0, 1.0]; nv],
+                &mut base_normals,
+            );
+            let acc = match grid {
+                Some(_) => {
+                    let s = bin.start();
+                    base_normals.iter().for_each(|n| bin.i16x3(n.map(snorm16)));
+                    let v = view(root, bin.region(s), ARRAY, Some(8));
+                    accessor(root, Some(v), 0, nv, I16_NORM, T::Vec3, None)
+                }
+                None => {
+                    let r = bin.push_f32s(base_normals.iter().flatten().map(|&v| v as f32));
+                    let v = view(root, r, ARRAY, None);
+                    accessor(root, Some(v), 0, nv, F32, T::Vec3, None)
+                }
+            };
+            attributes.insert(Valid(json::mesh::Semantic::Normals), acc);
+        }
+        if let Some(c) = mesh.colors() {
+            let cv = bin.push_f32s(c.iter().flatten().map(|&v| v as f32));
+            let cview = view(root, cv, ARRAY, None);
+            let cacc = accessor(root, Some(cview), 0, nv, F32, T::Vec3, None);
+            attributes.insert(Valid(json::mesh::Semantic::Colors(0)), cacc);
+        }
+        RestAttributes {
+            attributes,
+            qbase,
+            normals: base_normals,
+        }
     }
 
-    let mut targets = None;
-    let mut weights = None;
-    if animate {
-        // Position displacements of every frame, one view.
+    /// Step 4: one morph target per frame: the position displacements of
+    /// every frame in one view, the normal displacements in another, an
+    /// accessor pair per frame into them.
+    fn morph_targets(
+        &mut self,
+        seq: &MeshSequence,
+        grid: Option<Grid>,
+        rest: &RestAttributes,
+        normals: bool,
+    ) -> Vec<json::mesh::MorphTarget> {
+        use json::accessor::Type as T;
+        let (root, bin) = (&mut self.root, &mut self.bin);
+        let base = seq.mesh().positions();
+        let tris = seq.mesh().triangles();
+        let nv = base.len();
+        let frames = seq.frame_count();
         let disp = |f: usize| {
             seq.frame(f)
                 .iter()
@@ -447,7 +522,7 @@ pub fn encode_glb_with(
             match grid {
                 Some(g) => {
                     let start = bin.data.len();
-                    for (p, qb) in seq.frame(f).iter().zip(&qbase) {
+                    for (p, qb) in seq.frame(f).iter().zip(&rest.qbase) {
                         bin.i16x3(g.disp(*p, *qb));
                     }
                     let q = bin.data[start..]
@@ -462,14 +537,13 @@ pub fn encode_glb_with(
             }
         }
         let (pstride, pstorage) = if grid.is_some() { (8, I16) } else { (12, F32) };
-        let pview = view(&mut root, bin.region(s), array, Some(pstride));
-        // Normal displacements of every frame, one view.
-        let nview = if opts.normals {
+        let pview = view(root, bin.region(s), ARRAY, Some(pstride));
+        let nview = if normals {
             let s = bin.start();
             let mut n = Vec::new();
             for f in 0..frames {
-                normals_or(seq.frame(f), tris, &base_normals, &mut n);
-                for (a, b) in n.iter().zip(&base_normals) {
+                normals_or(seq.frame(f), tris, &rest.normals, &mut n);
+                for (a, b) in n.iter().zip(&rest.normals) {
                     let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
                     match grid {
                         Some(g) => bin.i8x3(d.map(|x| snorm8(x / g.w))),
@@ -478,7 +552,7 @@ pub fn encode_glb_with(
                 }
             }
             let stride = if grid.is_some() { 4 } else { 12 };
-            Some(view(&mut root, bin.region(s), array, Some(stride)))
+            Some(view(root, bin.region(s), ARRAY, Some(stride)))
         } else {
             None
         };
@@ -487,7 +561,7 @@ pub fn encode_glb_with(
         let mut t = Vec::with_capacity(frames);
         for (f, mm) in pos_bounds.into_iter().enumerate() {
             let positions = accessor(
-                &mut root,
+                root,
                 Some(pview),
                 f * nv * pstride,
                 nv,
@@ -495,79 +569,99 @@ pub fn encode_glb_with(
                 T::Vec3,
                 Some(mm),
             );
-            let normals = nview.map(|v| {
-                accessor(
-                    &mut root,
-                    Some(v),
-                    f * nv * nstride,
-                    nv,
-                    nstorage,
-                    T::Vec3,
-                    None,
-                )
-            });
+            let normals = nview
+                .map(|v| accessor(root, Some(v), f * nv * nstride, nv, nstorage, T::Vec3, None));
             t.push(json::mesh::MorphTarget {
                 positions: Some(positions),
                 normals,
                 tangents: None,
             });
         }
-        targets = Some(t);
-        weights = Some(vec![0.0f32; frames]);
+        t
     }
-    let material = root.push(json::Material {
-        name: Some("surfmotion".into()),
-        pbr_metallic_roughness: json::material::PbrMetallicRoughness {
-            // Vertex colours multiply the base colour: keep them as they are.
-            base_color_factor: json::material::PbrBaseColorFactor(if mesh.colors().is_some() {
-                [1.0; 4]
-            } else {
-                [0.8, 0.8, 0.8, 1.0]
-            }),
-            metallic_factor: json::material::StrengthFactor(0.0),
-            roughness_factor: json::material::StrengthFactor(0.6),
-            ..Default::default()
-        },
-        ..Default::default()
-    });
-    let primitive = json::mesh::Primitive {
-        attributes,
-        extensions: None,
-        extras: Default::default(),
-        indices: Some(idx_acc),
-        material: Some(material),
-        mode: Valid(json::mesh::Mode::Triangles),
-        targets,
-    };
-    let mesh_idx = root.push(json::Mesh {
-        extensions: None,
-        extras: Default::default(),
-        name: Some("surfmotion".into()),
-        primitives: vec![primitive],
-        weights,
-    });
-    let node = root.push(json::Node {
-        mesh: Some(mesh_idx),
-        name: Some("character".into()),
-        translation: grid.map(|g| g.t),
-        scale: grid.map(|g| [g.s; 3]),
-        ..Default::default()
-    });
-    let scene = root.push(json::Scene {
-        extensions: None,
-        extras: Default::default(),
-        name: None,
-        nodes: vec![node],
-    });
-    root.scene = Some(scene);
 
-    if animate {
+    /// Step 5: the material, the mesh (with zero weights when animated),
+    /// its node (the grid's transform when quantised) and the scene.
+    /// Returns the node.
+    fn scene(
+        &mut self,
+        mesh: &crate::mesh::Mesh,
+        attributes: BTreeMap<
+            json::validation::Checked<json::mesh::Semantic>,
+            json::Index<json::Accessor>,
+        >,
+        indices: json::Index<json::Accessor>,
+        targets: Option<Vec<json::mesh::MorphTarget>>,
+        grid: Option<Grid>,
+    ) -> json::Index<json::Node> {
+        let root = &mut self.root;
+        let material = root.push(json::Material {
+            name: Some("surfmotion".into()),
+            pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+                // Vertex colours multiply the base colour: keep them as they are.
+                base_color_factor: json::material::PbrBaseColorFactor(if mesh.colors().is_some() {
+                    [1.0; 4]
+                } else {
+                    [0.8, 0.8, 0.8, 1.0]
+                }),
+                metallic_factor: json::material::StrengthFactor(0.0),
+                roughness_factor: json::material::StrengthFactor(0.6),
+                ..Default::default()
+            },
+            ..Default::default()
+        });
+        let weights = targets.as_ref().map(|t| vec![0.0f32; t.len()]);
+        let primitive = json::mesh::Primitive {
+            attributes,
+            extensions: None,
+            extras: Default::default(),
+            indices: Some(indices),
+            material: Some(material),
+            mode: Valid(json::mesh::Mode::Triangles),
+            targets,
+        };
+        let mesh_idx = root.push(json::Mesh {
+            extensions: None,
+            extras: Default::default(),
+            name: Some("surfmotion".into()),
+            primitives: vec![primitive],
+            weights,
+        });
+        let node = root.push(json::Node {
+            mesh: Some(mesh_idx),
+            name: Some("character".into()),
+            translation: grid.map(|g| g.t),
+            scale: grid.map(|g| [g.s; 3]),
+            ..Default::default()
+        });
+        let scene = root.push(json::Scene {
+            extensions: None,
+            extras: Default::default(),
+            name: None,
+            nodes: vec![node],
+        });
+        root.scene = Some(scene);
+        node
+    }
+
+    /// Step 6: the morph-weights animation: key `k` at `k / fps`, its
+    /// output F keys of F weights, zero but for `key_weight` at (k, k): a
+    /// sparse accessor without a view (zeros) and F substitutions.
+    fn weights_animation(
+        &mut self,
+        frames: usize,
+        fps: f64,
+        key_weight: f32,
+        node: json::Index<json::Node>,
+    ) {
+        use json::accessor::Type as T;
+        let (root, bin) = (&mut self.root, &mut self.bin);
         let times: Vec<f32> = (0..frames).map(|k| (k as f64 / fps) as f32).collect();
         let tv = bin.push_f32s(times.iter().copied());
-        let tview = view(&mut root, tv, None, None);
+        let tview = view(root, tv, None, None);
         let last = *times.last().unwrap_or(&0.0);
         let tacc = accessor(
-            &mut root,
+            root,
             Some(tview),
             0,
             frames,
@@ -578,13 +672,11 @@ pub fn encode_glb_with(
                 json::Value::from(vec![last]),
             )),
         );
-        // Output: F keys of F weights, zero but for weight `key_weight` at
-        // (k, k): a sparse accessor without a view (zeros) and F substitutions.
         let iv = bin.push_u32s((0..frames).map(|k| (k * frames + k) as u32));
-        let iview = view(&mut root, iv, None, None);
+        let iview = view(root, iv, None, None);
         let vv = bin.push_f32s(std::iter::repeat_n(key_weight, frames));
-        let vview = view(&mut root, vv, None, None);
-        let wacc = accessor(&mut root, None, 0, frames * frames, F32, T::Scalar, None);
+        let vview = view(root, vv, None, None);
+        let wacc = accessor(root, None, 0, frames * frames, F32, T::Scalar, None);
         root.accessors[wacc.value()].sparse = Some(json::accessor::sparse::Sparse {
             count: USize64(frames as u64),
             indices: json::accessor::sparse::Indices {
@@ -630,40 +722,46 @@ pub fn encode_glb_with(
             samplers: vec![sampler],
         });
     }
-    bin.align();
-    root.push(json::Buffer {
-        byte_length: USize64(bin.data.len() as u64),
-        name: None,
-        uri: None,
-        extensions: None,
-        extras: Default::default(),
-    });
-    let mut js = json::serialize::to_vec(&root)
-        .map_err(|e| MeshError::invalid(Path::new("<glb>"), e.to_string()))?;
-    while js.len() % 4 != 0 {
-        js.push(b' ');
+
+    /// Step 7: the buffer, then the container: header, JSON chunk (padded
+    /// with spaces), binary chunk; refused beyond GLB's 4 GiB.
+    fn finish(mut self) -> Result<Vec<u8>, MeshError> {
+        let (root, bin) = (&mut self.root, &mut self.bin);
+        bin.align();
+        root.push(json::Buffer {
+            byte_length: USize64(bin.data.len() as u64),
+            name: None,
+            uri: None,
+            extensions: None,
+            extras: Default::default(),
+        });
+        let mut js = json::serialize::to_vec(&root)
+            .map_err(|e| MeshError::invalid(Path::new("<glb>"), e.to_string()))?;
+        while js.len() % 4 != 0 {
+            js.push(b' ');
+        }
+        let total = 12 + 8 + js.len() + 8 + bin.data.len();
+        if total > u32::MAX as usize {
+            return Err(MeshError::invalid(
+                Path::new("<glb>"),
+                format!(
+                    "{total} bytes: too large for GLB (4 GiB); quantise (`GlbOptions::quantize`), \
+                     leave out normals (--glb-no-normals) or split the sequence"
+                ),
+            ));
+        }
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(js.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&js);
+        out.extend_from_slice(&(bin.data.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin.data);
+        Ok(out)
     }
-    let total = 12 + 8 + js.len() + 8 + bin.data.len();
-    if total > u32::MAX as usize {
-        return Err(MeshError::invalid(
-            Path::new("<glb>"),
-            format!(
-                "{total} bytes: too large for GLB (4 GiB); quantise (`GlbOptions::quantize`), \
-                 leave out normals (--glb-no-normals) or split the sequence"
-            ),
-        ));
-    }
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(js.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&js);
-    out.extend_from_slice(&(bin.data.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin.data);
-    Ok(out)
 }
 
 /// Writes a sequence as GLB with the default options, atomically.

@@ -1,7 +1,7 @@
 //! Loading any supported mesh or sequence file as a sequence.
 
 use super::format::{MeshFormat, bad_frame_ref, split_frame_ref};
-use super::{gltf, mdd, obj, objseq, pc2, ply};
+use super::{fbx, gltf, mdd, obj, objseq, pc2, ply};
 use crate::mesh::{Mesh, MeshError, MeshSequence};
 use std::path::{Path, PathBuf};
 
@@ -37,6 +37,15 @@ fn cache_topology(path: &Path, opts: &LoadOptions) -> Result<Mesh, MeshError> {
     }
 }
 
+/// Reads a rigged character for its skin: a glTF/GLB, or an FBX by its
+/// extension ([`fbx::read_fbx_character`], in the same form).
+pub fn read_rigged(path: &Path) -> Result<gltf::GltfAsset, MeshError> {
+    match MeshFormat::of(path) {
+        Some(MeshFormat::Fbx) => fbx::read_fbx_character(path),
+        _ => gltf::read_gltf(path),
+    }
+}
+
 /// Loads any supported mesh or sequence file as a sequence (a single mesh is
 /// a one-frame sequence). `spec` may name a frame: `samba.pc2:12`.
 pub fn load_sequence(spec: &str, opts: &LoadOptions) -> Result<MeshSequence, MeshError> {
@@ -48,7 +57,7 @@ pub fn load_sequence(spec: &str, opts: &LoadOptions) -> Result<MeshSequence, Mes
     let fmt = MeshFormat::of(path).ok_or_else(|| {
         MeshError::invalid(
             path,
-            "unknown mesh format (expected .obj .ply .pc2 .mdd .gltf .glb or a folder)",
+            "unknown mesh format (expected .obj .ply .pc2 .mdd .gltf .glb .fbx or a folder)",
         )
     })?;
     let mut seq = match fmt {
@@ -82,6 +91,7 @@ pub fn load_sequence(spec: &str, opts: &LoadOptions) -> Result<MeshSequence, Mes
             .to_sequence()
             .map_err(|e| e.in_file(path))?,
         MeshFormat::ObjFolder => objseq::read_obj_folder(path)?,
+        MeshFormat::Fbx => MeshSequence::single(fbx::read_fbx_character(path)?.mesh),
         MeshFormat::Usda => {
             return Err(MeshError::invalid(
                 path,

@@ -4,6 +4,7 @@
 //! writes a sequence frame by frame (point caches and OBJ folders without
 //! holding the frames).
 
+pub mod fbx;
 pub mod files;
 pub mod format;
 pub mod glb;
@@ -20,5 +21,5 @@ pub mod usd;
 
 pub use files::{input_files, output_files, refuse_folder_as_file, refuse_overwriting};
 pub use format::{MAX_ABS_COORDINATE, MeshFormat, bad_frame_ref, split_frame_ref};
-pub use load::{LoadOptions, load_sequence};
+pub use load::{LoadOptions, load_sequence, read_rigged};
 pub use save::{SaveOptions, save_sequence, save_sequence_with};

@@ -53,12 +53,7 @@ pub fn save_sequence_with(
             glb::write_glb_with(seq, fps, &opts.glb, out)?;
             vec![out.to_path_buf()]
         }
-        MeshFormat::Gltf => {
-            return Err(MeshError::invalid(
-                out,
-                "writing .gltf is not supported; use .glb",
-            ));
-        }
+        MeshFormat::Gltf | MeshFormat::Fbx => return Err(super::format::not_written(out, fmt)),
         MeshFormat::Pc2 | MeshFormat::Mdd => {
             let n = seq.mesh().vertex_count();
             if fmt == MeshFormat::Pc2 {

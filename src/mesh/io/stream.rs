@@ -118,12 +118,7 @@ impl SequenceWriter {
                 width: frames.saturating_sub(1).to_string().len().max(4),
                 files: Vec::new(),
             },
-            MeshFormat::Gltf => {
-                return Err(MeshError::invalid(
-                    out,
-                    "writing .gltf is not supported; use .glb",
-                ));
-            }
+            MeshFormat::Gltf | MeshFormat::Fbx => return Err(super::format::not_written(out, fmt)),
             MeshFormat::Obj | MeshFormat::Ply => {
                 if frames != 1 {
                     return Err(MeshError::invalid(
@@ -195,31 +190,7 @@ impl SequenceWriter {
     /// Appends the next frame (the mesh's vertex count of positions).
     pub fn push(&mut self, frame: &[[f64; 3]]) -> Result<(), MeshError> {
         let n = self.mesh.vertex_count();
-        if frame.len() != n {
-            return Err(MeshError::invalid(
-                &self.out,
-                format!(
-                    "frame {} has {} vertices, the mesh has {n}",
-                    self.written,
-                    frame.len()
-                ),
-            ));
-        }
-        if self.written >= self.frames {
-            return Err(MeshError::invalid(
-                &self.out,
-                format!("more than the {} frames announced", self.frames),
-            ));
-        }
-        if let Some(v) = frame.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-            return Err(MeshError::invalid(
-                &self.out,
-                format!(
-                    "frame {}: vertex {v} has a non-finite coordinate",
-                    self.written
-                ),
-            ));
-        }
+        check_frame(&self.out, frame, n, self.written, self.frames)?;
         match &mut self.sink {
             Sink::Cache { file, big_endian } => {
                 let mut bytes = Vec::with_capacity(12 * n);
@@ -243,15 +214,7 @@ impl SequenceWriter {
     /// files written (a point cache's topology `.obj` beside it). Dropped
     /// before, a point cache leaves no file.
     pub fn finish(self) -> Result<Vec<PathBuf>, MeshError> {
-        if self.written != self.frames {
-            return Err(MeshError::invalid(
-                &self.out,
-                format!(
-                    "{} of the {} frames announced were written",
-                    self.written, self.frames
-                ),
-            ));
-        }
+        check_complete(&self.out, self.written, self.frames)?;
         match self.sink {
             Sink::Cache { file, .. } => {
                 file.commit()?;
@@ -271,6 +234,52 @@ impl SequenceWriter {
             }
         }
     }
+}
+
+/// The checks of a streamed frame (of [`SequenceWriter`] and of the
+/// writers it drives, [`super::usd::UsdaWriter`]): `vertices` positions,
+/// within the `frames` announced (`written` so far), every coordinate
+/// finite. Errors name `out`, the frame and the vertex.
+pub(crate) fn check_frame(
+    out: &Path,
+    frame: &[[f64; 3]],
+    vertices: usize,
+    written: usize,
+    frames: usize,
+) -> Result<(), MeshError> {
+    if frame.len() != vertices {
+        return Err(MeshError::invalid(
+            out,
+            format!(
+                "frame {written} has {} vertices, the mesh has {vertices}",
+                frame.len()
+            ),
+        ));
+    }
+    if written >= frames {
+        return Err(MeshError::invalid(
+            out,
+            format!("more than the {frames} frames announced"),
+        ));
+    }
+    if let Some(v) = frame.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        return Err(MeshError::invalid(
+            out,
+            format!("frame {written}: vertex {v} has a non-finite coordinate"),
+        ));
+    }
+    Ok(())
+}
+
+/// The check of a streamed output's end: every announced frame written.
+pub(crate) fn check_complete(out: &Path, written: usize, frames: usize) -> Result<(), MeshError> {
+    if written != frames {
+        return Err(MeshError::invalid(
+            out,
+            format!("{written} of the {frames} frames announced were written"),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -126,32 +126,7 @@ impl UsdaWriter {
 
     /// Appends the next frame's points (the mesh's vertex count, finite).
     pub fn push(&mut self, frame: &[[f64; 3]]) -> Result<(), MeshError> {
-        if frame.len() != self.vertices {
-            return Err(MeshError::invalid(
-                &self.out,
-                format!(
-                    "frame {} has {} vertices, the mesh has {}",
-                    self.written,
-                    frame.len(),
-                    self.vertices
-                ),
-            ));
-        }
-        if self.written >= self.frames {
-            return Err(MeshError::invalid(
-                &self.out,
-                format!("more than the {} frames announced", self.frames),
-            ));
-        }
-        if let Some(v) = frame.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-            return Err(MeshError::invalid(
-                &self.out,
-                format!(
-                    "frame {}: vertex {v} has a non-finite coordinate",
-                    self.written
-                ),
-            ));
-        }
+        super::stream::check_frame(&self.out, frame, self.vertices, self.written, self.frames)?;
         let mut e = [
             f32::INFINITY,
             f32::INFINITY,
@@ -188,15 +163,7 @@ impl UsdaWriter {
     /// Writes the extents and closes the layer, once every announced frame
     /// is in. Dropped before, it leaves no file.
     pub fn finish(mut self) -> Result<(), MeshError> {
-        if self.written != self.frames {
-            return Err(MeshError::invalid(
-                &self.out,
-                format!(
-                    "{} of the {} frames announced were written",
-                    self.written, self.frames
-                ),
-            ));
-        }
+        super::stream::check_complete(&self.out, self.written, self.frames)?;
         let mut t = String::from("    }\n    float3[] extent.timeSamples = {\n");
         for (k, e) in self.extents.iter().enumerate() {
             let _ = writeln!(

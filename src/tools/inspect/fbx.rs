@@ -1,6 +1,8 @@
 //! What `inspect` says about an FBX clip beyond the clip itself: the
-//! file's version, units, axes, frame rate and every take (animation
-//! stack), marking the one read.
+//! file's version, declared unit, axes, frame rate and every take
+//! (animation stack), marking the one read. The unit the clip is read in
+//! (the declared one, or the body's when it is missing or contradicts the
+//! body) is the report's `units`, with its reason.
 
 use crate::mocap::fbx::fbx_info;
 use crate::util::numfmt::Short;
@@ -38,10 +40,18 @@ pub fn describe(path: &Path, take: Option<&str>) -> String {
         })
         .collect();
     format!(
-        "fbx {} {}; {} m per unit; axes {}; {} fps; {} LimbNodes; takes: {}",
+        "fbx {} {}; {}; axes {}; {} fps; {} LimbNodes; takes: {}",
         i.version,
         if i.ascii { "ascii" } else { "binary" },
-        Short(i.metres_per_unit),
+        if i.unit_declared {
+            format!(
+                "UnitScaleFactor {} ({} m per unit)",
+                Short(i.metres_per_unit * 100.0),
+                Short(i.metres_per_unit)
+            )
+        } else {
+            "no UnitScaleFactor".to_string()
+        },
         i.axes,
         Short(i.fps),
         i.joints,
