@@ -77,12 +77,13 @@ fn skeleton_sliding(poses: &[Pose]) -> ClipSliding {
     track_sliding(&tracks, DVec3::Y, FPS, &FootOptions::default())
 }
 
-/// Real walks dragged along the floor at 0.4 to 1.6 m/s (a third of to
-/// the whole of the body's speed, back and forward) are flagged by the
+/// Real walks dragged along the floor at 0.35 to 1.25 m/s (0.3, 0.5 and
+/// 1 times the body's speed, back and forward) are flagged by the
 /// skeleton check and the mesh check alike; the walk as captured is not.
-/// Before: the mesh check read 0.00-0.43 cm per contact frame on the
-/// drags faster than 0.5 m/s (its contact needed the foot slower) and
-/// warned of none.
+/// Before (the old contact rule recomputed on the same meshes): dragged
+/// at the body's speed (1.2 m/s), both walks read 0.00 cm with 0 and 1
+/// contact foot-frames (their contact needed the foot slower than 0.5
+/// m/s) and were not warned about.
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn issue39_item3_a_walk_dragged_along_the_floor_is_flagged_at_any_speed() {
