@@ -6,8 +6,11 @@
 //! lift — built once per job ([`Prepared::new`]) and read, by reference,
 //! by every clip of a batch and every run of the `retarget` verb
 //! ([`Prepared::synthesise`]). [`Prepared::analyse`] makes the per-clip
-//! value ([`Analysed`]): the clip on the character's skeleton, once, read
-//! by retrieval, placement, deformation and the joint-velocity error.
+//! value ([`Analysed`]): the clip on the character's skeleton and the
+//! ground under each foot, from one run of the pose kernel, read by
+//! retrieval, placement, deformation, the joint-velocity error and the
+//! plausibility checks (which ran the kernel three more times per clip
+//! before issue 40).
 //!
 //! What it depends on, by reading the code: [`Blender::new`] reads the
 //! topology only; [`Deformer::new`] reads the character (topology, rig,
@@ -17,13 +20,16 @@
 //! per clip.
 
 use super::options::{RetargetError, RetargetOptions};
-use super::query::{database_floor_lift_on, on_character};
+use super::query::database_floor_lift_on;
 use crate::db::Character;
 use crate::deform::{DeformMode, DeformOptions, Deformer};
 use crate::mesh::Mesh;
 use crate::mesh::blend::Blender;
 use crate::pose::Pose;
-use crate::pose::retarget::{CharacterNeutral, Reference, character_neutral, stance_offsets};
+use crate::pose::retarget::{
+    CharacterNeutral, OnCharacter, Reference, character_neutral, on_character_with_grounds,
+    stance_offsets,
+};
 use glam::DVec3;
 use serde::Serialize;
 use std::time::Instant;
@@ -61,8 +67,8 @@ pub struct Prepared {
     frames: usize,
 }
 
-/// One clip analysed against a prepared character: made once per clip by
-/// [`Prepared::analyse`].
+/// One clip analysed against a character: made once per clip by
+/// [`Prepared::analyse`] (or [`Analysed::new`] without a preparation).
 #[derive(Debug, Clone)]
 pub struct Analysed {
     /// The clip on the character's skeleton, measured from its neutral
@@ -74,8 +80,50 @@ pub struct Analysed {
     /// compares poses as they stand on the database's floor (a block CMU
     /// subject 03 climbs is no part of the pose).
     pub on_floor: Vec<Pose>,
+    /// The pose kernel's run the query is made of: the clip's joints and
+    /// global rotations on the character's skeleton (before the floor
+    /// lift) and the ground under each foot, read by the plausibility
+    /// checks (the ground their floating, penetration and contact are
+    /// measured from; the clip's own foot glide).
+    pub on_character: OnCharacter,
     /// Seconds analysing.
     pub seconds: f64,
+}
+
+impl Analysed {
+    /// The clip `mocap` (the clip's own joints, metres, Y-up, the
+    /// character's rate) with its neutral `reference` on `ch`, measured
+    /// from the character's neutral pose `neutral` and raised by
+    /// `floor_lift` metres (the pose kernel runs once here): the query is
+    /// [`super::query::on_character`]'s, bit for bit.
+    pub fn new(
+        ch: &Character,
+        neutral: &Pose,
+        floor_lift: f64,
+        reference: &Reference,
+        mocap: &[Pose],
+    ) -> Analysed {
+        let t = Instant::now();
+        let on_character = on_character_with_grounds(ch.rest_pose(), neutral, reference, mocap);
+        let lift = DVec3::new(0.0, floor_lift, 0.0);
+        let query: Vec<Pose> = on_character
+            .frames
+            .iter()
+            .map(|(p, _)| p.map(|q| q + lift))
+            .collect();
+        let raised = stance_offsets(ch.rest_pose(), reference, mocap);
+        let on_floor = query
+            .iter()
+            .zip(raised.iter().chain(std::iter::repeat(&0.0)))
+            .map(|(p, &r)| p.map(|q| q - DVec3::Y * r))
+            .collect();
+        Analysed {
+            query,
+            on_floor,
+            on_character,
+            seconds: t.elapsed().as_secs_f64(),
+        }
+    }
 }
 
 impl Prepared {
@@ -164,24 +212,6 @@ impl Prepared {
     /// database's rate) with its neutral `reference`, analysed for `ch`
     /// (the pose kernel runs once here).
     pub fn analyse(&self, ch: &Character, reference: &Reference, mocap: &[Pose]) -> Analysed {
-        let t = Instant::now();
-        let query = on_character(
-            ch.rest_pose(),
-            &self.neutral.pose,
-            self.floor_lift,
-            reference,
-            mocap,
-        );
-        let raised = stance_offsets(ch.rest_pose(), reference, mocap);
-        let on_floor = query
-            .iter()
-            .zip(raised.iter().chain(std::iter::repeat(&0.0)))
-            .map(|(p, &r)| p.map(|q| q - DVec3::Y * r))
-            .collect();
-        Analysed {
-            query,
-            on_floor,
-            seconds: t.elapsed().as_secs_f64(),
-        }
+        Analysed::new(ch, &self.neutral.pose, self.floor_lift, reference, mocap)
     }
 }

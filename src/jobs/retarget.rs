@@ -8,13 +8,13 @@ use crate::batch::summary::count;
 use crate::batch::{Converted, Converter, Preparation};
 use crate::db::{BuildProgress, Character, CharacterOptions};
 use crate::deform::{DeformMode, TurnedOver};
-use crate::drive::query::{MocapPoses, load_mocap, to_database};
-use crate::drive::{Each, Output, Prepared, Report, RetargetOptions, Timings};
+use crate::drive::query::{MocapPoses, database_floor_lift, load_mocap};
+use crate::drive::{Analysed, Each, Output, Prepared, Report, RetargetOptions, Timings};
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
 use crate::pose::Pose;
-use crate::pose::retarget::{clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets};
+use crate::pose::retarget::{character_neutral, clip_head_trunk_deg, foot_glide_cm};
 use crate::rig::LoadOptions;
 use crate::tools::eval::{
     Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error,
@@ -68,6 +68,9 @@ pub struct RetargetRun {
     pub mocap: MocapPoses,
     /// Positions, the query on the character's skeleton, and the report.
     pub output: Output,
+    /// The clip analysed once ([`Prepared::analyse`]), which the
+    /// plausibility checks read.
+    pub analysed: Analysed,
 }
 
 impl RetargetJob {
@@ -119,9 +122,13 @@ impl RetargetJob {
     fn checker(&self) -> Option<&Checker> {
         self.checker
             .get_or_init(|| {
-                Checker::for_character(&self.character, PlausibilityOptions::default())
-                    .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
-                    .ok()
+                Checker::for_character_with(
+                    &self.character,
+                    self.prepared.neutral(),
+                    PlausibilityOptions::default(),
+                )
+                .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
+                .ok()
             })
             .as_ref()
     }
@@ -167,10 +174,14 @@ impl RetargetJob {
         )?;
         let output = Output {
             positions,
-            query: analysed.query,
+            query: analysed.query.clone(),
             report,
         };
-        Ok(RetargetRun { mocap, output })
+        Ok(RetargetRun {
+            mocap,
+            output,
+            analysed,
+        })
     }
 
     /// Retargets the clip at `clip` straight to `out` (by extension), each
@@ -233,6 +244,7 @@ impl RetargetJob {
         let velocity = velocity_error(&analysed.query, &skeletons);
         Ok(StreamedRun {
             mocap,
+            analysed,
             report,
             written,
             kept,
@@ -267,7 +279,7 @@ impl RetargetJob {
             &self.character,
             &run.kept,
             run.deformed().then_some(run.report.turned_over),
-            Some(&run.mocap),
+            Some((&run.mocap, &run.analysed)),
         )
     }
 
@@ -281,7 +293,7 @@ impl RetargetJob {
             &self.character,
             &out.positions,
             run.deformed().then_some(out.report.turned_over),
-            Some(&run.mocap),
+            Some((&run.mocap, &run.analysed)),
         )
     }
 
@@ -300,13 +312,14 @@ impl RetargetJob {
 }
 
 /// The plausibility of `positions` made for `ch` against the database's
-/// own frames (and, given the driving `clip`, its own head range), and the
-/// floor; `None` (with a warning) when the rig cannot support the checks.
+/// own frames (and, given the driving `clip` and its analysis, its own
+/// head range, foot glide and ground), and the floor; `None` (with a
+/// warning) when the rig cannot support the checks.
 pub fn plausibility(
     ch: &Character,
     positions: &[[f64; 3]],
     turned_over: Option<TurnedOver>,
-    clip: Option<&MocapPoses>,
+    clip: Option<(&MocapPoses, &Analysed)>,
 ) -> Option<(Plausibility, f64)> {
     match Checker::for_character(ch, PlausibilityOptions::default()) {
         Ok(c) => plausibility_with(&c, ch, positions, turned_over, clip),
@@ -324,7 +337,7 @@ pub fn plausibility_with(
     ch: &Character,
     positions: &[[f64; 3]],
     turned_over: Option<TurnedOver>,
-    clip: Option<&MocapPoses>,
+    clip: Option<(&MocapPoses, &Analysed)>,
 ) -> Option<(Plausibility, f64)> {
     match measure(c, ch, positions, turned_over, clip) {
         Ok(p) => Some(p),
@@ -335,29 +348,28 @@ pub fn plausibility_with(
     }
 }
 
-/// [`plausibility_with`]'s measure, its error kept.
+/// [`plausibility_with`]'s measure, its error kept. The clip's ground
+/// and foot glide are read off its analysis (`a`, the pose kernel's one
+/// run for the clip; issue 40: the checks ran it three more times).
 fn measure(
     c: &Checker,
     ch: &Character,
     positions: &[[f64; 3]],
     turned_over: Option<TurnedOver>,
-    clip: Option<&MocapPoses>,
+    clip: Option<(&MocapPoses, &Analysed)>,
 ) -> Result<(Plausibility, f64), crate::tools::eval::EvalError> {
     let opts = c.opts;
-    let Some(m) = clip else {
+    let Some((m, a)) = clip else {
         return Ok((c.measure(positions, ch.n(), turned_over)?.logged(), c.floor));
     };
     // Floating and penetration from the clip's own ground under each
     // foot (its floor, raised under a footfall on a step), where the
     // result stands.
-    let raised = foot_ground_offsets(ch.rest_pose(), &m.reference, &m.poses);
+    let raised = &a.on_character.foot_grounds;
     let p = c
-        .measure_on(positions, ch.n(), turned_over, Some(&raised))?
+        .measure_on(positions, ch.n(), turned_over, Some(raised))?
         .with_clip_head(&clip_head_trunk_deg(&m.reference, &m.poses), &opts.limits)
-        .with_clip_glide(
-            clip_foot_glide_cm(ch.rest_pose(), &m.reference, &m.poses),
-            &opts.limits,
-        )
+        .with_clip_glide(foot_glide_cm(ch.rest_pose(), &a.on_character), &opts.limits)
         .logged();
     Ok((p, c.floor))
 }
@@ -366,6 +378,9 @@ fn measure(
 pub struct StreamedRun {
     /// The clip as read (canonical poses, metres, Y-up, the database's rate).
     pub mocap: MocapPoses,
+    /// The clip analysed once ([`Prepared::analyse`]), which the
+    /// plausibility checks read.
+    pub analysed: Analysed,
     /// What was done.
     pub report: Report,
     /// Files written.
@@ -391,7 +406,7 @@ impl RetargetRun {
     /// The joint-velocity error (Huang et al. 2015, Sec. 6.2) between the
     /// query on the character's bones and the skeleton read off the result.
     /// The query is the run's own ([`Output::query`], the clip analysed
-    /// once), bit for bit what [`to_database`] gives.
+    /// once), bit for bit what [`crate::drive::query::to_database`] gives.
     pub fn velocity_error(&self, ch: &Character) -> VelocityError {
         let query = &self.output.query;
         let skel: Vec<Pose> = self
@@ -564,7 +579,17 @@ pub fn evaluate_result(
     use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
     let fps = ch.manifest().fps;
     let clip = load_mocap(mocap, load, fps)?;
-    let query = to_database(ch, &clip.reference, &clip.poses);
+    // The clip analysed once (the query of `to_database`, bit for bit),
+    // the neutral pose found once for it and the checker.
+    let neutral = character_neutral(ch.rest_pose(), ch.poses());
+    let analysed = Analysed::new(
+        ch,
+        &neutral.pose,
+        database_floor_lift(ch),
+        &clip.reference,
+        &clip.poses,
+    );
+    let query = &analysed.query;
     // The reader's errors name the file already (a context of its path
     // printed it twice: "out: out: no .obj files in the folder").
     let res = load_sequence(&result.to_string_lossy(), &SeqLoad::default())?;
@@ -595,8 +620,15 @@ pub fn evaluate_result(
     let out: Vec<Pose> = (0..res.frame_count())
         .map(|f| ch.rig().frame_joints(res.frame(f)))
         .collect();
-    let e = velocity_error(&query, &out);
-    let plaus = plausibility(ch, res.all_positions(), None, Some(&clip)).map(|p| p.0);
+    let e = velocity_error(query, &out);
+    let plaus = match Checker::for_character_with(ch, &neutral, PlausibilityOptions::default()) {
+        Ok(c) => plausibility_with(&c, ch, res.all_positions(), None, Some((&clip, &analysed))),
+        Err(e) => {
+            tracing::warn!("plausibility not measured: {e}");
+            None
+        }
+    }
+    .map(|p| p.0);
     Ok(EvalReport {
         mocap: mocap.to_path_buf(),
         result: result.to_path_buf(),

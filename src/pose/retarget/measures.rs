@@ -15,6 +15,40 @@ use glam::{DQuat, DVec3};
 
 use Canonical as C;
 
+/// A clip on the character's skeleton from one run of the pose kernel
+/// ([`on_character_with_grounds`]): what the per-clip analysed value
+/// (`drive::Analysed`) keeps for synthesis and the plausibility checks,
+/// so that neither runs the kernel again (issue 40).
+#[derive(Debug, Clone, Default)]
+pub struct OnCharacter {
+    /// Per frame, the character's joint positions and global joint
+    /// rotations (metres, Y-up, standing on the character's floor:
+    /// [`super::retarget_with_neutral`]'s result).
+    pub frames: Vec<(Pose, [DQuat; Canonical::COUNT])>,
+    /// The height of the ground under each foot (left, right) above the
+    /// character's floor per frame, gaps interpolated
+    /// ([`foot_ground_offsets`]).
+    pub foot_grounds: [Vec<f64>; 2],
+}
+
+/// The clip `mocap` on the character's skeleton `character` measured from
+/// its neutral pose `neutral` ([`super::retarget_with_neutral`], rigid
+/// toes) and the ground under each foot, from one run of the kernel.
+/// With `neutral` = `character` its parts are [`retarget`]'s result and
+/// [`foot_ground_offsets`], bit for bit.
+pub fn on_character_with_grounds(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+) -> OnCharacter {
+    let (frames, grounds) = retarget_on_grounds(character, neutral, reference, mocap, Toes::Rigid);
+    OnCharacter {
+        frames,
+        foot_grounds: grounds.map(|g| interpolate_gaps(&g)),
+    }
+}
+
 /// The clip's own foot glide while touching its ground, on the
 /// character (cm per touching foot-frame): the clip retargeted onto the
 /// character's skeleton `character` ([`retarget`]), then per foot the
@@ -28,12 +62,24 @@ use Canonical as C;
 /// the same feet and floor: a walk's feet pass through the touching band
 /// at heel strike and toe-off, which a mostly planted capture (the samba
 /// dance) never does, so a result is held to its own clip's figure.
+/// Runs the kernel; [`foot_glide_cm`] reads a run already made.
 pub fn clip_foot_glide_cm(character: &Pose, reference: &Reference, mocap: &[Pose]) -> f64 {
     if mocap.len() < 2 {
         return 0.0;
     }
-    let out = retarget(character, reference, mocap);
-    let raised = foot_ground_offsets(character, reference, mocap);
+    foot_glide_cm(
+        character,
+        &on_character_with_grounds(character, character, reference, mocap),
+    )
+}
+
+/// [`clip_foot_glide_cm`] of the clip already on the character's skeleton
+/// `character` (`on`, [`on_character_with_grounds`]): no kernel run.
+pub fn foot_glide_cm(character: &Pose, on: &OnCharacter) -> f64 {
+    let (out, raised) = (&on.frames, &on.foot_grounds);
+    if out.len() < 2 {
+        return 0.0;
+    }
     let rest = sole_height(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
     let (mut travel, mut touching) = (0.0, 0usize);
     for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
@@ -43,7 +89,8 @@ pub fn clip_foot_glide_cm(character: &Pose, reference: &Reference, mocap: &[Pose
         let (a, k) = (ankle.index(), toe.index());
         let touch = |t: usize| {
             let (p, g) = &out[t];
-            foot_soles(character, p, g)[foot] <= rest + raised[foot][t] + 0.03
+            let ground = raised[foot].get(t).copied().unwrap_or(0.0);
+            foot_soles(character, p, g)[foot] <= rest + ground + 0.03
         };
         let mid = |t: usize| {
             let p = &out[t].0;
@@ -134,9 +181,7 @@ pub fn foot_ground_offsets(
     reference: &Reference,
     mocap: &[Pose],
 ) -> [Vec<f64>; 2] {
-    retarget_on_grounds(character, character, reference, mocap, Toes::Rigid)
-        .1
-        .map(|g| interpolate_gaps(&g))
+    on_character_with_grounds(character, character, reference, mocap).foot_grounds
 }
 
 /// The height the character's body stands raised above its floor per

@@ -74,7 +74,8 @@ pub use feet::Toes;
 pub use ground::{Support, clip_support, ground_tilt};
 pub use kernel::{retarget, retarget_toes, retarget_with_neutral};
 pub use measures::{
-    clip_foot_glide_cm, clip_head_trunk_deg, foot_ground_offsets, ground_offsets, stance_offsets,
+    OnCharacter, clip_foot_glide_cm, clip_head_trunk_deg, foot_glide_cm, foot_ground_offsets,
+    ground_offsets, on_character_with_grounds, stance_offsets,
 };
 pub use reference::{
     CharacterNeutral, ClipPoses, JointRotations, NeutralSource, Reference, ReferenceSource,

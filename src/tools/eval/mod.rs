@@ -21,7 +21,7 @@ pub mod velocity;
 pub mod vertex;
 
 pub use error::EvalError;
-pub use feet::{ClipSliding, Feet, FootOptions, Sliding, clip_sliding, track_sliding};
+pub use feet::{ClipSliding, Feet, FootOptions, Sliding, clip_sliding, sole_ends, track_sliding};
 pub use ground::{Ground, floor_height, ground, lowest_heights};
 pub use head::{HeadOptions, HeadTorso};
 pub use knee::knee_hyperextension;

@@ -230,6 +230,19 @@ impl Checker {
     /// `retarget` writes them), with the database's floor (median lowest
     /// point of its frames) and its own figures as the reference.
     pub fn for_character(ch: &Character, opts: PlausibilityOptions) -> Result<Checker, EvalError> {
+        let neutral = crate::pose::retarget::character_neutral(ch.rest_pose(), ch.poses());
+        Checker::for_character_with(ch, &neutral, opts)
+    }
+
+    /// [`Checker::for_character`] with the character's neutral pose
+    /// (`pose::retarget::character_neutral`) found already: a prepared
+    /// character holds it (`drive::Prepared::neutral`), so a job finds it
+    /// once (issue 40).
+    pub fn for_character_with(
+        ch: &Character,
+        neutral: &crate::pose::retarget::CharacterNeutral,
+        opts: PlausibilityOptions,
+    ) -> Result<Checker, EvalError> {
         let mut c = Checker::new(
             ch.topology(),
             ch.rig(),
@@ -264,7 +277,6 @@ impl Checker {
         // neutrally is retargeted onto. Measured from a bent rest frame (a
         // stride, a bow) every frame would read its difference from that
         // pose.
-        let neutral = crate::pose::retarget::character_neutral(ch.rest_pose(), ch.poses());
         if let crate::pose::retarget::NeutralSource::Frame(i) = neutral.source
             && i < ch.frame_count()
         {

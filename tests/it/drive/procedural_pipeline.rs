@@ -290,3 +290,77 @@ fn streamed_retarget_writes_the_bytes_of_the_held_one() {
     // No bytes asked for: one frame is kept, the first.
     assert_eq!(streamed.kept, first);
 }
+
+/// Counts the runs of the pose kernel (its `pose_kernel` tracing span) on
+/// this thread while `f` runs.
+fn kernel_runs(f: impl FnOnce()) -> usize {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+    use tracing::span::{Attributes, Id, Record};
+    struct Count(Arc<AtomicUsize>, AtomicU64);
+    impl tracing::Subscriber for Count {
+        fn enabled(&self, _: &tracing::Metadata<'_>) -> bool {
+            true
+        }
+        fn new_span(&self, a: &Attributes<'_>) -> Id {
+            if a.metadata().name() == "pose_kernel" {
+                self.0.fetch_add(1, Ordering::Relaxed);
+            }
+            Id::from_u64(self.1.fetch_add(1, Ordering::Relaxed) + 1)
+        }
+        fn record(&self, _: &Id, _: &Record<'_>) {}
+        fn record_follows_from(&self, _: &Id, _: &Id) {}
+        fn event(&self, _: &tracing::Event<'_>) {}
+        fn enter(&self, _: &Id) {}
+        fn exit(&self, _: &Id) {}
+    }
+    let n = Arc::new(AtomicUsize::new(0));
+    tracing::subscriber::with_default(Count(n.clone(), AtomicU64::new(0)), f);
+    n.load(Ordering::Relaxed)
+}
+
+/// Issue 40, "a per-clip analysed value computed once and read by
+/// synthesis, placement and the plausibility checks": retargeting a clip
+/// and checking the result's plausibility runs the pose kernel once per
+/// clip, held or streamed, and `eval` once (before: 4 each: the query,
+/// then `foot_ground_offsets` and `clip_foot_glide_cm`'s two in the checks;
+/// `eval` also found the character's neutral pose twice).
+#[test]
+fn retarget_and_its_checks_run_the_pose_kernel_once_per_clip() {
+    use surfmotion::jobs::{RetargetJob, RetargetJobOptions};
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let clip = tmp.path().join("walk.bvh");
+    surfmotion::mocap::bvh::write_bvh(&gait_clip(Gait::Walk, 2.0, FPS), &clip).unwrap();
+    let job = RetargetJob::load(&f.db, RetargetJobOptions::default(), &Quiet).unwrap();
+    let mut held = None;
+    let runs = kernel_runs(|| {
+        let run = job.run(&clip).unwrap();
+        assert!(job.plausibility_of(&run).is_some());
+        held = Some(run);
+    });
+    assert_eq!(runs, 1, "held run and its checks");
+    let runs = kernel_runs(|| {
+        let run = job
+            .run_to(&clip, &tmp.path().join("s.pc2"), 1 << 30)
+            .unwrap();
+        assert!(job.plausibility_of_streamed(&run).is_some());
+    });
+    assert_eq!(runs, 1, "streamed run and its checks");
+    let out = tmp.path().join("held.pc2");
+    job.write(held.unwrap().output.positions, &out).unwrap();
+    let mut report = None;
+    let runs = kernel_runs(|| {
+        report = Some(
+            surfmotion::jobs::retarget::evaluate_result(
+                &job.character,
+                &clip,
+                &out,
+                &Default::default(),
+            )
+            .unwrap(),
+        );
+    });
+    assert_eq!(runs, 1, "eval");
+    assert!(report.unwrap().plausibility.is_some());
+}
