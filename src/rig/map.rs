@@ -504,126 +504,155 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             ),
         });
     }
-    let pose_note = |b: &structure::Body| {
-        let mut notes: Vec<String> = Vec::new();
-        if let Some(f) = b.reference_frame {
-            notes.push(format!(
-                "frame {f}: the rest skeleton is not a standing body (its legs do not point away from its spine, or it has no extent), so the structure was read on this frame's pose"
-            ));
-        }
-        if !b.ignored.is_empty() {
-            notes.push(format!(
-                "{} chain(s) off the chest are neither arms nor the neck and are ignored: {}",
-                b.ignored.len(),
-                b.ignored.join(", ")
-            ));
-        }
-        notes.join("; ")
-    };
-    let conv_chest_agrees = |b: &structure::Body| {
-        let rest = &b.reference;
-        let at = |c: Canonical| {
-            conv.map
-                .joints
-                .get(&c)
-                .and_then(|n| clip.joint(n))
-                .map(|j| rest[j.idx()])
+    if conv.missing.is_empty()
+        && body
+            .as_ref()
+            .map_or(true, |b| conv_chest_agrees(&conv, clip, b))
+    {
+        return match &body {
+            Ok(b) => Ok(by_names_checked(conv, clip, b)),
+            Err(_) => by_names_alone(conv, clip),
         };
-        let picked = |c: Canonical| b.picks[c.index()].joint.map(|j| rest[j]);
-        match (
-            at(Canonical::Chest),
-            picked(Canonical::Chest),
-            picked(Canonical::Pelvis),
-            picked(Canonical::Neck),
-        ) {
-            (Some(a), Some(c), Some(p), Some(n)) => a.distance(c) <= 0.2 * p.distance(n),
-            _ => true,
-        }
-    };
-    if conv.missing.is_empty() && body.as_ref().map_or(true, conv_chest_agrees) {
-        let mut conv = conv;
-        if let Ok(b) = &body {
-            chest_at_branch(&mut conv, clip, b);
-        }
-        let Ok(b) = &body else {
-            // Names alone decide: still no humanoid when the named legs do
-            // not point away from the named trunk (a T-rex or a lizard
-            // carrying every HumanIK name, its arms too short to count).
-            if let Some(cos) = named_stance(clip, &conv.map)
-                && cos > -0.7
-            {
-                return Err(RigError::NotHumanoid {
-                    reason: format!(
-                        "the legs named '{}' and '{}' do not point away from the spine (cosine {cos:.2} in the rest pose and the median frame): {} (although every '{}' name is present)",
-                        conv.map
-                            .joints
-                            .get(&Canonical::LHip)
-                            .map_or("", String::as_str),
-                        conv.map
-                            .joints
-                            .get(&Canonical::RHip)
-                            .map_or("", String::as_str),
-                        structure::HORIZONTAL,
-                        conv.map.convention
-                    ),
-                });
-            }
-            let mut d = conv;
-            d.sides = "from names (the structure analysis did not find a humanoid)".into();
-            return Ok(d);
-        };
-        let id = |c: Canonical| {
-            conv.map
-                .joints
-                .get(&c)
-                .and_then(|n| clip.joint(n))
-                .map(|j| j.idx())
-        };
-        let within = |c: Canonical, set: &[usize]| id(c).is_some_and(|j| set.contains(&j));
-        use Canonical as C;
-        let legs_swapped = within(C::LHip, &b.right_leg) && within(C::RHip, &b.left_leg);
-        let arms_swapped = within(C::LShoulder, &b.right_arm) && within(C::RShoulder, &b.left_arm);
-        let confirmed = within(C::LHip, &b.left_leg)
-            && within(C::RHip, &b.right_leg)
-            && within(C::LShoulder, &b.left_arm)
-            && within(C::RShoulder, &b.right_arm);
-        if !(legs_swapped || arms_swapped) {
-            let mut d = conv;
-            d.structure_pose = pose_note(b);
-            d.sides = if confirmed {
-                format!(
-                    "from names, confirmed by geometry (forward from the {}, confidence {:.2})",
-                    b.forward_from, b.side_confidence
-                )
-            } else {
-                "from names (geometry undecided)".into()
-            };
-            return Ok(d);
-        }
-        let mut joints = BTreeMap::new();
-        for (c, n) in &conv.map.joints {
-            let swap = if C::LEGS.contains(c) {
-                legs_swapped
-            } else {
-                arms_swapped
-            };
-            joints.insert(if swap { swap_side(*c) } else { *c }, n.clone());
-        }
-        let map = RigMap {
-            convention: BY_NAMES.into(),
-            joints,
-            derived: BTreeMap::new(),
-            file: None,
-        };
-        let mut d = Detection::from_map(map, Source::Names, 0.9, "");
-        d.structure_pose = pose_note(b);
-        d.sides = format!(
-            "from geometry (forward from the {}, confidence {:.2}); the names' left/right are mirrored",
-            b.forward_from, b.side_confidence
-        );
-        return Ok(d);
     }
     let b = body.map_err(|e| RigError::NotHumanoid { reason: e.0 })?;
+    Ok(by_structure(&names, &b))
+}
+
+/// The notes of a detection on the structure analysis `b`: the frame read
+/// for a rest skeleton that is not a standing body, the chains off the
+/// chest ignored.
+fn pose_note(b: &structure::Body) -> String {
+    let mut notes: Vec<String> = Vec::new();
+    if let Some(f) = b.reference_frame {
+        notes.push(format!(
+            "frame {f}: the rest skeleton is not a standing body (its legs do not point away from its spine, or it has no extent), so the structure was read on this frame's pose"
+        ));
+    }
+    if !b.ignored.is_empty() {
+        notes.push(format!(
+            "{} chain(s) off the chest are neither arms nor the neck and are ignored: {}",
+            b.ignored.len(),
+            b.ignored.join(", ")
+        ));
+    }
+    notes.join("; ")
+}
+
+/// True unless the convention's chest lies off the structure's chest by
+/// more than a fifth of pelvis → neck (in the pose the structure was read
+/// on), or either is missing.
+fn conv_chest_agrees(conv: &Detection, clip: &Clip, b: &structure::Body) -> bool {
+    let rest = &b.reference;
+    let at = |c: Canonical| {
+        conv.map
+            .joints
+            .get(&c)
+            .and_then(|n| clip.joint(n))
+            .map(|j| rest[j.idx()])
+    };
+    let picked = |c: Canonical| b.picks[c.index()].joint.map(|j| rest[j]);
+    match (
+        at(Canonical::Chest),
+        picked(Canonical::Chest),
+        picked(Canonical::Pelvis),
+        picked(Canonical::Neck),
+    ) {
+        (Some(a), Some(c), Some(p), Some(n)) => a.distance(c) <= 0.2 * p.distance(n),
+        _ => true,
+    }
+}
+
+/// A full convention's map when the structure analysis found no humanoid:
+/// the names decide, unless the named legs do not point away from the
+/// named trunk (a T-rex or a lizard carrying every HumanIK name, its arms
+/// too short to count).
+fn by_names_alone(conv: Detection, clip: &Clip) -> Result<Detection, RigError> {
+    if let Some(cos) = named_stance(clip, &conv.map)
+        && cos > -0.7
+    {
+        return Err(RigError::NotHumanoid {
+            reason: format!(
+                "the legs named '{}' and '{}' do not point away from the spine (cosine {cos:.2} in the rest pose and the median frame): {} (although every '{}' name is present)",
+                conv.map
+                    .joints
+                    .get(&Canonical::LHip)
+                    .map_or("", String::as_str),
+                conv.map
+                    .joints
+                    .get(&Canonical::RHip)
+                    .map_or("", String::as_str),
+                structure::HORIZONTAL,
+                conv.map.convention
+            ),
+        });
+    }
+    let mut d = conv;
+    d.sides = "from names (the structure analysis did not find a humanoid)".into();
+    Ok(d)
+}
+
+/// A full convention's map checked against the structure analysis `b`:
+/// its chest moved to the arms' branch ([`chest_at_branch`]), its sides
+/// confirmed by the geometry's, or its left and right swapped (limb pair
+/// by limb pair) when the geometry puts them on the other side.
+fn by_names_checked(conv: Detection, clip: &Clip, b: &structure::Body) -> Detection {
+    let mut conv = conv;
+    chest_at_branch(&mut conv, clip, b);
+    let id = |c: Canonical| {
+        conv.map
+            .joints
+            .get(&c)
+            .and_then(|n| clip.joint(n))
+            .map(|j| j.idx())
+    };
+    let within = |c: Canonical, set: &[usize]| id(c).is_some_and(|j| set.contains(&j));
+    use Canonical as C;
+    let legs_swapped = within(C::LHip, &b.right_leg) && within(C::RHip, &b.left_leg);
+    let arms_swapped = within(C::LShoulder, &b.right_arm) && within(C::RShoulder, &b.left_arm);
+    let confirmed = within(C::LHip, &b.left_leg)
+        && within(C::RHip, &b.right_leg)
+        && within(C::LShoulder, &b.left_arm)
+        && within(C::RShoulder, &b.right_arm);
+    if !(legs_swapped || arms_swapped) {
+        let mut d = conv;
+        d.structure_pose = pose_note(b);
+        d.sides = if confirmed {
+            format!(
+                "from names, confirmed by geometry (forward from the {}, confidence {:.2})",
+                b.forward_from, b.side_confidence
+            )
+        } else {
+            "from names (geometry undecided)".into()
+        };
+        return d;
+    }
+    let mut joints = BTreeMap::new();
+    for (c, n) in &conv.map.joints {
+        let swap = if C::LEGS.contains(c) {
+            legs_swapped
+        } else {
+            arms_swapped
+        };
+        joints.insert(if swap { swap_side(*c) } else { *c }, n.clone());
+    }
+    let map = RigMap {
+        convention: BY_NAMES.into(),
+        joints,
+        derived: BTreeMap::new(),
+        file: None,
+    };
+    let mut d = Detection::from_map(map, Source::Names, 0.9, "");
+    d.structure_pose = pose_note(b);
+    d.sides = format!(
+        "from geometry (forward from the {}, confidence {:.2}); the names' left/right are mirrored",
+        b.forward_from, b.side_confidence
+    );
+    d
+}
+
+/// The map the structure analysis `b` found (`names`: the clip's joint
+/// names), its joints, derivation rules and sides reported.
+fn by_structure(names: &[String], b: &structure::Body) -> Detection {
     let mut joints = BTreeMap::new();
     let mut derived = BTreeMap::new();
     let mut reports = Vec::with_capacity(Canonical::COUNT);
@@ -674,7 +703,7 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             ),
         )
     };
-    Ok(Detection {
+    Detection {
         derived: map.derived.keys().copied().collect(),
         map,
         missing,
@@ -682,8 +711,8 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
         joints: reports,
         side_confidence,
         sides,
-        structure_pose: pose_note(&b),
-    })
+        structure_pose: pose_note(b),
+    }
 }
 
 /// A convention's chest moved up the spine to the joint the arms and the

@@ -150,43 +150,263 @@ struct Geo<'a> {
     from_frame: Option<usize>,
 }
 
+/// Each joint's parent and children (children in index order).
+fn hierarchy(clip: &Clip) -> (Vec<Option<usize>>, Vec<Vec<usize>>) {
+    let parent: Vec<Option<usize>> = clip
+        .joints
+        .iter()
+        .map(|j| j.parent.map(|p| p.idx()))
+        .collect();
+    let mut children = vec![Vec::new(); parent.len()];
+    for (i, p) in parent.iter().enumerate() {
+        if let Some(p) = p {
+            children[*p].push(i);
+        }
+    }
+    (parent, children)
+}
+
+/// Bone lengths, and the reference pose: the rest skeleton, or the frame
+/// `from_frame` standing in for it (its world pose; its local
+/// translations, which position channels may set, the bones). Returns
+/// the lengths, world positions and world rotations.
+fn reference_pose(clip: &Clip, from_frame: Option<usize>) -> (Vec<f64>, Vec<DVec3>, Vec<DQuat>) {
+    let n = clip.joint_count();
+    match from_frame {
+        Some(f) if f < clip.frame_count() => {
+            let mut p = vec![DVec3::ZERO; n];
+            let mut r = vec![DQuat::IDENTITY; n];
+            clip.world_into(f, &mut p, &mut r);
+            let len = (0..n)
+                .map(|i| clip.translations.get(f * n + i).map_or(0.0, |t| t.length()))
+                .collect();
+            (len, p, r)
+        }
+        _ => (
+            clip.joints.iter().map(|j| j.offset.length()).collect(),
+            clip.rest_positions().0,
+            vec![DQuat::IDENTITY; n],
+        ),
+    }
+}
+
+/// The bounding-box diagonal of some points.
+fn bbox_diag(pts: impl Iterator<Item = DVec3>) -> f64 {
+    let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    for p in pts {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    (hi - lo).length()
+}
+
+/// The reference pose (positions `rest`, rotations `rot0`) followed by
+/// up to [`MAX_FRAMES`] frames spread over the clip.
+fn sampled_poses(clip: &Clip, rest: &[DVec3], rot0: Vec<DQuat>) -> Vec<(Vec<DVec3>, Vec<DQuat>)> {
+    let n = clip.joint_count();
+    let mut poses = Vec::new();
+    let mut rot = vec![DQuat::IDENTITY; n];
+    poses.push((rest.to_vec(), rot0));
+    let frames = clip.frame_count();
+    let step = (frames / MAX_FRAMES).max(1);
+    let mut pos = vec![DVec3::ZERO; n];
+    let mut f = 0;
+    while f < frames {
+        clip.world_into(f, &mut pos, &mut rot);
+        poses.push((pos.clone(), rot.clone()));
+        f += step;
+    }
+    poses
+}
+
+/// The body's size: the largest single-pose extent (a rest skeleton in
+/// bone-local frames, as CC exports, can be a folded stick; at least
+/// `diag`, the reference pose's), over the joints from the first
+/// branching joint down: a root chain above it is no part of the body
+/// (Bandai's static `joint_Root` stays at the origin while the body walks
+/// metres away from it).
+fn body_size(
+    parent: &[Option<usize>],
+    children: &[Vec<usize>],
+    poses: &[(Vec<DVec3>, Vec<DQuat>)],
+    diag: f64,
+) -> f64 {
+    let n = parent.len();
+    let mut top = parent.iter().position(Option::is_none).unwrap_or(0);
+    for _ in 0..n {
+        match children[top].as_slice() {
+            [only] => top = *only,
+            _ => break,
+        }
+    }
+    let mut above = vec![false; n];
+    let mut k = parent[top];
+    while let Some(x) = k {
+        if above[x] {
+            break;
+        }
+        above[x] = true;
+        k = parent[x];
+    }
+    poses
+        .iter()
+        .map(|(p, _)| {
+            bbox_diag(
+                p.iter()
+                    .enumerate()
+                    .filter(|&(i, _)| !above[i])
+                    .map(|(_, q)| *q),
+            )
+        })
+        .filter(|d| d.is_finite())
+        .fold(diag, f64::max)
+}
+
+/// Twist and share bones by geometry: a side branch whose joints (and End
+/// Sites) all lie on the bone from its parent to a sibling, in the rest
+/// pose and most sampled poses (CC's ThighTwist01/02 beside Calf,
+/// ToeBaseShareBone beside ToeBase), is a helper whatever its name.
+fn helpers_along_bones(
+    clip: &Clip,
+    parent: &[Option<usize>],
+    children: &[Vec<usize>],
+    len: &[f64],
+    poses: &[(Vec<DVec3>, Vec<DQuat>)],
+    eps: f64,
+    helper: &mut [bool],
+) {
+    let subtree_of = |j: usize| {
+        let mut out = Vec::new();
+        let mut stack = vec![j];
+        while let Some(k) = stack.pop() {
+            out.push(k);
+            stack.extend(children[k].iter().copied());
+            if out.len() > 64 {
+                break; // a twist chain is short; a limb is not a helper
+            }
+        }
+        out
+    };
+    for j in 0..parent.len() {
+        let Some(p) = parent[j] else { continue };
+        if helper[j] || children[p].len() < 2 {
+            continue;
+        }
+        let sub = subtree_of(j);
+        if sub.len() > 64 {
+            continue;
+        }
+        let on_bone = |k: usize| {
+            let seg_len = len[k];
+            if k == j || seg_len < eps {
+                return false;
+            }
+            let tol = 0.1 * seg_len;
+            let hits = poses
+                .iter()
+                .filter(|(ps, rs)| {
+                    let (a, mut b) = (ps[p], ps[k]);
+                    // The bone runs on through pass-through joints in
+                    // line with it (a split shin: Calf → x → Foot).
+                    let mut e = k;
+                    for _ in 0..8 {
+                        let dir = (b - a).normalize_or_zero();
+                        let next = children[e].iter().copied().find(|&q| {
+                            let v = ps[q] - a;
+                            len[q] >= eps
+                                && v.dot(dir) > (b - a).length()
+                                && (v - dir * v.dot(dir)).length() <= tol
+                        });
+                        match next {
+                            Some(q) => {
+                                e = q;
+                                b = ps[q];
+                            }
+                            None => break,
+                        }
+                    }
+                    let ab = b - a;
+                    let d = |q: DVec3| {
+                        let t = ((q - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+                        (a + ab * t).distance(q)
+                    };
+                    sub.iter().all(|&m| {
+                        d(ps[m]) <= tol
+                            && clip.joints[m]
+                                .tail
+                                .is_none_or(|t| d(ps[m] + rs[m] * t) <= tol)
+                    })
+                })
+                .count();
+            hits * 5 >= poses.len() * 4
+        };
+        if children[p].iter().any(|&k| on_bone(k)) {
+            for m in sub {
+                helper[m] = true;
+            }
+        }
+    }
+}
+
+/// Per joint, whether its subtree holds a non-helper joint (`useful`),
+/// and its reach: the longest path through useful children to an end
+/// point (End Site included).
+fn useful_and_reach(
+    clip: &Clip,
+    children: &[Vec<usize>],
+    len: &[f64],
+    helper: &[bool],
+) -> (Vec<bool>, Vec<f64>) {
+    let n = children.len();
+    // Children lists are in index order and parents precede children, so
+    // a reverse sweep sees every child before its parent.
+    let mut useful = vec![false; n];
+    let mut reach = vec![0.0f64; n];
+    for i in (0..n).rev() {
+        let mut r = clip.joints[i].tail.map_or(0.0, |t| t.length());
+        let mut u = !helper[i];
+        for &c in &children[i] {
+            if useful[c] {
+                u = true;
+                r = r.max(len[c] + reach[c]);
+            }
+        }
+        useful[i] = u;
+        reach[i] = if r.is_finite() { r } else { 0.0 };
+    }
+    (useful, reach)
+}
+
+/// Joints joined to their parent by a bone under `eps` long form one node:
+/// each joint's representative is the node's top joint.
+fn zero_length_nodes(parent: &[Option<usize>], len: &[f64], eps: f64) -> Vec<usize> {
+    let mut rep: Vec<usize> = (0..parent.len()).collect();
+    for i in 0..parent.len() {
+        if let Some(p) = parent[i]
+            && len[i] < eps
+        {
+            rep[i] = rep[p];
+        }
+    }
+    rep
+}
+
 impl<'a> Geo<'a> {
+    /// Step 1 on the rest skeleton, or on the frame `from_frame` standing
+    /// in for it: the hierarchy ([`hierarchy`]), bone lengths and the
+    /// reference pose ([`reference_pose`]), the sampled poses
+    /// ([`sampled_poses`]), the body's size ([`body_size`]), the helper
+    /// bones (by name, then by geometry: [`helpers_along_bones`]), each
+    /// joint's reach ([`useful_and_reach`]) and the zero-length nodes
+    /// ([`zero_length_nodes`]).
     fn new(
         clip: &'a Clip,
         tokens: &[Vec<String>],
         from_frame: Option<usize>,
     ) -> Result<Geo<'a>, NotHumanoid> {
         let n = clip.joint_count();
-        let parent: Vec<Option<usize>> = clip
-            .joints
-            .iter()
-            .map(|j| j.parent.map(|p| p.idx()))
-            .collect();
-        let mut children = vec![Vec::new(); n];
-        for (i, p) in parent.iter().enumerate() {
-            if let Some(p) = p {
-                children[*p].push(i);
-            }
-        }
-        // Bone lengths, and the reference pose: the rest skeleton, or the
-        // frame standing in for it (its world pose; its local translations,
-        // which position channels may set, the bones).
-        let (len, rest, rot0): (Vec<f64>, Vec<DVec3>, Vec<DQuat>) = match from_frame {
-            Some(f) if f < clip.frame_count() => {
-                let mut p = vec![DVec3::ZERO; n];
-                let mut r = vec![DQuat::IDENTITY; n];
-                clip.world_into(f, &mut p, &mut r);
-                let len = (0..n)
-                    .map(|i| clip.translations.get(f * n + i).map_or(0.0, |t| t.length()))
-                    .collect();
-                (len, p, r)
-            }
-            _ => (
-                clip.joints.iter().map(|j| j.offset.length()).collect(),
-                clip.rest_positions().0,
-                vec![DQuat::IDENTITY; n],
-            ),
-        };
+        let (parent, children) = hierarchy(clip);
+        let (len, rest, rot0) = reference_pose(clip, from_frame);
         let mut helper: Vec<bool> = (0..n)
             .map(|i| tokens.get(i).is_some_and(|t| is_helper(t)))
             .collect();
@@ -196,15 +416,7 @@ impl<'a> Geo<'a> {
             .enumerate()
             .map(|(i, j)| j.tail.map(|t| rest[i] + rot0[i] * t))
             .collect();
-        let bbox_diag = |pts: &mut dyn Iterator<Item = DVec3>| {
-            let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-            for p in pts {
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
-            (hi - lo).length()
-        };
-        let diag = bbox_diag(&mut rest.iter().chain(tail_rest.iter().flatten()).copied());
+        let diag = bbox_diag(rest.iter().chain(tail_rest.iter().flatten()).copied());
         if !(diag.is_finite() && diag > 0.0) {
             return Err(NotHumanoid(match from_frame {
                 Some(f) => format!("the skeleton has no extent at frame {f}"),
@@ -212,151 +424,11 @@ impl<'a> Geo<'a> {
             }));
         }
         let eps = 1e-3 * diag;
-        let mut poses = Vec::new();
-        let mut rot = vec![DQuat::IDENTITY; n];
-        poses.push((rest.clone(), rot0));
-        let frames = clip.frame_count();
-        let step = (frames / MAX_FRAMES).max(1);
-        let mut pos = vec![DVec3::ZERO; n];
-        let mut f = 0;
-        while f < frames {
-            clip.world_into(f, &mut pos, &mut rot);
-            poses.push((pos.clone(), rot.clone()));
-            f += step;
-        }
-        // The body's size: the largest single-pose extent (a rest skeleton
-        // in bone-local frames, as CC exports, can be a folded stick), over
-        // the joints from the first branching joint down: a root chain
-        // above it is no part of the body (Bandai's static `joint_Root`
-        // stays at the origin while the body walks metres away from it).
-        let mut top = parent.iter().position(Option::is_none).unwrap_or(0);
-        for _ in 0..n {
-            match children[top].as_slice() {
-                [only] => top = *only,
-                _ => break,
-            }
-        }
-        let mut above = vec![false; n];
-        let mut k = parent[top];
-        while let Some(x) = k {
-            if above[x] {
-                break;
-            }
-            above[x] = true;
-            k = parent[x];
-        }
-        let size = poses
-            .iter()
-            .map(|(p, _)| {
-                bbox_diag(
-                    &mut p
-                        .iter()
-                        .enumerate()
-                        .filter(|&(i, _)| !above[i])
-                        .map(|(_, q)| *q),
-                )
-            })
-            .filter(|d| d.is_finite())
-            .fold(diag, f64::max);
-        // Twist and share bones by geometry: a side branch whose joints (and
-        // End Sites) all lie on the bone from its parent to a sibling, in the
-        // rest pose and most sampled poses (CC's ThighTwist01/02 beside Calf,
-        // ToeBaseShareBone beside ToeBase), is a helper whatever its name.
-        let subtree_of = |j: usize| {
-            let mut out = Vec::new();
-            let mut stack = vec![j];
-            while let Some(k) = stack.pop() {
-                out.push(k);
-                stack.extend(children[k].iter().copied());
-                if out.len() > 64 {
-                    break; // a twist chain is short; a limb is not a helper
-                }
-            }
-            out
-        };
-        for j in 0..n {
-            let Some(p) = parent[j] else { continue };
-            if helper[j] || children[p].len() < 2 {
-                continue;
-            }
-            let sub = subtree_of(j);
-            if sub.len() > 64 {
-                continue;
-            }
-            let on_bone = |k: usize| {
-                let seg_len = len[k];
-                if k == j || seg_len < eps {
-                    return false;
-                }
-                let tol = 0.1 * seg_len;
-                let hits = poses
-                    .iter()
-                    .filter(|(ps, rs)| {
-                        let (a, mut b) = (ps[p], ps[k]);
-                        // The bone runs on through pass-through joints in
-                        // line with it (a split shin: Calf → x → Foot).
-                        let mut e = k;
-                        for _ in 0..8 {
-                            let dir = (b - a).normalize_or_zero();
-                            let next = children[e].iter().copied().find(|&q| {
-                                let v = ps[q] - a;
-                                len[q] >= eps
-                                    && v.dot(dir) > (b - a).length()
-                                    && (v - dir * v.dot(dir)).length() <= tol
-                            });
-                            match next {
-                                Some(q) => {
-                                    e = q;
-                                    b = ps[q];
-                                }
-                                None => break,
-                            }
-                        }
-                        let ab = b - a;
-                        let d = |q: DVec3| {
-                            let t = ((q - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
-                            (a + ab * t).distance(q)
-                        };
-                        sub.iter().all(|&m| {
-                            d(ps[m]) <= tol
-                                && clip.joints[m]
-                                    .tail
-                                    .is_none_or(|t| d(ps[m] + rs[m] * t) <= tol)
-                        })
-                    })
-                    .count();
-                hits * 5 >= poses.len() * 4
-            };
-            if children[p].iter().any(|&k| on_bone(k)) {
-                for m in sub {
-                    helper[m] = true;
-                }
-            }
-        }
-        // Children lists are in index order and parents precede children, so
-        // a reverse sweep sees every child before its parent.
-        let mut useful = vec![false; n];
-        let mut reach = vec![0.0f64; n];
-        for i in (0..n).rev() {
-            let mut r = clip.joints[i].tail.map_or(0.0, |t| t.length());
-            let mut u = !helper[i];
-            for &c in &children[i] {
-                if useful[c] {
-                    u = true;
-                    r = r.max(len[c] + reach[c]);
-                }
-            }
-            useful[i] = u;
-            reach[i] = if r.is_finite() { r } else { 0.0 };
-        }
-        let mut rep: Vec<usize> = (0..n).collect();
-        for i in 0..n {
-            if let Some(p) = parent[i]
-                && len[i] < eps
-            {
-                rep[i] = rep[p];
-            }
-        }
+        let poses = sampled_poses(clip, &rest, rot0);
+        let size = body_size(&parent, &children, &poses, diag);
+        helpers_along_bones(clip, &parent, &children, &len, &poses, eps, &mut helper);
+        let (useful, reach) = useful_and_reach(clip, &children, &len, &helper);
+        let rep = zero_length_nodes(&parent, &len, eps);
         Ok(Geo {
             clip,
             names: clip.point_names(),
