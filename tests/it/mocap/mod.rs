@@ -1,5 +1,6 @@
 //! Mocap input: the readers against reference implementations, other suites' skeletons, the bundled clips.
 
+mod one_capture;
 mod procedural;
 mod reference;
 mod suites;
