@@ -47,7 +47,7 @@ const fn conv(
 }
 
 /// The built-in conventions, most specific first.
-pub static CONVENTIONS: [Convention; 7] = [
+pub static CONVENTIONS: [Convention; 9] = [
     conv(
         "CMU cgspeed BVH (MotionBuilder-friendly)",
         &["LHipJoint", "LowerBack"],
@@ -202,6 +202,54 @@ pub static CONVENTIONS: [Convention; 7] = [
             lr!(&["LeftToeBase"], &["RightToeBase"]),
         ],
     ),
+    // Unreal Engine's mannequins (UE4: spine_01..03, the clavicles on
+    // spine_03; UE5 Manny and Quinn: spine_01..05, neck_01/02).
+    conv(
+        "Unreal Engine mannequin",
+        &["lowerarm_l", "calf_l"],
+        [
+            &["pelvis"],
+            &["spine_01"],
+            &["spine_05", "spine_03"],
+            &["neck_01"],
+            &["head"],
+        ],
+        [
+            lr!(&["upperarm_l"], &["upperarm_r"]),
+            lr!(&["lowerarm_l"], &["lowerarm_r"]),
+            lr!(&["hand_l"], &["hand_r"]),
+        ],
+        [
+            lr!(&["thigh_l"], &["thigh_r"]),
+            lr!(&["calf_l"], &["calf_r"]),
+            lr!(&["foot_l"], &["foot_r"]),
+            lr!(&["ball_l"], &["ball_r"]),
+        ],
+    ),
+    // Unity's humanoid avatar bones (HumanBodyBones), as Unity recorders
+    // and exporters name them; UpperChest is optional.
+    conv(
+        "Unity Humanoid",
+        &["LeftUpperLeg", "LeftLowerArm"],
+        [
+            &["Hips"],
+            &["Spine"],
+            &["UpperChest", "Chest"],
+            &["Neck"],
+            &["Head"],
+        ],
+        [
+            lr!(&["LeftUpperArm"], &["RightUpperArm"]),
+            lr!(&["LeftLowerArm"], &["RightLowerArm"]),
+            lr!(&["LeftHand"], &["RightHand"]),
+        ],
+        [
+            lr!(&["LeftUpperLeg"], &["RightUpperLeg"]),
+            lr!(&["LeftLowerLeg"], &["RightLowerLeg"]),
+            lr!(&["LeftFoot"], &["RightFoot"]),
+            lr!(&["LeftToes"], &["RightToes"]),
+        ],
+    ),
 ];
 
 /// Strips a `namespace:` / `path|` prefix and lowercases.
@@ -348,6 +396,10 @@ impl Detection {
     }
 }
 
+/// The largest cosine between the legs' direction and the trunk's
+/// ([`structure::STANDING`]) of a body that stands.
+const STANDING: f64 = structure::STANDING;
+
 /// Convention name of a map decided by name tokens inside the structure.
 pub const BY_NAMES: &str = "unknown convention, mapped by names";
 /// Convention name of a map decided (at least partly) by structure.
@@ -358,7 +410,49 @@ pub const BY_STRUCTURE: &str = "unknown convention, mapped by structure";
 /// joint matched, else `"unknown convention"`. For clips prefer
 /// [`detect_clip`], which also maps unknown rigs by structure.
 pub fn detect(names: &[String]) -> Detection {
-    let norm: Vec<String> = names.iter().map(|n| normalise_name(n)).collect();
+    // Names are compared as given (namespaces stripped) and, when most of
+    // them share a prefix (`Character1_`, as MotionBuilder names a
+    // HumanIK character's joints), without it; the better match counts.
+    let plain = detect_scored(names, None);
+    let stripped: Vec<&str> = names
+        .iter()
+        .map(|n| super::names::strip_namespace(n))
+        .collect();
+    let prefixed = super::names::common_prefix(&stripped)
+        .and_then(|p| detect_scored(names, Some(&p.to_ascii_lowercase())));
+    let best = match (plain, prefixed) {
+        (Some(a), Some(b)) if b.0 > a.0 => Some(b),
+        (a, b) => a.or(b),
+    };
+    best.map(|b| b.1).unwrap_or_else(|| {
+        Detection::from_map(
+            RigMap {
+                convention: "none".into(),
+                joints: BTreeMap::new(),
+                derived: BTreeMap::new(),
+                file: None,
+            },
+            Source::Convention,
+            0.0,
+            "none",
+        )
+    })
+}
+
+/// [`detect`] with the names compared after stripping `prefix` (lower
+/// case) where they carry it: the best convention and its score (names
+/// matched, a half for a signature name).
+fn detect_scored(names: &[String], prefix: Option<&str>) -> Option<(f64, Detection)> {
+    let norm: Vec<String> = names
+        .iter()
+        .map(|n| {
+            let n = normalise_name(n);
+            match prefix {
+                Some(p) if n.len() > p.len() && n.starts_with(p) => n[p.len()..].to_string(),
+                _ => n,
+            }
+        })
+        .collect();
     let raw_lower: Vec<String> = names.iter().map(|n| n.to_ascii_lowercase()).collect();
     let mut best: Option<(f64, Detection)> = None;
     for c in &CONVENTIONS {
@@ -397,19 +491,7 @@ pub fn detect(names: &[String]) -> Detection {
             best = Some((score, d));
         }
     }
-    best.map(|b| b.1).unwrap_or_else(|| {
-        Detection::from_map(
-            RigMap {
-                convention: "none".into(),
-                joints: BTreeMap::new(),
-                derived: BTreeMap::new(),
-                file: None,
-            },
-            Source::Convention,
-            0.0,
-            "none",
-        )
-    })
+    best
 }
 
 fn swap_side(c: Canonical) -> Canonical {
@@ -435,7 +517,9 @@ fn swap_side(c: Canonical) -> Canonical {
 
 /// How far a map's legs point from its trunk: per pose, the mean over both
 /// legs of the cosine between pelvis→ankle and pelvis→head (neck, else
-/// chest); the smaller of the rest pose's and the median of up to 24
+/// chest; each leg on its own, not their mean direction as the structure
+/// analysis takes it: arms named as legs hang beside the trunk, their mean
+/// straight down); the smaller of the rest pose's and the median of up to 24
 /// sampled frames' (a standing human is near −1, a horizontal body near
 /// 0). `None` when the map lacks those joints.
 fn named_stance(clip: &Clip, map: &RigMap) -> Option<f64> {
@@ -493,9 +577,16 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
     // no humanoid), and the convention's chest is the joint the arms and
     // neck branch from (Xsens MVN's Chest…Chest4 match the CMU 3dsMax
     // names, whose Chest2 would put the chest on the L3 vertebra).
+    //
+    // Every name of a known convention present and the structure finding a
+    // horizontal body: the names decide when the legs they name point away
+    // from the trunk they name in the rest pose or the median frame (the
+    // structure may have read an extra chain as a leg, or legs spread or
+    // bent in the rest pose), else the clip is refused.
     if conv.missing.is_empty()
         && let Err(e) = &body
         && e.0.contains(structure::HORIZONTAL)
+        && named_stance(clip, &conv.map).is_none_or(|cos| cos > STANDING)
     {
         return Err(RigError::NotHumanoid {
             reason: format!(
@@ -504,126 +595,172 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             ),
         });
     }
-    let pose_note = |b: &structure::Body| {
-        let mut notes: Vec<String> = Vec::new();
-        if let Some(f) = b.reference_frame {
-            notes.push(format!(
-                "frame {f}: the rest skeleton is not a standing body (its legs do not point away from its spine, or it has no extent), so the structure was read on this frame's pose"
-            ));
-        }
-        if !b.ignored.is_empty() {
-            notes.push(format!(
-                "{} chain(s) off the chest are neither arms nor the neck and are ignored: {}",
-                b.ignored.len(),
-                b.ignored.join(", ")
-            ));
-        }
-        notes.join("; ")
-    };
-    let conv_chest_agrees = |b: &structure::Body| {
-        let rest = &b.reference;
-        let at = |c: Canonical| {
-            conv.map
-                .joints
-                .get(&c)
-                .and_then(|n| clip.joint(n))
-                .map(|j| rest[j.idx()])
+    if conv.missing.is_empty()
+        && body
+            .as_ref()
+            .map_or(true, |b| conv_chest_agrees(&conv, clip, b))
+    {
+        return match &body {
+            Ok(b) => by_names_checked(conv, clip, b),
+            Err(_) => by_names_alone(conv, clip),
         };
-        let picked = |c: Canonical| b.picks[c.index()].joint.map(|j| rest[j]);
-        match (
-            at(Canonical::Chest),
-            picked(Canonical::Chest),
-            picked(Canonical::Pelvis),
-            picked(Canonical::Neck),
-        ) {
-            (Some(a), Some(c), Some(p), Some(n)) => a.distance(c) <= 0.2 * p.distance(n),
-            _ => true,
-        }
-    };
-    if conv.missing.is_empty() && body.as_ref().map_or(true, conv_chest_agrees) {
-        let mut conv = conv;
-        if let Ok(b) = &body {
-            chest_at_branch(&mut conv, clip, b);
-        }
-        let Ok(b) = &body else {
-            // Names alone decide: still no humanoid when the named legs do
-            // not point away from the named trunk (a T-rex or a lizard
-            // carrying every HumanIK name, its arms too short to count).
-            if let Some(cos) = named_stance(clip, &conv.map)
-                && cos > -0.7
-            {
-                return Err(RigError::NotHumanoid {
-                    reason: format!(
-                        "the legs named '{}' and '{}' do not point away from the spine (cosine {cos:.2} in the rest pose and the median frame): {} (although every '{}' name is present)",
-                        conv.map
-                            .joints
-                            .get(&Canonical::LHip)
-                            .map_or("", String::as_str),
-                        conv.map
-                            .joints
-                            .get(&Canonical::RHip)
-                            .map_or("", String::as_str),
-                        structure::HORIZONTAL,
-                        conv.map.convention
-                    ),
-                });
-            }
-            let mut d = conv;
-            d.sides = "from names (the structure analysis did not find a humanoid)".into();
-            return Ok(d);
-        };
-        let id = |c: Canonical| {
-            conv.map
-                .joints
-                .get(&c)
-                .and_then(|n| clip.joint(n))
-                .map(|j| j.idx())
-        };
-        let within = |c: Canonical, set: &[usize]| id(c).is_some_and(|j| set.contains(&j));
-        use Canonical as C;
-        let legs_swapped = within(C::LHip, &b.right_leg) && within(C::RHip, &b.left_leg);
-        let arms_swapped = within(C::LShoulder, &b.right_arm) && within(C::RShoulder, &b.left_arm);
-        let confirmed = within(C::LHip, &b.left_leg)
-            && within(C::RHip, &b.right_leg)
-            && within(C::LShoulder, &b.left_arm)
-            && within(C::RShoulder, &b.right_arm);
-        if !(legs_swapped || arms_swapped) {
-            let mut d = conv;
-            d.structure_pose = pose_note(b);
-            d.sides = if confirmed {
-                format!(
-                    "from names, confirmed by geometry (forward from the {}, confidence {:.2})",
-                    b.forward_from, b.side_confidence
-                )
-            } else {
-                "from names (geometry undecided)".into()
-            };
-            return Ok(d);
-        }
-        let mut joints = BTreeMap::new();
-        for (c, n) in &conv.map.joints {
-            let swap = if C::LEGS.contains(c) {
-                legs_swapped
-            } else {
-                arms_swapped
-            };
-            joints.insert(if swap { swap_side(*c) } else { *c }, n.clone());
-        }
-        let map = RigMap {
-            convention: BY_NAMES.into(),
-            joints,
-            derived: BTreeMap::new(),
-            file: None,
-        };
-        let mut d = Detection::from_map(map, Source::Names, 0.9, "");
-        d.structure_pose = pose_note(b);
-        d.sides = format!(
-            "from geometry (forward from the {}, confidence {:.2}); the names' left/right are mirrored",
-            b.forward_from, b.side_confidence
-        );
-        return Ok(d);
     }
     let b = body.map_err(|e| RigError::NotHumanoid { reason: e.0 })?;
+    Ok(by_structure(&names, &b))
+}
+
+/// The notes of a detection on the structure analysis `b`: the frame read
+/// for a rest skeleton that is not a standing body, the chains off the
+/// chest ignored.
+fn pose_note(b: &structure::Body) -> String {
+    let mut notes: Vec<String> = Vec::new();
+    if let Some(f) = b.reference_frame {
+        notes.push(format!(
+            "frame {f}: the rest skeleton is not a standing body (its legs do not point away from its spine, or it has no extent), so the structure was read on this frame's pose"
+        ));
+    }
+    if !b.ignored.is_empty() {
+        notes.push(format!(
+            "{} chain(s) off the chest are neither arms nor the neck and are ignored: {}",
+            b.ignored.len(),
+            b.ignored.join(", ")
+        ));
+    }
+    notes.join("; ")
+}
+
+/// True unless the convention's chest lies off the structure's chest by
+/// more than a fifth of pelvis → neck (in the pose the structure was read
+/// on), or either is missing.
+fn conv_chest_agrees(conv: &Detection, clip: &Clip, b: &structure::Body) -> bool {
+    let rest = &b.reference;
+    let at = |c: Canonical| {
+        conv.map
+            .joints
+            .get(&c)
+            .and_then(|n| clip.joint(n))
+            .map(|j| rest[j.idx()])
+    };
+    let picked = |c: Canonical| b.picks[c.index()].joint.map(|j| rest[j]);
+    match (
+        at(Canonical::Chest),
+        picked(Canonical::Chest),
+        picked(Canonical::Pelvis),
+        picked(Canonical::Neck),
+    ) {
+        (Some(a), Some(c), Some(p), Some(n)) => a.distance(c) <= 0.2 * p.distance(n),
+        _ => true,
+    }
+}
+
+/// A full convention's map when the structure analysis found no humanoid:
+/// the names decide, unless the named legs do not point away from the
+/// named trunk (a T-rex or a lizard carrying every HumanIK name, its arms
+/// too short to count: [`names_stand`]).
+fn by_names_alone(conv: Detection, clip: &Clip) -> Result<Detection, RigError> {
+    names_stand(&conv, clip)?;
+    let mut d = conv;
+    d.sides = "from names (the structure analysis did not find a humanoid)".into();
+    Ok(d)
+}
+
+/// Refuses a convention's map whose named legs do not point away from its
+/// named trunk ([`named_stance`] above [`STANDING`]).
+fn names_stand(conv: &Detection, clip: &Clip) -> Result<(), RigError> {
+    if let Some(cos) = named_stance(clip, &conv.map)
+        && cos > STANDING
+    {
+        return Err(RigError::NotHumanoid {
+            reason: format!(
+                "the legs named '{}' and '{}' do not point away from the spine (cosine {cos:.2} in the rest pose and the median frame): {} (although every '{}' name is present)",
+                conv.map
+                    .joints
+                    .get(&Canonical::LHip)
+                    .map_or("", String::as_str),
+                conv.map
+                    .joints
+                    .get(&Canonical::RHip)
+                    .map_or("", String::as_str),
+                structure::HORIZONTAL,
+                conv.map.convention
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// A full convention's map checked against the structure analysis `b`:
+/// its chest moved to the arms' branch ([`chest_at_branch`]), its sides
+/// confirmed by the geometry's, or its left and right swapped (limb pair
+/// by limb pair) when the geometry puts them on the other side. Names the
+/// geometry cannot place on its limbs are refused when their legs do not
+/// point away from their trunk ([`names_stand`]: a rig whose arms carry
+/// the leg names).
+fn by_names_checked(
+    conv: Detection,
+    clip: &Clip,
+    b: &structure::Body,
+) -> Result<Detection, RigError> {
+    let mut conv = conv;
+    chest_at_branch(&mut conv, clip, b);
+    let id = |c: Canonical| {
+        conv.map
+            .joints
+            .get(&c)
+            .and_then(|n| clip.joint(n))
+            .map(|j| j.idx())
+    };
+    let within = |c: Canonical, set: &[usize]| id(c).is_some_and(|j| set.contains(&j));
+    use Canonical as C;
+    let legs_swapped = within(C::LHip, &b.right_leg) && within(C::RHip, &b.left_leg);
+    let arms_swapped = within(C::LShoulder, &b.right_arm) && within(C::RShoulder, &b.left_arm);
+    let confirmed = within(C::LHip, &b.left_leg)
+        && within(C::RHip, &b.right_leg)
+        && within(C::LShoulder, &b.left_arm)
+        && within(C::RShoulder, &b.right_arm);
+    if !(legs_swapped || arms_swapped) {
+        if !confirmed {
+            names_stand(&conv, clip)?;
+        }
+        let mut d = conv;
+        d.structure_pose = pose_note(b);
+        d.sides = if confirmed {
+            format!(
+                "from names, confirmed by geometry (forward from the {}, confidence {:.2})",
+                b.forward_from, b.side_confidence
+            )
+        } else {
+            "from names (geometry undecided)".into()
+        };
+        return Ok(d);
+    }
+    let mut joints = BTreeMap::new();
+    for (c, n) in &conv.map.joints {
+        let swap = if C::LEGS.contains(c) {
+            legs_swapped
+        } else {
+            arms_swapped
+        };
+        joints.insert(if swap { swap_side(*c) } else { *c }, n.clone());
+    }
+    let map = RigMap {
+        convention: BY_NAMES.into(),
+        joints,
+        derived: BTreeMap::new(),
+        file: None,
+    };
+    let mut d = Detection::from_map(map, Source::Names, 0.9, "");
+    d.structure_pose = pose_note(b);
+    d.sides = format!(
+        "from geometry (forward from the {}, confidence {:.2}); the names' left/right are mirrored",
+        b.forward_from, b.side_confidence
+    );
+    Ok(d)
+}
+
+/// The map the structure analysis `b` found (`names`: the clip's joint
+/// names), its joints, derivation rules and sides reported.
+fn by_structure(names: &[String], b: &structure::Body) -> Detection {
     let mut joints = BTreeMap::new();
     let mut derived = BTreeMap::new();
     let mut reports = Vec::with_capacity(Canonical::COUNT);
@@ -674,7 +811,7 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
             ),
         )
     };
-    Ok(Detection {
+    Detection {
         derived: map.derived.keys().copied().collect(),
         map,
         missing,
@@ -682,8 +819,8 @@ pub fn detect_clip(clip: &Clip) -> Result<Detection, RigError> {
         joints: reports,
         side_confidence,
         sides,
-        structure_pose: pose_note(&b),
-    })
+        structure_pose: pose_note(b),
+    }
 }
 
 /// A convention's chest moved up the spine to the joint the arms and the

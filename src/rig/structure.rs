@@ -14,9 +14,13 @@
 //!    Bandai rigs).
 //! 3. The pelvis is the first node where exactly three significant chains
 //!    meet: two legs without further junctions and a spine that reaches a
-//!    node where two arms branch off (the chest). Legs must point away from
-//!    the chest (mean cosine below −0.7 in the rest pose or the median
-//!    sampled frame): a quadruped's spine is near horizontal above its legs.
+//!    node where two arms branch off (the chest). Lone joints (no useful
+//!    child: mesh attachments, sockets, pelvis controllers) beside the
+//!    chains neither count as chains there nor make a junction. Legs must
+//!    point away from the chest (the legs' mean direction at a cosine
+//!    below −0.7 with the trunk's in the rest pose or the median sampled
+//!    frame, [`legs_from_trunk`]): a quadruped's spine is near horizontal
+//!    above its legs.
 //!    A short bone (under 3% of the body's size) to a joint carrying both
 //!    legs joins that joint to the junction (Daz Genesis `hip` → `pelvis`).
 //! 4. Joints along a chain, where names do not fix them, by the body's
@@ -120,6 +124,28 @@ pub struct Body {
 /// horizontal body: a quadruped or a bird, whatever its joint names.
 pub const HORIZONTAL: &str = "a horizontal body";
 
+/// The largest cosine between the legs' mean direction and the trunk's
+/// ([`legs_from_trunk`]) of a standing body: −0.7 (134°). Humans walk and
+/// run at −0.85 to −1; a fox standing with its chest above its hips is at
+/// −0.53 (measured as the mean of the two legs' cosines).
+pub const STANDING: f64 = -0.7;
+
+/// The cosine between the legs' mean direction and the trunk's `up`:
+/// `legs` are pelvis → foot vectors, each normalised, their sum's
+/// direction taken (the bisector of a spread pair). A body standing with
+/// its legs spread, as a depth sensor's rest can hold them (55° out from
+/// the trunk's line each), has its feet below it all the same: the mean
+/// of the legs' own cosines (−0.57) called it horizontal. A quadruped's
+/// hind legs hang across its spine either way (near 0). 0 when the legs
+/// cancel out.
+pub fn legs_from_trunk(legs: &[DVec3], up: DVec3) -> f64 {
+    legs.iter()
+        .map(|l| l.normalize_or_zero())
+        .sum::<DVec3>()
+        .normalize_or_zero()
+        .dot(up)
+}
+
 /// Why a clip is not a humanoid.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{0}")]
@@ -150,43 +176,263 @@ struct Geo<'a> {
     from_frame: Option<usize>,
 }
 
+/// Each joint's parent and children (children in index order).
+fn hierarchy(clip: &Clip) -> (Vec<Option<usize>>, Vec<Vec<usize>>) {
+    let parent: Vec<Option<usize>> = clip
+        .joints
+        .iter()
+        .map(|j| j.parent.map(|p| p.idx()))
+        .collect();
+    let mut children = vec![Vec::new(); parent.len()];
+    for (i, p) in parent.iter().enumerate() {
+        if let Some(p) = p {
+            children[*p].push(i);
+        }
+    }
+    (parent, children)
+}
+
+/// Bone lengths, and the reference pose: the rest skeleton, or the frame
+/// `from_frame` standing in for it (its world pose; its local
+/// translations, which position channels may set, the bones). Returns
+/// the lengths, world positions and world rotations.
+fn reference_pose(clip: &Clip, from_frame: Option<usize>) -> (Vec<f64>, Vec<DVec3>, Vec<DQuat>) {
+    let n = clip.joint_count();
+    match from_frame {
+        Some(f) if f < clip.frame_count() => {
+            let mut p = vec![DVec3::ZERO; n];
+            let mut r = vec![DQuat::IDENTITY; n];
+            clip.world_into(f, &mut p, &mut r);
+            let len = (0..n)
+                .map(|i| clip.translations.get(f * n + i).map_or(0.0, |t| t.length()))
+                .collect();
+            (len, p, r)
+        }
+        _ => (
+            clip.joints.iter().map(|j| j.offset.length()).collect(),
+            clip.rest_positions().0,
+            vec![DQuat::IDENTITY; n],
+        ),
+    }
+}
+
+/// The bounding-box diagonal of some points.
+fn bbox_diag(pts: impl Iterator<Item = DVec3>) -> f64 {
+    let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    for p in pts {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    (hi - lo).length()
+}
+
+/// The reference pose (positions `rest`, rotations `rot0`) followed by
+/// up to [`MAX_FRAMES`] frames spread over the clip.
+fn sampled_poses(clip: &Clip, rest: &[DVec3], rot0: Vec<DQuat>) -> Vec<(Vec<DVec3>, Vec<DQuat>)> {
+    let n = clip.joint_count();
+    let mut poses = Vec::new();
+    let mut rot = vec![DQuat::IDENTITY; n];
+    poses.push((rest.to_vec(), rot0));
+    let frames = clip.frame_count();
+    let step = (frames / MAX_FRAMES).max(1);
+    let mut pos = vec![DVec3::ZERO; n];
+    let mut f = 0;
+    while f < frames {
+        clip.world_into(f, &mut pos, &mut rot);
+        poses.push((pos.clone(), rot.clone()));
+        f += step;
+    }
+    poses
+}
+
+/// The body's size: the largest single-pose extent (a rest skeleton in
+/// bone-local frames, as CC exports, can be a folded stick; at least
+/// `diag`, the reference pose's), over the joints from the first
+/// branching joint down: a root chain above it is no part of the body
+/// (Bandai's static `joint_Root` stays at the origin while the body walks
+/// metres away from it).
+fn body_size(
+    parent: &[Option<usize>],
+    children: &[Vec<usize>],
+    poses: &[(Vec<DVec3>, Vec<DQuat>)],
+    diag: f64,
+) -> f64 {
+    let n = parent.len();
+    let mut top = parent.iter().position(Option::is_none).unwrap_or(0);
+    for _ in 0..n {
+        match children[top].as_slice() {
+            [only] => top = *only,
+            _ => break,
+        }
+    }
+    let mut above = vec![false; n];
+    let mut k = parent[top];
+    while let Some(x) = k {
+        if above[x] {
+            break;
+        }
+        above[x] = true;
+        k = parent[x];
+    }
+    poses
+        .iter()
+        .map(|(p, _)| {
+            bbox_diag(
+                p.iter()
+                    .enumerate()
+                    .filter(|&(i, _)| !above[i])
+                    .map(|(_, q)| *q),
+            )
+        })
+        .filter(|d| d.is_finite())
+        .fold(diag, f64::max)
+}
+
+/// Twist and share bones by geometry: a side branch whose joints (and End
+/// Sites) all lie on the bone from its parent to a sibling, in the rest
+/// pose and most sampled poses (CC's ThighTwist01/02 beside Calf,
+/// ToeBaseShareBone beside ToeBase), is a helper whatever its name.
+fn helpers_along_bones(
+    clip: &Clip,
+    parent: &[Option<usize>],
+    children: &[Vec<usize>],
+    len: &[f64],
+    poses: &[(Vec<DVec3>, Vec<DQuat>)],
+    eps: f64,
+    helper: &mut [bool],
+) {
+    let subtree_of = |j: usize| {
+        let mut out = Vec::new();
+        let mut stack = vec![j];
+        while let Some(k) = stack.pop() {
+            out.push(k);
+            stack.extend(children[k].iter().copied());
+            if out.len() > 64 {
+                break; // a twist chain is short; a limb is not a helper
+            }
+        }
+        out
+    };
+    for j in 0..parent.len() {
+        let Some(p) = parent[j] else { continue };
+        if helper[j] || children[p].len() < 2 {
+            continue;
+        }
+        let sub = subtree_of(j);
+        if sub.len() > 64 {
+            continue;
+        }
+        let on_bone = |k: usize| {
+            let seg_len = len[k];
+            if k == j || seg_len < eps {
+                return false;
+            }
+            let tol = 0.1 * seg_len;
+            let hits = poses
+                .iter()
+                .filter(|(ps, rs)| {
+                    let (a, mut b) = (ps[p], ps[k]);
+                    // The bone runs on through pass-through joints in
+                    // line with it (a split shin: Calf → x → Foot).
+                    let mut e = k;
+                    for _ in 0..8 {
+                        let dir = (b - a).normalize_or_zero();
+                        let next = children[e].iter().copied().find(|&q| {
+                            let v = ps[q] - a;
+                            len[q] >= eps
+                                && v.dot(dir) > (b - a).length()
+                                && (v - dir * v.dot(dir)).length() <= tol
+                        });
+                        match next {
+                            Some(q) => {
+                                e = q;
+                                b = ps[q];
+                            }
+                            None => break,
+                        }
+                    }
+                    let ab = b - a;
+                    let d = |q: DVec3| {
+                        let t = ((q - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+                        (a + ab * t).distance(q)
+                    };
+                    sub.iter().all(|&m| {
+                        d(ps[m]) <= tol
+                            && clip.joints[m]
+                                .tail
+                                .is_none_or(|t| d(ps[m] + rs[m] * t) <= tol)
+                    })
+                })
+                .count();
+            hits * 5 >= poses.len() * 4
+        };
+        if children[p].iter().any(|&k| on_bone(k)) {
+            for m in sub {
+                helper[m] = true;
+            }
+        }
+    }
+}
+
+/// Per joint, whether its subtree holds a non-helper joint (`useful`),
+/// and its reach: the longest path through useful children to an end
+/// point (End Site included).
+fn useful_and_reach(
+    clip: &Clip,
+    children: &[Vec<usize>],
+    len: &[f64],
+    helper: &[bool],
+) -> (Vec<bool>, Vec<f64>) {
+    let n = children.len();
+    // Children lists are in index order and parents precede children, so
+    // a reverse sweep sees every child before its parent.
+    let mut useful = vec![false; n];
+    let mut reach = vec![0.0f64; n];
+    for i in (0..n).rev() {
+        let mut r = clip.joints[i].tail.map_or(0.0, |t| t.length());
+        let mut u = !helper[i];
+        for &c in &children[i] {
+            if useful[c] {
+                u = true;
+                r = r.max(len[c] + reach[c]);
+            }
+        }
+        useful[i] = u;
+        reach[i] = if r.is_finite() { r } else { 0.0 };
+    }
+    (useful, reach)
+}
+
+/// Joints joined to their parent by a bone under `eps` long form one node:
+/// each joint's representative is the node's top joint.
+fn zero_length_nodes(parent: &[Option<usize>], len: &[f64], eps: f64) -> Vec<usize> {
+    let mut rep: Vec<usize> = (0..parent.len()).collect();
+    for i in 0..parent.len() {
+        if let Some(p) = parent[i]
+            && len[i] < eps
+        {
+            rep[i] = rep[p];
+        }
+    }
+    rep
+}
+
 impl<'a> Geo<'a> {
+    /// Step 1 on the rest skeleton, or on the frame `from_frame` standing
+    /// in for it: the hierarchy ([`hierarchy`]), bone lengths and the
+    /// reference pose ([`reference_pose`]), the sampled poses
+    /// ([`sampled_poses`]), the body's size ([`body_size`]), the helper
+    /// bones (by name, then by geometry: [`helpers_along_bones`]), each
+    /// joint's reach ([`useful_and_reach`]) and the zero-length nodes
+    /// ([`zero_length_nodes`]).
     fn new(
         clip: &'a Clip,
         tokens: &[Vec<String>],
         from_frame: Option<usize>,
     ) -> Result<Geo<'a>, NotHumanoid> {
         let n = clip.joint_count();
-        let parent: Vec<Option<usize>> = clip
-            .joints
-            .iter()
-            .map(|j| j.parent.map(|p| p.idx()))
-            .collect();
-        let mut children = vec![Vec::new(); n];
-        for (i, p) in parent.iter().enumerate() {
-            if let Some(p) = p {
-                children[*p].push(i);
-            }
-        }
-        // Bone lengths, and the reference pose: the rest skeleton, or the
-        // frame standing in for it (its world pose; its local translations,
-        // which position channels may set, the bones).
-        let (len, rest, rot0): (Vec<f64>, Vec<DVec3>, Vec<DQuat>) = match from_frame {
-            Some(f) if f < clip.frame_count() => {
-                let mut p = vec![DVec3::ZERO; n];
-                let mut r = vec![DQuat::IDENTITY; n];
-                clip.world_into(f, &mut p, &mut r);
-                let len = (0..n)
-                    .map(|i| clip.translations.get(f * n + i).map_or(0.0, |t| t.length()))
-                    .collect();
-                (len, p, r)
-            }
-            _ => (
-                clip.joints.iter().map(|j| j.offset.length()).collect(),
-                clip.rest_positions().0,
-                vec![DQuat::IDENTITY; n],
-            ),
-        };
+        let (parent, children) = hierarchy(clip);
+        let (len, rest, rot0) = reference_pose(clip, from_frame);
         let mut helper: Vec<bool> = (0..n)
             .map(|i| tokens.get(i).is_some_and(|t| is_helper(t)))
             .collect();
@@ -196,15 +442,7 @@ impl<'a> Geo<'a> {
             .enumerate()
             .map(|(i, j)| j.tail.map(|t| rest[i] + rot0[i] * t))
             .collect();
-        let bbox_diag = |pts: &mut dyn Iterator<Item = DVec3>| {
-            let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
-            for p in pts {
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
-            (hi - lo).length()
-        };
-        let diag = bbox_diag(&mut rest.iter().chain(tail_rest.iter().flatten()).copied());
+        let diag = bbox_diag(rest.iter().chain(tail_rest.iter().flatten()).copied());
         if !(diag.is_finite() && diag > 0.0) {
             return Err(NotHumanoid(match from_frame {
                 Some(f) => format!("the skeleton has no extent at frame {f}"),
@@ -212,151 +450,11 @@ impl<'a> Geo<'a> {
             }));
         }
         let eps = 1e-3 * diag;
-        let mut poses = Vec::new();
-        let mut rot = vec![DQuat::IDENTITY; n];
-        poses.push((rest.clone(), rot0));
-        let frames = clip.frame_count();
-        let step = (frames / MAX_FRAMES).max(1);
-        let mut pos = vec![DVec3::ZERO; n];
-        let mut f = 0;
-        while f < frames {
-            clip.world_into(f, &mut pos, &mut rot);
-            poses.push((pos.clone(), rot.clone()));
-            f += step;
-        }
-        // The body's size: the largest single-pose extent (a rest skeleton
-        // in bone-local frames, as CC exports, can be a folded stick), over
-        // the joints from the first branching joint down: a root chain
-        // above it is no part of the body (Bandai's static `joint_Root`
-        // stays at the origin while the body walks metres away from it).
-        let mut top = parent.iter().position(Option::is_none).unwrap_or(0);
-        for _ in 0..n {
-            match children[top].as_slice() {
-                [only] => top = *only,
-                _ => break,
-            }
-        }
-        let mut above = vec![false; n];
-        let mut k = parent[top];
-        while let Some(x) = k {
-            if above[x] {
-                break;
-            }
-            above[x] = true;
-            k = parent[x];
-        }
-        let size = poses
-            .iter()
-            .map(|(p, _)| {
-                bbox_diag(
-                    &mut p
-                        .iter()
-                        .enumerate()
-                        .filter(|&(i, _)| !above[i])
-                        .map(|(_, q)| *q),
-                )
-            })
-            .filter(|d| d.is_finite())
-            .fold(diag, f64::max);
-        // Twist and share bones by geometry: a side branch whose joints (and
-        // End Sites) all lie on the bone from its parent to a sibling, in the
-        // rest pose and most sampled poses (CC's ThighTwist01/02 beside Calf,
-        // ToeBaseShareBone beside ToeBase), is a helper whatever its name.
-        let subtree_of = |j: usize| {
-            let mut out = Vec::new();
-            let mut stack = vec![j];
-            while let Some(k) = stack.pop() {
-                out.push(k);
-                stack.extend(children[k].iter().copied());
-                if out.len() > 64 {
-                    break; // a twist chain is short; a limb is not a helper
-                }
-            }
-            out
-        };
-        for j in 0..n {
-            let Some(p) = parent[j] else { continue };
-            if helper[j] || children[p].len() < 2 {
-                continue;
-            }
-            let sub = subtree_of(j);
-            if sub.len() > 64 {
-                continue;
-            }
-            let on_bone = |k: usize| {
-                let seg_len = len[k];
-                if k == j || seg_len < eps {
-                    return false;
-                }
-                let tol = 0.1 * seg_len;
-                let hits = poses
-                    .iter()
-                    .filter(|(ps, rs)| {
-                        let (a, mut b) = (ps[p], ps[k]);
-                        // The bone runs on through pass-through joints in
-                        // line with it (a split shin: Calf → x → Foot).
-                        let mut e = k;
-                        for _ in 0..8 {
-                            let dir = (b - a).normalize_or_zero();
-                            let next = children[e].iter().copied().find(|&q| {
-                                let v = ps[q] - a;
-                                len[q] >= eps
-                                    && v.dot(dir) > (b - a).length()
-                                    && (v - dir * v.dot(dir)).length() <= tol
-                            });
-                            match next {
-                                Some(q) => {
-                                    e = q;
-                                    b = ps[q];
-                                }
-                                None => break,
-                            }
-                        }
-                        let ab = b - a;
-                        let d = |q: DVec3| {
-                            let t = ((q - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
-                            (a + ab * t).distance(q)
-                        };
-                        sub.iter().all(|&m| {
-                            d(ps[m]) <= tol
-                                && clip.joints[m]
-                                    .tail
-                                    .is_none_or(|t| d(ps[m] + rs[m] * t) <= tol)
-                        })
-                    })
-                    .count();
-                hits * 5 >= poses.len() * 4
-            };
-            if children[p].iter().any(|&k| on_bone(k)) {
-                for m in sub {
-                    helper[m] = true;
-                }
-            }
-        }
-        // Children lists are in index order and parents precede children, so
-        // a reverse sweep sees every child before its parent.
-        let mut useful = vec![false; n];
-        let mut reach = vec![0.0f64; n];
-        for i in (0..n).rev() {
-            let mut r = clip.joints[i].tail.map_or(0.0, |t| t.length());
-            let mut u = !helper[i];
-            for &c in &children[i] {
-                if useful[c] {
-                    u = true;
-                    r = r.max(len[c] + reach[c]);
-                }
-            }
-            useful[i] = u;
-            reach[i] = if r.is_finite() { r } else { 0.0 };
-        }
-        let mut rep: Vec<usize> = (0..n).collect();
-        for i in 0..n {
-            if let Some(p) = parent[i]
-                && len[i] < eps
-            {
-                rep[i] = rep[p];
-            }
-        }
+        let poses = sampled_poses(clip, &rest, rot0);
+        let size = body_size(&parent, &children, &poses, diag);
+        helpers_along_bones(clip, &parent, &children, &len, &poses, eps, &mut helper);
+        let (useful, reach) = useful_and_reach(clip, &children, &len, &helper);
+        let rep = zero_length_nodes(&parent, &len, eps);
         Ok(Geo {
             clip,
             names: clip.point_names(),
@@ -402,10 +500,18 @@ impl<'a> Geo<'a> {
     /// the thighs and `Bip01 Spine1` 9 cm above `Bip01 Pelvis`) is one
     /// junction. Short: under half the significance threshold (6% of the
     /// body's size).
+    ///
+    /// Lone joints below the short bone do not count ([`Geo::lone`]: a
+    /// mesh attachment beside the knee made a CC thigh, 10 cm from the
+    /// pelvis, such a junction, and the legs started at the knees).
     fn hip_branches(&self, r: usize) -> Vec<usize> {
         let mut out = Vec::new();
         for c in self.branches(r) {
-            let sub = self.branches(self.rep[c]);
+            let sub: Vec<usize> = self
+                .branches(self.rep[c])
+                .into_iter()
+                .filter(|&k| !self.lone(k))
+                .collect();
             if self.len[c] < 0.5 * self.thr && sub.len() >= 2 {
                 out.extend(sub);
             } else {
@@ -536,7 +642,9 @@ impl<'a> Geo<'a> {
     }
 
     /// The main path from `start`: at each joint the useful child of
-    /// longest reach, until an end.
+    /// longest reach, a chain before a lone joint beside it (a mesh
+    /// attachment as long as the neck's rest beside `NeckTwist02`: the
+    /// path ran into it and missed the head), until an end.
     fn path(&self, start: usize) -> Vec<usize> {
         let mut out = vec![start];
         let mut j = start;
@@ -545,7 +653,9 @@ impl<'a> Geo<'a> {
                 .iter()
                 .filter(|&&c| self.useful[c])
                 .max_by(|&&a, &&b| {
-                    (self.len[a] + self.reach[a]).total_cmp(&(self.len[b] + self.reach[b]))
+                    self.lone(b).cmp(&self.lone(a)).then(
+                        (self.len[a] + self.reach[a]).total_cmp(&(self.len[b] + self.reach[b])),
+                    )
                 })
         {
             out.push(c);
@@ -559,17 +669,41 @@ impl<'a> Geo<'a> {
 
     /// The first junction (node with ≥ 2 significant branches) going down
     /// the single significant branch from `start`.
+    ///
+    /// A lone joint (no useful child: a mesh attachment, a socket, a twist
+    /// leaf) beside the chain going on does not make a junction
+    /// (`L_Humerus_RIGMESH` beside the forearm, a leaf as long as the spine
+    /// bone beside `Spine1`: the chest was found at the first leaf).
     fn junction_below(&self, start: usize) -> Option<usize> {
         let mut j = self.rep[start];
         for _ in 0..=self.clip.joint_count() {
             let b = self.branches(j);
-            match b.len() {
-                0 => return None,
-                1 => j = self.rep[b[0]],
+            let chains: Vec<usize> = b.iter().copied().filter(|&c| !self.lone(c)).collect();
+            match (b.len(), chains.as_slice()) {
+                (0, _) => return None,
+                (1, _) => j = self.rep[b[0]],
+                (_, [only]) => j = self.rep[*only],
                 _ => return Some(j),
             }
         }
         None
+    }
+
+    /// True when the branch starting at `c` is a lone joint: no useful
+    /// child leaves its zero-length node (an End Site at most).
+    fn lone(&self, c: usize) -> bool {
+        self.node_children(c).is_empty()
+    }
+
+    /// `b` without its lone joints ([`Geo::lone`]) when at least `keep`
+    /// chains remain, else `b`.
+    fn chains_of(&self, b: Vec<usize>, keep: usize) -> Vec<usize> {
+        let chains: Vec<usize> = b.iter().copied().filter(|&c| !self.lone(c)).collect();
+        if chains.len() >= keep && chains.len() < b.len() {
+            chains
+        } else {
+            b
+        }
     }
 
     /// Arc length (sum of bone lengths) along `path` from its first joint
@@ -726,7 +860,9 @@ fn analyse_at(
         if g.rep[p] != p || !g.useful[p] {
             continue;
         }
-        let b = g.hip_branches(p);
+        // Lone joints beside the chains (pelvis controllers, mesh
+        // attachments) are no legs or spine.
+        let b = g.chains_of(g.hip_branches(p), 3);
         if b.len() < 3 {
             continue;
         }
@@ -734,12 +870,14 @@ fn analyse_at(
             && let Some(legs) = g.hub_legs(&b)
         {
             // Legs, arms and neck off one joint (Kinect v1 / OpenNI's
-            // `Torso`): pelvis and chest are that joint's node.
+            // `Torso`): pelvis and chest are that joint's node. When that
+            // body is no humanoid, the five may be two legs, a spine and
+            // two accessory chains (a Rigify export's torso controller and
+            // tail): tried as such below.
             match body(&g, tokens, p, p, p, legs) {
                 Ok(body) => return Ok(body),
                 Err(e) => reasons.push(e.0),
             }
-            continue;
         }
         if b.len() > 3 {
             // Accessory chains beside the legs (a tail, skirt or cloth
@@ -924,6 +1062,9 @@ fn trunk(
         .into_iter()
         .filter(|c| !hub || !legs.contains(c))
         .collect();
+    // Lone joints off the chest (a mesh attachment, a breast leaf) are no
+    // arms; the neck may be one (OpenNI's `Head` on `Neck`).
+    let cb = g.chains_of(cb, 2);
     let (arms, neck_start) = match cb.len() {
         2 | 3 => {
             // The neck continues the spine: the child most aligned with pelvis→chest.
@@ -959,9 +1100,13 @@ fn trunk(
                     .into_iter()
                     .filter(|c| !cb.contains(c) && role_of(tokens, *c) != Some(Role::Collar))
                     .collect();
-                let neck = others
-                    .into_iter()
-                    .max_by(|&a, &b| far(a).dot(up).total_cmp(&far(b).dot(up)));
+                // A chain before a lone joint beside it, then the most
+                // upward.
+                let neck = others.into_iter().max_by(|&a, &b| {
+                    (!g.lone(a))
+                        .cmp(&!g.lone(b))
+                        .then(far(a).dot(up).total_cmp(&far(b).dot(up)))
+                });
                 ([cb[0], cb[1]], neck)
             }
         }
@@ -1001,13 +1146,15 @@ fn trunk(
                 _ => p[chest],
             };
             let up = (top - p[pelvis]).normalize_or_zero();
-            legs.iter()
+            let ends: Vec<DVec3> = legs
+                .iter()
                 .map(|&l| {
                     let path = g.path(l);
                     let end = *path.last().unwrap_or(&l);
-                    0.5 * (p[end] - p[pelvis]).normalize_or_zero().dot(up)
+                    p[end] - p[pelvis]
                 })
-                .sum::<f64>()
+                .collect();
+            legs_from_trunk(&ends, up)
         })
         .collect();
     let mut frames: Vec<f64> = cosines.iter().skip(1).copied().collect();
@@ -1015,15 +1162,13 @@ fn trunk(
     let median = frames.get(frames.len() / 2).copied().unwrap_or(f64::MAX);
     // A frame standing in for the rest counts as one frame among the others.
     let first = cosines.first().copied().unwrap_or(f64::MAX);
-    let rest_stands = g.from_frame.is_none() && first <= -0.7;
+    let rest_stands = g.from_frame.is_none() && first <= STANDING;
     let best_cos = if g.from_frame.is_some() {
         median
     } else {
         first.min(median)
     };
-    // −0.7 (134°): humans walk and run at −0.85 to −1; a fox standing
-    // with its chest above its hips is at −0.53.
-    if best_cos > -0.7 {
+    if best_cos > STANDING {
         return Err(NotHumanoid(format!(
             "the chains below '{}' do not point away from the spine (cosine {best_cos:.2} in the {}median frame): {HORIZONTAL}",
             name(pelvis),
@@ -1227,7 +1372,12 @@ fn neck_and_head(
         p != chest
             && g.rep[p] == g.rep[chest]
             && !g.helper[p]
-            && matches!(role_of(tokens, p), None | Some(Role::Neck))
+            // A spine-numbered name goes on up the spine (Rigify's neck is
+            // `DEF-spine.004`).
+            && matches!(
+                role_of(tokens, p),
+                None | Some(Role::Neck) | Some(Role::Chest) | Some(Role::Spine(_))
+            )
             && g.children[p]
                 .iter()
                 .all(|&c| c == neck_start || !g.useful[c])
@@ -1906,13 +2056,22 @@ fn arm_chain(
         d.get(d.len() / 2).copied().unwrap_or(0.0)
     };
     let geo_collar = c.len() >= 4 && lateral(c[0]) < 0.6 * lateral(c[1]);
-    let s_named = first_role(tokens, &c, |r| {
+    let named_upper = first_role(tokens, &c, |r| {
         r == Role::UpperArm || (collar && r == Role::ShoulderWord)
     })
-    .filter(|&s| w_named.is_none_or(|w| s < w))
-    .or(Some(usize::from(geo_collar)));
-    let e_named = first_role(tokens, &c, |r| r == Role::Elbow)
-        .filter(|&e| s_named.is_none_or(|s| e > s) && w_named.is_none_or(|w| e < w));
+    .filter(|&s| w_named.is_none_or(|w| s < w));
+    // The collar by geometry leaves room for an elbow before the named
+    // wrist and gives way to a named elbow right after the first joint:
+    // with the arms held out (a T-pose as the only frame) the elbow sits
+    // as far out from the chest as the upper arm is long, and a shoulder
+    // read as the collar left no elbow ("the arm chain from
+    // 'ShoulderLeft' has fewer than three joints": Kinect names, CMU
+    // 01_01's rest, the finger joints unnamed).
+    let elbow_at = first_role(tokens, &c, |r| r == Role::Elbow);
+    let collar_fits = elbow_at.is_none_or(|e| e > 1) && w_named.is_none_or(|w| w > 2);
+    let s_named = named_upper.or(Some(usize::from(geo_collar && collar_fits)));
+    let e_named =
+        elbow_at.filter(|&e| s_named.is_none_or(|s| e > s) && w_named.is_none_or(|w| e < w));
     let ln_off = |x: f64, want: f64| {
         if x.is_finite() && x > 0.0 {
             (x / want).ln().abs()

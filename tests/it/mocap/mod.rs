@@ -1,6 +1,7 @@
 //! Mocap input: the readers against reference implementations, other suites' skeletons, the bundled clips.
 
 mod fbx_units;
+mod one_capture;
 mod procedural;
 mod reference;
 mod suites;

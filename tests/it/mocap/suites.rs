@@ -394,8 +394,8 @@ Reference 0 0 0
     },
     Suite {
         name: "unity_humanoid",
-        convention: BY_N,
-        sides: "from geometry",
+        convention: "Unity Humanoid",
+        sides: "from names, confirmed by geometry",
         map: "pelvis=Hips;spine=Spine;chest=UpperChest;neck=Neck;head=Head;\
               l_shoulder=LeftUpperArm;l_elbow=LeftLowerArm;l_wrist=LeftHand;\
               r_shoulder=RightUpperArm;r_elbow=RightLowerArm;r_wrist=RightHand;\
@@ -766,8 +766,8 @@ J_Bip_C_Hips 0 95 0
     },
     Suite {
         name: "unreal_cape",
-        convention: BY_N,
-        sides: "from geometry",
+        convention: "Unreal Engine mannequin",
+        sides: "from names, confirmed by geometry",
         map: "pelvis=pelvis;spine=spine_01|spine_02;chest=spine_03;neck=neck_01;head=head;\
               l_shoulder=upperarm_l;l_elbow=lowerarm_l;l_wrist=hand_l;\
               r_shoulder=upperarm_r;r_elbow=lowerarm_r;r_wrist=hand_r;\

@@ -1,3 +1,4 @@
 //! Canonical mapping: any humanoid clip's joints onto the canonical skeleton.
 
+mod families;
 mod mapping;
