@@ -80,6 +80,7 @@ pub mod pose;
 pub mod db;
 pub mod graph;
 pub mod keyframe;
+pub mod live;
 pub mod similarity;
 // Synthesis.
 pub mod deform;

@@ -1,0 +1,12 @@
+//! Live retargeting from a mocap stream (issue 45): the actor moves in the
+//! suit, the 4D character moves now.
+//!
+//! [`online`] is the fixed-lag skeletal trellis (the offline
+//! [`crate::drive::trellis`] decided frame by frame), [`session`] the
+//! per-frame synthesis on a character prepared once.
+
+pub mod online;
+pub mod session;
+
+pub use online::{Advance, Committed, OnlineOptions, OnlineStats, OnlineTrellis};
+pub use session::{LiveFrame, Session, SessionOptions};
