@@ -28,6 +28,7 @@ pub mod batch;
 pub mod database;
 pub mod db_init;
 pub mod keyframe;
+pub mod live;
 pub mod outputs;
 pub mod play;
 pub mod retarget;

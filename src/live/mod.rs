@@ -3,10 +3,15 @@
 //!
 //! [`online`] is the fixed-lag skeletal trellis (the offline
 //! [`crate::drive::trellis`] decided frame by frame), [`session`] the
-//! per-frame synthesis on a character prepared once.
+//! per-frame synthesis on a character prepared once, [`source`] the
+//! stream input ([`replay`] a clip file as a stream), [`report`] the
+//! latency and throughput figures.
 
 pub mod online;
+pub mod replay;
+pub mod report;
 pub mod session;
+pub mod source;
 
 pub use online::{Advance, Committed, OnlineOptions, OnlineStats, OnlineTrellis};
 pub use session::{LiveFrame, Session, SessionOptions};
