@@ -192,10 +192,10 @@ pub fn run_live(
             break;
         }
         let ev = source.next(Duration::from_millis(50))?;
-        let (pose, arrived) = match ev {
+        let (pose, rotations, arrived) = match ev {
             Event::Idle => continue,
             Event::End => break,
-            Event::Frame(f) => (f.pose, f.arrived),
+            Event::Frame(f) => (f.pose, f.rotations, f.arrived),
         };
         first.get_or_insert(arrived);
         if session.is_none() {
@@ -221,7 +221,7 @@ pub fn run_live(
                 latency_ms: lat.as_secs_f64() * 1e3,
             });
         };
-        s.push(&pose, &mut emit);
+        s.push(&pose, rotations.as_ref(), &mut emit);
         last = Instant::now();
     }
     if let Some(s) = session.as_mut() {

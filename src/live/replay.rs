@@ -73,12 +73,13 @@ impl Source for Replay {
         Ok(Event::Frame(Incoming {
             seq: k as u64,
             pose: self.clip.poses[k],
+            rotations: self.clip.reference.rotations.get(k).copied(),
             arrived,
         }))
     }
 
     fn reference(&self) -> Option<Reference> {
-        Some(self.clip.reference.clone())
+        Some(self.clip.reference.without_rotations())
     }
 
     fn counters(&self) -> Counters {

@@ -32,8 +32,9 @@ use crate::drive::trellis::TrellisInput;
 use crate::drive::{Prepared, RetargetOptions};
 use crate::mesh::blend::{BlendWorkspace, FrameGradients};
 use crate::pose::Pose;
-use crate::pose::retarget::Reference;
+use crate::pose::retarget::{JointRotations, Reference};
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 /// Options of a live session.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -80,8 +81,10 @@ pub struct Session<'a> {
     opts: SessionOptions,
     reference: Reference,
     trellis: OnlineTrellis<'a>,
-    /// The last `analysis_window` raw frames.
+    /// The last `analysis_window` raw frames, and their file joints'
+    /// rotations when the stream gives them (one per raw frame).
     raw: VecDeque<Pose>,
+    raw_rotations: VecDeque<Option<JointRotations>>,
     /// Query poses (on the character) from frame `query_start` on.
     query: VecDeque<Pose>,
     query_start: usize,
@@ -117,6 +120,7 @@ impl<'a> Session<'a> {
             reference,
             trellis: OnlineTrellis::new(input, opts.retarget.trellis, opts.online),
             raw: VecDeque::new(),
+            raw_rotations: VecDeque::new(),
             query: VecDeque::new(),
             query_start: 0,
             path: VecDeque::new(),
@@ -142,15 +146,29 @@ impl<'a> Session<'a> {
     }
 
     /// Analyses the stream's next pose (`raw`: its canonical joints, metres,
-    /// Y-up) and hands every frame it lets the session decide to `out`.
-    pub fn push(&mut self, raw: &Pose, out: &mut dyn FnMut(LiveFrame<'_>)) {
+    /// Y-up; `rotations`: its file joints' world rotations, when known, which
+    /// turn the chest as offline) and hands every frame it lets the session
+    /// decide to `out`.
+    pub fn push(
+        &mut self,
+        raw: &Pose,
+        rotations: Option<&JointRotations>,
+        out: &mut dyn FnMut(LiveFrame<'_>),
+    ) {
         let w = self.opts.analysis_window.max(1);
         if self.raw.len() == w {
             self.raw.pop_front();
+            self.raw_rotations.pop_front();
         }
         self.raw.push_back(*raw);
+        self.raw_rotations.push_back(rotations.copied());
+        let rots: Option<Vec<JointRotations>> = self.raw_rotations.iter().copied().collect();
+        let reference = Reference {
+            rotations: Arc::from(rots.unwrap_or_default()),
+            ..self.reference.clone()
+        };
         let window = self.raw.make_contiguous();
-        let a = self.prepared.analyse(self.ch, &self.reference, window);
+        let a = self.prepared.analyse(self.ch, &reference, window);
         let (Some(q), Some(f)) = (a.query.last(), a.on_floor.last()) else {
             return;
         };

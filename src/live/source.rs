@@ -3,7 +3,7 @@
 
 use super::report::Counters;
 use crate::pose::Pose;
-use crate::pose::retarget::Reference;
+use crate::pose::retarget::{JointRotations, Reference};
 use std::time::{Duration, Instant};
 
 /// One frame of the stream.
@@ -13,6 +13,9 @@ pub struct Incoming {
     pub seq: u64,
     /// The canonical joints (metres, Y-up).
     pub pose: Pose,
+    /// The world rotations of the file joints mapped to each canonical
+    /// joint, when the stream carries rotations.
+    pub rotations: Option<JointRotations>,
     /// When it arrived (or, for a replay, was due).
     pub arrived: Instant,
 }

@@ -176,19 +176,22 @@ fn short_lags_commit_every_frame_in_order_along_the_graph() {
                 path[k]
             );
         }
-        let same = path
-            .iter()
-            .zip(&offline.path)
-            .filter(|(a, b)| a == b)
+        // The online path follows the query nearly as closely as the
+        // offline one (mean c_skel of the nodes, metres summed over joints).
+        let mean = |v: &mut dyn Iterator<Item = f64>| {
+            let (s, n) = v.fold((0.0, 0usize), |(s, n), c| (s + c, n + 1));
+            s / n.max(1) as f64
+        };
+        let on = mean(&mut steps.iter().map(|c| c.skeleton_cost));
+        let off = mean(&mut offline.skeleton_cost.iter().copied());
+        let offline_jumps = (1..offline.path.len())
+            .filter(|&k| !plays_on(&ch, offline.path[k - 1], offline.path[k]))
             .count();
         eprintln!(
-            "lag {lag}: {jumps} jumps, {same}/{} frames as offline ({} offline jumps)",
-            path.len(),
-            (1..offline.path.len())
-                .filter(|&k| !plays_on(&ch, offline.path[k - 1], offline.path[k]))
-                .count()
+            "lag {lag}: {jumps} jumps ({offline_jumps} offline), mean c_skel {on:.4} m vs offline {off:.4} m ({:.2}x)",
+            on / off
         );
-        // Not a copy of the offline path, but close to it.
-        assert!(same * 2 > path.len(), "lag {lag}: {same} frames as offline");
+        let bound = if lag == 0 { 2.0 } else { 1.5 };
+        assert!(on <= bound * off, "lag {lag}: c_skel {on} vs offline {off}");
     }
 }
