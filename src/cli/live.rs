@@ -7,15 +7,34 @@ use surfmotion::jobs::live::{LiveInput, LiveOptions, LiveReport, run_live};
 
 /// Arguments of `live`.
 #[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Args {
+    /// `live send`: send a clip as a stream.
+    #[command(subcommand)]
+    pub send: Option<Cmd>,
     /// The character database (built and cached on first use, as `db build`
     /// does).
-    #[arg(long)]
-    pub db: PathBuf,
+    #[arg(long, required = true)]
+    pub db: Option<PathBuf>,
     /// Play a clip file (any format `retarget` reads) as the stream, at its
     /// real frame rate (see --speed).
-    #[arg(long, value_name = "CLIP")]
-    pub replay: PathBuf,
+    #[arg(
+        long,
+        value_name = "CLIP",
+        required_unless_present = "bvh_tcp",
+        conflicts_with = "bvh_tcp"
+    )]
+    pub replay: Option<PathBuf>,
+    /// Listen for BVH over TCP (a BVH header, then one frame line per
+    /// sample, as Axis Studio / Perception Neuron broadcast) on ADDR:PORT,
+    /// e.g. 127.0.0.1:7001. An address other than 127.0.0.1 accepts other
+    /// machines and is printed as a warning.
+    #[arg(long = "bvh-tcp", value_name = "ADDR:PORT")]
+    pub bvh_tcp: Option<std::net::SocketAddr>,
+    /// End the session when no frame came for this many seconds (a network
+    /// stream otherwise waits for its sender to come back; stop with Ctrl-C).
+    #[arg(long = "until-idle", value_name = "SECONDS", value_parser = super::positive)]
+    pub until_idle: Option<f64>,
     /// Frames of future the retrieval sees before it decides a frame (the
     /// fixed-lag trellis); 0 decides each frame as it comes (greedy, with a
     /// hysteresis against flicker). Each lag frame adds one frame period
@@ -44,12 +63,82 @@ pub struct Args {
     pub clip: super::opts::ClipOpts,
 }
 
+/// `live` subcommands.
+#[derive(clap::Subcommand)]
+pub enum Cmd {
+    /// Send a clip as a stream, so every input path can be tested without
+    /// a suit.
+    #[command(
+        after_help = "Example:\n  surfmotion live --db samba_synth --bvh-tcp 127.0.0.1:7001 --until-idle 2 --report &\n  surfmotion live send 02_02.amc --to 127.0.0.1:7001 --protocol bvh"
+    )]
+    Send(SendArgs),
+}
+
+/// Arguments of `live send`.
+#[derive(clap::Args)]
+pub struct SendArgs {
+    /// The clip (any format `retarget` reads).
+    pub clip: PathBuf,
+    /// The receiver.
+    #[arg(long, value_name = "ADDR:PORT")]
+    pub to: std::net::SocketAddr,
+    /// The protocol: bvh (BVH over TCP). VMC and Rokoko Studio Live are not
+    /// implemented yet.
+    #[arg(long, default_value = "bvh", value_parser = ["bvh"])]
+    pub protocol: String,
+    /// Resample the clip to this rate before sending (default: its own).
+    #[arg(long, value_name = "FPS", value_parser = super::frame_rate)]
+    pub fps: Option<f64>,
+    /// Speed: 1 sends at the clip's real rate, 0 as fast as the socket takes.
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    pub speed: f64,
+    #[command(flatten)]
+    pub clip_opts: super::opts::ClipOpts,
+}
+
+/// Runs `live send`.
+fn send(a: SendArgs) -> anyhow::Result<()> {
+    if !(a.speed.is_finite() && a.speed >= 0.0) {
+        anyhow::bail!("--speed {}: expected a factor ≥ 0", a.speed);
+    }
+    let r = surfmotion::live::send::send_bvh(
+        &a.clip,
+        a.to,
+        &a.clip_opts.load_options()?,
+        a.fps,
+        a.speed,
+    )?;
+    println!(
+        "sent {} frames at {:.1} fps to {} ({}) in {:.2} s",
+        r.frames, r.fps, a.to, a.protocol, r.seconds
+    );
+    Ok(())
+}
+
 /// Runs `live`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    if let Some(Cmd::Send(s)) = a.send {
+        return send(s);
+    }
+    let Some(db) = a.db.clone() else {
+        anyhow::bail!("--db is required")
+    };
+    let input = match (&a.replay, a.bvh_tcp) {
+        (Some(p), _) => LiveInput::Replay(p.clone()),
+        (None, Some(addr)) => {
+            if !addr.ip().is_loopback() {
+                eprintln!(
+                    "warning: listening on {addr}, which accepts frames from other machines (127.0.0.1 keeps the stream on this one)"
+                );
+            }
+            LiveInput::BvhTcp(addr)
+        }
+        (None, None) => anyhow::bail!("give --replay CLIP or --bvh-tcp ADDR:PORT"),
+    };
     if let Some(out) = &a.record {
         surfmotion::jobs::outputs::check_mesh_output(out)?;
-        let mut inputs = surfmotion::jobs::outputs::database_inputs(&a.db);
-        inputs.push(a.replay.clone());
+        let mut inputs = surfmotion::jobs::outputs::database_inputs(&db);
+        inputs.extend(a.replay.clone());
         inputs.extend(a.clip.rig_map.clone());
         surfmotion::jobs::outputs::refuse_colliding(&inputs, &super::mesh_outputs(out))?;
     }
@@ -60,17 +149,19 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         lag: a.lag,
         speed: a.speed,
         seconds: a.seconds,
+        until_idle: a.until_idle,
         load: a.clip.load_options()?,
         ..LiveOptions::default()
     };
     let stop = AtomicBool::new(false);
     let report = run_live(
-        &a.db,
-        &LiveInput::Replay(a.replay.clone()),
+        &db,
+        &input,
         a.record.as_deref(),
         &opts,
         &super::db::Bars::new(),
         &stop,
+        &mut |addr| eprintln!("listening for BVH over TCP on {addr}"),
         &mut |_| {},
     )?;
     if a.json {

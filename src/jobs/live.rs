@@ -7,6 +7,7 @@ use crate::db::{BuildProgress, Character};
 use crate::drive::query::{QueryError, load_mocap};
 use crate::drive::trellis::TrellisInput;
 use crate::drive::{Prepared, RetargetError, RetargetOptions};
+use crate::live::bvh_tcp::BvhTcp;
 use crate::live::online::{OnlineOptions, OnlineStats};
 use crate::live::replay::Replay;
 use crate::live::report::{Counters, Latencies, LatencySummary};
@@ -40,6 +41,9 @@ pub struct LiveOptions {
     pub load: LoadOptions,
     /// Stop after this many seconds of streaming. Default: none.
     pub seconds: Option<f64>,
+    /// End the session when no frame came for this many seconds (after
+    /// the first). Default: none (a network stream waits for its sender).
+    pub until_idle: Option<f64>,
 }
 
 impl Default for LiveOptions {
@@ -53,6 +57,7 @@ impl Default for LiveOptions {
             speed: 1.0,
             load: LoadOptions::default(),
             seconds: None,
+            until_idle: None,
         }
     }
 }
@@ -62,6 +67,8 @@ impl Default for LiveOptions {
 pub enum LiveInput {
     /// A clip file played at its rate.
     Replay(PathBuf),
+    /// BVH over TCP, listening on the address.
+    BvhTcp(std::net::SocketAddr),
 }
 
 /// What can go wrong in [`run_live`].
@@ -133,7 +140,8 @@ pub struct LiveReport {
 }
 
 /// Runs a live session from `input` on the database in `db` until the
-/// stream ends, `stop` is set or `opts.seconds` pass: every output frame
+/// stream ends, `stop` is set, `opts.seconds` pass or the stream is idle
+/// `opts.until_idle` (a network source's address is told to `listening`): every output frame
 /// to `on_frame` as it is made, recorded to `record` (any sequence format,
 /// written atomically when the stream ends) if given.
 pub fn run_live(
@@ -143,6 +151,7 @@ pub fn run_live(
     opts: &LiveOptions,
     progress: &dyn BuildProgress,
     stop: &AtomicBool,
+    listening: &mut dyn FnMut(std::net::SocketAddr),
     on_frame: &mut dyn FnMut(FrameOut<'_>),
 ) -> Result<LiveReport, LiveError> {
     let ch = Character::load(db, progress)?;
@@ -153,6 +162,11 @@ pub fn run_live(
     let mut source: Box<dyn Source> = match input {
         LiveInput::Replay(clip) => {
             Box::new(Replay::new(load_mocap(clip, &opts.load, fps)?, opts.speed))
+        }
+        LiveInput::BvhTcp(addr) => {
+            let s = BvhTcp::bind(*addr, fps, opts.load.clone())?;
+            listening(s.local_addr());
+            Box::new(s)
         }
     };
     let successor = |id: u32| ch.successor(id);
@@ -182,6 +196,8 @@ pub fn run_live(
     let mut first: Option<Instant> = None;
     let mut last = Instant::now();
     let deadline = opts.seconds.map(Duration::from_secs_f64);
+    let idle = opts.until_idle.map(Duration::from_secs_f64);
+    let mut last_frame = Instant::now();
     loop {
         if stop.load(Ordering::Relaxed) {
             break;
@@ -193,11 +209,19 @@ pub fn run_live(
         }
         let ev = source.next(Duration::from_millis(50))?;
         let (pose, rotations, arrived) = match ev {
-            Event::Idle => continue,
+            Event::Idle => {
+                if let (Some(_), Some(d)) = (first, idle)
+                    && last_frame.elapsed() >= d
+                {
+                    break;
+                }
+                continue;
+            }
             Event::End => break,
             Event::Frame(f) => (f.pose, f.rotations, f.arrived),
         };
         first.get_or_insert(arrived);
+        last_frame = Instant::now();
         if session.is_none() {
             let reference = source.reference().ok_or(LiveError::NoReference)?;
             session = Some(Session::new(&ch, &prepared, &trellis, reference, sopts));

@@ -4,12 +4,16 @@
 //! [`online`] is the fixed-lag skeletal trellis (the offline
 //! [`crate::drive::trellis`] decided frame by frame), [`session`] the
 //! per-frame synthesis on a character prepared once, [`source`] the
-//! stream input ([`replay`] a clip file as a stream), [`report`] the
+//! stream input ([`replay`] a clip file as a stream, [`bvh_tcp`] BVH over
+//! TCP through a [`mailbox`]), [`report`] the
 //! latency and throughput figures.
 
+pub mod bvh_tcp;
+pub mod mailbox;
 pub mod online;
 pub mod replay;
 pub mod report;
+pub mod send;
 pub mod session;
 pub mod source;
 
