@@ -2,3 +2,4 @@
 //! and the per-frame session against the offline synthesis.
 
 mod online;
+mod protocols;
