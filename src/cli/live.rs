@@ -35,6 +35,10 @@ pub struct Args {
     /// stream otherwise waits for its sender to come back; stop with Ctrl-C).
     #[arg(long = "until-idle", value_name = "SECONDS", value_parser = super::positive)]
     pub until_idle: Option<f64>,
+    /// Keep every network frame, in order, instead of the newest winning
+    /// when the character falls behind (for recordings; latency then grows).
+    #[arg(long)]
+    pub lossless: bool,
     /// Frames of future the retrieval sees before it decides a frame (the
     /// fixed-lag trellis); 0 decides each frame as it comes (greedy, with a
     /// hysteresis against flicker). Each lag frame adds one frame period
@@ -150,6 +154,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         speed: a.speed,
         seconds: a.seconds,
         until_idle: a.until_idle,
+        lossless: a.lossless,
         load: a.clip.load_options()?,
         ..LiveOptions::default()
     };

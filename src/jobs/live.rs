@@ -44,6 +44,10 @@ pub struct LiveOptions {
     /// End the session when no frame came for this many seconds (after
     /// the first). Default: none (a network stream waits for its sender).
     pub until_idle: Option<f64>,
+    /// Keep every network frame in order instead of the newest winning
+    /// (for recordings and tests; latency grows when the session is slower
+    /// than the stream). Default: false.
+    pub lossless: bool,
 }
 
 impl Default for LiveOptions {
@@ -58,6 +62,7 @@ impl Default for LiveOptions {
             load: LoadOptions::default(),
             seconds: None,
             until_idle: None,
+            lossless: false,
         }
     }
 }
@@ -164,7 +169,7 @@ pub fn run_live(
             Box::new(Replay::new(load_mocap(clip, &opts.load, fps)?, opts.speed))
         }
         LiveInput::BvhTcp(addr) => {
-            let s = BvhTcp::bind(*addr, fps, opts.load.clone())?;
+            let s = BvhTcp::bind(*addr, fps, opts.load.clone(), opts.lossless)?;
             listening(s.local_addr());
             Box::new(s)
         }

@@ -36,13 +36,24 @@ pub struct BvhTcp {
 impl BvhTcp {
     /// Listens on `addr` for senders; frames are taken at `fps` (the
     /// database's rate).
-    pub fn bind(addr: SocketAddr, fps: f64, load: LoadOptions) -> Result<BvhTcp, SourceError> {
+    /// With `lossless` every frame is kept in order ([`Mailbox::lossless`]);
+    /// otherwise the newest wins.
+    pub fn bind(
+        addr: SocketAddr,
+        fps: f64,
+        load: LoadOptions,
+        lossless: bool,
+    ) -> Result<BvhTcp, SourceError> {
         let listener = TcpListener::bind(addr).map_err(|source| SourceError::Io {
             what: format!("listening on {addr}"),
             source,
         })?;
         let addr = listener.local_addr().unwrap_or(addr);
-        let mailbox = Arc::new(Mailbox::default());
+        let mailbox = Arc::new(if lossless {
+            Mailbox::lossless()
+        } else {
+            Mailbox::default()
+        });
         let mb = mailbox.clone();
         std::thread::spawn(move || serve(listener, fps, load, &mb));
         Ok(BvhTcp { mailbox, addr })
@@ -135,6 +146,10 @@ fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
                 "{header}Frames: 1\nFrame Time: {frame_time}\n{}\n",
                 line.trim_end()
             );
+            let Ok(clip) = parse_bvh(&text, Path::new("tcp"), &BvhOptions::default()) else {
+                mb.count(|c| c.malformed += 1);
+                continue;
+            };
             let t = source_index as f64 * frame_time;
             source_index += 1;
             // The output frames whose time this source frame is nearest.
@@ -146,10 +161,6 @@ fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
             if due.is_empty() {
                 continue;
             }
-            let Ok(clip) = parse_bvh(&text, Path::new("tcp"), &BvhOptions::default()) else {
-                mb.count(|c| c.malformed += 1);
-                continue;
-            };
             let Some((pose, rot, rest)) = frame_pose(clip, &text, &load, &mut decided) else {
                 mb.count(|c| c.malformed += 1);
                 continue;

@@ -10,7 +10,8 @@ use std::time::Duration;
 
 #[derive(Default)]
 struct State {
-    slot: Option<Incoming>,
+    slot: std::collections::VecDeque<Incoming>,
+    lossless: bool,
     last_seq: Option<u64>,
     reference: Option<Reference>,
     counters: Counters,
@@ -24,7 +25,19 @@ pub struct Mailbox {
     ready: Condvar,
 }
 
+/// Frames a lossless mailbox holds at most (then the oldest is dropped).
+pub const LOSSLESS_CAP: usize = 100_000;
+
 impl Mailbox {
+    /// A mailbox where no frame replaces another: every frame is taken in
+    /// order (latency grows when the session is slower than the stream),
+    /// up to [`LOSSLESS_CAP`] frames waiting.
+    pub fn lossless() -> Mailbox {
+        let m = Mailbox::default();
+        m.lock().lossless = true;
+        m
+    }
+
     fn lock(&self) -> MutexGuard<'_, State> {
         self.state.lock().unwrap_or_else(|e| e.into_inner())
     }
@@ -47,9 +60,12 @@ impl Mailbox {
         }
         s.last_seq = Some(f.seq);
         s.counters.received += 1;
-        if s.slot.replace(f).is_some() {
+        let cap = if s.lossless { LOSSLESS_CAP } else { 1 };
+        while s.slot.len() >= cap {
+            s.slot.pop_front();
             s.counters.dropped += 1;
         }
+        s.slot.push_back(f);
         self.ready.notify_one();
     }
 
@@ -61,14 +77,14 @@ impl Mailbox {
     /// The next frame, waiting at most `wait`.
     pub fn next(&self, wait: Duration) -> Result<Event, SourceError> {
         let mut s = self.lock();
-        if s.slot.is_none() {
+        if s.slot.is_empty() {
             s = self
                 .ready
                 .wait_timeout(s, wait)
                 .map(|(g, _)| g)
                 .unwrap_or_else(|e| e.into_inner().0);
         }
-        Ok(match s.slot.take() {
+        Ok(match s.slot.pop_front() {
             Some(f) => Event::Frame(f),
             None => Event::Idle,
         })

@@ -21,7 +21,14 @@ fn listen(db: &Path, args: &[&str]) -> (Child, u16) {
     let mut child = Command::new(bin())
         .args(["live", "--db"])
         .arg(db)
-        .args(["--bvh-tcp", "127.0.0.1:0", "--until-idle", "3", "--json"])
+        .args([
+            "--bvh-tcp",
+            "127.0.0.1:0",
+            "--until-idle",
+            "3",
+            "--lossless",
+            "--json",
+        ])
         .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
