@@ -45,6 +45,15 @@ pub struct Args {
     /// of delay.
     #[arg(long, default_value_t = 3)]
     pub lag: usize,
+    /// Frames of the stream the pose kernel analyses each frame with (it
+    /// levels the ground and finds the feet's support over them; offline it
+    /// sees the whole clip).
+    #[arg(long = "analysis-window", default_value_t = 32, value_name = "FRAMES")]
+    pub analysis_window: usize,
+    /// Decided frames kept for the timeline's blends and the placement's
+    /// smoothing.
+    #[arg(long, default_value_t = 64, value_name = "FRAMES")]
+    pub history: usize,
     /// Replay speed: 1 plays the clip at its real rate, 2 twice as fast, 0
     /// as fast as meshes are made (for measuring throughput).
     #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
@@ -155,6 +164,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         seconds: a.seconds,
         until_idle: a.until_idle,
         lossless: a.lossless,
+        analysis_window: a.analysis_window.max(1),
+        history: a.history.max(1),
         load: a.clip.load_options()?,
         ..LiveOptions::default()
     };

@@ -32,7 +32,9 @@ use crate::drive::trellis::TrellisInput;
 use crate::drive::{Prepared, RetargetOptions};
 use crate::mesh::blend::{BlendWorkspace, FrameGradients};
 use crate::pose::Pose;
-use crate::pose::retarget::{JointRotations, Reference};
+use crate::pose::retarget::{JointRotations, Reference, ReferenceSource};
+use crate::rig::Canonical as C;
+use glam::{DVec2, DVec3};
 use std::collections::VecDeque;
 use std::sync::Arc;
 
@@ -85,6 +87,9 @@ pub struct Session<'a> {
     /// rotations when the stream gives them (one per raw frame).
     raw: VecDeque<Pose>,
     raw_rotations: VecDeque<Option<JointRotations>>,
+    /// The analysed pelvis (x, z) of each raw frame but the newest, on the
+    /// stream's own root trajectory (see [`Session::push`]).
+    roots: VecDeque<DVec2>,
     /// Query poses (on the character) from frame `query_start` on.
     query: VecDeque<Pose>,
     query_start: usize,
@@ -121,6 +126,7 @@ impl<'a> Session<'a> {
             trellis: OnlineTrellis::new(input, opts.retarget.trellis, opts.online),
             raw: VecDeque::new(),
             raw_rotations: VecDeque::new(),
+            roots: VecDeque::new(),
             query: VecDeque::new(),
             query_start: 0,
             path: VecDeque::new(),
@@ -159,20 +165,41 @@ impl<'a> Session<'a> {
         if self.raw.len() == w {
             self.raw.pop_front();
             self.raw_rotations.pop_front();
+            self.roots.pop_front();
         }
         self.raw.push_back(*raw);
         self.raw_rotations.push_back(rotations.copied());
         let rots: Option<Vec<JointRotations>> = self.raw_rotations.iter().copied().collect();
         let reference = Reference {
             rotations: Arc::from(rots.unwrap_or_default()),
+            // A reference frame of the stream is not a frame of the window
+            // (the kernel reads `Frame(i)` as the window's frame i): the
+            // reference's pose stands for it.
+            source: match self.reference.source {
+                ReferenceSource::Frame(_) => ReferenceSource::Frame(usize::MAX),
+                s => s,
+            },
             ..self.reference.clone()
         };
         let window = self.raw.make_contiguous();
         let a = self.prepared.analyse(self.ch, &reference, window);
-        let (Some(q), Some(f)) = (a.query.last(), a.on_floor.last()) else {
+        let (Some(first), Some(q), Some(f)) = (a.query.first(), a.query.last(), a.on_floor.last())
+        else {
             return;
         };
-        self.push_analysed(q, f, out);
+        // The kernel moves the root by the clip's pelvis since the clip's
+        // first frame, here the window's: the window's first frame is put
+        // back where it stood on the stream's trajectory (as analysed when
+        // it was the newest), and the newest frame moved with it.
+        let p = C::Pelvis.index();
+        let shift = match self.roots.front() {
+            Some(r) => *r - DVec2::new(first[p].x, first[p].z),
+            None => DVec2::ZERO,
+        };
+        let by = DVec3::new(shift.x, 0.0, shift.y);
+        let (q, f) = (q.map(|x| x + by), f.map(|x| x + by));
+        self.roots.push_back(DVec2::new(q[p].x, q[p].z));
+        self.push_analysed(&q, &f, out);
     }
 
     /// Takes the next frame already analysed (`query` on the character,
