@@ -175,7 +175,7 @@ enum Command {
     #[command(
         after_help = "Example:\n  surfmotion live --db samba_synth --replay 02_02.amc --report --record live.pc2"
     )]
-    Live(live::Args),
+    Live(Box<live::Args>),
     /// The character in a web browser (Volino et al. 2015): export a
     /// static site (compact 4D geometry, the Surface Motion Graph, a WebGL2
     /// page with an animation engine) or serve it locally.
@@ -239,7 +239,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Transfer(a) => transfer::run(*a),
         Command::Batch(a) => batch::run_batch(*a),
         Command::Play(a) => play::run(a),
-        Command::Live(a) => live::run(a),
+        Command::Live(a) => live::run(*a),
         Command::Web(c) => web::run(c),
     }
 }

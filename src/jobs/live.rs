@@ -149,6 +149,7 @@ pub struct LiveReport {
 /// `opts.until_idle` (a network source's address is told to `listening`): every output frame
 /// to `on_frame` as it is made, recorded to `record` (any sequence format,
 /// written atomically when the stream ends) if given.
+#[allow(clippy::too_many_arguments)]
 pub fn run_live(
     db: &Path,
     input: &LiveInput,

@@ -106,7 +106,7 @@ fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
         }
         let mut reader = BufReader::new(stream);
         let mut header = String::new();
-        let mut frame_time = 0.0;
+        let mut frame_time: f64 = 0.0;
         let mut line = String::new();
         // The header, up to and including `Frame Time:`.
         loop {
@@ -125,7 +125,7 @@ fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
             }
             header.push_str(&line);
         }
-        if !(frame_time > 0.0) {
+        if frame_time.is_nan() || frame_time <= 0.0 {
             mb.count(|c| c.malformed += 1);
             continue;
         }

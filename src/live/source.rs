@@ -20,7 +20,9 @@ pub struct Incoming {
     pub arrived: Instant,
 }
 
-/// What a source has next.
+/// What a source has next. A frame is moved once per frame, by value: boxing
+/// it would allocate per frame.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy)]
 pub enum Event {
     /// A frame.

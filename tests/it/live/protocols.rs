@@ -16,7 +16,9 @@ fn bin() -> &'static str {
 }
 
 /// Starts `live --bvh-tcp 127.0.0.1:0 ARGS` and returns it with the port it
-/// listens on (read from its standard error).
+/// listens on (read from its standard error). The caller waits for it
+/// ([`report`]); a child that exits before listening fails the test.
+#[allow(clippy::zombie_processes)]
 fn listen(db: &Path, args: &[&str]) -> (Child, u16) {
     let mut child = Command::new(bin())
         .args(["live", "--db"])
