@@ -37,6 +37,8 @@
 //!   the distance/time path optimisation (Huang Sec. 5.1).
 //!
 //! Synthesis:
+//! - [`live`]: live retargeting from a mocap stream: the fixed-lag
+//!   trellis, the per-frame session, stream inputs and their sender.
 //! - [`drive`]: surface synthesis driven by mocap: skeletal trellis
 //!   retrieval, timeline, blending and placement (Huang Sec. 5.2).
 //! - [`deform`]: skeleton-driven editing of retrieved frames: skinning
@@ -80,6 +82,7 @@ pub mod pose;
 pub mod db;
 pub mod graph;
 pub mod keyframe;
+pub mod live;
 pub mod similarity;
 // Synthesis.
 pub mod deform;

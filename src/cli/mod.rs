@@ -11,6 +11,7 @@ mod flags;
 mod graph;
 mod inspect;
 mod keyframe;
+mod live;
 mod log;
 mod mesh;
 mod mocap;
@@ -169,6 +170,13 @@ enum Command {
         after_help = "Example:\n  surfmotion play --db gaits --script control.json -o session.glb --report session.json"
     )]
     Play(play::Args),
+    /// Drive the character live from a mocap stream (issue 45): each frame
+    /// retrieved by a fixed-lag trellis, blended, placed and deformed as it
+    /// arrives; a latency and throughput report, an optional recording.
+    #[command(
+        after_help = "Example:\n  surfmotion live --db samba_synth --replay 02_02.amc --report --record live.pc2"
+    )]
+    Live(Box<live::Args>),
     /// The character in a web browser (Volino et al. 2015): export a
     /// static site (compact 4D geometry, the Surface Motion Graph, a WebGL2
     /// page with an animation engine) or serve it locally.
@@ -232,6 +240,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Transfer(a) => transfer::run(*a),
         Command::Batch(a) => batch::run_batch(*a),
         Command::Play(a) => play::run(a),
+        Command::Live(a) => live::run(*a),
         Command::Web(c) => web::run(c),
     }
 }

@@ -30,6 +30,7 @@ pub mod database;
 pub mod db_init;
 pub mod demo;
 pub mod keyframe;
+pub mod live;
 pub mod mesh;
 pub mod mocap;
 pub mod outputs;

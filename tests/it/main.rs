@@ -31,6 +31,8 @@ mod parametric; // parametric motion
 
 mod drive; // surface synthesis
 
+mod live; // live retargeting from a stream
+
 mod keyframe; // key-frame animation
 
 mod transfer; // scan transfer

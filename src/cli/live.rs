@@ -1,0 +1,219 @@
+//! `surfmotion live`: a mocap stream drives the 4D character now (issue
+//! 45). Parses, calls [`surfmotion::jobs::live::run_live`] and prints.
+
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use surfmotion::jobs::live::{LiveInput, LiveOptions, LiveReport, run_live};
+
+/// Arguments of `live`.
+#[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct Args {
+    /// `live send`: send a clip as a stream.
+    #[command(subcommand)]
+    pub send: Option<Cmd>,
+    /// The character database (built and cached on first use, as `db build`
+    /// does).
+    #[arg(long, required = true)]
+    pub db: Option<PathBuf>,
+    /// Play a clip file (any format `retarget` reads) as the stream, at its
+    /// real frame rate (see --speed).
+    #[arg(
+        long,
+        value_name = "CLIP",
+        required_unless_present = "bvh_tcp",
+        conflicts_with = "bvh_tcp"
+    )]
+    pub replay: Option<PathBuf>,
+    /// Listen for BVH over TCP (a BVH header, then one frame line per
+    /// sample, as Axis Studio / Perception Neuron broadcast) on ADDR:PORT,
+    /// e.g. 127.0.0.1:7001. An address other than 127.0.0.1 accepts other
+    /// machines and is printed as a warning.
+    #[arg(long = "bvh-tcp", value_name = "ADDR:PORT")]
+    pub bvh_tcp: Option<std::net::SocketAddr>,
+    /// End the session when no frame came for this many seconds (a network
+    /// stream otherwise waits for its sender to come back; stop with Ctrl-C).
+    #[arg(long = "until-idle", value_name = "SECONDS", value_parser = super::positive)]
+    pub until_idle: Option<f64>,
+    /// Keep every network frame, in order, instead of the newest winning
+    /// when the character falls behind (for recordings; latency then grows).
+    #[arg(long)]
+    pub lossless: bool,
+    /// Frames of future the retrieval sees before it decides a frame (the
+    /// fixed-lag trellis); 0 decides each frame as it comes (greedy, with a
+    /// hysteresis against flicker). Each lag frame adds one frame period
+    /// of delay.
+    #[arg(long, default_value_t = 3)]
+    pub lag: usize,
+    /// Frames of the stream the pose kernel analyses each frame with (it
+    /// levels the ground and finds the feet's support over them; offline it
+    /// sees the whole clip).
+    #[arg(long = "analysis-window", default_value_t = 32, value_name = "FRAMES")]
+    pub analysis_window: usize,
+    /// Decided frames kept for the timeline's blends and the placement's
+    /// smoothing.
+    #[arg(long, default_value_t = 64, value_name = "FRAMES")]
+    pub history: usize,
+    /// Replay speed: 1 plays the clip at its real rate, 2 twice as fast, 0
+    /// as fast as meshes are made (for measuring throughput).
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    pub speed: f64,
+    /// Stop after this many seconds of streaming.
+    #[arg(long, value_parser = super::positive)]
+    pub seconds: Option<f64>,
+    /// Record the output to any sequence format (.glb, .pc2, .mdd, .usda, a
+    /// folder of OBJ frames), written atomically when the stream ends.
+    #[arg(long, value_name = "OUT")]
+    pub record: Option<PathBuf>,
+    /// Print the latency and throughput report (frames/s, arrival to mesh
+    /// ready median and p99, drops) when the stream ends.
+    #[arg(long)]
+    pub report: bool,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub clip: super::opts::ClipOpts,
+}
+
+/// `live` subcommands.
+#[derive(clap::Subcommand)]
+pub enum Cmd {
+    /// Send a clip as a stream, so every input path can be tested without
+    /// a suit.
+    #[command(
+        after_help = "Example:\n  surfmotion live --db samba_synth --bvh-tcp 127.0.0.1:7001 --until-idle 2 --report &\n  surfmotion live send 02_02.amc --to 127.0.0.1:7001 --protocol bvh"
+    )]
+    Send(SendArgs),
+}
+
+/// Arguments of `live send`.
+#[derive(clap::Args)]
+pub struct SendArgs {
+    /// The clip (any format `retarget` reads).
+    pub clip: PathBuf,
+    /// The receiver.
+    #[arg(long, value_name = "ADDR:PORT")]
+    pub to: std::net::SocketAddr,
+    /// The protocol: bvh (BVH over TCP). VMC and Rokoko Studio Live are not
+    /// implemented yet.
+    #[arg(long, default_value = "bvh", value_parser = ["bvh"])]
+    pub protocol: String,
+    /// Resample the clip to this rate before sending (default: its own).
+    #[arg(long, value_name = "FPS", value_parser = super::frame_rate)]
+    pub fps: Option<f64>,
+    /// Speed: 1 sends at the clip's real rate, 0 as fast as the socket takes.
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    pub speed: f64,
+    #[command(flatten)]
+    pub clip_opts: super::opts::ClipOpts,
+}
+
+/// Runs `live send`.
+fn send(a: SendArgs) -> anyhow::Result<()> {
+    if !(a.speed.is_finite() && a.speed >= 0.0) {
+        anyhow::bail!("--speed {}: expected a factor ≥ 0", a.speed);
+    }
+    let r = surfmotion::live::send::send_bvh(
+        &a.clip,
+        a.to,
+        &a.clip_opts.load_options()?,
+        a.fps,
+        a.speed,
+    )?;
+    println!(
+        "sent {} frames at {:.1} fps to {} ({}) in {:.2} s",
+        r.frames, r.fps, a.to, a.protocol, r.seconds
+    );
+    Ok(())
+}
+
+/// Runs `live`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    if let Some(Cmd::Send(s)) = a.send {
+        return send(s);
+    }
+    let Some(db) = a.db.clone() else {
+        anyhow::bail!("--db is required")
+    };
+    let input = match (&a.replay, a.bvh_tcp) {
+        (Some(p), _) => LiveInput::Replay(p.clone()),
+        (None, Some(addr)) => {
+            if !addr.ip().is_loopback() {
+                eprintln!(
+                    "warning: listening on {addr}, which accepts frames from other machines (127.0.0.1 keeps the stream on this one)"
+                );
+            }
+            LiveInput::BvhTcp(addr)
+        }
+        (None, None) => anyhow::bail!("give --replay CLIP or --bvh-tcp ADDR:PORT"),
+    };
+    if let Some(out) = &a.record {
+        surfmotion::jobs::outputs::check_mesh_output(out)?;
+        let mut inputs = surfmotion::jobs::outputs::database_inputs(&db);
+        inputs.extend(a.replay.clone());
+        inputs.extend(a.clip.rig_map.clone());
+        surfmotion::jobs::outputs::refuse_colliding(&inputs, &super::mesh_outputs(out))?;
+    }
+    if !(a.speed.is_finite() && a.speed >= 0.0) {
+        anyhow::bail!("--speed {}: expected a factor ≥ 0", a.speed);
+    }
+    let opts = LiveOptions {
+        lag: a.lag,
+        speed: a.speed,
+        seconds: a.seconds,
+        until_idle: a.until_idle,
+        lossless: a.lossless,
+        analysis_window: a.analysis_window.max(1),
+        history: a.history.max(1),
+        load: a.clip.load_options()?,
+        ..LiveOptions::default()
+    };
+    let stop = AtomicBool::new(false);
+    let report = run_live(
+        &db,
+        &input,
+        a.record.as_deref(),
+        &opts,
+        &super::db::Bars::new(),
+        &stop,
+        &mut |addr| eprintln!("listening for BVH over TCP on {addr}"),
+        &mut |_| {},
+    )?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else if a.report {
+        print_report(&report);
+    } else {
+        println!(
+            "{} frames at {:.1} frames/s, latency median {:.1} ms, p99 {:.1} ms",
+            report.frames_out, report.output_fps, report.latency.median_ms, report.latency.p99_ms
+        );
+    }
+    for f in &report.recorded {
+        println!("wrote {}", f.display());
+    }
+    Ok(())
+}
+
+/// The report as text.
+fn print_report(r: &LiveReport) {
+    println!(
+        "live: {} frames out over {:.2} s = {:.1} frames/s ({} vertices, database at {} fps, lag {})",
+        r.frames_out, r.seconds, r.output_fps, r.vertices, r.fps, r.lag
+    );
+    println!(
+        "arrival -> mesh ready: median {:.2} ms, p99 {:.2} ms, max {:.2} ms (mesh work median {:.2} ms)",
+        r.latency.median_ms, r.latency.p99_ms, r.latency.max_ms, r.work_median_ms
+    );
+    let c = &r.input;
+    println!(
+        "input: {} received, {} dropped, {} duplicated, {} late, {} malformed, {} reconnects",
+        c.received, c.dropped, c.duplicated, c.late, c.malformed, c.reconnects
+    );
+    let s = &r.retrieval;
+    println!(
+        "retrieval: {} decided, {} jumps, {} cuts, {} widened; T_skel {:.3} m; prepared in {:.2} s",
+        s.committed, s.jumps, s.cuts, s.widened, s.t_skel, r.prepare_seconds
+    );
+}

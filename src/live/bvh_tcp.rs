@@ -1,0 +1,222 @@
+//! BVH over TCP (as Axis Studio / Perception Neuron broadcast): a BVH
+//! header (`HIERARCHY` … `MOTION`, `Frames:`, `Frame Time:`), then one
+//! frame line per sample.
+//!
+//! A listener thread accepts one sender at a time; a sender that
+//! disconnects and connects again (with its header) resumes the session
+//! (counted as a reconnect). Each frame line is read with the header as a
+//! one-frame clip; the first frame decides the clip's units and up axis and
+//! the rig map (the same detection as a file, [`crate::rig::load_clip`], or
+//! the given `--rig-map`) and the neutral reference (the header's rest
+//! skeleton when it stands upright, else the first frame). Frames arrive at
+//! the sender's rate and are taken at the database's: the source frame
+//! nearest each output time. A line that does not read is counted as
+//! malformed and skipped; when the session is busy the newest frame wins
+//! (the ones it replaced are counted as dropped).
+
+use super::mailbox::Mailbox;
+use super::report::Counters;
+use super::source::{Event, Incoming, Source, SourceError};
+use crate::mocap::Clip;
+use crate::mocap::bvh::{BvhOptions, parse_bvh};
+use crate::pose::retarget::{JointRotations, Reference, choose_reference};
+use crate::rig::{LoadOptions, RigMap, detect_clip, load_clip};
+use std::io::{BufRead, BufReader};
+use std::net::{SocketAddr, TcpListener};
+use std::path::Path;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// A BVH-over-TCP stream.
+pub struct BvhTcp {
+    mailbox: Arc<Mailbox>,
+    addr: SocketAddr,
+}
+
+impl BvhTcp {
+    /// Listens on `addr` for senders; frames are taken at `fps` (the
+    /// database's rate).
+    /// With `lossless` every frame is kept in order ([`Mailbox::lossless`]);
+    /// otherwise the newest wins.
+    pub fn bind(
+        addr: SocketAddr,
+        fps: f64,
+        load: LoadOptions,
+        lossless: bool,
+    ) -> Result<BvhTcp, SourceError> {
+        let listener = TcpListener::bind(addr).map_err(|source| SourceError::Io {
+            what: format!("listening on {addr}"),
+            source,
+        })?;
+        let addr = listener.local_addr().unwrap_or(addr);
+        let mailbox = Arc::new(if lossless {
+            Mailbox::lossless()
+        } else {
+            Mailbox::default()
+        });
+        let mb = mailbox.clone();
+        std::thread::spawn(move || serve(listener, fps, load, &mb));
+        Ok(BvhTcp { mailbox, addr })
+    }
+
+    /// The address listened on.
+    pub fn local_addr(&self) -> SocketAddr {
+        self.addr
+    }
+}
+
+impl Drop for BvhTcp {
+    fn drop(&mut self) {
+        self.mailbox.close();
+    }
+}
+
+impl Source for BvhTcp {
+    fn next(&mut self, wait: Duration) -> Result<Event, SourceError> {
+        self.mailbox.next(wait)
+    }
+    fn reference(&self) -> Option<Reference> {
+        self.mailbox.reference()
+    }
+    fn counters(&self) -> Counters {
+        self.mailbox.counters()
+    }
+}
+
+/// What the first frame of the stream decided.
+struct Decided {
+    map: RigMap,
+    units: crate::mocap::Units,
+    up: crate::mocap::UpAxis,
+}
+
+/// Accepts senders one after the other until the mailbox is closed.
+fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
+    let mut decided: Option<Decided> = None;
+    let mut out_index = 0u64;
+    let mut connections = 0u64;
+    for stream in listener.incoming() {
+        if mb.closed() {
+            break;
+        }
+        let Ok(stream) = stream else { continue };
+        connections += 1;
+        if connections > 1 {
+            mb.count(|c| c.reconnects += 1);
+        }
+        let mut reader = BufReader::new(stream);
+        let mut header = String::new();
+        let mut frame_time: f64 = 0.0;
+        let mut line = String::new();
+        // The header, up to and including `Frame Time:`.
+        loop {
+            line.clear();
+            match reader.read_line(&mut line) {
+                Ok(0) | Err(_) => break,
+                Ok(_) => {}
+            }
+            let t = line.trim();
+            if let Some(v) = t.strip_prefix("Frame Time:") {
+                frame_time = v.trim().parse().unwrap_or(0.0);
+                break;
+            }
+            if t.starts_with("Frames:") {
+                continue;
+            }
+            header.push_str(&line);
+        }
+        if frame_time.is_nan() || frame_time <= 0.0 {
+            mb.count(|c| c.malformed += 1);
+            continue;
+        }
+        let mut source_index = 0u64;
+        // Output frames are numbered on from the last connection's.
+        let base = out_index;
+        loop {
+            line.clear();
+            match reader.read_line(&mut line) {
+                Ok(0) | Err(_) => break,
+                Ok(_) => {}
+            }
+            if line.trim().is_empty() {
+                continue;
+            }
+            let arrived = Instant::now();
+            let text = format!(
+                "{header}Frames: 1\nFrame Time: {frame_time}\n{}\n",
+                line.trim_end()
+            );
+            let Ok(clip) = parse_bvh(&text, Path::new("tcp"), &BvhOptions::default()) else {
+                mb.count(|c| c.malformed += 1);
+                continue;
+            };
+            let t = source_index as f64 * frame_time;
+            source_index += 1;
+            // The output frames whose time this source frame is nearest.
+            let mut due = Vec::new();
+            while ((out_index - base) as f64 / fps) < t + 0.5 * frame_time - 1e-9 {
+                due.push(out_index);
+                out_index += 1;
+            }
+            if due.is_empty() {
+                continue;
+            }
+            let Some((pose, rot, rest)) = frame_pose(clip, &text, &load, &mut decided) else {
+                mb.count(|c| c.malformed += 1);
+                continue;
+            };
+            if mb.reference().is_none()
+                && let Ok(r) = choose_reference(rest.as_ref(), &[pose])
+            {
+                mb.set_reference(r);
+            }
+            for seq in due {
+                mb.put(Incoming {
+                    seq,
+                    pose,
+                    rotations: Some(rot),
+                    arrived,
+                });
+            }
+        }
+    }
+}
+
+/// The canonical pose (metres, Y-up) and file-joint rotations of a
+/// one-frame clip, the rest pose when first decided.
+fn frame_pose(
+    mut clip: Clip,
+    text: &str,
+    load: &LoadOptions,
+    decided: &mut Option<Decided>,
+) -> Option<(crate::pose::Pose, JointRotations, Option<crate::pose::Pose>)> {
+    let mut first = false;
+    if decided.is_none() {
+        // The same decisions as a file: units, up axis, rig map.
+        let dir = tempfile::tempdir().ok()?;
+        let p = dir.path().join("stream.bvh");
+        std::fs::write(&p, text).ok()?;
+        let c = load_clip(&p, load).ok()?;
+        let map = match &load.rig_map {
+            Some(m) => m.clone(),
+            None => detect_clip(&c).ok()?.map,
+        };
+        *decided = Some(Decided {
+            map,
+            units: c.units.clone(),
+            up: c.up,
+        });
+        first = true;
+    }
+    let d = decided.as_ref()?;
+    clip.units = d.units.clone();
+    clip.up = d.up;
+    clip.to_metres_y_up();
+    let (poses, rots) = d.map.poses_and_rotations(&clip).ok()?;
+    let rest = if first {
+        d.map.rest_pose(&clip).ok()
+    } else {
+        None
+    };
+    Some((*poses.first()?, *rots.first()?, rest))
+}

@@ -1,0 +1,21 @@
+//! Live retargeting from a mocap stream (issue 45): the actor moves in the
+//! suit, the 4D character moves now.
+//!
+//! [`online`] is the fixed-lag skeletal trellis (the offline
+//! [`crate::drive::trellis`] decided frame by frame), [`session`] the
+//! per-frame synthesis on a character prepared once, [`source`] the
+//! stream input ([`replay`] a clip file as a stream, [`bvh_tcp`] BVH over
+//! TCP through a [`mailbox`]), [`report`] the
+//! latency and throughput figures.
+
+pub mod bvh_tcp;
+pub mod mailbox;
+pub mod online;
+pub mod replay;
+pub mod report;
+pub mod send;
+pub mod session;
+pub mod source;
+
+pub use online::{Advance, Committed, OnlineOptions, OnlineStats, OnlineTrellis};
+pub use session::{LiveFrame, Session, SessionOptions};

@@ -1,0 +1,388 @@
+//! Online retrieval: the skeletal trellis of [`crate::drive::trellis`]
+//! (Huang et al. 2015, Sec. 5.2.1, Eqs. 26-31) run as the query arrives,
+//! a fixed-lag Viterbi decoder.
+//!
+//! Each arriving query frame adds a row of candidates (its nearest database
+//! frames, as offline). While more than `lag` rows are undecided, the
+//! shortest path from the last committed node through every undecided row
+//! is found by the offline relaxation (same node and edge costs, same
+//! repeat, skip and cut rules) and its first node is committed: the frame
+//! `lag` frames back is decided with `lag` frames of future. The threshold
+//! `T_skel` and the node scale `s_node` are the offline rules (twice the
+//! median, the 90th percentile of the best-match costs) over the frames
+//! seen so far; the edge scale `s_edge` depends on the database only.
+//!
+//! With `lag` at least the query's length nothing is committed before the
+//! stream ends, and [`OnlineTrellis::finish`] solves the whole trellis with
+//! the final scales: the offline path, bit for bit (the integration test
+//! `live::online` checks it). With `lag` 0 each frame is decided greedily
+//! from the last one (node cost plus transition cost), and a jump (a step
+//! that neither plays on nor repeats) is charged `hysteresis` more, so the
+//! output does not flicker between near-equal candidates (the parametric
+//! controller's rule: leave the current motion only for a clearly better
+//! one).
+
+use crate::drive::trellis::{TrellisInput, TrellisOptions};
+use crate::pose::{Pose, measure::skeleton_distance};
+use serde::Serialize;
+
+/// Options of the online retrieval (besides the trellis's own).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OnlineOptions {
+    /// Frames of future seen before a frame is decided. Default: 3.
+    pub lag: usize,
+    /// Extra cost (normalised units) of a jump when `lag` is 0. Default: 1.
+    pub hysteresis: f64,
+}
+
+impl Default for OnlineOptions {
+    fn default() -> Self {
+        OnlineOptions {
+            lag: 3,
+            hysteresis: 1.0,
+        }
+    }
+}
+
+/// One decided query frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Committed {
+    /// Query frame (from 0, in arrival order).
+    pub index: usize,
+    /// Database frame retrieved.
+    pub id: u32,
+    /// `c_skel` of the node (metres).
+    pub skeleton_cost: f64,
+    /// Entered by a cut.
+    pub cut: bool,
+}
+
+/// What one step of the decoder decided.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Advance {
+    /// Frames decided, in order (none until `lag` frames of future are in;
+    /// at most one per arriving frame; all the rest at the end).
+    pub committed: Vec<Committed>,
+    /// The current best continuation of the last committed frame through
+    /// the undecided rows (database frames; may still change).
+    pub lookahead: Vec<u32>,
+}
+
+/// Counts of the decoder so far.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct OnlineStats {
+    /// Frames received.
+    pub frames: usize,
+    /// Frames decided.
+    pub committed: usize,
+    /// Decided frames entered by a cut.
+    pub cuts: usize,
+    /// Decided frames with no candidate under `T_skel` when decided.
+    pub widened: usize,
+    /// Decided frames that left the previous frame's motion (neither a
+    /// repeat nor its natural successor nor a skip).
+    pub jumps: usize,
+    /// The threshold now (metres).
+    pub t_skel: f64,
+    /// `s_node` now (metres).
+    pub node_scale: f64,
+    /// `s_edge` (the database's).
+    pub edge_scale: f64,
+}
+
+/// The fixed-lag trellis over a database.
+pub struct OnlineTrellis<'a> {
+    db: &'a TrellisInput<'a>,
+    trellis: TrellisOptions,
+    opts: OnlineOptions,
+    kmax: usize,
+    kmin: usize,
+    edge_scale: f64,
+    /// Best-match cost of every frame seen, sorted (the scales' sample).
+    bests: Vec<f64>,
+    /// Nearest frames (sorted by cost, at most `kmax`) of every undecided
+    /// query frame, oldest first.
+    rows: std::collections::VecDeque<Vec<(f32, u32)>>,
+    /// The last committed node.
+    anchor: Option<u32>,
+    committed: usize,
+    stats: OnlineStats,
+    /// Row slot of each database frame (scratch; `u32::MAX` = none).
+    slot: Vec<u32>,
+    /// Distances to every database frame (scratch).
+    all: Vec<(f32, u32)>,
+}
+
+impl<'a> OnlineTrellis<'a> {
+    /// A decoder over `db` with the trellis options `trellis` (as offline)
+    /// and the online options `opts`.
+    pub fn new(db: &'a TrellisInput<'a>, trellis: TrellisOptions, opts: OnlineOptions) -> Self {
+        let ng = db.poses.len();
+        let kmax = trellis.max_candidates.max(1).min(ng.max(1));
+        let kmin = trellis.min_candidates.max(1).min(kmax);
+        let mut steps: Vec<f64> = (0..ng as u32)
+            .filter_map(|f| (db.successor)(f).map(|g| (db.dissimilarity)(f, g) as f64))
+            .filter(|c| *c > 0.0)
+            .collect();
+        steps.sort_by(f64::total_cmp);
+        let edge_scale = steps
+            .get(steps.len() / 2)
+            .copied()
+            .unwrap_or(1.0)
+            .max(1e-12);
+        OnlineTrellis {
+            db,
+            trellis,
+            opts,
+            kmax,
+            kmin,
+            edge_scale,
+            bests: Vec::new(),
+            rows: std::collections::VecDeque::new(),
+            anchor: None,
+            committed: 0,
+            stats: OnlineStats {
+                edge_scale,
+                ..OnlineStats::default()
+            },
+            slot: vec![u32::MAX; ng],
+            all: Vec::with_capacity(ng),
+        }
+    }
+
+    /// The counts so far.
+    pub fn stats(&self) -> OnlineStats {
+        self.stats
+    }
+
+    /// Frames received but not decided.
+    pub fn pending(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Takes the next query frame (the analysed pose on the database's
+    /// floor, [`crate::drive::Analysed::on_floor`]); decides the frame
+    /// `lag` back once it can.
+    pub fn push(&mut self, q: &Pose) -> Advance {
+        if self.db.poses.is_empty() {
+            return Advance::default();
+        }
+        self.all.clear();
+        self.all.extend(
+            self.db
+                .poses
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (skeleton_distance(q, p) as f32, i as u32)),
+        );
+        let kmax = self.kmax;
+        if kmax < self.all.len() {
+            self.all
+                .select_nth_unstable_by(kmax - 1, |a, b| a.0.total_cmp(&b.0));
+            self.all.truncate(kmax);
+        }
+        self.all
+            .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let best = self.all[0].0 as f64;
+        let at = self.bests.partition_point(|x| x.total_cmp(&best).is_lt());
+        self.bests.insert(at, best);
+        self.rows.push_back(self.all.clone());
+        self.stats.frames += 1;
+        if self.rows.len() > self.opts.lag {
+            self.decide(1)
+        } else {
+            Advance::default()
+        }
+    }
+
+    /// Decides every frame still undecided (the stream ended).
+    pub fn finish(&mut self) -> Advance {
+        let n = self.rows.len();
+        self.decide(n)
+    }
+
+    /// The current `(T_skel, s_node)`.
+    fn scales(&self) -> (f64, f64) {
+        let b = &self.bests;
+        if b.is_empty() {
+            return (0.0, 1e-6);
+        }
+        let median = b[b.len() / 2];
+        let p90 = b[((b.len() as f64 * 0.9) as usize).min(b.len() - 1)];
+        let t_skel = self.trellis.t_skel.unwrap_or((2.0 * median).max(p90));
+        (t_skel, median.max(1e-6))
+    }
+
+    /// Solves the undecided rows from the anchor and commits the first
+    /// `count` of them.
+    fn decide(&mut self, count: usize) -> Advance {
+        if self.rows.is_empty() || count == 0 {
+            return Advance::default();
+        }
+        let (t_skel, node_scale) = self.scales();
+        self.stats.t_skel = t_skel;
+        self.stats.node_scale = node_scale;
+        let mut widened = Vec::with_capacity(self.rows.len());
+        let rows: Vec<&[(f32, u32)]> = self
+            .rows
+            .iter()
+            .map(|r| {
+                let under = r.iter().take_while(|c| (c.0 as f64) <= t_skel).count();
+                widened.push(under == 0);
+                let keep = under.max(self.kmin).min(r.len());
+                &r[..keep]
+            })
+            .collect();
+        let mut slot = std::mem::take(&mut self.slot);
+        let (slots, cuts) = self.solve(&rows, node_scale, &mut slot);
+        let mut out = Advance::default();
+        let count = count.min(rows.len());
+        for k in 0..count {
+            let (c, id) = rows[k][slots[k]];
+            if let Some(a) = self.anchor
+                && !self.continues(a, id)
+            {
+                self.stats.jumps += 1;
+            }
+            self.anchor = Some(id);
+            self.stats.committed += 1;
+            self.stats.cuts += usize::from(cuts[k]);
+            self.stats.widened += usize::from(widened[k]);
+            out.committed.push(Committed {
+                index: self.committed,
+                id,
+                skeleton_cost: c as f64,
+                cut: cuts[k],
+            });
+            self.committed += 1;
+        }
+        out.lookahead = (count..rows.len()).map(|k| rows[k][slots[k]].1).collect();
+        drop(rows);
+        self.slot = slot;
+        self.rows.drain(..count);
+        out
+    }
+
+    /// True when `b` repeats `a`, is its natural successor or skips one.
+    fn continues(&self, a: u32, b: u32) -> bool {
+        let s = self.db.successor;
+        a == b || s(a) == Some(b) || s(a).and_then(s) == Some(b)
+    }
+
+    /// The shortest path through `rows` from the anchor (or from the
+    /// first row when nothing is decided yet): the slot of the chosen node
+    /// per row, and whether it was entered by a cut. The relaxation is
+    /// [`crate::drive::trellis::retrieve`]'s, operation for operation.
+    fn solve(
+        &self,
+        rows: &[&[(f32, u32)]],
+        node_scale: f64,
+        slot: &mut [u32],
+    ) -> (Vec<usize>, Vec<bool>) {
+        let db = self.db;
+        let opts = self.trellis;
+        let edge_scale = self.edge_scale;
+        let hysteresis = if self.opts.lag == 0 {
+            self.opts.hysteresis
+        } else {
+            0.0
+        };
+        let node = |c: f32| opts.w_retr * c as f64 / node_scale;
+        let edge = |i: u32, j: u32| -> f64 {
+            match (db.successor)(i) {
+                Some(s) if s == j => 0.0,
+                _ if i == j => 0.0,
+                Some(s) => (db.dissimilarity)(s, j) as f64 / edge_scale,
+                None => (db.dissimilarity)(i, j) as f64 / edge_scale,
+            }
+        };
+        let skip_of = |i: u32| (db.successor)(i).and_then(|s| (db.successor)(s));
+        let anchor_row = self.anchor.map(|a| [(0.0f32, a)]);
+        // The first row relaxed from: the anchor (cost 0) or the first
+        // undecided row (its node costs).
+        let (mut cost, first): (Vec<f64>, usize) = match &anchor_row {
+            Some(_) => (vec![0.0], 0),
+            None => (rows[0].iter().map(|c| node(c.0)).collect(), 1),
+        };
+        let mut back: Vec<Vec<(u32, bool)>> = Vec::with_capacity(rows.len());
+        if first == 1 {
+            back.push(vec![(0, false); rows[0].len()]);
+        }
+        for k in first..rows.len() {
+            let row = rows[k];
+            // Row 0 is relaxed from only when there is an anchor.
+            let prev: &[(f32, u32)] = if k == 0 {
+                anchor_row.as_ref().map_or(&[][..], |a| &a[..])
+            } else {
+                rows[k - 1]
+            };
+            for (s, c) in row.iter().enumerate() {
+                slot[c.1 as usize] = s as u32;
+            }
+            let mut next = vec![f64::INFINITY; row.len()];
+            let mut bp = vec![(u32::MAX, false); row.len()];
+            for (pi, p) in prev.iter().enumerate() {
+                let base = cost[pi];
+                if !base.is_finite() {
+                    continue;
+                }
+                let i = p.1;
+                let mut relax = |j: u32| {
+                    let s = slot[j as usize];
+                    if s != u32::MAX {
+                        let mut v = base + edge(i, j);
+                        if hysteresis > 0.0 && !(i == j || (db.successor)(i) == Some(j)) {
+                            v += hysteresis;
+                        }
+                        if v < next[s as usize] {
+                            next[s as usize] = v;
+                            bp[s as usize] = (pi as u32, false);
+                        }
+                    }
+                };
+                relax(i);
+                for (j, _) in db.adjacency.successors(i) {
+                    relax(j);
+                }
+                if opts.skip
+                    && let Some(j) = skip_of(i)
+                {
+                    relax(j);
+                }
+            }
+            if let Some((pi, &b)) = cost.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)) {
+                for (s, v) in next.iter_mut().enumerate() {
+                    let w = b + opts.cut_cost + hysteresis;
+                    if w < *v {
+                        *v = w;
+                        bp[s] = (pi as u32, true);
+                    }
+                }
+            }
+            for (s, c) in row.iter().enumerate() {
+                next[s] += node(c.0);
+                slot[c.1 as usize] = u32::MAX;
+            }
+            cost = next;
+            back.push(bp);
+        }
+        let mut s = cost
+            .iter()
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(s, _)| s)
+            .unwrap_or(0);
+        let n = rows.len();
+        let mut slots = vec![0usize; n];
+        let mut cuts = vec![false; n];
+        for k in (0..n).rev() {
+            slots[k] = s;
+            let (p, cut) = back[k][s];
+            if k > 0 || first == 0 {
+                cuts[k] = cut;
+                s = p as usize;
+            }
+        }
+        (slots, cuts)
+    }
+}

@@ -1,0 +1,302 @@
+//! A live session: query frames in, one character mesh per frame out, as
+//! offline synthesis makes it (Huang et al. 2015, Sec. 5.2) but frame by
+//! frame, on a character prepared once ([`Prepared`]).
+//!
+//! Per arriving frame (the stream's canonical pose, metres, Y-up, at the
+//! database's rate):
+//! 1. analysis: the pose kernel ([`Prepared::analyse`]) on the last
+//!    `analysis_window` frames, the newest frame's result kept (the
+//!    kernel levels the ground and finds the feet's support over a clip;
+//!    online it sees the recent past only);
+//! 2. retrieval: [`OnlineTrellis`], which decides the frame `lag` back;
+//! 3. for each decided frame: its interpolation and blend weights by the
+//!    offline [`timeline`] and its placement by the offline placement, both
+//!    over a window of the last `history` decided frames followed by the
+//!    decoder's current continuation (at most `lag` frames; all of it at the
+//!    end of the stream), then blending ([`blend_placed`]) and the
+//!    part-based deformation towards the query pose.
+//!
+//! With `lag` and `history` at least the query's length, and the query
+//! analysed as a whole ([`Session::push_analysed`]), every output frame is
+//! the offline one (the integration test `live::online` checks it). The
+//! memory is bounded by `history + lag + analysis_window` frames: a stream
+//! of any length runs in constant memory (the retrieval's sorted sample of
+//! best-match costs, 8 bytes per frame, aside).
+
+use super::online::{Advance, OnlineOptions, OnlineStats, OnlineTrellis};
+use crate::db::Character;
+use crate::deform::DeformWorkspace;
+use crate::drive::placement::{BlendScratch, blend_placed, placements};
+use crate::drive::timeline::timeline;
+use crate::drive::trellis::TrellisInput;
+use crate::drive::{Prepared, RetargetOptions};
+use crate::mesh::blend::{BlendWorkspace, FrameGradients};
+use crate::pose::Pose;
+use crate::pose::retarget::{JointRotations, Reference, ReferenceSource};
+use crate::rig::Canonical as C;
+use glam::{DVec2, DVec3};
+use std::collections::VecDeque;
+use std::sync::Arc;
+
+/// Options of a live session.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SessionOptions {
+    /// Synthesis as offline (retrieval, timeline, placement smoothing,
+    /// deformation).
+    pub retarget: RetargetOptions,
+    /// The online retrieval's lag and hysteresis.
+    pub online: OnlineOptions,
+    /// Decided frames kept for the timeline and placement. Default: 64.
+    pub history: usize,
+    /// Frames the pose kernel analyses each frame with. Default: 32.
+    pub analysis_window: usize,
+}
+
+impl Default for SessionOptions {
+    fn default() -> Self {
+        SessionOptions {
+            retarget: RetargetOptions::default(),
+            online: OnlineOptions::default(),
+            history: 64,
+            analysis_window: 32,
+        }
+    }
+}
+
+/// One output frame.
+#[derive(Debug)]
+pub struct LiveFrame<'s> {
+    /// Query frame it stands for (from 0).
+    pub index: usize,
+    /// Database frame retrieved for it.
+    pub id: u32,
+    /// The character's vertices (metres, Y-up).
+    pub positions: &'s [[f64; 3]],
+    /// The query pose on the character's skeleton it follows.
+    pub query: &'s Pose,
+}
+
+/// The state of a live session.
+pub struct Session<'a> {
+    ch: &'a Character,
+    prepared: &'a Prepared,
+    opts: SessionOptions,
+    reference: Reference,
+    trellis: OnlineTrellis<'a>,
+    /// The last `analysis_window` raw frames, and their file joints'
+    /// rotations when the stream gives them (one per raw frame).
+    raw: VecDeque<Pose>,
+    raw_rotations: VecDeque<Option<JointRotations>>,
+    /// The analysed pelvis (x, z) of each raw frame but the newest, on the
+    /// stream's own root trajectory (see [`Session::push`]).
+    roots: VecDeque<DVec2>,
+    /// Query poses (on the character) from frame `query_start` on.
+    query: VecDeque<Pose>,
+    query_start: usize,
+    /// Decided frames from `path_start` on (at most `history + 1`).
+    path: VecDeque<u32>,
+    path_start: usize,
+    blend_ws: BlendWorkspace,
+    buf: Vec<[f64; 3]>,
+    grads: Vec<FrameGradients>,
+    deform_ws: Option<DeformWorkspace>,
+    blended: Vec<[f64; 3]>,
+    deformed: Vec<[f64; 3]>,
+    turned_over: usize,
+}
+
+impl<'a> Session<'a> {
+    /// A session on `ch` prepared as `prepared`, retrieving from `input`
+    /// (the character's trellis input), the stream's neutral pose being
+    /// `reference`.
+    pub fn new(
+        ch: &'a Character,
+        prepared: &'a Prepared,
+        input: &'a TrellisInput<'a>,
+        reference: Reference,
+        opts: SessionOptions,
+    ) -> Self {
+        let n = ch.n();
+        let deform_ws = prepared.deformer().map(|d| d.workspace());
+        Session {
+            ch,
+            prepared,
+            opts,
+            reference,
+            trellis: OnlineTrellis::new(input, opts.retarget.trellis, opts.online),
+            raw: VecDeque::new(),
+            raw_rotations: VecDeque::new(),
+            roots: VecDeque::new(),
+            query: VecDeque::new(),
+            query_start: 0,
+            path: VecDeque::new(),
+            path_start: 0,
+            blend_ws: prepared.blender().workspace(),
+            buf: vec![[0.0; 3]; n],
+            grads: vec![FrameGradients::default(); 4],
+            deform_ws,
+            blended: vec![[0.0; 3]; n],
+            deformed: vec![[0.0; 3]; n],
+            turned_over: 0,
+        }
+    }
+
+    /// The retrieval's counts.
+    pub fn stats(&self) -> OnlineStats {
+        self.trellis.stats()
+    }
+
+    /// Triangle-frames the deformation left turned over (after repair).
+    pub fn turned_over(&self) -> usize {
+        self.turned_over
+    }
+
+    /// Analyses the stream's next pose (`raw`: its canonical joints, metres,
+    /// Y-up; `rotations`: its file joints' world rotations, when known, which
+    /// turn the chest as offline) and hands every frame it lets the session
+    /// decide to `out`.
+    pub fn push(
+        &mut self,
+        raw: &Pose,
+        rotations: Option<&JointRotations>,
+        out: &mut dyn FnMut(LiveFrame<'_>),
+    ) {
+        let w = self.opts.analysis_window.max(1);
+        if self.raw.len() == w {
+            self.raw.pop_front();
+            self.raw_rotations.pop_front();
+            self.roots.pop_front();
+        }
+        self.raw.push_back(*raw);
+        self.raw_rotations.push_back(rotations.copied());
+        let rots: Option<Vec<JointRotations>> = self.raw_rotations.iter().copied().collect();
+        let reference = Reference {
+            rotations: Arc::from(rots.unwrap_or_default()),
+            // A reference frame of the stream is not a frame of the window
+            // (the kernel reads `Frame(i)` as the window's frame i): the
+            // reference's pose stands for it.
+            source: match self.reference.source {
+                ReferenceSource::Frame(_) => ReferenceSource::Frame(usize::MAX),
+                s => s,
+            },
+            ..self.reference.clone()
+        };
+        let window = self.raw.make_contiguous();
+        let a = self.prepared.analyse(self.ch, &reference, window);
+        let (Some(first), Some(q), Some(f)) = (a.query.first(), a.query.last(), a.on_floor.last())
+        else {
+            return;
+        };
+        // The kernel moves the root by the clip's pelvis since the clip's
+        // first frame, here the window's: the window's first frame is put
+        // back where it stood on the stream's trajectory (as analysed when
+        // it was the newest), and the newest frame moved with it.
+        let p = C::Pelvis.index();
+        let shift = match self.roots.front() {
+            Some(r) => *r - DVec2::new(first[p].x, first[p].z),
+            None => DVec2::ZERO,
+        };
+        let by = DVec3::new(shift.x, 0.0, shift.y);
+        let (q, f) = (q.map(|x| x + by), f.map(|x| x + by));
+        self.roots.push_back(DVec2::new(q[p].x, q[p].z));
+        self.push_analysed(&q, &f, out);
+    }
+
+    /// Takes the next frame already analysed (`query` on the character,
+    /// `on_floor` with the stance height taken off, as in
+    /// [`crate::drive::Analysed`]).
+    pub fn push_analysed(
+        &mut self,
+        query: &Pose,
+        on_floor: &Pose,
+        out: &mut dyn FnMut(LiveFrame<'_>),
+    ) {
+        self.query.push_back(*query);
+        let adv = self.trellis.push(on_floor);
+        self.emit(adv, out);
+    }
+
+    /// Decides and outputs every frame still pending (the stream ended).
+    pub fn finish(&mut self, out: &mut dyn FnMut(LiveFrame<'_>)) {
+        let adv = self.trellis.finish();
+        self.emit(adv, out);
+    }
+
+    fn emit(&mut self, adv: Advance, out: &mut dyn FnMut(LiveFrame<'_>)) {
+        let ids: Vec<u32> = adv
+            .committed
+            .iter()
+            .map(|c| c.id)
+            .chain(adv.lookahead.iter().copied())
+            .collect();
+        for (i, c) in adv.committed.iter().enumerate() {
+            self.path.push_back(c.id);
+            let ahead = &ids[i + 1..ids.len().min(i + 1 + self.opts.history.max(1))];
+            self.frame(c.index, c.id, ahead, out);
+            // Keep `history` decided frames (and their query poses).
+            while self.path.len() > self.opts.history.max(1) {
+                self.path.pop_front();
+                self.path_start += 1;
+            }
+            while self.query_start < self.path_start {
+                self.query.pop_front();
+                self.query_start += 1;
+            }
+        }
+    }
+
+    /// Makes output frame `k` (decided as `id`; `ahead`, the continuation).
+    fn frame(&mut self, k: usize, id: u32, ahead: &[u32], out: &mut dyn FnMut(LiveFrame<'_>)) {
+        let ch = self.ch;
+        let h = k - self.path_start;
+        let window: Vec<u32> = self
+            .path
+            .iter()
+            .copied()
+            .chain(ahead.iter().copied())
+            .collect();
+        let queries: Vec<Pose> = self
+            .query
+            .iter()
+            .skip(self.path_start - self.query_start)
+            .take(window.len())
+            .copied()
+            .collect();
+        let window = &window[..queries.len()];
+        let (frames, _) = timeline(window, ch, &self.opts.retarget.timeline);
+        let placed = placements(ch, window, &frames, &queries, self.opts.retarget.smooth);
+        let o = frames[h];
+        let primary = o.primary();
+        let mut scratch = BlendScratch {
+            ws: &mut self.blend_ws,
+            buf: &mut self.buf,
+            grads: &mut self.grads,
+        };
+        blend_placed(
+            ch,
+            self.prepared.blender(),
+            o.used(),
+            primary,
+            placed[h],
+            |f| f == primary,
+            &mut scratch,
+            &mut self.blended,
+        );
+        let target = &queries[h];
+        let positions: &[[f64; 3]] = match (self.prepared.deformer(), self.deform_ws.as_mut()) {
+            (Some(d), Some(ws)) => {
+                let sp = ch.rig().frame_joints(&self.blended);
+                let c = d.deform(ch, &self.blended, &sp, target, &mut self.deformed, ws);
+                self.turned_over += c.after;
+                &self.deformed
+            }
+            _ => &self.blended,
+        };
+        out(LiveFrame {
+            index: k,
+            id,
+            positions,
+            query: target,
+        });
+    }
+}

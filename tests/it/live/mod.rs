@@ -1,0 +1,5 @@
+//! Live retargeting from a mocap stream (issue 45): the fixed-lag trellis
+//! and the per-frame session against the offline synthesis.
+
+mod online;
+mod protocols;
