@@ -57,6 +57,7 @@ use crate::pose::Pose;
 use crate::pose::measure::skeleton_distance;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::cmp::Ordering;
 
 /// The thresholds of the checks (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -416,8 +417,8 @@ impl Stats {
             }
         }
         for (p, c) in count.iter().enumerate() {
-            for k in 0..3 {
-                self.raw_max[p][k] = self.raw_max[p][k].max(c[k]);
+            for (m, x) in self.raw_max[p].iter_mut().zip(c) {
+                *m = (*m).max(*x);
             }
         }
         for (v, &x) in r.rough.iter().enumerate() {
@@ -576,12 +577,19 @@ impl<'a> SurfaceReference<'a> {
         for (v, &x) in r.rough.iter().enumerate() {
             let p = b.vertex_part[v] as usize;
             out.rough_max_deg[p] = out.rough_max_deg[p].max(x.to_degrees());
-            if !(x <= s.rough_max[p] * o.roughness_factor) {
+            // Above the line, or not a number.
+            if !matches!(
+                x.partial_cmp(&(s.rough_max[p] * o.roughness_factor)),
+                Some(Ordering::Less | Ordering::Equal)
+            ) {
                 out.flags[p][ROUGH] += 1;
             }
         }
         for (t, &q) in r.quality.iter().enumerate() {
-            if !(q >= s.quality_min[t] * o.sliver_factor) {
+            if !matches!(
+                q.partial_cmp(&(s.quality_min[t] * o.sliver_factor)),
+                Some(Ordering::Greater | Ordering::Equal)
+            ) {
                 out.flags[b.tri_part[t] as usize][SLIVER] += 1;
             }
         }
