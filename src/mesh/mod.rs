@@ -13,6 +13,7 @@ pub mod measure;
 mod mesh;
 pub mod normals;
 pub mod poisson;
+pub mod quality;
 pub mod repair;
 mod sequence;
 pub mod solver;

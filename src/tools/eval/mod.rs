@@ -16,6 +16,7 @@ pub mod head;
 pub mod knee;
 pub mod plausibility;
 pub mod summary;
+pub mod surface;
 pub mod triangles;
 pub mod velocity;
 pub mod vertex;

@@ -1,3 +1,4 @@
 //! Tools: the plausibility evaluation.
 
 mod plausibility;
+mod surface;
