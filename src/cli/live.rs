@@ -175,7 +175,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         &input,
         a.record.as_deref(),
         &opts,
-        &super::db::Bars::new(),
+        &super::Bars::new(),
         &stop,
         &mut |addr| eprintln!("listening for BVH over TCP on {addr}"),
         &mut |_| {},
