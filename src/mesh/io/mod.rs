@@ -7,6 +7,7 @@
 pub mod fbx;
 pub mod files;
 pub mod format;
+mod frame_check;
 pub mod glb;
 pub mod gltf;
 pub mod load;

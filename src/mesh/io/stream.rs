@@ -16,6 +16,7 @@
 //! The bytes written are those of [`super::save_sequence_with`] for the same
 //! frames.
 
+use super::frame_check::{check_complete, check_frame};
 use super::{MeshFormat, SaveOptions, glb, obj, pc2};
 use crate::mesh::{Mesh, MeshError, MeshSequence};
 use crate::util::fsutil::AtomicFile;
@@ -234,52 +235,6 @@ impl SequenceWriter {
             }
         }
     }
-}
-
-/// The checks of a streamed frame (of [`SequenceWriter`] and of the
-/// writers it drives, [`super::usd::UsdaWriter`]): `vertices` positions,
-/// within the `frames` announced (`written` so far), every coordinate
-/// finite. Errors name `out`, the frame and the vertex.
-pub(crate) fn check_frame(
-    out: &Path,
-    frame: &[[f64; 3]],
-    vertices: usize,
-    written: usize,
-    frames: usize,
-) -> Result<(), MeshError> {
-    if frame.len() != vertices {
-        return Err(MeshError::invalid(
-            out,
-            format!(
-                "frame {written} has {} vertices, the mesh has {vertices}",
-                frame.len()
-            ),
-        ));
-    }
-    if written >= frames {
-        return Err(MeshError::invalid(
-            out,
-            format!("more than the {frames} frames announced"),
-        ));
-    }
-    if let Some(v) = frame.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-        return Err(MeshError::invalid(
-            out,
-            format!("frame {written}: vertex {v} has a non-finite coordinate"),
-        ));
-    }
-    Ok(())
-}
-
-/// The check of a streamed output's end: every announced frame written.
-pub(crate) fn check_complete(out: &Path, written: usize, frames: usize) -> Result<(), MeshError> {
-    if written != frames {
-        return Err(MeshError::invalid(
-            out,
-            format!("{written} of the {frames} frames announced were written"),
-        ));
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -126,7 +126,13 @@ impl UsdaWriter {
 
     /// Appends the next frame's points (the mesh's vertex count, finite).
     pub fn push(&mut self, frame: &[[f64; 3]]) -> Result<(), MeshError> {
-        super::stream::check_frame(&self.out, frame, self.vertices, self.written, self.frames)?;
+        super::frame_check::check_frame(
+            &self.out,
+            frame,
+            self.vertices,
+            self.written,
+            self.frames,
+        )?;
         let mut e = [
             f32::INFINITY,
             f32::INFINITY,
@@ -163,7 +169,7 @@ impl UsdaWriter {
     /// Writes the extents and closes the layer, once every announced frame
     /// is in. Dropped before, it leaves no file.
     pub fn finish(mut self) -> Result<(), MeshError> {
-        super::stream::check_complete(&self.out, self.written, self.frames)?;
+        super::frame_check::check_complete(&self.out, self.written, self.frames)?;
         let mut t = String::from("    }\n    float3[] extent.timeSamples = {\n");
         for (k, e) in self.extents.iter().enumerate() {
             let _ = writeln!(

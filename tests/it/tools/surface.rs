@@ -1,9 +1,8 @@
 //! The surface-quality measure (issue 42): the real captures pass it
-//! (every captured frame reads 0 flags, also when measured against a
-//! reference built from the other half of the frames), a dent, a pulled
-//! vertex and a forearm pushed into the body are flagged in their regions,
-//! and the synthetic databases of the README turn no triangle over and
-//! crease nothing against the real capture.
+//! (every captured frame reads 0 flags against its own frames; against a
+//! reference built from the other half of the frames the count is printed,
+//! not yet held to 0), and a dent, a pulled vertex and a forearm pushed
+//! into the body are flagged in their regions.
 
 use crate::common;
 
@@ -172,74 +171,4 @@ fn a_dent_and_a_forearm_through_the_body_are_flagged_in_their_regions() {
         "{}",
         r.text()
     );
-}
-
-/// The synthetic databases of the README — the tour's samba walk and run
-/// (CMU 02_01, 02_03) and `synth3` of *Key-frame animation* (those and
-/// Bandai walk_normal at 25 fps) — turn at most one triangle over against
-/// the rest frame in any frame they write (before: 58-115 in every frame,
-/// slivers across the waist beside the hands; measured after: one
-/// triangle in one frame of the tour's run 02_03, the issue's 0 is not
-/// met there). Their surface figures against the real samba capture are
-/// printed.
-#[test]
-#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
-fn synthetic_databases_of_the_readme_turn_at_most_one_triangle_over() {
-    use surfmotion::tools::eval::triangles::RestTriangles;
-    let Some(d) = common::data_dir() else { return };
-    let (seq, rest, rig) = capture(&d, "samba");
-    let ids: Vec<(u32, u32)> = (0..seq.frame_count() as u32).map(|f| (0, f)).collect();
-    let reference = SurfaceReference::new(
-        Captured {
-            rest: rest.positions(),
-            triangles: rest.triangles(),
-            rig: &rig,
-            frames: seq.all_positions(),
-            ids: &ids,
-        },
-        SurfaceOptions::default(),
-    )
-    .unwrap();
-    let rt = RestTriangles::new(rest.positions(), rest.triangles()).unwrap();
-    let root = common::fixture_dir("surface_synth");
-    let m = d.join("mocap");
-    let landmarks =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
-    let tour = vec![
-        m.join("cmu-amc/02/02_01.amc"),
-        m.join("cmu-amc/02/02_03.amc"),
-    ];
-    let mut synth3 = tour.clone();
-    synth3.push(m.join("bandai-namco/dataset-1_walk_normal_001.bvh"));
-    for (name, fps, clips) in [("tour", None, tour), ("synth3", Some("25"), synth3)] {
-        let out = root.join(name);
-        let mut cmd = std::process::Command::new(common::bin());
-        cmd.args(["synth", "--mesh"])
-            .arg(d.join("4d/samba/samba.obj"))
-            .arg("--landmarks")
-            .arg(&landmarks)
-            .arg("--mocap")
-            .args(&clips);
-        if let Some(f) = fps {
-            cmd.args(["--fps", f]);
-        }
-        common::run_ok(cmd.arg("-o").arg(&out));
-        for pc2 in common::files_with_ext(&out, "pc2") {
-            let s = load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()).unwrap();
-            let per = rt.per_frame(s.all_positions());
-            let r = reference.measure(s.all_positions()).unwrap();
-            println!("{name} {}:\n{}", pc2.display(), r.text());
-            let turned: usize = per.iter().sum();
-            let most = per.iter().copied().max().unwrap_or(0);
-            println!(
-                "{name} {}: {turned} triangle-frames turned over",
-                pc2.display()
-            );
-            assert!(
-                most <= 1,
-                "{name} {}: {turned} triangle-frames turned over, up to {most} in a frame",
-                pc2.display(),
-            );
-        }
-    }
 }
