@@ -198,52 +198,17 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
     let mut slot = vec![u32::MAX; ng];
     for k in 1..nq {
         let row = &rows[k];
-        for (s, c) in row.iter().enumerate() {
-            slot[c.1 as usize] = s as u32;
-        }
-        let mut next = vec![f64::INFINITY; row.len()];
-        let mut bp = vec![(u32::MAX, false); row.len()];
-        let prev = &rows[k - 1];
-        for (pi, p) in prev.iter().enumerate() {
-            let base = cost[pi];
-            if !base.is_finite() {
-                continue;
-            }
-            let i = p.1;
-            let mut relax = |j: u32| {
-                let s = slot[j as usize];
-                if s != u32::MAX {
-                    let v = base + edge(i, j);
-                    if v < next[s as usize] {
-                        next[s as usize] = v;
-                        bp[s as usize] = (pi as u32, false);
-                    }
-                }
-            };
-            relax(i);
-            for (j, _) in db.adjacency.successors(i) {
-                relax(j);
-            }
-            if opts.skip
-                && let Some(j) = (db.successor)(i).and_then(|s| (db.successor)(s))
-            {
-                relax(j);
-            }
-        }
-        // Cuts from the previous row's best node.
-        if let Some((pi, &b)) = cost.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)) {
-            for (s, v) in next.iter_mut().enumerate() {
-                let w = b + opts.cut_cost;
-                if w < *v {
-                    *v = w;
-                    bp[s] = (pi as u32, true);
-                }
-            }
-        }
-        for (s, c) in row.iter().enumerate() {
-            next[s] += node(c.0);
-            slot[c.1 as usize] = u32::MAX;
-        }
+        let (next, bp) = relax_row(
+            db,
+            opts,
+            &rows[k - 1],
+            &cost,
+            row,
+            &mut slot,
+            &node,
+            &edge,
+            0.0,
+        );
         cost = next;
         back.push(bp);
     }
@@ -291,4 +256,81 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
         node_scale,
         edge_scale,
     }
+}
+
+/// One row of the trellis relaxation (Huang et al. 2015, Sec. 5.2.1,
+/// Eqs. 26-31), shared by [`retrieve`] and the online (fixed-lag) trellis
+/// of `live`: every node of `row` is reached from the nodes of `prev`
+/// (costs `cost`) by a graph edge (`edge`), a repeat, a skip of one frame
+/// (`opts.skip`) or a cut from the previous row's best node
+/// (`opts.cut_cost`); then its own node cost (`node`) is added. `jump`
+/// (0 offline) is added to every step that is neither a repeat nor the
+/// capture's own next frame, and to cuts: the online trellis's hysteresis.
+/// `slot` (one entry per database frame, all `u32::MAX`) is scratch and is
+/// left as it came. Returns the row's costs and back pointers (the
+/// previous row's node, and whether the step is a cut).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn relax_row(
+    db: &TrellisInput,
+    opts: &TrellisOptions,
+    prev: &[(f32, u32)],
+    cost: &[f64],
+    row: &[(f32, u32)],
+    slot: &mut [u32],
+    node: &dyn Fn(f32) -> f64,
+    edge: &dyn Fn(u32, u32) -> f64,
+    jump: f64,
+) -> (Vec<f64>, Vec<(u32, bool)>) {
+    for (s, c) in row.iter().enumerate() {
+        slot[c.1 as usize] = s as u32;
+    }
+    let mut next = vec![f64::INFINITY; row.len()];
+    let mut bp = vec![(u32::MAX, false); row.len()];
+    for (pi, p) in prev.iter().enumerate() {
+        let base = cost[pi];
+        if !base.is_finite() {
+            continue;
+        }
+        let i = p.1;
+        let mut relax = |j: u32| {
+            let s = slot[j as usize];
+            if s != u32::MAX {
+                let mut v = base + edge(i, j);
+                if jump > 0.0 && !(i == j || (db.successor)(i) == Some(j)) {
+                    v += jump;
+                }
+                if v < next[s as usize] {
+                    next[s as usize] = v;
+                    bp[s as usize] = (pi as u32, false);
+                }
+            }
+        };
+        relax(i);
+        for (j, _) in db.adjacency.successors(i) {
+            relax(j);
+        }
+        if opts.skip
+            && let Some(j) = (db.successor)(i).and_then(|s| (db.successor)(s))
+        {
+            relax(j);
+        }
+    }
+    // Cuts from the previous row's best node.
+    if let Some((pi, &b)) = cost.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)) {
+        for (s, v) in next.iter_mut().enumerate() {
+            let mut w = b + opts.cut_cost;
+            if jump > 0.0 {
+                w += jump;
+            }
+            if w < *v {
+                *v = w;
+                bp[s] = (pi as u32, true);
+            }
+        }
+    }
+    for (s, c) in row.iter().enumerate() {
+        next[s] += node(c.0);
+        slot[c.1 as usize] = u32::MAX;
+    }
+    (next, bp)
 }

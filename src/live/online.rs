@@ -22,7 +22,7 @@
 //! controller's rule: leave the current motion only for a clearly better
 //! one).
 
-use crate::drive::trellis::{TrellisInput, TrellisOptions};
+use crate::drive::trellis::{TrellisInput, TrellisOptions, relax_row};
 use crate::pose::{Pose, measure::skeleton_distance};
 use serde::Serialize;
 
@@ -296,7 +296,6 @@ impl<'a> OnlineTrellis<'a> {
                 None => (db.dissimilarity)(i, j) as f64 / edge_scale,
             }
         };
-        let skip_of = |i: u32| (db.successor)(i).and_then(|s| (db.successor)(s));
         let anchor_row = self.anchor.map(|a| [(0.0f32, a)]);
         // The first row relaxed from: the anchor (cost 0) or the first
         // undecided row (its node costs).
@@ -316,53 +315,7 @@ impl<'a> OnlineTrellis<'a> {
             } else {
                 rows[k - 1]
             };
-            for (s, c) in row.iter().enumerate() {
-                slot[c.1 as usize] = s as u32;
-            }
-            let mut next = vec![f64::INFINITY; row.len()];
-            let mut bp = vec![(u32::MAX, false); row.len()];
-            for (pi, p) in prev.iter().enumerate() {
-                let base = cost[pi];
-                if !base.is_finite() {
-                    continue;
-                }
-                let i = p.1;
-                let mut relax = |j: u32| {
-                    let s = slot[j as usize];
-                    if s != u32::MAX {
-                        let mut v = base + edge(i, j);
-                        if hysteresis > 0.0 && !(i == j || (db.successor)(i) == Some(j)) {
-                            v += hysteresis;
-                        }
-                        if v < next[s as usize] {
-                            next[s as usize] = v;
-                            bp[s as usize] = (pi as u32, false);
-                        }
-                    }
-                };
-                relax(i);
-                for (j, _) in db.adjacency.successors(i) {
-                    relax(j);
-                }
-                if opts.skip
-                    && let Some(j) = skip_of(i)
-                {
-                    relax(j);
-                }
-            }
-            if let Some((pi, &b)) = cost.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)) {
-                for (s, v) in next.iter_mut().enumerate() {
-                    let w = b + opts.cut_cost + hysteresis;
-                    if w < *v {
-                        *v = w;
-                        bp[s] = (pi as u32, true);
-                    }
-                }
-            }
-            for (s, c) in row.iter().enumerate() {
-                next[s] += node(c.0);
-                slot[c.1 as usize] = u32::MAX;
-            }
+            let (next, bp) = relax_row(db, &opts, prev, &cost, row, slot, &node, &edge, hysteresis);
             cost = next;
             back.push(bp);
         }
