@@ -148,6 +148,9 @@ pub struct InitArgs {
     /// Print the manifest written as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Then open a page on 127.0.0.1 (URL printed, Ctrl-C stops) on the rest frame: drag a landmark to re-embed; Save writes NAME.picked.landmarks.json beside the landmark file and the manifest names it when the page stops.
+    #[arg(long, requires = "landmarks")]
+    pub pick: bool,
 }
 
 /// Arguments of `db info`.
@@ -238,6 +241,10 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         super::count(r.manifest.sequences.len(), "sequence"),
         a.dir.display()
     );
+    if a.pick {
+        let o = surfmotion::jobs::pick::PickOptions::default();
+        return super::pick::serve(surfmotion::jobs::pick::open_db(&a.dir, &o)?, false);
+    }
     Ok(())
 }
 

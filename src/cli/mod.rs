@@ -18,6 +18,7 @@ mod mocap;
 mod opts;
 mod out;
 mod parse;
+mod pick;
 mod play;
 mod render;
 mod repair;

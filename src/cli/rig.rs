@@ -43,14 +43,17 @@ pub struct EmbedArgs {
     #[arg(long)]
     pub parts: Option<PathBuf>,
     /// Output embedding (JSON).
-    #[arg(short, long)]
-    pub output: PathBuf,
+    #[arg(short, long, required_unless_present = "pick")]
+    pub output: Option<PathBuf>,
     /// Also draw the mesh coloured by part with the skeleton (PNG).
     #[arg(long, value_parser = super::png_path)]
     pub png: Option<PathBuf>,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Open a page on 127.0.0.1 instead (URL printed, Ctrl-C stops): the mesh coloured by part with the skeleton and the landmarks; drag a landmark to re-embed, Save writes NAME.picked.landmarks.json beside the landmark file (or a path typed on the page).
+    #[arg(long, requires = "landmarks", conflicts_with_all = ["output", "png", "group", "parts"])]
+    pub pick: bool,
 }
 
 /// Runs a `rig` subcommand.
@@ -61,6 +64,12 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
 }
 
 fn embed(a: EmbedArgs) -> anyhow::Result<()> {
+    if a.pick {
+        return pick(a);
+    }
+    let Some(output) = a.output else {
+        return Err(super::Usage.into());
+    };
     // No output over an input, checked before any work (`-o LANDMARKS.json`
     // replaced the landmarks with the embedding, exit 0).
     let mut inputs = surfmotion::mesh::io::input_files(&a.mesh, None);
@@ -70,7 +79,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
             .flatten()
             .cloned(),
     );
-    let mut outputs = vec![("-o", a.output.clone())];
+    let mut outputs = vec![("-o", output.clone())];
     outputs.extend(a.png.clone().map(|p| ("--png", p)));
     surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
     let mesh = super::load_mesh_groups(&a.mesh, &a.group)?;
@@ -83,7 +92,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
             skin: a.skin,
             rig_map: a.rig_map,
             parts: a.parts,
-            output: a.output,
+            output,
             png: a.png,
         },
     )?;
@@ -92,4 +101,18 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
         return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
     }
     super::emit(&surfmotion::jobs::text::rig_embed(&r))
+}
+
+/// `rig embed --pick`: the page on the mesh and its landmarks.
+fn pick(a: EmbedArgs) -> anyhow::Result<()> {
+    let mut inputs = surfmotion::mesh::io::input_files(&a.mesh, None);
+    inputs.extend(a.skin.iter().chain(&a.rig_map).cloned());
+    let mesh = super::load_mesh_groups(&a.mesh, &[])?;
+    let o = surfmotion::jobs::pick::PickOptions {
+        mesh: a.mesh,
+        landmarks: a.landmarks,
+        inputs,
+        ..Default::default()
+    };
+    super::pick::serve(surfmotion::jobs::pick::open(mesh, &o)?, a.json)
 }

@@ -34,6 +34,7 @@ pub mod live;
 pub mod mesh;
 pub mod mocap;
 pub mod outputs;
+pub mod pick;
 pub mod play;
 pub mod render;
 pub mod retarget;

@@ -9,6 +9,7 @@
 pub mod assets;
 pub mod codec;
 pub mod export;
+pub mod pick;
 pub mod serve;
 pub mod site;
 pub mod windows;

@@ -13,6 +13,8 @@ use std::process::Command;
 use std::time::Duration;
 use surfmotion::web::{self, ExportOptions, SiteManifest, SiteServer, codec};
 
+mod pick;
+
 /// The procedural demo database (no files needed), made once.
 fn demo_db() -> PathBuf {
     use std::sync::OnceLock;

@@ -1,0 +1,245 @@
+//! `rig embed --pick` and `db init --pick` as a job: the page to look at a
+//! rig and correct its landmarks ([`crate::web::pick`]) opened on a rest
+//! mesh ([`open`]) or on a database's rest frame ([`open_db`]), served
+//! until the caller stops it, then [`finish`]ed into a [`PickReport`].
+//!
+//! The page starts from a landmark file. Without one it is refused with
+//! advice ([`PickError::NoLandmarks`]): automatic landmarks for a static
+//! mesh are issue 41's `embed::scan_landmarks`, wired here when it lands.
+
+use crate::db::{DbError, MANIFEST, Manifest};
+use crate::embed::landmarks::{LandmarkError, Landmarks};
+use crate::mesh::Mesh;
+use crate::web::pick::{PickServer, PickSession, SessionFiles};
+use crate::web::serve::ServeError;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+/// Where the page starts from and listens.
+#[derive(Clone, Debug)]
+pub struct PickOptions {
+    /// The rest mesh's name as the user gave it (a file, or
+    /// `SEQ.pc2:FRAME`), shown on the page.
+    pub mesh: String,
+    /// The landmark file the page starts from. Required for now (see
+    /// [`PickError::NoLandmarks`]).
+    pub landmarks: Option<PathBuf>,
+    /// Where Save writes when the page names no path. Default (`None`):
+    /// beside the landmark file, `NAME.picked.landmarks.json` for
+    /// `NAME.landmarks.json` (`-2`, `-3`, … added while such a file
+    /// exists), so the input is never overwritten unless the page names
+    /// it explicitly.
+    pub save: Option<PathBuf>,
+    /// Files Save never writes (the mesh and every other input).
+    pub inputs: Vec<PathBuf>,
+    /// Address to listen on. Default: `127.0.0.1:0` (a free port).
+    pub bind: String,
+}
+
+impl Default for PickOptions {
+    fn default() -> Self {
+        PickOptions {
+            mesh: String::new(),
+            landmarks: None,
+            save: None,
+            inputs: Vec::new(),
+            bind: "127.0.0.1:0".into(),
+        }
+    }
+}
+
+/// Why the page cannot be opened.
+#[derive(Debug, thiserror::Error)]
+pub enum PickError {
+    /// No landmarks to start from.
+    #[error(
+        "{mesh}: no landmarks to start the page from; give a landmark file (--landmarks FILE: chin, groin, l_/r_wrist, l_/r_elbow, l_/r_knee as vertex ids or [x, y, z], rough places are fine, the page moves them){}",
+        if *.db { "; or run `db init` with --landmarks" } else { "" }
+    )]
+    NoLandmarks {
+        /// The mesh or database.
+        mesh: String,
+        /// It is a database.
+        db: bool,
+    },
+    /// The landmark file does not read.
+    #[error(transparent)]
+    Landmarks(#[from] LandmarkError),
+    /// The database does not open.
+    #[error(transparent)]
+    Db(#[from] DbError),
+    /// The address cannot be listened on.
+    #[error(transparent)]
+    Listen(#[from] ServeError),
+}
+
+/// What the page did.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PickReport {
+    /// The page's address.
+    pub url: String,
+    /// Files Save wrote, one entry per save.
+    pub saved: Vec<PathBuf>,
+    /// Embeddings computed (the first included).
+    pub embeds: usize,
+    /// Requests answered.
+    pub requests: usize,
+    /// The database manifest pointed at the last file saved
+    /// ([`open_db`] only).
+    pub manifest: Option<PathBuf>,
+}
+
+/// A page being served, with what [`finish`] needs.
+pub struct Pick {
+    /// The server ([`PickServer::run_until`] serves it).
+    pub server: PickServer,
+    /// The database, when opened by [`open_db`].
+    db: Option<PathBuf>,
+}
+
+impl Pick {
+    /// The page's address.
+    pub fn url(&self) -> String {
+        self.server.url()
+    }
+
+    /// Serves until `stop` is set (a signal handler's flag).
+    pub fn run_until(&self, stop: &AtomicBool) {
+        self.server.run_until(stop)
+    }
+
+    /// Serves on a background thread until `stop` is set.
+    pub fn spawn(self, stop: Arc<AtomicBool>) -> std::thread::JoinHandle<Pick> {
+        let db = self.db;
+        let h = self.server.spawn(stop);
+        std::thread::spawn(move || Pick {
+            server: h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)),
+            db,
+        })
+    }
+}
+
+/// The default save path for landmarks read from `input` (or, without
+/// one, beside `mesh`): `NAME.picked.landmarks.json`, numbered while it
+/// exists.
+pub fn default_save_path(input: Option<&Path>, mesh: &Path) -> PathBuf {
+    let from = input.unwrap_or(mesh);
+    let name = from
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "character".into());
+    let stem = name
+        .strip_suffix(".landmarks.json")
+        .or_else(|| name.strip_suffix(".json"))
+        .map(str::to_string)
+        .unwrap_or_else(|| {
+            Path::new(&name)
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or(name.clone())
+        });
+    let dir = from.parent().unwrap_or(Path::new(""));
+    let mut p = dir.join(format!("{stem}.picked.landmarks.json"));
+    for k in 2..1000 {
+        if !p.exists() {
+            break;
+        }
+        p = dir.join(format!("{stem}.picked-{k}.landmarks.json"));
+    }
+    p
+}
+
+/// Opens the page on the rest mesh `mesh` as `o` says: the landmarks read
+/// and embedded (landmarks no rig can be embedded from still open the
+/// page, with the reason), the address bound.
+pub fn open(mesh: Mesh, o: &PickOptions) -> Result<Pick, PickError> {
+    let Some(l) = &o.landmarks else {
+        return Err(PickError::NoLandmarks {
+            mesh: o.mesh.clone(),
+            db: false,
+        });
+    };
+    let lm = Landmarks::load(l, mesh.vertex_count())?;
+    let mesh_path = crate::mesh::io::split_frame_ref(&o.mesh).0;
+    let files = SessionFiles {
+        input: Some(l.clone()),
+        default_save: o
+            .save
+            .clone()
+            .unwrap_or_else(|| default_save_path(Some(l), &mesh_path)),
+        protected: o.inputs.clone(),
+    };
+    let session = PickSession::new(mesh, &o.mesh, lm, files);
+    Ok(Pick {
+        server: PickServer::bind(session, &o.bind)?,
+        db: None,
+    })
+}
+
+/// Opens the page on the database in `dir`: its rest frame and the
+/// landmarks its manifest names. Save writes a new landmark file (as
+/// [`PickOptions::save`] says; `o.mesh` and `o.landmarks` are taken from
+/// the manifest) and [`finish`] points the manifest at it.
+pub fn open_db(dir: &Path, o: &PickOptions) -> Result<Pick, PickError> {
+    let (m, mesh) = Manifest::open(dir)?;
+    let Some(l) = &m.rig.landmarks else {
+        return Err(PickError::NoLandmarks {
+            mesh: dir.display().to_string(),
+            db: true,
+        });
+    };
+    let l = Manifest::resolve(dir, l);
+    let lm = Landmarks::load(&l, mesh.vertex_count())?;
+    let topology = Manifest::resolve(dir, &m.topology);
+    let mut protected = o.inputs.clone();
+    protected.push(topology.clone());
+    protected.push(dir.join(MANIFEST));
+    protected.extend(m.sequences.iter().map(|s| Manifest::resolve(dir, &s.path)));
+    protected.extend(
+        [&m.rig.parts, &m.rig.gltf_skin, &m.rig.rig_map, &m.colors]
+            .into_iter()
+            .flatten()
+            .map(|p| Manifest::resolve(dir, p)),
+    );
+    let files = SessionFiles {
+        input: Some(l.clone()),
+        default_save: o
+            .save
+            .clone()
+            .unwrap_or_else(|| default_save_path(Some(&l), &topology)),
+        protected,
+    };
+    let name = format!("{} ({})", m.name, topology.display());
+    let session = PickSession::new(mesh, &name, lm, files);
+    Ok(Pick {
+        server: PickServer::bind(session, &o.bind)?,
+        db: Some(dir.to_path_buf()),
+    })
+}
+
+/// The report of a page that has stopped; for a database, its manifest
+/// is pointed at the last landmark file saved (an absolute path).
+pub fn finish(p: Pick) -> Result<PickReport, PickError> {
+    let url = p.server.url();
+    let requests = p.server.requests();
+    let (saved, embeds) = p.server.with_session(|s| (s.saved().to_vec(), s.embeds()));
+    let mut manifest = None;
+    if let (Some(dir), Some(last)) = (&p.db, saved.last()) {
+        let mut m = Manifest::read(dir)?;
+        // Relative to the folder when inside it, as `db init` writes paths.
+        let abs = std::path::absolute(last).unwrap_or_else(|_| last.clone());
+        let root = std::path::absolute(dir).unwrap_or_else(|_| dir.clone());
+        let rel = abs.strip_prefix(&root).map(Path::to_path_buf);
+        m.rig.landmarks = Some(rel.unwrap_or(abs));
+        m.save(dir)?;
+        manifest = Some(dir.join(MANIFEST));
+    }
+    Ok(PickReport {
+        url,
+        saved,
+        embeds,
+        requests,
+        manifest,
+    })
+}
