@@ -132,10 +132,13 @@ fn pick_api_embeds_posted_landmarks_refuses_bad_requests_and_saves_beside_the_in
     let input = tmp.path().join("humanoid.landmarks.json");
     std::fs::write(&input, humanoid_landmarks_json()).unwrap();
     let input_bytes = std::fs::read(&input).unwrap();
+    // Another input (a part-label file, say): never written.
+    let other = tmp.path().join("parts.json");
+    std::fs::write(&other, "{}").unwrap();
     let o = PickOptions {
         mesh: mesh_file.display().to_string(),
         landmarks: Some(input.clone()),
-        inputs: vec![mesh_file.clone()],
+        inputs: vec![mesh_file.clone(), other.clone()],
         ..Default::default()
     };
     let s = Served::start(mesh.clone(), &o);
@@ -288,7 +291,8 @@ fn pick_api_embeds_posted_landmarks_refuses_bad_requests_and_saves_beside_the_in
     // Refused: an input, not .json, a missing folder; the input itself
     // only when named.
     for (path, status) in [
-        (mesh_file.display().to_string(), 409),
+        (mesh_file.display().to_string(), 400),
+        (other.display().to_string(), 409),
         (tmp.path().join("x.txt").display().to_string(), 400),
         (tmp.path().join("no/x.json").display().to_string(), 409),
         (tmp.path().display().to_string() + "/", 400),
@@ -301,6 +305,7 @@ fn pick_api_embeds_posted_landmarks_refuses_bad_requests_and_saves_beside_the_in
         std::fs::read_to_string(&mesh_file).unwrap(),
         "not read: a protected input"
     );
+    assert_eq!(std::fs::read_to_string(&other).unwrap(), "{}");
     let (st, v) = post(a, "/api/save", &json!({ "path": input }));
     assert_eq!(st, 200, "{v}");
     assert_eq!(Landmarks::load(&input, mesh.vertex_count()).unwrap(), lm);
@@ -331,14 +336,15 @@ fn pick_without_landmarks_is_refused_with_advice() {
         .arg("--pick")
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--landmarks"), "{err}");
 }
 
-/// Fraction of pixels that differ between two screenshots, and the
-/// centre of the differing ones.
-fn diff(a: &Path, b: &Path) -> (usize, [f64; 2], usize) {
+/// Pixels that differ between two screenshots in their first `width`
+/// columns (the 3D view, not the panel), their centre, and the pixels
+/// compared.
+fn diff(a: &Path, b: &Path, width: usize) -> (usize, [f64; 2], usize) {
     let read = |p: &Path| {
         let d = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(p).unwrap()));
         let mut r = d.read_info().unwrap();
@@ -351,7 +357,7 @@ fn diff(a: &Path, b: &Path) -> (usize, [f64; 2], usize) {
     let (_, cb, pb) = read(b);
     let n = pa.len() / ca;
     let (mut count, mut sx, mut sy) = (0usize, 0f64, 0f64);
-    for i in 0..n {
+    for i in (0..n).filter(|i| i % w < width) {
         let d: i32 = (0..3)
             .map(|k| (pa[i * ca + k] as i32 - pb[i * cb + k] as i32).abs())
             .sum();
@@ -366,7 +372,7 @@ fn diff(a: &Path, b: &Path) -> (usize, [f64; 2], usize) {
     } else {
         [0.0; 2]
     };
-    (count, c, n)
+    (count, c, n / w * width.min(w))
 }
 
 #[test]
@@ -437,8 +443,12 @@ fn browser_pick_page_moves_a_landmark_recolours_the_arm_and_saves() {
     b.screenshot(&after);
     // The colouring differs, and where the elbow moved: the differing
     // pixels centre on the left arm, between the old and new elbow.
-    let (n, centre, total) = diff(&before, &after);
     let dpr = b.eval("window.devicePixelRatio").as_f64().unwrap_or(1.0);
+    let view = b
+        .eval("document.getElementById('gl').clientWidth")
+        .as_f64()
+        .unwrap();
+    let (n, centre, total) = diff(&before, &after, (view * dpr) as usize);
     let arm: Vec<f64> = [e, to]
         .iter()
         .flat_map(|p| {
