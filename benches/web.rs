@@ -1,7 +1,7 @@
 //! The web viewer's geometry codec and export on real data: encoding samba
 //! (175 frames × 9,971 vertices) at the default 1 mm bound and DEFLATE
 //! levels 3 and 6, decoding it (the Rust decoder; the page's is timed by
-//! `tests/it/web.rs`), and `web export` of a 1,050-frame database (samba's
+//! `tests/it/web/mod.rs`), and `web export` of a 1,050-frame database (samba's
 //! capture six times, graph cache warm; `--linear-transitions`, the
 //! precomputed non-linear windows timed once apart, and their blend alone
 //! per window frame as a ratio to the sparse-solve floor). The geometry
