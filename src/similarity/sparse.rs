@@ -555,8 +555,8 @@ pub fn sparse_pairs(
     let mut rows: Vec<(&mut [u32], &mut [f32])> = Vec::with_capacity(n);
     {
         let (mut c, mut v) = (&mut cols[..], &mut vals[..]);
-        for a in 0..n {
-            let k = deg[a] as usize;
+        for &k in &deg[..n] {
+            let k = k as usize;
             let (c0, c1) = std::mem::take(&mut c).split_at_mut(k);
             let (v0, v1) = std::mem::take(&mut v).split_at_mut(k);
             rows.push((c0, v0));
