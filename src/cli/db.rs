@@ -55,6 +55,11 @@ pub struct BuildArgs {
     /// Recompute even if the cache is current.
     #[arg(long)]
     pub force: bool,
+    /// Frame similarity: `dense` (every pair, the n² matrix) or `sparse`
+    /// (the full measure only near each frame's nearest neighbours, shape
+    /// measure; issue 43). Default: sparse from 5,000 frames, dense below.
+    #[arg(long, value_name = "dense|sparse")]
+    pub similarity: Option<surfmotion::db::build::Method>,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -64,6 +69,7 @@ fn build(a: BuildArgs) -> anyhow::Result<()> {
     let opts = surfmotion::db::BuildOptions {
         measure: a.measure.map(Into::into),
         force: a.force,
+        method: a.similarity,
     };
     let (graph, r) = surfmotion::jobs::build_database(&a.dir, &opts, &super::Bars::new())?;
     if a.json {

@@ -33,6 +33,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = surfmotion::db::BuildOptions {
         measure: a.measure.map(Into::into),
         force: false,
+        ..Default::default()
     };
     let (mat, g, _) = surfmotion::db::build(&a.dir, &opts, &super::Bars::new())?;
     if let Some(p) = &a.matrix {

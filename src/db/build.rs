@@ -11,10 +11,11 @@ use super::skeletons::embed_rig;
 use crate::embed::frames::{SkeletonKind, poses};
 use crate::graph::SurfaceMotionGraph;
 use crate::mocap::units::y_up;
+use crate::similarity::sparse::{Features, SparseOptions, sparse_pairs};
 use crate::similarity::vertex::VertexOptions;
 use crate::similarity::{
-    ColourSet, Measure, PairDistance, ShapeSet, SimilarityMatrix, SkeletonSet, Span, VertexSet,
-    all_pairs,
+    ColourSet, Measure, PairDistance, ShapeSet, Similarity, SimilarityMatrix, SkeletonSet, Span,
+    VertexSet, all_pairs,
 };
 use crate::util::fsutil::{read_text, write_bytes_atomic};
 use serde::{Deserialize, Serialize};
@@ -29,7 +30,39 @@ pub struct BuildOptions {
     pub measure: Option<Measure>,
     /// Recompute even when the cache is current.
     pub force: bool,
+    /// Dense (every pair) or sparse (the candidate pairs of a
+    /// nearest-neighbour index, issue 43) similarity; default: a current
+    /// cache of either, else sparse from [`SPARSE_FRAMES`] frames (shape
+    /// measure only), dense below.
+    pub method: Option<Method>,
 }
+
+/// How the frame similarity is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Every pair of frames: the `n²` matrix.
+    Dense,
+    /// The pairs near each frame's nearest neighbours and their windows
+    /// ([`crate::similarity::sparse`]).
+    Sparse,
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Method, String> {
+        match s {
+            "dense" => Ok(Method::Dense),
+            "sparse" => Ok(Method::Sparse),
+            _ => Err(format!("'{s}': the similarity method is dense or sparse")),
+        }
+    }
+}
+
+/// Databases of at least this many frames get the sparse similarity by
+/// default (the dense matrix of 5,000 frames is 100 MB and about a minute
+/// on two cores; it grows with `n²`).
+pub const SPARSE_FRAMES: usize = 5000;
 
 /// Progress callbacks of a build (the library does not print).
 pub trait BuildProgress: Sync {
@@ -50,6 +83,8 @@ impl BuildProgress for Quiet {}
 pub struct BuildReport {
     /// Measure used.
     pub measure: Measure,
+    /// `dense` or `sparse`.
+    pub method: &'static str,
     /// Unit of the dissimilarities.
     pub unit: &'static str,
     /// Frames in the database.
@@ -64,6 +99,8 @@ pub struct BuildReport {
     pub pairs_seconds: f64,
     /// Frame pairs evaluated (0 when cached).
     pub pairs: u64,
+    /// Frame pairs stored (`n (n + 1) / 2` when dense).
+    pub stored_pairs: u64,
     /// True if the graph came from the cache.
     pub graph_cached: bool,
     /// Seconds spent finding transitions and building the graph.
@@ -125,6 +162,36 @@ fn vertex_options(m: &Manifest) -> VertexOptions {
 /// The similarity cache file of `measure` in the database `dir`.
 pub fn similarity_path(dir: &Path, measure: Measure) -> PathBuf {
     cache_dir(dir).join(format!("similarity-{}.bin", measure.name()))
+}
+
+/// The sparse similarity cache file of `measure` in the database `dir`.
+pub fn sparse_path(dir: &Path, measure: Measure) -> PathBuf {
+    cache_dir(dir).join(format!("sparse-{}.bin", measure.name()))
+}
+
+/// The key of a sparse similarity: the dense one's and the options.
+pub fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
+    let mut k = KeyHasher::default();
+    k.text("similarity", &similarity_key.to_string());
+    k.text(
+        "sparse",
+        &format!(
+            "{} {} {} {}",
+            opts.neighbours, opts.dims, opts.band, opts.min_gap
+        ),
+    );
+    k.finish()
+}
+
+/// The sparse options for a manifest's transition options: the band the
+/// longest window needs, its `min_gap`.
+pub fn sparse_options(m: &Manifest) -> SparseOptions {
+    let t = m.graph.transition_options();
+    SparseOptions {
+        band: t.max_window.max(t.min_window) + 1,
+        min_gap: t.min_gap,
+        ..SparseOptions::default()
+    }
 }
 
 /// The graph cache file of `measure` in the database `dir`.
@@ -204,10 +271,74 @@ pub fn similarity(
     force: bool,
     progress: &dyn BuildProgress,
 ) -> Result<(SimilarityMatrix, u64, Option<Timing>), DbError> {
+    let (sim, key, t) = similarity_with(dir, m, measure, Some(Method::Dense), force, progress)?;
+    match sim {
+        Similarity::Dense(mat) => Ok((mat, key, t)),
+        Similarity::Sparse(_) => unreachable!("the dense method was asked for"),
+    }
+}
+
+/// The sparse similarity of `key` in the cache, if current and of the
+/// manifest's sequences; a warning naming the file when it is there but
+/// cannot be used.
+fn cached_sparse(dir: &Path, m: &Manifest, measure: Measure, key: u64) -> Option<Similarity> {
+    let path = sparse_path(dir, measure);
+    let s = cache::read_sparse(&path, key).unwrap_or_else(|why| {
+        tracing::warn!(
+            "{}: the cached sparse similarity cannot be used ({why}); recomputing it",
+            path.display()
+        );
+        None
+    })?;
+    let names_match = s.spans.len() == m.sequences.len()
+        && s.spans
+            .iter()
+            .zip(&m.sequences)
+            .all(|(a, b)| a.name == b.name);
+    if !names_match {
+        tracing::warn!(
+            "{}: the cached sparse similarity disagrees with the database (other sequences); recomputing it",
+            path.display()
+        );
+        return None;
+    }
+    Some(Similarity::Sparse(s))
+}
+
+/// The similarity of a database for one measure by `method` (`None`: a
+/// current cache of either method, else sparse from [`SPARSE_FRAMES`]
+/// frames for the shape measure, dense otherwise), from the cache if
+/// current. Returns the similarity, its key (the graph cache's input) and
+/// the report fields.
+pub fn similarity_with(
+    dir: &Path,
+    m: &Manifest,
+    measure: Measure,
+    method: Option<Method>,
+    force: bool,
+    progress: &dyn BuildProgress,
+) -> Result<(Similarity, u64, Option<Timing>), DbError> {
     let vopts = vertex_options(m);
     let key = similarity_key(dir, m, measure)?;
+    let sopts = sparse_options(m);
+    let skey = sparse_key(key, &sopts);
+    if method == Some(Method::Sparse) && measure != Measure::Shape {
+        return Err(DbError::Manifest {
+            path: dir.join(super::MANIFEST),
+            msg: format!(
+                "the sparse similarity needs the shape measure (the {} measure has no cheap descriptor yet); build with the dense method",
+                measure.name()
+            ),
+        });
+    }
     let path = similarity_path(dir, measure);
-    let cached = if force {
+    if method == Some(Method::Sparse)
+        && !force
+        && let Some(s) = cached_sparse(dir, m, measure, skey)
+    {
+        return Ok((s, skey, None));
+    }
+    let cached = if force || method == Some(Method::Sparse) {
         None
     } else {
         cache::read_matrix(&path, key).unwrap_or_else(|why| {
@@ -229,7 +360,7 @@ pub fn similarity(
                 .all(|(s, q)| s.name == q.name);
         let finite = (0..mat.len()).all(|a| mat.row(a).iter().all(|v| v.is_finite() && *v >= 0.0));
         if names_match && finite {
-            return Ok((mat, key, None));
+            return Ok((Similarity::Dense(mat), key, None));
         }
         tracing::warn!(
             "{}: the cached similarity matrix disagrees with the database ({}); recomputing it",
@@ -240,6 +371,13 @@ pub fn similarity(
                 "other sequences"
             }
         );
+    }
+    if method.is_none()
+        && !force
+        && measure == Measure::Shape
+        && let Some(s) = cached_sparse(dir, m, measure, skey)
+    {
+        return Ok((s, skey, None));
     }
     let topo = m.load_topology(dir)?;
     let n = topo.vertex_count();
@@ -315,6 +453,14 @@ pub fn similarity(
         _ => unreachable!("one set is built per measure"),
     };
     let frames = set.frames();
+    let sparse = match method {
+        Some(Method::Sparse) => true,
+        Some(Method::Dense) => false,
+        None => frames >= SPARSE_FRAMES && shape.is_some(),
+    };
+    if sparse && let Some(set) = shape.as_ref() {
+        return sparse_similarity(dir, measure, skey, set, spans, &sopts, describe, progress);
+    }
     let t1 = Instant::now();
     let (data, checkpoint) = compare_frames(dir, &path, key, set, progress)?;
     let pairs_s = t1.elapsed().as_secs_f64();
@@ -328,12 +474,56 @@ pub fn similarity(
     }
     let pairs = (frames as u64) * (frames as u64 + 1) / 2;
     Ok((
-        mat,
+        Similarity::Dense(mat),
         key,
         Some(Timing {
             describe_seconds: describe,
             pairs_seconds: pairs_s,
             pairs,
+        }),
+    ))
+}
+
+/// The sparse similarity of the described frames `set`, saved to the
+/// cache under `key`.
+#[allow(clippy::too_many_arguments)]
+fn sparse_similarity(
+    dir: &Path,
+    measure: Measure,
+    key: u64,
+    set: &dyn Features,
+    spans: Vec<Span>,
+    opts: &SparseOptions,
+    describe: f64,
+    progress: &dyn BuildProgress,
+) -> Result<(Similarity, u64, Option<Timing>), DbError> {
+    use crate::util::budget::thousands;
+    let n = set.frames();
+    let t = Instant::now();
+    progress.start("sparse pairs compared", 0);
+    let (sim, stats) = sparse_pairs(set, spans, opts, &|k| progress.advance(k));
+    progress.finish();
+    let all = (n as u128) * (n as u128 + 1) / 2;
+    notice(format!(
+        "sparse similarity of {} frames: {} candidate pairs from the {} nearest frames of each ({:.1} s), {} pairs compared ({:.2} % of the {} of the dense matrix) in {:.1} s",
+        thousands(n as u128),
+        thousands(stats.candidates as u128),
+        opts.neighbours,
+        stats.index_seconds,
+        thousands(stats.pairs as u128),
+        100.0 * stats.pairs as f64 / all.max(1) as f64,
+        thousands(all),
+        stats.pairs_seconds
+    ));
+    let path = sparse_path(dir, measure);
+    cache::save_sparse(&path, key, &sim).map_err(|e| DbError::cache_write(dir, e))?;
+    Ok((
+        Similarity::Sparse(sim),
+        key,
+        Some(Timing {
+            describe_seconds: describe,
+            pairs_seconds: t.elapsed().as_secs_f64(),
+            pairs: stats.pairs,
         }),
     ))
 }
@@ -476,7 +666,7 @@ pub fn build(
     dir: &Path,
     opts: &BuildOptions,
     progress: &dyn BuildProgress,
-) -> Result<(SimilarityMatrix, SurfaceMotionGraph, BuildReport), DbError> {
+) -> Result<(Similarity, SurfaceMotionGraph, BuildReport), DbError> {
     build_opened(dir, &Manifest::load(dir)?, opts, progress)
 }
 
@@ -487,7 +677,7 @@ pub fn build_opened(
     m: &Manifest,
     opts: &BuildOptions,
     progress: &dyn BuildProgress,
-) -> Result<(SimilarityMatrix, SurfaceMotionGraph, BuildReport), DbError> {
+) -> Result<(Similarity, SurfaceMotionGraph, BuildReport), DbError> {
     if m.sequences.is_empty() {
         return Err(DbError::Manifest {
             path: dir.join(super::MANIFEST),
@@ -497,7 +687,8 @@ pub fn build_opened(
         });
     }
     let measure = opts.measure.unwrap_or_else(|| default_measure(m));
-    let (mat, sim_key, timing) = similarity(dir, m, measure, opts.force, progress)?;
+    let (mat, sim_key, timing) =
+        similarity_with(dir, m, measure, opts.method, opts.force, progress)?;
     let topts = m.graph.transition_options();
     let edits = m.graph.edits();
     let graph_key = graph_key(m, sim_key);
@@ -541,15 +732,21 @@ pub fn build_opened(
     let (describe_seconds, pairs_seconds, pairs) = timing
         .map(|t| (t.describe_seconds, t.pairs_seconds, t.pairs))
         .unwrap_or((0.0, 0.0, 0));
+    let stored_pairs = match &mat {
+        Similarity::Dense(d) => (d.len() as u64) * (d.len() as u64 + 1) / 2,
+        Similarity::Sparse(s) => s.stored_pairs() as u64,
+    };
     let report = BuildReport {
         measure,
+        method: mat.method(),
         unit: measure.unit(),
         frames: mat.len(),
-        sequences: mat.spans.clone(),
+        sequences: mat.spans().to_vec(),
         similarity_cached: timing.is_none(),
         describe_seconds,
         pairs_seconds,
         pairs,
+        stored_pairs,
         graph_cached,
         graph_seconds,
         transitions: graph.transitions.len(),

@@ -13,7 +13,7 @@
 //! with the diagonal, row by row, as `n (n + 1) / 2` f32.
 
 use super::manifest::{DbError, Manifest};
-use crate::similarity::{SimilarityMatrix, Span};
+use crate::similarity::{SimilarityMatrix, Span, SparseSimilarity};
 use crate::util::fsutil::{FsError, write_atomic};
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -276,6 +276,35 @@ pub fn save_matrix(path: &Path, key: u64, m: &SimilarityMatrix) -> Result<(), Fs
         }
         Ok(())
     })
+}
+
+/// Magic of a sparse similarity cache file.
+const SPARSE_MAGIC: &[u8; 8] = b"SMSPA001";
+
+/// Writes a sparse similarity with its key, atomically.
+pub fn save_sparse(path: &Path, key: u64, s: &SparseSimilarity) -> Result<(), FsError> {
+    write_atomic(path, |w| {
+        w.write_all(SPARSE_MAGIC)?;
+        w.write_all(&key.to_le_bytes())?;
+        w.write_all(&s.to_bytes())
+    })
+}
+
+/// Reads a sparse similarity: `Ok(None)` when there is no such file or it
+/// has another key, `Err` saying why when it is there but cannot be used.
+pub fn read_sparse(path: &Path, key: u64) -> Result<Option<SparseSimilarity>, String> {
+    match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        _ => {}
+    }
+    let bytes = crate::util::fsutil::read_bytes(path).map_err(|e| e.source.to_string())?;
+    if bytes.len() < 16 || &bytes[..8] != SPARSE_MAGIC {
+        return Err("not a sparse similarity cache file (no SMSPA001 header)".into());
+    }
+    if u64::from_le_bytes(bytes[8..16].try_into().unwrap_or([0; 8])) != key {
+        return Ok(None);
+    }
+    SparseSimilarity::from_bytes(&bytes[16..]).map(Some)
 }
 
 /// Reads a similarity matrix if the file exists, is well formed and has

@@ -23,7 +23,7 @@ use crate::graph::{FrameAdjacency, FrameId, SurfaceMotionGraph};
 use crate::mesh::Mesh;
 use crate::mocap::units::y_up;
 use crate::pose::Pose;
-use crate::similarity::SimilarityMatrix;
+use crate::similarity::Similarity;
 use glam::DVec3;
 use std::path::Path;
 
@@ -65,7 +65,7 @@ pub struct Character {
     /// The rig's rest joints (metres, Y-up).
     rest_pose: Pose,
     /// The similarity matrix of the graph's measure.
-    matrix: SimilarityMatrix,
+    matrix: Similarity,
     /// The Surface Motion Graph.
     graph: SurfaceMotionGraph,
     /// Its frame-level adjacency.
@@ -241,8 +241,8 @@ impl Character {
         &self.rest_pose
     }
 
-    /// The similarity matrix of the graph's measure.
-    pub fn matrix(&self) -> &SimilarityMatrix {
+    /// The similarity of the graph's measure (dense or sparse).
+    pub fn matrix(&self) -> &Similarity {
         &self.matrix
     }
 

@@ -3,6 +3,7 @@
 //! ([`transitions`]), and the graph of sequences and transitions with its
 //! frame-level adjacency ([`smg`]).
 
+pub mod compare;
 pub mod plot;
 pub mod smg;
 pub mod transitions;

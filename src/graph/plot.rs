@@ -5,7 +5,7 @@
 //! along the diagonal.
 
 use super::SurfaceMotionGraph;
-use crate::similarity::SimilarityMatrix;
+use crate::similarity::Dissimilarity;
 use crate::tools::render::Image;
 
 /// Five stops of the viridis colour map.
@@ -27,8 +27,12 @@ fn ramp(t: f64) -> [u8; 3] {
 /// Draws the matrix at about `max_px` pixels a side (each pixel the
 /// minimum of the frames it covers, so narrow valleys stay visible; small
 /// matrices are enlarged to whole pixels per frame).
-pub fn matrix_image(m: &SimilarityMatrix, g: &SurfaceMotionGraph, max_px: usize) -> Image {
-    let n = m.len().max(1);
+pub fn matrix_image(
+    m: &(impl Dissimilarity + ?Sized),
+    g: &SurfaceMotionGraph,
+    max_px: usize,
+) -> Image {
+    let n = m.frame_count().max(1);
     let max_px = max_px.max(16);
     let (px, per) = if n <= max_px {
         let s = (max_px / n).max(1);
@@ -36,7 +40,14 @@ pub fn matrix_image(m: &SimilarityMatrix, g: &SurfaceMotionGraph, max_px: usize)
     } else {
         (max_px, n as f64 / max_px as f64)
     };
-    let mut vals: Vec<f32> = m.data().iter().copied().filter(|v| v.is_finite()).collect();
+    // Pairs a sparse similarity does not store are infinite: drawn at the
+    // top of the ramp, left out of the percentile.
+    let frames = m.frame_count();
+    let mut vals: Vec<f32> = (0..frames)
+        .flat_map(|a| (0..frames).map(move |b| (a, b)))
+        .map(|(a, b)| m.value(a, b))
+        .filter(|v| v.is_finite())
+        .collect();
     let hi = if vals.is_empty() {
         1.0
     } else {
@@ -57,8 +68,8 @@ pub fn matrix_image(m: &SimilarityMatrix, g: &SurfaceMotionGraph, max_px: usize)
             let (ca, cb) = span(x);
             let mut v = f32::INFINITY;
             for r in ra..rb {
-                for &c in &m.row(r)[ca..cb] {
-                    v = v.min(c);
+                for c in ca..cb {
+                    v = v.min(m.value(r, c));
                 }
             }
             let rgb = ramp(v as f64 / hi);
@@ -66,7 +77,7 @@ pub fn matrix_image(m: &SimilarityMatrix, g: &SurfaceMotionGraph, max_px: usize)
         }
     }
     let to_px = |f: usize| ((f as f64 + 0.5) / per) as usize;
-    for s in m.spans.iter().skip(1) {
+    for s in m.spans().iter().skip(1) {
         let p = ((s.start as f64) / per) as usize;
         for k in 0..px {
             for (x, y) in [(p, k), (k, p)] {
@@ -84,8 +95,8 @@ pub fn matrix_image(m: &SimilarityMatrix, g: &SurfaceMotionGraph, max_px: usize)
     };
     let arm = (px as i64 / 120).max(2);
     for t in &g.transitions {
-        let r = m.spans[t.from].start + t.m;
-        let c = m.spans[t.to].start + t.n;
+        let r = m.spans()[t.from].start + t.m;
+        let c = m.spans()[t.to].start + t.n;
         let (x, y) = (to_px(c) as i64, to_px(r) as i64);
         // The blend window along the diagonal.
         for k in -(t.window as i64)..=(t.window as i64) {
@@ -110,7 +121,7 @@ pub fn matrix_image(m: &SimilarityMatrix, g: &SurfaceMotionGraph, max_px: usize)
 mod tests {
     use super::*;
     use crate::graph::{GraphEdits, TransitionOptions};
-    use crate::similarity::{Measure, Span};
+    use crate::similarity::{Measure, SimilarityMatrix, Span};
 
     #[test]
     fn draws_values_boundaries_and_crosses() {

@@ -10,7 +10,7 @@
 //! `m−L..=m+L` / `n−L..=n+L` is applied when the path is turned into meshes.
 
 use super::transitions::{self, Transition, TransitionOptions};
-use crate::similarity::{Measure, SimilarityMatrix, Span};
+use crate::similarity::{Dissimilarity, Measure, Span};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
 
@@ -81,13 +81,13 @@ impl SurfaceMotionGraph {
     /// Finds the transitions of every ordered sequence pair (in parallel)
     /// and builds the graph, applying `edits`.
     pub fn build(
-        matrix: &SimilarityMatrix,
+        matrix: &(impl Dissimilarity + ?Sized),
         measure: Measure,
         options: &TransitionOptions,
         edits: &GraphEdits,
     ) -> Result<SurfaceMotionGraph, EditError> {
         use rayon::prelude::*;
-        let spans = matrix.spans.clone();
+        let spans = matrix.spans().to_vec();
         let forbid = parse_forbid(&edits.forbid, &spans)?;
         let remove = parse_remove(&edits.remove, &spans)?;
         let pairs: Vec<(usize, usize)> = (0..spans.len())
@@ -99,18 +99,25 @@ impl SurfaceMotionGraph {
                 if forbid.iter().any(|f| f.matches(i, j)) {
                     return Vec::new();
                 }
-                let c = |r: usize, s: usize| matrix.between(i, r, j, s);
-                transitions::find(&c, spans[i].len, spans[j].len, i == j, options)
-                    .into_iter()
-                    .map(|(m, n, window, cost)| Transition {
-                        from: i,
-                        to: j,
-                        m,
-                        n,
-                        window,
-                        cost,
-                    })
-                    .collect()
+                let (si, sj) = (spans[i].start, spans[j].start);
+                let c = |r: usize, s: usize| matrix.value(si + r, sj + s);
+                let (rows, cols, same) = (spans[i].len, spans[j].len, i == j);
+                match matrix.cells(i, j) {
+                    None => transitions::find(&c, rows, cols, same, options),
+                    Some(cells) => {
+                        transitions::find_among(&c, rows, cols, same, options, cells.into_iter())
+                    }
+                }
+                .into_iter()
+                .map(|(m, n, window, cost)| Transition {
+                    from: i,
+                    to: j,
+                    m,
+                    n,
+                    window,
+                    cost,
+                })
+                .collect()
             })
             .collect();
         let mut removed = Vec::new();
@@ -169,8 +176,8 @@ impl SurfaceMotionGraph {
     /// transitions, finite costs. A cache edited by hand (or by a bug) with
     /// a valid key made `retarget` and `graph --json` panic and `graph
     /// --dot` print nonsense (issue 18, item 13). Returns what is wrong.
-    pub fn validate(&self, matrix: &SimilarityMatrix) -> Result<(), String> {
-        if self.sequences != matrix.spans {
+    pub fn validate(&self, matrix: &(impl Dissimilarity + ?Sized)) -> Result<(), String> {
+        if self.sequences != matrix.spans() {
             return Err("its sequences differ from the similarity matrix's".into());
         }
         let seqs = &self.sequences;
@@ -440,6 +447,7 @@ fn parse_remove(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::similarity::SimilarityMatrix;
 
     fn two_sequences() -> SimilarityMatrix {
         // "a" (40 frames) and "b" (30 frames) of a 1-D motion; b repeats

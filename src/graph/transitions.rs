@@ -89,48 +89,72 @@ pub fn find(
     opts: &TransitionOptions,
 ) -> Vec<(usize, usize, usize, f64)> {
     let lo = opts.min_window.max(1);
+    let every = (lo..rows.saturating_sub(lo))
+        .flat_map(|m| (lo..cols.saturating_sub(lo)).map(move |n| (m, n)));
+    find_among(c, rows, cols, same, opts, every)
+}
+
+/// [`find`] with the candidates `(m, n)` taken only from `cells` (the
+/// pairs a sparse similarity stores, issue 43); `c` is `f32::INFINITY` for
+/// a pair not stored. A cell with a neighbour not stored is not a local
+/// minimum, and a window reaching a pair not stored is not a window, so
+/// the transitions found are the dense method's wherever the stored pairs
+/// cover a minimum, its 8 neighbours and its windows.
+pub fn find_among(
+    c: &impl Fn(usize, usize) -> f32,
+    rows: usize,
+    cols: usize,
+    same: bool,
+    opts: &TransitionOptions,
+    cells: impl Iterator<Item = (usize, usize)>,
+) -> Vec<(usize, usize, usize, f64)> {
+    let lo = opts.min_window.max(1);
     let hi = opts.max_window.max(lo);
     let mut cands = Vec::new();
-    for m in lo..rows.saturating_sub(lo) {
-        for n in lo..cols.saturating_sub(lo) {
-            // Within one sequence C is symmetric: take each pair once
-            // (m < n) and return both directions.
-            if same && (n <= m || n - m < opts.min_gap.max(1)) {
-                continue;
-            }
-            let v = c(m, n);
-            let mut minimum = true;
-            'nb: for dm in -1i64..=1 {
-                for dn in -1i64..=1 {
-                    if dm == 0 && dn == 0 {
-                        continue;
-                    }
-                    let (r, s) = (m as i64 + dm, n as i64 + dn);
-                    if r < 0 || s < 0 || r >= rows as i64 || s >= cols as i64 {
-                        continue;
-                    }
-                    if c(r as usize, s as usize) < v {
-                        minimum = false;
-                        break 'nb;
-                    }
+    for (m, n) in cells {
+        if m < lo || n < lo || m >= rows.saturating_sub(lo) || n >= cols.saturating_sub(lo) {
+            continue;
+        }
+        // Within one sequence C is symmetric: take each pair once
+        // (m < n) and return both directions.
+        if same && (n <= m || n - m < opts.min_gap.max(1)) {
+            continue;
+        }
+        let v = c(m, n);
+        let mut minimum = v.is_finite();
+        'nb: for dm in -1i64..=1 {
+            for dn in -1i64..=1 {
+                if dm == 0 && dn == 0 {
+                    continue;
+                }
+                let (r, s) = (m as i64 + dm, n as i64 + dn);
+                if r < 0 || s < 0 || r >= rows as i64 || s >= cols as i64 {
+                    continue;
+                }
+                let w = c(r as usize, s as usize);
+                if w < v || !w.is_finite() {
+                    minimum = false;
+                    break 'nb;
                 }
             }
-            if !minimum {
-                continue;
-            }
-            // Best window that fits in both sequences.
-            let fit = m.min(n).min(rows - 1 - m).min(cols - 1 - n).min(hi);
-            if fit < lo {
-                continue;
-            }
-            // Longest window among equals (`min_by` keeps the first).
-            let best = (lo..=fit)
-                .rev()
-                .map(|l| (l, window_cost(c, m, n, l)))
-                .min_by(|a, b| a.1.total_cmp(&b.1));
-            if let Some((l, cost)) = best {
-                cands.push((m, n, l, cost));
-            }
+        }
+        if !minimum {
+            continue;
+        }
+        // Best window that fits in both sequences.
+        let fit = m.min(n).min(rows - 1 - m).min(cols - 1 - n).min(hi);
+        if fit < lo {
+            continue;
+        }
+        // Longest window among equals (`min_by` keeps the first).
+        let best = (lo..=fit)
+            .rev()
+            .map(|l| (l, window_cost(c, m, n, l)))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((l, cost)) = best
+            && cost.is_finite()
+        {
+            cands.push((m, n, l, cost));
         }
     }
     // Best first; among equal costs the longer window, then the earlier frames.

@@ -188,6 +188,28 @@ pub fn describe_weighted(
     }
 }
 
+/// Values of [`magnitudes`]: one per `(frequency, ring)`.
+pub const MAGNITUDES_LEN: usize = FREQS * RINGS;
+
+/// The rotation-invariant part of a descriptor of [`describe`]: the
+/// magnitude of each φ-frequency of each `(r, θ)` ring (sub-shift 0),
+/// scaled so that the Euclidean distance between two frames' magnitudes is
+/// at most their Eq. 1 distance at any rotation (a rotation about the
+/// vertical only turns each coefficient's phase: `|a − e^{iφk} b| ≥ ||a| −
+/// |b||`, Parseval's weights as in [`ShapeKernel::distance`]). Writes
+/// [`MAGNITUDES_LEN`] values into `out`. The cheap descriptor of the
+/// sparse similarity ([`super::sparse`]).
+pub fn magnitudes(desc: &[f32], out: &mut [f32]) {
+    for k in 0..FREQS {
+        let w = (freq_weight(k) / PHI_BINS as f64).sqrt();
+        for ring in 0..RINGS {
+            let re = desc[(2 * k) * RING_PAD + ring] as f64;
+            let im = desc[(2 * k + 1) * RING_PAD + ring] as f64;
+            out[k * RINGS + ring] = (w * (re * re + im * im).sqrt()) as f32;
+        }
+    }
+}
+
 /// Weight of coefficient `k` in a sum over the full spectrum of a real
 /// signal: 1 for the DC and Nyquist terms, 2 for the others.
 fn freq_weight(k: usize) -> f64 {

@@ -83,6 +83,36 @@ impl SimilarityMatrix {
     }
 }
 
+/// What the transition search and the graph read from a similarity,
+/// dense ([`SimilarityMatrix`]) or sparse
+/// ([`super::sparse::SparseSimilarity`]).
+pub trait Dissimilarity: Sync {
+    /// The sequences, in row order.
+    fn spans(&self) -> &[Span];
+    /// The stored dissimilarity of frames `a` and `b` (global rows),
+    /// `f32::INFINITY` when the pair is not stored.
+    fn value(&self, a: usize, b: usize) -> f32;
+    /// The stored pairs of sequences `i` (rows) and `j` (columns) as frame
+    /// numbers within each, rows then columns ascending; `None` when every
+    /// pair is stored.
+    fn cells(&self, _i: usize, _j: usize) -> Option<Vec<(usize, usize)>> {
+        None
+    }
+    /// Number of frames.
+    fn frame_count(&self) -> usize {
+        self.spans().iter().map(|s| s.len).sum()
+    }
+}
+
+impl Dissimilarity for SimilarityMatrix {
+    fn spans(&self) -> &[Span] {
+        &self.spans
+    }
+    fn value(&self, a: usize, b: usize) -> f32 {
+        self.get(a, b)
+    }
+}
+
 /// Evaluates every pair of `set` in parallel; `progress` is called with the
 /// number of rows finished by each block.
 pub fn all_pairs(set: &dyn PairDistance, progress: &(dyn Fn(u64) + Sync)) -> Vec<f32> {

@@ -3,14 +3,23 @@
 //! vertical ([`histogram`] on [`voxel`] occupancy), vertex distance with a
 //! velocity term ([`vertex`]), and skeletal distance (Eq. 28,
 //! [`crate::pose::measure::skeleton_distance`]); per-frame descriptors
-//! ([`sets`]) compared all-pairs in parallel ([`matrix`]).
+//! ([`sets`]) compared all-pairs in parallel ([`matrix`]), or on the candidate pairs
+//! of a nearest-neighbour index only for large databases ([`sparse`],
+//! [`kdtree`]); [`lookup`] reads either.
 
 pub mod colour;
 pub mod histogram;
+pub mod kdtree;
+pub mod lookup;
 pub mod matrix;
 pub mod sets;
+pub mod sparse;
 pub mod vertex;
 pub mod voxel;
 
-pub use matrix::{PairDistance, SimilarityMatrix, Span, all_pairs, mirror_upper, upper_rows};
+pub use lookup::Similarity;
+pub use matrix::{
+    Dissimilarity, PairDistance, SimilarityMatrix, Span, all_pairs, mirror_upper, upper_rows,
+};
 pub use sets::{ColourSet, Measure, ShapeSet, SkeletonSet, VertexSet, y_up};
+pub use sparse::{SparseOptions, SparseSimilarity};

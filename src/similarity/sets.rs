@@ -83,6 +83,16 @@ impl Spectra {
     }
 }
 
+impl Spectra {
+    /// [`histogram::magnitudes`] of frame `a`.
+    fn magnitudes(&self, a: usize, out: &mut [f32]) {
+        histogram::magnitudes(
+            &self.desc[a * DESCRIPTOR_LEN..(a + 1) * DESCRIPTOR_LEN],
+            out,
+        );
+    }
+}
+
 /// Shape-histogram descriptors of every frame.
 #[derive(Debug, Clone)]
 pub struct ShapeSet {
@@ -181,6 +191,15 @@ impl ShapeSet {
                         histogram::describe(pts, triangles, &grid, scratch, out, norms) as u32;
                 },
             );
+    }
+}
+
+impl super::sparse::Features for ShapeSet {
+    fn feature_len(&self) -> usize {
+        histogram::MAGNITUDES_LEN
+    }
+    fn feature(&self, a: usize, out: &mut [f32]) {
+        self.spectra.magnitudes(a, out);
     }
 }
 

@@ -1,4 +1,5 @@
 //! Character databases: the real captures' manifests, synthetic databases.
 
 mod captures;
+mod sparse;
 mod synth;

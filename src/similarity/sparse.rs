@@ -1,0 +1,688 @@
+//! The sparse similarity of a large database (issue 43): the full shape
+//! measure only on the frame pairs that can hold a transition, found
+//! without forming the `n²` matrix.
+//!
+//! 1. **Cheap descriptors**: the rotation-invariant magnitudes of each
+//!    frame's histogram spectra ([`super::histogram::magnitudes`], 550
+//!    values whose distance is at most the Eq. 1 distance), projected on
+//!    their [`SparseOptions::dims`] principal axes (fitted on at most
+//!    [`PCA_SAMPLE`] frames).
+//! 2. **Candidate pairs**: the [`SparseOptions::neighbours`] nearest frames
+//!    of every frame in that space (an exact k-d tree query, [`KdTree`]),
+//!    leaving out the frame's own neighbourhood within its sequence
+//!    (closer than `min_gap` frames: not a transition); and every
+//!    [`SparseOptions::stride`]-th frame's nearest frame in each sequence
+//!    (one tree per sequence: the graph keeps the best transitions of every
+//!    sequence pair, also between dissimilar motions).
+//! 3. **Windows**: for each candidate `(a, b)` the full measure along the
+//!    diagonal `(a+t, b+t)`, `|t| ≤ band`, and the two diagonals either
+//!    side of it (what the transition search reads: its window and the
+//!    8-neighbour minimum test, whose anti-diagonal neighbours lie two
+//!    diagonals away), merged into runs along each diagonal; plus every
+//!    frame's next and next-but-one frame (the retrieval's step costs).
+//!    Stored both ways, row by row (a compressed sparse row matrix).
+//!
+//! Work and memory grow as `n · neighbours · band` pairs (plus the k-d
+//! tree's `n log n`), not `n²`. A pair that is not stored reads as
+//! [`SparseSimilarity::get`]'s estimate: at least both frames' neighbour
+//! radius (the largest full distance to their own candidates) and the
+//! cheap descriptors' distance.
+
+use super::kdtree::KdTree;
+use super::matrix::{Dissimilarity, PairDistance, Span};
+use rayon::prelude::*;
+
+/// Frames the principal axes are fitted on (evenly spaced).
+pub const PCA_SAMPLE: usize = 2048;
+
+/// A set of frames with a cheap descriptor besides its full measure.
+pub trait Features: PairDistance {
+    /// Values of a frame's descriptor.
+    fn feature_len(&self) -> usize;
+    /// Writes frame `a`'s descriptor into `out` (`feature_len` values).
+    fn feature(&self, a: usize, out: &mut [f32]);
+}
+
+/// Options of [`sparse_pairs`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SparseOptions {
+    /// Candidate frames per frame (nearest by the cheap descriptor).
+    /// Default: 24.
+    pub neighbours: usize,
+    /// Principal axes of the cheap descriptor. Default: 24.
+    pub dims: usize,
+    /// Half-length of the diagonal evaluated around each candidate: the
+    /// transition search's largest half-window plus one. Default: 25.
+    pub band: usize,
+    /// Within a sequence, frames closer than this are not candidates (the
+    /// transition search's `min_gap`). Default: 10.
+    pub min_gap: usize,
+    /// Besides the nearest frames overall, every `stride`-th frame's
+    /// nearest frame in each sequence (the graph keeps the best
+    /// transitions of every ordered sequence pair, also of dissimilar
+    /// motions, whose frames are nobody's nearest overall). Default: 4.
+    pub stride: usize,
+}
+
+impl Default for SparseOptions {
+    fn default() -> Self {
+        SparseOptions {
+            neighbours: 24,
+            dims: 24,
+            band: 25,
+            min_gap: 10,
+            stride: 4,
+        }
+    }
+}
+
+/// What [`sparse_pairs`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SparseStats {
+    /// Candidate pairs from the nearest-neighbour index.
+    pub candidates: u64,
+    /// Distinct pairs evaluated with the full measure.
+    pub pairs: u64,
+    /// Seconds: descriptors, projection and index.
+    pub index_seconds: f64,
+    /// Seconds: the full measure on the stored pairs.
+    pub pairs_seconds: f64,
+}
+
+/// A symmetric dissimilarity stored on some frame pairs only.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SparseSimilarity {
+    /// The sequences, in row order.
+    pub spans: Vec<Span>,
+    n: usize,
+    offsets: Vec<u64>,
+    cols: Vec<u32>,
+    vals: Vec<f32>,
+    /// Per frame, the largest full distance to its candidates.
+    radius: Vec<f32>,
+    dims: usize,
+    /// Per frame, the projected cheap descriptor (`n × dims`).
+    features: Vec<f32>,
+}
+
+/// A run of pairs `(r, r + diag)` for `r` in `r0..=r1`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct Run {
+    diag: u32,
+    r0: u32,
+    r1: u32,
+}
+
+impl SparseSimilarity {
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+    /// True for an empty database.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+    /// Pairs stored (each unordered pair once).
+    pub fn stored_pairs(&self) -> usize {
+        self.cols.len() / 2
+    }
+    /// The stored columns and values of row `a`, columns ascending.
+    pub fn row(&self, a: usize) -> (&[u32], &[f32]) {
+        let (s, e) = (self.offsets[a] as usize, self.offsets[a + 1] as usize);
+        (&self.cols[s..e], &self.vals[s..e])
+    }
+    /// The stored dissimilarity of `a` and `b` (0 for `a == b`).
+    pub fn stored(&self, a: usize, b: usize) -> Option<f32> {
+        if a == b {
+            return Some(0.0);
+        }
+        let (cols, vals) = self.row(a);
+        cols.binary_search(&(b as u32)).ok().map(|k| vals[k])
+    }
+    /// The dissimilarity of `a` and `b`: stored, else the estimate of a
+    /// pair that is neither frame's candidate: the larger of both frames'
+    /// neighbour radius and the distance of their cheap descriptors.
+    pub fn get(&self, a: usize, b: usize) -> f32 {
+        self.stored(a, b).unwrap_or_else(|| self.estimate(a, b))
+    }
+    fn estimate(&self, a: usize, b: usize) -> f32 {
+        let d = self.dims;
+        let fa = &self.features[a * d..(a + 1) * d];
+        let fb = &self.features[b * d..(b + 1) * d];
+        let lb = fa
+            .iter()
+            .zip(fb)
+            .map(|(x, y)| (x - y) * (x - y))
+            .sum::<f32>()
+            .sqrt();
+        lb.max(self.radius[a]).max(self.radius[b])
+    }
+    /// The stored pairs of sequences `i` (rows) and `j` (columns), as
+    /// frame numbers within each, rows then columns ascending.
+    pub fn block(&self, i: usize, j: usize) -> Vec<(usize, usize)> {
+        let (si, sj) = (&self.spans[i], &self.spans[j]);
+        let mut out = Vec::new();
+        for r in si.start..si.start + si.len {
+            let (cols, _) = self.row(r);
+            let from = cols.partition_point(|&c| (c as usize) < sj.start);
+            let to = cols.partition_point(|&c| (c as usize) < sj.start + sj.len);
+            out.extend(
+                cols[from..to]
+                    .iter()
+                    .map(|&c| (r - si.start, c as usize - sj.start)),
+            );
+        }
+        out
+    }
+
+    /// The bytes of [`SparseSimilarity::from_bytes`] (little-endian): `n`,
+    /// `dims`, sequences (name length, name, start, length), radius,
+    /// features, row offsets, columns, values.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::with_capacity(
+            32 + self.n * (12 + 4 * self.dims) + self.cols.len() * 8 + self.spans.len() * 40,
+        );
+        let u64le = |b: &mut Vec<u8>, v: u64| b.extend_from_slice(&v.to_le_bytes());
+        u64le(&mut b, self.n as u64);
+        u64le(&mut b, self.dims as u64);
+        u64le(&mut b, self.spans.len() as u64);
+        for s in &self.spans {
+            u64le(&mut b, s.name.len() as u64);
+            b.extend_from_slice(s.name.as_bytes());
+            u64le(&mut b, s.start as u64);
+            u64le(&mut b, s.len as u64);
+        }
+        for v in self.radius.iter().chain(&self.features) {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        for o in &self.offsets {
+            u64le(&mut b, *o);
+        }
+        for c in &self.cols {
+            b.extend_from_slice(&c.to_le_bytes());
+        }
+        for v in &self.vals {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b
+    }
+
+    /// Reads [`SparseSimilarity::to_bytes`]; `Err` naming what is wrong
+    /// (truncated, sizes that disagree, a value that is not a finite
+    /// distance, a column out of range or out of order).
+    pub fn from_bytes(bytes: &[u8]) -> Result<SparseSimilarity, String> {
+        let mut r = Reader { bytes, at: 0 };
+        let n = r.u64()? as usize;
+        let dims = r.u64()? as usize;
+        let ns = r.u64()? as usize;
+        if n > u32::MAX as usize || dims > 255 || ns > n.max(1) {
+            return Err(format!("{n} frames, {dims} dimensions, {ns} sequences"));
+        }
+        let mut spans = Vec::with_capacity(ns);
+        for _ in 0..ns {
+            let l = r.u64()? as usize;
+            let name = String::from_utf8(r.take(l)?.to_vec()).map_err(|e| e.to_string())?;
+            let start = r.u64()? as usize;
+            let len = r.u64()? as usize;
+            spans.push(Span { name, start, len });
+        }
+        let radius = r.f32s(n)?;
+        let features = r.f32s(n * dims)?;
+        let mut offsets = Vec::with_capacity(n + 1);
+        for _ in 0..=n {
+            offsets.push(r.u64()?);
+        }
+        let nnz = *offsets.last().unwrap_or(&0) as usize;
+        let cols: Vec<u32> = r
+            .take(nnz.checked_mul(4).ok_or("size overflow")?)?
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        let vals = r.f32s(nnz)?;
+        if r.at != bytes.len() {
+            return Err(format!("{} bytes after the end", bytes.len() - r.at));
+        }
+        let mut next = 0;
+        for s in &spans {
+            if s.start != next {
+                return Err(format!("sequence '{}' starts at {}", s.name, s.start));
+            }
+            next += s.len;
+        }
+        if next != n || offsets.first() != Some(&0) || offsets.windows(2).any(|w| w[0] > w[1]) {
+            return Err("the rows disagree with the frame count".into());
+        }
+        for a in 0..n {
+            let row = &cols[offsets[a] as usize..offsets[a + 1] as usize];
+            if row.windows(2).any(|w| w[0] >= w[1]) || row.iter().any(|&c| c as usize >= n) {
+                return Err(format!("row {a}: columns out of range or out of order"));
+            }
+        }
+        if !vals
+            .iter()
+            .chain(&radius)
+            .all(|v| v.is_finite() && *v >= 0.0)
+            || !features.iter().all(|v| v.is_finite())
+        {
+            return Err("a value that is not a finite distance".into());
+        }
+        Ok(SparseSimilarity {
+            spans,
+            n,
+            offsets,
+            cols,
+            vals,
+            radius,
+            dims,
+            features,
+        })
+    }
+}
+
+/// Little-endian values read off a byte slice, refusing to read past it.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, k: usize) -> Result<&'a [u8], String> {
+        let end = self.at.checked_add(k).ok_or("size overflow")?;
+        let s = self
+            .bytes
+            .get(self.at..end)
+            .ok_or_else(|| format!("truncated at byte {}", self.at))?;
+        self.at = end;
+        Ok(s)
+    }
+    fn u64(&mut self) -> Result<u64, String> {
+        let b = self.take(8)?;
+        Ok(u64::from_le_bytes(b.try_into().map_err(|_| "short")?))
+    }
+    fn f32s(&mut self, k: usize) -> Result<Vec<f32>, String> {
+        let raw = self.take(k.checked_mul(4).ok_or("size overflow")?)?;
+        Ok(raw
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect())
+    }
+}
+
+impl Dissimilarity for SparseSimilarity {
+    fn spans(&self) -> &[Span] {
+        &self.spans
+    }
+    fn value(&self, a: usize, b: usize) -> f32 {
+        self.stored(a, b).unwrap_or(f32::INFINITY)
+    }
+    fn cells(&self, i: usize, j: usize) -> Option<Vec<(usize, usize)>> {
+        Some(self.block(i, j))
+    }
+}
+
+/// The cheap descriptors of every frame projected on their `dims`
+/// principal axes (`n × dims`, row-major), the axes fitted on at most
+/// [`PCA_SAMPLE`] evenly spaced frames.
+pub fn project(set: &dyn Features, dims: usize) -> (Vec<f32>, usize) {
+    let n = set.frames();
+    let f = set.feature_len();
+    let mut raw = vec![0.0f32; n * f];
+    raw.par_chunks_mut(f.max(1))
+        .enumerate()
+        .for_each(|(a, out)| set.feature(a, out));
+    let dims = dims.clamp(1, f.max(1)).min(255);
+    if n == 0 {
+        return (Vec::new(), dims);
+    }
+    let sample: Vec<usize> = (0..PCA_SAMPLE.min(n))
+        .map(|k| k * n / PCA_SAMPLE.min(n))
+        .collect();
+    let mut mean = vec![0.0f64; f];
+    for &a in &sample {
+        for (m, v) in mean.iter_mut().zip(&raw[a * f..(a + 1) * f]) {
+            *m += *v as f64;
+        }
+    }
+    mean.iter_mut().for_each(|m| *m /= sample.len() as f64);
+    let mut cov = nalgebra::DMatrix::<f64>::zeros(f, f);
+    for &a in &sample {
+        let x = nalgebra::DVector::from_iterator(
+            f,
+            raw[a * f..(a + 1) * f]
+                .iter()
+                .zip(&mean)
+                .map(|(v, m)| *v as f64 - m),
+        );
+        cov.syger(1.0, &x, &x, 1.0);
+    }
+    // syger fills the lower triangle; mirror it.
+    for r in 0..f {
+        for c in r + 1..f {
+            cov[(r, c)] = cov[(c, r)];
+        }
+    }
+    let eig = nalgebra::SymmetricEigen::new(cov);
+    let mut order: Vec<usize> = (0..f).collect();
+    order.sort_by(|&x, &y| {
+        eig.eigenvalues[y]
+            .total_cmp(&eig.eigenvalues[x])
+            .then(x.cmp(&y))
+    });
+    let axes: Vec<Vec<f32>> = order[..dims]
+        .iter()
+        .map(|&k| {
+            eig.eigenvectors
+                .column(k)
+                .iter()
+                .map(|v| *v as f32)
+                .collect()
+        })
+        .collect();
+    let mut out = vec![0.0f32; n * dims];
+    out.par_chunks_mut(dims)
+        .zip(raw.par_chunks(f))
+        .for_each(|(o, x)| {
+            for (d, axis) in axes.iter().enumerate() {
+                o[d] = axis.iter().zip(x).map(|(a, v)| a * v).sum();
+            }
+        });
+    (out, dims)
+}
+
+/// The sparse similarity of `set`, whose frames form the sequences
+/// `spans`. `progress` hears the number of pairs of each evaluated run.
+pub fn sparse_pairs(
+    set: &dyn Features,
+    spans: Vec<Span>,
+    opts: &SparseOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (SparseSimilarity, SparseStats) {
+    let t0 = std::time::Instant::now();
+    let n = set.frames();
+    let mut seq = vec![0u32; n];
+    for (k, s) in spans.iter().enumerate() {
+        seq[s.start..s.start + s.len].fill(k as u32);
+    }
+    let (features, dims) = project(set, opts.dims);
+    let tree = KdTree::new(features.clone(), dims);
+    let gap = opts.min_gap.max(1);
+    let near: Vec<Vec<u32>> = (0..n)
+        .into_par_iter()
+        .map(|a| {
+            let keep = |b: u32| {
+                b as usize != a && (seq[b as usize] != seq[a] || (b as usize).abs_diff(a) >= gap)
+            };
+            tree.nearest(&features[a * dims..(a + 1) * dims], opts.neighbours, &keep)
+                .into_iter()
+                .map(|(_, b)| b)
+                .collect()
+        })
+        .collect();
+    // Every stride-th frame's nearest frame in each sequence (one index per
+    // sequence).
+    let stride = opts.stride.max(1);
+    let per_seq: Vec<Vec<Option<u32>>> = spans
+        .par_iter()
+        .map(|sj| {
+            let sub = features[sj.start * dims..(sj.start + sj.len) * dims].to_vec();
+            let tree = KdTree::new(sub, dims);
+            (0..n)
+                .step_by(stride)
+                .map(|a| {
+                    let keep = |b: u32| {
+                        let b = sj.start + b as usize;
+                        seq[b] != seq[a] || b.abs_diff(a) >= gap
+                    };
+                    tree.nearest(&features[a * dims..(a + 1) * dims], 1, &keep)
+                        .first()
+                        .map(|&(_, b)| (sj.start + b as usize) as u32)
+                })
+                .collect()
+        })
+        .collect();
+    let index_seconds = t0.elapsed().as_secs_f64();
+    let t1 = std::time::Instant::now();
+    // Runs along the diagonals around each candidate, and each sequence's
+    // first two off-diagonals.
+    let band = opts.band as i64;
+    let mut runs: Vec<Run> = Vec::new();
+    let mut candidates = 0u64;
+    let strided = per_seq.iter().flat_map(|bs| {
+        (0..n)
+            .step_by(stride)
+            .zip(bs.iter())
+            .filter_map(|(a, b)| b.map(|b| (a, b)))
+    });
+    let seeds = near
+        .iter()
+        .enumerate()
+        .flat_map(|(a, bs)| bs.iter().map(move |&b| (a, b)))
+        .chain(strided);
+    for (a, b) in seeds {
+        {
+            candidates += 1;
+            let (a, b) = (a.min(b as usize) as i64, a.max(b as usize) as i64);
+            let (si, sj) = (
+                &spans[seq[a as usize] as usize],
+                &spans[seq[b as usize] as usize],
+            );
+            for e in -2..=2i64 {
+                let d = b - a + e;
+                if d == 0 {
+                    continue;
+                }
+                let r0 = (a - band).max(si.start as i64).max(sj.start as i64 - d);
+                let r1 = (a + band)
+                    .min((si.start + si.len) as i64 - 1)
+                    .min((sj.start + sj.len) as i64 - 1 - d);
+                if r0 > r1 {
+                    continue;
+                }
+                runs.push(if d > 0 {
+                    Run {
+                        diag: d as u32,
+                        r0: r0 as u32,
+                        r1: r1 as u32,
+                    }
+                } else {
+                    Run {
+                        diag: (-d) as u32,
+                        r0: (r0 + d) as u32,
+                        r1: (r1 + d) as u32,
+                    }
+                });
+            }
+        }
+    }
+    for s in &spans {
+        for d in 1..=2usize {
+            if s.len > d {
+                runs.push(Run {
+                    diag: d as u32,
+                    r0: s.start as u32,
+                    r1: (s.start + s.len - 1 - d) as u32,
+                });
+            }
+        }
+    }
+    runs.sort_unstable();
+    let mut merged: Vec<Run> = Vec::with_capacity(runs.len() / 4);
+    for r in runs {
+        match merged.last_mut() {
+            Some(m) if m.diag == r.diag && r.r0 <= m.r1 + 1 => m.r1 = m.r1.max(r.r1),
+            _ => merged.push(r),
+        }
+    }
+    let values: Vec<Vec<f32>> = merged
+        .par_iter()
+        .map(|r| {
+            let v: Vec<f32> = (r.r0..=r.r1)
+                .map(|a| set.distance(a as usize, (a + r.diag) as usize) as f32)
+                .collect();
+            progress(v.len() as u64);
+            v
+        })
+        .collect();
+    let pairs: u64 = values.iter().map(|v| v.len() as u64).sum();
+    // Both directions, row by row.
+    let mut deg = vec![0u64; n + 1];
+    for r in &merged {
+        for a in r.r0..=r.r1 {
+            deg[a as usize] += 1;
+            deg[(a + r.diag) as usize] += 1;
+        }
+    }
+    let mut offsets = vec![0u64; n + 1];
+    for a in 0..n {
+        offsets[a + 1] = offsets[a] + deg[a];
+    }
+    let nnz = offsets[n] as usize;
+    let mut cols = vec![0u32; nnz];
+    let mut vals = vec![0.0f32; nnz];
+    let mut fill: Vec<u64> = offsets[..n].to_vec();
+    for (r, v) in merged.iter().zip(&values) {
+        for (a, x) in (r.r0..=r.r1).zip(v) {
+            let b = a + r.diag;
+            for (p, q) in [(a, b), (b, a)] {
+                let at = fill[p as usize] as usize;
+                cols[at] = q;
+                vals[at] = *x;
+                fill[p as usize] += 1;
+            }
+        }
+    }
+    // Sort each row by column.
+    let mut rows: Vec<(&mut [u32], &mut [f32])> = Vec::with_capacity(n);
+    {
+        let (mut c, mut v) = (&mut cols[..], &mut vals[..]);
+        for &k in &deg[..n] {
+            let k = k as usize;
+            let (c0, c1) = std::mem::take(&mut c).split_at_mut(k);
+            let (v0, v1) = std::mem::take(&mut v).split_at_mut(k);
+            rows.push((c0, v0));
+            c = c1;
+            v = v1;
+        }
+    }
+    rows.par_iter_mut().for_each(|(c, v)| {
+        let mut p: Vec<(u32, f32)> = c.iter().copied().zip(v.iter().copied()).collect();
+        p.sort_unstable_by_key(|x| x.0);
+        for (k, (cc, vv)) in p.into_iter().enumerate() {
+            c[k] = cc;
+            v[k] = vv;
+        }
+    });
+    drop(rows);
+    let mut sim = SparseSimilarity {
+        spans,
+        n,
+        offsets,
+        cols,
+        vals,
+        radius: vec![0.0; n],
+        dims,
+        features,
+    };
+    let radius: Vec<f32> = near
+        .par_iter()
+        .enumerate()
+        .map(|(a, bs)| {
+            bs.iter()
+                .filter_map(|&b| sim.stored(a, b as usize))
+                .fold(0.0f32, f32::max)
+        })
+        .collect();
+    sim.radius = radius;
+    let stats = SparseStats {
+        candidates,
+        pairs,
+        index_seconds,
+        pairs_seconds: t1.elapsed().as_secs_f64(),
+    };
+    (sim, stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Frames on a noisy 2-D loop: a periodic "motion" of period 40.
+    struct Loop(Vec<[f32; 2]>);
+    impl PairDistance for Loop {
+        fn frames(&self) -> usize {
+            self.0.len()
+        }
+        fn distance(&self, a: usize, b: usize) -> f64 {
+            let (p, q) = (self.0[a], self.0[b]);
+            (((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)) as f64).sqrt()
+        }
+    }
+    impl Features for Loop {
+        fn feature_len(&self) -> usize {
+            2
+        }
+        fn feature(&self, a: usize, out: &mut [f32]) {
+            out.copy_from_slice(&self.0[a]);
+        }
+    }
+
+    fn spans(lens: &[usize]) -> Vec<Span> {
+        let mut at = 0;
+        lens.iter()
+            .enumerate()
+            .map(|(k, &len)| {
+                at += len;
+                Span {
+                    name: format!("s{k}"),
+                    start: at - len,
+                    len,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn stores_exact_values_both_ways_and_round_trips() {
+        let set = Loop(
+            (0..300)
+                .map(|t| {
+                    let a = t as f32 * std::f32::consts::TAU / 40.0;
+                    [a.cos() + 0.001 * (t % 7) as f32, a.sin()]
+                })
+                .collect(),
+        );
+        let opts = SparseOptions {
+            neighbours: 6,
+            dims: 2,
+            ..SparseOptions::default()
+        };
+        let (s, stats) = sparse_pairs(&set, spans(&[120, 180]), &opts, &|_| {});
+        assert!(stats.candidates >= 300 * 6);
+        assert!(stats.pairs > 0 && (s.stored_pairs() as u64) == stats.pairs);
+        assert!(
+            s.stored_pairs() < 300 * 299 / 2,
+            "sparse: {}",
+            s.stored_pairs()
+        );
+        for a in 0..300 {
+            let (cols, vals) = s.row(a);
+            for (&b, &v) in cols.iter().zip(vals) {
+                assert_eq!(v, set.distance(a, b as usize) as f32);
+                assert_eq!(s.stored(b as usize, a), Some(v));
+            }
+            // Every frame's successor is stored.
+            if a != 119 && a != 299 {
+                assert!(s.stored(a, a + 1).is_some());
+            }
+        }
+        // A frame one period on is found (same phase, another sequence).
+        assert!(s.stored(10, 130).is_some());
+        // Estimates of pairs not stored are at least the radius.
+        assert!(s.get(0, 20) >= s.radius[0]);
+        let back = SparseSimilarity::from_bytes(&s.to_bytes()).unwrap();
+        assert_eq!(back, s);
+        let mut bad = s.to_bytes();
+        bad.truncate(bad.len() - 3);
+        assert!(SparseSimilarity::from_bytes(&bad).is_err());
+    }
+}
