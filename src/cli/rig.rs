@@ -9,10 +9,11 @@ use surfmotion::jobs::rig::{RigEmbedOptions, embed_rig};
 pub enum Cmd {
     /// Embed a rig in a rest mesh from landmarks (chin, groin, wrists,
     /// elbows, knees; optionally shoulders, ankles, toes, head_top) given as
-    /// JSON points or vertex indices. Writes joints, bone-heat skin weights,
+    /// JSON points or vertex indices, or found automatically when none are
+    /// given. Writes joints, bone-heat skin weights,
     /// contiguous body parts with overlapping regions and joint regressors.
     #[command(
-        after_help = "Example:\n  surfmotion rig embed samba.obj --landmarks samba.landmarks.json -o samba.rig.json --png samba_rig.png"
+        after_help = "Example:\n  surfmotion rig embed samba.obj --landmarks samba.landmarks.json -o samba.rig.json --png samba_rig.png\n  surfmotion rig embed human_man.obj -o smpl.rig.json --write-landmarks smpl.auto.landmarks.json"
     )]
     Embed(EmbedArgs),
 }
@@ -27,9 +28,21 @@ pub struct EmbedArgs {
     /// embedding is for the groups' vertices alone (renumbered in order).
     #[arg(long, value_name = "NAME")]
     pub group: Vec<String>,
-    /// Landmark JSON.
-    #[arg(long, required_unless_present = "skin", conflicts_with = "skin")]
+    /// Landmark JSON. Without it (and without --skin) the landmarks are
+    /// found automatically from the mesh's geometry (symmetry plane,
+    /// geodesic extremities, limb sections), each with a confidence; below
+    /// --min-confidence the embedding is refused with the reason. Given,
+    /// it overrides them, and landmarks far from confident automatic ones
+    /// (e.g. left and right swapped) are reported.
+    #[arg(long, conflicts_with = "skin")]
     pub landmarks: Option<PathBuf>,
+    /// The confidence (0..1) below which automatic landmarks are refused.
+    #[arg(long, default_value_t = 0.5, value_name = "C")]
+    pub min_confidence: f64,
+    /// Write the automatic landmarks as a landmark file to edit and give
+    /// back with --landmarks.
+    #[arg(long, value_name = "PATH", conflicts_with_all = ["landmarks", "skin"])]
+    pub write_landmarks: Option<PathBuf>,
     /// Or take the rig from a rigged glTF (.glb/.gltf) or FBX (.fbx) of
     /// this character: its skin's joints and weights, matched to the mesh
     /// by vertex position (an FBX in metres by its UnitScaleFactor, Y up).
@@ -81,6 +94,10 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
     );
     let mut outputs = vec![("-o", output.clone())];
     outputs.extend(a.png.clone().map(|p| ("--png", p)));
+    outputs.extend(a.write_landmarks.clone().map(|p| ("--write-landmarks", p)));
+    if !(0.0..=1.0).contains(&a.min_confidence) {
+        anyhow::bail!("--min-confidence {}: expected 0 to 1", a.min_confidence);
+    }
     surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
     let mesh = super::load_mesh_groups(&a.mesh, &a.group)?;
     let r = embed_rig(
@@ -94,13 +111,40 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
             parts: a.parts,
             output,
             png: a.png,
+            min_confidence: a.min_confidence,
+            write_landmarks: a.write_landmarks.clone(),
         },
     )?;
     if a.json {
         let v = serde_json::to_value(&r)?;
         return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
     }
-    super::emit(&surfmotion::jobs::text::rig_embed(&r))
+    let mut text = String::new();
+    if let Some(auto) = &r.automatic {
+        text += &format!(
+            "landmarks: automatic (confidence {:.2}; up ({:.2}, {:.2}, {:.2}), symmetry fit {:.2}% of the height){}\n",
+            auto.confidence,
+            auto.up[0],
+            auto.up[1],
+            auto.up[2],
+            auto.symmetry_percent,
+            a.write_landmarks
+                .as_ref()
+                .map(|p| format!(" → {}", p.display()))
+                .unwrap_or_default()
+        );
+        for (name, m) in &auto.marks {
+            text += &format!(
+                "  {name:<10} ({:>8.3}, {:>8.3}, {:>8.3})  confidence {:.2}  {}\n",
+                m.point[0], m.point[1], m.point[2], m.confidence, m.how
+            );
+        }
+    }
+    for d in &r.disagreements {
+        text += &format!("warning: landmark {}: {}\n", d.landmark, d.reason);
+    }
+    text += &surfmotion::jobs::text::rig_embed(&r);
+    super::emit(&text)
 }
 
 /// `rig embed --pick`: the page on the mesh and its landmarks.

@@ -15,6 +15,7 @@ pub mod midplane;
 pub mod parts;
 pub mod regress;
 pub mod rigid;
+pub mod scan_landmarks;
 pub mod section;
 pub mod skin;
 pub mod surface;

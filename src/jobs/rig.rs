@@ -4,6 +4,7 @@
 
 use crate::embed::landmarks::{Landmarks, Mark};
 use crate::embed::parts::{Part, neighbours, piece_counts};
+use crate::embed::scan_landmarks::{AutoLandmarks, Disagreement, ScanOptions, estimate, find};
 use crate::embed::{EmbedCheck, EmbedError, Embedding, parse_parts};
 use crate::mesh::Mesh;
 use crate::rig::Canonical;
@@ -35,6 +36,12 @@ pub struct RigEmbedOptions {
     pub output: PathBuf,
     /// A picture of the mesh coloured by part with the skeleton (PNG).
     pub png: Option<PathBuf>,
+    /// Without `landmarks` and `skin`: the automatic landmarks are
+    /// refused below this confidence (0..1; the CLI's default 0.5).
+    pub min_confidence: f64,
+    /// Write the landmarks used (automatic ones) as a landmark file a user
+    /// can edit and give back as `landmarks`.
+    pub write_landmarks: Option<PathBuf>,
 }
 
 /// One body part of an embedding.
@@ -67,6 +74,12 @@ pub struct RigEmbedReport {
     pub notes: Vec<String>,
     /// The self-check.
     pub check: EmbedCheck,
+    /// The automatic landmarks, when no landmarks or skin were given.
+    pub automatic: Option<AutoLandmarks>,
+    /// Given landmarks far (over 10 % of the height) from the automatic
+    /// ones, when the automatic ones are confident (a left/right swap is
+    /// named).
+    pub disagreements: Vec<Disagreement>,
     /// The mesh's name.
     #[serde(skip)]
     pub mesh: String,
@@ -86,6 +99,8 @@ pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, 
         None => None,
     };
     let t = Instant::now();
+    let mut automatic = None;
+    let mut disagreements = Vec::new();
     let e = match (&o.landmarks, &o.skin) {
         (Some(l), _) => {
             let mut lm = Landmarks::load(l, mesh.vertex_count())?;
@@ -106,6 +121,14 @@ pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, 
                     lm.marks.insert(l, Mark::Point(p));
                 }
                 mesh = crate::mesh::repair::repair(&mesh, &Default::default()).0;
+            }
+            // A file that contradicts confident automatic landmarks (a
+            // left/right swap) is reported, not silently obeyed.
+            if let Ok((Some(a), None)) = estimate(mesh.positions(), mesh.triangles())
+                && a.confidence >= o.min_confidence
+            {
+                disagreements =
+                    crate::embed::scan_landmarks::compare(&a, &lm, mesh.positions(), 10.0);
             }
             // A degenerate landmark set is the landmark file's fault: name it.
             Embedding::new(&mesh, &lm, parts).map_err(|e| match e {
@@ -135,11 +158,35 @@ pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, 
             crate::embed::skin::from_skin(&mesh, &asset, map.as_ref(), g)?
         }
         (None, None) => {
-            return Err(JobError::Usage(
-                "give `RigEmbedOptions::landmarks` or `RigEmbedOptions::skin`".into(),
-            ));
+            // Automatic landmarks from the geometry (issue 41).
+            if o.groups {
+                mesh = crate::mesh::repair::repair(&mesh, &Default::default()).0;
+            }
+            let opts = ScanOptions {
+                min_confidence: o.min_confidence,
+            };
+            let a =
+                find(mesh.positions(), mesh.triangles(), &opts).map_err(|e| JobError::Input {
+                    path: PathBuf::from(&o.mesh),
+                    msg: e.to_string(),
+                })?;
+            let lm = a.landmarks();
+            let e = Embedding::new(&mesh, &lm, parts).map_err(|e| match e {
+                EmbedError::Landmarks(le) => JobError::Input {
+                    path: PathBuf::from(&o.mesh),
+                    msg: format!("the automatic landmarks: {le}"),
+                },
+                e @ EmbedError::Mesh(_) => JobError::Usage(format!("{}: {e}", o.mesh)),
+                other => other.into(),
+            })?;
+            automatic = Some(a);
+            e
         }
     };
+    if let (Some(a), Some(p)) = (&automatic, &o.write_landmarks) {
+        let text = a.to_json();
+        crate::util::fsutil::write_atomic(p, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+    }
     let seconds = t.elapsed().as_secs_f64();
     e.save(&o.output)?;
     let check = crate::embed::check(&e, &mesh);
@@ -181,6 +228,8 @@ pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, 
         height: e.height,
         notes: e.notes.clone(),
         check,
+        automatic,
+        disagreements,
         mesh: o.mesh.clone(),
         vertices: mesh.vertex_count(),
         png: o.png.clone(),

@@ -3,3 +3,4 @@
 mod bodies;
 mod captures;
 mod placement;
+mod scan_auto;
