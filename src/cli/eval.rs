@@ -2,11 +2,14 @@
 
 use std::path::PathBuf;
 use surfmotion::db::Character;
+use surfmotion::drive::query::{load_mocap, to_database};
 use surfmotion::jobs::retarget::evaluate_result;
+use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::tools::eval::surface::{
     SurfaceOptions, SurfaceReference, SurfaceReport, captured_of, frame_ids,
 };
+use surfmotion::tools::eval::surface_follow::{JointFollow, joint_follow};
 
 /// Arguments of `eval`.
 #[derive(clap::Args)]
@@ -27,7 +30,10 @@ pub struct Args {
     /// database frame's more than the capture's own), slivers, stretched
     /// edges, and triangles of one part passing through another. Each
     /// counts only what lies outside the capture's own distribution, so
-    /// the capture's frames read 0. Without `--mocap`, only this.
+    /// the capture's frames read 0. Without `--mocap`, only this; with
+    /// it, also the joint-follow: the joints regressed from the result's
+    /// surface against the clip's skeleton retargeted onto the character,
+    /// per body part (median, p95, max in cm, pelvis on pelvis).
     #[arg(long)]
     pub surface: bool,
     /// Print the result as JSON.
@@ -37,8 +43,8 @@ pub struct Args {
     pub clip: super::ClipOpts,
 }
 
-/// The surface report of `result` against the database's captured frames.
-fn surface(ch: &Character, result: &std::path::Path) -> anyhow::Result<SurfaceReport> {
+/// The result's frames, with the character's vertex count.
+fn load_result(ch: &Character, result: &std::path::Path) -> anyhow::Result<MeshSequence> {
     let res = load_sequence(&result.to_string_lossy(), &LoadOptions::default())?;
     if res.mesh().vertex_count() != ch.n() {
         anyhow::bail!(
@@ -48,6 +54,27 @@ fn surface(ch: &Character, result: &std::path::Path) -> anyhow::Result<SurfaceRe
             ch.n()
         );
     }
+    Ok(res)
+}
+
+/// The joint-follow of `res` against the clip `mocap` retargeted onto the
+/// character (the query `retarget` deforms towards).
+fn follow(
+    ch: &Character,
+    mocap: &std::path::Path,
+    clip: &super::ClipOpts,
+    res: &MeshSequence,
+) -> anyhow::Result<JointFollow> {
+    let m = load_mocap(mocap, &clip.load_options()?, ch.manifest().fps)?;
+    let query = to_database(ch, &m.reference, &m.poses);
+    let out: Vec<_> = (0..res.frame_count())
+        .map(|f| ch.rig().frame_joints(res.frame(f)))
+        .collect();
+    Ok(joint_follow(&query, &out))
+}
+
+/// The surface report of `res` against the database's captured frames.
+fn surface(ch: &Character, res: &MeshSequence) -> anyhow::Result<SurfaceReport> {
     let rest = ch.topology_metres();
     let ids = frame_ids(ch);
     let reference = SurfaceReference::new(
@@ -67,10 +94,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Some(m) => Some(evaluate_result(&ch, m, &a.result, &a.clip.load_options()?)?),
         None => None,
     };
-    let surf = if a.surface {
-        Some(surface(&ch, &a.result)?)
+    let (surf, fol) = if a.surface {
+        let res = load_result(&ch, &a.result)?;
+        let fol = match &a.mocap {
+            Some(m) => Some(follow(&ch, m, &a.clip, &res)?),
+            None => None,
+        };
+        (Some(surface(&ch, &res)?), fol)
     } else {
-        None
+        (None, None)
     };
     if a.json {
         let mut v = match &r {
@@ -79,6 +111,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         };
         if let (Some(s), Some(o)) = (&surf, v.as_object_mut()) {
             o.insert("surface".into(), serde_json::to_value(s)?);
+        }
+        if let (Some(f), Some(o)) = (&fol, v.as_object_mut()) {
+            o.insert("joint_follow".into(), serde_json::to_value(f)?);
         }
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
@@ -107,6 +142,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     if let Some(x) = &surf {
         s += &x.text();
+    }
+    if let Some(f) = &fol {
+        s += &f.text();
     }
     super::emit(&s)
 }
