@@ -143,7 +143,10 @@
       pos: new Float32Array(buf, 24, 3 * n), joints: new Float32Array(buf, 24 + 12 * n, 57),
     };
     live.frames++;
-    live.arrivals.push(performance.now());
+    const now = performance.now();
+    live.arrivals.push(now);
+    if (live.firstFrameAt === undefined) live.firstFrameAt = now;
+    live.lastFrameAt = now;
   }
 
   function draw() {
@@ -155,7 +158,10 @@
     drawCharacter();
     drawSkeleton();
     live.drawn++;
-    live.draws.push(performance.now());
+    const now = performance.now();
+    live.draws.push(now);
+    if (live.firstDrawAt === undefined) live.firstDrawAt = now;
+    live.lastDrawAt = now;
     stats.innerHTML = `frame <b>${f.index}</b> · ${live.meta.vertices} vertices · lag ${live.meta.lag}` +
       ` · in <b>${live.receiveRate().toFixed(1)}</b> frames/s · drawn <b>${live.drawRate().toFixed(1)}</b> frames/s` +
       ` · arrival→mesh <b>${f.latency.toFixed(1)}</b> ms · delivery <b>${f.delivery.toFixed(1)}</b> ms`;
