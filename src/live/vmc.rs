@@ -130,7 +130,8 @@ fn transform(m: &OscMessage, with_rotation: bool) -> Result<(String, Bone), Malf
     }
     let rot = if with_rotation {
         let q = DQuat::from_xyzw(v[3], v[4], v[5], v[6]);
-        if !(q.length() > 1e-6) {
+        let len = q.length();
+        if len.is_nan() || len <= 1e-6 {
             return Err(bad());
         }
         q.normalize()
