@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
-use surfmotion::jobs::live::{LiveInput, LiveOptions, LiveReport, run_live};
+use surfmotion::jobs::live::{Listening, LiveInput, LiveOptions, LiveReport, run_live};
 
 /// Arguments of `live`.
 #[derive(clap::Args)]
@@ -21,16 +21,38 @@ pub struct Args {
     #[arg(
         long,
         value_name = "CLIP",
-        required_unless_present = "bvh_tcp",
-        conflicts_with = "bvh_tcp"
+        required_unless_present_any = ["bvh_tcp", "vmc", "rokoko"],
+        conflicts_with_all = ["bvh_tcp", "vmc", "rokoko"]
     )]
     pub replay: Option<PathBuf>,
     /// Listen for BVH over TCP (a BVH header, then one frame line per
     /// sample, as Axis Studio / Perception Neuron broadcast) on ADDR:PORT,
     /// e.g. 127.0.0.1:7001. An address other than 127.0.0.1 accepts other
     /// machines and is printed as a warning.
-    #[arg(long = "bvh-tcp", value_name = "ADDR:PORT")]
+    #[arg(long = "bvh-tcp", value_name = "ADDR:PORT", conflicts_with_all = ["vmc", "rokoko"])]
     pub bvh_tcp: Option<std::net::SocketAddr>,
+    /// Listen for the VMC protocol (OSC over UDP: root and bone local
+    /// transforms named as Unity's humanoid bones, as VTuber tools, Blender
+    /// add-ons and suit bridges send) on ADDR:PORT; 127.0.0.1:39539 when
+    /// given without a value. Another address than 127.0.0.1 is printed as
+    /// a warning.
+    #[arg(
+        long,
+        value_name = "ADDR:PORT",
+        num_args = 0..=1,
+        default_missing_value = "127.0.0.1:39539",
+        conflicts_with = "rokoko"
+    )]
+    pub vmc: Option<std::net::SocketAddr>,
+    /// Listen for Rokoko Studio Live (JSON over UDP: the first actor's body
+    /// joints) on ADDR:PORT; 127.0.0.1:14043 when given without a value.
+    #[arg(
+        long,
+        value_name = "ADDR:PORT",
+        num_args = 0..=1,
+        default_missing_value = "127.0.0.1:14043"
+    )]
+    pub rokoko: Option<std::net::SocketAddr>,
     /// End the session when no frame came for this many seconds (a network
     /// stream otherwise waits for its sender to come back; stop with Ctrl-C).
     #[arg(long = "until-idle", value_name = "SECONDS", value_parser = super::positive)]
@@ -69,6 +91,13 @@ pub struct Args {
     /// ready median and p99, drops) when the stream ends.
     #[arg(long)]
     pub report: bool,
+    /// Serve the browser page (the character and the incoming skeleton side
+    /// by side, with the latency and frame rates; frames streamed over a
+    /// WebSocket) on ADDR:PORT; 127.0.0.1:8765 when given without a value.
+    /// The page's URL is printed. Another address than 127.0.0.1 is printed
+    /// as a warning.
+    #[arg(long, value_name = "ADDR:PORT", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
+    pub serve: Option<std::net::SocketAddr>,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -82,7 +111,7 @@ pub enum Cmd {
     /// Send a clip as a stream, so every input path can be tested without
     /// a suit.
     #[command(
-        after_help = "Example:\n  surfmotion live --db samba_synth --bvh-tcp 127.0.0.1:7001 --until-idle 2 --report &\n  surfmotion live send 02_02.amc --to 127.0.0.1:7001 --protocol bvh"
+        after_help = "Example:\n  surfmotion live --db samba_synth --bvh-tcp 127.0.0.1:7001 --until-idle 2 --report &\n  surfmotion live send 02_02.amc --to 127.0.0.1:7001 --protocol bvh\n  surfmotion live --db samba_synth --vmc --until-idle 2 --report &\n  surfmotion live send 02_02.amc --to 127.0.0.1:39539 --protocol vmc"
     )]
     Send(SendArgs),
 }
@@ -95,9 +124,13 @@ pub struct SendArgs {
     /// The receiver.
     #[arg(long, value_name = "ADDR:PORT")]
     pub to: std::net::SocketAddr,
-    /// The protocol: bvh (BVH over TCP). VMC and Rokoko Studio Live are not
-    /// implemented yet.
-    #[arg(long, default_value = "bvh", value_parser = ["bvh"])]
+    /// The protocol: bvh (BVH over TCP: the clip's own skeleton), vmc (OSC
+    /// over UDP: the canonical joints as Unity humanoid bones, local
+    /// transforms) or rokoko (Rokoko Studio Live JSON over UDP: the
+    /// canonical joints as its body joints, world transforms). Over UDP the
+    /// clip's neutral pose goes along (an extension other receivers ignore),
+    /// so `live` takes the same reference as `--replay`.
+    #[arg(long, default_value = "bvh", value_parser = ["bvh", "vmc", "rokoko"])]
     pub protocol: String,
     /// Resample the clip to this rate before sending (default: its own).
     #[arg(long, value_name = "FPS", value_parser = super::frame_rate)]
@@ -114,13 +147,13 @@ fn send(a: SendArgs) -> anyhow::Result<()> {
     if !(a.speed.is_finite() && a.speed >= 0.0) {
         anyhow::bail!("--speed {}: expected a factor ≥ 0", a.speed);
     }
-    let r = surfmotion::live::send::send_bvh(
-        &a.clip,
-        a.to,
-        &a.clip_opts.load_options()?,
-        a.fps,
-        a.speed,
-    )?;
+    use surfmotion::live::send::{UdpProtocol, send_bvh, send_udp};
+    let load = a.clip_opts.load_options()?;
+    let r = match a.protocol.as_str() {
+        "vmc" => send_udp(&a.clip, a.to, UdpProtocol::Vmc, &load, a.fps, a.speed)?,
+        "rokoko" => send_udp(&a.clip, a.to, UdpProtocol::Rokoko, &load, a.fps, a.speed)?,
+        _ => send_bvh(&a.clip, a.to, &load, a.fps, a.speed)?,
+    };
     println!(
         "sent {} frames at {:.1} fps to {} ({}) in {:.2} s",
         r.frames, r.fps, a.to, a.protocol, r.seconds
@@ -136,18 +169,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let Some(db) = a.db.clone() else {
         anyhow::bail!("--db is required")
     };
-    let input = match (&a.replay, a.bvh_tcp) {
-        (Some(p), _) => LiveInput::Replay(p.clone()),
-        (None, Some(addr)) => {
-            if !addr.ip().is_loopback() {
-                eprintln!(
-                    "warning: listening on {addr}, which accepts frames from other machines (127.0.0.1 keeps the stream on this one)"
-                );
-            }
-            LiveInput::BvhTcp(addr)
+    let input = match (&a.replay, a.bvh_tcp, a.vmc, a.rokoko) {
+        (Some(p), ..) => LiveInput::Replay(p.clone()),
+        (None, Some(addr), ..) => LiveInput::BvhTcp(addr),
+        (None, None, Some(addr), _) => LiveInput::Vmc(addr),
+        (None, None, None, Some(addr)) => LiveInput::Rokoko(addr),
+        (None, None, None, None) => {
+            anyhow::bail!("give --replay CLIP, --bvh-tcp ADDR:PORT, --vmc or --rokoko")
         }
-        (None, None) => anyhow::bail!("give --replay CLIP or --bvh-tcp ADDR:PORT"),
     };
+    for addr in [a.bvh_tcp, a.vmc, a.rokoko, a.serve].into_iter().flatten() {
+        if addr.ip().is_loopback() {
+            continue;
+        }
+        eprintln!(
+            "warning: listening on {addr}, which other machines can reach (127.0.0.1 keeps it on this one)"
+        );
+    }
     if let Some(out) = &a.record {
         surfmotion::jobs::outputs::check_mesh_output(out)?;
         let mut inputs = surfmotion::jobs::outputs::database_inputs(&db);
@@ -164,6 +202,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         seconds: a.seconds,
         until_idle: a.until_idle,
         lossless: a.lossless,
+        serve: a.serve,
         analysis_window: a.analysis_window.max(1),
         history: a.history.max(1),
         load: a.clip.load_options()?,
@@ -177,7 +216,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         &opts,
         &super::Bars::new(),
         &stop,
-        &mut |addr| eprintln!("listening for BVH over TCP on {addr}"),
+        &mut |l| match l {
+            Listening::Stream(addr) => eprintln!("listening for {} on {addr}", input.protocol()),
+            Listening::Page(url) => eprintln!("live page at {url}"),
+        },
         &mut |_| {},
     )?;
     if a.json {

@@ -9,10 +9,14 @@ use crate::drive::trellis::TrellisInput;
 use crate::drive::{Prepared, RetargetError, RetargetOptions};
 use crate::live::bvh_tcp::BvhTcp;
 use crate::live::online::{OnlineOptions, OnlineStats};
+use crate::live::page::{Meta, PageFrame, PageServer};
 use crate::live::replay::Replay;
 use crate::live::report::{Counters, Latencies, LatencySummary};
+use crate::live::rokoko::Rokoko;
 use crate::live::session::{LiveFrame, Session, SessionOptions};
 use crate::live::source::{Event, Source, SourceError};
+use crate::live::stream::UdpStream;
+use crate::live::vmc::Vmc;
 use crate::mesh::MeshSequence;
 use crate::pose::Pose;
 use crate::rig::LoadOptions;
@@ -48,6 +52,9 @@ pub struct LiveOptions {
     /// (for recordings and tests; latency grows when the session is slower
     /// than the stream). Default: false.
     pub lossless: bool,
+    /// Serve the browser page (the character and the incoming skeleton,
+    /// streamed over a WebSocket) on this address. Default: none.
+    pub serve: Option<std::net::SocketAddr>,
 }
 
 impl Default for LiveOptions {
@@ -63,6 +70,7 @@ impl Default for LiveOptions {
             seconds: None,
             until_idle: None,
             lossless: false,
+            serve: None,
         }
     }
 }
@@ -74,6 +82,93 @@ pub enum LiveInput {
     Replay(PathBuf),
     /// BVH over TCP, listening on the address.
     BvhTcp(std::net::SocketAddr),
+    /// The VMC protocol (OSC over UDP), listening on the address.
+    Vmc(std::net::SocketAddr),
+    /// Rokoko Studio Live (JSON over UDP), listening on the address.
+    Rokoko(std::net::SocketAddr),
+}
+
+impl LiveInput {
+    /// What the input is, for messages ("BVH over TCP", ...).
+    pub fn protocol(&self) -> &'static str {
+        use crate::live::stream::Protocol;
+        match self {
+            LiveInput::Replay(_) => "a replayed clip",
+            LiveInput::BvhTcp(_) => "BVH over TCP",
+            LiveInput::Vmc(_) => crate::live::vmc::Vmc::NAME,
+            LiveInput::Rokoko(_) => crate::live::rokoko::Rokoko::NAME,
+        }
+    }
+}
+
+/// What a session listens on, as it starts.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Listening {
+    /// The stream's address (a network input).
+    Stream(std::net::SocketAddr),
+    /// The browser page's URL (`serve`).
+    Page(String),
+}
+
+/// The browser page on `opts.serve`, if asked for.
+fn start_page(
+    opts: &LiveOptions,
+    prepared: &Prepared,
+    fps: f64,
+    listening: &mut dyn FnMut(Listening),
+) -> Result<Option<PageServer>, LiveError> {
+    let Some(addr) = opts.serve else {
+        return Ok(None);
+    };
+    let mesh = prepared.topology_metres();
+    let (joints, parents) = crate::live::page::skeleton();
+    let meta = Meta {
+        vertices: mesh.vertex_count(),
+        triangles: mesh.triangles().iter().flatten().copied().collect(),
+        fps,
+        lag: opts.lag,
+        joints,
+        parents,
+    };
+    let page = PageServer::start(addr, &meta)?;
+    listening(Listening::Page(page.url().to_string()));
+    Ok(Some(page))
+}
+
+/// The stream `input` names, taken at `fps`; a network source's address
+/// told to `listening`.
+fn open_source(
+    input: &LiveInput,
+    opts: &LiveOptions,
+    fps: f64,
+    listening: &mut dyn FnMut(Listening),
+) -> Result<Box<dyn Source>, LiveError> {
+    let (load, lossless) = (opts.load.clone(), opts.lossless);
+    let (source, addr): (Box<dyn Source>, _) = match input {
+        LiveInput::Replay(clip) => (
+            Box::new(Replay::new(load_mocap(clip, &opts.load, fps)?, opts.speed)),
+            None,
+        ),
+        LiveInput::BvhTcp(addr) => {
+            let s = BvhTcp::bind(*addr, fps, load, lossless)?;
+            let a = s.local_addr();
+            (Box::new(s), Some(a))
+        }
+        LiveInput::Vmc(addr) => {
+            let s = UdpStream::bind(*addr, Vmc::default(), fps, load, lossless)?;
+            let a = s.local_addr();
+            (Box::new(s), Some(a))
+        }
+        LiveInput::Rokoko(addr) => {
+            let s = UdpStream::bind(*addr, Rokoko, fps, load, lossless)?;
+            let a = s.local_addr();
+            (Box::new(s), Some(a))
+        }
+    };
+    if let Some(a) = addr {
+        listening(Listening::Stream(a));
+    }
+    Ok(source)
 }
 
 /// What can go wrong in [`run_live`].
@@ -97,6 +192,9 @@ pub enum LiveError {
     /// The recording does not fit the character's topology.
     #[error(transparent)]
     Topology(#[from] crate::mesh::TopologyError),
+    /// The browser page could not be served.
+    #[error(transparent)]
+    Page(#[from] crate::live::page::PageError),
     /// The stream gave no frame to decide its neutral pose from.
     #[error("the stream ended before its skeleton was known")]
     NoReference,
@@ -111,6 +209,8 @@ pub struct FrameOut<'a> {
     /// Milliseconds from the arrival of the frame that let it be decided
     /// to its mesh being ready.
     pub latency_ms: f64,
+    /// Output frames per second since the first frame arrived.
+    pub output_fps: f64,
 }
 
 /// The report of a live session.
@@ -144,6 +244,12 @@ pub struct LiveReport {
     pub recorded: Vec<PathBuf>,
 }
 
+/// Frames per second since `first`.
+fn rate(frames: u64, first: Option<Instant>) -> f64 {
+    let s = first.map_or(0.0, |f| f.elapsed().as_secs_f64());
+    if s > 0.0 { frames as f64 / s } else { 0.0 }
+}
+
 /// Runs a live session from `input` on the database in `db` until the
 /// stream ends, `stop` is set, `opts.seconds` pass or the stream is idle
 /// `opts.until_idle` (a network source's address is told to `listening`): every output frame
@@ -157,7 +263,7 @@ pub fn run_live(
     opts: &LiveOptions,
     progress: &dyn BuildProgress,
     stop: &AtomicBool,
-    listening: &mut dyn FnMut(std::net::SocketAddr),
+    listening: &mut dyn FnMut(Listening),
     on_frame: &mut dyn FnMut(FrameOut<'_>),
 ) -> Result<LiveReport, LiveError> {
     let ch = Character::load(db, progress)?;
@@ -165,15 +271,19 @@ pub fn run_live(
     let t = Instant::now();
     let prepared = Prepared::new(&ch, &opts.retarget)?;
     let prepare_seconds = t.elapsed().as_secs_f64();
-    let mut source: Box<dyn Source> = match input {
-        LiveInput::Replay(clip) => {
-            Box::new(Replay::new(load_mocap(clip, &opts.load, fps)?, opts.speed))
+    let page = start_page(opts, &prepared, fps, listening)?;
+    let mut source = open_source(input, opts, fps, listening)?;
+    let mut on_frame = |f: FrameOut<'_>| {
+        if let Some(p) = &page {
+            p.publish(&PageFrame {
+                index: f.frame.index as u64,
+                latency_ms: f.latency_ms,
+                output_fps: f.output_fps,
+                positions: f.frame.positions,
+                incoming: f.incoming,
+            });
         }
-        LiveInput::BvhTcp(addr) => {
-            let s = BvhTcp::bind(*addr, fps, opts.load.clone(), opts.lossless)?;
-            listening(s.local_addr());
-            Box::new(s)
-        }
+        on_frame(f)
     };
     let successor = |id: u32| ch.successor(id);
     let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
@@ -249,6 +359,7 @@ pub fn run_live(
                 frame: f,
                 incoming: &inc,
                 latency_ms: lat.as_secs_f64() * 1e3,
+                output_fps: rate(frames_out, first),
             });
         };
         s.push(&pose, rotations.as_ref(), &mut emit);
@@ -266,6 +377,7 @@ pub fn run_live(
                 frame: f,
                 incoming: &inc,
                 latency_ms: arrived.elapsed().as_secs_f64() * 1e3,
+                output_fps: rate(frames_out, first),
             });
         };
         s.finish(&mut emit);

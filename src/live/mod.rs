@@ -5,17 +5,24 @@
 //! [`crate::drive::trellis`] decided frame by frame), [`session`] the
 //! per-frame synthesis on a character prepared once, [`source`] the
 //! stream input ([`replay`] a clip file as a stream, [`bvh_tcp`] BVH over
-//! TCP through a [`mailbox`]), [`report`] the
-//! latency and throughput figures.
+//! TCP, [`vmc`] and [`rokoko`] over UDP through [`stream`] and the
+//! [`humanoid`] bone tables, each through a [`mailbox`]), [`report`] the
+//! latency and throughput figures, [`page`] the browser page and its
+//! WebSocket.
 
 pub mod bvh_tcp;
+pub mod humanoid;
 pub mod mailbox;
 pub mod online;
+pub mod page;
 pub mod replay;
 pub mod report;
+pub mod rokoko;
 pub mod send;
 pub mod session;
 pub mod source;
+pub mod stream;
+pub mod vmc;
 
 pub use online::{Advance, Committed, OnlineOptions, OnlineStats, OnlineTrellis};
 pub use session::{LiveFrame, Session, SessionOptions};

@@ -16,6 +16,12 @@
 //! [`ServeOptions::head_timeout`]; an idle keep-alive connection is closed
 //! after [`ServeOptions::idle_timeout`], and at once when the server is
 //! near its cap, so idle or half-open connections leave room for new ones.
+//!
+//! One path may be a WebSocket route ([`SiteServer::with_websocket`], as
+//! `live --serve` streams its frames): a `GET` of it that asks to upgrade
+//! is answered `101 Switching Protocols` and the connection handed to the
+//! route's handler (with `tungstenite`) on its thread, counted against the
+//! cap like any other.
 
 use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
@@ -115,10 +121,18 @@ pub const MAX_HEAD_BYTES: usize = 16 << 10;
 /// flag and the time-outs.
 const POLL: Duration = Duration::from_millis(20);
 
+/// A WebSocket route's handler: it gets the upgraded connection and the
+/// server's stop flag, and returns when the client goes away or the flag is
+/// set.
+pub type WebSocketHandler =
+    Arc<dyn Fn(tungstenite::WebSocket<TcpStream>, &AtomicBool) + Send + Sync>;
+
 /// What the accepting loop and the connection threads share.
 struct Shared {
     root: PathBuf,
     opts: ServeOptions,
+    /// The WebSocket route: its path and handler.
+    websocket: Option<(String, WebSocketHandler)>,
     /// Connections being served.
     active: AtomicUsize,
     /// Set to stop serving.
@@ -170,10 +184,20 @@ impl SiteServer {
             shared: Arc::new(Shared {
                 root: root.to_path_buf(),
                 opts,
+                websocket: None,
                 active: AtomicUsize::new(0),
                 stop: AtomicBool::new(false),
             }),
         })
+    }
+
+    /// Serves a WebSocket at `path` (e.g. `/live`): an upgrade request for it
+    /// is handed to `handler`. Set before serving.
+    pub fn with_websocket(mut self, path: &str, handler: WebSocketHandler) -> SiteServer {
+        if let Some(sh) = Arc::get_mut(&mut self.shared) {
+            sh.websocket = Some((path.to_string(), handler));
+        }
+        self
     }
 
     /// The URL of the site.
@@ -260,6 +284,8 @@ struct Head {
     target: String,
     /// The connection may serve another request after this one.
     keep_alive: bool,
+    /// `Sec-WebSocket-Key` of a request to upgrade to a WebSocket.
+    websocket_key: Option<String>,
 }
 
 /// Serves requests on one connection until it closes, fails a time-out or
@@ -271,6 +297,10 @@ fn serve_connection(sh: &Shared, mut s: TcpStream) {
     let _ = s.set_nodelay(true);
     let mut buf = Vec::new();
     while let Some(head) = read_head(sh, &mut s, &mut buf) {
+        if let Some(handler) = websocket_route(sh, &head) {
+            upgrade(sh, s, &head, handler);
+            return;
+        }
         if !respond(sh, &mut s, &head) || !head.keep_alive {
             break;
         }
@@ -327,6 +357,37 @@ fn read_head(sh: &Shared, s: &mut TcpStream, buf: &mut Vec<u8>) -> Option<Head> 
     }
 }
 
+/// The handler of the WebSocket route when `head` asks to upgrade on it.
+fn websocket_route(sh: &Shared, head: &Head) -> Option<WebSocketHandler> {
+    let (path, handler) = sh.websocket.as_ref()?;
+    let target = head.target.split(['?', '#']).next().unwrap_or("");
+    (head.method == "GET" && head.websocket_key.is_some() && target == path)
+        .then(|| Arc::clone(handler))
+}
+
+/// Answers `101 Switching Protocols` and hands the connection to `handler`.
+fn upgrade(sh: &Shared, mut s: TcpStream, head: &Head, handler: WebSocketHandler) {
+    let key = head.websocket_key.as_deref().unwrap_or("");
+    let accept = tungstenite::handshake::derive_accept_key(key.as_bytes());
+    let answer = format!(
+        "HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Accept: {accept}\r\n\r\n"
+    );
+    if !write_all_by(
+        &mut s,
+        answer.as_bytes(),
+        Instant::now() + sh.opts.write_timeout,
+    ) {
+        return;
+    }
+    // Writes block at most the write time-out (a client that stops reading
+    // is dropped); reads wait a poll period.
+    if s.set_write_timeout(Some(sh.opts.write_timeout)).is_err() {
+        return;
+    }
+    let ws = tungstenite::WebSocket::from_raw_socket(s, tungstenite::protocol::Role::Server, None);
+    handler(ws, &sh.stop);
+}
+
 fn find_head_end(b: &[u8]) -> Option<usize> {
     b.windows(4).position(|w| w == b"\r\n\r\n")
 }
@@ -347,11 +408,18 @@ fn parse_head(s: &mut TcpStream, head: &[u8]) -> Option<Head> {
         return None;
     };
     let mut keep_alive = version == "HTTP/1.1";
+    let (mut upgrade, mut websocket_key) = (false, None);
     for line in lines {
         let Some((k, v)) = line.split_once(':') else {
             continue;
         };
         let (k, v) = (k.trim(), v.trim());
+        if k.eq_ignore_ascii_case("upgrade") && v.eq_ignore_ascii_case("websocket") {
+            upgrade = true;
+        }
+        if k.eq_ignore_ascii_case("sec-websocket-key") {
+            websocket_key = Some(v.to_string());
+        }
         if k.eq_ignore_ascii_case("connection") {
             if v.eq_ignore_ascii_case("close") {
                 keep_alive = false;
@@ -370,6 +438,7 @@ fn parse_head(s: &mut TcpStream, head: &[u8]) -> Option<Head> {
         method: method.to_string(),
         target: target.to_string(),
         keep_alive,
+        websocket_key: websocket_key.filter(|_| upgrade),
     })
 }
 

@@ -2,4 +2,5 @@
 //! and the per-frame session against the offline synthesis.
 
 mod online;
+mod page;
 mod protocols;

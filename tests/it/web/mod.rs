@@ -239,7 +239,7 @@ fn serving_a_folder_that_is_no_site_is_refused() {
 
 /// The browser: `$SURFMOTION_CHROMIUM`, else `chromium` or
 /// `chromium-browser` on the PATH.
-fn chromium() -> Option<PathBuf> {
+pub(crate) fn chromium() -> Option<PathBuf> {
     if let Some(p) = std::env::var_os("SURFMOTION_CHROMIUM") {
         return Some(p.into());
     }
@@ -511,7 +511,7 @@ fn browser_speed_slider_drives_the_achieved_speed() {
 /// (`Input.dispatchKeyEvent`), evaluation, screenshots, and the console
 /// errors and exceptions the page raised (`Runtime.consoleAPICalled`,
 /// `Runtime.exceptionThrown`, `Log.entryAdded`).
-mod cdp {
+pub(crate) mod cdp {
     use serde_json::{Value, json};
     use std::io::{Read, Write};
     use std::net::TcpStream;
@@ -813,7 +813,7 @@ fn run_page(b: &mut cdp::Browser, url: &str) -> serde_json::Value {
     b.wait_for(done, Duration::from_secs(90))
 }
 
-fn shots_dir() -> PathBuf {
+pub(crate) fn shots_dir() -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("web-shots");
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -838,12 +838,12 @@ fn save_shots(r: &serde_json::Value, name: &str) -> Vec<PathBuf> {
 /// on 2 cores starve each other past the page's time limits.
 static ONE_BROWSER: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
-fn one_browser() -> std::sync::MutexGuard<'static, ()> {
+pub(crate) fn one_browser() -> std::sync::MutexGuard<'static, ()> {
     ONE_BROWSER.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// The browser, or `None` (skip) outside CI.
-fn browser_or_skip() -> Option<PathBuf> {
+pub(crate) fn browser_or_skip() -> Option<PathBuf> {
     let b = chromium();
     if b.is_none() {
         assert!(
