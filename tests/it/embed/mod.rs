@@ -2,4 +2,5 @@
 
 mod bodies;
 mod captures;
+mod contact;
 mod placement;
