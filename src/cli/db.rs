@@ -10,6 +10,7 @@ use surfmotion::jobs::{export_skeletons, text};
 
 /// Database subcommands.
 #[derive(clap::Subcommand)]
+#[allow(clippy::large_enum_variant)] // parsed once per run
 pub enum Cmd {
     /// Write DIR/character.toml for a character: its topology mesh, its
     /// captured sequences, frame rate, units, up axis and rig annotation.
@@ -252,7 +253,7 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         }
         crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
     } else if let Some(s) = &r.setup {
-        crate::errln!("{}", setup_text(s));
+        crate::errln!("{}", super::flags::as_flags(&setup_text(s)));
     }
     crate::errln!(
         "wrote {} ({}); check it with `surfmotion db info {}`",

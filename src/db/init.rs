@@ -250,12 +250,28 @@ pub fn assemble_setup(
         )));
     }
     check_sequences(dir, &m, &topo)?;
-    let rest = if opts.choose_rest && m.rig.landmarks.is_some() && !m.sequences.is_empty() {
+    let mut rest = if m.rig.landmarks.is_some() && !m.sequences.is_empty() {
         choose_rest(dir, &m, &topo)?
     } else {
         None
     };
-    if let Some(r) = &rest {
+    if let Some(r) = rest
+        .as_mut()
+        .filter(|r| !opts.choose_rest && r.sequence.is_some())
+    {
+        // Kept as asked: the contact is reported, not handled.
+        r.choice.why = format!(
+            "kept (`InitOptions::choose_rest` off) although the topology's frame has {} contact(s), {} vertices touching: the touching parts may be wired together; a clearer frame would be {}:{}",
+            r.choice.first.contacts.len(),
+            r.choice.first.touching,
+            r.sequence.as_deref().unwrap_or(""),
+            r.frame
+        );
+        r.choice.contacts = r.choice.first.clone();
+        r.sequence = None;
+        r.frame = 0;
+        notes.push(format!("rest frame: the topology's, {}", r.choice.why));
+    } else if let Some(r) = &rest {
         if let Some(s) = &r.sequence {
             m.rig.rest = Some(format!("{s}:{}", r.frame));
             notes.push(format!(

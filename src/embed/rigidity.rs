@@ -138,6 +138,9 @@ pub struct Stray {
     pub frames: Vec<usize>,
 }
 
+/// A part followed, the vertices following it, their (miss, frame)s.
+type Followed = (usize, Vec<u32>, Vec<(f64, usize)>);
+
 /// The rigidity of every part of `labels` ([`Part::ALL`] indices) from the
 /// frame `rest` over `frames`, with the vertices that follow another part's
 /// motion better than their own (see [`RigidityOptions`]). `height` in the
@@ -200,7 +203,8 @@ pub fn part_rigidity(
         .iter()
         .map(|p| {
             let vs = &members[p.index()];
-            let mut by_target: Vec<(usize, Vec<u32>, Vec<(f64, usize)>)> = Vec::new();
+            // (the part followed, its vertices, their (miss, frame)s)
+            let mut by_target: Vec<Followed> = Vec::new();
             for &v in vs {
                 let vi = v as usize;
                 if picked.is_empty() || strays[vi] < need {
