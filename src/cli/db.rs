@@ -4,11 +4,13 @@ use anyhow::bail;
 use std::path::PathBuf;
 use surfmotion::db::info;
 use surfmotion::db::init::InitOptions;
+use surfmotion::jobs::db_init::{InitSetup, Setup, init_database_with};
 use surfmotion::jobs::skeletons::SkeletonsOptions;
-use surfmotion::jobs::{export_skeletons, init_database, text};
+use surfmotion::jobs::{export_skeletons, text};
 
 /// Database subcommands.
 #[derive(clap::Subcommand)]
+#[allow(clippy::large_enum_variant)] // parsed once per run
 pub enum Cmd {
     /// Write DIR/character.toml for a character: its topology mesh, its
     /// captured sequences, frame rate, units, up axis and rig annotation.
@@ -151,7 +153,21 @@ pub struct InitArgs {
     /// Overwrite an existing manifest.
     #[arg(long)]
     pub force: bool,
-    /// Print the manifest written as JSON.
+    /// Keep the topology's positions as the rest frame even when they have
+    /// a contact. Without it, with --landmarks and sequences, a topology
+    /// frame where the body touches itself far along the surface (a hand on
+    /// the hip, forearms on the belly) is replaced by the clearest frame of
+    /// the sequences for embedding the rig (written as `[rig] rest`): a
+    /// contact in the rest frame wires the touching parts together.
+    #[arg(long = "keep-rest-frame")]
+    pub keep_rest_frame: bool,
+    /// Write a picture of the rig (parts coloured, skeleton drawn), front
+    /// and side, on the topology's frame and on the rest frame chosen.
+    /// Needs --landmarks.
+    #[arg(long, value_name = "FILE.png", requires = "landmarks")]
+    pub png: Option<PathBuf>,
+    /// Print the manifest written as JSON, with the setup report under
+    /// "setup" (also written as DIR/setup.json with --landmarks).
     #[arg(long)]
     pub json: bool,
     /// Then open a page on 127.0.0.1 (URL printed, Ctrl-C stops) on the rest frame: drag a landmark to re-embed; Save writes NAME.picked.landmarks.json beside the landmark file and the manifest names it when the page stops.
@@ -205,7 +221,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Runs `db init` ([`init_database`]): the `NAME=PATH` pairs and the unit
+/// Runs `db init` ([`init_database_with`]): the `NAME=PATH` pairs and the unit
 /// are parsed here, everything else is the library's.
 fn init(a: InitArgs) -> anyhow::Result<()> {
     let mut sequences = Vec::new();
@@ -231,15 +247,22 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         rig_map: a.rig_map,
         human_sized: !a.not_human_sized,
         force: a.force,
+        choose_rest: !a.keep_rest_frame,
     };
-    let r = init_database(&a.dir, &opts)?;
+    let setup = InitSetup { png: a.png };
+    let r = init_database_with(&a.dir, &opts, &setup)?;
     for n in &r.notes {
         crate::errln!("{}", super::flags::as_flags(n));
     }
     if a.json {
         let mut v = serde_json::to_value(&r.manifest)?;
         v["manifest"] = serde_json::to_value(&r.path)?;
+        if let Some(s) = &r.setup {
+            v["setup"] = serde_json::to_value(s)?;
+        }
         crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
+    } else if let Some(s) = &r.setup {
+        crate::errln!("{}", super::flags::as_flags(&setup_text(s)));
     }
     crate::errln!(
         "wrote {} ({}); check it with `surfmotion db info {}`",
@@ -252,6 +275,77 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         return super::pick::serve(surfmotion::jobs::pick::open_db(&a.dir, &o)?, false);
     }
     Ok(())
+}
+
+/// The setup report as `db init` prints it.
+fn setup_text(s: &Setup) -> String {
+    let mut out = format!("rest frame: {} ({})\n", s.rest_frame, s.why);
+    let contacts = |list: &[surfmotion::jobs::db_init::ContactReport]| {
+        list.iter()
+            .map(|c| {
+                format!(
+                    "{} ({} vertices, gap {:.3})",
+                    c.parts.join(" ↔ "),
+                    c.vertices,
+                    c.gap
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    if !s.topology_contacts.is_empty() {
+        out += &format!(
+            "contacts on the topology's frame: {}\n",
+            contacts(&s.topology_contacts)
+        );
+    }
+    if !s.rest_contacts.is_empty() {
+        out += &format!(
+            "contacts on the rest frame: {}\n",
+            contacts(&s.rest_contacts)
+        );
+    }
+    if s.frames_examined > 0 {
+        out += &format!(
+            "frames with a contact: {} of {}\n",
+            s.frames_in_contact, s.frames_examined
+        );
+    }
+    let worst = s
+        .rigidity
+        .iter()
+        .max_by(|a, b| a.rms_percent.total_cmp(&b.rms_percent));
+    if let Some(w) = worst {
+        out += &format!(
+            "part rigidity: the least rigid part is {} ({:.1} % of the height rms off one rigid motion)\n",
+            w.part, w.rms_percent
+        );
+    }
+    for p in &s.rigidity {
+        for st in &p.stray {
+            let shown: Vec<String> = st.vertices.iter().take(8).map(u32::to_string).collect();
+            out += &format!(
+                "WARN part {}: {} vertices follow {} instead (vertices {}{}; frames {:?})\n",
+                p.part,
+                st.vertices.len(),
+                st.follows,
+                shown.join(", "),
+                if st.vertices.len() > 8 { ", …" } else { "" },
+                st.frames
+            );
+        }
+    }
+    for n in &s.rig_notes {
+        out += &format!("rig: {n}\n");
+    }
+    for w in &s.check.warnings {
+        out += &format!("WARN rig: {}\n", w.message);
+    }
+    if let Some(p) = &s.png {
+        out += &format!("wrote {}\n", p.display());
+    }
+    out += &format!("wrote {}", s.path.display());
+    out
 }
 
 fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {

@@ -22,6 +22,7 @@ const FLAGS: &[(&str, &str)] = &[
     ("`BlendOptions::alpha`", "--alpha"),
     ("`BvhOptions::fps`", "--input-fps"),
     ("`GlbOptions::quantize`", "--glb-quantize"),
+    ("`InitOptions::choose_rest` off", "--keep-rest-frame"),
     ("`InitOptions::gltf_skin`", "--gltf-skin"),
     ("`InitOptions::landmarks`", "--landmarks"),
     ("`InitOptions::mesh`", "--mesh"),

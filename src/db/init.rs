@@ -9,6 +9,7 @@
 use super::manifest::{extent, printable};
 use super::{DbError, MANIFEST, Manifest, RigSpec, SequenceEntry};
 use crate::embed::landmarks::{Landmark, Landmarks};
+use crate::embed::rest::{RestChoice, RestOptions, choose_rest_frame};
 use crate::mesh::Mesh;
 use std::path::{Path, PathBuf};
 
@@ -45,6 +46,12 @@ pub struct InitOptions {
     pub human_sized: bool,
     /// Overwrite an existing manifest. Default false.
     pub force: bool,
+    /// With landmarks and sequences: when the topology's frame has a
+    /// contact (a hand on the hip, forearms on the belly), embed the rig on
+    /// the clearest frame of the sequences instead
+    /// ([`crate::embed::rest::choose_rest_frame`]), written as the
+    /// manifest's `[rig] rest`. Default true.
+    pub choose_rest: bool,
 }
 
 impl Default for InitOptions {
@@ -62,6 +69,7 @@ impl Default for InitOptions {
             rig_map: None,
             human_sized: true,
             force: false,
+            choose_rest: true,
         }
     }
 }
@@ -125,6 +133,30 @@ pub fn assemble(
     opts: &InitOptions,
     notes: &mut Vec<String>,
 ) -> Result<Manifest, InitError> {
+    assemble_setup(dir, opts, notes).map(|(m, _)| m)
+}
+
+/// The rest frame `db init` chose ([`InitOptions::choose_rest`]).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct RestFrame {
+    /// The sequence of the frame chosen; `None`: the topology's own
+    /// positions.
+    pub sequence: Option<String>,
+    /// The frame in that sequence (0 for the topology).
+    pub frame: usize,
+    /// The choice over the topology's frame followed by every frame of
+    /// every sequence ([`RestChoice::frame`] indexes that list).
+    pub choice: RestChoice,
+}
+
+/// [`assemble`], with the rest frame chosen when
+/// [`InitOptions::choose_rest`] and there are landmarks and sequences
+/// (written into the manifest's `[rig] rest` when not the topology's).
+pub fn assemble_setup(
+    dir: &Path,
+    opts: &InitOptions,
+    notes: &mut Vec<String>,
+) -> Result<(Manifest, Option<RestFrame>), InitError> {
     let manifest = dir.join(MANIFEST);
     if manifest.exists() && !opts.force {
         return Err(InitError::Exists(manifest));
@@ -166,6 +198,7 @@ pub fn assemble(
             parts: opt(&opts.parts, "parts")?,
             gltf_skin: opt(&opts.gltf_skin, "gltf_skin")?,
             rig_map: opt(&opts.rig_map, "rig_map")?,
+            rest: None,
         },
         graph: Default::default(),
         deform: Default::default(),
@@ -217,6 +250,38 @@ pub fn assemble(
         )));
     }
     check_sequences(dir, &m, &topo)?;
+    let mut rest = if m.rig.landmarks.is_some() && !m.sequences.is_empty() {
+        choose_rest(dir, &m, &topo)?
+    } else {
+        None
+    };
+    if let Some(r) = rest
+        .as_mut()
+        .filter(|r| !opts.choose_rest && r.sequence.is_some())
+    {
+        // Kept as asked: the contact is reported, not handled.
+        r.choice.why = format!(
+            "kept (`InitOptions::choose_rest` off) although the topology's frame has {} contact(s), {} vertices touching: the touching parts may be wired together; a clearer frame would be {}:{}",
+            r.choice.first.contacts.len(),
+            r.choice.first.touching,
+            r.sequence.as_deref().unwrap_or(""),
+            r.frame
+        );
+        r.choice.contacts = r.choice.first.clone();
+        r.sequence = None;
+        r.frame = 0;
+        notes.push(format!("rest frame: the topology's, {}", r.choice.why));
+    } else if let Some(r) = &rest {
+        if let Some(s) = &r.sequence {
+            m.rig.rest = Some(format!("{s}:{}", r.frame));
+            notes.push(format!(
+                "rest frame: {s}:{} ({}); the rig is embedded on it (`[rig] rest`)",
+                r.frame, r.choice.why
+            ));
+        } else if !r.choice.first.contacts.is_empty() {
+            notes.push(format!("rest frame: the topology's ({})", r.choice.why));
+        }
+    }
     std::fs::create_dir_all(dir).map_err(|source| InitError::Io {
         path: dir.to_path_buf(),
         source,
@@ -251,7 +316,37 @@ pub fn assemble(
     {
         *p = store(p);
     }
-    Ok(m)
+    Ok((m, rest))
+}
+
+/// The rest frame over the topology's positions then every frame of every
+/// sequence ([`choose_rest_frame`]); surface distances measured on the
+/// topology.
+fn choose_rest(dir: &Path, m: &Manifest, topo: &Mesh) -> Result<Option<RestFrame>, InitError> {
+    let mut seqs = Vec::with_capacity(m.sequences.len());
+    for s in &m.sequences {
+        let q = m
+            .load_sequence(dir, s)
+            .map_err(|e| read(format!("`InitOptions::sequences` {}", s.name))(e.into()))?;
+        seqs.push(q);
+    }
+    let mut frames: Vec<&[[f64; 3]]> = vec![topo.positions()];
+    let mut at: Vec<(Option<usize>, usize)> = vec![(None, 0)];
+    for (k, q) in seqs.iter().enumerate() {
+        for f in 0..q.frame_count() {
+            frames.push(q.frame(f));
+            at.push((Some(k), f));
+        }
+    }
+    let Some(choice) = choose_rest_frame(topo, &frames, &RestOptions::default()) else {
+        return Ok(None);
+    };
+    let (seq, frame) = at[choice.frame];
+    Ok(Some(RestFrame {
+        sequence: seq.map(|k| m.sequences[k].name.clone()),
+        frame,
+        choice,
+    }))
 }
 
 /// Every sequence must share the topology's vertices: one of another

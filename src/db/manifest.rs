@@ -126,6 +126,12 @@ pub struct RigSpec {
     /// its joint names are not detected.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rig_map: Option<PathBuf>,
+    /// The frame the rig is embedded on, `SEQUENCE:FRAME`, when not the
+    /// topology's own positions: written by `db init` when the topology's
+    /// frame has a contact (a hand on the hip) and another frame is clear
+    /// ([`crate::embed::rest`]). The landmarks stay marked on the topology.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rest: Option<String>,
 }
 
 impl RigSpec {

@@ -74,7 +74,53 @@ pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding,
         }
         None => None,
     };
-    Embedding::new(topology, &lm, parts).map_err(DbError::Rig)
+    match rest_frame(dir, m, topology)? {
+        Some(rest) => Embedding::new_on_frame(topology, &rest, &lm, parts).map_err(DbError::Rig),
+        None => Embedding::new(topology, &lm, parts).map_err(DbError::Rig),
+    }
+}
+
+/// The positions of the manifest's `[rig] rest` frame (`SEQUENCE:FRAME`),
+/// `None` when it is not set (the topology's own positions).
+pub fn rest_frame(
+    dir: &Path,
+    m: &Manifest,
+    topology: &Mesh,
+) -> Result<Option<Vec<[f64; 3]>>, DbError> {
+    let Some(spec) = &m.rig.rest else {
+        return Ok(None);
+    };
+    let bad = |msg: String| DbError::Manifest {
+        path: dir.join(super::MANIFEST),
+        msg: format!("[rig] rest = \"{spec}\": {msg}"),
+    };
+    let (name, frame) = spec
+        .rsplit_once(':')
+        .ok_or_else(|| bad("expected SEQUENCE:FRAME".into()))?;
+    let frame: usize = frame
+        .trim()
+        .parse()
+        .map_err(|_| bad(format!("{frame:?} is not a frame number")))?;
+    let s = m
+        .sequences
+        .iter()
+        .find(|s| s.name == name.trim())
+        .ok_or_else(|| bad(format!("no sequence {name:?}")))?;
+    let seq = m.load_sequence(dir, s)?;
+    if seq.mesh().vertex_count() != topology.vertex_count() {
+        return Err(bad(format!(
+            "the sequence has {} vertices, the topology {}",
+            seq.mesh().vertex_count(),
+            topology.vertex_count()
+        )));
+    }
+    if frame >= seq.frame_count() {
+        return Err(bad(format!(
+            "the sequence has {} frames",
+            seq.frame_count()
+        )));
+    }
+    Ok(Some(seq.frame(frame).to_vec()))
 }
 
 /// Skeletons of every sequence of the database in `dir`; for

@@ -272,6 +272,70 @@ impl Embedding {
         Embedding::assemble(mesh, est, &w, parts)
     }
 
+    /// [`Embedding::new`] on another frame of the mesh than its own
+    /// positions: the rest frame chosen clear of contact
+    /// ([`super::rest::choose_rest_frame`]). The landmarks, marked on
+    /// `mesh`'s positions, are carried to `rest` ([`Landmarks::moved`]); the
+    /// labels, skin and regressors are made on `rest`; then the rest
+    /// quantities are carried back to `mesh`'s positions, so that the
+    /// embedding stays the mesh's like any other: the joints read off them
+    /// by the regressors, the head, hand and toe tips and the directions
+    /// moved by their part's rigid motion ([`super::rigidity::robust_motion`]).
+    /// The height stays the rest frame's. A note says so.
+    pub fn new_on_frame(
+        mesh: &Mesh,
+        rest: &[[f64; 3]],
+        lm: &Landmarks,
+        parts: Option<Vec<u8>>,
+    ) -> Result<Embedding, EmbedError> {
+        let frame = mesh
+            .with_positions(rest)
+            .map_err(|e| EmbedError::Mesh(format!("the rest frame: {e}")))?;
+        let moved = lm.moved(mesh.positions(), rest, mesh.triangles());
+        let mut e = Embedding::new(&frame, &moved, parts)?.carried(rest, mesh.positions());
+        e.notes.push(
+            "embedded on the rest frame chosen clear of contact; the joints read off the topology's own positions by the regressors".into(),
+        );
+        Ok(e)
+    }
+
+    /// The embedding with its rest quantities carried from the frame `from`
+    /// (the one its joints are on) to the frame `to` of the same mesh: the
+    /// joints read off `to` by the regressors, the tips and directions moved
+    /// by their part's rigid motion; labels, skin and regressors unchanged.
+    pub fn carried(&self, from: &[[f64; 3]], to: &[[f64; 3]]) -> Embedding {
+        let mut e = self.clone();
+        e.carry(from, to);
+        e
+    }
+
+    fn carry(&mut self, from: &[[f64; 3]], to: &[[f64; 3]]) {
+        use super::rigidity::{Rigid, robust_motion};
+        let part_motion = |part: Part| {
+            let verts: Vec<u32> = (0..self.labels.len() as u32)
+                .filter(|&v| self.labels[v as usize] as usize == part.index())
+                .collect();
+            robust_motion(from, to, &verts).unwrap_or(Rigid::IDENTITY)
+        };
+        let v = DVec3::from_array;
+        let head = part_motion(Part::of_joint(Canonical::Head));
+        let hands = [Canonical::LWrist, Canonical::RWrist].map(|j| part_motion(Part::of_joint(j)));
+        let toes = [Canonical::LToe, Canonical::RToe].map(|j| part_motion(Part::of_joint(j)));
+        let torso = part_motion(Part::of_joint(Canonical::Pelvis));
+        self.head_top = head.apply(v(self.head_top)).to_array();
+        for k in 0..2 {
+            self.hand_tips[k] = hands[k].apply(v(self.hand_tips[k])).to_array();
+            self.toe_tips[k] = toes[k].apply(v(self.toe_tips[k])).to_array();
+        }
+        let up = super::axes::body_up(torso.turn(v(self.up)));
+        let left = torso.turn(v(self.left));
+        let left = (left - up * left.dot(up)).normalize_or(v(self.left));
+        self.up = up.to_array();
+        self.left = left.to_array();
+        self.facing = left.cross(up).to_array();
+        self.joints = self.frame_joints(to).map(|j| j.to_array());
+    }
+
     /// The embedding of joints `est` and dense skin weights `w` (one row
     /// of [`Canonical::COUNT`] per vertex): part labels (or the given
     /// ones, made contiguous), overlapping regions, sparse skin, regressors.

@@ -554,6 +554,74 @@ impl Landmarks {
             Mark::Vertex(v) => positions[v as usize],
         })
     }
+
+    /// The landmarks carried from the frame `from` to the frame `to` (one
+    /// position per vertex each, one connectivity `triangles`): a vertex
+    /// stays that vertex; a point keeps its barycentric coordinates on its
+    /// nearest triangle of `from` and its offset from that triangle in the
+    /// triangle's own frame (a point inside the body stays inside, at the
+    /// same depth). Used to embed a rig on another frame than the one the
+    /// landmarks were marked on ([`super::rest`]). A point stays where it
+    /// is when the mesh has no triangle.
+    pub fn moved(&self, from: &[[f64; 3]], to: &[[f64; 3]], triangles: &[[u32; 3]]) -> Landmarks {
+        use glam::DVec3;
+        let v = |p: &[[f64; 3]], i: u32| DVec3::from_array(p[i as usize]);
+        // An orthonormal frame of a triangle (edge, in-plane, normal).
+        let frame = |a: DVec3, b: DVec3, c: DVec3| {
+            let e1 = (b - a).normalize_or(DVec3::X);
+            let n = (b - a)
+                .cross(c - a)
+                .normalize_or(e1.any_orthonormal_vector());
+            (e1, n.cross(e1), n)
+        };
+        let marks = self
+            .marks
+            .iter()
+            .map(|(&l, &m)| {
+                let Mark::Point(p) = m else {
+                    return (l, m);
+                };
+                let q = DVec3::from_array(p);
+                let best = triangles
+                    .iter()
+                    .map(|t| {
+                        let (a, b, c) = (v(from, t[0]), v(from, t[1]), v(from, t[2]));
+                        let c0 = super::surface::closest_on_triangle(q, a, b, c);
+                        (c0.distance_squared(q), t, c0)
+                    })
+                    .min_by(|x, y| x.0.total_cmp(&y.0));
+                let Some((_, t, c0)) = best else {
+                    return (l, m);
+                };
+                let (a, b, c) = (v(from, t[0]), v(from, t[1]), v(from, t[2]));
+                let w = barycentric(c0, a, b, c);
+                let (e1, e2, n) = frame(a, b, c);
+                let o = q - c0;
+                let local = [o.dot(e1), o.dot(e2), o.dot(n)];
+                let (a2, b2, c2) = (v(to, t[0]), v(to, t[1]), v(to, t[2]));
+                let (f1, f2, m2) = frame(a2, b2, c2);
+                let on = a2 * w[0] + b2 * w[1] + c2 * w[2];
+                let moved = on + f1 * local[0] + f2 * local[1] + m2 * local[2];
+                (l, Mark::Point(moved.to_array()))
+            })
+            .collect();
+        Landmarks { marks }
+    }
+}
+
+/// Barycentric coordinates of `p` (in the plane of `a b c`); the centre's
+/// for a degenerate triangle.
+fn barycentric(p: glam::DVec3, a: glam::DVec3, b: glam::DVec3, c: glam::DVec3) -> [f64; 3] {
+    let (v0, v1, v2) = (b - a, c - a, p - a);
+    let (d00, d01, d11) = (v0.dot(v0), v0.dot(v1), v1.dot(v1));
+    let (d20, d21) = (v2.dot(v0), v2.dot(v1));
+    let den = d00 * d11 - d01 * d01;
+    if den.abs() <= 1e-300 || !den.is_finite() {
+        return [1.0 / 3.0; 3];
+    }
+    let y = (d11 * d20 - d01 * d21) / den;
+    let z = (d00 * d21 - d01 * d20) / den;
+    [1.0 - y - z, y, z]
 }
 
 #[cfg(test)]

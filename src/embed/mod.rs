@@ -6,6 +6,7 @@
 
 pub mod axes;
 pub mod check;
+pub mod contact;
 mod embedding;
 pub mod frames;
 pub mod heat;
@@ -14,7 +15,9 @@ pub mod landmarks;
 pub mod midplane;
 pub mod parts;
 pub mod regress;
+pub mod rest;
 pub mod rigid;
+pub mod rigidity;
 pub mod scan_landmarks;
 pub mod section;
 pub mod skin;

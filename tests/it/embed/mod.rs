@@ -2,5 +2,6 @@
 
 mod bodies;
 mod captures;
+mod contact;
 mod placement;
 mod scan_auto;

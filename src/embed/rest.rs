@@ -1,0 +1,215 @@
+//! The rest frame a rig is embedded on, chosen rather than assumed
+//! (issue 41): over every frame of a character's sequences, the frame
+//! whose limbs are clearest of the body — the fewest vertices in a contact
+//! ([`super::contact`]: a hand on the hip, forearms on the belly), then
+//! the fewest barely clear of one — and, among frames as clear, the one
+//! nearest frame 0 in the order given (the capture's own start, usually its
+//! most neutral pose). Frame 0 is kept whenever it has no contact, so a
+//! clear capture rigs exactly as before.
+
+use super::contact::{ContactFinder, ContactOptions, FrameContacts};
+
+use crate::mesh::Mesh;
+use serde::Serialize;
+
+/// How [`choose_rest_frame`] chooses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RestOptions {
+    /// The contact thresholds. Default [`ContactOptions::default`].
+    pub contact: ContactOptions,
+    /// Frames whose near count (vertices within
+    /// [`ContactOptions::near`] of a surface-far vertex) exceeds the
+    /// clearest frame's by at most this fraction of the vertices count as
+    /// clear as it. Default 0.01 (1 %).
+    pub near_slack: f64,
+    /// The most frames among the clearest whose near count is measured
+    /// (evenly spread; the first always among them). Default 24.
+    pub candidates: usize,
+}
+
+impl Default for RestOptions {
+    fn default() -> Self {
+        RestOptions {
+            contact: ContactOptions::default(),
+            near_slack: 0.01,
+            candidates: 24,
+        }
+    }
+}
+
+/// The rest frame chosen and why.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RestChoice {
+    /// The frame chosen (index into the frames given).
+    pub frame: usize,
+    /// Its contacts.
+    pub contacts: FrameContacts,
+    /// Frame 0's contacts.
+    pub first: FrameContacts,
+    /// Frames examined.
+    pub frames: usize,
+    /// Frames with a contact.
+    pub frames_in_contact: usize,
+    /// One line: why this frame.
+    pub why: String,
+}
+
+/// The rest frame among `frames` (each one position per vertex of
+/// `mesh`, in the order of the sequences; `frames[0]` is the current rest
+/// frame), with the contacts of the chosen frame and of frame 0 and a
+/// one-line reason. Surface distances are measured on `mesh`'s own
+/// positions. `None` when `frames` is empty.
+///
+/// Cost: [`ContactFinder::new`] once, [`ContactFinder::find`] per frame,
+/// and [`ContactFinder::near`] on frame 0 and, when frame 0 has a contact,
+/// on at most [`RestOptions::candidates`] of the clearest frames.
+pub fn choose_rest_frame(
+    mesh: &Mesh,
+    frames: &[&[[f64; 3]]],
+    opts: &RestOptions,
+) -> Option<RestChoice> {
+    let finder = ContactFinder::new(mesh, opts.contact);
+    choose_with(&finder, frames, opts)
+}
+
+/// [`choose_rest_frame`] with a prepared finder.
+pub fn choose_with(
+    finder: &ContactFinder,
+    frames: &[&[[f64; 3]]],
+    opts: &RestOptions,
+) -> Option<RestChoice> {
+    if frames.is_empty() {
+        return None;
+    }
+    let mut found: Vec<FrameContacts> = frames.iter().map(|f| finder.find(f)).collect();
+    let n = frames[0].len().max(1);
+    let least = found.iter().map(|c| c.touching).min().unwrap_or(0);
+    let slack = (opts.near_slack * n as f64).ceil() as usize;
+    let mut nearest = 0;
+    // A clear frame 0 is kept: a clear capture rigs exactly as before.
+    let frame = if found[0].contacts.is_empty() {
+        0
+    } else {
+        // The near count of at most `opts.candidates` of the clearest
+        // frames, evenly spread in order.
+        let clearest: Vec<usize> = (0..found.len())
+            .filter(|&f| found[f].touching == least)
+            .collect();
+        let step = clearest.len().div_ceil(opts.candidates.max(1)).max(1);
+        let examined: Vec<usize> = clearest.iter().copied().step_by(step).collect();
+        for &f in &examined {
+            found[f].near = finder.near(frames[f]);
+        }
+        nearest = examined.iter().map(|&f| found[f].near).min().unwrap_or(0);
+        examined
+            .iter()
+            .copied()
+            .find(|&f| found[f].near <= nearest + slack)
+            .unwrap_or(0)
+    };
+    found[0].near = finder.near(frames[0]);
+    let in_contact = found.iter().filter(|c| !c.contacts.is_empty()).count();
+    let first = found[0].clone();
+    let contacts = found[frame].clone();
+    let describe = |c: &FrameContacts| {
+        if c.contacts.is_empty() {
+            "no contact".to_string()
+        } else {
+            format!(
+                "{} contact(s), {} vertices touching",
+                c.contacts.len(),
+                c.touching
+            )
+        }
+    };
+    let why = if frame == 0 {
+        if first.contacts.is_empty() {
+            format!(
+                "frame 0 is clear of contact ({} of {} frames have one)",
+                in_contact,
+                frames.len()
+            )
+        } else {
+            format!(
+                "frame 0 kept: {}, no frame is clearer ({} of {} frames have a contact)",
+                describe(&first),
+                in_contact,
+                frames.len()
+            )
+        }
+    } else {
+        format!(
+            "frame 0 has {}; the first frame with {} and {} vertices near a surface-far one (the clearest {nearest}, slack {slack}) is chosen",
+            describe(&first),
+            describe(&contacts),
+            contacts.near
+        )
+    };
+    Some(RestChoice {
+        frame,
+        contacts,
+        first,
+        frames: frames.len(),
+        frames_in_contact: in_contact,
+        why,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two boxes side by side joined by a thin bridge far away: in
+    /// "touching" frames the boxes' facing sides are 1 cm apart.
+    fn two_boxes() -> (Mesh, Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        // A strip of quads: box A's side at x = 0, box B's at x = gap,
+        // joined by a long U (see contact.rs's folded strip).
+        let ladder = |gap: f64| -> Vec<[f64; 3]> {
+            let mut p = Vec::new();
+            for i in 0..=40 {
+                let t = i as f64 / 40.0 * 4.0;
+                // 0..1.8 up on x = 0, 0.4 across the top, 1.8 down on x = gap
+                let (x, y) = if t <= 1.8 {
+                    (0.0, t)
+                } else if t <= 2.2 {
+                    (gap * (t - 1.8) / 0.4, 1.8)
+                } else {
+                    (gap, 1.8 - (t - 2.2))
+                };
+                p.push([x, y, 0.0]);
+                p.push([x, y, 0.1]);
+            }
+            p
+        };
+        let mut t = Vec::new();
+        for i in 0..40u32 {
+            let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+            t.push([a, c, b]);
+            t.push([b, c, d]);
+        }
+        let touching = ladder(0.01);
+        let clear = ladder(0.5);
+        (Mesh::new(touching.clone(), t).unwrap(), touching, clear)
+    }
+
+    #[test]
+    fn a_contact_in_frame_0_moves_the_rest_to_the_first_clear_frame() {
+        let (mesh, touching, clear) = two_boxes();
+        let frames: Vec<&[[f64; 3]]> = vec![&touching, &touching, &clear, &clear];
+        let c = choose_rest_frame(&mesh, &frames, &RestOptions::default()).unwrap();
+        assert_eq!(c.frame, 2, "{}", c.why);
+        assert!(!c.first.contacts.is_empty());
+        assert!(c.contacts.contacts.is_empty());
+        assert_eq!(c.frames_in_contact, 2);
+        // A clear frame 0 is kept.
+        let frames: Vec<&[[f64; 3]]> = vec![&clear, &touching, &clear];
+        let c = choose_rest_frame(&mesh, &frames, &RestOptions::default()).unwrap();
+        assert_eq!(c.frame, 0, "{}", c.why);
+        // Every frame touching: frame 0 stays, said so.
+        let frames: Vec<&[[f64; 3]]> = vec![&touching, &touching];
+        let c = choose_rest_frame(&mesh, &frames, &RestOptions::default()).unwrap();
+        assert_eq!(c.frame, 0);
+        assert!(c.why.contains("no frame is clearer"), "{}", c.why);
+        assert!(choose_rest_frame(&mesh, &[], &RestOptions::default()).is_none());
+    }
+}
