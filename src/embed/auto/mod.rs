@@ -132,20 +132,20 @@ impl AutoRig {
     /// The landmarks as the JSON a landmarks file holds (points, with the
     /// mesh's vertex count).
     pub fn landmarks_json(&self, vertex_count: usize) -> String {
-        let mut m = serde_json::Map::new();
-        m.insert("vertex_count".into(), vertex_count.into());
+        let r = |x: f64| (x * 1e5).round() / 1e5;
+        let mut lines = vec![format!("  \"vertex_count\": {vertex_count}")];
         for (l, mark) in &self.landmarks.marks {
-            let p = match mark {
-                Mark::Point(p) => *p,
-                Mark::Vertex(_) => continue,
-            };
-            let r = |x: f64| (x * 1e5).round() / 1e5;
-            m.insert(
-                l.name().into(),
-                serde_json::json!([r(p[0]), r(p[1]), r(p[2])]),
-            );
+            if let Mark::Point(p) = mark {
+                lines.push(format!(
+                    "  \"{}\": [{}, {}, {}]",
+                    l.name(),
+                    r(p[0]),
+                    r(p[1]),
+                    r(p[2])
+                ));
+            }
         }
-        serde_json::to_string_pretty(&serde_json::Value::Object(m)).unwrap_or_default()
+        format!("{{\n{}\n}}\n", lines.join(",\n"))
     }
 
     /// One line for `db init`: the confidence and what was found.
