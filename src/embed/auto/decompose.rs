@@ -185,9 +185,9 @@ pub fn split_connected(labels: &mut [u32], nb: &[Vec<u32>], min_size: usize) -> 
             else {
                 continue;
             };
-            for v in 0..n {
-                if comp[v] as usize == c {
-                    comp[v] = to;
+            for x in comp.iter_mut() {
+                if *x as usize == c {
+                    *x = to;
                 }
             }
             sizes[to as usize] += sizes[c];
@@ -390,10 +390,7 @@ pub fn decompose(
         .into_par_iter()
         .map(|(a, b)| (cost(&members, a, b), a, b))
         .collect();
-    loop {
-        let Some(&(rms, a, b)) = costs.iter().min_by(|x, y| x.0.total_cmp(&y.0)) else {
-            break;
-        };
+    while let Some(&(rms, a, b)) = costs.iter().min_by(|x, y| x.0.total_cmp(&y.0)) {
         if rms >= limit {
             break;
         }

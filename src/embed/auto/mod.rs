@@ -191,6 +191,10 @@ fn axis_name(v: DVec3) -> String {
     }
 }
 
+/// A limb: its tip, its path to the trunk (vertex, distance from the
+/// tip), and its three joints where the motion showed them.
+type Limb = (u32, Vec<(u32, f64)>, Vec<Option<Crossing>>);
+
 /// Expected distances from the tip (fractions of the height) of a leg's
 /// ankle, knee and hip, and of an arm's wrist, elbow and shoulder, along
 /// the surface.
@@ -340,7 +344,7 @@ pub fn auto_rig(
     };
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
     let mut legs = vec![limb(feet[0], &LEG, 0.1), limb(feet[1], &LEG, 0.1)];
-    let knee = |l: &(u32, Vec<(u32, f64)>, Vec<Option<Crossing>>)| {
+    let knee = |l: &Limb| {
         l.2[1]
             .map(|c| c.joint.position)
             .unwrap_or_else(|| along(rest, &l.1, LEG[1] * height))
@@ -349,7 +353,7 @@ pub fn auto_rig(
     // the toe tips point to from the knees.
     let flat = |d: DVec3| d - up * d.dot(up);
     let hips_found = legs.iter().all(|l| l.2[2].is_some());
-    let side_point = |l: &(u32, Vec<(u32, f64)>, Vec<Option<Crossing>>)| match l.2[2] {
+    let side_point = |l: &Limb| match l.2[2] {
         Some(c) if hips_found => c.joint.position,
         _ => knee(l),
     };
@@ -378,7 +382,7 @@ pub fn auto_rig(
         legs.swap(0, 1);
     }
     let mut arms = vec![limb(hands[0], &ARM, 0.08), limb(hands[1], &ARM, 0.08)];
-    let arm_point = |l: &(u32, Vec<(u32, f64)>, Vec<Option<Crossing>>)| {
+    let arm_point = |l: &Limb| {
         l.2[2]
             .or(l.2[1])
             .map(|c| c.joint.position)
