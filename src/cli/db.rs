@@ -249,7 +249,10 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
         force: a.force,
         choose_rest: !a.keep_rest_frame,
     };
-    let setup = InitSetup { png: a.png };
+    let setup = InitSetup {
+        png: a.png,
+        ..InitSetup::default()
+    };
     let r = init_database_with(&a.dir, &opts, &setup)?;
     for n in &r.notes {
         crate::errln!("{}", super::flags::as_flags(n));

@@ -4,6 +4,7 @@
 //! skeleton of any frame of the character's sequences (Huang et al. 2015,
 //! Sec. 3, skeleton extraction).
 
+pub mod auto;
 pub mod axes;
 pub mod check;
 pub mod contact;

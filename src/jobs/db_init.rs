@@ -5,20 +5,32 @@
 //! manifest (`setup.json`): the rest frame chosen and why, the contacts
 //! found, the parts' rigidity over the sequences, the rig's notes and
 //! self-check.
+//!
+//! Without landmarks (and without a glTF skin) the character is rigged
+//! from its capture ([`crate::embed::auto`]): the automatic landmarks are
+//! written beside the manifest as `auto.landmarks.json` and the manifest
+//! names them, so that `db build` embeds the rig as from any landmarks
+//! (on a rest frame clear of contact, as above) and the user can edit the
+//! file (and pass it back with `landmarks` as an override).
 
 use super::JobError;
 use super::outputs::check_output_folder;
 use crate::db::init::{InitOptions, RestFrame, assemble_setup};
 use crate::db::{MANIFEST, Manifest};
+use crate::embed::auto::{AutoOptions, AutoRig, auto_rig};
 use crate::embed::contact::{Contact, FrameContacts};
 use crate::embed::parts::Part;
 use crate::embed::rigidity::{PartRigidity, RigidityOptions, part_rigidity};
 use crate::embed::{EmbedCheck, Embedding};
+use crate::mesh::io::{LoadOptions, load_sequence};
 use crate::util::fsutil::write_atomic;
 use std::path::{Path, PathBuf};
 
 /// The setup report's file name in the database folder.
 pub const SETUP: &str = "setup.json";
+
+/// The file the automatic landmarks are written to, in the database folder.
+pub const AUTO_LANDMARKS: &str = "auto.landmarks.json";
 
 /// What [`init_database`] wrote.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -33,6 +45,9 @@ pub struct InitReport {
     /// The setup report (with landmarks), also written as `DIR/setup.json`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub setup: Option<Setup>,
+    /// The automatic rig, when the character was rigged from its capture.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub auto_rig: Option<AutoRig>,
 }
 
 /// The rig's setup: what a user checks before trusting the database.
@@ -84,6 +99,9 @@ pub struct InitSetup {
     /// A picture of the rig, front and side (the topology's frame, and
     /// below it the rest frame when another was chosen). Default none.
     pub png: Option<PathBuf>,
+    /// The automatic rig's options, used without landmarks and glTF skin.
+    /// Default [`AutoOptions::default`].
+    pub auto: AutoOptions,
 }
 
 /// Writes the manifest of `opts` into the database folder `dir` (created
@@ -108,8 +126,35 @@ pub fn init_database_with(
         "db init writes the database's character.toml into a folder",
     )?;
     let mut notes = Vec::new();
-    let (manifest, rest) = assemble_setup(dir, opts, &mut notes)?;
-    manifest.save(dir)?;
+    let wants_auto = opts.landmarks.is_none()
+        && opts.gltf_skin.is_none()
+        && !opts.sequences.is_empty()
+        && (opts.force || !dir.join(MANIFEST).exists());
+    let mut o = opts.clone();
+    let mut auto = None;
+    let mut written = None;
+    if wants_auto {
+        let (rig, file) = write_auto_landmarks(dir, &mut o, &setup.auto, &mut notes)?;
+        auto = Some(rig);
+        written = Some(file);
+    }
+    // Nothing written on a refusal: the landmarks this call wrote go.
+    let undo = |e: JobError| {
+        if let Some(f) = &written {
+            let _ = std::fs::remove_file(f);
+        }
+        e
+    };
+    let (manifest, rest) = assemble_setup(dir, &o, &mut notes).map_err(|e| undo(e.into()))?;
+    manifest.save(dir).map_err(|e| undo(e.into()))?;
+    if let (Some(rig), Some(file)) = (&auto, &written) {
+        notes.push(rig.summary());
+        notes.extend(rig.notes.iter().map(|n| format!("automatic rig: {n}")));
+        notes.push(format!(
+            "automatic rig: landmarks written to {}; edit them and pass them with `InitOptions::landmarks` to override",
+            file.display()
+        ));
+    }
     let setup = if manifest.rig.landmarks.is_some() {
         Some(write_setup(dir, &manifest, rest.as_ref(), setup)?)
     } else {
@@ -120,7 +165,59 @@ pub fn init_database_with(
         path: dir.join(MANIFEST),
         notes,
         setup,
+        auto_rig: auto,
     })
+}
+
+/// The automatic rig of `o`'s capture, its landmarks written as
+/// [`AUTO_LANDMARKS`] in `dir` and named in `o`; `o.up` set from the rig
+/// when `auto`.
+fn write_auto_landmarks(
+    dir: &Path,
+    o: &mut InitOptions,
+    auto: &AutoOptions,
+    notes: &mut Vec<String>,
+) -> Result<(AutoRig, PathBuf), JobError> {
+    let file = dir.join(AUTO_LANDMARKS);
+    if file.exists() && !o.force {
+        return Err(JobError::Input {
+            path: file,
+            msg: "automatic landmarks from an earlier `db init` are there: pass them as `InitOptions::landmarks` to keep them, or set `force` to find them again".into(),
+        });
+    }
+    let (rig, vertex_count) = rig_capture(o, auto)?;
+    let axis = crate::embed::axes::nearest_axis(glam::DVec3::from_array(rig.up));
+    let up = if axis == glam::DVec3::Y {
+        "y"
+    } else if axis == glam::DVec3::Z {
+        "z"
+    } else {
+        return Err(JobError::Input {
+            path: o.mesh.clone(),
+            msg: format!(
+                "automatic rigging: the body stands along ({:.0}, {:.0}, {:.0}); the database reads Y-up or Z-up files: turn the mesh and its sequences",
+                axis.x, axis.y, axis.z
+            ),
+        });
+    };
+    if o.up.eq_ignore_ascii_case("auto") {
+        o.up = up.into();
+    } else if !o.up.eq_ignore_ascii_case(up) {
+        notes.push(format!(
+            "`InitOptions::up` {}, but the automatic rig finds the feet on a floor along +{}: is the capture {}-up?",
+            o.up,
+            up.to_ascii_uppercase(),
+            up.to_ascii_uppercase()
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| JobError::Input {
+        path: dir.to_path_buf(),
+        msg: e.to_string(),
+    })?;
+    let json = rig.landmarks_json(vertex_count);
+    crate::util::fsutil::write_bytes_atomic(&file, json.as_bytes())?;
+    o.landmarks = Some(file.clone());
+    Ok((rig, file))
 }
 
 /// The rig embedded as the database will embed it, its report written.
@@ -241,4 +338,25 @@ fn contact(c: &Contact, rig: &Embedding) -> ContactReport {
         gap: c.gap,
         centre: c.centre,
     }
+}
+
+/// The automatic rig of `opts`' mesh from all its sequences' frames, and
+/// the mesh's vertex count.
+fn rig_capture(opts: &InitOptions, auto: &AutoOptions) -> Result<(AutoRig, usize), JobError> {
+    let spec = |p: &Path| p.to_string_lossy().into_owned();
+    let topo = load_sequence(&spec(&opts.mesh), &LoadOptions::default())?;
+    let mesh = topo.mesh();
+    let load = LoadOptions {
+        topology: Some(opts.mesh.clone()),
+        fps: None,
+    };
+    let mut seqs = Vec::new();
+    for (_, path) in &opts.sequences {
+        seqs.push(load_sequence(&spec(path), &load)?);
+    }
+    let frames: Vec<&[[f64; 3]]> = seqs
+        .iter()
+        .flat_map(|s| (0..s.frame_count()).map(|f| s.frame(f)))
+        .collect();
+    Ok((auto_rig(mesh, &frames, auto)?, mesh.vertex_count()))
 }

@@ -48,7 +48,7 @@ pub mod transfer;
 pub use crate::batch::Converter;
 pub use batch::{BatchEvent, BatchOptions, BatchReport, batch_folder};
 pub use database::{build_database, load_database};
-pub use db_init::{InitReport, init_database};
+pub use db_init::{InitReport, init_database, init_database_with};
 pub use retarget::{RetargetJob, RetargetJobOptions, RetargetRun, RetargetSummary, StreamedRun};
 pub use skeletons::{SkeletonFile, SkeletonsReport, export_skeletons};
 pub use synth_db::{
@@ -92,6 +92,9 @@ pub enum JobError {
     /// The rig could not be embedded.
     #[error(transparent)]
     Embed(#[from] crate::embed::EmbedError),
+    /// The capture could not be rigged automatically.
+    #[error(transparent)]
+    AutoRig(#[from] crate::embed::auto::AutoError),
     /// A scan could not be prepared.
     #[error(transparent)]
     Scan(#[from] crate::transfer::ScanError),

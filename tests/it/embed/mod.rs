@@ -1,5 +1,6 @@
 //! Rig embedding on a mesh: landmarks, parts, joints, regressors.
 
+mod auto;
 mod bodies;
 mod captures;
 mod contact;

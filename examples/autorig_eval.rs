@@ -1,0 +1,226 @@
+//! Evaluation of the automatic rig (issue 41): `cargo run --release
+//! --example autorig_eval -- [DATA] [real|synth|all]` (DATA defaults to
+//! `../shared/data`).
+//!
+//! - real captures (samba, crane): the embedding from the automatic
+//!   landmarks against the embedding from the hand-made fixtures'
+//!   landmarks (`tests/fixtures/*.landmarks.json`): mean joint distance over
+//!   the 19 joints in % of the height, part labels agreeing, time;
+//! - synthetic databases (the procedural humanoid in two shapes, driven by
+//!   two motion sets with `synth::database::drive`): the automatic rig's
+//!   joints read off every frame (its regressors) against the skeleton that
+//!   drove the frame, mean over joints and frames in % of the height, and
+//!   its part labels against the generating rig's.
+
+use glam::DVec3;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::auto::{AutoOptions, auto_rig};
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::mesh::Mesh;
+use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::rig::Canonical;
+
+fn height(rig: &Embedding) -> f64 {
+    rig.height
+}
+
+fn joint_error(a: &[[f64; 3]; 19], b: &[[f64; 3]; 19]) -> (f64, usize, f64) {
+    let mut worst = (0, 0.0);
+    let mut s = 0.0;
+    for j in 0..19 {
+        let d = DVec3::from_array(a[j]).distance(DVec3::from_array(b[j]));
+        s += d;
+        if d > worst.1 {
+            worst = (j, d);
+        }
+    }
+    (s / 19.0, worst.0, worst.1)
+}
+
+fn agree(a: &[u8], b: &[u8]) -> f64 {
+    a.iter().zip(b).filter(|(x, y)| x == y).count() as f64 / a.len() as f64
+}
+
+fn real(data: &Path) {
+    println!(
+        "| capture | joints vs landmark rig (% height) | worst joint | parts agree | confidence | time (s) |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for name in ["samba", "crane"] {
+        let pc2 = data.join(format!("4d/{name}/{name}.pc2"));
+        let seq = match load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()) {
+            Ok(s) => s,
+            Err(e) => {
+                println!("| {name} | not run: {e} |");
+                continue;
+            }
+        };
+        let mesh = seq.mesh().clone();
+        let frames: Vec<&[[f64; 3]]> = (0..seq.frame_count()).map(|f| seq.frame(f)).collect();
+        let t = Instant::now();
+        let auto = match auto_rig(&mesh, &frames, &AutoOptions::default()) {
+            Ok(a) => a,
+            Err(e) => {
+                println!("| {name} | refused: {e} |");
+                continue;
+            }
+        };
+        let secs = t.elapsed().as_secs_f64();
+        let fixture = PathBuf::from(format!("tests/fixtures/{name}.landmarks.json"));
+        let lm = Landmarks::load(&fixture, mesh.vertex_count()).expect("fixture landmarks");
+        let truth = Embedding::new(&mesh, &lm, None).expect("landmark rig");
+        let mine = Embedding::new(&mesh, &auto.landmarks, None);
+        match mine {
+            Ok(mine) => {
+                let (e, wj, wd) = joint_error(&mine.joints, &truth.joints);
+                let h = height(&truth);
+                println!(
+                    "| {name} | {:.2} | {} {:.1} | {:.1}% | {:.2} | {secs:.1} |",
+                    100.0 * e / h,
+                    Canonical::ALL[wj].name(),
+                    100.0 * wd / h,
+                    100.0 * agree(&mine.labels, &truth.labels),
+                    auto.confidence
+                );
+                for j in Canonical::ALL {
+                    let d = DVec3::from_array(mine.joints[j.index()])
+                        .distance(DVec3::from_array(truth.joints[j.index()]));
+                    eprint!("{} {:.1}  ", j.name(), 100.0 * d / h);
+                }
+                eprintln!();
+            }
+            Err(e) => println!("| {name} | embedding refused: {e} |"),
+        }
+        for n in &auto.notes {
+            eprintln!("  {name}: {n}");
+        }
+        eprintln!("  {name}: {}", auto.summary());
+    }
+}
+
+fn synth(data: &Path) {
+    use surfmotion::drive::query::load_mocap;
+    use surfmotion::jobs::synth_db::SynthClip;
+    use surfmotion::synth::database::{Dynamics, drive};
+    use surfmotion::synth::humanoid::{HumanoidShape, humanoid_landmarks_with, humanoid_mesh_with};
+    println!(
+        "| body | motion | frames | joints vs truth (% height, mean over joints and frames) | parts agree | confidence | time (s) |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    let bodies = [
+        ("humanoid A-pose 1.75 m", HumanoidShape::default()),
+        (
+            "humanoid T-pose 1.60 m, wide hips",
+            HumanoidShape {
+                arm_angle: 10.0,
+                hip_width: 1.2,
+                shoulder_width: 0.9,
+                height: 1.6,
+                ..Default::default()
+            },
+        ),
+    ];
+    let fps = 30.0;
+    let mut motions: Vec<(String, surfmotion::pose::retarget::ClipPoses)> = Vec::new();
+    let walk = surfmotion::synth::clips::gait_clip(surfmotion::synth::clips::Gait::Turn, 4.0, fps);
+    if let Ok(SynthClip::Poses { poses, .. }) = SynthClip::from_clip("turn", &walk) {
+        motions.push(("gait turn (4 s)".into(), *poses));
+    }
+    for clip in ["02_05", "05_06"] {
+        let p = [
+            data.join(format!("mocap/cmu-amc/02/{clip}.amc")),
+            data.join(format!("mocap/cmu-bvh-altered/{clip}.bvh")),
+        ];
+        let Some(path) = p.iter().find(|p| p.exists()) else {
+            continue;
+        };
+        match load_mocap(path, &Default::default(), fps) {
+            Ok(c) => {
+                let mut poses = c.poses;
+                let mut reference = c.reference;
+                poses.truncate(150);
+                reference.rotations = reference.rotations.iter().take(150).copied().collect();
+                motions.push((
+                    format!("CMU {clip} (5 s)"),
+                    surfmotion::pose::retarget::ClipPoses { poses, reference },
+                ));
+            }
+            Err(e) => eprintln!("{clip}: {e}"),
+        }
+    }
+    for (bname, shape) in &bodies {
+        let rest: Mesh = humanoid_mesh_with(0.02, shape);
+        let lm = humanoid_landmarks_with(&rest, shape);
+        let rig = Embedding::new(&rest, &lm, None).expect("synthetic rig");
+        let h = rig.height;
+        for (mname, cp) in &motions {
+            let out = drive(
+                &rest,
+                &rig,
+                &cp.poses,
+                &cp.reference,
+                fps,
+                Dynamics::default(),
+            );
+            let n = rest.vertex_count();
+            let frames: Vec<&[[f64; 3]]> = out.positions.chunks(n).collect();
+            let t = Instant::now();
+            let auto = match auto_rig(&rest, &frames, &AutoOptions::default()) {
+                Ok(a) => a,
+                Err(e) => {
+                    println!("| {bname} | {mname} | {} | refused: {e} |", frames.len());
+                    continue;
+                }
+            };
+            let secs = t.elapsed().as_secs_f64();
+            let mine = match Embedding::new(&rest, &auto.landmarks, None) {
+                Ok(m) => m,
+                Err(e) => {
+                    println!(
+                        "| {bname} | {mname} | {} | embedding refused: {e} |",
+                        frames.len()
+                    );
+                    continue;
+                }
+            };
+            let mut s = 0.0;
+            let mut k = 0usize;
+            for (f, pose) in frames.iter().zip(&out.poses) {
+                let j = mine.frame_joints(f);
+                for c in 0..19 {
+                    s += j[c].distance(pose[c]);
+                    k += 1;
+                }
+            }
+            println!(
+                "| {bname} | {mname} | {} | {:.2} | {:.1}% | {:.2} | {secs:.1} |",
+                frames.len(),
+                100.0 * s / k as f64 / h,
+                100.0 * agree(&mine.labels, &rig.labels),
+                auto.confidence
+            );
+            let (e, wj, wd) = joint_error(&mine.joints, &rig.joints);
+            eprintln!(
+                "  rest joints {:.2}%, worst {} {:.1}%; {}",
+                100.0 * e / h,
+                Canonical::ALL[wj].name(),
+                100.0 * wd / h,
+                auto.summary()
+            );
+        }
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let data = PathBuf::from(args.get(1).map_or("../shared/data", String::as_str));
+    let what = args.get(2).map_or("all", String::as_str);
+    if what == "real" || what == "all" {
+        real(&data);
+    }
+    if what == "synth" || what == "all" {
+        synth(&data);
+    }
+}

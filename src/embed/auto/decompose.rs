@@ -1,0 +1,433 @@
+//! Rigid skinning decomposition of a mesh sequence: which vertices move
+//! together. In the spirit of SSDR (Le & Deng 2012, "Smooth Skinning
+//! Decomposition with Rigid Bones") and Dem Bones (Le & Deng 2014,
+//! "Robust and Accurate Skeletal Rigging from Mesh Sequences"), with one
+//! bone per vertex (hard assignment):
+//!
+//! 1. every vertex's local rotation per frame (the best rigid fit of its
+//!    two-ring from the rest frame to the frame, Kabsch through the polar
+//!    decomposition, [`crate::mesh::frames::polar`]) is its motion
+//!    signature; k-means on the signatures, every cluster then cut into
+//!    its connected pieces, gives the initial parts (Le & Deng 2014,
+//!    Sec. 4.1 initialise by clustering the vertices' motion);
+//! 2. then alternate, as SSDR does: one rigid transform per part and frame
+//!    (Kabsch of its vertices), and each vertex re-assigned to the part,
+//!    among its own and its mesh neighbours' (spatial contiguity), whose
+//!    transforms reproduce its positions best;
+//! 3. adjacent parts whose union still moves rigidly (RMS residual below a
+//!    fraction of the height) are merged, most rigid pair first.
+
+use crate::mesh::frames::polar;
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+
+/// One rigid part's motion: a rotation and translation per frame, taking
+/// the rest frame's positions onto the frame's.
+#[derive(Debug, Clone)]
+pub struct Motion {
+    /// Per frame rotation.
+    pub r: Vec<DMat3>,
+    /// Per frame translation.
+    pub t: Vec<DVec3>,
+}
+
+impl Motion {
+    /// Where rest point `p` is at frame `f`.
+    pub fn apply(&self, f: usize, p: DVec3) -> DVec3 {
+        self.r[f] * p + self.t[f]
+    }
+}
+
+/// The parts found: a label per vertex (0..count) and each part's motion.
+#[derive(Debug, Clone)]
+pub struct Decomposition {
+    /// Part of each vertex.
+    pub labels: Vec<u32>,
+    /// Number of parts.
+    pub count: usize,
+    /// Each part's rigid motion over the frames.
+    pub motions: Vec<Motion>,
+    /// Each part's RMS residual (length units) over its vertices and frames.
+    pub residual: Vec<f64>,
+}
+
+/// Settings of [`decompose`].
+#[derive(Debug, Clone, Copy)]
+pub struct DecomposeOptions {
+    /// Clusters of the initial k-means. Default 40.
+    pub clusters: usize,
+    /// Alternating fit/assignment rounds. Default 8.
+    pub rounds: usize,
+    /// Merge adjacent parts while their union's RMS residual stays below
+    /// this fraction of the height. Default 0.012.
+    pub merge_below: f64,
+}
+
+impl Default for DecomposeOptions {
+    fn default() -> Self {
+        DecomposeOptions {
+            clusters: 40,
+            rounds: 8,
+            merge_below: 0.012,
+        }
+    }
+}
+
+fn v3(p: [f64; 3]) -> DVec3 {
+    DVec3::from_array(p)
+}
+
+/// Best rigid motion (Kabsch) taking rest points `idx` onto frame points.
+fn kabsch(rest: &[[f64; 3]], frame: &[[f64; 3]], idx: &[u32]) -> (DMat3, DVec3) {
+    if idx.is_empty() {
+        return (DMat3::IDENTITY, DVec3::ZERO);
+    }
+    let k = idx.len() as f64;
+    let c0 = idx.iter().map(|&v| v3(rest[v as usize])).sum::<DVec3>() / k;
+    let c1 = idx.iter().map(|&v| v3(frame[v as usize])).sum::<DVec3>() / k;
+    let mut h = DMat3::ZERO;
+    for &v in idx {
+        let (a, b) = (v3(rest[v as usize]) - c0, v3(frame[v as usize]) - c1);
+        h += DMat3::from_cols(b * a.x, b * a.y, b * a.z);
+    }
+    if idx.len() < 3 || !h.is_finite() || h.abs_diff_eq(DMat3::ZERO, 1e-300) {
+        return (DMat3::IDENTITY, c1 - c0);
+    }
+    let r = DMat3::from_quat(polar(h).0);
+    (r, c1 - r * c0)
+}
+
+/// Fits each part's motion over the frames.
+fn fit(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], members: &[Vec<u32>]) -> Vec<Motion> {
+    members
+        .par_iter()
+        .map(|idx| {
+            let (mut r, mut t) = (Vec::new(), Vec::new());
+            for f in frames {
+                let (a, b) = kabsch(rest, f, idx);
+                r.push(a);
+                t.push(b);
+            }
+            Motion { r, t }
+        })
+        .collect()
+}
+
+/// Squared error of vertex `v` under motion `m`, summed over frames.
+fn err(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], m: &Motion, v: usize) -> f64 {
+    let p = v3(rest[v]);
+    frames
+        .iter()
+        .enumerate()
+        .map(|(f, x)| (m.apply(f, p) - v3(x[v])).length_squared())
+        .sum()
+}
+
+fn members_of(labels: &[u32], count: usize) -> Vec<Vec<u32>> {
+    let mut m = vec![Vec::new(); count];
+    for (v, &l) in labels.iter().enumerate() {
+        m[l as usize].push(v as u32);
+    }
+    m
+}
+
+/// Relabels so that every label is one connected region: each connected
+/// piece of a label becomes its own label, and pieces below `min_size`
+/// vertices join the neighbouring label they touch most. Labels are then
+/// renumbered 0..count.
+pub fn split_connected(labels: &mut [u32], nb: &[Vec<u32>], min_size: usize) -> usize {
+    let n = labels.len();
+    let mut comp = vec![u32::MAX; n];
+    let mut sizes: Vec<usize> = Vec::new();
+    let mut stack = Vec::new();
+    for s in 0..n {
+        if comp[s] != u32::MAX {
+            continue;
+        }
+        let c = sizes.len() as u32;
+        comp[s] = c;
+        stack.push(s as u32);
+        let mut size = 0;
+        while let Some(v) = stack.pop() {
+            size += 1;
+            for &u in &nb[v as usize] {
+                if comp[u as usize] == u32::MAX && labels[u as usize] == labels[v as usize] {
+                    comp[u as usize] = c;
+                    stack.push(u);
+                }
+            }
+        }
+        sizes.push(size);
+    }
+    // Small pieces take the piece they border most, repeatedly (a piece
+    // may border only other small pieces at first).
+    for _ in 0..8 {
+        let mut changed = false;
+        for c in 0..sizes.len() {
+            if sizes[c] == 0 || sizes[c] >= min_size {
+                continue;
+            }
+            let mut count: std::collections::HashMap<u32, usize> = Default::default();
+            for v in 0..n {
+                if comp[v] as usize != c {
+                    continue;
+                }
+                for &u in &nb[v] {
+                    let cu = comp[u as usize];
+                    if cu as usize != c {
+                        *count.entry(cu).or_default() += 1;
+                    }
+                }
+            }
+            let Some((&to, _)) = count
+                .iter()
+                .max_by_key(|(k, c)| (**c, std::cmp::Reverse(**k)))
+            else {
+                continue;
+            };
+            for x in comp.iter_mut() {
+                if *x as usize == c {
+                    *x = to;
+                }
+            }
+            sizes[to as usize] += sizes[c];
+            sizes[c] = 0;
+            changed = true;
+        }
+        if !changed {
+            break;
+        }
+    }
+    let mut renum = vec![u32::MAX; sizes.len()];
+    let mut next = 0u32;
+    for v in 0..n {
+        let c = comp[v] as usize;
+        if renum[c] == u32::MAX {
+            renum[c] = next;
+            next += 1;
+        }
+        labels[v] = renum[c];
+    }
+    next as usize
+}
+
+/// Motion signature of every vertex: its two-ring's rotation per frame
+/// (nine numbers a frame).
+fn signatures(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], nb: &[Vec<u32>]) -> Vec<Vec<f64>> {
+    (0..rest.len())
+        .into_par_iter()
+        .map(|v| {
+            let mut ring: Vec<u32> = nb[v].clone();
+            for &u in &nb[v] {
+                ring.extend_from_slice(&nb[u as usize]);
+            }
+            ring.push(v as u32);
+            ring.sort_unstable();
+            ring.dedup();
+            let step = frames.len().div_ceil(SIGNATURE_FRAMES).max(1);
+            let mut s = Vec::with_capacity(9 * SIGNATURE_FRAMES);
+            for f in frames.iter().step_by(step) {
+                let (r, _) = kabsch(rest, f, &ring);
+                s.extend_from_slice(&r.to_cols_array());
+            }
+            s
+        })
+        .collect()
+}
+
+/// Frames of the motion signatures (evenly spread).
+const SIGNATURE_FRAMES: usize = 12;
+
+fn dist2(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
+}
+
+/// k-means (k-means++ seeding with a fixed pseudo-random sequence:
+/// deterministic) of the signatures.
+fn kmeans(sig: &[Vec<f64>], k: usize, iters: usize) -> Vec<u32> {
+    let n = sig.len();
+    let k = k.min(n).max(1);
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut rnd = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut centres: Vec<Vec<f64>> = vec![sig[n / 2].clone()];
+    let mut d: Vec<f64> = sig.par_iter().map(|s| dist2(s, &centres[0])).collect();
+    while centres.len() < k {
+        let total: f64 = d.iter().sum();
+        if total <= 0.0 {
+            break;
+        }
+        let mut x = rnd() * total;
+        let mut pick = n - 1;
+        for (i, di) in d.iter().enumerate() {
+            x -= di;
+            if x <= 0.0 {
+                pick = i;
+                break;
+            }
+        }
+        let c = sig[pick].clone();
+        d.par_iter_mut()
+            .zip(sig.par_iter())
+            .for_each(|(di, s)| *di = di.min(dist2(s, &c)));
+        centres.push(c);
+    }
+    let mut labels = vec![0u32; n];
+    for _ in 0..iters {
+        let new: Vec<u32> = sig
+            .par_iter()
+            .map(|s| {
+                (0..centres.len())
+                    .min_by(|&a, &b| dist2(s, &centres[a]).total_cmp(&dist2(s, &centres[b])))
+                    .unwrap_or(0) as u32
+            })
+            .collect();
+        let changed = new != labels;
+        labels = new;
+        let dim = sig[0].len();
+        let mut sums = vec![vec![0.0; dim]; centres.len()];
+        let mut counts = vec![0usize; centres.len()];
+        for (s, &l) in sig.iter().zip(&labels) {
+            counts[l as usize] += 1;
+            for (a, b) in sums[l as usize].iter_mut().zip(s) {
+                *a += b;
+            }
+        }
+        for (c, (s, &m)) in centres.iter_mut().zip(sums.iter().zip(&counts)) {
+            if m > 0 {
+                *c = s.iter().map(|x| x / m as f64).collect();
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    labels
+}
+
+/// RMS residual of the vertices `idx` under their own best rigid motion.
+fn union_rms(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], idx: &[u32]) -> (f64, Motion) {
+    let m = fit(rest, frames, &[idx.to_vec()]).pop().unwrap_or(Motion {
+        r: Vec::new(),
+        t: Vec::new(),
+    });
+    let e: f64 = idx
+        .par_iter()
+        .map(|&v| err(rest, frames, &m, v as usize))
+        .sum();
+    let rms = (e / (idx.len().max(1) * frames.len().max(1)) as f64).sqrt();
+    (rms, m)
+}
+
+/// Decomposes the motion of `frames` (each the rest frame's vertices, in
+/// order) relative to `rest` into rigid parts; `nb` are the mesh's vertex
+/// neighbours and `height` the body's size (for the merge threshold).
+pub fn decompose(
+    rest: &[[f64; 3]],
+    frames: &[&[[f64; 3]]],
+    nb: &[Vec<u32>],
+    height: f64,
+    opts: &DecomposeOptions,
+) -> Decomposition {
+    let n = rest.len();
+    let min_size = (n / 400).max(8);
+    let sig = signatures(rest, frames, nb);
+    let mut labels = kmeans(&sig, opts.clusters, 20);
+    drop(sig);
+    let mut count = split_connected(&mut labels, nb, min_size);
+    let mut motions = fit(rest, frames, &members_of(&labels, count));
+    for _ in 0..opts.rounds {
+        let new: Vec<u32> = (0..n)
+            .into_par_iter()
+            .map(|v| {
+                let mut best = (
+                    err(rest, frames, &motions[labels[v] as usize], v),
+                    labels[v],
+                );
+                for &u in &nb[v] {
+                    let l = labels[u as usize];
+                    if l != best.1 {
+                        let e = err(rest, frames, &motions[l as usize], v);
+                        if e < best.0 {
+                            best = (e, l);
+                        }
+                    }
+                }
+                best.1
+            })
+            .collect();
+        let changed = new.iter().zip(&labels).filter(|(a, b)| a != b).count();
+        labels = new;
+        count = split_connected(&mut labels, nb, min_size);
+        motions = fit(rest, frames, &members_of(&labels, count));
+        if changed < n / 1000 {
+            break;
+        }
+    }
+    // Greedy merging of adjacent parts whose union stays rigid (two
+    // adjacent connected parts make a connected one: no re-splitting).
+    let limit = opts.merge_below * height;
+    let mut members = members_of(&labels, count);
+    let mut pairs = std::collections::BTreeSet::new();
+    for v in 0..n {
+        for &u in &nb[v] {
+            let (a, b) = (labels[v], labels[u as usize]);
+            if a < b {
+                pairs.insert((a, b));
+            }
+        }
+    }
+    let cost = |members: &[Vec<u32>], a: u32, b: u32| {
+        let mut idx = members[a as usize].clone();
+        idx.extend_from_slice(&members[b as usize]);
+        union_rms(rest, frames, &idx).0
+    };
+    let mut costs: Vec<(f64, u32, u32)> = pairs
+        .into_par_iter()
+        .map(|(a, b)| (cost(&members, a, b), a, b))
+        .collect();
+    while let Some(&(rms, a, b)) = costs.iter().min_by(|x, y| x.0.total_cmp(&y.0)) {
+        if rms >= limit {
+            break;
+        }
+        let moved = std::mem::take(&mut members[b as usize]);
+        for &v in &moved {
+            labels[v as usize] = a;
+        }
+        members[a as usize].extend(moved);
+        // Pairs of b become pairs of a; pairs of a are re-costed.
+        let mut touched = std::collections::BTreeSet::new();
+        costs.retain(|&(_, x, y)| {
+            if x == a || y == a || x == b || y == b {
+                let o = if x == a || x == b { y } else { x };
+                if o != a && o != b {
+                    touched.insert(o);
+                }
+                false
+            } else {
+                true
+            }
+        });
+        let fresh: Vec<(f64, u32, u32)> = touched
+            .into_par_iter()
+            .map(|o| (cost(&members, a.min(o), a.max(o)), a.min(o), a.max(o)))
+            .collect();
+        costs.extend(fresh);
+    }
+    let count = split_connected(&mut labels, nb, 1);
+    let members = members_of(&labels, count);
+    let (residual, motions): (Vec<f64>, Vec<Motion>) = members
+        .iter()
+        .map(|idx| union_rms(rest, frames, idx))
+        .unzip();
+    Decomposition {
+        labels,
+        count,
+        motions,
+        residual,
+    }
+}
