@@ -54,7 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         auto.extremities.len()
     );
     let (mut sum, mut n) = (0.0, 0);
-    for (&l, _) in &lm.marks {
+    for &l in lm.marks.keys() {
         let Some(m) = auto.marks.get(l.name()) else {
             continue;
         };

@@ -173,7 +173,7 @@ pub fn compare(
     let h = auto.height.max(1e-12);
     let at = |name: &str| auto.marks.get(name).map(|m| DVec3::from_array(m.point));
     let mut out = Vec::new();
-    for (&l, _) in &given.marks {
+    for &l in given.marks.keys() {
         let (Some(p), Some(a)) = (given.point(l, positions), at(l.name())) else {
             continue;
         };
@@ -578,7 +578,7 @@ pub fn estimate(
     }
     let g = Graph::new(&p, triangles);
     let total: f64 = g.area.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return Err(ScanLandmarkError::Mesh("the surface has no area".into()));
     }
     let centre = p.iter().zip(&g.area).map(|(q, a)| *q * *a).sum::<DVec3>() / total;
@@ -601,7 +601,7 @@ pub fn estimate(
         hi - lo
     };
     let size = axes.iter().map(|a| extent(*a)).fold(0.0, f64::max);
-    if !(size > 0.0) {
+    if size.is_nan() || size <= 0.0 {
         return Err(ScanLandmarkError::Mesh("the mesh has no extent".into()));
     }
 

@@ -74,7 +74,7 @@ fn smpl_landmarks_are_within_three_percent_of_the_fixture_and_follow_the_scan() 
     let a = auto(&m);
     let fixture = Landmarks::load(&fixture(), m.vertex_count()).unwrap();
     let (mut sum, mut n) = (0.0, 0.0);
-    for (l, _) in &fixture.marks {
+    for l in fixture.marks.keys() {
         let q = DVec3::from_array(fixture.point(*l, m.positions()).unwrap());
         let p = DVec3::from_array(a.marks[l.name()].point);
         let pct = 100.0 * p.distance(q) / a.height;
