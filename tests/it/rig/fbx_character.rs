@@ -36,7 +36,7 @@ fn kenney_fbx_character_embeds_with_a_human_skeleton() {
     let width = b.max[0] - b.min[0];
     let depth = b.max[2] - b.min[2];
     assert!(
-        depth < 0.2 * tall && width > 0.8 * tall,
+        depth < 0.35 * tall && width > 0.8 * tall,
         "T-pose bounds {b:?}"
     );
     let e = from_skin(&a.mesh, &a, None, &f).unwrap();
