@@ -4,8 +4,8 @@
 //! database's `gltf_skin` take it the same way (`embed::skin::from_skin`).
 //!
 //! - **Mesh**: every mesh node, merged in scene order, in its bind pose in
-//!   world space (a skinned mesh through its clusters' geometry-to-world
-//!   matrix at bind time, a rigid one through its node), polygons
+//!   world space (a skinned mesh through a cluster's bind matrix times its
+//!   mesh-to-bone matrix, a rigid one through its node), polygons
 //!   triangulated by ufbx.
 //! - **Joints**: every bone (`LimbNode`) and every node a skin cluster
 //!   binds, parents the nearest such ancestor, names without their
@@ -58,8 +58,14 @@ pub fn parse_fbx_character(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshE
                 mesh.skin_deformers.len()
             ));
         }
+        // A cluster's bind (`TransformLink`) times its mesh-to-bone
+        // (`Transform`): the mesh at bind time. Not ufbx's cluster
+        // `geometry_to_world`, which carries the bone's pose in the scene
+        // as loaded: Kenney's character (Maya) has its first cluster on a
+        // foot IK control posed away from the bind, and the mesh came out
+        // turned on its back beside its skeleton.
         let to_world = match skin.and_then(|s| s.clusters.first()) {
-            Some(c) => matrix(&c.geometry_to_world),
+            Some(c) => matrix(&c.bind_to_world) * matrix(&c.geometry_to_bone),
             None => matrix(&node.geometry_to_world),
         };
         let to_world = conv * to_world;

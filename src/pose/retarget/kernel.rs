@@ -5,6 +5,7 @@
 use super::feet::{Toes, flat_feet, place_feet};
 use super::ground::{clip_support, foot_height, ground_tilt};
 use super::reference::{Reference, ReferenceSource, leg_length};
+use super::root::root_from_legs;
 use super::torso::{clip_rotations, neck_carriage, upright};
 use crate::pose::{Pose, pose_rotations};
 use crate::rig::Canonical;
@@ -123,6 +124,9 @@ pub(super) fn retarget_on_grounds(
     if mocap.is_empty() {
         return (Vec::new(), [Vec::new(), Vec::new()]);
     }
+    // A clip whose root carries no vertical motion stood on its legs.
+    let from_legs = root_from_legs(mocap);
+    let mocap = from_legs.as_deref().unwrap_or(mocap);
     // The clip's ground made level (a capture volume's floor is often a
     // degree or two off its vertical axis; CMU subject 02's rises 8 cm
     // over a 4 m walk), so that one floor height holds for every frame.

@@ -68,6 +68,7 @@ mod ground;
 mod kernel;
 mod measures;
 mod reference;
+mod root;
 mod torso;
 
 pub use feet::Toes;

@@ -1,4 +1,5 @@
 //! Canonical mapping: any humanoid clip's joints onto the canonical skeleton.
 
 mod families;
+mod fbx_character;
 mod mapping;
