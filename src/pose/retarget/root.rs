@@ -40,7 +40,7 @@ pub(super) fn root_from_legs(mocap: &[Pose]) -> Option<Vec<Pose>> {
     }
     let root = C::Pelvis.index();
     let leg = leg_length(&mocap[mocap.len() / 2]);
-    if !(leg > 0.0) {
+    if leg.is_nan() || leg <= 0.0 {
         return None;
     }
     let span = |v: &mut dyn Iterator<Item = f64>| {
