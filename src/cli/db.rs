@@ -163,9 +163,14 @@ pub struct InitArgs {
     pub keep_rest_frame: bool,
     /// Write a picture of the rig (parts coloured, skeleton drawn), front
     /// and side, on the topology's frame and on the rest frame chosen.
-    /// Needs --landmarks.
-    #[arg(long, value_name = "FILE.png", requires = "landmarks")]
+    /// Needs a rig: --landmarks, or sequences to rig the character from.
+    #[arg(long, value_name = "FILE.png")]
     pub png: Option<PathBuf>,
+    /// Without --landmarks and --gltf-skin, write the manifest without a
+    /// rig instead of rigging the character from its capture (the graph,
+    /// key-frame search and web export need none; retarget needs a rig).
+    #[arg(long = "no-rig", conflicts_with_all = ["landmarks", "gltf_skin"])]
+    pub no_rig: bool,
     /// Print the manifest written as JSON, with the setup report under
     /// "setup" (also written as DIR/setup.json with --landmarks).
     #[arg(long)]
@@ -251,6 +256,7 @@ fn init(a: InitArgs) -> anyhow::Result<()> {
     };
     let setup = InitSetup {
         png: a.png,
+        no_rig: a.no_rig,
         ..InitSetup::default()
     };
     let r = init_database_with(&a.dir, &opts, &setup)?;

@@ -102,6 +102,10 @@ pub struct InitSetup {
     /// The automatic rig's options, used without landmarks and glTF skin.
     /// Default [`AutoOptions::default`].
     pub auto: AutoOptions,
+    /// Without landmarks and glTF skin, write the manifest without a rig
+    /// instead of rigging the character from its capture (the graph,
+    /// key-frame search and web export need none). Default false.
+    pub no_rig: bool,
 }
 
 /// Writes the manifest of `opts` into the database folder `dir` (created
@@ -126,14 +130,17 @@ pub fn init_database_with(
         "db init writes the database's character.toml into a folder",
     )?;
     let mut notes = Vec::new();
-    let wants_auto = opts.landmarks.is_none()
+    let wants_auto = !setup.no_rig
+        && opts.landmarks.is_none()
         && opts.gltf_skin.is_none()
-        && !opts.sequences.is_empty()
-        && (opts.force || !dir.join(MANIFEST).exists());
+        && !opts.sequences.is_empty();
     let mut o = opts.clone();
     let mut auto = None;
     let mut written = None;
     if wants_auto {
+        // Every file read and checked first, refused with the words of a
+        // database without a rig; then the rig is found from the capture.
+        assemble_setup(dir, opts, &mut Vec::new())?;
         let (rig, file) = write_auto_landmarks(dir, &mut o, &setup.auto, &mut notes)?;
         auto = Some(rig);
         written = Some(file);
@@ -158,6 +165,12 @@ pub fn init_database_with(
     let setup = if manifest.rig.landmarks.is_some() {
         Some(write_setup(dir, &manifest, rest.as_ref(), setup)?)
     } else {
+        if setup.png.is_some() {
+            notes.push(
+                "no picture written: the character has no landmarks to draw its rig from (`rig embed --png` draws a glTF skin's)"
+                    .into(),
+            );
+        }
         None
     };
     Ok(InitReport {

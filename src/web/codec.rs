@@ -798,6 +798,17 @@ pub fn decode(b: &[u8]) -> Result<Decoded, CodecError> {
     let n = p.vertices;
     let mut total = 0u128;
     for (s, &(frames, len)) in p.table.iter().enumerate() {
+        // A block cannot be longer than the file: checked before the
+        // budget, so that a corrupt length is named as such.
+        if len as u128 > b.len() as u128 {
+            return Err(CodecError::Corrupt {
+                offset: HEADER_BYTES + 8 * s,
+                msg: format!(
+                    "sequence {s}: a block of {len} bytes in a file of {} bytes",
+                    b.len()
+                ),
+            });
+        }
         if (frames as u128) * (n as u128) * 3 > (len as u128) * 1100 {
             return Err(CodecError::Corrupt {
                 offset: HEADER_BYTES + 8 * s,

@@ -1828,6 +1828,7 @@ fn db_init_reads_every_file_before_writing() {
             "--sequence",
             &seq(&walk_pc2),
             "--force",
+            "--no-rig",
         ];
         assert_eq!(common::run_cli(&ok, Some(d), &[]).code, Some(0));
         let before = std::fs::read(old.join("character.toml")).unwrap();
