@@ -14,7 +14,7 @@
 //! malformed and skipped; when the session is busy the newest frame wins
 //! (the ones it replaced are counted as dropped).
 
-use super::mailbox::Mailbox;
+use super::mailbox::{Fed, Mailbox};
 use super::report::Counters;
 use super::source::{Event, Incoming, Source, SourceError};
 use crate::mocap::Clip;
@@ -24,14 +24,10 @@ use crate::rig::{LoadOptions, RigMap, detect_clip, load_clip};
 use std::io::{BufRead, BufReader};
 use std::net::{SocketAddr, TcpListener};
 use std::path::Path;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// A BVH-over-TCP stream.
-pub struct BvhTcp {
-    mailbox: Arc<Mailbox>,
-    addr: SocketAddr,
-}
+pub struct BvhTcp(Fed);
 
 impl BvhTcp {
     /// Listens on `addr` for senders; frames are taken at `fps` (the
@@ -49,37 +45,26 @@ impl BvhTcp {
             source,
         })?;
         let addr = listener.local_addr().unwrap_or(addr);
-        let mailbox = Arc::new(if lossless {
-            Mailbox::lossless()
-        } else {
-            Mailbox::default()
-        });
-        let mb = mailbox.clone();
-        std::thread::spawn(move || serve(listener, fps, load, &mb));
-        Ok(BvhTcp { mailbox, addr })
+        Ok(BvhTcp(Fed::spawn(addr, lossless, move |mb| {
+            serve(listener, fps, load, mb)
+        })))
     }
 
     /// The address listened on.
     pub fn local_addr(&self) -> SocketAddr {
-        self.addr
-    }
-}
-
-impl Drop for BvhTcp {
-    fn drop(&mut self) {
-        self.mailbox.close();
+        self.0.local_addr()
     }
 }
 
 impl Source for BvhTcp {
     fn next(&mut self, wait: Duration) -> Result<Event, SourceError> {
-        self.mailbox.next(wait)
+        self.0.next(wait)
     }
     fn reference(&self) -> Option<Reference> {
-        self.mailbox.reference()
+        self.0.reference()
     }
     fn counters(&self) -> Counters {
-        self.mailbox.counters()
+        self.0.counters()
     }
 }
 

@@ -3,9 +3,10 @@
 //! is counted as dropped), so a flood of packets holds one frame of memory.
 
 use super::report::Counters;
-use super::source::{Event, Incoming, SourceError};
+use super::source::{Event, Incoming, Source, SourceError};
 use crate::pose::retarget::Reference;
-use std::sync::{Condvar, Mutex, MutexGuard};
+use std::net::SocketAddr;
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
 #[derive(Default)]
@@ -118,5 +119,57 @@ impl Mailbox {
     /// True once closed.
     pub fn closed(&self) -> bool {
         self.lock().closed
+    }
+}
+
+/// A [`Source`] fed by a receiving thread through a [`Mailbox`]: the
+/// network sources (BVH over TCP, VMC and Rokoko over UDP) are each a
+/// listener on an address and one of these. Dropping it closes the
+/// mailbox, which ends the thread at its next frame.
+pub struct Fed {
+    mailbox: Arc<Mailbox>,
+    addr: SocketAddr,
+}
+
+impl Fed {
+    /// Starts `receive` on a thread of its own with a new mailbox
+    /// ([`Mailbox::lossless`] with `lossless`, else newest wins); `addr`
+    /// is the address it listens on.
+    pub fn spawn(
+        addr: SocketAddr,
+        lossless: bool,
+        receive: impl FnOnce(&Mailbox) + Send + 'static,
+    ) -> Fed {
+        let mailbox = Arc::new(if lossless {
+            Mailbox::lossless()
+        } else {
+            Mailbox::default()
+        });
+        let mb = mailbox.clone();
+        std::thread::spawn(move || receive(&mb));
+        Fed { mailbox, addr }
+    }
+
+    /// The address listened on.
+    pub fn local_addr(&self) -> SocketAddr {
+        self.addr
+    }
+}
+
+impl Drop for Fed {
+    fn drop(&mut self) {
+        self.mailbox.close();
+    }
+}
+
+impl Source for Fed {
+    fn next(&mut self, wait: Duration) -> Result<Event, SourceError> {
+        self.mailbox.next(wait)
+    }
+    fn reference(&self) -> Option<Reference> {
+        self.mailbox.reference()
+    }
+    fn counters(&self) -> Counters {
+        self.mailbox.counters()
     }
 }

@@ -15,7 +15,7 @@
 //! is counted as malformed and changes nothing.
 
 use super::humanoid::{BodyState, BoneTable, clip_offsets};
-use super::mailbox::Mailbox;
+use super::mailbox::{Fed, Mailbox};
 use super::report::Counters;
 use super::source::{Event, Incoming, Source, SourceError};
 use crate::pose::Pose;
@@ -24,7 +24,6 @@ use crate::rig::{Canonical, LoadOptions, RigMap, detect_clip};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::net::{SocketAddr, UdpSocket};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// A sender clock that goes back, or jumps ahead, by more than this many
@@ -62,10 +61,7 @@ pub trait Protocol: Send + 'static {
 }
 
 /// A body stream over UDP.
-pub struct UdpStream {
-    mailbox: Arc<Mailbox>,
-    addr: SocketAddr,
-}
+pub struct UdpStream(Fed);
 
 impl UdpStream {
     /// Listens on `addr` for datagrams of protocol `P`; frames are taken at
@@ -87,37 +83,26 @@ impl UdpStream {
             .set_read_timeout(Some(Duration::from_millis(50)))
             .map_err(io)?;
         let addr = socket.local_addr().unwrap_or(addr);
-        let mailbox = Arc::new(if lossless {
-            Mailbox::lossless()
-        } else {
-            Mailbox::default()
-        });
-        let mb = mailbox.clone();
-        std::thread::spawn(move || receive(socket, protocol, Decoder::new(fps, load), &mb));
-        Ok(UdpStream { mailbox, addr })
+        Ok(UdpStream(Fed::spawn(addr, lossless, move |mb| {
+            receive(socket, protocol, Decoder::new(fps, load), mb)
+        })))
     }
 
     /// The address listened on.
     pub fn local_addr(&self) -> SocketAddr {
-        self.addr
-    }
-}
-
-impl Drop for UdpStream {
-    fn drop(&mut self) {
-        self.mailbox.close();
+        self.0.local_addr()
     }
 }
 
 impl Source for UdpStream {
     fn next(&mut self, wait: Duration) -> Result<Event, SourceError> {
-        self.mailbox.next(wait)
+        self.0.next(wait)
     }
     fn reference(&self) -> Option<Reference> {
-        self.mailbox.reference()
+        self.0.reference()
     }
     fn counters(&self) -> Counters {
-        self.mailbox.counters()
+        self.0.counters()
     }
 }
 
