@@ -7,7 +7,7 @@ use crate::db::{BuildProgress, Character};
 use crate::drive::query::{QueryError, load_mocap};
 use crate::drive::trellis::TrellisInput;
 use crate::drive::{Prepared, RetargetError, RetargetOptions};
-use crate::live::bvh_tcp::BvhTcp;
+use crate::live::bvh_tcp;
 use crate::live::online::{OnlineOptions, OnlineStats};
 use crate::live::page::{Meta, PageFrame, PageServer};
 use crate::live::replay::Replay;
@@ -15,7 +15,7 @@ use crate::live::report::{Counters, Latencies, LatencySummary};
 use crate::live::rokoko::Rokoko;
 use crate::live::session::{LiveFrame, Session, SessionOptions};
 use crate::live::source::{Event, Source, SourceError};
-use crate::live::stream::UdpStream;
+use crate::live::stream;
 use crate::live::vmc::Vmc;
 use crate::mesh::MeshSequence;
 use crate::pose::Pose;
@@ -149,18 +149,13 @@ fn open_source(
             Box::new(Replay::new(load_mocap(clip, &opts.load, fps)?, opts.speed)),
             None,
         ),
-        LiveInput::BvhTcp(addr) => {
-            let s = BvhTcp::bind(*addr, fps, load, lossless)?;
-            let a = s.local_addr();
-            (Box::new(s), Some(a))
-        }
-        LiveInput::Vmc(addr) => {
-            let s = UdpStream::bind(*addr, Vmc::default(), fps, load, lossless)?;
-            let a = s.local_addr();
-            (Box::new(s), Some(a))
-        }
-        LiveInput::Rokoko(addr) => {
-            let s = UdpStream::bind(*addr, Rokoko, fps, load, lossless)?;
+        network => {
+            let s = match network {
+                LiveInput::BvhTcp(addr) => bvh_tcp::listen(*addr, fps, load, lossless)?,
+                LiveInput::Vmc(addr) => stream::listen(*addr, Vmc::default(), fps, load, lossless)?,
+                LiveInput::Rokoko(addr) => stream::listen(*addr, Rokoko, fps, load, lossless)?,
+                LiveInput::Replay(_) => unreachable!("matched above"),
+            };
             let a = s.local_addr();
             (Box::new(s), Some(a))
         }

@@ -15,57 +15,32 @@
 //! (the ones it replaced are counted as dropped).
 
 use super::mailbox::{Fed, Mailbox};
-use super::report::Counters;
-use super::source::{Event, Incoming, Source, SourceError};
+use super::source::{Incoming, SourceError};
 use crate::mocap::Clip;
 use crate::mocap::bvh::{BvhOptions, parse_bvh};
-use crate::pose::retarget::{JointRotations, Reference, choose_reference};
+use crate::pose::retarget::{JointRotations, choose_reference};
 use crate::rig::{LoadOptions, RigMap, detect_clip, load_clip};
 use std::io::{BufRead, BufReader};
 use std::net::{SocketAddr, TcpListener};
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-/// A BVH-over-TCP stream.
-pub struct BvhTcp(Fed);
-
-impl BvhTcp {
-    /// Listens on `addr` for senders; frames are taken at `fps` (the
-    /// database's rate).
-    /// With `lossless` every frame is kept in order ([`Mailbox::lossless`]);
-    /// otherwise the newest wins.
-    pub fn bind(
-        addr: SocketAddr,
-        fps: f64,
-        load: LoadOptions,
-        lossless: bool,
-    ) -> Result<BvhTcp, SourceError> {
-        let listener = TcpListener::bind(addr).map_err(|source| SourceError::Io {
-            what: format!("listening on {addr}"),
-            source,
-        })?;
-        let addr = listener.local_addr().unwrap_or(addr);
-        Ok(BvhTcp(Fed::spawn(addr, lossless, move |mb| {
-            serve(listener, fps, load, mb)
-        })))
-    }
-
-    /// The address listened on.
-    pub fn local_addr(&self) -> SocketAddr {
-        self.0.local_addr()
-    }
-}
-
-impl Source for BvhTcp {
-    fn next(&mut self, wait: Duration) -> Result<Event, SourceError> {
-        self.0.next(wait)
-    }
-    fn reference(&self) -> Option<Reference> {
-        self.0.reference()
-    }
-    fn counters(&self) -> Counters {
-        self.0.counters()
-    }
+/// Listens on `addr` for BVH senders: a [`Fed`] source; frames are
+/// taken at `fps` (the database's rate).
+pub fn listen(
+    addr: SocketAddr,
+    fps: f64,
+    load: LoadOptions,
+    lossless: bool,
+) -> Result<Fed, SourceError> {
+    let listener = TcpListener::bind(addr).map_err(|source| SourceError::Io {
+        what: format!("listening on {addr}"),
+        source,
+    })?;
+    let addr = listener.local_addr().unwrap_or(addr);
+    Ok(Fed::spawn(addr, lossless, move |mb| {
+        serve(listener, fps, load, mb)
+    }))
 }
 
 /// What the first frame of the stream decided.

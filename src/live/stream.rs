@@ -16,8 +16,7 @@
 
 use super::humanoid::{BodyState, BoneTable, clip_offsets};
 use super::mailbox::{Fed, Mailbox};
-use super::report::Counters;
-use super::source::{Event, Incoming, Source, SourceError};
+use super::source::{Incoming, SourceError};
 use crate::pose::Pose;
 use crate::pose::retarget::{JointRotations, Reference, choose_reference};
 use crate::rig::{Canonical, LoadOptions, RigMap, detect_clip};
@@ -60,50 +59,27 @@ pub trait Protocol: Send + 'static {
     fn read(&mut self, datagram: &[u8], state: &mut BodyState) -> Result<Read, Malformed>;
 }
 
-/// A body stream over UDP.
-pub struct UdpStream(Fed);
-
-impl UdpStream {
-    /// Listens on `addr` for datagrams of protocol `P`; frames are taken at
-    /// `fps` (the database's rate). With `lossless` every frame is kept in
-    /// order; otherwise the newest wins.
-    pub fn bind<P: Protocol>(
-        addr: SocketAddr,
-        protocol: P,
-        fps: f64,
-        load: LoadOptions,
-        lossless: bool,
-    ) -> Result<UdpStream, SourceError> {
-        let io = |source| SourceError::Io {
-            what: format!("listening for {} on {addr}", P::NAME),
-            source,
-        };
-        let socket = UdpSocket::bind(addr).map_err(io)?;
-        socket
-            .set_read_timeout(Some(Duration::from_millis(50)))
-            .map_err(io)?;
-        let addr = socket.local_addr().unwrap_or(addr);
-        Ok(UdpStream(Fed::spawn(addr, lossless, move |mb| {
-            receive(socket, protocol, Decoder::new(fps, load), mb)
-        })))
-    }
-
-    /// The address listened on.
-    pub fn local_addr(&self) -> SocketAddr {
-        self.0.local_addr()
-    }
-}
-
-impl Source for UdpStream {
-    fn next(&mut self, wait: Duration) -> Result<Event, SourceError> {
-        self.0.next(wait)
-    }
-    fn reference(&self) -> Option<Reference> {
-        self.0.reference()
-    }
-    fn counters(&self) -> Counters {
-        self.0.counters()
-    }
+/// Listens on `addr` for datagrams of protocol `P`: a [`Fed`] source;
+/// frames are taken at `fps` (the database's rate).
+pub fn listen<P: Protocol>(
+    addr: SocketAddr,
+    protocol: P,
+    fps: f64,
+    load: LoadOptions,
+    lossless: bool,
+) -> Result<Fed, SourceError> {
+    let io = |source| SourceError::Io {
+        what: format!("listening for {} on {addr}", P::NAME),
+        source,
+    };
+    let socket = UdpSocket::bind(addr).map_err(io)?;
+    socket
+        .set_read_timeout(Some(Duration::from_millis(50)))
+        .map_err(io)?;
+    let addr = socket.local_addr().unwrap_or(addr);
+    Ok(Fed::spawn(addr, lossless, move |mb| {
+        receive(socket, protocol, Decoder::new(fps, load), mb)
+    }))
 }
 
 /// Reads datagrams until the mailbox is closed.
