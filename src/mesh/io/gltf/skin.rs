@@ -1,0 +1,317 @@
+//! The first skin (joints, parents, inverse bind matrices, per-vertex
+//! influences), the node hierarchy with rest transforms, and the skinned
+//! mesh posed by a node animation.
+
+use super::animation::{TrsPath, sample};
+use super::asset::GltfAsset;
+use super::buffers::Ctx;
+use super::geometry::SceneNodes;
+use crate::mesh::{MeshError, MeshSequence};
+use glam::Mat4;
+
+/// A skin: joints with their hierarchy, and per-vertex influences.
+#[derive(Debug, Clone)]
+pub struct Skin {
+    /// Joint node names (`joint_N` where a node has no name).
+    pub joint_names: Vec<String>,
+    /// Parent joint of each joint within the skin (`None` at the top).
+    pub parents: Vec<Option<u32>>,
+    /// Inverse bind matrices, column-major.
+    pub inverse_bind: Vec<[[f32; 4]; 4]>,
+    /// Four joint indices per vertex.
+    pub joints: Vec<[u16; 4]>,
+    /// Four weights per vertex, normalised to sum to 1 where they did not.
+    pub weights: Vec<[f32; 4]>,
+}
+
+/// The node hierarchy with rest transforms.
+#[derive(Debug, Clone, Default)]
+pub struct NodeGraph {
+    /// Parent per node (`None` at a root or for unreachable nodes).
+    pub parent: Vec<Option<usize>>,
+    /// Rest translation, rotation, scale per node.
+    pub rest: Vec<(glam::DVec3, glam::DQuat, glam::DVec3)>,
+    /// Reachable nodes, parents before children.
+    pub order: Vec<usize>,
+    /// The skin's joint nodes (if any).
+    pub skin_joints: Vec<usize>,
+}
+
+/// Step 5 of [`parse_gltf`](super::parse_gltf): skin `skin_idx` (joints, their parents within
+/// the skin, inverse bind matrices) with the per-vertex influences of the
+/// `nv` vertices; weights not summing to 1 are normalised (and said in
+/// `problems`).
+pub(super) fn read_skin(
+    ctx: &Ctx,
+    doc: &gltf::Document,
+    skin_idx: Option<usize>,
+    parent: &[Option<usize>],
+    nv: usize,
+    (mut skin_joints, mut skin_weights): (Vec<[u16; 4]>, Vec<[f32; 4]>),
+    problems: &mut Vec<String>,
+) -> Result<Option<Skin>, MeshError> {
+    let Some(s) = skin_idx.and_then(|i| doc.skins().nth(i)) else {
+        return Ok(None);
+    };
+    let joint_nodes: Vec<usize> = s.joints().map(|j| j.index()).collect();
+    let joint_names = s
+        .joints()
+        .map(|j| {
+            j.name()
+                .map(str::to_string)
+                .unwrap_or_else(|| format!("joint_{}", j.index()))
+        })
+        .collect();
+    let parents = joint_nodes
+        .iter()
+        .map(|&n| {
+            let mut p = parent[n];
+            while let Some(pi) = p {
+                if let Some(k) = joint_nodes.iter().position(|&x| x == pi) {
+                    return Some(k as u32);
+                }
+                p = parent[pi];
+            }
+            None
+        })
+        .collect();
+    let inverse_bind = match s.inverse_bind_matrices() {
+        Some(a) => {
+            let (v, c) = ctx.read_f32(&a, "inverseBindMatrices")?;
+            if c != 16 || v.len() != joint_nodes.len() * 16 {
+                return Err(ctx.err("inverseBindMatrices must be one MAT4 per joint"));
+            }
+            v.chunks_exact(16)
+                .map(|m| Mat4::from_cols_slice(m).to_cols_array_2d())
+                .collect()
+        }
+        None => vec![Mat4::IDENTITY.to_cols_array_2d(); joint_nodes.len()],
+    };
+    skin_joints.resize(nv, [0; 4]);
+    skin_weights.resize(nv, [0.0; 4]);
+    let mut renorm = 0usize;
+    for (w, j) in skin_weights.iter_mut().zip(&skin_joints) {
+        if j.iter().any(|&k| k as usize >= joint_nodes.len()) {
+            return Err(ctx.err("JOINTS_0 refers to a joint the skin does not have"));
+        }
+        let s: f32 = w.iter().sum();
+        if (s - 1.0).abs() > 1e-3 {
+            renorm += 1;
+            if s > 0.0 {
+                w.iter_mut().for_each(|x| *x /= s);
+            }
+        }
+    }
+    if renorm > 0 {
+        problems.push(format!(
+            "{renorm} vertices had skin weights not summing to 1; normalised"
+        ));
+    }
+    Ok(Some(Skin {
+        joint_names,
+        parents,
+        inverse_bind,
+        joints: skin_joints,
+        weights: skin_weights,
+    }))
+}
+
+/// Step 7 of [`parse_gltf`](super::parse_gltf): the scene graph (parents, rest TRS, order,
+/// the skin's joint nodes).
+pub(super) fn node_graph(
+    doc: &gltf::Document,
+    nodes: &[gltf::Node],
+    scene: SceneNodes,
+    skin_idx: Option<usize>,
+) -> NodeGraph {
+    NodeGraph {
+        parent: scene.parent,
+        rest: nodes
+            .iter()
+            .map(|n| {
+                let (t, r, sc) = n.transform().decomposed();
+                (
+                    glam::DVec3::from_array(t.map(f64::from)),
+                    glam::DQuat::from_array(r.map(f64::from)).normalize(),
+                    glam::DVec3::from_array(sc.map(f64::from)),
+                )
+            })
+            .collect(),
+        order: scene.order,
+        skin_joints: skin_idx
+            .and_then(|i| doc.skins().nth(i))
+            .map(|s| s.joints().map(|j| j.index()).collect())
+            .unwrap_or_default(),
+    }
+}
+
+impl GltfAsset {
+    /// The skinned mesh in its rest pose in world space (every node at its
+    /// rest TRS, no animation), with the world position of each skin joint.
+    /// `None` without a skin.
+    pub fn rest_pose(&self) -> Option<(Vec<[f64; 3]>, Vec<glam::DVec3>)> {
+        use glam::{DMat4, DVec3};
+        let skin = self.skin.as_ref()?;
+        let g = &self.graph;
+        let mut world = vec![DMat4::IDENTITY; g.rest.len()];
+        for &n in &g.order {
+            let (t, r, sc) = g.rest[n];
+            let local = DMat4::from_scale_rotation_translation(sc, r, t);
+            world[n] = match g.parent[n] {
+                Some(p) => world[p] * local,
+                None => local,
+            };
+        }
+        let skinning: Vec<DMat4> = g
+            .skin_joints
+            .iter()
+            .enumerate()
+            .map(|(k, &jn)| {
+                let ibm = skin.inverse_bind.get(k).map_or(DMat4::IDENTITY, |m| {
+                    DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from)))
+                });
+                world.get(jn).copied().unwrap_or(DMat4::IDENTITY) * ibm
+            })
+            .collect();
+        let verts = self
+            .mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(v, p)| {
+                let src = DVec3::from_array(*p);
+                let mut acc = DVec3::ZERO;
+                for (j, w) in skin.joints[v].iter().zip(skin.weights[v]) {
+                    if let Some(m) = skinning.get(*j as usize) {
+                        acc += m.transform_point3(src) * w as f64;
+                    }
+                }
+                acc.to_array()
+            })
+            .collect();
+        let joints = g
+            .skin_joints
+            .iter()
+            .map(|&jn| world.get(jn).map_or(DVec3::ZERO, |m| m.w_axis.truncate()))
+            .collect();
+        Some((verts, joints))
+    }
+
+    /// Animation `index` of a skinned asset as a mesh sequence sampled at
+    /// `fps`: node transforms are sampled (linear, slerp or step), composed
+    /// down the hierarchy, and the mesh is skinned with linear blend skinning
+    /// `v' = Σ w_j (W_j · IBM_j) v` (glTF 2.0 §3.7.3; the mesh node's own
+    /// transform is ignored, as the spec says).
+    pub fn skinned_sequence(&self, index: usize, fps: f64) -> Result<MeshSequence, MeshError> {
+        use glam::{DMat4, DQuat, DVec3};
+        let bad = |m: String| MeshError::invalid(std::path::Path::new("<gltf>"), m);
+        let skin = self.skin.as_ref().ok_or_else(|| bad("no skin".into()))?;
+        let anim = self
+            .node_animations
+            .get(index)
+            .ok_or_else(|| bad(format!("no animation {index}")))?;
+        let g = &self.graph;
+        let frames = ((anim.duration as f64 * fps).floor() as usize + 1).min(100_000);
+        let nv = self.mesh.vertex_count();
+        // 100,000 frames of a mesh the file declares: checked before held.
+        crate::util::budget::check_frames("a skinned glTF animation", frames, nv, 1)
+            .map_err(|e| bad(e.to_string()))?;
+        let mut out = Vec::with_capacity(frames * nv);
+        let mut trs = g.rest.clone();
+        let mut world = vec![DMat4::IDENTITY; trs.len()];
+        let mut skinning = vec![DMat4::IDENTITY; g.skin_joints.len()];
+        for f in 0..frames {
+            let t = (f as f64 / fps) as f32;
+            trs.clone_from(&g.rest);
+            for ch in &anim.channels {
+                let Some(slot) = trs.get_mut(ch.node) else {
+                    continue;
+                };
+                let v = sample(ch, t);
+                match ch.path {
+                    TrsPath::Translation => {
+                        slot.0 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+                    }
+                    TrsPath::Rotation => {
+                        slot.1 =
+                            DQuat::from_xyzw(v[0] as f64, v[1] as f64, v[2] as f64, v[3] as f64)
+                                .normalize()
+                    }
+                    TrsPath::Scale => slot.2 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
+                }
+            }
+            for &n in &g.order {
+                let local = DMat4::from_scale_rotation_translation(trs[n].2, trs[n].1, trs[n].0);
+                world[n] = match g.parent[n] {
+                    Some(p) => world[p] * local,
+                    None => local,
+                };
+            }
+            for (k, &jn) in g.skin_joints.iter().enumerate() {
+                let ibm =
+                    DMat4::from_cols_array_2d(&skin.inverse_bind[k].map(|c| c.map(f64::from)));
+                skinning[k] = world[jn] * ibm;
+            }
+            for (v, p) in self.mesh.positions().iter().enumerate() {
+                let (js, ws) = (skin.joints[v], skin.weights[v]);
+                let src = DVec3::from_array(*p);
+                let mut acc = DVec3::ZERO;
+                let mut wsum = 0.0;
+                for i in 0..4 {
+                    let w = ws[i] as f64;
+                    if w != 0.0 {
+                        acc += skinning[js[i] as usize].transform_point3(src) * w;
+                        wsum += w;
+                    }
+                }
+                out.push(if wsum > 0.0 {
+                    (acc / wsum).to_array()
+                } else {
+                    *p
+                });
+            }
+        }
+        MeshSequence::new(self.mesh.clone(), out, Some(fps)).map_err(MeshError::from)
+    }
+
+    /// World positions of the skin's joints (in skin order) at time `t` of
+    /// node animation `index` (linear, slerp or step keys; the rest TRS of
+    /// nodes the animation does not drive). `None` without a skin or that
+    /// animation. For the joint mapping of rigged characters
+    /// (`rig::load::skin_clip`).
+    pub fn joint_positions_at(&self, index: usize, t: f32) -> Option<Vec<glam::DVec3>> {
+        use glam::{DMat4, DQuat, DVec3};
+        self.skin.as_ref()?;
+        let anim = self.node_animations.get(index)?;
+        let g = &self.graph;
+        let mut trs = g.rest.clone();
+        for ch in &anim.channels {
+            let Some(slot) = trs.get_mut(ch.node) else {
+                continue;
+            };
+            let v = sample(ch, t);
+            match ch.path {
+                TrsPath::Translation => slot.0 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
+                TrsPath::Rotation => {
+                    slot.1 = DQuat::from_xyzw(v[0] as f64, v[1] as f64, v[2] as f64, v[3] as f64)
+                        .normalize()
+                }
+                TrsPath::Scale => slot.2 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
+            }
+        }
+        let mut world = vec![DMat4::IDENTITY; trs.len()];
+        for &n in &g.order {
+            let local = DMat4::from_scale_rotation_translation(trs[n].2, trs[n].1, trs[n].0);
+            world[n] = match g.parent[n] {
+                Some(p) => world[p] * local,
+                None => local,
+            };
+        }
+        Some(
+            g.skin_joints
+                .iter()
+                .map(|&jn| world.get(jn).map_or(DVec3::ZERO, |m| m.w_axis.truncate()))
+                .collect(),
+        )
+    }
+}
