@@ -133,7 +133,7 @@ pub fn from_skin(
     if let Some(i) = joint_pos.iter().position(|p| !p.is_finite()) {
         return Err(bad(format!("joint {}: no usable transform", names[i])));
     }
-    let (clip, _) = crate::rig::load::skin_clip(asset, &joint_pos, false).map_err(bad)?;
+    let (clip, _) = asset.skin_clip(&joint_pos, false).map_err(bad)?;
     let joints = map.rest_pose(&clip).map_err(|e| bad(e.to_string()))?;
     let mut w = vec![[0.0f64; Canonical::COUNT]; mesh.vertex_count()];
     for (row, &g) in w.iter_mut().zip(&matched) {

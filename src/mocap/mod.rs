@@ -10,6 +10,7 @@ pub mod fbx;
 mod fk;
 mod load;
 mod resample;
+pub mod skin;
 pub mod units;
 
 pub use clip::{Channel, Clip, ClipError, Joint, JointId, PointConvention, Units, UpAxis};

@@ -192,144 +192,6 @@ pub fn guess_up(clip: &Clip, map: Option<&RigMap>) -> (UpAxis, String) {
     up_from_joints(clip, head, pelvis)
 }
 
-/// A glTF skin as a clip, so rigged characters go through the same joint
-/// mapping as BVH and ASF ([`detect_skin`]): one joint per skin joint
-/// (parents first; a zero `skin_root` above several roots), six channels
-/// each, in metres, Y-up. Frame 0 places the joints at `pose` (skin order:
-/// bind or rest positions); with `animate`, up to 48 frames of the asset's
-/// first node animation follow, so the structure analysis sees motion
-/// (travel, knee bends). Every local rotation is the identity and every
-/// local translation the offset from the parent's position. Also returns,
-/// per clip joint, its skin joint (`None` for `skin_root`).
-pub fn skin_clip(
-    asset: &crate::mesh::io::gltf::GltfAsset,
-    pose: &[glam::DVec3],
-    animate: bool,
-) -> Result<(Clip, Vec<Option<usize>>), String> {
-    use crate::mocap::{Channel, Joint, JointId, PointConvention};
-    use glam::{DQuat, DVec3};
-    let skin = asset.skin.as_ref().ok_or("the glTF has no skin")?;
-    let n = skin.joint_names.len();
-    if n == 0 || pose.len() != n {
-        return Err(format!(
-            "the skin has {n} joints and {} positions",
-            pose.len()
-        ));
-    }
-    let parent = |j: usize| {
-        skin.parents
-            .get(j)
-            .copied()
-            .flatten()
-            .map(|p| p as usize)
-            .filter(|&p| p < n && p != j)
-    };
-    let mut children = vec![Vec::new(); n];
-    let mut roots = Vec::new();
-    for j in 0..n {
-        match parent(j) {
-            Some(p) => children[p].push(j),
-            None => roots.push(j),
-        }
-    }
-    let mut order: Vec<Option<usize>> = Vec::with_capacity(n + 1);
-    if roots.len() != 1 {
-        order.push(None);
-    }
-    let mut stack: Vec<usize> = roots.iter().rev().copied().collect();
-    while let Some(j) = stack.pop() {
-        if order.len() > n + 1 {
-            break;
-        }
-        order.push(Some(j));
-        stack.extend(children[j].iter().rev().copied());
-    }
-    if order.iter().flatten().count() != n {
-        return Err("the skin's joint hierarchy has a cycle".into());
-    }
-    let mut clip_of = vec![0usize; n];
-    for (k, j) in order.iter().enumerate() {
-        if let Some(j) = j {
-            clip_of[*j] = k;
-        }
-    }
-    let six = vec![
-        Channel::Xposition,
-        Channel::Yposition,
-        Channel::Zposition,
-        Channel::Zrotation,
-        Channel::Xrotation,
-        Channel::Yrotation,
-    ];
-    let parent_in_clip = |k: usize| -> Option<usize> {
-        match order[k] {
-            None => None,
-            Some(j) => match parent(j) {
-                Some(p) => Some(clip_of[p]),
-                None if order[0].is_none() => Some(0),
-                None => None,
-            },
-        }
-    };
-    let local = |pos: &[DVec3], k: usize| -> DVec3 {
-        let here = order[k].map_or(DVec3::ZERO, |j| pos[j]);
-        match parent_in_clip(k).and_then(|p| order[p]) {
-            Some(p) => here - pos[p],
-            None => here,
-        }
-    };
-    let joints: Vec<Joint> = (0..order.len())
-        .map(|k| Joint {
-            name: order[k].map_or("skin_root".to_string(), |j| skin.joint_names[j].clone()),
-            parent: parent_in_clip(k).map(|p| JointId(p as u32)),
-            offset: local(pose, k),
-            channels: six.clone(),
-            tail: None,
-        })
-        .collect();
-    // The rest (offsets) is `pose`; the frames are the animation when there
-    // is one (world space, which may differ from bind space by the root
-    // node's transform), else `pose` again.
-    let mut frames: Vec<Vec<DVec3>> = Vec::new();
-    if animate && let Some(a) = asset.node_animations.first() {
-        let count = 48usize;
-        for f in 0..count {
-            let t = a.duration * f as f32 / (count - 1) as f32;
-            match asset.joint_positions_at(0, t) {
-                Some(p) if p.len() == n => frames.push(p),
-                _ => break,
-            }
-        }
-    }
-    if frames.is_empty() {
-        frames.push(pose.to_vec());
-    }
-    let m = order.len();
-    let mut rot = Vec::with_capacity(frames.len() * m);
-    let mut tr = Vec::with_capacity(frames.len() * m);
-    for p in &frames {
-        for k in 0..m {
-            rot.push(DQuat::IDENTITY);
-            tr.push(local(p, k));
-        }
-    }
-    let clip = Clip::new(
-        joints,
-        1.0 / 30.0,
-        rot,
-        tr,
-        Units {
-            metres_per_unit: 1.0,
-            name: "m".into(),
-            reason: "glTF is in metres".into(),
-        },
-        UpAxis::Y,
-        PointConvention::JointOrigins,
-    )
-    .map_err(|e| e.to_string())?;
-    Ok((clip, order))
-}
-
 /// Maps a glTF skin onto the canonical skeleton with no rig map, as
 /// [`detect_clip`] maps a BVH: names when a known convention matches (its
 /// left/right checked against the geometry), else the structure of the
@@ -343,8 +205,9 @@ pub fn detect_skin(
     let rest = skin_bind_positions(asset).ok_or_else(|| super::RigError::Degenerate {
         reason: "the glTF has no skin".into(),
     })?;
-    let (clip, _) =
-        skin_clip(asset, &rest, true).map_err(|reason| super::RigError::Degenerate { reason })?;
+    let (clip, _) = asset
+        .skin_clip(&rest, true)
+        .map_err(|reason| super::RigError::Degenerate { reason })?;
     detect_clip(&clip)
 }
 

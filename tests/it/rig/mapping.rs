@@ -1827,7 +1827,7 @@ fn skin_poses(a: &surfmotion::mesh::io::gltf::GltfAsset) -> Result<(RigMap, Vec<
     let d = surfmotion::rig::load::detect_skin(a)?;
     assert!(d.missing.is_empty(), "{:?}", d.missing);
     let bind = surfmotion::rig::load::skin_bind_positions(a).unwrap();
-    let (clip, _) = surfmotion::rig::load::skin_clip(a, &bind, true).unwrap();
+    let (clip, _) = a.skin_clip(&bind, true).unwrap();
     let p = d.map.poses(&clip)?;
     Ok((d.map, p))
 }

@@ -7,6 +7,7 @@ use super::asset::GltfAsset;
 use super::buffers::Ctx;
 use super::geometry::SceneNodes;
 use crate::mesh::{MeshError, MeshSequence};
+use crate::mocap::Clip;
 use glam::Mat4;
 
 /// A skin: joints with their hierarchy, and per-vertex influences.
@@ -278,7 +279,7 @@ impl GltfAsset {
     /// node animation `index` (linear, slerp or step keys; the rest TRS of
     /// nodes the animation does not drive). `None` without a skin or that
     /// animation. For the joint mapping of rigged characters
-    /// (`rig::load::skin_clip`).
+    /// ([`GltfAsset::skin_clip`]).
     pub fn joint_positions_at(&self, index: usize, t: f32) -> Option<Vec<glam::DVec3>> {
         use glam::{DMat4, DQuat, DVec3};
         self.skin.as_ref()?;
@@ -313,5 +314,33 @@ impl GltfAsset {
                 .map(|&jn| world.get(jn).map_or(DVec3::ZERO, |m| m.w_axis.truncate()))
                 .collect(),
         )
+    }
+
+    /// The skin as a clip ([`crate::mocap::skin::skin_clip`]), so rigged
+    /// characters go through the same joint mapping as BVH and ASF
+    /// (`rig::detect_skin`): the rest at `pose` (skin order: bind or rest
+    /// positions); the frames, with `animate`, up to 48 samples of the first
+    /// node animation (world space, which may differ from bind space by the
+    /// root node's transform), else `pose` alone. Also returns, per clip joint, its skin joint
+    /// (`None` for `skin_root`).
+    pub fn skin_clip(
+        &self,
+        pose: &[glam::DVec3],
+        animate: bool,
+    ) -> Result<(Clip, Vec<Option<usize>>), String> {
+        let skin = self.skin.as_ref().ok_or("the glTF has no skin")?;
+        let n = skin.joint_names.len();
+        let mut frames: Vec<Vec<glam::DVec3>> = Vec::new();
+        if animate && let Some(a) = self.node_animations.first() {
+            let count = 48usize;
+            for f in 0..count {
+                let t = a.duration * f as f32 / (count - 1) as f32;
+                match self.joint_positions_at(0, t) {
+                    Some(p) if p.len() == n => frames.push(p),
+                    _ => break,
+                }
+            }
+        }
+        crate::mocap::skin::skin_clip(&skin.joint_names, &skin.parents, pose, frames)
     }
 }
