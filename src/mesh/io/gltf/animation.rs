@@ -1,49 +1,10 @@
 //! Animations: the morph-weights animation (sparse per-key weights) and
 //! node transform channels (translation, rotation, scale), and their sampling.
 
+use super::asset::{KeyWeights, NodeAnimation, NodeChannel, TrsPath};
 use super::buffers::Ctx;
 use crate::mesh::MeshError;
 use gltf::accessor::Dimensions;
-
-/// The non-zero morph weights of one animation key: `(target, weight)`.
-pub type KeyWeights = Vec<(u32, f32)>;
-
-/// Which node property a channel drives.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TrsPath {
-    /// Translation (VEC3).
-    Translation,
-    /// Rotation quaternion xyzw (VEC4).
-    Rotation,
-    /// Scale (VEC3).
-    Scale,
-}
-
-/// One sampled channel of a node animation (CUBICSPLINE keys keep their values only).
-#[derive(Debug, Clone)]
-pub struct NodeChannel {
-    /// Target node.
-    pub node: usize,
-    /// Property.
-    pub path: TrsPath,
-    /// Key times (seconds, ascending).
-    pub times: Vec<f32>,
-    /// Key values (xyz or xyzw).
-    pub values: Vec<[f32; 4]>,
-    /// STEP interpolation (else linear / slerp).
-    pub step: bool,
-}
-
-/// A node animation: its name, duration and channels.
-#[derive(Debug, Clone)]
-pub struct NodeAnimation {
-    /// Name (may be empty).
-    pub name: String,
-    /// Last key time.
-    pub duration: f32,
-    /// Channels.
-    pub channels: Vec<NodeChannel>,
-}
 
 /// The animations of an asset (see [`GltfAsset`]).
 pub(super) struct Animations {

@@ -1,14 +1,25 @@
-//! The asset a glTF file holds and the reading of it: [`parse_gltf`] runs the
-//! steps of the sibling files in order ([`super::validate`], [`super::buffers`],
-//! [`super::geometry`], [`super::skin`], [`super::animation`]).
+//! What a glTF file holds: the [`GltfAsset`] and its parts (skin, node
+//! graph, animations), and the mesh sequence of its morph-weights animation.
 
-use super::animation::{KeyWeights, NodeAnimation, read_animations};
-use super::buffers::{Ctx, load_buffers};
-use super::geometry::{Geometry, SceneNodes};
-use super::skin::{NodeGraph, Skin, node_graph, read_skin};
-use super::validate::{check_attribute_indices, check_enums, check_glb_layout};
 use crate::mesh::{Mesh, MeshError, MeshSequence};
-use std::path::Path;
+
+/// The non-zero morph weights of one animation key: `(target, weight)`.
+pub type KeyWeights = Vec<(u32, f32)>;
+
+/// A skin: joints with their hierarchy, and per-vertex influences.
+#[derive(Debug, Clone)]
+pub struct Skin {
+    /// Joint node names (`joint_N` where a node has no name).
+    pub joint_names: Vec<String>,
+    /// Parent joint of each joint within the skin (`None` at the top).
+    pub parents: Vec<Option<u32>>,
+    /// Inverse bind matrices, column-major.
+    pub inverse_bind: Vec<[[f32; 4]; 4]>,
+    /// Four joint indices per vertex.
+    pub joints: Vec<[u16; 4]>,
+    /// Four weights per vertex, normalised to sum to 1 where they did not.
+    pub weights: Vec<[f32; 4]>,
+}
 
 /// What a glTF file holds.
 #[derive(Debug, Clone)]
@@ -43,78 +54,54 @@ pub struct GltfAsset {
     pub problems: Vec<String>,
 }
 
-/// Parses glTF or GLB bytes. `path` locates external buffers and names errors.
-///
-/// The steps, in order (each names the file in its errors): `open_document`
-/// (GLB layout, JSON, validation, buffers), `SceneNodes::walk` (world
-/// transforms, parents, order), `Geometry::add_node` per mesh node
-/// (positions, normals, colours, triangles, skin attributes, morph targets),
-/// `Geometry::into_mesh`, `read_skin`, `read_animations` and
-/// `node_graph`.
-pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
-    let (doc, ctx) = open_document(bytes, path)?;
-    let mut problems = Vec::new();
-    let scene = SceneNodes::walk(&doc);
-    let nodes: Vec<gltf::Node> = doc.nodes().collect();
-    let mut geo = Geometry::default();
-    for (ni, node) in nodes.iter().enumerate() {
-        geo.add_node(&ctx, ni, node, scene.world[ni], &mut problems)?;
-    }
-    let skin_idx = geo.skin_idx;
-    let morph_node = geo.morph_node;
-    let (mesh, parts) = geo.into_mesh(&ctx)?;
-    let skin = read_skin(
-        &ctx,
-        &doc,
-        skin_idx,
-        &scene.parent,
-        mesh.vertex_count(),
-        (parts.skin_joints, parts.skin_weights),
-        &mut problems,
-    )?;
-    let anims = read_animations(&ctx, &doc, morph_node, parts.targets.len())?;
-    let graph = node_graph(&doc, &nodes, scene, skin_idx);
-    Ok(GltfAsset {
-        mesh,
-        skin,
-        morph_targets: parts.targets,
-        normals: parts.normals,
-        morph_normals: parts.target_normals,
-        weights_animation: anims.weights,
-        animations: anims.names,
-        nodes: nodes.len(),
-        node_animations: anims.nodes,
-        graph,
-        problems,
-    })
+/// Which node property a channel drives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrsPath {
+    /// Translation (VEC3).
+    Translation,
+    /// Rotation quaternion xyzw (VEC4).
+    Rotation,
+    /// Scale (VEC3).
+    Scale,
 }
 
-/// Step 1 of [`parse_gltf`]: checks the GLB layout, parses the JSON (with
-/// `KHR_mesh_quantization` taken out of `extensionsRequired`, since
-/// quantisation only widens the component types of attributes, which
-/// `Ctx::read_f32` reads whatever they are), validates it, and loads the
-/// buffers.
-fn open_document<'a>(bytes: &[u8], path: &'a Path) -> Result<(gltf::Document, Ctx<'a>), MeshError> {
-    let bytes = check_glb_layout(bytes, path)?;
-    let g = gltf::Gltf::from_slice_without_validation(bytes)
-        .map_err(|e| MeshError::invalid(path, format!("glTF: {e}")))?;
-    let mut json = g.document.into_json();
-    json.extensions_required
-        .retain(|e| e != crate::mesh::io::glb::KHR_MESH_QUANTIZATION);
-    check_attribute_indices(&json, path)?;
-    let doc = gltf::Document::from_json(json)
-        .map_err(|e| MeshError::invalid(path, format!("glTF: {e}")))?;
-    check_enums(doc.as_json(), path)?;
-    let ctx = Ctx {
-        path,
-        buffers: load_buffers(&doc, g.blob, path)?,
-    };
-    Ok((doc, ctx))
+/// One sampled channel of a node animation (CUBICSPLINE keys keep their values only).
+#[derive(Debug, Clone)]
+pub struct NodeChannel {
+    /// Target node.
+    pub node: usize,
+    /// Property.
+    pub path: TrsPath,
+    /// Key times (seconds, ascending).
+    pub times: Vec<f32>,
+    /// Key values (xyz or xyzw).
+    pub values: Vec<[f32; 4]>,
+    /// STEP interpolation (else linear / slerp).
+    pub step: bool,
 }
 
-/// Reads a `.gltf` or `.glb` file.
-pub fn read_gltf(path: &Path) -> Result<GltfAsset, MeshError> {
-    parse_gltf(&crate::util::fsutil::read_bytes(path)?, path)
+/// A node animation: its name, duration and channels.
+#[derive(Debug, Clone)]
+pub struct NodeAnimation {
+    /// Name (may be empty).
+    pub name: String,
+    /// Last key time.
+    pub duration: f32,
+    /// Channels.
+    pub channels: Vec<NodeChannel>,
+}
+
+/// The node hierarchy with rest transforms.
+#[derive(Debug, Clone, Default)]
+pub struct NodeGraph {
+    /// Parent per node (`None` at a root or for unreachable nodes).
+    pub parent: Vec<Option<usize>>,
+    /// Rest translation, rotation, scale per node.
+    pub rest: Vec<(glam::DVec3, glam::DQuat, glam::DVec3)>,
+    /// Reachable nodes, parents before children.
+    pub order: Vec<usize>,
+    /// The skin's joint nodes (if any).
+    pub skin_joints: Vec<usize>,
 }
 
 impl GltfAsset {

@@ -17,9 +17,9 @@ mod animation;
 mod asset;
 mod buffers;
 mod geometry;
+mod read;
 mod skin;
 mod validate;
 
-pub use animation::{KeyWeights, NodeAnimation, NodeChannel, TrsPath};
-pub use asset::{GltfAsset, parse_gltf, read_gltf};
-pub use skin::{NodeGraph, Skin};
+pub use asset::{GltfAsset, KeyWeights, NodeAnimation, NodeChannel, NodeGraph, Skin, TrsPath};
+pub use read::{parse_gltf, read_gltf};

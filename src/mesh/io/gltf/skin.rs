@@ -2,41 +2,13 @@
 //! influences), the node hierarchy with rest transforms, and the skinned
 //! mesh posed by a node animation.
 
-use super::animation::{TrsPath, sample};
-use super::asset::GltfAsset;
+use super::animation::sample;
+use super::asset::{GltfAsset, NodeGraph, Skin, TrsPath};
 use super::buffers::Ctx;
 use super::geometry::SceneNodes;
 use crate::mesh::{MeshError, MeshSequence};
 use crate::mocap::Clip;
 use glam::Mat4;
-
-/// A skin: joints with their hierarchy, and per-vertex influences.
-#[derive(Debug, Clone)]
-pub struct Skin {
-    /// Joint node names (`joint_N` where a node has no name).
-    pub joint_names: Vec<String>,
-    /// Parent joint of each joint within the skin (`None` at the top).
-    pub parents: Vec<Option<u32>>,
-    /// Inverse bind matrices, column-major.
-    pub inverse_bind: Vec<[[f32; 4]; 4]>,
-    /// Four joint indices per vertex.
-    pub joints: Vec<[u16; 4]>,
-    /// Four weights per vertex, normalised to sum to 1 where they did not.
-    pub weights: Vec<[f32; 4]>,
-}
-
-/// The node hierarchy with rest transforms.
-#[derive(Debug, Clone, Default)]
-pub struct NodeGraph {
-    /// Parent per node (`None` at a root or for unreachable nodes).
-    pub parent: Vec<Option<usize>>,
-    /// Rest translation, rotation, scale per node.
-    pub rest: Vec<(glam::DVec3, glam::DQuat, glam::DVec3)>,
-    /// Reachable nodes, parents before children.
-    pub order: Vec<usize>,
-    /// The skin's joint nodes (if any).
-    pub skin_joints: Vec<usize>,
-}
 
 /// Step 5 of [`parse_gltf`](super::parse_gltf): skin `skin_idx` (joints, their parents within
 /// the skin, inverse bind matrices) with the per-vertex influences of the
