@@ -114,7 +114,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             }
             crate::errln!(
                 "wrote {}: {}, {}, {}",
-                super::written_list(&r.output, " and "),
+                surfmotion::jobs::text::written_list(&r.output, " and "),
                 super::count(r.vertices, "vertex"),
                 super::count(r.triangles, "triangle"),
                 super::count(r.frames, "frame")

@@ -28,7 +28,7 @@ pub fn path_summary(run: &PathRun, fps: f64) -> String {
     s += &format!(
         "{} -> {}: {} at {} fps\n",
         r.keys.join(" -> "),
-        crate::cli::written_list(&run.written, ", "),
+        surfmotion::jobs::text::written_list(&run.written, ", "),
         crate::cli::count(r.frames, "frame"),
         fps
     );
