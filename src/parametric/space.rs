@@ -13,7 +13,7 @@ use super::params::{ParamMap, Parameter, RootSteps, WEIGHT_STEP, blended_step, m
 use super::transition::{
     RefFeatures, SIMILARITY_VERTICES, SimilarityTable, TransitionOptions, VELOCITY_SECONDS,
 };
-use crate::db::{MANIFEST, Manifest};
+use crate::db::{MANIFEST, Manifest, SpaceEntry};
 use crate::mesh::Mesh;
 use crate::mesh::blend::Blender;
 use crate::similarity::y_up;
@@ -234,161 +234,237 @@ fn root_steps(al: &Alignment, i: usize, track: &RootTrack) -> RootSteps {
     RootSteps { step, duration }
 }
 
+/// What every space of [`Motion::build`] reads: the database, its units
+/// and topology.
+struct BuildCtx<'a> {
+    dir: &'a Path,
+    m: &'a Manifest,
+    /// The manifest, named in errors.
+    path: std::path::PathBuf,
+    /// Metres per unit of the database.
+    mpu: f64,
+    z_up: bool,
+    topo_file: &'a Mesh,
+    /// Vertices of the topology.
+    n: usize,
+    fps: f64,
+}
+
+impl BuildCtx<'_> {
+    fn space_err(&self, space: &str, msg: String) -> ParamError {
+        ParamError::Space {
+            path: self.path.clone(),
+            space: space.to_string(),
+            msg,
+        }
+    }
+
+    /// A database position in metres, Y up.
+    fn conv(&self, p: &[f64; 3]) -> [f64; 3] {
+        (y_up(*p, self.z_up) * self.mpu).to_array()
+    }
+
+    /// Step 1 of [`Motion::build`], per space: loads the sequences of `sp`
+    /// not yet in `loaded` (at the database's rate, its connectivity, at
+    /// least 2 frames each), in metres, with their root tracks.
+    fn load_sequences(
+        &self,
+        sp: &SpaceEntry,
+        loaded: &mut std::collections::HashMap<String, Loaded>,
+    ) -> Result<(), ParamError> {
+        for q in &sp.sequences {
+            if loaded.contains_key(q) {
+                continue;
+            }
+            let entry = self
+                .m
+                .sequences
+                .iter()
+                .find(|s| &s.name == q)
+                .ok_or_else(|| self.space_err(&sp.name, format!("no sequence '{q}'")))?;
+            if let Some(f) = entry.fps
+                && (f - self.fps).abs() > 1e-6 * self.fps
+            {
+                return Err(self.space_err(
+                    &sp.name,
+                    format!(
+                        "sequence '{q}' is at {f} fps, the database at {}: a space's sequences play at the database's rate",
+                        self.fps
+                    ),
+                ));
+            }
+            let seq = self.m.load_sequence(self.dir, entry)?;
+            if seq.mesh().vertex_count() != self.n
+                || seq.mesh().triangles() != self.topo_file.triangles()
+            {
+                return Err(self.space_err(
+                    &sp.name,
+                    format!("sequence '{q}': its connectivity differs from the topology"),
+                ));
+            }
+            if seq.frame_count() < 2 {
+                return Err(self.space_err(
+                    &sp.name,
+                    format!(
+                        "sequence '{q}' has {} frame(s); a space needs at least 2 per sequence",
+                        seq.frame_count()
+                    ),
+                ));
+            }
+            let frames: Vec<[f64; 3]> = seq.all_positions().iter().map(|p| self.conv(p)).collect();
+            let track = root_track(&frames, self.n, self.fps);
+            loaded.insert(q.clone(), Loaded { frames, track });
+        }
+        Ok(())
+    }
+}
+
+/// Step 2 of [`Motion::build`]: the space `sp` from its `loaded` sequences:
+/// phase alignment, the reference blocks on the aligned grid, root steps,
+/// the hybrid blend (the blender factored once), the parameter map and the
+/// measured parameters.
+fn build_space(
+    ctx: &BuildCtx,
+    sp: &SpaceEntry,
+    loaded: &std::collections::HashMap<String, Loaded>,
+    blender: &Blender,
+    opts: &MotionOptions,
+) -> Result<MotionSpace, ParamError> {
+    let (n, fps) = (ctx.n, ctx.fps);
+    let seqs: Vec<&Loaded> = sp.sequences.iter().map(|q| &loaded[q]).collect();
+    let feats: Vec<_> = seqs
+        .iter()
+        .map(|l| features(&l.frames, n, &l.track))
+        .collect();
+    let alignment = align(&feats, fps);
+    let k = alignment.grid;
+    let mut buf0 = vec![[0.0; 3]; n];
+    let mut buf1 = vec![[0.0; 3]; n];
+    let originals: Vec<Vec<f32>> = seqs
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let mut block = Vec::with_capacity(k * n * 3);
+            for j in 0..k {
+                let (f0, f1, fr) = alignment.wrapped(i, alignment.times[i][j]);
+                let f1 = f1.min(l.track.centre.len() - 1);
+                local_frame(&l.frames, n, &l.track, f0, &mut buf0);
+                local_frame(&l.frames, n, &l.track, f1, &mut buf1);
+                for (a, b) in buf0.iter().zip(&buf1) {
+                    for c in 0..3 {
+                        block.push((a[c] + (b[c] - a[c]) * fr) as f32);
+                    }
+                }
+            }
+            block
+        })
+        .collect();
+    let steps: Vec<RootSteps> = seqs
+        .iter()
+        .enumerate()
+        .map(|(i, l)| root_steps(&alignment, i, &l.track))
+        .collect();
+    let epsilon = sp.epsilon_mm.map_or(opts.hybrid.epsilon, |e| e * 1e-3);
+    let hopts = HybridOptions {
+        epsilon,
+        ..opts.hybrid
+    };
+    let blend = HybridBlend::build(originals, n, k, blender, &hopts);
+    let parameters: Vec<Parameter> = sp
+        .parameters
+        .iter()
+        .filter_map(|p| Parameter::parse(p))
+        .collect();
+    let axis = match parameters.first() {
+        Some(&p) => Some(ParamMap::fit(p, &steps, fps).map_err(|e| ctx.space_err(&sp.name, e))?),
+        None => None,
+    };
+    let per = (1.0 / WEIGHT_STEP).round() as usize;
+    let measured = (0..=(sp.sequences.len() - 1) * per)
+        .map(|i| {
+            let u = i as f64 / per as f64;
+            let [s, t] = measure(&steps, u, fps);
+            [u, s, t]
+        })
+        .collect();
+    Ok(MotionSpace {
+        name: sp.name.clone(),
+        sequences: sp.sequences.clone(),
+        parameters,
+        alignment,
+        pairs: blend.pairs.clone(),
+        blend,
+        steps,
+        axis,
+        measured,
+        epsilon,
+    })
+}
+
+/// Step 3 of [`Motion::build`]: the reference similarity tables between
+/// every ordered pair of spaces (empty on the diagonal).
+fn similarity_tables(spaces: &[MotionSpace], fps: f64) -> Vec<SimilarityTable> {
+    let feats: Vec<RefFeatures> = spaces.iter().map(|s| s.ref_features(fps)).collect();
+    let count = spaces.len();
+    let mut tables = Vec::with_capacity(count * count);
+    for s in 0..count {
+        for t in 0..count {
+            tables.push(if s == t {
+                SimilarityTable {
+                    ks: 0,
+                    kt: 0,
+                    us: Vec::new(),
+                    ut: Vec::new(),
+                    sim: Vec::new(),
+                }
+            } else {
+                SimilarityTable::new(&feats[s], &feats[t])
+            });
+        }
+    }
+    tables
+}
+
 impl Motion {
     /// Builds the model of the database in `dir` from its manifest's
     /// `[[space]]` entries (factoring the blender once for all spaces).
     pub fn build(dir: &Path, m: &Manifest, opts: &MotionOptions) -> Result<Motion, ParamError> {
         let path = dir.join(MANIFEST);
-        let space_err = |space: &str, msg: String| ParamError::Space {
-            path: path.clone(),
-            space: space.to_string(),
-            msg,
-        };
         let mpu = crate::mocap::units::parse_unit(&m.units)
             .map(|u| u.metres_per_unit)
             .unwrap_or(1.0);
         let z_up = m.up.eq_ignore_ascii_case("z");
-        let conv = |p: &[f64; 3]| (y_up(*p, z_up) * mpu).to_array();
         let topo_file = m.load_topology(dir)?;
+        let mut ctx = BuildCtx {
+            dir,
+            m,
+            path,
+            mpu,
+            z_up,
+            topo_file: &topo_file,
+            n: 0,
+            fps: m.fps,
+        };
         let topology = topo_file
-            .with_positions(&topo_file.positions().iter().map(conv).collect::<Vec<_>>())
+            .with_positions(
+                &topo_file
+                    .positions()
+                    .iter()
+                    .map(|p| ctx.conv(p))
+                    .collect::<Vec<_>>(),
+            )
             .map_err(crate::mesh::MeshError::from)
             .map_err(crate::db::DbError::from)?;
-        let n = topology.vertex_count();
+        ctx.n = topology.vertex_count();
         let blender = Blender::new(&topology)?;
         let fps = m.fps;
         let mut loaded: std::collections::HashMap<String, Loaded> = Default::default();
         let mut spaces = Vec::new();
         for sp in &m.spaces {
-            for q in &sp.sequences {
-                if loaded.contains_key(q) {
-                    continue;
-                }
-                let entry = m
-                    .sequences
-                    .iter()
-                    .find(|s| &s.name == q)
-                    .ok_or_else(|| space_err(&sp.name, format!("no sequence '{q}'")))?;
-                if let Some(f) = entry.fps
-                    && (f - fps).abs() > 1e-6 * fps
-                {
-                    return Err(space_err(
-                        &sp.name,
-                        format!(
-                            "sequence '{q}' is at {f} fps, the database at {fps}: a space's sequences play at the database's rate"
-                        ),
-                    ));
-                }
-                let seq = m.load_sequence(dir, entry)?;
-                if seq.mesh().vertex_count() != n || seq.mesh().triangles() != topo_file.triangles()
-                {
-                    return Err(space_err(
-                        &sp.name,
-                        format!("sequence '{q}': its connectivity differs from the topology"),
-                    ));
-                }
-                if seq.frame_count() < 2 {
-                    return Err(space_err(
-                        &sp.name,
-                        format!(
-                            "sequence '{q}' has {} frame(s); a space needs at least 2 per sequence",
-                            seq.frame_count()
-                        ),
-                    ));
-                }
-                let frames: Vec<[f64; 3]> = seq.all_positions().iter().map(conv).collect();
-                let track = root_track(&frames, n, fps);
-                loaded.insert(q.clone(), Loaded { frames, track });
-            }
-            let seqs: Vec<&Loaded> = sp.sequences.iter().map(|q| &loaded[q]).collect();
-            let feats: Vec<_> = seqs
-                .iter()
-                .map(|l| features(&l.frames, n, &l.track))
-                .collect();
-            let alignment = align(&feats, fps);
-            let k = alignment.grid;
-            let mut buf0 = vec![[0.0; 3]; n];
-            let mut buf1 = vec![[0.0; 3]; n];
-            let originals: Vec<Vec<f32>> = seqs
-                .iter()
-                .enumerate()
-                .map(|(i, l)| {
-                    let mut block = Vec::with_capacity(k * n * 3);
-                    for j in 0..k {
-                        let (f0, f1, fr) = alignment.wrapped(i, alignment.times[i][j]);
-                        let f1 = f1.min(l.track.centre.len() - 1);
-                        local_frame(&l.frames, n, &l.track, f0, &mut buf0);
-                        local_frame(&l.frames, n, &l.track, f1, &mut buf1);
-                        for (a, b) in buf0.iter().zip(&buf1) {
-                            for c in 0..3 {
-                                block.push((a[c] + (b[c] - a[c]) * fr) as f32);
-                            }
-                        }
-                    }
-                    block
-                })
-                .collect();
-            let steps: Vec<RootSteps> = seqs
-                .iter()
-                .enumerate()
-                .map(|(i, l)| root_steps(&alignment, i, &l.track))
-                .collect();
-            let epsilon = sp.epsilon_mm.map_or(opts.hybrid.epsilon, |e| e * 1e-3);
-            let hopts = HybridOptions {
-                epsilon,
-                ..opts.hybrid
-            };
-            let blend = HybridBlend::build(originals, n, k, &blender, &hopts);
-            let parameters: Vec<Parameter> = sp
-                .parameters
-                .iter()
-                .filter_map(|p| Parameter::parse(p))
-                .collect();
-            let axis = match parameters.first() {
-                Some(&p) => {
-                    Some(ParamMap::fit(p, &steps, fps).map_err(|e| space_err(&sp.name, e))?)
-                }
-                None => None,
-            };
-            let per = (1.0 / WEIGHT_STEP).round() as usize;
-            let measured = (0..=(sp.sequences.len() - 1) * per)
-                .map(|i| {
-                    let u = i as f64 / per as f64;
-                    let [s, t] = measure(&steps, u, fps);
-                    [u, s, t]
-                })
-                .collect();
-            spaces.push(MotionSpace {
-                name: sp.name.clone(),
-                sequences: sp.sequences.clone(),
-                parameters,
-                alignment,
-                pairs: blend.pairs.clone(),
-                blend,
-                steps,
-                axis,
-                measured,
-                epsilon,
-            });
+            ctx.load_sequences(sp, &mut loaded)?;
+            spaces.push(build_space(&ctx, sp, &loaded, &blender, opts)?);
         }
-        let feats: Vec<RefFeatures> = spaces.iter().map(|s| s.ref_features(fps)).collect();
-        let count = spaces.len();
-        let mut tables = Vec::with_capacity(count * count);
-        for s in 0..count {
-            for t in 0..count {
-                tables.push(if s == t {
-                    SimilarityTable {
-                        ks: 0,
-                        kt: 0,
-                        us: Vec::new(),
-                        ut: Vec::new(),
-                        sim: Vec::new(),
-                    }
-                } else {
-                    SimilarityTable::new(&feats[s], &feats[t])
-                });
-            }
-        }
+        let tables = similarity_tables(&spaces, fps);
         Ok(Motion {
             fps,
             topology,

@@ -108,23 +108,79 @@ pub fn parse(
     topology: &crate::mesh::Mesh,
     opts: &MotionOptions,
 ) -> Result<Motion, String> {
-    let mut at = 0usize;
-    let mut take = |k: usize| -> Result<&[u8], String> {
-        let s = bytes
-            .get(at..at.checked_add(k).ok_or("size overflow")?)
+    let mut r = Cursor { bytes, at: 0 };
+    let (header, hl) = read_header(&mut r, key, opts)?;
+    let n = topology.vertex_count();
+    // What is left after the header: every block below must fit it.
+    let body = bytes.len().saturating_sub(24 + hl);
+    let mut spaces = header.spaces;
+    for s in &mut spaces {
+        read_space_blocks(&mut r, s, n, body)?;
+    }
+    let mut tables = header.tables;
+    read_tables(&mut r, &mut tables, &spaces, body)?;
+    Ok(Motion {
+        fps: header.fps,
+        topology: topology.clone(),
+        spaces,
+        tables,
+        options: header.options,
+    })
+}
+
+/// A read position in a cache file's bytes; every read is checked against
+/// the end.
+struct Cursor<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Cursor<'a> {
+    /// The next `k` bytes.
+    fn take(&mut self, k: usize) -> Result<&'a [u8], String> {
+        let s = self
+            .bytes
+            .get(self.at..self.at.checked_add(k).ok_or("size overflow")?)
             .ok_or("truncated")?;
-        at += k;
+        self.at += k;
         Ok(s)
-    };
-    if take(8)? != MAGIC {
+    }
+
+    /// A block of `expect` finite `f32` values after its count; `what` names
+    /// it in the error.
+    fn floats(&mut self, expect: usize, what: &str) -> Result<Vec<f32>, String> {
+        let len = usize::try_from(u64_of(self.take(8)?)).map_err(|_| "count")?;
+        if len != expect {
+            return Err(format!("{what}: {len} values, expected {expect}"));
+        }
+        let body = self.take(len.checked_mul(4).ok_or("size overflow")?)?;
+        let v: Vec<f32> = body
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(format!("{what}: a value that is not finite"));
+        }
+        Ok(v)
+    }
+}
+
+/// A little-endian `u64` (0 for fewer than 8 bytes).
+fn u64_of(b: &[u8]) -> u64 {
+    u64::from_le_bytes(b.try_into().unwrap_or([0; 8]))
+}
+
+/// Step 1 of [`parse`]: the magic, the key, the JSON header (its frame rate
+/// a rate and its options `opts`); returns it with its length in bytes.
+fn read_header(r: &mut Cursor, key: u64, opts: &MotionOptions) -> Result<(Header, usize), String> {
+    if r.take(8)? != MAGIC {
         return Err("not a parametric cache".into());
     }
-    let u64_of = |b: &[u8]| u64::from_le_bytes(b.try_into().unwrap_or([0; 8]));
-    if u64_of(take(8)?) != key {
+    if u64_of(r.take(8)?) != key {
         return Err("stale (inputs changed)".into());
     }
-    let hl = usize::try_from(u64_of(take(8)?)).map_err(|_| "header size")?;
-    let header: Header = serde_json::from_slice(take(hl)?).map_err(|e| format!("header: {e}"))?;
+    let hl = usize::try_from(u64_of(r.take(8)?)).map_err(|_| "header size")?;
+    let header: Header = serde_json::from_slice(r.take(hl)?).map_err(|e| format!("header: {e}"))?;
     if !crate::util::budget::is_frame_rate(header.fps) {
         return Err(format!(
             "frame rate {} (expected {}-{} fps)",
@@ -140,88 +196,90 @@ pub fn parse(
             serde_json::to_string(opts).unwrap_or_default()
         ));
     }
-    let n = topology.vertex_count();
-    // What is left after the header: every block below must fit it.
-    let body = bytes.len().saturating_sub(24 + hl);
-    let mut floats = |expect: usize, what: &str| -> Result<Vec<f32>, String> {
-        let len = usize::try_from(u64_of(take(8)?)).map_err(|_| "count")?;
-        if len != expect {
-            return Err(format!("{what}: {len} values, expected {expect}"));
-        }
-        let body = take(len.checked_mul(4).ok_or("size overflow")?)?;
-        let v: Vec<f32> = body
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect();
-        if v.iter().any(|x| !x.is_finite()) {
-            return Err(format!("{what}: a value that is not finite"));
-        }
-        Ok(v)
-    };
-    let mut spaces = header.spaces;
-    for s in &mut spaces {
-        let k = s.alignment.grid;
-        let per_block = k
-            .checked_mul(n)
-            .and_then(|x| x.checked_mul(3))
-            .filter(|&x| x > 0 && x <= body / 4)
-            .ok_or_else(|| {
-                format!(
-                    "space '{}': a phase grid of {k} samples does not fit the file",
-                    s.name
-                )
-            })?;
-        let blocks = s
-            .pairs
-            .iter()
-            .flat_map(|p| p.blocks.iter().copied())
-            .max()
-            .map_or(1, |b| b.saturating_add(1))
-            .max(s.sequences.len());
-        // Each block is a count and its values: more than the bytes left
-        // can hold is a lie, refused before anything is allocated for it.
-        if blocks > body / (8 + 4 * per_block) {
-            return Err(format!(
-                "space '{}': {blocks} reference blocks of {per_block} values do not fit the file",
+    Ok((header, hl))
+}
+
+/// Step 2 of [`parse`], per space: its reference blocks (a phase grid of
+/// `n` vertices each, every count checked against the `body` bytes after
+/// the header before anything is allocated), then its blend.
+fn read_space_blocks(
+    r: &mut Cursor,
+    s: &mut MotionSpace,
+    n: usize,
+    body: usize,
+) -> Result<(), String> {
+    let k = s.alignment.grid;
+    let per_block = k
+        .checked_mul(n)
+        .and_then(|x| x.checked_mul(3))
+        .filter(|&x| x > 0 && x <= body / 4)
+        .ok_or_else(|| {
+            format!(
+                "space '{}': a phase grid of {k} samples does not fit the file",
                 s.name
+            )
+        })?;
+    let blocks = s
+        .pairs
+        .iter()
+        .flat_map(|p| p.blocks.iter().copied())
+        .max()
+        .map_or(1, |b| b.saturating_add(1))
+        .max(s.sequences.len());
+    // Each block is a count and its values: more than the bytes left
+    // can hold is a lie, refused before anything is allocated for it.
+    if blocks > body / (8 + 4 * per_block) {
+        return Err(format!(
+            "space '{}': {blocks} reference blocks of {per_block} values do not fit the file",
+            s.name
+        ));
+    }
+    if s.sequences.is_empty()
+        || s.steps.len() != s.sequences.len()
+        || s.pairs.len() + 1 != s.sequences.len()
+        || s.steps
+            .iter()
+            .any(|r| r.step.len() != k || r.duration.len() != k)
+    {
+        return Err(format!("space '{}': inconsistent header", s.name));
+    }
+    for (i, p) in s.pairs.iter().enumerate() {
+        let ordered = p
+            .weights
+            .windows(2)
+            .all(|w| w[0] <= w[1] && (0.0..=1.0).contains(&w[0]))
+            && p.weights.last().is_some_and(|w| (0.0..=1.0).contains(w));
+        if p.weights.len() < 2 || p.weights.len() != p.blocks.len() || !ordered {
+            return Err(format!(
+                "space '{}', pair {i}: {} reference weights for {} blocks (at least 2, in [0, 1], increasing)",
+                s.name,
+                p.weights.len(),
+                p.blocks.len()
             ));
         }
-        if s.sequences.is_empty()
-            || s.steps.len() != s.sequences.len()
-            || s.pairs.len() + 1 != s.sequences.len()
-            || s.steps
-                .iter()
-                .any(|r| r.step.len() != k || r.duration.len() != k)
-        {
-            return Err(format!("space '{}': inconsistent header", s.name));
-        }
-        for (i, p) in s.pairs.iter().enumerate() {
-            let ordered = p
-                .weights
-                .windows(2)
-                .all(|w| w[0] <= w[1] && (0.0..=1.0).contains(&w[0]))
-                && p.weights.last().is_some_and(|w| (0.0..=1.0).contains(w));
-            if p.weights.len() < 2 || p.weights.len() != p.blocks.len() || !ordered {
-                return Err(format!(
-                    "space '{}', pair {i}: {} reference weights for {} blocks (at least 2, in [0, 1], increasing)",
-                    s.name,
-                    p.weights.len(),
-                    p.blocks.len()
-                ));
-            }
-        }
-        let mut out = Vec::with_capacity(blocks);
-        for b in 0..blocks {
-            out.push(floats(per_block, &format!("space '{}' block {b}", s.name))?);
-        }
-        s.blend = super::hybrid::HybridBlend {
-            n,
-            grid: k,
-            blocks: out,
-            pairs: s.pairs.clone(),
-        };
     }
-    let mut tables = header.tables;
+    let mut out = Vec::with_capacity(blocks);
+    for b in 0..blocks {
+        out.push(r.floats(per_block, &format!("space '{}' block {b}", s.name))?);
+    }
+    s.blend = super::hybrid::HybridBlend {
+        n,
+        grid: k,
+        blocks: out,
+        pairs: s.pairs.clone(),
+    };
+    Ok(())
+}
+
+/// Step 3 of [`parse`]: the similarity tables, one per ordered pair of
+/// `spaces` (their sizes matching the spaces' grids and the `body` bytes),
+/// every similarity in `[0, 1]`.
+fn read_tables(
+    r: &mut Cursor,
+    tables: &mut [SimilarityTable],
+    spaces: &[MotionSpace],
+    body: usize,
+) -> Result<(), String> {
     if tables.len() != spaces.len() * spaces.len() {
         return Err("table count".into());
     }
@@ -250,18 +308,12 @@ pub fn parse(
                 t.kt
             ));
         };
-        t.sim = floats(expect, "similarity table")?;
+        t.sim = r.floats(expect, "similarity table")?;
         if t.sim.iter().any(|x| !(0.0..=1.0).contains(x)) {
             return Err("a similarity outside [0, 1]".into());
         }
     }
-    Ok(Motion {
-        fps: header.fps,
-        topology: topology.clone(),
-        spaces,
-        tables,
-        options: header.options,
-    })
+    Ok(())
 }
 
 /// The model of the database in `dir`: from the cache when current, else
