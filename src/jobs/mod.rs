@@ -39,6 +39,7 @@ pub mod play;
 pub mod render;
 pub mod retarget;
 pub mod rig;
+pub mod setup_text;
 pub mod skeletons;
 pub mod synth;
 pub mod synth_db;
