@@ -68,6 +68,9 @@ impl Setup {
         for n in &s.rig_notes {
             out += &format!("rig: {n}\n");
         }
+        for k in &s.check.skipped {
+            out += &format!("rig: {k}\n");
+        }
         for w in &s.check.warnings {
             out += &format!("WARN rig: {}\n", w.message);
         }
