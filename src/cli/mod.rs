@@ -7,6 +7,7 @@ mod argv;
 mod batch;
 mod blend;
 mod db;
+mod db_init;
 mod demo;
 mod eval;
 mod flags;

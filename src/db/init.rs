@@ -152,11 +152,26 @@ pub struct RestFrame {
 /// [`assemble`], with the rest frame chosen when
 /// [`InitOptions::choose_rest`] and there are landmarks and sequences
 /// (written into the manifest's `[rig] rest` when not the topology's).
+/// In steps: the options and paths ([`manifest_of`]), the files read and
+/// checked ([`check_files`], [`check_sequences`]), the rest frame
+/// ([`settle_rest`]), the folder and the relative paths ([`store_in`]).
 pub fn assemble_setup(
     dir: &Path,
     opts: &InitOptions,
     notes: &mut Vec<String>,
 ) -> Result<(Manifest, Option<RestFrame>), InitError> {
+    let mut m = manifest_of(dir, opts)?;
+    let topo = check_files(dir, opts, &mut m, notes)?;
+    check_sequences(dir, &m, &topo)?;
+    let rest = settle_rest(dir, opts, &mut m, &topo, notes)?;
+    store_in(dir, &mut m)?;
+    Ok((m, rest))
+}
+
+/// The manifest of `opts` with every path resolved (absolute), refused
+/// when one exists without `force`, a bad name or a path that does not
+/// resolve.
+fn manifest_of(dir: &Path, opts: &InitOptions) -> Result<Manifest, InitError> {
     let manifest = dir.join(MANIFEST);
     if manifest.exists() && !opts.force {
         return Err(InitError::Exists(manifest));
@@ -184,7 +199,7 @@ pub fn assemble_setup(
             .transpose()
             .map_err(|e| read(format!("`InitOptions::{option}`"))(e.into()))
     };
-    let mut m = Manifest {
+    Ok(Manifest {
         name: opts.name.clone().unwrap_or_default(),
         topology: canonical(&opts.mesh).map_err(|e| read("`InitOptions::mesh`")(e.into()))?,
         fps: opts.fps,
@@ -203,7 +218,17 @@ pub fn assemble_setup(
         graph: Default::default(),
         deform: Default::default(),
         spaces: Vec::new(),
-    };
+    })
+}
+
+/// The topology read, the landmarks checked on it, the up axis and unit
+/// resolved into `m`, a person-sized rest frame checked; the topology.
+fn check_files(
+    dir: &Path,
+    opts: &InitOptions,
+    m: &mut Manifest,
+    notes: &mut Vec<String>,
+) -> Result<Mesh, InitError> {
     let up = opts.up.to_ascii_lowercase();
     if !matches!(up.as_str(), "y" | "z" | "auto") {
         return Err(InitError::Option(format!(
@@ -249,9 +274,22 @@ pub fn assemble_setup(
             ))
         )));
     }
-    check_sequences(dir, &m, &topo)?;
+    Ok(topo)
+}
+
+/// The rest frame (with landmarks and sequences), written into `m`'s
+/// `[rig] rest` when not the topology's and [`InitOptions::choose_rest`];
+/// kept with the contact reported when it is off. What was decided is
+/// pushed onto `notes`.
+fn settle_rest(
+    dir: &Path,
+    opts: &InitOptions,
+    m: &mut Manifest,
+    topo: &Mesh,
+    notes: &mut Vec<String>,
+) -> Result<Option<RestFrame>, InitError> {
     let mut rest = if m.rig.landmarks.is_some() && !m.sequences.is_empty() {
-        choose_rest(dir, &m, &topo)?
+        choose_rest(dir, m, topo)?
     } else {
         None
     };
@@ -282,6 +320,12 @@ pub fn assemble_setup(
             notes.push(format!("rest frame: the topology's ({})", r.choice.why));
         }
     }
+    Ok(rest)
+}
+
+/// The folder `dir` created, `m` named after it when unnamed, and `m`'s
+/// paths stored relative to it when inside it (else absolute).
+fn store_in(dir: &Path, m: &mut Manifest) -> Result<(), InitError> {
     std::fs::create_dir_all(dir).map_err(|source| InitError::Io {
         path: dir.to_path_buf(),
         source,
@@ -316,7 +360,7 @@ pub fn assemble_setup(
     {
         *p = store(p);
     }
-    Ok((m, rest))
+    Ok(())
 }
 
 /// The rest frame over the topology's positions then every frame of every
@@ -417,8 +461,9 @@ pub fn resolve_up(
     let axis = landmarks.and_then(|p| {
         // An unreadable landmarks file is reported by `db build`, which
         // embeds the rig; here it only leaves the axis undecided.
-        let lm = Landmarks::load(p, topo.vertex_count()).ok()?;
         let pos = topo.positions();
+        // A headless body's chin: the top of its neck.
+        let lm = Landmarks::load(p, topo.vertex_count()).ok()?.completed(pos);
         let (c, g) = (
             lm.point(Landmark::Chin, pos)?,
             lm.point(Landmark::Groin, pos)?,

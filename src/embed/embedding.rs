@@ -90,6 +90,12 @@ pub struct Embedding {
     pub regressors: Vec<Regressor>,
     /// What was assumed while embedding.
     pub notes: Vec<String>,
+    /// The body ends the mesh lacks (issue 41's partial bodies): `head`
+    /// (the landmarks declare it, the chin placed at the top of the neck).
+    /// The checks of an absent end are skipped. Empty (and not written)
+    /// for a whole body.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub absent: Vec<String>,
 }
 
 /// Refuses meshes no rig can be embedded in, with the reason (a face-less,
@@ -257,6 +263,15 @@ impl Embedding {
     ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
         check_body(mesh)?;
+        // A headless body's chin: the top of its neck.
+        let headless = lm.headless();
+        let full;
+        let lm = if headless {
+            full = lm.completed(p);
+            &full
+        } else {
+            lm
+        };
         // The vertical as `place_joints` takes it ([`super::axes::body_up`]).
         let up = match (
             lm.point(super::landmarks::Landmark::Chin, p),
@@ -267,9 +282,20 @@ impl Embedding {
         };
         lm.validate(p, t, up.to_array())?;
         let est = place_joints(p, t, lm);
+        let absent: Vec<String> = if headless {
+            vec!["head".into()]
+        } else {
+            Vec::new()
+        };
         let bs = bones(&est);
         let w = bone_heat(mesh, &bs)?;
-        Embedding::assemble(mesh, est, &w, parts)
+        let mut e = Embedding::assemble(mesh, est, &w, parts)?;
+        if headless {
+            e.notes
+                .push("no head: the chin placed at the top of the neck".into());
+        }
+        e.absent = absent;
+        Ok(e)
     }
 
     /// [`Embedding::new`] on another frame of the mesh than its own
@@ -382,6 +408,7 @@ impl Embedding {
             skin,
             regressors,
             notes,
+            absent: Vec::new(),
         })
     }
 

@@ -109,7 +109,46 @@ fn on_line(p: DVec3, a: DVec3, b: DVec3) -> DVec3 {
     a + d * ((p - a).dot(d) / d.length_squared())
 }
 
-/// Places every canonical joint of a rest mesh from its landmarks.
+/// The body's frame on a rest mesh: up (groin to chin), the character's
+/// left (from the limb landmarks), facing, the floor and the height along
+/// up.
+#[derive(Clone, Copy)]
+struct Body {
+    up: DVec3,
+    left: DVec3,
+    facing: DVec3,
+    floor: f64,
+    h: f64,
+}
+
+impl Body {
+    /// `q` moved along up to `height`.
+    fn at_height(&self, q: DVec3, height: f64) -> DVec3 {
+        q + self.up * (height - q.dot(self.up))
+    }
+}
+
+/// The required landmarks' points (the origin for an absent one).
+struct Marks {
+    chin: DVec3,
+    groin: DVec3,
+    lw: DVec3,
+    rw: DVec3,
+    le: DVec3,
+    re: DVec3,
+    lk: DVec3,
+    rk: DVec3,
+}
+
+/// A landmark's point on `positions`, if given.
+fn mark(lm: &Landmarks, positions: &[[f64; 3]], l: Landmark) -> Option<DVec3> {
+    lm.point(l, positions).map(DVec3::from_array)
+}
+
+/// Places every canonical joint of a rest mesh from its landmarks, in
+/// named steps: the body's frame, neck and head, the mid-plane and the
+/// pelvis's centre, the ankles, the limbs (twice), the trunk, the toes,
+/// the hand tips.
 pub fn place_joints(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
@@ -117,142 +156,60 @@ pub fn place_joints(
 ) -> JointEstimate {
     use Canonical as C;
     use Landmark as L;
-    let get = |l: L| lm.point(l, positions).map(DVec3::from_array);
-    let req = |l: L| get(l).unwrap_or(DVec3::ZERO);
-    let (chin, groin) = (req(L::Chin), req(L::Groin));
-    let (lw, rw, le, re, lk, rk) = (
-        req(L::LWrist),
-        req(L::RWrist),
-        req(L::LElbow),
-        req(L::RElbow),
-        req(L::LKnee),
-        req(L::RKnee),
-    );
-    let up = body_up(chin - groin);
-    let side = (lk - rk) + (le - re) + (lw - rw);
-    let left = (side - up * side.dot(up)).normalize_or(up.any_orthonormal_vector());
-    let facing = left.cross(up);
-    let hs = positions.iter().map(|q| DVec3::from_array(*q).dot(up));
-    let (floor, top) = hs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-        (a.min(x), b.max(x))
-    });
-    let h = (top - floor).max(1e-9);
+    let req = |l: L| mark(lm, positions, l).unwrap_or(DVec3::ZERO);
+    let m = Marks {
+        chin: req(L::Chin),
+        groin: req(L::Groin),
+        lw: req(L::LWrist),
+        rw: req(L::RWrist),
+        le: req(L::LElbow),
+        re: req(L::RElbow),
+        lk: req(L::LKnee),
+        rk: req(L::RKnee),
+    };
+    let b = body_frame(positions, &m);
     let mut cx = Ctx {
         p: positions,
         t: triangles,
-        h,
+        h: b.h,
         notes: Vec::new(),
         twin: None,
     };
-    let at_height = |q: DVec3, height: f64| q + up * (height - q.dot(up));
     let mut j = [DVec3::ZERO; Canonical::COUNT];
-
-    // Neck and head: horizontal sections below and above the chin, around a
-    // point behind the chin (inside the neck/head).
-    let chin_h = chin.dot(up);
-    let behind = chin - facing * 0.04 * h;
-    let neck_at = at_height(behind, chin_h - 0.05 * h);
-    j[C::Neck.index()] = cx.centre("neck", neck_at, up, neck_at, 0.08, neck_at);
-    let head_at = at_height(behind, chin_h + 0.03 * h);
-    j[C::Head.index()] = cx.centre("head", head_at, up, head_at, 0.1, head_at);
-    let head_top = get(L::HeadTop).unwrap_or_else(|| {
-        let hc = j[C::Head.index()];
-        positions
-            .iter()
-            .map(|q| DVec3::from_array(*q))
-            .filter(|q| {
-                let d = *q - hc;
-                (d - up * d.dot(up)).length() < 0.12 * h
-            })
-            .max_by(|a, b| a.dot(up).total_cmp(&b.dot(up)))
-            .unwrap_or(hc + up * 0.1 * h)
-    });
-
-    // Pelvis and hips: on and about the mid-plane, at a height a little
-    // above the groin; the pelvis's depth from the torso's section there.
+    let (neck_at, head_at, head_top) = neck_and_head(&mut cx, &b, lm, m.chin, &mut j);
     let (plane, _) = estimate_mid_plane(
         positions,
         triangles,
-        [groin, chin, (lk + rk) * 0.5],
-        up,
-        left,
-        h,
+        [m.groin, m.chin, (m.lk + m.rk) * 0.5],
+        b.up,
+        b.left,
+        b.h,
     );
-    let hip_h = groin.dot(up) + 0.035 * h;
-    let (pc, pelvis_h) = pelvis_centre(&mut cx, &plane, groin, up, hip_h);
+    let hip_h = m.groin.dot(b.up) + 0.035 * b.h;
+    let (pc, pelvis_h) = pelvis_centre(&mut cx, &plane, m.groin, b.up, hip_h);
     for (c, name, at) in [(C::Neck, "neck", neck_at), (C::Head, "head", head_at)] {
         j[c.index()] = centred(&mut cx, &plane, name, j[c.index()], at);
     }
-    let mut hip_w = 0.055 * h;
-    let hip = |w: f64, s: f64| pc + left * (s * w);
-
-    // Ankles: from a landmark, or a section just above the floor under the knee.
-    let ankle_h = floor + 0.055 * h;
-    let mut ankles = [DVec3::ZERO; 2];
-    for (k, (lmk, knee, name)) in [(L::LAnkle, lk, "l_ankle"), (L::RAnkle, rk, "r_ankle")]
-        .into_iter()
-        .enumerate()
-    {
-        let at = get(lmk).unwrap_or_else(|| at_height(knee, ankle_h));
-        let axis = (knee - at).normalize_or(up);
-        let near = at_height(knee, at.dot(up));
-        let other = [rk, lk][k];
-        cx.twin = Some(get([L::RAnkle, L::LAnkle][k]).unwrap_or_else(|| at_height(other, ankle_h)));
-        ankles[k] = cx.centre(name, at, axis, near, 0.06, at);
-    }
-    // Knees, then elbows and wrists, twice: each pass refines the limb axes.
-    let mut knees = [lk, rk];
-    let mut arm = [[le, lw], [re, rw]];
-    let mut shoulders = [DVec3::ZERO; 2];
-    let mut hip_note = None;
-    let neck = j[C::Neck.index()];
-    for _ in 0..2 {
-        for (k, (lmk, s, name)) in [(lk, 1.0, "l_knee"), (rk, -1.0, "r_knee")]
-            .into_iter()
-            .enumerate()
-        {
-            let hp = hip(hip_w, s);
-            let axis = (ankles[k] - hp).normalize_or(-up);
-            let fb = on_line(lmk, hp, ankles[k]);
-            cx.twin = Some([rk, lk][k]);
-            knees[k] = cx.centre(name, lmk, axis, lmk, 0.07, fb);
-        }
-        let (w, note) = hip_half_width(
-            &cx,
-            &plane,
-            [hip(hip_w, 1.0), hip(hip_w, -1.0)],
-            knees,
-            up,
-            hip_h,
-        );
-        hip_w = w;
-        hip_note = note;
-        for (k, (e_lm, w_lm, s, names)) in [
-            (le, lw, 1.0, ["l_elbow", "l_wrist", "l_shoulder"]),
-            (re, rw, -1.0, ["r_elbow", "r_wrist", "r_shoulder"]),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let sh_lm = get(if s > 0.0 { L::LShoulder } else { L::RShoulder });
-            let guess = sh_lm
-                .map(|q| q - facing * (q - neck).dot(facing))
-                .unwrap_or_else(|| neck + left * (s * 0.095 * h) - up * 0.01 * h);
-            let w = cx.centre(names[1], w_lm, w_lm - e_lm, w_lm, 0.06, w_lm);
-            let e_axis = (w - guess).normalize_or(-up);
-            let e = cx.centre(names[0], e_lm, e_axis, e_lm, 0.07, on_line(e_lm, guess, w));
-            // The upper arm's axis from a section a quarter of the way down it.
-            let q = guess.lerp(e, 0.3);
-            let len = guess.distance(e);
-            shoulders[k] = match part_loop(positions, triangles, q, e - guess, q) {
-                Some(l) if l.radius < 0.06 * h && len > 0.0 => {
-                    e + (l.centroid - e).normalize_or(guess - e) * len
-                }
-                _ => guess,
-            };
-            arm[k] = [e, w];
-        }
-    }
+    let ankles = place_ankles(&mut cx, &b, lm, &m);
+    let limbs = place_limbs(
+        &mut cx,
+        &b,
+        lm,
+        &m,
+        &plane,
+        pc,
+        hip_h,
+        ankles,
+        j[C::Neck.index()],
+    );
+    let Limbs {
+        knees,
+        arm,
+        shoulders,
+        hip_w,
+        hip_note,
+    } = limbs;
+    let hip = |w: f64, s: f64| pc + b.left * (s * w);
     cx.notes.extend(hip_note);
     j[C::LShoulder.index()] = shoulders[0];
     j[C::RShoulder.index()] = shoulders[1];
@@ -266,21 +223,233 @@ pub fn place_joints(
     j[C::RKnee.index()] = knees[1];
     j[C::LAnkle.index()] = ankles[0];
     j[C::RAnkle.index()] = ankles[1];
-    // Between the hips, a little above them, and inside the torso when the
-    // crotch is above hip height.
+    place_trunk(&mut cx, &b, &plane, hip_h, pelvis_h, &mut j);
+    let toe_tips = place_toes(positions, &b, lm, ankles, &mut j);
+
+    // The same note from both refinement passes once.
+    let mut seen = std::collections::HashSet::new();
+    cx.notes.retain(|n| seen.insert(n.clone()));
+
+    let hand_tips = hand_tips(positions, &b, &arm);
+    JointEstimate {
+        joints: j,
+        head_top,
+        hand_tips,
+        toe_tips,
+        up: b.up,
+        facing: b.facing,
+        left: b.left,
+        height: b.h,
+        mid_plane: plane,
+        notes: cx.notes,
+    }
+}
+
+/// Up from the groin to the chin, left from the limb landmarks' pairs,
+/// facing = left × up; the floor and height along up.
+fn body_frame(positions: &[[f64; 3]], m: &Marks) -> Body {
+    let up = body_up(m.chin - m.groin);
+    let side = (m.lk - m.rk) + (m.le - m.re) + (m.lw - m.rw);
+    let left = (side - up * side.dot(up)).normalize_or(up.any_orthonormal_vector());
+    let facing = left.cross(up);
+    let hs = positions.iter().map(|q| DVec3::from_array(*q).dot(up));
+    let (floor, top) = hs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+        (a.min(x), b.max(x))
+    });
+    let h = (top - floor).max(1e-9);
+    Body {
+        up,
+        left,
+        facing,
+        floor,
+        h,
+    }
+}
+
+/// Neck and head: horizontal sections below and above the chin, around a
+/// point behind the chin (inside the neck/head), written into `j`; the
+/// points they were looked for around and the head top (a landmark, or
+/// the highest vertex above the head).
+fn neck_and_head(
+    cx: &mut Ctx,
+    b: &Body,
+    lm: &Landmarks,
+    chin: DVec3,
+    j: &mut [DVec3; Canonical::COUNT],
+) -> (DVec3, DVec3, DVec3) {
+    use Canonical as C;
+    let (up, h) = (b.up, b.h);
+    let chin_h = chin.dot(up);
+    let behind = chin - b.facing * 0.04 * h;
+    let neck_at = b.at_height(behind, chin_h - 0.05 * h);
+    j[C::Neck.index()] = cx.centre("neck", neck_at, up, neck_at, 0.08, neck_at);
+    let head_at = b.at_height(behind, chin_h + 0.03 * h);
+    j[C::Head.index()] = cx.centre("head", head_at, up, head_at, 0.1, head_at);
+    let head_top = mark(lm, cx.p, Landmark::HeadTop).unwrap_or_else(|| {
+        let hc = j[C::Head.index()];
+        cx.p.iter()
+            .map(|q| DVec3::from_array(*q))
+            .filter(|q| {
+                let d = *q - hc;
+                (d - up * d.dot(up)).length() < 0.12 * h
+            })
+            .max_by(|a, b| a.dot(up).total_cmp(&b.dot(up)))
+            .unwrap_or(hc + up * 0.1 * h)
+    });
+    (neck_at, head_at, head_top)
+}
+
+/// Ankles: from a landmark, or a section just above the floor under the
+/// knee.
+fn place_ankles(cx: &mut Ctx, b: &Body, lm: &Landmarks, m: &Marks) -> [DVec3; 2] {
+    use Landmark as L;
+    let p = cx.p;
+    let get = |l: L| mark(lm, p, l);
+    let ankle_h = b.floor + 0.055 * b.h;
+    let mut ankles = [DVec3::ZERO; 2];
+    for (k, (lmk, knee, name)) in [(L::LAnkle, m.lk, "l_ankle"), (L::RAnkle, m.rk, "r_ankle")]
+        .into_iter()
+        .enumerate()
+    {
+        let at = get(lmk).unwrap_or_else(|| b.at_height(knee, ankle_h));
+        let axis = (knee - at).normalize_or(b.up);
+        let near = b.at_height(knee, at.dot(b.up));
+        let other = [m.rk, m.lk][k];
+        let twin = get([L::RAnkle, L::LAnkle][k]).unwrap_or_else(|| b.at_height(other, ankle_h));
+        cx.twin = Some(twin);
+        ankles[k] = cx.centre(name, at, axis, near, 0.06, at);
+    }
+    ankles
+}
+
+/// The limbs' joints after [`place_limbs`]'s two passes.
+struct Limbs {
+    knees: [DVec3; 2],
+    /// Left and right (elbow, wrist).
+    arm: [[DVec3; 2]; 2],
+    shoulders: [DVec3; 2],
+    /// The hips' half width about the mid-plane.
+    hip_w: f64,
+    hip_note: Option<String>,
+}
+
+/// Knees, then the hips' width, then elbows, wrists and shoulders, twice:
+/// each pass refines the limb axes.
+#[allow(clippy::too_many_arguments)]
+fn place_limbs(
+    cx: &mut Ctx,
+    b: &Body,
+    lm: &Landmarks,
+    m: &Marks,
+    plane: &MidPlane,
+    pc: DVec3,
+    hip_h: f64,
+    ankles: [DVec3; 2],
+    neck: DVec3,
+) -> Limbs {
+    use Landmark as L;
+    let (up, left, facing, h) = (b.up, b.left, b.facing, b.h);
+    let (lk, rk) = (m.lk, m.rk);
+    let mut hip_w = 0.055 * h;
+    let hip = |w: f64, s: f64| pc + left * (s * w);
+    let mut knees = [lk, rk];
+    let mut arm = [[m.le, m.lw], [m.re, m.rw]];
+    let mut shoulders = [DVec3::ZERO; 2];
+    let mut hip_note = None;
+    for _ in 0..2 {
+        for (k, (lmk, s, name)) in [(lk, 1.0, "l_knee"), (rk, -1.0, "r_knee")]
+            .into_iter()
+            .enumerate()
+        {
+            let hp = hip(hip_w, s);
+            let axis = (ankles[k] - hp).normalize_or(-up);
+            let fb = on_line(lmk, hp, ankles[k]);
+            cx.twin = Some([rk, lk][k]);
+            knees[k] = cx.centre(name, lmk, axis, lmk, 0.07, fb);
+        }
+        let (w, note) = hip_half_width(
+            cx,
+            plane,
+            [hip(hip_w, 1.0), hip(hip_w, -1.0)],
+            knees,
+            up,
+            hip_h,
+        );
+        hip_w = w;
+        hip_note = note;
+        for (k, (e_lm, w_lm, s, names)) in [
+            (m.le, m.lw, 1.0, ["l_elbow", "l_wrist", "l_shoulder"]),
+            (m.re, m.rw, -1.0, ["r_elbow", "r_wrist", "r_shoulder"]),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let sh_lm = mark(lm, cx.p, if s > 0.0 { L::LShoulder } else { L::RShoulder });
+            let guess = sh_lm
+                .map(|q| q - facing * (q - neck).dot(facing))
+                .unwrap_or_else(|| neck + left * (s * 0.095 * h) - up * 0.01 * h);
+            let w = cx.centre(names[1], w_lm, w_lm - e_lm, w_lm, 0.06, w_lm);
+            let e_axis = (w - guess).normalize_or(-up);
+            let e = cx.centre(names[0], e_lm, e_axis, e_lm, 0.07, on_line(e_lm, guess, w));
+            // The upper arm's axis from a section a quarter of the way down it.
+            let q = guess.lerp(e, 0.3);
+            let len = guess.distance(e);
+            shoulders[k] = match part_loop(cx.p, cx.t, q, e - guess, q) {
+                Some(l) if l.radius < 0.06 * h && len > 0.0 => {
+                    e + (l.centroid - e).normalize_or(guess - e) * len
+                }
+                _ => guess,
+            };
+            arm[k] = [e, w];
+        }
+    }
+    Limbs {
+        knees,
+        arm,
+        shoulders,
+        hip_w,
+        hip_note,
+    }
+}
+
+/// Pelvis, spine and chest into `j` (the hips and neck placed): the pelvis
+/// between the hips, a little above them, and inside the torso when the
+/// crotch is above hip height; spine and chest on the pelvis-neck line,
+/// centred on sections.
+fn place_trunk(
+    cx: &mut Ctx,
+    b: &Body,
+    plane: &MidPlane,
+    hip_h: f64,
+    pelvis_h: f64,
+    j: &mut [DVec3; Canonical::COUNT],
+) {
+    use Canonical as C;
+    let neck = j[C::Neck.index()];
     let mid_hips = (j[C::LHip.index()] + j[C::RHip.index()]) * 0.5;
-    let pelvis = at_height(mid_hips, (hip_h + 0.02 * h).max(pelvis_h + 0.01 * h));
+    let pelvis = b.at_height(mid_hips, (hip_h + 0.02 * b.h).max(pelvis_h + 0.01 * b.h));
     j[C::Pelvis.index()] = pelvis;
     for (c, f, name) in [(C::Spine, 0.33, "spine"), (C::Chest, 0.66, "chest")] {
         let at = pelvis.lerp(neck, f);
-        let q = cx.centre(name, at, up, at, 0.2, at);
-        j[c.index()] = centred(&mut cx, &plane, name, q, at);
+        let q = cx.centre(name, at, b.up, at, 0.2, at);
+        j[c.index()] = centred(cx, plane, name, q, at);
     }
+}
 
-    // Toes and toe tips: the front of each foot (vertices below the ankle,
-    // near it and nearer to it than to the other ankle: with the feet
-    // closer than the search radius, both feet would average to a point
-    // between them), from a landmark when given.
+/// Toes (into `j`) and toe tips: the front of each foot (vertices below the ankle,
+/// near it and nearer to it than to the other ankle: with the feet
+/// closer than the search radius, both feet would average to a point
+/// between them), from a landmark when given.
+fn place_toes(
+    positions: &[[f64; 3]],
+    b: &Body,
+    lm: &Landmarks,
+    ankles: [DVec3; 2],
+    j: &mut [DVec3; Canonical::COUNT],
+) -> [DVec3; 2] {
+    use Canonical as C;
+    use Landmark as L;
+    let (up, facing, floor, h) = (b.up, b.facing, b.floor, b.h);
     let mut toe_tips = [DVec3::ZERO; 2];
     for (k, (c, lmk)) in [(C::LToe, L::LToe), (C::RToe, L::RToe)]
         .into_iter()
@@ -301,10 +470,10 @@ pub fn place_joints(
             .iter()
             .copied()
             .max_by(|x, y| x.dot(facing).total_cmp(&y.dot(facing)))
-            .unwrap_or(at_height(a + facing * 0.12 * h, floor));
+            .unwrap_or(b.at_height(a + facing * 0.12 * h, floor));
         toe_tips[k] = tip;
-        let toe = match get(lmk) {
-            Some(q) => at_height(q, (q.dot(up) + floor) * 0.5),
+        let toe = match mark(lm, positions, lmk) {
+            Some(q) => b.at_height(q, (q.dot(up) + floor) * 0.5),
             None => {
                 let (fa, ft) = (a.dot(facing), tip.dot(facing));
                 let band: Vec<DVec3> = foot
@@ -316,7 +485,7 @@ pub fn place_joints(
                     })
                     .collect();
                 if band.is_empty() {
-                    at_height(a.lerp(tip, 0.72), floor + 0.02 * h)
+                    b.at_height(a.lerp(tip, 0.72), floor + 0.02 * h)
                 } else {
                     band.iter().copied().sum::<DVec3>() / band.len() as f64
                 }
@@ -324,34 +493,22 @@ pub fn place_joints(
         };
         j[c.index()] = toe;
     }
+    toe_tips
+}
 
-    // The same note from both refinement passes once.
-    let mut seen = std::collections::HashSet::new();
-    cx.notes.retain(|n| seen.insert(n.clone()));
-
-    // Hand tips: the farthest arm vertex beyond each wrist.
+/// Hand tips: the farthest arm vertex beyond each wrist.
+fn hand_tips(positions: &[[f64; 3]], b: &Body, arm: &[[DVec3; 2]; 2]) -> [DVec3; 2] {
     let mut hand_tips = [DVec3::ZERO; 2];
     for (k, [e, w]) in arm.iter().enumerate() {
-        let a = (*w - *e).normalize_or(-up);
+        let a = (*w - *e).normalize_or(-b.up);
         hand_tips[k] = positions
             .iter()
             .map(|q| DVec3::from_array(*q))
-            .filter(|q| (*q - *w).dot(a) > 0.0 && q.distance(*w) < 0.15 * h)
+            .filter(|q| (*q - *w).dot(a) > 0.0 && q.distance(*w) < 0.15 * b.h)
             .max_by(|x, y| (*x - *w).dot(a).total_cmp(&(*y - *w).dot(a)))
-            .unwrap_or(*w + a * 0.08 * h);
+            .unwrap_or(*w + a * 0.08 * b.h);
     }
-    JointEstimate {
-        joints: j,
-        head_top,
-        hand_tips,
-        toe_tips,
-        up,
-        facing,
-        left,
-        height: h,
-        mid_plane: plane,
-        notes: cx.notes,
-    }
+    hand_tips
 }
 
 /// A central joint (spine, chest, neck, head) from its section centre `q`

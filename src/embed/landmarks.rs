@@ -210,9 +210,60 @@ fn missing_hint(missing: &str) -> String {
                  mark each on the rest frame (a vertex index or [x, y, z])"
         .to_string();
     if missing.split(", ").any(|m| m == "chin") {
-        s += "; the chin ends the neck: for a body without a head, place it at the top of the neck";
+        s += "; the chin ends the neck: for a body without a head, place it at the top of the neck, or write \"absent\": [\"head\"]";
     }
     s
+}
+
+/// The chin of a body without a head: the centre of the top of its neck
+/// (the vertices within 1.5 % of the height of the highest one near the
+/// body's axis: the vertical through the groin, up from the knees to the
+/// groin, within 12 % of the height of it), moved forward by 4 % of the
+/// height (joint placement looks for the neck that far behind the chin).
+/// `None` without a groin or knees.
+pub fn neck_top(lm: &Landmarks, positions: &[[f64; 3]]) -> Option<[f64; 3]> {
+    use glam::DVec3;
+    let at = |l: Landmark| lm.point(l, positions).map(DVec3::from_array);
+    let g = at(Landmark::Groin)?;
+    let (lk, rk) = (at(Landmark::LKnee)?, at(Landmark::RKnee)?);
+    let up = super::axes::body_up(g - (lk + rk) * 0.5);
+    let hs = positions.iter().map(|q| DVec3::from_array(*q).dot(up));
+    let (lo, hi) = hs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+        (a.min(x), b.max(x))
+    });
+    let h = (hi - lo).max(1e-9);
+    let flat = |q: DVec3| {
+        let d = q - g;
+        (d - up * d.dot(up)).length()
+    };
+    let axis: Vec<DVec3> = positions
+        .iter()
+        .map(|q| DVec3::from_array(*q))
+        .filter(|&q| flat(q) < 0.12 * h)
+        .collect();
+    let top = axis
+        .iter()
+        .map(|q| q.dot(up))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let ring: Vec<DVec3> = axis
+        .into_iter()
+        .filter(|q| q.dot(up) >= top - 0.015 * h)
+        .collect();
+    if ring.is_empty() {
+        return None;
+    }
+    let centre = ring.iter().copied().sum::<DVec3>() / ring.len() as f64;
+    let side = [
+        (Landmark::LKnee, Landmark::RKnee),
+        (Landmark::LElbow, Landmark::RElbow),
+        (Landmark::LWrist, Landmark::RWrist),
+    ]
+    .into_iter()
+    .filter_map(|(a, b)| Some(at(a)? - at(b)?))
+    .sum::<DVec3>();
+    let left = (side - up * side.dot(up)).normalize_or(up.any_orthonormal_vector());
+    let facing = left.cross(up);
+    Some((centre + facing * 0.04 * h).to_array())
 }
 
 /// Where a landmark was given.
@@ -244,7 +295,34 @@ impl Landmarks {
             .as_object()
             .ok_or_else(|| json("expected a JSON object of landmarks".into()))?;
         let mut marks = BTreeMap::new();
+        let mut headless = false;
         for (key, val) in obj {
+            // Optional: the body ends the file declares absent (a capture
+            // cut at the neck or the wrists, issue 41): "head" lifts the
+            // chin's requirement (the rig finds the top of the neck); the
+            // hands are accepted and change nothing (no check needs them).
+            if key == "absent" {
+                let names: Option<Vec<&str>> = val
+                    .as_array()
+                    .and_then(|a| a.iter().map(|x| x.as_str()).collect());
+                let Some(names) = names else {
+                    return Err(json(
+                        "absent: expected a list of names (head, hands, l_hand, r_hand)".into(),
+                    ));
+                };
+                for n in names {
+                    match n {
+                        "head" => headless = true,
+                        "hands" | "l_hand" | "r_hand" => {}
+                        other => {
+                            return Err(json(format!(
+                                "absent: unknown body end {other:?} (known: head, hands, l_hand, r_hand)"
+                            )));
+                        }
+                    }
+                }
+                continue;
+            }
             // Optional: the vertex count of the mesh the file was made for
             // (vertex indices of another mesh are otherwise in range and
             // wrong; issue 18, item 16).
@@ -290,9 +368,16 @@ impl Landmarks {
             };
             marks.insert(l, mark);
         }
+        if headless
+            && (marks.contains_key(&Landmark::Chin) || marks.contains_key(&Landmark::HeadTop))
+        {
+            return Err(json(
+                "absent: \"head\" with a chin or head_top given: drop them (the top of the neck is found) or drop \"head\" from absent".into(),
+            ));
+        }
         let missing: Vec<&str> = Landmark::REQUIRED
             .iter()
-            .filter(|l| !marks.contains_key(l))
+            .filter(|l| !(marks.contains_key(l) || headless && **l == Landmark::Chin))
             .map(|l| l.name())
             .collect();
         if !missing.is_empty() {
@@ -317,14 +402,38 @@ impl Landmarks {
     pub fn load_checked(path: &Path, mesh: &crate::mesh::Mesh) -> Result<Landmarks, LandmarkError> {
         let lm = Landmarks::load(path, mesh.vertex_count())?;
         let p = mesh.positions();
-        let up = match (lm.point(Landmark::Chin, p), lm.point(Landmark::Groin, p)) {
+        let full = lm.completed(p);
+        let up = match (
+            full.point(Landmark::Chin, p),
+            full.point(Landmark::Groin, p),
+        ) {
             (Some(c), Some(g)) => {
                 super::axes::body_up(glam::DVec3::from_array(c) - glam::DVec3::from_array(g))
             }
             _ => glam::DVec3::Y,
         };
-        lm.validate(p, mesh.triangles(), up.to_array())?;
+        full.validate(p, mesh.triangles(), up.to_array())?;
         Ok(lm)
+    }
+
+    /// Whether the body has no head: no chin (the file declares
+    /// `"absent": ["head"]`; [`Landmarks::parse`] requires a chin
+    /// otherwise).
+    pub fn headless(&self) -> bool {
+        !self.marks.contains_key(&Landmark::Chin)
+    }
+
+    /// The landmarks with, for a headless body ([`Landmarks::headless`]),
+    /// the chin placed at the top of the neck on `positions`
+    /// ([`neck_top`]); a copy otherwise.
+    pub fn completed(&self, positions: &[[f64; 3]]) -> Landmarks {
+        let mut lm = self.clone();
+        if self.headless()
+            && let Some(q) = neck_top(self, positions)
+        {
+            lm.marks.insert(Landmark::Chin, Mark::Point(q));
+        }
+        lm
     }
 
     /// Refuses landmark sets no rig can be embedded from, naming the

@@ -41,6 +41,7 @@ mod positions;
 pub mod render;
 pub mod retarget;
 pub mod rig;
+pub mod setup_text;
 pub mod skeletons;
 pub mod synth;
 pub mod synth_db;

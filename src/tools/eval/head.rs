@@ -175,8 +175,23 @@ impl HeadTorso {
         Ok(h)
     }
 
-    /// `∠(chin→crown, hips→chin)` of one frame (degrees, 0..180).
+    /// No sets, for a character without a head: every angle reads 0.
+    pub fn absent(vertex_count: usize) -> HeadTorso {
+        HeadTorso {
+            crown: Vec::new(),
+            chin: Vec::new(),
+            hips: Vec::new(),
+            rest_deg: 0.0,
+            vertex_count,
+        }
+    }
+
+    /// `∠(chin→crown, hips→chin)` of one frame (degrees, 0..180); 0
+    /// without a head ([`HeadTorso::absent`]).
     pub fn raw_deg(&self, positions: &[[f64; 3]]) -> f64 {
+        if self.crown.is_empty() {
+            return 0.0;
+        }
         let c = centroid(positions, &self.crown);
         let k = centroid(positions, &self.chin);
         let h = centroid(positions, &self.hips);

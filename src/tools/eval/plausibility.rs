@@ -146,6 +146,11 @@ pub struct Plausibility {
     pub warnings: Vec<String>,
     /// Signed head-to-torso angle per frame (degrees).
     pub head_torso_per_frame: Vec<f64>,
+    /// The character has no head ([`crate::embed::Embedding::absent`]):
+    /// the head-to-torso angle is not measured (0) and not warned about,
+    /// said once in [`Plausibility::text`]. Not written when false.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub headless: bool,
 }
 
 /// Per-frame series of one sequence, pooled to make a [`Reference`].
@@ -182,6 +187,9 @@ pub struct Checker {
     pub opts: PlausibilityOptions,
     /// The character's own figures, when known.
     pub reference: Option<Reference>,
+    /// The character has no head: [`Checker::head`] has no vertices and
+    /// the head checks are skipped.
+    pub headless: bool,
 }
 
 impl Checker {
@@ -203,7 +211,12 @@ impl Checker {
             .joints
             .get(crate::rig::Canonical::Pelvis.index())
             .map(|j| DVec3::from_array(*j));
-        let head = HeadTorso::with_pelvis(rest, &rig.labels, rig_up, pelvis, &opts.head)?;
+        let headless = rig.absent.iter().any(|a| a == "head");
+        let head = if headless {
+            HeadTorso::absent(rest.len())
+        } else {
+            HeadTorso::with_pelvis(rest, &rig.labels, rig_up, pelvis, &opts.head)?
+        };
         let feet = Feet::new(rest, &rig.labels, rig_up, &opts.feet)?;
         let floor = floor.unwrap_or_else(|| {
             lowest_heights(rest, rest.len(), up)
@@ -223,6 +236,7 @@ impl Checker {
             fps,
             opts,
             reference: None,
+            headless,
         })
     }
 
@@ -476,6 +490,7 @@ impl Checker {
             on_clip_ground: raised.is_some(),
             warnings: Vec::new(),
             head_torso_per_frame: s.head,
+            headless: self.headless,
         };
         p.warnings = warnings(&p, &self.opts.limits);
         Ok(p)
@@ -491,6 +506,7 @@ pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
         Some(r) => {
             let captured = r.head_torso_deg.p95;
             match clip {
+                _ if p.headless => {}
                 Some(c) if c > captured => {
                     if h > c + l.head_margin_deg {
                         w.push(format!(
@@ -561,7 +577,7 @@ pub fn warnings(p: &Plausibility, l: &Limits) -> Vec<String> {
             let line = clip.map_or(l.head_deg, |c| {
                 c.max(l.head_deg - l.head_margin_deg) + l.head_margin_deg
             });
-            if h > line {
+            if h > line && !p.headless {
                 w.push(format!(
                     "head-to-torso angle p95 {h:.1}° from rest exceeds {line:.0}°"
                 ));
@@ -643,6 +659,21 @@ fn turned_over_warning(p: &Plausibility, l: &Limits) -> Option<String> {
 }
 
 impl Plausibility {
+    /// [`Plausibility::text`] of a headless character: the head line
+    /// replaced by the note that its checks are skipped.
+    fn text_headless(&self) -> String {
+        let whole = Plausibility {
+            headless: false,
+            ..self.clone()
+        }
+        .text();
+        let mut lines: Vec<&str> = whole.lines().collect();
+        if let Some(l) = lines.iter_mut().find(|l| l.starts_with("  head-to-torso:")) {
+            *l = "  no head: head checks skipped";
+        }
+        lines.join("\n") + if whole.ends_with('\n') { "\n" } else { "" }
+    }
+
     /// Sets the driving clip's own head-to-trunk angles (`series`, per
     /// frame, degrees; [`crate::pose::retarget::clip_head_trunk_deg`]) and
     /// recomputes the warnings with `limits`: the head is then held to the
@@ -683,6 +714,9 @@ impl Plausibility {
             r.map(|r| format!(" [captured {}]", f(r)))
                 .unwrap_or_default()
         };
+        if self.headless {
+            return self.text_headless();
+        }
         let mut s = format!(
             "plausibility over {} frames:\n  head-to-torso: median {:.1}°, p95 {:.1}°, max {:.1}°{}\n",
             self.frames,
@@ -804,6 +838,7 @@ mod tests {
             on_clip_ground: false,
             warnings: Vec::new(),
             head_torso_per_frame: Vec::new(),
+            headless: false,
         }
     }
 

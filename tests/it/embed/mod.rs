@@ -4,5 +4,7 @@ mod auto;
 mod bodies;
 mod captures;
 mod contact;
+mod contradict;
+mod partial;
 mod placement;
 mod scan_auto;

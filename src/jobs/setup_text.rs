@@ -1,0 +1,83 @@
+//! The setup report of `db init` ([`Setup`]) as text, as the CLI prints
+//! it: the rest frame and why, the contacts, the parts' rigidity and the
+//! regions that follow another part, the rig's notes and warnings.
+
+use super::db_init::{ContactReport, Setup};
+
+impl Setup {
+    /// The report as `db init` prints it (one line each; warnings start
+    /// with `WARN`).
+    pub fn text(&self) -> String {
+        let s = self;
+        let mut out = format!("rest frame: {} ({})\n", s.rest_frame, s.why);
+        let contacts = |list: &[ContactReport]| {
+            list.iter()
+                .map(|c| {
+                    format!(
+                        "{} ({} vertices, gap {:.3})",
+                        c.parts.join(" ↔ "),
+                        c.vertices,
+                        c.gap
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        if !s.topology_contacts.is_empty() {
+            out += &format!(
+                "contacts on the topology's frame: {}\n",
+                contacts(&s.topology_contacts)
+            );
+        }
+        if !s.rest_contacts.is_empty() {
+            out += &format!(
+                "contacts on the rest frame: {}\n",
+                contacts(&s.rest_contacts)
+            );
+        }
+        if s.frames_examined > 0 {
+            out += &format!(
+                "frames with a contact: {} of {}\n",
+                s.frames_in_contact, s.frames_examined
+            );
+        }
+        let worst = s
+            .rigidity
+            .iter()
+            .max_by(|a, b| a.rms_percent.total_cmp(&b.rms_percent));
+        if let Some(w) = worst {
+            out += &format!(
+                "part rigidity: the least rigid part is {} ({:.1} % of the height rms off one rigid motion)\n",
+                w.part, w.rms_percent
+            );
+        }
+        for p in &s.rigidity {
+            for st in &p.stray {
+                let shown: Vec<String> = st.vertices.iter().take(8).map(u32::to_string).collect();
+                out += &format!(
+                    "WARN part {}: {} vertices follow {} instead (vertices {}{}; frames {:?})\n",
+                    p.part,
+                    st.vertices.len(),
+                    st.follows,
+                    shown.join(", "),
+                    if st.vertices.len() > 8 { ", …" } else { "" },
+                    st.frames
+                );
+            }
+        }
+        for n in &s.rig_notes {
+            out += &format!("rig: {n}\n");
+        }
+        for k in &s.check.skipped {
+            out += &format!("rig: {k}\n");
+        }
+        for w in &s.check.warnings {
+            out += &format!("WARN rig: {}\n", w.message);
+        }
+        if let Some(p) = &s.png {
+            out += &format!("wrote {}\n", p.display());
+        }
+        out += &format!("wrote {}", s.path.display());
+        out
+    }
+}
