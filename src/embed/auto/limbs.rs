@@ -105,7 +105,9 @@ impl Chains {
 
     /// The limb from `tip` to the trunk, its joints matched to the
     /// expected distances `exp` within `tol` of the height.
-    pub fn limb(&self, body: &Body, tip: u32, exp: &[f64; 3], tol: f64) -> Limb {
+    /// With `ring_knee` (legs), the middle joint is placed at the centre
+    /// of the boundary ring of its two parts.
+    pub fn limb(&self, body: &Body, tip: u32, exp: &[f64; 3], tol: f64, ring_knee: bool) -> Limb {
         let (rest, height) = (body.rest, body.height);
         let p = humanoid::path_to_source(rest, &self.prev, tip);
         let c = crossings(rest, body.nb, &body.dec, &p, 0.05);
@@ -118,6 +120,18 @@ impl Chains {
         let c = &c[..end];
         let entry = (end > 0 && self.trunk[c[end - 1].proximal as usize]).then(|| c[end - 1]);
         let mut m = match_joints(c, &exp[..2], height, MIN_BEND_DEG, tol);
+        // A knee at the ring where the shin's rigid part ends: the fixed
+        // point of the shin's motion and the part above is the knee only
+        // when that part is the thigh; under a skirt it is a band of cloth
+        // and the point fell 4-8 cm off the leg. The embedding centres the
+        // landmark in the leg's cross-section.
+        if ring_knee && let Some(k) = m[1].as_mut() {
+            if let Some(c) =
+                humanoid::boundary_centre(rest, body.nb, &body.dec.labels, k.distal, k.proximal)
+            {
+                k.joint.position = c;
+            }
+        }
         let used = m
             .iter()
             .flatten()
@@ -157,8 +171,8 @@ pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
     let (rest, up, height) = (body.rest, body.up, body.height);
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
     let mut legs = vec![
-        chains.limb(body, chains.feet[0], &LEG, 0.1),
-        chains.limb(body, chains.feet[1], &LEG, 0.1),
+        chains.limb(body, chains.feet[0], &LEG, 0.1, true),
+        chains.limb(body, chains.feet[1], &LEG, 0.1, true),
     ];
     let flat = |d: DVec3| d - up * d.dot(up);
     let hips_found = legs.iter().all(|l| l.2[2].is_some());
@@ -191,8 +205,8 @@ pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
         legs.swap(0, 1);
     }
     let mut arms = vec![
-        chains.limb(body, chains.hands[0], &ARM, 0.08),
-        chains.limb(body, chains.hands[1], &ARM, 0.08),
+        chains.limb(body, chains.hands[0], &ARM, 0.08, false),
+        chains.limb(body, chains.hands[1], &ARM, 0.08, false),
     ];
     let arm_point = |l: &Limb| {
         l.2[2]
@@ -227,4 +241,13 @@ fn debug_chain(what: &str, c: &[Crossing], h: f64) {
         })
         .collect();
     tracing::debug!("automatic rig, {what} from its tip: {}", parts.join("; "));
+}
+
+/// Each knee's distance to its toe tip, left against right: a body's
+/// shins and feet have one length (whatever the pose, up to the ankle's
+/// bend). Returns `(left, right, difference)` in the height's units.
+pub fn knee_to_toe(body: &Body, sided: &Sided) -> (f64, f64, f64) {
+    let h = |l: &Limb| knee(body, l).distance(DVec3::from_array(body.rest[l.0 as usize]));
+    let (l, r) = (h(&sided.legs[0]), h(&sided.legs[1]));
+    (l, r, (l - r).abs())
 }

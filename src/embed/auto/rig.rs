@@ -5,13 +5,17 @@
 
 use super::decompose::decompose;
 use super::humanoid::{Placed, along, extremities};
-use super::limbs::{ARM, Body, Chains, LEG, Sided, side};
+use super::limbs::{ARM, Body, Chains, LEG, Sided, knee_to_toe, side};
 use super::options::{AutoError, AutoOptions};
 use super::report::{AutoRig, FoundJoint};
 use super::up::find_up;
 use crate::embed::landmarks::{Landmark, Landmarks, Mark};
 use crate::mesh::Mesh;
 use glam::DVec3;
+
+/// The knees' distances to their toe tips may differ by this fraction of
+/// the height before the rig warns (samba's, crane's: 2 %, 1 %).
+const KNEE_TOLERANCE: f64 = 0.03;
 
 /// Rigs `mesh` (the topology; its positions are the capture's frame 0
 /// unless `opts.rest_frame` says another) from the capture's `frames`
@@ -42,7 +46,18 @@ pub fn auto_rig(
         len(arms[1].0, "r_shoulder"),
     ));
     let by_motion = found.iter().filter(|(_, p)| p.by_motion).count();
-    let confidence = by_motion as f64 / found.len() as f64 * sym;
+    let mut confidence = by_motion as f64 / found.len() as f64 * sym;
+    // The knees as far from the toes (the legs' one length): a check, said
+    // loudly, and the confidence lowered in proportion.
+    let (kl, kr, kd) = knee_to_toe(&body, &sided);
+    if kd > KNEE_TOLERANCE * body.height {
+        notes.push(format!(
+            "WARNING: the knees are {kl:.3} and {kr:.3} from their toe tips, {:.1}% of the height apart (a body's legs have one length; tolerance {:.0}%): one knee is probably at a clothing edge; look at the picture (`--png`) and correct l_knee/r_knee in the landmarks file, or give landmarks",
+            100.0 * kd / body.height,
+            100.0 * KNEE_TOLERANCE
+        ));
+        confidence *= (1.0 - kd / body.height / (4.0 * KNEE_TOLERANCE)).max(0.0);
+    }
     let marks = landmark_points(&body, &chains, &sided, &found, &mut notes);
 
     // Onto the topology: by the motion of the part of the nearest vertex.
@@ -153,6 +168,9 @@ fn sample_frames<'a>(
     used
 }
 
+/// The body, its first six extremities (vertex, distance) and the notes.
+type Found<'a> = (Body<'a>, Vec<(u32, f64)>, Vec<String>);
+
 /// The body: its extremities, up (two of them, the feet, on a floor over
 /// the frames), height, and rigid parts; refused when it is no humanoid.
 /// Returns it with its six first extremities and the notes so far.
@@ -161,7 +179,7 @@ fn find_body<'a>(
     used: &[&[[f64; 3]]],
     nb: &'a [Vec<u32>],
     opts: &AutoOptions,
-) -> Result<(Body<'a>, Vec<(u32, f64)>, Vec<String>), AutoError> {
+) -> Result<Found<'a>, AutoError> {
     let n = rest.len();
     let centre = rest.iter().map(|q| DVec3::from_array(*q)).sum::<DVec3>() / n as f64;
     let seed = (0..n)
@@ -301,7 +319,15 @@ fn landmark_points(
     // The groin: below the hips' midpoint by the embedding's hip offset
     // (`place_joints` puts the hips 3.5 % of the height above the groin).
     let groin = if get("l_hip").by_motion && get("r_hip").by_motion {
-        (get("l_hip").position + get("r_hip").position) * 0.5 - up * (0.035 * height)
+        let g = (get("l_hip").position + get("r_hip").position) * 0.5 - up * (0.035 * height);
+        // Side to side, midway between the knees: the groin is on the
+        // body's mid-plane, and a hip found at a skirt's boundary strays
+        // sideways (samba's by 8 cm, which moved the mid-plane and the
+        // hips, and sank a foot 16-29 cm into the floor in retargeting);
+        // the knees, at the shins' ends, do not.
+        let knees = (get("l_knee").position + get("r_knee").position) * 0.5;
+        let left = sided.left;
+        g + left * (knees - g).dot(left)
     } else {
         // Between the knees, at a usual crotch height (47 % of the height).
         notes.push("groin: the hips do not show in the motion (clothing?); placed between the knees at 47% of the height".into());
