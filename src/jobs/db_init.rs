@@ -17,9 +17,12 @@ use super::JobError;
 use super::outputs::check_output_folder;
 use crate::db::init::{InitOptions, RestFrame, assemble_setup};
 use crate::db::{MANIFEST, Manifest};
-use crate::embed::auto::{AutoOptions, AutoRig, auto_rig};
+use crate::embed::auto::options::AutoOptions;
+use crate::embed::auto::report::AutoRig;
+use crate::embed::auto::rig::auto_rig;
 use crate::embed::contact::{Contact, FrameContacts};
 use crate::embed::parts::Part;
+use crate::embed::rest::{RestOptions, choose_rest_frame};
 use crate::embed::rigidity::{PartRigidity, RigidityOptions, part_rigidity};
 use crate::embed::{EmbedCheck, Embedding};
 use crate::mesh::io::{LoadOptions, load_sequence};
@@ -371,5 +374,26 @@ fn rig_capture(opts: &InitOptions, auto: &AutoOptions) -> Result<(AutoRig, usize
         .iter()
         .flat_map(|s| (0..s.frame_count()).map(|f| s.frame(f)))
         .collect();
-    Ok((auto_rig(mesh, &frames, auto)?, mesh.vertex_count()))
+    let mut auto = *auto;
+    let mut why = None;
+    if auto.rest_frame.is_none() && opts.choose_rest {
+        // The parts found on the frame clearest of contact: the choice
+        // `assemble_setup` makes for the embedding (the topology's
+        // positions first, then every sequence's frames), so that a
+        // hand on the hip in frame 0 is not one rigid part with the hip.
+        let mut all: Vec<&[[f64; 3]]> = vec![mesh.positions()];
+        all.extend_from_slice(&frames);
+        if let Some(c) = choose_rest_frame(mesh, &all, &RestOptions::default())
+            && c.frame > 0
+        {
+            auto.rest_frame = Some(c.frame - 1);
+            why = Some(c.why);
+        }
+    }
+    let mut rig = auto_rig(mesh, &frames, &auto)?;
+    if let (Some(f), Some(why)) = (auto.rest_frame, why) {
+        rig.notes
+            .push(format!("parts found on frame {f} of the sequences ({why})"));
+    }
+    Ok((rig, mesh.vertex_count()))
 }

@@ -37,7 +37,7 @@ pub enum JobError {
     Embed(#[from] crate::embed::EmbedError),
     /// The capture could not be rigged automatically.
     #[error(transparent)]
-    AutoRig(#[from] crate::embed::auto::AutoError),
+    AutoRig(#[from] crate::embed::auto::options::AutoError),
     /// A scan could not be prepared.
     #[error(transparent)]
     Scan(#[from] crate::transfer::ScanError),

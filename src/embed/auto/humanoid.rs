@@ -189,8 +189,12 @@ pub struct Placed {
 
 /// Matches a limb's crossings to its joints: for each expected distance
 /// from the tip (in order, distal first; fractions of `height`), the
-/// crossing after the previous match that bends at least `min_deg` and is
-/// nearest the expected distance within `tol` of the height.
+/// first crossing after the previous match that bends at least `min_deg`
+/// within `tol` of the height of the expected distance: the end of the
+/// most distal rigid part (the shin, the forearm and hand). The nearest
+/// to the expected distance was chosen before; on a dancer in a skirt
+/// it was the skirt's hem above the shin (the skirt moves in bands that
+/// bend with neither thigh), and the knee landed at the hem.
 pub fn match_joints(
     crossings: &[Crossing],
     expected: &[f64],
@@ -202,18 +206,9 @@ pub fn match_joints(
     let mut from = 0;
     for &e in expected {
         let target = e * height;
-        let best = crossings
-            .iter()
-            .enumerate()
-            .skip(from)
-            .filter(|(_, c)| {
-                c.joint.articulation_deg >= min_deg && (c.from_tip - target).abs() <= tol * height
-            })
-            .min_by(|a, b| {
-                (a.1.from_tip - target)
-                    .abs()
-                    .total_cmp(&(b.1.from_tip - target).abs())
-            });
+        let best = crossings.iter().enumerate().skip(from).find(|(_, c)| {
+            c.joint.articulation_deg >= min_deg && (c.from_tip - target).abs() <= tol * height
+        });
         match best {
             Some((i, c)) => {
                 out.push(Some(*c));

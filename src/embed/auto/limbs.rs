@@ -1,0 +1,253 @@
+//! The body's five chains (two legs, two arms, the head) read off the
+//! rigid parts: each limb's path from its tip to the trunk, the part
+//! boundaries it crosses, and which of them are its joints; then facing
+//! and the sides.
+
+use super::decompose::Decomposition;
+use super::humanoid::{self, Crossing, along, crossings, geodesic, match_joints};
+use super::options::AutoError;
+use glam::DVec3;
+
+/// A limb: its tip, its path to the trunk (vertex, distance from the
+/// tip), and its three joints where the motion showed them.
+pub type Limb = (u32, Vec<(u32, f64)>, Vec<Option<Crossing>>);
+
+/// Expected distances from the tip (fractions of the height) of a leg's
+/// ankle, knee and hip, and of an arm's wrist, elbow and shoulder, along
+/// the surface.
+pub const LEG: [f64; 3] = [0.12, 0.37, 0.6];
+/// See [`LEG`].
+pub const ARM: [f64; 3] = [0.10, 0.25, 0.42];
+/// A joint must bend this much (RMS, degrees) in the capture.
+pub const MIN_BEND_DEG: f64 = 6.0;
+
+/// The rest frame, its parts and its axes, as the chains are read.
+pub struct Body<'a> {
+    /// Rest-frame positions.
+    pub rest: &'a [[f64; 3]],
+    /// Mesh neighbours.
+    pub nb: &'a [Vec<u32>],
+    /// The rigid parts.
+    pub dec: Decomposition,
+    /// Up (unit).
+    pub up: DVec3,
+    /// Lowest height along up.
+    pub lo: f64,
+    /// Height along up.
+    pub height: f64,
+    /// The vertex nearest the centroid.
+    pub seed: u32,
+    /// The centroid.
+    pub centre: DVec3,
+}
+
+/// The five chains' tips and the trunk they meet in.
+pub struct Chains {
+    /// The feet (the two lowest tips).
+    pub feet: [u32; 2],
+    /// The top of the head (the highest tip).
+    pub head: u32,
+    /// The hands (the other two).
+    pub hands: [u32; 2],
+    /// Each vertex's predecessor towards the trunk seed.
+    prev: Vec<u32>,
+    /// The trunk's parts.
+    trunk: Vec<bool>,
+}
+
+impl Chains {
+    /// The five chains of `body` from its five extremities `tips`.
+    pub fn find(body: &Body, tips: &[(u32, f64)]) -> Chains {
+        let (rest, up, n) = (body.rest, body.up, body.rest.len());
+        let hs = |q: [f64; 3]| DVec3::from_array(q).dot(up);
+        // The five chains: feet the two lowest tips, head the highest other.
+        let mut five: Vec<u32> = tips[..5].iter().map(|t| t.0).collect();
+        five.sort_by(|&a, &b| hs(rest[a as usize]).total_cmp(&hs(rest[b as usize])));
+        // Paths from each tip to a seed in the trunk: the vertex nearest the
+        // body's axis at 65 % of its height (the belly or the back).
+        let axis_at = body.centre + up * (body.lo + 0.65 * body.height - body.centre.dot(up));
+        let trunk_seed = (0..n)
+            .min_by(|&a, &b| {
+                let d = |v: usize| {
+                    let q = DVec3::from_array(rest[v]) - axis_at;
+                    (q - up * q.dot(up)).length_squared() + 4.0 * q.dot(up).powi(2)
+                };
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap_or(0) as u32;
+        let (_, prev) = geodesic(rest, body.nb, &[trunk_seed]);
+        // The trunk's parts: those on the paths of two limbs or more, and the
+        // seed's (`rig::structure` reads the trunk of a joint tree the same
+        // way: where the branches meet).
+        let dec = &body.dec;
+        let mut reached = vec![0usize; dec.count];
+        for &tip in &five {
+            let mut on: Vec<u32> = humanoid::path_to_source(rest, &prev, tip)
+                .iter()
+                .map(|x| dec.labels[x.0 as usize])
+                .collect();
+            on.sort_unstable();
+            on.dedup();
+            for l in on {
+                reached[l as usize] += 1;
+            }
+        }
+        let mut trunk: Vec<bool> = reached.iter().map(|&r| r >= 2).collect();
+        trunk[dec.labels[trunk_seed as usize] as usize] = true;
+        Chains {
+            feet: [five[0], five[1]],
+            head: five[4],
+            hands: [five[2], five[3]],
+            prev,
+            trunk,
+        }
+    }
+
+    /// The limb from `tip` to the trunk, its joints matched to the
+    /// expected distances `exp` within `tol` of the height.
+    /// With `ring_knee` (legs), the middle joint is placed at the centre
+    /// of the boundary ring of its two parts.
+    pub fn limb(&self, body: &Body, tip: u32, exp: &[f64; 3], tol: f64, ring_knee: bool) -> Limb {
+        let (rest, height) = (body.rest, body.height);
+        let p = humanoid::path_to_source(rest, &self.prev, tip);
+        let c = crossings(rest, body.nb, &body.dec, &p, 0.05);
+        debug_chain("limb", &c, height);
+        // Up to the limb's entry into the trunk.
+        let end = c
+            .iter()
+            .position(|x| self.trunk[x.proximal as usize])
+            .map_or(c.len(), |i| i + 1);
+        let c = &c[..end];
+        let entry = (end > 0 && self.trunk[c[end - 1].proximal as usize]).then(|| c[end - 1]);
+        let mut m = match_joints(c, &exp[..2], height, MIN_BEND_DEG, tol);
+        // A knee at the ring where the shin's rigid part ends: the fixed
+        // point of the shin's motion and the part above is the knee only
+        // when that part is the thigh; under a skirt it is a band of cloth
+        // and the point fell 4-8 cm off the leg. The embedding centres the
+        // landmark in the leg's cross-section.
+        if ring_knee && let Some(k) = m[1].as_mut() {
+            if let Some(c) =
+                humanoid::boundary_centre(rest, body.nb, &body.dec.labels, k.distal, k.proximal)
+            {
+                k.joint.position = c;
+            }
+        }
+        let used = m
+            .iter()
+            .flatten()
+            .any(|x| Some(x.from_tip) == entry.map(|e| e.from_tip));
+        let root = entry.filter(|e| {
+            !used
+                && (e.from_tip - exp[2] * height).abs() <= 0.15 * height
+                && m.iter().flatten().all(|x| x.from_tip < e.from_tip)
+        });
+        m.push(root);
+        (tip, p, m)
+    }
+}
+
+/// The limbs sided, and the body's facing and left.
+pub struct Sided {
+    /// Left leg, right leg.
+    pub legs: Vec<Limb>,
+    /// Left arm, right arm.
+    pub arms: Vec<Limb>,
+    /// Facing (unit).
+    pub facing: DVec3,
+    /// The character's left (unit).
+    pub left: DVec3,
+}
+
+/// A leg's knee: found, or by proportion along the leg.
+pub fn knee(body: &Body, l: &Limb) -> DVec3 {
+    l.2[1]
+        .map(|c| c.joint.position)
+        .unwrap_or_else(|| along(body.rest, &l.1, LEG[1] * body.height))
+}
+
+/// The limbs of `chains`, sided; facing square to the line through the
+/// hips (or knees), on the side the toe tips point to from the knees.
+pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
+    let (rest, up, height) = (body.rest, body.up, body.height);
+    let v3 = |q: [f64; 3]| DVec3::from_array(q);
+    let mut legs = vec![
+        chains.limb(body, chains.feet[0], &LEG, 0.1, true),
+        chains.limb(body, chains.feet[1], &LEG, 0.1, true),
+    ];
+    let flat = |d: DVec3| d - up * d.dot(up);
+    let hips_found = legs.iter().all(|l| l.2[2].is_some());
+    let side_point = |l: &Limb| match l.2[2] {
+        Some(c) if hips_found => c.joint.position,
+        _ => knee(body, l),
+    };
+    let across = flat(side_point(&legs[0]) - side_point(&legs[1]));
+    let mut toes = DVec3::ZERO;
+    for l in &legs {
+        toes += flat(v3(rest[l.0 as usize]) - knee(body, l)).normalize_or_zero();
+    }
+    let square = up.cross(across).normalize_or_zero();
+    let facing = if square == DVec3::ZERO {
+        toes.normalize_or_zero()
+    } else if square.dot(toes) >= 0.0 {
+        square
+    } else {
+        -square
+    };
+    if facing == DVec3::ZERO {
+        return Err(AutoError::NotHumanoid(
+            "the feet point nowhere: no facing".into(),
+        ));
+    }
+    let left = up.cross(facing).normalize();
+    // Sides: the limb whose root (or knee, elbow) lies more to the left is
+    // the left one.
+    if side_point(&legs[0]).dot(left) < side_point(&legs[1]).dot(left) {
+        legs.swap(0, 1);
+    }
+    let mut arms = vec![
+        chains.limb(body, chains.hands[0], &ARM, 0.08, false),
+        chains.limb(body, chains.hands[1], &ARM, 0.08, false),
+    ];
+    let arm_point = |l: &Limb| {
+        l.2[2]
+            .or(l.2[1])
+            .map(|c| c.joint.position)
+            .unwrap_or_else(|| along(rest, &l.1, ARM[1] * height))
+    };
+    if arm_point(&arms[0]).dot(left) < arm_point(&arms[1]).dot(left) {
+        arms.swap(0, 1);
+    }
+    Ok(Sided {
+        legs,
+        arms,
+        facing,
+        left,
+    })
+}
+
+/// Logs a limb's crossings (tracing, debug level).
+fn debug_chain(what: &str, c: &[Crossing], h: f64) {
+    let parts: Vec<String> = c
+        .iter()
+        .map(|c| {
+            format!(
+                "{}>{} at {:.2}h bends {:.0}° mis {:.1}%",
+                c.distal,
+                c.proximal,
+                c.from_tip / h,
+                c.joint.articulation_deg,
+                100.0 * c.joint.mismatch / h
+            )
+        })
+        .collect();
+    tracing::debug!("automatic rig, {what} from its tip: {}", parts.join("; "));
+}
+
+/// Each knee's distance to its toe tip, left against right: a body's
+/// shins and feet have one length (whatever the pose, up to the ankle's
+/// bend). Returns `(left, right, difference)` in the height's units.
+pub fn knee_to_toe(body: &Body, sided: &Sided) -> (f64, f64, f64) {
+    let h = |l: &Limb| knee(body, l).distance(DVec3::from_array(body.rest[l.0 as usize]));
+    let (l, r) = (h(&sided.legs[0]), h(&sided.legs[1]));
+    (l, r, (l - r).abs())
+}

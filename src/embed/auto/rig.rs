@@ -1,0 +1,347 @@
+//! [`auto_rig`]: the steps in order — the input checked, the frames
+//! sampled, the body's extremities, up and height, the rigid parts, the
+//! five chains, the limbs sided, the joints placed (by the motion or by
+//! proportion), the landmarks, and everything carried onto the topology.
+
+use super::decompose::decompose;
+use super::humanoid::{Placed, along, extremities};
+use super::limbs::{ARM, Body, Chains, LEG, Sided, knee_to_toe, side};
+use super::options::{AutoError, AutoOptions};
+use super::report::{AutoRig, FoundJoint};
+use super::up::find_up;
+use crate::embed::landmarks::{Landmark, Landmarks, Mark};
+use crate::mesh::Mesh;
+use glam::DVec3;
+
+/// The knees' distances to their toe tips may differ by this fraction of
+/// the height before the rig warns (samba's, crane's: 2 %, 1 %).
+const KNEE_TOLERANCE: f64 = 0.03;
+
+/// Rigs `mesh` (the topology; its positions are the capture's frame 0
+/// unless `opts.rest_frame` says another) from the capture's `frames`
+/// (each the mesh's vertices in order).
+pub fn auto_rig(
+    mesh: &Mesh,
+    frames: &[&[[f64; 3]]],
+    opts: &AutoOptions,
+) -> Result<AutoRig, AutoError> {
+    check_input(mesh, frames, opts)?;
+    let n = mesh.vertex_count();
+    let topo = mesh.positions();
+    let rest: &[[f64; 3]] = opts.rest_frame.map_or(topo, |r| frames[r]);
+    let used = sample_frames(topo, frames, opts.max_frames);
+    let nb = crate::embed::parts::neighbours(n, mesh.triangles());
+    let (body, tips, mut notes) = find_body(rest, &used, &nb, opts)?;
+    let chains = Chains::find(&body, &tips);
+    let sided = side(&body, &chains)?;
+    let found = place_joints(&body, &sided);
+    let get = |name: &str| get_joint(&found, name);
+    // Symmetry of the limbs: tip to root lengths left against right.
+    let v3 = |q: [f64; 3]| DVec3::from_array(q);
+    let len = |tip: u32, root: &str| v3(rest[tip as usize]).distance(get(root).position);
+    let ratio = |a: f64, b: f64| a.min(b) / a.max(b).max(1e-12);
+    let (legs, arms) = (&sided.legs, &sided.arms);
+    let sym = ratio(len(legs[0].0, "l_hip"), len(legs[1].0, "r_hip")).min(ratio(
+        len(arms[0].0, "l_shoulder"),
+        len(arms[1].0, "r_shoulder"),
+    ));
+    let by_motion = found.iter().filter(|(_, p)| p.by_motion).count();
+    let mut confidence = by_motion as f64 / found.len() as f64 * sym;
+    // The knees as far from the toes (the legs' one length): a check, said
+    // loudly, and the confidence lowered in proportion.
+    let (kl, kr, kd) = knee_to_toe(&body, &sided);
+    if kd > KNEE_TOLERANCE * body.height {
+        notes.push(format!(
+            "WARNING: the knees are {kl:.3} and {kr:.3} from their toe tips, {:.1}% of the height apart (a body's legs have one length; tolerance {:.0}%): one knee is probably at a clothing edge; look at the picture (`--png`) and correct l_knee/r_knee in the landmarks file, or give landmarks",
+            100.0 * kd / body.height,
+            100.0 * KNEE_TOLERANCE
+        ));
+        confidence *= (1.0 - kd / body.height / (4.0 * KNEE_TOLERANCE)).max(0.0);
+    }
+    let marks = landmark_points(&body, &chains, &sided, &found, &mut notes);
+
+    // Onto the topology: by the motion of the part of the nearest vertex.
+    let dec = &body.dec;
+    let to_topo = |q: DVec3| -> [f64; 3] {
+        if opts.rest_frame.is_none() {
+            return q.to_array();
+        }
+        let v = (0..n)
+            .min_by(|&a, &b| {
+                v3(rest[a])
+                    .distance_squared(q)
+                    .total_cmp(&v3(rest[b]).distance_squared(q))
+            })
+            .unwrap_or(0);
+        dec.motions[dec.labels[v] as usize].apply(0, q).to_array()
+    };
+    let mut landmarks = Landmarks::default();
+    for (l, q) in &marks {
+        landmarks.marks.insert(*l, Mark::Point(to_topo(*q)));
+    }
+    let guessed: Vec<&str> = found
+        .iter()
+        .filter(|(_, p)| !p.by_motion)
+        .map(|(n, _)| n.as_str())
+        .collect();
+    if !guessed.is_empty() {
+        notes.push(format!(
+            "placed by proportion along the limb (the capture does not bend there): {}",
+            guessed.join(", ")
+        ));
+    }
+    notes.push(format!(
+        "limbs: left/right lengths agree to {:.0}%",
+        100.0 * sym
+    ));
+    let rotate = |d: DVec3| -> [f64; 3] {
+        match opts.rest_frame {
+            None => d.to_array(),
+            Some(_) => {
+                let v = body.seed as usize;
+                (dec.motions[dec.labels[v] as usize].r[0] * d).to_array()
+            }
+        }
+    };
+    Ok(AutoRig {
+        landmarks,
+        up: rotate(body.up),
+        facing: rotate(sided.facing),
+        left: rotate(sided.left),
+        height: body.height,
+        rest_frame: opts.rest_frame,
+        frames_used: used.len() - 1,
+        parts: dec.count,
+        labels: dec.labels.clone(),
+        joints: found
+            .iter()
+            .map(|(name, p)| FoundJoint {
+                name: name.clone(),
+                position: to_topo(p.position),
+                by_motion: p.by_motion,
+                articulation_deg: p.articulation_deg,
+            })
+            .collect(),
+        confidence,
+        notes,
+    })
+}
+
+/// Every frame the mesh's vertex count, two frames or more, the rest frame
+/// among them.
+fn check_input(mesh: &Mesh, frames: &[&[[f64; 3]]], opts: &AutoOptions) -> Result<(), AutoError> {
+    let n = mesh.vertex_count();
+    if let Some((f, fr)) = frames.iter().enumerate().find(|(_, f)| f.len() != n) {
+        return Err(AutoError::VertexCount {
+            frame: f,
+            have: fr.len(),
+            want: n,
+        });
+    }
+    if frames.len() < 2 {
+        return Err(AutoError::TooFewFrames(frames.len()));
+    }
+    if let Some(r) = opts.rest_frame
+        && r >= frames.len()
+    {
+        return Err(AutoError::RestFrame {
+            frame: r,
+            frames: frames.len(),
+        });
+    }
+    Ok(())
+}
+
+/// Frame 0 of the fit is the topology mesh (so that rest points map back
+/// onto it), then up to `max_frames` evenly spread.
+fn sample_frames<'a>(
+    topo: &'a [[f64; 3]],
+    frames: &[&'a [[f64; 3]]],
+    max_frames: usize,
+) -> Vec<&'a [[f64; 3]]> {
+    let k = max_frames.clamp(2, frames.len().max(2));
+    let mut used: Vec<&[[f64; 3]]> = vec![topo];
+    for i in 0..k {
+        let f = (i * (frames.len() - 1)) / (k - 1).max(1);
+        used.push(frames[f]);
+    }
+    used
+}
+
+/// The body, its first six extremities (vertex, distance) and the notes.
+type Found<'a> = (Body<'a>, Vec<(u32, f64)>, Vec<String>);
+
+/// The body: its extremities, up (two of them, the feet, on a floor over
+/// the frames), height, and rigid parts; refused when it is no humanoid.
+/// Returns it with its six first extremities and the notes so far.
+fn find_body<'a>(
+    rest: &'a [[f64; 3]],
+    used: &[&[[f64; 3]]],
+    nb: &'a [Vec<u32>],
+    opts: &AutoOptions,
+) -> Result<Found<'a>, AutoError> {
+    let n = rest.len();
+    let centre = rest.iter().map(|q| DVec3::from_array(*q)).sum::<DVec3>() / n as f64;
+    let seed = (0..n)
+        .min_by(|&a, &b| {
+            DVec3::from_array(rest[a])
+                .distance_squared(centre)
+                .total_cmp(&DVec3::from_array(rest[b]).distance_squared(centre))
+        })
+        .unwrap_or(0) as u32;
+    let tips = extremities(rest, nb, seed, 6);
+    if tips.len() < 6 {
+        return Err(AutoError::NotHumanoid(
+            "the surface has fewer than five extremities".into(),
+        ));
+    }
+    let (up, floor_note) = find_up(rest, used, &tips[..5])?;
+    let hs = |q: [f64; 3]| DVec3::from_array(q).dot(up);
+    let (lo, hi) = rest
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+            (a.min(hs(*q)), b.max(hs(*q)))
+        });
+    let height = hi - lo;
+    if !(height > 0.0 && height.is_finite()) {
+        return Err(AutoError::NotHumanoid("the rest frame is flat".into()));
+    }
+    let notes = vec![floor_note];
+    if tips[5].1 > 0.75 * tips[4].1 {
+        return Err(AutoError::NotHumanoid(format!(
+            "a sixth extremity (vertex {}) reaches {:.0}% as far from the trunk as the fifth: a tail or another limb",
+            tips[5].0,
+            100.0 * tips[5].1 / tips[4].1
+        )));
+    }
+    // The parts and their motion.
+    let dec = decompose(rest, used, nb, height, &opts.decompose);
+    if dec.count < 5 {
+        return Err(AutoError::NotHumanoid(format!(
+            "the capture moves as {} rigid piece(s), not an articulated body",
+            dec.count
+        )));
+    }
+    let body = Body {
+        rest,
+        nb,
+        dec,
+        up,
+        lo,
+        height,
+        seed,
+        centre,
+    };
+    Ok((body, tips, notes))
+}
+
+/// The twelve limb joints, by motion or by proportion, left leg, right
+/// leg, left arm, right arm, each distal first.
+fn place_joints(body: &Body, sided: &Sided) -> Vec<(String, Placed)> {
+    let (rest, height) = (body.rest, body.height);
+    let mut found: Vec<(String, Placed)> = Vec::new();
+    let place = |m: Option<super::humanoid::Crossing>, p: &[(u32, f64)], d: f64| match m {
+        Some(c) => Placed {
+            position: c.joint.position,
+            by_motion: true,
+            articulation_deg: c.joint.articulation_deg,
+        },
+        None => Placed {
+            position: along(rest, p, d),
+            by_motion: false,
+            articulation_deg: 0.0,
+        },
+    };
+    for (side, (_, p, m)) in ["l", "r"].iter().zip(&sided.legs) {
+        for (k, name) in ["ankle", "knee", "hip"].iter().enumerate() {
+            found.push((format!("{side}_{name}"), place(m[k], p, LEG[k] * height)));
+        }
+    }
+    for (side, (_, p, m)) in ["l", "r"].iter().zip(&sided.arms) {
+        // The wrist by proportion from the elbow when the hand does not bend.
+        let elbow_d = m[1].map_or(ARM[1] * height, |c| c.from_tip);
+        let dw = [elbow_d * 0.43, ARM[1] * height, ARM[2] * height];
+        for (k, name) in ["wrist", "elbow", "shoulder"].iter().enumerate() {
+            found.push((format!("{side}_{name}"), place(m[k], p, dw[k])));
+        }
+    }
+    found
+}
+
+/// Joint `name` of `found` (the origin, by proportion, when missing).
+fn get_joint(found: &[(String, Placed)], name: &str) -> Placed {
+    found
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, p)| *p)
+        .unwrap_or(Placed {
+            position: DVec3::ZERO,
+            by_motion: false,
+            articulation_deg: 0.0,
+        })
+}
+
+/// The landmarks as rest-frame points: the limb joints (the optional ones
+/// only when the motion showed them), the groin, the chin, the head top.
+fn landmark_points(
+    body: &Body,
+    chains: &Chains,
+    sided: &Sided,
+    found: &[(String, Placed)],
+    notes: &mut Vec<String>,
+) -> Vec<(Landmark, DVec3)> {
+    let (up, lo, height) = (body.up, body.lo, body.height);
+    let get = |name: &str| get_joint(found, name);
+    let mut marks: Vec<(Landmark, DVec3)> = Vec::new();
+    for (l, name) in [
+        (Landmark::LWrist, "l_wrist"),
+        (Landmark::RWrist, "r_wrist"),
+        (Landmark::LElbow, "l_elbow"),
+        (Landmark::RElbow, "r_elbow"),
+        (Landmark::LKnee, "l_knee"),
+        (Landmark::RKnee, "r_knee"),
+        (Landmark::LShoulder, "l_shoulder"),
+        (Landmark::RShoulder, "r_shoulder"),
+        (Landmark::LAnkle, "l_ankle"),
+        (Landmark::RAnkle, "r_ankle"),
+    ] {
+        let p = get(name);
+        // Optional landmarks the motion did not show are left to the
+        // embedding's own defaults.
+        let optional = matches!(
+            l,
+            Landmark::LShoulder | Landmark::RShoulder | Landmark::LAnkle | Landmark::RAnkle
+        );
+        if p.by_motion || !optional {
+            marks.push((l, p.position));
+        }
+    }
+    // The groin: below the hips' midpoint by the embedding's hip offset
+    // (`place_joints` puts the hips 3.5 % of the height above the groin).
+    let groin = if get("l_hip").by_motion && get("r_hip").by_motion {
+        let g = (get("l_hip").position + get("r_hip").position) * 0.5 - up * (0.035 * height);
+        // Side to side, midway between the knees: the groin is on the
+        // body's mid-plane, and a hip found at a skirt's boundary strays
+        // sideways (samba's by 8 cm, which moved the mid-plane and the
+        // hips, and sank a foot 16-29 cm into the floor in retargeting);
+        // the knees, at the shins' ends, do not.
+        let knees = (get("l_knee").position + get("r_knee").position) * 0.5;
+        let left = sided.left;
+        g + left * (knees - g).dot(left)
+    } else {
+        // Between the knees, at a usual crotch height (47 % of the height).
+        notes.push("groin: the hips do not show in the motion (clothing?); placed between the knees at 47% of the height".into());
+        let mid = (get("l_knee").position + get("r_knee").position) * 0.5;
+        mid + up * (lo + 0.47 * height - mid.dot(up))
+    };
+    marks.push((Landmark::Groin, groin));
+    // The chin: 12.5 % of the height below the top of the head, ahead of
+    // its axis by `place_joints`'s chin offset.
+    let top = DVec3::from_array(body.rest[chains.head as usize]);
+    marks.push((
+        Landmark::Chin,
+        top - up * (0.125 * height) + sided.facing * (0.04 * height),
+    ));
+    marks.push((Landmark::HeadTop, top));
+    marks
+}

@@ -1,0 +1,196 @@
+//! The automatic rig's knees (issue 41): on samba (a dancer in a skirt)
+//! the knee was once placed at the skirt's hem (4.2 % of the height off
+//! the landmark rig's, the thigh bones 24 % apart), which tore the skirt
+//! and sank the feet in every retargeted frame. Here both knees must lie
+//! within 3 % of the height of the landmark rig's, on samba and crane and
+//! on generated variants of samba: frames reversed, mirrored (left and
+//! right swap), turned Z-up, scaled to cm, and re-ordered so that a frame
+//! with both hands on the hips comes first (the rest frame then chosen
+//! clear of contact, as `db init` chooses it); that last rig is compared
+//! with the clear order's (issue 41 asks 1 % and 95 %: not reached, the
+//! measured figures are guarded).
+
+use crate::common;
+
+use glam::DVec3;
+use std::path::{Path, PathBuf};
+use surfmotion::embed::Embedding;
+use surfmotion::embed::auto::options::AutoOptions;
+use surfmotion::embed::auto::rig::auto_rig;
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::embed::rest::{RestOptions, choose_rest_frame};
+use surfmotion::mesh::Mesh;
+use surfmotion::mesh::io::{LoadOptions, load_sequence};
+use surfmotion::rig::Canonical;
+
+/// The figure's bound, in % of the height.
+const KNEE_BOUND: f64 = 3.0;
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
+}
+
+/// A capture: its topology, frames and landmark rig.
+fn capture(d: &Path, name: &str) -> (Mesh, Vec<Vec<[f64; 3]>>, Embedding) {
+    let seq = load_sequence(
+        d.join(format!("4d/{name}/{name}.pc2")).to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let mesh = seq.mesh().clone();
+    let lm = Landmarks::load(
+        &fixture(&format!("{name}.landmarks.json")),
+        mesh.vertex_count(),
+    )
+    .unwrap();
+    let truth = Embedding::new(&mesh, &lm, None).unwrap();
+    let frames = (0..seq.frame_count())
+        .map(|f| seq.frame(f).to_vec())
+        .collect();
+    (mesh, frames, truth)
+}
+
+/// The automatic rig's embedding, its parts found on the rest frame `db
+/// init` would choose (the topology's positions, then every frame).
+fn auto_embedding(mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> Embedding {
+    let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
+    let mut all = vec![mesh.positions()];
+    all.extend_from_slice(&f);
+    let choice = choose_rest_frame(mesh, &all, &RestOptions::default()).unwrap();
+    let opts = AutoOptions {
+        rest_frame: (choice.frame > 0).then(|| choice.frame - 1),
+        ..AutoOptions::default()
+    };
+    let rig = auto_rig(mesh, &f, &opts).unwrap();
+    Embedding::new(mesh, &rig.landmarks, None).unwrap()
+}
+
+/// The knees' distances (left, right) in % of `height` between `mine` and
+/// `truth`; `swap` pairs left with right (a mirrored body).
+fn knees(mine: &[[f64; 3]; 19], truth: &[[f64; 3]; 19], height: f64, swap: bool) -> [f64; 2] {
+    let (l, r) = (Canonical::LKnee.index(), Canonical::RKnee.index());
+    let (tl, tr) = if swap { (r, l) } else { (l, r) };
+    let d = |a: usize, b: usize| {
+        100.0 * DVec3::from_array(mine[a]).distance(DVec3::from_array(truth[b])) / height
+    };
+    [d(l, tl), d(r, tr)]
+}
+
+fn assert_knees(what: &str, k: [f64; 2]) {
+    assert!(
+        k[0] <= KNEE_BOUND && k[1] <= KNEE_BOUND,
+        "{what}: knees {:.2}% and {:.2}% of the height from the landmark rig's (bound {KNEE_BOUND}%)",
+        k[0],
+        k[1]
+    );
+}
+
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn the_knees_of_the_real_captures_are_the_landmark_rigs() {
+    let Some(d) = common::data_dir() else { return };
+    for name in ["samba", "crane"] {
+        let (mesh, frames, truth) = capture(&d, name);
+        let e = auto_embedding(&mesh, &frames);
+        assert_knees(name, knees(&e.joints, &truth.joints, truth.height, false));
+    }
+}
+
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn the_knees_of_samba_variants_are_the_landmark_rigs() {
+    let Some(d) = common::data_dir() else { return };
+    let (mesh, frames, truth) = capture(&d, "samba");
+    let h = truth.height;
+    let variant = |f: &dyn Fn([f64; 3]) -> [f64; 3], flip: bool| {
+        let mut tris = mesh.triangles().to_vec();
+        if flip {
+            for t in &mut tris {
+                t.swap(1, 2);
+            }
+        }
+        let m = Mesh::new(mesh.positions().iter().map(|p| f(*p)).collect(), tris).unwrap();
+        let fr: Vec<Vec<[f64; 3]>> = frames
+            .iter()
+            .map(|x| x.iter().map(|p| f(*p)).collect())
+            .collect();
+        (m, fr)
+    };
+    // Reversed frames (the topology stays frame 0).
+    let mut rev = frames.clone();
+    rev.reverse();
+    let e = auto_embedding(&mesh, &rev);
+    assert_knees("reversed", knees(&e.joints, &truth.joints, h, false));
+    // Mirrored across x = 0: the left knee is the landmark rig's right.
+    let mirror = |p: [f64; 3]| [-p[0], p[1], p[2]];
+    let (m, fr) = variant(&mirror, true);
+    let e = auto_embedding(&m, &fr);
+    assert_knees(
+        "mirrored",
+        knees(&e.joints, &truth.joints.map(mirror), h, true),
+    );
+    // Z-up.
+    let zup = |p: [f64; 3]| [p[0], -p[2], p[1]];
+    let (m, fr) = variant(&zup, false);
+    let e = auto_embedding(&m, &fr);
+    assert_knees("Z-up", knees(&e.joints, &truth.joints.map(zup), h, false));
+    // Centimetres.
+    let cm = |p: [f64; 3]| p.map(|x| x * 100.0);
+    let (m, fr) = variant(&cm, false);
+    let e = auto_embedding(&m, &fr);
+    assert_knees(
+        "cm",
+        knees(&e.joints, &truth.joints.map(cm), h * 100.0, false),
+    );
+}
+
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn samba_starting_hands_on_hips_rigs_as_from_its_clear_start() {
+    let Some(d) = common::data_dir() else { return };
+    let (mesh, frames, truth) = capture(&d, "samba");
+    let h = truth.height;
+    // Frame 130 (both hands on the hips) first, as `tests/it/embed/contact`
+    // makes it: its positions the topology, the frames rotated.
+    let first = 130;
+    let nf = frames.len();
+    let moved: Vec<Vec<[f64; 3]>> = (0..nf).map(|k| frames[(first + k) % nf].clone()).collect();
+    let contact_mesh = mesh.with_positions(&frames[first]).unwrap();
+    let from_contact = auto_embedding(&contact_mesh, &moved);
+    // The landmark rig and the clear-order automatic rig, carried to
+    // frame 130.
+    let want = truth.frame_joints(&frames[first]).map(|p| p.to_array());
+    assert_knees(
+        "contact first",
+        knees(&from_contact.joints, &want, h, false),
+    );
+    let clear = auto_embedding(&mesh, &frames);
+    let carried = clear.frame_joints(&frames[first]);
+    let mean = Canonical::ALL
+        .into_iter()
+        .map(|j| carried[j.index()].distance(DVec3::from_array(from_contact.joints[j.index()])))
+        .sum::<f64>()
+        / 19.0;
+    let agree = clear
+        .labels
+        .iter()
+        .zip(&from_contact.labels)
+        .filter(|(a, b)| a == b)
+        .count() as f64
+        / clear.labels.len() as f64;
+    eprintln!(
+        "samba contact-first vs clear order: joints {:.2}% of the height, parts agree {:.1}%",
+        100.0 * mean / h,
+        100.0 * agree
+    );
+    // Measured 2.95 % and 82.4 % (`examples/autorig_eval.rs`); issue 41's
+    // 1 % and 95 % are not reached: guarded here against getting worse.
+    assert!(
+        100.0 * mean / h <= 3.5 && agree >= 0.8,
+        "contact first vs clear: joints {:.2}%, parts {:.1}%",
+        100.0 * mean / h,
+        100.0 * agree
+    );
+}
