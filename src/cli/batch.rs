@@ -3,11 +3,11 @@
 //! `retarget` and `transfer` (the same option groups, flattened).
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
-use std::time::Instant;
+use std::path::{Path, PathBuf};
 use surfmotion::batch::schedule::ShardSource;
 use surfmotion::batch::{ClipStatus, Converter, Format};
 use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::jobs::batch::{ClipRate, check_folders, outcome_line, report_text, target_inputs};
 use surfmotion::jobs::{
     BatchEvent, BatchOptions, RetargetJob, RetargetJobOptions, ScanTransferJob,
     ScanTransferOptions, batch_folder,
@@ -112,26 +112,21 @@ pub struct MergeArgs {
 fn run_merge(a: MergeArgs) -> anyhow::Result<()> {
     let r = surfmotion::jobs::batch::merge_batches(&a.dirs, a.output.as_deref())?;
     let s = &r.summary;
-    if a.json {
-        super::emit(&(serde_json::to_string_pretty(s)? + "\n"))?;
-    } else {
-        super::emit(&format!(
-            "merged {}: {}\nreport: {}\n",
-            surfmotion::batch::summary::count(r.reports.len(), "shard report"),
-            s.line(),
-            r.files
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))?;
-    }
+    super::emit(&match a.json {
+        true => serde_json::to_string_pretty(s)? + "\n",
+        false => r.text(),
+    })?;
+    none_failed(s, &r.files)
+}
+
+/// An error when a clip failed, naming the report.
+fn none_failed(s: &surfmotion::batch::Summary, files: &[PathBuf]) -> anyhow::Result<()> {
     anyhow::ensure!(
         s.failed == 0,
         "{} of {} clips failed (see {})",
         s.failed,
         s.clips,
-        r.files[0].display()
+        files[0].display()
     );
     Ok(())
 }
@@ -145,77 +140,90 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
     let (Some(mocap_dir), Some(output)) = (a.mocap_dir.clone(), a.output.clone()) else {
         anyhow::bail!("give --mocap-dir and -o (or `batch merge DIR...`)");
     };
-    let resolved =
-        surfmotion::batch::schedule::resolve(a.shard.as_deref(), a.shard_count, &|k: &str| {
-            std::env::var(k).ok()
-        })?;
+    let shard = resolve_shard(&a)?;
+    check_args(&a, &mocap_dir, &output)?;
+    let defaults = BatchOptions::default();
+    let opts = BatchOptions {
+        shard,
+        format: Format::from(a.format),
+        force: a.force,
+        jobs: a.jobs.unwrap_or(defaults.jobs),
+    };
+    let converter = converter(&a)?;
+    let term = std::io::stderr().is_terminal();
+    let bar = super::progress(0, "clips");
+    let rate = ClipRate::default();
+    let log = |e: BatchEvent<'_>| {
+        let o = match e {
+            BatchEvent::Planned(n) => return bar.set_length(n as u64),
+            BatchEvent::Clip(o) => o,
+        };
+        let frames_per_second = rate.add(o);
+        let line = outcome_line(o, &super::flags::as_flags);
+        if term {
+            bar.inc(1);
+            bar.set_message(format!("{frames_per_second:.0} frames/s"));
+            if o.status == ClipStatus::Failed {
+                bar.println(line);
+            }
+        } else {
+            crate::errln!("{line}");
+        }
+    };
+    let r = batch_folder(&mocap_dir, &output, converter.as_ref(), &opts, &log)?;
+    bar.finish_and_clear();
+    let s = &r.summary;
+    super::emit(&match a.json {
+        true => serde_json::to_string_pretty(s)? + "\n",
+        false => report_text(s, &r.files, &super::flags::as_flags),
+    })?;
+    none_failed(s, &r.files)
+}
+
+/// The shard from `--shard`, a Slurm array or a Kubernetes Indexed Job
+/// (said on stderr unless it is a plain `--shard`).
+fn resolve_shard(a: &Args) -> anyhow::Result<Option<String>> {
+    let env = |k: &str| std::env::var(k).ok();
+    let resolved = surfmotion::batch::schedule::resolve(a.shard.as_deref(), a.shard_count, &env)?;
     if let Some((s, source)) = &resolved
         && !matches!(source, ShardSource::Flag { ignored } if ignored.is_empty())
     {
         crate::errln!("{}", source.describe(s));
     }
-    let shard = resolved.map(|(s, _)| s.spelled());
+    Ok(resolved.map(|(s, _)| s.spelled()))
+}
+
+/// Refuses options of the other target and outputs that would land on a
+/// clip or an input, before the character loads.
+fn check_args(a: &Args, mocap_dir: &Path, output: &Path) -> anyhow::Result<()> {
     a.glb.refuse_unless_glb(
         matches!(a.format, super::values::FormatArg::Glb),
         &format!("--format {}", format!("{:?}", a.format).to_lowercase()),
     )?;
-    if a.db.is_some() {
-        anyhow::ensure!(
-            a.scan_job.is_default(),
-            "--group, --marker-count, --marker-margin and --fps apply to --scan (a database has its own frame rate)"
-        );
-    } else {
-        anyhow::ensure!(
-            a.retarget_job.is_default(),
-            "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db"
-        );
-    }
-    // Said before the character loads: "X: Not a directory (os error
-    // 20)" for a clip given as the folder, "/dev/full: File exists (os
-    // error 17)" for a file as -o.
-    if mocap_dir.exists() && !mocap_dir.is_dir() {
-        anyhow::bail!(
-            "--mocap-dir {}: a file, not a folder (batch converts every clip under a folder; `retarget` or `transfer` converts one)",
-            mocap_dir.display()
-        );
-    }
-    surfmotion::jobs::outputs::check_output_folder(
-        "-o",
-        &output,
-        "batch writes one output per clip and batch.json, .html and .svg into a folder",
-    )?;
-    surfmotion::jobs::outputs::refuse_output_in_clip_folder("-o", &output, &mocap_dir)?;
-    let format = Format::from(a.format);
-    let mut inputs = Vec::new();
-    if let Some(db) = &a.db {
-        inputs.extend(surfmotion::jobs::outputs::database_inputs(db));
-    }
-    if let Some(scan) = &a.scan {
-        inputs.extend(surfmotion::mesh::io::input_files(scan, None));
-    }
-    inputs.extend(a.landmarks.clone());
-    inputs.extend(a.clip.rig_map.clone());
-    inputs.extend(a.clip.asf.clone());
-    surfmotion::jobs::outputs::refuse_outputs_over_inputs(
-        &inputs, &mocap_dir, "-o", &output, format,
-    )?;
+    anyhow::ensure!(
+        a.db.is_none() || a.scan_job.is_default(),
+        "--group, --marker-count, --marker-margin and --fps apply to --scan (a database has its own frame rate)"
+    );
+    anyhow::ensure!(
+        a.db.is_some() || a.retarget_job.is_default(),
+        "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db"
+    );
+    let (db, scan) = (a.db.as_deref(), a.scan.as_deref());
+    let files = [&a.landmarks, &a.clip.rig_map, &a.clip.asf];
+    let inputs = target_inputs(db, scan, files.into_iter().flatten());
+    check_folders(mocap_dir, output, &inputs, Format::from(a.format))
+        .map_err(|e| anyhow::anyhow!(super::flags::as_flags(&e.to_string())))
+}
+
+/// The retarget job (with --db) or the scan transfer job (with --scan and
+/// --landmarks), loaded or factored once for every clip.
+fn converter(a: &Args) -> anyhow::Result<Box<dyn Converter>> {
     let load = a.clip.load_options()?;
-    let scan_job = a.scan_job.job()?;
-    let retarget_opts = a.retarget_job.options();
-    let mut opts = BatchOptions {
-        shard,
-        format,
-        force: a.force,
-        ..Default::default()
-    };
-    if let Some(j) = a.jobs {
-        opts.jobs = j;
-    }
-    let converter: Box<dyn Converter> = match (&a.db, &a.scan, &a.landmarks) {
+    Ok(match (&a.db, &a.scan, &a.landmarks) {
         (Some(db), _, _) => Box::new(RetargetJob::load(
             db,
             RetargetJobOptions {
-                retarget: retarget_opts,
+                retarget: a.retarget_job.options(),
                 character: a.retarget_job.character(),
                 load,
                 glb: a.glb.options(),
@@ -223,6 +231,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             &super::Bars::new(),
         )?),
         (None, Some(scan), Some(lm)) => {
+            let scan_job = a.scan_job.job()?;
             let mesh = super::load_mesh_groups(scan, &scan_job.groups)?;
             let landmarks = Landmarks::load(lm, mesh.vertex_count())?;
             let opts = ScanTransferOptions {
@@ -235,78 +244,5 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
             Box::new(ScanTransferJob::prepare(&mesh, &landmarks, scan, opts)?)
         }
         _ => anyhow::bail!("give --db, or --scan with --landmarks"),
-    };
-    let term = std::io::stderr().is_terminal();
-    let bar = super::progress(0, "clips");
-    let frames_done = std::sync::atomic::AtomicUsize::new(0);
-    let t0 = Instant::now();
-    let log = |e: BatchEvent<'_>| {
-        let o = match e {
-            BatchEvent::Planned(n) => return bar.set_length(n as u64),
-            BatchEvent::Clip(o) => o,
-        };
-        let f = if o.status == ClipStatus::Done {
-            frames_done.fetch_add(o.frames, std::sync::atomic::Ordering::Relaxed) + o.frames
-        } else {
-            frames_done.load(std::sync::atomic::Ordering::Relaxed)
-        };
-        let line = match o.status {
-            ClipStatus::Done => format!(
-                "done {} ({} frames, {:.1} s)",
-                o.clip.display(),
-                o.frames,
-                o.seconds
-            ),
-            ClipStatus::Skipped => format!("skipped {} (output complete)", o.clip.display()),
-            ClipStatus::Failed => format!(
-                "FAILED {}: {}",
-                o.clip.display(),
-                super::flags::as_flags(o.reason.as_deref().unwrap_or(""))
-            ),
-        };
-        if term {
-            bar.inc(1);
-            bar.set_message(format!(
-                "{:.0} frames/s",
-                f as f64 / t0.elapsed().as_secs_f64().max(1e-9)
-            ));
-            if o.status == ClipStatus::Failed {
-                bar.println(line);
-            }
-        } else {
-            crate::errln!("{line}");
-        }
-    };
-    let r = batch_folder(&mocap_dir, &output, converter.as_ref(), &opts, &log)?;
-    bar.finish_and_clear();
-    let (s, files) = (&r.summary, &r.files);
-    if a.json {
-        super::emit(&(serde_json::to_string_pretty(s)? + "\n"))?;
-    } else {
-        let mut out = format!(
-            "{}\nreport: {}\n",
-            s.line(),
-            files
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        for o in s.outcomes.iter().filter(|o| o.status == ClipStatus::Failed) {
-            out += &format!(
-                "failed: {}: {}\n",
-                o.clip.display(),
-                super::flags::as_flags(o.reason.as_deref().unwrap_or(""))
-            );
-        }
-        super::emit(&out)?;
-    }
-    anyhow::ensure!(
-        s.failed == 0,
-        "{} of {} clips failed (see {})",
-        s.failed,
-        s.clips,
-        files[0].display()
-    );
-    Ok(())
+    })
 }

@@ -176,8 +176,8 @@ pub fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
     k.text(
         "sparse",
         &format!(
-            "{} {} {} {}",
-            opts.neighbours, opts.dims, opts.band, opts.min_gap
+            "{} {} {} {} {} {}",
+            opts.neighbours, opts.dims, opts.band, opts.min_gap, opts.stride, opts.per_sequence
         ),
     );
     k.finish()
@@ -318,7 +318,6 @@ pub fn similarity_with(
     force: bool,
     progress: &dyn BuildProgress,
 ) -> Result<(Similarity, u64, Option<Timing>), DbError> {
-    let vopts = vertex_options(m);
     let key = similarity_key(dir, m, measure)?;
     let sopts = sparse_options(m);
     let skey = sparse_key(key, &sopts);
@@ -332,133 +331,20 @@ pub fn similarity_with(
         });
     }
     let path = similarity_path(dir, measure);
-    if method == Some(Method::Sparse)
-        && !force
-        && let Some(s) = cached_sparse(dir, m, measure, skey)
-    {
-        return Ok((s, skey, None));
+    if let Some(found) = cached_similarity(dir, m, measure, method, force, (key, skey)) {
+        return Ok(found);
     }
-    let cached = if force || method == Some(Method::Sparse) {
-        None
-    } else {
-        cache::read_matrix(&path, key).unwrap_or_else(|why| {
-            tracing::warn!(
-                "{}: the cached similarity matrix cannot be used ({why}); recomputing it",
-                path.display()
-            );
-            None
-        })
-    };
-    if let Some(mat) = cached {
-        // A valid key does not make the contents right: the spans must be
-        // the manifest's sequences and every value a finite distance.
-        let names_match = mat.spans.len() == m.sequences.len()
-            && mat
-                .spans
-                .iter()
-                .zip(&m.sequences)
-                .all(|(s, q)| s.name == q.name);
-        let finite = (0..mat.len()).all(|a| mat.row(a).iter().all(|v| v.is_finite() && *v >= 0.0));
-        if names_match && finite {
-            return Ok((Similarity::Dense(mat), key, None));
-        }
-        tracing::warn!(
-            "{}: the cached similarity matrix disagrees with the database ({}); recomputing it",
-            path.display(),
-            if names_match {
-                "a value that is not a finite distance"
-            } else {
-                "other sequences"
-            }
-        );
-    }
-    if method.is_none()
-        && !force
-        && measure == Measure::Shape
-        && let Some(s) = cached_sparse(dir, m, measure, skey)
-    {
-        return Ok((s, skey, None));
-    }
-    let topo = m.load_topology(dir)?;
-    let n = topo.vertex_count();
-    let z_up = m.up.eq_ignore_ascii_case("z");
     let t0 = Instant::now();
-    let mut spans = Vec::new();
-    let mut shape = None;
-    let mut vertex = None;
-    let mut skel = None;
-    let mut colour = None;
-    match measure {
-        Measure::Shape => {
-            let rest: Vec<_> = topo.positions().iter().map(|p| y_up(*p, z_up)).collect();
-            shape = Some(ShapeSet::new(ShapeSet::grid_for(&rest, topo.triangles())));
-        }
-        Measure::Vertex => vertex = Some(VertexSet::new(n, vopts)),
-        Measure::Skeleton => {
-            skel = Some((embed_rig(dir, m, &topo)?, SkeletonSet::default()));
-        }
-        Measure::Colour => {
-            let colours = vertex_colours(dir, m, &topo)?;
-            let rest: Vec<_> = topo.positions().iter().map(|p| y_up(*p, z_up)).collect();
-            colour = Some(ColourSet::new(
-                ShapeSet::grid_for(&rest, topo.triangles()),
-                colours,
-            ));
-        }
-    }
-    progress.start("sequences described", m.sequences.len() as u64);
-    for s in &m.sequences {
-        let seq = m.load_sequence(dir, s)?;
-        if seq.mesh().vertex_count() != n || seq.mesh().triangles() != topo.triangles() {
-            return Err(DbError::Manifest {
-                path: dir.join(super::MANIFEST),
-                msg: format!(
-                    "sequence '{}': its connectivity differs from the topology ({} vertices, the topology {}); `surfmotion db info` lists such problems",
-                    s.name,
-                    seq.mesh().vertex_count(),
-                    n
-                ),
-            });
-        }
-        let start = spans.iter().map(|s: &Span| s.len).sum();
-        spans.push(Span {
-            name: s.name.clone(),
-            start,
-            len: seq.frame_count(),
-        });
-        let frames = seq.all_positions();
-        if let Some(set) = shape.as_mut() {
-            set.push_sequence(frames, n, topo.triangles(), z_up);
-        }
-        if let Some(set) = vertex.as_mut() {
-            set.push_sequence(frames, z_up);
-        }
-        if let Some(set) = colour.as_mut() {
-            set.push_sequence(frames, n, topo.triangles(), z_up);
-        }
-        if let Some((rig, set)) = skel.as_mut() {
-            let p = poses(rig, frames, n, SkeletonKind::Regressor);
-            set.poses
-                .extend(p.into_iter().map(|q| q.map(|j| y_up(j.to_array(), z_up))));
-        }
-        progress.advance(1);
-    }
-    progress.finish();
+    let (sets, spans) = describe(dir, m, measure, progress)?;
     let describe = t0.elapsed().as_secs_f64();
-    let set: &dyn PairDistance = match (&shape, &vertex, &skel, &colour) {
-        (Some(s), _, _, _) => s,
-        (_, Some(s), _, _) => s,
-        (_, _, Some((_, s)), _) => s,
-        (_, _, _, Some(s)) => s,
-        _ => unreachable!("one set is built per measure"),
-    };
+    let set = sets.pair_distance();
     let frames = set.frames();
     let sparse = match method {
         Some(Method::Sparse) => true,
         Some(Method::Dense) => false,
-        None => frames >= SPARSE_FRAMES && shape.is_some(),
+        None => frames >= SPARSE_FRAMES && sets.shape.is_some(),
     };
-    if sparse && let Some(set) = shape.as_ref() {
+    if sparse && let Some(set) = sets.shape.as_ref() {
         return sparse_similarity(dir, measure, skey, set, spans, &sopts, describe, progress);
     }
     let t1 = Instant::now();
@@ -482,6 +368,182 @@ pub fn similarity_with(
             pairs,
         }),
     ))
+}
+
+/// A current cached similarity for `method`, with its key: the sparse
+/// cache when sparse is asked for; else the dense matrix when it is
+/// current, of the manifest's sequences and finite (a warning naming the
+/// file otherwise); else, without a method, a current sparse cache of the
+/// shape measure. `keys`: the dense and the sparse key.
+fn cached_similarity(
+    dir: &Path,
+    m: &Manifest,
+    measure: Measure,
+    method: Option<Method>,
+    force: bool,
+    (key, skey): (u64, u64),
+) -> Option<(Similarity, u64, Option<Timing>)> {
+    if method == Some(Method::Sparse)
+        && !force
+        && let Some(s) = cached_sparse(dir, m, measure, skey)
+    {
+        return Some((s, skey, None));
+    }
+    let path = similarity_path(dir, measure);
+    let cached = if force || method == Some(Method::Sparse) {
+        None
+    } else {
+        cache::read_matrix(&path, key).unwrap_or_else(|why| {
+            tracing::warn!(
+                "{}: the cached similarity matrix cannot be used ({why}); recomputing it",
+                path.display()
+            );
+            None
+        })
+    };
+    if let Some(mat) = cached {
+        // A valid key does not make the contents right: the spans must be
+        // the manifest's sequences and every value a finite distance.
+        let names_match = mat.spans.len() == m.sequences.len()
+            && mat
+                .spans
+                .iter()
+                .zip(&m.sequences)
+                .all(|(s, q)| s.name == q.name);
+        let finite = (0..mat.len()).all(|a| mat.row(a).iter().all(|v| v.is_finite() && *v >= 0.0));
+        if names_match && finite {
+            return Some((Similarity::Dense(mat), key, None));
+        }
+        tracing::warn!(
+            "{}: the cached similarity matrix disagrees with the database ({}); recomputing it",
+            path.display(),
+            if names_match {
+                "a value that is not a finite distance"
+            } else {
+                "other sequences"
+            }
+        );
+    }
+    if method.is_none()
+        && !force
+        && measure == Measure::Shape
+        && let Some(s) = cached_sparse(dir, m, measure, skey)
+    {
+        return Some((s, skey, None));
+    }
+    None
+}
+
+/// The per-frame descriptors of one measure (one set is built).
+#[derive(Default)]
+struct Sets {
+    shape: Option<ShapeSet>,
+    vertex: Option<VertexSet>,
+    skel: Option<(crate::embed::Embedding, SkeletonSet)>,
+    colour: Option<ColourSet>,
+}
+
+impl Sets {
+    /// The empty set of `measure` for the topology `topo`.
+    fn new(
+        dir: &Path,
+        m: &Manifest,
+        measure: Measure,
+        topo: &crate::mesh::Mesh,
+    ) -> Result<Sets, DbError> {
+        let z_up = m.up.eq_ignore_ascii_case("z");
+        let mut sets = Sets::default();
+        match measure {
+            Measure::Shape => {
+                let rest: Vec<_> = topo.positions().iter().map(|p| y_up(*p, z_up)).collect();
+                sets.shape = Some(ShapeSet::new(ShapeSet::grid_for(&rest, topo.triangles())));
+            }
+            Measure::Vertex => {
+                sets.vertex = Some(VertexSet::new(topo.vertex_count(), vertex_options(m)))
+            }
+            Measure::Skeleton => {
+                sets.skel = Some((embed_rig(dir, m, topo)?, SkeletonSet::default()));
+            }
+            Measure::Colour => {
+                let colours = vertex_colours(dir, m, topo)?;
+                let rest: Vec<_> = topo.positions().iter().map(|p| y_up(*p, z_up)).collect();
+                sets.colour = Some(ColourSet::new(
+                    ShapeSet::grid_for(&rest, topo.triangles()),
+                    colours,
+                ));
+            }
+        }
+        Ok(sets)
+    }
+
+    /// Adds one sequence's frames (`n` vertices each).
+    fn push(&mut self, frames: &[[f64; 3]], n: usize, triangles: &[[u32; 3]], z_up: bool) {
+        if let Some(set) = self.shape.as_mut() {
+            set.push_sequence(frames, n, triangles, z_up);
+        }
+        if let Some(set) = self.vertex.as_mut() {
+            set.push_sequence(frames, z_up);
+        }
+        if let Some(set) = self.colour.as_mut() {
+            set.push_sequence(frames, n, triangles, z_up);
+        }
+        if let Some((rig, set)) = self.skel.as_mut() {
+            let p = poses(rig, frames, n, SkeletonKind::Regressor);
+            set.poses
+                .extend(p.into_iter().map(|q| q.map(|j| y_up(j.to_array(), z_up))));
+        }
+    }
+
+    /// The set that was built, as pair distances.
+    fn pair_distance(&self) -> &dyn PairDistance {
+        match (&self.shape, &self.vertex, &self.skel, &self.colour) {
+            (Some(s), _, _, _) => s,
+            (_, Some(s), _, _) => s,
+            (_, _, Some((_, s)), _) => s,
+            (_, _, _, Some(s)) => s,
+            _ => unreachable!("one set is built per measure"),
+        }
+    }
+}
+
+/// Every sequence loaded one at a time and reduced to the descriptors of
+/// `measure`; returns them and the sequences' spans.
+fn describe(
+    dir: &Path,
+    m: &Manifest,
+    measure: Measure,
+    progress: &dyn BuildProgress,
+) -> Result<(Sets, Vec<Span>), DbError> {
+    let topo = m.load_topology(dir)?;
+    let n = topo.vertex_count();
+    let z_up = m.up.eq_ignore_ascii_case("z");
+    let mut spans = Vec::new();
+    let mut sets = Sets::new(dir, m, measure, &topo)?;
+    progress.start("sequences described", m.sequences.len() as u64);
+    for s in &m.sequences {
+        let seq = m.load_sequence(dir, s)?;
+        if seq.mesh().vertex_count() != n || seq.mesh().triangles() != topo.triangles() {
+            return Err(DbError::Manifest {
+                path: dir.join(super::MANIFEST),
+                msg: format!(
+                    "sequence '{}': its connectivity differs from the topology ({} vertices, the topology {}); `surfmotion db info` lists such problems",
+                    s.name,
+                    seq.mesh().vertex_count(),
+                    n
+                ),
+            });
+        }
+        let start = spans.iter().map(|s: &Span| s.len).sum();
+        spans.push(Span {
+            name: s.name.clone(),
+            start,
+            len: seq.frame_count(),
+        });
+        sets.push(seq.all_positions(), n, topo.triangles(), z_up);
+        progress.advance(1);
+    }
+    progress.finish();
+    Ok((sets, spans))
 }
 
 /// The sparse similarity of the described frames `set`, saved to the

@@ -6,9 +6,9 @@
 //! raised as `tracing` events with target [`NOTICE`] and kept in the report.
 
 use crate::batch::{
-    ClipOutcome, ClipStatus, Converter, Earlier, Format, MergeError, RunOptions, Shard, Summary,
-    clean_temporaries, find_clips, find_reports, lock_folder, merge, plan, read_report,
-    report_stem, run, write_summary,
+    ClipOutcome, ClipStatus, Converter, Earlier, FolderLock, Format, MergeError, Planned,
+    RunOptions, Shard, Summary, clean_temporaries, find_clips, find_reports, lock_folder, merge,
+    plan, read_report, report_stem, run, write_summary,
 };
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -65,6 +65,15 @@ pub enum BatchError {
     /// A report could not be written.
     #[error(transparent)]
     Fs(#[from] crate::util::fsutil::FsError),
+    /// The clips' folder is a file.
+    #[error(
+        "`mocap_dir` {}: a file, not a folder (batch converts every clip under a folder; `retarget` or `transfer` converts one)",
+        .0.display()
+    )]
+    NotAFolder(PathBuf),
+    /// An output folder or file that cannot be written.
+    #[error(transparent)]
+    Output(#[from] crate::jobs::outputs::OutputError),
 }
 
 /// The report of [`batch_folder`].
@@ -106,24 +115,91 @@ pub fn batch_folder(
         Some(s) => Some(Shard::parse(s).map_err(BatchError::Shard)?),
         None => None,
     };
+    let mut notices = Vec::new();
+    let (clips, library) = select_clips(mocap_dir, output, opts.format, shard, &mut notices)?;
+    std::fs::create_dir_all(output).map_err(|source| crate::util::fsutil::FsError {
+        path: output.to_path_buf(),
+        source,
+    })?;
     // `02/4` is shard 2/4 and writes batch-2of4.json.
     let shard_name = shard.map(|s| s.spelled());
-    let library_clips = |s: &mut Summary, n: usize| {
-        if shard.is_some() {
-            s.library_clips = Some(n);
-        }
+    let stem = report_stem(shard_name.as_deref());
+    let lock = take_folder(output, &stem, shard_name.as_deref(), &mut notices)?;
+    progress(BatchEvent::Planned(clips.len()));
+    // The report keeps what earlier runs recorded for the outputs they
+    // wrote, and is rewritten after every clip.
+    let earlier = Earlier::load(output, &format!("{stem}.json"));
+    let index: std::collections::HashMap<PathBuf, usize> = clips
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p.clip.clone(), i))
+        .collect();
+    let slots = Mutex::new(finished_earlier(&clips, &earlier, opts));
+    let reports = Reports {
+        output,
+        what: converter.describe(),
+        run_opts: RunOptions {
+            jobs: opts.jobs,
+            force: opts.force,
+            format: opts.format,
+        },
+        shard_name,
+        library: shard.map(|_| library),
+        converter,
+        t0: Instant::now(),
     };
-    let mut notices = Vec::new();
+    if let Ok(slots) = slots.lock() {
+        reports.progress(&slots);
+    }
+    let log = |o: &ClipOutcome| {
+        let mut o = o.clone();
+        earlier.fill(&mut o);
+        if let Ok(mut slots) = slots.lock()
+            && let Some(&i) = index.get(&o.clip)
+        {
+            slots[i] = Some(o.clone());
+            // A skipped output was listed before the run (when its earlier
+            // record is known): rewrite only for news.
+            if o.status != ClipStatus::Skipped {
+                reports.progress(&slots);
+            }
+        }
+        progress(BatchEvent::Clip(&o));
+    };
+    let convert = |clip: &Path, out: &Path| converter.convert(clip, out);
+    let mut outcomes = run(mocap_dir, &clips, &reports.run_opts, &convert, &log);
+    for o in &mut outcomes {
+        earlier.fill(o);
+    }
+    let summary = reports.summary(outcomes);
+    let files = write_summary(output, &summary)?;
+    drop(lock);
+    Ok(BatchReport {
+        summary,
+        files,
+        notices,
+    })
+}
+
+/// The clips under `mocap_dir` with their outputs in `output`, this
+/// shard's only, and the library's count. Outputs are planned for the
+/// whole library, so every shard names them alike; clips that would
+/// write one output are renamed (a notice) or refused before any work.
+fn select_clips(
+    mocap_dir: &Path,
+    output: &Path,
+    format: Format,
+    shard: Option<Shard>,
+    notices: &mut Vec<String>,
+) -> Result<(Vec<Planned>, usize), BatchError> {
     let all = find_clips(mocap_dir).map_err(|source| BatchError::List {
         path: mocap_dir.to_path_buf(),
         source,
     })?;
-    // Outputs of the whole library, so every shard names them alike; clips
-    // that would write one output are renamed or refused before any work.
-    let (planned, renamed) = plan(&all, output, opts.format)?;
+    let (planned, renamed) = plan(&all, output, format)?;
     if !renamed.is_empty() {
         notice(
-            &mut notices,
+            notices,
             format!(
                 "{} would write the same output; named with their extension:\n  {}",
                 crate::batch::summary::count(renamed.len(), "clip"),
@@ -136,15 +212,21 @@ pub fn batch_folder(
         Some(s) => s.select(&planned),
         None => planned,
     };
-    std::fs::create_dir_all(output).map_err(|source| crate::util::fsutil::FsError {
-        path: output.to_path_buf(),
-        source,
-    })?;
-    let stem = report_stem(shard_name.as_deref());
-    let lock = lock_folder(output, &stem, shard_name.as_deref())?;
+    Ok((clips, library))
+}
+
+/// The output folder's lock; stale locks removed and, when this run is
+/// alone there, the temporaries of killed runs (notices both).
+fn take_folder(
+    output: &Path,
+    stem: &str,
+    shard: Option<&str>,
+    notices: &mut Vec<String>,
+) -> Result<FolderLock, BatchError> {
+    let lock = lock_folder(output, stem, shard)?;
     for p in &lock.stale_removed {
         notice(
-            &mut notices,
+            notices,
             format!("removed the stale lock {} (its run is gone)", p.display()),
         );
     }
@@ -152,7 +234,7 @@ pub fn batch_folder(
         let (gone, bytes) = clean_temporaries(output);
         if !gone.is_empty() {
             notice(
-                &mut notices,
+                notices,
                 format!(
                     "removed {} unfinished temporar{} ({:.1} MB) left by a killed run",
                     gone.len(),
@@ -162,101 +244,193 @@ pub fn batch_folder(
             );
         }
     }
-    progress(BatchEvent::Planned(clips.len()));
-    let what = converter.describe();
-    let run_opts = RunOptions {
-        jobs: opts.jobs,
-        force: opts.force,
-        format: opts.format,
-    };
-    // The report keeps what earlier runs recorded for the outputs they
-    // wrote, and is rewritten after every clip.
-    let earlier = Earlier::load(output, &format!("{stem}.json"));
-    let index: std::collections::HashMap<PathBuf, usize> = clips
+    Ok(lock)
+}
+
+/// Per clip, its outcome when an earlier run finished its output (and
+/// `force` is off): the clips the run will skip.
+fn finished_earlier(
+    clips: &[Planned],
+    earlier: &Earlier,
+    opts: &BatchOptions,
+) -> Vec<Option<ClipOutcome>> {
+    clips
         .iter()
-        .enumerate()
-        .map(|(i, p)| (p.clip.clone(), i))
-        .collect();
-    let slots: Mutex<Vec<Option<ClipOutcome>>> = Mutex::new(
-        clips
-            .iter()
-            .map(|p| {
-                let mut o = ClipOutcome {
-                    clip: p.clip.clone(),
-                    output: p.output.clone(),
-                    status: ClipStatus::Skipped,
-                    frames: 0,
-                    seconds: 0.0,
-                    error_cm: None,
-                    warnings: Vec::new(),
-                    reason: None,
-                    fixed_seconds: None,
-                    earlier: false,
-                };
-                earlier.fill(&mut o);
-                (!opts.force && o.earlier && crate::batch::runner::complete(&p.output, opts.format))
-                    .then_some(o)
-            })
-            .collect(),
-    );
-    let t0 = Instant::now();
-    let progress_report = |slots: &[Option<ClipOutcome>]| {
+        .map(|p| {
+            let mut o = ClipOutcome {
+                clip: p.clip.clone(),
+                output: p.output.clone(),
+                status: ClipStatus::Skipped,
+                frames: 0,
+                seconds: 0.0,
+                error_cm: None,
+                warnings: Vec::new(),
+                reason: None,
+                fixed_seconds: None,
+                earlier: false,
+            };
+            earlier.fill(&mut o);
+            (!opts.force && o.earlier && crate::batch::runner::complete(&p.output, opts.format))
+                .then_some(o)
+        })
+        .collect()
+}
+
+/// What a batch's summaries share: the converter, the options, the shard
+/// and the clock.
+struct Reports<'a> {
+    output: &'a Path,
+    what: String,
+    run_opts: RunOptions,
+    shard_name: Option<String>,
+    /// The library's clip count, when this is a shard.
+    library: Option<usize>,
+    converter: &'a dyn Converter,
+    t0: Instant,
+}
+
+impl Reports<'_> {
+    /// The summary of `outcomes` at this point of the run.
+    fn summary(&self, outcomes: Vec<ClipOutcome>) -> Summary {
         let mut s = Summary::new(
-            what.clone(),
-            slots.iter().flatten().cloned().collect(),
-            t0.elapsed().as_secs_f64(),
-            run_opts.jobs,
-            shard_name.clone(),
+            self.what.clone(),
+            outcomes,
+            self.t0.elapsed().as_secs_f64(),
+            self.run_opts.jobs,
+            self.shard_name.clone(),
         );
+        s.set_preparation(self.converter.preparation());
+        if self.library.is_some() {
+            s.library_clips = self.library;
+        }
+        s
+    }
+
+    /// The unfinished report of the clips ended so far. All three files,
+    /// each atomically: a killed run leaves a JSON, page and plot of what
+    /// it finished (issue 18, item 3).
+    fn progress(&self, slots: &[Option<ClipOutcome>]) {
+        let mut s = self.summary(slots.iter().flatten().cloned().collect());
         s.finished = false;
-        library_clips(&mut s, library);
-        s.set_preparation(converter.preparation());
-        // All three files, each atomically: a killed run leaves a JSON,
-        // page and plot of what it finished (issue 18, item 3).
-        if let Err(e) = write_summary(output, &s) {
+        if let Err(e) = write_summary(self.output, &s) {
             tracing::warn!("report not updated: {e}");
         }
-    };
-    if let Ok(slots) = slots.lock() {
-        progress_report(&slots);
     }
-    let log = |o: &ClipOutcome| {
-        let mut o = o.clone();
-        earlier.fill(&mut o);
-        if let Ok(mut slots) = slots.lock()
-            && let Some(&i) = index.get(&o.clip)
-        {
-            slots[i] = Some(o.clone());
-            // A skipped output was listed before the run (when its earlier
-            // record is known): rewrite only for news.
-            if o.status != ClipStatus::Skipped {
-                progress_report(&slots);
-            }
+}
+
+/// Refuses, before any work, a `mocap_dir` that is a file, an `output`
+/// that cannot be a folder or lies in the clips' folder, and outputs that
+/// would land on one of `inputs` (the database's or scan's files).
+pub fn check_folders(
+    mocap_dir: &Path,
+    output: &Path,
+    inputs: &[PathBuf],
+    format: Format,
+) -> Result<(), BatchError> {
+    // Said before the character loads: "X: Not a directory (os error
+    // 20)" for a clip given as the folder, "/dev/full: File exists (os
+    // error 17)" for a file as -o.
+    if mocap_dir.exists() && !mocap_dir.is_dir() {
+        return Err(BatchError::NotAFolder(mocap_dir.to_path_buf()));
+    }
+    use crate::jobs::outputs;
+    outputs::check_output_folder(
+        "-o",
+        output,
+        "batch writes one output per clip and batch.json, .html and .svg into a folder",
+    )?;
+    outputs::refuse_output_in_clip_folder("-o", output, mocap_dir)?;
+    outputs::refuse_outputs_over_inputs(inputs, mocap_dir, "-o", output, format)?;
+    Ok(())
+}
+
+/// The input files a batch must not write over: the database's (`db`) or
+/// the scan's files and `others` (landmarks, rig map, ASF).
+pub fn target_inputs<'a>(
+    db: Option<&Path>,
+    scan: Option<&str>,
+    others: impl Iterator<Item = &'a PathBuf>,
+) -> Vec<PathBuf> {
+    let mut inputs = Vec::new();
+    if let Some(db) = db {
+        inputs.extend(crate::jobs::outputs::database_inputs(db));
+    }
+    if let Some(scan) = scan {
+        inputs.extend(crate::mesh::io::input_files(scan, None));
+    }
+    inputs.extend(others.cloned());
+    inputs
+}
+
+/// The line a front end prints when a clip ends; `flags` maps option
+/// names in a failure's reason to the front end's spelling.
+pub fn outcome_line(o: &ClipOutcome, flags: &dyn Fn(&str) -> String) -> String {
+    match o.status {
+        ClipStatus::Done => format!(
+            "done {} ({} frames, {:.1} s)",
+            o.clip.display(),
+            o.frames,
+            o.seconds
+        ),
+        ClipStatus::Skipped => format!("skipped {} (output complete)", o.clip.display()),
+        ClipStatus::Failed => format!(
+            "FAILED {}: {}",
+            o.clip.display(),
+            flags(o.reason.as_deref().unwrap_or(""))
+        ),
+    }
+}
+
+/// Frames converted per second since the clock started, over the clips
+/// ended so far (any thread).
+#[derive(Debug)]
+pub struct ClipRate {
+    frames: std::sync::atomic::AtomicUsize,
+    t0: Instant,
+}
+
+impl Default for ClipRate {
+    fn default() -> Self {
+        ClipRate {
+            frames: 0.into(),
+            t0: Instant::now(),
         }
-        progress(BatchEvent::Clip(&o));
-    };
-    let convert = |clip: &Path, out: &Path| converter.convert(clip, out);
-    let mut outcomes = run(mocap_dir, &clips, &run_opts, &convert, &log);
-    for o in &mut outcomes {
-        earlier.fill(o);
     }
-    let summary = Summary::new(
-        what,
-        outcomes,
-        t0.elapsed().as_secs_f64(),
-        run_opts.jobs,
-        shard_name.clone(),
-    );
-    let mut summary = summary;
-    summary.set_preparation(converter.preparation());
-    library_clips(&mut summary, library);
-    let files = write_summary(output, &summary)?;
-    drop(lock);
-    Ok(BatchReport {
-        summary,
-        files,
-        notices,
-    })
+}
+
+impl ClipRate {
+    /// Counts a clip's frames (if it was converted); returns the rate.
+    pub fn add(&self, o: &ClipOutcome) -> f64 {
+        use std::sync::atomic::Ordering::Relaxed;
+        let f = if o.status == ClipStatus::Done {
+            self.frames.fetch_add(o.frames, Relaxed) + o.frames
+        } else {
+            self.frames.load(Relaxed)
+        };
+        f as f64 / self.t0.elapsed().as_secs_f64().max(1e-9)
+    }
+}
+
+/// The text summary of a batch: its line, the report files and every
+/// failed clip with its reason (`flags` as in [`outcome_line`]).
+pub fn report_text(s: &Summary, files: &[PathBuf], flags: &dyn Fn(&str) -> String) -> String {
+    let mut out = format!("{}\nreport: {}\n", s.line(), joined(files));
+    for o in s.outcomes.iter().filter(|o| o.status == ClipStatus::Failed) {
+        out += &format!(
+            "failed: {}: {}\n",
+            o.clip.display(),
+            flags(o.reason.as_deref().unwrap_or(""))
+        );
+    }
+    out
+}
+
+fn joined(files: &[PathBuf]) -> String {
+    files
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// What can stop [`merge_batches`].
@@ -287,6 +461,18 @@ pub struct MergeReport {
     pub files: Vec<PathBuf>,
     /// The shard reports read.
     pub reports: Vec<PathBuf>,
+}
+
+impl MergeReport {
+    /// The text summary: the shards merged, the summary line, the files.
+    pub fn text(&self) -> String {
+        format!(
+            "merged {}: {}\nreport: {}\n",
+            crate::batch::summary::count(self.reports.len(), "shard report"),
+            self.summary.line(),
+            joined(&self.files)
+        )
+    }
 }
 
 /// Merges the shard reports (`batch-IofN.json`) found in `dirs` into the

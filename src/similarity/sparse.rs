@@ -13,7 +13,9 @@
 //!    (closer than `min_gap` frames: not a transition); and every
 //!    [`SparseOptions::stride`]-th frame's nearest frame in each sequence
 //!    (one tree per sequence: the graph keeps the best transitions of every
-//!    sequence pair, also between dissimilar motions).
+//!    sequence pair, also between dissimilar motions); the
+//!    [`SparseOptions::per_sequence`] nearest there, as the cheap
+//!    descriptor's nearest is often a few frames off the full measure's.
 //! 3. **Windows**: for each candidate `(a, b)` the full measure along the
 //!    diagonal `(a+t, b+t)`, `|t| ≤ band`, and the two diagonals either
 //!    side of it (what the transition search reads: its window and the
@@ -62,6 +64,10 @@ pub struct SparseOptions {
     /// transitions of every ordered sequence pair, also of dissimilar
     /// motions, whose frames are nobody's nearest overall). Default: 4.
     pub stride: usize,
+    /// Nearest frames in each sequence of every `stride`-th frame: the
+    /// dense method's transitions found at 3,234 frames rise from 78.8 %
+    /// (1) to 90.8 % (3), 94.5 % (6) and 94.9 % (8). Default: 12.
+    pub per_sequence: usize,
 }
 
 impl Default for SparseOptions {
@@ -72,6 +78,7 @@ impl Default for SparseOptions {
             band: 25,
             min_gap: 10,
             stride: 4,
+            per_sequence: 12,
         }
     }
 }
@@ -399,102 +406,172 @@ pub fn sparse_pairs(
 ) -> (SparseSimilarity, SparseStats) {
     let t0 = std::time::Instant::now();
     let n = set.frames();
-    let mut seq = vec![0u32; n];
-    for (k, s) in spans.iter().enumerate() {
-        seq[s.start..s.start + s.len].fill(k as u32);
-    }
+    let seq = sequence_of(&spans, n);
     let (features, dims) = project(set, opts.dims);
-    let tree = KdTree::new(features.clone(), dims);
-    let gap = opts.min_gap.max(1);
-    let near: Vec<Vec<u32>> = (0..n)
-        .into_par_iter()
-        .map(|a| {
-            let keep = |b: u32| {
-                b as usize != a && (seq[b as usize] != seq[a] || (b as usize).abs_diff(a) >= gap)
-            };
-            tree.nearest(&features[a * dims..(a + 1) * dims], opts.neighbours, &keep)
-                .into_iter()
-                .map(|(_, b)| b)
-                .collect()
-        })
-        .collect();
-    // Every stride-th frame's nearest frame in each sequence (one index per
-    // sequence).
-    let stride = opts.stride.max(1);
-    let per_seq: Vec<Vec<Option<u32>>> = spans
-        .par_iter()
-        .map(|sj| {
-            let sub = features[sj.start * dims..(sj.start + sj.len) * dims].to_vec();
-            let tree = KdTree::new(sub, dims);
-            (0..n)
-                .step_by(stride)
-                .map(|a| {
-                    let keep = |b: u32| {
-                        let b = sj.start + b as usize;
-                        seq[b] != seq[a] || b.abs_diff(a) >= gap
-                    };
-                    tree.nearest(&features[a * dims..(a + 1) * dims], 1, &keep)
-                        .first()
-                        .map(|&(_, b)| (sj.start + b as usize) as u32)
-                })
-                .collect()
-        })
-        .collect();
+    let index = Index {
+        features: &features,
+        dims,
+        seq: &seq,
+        gap: opts.min_gap.max(1),
+    };
+    let near = index.nearest_overall(opts.neighbours);
+    let per_seq = index.nearest_per_sequence(&spans, opts.stride.max(1), opts.per_sequence);
     let index_seconds = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
-    // Runs along the diagonals around each candidate, and each sequence's
-    // first two off-diagonals.
-    let band = opts.band as i64;
-    let mut runs: Vec<Run> = Vec::new();
-    let mut candidates = 0u64;
-    let strided = per_seq.iter().flat_map(|bs| {
-        (0..n)
-            .step_by(stride)
-            .zip(bs.iter())
-            .filter_map(|(a, b)| b.map(|b| (a, b)))
-    });
     let seeds = near
         .iter()
         .enumerate()
         .flat_map(|(a, bs)| bs.iter().map(move |&b| (a, b)))
-        .chain(strided);
+        .chain(per_seq);
+    let (mut runs, candidates) = runs_around(seeds, &spans, &seq, opts.band as i64);
+    runs.extend(successor_runs(&spans));
+    let merged = merge_runs(runs);
+    let values = evaluate(set, &merged, progress);
+    let pairs: u64 = values.iter().map(|v| v.len() as u64).sum();
+    let (offsets, cols, vals) = rows_of(n, &merged, &values);
+    let mut sim = SparseSimilarity {
+        spans,
+        n,
+        offsets,
+        cols,
+        vals,
+        radius: vec![0.0; n],
+        dims,
+        features,
+    };
+    sim.radius = radii(&sim, &near);
+    let stats = SparseStats {
+        candidates,
+        pairs,
+        index_seconds,
+        pairs_seconds: t1.elapsed().as_secs_f64(),
+    };
+    (sim, stats)
+}
+
+/// The sequence of every frame.
+fn sequence_of(spans: &[Span], n: usize) -> Vec<u32> {
+    let mut seq = vec![0u32; n];
+    for (k, s) in spans.iter().enumerate() {
+        seq[s.start..s.start + s.len].fill(k as u32);
+    }
+    seq
+}
+
+/// The projected descriptors and what makes a pair a candidate.
+struct Index<'a> {
+    features: &'a [f32],
+    dims: usize,
+    seq: &'a [u32],
+    /// Within a sequence, frames closer than this are not candidates.
+    gap: usize,
+}
+
+impl Index<'_> {
+    fn feature(&self, a: usize) -> &[f32] {
+        &self.features[a * self.dims..(a + 1) * self.dims]
+    }
+
+    /// Every frame's `k` nearest frames (one k-d tree over all frames).
+    fn nearest_overall(&self, k: usize) -> Vec<Vec<u32>> {
+        let n = self.seq.len();
+        let tree = KdTree::new(self.features.to_vec(), self.dims);
+        (0..n)
+            .into_par_iter()
+            .map(|a| {
+                let keep = |b: u32| {
+                    b as usize != a
+                        && (self.seq[b as usize] != self.seq[a]
+                            || (b as usize).abs_diff(a) >= self.gap)
+                };
+                tree.nearest(self.feature(a), k, &keep)
+                    .into_iter()
+                    .map(|(_, b)| b)
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Every `stride`-th frame's `k` nearest frames in each sequence (one
+    /// k-d tree per sequence), as `(frame, candidate)` pairs.
+    fn nearest_per_sequence(&self, spans: &[Span], stride: usize, k: usize) -> Vec<(usize, u32)> {
+        let n = self.seq.len();
+        let per_seq: Vec<Vec<(usize, u32)>> = spans
+            .par_iter()
+            .map(|sj| {
+                let sub =
+                    self.features[sj.start * self.dims..(sj.start + sj.len) * self.dims].to_vec();
+                let tree = KdTree::new(sub, self.dims);
+                (0..n)
+                    .step_by(stride)
+                    .flat_map(|a| {
+                        let keep = |b: u32| {
+                            let b = sj.start + b as usize;
+                            self.seq[b] != self.seq[a] || b.abs_diff(a) >= self.gap
+                        };
+                        tree.nearest(self.feature(a), k, &keep)
+                            .into_iter()
+                            .map(move |(_, b)| (a, (sj.start + b as usize) as u32))
+                    })
+                    .collect()
+            })
+            .collect();
+        per_seq.into_iter().flatten().collect()
+    }
+}
+
+/// The runs along the diagonals around each candidate `(a, b)`: the
+/// diagonal through it and the two either side, `band` frames each way,
+/// clipped to both sequences. Returns the runs and the candidates' count.
+fn runs_around(
+    seeds: impl Iterator<Item = (usize, u32)>,
+    spans: &[Span],
+    seq: &[u32],
+    band: i64,
+) -> (Vec<Run>, u64) {
+    let mut runs: Vec<Run> = Vec::new();
+    let mut candidates = 0u64;
     for (a, b) in seeds {
-        {
-            candidates += 1;
-            let (a, b) = (a.min(b as usize) as i64, a.max(b as usize) as i64);
-            let (si, sj) = (
-                &spans[seq[a as usize] as usize],
-                &spans[seq[b as usize] as usize],
-            );
-            for e in -2..=2i64 {
-                let d = b - a + e;
-                if d == 0 {
-                    continue;
-                }
-                let r0 = (a - band).max(si.start as i64).max(sj.start as i64 - d);
-                let r1 = (a + band)
-                    .min((si.start + si.len) as i64 - 1)
-                    .min((sj.start + sj.len) as i64 - 1 - d);
-                if r0 > r1 {
-                    continue;
-                }
-                runs.push(if d > 0 {
-                    Run {
-                        diag: d as u32,
-                        r0: r0 as u32,
-                        r1: r1 as u32,
-                    }
-                } else {
-                    Run {
-                        diag: (-d) as u32,
-                        r0: (r0 + d) as u32,
-                        r1: (r1 + d) as u32,
-                    }
-                });
+        candidates += 1;
+        let (a, b) = (a.min(b as usize) as i64, a.max(b as usize) as i64);
+        let (si, sj) = (
+            &spans[seq[a as usize] as usize],
+            &spans[seq[b as usize] as usize],
+        );
+        for e in -2..=2i64 {
+            let d = b - a + e;
+            if d == 0 {
+                continue;
             }
+            let r0 = (a - band).max(si.start as i64).max(sj.start as i64 - d);
+            let r1 = (a + band)
+                .min((si.start + si.len) as i64 - 1)
+                .min((sj.start + sj.len) as i64 - 1 - d);
+            if r0 > r1 {
+                continue;
+            }
+            runs.push(if d > 0 {
+                Run {
+                    diag: d as u32,
+                    r0: r0 as u32,
+                    r1: r1 as u32,
+                }
+            } else {
+                Run {
+                    diag: (-d) as u32,
+                    r0: (r0 + d) as u32,
+                    r1: (r1 + d) as u32,
+                }
+            });
         }
     }
-    for s in &spans {
+    (runs, candidates)
+}
+
+/// Each sequence's first two off-diagonals (the retrieval's step costs).
+fn successor_runs(spans: &[Span]) -> Vec<Run> {
+    let mut runs = Vec::new();
+    for s in spans {
         for d in 1..=2usize {
             if s.len > d {
                 runs.push(Run {
@@ -505,6 +582,11 @@ pub fn sparse_pairs(
             }
         }
     }
+    runs
+}
+
+/// The runs sorted, overlapping and touching runs of a diagonal merged.
+fn merge_runs(mut runs: Vec<Run>) -> Vec<Run> {
     runs.sort_unstable();
     let mut merged: Vec<Run> = Vec::with_capacity(runs.len() / 4);
     for r in runs {
@@ -513,8 +595,12 @@ pub fn sparse_pairs(
             _ => merged.push(r),
         }
     }
-    let values: Vec<Vec<f32>> = merged
-        .par_iter()
+    merged
+}
+
+/// The full measure along every run (in parallel over runs).
+fn evaluate(set: &dyn Features, runs: &[Run], progress: &(dyn Fn(u64) + Sync)) -> Vec<Vec<f32>> {
+    runs.par_iter()
         .map(|r| {
             let v: Vec<f32> = (r.r0..=r.r1)
                 .map(|a| set.distance(a as usize, (a + r.diag) as usize) as f32)
@@ -522,11 +608,14 @@ pub fn sparse_pairs(
             progress(v.len() as u64);
             v
         })
-        .collect();
-    let pairs: u64 = values.iter().map(|v| v.len() as u64).sum();
-    // Both directions, row by row.
+        .collect()
+}
+
+/// The runs' values stored both ways, row by row, columns ascending:
+/// row offsets, columns and values of a compressed sparse row matrix.
+fn rows_of(n: usize, merged: &[Run], values: &[Vec<f32>]) -> (Vec<u64>, Vec<u32>, Vec<f32>) {
     let mut deg = vec![0u64; n + 1];
-    for r in &merged {
+    for r in merged {
         for a in r.r0..=r.r1 {
             deg[a as usize] += 1;
             deg[(a + r.diag) as usize] += 1;
@@ -540,7 +629,7 @@ pub fn sparse_pairs(
     let mut cols = vec![0u32; nnz];
     let mut vals = vec![0.0f32; nnz];
     let mut fill: Vec<u64> = offsets[..n].to_vec();
-    for (r, v) in merged.iter().zip(&values) {
+    for (r, v) in merged.iter().zip(values) {
         for (a, x) in (r.r0..=r.r1).zip(v) {
             let b = a + r.diag;
             for (p, q) in [(a, b), (b, a)] {
@@ -551,18 +640,21 @@ pub fn sparse_pairs(
             }
         }
     }
-    // Sort each row by column.
-    let mut rows: Vec<(&mut [u32], &mut [f32])> = Vec::with_capacity(n);
-    {
-        let (mut c, mut v) = (&mut cols[..], &mut vals[..]);
-        for &k in &deg[..n] {
-            let k = k as usize;
-            let (c0, c1) = std::mem::take(&mut c).split_at_mut(k);
-            let (v0, v1) = std::mem::take(&mut v).split_at_mut(k);
-            rows.push((c0, v0));
-            c = c1;
-            v = v1;
-        }
+    sort_rows(&deg[..n], &mut cols, &mut vals);
+    (offsets, cols, vals)
+}
+
+/// Sorts each row (of `deg` entries) by column, in parallel over rows.
+fn sort_rows(deg: &[u64], cols: &mut [u32], vals: &mut [f32]) {
+    let mut rows: Vec<(&mut [u32], &mut [f32])> = Vec::with_capacity(deg.len());
+    let (mut c, mut v) = (cols, vals);
+    for &k in deg {
+        let k = k as usize;
+        let (c0, c1) = std::mem::take(&mut c).split_at_mut(k);
+        let (v0, v1) = std::mem::take(&mut v).split_at_mut(k);
+        rows.push((c0, v0));
+        c = c1;
+        v = v1;
     }
     rows.par_iter_mut().for_each(|(c, v)| {
         let mut p: Vec<(u32, f32)> = c.iter().copied().zip(v.iter().copied()).collect();
@@ -572,34 +664,18 @@ pub fn sparse_pairs(
             v[k] = vv;
         }
     });
-    drop(rows);
-    let mut sim = SparseSimilarity {
-        spans,
-        n,
-        offsets,
-        cols,
-        vals,
-        radius: vec![0.0; n],
-        dims,
-        features,
-    };
-    let radius: Vec<f32> = near
-        .par_iter()
+}
+
+/// Per frame, the largest stored distance to its nearest frames.
+fn radii(sim: &SparseSimilarity, near: &[Vec<u32>]) -> Vec<f32> {
+    near.par_iter()
         .enumerate()
         .map(|(a, bs)| {
             bs.iter()
                 .filter_map(|&b| sim.stored(a, b as usize))
                 .fold(0.0f32, f32::max)
         })
-        .collect();
-    sim.radius = radius;
-    let stats = SparseStats {
-        candidates,
-        pairs,
-        index_seconds,
-        pairs_seconds: t1.elapsed().as_secs_f64(),
-    };
-    (sim, stats)
+        .collect()
 }
 
 #[cfg(test)]
