@@ -63,10 +63,10 @@ fn aligned(amc: &Clip, bvh: &Clip) -> (Clip, Clip, f64) {
     for skip in 0..3i64 {
         for o in 0..=8i64 {
             let (mut s, mut n) = (0.0, 0);
-            for k in skip as usize..pb.len() {
+            for (k, b) in pb.iter().enumerate().skip(skip as usize) {
                 let i = ratio * (k as i64 - skip) + o;
                 if let Some(a) = pa.get(i as usize) {
-                    let (x, y) = (knees(a), knees(&pb[k]));
+                    let (x, y) = (knees(a), knees(b));
                     s += (x[0] - y[0]).abs() + (x[1] - y[1]).abs();
                     n += 1;
                 }
