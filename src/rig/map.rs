@@ -626,6 +626,7 @@ fn pose_note(b: &structure::Body) -> String {
             b.ignored.join(", ")
         ));
     }
+    notes.extend(b.notes.iter().cloned());
     notes.join("; ")
 }
 

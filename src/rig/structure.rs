@@ -117,6 +117,9 @@ pub struct Body {
     /// The first joints of chains off the chest that are neither arms nor
     /// the neck (wings, a cape), left out of the map.
     pub ignored: Vec<String>,
+    /// Limbs mapped with fewer joints than usual, and how (a leg of two
+    /// joints and an end marker).
+    pub notes: Vec<String>,
 }
 
 /// The words a [`NotHumanoid`] reason contains when the clip has a
@@ -791,6 +794,9 @@ struct Limb {
     picks: [Option<(usize, bool)>; 4],
     derive_end: Option<Derive>,
     subtree: Vec<usize>,
+    /// What the reader should know of a limb mapped with less than the
+    /// usual joints ([`two_joint_leg`]).
+    note: Option<String>,
 }
 
 /// Maps a clip's joints onto the canonical skeleton by structure, using
@@ -973,6 +979,7 @@ fn body(
         arm(trunk.arms[0])?,
         arm(trunk.arms[1])?,
     ];
+    let notes: Vec<String> = limbs.iter().filter_map(|l| l.note.clone()).collect();
     let s = sides(g, tokens, &mut picks, pelvis, neck_j, limbs);
     Ok(Body {
         picks,
@@ -988,6 +995,7 @@ fn body(
         reference_frame: g.from_frame,
         reference: g.rest.clone(),
         ignored: trunk.ignored,
+        notes,
     })
 }
 
@@ -1870,7 +1878,7 @@ fn leg_chain(
         ))
     };
     if c.len() < 3 {
-        return Err(short());
+        return two_joint_leg(g, tokens, start, &c).ok_or_else(short);
     }
     // The hip: a thigh-named joint, else the first joint, unless a short
     // bone (under a quarter of the significance threshold, 3% of the
@@ -1969,6 +1977,57 @@ fn leg_chain(
         ],
         derive_end,
         subtree: g.subtree(start),
+        note: None,
+    })
+}
+
+/// A leg of two joints and an end marker (a game character's or a
+/// Blender export's: hip and knee bones, the knee bone's tail written as
+/// a leaf joint, `pied gauche` → `pied gauche_end` on ufbx's barbarian,
+/// no foot bone): the hip and the knee are the two joints, the ankle is
+/// the end marker (the foot has no toes), and the toe is placed by
+/// proportion ([`Derive::ToeFromAnkle`], 0.35 of the shin forward of the
+/// ankle), with a note. Only when the structure is otherwise clear: the
+/// marker is the second joint's one leaf child (the longest when
+/// several), further from the pelvis than the knee in the reference
+/// pose, and thigh and shin are of like lengths (0.5-2, a human's ≈ 1).
+/// `None` otherwise (the leg is refused).
+fn two_joint_leg(g: &Geo, tokens: &[Vec<String>], start: usize, c: &[usize]) -> Option<Limb> {
+    let [hip, knee] = *c else {
+        return None;
+    };
+    let end = g.children[knee]
+        .iter()
+        .copied()
+        .filter(|&e| g.children[e].is_empty() && g.len[e] > g.eps)
+        .max_by(|&a, &b| g.len[a].total_cmp(&g.len[b]))?;
+    let (thigh, shin) = (
+        g.rest[hip].distance(g.rest[knee]),
+        g.rest[knee].distance(g.rest[end]),
+    );
+    let ratio = thigh / shin;
+    if !(ratio.is_finite() && (0.5..=2.0).contains(&ratio))
+        || g.rest[end].distance(g.rest[hip]) <= thigh
+    {
+        return None;
+    }
+    let named = |j: usize, r: Role| role_of(tokens, j) == Some(r);
+    Some(Limb {
+        picks: [
+            Some((hip, named(hip, Role::Thigh))),
+            Some((knee, named(knee, Role::Knee))),
+            Some((end, false)),
+            None,
+        ],
+        derive_end: Some(Derive::ToeFromAnkle {
+            ankle: Canonical::LAnkle,
+            fraction: 0.35,
+        }),
+        subtree: g.subtree(start),
+        note: Some(format!(
+            "the leg from '{}' has two joints and an end marker: '{}' is the ankle (thigh / shin {:.2}), the toe placed by proportion",
+            g.names[start], g.names[end], ratio
+        )),
     })
 }
 
@@ -2124,5 +2183,6 @@ fn arm_chain(
         ],
         derive_end: None,
         subtree: g.subtree(start),
+        note: None,
     })
 }

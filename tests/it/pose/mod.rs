@@ -6,3 +6,4 @@ mod feet;
 mod ground;
 mod placement;
 mod toes;
+mod two_files;

@@ -1,0 +1,205 @@
+//! One performance in two files (issue 44), beyond CMU 02_03
+//! (`mocap::one_capture`): CMU 02_01, 02_02 and 02_03 as the native AMC
+//! and as the Reallusion CC-rig BVH conversions (`cmu-bvh-ccrig`), and
+//! 01_01 as the AMC and the cgspeed BVH, each pair aligned in time (the
+//! BVH frame matching an AMC frame by the knees' bend), retargeted onto
+//! one character as `retarget` reads them, and compared: the mean over
+//! frames and canonical joints of the distance between the two results,
+//! over the character's height (`abs`), and the same about the pelvis
+//! (`rel`, the posture alone).
+//!
+//! What the figures say (measured 2026-11-29):
+//! - 01_01: the cgspeed BVH retargets as the AMC does (0.00 %).
+//! - The CC conversions: 3.1-4.2 % apart, 1.7-2.7 % of it posture. The
+//!   pelvis alone is 2.1-2.5 %: the conversion scaled the root's travel
+//!   by 1.144-1.148 (the same on all three clips) while the CC rig's legs
+//!   are 1.164 times the subject's, and the kernel scales the travel by
+//!   the legs; and the conversion dropped the root's vertical channel,
+//!   which `root_from_legs` stands on the planted foot again.
+//! - The posture: the AMC's reference is its ASF rest skeleton, whose
+//!   hip → shoulder line stands 6.9° off the vertical (the run's frames
+//!   3.9° on average), the conversion's the most neutral frame. A
+//!   scratch variant of the kernel that levels every reference by that
+//!   line brought `rel` to 0.7-1.15 % on the CC pairs but took 01_01 from
+//!   0.00 to 0.78 % (the cgspeed BVH drops the thorax's length: its
+//!   shoulders sit elsewhere), so it is not in the kernel.
+
+use crate::common;
+
+use surfmotion::mocap::Clip;
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{clip_poses, leg_length, retarget};
+use surfmotion::rig::{Canonical, detect_clip, load_clip};
+
+use Canonical as C;
+
+fn knees(p: &Pose) -> [f64; 2] {
+    let k = |h: C, k: C, a: C| {
+        let (h, k, a) = (p[h.index()], p[k.index()], p[a.index()]);
+        (k - h).angle_between(a - k).to_degrees()
+    };
+    [
+        k(C::LHip, C::LKnee, C::LAnkle),
+        k(C::RHip, C::RKnee, C::RAnkle),
+    ]
+}
+
+fn drop_frames(c: &Clip, n: usize) -> Clip {
+    let j = c.joint_count();
+    let mut c = c.clone();
+    c.rotations.drain(..n * j);
+    c.translations.drain(..n * j);
+    c
+}
+
+/// The two clips from the same instant: BVH frame `k ≥ skip` is AMC frame
+/// `ratio · (k − skip) + o`, the pair (skip, o) whose knees' bend differ
+/// least (mean degrees, also returned).
+fn aligned(amc: &Clip, bvh: &Clip) -> (Clip, Clip, f64) {
+    let ratio = (amc.fps() / bvh.fps()).round() as i64;
+    let pa = detect_clip(amc).unwrap().map.poses(amc).unwrap();
+    let pb = detect_clip(bvh).unwrap().map.poses(bvh).unwrap();
+    let mut best = (0i64, 0i64, f64::MAX);
+    for skip in 0..3i64 {
+        for o in 0..=8i64 {
+            let (mut s, mut n) = (0.0, 0);
+            for (k, b) in pb.iter().enumerate().skip(skip as usize) {
+                let i = ratio * (k as i64 - skip) + o;
+                if let Some(a) = pa.get(i as usize) {
+                    let (x, y) = (knees(a), knees(b));
+                    s += (x[0] - y[0]).abs() + (x[1] - y[1]).abs();
+                    n += 1;
+                }
+            }
+            let g = s / (2 * n.max(1)) as f64;
+            if g < best.2 {
+                best = (skip, o, g);
+            }
+        }
+    }
+    (
+        drop_frames(amc, best.1 as usize),
+        drop_frames(bvh, best.0 as usize),
+        best.2,
+    )
+}
+
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn one_performance_as_amc_and_as_bvh_retargets_alike() {
+    let Some(d) = common::data_dir() else { return };
+    let m = d.join("mocap");
+    let walk = surfmotion::synth::gait_clip(surfmotion::synth::Gait::Walk, 2.0, 30.0);
+    let character = detect_clip(&walk).unwrap().map.rest_pose(&walk).unwrap();
+    let h = character[C::Head.index()].y - character[C::LToe.index()].y;
+    // (AMC, BVH, abs limit, rel limit, pelvis limit): the figures reached
+    // (see the module docs), with a margin of 0.2 % of the height.
+    let pairs = [
+        (
+            "cmu-amc/01/01_01.amc",
+            "cmu-bvh/01_01.bvh",
+            0.001,
+            0.001,
+            0.001,
+        ),
+        (
+            "cmu-amc/02/02_01.amc",
+            "cmu-bvh-ccrig/002_01.bvh",
+            0.033,
+            0.019,
+            0.024,
+        ),
+        (
+            "cmu-amc/02/02_02.amc",
+            "cmu-bvh-ccrig/002_02.bvh",
+            0.044,
+            0.029,
+            0.027,
+        ),
+        (
+            "cmu-amc/02/02_03.amc",
+            "cmu-bvh-ccrig/002_03.bvh",
+            0.032,
+            0.021,
+            0.024,
+        ),
+    ];
+    let mut got = Vec::new();
+    for (a, b, abs_max, rel_max, pelvis_max) in pairs {
+        let mut amc = load_clip(&m.join(a), &Default::default()).unwrap();
+        let mut bvh = load_clip(&m.join(b), &Default::default()).unwrap();
+        amc.to_metres_y_up();
+        bvh.to_metres_y_up();
+        let (amc, bvh, gap) = aligned(&amc, &bvh);
+        assert!(
+            gap < 3.0,
+            "{a} vs {b}: knees {gap:.2} degrees apart at best"
+        );
+        let on = |c: &Clip| -> (Vec<Pose>, f64, Vec<Pose>) {
+            let c = c.try_resampled(30.0).unwrap();
+            let map = detect_clip(&c).unwrap().map;
+            let cp = clip_poses(&c, &map).unwrap();
+            let out = retarget(&character, &cp.reference, &cp.poses)
+                .into_iter()
+                .map(|(p, _)| p)
+                .collect();
+            (out, leg_length(&cp.reference.pose), cp.poses)
+        };
+        let ((ra, la, pa), (rb, lb, pb)) = (on(&amc), on(&bvh));
+        let n = ra.len().min(rb.len());
+        let p = C::Pelvis.index();
+        // The root's horizontal travel over the common span.
+        let travel = |q: &[Pose]| {
+            let d = q[n - 1][p] - q[0][p];
+            d.x.hypot(d.z)
+        };
+        let (ta, tb) = (travel(&pa), travel(&pb));
+        let (mut abs, mut rel, mut pelvis) = (0.0, 0.0, 0.0);
+        for f in 0..n {
+            pelvis += ra[f][p].distance(rb[f][p]);
+            for c in Canonical::ALL {
+                let j = c.index();
+                abs += ra[f][j].distance(rb[f][j]);
+                rel += (ra[f][j] - ra[f][p]).distance(rb[f][j] - rb[f][p]);
+            }
+        }
+        let (abs, rel) = (
+            abs / (n * Canonical::COUNT) as f64 / h,
+            rel / (n * Canonical::COUNT) as f64 / h,
+        );
+        let pelvis = pelvis / n as f64 / h;
+        eprintln!(
+            "{a} vs {b}: {n} frames at 30 fps, {:.2}% of the height apart, {:.2}% about the pelvis, \
+             the pelvis {:.2}%; legs {:.4}, travel {:.4} times the AMC's",
+            100.0 * abs,
+            100.0 * rel,
+            100.0 * pelvis,
+            lb / la,
+            tb / ta
+        );
+        got.push((
+            a,
+            abs,
+            rel,
+            pelvis,
+            abs_max,
+            rel_max,
+            pelvis_max,
+            lb / la,
+            tb / ta,
+        ));
+    }
+    for (a, abs, rel, pelvis, abs_max, rel_max, pelvis_max, legs, travel) in got {
+        assert!(
+            abs < abs_max && rel < rel_max && pelvis < pelvis_max,
+            "{a}: {abs} {rel} {pelvis}"
+        );
+        if a.contains("/02/") {
+            // The conversion's travel is not scaled by the legs.
+            assert!(
+                (legs - 1.164).abs() < 0.005 && (travel - 1.146).abs() < 0.006,
+                "{a}: {legs} {travel}"
+            );
+        }
+    }
+}
