@@ -35,10 +35,14 @@
 
 pub mod deformer;
 pub mod lbs;
+pub mod options;
 pub mod part_laplacian;
 pub mod pca;
+pub mod regions;
 pub mod soft;
 pub mod unflip;
 pub mod untangle;
 
-pub use deformer::{DeformMode, DeformOptions, DeformWorkspace, Deformer, TurnedOver, part_joint};
+pub use deformer::{DeformWorkspace, Deformer};
+pub use options::{DeformMode, DeformOptions, TurnedOver};
+pub use regions::part_joint;
