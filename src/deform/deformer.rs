@@ -4,7 +4,7 @@
 use super::options::{DeformMode, DeformOptions, TurnedOver};
 use super::part_laplacian::{RegionSolver, RegionWorkspace, apply};
 use super::regions::{Region, region_constraints, region_examples, region_specs, region_weights};
-use super::{lbs, pca, unflip, untangle};
+use super::{arap, lbs, pca, unflip, untangle};
 use crate::db::Character;
 use crate::mesh::laplacian::uniform_region_rows;
 use crate::mesh::solver::SolveError;
@@ -21,6 +21,8 @@ pub struct Deformer {
     repair: unflip::RepairOptions,
     untangle: untangle::UntangleOptions,
     repair_passes: usize,
+    /// Rotation-aware local steps after each region's solve.
+    local_steps: usize,
     triangles: usize,
     regions: Vec<Region>,
     rest_pose: Pose,
@@ -45,6 +47,10 @@ pub struct DeformWorkspace {
     targets: Vec<Vec<[f64; 3]>>,
     local: Vec<Vec<[f64; 3]>>,
     ws: Vec<RegionWorkspace>,
+    /// The source's Laplacian coordinates, unturned, and each vertex's
+    /// rotation of the local steps (per region).
+    lsrc: Vec<Vec<[f64; 3]>>,
+    rots: Vec<Vec<DQuat>>,
     /// Reference normals and source areas of the triangles (untangling).
     normals: Vec<DVec3>,
     areas: Vec<f64>,
@@ -83,6 +89,7 @@ impl Deformer {
             repair: opts.repair,
             untangle: opts.untangle,
             repair_passes: opts.repair_passes,
+            local_steps: opts.local_steps,
             triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
             rest_pose: *ch.rest_pose(),
@@ -177,6 +184,16 @@ impl Deformer {
                 .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
                 .collect(),
             ws: self.regions.iter().map(|r| r.solver.workspace()).collect(),
+            lsrc: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
+                .collect(),
+            rots: self
+                .regions
+                .iter()
+                .map(|r| vec![DQuat::IDENTITY; r.solver.vertices.len()])
+                .collect(),
             normals: vec![DVec3::ZERO; self.triangles],
             areas: vec![0.0; self.triangles],
             best: vec![[0.0; 3]; self.n],
@@ -227,12 +244,20 @@ impl Deformer {
                 *x = source[v as usize];
             }
             apply(r.solver.laplacian(), &ws.xs[k], &mut ws.delta[k]);
-            for (dv, &v) in ws.delta[k].iter_mut().zip(&r.solver.vertices) {
+            if self.local_steps > 0 {
+                ws.lsrc[k].copy_from_slice(&ws.delta[k]);
+            }
+            for ((dv, &v), rq) in ws.delta[k]
+                .iter_mut()
+                .zip(&r.solver.vertices)
+                .zip(ws.rots[k].iter_mut())
+            {
                 let turn = if self.local_frames {
                     qi * ws.turn[v as usize]
                 } else {
                     DQuat::IDENTITY
                 };
+                *rq = turn;
                 *dv = (turn * DVec3::from_array(*dv)).to_array();
             }
             for (t, &(v, seam)) in ws.targets[k].iter_mut().zip(&r.sources) {
@@ -249,6 +274,22 @@ impl Deformer {
                 &mut ws.local[k],
                 &mut ws.ws[k],
             );
+            for _ in 0..self.local_steps {
+                arap::local_step(
+                    r.solver.laplacian(),
+                    &ws.xs[k],
+                    &ws.local[k],
+                    &ws.lsrc[k],
+                    &mut ws.rots[k],
+                    &mut ws.delta[k],
+                );
+                r.solver.solve(
+                    &ws.delta[k],
+                    &ws.targets[k],
+                    &mut ws.local[k],
+                    &mut ws.ws[k],
+                );
+            }
             for ((y, &v), &w) in ws.local[k].iter().zip(&r.solver.vertices).zip(&r.weights) {
                 let x = (q * DVec3::from_array(*y)).to_array();
                 ws.solved[v as usize] = x;

@@ -33,6 +33,7 @@
 //! The manifest's `[deform]` section can give the constraint vertices and
 //! the example frames instead.
 
+pub mod arap;
 pub mod deformer;
 pub mod lbs;
 pub mod options;

@@ -80,6 +80,19 @@ pub struct DeformOptions {
     /// crumpled and were pushed back (hyper-extension p95 18.8° on CMU
     /// 02_02, 0.0° with it; joint-velocity error 0.34 → 0.16 cm/frame).
     pub hold_joints: bool,
+    /// Rotation-aware local steps after each region's solve ([`super::arap`]):
+    /// each vertex's rotation re-fitted to the solved one-ring, the source's
+    /// Laplacian coordinates turned by it, solved again with the same
+    /// factorisation. Default 0: measured on the samba capture (issue 42),
+    /// two steps leave the turned-over triangle-frames before the repair
+    /// nearly as they were (CMU 02_02 3,599 → 3,066, 03_02 15,228 →
+    /// 15,036) for three times the deformation's time (02_02: 6.7 →
+    /// 20.7 s for 75 frames, on a loaded shared machine): the folds are in the
+    /// thighs' regions (the skirt; 02_02 without repair, `eval --surface`:
+    /// thighs 789 + 264 triangle-frames against the rest frame, shins
+    /// 56 + 54, torso 2), where the overlapping thigh solves and their
+    /// held LBS targets disagree, not in the turn of the coordinates.
+    pub local_steps: usize,
 }
 
 impl Default for DeformOptions {
@@ -96,6 +109,7 @@ impl Default for DeformOptions {
             untangle: untangle::UntangleOptions::default(),
             repair_passes: 3,
             hold_joints: true,
+            local_steps: 0,
         }
     }
 }
