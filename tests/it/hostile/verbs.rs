@@ -3180,8 +3180,29 @@ fn plausibility_warnings_are_printed_once() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     let run = |args: &[&str]| common::cli_ok(args, Some(d));
-    // The procedural run floats above the demo character's floor.
-    run(&["mocap", "procedural", "--gait", "run", "-o", "run.bvh"]);
+    // The procedural run with every joint turned four times as far:
+    // knees bent backwards, feet through the floor (a clean synthetic
+    // character driven by the plain run gives no warning since issue 42).
+    run(&["mocap", "procedural", "--gait", "run", "-o", "plain.bvh"]);
+    let plain = std::fs::read_to_string(d.join("plain.bvh")).unwrap();
+    let (head, motion) = plain.split_once("MOTION\n").unwrap();
+    let mut wild = format!("{head}MOTION\n");
+    for (i, l) in motion.lines().enumerate() {
+        if i < 2 {
+            wild += &format!("{l}\n");
+            continue;
+        }
+        let v: Vec<String> = l
+            .split_whitespace()
+            .enumerate()
+            .map(|(k, x)| match k {
+                0..3 => x.to_string(),
+                _ => format!("{:.4}", 4.0 * x.parse::<f64>().unwrap()),
+            })
+            .collect();
+        wild += &format!("{}\n", v.join(" "));
+    }
+    std::fs::write(d.join("run.bvh"), wild).unwrap();
     let topo = f.db.join("topology.obj");
     let lm = f.db.join("landmarks.json");
     let synth = |json: bool| {

@@ -953,7 +953,20 @@ fn batch_keeps_the_plausibility_warnings_eval_gives() {
             .as_array()
             .unwrap_or_else(|| panic!("no warnings in {o}"));
         eprintln!("{}: eval {want:?}, batch {have:?}", o["clip"]);
-        assert_eq!(have.len(), want.len(), "{}", o["clip"]);
+        // The plausibility warnings only: the batch also reports its own
+        // deformation's repair (kind `repair`, "stay turned over"), which
+        // `eval` of the written result cannot see.
+        let plausible = |kind: &str| kind != "repair";
+        let have_kinds: Vec<&str> = have
+            .iter()
+            .map(|w| w["kind"].as_str().unwrap())
+            .filter(|k| plausible(k))
+            .collect();
+        let want_plausible = want
+            .iter()
+            .filter(|m| !m.contains("stay turned over"))
+            .count();
+        assert_eq!(have_kinds.len(), want_plausible, "{}", o["clip"]);
         for w in have {
             assert!(w["kind"].is_string() && !w["message"].as_str().unwrap().is_empty());
             if w["kind"] == "turned_over" {

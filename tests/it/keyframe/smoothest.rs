@@ -198,7 +198,9 @@ fn least_mean_agrees_with_an_exhaustive_search_and_the_bound_holds() {
 /// walk 02_01 and run 02_03 on the samba character, 25 fps): every path
 /// it reports lands within 1 % of both targets, its mean is never below
 /// the exact lower bound, and on every target the default grid meets its
-/// mean smoothness is not above the default path's.
+/// mean smoothness is not above the default path's. The grid reaches
+/// 10 m and 8 s: on the clean synthetic database (issue 42) the default
+/// paths of the former 7 m × 6 s grid met only 2 targets within 1 %.
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn least_mean_grid_lands_within_1pct_and_is_no_worse_than_the_default_paths() {
@@ -216,9 +218,9 @@ fn least_mean_grid_lands_within_1pct_and_is_no_worse_than_the_default_paths() {
             "02_03:30".into(),
             "--grid".into(),
             "--distances".into(),
-            "1:7:1".into(),
+            "1:10:1".into(),
             "--times".into(),
-            "1:6:1".into(),
+            "1:8:1".into(),
             "--report".into(),
             report.into(),
         ];

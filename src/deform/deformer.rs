@@ -1,0 +1,453 @@
+//! The `Deformer`: a character's prefactored part-based deformation
+//! (the module page, [`crate::deform`], describes the method).
+
+use super::options::{DeformMode, DeformOptions, TurnedOver};
+use super::part_laplacian::{RegionSolver, RegionWorkspace, apply};
+use super::regions::{Region, region_constraints, region_examples, region_specs, region_weights};
+use super::{arap, lbs, pca, unflip, untangle};
+use crate::db::Character;
+use crate::mesh::laplacian::uniform_region_rows;
+use crate::mesh::solver::SolveError;
+use crate::pose::{Pose, pose_rotations};
+use glam::{DQuat, DVec3};
+use rayon::prelude::*;
+
+/// A character's prefactored deformation.
+pub struct Deformer {
+    mode: DeformMode,
+    local_frames: bool,
+    /// Vertex adjacency for the turned-over repair (when on).
+    adjacency: Option<unflip::Adjacency>,
+    repair: unflip::RepairOptions,
+    untangle: untangle::UntangleOptions,
+    repair_passes: usize,
+    /// Rotation-aware local steps after each region's solve.
+    local_steps: usize,
+    triangles: usize,
+    regions: Vec<Region>,
+    rest_pose: Pose,
+    n: usize,
+    /// Constraint vertices (global) of the LBS.
+    pub constraint_vertices: Vec<u32>,
+    /// Basis sizes (components per region).
+    pub components: Vec<usize>,
+    /// Example frames (flat database ids) of each region.
+    pub examples: Vec<Vec<u32>>,
+}
+
+/// Scratch of [`Deformer::deform`].
+pub struct DeformWorkspace {
+    lbs: Vec<[f64; 3]>,
+    turn: Vec<DQuat>,
+    xs: Vec<Vec<[f64; 3]>>,
+    delta: Vec<Vec<[f64; 3]>>,
+    acc: Vec<[f64; 3]>,
+    wsum: Vec<f64>,
+    solved: Vec<[f64; 3]>,
+    targets: Vec<Vec<[f64; 3]>>,
+    local: Vec<Vec<[f64; 3]>>,
+    ws: Vec<RegionWorkspace>,
+    /// The source's Laplacian coordinates, unturned, and each vertex's
+    /// rotation of the local steps (per region).
+    lsrc: Vec<Vec<[f64; 3]>>,
+    rots: Vec<Vec<DQuat>>,
+    /// Reference normals and source areas of the triangles (untangling).
+    normals: Vec<DVec3>,
+    areas: Vec<f64>,
+    /// The best repair pass so far.
+    best: Vec<[f64; 3]>,
+    /// The deformed frame before its repair, then the fixed budget's
+    /// repair while the adaptive one runs.
+    start: Vec<[f64; 3]>,
+}
+
+impl Deformer {
+    /// Prefactors the deformation of a character (nothing for `Lbs`/`None`).
+    ///
+    /// The steps: the LBS constraint vertices, `region_specs` (the regions
+    /// in solve order, parents first), then per region its uniform
+    /// Laplacian, `region_examples` (the frames spanning its rotations and
+    /// their differential coordinates, Huang et al. 2015 Sec. 5.2.3),
+    /// the PCA basis, `region_constraints` (seams with the parent, then
+    /// LBS vertices), `region_weights` and the prefactored Eq. 32 solver.
+    pub fn new(
+        ch: &Character,
+        mode: DeformMode,
+        opts: &DeformOptions,
+    ) -> Result<Deformer, SolveError> {
+        let n = ch.n();
+        let constraint_vertices = match ch.constraint_override() {
+            Some(c) => c.to_vec(),
+            None => lbs::constraint_vertices(ch, opts.stride),
+        };
+        let mut out = Deformer {
+            mode,
+            local_frames: opts.local_frames,
+            adjacency: (opts.repair.rounds > 0
+                && matches!(mode, DeformMode::Part | DeformMode::Global))
+            .then(|| unflip::Adjacency::new(n, ch.topology().triangles())),
+            repair: opts.repair,
+            untangle: opts.untangle,
+            repair_passes: opts.repair_passes,
+            local_steps: opts.local_steps,
+            triangles: ch.topology().triangle_count(),
+            regions: Vec::new(),
+            rest_pose: *ch.rest_pose(),
+            n,
+            constraint_vertices: constraint_vertices.clone(),
+            components: Vec::new(),
+            examples: Vec::new(),
+        };
+        if matches!(mode, DeformMode::Lbs | DeformMode::None) {
+            return Ok(out);
+        }
+        let tris = ch.topology().triangles();
+        let is_constraint = {
+            let mut m = vec![false; n];
+            for &v in &constraint_vertices {
+                m[v as usize] = true;
+            }
+            m
+        };
+        let mut buf = vec![[0.0; 3]; n];
+        let mut index_of: Vec<Option<usize>> = Vec::new();
+        for (verts, joint, parent, example_joints, _owns) in region_specs(ch, mode) {
+            if verts.is_empty() {
+                index_of.push(None);
+                continue;
+            }
+            index_of.push(Some(out.regions.len()));
+            let parent = parent.and_then(|p| index_of.get(p).copied().flatten());
+            let mut local = vec![u32::MAX; n];
+            for (i, &v) in verts.iter().enumerate() {
+                local[v as usize] = i as u32;
+            }
+            let lap = uniform_region_rows(tris, &local, verts.len());
+            let (chosen, examples) =
+                region_examples(ch, &verts, &lap, joint, &example_joints, opts, &mut buf);
+            let basis = pca::pca(&examples, opts.keep);
+            let parent_verts: Option<&Vec<u32>> = parent.map(|p| &out.regions[p].solver.vertices);
+            let (constraints, sources) = region_constraints(
+                ch,
+                mode,
+                opts,
+                &verts,
+                joint,
+                parent_verts.map(Vec::as_slice),
+                &is_constraint,
+            );
+            let weights = region_weights(ch, mode, &verts, joint);
+            out.components.push(basis.components.len());
+            out.examples.push(chosen);
+            let solver = RegionSolver::new(tris, n, verts, constraints, &basis)?;
+            out.regions.push(Region {
+                joint,
+                solver,
+                sources,
+                weights,
+            });
+        }
+        Ok(out)
+    }
+
+    /// The mode.
+    pub fn mode(&self) -> DeformMode {
+        self.mode
+    }
+
+    /// Scratch space.
+    pub fn workspace(&self) -> DeformWorkspace {
+        DeformWorkspace {
+            lbs: vec![[0.0; 3]; self.n],
+            turn: vec![DQuat::IDENTITY; self.n],
+            xs: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
+                .collect(),
+            delta: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
+                .collect(),
+            acc: vec![[0.0; 3]; self.n],
+            wsum: vec![0.0; self.n],
+            solved: vec![[0.0; 3]; self.n],
+            targets: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.sources.len()])
+                .collect(),
+            local: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
+                .collect(),
+            ws: self.regions.iter().map(|r| r.solver.workspace()).collect(),
+            lsrc: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
+                .collect(),
+            rots: self
+                .regions
+                .iter()
+                .map(|r| vec![DQuat::IDENTITY; r.solver.vertices.len()])
+                .collect(),
+            normals: vec![DVec3::ZERO; self.triangles],
+            areas: vec![0.0; self.triangles],
+            best: vec![[0.0; 3]; self.n],
+            start: vec![[0.0; 3]; self.n],
+        }
+    }
+
+    /// Deforms `source` (a retrieved frame whose skeleton is `source_pose`)
+    /// to follow `target`, into `out`. Returns the triangles turned over
+    /// before and after the repair (zero for modes without one).
+    pub fn deform(
+        &self,
+        ch: &Character,
+        source: &[[f64; 3]],
+        source_pose: &Pose,
+        target: &Pose,
+        out: &mut [[f64; 3]],
+        ws: &mut DeformWorkspace,
+    ) -> TurnedOver {
+        if self.mode == DeformMode::None {
+            out.copy_from_slice(source);
+            return TurnedOver::default();
+        }
+        let g = pose_rotations(source_pose, target);
+        lbs::skin_into(source, ch.rig(), source_pose, target, &g, &mut ws.lbs);
+        out.copy_from_slice(&ws.lbs);
+        if self.mode == DeformMode::Lbs {
+            return TurnedOver::default();
+        }
+        let rot = pose_rotations(&self.rest_pose, target);
+        // Each vertex's rotation from source to target: its bones' turns,
+        // blended by skin weight.
+        unflip::skin_turns(&ch.rig().skin, &g, &mut ws.turn);
+        ws.acc.fill([0.0; 3]);
+        ws.wsum.fill(0.0);
+        for (k, r) in self.regions.iter().enumerate() {
+            let q = if self.local_frames {
+                rot[r.joint.index()]
+            } else {
+                DQuat::IDENTITY
+            };
+            let qi = q.inverse();
+            // δ₀: the source's Laplacian coordinates, each turned by its
+            // vertex's skin-blended rotation from the source skeleton to the
+            // target, in the part's frame. (A skirt vertex shared by both
+            // thighs turns the same way in both solves.)
+            for (x, &v) in ws.xs[k].iter_mut().zip(&r.solver.vertices) {
+                *x = source[v as usize];
+            }
+            apply(r.solver.laplacian(), &ws.xs[k], &mut ws.delta[k]);
+            if self.local_steps > 0 {
+                ws.lsrc[k].copy_from_slice(&ws.delta[k]);
+            }
+            for ((dv, &v), rq) in ws.delta[k]
+                .iter_mut()
+                .zip(&r.solver.vertices)
+                .zip(ws.rots[k].iter_mut())
+            {
+                let turn = if self.local_frames {
+                    qi * ws.turn[v as usize]
+                } else {
+                    DQuat::IDENTITY
+                };
+                *rq = turn;
+                *dv = (turn * DVec3::from_array(*dv)).to_array();
+            }
+            for (t, &(v, seam)) in ws.targets[k].iter_mut().zip(&r.sources) {
+                let p = if seam {
+                    ws.solved[v as usize]
+                } else {
+                    ws.lbs[v as usize]
+                };
+                *t = (qi * DVec3::from_array(p)).to_array();
+            }
+            r.solver.solve(
+                &ws.delta[k],
+                &ws.targets[k],
+                &mut ws.local[k],
+                &mut ws.ws[k],
+            );
+            for _ in 0..self.local_steps {
+                arap::local_step(
+                    r.solver.laplacian(),
+                    &ws.xs[k],
+                    &ws.local[k],
+                    &ws.lsrc[k],
+                    &mut ws.rots[k],
+                    &mut ws.delta[k],
+                );
+                r.solver.solve(
+                    &ws.delta[k],
+                    &ws.targets[k],
+                    &mut ws.local[k],
+                    &mut ws.ws[k],
+                );
+            }
+            for ((y, &v), &w) in ws.local[k].iter().zip(&r.solver.vertices).zip(&r.weights) {
+                let x = (q * DVec3::from_array(*y)).to_array();
+                ws.solved[v as usize] = x;
+                let a = &mut ws.acc[v as usize];
+                for d in 0..3 {
+                    a[d] += w * x[d];
+                }
+                ws.wsum[v as usize] += w;
+            }
+        }
+        for ((o, a), &w) in out.iter_mut().zip(&ws.acc).zip(&ws.wsum) {
+            if w > 0.0 {
+                *o = [a[0] / w, a[1] / w, a[2] / w];
+            }
+        }
+        match &self.adjacency {
+            Some(adj) => self.repair(ch.topology().triangles(), adj, source, out, ws),
+            None => TurnedOver::default(),
+        }
+    }
+
+    /// [`untangle::untangle`], then passes of [`unflip::unflip`] and
+    /// untangling while triangles stay turned over, keeping the best pass,
+    /// all with the fixed projection budget; then, if any are left, the
+    /// same again from the start with the adaptive budget
+    /// ([`untangle::UntangleOptions::max_steps`]), kept if it leaves fewer.
+    ///
+    /// The adaptive budget is only the last resort: a frame the fixed
+    /// budget and the patch repair bring wholly the right way round is
+    /// left as they leave it. Run on every frame, the doubling also moved
+    /// vertices the fixed budget and the repair would have fixed anyway,
+    /// further into their fans' thin feasible sets; those turn the right
+    /// way against the reference normals but not against the rest frame's
+    /// neighbourhoods (`crate::tools::eval::triangles`): CMU 03_02 on samba, where
+    /// nothing is left turned over either way, read 110 → 121 triangles
+    /// turned over against the rest frame in its worst frame (s12-blocks3).
+    fn repair(
+        &self,
+        tris: &[[u32; 3]],
+        adj: &unflip::Adjacency,
+        source: &[[f64; 3]],
+        out: &mut [[f64; 3]],
+        ws: &mut DeformWorkspace,
+    ) -> TurnedOver {
+        let bad = unflip::turned_over(tris, source, out, &ws.turn);
+        let before = bad.len();
+        if before == 0 {
+            return TurnedOver::default();
+        }
+        untangle::references(tris, source, &ws.turn, &mut ws.normals, &mut ws.areas);
+        let fixed = untangle::UntangleOptions {
+            max_steps: self.untangle.steps,
+            ..self.untangle
+        };
+        let adaptive = self.untangle.max_steps > self.untangle.steps;
+        if adaptive {
+            ws.start.copy_from_slice(out);
+        }
+        let first = self.repair_with(tris, adj, source, out, ws, bad.clone(), &fixed);
+        if first == 0 || !adaptive {
+            return TurnedOver {
+                before,
+                after: first,
+            };
+        }
+        // The last resort, from the deformed frame again; `ws.start` keeps
+        // the first result.
+        out.swap_with_slice(&mut ws.start);
+        let second = self.repair_with(tris, adj, source, out, ws, bad, &self.untangle);
+        if second >= first {
+            out.copy_from_slice(&ws.start);
+        }
+        TurnedOver {
+            before,
+            after: first.min(second),
+        }
+    }
+
+    /// The repair of [`Deformer::repair`] with untangling options `opts`,
+    /// from the turned-over triangles `bad` (reference normals in `ws`):
+    /// leaves `out` at its best pass and returns the triangles still
+    /// turned over there.
+    #[allow(clippy::too_many_arguments)]
+    fn repair_with(
+        &self,
+        tris: &[[u32; 3]],
+        adj: &unflip::Adjacency,
+        source: &[[f64; 3]],
+        out: &mut [[f64; 3]],
+        ws: &mut DeformWorkspace,
+        mut bad: Vec<u32>,
+        opts: &untangle::UntangleOptions,
+    ) -> usize {
+        let mut best = bad.len();
+        let mut best_bad = bad.clone();
+        ws.best.copy_from_slice(out);
+        // Untangling first: it is local and cheap, and fixes most frames
+        // without a patch factorisation (measured: 12.4 → 8.6 ms a frame on
+        // the real samba capture, still none left).
+        bad = untangle::untangle(tris, adj, &ws.normals, &ws.areas, out, bad, opts);
+        if bad.len() < best {
+            best = bad.len();
+            best_bad.clone_from(&bad);
+            ws.best.copy_from_slice(out);
+        }
+        if best == 0 {
+            return 0;
+        }
+        for pass in 0..self.repair_passes.max(1) {
+            // Each pass reaches one ring doubling further than the last, so
+            // a pass that starts again from the best state differs from it.
+            let repair = unflip::RepairOptions {
+                rounds: self.repair.rounds + pass,
+                ..self.repair
+            };
+            bad = unflip::unflip(tris, adj, source, out, &ws.turn, bad, &repair);
+            if !bad.is_empty() {
+                bad = untangle::untangle(tris, adj, &ws.normals, &ws.areas, out, bad, opts);
+            }
+            if bad.len() < best {
+                best = bad.len();
+                best_bad.clone_from(&bad);
+                ws.best.copy_from_slice(out);
+            } else {
+                // A pass that did not help: back to the best so far.
+                out.copy_from_slice(&ws.best);
+                bad.clone_from(&best_bad);
+            }
+            if best == 0 {
+                break;
+            }
+        }
+        best
+    }
+
+    /// Deforms every frame of a sequence (frame-major) in parallel;
+    /// returns the turned-over triangle counts summed over the frames.
+    pub fn deform_all(
+        &self,
+        ch: &Character,
+        frames: &mut [[f64; 3]],
+        targets: &[Pose],
+    ) -> TurnedOver {
+        let n = self.n;
+        frames
+            .par_chunks_mut(n.max(1))
+            .zip(targets.par_iter())
+            .map_init(
+                || (self.workspace(), vec![[0.0; 3]; n]),
+                |(ws, src), (f, t)| {
+                    src.copy_from_slice(f);
+                    let sp = ch.rig().frame_joints(src);
+                    self.deform(ch, src, &sp, t, f, ws)
+                },
+            )
+            .reduce(TurnedOver::default, |a, b| TurnedOver {
+                before: a.before + b.before,
+                after: a.after + b.after,
+            })
+    }
+}

@@ -1,0 +1,115 @@
+//! The deformation's mode, options and turned-over count.
+
+use super::unflip;
+use super::untangle;
+
+/// How retrieved frames are made to follow the query skeleton.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DeformMode {
+    /// Part-based PCA Laplacian deformation (the paper's method).
+    #[default]
+    Part,
+    /// One PCA Laplacian deformation space for the whole body.
+    Global,
+    /// Plain linear blend skinning of the retrieved frame.
+    Lbs,
+    /// No deformation: the interpolated retrieval.
+    None,
+}
+
+impl std::fmt::Display for DeformMode {
+    /// The words a report uses for the mode.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Part => "part-based PCA Laplacian",
+            Self::Global => "whole-body PCA Laplacian",
+            Self::Lbs => "linear blend skinning",
+            Self::None => "none (the interpolated retrieval)",
+        })
+    }
+}
+
+/// Triangles turned over relative to the source frame (see [`unflip`]),
+/// before and after the repair.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct TurnedOver {
+    /// After the deformation's solve.
+    pub before: usize,
+    /// After the repair and untangling.
+    pub after: usize,
+}
+
+/// Options of the deformation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DeformOptions {
+    /// Share of the examples' variance the basis keeps. Default: 0.95.
+    pub keep: f64,
+    /// Example frames per part (or for the whole body). Default: 40.
+    pub examples: usize,
+    /// Weight of an LBS constraint. Default: 1.
+    pub constraint_weight: f64,
+    /// Weight of a vertex shared with the parent part. Default: 10.
+    pub seam_weight: f64,
+    /// Keep every `stride`-th eligible constraint vertex. Default: 4.
+    pub stride: usize,
+    /// A database frame (flat id, [`crate::graph::SurfaceMotionGraph::flat_id`])
+    /// every region uses as an example (besides those chosen
+    /// automatically). Default: none.
+    pub include: Option<u32>,
+    /// Learn and solve each part in its own rotating frame (true) or in
+    /// world coordinates as the paper does (false). Default: true.
+    pub local_frames: bool,
+    /// Repair of triangles the solve turned over ([`unflip`]); `rounds: 0`
+    /// turns it (and the untangling) off.
+    pub repair: unflip::RepairOptions,
+    /// Local untangling after each repair pass ([`untangle`]).
+    pub untangle: untangle::UntangleOptions,
+    /// Repair + untangle passes while triangles stay turned over; the
+    /// best pass is kept. Default 3 (measured on the samba database: one
+    /// pass leaves a few on the hardest queries, e.g. 1 on CMU 131_01, three
+    /// leave none on the nine retarget queries).
+    pub repair_passes: usize,
+    /// Hold the part of a region that lies in a child part (the thigh's
+    /// region below the knee, the torso's inside the thighs and upper arms)
+    /// at its LBS positions, every `stride`-th vertex, with
+    /// `constraint_weight`. Default true. Without it that end of the
+    /// region is extrapolated from the mid-bone constraints along the
+    /// retrieved frame's differential coordinates, and the child, seamed to
+    /// it, inherits the error at the joint: on the samba database the knees
+    /// crumpled and were pushed back (hyper-extension p95 18.8° on CMU
+    /// 02_02, 0.0° with it; joint-velocity error 0.34 → 0.16 cm/frame).
+    pub hold_joints: bool,
+    /// Rotation-aware local steps after each region's solve ([`super::arap`]):
+    /// each vertex's rotation re-fitted to the solved one-ring, the source's
+    /// Laplacian coordinates turned by it, solved again with the same
+    /// factorisation. Default 0: measured on the samba capture (issue 42),
+    /// two steps leave the turned-over triangle-frames before the repair
+    /// nearly as they were (CMU 02_02 3,599 → 3,066, 03_02 15,228 →
+    /// 15,036) for three times the deformation's time (02_02: 6.7 →
+    /// 20.7 s for 75 frames, on a loaded shared machine): the folds are in the
+    /// thighs' regions (the skirt; 02_02 without repair, `eval --surface`:
+    /// thighs 789 + 264 triangle-frames against the rest frame, shins
+    /// 56 + 54, torso 2), where the overlapping thigh solves and their
+    /// held LBS targets disagree, not in the turn of the coordinates.
+    pub local_steps: usize,
+}
+
+impl Default for DeformOptions {
+    fn default() -> Self {
+        DeformOptions {
+            keep: 0.95,
+            examples: 40,
+            constraint_weight: 1.0,
+            seam_weight: 10.0,
+            stride: 4,
+            include: None,
+            local_frames: true,
+            repair: unflip::RepairOptions::default(),
+            untangle: untangle::UntangleOptions::default(),
+            repair_passes: 3,
+            hold_joints: true,
+            local_steps: 0,
+        }
+    }
+}

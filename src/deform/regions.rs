@@ -1,0 +1,275 @@
+//! The deformation regions of a character: the parts in solve order,
+//! their example frames, constraints and blending weights (the module
+//! page, [`crate::deform`], describes the method).
+
+use super::options::{DeformMode, DeformOptions};
+use super::part_laplacian::{RegionSolver, apply};
+use crate::db::Character;
+use crate::embed::parts::Part;
+use crate::pose::pose_rotations;
+use crate::rig::Canonical;
+use glam::{DQuat, DVec3};
+
+/// The joint whose rotation carries a part.
+pub fn part_joint(p: Part) -> Canonical {
+    use Canonical as C;
+    match p {
+        Part::Torso => C::Pelvis,
+        Part::Head => C::Neck,
+        Part::LUpperArm => C::LShoulder,
+        Part::LForearm => C::LElbow,
+        Part::RUpperArm => C::RShoulder,
+        Part::RForearm => C::RElbow,
+        Part::LThigh => C::LHip,
+        Part::LShin => C::LKnee,
+        Part::LFoot => C::LAnkle,
+        Part::RThigh => C::RHip,
+        Part::RShin => C::RKnee,
+        Part::RFoot => C::RAnkle,
+    }
+}
+
+/// A region to build: vertices, carrying joint, parent (index in the
+/// list), joints whose rotations choose examples, vertices it owns.
+pub(super) type RegionSpec = (Vec<u32>, Canonical, Option<usize>, Vec<Canonical>, Vec<u32>);
+
+pub(super) struct Region {
+    pub(super) joint: Canonical,
+    pub(super) solver: RegionSolver,
+    /// Per constraint: global vertex and whether it is a seam (parent's result).
+    pub(super) sources: Vec<(u32, bool)>,
+    /// Weight of this region's result at each local vertex (its part's
+    /// skin weight): overlapping regions are blended by it.
+    pub(super) weights: Vec<f64>,
+}
+
+pub(super) fn fps_examples(rot: &[Vec<DQuat>], want: usize) -> Vec<usize> {
+    let nf = rot.len();
+    if nf == 0 {
+        return Vec::new();
+    }
+    let dist = |a: usize, b: usize| -> f64 {
+        rot[a]
+            .iter()
+            .zip(&rot[b])
+            .map(|(p, q)| p.angle_between(*q))
+            .sum()
+    };
+    // Start from the frame closest to the rest pose.
+    let start = (0..nf)
+        .min_by(|&a, &b| {
+            let d = |f: usize| {
+                rot[f]
+                    .iter()
+                    .map(|q| q.angle_between(DQuat::IDENTITY))
+                    .sum::<f64>()
+            };
+            d(a).total_cmp(&d(b))
+        })
+        .unwrap_or(0);
+    let mut chosen = vec![start];
+    let mut near: Vec<f64> = (0..nf).map(|f| dist(f, start)).collect();
+    while chosen.len() < want.min(nf) {
+        let (f, d) = near
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(f, d)| (f, *d))
+            .unwrap_or((0, 0.0));
+        if d <= 1e-9 {
+            break;
+        }
+        chosen.push(f);
+        for (g, v) in near.iter_mut().enumerate() {
+            *v = v.min(dist(g, f));
+        }
+    }
+    chosen
+}
+
+/// The deformation regions in solve order (parents before children), each
+/// with its vertices, joint, parent (index in this list), the joints whose
+/// rotations its examples cover, and the vertices it owns: one region for
+/// the whole body (`Global`), else one per body part (its region of the
+/// embedding plus the vertices labelled with it).
+pub(super) fn region_specs(ch: &Character, mode: DeformMode) -> Vec<RegionSpec> {
+    let n = ch.n();
+    let rig = ch.rig();
+    match mode {
+        DeformMode::Global => vec![(
+            (0..n as u32).collect(),
+            Canonical::Pelvis,
+            None,
+            Canonical::ALL.to_vec(),
+            (0..n as u32).collect(),
+        )],
+        _ => {
+            let order = [
+                Part::Torso,
+                Part::Head,
+                Part::LUpperArm,
+                Part::RUpperArm,
+                Part::LThigh,
+                Part::RThigh,
+                Part::LForearm,
+                Part::RForearm,
+                Part::LShin,
+                Part::RShin,
+                Part::LFoot,
+                Part::RFoot,
+            ];
+            order
+                .iter()
+                .map(|&p| {
+                    let mut verts = rig.regions[p.index()].clone();
+                    let owns: Vec<u32> = (0..n as u32)
+                        .filter(|&v| rig.labels[v as usize] as usize == p.index())
+                        .collect();
+                    verts.extend(&owns);
+                    verts.sort_unstable();
+                    verts.dedup();
+                    let parent = p.parent().and_then(|q| order.iter().position(|&o| o == q));
+                    (verts, part_joint(p), parent, vec![part_joint(p)], owns)
+                })
+                .collect()
+        }
+    }
+}
+
+/// The example frames of a region (database ids: the override, else the
+/// frames farthest apart in the rotations of `example_joints`, plus
+/// `opts.include`) and their differential coordinates `L x` on the region
+/// (`lap`), turned into the joint's frame when `opts.local_frames`. `buf`
+/// is scratch of one frame.
+pub(super) fn region_examples(
+    ch: &Character,
+    verts: &[u32],
+    lap: &[Vec<(u32, f64)>],
+    joint: Canonical,
+    example_joints: &[Canonical],
+    opts: &DeformOptions,
+    buf: &mut [[f64; 3]],
+) -> (Vec<u32>, Vec<Vec<[f64; 3]>>) {
+    let nf = ch.frame_count();
+    // Examples covering the region's rotations.
+    let rots: Vec<Vec<DQuat>> = (0..nf)
+        .map(|f| {
+            let g = pose_rotations(ch.rest_pose(), &ch.poses()[f]);
+            example_joints.iter().map(|j| g[j.index()]).collect()
+        })
+        .collect();
+    let mut chosen = match ch.example_override() {
+        Some(e) => e.to_vec(),
+        None => fps_examples(&rots, opts.examples)
+            .into_iter()
+            .map(|f| f as u32)
+            .collect(),
+    };
+    if let Some(f) = opts
+        .include
+        .filter(|&f| (f as usize) < nf && !chosen.contains(&f))
+    {
+        chosen.push(f);
+    }
+    let mut examples = Vec::with_capacity(chosen.len());
+    for &f in &chosen {
+        ch.frame_metres(f, buf);
+        let x: Vec<[f64; 3]> = verts.iter().map(|&v| buf[v as usize]).collect();
+        let mut d = vec![[0.0; 3]; x.len()];
+        apply(lap, &x, &mut d);
+        let r = if opts.local_frames {
+            pose_rotations(ch.rest_pose(), &ch.poses()[f as usize])[joint.index()].inverse()
+        } else {
+            DQuat::IDENTITY
+        };
+        for v in d.iter_mut() {
+            *v = (r * DVec3::from_array(*v)).to_array();
+        }
+        examples.push(d);
+    }
+    (chosen, examples)
+}
+
+/// Where a region constraint's target comes from: `(global vertex, from
+/// the parent region's result)`.
+pub(super) type RegionSource = (u32, bool);
+
+/// The soft constraints of a region, `(local index, weight)`, with their
+/// sources `(global vertex, from the parent's result)`: seams with the
+/// parent region first, then the LBS constraint vertices (and, with
+/// `hold_joints`, a spread of the child parts' vertices); a region with
+/// none of those constrains a spread of its own vertices.
+pub(super) fn region_constraints(
+    ch: &Character,
+    mode: DeformMode,
+    opts: &DeformOptions,
+    verts: &[u32],
+    joint: Canonical,
+    parent_verts: Option<&[u32]>,
+    is_constraint: &[bool],
+) -> (Vec<(u32, f64)>, Vec<RegionSource>) {
+    let rig = ch.rig();
+    let mut constraints = Vec::new();
+    let mut sources = Vec::new();
+    for (i, &v) in verts.iter().enumerate() {
+        let seam = parent_verts.is_some_and(|pv| pv.binary_search(&v).is_ok());
+        if seam {
+            constraints.push((i as u32, opts.seam_weight));
+            sources.push((v, true));
+        } else if is_constraint[v as usize]
+            || (opts.hold_joints
+                && mode == DeformMode::Part
+                && i % opts.stride.max(1) == 0
+                && Part::ALL
+                    .get(rig.labels[v as usize] as usize)
+                    .is_some_and(|c| c.parent() == Some(Part::of_joint(joint))))
+        {
+            constraints.push((i as u32, opts.constraint_weight));
+            sources.push((v, false));
+        }
+    }
+    if constraints.is_empty() {
+        // A region with no eligible vertex: constrain a spread of its own.
+        for (i, &v) in verts.iter().enumerate().step_by(opts.stride.max(1)) {
+            constraints.push((i as u32, opts.constraint_weight));
+            sources.push((v, false));
+        }
+    }
+    (constraints, sources)
+}
+
+/// The weight of a region's result at each of its vertices: 1 for the
+/// whole body, else the vertex's skin weight on the region's part (at least
+/// 1e-3 for a vertex labelled with the part), so overlapping regions blend.
+pub(super) fn region_weights(
+    ch: &Character,
+    mode: DeformMode,
+    verts: &[u32],
+    joint: Canonical,
+) -> Vec<f64> {
+    let rig = ch.rig();
+    match mode {
+        DeformMode::Global => vec![1.0; verts.len()],
+        _ => {
+            let part = Part::of_joint(joint);
+            verts
+                .iter()
+                .map(|&v| {
+                    let (js, ws) = &rig.skin[v as usize];
+                    let w: f64 = js
+                        .iter()
+                        .zip(ws)
+                        .filter(|(j, _)| Part::of_joint(Canonical::ALL[**j as usize]) == part)
+                        .map(|(_, w)| *w)
+                        .sum();
+                    // A vertex labelled with the part always counts.
+                    if rig.labels[v as usize] as usize == part.index() {
+                        w.max(1e-3)
+                    } else {
+                        w
+                    }
+                })
+                .collect()
+        }
+    }
+}
