@@ -5,13 +5,16 @@
 use super::geometry::{Graph, Grid, clamp01, fit_symmetry, principal_axes};
 use glam::DVec3;
 
+/// Vertex positions and triangles.
+type Surface = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+
 /// Only the vertices of triangles (a group selected from a file keeps the
 /// others, unreferenced), renumbered in order; a triangle naming a vertex
 /// out of range is an error.
 pub(super) fn referenced(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
-) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>), String> {
+) -> Result<Surface, String> {
     let mut index = vec![u32::MAX; positions.len()];
     let mut kept: Vec<[f64; 3]> = Vec::new();
     let mut tris: Vec<[u32; 3]> = Vec::with_capacity(triangles.len());
