@@ -64,8 +64,8 @@ pub struct EmbedArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
-    /// Open a page on 127.0.0.1 instead (URL printed, Ctrl-C stops): the mesh coloured by part with the skeleton and the landmarks; drag a landmark to re-embed, Save writes NAME.picked.landmarks.json beside the landmark file (or a path typed on the page).
-    #[arg(long, requires = "landmarks", conflicts_with_all = ["output", "png", "group", "parts"])]
+    /// Open a page on 127.0.0.1 instead (URL printed, Ctrl-C stops): the mesh coloured by part with the skeleton and the landmarks; drag a landmark to re-embed, Save writes NAME.picked.landmarks.json beside the landmark file (or the mesh, or a path typed on the page). Without --landmarks the page starts from the automatic landmarks; below --min-confidence it still opens, with what was found and the reason shown.
+    #[arg(long, conflicts_with_all = ["output", "png", "group", "parts", "write_landmarks"])]
     pub pick: bool,
 }
 
@@ -151,10 +151,14 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
 fn pick(a: EmbedArgs) -> anyhow::Result<()> {
     let mut inputs = surfmotion::mesh::io::input_files(&a.mesh, None);
     inputs.extend(a.skin.iter().chain(&a.rig_map).cloned());
+    if !(0.0..=1.0).contains(&a.min_confidence) {
+        anyhow::bail!("--min-confidence {}: expected 0 to 1", a.min_confidence);
+    }
     let mesh = super::load_mesh_groups(&a.mesh, &[])?;
     let o = surfmotion::jobs::pick::PickOptions {
         mesh: a.mesh,
         landmarks: a.landmarks,
+        min_confidence: a.min_confidence,
         inputs,
         ..Default::default()
     };

@@ -10,7 +10,6 @@ use surfmotion::transfer::{MarkerOptions, SignMode, TransferOptions};
 
 /// Arguments of `transfer`.
 #[derive(clap::Args)]
-#[command(group(clap::ArgGroup::new("scan_markers").required(true).args(["landmarks", "markers"]).multiple(true)))]
 #[command(group(clap::ArgGroup::new("source").required(true).args(["mocap", "template"])))]
 pub struct Args {
     /// The static mesh to animate (OBJ, PLY, glTF, or SEQ.pc2:FRAME). It is
@@ -21,9 +20,19 @@ pub struct Args {
     #[command(flatten)]
     pub job: JobOpts,
     /// Landmarks on the scan (JSON, as for `rig embed`): the skeleton is
-    /// embedded and markers are placed in rings along its bones.
+    /// embedded and markers are placed in rings along its bones. Without
+    /// it (and without --markers) the landmarks are found automatically
+    /// from the scan's geometry, as `rig embed` does; below
+    /// --min-confidence the transfer is refused with the reason.
     #[arg(long)]
     pub landmarks: Option<PathBuf>,
+    /// The confidence (0..1) below which automatic landmarks are refused.
+    #[arg(long, default_value_t = 0.5, value_name = "C", conflicts_with_all = ["landmarks", "markers"])]
+    pub min_confidence: f64,
+    /// Write the automatic landmarks as a landmark file to edit and give
+    /// back with --landmarks.
+    #[arg(long, value_name = "PATH", conflicts_with_all = ["landmarks", "markers"])]
+    pub write_landmarks: Option<PathBuf>,
     /// Markers on the scan instead of generated ones: JSON
     /// {"markers": [{"name", "triangle", "bone"?}]}; `--save-markers`
     /// writes one to start from.
@@ -154,6 +163,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let spec = TransferSpec {
         scan_name: a.scan.clone(),
         landmarks: a.landmarks.clone(),
+        automatic: surfmotion::jobs::transfer::AutoScanLandmarks {
+            min_confidence: a.min_confidence,
+            write: a.write_landmarks.clone(),
+        },
         markers: a.markers.clone(),
         save_markers: a.save_markers.clone(),
         source,
@@ -204,6 +217,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 /// outputs that would replace an input or another output, are not a
 /// mesh format, or a folder that holds files without --force.
 fn check_options_and_outputs(a: &Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        (0.0..=1.0).contains(&a.min_confidence),
+        "--min-confidence {}: expected 0 to 1",
+        a.min_confidence
+    );
     // clap's `requires` let these through with --mocap, and they were
     // ignored without a word.
     if a.template.is_none() {
@@ -246,6 +264,7 @@ fn check_options_and_outputs(a: &Args) -> anyhow::Result<()> {
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
     outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
+    outputs.extend(a.write_landmarks.clone().map(|p| ("--write-landmarks", p)));
     surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
     a.glb.refuse_unless_glb(
@@ -277,12 +296,25 @@ fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::
         surfmotion::util::fsutil::write_bytes_atomic(p, v.as_bytes())?;
     }
     if a.run.json {
-        let v = serde_json::to_string_pretty(&report.short_json()?)?;
+        let mut v = report.short_json()?;
+        if let (Some(auto), Some(o)) = (&report.automatic_landmarks, v.as_object_mut()) {
+            o.insert("automatic_landmarks".into(), serde_json::to_value(auto)?);
+        }
+        let v = serde_json::to_string_pretty(&v)?;
         return super::emit(&(v + "\n"));
     }
-    super::emit(&surfmotion::jobs::text::transfer(
-        &a.scan,
-        a.truth.as_deref(),
-        report,
-    ))
+    let mut text = String::new();
+    if let Some(auto) = &report.automatic_landmarks {
+        text += &format!(
+            "landmarks: automatic (confidence {:.2}; symmetry fit {:.2}% of the height){}\n",
+            auto.confidence,
+            auto.symmetry_percent,
+            a.write_landmarks
+                .as_ref()
+                .map(|p| format!(" → {}", p.display()))
+                .unwrap_or_default()
+        );
+    }
+    text += &surfmotion::jobs::text::transfer(&a.scan, a.truth.as_deref(), report);
+    super::emit(&text)
 }

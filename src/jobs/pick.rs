@@ -3,9 +3,14 @@
 //! mesh ([`open`]) or on a database's rest frame ([`open_db`]), served
 //! until the caller stops it, then [`finish`]ed into a [`PickReport`].
 //!
-//! The page starts from a landmark file. Without one it is refused with
-//! advice ([`PickError::NoLandmarks`]): automatic landmarks for a static
-//! mesh are issue 41's `embed::scan_landmarks`, wired here when it lands.
+//! The page starts from a landmark file. Without one it starts from the
+//! automatic landmarks: a database's `auto.landmarks.json` (the automatic
+//! rig of `db init`) when it is there, else the rest mesh's landmarks
+//! found from its geometry ([`crate::embed::scan_landmarks`]). Automatic
+//! landmarks refused below [`PickOptions::min_confidence`] still open the
+//! page, with what was found and the reason shown, to be corrected there;
+//! only a mesh where nothing is found is refused
+//! ([`PickError::NoLandmarks`]).
 
 use crate::db::{DbError, MANIFEST, Manifest};
 use crate::embed::landmarks::{LandmarkError, Landmarks};
@@ -22,9 +27,12 @@ pub struct PickOptions {
     /// The rest mesh's name as the user gave it (a file, or
     /// `SEQ.pc2:FRAME`), shown on the page.
     pub mesh: String,
-    /// The landmark file the page starts from. Required for now (see
-    /// [`PickError::NoLandmarks`]).
+    /// The landmark file the page starts from. Default (`None`): the
+    /// automatic landmarks (see the module's page).
     pub landmarks: Option<PathBuf>,
+    /// Automatic landmarks below this confidence (0..1) open the page with
+    /// the reason shown. Default 0.5 (the CLI's `--min-confidence`).
+    pub min_confidence: f64,
     /// Where Save writes when the page names no path. Default (`None`):
     /// beside the landmark file, `NAME.picked.landmarks.json` for
     /// `NAME.landmarks.json` (`-2`, `-3`, … added while such a file
@@ -42,6 +50,7 @@ impl Default for PickOptions {
         PickOptions {
             mesh: String::new(),
             landmarks: None,
+            min_confidence: 0.5,
             save: None,
             inputs: Vec::new(),
             bind: "127.0.0.1:0".into(),
@@ -52,14 +61,16 @@ impl Default for PickOptions {
 /// Why the page cannot be opened.
 #[derive(Debug, thiserror::Error)]
 pub enum PickError {
-    /// No landmarks to start from.
+    /// No landmarks to start from: none given and none found automatically.
     #[error(
-        "{mesh}: no landmarks to start the page from; give a landmark file (--landmarks FILE: chin, groin, l_/r_wrist, l_/r_elbow, l_/r_knee as vertex ids or [x, y, z], rough places are fine, the page moves them){}",
+        "{mesh}: no landmarks to start the page from ({why}); give a landmark file (--landmarks FILE: chin, groin, l_/r_wrist, l_/r_elbow, l_/r_knee as vertex ids or [x, y, z], rough places are fine, the page moves them){}",
         if *.db { "; or run `db init` with --landmarks" } else { "" }
     )]
     NoLandmarks {
         /// The mesh or database.
         mesh: String,
+        /// Why the automatic landmarks found nothing.
+        why: String,
         /// It is a database.
         db: bool,
     },
@@ -150,27 +161,60 @@ pub fn default_save_path(input: Option<&Path>, mesh: &Path) -> PathBuf {
     p
 }
 
+/// The automatic landmarks of `mesh` (named `name`) for the page: the
+/// landmarks and, when they were refused below `min_confidence`, the
+/// reason (the page opens with it shown).
+fn automatic(
+    mesh: &Mesh,
+    name: &str,
+    min_confidence: f64,
+    db: bool,
+) -> Result<(Landmarks, Option<String>), PickError> {
+    use crate::embed::scan_landmarks::{ScanLandmarkError, ScanOptions, find};
+    let o = ScanOptions { min_confidence };
+    match find(mesh.positions(), mesh.triangles(), &o) {
+        Ok(a) => Ok((a.landmarks(), None)),
+        Err(e @ ScanLandmarkError::Refused { .. }) => {
+            let reason = e.to_string();
+            let ScanLandmarkError::Refused { found, .. } = e else {
+                unreachable!()
+            };
+            match *found {
+                Some(f) if !f.marks.is_empty() => Ok((f.landmarks(), Some(reason))),
+                _ => Err(PickError::NoLandmarks {
+                    mesh: name.to_string(),
+                    why: reason,
+                    db,
+                }),
+            }
+        }
+        Err(e) => Err(PickError::NoLandmarks {
+            mesh: name.to_string(),
+            why: e.to_string(),
+            db,
+        }),
+    }
+}
+
 /// Opens the page on the rest mesh `mesh` as `o` says: the landmarks read
-/// and embedded (landmarks no rig can be embedded from still open the
-/// page, with the reason), the address bound.
+/// (or found automatically) and embedded (landmarks no rig can be
+/// embedded from still open the page, with the reason), the address bound.
 pub fn open(mesh: Mesh, o: &PickOptions) -> Result<Pick, PickError> {
-    let Some(l) = &o.landmarks else {
-        return Err(PickError::NoLandmarks {
-            mesh: o.mesh.clone(),
-            db: false,
-        });
+    let (lm, notice) = match &o.landmarks {
+        Some(l) => (Landmarks::load(l, mesh.vertex_count())?, None),
+        None => automatic(&mesh, &o.mesh, o.min_confidence, false)?,
     };
-    let lm = Landmarks::load(l, mesh.vertex_count())?;
     let mesh_path = crate::mesh::io::split_frame_ref(&o.mesh).0;
     let files = SessionFiles {
-        input: Some(l.clone()),
+        input: o.landmarks.clone(),
         default_save: o
             .save
             .clone()
-            .unwrap_or_else(|| default_save_path(Some(l), &mesh_path)),
+            .unwrap_or_else(|| default_save_path(o.landmarks.as_deref(), &mesh_path)),
         protected: o.inputs.clone(),
     };
-    let session = PickSession::new(mesh, &o.mesh, lm, files);
+    let mut session = PickSession::new(mesh, &o.mesh, lm, files);
+    session.set_notice(notice);
     Ok(Pick {
         server: PickServer::bind(session, &o.bind)?,
         db: None,
@@ -183,14 +227,17 @@ pub fn open(mesh: Mesh, o: &PickOptions) -> Result<Pick, PickError> {
 /// the manifest) and [`finish`] points the manifest at it.
 pub fn open_db(dir: &Path, o: &PickOptions) -> Result<Pick, PickError> {
     let (m, mesh) = Manifest::open(dir)?;
-    let Some(l) = &m.rig.landmarks else {
-        return Err(PickError::NoLandmarks {
-            mesh: dir.display().to_string(),
-            db: true,
-        });
+    // The manifest's landmarks, else the automatic rig's file, else the
+    // rest frame's automatic landmarks.
+    let auto_file = dir.join(super::db_init::AUTO_LANDMARKS);
+    let l = match &m.rig.landmarks {
+        Some(l) => Some(Manifest::resolve(dir, l)),
+        None => auto_file.is_file().then_some(auto_file),
     };
-    let l = Manifest::resolve(dir, l);
-    let lm = Landmarks::load(&l, mesh.vertex_count())?;
+    let (lm, notice) = match &l {
+        Some(l) => (Landmarks::load(l, mesh.vertex_count())?, None),
+        None => automatic(&mesh, &dir.display().to_string(), o.min_confidence, true)?,
+    };
     let topology = Manifest::resolve(dir, &m.topology);
     let mut protected = o.inputs.clone();
     protected.push(topology.clone());
@@ -203,15 +250,16 @@ pub fn open_db(dir: &Path, o: &PickOptions) -> Result<Pick, PickError> {
             .map(|p| Manifest::resolve(dir, p)),
     );
     let files = SessionFiles {
-        input: Some(l.clone()),
+        input: l.clone(),
         default_save: o
             .save
             .clone()
-            .unwrap_or_else(|| default_save_path(Some(&l), &topology)),
+            .unwrap_or_else(|| default_save_path(l.as_deref(), &topology)),
         protected,
     };
     let name = format!("{} ({})", m.name, topology.display());
-    let session = PickSession::new(mesh, &name, lm, files);
+    let mut session = PickSession::new(mesh, &name, lm, files);
+    session.set_notice(notice);
     Ok(Pick {
         server: PickServer::bind(session, &o.bind)?,
         db: Some(dir.to_path_buf()),

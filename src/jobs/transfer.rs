@@ -314,7 +314,12 @@ pub struct TransferSpec {
     /// The scan's name in messages (its spec as given).
     pub scan_name: String,
     /// The scan's landmarks (generated markers and the embedded rig).
+    /// Without them and without `markers`: found automatically
+    /// ([`AutoScanLandmarks`]).
     pub landmarks: Option<PathBuf>,
+    /// The automatic landmarks, when neither `landmarks` nor `markers`
+    /// are given.
+    pub automatic: AutoScanLandmarks,
     /// A marker file for the scan (takes precedence over generated ones).
     pub markers: Option<PathBuf>,
     /// Save the scan's markers to this file.
@@ -325,6 +330,49 @@ pub struct TransferSpec {
     pub truth: Option<String>,
     /// Markers, frame rate, signs, clip reading and GLB output.
     pub options: ScanTransferOptions,
+}
+
+/// The scan's landmarks found from its geometry (issue 41,
+/// [`crate::embed::scan_landmarks`]) when no landmark or marker file is
+/// given.
+#[derive(Debug, Clone)]
+pub struct AutoScanLandmarks {
+    /// Refused below this confidence (0..1). Default 0.5 (the CLI's
+    /// `--min-confidence`).
+    pub min_confidence: f64,
+    /// Write them as a landmark file (to edit and give back). Default: no.
+    pub write: Option<PathBuf>,
+}
+
+impl Default for AutoScanLandmarks {
+    fn default() -> Self {
+        AutoScanLandmarks {
+            min_confidence: 0.5,
+            write: None,
+        }
+    }
+}
+
+/// The automatic landmarks of `scan` (named `name`) as `o` says, written
+/// if asked.
+fn automatic_landmarks(
+    scan: &Mesh,
+    name: &str,
+    o: &AutoScanLandmarks,
+) -> Result<crate::embed::scan_landmarks::AutoLandmarks, JobError> {
+    use crate::embed::scan_landmarks::{ScanOptions, find};
+    let opts = ScanOptions {
+        min_confidence: o.min_confidence,
+    };
+    let a = find(scan.positions(), scan.triangles(), &opts).map_err(|e| JobError::Input {
+        path: PathBuf::from(name),
+        msg: e.to_string(),
+    })?;
+    if let Some(p) = &o.write {
+        let text = a.to_json();
+        crate::util::fsutil::write_atomic(p, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+    }
+    Ok(a)
 }
 
 /// The vertex error against a ground truth (% of the scan's height), as
@@ -370,6 +418,9 @@ pub struct TransferOutcome {
     pub setup_seconds: f64,
     /// Seconds to set up the job (factor the system, build the motion).
     pub factor_seconds: f64,
+    /// The automatic landmarks, when neither landmarks nor markers were
+    /// given.
+    pub automatic_landmarks: Option<crate::embed::scan_landmarks::AutoLandmarks>,
 }
 
 /// The report of a transfer written by [`TransferOutcome::write`] (keys
@@ -412,6 +463,9 @@ pub struct TransferReport {
     pub metres_per_unit_assumed: Option<f64>,
     /// Plausibility of the result.
     pub plausibility: Option<crate::tools::eval::Plausibility>,
+    /// The automatic landmarks used (none given).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub automatic_landmarks: Option<crate::embed::scan_landmarks::AutoLandmarks>,
 }
 
 /// Metres per unit of a scan whose rig is `height` units tall, assuming a
@@ -496,12 +550,19 @@ fn transfer_inner(
     use crate::transfer::{MarkerFile, Source};
     let t0 = std::time::Instant::now();
     let mopts = spec.options.markers;
-    let lm = match &spec.landmarks {
-        Some(p) => Some(Landmarks::load(p, scan.vertex_count())?),
-        None => None,
-    };
     let file = match &spec.markers {
         Some(p) => Some(MarkerFile::load(p, scan.triangle_count())?),
+        None => None,
+    };
+    let mut automatic = None;
+    let lm = match &spec.landmarks {
+        Some(p) => Some(Landmarks::load(p, scan.vertex_count())?),
+        None if file.is_none() => {
+            let a = automatic_landmarks(scan, &spec.scan_name, &spec.automatic)?;
+            let l = a.landmarks();
+            automatic = Some(a);
+            Some(l)
+        }
         None => None,
     };
     // Errors of the preparation (a flat or face-less mesh, markers of
@@ -521,7 +582,7 @@ fn transfer_inner(
                 spec.scan_name,
                 spec.landmarks
                     .as_deref()
-                    .unwrap_or(Path::new("?"))
+                    .unwrap_or(Path::new("(automatic)"))
                     .display()
             )))?,
         (None, None) => {
@@ -744,6 +805,7 @@ fn transfer_inner(
         plausibility,
         setup_seconds: t_setup.duration_since(t0).as_secs_f64(),
         factor_seconds,
+        automatic_landmarks: automatic,
     };
     Ok((outcome, output))
 }
@@ -795,6 +857,7 @@ impl TransferOutcome {
             markers_used: self.used,
             metres_per_unit_assumed: self.metres_per_unit,
             plausibility: self.plausibility,
+            automatic_landmarks: self.automatic_landmarks,
         }
     }
 }

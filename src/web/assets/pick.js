@@ -258,6 +258,9 @@ function drawOverlay(c) {
 function showState() {
   const s = pick.state;
   $('title').textContent = s.name;
+  $('notice').textContent = s.notice
+    ? `started from automatic landmarks, refused: ${s.notice}. Move them, then Save.`
+    : (s.input ? '' : 'started from automatic landmarks: check them, move any that are wrong, then Save.');
   if (s.error) status(`no rig from these landmarks: ${s.error}`, true);
   else status(`embedded (revision ${s.revision}); height ${(+s.height).toFixed(3)}`, false);
   const lt = $('landmarks');

@@ -80,6 +80,9 @@ pub struct PickSession {
     embedding: Option<Embedding>,
     /// Why the current landmarks give no rig.
     error: Option<String>,
+    /// Where the starting landmarks came from when no file was given (the
+    /// automatic landmarks' refusal, with its reason).
+    notice: Option<String>,
     revision: u64,
     embeds: usize,
     saved: Vec<PathBuf>,
@@ -106,6 +109,7 @@ impl PickSession {
             landmarks,
             embedding: None,
             error: None,
+            notice: None,
             revision: 0,
             embeds: 0,
             saved: Vec::new(),
@@ -140,6 +144,12 @@ impl PickSession {
                 Err(reason)
             }
         }
+    }
+
+    /// A note shown on the page above everything else (e.g. why the
+    /// automatic landmarks it starts from were refused); `None` clears it.
+    pub fn set_notice(&mut self, notice: Option<String>) {
+        self.notice = notice;
     }
 
     /// The landmarks as they stand.
@@ -200,6 +210,7 @@ impl PickSession {
             "required": Landmark::REQUIRED.iter().map(|l| l.name()).collect::<Vec<_>>(),
             "known": Landmark::ALL.iter().map(|l| l.name()).collect::<Vec<_>>(),
             "error": self.error,
+            "notice": self.notice,
             "input": self.files.input,
             "defaultSave": self.files.default_save,
             "saved": self.saved,

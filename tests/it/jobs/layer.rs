@@ -320,6 +320,7 @@ fn transfer_onto_scan_animates_the_procedural_humanoid_from_a_clip() {
     let spec = TransferSpec {
         scan_name: "humanoid".into(),
         landmarks: Some(lm),
+        automatic: Default::default(),
         markers: None,
         save_markers: None,
         source: TransferSource::Mocap(clip.clone()),
@@ -397,6 +398,7 @@ fn transfer_onto_scan_reproduces_the_samba_capture_from_its_first_frame() {
     let spec = TransferSpec {
         scan_name: format!("{samba}:0"),
         landmarks: Some(lm),
+        automatic: Default::default(),
         markers: None,
         save_markers: None,
         source: TransferSource::Template {

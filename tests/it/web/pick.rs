@@ -3,7 +3,9 @@
 //! refusals with a reason and never a panic, Save atomic and never over an
 //! input), and the page itself in headless Chromium on samba: drawn, a
 //! landmark moved by `?move=` and by a real pointer drag, the part
-//! colouring changed where it moved, Save read back.
+//! colouring changed where it moved, Save read back; without a landmark
+//! file the page starts from the automatic landmarks (in Chromium on the
+//! SMPL template).
 
 use super::{browser_or_skip, cdp, one_browser, shots_dir};
 use crate::common;
@@ -314,21 +316,70 @@ fn pick_api_embeds_posted_landmarks_refuses_bad_requests_and_saves_beside_the_in
     assert!(r.embeds >= 3 && r.requests > 60, "{r:?}");
 }
 
-/// Without landmarks the page is refused with advice, not opened.
+/// Without landmarks the page starts from the automatic ones (refused or
+/// not: the page opens, the reason shown); a mesh too small to find any is
+/// refused with advice.
 #[test]
-fn pick_without_landmarks_is_refused_with_advice() {
+fn pick_without_landmarks_starts_from_the_automatic_ones() {
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_mesh};
-    let e = open(
+    let s = Served::start(
         humanoid_mesh(DEMO_GRID),
         &PickOptions {
             mesh: "body.obj".into(),
+            ..Default::default()
+        },
+    );
+    let (st, v) = request(&s.addr, "GET", "/api/state", &[], b"");
+    assert_eq!(st, 200, "{v}");
+    for l in Landmark::REQUIRED {
+        assert!(v["landmarks"].get(l.name()).is_some(), "{}: {v}", l.name());
+    }
+    assert!(v["input"].is_null(), "{v}");
+    assert!(
+        v["defaultSave"]
+            .as_str()
+            .unwrap()
+            .ends_with("body.picked.landmarks.json"),
+        "{v}"
+    );
+    // Refused below the confidence: still opened, the reason shown.
+    if let Some(n) = v["notice"].as_str() {
+        assert!(n.contains("refused"), "{n}");
+    }
+    drop(s);
+    // Every landmark required, so a confidence of 1 refuses: still opened.
+    let s = Served::start(
+        humanoid_mesh(DEMO_GRID),
+        &PickOptions {
+            mesh: "body.obj".into(),
+            min_confidence: 1.0 + 1e-9,
+            ..Default::default()
+        },
+    );
+    let (_, v) = request(&s.addr, "GET", "/api/state", &[], b"");
+    let n = v["notice"].as_str().unwrap_or_else(|| panic!("{v}"));
+    assert!(n.contains("refused") && n.contains("confidence"), "{n}");
+    drop(s);
+    // Nothing to find on a tetrahedron: refused with advice.
+    let tet = surfmotion::mesh::Mesh::new(
+        vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+    )
+    .unwrap();
+    let e = open(
+        tet,
+        &PickOptions {
+            mesh: "tet.obj".into(),
             ..Default::default()
         },
     )
     .err()
     .unwrap()
     .to_string();
-    assert!(e.contains("body.obj") && e.contains("--landmarks"), "{e}");
+    assert!(
+        e.contains("tet.obj") && e.contains("too few") && e.contains("--landmarks"),
+        "{e}"
+    );
     let tmp = tempfile::tempdir().unwrap();
     let out = std::process::Command::new(common::bin())
         .args(["rig", "embed"])
@@ -338,7 +389,50 @@ fn pick_without_landmarks_is_refused_with_advice() {
         .unwrap();
     assert_eq!(out.status.code(), Some(1), "{out:?}");
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--landmarks"), "{err}");
+    assert!(err.contains("none.obj"), "{err}");
+}
+
+/// The page opened without a landmark file on the SMPL template, in
+/// headless Chromium: it starts from the automatic landmarks, says so,
+/// and embeds a rig from them.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn browser_pick_page_opens_from_automatic_landmarks() {
+    let Some(d) = common::data_dir() else { return };
+    let Some(browser) = browser_or_skip() else {
+        return;
+    };
+    let _one = one_browser();
+    let mesh_path = d.join("scans/smpl-template/human_man.obj");
+    let mesh = surfmotion::mesh::io::obj::read_obj(&mesh_path).unwrap();
+    let o = PickOptions {
+        mesh: mesh_path.display().to_string(),
+        inputs: vec![mesh_path.clone()],
+        ..Default::default()
+    };
+    let s = Served::start(mesh, &o);
+    let mut b = cdp::Browser::launch(&browser);
+    b.navigate(&format!("{}?view=front", s.url));
+    let ready =
+        "window.pick && (pick.ready || pick.error) ? {ready: pick.ready, error: pick.error} : null";
+    let r = b.wait_for(ready, Duration::from_secs(90));
+    assert_eq!(r["ready"], true, "{r}");
+    b.eval("pick.frame()");
+    let st = b.eval("pick.state");
+    assert_eq!(st["embedded"], true, "{st}");
+    assert!(st["input"].is_null(), "{st}");
+    assert!(st["notice"].is_null(), "{st}");
+    let notice = b.eval("document.getElementById('notice').textContent");
+    assert!(
+        notice.as_str().unwrap().contains("automatic landmarks"),
+        "{notice}"
+    );
+    let rows = b.eval("document.getElementById('landmarks').rows.length");
+    assert!(rows.as_u64().unwrap() >= 8, "{rows}");
+    b.screenshot(&shots_dir().join("pick-auto-smpl.png"));
+    drop(b);
+    let rep = s.stop();
+    assert!(rep.saved.is_empty());
 }
 
 /// Pixels that differ between two screenshots in their first `width`
