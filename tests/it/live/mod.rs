@@ -1,6 +1,7 @@
 //! Live retargeting from a mocap stream (issue 45): the fixed-lag trellis
 //! and the per-frame session against the offline synthesis.
 
+mod actors;
 mod online;
 mod page;
 mod protocols;
