@@ -416,6 +416,7 @@ fn session_options(opts: &LiveOptions) -> SessionOptions {
         },
         history: opts.history,
         analysis_window: opts.analysis_window,
+        ..SessionOptions::default()
     }
 }
 

@@ -118,7 +118,9 @@ fn the_page_shows_the_character_moving_with_the_stream() {
         "({frames: live.frames, drawn: live.drawn, skipped: live.skipped, error: live.error,
           inRate: (live.frames - 1) / ((live.lastFrameAt - live.firstFrameAt) / 1000),
           drawRate: (live.drawn - 1) / ((live.lastDrawAt - live.firstDrawAt) / 1000),
-          latencyMs: live.latencyMs, deliveryMs: live.deliveryMs, outputFps: live.outputFps})",
+          latencyMs: live.latencyMs, deliveryMs: live.deliveryMs, shownMs: live.shownMs,
+          drawMs: live.drawMs, bytes: live.bytes, vertices: live.meta.vertices,
+          outputFps: live.outputFps})",
     );
     // The browser asks for a favicon the page does not have.
     let errors: Vec<String> = b
@@ -137,4 +139,20 @@ fn the_page_shows_the_character_moving_with_the_stream() {
     assert!(indices[1] != indices[0], "{indices:?}");
     // The character and the skeleton both moved between the shots.
     assert!(left > 500 && right > 200, "{left} / {right} pixels changed");
+    // Positions quantised: 6 bytes a vertex after the header.
+    let n = st["vertices"].as_u64().unwrap();
+    assert_eq!(st["bytes"].as_u64(), Some(52 + 12 * 19 + 6 * n), "{st}");
+    // Opened from disk, the page says it needs the server.
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/web/assets/live.html");
+    b.navigate(&format!("file://{}", file.display()));
+    let said = b.wait_for(
+        "window.live && live.error ? document.getElementById('stats').textContent : null",
+        Duration::from_secs(30),
+    );
+    b.screenshot(&dir.join("live-from-disk.png"));
+    assert!(
+        said.as_str()
+            .is_some_and(|t| t.contains("needs the live server")),
+        "{said}"
+    );
 }
