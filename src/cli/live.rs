@@ -53,21 +53,15 @@ pub struct Args {
         default_missing_value = "127.0.0.1:14043"
     )]
     pub rokoko: Option<std::net::SocketAddr>,
-    /// The Rokoko actor that drives the character: its name, or its index
-    /// in each datagram (from 0). The report lists the actors seen.
-    #[arg(
-        long,
-        default_value = "0",
-        value_name = "NAME|INDEX",
-        requires = "rokoko"
-    )]
+    /// The Rokoko actor that drives the character: name or index (from 0).
+    #[arg(long, default_value = "0", requires = "rokoko")]
     pub actor: surfmotion::live::rokoko::ActorChoice,
     /// End the session when no frame came for this many seconds (a network
     /// stream otherwise waits for its sender to come back; stop with Ctrl-C).
     #[arg(long = "until-idle", value_name = "SECONDS", value_parser = super::positive)]
     pub until_idle: Option<f64>,
-    /// Keep every network frame, in order, instead of the newest winning
-    /// when the character falls behind (for recordings; latency then grows).
+    /// Keep every network frame in order instead of the newest winning when
+    /// the character falls behind (for recordings; latency then grows).
     #[arg(long)]
     pub lossless: bool,
     /// Frames of future the retrieval sees before it decides a frame (the
@@ -89,20 +83,13 @@ pub struct Args {
     /// as fast as meshes are made (for measuring throughput).
     #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = super::non_negative)]
     pub speed: f64,
-    /// Play the replayed clip this many times over (the stream's clock goes
-    /// on; with --speed 1, an hour of stream takes an hour).
-    #[arg(
-        long = "loop",
-        default_value_t = 1,
-        value_name = "TIMES",
-        requires = "replay"
-    )]
+    /// Play the replayed clip this many times (the stream's clock goes on).
+    #[arg(long = "loop", default_value_t = 1, requires = "replay")]
     pub loops: usize,
     /// Stop after this many seconds of streaming.
     #[arg(long, value_parser = super::positive)]
     pub seconds: Option<f64>,
-    /// Sample the output rate, latency and resident memory every this many
-    /// seconds into the report (for long runs: both should stay flat).
+    /// Sample rate, latency and resident memory every SECONDS into the report.
     #[arg(long = "sample-every", value_name = "SECONDS", value_parser = super::positive)]
     pub sample_every: Option<f64>,
     /// Record the output to any sequence format (.glb, .pc2, .mdd, .usda, a
@@ -185,9 +172,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(Cmd::Send(s)) = a.send {
         return send(s);
     }
-    let Some(db) = a.db.clone() else {
-        anyhow::bail!("--db is required")
-    };
+    let db =
+        a.db.clone()
+            .ok_or_else(|| anyhow::anyhow!("--db is required"))?;
     let input = match (&a.replay, a.bvh_tcp, a.vmc, a.rokoko) {
         (Some(p), ..) => LiveInput::Replay(p.clone()),
         (None, Some(addr), ..) => LiveInput::BvhTcp(addr),
@@ -197,10 +184,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             anyhow::bail!("give --replay CLIP, --bvh-tcp ADDR:PORT, --vmc or --rokoko")
         }
     };
-    for addr in [a.bvh_tcp, a.vmc, a.rokoko, a.serve].into_iter().flatten() {
-        if addr.ip().is_loopback() {
-            continue;
-        }
+    let reachable = [a.bvh_tcp, a.vmc, a.rokoko, a.serve].into_iter().flatten();
+    for addr in reachable.filter(|addr| !addr.ip().is_loopback()) {
         eprintln!(
             "warning: listening on {addr}, which other machines can reach (127.0.0.1 keeps it on this one)"
         );
@@ -246,10 +231,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     } else if a.report {
         print!("{}", report.text());
     } else {
-        println!(
-            "{} frames at {:.1} frames/s, latency median {:.1} ms, p99 {:.1} ms",
-            report.frames_out, report.output_fps, report.latency.median_ms, report.latency.p99_ms
-        );
+        println!("{}", report.line());
     }
     for f in &report.recorded {
         println!("wrote {}", f.display());

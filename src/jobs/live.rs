@@ -270,6 +270,15 @@ pub struct LiveReport {
 }
 
 impl LiveReport {
+    /// The report in one line (`live` without `--report`).
+    pub fn line(&self) -> String {
+        let l = &self.latency;
+        format!(
+            "{} frames at {:.1} frames/s, latency median {:.1} ms, p99 {:.1} ms",
+            self.frames_out, self.output_fps, l.median_ms, l.p99_ms
+        )
+    }
+
     /// The report as the CLI prints it (`live --report`).
     pub fn text(&self) -> String {
         use std::fmt::Write;
