@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
-use surfmotion::jobs::live::{Listening, LiveInput, LiveOptions, LiveReport, run_live};
+use surfmotion::jobs::live::{Listening, LiveInput, LiveOptions, run_live};
 
 /// Arguments of `live`.
 #[derive(clap::Args)]
@@ -44,8 +44,8 @@ pub struct Args {
         conflicts_with = "rokoko"
     )]
     pub vmc: Option<std::net::SocketAddr>,
-    /// Listen for Rokoko Studio Live (JSON over UDP: the first actor's body
-    /// joints) on ADDR:PORT; 127.0.0.1:14043 when given without a value.
+    /// Listen for Rokoko Studio Live (JSON over UDP: an actor's body joints,
+    /// see --actor) on ADDR:PORT; 127.0.0.1:14043 when given without a value.
     #[arg(
         long,
         value_name = "ADDR:PORT",
@@ -53,12 +53,15 @@ pub struct Args {
         default_missing_value = "127.0.0.1:14043"
     )]
     pub rokoko: Option<std::net::SocketAddr>,
+    /// The Rokoko actor that drives the character: name or index (from 0).
+    #[arg(long, default_value = "0", requires = "rokoko")]
+    pub actor: surfmotion::live::rokoko::ActorChoice,
     /// End the session when no frame came for this many seconds (a network
     /// stream otherwise waits for its sender to come back; stop with Ctrl-C).
     #[arg(long = "until-idle", value_name = "SECONDS", value_parser = super::positive)]
     pub until_idle: Option<f64>,
-    /// Keep every network frame, in order, instead of the newest winning
-    /// when the character falls behind (for recordings; latency then grows).
+    /// Keep every network frame in order instead of the newest winning when
+    /// the character falls behind (for recordings; latency then grows).
     #[arg(long)]
     pub lossless: bool,
     /// Frames of future the retrieval sees before it decides a frame (the
@@ -78,11 +81,17 @@ pub struct Args {
     pub history: usize,
     /// Replay speed: 1 plays the clip at its real rate, 2 twice as fast, 0
     /// as fast as meshes are made (for measuring throughput).
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = super::non_negative)]
     pub speed: f64,
+    /// Play the replayed clip this many times (the stream's clock goes on).
+    #[arg(long = "loop", default_value_t = 1, requires = "replay")]
+    pub loops: usize,
     /// Stop after this many seconds of streaming.
     #[arg(long, value_parser = super::positive)]
     pub seconds: Option<f64>,
+    /// Sample rate, latency and resident memory every SECONDS into the report.
+    #[arg(long = "sample-every", value_name = "SECONDS", value_parser = super::positive)]
+    pub sample_every: Option<f64>,
     /// Record the output to any sequence format (.glb, .pc2, .mdd, .usda, a
     /// folder of OBJ frames), written atomically when the stream ends.
     #[arg(long, value_name = "OUT")]
@@ -136,7 +145,7 @@ pub struct SendArgs {
     #[arg(long, value_name = "FPS", value_parser = super::frame_rate)]
     pub fps: Option<f64>,
     /// Speed: 1 sends at the clip's real rate, 0 as fast as the socket takes.
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR")]
+    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = super::non_negative)]
     pub speed: f64,
     #[command(flatten)]
     pub clip_opts: super::opts::ClipOpts,
@@ -144,9 +153,6 @@ pub struct SendArgs {
 
 /// Runs `live send`.
 fn send(a: SendArgs) -> anyhow::Result<()> {
-    if !(a.speed.is_finite() && a.speed >= 0.0) {
-        anyhow::bail!("--speed {}: expected a factor ≥ 0", a.speed);
-    }
     use surfmotion::live::send::{UdpProtocol, send_bvh, send_udp};
     let load = a.clip_opts.load_options()?;
     let r = match a.protocol.as_str() {
@@ -166,9 +172,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(Cmd::Send(s)) = a.send {
         return send(s);
     }
-    let Some(db) = a.db.clone() else {
-        anyhow::bail!("--db is required")
-    };
+    let db =
+        a.db.clone()
+            .ok_or_else(|| anyhow::anyhow!("--db is required"))?;
     let input = match (&a.replay, a.bvh_tcp, a.vmc, a.rokoko) {
         (Some(p), ..) => LiveInput::Replay(p.clone()),
         (None, Some(addr), ..) => LiveInput::BvhTcp(addr),
@@ -178,10 +184,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             anyhow::bail!("give --replay CLIP, --bvh-tcp ADDR:PORT, --vmc or --rokoko")
         }
     };
-    for addr in [a.bvh_tcp, a.vmc, a.rokoko, a.serve].into_iter().flatten() {
-        if addr.ip().is_loopback() {
-            continue;
-        }
+    let reachable = [a.bvh_tcp, a.vmc, a.rokoko, a.serve].into_iter().flatten();
+    for addr in reachable.filter(|addr| !addr.ip().is_loopback()) {
         eprintln!(
             "warning: listening on {addr}, which other machines can reach (127.0.0.1 keeps it on this one)"
         );
@@ -193,9 +197,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         inputs.extend(a.clip.rig_map.clone());
         surfmotion::jobs::outputs::refuse_colliding(&inputs, &super::mesh_outputs(out))?;
     }
-    if !(a.speed.is_finite() && a.speed >= 0.0) {
-        anyhow::bail!("--speed {}: expected a factor ≥ 0", a.speed);
-    }
     let opts = LiveOptions {
         lag: a.lag,
         speed: a.speed,
@@ -205,6 +206,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         serve: a.serve,
         analysis_window: a.analysis_window.max(1),
         history: a.history.max(1),
+        loops: a.loops,
+        actor: a.actor.clone(),
+        sample_every: a.sample_every,
         load: a.clip.load_options()?,
         ..LiveOptions::default()
     };
@@ -225,37 +229,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else if a.report {
-        print_report(&report);
+        print!("{}", report.text());
     } else {
-        println!(
-            "{} frames at {:.1} frames/s, latency median {:.1} ms, p99 {:.1} ms",
-            report.frames_out, report.output_fps, report.latency.median_ms, report.latency.p99_ms
-        );
+        println!("{}", report.line());
     }
     for f in &report.recorded {
         println!("wrote {}", f.display());
     }
     Ok(())
-}
-
-/// The report as text.
-fn print_report(r: &LiveReport) {
-    println!(
-        "live: {} frames out over {:.2} s = {:.1} frames/s ({} vertices, database at {} fps, lag {})",
-        r.frames_out, r.seconds, r.output_fps, r.vertices, r.fps, r.lag
-    );
-    println!(
-        "arrival -> mesh ready: median {:.2} ms, p99 {:.2} ms, max {:.2} ms (mesh work median {:.2} ms)",
-        r.latency.median_ms, r.latency.p99_ms, r.latency.max_ms, r.work_median_ms
-    );
-    let c = &r.input;
-    println!(
-        "input: {} received, {} dropped, {} duplicated, {} late, {} malformed, {} reconnects",
-        c.received, c.dropped, c.duplicated, c.late, c.malformed, c.reconnects
-    );
-    let s = &r.retrieval;
-    println!(
-        "retrieval: {} decided, {} jumps, {} cuts, {} widened; T_skel {:.3} m; prepared in {:.2} s",
-        s.committed, s.jumps, s.cuts, s.widened, s.t_skel, r.prepare_seconds
-    );
 }

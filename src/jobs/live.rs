@@ -11,8 +11,8 @@ use crate::live::bvh_tcp;
 use crate::live::online::{OnlineOptions, OnlineStats};
 use crate::live::page::{Meta, PageFrame, PageServer};
 use crate::live::replay::Replay;
-use crate::live::report::{Counters, Latencies, LatencySummary};
-use crate::live::rokoko::Rokoko;
+use crate::live::report::{Counters, Latencies, LatencySummary, Sample, resident_mib};
+use crate::live::rokoko::{ActorChoice, Rokoko};
 use crate::live::session::{LiveFrame, Session, SessionOptions};
 use crate::live::source::{Event, Source, SourceError};
 use crate::live::stream;
@@ -21,6 +21,7 @@ use crate::mesh::MeshSequence;
 use crate::pose::Pose;
 use crate::rig::LoadOptions;
 use serde::Serialize;
+use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -55,6 +56,14 @@ pub struct LiveOptions {
     /// Serve the browser page (the character and the incoming skeleton,
     /// streamed over a WebSocket) on this address. Default: none.
     pub serve: Option<std::net::SocketAddr>,
+    /// Times a replayed clip is played (the stream goes on across the
+    /// loops). Default: 1.
+    pub loops: usize,
+    /// Sample the rate, latency and resident memory every this many
+    /// seconds into the report. Default: none.
+    pub sample_every: Option<f64>,
+    /// The Rokoko actor that drives the character. Default: the first.
+    pub actor: ActorChoice,
 }
 
 impl Default for LiveOptions {
@@ -71,6 +80,9 @@ impl Default for LiveOptions {
             until_idle: None,
             lossless: false,
             serve: None,
+            loops: 1,
+            sample_every: None,
+            actor: ActorChoice::default(),
         }
     }
 }
@@ -135,25 +147,37 @@ fn start_page(
     Ok(Some(page))
 }
 
+/// The Rokoko actors' names seen by a source (shared with its thread).
+type ActorsSeen = Option<std::sync::Arc<std::sync::Mutex<Vec<String>>>>;
+
 /// The stream `input` names, taken at `fps`; a network source's address
-/// told to `listening`.
+/// told to `listening`; the actors seen, for Rokoko.
 fn open_source(
     input: &LiveInput,
     opts: &LiveOptions,
     fps: f64,
     listening: &mut dyn FnMut(Listening),
-) -> Result<Box<dyn Source>, LiveError> {
+) -> Result<(Box<dyn Source>, ActorsSeen), LiveError> {
+    let mut seen = None;
     let (load, lossless) = (opts.load.clone(), opts.lossless);
     let (source, addr): (Box<dyn Source>, _) = match input {
         LiveInput::Replay(clip) => (
-            Box::new(Replay::new(load_mocap(clip, &opts.load, fps)?, opts.speed)),
+            Box::new(Replay::new(
+                load_mocap(clip, &opts.load, fps)?,
+                opts.speed,
+                opts.loops,
+            )),
             None,
         ),
         network => {
             let s = match network {
                 LiveInput::BvhTcp(addr) => bvh_tcp::listen(*addr, fps, load, lossless)?,
                 LiveInput::Vmc(addr) => stream::listen(*addr, Vmc::default(), fps, load, lossless)?,
-                LiveInput::Rokoko(addr) => stream::listen(*addr, Rokoko, fps, load, lossless)?,
+                LiveInput::Rokoko(addr) => {
+                    let r = Rokoko::new(opts.actor.clone());
+                    seen = Some(r.seen());
+                    stream::listen(*addr, r, fps, load, lossless)?
+                }
                 LiveInput::Replay(_) => unreachable!("matched above"),
             };
             let a = s.local_addr();
@@ -163,7 +187,7 @@ fn open_source(
     if let Some(a) = addr {
         listening(Listening::Stream(a));
     }
-    Ok(source)
+    Ok((source, seen))
 }
 
 /// What can go wrong in [`run_live`].
@@ -235,14 +259,183 @@ pub struct LiveReport {
     pub retrieval: OnlineStats,
     /// Triangle-frames left turned over by the deformation.
     pub turned_over: usize,
+    /// The rate, latency and memory every `sample_every` seconds (and at
+    /// the end), when asked for.
+    pub samples: Vec<Sample>,
+    /// The Rokoko actors seen (names, in order of appearance); empty for
+    /// the other inputs.
+    pub actors: Vec<String>,
     /// Files written by the recording.
     pub recorded: Vec<PathBuf>,
+}
+
+impl LiveReport {
+    /// The report in one line (`live` without `--report`).
+    pub fn line(&self) -> String {
+        let l = &self.latency;
+        format!(
+            "{} frames at {:.1} frames/s, latency median {:.1} ms, p99 {:.1} ms",
+            self.frames_out, self.output_fps, l.median_ms, l.p99_ms
+        )
+    }
+
+    /// The report as the CLI prints it (`live --report`).
+    pub fn text(&self) -> String {
+        use std::fmt::Write;
+        let r = self;
+        let mut t = String::new();
+        let _ = writeln!(
+            t,
+            "live: {} frames out over {:.2} s = {:.1} frames/s ({} vertices, database at {} fps, lag {})",
+            r.frames_out, r.seconds, r.output_fps, r.vertices, r.fps, r.lag
+        );
+        let _ = writeln!(
+            t,
+            "arrival -> mesh ready: median {:.2} ms, p99 {:.2} ms, max {:.2} ms (mesh work median {:.2} ms)",
+            r.latency.median_ms, r.latency.p99_ms, r.latency.max_ms, r.work_median_ms
+        );
+        let c = &r.input;
+        let _ = writeln!(
+            t,
+            "input: {} received, {} dropped, {} duplicated, {} late, {} malformed, {} reconnects",
+            c.received, c.dropped, c.duplicated, c.late, c.malformed, c.reconnects
+        );
+        let s = &r.retrieval;
+        let _ = writeln!(
+            t,
+            "retrieval: {} decided, {} jumps, {} cuts, {} widened; T_skel {:.3} m; prepared in {:.2} s",
+            s.committed, s.jumps, s.cuts, s.widened, s.t_skel, r.prepare_seconds
+        );
+        if !r.actors.is_empty() {
+            let _ = writeln!(t, "actors seen: {}", r.actors.join(", "));
+        }
+        for p in &r.samples {
+            let rss = p.rss_mib.map_or("?".to_string(), |m| format!("{m:.1}"));
+            let _ = writeln!(
+                t,
+                "  at {:7.1} s: {} out, {} dropped, {:.1} frames/s, median {:.2} ms, RSS {rss} MiB",
+                p.seconds, p.frames_out, p.dropped, p.output_fps, p.latency_median_ms
+            );
+        }
+        t
+    }
 }
 
 /// Frames per second since `first`.
 fn rate(frames: u64, first: Option<Instant>) -> f64 {
     let s = first.map_or(0.0, |f| f.elapsed().as_secs_f64());
     if s > 0.0 { frames as f64 / s } else { 0.0 }
+}
+
+/// What a session counts as it goes: latencies, frames, the recording,
+/// the samples of a long run.
+struct Tally {
+    latencies: Latencies,
+    work: Latencies,
+    frames_out: u64,
+    /// The recording's vertices (empty unless recording).
+    held: Vec<[f64; 3]>,
+    recording: bool,
+    /// The incoming skeletons not yet answered (at most lag + 1).
+    incoming: VecDeque<Pose>,
+    first: Option<Instant>,
+    last: Instant,
+    /// The samples' period, the latencies since the last sample, when it
+    /// was taken and the frames out then.
+    sample_every: Option<Duration>,
+    interval: Latencies,
+    sampled: Option<(Instant, u64)>,
+    samples: Vec<Sample>,
+}
+
+impl Tally {
+    fn new(recording: bool, sample_every: Option<f64>) -> Tally {
+        Tally {
+            latencies: Latencies::default(),
+            work: Latencies::default(),
+            frames_out: 0,
+            held: Vec::new(),
+            recording,
+            incoming: VecDeque::new(),
+            first: None,
+            last: Instant::now(),
+            sample_every: sample_every.map(Duration::from_secs_f64),
+            interval: Latencies::default(),
+            sampled: None,
+            samples: Vec::new(),
+        }
+    }
+
+    /// Counts an output frame made `latency` after its arrival and hands
+    /// it on with the incoming skeleton it answers (`fallback` when none
+    /// is waiting).
+    fn out(
+        &mut self,
+        f: LiveFrame<'_>,
+        latency: Duration,
+        fallback: &Pose,
+        on_frame: &mut dyn FnMut(FrameOut<'_>),
+    ) {
+        self.frames_out += 1;
+        if self.recording {
+            self.held.extend_from_slice(f.positions);
+        }
+        let inc = self.incoming.pop_front().unwrap_or(*fallback);
+        on_frame(FrameOut {
+            frame: f,
+            incoming: &inc,
+            latency_ms: latency.as_secs_f64() * 1e3,
+            output_fps: rate(self.frames_out, self.first),
+        });
+    }
+
+    /// Takes a sample when one is due (every `sample_every`, from the first
+    /// frame on).
+    fn sample(&mut self, counters: Counters, force: bool) {
+        let (Some(every), Some(first)) = (self.sample_every, self.first) else {
+            return;
+        };
+        let now = Instant::now();
+        let (since, frames_then) = *self.sampled.get_or_insert((first, 0));
+        let dt = now.saturating_duration_since(since);
+        if dt < every && !(force && dt.as_secs_f64() > 0.0) {
+            return;
+        }
+        self.samples.push(Sample {
+            seconds: now.saturating_duration_since(first).as_secs_f64(),
+            frames_out: self.frames_out,
+            received: counters.received,
+            dropped: counters.dropped,
+            output_fps: (self.frames_out - frames_then) as f64 / dt.as_secs_f64(),
+            latency_median_ms: self.interval.quantile_ms(0.5),
+            rss_mib: resident_mib(),
+        });
+        self.interval.clear();
+        self.sampled = Some((now, self.frames_out));
+    }
+}
+
+/// The session's options from the job's.
+fn session_options(opts: &LiveOptions) -> SessionOptions {
+    SessionOptions {
+        retarget: opts.retarget,
+        online: OnlineOptions {
+            lag: opts.lag,
+            hysteresis: opts.hysteresis,
+        },
+        history: opts.history,
+        analysis_window: opts.analysis_window,
+        ..SessionOptions::default()
+    }
+}
+
+/// True when the session should end now (stopped, out of time or idle),
+/// before waiting for the next event.
+fn should_stop(opts: &LiveOptions, stop: &AtomicBool, first: Option<Instant>) -> bool {
+    if stop.load(Ordering::Relaxed) {
+        return true;
+    }
+    matches!((first, opts.seconds), (Some(f), Some(d)) if f.elapsed().as_secs_f64() >= d)
 }
 
 /// Runs a live session from `input` on the database in `db` until the
@@ -267,7 +460,7 @@ pub fn run_live(
     let prepared = Prepared::new(&ch, &opts.retarget)?;
     let prepare_seconds = t.elapsed().as_secs_f64();
     let page = start_page(opts, &prepared, fps, listening)?;
-    let mut source = open_source(input, opts, fps, listening)?;
+    let (mut source, seen) = open_source(input, opts, fps, listening)?;
     let mut on_frame = |f: FrameOut<'_>| {
         if let Some(p) = &page {
             p.publish(&PageFrame {
@@ -288,42 +481,19 @@ pub fn run_live(
         successor: &successor,
         dissimilarity: &dissimilarity,
     };
-    let sopts = SessionOptions {
-        retarget: opts.retarget,
-        online: OnlineOptions {
-            lag: opts.lag,
-            hysteresis: opts.hysteresis,
-        },
-        history: opts.history,
-        analysis_window: opts.analysis_window,
-    };
+    let sopts = session_options(opts);
     let mut session: Option<Session<'_>> = None;
-    let mut held: Vec<[f64; 3]> = Vec::new();
-    let mut latencies = Latencies::default();
-    let mut work = Latencies::default();
-    let mut frames_out = 0u64;
-    // The incoming skeletons not yet answered (at most lag + 1).
-    let mut incoming: std::collections::VecDeque<Pose> = std::collections::VecDeque::new();
-    let mut first: Option<Instant> = None;
-    let mut last = Instant::now();
-    let deadline = opts.seconds.map(Duration::from_secs_f64);
+    let mut tally = Tally::new(record.is_some(), opts.sample_every);
     let idle = opts.until_idle.map(Duration::from_secs_f64);
     let mut last_frame = Instant::now();
     loop {
-        if stop.load(Ordering::Relaxed) {
+        if should_stop(opts, stop, tally.first) {
             break;
         }
-        if let (Some(f), Some(d)) = (first, deadline)
-            && f.elapsed() >= d
-        {
-            break;
-        }
-        let ev = source.next(Duration::from_millis(50))?;
-        let (pose, rotations, arrived) = match ev {
+        tally.sample(source.counters(), false);
+        let (pose, rotations, arrived) = match source.next(Duration::from_millis(50))? {
             Event::Idle => {
-                if let (Some(_), Some(d)) = (first, idle)
-                    && last_frame.elapsed() >= d
-                {
+                if matches!((tally.first, idle), (Some(_), Some(d)) if last_frame.elapsed() >= d) {
                     break;
                 }
                 continue;
@@ -331,78 +501,68 @@ pub fn run_live(
             Event::End => break,
             Event::Frame(f) => (f.pose, f.rotations, f.arrived),
         };
-        first.get_or_insert(arrived);
+        tally.first.get_or_insert(arrived);
         last_frame = Instant::now();
         if session.is_none() {
             let reference = source.reference().ok_or(LiveError::NoReference)?;
             session = Some(Session::new(&ch, &prepared, &trellis, reference, sopts));
         }
         let Some(s) = session.as_mut() else { continue };
-        incoming.push_back(pose);
+        tally.incoming.push_back(pose);
         let began = Instant::now();
         let mut emit = |f: LiveFrame<'_>| {
             let now = Instant::now();
             let lat = now.saturating_duration_since(arrived);
-            latencies.add(lat);
-            work.add(now - began);
-            frames_out += 1;
-            if record.is_some() {
-                held.extend_from_slice(f.positions);
-            }
-            let inc = incoming.pop_front().unwrap_or(pose);
-            on_frame(FrameOut {
-                frame: f,
-                incoming: &inc,
-                latency_ms: lat.as_secs_f64() * 1e3,
-                output_fps: rate(frames_out, first),
-            });
+            tally.latencies.add(lat);
+            tally.interval.add(lat);
+            tally.work.add(now - began);
+            tally.out(f, lat, &pose, &mut on_frame);
         };
         s.push(&pose, rotations.as_ref(), &mut emit);
-        last = Instant::now();
+        tally.last = Instant::now();
     }
     if let Some(s) = session.as_mut() {
         let arrived = Instant::now();
         let mut emit = |f: LiveFrame<'_>| {
-            frames_out += 1;
-            if record.is_some() {
-                held.extend_from_slice(f.positions);
-            }
-            let inc = incoming.pop_front().unwrap_or(*f.query);
-            on_frame(FrameOut {
-                frame: f,
-                incoming: &inc,
-                latency_ms: arrived.elapsed().as_secs_f64() * 1e3,
-                output_fps: rate(frames_out, first),
-            });
+            let q = *f.query;
+            tally.out(f, arrived.elapsed(), &q, &mut on_frame);
         };
         s.finish(&mut emit);
-        last = Instant::now();
+        tally.last = Instant::now();
     }
-    let seconds = first.map_or(0.0, |f| last.saturating_duration_since(f).as_secs_f64());
-    let mut recorded = Vec::new();
-    if let Some(out) = record
-        && frames_out > 0
-    {
-        let seq = MeshSequence::new(prepared.topology_metres().clone(), held, Some(fps))?;
-        recorded = crate::mesh::io::save_sequence(&seq, out, Some(fps))?;
-    }
+    tally.sample(source.counters(), true);
+    let recorded = match record {
+        Some(out) if tally.frames_out > 0 => {
+            let held = std::mem::take(&mut tally.held);
+            let seq = MeshSequence::new(prepared.topology_metres().clone(), held, Some(fps))?;
+            crate::mesh::io::save_sequence(&seq, out, Some(fps))?
+        }
+        _ => Vec::new(),
+    };
+    let seconds = tally.first.map_or(0.0, |f| {
+        tally.last.saturating_duration_since(f).as_secs_f64()
+    });
     Ok(LiveReport {
         fps,
         vertices: ch.n(),
         lag: opts.lag,
-        frames_out,
+        frames_out: tally.frames_out,
         output_fps: if seconds > 0.0 {
-            frames_out as f64 / seconds
+            tally.frames_out as f64 / seconds
         } else {
             0.0
         },
         seconds,
         prepare_seconds,
-        latency: latencies.summary(),
-        work_median_ms: work.quantile_ms(0.5),
+        latency: tally.latencies.summary(),
+        work_median_ms: tally.work.quantile_ms(0.5),
         input: source.counters(),
         retrieval: session.as_ref().map(|s| s.stats()).unwrap_or_default(),
         turned_over: session.as_ref().map_or(0, |s| s.turned_over()),
+        samples: tally.samples,
+        actors: seen.map_or_else(Vec::new, |s| {
+            s.lock().unwrap_or_else(|e| e.into_inner()).clone()
+        }),
         recorded,
     })
 }

@@ -10,7 +10,9 @@
 //! `lag` frames back is decided with `lag` frames of future. The threshold
 //! `T_skel` and the node scale `s_node` are the offline rules (twice the
 //! median, the 90th percentile of the best-match costs) over the frames
-//! seen so far; the edge scale `s_edge` depends on the database only.
+//! seen so far (the last [`SCALE_WINDOW`] of them, so a stream of any
+//! length keeps its memory flat); the edge scale `s_edge` depends on the
+//! database only.
 //!
 //! With `lag` at least the query's length nothing is committed before the
 //! stream ends, and [`OnlineTrellis::finish`] solves the whole trellis with
@@ -25,6 +27,11 @@
 use crate::drive::trellis::{TrellisInput, TrellisOptions, relax_row};
 use crate::pose::{Pose, measure::skeleton_distance};
 use serde::Serialize;
+
+/// Frames whose best-match costs set the scales (`T_skel`, `s_node`): the
+/// last 18,000 (10 minutes at 30 fps). A clip shorter than this has the
+/// offline scales; a longer stream's memory stays flat.
+pub const SCALE_WINDOW: usize = 18_000;
 
 /// Options of the online retrieval (besides the trellis's own).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -98,8 +105,10 @@ pub struct OnlineTrellis<'a> {
     kmax: usize,
     kmin: usize,
     edge_scale: f64,
-    /// Best-match cost of every frame seen, sorted (the scales' sample).
+    /// Best-match cost of the last [`SCALE_WINDOW`] frames, sorted (the
+    /// scales' sample), and in arrival order.
     bests: Vec<f64>,
+    recent: std::collections::VecDeque<f64>,
     /// Nearest frames (sorted by cost, at most `kmax`) of every undecided
     /// query frame, oldest first.
     rows: std::collections::VecDeque<Vec<(f32, u32)>>,
@@ -111,6 +120,8 @@ pub struct OnlineTrellis<'a> {
     slot: Vec<u32>,
     /// Distances to every database frame (scratch).
     all: Vec<(f32, u32)>,
+    /// Rows' buffers already decided, for reuse.
+    spare: Vec<Vec<(f32, u32)>>,
 }
 
 impl<'a> OnlineTrellis<'a> {
@@ -138,6 +149,7 @@ impl<'a> OnlineTrellis<'a> {
             kmin,
             edge_scale,
             bests: Vec::new(),
+            recent: std::collections::VecDeque::new(),
             rows: std::collections::VecDeque::new(),
             anchor: None,
             committed: 0,
@@ -147,6 +159,7 @@ impl<'a> OnlineTrellis<'a> {
             },
             slot: vec![u32::MAX; ng],
             all: Vec::with_capacity(ng),
+            spare: Vec::new(),
         }
     }
 
@@ -184,9 +197,20 @@ impl<'a> OnlineTrellis<'a> {
         self.all
             .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let best = self.all[0].0 as f64;
+        if self.recent.len() == SCALE_WINDOW
+            && let Some(old) = self.recent.pop_front()
+        {
+            let at = self.bests.partition_point(|x| x.total_cmp(&old).is_lt());
+            self.bests.remove(at);
+        }
+        self.recent.push_back(best);
         let at = self.bests.partition_point(|x| x.total_cmp(&best).is_lt());
         self.bests.insert(at, best);
-        self.rows.push_back(self.all.clone());
+        // The oldest row's buffer is reused once decided (see `decide`).
+        let mut row = self.spare.pop().unwrap_or_default();
+        row.clear();
+        row.extend_from_slice(&self.all);
+        self.rows.push_back(row);
         self.stats.frames += 1;
         if self.rows.len() > self.opts.lag {
             self.decide(1)
@@ -259,7 +283,11 @@ impl<'a> OnlineTrellis<'a> {
         out.lookahead = (count..rows.len()).map(|k| rows[k][slots[k]].1).collect();
         drop(rows);
         self.slot = slot;
-        self.rows.drain(..count);
+        for r in self.rows.drain(..count) {
+            if self.spare.len() < 4 {
+                self.spare.push(r);
+            }
+        }
         out
     }
 

@@ -1,7 +1,9 @@
 //! `--replay CLIP`: a clip file played as a stream at its real frame rate
-//! (or `speed` times it; 0 as fast as the session takes frames). When the
-//! session falls behind, the frames already due but older than the newest
-//! are dropped (newest wins) and counted.
+//! (or `speed` times it; 0 as fast as the session takes frames), `loops`
+//! times over (the sender's frame number and the stream's clock go on
+//! across the loops, the clip starting again from its first frame). When
+//! the session falls behind, the frames already due but older than the
+//! newest are dropped (newest wins) and counted.
 
 use super::report::Counters;
 use super::source::{Event, Incoming, Source, SourceError};
@@ -13,6 +15,8 @@ use std::time::{Duration, Instant};
 pub struct Replay {
     clip: MocapPoses,
     speed: f64,
+    /// Frames to play in all (the clip's length times the loops).
+    total: usize,
     next: usize,
     start: Option<Instant>,
     counters: Counters,
@@ -21,9 +25,11 @@ pub struct Replay {
 impl Replay {
     /// Plays `clip` (canonical poses at the database's rate, from
     /// [`crate::drive::query::load_mocap`]) at `speed` times its rate (0:
-    /// no waiting).
-    pub fn new(clip: MocapPoses, speed: f64) -> Replay {
+    /// no waiting), `loops` times over (at least once).
+    pub fn new(clip: MocapPoses, speed: f64, loops: usize) -> Replay {
+        let total = clip.poses.len().saturating_mul(loops.max(1));
         Replay {
+            total,
             clip,
             speed: if speed.is_finite() && speed > 0.0 {
                 speed
@@ -44,7 +50,7 @@ impl Replay {
 
 impl Source for Replay {
     fn next(&mut self, wait: Duration) -> Result<Event, SourceError> {
-        if self.next >= self.clip.poses.len() {
+        if self.next >= self.total {
             return Ok(Event::End);
         }
         let now = Instant::now();
@@ -53,7 +59,7 @@ impl Source for Replay {
         } else {
             let start = *self.start.get_or_insert(now);
             // Newest wins: skip frames whose successor is already due.
-            while self.next + 1 < self.clip.poses.len() && self.due(start, self.next + 1) <= now {
+            while self.next + 1 < self.total && self.due(start, self.next + 1) <= now {
                 self.next += 1;
                 self.counters.dropped += 1;
             }
@@ -68,12 +74,13 @@ impl Source for Replay {
             due
         };
         let k = self.next;
+        let i = k % self.clip.poses.len();
         self.next += 1;
         self.counters.received += 1;
         Ok(Event::Frame(Incoming {
             seq: k as u64,
-            pose: self.clip.poses[k],
-            rotations: self.clip.reference.rotations.get(k).copied(),
+            pose: self.clip.poses[i],
+            rotations: self.clip.reference.rotations.get(i).copied(),
             arrived,
         }))
     }

@@ -105,3 +105,43 @@ pub struct Counters {
     /// Senders that connected (TCP) after the first.
     pub reconnects: u64,
 }
+
+impl Latencies {
+    /// Forgets every latency (keeps the bins' memory).
+    pub fn clear(&mut self) {
+        self.bins.iter_mut().for_each(|b| *b = 0);
+        self.count = 0;
+        self.sum_ms = 0.0;
+        self.max_ms = 0.0;
+    }
+}
+
+/// One sample of a long session, taken every `--sample-every` seconds:
+/// the rate and the memory, to see both stay flat.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Sample {
+    /// Seconds since the first frame arrived.
+    pub seconds: f64,
+    /// Frames output so far.
+    pub frames_out: u64,
+    /// Frames received so far.
+    pub received: u64,
+    /// Frames dropped so far (newest wins).
+    pub dropped: u64,
+    /// Output frames per second since the previous sample.
+    pub output_fps: f64,
+    /// Arrival → mesh median since the previous sample (milliseconds).
+    pub latency_median_ms: f64,
+    /// The process's resident memory (MiB; `None` where the system does
+    /// not tell: only Linux's `/proc/self/status` is read).
+    pub rss_mib: Option<f64>,
+}
+
+/// The process's resident memory in MiB (`VmRSS` of `/proc/self/status`),
+/// `None` where it cannot be read.
+pub fn resident_mib() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmRSS:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}

@@ -3,8 +3,10 @@
 //! [{"name": N, "body": {"hip": {"position": {"x","y","z"}, "rotation":
 //! {"x","y","z","w"}}, …}}]}}`. Positions (metres) and rotations are world
 //! transforms in Unity's axes (Y up, left-handed); the body joints are
-//! named as [`ROKOKO_BONES`]. The first actor drives the character; props,
-//! faces, fingers and unknown joints are ignored.
+//! named as [`ROKOKO_BONES`]. One actor drives the character (the first,
+//! or the one [`Actor`] names: `--actor NAME|INDEX`); a datagram without
+//! it is skipped. The actors' names seen are kept ([`Rokoko::seen`]) for
+//! the report. Props, faces, fingers and unknown joints are ignored.
 //!
 //! The sender may add `"surfmotion": {"reference": {"hip": {"x","y","z"},
 //! …}}`, its neutral reference (which other receivers ignore).
@@ -20,9 +22,74 @@ use std::collections::BTreeMap;
 /// The Rokoko Studio Live default port.
 pub const DEFAULT_PORT: u16 = 14043;
 
+/// The actor that drives the character.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ActorChoice {
+    /// The actor at this position in each datagram (from 0).
+    Index(usize),
+    /// The actor of this name.
+    Name(String),
+}
+
+impl Default for ActorChoice {
+    fn default() -> Self {
+        ActorChoice::Index(0)
+    }
+}
+
+impl std::str::FromStr for ActorChoice {
+    type Err = std::convert::Infallible;
+    /// A number is an index, anything else a name.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(match s.parse::<usize>() {
+            Ok(i) => ActorChoice::Index(i),
+            Err(_) => ActorChoice::Name(s.to_string()),
+        })
+    }
+}
+
+/// The most actor names kept for the report.
+const MAX_SEEN: usize = 32;
+
 /// Rokoko Studio Live's reader.
 #[derive(Debug, Default)]
-pub struct Rokoko;
+pub struct Rokoko {
+    /// The actor that drives the character.
+    pub actor: ActorChoice,
+    seen: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
+}
+
+impl Rokoko {
+    /// A reader that follows `actor`.
+    pub fn new(actor: ActorChoice) -> Rokoko {
+        Rokoko {
+            actor,
+            ..Rokoko::default()
+        }
+    }
+
+    /// The actors' names seen so far (in order of first appearance, at
+    /// most 32), shared with the reader once it is moved to its thread.
+    pub fn seen(&self) -> std::sync::Arc<std::sync::Mutex<Vec<String>>> {
+        self.seen.clone()
+    }
+
+    fn note(&self, actors: &[Actor]) {
+        let mut seen = self.seen.lock().unwrap_or_else(|e| e.into_inner());
+        for a in actors {
+            if seen.len() < MAX_SEEN && !seen.contains(&a.name) {
+                seen.push(a.name.clone());
+            }
+        }
+    }
+
+    fn pick<'p>(&self, actors: &'p [Actor]) -> Option<&'p Actor> {
+        match &self.actor {
+            ActorChoice::Index(i) => actors.get(*i),
+            ActorChoice::Name(n) => actors.iter().find(|a| &a.name == n),
+        }
+    }
+}
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 struct V3 {
@@ -104,7 +171,8 @@ impl Protocol for Rokoko {
     fn read(&mut self, datagram: &[u8], state: &mut BodyState) -> Result<Read, Malformed> {
         let p: Packet =
             serde_json::from_slice(datagram).map_err(|e| Malformed(format!("JSON: {e}")))?;
-        let Some(actor) = p.scene.actors.first() else {
+        self.note(&p.scene.actors);
+        let Some(actor) = self.pick(&p.scene.actors) else {
             return Ok(Read::Partial);
         };
         let mut bones = Vec::new();
@@ -153,12 +221,59 @@ pub fn encode_frame(
     fps: f64,
     reference: Option<&Pose>,
 ) -> Result<Vec<u8>, serde_json::Error> {
+    encode_actors(&[("surfmotion", world)], t, fps, reference)
+}
+
+/// One frame of several actors (name, the canonical joints' world
+/// transforms in project axes), in order, as [`encode_frame`] does one.
+pub fn encode_actors(
+    actors: &[(&str, &[Bone; Canonical::COUNT])],
+    t: f64,
+    fps: f64,
+    reference: Option<&Pose>,
+) -> Result<Vec<u8>, serde_json::Error> {
+    let actors = actors
+        .iter()
+        .map(|(name, world)| {
+            Ok(Actor {
+                name: name.to_string(),
+                body: body(world)?,
+            })
+        })
+        .collect::<Result<Vec<_>, serde_json::Error>>()?;
     let v3 = |p: DVec3| V3 {
         x: p.x,
         y: p.y,
         z: p.z,
     };
-    let body = world
+    let surfmotion = reference.map(|r| Ext {
+        reference: r
+            .iter()
+            .enumerate()
+            .map(|(c, p)| (ROKOKO_CANONICAL[c].to_string(), v3(from_unity(*p))))
+            .collect(),
+    });
+    serde_json::to_vec(&Packet {
+        version: serde_json::json!(3),
+        fps: Some(fps),
+        scene: Scene {
+            timestamp: Some(t),
+            actors,
+        },
+        surfmotion,
+    })
+}
+
+/// An actor's body joints as JSON values.
+fn body(
+    world: &[Bone; Canonical::COUNT],
+) -> Result<BTreeMap<String, serde_json::Value>, serde_json::Error> {
+    let v3 = |p: DVec3| V3 {
+        x: p.x,
+        y: p.y,
+        z: p.z,
+    };
+    world
         .iter()
         .enumerate()
         .map(|(c, b)| {
@@ -174,24 +289,5 @@ pub fn encode_frame(
             };
             Ok((ROKOKO_CANONICAL[c].to_string(), serde_json::to_value(j)?))
         })
-        .collect::<Result<_, serde_json::Error>>()?;
-    let surfmotion = reference.map(|r| Ext {
-        reference: r
-            .iter()
-            .enumerate()
-            .map(|(c, p)| (ROKOKO_CANONICAL[c].to_string(), v3(from_unity(*p))))
-            .collect(),
-    });
-    serde_json::to_vec(&Packet {
-        version: serde_json::json!(3),
-        fps: Some(fps),
-        scene: Scene {
-            timestamp: Some(t),
-            actors: vec![Actor {
-                name: "surfmotion".into(),
-                body,
-            }],
-        },
-        surfmotion,
-    })
+        .collect()
 }

@@ -50,6 +50,10 @@ pub struct SessionOptions {
     pub history: usize,
     /// Frames the pose kernel analyses each frame with. Default: 32.
     pub analysis_window: usize,
+    /// Fraction of the difference between the last output query and the
+    /// newest analysis of that frame that is given up per frame (see
+    /// [`Session::push`]); 1 takes each analysis as it is. Default: 0.2.
+    pub settle: f64,
 }
 
 impl Default for SessionOptions {
@@ -59,6 +63,7 @@ impl Default for SessionOptions {
             online: OnlineOptions::default(),
             history: 64,
             analysis_window: 32,
+            settle: 0.2,
         }
     }
 }
@@ -93,6 +98,13 @@ pub struct Session<'a> {
     /// Query poses (on the character) from frame `query_start` on.
     query: VecDeque<Pose>,
     query_start: usize,
+    /// The newest analysis of the raw window's frames (on the stream's
+    /// trajectory), from frame `latest_start` on; empty when the frames
+    /// come analysed ([`Session::push_analysed`]).
+    latest: Vec<Pose>,
+    latest_start: usize,
+    /// The query of the last output frame (its index, the pose).
+    last_out: Option<(usize, Pose)>,
     /// Decided frames from `path_start` on (at most `history + 1`).
     path: VecDeque<u32>,
     path_start: usize,
@@ -129,6 +141,9 @@ impl<'a> Session<'a> {
             roots: VecDeque::new(),
             query: VecDeque::new(),
             query_start: 0,
+            latest: Vec::new(),
+            latest_start: 0,
+            last_out: None,
             path: VecDeque::new(),
             path_start: 0,
             blend_ws: prepared.blender().workspace(),
@@ -199,7 +214,45 @@ impl<'a> Session<'a> {
         let by = DVec3::new(shift.x, 0.0, shift.y);
         let (q, f) = (q.map(|x| x + by), f.map(|x| x + by));
         self.roots.push_back(DVec2::new(q[p].x, q[p].z));
+        // Every frame of the window as this analysis sees it (the frames
+        // not yet output take it: it has more of their future).
+        let newest = self.query_start + self.query.len();
+        self.latest_start = newest + 1 - a.query.len();
+        self.latest.clear();
+        self.latest
+            .extend(a.query.iter().map(|x| x.map(|x| x + by)));
+        let undecided = self.trellis.pending();
+        let from = self.query.len() - undecided.min(self.query.len());
+        for (i, slot) in self.query.iter_mut().enumerate().skip(from) {
+            if let Some(l) = (self.query_start + i)
+                .checked_sub(self.latest_start)
+                .and_then(|w| self.latest.get(w))
+            {
+                *slot = *l;
+            }
+        }
         self.push_analysed(&q, &f, out);
+    }
+
+    /// The query frame `k` is output with: its newest analysis, plus what
+    /// the previous output frame's query differed from that analysis's
+    /// view of it, less the `settle` fraction. Each stream frame is
+    /// analysed again as the window slides (the kernel's ground, support
+    /// and root height are decided over the window); this keeps the
+    /// output's motion that of one analysis from frame to frame and lets
+    /// the difference die away instead of jumping.
+    fn settled(&self, k: usize, query: Pose) -> Pose {
+        let view = |i: usize| {
+            i.checked_sub(self.latest_start)
+                .and_then(|w| self.latest.get(w))
+        };
+        match (&self.last_out, view(k), k.checked_sub(1).and_then(view)) {
+            (Some((j, prev)), Some(_), Some(seen)) if *j + 1 == k => {
+                let keep = 1.0 - self.opts.settle.clamp(0.0, 1.0);
+                std::array::from_fn(|i| query[i] + (prev[i] - seen[i]) * keep)
+            }
+            _ => query,
+        }
     }
 
     /// Takes the next frame already analysed (`query` on the character,
@@ -249,6 +302,11 @@ impl<'a> Session<'a> {
     fn frame(&mut self, k: usize, id: u32, ahead: &[u32], out: &mut dyn FnMut(LiveFrame<'_>)) {
         let ch = self.ch;
         let h = k - self.path_start;
+        if let Some(&q) = self.query.get(k - self.query_start) {
+            let q = self.settled(k, q);
+            self.query[k - self.query_start] = q;
+            self.last_out = Some((k, q));
+        }
         let window: Vec<u32> = self
             .path
             .iter()

@@ -18,50 +18,54 @@
   live.receiveRate = () => rate(live.arrivals);
   live.drawRate = () => rate(live.draws);
 
-  // ---- the character: WebGL, flat-lit from two lights ----
+  // ---- the character: WebGL, each triangle lit by its own facet ----
+  // Positions arrive quantised (u16, origin + step · q) and are uploaded as
+  // they are; the vertex shader dequantises, the fragment shader takes the
+  // facet's normal from the derivatives of the position: no per-vertex
+  // work in JavaScript, no normals sent.
   const cv = document.getElementById("character");
   const gl = cv.getContext("webgl", { antialias: true, preserveDrawingBuffer: true });
   const sk = document.getElementById("skeleton");
   const ctx = sk.getContext("2d");
+  const derivatives = !!gl.getExtension("OES_standard_derivatives");
   const prog = (() => {
-    const vs = `attribute vec3 p; attribute vec3 n; uniform mat4 m; varying vec3 vn;
-      void main() { vn = n; gl_Position = m * vec4(p, 1.0); }`;
-    const fs = `precision mediump float; varying vec3 vn;
-      void main() { vec3 n = normalize(vn);
+    const vs = `attribute vec3 q; uniform vec3 o; uniform float s; uniform mat4 m; varying vec3 wp;
+      void main() { wp = o + q * s; gl_Position = m * vec4(wp, 1.0); }`;
+    const fs = (derivatives ? "#extension GL_OES_standard_derivatives : enable\n" : "") +
+      `precision mediump float; varying vec3 wp;
+      void main() {
+        ${derivatives ? "vec3 n = normalize(cross(dFdx(wp), dFdy(wp)));" : "vec3 n = vec3(0.0, 0.0, 1.0);"}
         float l = 0.25 + 0.6 * max(dot(n, normalize(vec3(0.4, 0.7, 0.6))), 0.0)
                 + 0.25 * max(dot(n, normalize(vec3(-0.6, 0.2, -0.5))), 0.0);
         gl_FragColor = vec4(vec3(0.80, 0.74, 0.68) * l, 1.0); }`;
-    const sh = (t, s) => { const x = gl.createShader(t); gl.shaderSource(x, s); gl.compileShader(x); return x; };
+    const sh = (t, src) => {
+      const x = gl.createShader(t); gl.shaderSource(x, src); gl.compileShader(x);
+      if (!gl.getShaderParameter(x, gl.COMPILE_STATUS)) live.error = "shader: " + gl.getShaderInfoLog(x);
+      return x;
+    };
     const p = gl.createProgram();
     gl.attachShader(p, sh(gl.VERTEX_SHADER, vs));
     gl.attachShader(p, sh(gl.FRAGMENT_SHADER, fs));
     gl.linkProgram(p);
     return p;
   })();
-  const pbuf = gl.createBuffer(), nbuf = gl.createBuffer(), ibuf = gl.createBuffer();
-  let tris = null, normals = null, pos = null, joints = null, pending = null, triCount = 0;
-  let useUint32 = false;
+  const loc = {
+    q: gl.getAttribLocation(prog, "q"), o: gl.getUniformLocation(prog, "o"),
+    s: gl.getUniformLocation(prog, "s"), m: gl.getUniformLocation(prog, "m"),
+  };
+  const pbuf = gl.createBuffer(), ibuf = gl.createBuffer();
+  let joints = null, pending = null, triCount = 0, useUint32 = false;
 
   function setMeta(m) {
     live.meta = { vertices: m.vertices, triangles: m.triangles.length / 3, fps: m.fps, lag: m.lag };
     live.parents = m.parents;
     useUint32 = m.vertices > 65535 && !!gl.getExtension("OES_element_index_uint");
-    tris = useUint32 ? new Uint32Array(m.triangles) : new Uint16Array(m.triangles);
+    const tris = useUint32 ? new Uint32Array(m.triangles) : new Uint16Array(m.triangles);
     triCount = m.triangles.length;
-    normals = new Float32Array(3 * m.vertices);
     gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, ibuf);
     gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, tris, gl.STATIC_DRAW);
-  }
-
-  function computeNormals(p) {
-    normals.fill(0);
-    for (let t = 0; t < triCount; t += 3) {
-      const a = 3 * tris[t], b = 3 * tris[t + 1], c = 3 * tris[t + 2];
-      const ux = p[b] - p[a], uy = p[b + 1] - p[a + 1], uz = p[b + 2] - p[a + 2];
-      const vx = p[c] - p[a], vy = p[c + 1] - p[a + 1], vz = p[c + 2] - p[a + 2];
-      const nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-      for (const i of [a, b, c]) { normals[i] += nx; normals[i + 1] += ny; normals[i + 2] += nz; }
-    }
+    gl.bindBuffer(gl.ARRAY_BUFFER, pbuf);
+    gl.bufferData(gl.ARRAY_BUFFER, 6 * m.vertices, gl.DYNAMIC_DRAW);
   }
 
   // A camera in front of the body (+Z), following it over the floor.
@@ -85,24 +89,20 @@
     if (c.width !== w || c.height !== h) { c.width = w; c.height = h; }
   }
 
-  function drawCharacter() {
+  function drawCharacter(f) {
     fit(cv);
     gl.viewport(0, 0, cv.width, cv.height);
     gl.clearColor(0.16, 0.17, 0.19, 1);
     gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
     gl.enable(gl.DEPTH_TEST);
-    computeNormals(pos);
-    let cx = 0, cz = 0; const n = pos.length / 3;
-    for (let i = 0; i < pos.length; i += 3) { cx += pos[i]; cz += pos[i + 2]; }
     gl.useProgram(prog);
-    gl.uniformMatrix4fv(gl.getUniformLocation(prog, "m"), false, camera(cx / n, cz / n, cv.width / cv.height));
-    for (const [buf, data, name] of [[pbuf, pos, "p"], [nbuf, normals, "n"]]) {
-      const loc = gl.getAttribLocation(prog, name);
-      gl.bindBuffer(gl.ARRAY_BUFFER, buf);
-      gl.bufferData(gl.ARRAY_BUFFER, data, gl.DYNAMIC_DRAW);
-      gl.enableVertexAttribArray(loc);
-      gl.vertexAttribPointer(loc, 3, gl.FLOAT, false, 0, 0);
-    }
+    gl.uniformMatrix4fv(loc.m, false, camera(f.centre[0], f.centre[2], cv.width / cv.height));
+    gl.uniform3f(loc.o, f.origin[0], f.origin[1], f.origin[2]);
+    gl.uniform1f(loc.s, f.step * 65535);
+    gl.bindBuffer(gl.ARRAY_BUFFER, pbuf);
+    gl.bufferSubData(gl.ARRAY_BUFFER, 0, f.q);
+    gl.enableVertexAttribArray(loc.q);
+    gl.vertexAttribPointer(loc.q, 3, gl.UNSIGNED_SHORT, true, 0, 0);
     gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, ibuf);
     gl.drawElements(gl.TRIANGLES, triCount, useUint32 ? gl.UNSIGNED_INT : gl.UNSIGNED_SHORT, 0);
   }
@@ -131,42 +131,64 @@
     for (let i = 0; i < 19; i++) { const [x, y] = proj(i); ctx.beginPath(); ctx.arc(x, y, 2.5 * devicePixelRatio, 0, 7); ctx.fill(); }
   }
 
+  // The frame message (src/live/page.rs): 52 header bytes, the skeleton
+  // (19 × 3 f32), the vertices (n × 3 u16). Newest wins: a frame that
+  // arrives before the previous one was drawn replaces it (counted).
+  const HEADER = 52 + 12 * 19;
   function onFrame(buf) {
     const dv = new DataView(buf);
-    if (dv.getUint32(0, true) !== 1 || !live.meta) return;
+    if (dv.getUint32(0, true) !== 2 || !live.meta) return;
     const n = live.meta.vertices;
-    if (buf.byteLength !== 24 + 12 * (n + 19)) { live.error = "frame of " + buf.byteLength + " bytes"; return; }
+    if (buf.byteLength !== HEADER + 6 * n) { live.error = "frame of " + buf.byteLength + " bytes"; return; }
     if (pending) live.skipped++;
+    const f32 = (at) => dv.getFloat32(at, true);
     pending = {
-      index: dv.getUint32(4, true), latency: dv.getFloat32(8, true), fps: dv.getFloat32(12, true),
+      index: dv.getUint32(4, true), latency: f32(8), fps: f32(12),
       delivery: Date.now() - dv.getFloat64(16, true),
-      pos: new Float32Array(buf, 24, 3 * n), joints: new Float32Array(buf, 24 + 12 * n, 57),
+      origin: [f32(24), f32(28), f32(32)], step: f32(36), centre: [f32(40), f32(44), f32(48)],
+      joints: new Float32Array(buf, 52, 57), q: new Uint16Array(buf, HEADER, 3 * n),
     };
     live.frames++;
+    live.bytes = buf.byteLength;
     const now = performance.now();
     live.arrivals.push(now);
     if (live.firstFrameAt === undefined) live.firstFrameAt = now;
     live.lastFrameAt = now;
+    pending.received = now;
   }
 
   function draw() {
     requestAnimationFrame(draw);
     if (!pending) return;
     const f = pending; pending = null;
-    pos = f.pos; joints = f.joints;
+    joints = f.joints;
     live.index = f.index; live.latencyMs = f.latency; live.deliveryMs = f.delivery; live.outputFps = f.fps;
-    drawCharacter();
+    const t0 = performance.now();
+    drawCharacter(f);
     drawSkeleton();
     live.drawn++;
     const now = performance.now();
+    live.drawMs = now - t0;
     live.draws.push(now);
     if (live.firstDrawAt === undefined) live.firstDrawAt = now;
     live.lastDrawAt = now;
+    // Arrival at the server → drawn here: the session's latency plus the
+    // delivery and the wait for this draw.
+    live.shownMs = f.latency + f.delivery + (now - f.received);
     stats.innerHTML = `frame <b>${f.index}</b> · ${live.meta.vertices} vertices · lag ${live.meta.lag}` +
       ` · in <b>${live.receiveRate().toFixed(1)}</b> frames/s · drawn <b>${live.drawRate().toFixed(1)}</b> frames/s` +
-      ` · arrival→mesh <b>${f.latency.toFixed(1)}</b> ms · delivery <b>${f.delivery.toFixed(1)}</b> ms`;
+      ` · skipped <b>${live.skipped}</b> of ${live.frames}` +
+      ` · arrival→mesh <b>${f.latency.toFixed(1)}</b> ms · delivery <b>${f.delivery.toFixed(1)}</b> ms` +
+      ` · shown <b>${live.shownMs.toFixed(1)}</b> ms`;
   }
 
+  if (location.protocol === "file:") {
+    // Opened from disk: the frames come from the live session's server.
+    stats.innerHTML = "<b>This page needs the live server.</b> Run <code>surfmotion live --db DIR " +
+      "--replay CLIP --serve</code> (or --vmc/--rokoko/--bvh-tcp) and open the URL it prints.";
+    live.error = "opened from disk: no live server";
+    return;
+  }
   const ws = new WebSocket(`ws://${location.host}/live`);
   ws.binaryType = "arraybuffer";
   ws.onmessage = (e) => {

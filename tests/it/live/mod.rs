@@ -1,6 +1,8 @@
 //! Live retargeting from a mocap stream (issue 45): the fixed-lag trellis
 //! and the per-frame session against the offline synthesis.
 
+mod actors;
+mod long;
 mod online;
 mod page;
 mod protocols;

@@ -289,7 +289,7 @@ fn random_datagrams_are_refused_without_a_panic() {
     let (_, bad) = run(Vmc::default(), &v, &mut rng);
     assert!(bad > 3_000, "{bad}");
     let r = rokoko::encode_frame(&world, 0.5, 60.0, Some(&pose)).unwrap();
-    let (_, bad) = run(Rokoko, &r, &mut rng);
+    let (_, bad) = run(Rokoko::default(), &r, &mut rng);
     assert!(bad > 3_000, "{bad}");
 }
 
