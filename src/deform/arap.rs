@@ -86,7 +86,13 @@ mod tests {
         super::super::part_laplacian::apply(&lap, &y, &mut ly);
         let mut rots = vec![DQuat::IDENTITY; 7];
         let mut delta = vec![[0.0; 3]; 7];
-        local_step(&lap, &s, &y, &ls, &mut rots, &mut delta);
+        // Each step's extraction starts from the last one's rotation (as
+        // the deformer's steps and frames do): from the identity, eight
+        // iterations leave 0.02 rad of a 1.1 rad turn; a few warm-started
+        // steps converge.
+        for _ in 0..4 {
+            local_step(&lap, &s, &y, &ls, &mut rots, &mut delta);
+        }
         assert!(rots[0].angle_between(turn) < 1e-3, "{:?}", rots[0]);
         let d = DVec3::from_array(delta[0]) - DVec3::from_array(ly[0]);
         assert!(d.length() < 1e-3 * DVec3::from_array(ly[0]).length(), "{d}");
