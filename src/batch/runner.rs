@@ -165,6 +165,25 @@ pub struct ClipOutcome {
     pub earlier: bool,
 }
 
+impl ClipOutcome {
+    /// A clip not (yet) converted: skipped, nothing written or measured;
+    /// the run fills in what it does.
+    pub fn skipped(clip: PathBuf, output: PathBuf) -> Self {
+        ClipOutcome {
+            clip,
+            output,
+            status: ClipStatus::Skipped,
+            frames: 0,
+            seconds: 0.0,
+            error_cm: None,
+            warnings: Vec::new(),
+            reason: None,
+            fixed_seconds: None,
+            earlier: false,
+        }
+    }
+}
+
 /// True when the output of a clip exists in full.
 pub fn complete(out: &Path, format: Format) -> bool {
     match format {
@@ -203,18 +222,7 @@ pub fn run(
     let one = |p: &Planned| {
         let (rel, out) = (&p.clip, &p.output);
         let t = Instant::now();
-        let mut o = ClipOutcome {
-            clip: rel.clone(),
-            output: out.clone(),
-            status: ClipStatus::Skipped,
-            frames: 0,
-            seconds: 0.0,
-            error_cm: None,
-            warnings: Vec::new(),
-            reason: None,
-            fixed_seconds: None,
-            earlier: false,
-        };
+        let mut o = ClipOutcome::skipped(rel.clone(), out.clone());
         if !opts.force && complete(out, opts.format) {
             done(&o);
             return o;

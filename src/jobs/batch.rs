@@ -257,18 +257,7 @@ fn finished_earlier(
     clips
         .iter()
         .map(|p| {
-            let mut o = ClipOutcome {
-                clip: p.clip.clone(),
-                output: p.output.clone(),
-                status: ClipStatus::Skipped,
-                frames: 0,
-                seconds: 0.0,
-                error_cm: None,
-                warnings: Vec::new(),
-                reason: None,
-                fixed_seconds: None,
-                earlier: false,
-            };
+            let mut o = ClipOutcome::skipped(p.clip.clone(), p.output.clone());
             earlier.fill(&mut o);
             (!opts.force && o.earlier && crate::batch::runner::complete(&p.output, opts.format))
                 .then_some(o)

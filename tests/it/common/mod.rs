@@ -381,3 +381,27 @@ pub fn alone_in_process(module: &str, test: &str) -> bool {
     );
     false
 }
+
+/// A BVH whose joint angles are `scale` times `text`'s (root translation
+/// kept): a clip a character cannot follow, for tests that need a
+/// plausibility warning now that `synth` characters are clean (issue 42).
+pub fn scaled_angles_bvh(text: &str, scale: f64) -> String {
+    let (head, motion) = text.split_once("MOTION\n").expect("a BVH with MOTION");
+    let mut out = format!("{head}MOTION\n");
+    for (i, l) in motion.lines().enumerate() {
+        if i < 2 {
+            out += &format!("{l}\n");
+            continue;
+        }
+        let v: Vec<String> = l
+            .split_whitespace()
+            .enumerate()
+            .map(|(k, x)| match k {
+                0..3 => x.to_string(),
+                _ => format!("{:.4}", scale * x.parse::<f64>().unwrap()),
+            })
+            .collect();
+        out += &format!("{}\n", v.join(" "));
+    }
+    out
+}

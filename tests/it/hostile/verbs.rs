@@ -3185,23 +3185,7 @@ fn plausibility_warnings_are_printed_once() {
     // character driven by the plain run gives no warning since issue 42).
     run(&["mocap", "procedural", "--gait", "run", "-o", "plain.bvh"]);
     let plain = std::fs::read_to_string(d.join("plain.bvh")).unwrap();
-    let (head, motion) = plain.split_once("MOTION\n").unwrap();
-    let mut wild = format!("{head}MOTION\n");
-    for (i, l) in motion.lines().enumerate() {
-        if i < 2 {
-            wild += &format!("{l}\n");
-            continue;
-        }
-        let v: Vec<String> = l
-            .split_whitespace()
-            .enumerate()
-            .map(|(k, x)| match k {
-                0..3 => x.to_string(),
-                _ => format!("{:.4}", 4.0 * x.parse::<f64>().unwrap()),
-            })
-            .collect();
-        wild += &format!("{}\n", v.join(" "));
-    }
+    let wild = common::scaled_angles_bvh(&plain, 4.0);
     std::fs::write(d.join("run.bvh"), wild).unwrap();
     let topo = f.db.join("topology.obj");
     let lm = f.db.join("landmarks.json");

@@ -897,23 +897,7 @@ fn batch_keeps_the_plausibility_warnings_eval_gives() {
     // backwards, feet through the floor, folds (eval warns of 73 turned
     // over triangles in frame 37).
     let walk = short_clip("walk", 40);
-    let (head, motion) = walk.split_once("MOTION\n").unwrap();
-    let mut wild = format!("{head}MOTION\n");
-    for (i, l) in motion.lines().enumerate() {
-        if i < 2 {
-            wild += &format!("{l}\n");
-            continue;
-        }
-        let v: Vec<String> = l
-            .split_whitespace()
-            .enumerate()
-            .map(|(k, x)| match k {
-                0..3 => x.to_string(),
-                _ => format!("{:.4}", 4.0 * x.parse::<f64>().unwrap()),
-            })
-            .collect();
-        wild += &format!("{}\n", v.join(" "));
-    }
+    let wild = common::scaled_angles_bvh(&walk, 4.0);
     std::fs::write(lib.join("wild.bvh"), wild).unwrap();
     let out = tmp.path().join("out");
     let o = Command::new(common::bin())
