@@ -15,22 +15,14 @@
 //! - **Weights**: each vertex's four largest cluster weights, normalised to
 //!   sum to 1; a rigid mesh under a bone is weighted 1 to that bone.
 //! - **Units and axes**: converted to the project's (metres by
-//!   `UnitScaleFactor` checked against the body's stature as the clip
-//!   reader checks it, Y up, front +Z), like glTF; a unit the body decided
-//!   is named in the asset's problems.
+//!   `UnitScaleFactor`, Y up, front +Z), like glTF.
 //!
 //! Not read: animation (the clip reader, `mocap::fbx`, reads the takes),
 //! blend shapes, materials.
 
 use super::gltf::{GltfAsset, NodeGraph, Skin};
 use crate::mesh::{Mesh, MeshError};
-use crate::mocap::Units;
-use crate::mocap::fbx::{
-    FbxOptions, basis, file_units, load_scene, names_without_namespaces, parse_fbx,
-    units_with_stature,
-};
-use crate::rig::detect_clip;
-use crate::rig::load::stature;
+use crate::mocap::fbx::{basis, file_units, load_scene, names_without_namespaces};
 use glam::{DMat4, DVec3};
 use std::path::Path;
 
@@ -45,7 +37,7 @@ pub fn read_fbx_character(path: &Path) -> Result<GltfAsset, MeshError> {
 pub fn parse_fbx_character(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
     let scene = load_scene(bytes, path, true)?;
     let (m, _) = basis(&scene.settings.axes);
-    let units = character_units(&scene, bytes, path);
+    let units = file_units(&scene.settings);
     // File world → project world: axes, then metres.
     let conv = DMat4::from_mat3(m * units.metres_per_unit);
     let joints = joints(&scene, conv);
@@ -53,12 +45,6 @@ pub fn parse_fbx_character(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshE
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut influence: Vec<[(u16, f32); 4]> = Vec::new();
     let mut problems = Vec::new();
-    if units.metres_per_unit != file_units(&scene.settings).metres_per_unit {
-        problems.push(format!(
-            "units: {} m per file unit ({})",
-            units.metres_per_unit, units.reason
-        ));
-    }
     for node in scene.nodes.iter() {
         let Some(mesh) = node.mesh.as_ref() else {
             continue;
@@ -167,22 +153,6 @@ pub fn parse_fbx_character(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshE
         graph: graph(&joints),
         problems,
     })
-}
-
-/// The character's unit, decided as the clip reader decides a clip's
-/// (`rig::load_clip`: the file's `UnitScaleFactor` checked against the
-/// stature its limb bones give, [`units_with_stature`]), so that a
-/// character and a clip of one file come out at one scale. Kenney's
-/// character declares cm and its limbs give a 2.59 m stature: the body
-/// decides, as for its clip. The file's unit when the file has no
-/// humanoid skeleton to measure (or its takes cannot be read as a clip).
-fn character_units(scene: &ufbx::Scene, bytes: &[u8], path: &Path) -> Units {
-    let file = file_units(&scene.settings);
-    let Ok(clip) = parse_fbx(bytes, path, &FbxOptions::default()) else {
-        return file;
-    };
-    let h = detect_clip(&clip).ok().and_then(|d| stature(&clip, &d.map));
-    units_with_stature(&file, h)
 }
 
 /// The skin's joints: scene node indices, parents (indices into them),
