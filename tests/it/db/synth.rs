@@ -94,7 +94,11 @@ fn walk_and_run_have_the_right_frames_rigid_bones_and_measurable_dynamics() {
         let head_max = head.iter().map(|&v| offset(v)).fold(0.0, f64::max);
         eprintln!("{clip_name}: skirt mean max-offset {skirt_mean:.4} m, head {head_max:e}");
         assert!(skirt_mean > 0.005, "{clip_name}: skirt offset {skirt_mean}");
-        assert!(head_max < 1e-12, "{clip_name}: head offset {head_max}");
+        // The head is rigid in the dynamics; since issue 42's synth fix a
+        // frame whose skinning folds a triangle is repaired in a patch
+        // around the fold, which may reach the head by a fraction of a
+        // millimetre (02_03: 0.13 mm).
+        assert!(head_max < 1e-3, "{clip_name}: head offset {head_max}");
     }
 }
 
