@@ -375,6 +375,11 @@ function setupInput() {
 }
 
 async function main() {
+  if (location.protocol === 'file:') {
+    // Opened from disk: the mesh, rig and landmarks come from the pick server.
+    throw new Error('This page needs the pick server: run `surfmotion rig embed MESH --pick` ' +
+      '(or `surfmotion db init DIR … --pick`) and open the URL it prints.');
+  }
   const [m, s] = await Promise.all([api('/api/mesh'), api('/api/state')]);
   if (m.status !== 200) throw new Error(m.body.error);
   if (s.status !== 200) throw new Error(s.body.error);
