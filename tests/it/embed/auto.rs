@@ -55,13 +55,13 @@ fn mean_percent(a: &[[f64; 3]; 19], b: &[[f64; 3]; 19], height: f64, swap: bool)
 /// The capture, its landmark rig, and the automatic rig's embedding of a
 /// variant made by `point` (applied to every position) with the triangles
 /// reversed when `flip`, frames in `order`.
-struct Capture {
-    mesh: Mesh,
-    frames: Vec<Vec<[f64; 3]>>,
-    truth: Embedding,
+pub(super) struct Capture {
+    pub(super) mesh: Mesh,
+    pub(super) frames: Vec<Vec<[f64; 3]>>,
+    pub(super) truth: Embedding,
 }
 
-fn capture(d: &Path, name: &str) -> Capture {
+pub(super) fn capture(d: &Path, name: &str) -> Capture {
     let seq = load_sequence(
         d.join(format!("4d/{name}/{name}.pc2")).to_str().unwrap(),
         &LoadOptions::default(),

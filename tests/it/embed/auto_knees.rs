@@ -13,43 +13,21 @@
 use crate::common;
 
 use glam::DVec3;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use surfmotion::embed::Embedding;
 use surfmotion::embed::auto::options::AutoOptions;
 use surfmotion::embed::auto::rig::auto_rig;
-use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::embed::rest::{RestOptions, choose_rest_frame};
 use surfmotion::mesh::Mesh;
-use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::Canonical;
 
 /// The figure's bound, in % of the height.
 const KNEE_BOUND: f64 = 3.0;
 
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
-
-/// A capture: its topology, frames and landmark rig.
+/// A capture: its topology, frames and landmark rig (`embed::auto`'s).
 fn capture(d: &Path, name: &str) -> (Mesh, Vec<Vec<[f64; 3]>>, Embedding) {
-    let seq = load_sequence(
-        d.join(format!("4d/{name}/{name}.pc2")).to_str().unwrap(),
-        &LoadOptions::default(),
-    )
-    .unwrap();
-    let mesh = seq.mesh().clone();
-    let lm = Landmarks::load(
-        &fixture(&format!("{name}.landmarks.json")),
-        mesh.vertex_count(),
-    )
-    .unwrap();
-    let truth = Embedding::new(&mesh, &lm, None).unwrap();
-    let frames = (0..seq.frame_count())
-        .map(|f| seq.frame(f).to_vec())
-        .collect();
-    (mesh, frames, truth)
+    let c = super::auto::capture(d, name);
+    (c.mesh, c.frames, c.truth)
 }
 
 /// The automatic rig's embedding, its parts found on the rest frame `db
