@@ -39,7 +39,7 @@ pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding,
     let Some(lp) = &m.rig.landmarks else {
         if let Some(g) = &m.rig.gltf_skin {
             let g = Manifest::resolve(dir, g);
-            let asset = crate::mesh::io::read_rigged(&g)?;
+            let asset = crate::rig::read_rigged_character(&g)?;
             let map = match &m.rig.rig_map {
                 Some(p) => Some(
                     crate::rig::RigMap::load(&Manifest::resolve(dir, p)).map_err(|e| {

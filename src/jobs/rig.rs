@@ -146,7 +146,7 @@ pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, 
                     "`RigEmbedOptions::parts` goes with `RigEmbedOptions::landmarks`; a skin gives its own parts".into(),
                 ));
             }
-            let asset = crate::mesh::io::read_rigged(g)?;
+            let asset = crate::rig::read_rigged_character(g)?;
             // The glTF itself as the mesh: its bind pose, not its animation.
             if std::path::Path::new(&o.mesh) == g.as_path() {
                 mesh = asset.mesh.clone();

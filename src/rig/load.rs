@@ -192,6 +192,29 @@ pub fn guess_up(clip: &Clip, map: Option<&RigMap>) -> (UpAxis, String) {
     up_from_joints(clip, head, pelvis)
 }
 
+/// Reads a rigged character for its skin, as `mesh::io::read_rigged`
+/// does, an FBX at the unit its own clip reads at ([`load_clip`]: the
+/// file's `UnitScaleFactor` checked against the stature its limbs give),
+/// so a character and a clip of one file come out at one scale: Kenney's
+/// character declares cm and its limbs give a 2.59 m stature, so the body
+/// decides (a 2.47 m mesh, not the declared 3.76 m), the unit named in the
+/// asset's problems. The unit is decided here, not in the mesh reader,
+/// because it needs the rig detector (`mesh` does not import `rig`). An
+/// FBX whose takes do not read as a clip keeps its file's unit; a glTF
+/// is read as it is.
+pub fn read_rigged_character(
+    path: &Path,
+) -> Result<crate::mesh::io::gltf::GltfAsset, crate::mesh::MeshError> {
+    use crate::mesh::io::format::MeshFormat;
+    if MeshFormat::of(path) != Some(MeshFormat::Fbx) {
+        return crate::mesh::io::read_rigged(path);
+    }
+    let units = load_clip(path, &LoadOptions::default())
+        .ok()
+        .map(|c| c.units);
+    crate::mesh::io::fbx::read_fbx_character_in(path, units.as_ref())
+}
+
 /// Maps a glTF skin onto the canonical skeleton with no rig map, as
 /// [`detect_clip`] maps a BVH: names when a known convention matches (its
 /// left/right checked against the geometry), else the structure of the

@@ -15,13 +15,18 @@
 //! - **Weights**: each vertex's four largest cluster weights, normalised to
 //!   sum to 1; a rigid mesh under a bone is weighted 1 to that bone.
 //! - **Units and axes**: converted to the project's (metres by
-//!   `UnitScaleFactor`, Y up, front +Z), like glTF.
+//!   `UnitScaleFactor`, Y up, front +Z), like glTF; or metres by a unit the
+//!   caller decided ([`parse_fbx_character_in`]: `rig::read_rigged_character`
+//!   passes the unit the file's clip reads at, so a character and its clip
+//!   come out at one scale), named in the asset's problems when it is not
+//!   the file's.
 //!
 //! Not read: animation (the clip reader, `mocap::fbx`, reads the takes),
 //! blend shapes, materials.
 
 use super::gltf::{GltfAsset, NodeGraph, Skin};
 use crate::mesh::{Mesh, MeshError};
+use crate::mocap::Units;
 use crate::mocap::fbx::{basis, file_units, load_scene, names_without_namespaces};
 use glam::{DMat4, DVec3};
 use std::path::Path;
@@ -35,9 +40,29 @@ pub fn read_fbx_character(path: &Path) -> Result<GltfAsset, MeshError> {
 
 /// [`read_fbx_character`] of bytes in memory; `path` names them in errors.
 pub fn parse_fbx_character(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshError> {
+    parse_fbx_character_in(bytes, path, None)
+}
+
+/// [`read_fbx_character`] at a unit the caller decided (`None`: the file's
+/// `UnitScaleFactor`). A unit other than the file's is named in the asset's
+/// problems with its reason. The reader decides no unit itself: the unit a
+/// body's stature gives needs the rig detector, above the mesh readers
+/// (`rig::read_rigged_character` passes its clip's).
+pub fn read_fbx_character_in(path: &Path, units: Option<&Units>) -> Result<GltfAsset, MeshError> {
+    let bytes = crate::util::fsutil::read_bytes(path)?;
+    parse_fbx_character_in(&bytes, path, units)
+}
+
+/// [`read_fbx_character_in`] of bytes in memory; `path` names them in errors.
+pub fn parse_fbx_character_in(
+    bytes: &[u8],
+    path: &Path,
+    units: Option<&Units>,
+) -> Result<GltfAsset, MeshError> {
     let scene = load_scene(bytes, path, true)?;
     let (m, _) = basis(&scene.settings.axes);
-    let units = file_units(&scene.settings);
+    let file = file_units(&scene.settings);
+    let units = units.unwrap_or(&file);
     // File world → project world: axes, then metres.
     let conv = DMat4::from_mat3(m * units.metres_per_unit);
     let joints = joints(&scene, conv);
@@ -45,6 +70,12 @@ pub fn parse_fbx_character(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshE
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut influence: Vec<[(u16, f32); 4]> = Vec::new();
     let mut problems = Vec::new();
+    if units.metres_per_unit != file.metres_per_unit {
+        problems.push(format!(
+            "units: {} m per file unit ({}), not the file's {} m",
+            units.metres_per_unit, units.reason, file.metres_per_unit
+        ));
+    }
     for node in scene.nodes.iter() {
         let Some(mesh) = node.mesh.as_ref() else {
             continue;
