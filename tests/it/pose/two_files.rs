@@ -23,6 +23,18 @@
 //!   line brought `rel` to 0.7-1.15 % on the CC pairs but took 01_01 from
 //!   0.00 to 0.78 % (the cgspeed BVH drops the thorax's length: its
 //!   shoulders sit elsewhere), so it is not in the kernel.
+//! - The travel per stride, tried and not kept (session 21): `k`, the
+//!   least-squares ratio of the root's horizontal step to the step of the
+//!   root relative to the least-moving foot joint (ankle or toe, moving
+//!   under 2 % of the leg per frame), over 30 fps frames, was meant to
+//!   find the conversion's travel 1.6 % short of its legs and scale it
+//!   back. It reads 1.056 on the 02_03 AMC and 1.074 on its CC BVH: a
+//!   capture is 5.6 % off 1 by this estimate (the "planted" joint rolls
+//!   with the body), and the two files differ the wrong way (1.0165
+//!   instead of 0.985). With the kernel scaling travel by `s / k` when `k`
+//!   is more than 1 % off 1, 02_03's pelvis went from 2.1 % to 3.47 % of
+//!   the height apart, 02_01's abs from 3.1 % to 4.4 %. The next try needs
+//!   a foot anchor that does not roll (heel or the sole's contact point).
 
 use crate::common;
 
