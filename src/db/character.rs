@@ -15,10 +15,11 @@
 //! skeleton` writes [`SkeletonKind::Rigid`] by default.
 
 use crate::db::build::{BuildOptions, BuildProgress, build_opened};
+use crate::db::frames::{Conversion, FrameStore, open_or_build};
 use crate::db::skeletons::embed_rig;
 use crate::db::{DbError, MANIFEST, Manifest};
 use crate::embed::Embedding;
-use crate::embed::frames::{SkeletonKind, poses};
+use crate::embed::frames::SkeletonKind;
 use crate::graph::{FrameAdjacency, FrameId, SurfaceMotionGraph};
 use crate::mesh::Mesh;
 use crate::mocap::units::y_up;
@@ -56,8 +57,8 @@ pub struct Character {
     /// The rig embedded on the topology's rest frame.
     rig: Embedding,
     /// All frames of all sequences, frame-major, metres, Y-up (converted
-    /// once on load).
-    frames: Vec<[f64; 3]>,
+    /// once, into the memory-mapped frame cache).
+    frames: FrameStore,
     /// Vertices per frame.
     n: usize,
     /// Skeleton of every frame (metres, Y-up).
@@ -98,40 +99,26 @@ impl Character {
         let (matrix, graph, _) = build_opened(dir, &manifest, &BuildOptions::default(), progress)?;
         let rig = embed_rig(dir, &manifest, &topology)?;
         let n = topology.vertex_count();
-        let mut frames = Vec::with_capacity(matrix.len() * n);
-        for s in &manifest.sequences {
-            let seq = manifest.load_sequence(dir, s)?;
-            if seq.mesh().vertex_count() != n {
-                return Err(DbError::Manifest {
-                    path: dir.join(MANIFEST),
-                    msg: format!(
-                        "sequence '{}': vertex count differs from the topology",
-                        s.name
-                    ),
-                });
-            }
-            frames.extend_from_slice(seq.all_positions());
-        }
-        if frames.len() != matrix.len() * n {
-            return Err(DbError::Manifest {
-                path: dir.join(MANIFEST),
-                msg: "the sequences changed while loading; run `surfmotion db build` again".into(),
-            });
-        }
         let metres_per_unit = crate::mocap::units::parse_unit(&manifest.units)
             .map(|u| u.metres_per_unit)
             .unwrap_or(1.0);
         let z_up = manifest.up.eq_ignore_ascii_case("z");
         let conv = |p: DVec3| y_up(p.to_array(), z_up) * metres_per_unit;
-        let poses = poses(&rig, &frames, n, opts.skeleton)
-            .into_iter()
-            .map(|p| p.map(conv))
-            .collect();
-        // Frames in metres, Y-up, once (the skeletons above were read off
-        // the file-unit frames, as the rig was embedded on them).
-        for p in frames.iter_mut() {
-            *p = (y_up(*p, z_up) * metres_per_unit).to_array();
-        }
+        // Frames in metres, Y-up, memory-mapped from the cache (written on
+        // the first load, a sequence at a time), and the skeletons read off
+        // the file-unit frames (the rig was embedded on them), cached too.
+        let (frames, poses) = open_or_build(
+            dir,
+            &manifest,
+            &rig,
+            n,
+            matrix.len(),
+            Conversion {
+                metres_per_unit,
+                z_up,
+            },
+            opts.skeleton,
+        )?;
         let rest_pose = rig.joints.map(|j| conv(DVec3::from_array(j)));
         let adjacency = graph.adjacency();
         let bad = |msg: String| DbError::Manifest {
@@ -221,9 +208,21 @@ impl Character {
     }
 
     /// All frames of all sequences, frame-major (`n` positions a frame),
-    /// metres, Y-up (converted once on load).
+    /// metres, Y-up (memory-mapped: reading them all pages in the whole
+    /// frame cache; [`Character::frame`] reads one).
     pub fn frames(&self) -> &[[f64; 3]] {
+        self.frames.all()
+    }
+
+    /// The frame store (memory-mapped frame cache).
+    pub fn frame_store(&self) -> &FrameStore {
         &self.frames
+    }
+
+    /// The lowest Y of frame `id` (metres), kept with the frame cache so
+    /// that no scan of every frame is needed.
+    pub fn lowest(&self, id: u32) -> f64 {
+        self.frames.lowest(id)
     }
 
     /// Vertices per frame.
@@ -294,7 +293,7 @@ impl Character {
 
     /// Frame `id`'s positions (metres, Y-up, `n` of them).
     pub fn frame(&self, id: u32) -> &[[f64; 3]] {
-        &self.frames[id as usize * self.n..(id as usize + 1) * self.n]
+        self.frames.frame(id)
     }
 
     /// Frame `id`'s positions in metres, Y-up, copied to `out` (kept for

@@ -135,12 +135,11 @@ pub fn database_floor_lift(ch: &Character) -> f64 {
 /// (`topology`, [`Character::topology_metres`]; a prepared character holds
 /// it).
 pub fn database_floor_lift_on(ch: &Character, topology: &crate::mesh::Mesh) -> f64 {
-    let n = ch.n().max(1);
     let lowest = |f: &[[f64; 3]]| f.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
-    let mut lows: Vec<f64> = ch
-        .frames()
-        .chunks_exact(n)
-        .map(lowest)
+    // Each frame's lowest point, kept with the frame cache: no scan of
+    // every frame (the frames are memory-mapped, issue 43).
+    let mut lows: Vec<f64> = (0..ch.frame_count() as u32)
+        .map(|id| ch.lowest(id))
         .filter(|h| h.is_finite())
         .collect();
     let rest = lowest(topology.positions());
