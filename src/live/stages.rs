@@ -132,9 +132,11 @@ pub struct StageTally {
 impl StageTally {
     /// Counts one output frame.
     pub fn add(&mut self, f: &FrameStages) {
-        for i in 0..Stage::ALL.len() {
-            self.wall[i].add_ms(f.wall_ms[i]);
-            self.cpu[i].add_ms(f.cpu_ms[i]);
+        for (w, &ms) in self.wall.iter_mut().zip(&f.wall_ms) {
+            w.add_ms(ms);
+        }
+        for (c, &ms) in self.cpu.iter_mut().zip(&f.cpu_ms) {
+            c.add_ms(ms);
         }
         let d = f.wall_ms[Stage::Deformation as usize];
         if f.repaired {
