@@ -97,7 +97,9 @@ pub struct Args {
     #[arg(long, value_name = "OUT")]
     pub record: Option<PathBuf>,
     /// Print the latency and throughput report (frames/s, arrival to mesh
-    /// ready median and p99, drops) when the stream ends.
+    /// ready median and p99, drops, and where each frame's time went: the
+    /// analysis, retrieval, timeline+placement, blending and deformation
+    /// stages, wall and CPU) when the stream ends.
     #[arg(long)]
     pub report: bool,
     /// Serve the browser page (the character and the incoming skeleton side

@@ -15,6 +15,7 @@ use crate::live::report::{Counters, Latencies, LatencySummary, Sample, resident_
 use crate::live::rokoko::{ActorChoice, Rokoko};
 use crate::live::session::{LiveFrame, Session, SessionOptions};
 use crate::live::source::{Event, Source, SourceError};
+use crate::live::stages::{StageReport, StageTally};
 use crate::live::stream;
 use crate::live::vmc::Vmc;
 use crate::mesh::MeshSequence;
@@ -253,6 +254,13 @@ pub struct LiveReport {
     pub latency: LatencySummary,
     /// Milliseconds making each mesh (analysis to deformation), median.
     pub work_median_ms: f64,
+    /// Milliseconds making each mesh, mean (the stages' means add up to it).
+    pub work_mean_ms: f64,
+    /// Where each mesh's time went, stage by stage (wall and CPU).
+    pub stages: StageReport,
+    /// Milliseconds handing each mesh on after it is ready (recording it,
+    /// the page, the caller): not in the latency, but in the frame rate.
+    pub output: LatencySummary,
     /// The incoming frames: received, dropped, duplicated, late, malformed.
     pub input: Counters,
     /// The retrieval: frames decided, jumps, cuts, widened, the scales.
@@ -300,6 +308,37 @@ impl LiveReport {
             "input: {} received, {} dropped, {} duplicated, {} late, {} malformed, {} reconnects",
             c.received, c.dropped, c.duplicated, c.late, c.malformed, c.reconnects
         );
+        let _ = writeln!(
+            t,
+            "stages (ms per frame; wall median / p99 / max / mean, CPU mean / p99 / max):"
+        );
+        for g in &r.stages.stages {
+            let _ = writeln!(
+                t,
+                "  {:<19} {:7.2} {:7.2} {:7.2} {:7.2}   CPU {:7.2} {:7.2} {:7.2}",
+                g.stage,
+                g.median_ms,
+                g.p99_ms,
+                g.max_ms,
+                g.mean_ms,
+                g.cpu_mean_ms,
+                g.cpu_p99_ms,
+                g.cpu_max_ms
+            );
+        }
+        let st = &r.stages;
+        let _ = writeln!(
+            t,
+            "  (mesh work mean {:.2} ms; fold repair on {} frames: deformation mean {:.2} ms, p99 {:.2} ms, against {:.2} / {:.2} ms without; handing on: median {:.2} ms, p99 {:.2} ms)",
+            r.work_mean_ms,
+            st.repaired_frames,
+            st.deformation_repaired_mean_ms,
+            st.deformation_repaired_p99_ms,
+            st.deformation_plain_mean_ms,
+            st.deformation_plain_p99_ms,
+            r.output.median_ms,
+            r.output.p99_ms
+        );
         let s = &r.retrieval;
         let _ = writeln!(
             t,
@@ -332,6 +371,8 @@ fn rate(frames: u64, first: Option<Instant>) -> f64 {
 struct Tally {
     latencies: Latencies,
     work: Latencies,
+    stages: StageTally,
+    output: Latencies,
     frames_out: u64,
     /// The recording's vertices (empty unless recording).
     held: Vec<[f64; 3]>,
@@ -353,6 +394,8 @@ impl Tally {
         Tally {
             latencies: Latencies::default(),
             work: Latencies::default(),
+            stages: StageTally::default(),
+            output: Latencies::default(),
             frames_out: 0,
             held: Vec::new(),
             recording,
@@ -376,6 +419,7 @@ impl Tally {
         fallback: &Pose,
         on_frame: &mut dyn FnMut(FrameOut<'_>),
     ) {
+        let began = Instant::now();
         self.frames_out += 1;
         if self.recording {
             self.held.extend_from_slice(f.positions);
@@ -387,6 +431,7 @@ impl Tally {
             latency_ms: latency.as_secs_f64() * 1e3,
             output_fps: rate(self.frames_out, self.first),
         });
+        self.output.add(began.elapsed());
     }
 
     /// Takes a sample when one is due (every `sample_every`, from the first
@@ -516,6 +561,7 @@ pub fn run_live(
             tally.latencies.add(lat);
             tally.interval.add(lat);
             tally.work.add(now - began);
+            tally.stages.add(&f.stages);
             tally.out(f, lat, &pose, &mut on_frame);
         };
         s.push(&pose, rotations.as_ref(), &mut emit);
@@ -556,6 +602,9 @@ pub fn run_live(
         prepare_seconds,
         latency: tally.latencies.summary(),
         work_median_ms: tally.work.quantile_ms(0.5),
+        work_mean_ms: tally.work.summary().mean_ms,
+        stages: tally.stages.summary(),
+        output: tally.output.summary(),
         input: source.counters(),
         retrieval: session.as_ref().map(|s| s.stats()).unwrap_or_default(),
         turned_over: session.as_ref().map_or(0, |s| s.turned_over()),

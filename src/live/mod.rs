@@ -7,7 +7,7 @@
 //! stream input ([`replay`] a clip file as a stream, [`bvh_tcp`] BVH over
 //! TCP, [`vmc`] and [`rokoko`] over UDP through [`stream`] and the
 //! [`humanoid`] bone tables, each through a [`mailbox`]), [`report`] the
-//! latency and throughput figures, [`page`] the browser page and its
+//! latency and throughput figures, [`stages`] where a frame's time goes, [`page`] the browser page and its
 //! WebSocket.
 
 pub mod bvh_tcp;
@@ -21,6 +21,7 @@ pub mod rokoko;
 pub mod send;
 pub mod session;
 pub mod source;
+pub mod stages;
 pub mod stream;
 pub mod vmc;
 

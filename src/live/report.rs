@@ -33,7 +33,11 @@ impl Default for Latencies {
 impl Latencies {
     /// Records one latency.
     pub fn add(&mut self, d: Duration) {
-        let ms = d.as_secs_f64() * 1e3;
+        self.add_ms(d.as_secs_f64() * 1e3);
+    }
+
+    /// Records one latency given in milliseconds.
+    pub fn add_ms(&mut self, ms: f64) {
         let b = ((ms / BIN_MS) as usize).min(BINS - 1);
         self.bins[b] += 1;
         self.count += 1;

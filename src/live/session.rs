@@ -24,6 +24,7 @@
 //! best-match costs, 8 bytes per frame, aside).
 
 use super::online::{Advance, OnlineOptions, OnlineStats, OnlineTrellis};
+use super::stages::{FrameStages, Stage, StageClock};
 use crate::db::Character;
 use crate::deform::DeformWorkspace;
 use crate::drive::placement::{BlendScratch, blend_placed, placements};
@@ -79,6 +80,9 @@ pub struct LiveFrame<'s> {
     pub positions: &'s [[f64; 3]],
     /// The query pose on the character's skeleton it follows.
     pub query: &'s Pose,
+    /// Where the time making it went (the arriving frame's analysis and
+    /// retrieval count with the first frame it outputs).
+    pub stages: FrameStages,
 }
 
 /// The state of a live session.
@@ -115,6 +119,9 @@ pub struct Session<'a> {
     blended: Vec<[f64; 3]>,
     deformed: Vec<[f64; 3]>,
     turned_over: usize,
+    /// The stage clock of the frame being made and its times so far.
+    clock: StageClock,
+    stages: FrameStages,
 }
 
 impl<'a> Session<'a> {
@@ -153,6 +160,8 @@ impl<'a> Session<'a> {
             blended: vec![[0.0; 3]; n],
             deformed: vec![[0.0; 3]; n],
             turned_over: 0,
+            clock: StageClock::start(),
+            stages: FrameStages::default(),
         }
     }
 
@@ -176,6 +185,8 @@ impl<'a> Session<'a> {
         rotations: Option<&JointRotations>,
         out: &mut dyn FnMut(LiveFrame<'_>),
     ) {
+        self.clock = StageClock::start();
+        self.stages = FrameStages::default();
         let w = self.opts.analysis_window.max(1);
         if self.raw.len() == w {
             self.raw.pop_front();
@@ -231,7 +242,8 @@ impl<'a> Session<'a> {
                 *slot = *l;
             }
         }
-        self.push_analysed(&q, &f, out);
+        self.clock.lap(Stage::Analysis, &mut self.stages);
+        self.push_analysed_timed(&q, &f, out);
     }
 
     /// The query frame `k` is output with: its newest analysis, plus what
@@ -264,14 +276,30 @@ impl<'a> Session<'a> {
         on_floor: &Pose,
         out: &mut dyn FnMut(LiveFrame<'_>),
     ) {
+        self.clock = StageClock::start();
+        self.stages = FrameStages::default();
+        self.push_analysed_timed(query, on_floor, out);
+    }
+
+    /// [`Session::push_analysed`] on the running stage clock.
+    fn push_analysed_timed(
+        &mut self,
+        query: &Pose,
+        on_floor: &Pose,
+        out: &mut dyn FnMut(LiveFrame<'_>),
+    ) {
         self.query.push_back(*query);
         let adv = self.trellis.push(on_floor);
+        self.clock.lap(Stage::Retrieval, &mut self.stages);
         self.emit(adv, out);
     }
 
     /// Decides and outputs every frame still pending (the stream ended).
     pub fn finish(&mut self, out: &mut dyn FnMut(LiveFrame<'_>)) {
+        self.clock = StageClock::start();
+        self.stages = FrameStages::default();
         let adv = self.trellis.finish();
+        self.clock.lap(Stage::Retrieval, &mut self.stages);
         self.emit(adv, out);
     }
 
@@ -323,6 +351,7 @@ impl<'a> Session<'a> {
         let window = &window[..queries.len()];
         let (frames, _) = timeline(window, ch, &self.opts.retarget.timeline);
         let placed = placements(ch, window, &frames, &queries, self.opts.retarget.smooth);
+        self.clock.lap(Stage::Placement, &mut self.stages);
         let o = frames[h];
         let primary = o.primary();
         let mut scratch = BlendScratch {
@@ -340,21 +369,28 @@ impl<'a> Session<'a> {
             &mut scratch,
             &mut self.blended,
         );
+        self.clock.lap(Stage::Blending, &mut self.stages);
         let target = &queries[h];
         let positions: &[[f64; 3]] = match (self.prepared.deformer(), self.deform_ws.as_mut()) {
             (Some(d), Some(ws)) => {
                 let sp = ch.rig().frame_joints(&self.blended);
                 let c = d.deform(ch, &self.blended, &sp, target, &mut self.deformed, ws);
                 self.turned_over += c.after;
+                self.stages.repaired = c.before > 0;
                 &self.deformed
             }
             _ => &self.blended,
         };
+        self.clock.lap(Stage::Deformation, &mut self.stages);
+        let stages = std::mem::take(&mut self.stages);
         out(LiveFrame {
             index: k,
             id,
             positions,
             query: target,
+            stages,
         });
+        // The next frame of this arrival starts after the output.
+        self.clock = StageClock::start();
     }
 }

@@ -6,3 +6,4 @@ mod long;
 mod online;
 mod page;
 mod protocols;
+mod stages;

@@ -1,0 +1,217 @@
+//! Where a live frame's time goes: the session's stages timed one after
+//! the other (each stage ends where the next begins, so the stages of a
+//! frame add up to its mesh work), on the wall clock and on the process's
+//! CPU clock (all threads: the work rayon hands to other threads counts;
+//! on a machine busy with other work the CPU time is the stage's own cost,
+//! the wall time adds the waits for a core).
+
+use super::report::Latencies;
+use serde::Serialize;
+use std::time::Instant;
+
+/// The stages of one output frame, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// The pose kernel over the analysis window (and the window's upkeep).
+    Analysis,
+    /// The online trellis: candidates of the new frame, the fixed-lag solve.
+    Retrieval,
+    /// The offline timeline (interpolation, blend weights) and placement
+    /// over the decided history.
+    Placement,
+    /// Blending the retrieved frames at their placements.
+    Blending,
+    /// The part-based deformation towards the query pose, with the fold
+    /// repair when triangles turned over.
+    Deformation,
+}
+
+impl Stage {
+    /// Every stage, in order.
+    pub const ALL: [Stage; 5] = [
+        Stage::Analysis,
+        Stage::Retrieval,
+        Stage::Placement,
+        Stage::Blending,
+        Stage::Deformation,
+    ];
+
+    /// The stage's name in the report.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Analysis => "analysis",
+            Stage::Retrieval => "retrieval",
+            Stage::Placement => "timeline+placement",
+            Stage::Blending => "blending",
+            Stage::Deformation => "deformation",
+        }
+    }
+}
+
+/// CPU seconds of the whole process so far (every thread), or `None`
+/// where the platform does not say.
+#[cfg(unix)]
+pub fn process_cpu_seconds() -> Option<f64> {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec for the call's duration.
+    let r = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    (r == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+}
+
+/// CPU seconds of the whole process so far: `None` (not read here).
+#[cfg(not(unix))]
+pub fn process_cpu_seconds() -> Option<f64> {
+    None
+}
+
+/// The stage times of one output frame (milliseconds). The analysis and
+/// retrieval of an arriving frame count with the first frame it lets the
+/// session output (at the end of a stream one arrival outputs several).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameStages {
+    /// Wall time of each stage ([`Stage::ALL`] order).
+    pub wall_ms: [f64; 5],
+    /// Process CPU time of each stage (0 where not known).
+    pub cpu_ms: [f64; 5],
+    /// The deformation repaired turned-over triangles on this frame.
+    pub repaired: bool,
+}
+
+impl FrameStages {
+    /// Wall milliseconds of all stages.
+    pub fn total_wall_ms(&self) -> f64 {
+        self.wall_ms.iter().sum()
+    }
+}
+
+/// A running stage clock: [`StageClock::lap`] ends the current stage and
+/// starts the next.
+#[derive(Debug, Clone, Copy)]
+pub struct StageClock {
+    wall: Instant,
+    cpu: Option<f64>,
+}
+
+impl StageClock {
+    /// Starts the clock.
+    pub fn start() -> StageClock {
+        StageClock {
+            wall: Instant::now(),
+            cpu: process_cpu_seconds(),
+        }
+    }
+
+    /// Adds the time since the last lap to `stage` of `into` and starts
+    /// the next stage.
+    pub fn lap(&mut self, stage: Stage, into: &mut FrameStages) {
+        let now = StageClock::start();
+        let i = stage as usize;
+        into.wall_ms[i] += now.wall.saturating_duration_since(self.wall).as_secs_f64() * 1e3;
+        if let (Some(a), Some(b)) = (self.cpu, now.cpu) {
+            into.cpu_ms[i] += ((b - a) * 1e3).max(0.0);
+        }
+        *self = now;
+    }
+}
+
+/// The stage times of a session, binned (flat memory).
+#[derive(Debug, Clone, Default)]
+pub struct StageTally {
+    wall: [Latencies; 5],
+    cpu: [Latencies; 5],
+    /// Frames whose deformation ran the fold repair, and their
+    /// deformation's wall time.
+    repaired: Latencies,
+    /// The other frames' deformation wall time.
+    plain: Latencies,
+}
+
+impl StageTally {
+    /// Counts one output frame.
+    pub fn add(&mut self, f: &FrameStages) {
+        for (w, &ms) in self.wall.iter_mut().zip(&f.wall_ms) {
+            w.add_ms(ms);
+        }
+        for (c, &ms) in self.cpu.iter_mut().zip(&f.cpu_ms) {
+            c.add_ms(ms);
+        }
+        let d = f.wall_ms[Stage::Deformation as usize];
+        if f.repaired {
+            self.repaired.add_ms(d);
+        } else {
+            self.plain.add_ms(d);
+        }
+    }
+
+    /// The summary.
+    pub fn summary(&self) -> StageReport {
+        let stages = Stage::ALL
+            .iter()
+            .map(|&s| {
+                let (w, c) = (&self.wall[s as usize], &self.cpu[s as usize]);
+                let ws = w.summary();
+                let cs = c.summary();
+                StageSummary {
+                    stage: s.name(),
+                    median_ms: ws.median_ms,
+                    p99_ms: ws.p99_ms,
+                    max_ms: ws.max_ms,
+                    mean_ms: ws.mean_ms,
+                    cpu_mean_ms: cs.mean_ms,
+                    cpu_p99_ms: cs.p99_ms,
+                    cpu_max_ms: cs.max_ms,
+                }
+            })
+            .collect();
+        let (r, p) = (self.repaired.summary(), self.plain.summary());
+        StageReport {
+            stages,
+            repaired_frames: r.frames,
+            deformation_repaired_mean_ms: r.mean_ms,
+            deformation_repaired_p99_ms: r.p99_ms,
+            deformation_plain_mean_ms: p.mean_ms,
+            deformation_plain_p99_ms: p.p99_ms,
+        }
+    }
+}
+
+/// One stage's figures over a session (milliseconds per output frame).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StageSummary {
+    /// The stage ([`Stage::name`]).
+    pub stage: &'static str,
+    /// Wall time: median, 99th percentile, largest, mean.
+    pub median_ms: f64,
+    /// Wall time, 99th percentile.
+    pub p99_ms: f64,
+    /// Wall time, largest.
+    pub max_ms: f64,
+    /// Wall time, mean.
+    pub mean_ms: f64,
+    /// Process CPU time (all threads), mean.
+    pub cpu_mean_ms: f64,
+    /// Process CPU time, 99th percentile.
+    pub cpu_p99_ms: f64,
+    /// Process CPU time, largest.
+    pub cpu_max_ms: f64,
+}
+
+/// The stage breakdown of a session.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct StageReport {
+    /// Each stage, in order; their means add up to the mesh work's mean.
+    pub stages: Vec<StageSummary>,
+    /// Frames whose deformation ran the fold repair.
+    pub repaired_frames: u64,
+    /// Their deformation's wall time, mean and 99th percentile.
+    pub deformation_repaired_mean_ms: f64,
+    /// Their deformation's wall time, 99th percentile.
+    pub deformation_repaired_p99_ms: f64,
+    /// The other frames' deformation wall time, mean.
+    pub deformation_plain_mean_ms: f64,
+    /// The other frames' deformation wall time, 99th percentile.
+    pub deformation_plain_p99_ms: f64,
+}
