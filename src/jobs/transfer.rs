@@ -510,7 +510,7 @@ pub fn transfer_onto_scan(
 /// Frames of a streamed transfer kept for its plausibility measure, in
 /// bytes of positions (the first frames up to this size, and up to a
 /// quarter of the memory budget, are measured).
-pub const PLAUSIBILITY_BYTES: usize = 256 << 20;
+pub(crate) const PLAUSIBILITY_BYTES: usize = 256 << 20;
 
 /// [`transfer_onto_scan`] writing each frame to `out` as it is solved
 /// (GLB options `glb`), so a clip of any length needs the memory of its

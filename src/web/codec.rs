@@ -58,7 +58,7 @@ pub const VERSION: u32 = 1;
 /// Bytes of the fixed header (before the per-sequence table).
 pub const HEADER_BYTES: usize = 64;
 /// The most quantisation levels per axis (positions fit a `u16`).
-pub const MAX_LEVELS: u32 = 65_536;
+pub(crate) const MAX_LEVELS: u32 = 65_536;
 
 /// How a frame is predicted from what is already decoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]

@@ -96,7 +96,7 @@ fn check_site(site: &Path) -> Result<Vec<String>, String> {
 }
 
 /// The report of `path` when it is one of these kinds; `None` otherwise.
-pub fn inspect_other(path: &Path) -> Option<Result<JsonReport, InspectError>> {
+pub(crate) fn inspect_other(path: &Path) -> Option<Result<JsonReport, InspectError>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
