@@ -40,6 +40,27 @@ pub struct ScanTransferOptions {
     pub glb: GlbOptions,
 }
 
+impl ScanTransferOptions {
+    /// Checked options with the defaults but `markers` ([`MarkerOptions::new`]
+    /// checks them) and `fps` (a frame rate the CLI accepts,
+    /// [`crate::util::budget::is_frame_rate`]).
+    pub fn new(markers: MarkerOptions, fps: f64) -> Result<ScanTransferOptions, JobError> {
+        use crate::util::budget::{MAX_FPS, MIN_FPS, is_frame_rate};
+        if !is_frame_rate(fps) {
+            return Err(JobError::Usage(format!(
+                "`ScanTransferOptions::fps` {fps}: expected a frame rate in [{MIN_FPS}, {MAX_FPS}]"
+            )));
+        }
+        let markers = MarkerOptions::new(markers.count, markers.margin)
+            .map_err(|e| JobError::Usage(e.to_string()))?;
+        Ok(ScanTransferOptions {
+            markers,
+            fps,
+            ..ScanTransferOptions::default()
+        })
+    }
+}
+
 impl Default for ScanTransferOptions {
     fn default() -> Self {
         ScanTransferOptions {
@@ -350,6 +371,21 @@ impl Default for AutoScanLandmarks {
             min_confidence: 0.5,
             write: None,
         }
+    }
+}
+
+impl AutoScanLandmarks {
+    /// Checked options: `min_confidence` in [0, 1].
+    pub fn new(min_confidence: f64, write: Option<PathBuf>) -> Result<AutoScanLandmarks, JobError> {
+        if !(0.0..=1.0).contains(&min_confidence) {
+            return Err(JobError::Usage(format!(
+                "`AutoScanLandmarks::min_confidence` {min_confidence}: expected 0 to 1"
+            )));
+        }
+        Ok(AutoScanLandmarks {
+            min_confidence,
+            write,
+        })
     }
 }
 

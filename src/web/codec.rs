@@ -117,6 +117,33 @@ impl Default for EncodeOptions {
     }
 }
 
+impl EncodeOptions {
+    /// Checked options: `max_error` finite and positive (metres), `level`
+    /// a DEFLATE level 0-9.
+    pub fn new(
+        max_error: f64,
+        predictor: Predictor,
+        level: u32,
+    ) -> Result<EncodeOptions, CodecError> {
+        if !(max_error.is_finite() && max_error > 0.0) {
+            return Err(CodecError::Input(format!(
+                "`EncodeOptions::max_error` must be positive, got {} m",
+                Short(max_error)
+            )));
+        }
+        if level > 9 {
+            return Err(CodecError::Input(format!(
+                "`EncodeOptions::level` {level}: expected a DEFLATE level 0-9"
+            )));
+        }
+        Ok(EncodeOptions {
+            max_error,
+            predictor,
+            level,
+        })
+    }
+}
+
 /// Geometry to encode: one topology, sequences of frame-major positions
 /// (metres, Y-up; `frames × vertices` entries each).
 #[derive(Debug, Clone)]
