@@ -158,7 +158,7 @@ pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, 
 /// confident automatic ones.
 fn from_landmarks(
     mesh: &mut Mesh,
-    l: &PathBuf,
+    l: &std::path::Path,
     parts: Option<Vec<u8>>,
     o: &RigEmbedOptions,
 ) -> Result<(Embedding, Vec<Disagreement>), JobError> {
@@ -192,7 +192,7 @@ fn from_landmarks(
     // A degenerate landmark set is the landmark file's fault: name it.
     let e = Embedding::new(mesh, &lm, parts).map_err(|e| match e {
         EmbedError::Landmarks(le) => JobError::Input {
-            path: l.clone(),
+            path: l.to_path_buf(),
             msg: le.to_string(),
         },
         e @ EmbedError::Mesh(_) => JobError::Usage(format!("{}: {e}", o.mesh)),
@@ -205,7 +205,7 @@ fn from_landmarks(
 /// mesh when it is also `o.mesh`: its bind pose).
 fn from_skin(
     mesh: &mut Mesh,
-    g: &PathBuf,
+    g: &std::path::Path,
     parts: Option<Vec<u8>>,
     o: &RigEmbedOptions,
 ) -> Result<Embedding, JobError> {
@@ -216,7 +216,7 @@ fn from_skin(
     }
     let asset = crate::mesh::io::read_rigged(g)?;
     // The glTF itself as the mesh: its bind pose, not its animation.
-    if std::path::Path::new(&o.mesh) == g.as_path() {
+    if std::path::Path::new(&o.mesh) == g {
         *mesh = asset.mesh.clone();
     }
     let map = match &o.rig_map {

@@ -716,7 +716,7 @@ fn scan_height(prepared: &PreparedScan) -> f64 {
 /// borrows it).
 enum Driving {
     /// A clip's canonical poses.
-    Mocap(MocapPoses),
+    Mocap(Box<MocapPoses>),
     /// A template sequence with its markers.
     Template {
         frames: crate::mesh::MeshSequence,
@@ -779,7 +779,7 @@ fn load_driving(
             ));
             let what = format!("{} ({} rig)", m.display(), clip.convention);
             Ok(LoadedDriving {
-                driving: Driving::Mocap(clip),
+                driving: Driving::Mocap(Box::new(clip)),
                 fps: spec.options.fps,
                 what,
                 clip_head,
@@ -868,6 +868,10 @@ fn load_template(
     })
 }
 
+/// What [`solve`] returns: the positions (held or kept), what the
+/// transfer did, the files written (streamed).
+type Solved = (Vec<[f64; 3]>, TransferStats, Option<Vec<PathBuf>>);
+
 /// Solves every frame: held (checked against the memory budget first), or
 /// written to `stream` as solved with the first frames kept for the
 /// plausibility measure. Returns the positions (held or kept), what the
@@ -879,7 +883,7 @@ fn solve(
     fps: f64,
     progress: &(dyn Fn(usize) + Sync),
     stream: Option<(&Path, GlbOptions)>,
-) -> Result<(Vec<[f64; 3]>, TransferStats, Option<Vec<PathBuf>>), JobError> {
+) -> Result<Solved, JobError> {
     let frames = job.motion.frames();
     let n = prepared.mesh.vertex_count();
     Ok(match stream {
