@@ -12,7 +12,8 @@ Prints, for the library and binary under SRC_DIR:
      excluded), the top 15 and how many exceed 100 and 150 lines (--all: every one over 100);
   3. `mod.rs` files: total lines and lines of logic (not `mod`, `use`, attributes, comments);
   4. `src/cli` lines, and its files;
-  5. visibility: `pub` items vs `pub(crate)`/`pub(super)`, and public struct fields;
+  5. visibility: `pub` items vs `pub(crate)`/`pub(super)`, public struct fields, and the
+     `pub` items reachable from outside the crate (their file's every module `pub mod`);
   6. the number of test binaries (`tests/*.rs`), benches and examples;
   7. library string literals that name a CLI flag (`--word`), per file.
 
@@ -375,6 +376,24 @@ for mod, code in code_of.items():
 print(f"pub items: {pub_items}; pub(crate)/pub(super)/pub(in ..): {restricted}; "
       f"pub struct fields: {pub_fields}")
 print("pub items by kind: " + ", ".join(f"{k} {n}" for k, n in sorted(kinds.items(), key=lambda kv: -kv[1])))
+
+
+def declared_pub(mod):
+    """True when `mod` is declared `pub mod` (not `pub(crate)`, not private) in its parent."""
+    parent = mod[:-1]
+    code = code_of.get(parent, "")
+    m = re.search(r"(?m)^\s*(pub(?:\s*\([^)]*\))?\s+)?mod\s+" + re.escape(mod[-1]) + r"\s*;", code)
+    return bool(m and m.group(1) and m.group(1).strip() == "pub")
+
+
+reachable = 0
+for mod, code in code_of.items():
+    if mod and mod[0] in ("cli", "<main>"):
+        continue
+    if all(declared_pub(mod[:k]) for k in range(1, len(mod) + 1)):
+        reachable += len(re.findall(r"(?<![A-Za-z0-9_])pub\s+(" + KIND[3:-4] + r")\b", code))
+print(f"pub items reachable from outside the crate (in files whose every module is `pub mod` "
+      f"from lib.rs; re-exports not followed): {reachable} of {pub_items}")
 
 # --------------------------------------------------------------------------- binaries
 print()

@@ -4,7 +4,7 @@
 use super::argv::{Usage, allow_negative_numbers, bad_value, non_utf8_argument};
 use super::{
     batch, blend, db, demo, eval, graph, inspect, keyframe, live, log, mesh, mocap, play, render,
-    repair, retarget, rig, synth, transfer, web,
+    repair, retarget, rig, synth, transfer, transfer_run, web,
 };
 use clap::{CommandFactory, FromArgMatches, Subcommand};
 
@@ -201,7 +201,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Retarget(a) => retarget::run(a),
         Command::Keyframe(a) => keyframe::run(*a),
         Command::Eval(a) => eval::run(a),
-        Command::Transfer(a) => transfer::run(*a),
+        Command::Transfer(a) => transfer_run::run(*a),
         Command::Batch(a) => batch::run_batch(*a),
         Command::Play(a) => play::run(a),
         Command::Live(a) => live::run(*a),

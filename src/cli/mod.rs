@@ -29,6 +29,7 @@ mod retarget;
 mod rig;
 mod synth;
 mod transfer;
+mod transfer_run;
 mod values;
 mod web;
 

@@ -43,7 +43,7 @@ pub enum JobError {
     Scan(#[from] crate::transfer::ScanError),
     /// A transfer could not be set up.
     #[error(transparent)]
-    Transfer(#[from] crate::transfer::JobError),
+    Transfer(#[from] crate::transfer::SetupError),
     /// A file could not be read or written.
     #[error(transparent)]
     Fs(#[from] crate::util::fsutil::FsError),

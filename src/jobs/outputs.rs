@@ -159,7 +159,11 @@ fn named(option: &str, folder: &Path) -> String {
 /// work (it said "X: File exists (os error 17)" or "Not a directory" after
 /// it). `option` names it (empty for one named without an option), `writes`
 /// says what goes into the folder.
-pub fn check_output_folder(option: &str, dir: &Path, writes: &str) -> Result<(), OutputError> {
+pub(crate) fn check_output_folder(
+    option: &str,
+    dir: &Path,
+    writes: &str,
+) -> Result<(), OutputError> {
     for p in dir.ancestors().filter(|p| !p.as_os_str().is_empty()) {
         if p.exists() && !p.is_dir() {
             return Err(OutputError::NotAFolder {
@@ -331,7 +335,7 @@ pub fn database_inputs(db: &Path) -> Vec<PathBuf> {
 /// clips (and a later batch of the library walked the outputs' tree as
 /// part of it). Paths are compared resolved (links, `.`, `..`), an output
 /// that does not exist yet by its nearest existing parent.
-pub fn refuse_output_in_clip_folder(
+pub(crate) fn refuse_output_in_clip_folder(
     option: &str,
     output: &Path,
     clips: &Path,
@@ -395,7 +399,7 @@ fn sibling(clips: &Path) -> PathBuf {
 /// the database's own `walk.pc2` (reported as "already done", exit 0, or
 /// replaced with `force`), and the scan's folder would have a
 /// clip's topology OBJ written over the scan of the same name.
-pub fn refuse_outputs_over_inputs(
+pub(crate) fn refuse_outputs_over_inputs(
     inputs: &[PathBuf],
     clips: &Path,
     option: &str,

@@ -134,7 +134,7 @@ impl Pick {
 /// The default save path for landmarks read from `input` (or, without
 /// one, beside `mesh`): `NAME.picked.landmarks.json`, numbered while it
 /// exists.
-pub fn default_save_path(input: Option<&Path>, mesh: &Path) -> PathBuf {
+pub(crate) fn default_save_path(input: Option<&Path>, mesh: &Path) -> PathBuf {
     let from = input.unwrap_or(mesh);
     let name = from
         .file_name()

@@ -90,7 +90,7 @@ pub struct RenderReport {
 }
 
 /// `x`, `-x`, `z`, `-z`, `y`, `-y` (`+` allowed) as an axis.
-pub fn axis_named(s: &str) -> Option<DVec3> {
+pub(crate) fn axis_named(s: &str) -> Option<DVec3> {
     Some(match s.trim().to_ascii_lowercase().as_str() {
         "x" | "+x" => DVec3::X,
         "-x" => DVec3::NEG_X,
@@ -114,7 +114,7 @@ pub fn draw(
 }
 
 /// [`draw`] with each view placed by its framing (`None`: fitted to the frame).
-pub fn draw_framed(
+pub(crate) fn draw_framed(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     rig: Option<&Embedding>,

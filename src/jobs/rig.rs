@@ -93,6 +93,8 @@ pub struct RigEmbedReport {
 
 /// Embeds a rig in `mesh` as `o` says, saves it to `o.output` (and the
 /// picture to `o.png`), and reports joints, parts and the self-check.
+/// Steps: the part labels, the embedding (from landmarks, a skin or the
+/// geometry), the files written, the report.
 pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, JobError> {
     let parts = match &o.parts {
         Some(p) => Some(parse_parts(&read_text(p)?, p, mesh.triangles(), mesh.vertex_count())?.0),
@@ -103,82 +105,13 @@ pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, 
     let mut disagreements = Vec::new();
     let e = match (&o.landmarks, &o.skin) {
         (Some(l), _) => {
-            let mut lm = Landmarks::load(l, mesh.vertex_count())?;
-            if o.groups {
-                // Only the groups' vertices: landmarks given as vertex ids
-                // of the file become points first.
-                if parts.is_some() {
-                    return Err(JobError::Usage(
-                        "`RigEmbedOptions::parts` with `RigEmbedOptions::groups`: part labels name the file's vertices".into(),
-                    ));
-                }
-                let points: Vec<_> = lm
-                    .marks
-                    .keys()
-                    .filter_map(|&l| lm.point(l, mesh.positions()).map(|p| (l, p)))
-                    .collect();
-                for (l, p) in points {
-                    lm.marks.insert(l, Mark::Point(p));
-                }
-                mesh = crate::mesh::repair::repair(&mesh, &Default::default()).0;
-            }
-            // A file that contradicts confident automatic landmarks (a
-            // left/right swap) is reported, not silently obeyed.
-            if let Ok((Some(a), None)) = estimate(mesh.positions(), mesh.triangles())
-                && a.confidence >= o.min_confidence
-            {
-                disagreements =
-                    crate::embed::scan_landmarks::compare(&a, &lm, mesh.positions(), 10.0);
-            }
-            // A degenerate landmark set is the landmark file's fault: name it.
-            Embedding::new(&mesh, &lm, parts).map_err(|e| match e {
-                EmbedError::Landmarks(le) => JobError::Input {
-                    path: l.clone(),
-                    msg: le.to_string(),
-                },
-                e @ EmbedError::Mesh(_) => JobError::Usage(format!("{}: {e}", o.mesh)),
-                other => other.into(),
-            })?
+            let (e, d) = from_landmarks(&mut mesh, l, parts, o)?;
+            disagreements = d;
+            e
         }
-        (None, Some(g)) => {
-            if parts.is_some() {
-                return Err(JobError::Usage(
-                    "`RigEmbedOptions::parts` goes with `RigEmbedOptions::landmarks`; a skin gives its own parts".into(),
-                ));
-            }
-            let asset = crate::rig::read_rigged_character(g)?;
-            // The glTF itself as the mesh: its bind pose, not its animation.
-            if std::path::Path::new(&o.mesh) == g.as_path() {
-                mesh = asset.mesh.clone();
-            }
-            let map = match &o.rig_map {
-                Some(m) => Some(crate::rig::RigMap::load(m)?),
-                None => None,
-            };
-            crate::embed::skin::from_skin(&mesh, &asset, map.as_ref(), g)?
-        }
+        (None, Some(g)) => from_skin(&mut mesh, g, parts, o)?,
         (None, None) => {
-            // Automatic landmarks from the geometry (issue 41).
-            if o.groups {
-                mesh = crate::mesh::repair::repair(&mesh, &Default::default()).0;
-            }
-            let opts = ScanOptions {
-                min_confidence: o.min_confidence,
-            };
-            let a =
-                find(mesh.positions(), mesh.triangles(), &opts).map_err(|e| JobError::Input {
-                    path: PathBuf::from(&o.mesh),
-                    msg: e.to_string(),
-                })?;
-            let lm = a.landmarks();
-            let e = Embedding::new(&mesh, &lm, parts).map_err(|e| match e {
-                EmbedError::Landmarks(le) => JobError::Input {
-                    path: PathBuf::from(&o.mesh),
-                    msg: format!("the automatic landmarks: {le}"),
-                },
-                e @ EmbedError::Mesh(_) => JobError::Usage(format!("{}: {e}", o.mesh)),
-                other => other.into(),
-            })?;
+            let (e, a) = from_geometry(&mut mesh, parts, o)?;
             automatic = Some(a);
             e
         }
@@ -200,12 +133,6 @@ pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, 
         );
         img.save_png(p)?;
     }
-    let nb = neighbours(mesh.vertex_count(), mesh.triangles());
-    let pieces = piece_counts(&e.labels, &nb);
-    let mut sizes = [0usize; Part::COUNT];
-    for &l in &e.labels {
-        sizes[l as usize] += 1;
-    }
     Ok(RigEmbedReport {
         output: o.output.clone(),
         seconds,
@@ -213,17 +140,7 @@ pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, 
             .iter()
             .map(|c| (c.name(), e.joints[c.index()]))
             .collect(),
-        parts: Part::ALL
-            .iter()
-            .map(|p| {
-                let c = PartCount {
-                    vertices: sizes[p.index()],
-                    region: e.regions[p.index()].len(),
-                    pieces: pieces[p.index()],
-                };
-                (p.name(), c)
-            })
-            .collect(),
+        parts: part_counts(&mesh, &e),
         facing: e.facing,
         height: e.height,
         notes: e.notes.clone(),
@@ -234,4 +151,132 @@ pub fn embed_rig(mut mesh: Mesh, o: &RigEmbedOptions) -> Result<RigEmbedReport, 
         vertices: mesh.vertex_count(),
         png: o.png.clone(),
     })
+}
+
+/// The embedding from the landmark file `l` (with `o.groups`: landmarks
+/// as points, the kept groups repaired), and the landmarks that contradict
+/// confident automatic ones.
+fn from_landmarks(
+    mesh: &mut Mesh,
+    l: &std::path::Path,
+    parts: Option<Vec<u8>>,
+    o: &RigEmbedOptions,
+) -> Result<(Embedding, Vec<Disagreement>), JobError> {
+    let mut disagreements = Vec::new();
+    let mut lm = Landmarks::load(l, mesh.vertex_count())?;
+    if o.groups {
+        // Only the groups' vertices: landmarks given as vertex ids
+        // of the file become points first.
+        if parts.is_some() {
+            return Err(JobError::Usage(
+                "`RigEmbedOptions::parts` with `RigEmbedOptions::groups`: part labels name the file's vertices".into(),
+            ));
+        }
+        let points: Vec<_> = lm
+            .marks
+            .keys()
+            .filter_map(|&l| lm.point(l, mesh.positions()).map(|p| (l, p)))
+            .collect();
+        for (l, p) in points {
+            lm.marks.insert(l, Mark::Point(p));
+        }
+        *mesh = crate::mesh::repair::repair(mesh, &Default::default()).0;
+    }
+    // A file that contradicts confident automatic landmarks (a
+    // left/right swap) is reported, not silently obeyed.
+    if let Ok((Some(a), None)) = estimate(mesh.positions(), mesh.triangles())
+        && a.confidence >= o.min_confidence
+    {
+        disagreements = crate::embed::scan_landmarks::compare(&a, &lm, mesh.positions(), 10.0);
+    }
+    // A degenerate landmark set is the landmark file's fault: name it.
+    let e = Embedding::new(mesh, &lm, parts).map_err(|e| match e {
+        EmbedError::Landmarks(le) => JobError::Input {
+            path: l.to_path_buf(),
+            msg: le.to_string(),
+        },
+        e @ EmbedError::Mesh(_) => JobError::Usage(format!("{}: {e}", o.mesh)),
+        other => other.into(),
+    })?;
+    Ok((e, disagreements))
+}
+
+/// The embedding from the rigged glTF `g`'s skin (the glTF itself as the
+/// mesh when it is also `o.mesh`: its bind pose).
+fn from_skin(
+    mesh: &mut Mesh,
+    g: &std::path::Path,
+    parts: Option<Vec<u8>>,
+    o: &RigEmbedOptions,
+) -> Result<Embedding, JobError> {
+    if parts.is_some() {
+        return Err(JobError::Usage(
+            "`RigEmbedOptions::parts` goes with `RigEmbedOptions::landmarks`; a skin gives its own parts".into(),
+        ));
+    }
+    let asset = crate::rig::read_rigged_character(g)?;
+    // The glTF itself as the mesh: its bind pose, not its animation.
+    if std::path::Path::new(&o.mesh) == g {
+        *mesh = asset.mesh.clone();
+    }
+    let map = match &o.rig_map {
+        Some(m) => Some(crate::rig::RigMap::load(m)?),
+        None => None,
+    };
+    Ok(crate::embed::skin::from_skin(
+        mesh,
+        &asset,
+        map.as_ref(),
+        g,
+    )?)
+}
+
+/// The embedding from automatic landmarks found on the geometry (issue 41),
+/// with those landmarks.
+fn from_geometry(
+    mesh: &mut Mesh,
+    parts: Option<Vec<u8>>,
+    o: &RigEmbedOptions,
+) -> Result<(Embedding, AutoLandmarks), JobError> {
+    if o.groups {
+        *mesh = crate::mesh::repair::repair(mesh, &Default::default()).0;
+    }
+    let opts = ScanOptions {
+        min_confidence: o.min_confidence,
+    };
+    let a = find(mesh.positions(), mesh.triangles(), &opts).map_err(|e| JobError::Input {
+        path: PathBuf::from(&o.mesh),
+        msg: e.to_string(),
+    })?;
+    let lm = a.landmarks();
+    let e = Embedding::new(mesh, &lm, parts).map_err(|e| match e {
+        EmbedError::Landmarks(le) => JobError::Input {
+            path: PathBuf::from(&o.mesh),
+            msg: format!("the automatic landmarks: {le}"),
+        },
+        e @ EmbedError::Mesh(_) => JobError::Usage(format!("{}: {e}", o.mesh)),
+        other => other.into(),
+    })?;
+    Ok((e, a))
+}
+
+/// Each body part's vertices, region and connected pieces.
+fn part_counts(mesh: &Mesh, e: &Embedding) -> BTreeMap<&'static str, PartCount> {
+    let nb = neighbours(mesh.vertex_count(), mesh.triangles());
+    let pieces = piece_counts(&e.labels, &nb);
+    let mut sizes = [0usize; Part::COUNT];
+    for &l in &e.labels {
+        sizes[l as usize] += 1;
+    }
+    Part::ALL
+        .iter()
+        .map(|p| {
+            let c = PartCount {
+                vertices: sizes[p.index()],
+                region: e.regions[p.index()].len(),
+                pieces: pieces[p.index()],
+            };
+            (p.name(), c)
+        })
+        .collect()
 }

@@ -40,6 +40,27 @@ pub struct ScanTransferOptions {
     pub glb: GlbOptions,
 }
 
+impl ScanTransferOptions {
+    /// Checked options with the defaults but `markers` ([`MarkerOptions::new`]
+    /// checks them) and `fps` (a frame rate the CLI accepts,
+    /// [`crate::util::budget::is_frame_rate`]).
+    pub fn new(markers: MarkerOptions, fps: f64) -> Result<ScanTransferOptions, JobError> {
+        use crate::util::budget::{MAX_FPS, MIN_FPS, is_frame_rate};
+        if !is_frame_rate(fps) {
+            return Err(JobError::Usage(format!(
+                "`ScanTransferOptions::fps` {fps}: expected a frame rate in [{MIN_FPS}, {MAX_FPS}]"
+            )));
+        }
+        let markers = MarkerOptions::new(markers.count, markers.margin)
+            .map_err(|e| JobError::Usage(e.to_string()))?;
+        Ok(ScanTransferOptions {
+            markers,
+            fps,
+            ..ScanTransferOptions::default()
+        })
+    }
+}
+
 impl Default for ScanTransferOptions {
     fn default() -> Self {
         ScanTransferOptions {
@@ -353,6 +374,21 @@ impl Default for AutoScanLandmarks {
     }
 }
 
+impl AutoScanLandmarks {
+    /// Checked options: `min_confidence` in [0, 1].
+    pub fn new(min_confidence: f64, write: Option<PathBuf>) -> Result<AutoScanLandmarks, JobError> {
+        if !(0.0..=1.0).contains(&min_confidence) {
+            return Err(JobError::Usage(format!(
+                "`AutoScanLandmarks::min_confidence` {min_confidence}: expected 0 to 1"
+            )));
+        }
+        Ok(AutoScanLandmarks {
+            min_confidence,
+            write,
+        })
+    }
+}
+
 /// The automatic landmarks of `scan` (named `name`) as `o` says, written
 /// if asked.
 fn automatic_landmarks(
@@ -510,7 +546,7 @@ pub fn transfer_onto_scan(
 /// Frames of a streamed transfer kept for its plausibility measure, in
 /// bytes of positions (the first frames up to this size, and up to a
 /// quarter of the memory budget, are measured).
-pub const PLAUSIBILITY_BYTES: usize = 256 << 20;
+pub(crate) const PLAUSIBILITY_BYTES: usize = 256 << 20;
 
 /// [`transfer_onto_scan`] writing each frame to `out` as it is solved
 /// (GLB options `glb`), so a clip of any length needs the memory of its
@@ -540,22 +576,70 @@ pub fn transfer_onto_scan_to(
 
 /// The transfer: frames held in the outcome (`stream` `None`), or written
 /// to `stream`'s path as they are solved (the files written returned).
+/// Steps: the scan's marks, the prepared scan, the driving source, the job
+/// (factored once), the solve, the truth error, the plausibility.
 fn transfer_inner(
     scan: &Mesh,
     spec: &TransferSpec,
     progress: &(dyn Fn(FrameProgress) + Sync),
     stream: Option<(&Path, GlbOptions)>,
 ) -> Result<(TransferOutcome, Option<Vec<PathBuf>>), JobError> {
-    use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
-    use crate::transfer::{MarkerFile, Source};
     let t0 = std::time::Instant::now();
-    let mopts = spec.options.markers;
+    let marks = scan_marks(scan, spec)?;
+    let prepared = prepare_scan(scan, spec, &marks)?;
+    let height = scan_height(&prepared);
+    let driving = load_driving(scan, spec, &prepared)?;
+    let t_setup = std::time::Instant::now();
+    let mut job = crate::transfer::Job::new(&prepared, driving.source())?;
+    let factor_seconds = t_setup.elapsed().as_secs_f64();
+    let frames = job.motion.frames();
+    let fps = driving.fps;
+    let progress = &|done| {
+        progress(FrameProgress {
+            done,
+            total: frames,
+        })
+    };
+    let (positions, stats, output) = solve(&mut job, &prepared, spec, fps, progress, stream)?;
+    let truth_error = truth_error(spec, &prepared, &positions, height)?;
+    let (metres_per_unit, plausibility) =
+        plausibility(&prepared, &positions, fps, driving.clip_head.as_deref());
+    let outcome = TransferOutcome {
+        used: std::mem::take(&mut job.used),
+        unpaired: job.unpaired,
+        prepared,
+        positions,
+        fps,
+        frames,
+        what: driving.what,
+        stats,
+        truth_error,
+        metres_per_unit,
+        plausibility,
+        setup_seconds: t_setup.duration_since(t0).as_secs_f64(),
+        factor_seconds,
+        automatic_landmarks: marks.automatic,
+    };
+    Ok((outcome, output))
+}
+
+/// The scan's marks as a [`TransferSpec`] gives them: a marker file, its
+/// landmarks (from a file or, without either, found automatically).
+struct ScanMarks {
+    file: Option<crate::transfer::MarkerFile>,
+    landmarks: Option<Landmarks>,
+    automatic: Option<crate::embed::scan_landmarks::AutoLandmarks>,
+}
+
+/// Reads the scan's marker file and landmarks, or finds its landmarks.
+fn scan_marks(scan: &Mesh, spec: &TransferSpec) -> Result<ScanMarks, JobError> {
+    use crate::transfer::MarkerFile;
     let file = match &spec.markers {
         Some(p) => Some(MarkerFile::load(p, scan.triangle_count())?),
         None => None,
     };
     let mut automatic = None;
-    let lm = match &spec.landmarks {
+    let landmarks = match &spec.landmarks {
         Some(p) => Some(Landmarks::load(p, scan.vertex_count())?),
         None if file.is_none() => {
             let a = automatic_landmarks(scan, &spec.scan_name, &spec.automatic)?;
@@ -565,9 +649,25 @@ fn transfer_inner(
         }
         None => None,
     };
+    Ok(ScanMarks {
+        file,
+        landmarks,
+        automatic,
+    })
+}
+
+/// The scan repaired with its markers (and rig), its markers saved if
+/// asked.
+fn prepare_scan(
+    scan: &Mesh,
+    spec: &TransferSpec,
+    marks: &ScanMarks,
+) -> Result<PreparedScan, JobError> {
+    use crate::transfer::MarkerFile;
+    let mopts = spec.options.markers;
     // Errors of the preparation (a flat or face-less mesh, markers of
     // another mesh) name the files they came from.
-    let prepared = match (&file, &lm) {
+    let prepared = match (&marks.file, &marks.landmarks) {
         (Some(f), l) => prepare(scan, MarkerSpec::File(f, l.as_ref()))
             .map_err(JobError::from)
             .map_err(context(format!(
@@ -598,108 +698,195 @@ fn transfer_inner(
         }
         .save(p)?;
     }
-    let height = match &prepared.rig {
+    Ok(prepared)
+}
+
+/// The scan's height: its rig's, else its bounds' largest side.
+fn scan_height(prepared: &PreparedScan) -> f64 {
+    match &prepared.rig {
         Some(r) => r.height,
         None => {
             let b = prepared.mesh.bounds();
             (0..3).map(|k| b.max[k] - b.min[k]).fold(0.0, f64::max)
         }
-    };
-    let clip;
-    let template;
-    let template_markers;
-    let mut align = glam::DQuat::IDENTITY;
-    // The driving clip's own head-to-trunk angles: its head line
-    // (Plausibility::with_clip_head), as in retarget, eval and synth.
-    let mut clip_head: Option<Vec<f64>> = None;
-    let (source, fps, what) = match &spec.source {
+    }
+}
+
+/// What drives the scan, read and owned (a [`crate::transfer::Source`]
+/// borrows it).
+enum Driving {
+    /// A clip's canonical poses.
+    Mocap(Box<MocapPoses>),
+    /// A template sequence with its markers.
+    Template {
+        frames: crate::mesh::MeshSequence,
+        markers: Vec<crate::transfer::Marker>,
+        reference: usize,
+        align: glam::DQuat,
+    },
+}
+
+/// The driving source read, its frame rate, its description and (a clip)
+/// its own head-to-trunk angles.
+struct LoadedDriving {
+    driving: Driving,
+    fps: f64,
+    what: String,
+    /// The driving clip's own head-to-trunk angles: its head line
+    /// (Plausibility::with_clip_head), as in retarget, eval and synth.
+    clip_head: Option<Vec<f64>>,
+}
+
+impl LoadedDriving {
+    fn source(&self) -> crate::transfer::Source<'_> {
+        use crate::transfer::Source;
+        match &self.driving {
+            Driving::Mocap(clip) => Source::Mocap(&clip.poses, &clip.reference),
+            Driving::Template {
+                frames,
+                markers,
+                reference,
+                align,
+            } => Source::Template {
+                frames,
+                markers,
+                reference: *reference,
+                align: *align,
+            },
+        }
+    }
+}
+
+/// Reads `spec.source`: a clip (refused without frames) or a template
+/// sequence with its markers.
+fn load_driving(
+    scan: &Mesh,
+    spec: &TransferSpec,
+    prepared: &PreparedScan,
+) -> Result<LoadedDriving, JobError> {
+    match &spec.source {
         TransferSource::Mocap(m) => {
-            clip = load_mocap(m, &spec.options.load, spec.options.fps)?;
+            let clip = load_mocap(m, &spec.options.load, spec.options.fps)?;
             if clip.poses.is_empty() {
                 return Err(JobError::Input {
                     path: m.clone(),
                     msg: "the clip has no frames".into(),
                 });
             }
-            clip_head = Some(crate::pose::retarget::clip_head_trunk_deg(
+            let clip_head = Some(crate::pose::retarget::clip_head_trunk_deg(
                 &clip.reference,
                 &clip.poses,
             ));
-            (
-                Source::Mocap(&clip.poses, &clip.reference),
-                spec.options.fps,
-                format!("{} ({} rig)", m.display(), clip.convention),
-            )
+            let what = format!("{} ({} rig)", m.display(), clip.convention);
+            Ok(LoadedDriving {
+                driving: Driving::Mocap(Box::new(clip)),
+                fps: spec.options.fps,
+                what,
+                clip_head,
+            })
         }
         TransferSource::Template {
             spec: tspec,
             markers,
             landmarks,
             frame,
-        } => {
-            template = load_sequence(tspec, &SeqLoad::default())?;
-            // The range first: a frame past the end used to reach the
-            // landmark check on the last frame and fail there.
-            if *frame >= template.frame_count() {
-                return Err(JobError::Input {
-                    path: tspec.into(),
-                    msg: format!(
-                        "`TransferSource::Template` frame {frame} is past the end: the template has {} (0..={})",
-                        crate::batch::summary::count(template.frame_count(), "frame"),
-                        template.frame_count().saturating_sub(1)
-                    ),
-                });
+        } => load_template(
+            scan,
+            spec,
+            prepared,
+            tspec,
+            markers.as_deref(),
+            landmarks.as_deref(),
+            *frame,
+        ),
+    }
+}
+
+/// Reads a template sequence and its markers (from a marker file, else
+/// generated from its landmarks' rig, aligned to the scan's rig).
+fn load_template(
+    scan: &Mesh,
+    spec: &TransferSpec,
+    prepared: &PreparedScan,
+    tspec: &str,
+    markers: Option<&Path>,
+    landmarks: Option<&Path>,
+    frame: usize,
+) -> Result<LoadedDriving, JobError> {
+    use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
+    use crate::transfer::MarkerFile;
+    let mut align = glam::DQuat::IDENTITY;
+    let template = load_sequence(tspec, &SeqLoad::default())?;
+    // The range first: a frame past the end used to reach the
+    // landmark check on the last frame and fail there.
+    if frame >= template.frame_count() {
+        return Err(JobError::Input {
+            path: tspec.into(),
+            msg: format!(
+                "`TransferSource::Template` frame {frame} is past the end: the template has {} (0..={})",
+                crate::batch::summary::count(template.frame_count(), "frame"),
+                template.frame_count().saturating_sub(1)
+            ),
+        });
+    }
+    let tmesh = template.frame_mesh(frame);
+    let template_markers = if let Some(p) = markers {
+        MarkerFile::load(p, tmesh.triangle_count())?.markers
+    } else {
+        let tl = match (landmarks, &spec.landmarks) {
+            (Some(p), _) => Landmarks::load(p, tmesh.vertex_count())?,
+            (None, Some(p))
+                if tmesh.vertex_count() == scan.vertex_count()
+                    && tmesh.triangles() == scan.triangles() =>
+            {
+                Landmarks::load(p, tmesh.vertex_count())?
             }
-            let tmesh = template.frame_mesh(*frame);
-            template_markers = if let Some(p) = markers {
-                MarkerFile::load(p, tmesh.triangle_count())?.markers
-            } else {
-                let tl = match (landmarks, &spec.landmarks) {
-                    (Some(p), _) => Landmarks::load(p, tmesh.vertex_count())?,
-                    (None, Some(p))
-                        if tmesh.vertex_count() == scan.vertex_count()
-                            && tmesh.triangles() == scan.triangles() =>
-                    {
-                        Landmarks::load(p, tmesh.vertex_count())?
-                    }
-                    _ => {
-                        return Err(JobError::Usage(
-                            "the template needs markers: give the `TransferSource::Template` markers or landmarks"
-                                .into(),
-                        ));
-                    }
-                };
-                let rig = crate::embed::Embedding::new(&tmesh, &tl, None)?;
-                if let Some(scan_rig) = &prepared.rig {
-                    align = crate::transfer::alignment(&rig, scan_rig);
-                }
-                crate::transfer::markers::generate(&tmesh, &rig, &mopts)
-            };
-            let fps = template.fps.unwrap_or(spec.options.fps);
-            (
-                Source::Template {
-                    frames: &template,
-                    markers: &template_markers,
-                    reference: *frame,
-                    align,
-                },
-                fps,
-                tspec.to_string(),
-            )
+            _ => {
+                return Err(JobError::Usage(
+                    "the template needs markers: give the `TransferSource::Template` markers or landmarks"
+                        .into(),
+                ));
+            }
+        };
+        let rig = crate::embed::Embedding::new(&tmesh, &tl, None)?;
+        if let Some(scan_rig) = &prepared.rig {
+            align = crate::transfer::alignment(&rig, scan_rig);
         }
+        crate::transfer::markers::generate(&tmesh, &rig, &spec.options.markers)
     };
-    let t_setup = std::time::Instant::now();
-    let mut job = crate::transfer::Job::new(&prepared, source)?;
-    let factor_seconds = t_setup.elapsed().as_secs_f64();
+    let fps = template.fps.unwrap_or(spec.options.fps);
+    Ok(LoadedDriving {
+        driving: Driving::Template {
+            frames: template,
+            markers: template_markers,
+            reference: frame,
+            align,
+        },
+        fps,
+        what: tspec.to_string(),
+        clip_head: None,
+    })
+}
+
+/// What [`solve`] returns: the positions (held or kept), what the
+/// transfer did, the files written (streamed).
+type Solved = (Vec<[f64; 3]>, TransferStats, Option<Vec<PathBuf>>);
+
+/// Solves every frame: held (checked against the memory budget first), or
+/// written to `stream` as solved with the first frames kept for the
+/// plausibility measure. Returns the positions (held or kept), what the
+/// transfer did and the files written (streamed).
+fn solve(
+    job: &mut crate::transfer::Job,
+    prepared: &PreparedScan,
+    spec: &TransferSpec,
+    fps: f64,
+    progress: &(dyn Fn(usize) + Sync),
+    stream: Option<(&Path, GlbOptions)>,
+) -> Result<Solved, JobError> {
     let frames = job.motion.frames();
     let n = prepared.mesh.vertex_count();
-    let progress = &|done| {
-        progress(FrameProgress {
-            done,
-            total: frames,
-        })
-    };
-    let (positions, stats, output) = match stream {
+    Ok(match stream {
         None => {
             // Every output frame is held: refuse what cannot fit before
             // anything is allocated (issue 18, item 12).
@@ -746,8 +933,18 @@ fn transfer_inner(
             }
             (kept, stats, Some(writer.finish()?))
         }
-    };
-    let truth_error = match &spec.truth {
+    })
+}
+
+/// The vertex error against `spec.truth` (% of `height`), if given.
+fn truth_error(
+    spec: &TransferSpec,
+    prepared: &PreparedScan,
+    positions: &[[f64; 3]],
+    height: f64,
+) -> Result<Option<crate::tools::eval::VertexError>, JobError> {
+    use crate::mesh::io::{LoadOptions as SeqLoad, load_sequence};
+    Ok(match &spec.truth {
         Some(tspec) => {
             let t = load_sequence(tspec, &SeqLoad::default())?;
             if t.mesh().vertex_count() != prepared.mesh.vertex_count() {
@@ -761,15 +958,25 @@ fn transfer_inner(
                 });
             }
             Some(crate::tools::eval::vertex_error(
-                &positions,
+                positions,
                 t.all_positions(),
                 prepared.mesh.vertex_count(),
                 height,
             ))
         }
         None => None,
-    };
-    // Plausibility against the scan's rest frame (floor: its lowest point).
+    })
+}
+
+/// Plausibility against the scan's rest frame (floor: its lowest point),
+/// with the metres per unit assumed; `None` without a rig or when it cannot
+/// be measured (logged).
+fn plausibility(
+    prepared: &PreparedScan,
+    positions: &[[f64; 3]],
+    fps: f64,
+    clip_head: Option<&[f64]>,
+) -> (Option<f64>, Option<crate::tools::eval::Plausibility>) {
     let mut metres_per_unit = None;
     let plausibility = prepared.rig.as_ref().and_then(|rig| {
         let mpu = guess_metres_per_unit(rig.height);
@@ -781,9 +988,9 @@ fn transfer_inner(
         crate::tools::eval::Checker::new(&prepared.mesh, rig, up, None, fps, opts)
             .and_then(|mut c| {
                 c.metres_per_unit = mpu;
-                c.measure(&positions, rest.len(), None)
+                c.measure(positions, rest.len(), None)
             })
-            .map(|p| match &clip_head {
+            .map(|p| match clip_head {
                 Some(h) => p.with_clip_head(h, &opts.limits),
                 None => p,
             })
@@ -791,23 +998,7 @@ fn transfer_inner(
             .map_err(|e| tracing::warn!("plausibility not measured: {e}"))
             .ok()
     });
-    let outcome = TransferOutcome {
-        used: std::mem::take(&mut job.used),
-        unpaired: job.unpaired,
-        prepared,
-        positions,
-        fps,
-        frames,
-        what,
-        stats,
-        truth_error,
-        metres_per_unit,
-        plausibility,
-        setup_seconds: t_setup.duration_since(t0).as_secs_f64(),
-        factor_seconds,
-        automatic_landmarks: automatic,
-    };
-    Ok((outcome, output))
+    (metres_per_unit, plausibility)
 }
 
 impl TransferOutcome {

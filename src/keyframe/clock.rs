@@ -15,7 +15,7 @@
 /// CPU seconds the calling thread has run so far, or `None` where the
 /// platform does not say.
 #[cfg(unix)]
-pub fn thread_cpu_seconds() -> Option<f64> {
+pub(crate) fn thread_cpu_seconds() -> Option<f64> {
     let mut ts = libc::timespec {
         tv_sec: 0,
         tv_nsec: 0,
@@ -28,7 +28,7 @@ pub fn thread_cpu_seconds() -> Option<f64> {
 /// CPU seconds the calling thread has run so far: `None` (no portable
 /// thread clock here).
 #[cfg(not(unix))]
-pub fn thread_cpu_seconds() -> Option<f64> {
+pub(crate) fn thread_cpu_seconds() -> Option<f64> {
     None
 }
 

@@ -250,11 +250,11 @@ pub const MAX_RANGE_VALUES: usize = 100_001;
 /// for the floor several programmes, per target): each axis under
 /// [`MAX_RANGE_VALUES`] still made 8.9e9 targets, a 1.28 TB allocation
 /// (issue 46.4). The default grid has 800.
-pub const MAX_GRID_TARGETS: usize = 100_000;
+pub(crate) const MAX_GRID_TARGETS: usize = 100_000;
 
 /// Refuses a grid of `distances × times` targets before any query runs:
 /// more than [`MAX_GRID_TARGETS`], or records beyond the memory budget.
-pub fn check_grid(distances: usize, times: usize) -> Result<(), GridError> {
+pub(crate) fn check_grid(distances: usize, times: usize) -> Result<(), GridError> {
     let count = distances as u128 * times as u128;
     if count > MAX_GRID_TARGETS as u128 {
         return Err(GridError::TooMany {
@@ -312,7 +312,7 @@ pub fn parse_range(s: &str) -> Result<Vec<f64>, String> {
 }
 
 /// Distance bins of the reachability oracle per (node, frames, class).
-pub const ORACLE_BINS: usize = 256;
+pub(crate) const ORACLE_BINS: usize = 256;
 
 /// Is `(d, t)` reachable (module docs)? `met`: the query's result landed
 /// within 1 % (a witness).
@@ -389,13 +389,13 @@ pub fn graph_smoothness(
 
 /// True when the jump `from → to` (flat frame ids; `to − 1` pairs with
 /// `from`) joins two different sequences.
-pub fn is_across(ch: &Character, from: u32, to: u32) -> bool {
+pub(crate) fn is_across(ch: &Character, from: u32, to: u32) -> bool {
     ch.graph().frame_of(from).0 != ch.graph().frame_of(to.saturating_sub(1)).0
 }
 
 /// [`is_across`] of a transition report's frames (`SEQ:F` names; the
 /// frame entered is in the sequence it enters).
-pub fn names_across(from: &str, to: &str) -> bool {
+pub(crate) fn names_across(from: &str, to: &str) -> bool {
     let seq = |k: &str| {
         k.rsplit_once(':')
             .map_or(k.to_string(), |(s, _)| s.to_string())
@@ -405,7 +405,7 @@ pub fn names_across(from: &str, to: &str) -> bool {
 
 /// [`graph_smoothness`] split into the transitions within one sequence
 /// and those between two ([`is_across`]), each sorted.
-pub fn graph_smoothness_split(
+pub(crate) fn graph_smoothness_split(
     ch: &Character,
     g: &super::graph::KeyGraph,
     cache: &mut super::smoothness::Measurer,
@@ -442,7 +442,7 @@ pub fn evaluate(
 /// order: distances outer, times inner), so that a caller can show
 /// progress and rows before the grid ends. Errors: the grid's size
 /// ([`check_grid`]) or the search's.
-pub fn evaluate_with(
+pub(crate) fn evaluate_with(
     ch: &Character,
     planner: &Planner,
     distances: &[f64],

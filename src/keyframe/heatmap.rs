@@ -11,7 +11,7 @@ use crate::util::fsutil::{FsError, write_bytes_atomic};
 use std::path::Path;
 
 /// The larger of the two errors, percent of the target.
-pub fn error_pct(q: &GridQuery) -> f64 {
+pub(crate) fn error_pct(q: &GridQuery) -> f64 {
     let pct = |e: f64, t: f64| if t > 0.0 { 100.0 * e.abs() / t } else { 0.0 };
     pct(q.achieved_distance - q.distance, q.distance).max(pct(q.achieved_time - q.time, q.time))
 }

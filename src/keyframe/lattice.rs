@@ -1279,7 +1279,7 @@ impl Query<'_> {
 
 /// Frame counts the exact-length search's fallback tries, nearest bound
 /// first, when no path landed near its aim ([`search`]).
-pub const FALLBACK_COUNTS: usize = 64;
+pub(crate) const FALLBACK_COUNTS: usize = 64;
 
 /// [`solve_capped`] preceded, with a heading target, when no cap bounds
 /// it yet and pruning is on, by the probe (module docs, "Probe"): a programme with fewer bins

@@ -97,7 +97,7 @@ pub fn placements(ch: &Character, g: &KeyGraph, path: &[u32]) -> (Vec<Floor>, Ve
 /// all scaled so that the window's path length is unchanged; the frames
 /// after the window move with its end. A window with a standing step
 /// (shorter than 0.1 mm) is left as is.
-pub fn ease_steps(centre: &mut [[f64; 2]], jumps: &[Jump], g: &KeyGraph) {
+pub(crate) fn ease_steps(centre: &mut [[f64; 2]], jumps: &[Jump], g: &KeyGraph) {
     let step = |f: i64, seq: u32| -> Option<f64> {
         let i = usize::try_from(f).ok()?;
         (i > 0 && g.sequence.get(i) == Some(&seq) && g.sequence.get(i - 1) == Some(&seq))
@@ -208,7 +208,7 @@ pub struct Track {
 /// memory of one chunk, not of every frame (attack s14, item 3: 8.6 MB per
 /// output second). The frames are those of [`place`], bit for bit. The
 /// first error of the sink stops the placement and is returned.
-pub fn place_into<S: FrameSink>(
+pub(crate) fn place_into<S: FrameSink>(
     ch: &Character,
     blender: &Blender,
     g: &KeyGraph,

@@ -66,7 +66,7 @@ pub struct Resolved {
 
 /// Is `key` a pose (a mocap clip frame or a pose file) rather than
 /// `SEQUENCE:FRAME`?
-pub fn is_pose_key(key: &str) -> bool {
+pub(crate) fn is_pose_key(key: &str) -> bool {
     let lower = key.to_ascii_lowercase();
     let clip = lower
         .rsplit_once(':')
@@ -75,7 +75,7 @@ pub fn is_pose_key(key: &str) -> bool {
 }
 
 /// Reads the pose of a pose key (module docs) on the character's skeleton.
-pub fn read_pose(ch: &Character, key: &str, load: &LoadOptions) -> Result<Pose, PoseError> {
+pub(crate) fn read_pose(ch: &Character, key: &str, load: &LoadOptions) -> Result<Pose, PoseError> {
     let err = |msg: String| PoseError::Read {
         key: key.into(),
         msg,

@@ -303,7 +303,7 @@ pub enum RepeatsError {
 
 /// Largest loop-frame total the exact solver explores, whatever the bound
 /// (about 11 minutes at 25 fps).
-pub const MAX_LOOP_FRAMES: usize = 16_384;
+pub(crate) const MAX_LOOP_FRAMES: usize = 16_384;
 
 /// The paper's ILP (Eqs. 23-25), four `microlp` solves (eight with a
 /// heading term: the wrap integer as one more variable, module docs);
@@ -427,7 +427,7 @@ pub fn solve_exact(p: &Problem, bound: f64, max_labels: usize) -> Result<Repeats
 /// over `bound` and, with `beam`, keeps at most that many labels per loop
 /// frame count (those with the smallest lower bound): bounded time, no
 /// longer exact (the caller says so).
-pub fn solve_bounded(
+pub(crate) fn solve_bounded(
     p: &Problem,
     bound: f64,
     gap: f64,

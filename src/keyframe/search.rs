@@ -212,7 +212,7 @@ fn fixed_heading(h: &Heading, walk: f64, loop_turns: &[f64]) -> f64 {
 /// each walk's, [`super::repeats::merge_cones`]). A `heading` term is
 /// part of each combination's repetition programme as in
 /// [`Segment::solve`], over the whole path's turn.
-pub fn solve_split(
+pub(crate) fn solve_split(
     segs: &[Segment],
     t: &Target,
     heading: Option<&Heading>,

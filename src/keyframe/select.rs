@@ -73,7 +73,7 @@ pub fn measured(ch: &Character, opts: &SelectOptions) -> Vec<Chosen> {
 }
 
 /// [`measured`], telling `progress(done, total)` the sequence pairs done.
-pub fn measured_with(
+pub(crate) fn measured_with(
     ch: &Character,
     opts: &SelectOptions,
     progress: &mut dyn FnMut(usize, usize),

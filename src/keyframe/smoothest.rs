@@ -335,7 +335,7 @@ pub fn floor_grid(
 /// [`floor_grid`], calling `done` with every target as it finishes
 /// (distances outer, times inner). Errors: the grid's size
 /// ([`super::grid::check_grid`]) or the search's.
-pub fn floor_grid_with(
+pub(crate) fn floor_grid_with(
     ch: &Character,
     planner: &Planner,
     distances: &[f64],

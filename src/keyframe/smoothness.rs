@@ -289,7 +289,7 @@ pub fn hausdorff_surface(a: &[DVec3], b: &[DVec3], s: &Surface) -> f64 {
 /// to` (`to − 1` pairs with `from`), aligned as [`profile`], measured from
 /// every `stride`-th vertex only (a lower bound of [`hausdorff_surface`],
 /// for screening candidates).
-pub fn hausdorff_surface_stride(
+pub(crate) fn hausdorff_surface_stride(
     ch: &Character,
     s: &Surface,
     from: u32,
@@ -450,7 +450,12 @@ pub fn weighted<T: Copy>(h: &[Option<T>], window: usize, f: impl Fn(T) -> f64) -
 /// The overlapping frame pairs `(M_i(m + k), M_j(n + k))` of a jump
 /// `from → to` for `k ∈ [−K, K]` (flat frame ids; `None` where a frame is
 /// outside its sequence).
-pub fn profile_pairs(ch: &Character, from: u32, to: u32, half: usize) -> Vec<Option<(u32, u32)>> {
+pub(crate) fn profile_pairs(
+    ch: &Character,
+    from: u32,
+    to: u32,
+    half: usize,
+) -> Vec<Option<(u32, u32)>> {
     let (sa, ta) = ch.graph().frame_of(from);
     let (sb, tb) = ch.graph().frame_of(to);
     let tb = tb.saturating_sub(1);

@@ -21,7 +21,7 @@ use super::local::{RootTrack, local_frame};
 use serde::{Deserialize, Serialize};
 
 /// Vertices of the measure per frame (at most; evenly strided).
-pub const FEATURE_VERTICES: usize = 400;
+pub(crate) const FEATURE_VERTICES: usize = 400;
 
 /// One sequence's cycle.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -70,7 +70,7 @@ impl Alignment {
 }
 
 /// Per-frame features: the body frame of every `stride`-th vertex, f32.
-pub fn features(frames: &[[f64; 3]], n: usize, track: &RootTrack) -> Vec<Vec<f32>> {
+pub(crate) fn features(frames: &[[f64; 3]], n: usize, track: &RootTrack) -> Vec<Vec<f32>> {
     let count = frames.len() / n.max(1);
     let stride = n.div_ceil(FEATURE_VERTICES).max(1);
     let mut buf = vec![[0.0; 3]; n];
@@ -92,7 +92,7 @@ fn dist(a: &[f32], b: &[f32]) -> f64 {
 }
 
 /// The cycle of one sequence (see the module doc).
-pub fn detect_cycle(feat: &[Vec<f32>], fps: f64) -> Cycle {
+pub(crate) fn detect_cycle(feat: &[Vec<f32>], fps: f64) -> Cycle {
     let len = feat.len();
     let whole = |len: usize| Cycle {
         start: 0,

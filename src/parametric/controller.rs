@@ -20,7 +20,7 @@ use glam::DVec2;
 use serde::Serialize;
 
 /// Largest change of the weight coordinate per second.
-pub const WEIGHT_RATE: f64 = 1.5;
+pub(crate) const WEIGHT_RATE: f64 = 1.5;
 
 /// Control input; `None` keeps the previous value.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

@@ -17,7 +17,7 @@
 use glam::{DVec2, DVec3};
 
 /// Lowest travel speed (m/s) at which the heading follows the travel.
-pub const MIN_TRAVEL_SPEED: f64 = 0.15;
+pub(crate) const MIN_TRAVEL_SPEED: f64 = 0.15;
 
 /// The root motion of a sequence, per frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -30,14 +30,14 @@ pub struct RootTrack {
 
 /// Rotates `(x, z)` about the vertical by `a` (`+Z` goes to `(sin a, cos a)`).
 #[inline]
-pub fn rotate(v: DVec2, a: f64) -> DVec2 {
+pub(crate) fn rotate(v: DVec2, a: f64) -> DVec2 {
     let (s, c) = a.sin_cos();
     DVec2::new(v.x * c + v.y * s, -v.x * s + v.y * c)
 }
 
 /// The root track of `frames` (frame-major, `n` vertices a frame, metres,
 /// Y-up) at `fps`.
-pub fn root_track(frames: &[[f64; 3]], n: usize, fps: f64) -> RootTrack {
+pub(crate) fn root_track(frames: &[[f64; 3]], n: usize, fps: f64) -> RootTrack {
     let count = frames.len() / n.max(1);
     let centre: Vec<DVec2> = (0..count)
         .map(|f| {
@@ -87,7 +87,7 @@ pub fn root_track(frames: &[[f64; 3]], n: usize, fps: f64) -> RootTrack {
 }
 
 /// Frame `f` of `frames` in its body frame, written to `out` (`n` entries).
-pub fn local_frame(
+pub(crate) fn local_frame(
     frames: &[[f64; 3]],
     n: usize,
     track: &RootTrack,

@@ -21,7 +21,7 @@ use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 /// Weight sampling step of the measurement (the paper's `δw = 0.05`).
-pub const WEIGHT_STEP: f64 = 0.05;
+pub(crate) const WEIGHT_STEP: f64 = 0.05;
 
 /// A motion parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -78,7 +78,7 @@ pub struct RootSteps {
 /// The blended root step `k` at weight coordinate `u` (travel x, z,
 /// heading change, duration in frames).
 #[inline]
-pub fn blended_step(steps: &[RootSteps], u: f64, k: usize) -> [f64; 4] {
+pub(crate) fn blended_step(steps: &[RootSteps], u: f64, k: usize) -> [f64; 4] {
     let last = steps.len().saturating_sub(1);
     let u = u.clamp(0.0, last as f64);
     let a = (u.floor() as usize).min(last.saturating_sub(1));

@@ -49,16 +49,20 @@ pub const MAX_SECONDS: f64 = 3600.0;
 /// Largest speed a script may ask for (m/s, either sign): far beyond any
 /// space's range, which the controller clamps to; a larger value
 /// (`"speed": 1e300`) is a typo, and was echoed as a 300-digit number.
-pub const MAX_SPEED: f64 = 100.0;
+pub(crate) const MAX_SPEED: f64 = 100.0;
 
 /// Largest turn rate a script may ask for (deg/s, either sign): ten turns
 /// a second. The steering turn is not clamped by a space's range, so
 /// `"turn": -1e300` played a character spun by 1e300 degrees a second
 /// (exit 0).
-pub const MAX_TURN: f64 = 3600.0;
+pub(crate) const MAX_TURN: f64 = 3600.0;
 
 /// Parses and checks a script against the model's spaces and parameters.
-pub fn parse_script(text: &str, path: &Path, motion: &Motion) -> Result<Vec<Request>, ScriptError> {
+pub(crate) fn parse_script(
+    text: &str,
+    path: &Path,
+    motion: &Motion,
+) -> Result<Vec<Request>, ScriptError> {
     let spaces: Vec<(&str, &[Parameter])> = motion
         .spaces
         .iter()
@@ -246,7 +250,7 @@ pub struct SessionReport {
 
 /// Frames of a session of `seconds` (default: the last request's time +
 /// 2 s, at most [`MAX_SECONDS`]) at `fps`: those [`play`] makes.
-pub fn session_frames(script: &[Request], seconds: Option<f64>, fps: f64) -> usize {
+pub(crate) fn session_frames(script: &[Request], seconds: Option<f64>, fps: f64) -> usize {
     let seconds = seconds
         .unwrap_or_else(|| script.last().map_or(0.0, |r| r.t) + 2.0)
         .clamp(0.0, MAX_SECONDS);

@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"SMPAR001";
 /// Bump when the model's algorithm or layout changes (old caches are rebuilt).
-pub const FORMAT_VERSION: u32 = 4;
+pub(crate) const FORMAT_VERSION: u32 = 4;
 
 /// The cache file of a database's parametric model.
 pub fn cache_path(dir: &Path) -> PathBuf {
@@ -375,7 +375,7 @@ fn read_cached(
 /// would before trusting it (`inspect` of the cache): `Ok(())` when `play`
 /// would use it with the default options, else why not ("stale ..." for a
 /// file of other inputs).
-pub fn check_file(dir: &Path, m: &Manifest, path: &Path) -> Result<(), String> {
+pub(crate) fn check_file(dir: &Path, m: &Manifest, path: &Path) -> Result<(), String> {
     let opts = MotionOptions::default();
     let key = key(dir, m, &opts).map_err(|e| e.to_string())?;
     let bytes = crate::util::fsutil::read_bytes(path).map_err(|e| e.to_string())?;

@@ -28,9 +28,9 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 /// Seconds over which the velocity term of the measure is taken.
-pub const VELOCITY_SECONDS: f64 = 0.1;
+pub(crate) const VELOCITY_SECONDS: f64 = 0.1;
 /// Vertices of the similarity measure per frame (at most).
-pub const SIMILARITY_VERTICES: usize = 500;
+pub(crate) const SIMILARITY_VERTICES: usize = 500;
 
 /// Options of the transition search.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -83,7 +83,7 @@ pub struct SimilarityTable {
 
 /// The two hat weights of `u` over sorted reference coordinates.
 #[inline]
-pub fn hat(refs: &[f64], u: f64) -> (usize, usize, f64) {
+pub(crate) fn hat(refs: &[f64], u: f64) -> (usize, usize, f64) {
     if refs.len() < 2 {
         return (0, 0, 0.0);
     }

@@ -140,62 +140,7 @@ pub struct InspectOptions {
 /// Reads `path` and reports what it holds.
 pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectError> {
     if let Some(fmt) = MocapFormat::of(path) {
-        let clip = load_clip(path, &opts.mocap)?;
-        let det = match &opts.mocap.rig_map {
-            Some(m) => Ok(crate::rig::Detection::from_map(
-                m.clone(),
-                crate::rig::Source::MapFile,
-                1.0,
-                "from the map file",
-            )),
-            None => crate::rig::detect_clip(&clip),
-        };
-        let mut structure_pose = String::new();
-        let (convention, unmapped_canonical, rig_joints, derived_canonical, sides) = match det {
-            Ok(d) => (
-                d.map.convention.clone(),
-                d.missing.iter().map(|c| c.name().to_string()).collect(),
-                d.joints,
-                d.derived.iter().map(|c| c.name().to_string()).collect(),
-                {
-                    structure_pose = d.structure_pose;
-                    d.sides
-                },
-            ),
-            Err(e) => (
-                e.to_string(),
-                crate::rig::Canonical::ALL
-                    .iter()
-                    .map(|c| c.name().to_string())
-                    .collect(),
-                Vec::new(),
-                Vec::new(),
-                String::new(),
-            ),
-        };
-        return Ok(Report::Mocap(MocapReport {
-            path: path.to_path_buf(),
-            format: match fmt {
-                MocapFormat::Fbx => fbx::describe(path, opts.mocap.take.as_deref()),
-                _ => format!("{fmt:?}").to_lowercase(),
-            },
-            joints: clip.joint_count(),
-            joint_names: clip.point_names(),
-            frames: clip.frame_count(),
-            fps: clip.fps(),
-            duration_s: clip.duration(),
-            rest_extent_m: rest_extent(&clip) * clip.units.metres_per_unit,
-            units: clip.units.clone(),
-            up: clip.up,
-            up_reason: clip.up_reason.clone(),
-            convention,
-            unmapped_canonical,
-            rig_joints,
-            derived_canonical,
-            sides,
-            structure_pose,
-            warnings: clip.warnings.clone(),
-        }));
+        return inspect_mocap(path, fmt, opts).map(Report::Mocap);
     }
     if path
         .extension()
@@ -219,6 +164,77 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
     if let Some(r) = other::inspect_other(path) {
         return r.map(Report::File);
     }
+    inspect_mesh(path, opts).map(Report::Mesh)
+}
+
+/// A mocap clip: its joints, frames, units and axes, and its rig detection
+/// (or the map file's).
+fn inspect_mocap(
+    path: &Path,
+    fmt: MocapFormat,
+    opts: &InspectOptions,
+) -> Result<MocapReport, InspectError> {
+    let clip = load_clip(path, &opts.mocap)?;
+    let det = match &opts.mocap.rig_map {
+        Some(m) => Ok(crate::rig::Detection::from_map(
+            m.clone(),
+            crate::rig::Source::MapFile,
+            1.0,
+            "from the map file",
+        )),
+        None => crate::rig::detect_clip(&clip),
+    };
+    let mut structure_pose = String::new();
+    let (convention, unmapped_canonical, rig_joints, derived_canonical, sides) = match det {
+        Ok(d) => (
+            d.map.convention.clone(),
+            d.missing.iter().map(|c| c.name().to_string()).collect(),
+            d.joints,
+            d.derived.iter().map(|c| c.name().to_string()).collect(),
+            {
+                structure_pose = d.structure_pose;
+                d.sides
+            },
+        ),
+        Err(e) => (
+            e.to_string(),
+            crate::rig::Canonical::ALL
+                .iter()
+                .map(|c| c.name().to_string())
+                .collect(),
+            Vec::new(),
+            Vec::new(),
+            String::new(),
+        ),
+    };
+    Ok(MocapReport {
+        path: path.to_path_buf(),
+        format: match fmt {
+            MocapFormat::Fbx => fbx::describe(path, opts.mocap.take.as_deref()),
+            _ => format!("{fmt:?}").to_lowercase(),
+        },
+        joints: clip.joint_count(),
+        joint_names: clip.point_names(),
+        frames: clip.frame_count(),
+        fps: clip.fps(),
+        duration_s: clip.duration(),
+        rest_extent_m: rest_extent(&clip) * clip.units.metres_per_unit,
+        units: clip.units.clone(),
+        up: clip.up,
+        up_reason: clip.up_reason.clone(),
+        convention,
+        unmapped_canonical,
+        rig_joints,
+        derived_canonical,
+        sides,
+        structure_pose,
+        warnings: clip.warnings.clone(),
+    })
+}
+
+/// A mesh or mesh sequence (OBJ, PLY, point caches, glTF with its skin,
+/// morph targets and animations).
+fn inspect_mesh(path: &Path, opts: &InspectOptions) -> Result<MeshReport, InspectError> {
     let spec = path
         .to_str()
         .ok_or_else(|| InspectError::NotUtf8(path.to_path_buf()))?
@@ -258,7 +274,7 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
     let seq = crate::mesh::io::load_sequence(&spec, &opts.mesh)?;
     let m = seq.mesh();
     problems.extend(m.problems());
-    Ok(Report::Mesh(MeshReport {
+    Ok(MeshReport {
         path: path.to_path_buf(),
         format: format!("{fmt:?}").to_lowercase(),
         vertices: m.vertex_count(),
@@ -279,7 +295,7 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
         morph_targets,
         animations,
         problems,
-    }))
+    })
 }
 
 /// A rig detection as text: the convention, how sides were decided, then

@@ -63,7 +63,7 @@ pub struct Job {
 
 /// Why a job cannot be set up.
 #[derive(Debug, thiserror::Error)]
-pub enum JobError {
+pub enum SetupError {
     /// Mocap needs the scan's skeleton.
     #[error("a mocap source needs the scan's skeleton: give landmarks")]
     NoSkeleton,
@@ -110,8 +110,8 @@ pub fn mocap_motion(
     scan: &PreparedScan,
     poses: &[Pose],
     reference: &Reference,
-) -> Result<MarkerMotion, JobError> {
-    let rig = scan.rig.as_ref().ok_or(JobError::NoSkeleton)?;
+) -> Result<MarkerMotion, SetupError> {
+    let rig = scan.rig.as_ref().ok_or(SetupError::NoSkeleton)?;
     // The motion holds a rotation and a target per marker and frame
     // (whatever holds the output checks its own frames; a streamed
     // transfer holds none): refuse a clip whose motion cannot fit before
@@ -228,10 +228,10 @@ impl Job {
     /// Factors the scan for a mocap source (the markers that name a bone),
     /// once for any number of clips ([`mocap_motion`] per clip); returns
     /// the names of the markers used.
-    pub fn factor_mocap(scan: &PreparedScan) -> Result<(Confluent, Vec<String>), JobError> {
+    pub fn factor_mocap(scan: &PreparedScan) -> Result<(Confluent, Vec<String>), SetupError> {
         let used: Vec<&Marker> = scan.markers.iter().filter(|m| m.bone.is_some()).collect();
         if used.is_empty() {
-            return Err(JobError::NoMarkers(
+            return Err(SetupError::NoMarkers(
                 "no marker names a bone: a mocap source drives markers through bones".into(),
             ));
         }
@@ -243,7 +243,7 @@ impl Job {
     }
 
     /// Pairs markers, factors the scan and computes the marker motion.
-    pub fn new(scan: &PreparedScan, source: Source<'_>) -> Result<Job, JobError> {
+    pub fn new(scan: &PreparedScan, source: Source<'_>) -> Result<Job, SetupError> {
         let p = scan.mesh.positions();
         let centroid = |m: &Marker| {
             scan.mesh.triangles()[m.triangle as usize]
@@ -272,7 +272,7 @@ impl Job {
                 let tm = frames.mesh();
                 let count = frames.frame_count();
                 if reference >= count {
-                    return Err(JobError::Reference {
+                    return Err(SetupError::Reference {
                         frame: reference,
                         count,
                     });
@@ -286,7 +286,7 @@ impl Job {
                 for m in &scan.markers {
                     if let Some(&t) = by_name.get(m.name.as_str()) {
                         if t as usize >= tm.triangle_count() {
-                            return Err(JobError::TemplateTriangle {
+                            return Err(SetupError::TemplateTriangle {
                                 name: m.name.clone(),
                                 triangle: t,
                                 count: tm.triangle_count(),
@@ -297,7 +297,7 @@ impl Job {
                     }
                 }
                 if used.is_empty() {
-                    return Err(JobError::NoMarkers(
+                    return Err(SetupError::NoMarkers(
                         "no scan marker has a template marker of the same name".into(),
                     ));
                 }

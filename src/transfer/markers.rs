@@ -49,6 +49,9 @@ pub enum MarkerError {
     /// Reading or writing failed.
     #[error(transparent)]
     Io(#[from] FsError),
+    /// Options out of their range ([`MarkerOptions::new`]); says which.
+    #[error("{0}")]
+    Options(String),
     /// The file is not a marker file.
     #[error("{path}: {reason}")]
     Parse {
@@ -136,6 +139,24 @@ impl Default for MarkerOptions {
             count: 180,
             margin: 0.25,
         }
+    }
+}
+
+impl MarkerOptions {
+    /// Checked options: `count` at least 1, `margin` a fraction in
+    /// [0, 0.5] (the rings of one bone would cross past the middle).
+    pub fn new(count: usize, margin: f64) -> Result<MarkerOptions, MarkerError> {
+        if count == 0 {
+            return Err(MarkerError::Options(
+                "`MarkerOptions::count` 0: expected at least 1 marker".into(),
+            ));
+        }
+        if !(0.0..=0.5).contains(&margin) {
+            return Err(MarkerError::Options(format!(
+                "`MarkerOptions::margin` {margin}: expected a fraction in [0, 0.5]"
+            )));
+        }
+        Ok(MarkerOptions { count, margin })
     }
 }
 

@@ -18,7 +18,7 @@ pub mod signs;
 pub mod source;
 
 pub use confluent::{Confluent, ConfluentError};
-pub use job::{Job, JobError, Source, alignment, mocap_motion, up_axis};
+pub use job::{Job, SetupError, Source, alignment, mocap_motion, up_axis};
 pub use markers::{Marker, MarkerError, MarkerFile, MarkerOptions};
 pub use run::{TransferOptions, TransferStats, transfer, transfer_into};
 pub use scan::{MarkerSpec, PreparedScan, ScanError, prepare};

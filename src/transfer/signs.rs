@@ -32,7 +32,7 @@ pub enum SignMode {
 }
 
 /// The frame's mean rotation: the unit quaternion maximising `Σ (q·m)²`.
-pub fn mean_rotation(q: &[DQuat]) -> DQuat {
+pub(crate) fn mean_rotation(q: &[DQuat]) -> DQuat {
     let mut m = Matrix4::<f64>::zeros();
     for x in q {
         let v = DVec4::from(*x);
@@ -64,7 +64,7 @@ pub fn mean_rotation(q: &[DQuat]) -> DQuat {
 /// `prev_mean` (last frame's) for continuity in time. Returns the number of
 /// near-singular markers (turned over 160° from the reference pose,
 /// `|w| < 0.17`) and the signed mean to pass to the next frame.
-pub fn orient(q: &mut [DQuat], prev_mean: Option<DQuat>, mode: SignMode) -> (usize, DQuat) {
+pub(crate) fn orient(q: &mut [DQuat], prev_mean: Option<DQuat>, mode: SignMode) -> (usize, DQuat) {
     let singular = q.iter().filter(|x| x.w.abs() < 0.17).count();
     let mut mean = mean_rotation(q);
     match mode {

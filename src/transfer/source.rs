@@ -117,7 +117,7 @@ impl MarkerMotion {
 /// skeleton; `frames` are (pose, global joint rotations from `rest`) as
 /// [`crate::synth::database::retarget`] gives them; `bones[m]` and
 /// `centroids[m]` are marker m's driving joint and rest centroid.
-pub fn from_skeleton(
+pub(crate) fn from_skeleton(
     rest: &Pose,
     frames: &[(Pose, [DQuat; Canonical::COUNT])],
     bones: &[Canonical],
@@ -181,7 +181,7 @@ impl TemplateMarkers {
 /// frame; `centroids[m]` is the scan marker's rest centroid, `scale`
 /// multiplies the template's displacements and `align` turns the template's
 /// frame into the scan's (rotations are conjugated, displacements turned).
-pub fn from_template(
+pub(crate) fn from_template(
     frames: &[&[[f64; 3]]],
     reference: &[[f64; 3]],
     t: &[[u32; 3]],

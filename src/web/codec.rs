@@ -58,7 +58,7 @@ pub const VERSION: u32 = 1;
 /// Bytes of the fixed header (before the per-sequence table).
 pub const HEADER_BYTES: usize = 64;
 /// The most quantisation levels per axis (positions fit a `u16`).
-pub const MAX_LEVELS: u32 = 65_536;
+pub(crate) const MAX_LEVELS: u32 = 65_536;
 
 /// How a frame is predicted from what is already decoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -114,6 +114,33 @@ impl Default for EncodeOptions {
             predictor: Predictor::SpatioTemporal,
             level: DEFAULT_LEVEL,
         }
+    }
+}
+
+impl EncodeOptions {
+    /// Checked options: `max_error` finite and positive (metres), `level`
+    /// a DEFLATE level 0-9.
+    pub fn new(
+        max_error: f64,
+        predictor: Predictor,
+        level: u32,
+    ) -> Result<EncodeOptions, CodecError> {
+        if !(max_error.is_finite() && max_error > 0.0) {
+            return Err(CodecError::Input(format!(
+                "`EncodeOptions::max_error` must be positive, got {} m",
+                Short(max_error)
+            )));
+        }
+        if level > 9 {
+            return Err(CodecError::Input(format!(
+                "`EncodeOptions::level` {level}: expected a DEFLATE level 0-9"
+            )));
+        }
+        Ok(EncodeOptions {
+            max_error,
+            predictor,
+            level,
+        })
     }
 }
 
@@ -271,6 +298,73 @@ fn residuals(q: &[[u16; 3]], n: usize, parent: &[u32], predictor: Predictor) -> 
 /// once (sequences in parallel).
 pub fn encode(g: &Geometry, opts: &EncodeOptions) -> Result<(Vec<u8>, EncodeReport), CodecError> {
     let n = g.vertices;
+    check_input(g, opts)?;
+    let (lo, hi) = bounds(g)?;
+    let origin = lo.map(|x| x as f32);
+    let parent = parents(n, &g.triangles);
+    let topo = deflate(&topology_stream(&g.triangles), opts.level);
+    let mut step = 2.0 * opts.max_error / 3f64.sqrt();
+    for attempt in 1..=64 {
+        let stepf = step as f32;
+        let levels: [u32; 3] =
+            std::array::from_fn(|c| (((hi[c] - origin[c] as f64) / step).round() as u32) + 1);
+        if levels.iter().any(|&l| l > MAX_LEVELS) {
+            return Err(CodecError::Input(format!(
+                "the bounds ({} × {} × {} m) need more than {MAX_LEVELS} steps of {} mm per axis: raise the error bound",
+                Short(hi[0] - lo[0]),
+                Short(hi[1] - lo[1]),
+                Short(hi[2] - lo[2]),
+                Short(step * 1e3)
+            )));
+        }
+        let quantised = quantise(g, origin, step);
+        let worst = quantised.iter().map(|x| x.1).fold(0.0, f64::max);
+        if worst <= opts.max_error {
+            let blocks: Vec<(usize, Vec<u8>)> = quantised
+                .par_iter()
+                .map(|(q, _)| {
+                    (
+                        q.len() / n,
+                        deflate(&residuals(q, n, &parent, opts.predictor), opts.level),
+                    )
+                })
+                .collect();
+            let header = StreamHeader {
+                predictor: opts.predictor,
+                vertices: n,
+                triangles: g.triangles.len(),
+                step: stepf,
+                origin,
+                levels,
+                worst,
+            };
+            let out = assemble(&header, &topo, &blocks);
+            let frames = blocks.iter().map(|b| b.0).sum();
+            let bytes = out.len();
+            return Ok((
+                out,
+                EncodeReport {
+                    bytes,
+                    frames,
+                    step,
+                    max_error: worst,
+                    attempts: attempt,
+                    predictor: opts.predictor,
+                },
+            ));
+        }
+        step *= 0.97;
+    }
+    Err(CodecError::Input(format!(
+        "the error bound {} m was not met after 64 attempts",
+        Short(opts.max_error)
+    )))
+}
+
+/// Refuses a vertex count that is 0 or too large, an error bound that is
+/// not positive and a triangle naming a vertex past the count.
+fn check_input(g: &Geometry, opts: &EncodeOptions) -> Result<(), CodecError> {
+    let n = g.vertices;
     if n == 0 || n > u32::MAX as usize / 2 {
         return Err(CodecError::Input(format!("{n} vertices")));
     }
@@ -290,6 +384,14 @@ pub fn encode(g: &Geometry, opts: &EncodeOptions) -> Result<(Vec<u8>, EncodeRepo
             "triangle {i} {t:?} names a vertex past {n}"
         )));
     }
+    Ok(())
+}
+
+/// The bounds (minimum, maximum corner) of every position of every
+/// sequence (zero without sequences); refuses a sequence that is empty or
+/// not whole frames, and a non-finite position.
+fn bounds(g: &Geometry) -> Result<([f64; 3], [f64; 3]), CodecError> {
+    let n = g.vertices;
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for (s, seq) in g.sequences.iter().enumerate() {
@@ -318,125 +420,106 @@ pub fn encode(g: &Geometry, opts: &EncodeOptions) -> Result<(Vec<u8>, EncodeRepo
         lo = [0.0; 3];
         hi = [0.0; 3];
     }
-    let origin = lo.map(|x| x as f32);
-    let parent = parents(n, &g.triangles);
-    let mut topo = Vec::with_capacity(g.triangles.len() * 6);
+    Ok((lo, hi))
+}
+
+/// The topology stream (before DEFLATE): the vertex indices as zigzag
+/// differences from the previous one.
+fn topology_stream(triangles: &[[u32; 3]]) -> Vec<u8> {
+    let mut topo = Vec::with_capacity(triangles.len() * 6);
     let mut last = 0i64;
-    for t in &g.triangles {
+    for t in triangles {
         for &v in t {
             put_varint(&mut topo, zigzag((v as i64 - last) as i32));
             last = v as i64;
         }
     }
-    let topo = deflate(&topo, opts.level);
-    let mut step = 2.0 * opts.max_error / 3f64.sqrt();
-    for attempt in 1..=64 {
-        let stepf = step as f32;
-        let levels: [u32; 3] =
-            std::array::from_fn(|c| (((hi[c] - origin[c] as f64) / step).round() as u32) + 1);
-        if levels.iter().any(|&l| l > MAX_LEVELS) {
-            return Err(CodecError::Input(format!(
-                "the bounds ({} × {} × {} m) need more than {MAX_LEVELS} steps of {} mm per axis: raise the error bound",
-                Short(hi[0] - lo[0]),
-                Short(hi[1] - lo[1]),
-                Short(hi[2] - lo[2]),
-                Short(step * 1e3)
-            )));
-        }
-        let quantised: Vec<(Vec<[u16; 3]>, f64)> = g
-            .sequences
-            .par_iter()
-            .map(|seq| {
-                let q: Vec<[u16; 3]> = seq
-                    .iter()
-                    .map(|p| {
-                        // Round half up by truncation (`round` is a libm
-                        // call without SSE4.1: a tenth of an export's time);
-                        // negatives saturate to 0, as the clamp did.
-                        std::array::from_fn(|c| {
-                            let x = (p[c] as f64 - origin[c] as f64) / step + 0.5;
-                            (x as u32).min(MAX_LEVELS - 1) as u16
-                        })
+    topo
+}
+
+/// Every sequence quantised on the grid (`origin`, `step`), with its
+/// largest vertex error decoded in f32 (sequences in parallel).
+fn quantise(g: &Geometry, origin: [f32; 3], step: f64) -> Vec<(Vec<[u16; 3]>, f64)> {
+    let stepf = step as f32;
+    g.sequences
+        .par_iter()
+        .map(|seq| {
+            let q: Vec<[u16; 3]> = seq
+                .iter()
+                .map(|p| {
+                    // Round half up by truncation (`round` is a libm
+                    // call without SSE4.1: a tenth of an export's time);
+                    // negatives saturate to 0, as the clamp did.
+                    std::array::from_fn(|c| {
+                        let x = (p[c] as f64 - origin[c] as f64) / step + 0.5;
+                        (x as u32).min(MAX_LEVELS - 1) as u16
                     })
-                    .collect();
-                let mut worst = 0f64;
-                for (p, qq) in seq.iter().zip(&q) {
-                    let d: f64 = (0..3)
-                        .map(|c| {
-                            let r = origin[c] + stepf * qq[c] as f32;
-                            ((r - p[c]) as f64).powi(2)
-                        })
-                        .sum::<f64>()
-                        .sqrt();
-                    worst = worst.max(d);
-                }
-                (q, worst)
-            })
-            .collect();
-        let worst = quantised.iter().map(|x| x.1).fold(0.0, f64::max);
-        if worst <= opts.max_error {
-            let blocks: Vec<(usize, Vec<u8>)> = quantised
-                .par_iter()
-                .map(|(q, _)| {
-                    (
-                        q.len() / n,
-                        deflate(&residuals(q, n, &parent, opts.predictor), opts.level),
-                    )
                 })
                 .collect();
-            let mut out = Vec::with_capacity(
-                HEADER_BYTES
-                    + 8 * blocks.len()
-                    + topo.len()
-                    + blocks.iter().map(|b| b.1.len()).sum::<usize>(),
-            );
-            out.extend_from_slice(MAGIC);
-            for x in [
-                VERSION,
-                opts.predictor.code(),
-                n as u32,
-                g.triangles.len() as u32,
-                blocks.len() as u32,
-            ] {
-                out.extend_from_slice(&x.to_le_bytes());
+            let mut worst = 0f64;
+            for (p, qq) in seq.iter().zip(&q) {
+                let d: f64 = (0..3)
+                    .map(|c| {
+                        let r = origin[c] + stepf * qq[c] as f32;
+                        ((r - p[c]) as f64).powi(2)
+                    })
+                    .sum::<f64>()
+                    .sqrt();
+                worst = worst.max(d);
             }
-            out.extend_from_slice(&stepf.to_le_bytes());
-            for o in origin {
-                out.extend_from_slice(&o.to_le_bytes());
-            }
-            for l in levels {
-                out.extend_from_slice(&l.to_le_bytes());
-            }
-            out.extend_from_slice(&(worst as f32).to_le_bytes());
-            out.extend_from_slice(&(topo.len() as u32).to_le_bytes());
-            for (f, b) in &blocks {
-                out.extend_from_slice(&(*f as u32).to_le_bytes());
-                out.extend_from_slice(&(b.len() as u32).to_le_bytes());
-            }
-            out.extend_from_slice(&topo);
-            for (_, b) in &blocks {
-                out.extend_from_slice(b);
-            }
-            let frames = blocks.iter().map(|b| b.0).sum();
-            let bytes = out.len();
-            return Ok((
-                out,
-                EncodeReport {
-                    bytes,
-                    frames,
-                    step,
-                    max_error: worst,
-                    attempts: attempt,
-                    predictor: opts.predictor,
-                },
-            ));
-        }
-        step *= 0.97;
+            (q, worst)
+        })
+        .collect()
+}
+
+/// The fixed header's values (see the module's layout).
+struct StreamHeader {
+    predictor: Predictor,
+    vertices: usize,
+    triangles: usize,
+    step: f32,
+    origin: [f32; 3],
+    levels: [u32; 3],
+    worst: f64,
+}
+
+/// The file: the header, the per-sequence table, the topology block, the
+/// sequence blocks (`(frames, deflated residuals)`).
+fn assemble(h: &StreamHeader, topo: &[u8], blocks: &[(usize, Vec<u8>)]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(
+        HEADER_BYTES
+            + 8 * blocks.len()
+            + topo.len()
+            + blocks.iter().map(|b| b.1.len()).sum::<usize>(),
+    );
+    out.extend_from_slice(MAGIC);
+    for x in [
+        VERSION,
+        h.predictor.code(),
+        h.vertices as u32,
+        h.triangles as u32,
+        blocks.len() as u32,
+    ] {
+        out.extend_from_slice(&x.to_le_bytes());
     }
-    Err(CodecError::Input(format!(
-        "the error bound {} m was not met after 64 attempts",
-        Short(opts.max_error)
-    )))
+    out.extend_from_slice(&h.step.to_le_bytes());
+    for o in h.origin {
+        out.extend_from_slice(&o.to_le_bytes());
+    }
+    for l in h.levels {
+        out.extend_from_slice(&l.to_le_bytes());
+    }
+    out.extend_from_slice(&(h.worst as f32).to_le_bytes());
+    out.extend_from_slice(&(topo.len() as u32).to_le_bytes());
+    for (f, b) in blocks {
+        out.extend_from_slice(&(*f as u32).to_le_bytes());
+        out.extend_from_slice(&(b.len() as u32).to_le_bytes());
+    }
+    out.extend_from_slice(topo);
+    for (_, b) in blocks {
+        out.extend_from_slice(b);
+    }
+    out
 }
 
 struct Reader<'a> {

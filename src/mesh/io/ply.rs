@@ -124,9 +124,28 @@ impl<'a> Body<'a> {
     }
 }
 
-/// Parses PLY bytes.
+/// A PLY header: its elements, the body's format, where the body starts
+/// and the header's last line number.
+struct Header {
+    elements: Vec<Element>,
+    fmt: Format,
+    body_start: usize,
+    line_no: usize,
+}
+
+/// Parses PLY bytes: the header, the body's elements, the mesh.
 pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
-    // Header: text up to and including the "end_header" line.
+    let header = parse_header(bytes, path)?;
+    let mut body = Body::new(bytes, &header, path)?;
+    let mut out = Parsed::default();
+    for el in &header.elements {
+        read_element(el, &mut body, path, &mut out)?;
+    }
+    out.into_mesh(path)
+}
+
+/// The header: text up to and including the "end_header" line.
+fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
     let mut elements: Vec<Element> = Vec::new();
     let mut fmt = None;
     let mut pos = 0usize;
@@ -183,34 +202,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
                     props: Vec::new(),
                 });
             }
-            Some("property") => {
-                let Some(el) = elements.last_mut() else {
-                    return Err(MeshError::parse(
-                        path,
-                        line_no,
-                        "property before any element",
-                    ));
-                };
-                let bad = || MeshError::parse(path, line_no, format!("bad property line '{line}'"));
-                if toks.get(1) == Some(&"list") {
-                    let lt = toks.get(2).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;
-                    let it = toks.get(3).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;
-                    let name = toks.get(4).ok_or_else(bad)?;
-                    el.props.push(Prop {
-                        name: name.to_string(),
-                        ty: it,
-                        list_len: Some(lt),
-                    });
-                } else {
-                    let ty = toks.get(1).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;
-                    let name = toks.get(2).ok_or_else(bad)?;
-                    el.props.push(Prop {
-                        name: name.to_string(),
-                        ty,
-                        list_len: None,
-                    });
-                }
-            }
+            Some("property") => push_property(&mut elements, &toks, line, line_no, path)?,
             Some("end_header") => {
                 ended = true;
                 break;
@@ -229,128 +221,220 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
         return Err(MeshError::invalid(path, "no end_header"));
     }
     let fmt = fmt.ok_or_else(|| MeshError::invalid(path, "no format line"))?;
-    let mut body = Body {
-        bytes,
-        pos,
+    Ok(Header {
+        elements,
         fmt,
-        path,
-        words: Vec::new(),
-        wi: 0,
+        body_start: pos,
+        line_no,
+    })
+}
+
+/// A `property` line (`toks`, line `line_no`): a scalar or a list property
+/// of the last element.
+fn push_property(
+    elements: &mut [Element],
+    toks: &[&str],
+    line: &str,
+    line_no: usize,
+    path: &Path,
+) -> Result<(), MeshError> {
+    let Some(el) = elements.last_mut() else {
+        return Err(MeshError::parse(
+            path,
+            line_no,
+            "property before any element",
+        ));
     };
-    if fmt == Format::Ascii {
-        let text = std::str::from_utf8(&bytes[pos..])
-            .map_err(|_| MeshError::invalid(path, "ascii body is not text"))?;
-        for (k, l) in text.lines().enumerate() {
-            for w in l.split_whitespace() {
-                body.words.push((w, line_no + k + 1));
+    let bad = || MeshError::parse(path, line_no, format!("bad property line '{line}'"));
+    if toks.get(1) == Some(&"list") {
+        let lt = toks.get(2).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;
+        let it = toks.get(3).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;
+        let name = toks.get(4).ok_or_else(bad)?;
+        el.props.push(Prop {
+            name: name.to_string(),
+            ty: it,
+            list_len: Some(lt),
+        });
+    } else {
+        let ty = toks.get(1).and_then(|s| Scalar::parse(s)).ok_or_else(bad)?;
+        let name = toks.get(2).ok_or_else(bad)?;
+        el.props.push(Prop {
+            name: name.to_string(),
+            ty,
+            list_len: None,
+        });
+    }
+    Ok(())
+}
+
+impl<'a> Body<'a> {
+    /// The body after `header` (ascii: split into tokens with their lines).
+    fn new(bytes: &'a [u8], header: &Header, path: &'a Path) -> Result<Body<'a>, MeshError> {
+        let (pos, fmt, line_no) = (header.body_start, header.fmt, header.line_no);
+        let mut body = Body {
+            bytes,
+            pos,
+            fmt,
+            path,
+            words: Vec::new(),
+            wi: 0,
+        };
+        if fmt == Format::Ascii {
+            let text = std::str::from_utf8(&bytes[pos..])
+                .map_err(|_| MeshError::invalid(path, "ascii body is not text"))?;
+            for (k, l) in text.lines().enumerate() {
+                for w in l.split_whitespace() {
+                    body.words.push((w, line_no + k + 1));
+                }
+            }
+        }
+        Ok(body)
+    }
+}
+
+/// What the body's elements gave.
+#[derive(Default)]
+struct Parsed {
+    positions: Vec<[f64; 3]>,
+    colors: Vec<[f64; 3]>,
+    tris: Vec<[u32; 3]>,
+    /// The current face's vertices.
+    poly: Vec<u32>,
+    has_vertex: bool,
+}
+
+/// Reads the items of element `el`: vertices (positions, colours) and
+/// faces (fan-triangulated) are kept, other elements skipped.
+fn read_element(
+    el: &Element,
+    body: &mut Body,
+    path: &Path,
+    out: &mut Parsed,
+) -> Result<(), MeshError> {
+    // Every item needs at least one scalar per property: bound the count
+    // by the data left before looping or allocating.
+    if !el.props.is_empty() && el.count > body.left() / el.props.len() {
+        return Err(MeshError::invalid(
+            path,
+            format!(
+                "element '{}' claims {} items, more than the data holds",
+                el.name, el.count
+            ),
+        ));
+    }
+    if el.props.is_empty() {
+        return Ok(());
+    }
+    let is_vertex = el.name == "vertex";
+    let is_face = el.name == "face";
+    let xi = el.props.iter().position(|p| p.name == "x");
+    let yi = el.props.iter().position(|p| p.name == "y");
+    let zi = el.props.iter().position(|p| p.name == "z");
+    let ci = ["red", "green", "blue"].map(|n| el.props.iter().position(|p| p.name == n));
+    let fi = el.props.iter().position(|p| {
+        (p.name == "vertex_indices" || p.name == "vertex_index") && p.list_len.is_some()
+    });
+    if is_vertex {
+        out.has_vertex = true;
+        if xi.is_none() || yi.is_none() || zi.is_none() {
+            return Err(MeshError::invalid(path, "vertex element without x, y, z"));
+        }
+        out.positions.reserve(el.count);
+    }
+    let mut vals = vec![0.0f64; el.props.len()];
+    for item in 0..el.count {
+        for (k, p) in el.props.iter().enumerate() {
+            match p.list_len {
+                None => vals[k] = body.read(p.ty)?,
+                Some(lt) => {
+                    let take_face = is_face && Some(k) == fi;
+                    read_list(el, item, p.ty, lt, take_face, body, out)?;
+                }
+            }
+        }
+        if is_vertex {
+            let (x, y, z) = (xi.unwrap_or(0), yi.unwrap_or(0), zi.unwrap_or(0));
+            out.positions.push([vals[x], vals[y], vals[z]]);
+            if let [Some(r), Some(g), Some(b)] = ci {
+                let scale = if el.props[r].ty == Scalar::U8 {
+                    1.0 / 255.0
+                } else {
+                    1.0
+                };
+                out.colors
+                    .push([vals[r] * scale, vals[g] * scale, vals[b] * scale]);
             }
         }
     }
-    let mut positions: Vec<[f64; 3]> = Vec::new();
-    let mut colors: Vec<[f64; 3]> = Vec::new();
-    let mut tris: Vec<[u32; 3]> = Vec::new();
-    let mut poly: Vec<u32> = Vec::new();
-    let mut has_vertex = false;
-    for el in &elements {
-        // Every item needs at least one scalar per property: bound the count
-        // by the data left before looping or allocating.
-        if !el.props.is_empty() && el.count > body.left() / el.props.len() {
+    Ok(())
+}
+
+/// Reads one list property (length type `lt`, items `ty`) of item `item`;
+/// `take_face`: it is the face's vertex list, fan-triangulated into `out`.
+fn read_list(
+    el: &Element,
+    item: usize,
+    ty: Scalar,
+    lt: Scalar,
+    take_face: bool,
+    body: &mut Body,
+    out: &mut Parsed,
+) -> Result<(), MeshError> {
+    let path = body.path;
+    let n = body.read(lt)?;
+    if !(0.0..=1.0e6).contains(&n) || n.fract() != 0.0 {
+        return Err(MeshError::invalid(
+            path,
+            format!("{} {item}: bad list length {n}", el.name),
+        ));
+    }
+    let n = n as usize;
+    let poly = &mut out.poly;
+    if take_face {
+        poly.clear();
+    }
+    for _ in 0..n {
+        let v = body.read(ty)?;
+        if take_face {
+            if !(0.0..u32::MAX as f64).contains(&v) || v.fract() != 0.0 {
+                return Err(MeshError::invalid(
+                    path,
+                    format!("face {item}: bad vertex index {v}"),
+                ));
+            }
+            poly.push(v as u32);
+        }
+    }
+    if take_face {
+        if poly.len() < 3 {
             return Err(MeshError::invalid(
                 path,
-                format!(
-                    "element '{}' claims {} items, more than the data holds",
-                    el.name, el.count
-                ),
+                format!("face {item} has {} vertices", poly.len()),
             ));
         }
-        if el.props.is_empty() {
-            continue;
-        }
-        let is_vertex = el.name == "vertex";
-        let is_face = el.name == "face";
-        let xi = el.props.iter().position(|p| p.name == "x");
-        let yi = el.props.iter().position(|p| p.name == "y");
-        let zi = el.props.iter().position(|p| p.name == "z");
-        let ci = ["red", "green", "blue"].map(|n| el.props.iter().position(|p| p.name == n));
-        let fi = el.props.iter().position(|p| {
-            (p.name == "vertex_indices" || p.name == "vertex_index") && p.list_len.is_some()
-        });
-        if is_vertex {
-            has_vertex = true;
-            if xi.is_none() || yi.is_none() || zi.is_none() {
-                return Err(MeshError::invalid(path, "vertex element without x, y, z"));
-            }
-            positions.reserve(el.count);
-        }
-        let mut vals = vec![0.0f64; el.props.len()];
-        for item in 0..el.count {
-            for (k, p) in el.props.iter().enumerate() {
-                match p.list_len {
-                    None => vals[k] = body.read(p.ty)?,
-                    Some(lt) => {
-                        let n = body.read(lt)?;
-                        if !(0.0..=1.0e6).contains(&n) || n.fract() != 0.0 {
-                            return Err(MeshError::invalid(
-                                path,
-                                format!("{} {item}: bad list length {n}", el.name),
-                            ));
-                        }
-                        let n = n as usize;
-                        let take_face = is_face && Some(k) == fi;
-                        if take_face {
-                            poly.clear();
-                        }
-                        for _ in 0..n {
-                            let v = body.read(p.ty)?;
-                            if take_face {
-                                if !(0.0..u32::MAX as f64).contains(&v) || v.fract() != 0.0 {
-                                    return Err(MeshError::invalid(
-                                        path,
-                                        format!("face {item}: bad vertex index {v}"),
-                                    ));
-                                }
-                                poly.push(v as u32);
-                            }
-                        }
-                        if take_face {
-                            if poly.len() < 3 {
-                                return Err(MeshError::invalid(
-                                    path,
-                                    format!("face {item} has {} vertices", poly.len()),
-                                ));
-                            }
-                            for j in 1..poly.len() - 1 {
-                                tris.push([poly[0], poly[j], poly[j + 1]]);
-                            }
-                        }
-                    }
-                }
-            }
-            if is_vertex {
-                let (x, y, z) = (xi.unwrap_or(0), yi.unwrap_or(0), zi.unwrap_or(0));
-                positions.push([vals[x], vals[y], vals[z]]);
-                if let [Some(r), Some(g), Some(b)] = ci {
-                    let scale = if el.props[r].ty == Scalar::U8 {
-                        1.0 / 255.0
-                    } else {
-                        1.0
-                    };
-                    colors.push([vals[r] * scale, vals[g] * scale, vals[b] * scale]);
-                }
-            }
+        for j in 1..poly.len() - 1 {
+            out.tris.push([poly[0], poly[j], poly[j + 1]]);
         }
     }
-    if !has_vertex {
-        return Err(MeshError::invalid(path, "no vertex element"));
+    Ok(())
+}
+
+impl Parsed {
+    /// The mesh (with its colours, if any).
+    fn into_mesh(self, path: &Path) -> Result<Mesh, MeshError> {
+        if !self.has_vertex {
+            return Err(MeshError::invalid(path, "no vertex element"));
+        }
+        super::format::refuse_huge_coordinates(&self.positions, path)?;
+        let mut mesh =
+            Mesh::new(self.positions, self.tris).map_err(|e| MeshError::from(e).in_file(path))?;
+        if !self.colors.is_empty() {
+            mesh = mesh
+                .with_colors(self.colors)
+                .map_err(|e| MeshError::from(e).in_file(path))?;
+        }
+        Ok(mesh)
     }
-    super::format::refuse_huge_coordinates(&positions, path)?;
-    let mut mesh = Mesh::new(positions, tris).map_err(|e| MeshError::from(e).in_file(path))?;
-    if !colors.is_empty() {
-        mesh = mesh
-            .with_colors(colors)
-            .map_err(|e| MeshError::from(e).in_file(path))?;
-    }
-    Ok(mesh)
 }
 
 /// Reads a PLY file.

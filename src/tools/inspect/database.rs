@@ -123,12 +123,12 @@ pub struct CacheReport {
 }
 
 /// The database folder `path` is (it holds [`MANIFEST`]).
-pub fn is_database(path: &Path) -> bool {
+pub(crate) fn is_database(path: &Path) -> bool {
     path.is_dir() && path.join(MANIFEST).is_file()
 }
 
 /// The database whose cache folder `path` is.
-pub fn database_of_cache(path: &Path) -> Option<PathBuf> {
+pub(crate) fn database_of_cache(path: &Path) -> Option<PathBuf> {
     if !path.is_dir() || path.file_name()? != "cache" {
         return None;
     }
@@ -145,7 +145,7 @@ fn err(e: impl std::fmt::Display) -> InspectError {
 
 /// Reads the database `dir`: its manifest, every sequence (as `db info`),
 /// its skeleton files and its cache.
-pub fn inspect_database(dir: &Path) -> Result<DatabaseReport, InspectError> {
+pub(crate) fn inspect_database(dir: &Path) -> Result<DatabaseReport, InspectError> {
     // Read, not opened: what would refuse it (a wrong unit) is listed
     // among the problems.
     let m = Manifest::read(dir).map_err(err)?;
@@ -202,7 +202,7 @@ pub fn inspect_database(dir: &Path) -> Result<DatabaseReport, InspectError> {
 }
 
 /// Reads the cache folder of the database `db`.
-pub fn inspect_cache(path: &Path, db: &Path) -> Result<CacheReport, InspectError> {
+pub(crate) fn inspect_cache(path: &Path, db: &Path) -> Result<CacheReport, InspectError> {
     let m = Manifest::read(db).map_err(err)?;
     Ok(CacheReport {
         path: path.to_path_buf(),

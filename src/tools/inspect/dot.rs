@@ -55,7 +55,7 @@ fn statement(line: &str) -> Option<(Vec<&str>, String)> {
 }
 
 /// Describes the DOT file `path`.
-pub fn inspect_dot(path: &Path) -> Result<JsonReport, InspectError> {
+pub(crate) fn inspect_dot(path: &Path) -> Result<JsonReport, InspectError> {
     let text = crate::util::fsutil::read_small_text(path)
         .map_err(|e| InspectError::Json(e.to_string()))?;
     let first = text

@@ -86,12 +86,41 @@ pub fn json_kind(v: &serde_json::Value) -> Option<&'static str> {
 /// and the other JSON files the project writes (rig, rig map, graph cache,
 /// skeletons, reports), told apart by [`json_kind`].
 pub(super) fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
-    use crate::embed::landmarks::{Landmark, Landmarks, Mark};
-    let err = |e: String| InspectError::Json(e);
+    let (text, v, format) = read_kind(path)?;
+    let lines = match format {
+        "markers" => markers_lines(&text, path)?,
+        "landmarks" => landmarks_lines(&text, path)?,
+        "graph cache" => graph_cache_lines(&v),
+        "rig" => rig_lines(&v),
+        "parts" => parts_lines(&v),
+        "pose" => pose_lines(&v),
+        "play script" => play_script_lines(&v),
+        "keyframe grid report" => grid_report_lines(&v),
+        "batch report" => batch_report_lines(&v),
+        "play report" => play_report_lines(&v),
+        "web site manifest" => site_manifest_lines(&v),
+        "rig map" => rig_map_lines(&v),
+        "skeletons" => skeletons_lines(&v),
+        _ => report_lines(&v, format),
+    };
+    Ok(JsonReport {
+        path: path.to_path_buf(),
+        format: format.into(),
+        lines,
+    })
+}
+
+fn json_err(e: String) -> InspectError {
+    InspectError::Json(e)
+}
+
+/// The file's text, its value and its kind ([`json_kind`], its fields
+/// checked): refuses an unknown or malformed file.
+fn read_kind(path: &Path) -> Result<(String, serde_json::Value, &'static str), InspectError> {
+    let err = json_err;
     let text = crate::util::fsutil::read_text(path).map_err(|e| err(e.to_string()))?;
     let v: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| err(format!("{}: {e}", path.display())))?;
-    let mut lines = Vec::new();
     let Some(format) = json_kind(&v) else {
         let keys = match v.as_object() {
             Some(o) if o.is_empty() => "an empty object".to_string(),
@@ -115,232 +144,264 @@ pub(super) fn inspect_json(path: &Path) -> Result<JsonReport, InspectError> {
             path.display()
         )));
     }
-    let num = |v: &serde_json::Value, k: &str| v.get(k).and_then(|x| x.as_f64());
-    let len =
-        |v: &serde_json::Value, k: &str| v.get(k).and_then(|x| x.as_array()).map_or(0, |a| a.len());
-    let len_of = |v: &serde_json::Value| v.as_array().map_or(0, |a| a.len());
-    match format {
-        "markers" => {
-            let f = crate::transfer::MarkerFile::parse(&text, path, usize::MAX)
-                .map_err(|e| err(e.to_string()))?;
-            lines.push(format!(
-                "{} markers{}",
-                f.markers.len(),
-                f.triangle_count
-                    .map(|t| format!(" on a mesh of {t} triangles"))
-                    .unwrap_or_default()
-            ));
-            let mut per: std::collections::BTreeMap<String, usize> = Default::default();
-            for m in &f.markers {
-                let b = m
-                    .bone
-                    .map_or("(no bone)".to_string(), |b| b.name().to_string());
-                *per.entry(b).or_default() += 1;
-            }
-            lines.push(format!(
-                "by bone: {}",
-                per.iter()
-                    .map(|(b, n)| format!("{b} {n}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        }
-        "landmarks" => {
-            let lm = Landmarks::parse(&text, path, usize::MAX).map_err(|e| err(e.to_string()))?;
-            for (l, m) in &lm.marks {
-                lines.push(match m {
-                    Mark::Vertex(i) => format!("{:<11} vertex {i}", l.name()),
-                    Mark::Point(p) => {
-                        format!("{:<11} point [{}, {}, {}]", l.name(), p[0], p[1], p[2])
-                    }
-                });
-            }
-            let optional: Vec<&str> = Landmark::ALL
-                .iter()
-                .filter(|l| !lm.marks.contains_key(l))
-                .map(|l| l.name())
-                .collect();
-            if !optional.is_empty() {
-                lines.push(format!(
-                    "not given (optional, placed by body proportions): {}",
-                    optional.join(", ")
-                ));
-            }
-        }
-        "graph cache" => {
-            let g = &v["graph"];
-            lines.push(format!(
-                "the Surface Motion Graph cached by `db build` (measure {}); rebuilt whenever the database changes",
-                g["measure"].as_str().unwrap_or("?")
-            ));
-            let seqs = named_frames(g, "len");
-            lines.push(format!("{} sequences: {}", seqs.len(), seqs.join(", ")));
-            lines.push(format!(
-                "{} transitions, {} edges",
-                len(g, "transitions"),
-                len(g, "edges")
-            ));
-        }
-        "rig" => {
-            lines.push(format!(
-                "a rig embedded by `rig embed`: {} joints on a mesh of {} vertices, {:.3} m tall",
-                len(&v, "joints"),
-                v["vertex_count"],
-                num(&v, "height").unwrap_or(f64::NAN)
-            ));
-            for n in v["notes"].as_array().into_iter().flatten() {
-                lines.push(format!("note: {}", n.as_str().unwrap_or_default()));
-            }
-        }
-        "parts" => {
-            let o = v.as_object().into_iter().flatten();
-            lines.push(format!(
-                "part labels (`db init --parts`): {}",
-                o.map(|(k, ids)| format!("{k} {}", len_of(ids)))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        }
-        "pose" => {
-            let n = len_of(&v);
-            lines.push(format!(
-                "a key-frame pose (`keyframe --from POSE.json`): {n} joints [x, y, z] in metres, Y up{}",
-                if n == crate::rig::Canonical::COUNT {
-                    String::new()
-                } else {
-                    format!(" (keyframe needs {})", crate::rig::Canonical::COUNT)
-                }
-            ));
-        }
-        "play script" => {
-            let a = v.as_array().map_or(&[][..], |a| a.as_slice());
-            let last = a.iter().filter_map(|r| r["t"].as_f64()).fold(0.0, f64::max);
-            let mut spaces: Vec<&str> = a.iter().filter_map(|r| r["space"].as_str()).collect();
-            spaces.dedup();
-            lines.push(format!(
-                "a `play` script: {} over {} s, spaces {}; `play --db DB --script` checks it against the database's spaces",
-                count(a.len(), "request"),
-                crate::util::numfmt::Short(last),
-                if spaces.is_empty() { "-".to_string() } else { spaces.join(", ") }
-            ));
-            // The times `play` refuses whatever the database ("1 request
-            // over 1e308 s" was printed as if the script were sound).
-            use crate::parametric::script::MAX_SECONDS;
-            use crate::util::numfmt::Short;
-            let mut before = 0.0;
-            for (i, r) in a.iter().enumerate() {
-                let Some(t) = r["t"].as_f64() else {
-                    lines.push(format!(
-                        "problem: request {i}: no \"t\" (seconds); `play` refuses it"
-                    ));
-                    break;
-                };
-                if !(0.0..=MAX_SECONDS).contains(&t) || t < before {
-                    lines.push(format!(
-                        "problem: request {i}: t = {}: expected seconds in [0, {MAX_SECONDS}], in time order; `play` refuses it",
-                        Short(t)
-                    ));
-                    break;
-                }
-                before = t;
-            }
-        }
-        "keyframe grid report" => {
-            let keys: Vec<&str> = v["keys"]
-                .as_array()
-                .into_iter()
-                .flatten()
-                .filter_map(|k| k.as_str())
-                .collect();
-            lines.push(format!(
-                "a key-frame grid (`keyframe --grid --report`): {}, {} × {}",
-                keys.join(" -> "),
-                count(len(&v, "distances"), "distance"),
-                count(len(&v, "times"), "time")
-            ));
-            lines.push(format!(
-                "reachable {}, unreachable {}; query time {:.2} ms mean",
-                v["reachable"]["distance_m"]["count"],
-                v["unreachable"]["distance_m"]["count"],
-                num(&v, "query_ms_mean").unwrap_or(f64::NAN)
-            ));
-        }
-        "batch report" => {
-            lines.push(format!(
-                "a `batch` report: {}: {}, {} converted, {} already done, {} failed{}",
-                v["what"].as_str().unwrap_or("?"),
-                count(len(&v, "outcomes"), "clip"),
-                v["done"],
-                v["skipped"],
-                v["failed"],
-                if v["finished"] == false {
-                    " (the run did not finish)"
-                } else {
-                    ""
-                }
-            ));
-        }
-        "play report" => {
-            lines.push(format!(
-                "a `play` report: {} at {} fps ({:.2} s), {}, {}",
-                count(v["frames"].as_u64().unwrap_or(0) as usize, "frame"),
-                num(&v, "fps").unwrap_or(f64::NAN),
-                num(&v, "seconds").unwrap_or(f64::NAN),
-                count(len(&v, "transitions"), "transition"),
-                count(len(&v, "notices"), "notice")
-            ));
-        }
-        "web site manifest" => {
-            let seqs = named_frames(&v, "frames");
-            lines.push(format!(
-                "the manifest of a site written by `web export` ({} mode, character '{}'): geometry {}, max vertex error {:.3} mm",
-                v["mode"].as_str().unwrap_or("?"),
-                v["name"].as_str().unwrap_or("?"),
-                v["geometry"].as_str().unwrap_or("?"),
-                1e3 * num(&v, "max_error").unwrap_or(f64::NAN)
-            ));
-            lines.push(format!(
-                "{}: {}",
-                count(seqs.len(), "sequence"),
-                seqs.join(", ")
-            ));
-        }
-        "rig map" => {
-            lines.push(format!(
-                "a rig map (`mocap rigmap`, for `LoadOptions::rig_map`): convention {}, {} canonical joints mapped",
-                v["convention"].as_str().unwrap_or("?"),
-                v["joints"].as_object().map_or(0, |o| o.len())
-            ));
-        }
-        "skeletons" => {
-            lines.push(format!(
-                "per-frame skeletons of sequence {}: {} frames at {} fps, {} joints",
-                v["sequence"].as_str().unwrap_or("?"),
-                len(&v, "frames"),
-                num(&v, "fps").unwrap_or(f64::NAN),
-                len(&v, "joints")
-            ));
-        }
-        _ => {
-            lines.push(format!(
-                "a {format}: {} frames at {} fps",
-                v["frames"],
-                num(&v, "fps").unwrap_or(f64::NAN)
-            ));
-            if let (Some(d), Some(t)) = (num(&v, "distance"), num(&v, "time")) {
-                lines.push(format!(
-                    "travelled {d:.3} m in {t:.3} s over {}, {}",
-                    count(len(&v, "segments"), "segment"),
-                    count(len(&v, "transitions"), "transition")
-                ));
-            }
-        }
+    Ok((text, v, format))
+}
+
+/// The number at key `k` of `v`.
+fn num(v: &serde_json::Value, k: &str) -> Option<f64> {
+    v.get(k).and_then(|x| x.as_f64())
+}
+
+/// The length of the array at key `k` of `v` (0 if none).
+fn len(v: &serde_json::Value, k: &str) -> usize {
+    v.get(k).and_then(|x| x.as_array()).map_or(0, |a| a.len())
+}
+
+/// The length of `v` as an array (0 if not one).
+fn len_of(v: &serde_json::Value) -> usize {
+    v.as_array().map_or(0, |a| a.len())
+}
+
+fn markers_lines(text: &str, path: &Path) -> Result<Vec<String>, InspectError> {
+    let mut lines = Vec::new();
+    let f = crate::transfer::MarkerFile::parse(text, path, usize::MAX)
+        .map_err(|e| json_err(e.to_string()))?;
+    lines.push(format!(
+        "{} markers{}",
+        f.markers.len(),
+        f.triangle_count
+            .map(|t| format!(" on a mesh of {t} triangles"))
+            .unwrap_or_default()
+    ));
+    let mut per: std::collections::BTreeMap<String, usize> = Default::default();
+    for m in &f.markers {
+        let b = m
+            .bone
+            .map_or("(no bone)".to_string(), |b| b.name().to_string());
+        *per.entry(b).or_default() += 1;
     }
-    Ok(JsonReport {
-        path: path.to_path_buf(),
-        format: format.into(),
-        lines,
-    })
+    lines.push(format!(
+        "by bone: {}",
+        per.iter()
+            .map(|(b, n)| format!("{b} {n}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    Ok(lines)
+}
+
+fn landmarks_lines(text: &str, path: &Path) -> Result<Vec<String>, InspectError> {
+    use crate::embed::landmarks::{Landmark, Landmarks, Mark};
+    let mut lines = Vec::new();
+    let lm = Landmarks::parse(text, path, usize::MAX).map_err(|e| json_err(e.to_string()))?;
+    for (l, m) in &lm.marks {
+        lines.push(match m {
+            Mark::Vertex(i) => format!("{:<11} vertex {i}", l.name()),
+            Mark::Point(p) => {
+                format!("{:<11} point [{}, {}, {}]", l.name(), p[0], p[1], p[2])
+            }
+        });
+    }
+    let optional: Vec<&str> = Landmark::ALL
+        .iter()
+        .filter(|l| !lm.marks.contains_key(l))
+        .map(|l| l.name())
+        .collect();
+    if !optional.is_empty() {
+        lines.push(format!(
+            "not given (optional, placed by body proportions): {}",
+            optional.join(", ")
+        ));
+    }
+    Ok(lines)
+}
+
+fn graph_cache_lines(v: &serde_json::Value) -> Vec<String> {
+    let mut lines = Vec::new();
+    let g = &v["graph"];
+    lines.push(format!(
+        "the Surface Motion Graph cached by `db build` (measure {}); rebuilt whenever the database changes",
+        g["measure"].as_str().unwrap_or("?")
+    ));
+    let seqs = named_frames(g, "len");
+    lines.push(format!("{} sequences: {}", seqs.len(), seqs.join(", ")));
+    lines.push(format!(
+        "{} transitions, {} edges",
+        len(g, "transitions"),
+        len(g, "edges")
+    ));
+    lines
+}
+
+fn rig_lines(v: &serde_json::Value) -> Vec<String> {
+    let mut lines = Vec::new();
+    lines.push(format!(
+        "a rig embedded by `rig embed`: {} joints on a mesh of {} vertices, {:.3} m tall",
+        len(v, "joints"),
+        v["vertex_count"],
+        num(v, "height").unwrap_or(f64::NAN)
+    ));
+    for n in v["notes"].as_array().into_iter().flatten() {
+        lines.push(format!("note: {}", n.as_str().unwrap_or_default()));
+    }
+    lines
+}
+
+fn parts_lines(v: &serde_json::Value) -> Vec<String> {
+    let o = v.as_object().into_iter().flatten();
+    vec![format!(
+        "part labels (`db init --parts`): {}",
+        o.map(|(k, ids)| format!("{k} {}", len_of(ids)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )]
+}
+
+fn pose_lines(v: &serde_json::Value) -> Vec<String> {
+    let n = len_of(v);
+    vec![format!(
+        "a key-frame pose (`keyframe --from POSE.json`): {n} joints [x, y, z] in metres, Y up{}",
+        if n == crate::rig::Canonical::COUNT {
+            String::new()
+        } else {
+            format!(" (keyframe needs {})", crate::rig::Canonical::COUNT)
+        }
+    )]
+}
+
+fn play_script_lines(v: &serde_json::Value) -> Vec<String> {
+    let mut lines = Vec::new();
+    let a = v.as_array().map_or(&[][..], |a| a.as_slice());
+    let last = a.iter().filter_map(|r| r["t"].as_f64()).fold(0.0, f64::max);
+    let mut spaces: Vec<&str> = a.iter().filter_map(|r| r["space"].as_str()).collect();
+    spaces.dedup();
+    lines.push(format!(
+        "a `play` script: {} over {} s, spaces {}; `play --db DB --script` checks it against the database's spaces",
+        count(a.len(), "request"),
+        crate::util::numfmt::Short(last),
+        if spaces.is_empty() { "-".to_string() } else { spaces.join(", ") }
+    ));
+    // The times `play` refuses whatever the database ("1 request
+    // over 1e308 s" was printed as if the script were sound).
+    use crate::parametric::script::MAX_SECONDS;
+    use crate::util::numfmt::Short;
+    let mut before = 0.0;
+    for (i, r) in a.iter().enumerate() {
+        let Some(t) = r["t"].as_f64() else {
+            lines.push(format!(
+                "problem: request {i}: no \"t\" (seconds); `play` refuses it"
+            ));
+            break;
+        };
+        if !(0.0..=MAX_SECONDS).contains(&t) || t < before {
+            lines.push(format!(
+                "problem: request {i}: t = {}: expected seconds in [0, {MAX_SECONDS}], in time order; `play` refuses it",
+                Short(t)
+            ));
+            break;
+        }
+        before = t;
+    }
+    lines
+}
+
+fn grid_report_lines(v: &serde_json::Value) -> Vec<String> {
+    let keys: Vec<&str> = v["keys"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|k| k.as_str())
+        .collect();
+    vec![
+        format!(
+            "a key-frame grid (`keyframe --grid --report`): {}, {} × {}",
+            keys.join(" -> "),
+            count(len(v, "distances"), "distance"),
+            count(len(v, "times"), "time")
+        ),
+        format!(
+            "reachable {}, unreachable {}; query time {:.2} ms mean",
+            v["reachable"]["distance_m"]["count"],
+            v["unreachable"]["distance_m"]["count"],
+            num(v, "query_ms_mean").unwrap_or(f64::NAN)
+        ),
+    ]
+}
+
+fn batch_report_lines(v: &serde_json::Value) -> Vec<String> {
+    vec![format!(
+        "a `batch` report: {}: {}, {} converted, {} already done, {} failed{}",
+        v["what"].as_str().unwrap_or("?"),
+        count(len(v, "outcomes"), "clip"),
+        v["done"],
+        v["skipped"],
+        v["failed"],
+        if v["finished"] == false {
+            " (the run did not finish)"
+        } else {
+            ""
+        }
+    )]
+}
+
+fn play_report_lines(v: &serde_json::Value) -> Vec<String> {
+    vec![format!(
+        "a `play` report: {} at {} fps ({:.2} s), {}, {}",
+        count(v["frames"].as_u64().unwrap_or(0) as usize, "frame"),
+        num(v, "fps").unwrap_or(f64::NAN),
+        num(v, "seconds").unwrap_or(f64::NAN),
+        count(len(v, "transitions"), "transition"),
+        count(len(v, "notices"), "notice")
+    )]
+}
+
+fn site_manifest_lines(v: &serde_json::Value) -> Vec<String> {
+    let seqs = named_frames(v, "frames");
+    vec![
+        format!(
+            "the manifest of a site written by `web export` ({} mode, character '{}'): geometry {}, max vertex error {:.3} mm",
+            v["mode"].as_str().unwrap_or("?"),
+            v["name"].as_str().unwrap_or("?"),
+            v["geometry"].as_str().unwrap_or("?"),
+            1e3 * num(v, "max_error").unwrap_or(f64::NAN)
+        ),
+        format!("{}: {}", count(seqs.len(), "sequence"), seqs.join(", ")),
+    ]
+}
+
+fn rig_map_lines(v: &serde_json::Value) -> Vec<String> {
+    vec![format!(
+        "a rig map (`mocap rigmap`, for `LoadOptions::rig_map`): convention {}, {} canonical joints mapped",
+        v["convention"].as_str().unwrap_or("?"),
+        v["joints"].as_object().map_or(0, |o| o.len())
+    )]
+}
+
+fn skeletons_lines(v: &serde_json::Value) -> Vec<String> {
+    vec![format!(
+        "per-frame skeletons of sequence {}: {} frames at {} fps, {} joints",
+        v["sequence"].as_str().unwrap_or("?"),
+        len(v, "frames"),
+        num(v, "fps").unwrap_or(f64::NAN),
+        len(v, "joints")
+    )]
+}
+
+/// A retarget, transfer or keyframe report.
+fn report_lines(v: &serde_json::Value, format: &str) -> Vec<String> {
+    let mut lines = vec![format!(
+        "a {format}: {} frames at {} fps",
+        v["frames"],
+        num(v, "fps").unwrap_or(f64::NAN)
+    )];
+    if let (Some(d), Some(t)) = (num(v, "distance"), num(v, "time")) {
+        lines.push(format!(
+            "travelled {d:.3} m in {t:.3} s over {}, {}",
+            count(len(v, "segments"), "segment"),
+            count(len(v, "transitions"), "transition")
+        ));
+    }
+    lines
 }
 
 /// What a field of a file [`inspect`] recognises must hold.

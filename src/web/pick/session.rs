@@ -22,7 +22,7 @@ use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
 /// Largest request body accepted (a landmark set is well under 4 kB).
-pub const MAX_BODY_BYTES: usize = 1 << 20;
+pub(crate) const MAX_BODY_BYTES: usize = 1 << 20;
 
 /// An answer of the API.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,4 +1,5 @@
 //! Scan transfer (Confluent Motion).
 
 mod feet;
+mod options;
 mod scans;

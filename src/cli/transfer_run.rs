@@ -1,0 +1,189 @@
+//! `surfmotion transfer`: the arguments ([`super::transfer::Args`]) checked,
+//! the job ([`surfmotion::jobs::transfer`]) called, its report printed.
+
+use super::transfer::{Args, ScanJob};
+use surfmotion::jobs::{
+    ScanTransferOptions, TransferOutcome, TransferSource, TransferSpec, transfer_onto_scan,
+    transfer_onto_scan_to,
+};
+use surfmotion::transfer::{SignMode, TransferOptions};
+
+/// Runs `transfer`.
+pub fn run(a: Args) -> anyhow::Result<()> {
+    super::warnings_in_summary(!a.run.json);
+    check_options_and_outputs(&a)?;
+    let job_opts = a.job.job()?;
+    let scan = super::load_mesh_groups(&a.scan, &job_opts.groups)?;
+    let spec = spec(&a, &job_opts)?;
+    // The number of frames is known once the source is read: the library
+    // reports it with every frame solved.
+    let bar = super::progress(0, "frames");
+    if a.truth.is_none() && a.run.preview.preview.is_none() {
+        // Nothing needs every frame at once: they go to the output as they
+        // are solved (issue 18, item 12).
+        let report = transfer_onto_scan_to(
+            &scan,
+            &spec,
+            &a.output,
+            a.glb.options(),
+            a.report.is_some(),
+            &|p| {
+                bar.set_length(p.total as u64);
+                bar.inc(1);
+            },
+        )?;
+        bar.finish_and_clear();
+        return print_report(&a, &report);
+    }
+    let outcome = transfer_onto_scan(&scan, &spec, &|p| {
+        bar.set_length(p.total as u64);
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    print_outcome(&a, outcome)
+}
+
+/// The job's spec from the arguments.
+fn spec(a: &Args, job_opts: &ScanJob) -> anyhow::Result<TransferSpec> {
+    let source = match (&a.mocap, &a.template) {
+        (Some(m), _) => TransferSource::Mocap(m.clone()),
+        (None, Some(t)) => TransferSource::Template {
+            spec: t.clone(),
+            markers: a.template_markers.clone(),
+            landmarks: a.template_landmarks.clone(),
+            frame: a.template_frame,
+        },
+        (None, None) => anyhow::bail!("give --mocap or --template"),
+    };
+    Ok(TransferSpec {
+        scan_name: a.scan.clone(),
+        landmarks: a.landmarks.clone(),
+        automatic: surfmotion::jobs::transfer::AutoScanLandmarks {
+            min_confidence: a.min_confidence,
+            write: a.write_landmarks.clone(),
+        },
+        markers: a.markers.clone(),
+        save_markers: a.save_markers.clone(),
+        source,
+        truth: a.truth.clone(),
+        options: ScanTransferOptions {
+            markers: job_opts.markers,
+            fps: job_opts.fps,
+            transfer: TransferOptions {
+                signs: if a.naive_signs {
+                    SignMode::Hemisphere
+                } else {
+                    SignMode::Consistent
+                },
+            },
+            load: a.run.clip.load_options()?,
+            glb: a.glb.options(),
+        },
+    })
+}
+
+/// Refuses, before any work, template options without a template and
+/// outputs that would replace an input or another output, are not a
+/// mesh format, or a folder that holds files without --force.
+fn check_options_and_outputs(a: &Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        (0.0..=1.0).contains(&a.min_confidence),
+        "--min-confidence {}: expected 0 to 1",
+        a.min_confidence
+    );
+    // clap's `requires` let these through with --mocap, and they were
+    // ignored without a word.
+    if a.template.is_none() {
+        for (flag, given) in [
+            ("--template-markers", a.template_markers.is_some()),
+            ("--template-landmarks", a.template_landmarks.is_some()),
+            ("--template-frame", a.template_frame != 0),
+        ] {
+            anyhow::ensure!(
+                !given,
+                "{flag} applies to --template (a moving template mesh), not to --mocap"
+            );
+        }
+    }
+    let mut inputs = surfmotion::mesh::io::input_files(&a.scan, None);
+    if let Some(t) = &a.template {
+        inputs.extend(surfmotion::mesh::io::input_files(t, None));
+    }
+    surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
+    inputs.extend(a.mocap.clone());
+    // `--report LANDMARKS.json` replaced the scan's landmarks with the
+    // report and exited 0: every file read is an input.
+    if let Some(t) = &a.truth {
+        inputs.extend(surfmotion::mesh::io::input_files(t, None));
+    }
+    inputs.extend(
+        [
+            &a.landmarks,
+            &a.markers,
+            &a.template_markers,
+            &a.template_landmarks,
+            &a.run.clip.asf,
+            &a.run.clip.rig_map,
+        ]
+        .into_iter()
+        .flatten()
+        .cloned(),
+    );
+    let mut outputs = super::mesh_outputs(&a.output);
+    outputs.extend(a.report.clone().map(|p| ("--report", p)));
+    outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
+    outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
+    outputs.extend(a.write_landmarks.clone().map(|p| ("--write-landmarks", p)));
+    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
+    surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
+    a.glb.refuse_unless_glb(
+        super::mesh::GlbArgs::is_glb(&a.output),
+        &a.output.display().to_string(),
+    )?;
+    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
+    anyhow::ensure!(
+        surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
+        "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",
+        a.output.display()
+    );
+    Ok(())
+}
+
+/// Writes the preview and the result of a transfer and prints its report.
+fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
+    if let Some(path) = &a.run.preview.preview {
+        outcome.write_preview(path, &a.run.preview.options())?;
+    }
+    let report = outcome.write(&a.output, a.glb.options(), a.report.is_some())?;
+    print_report(a, &report)
+}
+
+/// Writes the JSON report if asked and prints the summary of a transfer.
+fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::Result<()> {
+    if let Some(p) = &a.report {
+        let v = serde_json::to_string_pretty(&serde_json::to_value(report)?)?;
+        surfmotion::util::fsutil::write_bytes_atomic(p, v.as_bytes())?;
+    }
+    if a.run.json {
+        let mut v = report.short_json()?;
+        if let (Some(auto), Some(o)) = (&report.automatic_landmarks, v.as_object_mut()) {
+            o.insert("automatic_landmarks".into(), serde_json::to_value(auto)?);
+        }
+        let v = serde_json::to_string_pretty(&v)?;
+        return super::emit(&(v + "\n"));
+    }
+    let mut text = String::new();
+    if let Some(auto) = &report.automatic_landmarks {
+        text += &format!(
+            "landmarks: automatic (confidence {:.2}; symmetry fit {:.2}% of the height){}\n",
+            auto.confidence,
+            auto.symmetry_percent,
+            a.write_landmarks
+                .as_ref()
+                .map(|p| format!(" → {}", p.display()))
+                .unwrap_or_default()
+        );
+    }
+    text += &surfmotion::jobs::text::transfer(&a.scan, a.truth.as_deref(), report);
+    super::emit(&text)
+}
