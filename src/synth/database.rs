@@ -28,9 +28,17 @@
 //!   and an arm takes no weight from a leg.
 //! - **The lag**: where neighbouring vertices lag by different amounts (the
 //!   edge of the soft region, a hem pressed between the legs) the lag turns
-//!   triangles over; there `λ` is halved on their vertices and two rings
-//!   around, up to eight times (then 0: the skinned surface), frame by
-//!   frame, until none is turned over against the rest frame.
+//!   triangles over. It is damped before it can: `λ` is lowered wherever
+//!   the lag would change an edge by more than a quarter of its rest
+//!   length, and the damping spread and smoothed over a few rings
+//!   ([`lag_damping`]), so the cloth stays smooth. (An earlier version
+//!   halved `λ` in patches around the turned-over triangles and repaired
+//!   what was left in patches of up to seven rings: on the synth3 walk,
+//!   CMU 02_01 frames 4 and 60, the front-left hem came out as a crumpled,
+//!   faceted patch.) Where triangles are still turned over `λ` is halved
+//!   on their vertices and two rings around and smoothed again, up to eight
+//!   times (then 0: the skinned surface), frame by frame, until none is
+//!   turned over against the rest frame.
 //! - **Skinning itself** folds a few triangles where a joint bends hard
 //!   (the crotch under a high knee): those are rebuilt by the
 //!   deformation's repair ([`crate::deform::unflip::unflip`]) against the
@@ -209,6 +217,22 @@ const WIDE_PASSES: usize = 7;
 /// Lag halvings before a vertex's lag is dropped (see the module docs).
 const LAG_ROUNDS: usize = 8;
 
+/// The most the lag may change an edge, as a share of its rest length,
+/// before it is damped ([`lag_damping`]). Measured on the synth3 walk (CMU
+/// 02_01 at 25 fps, `eval --surface` against the samba capture): 0.25
+/// and 0.15 give the same creases (left thigh 493 and 505
+/// edge-frames); 0.25 keeps more of the lag.
+const LAG_STRAIN: f64 = 0.25;
+
+/// Rings over which a damped vertex's `λ` is spread at its least.
+const LAG_SPREAD: usize = 2;
+
+/// Smoothing steps of the damping field (each only lowers it).
+const LAG_SMOOTH: usize = 6;
+
+/// Smoothing steps after each halving of the fallback (see the module docs).
+const LAG_RESMOOTH: usize = 2;
+
 /// Each frame made free of triangles turned over against the rest frame:
 /// the skinned frame repaired, then the lag (`positions` − the skinned
 /// frame as it was) taken back where it turns triangles over. Frames in
@@ -250,7 +274,7 @@ fn clean_frames(rest: &Mesh, skinned: &mut [[f64; 3]], positions: &mut [[f64; 3]
             // The skinned frame the lag is measured from stays as written
             // by the repair; what is left turned over is repaired once more
             // on the output below.
-            let mut lambda = vec![1.0f64; n];
+            let mut lambda = lag_damping(rest.positions(), &adj, &lag);
             for round in 0..=LAG_ROUNDS {
                 for ((o, s), (l, d)) in out.iter_mut().zip(sk.iter()).zip(lambda.iter().zip(&lag)) {
                     *o = (DVec3::from_array(*s) + *d * *l).to_array();
@@ -277,6 +301,11 @@ fn clean_frames(rest: &Mesh, skinned: &mut [[f64; 3]], positions: &mut [[f64; 3]
                 for (l, _) in lambda.iter_mut().zip(&on).filter(|x| *x.1) {
                     *l = if last { 0.0 } else { *l * 0.5 };
                 }
+                if !last {
+                    for _ in 0..LAG_RESMOOTH {
+                        blur_at_most(&adj, &mut lambda);
+                    }
+                }
             }
             // What skinning's own repair left (and the lag's edges):
             // repaired on the output, in wider patches.
@@ -299,4 +328,52 @@ fn clean_frames(rest: &Mesh, skinned: &mut [[f64; 3]], positions: &mut [[f64; 3]
                 unflip(tris, &adj, rest.positions(), out, &turn, bad, &wide);
             }
         });
+}
+
+/// One Jacobi step of umbrella smoothing of `l`, each value kept at most
+/// what it was (a damped vertex's neighbours are pulled down, never the
+/// vertex up).
+fn blur_at_most(adj: &Adjacency, l: &mut [f64]) {
+    let before = l.to_vec();
+    for (v, x) in l.iter_mut().enumerate() {
+        let nb = &adj.vertices[v];
+        let sum: f64 = nb.iter().map(|&w| before[w as usize]).sum::<f64>() + before[v];
+        *x = x.min(sum / (nb.len() + 1) as f64);
+    }
+}
+
+/// The lag's damping `λ` per vertex, before any triangle is tested: where
+/// the lag would stretch or squeeze an edge by more than [`LAG_STRAIN`] of
+/// its rest length (neighbours lagging by different amounts: a hem pressed
+/// between the legs) `λ` scales it down to that, and the field is spread
+/// (taken at its least over [`LAG_SPREAD`] rings, then smoothed
+/// [`LAG_SMOOTH`] times) so the damped cloth stays smooth instead of
+/// stepping between damped and free patches.
+fn lag_damping(rest: &[[f64; 3]], adj: &Adjacency, lag: &[DVec3]) -> Vec<f64> {
+    let c = LAG_STRAIN;
+    let mut l: Vec<f64> = (0..lag.len())
+        .map(|v| {
+            let p = DVec3::from_array(rest[v]);
+            let r = adj.vertices[v]
+                .iter()
+                .map(|&w| {
+                    let e = p.distance(DVec3::from_array(rest[w as usize])).max(1e-12);
+                    lag[v].distance(lag[w as usize]) / e
+                })
+                .fold(0.0f64, f64::max);
+            if r > c { c / r } else { 1.0 }
+        })
+        .collect();
+    for _ in 0..LAG_SPREAD {
+        let before = l.clone();
+        for (v, x) in l.iter_mut().enumerate() {
+            for &w in &adj.vertices[v] {
+                *x = x.min(before[w as usize]);
+            }
+        }
+    }
+    for _ in 0..LAG_SMOOTH {
+        blur_at_most(adj, &mut l);
+    }
+    l
 }

@@ -93,7 +93,13 @@ fn walk_and_run_have_the_right_frames_rigid_bones_and_measurable_dynamics() {
         let skirt_mean = skirt.iter().map(|&v| offset(v)).sum::<f64>() / skirt.len() as f64;
         let head_max = head.iter().map(|&v| offset(v)).fold(0.0, f64::max);
         eprintln!("{clip_name}: skirt mean max-offset {skirt_mean:.4} m, head {head_max:e}");
-        assert!(skirt_mean > 0.005, "{clip_name}: skirt offset {skirt_mean}");
+        // 5 mm until the lag was damped where it would fold (issue 42:
+        // the synth3 hem crumpled by the repair): 02_01 measured 3.76 mm
+        // after it.
+        assert!(
+            skirt_mean > 0.0025,
+            "{clip_name}: skirt offset {skirt_mean}"
+        );
         // The head is rigid in the dynamics; since issue 42's synth fix a
         // frame whose skinning folds a triangle is repaired in a patch
         // around the fold, which may reach the head by a fraction of a
