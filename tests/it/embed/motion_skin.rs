@@ -118,6 +118,7 @@ fn belly_vertices_are_not_weighted_to_a_forearm_after_a_contact_rest_frame() {
     // the fixture's point landmarks (the groin) where they were, so the
     // rig of a mirrored or scaled body is refused or wrong (measured: groin
     // off the surface in cm; parts 40 % in agreement mirrored).
+    #[allow(clippy::type_complexity)]
     let variants: [(&str, Box<dyn Fn([f64; 3]) -> [f64; 3]>, bool); 1] =
         [("re-ordered", Box::new(|p| p), false)];
     for (name, map, flip) in &variants {
