@@ -207,6 +207,18 @@ impl FrameStore {
         (pre.is_empty() && mid.len() == len).then_some(mid)
     }
 
+    /// `len` points (three f64 each) of the mapped file from byte `at`.
+    fn mapped_xyz(&self, at: usize, len: usize) -> Option<&[[f64; 3]]> {
+        let Backing::Mapped(map) = &self.backing else {
+            return None;
+        };
+        let bytes = map.get(at..at + len * 24)?;
+        // SAFETY: every bit pattern is a valid `[f64; 3]`; `align_to`
+        // checks the alignment (an unaligned start leaves a prefix, refused).
+        let (pre, mid, _) = unsafe { bytes.align_to::<[f64; 3]>() };
+        (pre.is_empty() && mid.len() == len).then_some(mid)
+    }
+
     /// Vertices per frame.
     pub fn n(&self) -> usize {
         self.n
@@ -233,10 +245,7 @@ impl FrameStore {
         match &self.backing {
             Backing::Owned(f, _) => f,
             Backing::Mapped(_) => {
-                let f = self
-                    .mapped_f64(HEADER, self.count * self.n * 3)
-                    .unwrap_or(&[]);
-                f.as_chunks::<3>().0
+                self.mapped_xyz(HEADER, self.count * self.n).unwrap_or(&[])
             }
         }
     }
@@ -248,8 +257,7 @@ impl FrameStore {
             Backing::Owned(f, _) => &f[a..b],
             Backing::Mapped(_) => {
                 assert!((id as usize) < self.count, "frame {id} of {}", self.count);
-                let f = self.mapped_f64(HEADER + a * 24, self.n * 3).unwrap_or(&[]);
-                f.as_chunks::<3>().0
+                self.mapped_xyz(HEADER + a * 24, self.n).unwrap_or(&[])
             }
         }
     }
@@ -352,7 +360,7 @@ pub fn open_or_build(
         count,
         conv,
         kind,
-        write_frames.then(|| (&fpath, fkey)),
+        write_frames.then_some((&fpath, fkey)),
     )?;
     let poses = match cached_poses {
         Some(p) => p,
