@@ -97,6 +97,7 @@ fn real(data: &Path) {
             }
             Err(e) => println!("| {name} | embedding refused: {e} |"),
         }
+        arm_offsets(name, &mesh, &lm, &auto);
         for n in &auto.notes {
             eprintln!("  {name}: {n}");
         }
@@ -104,6 +105,44 @@ fn real(data: &Path) {
         if name == "samba" {
             contact_first(&mesh, &frames, 130);
         }
+    }
+}
+
+/// The arm landmarks (elbows, wrists) of the automatic rig against the
+/// fixture's: the distance, and its part along the fixture's forearm
+/// (elbow to wrist; positive towards the hand), in % of the height.
+fn arm_offsets(
+    name: &str,
+    mesh: &Mesh,
+    lm: &Landmarks,
+    auto: &surfmotion::embed::auto::report::AutoRig,
+) {
+    use surfmotion::embed::landmarks::Landmark as L;
+    let p = mesh.positions();
+    let h = {
+        let ys = p.iter().map(|q| q[1]);
+        ys.clone().fold(f64::MIN, f64::max) - ys.fold(f64::MAX, f64::min)
+    };
+    let get = |l: &Landmarks, m: L| l.point(m, p).map(DVec3::from_array);
+    for (e, w, side) in [(L::LElbow, L::LWrist, "l"), (L::RElbow, L::RWrist, "r")] {
+        let (Some(fe), Some(fw), Some(ae), Some(aw)) = (
+            get(lm, e),
+            get(lm, w),
+            get(&auto.landmarks, e),
+            get(&auto.landmarks, w),
+        ) else {
+            continue;
+        };
+        let axis = (fw - fe).normalize_or_zero();
+        eprintln!(
+            "  {name} {side}: elbow {:.1}% off ({:+.1}% along the forearm), wrist {:.1}% off ({:+.1}%); forearm {:.1}% vs {:.1}%",
+            100.0 * ae.distance(fe) / h,
+            100.0 * (ae - fe).dot(axis) / h,
+            100.0 * aw.distance(fw) / h,
+            100.0 * (aw - fw).dot(axis) / h,
+            100.0 * fe.distance(fw) / h,
+            100.0 * ae.distance(aw) / h,
+        );
     }
 }
 

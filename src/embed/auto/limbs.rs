@@ -111,7 +111,7 @@ impl Chains {
         let (rest, height) = (body.rest, body.height);
         let p = humanoid::path_to_source(rest, &self.prev, tip);
         let c = crossings(rest, body.nb, &body.dec, &p, 0.05);
-        debug_chain("limb", &c, height);
+        debug_chain("limb", body, &c, height);
         // Up to the limb's entry into the trunk.
         let end = c
             .iter()
@@ -124,7 +124,9 @@ impl Chains {
         // point of the shin's motion and the part above is the knee only
         // when that part is the thigh; under a skirt it is a band of cloth
         // and the point fell 4-8 cm off the leg. The embedding centres the
-        // landmark in the leg's cross-section.
+        // landmark in the leg's cross-section. Not the elbow: samba's
+        // forearm ring lies as high as its fixed point or 2.5 cm higher
+        // (the forearm's rigid part reaches over the olecranon).
         if ring_knee && let Some(k) = m[1].as_mut() {
             if let Some(c) =
                 humanoid::boundary_centre(rest, body.nb, &body.dec.labels, k.distal, k.proximal)
@@ -225,18 +227,33 @@ pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
     })
 }
 
-/// Logs a limb's crossings (tracing, debug level).
-fn debug_chain(what: &str, c: &[Crossing], h: f64) {
+/// Logs a limb's crossings (tracing, debug level): the parts, where, how
+/// much they bend, the fixed point's mismatch, the fixed point and the
+/// boundary ring's centre.
+fn debug_chain(what: &str, body: &Body, c: &[Crossing], h: f64) {
+    if !tracing::enabled!(tracing::Level::DEBUG) {
+        return;
+    }
     let parts: Vec<String> = c
         .iter()
         .map(|c| {
+            let ring =
+                humanoid::boundary_centre(body.rest, body.nb, &body.dec.labels, c.distal, c.proximal)
+                    .unwrap_or(DVec3::NAN);
+            let q = c.joint.position;
             format!(
-                "{}>{} at {:.2}h bends {:.0}° mis {:.1}%",
+                "{}>{} at {:.2}h bends {:.0}° mis {:.1}% pivot ({:.3}, {:.3}, {:.3}) ring ({:.3}, {:.3}, {:.3})",
                 c.distal,
                 c.proximal,
                 c.from_tip / h,
                 c.joint.articulation_deg,
-                100.0 * c.joint.mismatch / h
+                100.0 * c.joint.mismatch / h,
+                q.x,
+                q.y,
+                q.z,
+                ring.x,
+                ring.y,
+                ring.z
             )
         })
         .collect();

@@ -281,6 +281,47 @@ fn get_joint(found: &[(String, Placed)], name: &str) -> Placed {
         })
 }
 
+/// The two shoulders differ, one mirrored onto the other, by more than
+/// this fraction of the height (along up and facing: what a mirror
+/// leaves unchanged) before they are left to the embedding (samba's: 1.5 %;
+/// crane's: 11 %).
+const SHOULDER_TOLERANCE: f64 = 0.05;
+
+/// Whether the shoulders the motion found are a body's pair: at one
+/// height and depth. The shoulder is the fixed point of the upper arm's
+/// part and the trunk's, a ball joint read off a short band of the upper
+/// arm against a trunk whose shoulder blade moves with the arm: on
+/// crane, arms raised as wings, one landed 16 cm below the other (r_shoulder
+/// 7.6 % of the height off the landmark rig's). When they disagree both
+/// are left to the embedding's proportions (as for landmarks without
+/// shoulders) and a note says so.
+fn shoulders_agree(
+    found: &[(String, Placed)],
+    up: DVec3,
+    facing: DVec3,
+    height: f64,
+    notes: &mut Vec<String>,
+) -> bool {
+    let (l, r) = (
+        get_joint(found, "l_shoulder"),
+        get_joint(found, "r_shoulder"),
+    );
+    if !(l.by_motion && r.by_motion) {
+        return true;
+    }
+    let d = l.position - r.position;
+    let off = (d.dot(up).powi(2) + d.dot(facing).powi(2)).sqrt();
+    if off <= SHOULDER_TOLERANCE * height {
+        return true;
+    }
+    notes.push(format!(
+        "shoulders: the motion's are {:.1}% of the height apart in height and depth (a body's pair: within {:.0}%); placed by the embedding's proportions from the neck",
+        100.0 * off / height,
+        100.0 * SHOULDER_TOLERANCE
+    ));
+    false
+}
+
 /// The landmarks as rest-frame points: the limb joints (the optional ones
 /// only when the motion showed them), the groin, the chin, the head top.
 fn landmark_points(
@@ -292,6 +333,7 @@ fn landmark_points(
 ) -> Vec<(Landmark, DVec3)> {
     let (up, lo, height) = (body.up, body.lo, body.height);
     let get = |name: &str| get_joint(found, name);
+    let shoulders = shoulders_agree(found, up, sided.facing, height, notes);
     let mut marks: Vec<(Landmark, DVec3)> = Vec::new();
     for (l, name) in [
         (Landmark::LWrist, "l_wrist"),
@@ -312,7 +354,8 @@ fn landmark_points(
             l,
             Landmark::LShoulder | Landmark::RShoulder | Landmark::LAnkle | Landmark::RAnkle
         );
-        if p.by_motion || !optional {
+        let shoulder = matches!(l, Landmark::LShoulder | Landmark::RShoulder);
+        if (p.by_motion && (shoulders || !shoulder)) || !optional {
             marks.push((l, p.position));
         }
     }

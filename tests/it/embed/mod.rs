@@ -1,6 +1,7 @@
 //! Rig embedding on a mesh: landmarks, parts, joints, regressors.
 
 mod auto;
+mod auto_arms;
 mod auto_knees;
 mod bodies;
 mod captures;

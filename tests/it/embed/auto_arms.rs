@@ -1,0 +1,170 @@
+//! The automatic rig's arms (issue 41): its elbows once sat 2-4 cm up the
+//! upper arm (the fixed point of the forearm's part and a short band of
+//! the upper arm), and a database rigged with them sank the retargeted
+//! character into the floor (CMU 02_02: 16-34 cm of ground penetration
+//! against the landmark rig's 0.45 cm). Here the elbows and wrists must lie
+//! within 3 % of the height of the landmark rig's, on samba, crane and
+//! samba mirrored (left and right swap) and turned Z-up; and CMU 02_02
+//! retargeted through samba's automatic rig (`db init` without landmarks,
+//! the CLI's whole path) stays inside the landmark rig's lines: ground
+//! penetration and knee hyperextension.
+
+use crate::common;
+
+use glam::DVec3;
+use std::path::Path;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::auto::options::AutoOptions;
+use surfmotion::embed::auto::rig::auto_rig;
+use surfmotion::embed::rest::{RestOptions, choose_rest_frame};
+use surfmotion::mesh::Mesh;
+use surfmotion::rig::Canonical;
+
+/// The figure's bound, in % of the height.
+const ARM_BOUND: f64 = 3.0;
+
+/// The automatic rig's embedding, its parts found on the rest frame `db
+/// init` would choose.
+fn auto_embedding(mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> Embedding {
+    let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
+    let mut all = vec![mesh.positions()];
+    all.extend_from_slice(&f);
+    let choice = choose_rest_frame(mesh, &all, &RestOptions::default()).unwrap();
+    let opts = AutoOptions {
+        rest_frame: (choice.frame > 0).then(|| choice.frame - 1),
+        ..AutoOptions::default()
+    };
+    let rig = auto_rig(mesh, &f, &opts).unwrap();
+    Embedding::new(mesh, &rig.landmarks, None).unwrap()
+}
+
+/// Each arm joint's distance (l_elbow, l_wrist, r_elbow, r_wrist) in % of
+/// `height` between `mine` and `truth`; `swap` pairs left with right.
+fn arms(mine: &[[f64; 3]; 19], truth: &[[f64; 3]; 19], height: f64, swap: bool) -> [f64; 4] {
+    use Canonical as C;
+    let own = [C::LElbow, C::LWrist, C::RElbow, C::RWrist];
+    let other = if swap {
+        [C::RElbow, C::RWrist, C::LElbow, C::LWrist]
+    } else {
+        own
+    };
+    let d = |a: C, b: C| {
+        100.0 * DVec3::from_array(mine[a.index()]).distance(DVec3::from_array(truth[b.index()]))
+            / height
+    };
+    [
+        d(own[0], other[0]),
+        d(own[1], other[1]),
+        d(own[2], other[2]),
+        d(own[3], other[3]),
+    ]
+}
+
+fn assert_arms(what: &str, a: [f64; 4]) {
+    assert!(
+        a.iter().all(|x| *x <= ARM_BOUND),
+        "{what}: l_elbow {:.2}%, l_wrist {:.2}%, r_elbow {:.2}%, r_wrist {:.2}% of the height from the landmark rig's (bound {ARM_BOUND}%)",
+        a[0],
+        a[1],
+        a[2],
+        a[3]
+    );
+}
+
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn the_arms_of_the_real_captures_and_variants_are_the_landmark_rigs() {
+    let Some(d) = common::data_dir() else { return };
+    for name in ["samba", "crane"] {
+        let c = super::auto::capture(&d, name);
+        let e = auto_embedding(&c.mesh, &c.frames);
+        assert_arms(
+            name,
+            arms(&e.joints, &c.truth.joints, c.truth.height, false),
+        );
+    }
+    let c = super::auto::capture(&d, "samba");
+    let h = c.truth.height;
+    let variant = |f: &dyn Fn([f64; 3]) -> [f64; 3], flip: bool| {
+        let mut tris = c.mesh.triangles().to_vec();
+        if flip {
+            for t in &mut tris {
+                t.swap(1, 2);
+            }
+        }
+        let m = Mesh::new(c.mesh.positions().iter().map(|p| f(*p)).collect(), tris).unwrap();
+        let fr: Vec<Vec<[f64; 3]>> = c
+            .frames
+            .iter()
+            .map(|x| x.iter().map(|p| f(*p)).collect())
+            .collect();
+        (m, fr)
+    };
+    // Mirrored across x = 0: the left arm is the landmark rig's right.
+    let mirror = |p: [f64; 3]| [-p[0], p[1], p[2]];
+    let (m, fr) = variant(&mirror, true);
+    let e = auto_embedding(&m, &fr);
+    assert_arms(
+        "mirrored",
+        arms(&e.joints, &c.truth.joints.map(mirror), h, true),
+    );
+    // Z-up.
+    let zup = |p: [f64; 3]| [p[0], -p[2], p[1]];
+    let (m, fr) = variant(&zup, false);
+    let e = auto_embedding(&m, &fr);
+    assert_arms("Z-up", arms(&e.joints, &c.truth.joints.map(zup), h, false));
+}
+
+#[test]
+#[ignore = "issue 41 not reached: 02_02 through samba's automatic rig sinks 25.1 cm (landmark rig 0.45; scripts/yardstick.sh, session 21); run with --ignored"]
+fn a_clip_retargeted_through_the_automatic_rig_stays_on_the_floor() {
+    let Some(d) = common::data_dir() else { return };
+    let t = tempfile::tempdir().unwrap();
+    let s = |p: &Path| p.display().to_string();
+    let samba = d.join("4d/samba");
+    let db = t.path().join("auto_db");
+    common::cli_ok(
+        &[
+            "db".to_string(),
+            "init".into(),
+            s(&db),
+            "--mesh".into(),
+            s(&samba.join("samba.obj")),
+            "--sequence".into(),
+            format!("samba={}", s(&samba.join("samba.pc2"))),
+        ],
+        None,
+    );
+    assert!(db.join("auto.landmarks.json").exists());
+    common::cli_ok(&["db".to_string(), "build".into(), s(&db)], None);
+    let mocap = d.join("mocap/cmu-amc/02/02_02.amc");
+    let out = t.path().join("02_02.pc2");
+    let args = |verb: &str, flag: &str| {
+        vec![
+            verb.to_string(),
+            "--db".into(),
+            s(&db),
+            "--mocap".into(),
+            s(&mocap),
+            flag.into(),
+            s(&out),
+        ]
+    };
+    common::cli_ok(&args("retarget", "-o"), None);
+    let mut e = args("eval", "--result");
+    e.push("--json".into());
+    let r = common::cli_ok(&e, None);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    let p = &v["plausibility"];
+    let pen = p["ground"]["penetration_cm"]["max"].as_f64().unwrap();
+    let knee = p["knee_hyperextension_deg"]["max"].as_f64().unwrap();
+    let vel = v["velocity_error_cm_per_frame"].as_f64().unwrap();
+    // The landmark rig (tests/fixtures/samba.landmarks.json, the same
+    // commands; scripts/yardstick.sh): 0.45 cm, 0.0°, 0.156 cm/frame; the
+    // automatic rig before the arms' rule: 16-34 cm, 12.8°, 1.04. Lines:
+    // the landmark rig's penetration within 2 cm, knees within 5°.
+    assert!(
+        pen <= 2.0 && knee <= 5.0,
+        "02_02 through the automatic rig: ground penetration {pen:.2} cm (line 2), knee hyperextension {knee:.1}° (line 5), velocity error {vel:.3} cm/frame"
+    );
+}
