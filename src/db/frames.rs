@@ -244,9 +244,7 @@ impl FrameStore {
     pub fn all(&self) -> &[[f64; 3]] {
         match &self.backing {
             Backing::Owned(f, _) => f,
-            Backing::Mapped(_) => {
-                self.mapped_xyz(HEADER, self.count * self.n).unwrap_or(&[])
-            }
+            Backing::Mapped(_) => self.mapped_xyz(HEADER, self.count * self.n).unwrap_or(&[]),
         }
     }
 
