@@ -45,7 +45,9 @@ pub struct EmbedArgs {
     pub write_landmarks: Option<PathBuf>,
     /// Or take the rig from a rigged glTF (.glb/.gltf) or FBX (.fbx) of
     /// this character: its skin's joints and weights, matched to the mesh
-    /// by vertex position (an FBX in metres by its UnitScaleFactor, Y up).
+    /// by vertex position (an FBX at the unit its animation reads at: its
+    /// UnitScaleFactor unless the limbs' stature says otherwise, as for its
+    /// clip; Y up). Give the same file as MESH to take its bind pose.
     #[arg(long)]
     pub skin: Option<PathBuf>,
     /// A rig map (canonical joint → skin joint name) for a skin whose

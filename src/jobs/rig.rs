@@ -215,8 +215,9 @@ fn from_skin(
         ));
     }
     let asset = crate::rig::read_rigged_character(g)?;
-    // The glTF itself as the mesh: its bind pose, not its animation.
-    if std::path::Path::new(&o.mesh) == g {
+    // The glTF itself as the mesh: its bind pose, not its animation (an
+    // FBX's skin may read at another unit than the file as a mesh).
+    if same_file(std::path::Path::new(&o.mesh), g) {
         *mesh = asset.mesh.clone();
     }
     let map = match &o.rig_map {
@@ -229,6 +230,15 @@ fn from_skin(
         map.as_ref(),
         g,
     )?)
+}
+
+/// Whether two paths name one file (`./a.fbx` and `a.fbx` do).
+fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    a == b
+        || matches!(
+            (std::fs::canonicalize(a), std::fs::canonicalize(b)),
+            (Ok(x), Ok(y)) if x == y
+        )
 }
 
 /// The embedding from automatic landmarks found on the geometry (issue 41),
