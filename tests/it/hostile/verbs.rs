@@ -4130,7 +4130,7 @@ fn many_via_key_frames_are_named_as_the_cause() {
     };
     let vias = |n: usize| -> Vec<String> {
         (0..n)
-            .flat_map(|i| ["--via".to_string(), format!("walk:{}", 20 + (i % 2) * 140)])
+            .flat_map(|i| ["--via".to_string(), format!("walk:{}", 30 + (i % 2) * 130)])
             .collect()
     };
     for n in [6, 10] {
