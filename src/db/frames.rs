@@ -67,6 +67,24 @@ pub enum FrameCacheError {
     },
 }
 
+impl FrameCacheError {
+    /// The I/O failure on `path`, as `map_err` takes it.
+    fn io_at(path: &Path) -> impl Fn(std::io::Error) -> FrameCacheError + Copy + '_ {
+        move |source| FrameCacheError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+
+    /// The header mismatch `what` in `path`.
+    fn header_at(path: &Path) -> impl Fn(String) -> FrameCacheError + Copy + '_ {
+        move |what| FrameCacheError::Header {
+            path: path.to_path_buf(),
+            what,
+        }
+    }
+}
+
 /// The frame cache file of the database `dir`.
 pub fn frames_path(dir: &Path) -> PathBuf {
     cache_dir(dir).join("frames.bin")
@@ -136,14 +154,10 @@ impl FrameStore {
         n: usize,
         count: usize,
     ) -> Result<FrameStore, FrameCacheError> {
-        let io = |source| FrameCacheError::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        let header = |what: String| FrameCacheError::Header {
-            path: path.to_path_buf(),
-            what,
-        };
+        let (io, header) = (
+            FrameCacheError::io_at(path),
+            FrameCacheError::header_at(path),
+        );
         let mut file = std::fs::File::open(path).map_err(io)?;
         let mut head = [0u8; 32];
         file.read_exact(&mut head)
@@ -528,14 +542,10 @@ fn save_poses(path: &Path, key: u64, poses: &[Pose]) -> Result<(), FsError> {
 
 /// Reads the skeleton cache `path` of `key` and `count` frames.
 pub fn read_poses(path: &Path, key: u64, count: usize) -> Result<Vec<Pose>, FrameCacheError> {
-    let io = |source| FrameCacheError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let header = |what: String| FrameCacheError::Header {
-        path: path.to_path_buf(),
-        what,
-    };
+    let (io, header) = (
+        FrameCacheError::io_at(path),
+        FrameCacheError::header_at(path),
+    );
     let len = std::fs::metadata(path).map_err(io)?.len();
     let expected = poses_len(count);
     if len != expected {

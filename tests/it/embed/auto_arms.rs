@@ -9,34 +9,16 @@
 //! the CLI's whole path) stays inside the landmark rig's lines: ground
 //! penetration and knee hyperextension.
 
+use super::auto_knees::auto_embedding;
 use crate::common;
 
 use glam::DVec3;
 use std::path::Path;
-use surfmotion::embed::Embedding;
-use surfmotion::embed::auto::options::AutoOptions;
-use surfmotion::embed::auto::rig::auto_rig;
-use surfmotion::embed::rest::{RestOptions, choose_rest_frame};
 use surfmotion::mesh::Mesh;
 use surfmotion::rig::Canonical;
 
 /// The figure's bound, in % of the height.
 const ARM_BOUND: f64 = 3.0;
-
-/// The automatic rig's embedding, its parts found on the rest frame `db
-/// init` would choose.
-fn auto_embedding(mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> Embedding {
-    let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
-    let mut all = vec![mesh.positions()];
-    all.extend_from_slice(&f);
-    let choice = choose_rest_frame(mesh, &all, &RestOptions::default()).unwrap();
-    let opts = AutoOptions {
-        rest_frame: (choice.frame > 0).then(|| choice.frame - 1),
-        ..AutoOptions::default()
-    };
-    let rig = auto_rig(mesh, &f, &opts).unwrap();
-    Embedding::new(mesh, &rig.landmarks, None).unwrap()
-}
 
 /// Each arm joint's distance (l_elbow, l_wrist, r_elbow, r_wrist) in % of
 /// `height` between `mine` and `truth`; `swap` pairs left with right.

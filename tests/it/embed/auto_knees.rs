@@ -32,7 +32,7 @@ fn capture(d: &Path, name: &str) -> (Mesh, Vec<Vec<[f64; 3]>>, Embedding) {
 
 /// The automatic rig's embedding, its parts found on the rest frame `db
 /// init` would choose (the topology's positions, then every frame).
-fn auto_embedding(mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> Embedding {
+pub(super) fn auto_embedding(mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> Embedding {
     let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
     let mut all = vec![mesh.positions()];
     all.extend_from_slice(&f);
