@@ -108,16 +108,16 @@ fn the_automatic_wrists_keep_the_hands_on_the_hands() {
         .unwrap();
         let e = Embedding::new(&m, &marks, None).unwrap();
         let w = hand_weights(&e);
-        for k in 0..2 {
+        for (k, &wk) in w.iter().enumerate() {
             let t = if swap { 1 - k } else { k };
             let tip = DVec3::from_array(e.hand_tips[k]);
             let want = DVec3::from_array(f(c.truth.hand_tips[t]));
             let off = 100.0 * tip.distance(want) / (h * scale);
-            let rel = (w[k] - truth_w[t]).abs() / truth_w[t];
+            let rel = (wk - truth_w[t]).abs() / truth_w[t];
             assert!(
                 off <= TIP_BOUND && rel <= WEIGHT_BOUND,
                 "{what}, hand {k}: tip {off:.2}% of the height from the fixture rig's (bound {TIP_BOUND}%), hand bone weight {:.0} against {:.0} ({:.0}% apart, bound {:.0}%)",
-                w[k],
+                wk,
                 truth_w[t],
                 100.0 * rel,
                 100.0 * WEIGHT_BOUND
