@@ -80,6 +80,9 @@ pub struct DeformOptions {
     /// crumpled and were pushed back (hyper-extension p95 18.8° on CMU
     /// 02_02, 0.0° with it; joint-velocity error 0.34 → 0.16 cm/frame).
     pub hold_joints: bool,
+    /// Hold soft vertices (a skirt, [`super::soft::softness`] above 0) too
+    /// when holding the joints. Default true.
+    pub hold_soft: bool,
     /// Rotation-aware local steps after each region's solve ([`super::arap`]):
     /// each vertex's rotation re-fitted to the solved one-ring, the source's
     /// Laplacian coordinates turned by it, solved again with the same
@@ -93,6 +96,52 @@ pub struct DeformOptions {
     /// 56 + 54, torso 2), where the overlapping thigh solves and their
     /// held LBS targets disagree, not in the turn of the coordinates.
     pub local_steps: usize,
+    /// The most work the fold repair may do on one frame
+    /// ([`RepairBudget`]).
+    pub repair_budget: RepairBudget,
+}
+
+/// The fold repair's work limit on one frame ([`unflip::Work`]): for a
+/// frame the solve left `b` triangles turned over, `per_triangle × b`,
+/// at most `most`. Steps that would go past it are not started, so a
+/// frame's repair costs at most a fixed amount of work, whatever the
+/// fold; the triangles it could not turn back are counted as left.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RepairBudget {
+    /// Work allowed per triangle turned over before the repair.
+    pub per_triangle: unflip::WorkLimit,
+    /// The most work on any frame.
+    pub most: unflip::WorkLimit,
+}
+
+impl RepairBudget {
+    /// No limit (the repair as it was before the budget).
+    pub const NONE: RepairBudget = RepairBudget {
+        per_triangle: unflip::WorkLimit::NONE,
+        most: unflip::WorkLimit::NONE,
+    };
+
+    /// The limit on a frame with `bad` triangles turned over.
+    pub fn limit(&self, bad: usize) -> unflip::WorkLimit {
+        unflip::WorkLimit {
+            projections: self
+                .per_triangle
+                .projections
+                .saturating_mul(bad)
+                .min(self.most.projections),
+            patch_vertices: self
+                .per_triangle
+                .patch_vertices
+                .saturating_mul(bad)
+                .min(self.most.patch_vertices),
+        }
+    }
+}
+
+impl Default for RepairBudget {
+    fn default() -> Self {
+        RepairBudget::NONE
+    }
 }
 
 impl Default for DeformOptions {
@@ -109,7 +158,9 @@ impl Default for DeformOptions {
             untangle: untangle::UntangleOptions::default(),
             repair_passes: 3,
             hold_joints: true,
+            hold_soft: true,
             local_steps: 0,
+            repair_budget: RepairBudget::default(),
         }
     }
 }
