@@ -133,6 +133,8 @@ impl Deformer {
         };
         let mut buf = vec![[0.0; 3]; n];
         let mut index_of: Vec<Option<usize>> = Vec::new();
+        // The parent of each region built (`sibling_seams`).
+        let mut parent_of: Vec<Option<usize>> = Vec::new();
         for (verts, joint, parent, example_joints, _owns) in region_specs(ch, mode) {
             if verts.is_empty() {
                 index_of.push(None);
@@ -149,16 +151,29 @@ impl Deformer {
                 region_examples(ch, &verts, &lap, joint, &example_joints, opts, &mut buf);
             let basis = pca::pca(&examples, opts.keep);
             let parent_verts: Option<&Vec<u32>> = parent.map(|p| &out.regions[p].solver.vertices);
+            // With `sibling_seams`, the vertices shared with the last sibling
+            // built (the left thigh for the right one) are seams too.
+            let sibling = parent
+                .filter(|_| opts.sibling_seams)
+                .and_then(|p| parent_of.iter().rposition(|&q| q == Some(p)));
+            let seams: Option<Vec<u32>> = sibling.map(|k| {
+                let mut all = out.regions[k].solver.vertices.clone();
+                all.extend(parent_verts.into_iter().flatten());
+                all.sort_unstable();
+                all.dedup();
+                all
+            });
             let (constraints, sources) = region_constraints(
                 ch,
                 mode,
                 opts,
                 &verts,
                 joint,
-                parent_verts.map(Vec::as_slice),
+                seams.as_deref().or(parent_verts.map(Vec::as_slice)),
                 &is_constraint,
                 &soft,
             );
+            parent_of.push(parent);
             let weights = region_weights(ch, mode, &verts, joint);
             out.components.push(basis.components.len());
             out.examples.push(chosen);
