@@ -1,7 +1,7 @@
 //! The `Deformer`: a character's prefactored part-based deformation
 //! (the module page, [`crate::deform`], describes the method).
 
-use super::options::{DeformMode, DeformOptions, TurnedOver};
+use super::options::{DeformMode, DeformOptions, RepairBudget, TurnedOver};
 use super::part_laplacian::{RegionSolver, RegionWorkspace, apply};
 use super::regions::{Region, region_constraints, region_examples, region_specs, region_weights};
 use super::{arap, lbs, pca, unflip, untangle};
@@ -21,6 +21,7 @@ pub struct Deformer {
     repair: unflip::RepairOptions,
     untangle: untangle::UntangleOptions,
     repair_passes: usize,
+    repair_budget: RepairBudget,
     /// Rotation-aware local steps after each region's solve.
     local_steps: usize,
     triangles: usize,
@@ -59,6 +60,16 @@ pub struct DeformWorkspace {
     /// The deformed frame before its repair, then the fixed budget's
     /// repair while the adaptive one runs.
     start: Vec<[f64; 3]>,
+    /// The last frame's repair work.
+    work: unflip::Work,
+}
+
+impl DeformWorkspace {
+    /// The work the fold repair did on the last frame deformed with this
+    /// workspace (zero when nothing was turned over).
+    pub fn repair_work(&self) -> unflip::Work {
+        self.work
+    }
 }
 
 impl Deformer {
@@ -89,6 +100,7 @@ impl Deformer {
             repair: opts.repair,
             untangle: opts.untangle,
             repair_passes: opts.repair_passes,
+            repair_budget: opts.repair_budget,
             local_steps: opts.local_steps,
             triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
@@ -109,8 +121,20 @@ impl Deformer {
             }
             m
         };
+        // Vertices the held joints leave free: the soft ones (a skirt), when
+        // `hold_soft` is off.
+        let soft: Vec<bool> = if opts.hold_soft {
+            vec![false; n]
+        } else {
+            super::soft::softness(ch.topology(), ch.rig())
+                .iter()
+                .map(|&s| s > 0.0)
+                .collect()
+        };
         let mut buf = vec![[0.0; 3]; n];
         let mut index_of: Vec<Option<usize>> = Vec::new();
+        // The parent of each region built (`sibling_seams`).
+        let mut parent_of: Vec<Option<usize>> = Vec::new();
         for (verts, joint, parent, example_joints, _owns) in region_specs(ch, mode) {
             if verts.is_empty() {
                 index_of.push(None);
@@ -127,15 +151,29 @@ impl Deformer {
                 region_examples(ch, &verts, &lap, joint, &example_joints, opts, &mut buf);
             let basis = pca::pca(&examples, opts.keep);
             let parent_verts: Option<&Vec<u32>> = parent.map(|p| &out.regions[p].solver.vertices);
+            // With `sibling_seams`, the vertices shared with the last sibling
+            // built (the left thigh for the right one) are seams too.
+            let sibling = parent
+                .filter(|_| opts.sibling_seams)
+                .and_then(|p| parent_of.iter().rposition(|&q| q == Some(p)));
+            let seams: Option<Vec<u32>> = sibling.map(|k| {
+                let mut all = out.regions[k].solver.vertices.clone();
+                all.extend(parent_verts.into_iter().flatten());
+                all.sort_unstable();
+                all.dedup();
+                all
+            });
             let (constraints, sources) = region_constraints(
                 ch,
                 mode,
                 opts,
                 &verts,
                 joint,
-                parent_verts.map(Vec::as_slice),
+                seams.as_deref().or(parent_verts.map(Vec::as_slice)),
                 &is_constraint,
+                &soft,
             );
+            parent_of.push(parent);
             let weights = region_weights(ch, mode, &verts, joint);
             out.components.push(basis.components.len());
             out.examples.push(chosen);
@@ -198,6 +236,7 @@ impl Deformer {
             areas: vec![0.0; self.triangles],
             best: vec![[0.0; 3]; self.n],
             start: vec![[0.0; 3]; self.n],
+            work: unflip::Work::default(),
         }
     }
 
@@ -336,9 +375,11 @@ impl Deformer {
     ) -> TurnedOver {
         let bad = unflip::turned_over(tris, source, out, &ws.turn);
         let before = bad.len();
+        ws.work = unflip::Work::default();
         if before == 0 {
             return TurnedOver::default();
         }
+        let mut budget = unflip::Budget::new(self.repair_budget.limit(before));
         untangle::references(tris, source, &ws.turn, &mut ws.normals, &mut ws.areas);
         let fixed = untangle::UntangleOptions {
             max_steps: self.untangle.steps,
@@ -348,7 +389,8 @@ impl Deformer {
         if adaptive {
             ws.start.copy_from_slice(out);
         }
-        let first = self.repair_with(tris, adj, source, out, ws, bad.clone(), &fixed);
+        let first = self.repair_with(tris, adj, source, out, ws, bad.clone(), &fixed, &mut budget);
+        ws.work = budget.done;
         if first == 0 || !adaptive {
             return TurnedOver {
                 before,
@@ -358,7 +400,8 @@ impl Deformer {
         // The last resort, from the deformed frame again; `ws.start` keeps
         // the first result.
         out.swap_with_slice(&mut ws.start);
-        let second = self.repair_with(tris, adj, source, out, ws, bad, &self.untangle);
+        let second = self.repair_with(tris, adj, source, out, ws, bad, &self.untangle, &mut budget);
+        ws.work = budget.done;
         if second >= first {
             out.copy_from_slice(&ws.start);
         }
@@ -371,7 +414,8 @@ impl Deformer {
     /// The repair of [`Deformer::repair`] with untangling options `opts`,
     /// from the turned-over triangles `bad` (reference normals in `ws`):
     /// leaves `out` at its best pass and returns the triangles still
-    /// turned over there.
+    /// turned over there. The work is counted in `budget` and stays
+    /// within it.
     #[allow(clippy::too_many_arguments)]
     fn repair_with(
         &self,
@@ -382,6 +426,7 @@ impl Deformer {
         ws: &mut DeformWorkspace,
         mut bad: Vec<u32>,
         opts: &untangle::UntangleOptions,
+        budget: &mut unflip::Budget,
     ) -> usize {
         let mut best = bad.len();
         let mut best_bad = bad.clone();
@@ -389,7 +434,7 @@ impl Deformer {
         // Untangling first: it is local and cheap, and fixes most frames
         // without a patch factorisation (measured: 12.4 → 8.6 ms a frame on
         // the real samba capture, still none left).
-        bad = untangle::untangle(tris, adj, &ws.normals, &ws.areas, out, bad, opts);
+        bad = untangle::untangle_within(tris, adj, &ws.normals, &ws.areas, out, bad, opts, budget);
         if bad.len() < best {
             best = bad.len();
             best_bad.clone_from(&bad);
@@ -405,9 +450,18 @@ impl Deformer {
                 rounds: self.repair.rounds + pass,
                 ..self.repair
             };
-            bad = unflip::unflip(tris, adj, source, out, &ws.turn, bad, &repair);
+            bad = unflip::unflip_within(tris, adj, source, out, &ws.turn, bad, &repair, budget);
             if !bad.is_empty() {
-                bad = untangle::untangle(tris, adj, &ws.normals, &ws.areas, out, bad, opts);
+                bad = untangle::untangle_within(
+                    tris,
+                    adj,
+                    &ws.normals,
+                    &ws.areas,
+                    out,
+                    bad,
+                    opts,
+                    budget,
+                );
             }
             if bad.len() < best {
                 best = bad.len();

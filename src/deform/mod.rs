@@ -45,5 +45,5 @@ pub mod unflip;
 pub mod untangle;
 
 pub use deformer::{DeformWorkspace, Deformer};
-pub use options::{DeformMode, DeformOptions, TurnedOver};
+pub use options::{DeformMode, DeformOptions, RepairBudget, TurnedOver};
 pub use regions::part_joint;

@@ -80,6 +80,22 @@ pub struct DeformOptions {
     /// crumpled and were pushed back (hyper-extension p95 18.8° on CMU
     /// 02_02, 0.0° with it; joint-velocity error 0.34 → 0.16 cm/frame).
     pub hold_joints: bool,
+    /// Hold soft vertices (a skirt, [`super::soft::softness`] above 0) too
+    /// when holding the joints. Default true. Off, it barely changes the
+    /// folds (session 22, CMU 02_02 on the real samba capture, triangle-
+    /// frames turned over before the repair: 3,599 → 3,412; 131_01 59,914
+    /// → 58,891): the folds are not on the soft vertices held (418 of
+    /// 02_02's 2,078 on the left thigh are soft) but where the thigh and
+    /// shin regions overlap at the knee (1,255 + 538 + 766 of 3,599) and
+    /// where the two thighs overlap under the skirt (609).
+    pub hold_soft: bool,
+    /// Constrain a region's vertices shared with its last sibling solved
+    /// before it (the right thigh's with the left's, under a skirt) to that
+    /// sibling's result, as seams. Default false: measured worse (session
+    /// 22, triangle-frames turned over before the repair on the real samba
+    /// capture: CMU 02_02 3,599 → 4,255, 131_01 59,914 → 66,055; the
+    /// folds move from the left leg to the right).
+    pub sibling_seams: bool,
     /// Rotation-aware local steps after each region's solve ([`super::arap`]):
     /// each vertex's rotation re-fitted to the solved one-ring, the source's
     /// Laplacian coordinates turned by it, solved again with the same
@@ -93,6 +109,60 @@ pub struct DeformOptions {
     /// 56 + 54, torso 2), where the overlapping thigh solves and their
     /// held LBS targets disagree, not in the turn of the coordinates.
     pub local_steps: usize,
+    /// The most work the fold repair may do on one frame
+    /// ([`RepairBudget`]).
+    pub repair_budget: RepairBudget,
+}
+
+/// The fold repair's work limit on one frame ([`unflip::Work`]): for a
+/// frame the solve left `b` triangles turned over, `per_triangle × b`,
+/// at most `most`. Steps that would go past it are not started, so a
+/// frame's repair costs at most a fixed amount of work, whatever the
+/// fold; the triangles it could not turn back are counted as left.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RepairBudget {
+    /// Work allowed per triangle turned over before the repair.
+    pub per_triangle: unflip::WorkLimit,
+    /// The most work on any frame.
+    pub most: unflip::WorkLimit,
+}
+
+impl RepairBudget {
+    /// No limit (the repair as it was before the budget).
+    pub const NONE: RepairBudget = RepairBudget {
+        per_triangle: unflip::WorkLimit::NONE,
+        most: unflip::WorkLimit::NONE,
+    };
+
+    /// The limit on a frame with `bad` triangles turned over.
+    pub fn limit(&self, bad: usize) -> unflip::WorkLimit {
+        unflip::WorkLimit {
+            projections: self
+                .per_triangle
+                .projections
+                .saturating_mul(bad)
+                .min(self.most.projections),
+            patch_vertices: self
+                .per_triangle
+                .patch_vertices
+                .saturating_mul(bad)
+                .min(self.most.patch_vertices),
+        }
+    }
+}
+
+impl Default for RepairBudget {
+    /// No limit: the repair as before the budget. Measured (session 22,
+    /// `tools::surface_repair`, the real samba capture): 30,000
+    /// projections and 4,000 patch unknowns a frame at most (1,000 and 60
+    /// per triangle turned over) bring `live --report`'s deformation CPU
+    /// p99 from 71.8 to 27.3 ms on CMU 02_02 and from 91.1 to 28.1 ms on
+    /// 131_01, but leave 11 (02_02) and 9,136 (131_01) triangle-frames
+    /// turned over that the unbounded repair turns back (60,000 / 8,000:
+    /// 0 and 4,869), so a bound is not the default.
+    fn default() -> Self {
+        RepairBudget::NONE
+    }
 }
 
 impl Default for DeformOptions {
@@ -109,7 +179,10 @@ impl Default for DeformOptions {
             untangle: untangle::UntangleOptions::default(),
             repair_passes: 3,
             hold_joints: true,
+            hold_soft: true,
+            sibling_seams: false,
             local_steps: 0,
+            repair_budget: RepairBudget::default(),
         }
     }
 }

@@ -197,8 +197,10 @@ pub(super) type RegionSource = (u32, bool);
 /// The soft constraints of a region, `(local index, weight)`, with their
 /// sources `(global vertex, from the parent's result)`: seams with the
 /// parent region first, then the LBS constraint vertices (and, with
-/// `hold_joints`, a spread of the child parts' vertices); a region with
-/// none of those constrains a spread of its own vertices.
+/// `hold_joints`, a spread of the child parts' vertices, those `soft` does
+/// not exclude); a region with none of those constrains a spread of its
+/// own vertices.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn region_constraints(
     ch: &Character,
     mode: DeformMode,
@@ -207,6 +209,7 @@ pub(super) fn region_constraints(
     joint: Canonical,
     parent_verts: Option<&[u32]>,
     is_constraint: &[bool],
+    soft: &[bool],
 ) -> (Vec<(u32, f64)>, Vec<RegionSource>) {
     let rig = ch.rig();
     let mut constraints = Vec::new();
@@ -220,6 +223,7 @@ pub(super) fn region_constraints(
             || (opts.hold_joints
                 && mode == DeformMode::Part
                 && i % opts.stride.max(1) == 0
+                && !soft[v as usize]
                 && Part::ALL
                     .get(rig.labels[v as usize] as usize)
                     .is_some_and(|c| c.parent() == Some(Part::of_joint(joint))))

@@ -130,6 +130,67 @@ pub fn turned_over(
         .collect()
 }
 
+/// The repair's work on one frame, counted, and the most it may do
+/// (`Deformer::repair`'s budget): projections of [`super::untangle`] and
+/// patch unknowns of [`unflip`] (each round's patch, free and fixed
+/// vertices, summed over the rounds). A step that would go past a limit is
+/// not started; what was done is still counted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct Work {
+    /// Projections made by the untangling.
+    pub projections: usize,
+    /// Patch unknowns solved by the Poisson repair.
+    pub patch_vertices: usize,
+}
+
+/// Limits of a frame's [`Work`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WorkLimit {
+    /// Most projections.
+    pub projections: usize,
+    /// Most patch unknowns.
+    pub patch_vertices: usize,
+}
+
+impl WorkLimit {
+    /// No limit.
+    pub const NONE: WorkLimit = WorkLimit {
+        projections: usize::MAX,
+        patch_vertices: usize::MAX,
+    };
+}
+
+/// A frame's work so far against its limit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Budget {
+    /// Done so far.
+    pub done: Work,
+    /// The limit.
+    pub limit: WorkLimit,
+}
+
+impl Budget {
+    /// Nothing done yet, within `limit`.
+    pub fn new(limit: WorkLimit) -> Budget {
+        Budget {
+            done: Work::default(),
+            limit,
+        }
+    }
+
+    /// Projections left.
+    pub fn projections_left(&self) -> usize {
+        self.limit.projections.saturating_sub(self.done.projections)
+    }
+
+    /// Patch unknowns left.
+    pub fn patch_left(&self) -> usize {
+        self.limit
+            .patch_vertices
+            .saturating_sub(self.done.patch_vertices)
+    }
+}
+
 /// Options of [`unflip`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RepairOptions {
@@ -167,8 +228,26 @@ pub fn unflip(
     source: &[[f64; 3]],
     out: &mut [[f64; 3]],
     turn: &[DQuat],
+    bad: Vec<u32>,
+    opts: &RepairOptions,
+) -> Vec<u32> {
+    let mut budget = Budget::new(WorkLimit::NONE);
+    unflip_within(tris, adj, source, out, turn, bad, opts, &mut budget)
+}
+
+/// [`unflip`] within `budget`: a round whose patch (free and fixed
+/// vertices) would go past the patch unknowns left is not solved (the
+/// smoothing still runs); the patch unknowns solved are added to it.
+#[allow(clippy::too_many_arguments)]
+pub fn unflip_within(
+    tris: &[[u32; 3]],
+    adj: &Adjacency,
+    source: &[[f64; 3]],
+    out: &mut [[f64; 3]],
+    turn: &[DQuat],
     mut bad: Vec<u32>,
     opts: &RepairOptions,
+    budget: &mut Budget,
 ) -> Vec<u32> {
     let n = out.len();
     let mut rings = 2;
@@ -210,6 +289,10 @@ pub fn unflip(
         }
         let fixed: Vec<u32> = (free as u32..patch.len() as u32).collect();
         let m = patch.len();
+        if m > budget.patch_left() {
+            break;
+        }
+        budget.done.patch_vertices += m;
         // Triangles touching a free vertex.
         let mut touch: Vec<u32> = patch[..free]
             .iter()

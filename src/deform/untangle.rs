@@ -52,7 +52,7 @@
 //! times that for a fan with no room at all); nothing at all on a frame
 //! with nothing turned over.
 
-use super::unflip::{Adjacency, triangle_turn};
+use super::unflip::{Adjacency, Budget, WorkLimit, triangle_turn};
 use glam::{DQuat, DVec3};
 
 /// Options of [`untangle`].
@@ -116,9 +116,28 @@ pub fn untangle(
     normals: &[DVec3],
     areas: &[f64],
     out: &mut [[f64; 3]],
-    mut bad: Vec<u32>,
+    bad: Vec<u32>,
     opts: &UntangleOptions,
 ) -> Vec<u32> {
+    let mut budget = Budget::new(WorkLimit::NONE);
+    untangle_within(tris, adj, normals, areas, out, bad, opts, &mut budget)
+}
+
+/// [`untangle`] within `budget`: no vertex is visited once the
+/// projections left cannot pay for its whole projection budget
+/// (`opts.max_steps` per margin); the projections made are added to it.
+#[allow(clippy::too_many_arguments)]
+pub fn untangle_within(
+    tris: &[[u32; 3]],
+    adj: &Adjacency,
+    normals: &[DVec3],
+    areas: &[f64],
+    out: &mut [[f64; 3]],
+    mut bad: Vec<u32>,
+    opts: &UntangleOptions,
+    budget: &mut Budget,
+) -> Vec<u32> {
+    let most = opts.max_steps.max(opts.steps) * opts.margins.len();
     let flipped =
         |out: &[[f64; 3]], t: u32| signed_area(&tris[t as usize], out, normals[t as usize]) <= 0.0;
     let mut verts: Vec<u32> = Vec::new();
@@ -143,8 +162,22 @@ pub fn untangle(
         verts.sort_unstable();
         verts.dedup();
         let mut moved = false;
+        let mut spent = false;
         for &v in &verts {
-            if relocate(tris, adj, normals, areas, out, v, opts) {
+            if budget.projections_left() < most {
+                spent = true;
+                break;
+            }
+            if relocate(
+                tris,
+                adj,
+                normals,
+                areas,
+                out,
+                v,
+                opts,
+                &mut budget.done.projections,
+            ) {
                 moved = true;
                 // A move that fixes two of a fan's triangles may turn a
                 // third over: track it too.
@@ -155,12 +188,16 @@ pub fn untangle(
         bad.dedup();
         bad.retain(|&t| flipped(out, t));
         idle = if moved { 0 } else { idle + 1 };
+        if spent {
+            break;
+        }
     }
     bad
 }
 
 /// Moves vertex `v` so that its whole fan faces the right way, if it can;
-/// returns whether it moved.
+/// returns whether it moved. The projections made are added to `made`.
+#[allow(clippy::too_many_arguments)]
 fn relocate(
     tris: &[[u32; 3]],
     adj: &Adjacency,
@@ -169,6 +206,7 @@ fn relocate(
     out: &mut [[f64; 3]],
     v: u32,
     opts: &UntangleOptions,
+    made: &mut usize,
 ) -> bool {
     let fan = &adj.triangles[v as usize];
     // Each fan triangle as an affine function of the vertex: a(p) = c + g·p.
@@ -209,7 +247,7 @@ fn relocate(
         if m <= r0 {
             return false;
         }
-        let p = project(&lin[..k], p0, m, opts.steps, &ball);
+        let p = project(&lin[..k], p0, m, opts.steps, &ball, made);
         if p.is_finite() && ratio(p) > r0 {
             out[v as usize] = p.to_array();
             return true;
@@ -234,7 +272,7 @@ fn relocate(
             if !q.is_finite() {
                 continue;
             }
-            *q = project(&lin[..k], *q, m, budget - done, &ball);
+            *q = project(&lin[..k], *q, m, budget - done, &ball, made);
             let p = *q;
             if !p.is_finite() {
                 continue;
@@ -317,8 +355,16 @@ impl Ball {
 /// Cyclic projection of `p` onto the half-spaces `c + g·p ≥ m · area`,
 /// the most violated first, each step followed by the projection onto
 /// `ball` (all convex sets, so a point of their intersection is found when
-/// there is one), for at most `steps` projections.
-fn project(lin: &[(f64, DVec3, f64)], mut p: DVec3, m: f64, steps: usize, ball: &Ball) -> DVec3 {
+/// there is one), for at most `steps` projections (those made are added
+/// to `made`).
+fn project(
+    lin: &[(f64, DVec3, f64)],
+    mut p: DVec3,
+    m: f64,
+    steps: usize,
+    ball: &Ball,
+    made: &mut usize,
+) -> DVec3 {
     for _ in 0..steps {
         let mut step = None;
         let mut most = 0.0;
@@ -331,7 +377,10 @@ fn project(lin: &[(f64, DVec3, f64)], mut p: DVec3, m: f64, steps: usize, ball: 
             }
         }
         match step {
-            Some(s) => p = ball.nearest(p + s),
+            Some(s) => {
+                *made += 1;
+                p = ball.nearest(p + s)
+            }
             None => break,
         }
     }
@@ -446,7 +495,7 @@ mod tests {
                         / areas.iter().sum::<f64>();
                     assert!(crushed < 0.05, "fan at {crushed} of its area");
                     let mut old = now.clone();
-                    relocate(&tris, &adj, &normals, &areas, &mut old, 0, &fixed);
+                    relocate(&tris, &adj, &normals, &areas, &mut old, 0, &fixed, &mut 0);
                     assert!(
                         wrong(&old) > 0,
                         "n {n} crush {crush} at ({x}, {y}): {} steps suffice",
@@ -459,7 +508,8 @@ mod tests {
                         &areas,
                         &mut now,
                         0,
-                        &Default::default()
+                        &Default::default(),
+                        &mut 0
                     ));
                     assert_eq!(wrong(&now), 0, "n {n} crush {crush} at ({x}, {y})");
                     assert_eq!(now[1..], old[1..], "the ring moved");

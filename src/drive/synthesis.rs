@@ -2,13 +2,13 @@
 //! timeline, placement, blending and deformation, frame by frame.
 
 use super::options::{RetargetError, RetargetOptions};
-use super::placement::{BlendScratch, blend_placed, placements};
+use super::placement::{BlendScratch, Floor, blend_placed, placements};
 use super::prepared::{Analysed, Prepared};
 use super::sink::FrameSink;
-use super::timeline::{Jump, timeline};
+use super::timeline::{Jump, OutFrame, timeline};
 use super::trellis::{Retrieval, TrellisInput, retrieve};
 use crate::db::Character;
-use crate::deform::{DeformMode, TurnedOver};
+use crate::deform::{DeformMode, Deformer, TurnedOver};
 use crate::mesh::blend::FrameGradients;
 use crate::pose::Pose;
 use crate::pose::retarget::{Reference, ReferenceSource};
@@ -170,24 +170,8 @@ impl Prepared {
             deform_factor: prepared.deform_factor,
             ..Timings::default()
         };
-        let t1 = Instant::now();
-        let successor = |id: u32| ch.successor(id);
-        let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
-        let input = TrellisInput {
-            poses: ch.poses(),
-            adjacency: ch.adjacency(),
-            successor: &successor,
-            dissimilarity: &dissimilarity,
-        };
-        let retrieval = retrieve(&clip.on_floor, &input, &opts.trellis);
-        timings.retrieval = t1.elapsed().as_secs_f64();
-        let t2 = Instant::now();
-        let (frames, jumps) = timeline(&retrieval.path, ch, &opts.timeline);
-        timings.timeline = t2.elapsed().as_secs_f64();
-        let blender = self.blender();
-        let t4 = Instant::now();
-        let placed = placements(ch, &retrieval.path, &frames, query, opts.smooth);
-        timings.meshes = t4.elapsed().as_secs_f64();
+        let (retrieval, frames, jumps, placed) =
+            self.retrieve_and_place(ch, clip, opts, &mut timings);
         let deformer = self.deformer();
         let n = ch.n().max(1);
         let chunk = CHUNK_FRAMES.min(frames.len()).max(1);
@@ -206,53 +190,25 @@ impl Prepared {
         for start in (0..frames.len()).step_by(chunk) {
             let m = chunk.min(frames.len() - start);
             let t = Instant::now();
-            blended[..m * n]
-                .par_chunks_mut(n)
-                .enumerate()
-                .for_each(|(i, dst)| {
-                    let k = start + i;
-                    let mut w = take(&blend_pool).unwrap_or_else(|| BlendWorker {
-                        ws: blender.workspace(),
-                        buf: vec![[0.0; 3]; n],
-                        grads: vec![FrameGradients::default(); 4],
-                    });
-                    let primary = frames[k].primary();
-                    let mut scratch = BlendScratch {
-                        ws: &mut w.ws,
-                        buf: &mut w.buf,
-                        grads: &mut w.grads,
-                    };
-                    blend_placed(
-                        ch,
-                        blender,
-                        frames[k].used(),
-                        primary,
-                        placed[k],
-                        |id| id == primary,
-                        &mut scratch,
-                        dst,
-                    );
-                    give(&blend_pool, w);
-                });
+            self.blend_chunk(
+                ch,
+                &frames[start..start + m],
+                &placed[start..start + m],
+                &mut blended[..m * n],
+                &blend_pool,
+            );
             timings.meshes += t.elapsed().as_secs_f64();
             let out: &[[f64; 3]] = match &deformer {
                 Some(d) => {
                     let t = Instant::now();
-                    let sum = deformed[..m * n]
-                        .par_chunks_mut(n)
-                        .zip(blended[..m * n].par_chunks(n))
-                        .zip(query[start..start + m].par_iter())
-                        .map(|((dst, src), target)| {
-                            let mut ws = take(&deform_pool).unwrap_or_else(|| d.workspace());
-                            let sp = ch.rig().frame_joints(src);
-                            let c = d.deform(ch, src, &sp, target, dst, &mut ws);
-                            give(&deform_pool, ws);
-                            c
-                        })
-                        .reduce(TurnedOver::default, |a, b| TurnedOver {
-                            before: a.before + b.before,
-                            after: a.after + b.after,
-                        });
+                    let sum = deform_chunk(
+                        ch,
+                        d,
+                        &blended[..m * n],
+                        &query[start..start + m],
+                        &mut deformed[..m * n],
+                        &deform_pool,
+                    );
                     turned_over.before += sum.before;
                     turned_over.after += sum.after;
                     timings.deform += t.elapsed().as_secs_f64();
@@ -264,32 +220,7 @@ impl Prepared {
                 sink.push(f)?;
             }
         }
-        let name = |id: u32| {
-            let (s, t) = ch.graph().frame_of(id);
-            (ch.graph().sequences[s].name.clone(), t)
-        };
-        let steps = retrieval
-            .path
-            .iter()
-            .zip(&retrieval.skeleton_cost)
-            .zip(&frames)
-            .map(|((&id, &c), o)| {
-                let (sequence, frame) = name(id);
-                Step {
-                    sequence,
-                    frame,
-                    skeleton_cost: c,
-                    blend: o
-                        .used()
-                        .iter()
-                        .map(|&(f, w)| {
-                            let (s, t) = name(f);
-                            (s, t, w)
-                        })
-                        .collect(),
-                }
-            })
-            .collect();
+        let steps = report_steps(ch, &retrieval, &frames);
         Ok(Report {
             frames: frames.len(),
             fps,
@@ -302,6 +233,135 @@ impl Prepared {
             turned_over,
         })
     }
+}
+
+impl Prepared {
+    /// [`Prepared::synthesise`]'s retrieval (the trellis), timeline and
+    /// placements on the root trajectory, their times in `timings`.
+    fn retrieve_and_place(
+        &self,
+        ch: &Character,
+        clip: &Analysed,
+        opts: &RetargetOptions,
+        timings: &mut Timings,
+    ) -> (Retrieval, Vec<OutFrame>, Vec<Jump>, Vec<Floor>) {
+        let t1 = Instant::now();
+        let successor = |id: u32| ch.successor(id);
+        let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
+        let input = TrellisInput {
+            poses: ch.poses(),
+            adjacency: ch.adjacency(),
+            successor: &successor,
+            dissimilarity: &dissimilarity,
+        };
+        let retrieval = retrieve(&clip.on_floor, &input, &opts.trellis);
+        timings.retrieval = t1.elapsed().as_secs_f64();
+        let t2 = Instant::now();
+        let (frames, jumps) = timeline(&retrieval.path, ch, &opts.timeline);
+        timings.timeline = t2.elapsed().as_secs_f64();
+        let t4 = Instant::now();
+        let placed = placements(ch, &retrieval.path, &frames, &clip.query, opts.smooth);
+        timings.meshes = t4.elapsed().as_secs_f64();
+        (retrieval, frames, jumps, placed)
+    }
+
+    /// Blends a chunk's output `frames`, placed by `placed`, into `dst`
+    /// (one frame of the character's vertices each) in parallel, with
+    /// per-worker scratch from `pool`.
+    fn blend_chunk(
+        &self,
+        ch: &Character,
+        frames: &[OutFrame],
+        placed: &[Floor],
+        dst: &mut [[f64; 3]],
+        pool: &std::sync::Mutex<Vec<BlendWorker>>,
+    ) {
+        let blender = self.blender();
+        let n = ch.n().max(1);
+        dst.par_chunks_mut(n).enumerate().for_each(|(k, dst)| {
+            let mut w = take(pool).unwrap_or_else(|| BlendWorker {
+                ws: blender.workspace(),
+                buf: vec![[0.0; 3]; n],
+                grads: vec![FrameGradients::default(); 4],
+            });
+            let primary = frames[k].primary();
+            let mut scratch = BlendScratch {
+                ws: &mut w.ws,
+                buf: &mut w.buf,
+                grads: &mut w.grads,
+            };
+            blend_placed(
+                ch,
+                blender,
+                frames[k].used(),
+                primary,
+                placed[k],
+                |id| id == primary,
+                &mut scratch,
+                dst,
+            );
+            give(pool, w);
+        });
+    }
+}
+
+/// Deforms a chunk's blended frames `src` towards their `query` poses into
+/// `dst` in parallel, with per-worker scratch from `pool`; the turned-over
+/// counts summed over the chunk.
+fn deform_chunk(
+    ch: &Character,
+    d: &Deformer,
+    src: &[[f64; 3]],
+    query: &[Pose],
+    dst: &mut [[f64; 3]],
+    pool: &std::sync::Mutex<Vec<crate::deform::DeformWorkspace>>,
+) -> TurnedOver {
+    let n = ch.n().max(1);
+    dst.par_chunks_mut(n)
+        .zip(src.par_chunks(n))
+        .zip(query.par_iter())
+        .map(|((dst, src), target)| {
+            let mut ws = take(pool).unwrap_or_else(|| d.workspace());
+            let sp = ch.rig().frame_joints(src);
+            let c = d.deform(ch, src, &sp, target, dst, &mut ws);
+            give(pool, ws);
+            c
+        })
+        .reduce(TurnedOver::default, |a, b| TurnedOver {
+            before: a.before + b.before,
+            after: a.after + b.after,
+        })
+}
+
+/// The report's row of each output frame: the retrieved frame, its
+/// skeleton cost and what it blends, by sequence name.
+fn report_steps(ch: &Character, retrieval: &Retrieval, frames: &[OutFrame]) -> Vec<Step> {
+    let name = |id: u32| {
+        let (s, t) = ch.graph().frame_of(id);
+        (ch.graph().sequences[s].name.clone(), t)
+    };
+    retrieval
+        .path
+        .iter()
+        .zip(&retrieval.skeleton_cost)
+        .zip(frames)
+        .map(|((&id, &c), o)| {
+            let (sequence, frame) = name(id);
+            Step {
+                sequence,
+                frame,
+                skeleton_cost: c,
+                blend: o
+                    .used()
+                    .iter()
+                    .map(|&(f, w)| {
+                        let (s, t) = name(f);
+                        (s, t, w)
+                    })
+                    .collect(),
+            }
+        })
+        .collect()
 }
 
 /// One worker's blending scratch in [`Prepared::synthesise`].

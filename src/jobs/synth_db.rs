@@ -12,7 +12,8 @@ use crate::db::{Manifest, RigSpec, SequenceEntry};
 use crate::embed::Embedding;
 use crate::mesh::io::save_sequence;
 use crate::mesh::{Mesh, MeshSequence};
-use crate::pose::retarget::ClipPoses;
+use crate::pose::Pose;
+use crate::pose::retarget::{ClipPoses, Reference};
 use crate::rig::LoadOptions;
 use crate::synth::database::{Dynamics, drive};
 use crate::tools::eval::{Checker, Plausibility};
@@ -151,6 +152,11 @@ impl SynthCharacter {
 /// Writes a synthetic database of `character` driven by `clips` into
 /// `dir`. `each` is called after every sequence with its report row and
 /// positions (frame-major), e.g. for a progress bar or a preview.
+///
+/// The steps: `prepare_folder` (refuse an existing database, write the
+/// topology and landmarks), then per clip `clip_poses` (read and cut),
+/// `unique_name`, `drive`, `write_sequence` (the PC2, its plausibility and
+/// truth skeleton), and last `write_manifest`.
 pub fn write_synthetic_database(
     dir: &Path,
     character: &SynthCharacter,
@@ -158,8 +164,60 @@ pub fn write_synthetic_database(
     opts: &SynthOptions,
     each: &mut dyn FnMut(&SynthSequence, &[[f64; 3]]),
 ) -> Result<SynthReport, JobError> {
-    let (rest, rig) = (&character.rest, &character.rig);
-    let landmarks_json = &character.landmarks_json[..];
+    let rest = &character.rest;
+    prepare_folder(dir, character, opts)?;
+    let fps = opts.fps;
+    let t1 = Instant::now();
+    let (mut sequences, mut rows, mut names) = (Vec::new(), Vec::new(), BTreeSet::new());
+    let mut frames_total = 0usize;
+    for clip in clips {
+        let (stem, source, poses, reference) = clip_poses(clip, opts)?;
+        // Skinned frames, their dynamics copy and the sequence: refuse a
+        // clip that cannot fit before allocating (issue 18, item 12).
+        crate::util::budget::check_frames(
+            &format!("{}", source.display()),
+            poses.len(),
+            rest.vertex_count(),
+            3,
+        )?;
+        let out = drive(rest, &character.rig, &poses, &reference, fps, opts.dynamics);
+        let name = unique_name(&stem, &mut names);
+        let frames = out.poses.len();
+        frames_total += frames;
+        let (seq, entry, row) = write_sequence(
+            dir,
+            character,
+            opts,
+            Driven {
+                name,
+                source,
+                poses: &poses,
+                reference: &reference,
+                out,
+            },
+        )?;
+        sequences.push(entry);
+        each(&row, seq.all_positions());
+        rows.push(row);
+    }
+    let synth_seconds = t1.elapsed().as_secs_f64();
+    write_manifest(dir, opts, sequences)?;
+    Ok(SynthReport {
+        output: dir.to_path_buf(),
+        embed_seconds: 0.0,
+        synth_seconds,
+        frames: frames_total,
+        sequences: rows,
+    })
+}
+
+/// Refuses a database already in `dir` (unless `opts.force`), makes the
+/// folder and writes the topology and the landmarks.
+fn prepare_folder(
+    dir: &Path,
+    character: &SynthCharacter,
+    opts: &SynthOptions,
+) -> Result<(), JobError> {
     if dir.join(crate::db::MANIFEST).exists() && !opts.force {
         return Err(JobError::Input {
             path: dir.to_path_buf(),
@@ -171,113 +229,151 @@ pub fn write_synthetic_database(
         msg: e.to_string(),
     })?;
     save_sequence(
-        &MeshSequence::single(rest.clone()),
+        &MeshSequence::single(character.rest.clone()),
         &dir.join("topology.obj"),
         None,
     )?;
-    crate::util::fsutil::write_bytes_atomic(&dir.join("landmarks.json"), landmarks_json)?;
+    crate::util::fsutil::write_bytes_atomic(
+        &dir.join("landmarks.json"),
+        &character.landmarks_json[..],
+    )?;
+    Ok(())
+}
+
+/// A clip's name stem, source, poses and reference at `opts.fps`, cut to
+/// `opts.seconds`.
+fn clip_poses(
+    clip: &SynthClip,
+    opts: &SynthOptions,
+) -> Result<(String, PathBuf, Vec<Pose>, Reference), JobError> {
     let fps = opts.fps;
-    let t1 = Instant::now();
-    let (mut sequences, mut rows, mut names) = (Vec::new(), Vec::new(), BTreeSet::new());
-    let mut frames_total = 0usize;
-    for clip in clips {
-        let (stem, source, mut poses, reference) = match clip {
-            SynthClip::File(path) => {
-                let c = crate::drive::query::load_mocap(path, &opts.load, fps)?;
-                let stem = path
-                    .file_stem()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_else(|| "clip".into());
-                (stem, path.clone(), c.poses, c.reference)
-            }
-            SynthClip::Poses {
-                name,
-                source,
-                poses,
-            } => (
-                name.clone(),
-                source.clone(),
-                poses.poses.clone(),
-                poses.reference.clone(),
-            ),
-        };
-        let mut reference = reference;
-        if let Some(s) = opts.seconds {
-            poses.truncate(((s * fps).round() as usize).max(1));
-            // The clip's joint rotations go with their poses.
-            reference.rotations = reference
-                .rotations
-                .iter()
-                .take(poses.len())
-                .copied()
-                .collect();
+    let (stem, source, mut poses, reference) = match clip {
+        SynthClip::File(path) => {
+            let c = crate::drive::query::load_mocap(path, &opts.load, fps)?;
+            let stem = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "clip".into());
+            (stem, path.clone(), c.poses, c.reference)
         }
-        // Skinned frames, their dynamics copy and the sequence: refuse a
-        // clip that cannot fit before allocating (issue 18, item 12).
-        crate::util::budget::check_frames(
-            &format!("{}", source.display()),
-            poses.len(),
-            rest.vertex_count(),
-            3,
-        )?;
-        let out = drive(rest, rig, &poses, &reference, fps, opts.dynamics);
-        // A unique sequence name.
-        let mut name = stem.clone();
-        let mut k = 2;
-        while !names.insert(name.clone()) {
-            name = format!("{stem}_{k}");
-            k += 1;
-        }
-        let frames = out.poses.len();
-        frames_total += frames;
-        let seq = MeshSequence::new(rest.clone(), out.positions, Some(fps))?;
-        let file = format!("{name}.pc2");
-        save_sequence(&seq, &dir.join(&file), Some(fps))?;
-        let plausibility = if opts.plausibility {
-            Checker::new(rest, rig, glam::DVec3::Y, None, fps, Default::default())
-                .and_then(|c| {
-                    let clip = crate::pose::retarget::clip_head_trunk_deg(&reference, &poses);
-                    // Floating from the clip's own ground under each foot
-                    // (raised on a step).
-                    let character = rig.joints.map(glam::DVec3::from_array);
-                    let raised =
-                        crate::pose::retarget::foot_ground_offsets(&character, &reference, &poses);
-                    Ok(c.measure_on(
-                        seq.all_positions(),
-                        rest.vertex_count(),
-                        None,
-                        Some(&raised),
-                    )?
-                    .with_clip_head(&clip, &c.opts.limits)
-                    .logged())
-                })
-                .map_err(|e| tracing::warn!("{name}: plausibility not measured: {e}"))
-                .ok()
-        } else {
-            None
-        };
-        if opts.truth {
-            SkeletonFile {
-                source: Some(source.clone()),
-                ..SkeletonFile::new(&name, fps, &out.poses)
-            }
-            .save(&dir.join("truth").join(format!("{name}.skeleton.json")))?;
-        }
-        sequences.push(SequenceEntry {
-            name: name.clone(),
-            path: PathBuf::from(file),
-            fps: None,
-        });
-        let row = SynthSequence {
-            sequence: name,
+        SynthClip::Poses {
+            name,
             source,
-            frames,
-            plausibility,
-        };
-        each(&row, seq.all_positions());
-        rows.push(row);
+            poses,
+        } => (
+            name.clone(),
+            source.clone(),
+            poses.poses.clone(),
+            poses.reference.clone(),
+        ),
+    };
+    let mut reference = reference;
+    if let Some(s) = opts.seconds {
+        poses.truncate(((s * fps).round() as usize).max(1));
+        // The clip's joint rotations go with their poses.
+        reference.rotations = reference
+            .rotations
+            .iter()
+            .take(poses.len())
+            .copied()
+            .collect();
     }
-    let synth_seconds = t1.elapsed().as_secs_f64();
+    Ok((stem, source, poses, reference))
+}
+
+/// `stem`, or `stem_2`, `stem_3`, … : the first not in `names` (added).
+fn unique_name(stem: &str, names: &mut BTreeSet<String>) -> String {
+    let mut name = stem.to_string();
+    let mut k = 2;
+    while !names.insert(name.clone()) {
+        name = format!("{stem}_{k}");
+        k += 1;
+    }
+    name
+}
+
+/// One clip driven onto the character, named.
+struct Driven<'a> {
+    name: String,
+    source: PathBuf,
+    poses: &'a [Pose],
+    reference: &'a Reference,
+    out: crate::synth::database::Synthesised,
+}
+
+/// Writes a driven clip's PC2, measures its plausibility (when asked) and
+/// writes its truth skeleton (when asked): the sequence, its manifest
+/// entry and its report row.
+fn write_sequence(
+    dir: &Path,
+    character: &SynthCharacter,
+    opts: &SynthOptions,
+    driven: Driven<'_>,
+) -> Result<(MeshSequence, SequenceEntry, SynthSequence), JobError> {
+    let (rest, rig) = (&character.rest, &character.rig);
+    let fps = opts.fps;
+    let Driven {
+        name,
+        source,
+        poses,
+        reference,
+        out,
+    } = driven;
+    let frames = out.poses.len();
+    let seq = MeshSequence::new(rest.clone(), out.positions, Some(fps))?;
+    let file = format!("{name}.pc2");
+    save_sequence(&seq, &dir.join(&file), Some(fps))?;
+    let plausibility = if opts.plausibility {
+        Checker::new(rest, rig, glam::DVec3::Y, None, fps, Default::default())
+            .and_then(|c| {
+                let clip = crate::pose::retarget::clip_head_trunk_deg(reference, poses);
+                // Floating from the clip's own ground under each foot
+                // (raised on a step).
+                let character = rig.joints.map(glam::DVec3::from_array);
+                let raised =
+                    crate::pose::retarget::foot_ground_offsets(&character, reference, poses);
+                Ok(c.measure_on(
+                    seq.all_positions(),
+                    rest.vertex_count(),
+                    None,
+                    Some(&raised),
+                )?
+                .with_clip_head(&clip, &c.opts.limits)
+                .logged())
+            })
+            .map_err(|e| tracing::warn!("{name}: plausibility not measured: {e}"))
+            .ok()
+    } else {
+        None
+    };
+    if opts.truth {
+        SkeletonFile {
+            source: Some(source.clone()),
+            ..SkeletonFile::new(&name, fps, &out.poses)
+        }
+        .save(&dir.join("truth").join(format!("{name}.skeleton.json")))?;
+    }
+    let entry = SequenceEntry {
+        name: name.clone(),
+        path: PathBuf::from(file),
+        fps: None,
+    };
+    let row = SynthSequence {
+        sequence: name,
+        source,
+        frames,
+        plausibility,
+    };
+    Ok((seq, entry, row))
+}
+
+/// Writes the database's manifest: its name (`opts.name`, else the
+/// folder's), the topology, landmarks and `sequences`.
+fn write_manifest(
+    dir: &Path,
+    opts: &SynthOptions,
+    sequences: Vec<SequenceEntry>,
+) -> Result<(), JobError> {
     let name = opts.name.clone().unwrap_or_else(|| {
         dir.file_name()
             .map(|s| s.to_string_lossy().into_owned())
@@ -286,7 +382,7 @@ pub fn write_synthetic_database(
     Manifest {
         name,
         topology: PathBuf::from("topology.obj"),
-        fps,
+        fps: opts.fps,
         units: "m".into(),
         up: "y".into(),
         human_sized: true,
@@ -301,11 +397,5 @@ pub fn write_synthetic_database(
         spaces: Vec::new(),
     }
     .save(dir)?;
-    Ok(SynthReport {
-        output: dir.to_path_buf(),
-        embed_seconds: 0.0,
-        synth_seconds,
-        frames: frames_total,
-        sequences: rows,
-    })
+    Ok(())
 }

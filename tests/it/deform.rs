@@ -174,7 +174,7 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
 
 /// The real samba capture as a database (`db init`, its graph built and
 /// cached by a first load), made once per test binary.
-fn samba_capture_db(d: &std::path::Path) -> std::path::PathBuf {
+pub(crate) fn samba_capture_db(d: &std::path::Path) -> std::path::PathBuf {
     use std::sync::OnceLock;
     static DB: OnceLock<std::path::PathBuf> = OnceLock::new();
     DB.get_or_init(|| {

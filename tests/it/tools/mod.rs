@@ -2,3 +2,4 @@
 
 mod plausibility;
 mod surface;
+mod surface_repair;
