@@ -70,10 +70,12 @@ pub struct Args {
     /// of delay.
     #[arg(long, default_value_t = 3)]
     pub lag: usize,
-    /// Frames of the stream the pose kernel analyses each frame with (it
-    /// levels the ground and finds the feet's support over them; offline it
-    /// sees the whole clip).
-    #[arg(long = "analysis-window", default_value_t = 32, value_name = "FRAMES")]
+    /// Frames of the stream the pose kernel analyses each frame with,
+    /// besides the undecided ones (up to --lag): it levels the ground and
+    /// finds the floor and the feet's support over them (offline it sees
+    /// the whole clip). Frames that left the lag keep what they were
+    /// decided with; the undecided ones are analysed and retrieved again.
+    #[arg(long = "analysis-window", default_value_t = 128, value_name = "FRAMES")]
     pub analysis_window: usize,
     /// Decided frames kept for the timeline's blends and the placement's
     /// smoothing.

@@ -38,7 +38,8 @@ pub struct LiveOptions {
     pub hysteresis: f64,
     /// Decided frames kept for blending and placement. Default: 64.
     pub history: usize,
-    /// Frames the pose kernel analyses each frame with. Default: 32.
+    /// Frames of context the pose kernel analyses each frame with,
+    /// besides the undecided ones (up to `lag`). Default: 128.
     pub analysis_window: usize,
     /// A replay's speed (1: the clip's real rate; 0: as fast as frames are
     /// made). Default: 1.
@@ -74,7 +75,7 @@ impl Default for LiveOptions {
             lag: 3,
             hysteresis: 1.0,
             history: 64,
-            analysis_window: 32,
+            analysis_window: 128,
             speed: 1.0,
             load: LoadOptions::default(),
             seconds: None,

@@ -180,6 +180,52 @@ impl<'a> OnlineTrellis<'a> {
         if self.db.poses.is_empty() {
             return Advance::default();
         }
+        let best = self.nearest(q);
+        if self.recent.len() == SCALE_WINDOW
+            && let Some(old) = self.recent.pop_front()
+        {
+            self.forget_best(old);
+        }
+        self.recent.push_back(best);
+        self.insert_best(best);
+        // The oldest row's buffer is reused once decided (see `decide`).
+        let mut row = self.spare.pop().unwrap_or_default();
+        row.clear();
+        row.extend_from_slice(&self.all);
+        self.rows.push_back(row);
+        self.stats.frames += 1;
+        if self.rows.len() > self.opts.lag {
+            self.decide(1)
+        } else {
+            Advance::default()
+        }
+    }
+
+    /// Replaces the undecided frame `k` (0 = the oldest undecided) by `q`,
+    /// its newer analysis: its candidates and its best-match cost in the
+    /// scales' sample are `q`'s, as if `q` had been pushed. Decided frames
+    /// stay decided; an index past the undecided ones is ignored.
+    pub fn revise(&mut self, k: usize, q: &Pose) {
+        if self.db.poses.is_empty() || k >= self.rows.len() {
+            return;
+        }
+        let best = self.nearest(q);
+        // The frame's place in arrival order: the undecided frames are the
+        // newest `rows.len()` of `recent` (when the sample still holds it).
+        let back = self.rows.len() - k;
+        if let Some(at) = self.recent.len().checked_sub(back) {
+            let old = std::mem::replace(&mut self.recent[at], best);
+            self.forget_best(old);
+            self.insert_best(best);
+        }
+        let row = &mut self.rows[k];
+        row.clear();
+        row.extend_from_slice(&self.all);
+    }
+
+    /// Fills `all` with the nearest `kmax` database frames to `q`, sorted
+    /// by cost then id; returns the best cost.
+    fn nearest(&mut self, q: &Pose) -> f64 {
         self.all.clear();
         self.all.extend(
             self.db
@@ -196,27 +242,19 @@ impl<'a> OnlineTrellis<'a> {
         }
         self.all
             .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let best = self.all[0].0 as f64;
-        if self.recent.len() == SCALE_WINDOW
-            && let Some(old) = self.recent.pop_front()
-        {
-            let at = self.bests.partition_point(|x| x.total_cmp(&old).is_lt());
-            self.bests.remove(at);
-        }
-        self.recent.push_back(best);
+        self.all[0].0 as f64
+    }
+
+    /// Takes `old` out of the scales' sorted sample.
+    fn forget_best(&mut self, old: f64) {
+        let at = self.bests.partition_point(|x| x.total_cmp(&old).is_lt());
+        self.bests.remove(at);
+    }
+
+    /// Puts `best` into the scales' sorted sample.
+    fn insert_best(&mut self, best: f64) {
         let at = self.bests.partition_point(|x| x.total_cmp(&best).is_lt());
         self.bests.insert(at, best);
-        // The oldest row's buffer is reused once decided (see `decide`).
-        let mut row = self.spare.pop().unwrap_or_default();
-        row.clear();
-        row.extend_from_slice(&self.all);
-        self.rows.push_back(row);
-        self.stats.frames += 1;
-        if self.rows.len() > self.opts.lag {
-            self.decide(1)
-        } else {
-            Advance::default()
-        }
     }
 
     /// Decides every frame still undecided (the stream ended).

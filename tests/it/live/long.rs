@@ -1,6 +1,7 @@
 //! A replay looped five times (`--loop 5`) with the report's own samples
 //! (`--sample-every`): every frame of every loop comes out, and the resident
-//! memory and the output rate stay flat from the second sample on (the
+//! memory (once the analysis window is full) and the output rate stay flat
+//! from the second sample on (the
 //! one-hour run, `live --replay CLIP --loop N --sample-every 60`, is an
 //! evaluation command: README, *Live*).
 
@@ -53,13 +54,21 @@ fn five_loops_keep_memory_and_rate_flat() {
         "{} samples: RSS {rss:?} MiB, output {fps:?} frames/s",
         samples.len()
     );
-    // Memory: after the first second (the character prepared, the buffers
-    // grown), within 5 % of the second sample to the end.
+    // Memory: once the analysis window is full (128 frames of context and
+    // the lag's 3; the pose kernel's buffers grow with it: 144.7 MiB at
+    // the first sample, 152.2 once full, 153.4 from there to the end),
+    // within 5 % of that sample to the end (at least the second sample).
     if rss.len() == samples.len() {
-        let base = rss[1];
+        let filled = (1..samples.len())
+            .find(|&i| samples[i]["received"].as_u64().unwrap_or(0) >= 128 + 3)
+            .unwrap_or(1);
+        assert!(filled + 3 < samples.len(), "too few samples: {r}");
+        let base = rss[filled];
         assert!(
-            rss[1..].iter().all(|m| (m - base).abs() <= 0.05 * base),
-            "RSS not flat: {rss:?}"
+            rss[filled..]
+                .iter()
+                .all(|m| (m - base).abs() <= 0.05 * base),
+            "RSS not flat from sample {filled}: {rss:?}"
         );
     }
     // Rate: no sample (the last, partial one aside) below a third of the

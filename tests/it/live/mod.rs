@@ -2,6 +2,7 @@
 //! and the per-frame session against the offline synthesis.
 
 mod actors;
+mod carried;
 mod long;
 mod online;
 mod page;
