@@ -689,120 +689,14 @@ pub fn parse_amc(
         .enumerate()
         .map(|(i, b)| (b.name.as_str(), i))
         .collect();
-    // The clip's size, from the frame-number lines, before anything is
-    // held: a 6 MB file of frame numbers alone asked for 10 GB.
-    let is_frame_number = |raw: &str| {
-        let l = raw.split('#').next().unwrap_or("").trim();
-        !l.is_empty() && l.bytes().all(|b| b.is_ascii_digit())
-    };
-    let frame_count = text.lines().filter(|l| is_frame_number(l)).count();
-    let per_frame: u128 = 24
-        + skel
-            .bones
-            .iter()
-            .map(|b| 24 + 8 * b.dof.len() as u128 + 56)
-            .sum::<u128>();
-    crate::util::budget::check(
-        || {
-            format!(
-                "{} frames × {} bones",
-                crate::util::budget::thousands(frame_count as u128),
-                crate::util::budget::thousands(skel.bones.len() as u128)
-            )
-        },
-        frame_count as u128 * per_frame,
-    )
-    .map_err(|e| MocapError::invalid(path, e.to_string()))?;
-    let mut degrees = skel.degrees;
-    let mut frames: Vec<Vec<Vec<f64>>> = Vec::with_capacity(frame_count);
-    let mut cur: Option<Vec<Vec<f64>>> = None;
-    let mut seen: Vec<bool> = vec![false; skel.bones.len()];
-    let mut warnings = Vec::new();
-    let mut missing_warned = false;
-    let empty_frame: Vec<Vec<f64>> = skel.bones.iter().map(|b| vec![0.0; b.dof.len()]).collect();
-    let mut finish =
-        |cur: &mut Option<Vec<Vec<f64>>>, seen: &mut Vec<bool>, frames: &mut Vec<Vec<Vec<f64>>>| {
-            if let Some(f) = cur.take() {
-                if !missing_warned && seen.iter().any(|s| !s) {
-                    let names: Vec<&str> = skel
-                        .bones
-                        .iter()
-                        .zip(seen.iter())
-                        .filter(|(b, s)| !**s && !b.dof.is_empty())
-                        .map(|(b, _)| b.name.as_str())
-                        .collect();
-                    if !names.is_empty() {
-                        raise_warning(
-                            &mut warnings,
-                            path,
-                            format!(
-                                "frame {} has no values for {}; zero used",
-                                frames.len() + 1,
-                                names.join(", ")
-                            ),
-                        );
-                        missing_warned = true;
-                    }
-                }
-                frames.push(f);
-                seen.iter_mut().for_each(|s| *s = false);
-            }
-        };
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        let l = raw.split('#').next().unwrap_or("").trim();
-        if l.is_empty() {
-            continue;
-        }
-        if let Some(k) = l.strip_prefix(':') {
-            let k = k.trim().to_ascii_uppercase();
-            if k.starts_with("RADIANS") {
-                degrees = false;
-            } else if k.starts_with("DEGREES") {
-                degrees = true;
-            }
-            continue;
-        }
-        let toks: Vec<&str> = l.split_whitespace().collect();
-        if toks.len() == 1 && toks[0].bytes().all(|b| b.is_ascii_digit()) {
-            finish(&mut cur, &mut seen, &mut frames);
-            cur = Some(empty_frame.clone());
-            continue;
-        }
-        let Some(f) = cur.as_mut() else {
-            return Err(MocapError::parse(
-                path,
-                line,
-                format!("{} before the first frame number", quoted(toks[0])),
-            ));
-        };
-        let bi = *index.get(toks[0]).ok_or_else(|| {
-            MocapError::parse(
-                path,
-                line,
-                format!("bone {} is not in the ASF", quoted(toks[0])),
-            )
-        })?;
-        let dof = &skel.bones[bi].dof;
-        if toks.len() - 1 != dof.len() {
-            return Err(MocapError::parse(
-                path,
-                line,
-                format!(
-                    "bone {} has {} values, its ASF dof lists {}",
-                    quoted(toks[0]),
-                    toks.len() - 1,
-                    dof.len()
-                ),
-            ));
-        }
-        for (k, (&d, t)) in dof.iter().zip(&toks[1..]).enumerate() {
-            let v = num(t, path, line)?;
-            f[bi][k] = if d < 3 && degrees { v.to_radians() } else { v };
-        }
-        seen[bi] = true;
-    }
-    finish(&mut cur, &mut seen, &mut frames);
+    let frame_count = amc_frame_count(text, path, skel)?;
+    let mut reader = AmcFrames::new(skel, path, frame_count);
+    reader.read(text, &index)?;
+    let AmcFrames {
+        frames,
+        mut warnings,
+        ..
+    } = reader;
     if frames.is_empty() {
         return Err(MocapError::invalid(path, "no frames"));
     }
@@ -828,6 +722,175 @@ pub fn parse_amc(
     }
     clip.warnings = warnings;
     Ok(clip)
+}
+
+/// The clip's size, from the frame-number lines, checked against the
+/// memory budget before anything is held: a 6 MB file of frame numbers
+/// alone asked for 10 GB.
+fn amc_frame_count(text: &str, path: &Path, skel: &AsfSkeleton) -> Result<usize, MocapError> {
+    let is_frame_number = |raw: &str| {
+        let l = raw.split('#').next().unwrap_or("").trim();
+        !l.is_empty() && l.bytes().all(|b| b.is_ascii_digit())
+    };
+    let frame_count = text.lines().filter(|l| is_frame_number(l)).count();
+    let per_frame: u128 = 24
+        + skel
+            .bones
+            .iter()
+            .map(|b| 24 + 8 * b.dof.len() as u128 + 56)
+            .sum::<u128>();
+    crate::util::budget::check(
+        || {
+            format!(
+                "{} frames × {} bones",
+                crate::util::budget::thousands(frame_count as u128),
+                crate::util::budget::thousands(skel.bones.len() as u128)
+            )
+        },
+        frame_count as u128 * per_frame,
+    )
+    .map_err(|e| MocapError::invalid(path, e.to_string()))?;
+    Ok(frame_count)
+}
+
+/// The AMC frames as they are read: every bone's values per frame (its
+/// ASF dof order, angles in radians), the frame being read and which
+/// bones it has had, and the warnings.
+struct AmcFrames<'a> {
+    skel: &'a AsfSkeleton,
+    path: &'a Path,
+    degrees: bool,
+    frames: Vec<Vec<Vec<f64>>>,
+    cur: Option<Vec<Vec<f64>>>,
+    seen: Vec<bool>,
+    warnings: Vec<String>,
+    missing_warned: bool,
+    empty_frame: Vec<Vec<f64>>,
+}
+
+impl<'a> AmcFrames<'a> {
+    fn new(skel: &'a AsfSkeleton, path: &'a Path, frame_count: usize) -> Self {
+        AmcFrames {
+            skel,
+            path,
+            degrees: skel.degrees,
+            frames: Vec::with_capacity(frame_count),
+            cur: None,
+            seen: vec![false; skel.bones.len()],
+            warnings: Vec::new(),
+            missing_warned: false,
+            empty_frame: skel.bones.iter().map(|b| vec![0.0; b.dof.len()]).collect(),
+        }
+    }
+
+    /// Every line of `text` (`index`: the bones by name), then the last
+    /// frame finished.
+    fn read(&mut self, text: &str, index: &HashMap<&str, usize>) -> Result<(), MocapError> {
+        for (i, raw) in text.lines().enumerate() {
+            let line = i + 1;
+            let l = raw.split('#').next().unwrap_or("").trim();
+            if l.is_empty() {
+                continue;
+            }
+            if let Some(k) = l.strip_prefix(':') {
+                let k = k.trim().to_ascii_uppercase();
+                if k.starts_with("RADIANS") {
+                    self.degrees = false;
+                } else if k.starts_with("DEGREES") {
+                    self.degrees = true;
+                }
+                continue;
+            }
+            let toks: Vec<&str> = l.split_whitespace().collect();
+            if toks.len() == 1 && toks[0].bytes().all(|b| b.is_ascii_digit()) {
+                self.finish();
+                self.cur = Some(self.empty_frame.clone());
+                continue;
+            }
+            self.bone_line(&toks, line, index)?;
+        }
+        self.finish();
+        Ok(())
+    }
+
+    /// One bone's values (`toks`: its name, then one value per dof) into
+    /// the current frame.
+    fn bone_line(
+        &mut self,
+        toks: &[&str],
+        line: usize,
+        index: &HashMap<&str, usize>,
+    ) -> Result<(), MocapError> {
+        let path = self.path;
+        let Some(f) = self.cur.as_mut() else {
+            return Err(MocapError::parse(
+                path,
+                line,
+                format!("{} before the first frame number", quoted(toks[0])),
+            ));
+        };
+        let bi = *index.get(toks[0]).ok_or_else(|| {
+            MocapError::parse(
+                path,
+                line,
+                format!("bone {} is not in the ASF", quoted(toks[0])),
+            )
+        })?;
+        let dof = &self.skel.bones[bi].dof;
+        if toks.len() - 1 != dof.len() {
+            return Err(MocapError::parse(
+                path,
+                line,
+                format!(
+                    "bone {} has {} values, its ASF dof lists {}",
+                    quoted(toks[0]),
+                    toks.len() - 1,
+                    dof.len()
+                ),
+            ));
+        }
+        for (k, (&d, t)) in dof.iter().zip(&toks[1..]).enumerate() {
+            let v = num(t, path, line)?;
+            f[bi][k] = if d < 3 && self.degrees {
+                v.to_radians()
+            } else {
+                v
+            };
+        }
+        self.seen[bi] = true;
+        Ok(())
+    }
+
+    /// The current frame (if any) pushed, with a warning (once) naming
+    /// the bones it had no values for.
+    fn finish(&mut self) {
+        if let Some(f) = self.cur.take() {
+            if !self.missing_warned && self.seen.iter().any(|s| !s) {
+                let names: Vec<&str> = self
+                    .skel
+                    .bones
+                    .iter()
+                    .zip(self.seen.iter())
+                    .filter(|(b, s)| !**s && !b.dof.is_empty())
+                    .map(|(b, _)| b.name.as_str())
+                    .collect();
+                if !names.is_empty() {
+                    raise_warning(
+                        &mut self.warnings,
+                        self.path,
+                        format!(
+                            "frame {} has no values for {}; zero used",
+                            self.frames.len() + 1,
+                            names.join(", ")
+                        ),
+                    );
+                    self.missing_warned = true;
+                }
+            }
+            self.frames.push(f);
+            self.seen.iter_mut().for_each(|s| *s = false);
+        }
+    }
 }
 
 /// Reads an AMC file with its ASF.

@@ -1037,6 +1037,16 @@ struct Trunk {
     ignored: Vec<String>,
 }
 
+/// A chain's reach: its first bone's length and the reach beyond it.
+fn chain_reach(g: &Geo, j: usize) -> f64 {
+    g.len[j] + g.reach[j]
+}
+
+/// The longer of two lengths over the shorter.
+fn length_ratio(a: f64, b: f64) -> f64 {
+    a.max(b) / a.min(b).max(1e-300)
+}
+
 /// Step 3's checks of a candidate trunk: legs and arms of like lengths,
 /// the arms and the neck among the chest's chains, and the legs pointing
 /// away from the chest (in the rest pose or the median sampled frame).
@@ -1049,9 +1059,8 @@ fn trunk(
 ) -> Result<Trunk, NotHumanoid> {
     let name = |j: usize| g.names[j].clone();
     // Leg/arm symmetry and the legs pointing away from the chest.
-    let reach = |j: usize| g.len[j] + g.reach[j];
-    let ratio = |a: f64, b: f64| a.max(b) / a.min(b).max(1e-300);
-    if ratio(reach(legs[0]), reach(legs[1])) > 1.6 {
+    let reach = |j: usize| chain_reach(g, j);
+    if length_ratio(reach(legs[0]), reach(legs[1])) > 1.6 {
         return Err(NotHumanoid(format!(
             "the two chains below '{}' differ in length ({:.3} vs {:.3})",
             name(pelvis),
@@ -1065,6 +1074,39 @@ fn trunk(
     // Chains off the chest that are neither arms nor the neck (wings, a
     // cape, a holster: named in the report).
     let mut ignored: Vec<String> = Vec::new();
+    let (arms, neck_start) = arms_and_neck(g, tokens, pelvis, chest, legs, hub, &mut ignored)?;
+    if length_ratio(reach(arms[0]), reach(arms[1])) > 1.6 {
+        return Err(NotHumanoid(format!(
+            "the two chains off '{}' differ in length",
+            name(chest)
+        )));
+    }
+    let rest_stands = legs_stand(g, pelvis, chest, legs, hub, neck_start)?;
+    let Some(neck_start) = neck_start else {
+        return Err(NotHumanoid(format!("no neck above '{}'", name(chest))));
+    };
+    Ok(Trunk {
+        hub,
+        arms,
+        neck_start,
+        rest_stands,
+        ignored,
+    })
+}
+
+/// Step 3's arms and neck among the chest's chains (the legs left out
+/// when pelvis and chest are one node, `hub`); chains that are neither
+/// are pushed to `ignored` by name.
+fn arms_and_neck(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    pelvis: usize,
+    chest: usize,
+    legs: [usize; 2],
+    hub: bool,
+    ignored: &mut Vec<String>,
+) -> Result<([usize; 2], Option<usize>), NotHumanoid> {
+    let name = |j: usize| g.names[j].clone();
     let cb: Vec<usize> = g
         .branches(chest)
         .into_iter()
@@ -1073,7 +1115,7 @@ fn trunk(
     // Lone joints off the chest (a mesh attachment, a breast leaf) are no
     // arms; the neck may be one (OpenNI's `Head` on `Neck`).
     let cb = g.chains_of(cb, 2);
-    let (arms, neck_start) = match cb.len() {
+    Ok(match cb.len() {
         2 | 3 => {
             // The neck continues the spine: the child most aligned with pelvis→chest.
             let up = (g.rest[chest] - g.rest[pelvis]).normalize_or_zero();
@@ -1083,39 +1125,9 @@ fn trunk(
                 (g.tail_rest[end].unwrap_or(g.rest[end]) - g.rest[chest]).normalize_or_zero()
             };
             if cb.len() == 3 {
-                // The neck: the branch whose path names a neck or head; else
-                // the odd one out of the three (the arms are the most alike
-                // pair in reach), ties broken by pointing up.
-                let named = (0..3).find(|&k| {
-                    g.path(cb[k])
-                        .iter()
-                        .any(|&j| matches!(role_of(tokens, j), Some(Role::Neck) | Some(Role::Head)))
-                });
-                let odd = |k: usize| {
-                    let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-                    -ratio(reach(cb[a]), reach(cb[b])) + 0.05 * far(cb[k]).dot(up)
-                };
-                let k = named.unwrap_or_else(|| {
-                    (0..3)
-                        .max_by(|&a, &b| odd(a).total_cmp(&odd(b)))
-                        .unwrap_or(0)
-                });
-                let arms: Vec<usize> = (0..3).filter(|&i| i != k).map(|i| cb[i]).collect();
-                ([arms[0], arms[1]], Some(cb[k]))
+                neck_among_three(g, tokens, &cb, up, far)
             } else {
-                let others: Vec<usize> = g
-                    .node_children(chest)
-                    .into_iter()
-                    .filter(|c| !cb.contains(c) && role_of(tokens, *c) != Some(Role::Collar))
-                    .collect();
-                // A chain before a lone joint beside it, then the most
-                // upward.
-                let neck = others.into_iter().max_by(|&a, &b| {
-                    (!g.lone(a))
-                        .cmp(&!g.lone(b))
-                        .then(far(a).dot(up).total_cmp(&far(b).dot(up)))
-                });
-                ([cb[0], cb[1]], neck)
+                neck_beside_two(g, tokens, chest, &cb, up, far)
             }
         }
         k if k >= 4 => match arms_among(g, tokens, pelvis, chest, &cb, legs) {
@@ -1136,15 +1148,78 @@ fn trunk(
                 name(chest)
             )));
         }
+    })
+}
+
+/// Three chains off the chest, `cb`: the neck is the branch whose path
+/// names a neck or head; else the odd one out of the three (the arms are
+/// the most alike pair in reach), ties broken by pointing up (`far`: a
+/// chain's direction from the chest, `up` the trunk's). The other two are
+/// the arms.
+fn neck_among_three(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    cb: &[usize],
+    up: DVec3,
+    far: impl Fn(usize) -> DVec3,
+) -> ([usize; 2], Option<usize>) {
+    let reach = |j: usize| chain_reach(g, j);
+    let named = (0..3).find(|&k| {
+        g.path(cb[k])
+            .iter()
+            .any(|&j| matches!(role_of(tokens, j), Some(Role::Neck) | Some(Role::Head)))
+    });
+    let odd = |k: usize| {
+        let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+        -length_ratio(reach(cb[a]), reach(cb[b])) + 0.05 * far(cb[k]).dot(up)
     };
-    if ratio(reach(arms[0]), reach(arms[1])) > 1.6 {
-        return Err(NotHumanoid(format!(
-            "the two chains off '{}' differ in length",
-            name(chest)
-        )));
-    }
-    // Legs point away from the chest in the rest pose or in the median
-    // sampled frame (not merely in one: a sitting quadruped's hind legs do).
+    let k = named.unwrap_or_else(|| {
+        (0..3)
+            .max_by(|&a, &b| odd(a).total_cmp(&odd(b)))
+            .unwrap_or(0)
+    });
+    let arms: Vec<usize> = (0..3).filter(|&i| i != k).map(|i| cb[i]).collect();
+    ([arms[0], arms[1]], Some(cb[k]))
+}
+
+/// Two chains off the chest, `cb`, the arms: the neck is among the chest's
+/// other children (no collar), a chain before a lone joint beside it, then
+/// the most upward (`far`, `up` as in [`neck_among_three`]).
+fn neck_beside_two(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    chest: usize,
+    cb: &[usize],
+    up: DVec3,
+    far: impl Fn(usize) -> DVec3,
+) -> ([usize; 2], Option<usize>) {
+    let others: Vec<usize> = g
+        .node_children(chest)
+        .into_iter()
+        .filter(|c| !cb.contains(c) && role_of(tokens, *c) != Some(Role::Collar))
+        .collect();
+    // A chain before a lone joint beside it, then the most
+    // upward.
+    let neck = others.into_iter().max_by(|&a, &b| {
+        (!g.lone(a))
+            .cmp(&!g.lone(b))
+            .then(far(a).dot(up).total_cmp(&far(b).dot(up)))
+    });
+    ([cb[0], cb[1]], neck)
+}
+
+/// Step 3's last check: the legs point away from the chest in the rest
+/// pose or in the median sampled frame (not merely in one: a sitting
+/// quadruped's hind legs do). Whether the rest pose stands.
+fn legs_stand(
+    g: &Geo,
+    pelvis: usize,
+    chest: usize,
+    legs: [usize; 2],
+    hub: bool,
+    neck_start: Option<usize>,
+) -> Result<bool, NotHumanoid> {
+    let name = |j: usize| g.names[j].clone();
     let cosines: Vec<f64> = g
         .poses
         .iter()
@@ -1187,16 +1262,7 @@ fn trunk(
             }
         )));
     }
-    let Some(neck_start) = neck_start else {
-        return Err(NotHumanoid(format!("no neck above '{}'", name(chest))));
-    };
-    Ok(Trunk {
-        hub,
-        arms,
-        neck_start,
-        rest_stands,
-        ignored,
-    })
+    Ok(rest_stands)
 }
 
 /// Step 4 on the trunk: the pelvis, spine and chest picks. Returns the
@@ -1345,16 +1411,37 @@ fn neck_and_head(
     neck_from_chest: Option<usize>,
     chest_derived: bool,
 ) -> Result<usize, NotHumanoid> {
-    let name = |j: usize| g.names[j].clone();
     let (hub, neck_start) = (trunk.hub, trunk.neck_start);
     // Neck and head.
     let neck_path = g.path(neck_start);
-    let neck_c = g.candidates(tokens, g.rest[chest], &neck_path, false);
+    let neck_c = neck_candidates(g, tokens, chest, &neck_path);
+    let neck_base = neck_base(g, tokens, chest, neck_start);
+    let (neck_j, head_c) = neck_joint(g, tokens, chest, &neck_c, neck_base, neck_from_chest)?;
+    set_pick(
+        picks,
+        Canonical::Neck,
+        neck_j,
+        role_of(tokens, neck_j) == Some(Role::Neck),
+    );
+    spine_and_chest_on_neck_line(picks, hub, chest_derived);
+    pick_head(g, tokens, picks, &head_c, &neck_path, neck_j);
+    Ok(neck_j)
+}
+
+/// The neck chain's candidate joints above the chest (`neck_path` the
+/// chain from the neck's start).
+fn neck_candidates(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    chest: usize,
+    neck_path: &[usize],
+) -> Vec<usize> {
+    let neck_c = g.candidates(tokens, g.rest[chest], neck_path, false);
     // A neck made only of helper-named bones (CC's NeckTwist01/02 under
     // Head): the first of them off the chest is the neck when the chain
     // has no other joint for it (helpers are ignored only as leaves or
     // pass-throughs).
-    let neck_c = match neck_c.first() {
+    match neck_c.first() {
         Some(&first) if neck_c.len() < 2 || role_of(tokens, first) == Some(Role::Head) => {
             let mut out = neck_c.clone();
             if let Some(&h) = neck_path
@@ -1367,7 +1454,12 @@ fn neck_and_head(
             out
         }
         _ => neck_c,
-    };
+    }
+}
+
+/// The base of the neck chain starting at `neck_start`, when a joint of
+/// the chest's node carries it (see the comment within).
+fn neck_base(g: &Geo, tokens: &[Vec<String>], chest: usize, neck_start: usize) -> Option<usize> {
     // The base of the neck: a joint of the chest's zero-length node, not
     // the chest itself, that carries the neck chain and nothing else (no
     // helper, not named for another role). Its rotation turns the whole
@@ -1376,7 +1468,7 @@ fn neck_and_head(
     // (CMU cgspeed `Neck` under `Spine1`, the 3dsMax-friendly release's
     // `lowerneck` under `Chest2`), and the first joint above it is then the
     // top of the lower neck, not its base.
-    let neck_base = g.parent[neck_start].filter(|&p| {
+    g.parent[neck_start].filter(|&p| {
         p != chest
             && g.rep[p] == g.rep[chest]
             && !g.helper[p]
@@ -1389,11 +1481,26 @@ fn neck_and_head(
             && g.children[p]
                 .iter()
                 .all(|&c| c == neck_start || !g.useful[c])
-    });
+    })
+}
+
+/// The neck's joint and the candidates for the head above it: the
+/// chest's named neck when there is one (`neck_from_chest`), else the
+/// first neck-named candidate, or the neck's base, or the first
+/// candidate.
+fn neck_joint(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    chest: usize,
+    neck_c: &[usize],
+    neck_base: Option<usize>,
+    neck_from_chest: Option<usize>,
+) -> Result<(usize, Vec<usize>), NotHumanoid> {
+    let name = |j: usize| g.names[j].clone();
     let (neck_j, head_c): (usize, Vec<usize>) = match neck_from_chest {
-        Some(nj) => (nj, neck_c.clone()),
+        Some(nj) => (nj, neck_c.to_vec()),
         None => {
-            let k = first_role(tokens, &neck_c, |r| r == Role::Neck).unwrap_or(0);
+            let k = first_role(tokens, neck_c, |r| r == Role::Neck).unwrap_or(0);
             let Some(&nj) = neck_c.get(k) else {
                 return Err(NotHumanoid(format!("no neck above '{}'", name(chest))));
             };
@@ -1406,12 +1513,12 @@ fn neck_and_head(
             (nj, neck_c[k + 1..].to_vec())
         }
     };
-    set_pick(
-        picks,
-        Canonical::Neck,
-        neck_j,
-        role_of(tokens, neck_j) == Some(Role::Neck),
-    );
+    Ok((neck_j, head_c))
+}
+
+/// A hub body's spine and chest on the pelvis → neck line, or a chest
+/// left to derive between the spine and the neck.
+fn spine_and_chest_on_neck_line(picks: &mut [Pick], hub: bool, chest_derived: bool) {
     if hub {
         // No spine joint: spine and chest on the pelvis→neck line where the
         // procedural skeleton has them (0.19 and 0.6 of the way).
@@ -1444,6 +1551,19 @@ fn neck_and_head(
             },
         );
     }
+}
+
+/// The head's pick among `head_c` (see the comment within), else derived
+/// from the neck chain's end (`neck_path`, `neck_j` the neck's joint).
+fn pick_head(
+    g: &Geo,
+    tokens: &[Vec<String>],
+    picks: &mut [Pick],
+    head_c: &[usize],
+    neck_path: &[usize],
+    neck_j: usize,
+) {
+    let name = |j: usize| g.names[j].clone();
     // The head: by name, else the top of the neck: the first joint whose
     // node branches (into jaw, eyes, face bones), else the chain's last
     // joint (its End Site the crown), skipping a final leaf marker with no
@@ -1462,7 +1582,7 @@ fn neck_and_head(
             && g.clip.joints[j].tail.is_none_or(|t| t.length() < g.eps);
         Some(if marker { last - 1 } else { last })
     };
-    match first_role(tokens, &head_c, |r| r == Role::Head).or_else(head_geo) {
+    match first_role(tokens, head_c, |r| r == Role::Head).or_else(head_geo) {
         Some(k) => {
             let h = head_c[k];
             set_pick(
@@ -1491,7 +1611,6 @@ fn neck_and_head(
             derive_pick(picks, Canonical::Head, d);
         }
     }
-    Ok(neck_j)
 }
 
 /// Step 5's answer: the limbs sorted into left and right, and how.

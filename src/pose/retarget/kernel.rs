@@ -155,7 +155,7 @@ pub(super) fn retarget_on_grounds(
     let root = C::Pelvis.index();
     let clip_floor = support.floor;
     let char_floor = foot_height(character);
-    let rotations = clip_rotations(r, mocap, reference, tilt);
+    let rotations = level_torso(clip_rotations(r, mocap, reference, tilt), r);
     let carriage_inv = neck_carriage(&upright(mocap, &rotations)).inverse();
     let (chest, neck) = (C::Chest.index(), C::Neck.index());
     let mut out: Vec<(Pose, [DQuat; Canonical::COUNT])> = mocap
@@ -209,6 +209,35 @@ pub(super) fn retarget_on_grounds(
     // toes, leaving) sank the striking heel 5-7 cm through the floor.
     let grounds = place_feet(character, &support, s, toes, &mut out);
     (out, grounds)
+}
+
+/// The torso's rotations (pelvis, spine, chest, neck, head) measured from
+/// the reference `r` stood upright: each turned by `L⁻¹` on the right, `L`
+/// the least rotation taking the reference's pelvis → chest line onto the
+/// vertical (the reference's own bones turned by `L` are then taken onto
+/// the frame's by the result). The lean a reference stands with is the
+/// file's, not the performance's: CMU 02_03's ASF rest skeleton stands
+/// 2.8° off the vertical on this line, the CC-rig BVH conversion's most
+/// neutral frame 5.4° (knees bent 37°), and with the reference as it
+/// stood the two drove the character's chest, neck and head 1.7-2.6 % of
+/// its height apart about the pelvis. The line is the pelvis → chest one
+/// (not → neck or shoulders): a conversion that drops the thorax's length
+/// (CMU 01_01's cgspeed BVH) moves the neck and shoulders, not the chest.
+pub(super) fn level_torso(
+    mut rotations: Vec<[DQuat; Canonical::COUNT]>,
+    r: &Pose,
+) -> Vec<[DQuat; Canonical::COUNT]> {
+    let line = (r[C::Chest.index()] - r[C::Pelvis.index()]).normalize_or_zero();
+    if line == DVec3::ZERO {
+        return rotations;
+    }
+    let undo = DQuat::from_rotation_arc(line, DVec3::Y).inverse();
+    for a in &mut rotations {
+        for c in TORSO {
+            a[c.index()] = (a[c.index()] * undo).normalize();
+        }
+    }
+    rotations
 }
 
 /// A limb joint's global rotation: the least rotation from where its
