@@ -274,6 +274,26 @@ impl FrameStore {
         }
     }
 
+    /// Lets the system drop the pages of frames `first..first + count`
+    /// from this process's memory (a mapped store; nothing for one held
+    /// in memory): a pass over every frame (the plausibility reference)
+    /// then holds one sequence at a time, not the whole file. The frames
+    /// stay readable: a later read pages them in again from the file.
+    pub fn release(&self, first: usize, count: usize) {
+        let Backing::Mapped(map) = &self.backing else {
+            return;
+        };
+        let at = HEADER + first * self.n * 24;
+        let len = count * self.n * 24;
+        if at + len <= map.len() && len > 0 {
+            // SAFETY: the map is a read-only mapping of a file that is not
+            // changed in place (see `open`): dropped pages read back the
+            // same bytes, so no borrowed slice sees a change.
+            let _ =
+                unsafe { map.unchecked_advise_range(memmap2::UncheckedAdvice::DontNeed, at, len) };
+        }
+    }
+
     /// The lowest Y of frame `id` (metres; +∞ for a frame without
     /// vertices), kept beside the frames so that no scan reads them all.
     pub fn lowest(&self, id: u32) -> f64 {
