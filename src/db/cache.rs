@@ -329,21 +329,27 @@ pub fn save_sparse(path: &Path, key: u64, s: &SparseSimilarity) -> Result<(), Fs
     })
 }
 
-/// Reads a sparse similarity: `Ok(None)` when there is no such file or it
-/// has another key, `Err` saying why when it is there but cannot be used.
+/// Reads a sparse similarity, its pairs memory-mapped (read on demand,
+/// issue 43): `Ok(None)` when there is no such file or it has another
+/// key, `Err` saying why when it is there but cannot be used.
 pub fn read_sparse(path: &Path, key: u64) -> Result<Option<SparseSimilarity>, String> {
     match std::fs::symlink_metadata(path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         _ => {}
     }
-    let bytes = crate::util::fsutil::read_bytes(path).map_err(|e| e.source.to_string())?;
-    if bytes.len() < 16 || &bytes[..8] != SPARSE_MAGIC {
+    let file = crate::util::fsutil::open_input(path, crate::util::fsutil::MAX_INPUT_BYTES)
+        .map_err(|e| e.source.to_string())?;
+    // SAFETY: the cache file is the database's own, written atomically (a
+    // new file renamed over the old, never changed in place), so the
+    // mapped bytes do not change under the map.
+    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| e.to_string())?;
+    if map.len() < 16 || &map[..8] != SPARSE_MAGIC {
         return Err("not a sparse similarity cache file (no SMSPA001 header)".into());
     }
-    if u64::from_le_bytes(bytes[8..16].try_into().unwrap_or([0; 8])) != key {
+    if u64::from_le_bytes(map[8..16].try_into().unwrap_or([0; 8])) != key {
         return Ok(None);
     }
-    SparseSimilarity::from_bytes(&bytes[16..]).map(Some)
+    SparseSimilarity::from_mapped(std::sync::Arc::new(map), 16).map(Some)
 }
 
 /// Reads a similarity matrix if the file exists, is well formed and has
