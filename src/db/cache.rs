@@ -2,7 +2,8 @@
 //! `DIR/cache/` and reused until their inputs change.
 //!
 //! Each entry carries a key: the xxh3-64 hash of everything it was computed
-//! from (the bytes of the topology and sequence files, the manifest fields
+//! from (the bytes of the topology and sequence files — of a file over
+//! 1 MiB its length, modification time and 16 sampled blocks —, the manifest fields
 //! that matter, the measure and its parameters, the cache format version).
 //! A stale or unreadable entry is simply recomputed. Files are written
 //! atomically, so an interrupted build leaves the old entry or none.
@@ -22,6 +23,13 @@ use xxhash_rust::xxh3::Xxh3;
 /// Bump when a cached format or algorithm changes.
 pub const CACHE_VERSION: u32 = 1;
 const MAGIC: &[u8; 8] = b"SMSIM001";
+/// Files up to this length are hashed whole into a key; longer ones are
+/// keyed by length, modification time and samples ([`KeyHasher::path`]).
+pub const WHOLE_FILE_BYTES: u64 = 1 << 20;
+/// Blocks sampled from a longer file.
+const SAMPLES: u64 = 16;
+/// Bytes of a sampled block.
+const SAMPLE_BYTES: usize = 4096;
 
 /// The cache folder of a database.
 pub fn cache_dir(dir: &Path) -> PathBuf {
@@ -50,7 +58,9 @@ impl KeyHasher {
     }
 
     /// Adds the bytes of a file, or of every file under a folder (sorted by
-    /// name). A missing path hashes as such (loading reports it).
+    /// name); of a file longer than [`WHOLE_FILE_BYTES`], its length,
+    /// modification time and samples of its bytes. A missing path hashes
+    /// as such (loading reports it).
     pub fn path(&mut self, p: &Path) -> Result<&mut Self, FsError> {
         let err = |e: std::io::Error| FsError {
             path: p.to_path_buf(),
@@ -76,12 +86,41 @@ impl KeyHasher {
         Ok(self)
     }
 
+    /// A file's bytes when it is at most [`WHOLE_FILE_BYTES`] long; a
+    /// larger one's length, modification time (nanoseconds) and
+    /// [`SAMPLES`] blocks of [`SAMPLE_BYTES`] spread evenly over it, first
+    /// and last included (issue 43: the keys of a 10⁴-frame database read
+    /// 1.2 GB of sequences, twice, on every load). A file rewritten in
+    /// place changes its modification time, so it still changes the key;
+    /// what is not seen is a same-length edit between the samples that
+    /// also sets the modification time back.
     fn file(&mut self, p: &Path) -> Result<(), FsError> {
+        use std::io::{Seek, SeekFrom};
         let err = |e: std::io::Error| FsError {
             path: p.to_path_buf(),
             source: e,
         };
         let mut f = crate::util::fsutil::open_input(p, crate::util::fsutil::MAX_INPUT_BYTES)?;
+        let meta = f.metadata().map_err(err)?;
+        let len = meta.len();
+        if len > WHOLE_FILE_BYTES {
+            let mtime = meta
+                .modified()
+                .ok()
+                .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+                .map_or(0, |d| d.as_nanos());
+            self.text("sampled file", &format!("{len} bytes, modified {mtime}"));
+            let mut buf = vec![0u8; SAMPLE_BYTES];
+            let last = len - SAMPLE_BYTES as u64;
+            for k in 0..SAMPLES {
+                f.seek(SeekFrom::Start(last * k / (SAMPLES - 1)))
+                    .map_err(err)?;
+                f.read_exact(&mut buf).map_err(err)?;
+                self.0.update(&buf);
+            }
+            self.0.update(&len.to_le_bytes());
+            return Ok(());
+        }
         let mut buf = vec![0u8; 1 << 20];
         let mut total = 0u64;
         loop {
@@ -290,21 +329,27 @@ pub fn save_sparse(path: &Path, key: u64, s: &SparseSimilarity) -> Result<(), Fs
     })
 }
 
-/// Reads a sparse similarity: `Ok(None)` when there is no such file or it
-/// has another key, `Err` saying why when it is there but cannot be used.
+/// Reads a sparse similarity, its pairs memory-mapped (read on demand,
+/// issue 43): `Ok(None)` when there is no such file or it has another
+/// key, `Err` saying why when it is there but cannot be used.
 pub fn read_sparse(path: &Path, key: u64) -> Result<Option<SparseSimilarity>, String> {
     match std::fs::symlink_metadata(path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         _ => {}
     }
-    let bytes = crate::util::fsutil::read_bytes(path).map_err(|e| e.source.to_string())?;
-    if bytes.len() < 16 || &bytes[..8] != SPARSE_MAGIC {
+    let file = crate::util::fsutil::open_input(path, crate::util::fsutil::MAX_INPUT_BYTES)
+        .map_err(|e| e.source.to_string())?;
+    // SAFETY: the cache file is the database's own, written atomically (a
+    // new file renamed over the old, never changed in place), so the
+    // mapped bytes do not change under the map.
+    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| e.to_string())?;
+    if map.len() < 16 || &map[..8] != SPARSE_MAGIC {
         return Err("not a sparse similarity cache file (no SMSPA001 header)".into());
     }
-    if u64::from_le_bytes(bytes[8..16].try_into().unwrap_or([0; 8])) != key {
+    if u64::from_le_bytes(map[8..16].try_into().unwrap_or([0; 8])) != key {
         return Ok(None);
     }
-    SparseSimilarity::from_bytes(&bytes[16..]).map(Some)
+    SparseSimilarity::from_mapped(std::sync::Arc::new(map), 16).map(Some)
 }
 
 /// Reads a similarity matrix if the file exists, is well formed and has
@@ -468,5 +513,49 @@ mod tests {
         let k3 = KeyHasher::default().path(dir.path()).unwrap().finish();
         assert_ne!(k3, k2);
         assert_eq!(k3, KeyHasher::default().path(dir.path()).unwrap().finish());
+    }
+
+    /// Issue 43: a file over [`WHOLE_FILE_BYTES`] is keyed by length,
+    /// modification time and samples, not every byte; rewriting it, or
+    /// only touching it, still changes the key.
+    #[test]
+    fn keys_of_a_long_file_follow_its_time_length_and_samples() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("seq.pc2");
+        let bytes: Vec<u8> = (0..3 << 20).map(|k: u32| (k % 251) as u8).collect();
+        std::fs::write(&f, &bytes).unwrap();
+        let key = || KeyHasher::default().path(&f).unwrap().finish();
+        let set_time = |secs: u64| {
+            let t = std::time::UNIX_EPOCH + std::time::Duration::from_secs(secs);
+            std::fs::File::options()
+                .write(true)
+                .open(&f)
+                .unwrap()
+                .set_modified(t)
+                .unwrap();
+        };
+        set_time(1_700_000_000);
+        let k0 = key();
+        assert_eq!(key(), k0, "the same file, the same key");
+        // Touched: the same bytes, another time.
+        set_time(1_700_000_001);
+        assert_ne!(key(), k0, "a touched file changes the key");
+        set_time(1_700_000_000);
+        assert_eq!(key(), k0);
+        // One byte of the first block changed, the time set back: the sample sees it.
+        let mut changed = bytes.clone();
+        changed[100] ^= 1;
+        std::fs::write(&f, &changed).unwrap();
+        set_time(1_700_000_000);
+        assert_ne!(key(), k0, "an edit in a sampled block changes the key");
+        // Rewritten in place (the time moves on): the key changes.
+        std::fs::write(&f, &bytes).unwrap();
+        assert_ne!(key(), k0, "a rewritten file changes the key");
+        // One byte longer.
+        let mut longer = bytes.clone();
+        longer.push(0);
+        std::fs::write(&f, &longer).unwrap();
+        set_time(1_700_000_000);
+        assert_ne!(key(), k0, "a longer file changes the key");
     }
 }

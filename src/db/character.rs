@@ -15,7 +15,7 @@
 //! skeleton` writes [`SkeletonKind::Rigid`] by default.
 
 use crate::db::build::{BuildOptions, BuildProgress, build_opened};
-use crate::db::frames::{Conversion, FrameStore, open_or_build};
+use crate::db::frames::{CacheInputs, Conversion, FrameStore, open_or_build};
 use crate::db::skeletons::embed_rig;
 use crate::db::{DbError, MANIFEST, Manifest};
 use crate::embed::Embedding;
@@ -79,6 +79,11 @@ pub struct Character {
     metres_per_unit: f64,
     /// The files are Z-up.
     z_up: bool,
+    /// The database folder.
+    dir: std::path::PathBuf,
+    /// The key of the frames, the rig and the skeleton kind (the skeleton
+    /// cache's).
+    cache_key: u64,
 }
 
 impl Character {
@@ -107,18 +112,18 @@ impl Character {
         // Frames in metres, Y-up, memory-mapped from the cache (written on
         // the first load, a sequence at a time), and the skeletons read off
         // the file-unit frames (the rig was embedded on them), cached too.
-        let (frames, poses) = open_or_build(
+        let (frames, poses, cache_key) = open_or_build(&CacheInputs {
             dir,
-            &manifest,
-            &rig,
+            manifest: &manifest,
+            rig: &rig,
             n,
-            matrix.len(),
-            Conversion {
+            count: matrix.len(),
+            conv: Conversion {
                 metres_per_unit,
                 z_up,
             },
-            opts.skeleton,
-        )?;
+            kind: opts.skeleton,
+        })?;
         let rest_pose = rig.joints.map(|j| conv(DVec3::from_array(j)));
         let adjacency = graph.adjacency();
         let bad = |msg: String| DbError::Manifest {
@@ -188,7 +193,22 @@ impl Character {
             example_override,
             metres_per_unit,
             z_up,
+            dir: dir.to_path_buf(),
+            cache_key,
         })
+    }
+
+    /// The database folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The key of everything the character's frames and skeletons were
+    /// made from (the sequences, the rig, the skeleton kind): a cache
+    /// derived from them (the plausibility reference) is current while
+    /// its key includes this one.
+    pub fn cache_key(&self) -> u64 {
+        self.cache_key
     }
 
     /// The manifest.

@@ -274,6 +274,26 @@ impl FrameStore {
         }
     }
 
+    /// Lets the system drop the pages of frames `first..first + count`
+    /// from this process's memory (a mapped store; nothing for one held
+    /// in memory): a pass over every frame (the plausibility reference)
+    /// then holds one sequence at a time, not the whole file. The frames
+    /// stay readable: a later read pages them in again from the file.
+    pub fn release(&self, first: usize, count: usize) {
+        let Backing::Mapped(map) = &self.backing else {
+            return;
+        };
+        let at = HEADER + first * self.n * 24;
+        let len = count * self.n * 24;
+        if at + len <= map.len() && len > 0 {
+            // SAFETY: the map is a read-only mapping of a file that is not
+            // changed in place (see `open`): dropped pages read back the
+            // same bytes, so no borrowed slice sees a change.
+            let _ =
+                unsafe { map.unchecked_advise_range(memmap2::UncheckedAdvice::DontNeed, at, len) };
+        }
+    }
+
     /// The lowest Y of frame `id` (metres; +∞ for a frame without
     /// vertices), kept beside the frames so that no scan reads them all.
     pub fn lowest(&self, id: u32) -> f64 {
@@ -340,40 +360,53 @@ impl Conversion {
     }
 }
 
-/// The frames and skeletons of the database `dir` (`count` frames of `n`
-/// vertices): from the cache when current, else streamed from the
-/// sequences (one at a time) into the cache and mapped. A cache that
-/// cannot be used is rebuilt with a warning naming it and why.
-#[allow(clippy::too_many_arguments)]
-pub fn open_or_build(
-    dir: &Path,
-    m: &Manifest,
-    rig: &Embedding,
-    n: usize,
-    count: usize,
-    conv: Conversion,
-    kind: SkeletonKind,
-) -> Result<(FrameStore, Vec<Pose>), DbError> {
+/// What a database's frame and skeleton caches are made from: the
+/// database `dir` with its manifest and rig, `count` frames of `n`
+/// vertices, converted by `conv`, skeletons of `kind`.
+#[derive(Debug, Clone, Copy)]
+pub struct CacheInputs<'a> {
+    /// The database folder.
+    pub dir: &'a Path,
+    /// Its manifest.
+    pub manifest: &'a Manifest,
+    /// The rig embedded on its rest frame.
+    pub rig: &'a Embedding,
+    /// Vertices per frame.
+    pub n: usize,
+    /// Frames.
+    pub count: usize,
+    /// File units and axes to metres, Y-up.
+    pub conv: Conversion,
+    /// The skeletons' kind.
+    pub kind: SkeletonKind,
+}
+
+/// The frames and skeletons of the database `inp.dir`: from the cache
+/// when current, else streamed from the sequences (one at a time) into the
+/// cache and mapped. A cache that cannot be used is rebuilt with a warning
+/// naming it and why. Also returns the skeleton cache's key (the frames,
+/// the rig and the kind: what a cache derived from both depends on).
+pub fn open_or_build(inp: &CacheInputs) -> Result<(FrameStore, Vec<Pose>, u64), DbError> {
+    let CacheInputs {
+        dir,
+        manifest: m,
+        rig,
+        n,
+        count,
+        conv,
+        kind,
+    } = *inp;
     let (fkey, pkey) = keys(dir, m, conv.metres_per_unit, kind)?;
     let fpath = frames_path(dir);
     let ppath = poses_path(dir, kind);
     let store = open_logged(FrameStore::open(&fpath, fkey, n, count));
     let cached_poses = open_logged(read_poses(&ppath, pkey, count));
     let (write_frames, cached_poses) = match (store, cached_poses) {
-        (Some(store), Some(poses)) => return Ok((store, poses)),
+        (Some(store), Some(poses)) => return Ok((store, poses, pkey)),
         // A mapped store not used is unmapped here, before it is rewritten.
         (store, poses) => (store.is_none(), poses),
     };
-    let measured = stream(
-        dir,
-        m,
-        rig,
-        n,
-        count,
-        conv,
-        kind,
-        write_frames.then_some((&fpath, fkey)),
-    )?;
+    let measured = stream(inp, write_frames.then_some((&fpath, fkey)))?;
     let poses = match cached_poses {
         Some(p) => p,
         None => {
@@ -386,7 +419,7 @@ pub fn open_or_build(
         path: dir.join(MANIFEST),
         msg: format!("the frame cache just written cannot be read: {e}"),
     })?;
-    Ok((store, poses))
+    Ok((store, poses, pkey))
 }
 
 /// `Some` of a usable cache; `None` with a warning naming the file when it
@@ -409,17 +442,16 @@ fn open_logged<T>(r: Result<T, FrameCacheError>) -> Option<T> {
 /// Reads every sequence once, in order: writes the frame cache (when
 /// `frames` names it) and returns each frame's measured skeleton (file
 /// units; the rigid kind's measurement is the regressor's).
-#[allow(clippy::too_many_arguments)]
-fn stream(
-    dir: &Path,
-    m: &Manifest,
-    rig: &Embedding,
-    n: usize,
-    count: usize,
-    conv: Conversion,
-    kind: SkeletonKind,
-    frames: Option<(&PathBuf, u64)>,
-) -> Result<Vec<Pose>, DbError> {
+fn stream(inp: &CacheInputs, frames: Option<(&PathBuf, u64)>) -> Result<Vec<Pose>, DbError> {
+    let CacheInputs {
+        dir,
+        manifest: m,
+        rig,
+        n,
+        count,
+        conv,
+        kind,
+    } = *inp;
     let measure_kind = match kind {
         SkeletonKind::Rigid => SkeletonKind::Regressor,
         k => k,

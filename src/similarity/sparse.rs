@@ -97,19 +97,105 @@ pub struct SparseStats {
 }
 
 /// A symmetric dissimilarity stored on some frame pairs only.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct SparseSimilarity {
     /// The sequences, in row order.
     pub spans: Vec<Span>,
     n: usize,
     offsets: Vec<u64>,
-    cols: Vec<u32>,
-    vals: Vec<f32>,
+    /// The stored pairs' columns and values, row by row.
+    pairs: Stored,
     /// Per frame, the largest full distance to its candidates.
     radius: Vec<f32>,
     dims: usize,
     /// Per frame, the projected cheap descriptor (`n × dims`).
     features: Vec<f32>,
+}
+
+impl PartialEq for SparseSimilarity {
+    fn eq(&self, o: &Self) -> bool {
+        self.spans == o.spans
+            && self.n == o.n
+            && self.offsets == o.offsets
+            && self.radius == o.radius
+            && self.dims == o.dims
+            && self.features == o.features
+            && self.pairs.len() == o.pairs.len()
+            && (0..self.pairs.len()).all(|k| {
+                self.pairs.col(k) == o.pairs.col(k)
+                    && self.pairs.val(k).to_bits() == o.pairs.val(k).to_bits()
+            })
+    }
+}
+
+/// The stored pairs' columns and values: in memory (a build), or read on
+/// demand from the memory-mapped cache file (issue 43: at 10⁴ frames the
+/// pairs are 0.5 GB, of which a retarget reads a few).
+#[derive(Clone)]
+enum Stored {
+    /// Columns and values held in memory.
+    Owned { cols: Vec<u32>, vals: Vec<f32> },
+    /// `len` little-endian `u32` columns from byte `cols` of the map, and
+    /// as many `f32` values from byte `vals`.
+    Mapped {
+        map: std::sync::Arc<memmap2::Mmap>,
+        cols: usize,
+        vals: usize,
+        len: usize,
+    },
+}
+
+impl std::fmt::Debug for Stored {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stored::Owned { cols, .. } => write!(f, "Owned({} pairs)", cols.len()),
+            Stored::Mapped { len, .. } => write!(f, "Mapped({len} pairs)"),
+        }
+    }
+}
+
+impl Stored {
+    fn len(&self) -> usize {
+        match self {
+            Stored::Owned { cols, .. } => cols.len(),
+            Stored::Mapped { len, .. } => *len,
+        }
+    }
+    /// Four bytes of the map at `at` (all ones past its end: a column out
+    /// of range, a value that is NaN; the length was checked on opening).
+    fn word(map: &memmap2::Mmap, at: usize) -> [u8; 4] {
+        map.get(at..at + 4)
+            .and_then(|b| b.try_into().ok())
+            .unwrap_or([0xff; 4])
+    }
+    /// The column of stored pair `k`.
+    fn col(&self, k: usize) -> u32 {
+        match self {
+            Stored::Owned { cols, .. } => cols[k],
+            Stored::Mapped { map, cols, .. } => u32::from_le_bytes(Self::word(map, cols + 4 * k)),
+        }
+    }
+    /// The value of stored pair `k`.
+    fn val(&self, k: usize) -> f32 {
+        match self {
+            Stored::Owned { vals, .. } => vals[k],
+            Stored::Mapped { map, vals, .. } => f32::from_le_bytes(Self::word(map, vals + 4 * k)),
+        }
+    }
+}
+
+/// What [`SparseSimilarity`]'s bytes say before its pairs: where the pairs
+/// start (bytes from the start of the bytes read).
+struct Head {
+    spans: Vec<Span>,
+    n: usize,
+    dims: usize,
+    radius: Vec<f32>,
+    features: Vec<f32>,
+    offsets: Vec<u64>,
+    nnz: usize,
+    cols_at: usize,
+    vals_at: usize,
 }
 
 /// A run of pairs `(r, r + diag)` for `r` in `r0..=r1`.
@@ -131,20 +217,42 @@ impl SparseSimilarity {
     }
     /// Pairs stored (each unordered pair once).
     pub fn stored_pairs(&self) -> usize {
-        self.cols.len() / 2
+        self.pairs.len() / 2
+    }
+    /// True when the pairs are read from a memory-mapped cache file.
+    pub fn is_mapped(&self) -> bool {
+        matches!(self.pairs, Stored::Mapped { .. })
+    }
+    /// The range of row `a` in the stored pairs.
+    fn range(&self, a: usize) -> (usize, usize) {
+        (self.offsets[a] as usize, self.offsets[a + 1] as usize)
+    }
+    /// The first stored pair of `s..e` (a row) whose column is not below
+    /// `c` (`e` when none).
+    fn lower(&self, mut s: usize, mut e: usize, c: u32) -> usize {
+        while s < e {
+            let mid = s + (e - s) / 2;
+            if self.pairs.col(mid) < c {
+                s = mid + 1;
+            } else {
+                e = mid;
+            }
+        }
+        s
     }
     /// The stored columns and values of row `a`, columns ascending.
-    pub fn row(&self, a: usize) -> (&[u32], &[f32]) {
-        let (s, e) = (self.offsets[a] as usize, self.offsets[a + 1] as usize);
-        (&self.cols[s..e], &self.vals[s..e])
+    pub fn row(&self, a: usize) -> impl Iterator<Item = (u32, f32)> + '_ {
+        let (s, e) = self.range(a);
+        (s..e).map(|k| (self.pairs.col(k), self.pairs.val(k)))
     }
     /// The stored dissimilarity of `a` and `b` (0 for `a == b`).
     pub fn stored(&self, a: usize, b: usize) -> Option<f32> {
         if a == b {
             return Some(0.0);
         }
-        let (cols, vals) = self.row(a);
-        cols.binary_search(&(b as u32)).ok().map(|k| vals[k])
+        let (s, e) = self.range(a);
+        let k = self.lower(s, e, b as u32);
+        (k < e && self.pairs.col(k) == b as u32).then(|| self.pairs.val(k))
     }
     /// The dissimilarity of `a` and `b`: stored, else the estimate of a
     /// pair that is neither frame's candidate: the larger of both frames'
@@ -170,14 +278,17 @@ impl SparseSimilarity {
         let (si, sj) = (&self.spans[i], &self.spans[j]);
         let mut out = Vec::new();
         for r in si.start..si.start + si.len {
-            let (cols, _) = self.row(r);
-            let from = cols.partition_point(|&c| (c as usize) < sj.start);
-            let to = cols.partition_point(|&c| (c as usize) < sj.start + sj.len);
-            out.extend(
-                cols[from..to]
-                    .iter()
-                    .map(|&c| (r - si.start, c as usize - sj.start)),
-            );
+            let (s, e) = self.range(r);
+            let from = self.lower(s, e, sj.start as u32);
+            let to = self.lower(from, e, (sj.start + sj.len) as u32);
+            // A column outside the block (a mapped file's columns are not
+            // all checked on opening) is left out, never wrapped.
+            out.extend((from..to).filter_map(|k| {
+                (self.pairs.col(k) as usize)
+                    .checked_sub(sj.start)
+                    .filter(|&c| c < sj.len)
+                    .map(|c| (r - si.start, c))
+            }));
         }
         out
     }
@@ -187,7 +298,7 @@ impl SparseSimilarity {
     /// features, row offsets, columns, values.
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut b = Vec::with_capacity(
-            32 + self.n * (12 + 4 * self.dims) + self.cols.len() * 8 + self.spans.len() * 40,
+            32 + self.n * (12 + 4 * self.dims) + self.pairs.len() * 8 + self.spans.len() * 40,
         );
         let u64le = |b: &mut Vec<u8>, v: u64| b.extend_from_slice(&v.to_le_bytes());
         u64le(&mut b, self.n as u64);
@@ -205,19 +316,76 @@ impl SparseSimilarity {
         for o in &self.offsets {
             u64le(&mut b, *o);
         }
-        for c in &self.cols {
-            b.extend_from_slice(&c.to_le_bytes());
+        for k in 0..self.pairs.len() {
+            b.extend_from_slice(&self.pairs.col(k).to_le_bytes());
         }
-        for v in &self.vals {
-            b.extend_from_slice(&v.to_le_bytes());
+        for k in 0..self.pairs.len() {
+            b.extend_from_slice(&self.pairs.val(k).to_le_bytes());
         }
         b
     }
 
-    /// Reads [`SparseSimilarity::to_bytes`]; `Err` naming what is wrong
-    /// (truncated, sizes that disagree, a value that is not a finite
-    /// distance, a column out of range or out of order).
+    /// Reads [`SparseSimilarity::to_bytes`] into memory; `Err` naming what
+    /// is wrong (truncated, sizes that disagree, a value that is not a
+    /// finite distance, a column out of range or out of order).
     pub fn from_bytes(bytes: &[u8]) -> Result<SparseSimilarity, String> {
+        let h = Self::head(bytes)?;
+        let cols: Vec<u32> = bytes[h.cols_at..h.cols_at + 4 * h.nnz]
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        let vals: Vec<f32> = bytes[h.vals_at..h.vals_at + 4 * h.nnz]
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        for a in 0..h.n {
+            let row = &cols[h.offsets[a] as usize..h.offsets[a + 1] as usize];
+            if row.windows(2).any(|w| w[0] >= w[1]) || row.iter().any(|&c| c as usize >= h.n) {
+                return Err(format!("row {a}: columns out of range or out of order"));
+            }
+        }
+        if !vals.iter().all(|v| v.is_finite() && *v >= 0.0) {
+            return Err("a value that is not a finite distance".into());
+        }
+        Ok(Self::with_pairs(h, Stored::Owned { cols, vals }))
+    }
+
+    /// Reads [`SparseSimilarity::to_bytes`] from byte `at` of a mapped
+    /// cache file, the pairs left in the map and read on demand. Checked on
+    /// opening as [`SparseSimilarity::from_bytes`] checks, except each
+    /// row's columns and values (that would read the whole file): the file
+    /// is the database's own, written atomically; a column out of range
+    /// is then never found, never a panic.
+    pub fn from_mapped(
+        map: std::sync::Arc<memmap2::Mmap>,
+        at: usize,
+    ) -> Result<SparseSimilarity, String> {
+        let h = Self::head(map.get(at..).ok_or("shorter than its header")?)?;
+        let pairs = Stored::Mapped {
+            cols: at + h.cols_at,
+            vals: at + h.vals_at,
+            len: h.nnz,
+            map,
+        };
+        Ok(Self::with_pairs(h, pairs))
+    }
+
+    fn with_pairs(h: Head, pairs: Stored) -> SparseSimilarity {
+        SparseSimilarity {
+            spans: h.spans,
+            n: h.n,
+            offsets: h.offsets,
+            pairs,
+            radius: h.radius,
+            dims: h.dims,
+            features: h.features,
+        }
+    }
+
+    /// Everything of [`SparseSimilarity::to_bytes`] before the pairs, checked
+    /// (sizes, sequences tiling the frames, rows in order, radius and
+    /// descriptors finite), and where the pairs are.
+    fn head(bytes: &[u8]) -> Result<Head, String> {
         let mut r = Reader { bytes, at: 0 };
         let n = r.u64()? as usize;
         let dims = r.u64()? as usize;
@@ -240,12 +408,10 @@ impl SparseSimilarity {
             offsets.push(r.u64()?);
         }
         let nnz = *offsets.last().unwrap_or(&0) as usize;
-        let cols: Vec<u32> = r
-            .take(nnz.checked_mul(4).ok_or("size overflow")?)?
-            .chunks_exact(4)
-            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect();
-        let vals = r.f32s(nnz)?;
+        let cols_at = r.at;
+        r.take(nnz.checked_mul(4).ok_or("size overflow")?)?;
+        let vals_at = r.at;
+        r.take(nnz.checked_mul(4).ok_or("size overflow")?)?;
         if r.at != bytes.len() {
             return Err(format!("{} bytes after the end", bytes.len() - r.at));
         }
@@ -259,29 +425,21 @@ impl SparseSimilarity {
         if next != n || offsets.first() != Some(&0) || offsets.windows(2).any(|w| w[0] > w[1]) {
             return Err("the rows disagree with the frame count".into());
         }
-        for a in 0..n {
-            let row = &cols[offsets[a] as usize..offsets[a + 1] as usize];
-            if row.windows(2).any(|w| w[0] >= w[1]) || row.iter().any(|&c| c as usize >= n) {
-                return Err(format!("row {a}: columns out of range or out of order"));
-            }
-        }
-        if !vals
-            .iter()
-            .chain(&radius)
-            .all(|v| v.is_finite() && *v >= 0.0)
+        if !radius.iter().all(|v| v.is_finite() && *v >= 0.0)
             || !features.iter().all(|v| v.is_finite())
         {
             return Err("a value that is not a finite distance".into());
         }
-        Ok(SparseSimilarity {
+        Ok(Head {
             spans,
             n,
-            offsets,
-            cols,
-            vals,
-            radius,
             dims,
+            radius,
             features,
+            offsets,
+            nnz,
+            cols_at,
+            vals_at,
         })
     }
 }
@@ -433,8 +591,7 @@ pub fn sparse_pairs(
         spans,
         n,
         offsets,
-        cols,
-        vals,
+        pairs: Stored::Owned { cols, vals },
         radius: vec![0.0; n],
         dims,
         features,
@@ -741,8 +898,7 @@ mod tests {
             s.stored_pairs()
         );
         for a in 0..300 {
-            let (cols, vals) = s.row(a);
-            for (&b, &v) in cols.iter().zip(vals) {
+            for (b, v) in s.row(a) {
                 assert_eq!(v, set.distance(a, b as usize) as f32);
                 assert_eq!(s.stored(b as usize, a), Some(v));
             }
@@ -760,5 +916,29 @@ mod tests {
         let mut bad = s.to_bytes();
         bad.truncate(bad.len() - 3);
         assert!(SparseSimilarity::from_bytes(&bad).is_err());
+        // Mapped from a file (16 bytes of header first, as the cache has):
+        // the same pairs, values and blocks, read on demand.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("sparse.bin");
+        let mut file = vec![7u8; 16];
+        file.extend(s.to_bytes());
+        std::fs::write(&p, &file).unwrap();
+        let map = unsafe { memmap2::Mmap::map(&std::fs::File::open(&p).unwrap()) }.unwrap();
+        let mapped = SparseSimilarity::from_mapped(std::sync::Arc::new(map), 16).unwrap();
+        assert!(mapped.is_mapped() && !s.is_mapped());
+        assert_eq!(mapped, s);
+        for (a, b) in [(0, 20), (10, 130), (5, 6), (299, 0), (119, 120)] {
+            assert_eq!(
+                mapped.get(a, b).to_bits(),
+                s.get(a, b).to_bits(),
+                "({a}, {b})"
+            );
+        }
+        for (i, j) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+            assert_eq!(mapped.block(i, j), s.block(i, j));
+        }
+        std::fs::write(&p, &file[..file.len() - 1]).unwrap();
+        let map = unsafe { memmap2::Mmap::map(&std::fs::File::open(&p).unwrap()) }.unwrap();
+        assert!(SparseSimilarity::from_mapped(std::sync::Arc::new(map), 16).is_err());
     }
 }

@@ -82,7 +82,7 @@ pub struct Feet {
 }
 
 /// Sliding of both feet over a sequence (centimetres).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct Sliding {
     /// Foot-frames in contact (both feet counted).
     pub contact_frames: usize,

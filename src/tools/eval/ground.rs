@@ -29,7 +29,7 @@ pub fn floor_height(lowest: &[f64]) -> f64 {
 }
 
 /// Penetration and floating over a sequence (centimetres, from metres).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct Ground {
     /// Depth of the lowest vertex below the floor, per frame (0 when above).
     pub penetration_cm: Summary,

@@ -18,7 +18,7 @@ use crate::embed::Embedding;
 use crate::embed::regress::Regressor;
 use crate::mesh::Mesh;
 use glam::DVec3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// How far a result may leave the reference before it is warned about.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -77,7 +77,7 @@ pub struct PlausibilityOptions {
 
 /// The checks on the character's own frames (a database's captured frames,
 /// or a scan's rest frame).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Reference {
     /// What was measured (e.g. "database 'samba' (175 frames)").
     pub source: String,
@@ -97,6 +97,59 @@ pub struct Reference {
     /// The vertex farthest off its one-ring in the captured frames (frames
     /// counted across the sequences).
     pub off_ring: OffRing,
+}
+
+/// Bump when a check's measure changes: the database's cached reference
+/// (`cache/plausibility-reference.json`) is then measured again.
+pub const REFERENCE_VERSION: u32 = 1;
+
+/// The database's floor and reference as cached beside its frames.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct CachedReference {
+    key: u64,
+    floor: f64,
+    reference: Reference,
+}
+
+/// The reference cache of the database `dir`.
+pub fn reference_path(dir: &std::path::Path) -> std::path::PathBuf {
+    crate::db::cache::cache_dir(dir).join("plausibility-reference.json")
+}
+
+/// The cached floor and reference when the file is there, well formed and
+/// of `key`; `None` otherwise (a file that cannot be used is said in the
+/// log and measured again).
+fn read_reference(path: &std::path::Path, key: u64) -> Option<CachedReference> {
+    let text = match crate::util::fsutil::read_text(path) {
+        Ok(t) => t,
+        Err(e) if e.source.kind() == std::io::ErrorKind::NotFound => return None,
+        Err(e) => {
+            tracing::warn!("{e}; measuring the plausibility reference again");
+            return None;
+        }
+    };
+    match serde_json::from_str::<CachedReference>(&text) {
+        Ok(c) if c.key == key => Some(c),
+        Ok(_) => None,
+        Err(e) => {
+            tracing::warn!(
+                "{}: {e}; measuring the plausibility reference again",
+                path.display()
+            );
+            None
+        }
+    }
+}
+
+fn write_reference(
+    path: &std::path::Path,
+    c: &CachedReference,
+) -> Result<(), crate::util::fsutil::FsError> {
+    let text = serde_json::to_string(c).map_err(|e| crate::util::fsutil::FsError {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(e),
+    })?;
+    crate::util::fsutil::write_bytes_atomic(path, text.as_bytes())
 }
 
 /// The plausibility of one result sequence.
@@ -269,22 +322,6 @@ impl Checker {
         // (a rigid alignment relates axes, not units).
         let rest = ch.topology_metres();
         c.triangles = RestTriangles::new(rest.positions(), rest.triangles())?;
-        let n = ch.n();
-        let mut buf = vec![[0.0; 3]; n];
-        let mut seqs: Vec<Vec<[f64; 3]>> = Vec::with_capacity(ch.graph().sequences.len());
-        for (s, q) in ch.graph().sequences.iter().enumerate() {
-            let mut frames = Vec::with_capacity(q.len * n);
-            for t in 0..q.len {
-                ch.frame_metres(ch.graph().frame_id(s, t), &mut buf);
-                frames.extend_from_slice(&buf);
-            }
-            seqs.push(frames);
-        }
-        let lowest: Vec<f64> = seqs
-            .iter()
-            .flat_map(|f| lowest_heights(f, n, DVec3::Y))
-            .collect();
-        c.floor = floor_height(&lowest);
         // The head's zero is the character's neutral: its rest frame when
         // that stands upright, else the database frame nearest neutral
         // (`pose::retarget::character_neutral`), the attitude a clip standing
@@ -294,19 +331,90 @@ impl Checker {
         if let crate::pose::retarget::NeutralSource::Frame(i) = neutral.source
             && i < ch.frame_count()
         {
-            ch.frame_metres(i as u32, &mut buf);
-            c.head.rest_deg = c.head.raw_deg(&buf);
+            c.head.rest_deg = c.head.raw_deg(ch.frame(i as u32));
         }
-        let series: Vec<Series> = seqs.iter().map(|f| c.series(f, n)).collect();
-        c.reference = Some(c.pool(
+        // The floor and the reference are read from the database's cache
+        // when current (issue 43: measuring them reads every frame, 2.4 GB
+        // at 10⁴ frames), else measured and cached.
+        let path = reference_path(ch.dir());
+        let key = c.reference_key(ch, neutral);
+        if let Some(cached) = read_reference(&path, key) {
+            c.floor = cached.floor;
+            c.reference = Some(cached.reference);
+            return Ok(c);
+        }
+        let (floor, reference) = c.measure_database(ch);
+        c.floor = floor;
+        let cached = CachedReference {
+            key,
+            floor,
+            reference,
+        };
+        if let Err(e) = write_reference(&path, &cached) {
+            tracing::warn!("the plausibility reference is not cached: {e}");
+        }
+        c.reference = Some(cached.reference);
+        Ok(c)
+    }
+
+    /// The floor (median lowest point of the database's frames) and the
+    /// checks on every sequence, read from the mapped frames one sequence
+    /// at a time (no copy of the frames; each sequence's pages released
+    /// after use): the same values, in the same order, as when every frame
+    /// was copied out first.
+    fn measure_database(&mut self, ch: &Character) -> (f64, Reference) {
+        let n = ch.n();
+        let store = ch.frame_store();
+        let all = store.all();
+        let seq = |q: &crate::similarity::Span| -> &[[f64; 3]] {
+            all.get(q.start * n..(q.start + q.len) * n).unwrap_or(&[])
+        };
+        let sequences = &ch.graph().sequences;
+        let mut lowest = Vec::with_capacity(ch.frame_count());
+        for q in sequences {
+            lowest.extend(lowest_heights(seq(q), n, DVec3::Y));
+            store.release(q.start, q.len);
+        }
+        self.floor = floor_height(&lowest);
+        let series: Vec<Series> = sequences
+            .iter()
+            .map(|q| {
+                let s = self.series(seq(q), n);
+                store.release(q.start, q.len);
+                s
+            })
+            .collect();
+        let reference = self.pool(
             &format!(
                 "database '{}' ({} frames)",
                 ch.manifest().name,
                 lowest.len()
             ),
             &series,
-        ));
-        Ok(c)
+        );
+        (self.floor, reference)
+    }
+
+    /// The key of the cached reference: the character's frames, rig and
+    /// skeletons ([`Character::cache_key`]), the rig's labels and
+    /// regressors, the options, the head's zero and
+    /// [`REFERENCE_VERSION`].
+    fn reference_key(
+        &self,
+        ch: &Character,
+        neutral: &crate::pose::retarget::CharacterNeutral,
+    ) -> u64 {
+        let mut h = crate::db::cache::KeyHasher::default();
+        h.text("plausibility reference", &REFERENCE_VERSION.to_string());
+        h.text("character", &ch.cache_key().to_string());
+        h.text("options", &format!("{:?}", self.opts));
+        h.text("neutral", &format!("{:?}", neutral.source));
+        h.text("head zero", &self.head.rest_deg.to_bits().to_string());
+        h.text("fps", &self.fps.to_bits().to_string());
+        let rig = ch.rig();
+        h.text("labels", &format!("{:?}", rig.labels));
+        h.text("regressors", &format!("{:?}", rig.regressors));
+        h.finish()
     }
 
     /// Sets the reference to the checks on `sequences` (each frame-major,

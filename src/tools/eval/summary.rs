@@ -4,7 +4,7 @@
 use serde::Serialize;
 
 /// Order statistics of a series (its own units). All zero for an empty one.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct Summary {
     /// Median.
     pub median: f64,

@@ -262,7 +262,7 @@ impl RestTriangles {
 }
 
 /// Turned-over triangles of a sequence against the rest frame.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct TurnedOverCount {
     /// Triangles of the mesh.
     pub triangles: usize,
@@ -280,6 +280,8 @@ pub struct TurnedOverCount {
     pub worst_frame: usize,
     /// What the deformation's repair left turned over against the
     /// retrieved frames (`retarget` only; [`crate::deform::TurnedOver`]).
+    /// Not read back (a cached reference has none).
+    #[serde(skip_deserializing)]
     pub deformation: Option<TurnedOver>,
 }
 
@@ -314,7 +316,7 @@ impl TurnedOverCount {
 /// The vertex farthest off its one-ring in a sequence (see the module
 /// docs): a single-vertex spike reads tens of edge lengths, a real capture
 /// under two.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct OffRing {
     /// Frames measured.
     pub frames: usize,

@@ -48,8 +48,7 @@ fn compare(db: &Path, tmp: &Path) -> String {
     assert_eq!(sparse.len(), n);
     // Every stored value is the dense matrix's, both ways.
     for a in 0..n {
-        let (cols, vals) = sparse.row(a);
-        for (&b, &v) in cols.iter().zip(vals) {
+        for (b, v) in sparse.row(a) {
             assert_eq!(v, dense.get(a, b as usize), "({a}, {b})");
         }
     }
