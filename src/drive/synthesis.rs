@@ -6,7 +6,7 @@ use super::placement::{BlendScratch, Floor, blend_placed, placements};
 use super::prepared::{Analysed, Prepared};
 use super::sink::FrameSink;
 use super::timeline::{Jump, OutFrame, timeline};
-use super::trellis::{Retrieval, TrellisInput, retrieve};
+use super::trellis::{DatabaseLinks, Retrieval, retrieve};
 use crate::db::Character;
 use crate::deform::{DeformMode, Deformer, TurnedOver};
 use crate::mesh::blend::FrameGradients;
@@ -246,14 +246,8 @@ impl Prepared {
         timings: &mut Timings,
     ) -> (Retrieval, Vec<OutFrame>, Vec<Jump>, Vec<Floor>) {
         let t1 = Instant::now();
-        let successor = |id: u32| ch.successor(id);
-        let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
-        let input = TrellisInput {
-            poses: ch.poses(),
-            adjacency: ch.adjacency(),
-            successor: &successor,
-            dissimilarity: &dissimilarity,
-        };
+        let links = DatabaseLinks::of(ch);
+        let input = links.input();
         let retrieval = retrieve(&clip.on_floor, &input, &opts.trellis);
         timings.retrieval = t1.elapsed().as_secs_f64();
         let t2 = Instant::now();

@@ -110,6 +110,37 @@ pub struct TrellisInput<'a> {
     pub dissimilarity: &'a (dyn Fn(u32, u32) -> f32 + Sync),
 }
 
+/// A database character's frame links for the trellis (its natural
+/// successors and its graph's dissimilarity), made once where a caller
+/// needs a [`TrellisInput`] of the character (offline synthesis, the live
+/// session).
+pub struct DatabaseLinks<'a> {
+    ch: &'a crate::db::Character,
+    successor: Box<dyn Fn(u32) -> Option<u32> + Sync + 'a>,
+    dissimilarity: Box<dyn Fn(u32, u32) -> f32 + Sync + 'a>,
+}
+
+impl<'a> DatabaseLinks<'a> {
+    /// The links of `ch`.
+    pub fn of(ch: &'a crate::db::Character) -> Self {
+        DatabaseLinks {
+            ch,
+            successor: Box::new(move |id| ch.successor(id)),
+            dissimilarity: Box::new(move |a, b| ch.matrix().get(a as usize, b as usize)),
+        }
+    }
+
+    /// The trellis's input: the character's skeletons, adjacency and links.
+    pub fn input(&self) -> TrellisInput<'_> {
+        TrellisInput {
+            poses: self.ch.poses(),
+            adjacency: self.ch.adjacency(),
+            successor: &*self.successor,
+            dissimilarity: &*self.dissimilarity,
+        }
+    }
+}
+
 /// Finds the optimal path for `query` (Eq. 29).
 pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Retrieval {
     let ng = db.poses.len();

@@ -5,7 +5,7 @@
 
 use crate::db::{BuildProgress, Character};
 use crate::drive::query::{QueryError, load_mocap};
-use crate::drive::trellis::TrellisInput;
+use crate::drive::trellis::DatabaseLinks;
 use crate::drive::{Prepared, RetargetError, RetargetOptions};
 use crate::live::bvh_tcp;
 use crate::live::online::{OnlineOptions, OnlineStats};
@@ -519,14 +519,8 @@ pub fn run_live(
         }
         on_frame(f)
     };
-    let successor = |id: u32| ch.successor(id);
-    let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
-    let trellis = TrellisInput {
-        poses: ch.poses(),
-        adjacency: ch.adjacency(),
-        successor: &successor,
-        dissimilarity: &dissimilarity,
-    };
+    let links = DatabaseLinks::of(&ch);
+    let trellis = links.input();
     let sopts = session_options(opts);
     let mut session: Option<Session<'_>> = None;
     let mut tally = Tally::new(record.is_some(), opts.sample_every);

@@ -12,7 +12,7 @@ use std::path::Path;
 use surfmotion::db::Character;
 use surfmotion::deform::DeformMode;
 use surfmotion::drive::query::load_mocap;
-use surfmotion::drive::trellis::TrellisInput;
+use surfmotion::drive::trellis::DatabaseLinks;
 use surfmotion::drive::{Prepared, RetargetError, RetargetOptions};
 use surfmotion::live::{LiveFrame, OnlineOptions, Session, SessionOptions};
 use surfmotion::pose::Pose;
@@ -33,14 +33,8 @@ fn run_raw(
     rotations: bool,
     sopts: SessionOptions,
 ) -> (Vec<usize>, Vec<Pose>, Vec<[f64; 3]>) {
-    let successor = |id: u32| ch.successor(id);
-    let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
-    let input = TrellisInput {
-        poses: ch.poses(),
-        adjacency: ch.adjacency(),
-        successor: &successor,
-        dissimilarity: &dissimilarity,
-    };
+    let links = DatabaseLinks::of(ch);
+    let input = links.input();
     let mut s = Session::new(ch, prepared, &input, m.reference.without_rotations(), sopts);
     let (mut order, mut queries, mut positions) = (Vec::new(), Vec::new(), Vec::new());
     let mut keep = |f: LiveFrame<'_>| {

@@ -9,7 +9,7 @@ use std::path::Path;
 use surfmotion::db::Character;
 use surfmotion::drive::query::load_mocap;
 use surfmotion::drive::timeline::plays_on;
-use surfmotion::drive::trellis::{TrellisInput, retrieve};
+use surfmotion::drive::trellis::{DatabaseLinks, TrellisInput, retrieve};
 use surfmotion::drive::{Prepared, RetargetOptions};
 use surfmotion::live::{OnlineOptions, OnlineTrellis, Session, SessionOptions};
 
@@ -58,14 +58,8 @@ fn a_lag_covering_the_clip_gives_the_offline_path_and_meshes_exactly() {
     let fps = ch.manifest().fps;
     let opts = RetargetOptions::default();
     let prepared = Prepared::new(&ch, &opts).unwrap();
-    let successor = |id: u32| ch.successor(id);
-    let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
-    let input = TrellisInput {
-        poses: ch.poses(),
-        adjacency: ch.adjacency(),
-        successor: &successor,
-        dissimilarity: &dissimilarity,
-    };
+    let links = DatabaseLinks::of(&ch);
+    let input = links.input();
     for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
         let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), fps).unwrap();
         // A third of the clip keeps the test quick; still several jumps.
@@ -137,14 +131,8 @@ fn short_lags_commit_every_frame_in_order_along_the_graph() {
     let fps = ch.manifest().fps;
     let opts = RetargetOptions::default();
     let prepared = Prepared::new(&ch, &opts).unwrap();
-    let successor = |id: u32| ch.successor(id);
-    let dissimilarity = |a: u32, b: u32| ch.matrix().get(a as usize, b as usize);
-    let input = TrellisInput {
-        poses: ch.poses(),
-        adjacency: ch.adjacency(),
-        successor: &successor,
-        dissimilarity: &dissimilarity,
-    };
+    let links = DatabaseLinks::of(&ch);
+    let input = links.input();
     let m = load_mocap(
         &d.join("mocap/cmu-amc/02/02_02.amc"),
         &Default::default(),
