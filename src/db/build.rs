@@ -221,6 +221,7 @@ pub fn similarity_key(dir: &Path, m: &Manifest, measure: Measure) -> Result<u64,
             }
         }
     }
+    key.save();
     Ok(key.finish())
 }
 

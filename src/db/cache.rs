@@ -3,7 +3,8 @@
 //!
 //! Each entry carries a key: the xxh3-64 hash of everything it was computed
 //! from (the bytes of the topology and sequence files — of a file over
-//! 1 MiB its length, modification time and 16 sampled blocks —, the manifest fields
+//! 1 MiB its length and the hash of all its bytes, remembered in
+//! `cache/content-hashes.json` ([`super::content`]) —, the manifest fields
 //! that matter, the measure and its parameters, the cache format version).
 //! A stale or unreadable entry is simply recomputed. Files are written
 //! atomically, so an interrupted build leaves the old entry or none.
@@ -13,6 +14,7 @@
 //! `u32`, the UTF-8 name, start and length `u64`; then the upper triangle
 //! with the diagonal, row by row, as `n (n + 1) / 2` f32.
 
+use super::content::ContentMemo;
 use super::manifest::{DbError, Manifest};
 use crate::similarity::{SimilarityMatrix, Span, SparseSimilarity};
 use crate::util::fsutil::{FsError, write_atomic};
@@ -23,31 +25,51 @@ use xxhash_rust::xxh3::Xxh3;
 /// Bump when a cached format or algorithm changes.
 pub const CACHE_VERSION: u32 = 1;
 const MAGIC: &[u8; 8] = b"SMSIM001";
-/// Files up to this length are hashed whole into a key; longer ones are
-/// keyed by length, modification time and samples ([`KeyHasher::path`]).
+/// Files up to this length are hashed into a key byte by byte; longer
+/// ones by their length and content hash, remembered between loads
+/// ([`super::content::ContentMemo`]).
 pub const WHOLE_FILE_BYTES: u64 = 1 << 20;
-/// Blocks sampled from a longer file.
-const SAMPLES: u64 = 16;
-/// Bytes of a sampled block.
-const SAMPLE_BYTES: usize = 4096;
 
 /// The cache folder of a database.
 pub fn cache_dir(dir: &Path) -> PathBuf {
     dir.join("cache")
 }
 
-/// A hasher of cache inputs.
-pub struct KeyHasher(Xxh3);
+/// A hasher of cache inputs: with the memo of a database
+/// ([`KeyHasher::for_db`]), a large file's content hash is read from it
+/// when the file has not changed.
+pub struct KeyHasher(Xxh3, Option<ContentMemo>);
 
 impl Default for KeyHasher {
     fn default() -> Self {
         let mut h = Xxh3::new();
         h.update(&CACHE_VERSION.to_le_bytes());
-        KeyHasher(h)
+        KeyHasher(h, None)
     }
 }
 
 impl KeyHasher {
+    /// A hasher of the inputs of the database `dir`, remembering the content
+    /// hashes of its large files in its cache folder ([`KeyHasher::save`]).
+    pub fn for_db(dir: &Path) -> Self {
+        let mut k = KeyHasher::default();
+        k.1 = Some(ContentMemo::open(dir));
+        k
+    }
+
+    /// Writes back the content hashes learnt ([`ContentMemo::save`]).
+    pub fn save(&mut self) -> &mut Self {
+        if let Some(m) = &mut self.1 {
+            m.save();
+        }
+        self
+    }
+
+    /// Large files hashed whole by this hasher (not found in its memo).
+    pub fn hashed(&self) -> usize {
+        self.1.as_ref().map_or(0, ContentMemo::hashed)
+    }
+
     /// Adds a labelled string.
     pub fn text(&mut self, label: &str, value: &str) -> &mut Self {
         for s in [label, value] {
@@ -58,9 +80,9 @@ impl KeyHasher {
     }
 
     /// Adds the bytes of a file, or of every file under a folder (sorted by
-    /// name); of a file longer than [`WHOLE_FILE_BYTES`], its length,
-    /// modification time and samples of its bytes. A missing path hashes
-    /// as such (loading reports it).
+    /// name); of a file longer than [`WHOLE_FILE_BYTES`], its length and
+    /// the hash of all its bytes. A missing path hashes as such (loading
+    /// reports it).
     pub fn path(&mut self, p: &Path) -> Result<&mut Self, FsError> {
         let err = |e: std::io::Error| FsError {
             path: p.to_path_buf(),
@@ -87,15 +109,12 @@ impl KeyHasher {
     }
 
     /// A file's bytes when it is at most [`WHOLE_FILE_BYTES`] long; a
-    /// larger one's length, modification time (nanoseconds) and
-    /// [`SAMPLES`] blocks of [`SAMPLE_BYTES`] spread evenly over it, first
-    /// and last included (issue 43: the keys of a 10⁴-frame database read
-    /// 1.2 GB of sequences, twice, on every load). A file rewritten in
-    /// place changes its modification time, so it still changes the key;
-    /// what is not seen is a same-length edit between the samples that
-    /// also sets the modification time back.
+    /// larger one's length and the xxh3-64 hash of all its bytes, from the
+    /// database's memo when the file's path, length and times are the ones
+    /// remembered (issue 43: the 1.2 GB of sequences of a 10⁴-frame
+    /// database are read once, not on every load; a copy or a `touch`
+    /// costs one more reading of them, not a rebuild of every cache).
     fn file(&mut self, p: &Path) -> Result<(), FsError> {
-        use std::io::{Seek, SeekFrom};
         let err = |e: std::io::Error| FsError {
             path: p.to_path_buf(),
             source: e,
@@ -104,20 +123,11 @@ impl KeyHasher {
         let meta = f.metadata().map_err(err)?;
         let len = meta.len();
         if len > WHOLE_FILE_BYTES {
-            let mtime = meta
-                .modified()
-                .ok()
-                .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
-                .map_or(0, |d| d.as_nanos());
-            self.text("sampled file", &format!("{len} bytes, modified {mtime}"));
-            let mut buf = vec![0u8; SAMPLE_BYTES];
-            let last = len - SAMPLE_BYTES as u64;
-            for k in 0..SAMPLES {
-                f.seek(SeekFrom::Start(last * k / (SAMPLES - 1)))
-                    .map_err(err)?;
-                f.read_exact(&mut buf).map_err(err)?;
-                self.0.update(&buf);
-            }
+            let digest = match &mut self.1 {
+                Some(memo) => memo.hash(p, &mut f, &meta)?,
+                None => super::content::hash_all(p, &mut f)?,
+            };
+            self.text("hashed file", &format!("{len} bytes, xxh3 {digest:016x}"));
             self.0.update(&len.to_le_bytes());
             return Ok(());
         }
@@ -144,7 +154,7 @@ impl KeyHasher {
 /// The key of everything the database's frames depend on: topology,
 /// sequences (name, fps, file contents) and up axis.
 pub fn frames_key(dir: &Path, m: &Manifest) -> Result<KeyHasher, DbError> {
-    let mut h = KeyHasher::default();
+    let mut h = KeyHasher::for_db(dir);
     h.text("up", &m.up.to_ascii_lowercase());
     h.text("fps", &m.fps.to_string());
     h.path(&Manifest::resolve(dir, &m.topology))?;
@@ -154,6 +164,7 @@ pub fn frames_key(dir: &Path, m: &Manifest) -> Result<KeyHasher, DbError> {
         h.text("path", &s.path.to_string_lossy());
         h.path(&Manifest::resolve(dir, &s.path))?;
     }
+    h.save();
     Ok(h)
 }
 
@@ -515,16 +526,22 @@ mod tests {
         assert_eq!(k3, KeyHasher::default().path(dir.path()).unwrap().finish());
     }
 
-    /// Issue 43: a file over [`WHOLE_FILE_BYTES`] is keyed by length,
-    /// modification time and samples, not every byte; rewriting it, or
-    /// only touching it, still changes the key.
+    /// Issue 43: a file over [`WHOLE_FILE_BYTES`] is keyed by its length
+    /// and the hash of all its bytes: touching it or copying it keeps the
+    /// key; any changed byte changes it, also where the samples of the
+    /// previous keys did not look (between them, the time set back).
     #[test]
-    fn keys_of_a_long_file_follow_its_time_length_and_samples() {
+    fn keys_of_a_long_file_follow_its_bytes_not_its_times() {
         let dir = tempfile::tempdir().unwrap();
         let f = dir.path().join("seq.pc2");
         let bytes: Vec<u8> = (0..3 << 20).map(|k: u32| (k % 251) as u8).collect();
         std::fs::write(&f, &bytes).unwrap();
-        let key = || KeyHasher::default().path(&f).unwrap().finish();
+        let key = || {
+            let mut h = KeyHasher::for_db(dir.path());
+            h.path(&f).unwrap();
+            h.save();
+            h.finish()
+        };
         let set_time = |secs: u64| {
             let t = std::time::UNIX_EPOCH + std::time::Duration::from_secs(secs);
             std::fs::File::options()
@@ -537,25 +554,32 @@ mod tests {
         set_time(1_700_000_000);
         let k0 = key();
         assert_eq!(key(), k0, "the same file, the same key");
-        // Touched: the same bytes, another time.
+        assert_eq!(
+            KeyHasher::default().path(&f).unwrap().finish(),
+            k0,
+            "with or without the memo"
+        );
         set_time(1_700_000_001);
-        assert_ne!(key(), k0, "a touched file changes the key");
-        set_time(1_700_000_000);
-        assert_eq!(key(), k0);
-        // One byte of the first block changed, the time set back: the sample sees it.
+        assert_eq!(key(), k0, "a touched file keeps the key");
+        // A copy elsewhere (new times) has the same key.
+        let copy = tempfile::tempdir().unwrap();
+        let g = copy.path().join("seq.pc2");
+        std::fs::copy(&f, &g).unwrap();
+        assert_eq!(
+            KeyHasher::for_db(copy.path()).path(&g).unwrap().finish(),
+            k0
+        );
+        // One byte between the former samples changed, the time set back.
         let mut changed = bytes.clone();
-        changed[100] ^= 1;
+        changed[(3 << 20) / 2 + 100] ^= 1;
         std::fs::write(&f, &changed).unwrap();
         set_time(1_700_000_000);
-        assert_ne!(key(), k0, "an edit in a sampled block changes the key");
-        // Rewritten in place (the time moves on): the key changes.
+        assert_ne!(key(), k0, "an edit anywhere changes the key");
         std::fs::write(&f, &bytes).unwrap();
-        assert_ne!(key(), k0, "a rewritten file changes the key");
-        // One byte longer.
+        assert_eq!(key(), k0, "the same bytes again, the same key");
         let mut longer = bytes.clone();
         longer.push(0);
         std::fs::write(&f, &longer).unwrap();
-        set_time(1_700_000_000);
         assert_ne!(key(), k0, "a longer file changes the key");
     }
 }

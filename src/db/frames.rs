@@ -334,9 +334,10 @@ pub fn keys(
     h.text("frame cache", "metres, y up, f64");
     h.text("metres per unit", &metres_per_unit.to_bits().to_string());
     let fk = h.finish();
-    let mut p = KeyHasher::default();
+    let mut p = KeyHasher::for_db(dir);
     p.text("frames", &fk.to_string());
     add_rig(&mut p, dir, m)?;
+    p.save();
     p.text("skeleton", kind_name(kind));
     Ok((fk, p.finish()))
 }
