@@ -322,6 +322,11 @@ pub fn similarity_with(
     let key = similarity_key(dir, m, measure)?;
     let sopts = sparse_options(m);
     let skey = sparse_key(key, &sopts);
+    tracing::debug!(
+        "{}: cache keys: similarity ({}) {key:016x}, sparse {skey:016x}",
+        dir.display(),
+        measure.name()
+    );
     if method == Some(Method::Sparse) && measure != Measure::Shape {
         return Err(DbError::Manifest {
             path: dir.join(super::MANIFEST),
@@ -756,6 +761,7 @@ pub fn build_opened(
     let edits = m.graph.edits();
     let graph_key = graph_key(m, sim_key);
     let gpath = graph_path(dir, measure);
+    tracing::debug!("{}: cache key {graph_key:016x}", gpath.display());
     let cached: Option<SurfaceMotionGraph> = if opts.force {
         None
     } else {

@@ -339,7 +339,13 @@ pub fn keys(
     add_rig(&mut p, dir, m)?;
     p.save();
     p.text("skeleton", kind_name(kind));
-    Ok((fk, p.finish()))
+    let pk = p.finish();
+    tracing::debug!(
+        "{}: cache keys: frames {fk:016x}, poses ({}) {pk:016x}",
+        dir.display(),
+        kind_name(kind)
+    );
+    Ok((fk, pk))
 }
 
 /// How one database's frames are converted (file units and axes to metres,
