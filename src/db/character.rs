@@ -67,6 +67,9 @@ pub struct Character {
     rest_pose: Pose,
     /// The similarity matrix of the graph's measure.
     matrix: Similarity,
+    /// Each frame's dissimilarity to its natural successor (NaN for a
+    /// sequence's last frame): [`Character::dissimilarity`].
+    steps: Vec<f32>,
     /// The Surface Motion Graph.
     graph: SurfaceMotionGraph,
     /// Its frame-level adjacency.
@@ -126,6 +129,7 @@ impl Character {
         })?;
         let rest_pose = rig.joints.map(|j| conv(DVec3::from_array(j)));
         let adjacency = graph.adjacency();
+        let steps = successor_steps(&matrix, &graph);
         let bad = |msg: String| DbError::Manifest {
             path: dir.join(MANIFEST),
             msg: format!("[deform] {msg}"),
@@ -187,6 +191,7 @@ impl Character {
             poses,
             rest_pose,
             matrix,
+            steps,
             graph,
             adjacency,
             constraint_override,
@@ -265,6 +270,21 @@ impl Character {
         &self.matrix
     }
 
+    /// The dissimilarity of frames `a` and `b` ([`Similarity::get`]), a
+    /// frame and its natural successor's read once on loading (issue 43:
+    /// retrieval scales its edge costs by the median of these over every
+    /// frame, a pass that mapped all 0.5 GB of a 10⁴-frame database's
+    /// sparse similarity into the process; the same values).
+    pub fn dissimilarity(&self, a: u32, b: u32) -> f32 {
+        if b == a.wrapping_add(1)
+            && let Some(&v) = self.steps.get(a as usize)
+            && !v.is_nan()
+        {
+            return v;
+        }
+        self.matrix.get(a as usize, b as usize)
+    }
+
     /// The Surface Motion Graph.
     pub fn graph(&self) -> &SurfaceMotionGraph {
         &self.graph
@@ -340,4 +360,38 @@ impl Character {
         let (s, t) = self.graph.frame_of(id);
         (t + 1 < self.graph.sequences[s].len).then_some(id + 1)
     }
+}
+
+/// Rows of a mapped sparse similarity read between two releases of its
+/// pages by [`successor_steps`].
+const STEP_ROWS: usize = 512;
+
+/// Each frame's dissimilarity to the next frame of its sequence (NaN for
+/// a sequence's last frame), the pages of a mapped similarity released
+/// every [`STEP_ROWS`] rows so that the pass does not keep the whole file
+/// resident.
+fn successor_steps(matrix: &Similarity, graph: &SurfaceMotionGraph) -> Vec<f32> {
+    let mut steps = vec![f32::NAN; matrix.len()];
+    let sparse = match matrix {
+        Similarity::Sparse(s) => Some(s),
+        Similarity::Dense(_) => None,
+    };
+    let mut read = 0;
+    for q in &graph.sequences {
+        for a in q.start..(q.start + q.len).saturating_sub(1) {
+            if let Some(v) = steps.get_mut(a) {
+                *v = matrix.get(a, a + 1);
+            }
+            read += 1;
+            if read % STEP_ROWS == 0
+                && let Some(s) = sparse
+            {
+                s.release();
+            }
+        }
+    }
+    if let Some(s) = sparse {
+        s.release();
+    }
+    steps
 }

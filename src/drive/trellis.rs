@@ -126,7 +126,7 @@ impl<'a> DatabaseLinks<'a> {
         DatabaseLinks {
             ch,
             successor: Box::new(move |id| ch.successor(id)),
-            dissimilarity: Box::new(move |a, b| ch.matrix().get(a as usize, b as usize)),
+            dissimilarity: Box::new(move |a, b| ch.dissimilarity(a, b)),
         }
     }
 
