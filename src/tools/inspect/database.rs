@@ -11,6 +11,7 @@
 use super::error::InspectError;
 use crate::db::build::{
     default_measure, graph_key, graph_path, read_graph_cache, similarity_key, similarity_path,
+    sparse_key, sparse_options, sparse_path,
 };
 use crate::db::cache::cache_dir;
 use crate::db::{MANIFEST, Manifest};
@@ -305,6 +306,18 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
                 (e.up_to_date, e.state) =
                     (false, format!("damaged ({why}): `db build` rebuilds it"));
             }
+        } else if let Some(measure) = measures.into_iter().find(|&q| file == sparse_path(dir, q)) {
+            e.what = format!("sparse similarity ({})", measure.name());
+            let want = key_of(measure).map(|k| sparse_key(k, &sparse_options(m)));
+            judge(&mut e, header_key(&file, b"SMSPA001"), want.clone());
+            // Opened as `db build` opens it before reuse.
+            if e.up_to_date
+                && let Ok(k) = want
+                && let Err(why) = crate::db::cache::read_sparse(&file, k)
+            {
+                (e.up_to_date, e.state) =
+                    (false, format!("damaged ({why}): `db build` rebuilds it"));
+            }
         } else if let Some(measure) = measures.into_iter().find(|&q| file == graph_path(dir, q)) {
             e.what = format!("graph ({})", measure.name());
             let read = read_graph_cache(&file);
@@ -313,18 +326,13 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
                 e.edges = Some(g.edges.len());
                 e.frames = Some(g.sequences.iter().map(|s| s.len).sum());
             }
-            let graph = read.as_ref().ok().map(|(_, g)| g.clone());
-            judge(
-                &mut e,
-                read.map(|(k, _)| k),
-                key_of(measure).map(|k| graph_key(m, k)),
-            );
-            // Checked against its similarity matrix, as `db build` does.
+            let found = read.as_ref().map(|(k, _)| *k).map_err(Clone::clone);
+            let (want, sparse) = graph_want(m, found.as_ref().ok().copied(), key_of(measure));
+            judge(&mut e, found, want);
+            // Checked against its similarity, as `db build` does.
             if e.up_to_date
-                && let (Some(g), Ok(k)) = (graph, key_of(measure))
-                && let Ok(Some(mat)) =
-                    crate::db::cache::read_matrix(&similarity_path(dir, measure), k)
-                && let Err(why) = g.validate(&mat)
+                && let (Ok((_, g)), Ok(k)) = (&read, key_of(measure))
+                && let Err(why) = validate_graph(dir, m, measure, g, k, sparse)
             {
                 (e.up_to_date, e.state) =
                     (false, format!("damaged ({why}): `db build` rebuilds it"));
@@ -349,6 +357,55 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
         out.push(e);
     }
     Ok(out)
+}
+
+/// The key a graph cache must carry to be current, and whether that is the
+/// key of a graph built on the sparse similarity: `db build` keys a graph by
+/// the similarity it was built from — the dense matrix's key, or the sparse
+/// similarity's ([`sparse_key`]) for a database of
+/// [`crate::db::build::SPARSE_FRAMES`] frames or more (issue 43: judged
+/// with the dense key alone, every sparse database's graph read "stale").
+fn graph_want(
+    m: &Manifest,
+    found: Option<u64>,
+    dense: Result<u64, String>,
+) -> (Result<u64, String>, bool) {
+    match dense {
+        Err(why) => (Err(why), false),
+        Ok(k) => {
+            let sparse = graph_key(m, sparse_key(k, &sparse_options(m)));
+            if found == Some(sparse) {
+                (Ok(sparse), true)
+            } else {
+                (Ok(graph_key(m, k)), false)
+            }
+        }
+    }
+}
+
+/// A current graph checked against the similarity it was built from (the
+/// dense matrix or the sparse similarity of `dense_key`), as `db build`
+/// checks it before reuse; no similarity cache to check against: `Ok`.
+fn validate_graph(
+    dir: &Path,
+    m: &Manifest,
+    measure: Measure,
+    g: &crate::graph::SurfaceMotionGraph,
+    dense_key: u64,
+    sparse: bool,
+) -> Result<(), String> {
+    if sparse {
+        let skey = sparse_key(dense_key, &sparse_options(m));
+        match crate::db::cache::read_sparse(&sparse_path(dir, measure), skey) {
+            Ok(Some(s)) => g.validate(&s),
+            _ => Ok(()),
+        }
+    } else {
+        match crate::db::cache::read_matrix(&similarity_path(dir, measure), dense_key) {
+            Ok(Some(mat)) => g.validate(&mat),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// A similarity cache of key `key` read whole and checked as `db build`

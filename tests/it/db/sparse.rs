@@ -103,3 +103,66 @@ fn measure_the_sparse_graph_on_a_given_database() {
     let tmp = tempfile::tempdir().unwrap();
     println!("{}: {}", db.display(), compare(&db, tmp.path()));
 }
+
+/// Issue 43: `inspect` judges a sparse database's graph cache by the key
+/// `db build` gave it (the sparse similarity's), and its sparse similarity
+/// file as a cache file of its own; a dense database's as before. Before,
+/// a sparse database's current graph read "stale" and its sparse file "not
+/// a file db build writes".
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn inspect_judges_a_sparse_graph_by_its_own_key() {
+    use surfmotion::tools::inspect::{InspectOptions, Report, inspect};
+    let Some(d) = common::data_dir() else { return };
+    let db = common::synthetic_db(&d);
+    let tmp = tempfile::tempdir().unwrap();
+    let states = |dir: &Path| -> Vec<(String, bool, String)> {
+        let Report::Database(r) = inspect(dir, &InspectOptions::default()).unwrap() else {
+            panic!("not read as a database")
+        };
+        r.cache
+            .into_iter()
+            .map(|e| (e.what, e.up_to_date, e.state))
+            .collect()
+    };
+    let find = |v: &[(String, bool, String)], what: &str| {
+        v.iter()
+            .find(|e| e.0 == what)
+            .cloned()
+            .unwrap_or_else(|| panic!("no {what} in {v:?}"))
+    };
+    for method in [Method::Sparse, Method::Dense] {
+        let dir = manifest_copy(&db, &tmp.path().join(format!("{method:?}")));
+        let opts = BuildOptions {
+            method: Some(method),
+            ..Default::default()
+        };
+        build(&dir, &opts, &Quiet).unwrap();
+        let v = states(&dir);
+        let graph = find(&v, "graph (shape)");
+        assert!(graph.1, "{method:?}: {graph:?}");
+        let similarity = match method {
+            Method::Sparse => "sparse similarity (shape)",
+            Method::Dense => "similarity matrix (shape)",
+        };
+        assert!(find(&v, similarity).1, "{method:?}: {v:?}");
+        // Another key in the graph file: stale, whichever the method.
+        let gpath = surfmotion::db::build::graph_path(&dir, surfmotion::similarity::Measure::Shape);
+        let text = std::fs::read_to_string(&gpath).unwrap();
+        let (head, rest) = text.split_once(',').unwrap();
+        assert!(head.starts_with("{\"key\":"), "{head}");
+        std::fs::write(&gpath, format!("{{\"key\":1,{rest}")).unwrap();
+        let graph = find(&states(&dir), "graph (shape)");
+        assert!(
+            !graph.1 && graph.2.starts_with("stale"),
+            "{method:?}: {graph:?}"
+        );
+    }
+    // The sparse file cut: damaged, not up to date.
+    let dir = tmp.path().join("Sparse");
+    let spath = surfmotion::db::build::sparse_path(&dir, surfmotion::similarity::Measure::Shape);
+    let bytes = std::fs::read(&spath).unwrap();
+    std::fs::write(&spath, &bytes[..bytes.len() - 5]).unwrap();
+    let s = find(&states(&dir), "sparse similarity (shape)");
+    assert!(!s.1 && s.2.starts_with("damaged"), "{s:?}");
+}
