@@ -35,6 +35,11 @@ pub fn cache_dir(dir: &Path) -> PathBuf {
     dir.join("cache")
 }
 
+/// The content-hash memo of the database `dir` ([`ContentMemo`]).
+pub fn memo_path(dir: &Path) -> PathBuf {
+    cache_dir(dir).join(super::content::MEMO_FILE)
+}
+
 /// A hasher of cache inputs: with the memo of a database
 /// ([`KeyHasher::for_db`]), a large file's content hash is read from it
 /// when the file has not changed.
@@ -53,7 +58,7 @@ impl KeyHasher {
     /// hashes of its large files in its cache folder ([`KeyHasher::save`]).
     pub fn for_db(dir: &Path) -> Self {
         let mut k = KeyHasher::default();
-        k.1 = Some(ContentMemo::open(dir));
+        k.1 = Some(ContentMemo::open(dir, memo_path(dir)));
         k
     }
 

@@ -97,22 +97,18 @@ struct MemoFile {
 #[derive(Debug)]
 pub struct ContentMemo {
     dir: PathBuf,
+    path: PathBuf,
     known: BTreeMap<String, (Stamp, u64)>,
     dirty: bool,
     /// Files hashed (not found in the memo) since it was opened.
     hashed: usize,
 }
 
-/// The memo file of the database `dir`.
-pub fn memo_path(dir: &Path) -> PathBuf {
-    super::cache::cache_dir(dir).join(MEMO_FILE)
-}
-
 impl ContentMemo {
-    /// The memo of the database `dir`: empty when there is none; when it
-    /// cannot be read, a warning naming it and empty (never trusted).
-    pub fn open(dir: &Path) -> ContentMemo {
-        let path = memo_path(dir);
+    /// The memo of the database `dir`, kept in the file `path`
+    /// (`cache::memo_path`): empty when there is none; when it cannot be
+    /// read, a warning naming it and empty (never trusted).
+    pub fn open(dir: &Path, path: PathBuf) -> ContentMemo {
         let known = match read_memo(&path) {
             Ok(k) => k,
             Err(why) => {
@@ -125,6 +121,7 @@ impl ContentMemo {
         };
         ContentMemo {
             dir: dir.to_path_buf(),
+            path,
             known,
             dirty: false,
             hashed: 0,
@@ -176,7 +173,7 @@ impl ContentMemo {
         if !self.dirty {
             return;
         }
-        let path = memo_path(&self.dir);
+        let path = self.path.clone();
         let file = MemoFile {
             version: MEMO_VERSION,
             files: self
@@ -267,6 +264,10 @@ pub fn hash_all(p: &Path, f: &mut std::fs::File) -> Result<u64, FsError> {
 mod tests {
     use super::*;
 
+    fn memo_path(dir: &Path) -> PathBuf {
+        dir.join(MEMO_FILE)
+    }
+
     fn stamp_back(f: &Path, secs: u64) {
         let t = std::time::UNIX_EPOCH + std::time::Duration::from_secs(secs);
         std::fs::File::options()
@@ -292,16 +293,16 @@ mod tests {
         let f = dir.path().join("seq.pc2");
         std::fs::write(&f, vec![7u8; 4096]).unwrap();
         // Fresh: its ctime is now, so it is hashed but not remembered.
-        let mut m = ContentMemo::open(dir.path());
+        let mut m = ContentMemo::open(dir.path(), memo_path(dir.path()));
         let h = hash_of(&mut m, &f);
         m.save();
         assert!(!memo_path(dir.path()).exists(), "a racy entry is not saved");
         std::thread::sleep(std::time::Duration::from_secs(SETTLE_SECONDS + 1));
-        let mut m = ContentMemo::open(dir.path());
+        let mut m = ContentMemo::open(dir.path(), memo_path(dir.path()));
         assert_eq!(hash_of(&mut m, &f), h);
         assert_eq!(m.hashed(), 1);
         m.save();
-        let mut m = ContentMemo::open(dir.path());
+        let mut m = ContentMemo::open(dir.path(), memo_path(dir.path()));
         assert_eq!(hash_of(&mut m, &f), h);
         assert_eq!(m.hashed(), 0, "remembered");
         // The memo claims another hash for the same stamp: corrupt memo
@@ -309,18 +310,18 @@ mod tests {
         let p = memo_path(dir.path());
         let text = std::fs::read_to_string(&p).unwrap();
         std::fs::write(&p, &text[..text.len() / 2]).unwrap();
-        let mut m = ContentMemo::open(dir.path());
+        let mut m = ContentMemo::open(dir.path(), memo_path(dir.path()));
         assert_eq!(hash_of(&mut m, &f), h);
         assert_eq!(m.hashed(), 1, "a cut memo is not trusted");
         // Same length, the modification time set back: the ctime moved.
         stamp_back(&f, 1_700_000_000);
         std::thread::sleep(std::time::Duration::from_secs(SETTLE_SECONDS + 1));
-        let mut m = ContentMemo::open(dir.path());
+        let mut m = ContentMemo::open(dir.path(), memo_path(dir.path()));
         hash_of(&mut m, &f);
         m.save();
         std::fs::write(&f, vec![8u8; 4096]).unwrap();
         stamp_back(&f, 1_700_000_000);
-        let mut m = ContentMemo::open(dir.path());
+        let mut m = ContentMemo::open(dir.path(), memo_path(dir.path()));
         let h2 = hash_of(&mut m, &f);
         assert_ne!(h2, h, "an edit with the length and time put back is seen");
         assert_eq!(m.hashed(), 1);

@@ -12,8 +12,8 @@ use crate::common;
 
 use glam::DVec3;
 use std::path::{Path, PathBuf};
-use surfmotion::db::cache::cache_dir;
-use surfmotion::db::content::{SETTLE_SECONDS, memo_path};
+use surfmotion::db::cache::{cache_dir, memo_path};
+use surfmotion::db::content::SETTLE_SECONDS;
 use surfmotion::db::frames::frames_path;
 use surfmotion::db::{Character, Quiet};
 use surfmotion::pose::retarget::character_neutral;
