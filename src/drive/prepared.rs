@@ -27,8 +27,8 @@ use crate::mesh::Mesh;
 use crate::mesh::blend::Blender;
 use crate::pose::Pose;
 use crate::pose::retarget::{
-    CharacterNeutral, OnCharacter, Reference, character_neutral, on_character_with_grounds,
-    stance_offsets,
+    CharacterNeutral, OnCharacter, Reference, character_neutral, on_character_on_floor,
+    stance_offsets_on_floor,
 };
 use glam::DVec3;
 use serde::Serialize;
@@ -103,15 +103,29 @@ impl Analysed {
         reference: &Reference,
         mocap: &[Pose],
     ) -> Analysed {
+        Analysed::on_given_floor(ch, neutral, floor_lift, reference, mocap, None)
+    }
+
+    /// [`Analysed::new`] on the clip's floor `floor` when given (the
+    /// levelled clip's height, metres: a live session's running estimate)
+    /// instead of the one the pose kernel finds over `mocap`.
+    pub fn on_given_floor(
+        ch: &Character,
+        neutral: &Pose,
+        floor_lift: f64,
+        reference: &Reference,
+        mocap: &[Pose],
+        floor: Option<f64>,
+    ) -> Analysed {
         let t = Instant::now();
-        let on_character = on_character_with_grounds(ch.rest_pose(), neutral, reference, mocap);
+        let on_character = on_character_on_floor(ch.rest_pose(), neutral, reference, mocap, floor);
         let lift = DVec3::new(0.0, floor_lift, 0.0);
         let query: Vec<Pose> = on_character
             .frames
             .iter()
             .map(|(p, _)| p.map(|q| q + lift))
             .collect();
-        let raised = stance_offsets(ch.rest_pose(), reference, mocap);
+        let raised = stance_offsets_on_floor(ch.rest_pose(), reference, mocap, floor);
         let on_floor = query
             .iter()
             .zip(raised.iter().chain(std::iter::repeat(&0.0)))
@@ -213,5 +227,24 @@ impl Prepared {
     /// (the pose kernel runs once here).
     pub fn analyse(&self, ch: &Character, reference: &Reference, mocap: &[Pose]) -> Analysed {
         Analysed::new(ch, &self.neutral.pose, self.floor_lift, reference, mocap)
+    }
+
+    /// [`Prepared::analyse`] on the clip's floor `floor` when given
+    /// ([`Analysed::on_given_floor`]).
+    pub fn analyse_on_floor(
+        &self,
+        ch: &Character,
+        reference: &Reference,
+        mocap: &[Pose],
+        floor: Option<f64>,
+    ) -> Analysed {
+        Analysed::on_given_floor(
+            ch,
+            &self.neutral.pose,
+            self.floor_lift,
+            reference,
+            mocap,
+            floor,
+        )
     }
 }

@@ -41,6 +41,10 @@ pub struct LiveOptions {
     /// Frames of context the pose kernel analyses each frame with,
     /// besides the undecided ones (up to `lag`). Default: 128.
     pub analysis_window: usize,
+    /// The most the running floor given to the pose kernel moves per frame
+    /// (metres; `live::floor`); `None` (the default): the kernel finds its
+    /// floor over each window.
+    pub floor_step: Option<f64>,
     /// A replay's speed (1: the clip's real rate; 0: as fast as frames are
     /// made). Default: 1.
     pub speed: f64,
@@ -76,6 +80,7 @@ impl Default for LiveOptions {
             hysteresis: 1.0,
             history: 64,
             analysis_window: 128,
+            floor_step: None,
             speed: 1.0,
             load: LoadOptions::default(),
             seconds: None,
@@ -471,6 +476,7 @@ fn session_options(opts: &LiveOptions) -> SessionOptions {
         },
         history: opts.history,
         analysis_window: opts.analysis_window,
+        floor_step: opts.floor_step,
         ..SessionOptions::default()
     }
 }

@@ -20,6 +20,7 @@ use super::frames::RestFrames;
 use super::poisson::{Poisson, PoissonWorkspace, centroid};
 use super::solver::SolveError;
 use glam::{DMat3, DQuat, DVec3};
+use rayon::prelude::*;
 
 /// A symmetric 3×3 matrix `[xx, yy, zz, xy, xz, yz]`.
 pub type Sym3 = [f64; 6];
@@ -119,16 +120,19 @@ impl Blender {
         out.rotation.resize(self.triangles.len(), DQuat::IDENTITY);
         out.stretch
             .resize(self.triangles.len(), [1.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
-        for ((g, r), s) in ws
-            .gradients
-            .iter()
-            .zip(&mut out.rotation)
-            .zip(&mut out.stretch)
-        {
-            let (q, st) = super::frames::polar(*g);
-            *r = q;
-            *s = sym3(st);
-        }
+        // One polar decomposition per triangle, each on its own: split
+        // over the threads (the same bits as in order; a live frame
+        // blended from two database frames spent 10.7 ms here on one).
+        ws.gradients
+            .par_iter()
+            .zip(out.rotation.par_iter_mut())
+            .zip(out.stretch.par_iter_mut())
+            .with_min_len(1024)
+            .for_each(|((g, r), s)| {
+                let (q, st) = super::frames::polar(*g);
+                *r = q;
+                *s = sym3(st);
+            });
         let s: DVec3 = positions.iter().map(|p| super::frames::dvec(*p)).sum();
         out.centroid = s / positions.len().max(1) as f64;
     }

@@ -8,7 +8,7 @@ use glam::{DQuat, DVec3};
 use Canonical as C;
 
 /// Lowest ankle or toe joint height of a pose.
-pub(super) fn foot_height(p: &Pose) -> f64 {
+pub fn foot_height(p: &Pose) -> f64 {
     [C::LAnkle, C::LToe, C::RAnkle, C::RToe]
         .iter()
         .map(|c| p[c.index()].y)
@@ -142,16 +142,35 @@ pub(super) fn held_height(h: &[f64]) -> f64 {
 /// as a step it raised samba's penetration maximum 0.50 → 1.18 cm),
 /// which the foot on it does not touch; [`Support::held`] has it.
 pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
+    clip_support_on(mocap, leg, None)
+}
+
+/// The floor [`clip_support`] finds for `mocap` (levelled, metres): the
+/// 5th percentile of its frames' lowest ankle or toe joint (the first
+/// frame's pelvis height when no foot joint is finite).
+pub fn clip_floor(mocap: &[Pose]) -> f64 {
     let mut lows: Vec<f64> = mocap
         .iter()
         .map(foot_height)
         .filter(|h| h.is_finite())
         .collect();
     lows.sort_by(f64::total_cmp);
-    let floor = lows
-        .get(lows.len() / 20)
+    lows.get(lows.len() / 20)
         .copied()
-        .unwrap_or_else(|| mocap.first().map_or(0.0, |p| p[C::Pelvis.index()].y));
+        .unwrap_or_else(|| mocap.first().map_or(0.0, |p| p[C::Pelvis.index()].y))
+}
+
+/// [`clip_support`] on the floor `floor` when the caller gives one (the
+/// levelled clip's height, metres), else on [`clip_floor`]'s: a live
+/// session's window is a few seconds of the stream, and its own 5th
+/// percentile moved by millimetres from one window to the next, which
+/// changed the frames a foot touches within the 3 cm band and the body's
+/// lift with them (see `live::floor`).
+pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support {
+    let floor = match floor {
+        Some(f) if f.is_finite() => f,
+        _ => clip_floor(mocap),
+    };
     let mut touch: [Vec<Option<f64>>; 2] = [vec![None; mocap.len()], vec![None; mocap.len()]];
     let mut held: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];
     let mut rests: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];

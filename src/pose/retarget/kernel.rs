@@ -3,7 +3,7 @@
 //! on their grounds. See the [module docs](super) for what is matched.
 
 use super::feet::{Toes, flat_feet, place_feet};
-use super::ground::{clip_support, foot_height, ground_tilt};
+use super::ground::{clip_support_on, foot_height, ground_tilt};
 use super::reference::{Reference, ReferenceSource, leg_length};
 use super::root::root_from_legs;
 use super::torso::{clip_rotations, neck_carriage, upright};
@@ -106,18 +106,23 @@ pub fn retarget_toes(
     mocap: &[Pose],
     toes: Toes,
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
-    retarget_on_grounds(character, neutral, reference, mocap, toes).0
+    retarget_on_grounds(character, neutral, reference, mocap, toes, None).0
 }
 
 /// [`retarget_toes`] and the ground each foot of the result stands on or
 /// above per frame, raised above the character's floor (character's
 /// metres; `None` for a foot that never touches): see [`place_feet`].
+/// `floor`, when the caller gives it, is the clip's floor (the levelled
+/// clip's height, metres) instead of the one found over `mocap`
+/// ([`clip_support_on`]): a live session's running estimate over the
+/// stream, where `mocap` is only its recent window.
 pub(super) fn retarget_on_grounds(
     character: &Pose,
     neutral: &Pose,
     reference: &Reference,
     mocap: &[Pose],
     toes: Toes,
+    floor: Option<f64>,
 ) -> RetargetedOnGrounds {
     // Counted by the tests of issue 40's "analysed once per clip".
     let _run = tracing::debug_span!("pose_kernel", frames = mocap.len()).entered();
@@ -144,7 +149,7 @@ pub(super) fn retarget_on_grounds(
     };
     // The clip's floor and the support under each of its footfalls (the
     // leg's length does not depend on the feet).
-    let support = clip_support(mocap, leg_length(r));
+    let support = clip_support_on(mocap, leg_length(r), floor);
     // The feet measured from how the clip holds them flat on its ground.
     let stance_ref = flat_feet(r, mocap, &support);
     let r = &stance_ref;

@@ -5,7 +5,7 @@
 
 use super::feet::Toes;
 use super::feet::{foot_soles, sole_height};
-use super::ground::{Support, clip_support, ground_tilt, interpolate_gaps};
+use super::ground::{Support, clip_support_on, ground_tilt, interpolate_gaps};
 use super::kernel::{retarget, retarget_on_grounds};
 use super::reference::{Reference, angle, leg_length};
 use super::torso::{clip_rotations, neck_carriage, upright};
@@ -42,7 +42,20 @@ pub fn on_character_with_grounds(
     reference: &Reference,
     mocap: &[Pose],
 ) -> OnCharacter {
-    let (frames, grounds) = retarget_on_grounds(character, neutral, reference, mocap, Toes::Rigid);
+    on_character_on_floor(character, neutral, reference, mocap, None)
+}
+
+/// [`on_character_with_grounds`] on the clip's floor `floor` when given
+/// (the levelled clip's height, metres; the kernel's optional input).
+pub fn on_character_on_floor(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    floor: Option<f64>,
+) -> OnCharacter {
+    let (frames, grounds) =
+        retarget_on_grounds(character, neutral, reference, mocap, Toes::Rigid, floor);
     OnCharacter {
         frames,
         foot_grounds: grounds.map(|g| interpolate_gaps(&g)),
@@ -190,7 +203,18 @@ pub fn foot_ground_offsets(
 /// air. Retrieval takes it off the query, comparing poses as they stand
 /// on the database's floor.
 pub fn stance_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
-    offsets(character, reference, mocap, |s| s.ground.clone())
+    stance_offsets_on_floor(character, reference, mocap, None)
+}
+
+/// [`stance_offsets`] on the clip's floor `floor` when given (as
+/// [`on_character_on_floor`]).
+pub fn stance_offsets_on_floor(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    floor: Option<f64>,
+) -> Vec<f64> {
+    offsets_on(character, reference, mocap, floor, |s| s.ground.clone())
 }
 
 /// One per-frame height of the clip's [`Support`] (chosen by `pick`)
@@ -201,6 +225,17 @@ pub(super) fn offsets(
     mocap: &[Pose],
     pick: impl Fn(&Support) -> Vec<Option<f64>>,
 ) -> Vec<f64> {
+    offsets_on(character, reference, mocap, None, pick)
+}
+
+/// [`offsets`] on the clip's floor `floor` when given.
+fn offsets_on(
+    character: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    floor: Option<f64>,
+    pick: impl Fn(&Support) -> Vec<Option<f64>>,
+) -> Vec<f64> {
     if mocap.is_empty() {
         return Vec::new();
     }
@@ -208,7 +243,7 @@ pub(super) fn offsets(
     let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
     let r = leg_length(&reference.pose).max(1e-12);
     let s = leg_length(character) / r;
-    let support = clip_support(&levelled, r);
+    let support = clip_support_on(&levelled, r, floor);
     let raised: Vec<Option<f64>> = pick(&support)
         .iter()
         .map(|g| g.map(|y| (y - support.floor) * s))

@@ -6,21 +6,17 @@
 //! (a 32-frame window re-deciding the frames already output, settled by
 //! 20 % a frame) did not meet.
 
+use super::offline::{character, offline, worst_difference};
 use crate::common;
 
-use std::path::Path;
 use surfmotion::db::Character;
 use surfmotion::deform::DeformMode;
 use surfmotion::drive::query::load_mocap;
 use surfmotion::drive::trellis::DatabaseLinks;
-use surfmotion::drive::{Prepared, RetargetError, RetargetOptions};
-use surfmotion::live::{LiveFrame, OnlineOptions, Session, SessionOptions};
+use surfmotion::drive::{Prepared, RetargetOptions};
+use surfmotion::live::{LiveFrame, Session, SessionOptions};
 use surfmotion::pose::Pose;
 use surfmotion::tools::eval::velocity::velocity_error;
-
-fn character(d: &Path) -> Character {
-    Character::load(&common::synthetic_db(d), &surfmotion::db::Quiet).unwrap()
-}
 
 /// Every output frame of a session pushed `poses` raw (with their file
 /// rotations when `rotations`), in order: (index, query, positions).
@@ -59,38 +55,23 @@ fn run_raw(
 fn a_lag_covering_the_clip_pushed_raw_gives_the_offline_meshes_exactly() {
     let Some(d) = common::data_dir() else { return };
     let ch = character(&d);
-    let fps = ch.manifest().fps;
     let opts = RetargetOptions::default();
     let prepared = Prepared::new(&ch, &opts).unwrap();
     for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
-        let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), fps).unwrap();
-        // A third of the clip keeps the test quick.
-        let poses = &m.poses[..m.poses.len().min(150)];
-        let n = poses.len();
         // Offline on the same frames, without file rotations (the stream
         // is pushed without them).
-        let a = prepared.analyse(&ch, &m.reference.without_rotations(), poses);
-        let mut held = Vec::new();
-        prepared
-            .synthesise::<_, RetargetError>(&ch, &a, m.reference.source, fps, &opts, &mut held)
-            .unwrap();
-        let sopts = SessionOptions {
-            online: OnlineOptions {
-                lag: n,
-                ..OnlineOptions::default()
-            },
-            history: n,
-            ..SessionOptions::default()
-        };
-        let (order, queries, live) = run_raw(&ch, &prepared, &m, poses, false, sopts);
+        let o = offline(&d, &ch, &prepared, &opts, clip, |m| {
+            m.reference.without_rotations()
+        });
+        let n = o.poses.len();
+        let (order, queries, live) = run_raw(&ch, &prepared, &o.m, &o.poses, false, o.covering);
         assert_eq!(order, (0..n).collect::<Vec<_>>(), "{clip}");
-        assert_eq!(queries, a.query, "{clip}: the queries differ from offline");
-        assert_eq!(live.len(), held.len(), "{clip}");
-        let worst = live
-            .iter()
-            .zip(&held)
-            .map(|(a, b)| (0..3).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max))
-            .fold(0.0, f64::max);
+        assert_eq!(
+            queries, o.analysed.query,
+            "{clip}: the queries differ from offline"
+        );
+        assert_eq!(live.len(), o.meshes.len(), "{clip}");
+        let worst = worst_difference(&live, &o.meshes);
         assert_eq!(worst, 0.0, "{clip}: raw-pushed meshes differ by {worst} m");
         eprintln!("{clip}: {n} frames pushed raw at lag {n}: queries and meshes = offline");
     }

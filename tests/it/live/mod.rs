@@ -4,6 +4,7 @@
 mod actors;
 mod carried;
 mod long;
+mod offline;
 mod online;
 mod page;
 mod protocols;

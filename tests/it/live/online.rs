@@ -3,19 +3,14 @@
 //! the offline path and meshes exactly; at lag 3 and 0 every step is one the
 //! offline path could take.
 
+use super::offline::{character, offline, worst_difference};
 use crate::common;
 
-use std::path::Path;
-use surfmotion::db::Character;
 use surfmotion::drive::query::load_mocap;
 use surfmotion::drive::timeline::plays_on;
 use surfmotion::drive::trellis::{DatabaseLinks, TrellisInput, retrieve};
 use surfmotion::drive::{Prepared, RetargetOptions};
-use surfmotion::live::{OnlineOptions, OnlineTrellis, Session, SessionOptions};
-
-fn character(d: &Path) -> Character {
-    Character::load(&common::synthetic_db(d), &surfmotion::db::Quiet).unwrap()
-}
+use surfmotion::live::{OnlineOptions, OnlineTrellis, Session};
 
 /// The database frame path the online decoder commits for `on_floor`.
 fn online_path(input: &TrellisInput, on_floor: &[surfmotion::pose::Pose], lag: usize) -> Vec<u32> {
@@ -55,46 +50,24 @@ fn decided(
 fn a_lag_covering_the_clip_gives_the_offline_path_and_meshes_exactly() {
     let Some(d) = common::data_dir() else { return };
     let ch = character(&d);
-    let fps = ch.manifest().fps;
     let opts = RetargetOptions::default();
     let prepared = Prepared::new(&ch, &opts).unwrap();
     let links = DatabaseLinks::of(&ch);
     let input = links.input();
     for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
-        let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), fps).unwrap();
-        // A third of the clip keeps the test quick; still several jumps.
-        let poses = &m.poses[..m.poses.len().min(150)];
-        let a = prepared.analyse(&ch, &m.reference, poses);
-        let offline = retrieve(&a.on_floor, &input, &opts.trellis);
+        let o = offline(&d, &ch, &prepared, &opts, clip, |m| m.reference.clone());
+        let (m, poses, a) = (&o.m, &o.poses, &o.analysed);
+        let retrieved = retrieve(&a.on_floor, &input, &opts.trellis);
         let online = online_path(&input, &a.on_floor, poses.len());
-        assert_eq!(online, offline.path, "{clip}: lag = length");
+        assert_eq!(online, retrieved.path, "{clip}: lag = length");
         // A lag longer than the clip, too.
         assert_eq!(
             online_path(&input, &a.on_floor, 10 * poses.len()),
-            offline.path
+            retrieved.path
         );
         // The meshes: the session fed the analysed clip equals the offline
         // synthesis bit for bit.
-        let mut held = Vec::new();
-        prepared
-            .synthesise::<_, surfmotion::drive::RetargetError>(
-                &ch,
-                &a,
-                m.reference.source,
-                fps,
-                &opts,
-                &mut held,
-            )
-            .unwrap();
-        let sopts = SessionOptions {
-            online: OnlineOptions {
-                lag: poses.len(),
-                ..OnlineOptions::default()
-            },
-            history: poses.len(),
-            ..SessionOptions::default()
-        };
-        let mut s = Session::new(&ch, &prepared, &input, m.reference.clone(), sopts);
+        let mut s = Session::new(&ch, &prepared, &input, m.reference.clone(), o.covering);
         let mut live = Vec::new();
         let mut order = Vec::new();
         let mut keep = |f: surfmotion::live::LiveFrame<'_>| {
@@ -106,12 +79,8 @@ fn a_lag_covering_the_clip_gives_the_offline_path_and_meshes_exactly() {
         }
         s.finish(&mut keep);
         assert_eq!(order, (0..poses.len()).collect::<Vec<_>>(), "{clip}");
-        assert_eq!(live.len(), held.len(), "{clip}");
-        let worst = live
-            .iter()
-            .zip(&held)
-            .map(|(a, b)| (0..3).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max))
-            .fold(0.0, f64::max);
+        assert_eq!(live.len(), o.meshes.len(), "{clip}");
+        let worst = worst_difference(&live, &o.meshes);
         assert_eq!(
             worst, 0.0,
             "{clip}: online meshes differ from offline by {worst} m"

@@ -1,0 +1,80 @@
+//! The offline-vs-online comparison set-up shared by `live::online` and
+//! `live::carried`: a clip's first frames analysed and synthesised
+//! offline, the session options whose lag and history cover them, and the
+//! largest coordinate difference between two mesh sequences.
+
+use crate::common;
+
+use std::path::Path;
+use surfmotion::db::Character;
+use surfmotion::drive::query::{MocapPoses, load_mocap};
+use surfmotion::drive::{Analysed, Prepared, RetargetError, RetargetOptions};
+use surfmotion::live::{OnlineOptions, SessionOptions};
+use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::Reference;
+
+/// The synthetic samba database's character (`common::synthetic_db`).
+pub(super) fn character(d: &Path) -> Character {
+    Character::load(&common::synthetic_db(d), &surfmotion::db::Quiet).unwrap()
+}
+
+/// A clip's first frames (at most 150: a third of a CMU walk keeps the
+/// tests quick, still several jumps) and their offline result.
+pub(super) struct Offline {
+    /// The clip as loaded (all its frames).
+    pub m: MocapPoses,
+    /// Its first frames.
+    pub poses: Vec<Pose>,
+    /// Those frames analysed on the character with the given reference.
+    pub analysed: Analysed,
+    /// The offline synthesis of `analysed` (every frame's vertices).
+    pub meshes: Vec<[f64; 3]>,
+    /// Session options whose lag and history cover the frames.
+    pub covering: SessionOptions,
+}
+
+/// [`Offline`] for `clip` (under `../shared/data/mocap`) on `ch`, analysed
+/// with `reference(&m)` (the clip's reference, with or without its file
+/// rotations).
+pub(super) fn offline(
+    d: &Path,
+    ch: &Character,
+    prepared: &Prepared,
+    opts: &RetargetOptions,
+    clip: &str,
+    reference: impl Fn(&MocapPoses) -> Reference,
+) -> Offline {
+    let fps = ch.manifest().fps;
+    let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), fps).unwrap();
+    let poses = m.poses[..m.poses.len().min(150)].to_vec();
+    let n = poses.len();
+    let analysed = prepared.analyse(ch, &reference(&m), &poses);
+    let mut meshes = Vec::new();
+    prepared
+        .synthesise::<_, RetargetError>(ch, &analysed, m.reference.source, fps, opts, &mut meshes)
+        .unwrap();
+    let covering = SessionOptions {
+        retarget: *opts,
+        online: OnlineOptions {
+            lag: n,
+            ..OnlineOptions::default()
+        },
+        history: n,
+        ..SessionOptions::default()
+    };
+    Offline {
+        m,
+        poses,
+        analysed,
+        meshes,
+        covering,
+    }
+}
+
+/// The largest coordinate difference between two mesh sequences (metres).
+pub(super) fn worst_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| (0..3).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max)
+}
