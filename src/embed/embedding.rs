@@ -261,6 +261,21 @@ impl Embedding {
         lm: &Landmarks,
         parts: Option<Vec<u8>>,
     ) -> Result<Embedding, EmbedError> {
+        Embedding::new_moving(mesh, lm, parts, &[])
+    }
+
+    /// [`Embedding::new`] with the skin weights fitted to the motion of
+    /// `frames` (each one position per vertex of `mesh`: the character's
+    /// sequences), [`super::motion_weights::refine`]: a vertex that
+    /// touched a bone in the rest frame but does not follow it over the
+    /// frames loses its weight on it, so labels, regions and skin follow
+    /// the motion. With no frames, bone heat alone, as [`Embedding::new`].
+    pub fn new_moving(
+        mesh: &Mesh,
+        lm: &Landmarks,
+        parts: Option<Vec<u8>>,
+        frames: &[&[[f64; 3]]],
+    ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
         check_body(mesh)?;
         // A headless body's chin: the top of its neck.
@@ -288,8 +303,16 @@ impl Embedding {
             Vec::new()
         };
         let bs = bones(&est);
-        let w = bone_heat(mesh, &bs)?;
+        let mut w = bone_heat(mesh, &bs)?;
+        let moved = (!frames.is_empty()).then(|| {
+            let labels = contiguous_labels(&part_weights(&w), &neighbours(p.len(), t));
+            let o = super::motion_weights::MotionWeightOptions::default();
+            super::motion_weights::refine(p, &mut w, &labels, frames, est.height, &o)
+        });
         let mut e = Embedding::assemble(mesh, est, &w, parts)?;
+        if let Some(r) = moved.filter(|r| r.frames > 0) {
+            e.notes.push(r.note());
+        }
         if headless {
             e.notes
                 .push("no head: the chin placed at the top of the neck".into());
@@ -314,11 +337,24 @@ impl Embedding {
         lm: &Landmarks,
         parts: Option<Vec<u8>>,
     ) -> Result<Embedding, EmbedError> {
+        Embedding::new_on_frame_moving(mesh, rest, lm, parts, &[])
+    }
+
+    /// [`Embedding::new_on_frame`] with the skin weights fitted to the
+    /// motion of `frames` ([`Embedding::new_moving`]).
+    pub fn new_on_frame_moving(
+        mesh: &Mesh,
+        rest: &[[f64; 3]],
+        lm: &Landmarks,
+        parts: Option<Vec<u8>>,
+        frames: &[&[[f64; 3]]],
+    ) -> Result<Embedding, EmbedError> {
         let frame = mesh
             .with_positions(rest)
             .map_err(|e| EmbedError::Mesh(format!("the rest frame: {e}")))?;
         let moved = lm.moved(mesh.positions(), rest, mesh.triangles());
-        let mut e = Embedding::new(&frame, &moved, parts)?.carried(rest, mesh.positions());
+        let mut e =
+            Embedding::new_moving(&frame, &moved, parts, frames)?.carried(rest, mesh.positions());
         e.notes.push(
             "embedded on the rest frame chosen clear of contact; the joints read off the topology's own positions by the regressors".into(),
         );

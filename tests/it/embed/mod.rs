@@ -7,6 +7,7 @@ mod bodies;
 mod captures;
 mod contact;
 mod contradict;
+mod motion_skin;
 mod partial;
 mod placement;
 mod scan_auto;
