@@ -268,8 +268,10 @@ impl Embedding {
     /// `frames` (each one position per vertex of `mesh`: the character's
     /// sequences), [`super::motion_weights::refine`]: a vertex that
     /// touched a bone in the rest frame but does not follow it over the
-    /// frames loses its weight on it, so labels, regions and skin follow
-    /// the motion. With no frames, bone heat alone, as [`Embedding::new`].
+    /// frames loses its weight on it: the skin and regions follow the
+    /// motion, and the part labels where the fit takes a vertex off its
+    /// part ([`super::motion_weights::motion_labels`]; explicit `parts`
+    /// stay). With no frames, bone heat alone, as [`Embedding::new`].
     pub fn new_moving(
         mesh: &Mesh,
         lm: &Landmarks,
@@ -304,12 +306,22 @@ impl Embedding {
         };
         let bs = bones(&est);
         let mut w = bone_heat(mesh, &bs)?;
-        let moved = (!frames.is_empty()).then(|| {
-            let labels = contiguous_labels(&part_weights(&w), &neighbours(p.len(), t));
+        let mut moved = None;
+        let mut parts = parts;
+        if !frames.is_empty() {
+            let nb = neighbours(p.len(), t);
+            let labels = contiguous_labels(&part_weights(&w), &nb);
             let o = super::motion_weights::MotionWeightOptions::default();
-            super::motion_weights::refine(p, &mut w, &labels, frames, est.height, &o)
-        });
-        let mut e = Embedding::assemble(mesh, est, &w, parts)?;
+            let r = super::motion_weights::refine(p, &mut w, &labels, frames, est.height, &o);
+            if parts.is_none() && r.frames > 0 {
+                let mut l = super::motion_weights::motion_labels(&labels, &w, o.keep_label);
+                make_contiguous(&mut l, &nb);
+                parts = Some(l);
+            }
+            moved = Some(r);
+        }
+        let explicit = parts.is_some() && moved.as_ref().is_none_or(|r| r.frames == 0);
+        let mut e = Embedding::assemble_labelled(mesh, est, &w, parts, explicit)?;
         if let Some(r) = moved.filter(|r| r.frames > 0) {
             e.notes.push(r.note());
         }
@@ -407,6 +419,20 @@ impl Embedding {
         w: &super::heat::Weights,
         parts: Option<Vec<u8>>,
     ) -> Result<Embedding, EmbedError> {
+        let explicit = parts.is_some();
+        Embedding::assemble_labelled(mesh, est, w, parts, explicit)
+    }
+
+    /// [`Embedding::assemble`]; `explicit` says whether `parts` were given
+    /// by the user (noted) or made by the motion fit
+    /// ([`super::motion_weights::motion_labels`]).
+    fn assemble_labelled(
+        mesh: &Mesh,
+        est: JointEstimate,
+        w: &super::heat::Weights,
+        parts: Option<Vec<u8>>,
+        explicit: bool,
+    ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
         let pw = part_weights(w);
         let nb = neighbours(p.len(), t);
@@ -414,7 +440,9 @@ impl Embedding {
         let labels = match parts {
             Some(mut l) => {
                 make_contiguous(&mut l, &nb);
-                notes.push("part labels: given explicitly".into());
+                if explicit {
+                    notes.push("part labels: given explicitly".into());
+                }
                 l
             }
             None => contiguous_labels(&pw, &nb),
