@@ -7,6 +7,7 @@ mod bodies;
 mod captures;
 mod contact;
 mod contradict;
+mod motion_rest;
 mod motion_skin;
 mod partial;
 mod placement;
