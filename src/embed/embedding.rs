@@ -447,7 +447,7 @@ impl Embedding {
             }
             None => contiguous_labels(&pw, &nb),
         };
-        let regions = regions(&labels, &pw, 0.1);
+        let regions = regions(&labels, &pw, 0.1, &nb);
         let skin = sparsify::<4>(w, 0.01);
         let mut regressors = Vec::with_capacity(Canonical::COUNT);
         for j in Canonical::ALL {
