@@ -74,9 +74,21 @@ pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding,
         }
         None => None,
     };
+    // The skin weights are fitted to the sequences' motion (issue 41):
+    // bone heat on one frame wires a contact into the weights.
+    let mut seqs = Vec::with_capacity(m.sequences.len());
+    for s in &m.sequences {
+        seqs.push(m.load_sequence(dir, s)?);
+    }
+    let frames: Vec<&[[f64; 3]]> = seqs
+        .iter()
+        .filter(|q| q.mesh().vertex_count() == n)
+        .flat_map(|q| (0..q.frame_count()).map(move |f| q.frame(f)))
+        .collect();
     match rest_frame(dir, m, topology)? {
-        Some(rest) => Embedding::new_on_frame(topology, &rest, &lm, parts).map_err(DbError::Rig),
-        None => Embedding::new(topology, &lm, parts).map_err(DbError::Rig),
+        Some(rest) => Embedding::new_on_frame_moving(topology, &rest, &lm, parts, &frames)
+            .map_err(DbError::Rig),
+        None => Embedding::new_moving(topology, &lm, parts, &frames).map_err(DbError::Rig),
     }
 }
 

@@ -261,6 +261,23 @@ impl Embedding {
         lm: &Landmarks,
         parts: Option<Vec<u8>>,
     ) -> Result<Embedding, EmbedError> {
+        Embedding::new_moving(mesh, lm, parts, &[])
+    }
+
+    /// [`Embedding::new`] with the skin weights fitted to the motion of
+    /// `frames` (each one position per vertex of `mesh`: the character's
+    /// sequences), [`super::motion_weights::refine`]: a vertex that
+    /// touched a bone in the rest frame but does not follow it over the
+    /// frames loses its weight on it: the skin and regions follow the
+    /// motion, and the part labels where the fit takes a vertex off its
+    /// part ([`super::motion_weights::motion_labels`]; explicit `parts`
+    /// stay). With no frames, bone heat alone, as [`Embedding::new`].
+    pub fn new_moving(
+        mesh: &Mesh,
+        lm: &Landmarks,
+        parts: Option<Vec<u8>>,
+        frames: &[&[[f64; 3]]],
+    ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
         check_body(mesh)?;
         // A headless body's chin: the top of its neck.
@@ -288,8 +305,26 @@ impl Embedding {
             Vec::new()
         };
         let bs = bones(&est);
-        let w = bone_heat(mesh, &bs)?;
-        let mut e = Embedding::assemble(mesh, est, &w, parts)?;
+        let mut w = bone_heat(mesh, &bs)?;
+        let mut moved = None;
+        let mut parts = parts;
+        if !frames.is_empty() {
+            let nb = neighbours(p.len(), t);
+            let labels = contiguous_labels(&part_weights(&w), &nb);
+            let o = super::motion_weights::MotionWeightOptions::default();
+            let r = super::motion_weights::refine(p, &mut w, &labels, frames, est.height, &o);
+            if parts.is_none() && r.frames > 0 {
+                let mut l = super::motion_weights::motion_labels(&labels, &w, o.keep_label);
+                make_contiguous(&mut l, &nb);
+                parts = Some(l);
+            }
+            moved = Some(r);
+        }
+        let explicit = parts.is_some() && moved.as_ref().is_none_or(|r| r.frames == 0);
+        let mut e = Embedding::assemble_labelled(mesh, est, &w, parts, explicit)?;
+        if let Some(r) = moved.filter(|r| r.frames > 0) {
+            e.notes.push(r.note());
+        }
         if headless {
             e.notes
                 .push("no head: the chin placed at the top of the neck".into());
@@ -314,11 +349,24 @@ impl Embedding {
         lm: &Landmarks,
         parts: Option<Vec<u8>>,
     ) -> Result<Embedding, EmbedError> {
+        Embedding::new_on_frame_moving(mesh, rest, lm, parts, &[])
+    }
+
+    /// [`Embedding::new_on_frame`] with the skin weights fitted to the
+    /// motion of `frames` ([`Embedding::new_moving`]).
+    pub fn new_on_frame_moving(
+        mesh: &Mesh,
+        rest: &[[f64; 3]],
+        lm: &Landmarks,
+        parts: Option<Vec<u8>>,
+        frames: &[&[[f64; 3]]],
+    ) -> Result<Embedding, EmbedError> {
         let frame = mesh
             .with_positions(rest)
             .map_err(|e| EmbedError::Mesh(format!("the rest frame: {e}")))?;
         let moved = lm.moved(mesh.positions(), rest, mesh.triangles());
-        let mut e = Embedding::new(&frame, &moved, parts)?.carried(rest, mesh.positions());
+        let mut e =
+            Embedding::new_moving(&frame, &moved, parts, frames)?.carried(rest, mesh.positions());
         e.notes.push(
             "embedded on the rest frame chosen clear of contact; the joints read off the topology's own positions by the regressors".into(),
         );
@@ -371,6 +419,20 @@ impl Embedding {
         w: &super::heat::Weights,
         parts: Option<Vec<u8>>,
     ) -> Result<Embedding, EmbedError> {
+        let explicit = parts.is_some();
+        Embedding::assemble_labelled(mesh, est, w, parts, explicit)
+    }
+
+    /// [`Embedding::assemble`]; `explicit` says whether `parts` were given
+    /// by the user (noted) or made by the motion fit
+    /// ([`super::motion_weights::motion_labels`]).
+    fn assemble_labelled(
+        mesh: &Mesh,
+        est: JointEstimate,
+        w: &super::heat::Weights,
+        parts: Option<Vec<u8>>,
+        explicit: bool,
+    ) -> Result<Embedding, EmbedError> {
         let (p, t) = (mesh.positions(), mesh.triangles());
         let pw = part_weights(w);
         let nb = neighbours(p.len(), t);
@@ -378,12 +440,14 @@ impl Embedding {
         let labels = match parts {
             Some(mut l) => {
                 make_contiguous(&mut l, &nb);
-                notes.push("part labels: given explicitly".into());
+                if explicit {
+                    notes.push("part labels: given explicitly".into());
+                }
                 l
             }
             None => contiguous_labels(&pw, &nb),
         };
-        let regions = regions(&labels, &pw, 0.1);
+        let regions = regions(&labels, &pw, 0.1, &nb);
         let skin = sparsify::<4>(w, 0.01);
         let mut regressors = Vec::with_capacity(Canonical::COUNT);
         for j in Canonical::ALL {

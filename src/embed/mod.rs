@@ -14,6 +14,7 @@ pub mod heat;
 pub mod joints;
 pub mod landmarks;
 pub mod midplane;
+pub mod motion_weights;
 pub mod parts;
 pub mod regress;
 pub mod rest;

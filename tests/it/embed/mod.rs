@@ -8,6 +8,8 @@ mod bodies;
 mod captures;
 mod contact;
 mod contradict;
+mod motion_rest;
+mod motion_skin;
 mod partial;
 mod placement;
 mod scan_auto;
