@@ -8,7 +8,10 @@
 //!   landmarks (`tests/fixtures/*.landmarks.json`): mean joint distance over
 //!   the 19 joints in % of the height, part labels agreeing, time; and
 //!   samba re-ordered to start with both hands on the hips (frame 130)
-//!   against the clear order;
+//!   against the clear order; `contact [FRAMES]`: samba re-ordered to
+//!   start at each of FRAMES (default 130 and 155, forearms on the belly),
+//!   plain and mirrored, against the clear order (the rest frame chosen
+//!   and the rig embedded on it as `db init` does);
 //! - synthetic databases (the procedural humanoid in two shapes, driven by
 //!   two motion sets with `synth::database::drive`): the automatic rig's
 //!   joints read off every frame (its regressors) against the skeleton that
@@ -75,9 +78,9 @@ fn real(data: &Path) {
         let fixture = PathBuf::from(format!("tests/fixtures/{name}.landmarks.json"));
         let lm = Landmarks::load(&fixture, mesh.vertex_count()).expect("fixture landmarks");
         let truth = Embedding::new(&mesh, &lm, None).expect("landmark rig");
-        let mine = Embedding::new(&mesh, &auto.landmarks, None);
+        let mine = embed_as_db_init(&mesh, &frames, auto.rest_frame, &auto.landmarks);
         match mine {
-            Ok(mine) => {
+            Some(mine) => {
                 let (e, wj, wd) = joint_error(&mine.joints, &truth.joints);
                 let h = height(&truth);
                 println!(
@@ -95,7 +98,7 @@ fn real(data: &Path) {
                 }
                 eprintln!();
             }
-            Err(e) => println!("| {name} | embedding refused: {e} |"),
+            None => println!("| {name} | embedding refused |"),
         }
         arm_offsets(name, &mesh, &lm, &auto);
         for n in &auto.notes {
@@ -103,7 +106,7 @@ fn real(data: &Path) {
         }
         eprintln!("  {name}: {}", auto.summary());
         if name == "samba" {
-            contact_first(&mesh, &frames, 130);
+            contact_first(&mesh, &frames, 130, false);
         }
     }
 }
@@ -165,41 +168,139 @@ fn rig_as_db_init(
     auto_rig(mesh, frames, &opts)
 }
 
+/// The rest frame `db init` chooses over the topology's positions and
+/// `frames` (an index into `frames`; `None`: the topology's), and why.
+fn rest_as_db_init(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> (Option<usize>, String) {
+    use surfmotion::embed::rest::{RestOptions, choose_rest_frame};
+    let mut all = vec![mesh.positions()];
+    all.extend_from_slice(frames);
+    match choose_rest_frame(mesh, &all, &RestOptions::default()) {
+        Some(c) => ((c.frame > 0).then(|| c.frame - 1), c.why),
+        None => (None, String::new()),
+    }
+}
+
+/// The embedding `db init` makes from automatic landmarks: on the rest
+/// frame it chose (`[rig] rest`), its joints carried to the topology.
+fn embed_as_db_init(
+    mesh: &Mesh,
+    frames: &[&[[f64; 3]]],
+    rest: Option<usize>,
+    lm: &Landmarks,
+) -> Option<Embedding> {
+    match rest {
+        None => Embedding::new(mesh, lm, None).ok(),
+        Some(r) => Embedding::new_on_frame(mesh, frames[r], lm, None).ok(),
+    }
+}
+
 /// Issue 41's contact figure: the capture re-ordered so that frame
-/// `first` (samba 130: both hands on the hips) comes first, rigged
-/// automatically, against the rig from the clear order carried to that
-/// frame: mean joint distance (% of the height) and parts agreeing.
-fn contact_first(mesh: &Mesh, frames: &[&[[f64; 3]]], first: usize) {
+/// `first` (samba 130: both hands on the hips; 155: forearms on the belly)
+/// comes first, rigged automatically and embedded as `db init` does (on
+/// the rest frame it chooses), against the rig from the clear order
+/// carried to that frame: mean and worst joint distance (% of the height),
+/// parts agreeing, and the rest frame chosen (as a frame of the clear
+/// order). `mirror` mirrors both orders' frames (x → −x) first.
+fn contact_first(mesh: &Mesh, frames: &[&[[f64; 3]]], first: usize, mirror: bool) {
+    let flip = |f: &[[f64; 3]]| -> Vec<[f64; 3]> {
+        f.iter()
+            .map(|q| if mirror { [-q[0], q[1], q[2]] } else { *q })
+            .collect()
+    };
+    let own: Vec<Vec<[f64; 3]>> = frames.iter().map(|f| flip(f)).collect();
+    let frames: Vec<&[[f64; 3]]> = own.iter().map(Vec::as_slice).collect();
+    let mut tris = mesh.triangles().to_vec();
+    if mirror {
+        tris.iter_mut().for_each(|t| t.swap(1, 2));
+    }
+    let (Ok(mesh), Ok(cmesh)) = (
+        Mesh::new(flip(mesh.positions()), tris.clone()),
+        Mesh::new(frames[first].to_vec(), tris),
+    ) else {
+        return;
+    };
     let nf = frames.len();
     let moved: Vec<&[[f64; 3]]> = (0..nf).map(|k| frames[(first + k) % nf]).collect();
-    let Ok(cmesh) = mesh.with_positions(frames[first]) else {
-        return;
+    let what = format!(
+        "samba{}, frame {first} first",
+        if mirror { " mirrored" } else { "" }
+    );
+    let (rest_a, _) = rest_as_db_init(&mesh, &frames);
+    let (rest_b, why) = rest_as_db_init(&cmesh, &moved);
+    let rig = |m: &Mesh, f: &[&[[f64; 3]]], r: Option<usize>| {
+        auto_rig(
+            m,
+            f,
+            &AutoOptions {
+                rest_frame: r,
+                ..AutoOptions::default()
+            },
+        )
     };
-    let (Ok(clear), Ok(contact)) = (rig_as_db_init(mesh, frames), rig_as_db_init(&cmesh, &moved))
+    let (Ok(clear), Ok(contact)) = (rig(&mesh, &frames, rest_a), rig(&cmesh, &moved, rest_b))
     else {
-        println!("| samba, frame {first} first | refused |");
+        println!("| {what} | refused |");
         return;
     };
-    let (Ok(a), Ok(b)) = (
-        Embedding::new(mesh, &clear.landmarks, None),
-        Embedding::new(&cmesh, &contact.landmarks, None),
+    let (Some(a), Some(b)) = (
+        embed_as_db_init(&mesh, &frames, rest_a, &clear.landmarks),
+        embed_as_db_init(&cmesh, &moved, rest_b, &contact.landmarks),
     ) else {
-        println!("| samba, frame {first} first | embedding refused |");
+        println!("| {what} | embedding refused |");
         return;
     };
     let carried = a.frame_joints(frames[first]);
-    let mean = (0..19)
-        .map(|j| carried[j].distance(DVec3::from_array(b.joints[j])))
-        .sum::<f64>()
-        / 19.0;
+    let d: Vec<f64> = (0..19)
+        .map(|j| carried[j].distance(DVec3::from_array(b.joints[j])) / a.height * 100.0)
+        .collect();
+    let (wj, wd) = d
+        .iter()
+        .enumerate()
+        .fold((0, 0.0f64), |w, (j, &x)| if x > w.1 { (j, x) } else { w });
+    let original = |r: Option<usize>, first: usize| r.map_or(first, |r| (first + r) % nf);
     println!(
-        "| samba, frame {first} first vs clear order | {:.2} | | {:.1}% | {:.2} | |",
-        100.0 * mean / a.height,
+        "| {what} vs clear order | {:.2} | {} {:.1} | {:.1}% | {:.2} | rest frame {} (clear order: {}) |",
+        d.iter().sum::<f64>() / 19.0,
+        Canonical::ALL[wj].name(),
+        wd,
         100.0 * agree(&a.labels, &b.labels),
-        contact.confidence
+        contact.confidence,
+        original(rest_b, first),
+        original(rest_a, 0),
     );
-    for n in &contact.notes {
-        eprintln!("  samba {first} first: {n}");
+    eprintln!("  {what}: {why}");
+}
+
+/// The frames of `frames` with a contact (issue 41's contact finder on
+/// `mesh`'s surface distances).
+fn contact_frames(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> Vec<usize> {
+    use surfmotion::embed::contact::{ContactFinder, ContactOptions};
+    let finder = ContactFinder::new(mesh, ContactOptions::default());
+    (0..frames.len())
+        .filter(|&f| !finder.find(frames[f]).contacts.is_empty())
+        .collect()
+}
+
+/// `contact [FRAMES]`: the contact figure for samba started at each of
+/// `FRAMES` (default 130 and 155), plain and mirrored.
+fn contact(data: &Path, starts: &[usize]) {
+    let pc2 = data.join("4d/samba/samba.pc2");
+    let Ok(seq) = load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()) else {
+        println!("no samba at {}", pc2.display());
+        return;
+    };
+    let mesh = seq.mesh().clone();
+    let frames: Vec<&[[f64; 3]]> = (0..seq.frame_count()).map(|f| seq.frame(f)).collect();
+    eprintln!(
+        "samba frames with a contact: {:?}",
+        contact_frames(&mesh, &frames)
+    );
+    println!("| case | joints (% height, mean) | worst joint | parts agree | confidence | rest |");
+    println!("|---|---|---|---|---|---|");
+    for &f in starts {
+        for mirror in [false, true] {
+            contact_first(&mesh, &frames, f, mirror);
+        }
     }
 }
 
@@ -325,5 +426,16 @@ fn main() {
     }
     if what == "synth" || what == "all" {
         synth(&data);
+    }
+    if what == "contact" {
+        let starts: Vec<usize> = args[3..].iter().filter_map(|a| a.parse().ok()).collect();
+        contact(
+            &data,
+            if starts.is_empty() {
+                &[130, 155]
+            } else {
+                &starts
+            },
+        );
     }
 }
