@@ -1,5 +1,6 @@
 //! Mocap input: the readers against reference implementations, other suites' skeletons, the bundled clips.
 
+mod cartwheel;
 mod fbx_units;
 mod one_capture;
 mod procedural;
