@@ -57,9 +57,8 @@ impl KeyHasher {
     /// A hasher of the inputs of the database `dir`, remembering the content
     /// hashes of its large files in its cache folder ([`KeyHasher::save`]).
     pub fn for_db(dir: &Path) -> Self {
-        let mut k = KeyHasher::default();
-        k.1 = Some(ContentMemo::open(dir, memo_path(dir)));
-        k
+        let KeyHasher(h, _) = KeyHasher::default();
+        KeyHasher(h, Some(ContentMemo::open(dir, memo_path(dir))))
     }
 
     /// Writes back the content hashes learnt ([`ContentMemo::save`]).
