@@ -138,7 +138,8 @@ fn the_running_floor_keeps_the_pelvis_bounce_closer_to_offline() {
         ..RetargetOptions::default()
     };
     let prepared = Prepared::new(&ch, &opts).unwrap();
-    for clip in ["cmu-bvh/131_02.bvh"] {
+    {
+        let clip = "cmu-bvh/131_02.bvh";
         let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), fps).unwrap();
         let a = prepared.analyse(&ch, &m.reference, &m.poses);
         let bounce = |floor_step: Option<f64>| {
