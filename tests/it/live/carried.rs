@@ -115,3 +115,46 @@ fn at_lag_3_the_output_queries_follow_the_offline_motion() {
         );
     }
 }
+
+/// Mean absolute difference (cm per frame) between two query sequences'
+/// frame-to-frame vertical pelvis motion.
+fn pelvis_bounce_error(a: &[Pose], b: &[Pose]) -> f64 {
+    let p = surfmotion::rig::Canonical::Pelvis.index();
+    let n = a.len().min(b.len());
+    let sum: f64 = (1..n)
+        .map(|k| ((a[k][p].y - a[k - 1][p].y) - (b[k][p].y - b[k - 1][p].y)).abs())
+        .sum();
+    100.0 * sum / (n.max(2) - 1) as f64
+}
+
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn the_running_floor_keeps_the_pelvis_bounce_closer_to_offline() {
+    let Some(d) = common::data_dir() else { return };
+    let ch = character(&d);
+    let fps = ch.manifest().fps;
+    let opts = RetargetOptions {
+        deform: DeformMode::None,
+        ..RetargetOptions::default()
+    };
+    let prepared = Prepared::new(&ch, &opts).unwrap();
+    {
+        let clip = "cmu-bvh/131_02.bvh";
+        let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), fps).unwrap();
+        let a = prepared.analyse(&ch, &m.reference, &m.poses);
+        let bounce = |floor_step: Option<f64>| {
+            let sopts = SessionOptions {
+                retarget: opts,
+                floor_step,
+                ..SessionOptions::default()
+            };
+            let (_, queries, _) = run_raw(&ch, &prepared, &m, &m.poses, true, sopts);
+            pelvis_bounce_error(&a.query, &queries)
+        };
+        let (window, running) = (bounce(None), bounce(Some(0.0005)));
+        eprintln!(
+            "{clip}: lag 3, pelvis bounce error against offline {window:.4} cm/frame on each window's floor, {running:.4} on the running floor"
+        );
+        assert!(running < window, "{clip}: {running} >= {window}");
+    }
+}
