@@ -104,6 +104,11 @@ pub struct DeformOptions {
     /// weights joins the two (issue 42). Off, every seam has
     /// `seam_weight` and the child copies the parent's result over the
     /// whole overlap, including the free lower end of the thigh's region.
+    /// Default false: measured (session 23, `retarget --json` onto the
+    /// real samba capture, with `hold_spread`), triangle-frames turned over
+    /// before the repair 02_02 3,683 → 3,521, 131_01 59,945 → 58,471,
+    /// 131_02 8,360 → 8,432, but turned over against the rest frame after
+    /// the repair 288 → 356 (02_02) and 703 → 741 (131_02): a mixed step.
     pub seam_by_weight: bool,
     /// Scale a held joint vertex (`hold_joints`: the region's end inside a
     /// child part, held at LBS) by the region's share of the blending
@@ -116,6 +121,7 @@ pub struct DeformOptions {
     /// every `stride`-th with `constraint_weight`: the same total pull
     /// towards the LBS positions, spread evenly, so single held vertices
     /// do not dimple the surface around them (issue 42).
+    /// Default false (measured with `seam_by_weight`, above).
     pub hold_spread: bool,
     /// Rotation-aware local steps after each region's solve ([`super::arap`]):
     /// each vertex's rotation re-fitted to the solved one-ring, the source's
@@ -202,9 +208,9 @@ impl Default for DeformOptions {
             hold_joints: true,
             hold_soft: true,
             sibling_seams: false,
-            seam_by_weight: true,
+            seam_by_weight: false,
             hold_by_weight: false,
-            hold_spread: true,
+            hold_spread: false,
             local_steps: 0,
             repair_budget: RepairBudget::default(),
         }
