@@ -3,7 +3,9 @@
 
 use super::options::{DeformMode, DeformOptions, RepairBudget, TurnedOver};
 use super::part_laplacian::{RegionSolver, RegionWorkspace, apply};
-use super::regions::{Region, region_constraints, region_examples, region_specs, region_weights};
+use super::regions::{
+    Region, constraint_scale, region_constraints, region_examples, region_specs, region_weights,
+};
 use super::{arap, lbs, pca, unflip, untangle};
 use crate::db::Character;
 use crate::mesh::laplacian::uniform_region_rows;
@@ -34,6 +36,32 @@ pub struct Deformer {
     pub components: Vec<usize>,
     /// Example frames (flat database ids) of each region.
     pub examples: Vec<Vec<u32>>,
+}
+
+/// How a region's vertex is constrained in its solve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Held {
+    /// Only by the Laplacian and the deformation space.
+    Free,
+    /// To its LBS position.
+    Lbs,
+    /// To the parent region's result (a seam).
+    Seam,
+}
+
+/// One region's own result ([`Deformer::region_results`]).
+#[derive(Debug, Clone)]
+pub struct RegionResult {
+    /// The joint carrying the region.
+    pub joint: crate::rig::Canonical,
+    /// Its vertices (global ids).
+    pub vertices: Vec<u32>,
+    /// Its solved positions, one per vertex, world coordinates.
+    pub positions: Vec<[f64; 3]>,
+    /// Its blending weight at each vertex.
+    pub weights: Vec<f64>,
+    /// How each vertex is constrained.
+    pub held: Vec<Held>,
 }
 
 /// Scratch of [`Deformer::deform`].
@@ -163,6 +191,17 @@ impl Deformer {
                 all.dedup();
                 all
             });
+            let weights = region_weights(ch, mode, &verts, joint);
+            let scale = constraint_scale(
+                ch,
+                opts,
+                &verts,
+                &weights,
+                parent.map(|p| {
+                    let r = &out.regions[p];
+                    (r.solver.vertices.as_slice(), r.weights.as_slice())
+                }),
+            );
             let (constraints, sources) = region_constraints(
                 ch,
                 mode,
@@ -172,9 +211,9 @@ impl Deformer {
                 seams.as_deref().or(parent_verts.map(Vec::as_slice)),
                 &is_constraint,
                 &soft,
+                &scale,
             );
             parent_of.push(parent);
-            let weights = region_weights(ch, mode, &verts, joint);
             out.components.push(basis.components.len());
             out.examples.push(chosen);
             let solver = RegionSolver::new(tris, n, verts, constraints, &basis)?;
@@ -186,6 +225,40 @@ impl Deformer {
             });
         }
         Ok(out)
+    }
+
+    /// Each region's own result on the last frame deformed with `ws`
+    /// (before the blend and the repair), in world coordinates, with its
+    /// blending weights and which of its vertices are held (an LBS target)
+    /// or seamed to the parent: a diagnostic of where regions disagree
+    /// (issue 42). `target` is the pose that frame was deformed to.
+    pub fn region_results(&self, target: &Pose, ws: &DeformWorkspace) -> Vec<RegionResult> {
+        let rot = pose_rotations(&self.rest_pose, target);
+        self.regions
+            .iter()
+            .zip(&ws.local)
+            .map(|(r, local)| {
+                let q = if self.local_frames {
+                    rot[r.joint.index()]
+                } else {
+                    DQuat::IDENTITY
+                };
+                let mut held = vec![Held::Free; r.solver.vertices.len()];
+                for (&(c, _), &(_, seam)) in r.solver.constraints.iter().zip(&r.sources) {
+                    held[c as usize] = if seam { Held::Seam } else { Held::Lbs };
+                }
+                RegionResult {
+                    joint: r.joint,
+                    vertices: r.solver.vertices.clone(),
+                    positions: local
+                        .iter()
+                        .map(|y| (q * DVec3::from_array(*y)).to_array())
+                        .collect(),
+                    weights: r.weights.clone(),
+                    held,
+                }
+            })
+            .collect()
     }
 
     /// The mode.

@@ -44,6 +44,6 @@ pub mod soft;
 pub mod unflip;
 pub mod untangle;
 
-pub use deformer::{DeformWorkspace, Deformer};
+pub use deformer::{DeformWorkspace, Deformer, Held, RegionResult};
 pub use options::{DeformMode, DeformOptions, RepairBudget, TurnedOver};
 pub use regions::part_joint;

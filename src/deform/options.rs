@@ -96,6 +96,33 @@ pub struct DeformOptions {
     /// capture: CMU 02_02 3,599 → 4,255, 131_01 59,914 → 66,055; the
     /// folds move from the left leg to the right).
     pub sibling_seams: bool,
+    /// Scale a seam (a vertex a region shares with its parent, held to the
+    /// parent's result) by the parent's share of the two regions' blending
+    /// weights there, `w_parent / (w_parent + w_child)`: near the joint the
+    /// child follows the parent, below it (the shin's part of the thigh's
+    /// region) it follows its own solve, and the blend by the same skin
+    /// weights joins the two (issue 42). Off, every seam has
+    /// `seam_weight` and the child copies the parent's result over the
+    /// whole overlap, including the free lower end of the thigh's region.
+    /// Default false: measured (session 23, `retarget --json` onto the
+    /// real samba capture, with `hold_spread`), triangle-frames turned over
+    /// before the repair 02_02 3,683 → 3,521, 131_01 59,945 → 58,471,
+    /// 131_02 8,360 → 8,432, but turned over against the rest frame after
+    /// the repair 288 → 356 (02_02) and 703 → 741 (131_02): a mixed step.
+    pub seam_by_weight: bool,
+    /// Scale a held joint vertex (`hold_joints`: the region's end inside a
+    /// child part, held at LBS) by the region's share of the blending
+    /// weights there, `w_region / (w_region + w_child)`, so the thigh's
+    /// targets loosen below the knee where its result counts little in
+    /// the blend (issue 42).
+    pub hold_by_weight: bool,
+    /// Hold every vertex of a region's end inside a child part
+    /// (`hold_joints`) with `constraint_weight / √stride`, instead of
+    /// every `stride`-th with `constraint_weight`: the same total pull
+    /// towards the LBS positions, spread evenly, so single held vertices
+    /// do not dimple the surface around them (issue 42).
+    /// Default false (measured with `seam_by_weight`, above).
+    pub hold_spread: bool,
     /// Rotation-aware local steps after each region's solve ([`super::arap`]):
     /// each vertex's rotation re-fitted to the solved one-ring, the source's
     /// Laplacian coordinates turned by it, solved again with the same
@@ -181,6 +208,9 @@ impl Default for DeformOptions {
             hold_joints: true,
             hold_soft: true,
             sibling_seams: false,
+            seam_by_weight: false,
+            hold_by_weight: false,
+            hold_spread: false,
             local_steps: 0,
             repair_budget: RepairBudget::default(),
         }

@@ -194,6 +194,63 @@ pub(super) fn region_examples(
 /// the parent region's result)`.
 pub(super) type RegionSource = (u32, bool);
 
+/// Per local vertex of a region, the factor of its seam weight and of its
+/// held-joint weight ([`DeformOptions::seam_by_weight`],
+/// [`DeformOptions::hold_by_weight`]); empty: 1 everywhere.
+#[derive(Debug, Default)]
+pub(super) struct ConstraintScale {
+    pub(super) seam: Vec<f64>,
+    pub(super) hold: Vec<f64>,
+}
+
+/// The factors of [`ConstraintScale`] for a region with `verts` and
+/// blending `weights`, whose parent region has `parent_verts` and
+/// `parent_weights`: a seam by the parent's share `w_p / (w_p + w)`, a
+/// held vertex by the region's share of its weight and the skin weight
+/// of the part the vertex is labelled with, `w / (w + w_c)` (1 where both
+/// are 0).
+pub(super) fn constraint_scale(
+    ch: &Character,
+    opts: &DeformOptions,
+    verts: &[u32],
+    weights: &[f64],
+    parent: Option<(&[u32], &[f64])>,
+) -> ConstraintScale {
+    let share = |a: f64, b: f64| if a + b > 0.0 { a / (a + b) } else { 1.0 };
+    let seam = match parent {
+        Some((pv, pw)) if opts.seam_by_weight => verts
+            .iter()
+            .zip(weights)
+            .map(|(v, &w)| match pv.binary_search(v) {
+                Ok(j) => share(pw[j], w),
+                Err(_) => 1.0,
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
+    let hold = if opts.hold_by_weight {
+        let rig = ch.rig();
+        verts
+            .iter()
+            .zip(weights)
+            .map(|(&v, &w)| {
+                let label = rig.labels[v as usize] as usize;
+                let (js, ws) = &rig.skin[v as usize];
+                let wc: f64 = js
+                    .iter()
+                    .zip(ws)
+                    .filter(|(j, _)| Part::of_joint(Canonical::ALL[**j as usize]).index() == label)
+                    .map(|(_, w)| *w)
+                    .sum();
+                share(w, wc)
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    ConstraintScale { seam, hold }
+}
+
 /// The soft constraints of a region, `(local index, weight)`, with their
 /// sources `(global vertex, from the parent's result)`: seams with the
 /// parent region first, then the LBS constraint vertices (and, with
@@ -210,6 +267,7 @@ pub(super) fn region_constraints(
     parent_verts: Option<&[u32]>,
     is_constraint: &[bool],
     soft: &[bool],
+    scale: &ConstraintScale,
 ) -> (Vec<(u32, f64)>, Vec<RegionSource>) {
     let rig = ch.rig();
     let mut constraints = Vec::new();
@@ -217,18 +275,27 @@ pub(super) fn region_constraints(
     for (i, &v) in verts.iter().enumerate() {
         let seam = parent_verts.is_some_and(|pv| pv.binary_search(&v).is_ok());
         if seam {
-            constraints.push((i as u32, opts.seam_weight));
+            let s = scale.seam.get(i).copied().unwrap_or(1.0);
+            constraints.push((i as u32, opts.seam_weight * s));
             sources.push((v, true));
-        } else if is_constraint[v as usize]
-            || (opts.hold_joints
-                && mode == DeformMode::Part
-                && i % opts.stride.max(1) == 0
-                && !soft[v as usize]
-                && Part::ALL
-                    .get(rig.labels[v as usize] as usize)
-                    .is_some_and(|c| c.parent() == Some(Part::of_joint(joint))))
-        {
+        } else if is_constraint[v as usize] {
             constraints.push((i as u32, opts.constraint_weight));
+            sources.push((v, false));
+        } else if opts.hold_joints
+            && mode == DeformMode::Part
+            && (opts.hold_spread || i % opts.stride.max(1) == 0)
+            && !soft[v as usize]
+            && Part::ALL
+                .get(rig.labels[v as usize] as usize)
+                .is_some_and(|c| c.parent() == Some(Part::of_joint(joint)))
+        {
+            let mut s = scale.hold.get(i).copied().unwrap_or(1.0);
+            if opts.hold_spread {
+                // The same total pull as every `stride`-th vertex held
+                // with the full weight, spread over all of them.
+                s /= (opts.stride.max(1) as f64).sqrt();
+            }
+            constraints.push((i as u32, opts.constraint_weight * s));
             sources.push((v, false));
         }
     }

@@ -133,6 +133,30 @@ fn where_the_solve_folds_the_real_capture() {
             },
         ),
         (
+            "seams by weight, held joints spread",
+            DeformOptions {
+                seam_by_weight: true,
+                hold_spread: true,
+                ..Default::default()
+            },
+        ),
+        (
+            "seams by weight only",
+            DeformOptions {
+                seam_by_weight: true,
+                ..Default::default()
+            },
+        ),
+        (
+            "held joints spread and by weight",
+            DeformOptions {
+                seam_by_weight: true,
+                hold_spread: true,
+                hold_by_weight: true,
+                ..Default::default()
+            },
+        ),
+        (
             "sibling seams",
             DeformOptions {
                 sibling_seams: true,
@@ -161,12 +185,20 @@ fn where_the_solve_folds_the_real_capture() {
             },
         ),
     ];
-    for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
+    for clip in [
+        "cmu-amc/02/02_02.amc",
+        "cmu-bvh/131_01.bvh",
+        "cmu-bvh/131_02.bvh",
+    ] {
         if !only.is_empty() && !clip.contains(&only) {
             continue;
         }
         let raw = sources(&ch, &d, clip);
+        let pick = std::env::var("SURFACE_REPAIR_VARIANTS").unwrap_or_default();
         for (name, opts) in &variants {
+            if !pick.is_empty() && !pick.split(',').any(|p| name.contains(p)) {
+                continue;
+            }
             eprintln!("{clip}, {name}:");
             let f = deform_frames(&ch, &raw, opts);
             let mut per = [[0usize; 3]; Part::COUNT];
@@ -326,4 +358,242 @@ fn the_fold_repair_stays_within_its_budget() {
         left(&bounded),
         left(&unbounded)
     );
+}
+
+/// Why the thigh and shin regions fold where they overlap (issue 42): at
+/// the frame of CMU 02_02 with the most triangles turned over before the
+/// repair, what each region's solve gives a vertex of the overlap (the
+/// thigh's and the shin's results, the LBS position, the blending weights,
+/// how each region holds the vertex), by position along the thigh bone
+/// and the shin bone, on the folded triangles and on the whole overlap.
+/// A measurement: prints.
+#[test]
+#[ignore = "measurement: prints what the thigh and shin solves ask of the knee overlap"]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn why_the_knees_fold() {
+    use surfmotion::deform::Held;
+    use surfmotion::rig::Canonical as C;
+    let Some(d) = common::data_dir() else { return };
+    let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
+    let clip = std::env::var("SURFACE_KNEE_CLIP").unwrap_or("cmu-amc/02/02_02.amc".into());
+    let raw = sources(&ch, &d, &clip);
+    let opts = DeformOptions {
+        repair: unflip::RepairOptions {
+            rounds: 0,
+            ..Default::default()
+        },
+        seam_by_weight: std::env::var_os("SURFACE_KNEE_NEW").is_some(),
+        hold_spread: std::env::var_os("SURFACE_KNEE_NEW").is_some(),
+        ..Default::default()
+    };
+    let f = deform_frames(
+        &ch,
+        &raw,
+        &DeformOptions {
+            repair: Default::default(),
+            ..opts
+        },
+    );
+    let (k, _) = f
+        .before
+        .iter()
+        .enumerate()
+        .max_by_key(|(_, b)| b.len())
+        .unwrap();
+    let n = ch.n();
+    let tris = ch.topology().triangles();
+    let def = Deformer::new(&ch, DeformMode::Part, &opts).unwrap();
+    let mut ws = def.workspace();
+    let src = &raw.positions[k * n..(k + 1) * n];
+    let sp = ch.rig().frame_joints(src);
+    let target = &raw.query[k];
+    let mut out = vec![[0.0; 3]; n];
+    def.deform(&ch, src, &sp, target, &mut out, &mut ws);
+    let g = surfmotion::pose::pose_rotations(&sp, target);
+    let mut lbs = vec![[0.0; 3]; n];
+    surfmotion::deform::lbs::skin_into(src, ch.rig(), &sp, target, &g, &mut lbs);
+    let res = def.region_results(target, &ws);
+    let bad = &f.before[k];
+    eprintln!(
+        "{clip}: frame {k}, {} turned over before the repair",
+        bad.len()
+    );
+    let dist = |a: [f64; 3], b: [f64; 3]| {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    };
+    let rest = ch.rest_pose();
+    for (thigh, shin, hip, knee, ankle) in [
+        (C::LHip, C::LKnee, C::LHip, C::LKnee, C::LAnkle),
+        (C::RHip, C::RKnee, C::RHip, C::RKnee, C::RAnkle),
+    ] {
+        let rt = res.iter().find(|r| r.joint == thigh).unwrap();
+        let rs = res.iter().find(|r| r.joint == shin).unwrap();
+        let at = |r: &surfmotion::deform::RegionResult, v: u32| r.vertices.binary_search(&v).ok();
+        // Along the leg in the source frame: 0 at the hip, 1 at the knee, 2 at the ankle.
+        let along = |v: u32| {
+            let p = glam::DVec3::from_array(src[v as usize]);
+            let (h, kn, an) = (sp[hip.index()], sp[knee.index()], sp[ankle.index()]);
+            let s = (p - kn).dot(kn - h) / (kn - h).length_squared();
+            if s < 0.0 {
+                1.0 + s
+            } else {
+                1.0 + (p - kn).dot(an - kn) / (an - kn).length_squared()
+            }
+        };
+        let _ = rest;
+        let folded: std::collections::BTreeSet<u32> =
+            bad.iter().flat_map(|&t| tris[t as usize]).collect();
+        // Bins of `along`: per bin, count, mean |thigh − shin|, |thigh − LBS|,
+        // |shin − LBS|, |blend − LBS|, mean weights, held kinds, folded vertices.
+        let mut bins = vec![[0.0f64; 12]; 12];
+        for (i, &v) in rt.vertices.iter().enumerate() {
+            let Some(j) = at(rs, v) else { continue };
+            let a = along(v);
+            let b = ((a - 0.6) / 0.1).floor().clamp(0.0, 11.0) as usize;
+            let e = &mut bins[b];
+            e[0] += 1.0;
+            e[1] += dist(rt.positions[i], rs.positions[j]);
+            e[2] += dist(rt.positions[i], lbs[v as usize]);
+            e[3] += dist(rs.positions[j], lbs[v as usize]);
+            e[4] += dist(out[v as usize], lbs[v as usize]);
+            e[5] += rt.weights[i];
+            e[6] += rs.weights[j];
+            e[7] += (rt.held[i] == Held::Lbs) as u8 as f64;
+            e[8] += (rs.held[j] == Held::Seam) as u8 as f64;
+            e[9] += folded.contains(&v) as u8 as f64;
+            e[10] += (rs.held[j] == Held::Lbs) as u8 as f64;
+            e[11] +=
+                (ch.rig().labels[v as usize] as usize == Part::of_joint(shin).index()) as u8 as f64;
+        }
+        eprintln!(
+            "{thigh:?}/{shin:?} overlap by position along the leg (1 = knee, 2 = ankle): n, cm |thigh-shin| |thigh-LBS| |shin-LBS| |blend-LBS|, weight thigh shin, thigh holds at LBS, shin seams, shin holds at LBS, shin-labelled, folded"
+        );
+        for (b, e) in bins.iter().enumerate() {
+            if e[0] == 0.0 {
+                continue;
+            }
+            let m = |x: f64| x / e[0];
+            eprintln!(
+                "  {:.1}-{:.1}: {:>5} | {:>6.2} {:>6.2} {:>6.2} {:>6.2} | {:.2} {:.2} | {:>4} {:>4} {:>4} {:>4} | {:>4}",
+                0.6 + 0.1 * b as f64,
+                0.7 + 0.1 * b as f64,
+                e[0],
+                100.0 * m(e[1]),
+                100.0 * m(e[2]),
+                100.0 * m(e[3]),
+                100.0 * m(e[4]),
+                m(e[5]),
+                m(e[6]),
+                e[7],
+                e[8],
+                e[10],
+                e[11],
+                e[9]
+            );
+        }
+    }
+    // The folded vertices by the regions holding them.
+    let mut kinds = std::collections::BTreeMap::<String, usize>::new();
+    for &v in bad
+        .iter()
+        .flat_map(|&t| tris[t as usize])
+        .collect::<std::collections::BTreeSet<u32>>()
+        .iter()
+    {
+        let key: Vec<String> = res
+            .iter()
+            .filter_map(|r| {
+                r.vertices.binary_search(&v).ok().map(|i| {
+                    format!("{:?}:{:?}:{:.2}", r.joint, r.held[i], r.weights[i])
+                        .chars()
+                        .take(18)
+                        .collect()
+                })
+            })
+            .collect();
+        let key: Vec<String> = key
+            .iter()
+            .map(|s: &String| s.split(':').take(2).collect::<Vec<_>>().join(":"))
+            .collect();
+        *kinds.entry(key.join(" + ")).or_default() += 1;
+    }
+    let mut kinds: Vec<_> = kinds.into_iter().collect();
+    kinds.sort_by_key(|&(_, c)| std::cmp::Reverse(c));
+    eprintln!("folded vertices by region:held");
+    for (kd, c) in kinds.iter().take(12) {
+        eprintln!("  {c:>5} {kd}");
+    }
+}
+
+/// Triangle-frames the part-based solve turns over before any repair,
+/// over every frame of `raw`, with `opts` (its repair off).
+fn folds_before_repair(ch: &Character, raw: &Output, opts: &DeformOptions) -> usize {
+    let n = ch.n();
+    let tris = ch.topology().triangles();
+    let bare = Deformer::new(
+        ch,
+        DeformMode::Part,
+        &DeformOptions {
+            repair: unflip::RepairOptions {
+                rounds: 0,
+                ..opts.repair
+            },
+            ..*opts
+        },
+    )
+    .unwrap();
+    let mut ws = bare.workspace();
+    let mut out = vec![[0.0; 3]; n];
+    let mut turn = vec![glam::DQuat::IDENTITY; n];
+    (0..raw.report.frames)
+        .map(|k| {
+            let src = &raw.positions[k * n..(k + 1) * n];
+            let sp = ch.rig().frame_joints(src);
+            let target = &raw.query[k];
+            bare.deform(ch, src, &sp, target, &mut out, &mut ws);
+            let g = surfmotion::pose::pose_rotations(&sp, target);
+            unflip::skin_turns(&ch.rig().skin, &g, &mut turn);
+            unflip::turned_over(tris, src, &out, &turn).len()
+        })
+        .sum()
+}
+
+/// Fewer folds where the thigh and shin regions overlap (issue 42): CMU
+/// 02_02 retargeted onto the real samba capture, triangle-frames the
+/// part-based solve turns over before any repair, with the default
+/// options `seam_by_weight` and `hold_spread` (off by default) against
+/// session 22's (every seam at full weight, every `stride`-th held joint
+/// vertex at full weight, the default): the old options turn
+/// over more than 3,000 (3,599 measured in session 22) and the default
+/// fewer (measured through `retarget --json`: 3,683 → 3,521; a small
+/// step, not the fix issue 42 asks for).
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn the_knees_fold_less_before_the_repair() {
+    let Some(d) = common::data_dir() else { return };
+    let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
+    let raw = sources(&ch, &d, "cmu-amc/02/02_02.amc");
+    let old = folds_before_repair(
+        &ch,
+        &raw,
+        &DeformOptions {
+            seam_by_weight: false,
+            hold_spread: false,
+            ..Default::default()
+        },
+    );
+    let new = folds_before_repair(
+        &ch,
+        &raw,
+        &DeformOptions {
+            seam_by_weight: true,
+            hold_spread: true,
+            ..Default::default()
+        },
+    );
+    eprintln!(
+        "02_02 on samba, triangle-frames turned over before the repair: session 22's options {old}, default {new}"
+    );
+    assert!(old > 3_000, "session 22's options: {old}");
+    assert!(new < old, "default {new} against {old}");
 }
