@@ -338,14 +338,14 @@ fn fit_vertex(
     explains_better(&out, heat, min_heat, tau_h, frames.len(), &offsets).then_some(out)
 }
 
+/// `(frame, joints)` → each joint's motion of the vertex at rest minus
+/// its position in that frame (`None` if a joint has no motion there).
+type Offsets<'a> = dyn Fn(usize, &[usize]) -> Option<Vec<DVec3>> + 'a;
+
 /// The candidates `cand` kept: the anchor (the one whose motion alone has
 /// the least residual over the `nf` frames, first in the result) and its
 /// parent and children among them.
-fn near_anchor(
-    cand: &[usize],
-    nf: usize,
-    offsets: &dyn Fn(usize, &[usize]) -> Option<Vec<DVec3>>,
-) -> Option<Vec<usize>> {
+fn near_anchor(cand: &[usize], nf: usize, offsets: &Offsets) -> Option<Vec<usize>> {
     let mut alone = vec![0.0; cand.len()];
     for f in 0..nf {
         for (a, e) in alone.iter_mut().zip(offsets(f, cand)?) {
@@ -375,7 +375,7 @@ fn explains_better(
     min_heat: f64,
     tau_h: f64,
     nf: usize,
-    offsets: &dyn Fn(usize, &[usize]) -> Option<Vec<DVec3>>,
+    offsets: &Offsets,
 ) -> bool {
     let rms = |row: &[f64; Canonical::COUNT], floor: f64| -> Option<f64> {
         let js: Vec<usize> = (0..Canonical::COUNT)

@@ -10,6 +10,7 @@ mod contact;
 mod contradict;
 mod motion_rest;
 mod motion_skin;
+mod motion_tears;
 mod partial;
 mod placement;
 mod scan_auto;
