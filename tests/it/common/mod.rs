@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+pub mod bvh;
 pub mod gaits;
 pub mod keygraph;
 pub mod skel;

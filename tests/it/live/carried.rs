@@ -6,11 +6,10 @@
 //! (a 32-frame window re-deciding the frames already output, settled by
 //! 20 % a frame) did not meet.
 
-use super::offline::{character, offline, worst_difference};
+use super::offline::{character, offline, undeformed, worst_difference};
 use crate::common;
 
 use surfmotion::db::Character;
-use surfmotion::deform::DeformMode;
 use surfmotion::drive::query::load_mocap;
 use surfmotion::drive::trellis::DatabaseLinks;
 use surfmotion::drive::{Prepared, RetargetOptions};
@@ -84,11 +83,7 @@ fn at_lag_3_the_output_queries_follow_the_offline_motion() {
     let ch = character(&d);
     let fps = ch.manifest().fps;
     // The queries do not depend on the deformation: none, to keep it quick.
-    let opts = RetargetOptions {
-        deform: DeformMode::None,
-        ..RetargetOptions::default()
-    };
-    let prepared = Prepared::new(&ch, &opts).unwrap();
+    let (opts, prepared) = undeformed(&ch);
     // (clip, bound in cm/frame). Measured (the output queries against the
     // offline query, joint-velocity error, lag 3): with the per-window
     // re-decision (32-frame window, settle 0.2) 131_02 0.339, 02_02 0.119;
@@ -133,11 +128,7 @@ fn the_running_floor_keeps_the_pelvis_bounce_closer_to_offline() {
     let Some(d) = common::data_dir() else { return };
     let ch = character(&d);
     let fps = ch.manifest().fps;
-    let opts = RetargetOptions {
-        deform: DeformMode::None,
-        ..RetargetOptions::default()
-    };
-    let prepared = Prepared::new(&ch, &opts).unwrap();
+    let (opts, prepared) = undeformed(&ch);
     {
         let clip = "cmu-bvh/131_02.bvh";
         let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), fps).unwrap();

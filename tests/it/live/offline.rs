@@ -7,6 +7,7 @@ use crate::common;
 
 use std::path::Path;
 use surfmotion::db::Character;
+use surfmotion::deform::DeformMode;
 use surfmotion::drive::query::{MocapPoses, load_mocap};
 use surfmotion::drive::{Analysed, Prepared, RetargetError, RetargetOptions};
 use surfmotion::live::{OnlineOptions, SessionOptions};
@@ -16,6 +17,16 @@ use surfmotion::pose::retarget::Reference;
 /// The synthetic samba database's character (`common::synthetic_db`).
 pub(super) fn character(d: &Path) -> Character {
     Character::load(&common::synthetic_db(d), &surfmotion::db::Quiet).unwrap()
+}
+
+/// Retarget options without deformation (the queries do not depend on
+/// it: quick) and `ch` prepared for them.
+pub(super) fn undeformed(ch: &Character) -> (RetargetOptions, Prepared) {
+    let opts = RetargetOptions {
+        deform: DeformMode::None,
+        ..RetargetOptions::default()
+    };
+    (opts, Prepared::new(ch, &opts).unwrap())
 }
 
 /// A clip's first frames (at most 150: a third of a CMU walk keeps the
