@@ -1450,9 +1450,23 @@ impl Drop for Killed {
 }
 
 /// A virtual X screen on the first free display from :91, and its name.
+/// A display is taken while its lock names a live process; the lock and
+/// socket an Xvfb killed by an earlier run left behind are removed (a
+/// killed Xvfb cannot clean up, so on a reused machine stale locks filled
+/// :91-:119 and the test failed with no display free).
 fn virtual_screen(xvfb: &Path) -> (Killed, String) {
     for n in 91..120 {
-        if Path::new(&format!("/tmp/.X{n}-lock")).exists() {
+        let lock = format!("/tmp/.X{n}-lock");
+        if let Ok(text) = std::fs::read_to_string(&lock) {
+            let alive = text
+                .trim()
+                .parse::<u32>()
+                .is_ok_and(|pid| Path::new(&format!("/proc/{pid}")).exists());
+            if alive || std::fs::remove_file(&lock).is_err() {
+                continue;
+            }
+            let _ = std::fs::remove_file(format!("/tmp/.X11-unix/X{n}"));
+        } else if Path::new(&lock).exists() {
             continue;
         }
         let display = format!(":{n}");
