@@ -1449,12 +1449,35 @@ impl Drop for Killed {
     }
 }
 
+/// A virtual X screen's server, asked to stop (SIGTERM, so that it removes
+/// its lock and socket) when dropped, and killed if it has not stopped
+/// within two seconds.
+struct Screen(std::process::Child);
+
+impl Drop for Screen {
+    fn drop(&mut self) {
+        let pid = self.0.id().to_string();
+        let asked = Command::new("kill").args(["-TERM", &pid]).status();
+        if asked.is_ok_and(|s| s.success()) {
+            for _ in 0..20 {
+                if matches!(self.0.try_wait(), Ok(Some(_))) {
+                    return;
+                }
+                std::thread::sleep(Duration::from_millis(100));
+            }
+        }
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// A virtual X screen on the first free display from :91, and its name.
 /// A display is taken while its lock names a live process; the lock and
 /// socket an Xvfb killed by an earlier run left behind are removed (a
 /// killed Xvfb cannot clean up, so on a reused machine stale locks filled
-/// :91-:119 and the test failed with no display free).
-fn virtual_screen(xvfb: &Path) -> (Killed, String) {
+/// :91-:119 and the test failed with no display free). The screen's
+/// server is stopped with SIGTERM ([`Screen`]), so it cleans up itself.
+fn virtual_screen(xvfb: &Path) -> (Screen, String) {
     for n in 91..120 {
         let lock = format!("/tmp/.X{n}-lock");
         if let Ok(text) = std::fs::read_to_string(&lock) {
@@ -1486,7 +1509,7 @@ fn virtual_screen(xvfb: &Path) -> (Killed, String) {
         for _ in 0..50 {
             std::thread::sleep(Duration::from_millis(100));
             if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
-                return (Killed(child), display);
+                return (Screen(child), display);
             }
             if child.try_wait().unwrap().is_some() {
                 break;
