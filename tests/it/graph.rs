@@ -179,10 +179,10 @@ fn two_clips_sharing_a_segment_get_a_transition_inside_it() {
     );
     // The frame graph lets a path jump across at the transition.
     let adj = g.adjacency();
-    let from = g.frame_id(0, best.m);
+    let from = g.flat_id(0, best.m);
     assert!(
         adj.successors(from)
-            .any(|(t, _)| t == g.frame_id(1, best.n + 1))
+            .any(|(t, _)| t == g.flat_id(1, best.n + 1))
     );
 }
 
