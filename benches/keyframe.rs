@@ -25,6 +25,7 @@
 
 use criterion::Criterion;
 use std::hint::black_box;
+use surfmotion::graph::FlatFrame;
 use surfmotion::keyframe::graph::KeyGraph;
 use surfmotion::keyframe::heading::HeadingTarget;
 use surfmotion::keyframe::options::{Method, SearchOptions};
@@ -44,18 +45,18 @@ fn graph() -> KeyGraph {
         }
     }
     let n = centre.len();
-    let mut succ: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
+    let mut succ: Vec<Vec<(FlatFrame, f64)>> = vec![Vec::new(); n];
     for f in 0..n - 1 {
         if sequence[f] == sequence[f + 1] {
-            succ[f].push((f as u32 + 1, 0.0));
+            succ[f].push((FlatFrame::from_index(f + 1), 0.0));
         }
     }
     // Loops: every gait period, both ways.
     for (s, &(len, _, p)) in seqs.iter().enumerate() {
         let mut m = 5;
         while m + p + 2 < len {
-            succ[start[s] + m + p].push(((start[s] + m + 1) as u32, 0.001));
-            succ[start[s] + m].push(((start[s] + m + p + 1) as u32, 0.001));
+            succ[start[s] + m + p].push((FlatFrame::from_index(start[s] + m + 1), 0.001));
+            succ[start[s] + m].push((FlatFrame::from_index(start[s] + m + p + 1), 0.001));
             m += p / 2 + 3;
         }
     }
@@ -72,7 +73,7 @@ fn graph() -> KeyGraph {
         (1, 2, 30, 117),
         (2, 1, 117, 30),
     ] {
-        succ[start[a] + m].push(((start[b] + k + 1) as u32, 0.004));
+        succ[start[a] + m].push((FlatFrame::from_index(start[b] + k + 1), 0.004));
     }
     KeyGraph::new(&succ, centre, sequence)
 }
@@ -90,10 +91,10 @@ fn bandai9_graph() -> KeyGraph {
         }
     }
     let n = centre.len();
-    let mut succ: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
+    let mut succ: Vec<Vec<(FlatFrame, f64)>> = vec![Vec::new(); n];
     for f in 0..n - 1 {
         if sequence[f] == sequence[f + 1] {
-            succ[f].push((f as u32 + 1, 0.0));
+            succ[f].push((FlatFrame::from_index(f + 1), 0.0));
         }
     }
     let mut x = 0x2545_f491_4f6c_dd1du64;
@@ -108,8 +109,8 @@ fn bandai9_graph() -> KeyGraph {
         let (a, b) = ((next() * 9.0) as usize, (next() * 9.0) as usize);
         let m = a * len + 2 + (next() * (len - 4) as f64) as usize;
         let to = b * len + 2 + (next() * (len - 4) as f64) as usize;
-        if to != m + 1 && !succ[m].iter().any(|e| e.0 == to as u32) {
-            succ[m].push((to as u32, 0.0007 + 0.0074 * next()));
+        if to != m + 1 && !succ[m].iter().any(|e| e.0.index() == to) {
+            succ[m].push((FlatFrame::from_index(to), 0.0007 + 0.0074 * next()));
             added += 1;
         }
     }
@@ -118,7 +119,7 @@ fn bandai9_graph() -> KeyGraph {
 
 fn main() {
     let g = graph();
-    let keys = [0u32, (72 + 36 + 150) as u32];
+    let keys = [FlatFrame::new(0), FlatFrame::new(72 + 36 + 150)];
     let o = SearchOptions::default();
     let mut c = Criterion::default().configure_from_args();
     let mut grp = c.benchmark_group("keyframe/search");
@@ -150,7 +151,11 @@ fn main() {
     }
     // One global target over a via key-frame: the exact-length search over
     // the chain of segments, and the walks' split.
-    let via = [0u32, (72 + 30) as u32, (72 + 36 + 150) as u32];
+    let via = [
+        FlatFrame::new(0),
+        FlatFrame::new(72 + 30),
+        FlatFrame::new(72 + 36 + 150),
+    ];
     let pv = Planner::new(g.clone(), &via, 25.0, &o).unwrap();
     // A grid of targets over the via (distances 4-16 m by 4 m × times
     // 2-10 s by 2 s, 20 queries per iteration, some too fast for the
@@ -215,7 +220,13 @@ fn main() {
         });
     }
     // The one-performer database's shape (module docs).
-    let pb = Planner::new(bandai9_graph(), &[0, (6 * 105 + 100) as u32], 25.0, &o).unwrap();
+    let pb = Planner::new(
+        bandai9_graph(),
+        &[FlatFrame::new(0), FlatFrame::new(6 * 105 + 100)],
+        25.0,
+        &o,
+    )
+    .unwrap();
     let unpruned = SearchOptions {
         lattice: surfmotion::keyframe::options::LatticeOptions {
             prune: false,
@@ -290,7 +301,13 @@ fn main() {
     for (k, e) in turning9.edges.iter_mut().filter(|e| e.jump).enumerate() {
         e.turn = [0.2, -0.4, 0.6, -0.3, 0.5][k % 5];
     }
-    let ph9 = Planner::new(turning9, &[0, (6 * 105 + 100) as u32], 25.0, &o).unwrap();
+    let ph9 = Planner::new(
+        turning9,
+        &[FlatFrame::new(0), FlatFrame::new(6 * 105 + 100)],
+        25.0,
+        &o,
+    )
+    .unwrap();
     for (name, lattice) in [("before", before), ("default", o.lattice)] {
         let plain = SearchOptions { lattice, ..o };
         grp.bench_function(format!("bandai9_{name}_18m_35s"), |b| {

@@ -20,7 +20,7 @@ use crate::db::skeletons::embed_rig;
 use crate::db::{DbError, MANIFEST, Manifest};
 use crate::embed::Embedding;
 use crate::embed::frames::SkeletonKind;
-use crate::graph::{FrameAdjacency, FrameId, SurfaceMotionGraph};
+use crate::graph::{FlatFrame, FrameAdjacency, FrameId, SurfaceMotionGraph};
 use crate::mesh::Mesh;
 use crate::mocap::units::y_up;
 use crate::pose::Pose;
@@ -77,7 +77,7 @@ pub struct Character {
     /// Constraint vertices given in the manifest (`[deform] constraints`).
     constraint_override: Option<Vec<u32>>,
     /// Example frames given in the manifest (`[deform] examples`).
-    example_override: Option<Vec<u32>>,
+    example_override: Option<Vec<FlatFrame>>,
     /// Metres per file unit.
     metres_per_unit: f64,
     /// The files are Z-up.
@@ -172,7 +172,7 @@ impl Character {
                     .parse()
                     .ok()
                     .and_then(|frame| {
-                        graph.flat_id(FrameId {
+                        graph.checked_flat_id(FrameId {
                             seq: s as u32,
                             frame,
                         })
@@ -246,8 +246,8 @@ impl Character {
 
     /// The lowest Y of frame `id` (metres), kept with the frame cache so
     /// that no scan of every frame is needed.
-    pub fn lowest(&self, id: u32) -> f64 {
-        self.frames.lowest(id)
+    pub fn lowest(&self, id: FlatFrame) -> f64 {
+        self.frames.lowest(id.get())
     }
 
     /// Vertices per frame.
@@ -255,9 +255,15 @@ impl Character {
         self.n
     }
 
-    /// The skeleton of every frame (metres, Y-up), indexed by flat id.
+    /// The skeleton of every frame (metres, Y-up), indexed by flat id
+    /// ([`FlatFrame::index`]).
     pub fn poses(&self) -> &[Pose] {
         &self.poses
+    }
+
+    /// The skeleton of frame `id` (metres, Y-up).
+    pub fn pose(&self, id: FlatFrame) -> &Pose {
+        &self.poses[id.index()]
     }
 
     /// The rig's rest joints (metres, Y-up).
@@ -275,14 +281,14 @@ impl Character {
     /// retrieval scales its edge costs by the median of these over every
     /// frame, a pass that mapped all 0.5 GB of a 10⁴-frame database's
     /// sparse similarity into the process; the same values).
-    pub fn dissimilarity(&self, a: u32, b: u32) -> f32 {
-        if b == a.wrapping_add(1)
-            && let Some(&v) = self.steps.get(a as usize)
+    pub fn dissimilarity(&self, a: FlatFrame, b: FlatFrame) -> f32 {
+        if b.get() == a.get().wrapping_add(1)
+            && let Some(&v) = self.steps.get(a.index())
             && !v.is_nan()
         {
             return v;
         }
-        self.matrix.get(a as usize, b as usize)
+        self.matrix.get(a.index(), b.index())
     }
 
     /// The Surface Motion Graph.
@@ -302,7 +308,7 @@ impl Character {
 
     /// Example frames (flat ids) given in the manifest (`[deform]
     /// examples`).
-    pub fn example_override(&self) -> Option<&[u32]> {
+    pub fn example_override(&self) -> Option<&[FlatFrame]> {
         self.example_override.as_deref()
     }
 
@@ -322,23 +328,23 @@ impl Character {
     }
 
     /// The flat id of a database frame (`None` when out of range).
-    pub fn flat_id(&self, f: FrameId) -> Option<u32> {
-        self.graph.flat_id(f)
+    pub fn checked_flat_id(&self, f: FrameId) -> Option<FlatFrame> {
+        self.graph.checked_flat_id(f)
     }
 
     /// The sequence and frame of a flat id.
-    pub fn frame_id(&self, id: u32) -> FrameId {
+    pub fn frame_at(&self, id: FlatFrame) -> FrameId {
         self.graph.frame_at(id)
     }
 
     /// Frame `id`'s positions (metres, Y-up, `n` of them).
-    pub fn frame(&self, id: u32) -> &[[f64; 3]] {
-        self.frames.frame(id)
+    pub fn frame(&self, id: FlatFrame) -> &[[f64; 3]] {
+        self.frames.frame(id.get())
     }
 
     /// Frame `id`'s positions in metres, Y-up, copied to `out` (kept for
     /// callers that own a buffer; [`Character::frame`] borrows instead).
-    pub fn frame_metres(&self, id: u32, out: &mut [[f64; 3]]) {
+    pub fn frame_metres(&self, id: FlatFrame, out: &mut [[f64; 3]]) {
         out.copy_from_slice(self.frame(id));
     }
 
@@ -356,9 +362,9 @@ impl Character {
     }
 
     /// The natural successor of a frame (the next frame of its sequence).
-    pub fn successor(&self, id: u32) -> Option<u32> {
+    pub fn successor(&self, id: FlatFrame) -> Option<FlatFrame> {
         let (s, t) = self.graph.frame_of(id);
-        (t + 1 < self.graph.sequences[s].len).then_some(id + 1)
+        (t + 1 < self.graph.sequences[s].len).then_some(id.next())
     }
 }
 

@@ -11,7 +11,7 @@ pub mod init;
 pub mod manifest;
 pub mod skeletons;
 
-pub use crate::graph::FrameId;
+pub use crate::graph::{FlatFrame, FrameId};
 pub use build::{BuildOptions, BuildProgress, BuildReport, Quiet, build};
 pub use character::{Character, CharacterOptions};
 pub use manifest::{

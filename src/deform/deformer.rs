@@ -35,7 +35,7 @@ pub struct Deformer {
     /// Basis sizes (components per region).
     pub components: Vec<usize>,
     /// Example frames (flat database ids) of each region.
-    pub examples: Vec<Vec<u32>>,
+    pub examples: Vec<Vec<crate::graph::FlatFrame>>,
 }
 
 /// How a region's vertex is constrained in its solve.

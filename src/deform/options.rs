@@ -56,7 +56,7 @@ pub struct DeformOptions {
     /// A database frame (flat id, [`crate::graph::SurfaceMotionGraph::flat_id`])
     /// every region uses as an example (besides those chosen
     /// automatically). Default: none.
-    pub include: Option<u32>,
+    pub include: Option<crate::graph::FlatFrame>,
     /// Learn and solve each part in its own rotating frame (true) or in
     /// world coordinates as the paper does (false). Default: true.
     pub local_frames: bool,

@@ -6,6 +6,7 @@ use super::options::{DeformMode, DeformOptions};
 use super::part_laplacian::{RegionSolver, apply};
 use crate::db::Character;
 use crate::embed::parts::Part;
+use crate::graph::FlatFrame;
 use crate::pose::pose_rotations;
 use crate::rig::Canonical;
 use glam::{DQuat, DVec3};
@@ -149,7 +150,7 @@ pub(super) fn region_examples(
     example_joints: &[Canonical],
     opts: &DeformOptions,
     buf: &mut [[f64; 3]],
-) -> (Vec<u32>, Vec<Vec<[f64; 3]>>) {
+) -> (Vec<FlatFrame>, Vec<Vec<[f64; 3]>>) {
     let nf = ch.frame_count();
     // Examples covering the region's rotations.
     let rots: Vec<Vec<DQuat>> = (0..nf)
@@ -162,12 +163,12 @@ pub(super) fn region_examples(
         Some(e) => e.to_vec(),
         None => fps_examples(&rots, opts.examples)
             .into_iter()
-            .map(|f| f as u32)
+            .map(FlatFrame::from_index)
             .collect(),
     };
     if let Some(f) = opts
         .include
-        .filter(|&f| (f as usize) < nf && !chosen.contains(&f))
+        .filter(|&f| f.index() < nf && !chosen.contains(&f))
     {
         chosen.push(f);
     }
@@ -178,7 +179,7 @@ pub(super) fn region_examples(
         let mut d = vec![[0.0; 3]; x.len()];
         apply(lap, &x, &mut d);
         let r = if opts.local_frames {
-            pose_rotations(ch.rest_pose(), &ch.poses()[f as usize])[joint.index()].inverse()
+            pose_rotations(ch.rest_pose(), ch.pose(f))[joint.index()].inverse()
         } else {
             DQuat::IDENTITY
         };

@@ -3,6 +3,7 @@
 
 use super::timeline::{self, Frames, OutFrame};
 use crate::db::Character;
+use crate::graph::FlatFrame;
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::pose::Pose;
 use crate::pose::measure::{floor_fit, rotate_yaw};
@@ -28,10 +29,10 @@ pub struct BlendScratch<'a> {
 pub fn blend_placed(
     ch: &Character,
     blender: &Blender,
-    used: &[(u32, f64)],
-    anchor: u32,
+    used: &[(FlatFrame, f64)],
+    anchor: FlatFrame,
     place: Floor,
-    same: impl Fn(u32) -> bool,
+    same: impl Fn(FlatFrame) -> bool,
     s: &mut BlendScratch<'_>,
     dst: &mut [[f64; 3]],
 ) {
@@ -39,10 +40,7 @@ pub fn blend_placed(
         let pl = if same(id) {
             place
         } else {
-            place.after(&Floor::fit(
-                &ch.poses()[id as usize],
-                &ch.poses()[anchor as usize],
-            ))
+            place.after(&Floor::fit(ch.pose(id), ch.pose(anchor)))
         };
         ch.frame_metres(id, s.buf);
         for p in s.buf.iter_mut() {
@@ -94,16 +92,16 @@ impl Floor {
 }
 
 impl Frames for Character {
-    fn frame_of(&self, id: u32) -> (usize, usize) {
+    fn frame_of(&self, id: FlatFrame) -> (usize, usize) {
         self.graph().frame_of(id)
     }
-    fn id(&self, s: usize, t: usize) -> u32 {
-        self.graph().frame_id(s, t)
+    fn flat_id(&self, s: usize, t: usize) -> FlatFrame {
+        self.graph().flat_id(s, t)
     }
     fn len(&self, s: usize) -> usize {
         self.graph().sequences[s].len
     }
-    fn transition_window(&self, from: u32, to_prev: u32) -> Option<usize> {
+    fn transition_window(&self, from: FlatFrame, to_prev: FlatFrame) -> Option<usize> {
         let (sa, m) = self.graph().frame_of(from);
         let (sb, n) = self.graph().frame_of(to_prev);
         self.graph()
@@ -119,7 +117,7 @@ impl Frames for Character {
 /// frames either side within a segment (between jumps).
 pub(crate) fn placements(
     ch: &Character,
-    path: &[u32],
+    path: &[FlatFrame],
     frames: &[OutFrame],
     query: &[Pose],
     smooth: usize,
@@ -128,7 +126,7 @@ pub(crate) fn placements(
     let raw: Vec<Floor> = frames
         .iter()
         .zip(query)
-        .map(|(o, q)| Floor::fit(&ch.poses()[o.primary() as usize], q))
+        .map(|(o, q)| Floor::fit(ch.pose(o.primary()), q))
         .collect();
     let mut unwrapped: Vec<f64> = raw.iter().map(|f| f.theta).collect();
     for k in 1..unwrapped.len() {

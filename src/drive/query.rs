@@ -138,7 +138,7 @@ pub fn database_floor_lift_on(ch: &Character, topology: &crate::mesh::Mesh) -> f
     let lowest = |f: &[[f64; 3]]| f.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
     // Each frame's lowest point, kept with the frame cache: no scan of
     // every frame (the frames are memory-mapped, issue 43).
-    let mut lows: Vec<f64> = (0..ch.frame_count() as u32)
+    let mut lows: Vec<f64> = crate::graph::FlatFrame::all(ch.frame_count())
         .map(|id| ch.lowest(id))
         .filter(|h| h.is_finite())
         .collect();

@@ -330,7 +330,7 @@ fn deform_chunk(
 /// The report's row of each output frame: the retrieved frame, its
 /// skeleton cost and what it blends, by sequence name.
 fn report_steps(ch: &Character, retrieval: &Retrieval, frames: &[OutFrame]) -> Vec<Step> {
-    let name = |id: u32| {
+    let name = |id: crate::graph::FlatFrame| {
         let (s, t) = ch.graph().frame_of(id);
         (ch.graph().sequences[s].name.clone(), t)
     };

@@ -16,30 +16,31 @@
 //! frame is thus a weighted set of at most four database frames, blended
 //! non-linearly.
 
+use crate::graph::FlatFrame;
 use serde::Serialize;
 
 /// What one output frame blends: database frames and weights (summing to 1).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct OutFrame {
-    /// `(frame id, weight)`; the first `count` are used.
-    pub sources: [(u32, f64); 4],
+    /// `(frame, weight)`; the first `count` are used.
+    pub sources: [(FlatFrame, f64); 4],
     /// Sources used.
     pub count: usize,
 }
 
 impl OutFrame {
     /// The used sources.
-    pub fn used(&self) -> &[(u32, f64)] {
+    pub fn used(&self) -> &[(FlatFrame, f64)] {
         &self.sources[..self.count]
     }
-    /// The source with the largest weight.
-    pub fn primary(&self) -> u32 {
+    /// The source with the largest weight (frame 0 when none is used).
+    pub fn primary(&self) -> FlatFrame {
         self.used()
             .iter()
             .max_by(|a, b| a.1.total_cmp(&b.1))
-            .map_or(0, |s| s.0)
+            .map_or(FlatFrame::default(), |s| s.0)
     }
-    fn push(&mut self, id: u32, w: f64) {
+    fn push(&mut self, id: FlatFrame, w: f64) {
         if w <= 1e-9 {
             return;
         }
@@ -58,9 +59,9 @@ pub struct Jump {
     /// First output frame after the jump.
     pub at: usize,
     /// Frame left.
-    pub from: u32,
+    pub from: FlatFrame,
     /// Frame entered.
-    pub to: u32,
+    pub to: FlatFrame,
     /// Half-window of the blend.
     pub window: usize,
     /// True for a transition of the graph, false for a cut.
@@ -71,19 +72,19 @@ pub struct Jump {
 /// `(sequence, t)`, and sequence lengths.
 pub trait Frames {
     /// `(sequence, frame)` of an id.
-    fn frame_of(&self, id: u32) -> (usize, usize);
+    fn frame_of(&self, id: FlatFrame) -> (usize, usize);
     /// Id of `(sequence, frame)`.
-    fn id(&self, s: usize, t: usize) -> u32;
+    fn flat_id(&self, s: usize, t: usize) -> FlatFrame;
     /// Frames in sequence `s`.
     fn len(&self, s: usize) -> usize;
     /// The graph's window for a transition `(m → n)` given as
     /// `(frame left, frame entered − 1)`, if it is one.
-    fn transition_window(&self, from: u32, to_prev: u32) -> Option<usize>;
+    fn transition_window(&self, from: FlatFrame, to_prev: FlatFrame) -> Option<usize>;
 }
 
 /// True when `b` plays on from `a`: the same frame, the next, or the one
 /// after (a skip).
-pub fn plays_on(db: &dyn Frames, a: u32, b: u32) -> bool {
+pub fn plays_on(db: &dyn Frames, a: FlatFrame, b: FlatFrame) -> bool {
     let (sa, ta) = db.frame_of(a);
     let (sb, tb) = db.frame_of(b);
     sa == sb && tb >= ta && tb <= ta + 2
@@ -112,14 +113,14 @@ impl Default for TimelineOptions {
 
 /// The output frames for a path, and the jumps it makes.
 pub fn timeline(
-    path: &[u32],
+    path: &[FlatFrame],
     db: &dyn Frames,
     opts: &TimelineOptions,
 ) -> (Vec<OutFrame>, Vec<Jump>) {
     let nq = path.len();
-    let succ = |id: u32| {
+    let succ = |id: FlatFrame| {
         let (s, t) = db.frame_of(id);
-        (t + 1 < db.len(s)).then(|| db.id(s, t + 1))
+        (t + 1 < db.len(s)).then(|| db.flat_id(s, t + 1))
     };
     // Sequence and time of each output frame.
     let mut tau: Vec<(usize, f64)> = path
@@ -180,7 +181,7 @@ pub fn timeline(
             continue;
         }
         let (sb, tb) = db.frame_of(b);
-        let prev_b = (tb > 0).then(|| db.id(sb, tb - 1));
+        let prev_b = (tb > 0).then(|| db.flat_id(sb, tb - 1));
         let win = prev_b.and_then(|p| db.transition_window(a, p));
         jumps.push(Jump {
             at: k,
@@ -207,16 +208,16 @@ pub fn timeline(
         let t = t.clamp(0.0, (len - 1) as f64);
         let f = t.floor() as usize;
         let frac = t - f as f64;
-        out.push(db.id(s, f), w * (1.0 - frac));
+        out.push(db.flat_id(s, f), w * (1.0 - frac));
         if f + 1 < len {
-            out.push(db.id(s, f + 1), w * frac);
+            out.push(db.flat_id(s, f + 1), w * frac);
         }
     };
     let mut out: Vec<OutFrame> = tau
         .iter()
         .map(|&(s, t)| {
             let mut o = OutFrame {
-                sources: [(0, 0.0); 4],
+                sources: [(FlatFrame::default(), 0.0); 4],
                 count: 0,
             };
             split(&mut o, s, t, 1.0);
@@ -240,7 +241,7 @@ pub fn timeline(
                 };
                 let _ = s;
                 let mut o = OutFrame {
-                    sources: [(0, 0.0); 4],
+                    sources: [(FlatFrame::default(), 0.0); 4],
                     count: 0,
                 };
                 split(&mut o, sa, t_a, 1.0 - alpha);
@@ -259,35 +260,39 @@ mod tests {
     /// Two sequences of 20 and 30 frames; one transition a:10 -> b:5 (L=3).
     struct Two;
     impl Frames for Two {
-        fn frame_of(&self, id: u32) -> (usize, usize) {
-            if id < 20 {
-                (0, id as usize)
+        fn frame_of(&self, id: FlatFrame) -> (usize, usize) {
+            if id.get() < 20 {
+                (0, id.index())
             } else {
-                (1, id as usize - 20)
+                (1, id.index() - 20)
             }
         }
-        fn id(&self, s: usize, t: usize) -> u32 {
-            (if s == 0 { t } else { 20 + t }) as u32
+        fn flat_id(&self, s: usize, t: usize) -> FlatFrame {
+            FlatFrame::from_index(if s == 0 { t } else { 20 + t })
         }
         fn len(&self, s: usize) -> usize {
             if s == 0 { 20 } else { 30 }
         }
-        fn transition_window(&self, from: u32, to_prev: u32) -> Option<usize> {
-            (from == 10 && to_prev == 25).then_some(3)
+        fn transition_window(&self, from: FlatFrame, to_prev: FlatFrame) -> Option<usize> {
+            (from == f(10) && to_prev == f(25)).then_some(3)
         }
+    }
+
+    fn f(id: u32) -> FlatFrame {
+        FlatFrame::new(id)
     }
 
     #[test]
     fn repeats_are_interpolated_and_jumps_blended() {
         // a:2 a:2 a:2 a:3 ... a:10 then b:6 b:7 ...
-        let mut path: Vec<u32> = vec![2, 2, 2];
-        path.extend(3..=10);
-        path.extend(26..=32);
+        let mut path: Vec<FlatFrame> = vec![f(2), f(2), f(2)];
+        path.extend((3..=10).map(f));
+        path.extend((26..=32).map(f));
         let (out, jumps) = timeline(&path, &Two, &TimelineOptions::default());
         assert_eq!(out.len(), path.len());
         // Interpolated repeats: 2, 2⅓, 2⅔.
-        assert_eq!(out[0].used(), &[(2, 1.0)]);
-        assert!((out[1].sources[0].1 - 2.0 / 3.0).abs() < 1e-12 && out[1].sources[1].0 == 3);
+        assert_eq!(out[0].used(), &[(f(2), 1.0)]);
+        assert!((out[1].sources[0].1 - 2.0 / 3.0).abs() < 1e-12 && out[1].sources[1].0 == f(3));
         assert!((out[2].sources[1].1 - 2.0 / 3.0).abs() < 1e-12);
         // One transition with the graph's window.
         assert_eq!(jumps.len(), 1);
@@ -298,7 +303,7 @@ mod tests {
         for (k, o) in out.iter().enumerate() {
             let total: f64 = o.used().iter().map(|s| s.1).sum();
             assert!((total - 1.0).abs() < 1e-12, "{k}");
-            let wb: f64 = o.used().iter().filter(|s| s.0 >= 20).map(|s| s.1).sum();
+            let wb: f64 = o.used().iter().filter(|s| s.0 >= f(20)).map(|s| s.1).sum();
             if (8..14).contains(&k) {
                 assert!(wb > last && wb > 0.0 && wb < 1.0, "{k}: {wb}");
                 last = wb;
@@ -310,8 +315,8 @@ mod tests {
         }
         // Before the jump, A's frame pairs with B at the transition offset
         // (a:10 ↔ b:5, i.e. ids 10 ↔ 25).
-        assert!(out[10].used().iter().any(|s| s.0 == 10));
-        assert!(out[10].used().iter().any(|s| s.0 == 25));
+        assert!(out[10].used().iter().any(|s| s.0 == f(10)));
+        assert!(out[10].used().iter().any(|s| s.0 == f(25)));
         // Without blending or interpolation, frames are plain.
         let plain = TimelineOptions {
             interpolate: false,

@@ -34,7 +34,7 @@
 //! two rows, a cut (a jump to any candidate, at `cut_cost`) keeps the
 //! search going and is reported.
 
-use crate::graph::FrameAdjacency;
+use crate::graph::{FlatFrame, FrameAdjacency};
 use crate::pose::{Pose, measure::skeleton_distance};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -77,7 +77,7 @@ impl Default for TrellisOptions {
 #[derive(Debug, Clone, Serialize)]
 pub struct Retrieval {
     /// Database frame per query frame.
-    pub path: Vec<u32>,
+    pub path: Vec<FlatFrame>,
     /// `c_skel` of each path node (metres).
     pub skeleton_cost: Vec<f64>,
     /// The threshold used.
@@ -105,9 +105,9 @@ pub struct TrellisInput<'a> {
     /// The graph's frame adjacency.
     pub adjacency: &'a FrameAdjacency,
     /// Natural successor of a frame.
-    pub successor: &'a (dyn Fn(u32) -> Option<u32> + Sync),
+    pub successor: &'a (dyn Fn(FlatFrame) -> Option<FlatFrame> + Sync),
     /// Frame dissimilarity (the graph's measure).
-    pub dissimilarity: &'a (dyn Fn(u32, u32) -> f32 + Sync),
+    pub dissimilarity: &'a (dyn Fn(FlatFrame, FlatFrame) -> f32 + Sync),
 }
 
 /// A database character's frame links for the trellis (its natural
@@ -116,8 +116,8 @@ pub struct TrellisInput<'a> {
 /// session).
 pub struct DatabaseLinks<'a> {
     ch: &'a crate::db::Character,
-    successor: Box<dyn Fn(u32) -> Option<u32> + Sync + 'a>,
-    dissimilarity: Box<dyn Fn(u32, u32) -> f32 + Sync + 'a>,
+    successor: Box<dyn Fn(FlatFrame) -> Option<FlatFrame> + Sync + 'a>,
+    dissimilarity: Box<dyn Fn(FlatFrame, FlatFrame) -> f32 + Sync + 'a>,
 }
 
 impl<'a> DatabaseLinks<'a> {
@@ -162,7 +162,7 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
     let kmax = opts.max_candidates.max(1).min(ng);
     let kmin = opts.min_candidates.max(1).min(kmax);
     // Nearest frames of every query frame (sorted by cost).
-    let near: Vec<Vec<(f32, u32)>> = query
+    let near: Vec<Vec<(f32, FlatFrame)>> = query
         .par_iter()
         .map_init(
             || Vec::with_capacity(ng),
@@ -172,7 +172,7 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
                     db.poses
                         .iter()
                         .enumerate()
-                        .map(|(i, p)| (skeleton_distance(q, p) as f32, i as u32)),
+                        .map(|(i, p)| (skeleton_distance(q, p) as f32, FlatFrame::from_index(i))),
                 );
                 if kmax < all.len() {
                     all.select_nth_unstable_by(kmax - 1, |a, b| a.0.total_cmp(&b.0));
@@ -189,7 +189,7 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
     let p90 = best[((best.len() as f64 * 0.9) as usize).min(best.len() - 1)];
     let t_skel = opts.t_skel.unwrap_or((2.0 * median).max(p90));
     let node_scale = median.max(1e-6);
-    let mut steps: Vec<f64> = (0..ng as u32)
+    let mut steps: Vec<f64> = FlatFrame::all(ng)
         .filter_map(|f| (db.successor)(f).map(|g| (db.dissimilarity)(f, g) as f64))
         .filter(|c| *c > 0.0)
         .collect();
@@ -200,7 +200,7 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
         .unwrap_or(1.0)
         .max(1e-12);
     let mut widened = Vec::new();
-    let rows: Vec<Vec<(f32, u32)>> = near
+    let rows: Vec<Vec<(f32, FlatFrame)>> = near
         .into_iter()
         .enumerate()
         .map(|(k, r)| {
@@ -214,7 +214,7 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
         .collect();
     let nodes = rows.iter().map(Vec::len).sum();
     let node = |c: f32| opts.w_retr * c as f64 / node_scale;
-    let edge = |i: u32, j: u32| -> f64 {
+    let edge = |i: FlatFrame, j: FlatFrame| -> f64 {
         match (db.successor)(i) {
             Some(s) if s == j => 0.0,
             _ if i == j => 0.0,
@@ -250,7 +250,7 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
         .min_by(|a, b| a.1.total_cmp(b.1))
         .map(|(s, c)| (s, *c))
         .unwrap_or((0, 0.0));
-    let mut path = vec![0u32; nq];
+    let mut path = vec![FlatFrame::default(); nq];
     let mut skel = vec![0.0; nq];
     let mut cuts = Vec::new();
     for k in (0..nq).rev() {
@@ -304,16 +304,16 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
 pub(crate) fn relax_row(
     db: &TrellisInput,
     opts: &TrellisOptions,
-    prev: &[(f32, u32)],
+    prev: &[(f32, FlatFrame)],
     cost: &[f64],
-    row: &[(f32, u32)],
+    row: &[(f32, FlatFrame)],
     slot: &mut [u32],
     node: &dyn Fn(f32) -> f64,
-    edge: &dyn Fn(u32, u32) -> f64,
+    edge: &dyn Fn(FlatFrame, FlatFrame) -> f64,
     jump: f64,
 ) -> (Vec<f64>, Vec<(u32, bool)>) {
     for (s, c) in row.iter().enumerate() {
-        slot[c.1 as usize] = s as u32;
+        slot[c.1.index()] = s as u32;
     }
     let mut next = vec![f64::INFINITY; row.len()];
     let mut bp = vec![(u32::MAX, false); row.len()];
@@ -323,8 +323,8 @@ pub(crate) fn relax_row(
             continue;
         }
         let i = p.1;
-        let mut relax = |j: u32| {
-            let s = slot[j as usize];
+        let mut relax = |j: FlatFrame| {
+            let s = slot[j.index()];
             if s != u32::MAX {
                 let mut v = base + edge(i, j);
                 if jump > 0.0 && !(i == j || (db.successor)(i) == Some(j)) {
@@ -361,7 +361,7 @@ pub(crate) fn relax_row(
     }
     for (s, c) in row.iter().enumerate() {
         next[s] += node(c.0);
-        slot[c.1 as usize] = u32::MAX;
+        slot[c.1.index()] = u32::MAX;
     }
     (next, bp)
 }

@@ -1,12 +1,15 @@
 //! The Surface Motion Graph (Huang et al. 2015, Secs. 4.2–4.3): transitions
 //! found by adaptive temporal filtering of the similarity matrix
 //! ([`transitions`]), and the graph of sequences and transitions with its
-//! frame-level adjacency ([`smg`]).
+//! frame-level adjacency ([`smg`]), over database frames named by
+//! [`FlatFrame`] (flat) or [`FrameId`] (sequence and frame) ([`frame`]).
 
 pub mod compare;
+pub mod frame;
 pub mod plot;
 pub mod smg;
 pub mod transitions;
 
-pub use smg::{FrameAdjacency, FrameId, GraphEdits, SequenceEdge, SurfaceMotionGraph};
+pub use frame::{FlatFrame, FrameId};
+pub use smg::{FrameAdjacency, GraphEdits, SequenceEdge, SurfaceMotionGraph};
 pub use transitions::{Transition, TransitionOptions};

@@ -2,29 +2,18 @@
 //! nodes, transitions as edges, the user's edits, and the flat frame-level
 //! adjacency the searches walk.
 //!
-//! Frames are numbered globally (`u32`), sequence after sequence. The frame
+//! Frames are numbered globally ([`FlatFrame`]), sequence after sequence. The frame
 //! graph has an edge `t → t+1` inside every sequence (cost 0) and, for every
 //! transition `(i, m) → (j, n)` with half-window `L`, an edge from frame `m`
 //! of `i` to frame `n+1` of `j` with the transition's cost: a path taking it
 //! plays `i` up to `m` and continues in `j` after `n`; the blend over
 //! `m−L..=m+L` / `n−L..=n+L` is applied when the path is turned into meshes.
 
+use super::frame::{FlatFrame, FrameId};
 use super::transitions::{self, Transition, TransitionOptions};
 use crate::similarity::{Dissimilarity, Measure, Span};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
-
-/// A database frame: a sequence (in graph order) and a frame in it. The
-/// frame-level adjacency and the searches use the flat `u32` id instead
-/// ([`SurfaceMotionGraph::flat_id`]: frames of all sequences numbered in
-/// order).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
-pub struct FrameId {
-    /// Sequence index.
-    pub seq: u32,
-    /// Frame within the sequence.
-    pub frame: u32,
-}
 
 /// User edits of the graph (manifest `[graph]`).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -222,19 +211,20 @@ impl SurfaceMotionGraph {
         self.sequences.iter().map(|s| s.len).sum()
     }
 
-    /// Global id of frame `t` of sequence `s`.
-    pub fn frame_id(&self, s: usize, t: usize) -> u32 {
-        (self.sequences[s].start + t) as u32
+    /// The flat id of frame `t` of sequence `s` (`s` must be a sequence of
+    /// the graph; [`SurfaceMotionGraph::checked_flat_id`] checks).
+    pub fn flat_id(&self, s: usize, t: usize) -> FlatFrame {
+        FlatFrame::from_index(self.sequences[s].start + t)
     }
 
     /// The flat id of a frame (`None` when out of range).
-    pub fn flat_id(&self, f: FrameId) -> Option<u32> {
+    pub fn checked_flat_id(&self, f: FrameId) -> Option<FlatFrame> {
         let q = self.sequences.get(f.seq as usize)?;
-        ((f.frame as usize) < q.len).then(|| self.frame_id(f.seq as usize, f.frame as usize))
+        ((f.frame as usize) < q.len).then(|| self.flat_id(f.seq as usize, f.frame as usize))
     }
 
     /// The frame of a flat id ([`SurfaceMotionGraph::frame_of`] typed).
-    pub fn frame_at(&self, id: u32) -> FrameId {
+    pub fn frame_at(&self, id: FlatFrame) -> FrameId {
         let (s, t) = self.frame_of(id);
         FrameId {
             seq: s as u32,
@@ -242,9 +232,10 @@ impl SurfaceMotionGraph {
         }
     }
 
-    /// Sequence and frame of a global id.
-    pub fn frame_of(&self, id: u32) -> (usize, usize) {
-        let id = id as usize;
+    /// Sequence and frame of a flat id (the last sequence's for an id past
+    /// the end).
+    pub fn frame_of(&self, id: FlatFrame) -> (usize, usize) {
+        let id = id.index();
         let s = self
             .sequences
             .partition_point(|q| q.start + q.len <= id)
@@ -255,16 +246,16 @@ impl SurfaceMotionGraph {
     /// The frame-level adjacency (successors of each frame with costs).
     pub fn adjacency(&self) -> FrameAdjacency {
         let n = self.frame_count();
-        let mut out: Vec<Vec<(u32, f32)>> = vec![Vec::new(); n];
+        let mut out: Vec<Vec<(FlatFrame, f32)>> = vec![Vec::new(); n];
         for (s, span) in self.sequences.iter().enumerate() {
             for t in 0..span.len.saturating_sub(1) {
-                out[self.frame_id(s, t) as usize].push((self.frame_id(s, t + 1), 0.0));
+                out[self.flat_id(s, t).index()].push((self.flat_id(s, t + 1), 0.0));
             }
         }
         for t in &self.transitions {
             if t.n + 1 < self.sequences[t.to].len {
-                out[self.frame_id(t.from, t.m) as usize]
-                    .push((self.frame_id(t.to, t.n + 1), t.cost as f32));
+                out[self.flat_id(t.from, t.m).index()]
+                    .push((self.flat_id(t.to, t.n + 1), t.cost as f32));
             }
         }
         let mut offsets = Vec::with_capacity(n + 1);
@@ -330,18 +321,18 @@ fn escape(s: &str) -> String {
 pub struct FrameAdjacency {
     /// Row starts, `frames + 1` entries.
     pub offsets: Vec<u32>,
-    /// Successor frame ids.
-    pub targets: Vec<u32>,
+    /// Successor frames.
+    pub targets: Vec<FlatFrame>,
     /// Edge costs (0 along a sequence, the transition cost on a jump).
     pub costs: Vec<f32>,
 }
 
 impl FrameAdjacency {
     /// Successors of frame `f` with costs.
-    pub fn successors(&self, f: u32) -> impl Iterator<Item = (u32, f32)> + '_ {
+    pub fn successors(&self, f: FlatFrame) -> impl Iterator<Item = (FlatFrame, f32)> + '_ {
         let (a, b) = (
-            self.offsets[f as usize] as usize,
-            self.offsets[f as usize + 1] as usize,
+            self.offsets[f.index()] as usize,
+            self.offsets[f.index() + 1] as usize,
         );
         self.targets[a..b]
             .iter()
@@ -498,12 +489,12 @@ mod tests {
             .filter(|t| t.n + 1 < g.sequences[t.to].len)
             .count();
         assert_eq!(adj.targets.len(), steps + jumps);
-        let f = g.frame_id(0, ab[0].m);
+        let f = g.flat_id(0, ab[0].m);
         assert!(
             adj.successors(f)
-                .any(|(t, _)| t == g.frame_id(1, ab[0].n + 1))
+                .any(|(t, _)| t == g.flat_id(1, ab[0].n + 1))
         );
-        assert_eq!(g.frame_of(g.frame_id(1, 7)), (1, 7));
+        assert_eq!(g.frame_of(g.flat_id(1, 7)), (1, 7));
         assert!(g.to_dot().contains("s0 -> s1"));
         // Edits.
         let edits = GraphEdits {

@@ -3,6 +3,7 @@
 //! that each returns them.
 
 use super::repeats::RepeatsError;
+use crate::graph::FlatFrame;
 use crate::util::budget::OverBudget;
 
 /// What went wrong in a search.
@@ -10,14 +11,14 @@ use crate::util::budget::OverBudget;
 pub enum SearchError {
     /// A key-frame outside the graph.
     #[error("key-frame {0} is not a frame of the graph ({1} frames)")]
-    Frame(u32, usize),
+    Frame(FlatFrame, usize),
     /// No path joins two key-frames.
     #[error("no path from {from} to {to} in the graph")]
     NoPath {
-        /// Start frame id.
-        from: u32,
-        /// End frame id.
-        to: u32,
+        /// Start frame.
+        from: FlatFrame,
+        /// End frame.
+        to: FlatFrame,
     },
     /// The repetition solver failed.
     #[error(transparent)]

@@ -27,8 +27,8 @@
 use super::graph::KeyGraph;
 use super::smoothness::FrameSet;
 use crate::db::Character;
-use crate::graph::SurfaceMotionGraph;
 use crate::graph::transitions::TransitionOptions;
+use crate::graph::{FlatFrame, SurfaceMotionGraph};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -118,7 +118,7 @@ pub struct TransitionFloor {
     /// `(frame left, frame entered, bound, L)` in both directions (for
     /// [`path_floor`] on [`KeyGraph::of_character_with`]).
     #[serde(skip)]
-    pub bounds: Vec<(u32, u32, f64, usize)>,
+    pub bounds: Vec<(FlatFrame, FlatFrame, f64, usize)>,
 }
 
 /// The α′(k)-weighted average of `h(k)`, `k ∈ [−l, l]`, the least over
@@ -149,24 +149,26 @@ fn best_window(h: &[f64], lo: usize, hi: usize) -> (usize, f64) {
 struct Level<'a> {
     frames: &'a FrameSet,
     stride: usize,
-    cache: HashMap<(u32, u32), f64>,
+    cache: HashMap<(FlatFrame, FlatFrame), f64>,
 }
 
 impl Level<'_> {
     /// The weighted window `(l, value)` of the diagonal `(a + k, b + k)`,
     /// `k ∈ [−hi, hi]`, measuring missing pairs in parallel.
-    fn window(&mut self, a: u32, b: u32, lo: usize, hi: usize) -> (usize, f64) {
-        let pairs: Vec<(u32, u32)> = (-(hi as i64)..=hi as i64)
-            .map(|k| ((a as i64 + k) as u32, (b as i64 + k) as u32))
+    fn window(&mut self, a: FlatFrame, b: FlatFrame, lo: usize, hi: usize) -> (usize, f64) {
+        // The callers keep `a ± hi` and `b ± hi` inside their sequences.
+        let at = |f: FlatFrame, k: i64| FlatFrame::new((i64::from(f.get()) + k) as u32);
+        let pairs: Vec<(FlatFrame, FlatFrame)> = (-(hi as i64)..=hi as i64)
+            .map(|k| (at(a, k), at(b, k)))
             .map(|(x, y)| (x.min(y), x.max(y)))
             .collect();
-        let missing: Vec<(u32, u32)> = pairs
+        let missing: Vec<(FlatFrame, FlatFrame)> = pairs
             .iter()
             .copied()
             .filter(|p| !self.cache.contains_key(p))
             .collect();
         let (frames, stride) = (self.frames, self.stride);
-        let got: Vec<((u32, u32), f64)> = missing
+        let got: Vec<((FlatFrame, FlatFrame), f64)> = missing
             .par_iter()
             .map(|&(x, y)| ((x, y), frames.distance(x, y, stride)))
             .collect();
@@ -280,9 +282,9 @@ struct Pair<'a> {
 }
 
 impl Pair<'_> {
-    /// The frame ids of frame `m` of sequence `i` and `n` of `j`.
-    fn ids(&self, m: usize, n: usize) -> (u32, u32) {
-        (self.g.frame_id(self.i, m), self.g.frame_id(self.j, n))
+    /// The flat ids of frame `m` of sequence `i` and `n` of `j`.
+    fn ids(&self, m: usize, n: usize) -> (FlatFrame, FlatFrame) {
+        (self.g.flat_id(self.i, m), self.g.flat_id(self.j, n))
     }
 }
 
@@ -303,17 +305,17 @@ impl Levels<'_> {
     fn fill_coarse(&mut self, p: &Pair) {
         let (g, i, j, opts) = (p.g, p.i, p.j, p.opts);
         let coarse = &mut self.coarse;
-        let all: Vec<(u32, u32)> = (0..p.li)
+        let all: Vec<(FlatFrame, FlatFrame)> = (0..p.li)
             .flat_map(|r| (0..p.lj).map(move |s| (r, s)))
             .filter(|&(r, s)| i != j || s >= r + opts.min_gap)
             .map(|(r, s)| {
-                let (x, y) = (g.frame_id(i, r), g.frame_id(j, s));
+                let (x, y) = (g.flat_id(i, r), g.flat_id(j, s));
                 (x.min(y), x.max(y))
             })
             .filter(|p| !coarse.cache.contains_key(p))
             .collect();
         let (frames, stride) = (coarse.frames, coarse.stride);
-        let got: Vec<((u32, u32), f64)> = all
+        let got: Vec<((FlatFrame, FlatFrame), f64)> = all
             .par_iter()
             .map(|&(x, y)| ((x, y), frames.distance(x, y, stride)))
             .collect();
@@ -326,7 +328,7 @@ impl Levels<'_> {
     fn candidates(
         &mut self,
         p: &Pair,
-        bounds: &mut Vec<(u32, u32, f64, usize)>,
+        bounds: &mut Vec<(FlatFrame, FlatFrame, f64, usize)>,
         at: &mut dyn FnMut(u64),
     ) -> Vec<Candidate> {
         let (li, lj, opts) = (p.li, p.lj, p.opts);
@@ -350,10 +352,10 @@ impl Levels<'_> {
                 let (l, v) = self.coarse.window(a, b, p.lo, hi);
                 cands.push((v, m, n, hi));
                 if n + 1 < lj {
-                    bounds.push((a, b + 1, v, l));
+                    bounds.push((a, b.next(), v, l));
                 }
                 if m + 1 < li {
-                    bounds.push((b, a + 1, v, l));
+                    bounds.push((b, a.next(), v, l));
                 }
             }
         }
@@ -435,7 +437,12 @@ pub struct PathFloor {
 /// `to` with `k ∈ [1, max_transitions]` jumps (module docs). With `g`
 /// priced by smoothness, a lower bound of the smoothness of every path
 /// between the two key-frames with at most that many transitions.
-pub fn path_floor(g: &KeyGraph, from: u32, to: u32, max_transitions: usize) -> PathFloor {
+pub fn path_floor(
+    g: &KeyGraph,
+    from: FlatFrame,
+    to: FlatFrame,
+    max_transitions: usize,
+) -> PathFloor {
     let n = g.step.len();
     let inf = f64::INFINITY;
     // Along a sequence: frames reachable without a jump.
@@ -445,18 +452,18 @@ pub fn path_floor(g: &KeyGraph, from: u32, to: u32, max_transitions: usize) -> P
                 continue;
             }
             for e in &g.edges[g.offsets[f] as usize..g.offsets[f + 1] as usize] {
-                if !e.jump && d[f] < d[e.to as usize] {
-                    d[e.to as usize] = d[f];
+                if !e.jump && d[f] < d[e.to.index()] {
+                    d[e.to.index()] = d[f];
                 }
             }
         }
     };
     let mut d = vec![inf; n];
-    if (from as usize) < n {
-        d[from as usize] = 0.0;
+    if from.index() < n {
+        d[from.index()] = 0.0;
     }
     sweep(&mut d);
-    let direct = (to as usize) < n && d[to as usize].is_finite();
+    let direct = to.index() < n && d[to.index()].is_finite();
     let mut by_count = Vec::new();
     for _ in 0..max_transitions {
         let mut next = vec![inf; n];
@@ -466,8 +473,8 @@ pub fn path_floor(g: &KeyGraph, from: u32, to: u32, max_transitions: usize) -> P
             }
             for e in &g.edges[g.offsets[f] as usize..g.offsets[f + 1] as usize] {
                 let c = df + e.cost;
-                if e.jump && c < next[e.to as usize] {
-                    next[e.to as usize] = c;
+                if e.jump && c < next[e.to.index()] {
+                    next[e.to.index()] = c;
                 }
             }
         }
@@ -475,7 +482,7 @@ pub fn path_floor(g: &KeyGraph, from: u32, to: u32, max_transitions: usize) -> P
         d = next;
         let k = by_count.len() + 1;
         by_count.push(
-            d.get(to as usize)
+            d.get(to.index())
                 .filter(|x| x.is_finite())
                 .map(|x| x / k as f64),
         );
@@ -515,17 +522,17 @@ mod tests {
 
     /// Two sequences of 10 frames (0-9, 10-19) with the jumps given.
     fn two(jumps: &[(u32, u32, f64)]) -> KeyGraph {
-        let mut succ: Vec<Vec<(u32, f64)>> = (0..20u32)
+        let mut succ: Vec<Vec<(FlatFrame, f64)>> = (0..20u32)
             .map(|f| {
                 if f % 10 != 9 {
-                    vec![(f + 1, 0.0)]
+                    vec![(FlatFrame::new(f + 1), 0.0)]
                 } else {
                     vec![]
                 }
             })
             .collect();
         for &(a, b, c) in jumps {
-            succ[a as usize].push((b, c));
+            succ[a as usize].push((FlatFrame::new(b), c));
         }
         let seq = (0..20).map(|f| f / 10).collect();
         KeyGraph::new(&succ, vec![[0.0; 2]; 20], seq)
@@ -536,7 +543,8 @@ mod tests {
         // 0 → 15 needs the jump 3 → 12 (0.3); the loop 16 → 11 (0.1)
         // dilutes it: k = 2: (0.3 + 0.1) / 2; k = 3: 0.5 / 3.
         let g = two(&[(3, 12, 0.3), (16, 11, 0.1), (5, 18, 0.9)]);
-        let p = path_floor(&g, 0, 15, 3);
+        let f = FlatFrame::new;
+        let p = path_floor(&g, f(0), f(15), 3);
         assert!(!p.direct);
         let want = [0.3, 0.2, 0.5 / 3.0];
         for (got, want) in p.by_count.iter().zip(want) {
@@ -545,8 +553,8 @@ mod tests {
         assert_eq!(p.best.map(|b| b.0), Some(3));
         // A key-frame later in the same sequence needs no transition; one
         // before the start with no loop back cannot be reached.
-        assert!(path_floor(&g, 0, 7, 2).direct);
-        let back = path_floor(&g, 12, 2, 4);
+        assert!(path_floor(&g, f(0), f(7), 2).direct);
+        let back = path_floor(&g, f(12), f(2), 4);
         assert!(!back.direct && back.best.is_none());
     }
 }

@@ -13,14 +13,14 @@
 
 use crate::db::Character;
 use crate::drive::timeline::Frames;
-use crate::graph::FrameAdjacency;
+use crate::graph::{FlatFrame, FrameAdjacency};
 use std::collections::HashMap;
 
 /// An arc of the frame graph as the search sees it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FrameEdge {
     /// Frame entered.
-    pub to: u32,
+    pub to: FlatFrame,
     /// Transition cost (0 along a sequence).
     pub cost: f64,
     /// True for a transition (a jump), false for the next frame of the
@@ -35,7 +35,7 @@ pub struct FrameEdge {
 }
 
 /// The frame graph with per-frame steps. Frames are numbered as in
-/// [`crate::graph::SurfaceMotionGraph::frame_id`].
+/// [`crate::graph::SurfaceMotionGraph::flat_id`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct KeyGraph {
     /// Successors of every frame (CSR rows: `offsets[f]..offsets[f+1]`).
@@ -53,7 +53,7 @@ pub struct KeyGraph {
     /// Blend half-window of every jump `(frame left, frame entered)` when
     /// the jumps are not the Surface Motion Graph's (key-frame transitions
     /// chosen by [`super::select`]); empty: the graph's windows.
-    pub windows: HashMap<(u32, u32), usize>,
+    pub windows: HashMap<(FlatFrame, FlatFrame), usize>,
 }
 
 impl KeyGraph {
@@ -61,7 +61,11 @@ impl KeyGraph {
     /// `sequence[f]` names the sequence of frame `f`; frames of one
     /// sequence are consecutive. An arc `f → f+1` inside a sequence with
     /// cost 0 is a plain step; any other arc is a jump.
-    pub fn new(succ: &[Vec<(u32, f64)>], centre: Vec<[f64; 2]>, sequence: Vec<u32>) -> KeyGraph {
+    pub fn new(
+        succ: &[Vec<(FlatFrame, f64)>],
+        centre: Vec<[f64; 2]>,
+        sequence: Vec<u32>,
+    ) -> KeyGraph {
         let n = succ.len();
         let mut offsets = Vec::with_capacity(n + 1);
         let mut edges = Vec::new();
@@ -69,7 +73,7 @@ impl KeyGraph {
         for (f, row) in succ.iter().enumerate() {
             for &(to, cost) in row {
                 let plain =
-                    to as usize == f + 1 && sequence.get(f + 1) == sequence.get(f) && cost == 0.0;
+                    to.index() == f + 1 && sequence.get(f + 1) == sequence.get(f) && cost == 0.0;
                 edges.push(FrameEdge {
                     to,
                     cost,
@@ -106,7 +110,7 @@ impl KeyGraph {
         sequence: Vec<u32>,
     ) -> KeyGraph {
         let n = adj.offsets.len().saturating_sub(1);
-        let succ: Vec<Vec<(u32, f64)>> = (0..n as u32)
+        let succ: Vec<Vec<(FlatFrame, f64)>> = FlatFrame::all(n)
             .map(|f| adj.successors(f).map(|(t, c)| (t, c as f64)).collect())
             .collect();
         KeyGraph::new(&succ, centre, sequence)
@@ -121,7 +125,10 @@ impl KeyGraph {
 
     /// [`KeyGraph::of_character`] with the jumps replaced by `jumps`
     /// (`(frame left, frame entered, cost, half-window)`) when given.
-    pub fn of_character_with(ch: &Character, jumps: Option<&[(u32, u32, f64, usize)]>) -> KeyGraph {
+    pub fn of_character_with(
+        ch: &Character,
+        jumps: Option<&[(FlatFrame, FlatFrame, f64, usize)]>,
+    ) -> KeyGraph {
         let centre = frame_centres(ch);
         let mut sequence = vec![0u32; ch.frame_count()];
         for (s, span) in ch.graph().sequences.iter().enumerate() {
@@ -135,17 +142,17 @@ impl KeyGraph {
             None => KeyGraph::from_adjacency(ch.adjacency(), centre, sequence),
             Some(jumps) => {
                 let n = ch.frame_count();
-                let mut succ: Vec<Vec<(u32, f64)>> = (0..n)
+                let mut succ: Vec<Vec<(FlatFrame, f64)>> = (0..n)
                     .map(|f| {
                         if f + 1 < n && sequence[f + 1] == sequence[f] {
-                            vec![(f as u32 + 1, 0.0)]
+                            vec![(FlatFrame::from_index(f + 1), 0.0)]
                         } else {
                             Vec::new()
                         }
                     })
                     .collect();
                 for &(a, b, c, _) in jumps {
-                    if let Some(row) = succ.get_mut(a as usize) {
+                    if let Some(row) = succ.get_mut(a.index()) {
                         row.push((b, c));
                     }
                 }
@@ -158,7 +165,7 @@ impl KeyGraph {
         for f in 0..g.len() {
             let (lo, hi) = (g.offsets[f] as usize, g.offsets[f + 1] as usize);
             for e in &mut g.edges[lo..hi] {
-                let b = e.to as usize;
+                let b = e.to.index();
                 if e.jump && b > 0 && b < ch.poses().len() && f < ch.poses().len() {
                     e.turn = crate::drive::Floor::fit(&ch.poses()[b - 1], &ch.poses()[f]).theta;
                 }
@@ -178,12 +185,18 @@ impl KeyGraph {
     }
 
     /// Arcs leaving `f`.
-    pub fn successors(&self, f: u32) -> &[FrameEdge] {
-        &self.edges[self.offsets[f as usize] as usize..self.offsets[f as usize + 1] as usize]
+    pub fn successors(&self, f: FlatFrame) -> &[FrameEdge] {
+        &self.edges[self.offsets[f.index()] as usize..self.offsets[f.index() + 1] as usize]
+    }
+
+    /// Floor distance of frame `f`'s centroid from the previous frame of
+    /// its sequence ([`KeyGraph::step`]).
+    pub fn step_of(&self, f: FlatFrame) -> f64 {
+        self.step[f.index()]
     }
 
     /// The arc `a → b`, the cheapest if several.
-    pub fn edge(&self, a: u32, b: u32) -> Option<FrameEdge> {
+    pub fn edge(&self, a: FlatFrame, b: FlatFrame) -> Option<FrameEdge> {
         self.successors(a)
             .iter()
             .filter(|e| e.to == b)
@@ -203,20 +216,20 @@ pub struct KeyFrames<'a> {
 }
 
 impl Frames for KeyFrames<'_> {
-    fn frame_of(&self, id: u32) -> (usize, usize) {
+    fn frame_of(&self, id: FlatFrame) -> (usize, usize) {
         Frames::frame_of(self.ch, id)
     }
-    fn id(&self, s: usize, t: usize) -> u32 {
-        Frames::id(self.ch, s, t)
+    fn flat_id(&self, s: usize, t: usize) -> FlatFrame {
+        Frames::flat_id(self.ch, s, t)
     }
     fn len(&self, s: usize) -> usize {
         Frames::len(self.ch, s)
     }
-    fn transition_window(&self, from: u32, to_prev: u32) -> Option<usize> {
+    fn transition_window(&self, from: FlatFrame, to_prev: FlatFrame) -> Option<usize> {
         if self.graph.windows.is_empty() {
             Frames::transition_window(self.ch, from, to_prev)
         } else {
-            self.graph.windows.get(&(from, to_prev + 1)).copied()
+            self.graph.windows.get(&(from, to_prev.next())).copied()
         }
     }
 }
@@ -226,8 +239,8 @@ impl Frames for KeyFrames<'_> {
 pub fn frame_centres(ch: &Character) -> Vec<[f64; 2]> {
     // The character's frames are in metres, Y-up already (converted once
     // on load).
-    (0..ch.frame_count())
-        .map(|f| centre_of(ch.frame(f as u32)))
+    FlatFrame::all(ch.frame_count())
+        .map(|f| centre_of(ch.frame(f)))
         .collect()
 }
 

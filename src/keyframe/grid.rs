@@ -31,6 +31,7 @@ use super::segment::{Reach, Target};
 use super::{Planner, Targets, mean_smoothness, mean_smoothness_vertex, transitions};
 use crate::db::Character;
 use crate::drive::timeline::TimelineOptions;
+use crate::graph::FlatFrame;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -356,7 +357,10 @@ pub fn reachable_by_speed(reach: &[Reach], fps: f64, d: f64, t: f64) -> bool {
 /// Every transition the search may take, as `(from, to, window)` at its
 /// own blend window: the key graph's own jumps when it chose them
 /// ([`super::TransitionSet::Measured`]), else the Surface Motion Graph's.
-pub fn graph_jumps(ch: &Character, g: &super::graph::KeyGraph) -> Vec<(u32, u32, usize)> {
+pub fn graph_jumps(
+    ch: &Character,
+    g: &super::graph::KeyGraph,
+) -> Vec<(FlatFrame, FlatFrame, usize)> {
     if !g.windows.is_empty() {
         return g.windows.iter().map(|(&(a, b), &l)| (a, b, l)).collect();
     }
@@ -364,8 +368,8 @@ pub fn graph_jumps(ch: &Character, g: &super::graph::KeyGraph) -> Vec<(u32, u32,
         .transitions
         .iter()
         .map(|t| {
-            let from = ch.graph().frame_id(t.from, t.m);
-            let to = ch.graph().frame_id(t.to, t.n) + 1;
+            let from = ch.graph().flat_id(t.from, t.m);
+            let to = ch.graph().flat_id(t.to, t.n).next();
             (from, to, t.window)
         })
         .collect()
@@ -387,10 +391,10 @@ pub fn graph_smoothness(
         .collect()
 }
 
-/// True when the jump `from → to` (flat frame ids; `to − 1` pairs with
-/// `from`) joins two different sequences.
-pub(crate) fn is_across(ch: &Character, from: u32, to: u32) -> bool {
-    ch.graph().frame_of(from).0 != ch.graph().frame_of(to.saturating_sub(1)).0
+/// True when the jump `from → to` (`to − 1` pairs with `from`) joins two
+/// different sequences.
+pub(crate) fn is_across(ch: &Character, from: FlatFrame, to: FlatFrame) -> bool {
+    ch.graph().frame_of(from).0 != ch.graph().frame_of(to.prev().unwrap_or(to)).0
 }
 
 /// [`is_across`] of a transition report's frames (`SEQ:F` names; the

@@ -10,6 +10,7 @@ use super::{place, pose, smoothness};
 use crate::db::Character;
 use crate::deform::DeformMode;
 use crate::drive::{FrameSink, Prepared, RetargetOptions};
+use crate::graph::FlatFrame;
 use std::time::Instant;
 
 /// The synthesised key-frame animation.
@@ -22,7 +23,7 @@ pub struct Output {
     pub report: Report,
 }
 
-/// Plans and synthesises: key-frame ids `keys` (at least two), targets,
+/// Plans and synthesises: key-frames `keys` (at least two), targets,
 /// options. Errors: the search's (no path between two key-frames) or a
 /// failed factorisation of the blender. A one-off: the character is
 /// prepared ([`prepare`]) for this call and every frame is held
@@ -30,7 +31,7 @@ pub struct Output {
 /// CLI streams its output instead.
 pub fn synthesise(
     ch: &Character,
-    keys: &[u32],
+    keys: &[FlatFrame],
     targets: &Targets,
     opts: &KeyframeOptions,
 ) -> Result<Output, KeyframeError> {
@@ -96,13 +97,13 @@ pub struct Streamed {
     pub report: Report,
 }
 
-/// Finds the path through key-frame ids `keys` (at least two) for the
+/// Finds the path through key-frames `keys` (at least two) for the
 /// targets (Eq. 7). Errors: too few keys, or the search's (no path
 /// between two key-frames).
 /// `progress` is told each stage (the graph, preparing, searching).
 pub fn plan_path(
     ch: &Character,
-    keys: &[u32],
+    keys: &[FlatFrame],
     targets: &Targets,
     opts: &KeyframeOptions,
     progress: &mut dyn FnMut(&str),
@@ -233,10 +234,10 @@ impl Planned {
 
 /// The end key-frame's facing minus the start's (radians, from their
 /// skeletons; [`Planner::facing`]).
-pub fn facing_change(ch: &Character, keys: &[u32]) -> f64 {
+pub fn facing_change(ch: &Character, keys: &[FlatFrame]) -> f64 {
     match (keys.first(), keys.last()) {
-        (Some(&a), Some(&b)) if (a.max(b) as usize) < ch.poses().len() => {
-            pose::facing(&ch.poses()[b as usize]) - pose::facing(&ch.poses()[a as usize])
+        (Some(&a), Some(&b)) if a.max(b).index() < ch.poses().len() => {
+            pose::facing(ch.pose(b)) - pose::facing(ch.pose(a))
         }
         _ => 0.0,
     }

@@ -32,6 +32,7 @@ use super::graph::{KeyGraph, centre_of};
 use crate::db::Character;
 use crate::drive::timeline::{Jump, OutFrame, TimelineOptions, timeline};
 use crate::drive::{BlendScratch, CHUNK_FRAMES, Floor, FrameSink, blend_placed};
+use crate::graph::FlatFrame;
 use crate::mesh::blend::{Blender, FrameGradients};
 use crate::mesh::solver::SolveError;
 use crate::pose::measure::rotate_yaw;
@@ -55,20 +56,20 @@ pub struct Placed {
 
 /// The heading and floor motion of every path frame (see the module docs):
 /// `placement[k]` maps frame `path[k]` from its capture to the output.
-pub fn placements(ch: &Character, g: &KeyGraph, path: &[u32]) -> (Vec<Floor>, Vec<[f64; 2]>) {
+pub fn placements(ch: &Character, g: &KeyGraph, path: &[FlatFrame]) -> (Vec<Floor>, Vec<[f64; 2]>) {
     let mut theta = 0.0f64;
-    let mut x = path.first().map_or([0.0; 2], |&f| g.centre[f as usize]);
+    let mut x = path.first().map_or([0.0; 2], |&f| g.centre[f.index()]);
     let mut out = Vec::with_capacity(path.len());
     let mut centres = Vec::with_capacity(path.len());
     for (k, &b) in path.iter().enumerate() {
         if k > 0 {
             let a = path[k - 1];
-            let plain = b == a + 1 && g.sequence[a as usize] == g.sequence[b as usize];
-            if !plain && b > 0 {
-                let fit = Floor::fit(&ch.poses()[b as usize - 1], &ch.poses()[a as usize]);
+            let plain = b == a.next() && g.sequence[a.index()] == g.sequence[b.index()];
+            if !plain && let Some(before_b) = b.prev() {
+                let fit = Floor::fit(ch.pose(before_b), ch.pose(a));
                 theta += fit.theta;
             }
-            let (cb, cp) = (g.centre[b as usize], g.centre[b as usize - 1]);
+            let (cb, cp) = (g.centre[b.index()], g.centre[b.index() - 1]);
             let v = rotate_yaw(
                 DVec3::new(cb[0] - cp[0], 0.0, cb[1] - cp[1]),
                 theta.cos(),
@@ -76,7 +77,7 @@ pub fn placements(ch: &Character, g: &KeyGraph, path: &[u32]) -> (Vec<Floor>, Ve
             );
             x = [x[0] + v.x, x[1] + v.z];
         }
-        let c = g.centre[b as usize];
+        let c = g.centre[b.index()];
         let r = rotate_yaw(DVec3::new(c[0], 0.0, c[1]), theta.cos(), theta.sin());
         out.push(Floor {
             theta,
@@ -107,12 +108,12 @@ pub(crate) fn ease_steps(centre: &mut [[f64; 2]], jumps: &[Jump], g: &KeyGraph) 
         let l = j.window.max(1);
         let lo = j.at.saturating_sub(l).max(1);
         let hi = (j.at + l - 1).min(centre.len().saturating_sub(1));
-        if lo >= j.at || j.at > hi || j.from as usize >= g.sequence.len() {
+        if lo >= j.at || j.at > hi || j.from.index() >= g.sequence.len() {
             continue;
         }
         let (si, sj) = (
-            g.sequence[j.from as usize],
-            g.sequence.get(j.to as usize).copied(),
+            g.sequence[j.from.index()],
+            g.sequence.get(j.to.index()).copied(),
         );
         let Some(sj) = sj else { continue };
         let steps: Vec<[f64; 2]> = (lo..=hi)
@@ -132,8 +133,8 @@ pub(crate) fn ease_steps(centre: &mut [[f64; 2]], jumps: &[Jump], g: &KeyGraph) 
             .map(|(k, &now)| {
                 let o = k as i64 - j.at as i64;
                 let alpha = (o + l as i64) as f64 / (2 * l) as f64 + 0.5 / (2 * l) as f64;
-                let left = step(j.from as i64 + o + 1, si);
-                let entered = step(j.to as i64 + o, sj);
+                let left = step(i64::from(j.from.get()) + o + 1, si);
+                let entered = step(i64::from(j.to.get()) + o, sj);
                 match (left, entered) {
                     (Some(x), Some(y)) => (1.0 - alpha) * x + alpha * y,
                     (Some(x), None) | (None, Some(x)) => x,
@@ -167,7 +168,7 @@ pub(crate) fn ease_steps(centre: &mut [[f64; 2]], jumps: &[Jump], g: &KeyGraph) 
 pub fn place(
     ch: &Character,
     g: &KeyGraph,
-    path: &[u32],
+    path: &[FlatFrame],
     opts: &TimelineOptions,
 ) -> Result<Placed, SolveError> {
     let blender = Blender::new(&ch.topology_metres())?;
@@ -212,7 +213,7 @@ pub(crate) fn place_into<S: FrameSink>(
     ch: &Character,
     blender: &Blender,
     g: &KeyGraph,
-    path: &[u32],
+    path: &[FlatFrame],
     opts: &TimelineOptions,
     mut sink: S,
 ) -> Result<Track, S::Error> {
@@ -251,7 +252,7 @@ pub(crate) fn place_into<S: FrameSink>(
                 });
                 let o = &frames[k];
                 let r = path[k];
-                let same = |id: u32| g.sequence[id as usize] == g.sequence[r as usize];
+                let same = |id: FlatFrame| g.sequence[id.index()] == g.sequence[r.index()];
                 let mut scratch = BlendScratch {
                     ws: &mut ws,
                     buf: &mut buf,
@@ -305,17 +306,17 @@ mod tests {
                 }
             })
             .collect();
-        let succ: Vec<Vec<(u32, f64)>> = (0..60u32)
+        let succ: Vec<Vec<(FlatFrame, f64)>> = (0..60u32)
             .map(|f| {
                 if f % 30 != 29 {
-                    vec![(f + 1, 0.0)]
+                    vec![(FlatFrame::new(f + 1), 0.0)]
                 } else {
                     vec![]
                 }
             })
             .collect();
         let g = KeyGraph::new(&succ, centre, (0..60).map(|f| f / 30).collect());
-        let path: Vec<u32> = (0..20).chain(40..60).collect();
+        let path: Vec<FlatFrame> = (0..20).chain(40..60).map(FlatFrame::new).collect();
         let mut c = vec![[0.0, 0.0]];
         for k in 1..path.len() {
             let p = c[k - 1];
@@ -328,8 +329,8 @@ mod tests {
         let before = c.clone();
         let jump = Jump {
             at: 20,
-            from: 19,
-            to: 40,
+            from: FlatFrame::new(19),
+            to: FlatFrame::new(40),
             window: 4,
             transition: true,
         };

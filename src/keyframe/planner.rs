@@ -10,6 +10,7 @@ use super::repeats::Measure;
 use super::segment::{Segment, SegmentPath, Stats, Target};
 use super::{clock, lattice, search};
 use crate::db::Character;
+use crate::graph::FlatFrame;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -18,8 +19,8 @@ use std::time::Instant;
 pub struct Planner {
     /// The frame graph.
     pub graph: KeyGraph,
-    /// Key-frame ids, in order.
-    pub keys: Vec<u32>,
+    /// Key-frames, in order.
+    pub keys: Vec<FlatFrame>,
     /// One per consecutive pair.
     pub segments: Vec<Segment>,
     /// The segments joined at their key-frames for the exact-length search
@@ -114,7 +115,7 @@ pub struct Plan {
     /// Segments in order.
     pub segments: Vec<SegmentPath>,
     /// The whole frame path (key-frame to key-frame).
-    pub path: Vec<u32>,
+    pub path: Vec<FlatFrame>,
     /// Transition cost, distance and frames of the whole path.
     pub measure: Measure,
     /// Eq. 7's terms.
@@ -135,8 +136,8 @@ pub struct Plan {
 
 /// The frame path of consecutive segments (each shares its first frame
 /// with the previous one's last).
-pub fn join(segs: &[SegmentPath]) -> Vec<u32> {
-    let mut path: Vec<u32> = Vec::new();
+pub fn join(segs: &[SegmentPath]) -> Vec<FlatFrame> {
+    let mut path: Vec<FlatFrame> = Vec::new();
     for s in segs {
         let skip = usize::from(!path.is_empty());
         path.extend_from_slice(&s.path[skip..]);
@@ -145,7 +146,7 @@ pub fn join(segs: &[SegmentPath]) -> Vec<u32> {
 }
 
 /// Runs of consecutive frames as `SEQUENCE[a..b]`.
-pub fn runs(ch: &Character, frames: &[u32]) -> Vec<String> {
+pub fn runs(ch: &Character, frames: &[FlatFrame]) -> Vec<String> {
     let mut out: Vec<(usize, usize, usize)> = Vec::new();
     for &f in frames {
         let (s, t) = ch.graph().frame_of(f);
@@ -160,10 +161,10 @@ pub fn runs(ch: &Character, frames: &[u32]) -> Vec<String> {
 }
 
 impl Planner {
-    /// Prepares the search through `keys` (frame ids, at least two).
+    /// Prepares the search through `keys` (at least two).
     pub fn new(
         graph: KeyGraph,
-        keys: &[u32],
+        keys: &[FlatFrame],
         fps: f64,
         opts: &SearchOptions,
     ) -> Result<Planner, SearchError> {
@@ -392,7 +393,7 @@ impl Planner {
 
     /// The heading's turn along a frame path: the sum of its transitions'
     /// turns ([`graph::FrameEdge::turn`]).
-    pub fn turn_of(&self, path: &[u32]) -> f64 {
+    pub fn turn_of(&self, path: &[FlatFrame]) -> f64 {
         path.windows(2)
             .filter_map(|w| self.graph.edge(w[0], w[1]))
             .map(|e| e.turn)

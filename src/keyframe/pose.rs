@@ -13,6 +13,7 @@
 
 use crate::db::Character;
 use crate::drive::query::{load_mocap, to_character};
+use crate::graph::FlatFrame;
 use crate::pose::Pose;
 use crate::pose::measure::skeleton_distance;
 use crate::rig::Canonical;
@@ -53,9 +54,9 @@ pub struct Resolved {
     pub key: String,
     /// The database frame (`SEQUENCE:FRAME`).
     pub frame: String,
-    /// Its frame id.
+    /// Its flat id.
     #[serde(skip)]
-    pub id: u32,
+    pub id: FlatFrame,
     /// `c_skel` between the pose and that frame (metres, summed over the
     /// 19 joints).
     pub distance: f64,
@@ -144,19 +145,20 @@ pub fn nearest_frame(ch: &Character, key: &str, pose: &Pose) -> Resolved {
     let best = (0..d.len())
         .min_by(|&a, &b| d[a].total_cmp(&d[b]))
         .unwrap_or(0);
-    let (sb, fb) = ch.graph().frame_of(best as u32);
+    let best = FlatFrame::from_index(best);
+    let (sb, fb) = ch.graph().frame_of(best);
     let runner = (0..d.len())
         .filter(|&i| {
-            let (s, f) = ch.graph().frame_of(i as u32);
+            let (s, f) = ch.graph().frame_of(FlatFrame::from_index(i));
             s != sb || f.abs_diff(fb) > 2
         })
         .min_by(|&a, &b| d[a].total_cmp(&d[b]));
     Resolved {
         key: key.into(),
-        frame: super::key_name(ch, best as u32),
-        id: best as u32,
-        distance: d.get(best).copied().unwrap_or(f64::INFINITY),
-        runner_up: runner.map(|i| (super::key_name(ch, i as u32), d[i])),
+        frame: super::key_name(ch, best),
+        id: best,
+        distance: d.get(best.index()).copied().unwrap_or(f64::INFINITY),
+        runner_up: runner.map(|i| (super::key_name(ch, FlatFrame::from_index(i)), d[i])),
     }
 }
 

@@ -6,6 +6,7 @@ use super::options::SearchOptions;
 use super::{select, smoothness};
 use crate::db::Character;
 use crate::drive::timeline::TimelineOptions;
+use crate::graph::FlatFrame;
 use serde::Serialize;
 
 /// Bad key-frames or targets.
@@ -98,8 +99,8 @@ pub const MAX_TARGET_SECONDS: f64 = 3600.0;
 /// The longest target distance of a query, in metres.
 pub const MAX_TARGET_METRES: f64 = 100_000.0;
 
-/// Frame id of a key-frame written `SEQUENCE:FRAME`.
-pub fn parse_key(ch: &Character, key: &str) -> Result<u32, KeyframeError> {
+/// The frame of a key-frame written `SEQUENCE:FRAME`.
+pub fn parse_key(ch: &Character, key: &str) -> Result<FlatFrame, KeyframeError> {
     let (name, f) = key
         .rsplit_once(':')
         .ok_or_else(|| KeyframeError::Syntax(key.into()))?;
@@ -136,11 +137,11 @@ pub fn parse_key(ch: &Character, key: &str) -> Result<u32, KeyframeError> {
             len,
         });
     }
-    Ok(ch.graph().frame_id(s, f))
+    Ok(ch.graph().flat_id(s, f))
 }
 
-/// `SEQUENCE:FRAME` of a frame id.
-pub fn key_name(ch: &Character, id: u32) -> String {
+/// `SEQUENCE:FRAME` of a frame.
+pub fn key_name(ch: &Character, id: FlatFrame) -> String {
     let (s, f) = ch.graph().frame_of(id);
     format!("{}:{}", ch.graph().sequences[s].name, f)
 }
@@ -249,7 +250,7 @@ pub fn key_graph_with(
     progress: &mut dyn FnMut(&str),
 ) -> KeyGraph {
     if opts.transitions == TransitionSet::Measured {
-        let jumps: Vec<(u32, u32, f64, usize)> =
+        let jumps: Vec<(FlatFrame, FlatFrame, f64, usize)> =
             select::measured_with(ch, &select::SelectOptions::default(), &mut |d, t| {
                 progress(&format!(
                     "choosing transitions by measured smoothness: {d}/{t} sequence pairs"
@@ -289,13 +290,13 @@ pub fn price_by_smoothness(ch: &Character, g: &mut KeyGraph) {
     use rayon::prelude::*;
     let mut window = std::collections::HashMap::new();
     for t in &ch.graph().transitions {
-        let from = ch.graph().frame_id(t.from, t.m);
-        let to = ch.graph().frame_id(t.to, t.n) + 1;
+        let from = ch.graph().flat_id(t.from, t.m);
+        let to = ch.graph().flat_id(t.to, t.n).next();
         window.insert((from, to), t.window);
     }
-    let jumps: Vec<(usize, u32, u32)> = (0..g.len() as u32)
+    let jumps: Vec<(usize, FlatFrame, FlatFrame)> = FlatFrame::all(g.len())
         .flat_map(|f| {
-            let lo = g.offsets[f as usize] as usize;
+            let lo = g.offsets[f.index()] as usize;
             g.successors(f)
                 .iter()
                 .enumerate()

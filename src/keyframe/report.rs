@@ -9,6 +9,7 @@ use super::segment::Stats;
 use super::{graph, options, pose, smoothness};
 use crate::db::Character;
 use crate::drive::timeline::{TimelineOptions, timeline};
+use crate::graph::FlatFrame;
 use serde::Serialize;
 
 /// The report of a key-frame animation.
@@ -140,12 +141,13 @@ pub fn segment_reports(
 pub fn transitions(
     ch: &Character,
     g: &KeyGraph,
-    path: &[u32],
+    path: &[FlatFrame],
     opts: &TimelineOptions,
     cache: &mut smoothness::Measurer,
 ) -> Vec<TransitionReport> {
     let (_, jumps) = timeline(path, &graph::KeyFrames { ch, graph: g }, opts);
-    let asked: Vec<(u32, u32, usize)> = jumps.iter().map(|j| (j.from, j.to, j.window)).collect();
+    let asked: Vec<(FlatFrame, FlatFrame, usize)> =
+        jumps.iter().map(|j| (j.from, j.to, j.window)).collect();
     cache.prefill(ch, &asked);
     jumps
         .iter()
@@ -192,15 +194,15 @@ pub fn describe(ch: &Character, e: &SearchError) -> String {
 /// frame of `to`'s sequence a transition of the graph enters (a frame
 /// before it is reached only along its own sequence), and the last frame
 /// of `from`'s sequence a transition leaves. Empty when neither explains it.
-fn no_path_hint(ch: &Character, from: u32, to: u32) -> String {
+fn no_path_hint(ch: &Character, from: FlatFrame, to: FlatFrame) -> String {
     let g = ch.graph();
     let adj = ch.adjacency();
-    let n = g.frame_count() as u32;
+    let n = g.frame_count();
     let ((sf, ff), (st, ft)) = (g.frame_of(from), g.frame_of(to));
     let (mut entered, mut left): (Option<usize>, Option<usize>) = (None, None);
-    for f in 0..n.min(adj.offsets.len().saturating_sub(1) as u32) {
+    for f in FlatFrame::all(n.min(adj.offsets.len().saturating_sub(1))) {
         for (t, _) in adj.successors(f) {
-            if t == f + 1 || t >= n {
+            if t == f.next() || t.index() >= n {
                 continue;
             }
             let ((sa, a), (sb, b)) = (g.frame_of(f), g.frame_of(t));

@@ -19,6 +19,7 @@ use super::graph::KeyGraph;
 use super::heading::wrap;
 use super::options::Limits;
 use super::repeats::{Cone, Measure, cone};
+use crate::graph::FlatFrame;
 use serde::Serialize;
 use std::collections::BinaryHeap;
 
@@ -35,9 +36,9 @@ pub struct Target {
 pub(super) struct Arc {
     pub(super) to: u32,
     pub(super) m: Measure,
-    /// Frame id the arc starts from and ends at.
-    pub(super) from_frame: u32,
-    pub(super) to_frame: u32,
+    /// Frame the arc starts from and ends at.
+    pub(super) from_frame: FlatFrame,
+    pub(super) to_frame: FlatFrame,
     /// A transition (else a run of plain frames).
     pub(super) jump: bool,
     /// The heading's turn (radians; [`super::graph::FrameEdge::turn`]).
@@ -89,9 +90,10 @@ pub(super) struct Walk {
 /// bounds to the goal: built once, queried for any target.
 #[derive(Debug, Clone)]
 pub struct Segment {
-    pub(super) from: u32,
-    pub(super) to: u32,
-    pub(super) frames: Vec<u32>,
+    pub(super) from: FlatFrame,
+    pub(super) to: FlatFrame,
+    /// The frame of every node.
+    pub(super) frames: Vec<FlatFrame>,
     pub(super) arcs: Vec<Arc>,
     pub(super) out: Vec<Vec<u32>>,
     pub(super) start: u32,
@@ -115,9 +117,9 @@ pub struct Segment {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LoopUse {
     /// The walk frame it is attached at (it starts and ends there).
-    pub at: u32,
+    pub at: FlatFrame,
     /// One repetition's frames (after `at`, ending at `at`).
-    pub frames: Vec<u32>,
+    pub frames: Vec<FlatFrame>,
     /// One repetition's cost, distance and frames.
     pub measure: Measure,
     /// Repetitions.
@@ -127,12 +129,12 @@ pub struct LoopUse {
 /// The path found for one segment.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SegmentPath {
-    /// Start key-frame (frame id).
-    pub from: u32,
+    /// Start key-frame.
+    pub from: FlatFrame,
     /// End key-frame.
-    pub to: u32,
+    pub to: FlatFrame,
     /// The loop-free walk's frames, `from` to `to`.
-    pub walk: Vec<u32>,
+    pub walk: Vec<FlatFrame>,
     /// Its cost, distance and frames.
     pub walk_measure: Measure,
     /// Loops with their repetitions (only those repeated at least once).
@@ -140,7 +142,7 @@ pub struct SegmentPath {
     /// Walk plus loops.
     pub measure: Measure,
     /// The full frame path, `from` to `to`.
-    pub path: Vec<u32>,
+    pub path: Vec<FlatFrame>,
 }
 
 /// What a segment can reach (see [`Segment::reach`]).
@@ -219,24 +221,28 @@ fn min_cost_paths(n: usize, rev: &[Vec<(u32, f64)>], goal: u32) -> Vec<f64> {
 /// node index (`u32::MAX` for a plain frame), the arcs, and the arcs
 /// leaving every node.
 #[allow(clippy::type_complexity)]
-fn compress(g: &KeyGraph, from: u32, to: u32) -> (Vec<u32>, Vec<u32>, Vec<Arc>, Vec<Vec<u32>>) {
+fn compress(
+    g: &KeyGraph,
+    from: FlatFrame,
+    to: FlatFrame,
+) -> (Vec<FlatFrame>, Vec<u32>, Vec<Arc>, Vec<Vec<u32>>) {
     // Nodes: key-frames and transition ends.
     let nf = g.len();
     let mut is_node = vec![false; nf];
-    is_node[from as usize] = true;
-    is_node[to as usize] = true;
-    for f in 0..nf as u32 {
+    is_node[from.index()] = true;
+    is_node[to.index()] = true;
+    for f in FlatFrame::all(nf) {
         for e in g.successors(f) {
             if e.jump {
-                is_node[f as usize] = true;
-                is_node[e.to as usize] = true;
+                is_node[f.index()] = true;
+                is_node[e.to.index()] = true;
             }
         }
     }
-    let frames: Vec<u32> = (0..nf as u32).filter(|&f| is_node[f as usize]).collect();
+    let frames: Vec<FlatFrame> = FlatFrame::all(nf).filter(|f| is_node[f.index()]).collect();
     let mut index = vec![u32::MAX; nf];
     for (i, &f) in frames.iter().enumerate() {
-        index[f as usize] = i as u32;
+        index[f.index()] = i as u32;
     }
     let mut arcs = Vec::new();
     let mut out = vec![Vec::new(); frames.len()];
@@ -246,12 +252,12 @@ fn compress(g: &KeyGraph, from: u32, to: u32) -> (Vec<u32>, Vec<u32>, Vec<Arc>, 
         let mut m = Measure::default();
         while let Some(e) = g.successors(f).iter().find(|e| !e.jump) {
             f = e.to;
-            m.distance += g.step[f as usize];
+            m.distance += g.step_of(f);
             m.frames += 1;
-            if is_node[f as usize] {
+            if is_node[f.index()] {
                 out[i].push(arcs.len() as u32);
                 arcs.push(Arc {
-                    to: index[f as usize],
+                    to: index[f.index()],
                     m,
                     from_frame: u,
                     to_frame: f,
@@ -264,10 +270,10 @@ fn compress(g: &KeyGraph, from: u32, to: u32) -> (Vec<u32>, Vec<u32>, Vec<Arc>, 
         for e in g.successors(u).iter().filter(|e| e.jump) {
             out[i].push(arcs.len() as u32);
             arcs.push(Arc {
-                to: index[e.to as usize],
+                to: index[e.to.index()],
                 m: Measure {
                     cost: e.cost.max(0.0),
-                    distance: g.step[e.to as usize],
+                    distance: g.step_of(e.to),
                     frames: 1,
                 },
                 from_frame: u,
@@ -340,19 +346,19 @@ impl Segment {
     /// segments share their start with the previous one's end).
     pub fn new(
         g: &KeyGraph,
-        from: u32,
-        to: u32,
+        from: FlatFrame,
+        to: FlatFrame,
         count_start: bool,
         limits: &Limits,
     ) -> Result<Segment, SearchError> {
         for f in [from, to] {
-            if f as usize >= g.len() {
+            if f.index() >= g.len() {
                 return Err(SearchError::Frame(f, g.len()));
             }
         }
         let (frames, index, arcs, out) = compress(g, from, to);
         let n = frames.len();
-        let (start, goal) = (index[from as usize], index[to as usize]);
+        let (start, goal) = (index[from.index()], index[to.index()]);
         // Reachable from the start and reaching the goal.
         let mut rev: Vec<Vec<(u32, u32)>> = vec![Vec::new(); n];
         for (u, o) in out.iter().enumerate() {
@@ -812,12 +818,12 @@ impl Segment {
     }
 
     /// The frames an arc adds (after its start).
-    fn arc_frames(&self, a: u32, out: &mut Vec<u32>) {
+    fn arc_frames(&self, a: u32, out: &mut Vec<FlatFrame>) {
         let arc = &self.arcs[a as usize];
         if arc.jump {
             out.push(arc.to_frame);
         } else {
-            out.extend(arc.from_frame + 1..=arc.to_frame);
+            out.extend((arc.from_frame.get() + 1..=arc.to_frame.get()).map(FlatFrame::new));
         }
     }
 

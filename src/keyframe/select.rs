@@ -29,6 +29,7 @@
 
 use super::smoothness::{Surface, hausdorff_surface_stride, profile, weighted};
 use crate::db::Character;
+use crate::graph::FlatFrame;
 use crate::graph::transitions::{self, TransitionOptions};
 use rayon::prelude::*;
 
@@ -56,10 +57,10 @@ impl Default for SelectOptions {
 /// A chosen transition.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Chosen {
-    /// Frame left (flat id).
-    pub from: u32,
-    /// Frame entered (flat id; `frame entered − 1` pairs with `from`).
-    pub to: u32,
+    /// Frame left.
+    pub from: FlatFrame,
+    /// Frame entered (`frame entered − 1` pairs with `from`).
+    pub to: FlatFrame,
     /// Blend half-window.
     pub window: usize,
     /// Weighted surface Hausdorff distance (metres).
@@ -106,7 +107,7 @@ pub(crate) fn measured_with(
         let mut screened: Vec<((usize, usize), f64)> = cands
             .par_iter()
             .map(|&(m, n)| {
-                let (a, b) = (g.frame_id(i, m), g.frame_id(j, n) + 1);
+                let (a, b) = (g.flat_id(i, m), g.flat_id(j, n).next());
                 (
                     (m, n),
                     hausdorff_surface_stride(ch, &surface, a, b, opts.stride),
@@ -131,7 +132,7 @@ pub(crate) fn measured_with(
         let mut chosen: Vec<Chosen> = kept
             .par_iter()
             .map(|&(m, n)| {
-                let (a, b) = (g.frame_id(i, m), g.frame_id(j, n) + 1);
+                let (a, b) = (g.flat_id(i, m), g.flat_id(j, n).next());
                 let fit = m.min(n).min(li - 1 - m).min(lj - 1 - n).clamp(lo, hi);
                 let h = profile(ch, &surface, a, b, fit, false);
                 let (window, smoothness) = (lo..=fit)

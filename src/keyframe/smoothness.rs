@@ -21,6 +21,7 @@
 use crate::db::Character;
 use crate::drive::Floor;
 use crate::embed::surface::closest_on_triangle;
+use crate::graph::FlatFrame;
 use glam::DVec3;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -292,11 +293,11 @@ pub fn hausdorff_surface(a: &[DVec3], b: &[DVec3], s: &Surface) -> f64 {
 pub(crate) fn hausdorff_surface_stride(
     ch: &Character,
     s: &Surface,
-    from: u32,
-    to: u32,
+    from: FlatFrame,
+    to: FlatFrame,
     stride: usize,
 ) -> f64 {
-    let (pa, pb) = aligned(ch, from, to.saturating_sub(1));
+    let (pa, pb) = aligned(ch, from, to.prev().unwrap_or(to));
     let cell = 0.03;
     let ga = Grid::new(pa.clone(), cell);
     let gb = Grid::new(pb.clone(), cell);
@@ -308,12 +309,12 @@ pub(crate) fn hausdorff_surface_stride(
 /// Frames `ia` and `ib` in metres, `ib` moved on the floor onto `ia` (the
 /// rotation about the vertical and translation that best fit their
 /// skeletons, [`Floor::fit`]).
-fn aligned(ch: &Character, ia: u32, ib: u32) -> (Vec<DVec3>, Vec<DVec3>) {
+fn aligned(ch: &Character, ia: FlatFrame, ib: FlatFrame) -> (Vec<DVec3>, Vec<DVec3>) {
     let mut a = vec![[0.0; 3]; ch.n()];
     let mut b = vec![[0.0; 3]; ch.n()];
     ch.frame_metres(ia, &mut a);
     ch.frame_metres(ib, &mut b);
-    let fit = Floor::fit(&ch.poses()[ib as usize], &ch.poses()[ia as usize]);
+    let fit = Floor::fit(ch.pose(ib), ch.pose(ia));
     (
         a.iter().map(|p| DVec3::from_array(*p)).collect(),
         b.iter().map(|p| fit.apply(DVec3::from_array(*p))).collect(),
@@ -339,7 +340,7 @@ impl FrameSet {
             .into_par_iter()
             .map(|f| {
                 let mut a = vec![[0.0; 3]; n];
-                ch.frame_metres(f, &mut a);
+                ch.frame_metres(FlatFrame::new(f), &mut a);
                 Grid::new(a.iter().map(|p| DVec3::from_array(*p)).collect(), 0.03)
             })
             .collect();
@@ -367,9 +368,9 @@ impl FrameSet {
     /// fewer vertices). Each directed distance is taken in the frame of
     /// the mesh measured against (the rigid floor motion moved onto the
     /// query points instead), so no grid is rebuilt.
-    pub fn distance(&self, a: u32, b: u32, stride: usize) -> f64 {
-        let (ga, gb) = (&self.grids[a as usize], &self.grids[b as usize]);
-        let fit = Floor::fit(&self.poses[b as usize], &self.poses[a as usize]);
+    pub fn distance(&self, a: FlatFrame, b: FlatFrame, stride: usize) -> f64 {
+        let (ga, gb) = (&self.grids[a.index()], &self.grids[b.index()]);
+        let fit = Floor::fit(&self.poses[b.index()], &self.poses[a.index()]);
         let inv = Floor {
             theta: -fit.theta,
             t: Floor {
@@ -411,12 +412,17 @@ pub struct Smoothness {
 /// The smoothness of a jump from frame `from` (of sequence `i`) to frame
 /// `to` (of `j`; `to − 1` pairs with `from`) with half-window `window`:
 /// [`Smoothness::surface`].
-pub fn transition_smoothness(ch: &Character, from: u32, to: u32, window: usize) -> f64 {
+pub fn transition_smoothness(ch: &Character, from: FlatFrame, to: FlatFrame, window: usize) -> f64 {
     transition_smoothness_both(ch, from, to, window).surface
 }
 
 /// [`transition_smoothness`] by both distances ([`Smoothness`]).
-pub fn transition_smoothness_both(ch: &Character, from: u32, to: u32, window: usize) -> Smoothness {
+pub fn transition_smoothness_both(
+    ch: &Character,
+    from: FlatFrame,
+    to: FlatFrame,
+    window: usize,
+) -> Smoothness {
     let surface = Surface::new(ch.topology().triangles(), ch.n());
     let h = profile(ch, &surface, from, to, window.max(1), true);
     Smoothness {
@@ -448,14 +454,14 @@ pub fn weighted<T: Copy>(h: &[Option<T>], window: usize, f: impl Fn(T) -> f64) -
 }
 
 /// The overlapping frame pairs `(M_i(m + k), M_j(n + k))` of a jump
-/// `from → to` for `k ∈ [−K, K]` (flat frame ids; `None` where a frame is
-/// outside its sequence).
+/// `from → to` for `k ∈ [−K, K]` (`None` where a frame is outside its
+/// sequence).
 pub(crate) fn profile_pairs(
     ch: &Character,
-    from: u32,
-    to: u32,
+    from: FlatFrame,
+    to: FlatFrame,
     half: usize,
-) -> Vec<Option<(u32, u32)>> {
+) -> Vec<Option<(FlatFrame, FlatFrame)>> {
     let (sa, ta) = ch.graph().frame_of(from);
     let (sb, tb) = ch.graph().frame_of(to);
     let tb = tb.saturating_sub(1);
@@ -471,8 +477,8 @@ pub(crate) fn profile_pairs(
                 return None;
             }
             Some((
-                ch.graph().frame_id(sa, fa as usize),
-                ch.graph().frame_id(sb, fb as usize),
+                ch.graph().flat_id(sa, fa as usize),
+                ch.graph().flat_id(sb, fb as usize),
             ))
         })
         .collect()
@@ -480,7 +486,7 @@ pub(crate) fn profile_pairs(
 
 /// The distances `(surface, vertex)` of frames `ia` and `ib`, `ib` moved
 /// on the floor onto `ia` (module docs).
-fn pair_distances(ch: &Character, surface: &Surface, ia: u32, ib: u32) -> (f64, f64) {
+fn pair_distances(ch: &Character, surface: &Surface, ia: FlatFrame, ib: FlatFrame) -> (f64, f64) {
     let (pa, pb) = aligned(ch, ia, ib);
     hausdorff_both(&pa, &pb, surface)
 }
@@ -493,8 +499,8 @@ fn pair_distances(ch: &Character, surface: &Surface, ia: u32, ib: u32) -> (f64, 
 pub fn profile(
     ch: &Character,
     surface: &Surface,
-    from: u32,
-    to: u32,
+    from: FlatFrame,
+    to: FlatFrame,
     half: usize,
     both: bool,
 ) -> Vec<Option<(f64, f64)>> {
@@ -517,7 +523,7 @@ pub fn profile(
 /// The values are those of [`transition_smoothness_both`].
 pub struct Measurer {
     surface: Surface,
-    pairs: HashMap<(u32, u32), (f64, f64)>,
+    pairs: HashMap<(FlatFrame, FlatFrame), (f64, f64)>,
 }
 
 impl Measurer {
@@ -541,9 +547,9 @@ impl Measurer {
 
     /// Measures the pairs of every jump `(from, to, window)` not measured
     /// yet, in parallel.
-    pub fn prefill(&mut self, ch: &Character, jumps: &[(u32, u32, usize)]) {
+    pub fn prefill(&mut self, ch: &Character, jumps: &[(FlatFrame, FlatFrame, usize)]) {
         use rayon::prelude::*;
-        let mut todo: Vec<(u32, u32)> = jumps
+        let mut todo: Vec<(FlatFrame, FlatFrame)> = jumps
             .iter()
             .flat_map(|&(a, b, l)| profile_pairs(ch, a, b, l.max(1)))
             .flatten()
@@ -552,7 +558,7 @@ impl Measurer {
         todo.sort_unstable();
         todo.dedup();
         let surface = &self.surface;
-        let done: Vec<((u32, u32), (f64, f64))> = todo
+        let done: Vec<((FlatFrame, FlatFrame), (f64, f64))> = todo
             .par_iter()
             .map(|&(a, b)| ((a, b), pair_distances(ch, surface, a, b)))
             .collect();
@@ -561,7 +567,13 @@ impl Measurer {
 
     /// The smoothness of a jump `from → to` at half-window `window`
     /// ([`transition_smoothness_both`]).
-    pub fn transition(&mut self, ch: &Character, from: u32, to: u32, window: usize) -> Smoothness {
+    pub fn transition(
+        &mut self,
+        ch: &Character,
+        from: FlatFrame,
+        to: FlatFrame,
+        window: usize,
+    ) -> Smoothness {
         let h: Vec<Option<(f64, f64)>> = profile_pairs(ch, from, to, window.max(1))
             .into_iter()
             .map(|p| {

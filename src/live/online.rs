@@ -25,6 +25,7 @@
 //! one).
 
 use crate::drive::trellis::{TrellisInput, TrellisOptions, relax_row};
+use crate::graph::FlatFrame;
 use crate::pose::{Pose, measure::skeleton_distance};
 use serde::Serialize;
 
@@ -57,7 +58,7 @@ pub struct Committed {
     /// Query frame (from 0, in arrival order).
     pub index: usize,
     /// Database frame retrieved.
-    pub id: u32,
+    pub id: FlatFrame,
     /// `c_skel` of the node (metres).
     pub skeleton_cost: f64,
     /// Entered by a cut.
@@ -72,7 +73,7 @@ pub struct Advance {
     pub committed: Vec<Committed>,
     /// The current best continuation of the last committed frame through
     /// the undecided rows (database frames; may still change).
-    pub lookahead: Vec<u32>,
+    pub lookahead: Vec<FlatFrame>,
 }
 
 /// Counts of the decoder so far.
@@ -111,17 +112,17 @@ pub struct OnlineTrellis<'a> {
     recent: std::collections::VecDeque<f64>,
     /// Nearest frames (sorted by cost, at most `kmax`) of every undecided
     /// query frame, oldest first.
-    rows: std::collections::VecDeque<Vec<(f32, u32)>>,
+    rows: std::collections::VecDeque<Vec<(f32, FlatFrame)>>,
     /// The last committed node.
-    anchor: Option<u32>,
+    anchor: Option<FlatFrame>,
     committed: usize,
     stats: OnlineStats,
     /// Row slot of each database frame (scratch; `u32::MAX` = none).
     slot: Vec<u32>,
     /// Distances to every database frame (scratch).
-    all: Vec<(f32, u32)>,
+    all: Vec<(f32, FlatFrame)>,
     /// Rows' buffers already decided, for reuse.
-    spare: Vec<Vec<(f32, u32)>>,
+    spare: Vec<Vec<(f32, FlatFrame)>>,
 }
 
 impl<'a> OnlineTrellis<'a> {
@@ -131,7 +132,7 @@ impl<'a> OnlineTrellis<'a> {
         let ng = db.poses.len();
         let kmax = trellis.max_candidates.max(1).min(ng.max(1));
         let kmin = trellis.min_candidates.max(1).min(kmax);
-        let mut steps: Vec<f64> = (0..ng as u32)
+        let mut steps: Vec<f64> = FlatFrame::all(ng)
             .filter_map(|f| (db.successor)(f).map(|g| (db.dissimilarity)(f, g) as f64))
             .filter(|c| *c > 0.0)
             .collect();
@@ -232,7 +233,7 @@ impl<'a> OnlineTrellis<'a> {
                 .poses
                 .iter()
                 .enumerate()
-                .map(|(i, p)| (skeleton_distance(q, p) as f32, i as u32)),
+                .map(|(i, p)| (skeleton_distance(q, p) as f32, FlatFrame::from_index(i))),
         );
         let kmax = self.kmax;
         if kmax < self.all.len() {
@@ -285,7 +286,7 @@ impl<'a> OnlineTrellis<'a> {
         self.stats.t_skel = t_skel;
         self.stats.node_scale = node_scale;
         let mut widened = Vec::with_capacity(self.rows.len());
-        let rows: Vec<&[(f32, u32)]> = self
+        let rows: Vec<&[(f32, FlatFrame)]> = self
             .rows
             .iter()
             .map(|r| {
@@ -330,7 +331,7 @@ impl<'a> OnlineTrellis<'a> {
     }
 
     /// True when `b` repeats `a`, is its natural successor or skips one.
-    fn continues(&self, a: u32, b: u32) -> bool {
+    fn continues(&self, a: FlatFrame, b: FlatFrame) -> bool {
         let s = self.db.successor;
         a == b || s(a) == Some(b) || s(a).and_then(s) == Some(b)
     }
@@ -341,7 +342,7 @@ impl<'a> OnlineTrellis<'a> {
     /// [`crate::drive::trellis::retrieve`]'s, operation for operation.
     fn solve(
         &self,
-        rows: &[&[(f32, u32)]],
+        rows: &[&[(f32, FlatFrame)]],
         node_scale: f64,
         slot: &mut [u32],
     ) -> (Vec<usize>, Vec<bool>) {
@@ -354,7 +355,7 @@ impl<'a> OnlineTrellis<'a> {
             0.0
         };
         let node = |c: f32| opts.w_retr * c as f64 / node_scale;
-        let edge = |i: u32, j: u32| -> f64 {
+        let edge = |i: FlatFrame, j: FlatFrame| -> f64 {
             match (db.successor)(i) {
                 Some(s) if s == j => 0.0,
                 _ if i == j => 0.0,
@@ -376,7 +377,7 @@ impl<'a> OnlineTrellis<'a> {
         for k in first..rows.len() {
             let row = rows[k];
             // Row 0 is relaxed from only when there is an anchor.
-            let prev: &[(f32, u32)] = if k == 0 {
+            let prev: &[(f32, FlatFrame)] = if k == 0 {
                 anchor_row.as_ref().map_or(&[][..], |a| &a[..])
             } else {
                 rows[k - 1]

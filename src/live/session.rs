@@ -38,6 +38,7 @@ use crate::drive::placement::{BlendScratch, blend_placed, placements};
 use crate::drive::timeline::timeline;
 use crate::drive::trellis::TrellisInput;
 use crate::drive::{Prepared, RetargetOptions};
+use crate::graph::FlatFrame;
 use crate::mesh::blend::{BlendWorkspace, FrameGradients};
 use crate::pose::Pose;
 use crate::pose::retarget::{JointRotations, Reference, ReferenceSource};
@@ -96,7 +97,7 @@ pub struct LiveFrame<'s> {
     /// Query frame it stands for (from 0).
     pub index: usize,
     /// Database frame retrieved for it.
-    pub id: u32,
+    pub id: FlatFrame,
     /// The character's vertices (metres, Y-up).
     pub positions: &'s [[f64; 3]],
     /// The query pose on the character's skeleton it follows.
@@ -133,7 +134,7 @@ pub struct Session<'a> {
     /// The query of the last output frame (its index, the pose).
     last_out: Option<(usize, Pose)>,
     /// Decided frames from `path_start` on (at most `history + 1`).
-    path: VecDeque<u32>,
+    path: VecDeque<FlatFrame>,
     path_start: usize,
     blend_ws: BlendWorkspace,
     buf: Vec<[f64; 3]>,
@@ -354,7 +355,7 @@ impl<'a> Session<'a> {
     }
 
     fn emit(&mut self, adv: Advance, out: &mut dyn FnMut(LiveFrame<'_>)) {
-        let ids: Vec<u32> = adv
+        let ids: Vec<FlatFrame> = adv
             .committed
             .iter()
             .map(|c| c.id)
@@ -377,7 +378,13 @@ impl<'a> Session<'a> {
     }
 
     /// Makes output frame `k` (decided as `id`; `ahead`, the continuation).
-    fn frame(&mut self, k: usize, id: u32, ahead: &[u32], out: &mut dyn FnMut(LiveFrame<'_>)) {
+    fn frame(
+        &mut self,
+        k: usize,
+        id: FlatFrame,
+        ahead: &[FlatFrame],
+        out: &mut dyn FnMut(LiveFrame<'_>),
+    ) {
         let ch = self.ch;
         let h = k - self.path_start;
         if let Some(&q) = self.query.get(k - self.query_start) {
@@ -385,7 +392,7 @@ impl<'a> Session<'a> {
             self.query[k - self.query_start] = q;
             self.last_out = Some((k, q));
         }
-        let window: Vec<u32> = self
+        let window: Vec<FlatFrame> = self
             .path
             .iter()
             .copied()

@@ -35,7 +35,7 @@ fn constraints_from_an_example_frame_return_that_frame() {
     for mode in [DeformMode::Part, DeformMode::Global] {
         // A basis spanning all examples (keep everything).
         // A frame every region uses as an example.
-        let f = 57;
+        let f = surfmotion::graph::FlatFrame::new(57);
         let opts = DeformOptions {
             keep: 1.0,
             include: Some(f),
@@ -46,7 +46,7 @@ fn constraints_from_an_example_frame_return_that_frame() {
         assert!(def.examples.iter().all(|e| e.contains(&f)));
         let mut x = vec![[0.0; 3]; n];
         ch.frame_metres(f, &mut x);
-        let pose = ch.poses()[f as usize];
+        let pose = *ch.pose(f);
         let mut out = vec![[0.0; 3]; n];
         def.deform(&ch, &x, &pose, &pose, &mut out, &mut def.workspace());
         let err = max_dist(&out, &x) / height(&x);
@@ -247,9 +247,9 @@ fn the_manifest_overrides_constraints_and_examples() {
         .iter()
         .position(|s| s.name == "02_01")
         .unwrap();
-    let ids: Vec<u32> = def.examples[0].clone();
+    let ids = def.examples[0].clone();
     assert_eq!(ids.len(), 3);
-    assert_eq!(ids[0], ch.graph().frame_id(s0, 10));
+    assert_eq!(ids[0], ch.graph().flat_id(s0, 10));
     assert!(def.examples.iter().all(|e| *e == ids));
     // Bad overrides are one-line errors naming the manifest.
     m.deform.examples = vec!["02_01:9999".into()];
@@ -370,7 +370,7 @@ fn a_real_retarget_keeps_every_vertex_in_its_ring() {
     let rt = RestTriangles::new(rest.positions(), rest.triangles()).unwrap();
     let mut captured = 0.0f64;
     let mut buf = vec![[0.0; 3]; n];
-    for f in 0..ch.frame_count() as u32 {
+    for f in surfmotion::graph::FlatFrame::all(ch.frame_count()) {
         ch.frame_metres(f, &mut buf);
         captured = captured.max(rt.off_ring(&buf).0);
     }

@@ -57,7 +57,7 @@ pub struct FloorReport {
 /// most 250). `progress` is told each stage.
 pub fn floor(
     ch: &Character,
-    keys: &[u32],
+    keys: &[crate::graph::FlatFrame],
     opts: &KeyframeOptions,
     targets: &GridTargets,
     progress: &mut dyn FnMut(FloorStage),

@@ -59,7 +59,7 @@ impl GridTargets {
 /// once for every target).
 pub fn grid_planner(
     ch: &Character,
-    keys: &[u32],
+    keys: &[crate::graph::FlatFrame],
     opts: &KeyframeOptions,
 ) -> Result<Planner, KeyframeJobError> {
     let mut planner = Planner::new(key_graph(ch, opts), keys, ch.manifest().fps, &opts.search)
@@ -94,7 +94,7 @@ fn priced(opts: &KeyframeOptions) -> KeyframeOptions {
 /// The planner of [`least_mean`]: the graph priced by smoothness.
 pub fn least_mean_planner(
     ch: &Character,
-    keys: &[u32],
+    keys: &[crate::graph::FlatFrame],
     opts: &KeyframeOptions,
 ) -> Result<Planner, KeyframeJobError> {
     let g = key_graph(ch, &priced(opts));

@@ -7,11 +7,11 @@ use crate::keyframe::parse_key;
 use crate::keyframe::pose::{self, Resolved};
 use crate::rig::LoadOptions;
 
-/// Key-frames resolved to database frame ids.
+/// Key-frames resolved to database frames.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Keys {
-    /// Frame ids, in order (start, the key-frames in between, end).
-    pub ids: Vec<u32>,
+    /// Frames, in order (start, the key-frames in between, end).
+    pub ids: Vec<crate::graph::FlatFrame>,
     /// The key-frames given as poses, each with the database frame it
     /// resolved to (Eq. 28's skeleton measure), in order.
     pub resolved: Vec<Resolved>,

@@ -331,7 +331,9 @@ impl Checker {
         if let crate::pose::retarget::NeutralSource::Frame(i) = neutral.source
             && i < ch.frame_count()
         {
-            c.head.rest_deg = c.head.raw_deg(ch.frame(i as u32));
+            c.head.rest_deg = c
+                .head
+                .raw_deg(ch.frame(crate::graph::FlatFrame::from_index(i)));
         }
         // The floor and the reference are read from the database's cache
         // when current (issue 43: measuring them reads every frame, 2.4 GB

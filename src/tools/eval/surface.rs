@@ -795,9 +795,9 @@ pub fn captured_of<'a>(
 
 /// `(sequence, frame)` of each of a character's frames (flat-id order).
 pub fn frame_ids(ch: &Character) -> Vec<(u32, u32)> {
-    (0..ch.frame_count() as u32)
+    crate::graph::FlatFrame::all(ch.frame_count())
         .map(|i| {
-            let f = ch.frame_id(i);
+            let f = ch.frame_at(i);
             (f.seq, f.frame)
         })
         .collect()

@@ -2,6 +2,7 @@
 //! tests/keyframe_smoothest.rs): a small deterministic generator and
 //! sequences walking at different speeds joined by random transitions.
 
+use surfmotion::graph::FlatFrame;
 use surfmotion::keyframe::graph::KeyGraph;
 
 /// A small deterministic generator (no dependency).
@@ -48,10 +49,10 @@ pub fn random_graph(r: &mut Lcg, seqs: usize, jumps: usize, shape: &Shape) -> Ke
         }
     }
     let n = centre.len();
-    let mut succ: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
+    let mut succ: Vec<Vec<(FlatFrame, f64)>> = vec![Vec::new(); n];
     for f in 0..n - 1 {
         if sequence[f] == sequence[f + 1] {
-            succ[f].push((f as u32 + 1, 0.0));
+            succ[f].push((FlatFrame::from_index(f + 1), 0.0));
         }
     }
     for _ in 0..jumps {
@@ -59,9 +60,12 @@ pub fn random_graph(r: &mut Lcg, seqs: usize, jumps: usize, shape: &Shape) -> Ke
         let (b0, lb) = starts[r.below(seqs)];
         let m = a0 + r.below(la);
         let to = b0 + 1 + r.below(lb - 1);
-        let seen = shape.distinct && succ[m].iter().any(|&(t, _)| t as usize == to);
+        let seen = shape.distinct && succ[m].iter().any(|&(t, _)| t.index() == to);
         if to != m + 1 && !seen {
-            succ[m].push((to as u32, shape.cost.0 + shape.cost.1 * r.next()));
+            succ[m].push((
+                FlatFrame::from_index(to),
+                shape.cost.0 + shape.cost.1 * r.next(),
+            ));
         }
     }
     KeyGraph::new(&succ, centre, sequence)

@@ -278,17 +278,18 @@ pub fn line_key_graph(
     loops: &[(usize, u32, f64)],
 ) -> surfmotion::keyframe::graph::KeyGraph {
     let centre: Vec<[f64; 2]> = (0..n).map(|f| [step * f as f64, 0.0]).collect();
-    let mut succ: Vec<Vec<(u32, f64)>> = (0..n)
+    use surfmotion::graph::FlatFrame;
+    let mut succ: Vec<Vec<(FlatFrame, f64)>> = (0..n)
         .map(|f| {
             if f + 1 < n {
-                vec![(f as u32 + 1, 0.0)]
+                vec![(FlatFrame::from_index(f + 1), 0.0)]
             } else {
                 Vec::new()
             }
         })
         .collect();
     for &(from, to, cost) in loops {
-        succ[from].push((to, cost));
+        succ[from].push((FlatFrame::new(to), cost));
     }
     surfmotion::keyframe::graph::KeyGraph::new(&succ, centre, vec![0; n])
 }

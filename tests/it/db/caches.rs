@@ -88,7 +88,7 @@ fn a_rewritten_sequence_invalidates_the_frame_cache_a_touched_or_copied_one_does
     settle();
     let ch = Character::load(&db, &Quiet).unwrap();
     let n = ch.n();
-    let before: Vec<[f64; 3]> = ch.frame(10).to_vec();
+    let before: Vec<[f64; 3]> = ch.frame(surfmotion::graph::FlatFrame::new(10)).to_vec();
     drop(ch);
     let fpath = frames_path(&db);
     assert!(
@@ -145,7 +145,7 @@ fn a_rewritten_sequence_invalidates_the_frame_cache_a_touched_or_copied_one_does
     assert_ne!(modified(&copy.join("samba.pc2")), modified(&pc2));
     let ch = Character::load(&copy, &Quiet).unwrap();
     assert_eq!(cache_times(&copy), copied, "a copy rebuilt a cache");
-    assert_eq!(ch.frame(10), &before[..]);
+    assert_eq!(ch.frame(surfmotion::graph::FlatFrame::new(10)), &before[..]);
     drop(ch);
 
     // Rewritten in place, the same length, the modification time put back:
@@ -168,9 +168,18 @@ fn a_rewritten_sequence_invalidates_the_frame_cache_a_touched_or_copied_one_does
         written,
         "a rewritten sequence kept the old cache"
     );
-    assert_eq!(ch.frame(10)[0][0].to_bits(), (x as f64).to_bits());
-    assert_ne!(ch.frame(10)[0], before[0]);
-    assert_eq!(ch.frame(10)[1..], before[1..]);
+    assert_eq!(
+        ch.frame(surfmotion::graph::FlatFrame::new(10))[0][0].to_bits(),
+        (x as f64).to_bits()
+    );
+    assert_ne!(
+        ch.frame(surfmotion::graph::FlatFrame::new(10))[0],
+        before[0]
+    );
+    assert_eq!(
+        ch.frame(surfmotion::graph::FlatFrame::new(10))[1..],
+        before[1..]
+    );
 }
 
 #[test]

@@ -51,8 +51,8 @@ fn mapped_frames_equal_loaded_and_a_cut_cache_is_rebuilt() {
     assert_eq!(frames.len(), count * n);
     // Bit for bit: the frames, each frame's lowest point, the skeletons.
     assert_eq!(bits(ch.frames()), bits(&frames));
-    for id in 0..count as u32 {
-        let want = &frames[id as usize * n..(id as usize + 1) * n];
+    for id in surfmotion::graph::FlatFrame::all(count) {
+        let want = &frames[id.index() * n..(id.index() + 1) * n];
         assert_eq!(bits(ch.frame(id)), bits(want), "frame {id}");
         let low = want.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
         assert_eq!(ch.lowest(id).to_bits(), low.to_bits(), "frame {id}");

@@ -119,7 +119,7 @@ fn procedural_retarget_through_the_graph_follows_the_query() {
     // query walks along a circle; the database walks straight or runs).
     let r = &out.report.retrieval;
     assert_eq!(r.path.len(), frames);
-    assert!(r.path.iter().all(|&id| (id as usize) < f.ch.frame_count()));
+    assert!(r.path.iter().all(|&id| id.index() < f.ch.frame_count()));
     assert_eq!(out.report.steps.len(), frames);
     let walking = out
         .report
@@ -232,7 +232,7 @@ fn keyframe_frame_centres_read_frames_converted_once_on_load() {
     let centres = frame_centres(&ch);
     assert_eq!(centres.len(), ch.frame_count());
     for (i, c) in centres.iter().enumerate() {
-        let want = centre_of(ch.frame(i as u32));
+        let want = centre_of(ch.frame(surfmotion::graph::FlatFrame::from_index(i)));
         assert!(
             (c[0] - want[0]).abs() < 1e-12 && (c[1] - want[1]).abs() < 1e-12,
             "frame {i}: centre {c:?}, its frame's centre {want:?}"

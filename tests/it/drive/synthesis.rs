@@ -169,7 +169,7 @@ fn interpolated_frames_lie_between_their_neighbours() {
         );
         set.push_sequence(&out.positions[k * n..(k + 1) * n], false);
         for (_, f, _) in &step.blend {
-            ch.frame_metres(ch.graph().frame_id(seq, *f), &mut buf);
+            ch.frame_metres(ch.graph().flat_id(seq, *f), &mut buf);
             set.push_sequence(&buf, false);
         }
         use surfmotion::similarity::PairDistance;

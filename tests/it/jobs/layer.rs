@@ -110,8 +110,8 @@ fn character_is_in_metres_once_and_its_skeleton_kind_is_selectable() {
     assert_eq!(report.frames, 105);
     let ch = Character::load(&db, &Quiet).unwrap();
     let walk = load_sequence(db.join("walk.pc2").to_str().unwrap(), &Default::default()).unwrap();
-    let f = 7;
-    for (got, file) in ch.frame(f).iter().zip(walk.frame(f as usize)) {
+    let f = surfmotion::graph::FlatFrame::new(7);
+    for (got, file) in ch.frame(f).iter().zip(walk.frame(f.index())) {
         let want = [file[0] * 0.01, file[2] * 0.01, -file[1] * 0.01];
         for k in 0..3 {
             assert!((got[k] - want[k]).abs() < 1e-12, "{got:?} vs {want:?}");
@@ -119,10 +119,11 @@ fn character_is_in_metres_once_and_its_skeleton_kind_is_selectable() {
     }
     // Frame ids: (sequence, frame) and the flat id the graph uses.
     let id = surfmotion::db::FrameId { seq: 1, frame: 4 };
-    assert_eq!(ch.flat_id(id), Some(64));
-    assert_eq!(ch.frame_id(64), id);
+    let flat = surfmotion::graph::FlatFrame::new(64);
+    assert_eq!(ch.checked_flat_id(id), Some(flat));
+    assert_eq!(ch.frame_at(flat), id);
     assert_eq!(
-        ch.flat_id(surfmotion::db::FrameId { seq: 1, frame: 45 }),
+        ch.checked_flat_id(surfmotion::db::FrameId { seq: 1, frame: 45 }),
         None
     );
     let mut buf = vec![[0.0; 3]; ch.n()];

@@ -6,6 +6,7 @@
 
 use crate::common;
 
+use surfmotion::graph::FlatFrame;
 use surfmotion::keyframe::error::SearchError;
 use surfmotion::keyframe::graph::KeyGraph;
 use surfmotion::keyframe::options::SearchOptions;
@@ -25,7 +26,7 @@ fn an_exact_length_table_over_the_memory_budget_is_a_typed_error() {
         return;
     }
     let o = SearchOptions::default();
-    let p = Planner::new(looped(), &[0, 59], 25.0, &o).unwrap();
+    let p = Planner::new(looped(), &[FlatFrame::new(0), FlatFrame::new(59)], 25.0, &o).unwrap();
     let c = p.chain.as_ref().unwrap();
     // Within the default budget the query is answered.
     let t = Targets::Global {
@@ -39,7 +40,7 @@ fn an_exact_length_table_over_the_memory_budget_is_a_typed_error() {
     // SAFETY: this process runs this one test (`alone_in_process`); nothing
     // else reads the environment concurrently.
     unsafe { std::env::set_var("SURFMOTION_MEMORY_LIMIT", "4K") };
-    let fresh = Planner::new(looped(), &[0, 59], 25.0, &o).unwrap();
+    let fresh = Planner::new(looped(), &[FlatFrame::new(0), FlatFrame::new(59)], 25.0, &o).unwrap();
     let e = fresh
         .plan(
             &Targets::Global {

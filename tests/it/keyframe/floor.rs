@@ -27,25 +27,26 @@ fn floor_is_the_measure_minimised_over_every_frame_pair_and_bounds_the_graph() {
     assert_eq!(frames.len(), ch.frame_count());
     let surface = Surface::new(ch.topology().triangles(), ch.n());
     let g = ch.graph();
-    for (a, b) in [(3u32, 40u32), (10, 90), (50, 100)] {
+    let f = surfmotion::graph::FlatFrame::new;
+    for (a, b) in [(f(3), f(40)), (f(10), f(90)), (f(50), f(100))] {
         let exact = frames.distance(a, b, 1);
-        let p = profile(&ch, &surface, a, b + 1, 0, false);
+        let p = profile(&ch, &surface, a, b.next(), 0, false);
         let want = p[0].unwrap().0;
         assert!((exact - want).abs() < 1e-9, "{a}, {b}: {exact} vs {want}");
         assert!(frames.distance(a, b, 16) <= exact + 1e-12);
         assert!(exact > 0.0);
     }
-    assert_eq!(frames.distance(7, 7, 1), 0.0);
+    assert_eq!(frames.distance(f(7), f(7), 1), 0.0);
     let opts = FloorOptions::of_graph(&g.options);
     let t = transition_floor(&ch, &frames, &opts);
     let best = t.best.clone().expect("a window fits");
     assert!((opts.min_window..=opts.max_window).contains(&best.window));
     let seq = |name: &str| g.sequences.iter().position(|s| s.name == name).unwrap();
     let (a, b) = (
-        g.frame_id(seq(&best.from), best.m),
-        g.frame_id(seq(&best.to), best.n),
+        g.flat_id(seq(&best.from), best.m),
+        g.flat_id(seq(&best.to), best.n),
     );
-    let s = transition_smoothness(&ch, a, b + 1, best.window);
+    let s = transition_smoothness(&ch, a, b.next(), best.window);
     assert!((s - best.smoothness).abs() < 1e-9, "{best:?} measures {s}");
     let mut covered = 0;
     for tr in &g.transitions {
@@ -57,15 +58,15 @@ fn floor_is_the_measure_minimised_over_every_frame_pair_and_bounds_the_graph() {
         if !fits {
             continue;
         }
-        let (x, y) = (g.frame_id(tr.from, tr.m), g.frame_id(tr.to, tr.n));
-        let s = transition_smoothness(&ch, x, y + 1, tr.window);
+        let (x, y) = (g.flat_id(tr.from, tr.m), g.flat_id(tr.to, tr.n));
+        let s = transition_smoothness(&ch, x, y.next(), tr.window);
         assert!(best.smoothness <= s + 1e-9, "{tr:?}: {s} < floor {best:?}");
         covered += 1;
     }
     assert!(covered > 0);
     assert_eq!(t.pairs.len(), 3);
     // Walk 02_01:0 to run 02_03:30: at least one transition.
-    let (from, to) = (g.frame_id(0, 0), g.frame_id(1, 30));
+    let (from, to) = (g.flat_id(0, 0), g.flat_id(1, 30));
     let priced = surfmotion::keyframe::KeyframeOptions {
         transition_cost: surfmotion::keyframe::TransitionCost::Smoothness,
         ..Default::default()

@@ -6,12 +6,18 @@ use crate::common;
 
 use std::collections::BinaryHeap;
 use std::process::Command;
+use surfmotion::graph::FlatFrame;
 use surfmotion::keyframe::graph::KeyGraph;
 use surfmotion::keyframe::options::SearchOptions;
 use surfmotion::keyframe::repeats::{Measure, Problem, brute_force, solve_exact, solve_ilp};
 use surfmotion::keyframe::{Planner, Targets};
 
 use common::keygraph::Lcg;
+
+/// The frame at position `i` of the graph.
+fn ff(i: usize) -> FlatFrame {
+    FlatFrame::from_index(i)
+}
 
 fn random_problem(r: &mut Lcg, loops: &mut Vec<Measure>) -> (Measure, f64, f64) {
     loops.clear();
@@ -148,9 +154,9 @@ fn random_graph_costing(r: &mut Lcg, seqs: usize, jumps: usize, least: f64, span
 
 /// Dijkstra on the frame graph with the zero-target cost of a step:
 /// transition cost + w_dist · step + w_time · 1 frame.
-fn dijkstra(g: &KeyGraph, from: u32, to: u32, wd: f64, wt: f64) -> Option<f64> {
+fn dijkstra(g: &KeyGraph, from: FlatFrame, to: FlatFrame, wd: f64, wt: f64) -> Option<f64> {
     #[derive(PartialEq)]
-    struct Item(f64, u32);
+    struct Item(f64, FlatFrame);
     impl Eq for Item {}
     impl PartialOrd for Item {
         fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
@@ -163,22 +169,22 @@ fn dijkstra(g: &KeyGraph, from: u32, to: u32, wd: f64, wt: f64) -> Option<f64> {
         }
     }
     let mut d = vec![f64::INFINITY; g.len()];
-    d[from as usize] = wt; // the start frame counts (Eq. 12)
+    d[from.index()] = wt; // the start frame counts (Eq. 12)
     let mut h = BinaryHeap::new();
     h.push(Item(wt, from));
     while let Some(Item(c, u)) = h.pop() {
-        if c > d[u as usize] {
+        if c > d[u.index()] {
             continue;
         }
         for e in g.successors(u) {
-            let nc = c + e.cost + wd * g.step[e.to as usize] + wt;
-            if nc < d[e.to as usize] {
-                d[e.to as usize] = nc;
+            let nc = c + e.cost + wd * g.step_of(e.to) + wt;
+            if nc < d[e.to.index()] {
+                d[e.to.index()] = nc;
                 h.push(Item(nc, e.to));
             }
         }
     }
-    d[to as usize].is_finite().then_some(d[to as usize])
+    d[to.index()].is_finite().then_some(d[to.index()])
 }
 
 fn exact() -> SearchOptions {
@@ -194,8 +200,8 @@ fn zero_targets_give_the_dijkstra_shortest_path() {
     let mut compared = 0;
     for case in 0..400 {
         let g = random_graph(&mut r, 3, 16);
-        let from = r.below(g.len()) as u32;
-        let to = r.below(g.len()) as u32;
+        let from = ff(r.below(g.len()));
+        let to = ff(r.below(g.len()));
         let o = exact();
         let w = o.weights;
         let want = dijkstra(&g, from, to, w.distance, w.time);
@@ -234,7 +240,7 @@ fn paths_start_and_end_at_the_key_frames_pass_every_via_and_follow_edges() {
     let mut checked = 0;
     for case in 0..40 {
         let g = random_graph(&mut r, 3, 14);
-        let keys: Vec<u32> = (0..3).map(|_| r.below(g.len()) as u32).collect();
+        let keys: Vec<FlatFrame> = (0..3).map(|_| ff(r.below(g.len()))).collect();
         let o = SearchOptions::default();
         let Ok(p) = Planner::new(g.clone(), &keys, 25.0, &o) else {
             continue;
@@ -269,7 +275,7 @@ fn assert_walks_the_graph(g: &KeyGraph, plan: &surfmotion::keyframe::Plan, case:
         let e = g.edge(w[0], w[1]);
         assert!(e.is_some(), "case {case}: {} -> {} is no edge", w[0], w[1]);
         cost += e.unwrap().cost;
-        dist += g.step[w[1] as usize];
+        dist += g.step_of(w[1]);
     }
     assert_eq!(plan.measure.frames as usize, plan.path.len(), "case {case}");
     assert!((plan.measure.distance - dist).abs() < 1e-9, "case {case}");
@@ -282,7 +288,7 @@ fn loops_are_repeated_to_meet_a_reachable_target() {
     // 1 m): 0 -> 39 plus k loops makes 1.95 + k m in 40 + 20k frames.
     let g = common::line_key_graph(40, 0.05, &[(30, 11, 0.002)]);
     let o = exact();
-    let p = Planner::new(g, &[0, 39], 20.0, &o).unwrap();
+    let p = Planner::new(g, &[ff(0), ff(39)], 20.0, &o).unwrap();
     let plan = p
         .plan(
             &Targets::Global {
@@ -793,17 +799,17 @@ fn cli_output_with_vias_passes_every_key_frame_in_the_written_file() {
 /// programme the lattice search bins (frame level, no pruning).
 fn all_exact_length(
     g: &KeyGraph,
-    from: u32,
-    to: u32,
+    from: FlatFrame,
+    to: FlatFrame,
     frames: usize,
     min_run: u32,
 ) -> Vec<(f64, f64)> {
     use std::collections::HashMap;
     // (frame, frames since the last transition, capped) -> labels.
-    let mut layer: HashMap<(u32, u32), Vec<(f64, f64)>> = HashMap::new();
+    let mut layer: HashMap<(FlatFrame, u32), Vec<(f64, f64)>> = HashMap::new();
     layer.insert((from, min_run), vec![(0.0, 0.0)]);
     for _ in 1..frames {
-        let mut next: HashMap<(u32, u32), Vec<(f64, f64)>> = HashMap::new();
+        let mut next: HashMap<(FlatFrame, u32), Vec<(f64, f64)>> = HashMap::new();
         for (&(f, since), labels) in &layer {
             for e in g.successors(f) {
                 if e.jump && since < min_run {
@@ -812,7 +818,7 @@ fn all_exact_length(
                 let s2 = if e.jump { 1 } else { (since + 1).min(min_run) };
                 let row = next.entry((e.to, s2)).or_default();
                 for &(d, c) in labels {
-                    row.push((d + g.step[e.to as usize], c + e.cost));
+                    row.push((d + g.step_of(e.to), c + e.cost));
                 }
             }
         }
@@ -844,7 +850,7 @@ fn exact_length_search_matches_an_exhaustive_search_on_random_graphs() {
     let w = o.weights;
     for case in 0..400 {
         let g = random_graph(&mut r, 3, 16);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
             continue;
         };
@@ -911,13 +917,10 @@ fn pose_key_frames_resolve_to_the_nearest_database_frame_and_bad_poses_exit_1() 
     let tmp = tempfile::tempdir().unwrap();
     let ch = surfmotion::db::Character::load(db, &surfmotion::db::Quiet).unwrap();
     let id = surfmotion::keyframe::parse_key(&ch, "02_03:30").unwrap();
-    let pose: Vec<[f64; 3]> = ch.poses()[id as usize]
-        .iter()
-        .map(|p| p.to_array())
-        .collect();
+    let pose: Vec<[f64; 3]> = ch.pose(id).iter().map(|p| p.to_array()).collect();
     let pose_file = tmp.path().join("pose.json");
     std::fs::write(&pose_file, serde_json::to_string(&pose).unwrap()).unwrap();
-    let r = surfmotion::keyframe::pose::nearest_frame(&ch, "pose", &ch.poses()[id as usize]);
+    let r = surfmotion::keyframe::pose::nearest_frame(&ch, "pose", ch.pose(id));
     assert_eq!((r.id, r.frame.as_str()), (id, "02_03:30"));
     assert!(r.distance < 1e-9, "{}", r.distance);
     let report = tmp.path().join("kf.json");
@@ -1002,7 +1005,7 @@ fn wrap_deg(x: f64) -> f64 {
 /// when there is no plain plan.
 fn walks_plain_and_turned_60(
     g: &KeyGraph,
-    keys: &[u32],
+    keys: &[FlatFrame],
     t: &Targets,
 ) -> Option<(surfmotion::keyframe::Plan, surfmotion::keyframe::Plan, f64)> {
     use surfmotion::keyframe::heading::HeadingTarget;
@@ -1038,7 +1041,7 @@ fn heading_target_turns_the_final_facing() {
     let (mut cases, mut closer, mut sum) = (0, 0, 0.0);
     for _ in 0..300 {
         let g = turning_graph(&mut r);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         let o = SearchOptions::default();
         let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
             continue;
@@ -1091,16 +1094,16 @@ fn heading_target_turns_the_final_facing() {
 /// path may pass it again), transitions `min_run` apart: exhaustive.
 fn all_exact_length_via(
     g: &KeyGraph,
-    keys: &[u32],
+    keys: &[FlatFrame],
     frames: usize,
     min_run: u32,
 ) -> Vec<(f64, f64)> {
     use std::collections::HashMap;
     let last = keys.len() - 2; // stage of the last segment
-    let mut layer: HashMap<(u32, u32, usize), Vec<(f64, f64)>> = HashMap::new();
+    let mut layer: HashMap<(FlatFrame, u32, usize), Vec<(f64, f64)>> = HashMap::new();
     layer.insert((keys[0], min_run, 0), vec![(0.0, 0.0)]);
     for _ in 1..frames {
-        let mut next: HashMap<(u32, u32, usize), Vec<(f64, f64)>> = HashMap::new();
+        let mut next: HashMap<(FlatFrame, u32, usize), Vec<(f64, f64)>> = HashMap::new();
         for (&(f, since, stage), labels) in &layer {
             for e in g.successors(f) {
                 if e.jump && since < min_run {
@@ -1116,7 +1119,7 @@ fn all_exact_length_via(
                 for st in stages {
                     let row = next.entry((e.to, s2, st)).or_default();
                     for &(d, c) in labels {
-                        row.push((d + g.step[e.to as usize], c + e.cost));
+                        row.push((d + g.step_of(e.to), c + e.cost));
                     }
                 }
             }
@@ -1155,7 +1158,7 @@ fn one_global_target_over_via_keyframes_is_split_by_the_exact_length_search() {
     let w = o.weights;
     for case in 0..900 {
         let g = random_graph(&mut r, 3, 16);
-        let keys: Vec<u32> = (0..3).map(|_| r.below(g.len()) as u32).collect();
+        let keys: Vec<FlatFrame> = (0..3).map(|_| ff(r.below(g.len()))).collect();
         if keys[0] == keys[1] || keys[1] == keys[2] {
             continue;
         }
@@ -1216,7 +1219,7 @@ fn reachability_oracle_agrees_with_an_exhaustive_search() {
     let (mut yes, mut no) = (0, 0);
     for case in 0..700 {
         let g = random_graph(&mut r, 3, 16);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
             continue;
         };
@@ -1272,7 +1275,7 @@ fn the_search_meets_both_targets_within_1pct_when_some_path_does() {
     let (mut cases, mut met, mut plain_met) = (0, 0, 0);
     for _ in 0..300 {
         let g = random_graph(&mut r, 3, 16);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &base) else {
             continue;
         };
@@ -1305,25 +1308,31 @@ fn the_search_meets_both_targets_within_1pct_when_some_path_does() {
 }
 
 /// Every simple path of frames from `from` to `to` (depth-first).
-fn simple_paths(g: &KeyGraph, from: u32, to: u32) -> Vec<Vec<u32>> {
-    fn go(g: &KeyGraph, to: u32, path: &mut Vec<u32>, on: &mut [bool], out: &mut Vec<Vec<u32>>) {
+fn simple_paths(g: &KeyGraph, from: FlatFrame, to: FlatFrame) -> Vec<Vec<FlatFrame>> {
+    fn go(
+        g: &KeyGraph,
+        to: FlatFrame,
+        path: &mut Vec<FlatFrame>,
+        on: &mut [bool],
+        out: &mut Vec<Vec<FlatFrame>>,
+    ) {
         let u = *path.last().unwrap();
         if u == to {
             out.push(path.clone());
             return;
         }
         for e in g.successors(u) {
-            if !on[e.to as usize] {
-                on[e.to as usize] = true;
+            if !on[e.to.index()] {
+                on[e.to.index()] = true;
                 path.push(e.to);
                 go(g, to, path, on, out);
                 path.pop();
-                on[e.to as usize] = false;
+                on[e.to.index()] = false;
             }
         }
     }
     let mut on = vec![false; g.len()];
-    on[from as usize] = true;
+    on[from.index()] = true;
     let mut out = Vec::new();
     go(g, to, &mut vec![from], &mut on, &mut out);
     out
@@ -1331,45 +1340,51 @@ fn simple_paths(g: &KeyGraph, from: u32, to: u32) -> Vec<Vec<u32>> {
 
 /// Every simple cycle of frames, as frame lists (each from its least
 /// frame, once).
-fn simple_cycles(g: &KeyGraph) -> Vec<Vec<u32>> {
-    fn go(g: &KeyGraph, v: u32, path: &mut Vec<u32>, on: &mut [bool], out: &mut Vec<Vec<u32>>) {
+fn simple_cycles(g: &KeyGraph) -> Vec<Vec<FlatFrame>> {
+    fn go(
+        g: &KeyGraph,
+        v: FlatFrame,
+        path: &mut Vec<FlatFrame>,
+        on: &mut [bool],
+        out: &mut Vec<Vec<FlatFrame>>,
+    ) {
         let u = *path.last().unwrap();
         for e in g.successors(u) {
             if e.to == v {
                 out.push(path.clone());
-            } else if e.to > v && !on[e.to as usize] {
-                on[e.to as usize] = true;
+            } else if e.to > v && !on[e.to.index()] {
+                on[e.to.index()] = true;
                 path.push(e.to);
                 go(g, v, path, on, out);
                 path.pop();
-                on[e.to as usize] = false;
+                on[e.to.index()] = false;
             }
         }
     }
     let mut out = Vec::new();
     let mut on = vec![false; g.len()];
-    for v in 0..g.len() as u32 {
-        on[v as usize] = true;
+    for v in FlatFrame::all(g.len()) {
+        on[v.index()] = true;
         go(g, v, &mut vec![v], &mut on, &mut out);
-        on[v as usize] = false;
+        on[v.index()] = false;
     }
     out
 }
 
 /// The measure of the steps of a closed (`closed`) or open frame list.
-fn frames_measure(g: &KeyGraph, frames: &[u32], closed: bool) -> Measure {
+fn frames_measure(g: &KeyGraph, frames: &[FlatFrame], closed: bool) -> Measure {
     let mut m = Measure {
         frames: if closed { 0 } else { 1 },
         ..Default::default()
     };
-    let mut steps: Vec<(u32, u32)> = frames.windows(2).map(|w| (w[0], w[1])).collect();
+    let mut steps: Vec<(FlatFrame, FlatFrame)> = frames.windows(2).map(|w| (w[0], w[1])).collect();
     if closed {
         steps.push((*frames.last().unwrap(), frames[0]));
     }
     for (a, b) in steps {
         let e = g.edge(a, b).unwrap();
         m.cost += e.cost;
-        m.distance += g.step[b as usize];
+        m.distance += g.step_of(b);
         m.frames += 1;
     }
     m
@@ -1422,7 +1437,7 @@ fn walks_search_with_the_ilp_matches_brute_force_on_small_random_graphs() {
     let mut compared = 0;
     for case in 0..300 {
         let g = random_graph(&mut r, 2, 5);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         if a == b {
             continue;
         }
@@ -1445,7 +1460,7 @@ fn walks_search_with_the_ilp_matches_brute_force_on_small_random_graphs() {
             continue;
         }
         let w = ilp.weights;
-        let cycles: Vec<(Vec<u32>, Measure)> = simple_cycles(&g)
+        let cycles: Vec<(Vec<FlatFrame>, Measure)> = simple_cycles(&g)
             .into_iter()
             .map(|c| {
                 let m = frames_measure(&g, &c, true);
@@ -1494,8 +1509,8 @@ fn walks_search_with_the_ilp_matches_brute_force_on_small_random_graphs() {
 
 /// The turn of the steps of a closed (`closed`) or open frame list
 /// (radians, the sum of its edges' turns).
-fn frames_turn(g: &KeyGraph, frames: &[u32], closed: bool) -> f64 {
-    let mut steps: Vec<(u32, u32)> = frames.windows(2).map(|w| (w[0], w[1])).collect();
+fn frames_turn(g: &KeyGraph, frames: &[FlatFrame], closed: bool) -> f64 {
+    let mut steps: Vec<(FlatFrame, FlatFrame)> = frames.windows(2).map(|w| (w[0], w[1])).collect();
     if closed {
         steps.push((*frames.last().unwrap(), frames[0]));
     }
@@ -1521,7 +1536,7 @@ fn walks_search_with_a_heading_target_matches_brute_force_on_small_random_graphs
         for e in g.edges.iter_mut().filter(|e| e.jump) {
             e.turn = 4.0 * r.next() - 2.0;
         }
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         if a == b {
             continue;
         }
@@ -1551,7 +1566,7 @@ fn walks_search_with_a_heading_target_matches_brute_force_on_small_random_graphs
             continue;
         }
         let w = ilp.weights;
-        let cycles: Vec<(Vec<u32>, Measure, f64)> = simple_cycles(&g)
+        let cycles: Vec<(Vec<FlatFrame>, Measure, f64)> = simple_cycles(&g)
             .into_iter()
             .map(|c| {
                 let m = frames_measure(&g, &c, true);
@@ -1564,7 +1579,7 @@ fn walks_search_with_a_heading_target_matches_brute_force_on_small_random_graphs
         assert!(!paths.is_empty(), "case {case}");
         for path in &paths {
             let walk = frames_measure(&g, path, false);
-            let near: Vec<&(Vec<u32>, Measure, f64)> = cycles
+            let near: Vec<&(Vec<FlatFrame>, Measure, f64)> = cycles
                 .iter()
                 .filter(|(c, _, _)| c.iter().any(|f| path.contains(f)))
                 .collect();
@@ -1635,7 +1650,7 @@ fn paths_pass_two_vias_in_order_with_either_search() {
     let mut checked = [0usize; 2];
     for case in 0..60 {
         let g = random_graph(&mut r, 3, 18);
-        let keys: Vec<u32> = (0..4).map(|_| r.below(g.len()) as u32).collect();
+        let keys: Vec<FlatFrame> = (0..4).map(|_| ff(r.below(g.len()))).collect();
         let o = SearchOptions::default();
         let Ok(p) = Planner::new(g.clone(), &keys, 25.0, &o) else {
             continue;
@@ -1687,7 +1702,7 @@ fn heading_target_counts_in_the_walks_search() {
     let (mut cases, mut sum) = (0, 0.0);
     for case in 0..200 {
         let g = turning_graph(&mut r);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         let t = Targets::Global {
             distance: 1.0 + 2.0 * r.next(),
             time: 2.0 + 2.0 * r.next(),
@@ -1726,7 +1741,7 @@ fn heading_target_counts_in_the_walks_split_over_vias() {
     let (mut cases, mut lower) = (0, 0);
     for case in 0..150 {
         let g = turning_graph(&mut r);
-        let keys: Vec<u32> = (0..3).map(|_| r.below(g.len()) as u32).collect();
+        let keys: Vec<FlatFrame> = (0..3).map(|_| ff(r.below(g.len()))).collect();
         let t = Targets::Global {
             distance: 2.0 + 2.0 * r.next(),
             time: 3.0 + 2.0 * r.next(),
@@ -1784,7 +1799,7 @@ fn extremes_kept_across_queries_equal_a_fresh_table() {
     let mut checked = 0;
     for _ in 0..400 {
         let g = random_graph(&mut r, 3, 16);
-        let keys: Vec<u32> = (0..3).map(|_| r.below(g.len()) as u32).collect();
+        let keys: Vec<FlatFrame> = (0..3).map(|_| ff(r.below(g.len()))).collect();
         let o = SearchOptions::default();
         let Ok(p) = Planner::new(g, &keys, 25.0, &o) else {
             continue;
@@ -1824,10 +1839,10 @@ fn smoothness_is_zero_on_identical_overlaps_and_measured_transitions_report_thei
     let Some(d) = common::data_dir() else { return };
     let ch = surfmotion::db::Character::load(walk_run_db(&d), &surfmotion::db::Quiet).unwrap();
     let f = surfmotion::keyframe::parse_key(&ch, "02_01:40").unwrap();
-    assert_eq!(transition_smoothness(&ch, f, f + 1, 4), 0.0);
+    assert_eq!(transition_smoothness(&ch, f, f.next(), 4), 0.0);
     for t in ch.graph().transitions.iter().take(2) {
-        let a = ch.graph().frame_id(t.from, t.m);
-        let b = ch.graph().frame_id(t.to, t.n) + 1;
+        let a = ch.graph().flat_id(t.from, t.m);
+        let b = ch.graph().flat_id(t.to, t.n).next();
         let s = transition_smoothness_both(&ch, a, b, t.window);
         assert!(s.surface > 0.0 && s.surface <= s.vertex + 1e-12, "{s:?}");
     }
@@ -1865,7 +1880,7 @@ fn smoothness_is_zero_on_identical_overlaps_and_measured_transitions_report_thei
     for c in &chosen {
         assert!((lo..=opts.max_window).contains(&c.window), "{c:?}");
         let (sa, _) = ch.graph().frame_of(c.from);
-        let (sb, _) = ch.graph().frame_of(c.to - 1);
+        let (sb, _) = ch.graph().frame_of(c.to.prev().unwrap());
         assert!(ch.graph().edges.iter().any(|e| e.from == sa && e.to == sb));
         let s = transition_smoothness(&ch, c.from, c.to, c.window);
         assert!((s - c.smoothness).abs() < 1e-12, "{c:?} measures {s}");
@@ -1888,8 +1903,8 @@ fn a_far_target_gets_the_best_compromise_within_the_horizon() {
     let mut checked = 0;
     for case in 0..40 {
         let g = random_graph(&mut r, 3, 16);
-        let from = r.below(g.len()) as u32;
-        let to = r.below(g.len()) as u32;
+        let from = ff(r.below(g.len()));
+        let to = ff(r.below(g.len()));
         let Ok(p) = Planner::new(g, &[from, to], 25.0, &SearchOptions::default()) else {
             continue;
         };
@@ -1951,7 +1966,7 @@ fn cost_pruning_keeps_the_unpruned_result_on_random_graphs() {
     let (mut compared, mut found, mut bit) = (0, 0, 0);
     for case in 0..300 {
         let g = random_dear_graph(&mut r, 3, 16);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
             continue;
         };
@@ -2045,7 +2060,7 @@ fn the_probe_gives_no_dearer_path_than_the_search_without_it() {
         for (k, e) in g.edges.iter_mut().filter(|e| e.jump).enumerate() {
             e.turn = [0.2, -0.4, 0.6, -0.3, 0.5][(k + case) % 5];
         }
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
             continue;
         };
@@ -2111,7 +2126,7 @@ fn exact_length_search_gives_the_same_path_on_any_number_of_threads() {
     let mut found = 0;
     for case in 0..120 {
         let g = random_dear_graph(&mut r, 4, 30);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
             continue;
         };
@@ -2159,7 +2174,7 @@ fn following_one_arc_nodes_loses_no_path_against_an_exhaustive_search() {
     for case in 0..300 {
         let jumps = 6 + r.below(20);
         let g = random_graph(&mut r, 3, jumps);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         let o = SearchOptions::default();
         let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &o) else {
             continue;
@@ -2297,7 +2312,7 @@ fn coarse_bins_far_from_the_goal_meet_what_the_fine_search_meets() {
     let (mut met, mut differ, mut worst) = (0, 0, 0.0f64);
     for _ in 0..160 {
         let g = random_graph(&mut r, 3, 24);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (ff(r.below(g.len())), ff(r.below(g.len())));
         let Ok(p) = Planner::new(g.clone(), &[a, b], 25.0, &coarse) else {
             continue;
         };
@@ -2356,8 +2371,8 @@ fn a_time_target_past_the_search_cap_is_reported_as_a_bound_hit() {
     let mut checked = 0;
     for _ in 0..20 {
         let g = random_graph(&mut r, 3, 16);
-        let from = r.below(g.len()) as u32;
-        let to = r.below(g.len()) as u32;
+        let from = ff(r.below(g.len()));
+        let to = ff(r.below(g.len()));
         let Ok(p) = Planner::new(g, &[from, to], 25.0, &SearchOptions::default()) else {
             continue;
         };
@@ -2417,9 +2432,7 @@ fn joined_key_frames_never_give_a_false_no_path() {
     for case in 0..60 {
         let (seqs, jumps) = (3 + r.below(3), 10 + r.below(30));
         let g = random_graph(&mut r, seqs, jumps);
-        let keys: Vec<u32> = (0..2 + r.below(2))
-            .map(|_| r.below(g.len()) as u32)
-            .collect();
+        let keys: Vec<FlatFrame> = (0..2 + r.below(2)).map(|_| ff(r.below(g.len()))).collect();
         for limits in [Limits::default(), bounded] {
             let base = SearchOptions {
                 limits,

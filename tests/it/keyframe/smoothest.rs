@@ -7,6 +7,7 @@
 use crate::common;
 
 use std::collections::HashMap;
+use surfmotion::graph::FlatFrame;
 use surfmotion::keyframe::graph::KeyGraph;
 use surfmotion::keyframe::options::SearchOptions;
 use surfmotion::keyframe::segment::Target;
@@ -32,16 +33,16 @@ fn random_graph(r: &mut Lcg, seqs: usize, jumps: usize) -> KeyGraph {
 /// sum gives the least mean, whatever follows).
 fn all_paths(
     g: &KeyGraph,
-    from: u32,
-    to: u32,
+    from: FlatFrame,
+    to: FlatFrame,
     frames: usize,
     min_run: u32,
 ) -> Vec<(f64, usize, f64)> {
     type Row = Vec<(f64, usize, f64)>;
-    let mut layer: HashMap<(u32, u32), Row> = HashMap::new();
+    let mut layer: HashMap<(FlatFrame, u32), Row> = HashMap::new();
     layer.insert((from, min_run), vec![(0.0, 0, 0.0)]);
     for _ in 1..frames {
-        let mut next: HashMap<(u32, u32), Row> = HashMap::new();
+        let mut next: HashMap<(FlatFrame, u32), Row> = HashMap::new();
         for (&(f, since), labels) in &layer {
             for e in g.successors(f) {
                 if e.jump && since < min_run {
@@ -52,7 +53,7 @@ fn all_paths(
                 for &(d, k, s) in labels {
                     let j = usize::from(e.jump);
                     row.push((
-                        d + g.step[e.to as usize],
+                        d + g.step_of(e.to),
                         k + j,
                         s + if e.jump { e.cost } else { 0.0 },
                     ));
@@ -77,7 +78,7 @@ fn all_paths(
 }
 
 /// The mean price of the transitions along a frame path.
-fn path_mean(g: &KeyGraph, path: &[u32]) -> Option<f64> {
+fn path_mean(g: &KeyGraph, path: &[FlatFrame]) -> Option<f64> {
     let s: Vec<f64> = path
         .windows(2)
         .filter_map(|w| g.edge(w[0], w[1]))
@@ -100,7 +101,10 @@ fn least_mean_agrees_with_an_exhaustive_search_and_the_bound_holds() {
     let (mut compared, mut equal, mut found, mut bounded_above_min) = (0, 0, 0, 0);
     for case in 0..1500 {
         let g = random_graph(&mut r, 3, 14);
-        let (a, b) = (r.below(g.len()) as u32, r.below(g.len()) as u32);
+        let (a, b) = (
+            FlatFrame::from_index(r.below(g.len())),
+            FlatFrame::from_index(r.below(g.len())),
+        );
         let Ok(p) = surfmotion::keyframe::Planner::new(g.clone(), &[a, b], 25.0, &o) else {
             continue;
         };
@@ -166,7 +170,7 @@ fn least_mean_agrees_with_an_exhaustive_search_and_the_bound_holds() {
                 "case {case}: {w:?} is no edge"
             );
         }
-        let dist: f64 = path[1..].iter().map(|&f| g.step[f as usize]).sum();
+        let dist: f64 = path[1..].iter().map(|&f| g.step_of(f)).sum();
         assert!((dist - d).abs() < 0.01 * d, "case {case}: {dist} for {d}");
         let mean = path_mean(&g, &path).expect("a transition");
         assert!(

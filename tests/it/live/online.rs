@@ -13,7 +13,11 @@ use surfmotion::drive::{Prepared, RetargetOptions};
 use surfmotion::live::{OnlineOptions, OnlineTrellis, Session};
 
 /// The database frame path the online decoder commits for `on_floor`.
-fn online_path(input: &TrellisInput, on_floor: &[surfmotion::pose::Pose], lag: usize) -> Vec<u32> {
+fn online_path(
+    input: &TrellisInput,
+    on_floor: &[surfmotion::pose::Pose],
+    lag: usize,
+) -> Vec<surfmotion::graph::FlatFrame> {
     decided(input, on_floor, lag).iter().map(|c| c.id).collect()
 }
 
@@ -112,7 +116,7 @@ fn short_lags_commit_every_frame_in_order_along_the_graph() {
     let offline = retrieve(&a.on_floor, &input, &opts.trellis);
     for lag in [0, 3] {
         let steps = decided(&input, &a.on_floor, lag);
-        let path: Vec<u32> = steps.iter().map(|c| c.id).collect();
+        let path: Vec<surfmotion::graph::FlatFrame> = steps.iter().map(|c| c.id).collect();
         assert_eq!(path.len(), a.on_floor.len(), "lag {lag}");
         for (k, c) in steps.iter().enumerate() {
             assert_eq!(c.index, k, "lag {lag}: decided out of order");

@@ -191,10 +191,14 @@ fn the_head_measure_of_a_bent_rest_database_starts_from_its_neutral_frame() {
     let NeutralSource::Frame(i) = character_neutral(bent.rest_pose(), bent.poses()).source else {
         panic!("the stride was taken as neutral");
     };
-    let at = cb.head.angle_deg(bent.frame(i as u32));
+    let at = cb
+        .head
+        .angle_deg(bent.frame(surfmotion::graph::FlatFrame::from_index(i)));
     assert!(at.abs() < 1e-9, "frame {i}: {at}");
-    let from_rest =
-        cb.head.raw_deg(bent.frame(i as u32)) - cb.head.raw_deg(bent.topology().positions());
+    let from_rest = cb
+        .head
+        .raw_deg(bent.frame(surfmotion::graph::FlatFrame::from_index(i)))
+        - cb.head.raw_deg(bent.topology().positions());
     assert!(from_rest.abs() > 1.0, "{from_rest}");
     // The capture's own head figures agree with the upright-rest
     // database's (the vertex sets are chosen on each rest frame, so they
@@ -204,7 +208,7 @@ fn the_head_measure_of_a_bent_rest_database_starts_from_its_neutral_frame() {
         cb.reference.as_ref().unwrap().head_torso_deg,
     );
     let rest_raw = cb.head.raw_deg(bent.topology().positions());
-    let mut stride: Vec<f64> = (0..bent.frame_count() as u32)
+    let mut stride: Vec<f64> = surfmotion::graph::FlatFrame::all(bent.frame_count())
         .map(|f| (cb.head.raw_deg(bent.frame(f)) - rest_raw).abs())
         .collect();
     let stride_p95 = percentile(std::mem::take(&mut stride), 0.95);
