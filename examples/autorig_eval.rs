@@ -249,26 +249,72 @@ fn contact_first(mesh: &Mesh, frames: &[&[[f64; 3]]], first: usize, mirror: bool
         println!("| {what} | embedding refused |");
         return;
     };
-    let carried = a.frame_joints(frames[first]);
-    let d: Vec<f64> = (0..19)
-        .map(|j| carried[j].distance(DVec3::from_array(b.joints[j])) / a.height * 100.0)
-        .collect();
-    let (wj, wd) = d
-        .iter()
-        .enumerate()
-        .fold((0, 0.0f64), |w, (j, &x)| if x > w.1 { (j, x) } else { w });
     let original = |r: Option<usize>, first: usize| r.map_or(first, |r| (first + r) % nf);
-    println!(
-        "| {what} vs clear order | {:.2} | {} {:.1} | {:.1}% | {:.2} | rest frame {} (clear order: {}) |",
-        d.iter().sum::<f64>() / 19.0,
-        Canonical::ALL[wj].name(),
-        wd,
-        100.0 * agree(&a.labels, &b.labels),
-        contact.confidence,
-        original(rest_b, first),
-        original(rest_a, 0),
-    );
+    // `a` is a clear-order rig (its joints on frame 0), `b` one whose
+    // joints are on frame `first` (`b_first`) or on frame 0.
+    let row3 = |case: &str, a: &Embedding, b: &Embedding, b_first: bool| {
+        let carried = a.frame_joints(frames[first]);
+        let other = if b_first {
+            b.joints.map(DVec3::from_array)
+        } else {
+            b.frame_joints(frames[first])
+        };
+        let d: Vec<f64> = (0..19)
+            .map(|j| carried[j].distance(other[j]) / a.height * 100.0)
+            .collect();
+        let (wj, wd) = d
+            .iter()
+            .enumerate()
+            .fold((0, 0.0f64), |w, (j, &x)| if x > w.1 { (j, x) } else { w });
+        println!(
+            "| {what}: {case} | {:.2} | {} {:.1} | {:.1}% | {:.2} | rest frame {} (clear order: {}) |",
+            d.iter().sum::<f64>() / 19.0,
+            Canonical::ALL[wj].name(),
+            wd,
+            100.0 * agree(&a.labels, &b.labels),
+            contact.confidence,
+            original(rest_b, first),
+            original(rest_a, 0),
+        );
+    };
+    let row = |case: &str, a: &Embedding, b: &Embedding| row3(case, a, b, true);
+    row("vs clear order", &a, &b);
     eprintln!("  {what}: {why}");
+    // Where the distance comes from. (1) The landmarks as points on the
+    // topology (the contact frame) carried back to the rest frame by its
+    // nearest triangles (`Landmarks::moved`), as `db init` wrote them
+    // before surface marks.
+    let on_topo = Landmarks {
+        marks: contact
+            .landmarks
+            .marks
+            .keys()
+            .filter_map(|&l| {
+                let p = contact.landmarks.point(l, cmesh.positions())?;
+                Some((l, surfmotion::embed::landmarks::Mark::Point(p)))
+            })
+            .collect(),
+    };
+    match embed_as_db_init(&cmesh, &moved, rest_b, &on_topo) {
+        Some(old) => row("points carried through the contact frame", &a, &old),
+        None => {
+            println!("| {what}: points carried through the contact frame | embedding refused |")
+        }
+    }
+    // (2) The clear order rigged and embedded on the contact order's rest
+    // frame: what the rest frame alone changes.
+    let r = original(rest_b, first);
+    if let Ok(same) = rig(&mesh, &frames, Some(r))
+        && let Some(s) = embed_as_db_init(&mesh, &frames, Some(r), &same.landmarks)
+    {
+        row3(
+            "clear order on the same rest frame, vs clear order",
+            &a,
+            &s,
+            false,
+        );
+        row("vs clear order on the same rest frame", &s, &b);
+    }
 }
 
 /// The frames of `frames` with a contact (issue 41's contact finder on

@@ -252,7 +252,11 @@ fn check_files(
     }
     m.up = resolve_up(&up, &topo, opts.landmarks.as_deref(), notes)?;
     m.units = resolve_units(&opts.units, &topo, notes);
-    if let Some(p) = &m.rig.landmarks {
+    // Landmarks fixed to another frame's surface (the automatic rig's,
+    // found on the rest frame) are checked on that frame ([`settle_rest`]).
+    if let Some(p) = &m.rig.landmarks
+        && !on_surface(p, &topo)
+    {
         Landmarks::load_checked(p, &topo)
             .map_err(|e| read(format!("`InitOptions::landmarks` {}", p.display()))(e.into()))?;
     }
@@ -320,7 +324,31 @@ fn settle_rest(
             notes.push(format!("rest frame: the topology's ({})", r.choice.why));
         }
     }
+    if let Some(p) = &m.rig.landmarks
+        && on_surface(p, topo)
+    {
+        // Checked on the frame they are embedded on, as `check_files`
+        // checks points on the topology.
+        let at = crate::db::skeletons::rest_frame(dir, m, topo)?;
+        let frame = match at {
+            Some(q) => topo
+                .with_positions(&q)
+                .map_err(|e| InitError::Option(format!("the rest frame: {e}")))?,
+            None => topo.clone(),
+        };
+        Landmarks::load_checked(p, &frame)
+            .map_err(|e| read(format!("`InitOptions::landmarks` {}", p.display()))(e.into()))?;
+    }
     Ok(rest)
+}
+
+/// Whether the landmarks file `p` holds a mark fixed to the surface
+/// ([`crate::embed::landmarks::Mark::Surface`]); false when it does not
+/// read (refused by the checks that follow).
+fn on_surface(p: &Path, topo: &Mesh) -> bool {
+    use crate::embed::landmarks::Mark;
+    Landmarks::load(p, topo.vertex_count())
+        .is_ok_and(|lm| lm.marks.values().any(|m| matches!(m, Mark::Surface(_))))
 }
 
 /// The folder `dir` created, `m` named after it when unnamed, and `m`'s

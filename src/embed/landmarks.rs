@@ -1,8 +1,10 @@
 //! Landmarks a user marks on a character's rest frame, as Mixamo's
 //! auto-rigger asks for them: chin, groin, wrists, elbows, knees (required);
 //! shoulders, ankles, toes, head top (optional). A JSON object whose values
-//! are either a 3D point `[x, y, z]` (on or near the surface) or a vertex
-//! index. Left and right are the character's own.
+//! are either a 3D point `[x, y, z]` (on or near the surface), a vertex
+//! index, or a point fixed to a triangle ([`Anchor`]: what the automatic
+//! rig writes when it found the landmarks on a frame other than the
+//! topology's). Left and right are the character's own.
 //!
 //! ```json
 //! { "chin": 4512, "groin": [0.01, 0.93, 0.02], "l_wrist": 812, ... }
@@ -273,6 +275,142 @@ pub enum Mark {
     Point([f64; 3]),
     /// A vertex of the rest mesh.
     Vertex(u32),
+    /// A point fixed to a triangle of the surface: on every frame where
+    /// the triangle is found ([`Anchor::point`]). The automatic rig writes
+    /// these when it found the landmarks on another frame than the
+    /// topology's, so that they land on that frame exactly.
+    Surface(Anchor),
+}
+
+/// A point fixed to a triangle of the surface: its foot on the triangle
+/// (barycentric weights) and its offset from the foot in the triangle's
+/// own frame (along the edge from the first vertex to the second, across
+/// it in the plane, along the normal), so that a point inside the body
+/// stays inside at the same depth on every frame. JSON:
+/// `{"triangle": [a, b, c], "weights": [wa, wb, wc], "offset": [x, y, z]}`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Anchor {
+    /// The triangle's vertices.
+    pub triangle: [u32; 3],
+    /// Barycentric weights of the foot.
+    pub weights: [f64; 3],
+    /// The offset from the foot in the triangle's frame.
+    pub offset: [f64; 3],
+}
+
+/// An orthonormal frame of a triangle (edge, in-plane, normal).
+fn triangle_frame(
+    a: glam::DVec3,
+    b: glam::DVec3,
+    c: glam::DVec3,
+) -> (glam::DVec3, glam::DVec3, glam::DVec3) {
+    let e1 = (b - a).normalize_or(glam::DVec3::X);
+    let n = (b - a)
+        .cross(c - a)
+        .normalize_or(e1.any_orthonormal_vector());
+    (e1, n.cross(e1), n)
+}
+
+impl Anchor {
+    /// `q` anchored on triangle `t` of `positions`.
+    pub fn on(q: [f64; 3], t: [u32; 3], positions: &[[f64; 3]]) -> Anchor {
+        use glam::DVec3;
+        let q = DVec3::from_array(q);
+        let [a, b, c] = t.map(|i| DVec3::from_array(positions[i as usize]));
+        let c0 = super::surface::closest_on_triangle(q, a, b, c);
+        let weights = barycentric(c0, a, b, c);
+        let (e1, e2, n) = triangle_frame(a, b, c);
+        let o = q - c0;
+        Anchor {
+            triangle: t,
+            weights,
+            offset: [o.dot(e1), o.dot(e2), o.dot(n)],
+        }
+    }
+
+    /// `q` anchored on its nearest triangle of `positions` among
+    /// `triangles`; `None` when there is none.
+    pub fn nearest<'a>(
+        q: [f64; 3],
+        positions: &[[f64; 3]],
+        triangles: impl IntoIterator<Item = &'a [u32; 3]>,
+    ) -> Option<Anchor> {
+        use glam::DVec3;
+        let p = DVec3::from_array(q);
+        let v = |i: u32| DVec3::from_array(positions[i as usize]);
+        triangles
+            .into_iter()
+            .map(|t| {
+                let c0 = super::surface::closest_on_triangle(p, v(t[0]), v(t[1]), v(t[2]));
+                (c0.distance_squared(p), t)
+            })
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map(|(_, t)| Anchor::on(q, *t, positions))
+    }
+
+    /// The point on the frame `positions`.
+    pub fn point(&self, positions: &[[f64; 3]]) -> [f64; 3] {
+        let [a, b, c] = self
+            .triangle
+            .map(|i| glam::DVec3::from_array(positions[i as usize]));
+        let (f1, f2, m) = triangle_frame(a, b, c);
+        let (w, l) = (self.weights, self.offset);
+        let on = a * w[0] + b * w[1] + c * w[2];
+        (on + f1 * l[0] + f2 * l[1] + m * l[2]).to_array()
+    }
+
+    /// The anchor as the landmark file's JSON value.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "triangle": self.triangle,
+            "weights": self.weights,
+            "offset": self.offset,
+        })
+    }
+
+    /// Parses [`Anchor::to_json`]'s object; the reason when it is not one
+    /// (a vertex out of `vertex_count`, a number not finite).
+    fn parse(v: &serde_json::Value, vertex_count: usize) -> Result<Anchor, String> {
+        let three = |key: &str| -> Result<[f64; 3], String> {
+            let a = v.get(key).and_then(|x| x.as_array());
+            let p: Vec<f64> = a.map_or(Vec::new(), |a| {
+                a.iter().filter_map(|x| x.as_f64()).collect()
+            });
+            match (a, p.as_slice()) {
+                (Some(a), &[x, y, z]) if a.len() == 3 && p.iter().all(|x| x.is_finite()) => {
+                    Ok([x, y, z])
+                }
+                _ => Err(format!("{key}: expected three finite numbers")),
+            }
+        };
+        let t: Vec<u64> = v
+            .get("triangle")
+            .and_then(|x| x.as_array())
+            .map_or(Vec::new(), |a| {
+                a.iter().filter_map(|x| x.as_u64()).collect()
+            });
+        let &[a, b, c] = t.as_slice() else {
+            return Err("triangle: expected three vertex indices".into());
+        };
+        if let Some(i) = [a, b, c].into_iter().find(|&i| i as usize >= vertex_count) {
+            return Err(format!(
+                "triangle: vertex {i} is out of range (the mesh has {vertex_count})"
+            ));
+        }
+        if let Some(k) = v.as_object().and_then(|o| {
+            o.keys()
+                .find(|k| !matches!(k.as_str(), "triangle" | "weights" | "offset"))
+        }) {
+            return Err(format!(
+                "unknown key {k:?} (expected triangle, weights, offset)"
+            ));
+        }
+        Ok(Anchor {
+            triangle: [a as u32, b as u32, c as u32],
+            weights: three("weights")?,
+            offset: three("offset")?,
+        })
+    }
 }
 
 /// A set of landmarks.
@@ -363,8 +501,12 @@ impl Landmarks {
                     return Err(bad("expected [x, y, z] with three finite numbers"));
                 }
                 Mark::Point([p[0], p[1], p[2]])
+            } else if val.is_object() {
+                Mark::Surface(Anchor::parse(val, vertex_count).map_err(|r| bad(&r))?)
             } else {
-                return Err(bad("expected a vertex index or [x, y, z]"));
+                return Err(bad(
+                    "expected a vertex index, [x, y, z] or {\"triangle\", \"weights\", \"offset\"}",
+                ));
             };
             marks.insert(l, mark);
         }
@@ -661,28 +803,20 @@ impl Landmarks {
         self.marks.get(&l).map(|m| match *m {
             Mark::Point(p) => p,
             Mark::Vertex(v) => positions[v as usize],
+            Mark::Surface(a) => a.point(positions),
         })
     }
 
     /// The landmarks carried from the frame `from` to the frame `to` (one
     /// position per vertex each, one connectivity `triangles`): a vertex
-    /// stays that vertex; a point keeps its barycentric coordinates on its
+    /// stays that vertex and a surface mark on its triangle ([`Anchor`]:
+    /// found on the frame it names, it needs no carrying); a point keeps its barycentric coordinates on its
     /// nearest triangle of `from` and its offset from that triangle in the
     /// triangle's own frame (a point inside the body stays inside, at the
     /// same depth). Used to embed a rig on another frame than the one the
     /// landmarks were marked on ([`super::rest`]). A point stays where it
     /// is when the mesh has no triangle.
     pub fn moved(&self, from: &[[f64; 3]], to: &[[f64; 3]], triangles: &[[u32; 3]]) -> Landmarks {
-        use glam::DVec3;
-        let v = |p: &[[f64; 3]], i: u32| DVec3::from_array(p[i as usize]);
-        // An orthonormal frame of a triangle (edge, in-plane, normal).
-        let frame = |a: DVec3, b: DVec3, c: DVec3| {
-            let e1 = (b - a).normalize_or(DVec3::X);
-            let n = (b - a)
-                .cross(c - a)
-                .normalize_or(e1.any_orthonormal_vector());
-            (e1, n.cross(e1), n)
-        };
         let marks = self
             .marks
             .iter()
@@ -690,28 +824,10 @@ impl Landmarks {
                 let Mark::Point(p) = m else {
                     return (l, m);
                 };
-                let q = DVec3::from_array(p);
-                let best = triangles
-                    .iter()
-                    .map(|t| {
-                        let (a, b, c) = (v(from, t[0]), v(from, t[1]), v(from, t[2]));
-                        let c0 = super::surface::closest_on_triangle(q, a, b, c);
-                        (c0.distance_squared(q), t, c0)
-                    })
-                    .min_by(|x, y| x.0.total_cmp(&y.0));
-                let Some((_, t, c0)) = best else {
-                    return (l, m);
-                };
-                let (a, b, c) = (v(from, t[0]), v(from, t[1]), v(from, t[2]));
-                let w = barycentric(c0, a, b, c);
-                let (e1, e2, n) = frame(a, b, c);
-                let o = q - c0;
-                let local = [o.dot(e1), o.dot(e2), o.dot(n)];
-                let (a2, b2, c2) = (v(to, t[0]), v(to, t[1]), v(to, t[2]));
-                let (f1, f2, m2) = frame(a2, b2, c2);
-                let on = a2 * w[0] + b2 * w[1] + c2 * w[2];
-                let moved = on + f1 * local[0] + f2 * local[1] + m2 * local[2];
-                (l, Mark::Point(moved.to_array()))
+                match Anchor::nearest(p, from, triangles) {
+                    Some(a) => (l, Mark::Point(a.point(to))),
+                    None => (l, m),
+                }
             })
             .collect();
         Landmarks { marks }

@@ -22,7 +22,10 @@ pub struct FoundJoint {
 /// The automatic rig of a capture.
 #[derive(Debug, Clone, Serialize)]
 pub struct AutoRig {
-    /// Landmarks on the topology mesh (points).
+    /// The landmarks: points on the topology mesh, or, when the parts were
+    /// found on another rest frame, fixed to that frame's surface
+    /// ([`Mark::Surface`]; where they were found on it, carried to any
+    /// other frame with their triangle).
     #[serde(skip)]
     pub landmarks: Landmarks,
     /// Up, facing and left (unit, the files' coordinates).
@@ -52,20 +55,22 @@ pub struct AutoRig {
 }
 
 impl AutoRig {
-    /// The landmarks as the JSON a landmarks file holds (points, with the
-    /// mesh's vertex count).
+    /// The landmarks as the JSON a landmarks file holds (points rounded to
+    /// 10 µm, surface marks in full, with the mesh's vertex count).
     pub fn landmarks_json(&self, vertex_count: usize) -> String {
         let r = |x: f64| (x * 1e5).round() / 1e5;
         let mut lines = vec![format!("  \"vertex_count\": {vertex_count}")];
         for (l, mark) in &self.landmarks.marks {
-            if let Mark::Point(p) = mark {
-                lines.push(format!(
+            match mark {
+                Mark::Point(p) => lines.push(format!(
                     "  \"{}\": [{}, {}, {}]",
                     l.name(),
                     r(p[0]),
                     r(p[1]),
                     r(p[2])
-                ));
+                )),
+                Mark::Surface(a) => lines.push(format!("  \"{}\": {}", l.name(), a.to_json())),
+                Mark::Vertex(v) => lines.push(format!("  \"{}\": {v}", l.name())),
             }
         }
         format!("{{\n{}\n}}\n", lines.join(",\n"))

@@ -9,7 +9,7 @@ use super::limbs::{ARM, Body, Chains, LEG, Sided, knee_to_toe, side};
 use super::options::{AutoError, AutoOptions};
 use super::report::{AutoRig, FoundJoint};
 use super::up::find_up;
-use crate::embed::landmarks::{Landmark, Landmarks, Mark};
+use crate::embed::landmarks::{Anchor, Landmark, Landmarks, Mark};
 use crate::mesh::Mesh;
 use glam::DVec3;
 
@@ -75,9 +75,21 @@ pub fn auto_rig(
             .unwrap_or(0);
         dec.motions[dec.labels[v] as usize].apply(0, q).to_array()
     };
+    // Found on another frame than the topology's: fixed to the surface of
+    // that frame (`Mark::Surface`), so that the embedding on it (`db
+    // init`'s `[rig] rest`) gets them exactly where they were found.
+    // Written as points carried to the topology they came back through
+    // the topology's nearest triangles (`Landmarks::moved`): with a hand
+    // on the hip there, a mark near the hand rode the hip, and samba
+    // started at frame 130 was refused ("l_knee … above the groin").
     let mut landmarks = Landmarks::default();
     for (l, q) in &marks {
-        landmarks.marks.insert(*l, Mark::Point(to_topo(*q)));
+        let mark = match opts.rest_frame {
+            None => Mark::Point(q.to_array()),
+            Some(_) => anchored(*q, rest, mesh.triangles(), &dec.labels)
+                .map_or_else(|| Mark::Point(to_topo(*q)), Mark::Surface),
+        };
+        landmarks.marks.insert(*l, mark);
     }
     let guessed: Vec<&str> = found
         .iter()
@@ -125,6 +137,19 @@ pub fn auto_rig(
         confidence,
         notes,
     })
+}
+
+/// `q` fixed to its nearest triangle of `rest` among those of the part
+/// (`labels`) of its nearest vertex (a joint inside the knee on the
+/// knee's surface, not on a skirt's or a hand's nearby); among all
+/// triangles when that part has none. `None` without triangles.
+fn anchored(q: DVec3, rest: &[[f64; 3]], triangles: &[[u32; 3]], labels: &[u32]) -> Option<Anchor> {
+    let d = |v: usize| DVec3::from_array(rest[v]).distance_squared(q);
+    let v = (0..rest.len()).min_by(|&a, &b| d(a).total_cmp(&d(b)))?;
+    let part = labels.get(v).copied();
+    let own = |t: &&[u32; 3]| t.iter().all(|&i| labels.get(i as usize).copied() == part);
+    Anchor::nearest(q.to_array(), rest, triangles.iter().filter(own))
+        .or_else(|| Anchor::nearest(q.to_array(), rest, triangles))
 }
 
 /// Every frame the mesh's vertex count, two frames or more, the rest frame

@@ -200,6 +200,13 @@ fn landmarks_lines(text: &str, path: &Path) -> Result<Vec<String>, InspectError>
             Mark::Point(p) => {
                 format!("{:<11} point [{}, {}, {}]", l.name(), p[0], p[1], p[2])
             }
+            Mark::Surface(a) => format!(
+                "{:<11} on triangle {:?} (weights {:?}, offset {:?})",
+                l.name(),
+                a.triangle,
+                a.weights,
+                a.offset
+            ),
         });
     }
     let optional: Vec<&str> = Landmark::ALL

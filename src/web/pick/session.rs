@@ -180,6 +180,7 @@ impl PickSession {
             let v = match *mark {
                 Mark::Vertex(i) => json!(i),
                 Mark::Point(p) => json!(p),
+                Mark::Surface(a) => a.to_json(),
             };
             m.insert(l.name().to_string(), v);
         }
@@ -200,7 +201,7 @@ impl PickSession {
             .iter()
             .filter_map(|(l, m)| match m {
                 Mark::Vertex(i) => Some((l.name().to_string(), json!(i))),
-                Mark::Point(_) => None,
+                Mark::Point(_) | Mark::Surface(_) => None,
             })
             .collect();
         let mut v = json!({

@@ -27,7 +27,7 @@ fn fixture(name: &str) -> PathBuf {
 
 /// Mean joint distance between two rigs in % of `height`; `swap` pairs
 /// each left joint of `a` with the right joint of `b` (a mirrored body).
-fn mean_percent(a: &[[f64; 3]; 19], b: &[[f64; 3]; 19], height: f64, swap: bool) -> f64 {
+pub(super) fn mean_percent(a: &[[f64; 3]; 19], b: &[[f64; 3]; 19], height: f64, swap: bool) -> f64 {
     let other = |j: Canonical| {
         if !swap {
             return j;

@@ -2,6 +2,7 @@
 
 mod auto;
 mod auto_arms;
+mod auto_contact;
 mod auto_hands;
 mod auto_knees;
 mod bodies;

@@ -64,6 +64,11 @@ fn landmarks_json(lm: &Landmarks, index: &[u32], drop: &[Landmark], absent: &[&s
         let v = match *m {
             Mark::Vertex(v) => serde_json::json!(index[v as usize]),
             Mark::Point(p) => serde_json::json!(p),
+            Mark::Surface(a) => {
+                let mut a = a;
+                a.triangle = a.triangle.map(|v| index[v as usize]);
+                a.to_json()
+            }
         };
         o.insert(l.name().into(), v);
     }
