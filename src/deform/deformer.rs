@@ -4,7 +4,8 @@
 use super::options::{DeformMode, DeformOptions, RepairBudget, TurnedOver};
 use super::part_laplacian::{RegionSolver, RegionWorkspace, apply};
 use super::regions::{
-    Region, constraint_scale, region_constraints, region_examples, region_specs, region_weights,
+    Region, Target, constraint_scale, region_constraints, region_examples, region_specs,
+    region_weights, sibling_overlaps,
 };
 use super::{arap, lbs, pca, unflip, untangle};
 use crate::db::Character;
@@ -26,6 +27,8 @@ pub struct Deformer {
     repair_budget: RepairBudget,
     /// Rotation-aware local steps after each region's solve.
     local_steps: usize,
+    /// Solves of overlapping siblings ([`DeformOptions::overlap_passes`]).
+    overlap_passes: usize,
     triangles: usize,
     regions: Vec<Region>,
     rest_pose: Pose,
@@ -47,6 +50,9 @@ pub enum Held {
     Lbs,
     /// To the parent region's result (a seam).
     Seam,
+    /// To the target shared with an overlapping sibling region
+    /// ([`DeformOptions::overlap_weight`]).
+    Shared,
 }
 
 /// One region's own result ([`Deformer::region_results`]).
@@ -72,7 +78,13 @@ pub struct DeformWorkspace {
     delta: Vec<Vec<[f64; 3]>>,
     acc: Vec<[f64; 3]>,
     wsum: Vec<f64>,
-    solved: Vec<[f64; 3]>,
+    /// Each region's result, world coordinates (local order).
+    world: Vec<Vec<[f64; 3]>>,
+    /// The overlap's shared targets (global ids).
+    shared: Vec<[f64; 3]>,
+    /// The last result solved at each vertex, world coordinates
+    /// ([`Target::Last`]).
+    last: Vec<[f64; 3]>,
     targets: Vec<Vec<[f64; 3]>>,
     local: Vec<Vec<[f64; 3]>>,
     ws: Vec<RegionWorkspace>,
@@ -130,6 +142,7 @@ impl Deformer {
             repair_passes: opts.repair_passes,
             repair_budget: opts.repair_budget,
             local_steps: opts.local_steps,
+            overlap_passes: opts.overlap_passes.max(1),
             triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
             rest_pose: *ch.rest_pose(),
@@ -163,7 +176,10 @@ impl Deformer {
         let mut index_of: Vec<Option<usize>> = Vec::new();
         // The parent of each region built (`sibling_seams`).
         let mut parent_of: Vec<Option<usize>> = Vec::new();
-        for (verts, joint, parent, example_joints, _owns) in region_specs(ch, mode) {
+        let specs = region_specs(ch, mode);
+        let overlaps = (opts.overlap_weight > 0.0 && mode == DeformMode::Part)
+            .then(|| sibling_overlaps(&specs, n));
+        for (i, (verts, joint, parent, example_joints, _owns)) in specs.into_iter().enumerate() {
             if verts.is_empty() {
                 index_of.push(None);
                 continue;
@@ -191,7 +207,7 @@ impl Deformer {
                 all.dedup();
                 all
             });
-            let weights = region_weights(ch, mode, &verts, joint);
+            let weights = region_weights(ch, mode, &verts, joint, opts.blend_taper);
             let scale = constraint_scale(
                 ch,
                 opts,
@@ -211,8 +227,33 @@ impl Deformer {
                 seams.as_deref().or(parent_verts.map(Vec::as_slice)),
                 &is_constraint,
                 &soft,
+                overlaps.as_ref().map_or(&[][..], |o| o[i].as_slice()),
                 &scale,
             );
+            let targets = sources
+                .iter()
+                .map(|&(v, held)| match held {
+                    Held::Seam if !opts.parent_seams => Target::Last(v),
+                    Held::Seam => {
+                        // The sibling's result where it has the vertex
+                        // (`sibling_seams`), else the parent's own.
+                        let from = |k: usize| {
+                            out.regions[k]
+                                .solver
+                                .vertices
+                                .binary_search(&v)
+                                .ok()
+                                .map(|j| Target::Region(k as u32, j as u32))
+                        };
+                        sibling
+                            .and_then(from)
+                            .or_else(|| parent.and_then(from))
+                            .unwrap_or(Target::Lbs(v))
+                    }
+                    Held::Shared => Target::Shared(v),
+                    _ => Target::Lbs(v),
+                })
+                .collect();
             parent_of.push(parent);
             out.components.push(basis.components.len());
             out.examples.push(chosen);
@@ -220,11 +261,44 @@ impl Deformer {
             out.regions.push(Region {
                 joint,
                 solver,
-                sources,
+                targets,
+                siblings: Vec::new(),
                 weights,
             });
         }
+        out.link_siblings(&parent_of);
         Ok(out)
+    }
+
+    /// Fills each region's `siblings`: the regions with the same parent
+    /// that share a held overlap vertex with it.
+    fn link_siblings(&mut self, parent_of: &[Option<usize>]) {
+        let held: Vec<Vec<u32>> = self
+            .regions
+            .iter()
+            .map(|r| {
+                let mut h: Vec<u32> = r
+                    .targets
+                    .iter()
+                    .filter_map(|t| match t {
+                        Target::Shared(v) => Some(*v),
+                        _ => None,
+                    })
+                    .collect();
+                h.sort_unstable();
+                h
+            })
+            .collect();
+        for k in 0..self.regions.len() {
+            self.regions[k].siblings = (0..self.regions.len())
+                .filter(|&j| {
+                    j != k
+                        && parent_of[j].is_some()
+                        && parent_of[j] == parent_of[k]
+                        && held[k].iter().any(|v| held[j].binary_search(v).is_ok())
+                })
+                .collect();
+        }
     }
 
     /// Each region's own result on the last frame deformed with `ws`
@@ -233,27 +307,23 @@ impl Deformer {
     /// or seamed to the parent: a diagnostic of where regions disagree
     /// (issue 42). `target` is the pose that frame was deformed to.
     pub fn region_results(&self, target: &Pose, ws: &DeformWorkspace) -> Vec<RegionResult> {
-        let rot = pose_rotations(&self.rest_pose, target);
+        let _ = target;
         self.regions
             .iter()
-            .zip(&ws.local)
-            .map(|(r, local)| {
-                let q = if self.local_frames {
-                    rot[r.joint.index()]
-                } else {
-                    DQuat::IDENTITY
-                };
+            .zip(&ws.world)
+            .map(|(r, world)| {
                 let mut held = vec![Held::Free; r.solver.vertices.len()];
-                for (&(c, _), &(_, seam)) in r.solver.constraints.iter().zip(&r.sources) {
-                    held[c as usize] = if seam { Held::Seam } else { Held::Lbs };
+                for (&(c, _), t) in r.solver.constraints.iter().zip(&r.targets) {
+                    held[c as usize] = match t {
+                        Target::Lbs(_) => Held::Lbs,
+                        Target::Region(..) | Target::Last(_) => Held::Seam,
+                        Target::Shared(_) => Held::Shared,
+                    };
                 }
                 RegionResult {
                     joint: r.joint,
                     vertices: r.solver.vertices.clone(),
-                    positions: local
-                        .iter()
-                        .map(|y| (q * DVec3::from_array(*y)).to_array())
-                        .collect(),
+                    positions: world.clone(),
                     weights: r.weights.clone(),
                     held,
                 }
@@ -283,11 +353,17 @@ impl Deformer {
                 .collect(),
             acc: vec![[0.0; 3]; self.n],
             wsum: vec![0.0; self.n],
-            solved: vec![[0.0; 3]; self.n],
+            world: self
+                .regions
+                .iter()
+                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
+                .collect(),
+            shared: vec![[0.0; 3]; self.n],
+            last: vec![[0.0; 3]; self.n],
             targets: self
                 .regions
                 .iter()
-                .map(|r| vec![[0.0; 3]; r.sources.len()])
+                .map(|r| vec![[0.0; 3]; r.targets.len()])
                 .collect(),
             local: self
                 .regions
@@ -339,72 +415,28 @@ impl Deformer {
         // Each vertex's rotation from source to target: its bones' turns,
         // blended by skin weight.
         unflip::skin_turns(&ch.rig().skin, &g, &mut ws.turn);
+        ws.shared.copy_from_slice(&ws.lbs);
+        for k in 0..self.regions.len() {
+            let q = self.frame_of(k, &rot);
+            self.source_delta(k, q, source, ws);
+            self.solve_region(k, q, ws);
+            let r = &self.regions[k];
+            if self.overlap_passes > 1
+                && !r.siblings.is_empty()
+                && r.siblings.iter().all(|&j| j < k)
+            {
+                for _ in 1..self.overlap_passes {
+                    self.blend_shared(k, ws);
+                    for j in r.siblings.iter().copied().chain([k]) {
+                        self.solve_region(j, self.frame_of(j, &rot), ws);
+                    }
+                }
+            }
+        }
         ws.acc.fill([0.0; 3]);
         ws.wsum.fill(0.0);
-        for (k, r) in self.regions.iter().enumerate() {
-            let q = if self.local_frames {
-                rot[r.joint.index()]
-            } else {
-                DQuat::IDENTITY
-            };
-            let qi = q.inverse();
-            // δ₀: the source's Laplacian coordinates, each turned by its
-            // vertex's skin-blended rotation from the source skeleton to the
-            // target, in the part's frame. (A skirt vertex shared by both
-            // thighs turns the same way in both solves.)
-            for (x, &v) in ws.xs[k].iter_mut().zip(&r.solver.vertices) {
-                *x = source[v as usize];
-            }
-            apply(r.solver.laplacian(), &ws.xs[k], &mut ws.delta[k]);
-            if self.local_steps > 0 {
-                ws.lsrc[k].copy_from_slice(&ws.delta[k]);
-            }
-            for ((dv, &v), rq) in ws.delta[k]
-                .iter_mut()
-                .zip(&r.solver.vertices)
-                .zip(ws.rots[k].iter_mut())
-            {
-                let turn = if self.local_frames {
-                    qi * ws.turn[v as usize]
-                } else {
-                    DQuat::IDENTITY
-                };
-                *rq = turn;
-                *dv = (turn * DVec3::from_array(*dv)).to_array();
-            }
-            for (t, &(v, seam)) in ws.targets[k].iter_mut().zip(&r.sources) {
-                let p = if seam {
-                    ws.solved[v as usize]
-                } else {
-                    ws.lbs[v as usize]
-                };
-                *t = (qi * DVec3::from_array(p)).to_array();
-            }
-            r.solver.solve(
-                &ws.delta[k],
-                &ws.targets[k],
-                &mut ws.local[k],
-                &mut ws.ws[k],
-            );
-            for _ in 0..self.local_steps {
-                arap::local_step(
-                    r.solver.laplacian(),
-                    &ws.xs[k],
-                    &ws.local[k],
-                    &ws.lsrc[k],
-                    &mut ws.rots[k],
-                    &mut ws.delta[k],
-                );
-                r.solver.solve(
-                    &ws.delta[k],
-                    &ws.targets[k],
-                    &mut ws.local[k],
-                    &mut ws.ws[k],
-                );
-            }
-            for ((y, &v), &w) in ws.local[k].iter().zip(&r.solver.vertices).zip(&r.weights) {
-                let x = (q * DVec3::from_array(*y)).to_array();
-                ws.solved[v as usize] = x;
+        for (r, world) in self.regions.iter().zip(&ws.world) {
+            for ((x, &v), &w) in world.iter().zip(&r.solver.vertices).zip(&r.weights) {
                 let a = &mut ws.acc[v as usize];
                 for d in 0..3 {
                     a[d] += w * x[d];
@@ -420,6 +452,131 @@ impl Deformer {
         match &self.adjacency {
             Some(adj) => self.repair(ch.topology().triangles(), adj, source, out, ws),
             None => TurnedOver::default(),
+        }
+    }
+
+    /// The rotation of region `k`'s frame (its joint's, with
+    /// `local_frames`) in the target pose, `rot` the target's rotations
+    /// from the rest pose.
+    fn frame_of(&self, k: usize, rot: &[DQuat]) -> DQuat {
+        if self.local_frames {
+            rot[self.regions[k].joint.index()]
+        } else {
+            DQuat::IDENTITY
+        }
+    }
+
+    /// Region `k`'s `δ₀` into `ws.delta[k]`: the source's Laplacian
+    /// coordinates, each turned by its vertex's skin-blended rotation from
+    /// the source skeleton to the target, in the part's frame `q` (a skirt
+    /// vertex shared by both thighs turns the same way in both solves).
+    fn source_delta(&self, k: usize, q: DQuat, source: &[[f64; 3]], ws: &mut DeformWorkspace) {
+        let r = &self.regions[k];
+        let qi = q.inverse();
+        for (x, &v) in ws.xs[k].iter_mut().zip(&r.solver.vertices) {
+            *x = source[v as usize];
+        }
+        apply(r.solver.laplacian(), &ws.xs[k], &mut ws.delta[k]);
+        if self.local_steps > 0 {
+            ws.lsrc[k].copy_from_slice(&ws.delta[k]);
+        }
+        for ((dv, &v), rq) in ws.delta[k]
+            .iter_mut()
+            .zip(&r.solver.vertices)
+            .zip(ws.rots[k].iter_mut())
+        {
+            let turn = if self.local_frames {
+                qi * ws.turn[v as usize]
+            } else {
+                DQuat::IDENTITY
+            };
+            *rq = turn;
+            *dv = (turn * DVec3::from_array(*dv)).to_array();
+        }
+    }
+
+    /// Solves region `k` in its frame `q` (Eq. 32, then the local steps)
+    /// with its constraints' targets read now (LBS, another region's
+    /// result, the overlap's shared target), into `ws.world[k]`.
+    fn solve_region(&self, k: usize, q: DQuat, ws: &mut DeformWorkspace) {
+        let r = &self.regions[k];
+        let qi = q.inverse();
+        for i in 0..r.targets.len() {
+            let p = match r.targets[i] {
+                Target::Lbs(v) => ws.lbs[v as usize],
+                Target::Shared(v) => ws.shared[v as usize],
+                Target::Region(j, l) => ws.world[j as usize][l as usize],
+                Target::Last(v) => ws.last[v as usize],
+            };
+            ws.targets[k][i] = (qi * DVec3::from_array(p)).to_array();
+        }
+        r.solver.solve(
+            &ws.delta[k],
+            &ws.targets[k],
+            &mut ws.local[k],
+            &mut ws.ws[k],
+        );
+        for _ in 0..self.local_steps {
+            arap::local_step(
+                r.solver.laplacian(),
+                &ws.xs[k],
+                &ws.local[k],
+                &ws.lsrc[k],
+                &mut ws.rots[k],
+                &mut ws.delta[k],
+            );
+            r.solver.solve(
+                &ws.delta[k],
+                &ws.targets[k],
+                &mut ws.local[k],
+                &mut ws.ws[k],
+            );
+        }
+        for ((x, y), &v) in ws.world[k]
+            .iter_mut()
+            .zip(&ws.local[k])
+            .zip(&r.solver.vertices)
+        {
+            *x = (q * DVec3::from_array(*y)).to_array();
+            ws.last[v as usize] = *x;
+        }
+    }
+
+    /// The overlap's shared targets of region `k` and its siblings: each
+    /// held vertex's results in those regions blended by their weights.
+    fn blend_shared(&self, k: usize, ws: &mut DeformWorkspace) {
+        let group = || self.regions[k].siblings.iter().copied().chain([k]);
+        for j in group() {
+            for t in &self.regions[j].targets {
+                if let Target::Shared(v) = *t {
+                    ws.acc[v as usize] = [0.0; 3];
+                    ws.wsum[v as usize] = 0.0;
+                }
+            }
+        }
+        for j in group() {
+            let r = &self.regions[j];
+            for (&(c, _), t) in r.solver.constraints.iter().zip(&r.targets) {
+                if let Target::Shared(v) = *t {
+                    let (x, w) = (ws.world[j][c as usize], r.weights[c as usize]);
+                    let a = &mut ws.acc[v as usize];
+                    for d in 0..3 {
+                        a[d] += w * x[d];
+                    }
+                    ws.wsum[v as usize] += w;
+                }
+            }
+        }
+        for j in group() {
+            let r = &self.regions[j];
+            for t in &r.targets {
+                if let Target::Shared(v) = *t {
+                    let (a, w) = (ws.acc[v as usize], ws.wsum[v as usize]);
+                    if w > 0.0 {
+                        ws.shared[v as usize] = [a[0] / w, a[1] / w, a[2] / w];
+                    }
+                }
+            }
         }
     }
 

@@ -18,14 +18,19 @@
 //! `R` in the target pose is solved in its own frame (`y = Rᵀx`, constraints
 //! rotated by `Rᵀ`) and turned back, so one factorisation per part serves
 //! every pose. Parts are solved from the torso outwards; a vertex a child
-//! shares with its parent is constrained (strongly) to the parent's result,
-//! the others to their LBS positions; the end of a region that reaches
+//! shares with its parent is constrained (strongly) to the parent's result
+//! (by default to the last result solved there, which under a skirt is the
+//! other thigh's; [`DeformOptions::parent_seams`] holds it to the parent's
+//! own), the others to their LBS positions; the end of a region that reaches
 //! into a child part is held at LBS positions too
 //! ([`DeformOptions::hold_joints`]), so the joint is where the skeleton
 //! puts it before the child is solved. Where regions overlap (siblings such
 //! as the two thighs under a skirt, or a parent and child near a joint) the
 //! results are blended by the parts' skin weights, so parts join without
-//! seams.
+//! seams ([`DeformOptions::overlap_weight`] holds the two thighs' shared
+//! vertices at one target in both solves first, and
+//! [`DeformOptions::blend_taper`] takes the weights to 0 at a region's
+//! edge; both off by default).
 //!
 //! Constraint vertices are chosen once per character, away from joints
 //! where LBS collapses: vertices bound (≥ 95 %) to one bone whose rest

@@ -139,6 +139,41 @@ pub struct DeformOptions {
     /// The most work the fold repair may do on one frame
     /// ([`RepairBudget`]).
     pub repair_budget: RepairBudget,
+    /// Weight holding the vertices two sibling regions share (the two
+    /// thighs' regions under a skirt) at one shared target in both solves:
+    /// their LBS position, then (`overlap_passes` above 1) the two
+    /// results blended by skin weight, so the solves agree there before
+    /// they are blended. 0 turns it off. Default 0: measured (session 24,
+    /// with `parent_seams`, weight 3, onto the real samba capture), the
+    /// triangle-frames turned over before the repair drop on CMU 02_02,
+    /// 131_01, 131_02, 03_02 (5,837 → 3,544, 72,465 → 65,177, 11,131 →
+    /// 6,551, 20,204 → 17,062) and the joint-velocity error with them, but
+    /// those turned over against the rest frame after the repair rise on
+    /// three of four (465 → 567, 16,864 → 17,893, 5,706 → 6,016; 131_02
+    /// 1,067 → 698) and the ground penetration too (README, issue 42).
+    pub overlap_weight: f64,
+    /// Solves of the overlapping siblings (at least 1); each after the
+    /// first takes the last one's blend as the shared target. Default 1.
+    pub overlap_passes: usize,
+    /// Blending weights that fall to 0 at a region's edge
+    /// ([`super::regions::region_weights`]). Default false.
+    pub blend_taper: bool,
+    /// Hold a seam (a vertex a region shares with its parent) to the
+    /// parent region's own result. Off, a seam is held to the result of the
+    /// last region solved that has the vertex, which is the parent's
+    /// except where the parent overlaps a sibling solved after it: the
+    /// left shin, solved after both thighs, is then tied to the *right*
+    /// thigh's result under the skirt (session 23 measured the left shin
+    /// 2-3 cm from its left thigh there, the right 0.02 cm).
+    /// Default false (the outputs of sessions up to 23). Measured on
+    /// (session 24, `retarget --json` onto the real samba capture), the
+    /// triangle-frames turned over before the repair drop (CMU 02_02
+    /// 5,837 → 4,845, 131_01 72,465 → 68,743) and the joint-velocity
+    /// error too (0.135 → 0.120, 0.241 → 0.230 cm/frame), but those
+    /// turned over against the rest frame after the repair rise
+    /// (465 → 735, 16,864 → 16,982; 131_01's worst frame 106 → 122,
+    /// above the capture's own most, a yardstick warning).
+    pub parent_seams: bool,
 }
 
 /// The fold repair's work limit on one frame ([`unflip::Work`]): for a
@@ -213,6 +248,10 @@ impl Default for DeformOptions {
             hold_spread: false,
             local_steps: 0,
             repair_budget: RepairBudget::default(),
+            overlap_weight: 0.0,
+            overlap_passes: 1,
+            blend_taper: false,
+            parent_seams: false,
         }
     }
 }

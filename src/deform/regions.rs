@@ -2,6 +2,7 @@
 //! their example frames, constraints and blending weights (the module
 //! page, [`crate::deform`], describes the method).
 
+use super::deformer::Held;
 use super::options::{DeformMode, DeformOptions};
 use super::part_laplacian::{RegionSolver, apply};
 use crate::db::Character;
@@ -34,11 +35,35 @@ pub fn part_joint(p: Part) -> Canonical {
 /// list), joints whose rotations choose examples, vertices it owns.
 pub(super) type RegionSpec = (Vec<u32>, Canonical, Option<usize>, Vec<Canonical>, Vec<u32>);
 
+/// Where a region constraint's target comes from in a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Target {
+    /// The vertex's LBS position (global id).
+    Lbs(u32),
+    /// Another region's own result (a seam): that region's index and the
+    /// vertex's local index in it.
+    Region(u32, u32),
+    /// The overlap's shared target (global id): the LBS position, then the
+    /// overlapping siblings' blended results
+    /// ([`DeformOptions::overlap_weight`]).
+    Shared(u32),
+    /// The result of the last region solved that has the vertex (global
+    /// id): the seams' target without [`DeformOptions::parent_seams`].
+    /// Where a child's parent overlaps a sibling solved after it (the two
+    /// thighs under a skirt, solved left then right), that is the
+    /// sibling's result, not the parent's.
+    Last(u32),
+}
+
 pub(super) struct Region {
     pub(super) joint: Canonical,
     pub(super) solver: RegionSolver,
-    /// Per constraint: global vertex and whether it is a seam (parent's result).
-    pub(super) sources: Vec<(u32, bool)>,
+    /// Per constraint: where its target comes from.
+    pub(super) targets: Vec<Target>,
+    /// Regions overlapping this one with the same parent (the other thigh
+    /// under a skirt), when it holds the overlap
+    /// ([`DeformOptions::overlap_weight`]).
+    pub(super) siblings: Vec<usize>,
     /// Weight of this region's result at each local vertex (its part's
     /// skin weight): overlapping regions are blended by it.
     pub(super) weights: Vec<f64>,
@@ -137,6 +162,31 @@ pub(super) fn region_specs(ch: &Character, mode: DeformMode) -> Vec<RegionSpec> 
     }
 }
 
+/// Per region of `specs` ([`region_specs`]), which of the `n` vertices
+/// it shares with a sibling region (another child of the same parent: the
+/// two thighs' regions under a skirt).
+pub(super) fn sibling_overlaps(specs: &[RegionSpec], n: usize) -> Vec<Vec<bool>> {
+    specs
+        .iter()
+        .enumerate()
+        .map(|(i, (verts, _, parent, _, _))| {
+            let mut count = vec![0u8; n];
+            for (j, (other, _, p, _, _)) in specs.iter().enumerate() {
+                if j != i && parent.is_some() && p == parent {
+                    for &v in other {
+                        count[v as usize] = 1;
+                    }
+                }
+            }
+            let mut shared = vec![false; n];
+            for &v in verts {
+                shared[v as usize] = count[v as usize] > 0;
+            }
+            shared
+        })
+        .collect()
+}
+
 /// The example frames of a region (database ids: the override, else the
 /// frames farthest apart in the rotations of `example_joints`, plus
 /// `opts.include`) and their differential coordinates `L x` on the region
@@ -191,9 +241,10 @@ pub(super) fn region_examples(
     (chosen, examples)
 }
 
-/// Where a region constraint's target comes from: `(global vertex, from
-/// the parent region's result)`.
-pub(super) type RegionSource = (u32, bool);
+/// Where a region constraint's target comes from: the global vertex and
+/// how it is held ([`Held::Lbs`], [`Held::Seam`]: the parent's result, or
+/// [`Held::Shared`]: the overlap's shared target).
+pub(super) type RegionSource = (u32, Held);
 
 /// Per local vertex of a region, the factor of its seam weight and of its
 /// held-joint weight ([`DeformOptions::seam_by_weight`],
@@ -257,7 +308,9 @@ pub(super) fn constraint_scale(
 /// parent region first, then the LBS constraint vertices (and, with
 /// `hold_joints`, a spread of the child parts' vertices, those `soft` does
 /// not exclude); a region with none of those constrains a spread of its
-/// own vertices.
+/// own vertices. With `overlap_weight` above 0, the vertices `shared`
+/// marks (in a sibling region too) that are not seams are held with it
+/// at the overlap's shared target.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn region_constraints(
     ch: &Character,
@@ -268,6 +321,7 @@ pub(super) fn region_constraints(
     parent_verts: Option<&[u32]>,
     is_constraint: &[bool],
     soft: &[bool],
+    shared: &[bool],
     scale: &ConstraintScale,
 ) -> (Vec<(u32, f64)>, Vec<RegionSource>) {
     let rig = ch.rig();
@@ -278,10 +332,13 @@ pub(super) fn region_constraints(
         if seam {
             let s = scale.seam.get(i).copied().unwrap_or(1.0);
             constraints.push((i as u32, opts.seam_weight * s));
-            sources.push((v, true));
+            sources.push((v, Held::Seam));
+        } else if opts.overlap_weight > 0.0 && shared.get(v as usize) == Some(&true) {
+            constraints.push((i as u32, opts.overlap_weight));
+            sources.push((v, Held::Shared));
         } else if is_constraint[v as usize] {
             constraints.push((i as u32, opts.constraint_weight));
-            sources.push((v, false));
+            sources.push((v, Held::Lbs));
         } else if opts.hold_joints
             && mode == DeformMode::Part
             && (opts.hold_spread || i % opts.stride.max(1) == 0)
@@ -297,27 +354,36 @@ pub(super) fn region_constraints(
                 s /= (opts.stride.max(1) as f64).sqrt();
             }
             constraints.push((i as u32, opts.constraint_weight * s));
-            sources.push((v, false));
+            sources.push((v, Held::Lbs));
         }
     }
     if constraints.is_empty() {
         // A region with no eligible vertex: constrain a spread of its own.
         for (i, &v) in verts.iter().enumerate().step_by(opts.stride.max(1)) {
             constraints.push((i as u32, opts.constraint_weight));
-            sources.push((v, false));
+            sources.push((v, Held::Lbs));
         }
     }
     (constraints, sources)
 }
 
+/// The skin weight above which a vertex joins a part's region
+/// ([`crate::embed::parts::regions`], as the embedding calls it).
+const REGION_MIN: f64 = 0.1;
+
 /// The weight of a region's result at each of its vertices: 1 for the
 /// whole body, else the vertex's skin weight on the region's part (at least
 /// 1e-3 for a vertex labelled with the part), so overlapping regions blend.
+/// With `taper` ([`DeformOptions::blend_taper`]) a vertex not labelled
+/// with the part has `(w − 0.1) / 0.9`, so the weight falls to 0 at the
+/// region's edge (where the skin weight crosses the region's threshold)
+/// instead of stepping from 0.1 to 0.
 pub(super) fn region_weights(
     ch: &Character,
     mode: DeformMode,
     verts: &[u32],
     joint: Canonical,
+    taper: bool,
 ) -> Vec<f64> {
     let rig = ch.rig();
     match mode {
@@ -337,6 +403,8 @@ pub(super) fn region_weights(
                     // A vertex labelled with the part always counts.
                     if rig.labels[v as usize] as usize == part.index() {
                         w.max(1e-3)
+                    } else if taper {
+                        ((w - REGION_MIN) / (1.0 - REGION_MIN)).max(0.0)
                     } else {
                         w
                     }
