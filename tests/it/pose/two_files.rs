@@ -243,7 +243,7 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
         // rotations, so the same figures.
         ("cmu-amc/02/02_03.amc", REORDERED, 0.025, 0.021, 0.024),
         // Turned 30° about the vertical and scaled by 1.37, the result
-        // turned back: the same figures (asserted below to 1e-6 of the
+        // turned back: the same figures (asserted below to 1e-4 of the
         // height; the contact band is a fraction of the leg).
         ("cmu-amc/02/02_03.amc", TURNED, 0.025, 0.021, 0.024),
     ];
@@ -360,22 +360,23 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
             pelvis_max,
             lb / la,
             tb / ta,
+            vertical / n as f64 / h,
         ));
     }
     // A clip turned and scaled retargets as the clip: the contact band
     // scales with the leg (with a fixed 3 cm band the pelvis stood 1.28 %
     // of the height from the AMC's vertically instead of 1.17 %).
-    let of = |b: &str| got.iter().find(|g| g.1 == b).map(|g| (g.2, g.3, g.4));
+    let of = |b: &str| got.iter().find(|g| g.1 == b).map(|g| [g.2, g.3, g.4, g.10]);
     let (Some(plain), Some(turned)) = (of("cmu-bvh-ccrig/002_03.bvh"), of(TURNED)) else {
         panic!("the 02_03 pairs were not measured");
     };
+    // Within 1e-4 of the height (the ground's levelling shrinks its slope
+    // by a ridge in metres, which does not scale with the clip).
     assert!(
-        (plain.0 - turned.0).abs() < 1e-6
-            && (plain.1 - turned.1).abs() < 1e-6
-            && (plain.2 - turned.2).abs() < 1e-6,
-        "turned and rescaled: {turned:?} against {plain:?}"
+        plain.iter().zip(&turned).all(|(x, y)| (x - y).abs() < 1e-4),
+        "turned and rescaled (abs, rel, pelvis, its vertical): {turned:?} against {plain:?}"
     );
-    for (a, b, abs, rel, pelvis, abs_max, rel_max, pelvis_max, legs, travel) in got {
+    for (a, b, abs, rel, pelvis, abs_max, rel_max, pelvis_max, legs, travel, _) in got {
         assert!(
             abs < abs_max && rel < rel_max && pelvis < pelvis_max,
             "{a}: {abs} {rel} {pelvis}"
