@@ -2,7 +2,7 @@
 //! stands on the ground, toes bent up about the ball, and the reference's
 //! foot bones set to the elevation the clip's feet have when flat.
 
-use super::ground::{CONTACT, Support, grounds_either_side, interpolate_gaps};
+use super::ground::{Support, grounds_either_side, interpolate_gaps};
 use super::reference::leg_length;
 use crate::pose::Pose;
 use crate::rig::Canonical;
@@ -87,7 +87,7 @@ pub(super) fn place_feet(
                     (Some(a), Some(b)) => a.min(b),
                     (a, b) => a.or(b).unwrap_or(u),
                 };
-                if u > lo && settled[1 - f][i].is_some_and(|o| o >= u - CONTACT) {
+                if u > lo && settled[1 - f][i].is_some_and(|o| o >= u - support.band) {
                     None
                 } else {
                     t
@@ -130,7 +130,7 @@ pub(super) fn place_feet(
             if let (Some(u), None) = (t[i - 1], t[i])
                 && let Some(j) = (i..n).find(|&j| t[j].is_some())
             {
-                if t[j].is_some_and(|v| v < u - CONTACT) {
+                if t[j].is_some_and(|v| v < u - support.band) {
                     let (a, b) = (lift[i - 1], lift[j]);
                     for (k, l) in lift.iter_mut().enumerate().take(j).skip(i) {
                         let w = (k + 1 - i) as f64 / (j + 1 - i) as f64;

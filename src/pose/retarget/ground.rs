@@ -23,12 +23,13 @@ pub struct Support {
     /// joint over the frames.
     pub floor: f64,
     /// Per frame, the support under the clip's lowest planted foot when it
-    /// touches it (its lowest joint within 3 cm); `None` in the air. The
+    /// touches it (its lowest joint within the contact band, [`Support::band`]);
+    /// `None` in the air. The
     /// lowest of the two feet's [`Support::touch`].
     pub ground: Vec<Option<f64>>,
     /// Per foot (left, right) and frame, the support the foot touches: its
-    /// footfall's when its lowest joint is within 3 cm of it, the floor
-    /// when within 3 cm of the floor; `None` otherwise.
+    /// footfall's when its lowest joint is within the contact band of it,
+    /// the floor when within the band of the floor; `None` otherwise.
     pub touch: [Vec<Option<f64>>; 2],
     /// Per foot and frame, the ground under the foot: the support it
     /// touches; in the air, the higher of the last support it touched and
@@ -47,6 +48,10 @@ pub struct Support {
     /// joints both moving less than 0.5 % of the leg's length from the
     /// frame before (the first frame: to the next).
     pub rests: [Vec<bool>; 2],
+    /// The contact band (the clip's metres, 3.6 % of its leg's length):
+    /// a foot whose lowest joint is within it of a support touches that
+    /// support.
+    pub band: f64,
 }
 
 /// The ground under a foot per frame (see [`Support::under`]) from the
@@ -87,18 +92,34 @@ pub(super) fn grounds_either_side(touch: &[Option<f64>]) -> Vec<(Option<f64>, Op
     out
 }
 
-/// The contact band (m): a foot whose lowest joint is within it of a
-/// support touches that support.
-pub(super) const CONTACT: f64 = 0.03;
+/// The contact band as a fraction of the clip's leg length (hip, knee,
+/// ankle): a foot whose lowest joint is within it of a support touches
+/// that support. 3.0 cm on CMU subject 02's legs (0.838 m), 2.9 cm on
+/// the CMU BVH skeleton's and Bandai Namco's (0.80 m), as the fixed 3 cm
+/// band it replaces; 3.5 cm on the Reallusion CC rig's (0.975 m). A
+/// fixed band did not scale with the clip: CMU 02_03's CC-rig BVH
+/// conversion scaled by 1.37 stood the character's pelvis 1.28 % of its
+/// height from the AMC's instead of 1.17 % (issue 44).
+pub(super) const CONTACT_PER_LEG: f64 = 0.036;
+
+/// The contact band (the clip's metres) of a clip whose legs are `leg`
+/// long: [`CONTACT_PER_LEG`] of it; 3 cm for a leg of no finite length.
+pub(super) fn contact_band(leg: f64) -> f64 {
+    if leg.is_finite() && leg > 0.0 {
+        CONTACT_PER_LEG * leg
+    } else {
+        0.03
+    }
+}
 
 /// The height a footfall holds its lowest joint at, from its heights
 /// `h` in the frames the foot is at rest (metres, sorted ascending): the
 /// lowest of the largest set of them within the contact band of one
 /// another (the first such set). `INFINITY` for no heights.
-pub(super) fn held_height(h: &[f64]) -> f64 {
+pub(super) fn held_height(h: &[f64], band: f64) -> f64 {
     let (mut best, mut lo, mut j) = (0, f64::INFINITY, 0);
     for i in 0..h.len() {
-        while h[i] - h[j] > CONTACT {
+        while h[i] - h[j] > band {
             j += 1;
         }
         if i + 1 - j > best {
@@ -116,14 +137,16 @@ pub(super) fn held_height(h: &[f64]) -> f64 {
 /// its lowest joint holds in it while the foot is at rest, its ankle and
 /// toe both moving less than 0.5 % of the leg length per frame
 /// ([`held_height`]: the lowest of the largest set of those heights
-/// within the 3 cm contact band; of all its heights when it never rests). A support
+/// within the contact band, [`Support::band`], 3.6 % of the leg; of all
+/// its heights when it never rests). A support
 /// within twice the contact band of the clip's floor is the floor (a flat
 /// capture keeps one plane); a higher one is a step the clip stands on
 /// (CMU subject 03 walks over blocks 11-25 cm high) when the footfall
 /// lasts at least 5 frames, the foot rests in some and bears weight (it
 /// is the lower foot in some frame of it). A frame touches the ground when any foot
-/// joint is within 3 cm of the floor (as on a flat capture), or a planted
-/// foot's lowest joint is within 3 cm of its footfall's support; the
+/// joint is within the band of the floor (as on a flat capture), or a
+/// planted foot's lowest joint is within the band of its footfall's
+/// support; the
 /// lowest such support is the frame's ground.
 ///
 /// The support was the lowest height the footfall's lowest joint
@@ -175,6 +198,7 @@ pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support 
     let mut held: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];
     let mut rests: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];
     let still = 0.02 * leg.max(1e-9);
+    let band = contact_band(leg);
     for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
         .into_iter()
         .enumerate()
@@ -222,11 +246,11 @@ pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support 
             let sup = if rests.is_empty() {
                 let mut lows: Vec<f64> = run.clone().map(height).collect();
                 lows.sort_by(f64::total_cmp);
-                held_height(&lows)
+                held_height(&lows, band)
             } else {
-                held_height(&rests)
+                held_height(&rests, band)
             };
-            // A step is twice the contact band above the floor (6 cm; a
+            // A step is twice the contact band above the floor (~6 cm; a
             // kerb or a block), held at least 5 frames with the foot at
             // rest in some, and bears weight: the foot is the lower of
             // the two in some frame of the footfall (a leg held still in
@@ -235,15 +259,15 @@ pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support 
             let bears = run
                 .clone()
                 .any(|i| low(&mocap[i]).y <= foot_height(&mocap[i]) + 1e-9);
-            if sup > floor + 2.0 * CONTACT && !(bears && !rests.is_empty() && run.len() >= 5) {
+            if sup > floor + 2.0 * band && !(bears && !rests.is_empty() && run.len() >= 5) {
                 continue;
             }
             for i in run.clone() {
-                if (low(&mocap[i]).y - sup).abs() <= CONTACT {
+                if (low(&mocap[i]).y - sup).abs() <= band {
                     held[foot][i] = true;
                 }
             }
-            let sup = if sup <= floor + 2.0 * CONTACT {
+            let sup = if sup <= floor + 2.0 * band {
                 floor
             } else {
                 sup
@@ -252,14 +276,14 @@ pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support 
             // the foot, still counted planted, has dropped past the
             // block's edge (stepping down) or not yet come down onto it.
             for i in run {
-                if (low(&mocap[i]).y - sup).abs() <= CONTACT {
+                if (low(&mocap[i]).y - sup).abs() <= band {
                     touch[foot][i] = Some(sup);
                 }
             }
         }
-        // On the floor, as on a flat capture: the foot within 3 cm of it.
+        // On the floor, as on a flat capture: the foot within the band of it.
         for (i, p) in mocap.iter().enumerate() {
-            if low(p).y <= floor + CONTACT {
+            if low(p).y <= floor + band {
                 touch[foot][i] = Some(floor);
             }
         }
@@ -287,6 +311,7 @@ pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support 
         under,
         held,
         rests,
+        band,
     }
 }
 

@@ -193,8 +193,8 @@ pub(super) fn retarget_on_grounds(
         })
         .collect();
     // Feet on the ground: in every frame where a foot of the clip touches
-    // its ground (planted, its lowest joint within 3 cm of that footfall's
-    // support, or within 3 cm of the floor), the body is lifted (or
+    // its ground (planted, its lowest joint within the contact band, 3.6 %
+    // of the clip's leg, of that footfall's support, or of the floor), the body is lifted (or
     // lowered) so that each character foot stands on or above the ground
     // under it ([`Support::under`]: the support the foot touches, raised
     // above the character's floor by its height above the clip's floor,

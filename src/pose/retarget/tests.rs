@@ -486,3 +486,37 @@ fn the_clip_foot_glide_reads_zero_standing_and_the_drag_when_dragged() {
     let g = clip_foot_glide_cm(&ch, &rf, &lifted);
     assert!(g < 1e-9, "{g}");
 }
+
+/// The frames each foot touches its ground (`Support::touch`), per foot.
+fn touches(s: &Support) -> [Vec<bool>; 2] {
+    s.touch
+        .each_ref()
+        .map(|t| t.iter().map(|g| g.is_some()).collect())
+}
+
+#[test]
+fn a_clip_scaled_touches_the_ground_in_the_same_frames() {
+    // The project's generated walk and run (metres), and the same clips
+    // scaled as a child's, a giant's or a file in other units would be:
+    // the contact band is a fraction of the leg, so the same frames touch
+    // and the supports scale with the clip (with the fixed 3 cm band it
+    // replaces, the walk scaled by 0.6 touched in other frames).
+    for g in [crate::synth::Gait::Walk, crate::synth::Gait::Run] {
+        let clip = crate::synth::gait_clip(g, 2.0, 30.0);
+        let poses = crate::rig::detect_clip(&clip)
+            .unwrap()
+            .map
+            .poses(&clip)
+            .unwrap();
+        let leg = leg_length(&poses[0]);
+        let base = clip_support(&poses, leg);
+        assert!(touches(&base).iter().flatten().any(|&t| t));
+        for k in [0.6, 1.37, 2.5] {
+            let scaled: Vec<Pose> = poses.iter().map(|p| p.map(|x| x * k)).collect();
+            let s = clip_support(&scaled, leg * k);
+            assert_eq!(touches(&s), touches(&base), "{g:?} scaled by {k}");
+            assert!((s.floor - k * base.floor).abs() < 1e-9 * k);
+            assert!((s.band - k * base.band).abs() < 1e-12 * k);
+        }
+    }
+}

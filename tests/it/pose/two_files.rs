@@ -54,6 +54,29 @@
 //! the posture (1.83 %) but not the pelvis's height (vertical 1.30
 //! against 1.16): the 3 cm contact band does not scale with the clip.
 //!
+//! Session 24: the contact band is a fraction of the clip's leg (3.6 %),
+//! so the turned and rescaled copy retargets exactly as the BVH (before:
+//! the pelvis 2.17 against 2.15 %, vertically 1.28 against 1.17); 02_03
+//! 2.26 → 2.31 % (the pelvis's vertical 1.17 → 1.23: the CC rig's band
+//! is now 3.5 cm), 02_01 1.90, 02_02 2.20 unchanged. Measured with a
+//! scratch kernel (`SM44_*` switches, not kept): the two files' limb
+//! directions agree within 0.3-2.6° (mean over frames: upper arms
+//! 0.3-1.0, forearms 0.4-1.1, thighs 1.2-2.6, shins 0.8-1.7; heading
+//! 1.2° apart), so what remains is the kernel's, not the data's: the
+//! bones that differ are the ones whose joints sit elsewhere (pelvis →
+//! hips 37-39°, spine 18-20°, head 14°, clavicles 13°, feet 7-10°), and
+//! the BVH's reference (a frame) carries its stride: hips turned 8.2°
+//! against the shoulders in 02_03's frame 34, knees bent 35-37°. Rules
+//! tried (02_01 / 02_02 / 02_03, abs %; main 1.905 / 2.196 / 2.262):
+//! knees of the reference straightened 1.915 / 2.183 / 2.122 (fails
+//! `mocap::one_capture`'s zeroed-root run_normal, 0.90 → 1.00 %);
+//! hips and shoulders of the reference squared to their mean line
+//! 1.784 / 2.152 / 2.430 (02_03's hips about the pelvis 0.95 / 0.62 →
+//! 0.28 / 0.22, but chest, neck and arms worse); feet turned to the
+//! clip's planted yaw 1.832 / 2.141 / 2.310; travel and height scaled by
+//! the hip's standing height (legs and ankle over toe) 1.832 / 2.319 /
+//! 2.342 (the pelvis horizontally 1.57 → 0.91 on 02_03).
+//!
 //! Earlier figures (measured 2026-11-29):
 //! - 01_01: the cgspeed BVH retargets as the AMC does (0.00 %).
 //! - The CC conversions: 3.1-4.2 % apart, 1.7-2.7 % of it posture. The
@@ -220,8 +243,9 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
         // rotations, so the same figures.
         ("cmu-amc/02/02_03.amc", REORDERED, 0.025, 0.021, 0.024),
         // Turned 30° about the vertical and scaled by 1.37, the result
-        // turned back: the posture about the pelvis the same.
-        ("cmu-amc/02/02_03.amc", TURNED, 0.025, 0.021, 0.025),
+        // turned back: the same figures (asserted below to 1e-4 of the
+        // height; the contact band is a fraction of the leg).
+        ("cmu-amc/02/02_03.amc", TURNED, 0.025, 0.021, 0.024),
     ];
     let mut got = Vec::new();
     let reordered = reordered_channels(&m.join("cmu-bvh-ccrig/002_03.bvh"));
@@ -336,9 +360,23 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
             pelvis_max,
             lb / la,
             tb / ta,
+            vertical / n as f64 / h,
         ));
     }
-    for (a, b, abs, rel, pelvis, abs_max, rel_max, pelvis_max, legs, travel) in got {
+    // A clip turned and scaled retargets as the clip: the contact band
+    // scales with the leg (with a fixed 3 cm band the pelvis stood 1.28 %
+    // of the height from the AMC's vertically instead of 1.17 %).
+    let of = |b: &str| got.iter().find(|g| g.1 == b).map(|g| [g.2, g.3, g.4, g.10]);
+    let (Some(plain), Some(turned)) = (of("cmu-bvh-ccrig/002_03.bvh"), of(TURNED)) else {
+        panic!("the 02_03 pairs were not measured");
+    };
+    // Within 1e-4 of the height (the ground's levelling shrinks its slope
+    // by a ridge in metres, which does not scale with the clip).
+    assert!(
+        plain.iter().zip(&turned).all(|(x, y)| (x - y).abs() < 1e-4),
+        "turned and rescaled (abs, rel, pelvis, its vertical): {turned:?} against {plain:?}"
+    );
+    for (a, b, abs, rel, pelvis, abs_max, rel_max, pelvis_max, legs, travel, _) in got {
         assert!(
             abs < abs_max && rel < rel_max && pelvis < pelvis_max,
             "{a}: {abs} {rel} {pelvis}"
