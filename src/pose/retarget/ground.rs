@@ -175,8 +175,12 @@ pub struct Given<'a> {
     pub floor: Option<f64>,
     /// The last word on the supports: called with the levelled clip and
     /// the support found over it.
-    pub support: Option<&'a dyn Fn(&[Pose], &mut Support)>,
+    pub support: Option<SupportHook<'a>>,
 }
+
+/// [`Given::support`]: called with the levelled clip and the support found
+/// over it, may change the support.
+pub type SupportHook<'a> = &'a dyn Fn(&[Pose], &mut Support);
 
 impl Given<'_> {
     /// Only the floor given (or nothing).
