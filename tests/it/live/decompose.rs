@@ -45,6 +45,10 @@ fn root_as_offline(live: &[Pose], offline: &[Pose], all: bool) -> Vec<Pose> {
         .collect()
 }
 
+/// One swap of the decomposition: its row's name and the decision it
+/// takes from offline.
+type SwapStep = (&'static str, fn(&mut Swap));
+
 /// The session's options at `lag` (others as given).
 fn at_lag(base: SessionOptions, lag: usize) -> SessionOptions {
     SessionOptions {
@@ -62,7 +66,7 @@ fn stages(ch: &Character, prepared: &Prepared, m: &MocapPoses, a: &Analysed, bas
     };
     let live = run(base, None);
     eprintln!("    live as is                     {:.3}", err(&live));
-    let steps: [(&str, fn(&mut Swap)); 3] = [
+    let steps: [SwapStep; 3] = [
         ("+ levelling offline", |s| s.tilt = true),
         ("+ floor offline", |s| s.floor = true),
         ("+ supports offline", |s| s.support = true),
