@@ -84,6 +84,11 @@ pub struct Args {
     /// but 02_02, a walk on a sloping floor, 1.70 -> 2.46; off by default).
     #[arg(long = "floor-step", value_name = "MM", value_parser = super::non_negative)]
     pub floor_step: Option<f64>,
+    /// The fraction of the body's lift that differs between the frame
+    /// output last and the newest analysis of it given up per frame
+    /// (default: the session's).
+    #[arg(long = "lift-settle", value_name = "FRACTION", value_parser = super::fraction)]
+    pub lift_settle: Option<f64>,
     /// Decided frames kept for the timeline's blends and the placement's
     /// smoothing.
     #[arg(long, default_value_t = 64, value_name = "FRAMES")]
@@ -217,6 +222,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         serve: a.serve,
         analysis_window: a.analysis_window.max(1),
         floor_step: a.floor_step.map(|mm| mm / 1000.0),
+        lift_settle: a.lift_settle.or(LiveOptions::default().lift_settle),
         history: a.history.max(1),
         loops: a.loops,
         actor: a.actor.clone(),

@@ -27,8 +27,8 @@ use crate::mesh::Mesh;
 use crate::mesh::blend::Blender;
 use crate::pose::Pose;
 use crate::pose::retarget::{
-    CharacterNeutral, OnCharacter, Reference, character_neutral, on_character_on_floor,
-    stance_offsets_on_floor,
+    CharacterNeutral, Given, OnCharacter, Reference, character_neutral, on_character_given,
+    stance_offsets_given,
 };
 use glam::DVec3;
 use serde::Serialize;
@@ -103,29 +103,29 @@ impl Analysed {
         reference: &Reference,
         mocap: &[Pose],
     ) -> Analysed {
-        Analysed::on_given_floor(ch, neutral, floor_lift, reference, mocap, None)
+        Analysed::on_given(ch, neutral, floor_lift, reference, mocap, &Given::default())
     }
 
-    /// [`Analysed::new`] on the clip's floor `floor` when given (the
-    /// levelled clip's height, metres: a live session's running estimate)
-    /// instead of the one the pose kernel finds over `mocap`.
-    pub fn on_given_floor(
+    /// [`Analysed::new`] with what the caller decides instead of the pose
+    /// kernel over `mocap` ([`Given`]: the levelling, the floor, the
+    /// supports; a live session's decisions over its stream).
+    pub fn on_given(
         ch: &Character,
         neutral: &Pose,
         floor_lift: f64,
         reference: &Reference,
         mocap: &[Pose],
-        floor: Option<f64>,
+        given: &Given<'_>,
     ) -> Analysed {
         let t = Instant::now();
-        let on_character = on_character_on_floor(ch.rest_pose(), neutral, reference, mocap, floor);
+        let on_character = on_character_given(ch.rest_pose(), neutral, reference, mocap, given);
         let lift = DVec3::new(0.0, floor_lift, 0.0);
         let query: Vec<Pose> = on_character
             .frames
             .iter()
             .map(|(p, _)| p.map(|q| q + lift))
             .collect();
-        let raised = stance_offsets_on_floor(ch.rest_pose(), reference, mocap, floor);
+        let raised = stance_offsets_given(ch.rest_pose(), reference, mocap, given);
         let on_floor = query
             .iter()
             .zip(raised.iter().chain(std::iter::repeat(&0.0)))
@@ -229,22 +229,22 @@ impl Prepared {
         Analysed::new(ch, &self.neutral.pose, self.floor_lift, reference, mocap)
     }
 
-    /// [`Prepared::analyse`] on the clip's floor `floor` when given
-    /// ([`Analysed::on_given_floor`]).
-    pub fn analyse_on_floor(
+    /// [`Prepared::analyse`] with what the caller decides
+    /// ([`Analysed::on_given`]).
+    pub fn analyse_given(
         &self,
         ch: &Character,
         reference: &Reference,
         mocap: &[Pose],
-        floor: Option<f64>,
+        given: &Given<'_>,
     ) -> Analysed {
-        Analysed::on_given_floor(
+        Analysed::on_given(
             ch,
             &self.neutral.pose,
             self.floor_lift,
             reference,
             mocap,
-            floor,
+            given,
         )
     }
 }

@@ -45,6 +45,9 @@ pub struct LiveOptions {
     /// (metres; `live::floor`); `None` (the default): the kernel finds its
     /// floor over each window.
     pub floor_step: Option<f64>,
+    /// The settle of the body's lift ([`SessionOptions::lift_settle`]).
+    /// Default: the session's.
+    pub lift_settle: Option<f64>,
     /// A replay's speed (1: the clip's real rate; 0: as fast as frames are
     /// made). Default: 1.
     pub speed: f64,
@@ -81,6 +84,7 @@ impl Default for LiveOptions {
             history: 64,
             analysis_window: 128,
             floor_step: None,
+            lift_settle: SessionOptions::default().lift_settle,
             speed: 1.0,
             load: LoadOptions::default(),
             seconds: None,
@@ -477,6 +481,7 @@ fn session_options(opts: &LiveOptions) -> SessionOptions {
         history: opts.history,
         analysis_window: opts.analysis_window,
         floor_step: opts.floor_step,
+        lift_settle: opts.lift_settle,
         ..SessionOptions::default()
     }
 }

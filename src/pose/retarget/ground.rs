@@ -183,6 +183,53 @@ pub fn clip_floor(mocap: &[Pose]) -> f64 {
         .unwrap_or_else(|| mocap.first().map_or(0.0, |p| p[C::Pelvis.index()].y))
 }
 
+/// What a caller decides for the pose kernel instead of its finding it
+/// over the clip it is given: a live session's window is a few seconds of
+/// a stream, and decisions made over it alone move from one window to the
+/// next (`live::ground`). `Given::default()` decides nothing: the kernel's
+/// result is the offline one, bit for bit.
+#[derive(Clone, Copy, Default)]
+pub struct Given<'a> {
+    /// The rotation levelling the ground (else [`ground_tilt`]'s over the
+    /// clip).
+    pub tilt: Option<DQuat>,
+    /// The floor (the levelled clip's height, metres; else
+    /// [`clip_floor`]'s).
+    pub floor: Option<f64>,
+    /// The last word on the supports: called with the levelled clip and
+    /// the support found over it.
+    pub support: Option<SupportHook<'a>>,
+}
+
+/// [`Given::support`]: called with the levelled clip and the support found
+/// over it, may change the support.
+pub type SupportHook<'a> = &'a dyn Fn(&[Pose], &mut Support);
+
+impl Given<'_> {
+    /// Only the floor given (or nothing).
+    pub fn floor(floor: Option<f64>) -> Given<'static> {
+        Given {
+            floor,
+            ..Given::default()
+        }
+    }
+
+    /// The levelling: the given one, else [`ground_tilt`]'s over `mocap`.
+    pub fn tilt_of(&self, mocap: &[Pose]) -> DQuat {
+        self.tilt.unwrap_or_else(|| ground_tilt(mocap))
+    }
+}
+
+/// [`clip_support_on`] with what `given` decides (the floor, the last
+/// word).
+pub fn clip_support_given(mocap: &[Pose], leg: f64, given: &Given<'_>) -> Support {
+    let mut s = clip_support_on(mocap, leg, given.floor);
+    if let Some(f) = given.support {
+        f(mocap, &mut s);
+    }
+    s
+}
+
 /// [`clip_support`] on the floor `floor` when the caller gives one (the
 /// levelled clip's height, metres), else on [`clip_floor`]'s: a live
 /// session's window is a few seconds of the stream, and its own 5th

@@ -3,7 +3,7 @@
 //! on their grounds. See the [module docs](super) for what is matched.
 
 use super::feet::{Toes, flat_feet, place_feet};
-use super::ground::{clip_support_on, foot_height, ground_tilt};
+use super::ground::{Given, clip_support_given, foot_height};
 use super::reference::{Reference, ReferenceSource, leg_length};
 use super::root::root_from_legs;
 use super::torso::{clip_rotations, neck_carriage, upright};
@@ -106,23 +106,31 @@ pub fn retarget_toes(
     mocap: &[Pose],
     toes: Toes,
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
-    retarget_on_grounds(character, neutral, reference, mocap, toes, None).0
+    retarget_on_grounds(
+        character,
+        neutral,
+        reference,
+        mocap,
+        toes,
+        &Given::default(),
+    )
+    .0
 }
 
 /// [`retarget_toes`] and the ground each foot of the result stands on or
 /// above per frame, raised above the character's floor (character's
 /// metres; `None` for a foot that never touches): see [`place_feet`].
-/// `floor`, when the caller gives it, is the clip's floor (the levelled
-/// clip's height, metres) instead of the one found over `mocap`
-/// ([`clip_support_on`]): a live session's running estimate over the
-/// stream, where `mocap` is only its recent window.
+/// `given` holds what the caller decides instead of the kernel (the
+/// levelling, the floor, the supports: [`Given`]): a live session's
+/// decisions over the stream, where `mocap` is only its recent window;
+/// `Given::default()` decides nothing.
 pub(super) fn retarget_on_grounds(
     character: &Pose,
     neutral: &Pose,
     reference: &Reference,
     mocap: &[Pose],
     toes: Toes,
-    floor: Option<f64>,
+    given: &Given<'_>,
 ) -> RetargetedOnGrounds {
     // Counted by the tests of issue 40's "analysed once per clip".
     let _run = tracing::debug_span!("pose_kernel", frames = mocap.len()).entered();
@@ -135,7 +143,7 @@ pub(super) fn retarget_on_grounds(
     // The clip's ground made level (a capture volume's floor is often a
     // degree or two off its vertical axis; CMU subject 02's rises 8 cm
     // over a 4 m walk), so that one floor height holds for every frame.
-    let tilt = ground_tilt(mocap);
+    let tilt = given.tilt_of(mocap);
     let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
     let mocap = &levelled[..];
     let first = &mocap[0];
@@ -149,7 +157,7 @@ pub(super) fn retarget_on_grounds(
     };
     // The clip's floor and the support under each of its footfalls (the
     // leg's length does not depend on the feet).
-    let support = clip_support_on(mocap, leg_length(r), floor);
+    let support = clip_support_given(mocap, leg_length(r), given);
     // The feet measured from how the clip holds them flat on its ground.
     let stance_ref = flat_feet(r, mocap, &support);
     let r = &stance_ref;

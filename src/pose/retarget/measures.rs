@@ -5,7 +5,7 @@
 
 use super::feet::Toes;
 use super::feet::{foot_soles, sole_height};
-use super::ground::{Support, clip_support_on, ground_tilt, interpolate_gaps};
+use super::ground::{Given, Support, clip_support_given, interpolate_gaps};
 use super::kernel::{retarget, retarget_on_grounds};
 use super::reference::{Reference, angle, leg_length};
 use super::torso::{clip_rotations, neck_carriage, upright};
@@ -42,20 +42,20 @@ pub fn on_character_with_grounds(
     reference: &Reference,
     mocap: &[Pose],
 ) -> OnCharacter {
-    on_character_on_floor(character, neutral, reference, mocap, None)
+    on_character_given(character, neutral, reference, mocap, &Given::default())
 }
 
-/// [`on_character_with_grounds`] on the clip's floor `floor` when given
-/// (the levelled clip's height, metres; the kernel's optional input).
-pub fn on_character_on_floor(
+/// [`on_character_with_grounds`] with what the caller decides (the
+/// levelling, the floor, the supports: [`Given`]).
+pub fn on_character_given(
     character: &Pose,
     neutral: &Pose,
     reference: &Reference,
     mocap: &[Pose],
-    floor: Option<f64>,
+    given: &Given<'_>,
 ) -> OnCharacter {
     let (frames, grounds) =
-        retarget_on_grounds(character, neutral, reference, mocap, Toes::Rigid, floor);
+        retarget_on_grounds(character, neutral, reference, mocap, Toes::Rigid, given);
     OnCharacter {
         frames,
         foot_grounds: grounds.map(|g| interpolate_gaps(&g)),
@@ -203,18 +203,18 @@ pub fn foot_ground_offsets(
 /// air. Retrieval takes it off the query, comparing poses as they stand
 /// on the database's floor.
 pub fn stance_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
-    stance_offsets_on_floor(character, reference, mocap, None)
+    stance_offsets_given(character, reference, mocap, &Given::default())
 }
 
-/// [`stance_offsets`] on the clip's floor `floor` when given (as
-/// [`on_character_on_floor`]).
-pub fn stance_offsets_on_floor(
+/// [`stance_offsets`] with what the caller decides (as
+/// [`on_character_given`]).
+pub fn stance_offsets_given(
     character: &Pose,
     reference: &Reference,
     mocap: &[Pose],
-    floor: Option<f64>,
+    given: &Given<'_>,
 ) -> Vec<f64> {
-    offsets_on(character, reference, mocap, floor, |s| s.ground.clone())
+    offsets_on(character, reference, mocap, given, |s| s.ground.clone())
 }
 
 /// One per-frame height of the clip's [`Support`] (chosen by `pick`)
@@ -225,25 +225,25 @@ pub(super) fn offsets(
     mocap: &[Pose],
     pick: impl Fn(&Support) -> Vec<Option<f64>>,
 ) -> Vec<f64> {
-    offsets_on(character, reference, mocap, None, pick)
+    offsets_on(character, reference, mocap, &Given::default(), pick)
 }
 
-/// [`offsets`] on the clip's floor `floor` when given.
+/// [`offsets`] with what the caller decides.
 fn offsets_on(
     character: &Pose,
     reference: &Reference,
     mocap: &[Pose],
-    floor: Option<f64>,
+    given: &Given<'_>,
     pick: impl Fn(&Support) -> Vec<Option<f64>>,
 ) -> Vec<f64> {
     if mocap.is_empty() {
         return Vec::new();
     }
-    let tilt = ground_tilt(mocap);
+    let tilt = given.tilt_of(mocap);
     let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
     let r = leg_length(&reference.pose).max(1e-12);
     let s = leg_length(character) / r;
-    let support = clip_support_on(&levelled, r, floor);
+    let support = clip_support_given(&levelled, r, given);
     let raised: Vec<Option<f64>> = pick(&support)
         .iter()
         .map(|g| g.map(|y| (y - support.floor) * s))

@@ -72,12 +72,15 @@ mod root;
 mod torso;
 
 pub use feet::Toes;
-pub use ground::{Support, clip_floor, clip_support, clip_support_on, foot_height, ground_tilt};
+pub use ground::{
+    Given, Support, clip_floor, clip_support, clip_support_given, clip_support_on, foot_height,
+    ground_tilt,
+};
 pub use kernel::{retarget, retarget_toes, retarget_with_neutral};
 pub use measures::{
     OnCharacter, clip_foot_glide_cm, clip_head_trunk_deg, foot_glide_cm, foot_ground_offsets,
-    ground_offsets, on_character_on_floor, on_character_with_grounds, stance_offsets,
-    stance_offsets_on_floor,
+    ground_offsets, on_character_given, on_character_with_grounds, stance_offsets,
+    stance_offsets_given,
 };
 pub use reference::{
     CharacterNeutral, ClipPoses, JointRotations, NeutralSource, Reference, ReferenceSource,

@@ -6,48 +6,16 @@
 //! (a 32-frame window re-deciding the frames already output, settled by
 //! 20 % a frame) did not meet.
 
-use super::offline::{character, offline, undeformed, worst_difference};
+use super::offline::{character, offline, run_raw, undeformed, worst_difference};
 use crate::common;
 
-use surfmotion::db::Character;
-use surfmotion::drive::query::load_mocap;
-use surfmotion::drive::trellis::DatabaseLinks;
+use surfmotion::drive::query::{MocapPoses, load_mocap};
 use surfmotion::drive::{Prepared, RetargetOptions};
-use surfmotion::live::{LiveFrame, Session, SessionOptions};
+use surfmotion::live::ground::{OfflineGround, Swap};
+use surfmotion::live::{OnlineOptions, SessionOptions};
 use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{Reference, ReferenceSource};
 use surfmotion::tools::eval::velocity::velocity_error;
-
-/// Every output frame of a session pushed `poses` raw (with their file
-/// rotations when `rotations`), in order: (index, query, positions).
-#[allow(clippy::type_complexity)]
-fn run_raw(
-    ch: &Character,
-    prepared: &Prepared,
-    m: &surfmotion::drive::query::MocapPoses,
-    poses: &[Pose],
-    rotations: bool,
-    sopts: SessionOptions,
-) -> (Vec<usize>, Vec<Pose>, Vec<[f64; 3]>) {
-    let links = DatabaseLinks::of(ch);
-    let input = links.input();
-    let mut s = Session::new(ch, prepared, &input, m.reference.without_rotations(), sopts);
-    let (mut order, mut queries, mut positions) = (Vec::new(), Vec::new(), Vec::new());
-    let mut keep = |f: LiveFrame<'_>| {
-        order.push(f.index);
-        queries.push(*f.query);
-        positions.extend_from_slice(f.positions);
-    };
-    for (i, p) in poses.iter().enumerate() {
-        let r = if rotations {
-            m.reference.rotations.get(i)
-        } else {
-            None
-        };
-        s.push(p, r, &mut keep);
-    }
-    s.finish(&mut keep);
-    (order, queries, positions)
-}
 
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
@@ -63,7 +31,8 @@ fn a_lag_covering_the_clip_pushed_raw_gives_the_offline_meshes_exactly() {
             m.reference.without_rotations()
         });
         let n = o.poses.len();
-        let (order, queries, live) = run_raw(&ch, &prepared, &o.m, &o.poses, false, o.covering);
+        let (order, queries, live) =
+            run_raw(&ch, &prepared, &o.m, &o.poses, false, o.covering, None);
         assert_eq!(order, (0..n).collect::<Vec<_>>(), "{clip}");
         assert_eq!(
             queries, o.analysed.query,
@@ -96,7 +65,7 @@ fn at_lag_3_the_output_queries_follow_the_offline_motion() {
             retarget: opts,
             ..SessionOptions::default()
         };
-        let (order, queries, _) = run_raw(&ch, &prepared, &m, &m.poses, true, sopts);
+        let (order, queries, _) = run_raw(&ch, &prepared, &m, &m.poses, true, sopts, None);
         assert_eq!(order, (0..m.poses.len()).collect::<Vec<_>>(), "{clip}");
         let v = velocity_error(&a.query, &queries);
         eprintln!(
@@ -139,7 +108,7 @@ fn the_running_floor_keeps_the_pelvis_bounce_closer_to_offline() {
                 floor_step,
                 ..SessionOptions::default()
             };
-            let (_, queries, _) = run_raw(&ch, &prepared, &m, &m.poses, true, sopts);
+            let (_, queries, _) = run_raw(&ch, &prepared, &m, &m.poses, true, sopts, None);
             pelvis_bounce_error(&a.query, &queries)
         };
         let (window, running) = (bounce(None), bounce(Some(0.0005)));
@@ -147,5 +116,84 @@ fn the_running_floor_keeps_the_pelvis_bounce_closer_to_offline() {
             "{clip}: lag 3, pelvis bounce error against offline {window:.4} cm/frame on each window's floor, {running:.4} on the running floor"
         );
         assert!(running < window, "{clip}: {running} >= {window}");
+    }
+}
+
+/// `poses` turned by `deg` about the vertical and moved by `by` (metres).
+fn turned(poses: &[Pose], deg: f64, by: glam::DVec3) -> Vec<Pose> {
+    let r = glam::DQuat::from_rotation_y(deg.to_radians());
+    poses.iter().map(|p| p.map(|x| r * x + by)).collect()
+}
+
+#[test]
+#[ignore = "written at the end of s24 and not yet run (no release build in time): run it with --ignored"]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn over_blocks_the_offline_ground_swapped_in_brings_live_closer_to_offline() {
+    let Some(d) = common::data_dir() else { return };
+    let ch = character(&d);
+    let fps = ch.manifest().fps;
+    let (opts, prepared) = undeformed(&ch);
+    let sopts = SessionOptions {
+        retarget: opts,
+        online: OnlineOptions {
+            lag: 10,
+            ..OnlineOptions::default()
+        },
+        ..SessionOptions::default()
+    };
+    let all = Swap {
+        tilt: true,
+        floor: true,
+        support: true,
+    };
+    // CMU subject 03 walks over blocks 11-25 cm high, and each window
+    // decides the levelling, the floor and the supports over what has
+    // arrived (live::decompose: samba, lag 10, 03_01 0.431 → 0.245 and
+    // 03_02 0.464 → 0.254 cm/frame with the offline ones). The output
+    // queries' joint-velocity error against offline's must drop when the
+    // offline decisions are swapped in, whatever way the clip faces and
+    // wherever the stream starts.
+    for clip in ["cmu-amc/03/03_01.amc", "cmu-amc/03/03_02.amc"] {
+        let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), fps).unwrap();
+        // The clip as read, turned 120° and moved 3 m away, and its last
+        // two thirds (the stream starting mid-walk): without the file's
+        // rotations, which the turned poses no longer match.
+        let start = m.poses.len() / 3;
+        let (turn, by) = (120.0, glam::DVec3::new(3.0, 0.0, -2.0));
+        let variants: [(&str, Vec<Pose>, Pose); 3] = [
+            ("as read", m.poses.clone(), m.reference.pose),
+            (
+                "turned",
+                turned(&m.poses, turn, by),
+                turned(&[m.reference.pose], turn, by)[0],
+            ),
+            ("cut", m.poses[start..].to_vec(), m.reference.pose),
+        ];
+        for (name, poses, pose) in variants {
+            // The same neutral pose for the offline and the live analysis.
+            let reference = Reference {
+                pose,
+                source: ReferenceSource::Rest,
+                ..m.reference.without_rotations()
+            };
+            let a = prepared.analyse(&ch, &reference, &poses);
+            let clip_as = MocapPoses {
+                poses: poses.clone(),
+                reference,
+                ..m.clone()
+            };
+            let error = |swap: Option<Swap>| {
+                let g = swap.map(|s| OfflineGround::of(&clip_as.reference, &poses, s));
+                let (order, queries, _) =
+                    run_raw(&ch, &prepared, &clip_as, &poses, false, sopts, g);
+                assert_eq!(order, (0..poses.len()).collect::<Vec<_>>(), "{clip} {name}");
+                velocity_error(&a.query, &queries).mean_cm
+            };
+            let (live, swapped) = (error(None), error(Some(all)));
+            eprintln!(
+                "{clip} {name}: lag 10, the output queries' velocity error against offline's {live:.3} cm/frame, {swapped:.3} with the offline ground"
+            );
+            assert!(swapped < live, "{clip} {name}: {swapped:.3} >= {live:.3}");
+        }
     }
 }

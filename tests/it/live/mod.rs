@@ -3,6 +3,7 @@
 
 mod actors;
 mod carried;
+mod decompose;
 mod long;
 mod offline;
 mod online;

@@ -1,7 +1,8 @@
 //! The offline-vs-online comparison set-up shared by `live::online` and
 //! `live::carried`: a clip's first frames analysed and synthesised
-//! offline, the session options whose lag and history cover them, and the
-//! largest coordinate difference between two mesh sequences.
+//! offline, the session options whose lag and history cover them, a
+//! session pushed a clip raw, and the largest coordinate difference
+//! between two mesh sequences.
 
 use crate::common;
 
@@ -9,8 +10,10 @@ use std::path::Path;
 use surfmotion::db::Character;
 use surfmotion::deform::DeformMode;
 use surfmotion::drive::query::{MocapPoses, load_mocap};
+use surfmotion::drive::trellis::DatabaseLinks;
 use surfmotion::drive::{Analysed, Prepared, RetargetError, RetargetOptions};
-use surfmotion::live::{OnlineOptions, SessionOptions};
+use surfmotion::live::ground::OfflineGround;
+use surfmotion::live::{LiveFrame, OnlineOptions, Session, SessionOptions};
 use surfmotion::pose::Pose;
 use surfmotion::pose::retarget::Reference;
 
@@ -88,4 +91,41 @@ pub(super) fn worst_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
         .zip(b)
         .map(|(a, b)| (0..3).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max))
         .fold(0.0, f64::max)
+}
+
+/// Every output frame of a session pushed `poses` raw (with their file
+/// rotations when `rotations`; with the ground decisions `swap` takes from
+/// the offline analysis), in order: (index, query, positions).
+#[allow(clippy::type_complexity)]
+pub(super) fn run_raw(
+    ch: &Character,
+    prepared: &Prepared,
+    m: &surfmotion::drive::query::MocapPoses,
+    poses: &[Pose],
+    rotations: bool,
+    sopts: SessionOptions,
+    swap: Option<OfflineGround>,
+) -> (Vec<usize>, Vec<Pose>, Vec<[f64; 3]>) {
+    let links = DatabaseLinks::of(ch);
+    let input = links.input();
+    let mut s = Session::new(ch, prepared, &input, m.reference.without_rotations(), sopts);
+    if let Some(g) = swap {
+        s.swap_in(g);
+    }
+    let (mut order, mut queries, mut positions) = (Vec::new(), Vec::new(), Vec::new());
+    let mut keep = |f: LiveFrame<'_>| {
+        order.push(f.index);
+        queries.push(*f.query);
+        positions.extend_from_slice(f.positions);
+    };
+    for (i, p) in poses.iter().enumerate() {
+        let r = if rotations {
+            m.reference.rotations.get(i)
+        } else {
+            None
+        };
+        s.push(p, r, &mut keep);
+    }
+    s.finish(&mut keep);
+    (order, queries, positions)
 }
