@@ -83,6 +83,7 @@ impl OfflineGround {
                 under: [cut(&s.under[0]), cut(&s.under[1])],
                 held: [cut_b(&s.held[0]), cut_b(&s.held[1])],
                 rests: [cut_b(&s.rests[0]), cut_b(&s.rests[1])],
+                band: s.band,
             }
         });
         WindowGround {
