@@ -173,21 +173,16 @@ pub fn sparse_path(dir: &Path, measure: Measure) -> PathBuf {
 pub fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
     let mut k = KeyHasher::default();
     k.text("similarity", &similarity_key.to_string());
-    k.text(
-        "sparse",
-        &format!(
-            "{} {} {} {} {} {} {} {} {}",
-            opts.neighbours,
-            opts.dims,
-            opts.band,
-            opts.min_gap,
-            opts.stride,
-            opts.per_sequence,
-            opts.per_pair,
-            opts.spread,
-            opts.min_window
-        ),
+    let mut text = format!(
+        "{} {} {} {} {} {}",
+        opts.neighbours, opts.dims, opts.band, opts.min_gap, opts.stride, opts.per_sequence
     );
+    // The per-pair options only when the scan is on: the caches of
+    // databases built without it keep their key.
+    if opts.per_pair > 0 {
+        text += &format!(" {} {} {}", opts.per_pair, opts.spread, opts.min_window);
+    }
+    k.text("sparse", &text);
     k.finish()
 }
 

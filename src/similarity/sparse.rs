@@ -15,10 +15,11 @@
 //!    pair by the cheap distances ([`super::pair_scan`]: the graph keeps the
 //!    best transitions of every sequence pair, also between dissimilar
 //!    motions), each with its neighbours [`SparseOptions::spread`] frames
-//!    either way along the other sequence. (Before session 24: every
+//!    either way along the other sequence (off by default: too few of the
+//!    dense transitions found, see [`SparseOptions::per_pair`]); and every
 //!    [`SparseOptions::stride`]-th frame's [`SparseOptions::per_sequence`]
-//!    nearest frames in each sequence, `n × sequences` candidates; now off
-//!    by default.)
+//!    nearest frames in each sequence (one tree per sequence; the default,
+//!    `n × sequences` candidates).
 //! 3. **Windows**: for each candidate `(a, b)` the full measure along the
 //!    diagonal `(a+t, b+t)`, `|t| ≤ band`, and the two diagonals either
 //!    side of it (what the transition search reads: its window and the
@@ -73,14 +74,18 @@ pub struct SparseOptions {
     /// Nearest frames in each sequence of every `stride`-th frame: the
     /// dense method's transitions found at 3,234 frames rise from 78.8 %
     /// (1) to 90.8 % (3), 94.5 % (6) and 94.9 % (8). Its candidates grow
-    /// with `n × sequences`; default: 0 (off; 12 in sessions 21–23).
+    /// with `n × sequences`. Default: 12.
     pub per_sequence: usize,
     /// Best transitions by the cheap distances per unordered sequence pair
-    /// whose centres are candidates ([`super::pair_scan`]). Default: 8.
+    /// whose centres are candidates ([`super::pair_scan`]); their count
+    /// does not grow with the sequences' lengths, but the cheap ranking
+    /// misses many of the dense method's transitions (session 24, 8 per
+    /// pair without `per_sequence`: 91.4 % found at 1,014 frames, 71.1 %
+    /// at 3,234, for 19.8 % of the pairs). Default: 0 (off).
     pub per_pair: usize,
     /// Each per-pair candidate also taken `spread` frames either way along
     /// the second sequence (its ±2 diagonals then cover ±(spread + 2)).
-    /// Default: 5.
+    /// Default: 5 (used when `per_pair` is on).
     pub spread: usize,
     /// Smallest half-window of the per-pair search (the transition
     /// search's `min_window`). Default: 4.
@@ -95,8 +100,8 @@ impl Default for SparseOptions {
             band: 25,
             min_gap: 10,
             stride: 4,
-            per_sequence: 0,
-            per_pair: 8,
+            per_sequence: 12,
+            per_pair: 0,
             spread: 5,
             min_window: 4,
         }
@@ -944,17 +949,12 @@ mod tests {
             .collect()
     }
 
+    /// Transitions as `(m, n, L, cost)`.
+    type Found = Vec<(usize, usize, usize, f64)>;
+
     /// The transitions of sequences `i → j` found on `sim`'s stored pairs
     /// and on every pair of `set` (the dense method).
-    fn both_ways(
-        set: &Loop,
-        sim: &SparseSimilarity,
-        i: usize,
-        j: usize,
-    ) -> (
-        Vec<(usize, usize, usize, f64)>,
-        Vec<(usize, usize, usize, f64)>,
-    ) {
+    fn both_ways(set: &Loop, sim: &SparseSimilarity, i: usize, j: usize) -> (Found, Found) {
         use crate::graph::transitions::{TransitionOptions, find, find_among};
         let (si, sj) = (&sim.spans[i], &sim.spans[j]);
         let opts = TransitionOptions::default();
@@ -971,6 +971,7 @@ mod tests {
     /// method's transitions to and from the others — from the per-pair
     /// candidates; the nearest frames alone give it none.
     #[test]
+    #[ignore = "session 24: written, compiled, not yet run"]
     fn a_far_motion_keeps_its_best_transitions() {
         let ring = |t: usize, centre: f32, speed: f32, wobble: f32| {
             let a = t as f32 * std::f32::consts::TAU / 40.0 * speed;
@@ -987,6 +988,9 @@ mod tests {
         let base = SparseOptions {
             neighbours: 6,
             dims: 2,
+            per_sequence: 0,
+            per_pair: 8,
+            spread: 5,
             ..SparseOptions::default()
         };
         let (with, _) = sparse_pairs(&set, spans.clone(), &base, &|_| {});
