@@ -7,8 +7,11 @@
 #
 #   scripts/scale-db.sh OUT FRAMES...        e.g. scripts/scale-db.sh /work/scale-data 1000 3000 10000
 #
-# The pool is made once in OUT/pool/vK (one `synth` per variant and source
-# frame rate; a variant already there is reused), then each size gets
+# The pool is made once in OUT/pool/vK (one `synth` per variant, source
+# frame rate and CMU subject; what is already there is reused; the pool
+# stops growing as soon as it holds FRAMES, so the largest size makes only
+# the part of a variant it needs: the manifests take the pool's sequences
+# in the order they are made), then each size gets
 # OUT/dbFRAMES/character.toml listing the pool's sequences in order until
 # FRAMES frames are reached (whole sequences, so the count is at least
 # FRAMES; the last sequence may overshoot). The sequences are not copied:
@@ -39,14 +42,15 @@ pool_frames() {
   done
   echo $total
 }
+enough() { [ "$(pool_frames)" -ge "$max" ]; }
 k=0
 for f in $FACTORS; do
-  have=$(pool_frames)
-  [ "$have" -ge "$max" ] && break
+  enough && break
   v=$OUT/pool/v$k
   for group in amc bvh120 bvh30; do
     d=$v/$group
     [ -f "$d/character.toml" ] && continue
+    enough && break
     case $group in
       amc) clips=$amc; rate=120 ;;
       bvh120) clips=$bvh120; rate=120 ;;
@@ -56,12 +60,17 @@ for f in $FACTORS; do
     # Each AMC needs its own ASF (subjects 01, 02, 03): one call per subject.
     if [ $group = amc ]; then
       for subj in 01 02 03; do
+        [ -f "$d/$subj/character.toml" ] && continue
+        enough && break
         "$BIN" synth --mesh "$S/4d/samba/samba.obj" --landmarks "$F/samba.landmarks.json" \
           --input-fps "$fps" --mocap "$S"/mocap/cmu-amc/$subj/*.amc -o "$d/$subj" --force >/dev/null
       done
       mkdir -p "$d"
-      # A marker so the variant counts as done (the sequences are in the subfolders).
-      : > "$d/character.toml"
+      # A marker so the group counts as done (the sequences are in the
+      # subfolders); none while a subject is left out (the pool was enough).
+      if [ -f "$d/01/character.toml" ] && [ -f "$d/02/character.toml" ] && [ -f "$d/03/character.toml" ]; then
+        : > "$d/character.toml"
+      fi
     else
       # shellcheck disable=SC2086
       "$BIN" synth --mesh "$S/4d/samba/samba.obj" --landmarks "$F/samba.landmarks.json" \

@@ -173,13 +173,16 @@ pub fn sparse_path(dir: &Path, measure: Measure) -> PathBuf {
 pub fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
     let mut k = KeyHasher::default();
     k.text("similarity", &similarity_key.to_string());
-    k.text(
-        "sparse",
-        &format!(
-            "{} {} {} {} {} {}",
-            opts.neighbours, opts.dims, opts.band, opts.min_gap, opts.stride, opts.per_sequence
-        ),
+    let mut text = format!(
+        "{} {} {} {} {} {}",
+        opts.neighbours, opts.dims, opts.band, opts.min_gap, opts.stride, opts.per_sequence
     );
+    // The per-pair options only when the scan is on: the caches of
+    // databases built without it keep their key.
+    if opts.per_pair > 0 {
+        text += &format!(" {} {} {}", opts.per_pair, opts.spread, opts.min_window);
+    }
+    k.text("sparse", &text);
     k.finish()
 }
 
@@ -190,6 +193,7 @@ pub fn sparse_options(m: &Manifest) -> SparseOptions {
     SparseOptions {
         band: t.max_window.max(t.min_window) + 1,
         min_gap: t.min_gap,
+        min_window: t.min_window,
         ..SparseOptions::default()
     }
 }
@@ -512,6 +516,23 @@ impl Sets {
     }
 }
 
+/// The shape descriptors of every frame of the database `dir` and its
+/// sequences' spans: what a sparse build describes (for measurements that
+/// run [`sparse_pairs`] with several options on one description).
+pub fn describe_shape(
+    dir: &Path,
+    m: &Manifest,
+    progress: &dyn BuildProgress,
+) -> Result<(ShapeSet, Vec<Span>), DbError> {
+    let (sets, spans) = describe(dir, m, Measure::Shape, progress)?;
+    sets.shape
+        .map(|s| (s, spans))
+        .ok_or_else(|| DbError::Manifest {
+            path: dir.join(super::MANIFEST),
+            msg: "internal: no shape descriptors for the shape measure".into(),
+        })
+}
+
 /// Every sequence loaded one at a time and reduced to the descriptors of
 /// `measure`; returns them and the sequences' spans.
 fn describe(
@@ -573,11 +594,14 @@ fn sparse_similarity(
     progress.finish();
     let all = (n as u128) * (n as u128 + 1) / 2;
     notice(format!(
-        "sparse similarity of {} frames: {} candidate pairs from the {} nearest frames of each ({:.1} s), {} pairs compared ({:.2} % of the {} of the dense matrix) in {:.1} s",
+        "sparse similarity of {} frames: {} candidate pairs from the {} nearest frames of each and the {} best cheap transitions of each sequence pair ({} of them; {:.1} s, of which the sequence pairs {:.1} s), {} pairs compared ({:.2} % of the {} of the dense matrix) in {:.1} s",
         thousands(n as u128),
         thousands(stats.candidates as u128),
         opts.neighbours,
+        opts.per_pair,
+        thousands(stats.pair_candidates as u128),
         stats.index_seconds,
+        stats.scan_seconds,
         thousands(stats.pairs as u128),
         100.0 * stats.pairs as f64 / all.max(1) as f64,
         thousands(all),

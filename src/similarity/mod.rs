@@ -4,14 +4,16 @@
 //! velocity term ([`vertex`]), and skeletal distance (Eq. 28,
 //! [`crate::pose::measure::skeleton_distance`]); per-frame descriptors
 //! ([`sets`]) compared all-pairs in parallel ([`matrix`]), or on the candidate pairs
-//! of a nearest-neighbour index only for large databases ([`sparse`],
-//! [`kdtree`]); [`lookup`] reads either.
+//! of a nearest-neighbour index and of each sequence pair's best cheap
+//! transitions only for large databases ([`sparse`], [`kdtree`],
+//! [`pair_scan`]); [`lookup`] reads either.
 
 pub mod colour;
 pub mod histogram;
 pub mod kdtree;
 pub mod lookup;
 pub mod matrix;
+pub mod pair_scan;
 pub mod sets;
 pub mod sparse;
 pub mod vertex;

@@ -10,12 +10,16 @@
 //! 2. **Candidate pairs**: the [`SparseOptions::neighbours`] nearest frames
 //!    of every frame in that space (an exact k-d tree query, [`KdTree`]),
 //!    leaving out the frame's own neighbourhood within its sequence
-//!    (closer than `min_gap` frames: not a transition); and every
-//!    [`SparseOptions::stride`]-th frame's nearest frame in each sequence
-//!    (one tree per sequence: the graph keeps the best transitions of every
-//!    sequence pair, also between dissimilar motions); the
-//!    [`SparseOptions::per_sequence`] nearest there, as the cheap
-//!    descriptor's nearest is often a few frames off the full measure's.
+//!    (closer than `min_gap` frames: not a transition); and the centres of
+//!    the [`SparseOptions::per_pair`] best transitions of every sequence
+//!    pair by the cheap distances ([`super::pair_scan`]: the graph keeps the
+//!    best transitions of every sequence pair, also between dissimilar
+//!    motions), each with its neighbours [`SparseOptions::spread`] frames
+//!    either way along the other sequence (off by default: too few of the
+//!    dense transitions found, see [`SparseOptions::per_pair`]); and every
+//!    [`SparseOptions::stride`]-th frame's [`SparseOptions::per_sequence`]
+//!    nearest frames in each sequence (one tree per sequence; the default,
+//!    `n × sequences` candidates).
 //! 3. **Windows**: for each candidate `(a, b)` the full measure along the
 //!    diagonal `(a+t, b+t)`, `|t| ≤ band`, and the two diagonals either
 //!    side of it (what the transition search reads: its window and the
@@ -24,14 +28,17 @@
 //!    frame's next and next-but-one frame (the retrieval's step costs).
 //!    Stored both ways, row by row (a compressed sparse row matrix).
 //!
-//! Work and memory grow as `n · neighbours · band` pairs (plus the k-d
-//! tree's `n log n`), not `n²`. A pair that is not stored reads as
+//! Work and memory grow as `n · neighbours · band` pairs plus
+//! `per_pair · band` pairs per sequence pair (plus the k-d tree's
+//! `n log n` and the cheap scan's `n²` distances of `dims` values each),
+//! not `n²` full measures. A pair that is not stored reads as
 //! [`SparseSimilarity::get`]'s estimate: at least both frames' neighbour
 //! radius (the largest full distance to their own candidates) and the
 //! cheap descriptors' distance.
 
 use super::kdtree::KdTree;
 use super::matrix::{Dissimilarity, PairDistance, Span};
+use super::pair_scan;
 use rayon::prelude::*;
 
 /// Frames the principal axes are fitted on (evenly spaced).
@@ -66,8 +73,23 @@ pub struct SparseOptions {
     pub stride: usize,
     /// Nearest frames in each sequence of every `stride`-th frame: the
     /// dense method's transitions found at 3,234 frames rise from 78.8 %
-    /// (1) to 90.8 % (3), 94.5 % (6) and 94.9 % (8). Default: 12.
+    /// (1) to 90.8 % (3), 94.5 % (6) and 94.9 % (8). Its candidates grow
+    /// with `n × sequences`. Default: 12.
     pub per_sequence: usize,
+    /// Best transitions by the cheap distances per unordered sequence pair
+    /// whose centres are candidates ([`super::pair_scan`]); their count
+    /// does not grow with the sequences' lengths, but the cheap ranking
+    /// misses many of the dense method's transitions (session 24, 8 per
+    /// pair without `per_sequence`: 91.4 % found at 1,014 frames, 71.1 %
+    /// at 3,234, for 19.8 % of the pairs). Default: 0 (off).
+    pub per_pair: usize,
+    /// Each per-pair candidate also taken `spread` frames either way along
+    /// the second sequence (its ±2 diagonals then cover ±(spread + 2)).
+    /// Default: 5 (used when `per_pair` is on).
+    pub spread: usize,
+    /// Smallest half-window of the per-pair search (the transition
+    /// search's `min_window`). Default: 4.
+    pub min_window: usize,
 }
 
 impl Default for SparseOptions {
@@ -79,6 +101,9 @@ impl Default for SparseOptions {
             min_gap: 10,
             stride: 4,
             per_sequence: 12,
+            per_pair: 0,
+            spread: 5,
+            min_window: 4,
         }
     }
 }
@@ -86,8 +111,13 @@ impl Default for SparseOptions {
 /// What [`sparse_pairs`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SparseStats {
-    /// Candidate pairs from the nearest-neighbour index.
+    /// Candidate pairs from the nearest-neighbour index and the per-pair
+    /// scan.
     pub candidates: u64,
+    /// Of those, from the per-pair scan (its seeds and their spread).
+    pub pair_candidates: u64,
+    /// Seconds of the per-pair scan (part of `index_seconds`).
+    pub scan_seconds: f64,
     /// Distinct pairs evaluated with the full measure.
     pub pairs: u64,
     /// Seconds: descriptors, projection and index.
@@ -592,13 +622,23 @@ pub fn sparse_pairs(
     };
     let near = index.nearest_overall(opts.neighbours);
     let per_seq = index.nearest_per_sequence(&spans, opts.stride.max(1), opts.per_sequence);
+    let t_scan = std::time::Instant::now();
+    let per_pair = pair_scan::spread_seeds(
+        &pair_scan::best_per_pair(&features, dims, &spans, &per_pair_options(opts)),
+        opts.spread,
+        &spans,
+        &seq,
+    );
+    let scan_seconds = t_scan.elapsed().as_secs_f64();
+    let pair_candidates = per_pair.len() as u64;
     let index_seconds = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
     let seeds = near
         .iter()
         .enumerate()
         .flat_map(|(a, bs)| bs.iter().map(move |&b| (a, b)))
-        .chain(per_seq);
+        .chain(per_seq)
+        .chain(per_pair);
     let (mut runs, candidates) = runs_around(seeds, &spans, &seq, opts.band as i64);
     runs.extend(successor_runs(&spans));
     let merged = merge_runs(runs);
@@ -617,11 +657,25 @@ pub fn sparse_pairs(
     sim.radius = radii(&sim, &near);
     let stats = SparseStats {
         candidates,
+        pair_candidates,
+        scan_seconds,
         pairs,
         index_seconds,
         pairs_seconds: t1.elapsed().as_secs_f64(),
     };
     (sim, stats)
+}
+
+/// The transition search of the per-pair candidates: `per_pair` kept, the
+/// windows the band covers.
+fn per_pair_options(opts: &SparseOptions) -> crate::graph::transitions::TransitionOptions {
+    let lo = opts.min_window.max(1);
+    crate::graph::transitions::TransitionOptions {
+        top_n: opts.per_pair,
+        max_window: opts.band.saturating_sub(1).max(lo),
+        min_window: lo,
+        min_gap: opts.min_gap,
+    }
 }
 
 /// The sequence of every frame.
@@ -670,6 +724,9 @@ impl Index<'_> {
     /// Every `stride`-th frame's `k` nearest frames in each sequence (one
     /// k-d tree per sequence), as `(frame, candidate)` pairs.
     fn nearest_per_sequence(&self, spans: &[Span], stride: usize, k: usize) -> Vec<(usize, u32)> {
+        if k == 0 {
+            return Vec::new();
+        }
         let n = self.seq.len();
         let per_seq: Vec<Vec<(usize, u32)>> = spans
             .par_iter()
@@ -890,6 +947,68 @@ mod tests {
                 }
             })
             .collect()
+    }
+
+    /// Transitions as `(m, n, L, cost)`.
+    type Found = Vec<(usize, usize, usize, f64)>;
+
+    /// The transitions of sequences `i → j` found on `sim`'s stored pairs
+    /// and on every pair of `set` (the dense method).
+    fn both_ways(set: &Loop, sim: &SparseSimilarity, i: usize, j: usize) -> (Found, Found) {
+        use crate::graph::transitions::{TransitionOptions, find, find_among};
+        let (si, sj) = (&sim.spans[i], &sim.spans[j]);
+        let opts = TransitionOptions::default();
+        let dense = |r: usize, c: usize| set.distance(si.start + r, sj.start + c) as f32;
+        let sparse = |r: usize, c: usize| sim.value(si.start + r, sj.start + c);
+        let d = find(&dense, si.len, sj.len, i == j, &opts);
+        let cells = sim.block(i, j).into_iter();
+        let s = find_among(&sparse, si.len, sj.len, i == j, &opts, cells);
+        (d, s)
+    }
+
+    /// Issue 43: a motion far from every other (its frames are nobody's
+    /// nearest, and its nearest frames are its own) still gets the dense
+    /// method's transitions to and from the others — from the per-pair
+    /// candidates; the nearest frames alone give it none.
+    #[test]
+    #[ignore = "session 24: written, compiled, not yet run"]
+    fn a_far_motion_keeps_its_best_transitions() {
+        let ring = |t: usize, centre: f32, speed: f32, wobble: f32| {
+            let a = t as f32 * std::f32::consts::TAU / 40.0 * speed;
+            [
+                centre + a.cos() * (1.0 + wobble * (0.3 * t as f32).sin()),
+                a.sin(),
+            ]
+        };
+        let mut pts: Vec<[f32; 2]> = (0..160).map(|t| ring(t, 0.0, 1.0, 0.05)).collect();
+        pts.extend((0..120).map(|t| ring(t, 0.0, 1.3, 0.1)));
+        pts.extend((0..100).map(|t| ring(t, 9.0, 0.8, 0.2)));
+        let set = Loop(pts);
+        let spans = spans(&[160, 120, 100]);
+        let base = SparseOptions {
+            neighbours: 6,
+            dims: 2,
+            per_sequence: 0,
+            per_pair: 8,
+            spread: 5,
+            ..SparseOptions::default()
+        };
+        let (with, _) = sparse_pairs(&set, spans.clone(), &base, &|_| {});
+        let knn_only = SparseOptions {
+            per_pair: 0,
+            per_sequence: 0,
+            ..base
+        };
+        let (without, _) = sparse_pairs(&set, spans, &knn_only, &|_| {});
+        for (i, j) in [(0, 2), (2, 0), (1, 2), (2, 1), (0, 1)] {
+            let (dense, sparse) = both_ways(&set, &with, i, j);
+            assert!(!dense.is_empty(), "({i}, {j})");
+            assert_eq!(sparse, dense, "({i}, {j})");
+        }
+        for (i, j) in [(0, 2), (2, 1)] {
+            let (_, sparse) = both_ways(&set, &without, i, j);
+            assert!(sparse.is_empty(), "({i}, {j}): {sparse:?}");
+        }
     }
 
     #[test]

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use surfmotion::db::build::Method;
 use surfmotion::db::{BuildOptions, Manifest, Quiet, build};
 use surfmotion::graph::compare::agreement;
+use surfmotion::similarity::PairDistance;
 use surfmotion::similarity::Similarity;
 
 /// A manifest in `to` naming the database `from`'s files (absolute paths),
@@ -30,8 +31,10 @@ fn manifest_copy(from: &Path, to: &Path) -> PathBuf {
 }
 
 /// Builds `db` by both methods (in copies under `tmp`) and checks the
-/// sparse graph against the dense one; returns what it measured.
-fn compare(db: &Path, tmp: &Path) -> String {
+/// sparse graph against the dense one; returns what it measured. `strict`:
+/// the issue's 95 % and a sparse transition in every ordered sequence pair
+/// that has a dense one; else the line held since session 20 (85 %).
+fn compare(db: &Path, tmp: &Path, strict: bool) -> String {
     let dense_dir = manifest_copy(db, &tmp.join("dense"));
     let sparse_dir = manifest_copy(db, &tmp.join("sparse"));
     let opts = |m| BuildOptions {
@@ -75,13 +78,101 @@ fn compare(db: &Path, tmp: &Path) -> String {
         dr.describe_seconds + dr.pairs_seconds + dr.graph_seconds,
         sr.describe_seconds + sr.pairs_seconds + sr.graph_seconds,
     );
-    // Issue 43 asks for 95 %; measured 90.5 % here (370 frames) and
-    // 73.3 % at 3,234 frames (README): the target is not met yet. This
-    // holds the line where it is; the costs of the transitions found are
-    // the dense ones exactly.
-    assert!(a.found() >= 0.85, "{line}");
+    // Issue 43 asks for 95 % with costs within 5 %; the costs of the
+    // transitions found are the dense ones exactly.
+    assert!(a.found() >= if strict { 0.95 } else { 0.85 }, "{line}");
     assert!(near.worst_cost <= 0.05, "{line}");
+    if !strict {
+        return line;
+    }
+    // Every ordered sequence pair with a dense transition has a sparse one
+    // (the graph keeps the best transitions of every sequence pair, also
+    // of dissimilar motions: the per-pair candidates' purpose).
+    for t in &dg.transitions {
+        assert!(
+            sg.transitions
+                .iter()
+                .any(|u| (u.from, u.to) == (t.from, t.to)),
+            "no sparse transition {} -> {}: {line}",
+            dg.sequences[t.from].name,
+            dg.sequences[t.to].name
+        );
+    }
     line
+}
+
+/// A variant of the database `from` in `to`: its sequences cut in two
+/// (the first 45 % and the rest), the second pieces turned 90° about the
+/// vertical, the first sequence also mirrored (x → −x: a motion whose
+/// frames are nobody's nearest, the shape measure being invariant to turns
+/// only), all in reverse order. Same topology and rig.
+fn variant_db(from: &Path, to: &Path) -> PathBuf {
+    use surfmotion::mesh::io::pc2::{read_pc2, write_pc2};
+    let mut m = Manifest::load(from).unwrap();
+    assert_eq!(
+        m.up.to_ascii_lowercase(),
+        "y",
+        "the synthetic database is Y-up"
+    );
+    std::fs::create_dir_all(to).unwrap();
+    let mut pieces: Vec<(String, usize, Vec<[f64; 3]>)> = Vec::new();
+    for (k, s) in m.sequences.iter().enumerate() {
+        let pc = read_pc2(&Manifest::resolve(from, &s.path)).unwrap();
+        let v = pc.points;
+        let frames = pc.positions.len() / v;
+        let cut = frames * 45 / 100;
+        let turned: Vec<[f64; 3]> = pc.positions[cut * v..]
+            .iter()
+            .map(|p| [p[2], p[1], -p[0]])
+            .collect();
+        pieces.push((
+            format!("{}_head", s.name),
+            v,
+            pc.positions[..cut * v].to_vec(),
+        ));
+        pieces.push((format!("{}_tail_turned", s.name), v, turned));
+        if k == 0 {
+            let mirrored = pc.positions.iter().map(|p| [-p[0], p[1], p[2]]).collect();
+            pieces.push((format!("{}_mirrored", s.name), v, mirrored));
+        }
+    }
+    pieces.reverse();
+    let template = m.sequences[0].clone();
+    m.sequences = pieces
+        .into_iter()
+        .map(|(name, v, pos)| {
+            let path = to.join(format!("{name}.pc2"));
+            write_pc2(v, &pos, &path).unwrap();
+            surfmotion::db::SequenceEntry {
+                name,
+                path,
+                ..template.clone()
+            }
+        })
+        .collect();
+    m.topology = Manifest::resolve(from, &m.topology);
+    for p in [&mut m.rig.landmarks, &mut m.rig.parts]
+        .into_iter()
+        .flatten()
+    {
+        *p = Manifest::resolve(from, p);
+    }
+    m.save(to).unwrap();
+    to.to_path_buf()
+}
+
+/// Issue 43 on generated variants: cut, turned, mirrored and re-ordered
+/// sequences (7 of them, among them pairs of dissimilar motions) — the
+/// sparse graph finds ≥ 95 % of the dense transitions with their costs,
+/// and a transition in every ordered sequence pair that has one.
+#[test]
+#[ignore = "session 24: written, compiled, not yet run (needs ../shared/data)"]
+fn the_sparse_graph_finds_the_dense_transitions_of_a_variant_database() {
+    let Some(d) = common::data_dir() else { return };
+    let db = common::synthetic_db(&d);
+    let tmp = tempfile::tempdir().unwrap();
+    let variant = variant_db(&db, &tmp.path().join("variant"));
+    eprintln!("{}", compare(&variant, tmp.path(), true));
 }
 
 #[test]
@@ -90,7 +181,7 @@ fn the_sparse_graph_finds_the_dense_transitions() {
     let Some(d) = common::data_dir() else { return };
     let db = common::synthetic_db(&d);
     let tmp = tempfile::tempdir().unwrap();
-    eprintln!("{}", compare(&db, tmp.path()));
+    eprintln!("{}", compare(&db, tmp.path(), false));
 }
 
 /// A measurement on a database named by `SURFMOTION_SCALE_DB` (e.g. one of
@@ -101,7 +192,7 @@ fn the_sparse_graph_finds_the_dense_transitions() {
 fn measure_the_sparse_graph_on_a_given_database() {
     let db = PathBuf::from(std::env::var("SURFMOTION_SCALE_DB").expect("SURFMOTION_SCALE_DB"));
     let tmp = tempfile::tempdir().unwrap();
-    println!("{}: {}", db.display(), compare(&db, tmp.path()));
+    println!("{}: {}", db.display(), compare(&db, tmp.path(), true));
 }
 
 /// Issue 43: `inspect` judges a sparse database's graph cache by the key
@@ -165,4 +256,131 @@ fn inspect_judges_a_sparse_graph_by_its_own_key() {
     std::fs::write(&spath, &bytes[..bytes.len() - 5]).unwrap();
     let s = find(&states(&dir), "sparse similarity (shape)");
     assert!(!s.1 && s.2.starts_with("damaged"), "{s:?}");
+}
+
+/// The full measure read from a dense build's matrix (the same values a
+/// sparse build computes: `compare` checks it value by value), the cheap
+/// descriptors from the shape set; or, without a matrix, the cheap
+/// distance for both (pairs are counted, transitions mean nothing).
+struct Looked<'a> {
+    shape: &'a surfmotion::similarity::ShapeSet,
+    dense: Option<&'a surfmotion::similarity::SimilarityMatrix>,
+}
+
+impl surfmotion::similarity::PairDistance for Looked<'_> {
+    fn frames(&self) -> usize {
+        self.shape.frames()
+    }
+    fn distance(&self, a: usize, b: usize) -> f64 {
+        match self.dense {
+            Some(m) => m.get(a, b) as f64,
+            None => 0.0,
+        }
+    }
+}
+
+impl surfmotion::similarity::sparse::Features for Looked<'_> {
+    fn feature_len(&self) -> usize {
+        self.shape.feature_len()
+    }
+    fn feature(&self, a: usize, out: &mut [f32]) {
+        self.shape.feature(a, out)
+    }
+}
+
+/// Option sets from `SURFMOTION_SPARSE_OPTIONS`: `neighbours,per_pair,
+/// spread,per_sequence` separated by `;` (default: the current default).
+fn option_sets(
+    base: surfmotion::similarity::SparseOptions,
+) -> Vec<surfmotion::similarity::SparseOptions> {
+    let Ok(text) = std::env::var("SURFMOTION_SPARSE_OPTIONS") else {
+        return vec![base];
+    };
+    text.split(';')
+        .filter(|s| !s.trim().is_empty())
+        .map(|s| {
+            let v: Vec<usize> = s.split(',').map(|x| x.trim().parse().expect(s)).collect();
+            surfmotion::similarity::SparseOptions {
+                neighbours: v[0],
+                per_pair: v[1],
+                spread: v[2],
+                per_sequence: v[3],
+                ..base
+            }
+        })
+        .collect()
+}
+
+/// Issue 43, the choice of the sparse options: describes the database
+/// named by `SURFMOTION_SCALE_DB` once, then runs `sparse_pairs` and the
+/// graph for each option set of `SURFMOTION_SPARSE_OPTIONS`, the full
+/// measure read from the database's dense cache (`db build --similarity
+/// dense` first; its `graph-shape.json` is the reference) or, without one,
+/// pairs counted only. `SURFMOTION_SCALE_DB=DIR SURFMOTION_SPARSE_OPTIONS=
+/// '24,8,5,0;12,8,5,0' cargo test --release --test it
+/// db::sparse::options -- --ignored --nocapture`.
+#[test]
+#[ignore = "measurement: needs SURFMOTION_SCALE_DB (a database folder)"]
+fn options_measured_against_the_dense_cache() {
+    use surfmotion::db::build::{
+        describe_shape, graph_path, read_graph_cache, similarity_key, similarity_path,
+        sparse_options,
+    };
+    use surfmotion::graph::SurfaceMotionGraph;
+    use surfmotion::similarity::{Measure, sparse::sparse_pairs};
+    let db = PathBuf::from(std::env::var("SURFMOTION_SCALE_DB").expect("SURFMOTION_SCALE_DB"));
+    let m = Manifest::load(&db).unwrap();
+    let key = similarity_key(&db, &m, Measure::Shape).unwrap();
+    let dense =
+        surfmotion::db::cache::read_matrix(&similarity_path(&db, Measure::Shape), key).unwrap();
+    let reference = dense
+        .as_ref()
+        .and_then(|_| read_graph_cache(&graph_path(&db, Measure::Shape)).ok())
+        .map(|(_, g)| g);
+    let t = std::time::Instant::now();
+    let (shape, spans) = describe_shape(&db, &m, &Quiet).unwrap();
+    let n = shape.frames();
+    println!(
+        "{}: {n} frames, {} sequences, described in {:.1} s; dense cache: {}",
+        db.display(),
+        spans.len(),
+        t.elapsed().as_secs_f64(),
+        dense.is_some()
+    );
+    let set = Looked {
+        shape: &shape,
+        dense: dense.as_ref(),
+    };
+    let topts = m.graph.transition_options();
+    for o in option_sets(sparse_options(&m)) {
+        let (sim, stats) = sparse_pairs(&set, spans.clone(), &o, &|_| {});
+        let mut line = format!(
+            "neighbours {} per_pair {} spread {} per_sequence {}: candidates {} (per pair {}), pairs {} ({:.1} % of {}), index {:.1} s (scan {:.1} s)",
+            o.neighbours,
+            o.per_pair,
+            o.spread,
+            o.per_sequence,
+            stats.candidates,
+            stats.pair_candidates,
+            stats.pairs,
+            100.0 * stats.pairs as f64 / (n as f64 * (n as f64 + 1.0) / 2.0),
+            n * (n + 1) / 2,
+            stats.index_seconds,
+            stats.scan_seconds
+        );
+        if let Some(reference) = &reference {
+            let g =
+                SurfaceMotionGraph::build(&sim, Measure::Shape, &topts, &m.graph.edits()).unwrap();
+            let a = agreement(reference, &g, 0, 0.05);
+            line += &format!(
+                "; transitions {} (dense {}), found {} ({:.1} %), worst cost {:.2} %",
+                a.compared,
+                a.reference,
+                a.near_and_cost,
+                100.0 * a.found(),
+                100.0 * a.worst_cost
+            );
+        }
+        println!("{line}");
+    }
 }
