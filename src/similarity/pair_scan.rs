@@ -125,7 +125,6 @@ mod tests {
     /// the other's values come close: every sequence pair gets its
     /// transitions, also the pair whose frames are nobody's nearest.
     #[test]
-    #[ignore = "session 24: written, compiled, not yet run"]
     fn every_sequence_pair_gets_its_best_transitions() {
         let a: Vec<f32> = (0..120).map(|t| (t as f32 * 0.2).sin()).collect();
         let mut b: Vec<f32> = (0..90).map(|t| 10.0 + (t as f32 * 0.3).cos()).collect();
@@ -159,7 +158,6 @@ mod tests {
     }
 
     #[test]
-    #[ignore = "session 24: written, compiled, not yet run"]
     fn spread_stays_in_the_sequence() {
         let spans = vec![span("a", 0, 50), span("b", 50, 30)];
         let seq: Vec<u32> = (0..80).map(|f| u32::from(f >= 50)).collect();

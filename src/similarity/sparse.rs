@@ -971,7 +971,6 @@ mod tests {
     /// method's transitions to and from the others — from the per-pair
     /// candidates; the nearest frames alone give it none.
     #[test]
-    #[ignore = "session 24: written, compiled, not yet run"]
     fn a_far_motion_keeps_its_best_transitions() {
         let ring = |t: usize, centre: f32, speed: f32, wobble: f32| {
             let a = t as f32 * std::f32::consts::TAU / 40.0 * speed;

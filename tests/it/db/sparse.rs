@@ -166,7 +166,7 @@ fn variant_db(from: &Path, to: &Path) -> PathBuf {
 /// sparse graph finds ≥ 95 % of the dense transitions with their costs,
 /// and a transition in every ordered sequence pair that has one.
 #[test]
-#[ignore = "session 24: written, compiled, not yet run (needs ../shared/data)"]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn the_sparse_graph_finds_the_dense_transitions_of_a_variant_database() {
     let Some(d) = common::data_dir() else { return };
     let db = common::synthetic_db(&d);
