@@ -4,7 +4,7 @@
 use super::options::{DeformMode, DeformOptions, RepairBudget, TurnedOver};
 use super::part_laplacian::{RegionSolver, RegionWorkspace, apply};
 use super::regions::{
-    Region, Target, constraint_scale, region_constraints, region_examples, region_specs,
+    Held, Region, Target, constraint_scale, region_constraints, region_examples, region_specs,
     region_weights, sibling_overlaps,
 };
 use super::{arap, lbs, pca, unflip, untangle};
@@ -39,20 +39,6 @@ pub struct Deformer {
     pub components: Vec<usize>,
     /// Example frames (flat database ids) of each region.
     pub examples: Vec<Vec<crate::graph::FlatFrame>>,
-}
-
-/// How a region's vertex is constrained in its solve.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Held {
-    /// Only by the Laplacian and the deformation space.
-    Free,
-    /// To its LBS position.
-    Lbs,
-    /// To the parent region's result (a seam).
-    Seam,
-    /// To the target shared with an overlapping sibling region
-    /// ([`DeformOptions::overlap_weight`]).
-    Shared,
 }
 
 /// One region's own result ([`Deformer::region_results`]).

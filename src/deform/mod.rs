@@ -49,6 +49,6 @@ pub mod soft;
 pub mod unflip;
 pub mod untangle;
 
-pub use deformer::{DeformWorkspace, Deformer, Held, RegionResult};
+pub use deformer::{DeformWorkspace, Deformer, RegionResult};
 pub use options::{DeformMode, DeformOptions, RepairBudget, TurnedOver};
-pub use regions::part_joint;
+pub use regions::{Held, part_joint};

@@ -2,7 +2,6 @@
 //! their example frames, constraints and blending weights (the module
 //! page, [`crate::deform`], describes the method).
 
-use super::deformer::Held;
 use super::options::{DeformMode, DeformOptions};
 use super::part_laplacian::{RegionSolver, apply};
 use crate::db::Character;
@@ -11,6 +10,20 @@ use crate::graph::FlatFrame;
 use crate::pose::pose_rotations;
 use crate::rig::Canonical;
 use glam::{DQuat, DVec3};
+
+/// How a region's vertex is constrained in its solve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Held {
+    /// Only by the Laplacian and the deformation space.
+    Free,
+    /// To its LBS position.
+    Lbs,
+    /// To the parent region's result (a seam).
+    Seam,
+    /// To the target shared with an overlapping sibling region
+    /// ([`DeformOptions::overlap_weight`]).
+    Shared,
+}
 
 /// The joint whose rotation carries a part.
 pub fn part_joint(p: Part) -> Canonical {
