@@ -8,7 +8,10 @@ pub mod compare;
 pub mod frame;
 pub mod plot;
 pub mod smg;
-pub mod transitions;
+/// The transition search (Eqs. 2–5) lives with the similarity it reads
+/// (`similarity/transitions.rs`: the sparse similarity searches per sequence
+/// pair with it, and the graph imports the similarity, not the reverse).
+pub use crate::similarity::transitions;
 
 pub use frame::{FlatFrame, FrameId};
 pub use smg::{FrameAdjacency, GraphEdits, SequenceEdge, SurfaceMotionGraph};

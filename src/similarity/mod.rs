@@ -16,6 +16,7 @@ pub mod matrix;
 pub mod pair_scan;
 pub mod sets;
 pub mod sparse;
+pub mod transitions;
 pub mod vertex;
 pub mod voxel;
 

@@ -6,7 +6,7 @@
 //! motions, whose frames are nobody's nearest frames overall. So for every
 //! unordered pair of sequences `i ≤ j` (the matrix is symmetric: the
 //! transitions `j → i` are those of `i → j` transposed) the transition
-//! search itself ([`crate::graph::transitions::find`]: local minima, the
+//! search itself ([`super::transitions::find`]: local minima, the
 //! windowed cost of Eq. 3 per blended frame, suppression within a window)
 //! runs on the block of cheap distances (the projected descriptors'
 //! Euclidean distance, a lower bound of Eq. 1's), and the centres of its
@@ -21,7 +21,7 @@
 //! `n × sequences × 3` candidates.
 
 use super::matrix::Span;
-use crate::graph::transitions::{TransitionOptions, find};
+use super::transitions::{TransitionOptions, find};
 use rayon::prelude::*;
 
 /// The cheap distances of sequences `si` (rows) and `sj` (columns),

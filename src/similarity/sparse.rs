@@ -668,9 +668,9 @@ pub fn sparse_pairs(
 
 /// The transition search of the per-pair candidates: `per_pair` kept, the
 /// windows the band covers.
-fn per_pair_options(opts: &SparseOptions) -> crate::graph::transitions::TransitionOptions {
+fn per_pair_options(opts: &SparseOptions) -> super::transitions::TransitionOptions {
     let lo = opts.min_window.max(1);
-    crate::graph::transitions::TransitionOptions {
+    super::transitions::TransitionOptions {
         top_n: opts.per_pair,
         max_window: opts.band.saturating_sub(1).max(lo),
         min_window: lo,
@@ -955,7 +955,7 @@ mod tests {
     /// The transitions of sequences `i → j` found on `sim`'s stored pairs
     /// and on every pair of `set` (the dense method).
     fn both_ways(set: &Loop, sim: &SparseSimilarity, i: usize, j: usize) -> (Found, Found) {
-        use crate::graph::transitions::{TransitionOptions, find, find_among};
+        use super::super::transitions::{TransitionOptions, find, find_among};
         let (si, sj) = (&sim.spans[i], &sim.spans[j]);
         let opts = TransitionOptions::default();
         let dense = |r: usize, c: usize| set.distance(si.start + r, sj.start + c) as f32;
