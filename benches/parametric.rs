@@ -79,7 +79,7 @@ fn main() {
     // Fig. 4: stored references and error against ε (walk-run space).
     let blender = Blender::new(&motion.topology).unwrap();
     let sp = &motion.spaces[loco];
-    let originals: Vec<Vec<f32>> = sp.blend.blocks[..2].to_vec();
+    let originals: Vec<Vec<f32>> = sp.blend().blocks[..2].to_vec();
     for eps_mm in [20.0, 10.0, 5.0, 2.0, 1.0] {
         let t = std::time::Instant::now();
         let h = HybridBlend::build(
@@ -122,14 +122,14 @@ fn main() {
     // controller over four whole cycles.
     for (s, idx) in [(loco, 0usize), (turning, 1usize)] {
         let sp = &motion.spaces[s];
-        let map = sp.axis.as_ref().unwrap();
+        let map = sp.axis().unwrap();
         let [lo, hi] = map.range;
         let mut worst_map: f64 = 0.0;
         let mut worst_play: f64 = 0.0;
         for i in 0..=20 {
             let p = lo + (hi - lo) * i as f64 / 20.0;
             let (u, _) = map.inverse(p);
-            let back = measure(&sp.steps, u, motion.fps)[idx];
+            let back = measure(sp.steps(), u, motion.fps)[idx];
             let rel = |x: f64| {
                 if idx == 0 {
                     (x - p).abs() / p * 100.0
@@ -177,7 +177,7 @@ fn main() {
         }
         eprintln!(
             "params: {} {} range [{lo:.3}, {hi:.3}]: fit {:?} (quadratic round trip {:.4}, table {:.4}); worst over 21 values: map {worst_map:.3}{u}, controller {worst_play:.3}{u}",
-            sp.name,
+            sp.name(),
             map.parameter.name(),
             map.fit,
             map.error_quadratic,
@@ -193,7 +193,7 @@ fn main() {
         let mut ph = 0.0;
         b.iter(|| {
             ph = (ph + 0.7) % sp.grid() as f64;
-            sp.blend.eval(black_box(0.37), ph, &mut out);
+            sp.blend().eval(black_box(0.37), ph, &mut out);
             black_box(&out);
         })
     });
@@ -201,7 +201,7 @@ fn main() {
         let mut ph = 0.0;
         b.iter(|| {
             ph = (ph + 0.7) % sp.grid() as f64;
-            sp.blend.eval_linear(black_box(0.37), ph, &mut out);
+            sp.blend().eval_linear(black_box(0.37), ph, &mut out);
             black_box(&out);
         })
     });

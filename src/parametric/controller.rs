@@ -225,17 +225,17 @@ impl<'m> Controller<'m> {
         let mut steer_turn = None;
         for (i, p) in Parameter::ALL.iter().enumerate() {
             let Some(v) = self.wanted[i] else { continue };
-            match s.parameters.iter().position(|q| q == p) {
+            match s.parameters().iter().position(|q| q == p) {
                 None => notices.push(Notice::NotInSpace {
-                    space: s.name.clone(),
+                    space: s.name().to_owned(),
                     parameter: *p,
                 }),
                 Some(0) => {
-                    if let Some(map) = &s.axis {
+                    if let Some(map) = &s.axis() {
                         let (w, clamped) = map.inverse(v);
                         if clamped {
                             notices.push(Notice::Clamped {
-                                space: s.name.clone(),
+                                space: s.name().to_owned(),
                                 parameter: *p,
                                 asked: v,
                                 used: v.clamp(map.range[0], map.range[1]),
@@ -314,8 +314,8 @@ impl<'m> Controller<'m> {
         let secs = t0.elapsed().as_secs_f64();
         let Some(plan) = plan else { return };
         self.transitions.push(TransitionRecord {
-            from: src.name.clone(),
-            to: m.spaces[target].name.clone(),
+            from: src.name().to_owned(),
+            to: m.spaces[target].name().to_owned(),
             request_frame: self.frame,
             start_frame: self.frame + plan.wait,
             end_frame: self.frame + plan.wait + opts.blend_frames,
@@ -371,12 +371,14 @@ impl<'m> Controller<'m> {
         }
         let space = &m.spaces[self.head.space];
         space
-            .blend
+            .blend()
             .eval(self.head.u, self.head.phase, &mut self.local);
         let mut d = Self::step_head(m, &mut self.head);
         if let Some((mut t, done, total)) = self.fade {
             let a = (done + 1) as f64 / (total + 1) as f64;
-            m.spaces[t.space].blend.eval(t.u, t.phase, &mut self.other);
+            m.spaces[t.space]
+                .blend()
+                .eval(t.u, t.phase, &mut self.other);
             for (l, o) in self.local.iter_mut().zip(&self.other) {
                 for c in 0..3 {
                     l[c] += (o[c] - l[c]) * a;
@@ -401,7 +403,10 @@ impl<'m> Controller<'m> {
         // Steering: a later `turn` parameter adds to the blend's own turning.
         let space = &m.spaces[self.head.space];
         let steer = match (
-            space.parameters.iter().position(|p| *p == Parameter::Turn),
+            space
+                .parameters()
+                .iter()
+                .position(|p| *p == Parameter::Turn),
             self.wanted[1],
         ) {
             (Some(i), Some(v)) if i > 0 => {

@@ -17,6 +17,7 @@ pub mod controller;
 pub mod error;
 pub mod hybrid;
 pub mod local;
+pub mod motion_space;
 pub mod params;
 pub mod script;
 pub mod space;

@@ -66,7 +66,7 @@ pub(crate) fn parse_script(
     let spaces: Vec<(&str, &[Parameter])> = motion
         .spaces
         .iter()
-        .map(|s| (s.name.as_str(), s.parameters.as_slice()))
+        .map(|s| (s.name(), s.parameters()))
         .collect();
     parse_script_for(text, path, &spaces)
 }
@@ -322,7 +322,7 @@ pub fn play<E>(
             let dur = if n == 0 { 1.0 } else { n as f64 / fps };
             per_second.push(SecondReport {
                 second: f / per,
-                space: motion.spaces[c.space()].name.clone(),
+                space: motion.spaces[c.space()].name().to_owned(),
                 speed_asked: asked[0],
                 speed: sec_path / dur,
                 turn_asked: asked[1],

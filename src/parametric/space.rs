@@ -9,10 +9,9 @@ use super::ParamError;
 use super::align::{Alignment, align, features};
 use super::hybrid::{HybridBlend, HybridOptions};
 use super::local::{RootTrack, local_frame, root_track, rotate};
-use super::params::{ParamMap, Parameter, RootSteps, WEIGHT_STEP, blended_step, measure};
-use super::transition::{
-    RefFeatures, SIMILARITY_VERTICES, SimilarityTable, TransitionOptions, VELOCITY_SECONDS,
-};
+pub use super::motion_space::{MotionSpace, SpaceParts};
+use super::params::{ParamMap, Parameter, RootSteps, WEIGHT_STEP, measure};
+use super::transition::{RefFeatures, SimilarityTable, TransitionOptions};
 use crate::db::{MANIFEST, Manifest, SpaceEntry};
 use crate::mesh::Mesh;
 use crate::mesh::blend::Blender;
@@ -28,153 +27,6 @@ pub struct MotionOptions {
     pub hybrid: HybridOptions,
     /// Transition search options.
     pub transition: TransitionOptions,
-}
-
-/// One motion space.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct MotionSpace {
-    /// Name.
-    pub name: String,
-    /// Its sequences, in blend order (weight coordinate `u = i` is sequence `i`).
-    pub sequences: Vec<String>,
-    /// Its parameters; the first is blended, a later `turn` steers.
-    pub parameters: Vec<Parameter>,
-    /// The time alignment of the sequences.
-    pub alignment: Alignment,
-    /// The hybrid blend (reference blocks are stored apart in the cache).
-    #[serde(skip)]
-    pub blend: HybridBlend,
-    /// Reference weights per pair (mirrors `blend.pairs`, for the cache).
-    pub pairs: Vec<super::hybrid::PairRefs>,
-    /// Root motion of each sequence on the phase grid.
-    pub steps: Vec<RootSteps>,
-    /// The inverse map of the first parameter.
-    pub axis: Option<ParamMap>,
-    /// `(u, speed m/s, turn deg/s)` at weight step 0.05.
-    pub measured: Vec<[f64; 3]>,
-    /// Hybrid tolerance used (metres).
-    pub epsilon: f64,
-}
-
-impl MotionSpace {
-    /// Largest weight coordinate (`N − 1`).
-    pub fn u_max(&self) -> f64 {
-        self.sequences.len().saturating_sub(1) as f64
-    }
-
-    /// Phase samples per cycle.
-    pub fn grid(&self) -> usize {
-        self.alignment.grid
-    }
-
-    /// The measured `[speed, turn]` at `u` (interpolated from the samples).
-    pub fn measured_at(&self, u: f64) -> [f64; 2] {
-        let s = &self.measured;
-        if s.len() < 2 {
-            return s.first().map_or([0.0; 2], |m| [m[1], m[2]]);
-        }
-        let x = (u / WEIGHT_STEP).clamp(0.0, (s.len() - 1) as f64);
-        let k = (x.floor() as usize).min(s.len() - 2);
-        let t = x - k as f64;
-        [
-            s[k][1] + (s[k + 1][1] - s[k][1]) * t,
-            s[k][2] + (s[k + 1][2] - s[k][2]) * t,
-        ]
-    }
-
-    /// The references `(u, block)` sorted by weight coordinate.
-    pub fn references(&self) -> Vec<(f64, usize)> {
-        if self.pairs.is_empty() {
-            return vec![(0.0, 0)];
-        }
-        let mut out = Vec::new();
-        for (a, p) in self.pairs.iter().enumerate() {
-            for (k, (&w, &b)) in p.weights.iter().zip(&p.blocks).enumerate() {
-                if a > 0 && k == 0 {
-                    continue;
-                }
-                out.push((a as f64 + w, b));
-            }
-        }
-        out
-    }
-
-    /// The blended root step at phase sample `k` and weight `u`.
-    #[inline]
-    pub fn step(&self, u: f64, k: usize) -> [f64; 4] {
-        blended_step(&self.steps, u, k)
-    }
-
-    /// Plays `frames` frames from `phase` (grid units) at weight `u`:
-    /// the new phase and the root motion `(x, z, dθ)` in the body frame at
-    /// the start. Integrates step by step (a step's travel spread over its
-    /// duration), so steps the time warp made short are passed through,
-    /// not skipped.
-    pub fn play_phase(&self, u: f64, phase: f64, frames: f64) -> (f64, [f64; 3]) {
-        let k = self.grid();
-        let mut p = phase.rem_euclid(k as f64);
-        let mut left = frames;
-        let mut acc = [0.0; 3];
-        for _ in 0..4 * k + 4 {
-            if left <= 1e-12 {
-                break;
-            }
-            let i = (p.floor() as usize).min(k - 1);
-            let [x, z, dh, d] = self.step(u, i);
-            let rest = (i + 1) as f64 - p;
-            let need = rest * d;
-            let (take, dp) = if need <= left {
-                (rest, need)
-            } else {
-                (left / d.max(1e-12), left)
-            };
-            let take = take.min(rest);
-            acc[0] += x * take;
-            acc[1] += z * take;
-            acc[2] += dh * take;
-            left -= dp;
-            p += take;
-            if p >= (i + 1) as f64 - 1e-12 {
-                p = ((i + 1) % k) as f64;
-            }
-        }
-        (p, acc)
-    }
-
-    /// The similarity features of the references ([`super::transition`]).
-    pub fn ref_features(&self, fps: f64) -> RefFeatures {
-        let n = self.blend.n;
-        let stride = n.div_ceil(SIMILARITY_VERTICES).max(1);
-        let k = self.grid();
-        let refs = self.references();
-        let feats = refs
-            .iter()
-            .map(|&(u, b)| {
-                let block = &self.blend.blocks[b];
-                (0..k)
-                    .map(|i| {
-                        let j = (i + 1) % k;
-                        let scale = VELOCITY_SECONDS * fps / self.step(u, i)[3].max(1e-6);
-                        let mut f = Vec::with_capacity(6 * n.div_ceil(stride));
-                        for v in (0..n).step_by(stride) {
-                            for c in 0..3 {
-                                f.push(block[(i * n + v) * 3 + c]);
-                            }
-                            for c in 0..3 {
-                                let d = block[(j * n + v) * 3 + c] - block[(i * n + v) * 3 + c];
-                                f.push((d as f64 * scale) as f32);
-                            }
-                        }
-                        f
-                    })
-                    .collect()
-            })
-            .collect();
-        RefFeatures {
-            u: refs.iter().map(|r| r.0).collect(),
-            feats,
-        }
-    }
 }
 
 /// The parametric model of a database: its spaces and the similarity
@@ -387,18 +239,18 @@ fn build_space(
             [u, s, t]
         })
         .collect();
-    Ok(MotionSpace {
+    let parts = SpaceParts {
         name: sp.name.clone(),
         sequences: sp.sequences.clone(),
         parameters,
         alignment,
         pairs: blend.pairs.clone(),
-        blend,
         steps,
         axis,
         measured,
         epsilon,
-    })
+    };
+    MotionSpace::new(parts, blend).map_err(|e| ctx.space_err(&sp.name, e))
 }
 
 /// Step 3 of [`Motion::build`]: the reference similarity tables between
@@ -476,7 +328,7 @@ impl Motion {
 
     /// The index of the space called `name`.
     pub fn space_index(&self, name: &str) -> Option<usize> {
-        self.spaces.iter().position(|s| s.name == name)
+        self.spaces.iter().position(|s| s.name() == name)
     }
 
     /// The similarity table from space `s` to space `t`.
@@ -489,31 +341,31 @@ impl Motion {
         self.spaces
             .iter()
             .map(|s| SpaceSummary {
-                name: s.name.clone(),
-                sequences: s.sequences.clone(),
-                cycles: s.alignment.cycles.iter().map(|c| c.period).collect(),
-                cyclic: s.alignment.cycles.iter().map(|c| c.cyclic).collect(),
-                alignment_rms_m: s.alignment.cost.clone(),
+                name: s.name().to_owned(),
+                sequences: s.sequences().to_owned(),
+                cycles: s.alignment().cycles.iter().map(|c| c.period).collect(),
+                cyclic: s.alignment().cycles.iter().map(|c| c.cyclic).collect(),
+                alignment_rms_m: s.alignment().cost.clone(),
                 phase_samples: s.grid(),
-                references: s.blend.pairs.iter().map(|p| p.weights.clone()).collect(),
+                references: s.blend().pairs.iter().map(|p| p.weights.clone()).collect(),
                 hybrid_max_error_mm: s
-                    .blend
+                    .blend()
                     .pairs
                     .iter()
                     .map(|p| p.max_error * 1e3)
                     .fold(0.0, f64::max),
-                epsilon_mm: s.epsilon * 1e3,
-                correction_bytes: s.blend.correction_bytes(),
+                epsilon_mm: s.epsilon() * 1e3,
+                correction_bytes: s.blend().correction_bytes(),
                 ranges: s
-                    .parameters
+                    .parameters()
                     .iter()
                     .enumerate()
                     .map(|(i, p)| {
                         let idx = if *p == Parameter::Speed { 1 } else { 2 };
-                        let (lo, hi) = match (&s.axis, i) {
+                        let (lo, hi) = match (&s.axis(), i) {
                             (Some(a), 0) => (a.range[0], a.range[1]),
                             _ => s
-                                .measured
+                                .measured()
                                 .iter()
                                 .map(|m| m[idx])
                                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
@@ -525,15 +377,13 @@ impl Motion {
                             blended: i == 0,
                             min: lo,
                             max: hi,
-                            fit: s.axis.as_ref().filter(|_| i == 0).map(|a| a.fit),
-                            roundtrip_error: s.axis.as_ref().filter(|_| i == 0).map(|a| {
-                                match a.fit {
-                                    super::params::FitKind::Quadratic => a.error_quadratic,
-                                    super::params::FitKind::Table => a.error_table,
-                                }
+                            fit: s.axis().filter(|_| i == 0).map(|a| a.fit),
+                            roundtrip_error: s.axis().filter(|_| i == 0).map(|a| match a.fit {
+                                super::params::FitKind::Quadratic => a.error_quadratic,
+                                super::params::FitKind::Table => a.error_table,
                             }),
                             quadratic_error: s
-                                .axis
+                                .axis()
                                 .as_ref()
                                 .filter(|_| i == 0)
                                 .map(|a| a.error_quadratic),

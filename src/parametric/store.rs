@@ -11,7 +11,7 @@
 //! a warning.
 
 use super::ParamError;
-use super::space::{Motion, MotionOptions, MotionSpace};
+use super::space::{Motion, MotionOptions, MotionSpace, SpaceParts};
 use super::transition::SimilarityTable;
 use crate::db::cache::{KeyHasher, cache_dir, frames_key};
 use crate::db::{DbError, Manifest};
@@ -28,10 +28,10 @@ pub fn cache_path(dir: &Path) -> PathBuf {
     cache_dir(dir).join("parametric.bin")
 }
 
-#[derive(Serialize, Deserialize)]
+#[derive(Deserialize)]
 struct Header {
     fps: f64,
-    spaces: Vec<MotionSpace>,
+    spaces: Vec<SpaceParts>,
     tables: Vec<SimilarityTable>,
     options: MotionOptions,
 }
@@ -74,7 +74,7 @@ pub fn save(path: &Path, key: u64, motion: &Motion) -> Result<(), ParamError> {
             Ok(())
         };
         for s in &motion.spaces {
-            for b in &s.blend.blocks {
+            for b in &s.blend().blocks {
                 put(b)?;
             }
         }
@@ -113,10 +113,11 @@ pub fn parse(
     let n = topology.vertex_count();
     // What is left after the header: every block below must fit it.
     let body = bytes.len().saturating_sub(24 + hl);
-    let mut spaces = header.spaces;
-    for s in &mut spaces {
-        read_space_blocks(&mut r, s, n, body)?;
-    }
+    let spaces = header
+        .spaces
+        .into_iter()
+        .map(|s| read_space_blocks(&mut r, s, n, body))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut tables = header.tables;
     read_tables(&mut r, &mut tables, &spaces, body)?;
     Ok(Motion {
@@ -199,26 +200,24 @@ fn read_header(r: &mut Cursor, key: u64, opts: &MotionOptions) -> Result<(Header
     Ok((header, hl))
 }
 
-/// Step 2 of [`parse`], per space: its reference blocks (a phase grid of
-/// `n` vertices each, every count checked against the `body` bytes after
-/// the header before anything is allocated), then its blend.
+/// Step 2 of [`parse`], per space: its parts checked
+/// ([`SpaceParts::check`]), its reference blocks (a phase grid of `n`
+/// vertices each, every count checked against the `body` bytes after the
+/// header before anything is allocated), then the space made from both
+/// ([`MotionSpace::new`]).
 fn read_space_blocks(
     r: &mut Cursor,
-    s: &mut MotionSpace,
+    s: SpaceParts,
     n: usize,
     body: usize,
-) -> Result<(), String> {
+) -> Result<MotionSpace, String> {
+    let named = |e: String| format!("space '{}': {e}", s.name);
     let k = s.alignment.grid;
     let per_block = k
         .checked_mul(n)
         .and_then(|x| x.checked_mul(3))
         .filter(|&x| x > 0 && x <= body / 4)
-        .ok_or_else(|| {
-            format!(
-                "space '{}': a phase grid of {k} samples does not fit the file",
-                s.name
-            )
-        })?;
+        .ok_or_else(|| named(format!("a phase grid of {k} samples does not fit the file")))?;
     let blocks = s
         .pairs
         .iter()
@@ -229,46 +228,23 @@ fn read_space_blocks(
     // Each block is a count and its values: more than the bytes left
     // can hold is a lie, refused before anything is allocated for it.
     if blocks > body / (8 + 4 * per_block) {
-        return Err(format!(
-            "space '{}': {blocks} reference blocks of {per_block} values do not fit the file",
-            s.name
-        ));
+        return Err(named(format!(
+            "{blocks} reference blocks of {per_block} values do not fit the file"
+        )));
     }
-    if s.sequences.is_empty()
-        || s.steps.len() != s.sequences.len()
-        || s.pairs.len() + 1 != s.sequences.len()
-        || s.steps
-            .iter()
-            .any(|r| r.step.len() != k || r.duration.len() != k)
-    {
-        return Err(format!("space '{}': inconsistent header", s.name));
-    }
-    for (i, p) in s.pairs.iter().enumerate() {
-        let ordered = p
-            .weights
-            .windows(2)
-            .all(|w| w[0] <= w[1] && (0.0..=1.0).contains(&w[0]))
-            && p.weights.last().is_some_and(|w| (0.0..=1.0).contains(w));
-        if p.weights.len() < 2 || p.weights.len() != p.blocks.len() || !ordered {
-            return Err(format!(
-                "space '{}', pair {i}: {} reference weights for {} blocks (at least 2, in [0, 1], increasing)",
-                s.name,
-                p.weights.len(),
-                p.blocks.len()
-            ));
-        }
-    }
+    s.check().map_err(named)?;
     let mut out = Vec::with_capacity(blocks);
     for b in 0..blocks {
-        out.push(r.floats(per_block, &format!("space '{}' block {b}", s.name))?);
+        out.push(r.floats(per_block, &named(format!("block {b}")))?);
     }
-    s.blend = super::hybrid::HybridBlend {
+    let blend = super::hybrid::HybridBlend {
         n,
         grid: k,
         blocks: out,
         pairs: s.pairs.clone(),
     };
-    Ok(())
+    let name = s.name.clone();
+    MotionSpace::new(s, blend).map_err(|e| format!("space '{name}': {e}"))
 }
 
 /// Step 3 of [`parse`]: the similarity tables, one per ordered pair of
@@ -291,7 +267,7 @@ fn read_tables(
         let consistent = if diagonal {
             t.ks == 0 && t.kt == 0
         } else {
-            t.ks == src.alignment.grid && t.kt == tgt.alignment.grid
+            t.ks == src.alignment().grid && t.kt == tgt.alignment().grid
         };
         let expect =
             t.us.len()

@@ -249,28 +249,34 @@ fn space_table(dir: &Path, g: &mut Geometry) -> Result<Vec<SiteSpace>, WebError>
     let summary = motion.summary();
     let mut out = Vec::with_capacity(motion.spaces.len());
     for (s, sum) in motion.spaces.iter().zip(summary) {
-        if s.blend.n != g.vertices {
+        if s.blend().n != g.vertices {
             return Err(WebError::Io {
                 path: dir.to_path_buf(),
                 msg: format!(
                     "space '{}': {} vertices, the topology has {}",
-                    s.name, s.blend.n, g.vertices
+                    s.name(),
+                    s.blend().n,
+                    g.vertices
                 ),
             });
         }
         let first = g.sequences.len();
-        for b in &s.blend.blocks {
+        for b in &s.blend().blocks {
             g.sequences
                 .push(b.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect());
         }
         out.push(SiteSpace {
-            name: s.name.clone(),
-            sequences: s.sequences.clone(),
-            parameters: s.parameters.iter().map(|p| p.name().to_string()).collect(),
+            name: s.name().to_owned(),
+            sequences: s.sequences().to_owned(),
+            parameters: s
+                .parameters()
+                .iter()
+                .map(|p| p.name().to_string())
+                .collect(),
             grid: s.grid(),
             fps: motion.fps,
             pairs: s
-                .blend
+                .blend()
                 .pairs
                 .iter()
                 .map(|p| SitePair {
@@ -280,7 +286,7 @@ fn space_table(dir: &Path, g: &mut Geometry) -> Result<Vec<SiteSpace>, WebError>
                 .collect(),
             first_block: first,
             steps: s
-                .steps
+                .steps()
                 .iter()
                 .map(|r| {
                     r.step
@@ -290,8 +296,8 @@ fn space_table(dir: &Path, g: &mut Geometry) -> Result<Vec<SiteSpace>, WebError>
                         .collect()
                 })
                 .collect(),
-            measured: s.measured.clone(),
-            axis: s.axis.clone(),
+            measured: s.measured().to_owned(),
+            axis: s.axis().cloned(),
             ranges: sum.ranges.iter().map(|r| [r.min, r.max]).collect(),
         });
     }

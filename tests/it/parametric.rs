@@ -115,19 +115,19 @@ fn hybrid_blending_is_exact_at_references_and_within_epsilon_between() {
     let m = motion();
     let blender = Blender::new(&m.topology).unwrap();
     for s in &m.spaces {
-        let worst = check_hybrid(&s.blend, &blender, s.epsilon);
+        let worst = check_hybrid(s.blend(), &blender, s.epsilon());
         eprintln!(
             "{}: {} intermediate references, worst {:.2} mm (ε {:.0} mm), {} bytes",
-            s.name,
-            s.blend.intermediate_count(),
+            s.name(),
+            s.blend().intermediate_count(),
             worst * 1e3,
-            s.epsilon * 1e3,
-            s.blend.correction_bytes()
+            s.epsilon() * 1e3,
+            s.blend().correction_bytes()
         );
     }
     // Walk and run differ enough that linear blending alone misses ε.
     let loco = &m.spaces[m.space_index("locomotion").unwrap()];
-    assert!(loco.blend.intermediate_count() >= 1);
+    assert!(loco.blend().intermediate_count() >= 1);
 }
 
 /// The real samba capture: frames 0-9 against frames 60-69 as two
@@ -176,30 +176,30 @@ fn inverse_map_round_trips_and_the_controller_achieves_it() {
     let turning = m.space_index("turning").unwrap();
     for (s, idx, tol) in [(loco, 0, 0.01), (turning, 1, 0.5)] {
         let sp = &m.spaces[s];
-        let map = sp.axis.as_ref().unwrap();
+        let map = sp.axis().unwrap();
         let [lo, hi] = map.range;
         for i in 0..=10 {
             let p = lo + (hi - lo) * i as f64 / 10.0;
             let (u, clamped) = map.inverse(p);
             assert!(!clamped);
-            let back = measure(&sp.steps, u, m.fps)[idx];
+            let back = measure(sp.steps(), u, m.fps)[idx];
             let e = if idx == 0 {
                 (back - p).abs() / p
             } else {
                 (back - p).abs()
             };
-            assert!(e <= tol, "{}: {p} → w {u} → {back}", sp.name);
+            assert!(e <= tol, "{}: {p} → w {u} → {back}", sp.name());
         }
     }
     // Known parameters: the procedural walk is 1.4 m/s on a 1.75 m
     // skeleton, the run 3.2 m/s; the turn 0.7 rad/s (40°/s).
     let sp = &m.spaces[loco];
-    let [lo, hi] = sp.axis.as_ref().unwrap().range;
+    let [lo, hi] = sp.axis().unwrap().range;
     assert!(
         lo > 0.8 && lo < 1.6 && hi > 2.0 && hi < 3.6,
         "speed range {lo}..{hi}"
     );
-    let tr = m.spaces[turning].axis.as_ref().unwrap().range;
+    let tr = m.spaces[turning].axis().unwrap().range;
     assert!(
         tr[0].abs() < 1.0 && (tr[1] - 40.1).abs() < 3.0,
         "turn range {tr:?}"
@@ -535,6 +535,79 @@ fn tampered(bytes: &[u8], f: impl Fn(&mut serde_json::Value)) -> Vec<u8> {
     out.extend_from_slice(&h);
     out.extend_from_slice(&bytes[24 + hl..]);
     out
+}
+
+/// Issue 40 (validated constructors): a motion space is made only through
+/// `MotionSpace::new`, which checks that its parts agree. Every space of
+/// the gaits model goes back through it from its serialised parts (the
+/// cache's header) unchanged; each kind of disagreement — a root track
+/// missing, a track off the phase grid, a blend on another grid, a block
+/// cut short, a pair naming a block the blend lacks, weights out of
+/// order, a parameter without its inverse map, a non-finite measurement —
+/// is refused with what disagrees, for every space.
+#[test]
+fn a_motion_space_is_made_only_from_parts_that_agree() {
+    use surfmotion::parametric::{MotionSpace, motion_space::SpaceParts};
+    type Tamper = fn(&mut SpaceParts, &mut HybridBlend);
+    let parts_of = |s: &MotionSpace| -> SpaceParts {
+        serde_json::from_value(serde_json::to_value(s).unwrap()).unwrap()
+    };
+    let cases: [(&str, Tamper, &str); 8] = [
+        (
+            "a root track missing",
+            |p, _| p.steps.truncate(0),
+            "root tracks",
+        ),
+        (
+            "a track off the grid",
+            |p, _| p.steps[0].duration.truncate(1),
+            "root tracks",
+        ),
+        ("a blend on another grid", |_, b| b.grid += 1, "blend"),
+        ("a block cut short", |_, b| b.blocks[0].truncate(3), "blend"),
+        (
+            "a pair naming a missing block",
+            |p, b| {
+                let last = p.pairs[0].blocks.len() - 1;
+                p.pairs[0].blocks[last] = 1 << 20;
+                b.pairs = p.pairs.clone();
+            },
+            "blend",
+        ),
+        (
+            "weights out of order",
+            |p, _| p.pairs[0].weights.reverse(),
+            "reference weights",
+        ),
+        (
+            "a parameter without its map",
+            |p, _| p.axis = None,
+            "inverse map",
+        ),
+        (
+            "a measurement not finite",
+            |p, _| p.measured[0][1] = f64::NAN,
+            "not finite",
+        ),
+    ];
+    for s in &motion().spaces {
+        assert!(!s.parameters().is_empty() && !s.sequences().is_empty());
+        let again = MotionSpace::new(parts_of(s), s.blend().clone()).unwrap();
+        assert_eq!(
+            &again,
+            s,
+            "space '{}' changed on its way through new()",
+            s.name()
+        );
+        for (what, tamper, words) in &cases {
+            let (mut p, mut b) = (parts_of(s), s.blend().clone());
+            tamper(&mut p, &mut b);
+            match MotionSpace::new(p, b) {
+                Ok(_) => panic!("space '{}', {what}: accepted", s.name()),
+                Err(why) => assert!(why.contains(words), "space '{}', {what}: {why}", s.name()),
+            }
+        }
+    }
 }
 
 /// Regression (issue 46, items 6 and 12): a `parametric.bin` whose header

@@ -302,20 +302,20 @@ fn exported_space_carries_the_hybrid_references_and_parameter_map() {
     assert_eq!(sp.name, "locomotion");
     assert_eq!(sp.parameters, ["speed", "turn"]);
     assert_eq!(sp.grid, model.grid());
-    assert_eq!(sp.axis.as_ref(), model.axis.as_ref());
+    assert_eq!(sp.axis.as_ref(), model.axis());
     let range = sp.ranges[0];
     assert!(range[1] - range[0] > 0.5, "speed range {range:?}");
     assert_eq!(r.spaces, 1);
-    assert_eq!(r.space_frames, model.blend.blocks.len() * model.grid());
+    assert_eq!(r.space_frames, model.blend().blocks.len() * model.grid());
     let d = codec::decode(&std::fs::read(site.join("character.sm4d")).unwrap()).unwrap();
     assert_eq!(d.sequences.len(), m.geometry_sequences);
     let n = d.vertices;
     let mut checked = 0;
-    for (pair, mp) in sp.pairs.iter().zip(&model.blend.pairs) {
+    for (pair, mp) in sp.pairs.iter().zip(&model.blend().pairs) {
         assert_eq!(pair.weights, mp.weights);
         for (&g, &b) in pair.blocks.iter().zip(&mp.blocks) {
             let got: Vec<[f32; 3]> = d.sequences[g].iter().map(|q| d.position(*q)).collect();
-            let want: Vec<[f32; 3]> = model.blend.blocks[b]
+            let want: Vec<[f32; 3]> = model.blend().blocks[b]
                 .chunks_exact(3)
                 .map(|c| [c[0], c[1], c[2]])
                 .collect();
