@@ -247,7 +247,7 @@ impl Character {
     /// The lowest Y of frame `id` (metres), kept with the frame cache so
     /// that no scan of every frame is needed.
     pub fn lowest(&self, id: FlatFrame) -> f64 {
-        self.frames.lowest(id.get())
+        self.frames.lowest(id)
     }
 
     /// Vertices per frame.
@@ -339,7 +339,7 @@ impl Character {
 
     /// Frame `id`'s positions (metres, Y-up, `n` of them).
     pub fn frame(&self, id: FlatFrame) -> &[[f64; 3]] {
-        self.frames.frame(id.get())
+        self.frames.frame(id)
     }
 
     /// Frame `id`'s positions in metres, Y-up, copied to `out` (kept for

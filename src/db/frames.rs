@@ -18,6 +18,7 @@ use super::cache::{KeyHasher, add_rig, cache_dir, frames_key};
 use super::manifest::{DbError, MANIFEST, Manifest};
 use crate::embed::Embedding;
 use crate::embed::frames::{SkeletonKind, poses, rigid_fit};
+use crate::graph::FlatFrame;
 use crate::mocap::units::y_up;
 use crate::pose::Pose;
 use crate::util::fsutil::{FsError, write_atomic};
@@ -263,12 +264,12 @@ impl FrameStore {
     }
 
     /// Frame `id`'s positions (`n` of them).
-    pub fn frame(&self, id: u32) -> &[[f64; 3]] {
-        let (a, b) = (id as usize * self.n, (id as usize + 1) * self.n);
+    pub fn frame(&self, id: FlatFrame) -> &[[f64; 3]] {
+        let (a, b) = (id.index() * self.n, (id.index() + 1) * self.n);
         match &self.backing {
             Backing::Owned(f, _) => &f[a..b],
             Backing::Mapped(_) => {
-                assert!((id as usize) < self.count, "frame {id} of {}", self.count);
+                assert!(id.index() < self.count, "frame {id} of {}", self.count);
                 self.mapped_xyz(HEADER + a * 24, self.n).unwrap_or(&[])
             }
         }
@@ -296,11 +297,11 @@ impl FrameStore {
 
     /// The lowest Y of frame `id` (metres; +∞ for a frame without
     /// vertices), kept beside the frames so that no scan reads them all.
-    pub fn lowest(&self, id: u32) -> f64 {
+    pub fn lowest(&self, id: FlatFrame) -> f64 {
         match &self.backing {
-            Backing::Owned(_, lows) => lows[id as usize],
+            Backing::Owned(_, lows) => lows[id.index()],
             Backing::Mapped(_) => self
-                .mapped_f64(HEADER + self.count * self.n * 24 + id as usize * 8, 1)
+                .mapped_f64(HEADER + self.count * self.n * 24 + id.index() * 8, 1)
                 .map_or(f64::INFINITY, |v| v[0]),
         }
     }
