@@ -155,15 +155,16 @@ fn init_in(
     let mut o = opts.clone();
     let mut auto = None;
     let mut file = None;
-    // The automatic rig's rest frame is chosen by pose (the one its parts
-    // were found on, whatever frame the capture starts with); landmarks
-    // marked on the topology keep a clear topology.
-    let mut rule = RestOptions::default();
+    // The rest frame's rule. `RestOptions::by_pose` (the same frame
+    // whatever frame the capture starts with) is not on: on samba it chose
+    // frame 87 (the still start's arms hang within the near slack of the
+    // skirt) and the rig embedded there warned of feet turned backwards
+    // and ankles, toes and wrists 10-12 % apart (session 25).
+    let rule = RestOptions::default();
     if wants_auto {
         // Every file read and checked first, refused with the words of a
         // database without a rig; then the rig is found from the capture.
         assemble_setup(dir, opts, &mut Vec::new())?;
-        rule.by_pose = true;
         let (rig, f) = write_auto_landmarks(dir, &mut o, &setup.auto, &rule, written, &mut notes)?;
         auto = Some(rig);
         file = Some(f);
