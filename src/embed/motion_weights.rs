@@ -45,8 +45,7 @@ pub struct MotionWeightOptions {
     /// Parts with a heat weight below this are no candidates (the parent of
     /// the vertex's heaviest part always is). Default 0.005.
     pub min_heat: f64,
-    /// The most frames used (chosen by pose when there are more, see
-    /// `by_pose`). Default 120.
+    /// The most frames used (evenly spread over those given). Default 120.
     pub max_frames: usize,
     /// A vertex keeps bone heat's part label while its fitted weight on
     /// that part is at least this ([`motion_labels`]). Default 0.25.
@@ -113,7 +112,8 @@ pub fn refine(
 ) -> MotionWeightReport {
     let n = rest.len();
     let usable: Vec<&[[f64; 3]]> = frames.iter().copied().filter(|f| f.len() == n).collect();
-    let used = by_pose(rest, usable, opts.max_frames);
+    let step = usable.len().div_ceil(opts.max_frames.max(1)).max(1);
+    let used: Vec<&[[f64; 3]]> = usable.into_iter().step_by(step).collect();
     if used.is_empty() || w.len() != n || labels.len() != n {
         return MotionWeightReport::default();
     }
@@ -149,24 +149,6 @@ pub fn refine(
         w[v] = new;
     }
     report
-}
-
-/// All of `frames` when they are at most `max` (in their order), else `max`
-/// of them chosen by pose, farthest-point first from `rest`
-/// ([`super::pose_order::farthest_first`]): the fit does not depend on
-/// the order the frames come in (they were every k-th in the order given:
-/// samba started at frame 155 fitted the odd frames, the clear order the
-/// even ones).
-fn by_pose<'a>(rest: &[[f64; 3]], frames: Vec<&'a [[f64; 3]]>, max: usize) -> Vec<&'a [[f64; 3]]> {
-    use super::pose_order::{descriptor, farthest_first};
-    if frames.len() <= max.max(1) {
-        return frames;
-    }
-    let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
-    farthest_first(&descs, &descriptor(rest), max.max(1))
-        .into_iter()
-        .map(|f| frames[f])
-        .collect()
 }
 
 /// The part labels after the fit: bone heat's label `heat_labels[v]`
