@@ -107,8 +107,8 @@ fn orders_agree(
         ));
     }
     let mut failures = Vec::new();
-    let variants: [(fn([f64; 3]) -> [f64; 3], bool, &str); 2] =
-        [(same, false, ""), (mirror, true, " mirrored")];
+    type Map = fn([f64; 3]) -> [f64; 3];
+    let variants: [(Map, bool, &str); 2] = [(same, false, ""), (mirror, true, " mirrored")];
     for (map, flip, how) in variants {
         let own: Vec<usize> = (0..n).collect();
         let (rest_a, a) = rig_in_order(mesh, frames, &own, map, flip);
