@@ -156,11 +156,11 @@ fn rig_as_db_init(
     mesh: &Mesh,
     frames: &[&[[f64; 3]]],
 ) -> Result<surfmotion::embed::auto::report::AutoRig, surfmotion::embed::auto::options::AutoError> {
-    use surfmotion::embed::rest::{RestOptions, choose_rest_frame};
+    use surfmotion::embed::rest::choose_rest_frame;
     let mut all = vec![mesh.positions()];
     all.extend_from_slice(frames);
-    let rest = choose_rest_frame(mesh, &all, &RestOptions::default())
-        .and_then(|c| (c.frame > 0).then(|| c.frame - 1));
+    let rest =
+        choose_rest_frame(mesh, &all, &by_pose()).and_then(|c| (c.frame > 0).then(|| c.frame - 1));
     let opts = AutoOptions {
         rest_frame: rest,
         ..AutoOptions::default()
@@ -168,13 +168,21 @@ fn rig_as_db_init(
     auto_rig(mesh, frames, &opts)
 }
 
+/// `db init`'s rule for the automatic rig: the rest frame by pose.
+fn by_pose() -> surfmotion::embed::rest::RestOptions {
+    surfmotion::embed::rest::RestOptions {
+        by_pose: true,
+        ..Default::default()
+    }
+}
+
 /// The rest frame `db init` chooses over the topology's positions and
 /// `frames` (an index into `frames`; `None`: the topology's), and why.
 fn rest_as_db_init(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> (Option<usize>, String) {
-    use surfmotion::embed::rest::{RestOptions, choose_rest_frame};
+    use surfmotion::embed::rest::choose_rest_frame;
     let mut all = vec![mesh.positions()];
     all.extend_from_slice(frames);
-    match choose_rest_frame(mesh, &all, &RestOptions::default()) {
+    match choose_rest_frame(mesh, &all, &by_pose()) {
         Some(c) => ((c.frame > 0).then(|| c.frame - 1), c.why),
         None => (None, String::new()),
     }
@@ -202,6 +210,19 @@ fn embed_as_db_init(
 /// parts agreeing, and the rest frame chosen (as a frame of the clear
 /// order). `mirror` mirrors both orders' frames (x → −x) first.
 fn contact_first(mesh: &Mesh, frames: &[&[[f64; 3]]], first: usize, mirror: bool) {
+    let nf = frames.len();
+    let order: Vec<usize> = (0..nf).map(|k| (first + k) % nf).collect();
+    let what = format!(
+        "samba{}, frame {first} first",
+        if mirror { " mirrored" } else { "" }
+    );
+    reordered(mesh, frames, &order, &what, mirror);
+}
+
+/// [`contact_first`] for any `order` of the frames (`order[k]`: the
+/// original frame given k-th; its first the topology), named `what`.
+fn reordered(mesh: &Mesh, frames: &[&[[f64; 3]]], order: &[usize], what: &str, mirror: bool) {
+    let first = order[0];
     let flip = |f: &[[f64; 3]]| -> Vec<[f64; 3]> {
         f.iter()
             .map(|q| if mirror { [-q[0], q[1], q[2]] } else { *q })
@@ -219,12 +240,7 @@ fn contact_first(mesh: &Mesh, frames: &[&[[f64; 3]]], first: usize, mirror: bool
     ) else {
         return;
     };
-    let nf = frames.len();
-    let moved: Vec<&[[f64; 3]]> = (0..nf).map(|k| frames[(first + k) % nf]).collect();
-    let what = format!(
-        "samba{}, frame {first} first",
-        if mirror { " mirrored" } else { "" }
-    );
+    let moved: Vec<&[[f64; 3]]> = order.iter().map(|&k| frames[k]).collect();
     let (rest_a, _) = rest_as_db_init(&mesh, &frames);
     let (rest_b, why) = rest_as_db_init(&cmesh, &moved);
     let rig = |m: &Mesh, f: &[&[[f64; 3]]], r: Option<usize>| {
@@ -249,7 +265,9 @@ fn contact_first(mesh: &Mesh, frames: &[&[[f64; 3]]], first: usize, mirror: bool
         println!("| {what} | embedding refused |");
         return;
     };
-    let original = |r: Option<usize>, first: usize| r.map_or(first, |r| (first + r) % nf);
+    // As frames of the clear order (the topology: its first frame).
+    let original = |r: Option<usize>| r.map_or(first, |r| order[r]);
+    let clear_rest = rest_a.unwrap_or(0);
     // `a` is a clear-order rig (its joints on frame 0), `b` one whose
     // joints are on frame `first` (`b_first`) or on frame 0.
     let row3 = |case: &str, a: &Embedding, b: &Embedding, b_first: bool| {
@@ -273,8 +291,8 @@ fn contact_first(mesh: &Mesh, frames: &[&[[f64; 3]]], first: usize, mirror: bool
             wd,
             100.0 * agree(&a.labels, &b.labels),
             contact.confidence,
-            original(rest_b, first),
-            original(rest_a, 0),
+            original(rest_b),
+            clear_rest,
         );
     };
     let row = |case: &str, a: &Embedding, b: &Embedding| row3(case, a, b, true);
@@ -303,7 +321,7 @@ fn contact_first(mesh: &Mesh, frames: &[&[[f64; 3]]], first: usize, mirror: bool
     }
     // (2) The clear order rigged and embedded on the contact order's rest
     // frame: what the rest frame alone changes.
-    let r = original(rest_b, first);
+    let r = original(rest_b);
     if let Ok(same) = rig(&mesh, &frames, Some(r))
         && let Some(s) = embed_as_db_init(&mesh, &frames, Some(r), &same.landmarks)
     {
@@ -347,6 +365,52 @@ fn contact(data: &Path, starts: &[usize]) {
         for mirror in [false, true] {
             contact_first(&mesh, &frames, f, mirror);
         }
+    }
+}
+
+/// A fixed shuffle of `0..n` (xorshift; the same every run).
+fn shuffled(n: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut x = 0x2545_F491_4F6C_DD1Du64;
+    for i in (1..n).rev() {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        order.swap(i, (x % (i as u64 + 1)) as usize);
+    }
+    order
+}
+
+/// `orders`: samba's frames reversed and shuffled, plain and mirrored,
+/// against the clear order (the rig must not depend on the order).
+fn orders(data: &Path) {
+    let pc2 = data.join("4d/samba/samba.pc2");
+    let Ok(seq) = load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()) else {
+        println!("no samba at {}", pc2.display());
+        return;
+    };
+    let mesh = seq.mesh().clone();
+    let frames: Vec<&[[f64; 3]]> = (0..seq.frame_count()).map(|f| seq.frame(f)).collect();
+    let nf = frames.len();
+    println!("| case | joints (% height, mean) | worst joint | parts agree | confidence | rest |");
+    println!("|---|---|---|---|---|---|");
+    let reversed: Vec<usize> = (0..nf).rev().collect();
+    for mirror in [false, true] {
+        let m = if mirror { " mirrored" } else { "" };
+        reordered(
+            &mesh,
+            &frames,
+            &reversed,
+            &format!("samba{m} reversed"),
+            mirror,
+        );
+        reordered(
+            &mesh,
+            &frames,
+            &shuffled(nf),
+            &format!("samba{m} shuffled"),
+            mirror,
+        );
     }
 }
 
@@ -472,6 +536,9 @@ fn main() {
     }
     if what == "synth" || what == "all" {
         synth(&data);
+    }
+    if what == "orders" {
+        orders(&data);
     }
     if what == "contact" {
         let starts: Vec<usize> = args[3..].iter().filter_map(|a| a.parse().ok()).collect();

@@ -160,10 +160,21 @@ pub fn assemble_setup(
     opts: &InitOptions,
     notes: &mut Vec<String>,
 ) -> Result<(Manifest, Option<RestFrame>), InitError> {
+    assemble_setup_with(dir, opts, &RestOptions::default(), notes)
+}
+
+/// [`assemble_setup`] with the rest frame chosen by `rule` (the automatic
+/// rig's: [`RestOptions::by_pose`], the frame its parts were found on).
+pub fn assemble_setup_with(
+    dir: &Path,
+    opts: &InitOptions,
+    rule: &RestOptions,
+    notes: &mut Vec<String>,
+) -> Result<(Manifest, Option<RestFrame>), InitError> {
     let mut m = manifest_of(dir, opts)?;
     let topo = check_files(dir, opts, &mut m, notes)?;
     check_sequences(dir, &m, &topo)?;
-    let rest = settle_rest(dir, opts, &mut m, &topo, notes)?;
+    let rest = settle_rest(dir, opts, rule, &mut m, &topo, notes)?;
     store_in(dir, &mut m)?;
     Ok((m, rest))
 }
@@ -288,12 +299,13 @@ fn check_files(
 fn settle_rest(
     dir: &Path,
     opts: &InitOptions,
+    rule: &RestOptions,
     m: &mut Manifest,
     topo: &Mesh,
     notes: &mut Vec<String>,
 ) -> Result<Option<RestFrame>, InitError> {
     let mut rest = if m.rig.landmarks.is_some() && !m.sequences.is_empty() {
-        choose_rest(dir, m, topo)?
+        choose_rest(dir, m, topo, rule)?
     } else {
         None
     };
@@ -394,7 +406,12 @@ fn store_in(dir: &Path, m: &mut Manifest) -> Result<(), InitError> {
 /// The rest frame over the topology's positions then every frame of every
 /// sequence ([`choose_rest_frame`]); surface distances measured on the
 /// topology.
-fn choose_rest(dir: &Path, m: &Manifest, topo: &Mesh) -> Result<Option<RestFrame>, InitError> {
+fn choose_rest(
+    dir: &Path,
+    m: &Manifest,
+    topo: &Mesh,
+    rule: &RestOptions,
+) -> Result<Option<RestFrame>, InitError> {
     let mut seqs = Vec::with_capacity(m.sequences.len());
     for s in &m.sequences {
         let q = m
@@ -410,7 +427,7 @@ fn choose_rest(dir: &Path, m: &Manifest, topo: &Mesh) -> Result<Option<RestFrame
             at.push((Some(k), f));
         }
     }
-    let Some(choice) = choose_rest_frame(topo, &frames, &RestOptions::default()) else {
+    let Some(choice) = choose_rest_frame(topo, &frames, rule) else {
         return Ok(None);
     };
     let (seq, frame) = at[choice.frame];

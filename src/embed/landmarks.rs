@@ -162,6 +162,21 @@ pub enum LandmarkError {
         /// `span` as a percentage of `height`.
         percent: f64,
     },
+    /// A landmark's point is not finite: a surface mark whose weights or
+    /// offset, finite each, overflow (±1e308).
+    #[error(
+        "landmark {key}: its point ({x}, {y}, {z}) is not finite: the mark's weights or offset are too large (weights near 0-1 that sum to 1, an offset within the body's size)"
+    )]
+    NotFinite {
+        /// The landmark.
+        key: &'static str,
+        /// The point's coordinates.
+        x: f64,
+        /// …
+        y: f64,
+        /// …
+        z: f64,
+    },
     /// A landmark lies outside the body, far from its surface.
     #[error(
         "landmark {key} is outside the mesh, {distance:.4} from its surface ({percent:.1}% of the height; the limit is {limit_percent:.0}%)"
@@ -610,6 +625,16 @@ impl Landmarks {
             .keys()
             .filter_map(|&l| self.point(l, positions).map(|p| (l, DVec3::from_array(p))))
             .collect();
+        // Before any distance: an overflowing surface mark read "inf from
+        // its surface (inf% of the height)".
+        if let Some((l, p)) = pts.iter().find(|(_, p)| !p.is_finite()) {
+            return Err(LandmarkError::NotFinite {
+                key: l.name(),
+                x: p.x,
+                y: p.y,
+                z: p.z,
+            });
+        }
         let mut widest = (0.0, Landmark::Chin, Landmark::Groin);
         for (i, (la, pa)) in pts.iter().enumerate() {
             for (lb, pb) in &pts[i + 1..] {

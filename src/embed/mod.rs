@@ -16,6 +16,7 @@ pub mod landmarks;
 pub mod midplane;
 pub mod motion_weights;
 pub mod parts;
+pub mod pose_order;
 pub mod regress;
 pub mod rest;
 pub mod rigid;

@@ -6,6 +6,12 @@
 //! nearest frame 0 in the order given (the capture's own start, usually its
 //! most neutral pose). Frame 0 is kept whenever it has no contact, so a
 //! clear capture rigs exactly as before.
+//! With [`RestOptions::by_pose`] (the automatic rig's rule) the order
+//! given plays no part: among the clearest frames, the one most standing
+//! with the limbs in ([`super::pose_order::spread`]; samba's still start).
+//! The mean pose was tried first: it chose samba's frame 119, mid-step,
+//! and the rig embedded there warned of wrists, ankles and toes 10-20 %
+//! apart.
 
 use super::contact::{ContactFinder, ContactOptions, FrameContacts};
 
@@ -23,8 +29,17 @@ pub struct RestOptions {
     /// clear as it. Default 0.01 (1 %).
     pub near_slack: f64,
     /// The most frames among the clearest whose near count is measured
-    /// (evenly spread; the first always among them). Default 24.
+    /// (evenly spread; the first always among them; with `by_pose`, the
+    /// most standing). Default 24.
     pub candidates: usize,
+    /// Choose by pose alone, never by index: among the clearest frames,
+    /// the one most standing with the limbs in
+    /// ([`super::pose_order::standing_first`]) whose near count is
+    /// within the slack, frame 0 not kept for being first. The automatic
+    /// rig's rule (its parts and joints then do not depend on the frame a
+    /// capture starts with); landmarks marked on the topology keep the
+    /// topology when it is clear. Default false.
+    pub by_pose: bool,
 }
 
 impl Default for RestOptions {
@@ -33,6 +48,7 @@ impl Default for RestOptions {
             contact: ContactOptions::default(),
             near_slack: 0.01,
             candidates: 24,
+            by_pose: false,
         }
     }
 }
@@ -58,7 +74,8 @@ pub struct RestChoice {
 /// `mesh`, in the order of the sequences; `frames[0]` is the current rest
 /// frame), with the contacts of the chosen frame and of frame 0 and a
 /// one-line reason. Surface distances are measured on `mesh`'s own
-/// positions. `None` when `frames` is empty.
+/// positions (with [`RestOptions::by_pose`], on the most standing frame).
+/// `None` when `frames` is empty.
 ///
 /// Cost: [`ContactFinder::new`] once, [`ContactFinder::find`] per frame,
 /// and [`ContactFinder::near`] on frame 0 and, when frame 0 has a contact,
@@ -68,8 +85,27 @@ pub fn choose_rest_frame(
     frames: &[&[[f64; 3]]],
     opts: &RestOptions,
 ) -> Option<RestChoice> {
+    if opts.by_pose
+        && let Some(m) = reference_by_pose(mesh, frames)
+    {
+        return choose_with(&ContactFinder::new(&m, opts.contact), frames, opts);
+    }
     let finder = ContactFinder::new(mesh, opts.contact);
     choose_with(&finder, frames, opts)
+}
+
+/// `mesh` on the most standing frame ([`super::pose_order::spread`]):
+/// [`RestOptions::by_pose`]'s
+/// reference for surface distances and heights, so that the counts do not
+/// depend on which frame the mesh's own positions are (the contact frame a
+/// capture starts with). `None` without frames or on a frame that does not
+/// fit the mesh.
+fn reference_by_pose(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> Option<Mesh> {
+    use super::pose_order::{descriptor, standing_first};
+    let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
+    let all: Vec<usize> = (0..frames.len()).collect();
+    let f = *standing_first(frames, &descs, &all).first()?;
+    mesh.with_positions(frames[f]).ok()
 }
 
 /// [`choose_rest_frame`] with a prepared finder.
@@ -87,7 +123,11 @@ pub fn choose_with(
     let slack = (opts.near_slack * n as f64).ceil() as usize;
     let mut nearest = 0;
     // A clear frame 0 is kept: a clear capture rigs exactly as before.
-    let frame = if found[0].contacts.is_empty() {
+    let frame = if opts.by_pose {
+        let (f, least_near) = by_pose(finder, frames, &mut found, least, slack, opts);
+        nearest = least_near;
+        f
+    } else if found[0].contacts.is_empty() {
         0
     } else {
         // The near count of at most `opts.candidates` of the clearest
@@ -122,7 +162,17 @@ pub fn choose_with(
             )
         }
     };
-    let why = if frame == 0 {
+    let why = if opts.by_pose {
+        format!(
+            "the frame most standing with the limbs in (`pose_order::spread`) among those with {} and at most {} vertices near a surface-far one (the clearest {nearest}, slack {slack}): {} near; frame 0 has {} ({} of {} frames have a contact)",
+            describe(&contacts),
+            nearest + slack,
+            contacts.near,
+            describe(&first),
+            in_contact,
+            frames.len()
+        )
+    } else if frame == 0 {
         if first.contacts.is_empty() {
             format!(
                 "frame 0 is clear of contact ({} of {} frames have one)",
@@ -153,6 +203,38 @@ pub fn choose_with(
         frames_in_contact: in_contact,
         why,
     })
+}
+
+/// [`RestOptions::by_pose`]'s choice: the clearest frames (`least`
+/// touching vertices) most standing first, the near count measured
+/// on the first [`RestOptions::candidates`] of them, the first within
+/// `slack` of their least taken. Returns the frame and that least near
+/// count.
+fn by_pose(
+    finder: &ContactFinder,
+    frames: &[&[[f64; 3]]],
+    found: &mut [FrameContacts],
+    least: usize,
+    slack: usize,
+    opts: &RestOptions,
+) -> (usize, usize) {
+    use super::pose_order::{descriptor, standing_first};
+    let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
+    let clearest: Vec<usize> = (0..found.len())
+        .filter(|&f| found[f].touching == least)
+        .collect();
+    let mut examined = standing_first(frames, &descs, &clearest);
+    examined.truncate(opts.candidates.max(1));
+    for &f in &examined {
+        found[f].near = finder.near(frames[f]);
+    }
+    let nearest = examined.iter().map(|&f| found[f].near).min().unwrap_or(0);
+    let frame = examined
+        .iter()
+        .copied()
+        .find(|&f| found[f].near <= nearest + slack)
+        .unwrap_or(0);
+    (frame, nearest)
 }
 
 #[cfg(test)]

@@ -15,7 +15,7 @@
 
 use super::JobError;
 use super::outputs::check_output_folder;
-use crate::db::init::{InitOptions, RestFrame, assemble_setup};
+use crate::db::init::{InitOptions, RestFrame, assemble_setup, assemble_setup_with};
 use crate::db::{MANIFEST, Manifest};
 use crate::embed::auto::options::AutoOptions;
 use crate::embed::auto::report::AutoRig;
@@ -132,6 +132,21 @@ pub fn init_database_with(
         dir,
         "db init writes the database's character.toml into a folder",
     )?;
+    // Nothing left behind on a refusal: every file this call wrote is put
+    // back as it was (a failed automatic setup left `character.toml` and
+    // `auto.landmarks.json`).
+    let mut written = Written::new(dir);
+    init_in(dir, opts, setup, &mut written).inspect_err(|_| written.undo())
+}
+
+/// [`init_database_with`]'s steps, each file recorded in `written` before
+/// it is written.
+fn init_in(
+    dir: &Path,
+    opts: &InitOptions,
+    setup: &InitSetup,
+    written: &mut Written,
+) -> Result<InitReport, JobError> {
     let mut notes = Vec::new();
     let wants_auto = !setup.no_rig
         && opts.landmarks.is_none()
@@ -139,25 +154,25 @@ pub fn init_database_with(
         && !opts.sequences.is_empty();
     let mut o = opts.clone();
     let mut auto = None;
-    let mut written = None;
+    let mut file = None;
+    // The rest frame's rule. `RestOptions::by_pose` (the same frame
+    // whatever frame the capture starts with) is not on: on samba it chose
+    // frame 87 (the still start's arms hang within the near slack of the
+    // skirt) and the rig embedded there warned of feet turned backwards
+    // and ankles, toes and wrists 10-12 % apart (session 25).
+    let rule = RestOptions::default();
     if wants_auto {
         // Every file read and checked first, refused with the words of a
         // database without a rig; then the rig is found from the capture.
         assemble_setup(dir, opts, &mut Vec::new())?;
-        let (rig, file) = write_auto_landmarks(dir, &mut o, &setup.auto, &mut notes)?;
+        let (rig, f) = write_auto_landmarks(dir, &mut o, &setup.auto, &rule, written, &mut notes)?;
         auto = Some(rig);
-        written = Some(file);
+        file = Some(f);
     }
-    // Nothing written on a refusal: the landmarks this call wrote go.
-    let undo = |e: JobError| {
-        if let Some(f) = &written {
-            let _ = std::fs::remove_file(f);
-        }
-        e
-    };
-    let (manifest, rest) = assemble_setup(dir, &o, &mut notes).map_err(|e| undo(e.into()))?;
-    manifest.save(dir).map_err(|e| undo(e.into()))?;
-    if let (Some(rig), Some(file)) = (&auto, &written) {
+    let (manifest, rest) = assemble_setup_with(dir, &o, &rule, &mut notes)?;
+    written.before(&dir.join(MANIFEST));
+    manifest.save(dir)?;
+    if let (Some(rig), Some(file)) = (&auto, &file) {
         notes.push(rig.summary());
         notes.extend(rig.notes.iter().map(|n| format!("automatic rig: {n}")));
         notes.push(format!(
@@ -166,7 +181,7 @@ pub fn init_database_with(
         ));
     }
     let setup = if manifest.rig.landmarks.is_some() {
-        Some(write_setup(dir, &manifest, rest.as_ref(), setup)?)
+        Some(write_setup(dir, &manifest, rest.as_ref(), setup, written)?)
     } else {
         if setup.png.is_some() {
             notes.push(
@@ -185,13 +200,67 @@ pub fn init_database_with(
     })
 }
 
+/// The files a `db init` wrote, each with what was there before, and
+/// whether it made the folder: [`Written::undo`] puts them back (a file
+/// that was there gets its old bytes, a new one goes, a new folder goes
+/// when empty again), so that a refusal leaves the folder as it was.
+struct Written {
+    /// The folder, when this call made it.
+    made: Option<PathBuf>,
+    /// Each file written and its bytes before (`None`: it was not there).
+    files: Vec<(PathBuf, Option<Vec<u8>>)>,
+}
+
+impl Written {
+    fn new(dir: &Path) -> Written {
+        Written {
+            made: (!dir.exists()).then(|| dir.to_path_buf()),
+            files: Vec::new(),
+        }
+    }
+
+    /// Records `path` before it is written (a file there that does not
+    /// read is not recorded: it is never removed).
+    fn before(&mut self, path: &Path) {
+        if self.files.iter().any(|(p, _)| p == path) {
+            return;
+        }
+        match std::fs::read(path) {
+            Ok(bytes) => self.files.push((path.to_path_buf(), Some(bytes))),
+            Err(_) if !path.exists() => self.files.push((path.to_path_buf(), None)),
+            Err(_) => {}
+        }
+    }
+
+    /// Every recorded file put back, the folder removed when this call
+    /// made it and it is empty again.
+    fn undo(&self) {
+        for (p, old) in self.files.iter().rev() {
+            match old {
+                Some(bytes) => {
+                    let _ = crate::util::fsutil::write_bytes_atomic(p, bytes);
+                }
+                None => {
+                    let _ = std::fs::remove_file(p);
+                }
+            }
+        }
+        if let Some(d) = &self.made {
+            let _ = std::fs::remove_dir(d);
+        }
+    }
+}
+
 /// The automatic rig of `o`'s capture, its landmarks written as
 /// [`AUTO_LANDMARKS`] in `dir` and named in `o`; `o.up` set from the rig
-/// when `auto`.
+/// when `auto`. The rest frame is chosen by `rule`; the file is recorded
+/// in `written`.
 fn write_auto_landmarks(
     dir: &Path,
     o: &mut InitOptions,
     auto: &AutoOptions,
+    rule: &RestOptions,
+    written: &mut Written,
     notes: &mut Vec<String>,
 ) -> Result<(AutoRig, PathBuf), JobError> {
     let file = dir.join(AUTO_LANDMARKS);
@@ -201,7 +270,7 @@ fn write_auto_landmarks(
             msg: "automatic landmarks from an earlier `db init` are there: pass them as `InitOptions::landmarks` to keep them, or set `force` to find them again".into(),
         });
     }
-    let (rig, vertex_count) = rig_capture(o, auto)?;
+    let (rig, vertex_count) = rig_capture(o, auto, rule)?;
     let axis = crate::embed::axes::nearest_axis(glam::DVec3::from_array(rig.up));
     let up = if axis == glam::DVec3::Y {
         "y"
@@ -231,6 +300,7 @@ fn write_auto_landmarks(
         msg: e.to_string(),
     })?;
     let json = rig.landmarks_json(vertex_count);
+    written.before(&file);
     crate::util::fsutil::write_bytes_atomic(&file, json.as_bytes())?;
     o.landmarks = Some(file.clone());
     Ok((rig, file))
@@ -242,6 +312,7 @@ fn write_setup(
     m: &Manifest,
     rest: Option<&RestFrame>,
     o: &InitSetup,
+    written: &mut Written,
 ) -> Result<Setup, JobError> {
     let topo = m.load_topology(dir)?;
     let rig = crate::db::skeletons::embed_rig(dir, m, &topo)?;
@@ -309,6 +380,7 @@ fn write_setup(
                     500,
                 ));
             }
+            written.before(p);
             img.save_png(p)?;
             Some(p.clone())
         }
@@ -328,6 +400,7 @@ fn write_setup(
         png,
     };
     let text = serde_json::to_string_pretty(&report).map_err(|e| JobError::Usage(e.to_string()))?;
+    written.before(&report.path);
     write_atomic(&report.path, |w| w.write_all(text.as_bytes()))?;
     Ok(report)
 }
@@ -358,7 +431,11 @@ fn contact(c: &Contact, rig: &Embedding) -> ContactReport {
 
 /// The automatic rig of `opts`' mesh from all its sequences' frames, and
 /// the mesh's vertex count.
-fn rig_capture(opts: &InitOptions, auto: &AutoOptions) -> Result<(AutoRig, usize), JobError> {
+fn rig_capture(
+    opts: &InitOptions,
+    auto: &AutoOptions,
+    rule: &RestOptions,
+) -> Result<(AutoRig, usize), JobError> {
     let spec = |p: &Path| p.to_string_lossy().into_owned();
     let topo = load_sequence(&spec(&opts.mesh), &LoadOptions::default())?;
     let mesh = topo.mesh();
@@ -383,7 +460,7 @@ fn rig_capture(opts: &InitOptions, auto: &AutoOptions) -> Result<(AutoRig, usize
         // hand on the hip in frame 0 is not one rigid part with the hip.
         let mut all: Vec<&[[f64; 3]]> = vec![mesh.positions()];
         all.extend_from_slice(&frames);
-        if let Some(c) = choose_rest_frame(mesh, &all, &RestOptions::default())
+        if let Some(c) = choose_rest_frame(mesh, &all, rule)
             && c.frame > 0
         {
             auto.rest_frame = Some(c.frame - 1);

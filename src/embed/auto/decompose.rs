@@ -113,6 +113,22 @@ fn fit(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], members: &[Vec<u32>]) -> Vec<M
         .collect()
 }
 
+/// Each part's best rigid motion (Kabsch) from `rest` onto `frame`, the
+/// parts given by `labels` (0..`count`): how points found on the rest
+/// frame are carried onto another frame (the topology's) that the
+/// decomposition did not fit.
+pub fn fit_onto(
+    rest: &[[f64; 3]],
+    frame: &[[f64; 3]],
+    labels: &[u32],
+    count: usize,
+) -> Vec<(DMat3, DVec3)> {
+    members_of(labels, count)
+        .iter()
+        .map(|idx| kabsch(rest, frame, idx))
+        .collect()
+}
+
 /// Squared error of vertex `v` under motion `m`, summed over frames.
 fn err(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], m: &Motion, v: usize) -> f64 {
     let p = v3(rest[v]);

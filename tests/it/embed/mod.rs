@@ -5,6 +5,7 @@ mod auto_arms;
 mod auto_contact;
 mod auto_hands;
 mod auto_knees;
+mod auto_order;
 mod bodies;
 mod captures;
 mod contact;

@@ -1,0 +1,233 @@
+//! Frames chosen by their poses, never by their place in the capture
+//! (issue 41): the automatic rig must come out the same whichever frame a
+//! capture starts with, in whatever order its frames are given.
+//!
+//! A frame's pose descriptor is the distances between a fixed set of
+//! vertices (every `n / K`-th, `K` = [`DESCRIPTOR_VERTICES`]): unchanged by
+//! the body's place, heading and mirror image, and by the frame's index.
+//! On it:
+//!
+//! - [`farthest_first`]: farthest-point sampling (Gonzalez 1985, the greedy
+//!   2-approximation of the k-centre problem), seeded by a given pose (the
+//!   rest frame's): which frames the skinning decomposition fits and the
+//!   order it visits them;
+//! - [`standing_first`]: frames ordered by [`spread`], how far they are
+//!   from standing with the limbs in (the most neutral first), for the
+//!   rest frame's choice.
+//!
+//! Ties (equal distances: repeated poses) are broken by the descriptors
+//! themselves (lexicographic), so that only a frame identical in pose to
+//! another can change places with it.
+//!
+//! Cost: O(F K²) for F frames, then O(F k) for k samples.
+
+use std::cmp::Ordering;
+
+/// Vertices of the descriptor (at most; all of a smaller mesh).
+pub const DESCRIPTOR_VERTICES: usize = 96;
+
+/// A frame's pose descriptor: the distances between every pair of
+/// [`DESCRIPTOR_VERTICES`] vertices spread evenly over the vertex indices
+/// (K(K−1)/2 numbers; empty for an empty frame).
+pub fn descriptor(frame: &[[f64; 3]]) -> Vec<f64> {
+    let n = frame.len();
+    let k = DESCRIPTOR_VERTICES.min(n);
+    let picked: Vec<glam::DVec3> = (0..k)
+        .map(|i| glam::DVec3::from_array(frame[i * n / k]))
+        .collect();
+    let mut d = Vec::with_capacity(k * k.saturating_sub(1) / 2);
+    for (i, a) in picked.iter().enumerate() {
+        for b in &picked[i + 1..] {
+            d.push(a.distance(*b));
+        }
+    }
+    d
+}
+
+/// Squared distance of two descriptors.
+pub fn distance2(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
+}
+
+/// Orders descriptors lexicographically (the tie-break by pose).
+fn by_pose(a: &[f64], b: &[f64]) -> Ordering {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.total_cmp(y))
+        .find(|o| o.is_ne())
+        .unwrap_or(Ordering::Equal)
+}
+
+/// Up to `k` indices of `descs`, farthest-point first: each the descriptor
+/// farthest from `seed` and those already taken (ties: the greater
+/// descriptor). The same poses give the same sequence of poses whatever
+/// their order in `descs`.
+pub fn farthest_first(descs: &[Vec<f64>], seed: &[f64], k: usize) -> Vec<usize> {
+    let mut near: Vec<f64> = descs.iter().map(|d| distance2(d, seed)).collect();
+    let mut taken = vec![false; descs.len()];
+    let mut out = Vec::with_capacity(k.min(descs.len()));
+    while out.len() < k.min(descs.len()) {
+        let pick = (0..descs.len()).filter(|&i| !taken[i]).max_by(|&a, &b| {
+            near[a]
+                .total_cmp(&near[b])
+                .then_with(|| by_pose(&descs[a], &descs[b]))
+        });
+        let Some(p) = pick else { break };
+        taken[p] = true;
+        out.push(p);
+        for (i, d) in descs.iter().enumerate() {
+            if !taken[i] {
+                near[i] = near[i].min(distance2(d, &descs[p]));
+            }
+        }
+    }
+    out
+}
+
+/// How far a frame is from a standing, limbs-in pose: the ratio of its
+/// vertices' spread across their long axis to the spread along it,
+/// (λ₂ + λ₃) / λ₁ of their covariance (λ₁ the largest eigenvalue). Small
+/// for a body standing with its arms and legs in; larger with the arms
+/// out, a leg lifted, bent over or crouched. Unchanged by place, turn,
+/// mirror and scale. On samba the capture's first 12 frames (standing
+/// still before the dance) are the 12 smallest (0.157; the dance's
+/// frames up to 0.3). `f64::INFINITY` for fewer than two vertices.
+pub fn spread(frame: &[[f64; 3]]) -> f64 {
+    use glam::DVec3;
+    let n = frame.len();
+    if n < 2 {
+        return f64::INFINITY;
+    }
+    let c = frame.iter().map(|p| DVec3::from_array(*p)).sum::<DVec3>() / n as f64;
+    let mut a = [[0.0f64; 3]; 3];
+    for p in frame {
+        let d = DVec3::from_array(*p) - c;
+        let d = d.to_array();
+        for (i, row) in a.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x += d[i] * d[j];
+            }
+        }
+    }
+    let trace = a[0][0] + a[1][1] + a[2][2];
+    let top = largest_eigenvalue(a);
+    if !(top > 0.0 && top.is_finite()) {
+        return f64::INFINITY;
+    }
+    (trace - top) / top
+}
+
+/// The largest eigenvalue of a symmetric 3 × 3 matrix (the closed form
+/// of Smith 1961, "Eigenvalues of a symmetric 3 × 3 matrix", CACM 4(4)).
+fn largest_eigenvalue(a: [[f64; 3]; 3]) -> f64 {
+    let p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    let q = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
+    let p2 = (a[0][0] - q).powi(2) + (a[1][1] - q).powi(2) + (a[2][2] - q).powi(2) + 2.0 * p1;
+    if p2 <= 0.0 {
+        return q;
+    }
+    let p = (p2 / 6.0).sqrt();
+    let b = |i: usize, j: usize| (a[i][j] - if i == j { q } else { 0.0 }) / p;
+    let det = b(0, 0) * (b(1, 1) * b(2, 2) - b(1, 2) * b(2, 1))
+        - b(0, 1) * (b(1, 0) * b(2, 2) - b(1, 2) * b(2, 0))
+        + b(0, 2) * (b(1, 0) * b(2, 1) - b(1, 1) * b(2, 0));
+    let phi = (det / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
+    q + 2.0 * p * phi.cos()
+}
+
+/// The indices `among` ordered by [`spread`] of their frames (the most
+/// standing, limbs-in pose first; ties: the lesser descriptor).
+pub fn standing_first(frames: &[&[[f64; 3]]], descs: &[Vec<f64>], among: &[usize]) -> Vec<usize> {
+    let mut order: Vec<(f64, usize)> = among.iter().map(|&i| (spread(frames[i]), i)).collect();
+    order.sort_by(|a, b| {
+        a.0.total_cmp(&b.0)
+            .then_with(|| by_pose(&descs[a.1], &descs[b.1]))
+    });
+    order.into_iter().map(|(_, i)| i).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Eight "poses": a segment of 200 vertices bent by an angle.
+    fn poses() -> Vec<Vec<[f64; 3]>> {
+        (0..8)
+            .map(|p| {
+                let bend = 0.2 * p as f64;
+                (0..200)
+                    .map(|i| {
+                        let t = i as f64 / 100.0;
+                        if t <= 1.0 {
+                            [t, 0.0, 0.0]
+                        } else {
+                            let s = t - 1.0;
+                            [1.0 + s * bend.cos(), s * bend.sin(), 0.0]
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_sample_is_the_same_poses_in_any_order() {
+        let p = poses();
+        let seed = descriptor(&p[0]);
+        let descs: Vec<Vec<f64>> = p.iter().map(|f| descriptor(f)).collect();
+        let a = farthest_first(&descs, &seed, 4);
+        // Farthest from the straight pose first: the most bent.
+        assert_eq!(a[0], 7);
+        for perm in [[7, 6, 5, 4, 3, 2, 1, 0], [3, 0, 6, 1, 7, 2, 5, 4]] {
+            let shuffled: Vec<Vec<f64>> = perm.iter().map(|&i| descs[i].clone()).collect();
+            let b: Vec<usize> = farthest_first(&shuffled, &seed, 4)
+                .into_iter()
+                .map(|i| perm[i])
+                .collect();
+            assert_eq!(a, b);
+            let all: Vec<usize> = (0..8).collect();
+            let frames: Vec<&[[f64; 3]]> = perm.iter().map(|&i| p[i].as_slice()).collect();
+            let m: Vec<usize> = standing_first(&frames, &shuffled, &all)
+                .into_iter()
+                .map(|i| perm[i])
+                .collect();
+            let own: Vec<&[[f64; 3]]> = p.iter().map(Vec::as_slice).collect();
+            assert_eq!(m, standing_first(&own, &descs, &all));
+            // The straight segment is the most stretched out.
+            assert_eq!(m[0], 0);
+        }
+    }
+
+    #[test]
+    fn the_spread_is_that_of_the_covariance() {
+        // Points on the axes: variances 4, 1, 0.25 (×2/6 each).
+        let mut f = Vec::new();
+        for (k, s) in [2.0, 1.0, 0.5].into_iter().enumerate() {
+            let mut p = [0.0; 3];
+            p[k] = s;
+            f.push(p);
+            p[k] = -s;
+            f.push(p);
+        }
+        assert!((spread(&f) - 1.25 / 4.0).abs() < 1e-12, "{}", spread(&f));
+        // Turned 30° about z: the same.
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let turned: Vec<[f64; 3]> = f
+            .iter()
+            .map(|q| [c * q[0] - s * q[1], s * q[0] + c * q[1], q[2]])
+            .collect();
+        assert!((spread(&turned) - 1.25 / 4.0).abs() < 1e-12);
+        assert_eq!(spread(&f[..1]), f64::INFINITY);
+    }
+
+    #[test]
+    fn the_descriptor_ignores_place_turn_and_mirror() {
+        let p = &poses()[3];
+        let moved: Vec<[f64; 3]> = p.iter().map(|q| [-q[1] + 5.0, q[0], -q[2] + 1.0]).collect();
+        let mirrored: Vec<[f64; 3]> = p.iter().map(|q| [-q[0], q[1], q[2]]).collect();
+        let d = descriptor(p);
+        assert!(distance2(&d, &descriptor(&moved)) < 1e-20);
+        assert!(distance2(&d, &descriptor(&mirrored)) < 1e-20);
+        assert!(descriptor(&[]).is_empty());
+    }
+}
