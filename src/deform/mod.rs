@@ -41,6 +41,7 @@
 pub mod arap;
 pub mod deformer;
 pub mod lbs;
+pub mod near_turns;
 pub mod options;
 pub mod part_laplacian;
 pub mod pca;
