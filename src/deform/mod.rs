@@ -51,5 +51,5 @@ pub mod unflip;
 pub mod untangle;
 
 pub use deformer::{DeformWorkspace, Deformer, RegionResult};
-pub use options::{DeformMode, DeformOptions, RepairBudget, TurnedOver};
+pub use options::{DeformMode, DeformOptions, RepairBudget, RepairTurns, TurnedOver};
 pub use regions::{Held, part_joint};
