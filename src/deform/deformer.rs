@@ -154,7 +154,7 @@ impl Deformer {
             out.near = out
                 .adjacency
                 .as_ref()
-                .map(|a| Neighbourhoods::new(a, crate::tools::eval::triangles::RINGS));
+                .map(|a| Neighbourhoods::new(a, super::near_turns::RINGS));
         }
         let tris = ch.topology().triangles();
         let is_constraint = {

@@ -17,6 +17,11 @@ use super::unflip::Adjacency;
 use crate::mesh::frames::polar;
 use glam::{DMat3, DQuat, DVec3};
 
+/// Edges from a seed to the farthest vertex of its neighbourhood: 3
+/// (about 37 vertices on a regular mesh, a few centimetres on the samba
+/// capture's): a fold of a few triangles moves a small share of it.
+pub const RINGS: usize = 3;
+
 /// The seeds and their neighbourhoods of a mesh, built once.
 #[derive(Debug, Clone)]
 pub struct Neighbourhoods {

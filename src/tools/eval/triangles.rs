@@ -48,10 +48,9 @@ use glam::{DMat3, DQuat, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-/// Edges from a vertex to the farthest vertex of its neighbourhood: 3
-/// (about 37 vertices on a regular mesh, a few centimetres on the samba
-/// capture's): a fold of a few triangles moves a small share of it.
-pub const RINGS: usize = 3;
+/// Edges from a vertex to the farthest vertex of its neighbourhood
+/// ([`crate::deform::near_turns::RINGS`], the fold repair's own).
+pub const RINGS: usize = crate::deform::near_turns::RINGS;
 
 /// Scratch of [`RestTriangles::turned_over`].
 #[derive(Debug, Default)]
