@@ -1,7 +1,8 @@
 //! The `Deformer`: a character's prefactored part-based deformation
 //! (the module page, [`crate::deform`], describes the method).
 
-use super::options::{DeformMode, DeformOptions, RepairBudget, TurnedOver};
+use super::near_turns::Neighbourhoods;
+use super::options::{DeformMode, DeformOptions, RepairBudget, RepairTurns, TurnedOver};
 use super::part_laplacian::{RegionSolver, RegionWorkspace, apply};
 use super::regions::{
     Held, Region, Target, constraint_scale, region_constraints, region_examples, region_specs,
@@ -29,6 +30,10 @@ pub struct Deformer {
     local_steps: usize,
     /// Solves of overlapping siblings ([`DeformOptions::overlap_passes`]).
     overlap_passes: usize,
+    /// The repair's rotations ([`DeformOptions::repair_turns`]).
+    repair_turns: RepairTurns,
+    /// The surface's neighbourhoods (a repair with the surface's turns).
+    near: Option<Neighbourhoods>,
     triangles: usize,
     regions: Vec<Region>,
     rest_pose: Pose,
@@ -88,6 +93,9 @@ pub struct DeformWorkspace {
     start: Vec<[f64; 3]>,
     /// The last frame's repair work.
     work: unflip::Work,
+    /// The surface's own rotations ([`RepairTurns`]) and one a seed.
+    surface_turn: Vec<DQuat>,
+    seeds: Vec<DQuat>,
 }
 
 impl DeformWorkspace {
@@ -129,6 +137,8 @@ impl Deformer {
             repair_budget: opts.repair_budget,
             local_steps: opts.local_steps,
             overlap_passes: opts.overlap_passes.max(1),
+            repair_turns: opts.repair_turns,
+            near: None,
             triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
             rest_pose: *ch.rest_pose(),
@@ -139,6 +149,12 @@ impl Deformer {
         };
         if matches!(mode, DeformMode::Lbs | DeformMode::None) {
             return Ok(out);
+        }
+        if opts.repair_turns != RepairTurns::Skin {
+            out.near = out
+                .adjacency
+                .as_ref()
+                .map(|a| Neighbourhoods::new(a, super::near_turns::RINGS));
         }
         let tris = ch.topology().triangles();
         let is_constraint = {
@@ -372,6 +388,8 @@ impl Deformer {
             best: vec![[0.0; 3]; self.n],
             start: vec![[0.0; 3]; self.n],
             work: unflip::Work::default(),
+            surface_turn: vec![DQuat::IDENTITY; self.n],
+            seeds: Vec::new(),
         }
     }
 
@@ -566,6 +584,44 @@ impl Deformer {
         }
     }
 
+    /// The fold repair with the rotations of [`DeformOptions::repair_turns`]:
+    /// [`Deformer::repair_against`] the skin's turns, then (or only) the
+    /// surface's own ([`super::near_turns`], read off the deformed frame).
+    /// `before` counts against the skin's turns; `after` against the turns
+    /// the last repair used (the surface's, where it runs: a triangle that
+    /// faces with its neighbourhood is not left folded, though it may face
+    /// against the skin's blend of two thighs' turns).
+    fn repair(
+        &self,
+        tris: &[[u32; 3]],
+        adj: &unflip::Adjacency,
+        source: &[[f64; 3]],
+        out: &mut [[f64; 3]],
+        ws: &mut DeformWorkspace,
+    ) -> TurnedOver {
+        ws.work = unflip::Work::default();
+        let skin = std::mem::take(&mut ws.turn);
+        let mut counts = match self.repair_turns {
+            RepairTurns::Skin | RepairTurns::SkinThenSurface => {
+                self.repair_against(tris, adj, source, out, ws, &skin)
+            }
+            RepairTurns::Surface => TurnedOver {
+                before: unflip::turned_over(tris, source, out, &skin).len(),
+                after: 0,
+            },
+        };
+        if let (Some(near), RepairTurns::SkinThenSurface | RepairTurns::Surface) =
+            (&self.near, self.repair_turns)
+        {
+            let mut turn = std::mem::take(&mut ws.surface_turn);
+            near.turns(source, out, &mut ws.seeds, &mut turn);
+            counts.after = self.repair_against(tris, adj, source, out, ws, &turn).after;
+            ws.surface_turn = turn;
+        }
+        ws.turn = skin;
+        counts
+    }
+
     /// [`untangle::untangle`], then passes of [`unflip::unflip`] and
     /// untangling while triangles stay turned over, keeping the best pass,
     /// all with the fixed projection budget; then, if any are left, the
@@ -581,22 +637,23 @@ impl Deformer {
     /// neighbourhoods (`crate::tools::eval::triangles`): CMU 03_02 on samba, where
     /// nothing is left turned over either way, read 110 → 121 triangles
     /// turned over against the rest frame in its worst frame (s12-blocks3).
-    fn repair(
+    fn repair_against(
         &self,
         tris: &[[u32; 3]],
         adj: &unflip::Adjacency,
         source: &[[f64; 3]],
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
+        turn: &[DQuat],
     ) -> TurnedOver {
-        let bad = unflip::turned_over(tris, source, out, &ws.turn);
+        let bad = unflip::turned_over(tris, source, out, turn);
         let before = bad.len();
-        ws.work = unflip::Work::default();
         if before == 0 {
             return TurnedOver::default();
         }
         let mut budget = unflip::Budget::new(self.repair_budget.limit(before));
-        untangle::references(tris, source, &ws.turn, &mut ws.normals, &mut ws.areas);
+        let base = ws.work;
+        untangle::references(tris, source, turn, &mut ws.normals, &mut ws.areas);
         let fixed = untangle::UntangleOptions {
             max_steps: self.untangle.steps,
             ..self.untangle
@@ -605,8 +662,18 @@ impl Deformer {
         if adaptive {
             ws.start.copy_from_slice(out);
         }
-        let first = self.repair_with(tris, adj, source, out, ws, bad.clone(), &fixed, &mut budget);
-        ws.work = budget.done;
+        let first = self.repair_with(
+            tris,
+            adj,
+            source,
+            out,
+            ws,
+            turn,
+            bad.clone(),
+            &fixed,
+            &mut budget,
+        );
+        ws.work = add_work(base, budget.done);
         if first == 0 || !adaptive {
             return TurnedOver {
                 before,
@@ -616,8 +683,18 @@ impl Deformer {
         // The last resort, from the deformed frame again; `ws.start` keeps
         // the first result.
         out.swap_with_slice(&mut ws.start);
-        let second = self.repair_with(tris, adj, source, out, ws, bad, &self.untangle, &mut budget);
-        ws.work = budget.done;
+        let second = self.repair_with(
+            tris,
+            adj,
+            source,
+            out,
+            ws,
+            turn,
+            bad,
+            &self.untangle,
+            &mut budget,
+        );
+        ws.work = add_work(base, budget.done);
         if second >= first {
             out.copy_from_slice(&ws.start);
         }
@@ -640,6 +717,7 @@ impl Deformer {
         source: &[[f64; 3]],
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
+        turn: &[DQuat],
         mut bad: Vec<u32>,
         opts: &untangle::UntangleOptions,
         budget: &mut unflip::Budget,
@@ -666,7 +744,7 @@ impl Deformer {
                 rounds: self.repair.rounds + pass,
                 ..self.repair
             };
-            bad = unflip::unflip_within(tris, adj, source, out, &ws.turn, bad, &repair, budget);
+            bad = unflip::unflip_within(tris, adj, source, out, turn, bad, &repair, budget);
             if !bad.is_empty() {
                 bad = untangle::untangle_within(
                     tris,
@@ -719,5 +797,13 @@ impl Deformer {
                 before: a.before + b.before,
                 after: a.after + b.after,
             })
+    }
+}
+
+/// Two repairs' work added.
+fn add_work(a: unflip::Work, b: unflip::Work) -> unflip::Work {
+    unflip::Work {
+        projections: a.projections + b.projections,
+        patch_vertices: a.patch_vertices + b.patch_vertices,
     }
 }

@@ -18,10 +18,10 @@
 //! `R` in the target pose is solved in its own frame (`y = Rᵀx`, constraints
 //! rotated by `Rᵀ`) and turned back, so one factorisation per part serves
 //! every pose. Parts are solved from the torso outwards; a vertex a child
-//! shares with its parent is constrained (strongly) to the parent's result
-//! (by default to the last result solved there, which under a skirt is the
-//! other thigh's; [`DeformOptions::parent_seams`] holds it to the parent's
-//! own), the others to their LBS positions; the end of a region that reaches
+//! shares with its parent is constrained (strongly) to the parent's own
+//! result ([`DeformOptions::parent_seams`], the default; off, to the last
+//! result solved there, which under a skirt is the other thigh's), the
+//! others to their LBS positions; the end of a region that reaches
 //! into a child part is held at LBS positions too
 //! ([`DeformOptions::hold_joints`]), so the joint is where the skeleton
 //! puts it before the child is solved. Where regions overlap (siblings such
@@ -37,10 +37,19 @@
 //! position projects into the middle 60 % of that bone, every `stride`-th.
 //! The manifest's `[deform]` section can give the constraint vertices and
 //! the example frames instead.
+//!
+//! Where the solve turns triangles over (under the skirt, at the knees) a
+//! repair ([`unflip`], [`untangle`]) rebuilds them, first against the
+//! skin's turns, then against the surface's own ([`near_turns`],
+//! [`DeformOptions::repair_turns`]); Huang et al.'s method has no such
+//! step, and the part-based PCA Laplacian cannot do without it here: on
+//! the real samba capture the solve alone turns 4,845 (CMU 02_02) to
+//! 68,743 (131_01) triangle-frames over (README, issue 42).
 
 pub mod arap;
 pub mod deformer;
 pub mod lbs;
+pub mod near_turns;
 pub mod options;
 pub mod part_laplacian;
 pub mod pca;
@@ -50,5 +59,5 @@ pub mod unflip;
 pub mod untangle;
 
 pub use deformer::{DeformWorkspace, Deformer, RegionResult};
-pub use options::{DeformMode, DeformOptions, RepairBudget, TurnedOver};
+pub use options::{DeformMode, DeformOptions, RepairBudget, RepairTurns, TurnedOver};
 pub use regions::{Held, part_joint};

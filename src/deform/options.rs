@@ -165,15 +165,47 @@ pub struct DeformOptions {
     /// left shin, solved after both thighs, is then tied to the *right*
     /// thigh's result under the skirt (session 23 measured the left shin
     /// 2-3 cm from its left thigh there, the right 0.02 cm).
-    /// Default false (the outputs of sessions up to 23). Measured on
-    /// (session 24, `retarget --json` onto the real samba capture), the
-    /// triangle-frames turned over before the repair drop (CMU 02_02
-    /// 5,837 → 4,845, 131_01 72,465 → 68,743) and the joint-velocity
-    /// error too (0.135 → 0.120, 0.241 → 0.230 cm/frame), but those
-    /// turned over against the rest frame after the repair rise
-    /// (465 → 735, 16,864 → 16,982; 131_01's worst frame 106 → 122,
-    /// above the capture's own most, a yardstick warning).
+    /// Default true since session 25, with [`RepairTurns::SkinThenSurface`]:
+    /// alone (session 24) it lowered the triangle-frames turned over before
+    /// the repair (CMU 02_02 on the real samba capture 5,837 → 4,845) but
+    /// raised those turned over against the rest frame after it (465 →
+    /// 735): the repair read "turned over" with the skin's turns, which
+    /// under the skirt are not the surface's. With the repair finished
+    /// against the surface's own turns, 465 → 55 (README, issue 42).
     pub parent_seams: bool,
+    /// The rotations the fold repair reads "turned over" with
+    /// ([`RepairTurns`]).
+    pub repair_turns: RepairTurns,
+}
+
+/// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
+/// turns the retrieved frame's triangles by before asking whether the
+/// deformed ones face the other way.
+///
+/// The surface measure ([`crate::tools::eval::triangles`]) asks the same
+/// question with each neighbourhood's own rotation; the skin's blend of
+/// the bones' turns differs from it where a vertex's bones turn apart (the
+/// skirt between the thighs, a limb twisted about itself), so a repair
+/// that reads only the skin's turns leaves folds the measure counts, and a
+/// better solve before it (`parent_seams`) did not show after it. Measured
+/// (session 25, `retarget` then `eval --surface` onto the real samba
+/// capture; session-24 default → `parent_seams` with this default):
+/// triangle-frames turned over against the rest frame after the repair,
+/// CMU 02_02 465 → 55, 131_02 1,067 → 118 (README, issue 42).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RepairTurns {
+    /// The skeleton's rotations blended by skin weight (sessions up to 24).
+    Skin,
+    /// The skin's, then a second repair of what is left turned over
+    /// against the surface's own rotations ([`super::near_turns`]: each
+    /// neighbourhood's best rigid alignment from the retrieved frame onto
+    /// the repaired one), the test the surface measure makes against the
+    /// rest frame. The default.
+    #[default]
+    SkinThenSurface,
+    /// The surface's own rotations only.
+    Surface,
 }
 
 /// The fold repair's work limit on one frame ([`unflip::Work`]): for a
@@ -251,7 +283,8 @@ impl Default for DeformOptions {
             overlap_weight: 0.0,
             overlap_passes: 1,
             blend_taper: false,
-            parent_seams: false,
+            parent_seams: true,
+            repair_turns: RepairTurns::default(),
         }
     }
 }

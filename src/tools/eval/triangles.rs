@@ -41,16 +41,16 @@
 
 use super::EvalError;
 use crate::deform::TurnedOver;
+use crate::deform::near_turns::Neighbourhoods;
 use crate::deform::unflip::{Adjacency, turned_over};
 use crate::mesh::frames::polar;
 use glam::{DMat3, DQuat, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-/// Edges from a vertex to the farthest vertex of its neighbourhood: 3
-/// (about 37 vertices on a regular mesh, a few centimetres on the samba
-/// capture's): a fold of a few triangles moves a small share of it.
-pub const RINGS: usize = 3;
+/// Edges from a vertex to the farthest vertex of its neighbourhood
+/// ([`crate::deform::near_turns::RINGS`], the fold repair's own).
+pub const RINGS: usize = crate::deform::near_turns::RINGS;
 
 /// Scratch of [`RestTriangles::turned_over`].
 #[derive(Debug, Default)]
@@ -97,52 +97,23 @@ impl RestTriangles {
             });
         }
         let adj = Adjacency::new(n, triangles);
-        let (mut start, mut near, mut offsets) = (vec![0], Vec::new(), Vec::new());
-        let mut seed_of = vec![u32::MAX; n];
-        let mut seen = vec![usize::MAX; n];
-        let mut ring = Vec::new();
-        for v in 0..n {
-            if seed_of[v] != u32::MAX {
-                continue;
-            }
-            // A seed: it and its uncovered neighbours take its rotation.
-            let s = (start.len() - 1) as u32;
-            seed_of[v] = s;
-            for &w in &adj.vertices[v] {
-                if seed_of[w as usize] == u32::MAX {
-                    seed_of[w as usize] = s;
-                }
-            }
-            let from = near.len();
-            seen[v] = v;
-            near.push(v as u32);
-            ring.clear();
-            ring.push(v as u32);
-            for _ in 0..RINGS {
-                let mut next = Vec::new();
-                for &u in &ring {
-                    for &w in &adj.vertices[u as usize] {
-                        if seen[w as usize] != v {
-                            seen[w as usize] = v;
-                            near.push(w);
-                            next.push(w);
-                        }
-                    }
-                }
-                ring = next;
-            }
-            let k = (near.len() - from) as f64;
-            let c = near[from..]
+        let Neighbourhoods {
+            seed_of,
+            start,
+            near,
+        } = Neighbourhoods::new(&adj, RINGS);
+        let mut offsets = Vec::with_capacity(near.len());
+        for w in start.windows(2) {
+            let near = &near[w[0]..w[1]];
+            let c = near
                 .iter()
                 .map(|&u| DVec3::from_array(rest[u as usize]))
                 .sum::<DVec3>()
-                / k;
+                / near.len() as f64;
             offsets.extend(
-                near[from..]
-                    .iter()
+                near.iter()
                     .map(|&u| DVec3::from_array(rest[u as usize]) - c),
             );
-            start.push(near.len());
         }
         let mut ring_start = vec![0];
         let mut ring = Vec::new();

@@ -1,0 +1,150 @@
+//! Each vertex's rotation read off the surface itself: the best rigid
+//! alignment (Kabsch, the rotation of the polar decomposition of
+//! `Σ xᵢ oᵢᵀ`, `oᵢ` the reference offsets from their centroid) of a
+//! neighbourhood, the vertices within a few edges of a seed vertex, from a
+//! reference frame onto a frame. Every vertex is a seed or next to one (a
+//! greedy dominating set, about a quarter of the vertices) and takes its
+//! seed's rotation.
+//!
+//! The surface measure reads turned-over triangles this way against the
+//! rest frame ([`crate::tools::eval::triangles`]); the fold repair
+//! ([`super::unflip`]) reads them against the retrieved frame with the
+//! skeleton's skin-blended rotations, which under a skirt (a blend of the
+//! two thighs' turns) and along a twisted limb are not the surface's own.
+//! [`crate::deform::RepairTurns`] lets the repair finish against these.
+
+use super::unflip::Adjacency;
+use crate::mesh::frames::polar;
+use glam::{DMat3, DQuat, DVec3};
+
+/// Edges from a seed to the farthest vertex of its neighbourhood: 3
+/// (about 37 vertices on a regular mesh, a few centimetres on the samba
+/// capture's): a fold of a few triangles moves a small share of it.
+pub const RINGS: usize = 3;
+
+/// The seeds and their neighbourhoods of a mesh, built once.
+#[derive(Debug, Clone)]
+pub struct Neighbourhoods {
+    /// The seed whose rotation each vertex takes (index into the seeds).
+    pub seed_of: Vec<u32>,
+    /// Neighbourhood of seed `s`: `start[s]..start[s + 1]` of `near`.
+    pub start: Vec<usize>,
+    /// The neighbourhoods' vertices, seed by seed.
+    pub near: Vec<u32>,
+}
+
+impl Neighbourhoods {
+    /// The seeds of `adj`'s mesh and their neighbourhoods of `rings` edges.
+    pub fn new(adj: &Adjacency, rings: usize) -> Neighbourhoods {
+        let n = adj.vertices.len();
+        let (mut start, mut near) = (vec![0], Vec::new());
+        let mut seed_of = vec![u32::MAX; n];
+        let mut seen = vec![usize::MAX; n];
+        let mut ring = Vec::new();
+        for v in 0..n {
+            if seed_of[v] != u32::MAX {
+                continue;
+            }
+            // A seed: it and its uncovered neighbours take its rotation.
+            let s = (start.len() - 1) as u32;
+            seed_of[v] = s;
+            for &w in &adj.vertices[v] {
+                if seed_of[w as usize] == u32::MAX {
+                    seed_of[w as usize] = s;
+                }
+            }
+            seen[v] = v;
+            near.push(v as u32);
+            ring.clear();
+            ring.push(v as u32);
+            for _ in 0..rings {
+                let mut next = Vec::new();
+                for &u in &ring {
+                    for &w in &adj.vertices[u as usize] {
+                        if seen[w as usize] != v {
+                            seen[w as usize] = v;
+                            near.push(w);
+                            next.push(w);
+                        }
+                    }
+                }
+                ring = next;
+            }
+            start.push(near.len());
+        }
+        Neighbourhoods {
+            seed_of,
+            start,
+            near,
+        }
+    }
+
+    /// Seeds.
+    pub fn seeds(&self) -> usize {
+        self.start.len() - 1
+    }
+
+    /// The rotation of seed `s`'s neighbourhood from `reference` onto
+    /// `frame` (identity where it is degenerate or not finite).
+    pub fn seed_turn(&self, s: usize, reference: &[[f64; 3]], frame: &[[f64; 3]]) -> DQuat {
+        let near = &self.near[self.start[s]..self.start[s + 1]];
+        let c = near
+            .iter()
+            .map(|&u| DVec3::from_array(reference[u as usize]))
+            .sum::<DVec3>()
+            / near.len().max(1) as f64;
+        // Σ xᵢ oᵢᵀ: the offsets sum to zero, so x needs no centring.
+        let mut h = DMat3::ZERO;
+        for &u in near {
+            let o = DVec3::from_array(reference[u as usize]) - c;
+            let x = DVec3::from_array(frame[u as usize]);
+            h += DMat3::from_cols(x * o.x, x * o.y, x * o.z);
+        }
+        if h.is_finite() && h != DMat3::ZERO {
+            polar(h).0
+        } else {
+            DQuat::IDENTITY
+        }
+    }
+
+    /// Each vertex's rotation from `reference` onto `frame`, into `turn`
+    /// (`seeds`: scratch of one rotation a seed).
+    pub fn turns(
+        &self,
+        reference: &[[f64; 3]],
+        frame: &[[f64; 3]],
+        seeds: &mut Vec<DQuat>,
+        turn: &mut [DQuat],
+    ) {
+        seeds.clear();
+        seeds.extend((0..self.seeds()).map(|s| self.seed_turn(s, reference, frame)));
+        for (t, &s) in turn.iter_mut().zip(&self.seed_of) {
+            *t = seeds[s as usize];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::subdivide::{icosahedron, midpoint};
+
+    #[test]
+    fn every_vertex_reads_a_rigid_turn_of_the_whole_mesh() {
+        let m = midpoint(&icosahedron());
+        let src = m.positions().to_vec();
+        let r = DQuat::from_rotation_y(2.9) * DQuat::from_rotation_x(0.4);
+        let out: Vec<[f64; 3]> = src
+            .iter()
+            .map(|p| (r * DVec3::from_array(*p) + DVec3::new(1.0, -2.0, 3.0)).to_array())
+            .collect();
+        let adj = Adjacency::new(src.len(), m.triangles());
+        let nb = Neighbourhoods::new(&adj, 2);
+        assert!(nb.seeds() < src.len());
+        let mut turn = vec![DQuat::IDENTITY; src.len()];
+        nb.turns(&src, &out, &mut Vec::new(), &mut turn);
+        for t in &turn {
+            assert!(t.dot(r).abs() > 1.0 - 1e-9, "{t:?} against {r:?}");
+        }
+    }
+}
