@@ -15,13 +15,13 @@
 //!    pair by the cheap distances ([`super::pair_scan`]: the graph keeps the
 //!    best transitions of every sequence pair, also between dissimilar
 //!    motions), each with its neighbours [`SparseOptions::spread`] frames
-//!    either way along the other sequence; by default the
-//!    [`SparseOptions::rerank`] best cheap transitions of each pair are
-//!    re-ranked by the full measure first (the cheap distance does not
-//!    rank near-equal minima as Eq. 1 does); and, off by default since
-//!    session 25, every [`SparseOptions::stride`]-th frame's
-//!    [`SparseOptions::per_sequence`] nearest frames in each sequence (one
-//!    tree per sequence, `n × sequences` candidates).
+//!    either way along the other sequence, optionally re-ranked from the
+//!    [`SparseOptions::rerank`] best cheap transitions by the full measure
+//!    (off by default: too few of the dense transitions found, see
+//!    [`SparseOptions::rerank`]); and every [`SparseOptions::stride`]-th
+//!    frame's [`SparseOptions::per_sequence`] nearest frames in each
+//!    sequence (one tree per sequence; the default, `n × sequences`
+//!    candidates).
 //! 3. **Windows**: for each candidate `(a, b)` the full measure along the
 //!    diagonal `(a+t, b+t)`, `|t| ≤ band`, and the two diagonals either
 //!    side of it (what the transition search reads: its window and the
@@ -75,23 +75,23 @@ pub struct SparseOptions {
     pub stride: usize,
     /// Nearest frames in each sequence of every `stride`-th frame: the
     /// dense method's transitions found at 3,234 frames rise from 78.8 %
-    /// (1) to 90.8 % (3), 94.5 % (6) and 94.9 % (8), 96.3 % (12, the
-    /// default until session 25). Its candidates grow with
-    /// `n × sequences`. Default: 0 (the re-ranked per-pair candidates
-    /// instead).
+    /// (1) to 90.8 % (3), 94.5 % (6) and 94.9 % (8), 96.3 % (12). Its
+    /// candidates grow with `n × sequences`. Default: 12.
     pub per_sequence: usize,
     /// Best transitions by the cheap distances per unordered sequence pair
     /// whose centres are candidates ([`super::pair_scan`]); their count
     /// does not grow with the sequences' lengths, but the cheap ranking
     /// misses many of the dense method's near-equal transitions unless
     /// they are re-ranked by the full measure ([`SparseOptions::rerank`];
-    /// session 24, 8 per pair without it and without `per_sequence`:
-    /// 91.4 % found at 1,014 frames, 71.1 % at 3,234). Default: 8.
+    /// without `per_sequence`, 8 per pair found 71.1 % of the dense
+    /// transitions at 3,234 frames, 84.4 % re-ranked from 32, session 25).
+    /// Default: 0 (off).
     pub per_pair: usize,
     /// Each per-pair candidate also taken `spread` frames either way along
     /// the second sequence (its ±2 diagonals then cover ±(spread + 2)):
     /// for cheap centres, often a few frames off the full measure's; the
-    /// re-ranked centres are the full measure's minima. Default: 0.
+    /// re-ranked centres are the full measure's minima. Default: 5 (used
+    /// when `per_pair` is on).
     pub spread: usize,
     /// Smallest half-window of the per-pair search (the transition
     /// search's `min_window`). Default: 4.
@@ -101,7 +101,10 @@ pub struct SparseOptions {
     /// ([`pair_scan::best_per_pair_refined`]: each centre descended to the
     /// full measure's local minimum, then the transition search on those
     /// minima); 0: the `per_pair` best by the cheap distances, as they are.
-    /// Default: 32.
+    /// At 3,234 frames (8 per pair, no `per_sequence`) it raises the dense
+    /// transitions found from 71.1 % to 84.4 % (32) and 88.5 % (spread 5,
+    /// or 32 of 128), short of the 95 % `per_sequence` 12 reaches. Default:
+    /// 0 (off).
     pub rerank: usize,
 }
 
@@ -113,11 +116,11 @@ impl Default for SparseOptions {
             band: 25,
             min_gap: 10,
             stride: 4,
-            per_sequence: 0,
-            per_pair: 8,
-            spread: 0,
+            per_sequence: 12,
+            per_pair: 0,
+            spread: 5,
             min_window: 4,
-            rerank: 32,
+            rerank: 0,
         }
     }
 }
