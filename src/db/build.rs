@@ -182,19 +182,38 @@ pub fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
     if opts.per_pair > 0 {
         text += &format!(" {} {} {}", opts.per_pair, opts.spread, opts.min_window);
     }
+    // The re-ranking likewise only when on.
+    if opts.per_pair > 0 && opts.rerank > 0 {
+        text += &format!(" rerank {}", opts.rerank);
+    }
     k.text("sparse", &text);
     k.finish()
 }
 
+/// The environment variable whose `name=value` pairs override the sparse
+/// options of `db build` (measurements of issue 43;
+/// [`SparseOptions::with_overrides`]), e.g.
+/// `SURFMOTION_SPARSE=neighbours=12,rerank=0`. The cache key follows the
+/// options, so a build with other options never reads another's cache.
+pub const SPARSE_ENV: &str = "SURFMOTION_SPARSE";
+
 /// The sparse options for a manifest's transition options: the band the
-/// longest window needs, its `min_gap`.
+/// longest window needs, its `min_gap`; then [`SPARSE_ENV`]'s overrides
+/// (a warning, and none taken, when they cannot be read).
 pub fn sparse_options(m: &Manifest) -> SparseOptions {
     let t = m.graph.transition_options();
-    SparseOptions {
+    let o = SparseOptions {
         band: t.max_window.max(t.min_window) + 1,
         min_gap: t.min_gap,
         min_window: t.min_window,
         ..SparseOptions::default()
+    };
+    match std::env::var(SPARSE_ENV) {
+        Ok(text) => o.with_overrides(&text).unwrap_or_else(|why| {
+            tracing::warn!("{SPARSE_ENV}: {why}; the default sparse options are used");
+            o
+        }),
+        Err(_) => o,
     }
 }
 
@@ -607,6 +626,13 @@ fn sparse_similarity(
         thousands(all),
         stats.pairs_seconds
     ));
+    if opts.rerank > 0 && opts.per_pair > 0 {
+        notice(format!(
+            "each sequence pair's {} best cheap transitions re-ranked by the full measure: {} pairs evaluated",
+            opts.rerank,
+            thousands(stats.rerank_pairs as u128)
+        ));
+    }
     let path = sparse_path(dir, measure);
     cache::save_sparse(&path, key, &sim).map_err(|e| DbError::cache_write(dir, e))?;
     Ok((

@@ -20,9 +20,11 @@
 //! scheme (every 4th frame's 12 nearest frames in each sequence) gave
 //! `n × sequences × 3` candidates.
 
-use super::matrix::Span;
-use super::transitions::{TransitionOptions, find};
+use super::matrix::{PairDistance, Span};
+use super::transitions::{TransitionOptions, find, find_among};
 use rayon::prelude::*;
+use std::cell::RefCell;
+use std::collections::HashMap;
 
 /// The cheap distances of sequences `si` (rows) and `sj` (columns),
 /// row-major (`si.len × sj.len`): the Euclidean distance of the frames'
@@ -58,27 +60,185 @@ pub fn best_per_pair(
     spans: &[Span],
     opts: &TransitionOptions,
 ) -> Vec<(usize, u32)> {
-    if opts.top_n == 0 {
-        return Vec::new();
+    per_pair(spans, opts.top_n, |i, j| {
+        let (si, sj) = (&spans[i], &spans[j]);
+        let c = cheap_block(features, dims, si, sj);
+        let at = |r: usize, s: usize| c[r * sj.len + s];
+        let found = find(&at, si.len, sj.len, i == j, opts);
+        (centres(found, i == j), 0)
+    })
+    .0
+}
+
+/// What [`best_per_pair_refined`] re-ranks with: the full measure, and how
+/// many of each sequence pair's cheap transitions it examines.
+#[derive(Clone, Copy)]
+pub struct Rerank<'a> {
+    /// The full measure (Eq. 1) of the frames.
+    pub full: &'a dyn PairDistance,
+    /// Cheap transitions examined per unordered sequence pair (their
+    /// centres descended to the full measure's minima); at least `top_n`.
+    pub examine: usize,
+}
+
+/// [`best_per_pair`] with the near-ties settled by the full measure
+/// (issue 43, session 25): the centres of each sequence pair's
+/// `rerank.examine` best cheap transitions are each moved downhill on the
+/// full measure to its local minimum (8-neighbour steepest descent, at
+/// most [`MAX_DESCENT`] steps), and the transition search (Eqs. 2–5:
+/// minimum test, best window, suppression) runs on those minima with the
+/// full measure: its `opts.top_n` best are kept. The cheap distance, a
+/// lower bound of Eq. 1 on 24 principal axes, finds the valleys but not
+/// which of a valley's near-equal minima Eq. 1 ranks first (session 24:
+/// 71 % of the dense transitions at 3,234 frames). Also returns the full
+/// measures evaluated (`examine · (steps · 5 + window)` per pair at most).
+pub fn best_per_pair_refined(
+    features: &[f32],
+    dims: usize,
+    spans: &[Span],
+    opts: &TransitionOptions,
+    rerank: Rerank<'_>,
+) -> (Vec<(usize, u32)>, u64) {
+    let cheap = TransitionOptions {
+        top_n: rerank.examine.max(opts.top_n),
+        ..*opts
+    };
+    per_pair(spans, opts.top_n, |i, j| {
+        let (si, sj) = (&spans[i], &spans[j]);
+        let c = cheap_block(features, dims, si, sj);
+        let at = |r: usize, s: usize| c[r * sj.len + s];
+        let seeds = find(&at, si.len, sj.len, i == j, &cheap);
+        let full = Memo::new(rerank.full, si, sj);
+        let mut minima: Vec<(usize, usize)> = seeds
+            .iter()
+            .map(|&(m, n, _, _)| full.descend(m, n, i == j, opts.min_gap))
+            .map(|(m, n)| if i == j && n < m { (n, m) } else { (m, n) })
+            .collect();
+        minima.sort_unstable();
+        minima.dedup();
+        let g = |r: usize, s: usize| full.get(r, s);
+        let found = find_among(&g, si.len, sj.len, i == j, opts, minima.into_iter());
+        (centres(found, i == j), full.evaluated())
+    })
+}
+
+/// Steps of [`Memo::descend`] at most (a valley's floor is a few frames
+/// from the cheap minimum; the bound keeps a long slope from costing more
+/// than a band).
+pub const MAX_DESCENT: usize = 32;
+
+/// Runs `block(i, j)` on every unordered sequence pair `i ≤ j` (in
+/// parallel, results in a fixed order) when `top_n` is not 0; the centres
+/// it returns and the sum of its counts.
+fn per_pair(
+    spans: &[Span],
+    top_n: usize,
+    block: impl Fn(usize, usize) -> (Vec<(usize, usize)>, u64) + Sync,
+) -> (Vec<(usize, u32)>, u64) {
+    if top_n == 0 {
+        return (Vec::new(), 0);
     }
     let pairs: Vec<(usize, usize)> = (0..spans.len())
         .flat_map(|i| (i..spans.len()).map(move |j| (i, j)))
         .collect();
-    pairs
+    let per: Vec<(Vec<(usize, u32)>, u64)> = pairs
         .par_iter()
-        .flat_map_iter(|&(i, j)| {
-            let (si, sj) = (&spans[i], &spans[j]);
-            let c = cheap_block(features, dims, si, sj);
-            let cols = sj.len;
-            let at = |r: usize, s: usize| c[r * cols + s];
-            let (a0, b0) = (si.start, sj.start);
-            find(&at, si.len, sj.len, i == j, opts)
+        .map(|&(i, j)| {
+            let (found, k) = block(i, j);
+            let (a0, b0) = (spans[i].start, spans[j].start);
+            let global = found
                 .into_iter()
-                .filter(move |&(m, n, _, _)| i != j || m < n)
-                .map(move |(m, n, _, _)| (a0 + m, (b0 + n) as u32))
+                .map(|(m, n)| (a0 + m, (b0 + n) as u32))
+                .collect();
+            (global, k)
         })
+        .collect();
+    let count = per.iter().map(|p| p.1).sum();
+    (per.into_iter().flat_map(|p| p.0).collect(), count)
+}
+
+/// The centres `(m, n)` of found transitions; within one sequence each
+/// frame pair once (`m < n`).
+fn centres(found: Vec<(usize, usize, usize, f64)>, same: bool) -> Vec<(usize, usize)> {
+    found
+        .into_iter()
+        .filter(|&(m, n, _, _)| !same || m < n)
+        .map(|(m, n, _, _)| (m, n))
         .collect()
 }
+
+/// The full measure of a sequence pair's block (frame numbers within each
+/// sequence), each pair evaluated once.
+struct Memo<'a> {
+    full: &'a dyn PairDistance,
+    si: &'a Span,
+    sj: &'a Span,
+    seen: RefCell<HashMap<(usize, usize), f32>>,
+}
+
+impl<'a> Memo<'a> {
+    fn new(full: &'a dyn PairDistance, si: &'a Span, sj: &'a Span) -> Self {
+        Memo {
+            full,
+            si,
+            sj,
+            seen: RefCell::new(HashMap::new()),
+        }
+    }
+    /// The full measure of rows `r` and `s` (`INFINITY` outside the block).
+    fn get(&self, r: usize, s: usize) -> f32 {
+        if r >= self.si.len || s >= self.sj.len {
+            return f32::INFINITY;
+        }
+        if let Some(v) = self.seen.borrow().get(&(r, s)) {
+            return *v;
+        }
+        let v = self.full.distance(self.si.start + r, self.sj.start + s) as f32;
+        self.seen.borrow_mut().insert((r, s), v);
+        v
+    }
+    fn evaluated(&self) -> u64 {
+        self.seen.borrow().len() as u64
+    }
+    /// From `(m, n)` to the smallest of the 8 neighbours while it is
+    /// smaller (within one sequence, never closer than `gap` frames to the
+    /// diagonal), at most [`MAX_DESCENT`] steps.
+    fn descend(&self, mut m: usize, mut n: usize, same: bool, gap: usize) -> (usize, usize) {
+        for _ in 0..MAX_DESCENT {
+            let mut best = (self.get(m, n), m, n);
+            for (dm, dn) in NEIGHBOURS {
+                let (Some(r), Some(s)) = (m.checked_add_signed(dm), n.checked_add_signed(dn))
+                else {
+                    continue;
+                };
+                if same && r.abs_diff(s) < gap.max(1) {
+                    continue;
+                }
+                let v = self.get(r, s);
+                if v < best.0 {
+                    best = (v, r, s);
+                }
+            }
+            if (best.1, best.2) == (m, n) {
+                break;
+            }
+            (m, n) = (best.1, best.2);
+        }
+        (m, n)
+    }
+}
+
+/// The 8 neighbours of a pair.
+const NEIGHBOURS: [(isize, isize); 8] = [
+    (-1, -1),
+    (-1, 0),
+    (-1, 1),
+    (0, -1),
+    (0, 1),
+    (1, -1),
+    (1, 0),
+    (1, 1),
+];
 
 /// `seeds` and, for each, the pairs `spread` frames either way along its
 /// second frame's sequence (the cheap minimum's diagonal is often a few
@@ -155,6 +315,98 @@ mod tests {
             )
             .is_empty()
         );
+    }
+
+    /// A full measure: the cheap (1-D) distance plus `extra` on the pairs
+    /// `inside` says (what Eq. 1 sees and the descriptor does not).
+    struct Full<'a> {
+        f: &'a [f32],
+        extra: f32,
+        inside: &'a (dyn Fn(usize, usize) -> bool + Sync),
+    }
+    impl PairDistance for Full<'_> {
+        fn frames(&self) -> usize {
+            self.f.len()
+        }
+        fn distance(&self, a: usize, b: usize) -> f64 {
+            let bump = if (self.inside)(a, b) || (self.inside)(b, a) {
+                self.extra
+            } else {
+                0.0
+            };
+            ((self.f[a] - self.f[b]).abs() + bump) as f64
+        }
+    }
+
+    /// Issue 43, the near-ties: sequence `b` repeats two stretches of `a`,
+    /// the first exactly by the cheap distance but not by the full measure
+    /// (which adds `extra` there), the second with a little noise. The
+    /// cheap ranking keeps the first; the re-ranking keeps what the dense
+    /// search on the full measure keeps — at the same frames — whatever the
+    /// sequences' order, sign or shift.
+    #[test]
+    fn the_full_measure_settles_the_near_ties() {
+        let signal = |t: usize| ((t as f32) * 0.37).sin() * 3.0 + (t as f32) * 0.01;
+        for (k, (flip, first_b, shift)) in [(1.0, false, 0.0), (-1.0, true, 5.0), (1.0, true, -2.0)]
+            .into_iter()
+            .enumerate()
+        {
+            let a: Vec<f32> = (0..120).map(|t| flip * signal(t) + shift).collect();
+            let mut b: Vec<f32> = (0..100)
+                .map(|t| flip * (20.0 + (t as f32 * 0.23).cos()) + shift)
+                .collect();
+            b[10..40].copy_from_slice(&a[30..60]);
+            for (t, v) in b.iter_mut().enumerate().take(90).skip(60) {
+                *v = a[t + 10] + 0.01 * ((t * 7 % 5) as f32 - 2.0);
+            }
+            let (la, lb) = (a.len(), b.len());
+            let (features, spans, a0, b0) = if first_b {
+                let f: Vec<f32> = b.iter().chain(&a).copied().collect();
+                (f, vec![span("b", 0, lb), span("a", lb, la)], lb, 0)
+            } else {
+                let f: Vec<f32> = a.iter().chain(&b).copied().collect();
+                (f, vec![span("a", 0, la), span("b", la, lb)], 0, la)
+            };
+            // The first copy, a's 30..60 on b's 10..40, as frames of `features`.
+            let inside = move |x: usize, y: usize| {
+                (a0 + 30..a0 + 60).contains(&x) && (b0 + 10..b0 + 40).contains(&y)
+            };
+            let full = Full {
+                f: &features,
+                extra: 0.5,
+                inside: &inside,
+            };
+            let opts = TransitionOptions {
+                top_n: 1,
+                ..TransitionOptions::default()
+            };
+            let across = |v: Vec<(usize, u32)>| -> Vec<(usize, usize)> {
+                v.into_iter()
+                    .map(|(x, y)| (x, y as usize))
+                    .filter(|&(x, y)| spans[0].len <= y && x < spans[0].len)
+                    .map(|(x, y)| if first_b { (y, x) } else { (x, y) })
+                    .collect()
+            };
+            // The dense search on the full measure, a's rows, b's columns.
+            let g = |r: usize, s: usize| full.distance(a0 + r, b0 + s) as f32;
+            let dense = find(&g, la, lb, false, &opts);
+            let (m, n) = (a0 + dense[0].0, b0 + dense[0].1);
+            assert!((70..100).contains(&(m - a0)), "{k}: {dense:?}");
+            let cheap = across(best_per_pair(&features, 1, &spans, &opts));
+            assert_eq!(cheap.len(), 1, "{k}");
+            assert!(inside(cheap[0].0, cheap[0].1), "{k}: {cheap:?}");
+            let rerank = Rerank {
+                full: &full,
+                examine: 8,
+            };
+            let (refined, evaluated) = best_per_pair_refined(&features, 1, &spans, &opts, rerank);
+            assert_eq!(across(refined), vec![(m, n)], "{k}");
+            // Far fewer full measures than the block's pairs.
+            assert!(
+                evaluated > 0 && evaluated < (la * lb) as u64 / 4,
+                "{k}: {evaluated}"
+            );
+        }
     }
 
     #[test]

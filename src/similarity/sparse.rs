@@ -15,11 +15,13 @@
 //!    pair by the cheap distances ([`super::pair_scan`]: the graph keeps the
 //!    best transitions of every sequence pair, also between dissimilar
 //!    motions), each with its neighbours [`SparseOptions::spread`] frames
-//!    either way along the other sequence (off by default: too few of the
-//!    dense transitions found, see [`SparseOptions::per_pair`]); and every
-//!    [`SparseOptions::stride`]-th frame's [`SparseOptions::per_sequence`]
-//!    nearest frames in each sequence (one tree per sequence; the default,
-//!    `n × sequences` candidates).
+//!    either way along the other sequence, optionally re-ranked from the
+//!    [`SparseOptions::rerank`] best cheap transitions by the full measure
+//!    (off by default: too few of the dense transitions found, see
+//!    [`SparseOptions::rerank`]); and every [`SparseOptions::stride`]-th
+//!    frame's [`SparseOptions::per_sequence`] nearest frames in each
+//!    sequence (one tree per sequence; the default, `n × sequences`
+//!    candidates).
 //! 3. **Windows**: for each candidate `(a, b)` the full measure along the
 //!    diagonal `(a+t, b+t)`, `|t| ≤ band`, and the two diagonals either
 //!    side of it (what the transition search reads: its window and the
@@ -73,23 +75,37 @@ pub struct SparseOptions {
     pub stride: usize,
     /// Nearest frames in each sequence of every `stride`-th frame: the
     /// dense method's transitions found at 3,234 frames rise from 78.8 %
-    /// (1) to 90.8 % (3), 94.5 % (6) and 94.9 % (8). Its candidates grow
-    /// with `n × sequences`. Default: 12.
+    /// (1) to 90.8 % (3), 94.5 % (6) and 94.9 % (8), 96.3 % (12). Its
+    /// candidates grow with `n × sequences`. Default: 12.
     pub per_sequence: usize,
     /// Best transitions by the cheap distances per unordered sequence pair
     /// whose centres are candidates ([`super::pair_scan`]); their count
     /// does not grow with the sequences' lengths, but the cheap ranking
-    /// misses many of the dense method's transitions (session 24, 8 per
-    /// pair without `per_sequence`: 91.4 % found at 1,014 frames, 71.1 %
-    /// at 3,234, for 19.8 % of the pairs). Default: 0 (off).
+    /// misses many of the dense method's near-equal transitions unless
+    /// they are re-ranked by the full measure ([`SparseOptions::rerank`];
+    /// without `per_sequence`, 8 per pair found 71.1 % of the dense
+    /// transitions at 3,234 frames, 84.4 % re-ranked from 32, session 25).
+    /// Default: 0 (off).
     pub per_pair: usize,
     /// Each per-pair candidate also taken `spread` frames either way along
-    /// the second sequence (its ±2 diagonals then cover ±(spread + 2)).
-    /// Default: 5 (used when `per_pair` is on).
+    /// the second sequence (its ±2 diagonals then cover ±(spread + 2)):
+    /// for cheap centres, often a few frames off the full measure's; the
+    /// re-ranked centres are the full measure's minima. Default: 5 (used
+    /// when `per_pair` is on).
     pub spread: usize,
     /// Smallest half-window of the per-pair search (the transition
     /// search's `min_window`). Default: 4.
     pub min_window: usize,
+    /// Cheap transitions examined per unordered sequence pair, of which the
+    /// full measure keeps the `per_pair` best
+    /// ([`pair_scan::best_per_pair_refined`]: each centre descended to the
+    /// full measure's local minimum, then the transition search on those
+    /// minima); 0: the `per_pair` best by the cheap distances, as they are.
+    /// At 3,234 frames (8 per pair, no `per_sequence`) it raises the dense
+    /// transitions found from 71.1 % to 84.4 % (32) and 88.5 % (spread 5,
+    /// or 32 of 128), short of the 95 % `per_sequence` 12 reaches. Default:
+    /// 0 (off).
+    pub rerank: usize,
 }
 
 impl Default for SparseOptions {
@@ -104,7 +120,42 @@ impl Default for SparseOptions {
             per_pair: 0,
             spread: 5,
             min_window: 4,
+            rerank: 0,
         }
+    }
+}
+
+impl SparseOptions {
+    /// These options with `name=value` pairs applied (comma-separated,
+    /// names of the fields, e.g. `per_pair=8,rerank=32,per_sequence=0`):
+    /// how `db build` takes other options for a measurement
+    /// (`SURFMOTION_SPARSE`). `Err` naming the pair that is not an option
+    /// or not a count.
+    pub fn with_overrides(mut self, text: &str) -> Result<SparseOptions, String> {
+        for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let (name, value) = pair
+                .split_once('=')
+                .ok_or_else(|| format!("'{pair}': expected name=value"))?;
+            let v: usize = value
+                .trim()
+                .parse()
+                .map_err(|_| format!("'{pair}': the value is not a count"))?;
+            let field = match name.trim() {
+                "neighbours" => &mut self.neighbours,
+                "dims" => &mut self.dims,
+                "band" => &mut self.band,
+                "min_gap" => &mut self.min_gap,
+                "stride" => &mut self.stride,
+                "per_sequence" => &mut self.per_sequence,
+                "per_pair" => &mut self.per_pair,
+                "spread" => &mut self.spread,
+                "min_window" => &mut self.min_window,
+                "rerank" => &mut self.rerank,
+                other => return Err(format!("'{other}' is not a sparse option")),
+            };
+            *field = v;
+        }
+        Ok(self)
     }
 }
 
@@ -118,6 +169,8 @@ pub struct SparseStats {
     pub pair_candidates: u64,
     /// Seconds of the per-pair scan (part of `index_seconds`).
     pub scan_seconds: f64,
+    /// Full measures evaluated by the per-pair re-ranking (not stored).
+    pub rerank_pairs: u64,
     /// Distinct pairs evaluated with the full measure.
     pub pairs: u64,
     /// Seconds: descriptors, projection and index.
@@ -623,12 +676,17 @@ pub fn sparse_pairs(
     let near = index.nearest_overall(opts.neighbours);
     let per_seq = index.nearest_per_sequence(&spans, opts.stride.max(1), opts.per_sequence);
     let t_scan = std::time::Instant::now();
-    let per_pair = pair_scan::spread_seeds(
-        &pair_scan::best_per_pair(&features, dims, &spans, &per_pair_options(opts)),
-        opts.spread,
-        &spans,
-        &seq,
-    );
+    let popts = per_pair_options(opts);
+    let (best, rerank_pairs) = if opts.rerank > 0 {
+        let rerank = pair_scan::Rerank {
+            full: set,
+            examine: opts.rerank,
+        };
+        pair_scan::best_per_pair_refined(&features, dims, &spans, &popts, rerank)
+    } else {
+        (pair_scan::best_per_pair(&features, dims, &spans, &popts), 0)
+    };
+    let per_pair = pair_scan::spread_seeds(&best, opts.spread, &spans, &seq);
     let scan_seconds = t_scan.elapsed().as_secs_f64();
     let pair_candidates = per_pair.len() as u64;
     let index_seconds = t0.elapsed().as_secs_f64();
@@ -659,6 +717,7 @@ pub fn sparse_pairs(
         candidates,
         pair_candidates,
         scan_seconds,
+        rerank_pairs,
         pairs,
         index_seconds,
         pairs_seconds: t1.elapsed().as_secs_f64(),
@@ -1007,6 +1066,28 @@ mod tests {
         for (i, j) in [(0, 2), (2, 1)] {
             let (_, sparse) = both_ways(&set, &without, i, j);
             assert!(sparse.is_empty(), "({i}, {j}): {sparse:?}");
+        }
+    }
+
+    #[test]
+    fn overrides_name_their_fields_and_refuse_the_rest() {
+        let d = SparseOptions::default();
+        let o = d
+            .with_overrides(" per_pair=16, rerank=0 ,neighbours=8")
+            .unwrap();
+        assert_eq!((o.per_pair, o.rerank, o.neighbours), (16, 0, 8));
+        assert_eq!(
+            SparseOptions {
+                per_pair: 16,
+                rerank: 0,
+                neighbours: 8,
+                ..d
+            },
+            o
+        );
+        assert_eq!(d.with_overrides("").unwrap(), d);
+        for bad in ["per_pair", "per_pair=x", "per_pair=-1", "nearest=3"] {
+            assert!(d.with_overrides(bad).unwrap_err().contains('\''), "{bad}");
         }
     }
 

@@ -289,7 +289,8 @@ impl surfmotion::similarity::sparse::Features for Looked<'_> {
 }
 
 /// Option sets from `SURFMOTION_SPARSE_OPTIONS`: `neighbours,per_pair,
-/// spread,per_sequence` separated by `;` (default: the current default).
+/// spread,per_sequence[,rerank]` separated by `;` (default: the current
+/// default; `rerank` when left out: the default's).
 fn option_sets(
     base: surfmotion::similarity::SparseOptions,
 ) -> Vec<surfmotion::similarity::SparseOptions> {
@@ -305,6 +306,7 @@ fn option_sets(
                 per_pair: v[1],
                 spread: v[2],
                 per_sequence: v[3],
+                rerank: v.get(4).copied().unwrap_or(base.rerank),
                 ..base
             }
         })
@@ -355,14 +357,16 @@ fn options_measured_against_the_dense_cache() {
     for o in option_sets(sparse_options(&m)) {
         let (sim, stats) = sparse_pairs(&set, spans.clone(), &o, &|_| {});
         let mut line = format!(
-            "neighbours {} per_pair {} spread {} per_sequence {}: candidates {} (per pair {}), pairs {} ({:.1} % of {}), index {:.1} s (scan {:.1} s)",
+            "neighbours {} per_pair {} spread {} per_sequence {} rerank {}: candidates {} (per pair {}), pairs {} (+ {} re-ranking), ({:.1} % of {}), index {:.1} s (scan {:.1} s)",
             o.neighbours,
             o.per_pair,
             o.spread,
             o.per_sequence,
+            o.rerank,
             stats.candidates,
             stats.pair_candidates,
             stats.pairs,
+            stats.rerank_pairs,
             100.0 * stats.pairs as f64 / (n as f64 * (n as f64 + 1.0) / 2.0),
             n * (n + 1) / 2,
             stats.index_seconds,
