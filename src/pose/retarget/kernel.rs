@@ -4,9 +4,10 @@
 
 use super::feet::{Toes, flat_feet, place_feet};
 use super::ground::{Given, clip_support_given, foot_height};
+use super::motion_ref::torso_from_motion;
 use super::reference::{Reference, ReferenceSource, leg_length};
 use super::root::root_from_legs;
-use super::torso::{clip_rotations, neck_carriage, upright};
+use super::torso::{clip_rotations_from, neck_carriage, upright};
 use crate::pose::{Pose, pose_rotations};
 use crate::rig::Canonical;
 use glam::{DQuat, DVec3};
@@ -155,6 +156,13 @@ pub(super) fn retarget_on_grounds(
         }
         _ => &reference.pose,
     };
+    // A frame standing in for the rest: the torso from the clip's mean
+    // carriage (see [`torso_from_motion`]).
+    let (carriage, at_ref) = match reference.source {
+        ReferenceSource::Frame(_) => torso_from_motion(r, mocap, &reference.rotations, tilt),
+        ReferenceSource::Rest => (*r, None),
+    };
+    let r = &carriage;
     // The clip's floor and the support under each of its footfalls (the
     // leg's length does not depend on the feet).
     let support = clip_support_given(mocap, leg_length(r), given);
@@ -168,7 +176,7 @@ pub(super) fn retarget_on_grounds(
     let root = C::Pelvis.index();
     let clip_floor = support.floor;
     let char_floor = foot_height(character);
-    let rotations = level_torso(clip_rotations(r, mocap, reference, tilt), r);
+    let rotations = level_torso(clip_rotations_from(r, mocap, reference, tilt, at_ref), r);
     let carriage_inv = neck_carriage(&upright(mocap, &rotations)).inverse();
     let (chest, neck) = (C::Chest.index(), C::Neck.index());
     let mut out: Vec<(Pose, [DQuat; Canonical::COUNT])> = mocap

@@ -61,12 +61,17 @@
 //! The clip's reference ([`choose_reference`]) is its rest skeleton when
 //! that stands upright (a T- or A-pose: trunk within 20° of vertical, legs
 //! within 30°, bones as long as in the motion), else its most neutral frame
-//! (trunk nearest vertical, knees straightest).
+//! (trunk nearest vertical, knees straightest), whose torso (spine, chest,
+//! neck, head, hips' and shoulders' places, the file joints' rotations) is
+//! then the clip's mean carriage in the body's heading frame
+//! (`motion_ref`): that frame's stride is the file's, not the
+//! performance's.
 
 mod feet;
 mod ground;
 mod kernel;
 mod measures;
+mod motion_ref;
 mod reference;
 mod root;
 mod torso;

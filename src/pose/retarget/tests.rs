@@ -329,7 +329,11 @@ fn a_bent_rest_skeleton_falls_back_to_the_most_neutral_frame() {
     // clip's does: the torso is measured from the reference stood upright
     // on that line (the lean a reference stands with is the file's, not
     // the performance's; `level_torso`), so a frame chosen as the
-    // reference no longer stands the character as at rest.
+    // reference no longer stands the character as at rest. The reference's
+    // torso is the walk's mean carriage (`motion_ref`), whose line leans
+    // within a hundredth of a degree of this frame's: 6.957° against the
+    // clip's 6.964° (exactly the clip's when the frame itself was the
+    // torso's reference).
     let least = poses.iter().map(trunk_tilt).fold(f64::INFINITY, f64::min);
     assert!(trunk_tilt(&cp.poses[i]) < least + 5f64.to_radians());
     let out = retarget(&standing(), &cp.reference, &cp.poses);
@@ -337,7 +341,7 @@ fn a_bent_rest_skeleton_falls_back_to_the_most_neutral_frame() {
     let tilt = ground_tilt(&cp.poses);
     let clip_lean = lean(&cp.poses[i].map(|p| tilt * p));
     assert!(
-        (lean(&out[i].0) - clip_lean).abs() < 1e-6,
+        (lean(&out[i].0) - clip_lean).abs() < 0.1f64.to_radians(),
         "{} vs the clip's {}",
         lean(&out[i].0).to_degrees(),
         clip_lean.to_degrees()

@@ -73,15 +73,29 @@ pub(super) fn clip_rotations(
     reference: &Reference,
     tilt: DQuat,
 ) -> Vec<[DQuat; Canonical::COUNT]> {
+    clip_rotations_from(r, mocap, reference, tilt, None)
+}
+
+/// [`clip_rotations`] with the file joints' rotations at the reference
+/// given (`at`, levelled as the poses are: the mean carriage of
+/// [`torso_from_motion`](super::motion_ref::torso_from_motion)) instead of
+/// the reference's own (`None`).
+pub(super) fn clip_rotations_from(
+    r: &Pose,
+    mocap: &[Pose],
+    reference: &Reference,
+    tilt: DQuat,
+    at: Option<JointRotations>,
+) -> Vec<[DQuat; Canonical::COUNT]> {
     let mut rotations: Vec<[DQuat; Canonical::COUNT]> =
         mocap.par_iter().map(|m| pose_rotations(r, m)).collect();
     let file = &reference.rotations;
     // The reference's own file rotations: the rest skeleton's are the
     // identity; a frame's, turned as the poses are.
-    let at_ref: Option<JointRotations> = match reference.source {
+    let at_ref: Option<JointRotations> = at.or_else(|| match reference.source {
         ReferenceSource::Rest => Some([Some(DQuat::IDENTITY); Canonical::COUNT]),
         ReferenceSource::Frame(i) => file.get(i).map(|w| w.map(|q| q.map(|q| tilt * q))),
-    };
+    });
     if let Some(at_ref) = at_ref
         && file.len() == mocap.len()
     {

@@ -77,6 +77,27 @@
 //! the hip's standing height (legs and ankle over toe) 1.832 / 2.319 /
 //! 2.342 (the pelvis horizontally 1.57 → 0.91 on 02_03).
 //!
+//! Session 25: where the reference is a frame (the CC BVHs', Bandai's),
+//! its torso is the clip's mean carriage in the body's heading frame
+//! (`pose::retarget`'s `motion_ref`: each torso joint's mean place about
+//! the pelvis, the file joints' mean rotations). 02_01 / 02_02 / 02_03
+//! 1.905 / 2.196 / 2.309 → 1.805 / 2.066 / 2.116 % (about the pelvis
+//! 1.31 / 1.48 / 1.92 → 1.28 / 1.40 / 1.59); the turned and rescaled
+//! copy still equals the BVH's. Measured with a switched build and not
+//! kept (abs %): the hips' and shoulders' lines alone turned to their
+//! mean yaw 1.920 / 2.196 / 2.231; the mean torso places without the file
+//! rotations' mean 1.877 / 2.093 / 2.473 (the chest then turns from the
+//! frame's file rotation, no longer matching its places); the mean
+//! carriage with the knees straightened 1.855 / 2.098 / 1.960; with the
+//! travel scaled by the standing hip height 1.765 / 2.260 / 2.118. What
+//! remains (02_03, signed means in the AMC result's heading frame, % of
+//! the height): the BVH's pelvis 1.4 behind the AMC's (the travel 1.6 %
+//! short, above) and 1.2 lower, while every other joint about the pelvis
+//! sits 0.8-2.5 ahead (spine 0.8, chest 0.9, head 2.3, knees 1.0-1.3,
+//! ankles 1.6-1.8, toes 1.9-2.5): the CC rig's hips sit behind the
+//! AMC's relative to the feet (its thighs 1.2-2.6° further forward, the
+//! data's), and the two offsets cancel in part in the world.
+//!
 //! Earlier figures (measured 2026-11-29):
 //! - 01_01: the cgspeed BVH retargets as the AMC does (0.00 %).
 //! - The CC conversions: 3.1-4.2 % apart, 1.7-2.7 % of it posture. The
@@ -174,6 +195,10 @@ const REORDERED: &str = "002_03 with its rotation channels re-ordered";
 /// 1.37 (its poses, reference and file rotations) in the table of pairs.
 const TURNED: &str = "002_03 turned and rescaled";
 
+/// Stands for 02_03's CC BVH re-timed (resampled from 60 to 24 fps
+/// before it is read as usual) in the table of pairs.
+const RETIMED: &str = "002_03 re-timed to 24 fps";
+
 /// `cp` turned by `q` and scaled by `k` about the origin: the poses, the
 /// reference's pose and the file joints' world rotations.
 fn turned(mut cp: ClipPoses, q: DQuat, k: f64) -> ClipPoses {
@@ -220,38 +245,43 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
         (
             "cmu-amc/02/02_01.amc",
             "cmu-bvh-ccrig/002_01.bvh",
-            0.021,
+            0.020,
             0.015,
             0.024,
         ),
         (
             "cmu-amc/02/02_02.amc",
             "cmu-bvh-ccrig/002_02.bvh",
-            0.024,
-            0.017,
+            0.023,
+            0.016,
             0.027,
         ),
         (
             "cmu-amc/02/02_03.amc",
             "cmu-bvh-ccrig/002_03.bvh",
-            0.025,
-            0.021,
+            0.0235,
+            0.018,
             0.024,
         ),
         // The same conversion written again with every joint's rotation
         // channels in another order (X Y Z for the file's Z Y X): the same
         // rotations, so the same figures.
-        ("cmu-amc/02/02_03.amc", REORDERED, 0.025, 0.021, 0.024),
+        ("cmu-amc/02/02_03.amc", REORDERED, 0.0235, 0.018, 0.024),
         // Turned 30° about the vertical and scaled by 1.37, the result
         // turned back: the same figures (asserted below to 1e-4 of the
         // height; the contact band is a fraction of the leg).
-        ("cmu-amc/02/02_03.amc", TURNED, 0.025, 0.021, 0.024),
+        ("cmu-amc/02/02_03.amc", TURNED, 0.0235, 0.018, 0.024),
+        // Re-timed: the BVH resampled to 24 fps, then to the 30 fps every
+        // clip is read at, so its frames are interpolated twice (a run at
+        // 24 fps loses its footfalls' detail: 3.28 % apart, 1.84 % about
+        // the pelvis, the pelvis 3.11 %, measured).
+        ("cmu-amc/02/02_03.amc", RETIMED, 0.035, 0.021, 0.034),
     ];
     let mut got = Vec::new();
     let reordered = reordered_channels(&m.join("cmu-bvh-ccrig/002_03.bvh"));
     for (a, b, abs_max, rel_max, pelvis_max) in pairs {
         let mut amc = load_clip(&m.join(a), &Default::default()).unwrap();
-        let b_path = if b == TURNED {
+        let b_path = if b == TURNED || b == RETIMED {
             m.join("cmu-bvh-ccrig/002_03.bvh")
         } else if b == REORDERED {
             reordered.clone()
@@ -261,6 +291,9 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
         let mut bvh = load_clip(&b_path, &Default::default()).unwrap();
         amc.to_metres_y_up();
         bvh.to_metres_y_up();
+        if b == RETIMED {
+            bvh = bvh.try_resampled(24.0).unwrap();
+        }
         let (amc, bvh, gap) = aligned(&amc, &bvh);
         assert!(
             gap < 3.0,
@@ -274,6 +307,7 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
             let c = c.try_resampled(30.0).unwrap();
             let map = detect_clip(&c).unwrap().map;
             let mut cp = clip_poses(&c, &map).unwrap();
+            eprintln!("{a} vs {b}: reference {}", cp.reference.source);
             if turn {
                 cp = turned(cp, q, 1.37);
             }
