@@ -526,6 +526,7 @@ fn analyse(
             .support
             .as_ref()
             .map(|_| &replace as &dyn Fn(&[Pose], &mut Support)),
+        open_end: false,
     };
     prepared.analyse_given(ch, reference, window, &given)
 }
