@@ -33,6 +33,7 @@ OUT=${2:-$(mktemp -d "${TMPDIR:-/tmp}/live-fidelity.XXXXXX")}
 mkdir -p "$OUT"
 vel() { python3 -c 'import json,sys; print("%.3f" % json.load(open(sys.argv[1]))["velocity_error_cm_per_frame"])' "$1" 2>/dev/null || echo nan; }
 echo "# $BIN on $DB; lags $LAGS; live options: ${ARGS:-none}; results in $OUT"
+echo "# start: $(uptime)"
 printf "%-28s %8s" clip offline; for l in $LAGS; do printf " %14s" "lag $l"; done; echo
 for c in $CLIPS; do
   n=$(basename "$c"); n=${n%.*}
@@ -50,3 +51,4 @@ for c in $CLIPS; do
   done
   echo
 done
+echo "# end: $(uptime)"

@@ -89,6 +89,18 @@ pub struct Args {
     /// (default: the session's).
     #[arg(long = "lift-settle", value_name = "FRACTION", value_parser = super::fraction)]
     pub lift_settle: Option<f64>,
+    /// Frames of the stream after which the pose kernel's levelling and
+    /// floor are decided over the window and kept (decided again only when
+    /// the window's own floor is more than the contact band from the kept
+    /// one); 0 decides both over each window.
+    #[arg(long = "keep-ground", value_name = "FRAMES")]
+    pub keep_ground: Option<usize>,
+    /// A foot that has left its support and not landed yet, at the
+    /// window's end, counts with the floor under it instead of the support
+    /// it left (as in a whole clip). Measured on CMU 03_01 (samba): better
+    /// at lag 0, worse at lag 3 (README, Live).
+    #[arg(long = "open-end")]
+    pub open_end: bool,
     /// Decided frames kept for the timeline's blends and the placement's
     /// smoothing.
     #[arg(long, default_value_t = 64, value_name = "FRAMES")]
@@ -223,6 +235,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         analysis_window: a.analysis_window.max(1),
         floor_step: a.floor_step.map(|mm| mm / 1000.0),
         lift_settle: a.lift_settle.or(LiveOptions::default().lift_settle),
+        keep_ground: match a.keep_ground {
+            Some(0) => None,
+            Some(n) => Some(n),
+            None => LiveOptions::default().keep_ground,
+        },
+        open_end: LiveOptions::default().open_end || a.open_end,
         history: a.history.max(1),
         loops: a.loops,
         actor: a.actor.clone(),

@@ -48,6 +48,12 @@ pub struct LiveOptions {
     /// The settle of the body's lift ([`SessionOptions::lift_settle`]).
     /// Default: the session's.
     pub lift_settle: Option<f64>,
+    /// Frames after which the levelling and floor are kept
+    /// ([`SessionOptions::keep_ground`]). Default: the session's.
+    pub keep_ground: Option<usize>,
+    /// The window's end is the stream's newest frame
+    /// ([`SessionOptions::open_end`]). Default: the session's.
+    pub open_end: bool,
     /// A replay's speed (1: the clip's real rate; 0: as fast as frames are
     /// made). Default: 1.
     pub speed: f64,
@@ -85,6 +91,8 @@ impl Default for LiveOptions {
             analysis_window: 128,
             floor_step: None,
             lift_settle: SessionOptions::default().lift_settle,
+            keep_ground: SessionOptions::default().keep_ground,
+            open_end: SessionOptions::default().open_end,
             speed: 1.0,
             load: LoadOptions::default(),
             seconds: None,
@@ -482,6 +490,8 @@ fn session_options(opts: &LiveOptions) -> SessionOptions {
         analysis_window: opts.analysis_window,
         floor_step: opts.floor_step,
         lift_settle: opts.lift_settle,
+        keep_ground: opts.keep_ground,
+        open_end: opts.open_end,
         ..SessionOptions::default()
     }
 }

@@ -7,7 +7,8 @@
 //! stream input ([`replay`] a clip file as a stream, [`bvh_tcp`] BVH over
 //! TCP, [`vmc`] and [`rokoko`] over UDP through [`stream`] and the
 //! [`humanoid`] bone tables, each through a [`mailbox`]), [`floor`] the
-//! running floor the pose kernel stands the stream on, [`ground`] the
+//! running floor the pose kernel stands the stream on, [`kept`] the levelling and floor
+//! decided once and kept, [`ground`] the
 //! offline ground decisions swapped in stage by stage, [`report`] the
 //! latency and throughput figures, [`stages`] where a frame's time goes, [`page`] the browser page and its
 //! WebSocket.
@@ -16,6 +17,7 @@ pub mod bvh_tcp;
 pub mod floor;
 pub mod ground;
 pub mod humanoid;
+pub mod kept;
 pub mod mailbox;
 pub mod online;
 pub mod page;

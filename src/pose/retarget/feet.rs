@@ -51,6 +51,7 @@ pub(super) fn place_feet(
     support: &Support,
     s: f64,
     toes: Toes,
+    open_end: bool,
     out: &mut [(Pose, [DQuat; Canonical::COUNT])],
 ) -> [Vec<Option<f64>>; 2] {
     let clip_floor = support.floor;
@@ -70,7 +71,9 @@ pub(super) fn place_feet(
             .map(|i| support.touch[f][i].filter(|&u| u <= clip_floor || support.rests[f][i]))
             .collect()
     });
-    let settled_sides = settled.each_ref().map(|t| grounds_either_side(t));
+    let settled_sides = settled
+        .each_ref()
+        .map(|t| landing_open(grounds_either_side(t), clip_floor, open_end));
     // A foot touching a step it is arriving on or leaving (not at rest on
     // it, and the step above the lower of the supports it settles on
     // before and after) while the other foot is settled on a support as
@@ -95,7 +98,9 @@ pub(super) fn place_feet(
             })
             .collect()
     });
-    let sides = touch.each_ref().map(|t| grounds_either_side(t));
+    let sides = touch
+        .each_ref()
+        .map(|t| landing_open(grounds_either_side(t), clip_floor, open_end));
     // A foot's ground when touching; in the air, the lower of the
     // supports it left and lands on.
     let lower = |f: usize, i: usize| -> Option<f64> {
@@ -178,6 +183,27 @@ pub(super) fn place_feet(
             .map(|y| y.map(|y| (y - clip_floor) * s))
             .collect()
     })
+}
+
+/// A foot's last and next support per frame (`sides`,
+/// [`grounds_either_side`]) with, when the clip's end is `open` (a
+/// stream's newest frame, [`Given::open_end`](super::Given::open_end)),
+/// `floor` for the next one of a foot that has left its last support and
+/// not landed in the clip: the lowest it can land on.
+fn landing_open(
+    mut sides: Vec<(Option<f64>, Option<f64>)>,
+    floor: f64,
+    open: bool,
+) -> Vec<(Option<f64>, Option<f64>)> {
+    if open {
+        for s in sides.iter_mut().rev() {
+            match s {
+                (Some(_), None) => s.1 = Some(floor),
+                _ => break,
+            }
+        }
+    }
+    sides
 }
 
 /// The lowest sole point of the character posed as `t` with global

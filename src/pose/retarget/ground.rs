@@ -104,7 +104,7 @@ pub(super) const CONTACT_PER_LEG: f64 = 0.036;
 
 /// The contact band (the clip's metres) of a clip whose legs are `leg`
 /// long: [`CONTACT_PER_LEG`] of it; 3 cm for a leg of no finite length.
-pub(super) fn contact_band(leg: f64) -> f64 {
+pub fn contact_band(leg: f64) -> f64 {
     if leg.is_finite() && leg > 0.0 {
         CONTACT_PER_LEG * leg
     } else {
@@ -199,6 +199,13 @@ pub struct Given<'a> {
     /// The last word on the supports: called with the levelled clip and
     /// the support found over it.
     pub support: Option<SupportHook<'a>>,
+    /// The clip ends at a stream's newest frame: a foot in the air after
+    /// its last touch in it has not landed yet, and the floor, the lowest
+    /// support it can land on, stands for the one it lands on (offline,
+    /// the lower of the support it left and the next one decides how low
+    /// it may go before it lifts the body: [`Support::under`]). False:
+    /// the clip is whole.
+    pub open_end: bool,
 }
 
 /// [`Given::support`]: called with the levelled clip and the support found

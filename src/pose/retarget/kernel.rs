@@ -228,7 +228,7 @@ pub(super) fn retarget_on_grounds(
     // clip has no heel point, so a heel strike's foot is off the ground
     // by its joints, and standing the body on the other foot alone (its
     // toes, leaving) sank the striking heel 5-7 cm through the floor.
-    let grounds = place_feet(character, &support, s, toes, &mut out);
+    let grounds = place_feet(character, &support, s, toes, given.open_end, &mut out);
     (out, grounds)
 }
 

@@ -78,8 +78,8 @@ mod torso;
 
 pub use feet::Toes;
 pub use ground::{
-    Given, Support, clip_floor, clip_support, clip_support_given, clip_support_on, foot_height,
-    ground_tilt,
+    Given, Support, clip_floor, clip_support, clip_support_given, clip_support_on, contact_band,
+    foot_height, ground_tilt,
 };
 pub use kernel::{retarget, retarget_toes, retarget_with_neutral};
 pub use measures::{

@@ -25,6 +25,7 @@ use surfmotion::drive::{Analysed, Prepared, RetargetError, RetargetOptions};
 use surfmotion::live::ground::{OfflineGround, Swap};
 use surfmotion::live::{LiveFrame, OnlineOptions, Session, SessionOptions};
 use surfmotion::pose::Pose;
+use surfmotion::pose::retarget::{clip_floor, ground_tilt};
 use surfmotion::rig::Canonical;
 use surfmotion::tools::eval::velocity::velocity_error;
 
@@ -64,8 +65,43 @@ fn stages(ch: &Character, prepared: &Prepared, m: &MocapPoses, a: &Analysed, bas
         let g = swap.map(|s| OfflineGround::of(&m.reference, &m.poses, s));
         run_raw(ch, prepared, m, &m.poses, true, sopts, g).1
     };
+    let tracing = std::env::var("SURFMOTION_LIVE_TRACE").is_ok_and(|v| v == "1");
+    // The stream's rules one at a time: s24's (each window decides its
+    // levelling and floor; a foot in the air at the window's end counts
+    // with the support it left), the open end, the kept ground.
+    let rules = |keep_ground: Option<usize>, open_end: bool| SessionOptions {
+        keep_ground,
+        open_end,
+        ..base
+    };
+    let s24 = run(rules(None, false), None);
+    eprintln!("    s24 rules                      {:.3}", err(&s24));
     let live = run(base, None);
-    eprintln!("    live as is                     {:.3}", err(&live));
+    for (name, keep, open) in [
+        ("+ open end", None, true),
+        ("+ ground kept after 32", Some(32), false),
+        ("+ ground kept after 64", Some(64), false),
+        ("+ ground kept after 128", Some(128), false),
+        ("open end, kept after 32", Some(32), true),
+        ("open end, kept after 128", Some(128), true),
+    ] {
+        eprintln!("    {name:<30} {:.3}", err(&run(rules(keep, open), None)));
+    }
+    eprintln!("    live as is (defaults)          {:.3}", err(&live));
+    if tracing {
+        let unsettled = run(
+            SessionOptions {
+                settle: 1.0,
+                ..base
+            },
+            None,
+        );
+        trace(
+            &a.query,
+            &m.poses,
+            &[("s24", &s24), ("live", &live), ("unsettled", &unsettled)],
+        );
+    }
     let steps: [SwapStep; 3] = [
         ("+ levelling offline", |s| s.tilt = true),
         ("+ floor offline", |s| s.floor = true),
@@ -78,6 +114,9 @@ fn stages(ch: &Character, prepared: &Prepared, m: &MocapPoses, a: &Analysed, bas
         let q = run(base, Some(swap));
         eprintln!("    {name:<30} {:.3}", err(&q));
         last = q;
+    }
+    if tracing {
+        trace(&a.query, &m.poses, &[("ground off.", &last)]);
     }
     let height = root_as_offline(&last, &a.query, false);
     eprintln!("    + root height offline          {:.3}", err(&height));
@@ -96,12 +135,10 @@ fn stages(ch: &Character, prepared: &Prepared, m: &MocapPoses, a: &Analysed, bas
     };
     for (name, sopts) in [
         ("settle 1 (none)", s(1.0, Some(1.0))),
-        ("settle 0.05 (s23)", s(0.05, None)),
         ("settle 0.05, lift 0.25", s(0.05, Some(0.25))),
-        ("settle 0.05, lift 0.02", s(0.05, Some(0.02))),
         ("settle 0.05, lift 0.01", s(0.05, Some(0.01))),
-        ("settle 0.05, lift 0", s(0.05, Some(0.0))),
-        ("settle 0.01", s(0.01, None)),
+        ("settle 0.1", s(0.1, None)),
+        ("settle 0.02", s(0.02, None)),
     ] {
         let q = run(sopts, None);
         let (mean, max) = height_apart(&q, &a.query);
@@ -109,6 +146,54 @@ fn stages(ch: &Character, prepared: &Prepared, m: &MocapPoses, a: &Analysed, bas
             "    {name:<30} {:.3}  (pelvis height from offline's: mean {mean:.2}, max {max:.2} cm)",
             err(&q)
         );
+    }
+}
+
+/// Prints, every frame, the offline pelvis height and each run's apart
+/// from it (cm), and each run's per-frame velocity error: where in the
+/// clip the error is made.
+fn trace(offline: &[Pose], raw: &[Pose], runs: &[(&str, &Vec<Pose>)]) {
+    let p = Canonical::Pelvis.index();
+    let row = |name: &str, v: Vec<f64>| {
+        let t: Vec<String> = v.iter().map(|x| format!("{x:.1}")).collect();
+        eprintln!("      {name:<12} {}", t.join(" "));
+    };
+    row("offline", offline.iter().map(|o| 100.0 * o[p].y).collect());
+    // The levelling over the whole clip and over its first frames, and
+    // the floor each finds (degrees off level, cm).
+    let tilts: Vec<String> = [16, 32, 64, 128, raw.len()]
+        .iter()
+        .map(|&n| {
+            let w = &raw[..n.min(raw.len())];
+            let t = ground_tilt(w);
+            let levelled: Vec<Pose> = w.iter().map(|m| m.map(|x| t * x)).collect();
+            let angle = t.angle_between(glam::DQuat::IDENTITY).to_degrees();
+            format!(
+                "{n}: {angle:.2} deg, floor {:.1}",
+                100.0 * clip_floor(&levelled)
+            )
+        })
+        .collect();
+    eprintln!(
+        "      levelling over the first frames: {}",
+        tilts.join("; ")
+    );
+    for (name, q) in runs {
+        row(
+            name,
+            q.iter()
+                .zip(offline)
+                .map(|(l, o)| 100.0 * (l[p].y - o[p].y))
+                .collect(),
+        );
+        let mut e = vec![0.0];
+        e.extend(
+            velocity_error(offline, q)
+                .per_frame
+                .iter()
+                .map(|x| 10.0 * x),
+        );
+        row("  err x10", e);
     }
 }
 

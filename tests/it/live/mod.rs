@@ -10,3 +10,4 @@ mod online;
 mod page;
 mod protocols;
 mod stages;
+mod stream_rules;
