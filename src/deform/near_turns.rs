@@ -93,18 +93,10 @@ impl Neighbourhoods {
             .map(|&u| DVec3::from_array(reference[u as usize]))
             .sum::<DVec3>()
             / near.len().max(1) as f64;
-        // Σ xᵢ oᵢᵀ: the offsets sum to zero, so x needs no centring.
-        let mut h = DMat3::ZERO;
-        for &u in near {
+        best_turn(near.iter().map(|&u| {
             let o = DVec3::from_array(reference[u as usize]) - c;
-            let x = DVec3::from_array(frame[u as usize]);
-            h += DMat3::from_cols(x * o.x, x * o.y, x * o.z);
-        }
-        if h.is_finite() && h != DMat3::ZERO {
-            polar(h).0
-        } else {
-            DQuat::IDENTITY
-        }
+            (DVec3::from_array(frame[u as usize]), o)
+        }))
     }
 
     /// Each vertex's rotation from `reference` onto `frame`, into `turn`
@@ -121,6 +113,23 @@ impl Neighbourhoods {
         for (t, &s) in turn.iter_mut().zip(&self.seed_of) {
             *t = seeds[s as usize];
         }
+    }
+}
+
+/// The rotation that best turns offsets `o` onto points `x` over the
+/// pairs `(x, o)` (Kabsch: the polar factor of `Σ xᵢ oᵢᵀ`; the offsets sum
+/// to zero, so `x` needs no centring); the identity where the sum is
+/// degenerate or not finite. Shared with the surface measure
+/// ([`crate::tools::eval::triangles`]), which asks the same question.
+pub fn best_turn(pairs: impl Iterator<Item = (DVec3, DVec3)>) -> DQuat {
+    let mut h = DMat3::ZERO;
+    for (x, o) in pairs {
+        h += DMat3::from_cols(x * o.x, x * o.y, x * o.z);
+    }
+    if h.is_finite() && h != DMat3::ZERO {
+        polar(h).0
+    } else {
+        DQuat::IDENTITY
     }
 }
 

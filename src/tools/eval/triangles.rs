@@ -41,10 +41,9 @@
 
 use super::EvalError;
 use crate::deform::TurnedOver;
-use crate::deform::near_turns::Neighbourhoods;
+use crate::deform::near_turns::{Neighbourhoods, best_turn};
 use crate::deform::unflip::{Adjacency, turned_over};
-use crate::mesh::frames::polar;
-use glam::{DMat3, DQuat, DVec3};
+use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -164,17 +163,12 @@ impl RestTriangles {
         seeds.clear();
         seeds.extend(self.start.windows(2).map(|w| {
             let r = w[0]..w[1];
-            // Σ xᵢ oᵢᵀ: the offsets sum to zero, so x needs no centring.
-            let mut h = DMat3::ZERO;
-            for (&u, o) in self.near[r.clone()].iter().zip(&self.offsets[r]) {
-                let x = DVec3::from_array(frame[u as usize]);
-                h += DMat3::from_cols(x * o.x, x * o.y, x * o.z);
-            }
-            if h.is_finite() && h != DMat3::ZERO {
-                polar(h).0
-            } else {
-                DQuat::IDENTITY
-            }
+            best_turn(
+                self.near[r.clone()]
+                    .iter()
+                    .zip(&self.offsets[r])
+                    .map(|(&u, &o)| (DVec3::from_array(frame[u as usize]), o)),
+            )
         }));
         turn.clear();
         turn.extend(self.seed_of.iter().map(|&s| seeds[s as usize]));
