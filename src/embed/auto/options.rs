@@ -11,8 +11,17 @@ pub struct AutoOptions {
     /// itself (the capture's frame 0). `db init` passes the frame
     /// `embed::rest::choose_rest_frame` chooses (the clearest of contact).
     pub rest_frame: Option<usize>,
-    /// Frames of the capture used, evenly spread. Default 40.
+    /// Frames of the capture used. Default 40.
     pub max_frames: usize,
+    /// The frames chosen by their poses (farthest-point first from the
+    /// rest frame's pose, `embed::pose_order`), the topology not in the fit:
+    /// the same capture in any order is fitted on the same frames. Default
+    /// false (session 25): spread evenly in the order given, after the
+    /// topology's positions as the fit's first frame — on with `db init`,
+    /// the merged build's `embed::auto_arms`/`auto_knees` (the automatic
+    /// rig against the landmark rigs on the real captures) failed, and the
+    /// yardstick with it was not measured.
+    pub frames_by_pose: bool,
     /// The decomposition's settings.
     pub decompose: DecomposeOptions,
 }
@@ -22,6 +31,7 @@ impl Default for AutoOptions {
         AutoOptions {
             rest_frame: None,
             max_frames: 40,
+            frames_by_pose: false,
             decompose: DecomposeOptions::default(),
         }
     }

@@ -30,7 +30,11 @@ pub fn auto_rig(
     let n = mesh.vertex_count();
     let topo = mesh.positions();
     let rest: &[[f64; 3]] = opts.rest_frame.map_or(topo, |r| frames[r]);
-    let used = sample_frames(rest, frames, opts.max_frames);
+    let used = if opts.frames_by_pose {
+        sample_by_pose(rest, frames, opts.max_frames)
+    } else {
+        sample_evenly(topo, frames, opts.max_frames)
+    };
     let nb = crate::embed::parts::neighbours(n, mesh.triangles());
     let (body, tips, mut notes) = find_body(rest, &used, &nb, opts)?;
     let chains = Chains::find(&body, &tips);
@@ -65,9 +69,12 @@ pub fn auto_rig(
     // (each part's rigid fit from the rest frame onto the topology's
     // positions; the topology takes no part in the decomposition).
     let dec = &body.dec;
-    let onto_topo = match opts.rest_frame {
-        Some(_) => super::decompose::fit_onto(rest, topo, &dec.labels, dec.count),
-        None => Vec::new(),
+    // (Evenly spread, the topology is the fit's first frame: each part's
+    // motion onto it is the fit's own.)
+    let onto_topo = match (opts.rest_frame, opts.frames_by_pose) {
+        (None, _) => Vec::new(),
+        (Some(_), true) => super::decompose::fit_onto(rest, topo, &dec.labels, dec.count),
+        (Some(_), false) => dec.motions.iter().map(|m| (m.r[0], m.t[0])).collect(),
     };
     let to_topo = |q: DVec3| -> [f64; 3] {
         if opts.rest_frame.is_none() {
@@ -135,7 +142,7 @@ pub fn auto_rig(
         left: rotate(sided.left),
         height: body.height,
         rest_frame: opts.rest_frame,
-        frames_used: used.len(),
+        frames_used: used.len() - usize::from(!opts.frames_by_pose),
         parts: dec.count,
         labels: dec.labels.clone(),
         joints: found
@@ -199,7 +206,7 @@ fn check_input(mesh: &Mesh, frames: &[&[[f64; 3]]], opts: &AutoOptions) -> Resul
 /// samba started at a frame with the hands on the hips rigged 1.4 % of
 /// the height and 8 % of the parts away from its clear start on the same
 /// rest frame.)
-fn sample_frames<'a>(
+fn sample_by_pose<'a>(
     rest: &[[f64; 3]],
     frames: &[&'a [[f64; 3]]],
     max_frames: usize,
@@ -211,6 +218,23 @@ fn sample_frames<'a>(
         .into_iter()
         .map(|f| frames[f])
         .collect()
+}
+
+/// Frame 0 of the fit is the topology mesh (so that rest points map back
+/// onto it), then up to `max_frames` evenly spread in the order given
+/// (the default; [`AutoOptions::frames_by_pose`]).
+fn sample_evenly<'a>(
+    topo: &'a [[f64; 3]],
+    frames: &[&'a [[f64; 3]]],
+    max_frames: usize,
+) -> Vec<&'a [[f64; 3]]> {
+    let k = max_frames.clamp(2, frames.len().max(2));
+    let mut used: Vec<&[[f64; 3]]> = vec![topo];
+    for i in 0..k {
+        let f = (i * (frames.len() - 1)) / (k - 1).max(1);
+        used.push(frames[f]);
+    }
+    used
 }
 
 /// The body, its first six extremities (vertex, distance) and the notes.

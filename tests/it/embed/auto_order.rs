@@ -59,6 +59,7 @@ fn rig_in_order(
     let rest = (c.frame > 0).then(|| c.frame - 1);
     let opts = AutoOptions {
         rest_frame: rest,
+        frames_by_pose: true,
         ..AutoOptions::default()
     };
     let rig = auto_rig(&topo, &f, &opts).unwrap();
