@@ -407,3 +407,27 @@ pub fn scaled_angles_bvh(text: &str, scale: f64) -> String {
     }
     out
 }
+
+/// A canonical clip mirrored left to right (x negated, left and right
+/// joints swapped: arms 5-7 with 8-10, legs 11-14 with 15-18): the other
+/// foot swings, the other leg leads.
+pub fn mirrored_clip(clip: &[surfmotion::pose::Pose]) -> Vec<surfmotion::pose::Pose> {
+    use surfmotion::rig::Canonical;
+    clip.iter()
+        .map(|p| {
+            let mut m = *p;
+            for c in Canonical::ALL {
+                let i = c.index();
+                let j = match i {
+                    5..=7 => i + 3,
+                    8..=10 => i - 3,
+                    11..=14 => i + 4,
+                    15..=18 => i - 4,
+                    _ => i,
+                };
+                m[j] = glam::DVec3::new(-p[i].x, p[i].y, p[i].z);
+            }
+            m
+        })
+        .collect()
+}

@@ -98,29 +98,6 @@ fn step_up(block: f64, fps: f64) -> Vec<Pose> {
         .collect()
 }
 
-/// The clip mirrored left to right (x negated, left and right joints
-/// swapped): the other foot swings.
-fn mirrored(clip: &[Pose]) -> Vec<Pose> {
-    clip.iter()
-        .map(|p| {
-            let mut m = *p;
-            for c in Canonical::ALL {
-                let i = c.index();
-                // Arms 5-7 with 8-10, legs 11-14 with 15-18.
-                let j = match i {
-                    5..=7 => i + 3,
-                    8..=10 => i - 3,
-                    11..=14 => i + 4,
-                    15..=18 => i - 4,
-                    _ => i,
-                };
-                m[j] = DVec3::new(-p[i].x, p[i].y, p[i].z);
-            }
-            m
-        })
-        .collect()
-}
-
 /// Retargets `clip` onto the standing character at ×0.85, ×1 and ×1.2 and
 /// with a longer foot, and asserts that per frame the pelvis rises or
 /// falls as the clip's, scaled by the ratio of leg lengths, within 2.5 %
@@ -169,9 +146,9 @@ fn a_foot_passing_a_blocks_top_does_not_lift_the_body_in_one_frame() {
             let down: Vec<Pose> = up.iter().rev().copied().collect();
             for (way, clip) in [
                 ("up, left foot", up.clone()),
-                ("up, right foot", mirrored(&up)),
+                ("up, right foot", crate::common::mirrored_clip(&up)),
                 ("down, left foot", down.clone()),
-                ("down, right foot", mirrored(&down)),
+                ("down, right foot", crate::common::mirrored_clip(&down)),
             ] {
                 let what = format!("block {block} m, {fps} fps, {way}");
                 worst = worst.max(pelvis_follows_the_clip(&clip, &what));
@@ -265,7 +242,7 @@ fn a_foot_leaving_a_blocks_top_does_not_drop_the_body_in_one_frame() {
             let down = step_down(block, fps);
             for (way, clip) in [
                 ("left foot first", down.clone()),
-                ("right foot first", mirrored(&down)),
+                ("right foot first", crate::common::mirrored_clip(&down)),
             ] {
                 let what = format!("block {block} m, {fps} fps, {way}");
                 worst = worst.max(pelvis_follows_the_clip(&clip, &what));

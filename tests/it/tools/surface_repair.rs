@@ -696,30 +696,6 @@ fn a_region_meets_its_parent_at_its_seams() {
     }
 }
 
-/// `clip` mirrored left to right (x negated, left and right joints
-/// swapped, as `pose::placement` does): the other leg leads.
-fn mirrored(clip: &[surfmotion::pose::Pose]) -> Vec<surfmotion::pose::Pose> {
-    use surfmotion::rig::Canonical;
-    clip.iter()
-        .map(|p| {
-            let mut m = *p;
-            for c in Canonical::ALL {
-                let i = c.index();
-                // Arms 5-7 with 8-10, legs 11-14 with 15-18.
-                let j = match i {
-                    5..=7 => i + 3,
-                    8..=10 => i - 3,
-                    11..=14 => i + 4,
-                    15..=18 => i - 4,
-                    _ => i,
-                };
-                m[j] = glam::DVec3::new(-p[i].x, p[i].y, p[i].z);
-            }
-            m
-        })
-        .collect()
-}
-
 /// Triangle-frames of `raw` turned over against the character's rest frame
 /// (the surface measure's test, `eval`'s plausibility count) after the
 /// deformation with `opts` and its repair.
@@ -767,7 +743,10 @@ fn the_parent_seams_and_surface_repair_leave_fewer_turned_over_after_the_repair(
     )
     .unwrap();
     let backwards: Vec<_> = m.poses.iter().rev().copied().collect();
-    for (name, poses) in [("mirrored", mirrored(&m.poses)), ("backwards", backwards)] {
+    for (name, poses) in [
+        ("mirrored", common::mirrored_clip(&m.poses)),
+        ("backwards", backwards),
+    ] {
         let opts = RetargetOptions {
             deform: DeformMode::None,
             ..Default::default()
