@@ -57,14 +57,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     if a.matrix.is_none() {
         let mut out = String::new();
-        for s in &g.sequences {
+        for s in g.sequences() {
             out += &format!("{} ({})\n", s.name, super::count(s.len, "frame"));
         }
-        for e in &g.edges {
+        for e in g.edges() {
             out += &format!(
                 "{} -> {}: {}, best cost {:.4}\n",
-                g.sequences[e.from].name,
-                g.sequences[e.to].name,
+                g.sequences()[e.from].name,
+                g.sequences()[e.to].name,
                 super::count(e.transitions.len(), "transition"),
                 e.cost
             );

@@ -868,8 +868,8 @@ pub fn build_opened(
         stored_pairs,
         graph_cached,
         graph_seconds,
-        transitions: graph.transitions.len(),
-        edges: graph.edges.len(),
+        transitions: graph.transitions().len(),
+        edges: graph.edges().len(),
         cache: cache_dir(dir),
     };
     Ok((mat, graph, report))

@@ -163,7 +163,7 @@ impl Character {
                     .rsplit_once(':')
                     .ok_or_else(|| bad(format!("example '{e}': expected SEQUENCE:FRAME")))?;
                 let s = graph
-                    .sequences
+                    .sequences()
                     .iter()
                     .position(|q| q.name == name.trim())
                     .ok_or_else(|| bad(format!("example '{e}': no sequence '{name}'")))?;
@@ -364,7 +364,7 @@ impl Character {
     /// The natural successor of a frame (the next frame of its sequence).
     pub fn successor(&self, id: FlatFrame) -> Option<FlatFrame> {
         let (s, t) = self.graph.frame_of(id);
-        (t + 1 < self.graph.sequences[s].len).then_some(id.next())
+        (t + 1 < self.graph.sequences()[s].len).then_some(id.next())
     }
 }
 
@@ -383,7 +383,7 @@ fn successor_steps(matrix: &Similarity, graph: &SurfaceMotionGraph) -> Vec<f32> 
         Similarity::Dense(_) => None,
     };
     let mut read = 0;
-    for q in &graph.sequences {
+    for q in graph.sequences() {
         for a in q.start..(q.start + q.len).saturating_sub(1) {
             if let Some(v) = steps.get_mut(a) {
                 *v = matrix.get(a, a + 1);

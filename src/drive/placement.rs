@@ -99,13 +99,13 @@ impl Frames for Character {
         self.graph().flat_id(s, t)
     }
     fn len(&self, s: usize) -> usize {
-        self.graph().sequences[s].len
+        self.graph().sequences()[s].len
     }
     fn transition_window(&self, from: FlatFrame, to_prev: FlatFrame) -> Option<usize> {
         let (sa, m) = self.graph().frame_of(from);
         let (sb, n) = self.graph().frame_of(to_prev);
         self.graph()
-            .transitions
+            .transitions()
             .iter()
             .find(|t| t.from == sa && t.to == sb && t.m == m && t.n == n)
             .map(|t| t.window)

@@ -332,7 +332,7 @@ fn deform_chunk(
 fn report_steps(ch: &Character, retrieval: &Retrieval, frames: &[OutFrame]) -> Vec<Step> {
     let name = |id: crate::graph::FlatFrame| {
         let (s, t) = ch.graph().frame_of(id);
-        (ch.graph().sequences[s].name.clone(), t)
+        (ch.graph().sequences()[s].name.clone(), t)
     };
     retrieval
         .path

@@ -48,16 +48,16 @@ pub fn agreement(
     cost: f64,
 ) -> Agreement {
     let mut a = Agreement {
-        reference: reference.transitions.len(),
-        compared: compared.transitions.len(),
+        reference: reference.transitions().len(),
+        compared: compared.transitions().len(),
         same_frames: 0,
         near: 0,
         near_and_cost: 0,
         worst_cost: 0.0,
     };
-    for t in &reference.transitions {
+    for t in reference.transitions() {
         let best = compared
-            .transitions
+            .transitions()
             .iter()
             .filter(|u| u.from == t.from && u.to == t.to)
             .filter(|u| u.m.abs_diff(t.m) <= frames && u.n.abs_diff(t.n) <= frames)

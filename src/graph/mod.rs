@@ -6,6 +6,7 @@
 
 pub mod compare;
 pub mod frame;
+pub mod parts;
 pub mod plot;
 pub mod smg;
 /// The transition search (Eqs. 2–5) lives with the similarity it reads
@@ -14,5 +15,6 @@ pub mod smg;
 pub use crate::similarity::transitions;
 
 pub use frame::{FlatFrame, FrameId};
+pub use parts::GraphParts;
 pub use smg::{FrameAdjacency, GraphEdits, SequenceEdge, SurfaceMotionGraph};
 pub use transitions::{Transition, TransitionOptions};

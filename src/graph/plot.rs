@@ -94,7 +94,7 @@ pub fn matrix_image(
         }
     };
     let arm = (px as i64 / 120).max(2);
-    for t in &g.transitions {
+    for t in g.transitions() {
         let r = m.spans()[t.from].start + t.m;
         let c = m.spans()[t.to].start + t.n;
         let (x, y) = (to_px(c) as i64, to_px(r) as i64);
@@ -149,7 +149,7 @@ mod tests {
             &GraphEdits::default(),
         )
         .unwrap();
-        assert!(!g.transitions.is_empty());
+        assert!(!g.transitions().is_empty());
         let img = matrix_image(&m, &g, 240);
         assert_eq!((img.width, img.height), (240, 240));
         // Diagonal dark, boundary white, some red.

@@ -10,6 +10,7 @@
 //! `m−L..=m+L` / `n−L..=n+L` is applied when the path is turned into meshes.
 
 use super::frame::{FlatFrame, FrameId};
+use super::parts::GraphParts;
 use super::transitions::{self, Transition, TransitionOptions};
 use crate::similarity::{Dissimilarity, Measure, Span};
 use serde::{Deserialize, Serialize};
@@ -39,21 +40,25 @@ pub struct SequenceEdge {
     pub cost: f64,
 }
 
-/// The graph.
+/// The graph. Made by [`SurfaceMotionGraph::build`] or, from its parts
+/// (a cache, a test), by [`SurfaceMotionGraph::new`], which checks that they
+/// agree ([`GraphParts::check`]); its fields are read through accessors.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "GraphParts")]
 pub struct SurfaceMotionGraph {
-    /// The measure the transitions were found with.
-    pub measure: Measure,
-    /// The options used.
-    pub options: TransitionOptions,
-    /// Sequences (nodes) with their frame spans.
-    pub sequences: Vec<Span>,
-    /// All transitions, grouped by ordered sequence pair, best first.
-    pub transitions: Vec<Transition>,
-    /// Sequence-level edges.
-    pub edges: Vec<SequenceEdge>,
-    /// What the edits removed, for the report.
-    pub removed: Vec<String>,
+    measure: Measure,
+    options: TransitionOptions,
+    sequences: Vec<Span>,
+    transitions: Vec<Transition>,
+    edges: Vec<SequenceEdge>,
+    removed: Vec<String>,
+}
+
+impl TryFrom<GraphParts> for SurfaceMotionGraph {
+    type Error = String;
+    fn try_from(parts: GraphParts) -> Result<Self, String> {
+        SurfaceMotionGraph::new(parts)
+    }
 }
 
 /// An edit that names something that does not exist.
@@ -67,6 +72,70 @@ pub struct EditError {
 }
 
 impl SurfaceMotionGraph {
+    /// A graph from its parts, when they agree ([`GraphParts::check`]);
+    /// the error says what disagrees.
+    pub fn new(parts: GraphParts) -> Result<SurfaceMotionGraph, String> {
+        parts.check()?;
+        let GraphParts {
+            measure,
+            options,
+            sequences,
+            transitions,
+            edges,
+            removed,
+        } = parts;
+        Ok(SurfaceMotionGraph {
+            measure,
+            options,
+            sequences,
+            transitions,
+            edges,
+            removed,
+        })
+    }
+
+    /// The graph's parts (to edit and remake with [`SurfaceMotionGraph::new`]).
+    pub fn into_parts(self) -> GraphParts {
+        GraphParts {
+            measure: self.measure,
+            options: self.options,
+            sequences: self.sequences,
+            transitions: self.transitions,
+            edges: self.edges,
+            removed: self.removed,
+        }
+    }
+
+    /// The measure the transitions were found with.
+    pub fn measure(&self) -> Measure {
+        self.measure
+    }
+
+    /// The transition search's options.
+    pub fn options(&self) -> &TransitionOptions {
+        &self.options
+    }
+
+    /// Sequences (nodes) with their frame spans, numbered flat in order.
+    pub fn sequences(&self) -> &[Span] {
+        &self.sequences
+    }
+
+    /// All transitions, grouped by ordered sequence pair, best first.
+    pub fn transitions(&self) -> &[Transition] {
+        &self.transitions
+    }
+
+    /// Sequence-level edges, one per ordered pair with a transition.
+    pub fn edges(&self) -> &[SequenceEdge] {
+        &self.edges
+    }
+
+    /// What the edits removed, for the report.
+    pub fn removed(&self) -> &[String] {
+        &self.removed
+    }
+
     /// Finds the transitions of every ordered sequence pair (in parallel)
     /// and builds the graph, applying `edits`.
     pub fn build(
@@ -160,48 +229,14 @@ impl SurfaceMotionGraph {
     }
 
     /// Checks a graph read from a cache against the similarity matrix it
-    /// claims to come from: the same sequences (names, starts, lengths),
-    /// every transition and edge naming existing sequences, frames and
-    /// transitions, finite costs. A cache edited by hand (or by a bug) with
-    /// a valid key made `retarget` and `graph --json` panic and `graph
-    /// --dot` print nonsense (issue 18, item 13). Returns what is wrong.
+    /// claims to come from: the same sequences (names, starts, lengths).
+    /// The graph's own parts agree by construction ([`SurfaceMotionGraph::new`]):
+    /// a cache edited by hand (or by a bug) with a valid key made `retarget`
+    /// and `graph --json` panic and `graph --dot` print nonsense (issue 18,
+    /// item 13). Returns what is wrong.
     pub fn validate(&self, matrix: &(impl Dissimilarity + ?Sized)) -> Result<(), String> {
         if self.sequences != matrix.spans() {
             return Err("its sequences differ from the similarity matrix's".into());
-        }
-        let seqs = &self.sequences;
-        for (k, t) in self.transitions.iter().enumerate() {
-            let (Some(a), Some(b)) = (seqs.get(t.from), seqs.get(t.to)) else {
-                return Err(format!(
-                    "transition {k} joins sequences {} -> {} of {}",
-                    t.from,
-                    t.to,
-                    seqs.len()
-                ));
-            };
-            if t.m >= a.len || t.n >= b.len {
-                return Err(format!(
-                    "transition {k} ({}:{} -> {}:{}) is past the end of a sequence ({} and {} frames)",
-                    a.name, t.m, b.name, t.n, a.len, b.len
-                ));
-            }
-            if !t.cost.is_finite() || t.window > a.len.max(b.len) {
-                return Err(format!(
-                    "transition {k} has cost {} and half-window {}",
-                    t.cost, t.window
-                ));
-            }
-        }
-        for (k, e) in self.edges.iter().enumerate() {
-            if e.from >= seqs.len() || e.to >= seqs.len() {
-                return Err(format!("edge {k} joins sequences that do not exist"));
-            }
-            for &i in &e.transitions {
-                match self.transitions.get(i) {
-                    Some(t) if t.from == e.from && t.to == e.to => {}
-                    _ => return Err(format!("edge {k} lists transition {i}, not one of its own")),
-                }
-            }
         }
         Ok(())
     }

@@ -162,7 +162,7 @@ pub fn run_demo(dir: &Path, progress: &dyn BuildProgress) -> Result<DemoReport, 
         output: dir.to_path_buf(),
         vertices: n,
         database_frames: ch.frame_count(),
-        transitions: ch.graph().transitions.len(),
+        transitions: ch.graph().transitions().len(),
         query_frames: frames,
         velocity_error_cm_per_frame: err.mean_cm,
         seconds: DemoSeconds {

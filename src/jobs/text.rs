@@ -43,21 +43,26 @@ pub fn database(dir: &Path, graph: &SurfaceMotionGraph, r: &DatabaseReport) -> S
         if r.graph_cached { " (cached)" } else { "" },
         r.graph_seconds
     );
-    for t in graph.transitions.iter().take(40) {
+    for t in graph.transitions().iter().take(40) {
         let _ = writeln!(
             out,
             "  {}:{} -> {}:{}  L = {:2}  cost {:.4}",
-            graph.sequences[t.from].name, t.m, graph.sequences[t.to].name, t.n, t.window, t.cost
+            graph.sequences()[t.from].name,
+            t.m,
+            graph.sequences()[t.to].name,
+            t.n,
+            t.window,
+            t.cost
         );
     }
-    if graph.transitions.len() > 40 {
+    if graph.transitions().len() > 40 {
         let _ = writeln!(
             out,
             "  ... (`surfmotion graph {} --json` lists all)",
             dir.display()
         );
     }
-    for e in &graph.removed {
+    for e in graph.removed() {
         let _ = writeln!(out, "  removed by the manifest: {e}");
     }
     let _ = writeln!(out, "cache: {}", r.cache.display());

@@ -194,7 +194,7 @@ pub fn transition_floor_with(
     progress: &mut dyn FnMut(u64, u64),
 ) -> TransitionFloor {
     let g = ch.graph();
-    let seqs = &g.sequences;
+    let seqs = g.sequences();
     let total: u64 = seqs
         .iter()
         .enumerate()

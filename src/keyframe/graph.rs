@@ -131,7 +131,7 @@ impl KeyGraph {
     ) -> KeyGraph {
         let centre = frame_centres(ch);
         let mut sequence = vec![0u32; ch.frame_count()];
-        for (s, span) in ch.graph().sequences.iter().enumerate() {
+        for (s, span) in ch.graph().sequences().iter().enumerate() {
             for f in span.start..span.start + span.len {
                 if let Some(x) = sequence.get_mut(f) {
                     *x = s as u32;

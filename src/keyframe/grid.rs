@@ -365,7 +365,7 @@ pub fn graph_jumps(
         return g.windows.iter().map(|(&(a, b), &l)| (a, b, l)).collect();
     }
     ch.graph()
-        .transitions
+        .transitions()
         .iter()
         .map(|t| {
             let from = ch.graph().flat_id(t.from, t.m);

@@ -156,7 +156,7 @@ pub fn runs(ch: &Character, frames: &[FlatFrame]) -> Vec<String> {
         }
     }
     out.into_iter()
-        .map(|(s, a, b)| format!("{}[{a}..{b}]", ch.graph().sequences[s].name))
+        .map(|(s, a, b)| format!("{}[{a}..{b}]", ch.graph().sequences()[s].name))
         .collect()
 }
 

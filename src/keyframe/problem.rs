@@ -107,7 +107,7 @@ pub fn parse_key(ch: &Character, key: &str) -> Result<FlatFrame, KeyframeError> 
     let name = name.trim();
     let s = ch
         .graph()
-        .sequences
+        .sequences()
         .iter()
         .position(|q| q.name == name)
         .ok_or_else(|| KeyframeError::Sequence {
@@ -115,13 +115,13 @@ pub fn parse_key(ch: &Character, key: &str) -> Result<FlatFrame, KeyframeError> 
             name: name.into(),
             known: ch
                 .graph()
-                .sequences
+                .sequences()
                 .iter()
                 .map(|q| q.name.as_str())
                 .collect::<Vec<_>>()
                 .join(", "),
         })?;
-    let len = ch.graph().sequences[s].len;
+    let len = ch.graph().sequences()[s].len;
     let f = f.trim();
     // All digits but too many for a number (`walk:99999999999999999999`):
     // out of range, not a syntax error.
@@ -143,7 +143,7 @@ pub fn parse_key(ch: &Character, key: &str) -> Result<FlatFrame, KeyframeError> 
 /// `SEQUENCE:FRAME` of a frame.
 pub fn key_name(ch: &Character, id: FlatFrame) -> String {
     let (s, f) = ch.graph().frame_of(id);
-    format!("{}:{}", ch.graph().sequences[s].name, f)
+    format!("{}:{}", ch.graph().sequences()[s].name, f)
 }
 
 /// Distance and time targets.
@@ -289,7 +289,7 @@ pub enum TransitionCost {
 pub fn price_by_smoothness(ch: &Character, g: &mut KeyGraph) {
     use rayon::prelude::*;
     let mut window = std::collections::HashMap::new();
-    for t in &ch.graph().transitions {
+    for t in ch.graph().transitions() {
         let from = ch.graph().flat_id(t.from, t.m);
         let to = ch.graph().flat_id(t.to, t.n).next();
         window.insert((from, to), t.window);

@@ -214,7 +214,7 @@ fn no_path_hint(ch: &Character, from: FlatFrame, to: FlatFrame) -> String {
             }
         }
     }
-    let seq = |s: usize| &g.sequences[s].name;
+    let seq = |s: usize| &g.sequences()[s].name;
     let mut out = Vec::new();
     // `to` is reachable along its own sequence from an earlier `from`.
     let along = sf == st && ff <= ft;

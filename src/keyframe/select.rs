@@ -80,7 +80,7 @@ pub(crate) fn measured_with(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Vec<Chosen> {
     let g = ch.graph();
-    let topts = g.options;
+    let topts = g.options();
     let lo = topts.min_window.max(1);
     let hi = opts.max_window.max(lo);
     let surface = Surface::new(ch.topology().triangles(), ch.n());
@@ -90,7 +90,7 @@ pub(crate) fn measured_with(
         min_window: lo,
         min_gap: topts.min_gap,
     };
-    let mut pairs: Vec<(usize, usize)> = g.edges.iter().map(|e| (e.from, e.to)).collect();
+    let mut pairs: Vec<(usize, usize)> = g.edges().iter().map(|e| (e.from, e.to)).collect();
     pairs.sort_unstable();
     pairs.dedup();
     let mut out = Vec::new();
@@ -98,7 +98,7 @@ pub(crate) fn measured_with(
     for (done, (i, j)) in pairs.into_iter().enumerate() {
         progress(done, total);
         let c = |r: usize, s: usize| ch.matrix().between(i, r, j, s);
-        let (li, lj) = (g.sequences[i].len, g.sequences[j].len);
+        let (li, lj) = (g.sequences()[i].len, g.sequences()[j].len);
         let cands: Vec<(usize, usize)> = transitions::find(&c, li, lj, i == j, &fopts)
             .into_iter()
             .map(|(m, n, _, _)| (m, n))
@@ -157,7 +157,7 @@ pub(crate) fn measured_with(
 
 /// True when a `remove` edit of the graph dropped `(i, m) → (j, n)`.
 fn removed(ch: &Character, i: usize, m: usize, j: usize, n: usize) -> bool {
-    let s = &ch.graph().sequences;
+    let s = ch.graph().sequences();
     let text = format!("{}:{} -> {}:{}", s[i].name, m, s[j].name, n);
-    ch.graph().removed.contains(&text)
+    ch.graph().removed().contains(&text)
 }

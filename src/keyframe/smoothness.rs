@@ -467,8 +467,8 @@ pub(crate) fn profile_pairs(
     let tb = tb.saturating_sub(1);
     let l = half as i64;
     let (la, lb) = (
-        ch.graph().sequences[sa].len as i64,
-        ch.graph().sequences[sb].len as i64,
+        ch.graph().sequences()[sa].len as i64,
+        ch.graph().sequences()[sb].len as i64,
     );
     (-l..=l)
         .map(|k| {

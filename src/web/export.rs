@@ -307,7 +307,7 @@ fn space_table(dir: &Path, g: &mut Geometry) -> Result<Vec<SiteSpace>, WebError>
 /// The graph's transitions as the page's table, in the graph's order.
 pub fn transition_table(graph: &SurfaceMotionGraph, g: &Geometry) -> Vec<SiteTransition> {
     graph
-        .transitions
+        .transitions()
         .iter()
         .map(|t| SiteTransition {
             from: t.from,

@@ -243,7 +243,7 @@ fn the_manifest_overrides_constraints_and_examples() {
     assert_eq!(def.constraint_vertices, vec![10, 500, 2000, 7000]);
     let s0 = ch
         .graph()
-        .sequences
+        .sequences()
         .iter()
         .position(|s| s.name == "02_01")
         .unwrap();

@@ -5,8 +5,9 @@ use crate::common;
 use glam::{DQuat, DVec3};
 use std::path::Path;
 use surfmotion::db::{BuildOptions, Manifest, Quiet, SequenceEntry, build};
+use surfmotion::graph::{GraphParts, SurfaceMotionGraph, TransitionOptions};
 use surfmotion::mesh::io::pc2::{read_pc2, write_pc2};
-use surfmotion::similarity::{Measure, PairDistance, ShapeSet, VertexSet};
+use surfmotion::similarity::{Measure, PairDistance, ShapeSet, SimilarityMatrix, Span, VertexSet};
 
 /// A database in a temporary folder with the given sequences of samba
 /// frames (`name`, first frame, end frame), written as PC2 caches.
@@ -85,12 +86,12 @@ fn samba_matrix_is_symmetric_zero_on_the_diagonal_and_has_loops() {
             "{measure:?}: neighbours {near}, mean {mean}"
         );
         // Loops within the dance, in both directions, well off the diagonal.
-        assert!(g.transitions.len() >= 2, "{measure:?}");
-        for t in &g.transitions {
+        assert!(g.transitions().len() >= 2, "{measure:?}");
+        for t in g.transitions() {
             assert_eq!((t.from, t.to), (0, 0));
             assert!(t.m.abs_diff(t.n) >= 10);
             assert!(t.m >= t.window && t.m + t.window < 175);
-            assert!(g.transitions.iter().any(|u| u.m == t.n && u.n == t.m));
+            assert!(g.transitions().iter().any(|u| u.m == t.n && u.n == t.m));
             // A transition is far cheaper than a typical frame pair.
             assert!(
                 (t.cost as f32) < 0.25 * mean,
@@ -98,7 +99,7 @@ fn samba_matrix_is_symmetric_zero_on_the_diagonal_and_has_loops() {
             );
         }
         let loops: Vec<String> = g
-            .transitions
+            .transitions()
             .iter()
             .map(|t| format!("{}->{} L={} cost {:.4}", t.m, t.n, t.window, t.cost))
             .collect();
@@ -158,7 +159,7 @@ fn two_clips_sharing_a_segment_get_a_transition_inside_it() {
     samba_db(&d, tmp.path(), &[("first", 0, 110), ("second", 70, 175)]);
     let (_, g, _) = build(tmp.path(), &BuildOptions::default(), &Quiet).unwrap();
     let across: Vec<_> = g
-        .transitions
+        .transitions()
         .iter()
         .filter(|t| t.from == 0 && t.to == 1)
         .collect();
@@ -173,7 +174,7 @@ fn two_clips_sharing_a_segment_get_a_transition_inside_it() {
     assert!(best.cost < 1e-6, "{best:?}");
     // And back: second -> first at the same frames.
     assert!(
-        g.transitions
+        g.transitions()
             .iter()
             .any(|t| t.from == 1 && t.to == 0 && t.n == t.m + 70 && t.cost < 1e-6)
     );
@@ -209,7 +210,7 @@ fn flat_ids_and_frame_ids_go_both_ways_in_any_sequence_order() {
         assert_eq!(g.frame_count(), 175);
         let mut next = 0u32;
         let mut all = Vec::new();
-        for (s, q) in g.sequences.iter().enumerate() {
+        for (s, q) in g.sequences().iter().enumerate() {
             for t in 0..q.len {
                 let f = g.flat_id(s, t);
                 assert_eq!(f, FlatFrame::new(next), "{}:{t}", q.name);
@@ -230,7 +231,7 @@ fn flat_ids_and_frame_ids_go_both_ways_in_any_sequence_order() {
             assert_eq!(g.checked_flat_id(past), None, "{}", q.name);
         }
         let beyond = FrameId {
-            seq: g.sequences.len() as u32,
+            seq: g.sequences().len() as u32,
             frame: 0,
         };
         assert_eq!(g.checked_flat_id(beyond), None);
@@ -238,11 +239,11 @@ fn flat_ids_and_frame_ids_go_both_ways_in_any_sequence_order() {
         // transitions landing inside their target, nothing else.
         let adj = g.adjacency();
         let mut want: Vec<(FlatFrame, FlatFrame)> = Vec::new();
-        for (s, q) in g.sequences.iter().enumerate() {
+        for (s, q) in g.sequences().iter().enumerate() {
             want.extend((1..q.len).map(|t| (g.flat_id(s, t - 1), g.flat_id(s, t))));
         }
-        for t in &g.transitions {
-            if t.n + 1 < g.sequences[t.to].len {
+        for t in g.transitions() {
+            if t.n + 1 < g.sequences()[t.to].len {
                 let to = g.flat_id(t.to, t.n).next();
                 assert_eq!(g.frame_of(to), (t.to, t.n + 1));
                 want.push((g.flat_id(t.from, t.m), to));
@@ -297,8 +298,8 @@ fn a_second_build_uses_the_cache_until_an_input_changes() {
     m.save(tmp.path()).unwrap();
     let (_, g3, r3) = build(tmp.path(), &opts, &Quiet).unwrap();
     assert!(r3.similarity_cached && !r3.graph_cached);
-    assert!(!g3.transitions.iter().any(|t| t.from == 0 && t.to == 1));
-    assert!(g2.transitions.iter().any(|t| t.from == 0 && t.to == 1));
+    assert!(!g3.transitions().iter().any(|t| t.from == 0 && t.to == 1));
+    assert!(g2.transitions().iter().any(|t| t.from == 0 && t.to == 1));
     // New frame data invalidates the matrix.
     let all = read_pc2(&tmp.path().join("b.pc2")).unwrap();
     write_pc2(
@@ -418,7 +419,7 @@ fn colour_measure_on_a_coloured_samba() {
     let mean = off / (175.0 * 174.0);
     let near: f64 = (0..174).map(|a| mat.get(a, a + 1) as f64).sum::<f64>() / 174.0;
     assert!(near < 0.5 * mean, "neighbours {near}, mean {mean}");
-    assert!(!g.transitions.is_empty());
+    assert!(!g.transitions().is_empty());
     // Turning a frame about the vertical keeps it near itself.
     let all = read_pc2(&d.join("4d/samba/samba.pc2")).unwrap();
     let n = topo.vertex_count();
@@ -446,4 +447,126 @@ fn colour_measure_on_a_coloured_samba() {
     set.push_sequence(&all.positions[60 * n..61 * n], n, topo.triangles(), false);
     let (same, other) = (set.distance(0, 1), set.distance(0, 2));
     assert!(same < 0.2 * other, "turned {same}, other pose {other}");
+}
+
+/// A similarity matrix of periodic motions: sequence `s` plays a cycle at
+/// `rates[s]` cycles per frame from phase `offsets[s]`; two frames differ by
+/// how far apart their phases are, so every pair of sequences has minima.
+fn periodic_matrix(rates: &[f64], offsets: &[f64], frames: usize) -> SimilarityMatrix {
+    let spans: Vec<Span> = (0..rates.len())
+        .map(|s| Span {
+            name: format!("cycle{s}"),
+            start: s * frames,
+            len: frames,
+        })
+        .collect();
+    let phase = |a: usize| (offsets[a / frames] + rates[a / frames] * (a % frames) as f64).fract();
+    let n = rates.len() * frames;
+    let data = (0..n * n)
+        .map(|k| {
+            let d = (phase(k / n) - phase(k % n)).abs();
+            (std::f64::consts::PI * d).sin().abs() as f32
+        })
+        .collect();
+    SimilarityMatrix::new(spans, data).unwrap()
+}
+
+/// An edit of a graph's parts that makes them disagree.
+type PartsEdit = Box<dyn Fn(&mut GraphParts)>;
+
+/// Issue 40: a Surface Motion Graph is made only by `build` or from parts
+/// that agree (`SurfaceMotionGraph::new`, which the cache reader uses too):
+/// every graph round-trips through its parts and through JSON unchanged, in
+/// either order of its sequences; each kind of disagreement is refused,
+/// naming what disagrees, directly and through the cache's JSON.
+#[test]
+fn a_graph_is_made_only_from_parts_that_agree() {
+    let rates = [0.031, 0.047, 0.038];
+    for offsets in [[0.0, 0.3, 0.6], [0.6, 0.3, 0.0]] {
+        let m = periodic_matrix(&rates, &offsets, 90);
+        let g = SurfaceMotionGraph::build(
+            &m,
+            Measure::Shape,
+            &TransitionOptions::default(),
+            &Default::default(),
+        )
+        .unwrap();
+        assert!(g.edges().len() >= 3 && g.transitions().len() >= 3, "{g:?}");
+        assert_eq!(SurfaceMotionGraph::new(g.clone().into_parts()).unwrap(), g);
+        let json = serde_json::to_string(&g).unwrap();
+        assert_eq!(
+            serde_json::from_str::<SurfaceMotionGraph>(&json).unwrap(),
+            g
+        );
+        let e0 = &g.edges()[0];
+        let other = g
+            .edges()
+            .iter()
+            .position(|e| (e.from, e.to) != (e0.from, e0.to));
+        let other = other.unwrap();
+        let cases: Vec<(&str, PartsEdit)> = vec![
+            (
+                "starts at flat frame",
+                Box::new(|p| p.sequences[1].start += 1),
+            ),
+            ("joins sequences", Box::new(|p| p.transitions[0].to = 3)),
+            ("past the end", Box::new(|p| p.transitions[0].m = 90)),
+            (
+                "has cost NaN",
+                Box::new(|p| p.transitions[0].cost = f64::NAN),
+            ),
+            ("half-window", Box::new(|p| p.transitions[0].window = 91)),
+            ("that do not exist", Box::new(|p| p.edges[0].to = 5)),
+            (
+                "not one of its own",
+                Box::new(move |p| {
+                    let t = p.edges[other].transitions[0];
+                    p.edges[0].transitions.push(t)
+                }),
+            ),
+            (
+                "twice",
+                Box::new(|p| {
+                    let t = p.edges[0].transitions[0];
+                    p.edges[0].transitions.push(t)
+                }),
+            ),
+            (
+                "repeats the sequence pair",
+                Box::new(|p| {
+                    let e = p.edges[0].clone();
+                    p.edges.push(e)
+                }),
+            ),
+            ("cheapest", Box::new(|p| p.edges[0].cost += 0.5)),
+            (
+                "is on no edge",
+                Box::new(|p| {
+                    let e = &mut p.edges[0];
+                    if e.transitions.len() == 1 {
+                        p.edges.remove(0);
+                    } else {
+                        let cheapest = e.transitions[0];
+                        e.transitions.retain(|&k| k != cheapest);
+                        p.transitions[cheapest].cost = e.cost;
+                    }
+                }),
+            ),
+        ];
+        for (what, edit) in &cases {
+            let mut parts = g.clone().into_parts();
+            edit(&mut parts);
+            let err = SurfaceMotionGraph::new(parts.clone()).unwrap_err();
+            assert!(err.contains(what), "{what}: {err}");
+            if parts.transitions.iter().all(|t| t.cost.is_finite()) {
+                // Through the cache's JSON (no NaN in JSON).
+                let mut v = serde_json::to_value(&g).unwrap();
+                v["sequences"] = serde_json::to_value(&parts.sequences).unwrap();
+                v["transitions"] = serde_json::to_value(&parts.transitions).unwrap();
+                v["edges"] = serde_json::to_value(&parts.edges).unwrap();
+                let err = serde_json::from_value::<SurfaceMotionGraph>(v).unwrap_err();
+                assert!(err.to_string().contains(what), "{what}: {err}");
+            }
+        }
+    }
 }

@@ -67,7 +67,7 @@ pub fn floor(
     let k_max = ((longest * fps / 4.0).ceil() as usize).clamp(1, 250);
     progress(FloorStage::Surfaces);
     let frames = FrameSet::new(ch);
-    let options = FloorOptions::of_graph(&ch.graph().options);
+    let options = FloorOptions::of_graph(ch.graph().options());
     progress(FloorStage::Pairs(0, 0));
     let transitions = transition_floor_with(ch, &frames, &options, &mut |done, total| {
         progress(FloorStage::Pairs(done, total))

@@ -371,7 +371,7 @@ impl Checker {
         let seq = |q: &crate::similarity::Span| -> &[[f64; 3]] {
             all.get(q.start * n..(q.start + q.len) * n).unwrap_or(&[])
         };
-        let sequences = &ch.graph().sequences;
+        let sequences = ch.graph().sequences();
         let mut lowest = Vec::with_capacity(ch.frame_count());
         for q in sequences {
             lowest.extend(lowest_heights(seq(q), n, DVec3::Y));

@@ -322,9 +322,9 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
             e.what = format!("graph ({})", measure.name());
             let read = read_graph_cache(&file);
             if let Ok((_, g)) = &read {
-                e.transitions = Some(g.transitions.len());
-                e.edges = Some(g.edges.len());
-                e.frames = Some(g.sequences.iter().map(|s| s.len).sum());
+                e.transitions = Some(g.transitions().len());
+                e.edges = Some(g.edges().len());
+                e.frames = Some(g.sequences().iter().map(|s| s.len).sum());
             }
             let found = read.as_ref().map(|(k, _)| *k).map_err(Clone::clone);
             let (want, sparse) = graph_want(m, found.as_ref().ok().copied(), key_of(measure));

@@ -188,7 +188,7 @@ fn the_plausibility_reference_equals_the_copied_frames_bit_for_bit_and_is_cached
     let Some(d) = common::data_dir() else { return };
     let db = common::walk_run_db(&d, "db_caches_reference");
     let ch = Character::load(&db, &Quiet).unwrap();
-    assert!(ch.graph().sequences.len() >= 2);
+    assert!(ch.graph().sequences().len() >= 2);
     let neutral = character_neutral(ch.rest_pose(), ch.poses());
     let opts = PlausibilityOptions::default();
     let path = reference_path(&db);
@@ -208,7 +208,7 @@ fn the_plausibility_reference_equals_the_copied_frames_bit_for_bit_and_is_cached
     let n = ch.n();
     let copies: Vec<Vec<[f64; 3]>> = ch
         .graph()
-        .sequences
+        .sequences()
         .iter()
         .map(|q| ch.frames()[q.start * n..(q.start + q.len) * n].to_vec())
         .collect();

@@ -88,14 +88,14 @@ fn compare(db: &Path, tmp: &Path, strict: bool) -> String {
     // Every ordered sequence pair with a dense transition has a sparse one
     // (the graph keeps the best transitions of every sequence pair, also
     // of dissimilar motions: the per-pair candidates' purpose).
-    for t in &dg.transitions {
+    for t in dg.transitions() {
         assert!(
-            sg.transitions
+            sg.transitions()
                 .iter()
                 .any(|u| (u.from, u.to) == (t.from, t.to)),
             "no sparse transition {} -> {}: {line}",
-            dg.sequences[t.from].name,
-            dg.sequences[t.to].name
+            dg.sequences()[t.from].name,
+            dg.sequences()[t.to].name
         );
     }
     line

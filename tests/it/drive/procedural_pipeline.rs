@@ -53,7 +53,7 @@ fn fixture() -> &'static Fixture {
             "fixture: {} vertices, {} database frames, {} transitions, in {:.2} s",
             ch.n(),
             ch.frame_count(),
-            ch.graph().transitions.len(),
+            ch.graph().transitions().len(),
             t.elapsed().as_secs_f64()
         );
         Fixture { db, ch, query }
@@ -100,7 +100,7 @@ fn procedural_database_has_a_graph_with_transitions() {
     assert_eq!(f.ch.frame_count(), 150);
     assert!(f.ch.n() > 500, "{} vertices", f.ch.n());
     assert!(
-        !f.ch.graph().transitions.is_empty(),
+        !f.ch.graph().transitions().is_empty(),
         "a walk and a run of one character must have transitions"
     );
 }

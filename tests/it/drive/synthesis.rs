@@ -87,7 +87,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
     );
     let seq = ch
         .graph()
-        .sequences
+        .sequences()
         .iter()
         .position(|s| s.name == "02_03")
         .unwrap();
@@ -157,7 +157,7 @@ fn interpolated_frames_lie_between_their_neighbours() {
         // two captured frames it interpolates.
         let seq = ch
             .graph()
-            .sequences
+            .sequences()
             .iter()
             .position(|s| s.name == step.blend[0].0)
             .unwrap();

@@ -29,16 +29,16 @@ fn the_transition_floor_reports_its_progress_to_the_end() {
     let Some(d) = common::data_dir() else { return };
     let ch = surfmotion::db::Character::load(walk_run(&d), &surfmotion::db::Quiet).unwrap();
     let g = ch.graph();
-    let total: u64 = (0..g.sequences.len())
-        .flat_map(|i| (i..g.sequences.len()).map(move |j| (i, j)))
-        .map(|(i, j)| (g.sequences[i].len * g.sequences[j].len) as u64)
+    let total: u64 = (0..g.sequences().len())
+        .flat_map(|i| (i..g.sequences().len()).map(move |j| (i, j)))
+        .map(|(i, j)| (g.sequences()[i].len * g.sequences()[j].len) as u64)
         .sum();
     let frames = surfmotion::keyframe::smoothness::FrameSet::new(&ch);
     let mut seen = Vec::new();
     let t = transition_floor_with(
         &ch,
         &frames,
-        &FloorOptions::of_graph(&g.options),
+        &FloorOptions::of_graph(g.options()),
         &mut |d, t| seen.push((d, t)),
     );
     assert_eq!(t.pairs.len(), 3);

@@ -37,11 +37,11 @@ fn floor_is_the_measure_minimised_over_every_frame_pair_and_bounds_the_graph() {
         assert!(exact > 0.0);
     }
     assert_eq!(frames.distance(f(7), f(7), 1), 0.0);
-    let opts = FloorOptions::of_graph(&g.options);
+    let opts = FloorOptions::of_graph(g.options());
     let t = transition_floor(&ch, &frames, &opts);
     let best = t.best.clone().expect("a window fits");
     assert!((opts.min_window..=opts.max_window).contains(&best.window));
-    let seq = |name: &str| g.sequences.iter().position(|s| s.name == name).unwrap();
+    let seq = |name: &str| g.sequences().iter().position(|s| s.name == name).unwrap();
     let (a, b) = (
         g.flat_id(seq(&best.from), best.m),
         g.flat_id(seq(&best.to), best.n),
@@ -49,8 +49,8 @@ fn floor_is_the_measure_minimised_over_every_frame_pair_and_bounds_the_graph() {
     let s = transition_smoothness(&ch, a, b.next(), best.window);
     assert!((s - best.smoothness).abs() < 1e-9, "{best:?} measures {s}");
     let mut covered = 0;
-    for tr in &g.transitions {
-        let (li, lj) = (g.sequences[tr.from].len, g.sequences[tr.to].len);
+    for tr in g.transitions() {
+        let (li, lj) = (g.sequences()[tr.from].len, g.sequences()[tr.to].len);
         let fits = tr.m.min(tr.n) >= tr.window
             && tr.m + tr.window < li
             && tr.n + tr.window < lj

@@ -1840,7 +1840,7 @@ fn smoothness_is_zero_on_identical_overlaps_and_measured_transitions_report_thei
     let ch = surfmotion::db::Character::load(walk_run_db(&d), &surfmotion::db::Quiet).unwrap();
     let f = surfmotion::keyframe::parse_key(&ch, "02_01:40").unwrap();
     assert_eq!(transition_smoothness(&ch, f, f.next(), 4), 0.0);
-    for t in ch.graph().transitions.iter().take(2) {
+    for t in ch.graph().transitions().iter().take(2) {
         let a = ch.graph().flat_id(t.from, t.m);
         let b = ch.graph().flat_id(t.to, t.n).next();
         let s = transition_smoothness_both(&ch, a, b, t.window);
@@ -1876,12 +1876,17 @@ fn smoothness_is_zero_on_identical_overlaps_and_measured_transitions_report_thei
     };
     let chosen = measured(&ch, &opts);
     assert!(!chosen.is_empty());
-    let lo = ch.graph().options.min_window;
+    let lo = ch.graph().options().min_window;
     for c in &chosen {
         assert!((lo..=opts.max_window).contains(&c.window), "{c:?}");
         let (sa, _) = ch.graph().frame_of(c.from);
         let (sb, _) = ch.graph().frame_of(c.to.prev().unwrap());
-        assert!(ch.graph().edges.iter().any(|e| e.from == sa && e.to == sb));
+        assert!(
+            ch.graph()
+                .edges()
+                .iter()
+                .any(|e| e.from == sa && e.to == sb)
+        );
         let s = transition_smoothness(&ch, c.from, c.to, c.window);
         assert!((s - c.smoothness).abs() < 1e-12, "{c:?} measures {s}");
     }

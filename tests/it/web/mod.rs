@@ -66,7 +66,7 @@ fn check_round_trip(db: &Path, site: &Path, bound: f64) -> f64 {
         .map(|t| (t.from, t.to, t.m, t.n, t.window))
         .collect();
     let graph: Vec<_> = graph
-        .transitions
+        .transitions()
         .iter()
         .map(|t| (t.from, t.to, t.m, t.n, t.window))
         .collect();
@@ -891,7 +891,7 @@ fn browser_draws_the_character_follows_keys_and_reports_corrupt_data() {
     // The engine in the page walks the graph's own transition table.
     let (_, _, graph) = web::load_db_geometry(&db).unwrap();
     let table: Vec<[usize; 5]> = graph
-        .transitions
+        .transitions()
         .iter()
         .map(|t| [t.from, t.to, t.m, t.n, t.window])
         .collect();
