@@ -486,7 +486,7 @@ impl RetargetSummary {
 }
 
 /// Retrieval, timeline, meshes and deformation time per output frame (s).
-pub fn per_frame_seconds(r: &Report) -> f64 {
+pub(crate) fn per_frame_seconds(r: &Report) -> f64 {
     (r.timings.retrieval + r.timings.timeline + r.timings.meshes + r.timings.deform)
         / r.frames.max(1) as f64
 }

@@ -65,7 +65,7 @@ impl SkeletonFile {
 }
 
 /// Per-bone values keyed by the bone's BVH name (sorted).
-pub type ByBone = BTreeMap<&'static str, f64>;
+pub(crate) type ByBone = BTreeMap<&'static str, f64>;
 
 /// What [`export_skeletons`] wrote for one sequence.
 #[derive(Debug, Clone, Serialize)]

@@ -34,7 +34,7 @@ pub(crate) fn thread_cpu_seconds() -> Option<f64> {
 
 /// A stopwatch of both clocks.
 #[derive(Debug, Clone, Copy)]
-pub struct Stopwatch {
+pub(crate) struct Stopwatch {
     wall: std::time::Instant,
     cpu: Option<f64>,
 }

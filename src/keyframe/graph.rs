@@ -104,7 +104,7 @@ impl KeyGraph {
     }
 
     /// From a frame adjacency and centroids.
-    pub fn from_adjacency(
+    pub(crate) fn from_adjacency(
         adj: &FrameAdjacency,
         centre: Vec<[f64; 2]>,
         sequence: Vec<u32>,
@@ -208,7 +208,7 @@ impl KeyGraph {
 /// The character's frame layout with the blend windows of a key graph's
 /// jumps ([`KeyGraph::windows`]; the graph's when empty), for
 /// [`crate::drive::timeline::timeline`].
-pub struct KeyFrames<'a> {
+pub(crate) struct KeyFrames<'a> {
     /// The character.
     pub ch: &'a Character,
     /// The graph whose jumps are walked.

@@ -337,23 +337,6 @@ pub fn reachability(
     Ok(oracle(c, &t, 0.01, ORACLE_BINS, min_run)?)
 }
 
-/// The asymptotic criterion: at least the shortest walk's frames and
-/// distance, and a mean speed between the slowest and the fastest loop
-/// (a necessary condition for long paths, kept for the report's `reach`).
-pub fn reachable_by_speed(reach: &[Reach], fps: f64, d: f64, t: f64) -> bool {
-    let frames: u32 = reach.iter().map(|r| r.frames).sum();
-    let dist: f64 = reach.iter().map(|r| r.distance).sum();
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for r in reach {
-        if let Some((a, b)) = r.speed {
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
-    }
-    let f = t * fps;
-    f >= frames as f64 && d >= dist && f > 0.0 && lo <= d / f && d / f <= hi
-}
-
 /// Every transition the search may take, as `(from, to, window)` at its
 /// own blend window: the key graph's own jumps when it chose them
 /// ([`super::TransitionSet::Measured`]), else the Surface Motion Graph's.

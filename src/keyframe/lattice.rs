@@ -276,7 +276,7 @@ impl Chain {
     }
 
     /// True when the first segment counts its start frame.
-    pub fn counts_start(&self) -> bool {
+    pub(crate) fn counts_start(&self) -> bool {
         self.count_start
     }
 
@@ -314,7 +314,7 @@ impl Chain {
     }
 
     /// Fewest arc frames of any path (start not counted).
-    pub fn least_frames(&self) -> u32 {
+    pub(crate) fn least_frames(&self) -> u32 {
         self.least
     }
 

@@ -393,7 +393,7 @@ impl Planner {
 
     /// The heading's turn along a frame path: the sum of its transitions'
     /// turns ([`graph::FrameEdge::turn`]).
-    pub fn turn_of(&self, path: &[FlatFrame]) -> f64 {
+    pub(crate) fn turn_of(&self, path: &[FlatFrame]) -> f64 {
         path.windows(2)
             .filter_map(|w| self.graph.edge(w[0], w[1]))
             .map(|e| e.turn)

@@ -23,24 +23,6 @@ use super::segment::{Segment, SegmentPath, Stats, Target};
 
 /// The searches of a segment (Eqs. 20-22) and its exact-length search.
 impl Segment {
-    /// Is `(distance, frames)` reachable exactly: some path of exactly
-    /// `frames` frames travels at most `distance` and some at least
-    /// ([`super::lattice`])? `None` when `frames` is beyond `limit`, or
-    /// when the table for it exceeds the memory budget.
-    pub fn reaches_exactly(&self, distance: f64, frames: f64, limit: usize) -> Option<bool> {
-        let f = frames.round() as i64 - i64::from(self.count_start);
-        if f < 0 {
-            return Some(false);
-        }
-        let f = f as usize;
-        if f > limit {
-            return None;
-        }
-        let ext = lattice::extremes(self, f).ok()?;
-        let (lo, hi) = ext.at(self.start, f);
-        Some(lo <= distance + 1e-9 && distance <= hi + 1e-9)
-    }
-
     /// The exact-length search ([`super::lattice::search`]) on this
     /// segment alone; `None` when it finds nothing within its tolerance.
     pub fn solve_lattice(
@@ -58,7 +40,7 @@ impl Segment {
     /// [`Segment::solve_lattice`] on this segment's chain `c` (built once
     /// by the caller, [`Chain::of`] of this segment alone,
     /// so that its extremes serve every query).
-    pub fn solve_lattice_on(
+    pub(crate) fn solve_lattice_on(
         &self,
         c: &Chain,
         t: &Target,

@@ -527,23 +527,18 @@ impl Segment {
 
     /// Fewest frames from the start to the goal (the start frame not
     /// counted).
-    pub fn least_frames(&self) -> u32 {
+    pub(crate) fn least_frames(&self) -> u32 {
         self.h[self.start as usize].frames
     }
 
     /// Does the segment count its start frame (the first of a path)?
-    pub fn counts_start(&self) -> bool {
+    pub(crate) fn counts_start(&self) -> bool {
         self.count_start
     }
 
     /// Is node `u` on some path from the start to the goal?
-    pub fn is_relevant(&self, u: u32) -> bool {
+    pub(crate) fn is_relevant(&self, u: u32) -> bool {
         self.relevant[u as usize]
-    }
-
-    /// The arcs leaving node `u`: head node and measure.
-    pub fn arcs_from(&self, u: u32) -> impl Iterator<Item = (u32, Measure)> + '_ {
-        self.arcs_from_indexed(u).map(|a| (a.to, a.m))
     }
 
     /// The arcs leaving node `u` towards relevant nodes, with their indices.
@@ -796,11 +791,6 @@ impl Segment {
         stats.nodes += self.frames.len();
         stats.arcs += self.arcs.len();
         stats.cycles += self.cycles.len();
-    }
-
-    /// Walks enumerated.
-    pub fn walk_count(&self) -> usize {
-        self.walks.len()
     }
 
     fn pop(

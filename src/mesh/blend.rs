@@ -23,11 +23,11 @@ use glam::{DMat3, DQuat, DVec3};
 use rayon::prelude::*;
 
 /// A symmetric 3×3 matrix `[xx, yy, zz, xy, xz, yz]`.
-pub type Sym3 = [f64; 6];
+pub(crate) type Sym3 = [f64; 6];
 
 /// Packs the symmetric part of a matrix.
 #[inline]
-pub fn sym3(m: DMat3) -> Sym3 {
+pub(crate) fn sym3(m: DMat3) -> Sym3 {
     [
         m.x_axis.x,
         m.y_axis.y,
@@ -153,7 +153,7 @@ impl Blender {
     }
 
     /// Weighted N-way blend. Weights are normalised to sum to 1.
-    pub fn blend_many(
+    pub(crate) fn blend_many(
         &self,
         inputs: &[(&FrameGradients, f64)],
         out: &mut [[f64; 3]],

@@ -12,7 +12,7 @@
 use glam::{DMat3, DQuat, DVec3};
 
 /// The frame matrix of a triangle (columns: two edges and the scaled normal).
-pub fn triangle_frame(a: DVec3, b: DVec3, c: DVec3) -> DMat3 {
+pub(crate) fn triangle_frame(a: DVec3, b: DVec3, c: DVec3) -> DMat3 {
     let (e1, e2) = (b - a, c - a);
     let n = e1.cross(e2);
     let len = n.length();
@@ -60,7 +60,7 @@ impl RestFrames {
     }
 
     /// Deformation gradients of `positions` relative to the reference, into `out`.
-    pub fn gradients_into(
+    pub(crate) fn gradients_into(
         &self,
         positions: &[[f64; 3]],
         triangles: &[[u32; 3]],

@@ -12,7 +12,7 @@ use super::Mesh;
 
 /// Half-cotangent weights of each triangle: entry k is `cot(angle at corner k) / 2`,
 /// the weight of the edge opposite corner k (between corners k+1 and k+2).
-pub fn half_cotangents(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
+pub(crate) fn half_cotangents(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
     triangles
         .iter()
         .map(|t| {

@@ -10,7 +10,7 @@ use super::Mesh;
 
 /// Which lumping.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum MassKind {
+pub(crate) enum MassKind {
     /// A third of each incident triangle's area.
     Barycentric,
     /// Mixed Voronoi area (libigl default).
@@ -19,7 +19,7 @@ pub enum MassKind {
 }
 
 /// The diagonal of the mass matrix, one area per vertex (f64).
-pub fn mass_diagonal(mesh: &Mesh, kind: MassKind) -> Vec<f64> {
+pub(crate) fn mass_diagonal(mesh: &Mesh, kind: MassKind) -> Vec<f64> {
     let p = mesh.positions();
     let mut m = vec![0.0; mesh.vertex_count()];
     for t in mesh.triangles() {

@@ -65,7 +65,7 @@ impl Bounds {
 }
 
 /// Checks that all coordinates are finite.
-pub fn check_finite(points: &[[f64; 3]]) -> Result<(), TopologyError> {
+pub(crate) fn check_finite(points: &[[f64; 3]]) -> Result<(), TopologyError> {
     match points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
         Some(vertex) => Err(TopologyError::NonFinite { vertex }),
         None => Ok(()),
@@ -117,7 +117,7 @@ impl Mesh {
     }
 
     /// Sets the triangle groups (ranges are clamped to the triangle count).
-    pub fn with_groups(mut self, groups: Vec<Group>) -> Mesh {
+    pub(crate) fn with_groups(mut self, groups: Vec<Group>) -> Mesh {
         let nt = self.triangles.len() as u32;
         self.groups = groups
             .into_iter()

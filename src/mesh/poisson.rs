@@ -57,7 +57,7 @@ impl Poisson {
     }
 
     /// Factors the system with the given anchor vertices (hard constraints).
-    pub fn with_anchors(reference: &Mesh, anchors: &[u32]) -> Result<Poisson, SolveError> {
+    pub(crate) fn with_anchors(reference: &Mesh, anchors: &[u32]) -> Result<Poisson, SolveError> {
         let k: Vec<(u32, u32, f64)> = cotan_triplets(reference)
             .into_iter()
             .map(|(i, j, v)| (i, j, -v))
@@ -166,7 +166,11 @@ impl Poisson {
     /// Assembles `b` with the transform of triangle `t` given by `f(t)`, so
     /// callers can compute transforms on the fly without storing them.
     #[inline]
-    pub fn assemble_with(&self, ws: &mut PoissonWorkspace, mut f: impl FnMut(usize) -> DMat3) {
+    pub(crate) fn assemble_with(
+        &self,
+        ws: &mut PoissonWorkspace,
+        mut f: impl FnMut(usize) -> DMat3,
+    ) {
         ws.b.iter_mut().for_each(|r| *r = [0.0; 3]);
         for (ti, (t, g)) in self.triangles.iter().zip(&self.corner_vectors).enumerate() {
             let m = f(ti);
@@ -190,7 +194,7 @@ impl Poisson {
     /// Assembles `b` from per-triangle corner shares already mapped:
     /// `shares[t][k] = T_t · corner_vectors()[t][k]`. Three scattered
     /// additions per triangle.
-    pub fn assemble_shares(&self, shares: &[[DVec3; 3]], ws: &mut PoissonWorkspace) {
+    pub(crate) fn assemble_shares(&self, shares: &[[DVec3; 3]], ws: &mut PoissonWorkspace) {
         ws.b.iter_mut().for_each(|r| *r = [0.0; 3]);
         for (t, sh) in self.triangles.iter().zip(shares) {
             for (&v, d) in t.iter().zip(sh) {

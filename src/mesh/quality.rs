@@ -132,7 +132,7 @@ pub fn triangle_quality(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 
 /// [`triangle_quality`] of every triangle of `triangles` in `pos`, into
 /// `out`.
-pub fn qualities(triangles: &[[u32; 3]], pos: &[[f64; 3]], out: &mut Vec<f64>) {
+pub(crate) fn qualities(triangles: &[[u32; 3]], pos: &[[f64; 3]], out: &mut Vec<f64>) {
     out.clear();
     out.extend(triangles.iter().map(|t| {
         let [a, b, c] = t.map(|v| DVec3::from_array(pos[v as usize]));

@@ -210,7 +210,7 @@ impl<'m> Controller<'m> {
         self.head.u
     }
     /// A transition is waiting or fading.
-    pub fn in_transition(&self) -> bool {
+    pub(crate) fn in_transition(&self) -> bool {
         self.pending.is_some() || self.fade.is_some()
     }
 

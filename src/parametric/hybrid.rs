@@ -230,7 +230,7 @@ impl HybridBlend {
 
     /// `(k0, k1, fraction)` of a phase in grid units (wrapped into `[0, K)`).
     #[inline]
-    pub fn phase_samples(&self, phase: f64) -> (usize, usize, f32) {
+    pub(crate) fn phase_samples(&self, phase: f64) -> (usize, usize, f32) {
         let k = self.grid;
         let p = phase.rem_euclid(k as f64);
         let k0 = (p.floor() as usize).min(k - 1);

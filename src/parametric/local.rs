@@ -21,7 +21,7 @@ pub(crate) const MIN_TRAVEL_SPEED: f64 = 0.15;
 
 /// The root motion of a sequence, per frame.
 #[derive(Debug, Clone, PartialEq)]
-pub struct RootTrack {
+pub(crate) struct RootTrack {
     /// Horizontal centroid `(x, z)` per frame (metres).
     pub centre: Vec<DVec2>,
     /// Heading per frame (radians, unwrapped: continuous across ±π).

@@ -204,7 +204,7 @@ impl MotionSpace {
         self.epsilon
     }
     /// Largest weight coordinate (`N − 1`).
-    pub fn u_max(&self) -> f64 {
+    pub(crate) fn u_max(&self) -> f64 {
         self.sequences.len().saturating_sub(1) as f64
     }
 
@@ -214,7 +214,7 @@ impl MotionSpace {
     }
 
     /// The measured `[speed, turn]` at `u` (interpolated from the samples).
-    pub fn measured_at(&self, u: f64) -> [f64; 2] {
+    pub(crate) fn measured_at(&self, u: f64) -> [f64; 2] {
         let s = &self.measured;
         if s.len() < 2 {
             return s.first().map_or([0.0; 2], |m| [m[1], m[2]]);
@@ -288,7 +288,7 @@ impl MotionSpace {
     }
 
     /// The similarity features of the references ([`super::transition`]).
-    pub fn ref_features(&self, fps: f64) -> RefFeatures {
+    pub(crate) fn ref_features(&self, fps: f64) -> RefFeatures {
         let n = self.blend.n;
         let stride = n.div_ceil(SIMILARITY_VERTICES).max(1);
         let k = self.grid();

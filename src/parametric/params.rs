@@ -53,7 +53,7 @@ impl Parameter {
     /// The smallest span of values over a space's weights that makes the
     /// parameter steerable (0.05 m/s, 2°/s): below it the sequences do not
     /// differ in this parameter (e.g. a sideways walk offered as a turn).
-    pub fn min_span(self) -> f64 {
+    pub(crate) fn min_span(self) -> f64 {
         match self {
             Parameter::Speed => 0.05,
             Parameter::Turn => 2.0,

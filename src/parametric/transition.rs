@@ -124,11 +124,6 @@ impl SimilarityTable {
         }
     }
 
-    /// Entries the table must hold.
-    pub fn expected_len(&self) -> usize {
-        self.us.len() * self.ut.len() * self.ks * self.kt
-    }
-
     /// Eq. 5: the similarity between the source at (phase sample `i`,
     /// weight `u_s`) and the target at (phase sample `j`, weight `u_t`).
     #[inline]

@@ -361,7 +361,7 @@ pub struct Detection {
 impl Detection {
     /// A detection that reports `map` as given, every joint from `source`
     /// with confidence `confidence`.
-    pub fn from_map(map: RigMap, source: Source, confidence: f64, sides: &str) -> Detection {
+    pub(crate) fn from_map(map: RigMap, source: Source, confidence: f64, sides: &str) -> Detection {
         let joints = Canonical::ALL
             .iter()
             .map(|c| JointReport {
@@ -1192,7 +1192,7 @@ impl RigMap {
 
 /// Per-frame canonical poses and the world rotations of the mapped file
 /// joints ([`RigMap::poses_and_rotations`]).
-pub type PosesAndRotations = (
+pub(crate) type PosesAndRotations = (
     Vec<[DVec3; Canonical::COUNT]>,
     Vec<[Option<DQuat>; Canonical::COUNT]>,
 );

@@ -163,7 +163,7 @@ pub fn strip_namespace(s: &str) -> &str {
 /// The longest prefix ending in a separator (`_`, ` `, `.`, `-`) shared by at
 /// least 80% of the (namespace-stripped) names, if any; e.g. `Bip01 `,
 /// `Character1_`, `CC_Base_`. O(n·len).
-pub fn common_prefix(names: &[&str]) -> Option<String> {
+pub(crate) fn common_prefix(names: &[&str]) -> Option<String> {
     if names.len() < 2 {
         return None;
     }

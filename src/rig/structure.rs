@@ -125,7 +125,7 @@ pub struct Body {
 /// The words a [`NotHumanoid`] reason contains when the clip has a
 /// humanoid's chains (two legs, a spine with two limbs and a neck) on a
 /// horizontal body: a quadruped or a bird, whatever its joint names.
-pub const HORIZONTAL: &str = "a horizontal body";
+pub(crate) const HORIZONTAL: &str = "a horizontal body";
 
 /// The largest cosine between the legs' mean direction and the trunk's
 /// ([`legs_from_trunk`]) of a standing body: −0.7 (134°). Humans walk and

@@ -250,7 +250,8 @@ impl Confluent {
     }
 
     /// Centroid of every marker triangle on `positions`.
-    pub fn marker_centroids(&self, positions: &[[f64; 3]]) -> Vec<DVec3> {
+    #[cfg(test)]
+    pub(crate) fn marker_centroids(&self, positions: &[[f64; 3]]) -> Vec<DVec3> {
         self.marker_triangles
             .iter()
             .map(|tv| {

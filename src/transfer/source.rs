@@ -95,7 +95,7 @@ impl FootGround {
 impl MarkerMotion {
     /// The frame rate of the motion, for what is set in seconds (the
     /// floor shift's smoothing; 30 fps unless set).
-    pub fn set_fps(&mut self, fps: f64) {
+    pub(crate) fn set_fps(&mut self, fps: f64) {
         if let Some(f) = self.feet.as_mut() {
             f.fps = fps;
         }
@@ -140,7 +140,7 @@ pub(crate) fn from_skeleton(
 }
 
 /// A template mesh's marker triangles with their neighbours.
-pub struct TemplateMarkers {
+pub(crate) struct TemplateMarkers {
     /// Per marker: the triangles whose gradients are summed.
     pub patches: Vec<Vec<u32>>,
     /// Per marker: its own triangle.

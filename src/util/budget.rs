@@ -107,12 +107,12 @@ pub fn check(what: impl FnOnce() -> String, need: u128) -> Result<(), OverBudget
 }
 
 /// Bytes of one vertex position (`[f64; 3]`).
-pub const VERTEX_BYTES: u128 = 24;
+pub(crate) const VERTEX_BYTES: u128 = 24;
 
 /// Refuses a job holding `copies` arrays of `frames` × `vertices`
 /// positions (`[f64; 3]`) when they exceed the budget; `what` names the
 /// job ("retarget of walk.bvh").
-pub fn check_frames(
+pub(crate) fn check_frames(
     what: &str,
     frames: usize,
     vertices: usize,

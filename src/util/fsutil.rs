@@ -166,7 +166,7 @@ fn file_kind(meta: &std::fs::Metadata) -> &'static str {
 /// Reads a whole file into memory, refusing more than `limit` bytes and
 /// anything but a regular file ([`open_input`]). At most `limit + 1` bytes
 /// are read even if the file grows while it is read.
-pub fn read_bytes_limited(path: &Path, limit: u64) -> Result<Vec<u8>, FsError> {
+pub(crate) fn read_bytes_limited(path: &Path, limit: u64) -> Result<Vec<u8>, FsError> {
     use std::io::Read;
     let wrap = |source| FsError {
         path: path.to_path_buf(),
@@ -193,7 +193,7 @@ pub fn read_text(path: &Path) -> Result<String, FsError> {
 }
 
 /// [`read_text`] of a settings file, at most [`MAX_SMALL_FILE_BYTES`].
-pub fn read_small_text(path: &Path) -> Result<String, FsError> {
+pub(crate) fn read_small_text(path: &Path) -> Result<String, FsError> {
     read_text_limited(path, MAX_SMALL_FILE_BYTES)
 }
 
@@ -421,7 +421,7 @@ pub fn stale_temporary_pid(file: &str, name: &std::ffi::OsStr) -> Option<u32> {
 
 /// Whether process `pid` runs: `Some(false)` only when the system says
 /// there is no such process, `None` when that cannot be told (not Unix).
-pub fn process_alive(pid: u32) -> Option<bool> {
+pub(crate) fn process_alive(pid: u32) -> Option<bool> {
     #[cfg(unix)]
     {
         let p = i32::try_from(pid).ok().filter(|&p| p > 0)?;
@@ -485,7 +485,7 @@ pub fn remove_stale_temporaries(dir: &Path, name: &std::ffi::OsStr) -> Vec<Stale
 }
 
 /// Whether this process's user owns the file (always true off Unix).
-pub fn owned_by_me(meta: &std::fs::Metadata) -> bool {
+pub(crate) fn owned_by_me(meta: &std::fs::Metadata) -> bool {
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt;
@@ -507,7 +507,7 @@ pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), FsError> {
 /// `%XX` escapes decoded (RFC 3986, 2.1): the paths of glTF buffer URIs and
 /// of the web viewer's requests. `None` for a bad escape or bytes that are
 /// not UTF-8.
-pub fn percent_decode(s: &str) -> Option<String> {
+pub(crate) fn percent_decode(s: &str) -> Option<String> {
     let b = s.as_bytes();
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;

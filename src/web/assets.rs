@@ -13,7 +13,7 @@
 //!   run in a worker.
 
 /// `(file name, contents)` of every asset, in the order they are written.
-pub const FILES: &[(&str, &[u8])] = &[
+pub(crate) const FILES: &[(&str, &[u8])] = &[
     ("index.html", include_bytes!("assets/index.html")),
     ("app.js", include_bytes!("assets/app.js")),
     ("engine.js", include_bytes!("assets/engine.js")),

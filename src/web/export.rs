@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 /// Name of the geometry file in a site.
 pub const GEOMETRY_FILE: &str = "character.sm4d";
 /// Name of the manifest in a site.
-pub const MANIFEST_FILE: &str = "manifest.json";
+pub(crate) const MANIFEST_FILE: &str = "manifest.json";
 /// The `format` field of a site manifest.
 pub const FORMAT: &str = "surfmotion-web";
 /// The record of the files an export wrote (the marker that lets a later
@@ -32,7 +32,7 @@ pub const FORMAT: &str = "surfmotion-web";
 pub const RECORD_FILE: &str = ".surfmotion-export.json";
 /// The geometry and manifest as a classic script (`window.surfmotionData`),
 /// for the page opened from disk (`file://`), where browsers refuse `fetch`.
-pub const SCRIPT_DATA_FILE: &str = "character.sm4d.js";
+pub(crate) const SCRIPT_DATA_FILE: &str = "character.sm4d.js";
 /// The `format` field of [`RECORD_FILE`].
 const RECORD_FORMAT: &str = "surfmotion-web-export-files";
 
@@ -132,7 +132,7 @@ fn metres(p: &[[f64; 3]], z_up: bool, scale: f64) -> Vec<[f32; 3]> {
 /// The ground-plane rigid motion `[cos θ, sin θ, tx, tz]` that best carries
 /// the points `b` onto `a` (2D Procrustes on x, z; Umeyama 1991 without
 /// scale): `x' = R(θ) x + t` with `R` a rotation about +Y.
-pub fn align_ground(a: &[[f32; 3]], b: &[[f32; 3]]) -> [f64; 4] {
+pub(crate) fn align_ground(a: &[[f32; 3]], b: &[[f32; 3]]) -> [f64; 4] {
     let k = a.len().min(b.len()).max(1) as f64;
     let mean = |p: &[[f32; 3]]| {
         let (mut x, mut z) = (0.0, 0.0);
@@ -537,7 +537,7 @@ fn script_data(manifest_json: &str, geometry: &[u8]) -> String {
 /// recorded in its [`RECORD_FILE`] with their recorded size and hash (or,
 /// for a site of an earlier version without the record, only the files such
 /// a site holds, with its manifest). Names the first file it refuses for.
-pub fn check_output(out: &Path, inputs: &[PathBuf]) -> Result<(), WebError> {
+pub(crate) fn check_output(out: &Path, inputs: &[PathBuf]) -> Result<(), WebError> {
     let Ok(meta) = out.symlink_metadata() else {
         return Ok(());
     };

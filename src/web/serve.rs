@@ -124,7 +124,7 @@ const POLL: Duration = Duration::from_millis(20);
 /// A WebSocket route's handler: it gets the upgraded connection and the
 /// server's stop flag, and returns when the client goes away or the flag is
 /// set.
-pub type WebSocketHandler =
+pub(crate) type WebSocketHandler =
     Arc<dyn Fn(tungstenite::WebSocket<TcpStream>, &AtomicBool) + Send + Sync>;
 
 /// What the accepting loop and the connection threads share.
@@ -543,7 +543,7 @@ fn write_all_by(s: &mut TcpStream, mut bytes: &[u8], deadline: Instant) -> bool 
 /// Prefix of the temporary folders `web serve --db/--result` exports into
 /// (in the system's temporary folder): `surfmotion-serve-<PID>-XXXXXX`,
 /// holding the file [`EXPORT_MARKER`] with the process id.
-pub const EXPORT_DIR_PREFIX: &str = "surfmotion-serve-";
+pub(crate) const EXPORT_DIR_PREFIX: &str = "surfmotion-serve-";
 
 /// The file in a serve export folder that names the process that made it.
 pub const EXPORT_MARKER: &str = "surfmotion-serve.pid";

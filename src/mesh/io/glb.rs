@@ -66,7 +66,7 @@ impl Default for GlbOptions {
 pub const MAX_FRAMES: usize = 65_535;
 
 /// The `extensionsRequired` entry of quantised files.
-pub const KHR_MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
+pub(crate) const KHR_MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
 
 struct Bin {
     data: Vec<u8>,

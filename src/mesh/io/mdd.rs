@@ -61,7 +61,7 @@ pub fn parse_mdd(bytes: &[u8], path: &Path) -> Result<PointCache, MeshError> {
 }
 
 /// Reads an MDD file.
-pub fn read_mdd(path: &Path) -> Result<PointCache, MeshError> {
+pub(crate) fn read_mdd(path: &Path) -> Result<PointCache, MeshError> {
     parse_mdd(&crate::util::fsutil::read_bytes(path)?, path)
 }
 
@@ -83,7 +83,7 @@ pub fn encode_mdd(points: usize, positions: &[[f64; 3]], fps: f64) -> Vec<u8> {
 }
 
 /// Writes an MDD file atomically.
-pub fn write_mdd(
+pub(crate) fn write_mdd(
     points: usize,
     positions: &[[f64; 3]],
     fps: f64,

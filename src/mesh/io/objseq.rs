@@ -112,7 +112,7 @@ pub fn read_obj_folder(dir: &Path) -> Result<MeshSequence, MeshError> {
 }
 
 /// Writes every frame as `frame_NNNN.obj` in `dir` (each file atomically).
-pub fn write_obj_folder(seq: &MeshSequence, dir: &Path) -> Result<Vec<PathBuf>, MeshError> {
+pub(crate) fn write_obj_folder(seq: &MeshSequence, dir: &Path) -> Result<Vec<PathBuf>, MeshError> {
     let width = seq.frame_count().saturating_sub(1).to_string().len().max(4);
     let mut out = Vec::with_capacity(seq.frame_count());
     for f in 0..seq.frame_count() {

@@ -438,7 +438,7 @@ impl Parsed {
 }
 
 /// Reads a PLY file.
-pub fn read_ply(path: &Path) -> Result<Mesh, MeshError> {
+pub(crate) fn read_ply(path: &Path) -> Result<Mesh, MeshError> {
     parse_ply(&crate::util::fsutil::read_bytes(path)?, path)
 }
 
@@ -479,7 +479,7 @@ pub fn encode_ply(mesh: &Mesh, positions: Option<&[[f64; 3]]>) -> Vec<u8> {
 }
 
 /// Writes a binary PLY atomically.
-pub fn write_ply(
+pub(crate) fn write_ply(
     mesh: &Mesh,
     positions: Option<&[[f64; 3]]>,
     path: &Path,

@@ -187,7 +187,7 @@ impl UsdaWriter {
 
 /// Writes a whole sequence as `.usda` at `fps` (the sequence's own rate
 /// first).
-pub fn write_usda(seq: &MeshSequence, fps: f64, out: &Path) -> Result<(), MeshError> {
+pub(crate) fn write_usda(seq: &MeshSequence, fps: f64, out: &Path) -> Result<(), MeshError> {
     let fps = seq.fps.unwrap_or(fps);
     let mut w = UsdaWriter::create(seq.mesh(), out, seq.frame_count(), fps)?;
     for k in 0..seq.frame_count() {

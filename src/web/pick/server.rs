@@ -82,7 +82,7 @@ impl PickServer {
     }
 
     /// Runs `f` on the session (waiting for a request being answered).
-    pub fn with_session<T>(&self, f: impl FnOnce(&PickSession) -> T) -> T {
+    pub(crate) fn with_session<T>(&self, f: impl FnOnce(&PickSession) -> T) -> T {
         f(&self
             .shared
             .session

@@ -148,7 +148,7 @@ impl PickSession {
 
     /// A note shown on the page above everything else (e.g. why the
     /// automatic landmarks it starts from were refused); `None` clears it.
-    pub fn set_notice(&mut self, notice: Option<String>) {
+    pub(crate) fn set_notice(&mut self, notice: Option<String>) {
         self.notice = notice;
     }
 
@@ -174,7 +174,7 @@ impl PickSession {
 
     /// The landmark file's JSON: every landmark as a point (vertex ids
     /// kept as given), with the mesh's vertex count.
-    pub fn landmark_json(&self) -> Value {
+    pub(crate) fn landmark_json(&self) -> Value {
         let mut m = serde_json::Map::new();
         for (l, mark) in &self.landmarks.marks {
             let v = match *mark {

@@ -175,7 +175,11 @@ impl GltfAsset {
     /// down the hierarchy, and the mesh is skinned with linear blend skinning
     /// `v' = Σ w_j (W_j · IBM_j) v` (glTF 2.0 §3.7.3; the mesh node's own
     /// transform is ignored, as the spec says).
-    pub fn skinned_sequence(&self, index: usize, fps: f64) -> Result<MeshSequence, MeshError> {
+    pub(crate) fn skinned_sequence(
+        &self,
+        index: usize,
+        fps: f64,
+    ) -> Result<MeshSequence, MeshError> {
         use glam::{DMat4, DQuat, DVec3};
         let bad = |m: String| MeshError::invalid(std::path::Path::new("<gltf>"), m);
         let skin = self.skin.as_ref().ok_or_else(|| bad("no skin".into()))?;
@@ -252,7 +256,7 @@ impl GltfAsset {
     /// nodes the animation does not drive). `None` without a skin or that
     /// animation. For the joint mapping of rigged characters
     /// ([`GltfAsset::skin_clip`]).
-    pub fn joint_positions_at(&self, index: usize, t: f32) -> Option<Vec<glam::DVec3>> {
+    pub(crate) fn joint_positions_at(&self, index: usize, t: f32) -> Option<Vec<glam::DVec3>> {
         use glam::{DMat4, DQuat, DVec3};
         self.skin.as_ref()?;
         let anim = self.node_animations.get(index)?;
