@@ -98,6 +98,39 @@
 //! AMC's relative to the feet (its thighs 1.2-2.6° further forward, the
 //! data's), and the two offsets cancel in part in the world.
 //!
+//! Session 26: the pelvis placed by the body, measured and not kept (the
+//! kernel unchanged; these figures are the main kernel's results moved
+//! horizontally per frame in a scratch copy of this test, and a scratch
+//! kernel with `SM44_PLACE`/`SM44_START` switches whose `root` setting
+//! wrote 02_02's PC2 on samba byte for byte as main's). Main: 02_01 /
+//! 02_02 / 02_03 1.802 / 2.064 / 2.110 % (the pelvis 2.14 / 2.42 / 2.16).
+//! An anchor of the body (the root; the hips' midpoint; the feet, ankles
+//! and toes; the legs' eight joints; all nineteen joints) following the
+//! clip's same anchor from the character's rest one, its travel scaled by
+//! the legs' ratio, the standing hip height (median or 90th percentile of
+//! the hips' midpoint over the lowest foot joint) or the hip → ankle
+//! extension (90th percentile): the best per pair were the root by the
+//! extension 1.736 / 1.967 / 2.070, the mean joint by the hip height
+//! 1.800 / 2.058 / 1.866, the legs' mean by the hip height 2.012 / 2.295 /
+//! 1.822; the hips' midpoint by the legs 2.161 / 2.476 / 2.242, the feet by
+//! the legs 2.372 / 2.785 / 3.310. The hip height's scale takes the
+//! pelvis to 1.36 / 1.43 / 1.61 but moves the body about it further off.
+//! Foot locking in the kernel (where a clip foot touches its ground and
+//! its stiller joint, ankle or toe, moves under 2 % of the leg a frame,
+//! the character's same joint moves as the clip's, scaled; the shift held
+//! in the air): 1.99 / 3.62 / 2.14 %, re-timed 4.40 (the pelvis 1.63 /
+//! 2.63 / 1.78); it changes every clip's output (02_02 on samba: 74 of 75
+//! frames, up to 21.4 cm at the end; on this test's character the locked
+//! feet moved 02_02's body 4.3 cm from the scaled root by the end with the
+//! AMC, 14.1 cm with the BVH) and fails
+//! `mocap::one_capture`'s zeroed-root test. With frame 0 placed by the
+//! mean joint (`SM44_START=centroid`): root 2.17 / 2.56 / 2.46, foot
+//! locking 1.63 / 2.71 / 2.04. None is near 1 %: about the pelvis the two
+//! results stay 1.28 / 1.40 / 1.59 % apart whatever the placement (every
+//! rule above moves the whole body), so the gap left is the posture's
+//! (the CC rig's thighs and hips, above) and the pelvis's height on bent
+//! knees, not the root's travel.
+//!
 //! Earlier figures (measured 2026-11-29):
 //! - 01_01: the cgspeed BVH retargets as the AMC does (0.00 %).
 //! - The CC conversions: 3.1-4.2 % apart, 1.7-2.7 % of it posture. The
