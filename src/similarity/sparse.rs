@@ -75,8 +75,11 @@ pub struct SparseOptions {
     pub stride: usize,
     /// Nearest frames in each sequence of every `stride`-th frame: the
     /// dense method's transitions found at 3,234 frames rise from 78.8 %
-    /// (1) to 90.8 % (3), 94.5 % (6) and 94.9 % (8), 96.3 % (12). Its
-    /// candidates grow with `n × sequences`. Default: 12.
+    /// (1) to 90.8 % (3), 94.5 % (6) and 94.9 % (8), 96.3 % (12) alone;
+    /// with the re-ranked per-pair candidates (8 per pair, spread 5) to
+    /// 95.4 % (3, re-ranked from 32), 97.2 % (3, from 64), 95.9 % (4-6,
+    /// from 32), session 26. Its candidates grow with `n × sequences`.
+    /// Default: 12.
     pub per_sequence: usize,
     /// Best transitions by the cheap distances per unordered sequence pair
     /// whose centres are candidates ([`super::pair_scan`]); their count
@@ -103,8 +106,11 @@ pub struct SparseOptions {
     /// minima); 0: the `per_pair` best by the cheap distances, as they are.
     /// At 3,234 frames (8 per pair, no `per_sequence`) it raises the dense
     /// transitions found from 71.1 % to 84.4 % (32) and 88.5 % (spread 5,
-    /// or 32 of 128), short of the 95 % `per_sequence` 12 reaches. Default:
-    /// 0 (off).
+    /// or 32 of 128), short of the 95 % `per_sequence` 12 reaches; with
+    /// `per_sequence` 3 and spread 5, 97.2 % from 64 for 2.25 M pairs
+    /// (+ 0.16 M re-ranking) where the default's 12 per sequence compares
+    /// 3.27 M (session 26; not yet the default: not run as the default
+    /// through the tests). Default: 0 (off).
     pub rerank: usize,
 }
 

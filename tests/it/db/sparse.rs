@@ -289,8 +289,8 @@ impl surfmotion::similarity::sparse::Features for Looked<'_> {
 }
 
 /// Option sets from `SURFMOTION_SPARSE_OPTIONS`: `neighbours,per_pair,
-/// spread,per_sequence[,rerank]` separated by `;` (default: the current
-/// default; `rerank` when left out: the default's).
+/// spread,per_sequence[,rerank[,stride]]` separated by `;` (default: the
+/// current default; `rerank` and `stride` when left out: the default's).
 fn option_sets(
     base: surfmotion::similarity::SparseOptions,
 ) -> Vec<surfmotion::similarity::SparseOptions> {
@@ -307,6 +307,7 @@ fn option_sets(
                 spread: v[2],
                 per_sequence: v[3],
                 rerank: v.get(4).copied().unwrap_or(base.rerank),
+                stride: v.get(5).copied().unwrap_or(base.stride),
                 ..base
             }
         })
@@ -357,12 +358,13 @@ fn options_measured_against_the_dense_cache() {
     for o in option_sets(sparse_options(&m)) {
         let (sim, stats) = sparse_pairs(&set, spans.clone(), &o, &|_| {});
         let mut line = format!(
-            "neighbours {} per_pair {} spread {} per_sequence {} rerank {}: candidates {} (per pair {}), pairs {} (+ {} re-ranking), ({:.1} % of {}), index {:.1} s (scan {:.1} s)",
+            "neighbours {} per_pair {} spread {} per_sequence {} rerank {} stride {}: candidates {} (per pair {}), pairs {} (+ {} re-ranking), ({:.1} % of {}), index {:.1} s (scan {:.1} s)",
             o.neighbours,
             o.per_pair,
             o.spread,
             o.per_sequence,
             o.rerank,
+            o.stride,
             stats.candidates,
             stats.pair_candidates,
             stats.pairs,
@@ -384,7 +386,121 @@ fn options_measured_against_the_dense_cache() {
                 100.0 * a.found(),
                 100.0 * a.worst_cost
             );
+            println!("{line}");
+            if std::env::var_os("SURFMOTION_SPARSE_MISSES").is_some() {
+                let cheap = cheap_centres(&shape, &spans, &o, &topts);
+                for l in misses(
+                    &transitions_of(reference),
+                    &transitions_of(&g),
+                    &sim,
+                    &cheap,
+                ) {
+                    println!("  {l}");
+                }
+            }
+            continue;
         }
         println!("{line}");
     }
+}
+
+/// A graph's transitions (one place that reads them).
+fn transitions_of(
+    g: &surfmotion::graph::SurfaceMotionGraph,
+) -> Vec<surfmotion::similarity::transitions::Transition> {
+    g.transitions.clone()
+}
+
+/// The centres of each unordered sequence pair's best cheap transitions
+/// (as many as the re-ranking examines, at least 8): what the per-pair
+/// scan looks at, global frames, the first in the earlier sequence.
+fn cheap_centres(
+    shape: &surfmotion::similarity::ShapeSet,
+    spans: &[surfmotion::similarity::Span],
+    o: &surfmotion::similarity::SparseOptions,
+    t: &surfmotion::similarity::transitions::TransitionOptions,
+) -> Vec<(usize, u32)> {
+    use surfmotion::similarity::{pair_scan, sparse::project};
+    let (features, dims) = project(shape, o.dims);
+    let opts = surfmotion::similarity::transitions::TransitionOptions {
+        top_n: o.rerank.max(o.per_pair).max(8),
+        max_window: o.band.saturating_sub(1).max(t.min_window),
+        ..*t
+    };
+    pair_scan::best_per_pair(&features, dims, spans, &opts)
+}
+
+/// The dense transitions the sparse graph misses (not at the same frames
+/// with cost within 5 %), one line each: sequences, frames, cost, rank in
+/// its sequence pair, whether the centre pair is stored, the nearest
+/// examined cheap centre of the same sequence pair (frames along the
+/// diagonal, diagonals off) and the nearest sparse transition of the same
+/// ordered pair (|Δm| + |Δn|, cost relative); then a summary.
+fn misses(
+    dense: &[surfmotion::similarity::transitions::Transition],
+    sparse: &[surfmotion::similarity::transitions::Transition],
+    sim: &surfmotion::similarity::SparseSimilarity,
+    cheap: &[(usize, u32)],
+) -> Vec<String> {
+    let spans = &sim.spans;
+    let seq = |f: usize| spans.iter().position(|s| f < s.start + s.len).unwrap();
+    let mut out = Vec::new();
+    let (mut far, mut stored) = (Vec::new(), 0);
+    for t in dense {
+        let same =
+            |u: &&surfmotion::similarity::transitions::Transition| (u.from, u.to) == (t.from, t.to);
+        let hit = sparse.iter().filter(same).any(|u| {
+            (u.m, u.n) == (t.m, t.n) && (u.cost - t.cost).abs() <= 0.05 * t.cost.abs().max(1e-12)
+        });
+        if hit {
+            continue;
+        }
+        let rank = 1 + dense
+            .iter()
+            .filter(same)
+            .filter(|u| u.cost < t.cost)
+            .count();
+        let (ga, gb) = (spans[t.from].start + t.m, spans[t.to].start + t.n);
+        let (x, y) = (ga.min(gb), ga.max(gb));
+        stored += usize::from(sim.stored(ga, gb).is_some());
+        let near_cheap = cheap
+            .iter()
+            .filter(|&&(a, b)| seq(a) == seq(x) && seq(b as usize) == seq(y))
+            .map(|&(a, b)| {
+                let along = a as i64 - x as i64;
+                let off = (b as i64 - a as i64) - (y as i64 - x as i64);
+                (along.abs() + off.abs(), along, off)
+            })
+            .min();
+        let near_sparse = sparse
+            .iter()
+            .filter(same)
+            .map(|u| (u.m.abs_diff(t.m) + u.n.abs_diff(t.n), u.cost / t.cost - 1.0))
+            .min_by(|p, q| p.0.cmp(&q.0));
+        if let Some(c) = near_cheap {
+            far.push(c.0);
+        }
+        out.push(format!(
+            "miss {} -> {} ({}, {}) L {} cost {:.5} rank {rank}; centre stored {}; nearest cheap centre {:?}; nearest sparse transition {:?}",
+            spans[t.from].name,
+            spans[t.to].name,
+            t.m,
+            t.n,
+            t.window,
+            t.cost,
+            sim.stored(ga, gb).is_some(),
+            near_cheap.map(|c| (c.1, c.2)),
+            near_sparse.map(|(d, r)| format!("{d} frames, {:+.1} %", 100.0 * r)),
+        ));
+    }
+    far.sort_unstable();
+    let q = |p: usize| far.get(far.len().saturating_sub(1) * p / 100).copied();
+    out.push(format!(
+        "{} misses, centre stored in {stored}; |along| + |off| to the nearest cheap centre: 10th {:?}, 50th {:?}, 90th {:?}",
+        out.len(),
+        q(10),
+        q(50),
+        q(90)
+    ));
+    out
 }
