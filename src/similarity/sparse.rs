@@ -79,7 +79,8 @@ pub struct SparseOptions {
     /// with the re-ranked per-pair candidates (8 per pair, spread 5) to
     /// 95.4 % (3, re-ranked from 32), 97.2 % (3, from 64), 95.9 % (4-6,
     /// from 32), session 26. Its candidates grow with `n × sequences`.
-    /// Default: 12.
+    /// Default: 3 (with `per_pair` 8 re-ranked from 64; 12 alone before
+    /// session 26).
     pub per_sequence: usize,
     /// Best transitions by the cheap distances per unordered sequence pair
     /// whose centres are candidates ([`super::pair_scan`]); their count
@@ -88,7 +89,7 @@ pub struct SparseOptions {
     /// they are re-ranked by the full measure ([`SparseOptions::rerank`];
     /// without `per_sequence`, 8 per pair found 71.1 % of the dense
     /// transitions at 3,234 frames, 84.4 % re-ranked from 32, session 25).
-    /// Default: 0 (off).
+    /// Default: 8, re-ranked from 64 ([`SparseOptions::rerank`]).
     pub per_pair: usize,
     /// Each per-pair candidate also taken `spread` frames either way along
     /// the second sequence (its ±2 diagonals then cover ±(spread + 2)):
@@ -108,9 +109,9 @@ pub struct SparseOptions {
     /// transitions found from 71.1 % to 84.4 % (32) and 88.5 % (spread 5,
     /// or 32 of 128), short of the 95 % `per_sequence` 12 reaches; with
     /// `per_sequence` 3 and spread 5, 97.2 % from 64 for 2.25 M pairs
-    /// (+ 0.16 M re-ranking) where the default's 12 per sequence compares
-    /// 3.27 M (session 26; not yet the default: not run as the default
-    /// through the tests). Default: 0 (off).
+    /// (+ 0.16 M re-ranking) where 12 per sequence alone compares 3.27 M
+    /// for 96.3 % (session 26), at 110.9 s CPU against 129.8 s for the
+    /// whole `db build`. Default: 64.
     pub rerank: usize,
 }
 
@@ -122,11 +123,11 @@ impl Default for SparseOptions {
             band: 25,
             min_gap: 10,
             stride: 4,
-            per_sequence: 12,
-            per_pair: 0,
+            per_sequence: 3,
+            per_pair: 8,
             spread: 5,
             min_window: 4,
-            rerank: 0,
+            rerank: 64,
         }
     }
 }
@@ -1055,6 +1056,7 @@ mod tests {
             per_sequence: 0,
             per_pair: 8,
             spread: 5,
+            rerank: 0,
             ..SparseOptions::default()
         };
         let (with, _) = sparse_pairs(&set, spans.clone(), &base, &|_| {});
