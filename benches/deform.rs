@@ -73,23 +73,18 @@ fn main() {
         },
         ..Default::default()
     };
-    // Session 25's default (the seam read off the last region solved, the
-    // repair against the skin's turns only) and the default's seams with
-    // that repair: the surface repair's cost is the difference (issue 42).
-    let old = DeformOptions {
-        parent_seams: false,
-        repair_turns: RepairTurns::Skin,
-        ..Default::default()
-    };
-    let skin_repair = DeformOptions {
-        repair_turns: RepairTurns::Skin,
+    // The seam to the parent's own result and the repair finished against
+    // the surface's own turns (options, issue 42): their cost against the
+    // default's.
+    let surface = DeformOptions {
+        parent_seams: true,
+        repair_turns: RepairTurns::SkinThenSurface,
         ..Default::default()
     };
     for (name, opts) in [
         ("part_75_frames", DeformOptions::default()),
         ("part_no_repair_75_frames", no_repair),
-        ("part_old_default_75_frames", old),
-        ("part_skin_repair_75_frames", skin_repair),
+        ("part_surface_repair_75_frames", surface),
     ] {
         let def = Deformer::new(&ch, DeformMode::Part, &opts).unwrap();
         let mut ws = def.workspace();
@@ -130,8 +125,10 @@ fn main() {
         for (name, what) in [
             ("part_75_frames", "part"),
             ("part_no_repair_75_frames", "without the repair"),
-            ("part_old_default_75_frames", "session 25's default"),
-            ("part_skin_repair_75_frames", "the skin's repair only"),
+            (
+                "part_surface_repair_75_frames",
+                "parent seams and surface repair",
+            ),
         ] {
             if let Some(p) = med(name) {
                 let p = p / frames as f64;

@@ -22,8 +22,8 @@ struct Readings {
     rest: Vec<u32>,
 }
 
-/// CMU 02_02 and 131_01 on the real samba capture, deformed with the old
-/// default (`parent_seams` off, `RepairTurns::Skin`) and the default: per frame
+/// CMU 02_02 and 131_01 on the real samba capture, deformed with the
+/// default and with `parent_seams` + `RepairTurns::SkinThenSurface`: per frame
 /// the three readings' counts (printed), and, with `SURFACE_LOOK_DIR`
 /// set, the outputs (PC2, metres, Y-up), the topology (OBJ) and each
 /// frame's flagged triangles (`flags.txt`: clip variant reading frame
@@ -46,12 +46,13 @@ fn where_the_tests_of_turned_over_disagree() {
     if let Some(p) = &dir {
         surfmotion::mesh::io::obj::write_obj(&rest, None, &p.join("samba-rest.obj")).unwrap();
     }
-    let old = DeformOptions {
-        parent_seams: false,
-        repair_turns: RepairTurns::Skin,
+    let old = DeformOptions::default();
+    assert!(!old.parent_seams && old.repair_turns == RepairTurns::Skin);
+    let new = DeformOptions {
+        parent_seams: true,
+        repair_turns: RepairTurns::SkinThenSurface,
         ..Default::default()
     };
-    let new = DeformOptions::default();
     for (clip, tag) in [
         ("cmu-amc/02/02_02.amc", "02_02"),
         ("cmu-bvh/131_01.bvh", "131_01"),
