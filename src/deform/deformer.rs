@@ -587,10 +587,11 @@ impl Deformer {
     /// The fold repair with the rotations of [`DeformOptions::repair_turns`]:
     /// [`Deformer::repair_against`] the skin's turns, then (or only) the
     /// surface's own ([`super::near_turns`], read off the deformed frame).
-    /// `before` counts against the skin's turns; `after` against the turns
-    /// the last repair used (the surface's, where it runs: a triangle that
-    /// faces with its neighbourhood is not left folded, though it may face
-    /// against the skin's blend of two thighs' turns).
+    /// `before` counts against the skin's turns; `after` against the
+    /// surface's own turns of the frame as left, where the surface repair
+    /// runs ([`Deformer::repair_surface`]: a triangle that faces with its
+    /// neighbourhood is not left folded, though it may face against the
+    /// skin's blend of two thighs' turns), else against the skin's.
     fn repair(
         &self,
         tris: &[[u32; 3]],
@@ -613,13 +614,46 @@ impl Deformer {
         if let (Some(near), RepairTurns::SkinThenSurface | RepairTurns::Surface) =
             (&self.near, self.repair_turns)
         {
-            let mut turn = std::mem::take(&mut ws.surface_turn);
-            near.turns(source, out, &mut ws.seeds, &mut turn);
-            counts.after = self.repair_against(tris, adj, source, out, ws, &turn).after;
-            ws.surface_turn = turn;
+            counts.after = self.repair_surface(near, tris, adj, source, out, ws);
         }
         ws.turn = skin;
         counts
+    }
+
+    /// The repair against the surface's own turns: rounds of reading each
+    /// neighbourhood's turn off the frame as it now is and repairing what
+    /// faces against it, until nothing does or [`SURFACE_ROUNDS`] repairs
+    /// have run. Returns the triangles left turned over against the turns
+    /// of the frame as it is left ([`super::near_turns::turned_over_near`],
+    /// what the tests count): a repair moves vertices, and with them the
+    /// turns it was read against.
+    fn repair_surface(
+        &self,
+        near: &Neighbourhoods,
+        tris: &[[u32; 3]],
+        adj: &unflip::Adjacency,
+        source: &[[f64; 3]],
+        out: &mut [[f64; 3]],
+        ws: &mut DeformWorkspace,
+    ) -> usize {
+        let mut turn = std::mem::take(&mut ws.surface_turn);
+        let mut left = 0;
+        for round in 0..=SURFACE_ROUNDS {
+            near.turns(source, out, &mut ws.seeds, &mut turn);
+            if round == SURFACE_ROUNDS {
+                left = unflip::turned_over(tris, source, out, &turn).len();
+                break;
+            }
+            if self
+                .repair_against(tris, adj, source, out, ws, &turn)
+                .before
+                == 0
+            {
+                break;
+            }
+        }
+        ws.surface_turn = turn;
+        left
     }
 
     /// [`untangle::untangle`], then passes of [`unflip::unflip`] and
@@ -799,6 +833,11 @@ impl Deformer {
             })
     }
 }
+
+/// Repairs against the surface's own turns, each after reading them
+/// again ([`Deformer::repair_surface`]). Measured (session 26, CMU 02_02
+/// and 131_01 on the real samba capture): see README, issue 42.
+const SURFACE_ROUNDS: usize = 2;
 
 /// Two repairs' work added.
 fn add_work(a: unflip::Work, b: unflip::Work) -> unflip::Work {

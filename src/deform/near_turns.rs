@@ -116,6 +116,67 @@ impl Neighbourhoods {
     }
 }
 
+/// Triangles of `out` turned over against `source` with each vertex
+/// turned by its neighbourhood's own rotation from `source` onto `out`
+/// ([`Neighbourhoods::turns`]; `seeds`, `turn`: scratch). The test of
+/// "turned over" the deformation's tests and its report use (issue 42,
+/// session 26): a triangle counts when it faces against its own
+/// surroundings, as a fold, crease or sliver does on screen, not when the
+/// skin's blend of two bones' turns (the skirt between the thighs) points
+/// elsewhere than the cloth went.
+pub fn turned_over_near(
+    near: &Neighbourhoods,
+    tris: &[[u32; 3]],
+    source: &[[f64; 3]],
+    out: &[[f64; 3]],
+    seeds: &mut Vec<DQuat>,
+    turn: &mut Vec<DQuat>,
+) -> Vec<u32> {
+    turn.resize(source.len(), DQuat::IDENTITY);
+    near.turns(source, out, seeds, turn);
+    super::unflip::turned_over(tris, source, out, turn)
+}
+
+/// [`turned_over_near`] with its neighbourhoods and scratch, built once
+/// per mesh: what a caller outside the deformation (a test, a report)
+/// counts a deformed frame's folds with.
+#[derive(Debug, Clone)]
+pub struct SurfaceFolds {
+    near: Neighbourhoods,
+    seeds: Vec<DQuat>,
+    turn: Vec<DQuat>,
+}
+
+impl SurfaceFolds {
+    /// The neighbourhoods ([`RINGS`] edges) of the mesh of `n` vertices
+    /// and `tris`.
+    pub fn new(n: usize, tris: &[[u32; 3]]) -> SurfaceFolds {
+        SurfaceFolds {
+            near: Neighbourhoods::new(&Adjacency::new(n, tris), RINGS),
+            seeds: Vec::new(),
+            turn: vec![DQuat::IDENTITY; n],
+        }
+    }
+
+    /// The triangles of `out` turned over against `source`
+    /// ([`turned_over_near`]).
+    pub fn turned_over(
+        &mut self,
+        tris: &[[u32; 3]],
+        source: &[[f64; 3]],
+        out: &[[f64; 3]],
+    ) -> Vec<u32> {
+        turned_over_near(
+            &self.near,
+            tris,
+            source,
+            out,
+            &mut self.seeds,
+            &mut self.turn,
+        )
+    }
+}
+
 /// The rotation that best turns offsets `o` onto points `x` over the
 /// pairs `(x, o)` (Kabsch: the polar factor of `Σ xᵢ oᵢᵀ`; the offsets sum
 /// to zero, so `x` needs no centring); the identity where the sum is

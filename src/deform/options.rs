@@ -165,7 +165,7 @@ pub struct DeformOptions {
     /// left shin, solved after both thighs, is then tied to the *right*
     /// thigh's result under the skirt (session 23 measured the left shin
     /// 2-3 cm from its left thigh there, the right 0.02 cm).
-    /// Default false (the outputs of sessions up to 25). Alone (session 24)
+    /// Default false (the outputs of sessions up to 26). Alone (session 24)
     /// it lowered the triangle-frames turned over before the repair (CMU
     /// 02_02 on the real samba capture 5,837 → 4,845) but raised those
     /// turned over against the rest frame after it (465 → 735): the repair
@@ -192,23 +192,28 @@ pub struct DeformOptions {
 /// capture; session-24 default → `parent_seams` with this default):
 /// triangle-frames turned over against the rest frame after the repair,
 /// CMU 02_02 465 → 55, 131_02 1,067 → 118 (README, issue 42).
+///
+/// Which reading a person sees: README, issue 42 (session 26). The
+/// deformation's tests still count with the skin's blend; the surface's
+/// own reading is [`super::near_turns::turned_over_near`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RepairTurns {
-    /// The skeleton's rotations blended by skin weight. The default: the
-    /// second repair below leaves triangles facing away from the skin's
-    /// blend of the retrieved frame (session 25, merged build: CMU 02_02 on
-    /// samba 643 triangle-frames, 131_01 on the synthetic database 246,
-    /// where this repair leaves 0 — the contract of
-    /// `deform::a_walk_on_the_real_capture_turns_no_triangle_over`), and
-    /// the retargeting yardstick was not run with it.
+    /// The skeleton's rotations blended by skin weight. The default: with
+    /// the second repair below as the default (session 26's build), CMU
+    /// 02_02 on samba left 8 triangle-frames facing against their own
+    /// neighbourhoods (`deform::a_walk_on_the_real_capture_turns_no_triangle_over`
+    /// judged by that reading) and 131_01 3 in frame 96
+    /// (`deform::a_real_retarget_keeps_every_vertex_in_its_ring`), so the
+    /// tests that read deformed surfaces did not pass with it.
     #[default]
     Skin,
-    /// The skin's, then a second repair of what is left turned over
-    /// against the surface's own rotations ([`super::near_turns`]: each
+    /// The skin's, then repairs of what is left turned over against the
+    /// surface's own rotations ([`super::near_turns`]: each
     /// neighbourhood's best rigid alignment from the retrieved frame onto
-    /// the repaired one), the test the surface measure makes against the
-    /// rest frame.
+    /// the repaired one, read again after each repair, at most two
+    /// repairs), the test the surface measure makes against the rest
+    /// frame.
     SkinThenSurface,
     /// The surface's own rotations only.
     Surface,

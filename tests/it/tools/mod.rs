@@ -2,4 +2,5 @@
 
 mod plausibility;
 mod surface;
+mod surface_look;
 mod surface_repair;
