@@ -114,7 +114,12 @@ pub struct SessionOptions {
     /// 03_01 lag 0 0.522 → 0.358, but lag 3 0.442 → 0.547 (the body
     /// dropped 8 cm in one frame where the leading foot left the block,
     /// frame 40, no longer held and not yet ramped down to its landing),
-    /// lag 10 0.431 → 0.421. False (the default) as s24.
+    /// lag 10 0.431 → 0.421. s26: a foot that left a step above the floor
+    /// and has not landed carries the body down no faster than the
+    /// window's pelvis falls fastest (the kernel's causal step-down):
+    /// lag 3 0.547 → 0.443 (s24's 0.442), lag 0 0.358 as before
+    /// (`live::stream_rules`). Not measured on all eight clips of the
+    /// fidelity table: false (the default) as s24.
     pub open_end: bool,
 }
 

@@ -129,21 +129,38 @@ pub(super) fn place_feet(
     // millimetres (CMU 03_01 on samba, frame 89: 3.8 cm; synth3 03_02,
     // frame 39: 9.2 cm). Only raises the body, so no foot goes under its
     // ground.
+    //
+    // At a stream's open end ([`Given::open_end`](super::Given::open_end))
+    // a foot that left a step above the floor and has not landed in the
+    // window has no landing to ramp to: the body is carried from the last
+    // frame the step held it and comes down no faster than the clip's
+    // pelvis falls fastest in the window ([`carry_down`]), so a later
+    // window's landing and ramp do not find the frames already shown
+    // dropped onto the floor under them (CMU 03_01 on samba at lag 3,
+    // frame 40: 8 cm below offline where the leading foot left the block).
+    let fall = if open_end { fall_rate(out) } else { 0.0 };
     for t in &touch {
         let mut i = 1;
         while i < n {
-            if let (Some(u), None) = (t[i - 1], t[i])
-                && let Some(j) = (i..n).find(|&j| t[j].is_some())
-            {
-                if t[j].is_some_and(|v| v < u - support.band) {
-                    let (a, b) = (lift[i - 1], lift[j]);
-                    for (k, l) in lift.iter_mut().enumerate().take(j).skip(i) {
-                        let w = (k + 1 - i) as f64 / (j + 1 - i) as f64;
-                        *l = l.max(a + (b - a) * w);
+            if let (Some(u), None) = (t[i - 1], t[i]) {
+                match (i..n).find(|&j| t[j].is_some()) {
+                    Some(j) => {
+                        if t[j].is_some_and(|v| v < u - support.band) {
+                            let (a, b) = (lift[i - 1], lift[j]);
+                            for (k, l) in lift.iter_mut().enumerate().take(j).skip(i) {
+                                let w = (k + 1 - i) as f64 / (j + 1 - i) as f64;
+                                *l = l.max(a + (b - a) * w);
+                            }
+                        }
+                        i = j;
+                        continue;
                     }
+                    None if open_end && u > clip_floor + support.band => {
+                        carry_down(&mut lift[i - 1..], fall);
+                        break;
+                    }
+                    None => {}
                 }
-                i = j;
-                continue;
             }
             i += 1;
         }
@@ -183,6 +200,31 @@ pub(super) fn place_feet(
             .map(|y| y.map(|y| (y - clip_floor) * s))
             .collect()
     })
+}
+
+/// The fastest the body falls in `out` (the character's poses before the
+/// feet's lift): the largest drop of the pelvis from one frame to the
+/// next, metres a frame (0 for fewer than two frames or a pelvis that
+/// never drops). A bound the clip's own motion shows the body can reach,
+/// for [`carry_down`].
+fn fall_rate(out: &[(Pose, [DQuat; Canonical::COUNT])]) -> f64 {
+    let p = C::Pelvis.index();
+    out.windows(2)
+        .map(|w| w[0].0[p].y - w[1].0[p].y)
+        .filter(|d| d.is_finite())
+        .fold(0.0, f64::max)
+}
+
+/// Raises `lift[k]` (k ≥ 1) to at least `lift[0] - fall * k`: the body
+/// held by `lift[0]` (the last frame a support held it) comes down by at
+/// most `fall` a frame. Only raises, so no foot goes under its ground.
+fn carry_down(lift: &mut [f64], fall: f64) {
+    let Some(&a) = lift.first() else {
+        return;
+    };
+    for (k, l) in lift.iter_mut().enumerate().skip(1) {
+        *l = l.max(a - fall * k as f64);
+    }
 }
 
 /// A foot's last and next support per frame (`sides`,
@@ -423,4 +465,22 @@ pub enum Toes {
     /// deformation that turns the toes by the toe joint's rotation (the
     /// Confluent Motion markers of `transfer`).
     Bending,
+}
+
+#[cfg(test)]
+mod open_end_tests {
+    use super::carry_down;
+
+    #[test]
+    fn carry_down_only_raises_and_falls_at_the_rate() {
+        let mut lift = vec![0.10, 0.02, 0.09, 0.0, 0.0];
+        carry_down(&mut lift, 0.03);
+        let want = [0.10, 0.07, 0.09, 0.01, 0.0];
+        for (l, w) in lift.iter().zip(want) {
+            assert!((l - w).abs() < 1e-12, "{lift:?}");
+        }
+        let mut none: Vec<f64> = Vec::new();
+        carry_down(&mut none, 0.03);
+        assert!(none.is_empty());
+    }
 }

@@ -203,8 +203,11 @@ pub struct Given<'a> {
     /// its last touch in it has not landed yet, and the floor, the lowest
     /// support it can land on, stands for the one it lands on (offline,
     /// the lower of the support it left and the next one decides how low
-    /// it may go before it lifts the body: [`Support::under`]). False:
-    /// the clip is whole.
+    /// it may go before it lifts the body: [`Support::under`]). A foot
+    /// that left a step above the floor and has not landed carries the
+    /// body down from the step no faster than the clip's pelvis falls
+    /// fastest in the clip (`place_feet`'s causal step-down). False: the
+    /// clip is whole.
     pub open_end: bool,
 }
 
