@@ -108,7 +108,13 @@ pub fn apply_override(
                 rule.pose_rule = PoseRule::parse(v).ok_or_else(bad)?;
             }
             "frames" => auto.frames = FrameSample::parse(v).ok_or_else(bad)?,
-            "max" => auto.max_frames = v.parse::<usize>().ok().filter(|&m| m >= 2).ok_or_else(bad)?,
+            "max" => {
+                auto.max_frames = v
+                    .parse::<usize>()
+                    .ok()
+                    .filter(|&m| m >= 2)
+                    .ok_or_else(bad)?
+            }
             _ => return Err(bad()),
         }
     }
