@@ -81,8 +81,9 @@ impl PoseRule {
 }
 
 impl RestOptions {
-    /// The automatic rig's rule (`db init` without landmarks): by pose,
-    /// [`PoseRule::Standing`].
+    /// The rule by pose for the automatic rig: [`PoseRule::Standing`]. Not
+    /// `db init`'s default (`embed::auto::options::automatic_setup`; with
+    /// `SURFMOTION_AUTORIG=rest=standing`).
     pub fn automatic() -> RestOptions {
         RestOptions {
             by_pose: true,

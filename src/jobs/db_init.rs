@@ -155,10 +155,9 @@ fn init_in(
     let mut o = opts.clone();
     let mut auto = None;
     let mut file = None;
-    // The rest frame's rule: without landmarks the automatic rig's
-    // (`RestOptions::automatic`: by pose, the same frame whatever frame
-    // the capture starts with), else main's (a clear topology is kept for
-    // the landmarks marked on it).
+    // The rest frame's rule and the automatic rig's options: without
+    // landmarks `automatic_setup`'s (main's rule unless
+    // `SURFMOTION_AUTORIG` asks the rules by pose), else main's rule.
     let (rule, auto_opts) = if wants_auto {
         automatic_setup(&setup.auto).map_err(JobError::Usage)?
     } else {

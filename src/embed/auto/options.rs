@@ -14,7 +14,10 @@ pub struct AutoOptions {
     /// Frames of the capture used. Default 40.
     pub max_frames: usize,
     /// Which frames the decomposition fits ([`FrameSample`]). Default
-    /// [`FrameSample::PoseQuantiles`] (session 26).
+    /// [`FrameSample::InOrder`]: as `db init`'s default (session 26's
+    /// build) [`FrameSample::PoseQuantiles`] with the rule by pose failed
+    /// `embed::auto_knees` (crane's right knee 4.4 % of the height from
+    /// the landmark rig, bound 3 %).
     pub frames: FrameSample,
     /// The decomposition's settings.
     pub decompose: DecomposeOptions,
@@ -25,7 +28,7 @@ impl Default for AutoOptions {
         AutoOptions {
             rest_frame: None,
             max_frames: 40,
-            frames: FrameSample::PoseQuantiles,
+            frames: FrameSample::InOrder,
             decompose: DecomposeOptions::default(),
         }
     }
@@ -72,14 +75,17 @@ impl FrameSample {
 /// `frames=in-order|farthest|quantiles`, `max=N`.
 pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
 
-/// `db init`'s automatic rig: the rest frame's rule
-/// ([`crate::embed::rest::RestOptions::automatic`]) and `auto`, with the
-/// measurement override [`AUTORIG_ENV`] applied when set. `Err` names the
-/// pair that is not an option.
+/// `db init`'s automatic rig: the rest frame's rule (main's,
+/// [`crate::embed::rest::RestOptions::default`]: a clear topology kept,
+/// else the first clear frame) and `auto`, with the measurement override
+/// [`AUTORIG_ENV`] applied when set (`rest=standing,frames=quantiles`:
+/// the rules by pose, [`crate::embed::rest::RestOptions::automatic`] and
+/// [`FrameSample::PoseQuantiles`], not the default: see
+/// [`AutoOptions::frames`]). `Err` names the pair that is not an option.
 pub fn automatic_setup(
     auto: &AutoOptions,
 ) -> Result<(crate::embed::rest::RestOptions, AutoOptions), String> {
-    let mut rule = crate::embed::rest::RestOptions::automatic();
+    let mut rule = crate::embed::rest::RestOptions::default();
     let mut auto = *auto;
     if let Ok(text) = std::env::var(AUTORIG_ENV) {
         apply_override(&text, &mut rule, &mut auto)?;

@@ -23,18 +23,25 @@
 //! 0.20 / 4.63, 88.3; s165 Z-up 1.71, 5.27 / 3.98, 88.0 …): the contact
 //! orders chose another rest frame (original 29, 64, 35 …; the clear order
 //! kept 0) and the frames sampled for the decomposition followed the
-//! order. With `db init`'s rules of session 26 (the rest frame the most
+//! order. With the rules by pose of session 26 (the rest frame the most
 //! standing of the clear ones, `RestOptions::automatic`; the frames by
-//! their poses, `FrameSample::PoseQuantiles`) every start chooses the
-//! clear order's rest frame, and is held to the figures.
+//! their poses, `FrameSample::PoseQuantiles`; options of `db init` through
+//! `SURFMOTION_AUTORIG`, not its default) every start chooses the clear
+//! order's rest frame, and is held to the figures.
 
 use crate::common;
+
+/// The rules by pose (`RestOptions::automatic`,
+/// `FrameSample::PoseQuantiles`): options, not `db init`'s default (as
+/// the default they failed `embed::auto_knees` on crane).
+const BY_POSE: &str = "rest=standing,frames=quantiles";
 
 use glam::DVec3;
 use std::path::Path;
 use surfmotion::db::Manifest;
 use surfmotion::db::skeletons::embed_rig;
 use surfmotion::embed::Embedding;
+use surfmotion::embed::auto::options::AUTORIG_ENV;
 use surfmotion::embed::landmarks::{Anchor, Landmark, Landmarks, Mark};
 use surfmotion::mesh::MeshSequence;
 use surfmotion::mesh::io::obj::write_obj;
@@ -98,7 +105,7 @@ fn init(seq: &MeshSequence, s: &Start, dir: &Path) -> (common::CliRun, std::path
             format!("dance={}", p(&pc2)),
         ],
         None,
-        &[],
+        &[(AUTORIG_ENV, BY_POSE)],
     );
     (run, db)
 }

@@ -3,8 +3,8 @@
 //! them are chosen by pose (`embed::pose_order::quantiles`, evenly spaced
 //! ranks of the distance from the rest frame's pose), the topology takes
 //! no part in the fit, and the rest frame is the most standing of the
-//! clearest frames (`RestOptions::automatic`) — `db init`'s rules
-//! (`automatic_setup`). Before, the frames were spread evenly in the
+//! clearest frames (`RestOptions::automatic`) — options, not `db init`'s
+//! default (`SURFMOTION_AUTORIG=rest=standing,frames=quantiles`). Before, the frames were spread evenly in the
 //! order given after the topology, and the rest frame was the first clear
 //! one: samba started at frame 130 rigged 2.6 % of the height and 15 % of
 //! the parts away from its clear start, and on the same rest frame still
@@ -20,10 +20,10 @@ use crate::common;
 use glam::DVec3;
 use std::path::Path;
 use surfmotion::embed::Embedding;
-use surfmotion::embed::auto::options::{AutoOptions, automatic_setup};
+use surfmotion::embed::auto::options::{AutoOptions, FrameSample};
 use surfmotion::embed::auto::report::AutoRig;
 use surfmotion::embed::auto::rig::auto_rig;
-use surfmotion::embed::rest::choose_rest_frame;
+use surfmotion::embed::rest::{RestOptions, choose_rest_frame};
 use surfmotion::mesh::Mesh;
 use surfmotion::mesh::io::obj::write_obj;
 use surfmotion::mesh::io::pc2::write_pc2;
@@ -52,12 +52,13 @@ fn rig_in_order(
     let f: Vec<&[[f64; 3]]> = moved.iter().map(Vec::as_slice).collect();
     let mut all = vec![topo.positions()];
     all.extend_from_slice(&f);
-    let (rule, auto) = automatic_setup(&AutoOptions::default()).unwrap();
+    let rule = RestOptions::automatic();
     let c = choose_rest_frame(&topo, &all, &rule).unwrap();
     let rest = (c.frame > 0).then(|| c.frame - 1);
     let opts = AutoOptions {
         rest_frame: rest,
-        ..auto
+        frames: FrameSample::PoseQuantiles,
+        ..AutoOptions::default()
     };
     let rig = auto_rig(&topo, &f, &opts).unwrap();
     (all[c.frame].to_vec(), rig)
