@@ -149,30 +149,32 @@ fn arm_offsets(
     }
 }
 
-/// The automatic rig as `db init` runs it: the parts found on the rest
-/// frame chosen clear of contact over the topology's positions and every
-/// frame.
+/// The automatic rig as `db init` runs it (its rules, `automatic_setup`,
+/// `SURFMOTION_AUTORIG` applied): the parts found on the rest frame chosen
+/// over the topology's positions and every frame.
 fn rig_as_db_init(
     mesh: &Mesh,
     frames: &[&[[f64; 3]]],
 ) -> Result<surfmotion::embed::auto::report::AutoRig, surfmotion::embed::auto::options::AutoError> {
-    use surfmotion::embed::rest::choose_rest_frame;
-    let mut all = vec![mesh.positions()];
-    all.extend_from_slice(frames);
-    let rest =
-        choose_rest_frame(mesh, &all, &by_pose()).and_then(|c| (c.frame > 0).then(|| c.frame - 1));
-    let opts = AutoOptions {
-        rest_frame: rest,
-        ..AutoOptions::default()
-    };
-    auto_rig(mesh, frames, &opts)
+    let (rest, _) = rest_as_db_init(mesh, frames);
+    auto_rig(mesh, frames, &db_init_options(rest))
 }
 
-/// `db init`'s rule for the automatic rig: the rest frame by pose.
-fn by_pose() -> surfmotion::embed::rest::RestOptions {
-    surfmotion::embed::rest::RestOptions {
-        by_pose: true,
-        ..Default::default()
+/// `db init`'s rules for the automatic rig (`automatic_setup`, with
+/// `SURFMOTION_AUTORIG` when set).
+fn db_init_rules() -> (surfmotion::embed::rest::RestOptions, AutoOptions) {
+    use surfmotion::embed::auto::options::automatic_setup;
+    automatic_setup(&AutoOptions::default()).unwrap_or_else(|e| {
+        eprintln!("{e}");
+        std::process::exit(2)
+    })
+}
+
+/// `db init`'s automatic rig options with the rest frame `rest`.
+fn db_init_options(rest: Option<usize>) -> AutoOptions {
+    AutoOptions {
+        rest_frame: rest,
+        ..db_init_rules().1
     }
 }
 
@@ -182,7 +184,7 @@ fn rest_as_db_init(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> (Option<usize>, Strin
     use surfmotion::embed::rest::choose_rest_frame;
     let mut all = vec![mesh.positions()];
     all.extend_from_slice(frames);
-    match choose_rest_frame(mesh, &all, &by_pose()) {
+    match choose_rest_frame(mesh, &all, &db_init_rules().0) {
         Some(c) => ((c.frame > 0).then(|| c.frame - 1), c.why),
         None => (None, String::new()),
     }
@@ -243,16 +245,7 @@ fn reordered(mesh: &Mesh, frames: &[&[[f64; 3]]], order: &[usize], what: &str, m
     let moved: Vec<&[[f64; 3]]> = order.iter().map(|&k| frames[k]).collect();
     let (rest_a, _) = rest_as_db_init(&mesh, &frames);
     let (rest_b, why) = rest_as_db_init(&cmesh, &moved);
-    let rig = |m: &Mesh, f: &[&[[f64; 3]]], r: Option<usize>| {
-        auto_rig(
-            m,
-            f,
-            &AutoOptions {
-                rest_frame: r,
-                ..AutoOptions::default()
-            },
-        )
-    };
+    let rig = |m: &Mesh, f: &[&[[f64; 3]]], r: Option<usize>| auto_rig(m, f, &db_init_options(r));
     let (Ok(clear), Ok(contact)) = (rig(&mesh, &frames, rest_a), rig(&cmesh, &moved, rest_b))
     else {
         println!("| {what} | refused |");
@@ -481,7 +474,7 @@ fn synth(data: &Path) {
             let n = rest.vertex_count();
             let frames: Vec<&[[f64; 3]]> = out.positions.chunks(n).collect();
             let t = Instant::now();
-            let auto = match auto_rig(&rest, &frames, &AutoOptions::default()) {
+            let auto = match auto_rig(&rest, &frames, &db_init_options(None)) {
                 Ok(a) => a,
                 Err(e) => {
                     println!("| {bname} | {mname} | {} | refused: {e} |", frames.len());

@@ -13,7 +13,12 @@
 //!   order it visits them;
 //! - [`standing_first`]: frames ordered by [`spread`], how far they are
 //!   from standing with the limbs in (the most neutral first), for the
-//!   rest frame's choice.
+//!   rest frame's choice; [`nearest`] and [`median`]: frames ordered by
+//!   their distance from a pose (the per-coordinate median of all);
+//! - [`quantiles`]: `k` frames at evenly spaced ranks of their distance
+//!   from the rest frame's pose, the rest frame first: the capture's poses
+//!   in proportion to how long it holds them, near and far (an even
+//!   spread in time gave that, but followed the order).
 //!
 //! Ties (equal distances: repeated poses) are broken by the descriptors
 //! themselves (lexicographic), so that only a frame identical in pose to
@@ -146,6 +151,53 @@ pub fn standing_first(frames: &[&[[f64; 3]]], descs: &[Vec<f64>], among: &[usize
     order.into_iter().map(|(_, i)| i).collect()
 }
 
+/// The indices `among` ordered by their descriptor's distance from
+/// `pose` (nearest first; ties: the lesser descriptor).
+pub fn nearest(descs: &[Vec<f64>], pose: &[f64], among: &[usize]) -> Vec<usize> {
+    let mut order: Vec<(f64, usize)> = among
+        .iter()
+        .map(|&i| (distance2(&descs[i], pose), i))
+        .collect();
+    order.sort_by(|a, b| {
+        a.0.total_cmp(&b.0)
+            .then_with(|| by_pose(&descs[a.1], &descs[b.1]))
+    });
+    order.into_iter().map(|(_, i)| i).collect()
+}
+
+/// The per-coordinate median of `descs` (the lower middle of an even
+/// count; empty without descriptors). The same in any order of `descs`.
+pub fn median(descs: &[Vec<f64>]) -> Vec<f64> {
+    let Some(len) = descs.iter().map(Vec::len).min() else {
+        return Vec::new();
+    };
+    let mid = (descs.len() - 1) / 2;
+    let mut column = vec![0.0; descs.len()];
+    (0..len)
+        .map(|c| {
+            for (x, d) in column.iter_mut().zip(descs) {
+                *x = d[c];
+            }
+            *column.select_nth_unstable_by(mid, f64::total_cmp).1
+        })
+        .collect()
+}
+
+/// Up to `k` (at least 2 when there are) indices of `descs` at evenly
+/// spaced ranks of their distance from `seed` ([`nearest`]: the nearest
+/// first, the farthest last, ties by pose). The same poses in any order
+/// give the same poses in the same order.
+pub fn quantiles(descs: &[Vec<f64>], seed: &[f64], k: usize) -> Vec<usize> {
+    let all: Vec<usize> = (0..descs.len()).collect();
+    let ranked = nearest(descs, seed, &all);
+    let n = ranked.len();
+    let k = k.max(2).min(n);
+    if k <= 1 {
+        return ranked;
+    }
+    (0..k).map(|i| ranked[i * (n - 1) / (k - 1)]).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -196,6 +248,33 @@ mod tests {
             // The straight segment is the most stretched out.
             assert_eq!(m[0], 0);
         }
+    }
+
+    #[test]
+    fn quantiles_and_the_median_are_the_same_poses_in_any_order() {
+        let p = poses();
+        let seed = descriptor(&p[2]);
+        let descs: Vec<Vec<f64>> = p.iter().map(|f| descriptor(f)).collect();
+        let q = quantiles(&descs, &seed, 4);
+        // The seed's own pose first, the farthest (the most bent) last.
+        assert_eq!(q.first(), Some(&2));
+        assert_eq!(q.last(), Some(&7));
+        assert_eq!(q.len(), 4);
+        let med = median(&descs);
+        let all: Vec<usize> = (0..8).collect();
+        let m = nearest(&descs, &med, &all);
+        for perm in [[7, 6, 5, 4, 3, 2, 1, 0], [3, 0, 6, 1, 7, 2, 5, 4]] {
+            let shuffled: Vec<Vec<f64>> = perm.iter().map(|&i| descs[i].clone()).collect();
+            let back = |v: Vec<usize>| -> Vec<usize> { v.into_iter().map(|i| perm[i]).collect() };
+            assert_eq!(back(quantiles(&shuffled, &seed, 4)), q);
+            assert_eq!(median(&shuffled), med);
+            assert_eq!(back(nearest(&shuffled, &med, &all)), m);
+        }
+        // Each distance shrinks as the bend grows: the lower middle of the
+        // eight is bend 4's, in every coordinate.
+        assert_eq!(m[0], 4);
+        assert!(median(&[]).is_empty());
+        assert_eq!(quantiles(&descs[..1], &seed, 5).len(), 1);
     }
 
     #[test]

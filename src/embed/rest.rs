@@ -6,12 +6,15 @@
 //! nearest frame 0 in the order given (the capture's own start, usually its
 //! most neutral pose). Frame 0 is kept whenever it has no contact, so a
 //! clear capture rigs exactly as before.
-//! With [`RestOptions::by_pose`] (the automatic rig's rule) the order
-//! given plays no part: among the clearest frames, the one most standing
-//! with the limbs in ([`super::pose_order::spread`]; samba's still start).
-//! The mean pose was tried first: it chose samba's frame 119, mid-step,
-//! and the rig embedded there warned of wrists, ankles and toes 10-20 %
-//! apart.
+//! With [`RestOptions::by_pose`] (the automatic rig's rule,
+//! [`RestOptions::automatic`]) the order given plays no part: among the
+//! clearest frames, one chosen by its pose alone ([`PoseRule`]; by
+//! default the most standing with the limbs in,
+//! [`super::pose_order::spread`]: samba's still start), ties broken by
+//! pose. The mean pose was tried first: it chose samba's frame 119,
+//! mid-step, and the rig embedded there warned of wrists, ankles and toes
+//! 10-20 % apart; the most standing within the near slack (session 25)
+//! chose samba's frame 87.
 
 use super::contact::{ContactFinder, ContactOptions, FrameContacts};
 
@@ -40,6 +43,53 @@ pub struct RestOptions {
     /// capture starts with); landmarks marked on the topology keep the
     /// topology when it is clear. Default false.
     pub by_pose: bool,
+    /// With `by_pose`, which of the clearest frames. Default
+    /// [`PoseRule::Standing`].
+    pub pose_rule: PoseRule,
+}
+
+/// [`RestOptions::by_pose`]'s choice among the frames with the fewest
+/// touching vertices (the contact-clear ones when there are any).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PoseRule {
+    /// The most standing with the limbs in
+    /// ([`super::pose_order::standing_first`]). The near count is not
+    /// asked: samba's still start has its hands hanging beside the skirt
+    /// (many vertices near, none touching), and asking it moved the
+    /// choice to a dance frame (87).
+    Standing,
+    /// The most standing whose near count is within
+    /// [`RestOptions::near_slack`] of the least among the
+    /// [`RestOptions::candidates`] most standing (session 25's rule: samba's
+    /// frame 87).
+    StandingNear,
+    /// The nearest the per-coordinate median of all frames' pose
+    /// descriptors ([`super::pose_order::median`]).
+    NearestMedian,
+}
+
+impl PoseRule {
+    /// The rule named `name` (`standing`, `standing-near`, `median`).
+    pub fn parse(name: &str) -> Option<PoseRule> {
+        match name {
+            "standing" => Some(PoseRule::Standing),
+            "standing-near" => Some(PoseRule::StandingNear),
+            "median" => Some(PoseRule::NearestMedian),
+            _ => None,
+        }
+    }
+}
+
+impl RestOptions {
+    /// The rule by pose for the automatic rig: [`PoseRule::Standing`]. Not
+    /// `db init`'s default (`embed::auto::options::automatic_setup`; with
+    /// `SURFMOTION_AUTORIG=rest=standing`).
+    pub fn automatic() -> RestOptions {
+        RestOptions {
+            by_pose: true,
+            ..RestOptions::default()
+        }
+    }
 }
 
 impl Default for RestOptions {
@@ -49,6 +99,7 @@ impl Default for RestOptions {
             near_slack: 0.01,
             candidates: 24,
             by_pose: false,
+            pose_rule: PoseRule::Standing,
         }
     }
 }
@@ -164,9 +215,18 @@ pub fn choose_with(
     };
     let why = if opts.by_pose {
         format!(
-            "the frame most standing with the limbs in (`pose_order::spread`) among those with {} and at most {} vertices near a surface-far one (the clearest {nearest}, slack {slack}): {} near; frame 0 has {} ({} of {} frames have a contact)",
+            "{} among those with {}: {} vertices near a surface-far one; frame 0 has {} ({} of {} frames have a contact)",
+            match opts.pose_rule {
+                PoseRule::Standing =>
+                    "the frame most standing with the limbs in (`pose_order::spread`)".to_string(),
+                PoseRule::StandingNear => format!(
+                    "the frame most standing with the limbs in (`pose_order::spread`) with at most {} vertices near (the clearest {nearest}, slack {slack})",
+                    nearest + slack
+                ),
+                PoseRule::NearestMedian =>
+                    "the frame nearest the median pose (`pose_order::median`)".to_string(),
+            },
             describe(&contacts),
-            nearest + slack,
             contacts.near,
             describe(&first),
             in_contact,
@@ -205,11 +265,10 @@ pub fn choose_with(
     })
 }
 
-/// [`RestOptions::by_pose`]'s choice: the clearest frames (`least`
-/// touching vertices) most standing first, the near count measured
-/// on the first [`RestOptions::candidates`] of them, the first within
-/// `slack` of their least taken. Returns the frame and that least near
-/// count.
+/// [`RestOptions::by_pose`]'s choice among the clearest frames (`least`
+/// touching vertices), by [`RestOptions::pose_rule`]; ties broken by pose.
+/// Returns the frame and the least near count measured (of the frames
+/// examined; the frame's own when only it is).
 fn by_pose(
     finder: &ContactFinder,
     frames: &[&[[f64; 3]]],
@@ -218,23 +277,30 @@ fn by_pose(
     slack: usize,
     opts: &RestOptions,
 ) -> (usize, usize) {
-    use super::pose_order::{descriptor, standing_first};
+    use super::pose_order::{descriptor, median, nearest, standing_first};
     let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
     let clearest: Vec<usize> = (0..found.len())
         .filter(|&f| found[f].touching == least)
         .collect();
-    let mut examined = standing_first(frames, &descs, &clearest);
-    examined.truncate(opts.candidates.max(1));
+    let mut examined = match opts.pose_rule {
+        PoseRule::NearestMedian => nearest(&descs, &median(&descs), &clearest),
+        PoseRule::Standing | PoseRule::StandingNear => standing_first(frames, &descs, &clearest),
+    };
+    let keep = match opts.pose_rule {
+        PoseRule::StandingNear => opts.candidates.max(1),
+        PoseRule::Standing | PoseRule::NearestMedian => 1,
+    };
+    examined.truncate(keep);
     for &f in &examined {
         found[f].near = finder.near(frames[f]);
     }
-    let nearest = examined.iter().map(|&f| found[f].near).min().unwrap_or(0);
+    let nearest_count = examined.iter().map(|&f| found[f].near).min().unwrap_or(0);
     let frame = examined
         .iter()
         .copied()
-        .find(|&f| found[f].near <= nearest + slack)
+        .find(|&f| found[f].near <= nearest_count + slack)
         .unwrap_or(0);
-    (frame, nearest)
+    (frame, nearest_count)
 }
 
 #[cfg(test)]
@@ -293,5 +359,44 @@ mod tests {
         assert_eq!(c.frame, 0);
         assert!(c.why.contains("no frame is clearer"), "{}", c.why);
         assert!(choose_rest_frame(&mesh, &[], &RestOptions::default()).is_none());
+    }
+
+    #[test]
+    fn the_automatic_rule_chooses_the_same_pose_in_any_order() {
+        let (mesh, touching, clear) = two_boxes();
+        // A third pose: clear, the boxes farther apart (more spread).
+        let wide: Vec<[f64; 3]> = clear
+            .iter()
+            .map(|p| {
+                if p[0] > 0.25 {
+                    [p[0] + 0.4, p[1], p[2]]
+                } else {
+                    *p
+                }
+            })
+            .collect();
+        let poses = [&touching, &wide, &clear];
+        let mut chosen = Vec::new();
+        for order in [[0, 1, 2], [2, 0, 1], [1, 2, 0], [0, 2, 1]] {
+            let frames: Vec<&[[f64; 3]]> = order.iter().map(|&k| poses[k].as_slice()).collect();
+            let topo = Mesh::new(frames[0].to_vec(), mesh.triangles().to_vec()).unwrap();
+            for rule in [PoseRule::Standing, PoseRule::NearestMedian] {
+                let opts = RestOptions {
+                    pose_rule: rule,
+                    ..RestOptions::automatic()
+                };
+                let c = choose_rest_frame(&topo, &frames, &opts).unwrap();
+                assert!(c.contacts.contacts.is_empty(), "{}", c.why);
+                chosen.push((rule, frames[c.frame].to_vec()));
+            }
+        }
+        for rule in [PoseRule::Standing, PoseRule::NearestMedian] {
+            let mine: Vec<&Vec<[f64; 3]>> = chosen
+                .iter()
+                .filter(|(r, _)| *r == rule)
+                .map(|(_, p)| p)
+                .collect();
+            assert!(mine.iter().all(|p| *p == mine[0]), "{rule:?}");
+        }
     }
 }

@@ -17,7 +17,7 @@ use super::JobError;
 use super::outputs::check_output_folder;
 use crate::db::init::{InitOptions, RestFrame, assemble_setup, assemble_setup_with};
 use crate::db::{MANIFEST, Manifest};
-use crate::embed::auto::options::AutoOptions;
+use crate::embed::auto::options::{AutoOptions, automatic_setup};
 use crate::embed::auto::report::AutoRig;
 use crate::embed::auto::rig::auto_rig;
 use crate::embed::contact::{Contact, FrameContacts};
@@ -155,17 +155,19 @@ fn init_in(
     let mut o = opts.clone();
     let mut auto = None;
     let mut file = None;
-    // The rest frame's rule. `RestOptions::by_pose` (the same frame
-    // whatever frame the capture starts with) is not on: on samba it chose
-    // frame 87 (the still start's arms hang within the near slack of the
-    // skirt) and the rig embedded there warned of feet turned backwards
-    // and ankles, toes and wrists 10-12 % apart (session 25).
-    let rule = RestOptions::default();
+    // The rest frame's rule and the automatic rig's options: without
+    // landmarks `automatic_setup`'s (main's rule unless
+    // `SURFMOTION_AUTORIG` asks the rules by pose), else main's rule.
+    let (rule, auto_opts) = if wants_auto {
+        automatic_setup(&setup.auto).map_err(JobError::Usage)?
+    } else {
+        (RestOptions::default(), setup.auto)
+    };
     if wants_auto {
         // Every file read and checked first, refused with the words of a
         // database without a rig; then the rig is found from the capture.
         assemble_setup(dir, opts, &mut Vec::new())?;
-        let (rig, f) = write_auto_landmarks(dir, &mut o, &setup.auto, &rule, written, &mut notes)?;
+        let (rig, f) = write_auto_landmarks(dir, &mut o, &auto_opts, &rule, written, &mut notes)?;
         auto = Some(rig);
         file = Some(f);
     }

@@ -13,15 +13,12 @@ pub struct AutoOptions {
     pub rest_frame: Option<usize>,
     /// Frames of the capture used. Default 40.
     pub max_frames: usize,
-    /// The frames chosen by their poses (farthest-point first from the
-    /// rest frame's pose, `embed::pose_order`), the topology not in the fit:
-    /// the same capture in any order is fitted on the same frames. Default
-    /// false (session 25): spread evenly in the order given, after the
-    /// topology's positions as the fit's first frame — on with `db init`,
-    /// the merged build's `embed::auto_arms`/`auto_knees` (the automatic
-    /// rig against the landmark rigs on the real captures) failed, and the
-    /// yardstick with it was not measured.
-    pub frames_by_pose: bool,
+    /// Which frames the decomposition fits ([`FrameSample`]). Default
+    /// [`FrameSample::InOrder`]: as `db init`'s default (session 26's
+    /// build) [`FrameSample::PoseQuantiles`] with the rule by pose failed
+    /// `embed::auto_knees` (crane's right knee 4.4 % of the height from
+    /// the landmark rig, bound 3 %).
+    pub frames: FrameSample,
     /// The decomposition's settings.
     pub decompose: DecomposeOptions,
 }
@@ -31,10 +28,103 @@ impl Default for AutoOptions {
         AutoOptions {
             rest_frame: None,
             max_frames: 40,
-            frames_by_pose: false,
+            frames: FrameSample::InOrder,
             decompose: DecomposeOptions::default(),
         }
     }
+}
+
+/// Which frames of the capture the skinning decomposition fits
+/// ([`AutoOptions::frames`]), up to [`AutoOptions::max_frames`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameSample {
+    /// Spread evenly in the order given, after the topology's positions
+    /// as the fit's first frame (sessions 20-25's default): the same
+    /// capture started on another frame is fitted on other frames.
+    InOrder,
+    /// Farthest-point first from the rest frame's pose
+    /// (`embed::pose_order::farthest_first`), the topology not in the fit
+    /// (session 25's option): the extremes of the motion. As `db init`'s
+    /// default it failed `embed::auto_arms` (samba l_elbow 3.84 % of the
+    /// height from the landmark rig) and `embed::auto_knees` (4.20 %).
+    Farthest,
+    /// The frames ordered by their pose's distance from the rest frame's
+    /// (`embed::pose_order::by_distance`, ties by pose), taken at evenly
+    /// spaced ranks, the rest frame itself the first: the motion's poses
+    /// in proportion to how often the capture holds them (as the even
+    /// spread in time gave them), near and far, in any order of the
+    /// frames.
+    PoseQuantiles,
+}
+
+impl FrameSample {
+    /// The sample named `name` (`in-order`, `farthest`, `quantiles`).
+    pub fn parse(name: &str) -> Option<FrameSample> {
+        match name {
+            "in-order" => Some(FrameSample::InOrder),
+            "farthest" => Some(FrameSample::Farthest),
+            "quantiles" => Some(FrameSample::PoseQuantiles),
+            _ => None,
+        }
+    }
+}
+
+/// The environment variable that overrides `db init`'s automatic rig for
+/// measurements (as `SURFMOTION_SPARSE` does `db build`'s graph):
+/// comma-separated `rest=first|standing|standing-near|median`,
+/// `frames=in-order|farthest|quantiles`, `max=N`.
+pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
+
+/// `db init`'s automatic rig: the rest frame's rule (main's,
+/// [`crate::embed::rest::RestOptions::default`]: a clear topology kept,
+/// else the first clear frame) and `auto`, with the measurement override
+/// [`AUTORIG_ENV`] applied when set (`rest=standing,frames=quantiles`:
+/// the rules by pose, [`crate::embed::rest::RestOptions::automatic`] and
+/// [`FrameSample::PoseQuantiles`], not the default: see
+/// [`AutoOptions::frames`]). `Err` names the pair that is not an option.
+pub fn automatic_setup(
+    auto: &AutoOptions,
+) -> Result<(crate::embed::rest::RestOptions, AutoOptions), String> {
+    let mut rule = crate::embed::rest::RestOptions::default();
+    let mut auto = *auto;
+    if let Ok(text) = std::env::var(AUTORIG_ENV) {
+        apply_override(&text, &mut rule, &mut auto)?;
+    }
+    Ok((rule, auto))
+}
+
+/// [`automatic_setup`]'s override `text` applied to `rule` and `auto`.
+pub fn apply_override(
+    text: &str,
+    rule: &mut crate::embed::rest::RestOptions,
+    auto: &mut AutoOptions,
+) -> Result<(), String> {
+    use crate::embed::rest::PoseRule;
+    for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let bad = || {
+            format!(
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|standing|standing-near|median, frames=in-order|farthest|quantiles, max=N)"
+            )
+        };
+        let (k, v) = pair.split_once('=').ok_or_else(bad)?;
+        match k {
+            "rest" if v == "first" => rule.by_pose = false,
+            "rest" => {
+                rule.by_pose = true;
+                rule.pose_rule = PoseRule::parse(v).ok_or_else(bad)?;
+            }
+            "frames" => auto.frames = FrameSample::parse(v).ok_or_else(bad)?,
+            "max" => {
+                auto.max_frames = v
+                    .parse::<usize>()
+                    .ok()
+                    .filter(|&m| m >= 2)
+                    .ok_or_else(bad)?
+            }
+            _ => return Err(bad()),
+        }
+    }
+    Ok(())
 }
 
 /// Why a capture cannot be rigged automatically; each a one-line reason.
@@ -69,4 +159,26 @@ pub enum AutoError {
     /// found.
     #[error("automatic rigging: not a humanoid: {0}; give landmarks")]
     NotHumanoid(String),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::embed::rest::{PoseRule, RestOptions};
+
+    #[test]
+    fn the_override_sets_what_it_names_and_refuses_the_rest() {
+        let (mut rule, mut auto) = (RestOptions::automatic(), AutoOptions::default());
+        apply_override("rest=median, frames=in-order,max=60", &mut rule, &mut auto).unwrap();
+        assert!(rule.by_pose);
+        assert_eq!(rule.pose_rule, PoseRule::NearestMedian);
+        assert_eq!(auto.frames, FrameSample::InOrder);
+        assert_eq!(auto.max_frames, 60);
+        apply_override("rest=first", &mut rule, &mut auto).unwrap();
+        assert!(!rule.by_pose);
+        for bad in ["rest=middle", "frames", "max=1", "sample=x"] {
+            let e = apply_override(bad, &mut rule, &mut auto).unwrap_err();
+            assert!(e.contains(bad) && e.contains(AUTORIG_ENV), "{e}");
+        }
+    }
 }

@@ -6,7 +6,7 @@
 use super::decompose::decompose;
 use super::humanoid::{Placed, along, extremities};
 use super::limbs::{ARM, Body, Chains, LEG, Sided, knee_to_toe, side};
-use super::options::{AutoError, AutoOptions};
+use super::options::{AutoError, AutoOptions, FrameSample};
 use super::report::{AutoRig, FoundJoint};
 use super::up::find_up;
 use crate::embed::landmarks::{Anchor, Landmark, Landmarks, Mark};
@@ -30,11 +30,13 @@ pub fn auto_rig(
     let n = mesh.vertex_count();
     let topo = mesh.positions();
     let rest: &[[f64; 3]] = opts.rest_frame.map_or(topo, |r| frames[r]);
-    let used = if opts.frames_by_pose {
-        sample_by_pose(rest, frames, opts.max_frames)
-    } else {
-        sample_evenly(topo, frames, opts.max_frames)
+    let used = match opts.frames {
+        FrameSample::InOrder => sample_evenly(topo, frames, opts.max_frames),
+        FrameSample::Farthest | FrameSample::PoseQuantiles => {
+            sample_by_pose(rest, frames, opts.max_frames, opts.frames)
+        }
     };
+    let in_order = opts.frames == FrameSample::InOrder;
     let nb = crate::embed::parts::neighbours(n, mesh.triangles());
     let (body, tips, mut notes) = find_body(rest, &used, &nb, opts)?;
     let chains = Chains::find(&body, &tips);
@@ -71,10 +73,10 @@ pub fn auto_rig(
     let dec = &body.dec;
     // (Evenly spread, the topology is the fit's first frame: each part's
     // motion onto it is the fit's own.)
-    let onto_topo = match (opts.rest_frame, opts.frames_by_pose) {
+    let onto_topo = match (opts.rest_frame, in_order) {
         (None, _) => Vec::new(),
-        (Some(_), true) => super::decompose::fit_onto(rest, topo, &dec.labels, dec.count),
-        (Some(_), false) => dec.motions.iter().map(|m| (m.r[0], m.t[0])).collect(),
+        (Some(_), false) => super::decompose::fit_onto(rest, topo, &dec.labels, dec.count),
+        (Some(_), true) => dec.motions.iter().map(|m| (m.r[0], m.t[0])).collect(),
     };
     let to_topo = |q: DVec3| -> [f64; 3] {
         if opts.rest_frame.is_none() {
@@ -142,7 +144,7 @@ pub fn auto_rig(
         left: rotate(sided.left),
         height: body.height,
         rest_frame: opts.rest_frame,
-        frames_used: used.len() - usize::from(!opts.frames_by_pose),
+        frames_used: used.len() - usize::from(in_order),
         parts: dec.count,
         labels: dec.labels.clone(),
         joints: found
@@ -198,31 +200,37 @@ fn check_input(mesh: &Mesh, frames: &[&[[f64; 3]]], opts: &AutoOptions) -> Resul
 }
 
 /// The frames the decomposition fits, in the order it visits them: up to
-/// `max_frames` (at least 2) chosen by their poses alone, farthest-point
-/// first from the rest frame's pose ([`pose_order::farthest_first`]), so
-/// that the same capture in any order, started on any frame, is fitted on
-/// the same frames in the same order. (They were spread evenly in the
-/// order given after the topology's positions as the fit's first frame:
-/// samba started at a frame with the hands on the hips rigged 1.4 % of
-/// the height and 8 % of the parts away from its clear start on the same
-/// rest frame.)
+/// `max_frames` (at least 2) chosen by their poses alone, seeded by the
+/// rest frame's pose: farthest-point first
+/// ([`pose_order::farthest_first`], [`FrameSample::Farthest`]) or at
+/// evenly spaced ranks of the distance from it ([`pose_order::quantiles`],
+/// [`FrameSample::PoseQuantiles`]), so that the same capture in any order,
+/// started on any frame, is fitted on the same frames in the same order.
+/// (They were spread evenly in the order given after the topology's
+/// positions as the fit's first frame: samba started at a frame with the
+/// hands on the hips rigged 1.4 % of the height and 8 % of the parts away
+/// from its clear start on the same rest frame.)
 fn sample_by_pose<'a>(
     rest: &[[f64; 3]],
     frames: &[&'a [[f64; 3]]],
     max_frames: usize,
+    how: FrameSample,
 ) -> Vec<&'a [[f64; 3]]> {
     let descs: Vec<Vec<f64>> = frames.iter().map(|f| pose_order::descriptor(f)).collect();
     let seed = pose_order::descriptor(rest);
     let k = max_frames.max(2);
-    pose_order::farthest_first(&descs, &seed, k)
-        .into_iter()
-        .map(|f| frames[f])
-        .collect()
+    let picked = match how {
+        FrameSample::PoseQuantiles => pose_order::quantiles(&descs, &seed, k),
+        FrameSample::Farthest | FrameSample::InOrder => {
+            pose_order::farthest_first(&descs, &seed, k)
+        }
+    };
+    picked.into_iter().map(|f| frames[f]).collect()
 }
 
 /// Frame 0 of the fit is the topology mesh (so that rest points map back
 /// onto it), then up to `max_frames` evenly spread in the order given
-/// (the default; [`AutoOptions::frames_by_pose`]).
+/// ([`FrameSample::InOrder`]).
 fn sample_evenly<'a>(
     topo: &'a [[f64; 3]],
     frames: &[&'a [[f64; 3]]],

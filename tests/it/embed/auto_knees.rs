@@ -15,9 +15,9 @@ use crate::common;
 use glam::DVec3;
 use std::path::Path;
 use surfmotion::embed::Embedding;
-use surfmotion::embed::auto::options::AutoOptions;
+use surfmotion::embed::auto::options::{AutoOptions, automatic_setup};
 use surfmotion::embed::auto::rig::auto_rig;
-use surfmotion::embed::rest::{RestOptions, choose_rest_frame};
+use surfmotion::embed::rest::choose_rest_frame;
 use surfmotion::mesh::Mesh;
 use surfmotion::rig::Canonical;
 
@@ -30,16 +30,18 @@ fn capture(d: &Path, name: &str) -> (Mesh, Vec<Vec<[f64; 3]>>, Embedding) {
     (c.mesh, c.frames, c.truth)
 }
 
-/// The automatic rig's embedding, its parts found on the rest frame `db
-/// init` would choose (the topology's positions, then every frame).
+/// The automatic rig's embedding as `db init` makes it: its rules
+/// (`automatic_setup`), its parts found on the rest frame it would choose
+/// (the topology's positions, then every frame).
 pub(super) fn auto_embedding(mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> Embedding {
     let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
     let mut all = vec![mesh.positions()];
     all.extend_from_slice(&f);
-    let choice = choose_rest_frame(mesh, &all, &RestOptions::default()).unwrap();
+    let (rule, auto) = automatic_setup(&AutoOptions::default()).unwrap();
+    let choice = choose_rest_frame(mesh, &all, &rule).unwrap();
     let opts = AutoOptions {
         rest_frame: (choice.frame > 0).then(|| choice.frame - 1),
-        ..AutoOptions::default()
+        ..auto
     };
     let rig = auto_rig(mesh, &f, &opts).unwrap();
     Embedding::new(mesh, &rig.landmarks, None).unwrap()
