@@ -408,7 +408,7 @@ fn options_measured_against_the_dense_cache() {
 fn transitions_of(
     g: &surfmotion::graph::SurfaceMotionGraph,
 ) -> Vec<surfmotion::similarity::transitions::Transition> {
-    g.transitions.clone()
+    g.transitions().to_vec()
 }
 
 /// The centres of each unordered sequence pair's best cheap transitions
