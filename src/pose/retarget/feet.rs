@@ -138,33 +138,8 @@ pub(super) fn place_feet(
     // window's landing and ramp do not find the frames already shown
     // dropped onto the floor under them (CMU 03_01 on samba at lag 3,
     // frame 40: 8 cm below offline where the leading foot left the block).
-    let fall = if open_end { fall_rate(out) } else { 0.0 };
-    for t in &touch {
-        let mut i = 1;
-        while i < n {
-            if let (Some(u), None) = (t[i - 1], t[i]) {
-                match (i..n).find(|&j| t[j].is_some()) {
-                    Some(j) => {
-                        if t[j].is_some_and(|v| v < u - support.band) {
-                            let (a, b) = (lift[i - 1], lift[j]);
-                            for (k, l) in lift.iter_mut().enumerate().take(j).skip(i) {
-                                let w = (k + 1 - i) as f64 / (j + 1 - i) as f64;
-                                *l = l.max(a + (b - a) * w);
-                            }
-                        }
-                        i = j;
-                        continue;
-                    }
-                    None if open_end && u > clip_floor + support.band => {
-                        carry_down(&mut lift[i - 1..], fall);
-                        break;
-                    }
-                    None => {}
-                }
-            }
-            i += 1;
-        }
-    }
+    let open = open_end.then(|| (clip_floor, fall_rate(out)));
+    ramp_step_downs(&mut lift, &touch, support.band, open);
     // The higher top under a foot in the air where the clip's joints are
     // above it and the character's sole, lifted, is too.
     let grounds: [Vec<Option<f64>>; 2] = [0, 1].map(|f| {
@@ -200,6 +175,50 @@ pub(super) fn place_feet(
             .map(|y| y.map(|y| (y - clip_floor) * s))
             .collect()
     })
+}
+
+/// The step-down ramps of [`place_feet`] (its comment above the call
+/// says why): for each foot that leaves a support for a lower one, `lift`
+/// comes down to the landing frame's at an even rate, never below what it
+/// was; with `open` (`(clip floor, fall rate)`, a stream's open end), a
+/// foot that left a step above the floor and has not landed is carried
+/// down at most `fall` a frame ([`carry_down`]).
+fn ramp_step_downs(
+    lift: &mut [f64],
+    touch: &[Vec<Option<f64>>; 2],
+    band: f64,
+    open: Option<(f64, f64)>,
+) {
+    let n = lift.len();
+    for t in touch {
+        let mut i = 1;
+        while i < n {
+            if let (Some(u), None) = (t[i - 1], t[i]) {
+                match (i..n).find(|&j| t[j].is_some()) {
+                    Some(j) => {
+                        if t[j].is_some_and(|v| v < u - band) {
+                            let (a, b) = (lift[i - 1], lift[j]);
+                            for (k, l) in lift.iter_mut().enumerate().take(j).skip(i) {
+                                let w = (k + 1 - i) as f64 / (j + 1 - i) as f64;
+                                *l = l.max(a + (b - a) * w);
+                            }
+                        }
+                        i = j;
+                        continue;
+                    }
+                    None => {
+                        if let Some((floor, fall)) = open
+                            && u > floor + band
+                        {
+                            carry_down(&mut lift[i - 1..], fall);
+                            break;
+                        }
+                    }
+                }
+            }
+            i += 1;
+        }
+    }
 }
 
 /// The fastest the body falls in `out` (the character's poses before the
