@@ -15,6 +15,6 @@ pub mod smg;
 pub use crate::similarity::transitions;
 
 pub use frame::{FlatFrame, FrameId};
-pub use parts::GraphParts;
-pub use smg::{FrameAdjacency, GraphEdits, SequenceEdge, SurfaceMotionGraph};
+pub use parts::{GraphParts, SequenceEdge};
+pub use smg::{FrameAdjacency, GraphEdits, SurfaceMotionGraph};
 pub use transitions::{Transition, TransitionOptions};

@@ -1,16 +1,28 @@
-//! The parts of a [`SurfaceMotionGraph`] (Huang et al. 2015, Sec. 4.3) and
-//! the check that they agree: [`SurfaceMotionGraph::new`] and the graph
+//! The parts of a [`super::SurfaceMotionGraph`] (Huang et al. 2015, Sec. 4.3) and
+//! the check that they agree: [`super::SurfaceMotionGraph::new`] and the graph
 //! cache's reader go through [`GraphParts::check`], so a graph in hand names
 //! only sequences, frames and transitions that exist, and its fields are read
 //! through accessors.
 
-use super::smg::SequenceEdge;
 use super::transitions::{Transition, TransitionOptions};
 use crate::similarity::{Measure, Span};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
+
+/// A sequence edge (one or more transitions between two sequences).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SequenceEdge {
+    /// Source sequence.
+    pub from: usize,
+    /// Target sequence.
+    pub to: usize,
+    /// Transitions on this edge (indices into [`super::SurfaceMotionGraph::transitions`]).
+    pub transitions: Vec<usize>,
+    /// Cheapest transition cost.
+    pub cost: f64,
+}
 
 /// A graph's parts as the cache stores them (the same JSON as a serialised
-/// [`SurfaceMotionGraph`]).
+/// [`super::SurfaceMotionGraph`]).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 pub struct GraphParts {
     /// The measure the transitions were found with.

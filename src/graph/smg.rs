@@ -10,7 +10,7 @@
 //! `m−L..=m+L` / `n−L..=n+L` is applied when the path is turned into meshes.
 
 use super::frame::{FlatFrame, FrameId};
-use super::parts::GraphParts;
+use super::parts::{GraphParts, SequenceEdge};
 use super::transitions::{self, Transition, TransitionOptions};
 use crate::similarity::{Dissimilarity, Measure, Span};
 use serde::{Deserialize, Serialize};
@@ -25,19 +25,6 @@ pub struct GraphEdits {
     pub forbid: Vec<String>,
     /// Single transitions to drop, as `"from:m -> to:n"`.
     pub remove: Vec<String>,
-}
-
-/// A sequence edge (one or more transitions between two sequences).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SequenceEdge {
-    /// Source sequence.
-    pub from: usize,
-    /// Target sequence.
-    pub to: usize,
-    /// Transitions on this edge (indices into [`SurfaceMotionGraph::transitions`]).
-    pub transitions: Vec<usize>,
-    /// Cheapest transition cost.
-    pub cost: f64,
 }
 
 /// The graph. Made by [`SurfaceMotionGraph::build`] or, from its parts
