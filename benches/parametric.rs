@@ -23,7 +23,7 @@ use surfmotion::mesh::io::load_sequence;
 use surfmotion::parametric::hybrid::{HybridBlend, HybridOptions};
 use surfmotion::parametric::params::measure;
 use surfmotion::parametric::script::{Request, play};
-use surfmotion::parametric::transition::{Planner, TargetState};
+use surfmotion::parametric::transition::{TargetState, TransitionPlanner};
 use surfmotion::parametric::{Control, Controller, Motion, MotionOptions};
 use surfmotion::synth::Gait;
 
@@ -218,7 +218,7 @@ fn main() {
     });
     let opts = motion.options.transition;
     let table = motion.table(loco, turning);
-    let mut planner = Planner::with_capacity(opts.depth, 64);
+    let mut planner = TransitionPlanner::with_capacity(opts.depth, 64);
     let src: Vec<usize> = (0..=opts.depth).map(|i| (i * 7 / 5) % sp.grid()).collect();
     c.bench_function("transition decision (trellis depth 30, Dijkstra)", |b| {
         b.iter(|| {

@@ -375,12 +375,12 @@ fn reserved(o: &Path, out_dir: &Path) -> bool {
 }
 
 /// Prefix of every temporary file or folder this crate writes.
-pub const TEMP_PREFIX: &str = ".surfmotion-";
+pub(crate) const TEMP_PREFIX: &str = ".surfmotion-";
 
 /// True for the name of a temporary this crate writes: an atomic write's
 /// `.surfmotion-XXXXXX.part` file, or a batch's `.surfmotion-XXXXXX-partial`
 /// folder of OBJ frames.
-pub fn is_temporary(name: &str) -> bool {
+pub(crate) fn is_temporary(name: &str) -> bool {
     name.strip_prefix(TEMP_PREFIX)
         .and_then(|r| {
             r.strip_suffix(".part")

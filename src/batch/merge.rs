@@ -122,7 +122,7 @@ pub struct ShardReport {
 }
 
 /// The shard a report's file name says (`batch-2of4.json` → 2/4).
-pub fn shard_of_report(name: &str) -> Option<Shard> {
+pub(crate) fn shard_of_report(name: &str) -> Option<Shard> {
     let mid = name.strip_prefix("batch-")?.strip_suffix(".json")?;
     let (i, n) = mid.split_once("of")?;
     if i.starts_with('0') || n.starts_with('0') {

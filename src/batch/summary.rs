@@ -184,7 +184,7 @@ fn esc(s: &str) -> String {
 
 /// A bar chart: per clip, seconds (blue, left scale) and joint-velocity
 /// error (orange, right scale); failed clips marked red.
-pub fn plot_svg(s: &Summary) -> String {
+pub(crate) fn plot_svg(s: &Summary) -> String {
     let n = s.outcomes.len().max(1);
     // At least wide enough for the two axis titles (a report of one or two
     // clips, as a killed run leaves, overlapped them).

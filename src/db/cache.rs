@@ -23,12 +23,12 @@ use std::path::{Path, PathBuf};
 use xxhash_rust::xxh3::Xxh3;
 
 /// Bump when a cached format or algorithm changes.
-pub const CACHE_VERSION: u32 = 1;
+pub(crate) const CACHE_VERSION: u32 = 1;
 const MAGIC: &[u8; 8] = b"SMSIM001";
 /// Files up to this length are hashed into a key byte by byte; longer
 /// ones by their length and content hash, remembered between loads
 /// ([`super::content::ContentMemo`]).
-pub const WHOLE_FILE_BYTES: u64 = 1 << 20;
+pub(crate) const WHOLE_FILE_BYTES: u64 = 1 << 20;
 
 /// The cache folder of a database.
 pub fn cache_dir(dir: &Path) -> PathBuf {
@@ -157,7 +157,7 @@ impl KeyHasher {
 
 /// The key of everything the database's frames depend on: topology,
 /// sequences (name, fps, file contents) and up axis.
-pub fn frames_key(dir: &Path, m: &Manifest) -> Result<KeyHasher, DbError> {
+pub(crate) fn frames_key(dir: &Path, m: &Manifest) -> Result<KeyHasher, DbError> {
     let mut h = KeyHasher::for_db(dir);
     h.text("up", &m.up.to_ascii_lowercase());
     h.text("fps", &m.fps.to_string());
@@ -173,7 +173,7 @@ pub fn frames_key(dir: &Path, m: &Manifest) -> Result<KeyHasher, DbError> {
 }
 
 /// Adds the rig inputs (landmarks, parts) to a key.
-pub fn add_rig(h: &mut KeyHasher, dir: &Path, m: &Manifest) -> Result<(), DbError> {
+pub(crate) fn add_rig(h: &mut KeyHasher, dir: &Path, m: &Manifest) -> Result<(), DbError> {
     for (label, p) in [("landmarks", &m.rig.landmarks), ("parts", &m.rig.parts)] {
         if let Some(p) = p {
             h.text("rig", label);
@@ -189,7 +189,7 @@ const PARTIAL_HEADER: u64 = 24;
 
 /// The checkpoint of a build of the similarity file `matrix`: the rows it
 /// finished, so that a killed `db build` resumes from its last block.
-pub fn partial_path(matrix: &Path) -> PathBuf {
+pub(crate) fn partial_path(matrix: &Path) -> PathBuf {
     matrix.with_extension("partial")
 }
 
@@ -202,7 +202,13 @@ fn partial_bytes(n: usize, rows: usize) -> u64 {
 /// frames into `data` (`n × n`, upper triangle) and returns how many (a
 /// multiple of `block`, or `n`): 0 without a checkpoint, for another key or
 /// size, or one not even a block long. A torn last block is ignored.
-pub fn resume_rows(path: &Path, key: u64, n: usize, block: usize, data: &mut [f32]) -> usize {
+pub(crate) fn resume_rows(
+    path: &Path,
+    key: u64,
+    n: usize,
+    block: usize,
+    data: &mut [f32],
+) -> usize {
     let Ok(mut f) = std::fs::File::open(path) else {
         return 0;
     };
@@ -336,7 +342,7 @@ pub fn save_matrix(path: &Path, key: u64, m: &SimilarityMatrix) -> Result<(), Fs
 const SPARSE_MAGIC: &[u8; 8] = b"SMSPA001";
 
 /// Writes a sparse similarity with its key, atomically.
-pub fn save_sparse(path: &Path, key: u64, s: &SparseSimilarity) -> Result<(), FsError> {
+pub(crate) fn save_sparse(path: &Path, key: u64, s: &SparseSimilarity) -> Result<(), FsError> {
     write_atomic(path, |w| {
         w.write_all(SPARSE_MAGIC)?;
         w.write_all(&key.to_le_bytes())?;
@@ -347,7 +353,7 @@ pub fn save_sparse(path: &Path, key: u64, s: &SparseSimilarity) -> Result<(), Fs
 /// Reads a sparse similarity, its pairs memory-mapped (read on demand,
 /// issue 43): `Ok(None)` when there is no such file or it has another
 /// key, `Err` saying why when it is there but cannot be used.
-pub fn read_sparse(path: &Path, key: u64) -> Result<Option<SparseSimilarity>, String> {
+pub(crate) fn read_sparse(path: &Path, key: u64) -> Result<Option<SparseSimilarity>, String> {
     match std::fs::symlink_metadata(path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         _ => {}
@@ -369,7 +375,8 @@ pub fn read_sparse(path: &Path, key: u64) -> Result<Option<SparseSimilarity>, St
 
 /// Reads a similarity matrix if the file exists, is well formed and has
 /// `key`; `None` otherwise (the caller recomputes).
-pub fn load_matrix(path: &Path, key: u64) -> Option<SimilarityMatrix> {
+#[cfg(test)]
+pub(crate) fn load_matrix(path: &Path, key: u64) -> Option<SimilarityMatrix> {
     read_matrix(path, key).ok().flatten()
 }
 
@@ -396,7 +403,10 @@ pub fn parse_matrix(bytes: &[u8], key: u64) -> Option<SimilarityMatrix> {
 
 /// [`parse_matrix`] saying why: `Ok(None)` for a well-formed header with
 /// another key, `Err` for bytes that are not a whole similarity file.
-pub fn parse_matrix_checked(bytes: &[u8], key: u64) -> Result<Option<SimilarityMatrix>, String> {
+pub(crate) fn parse_matrix_checked(
+    bytes: &[u8],
+    key: u64,
+) -> Result<Option<SimilarityMatrix>, String> {
     let mut at = 0usize;
     let truncated = |at: usize| format!("truncated at byte {at} of {}", bytes.len());
     let mut take = |k: usize| -> Result<&[u8], String> {

@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use xxhash_rust::xxh3::Xxh3;
 
 /// The memo's file name in the cache folder.
-pub const MEMO_FILE: &str = "content-hashes.json";
+pub(crate) const MEMO_FILE: &str = "content-hashes.json";
 /// Format of the memo file.
 const MEMO_VERSION: u32 = 1;
 /// A file changed this recently when hashed is not remembered.
@@ -241,7 +241,7 @@ fn read_memo(path: &Path) -> Result<BTreeMap<String, (Stamp, u64)>, String> {
 }
 
 /// The xxh3-64 hash of every byte of `f` from its start.
-pub fn hash_all(p: &Path, f: &mut std::fs::File) -> Result<u64, FsError> {
+pub(crate) fn hash_all(p: &Path, f: &mut std::fs::File) -> Result<u64, FsError> {
     use std::io::{Seek, SeekFrom};
     let err = |source| FsError {
         path: p.to_path_buf(),

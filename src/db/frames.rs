@@ -394,7 +394,7 @@ pub struct CacheInputs<'a> {
 /// cache and mapped. A cache that cannot be used is rebuilt with a warning
 /// naming it and why. Also returns the skeleton cache's key (the frames,
 /// the rig and the kind: what a cache derived from both depends on).
-pub fn open_or_build(inp: &CacheInputs) -> Result<(FrameStore, Vec<Pose>, u64), DbError> {
+pub(crate) fn open_or_build(inp: &CacheInputs) -> Result<(FrameStore, Vec<Pose>, u64), DbError> {
     let CacheInputs {
         dir,
         manifest: m,

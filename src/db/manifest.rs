@@ -35,7 +35,7 @@ pub const MAX_FPS: f64 = crate::util::budget::MAX_FPS;
 /// True for text with NUL bytes or many invalid UTF-8 sequences (read
 /// lossily as U+FFFD): a binary file, whose bytes must not be echoed into
 /// a message (issue 18, item 17).
-pub fn looks_binary(text: &str) -> bool {
+pub(crate) fn looks_binary(text: &str) -> bool {
     let head: Vec<char> = text.chars().take(4096).collect();
     let bad = head
         .iter()
@@ -66,7 +66,7 @@ pub fn printable(s: &str, max: usize) -> String {
 /// names (`DIR/NAME.bvh`) and of `SEQ:FRAME` specs: it must be a plain
 /// name, never a path. Regression (issue 18, item 11): a sequence named
 /// `../../escaped` made `db skeleton` write outside its output folder.
-pub fn check_name(name: &str) -> Result<(), &'static str> {
+pub(crate) fn check_name(name: &str) -> Result<(), &'static str> {
     if name.is_empty() {
         return Err("empty");
     }
@@ -94,7 +94,7 @@ pub const MANIFEST: &str = "character.toml";
 /// outside them is refused by [`Manifest::load`]. Regression (issue 39,
 /// item 5): `units = "cm"` on a mesh in metres built a 1.8 cm dancer that
 /// `retarget` wrote without a word.
-pub const HUMAN_SIZE_M: std::ops::RangeInclusive<f64> = 0.5..=3.0;
+pub(crate) const HUMAN_SIZE_M: std::ops::RangeInclusive<f64> = 0.5..=3.0;
 
 /// One captured sequence.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -388,7 +388,7 @@ impl DbError {
 }
 
 /// The text of [`DbError::Size`] (also a `db info` problem).
-pub fn size_message(metres: f64, units: &str, suggest: Option<(&str, f64)>) -> String {
+pub(crate) fn size_message(metres: f64, units: &str, suggest: Option<(&str, f64)>) -> String {
     let hint = suggest.map_or(String::new(), |(u, m)| {
         format!(" (units = \"{u}\" makes it {m:.2} m)")
     });

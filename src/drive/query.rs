@@ -134,7 +134,7 @@ pub fn database_floor_lift(ch: &Character) -> f64 {
 /// [`database_floor_lift`] given the character's topology in metres
 /// (`topology`, [`Character::topology_metres`]; a prepared character holds
 /// it).
-pub fn database_floor_lift_on(ch: &Character, topology: &crate::mesh::Mesh) -> f64 {
+pub(crate) fn database_floor_lift_on(ch: &Character, topology: &crate::mesh::Mesh) -> f64 {
     let lowest = |f: &[[f64; 3]]| f.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
     // Each frame's lowest point, kept with the frame cache: no scan of
     // every frame (the frames are memory-mapped, issue 43).
@@ -150,8 +150,9 @@ pub fn database_floor_lift_on(ch: &Character, topology: &crate::mesh::Mesh) -> f
     lows[lows.len() / 2] - rest
 }
 
-/// The clip's poses on a loaded database character ([`to_database_character`]
-/// on its rest frame's joints and frame skeletons), raised by
+/// The clip's poses on a loaded database character (measured from its
+/// neutral pose, [`character_neutral`] of its rest frame's joints and frame
+/// skeletons), raised by
 /// [`database_floor_lift`]: the character stands on the floor its own
 /// frames stand on. What `retarget` queries the database with and what
 /// its joint-velocity error is measured against.
@@ -183,22 +184,5 @@ pub fn on_character(
     retarget_with_neutral(rest, neutral, reference, mocap)
         .into_iter()
         .map(|(p, _)| p.map(|q| q + lift))
-        .collect()
-}
-
-/// The clip's poses on a database character's skeleton (`rest`, its rest
-/// frame's joints), measured from the character's neutral pose: its rest
-/// frame when that stands upright, else the database frame of `frames`
-/// nearest neutral ([`character_neutral`]).
-pub fn to_database_character(
-    rest: &Pose,
-    frames: &[Pose],
-    reference: &Reference,
-    mocap: &[Pose],
-) -> Vec<Pose> {
-    let neutral = character_neutral(rest, frames);
-    retarget_with_neutral(rest, &neutral.pose, reference, mocap)
-        .into_iter()
-        .map(|(p, _)| p)
         .collect()
 }

@@ -80,7 +80,7 @@ pub struct PlayRun {
 /// a real one). A database without spaces is refused as such, not as a
 /// script error. A manifest that cannot be read is left to the model's
 /// loader.
-pub fn read_script(db: &Path, script: &Path) -> Result<String, PlayError> {
+pub(crate) fn read_script(db: &Path, script: &Path) -> Result<String, PlayError> {
     let text = crate::util::fsutil::read_small_text(script)?;
     if let Ok(m) = Manifest::load(db) {
         m.require_spaces(db)?;

@@ -332,7 +332,7 @@ pub fn plausibility(
 
 /// [`plausibility`] with the character's checker `c` built already
 /// ([`Checker::for_character`]; a [`RetargetJob`] builds it once).
-pub fn plausibility_with(
+pub(crate) fn plausibility_with(
     c: &Checker,
     ch: &Character,
     positions: &[[f64; 3]],

@@ -216,7 +216,7 @@ pub struct GridReport {
     pub queries: Vec<GridQuery>,
 }
 
-/// One target of [`super::smoothest::floor_grid`] (here beside
+/// One target of [`super::smoothest::floor_grid_with`] (here beside
 /// [`GridQuery`], so that [`check_grid`] bounds the records of both grids).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FloorQuery {
@@ -247,7 +247,7 @@ pub struct FloorQuery {
 pub const MAX_RANGE_VALUES: usize = 100_001;
 
 /// Most targets of one grid (distances × times), the work of
-/// [`evaluate`] and of [`super::smoothest::floor_grid`] (one query, and
+/// [`evaluate`] and of [`super::smoothest::floor_grid_with`] (one query, and
 /// for the floor several programmes, per target): each axis under
 /// [`MAX_RANGE_VALUES`] still made 8.9e9 targets, a 1.28 TB allocation
 /// (issue 46.4). The default grid has 800.

@@ -145,7 +145,7 @@
 
 use super::heading::Heading;
 use super::options::{LatticeOptions, SearchOptions, Weights};
-use super::repeats::Measure;
+use super::repeats::Tally;
 use super::segment::{ArcView, Segment, Target};
 use crate::util::budget::OverBudget;
 
@@ -492,7 +492,7 @@ pub struct Found {
     pub arcs: Vec<u32>,
     /// Transition cost, distance, frames (arc frames, the start frame not
     /// counted).
-    pub measure: Measure,
+    pub measure: Tally,
     /// The heading's turn over the path (radians).
     pub turn: f64,
 }
@@ -636,7 +636,7 @@ pub fn solve_capped(
     Some((
         Found {
             arcs: trace_back(&arena, id),
-            measure: Measure {
+            measure: Tally {
                 cost: l.cost,
                 distance: l.distance,
                 frames: frames as u32,

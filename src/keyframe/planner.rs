@@ -6,7 +6,7 @@ use super::graph::KeyGraph;
 use super::heading::{Heading, wrap};
 use super::options::{Method, SearchOptions};
 use super::problem::*;
-use super::repeats::Measure;
+use super::repeats::Tally;
 use super::segment::{Segment, SegmentPath, Stats, Target};
 use super::{clock, lattice, search};
 use crate::db::Character;
@@ -106,7 +106,7 @@ pub struct LoopReport {
     /// Repetitions.
     pub repeats: u32,
     /// One repetition's cost, distance, frames.
-    pub measure: Measure,
+    pub measure: Tally,
 }
 
 /// The result of a query.
@@ -117,7 +117,7 @@ pub struct Plan {
     /// The whole frame path (key-frame to key-frame).
     pub path: Vec<FlatFrame>,
     /// Transition cost, distance and frames of the whole path.
-    pub measure: Measure,
+    pub measure: Tally,
     /// Eq. 7's terms.
     pub cost: CostTerms,
     /// The heading's turn over the path (radians).
@@ -321,9 +321,7 @@ impl Planner {
             ));
         }
         let path = join(&segs);
-        let measure = segs
-            .iter()
-            .fold(Measure::default(), |a, s| a.plus(s.measure));
+        let measure = segs.iter().fold(Tally::default(), |a, s| a.plus(s.measure));
         let (dterm, tterm) = match targets {
             Targets::Global { distance, time } => (
                 w.distance * (measure.distance - distance).abs(),

@@ -47,10 +47,10 @@ use super::heading::wrap;
 use good_lp::{Expression, ProblemVariables, Solution, SolverModel, Variable, microlp, variable};
 use std::f64::consts::TAU;
 
-/// The cost of a walk or of one loop: transition cost, floor distance
+/// What a walk or one loop adds up to (its tally): transition cost, floor distance
 /// (metres), frames.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
-pub struct Measure {
+pub struct Tally {
     /// Sum of the transition costs (Eq. 8).
     pub cost: f64,
     /// Distance travelled (Eq. 10), metres.
@@ -59,18 +59,18 @@ pub struct Measure {
     pub frames: u32,
 }
 
-impl Measure {
+impl Tally {
     /// Componentwise sum.
-    pub fn plus(self, o: Measure) -> Measure {
-        Measure {
+    pub fn plus(self, o: Tally) -> Tally {
+        Tally {
             cost: self.cost + o.cost,
             distance: self.distance + o.distance,
             frames: self.frames + o.frames,
         }
     }
     /// `k` times this.
-    pub fn times(self, k: u32) -> Measure {
-        Measure {
+    pub fn times(self, k: u32) -> Tally {
+        Tally {
             cost: self.cost * k as f64,
             distance: self.distance * k as f64,
             frames: self.frames * k,
@@ -82,9 +82,9 @@ impl Measure {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Problem<'a> {
     /// The walk.
-    pub walk: Measure,
+    pub walk: Tally,
     /// The loops attached to it (every `frames ≥ 1`).
-    pub loops: &'a [Measure],
+    pub loops: &'a [Tally],
     /// Target distance `d_V`, metres (0: as short as possible).
     pub distance: f64,
     /// Target time `t_V`, frames (0: as short as possible).
@@ -141,7 +141,7 @@ impl Problem<'_> {
         self.heading.filter(|h| h.weight > 0.0)
     }
     /// The walk plus `n` repetitions of the loops.
-    pub fn total(&self, n: &[u32]) -> Measure {
+    pub fn total(&self, n: &[u32]) -> Tally {
         self.loops
             .iter()
             .zip(n)
@@ -195,7 +195,7 @@ impl Cone {
 }
 
 /// The [`Cone`] of a loop set (`None` without loops).
-pub fn cone(loops: &[Measure]) -> Option<Cone> {
+pub fn cone(loops: &[Tally]) -> Option<Cone> {
     let mut p: Vec<(f64, f64)> = loops
         .iter()
         .filter(|l| l.frames > 0)
@@ -696,13 +696,13 @@ mod tests {
 
     #[test]
     fn one_loop_reaches_the_target_exactly() {
-        let loops = [Measure {
+        let loops = [Tally {
             cost: 0.1,
             distance: 1.0,
             frames: 25,
         }];
         let p = Problem {
-            walk: Measure {
+            walk: Tally {
                 cost: 0.0,
                 distance: 2.0,
                 frames: 50,

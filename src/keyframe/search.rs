@@ -18,7 +18,7 @@ use super::error::SearchError;
 use super::heading::{Heading, wrap};
 use super::lattice::{self, Chain, Found};
 use super::options::{Method, SearchOptions, Solver};
-use super::repeats::{self, Measure, Problem, RepeatsError, Turns, solve_bounded, solve_ilp};
+use super::repeats::{self, Problem, RepeatsError, Tally, Turns, solve_bounded, solve_ilp};
 use super::segment::{Segment, SegmentPath, Stats, Target};
 
 /// The searches of a segment (Eqs. 20-22) and its exact-length search.
@@ -56,8 +56,8 @@ impl Segment {
     #[allow(clippy::too_many_arguments)]
     fn solve_repeats(
         &self,
-        walk: Measure,
-        loops: &[Measure],
+        walk: Tally,
+        loops: &[Tally],
         turns: Option<Turns<'_>>,
         t: &Target,
         opts: &SearchOptions,
@@ -216,7 +216,7 @@ pub(crate) fn solve_split(
     }
     let k = segs.len();
     let rest = cheapest_rest(segs);
-    let lower = |m: &Measure, i: usize| {
+    let lower = |m: &Tally, i: usize| {
         let r = rest[i];
         m.cost
             + r.cost
@@ -226,7 +226,7 @@ pub(crate) fn solve_split(
     let mut best_cost = f64::INFINITY;
     let mut best: Option<(Vec<usize>, Vec<u32>)> = None;
     let mut choice = vec![0usize; k];
-    let mut acc = vec![Measure::default(); k + 1];
+    let mut acc = vec![Tally::default(); k + 1];
     let mut next = vec![0usize; k];
     let mut tried = 0usize;
     let mut buf = Vec::new();
@@ -292,12 +292,12 @@ pub(crate) fn solve_split(
 
 /// The cheapest completion of the segments from each on, per measure
 /// (each minimised on its own over the walks; `rest[k]` is zero).
-fn cheapest_rest(segs: &[Segment]) -> Vec<Measure> {
+fn cheapest_rest(segs: &[Segment]) -> Vec<Tally> {
     let k = segs.len();
-    let mut rest = vec![Measure::default(); k + 1];
+    let mut rest = vec![Tally::default(); k + 1];
     for i in (0..k).rev() {
         let ws = &segs[i].walks;
-        rest[i] = rest[i + 1].plus(Measure {
+        rest[i] = rest[i + 1].plus(Tally {
             cost: ws.iter().map(|x| x.m.cost).fold(f64::INFINITY, f64::min),
             distance: ws
                 .iter()
@@ -317,7 +317,7 @@ fn cheapest_rest(segs: &[Segment]) -> Vec<Measure> {
 fn solve_combination(
     segs: &[Segment],
     choice: &[usize],
-    m: Measure,
+    m: Tally,
     t: &Target,
     heading: Option<&Heading>,
     opts: &SearchOptions,
@@ -345,7 +345,7 @@ fn solve_combination(
         return Ok(None);
     }
     let walks = (0..k).map(|j| &segs[j].walks[choice[j]]);
-    let loops: Vec<Measure> = walks
+    let loops: Vec<Tally> = walks
         .clone()
         .flat_map(|w| w.measures.iter().copied())
         .collect();

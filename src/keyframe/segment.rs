@@ -18,7 +18,7 @@ use super::error::SearchError;
 use super::graph::KeyGraph;
 use super::heading::wrap;
 use super::options::Limits;
-use super::repeats::{Cone, Measure, cone};
+use super::repeats::{Cone, Tally, cone};
 use crate::graph::FlatFrame;
 use serde::Serialize;
 use std::collections::BinaryHeap;
@@ -35,7 +35,7 @@ pub struct Target {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Arc {
     pub(super) to: u32,
-    pub(super) m: Measure,
+    pub(super) m: Tally,
     /// Frame the arc starts from and ends at.
     pub(super) from_frame: FlatFrame,
     pub(super) to_frame: FlatFrame,
@@ -54,7 +54,7 @@ pub struct ArcView {
     /// Head node.
     pub to: u32,
     /// Transition cost, distance, frames.
-    pub m: Measure,
+    pub m: Tally,
     /// A transition (else a run of plain frames).
     pub jump: bool,
     /// The heading's turn (radians; 0 on a run of plain frames).
@@ -65,7 +65,7 @@ pub struct ArcView {
 #[derive(Debug, Clone)]
 pub(super) struct Cycle {
     pub(super) arcs: Vec<u32>,
-    pub(super) m: Measure,
+    pub(super) m: Tally,
 }
 
 /// A loop-free walk with its attached loops.
@@ -73,11 +73,11 @@ pub(super) struct Cycle {
 pub(super) struct Walk {
     pub(super) nodes: Vec<u32>,
     pub(super) arcs: Vec<u32>,
-    pub(super) m: Measure,
+    pub(super) m: Tally,
     /// `(walk position, cycle)` of its distinct loops.
     pub(super) loops: Vec<(usize, u32)>,
     /// Their measures.
-    pub(super) measures: Vec<Measure>,
+    pub(super) measures: Vec<Tally>,
     /// Their relaxation.
     pub(super) cone: Option<Cone>,
     /// The walk's heading turn (radians) and each loop's, per repetition:
@@ -103,7 +103,7 @@ pub struct Segment {
     /// Cycles through each node.
     pub(super) through: Vec<Vec<u32>>,
     /// Cheapest cost, distance and frames from a node to the goal.
-    pub(super) h: Vec<Measure>,
+    pub(super) h: Vec<Tally>,
     /// Count the start frame in the walk's frames (first segment of a
     /// path).
     pub(super) count_start: bool,
@@ -121,7 +121,7 @@ pub struct LoopUse {
     /// One repetition's frames (after `at`, ending at `at`).
     pub frames: Vec<FlatFrame>,
     /// One repetition's cost, distance and frames.
-    pub measure: Measure,
+    pub measure: Tally,
     /// Repetitions.
     pub repeats: u32,
 }
@@ -136,11 +136,11 @@ pub struct SegmentPath {
     /// The loop-free walk's frames, `from` to `to`.
     pub walk: Vec<FlatFrame>,
     /// Its cost, distance and frames.
-    pub walk_measure: Measure,
+    pub walk_measure: Tally,
     /// Loops with their repetitions (only those repeated at least once).
     pub loops: Vec<LoopUse>,
     /// Walk plus loops.
-    pub measure: Measure,
+    pub measure: Tally,
     /// The full frame path, `from` to `to`.
     pub path: Vec<FlatFrame>,
 }
@@ -249,7 +249,7 @@ fn compress(
     for (i, &u) in frames.iter().enumerate() {
         // The run of plain frames to the next node.
         let mut f = u;
-        let mut m = Measure::default();
+        let mut m = Tally::default();
         while let Some(e) = g.successors(f).iter().find(|e| !e.jump) {
             f = e.to;
             m.distance += g.step_of(f);
@@ -271,7 +271,7 @@ fn compress(
             out[i].push(arcs.len() as u32);
             arcs.push(Arc {
                 to: index[e.to.index()],
-                m: Measure {
+                m: Tally {
                     cost: e.cost.max(0.0),
                     distance: g.step_of(e.to),
                     frames: 1,
@@ -310,9 +310,9 @@ fn bounds_to_goal(
     arcs: &[Arc],
     relevant: &[bool],
     goal: u32,
-) -> Vec<Measure> {
+) -> Vec<Tally> {
     let n = rev.len();
-    let h_of = |w: &dyn Fn(&Measure) -> f64| {
+    let h_of = |w: &dyn Fn(&Tally) -> f64| {
         let r: Vec<Vec<(u32, f64)>> = rev
             .iter()
             .map(|row| {
@@ -328,7 +328,7 @@ fn bounds_to_goal(
     let hd = h_of(&|m| m.distance);
     let hf = h_of(&|m| m.frames as f64);
     (0..n)
-        .map(|u| Measure {
+        .map(|u| Tally {
             cost: hc[u],
             distance: hd[u],
             frames: if hf[u].is_finite() {
@@ -455,7 +455,7 @@ impl Segment {
                     c.push(a);
                     let m = c
                         .iter()
-                        .fold(Measure::default(), |s, &a| s.plus(self.arcs[a as usize].m));
+                        .fold(Tally::default(), |s, &a| s.plus(self.arcs[a as usize].m));
                     if m.frames > 0 {
                         let idx = self.cycles.len() as u32;
                         for &a in &c {
@@ -606,7 +606,7 @@ impl Segment {
                 }
             }
             let mut frames = Vec::new();
-            let mut m = Measure::default();
+            let mut m = Tally::default();
             for &a in &cyc {
                 self.arc_frames(a, &mut frames);
                 m = m.plus(self.arcs[a as usize].m);
@@ -619,7 +619,7 @@ impl Segment {
             });
         }
         let measure = arcs.iter().fold(
-            Measure {
+            Tally {
                 frames: u32::from(self.count_start),
                 ..Default::default()
             },
@@ -636,9 +636,9 @@ impl Segment {
         }
     }
 
-    fn walk_measure(&self, arcs: &[u32]) -> Measure {
+    fn walk_measure(&self, arcs: &[u32]) -> Tally {
         arcs.iter().fold(
-            Measure {
+            Tally {
                 frames: u32::from(self.count_start),
                 ..Default::default()
             },
@@ -730,7 +730,7 @@ impl Segment {
             .map(|(nodes, arcs, m)| {
                 let (loops, capped) = self.attached(&nodes, limits.loops_per_walk);
                 capped_loops |= capped;
-                let measures: Vec<Measure> = loops
+                let measures: Vec<Tally> = loops
                     .iter()
                     .map(|&(_, c)| self.cycles[c as usize].m)
                     .collect();
@@ -764,7 +764,7 @@ impl Segment {
     /// bounds `h` (each step takes an arc on a shortest path; frames are
     /// positive, so it is loop-free); `None` when the goal is not reached.
     #[allow(clippy::type_complexity)]
-    fn shortest_walk(&self) -> Option<(Vec<u32>, Vec<u32>, Measure)> {
+    fn shortest_walk(&self) -> Option<(Vec<u32>, Vec<u32>, Tally)> {
         let mut u = self.start;
         let (mut nodes, mut arcs) = (vec![u], Vec::new());
         while u != self.goal {
@@ -876,7 +876,7 @@ impl Segment {
         &self,
         limit: usize,
         expansions: usize,
-    ) -> (Vec<(Vec<u32>, Vec<u32>, Measure)>, bool) {
+    ) -> (Vec<(Vec<u32>, Vec<u32>, Tally)>, bool) {
         let mut out = Vec::new();
         let mut on = vec![false; self.frames.len()];
         let mut nodes = vec![self.start];

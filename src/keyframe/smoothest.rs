@@ -36,7 +36,7 @@
 //! smoothness at their own blend windows
 //! ([`super::TransitionCost::Smoothness`]); what the grid measures on a
 //! path can differ where the timeline shortens a window (two transitions
-//! closer than their windows), so [`floor_grid`] reports the path's mean
+//! closer than their windows), so [`floor_grid_with`] reports the path's mean
 //! measured as the grid measures it as well.
 
 use super::error::SearchError;
@@ -320,19 +320,8 @@ pub struct FloorReport {
 }
 
 /// [`least_mean`] and [`lower_bound`] for every target of a grid, on a
-/// planner whose graph is priced by smoothness (module docs), within 1 %.
-pub fn floor_grid(
-    ch: &Character,
-    planner: &Planner,
-    distances: &[f64],
-    times: &[f64],
-    opts: &LatticeOptions,
-    timeline: &TimelineOptions,
-) -> Result<FloorReport, SearchError> {
-    floor_grid_with(ch, planner, distances, times, opts, timeline, &mut |_| {})
-}
-
-/// [`floor_grid`], calling `done` with every target as it finishes
+/// planner whose graph is priced by smoothness (module docs), within 1 %,
+/// calling `done` with every target as it finishes
 /// (distances outer, times inner). Errors: the grid's size
 /// ([`super::grid::check_grid`]) or the search's.
 pub(crate) fn floor_grid_with(

@@ -14,7 +14,7 @@
 //! the corresponding vertex. The nearest point is looked for on the
 //! triangles around the nearest vertex (found with a uniform grid, `O(n)`
 //! per frame pair for meshes of even density); it is never farther than
-//! that vertex. [`hausdorff`] (vertex set to vertex set, the measure used
+//! that vertex. `hausdorff` (vertex set to vertex set, the measure used
 //! before) is kept and reported alongside as `smoothness_vertex`: it
 //! exceeds the surface distance by up to about half an edge length.
 
@@ -81,8 +81,9 @@ fn key(p: DVec3, cell: f64) -> (i32, i32, i32) {
 }
 
 /// Symmetric Hausdorff distance between two vertex sets (nearest vertex,
-/// not nearest surface point; see [`hausdorff_surface`]).
-pub fn hausdorff(a: &[DVec3], b: &[DVec3]) -> f64 {
+/// not nearest surface point; see `hausdorff_surface`).
+#[cfg(test)]
+pub(crate) fn hausdorff(a: &[DVec3], b: &[DVec3]) -> f64 {
     if a.is_empty() || b.is_empty() {
         return 0.0;
     }
@@ -96,6 +97,7 @@ pub fn hausdorff(a: &[DVec3], b: &[DVec3]) -> f64 {
 /// point whose search meets a point of `b` within the largest distance so
 /// far cannot raise it, so its search stops there (the maximum is the
 /// full search's, [`Grid::nearest_within`]).
+#[cfg(test)]
 fn directed_to_vertices(a: &[DVec3], b: &Grid) -> f64 {
     let mut worst = 0.0f64;
     for pass in [COARSE, 1] {
@@ -279,7 +281,8 @@ fn hausdorff_both(a: &[DVec3], b: &[DVec3], s: &Surface) -> (f64, f64) {
 /// Symmetric Hausdorff distance between two meshes of one topology `s`
 /// with vertices `a` and `b`: the larger of the two directed distances
 /// from the vertices of one to the surface of the other (module docs).
-pub fn hausdorff_surface(a: &[DVec3], b: &[DVec3], s: &Surface) -> f64 {
+#[cfg(test)]
+pub(crate) fn hausdorff_surface(a: &[DVec3], b: &[DVec3], s: &Surface) -> f64 {
     if a.is_empty() || b.is_empty() {
         return 0.0;
     }
@@ -288,7 +291,7 @@ pub fn hausdorff_surface(a: &[DVec3], b: &[DVec3], s: &Surface) -> f64 {
 
 /// The surface Hausdorff distance of the centre frames of a jump `from →
 /// to` (`to − 1` pairs with `from`), aligned as [`profile`], measured from
-/// every `stride`-th vertex only (a lower bound of [`hausdorff_surface`],
+/// every `stride`-th vertex only (a lower bound of `hausdorff_surface`,
 /// for screening candidates).
 pub(crate) fn hausdorff_surface_stride(
     ch: &Character,
@@ -401,10 +404,10 @@ impl FrameSet {
 /// A transition's smoothness by both distances (metres).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct Smoothness {
-    /// Weighted surface Hausdorff distance ([`hausdorff_surface`]): the
+    /// Weighted surface Hausdorff distance (`hausdorff_surface`): the
     /// paper's measure.
     pub surface: f64,
-    /// Weighted vertex-set Hausdorff distance ([`hausdorff`]): the measure
+    /// Weighted vertex-set Hausdorff distance (`hausdorff`): the measure
     /// reported before (an upper bound of `surface` up to sampling).
     pub vertex: f64,
 }

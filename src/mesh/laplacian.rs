@@ -64,14 +64,15 @@ pub fn cotan_triplets(mesh: &Mesh) -> Triplets {
 
 /// Triplets of the uniform (graph) Laplacian: `L_ij = 1` per edge, diagonal
 /// minus the degree.
-pub fn uniform_triplets(mesh: &Mesh) -> Triplets {
+#[cfg(test)]
+pub(crate) fn uniform_triplets(mesh: &Mesh) -> Triplets {
     uniform_triplets_by(mesh.triangles(), Some)
 }
 
 /// Triplets of the uniform Laplacian of the edges of `triangles` with both
 /// ends kept by `index` (which maps a vertex to its row, or `None` to drop
 /// it): each edge once, `(a, b, 1), (b, a, 1), (a, a, −1), (b, b, −1)`, in
-/// sorted edge order. The one implementation behind [`uniform_triplets`]
+/// sorted edge order. The one implementation behind `uniform_triplets`
 /// and [`uniform_region_rows`].
 fn uniform_triplets_by(triangles: &[[u32; 3]], index: impl Fn(u32) -> Option<u32>) -> Triplets {
     let mut edges: Vec<(u32, u32)> = Vec::with_capacity(triangles.len() * 3);

@@ -15,7 +15,7 @@ use glam::DVec3;
 /// (isolated or only on degenerate triangles; the caller picks a fallback).
 /// Triangles naming a vertex past `positions` are skipped. `out` is reused
 /// across calls so a per-frame loop does not allocate.
-pub fn vertex_normals_into(
+pub(crate) fn vertex_normals_into(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     out: &mut Vec<[f64; 3]>,

@@ -119,7 +119,7 @@ impl Edges {
 /// lengths)`, 1 for an equilateral triangle, 0 for a degenerate one (a
 /// sliver or a needle); the same under any similarity transform. A
 /// non-finite triangle reads 0.
-pub fn triangle_quality(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+pub(crate) fn triangle_quality(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let s = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
     let area2 = (b - a).cross(c - a).length();
     let q = 2.0 * 3f64.sqrt() * area2 / s;
@@ -159,7 +159,7 @@ fn segment_crosses(q0: DVec3, q1: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
 /// Whether two triangles (corner positions) pass through each other: an
 /// edge of one crosses the inside of the other (transversal crossings;
 /// coplanar overlaps are not counted).
-pub fn triangles_cross(p: [DVec3; 3], q: [DVec3; 3]) -> bool {
+pub(crate) fn triangles_cross(p: [DVec3; 3], q: [DVec3; 3]) -> bool {
     (0..3).any(|k| segment_crosses(q[k], q[(k + 1) % 3], p[0], p[1], p[2]))
         || (0..3).any(|k| segment_crosses(p[k], p[(k + 1) % 3], q[0], q[1], q[2]))
 }
@@ -170,7 +170,11 @@ pub fn triangles_cross(p: [DVec3; 3], q: [DVec3; 3]) -> bool {
 /// triangles' bounding boxes along X, then [`triangles_cross`]. Each pair
 /// once, `[lower, higher]` triangle index, sorted. A triangle with a
 /// non-finite corner is left out.
-pub fn crossing_pairs(triangles: &[[u32; 3]], pos: &[[f64; 3]], group: &[u8]) -> Vec<[u32; 2]> {
+pub(crate) fn crossing_pairs(
+    triangles: &[[u32; 3]],
+    pos: &[[f64; 3]],
+    group: &[u8],
+) -> Vec<[u32; 2]> {
     let boxes: Vec<(DVec3, DVec3)> = triangles
         .iter()
         .map(|t| {

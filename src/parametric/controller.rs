@@ -15,7 +15,7 @@
 
 use super::Parameter;
 use super::space::{Motion, place};
-use super::transition::{Planner, TargetState};
+use super::transition::{TargetState, TransitionPlanner};
 use glam::DVec2;
 use serde::Serialize;
 
@@ -148,7 +148,7 @@ pub struct Controller<'m> {
     other: Vec<[f64; 3]>,
     out: Vec<[f64; 3]>,
     predicted: Vec<usize>,
-    planner: Planner,
+    planner: TransitionPlanner,
     /// Transitions taken so far.
     pub transitions: Vec<TransitionRecord>,
 }
@@ -179,7 +179,7 @@ impl<'m> Controller<'m> {
             other: vec![[0.0; 3]; n],
             out: vec![[0.0; 3]; n],
             predicted: Vec::with_capacity(depth + 1),
-            planner: Planner::with_capacity(depth, kmax),
+            planner: TransitionPlanner::with_capacity(depth, kmax),
             transitions: Vec::with_capacity(16),
         }
     }

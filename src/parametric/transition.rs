@@ -173,7 +173,7 @@ pub enum TargetState {
 
 /// Dijkstra over the transition trellis, with buffers kept across calls.
 #[derive(Debug, Default)]
-pub struct Planner {
+pub struct TransitionPlanner {
     dist: Vec<f64>,
     prev: Vec<usize>,
     heap: BinaryHeap<Reverse<(u64, usize)>>,
@@ -184,11 +184,11 @@ fn key(c: f64) -> u64 {
     c.max(0.0).to_bits()
 }
 
-impl Planner {
+impl TransitionPlanner {
     /// A planner with room for trellises of `depth` and `k` target samples.
-    pub fn with_capacity(depth: usize, k: usize) -> Planner {
+    pub fn with_capacity(depth: usize, k: usize) -> TransitionPlanner {
         let n = depth + 2 + k.max(depth + 1) + 1;
-        Planner {
+        TransitionPlanner {
             dist: Vec::with_capacity(n),
             prev: Vec::with_capacity(n),
             heap: BinaryHeap::with_capacity(n * 4),
@@ -331,7 +331,7 @@ mod tests {
             ut: vec![0.0],
             sim,
         };
-        let mut p = Planner::with_capacity(3, 4);
+        let mut p = TransitionPlanner::with_capacity(3, 4);
         let src = [0, 1, 2, 3];
         let o = TransitionOptions {
             lambda: 0.3,

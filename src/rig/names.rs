@@ -249,7 +249,7 @@ const MMD_TRUNK: &[(&str, &str)] = &[
 /// ([`MMD_TRUNK`]) name joints of the rig (namespaces stripped), in
 /// Japanese or in English: a clip exported from MMD, whose length unit is
 /// 8 cm ([`crate::mocap::units::MMD_UNIT_M`]).
-pub fn mmd_rig(names: &[String]) -> bool {
+pub(crate) fn mmd_rig(names: &[String]) -> bool {
     MMD_TRUNK
         .iter()
         .filter(|(en, jp)| {
@@ -356,7 +356,7 @@ pub fn is_helper(tokens: &[String]) -> bool {
 }
 
 /// The body part the tokens name, if any (helpers have none).
-pub fn role(tokens: &[String]) -> Option<Role> {
+pub(crate) fn role(tokens: &[String]) -> Option<Role> {
     if is_helper(tokens) {
         return None;
     }
@@ -426,7 +426,7 @@ pub fn role(tokens: &[String]) -> Option<Role> {
 }
 
 /// Tokens of every name after stripping namespaces and a common prefix.
-pub fn all_tokens(names: &[String]) -> Vec<Vec<String>> {
+pub(crate) fn all_tokens(names: &[String]) -> Vec<Vec<String>> {
     let stripped: Vec<&str> = names.iter().map(|n| strip_namespace(n)).collect();
     let prefix = common_prefix(&stripped);
     stripped

@@ -131,7 +131,7 @@ pub(crate) const HORIZONTAL: &str = "a horizontal body";
 /// ([`legs_from_trunk`]) of a standing body: −0.7 (134°). Humans walk and
 /// run at −0.85 to −1; a fox standing with its chest above its hips is at
 /// −0.53 (measured as the mean of the two legs' cosines).
-pub const STANDING: f64 = -0.7;
+pub(crate) const STANDING: f64 = -0.7;
 
 /// The cosine between the legs' mean direction and the trunk's `up`:
 /// `legs` are pelvis → foot vectors, each normalised, their sum's
@@ -141,7 +141,7 @@ pub const STANDING: f64 = -0.7;
 /// of the legs' own cosines (−0.57) called it horizontal. A quadruped's
 /// hind legs hang across its spine either way (near 0). 0 when the legs
 /// cancel out.
-pub fn legs_from_trunk(legs: &[DVec3], up: DVec3) -> f64 {
+pub(crate) fn legs_from_trunk(legs: &[DVec3], up: DVec3) -> f64 {
     legs.iter()
         .map(|l| l.normalize_or_zero())
         .sum::<DVec3>()
@@ -833,7 +833,7 @@ pub fn analyse(clip: &Clip, tokens: &[Vec<String>]) -> Result<Body, NotHumanoid>
 /// standing body: of up to 24 sampled frames, the one of largest extent
 /// (bounding-box diagonal of its joints), a pose with the limbs spread
 /// rather than folded. `None` without frames.
-pub fn representative_frame(clip: &Clip) -> Option<usize> {
+pub(crate) fn representative_frame(clip: &Clip) -> Option<usize> {
     let n = clip.joint_count();
     let frames = clip.frame_count();
     let step = (frames / MAX_FRAMES).max(1);
@@ -1980,7 +1980,7 @@ fn arms_among(
 /// (hip to the toe tip), both from the bone joining them to the trunk:
 /// 0.67 on Bandai's rig, 0.65 and 0.61 on CMU 01 and 131 (cgspeed BVH),
 /// 0.83 on CC's (its fingers reach further than its hand's end).
-pub const ARM_OF_LEG: f64 = 0.7;
+pub(crate) const ARM_OF_LEG: f64 = 0.7;
 
 fn leg_chain(
     g: &Geo,

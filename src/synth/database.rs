@@ -170,7 +170,7 @@ pub fn drive(
 /// scaled to sum to 1 (a vertex left without weight keeps its own). The
 /// legs and the torso keep theirs: a skirt spans the hips and thighs. See
 /// the module docs.
-pub fn part_bound_skin(rig: &Embedding) -> Vec<([u8; 4], [f64; 4])> {
+pub(crate) fn part_bound_skin(rig: &Embedding) -> Vec<([u8; 4], [f64; 4])> {
     let arm = |p: Part| {
         matches!(
             p,

@@ -290,7 +290,7 @@ pub fn humanoid_landmarks_with(mesh: &Mesh, s: &HumanoidShape) -> Landmarks {
 /// Surface nets of the zero set of `f` over the box `[lo, hi]`, spacing `h`.
 /// Closed where the zero set stays inside the box; a few edges may be
 /// shared by four triangles where two sheets pass one cell edge.
-pub fn surface_nets(f: &dyn Fn(DVec3) -> f64, lo: DVec3, hi: DVec3, h: f64) -> Mesh {
+pub(crate) fn surface_nets(f: &dyn Fn(DVec3) -> f64, lo: DVec3, hi: DVec3, h: f64) -> Mesh {
     let dims = ((hi - lo) / h).ceil().as_uvec3();
     let (nx, ny, nz) = (
         dims.x as usize + 1,

@@ -41,7 +41,7 @@ impl View {
 /// assume (`render --up`): the shortest arc from `up` to +Y, half a turn
 /// about X for -Y. A bare `.pc2` from a Z-up scan carries no up of its
 /// own; turned by this, it is drawn standing.
-pub fn y_up_turn(up: DVec3) -> glam::DQuat {
+pub(crate) fn y_up_turn(up: DVec3) -> glam::DQuat {
     let u = up.normalize_or(DVec3::Y);
     if u.dot(DVec3::Y) > 1.0 - 1e-12 {
         glam::DQuat::IDENTITY
@@ -146,7 +146,7 @@ fn axes(view: View) -> (DVec3, DVec3, DVec3) {
 
 /// Bounds `([min right, min up], [max right, max up])` of `positions` seen
 /// along `view`.
-pub fn view_bounds(positions: &[[f64; 3]], view: View) -> ([f64; 2], [f64; 2]) {
+pub(crate) fn view_bounds(positions: &[[f64; 3]], view: View) -> ([f64; 2], [f64; 2]) {
     let (right, up, _) = axes(view);
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for &p in positions {
@@ -184,7 +184,7 @@ pub fn render(scene: &Scene, view: View, size: usize) -> Image {
 
 /// Renders `scene` seen along `view` into a `size × size` image placed by
 /// `framing` (so that several panels can share one scale).
-pub fn render_framed(scene: &Scene, view: View, size: usize, framing: Framing) -> Image {
+pub(crate) fn render_framed(scene: &Scene, view: View, size: usize, framing: Framing) -> Image {
     let (right, up, f) = axes(view);
     let project = |p: [f64; 3]| {
         let p = DVec3::from_array(p);
@@ -443,7 +443,7 @@ fn facing_vote(positions: &[[f64; 3]], axis: DVec3) -> f64 {
 /// The floor line of a panel: a grey segment at height `y` (along Y)
 /// across the whole `size`-pixel panel seen along `view` placed by
 /// `framing`.
-pub fn floor_line(
+pub(crate) fn floor_line(
     view: View,
     framing: Framing,
     y: f64,
@@ -464,7 +464,7 @@ pub fn floor_line(
 /// pixels) and one vertical centre, each centred horizontally on its own
 /// bounds. Also returns the extent (view units). Shared by contact sheets
 /// and `surfmotion render`.
-pub fn shared_framing(bounds: &[([f64; 2], [f64; 2])], size: usize) -> (Vec<Framing>, f64) {
+pub(crate) fn shared_framing(bounds: &[([f64; 2], [f64; 2])], size: usize) -> (Vec<Framing>, f64) {
     let (mut ylo, mut yhi, mut width) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
     for b in bounds {
         ylo = ylo.min(b.0[1]);
@@ -496,7 +496,7 @@ pub fn shared_framing(bounds: &[([f64; 2], [f64; 2])], size: usize) -> (Vec<Fram
 /// own frame; vertically all share one centre, so the floor is one line.
 /// Frame `i` is seen facing `facings[i]` (the last one for frames beyond
 /// it; +Z when empty). `floor` (height along Y) draws a grey floor line.
-pub fn contact_sheet(
+pub(crate) fn contact_sheet(
     frames: &[&[[f64; 3]]],
     triangles: &[[u32; 3]],
     colours: Option<&[[u8; 3]]>,
@@ -557,7 +557,7 @@ pub fn contact_sheet(
 
 /// Frame indices for a contact sheet: `count` evenly spaced over `frames`
 /// (first and last included; fewer when the sequence is shorter).
-pub fn sheet_frames(frames: usize, count: usize) -> Vec<usize> {
+pub(crate) fn sheet_frames(frames: usize, count: usize) -> Vec<usize> {
     if frames == 0 || count == 0 {
         return Vec::new();
     }
@@ -569,7 +569,7 @@ pub fn sheet_frames(frames: usize, count: usize) -> Vec<usize> {
 }
 
 /// A distinct colour for label `k` (golden-angle hues).
-pub fn label_colour(k: usize) -> [u8; 3] {
+pub(crate) fn label_colour(k: usize) -> [u8; 3] {
     let h = (k as f64 * 137.508) % 360.0;
     let (s, v) = (0.65, 0.95);
     let c = v * s;

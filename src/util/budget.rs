@@ -32,7 +32,7 @@ pub fn is_frame_rate(fps: f64) -> bool {
 }
 
 /// The environment variable that overrides the memory budget.
-pub const MEMORY_ENV: &str = "SURFMOTION_MEMORY_LIMIT";
+pub(crate) const MEMORY_ENV: &str = "SURFMOTION_MEMORY_LIMIT";
 
 /// A memory budget in bytes and where it came from.
 #[derive(Debug, Clone, Copy, PartialEq)]

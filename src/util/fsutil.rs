@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 /// Largest input file any reader accepts (4 GiB). Readers never trust counts
 /// in a header: they check them against the bytes actually present.
-pub const MAX_INPUT_BYTES: u64 = 4 << 30;
+pub(crate) const MAX_INPUT_BYTES: u64 = 4 << 30;
 
 /// Error of a file-system helper, carrying the path it concerns.
 #[derive(Debug, thiserror::Error)]
@@ -85,10 +85,10 @@ pub(crate) fn raise_warning(warnings: &mut Vec<String>, path: &Path, message: St
 
 /// Largest settings file (landmarks, markers, rig maps, part labels,
 /// manifests) any reader accepts (64 MiB): such files are a few kB.
-pub const MAX_SMALL_FILE_BYTES: u64 = 64 << 20;
+pub(crate) const MAX_SMALL_FILE_BYTES: u64 = 64 << 20;
 
 /// Reads a whole file into memory, refusing files over [`MAX_INPUT_BYTES`].
-pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FsError> {
+pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>, FsError> {
     read_bytes_limited(path, MAX_INPUT_BYTES)
 }
 
@@ -99,7 +99,7 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FsError> {
 /// as a BVH was read to the 4 GiB limit before it was refused), a socket.
 /// Files over `limit` bytes are refused too. Every reader opens its input
 /// through this (directly or through [`read_bytes`] and friends).
-pub fn open_input(path: &Path, limit: u64) -> Result<std::fs::File, FsError> {
+pub(crate) fn open_input(path: &Path, limit: u64) -> Result<std::fs::File, FsError> {
     let wrap = |source| FsError {
         path: path.to_path_buf(),
         source,
@@ -241,7 +241,7 @@ pub fn decode_text(mut bytes: Vec<u8>) -> String {
 /// Writes a file atomically: the bytes go to a temporary file in the same
 /// folder, which is flushed and renamed over `path`. A killed run leaves
 /// either the old file or the complete new one, never a truncated one.
-pub fn write_atomic(
+pub(crate) fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), FsError> {
@@ -409,7 +409,7 @@ pub fn temp_prefix(pid: u32, name: &std::ffi::OsStr) -> String {
 
 /// The process id in a temporary's file name `file`, when it is one that
 /// [`AtomicFile`] writes for an output named `name`; `None` otherwise.
-pub fn stale_temporary_pid(file: &str, name: &std::ffi::OsStr) -> Option<u32> {
+pub(crate) fn stale_temporary_pid(file: &str, name: &std::ffi::OsStr) -> Option<u32> {
     let rest = file.strip_prefix(".surfmotion-pid")?;
     let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
     let pid: u32 = rest[..digits].parse().ok()?;
@@ -455,7 +455,7 @@ pub struct StaleTemporary {
 /// named `name` whose process is gone: regular files of that naming, owned
 /// by this user, written by another process that no longer runs. Anything
 /// it cannot prove stale stays. Returns what it removed.
-pub fn remove_stale_temporaries(dir: &Path, name: &std::ffi::OsStr) -> Vec<StaleTemporary> {
+pub(crate) fn remove_stale_temporaries(dir: &Path, name: &std::ffi::OsStr) -> Vec<StaleTemporary> {
     let mut out = Vec::new();
     let Ok(rd) = std::fs::read_dir(dir) else {
         return out;

@@ -840,7 +840,7 @@ fn walk(
 
 /// What [`verify`] found: the counts of a valid `.sm4d` file.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Summary {
+pub struct Verified {
     /// The predictor the file used.
     pub predictor: Predictor,
     /// Vertices per frame.
@@ -858,10 +858,10 @@ pub struct Summary {
 /// Checks a whole `.sm4d` file as [`decode`] does (every size, index and
 /// position) while holding only two frames: what `inspect` uses, so a file
 /// that declares millions of frames is checked, not loaded.
-pub fn verify(b: &[u8]) -> Result<Summary, CodecError> {
+pub(crate) fn verify(b: &[u8]) -> Result<Verified, CodecError> {
     let p = read_header(b)?;
     walk(b, &p, |_, _, _| {})?;
-    Ok(Summary {
+    Ok(Verified {
         predictor: p.predictor,
         vertices: p.vertices,
         triangles: p.triangles.len(),

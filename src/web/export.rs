@@ -26,10 +26,10 @@ pub const GEOMETRY_FILE: &str = "character.sm4d";
 /// Name of the manifest in a site.
 pub(crate) const MANIFEST_FILE: &str = "manifest.json";
 /// The `format` field of a site manifest.
-pub const FORMAT: &str = "surfmotion-web";
+pub(crate) const FORMAT: &str = "surfmotion-web";
 /// The record of the files an export wrote (the marker that lets a later
 /// export replace the folder).
-pub const RECORD_FILE: &str = ".surfmotion-export.json";
+pub(crate) const RECORD_FILE: &str = ".surfmotion-export.json";
 /// The geometry and manifest as a classic script (`window.surfmotionData`),
 /// for the page opened from disk (`file://`), where browsers refuse `fetch`.
 pub(crate) const SCRIPT_DATA_FILE: &str = "character.sm4d.js";

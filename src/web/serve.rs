@@ -115,7 +115,7 @@ impl Default for ServeOptions {
 
 /// Largest request head accepted (request line and headers); a larger one
 /// is answered `431` and the connection closed.
-pub const MAX_HEAD_BYTES: usize = 16 << 10;
+pub(crate) const MAX_HEAD_BYTES: usize = 16 << 10;
 
 /// How often a waiting connection and the accepting loop look at the stop
 /// flag and the time-outs.
@@ -546,7 +546,7 @@ fn write_all_by(s: &mut TcpStream, mut bytes: &[u8], deadline: Instant) -> bool 
 pub(crate) const EXPORT_DIR_PREFIX: &str = "surfmotion-serve-";
 
 /// The file in a serve export folder that names the process that made it.
-pub const EXPORT_MARKER: &str = "surfmotion-serve.pid";
+pub(crate) const EXPORT_MARKER: &str = "surfmotion-serve.pid";
 
 /// A new temporary folder in `parent` for a served export, named and
 /// marked with this process's id (removed when dropped).

@@ -48,13 +48,16 @@ pub fn parse_fbx_character(bytes: &[u8], path: &Path) -> Result<GltfAsset, MeshE
 /// problems with its reason. The reader decides no unit itself: the unit a
 /// body's stature gives needs the rig detector, above the mesh readers
 /// (`rig::read_rigged_character` passes its clip's).
-pub fn read_fbx_character_in(path: &Path, units: Option<&Units>) -> Result<GltfAsset, MeshError> {
+pub(crate) fn read_fbx_character_in(
+    path: &Path,
+    units: Option<&Units>,
+) -> Result<GltfAsset, MeshError> {
     let bytes = crate::util::fsutil::read_bytes(path)?;
     parse_fbx_character_in(&bytes, path, units)
 }
 
 /// [`read_fbx_character_in`] of bytes in memory; `path` names them in errors.
-pub fn parse_fbx_character_in(
+pub(crate) fn parse_fbx_character_in(
     bytes: &[u8],
     path: &Path,
     units: Option<&Units>,

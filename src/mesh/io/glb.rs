@@ -63,7 +63,7 @@ impl Default for GlbOptions {
 
 /// The most frames one GLB holds: the weights animation has `F²` values,
 /// addressed by 32-bit sparse indices.
-pub const MAX_FRAMES: usize = 65_535;
+pub(crate) const MAX_FRAMES: usize = 65_535;
 
 /// The `extensionsRequired` entry of quantised files.
 pub(crate) const KHR_MESH_QUANTIZATION: &str = "KHR_mesh_quantization";

@@ -101,7 +101,7 @@ pub struct Reference {
 
 /// Bump when a check's measure changes: the database's cached reference
 /// (`cache/plausibility-reference.json`) is then measured again.
-pub const REFERENCE_VERSION: u32 = 1;
+pub(crate) const REFERENCE_VERSION: u32 = 1;
 
 /// The database's floor and reference as cached beside its frames.
 #[derive(Debug, Clone, Serialize, Deserialize)]

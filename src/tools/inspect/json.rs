@@ -138,7 +138,7 @@ fn read_kind(path: &Path) -> Result<(String, serde_json::Value, &'static str), I
     // A file that has a kind's keys but not its values is malformed, not
     // that kind ("a keyframe report: 238 frames at NaN fps", exit 0, for a
     // report whose `fps` was `[[[[1e308]]]]`).
-    if let Err(why) = check_fields(&v, format) {
+    if let Err(why) = check_fields(&v, format).and_then(|()| holds_together(&v, format)) {
         return Err(err(format!(
             "{}: a malformed {format}: {why}",
             path.display()
@@ -558,6 +558,21 @@ fn check_fields(v: &serde_json::Value, kind: &str) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// Whether a file whose fields are right also holds together as the value
+/// it names. A graph cache is read through the graph's validated
+/// constructor ([`crate::graph::SurfaceMotionGraph::new`]): a transition past
+/// its sequence's end, an edge naming no transition or a sequence that does
+/// not exist is refused here as `db build` refuses it (it then rebuilds the
+/// cache), not summarised as if the graph were whole.
+fn holds_together(v: &serde_json::Value, kind: &str) -> Result<(), String> {
+    if kind != "graph cache" {
+        return Ok(());
+    }
+    serde_json::from_value::<crate::graph::SurfaceMotionGraph>(v["graph"].clone())
+        .map(drop)
+        .map_err(|e| format!("{e}; `db build` rebuilds it"))
 }
 
 /// `name (N frames)` of each entry of `v["sequences"]`, its frame count

@@ -143,7 +143,7 @@ fn left_of(j: &crate::pose::Pose, up: DVec3) -> DVec3 {
 /// and shoulders (left × up), signed as the rig's own rest facing is
 /// against its rest skeleton (so a rig whose sides are named the other
 /// way round still faces forward). `None` when the skeleton has no width.
-pub fn rig_facing(r: &Embedding, j: &crate::pose::Pose) -> Option<DVec3> {
+pub(crate) fn rig_facing(r: &Embedding, j: &crate::pose::Pose) -> Option<DVec3> {
     let rest_up = DVec3::from_array(r.up).normalize_or(DVec3::Y);
     let rest = left_of(&r.joints.map(DVec3::from_array), rest_up).cross(rest_up);
     let sign = if rest.dot(DVec3::from_array(r.facing)) < 0.0 {

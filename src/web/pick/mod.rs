@@ -19,6 +19,6 @@ pub use server::PickServer;
 pub use session::{PickSession, Response, SessionFiles};
 
 /// The page.
-pub const PAGE: &[u8] = include_bytes!("../assets/pick.html");
+pub(crate) const PAGE: &[u8] = include_bytes!("../assets/pick.html");
 /// Its script.
 pub const SCRIPT: &[u8] = include_bytes!("../assets/pick.js");

@@ -2085,6 +2085,21 @@ fn tampered_graph_cache_is_rebuilt() {
             g["graph"]["transitions"][0][tamper.0] = tamper.1.into();
         }
         std::fs::write(&gpath, serde_json::to_string(&g).unwrap()).unwrap();
+        // `inspect` reads the cache through the graph's constructor: it
+        // names what does not hold together instead of summarising it.
+        let o = Command::new(common::bin())
+            .args(["inspect", gpath.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{what}: {err}");
+        assert!(
+            err.contains("graph-shape.json")
+                && err.contains("malformed graph cache")
+                && err.contains(what)
+                && err.contains("db build"),
+            "{what}: {err}"
+        );
         let run = |args: &[&str]| {
             let o = Command::new(common::bin())
                 .args(args)

@@ -9,7 +9,7 @@ use std::process::Command;
 use surfmotion::graph::FlatFrame;
 use surfmotion::keyframe::graph::KeyGraph;
 use surfmotion::keyframe::options::SearchOptions;
-use surfmotion::keyframe::repeats::{Measure, Problem, brute_force, solve_exact, solve_ilp};
+use surfmotion::keyframe::repeats::{Problem, Tally, brute_force, solve_exact, solve_ilp};
 use surfmotion::keyframe::{Planner, Targets};
 
 use common::keygraph::Lcg;
@@ -19,16 +19,16 @@ fn ff(i: usize) -> FlatFrame {
     FlatFrame::from_index(i)
 }
 
-fn random_problem(r: &mut Lcg, loops: &mut Vec<Measure>) -> (Measure, f64, f64) {
+fn random_problem(r: &mut Lcg, loops: &mut Vec<Tally>) -> (Tally, f64, f64) {
     loops.clear();
     for _ in 0..1 + r.below(3) {
-        loops.push(Measure {
+        loops.push(Tally {
             cost: 0.05 * r.next(),
             distance: 0.2 + 1.5 * r.next(),
             frames: 3 + r.below(12) as u32,
         });
     }
-    let walk = Measure {
+    let walk = Tally {
         cost: 0.1 * r.next(),
         distance: 2.0 * r.next(),
         frames: 1 + r.below(20) as u32,
@@ -1372,8 +1372,8 @@ fn simple_cycles(g: &KeyGraph) -> Vec<Vec<FlatFrame>> {
 }
 
 /// The measure of the steps of a closed (`closed`) or open frame list.
-fn frames_measure(g: &KeyGraph, frames: &[FlatFrame], closed: bool) -> Measure {
-    let mut m = Measure {
+fn frames_measure(g: &KeyGraph, frames: &[FlatFrame], closed: bool) -> Tally {
+    let mut m = Tally {
         frames: if closed { 0 } else { 1 },
         ..Default::default()
     };
@@ -1460,7 +1460,7 @@ fn walks_search_with_the_ilp_matches_brute_force_on_small_random_graphs() {
             continue;
         }
         let w = ilp.weights;
-        let cycles: Vec<(Vec<FlatFrame>, Measure)> = simple_cycles(&g)
+        let cycles: Vec<(Vec<FlatFrame>, Tally)> = simple_cycles(&g)
             .into_iter()
             .map(|c| {
                 let m = frames_measure(&g, &c, true);
@@ -1472,7 +1472,7 @@ fn walks_search_with_the_ilp_matches_brute_force_on_small_random_graphs() {
         assert!(!paths.is_empty(), "case {case}");
         for path in &paths {
             let walk = frames_measure(&g, path, false);
-            let loops: Vec<Measure> = cycles
+            let loops: Vec<Tally> = cycles
                 .iter()
                 .filter(|(c, _)| c.iter().any(|f| path.contains(f)))
                 .map(|x| x.1)
@@ -1566,7 +1566,7 @@ fn walks_search_with_a_heading_target_matches_brute_force_on_small_random_graphs
             continue;
         }
         let w = ilp.weights;
-        let cycles: Vec<(Vec<FlatFrame>, Measure, f64)> = simple_cycles(&g)
+        let cycles: Vec<(Vec<FlatFrame>, Tally, f64)> = simple_cycles(&g)
             .into_iter()
             .map(|c| {
                 let m = frames_measure(&g, &c, true);
@@ -1579,11 +1579,11 @@ fn walks_search_with_a_heading_target_matches_brute_force_on_small_random_graphs
         assert!(!paths.is_empty(), "case {case}");
         for path in &paths {
             let walk = frames_measure(&g, path, false);
-            let near: Vec<&(Vec<FlatFrame>, Measure, f64)> = cycles
+            let near: Vec<&(Vec<FlatFrame>, Tally, f64)> = cycles
                 .iter()
                 .filter(|(c, _, _)| c.iter().any(|f| path.contains(f)))
                 .collect();
-            let loops: Vec<Measure> = near.iter().map(|x| x.1).collect();
+            let loops: Vec<Tally> = near.iter().map(|x| x.1).collect();
             let turns: Vec<f64> = near.iter().map(|x| x.2).collect();
             let pr = Problem {
                 walk,
@@ -1770,14 +1770,14 @@ fn merged_cones_equal_the_cone_of_all_loops() {
     let mut r = Lcg(73);
     let mut buf = Vec::new();
     for case in 0..300 {
-        let sets: Vec<Vec<Measure>> = (0..1 + r.below(3))
+        let sets: Vec<Vec<Tally>> = (0..1 + r.below(3))
             .map(|_| {
                 let mut v = Vec::new();
                 random_problem(&mut r, &mut v);
                 v
             })
             .collect();
-        let all: Vec<Measure> = sets.iter().flatten().copied().collect();
+        let all: Vec<Tally> = sets.iter().flatten().copied().collect();
         let cones: Vec<_> = sets.iter().map(|s| cone(s).unwrap()).collect();
         let merged = merge_cones(cones.iter(), &mut buf).unwrap();
         let direct = cone(&all).unwrap();
