@@ -119,7 +119,7 @@ impl Summary {
     }
 
     /// Records what the converter prepared once ([`Preparation`]).
-    pub fn set_preparation(&mut self, p: Preparation) {
+    pub(crate) fn set_preparation(&mut self, p: Preparation) {
         self.factorisations = p.factorisations;
         self.prepare_seconds = p.seconds;
     }

@@ -56,7 +56,7 @@ impl Default for KeyHasher {
 impl KeyHasher {
     /// A hasher of the inputs of the database `dir`, remembering the content
     /// hashes of its large files in its cache folder ([`KeyHasher::save`]).
-    pub fn for_db(dir: &Path) -> Self {
+    pub(crate) fn for_db(dir: &Path) -> Self {
         let KeyHasher(h, _) = KeyHasher::default();
         KeyHasher(h, Some(ContentMemo::open(dir, memo_path(dir))))
     }
@@ -292,7 +292,7 @@ impl Checkpoint {
 
     /// Appends the finished rows `first..` held in `rows` (whole rows of
     /// `n` values; the upper triangle of each is written) and syncs them.
-    pub fn append(&mut self, first: usize, rows: &[f32]) -> Result<(), FsError> {
+    pub(crate) fn append(&mut self, first: usize, rows: &[f32]) -> Result<(), FsError> {
         use std::io::Write;
         let n = self.n;
         let mut bytes = Vec::with_capacity(rows.len() * 4);

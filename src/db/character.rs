@@ -212,7 +212,7 @@ impl Character {
     /// made from (the sequences, the rig, the skeleton kind): a cache
     /// derived from them (the plausibility reference) is current while
     /// its key includes this one.
-    pub fn cache_key(&self) -> u64 {
+    pub(crate) fn cache_key(&self) -> u64 {
         self.cache_key
     }
 
@@ -302,13 +302,13 @@ impl Character {
     }
 
     /// Constraint vertices given in the manifest (`[deform] constraints`).
-    pub fn constraint_override(&self) -> Option<&[u32]> {
+    pub(crate) fn constraint_override(&self) -> Option<&[u32]> {
         self.constraint_override.as_deref()
     }
 
     /// Example frames (flat ids) given in the manifest (`[deform]
     /// examples`).
-    pub fn example_override(&self) -> Option<&[FlatFrame]> {
+    pub(crate) fn example_override(&self) -> Option<&[FlatFrame]> {
         self.example_override.as_deref()
     }
 

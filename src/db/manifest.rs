@@ -375,7 +375,7 @@ pub enum DbError {
 impl DbError {
     /// A failed write of the cache of the database at `dir`: refused
     /// permission or a read-only file system is [`DbError::CacheUnwritable`].
-    pub fn cache_write(dir: &std::path::Path, e: crate::util::fsutil::FsError) -> DbError {
+    pub(crate) fn cache_write(dir: &std::path::Path, e: crate::util::fsutil::FsError) -> DbError {
         use std::io::ErrorKind as K;
         match e.source.kind() {
             K::PermissionDenied | K::ReadOnlyFilesystem => DbError::CacheUnwritable {
@@ -447,7 +447,7 @@ impl Manifest {
 
     /// The rest frame's size in metres: the largest side of the topology's
     /// bounding box in the manifest's `units` (`None`: no extent).
-    pub fn size_metres(&self, topology: &Mesh) -> Option<f64> {
+    pub(crate) fn size_metres(&self, topology: &Mesh) -> Option<f64> {
         let u = crate::mocap::units::parse_unit(&self.units)?;
         extent(topology.positions()).map(|h| h * u.metres_per_unit)
     }
@@ -648,7 +648,7 @@ impl Manifest {
     /// database's sequence names). `dir` names the manifest. Regression
     /// (issue 39, item 9): `play` on such a database said `unknown key
     /// "speed" (expected t, space)`, blaming the script.
-    pub fn require_spaces(&self, dir: &Path) -> Result<(), DbError> {
+    pub(crate) fn require_spaces(&self, dir: &Path) -> Result<(), DbError> {
         if !self.spaces.is_empty() {
             return Ok(());
         }

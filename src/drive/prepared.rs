@@ -109,7 +109,7 @@ impl Analysed {
     /// [`Analysed::new`] with what the caller decides instead of the pose
     /// kernel over `mocap` ([`Given`]: the levelling, the floor, the
     /// supports; a live session's decisions over its stream).
-    pub fn on_given(
+    pub(crate) fn on_given(
         ch: &Character,
         neutral: &Pose,
         floor_lift: f64,
@@ -231,7 +231,7 @@ impl Prepared {
 
     /// [`Prepared::analyse`] with what the caller decides
     /// ([`Analysed::on_given`]).
-    pub fn analyse_given(
+    pub(crate) fn analyse_given(
         &self,
         ch: &Character,
         reference: &Reference,

@@ -34,7 +34,7 @@ impl OutFrame {
         &self.sources[..self.count]
     }
     /// The source with the largest weight (frame 0 when none is used).
-    pub fn primary(&self) -> FlatFrame {
+    pub(crate) fn primary(&self) -> FlatFrame {
         self.used()
             .iter()
             .max_by(|a, b| a.1.total_cmp(&b.1))

@@ -100,7 +100,7 @@ impl RetargetJob {
     /// How many times the character was prepared (its blender and deformer
     /// factored): 1 for a job whose options did not change after
     /// [`RetargetJob::load`], whatever the number of clips.
-    pub fn preparations(&self) -> usize {
+    pub(crate) fn preparations(&self) -> usize {
         self.preparations.load(Ordering::Relaxed)
     }
 

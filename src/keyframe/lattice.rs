@@ -288,7 +288,7 @@ impl Chain {
     /// The same chain with every arc's cost replaced by `f(arc)`, and no
     /// extremes computed yet: the ratio search of [`super::smoothest`]
     /// prices a transition `s − λ`, negative when it is smoother than `λ`.
-    pub fn repriced(&self, f: impl Fn(&ArcView) -> f64) -> Chain {
+    pub(crate) fn repriced(&self, f: impl Fn(&ArcView) -> f64) -> Chain {
         let mut c = self.clone();
         for a in c.adj.iter_mut().flatten() {
             a.m.cost = f(a);

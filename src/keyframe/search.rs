@@ -25,7 +25,7 @@ use super::segment::{Segment, SegmentPath, Stats, Target};
 impl Segment {
     /// The exact-length search ([`super::lattice::search`]) on this
     /// segment alone; `None` when it finds nothing within its tolerance.
-    pub fn solve_lattice(
+    pub(crate) fn solve_lattice(
         &self,
         t: &Target,
         heading: Option<&Heading>,

@@ -521,7 +521,7 @@ impl Segment {
     }
 
     /// Arcs of the compressed graph (indices `0..arc_count()`).
-    pub fn arc_count(&self) -> usize {
+    pub(crate) fn arc_count(&self) -> usize {
         self.arcs.len()
     }
 
@@ -542,7 +542,7 @@ impl Segment {
     }
 
     /// The arcs leaving node `u` towards relevant nodes, with their indices.
-    pub fn arcs_from_indexed(&self, u: u32) -> impl Iterator<Item = ArcView> + '_ {
+    pub(crate) fn arcs_from_indexed(&self, u: u32) -> impl Iterator<Item = ArcView> + '_ {
         self.out[u as usize].iter().filter_map(move |&a| {
             let arc = &self.arcs[a as usize];
             self.relevant[arc.to as usize].then_some(ArcView {

@@ -99,7 +99,7 @@ impl Poisson {
     /// triangle m's corners. Definite when every connected component has
     /// one of `triangles`; [`Poisson::pull_centroids`] adds the targets to
     /// `b` before [`Poisson::solve`].
-    pub fn with_soft_centroids(
+    pub(crate) fn with_soft_centroids(
         reference: &Mesh,
         triangles: &[[u32; 3]],
         weight: f64,
@@ -122,7 +122,7 @@ impl Poisson {
 
     /// Adds the pull of [`Poisson::with_soft_centroids`] towards `targets`
     /// (one per triangle, in its order) to the assembled `ws.b`.
-    pub fn pull_centroids(
+    pub(crate) fn pull_centroids(
         ws: &mut PoissonWorkspace,
         triangles: &[[u32; 3]],
         targets: &[DVec3],
@@ -187,7 +187,7 @@ impl Poisson {
     /// Per triangle and corner k: the vector `g_k` whose image `T_t g_k` is
     /// corner k's share of `b` (the two weighted edges meeting at corner k,
     /// `w_(k+2) e_(k+2) − w_(k+1) e_(k+1)`).
-    pub fn corner_vectors(&self) -> &[[DVec3; 3]] {
+    pub(crate) fn corner_vectors(&self) -> &[[DVec3; 3]] {
         &self.corner_vectors
     }
 

@@ -207,7 +207,7 @@ impl HybridBlend {
     /// The pair, the two bracketing references and the fraction between
     /// them for the weight coordinate `u ∈ [0, N − 1]` (clamped).
     #[inline]
-    pub fn bracket(&self, u: f64) -> (usize, usize, f32) {
+    pub(crate) fn bracket(&self, u: f64) -> (usize, usize, f32) {
         if self.pairs.is_empty() {
             return (0, 0, 0.0);
         }

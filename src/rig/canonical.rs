@@ -58,7 +58,7 @@ impl Canonical {
 
     /// The leg joints, left then right, each from hip to toe (the last
     /// eight of [`Canonical::ALL`]).
-    pub const LEGS: [Canonical; 8] = {
+    pub(crate) const LEGS: [Canonical; 8] = {
         let mut out = [Canonical::LHip; 8];
         let mut i = 0;
         while i < out.len() {

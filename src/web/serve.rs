@@ -193,7 +193,7 @@ impl SiteServer {
 
     /// Serves a WebSocket at `path` (e.g. `/live`): an upgrade request for it
     /// is handed to `handler`. Set before serving.
-    pub fn with_websocket(mut self, path: &str, handler: WebSocketHandler) -> SiteServer {
+    pub(crate) fn with_websocket(mut self, path: &str, handler: WebSocketHandler) -> SiteServer {
         if let Some(sh) = Arc::get_mut(&mut self.shared) {
             sh.websocket = Some((path.to_string(), handler));
         }

@@ -152,7 +152,7 @@ impl Feet {
     /// driving clip stands that foot on; frames past its end on the
     /// floor).
     #[allow(clippy::too_many_arguments)]
-    pub fn sliding_on(
+    pub(crate) fn sliding_on(
         &self,
         frames: &[[f64; 3]],
         n: usize,

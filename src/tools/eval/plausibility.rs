@@ -788,7 +788,7 @@ impl Plausibility {
     /// frame, degrees; [`crate::pose::retarget::clip_head_trunk_deg`]) and
     /// recomputes the warnings with `limits`: the head is then held to the
     /// larger of the captured range and the clip's own.
-    pub fn with_clip_head(mut self, series: &[f64], limits: &Limits) -> Self {
+    pub(crate) fn with_clip_head(mut self, series: &[f64], limits: &Limits) -> Self {
         self.clip_head_torso_deg = Some(HeadTorso::summary(series));
         self.warnings = warnings(&self, limits);
         self
@@ -799,7 +799,7 @@ impl Plausibility {
     /// [`crate::pose::retarget::clip_foot_glide_cm`]) and recomputes the
     /// warnings with `limits`: the feet are then warned about only when
     /// they glide more than the larger of the captured glide and the clip's.
-    pub fn with_clip_glide(mut self, cm_per_frame: f64, limits: &Limits) -> Self {
+    pub(crate) fn with_clip_glide(mut self, cm_per_frame: f64, limits: &Limits) -> Self {
         self.clip_foot_glide_cm_per_frame = cm_per_frame.is_finite().then_some(cm_per_frame);
         self.warnings = warnings(&self, limits);
         self
