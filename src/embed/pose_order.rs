@@ -151,6 +151,67 @@ pub fn standing_first(frames: &[&[[f64; 3]]], descs: &[Vec<f64>], among: &[usize
     order.into_iter().map(|(_, i)| i).collect()
 }
 
+/// The number of nearest frames [`hold_radius`] asks of a capture of
+/// `frames` frames: about 3 % of them (5 of 175, a sixth of a second at
+/// 30 fps), at least 2 and at most 16, and fewer than the frames.
+pub fn hold_neighbours(frames: usize) -> usize {
+    (frames / 32).clamp(2, 16).min(frames.saturating_sub(1))
+}
+
+/// How long the capture holds each frame's pose: the distance from its
+/// descriptor to its `k`-th nearest among the other frames' (small for a
+/// pose held still over many frames, a capture's calibration stance;
+/// large for a pose passed through). 0 with `k` = 0; the farthest when
+/// fewer than `k` others. Depends on the set of poses alone, not their
+/// order. Cost O(F² K²) for F frames (samba's 175: 0.1 s).
+pub fn hold_radius(descs: &[Vec<f64>], k: usize) -> Vec<f64> {
+    use rayon::prelude::*;
+    descs
+        .par_iter()
+        .enumerate()
+        .map(|(i, a)| {
+            let mut d: Vec<f64> = descs
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, b)| distance2(a, b))
+                .collect();
+            if k == 0 || d.is_empty() {
+                return 0.0;
+            }
+            let at = (k - 1).min(d.len() - 1);
+            d.select_nth_unstable_by(at, f64::total_cmp).1.sqrt()
+        })
+        .collect()
+}
+
+/// The indices `among` ordered by how long the capture holds their pose
+/// ([`hold_radius`] with [`hold_neighbours`], the longest held first),
+/// those no less standing than the median of `among` ([`spread`]) before
+/// the others (a crouch held longer than the stance does not come
+/// first); ties: the lesser descriptor. On samba the still start (frames
+/// 4-10; its held end has the hands on the hips, a contact), on crane
+/// the A-pose start (frames 2-9), where [`standing_first`] chose a step
+/// of crane's walk (frame 86, a knee bent).
+pub fn held_first(frames: &[&[[f64; 3]]], descs: &[Vec<f64>], among: &[usize]) -> Vec<usize> {
+    let radius = hold_radius(descs, hold_neighbours(descs.len()));
+    let spreads: Vec<f64> = among.iter().map(|&i| spread(frames[i])).collect();
+    let mut sorted = spreads.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted.get(sorted.len().saturating_sub(1) / 2).copied();
+    let mut order: Vec<(bool, f64, usize)> = among
+        .iter()
+        .zip(&spreads)
+        .map(|(&i, &s)| (median.is_some_and(|m| s > m), radius[i], i))
+        .collect();
+    order.sort_by(|a, b| {
+        a.0.cmp(&b.0)
+            .then_with(|| a.1.total_cmp(&b.1))
+            .then_with(|| by_pose(&descs[a.2], &descs[b.2]))
+    });
+    order.into_iter().map(|(_, _, i)| i).collect()
+}
+
 /// The indices `among` ordered by their descriptor's distance from
 /// `pose` (nearest first; ties: the lesser descriptor).
 pub fn nearest(descs: &[Vec<f64>], pose: &[f64], among: &[usize]) -> Vec<usize> {
