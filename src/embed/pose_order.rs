@@ -339,6 +339,37 @@ mod tests {
     }
 
     #[test]
+    fn the_pose_held_longest_of_the_standing_half_comes_first_in_any_order() {
+        let p = poses();
+        // Pose 2 held for 5 frames, pose 6 (more bent) for 7, the others
+        // passed through once.
+        let mut take = vec![0, 1, 3, 4, 5, 7];
+        take.extend([2; 5]);
+        take.extend([6; 7]);
+        for perm in [0usize, 5, 11] {
+            let mut order = take.clone();
+            order.rotate_left(perm);
+            order.reverse();
+            let frames: Vec<&[[f64; 3]]> = order.iter().map(|&k| p[k].as_slice()).collect();
+            let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
+            let all: Vec<usize> = (0..frames.len()).collect();
+            let first = held_first(&frames, &descs, &all);
+            // The bent pose is held longer, but it is of the less standing
+            // half: the straighter held pose comes first.
+            assert_eq!(order[first[0]], 2, "{order:?}");
+            // Among the passed-through poses, none before a held one of
+            // its half.
+            assert!(first[..5].iter().all(|&i| order[i] == 2));
+        }
+        assert_eq!(hold_neighbours(175), 5);
+        assert_eq!(hold_neighbours(2), 1);
+        assert_eq!(hold_neighbours(10_000), 16);
+        let descs: Vec<Vec<f64>> = p.iter().map(|f| descriptor(f)).collect();
+        assert!(hold_radius(&descs, 0).iter().all(|&r| r == 0.0));
+        assert_eq!(hold_radius(&descs[..1], 3), vec![0.0]);
+    }
+
+    #[test]
     fn the_spread_is_that_of_the_covariance() {
         // Points on the axes: variances 4, 1, 0.25 (×2/6 each).
         let mut f = Vec::new();

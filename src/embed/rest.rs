@@ -399,7 +399,7 @@ mod tests {
         for order in [[0, 1, 2], [2, 0, 1], [1, 2, 0], [0, 2, 1]] {
             let frames: Vec<&[[f64; 3]]> = order.iter().map(|&k| poses[k].as_slice()).collect();
             let topo = Mesh::new(frames[0].to_vec(), mesh.triangles().to_vec()).unwrap();
-            for rule in [PoseRule::Standing, PoseRule::NearestMedian] {
+            for rule in [PoseRule::Held, PoseRule::Standing, PoseRule::NearestMedian] {
                 let opts = RestOptions {
                     pose_rule: rule,
                     ..RestOptions::automatic()
@@ -409,7 +409,7 @@ mod tests {
                 chosen.push((rule, frames[c.frame].to_vec()));
             }
         }
-        for rule in [PoseRule::Standing, PoseRule::NearestMedian] {
+        for rule in [PoseRule::Held, PoseRule::Standing, PoseRule::NearestMedian] {
             let mine: Vec<&Vec<[f64; 3]>> = chosen
                 .iter()
                 .filter(|(r, _)| *r == rule)

@@ -192,7 +192,13 @@ mod tests {
         assert_eq!(auto.max_frames, 60);
         apply_override("rest=first", &mut rule, &mut auto).unwrap();
         assert!(!rule.by_pose);
-        for bad in ["rest=middle", "frames", "max=1", "sample=x"] {
+        assert!(!auto.thigh_hip);
+        apply_override("rest=held,hip=thigh", &mut rule, &mut auto).unwrap();
+        assert!(rule.by_pose && auto.thigh_hip);
+        assert_eq!(rule.pose_rule, PoseRule::Held);
+        apply_override("hip=trunk", &mut rule, &mut auto).unwrap();
+        assert!(!auto.thigh_hip);
+        for bad in ["rest=middle", "frames", "max=1", "sample=x", "hip=knee"] {
             let e = apply_override(bad, &mut rule, &mut auto).unwrap_err();
             assert!(e.contains(bad) && e.contains(AUTORIG_ENV), "{e}");
         }
