@@ -67,6 +67,8 @@ fn real(data: &Path) {
         let mesh = seq.mesh().clone();
         let frames: Vec<&[[f64; 3]]> = (0..seq.frame_count()).map(|f| seq.frame(f)).collect();
         let t = Instant::now();
+        let (rest, why) = rest_as_db_init(&mesh, &frames);
+        eprintln!("  {name}: rest frame {rest:?}: {why}");
         let auto = match rig_as_db_init(&mesh, &frames) {
             Ok(a) => a,
             Err(e) => {
@@ -97,6 +99,7 @@ fn real(data: &Path) {
                     eprint!("{} {:.1}  ", j.name(), 100.0 * d / h);
                 }
                 eprintln!();
+                knees_per_frame(name, &frames, &mine, &truth);
             }
             None => println!("| {name} | embedding refused |"),
         }
@@ -108,6 +111,36 @@ fn real(data: &Path) {
         if name == "samba" {
             contact_first(&mesh, &frames, 130, false);
         }
+    }
+}
+
+/// The knees of `mine` against `truth`'s in every frame (each rig's
+/// joints read off the frame by its regressors), in % of the height:
+/// mean, the worst and its frame, and the five worst frames.
+fn knees_per_frame(name: &str, frames: &[&[[f64; 3]]], mine: &Embedding, truth: &Embedding) {
+    let h = truth.height;
+    for knee in [Canonical::LKnee, Canonical::RKnee] {
+        let k = knee.index();
+        let mut d: Vec<(f64, usize)> = frames
+            .iter()
+            .enumerate()
+            .map(|(f, x)| {
+                let (a, b) = (mine.frame_joints(x), truth.frame_joints(x));
+                (100.0 * a[k].distance(b[k]) / h, f)
+            })
+            .collect();
+        let mean = d.iter().map(|x| x.0).sum::<f64>() / d.len().max(1) as f64;
+        d.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let worst: Vec<String> = d
+            .iter()
+            .take(5)
+            .map(|(x, f)| format!("{f}: {x:.1}"))
+            .collect();
+        eprintln!(
+            "  {name} {} per frame: mean {mean:.2}%, worst {}",
+            knee.name(),
+            worst.join(", ")
+        );
     }
 }
 
@@ -474,7 +507,8 @@ fn synth(data: &Path) {
             let n = rest.vertex_count();
             let frames: Vec<&[[f64; 3]]> = out.positions.chunks(n).collect();
             let t = Instant::now();
-            let auto = match auto_rig(&rest, &frames, &db_init_options(None)) {
+            let (rest_frame, why) = rest_as_db_init(&rest, &frames);
+            let auto = match auto_rig(&rest, &frames, &db_init_options(rest_frame)) {
                 Ok(a) => a,
                 Err(e) => {
                     println!("| {bname} | {mname} | {} | refused: {e} |", frames.len());
@@ -482,7 +516,9 @@ fn synth(data: &Path) {
                 }
             };
             let secs = t.elapsed().as_secs_f64();
-            let mine = match Embedding::new(&rest, &auto.landmarks, None) {
+            let mine = match embed_as_db_init(&rest, &frames, rest_frame, &auto.landmarks)
+                .ok_or("refused")
+            {
                 Ok(m) => m,
                 Err(e) => {
                     println!(
@@ -510,7 +546,7 @@ fn synth(data: &Path) {
             );
             let (e, wj, wd) = joint_error(&mine.joints, &rig.joints);
             eprintln!(
-                "  rest joints {:.2}%, worst {} {:.1}%; {}",
+                "  rest frame {rest_frame:?} ({why}); rest joints {:.2}%, worst {} {:.1}%; {}",
                 100.0 * e / h,
                 Canonical::ALL[wj].name(),
                 100.0 * wd / h,

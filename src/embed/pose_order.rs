@@ -151,6 +151,67 @@ pub fn standing_first(frames: &[&[[f64; 3]]], descs: &[Vec<f64>], among: &[usize
     order.into_iter().map(|(_, i)| i).collect()
 }
 
+/// The number of nearest frames [`hold_radius`] asks of a capture of
+/// `frames` frames: about 3 % of them (5 of 175, a sixth of a second at
+/// 30 fps), at least 2 and at most 16, and fewer than the frames.
+pub fn hold_neighbours(frames: usize) -> usize {
+    (frames / 32).clamp(2, 16).min(frames.saturating_sub(1))
+}
+
+/// How long the capture holds each frame's pose: the distance from its
+/// descriptor to its `k`-th nearest among the other frames' (small for a
+/// pose held still over many frames, a capture's calibration stance;
+/// large for a pose passed through). 0 with `k` = 0; the farthest when
+/// fewer than `k` others. Depends on the set of poses alone, not their
+/// order. Cost O(F² K²) for F frames (samba's 175: 0.1 s).
+pub fn hold_radius(descs: &[Vec<f64>], k: usize) -> Vec<f64> {
+    use rayon::prelude::*;
+    descs
+        .par_iter()
+        .enumerate()
+        .map(|(i, a)| {
+            let mut d: Vec<f64> = descs
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, b)| distance2(a, b))
+                .collect();
+            if k == 0 || d.is_empty() {
+                return 0.0;
+            }
+            let at = (k - 1).min(d.len() - 1);
+            d.select_nth_unstable_by(at, f64::total_cmp).1.sqrt()
+        })
+        .collect()
+}
+
+/// The indices `among` ordered by how long the capture holds their pose
+/// ([`hold_radius`] with [`hold_neighbours`], the longest held first),
+/// those no less standing than the median of `among` ([`spread`]) before
+/// the others (a crouch held longer than the stance does not come
+/// first); ties: the lesser descriptor. On samba the still start (frames
+/// 4-10; its held end has the hands on the hips, a contact), on crane
+/// the A-pose start (frames 2-9), where [`standing_first`] chose a step
+/// of crane's walk (frame 86, a knee bent).
+pub fn held_first(frames: &[&[[f64; 3]]], descs: &[Vec<f64>], among: &[usize]) -> Vec<usize> {
+    let radius = hold_radius(descs, hold_neighbours(descs.len()));
+    let spreads: Vec<f64> = among.iter().map(|&i| spread(frames[i])).collect();
+    let mut sorted = spreads.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted.get(sorted.len().saturating_sub(1) / 2).copied();
+    let mut order: Vec<(bool, f64, usize)> = among
+        .iter()
+        .zip(&spreads)
+        .map(|(&i, &s)| (median.is_some_and(|m| s > m), radius[i], i))
+        .collect();
+    order.sort_by(|a, b| {
+        a.0.cmp(&b.0)
+            .then_with(|| a.1.total_cmp(&b.1))
+            .then_with(|| by_pose(&descs[a.2], &descs[b.2]))
+    });
+    order.into_iter().map(|(_, _, i)| i).collect()
+}
+
 /// The indices `among` ordered by their descriptor's distance from
 /// `pose` (nearest first; ties: the lesser descriptor).
 pub fn nearest(descs: &[Vec<f64>], pose: &[f64], among: &[usize]) -> Vec<usize> {
@@ -275,6 +336,37 @@ mod tests {
         assert_eq!(m[0], 4);
         assert!(median(&[]).is_empty());
         assert_eq!(quantiles(&descs[..1], &seed, 5).len(), 1);
+    }
+
+    #[test]
+    fn the_pose_held_longest_of_the_standing_half_comes_first_in_any_order() {
+        let p = poses();
+        // Pose 2 held for 5 frames, pose 6 (more bent) for 7, the others
+        // passed through once.
+        let mut take = vec![0, 1, 3, 4, 5, 7];
+        take.extend([2; 5]);
+        take.extend([6; 7]);
+        for perm in [0usize, 5, 11] {
+            let mut order = take.clone();
+            order.rotate_left(perm);
+            order.reverse();
+            let frames: Vec<&[[f64; 3]]> = order.iter().map(|&k| p[k].as_slice()).collect();
+            let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
+            let all: Vec<usize> = (0..frames.len()).collect();
+            let first = held_first(&frames, &descs, &all);
+            // The bent pose is held longer, but it is of the less standing
+            // half: the straighter held pose comes first.
+            assert_eq!(order[first[0]], 2, "{order:?}");
+            // Among the passed-through poses, none before a held one of
+            // its half.
+            assert!(first[..5].iter().all(|&i| order[i] == 2));
+        }
+        assert_eq!(hold_neighbours(175), 5);
+        assert_eq!(hold_neighbours(2), 1);
+        assert_eq!(hold_neighbours(10_000), 16);
+        let descs: Vec<Vec<f64>> = p.iter().map(|f| descriptor(f)).collect();
+        assert!(hold_radius(&descs, 0).iter().all(|&r| r == 0.0));
+        assert_eq!(hold_radius(&descs[..1], 3), vec![0.0]);
     }
 
     #[test]

@@ -10,11 +10,14 @@
 //! [`RestOptions::automatic`]) the order given plays no part: among the
 //! clearest frames, one chosen by its pose alone ([`PoseRule`]; by
 //! default the most standing with the limbs in,
-//! [`super::pose_order::spread`]: samba's still start), ties broken by
-//! pose. The mean pose was tried first: it chose samba's frame 119,
-//! mid-step, and the rig embedded there warned of wrists, ankles and toes
-//! 10-20 % apart; the most standing within the near slack (session 25)
-//! chose samba's frame 87.
+//! [`super::pose_order::spread`]; [`PoseRule::Held`], the pose the
+//! capture holds longest: samba's still start, crane's A-pose), ties
+//! broken by pose. The mean pose was tried first: it chose
+//! samba's frame 119, mid-step, and the rig embedded there warned of
+//! wrists, ankles and toes 10-20 % apart; the most standing within the
+//! near slack (session 25) chose samba's frame 87; the most standing
+//! (session 26, [`PoseRule::Standing`]) chose samba's still start but a
+//! step of crane's walk (frame 86).
 
 use super::contact::{ContactFinder, ContactOptions, FrameContacts};
 
@@ -52,6 +55,17 @@ pub struct RestOptions {
 /// touching vertices (the contact-clear ones when there are any).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PoseRule {
+    /// The pose the capture holds longest
+    /// ([`super::pose_order::held_first`]: the nearest frames in pose
+    /// closest), of the more standing half: a capture's still start or
+    /// end (samba's frames 4-10, arms hanging; crane's A-pose, frames
+    /// 2-9). An option (`SURFMOTION_AUTORIG=rest=held`):
+    /// [`PoseRule::Standing`] chose a step of crane's walk (frame 86, the
+    /// right knee bent), and the automatic rig on it put crane's right
+    /// knee 4.4 % of the height off the landmark rig's (0.1 / 2.2 % on
+    /// this rule's frame 5); see `AutoOptions::frames` for why it is not
+    /// the default.
+    Held,
     /// The most standing with the limbs in
     /// ([`super::pose_order::standing_first`]). The near count is not
     /// asked: samba's still start has its hands hanging beside the skirt
@@ -69,9 +83,11 @@ pub enum PoseRule {
 }
 
 impl PoseRule {
-    /// The rule named `name` (`standing`, `standing-near`, `median`).
+    /// The rule named `name` (`held`, `standing`, `standing-near`,
+    /// `median`).
     pub fn parse(name: &str) -> Option<PoseRule> {
         match name {
+            "held" => Some(PoseRule::Held),
             "standing" => Some(PoseRule::Standing),
             "standing-near" => Some(PoseRule::StandingNear),
             "median" => Some(PoseRule::NearestMedian),
@@ -83,7 +99,7 @@ impl PoseRule {
 impl RestOptions {
     /// The rule by pose for the automatic rig: [`PoseRule::Standing`]. Not
     /// `db init`'s default (`embed::auto::options::automatic_setup`; with
-    /// `SURFMOTION_AUTORIG=rest=standing`).
+    /// `SURFMOTION_AUTORIG=rest=standing`, or `rest=held`).
     pub fn automatic() -> RestOptions {
         RestOptions {
             by_pose: true,
@@ -217,6 +233,8 @@ pub fn choose_with(
         format!(
             "{} among those with {}: {} vertices near a surface-far one; frame 0 has {} ({} of {} frames have a contact)",
             match opts.pose_rule {
+                PoseRule::Held =>
+                    "the pose the capture holds longest, of the more standing half (`pose_order::held_first`)".to_string(),
                 PoseRule::Standing =>
                     "the frame most standing with the limbs in (`pose_order::spread`)".to_string(),
                 PoseRule::StandingNear => format!(
@@ -277,18 +295,19 @@ fn by_pose(
     slack: usize,
     opts: &RestOptions,
 ) -> (usize, usize) {
-    use super::pose_order::{descriptor, median, nearest, standing_first};
+    use super::pose_order::{descriptor, held_first, median, nearest, standing_first};
     let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
     let clearest: Vec<usize> = (0..found.len())
         .filter(|&f| found[f].touching == least)
         .collect();
     let mut examined = match opts.pose_rule {
+        PoseRule::Held => held_first(frames, &descs, &clearest),
         PoseRule::NearestMedian => nearest(&descs, &median(&descs), &clearest),
         PoseRule::Standing | PoseRule::StandingNear => standing_first(frames, &descs, &clearest),
     };
     let keep = match opts.pose_rule {
         PoseRule::StandingNear => opts.candidates.max(1),
-        PoseRule::Standing | PoseRule::NearestMedian => 1,
+        PoseRule::Held | PoseRule::Standing | PoseRule::NearestMedian => 1,
     };
     examined.truncate(keep);
     for &f in &examined {
@@ -380,7 +399,7 @@ mod tests {
         for order in [[0, 1, 2], [2, 0, 1], [1, 2, 0], [0, 2, 1]] {
             let frames: Vec<&[[f64; 3]]> = order.iter().map(|&k| poses[k].as_slice()).collect();
             let topo = Mesh::new(frames[0].to_vec(), mesh.triangles().to_vec()).unwrap();
-            for rule in [PoseRule::Standing, PoseRule::NearestMedian] {
+            for rule in [PoseRule::Held, PoseRule::Standing, PoseRule::NearestMedian] {
                 let opts = RestOptions {
                     pose_rule: rule,
                     ..RestOptions::automatic()
@@ -390,7 +409,7 @@ mod tests {
                 chosen.push((rule, frames[c.frame].to_vec()));
             }
         }
-        for rule in [PoseRule::Standing, PoseRule::NearestMedian] {
+        for rule in [PoseRule::Held, PoseRule::Standing, PoseRule::NearestMedian] {
             let mine: Vec<&Vec<[f64; 3]>> = chosen
                 .iter()
                 .filter(|(r, _)| *r == rule)

@@ -39,6 +39,8 @@ pub struct Body<'a> {
     pub seed: u32,
     /// The centroid.
     pub centre: DVec3,
+    /// Legs' hips at the thigh's end ([`super::options::AutoOptions::thigh_hip`]).
+    pub thigh_hip: bool,
 }
 
 /// The five chains' tips and the trunk they meet in.
@@ -119,7 +121,21 @@ impl Chains {
             .map_or(c.len(), |i| i + 1);
         let c = &c[..end];
         let entry = (end > 0 && self.trunk[c[end - 1].proximal as usize]).then(|| c[end - 1]);
-        let mut m = match_joints(c, &exp[..2], height, MIN_BEND_DEG, tol);
+        // Legs: the hip matched as the knee is, the end of the thigh's
+        // rigid part (the first crossing after the knee that bends, near
+        // the hip's distance); the limb's entry into the trunk only when
+        // none is. Crane's left leg enters the trunk at its sweater's
+        // hem, 0.71 of the height from the toe (y 1.06 m, 58 % of the
+        // height) past the thigh's end at 0.59 (y 0.91 m): the groin
+        // placed from that hip sat 15 cm above the landmark rig's, the
+        // pelvis 8 % of the height off (`autorig_eval real`, rest frame 0,
+        // frames by pose). An option (`AutoOptions::thigh_hip`): with it
+        // (rest frame by `PoseRule::Held`) crane's pelvis was still 5.0 %
+        // off.
+        let matched = if ring_knee && body.thigh_hip { 3 } else { 2 };
+        let mut m = match_joints(c, &exp[..matched], height, MIN_BEND_DEG, tol);
+        let hip = m.get(2).copied().flatten();
+        m.truncate(2);
         // A knee at the ring where the shin's rigid part ends: the fixed
         // point of the shin's motion and the part above is the knee only
         // when that part is the thigh; under a skirt it is a band of cloth
@@ -138,10 +154,12 @@ impl Chains {
             .iter()
             .flatten()
             .any(|x| Some(x.from_tip) == entry.map(|e| e.from_tip));
-        let root = entry.filter(|e| {
-            !used
-                && (e.from_tip - exp[2] * height).abs() <= 0.15 * height
-                && m.iter().flatten().all(|x| x.from_tip < e.from_tip)
+        let root = hip.or_else(|| {
+            entry.filter(|e| {
+                !used
+                    && (e.from_tip - exp[2] * height).abs() <= 0.15 * height
+                    && m.iter().flatten().all(|x| x.from_tip < e.from_tip)
+            })
         });
         m.push(root);
         (tip, p, m)

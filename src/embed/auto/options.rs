@@ -14,11 +14,23 @@ pub struct AutoOptions {
     /// Frames of the capture used. Default 40.
     pub max_frames: usize,
     /// Which frames the decomposition fits ([`FrameSample`]). Default
-    /// [`FrameSample::InOrder`]: as `db init`'s default (session 26's
-    /// build) [`FrameSample::PoseQuantiles`] with the rule by pose failed
-    /// `embed::auto_knees` (crane's right knee 4.4 % of the height from
-    /// the landmark rig, bound 3 %).
+    /// [`FrameSample::InOrder`]. With [`FrameSample::PoseQuantiles`] and
+    /// the rest frame by [`crate::embed::rest::PoseRule::Standing`]
+    /// (session 26) crane's right knee was 4.4 % of the height from the
+    /// landmark rig's: that rest frame is a step of crane's walk (frame
+    /// 86, the knee bent). With [`crate::embed::rest::PoseRule::Held`]
+    /// (crane's A-pose, frame 5) and [`AutoOptions::thigh_hip`] (session
+    /// 27's build with them as the default) crane's knees were 0.1 and
+    /// 2.2 %, but samba's rest frame moved from its frame 2 to 4 (both of
+    /// the still start) and its left elbow to 4.2 % (bound 3 %, r_knee
+    /// 2.7 %, joints 1.94 %): not the default.
     pub frames: FrameSample,
+    /// A leg's hip where its thigh's rigid part ends (the first crossing
+    /// after the knee that bends, near the hip's usual distance from the
+    /// toe), as the knee is found; else where the leg's path enters the
+    /// trunk. Default false (sessions 20-26's; `hip=thigh` in
+    /// [`AUTORIG_ENV`]).
+    pub thigh_hip: bool,
     /// The decomposition's settings.
     pub decompose: DecomposeOptions,
 }
@@ -29,6 +41,7 @@ impl Default for AutoOptions {
             rest_frame: None,
             max_frames: 40,
             frames: FrameSample::InOrder,
+            thigh_hip: false,
             decompose: DecomposeOptions::default(),
         }
     }
@@ -71,17 +84,18 @@ impl FrameSample {
 
 /// The environment variable that overrides `db init`'s automatic rig for
 /// measurements (as `SURFMOTION_SPARSE` does `db build`'s graph):
-/// comma-separated `rest=first|standing|standing-near|median`,
-/// `frames=in-order|farthest|quantiles`, `max=N`.
+/// comma-separated `rest=first|held|standing|standing-near|median`,
+/// `frames=in-order|farthest|quantiles`, `hip=thigh|trunk`, `max=N`.
 pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
 
 /// `db init`'s automatic rig: the rest frame's rule (main's,
 /// [`crate::embed::rest::RestOptions::default`]: a clear topology kept,
 /// else the first clear frame) and `auto`, with the measurement override
-/// [`AUTORIG_ENV`] applied when set (`rest=standing,frames=quantiles`:
-/// the rules by pose, [`crate::embed::rest::RestOptions::automatic`] and
-/// [`FrameSample::PoseQuantiles`], not the default: see
-/// [`AutoOptions::frames`]). `Err` names the pair that is not an option.
+/// [`AUTORIG_ENV`] applied when set (`rest=held,frames=quantiles,hip=thigh`:
+/// the rules by pose, [`crate::embed::rest::PoseRule::Held`],
+/// [`FrameSample::PoseQuantiles`] and [`AutoOptions::thigh_hip`], not the
+/// default: see [`AutoOptions::frames`]). `Err` names the pair that is not
+/// an option.
 pub fn automatic_setup(
     auto: &AutoOptions,
 ) -> Result<(crate::embed::rest::RestOptions, AutoOptions), String> {
@@ -103,7 +117,7 @@ pub fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|standing|standing-near|median, frames=in-order|farthest|quantiles, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles, hip=thigh|trunk, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -114,6 +128,8 @@ pub fn apply_override(
                 rule.pose_rule = PoseRule::parse(v).ok_or_else(bad)?;
             }
             "frames" => auto.frames = FrameSample::parse(v).ok_or_else(bad)?,
+            "hip" if v == "thigh" => auto.thigh_hip = true,
+            "hip" if v == "trunk" => auto.thigh_hip = false,
             "max" => {
                 auto.max_frames = v
                     .parse::<usize>()
@@ -176,7 +192,13 @@ mod tests {
         assert_eq!(auto.max_frames, 60);
         apply_override("rest=first", &mut rule, &mut auto).unwrap();
         assert!(!rule.by_pose);
-        for bad in ["rest=middle", "frames", "max=1", "sample=x"] {
+        assert!(!auto.thigh_hip);
+        apply_override("rest=held,hip=thigh", &mut rule, &mut auto).unwrap();
+        assert!(rule.by_pose && auto.thigh_hip);
+        assert_eq!(rule.pose_rule, PoseRule::Held);
+        apply_override("hip=trunk", &mut rule, &mut auto).unwrap();
+        assert!(!auto.thigh_hip);
+        for bad in ["rest=middle", "frames", "max=1", "sample=x", "hip=knee"] {
             let e = apply_override(bad, &mut rule, &mut auto).unwrap_err();
             assert!(e.contains(bad) && e.contains(AUTORIG_ENV), "{e}");
         }

@@ -308,6 +308,7 @@ fn find_body<'a>(
         height,
         seed,
         centre,
+        thigh_hip: opts.thigh_hip,
     };
     Ok((body, tips, notes))
 }

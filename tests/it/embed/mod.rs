@@ -4,6 +4,7 @@ mod auto;
 mod auto_arms;
 mod auto_contact;
 mod auto_hands;
+mod auto_held;
 mod auto_knees;
 mod auto_order;
 mod bodies;
