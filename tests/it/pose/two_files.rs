@@ -131,6 +131,40 @@
 //! (the CC rig's thighs and hips, above) and the pelvis's height on bent
 //! knees, not the root's travel.
 //!
+//! Session 27: the posture about the pelvis decomposed (scratch test and
+//! a switched kernel, not kept; main's kernel). `rel` on main 1.278 /
+//! 1.395 / 1.594 % (02_01 / 02_02 / 02_03). Per joint rotation: the BVH's
+//! result given the AMC result's rotation of one group (the chain from
+//! the pelvis re-built on the character), the drop of `rel`: the pelvis
+//! 0.34 / 0.37 / 0.35, spine 0.16 / 0.09 / 0.08, chest 0.18 / 0.32 / 0.32,
+//! neck and head 0.01-0.02, arms 0.01-0.05, thighs 0.20 / 0.18 / 0.31,
+//! shins 0.08-0.09, feet 0.03 / 0.02 / 0.12; the pelvis, spine and chest
+//! together 0.69 / 0.79 / 0.76 (0.59 / 0.61 / 0.83 left, all in the legs);
+//! the legs together 0.29 / 0.30 / 0.54; the results' heading 0.00-0.01.
+//! Per cause: (a) the reference: the AMC measured as the BVH is (its most
+//! neutral frame, the mean carriage) 1.250 / 1.018 / 1.234 (a share of
+//! 0.03 / 0.38 / 0.36; that rule alone moves the AMC's own result 0.34 /
+//! 0.64 / 0.58); (b) bone lengths: the BVH re-built on the AMC's
+//! proportions (scaled by the legs), its directions kept, 1.55 / 1.68 /
+//! 1.88, further (the levelling line and the mean carriage read lengths);
+//! (c) the hips inside the pelvis: the AMC's (scaled) at ±0.109, −0.114,
+//! +0.05 m in the frame of the hips' line and the spine, the CC rig's at
+//! ±0.097, −0.022, +0.006 (9 cm higher, 4.5 cm back); the AMC's hips put
+//! where the CC rig's are (knees kept) 1.161 / 1.237 / 1.439 (the upper
+//! body nearer through the pelvis's fit, the knees further), the BVH's
+//! where the AMC's are 1.82 / 1.98 / 2.25; (d) the spine's bend: over the
+//! frames the CC rig's pelvis → spine bone is pitched 18-20° from the
+//! AMC's, its spine → chest bone 11° the other way, the pelvis → chest
+//! line 2.6-3.5° apart. The pelvis's rotation from the frame of the hips'
+//! line and the spine bone (not the fit to the three directions, where the
+//! AMC's low hips weigh in its pitch and the CC rig's level hips do not):
+//! `rel` 1.127 / 1.182 / 1.376, abs 1.82 / 2.08 / 2.08 (the pelvis 2.15 /
+//! 2.43 / 2.13 is most of abs); from the hips' line and the pelvis →
+//! chest line 1.07 / 1.15 / 1.34, abs 1.82 / 2.09 / 2.08; neither gains
+//! with both files measured from a frame (1.248 / 1.011 / 1.231). Not kept:
+//! not run on the other groups. The mirrored pair (both files reflected
+//! left for right) gives the plain pair's figures to 1e-3 of the height.
+//!
 //! Earlier figures (measured 2026-11-29):
 //! - 01_01: the cgspeed BVH retargets as the AMC does (0.00 %).
 //! - The CC conversions: 3.1-4.2 % apart, 1.7-2.7 % of it posture. The
@@ -232,6 +266,66 @@ const TURNED: &str = "002_03 turned and rescaled";
 /// before it is read as usual) in the table of pairs.
 const RETIMED: &str = "002_03 re-timed to 24 fps";
 
+/// Stands for 02_03's AMC and CC BVH both mirrored left for right (each
+/// pose reflected across the sagittal plane, its left and right joints
+/// swapped, and the file joints' rotations with them) in the table of
+/// pairs.
+const MIRRORED: &str = "002_03 mirrored, with its AMC";
+
+/// The joint on the other side (itself for the torso's).
+fn other_side(c: C) -> C {
+    match c {
+        C::LShoulder => C::RShoulder,
+        C::LElbow => C::RElbow,
+        C::LWrist => C::RWrist,
+        C::LHip => C::RHip,
+        C::LKnee => C::RKnee,
+        C::LAnkle => C::RAnkle,
+        C::LToe => C::RToe,
+        C::RShoulder => C::LShoulder,
+        C::RElbow => C::LElbow,
+        C::RWrist => C::LWrist,
+        C::RHip => C::LHip,
+        C::RKnee => C::LKnee,
+        C::RAnkle => C::LAnkle,
+        C::RToe => C::LToe,
+        c => c,
+    }
+}
+
+/// `cp` mirrored across the plane x = 0 (the clip's, metres, Y up): each
+/// pose's joints reflected and swapped left for right, and the file
+/// joints' world rotations `R` with them (`M R M`, `M` the reflection: a
+/// quaternion's y and z negated).
+fn mirrored(mut cp: ClipPoses) -> ClipPoses {
+    let flip = |p: &Pose| {
+        let mut o = *p;
+        for c in Canonical::ALL {
+            let x = p[c.index()];
+            o[other_side(c).index()] = glam::DVec3::new(-x.x, x.y, x.z);
+        }
+        o
+    };
+    for p in cp.poses.iter_mut().chain([&mut cp.reference.pose]) {
+        *p = flip(p);
+    }
+    let rotations: Vec<_> = cp
+        .reference
+        .rotations
+        .iter()
+        .map(|w| {
+            let mut o = *w;
+            for c in Canonical::ALL {
+                o[other_side(c).index()] =
+                    w[c.index()].map(|q| DQuat::from_xyzw(q.x, -q.y, -q.z, q.w));
+            }
+            o
+        })
+        .collect();
+    cp.reference.rotations = rotations.into();
+    cp
+}
+
 /// `cp` turned by `q` and scaled by `k` about the origin: the poses, the
 /// reference's pose and the file joints' world rotations.
 fn turned(mut cp: ClipPoses, q: DQuat, k: f64) -> ClipPoses {
@@ -266,7 +360,7 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
     let character = detect_clip(&walk).unwrap().map.rest_pose(&walk).unwrap();
     let h = character[C::Head.index()].y - character[C::LToe.index()].y;
     // (AMC, BVH, abs limit, rel limit, pelvis limit): the figures reached
-    // (see the module docs), with a margin of 0.2 % of the height.
+    // (see the module docs), with a margin of 0.1 % of the height.
     let pairs = [
         (
             "cmu-amc/01/01_01.amc",
@@ -278,32 +372,36 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
         (
             "cmu-amc/02/02_01.amc",
             "cmu-bvh-ccrig/002_01.bvh",
-            0.020,
-            0.015,
-            0.024,
+            0.019,
+            0.0138,
+            0.0224,
         ),
         (
             "cmu-amc/02/02_02.amc",
             "cmu-bvh-ccrig/002_02.bvh",
-            0.023,
-            0.016,
-            0.027,
+            0.0216,
+            0.015,
+            0.0252,
         ),
         (
             "cmu-amc/02/02_03.amc",
             "cmu-bvh-ccrig/002_03.bvh",
-            0.0235,
-            0.018,
-            0.024,
+            0.022,
+            0.017,
+            0.0226,
         ),
         // The same conversion written again with every joint's rotation
         // channels in another order (X Y Z for the file's Z Y X): the same
         // rotations, so the same figures.
-        ("cmu-amc/02/02_03.amc", REORDERED, 0.0235, 0.018, 0.024),
+        ("cmu-amc/02/02_03.amc", REORDERED, 0.022, 0.017, 0.0226),
         // Turned 30° about the vertical and scaled by 1.37, the result
         // turned back: the same figures (asserted below to 1e-4 of the
         // height; the contact band is a fraction of the leg).
-        ("cmu-amc/02/02_03.amc", TURNED, 0.0235, 0.018, 0.024),
+        ("cmu-amc/02/02_03.amc", TURNED, 0.022, 0.017, 0.0226),
+        // Both files mirrored left for right: the same figures (asserted
+        // below to 0.1 % of the height; the character is the generated
+        // walk's, symmetric).
+        ("cmu-amc/02/02_03.amc", MIRRORED, 0.022, 0.017, 0.0226),
         // Re-timed: the BVH resampled to 24 fps, then to the 30 fps every
         // clip is read at, so its frames are interpolated twice (a run at
         // 24 fps loses its footfalls' detail: 3.28 % apart, 1.84 % about
@@ -314,7 +412,7 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
     let reordered = reordered_channels(&m.join("cmu-bvh-ccrig/002_03.bvh"));
     for (a, b, abs_max, rel_max, pelvis_max) in pairs {
         let mut amc = load_clip(&m.join(a), &Default::default()).unwrap();
-        let b_path = if b == TURNED || b == RETIMED {
+        let b_path = if b == TURNED || b == RETIMED || b == MIRRORED {
             m.join("cmu-bvh-ccrig/002_03.bvh")
         } else if b == REORDERED {
             reordered.clone()
@@ -336,6 +434,7 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
         // root (the kernel keeps the clip's heading of travel).
         let q = DQuat::from_rotation_y(30f64.to_radians());
         let c0 = character[C::Pelvis.index()] * glam::DVec3::new(1.0, 0.0, 1.0);
+        let mirror = b == MIRRORED;
         let on = |c: &Clip, turn: bool| -> (Vec<Pose>, f64, Vec<Pose>) {
             let c = c.try_resampled(30.0).unwrap();
             let map = detect_clip(&c).unwrap().map;
@@ -343,6 +442,9 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
             eprintln!("{a} vs {b}: reference {}", cp.reference.source);
             if turn {
                 cp = turned(cp, q, 1.37);
+            }
+            if mirror {
+                cp = mirrored(cp);
             }
             let out = retarget(&character, &cp.reference, &cp.poses)
                 .into_iter()
@@ -434,9 +536,17 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
     // scales with the leg (with a fixed 3 cm band the pelvis stood 1.28 %
     // of the height from the AMC's vertically instead of 1.17 %).
     let of = |b: &str| got.iter().find(|g| g.1 == b).map(|g| [g.2, g.3, g.4, g.10]);
-    let (Some(plain), Some(turned)) = (of("cmu-bvh-ccrig/002_03.bvh"), of(TURNED)) else {
+    let (Some(plain), Some(turned), Some(mirror)) =
+        (of("cmu-bvh-ccrig/002_03.bvh"), of(TURNED), of(MIRRORED))
+    else {
         panic!("the 02_03 pairs were not measured");
     };
+    // Mirrored: the same figures within 0.1 % of the height (the kernel
+    // has no side of its own).
+    assert!(
+        plain.iter().zip(&mirror).all(|(x, y)| (x - y).abs() < 1e-3),
+        "mirrored (abs, rel, pelvis, its vertical): {mirror:?} against {plain:?}"
+    );
     // Within 1e-4 of the height (the ground's levelling shrinks its slope
     // by a ridge in metres, which does not scale with the clip).
     assert!(
