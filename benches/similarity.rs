@@ -1,5 +1,6 @@
 //! Similarity stage on real data (samba, 175 frames, 10K vertices): the
-//! per-frame descriptors, the per-pair distances of each measure, the whole
+//! per-frame descriptors (and the first version's, which they equal bit for
+//! bit: the ratio is the binning's saving), the per-pair distances of each measure, the whole
 //! 175 × 175 shape matrix, and the transition search over it. Whole-database
 //! figures (1,000 frames) come from `surfmotion db build --json`, which
 //! reports descriptor and all-pairs times.
@@ -14,6 +15,7 @@ use surfmotion::embed::frames::{SkeletonKind, poses};
 use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::graph::transitions::{TransitionOptions, find};
 use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, ShapeScratch, describe};
+use surfmotion::similarity::histogram_reference;
 use surfmotion::similarity::{
     PairDistance, ShapeSet, SimilarityMatrix, SkeletonSet, Span, VertexSet, all_pairs,
 };
@@ -54,6 +56,23 @@ fn main() {
         let mut scratch = ShapeScratch::default();
         b.iter(|| {
             describe(
+                black_box(&pts),
+                rest.triangles(),
+                &grid,
+                &mut scratch,
+                &mut out,
+                &mut norms,
+            )
+        })
+    });
+    // The first version's binning, which `describe` equals bit for bit
+    // (issue 43, session 27): the ratio of the two is the saving.
+    g.bench_function("shape_describe_frame_first_version", |b| {
+        let mut out = vec![0.0; DESCRIPTOR_LEN];
+        let mut norms = [0.0; PHI_SUB];
+        let mut scratch = histogram_reference::Scratch::default();
+        b.iter(|| {
+            histogram_reference::describe(
                 black_box(&pts),
                 rest.triangles(),
                 &grid,

@@ -40,9 +40,9 @@ pub const RINGS: usize = R_BINS * THETA_BINS;
 /// Non-redundant DFT coefficients of a real signal of `PHI_BINS` samples.
 pub const FREQS: usize = PHI_BINS / 2 + 1;
 /// Rings padded to whole 4-lanes.
-const RING_PAD: usize = RINGS.div_ceil(4) * 4;
+pub(super) const RING_PAD: usize = RINGS.div_ceil(4) * 4;
 /// f32 values per sub-shift: `FREQS × (re, im) × RING_PAD`.
-const SUB_STRIDE: usize = FREQS * 2 * RING_PAD;
+pub(super) const SUB_STRIDE: usize = FREQS * 2 * RING_PAD;
 /// f32 values of one frame's descriptor.
 pub const DESCRIPTOR_LEN: usize = PHI_SUB * SUB_STRIDE;
 
@@ -94,6 +94,18 @@ pub fn describe(
 
 /// [`describe`] for weighted sample points (voxels, or area-weighted
 /// surface points), binned about their weighted centre.
+///
+/// Equal bit for bit to the first version
+/// ([`super::histogram_reference::describe_weighted`], which the cached
+/// similarities were computed with), at less cost: a sample's azimuth
+/// (`atan2`, the fine φ bin and its share) is computed again only when its
+/// horizontal offset from the centre changes — voxels come column by
+/// column ([`super::voxel::occupancy`]), so once per column, not per
+/// voxel —; the fine histogram is stored φ-major (`[fine φ][ring]`), so a
+/// column adds into two runs of 50 values; and the coarse re-binning
+/// ([`spectra`]) runs over all rings at once from a tap table made once.
+/// The additions into every bin happen in the same order as before, so the
+/// sums are the same.
 pub fn describe_weighted(
     points: &[(DVec3, f64)],
     grid: &ShapeGrid,
@@ -101,77 +113,147 @@ pub fn describe_weighted(
     out: &mut [f32],
     norms: &mut [f64; PHI_SUB],
 ) {
+    bin_fine(points, grid, fine);
+    spectra(fine, out, norms);
+}
+
+/// Fine φ bins.
+const NFINE: usize = PHI_BINS * PHI_SUB;
+
+/// A sample's share of the fine φ bins: bins `f0` and `f1 = f0 + 1`
+/// (circular), `ff` going to `f1`.
+#[derive(Debug, Clone, Copy)]
+struct Azimuth {
+    f0: usize,
+    f1: usize,
+    ff: f64,
+}
+
+impl Azimuth {
+    /// The azimuth of the offset `(dx, dz)` from the centre (φ measured
+    /// from +x towards −z), shared linearly between the two nearest fine
+    /// bin centres.
+    #[inline]
+    fn of(dx: f64, dz: f64) -> Azimuth {
+        let phi = (-dz).atan2(dx).rem_euclid(std::f64::consts::TAU);
+        let x = phi / std::f64::consts::TAU * NFINE as f64 - 0.5;
+        let xf = x.floor();
+        let f0 = (xf as i64).rem_euclid(NFINE as i64) as usize;
+        Azimuth {
+            f0,
+            f1: (f0 + 1) % NFINE,
+            ff: x - xf,
+        }
+    }
+}
+
+/// A value `x` in bin units shared linearly between the two nearest of
+/// `n` bin centres (clamped at the ends): `(i, i + 1, share of i + 1)`.
+/// The clamped value is not negative (or NaN, which both give 0), so its
+/// truncation is its floor: no library call.
+#[inline(always)]
+fn soft(x: f64, n: usize) -> (usize, usize, f64) {
+    let x = (x - 0.5).clamp(0.0, (n - 1) as f64);
+    let i = (x as usize).min(n - 1);
+    (i, (i + 1).min(n - 1), x - i as f64)
+}
+
+/// The fine histogram (`NFINE × RINGS`, φ-major, unit sum) of the weighted
+/// samples about their weighted centre, soft-binned in `r`, `θ` and fine
+/// `φ`: each sample is shared linearly between the two nearest bin centres
+/// of each, so the histogram varies continuously with the mesh and the
+/// voxel grid's aliasing (a sample crossing a bin edge) does not show as
+/// noise.
+fn bin_fine(points: &[(DVec3, f64)], grid: &ShapeGrid, fine: &mut Vec<f64>) {
     let mass: f64 = points.iter().map(|p| p.1).sum();
     let centre = points.iter().map(|(p, w)| *p * *w).sum::<DVec3>() / mass.max(f64::MIN_POSITIVE);
-    let nfine = PHI_BINS * PHI_SUB;
     fine.clear();
-    fine.resize(RINGS * nfine, 0.0);
+    fine.resize(RINGS * NFINE, 0.0);
     let unit = 1.0 / mass.max(f64::MIN_POSITIVE);
+    // The horizontal offset (bits) the azimuth was last computed for.
+    let mut last = None;
+    let mut az = Azimuth::of(0.0, 0.0);
     for (p, w) in points.iter() {
         let d = *p - centre;
+        let key = (d.x.to_bits(), d.z.to_bits());
+        if last != Some(key) {
+            az = Azimuth::of(d.x, d.z);
+            last = Some(key);
+        }
         let r = d.length();
         let theta = if r > 0.0 {
             (d.y / r).clamp(-1.0, 1.0).acos()
         } else {
             0.0
         };
-        let phi = (-d.z).atan2(d.x).rem_euclid(std::f64::consts::TAU);
-        // Soft binning: each sample is shared linearly between the two
-        // nearest bin centres in r, θ and fine φ, so the histogram varies
-        // continuously with the mesh and the voxel grid's aliasing (a
-        // sample crossing a bin edge) does not show as noise.
-        let [(r0, r1, fr), (t0, t1, ft)] = [
-            (r / grid.r_max * R_BINS as f64, R_BINS),
-            (theta / std::f64::consts::PI * THETA_BINS as f64, THETA_BINS),
-        ]
-        .map(|(x, n)| {
-            let x = (x - 0.5).clamp(0.0, (n - 1) as f64);
-            let i = (x.floor() as usize).min(n - 1);
-            (i, (i + 1).min(n - 1), x - i as f64)
-        });
-        let x = phi / std::f64::consts::TAU * nfine as f64 - 0.5;
-        let xf = x.floor();
-        let ff = x - xf;
-        let f0 = (xf as i64).rem_euclid(nfine as i64) as usize;
-        let f1 = (f0 + 1) % nfine;
+        let (r0, r1, fr) = soft(r / grid.r_max * R_BINS as f64, R_BINS);
+        let (t0, t1, ft) = soft(theta / std::f64::consts::PI * THETA_BINS as f64, THETA_BINS);
+        let (row0, row1) = (az.f0 * RINGS, az.f1 * RINGS);
         let m = unit * w;
         for (ri, wr) in [(r0, 1.0 - fr), (r1, fr)] {
             for (ti, wt) in [(t0, 1.0 - ft), (t1, ft)] {
-                let base = (ri * THETA_BINS + ti) * nfine;
+                let ring = ri * THETA_BINS + ti;
                 let v = m * wr * wt;
-                fine[base + f0] += v * (1.0 - ff);
-                fine[base + f1] += v * ff;
+                fine[row0 + ring] += v * (1.0 - az.ff);
+                fine[row1 + ring] += v * az.ff;
             }
         }
     }
+}
+
+/// Taps of the coarse re-binning: a coarse φ bin `c` of the histogram
+/// shifted by `s` fine bins is `Σ_t w_t · fine[(c · PHI_SUB + t − PHI_SUB/2
+/// − s) mod NFINE]` over `t < 2 · PHI_SUB`, with the hat weights `w_t`
+/// (linear interpolation between coarse bin centres, a partition of unity:
+/// a box would put a sharp, grid-aliased edge at every coarse φ boundary).
+const TAPS: usize = 2 * PHI_SUB;
+
+/// The hat weights `w_t` of [`TAPS`], computed as the first version did.
+fn tap_weights() -> [f64; TAPS] {
+    let sub = PHI_SUB as i64;
+    std::array::from_fn(|t| {
+        let i = t as i64 - sub / 2;
+        1.0 - ((i as f64 - (sub as f64 - 1.0) / 2.0) / sub as f64).abs()
+    })
+}
+
+/// Writes the descriptor (the DFT over coarse φ of each ring, for each of
+/// the `PHI_SUB` sub-shifts) of the fine histogram `fine` (φ-major) into
+/// `out`, and each sub-shift's squared norm (Parseval on the stored,
+/// rounded spectra) into `norms`. Every ring is done at once (the ring is
+/// the inner, contiguous index); each value is summed in the first
+/// version's order.
+fn spectra(fine: &[f64], out: &mut [f32], norms: &mut [f64; PHI_SUB]) {
     let (cos, sin) = dft_table();
+    let taps = tap_weights();
     out[..DESCRIPTOR_LEN].fill(0.0);
+    let mut coarse = [[0.0f64; RINGS]; PHI_BINS];
     for (s, norm) in norms.iter_mut().enumerate() {
-        let block = &mut out[s * SUB_STRIDE..(s + 1) * SUB_STRIDE];
-        for ring in 0..RINGS {
-            let f = &fine[ring * nfine..(ring + 1) * nfine];
-            // Shift by s fine bins and re-bin to coarse with a hat kernel
-            // (linear interpolation between coarse bin centres, a partition
-            // of unity): a box would put a sharp, grid-aliased edge at
-            // every coarse φ boundary.
-            let coarse: [f64; PHI_BINS] = std::array::from_fn(|c| {
-                let sub = PHI_SUB as i64;
-                (-sub / 2..sub + sub / 2)
-                    .map(|i| {
-                        let w = 1.0 - ((i as f64 - (sub as f64 - 1.0) / 2.0) / sub as f64).abs();
-                        let j = (c as i64 * sub + i - s as i64).rem_euclid(nfine as i64);
-                        w * f[j as usize]
-                    })
-                    .sum()
-            });
-            for k in 0..FREQS {
-                let (mut re, mut im) = (0.0, 0.0);
-                for (c, v) in coarse.iter().enumerate() {
-                    re += v * cos[k][c];
-                    im -= v * sin[k][c];
+        for (c, acc) in coarse.iter_mut().enumerate() {
+            // The empty sum of `Iterator::sum` for floats.
+            *acc = [-0.0; RINGS];
+            for (t, w) in taps.iter().enumerate() {
+                let j = (c * PHI_SUB + NFINE + t - PHI_SUB / 2 - s) % NFINE;
+                let row = &fine[j * RINGS..(j + 1) * RINGS];
+                for (a, f) in acc.iter_mut().zip(row) {
+                    *a += w * f;
                 }
-                block[(2 * k) * RING_PAD + ring] = re as f32;
-                block[(2 * k + 1) * RING_PAD + ring] = im as f32;
+            }
+        }
+        let block = &mut out[s * SUB_STRIDE..(s + 1) * SUB_STRIDE];
+        for k in 0..FREQS {
+            let mut re = [0.0f64; RINGS];
+            let mut im = [0.0f64; RINGS];
+            for (c, v) in coarse.iter().enumerate() {
+                let (ck, sk) = (cos[k][c], sin[k][c]);
+                for ring in 0..RINGS {
+                    re[ring] += v[ring] * ck;
+                    im[ring] -= v[ring] * sk;
+                }
+            }
+            for ring in 0..RINGS {
+                block[(2 * k) * RING_PAD + ring] = re[ring] as f32;
+                block[(2 * k + 1) * RING_PAD + ring] = im[ring] as f32;
             }
         }
         // Parseval on the stored (rounded) spectra.
@@ -212,7 +294,7 @@ pub fn magnitudes(desc: &[f32], out: &mut [f32]) {
 
 /// Weight of coefficient `k` in a sum over the full spectrum of a real
 /// signal: 1 for the DC and Nyquist terms, 2 for the others.
-fn freq_weight(k: usize) -> f64 {
+pub(super) fn freq_weight(k: usize) -> f64 {
     if k == 0 || 2 * k == PHI_BINS {
         1.0
     } else {
@@ -221,7 +303,7 @@ fn freq_weight(k: usize) -> f64 {
 }
 
 /// `cos(2π k c / N)`, `sin(2π k c / N)` for `k < FREQS`, `c < PHI_BINS`.
-fn dft_table() -> ([[f64; PHI_BINS]; FREQS], [[f64; PHI_BINS]; FREQS]) {
+pub(super) fn dft_table() -> ([[f64; PHI_BINS]; FREQS], [[f64; PHI_BINS]; FREQS]) {
     let mut cos = [[0.0; PHI_BINS]; FREQS];
     let mut sin = [[0.0; PHI_BINS]; FREQS];
     for k in 0..FREQS {
@@ -342,6 +424,7 @@ impl ShapeKernel {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::similarity::voxel::occupancy;
     use crate::synth::shapes::capsule_mesh;
     use glam::DQuat;
 
@@ -405,5 +488,79 @@ mod tests {
         );
         // Norms agree with the descriptor of the unshifted histogram.
         assert!(na.iter().all(|n| (n / na[0] - 1.0).abs() < 0.2));
+    }
+
+    /// The descriptor and norms of `points` by [`describe_weighted`] and by
+    /// the first version, as bits.
+    fn both(points: &[(DVec3, f64)], grid: &ShapeGrid) -> [(Vec<u32>, Vec<u64>); 2] {
+        let bits = |out: &[f32], norms: &[f64; PHI_SUB]| {
+            (
+                out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                norms.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            )
+        };
+        let (mut out, mut norms) = (vec![f32::NAN; DESCRIPTOR_LEN], [f64::NAN; PHI_SUB]);
+        describe_weighted(points, grid, &mut Vec::new(), &mut out, &mut norms);
+        let new = bits(&out, &norms);
+        let (mut out, mut norms) = (vec![f32::NAN; DESCRIPTOR_LEN], [f64::NAN; PHI_SUB]);
+        crate::similarity::histogram_reference::describe_weighted(
+            points,
+            grid,
+            &mut Vec::new(),
+            &mut out,
+            &mut norms,
+        );
+        [new, bits(&out, &norms)]
+    }
+
+    /// The cheaper binning (φ once per voxel column, φ-major fine bins, the
+    /// re-binning over all rings at once) gives the first version's
+    /// descriptors bit for bit — so no cached similarity or graph changes —
+    /// on voxels of a posed capsule turned (also by a fraction of a fine
+    /// bin), mirrored, rescaled, moved and in reversed order, and on
+    /// surface samples (the colour measure's, not in columns).
+    #[test]
+    fn cheaper_binning_equals_the_first_version_bit_for_bit() {
+        let m = capsule_mesh(0.15, 0.8, 32, 8);
+        let grid = ShapeGrid {
+            voxel: 0.02,
+            r_max: 0.8,
+        };
+        let mut sc = crate::similarity::voxel::VoxelScratch::default();
+        let variants: [&dyn Fn(DVec3) -> DVec3; 5] = [
+            &|v| v,
+            &|v| DQuat::from_rotation_y(0.0123) * v,
+            &|v| DVec3::new(-v.x, v.y, v.z),
+            &|v| v * 1.37 + DVec3::new(-2.1, 0.4, 7.3),
+            &|v| DQuat::from_rotation_x(0.4) * v * 0.61,
+        ];
+        let mut checked = 0;
+        for (k, f) in variants.iter().enumerate() {
+            for bend in [0.0, 0.3] {
+                let pts: Vec<DVec3> = posed(0.7 * k as f64, bend).into_iter().map(f).collect();
+                let mut voxels = Vec::new();
+                occupancy(&pts, m.triangles(), grid.voxel, &mut sc, |p, w| {
+                    voxels.push((p, w))
+                });
+                assert!(voxels.len() > 1000);
+                let [new, old] = both(&voxels, &grid);
+                assert!(new == old, "variant {k}, bend {bend}: voxels differ");
+                voxels.reverse();
+                let [new, old] = both(&voxels, &grid);
+                assert!(
+                    new == old,
+                    "variant {k}, bend {bend}: reversed voxels differ"
+                );
+                let mut samples = Vec::new();
+                crate::similarity::colour::surface_samples(&pts, m.triangles(), &mut samples);
+                let [new, old] = both(&samples, &grid);
+                assert!(
+                    new == old,
+                    "variant {k}, bend {bend}: surface samples differ"
+                );
+                checked += 3;
+            }
+        }
+        assert_eq!(checked, 30);
     }
 }

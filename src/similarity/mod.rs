@@ -10,6 +10,8 @@
 
 pub mod colour;
 pub mod histogram;
+#[doc(hidden)]
+pub mod histogram_reference;
 pub mod kdtree;
 pub mod lookup;
 pub mod matrix;

@@ -45,10 +45,10 @@ pub fn occupancy(
         hi = hi.max(*p);
     }
     // Column centres at (i + 0.5) h over the horizontal extent.
-    let i0 = (lo.x / h).floor() as i64;
-    let k0 = (lo.z / h).floor() as i64;
-    let ni = ((hi.x / h).floor() as i64 - i0 + 1).max(1) as usize;
-    let nk = ((hi.z / h).floor() as i64 - k0 + 1).max(1) as usize;
+    let i0 = floor_i64(lo.x / h);
+    let k0 = floor_i64(lo.z / h);
+    let ni = (floor_i64(hi.x / h) - i0 + 1).max(1) as usize;
+    let nk = (floor_i64(hi.z / h) - k0 + 1).max(1) as usize;
     let cx = |i: i64| (i as f64 + 0.5) * h;
     let xs = &mut scratch.crossings;
     xs.clear();
@@ -67,10 +67,10 @@ pub fn occupancy(
         let xmax = a.x.max(b.x).max(c.x);
         let zmin = a.z.min(b.z).min(c.z);
         let zmax = a.z.max(b.z).max(c.z);
-        let ia = ((xmin / h - 0.5).ceil() as i64).max(i0);
-        let ib = ((xmax / h - 0.5).floor() as i64).min(i0 + ni as i64 - 1);
-        let ka = ((zmin / h - 0.5).ceil() as i64).max(k0);
-        let kb = ((zmax / h - 0.5).floor() as i64).min(k0 + nk as i64 - 1);
+        let ia = ceil_i64(xmin / h - 0.5).max(i0);
+        let ib = floor_i64(xmax / h - 0.5).min(i0 + ni as i64 - 1);
+        let ka = ceil_i64(zmin / h - 0.5).max(k0);
+        let kb = floor_i64(zmax / h - 0.5).min(k0 + nk as i64 - 1);
         let edges = [(b, c), (c, a), (a, b)];
         for i in ia..=ib {
             let x = cx(i);
@@ -105,8 +105,8 @@ pub fn occupancy(
         let i = i0 + (col as usize / nk) as i64;
         let k = k0 + (col as usize % nk) as i64;
         let (x, z) = (cx(i), cx(k));
-        let ja = (y0 / h).floor() as i64;
-        let jb = (y1 / h).floor() as i64;
+        let ja = floor_i64(y0 / h);
+        let jb = floor_i64(y1 / h);
         for j in ja..=jb {
             let lo = (j as f64 * h).max(y0);
             let hi = ((j + 1) as f64 * h).min(y1);
@@ -153,6 +153,31 @@ pub fn occupancy(
         s = e;
     }
     total
+}
+
+/// `x.floor() as i64`, equal for every `x` (NaN 0, saturating at the
+/// ends), without the library call that `floor` is on a baseline x86-64
+/// build (no SSE4.1 `roundsd`): truncate, then step down if that rounded
+/// up. `t as f64` is exact wherever `x` has a fraction (|x| < 2⁵²).
+#[inline(always)]
+pub fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) > x {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
+/// `x.ceil() as i64`, equal for every `x`, as [`floor_i64`].
+#[inline(always)]
+pub fn ceil_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) < x {
+        t.saturating_add(1)
+    } else {
+        t
+    }
 }
 
 #[cfg(test)]
@@ -216,5 +241,44 @@ mod tests {
         let vol = n * h * h * h;
         let exact = std::f64::consts::PI * r * r * (len + 4.0 / 3.0 * r);
         assert!((vol / exact - 1.0).abs() < 0.03, "{vol} vs {exact}");
+    }
+
+    #[test]
+    fn floor_and_ceil_equal_the_library_ones() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            1.0 - f64::EPSILON,
+            -1.0 + f64::EPSILON,
+            2f64.powi(52) + 0.5,
+            -(2f64.powi(52)) - 0.5,
+            2f64.powi(53),
+            2f64.powi(63),
+            -(2f64.powi(63)),
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+        ];
+        // A deterministic spread of magnitudes and fractions.
+        let mut v = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..100_000 {
+            v ^= v << 13;
+            v ^= v >> 7;
+            v ^= v << 17;
+            let scale = 2f64.powi((v % 80) as i32 - 20);
+            xs.push(((v >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * scale);
+        }
+        for x in xs {
+            assert_eq!(floor_i64(x), x.floor() as i64, "floor {x:e}");
+            assert_eq!(ceil_i64(x), x.ceil() as i64, "ceil {x:e}");
+        }
     }
 }

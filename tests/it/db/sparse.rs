@@ -504,3 +504,137 @@ fn misses(
     ));
     out
 }
+
+/// The frames (every `step`th) of the real 4D capture `name`, with its
+/// triangles, and variants of each: as captured, mirrored (x → −x), turned
+/// 0.3 rad about the vertical and moved, rescaled by 1/100.
+fn capture_variants(
+    d: &Path,
+    name: &str,
+    step: usize,
+) -> (Vec<[u32; 3]>, Vec<glam::DVec3>, Vec<Vec<glam::DVec3>>) {
+    use glam::{DQuat, DVec3};
+    use surfmotion::mesh::io::{LoadOptions, load_sequence};
+    let path = d.join(format!("4d/{name}/{name}.pc2"));
+    let seq = load_sequence(path.to_str().unwrap(), &LoadOptions::default()).unwrap();
+    let tris = seq.mesh().triangles().to_vec();
+    let pts =
+        |i: usize| -> Vec<DVec3> { seq.frame(i).iter().map(|p| DVec3::from_array(*p)).collect() };
+    let turn = DQuat::from_rotation_y(0.3);
+    let variants: [&dyn Fn(DVec3) -> DVec3; 4] = [
+        &|v| v,
+        &|v| DVec3::new(-v.x, v.y, v.z),
+        &|v| turn * v + DVec3::new(0.37, 0.0, -1.9),
+        &|v| v * 0.01,
+    ];
+    let frames = (0..seq.frame_count())
+        .step_by(step)
+        .flat_map(|i| {
+            variants
+                .iter()
+                .map(move |f| pts(i).into_iter().map(f).collect())
+        })
+        .collect();
+    (tris, pts(0), frames)
+}
+
+/// Issue 43, session 27: the shape descriptor's cheaper binning (φ once
+/// per voxel column, φ-major fine bins, the coarse re-binning over all
+/// rings at once) equals the first version's bit for bit — every value and
+/// norm — on frames of both real 4D captures and their mirrored, turned,
+/// moved and rescaled variants; so no cached similarity or graph changes
+/// and the cache keys stay. (Mirrored frames are binned with the grid of
+/// the unmirrored rest frame: any grid must give equal bits.)
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn the_cheaper_descriptors_equal_the_first_versions_on_real_frames() {
+    use surfmotion::similarity::ShapeSet;
+    use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, ShapeScratch, describe};
+    use surfmotion::similarity::histogram_reference as reference;
+    let Some(d) = common::data_dir() else { return };
+    let mut checked = 0;
+    for (name, step) in [("samba", 7), ("crane", 9)] {
+        let (tris, rest, frames) = capture_variants(&d, name, step);
+        let grid = ShapeSet::grid_for(&rest, &tris);
+        let (mut scratch, mut vs) = (ShapeScratch::default(), Default::default());
+        for (k, f) in frames.iter().enumerate() {
+            let mut new = (vec![f32::NAN; DESCRIPTOR_LEN], [f64::NAN; PHI_SUB]);
+            let mut old = new.clone();
+            let nv = describe(f, &tris, &grid, &mut scratch, &mut new.0, &mut new.1);
+            let ov = reference::describe(f, &tris, &grid, &mut vs, &mut old.0, &mut old.1);
+            assert!(
+                nv > 1000.0 && nv.to_bits() == ov.to_bits(),
+                "{name} {k}: {nv} voxels, {ov}"
+            );
+            let differ = new
+                .0
+                .iter()
+                .zip(&old.0)
+                .filter(|(a, b)| a.to_bits() != b.to_bits());
+            assert_eq!(
+                differ.count(),
+                0,
+                "{name} frame variant {k}: descriptor values differ"
+            );
+            let norms = new
+                .1
+                .iter()
+                .zip(&old.1)
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(
+                norms,
+                "{name} frame variant {k}: norms {:?} vs {:?}",
+                new.1, old.1
+            );
+            checked += 1;
+        }
+    }
+    eprintln!("{checked} descriptors equal bit for bit");
+    assert!(checked > 100, "{checked}");
+}
+
+/// The per-frame CPU of the shape descriptor, the current binning against
+/// the first version (one thread, `CLOCK_THREAD_CPUTIME_ID`), on the samba
+/// capture's frames and their variants: `cargo test --release --test it
+/// db::sparse::descriptor_cost -- --ignored --nocapture` (ignored: a
+/// measurement, it asserts nothing; it needs the shared data).
+#[test]
+#[ignore = "measurement: prints the descriptor's CPU per frame; needs ../shared/data"]
+fn descriptor_cost_per_frame() {
+    use surfmotion::similarity::ShapeSet;
+    use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, ShapeScratch, describe};
+    use surfmotion::similarity::histogram_reference as reference;
+    let d = common::data_path();
+    let (tris, rest, frames) = capture_variants(&d, "samba", 1);
+    let grid = ShapeSet::grid_for(&rest, &tris);
+    let cpu = || {
+        let mut t = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: a valid clock id and a valid out-pointer.
+        unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+        t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64
+    };
+    let (mut out, mut norms) = (vec![0.0; DESCRIPTOR_LEN], [0.0; PHI_SUB]);
+    let (mut scratch, mut vs) = (ShapeScratch::default(), Default::default());
+    for round in 0..3 {
+        let t0 = cpu();
+        for f in &frames {
+            describe(f, &tris, &grid, &mut scratch, &mut out, &mut norms);
+        }
+        let t1 = cpu();
+        for f in &frames {
+            reference::describe(f, &tris, &grid, &mut vs, &mut out, &mut norms);
+        }
+        let t2 = cpu();
+        let n = frames.len() as f64;
+        println!(
+            "round {round}: {} frames: current {:.3} ms/frame, first version {:.3} ms/frame ({:.2}x)",
+            frames.len(),
+            1e3 * (t1 - t0) / n,
+            1e3 * (t2 - t1) / n,
+            (t2 - t1) / (t1 - t0)
+        );
+    }
+}
