@@ -176,6 +176,16 @@ pub struct DeformOptions {
     /// The rotations the fold repair reads "turned over" with
     /// ([`RepairTurns`]).
     pub repair_turns: RepairTurns,
+    /// Most repairs against the surface's own turns
+    /// ([`RepairTurns::SkinThenSurface`], [`RepairTurns::Surface`]), each
+    /// after reading the turns again off the frame as the last left it, each
+    /// after the first reaching one doubling of rings further around what is
+    /// still flagged; a frame stops at the first round that leaves nothing
+    /// facing against its own turns, so the rounds past it cost nothing.
+    /// Default 6 (session 26 ran 2 and left triangle-frames facing against
+    /// their own neighbourhoods: CMU 02_02 on the real samba capture 8,
+    /// 131_01 frame 96 3; README, issue 42).
+    pub surface_rounds: usize,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -211,9 +221,9 @@ pub enum RepairTurns {
     /// The skin's, then repairs of what is left turned over against the
     /// surface's own rotations ([`super::near_turns`]: each
     /// neighbourhood's best rigid alignment from the retrieved frame onto
-    /// the repaired one, read again after each repair, at most two
-    /// repairs), the test the surface measure makes against the rest
-    /// frame.
+    /// the repaired one, read again after each repair, at most
+    /// [`DeformOptions::surface_rounds`] repairs), the test the surface
+    /// measure makes against the rest frame.
     SkinThenSurface,
     /// The surface's own rotations only.
     Surface,
@@ -296,6 +306,7 @@ impl Default for DeformOptions {
             blend_taper: false,
             parent_seams: false,
             repair_turns: RepairTurns::default(),
+            surface_rounds: 6,
         }
     }
 }
