@@ -687,6 +687,10 @@ impl Deformer {
     /// neighbourhoods (`crate::tools::eval::triangles`): CMU 03_02 on samba, where
     /// nothing is left turned over either way, read 110 → 121 triangles
     /// turned over against the rest frame in its worst frame (s12-blocks3).
+    ///
+    /// `grow`: doublings of the patch's rings added to every pass
+    /// ([`Deformer::repair_surface`]'s later rounds; 0 for the skin's).
+    #[allow(clippy::too_many_arguments)]
     fn repair_against(
         &self,
         tris: &[[u32; 3]],
