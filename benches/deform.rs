@@ -73,18 +73,24 @@ fn main() {
         },
         ..Default::default()
     };
-    // The seam to the parent's own result and the repair finished against
-    // the surface's own turns (options, issue 42): their cost against the
-    // default's.
-    let surface = DeformOptions {
-        parent_seams: true,
-        repair_turns: RepairTurns::SkinThenSurface,
+    // The default up to session 26 (the seam read off the last region
+    // solved, the repair against the skin's turns only) and the default's
+    // seams with that repair: the surface repair's cost is the difference
+    // (issue 42).
+    let old = DeformOptions {
+        parent_seams: false,
+        repair_turns: RepairTurns::Skin,
+        ..Default::default()
+    };
+    let skin_repair = DeformOptions {
+        repair_turns: RepairTurns::Skin,
         ..Default::default()
     };
     for (name, opts) in [
         ("part_75_frames", DeformOptions::default()),
         ("part_no_repair_75_frames", no_repair),
-        ("part_surface_repair_75_frames", surface),
+        ("part_old_default_75_frames", old),
+        ("part_skin_repair_75_frames", skin_repair),
     ] {
         let def = Deformer::new(&ch, DeformMode::Part, &opts).unwrap();
         let mut ws = def.workspace();
@@ -125,10 +131,8 @@ fn main() {
         for (name, what) in [
             ("part_75_frames", "part"),
             ("part_no_repair_75_frames", "without the repair"),
-            (
-                "part_surface_repair_75_frames",
-                "parent seams and surface repair",
-            ),
+            ("part_old_default_75_frames", "the default up to session 26"),
+            ("part_skin_repair_75_frames", "the skin's repair only"),
         ] {
             if let Some(p) = med(name) {
                 let p = p / frames as f64;

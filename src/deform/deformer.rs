@@ -34,6 +34,9 @@ pub struct Deformer {
     repair_turns: RepairTurns,
     /// The surface's neighbourhoods (a repair with the surface's turns).
     near: Option<Neighbourhoods>,
+    /// Most repairs against the surface's turns
+    /// ([`DeformOptions::surface_rounds`]).
+    surface_rounds: usize,
     triangles: usize,
     regions: Vec<Region>,
     rest_pose: Pose,
@@ -96,6 +99,8 @@ pub struct DeformWorkspace {
     /// The surface's own rotations ([`RepairTurns`]) and one a seed.
     surface_turn: Vec<DQuat>,
     seeds: Vec<DQuat>,
+    /// The surface repair's frame that faced least against its own turns.
+    surface_best: Vec<[f64; 3]>,
 }
 
 impl DeformWorkspace {
@@ -139,6 +144,7 @@ impl Deformer {
             overlap_passes: opts.overlap_passes.max(1),
             repair_turns: opts.repair_turns,
             near: None,
+            surface_rounds: opts.surface_rounds,
             triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
             rest_pose: *ch.rest_pose(),
@@ -390,6 +396,7 @@ impl Deformer {
             work: unflip::Work::default(),
             surface_turn: vec![DQuat::IDENTITY; self.n],
             seeds: Vec::new(),
+            surface_best: vec![[0.0; 3]; self.n],
         }
     }
 
@@ -604,7 +611,7 @@ impl Deformer {
         let skin = std::mem::take(&mut ws.turn);
         let mut counts = match self.repair_turns {
             RepairTurns::Skin | RepairTurns::SkinThenSurface => {
-                self.repair_against(tris, adj, source, out, ws, &skin)
+                self.repair_against(tris, adj, source, out, ws, &skin, 0)
             }
             RepairTurns::Surface => TurnedOver {
                 before: unflip::turned_over(tris, source, out, &skin).len(),
@@ -622,11 +629,15 @@ impl Deformer {
 
     /// The repair against the surface's own turns: rounds of reading each
     /// neighbourhood's turn off the frame as it now is and repairing what
-    /// faces against it, until nothing does or [`SURFACE_ROUNDS`] repairs
-    /// have run. Returns the triangles left turned over against the turns
-    /// of the frame as it is left ([`super::near_turns::turned_over_near`],
-    /// what the tests count): a repair moves vertices, and with them the
-    /// turns it was read against.
+    /// faces against it, until nothing does or
+    /// [`DeformOptions::surface_rounds`] repairs have run. A repair moves
+    /// vertices, and with them the turns it was read against, so a round
+    /// can leave triangles that the next reading flags; each round after
+    /// the first lets the patch solve reach one doubling of rings further
+    /// around what is still flagged ([`Deformer::repair_against`]'s
+    /// `grow`). The frame left is the round's that faces least against its
+    /// own turns; returns that count
+    /// ([`super::near_turns::turned_over_near`], what the tests count).
     fn repair_surface(
         &self,
         near: &Neighbourhoods,
@@ -637,23 +648,28 @@ impl Deformer {
         ws: &mut DeformWorkspace,
     ) -> usize {
         let mut turn = std::mem::take(&mut ws.surface_turn);
-        let mut left = 0;
-        for round in 0..=SURFACE_ROUNDS {
+        let (mut least, mut last) = (usize::MAX, 0);
+        for round in 0..=self.surface_rounds {
             near.turns(source, out, &mut ws.seeds, &mut turn);
-            if round == SURFACE_ROUNDS {
-                left = unflip::turned_over(tris, source, out, &turn).len();
+            last = unflip::turned_over(tris, source, out, &turn).len();
+            if last == 0 {
+                least = 0;
                 break;
             }
-            if self
-                .repair_against(tris, adj, source, out, ws, &turn)
-                .before
-                == 0
-            {
+            if last < least {
+                least = last;
+                ws.surface_best.copy_from_slice(out);
+            }
+            if round == self.surface_rounds {
                 break;
             }
+            self.repair_against(tris, adj, source, out, ws, &turn, round);
+        }
+        if last > least {
+            out.copy_from_slice(&ws.surface_best);
         }
         ws.surface_turn = turn;
-        left
+        least
     }
 
     /// [`untangle::untangle`], then passes of [`unflip::unflip`] and
@@ -671,6 +687,10 @@ impl Deformer {
     /// neighbourhoods (`crate::tools::eval::triangles`): CMU 03_02 on samba, where
     /// nothing is left turned over either way, read 110 → 121 triangles
     /// turned over against the rest frame in its worst frame (s12-blocks3).
+    ///
+    /// `grow`: doublings of the patch's rings added to every pass
+    /// ([`Deformer::repair_surface`]'s later rounds; 0 for the skin's).
+    #[allow(clippy::too_many_arguments)]
     fn repair_against(
         &self,
         tris: &[[u32; 3]],
@@ -679,6 +699,7 @@ impl Deformer {
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
         turn: &[DQuat],
+        grow: usize,
     ) -> TurnedOver {
         let bad = unflip::turned_over(tris, source, out, turn);
         let before = bad.len();
@@ -706,6 +727,7 @@ impl Deformer {
             bad.clone(),
             &fixed,
             &mut budget,
+            grow,
         );
         ws.work = add_work(base, budget.done);
         if first == 0 || !adaptive {
@@ -727,6 +749,7 @@ impl Deformer {
             bad,
             &self.untangle,
             &mut budget,
+            grow,
         );
         ws.work = add_work(base, budget.done);
         if second >= first {
@@ -755,6 +778,7 @@ impl Deformer {
         mut bad: Vec<u32>,
         opts: &untangle::UntangleOptions,
         budget: &mut unflip::Budget,
+        grow: usize,
     ) -> usize {
         let mut best = bad.len();
         let mut best_bad = bad.clone();
@@ -773,9 +797,10 @@ impl Deformer {
         }
         for pass in 0..self.repair_passes.max(1) {
             // Each pass reaches one ring doubling further than the last, so
-            // a pass that starts again from the best state differs from it.
+            // a pass that starts again from the best state differs from it;
+            // `grow` doublings further still.
             let repair = unflip::RepairOptions {
-                rounds: self.repair.rounds + pass,
+                rounds: self.repair.rounds + grow + pass,
                 ..self.repair
             };
             bad = unflip::unflip_within(tris, adj, source, out, turn, bad, &repair, budget);
@@ -833,11 +858,6 @@ impl Deformer {
             })
     }
 }
-
-/// Repairs against the surface's own turns, each after reading them
-/// again ([`Deformer::repair_surface`]). Measured (session 26, CMU 02_02
-/// and 131_01 on the real samba capture): see README, issue 42.
-const SURFACE_ROUNDS: usize = 2;
 
 /// Two repairs' work added.
 fn add_work(a: unflip::Work, b: unflip::Work) -> unflip::Work {

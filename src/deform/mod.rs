@@ -19,8 +19,9 @@
 //! rotated by `Rᵀ`) and turned back, so one factorisation per part serves
 //! every pose. Parts are solved from the torso outwards; a vertex a child
 //! shares with its parent is constrained (strongly) to the parent's own
-//! result ([`DeformOptions::parent_seams`], an option; by default, to the last
-//! result solved there, which under a skirt is the other thigh's), the
+//! result ([`DeformOptions::parent_seams`], the default since session 27;
+//! off, to the last result solved there, which under a skirt is the other
+//! thigh's), the
 //! others to their LBS positions; the end of a region that reaches
 //! into a child part is held at LBS positions too
 //! ([`DeformOptions::hold_joints`]), so the joint is where the skeleton

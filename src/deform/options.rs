@@ -165,17 +165,27 @@ pub struct DeformOptions {
     /// left shin, solved after both thighs, is then tied to the *right*
     /// thigh's result under the skirt (session 23 measured the left shin
     /// 2-3 cm from its left thigh there, the right 0.02 cm).
-    /// Default false (the outputs of sessions up to 26). Alone (session 24)
-    /// it lowered the triangle-frames turned over before the repair (CMU
-    /// 02_02 on the real samba capture 5,837 → 4,845) but raised those
-    /// turned over against the rest frame after it (465 → 735): the repair
-    /// read "turned over" with the skin's turns, which under the skirt are
-    /// not the surface's. With [`RepairTurns::SkinThenSurface`], 465 → 55
-    /// (README, issue 42); not the default: see [`RepairTurns`].
+    /// Default true (session 27; false gives the outputs of sessions up to
+    /// 26). Alone (session 24) it lowered the triangle-frames turned over
+    /// before the repair (CMU 02_02 on the real samba capture 5,837 →
+    /// 4,845) but raised those turned over against the rest frame after it
+    /// (465 → 735): the repair read "turned over" with the skin's turns,
+    /// which under the skirt are not the surface's. With
+    /// [`RepairTurns::SkinThenSurface`], 465 → 55 (README, issue 42).
     pub parent_seams: bool,
     /// The rotations the fold repair reads "turned over" with
     /// ([`RepairTurns`]).
     pub repair_turns: RepairTurns,
+    /// Most repairs against the surface's own turns
+    /// ([`RepairTurns::SkinThenSurface`], [`RepairTurns::Surface`]), each
+    /// after reading the turns again off the frame as the last left it, each
+    /// after the first reaching one doubling of rings further around what is
+    /// still flagged; a frame stops at the first round that leaves nothing
+    /// facing against its own turns, so the rounds past it cost nothing.
+    /// Default 6 (session 26 ran 2 and left triangle-frames facing against
+    /// their own neighbourhoods: CMU 02_02 on the real samba capture 8,
+    /// 131_01 frame 96 3; README, issue 42).
+    pub surface_rounds: usize,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -193,27 +203,24 @@ pub struct DeformOptions {
 /// triangle-frames turned over against the rest frame after the repair,
 /// CMU 02_02 465 → 55, 131_02 1,067 → 118 (README, issue 42).
 ///
-/// Which reading a person sees: README, issue 42 (session 26). The
-/// deformation's tests still count with the skin's blend; the surface's
-/// own reading is [`super::near_turns::turned_over_near`].
+/// Which reading a person sees was settled by looking (session 26, README
+/// issue 42): the triangles only the skin's blend flags face with their
+/// surroundings on screen; those the surface's own turns flag are the
+/// visible folds. The deformation's tests count with
+/// [`super::near_turns::turned_over_near`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RepairTurns {
-    /// The skeleton's rotations blended by skin weight. The default: with
-    /// the second repair below as the default (session 26's build), CMU
-    /// 02_02 on samba left 8 triangle-frames facing against their own
-    /// neighbourhoods (`deform::a_walk_on_the_real_capture_turns_no_triangle_over`
-    /// judged by that reading) and 131_01 3 in frame 96
-    /// (`deform::a_real_retarget_keeps_every_vertex_in_its_ring`), so the
-    /// tests that read deformed surfaces did not pass with it.
-    #[default]
+    /// The skeleton's rotations blended by skin weight (the default up to
+    /// session 26): blind to folds where a vertex's bones turn apart.
     Skin,
-    /// The skin's, then repairs of what is left turned over against the
-    /// surface's own rotations ([`super::near_turns`]: each
-    /// neighbourhood's best rigid alignment from the retrieved frame onto
-    /// the repaired one, read again after each repair, at most two
-    /// repairs), the test the surface measure makes against the rest
-    /// frame.
+    /// The default (session 27): the skin's, then repairs of what is left
+    /// turned over against the surface's own rotations
+    /// ([`super::near_turns`]: each neighbourhood's best rigid alignment
+    /// from the retrieved frame onto the repaired one, read again after
+    /// each repair, at most [`DeformOptions::surface_rounds`] repairs), the
+    /// test the surface measure makes against the rest frame.
+    #[default]
     SkinThenSurface,
     /// The surface's own rotations only.
     Surface,
@@ -294,8 +301,9 @@ impl Default for DeformOptions {
             overlap_weight: 0.0,
             overlap_passes: 1,
             blend_taper: false,
-            parent_seams: false,
+            parent_seams: true,
             repair_turns: RepairTurns::default(),
+            surface_rounds: 6,
         }
     }
 }

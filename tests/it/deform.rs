@@ -83,13 +83,27 @@ fn run(ch: &Character, m: &MocapPoses, mode: DeformMode) -> Output {
 }
 
 /// Triangle-frames of `res` turned over relative to the frames `raw` they
-/// were made from: a normal opposing the source normal turned by the
-/// triangle's skin rotation (a triangle that merely turns with its limb
-/// does not count).
-fn turned_over(ch: &Character, raw: &Output, res: &Output) -> usize {
+/// were made from, read two ways: `surface`, a normal opposing the source
+/// normal turned by its neighbourhood's own rigid turn
+/// ([`surfmotion::deform::near_turns::SurfaceFolds`]: a fold as a person
+/// sees it, the reading the tests judge by, issue 42), and `skin`, turned
+/// by the skeleton's skin-blended rotation (blind where a vertex's bones
+/// turn apart, as the skirt between the thighs: a looser, second check).
+/// A triangle that merely turns with its limb counts in neither.
+#[derive(Debug, Clone, Copy)]
+struct Turned {
+    surface: usize,
+    skin: usize,
+}
+
+fn turned_over(ch: &Character, raw: &Output, res: &Output) -> Turned {
     let n = ch.n();
     let tris = ch.topology().triangles();
-    let mut count = 0;
+    let mut folds = surfmotion::deform::near_turns::SurfaceFolds::new(n, tris);
+    let mut count = Turned {
+        surface: 0,
+        skin: 0,
+    };
     let mut turn = vec![glam::DQuat::IDENTITY; n];
     for k in 0..raw.report.frames {
         let (a, b) = (
@@ -98,7 +112,8 @@ fn turned_over(ch: &Character, raw: &Output, res: &Output) -> usize {
         );
         let g = surfmotion::pose::pose_rotations(&ch.rig().frame_joints(a), &raw.query[k]);
         surfmotion::deform::unflip::skin_turns(&ch.rig().skin, &g, &mut turn);
-        count += surfmotion::deform::unflip::turned_over(tris, a, b, &turn).len();
+        count.skin += surfmotion::deform::unflip::turned_over(tris, a, b, &turn).len();
+        count.surface += folds.turned_over(tris, a, b).len();
     }
     count
 }
@@ -128,11 +143,12 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
         );
         let lbs = run(&ch, &m, DeformMode::Lbs);
         let flips = |res: &Output| turned_over(&ch, &raw, res);
-        let (f_part, f_lbs) = (flips(&part), flips(&lbs));
+        let (part_t, lbs_t) = (flips(&part), flips(&lbs));
+        let (f_part, f_lbs) = (part_t.surface, lbs_t.surface.max(lbs_t.skin));
         let total = raw.report.frames * tris.len();
         // Skinning folds the skirt between the legs (and the lunges of
         // 131_01 the hem at the knee); the repair and untangling leave no
-        // triangle turned over.
+        // triangle facing against its surroundings.
         assert!(f_lbs > 0, "{clip}: the query should fold LBS somewhere");
         assert_eq!(
             f_part, 0,
@@ -157,13 +173,20 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
             },
         )
         .unwrap();
-        let f_bare = flips(&bare);
+        let bare_t = flips(&bare);
+        let f_bare = bare_t.surface;
         assert!(
             f_bare > 0,
             "{clip}: the unrepaired solve turned nothing over"
         );
+        // The looser check: against the skin's blend the repair leaves
+        // fewer than the solve turned over.
+        assert!(
+            part_t.skin < bare_t.skin,
+            "{clip}: against the skin's turns {part_t:?} after the repair, {bare_t:?} before"
+        );
         eprintln!(
-            "{clip}: turned-over triangle-frames: part {f_part} (unrepaired {f_bare}), LBS {f_lbs} of {total}"
+            "{clip}: turned-over triangle-frames (surface, skin): part {part_t:?} (unrepaired {bare_t:?}), LBS {lbs_t:?} of {total}"
         );
         eprintln!("{clip}: mean joint error {e_raw:.4} m -> {e_part:.4} m");
         // The report counts the same triangles.
@@ -212,11 +235,19 @@ fn a_walk_on_the_real_capture_turns_no_triangle_over() {
     .unwrap();
     let [raw, part, lbs] =
         [DeformMode::None, DeformMode::Part, DeformMode::Lbs].map(|mode| run(&ch, &m, mode));
-    let (f_part, f_lbs) = (turned_over(&ch, &raw, &part), turned_over(&ch, &raw, &lbs));
-    assert!(f_lbs > 0);
-    assert_eq!(f_part, 0, "{f_part} triangle-frames turned over");
+    let (part_t, lbs_t) = (turned_over(&ch, &raw, &part), turned_over(&ch, &raw, &lbs));
+    assert!(lbs_t.surface.max(lbs_t.skin) > 0, "{lbs_t:?}");
+    assert_eq!(part_t.surface, 0, "{part_t:?} triangle-frames turned over");
+    // The looser check against the skin's blend (the thighs' turns under
+    // the skirt, which the cloth does not follow): fewer than the solve
+    // turned over.
+    assert!(
+        part_t.skin < part.report.turned_over.before,
+        "{part_t:?} against {} before the repair",
+        part.report.turned_over.before
+    );
     eprintln!(
-        "real samba, 02_02: turned over after the solve {}, after the repair {f_part}; LBS {f_lbs}",
+        "real samba, 02_02: turned over after the solve {}, after the repair {part_t:?}; LBS {lbs_t:?}",
         part.report.turned_over.before
     );
 }
