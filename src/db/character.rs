@@ -16,7 +16,7 @@
 
 use crate::db::build::{BuildOptions, BuildProgress, build_opened};
 use crate::db::frames::{CacheInputs, Conversion, FrameStore, open_or_build};
-use crate::db::skeletons::embed_rig;
+use crate::db::skeletons::embed_rig_with;
 use crate::db::{DbError, MANIFEST, Manifest};
 use crate::embed::Embedding;
 use crate::embed::frames::SkeletonKind;
@@ -105,7 +105,16 @@ impl Character {
         // The topology read once: the size check and the character share it.
         let (manifest, topology) = Manifest::open(dir)?;
         let (matrix, graph, _) = build_opened(dir, &manifest, &BuildOptions::default(), progress)?;
-        let rig = embed_rig(dir, &manifest, &topology)?;
+        // Only the frames the skin's motion fit reads are loaded (the graph's
+        // spans give each sequence's length).
+        let spans = graph.sequences();
+        let same = spans.len() == manifest.sequences.len()
+            && spans
+                .iter()
+                .zip(&manifest.sequences)
+                .all(|(a, b)| a.name == b.name);
+        let lens: Vec<usize> = spans.iter().map(|s| s.len).collect();
+        let rig = embed_rig_with(dir, &manifest, &topology, same.then_some(&lens[..]))?;
         let n = topology.vertex_count();
         let metres_per_unit = crate::mocap::units::parse_unit(&manifest.units)
             .map(|u| u.metres_per_unit)

@@ -36,6 +36,19 @@ pub struct SequenceSkeleton {
 
 /// Embeds the database's rig (landmarks, optionally with explicit parts).
 pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding, DbError> {
+    embed_rig_with(dir, m, topology, None)
+}
+
+/// [`embed_rig`] given each sequence's frame count (`lens`, in the
+/// manifest's order: a built graph's spans), so that only the frames the
+/// skin's motion fit reads are held, a sequence at a time
+/// ([`motion_frames`]); the same embedding.
+pub(crate) fn embed_rig_with(
+    dir: &Path,
+    m: &Manifest,
+    topology: &Mesh,
+    lens: Option<&[usize]>,
+) -> Result<Embedding, DbError> {
     let Some(lp) = &m.rig.landmarks else {
         if let Some(g) = &m.rig.gltf_skin {
             let g = Manifest::resolve(dir, g);
@@ -76,20 +89,65 @@ pub fn embed_rig(dir: &Path, m: &Manifest, topology: &Mesh) -> Result<Embedding,
     };
     // The skin weights are fitted to the sequences' motion (issue 41):
     // bone heat on one frame wires a contact into the weights.
-    let mut seqs = Vec::with_capacity(m.sequences.len());
-    for s in &m.sequences {
-        seqs.push(m.load_sequence(dir, s)?);
-    }
-    let frames: Vec<&[[f64; 3]]> = seqs
-        .iter()
-        .filter(|q| q.mesh().vertex_count() == n)
-        .flat_map(|q| (0..q.frame_count()).map(move |f| q.frame(f)))
-        .collect();
+    let kept = motion_frames(dir, m, n, lens)?;
+    let frames: Vec<&[[f64; 3]]> = kept.iter().map(|f| f.as_slice()).collect();
     match rest_frame(dir, m, topology)? {
         Some(rest) => Embedding::new_on_frame_moving(topology, &rest, &lm, parts, &frames)
             .map_err(DbError::Rig),
         None => Embedding::new_moving(topology, &lm, parts, &frames).map_err(DbError::Rig),
     }
+}
+
+/// The frames of the database the skin's motion fit reads
+/// ([`crate::embed::motion_weights::refine`]: of the frames with `n`
+/// vertices, every `step`-th from the first, `step` = ⌈frames /
+/// `max_frames`⌉), in order. With `lens` (each sequence's frame count) only
+/// those frames are kept, a sequence at a time, and `refine` takes every
+/// one of them (at most `max_frames`: its step is 1), so the fit is the same
+/// as on every frame; at 10⁴ frames of 10K vertices holding every frame
+/// took 2.3 GB (issue 43). Without `lens`, or when a sequence is not what
+/// `lens` says, every frame with `n` vertices (`refine` samples them).
+fn motion_frames(
+    dir: &Path,
+    m: &Manifest,
+    n: usize,
+    lens: Option<&[usize]>,
+) -> Result<Vec<Vec<[f64; 3]>>, DbError> {
+    let every = || -> Result<Vec<Vec<[f64; 3]>>, DbError> {
+        let mut all = Vec::new();
+        for s in &m.sequences {
+            let q = m.load_sequence(dir, s)?;
+            if q.mesh().vertex_count() == n {
+                all.extend((0..q.frame_count()).map(|f| q.frame(f).to_vec()));
+            }
+        }
+        Ok(all)
+    };
+    let Some(lens) = lens.filter(|l| l.len() == m.sequences.len()) else {
+        return every();
+    };
+    let max = crate::embed::motion_weights::MotionWeightOptions::default()
+        .max_frames
+        .max(1);
+    let step = lens.iter().sum::<usize>().div_ceil(max).max(1);
+    let mut kept = Vec::new();
+    let mut at = 0usize;
+    for (s, &len) in m.sequences.iter().zip(lens) {
+        let first = at.div_ceil(step) * step;
+        if first < at + len {
+            let q = m.load_sequence(dir, s)?;
+            if q.mesh().vertex_count() != n || q.frame_count() != len {
+                return every();
+            }
+            kept.extend(
+                (first..at + len)
+                    .step_by(step)
+                    .map(|g| q.frame(g - at).to_vec()),
+            );
+        }
+        at += len;
+    }
+    Ok(kept)
 }
 
 /// The positions of the manifest's `[rig] rest` frame (`SEQUENCE:FRAME`),
