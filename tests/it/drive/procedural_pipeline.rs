@@ -364,3 +364,17 @@ fn retarget_and_its_checks_run_the_pose_kernel_once_per_clip() {
     assert_eq!(runs, 1, "eval");
     assert!(report.unwrap().plausibility.is_some());
 }
+
+/// Issue 43: a loaded character embeds its rig from only the frames the
+/// skin's motion fit reads (at most 120, taken a sequence at a time with
+/// the graph's spans, not every frame of every sequence held at once); on
+/// a database of two sequences whose frames the fit samples, the rig is
+/// the one embedded from every frame (`db::skeletons::embed_rig`).
+#[test]
+fn the_rig_from_the_sampled_frames_is_the_rig_from_every_frame() {
+    let f = fixture();
+    let (m, topo) = surfmotion::db::Manifest::open(&f.db).unwrap();
+    assert!(m.sequences.len() >= 2 && f.ch.frame_count() > 120);
+    let full = surfmotion::db::skeletons::embed_rig(&f.db, &m, &topo).unwrap();
+    assert_eq!(f.ch.rig(), &full);
+}
