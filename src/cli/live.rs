@@ -150,55 +150,13 @@ pub enum Cmd {
     #[command(
         after_help = "Example:\n  surfmotion live --db samba_synth --bvh-tcp 127.0.0.1:7001 --until-idle 2 --report &\n  surfmotion live send 02_02.amc --to 127.0.0.1:7001 --protocol bvh\n  surfmotion live --db samba_synth --vmc --until-idle 2 --report &\n  surfmotion live send 02_02.amc --to 127.0.0.1:39539 --protocol vmc"
     )]
-    Send(SendArgs),
-}
-
-/// Arguments of `live send`.
-#[derive(clap::Args)]
-pub struct SendArgs {
-    /// The clip (any format `retarget` reads).
-    pub clip: PathBuf,
-    /// The receiver.
-    #[arg(long, value_name = "ADDR:PORT")]
-    pub to: std::net::SocketAddr,
-    /// The protocol: bvh (BVH over TCP: the clip's own skeleton), vmc (OSC
-    /// over UDP: the canonical joints as Unity humanoid bones, local
-    /// transforms) or rokoko (Rokoko Studio Live JSON over UDP: the
-    /// canonical joints as its body joints, world transforms). Over UDP the
-    /// clip's neutral pose goes along (an extension other receivers ignore),
-    /// so `live` takes the same reference as `--replay`.
-    #[arg(long, default_value = "bvh", value_parser = ["bvh", "vmc", "rokoko"])]
-    pub protocol: String,
-    /// Resample the clip to this rate before sending (default: its own).
-    #[arg(long, value_name = "FPS", value_parser = super::frame_rate)]
-    pub fps: Option<f64>,
-    /// Speed: 1 sends at the clip's real rate, 0 as fast as the socket takes.
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = super::non_negative)]
-    pub speed: f64,
-    #[command(flatten)]
-    pub clip_opts: super::opts::ClipOpts,
-}
-
-/// Runs `live send`.
-fn send(a: SendArgs) -> anyhow::Result<()> {
-    use surfmotion::live::send::{UdpProtocol, send_bvh, send_udp};
-    let load = a.clip_opts.load_options()?;
-    let r = match a.protocol.as_str() {
-        "vmc" => send_udp(&a.clip, a.to, UdpProtocol::Vmc, &load, a.fps, a.speed)?,
-        "rokoko" => send_udp(&a.clip, a.to, UdpProtocol::Rokoko, &load, a.fps, a.speed)?,
-        _ => send_bvh(&a.clip, a.to, &load, a.fps, a.speed)?,
-    };
-    println!(
-        "sent {} frames at {:.1} fps to {} ({}) in {:.2} s",
-        r.frames, r.fps, a.to, a.protocol, r.seconds
-    );
-    Ok(())
+    Send(super::live_send::SendArgs),
 }
 
 /// Runs `live`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(Cmd::Send(s)) = a.send {
-        return send(s);
+        return super::live_send::run(s);
     }
     let db =
         a.db.clone()

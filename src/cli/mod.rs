@@ -15,6 +15,7 @@ mod graph;
 mod inspect;
 mod keyframe;
 mod live;
+mod live_send;
 mod log;
 mod mesh;
 mod mocap;
