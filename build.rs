@@ -15,17 +15,81 @@
 //!   as changed on every build, which would rebuild the whole crate each time.
 //!   When the data appears after such a build, `tests/it/hygiene/data_gate.rs` fails and
 //!   says to `touch build.rs` (or set `SURFMOTION_DATA`).
+//!
+//! It also sets `SURFMOTION_RIG_SOURCE`, a fingerprint of the sources a
+//! database's rig is embedded by ([`RIG_SOURCES`]): the rig cache of a
+//! loaded character (`src/db/rig_cache.rs`) carries it in its key, so a
+//! change to the embedding's code embeds the rig again instead of reading
+//! the rig of the old code.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+/// The files and folders whose bytes the rig cache's key covers: the
+/// embedding and everything it calls (meshes and their solvers, poses,
+/// clips and units, the rig readers, file helpers), the database code that
+/// runs it, and the locked versions of the numerical crates.
+const RIG_SOURCES: &[&str] = &[
+    "src/embed",
+    "src/rig",
+    "src/mesh",
+    "src/pose",
+    "src/mocap",
+    "src/util",
+    "src/db/skeletons.rs",
+    "src/db/manifest.rs",
+    "src/db/rig_cache.rs",
+    "Cargo.lock",
+];
+
+/// Every file under `p` (or `p` itself), in no particular order.
+fn files_under(p: &Path, out: &mut Vec<PathBuf>) {
+    if p.is_dir() {
+        for e in std::fs::read_dir(p).into_iter().flatten().flatten() {
+            files_under(&e.path(), out);
+        }
+    } else if p.is_file() {
+        out.push(p.to_path_buf());
+    }
+}
+
+/// FNV-1a (64 bit) of the [`RIG_SOURCES`]' relative paths and bytes, in
+/// path order; each is watched, so an edit reruns this script.
+fn rig_source_fingerprint(root: &Path) -> u64 {
+    let mut files = Vec::new();
+    for s in RIG_SOURCES {
+        println!("cargo::rerun-if-changed={s}");
+        files_under(&root.join(s), &mut files);
+    }
+    files.sort();
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut feed = |bytes: &[u8]| {
+        for &b in bytes {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for f in files {
+        let rel = f.strip_prefix(root).unwrap_or(&f);
+        feed(rel.to_string_lossy().as_bytes());
+        feed(&[0]);
+        let bytes = std::fs::read(&f).unwrap_or_default();
+        feed(&(bytes.len() as u64).to_le_bytes());
+        feed(&bytes);
+    }
+    h
+}
 
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(no_shared_data)");
     println!("cargo::rerun-if-changed=build.rs");
+    let root = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").unwrap_or_default());
+    println!(
+        "cargo::rustc-env=SURFMOTION_RIG_SOURCE={:016x}",
+        rig_source_fingerprint(&root)
+    );
     println!("cargo::rerun-if-env-changed=SURFMOTION_DATA");
     let dir = match std::env::var_os("SURFMOTION_DATA") {
         Some(p) => PathBuf::from(p),
-        None => PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").unwrap_or_default())
-            .join("../shared/data"),
+        None => root.join("../shared/data"),
     };
     let marker = dir.join("README.md");
     if marker.is_file() {

@@ -16,7 +16,7 @@
 
 use crate::db::build::{BuildOptions, BuildProgress, build_opened};
 use crate::db::frames::{CacheInputs, Conversion, FrameStore, open_or_build};
-use crate::db::skeletons::embed_rig_with;
+use crate::db::rig_cache::{RigSource, embed_rig_cached};
 use crate::db::{DbError, MANIFEST, Manifest};
 use crate::embed::Embedding;
 use crate::embed::frames::SkeletonKind;
@@ -87,6 +87,8 @@ pub struct Character {
     /// The key of the frames, the rig and the skeleton kind (the skeleton
     /// cache's).
     cache_key: u64,
+    /// Whether the rig was read from the database's cache.
+    rig_source: RigSource,
 }
 
 impl Character {
@@ -105,8 +107,10 @@ impl Character {
         // The topology read once: the size check and the character share it.
         let (manifest, topology) = Manifest::open(dir)?;
         let (matrix, graph, _) = build_opened(dir, &manifest, &BuildOptions::default(), progress)?;
-        // Only the frames the skin's motion fit reads are loaded (the graph's
-        // spans give each sequence's length).
+        // The rig from the cache (`cache/rig.json`) when it is current, else
+        // embedded from only the frames the skin's motion fit reads (the
+        // graph's spans give each sequence's length) and cached: a load with
+        // its caches current reads no sequence file (issue 43).
         let spans = graph.sequences();
         let same = spans.len() == manifest.sequences.len()
             && spans
@@ -114,7 +118,8 @@ impl Character {
                 .zip(&manifest.sequences)
                 .all(|(a, b)| a.name == b.name);
         let lens: Vec<usize> = spans.iter().map(|s| s.len).collect();
-        let rig = embed_rig_with(dir, &manifest, &topology, same.then_some(&lens[..]))?;
+        let (rig, rig_source) =
+            embed_rig_cached(dir, &manifest, &topology, same.then_some(&lens[..]))?;
         let n = topology.vertex_count();
         let metres_per_unit = crate::mocap::units::parse_unit(&manifest.units)
             .map(|u| u.metres_per_unit)
@@ -209,6 +214,7 @@ impl Character {
             z_up,
             dir: dir.to_path_buf(),
             cache_key,
+            rig_source,
         })
     }
 
@@ -223,6 +229,12 @@ impl Character {
     /// its key includes this one.
     pub(crate) fn cache_key(&self) -> u64 {
         self.cache_key
+    }
+
+    /// Whether the rig was read from the database's rig cache
+    /// ([`crate::db::rig_cache`]) or embedded by this load.
+    pub fn rig_source(&self) -> RigSource {
+        self.rig_source
     }
 
     /// The manifest.

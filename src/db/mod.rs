@@ -1,5 +1,5 @@
 //! Character databases: the manifest and what it points to, per-frame
-//! skeletons, the cached similarity matrix and Surface Motion Graph, and
+//! skeletons, the cached similarity matrix, Surface Motion Graph and rig, and
 //! the [`Character`] they load into for synthesis.
 
 pub mod build;
@@ -9,6 +9,7 @@ pub mod content;
 pub mod frames;
 pub mod init;
 pub mod manifest;
+pub mod rig_cache;
 pub mod skeletons;
 
 pub use crate::graph::{FlatFrame, FrameId};

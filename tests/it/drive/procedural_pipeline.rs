@@ -378,3 +378,226 @@ fn the_rig_from_the_sampled_frames_is_the_rig_from_every_frame() {
     let full = surfmotion::db::skeletons::embed_rig(&f.db, &m, &topo).unwrap();
     assert_eq!(f.ch.rig(), &full);
 }
+
+/// Runs `f` and returns what it gave with the warnings logged on this
+/// thread meanwhile (their text).
+fn warnings_of<T>(f: impl FnOnce() -> T) -> (T, Vec<String>) {
+    use std::fmt::Write as _;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    use std::sync::{Arc, Mutex};
+    use tracing::span::{Attributes, Id, Record};
+    struct Text<'a>(&'a mut String);
+    impl tracing::field::Visit for Text<'_> {
+        fn record_debug(&mut self, _: &tracing::field::Field, v: &dyn std::fmt::Debug) {
+            let _ = write!(self.0, "{v:?} ");
+        }
+    }
+    struct Log(Arc<Mutex<Vec<String>>>, AtomicU64);
+    impl tracing::Subscriber for Log {
+        fn enabled(&self, m: &tracing::Metadata<'_>) -> bool {
+            *m.level() <= tracing::Level::WARN
+        }
+        fn new_span(&self, _: &Attributes<'_>) -> Id {
+            Id::from_u64(self.1.fetch_add(1, Ordering::Relaxed) + 1)
+        }
+        fn record(&self, _: &Id, _: &Record<'_>) {}
+        fn record_follows_from(&self, _: &Id, _: &Id) {}
+        fn event(&self, e: &tracing::Event<'_>) {
+            let mut s = String::new();
+            e.record(&mut Text(&mut s));
+            self.0.lock().unwrap().push(s);
+        }
+        fn enter(&self, _: &Id) {}
+        fn exit(&self, _: &Id) {}
+    }
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let out = tracing::subscriber::with_default(Log(log.clone(), AtomicU64::new(0)), f);
+    let got = log.lock().unwrap().clone();
+    (out, got)
+}
+
+/// A copy of the fixture's database without its rig cache, in a temporary
+/// folder.
+fn database_copy() -> (tempfile::TempDir, std::path::PathBuf) {
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    copy_dir(&fixture().db, &db);
+    let _ = std::fs::remove_file(surfmotion::db::rig_cache::rig_path(&db));
+    (tmp, db)
+}
+
+/// Issue 43: a loaded character's rig (joints, parts, skin weights,
+/// regressors) is cached in its database: the first load embeds and writes
+/// it, the second reads it and gives the same character — the rig equal
+/// to the first load's and to one embedded from every frame, the same
+/// skeletons of every frame — without writing the cache again.
+#[test]
+fn a_second_load_reads_the_cached_rig_and_gives_the_same_character() {
+    use surfmotion::db::rig_cache::{RigSource, rig_path};
+    let (_tmp, db) = database_copy();
+    let first = Character::load(&db, &Quiet).unwrap();
+    assert_eq!(first.rig_source(), RigSource::Embedded);
+    let written = std::fs::read(rig_path(&db)).unwrap();
+    let stamp = std::fs::metadata(rig_path(&db))
+        .unwrap()
+        .modified()
+        .unwrap();
+    let (second, warnings) = warnings_of(|| Character::load(&db, &Quiet).unwrap());
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_eq!(second.rig_source(), RigSource::Cached);
+    assert_eq!(second.rig(), first.rig());
+    assert_eq!(second.rig(), fixture().ch.rig());
+    let (m, topo) = surfmotion::db::Manifest::open(&db).unwrap();
+    let full = surfmotion::db::skeletons::embed_rig(&db, &m, &topo).unwrap();
+    assert_eq!(second.rig(), &full);
+    assert_eq!(second.rig().skin, full.skin, "the skin weights");
+    assert_eq!(second.poses(), first.poses());
+    assert_eq!(std::fs::read(rig_path(&db)).unwrap(), written);
+    assert_eq!(
+        std::fs::metadata(rig_path(&db))
+            .unwrap()
+            .modified()
+            .unwrap(),
+        stamp,
+        "the cache was written again"
+    );
+}
+
+/// Issue 43: a rig cache that cannot be trusted — a digit of its rig
+/// changed (same length), cut short, of another key, a consistent forgery
+/// (checksum mended) whose rig has another vertex count, an empty file,
+/// not a cache at all — is refused with a warning naming the file, the rig
+/// embedded again (equal to the good one) and the cache written again
+/// byte for byte as it was.
+#[test]
+fn a_changed_cut_or_foreign_rig_cache_is_embedded_again() {
+    use surfmotion::db::rig_cache::{RigSource, rig_path};
+    let (_tmp, db) = database_copy();
+    let good_rig = Character::load(&db, &Quiet).unwrap().rig().clone();
+    let path = rig_path(&db);
+    let good = std::fs::read(&path).unwrap();
+    let nl = good.iter().position(|&b| b == b'\n').unwrap();
+    let (head, body) = (&good[..nl], &good[nl + 1..]);
+    let head_text = std::str::from_utf8(head).unwrap();
+    // A digit of the height changed in place.
+    let mut digit = good.clone();
+    let h = nl
+        + 1
+        + std::str::from_utf8(body)
+            .unwrap()
+            .find("\"height\":")
+            .unwrap()
+        + 9;
+    let at = h + digit[h..].iter().position(|b| b.is_ascii_digit()).unwrap();
+    digit[at] = if digit[at] == b'1' { b'2' } else { b'1' };
+    // Another key in the header.
+    let key = &head_text[head_text.find("\"key\":\"").unwrap() + 7..][..16];
+    let other_key = head_text.replace(key, "0123456789abcdef");
+    let mut foreign = other_key.into_bytes();
+    foreign.push(b'\n');
+    foreign.extend_from_slice(body);
+    // A forgery with its checksum mended: the rig of one more vertex.
+    let mut rig: serde_json::Value = serde_json::from_slice(body).unwrap();
+    rig["vertex_count"] = (good_rig.vertex_count + 1).into();
+    let forged_body = serde_json::to_vec(&rig).unwrap();
+    let forged_head = format!(
+        "{{\"format\":\"surfmotion rig cache 1\",\"key\":\"{key}\",\"bytes\":{},\"xxh3\":\"{:016x}\"}}\n",
+        forged_body.len(),
+        xxhash_rust::xxh3::xxh3_64(&forged_body)
+    );
+    let forged = [forged_head.into_bytes(), forged_body].concat();
+    let variants: Vec<(&str, Vec<u8>)> = vec![
+        ("a digit changed", digit),
+        ("cut short", good[..good.len() - 100].to_vec()),
+        ("cut in its header", good[..nl / 2].to_vec()),
+        ("another key", foreign),
+        ("forged, another vertex count", forged),
+        ("empty", Vec::new()),
+        ("not a cache", b"{\"skin\": []}\nhello".to_vec()),
+    ];
+    for (what, bytes) in variants {
+        std::fs::write(&path, &bytes).unwrap();
+        let (ch, warnings) = warnings_of(|| Character::load(&db, &Quiet).unwrap());
+        assert_eq!(ch.rig_source(), RigSource::Embedded, "{what}");
+        assert_eq!(ch.rig(), &good_rig, "{what}");
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.contains("rig.json") && w.contains("embedding the rig again")),
+            "{what}: {warnings:?}"
+        );
+        assert!(
+            std::fs::read(&path).unwrap() == good,
+            "{what}: not rewritten"
+        );
+        let again = Character::load(&db, &Quiet).unwrap();
+        assert_eq!(again.rig_source(), RigSource::Cached, "{what}");
+    }
+}
+
+/// The bytes this process has read through `read` and its kin
+/// (`/proc/self/io`'s `rchar`; pages of a memory-mapped file are not
+/// counted).
+#[cfg(target_os = "linux")]
+fn bytes_read() -> u64 {
+    let io = std::fs::read_to_string("/proc/self/io").unwrap();
+    io.lines()
+        .find_map(|l| l.strip_prefix("rchar: "))
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap()
+}
+
+/// Issue 43 (the 10⁴-frame retarget read all 1.2 GB of its sequences on
+/// every load, for the rig's skin fit): once its caches are written, a
+/// load of the samba capture reads less than half its sequence file's
+/// bytes in all (21 MB; the first load reads it at least once; what a
+/// cached load reads is the topology, hashed into the caches' keys, and
+/// the caches: 3.5 MB), and its rig and frames are the first load's.
+/// Counted by the process's read bytes, so it runs alone in a process of
+/// its own.
+#[cfg(target_os = "linux")]
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn a_second_load_of_the_samba_capture_reads_no_sequence_file() {
+    let Some(d) = common::data_dir() else { return };
+    if !common::alone_in_process(
+        module_path!(),
+        "a_second_load_of_the_samba_capture_reads_no_sequence_file",
+    ) {
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let db = tmp.path().join("db");
+    std::fs::create_dir_all(&db).unwrap();
+    let pc2 = d.join("4d/samba/samba.pc2");
+    let landmarks =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
+    let toml = format!(
+        "name = \"samba\"\ntopology = {:?}\nfps = 30.0\nunits = \"m\"\nup = \"y\"\n\n[[sequence]]\nname = \"dance\"\npath = {:?}\n\n[rig]\nlandmarks = {:?}\n",
+        d.join("4d/samba/samba.obj"),
+        pc2,
+        landmarks
+    );
+    std::fs::write(db.join("character.toml"), toml).unwrap();
+    let len = std::fs::metadata(&pc2).unwrap().len();
+    let r0 = bytes_read();
+    let first = Character::load(&db, &Quiet).unwrap();
+    let r1 = bytes_read();
+    assert!(
+        r1 - r0 >= len,
+        "the first load read {} of {len} bytes",
+        r1 - r0
+    );
+    let second = Character::load(&db, &Quiet).unwrap();
+    let read = bytes_read() - r1;
+    assert!(
+        read < len / 2,
+        "the second load read {read} bytes; the sequence is {len}"
+    );
+    assert_eq!(second.rig(), first.rig());
+    assert_eq!(second.poses(), first.poses());
+    let last = surfmotion::graph::FlatFrame::from_index(first.frame_count() - 1);
+    assert_eq!(second.frame(last), first.frame(last));
+}
