@@ -6,16 +6,19 @@
 //! reports descriptor and all-pairs times.
 
 mod common;
+/// The first version's binning (outside the library: the tests' oracle).
+#[path = "../tests/it/db/histogram_reference.rs"]
+mod histogram_reference;
 
-use criterion::Criterion;
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion};
 use glam::DVec3;
 use std::hint::black_box;
 use surfmotion::embed::Embedding;
 use surfmotion::embed::frames::{SkeletonKind, poses};
 use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::graph::transitions::{TransitionOptions, find};
-use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, ShapeScratch, describe};
-use surfmotion::similarity::histogram_reference;
+use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, ShapeGrid, describe};
 use surfmotion::similarity::{
     PairDistance, ShapeSet, SimilarityMatrix, SkeletonSet, Span, VertexSet, all_pairs,
 };
@@ -50,38 +53,19 @@ fn main() {
 
     let mut c = Criterion::default().configure_from_args();
     let mut g = c.benchmark_group("similarity/samba");
-    g.bench_function("shape_describe_frame", |b| {
-        let mut out = vec![0.0; DESCRIPTOR_LEN];
-        let mut norms = [0.0; PHI_SUB];
-        let mut scratch = ShapeScratch::default();
-        b.iter(|| {
-            describe(
-                black_box(&pts),
-                rest.triangles(),
-                &grid,
-                &mut scratch,
-                &mut out,
-                &mut norms,
-            )
-        })
-    });
+    let tris = rest.triangles();
+    bench_describe(&mut g, "shape_describe_frame", &pts, tris, &grid, describe);
     // The first version's binning, which `describe` equals bit for bit
     // (issue 43, session 27): the ratio of the two is the saving.
-    g.bench_function("shape_describe_frame_first_version", |b| {
-        let mut out = vec![0.0; DESCRIPTOR_LEN];
-        let mut norms = [0.0; PHI_SUB];
-        let mut scratch = histogram_reference::Scratch::default();
-        b.iter(|| {
-            histogram_reference::describe(
-                black_box(&pts),
-                rest.triangles(),
-                &grid,
-                &mut scratch,
-                &mut out,
-                &mut norms,
-            )
-        })
-    });
+    let first = histogram_reference::describe;
+    bench_describe(
+        &mut g,
+        "shape_describe_frame_first_version",
+        &pts,
+        tris,
+        &grid,
+        first,
+    );
     g.bench_function("shape_pair", |b| {
         b.iter(|| shape.distance(black_box(3), 90))
     });
@@ -118,4 +102,36 @@ fn main() {
     });
     g.finish();
     c.final_summary();
+}
+
+/// A binning's signature: `describe` and the first version's, each with
+/// its own scratch.
+type Describe<S> =
+    fn(&[DVec3], &[[u32; 3]], &ShapeGrid, &mut S, &mut [f32], &mut [f64; PHI_SUB]) -> f64;
+
+/// Benchmarks one binning of the frame `pts` (the set-up both describe
+/// benches share: output, norms and scratch made once).
+fn bench_describe<S: Default>(
+    g: &mut BenchmarkGroup<'_, WallTime>,
+    name: &str,
+    pts: &[DVec3],
+    tris: &[[u32; 3]],
+    grid: &ShapeGrid,
+    describe: Describe<S>,
+) {
+    g.bench_function(name, |b| {
+        let mut out = vec![0.0; DESCRIPTOR_LEN];
+        let mut norms = [0.0; PHI_SUB];
+        let mut scratch = S::default();
+        b.iter(|| {
+            describe(
+                black_box(pts),
+                tris,
+                grid,
+                &mut scratch,
+                &mut out,
+                &mut norms,
+            )
+        })
+    });
 }

@@ -186,6 +186,11 @@ pub fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
     if opts.per_pair > 0 && opts.rerank > 0 {
         text += &format!(" rerank {}", opts.rerank);
     }
+    // The per-sequence candidates from one index's pool (session 28) only
+    // when on: a cache of the per-sequence trees keeps its key.
+    if opts.per_sequence > 0 && opts.pool > 0 {
+        text += &format!(" pool {}", opts.pool);
+    }
     k.text("sparse", &text);
     k.finish()
 }
@@ -364,8 +369,10 @@ pub fn similarity_with(
         return Ok(found);
     }
     let t0 = Instant::now();
+    let c0 = crate::similarity::candidates::process_cpu_seconds();
     let (sets, spans) = describe(dir, m, measure, progress)?;
     let describe = t0.elapsed().as_secs_f64();
+    let describe_cpu = crate::similarity::candidates::process_cpu_seconds() - c0;
     let set = sets.pair_distance();
     let frames = set.frames();
     let sparse = match method {
@@ -374,6 +381,9 @@ pub fn similarity_with(
         None => frames >= SPARSE_FRAMES && sets.shape.is_some(),
     };
     if sparse && let Some(set) = sets.shape.as_ref() {
+        notice(format!(
+            "{frames} frames described in {describe:.1} s ({describe_cpu:.1} s of CPU)"
+        ));
         return sparse_similarity(dir, measure, skey, set, spans, &sopts, describe, progress);
     }
     let t1 = Instant::now();
@@ -633,6 +643,21 @@ fn sparse_similarity(
             thousands(stats.rerank_pairs as u128)
         ));
     }
+    let [p_near, p_seq, p_pair] = stats.pairs_by_source.map(|p| thousands(p as u128));
+    let [c_index, c_scan, c_pairs] = stats.cpu_seconds;
+    notice(format!(
+        "candidates: {} nearest overall ({p_near} pairs alone), {} per sequence ({p_seq} pairs alone; {} per sequence among the {} nearest of every {}th frame), {} per sequence pair ({p_pair} pairs alone); CPU s: index {c_index:.1}, sequence-pair scan and re-ranking {c_scan:.1}, full measure {c_pairs:.1}",
+        thousands(stats.near_candidates as u128),
+        thousands(stats.sequence_candidates as u128),
+        opts.per_sequence,
+        if opts.pool > 0 {
+            opts.pool.to_string()
+        } else {
+            "frames of each sequence".into()
+        },
+        opts.stride,
+        thousands(stats.pair_candidates as u128),
+    ));
     let path = sparse_path(dir, measure);
     cache::save_sparse(&path, key, &sim).map_err(|e| DbError::cache_write(dir, e))?;
     Ok((

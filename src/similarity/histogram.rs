@@ -39,10 +39,15 @@ pub const PHI_SUB: usize = 10;
 pub const RINGS: usize = R_BINS * THETA_BINS;
 /// Non-redundant DFT coefficients of a real signal of `PHI_BINS` samples.
 pub const FREQS: usize = PHI_BINS / 2 + 1;
-/// Rings padded to whole 4-lanes.
-pub(super) const RING_PAD: usize = RINGS.div_ceil(4) * 4;
+/// Rings padded to whole 4-lanes. (Public, hidden, for the first
+/// version's binning, the oracle of the bit-identity tests in
+/// `tests/it/db/histogram_reference.rs`; likewise [`SUB_STRIDE`],
+/// [`freq_weight`], [`dft_table`].)
+#[doc(hidden)]
+pub const RING_PAD: usize = RINGS.div_ceil(4) * 4;
 /// f32 values per sub-shift: `FREQS × (re, im) × RING_PAD`.
-pub(super) const SUB_STRIDE: usize = FREQS * 2 * RING_PAD;
+#[doc(hidden)]
+pub const SUB_STRIDE: usize = FREQS * 2 * RING_PAD;
 /// f32 values of one frame's descriptor.
 pub const DESCRIPTOR_LEN: usize = PHI_SUB * SUB_STRIDE;
 
@@ -96,8 +101,9 @@ pub fn describe(
 /// surface points), binned about their weighted centre.
 ///
 /// Equal bit for bit to the first version
-/// ([`super::histogram_reference::describe_weighted`], which the cached
-/// similarities were computed with), at less cost: a sample's azimuth
+/// (kept outside the library as the oracle of the bit-identity tests,
+/// `tests/it/db/histogram_reference.rs`; the cached similarities were
+/// computed with it), at less cost: a sample's azimuth
 /// (`atan2`, the fine φ bin and its share) is computed again only when its
 /// horizontal offset from the centre changes — voxels come column by
 /// column ([`super::voxel::occupancy`]), so once per column, not per
@@ -294,7 +300,8 @@ pub fn magnitudes(desc: &[f32], out: &mut [f32]) {
 
 /// Weight of coefficient `k` in a sum over the full spectrum of a real
 /// signal: 1 for the DC and Nyquist terms, 2 for the others.
-pub(super) fn freq_weight(k: usize) -> f64 {
+#[doc(hidden)]
+pub fn freq_weight(k: usize) -> f64 {
     if k == 0 || 2 * k == PHI_BINS {
         1.0
     } else {
@@ -303,7 +310,8 @@ pub(super) fn freq_weight(k: usize) -> f64 {
 }
 
 /// `cos(2π k c / N)`, `sin(2π k c / N)` for `k < FREQS`, `c < PHI_BINS`.
-pub(super) fn dft_table() -> ([[f64; PHI_BINS]; FREQS], [[f64; PHI_BINS]; FREQS]) {
+#[doc(hidden)]
+pub fn dft_table() -> ([[f64; PHI_BINS]; FREQS], [[f64; PHI_BINS]; FREQS]) {
     let mut cos = [[0.0; PHI_BINS]; FREQS];
     let mut sin = [[0.0; PHI_BINS]; FREQS];
     for k in 0..FREQS {
@@ -424,7 +432,6 @@ impl ShapeKernel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::similarity::voxel::occupancy;
     use crate::synth::shapes::capsule_mesh;
     use glam::DQuat;
 
@@ -488,79 +495,5 @@ mod tests {
         );
         // Norms agree with the descriptor of the unshifted histogram.
         assert!(na.iter().all(|n| (n / na[0] - 1.0).abs() < 0.2));
-    }
-
-    /// The descriptor and norms of `points` by [`describe_weighted`] and by
-    /// the first version, as bits.
-    fn both(points: &[(DVec3, f64)], grid: &ShapeGrid) -> [(Vec<u32>, Vec<u64>); 2] {
-        let bits = |out: &[f32], norms: &[f64; PHI_SUB]| {
-            (
-                out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
-                norms.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
-            )
-        };
-        let (mut out, mut norms) = (vec![f32::NAN; DESCRIPTOR_LEN], [f64::NAN; PHI_SUB]);
-        describe_weighted(points, grid, &mut Vec::new(), &mut out, &mut norms);
-        let new = bits(&out, &norms);
-        let (mut out, mut norms) = (vec![f32::NAN; DESCRIPTOR_LEN], [f64::NAN; PHI_SUB]);
-        crate::similarity::histogram_reference::describe_weighted(
-            points,
-            grid,
-            &mut Vec::new(),
-            &mut out,
-            &mut norms,
-        );
-        [new, bits(&out, &norms)]
-    }
-
-    /// The cheaper binning (φ once per voxel column, φ-major fine bins, the
-    /// re-binning over all rings at once) gives the first version's
-    /// descriptors bit for bit — so no cached similarity or graph changes —
-    /// on voxels of a posed capsule turned (also by a fraction of a fine
-    /// bin), mirrored, rescaled, moved and in reversed order, and on
-    /// surface samples (the colour measure's, not in columns).
-    #[test]
-    fn cheaper_binning_equals_the_first_version_bit_for_bit() {
-        let m = capsule_mesh(0.15, 0.8, 32, 8);
-        let grid = ShapeGrid {
-            voxel: 0.02,
-            r_max: 0.8,
-        };
-        let mut sc = crate::similarity::voxel::VoxelScratch::default();
-        let variants: [&dyn Fn(DVec3) -> DVec3; 5] = [
-            &|v| v,
-            &|v| DQuat::from_rotation_y(0.0123) * v,
-            &|v| DVec3::new(-v.x, v.y, v.z),
-            &|v| v * 1.37 + DVec3::new(-2.1, 0.4, 7.3),
-            &|v| DQuat::from_rotation_x(0.4) * v * 0.61,
-        ];
-        let mut checked = 0;
-        for (k, f) in variants.iter().enumerate() {
-            for bend in [0.0, 0.3] {
-                let pts: Vec<DVec3> = posed(0.7 * k as f64, bend).into_iter().map(f).collect();
-                let mut voxels = Vec::new();
-                occupancy(&pts, m.triangles(), grid.voxel, &mut sc, |p, w| {
-                    voxels.push((p, w))
-                });
-                assert!(voxels.len() > 1000);
-                let [new, old] = both(&voxels, &grid);
-                assert!(new == old, "variant {k}, bend {bend}: voxels differ");
-                voxels.reverse();
-                let [new, old] = both(&voxels, &grid);
-                assert!(
-                    new == old,
-                    "variant {k}, bend {bend}: reversed voxels differ"
-                );
-                let mut samples = Vec::new();
-                crate::similarity::colour::surface_samples(&pts, m.triangles(), &mut samples);
-                let [new, old] = both(&samples, &grid);
-                assert!(
-                    new == old,
-                    "variant {k}, bend {bend}: surface samples differ"
-                );
-                checked += 3;
-            }
-        }
-        assert_eq!(checked, 30);
     }
 }

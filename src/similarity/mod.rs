@@ -8,10 +8,9 @@
 //! transitions only for large databases ([`sparse`], [`kdtree`],
 //! [`pair_scan`]); [`lookup`] reads either.
 
+pub mod candidates;
 pub mod colour;
 pub mod histogram;
-#[doc(hidden)]
-pub mod histogram_reference;
 pub mod kdtree;
 pub mod lookup;
 pub mod matrix;

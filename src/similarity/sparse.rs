@@ -7,21 +7,22 @@
 //!    values whose distance is at most the Eq. 1 distance), projected on
 //!    their [`SparseOptions::dims`] principal axes (fitted on at most
 //!    [`PCA_SAMPLE`] frames).
-//! 2. **Candidate pairs**: the [`SparseOptions::neighbours`] nearest frames
-//!    of every frame in that space (an exact k-d tree query, [`KdTree`]),
-//!    leaving out the frame's own neighbourhood within its sequence
-//!    (closer than `min_gap` frames: not a transition); and the centres of
+//! 2. **Candidate pairs** ([`super::candidates`], one exact k-d tree over
+//!    all frames in that space): the [`SparseOptions::neighbours`] nearest
+//!    frames of every frame, leaving out the frame's own neighbourhood
+//!    within its sequence (closer than `min_gap` frames: not a
+//!    transition); every [`SparseOptions::stride`]-th frame's
+//!    [`SparseOptions::per_sequence`] nearest frames in each sequence (one
+//!    tree per sequence: `n × sequences` candidates; or, an option since
+//!    session 28, among its [`SparseOptions::pool`] nearest overall); and
+//!    the centres of
 //!    the [`SparseOptions::per_pair`] best transitions of every sequence
-//!    pair by the cheap distances ([`super::pair_scan`]: the graph keeps the
-//!    best transitions of every sequence pair, also between dissimilar
-//!    motions), each with its neighbours [`SparseOptions::spread`] frames
-//!    either way along the other sequence, optionally re-ranked from the
-//!    [`SparseOptions::rerank`] best cheap transitions by the full measure
-//!    (off by default: too few of the dense transitions found, see
-//!    [`SparseOptions::rerank`]); and every [`SparseOptions::stride`]-th
-//!    frame's [`SparseOptions::per_sequence`] nearest frames in each
-//!    sequence (one tree per sequence; the default, `n × sequences`
-//!    candidates).
+//!    pair ([`super::pair_scan`]: the graph keeps the best transitions of
+//!    every sequence pair, also between dissimilar motions), examined
+//!    from the [`SparseOptions::rerank`] best by the cheap distances and
+//!    re-ranked by the full measure, each with its neighbours
+//!    [`SparseOptions::spread`] frames either way along the other
+//!    sequence.
 //! 3. **Windows**: for each candidate `(a, b)` the full measure along the
 //!    diagonal `(a+t, b+t)`, `|t| ≤ band`, and the two diagonals either
 //!    side of it (what the transition search reads: its window and the
@@ -38,7 +39,7 @@
 //! radius (the largest full distance to their own candidates) and the
 //! cheap descriptors' distance.
 
-use super::kdtree::KdTree;
+use super::candidates::{CandidateOptions, index_candidates, process_cpu_seconds, sequence_of};
 use super::matrix::{Dissimilarity, PairDistance, Span};
 use super::pair_scan;
 use rayon::prelude::*;
@@ -82,6 +83,22 @@ pub struct SparseOptions {
     /// Default: 3 (with `per_pair` 8 re-ranked from 64; 12 alone before
     /// session 26).
     pub per_sequence: usize,
+    /// Where the per-sequence candidates come from: the `pool` nearest
+    /// frames of every `stride`-th frame over the whole database (the one
+    /// k-d tree of [`SparseOptions::neighbours`]), of which at most
+    /// `per_sequence` in each sequence are kept, so that they number at
+    /// most `n / stride · pool` whatever the number of sequences
+    /// ([`super::candidates`]); 0: one k-d tree per sequence,
+    /// `per_sequence` nearest in every sequence (`n / stride · sequences ·
+    /// per_sequence` candidates: at 10⁴ frames and 34 sequences 16 M of
+    /// the 20.7 M pairs compared). Measured (session 28, the options
+    /// harness on the dense caches, with the rest of the default): at
+    /// 3,234 frames the dense transitions found fall from 97.2 % (0) to
+    /// 93.6 % (64), 95.9 % (128, 256) for 2.25 → 1.21, 1.46, 1.76 M pairs;
+    /// at 1,014 frames 100 % → 98.3 % (64), 100 % (128, 256); the 10⁴ build
+    /// with 64 compares 6.5 M pairs in 301 s of CPU (702 s with 0). A
+    /// recall drop, so not the default. Default: 0.
+    pub pool: usize,
     /// Best transitions by the cheap distances per unordered sequence pair
     /// whose centres are candidates ([`super::pair_scan`]); their count
     /// does not grow with the sequences' lengths, but the cheap ranking
@@ -124,6 +141,7 @@ impl Default for SparseOptions {
             min_gap: 10,
             stride: 4,
             per_sequence: 3,
+            pool: 0,
             per_pair: 8,
             spread: 5,
             min_window: 4,
@@ -154,6 +172,7 @@ impl SparseOptions {
                 "min_gap" => &mut self.min_gap,
                 "stride" => &mut self.stride,
                 "per_sequence" => &mut self.per_sequence,
+                "pool" => &mut self.pool,
                 "per_pair" => &mut self.per_pair,
                 "spread" => &mut self.spread,
                 "min_window" => &mut self.min_window,
@@ -172,8 +191,17 @@ pub struct SparseStats {
     /// Candidate pairs from the nearest-neighbour index and the per-pair
     /// scan.
     pub candidates: u64,
+    /// Of those, every frame's nearest frames overall.
+    pub near_candidates: u64,
+    /// Of those, the per-sequence nearest frames
+    /// ([`SparseOptions::per_sequence`]).
+    pub sequence_candidates: u64,
     /// Of those, from the per-pair scan (its seeds and their spread).
     pub pair_candidates: u64,
+    /// Distinct pairs the windows of each kind of candidate would compare
+    /// alone (nearest overall, per sequence, per pair; without the
+    /// successors): what each adds to `pairs`, overlaps counted in each.
+    pub pairs_by_source: [u64; 3],
     /// Seconds of the per-pair scan (part of `index_seconds`).
     pub scan_seconds: f64,
     /// Full measures evaluated by the per-pair re-ranking (not stored).
@@ -184,6 +212,10 @@ pub struct SparseStats {
     pub index_seconds: f64,
     /// Seconds: the full measure on the stored pairs.
     pub pairs_seconds: f64,
+    /// CPU seconds of the process (every thread; 0 where the platform does
+    /// not say): the projection and the index, the per-pair scan with its
+    /// re-ranking, the full measure on the stored pairs.
+    pub cpu_seconds: [f64; 3],
 }
 
 /// A symmetric dissimilarity stored on some frame pairs only.
@@ -671,17 +703,20 @@ pub fn sparse_pairs(
     progress: &(dyn Fn(u64) + Sync),
 ) -> (SparseSimilarity, SparseStats) {
     let t0 = std::time::Instant::now();
+    let cpu = process_cpu_seconds;
+    let c0 = cpu();
     let n = set.frames();
     let seq = sequence_of(&spans, n);
     let (features, dims) = project(set, opts.dims);
-    let index = Index {
-        features: &features,
-        dims,
-        seq: &seq,
-        gap: opts.min_gap.max(1),
+    let copts = CandidateOptions {
+        neighbours: opts.neighbours,
+        stride: opts.stride,
+        per_sequence: opts.per_sequence,
+        pool: opts.pool,
+        min_gap: opts.min_gap,
     };
-    let near = index.nearest_overall(opts.neighbours);
-    let per_seq = index.nearest_per_sequence(&spans, opts.stride.max(1), opts.per_sequence);
+    let found = index_candidates(&features, dims, &spans, &copts);
+    let c1 = cpu();
     let t_scan = std::time::Instant::now();
     let popts = per_pair_options(opts);
     let (best, rerank_pairs) = if opts.rerank > 0 {
@@ -695,17 +730,29 @@ pub fn sparse_pairs(
     };
     let per_pair = pair_scan::spread_seeds(&best, opts.spread, &spans, &seq);
     let scan_seconds = t_scan.elapsed().as_secs_f64();
-    let pair_candidates = per_pair.len() as u64;
+    let c2 = cpu();
     let index_seconds = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
-    let seeds = near
+    let near = found
+        .near
         .iter()
         .enumerate()
-        .flat_map(|(a, bs)| bs.iter().map(move |&b| (a, b)))
-        .chain(per_seq)
-        .chain(per_pair);
-    let (mut runs, candidates) = runs_around(seeds, &spans, &seq, opts.band as i64);
-    runs.extend(successor_runs(&spans));
+        .flat_map(|(a, bs)| bs.iter().map(move |&b| (a, b)));
+    let band = opts.band as i64;
+    let sources = [
+        runs_around(near, &spans, &seq, band),
+        runs_around(found.per_sequence.iter().copied(), &spans, &seq, band),
+        runs_around(per_pair.iter().copied(), &spans, &seq, band),
+    ];
+    let mut pairs_by_source = [0u64; 3];
+    let mut counts = [0u64; 3];
+    let mut runs = successor_runs(&spans);
+    for (k, (r, c)) in sources.into_iter().enumerate() {
+        let merged = merge_runs(r);
+        pairs_by_source[k] = merged.iter().map(|r| (r.r1 - r.r0 + 1) as u64).sum();
+        counts[k] = c;
+        runs.extend(merged);
+    }
     let merged = merge_runs(runs);
     let values = evaluate(set, &merged, progress);
     let pairs: u64 = values.iter().map(|v| v.len() as u64).sum();
@@ -719,15 +766,19 @@ pub fn sparse_pairs(
         dims,
         features,
     };
-    sim.radius = radii(&sim, &near);
+    sim.radius = radii(&sim, &found.near);
     let stats = SparseStats {
-        candidates,
-        pair_candidates,
+        candidates: counts.iter().sum(),
+        near_candidates: counts[0],
+        sequence_candidates: counts[1],
+        pair_candidates: counts[2],
+        pairs_by_source,
         scan_seconds,
         rerank_pairs,
         pairs,
         index_seconds,
         pairs_seconds: t1.elapsed().as_secs_f64(),
+        cpu_seconds: [c1 - c0, c2 - c1, cpu() - c2],
     };
     (sim, stats)
 }
@@ -741,80 +792,6 @@ fn per_pair_options(opts: &SparseOptions) -> super::transitions::TransitionOptio
         max_window: opts.band.saturating_sub(1).max(lo),
         min_window: lo,
         min_gap: opts.min_gap,
-    }
-}
-
-/// The sequence of every frame.
-fn sequence_of(spans: &[Span], n: usize) -> Vec<u32> {
-    let mut seq = vec![0u32; n];
-    for (k, s) in spans.iter().enumerate() {
-        seq[s.start..s.start + s.len].fill(k as u32);
-    }
-    seq
-}
-
-/// The projected descriptors and what makes a pair a candidate.
-struct Index<'a> {
-    features: &'a [f32],
-    dims: usize,
-    seq: &'a [u32],
-    /// Within a sequence, frames closer than this are not candidates.
-    gap: usize,
-}
-
-impl Index<'_> {
-    fn feature(&self, a: usize) -> &[f32] {
-        &self.features[a * self.dims..(a + 1) * self.dims]
-    }
-
-    /// Every frame's `k` nearest frames (one k-d tree over all frames).
-    fn nearest_overall(&self, k: usize) -> Vec<Vec<u32>> {
-        let n = self.seq.len();
-        let tree = KdTree::new(self.features.to_vec(), self.dims);
-        (0..n)
-            .into_par_iter()
-            .map(|a| {
-                let keep = |b: u32| {
-                    b as usize != a
-                        && (self.seq[b as usize] != self.seq[a]
-                            || (b as usize).abs_diff(a) >= self.gap)
-                };
-                tree.nearest(self.feature(a), k, &keep)
-                    .into_iter()
-                    .map(|(_, b)| b)
-                    .collect()
-            })
-            .collect()
-    }
-
-    /// Every `stride`-th frame's `k` nearest frames in each sequence (one
-    /// k-d tree per sequence), as `(frame, candidate)` pairs.
-    fn nearest_per_sequence(&self, spans: &[Span], stride: usize, k: usize) -> Vec<(usize, u32)> {
-        if k == 0 {
-            return Vec::new();
-        }
-        let n = self.seq.len();
-        let per_seq: Vec<Vec<(usize, u32)>> = spans
-            .par_iter()
-            .map(|sj| {
-                let sub =
-                    self.features[sj.start * self.dims..(sj.start + sj.len) * self.dims].to_vec();
-                let tree = KdTree::new(sub, self.dims);
-                (0..n)
-                    .step_by(stride)
-                    .flat_map(|a| {
-                        let keep = |b: u32| {
-                            let b = sj.start + b as usize;
-                            self.seq[b] != self.seq[a] || b.abs_diff(a) >= self.gap
-                        };
-                        tree.nearest(self.feature(a), k, &keep)
-                            .into_iter()
-                            .map(move |(_, b)| (a, (sj.start + b as usize) as u32))
-                    })
-                    .collect()
-            })
-            .collect();
-        per_seq.into_iter().flatten().collect()
     }
 }
 

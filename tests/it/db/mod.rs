@@ -3,5 +3,6 @@
 mod caches;
 mod captures;
 mod frames;
+mod histogram_reference;
 mod sparse;
 mod synth;

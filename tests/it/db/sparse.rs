@@ -4,6 +4,10 @@
 
 use crate::common;
 
+// The first version of the shape descriptor's binning, the oracle of the
+// bit-identity tests (outside the library since session 28).
+use super::histogram_reference as reference;
+
 use std::path::{Path, PathBuf};
 use surfmotion::db::build::Method;
 use surfmotion::db::{BuildOptions, Manifest, Quiet, build};
@@ -289,8 +293,10 @@ impl surfmotion::similarity::sparse::Features for Looked<'_> {
 }
 
 /// Option sets from `SURFMOTION_SPARSE_OPTIONS`: `neighbours,per_pair,
-/// spread,per_sequence[,rerank[,stride]]` separated by `;` (default: the
-/// current default; `rerank` and `stride` when left out: the default's).
+/// spread,per_sequence[,rerank[,stride]]` or `name=value,...` (the
+/// default's fields overridden, [`SparseOptions::with_overrides`]),
+/// separated by `;` (default: the current default; `rerank` and `stride`
+/// when left out: the default's).
 fn option_sets(
     base: surfmotion::similarity::SparseOptions,
 ) -> Vec<surfmotion::similarity::SparseOptions> {
@@ -300,6 +306,9 @@ fn option_sets(
     text.split(';')
         .filter(|s| !s.trim().is_empty())
         .map(|s| {
+            if s.contains('=') {
+                return base.with_overrides(s).expect(s);
+            }
             let v: Vec<usize> = s.split(',').map(|x| x.trim().parse().expect(s)).collect();
             surfmotion::similarity::SparseOptions {
                 neighbours: v[0],
@@ -358,21 +367,30 @@ fn options_measured_against_the_dense_cache() {
     for o in option_sets(sparse_options(&m)) {
         let (sim, stats) = sparse_pairs(&set, spans.clone(), &o, &|_| {});
         let mut line = format!(
-            "neighbours {} per_pair {} spread {} per_sequence {} rerank {} stride {}: candidates {} (per pair {}), pairs {} (+ {} re-ranking), ({:.1} % of {}), index {:.1} s (scan {:.1} s)",
+            "neighbours {} per_pair {} spread {} per_sequence {} pool {} rerank {} stride {}: candidates {} (nearest {}, per sequence {}, per pair {}), pairs {} (alone: nearest {}, per sequence {}, per pair {}) (+ {} re-ranking), ({:.1} % of {}), index {:.1} s (scan {:.1} s), CPU index {:.1} s, scan {:.1} s, pairs {:.1} s",
             o.neighbours,
             o.per_pair,
             o.spread,
             o.per_sequence,
+            o.pool,
             o.rerank,
             o.stride,
             stats.candidates,
+            stats.near_candidates,
+            stats.sequence_candidates,
             stats.pair_candidates,
             stats.pairs,
+            stats.pairs_by_source[0],
+            stats.pairs_by_source[1],
+            stats.pairs_by_source[2],
             stats.rerank_pairs,
             100.0 * stats.pairs as f64 / (n as f64 * (n as f64 + 1.0) / 2.0),
             n * (n + 1) / 2,
             stats.index_seconds,
-            stats.scan_seconds
+            stats.scan_seconds,
+            stats.cpu_seconds[0],
+            stats.cpu_seconds[1],
+            stats.cpu_seconds[2]
         );
         if let Some(reference) = &reference {
             let g =
@@ -505,6 +523,96 @@ fn misses(
     out
 }
 
+/// The descriptor and norms of `points` by the current binning and by the
+/// first version, as bits.
+fn both_binnings(
+    points: &[(glam::DVec3, f64)],
+    grid: &surfmotion::similarity::histogram::ShapeGrid,
+) -> [(Vec<u32>, Vec<u64>); 2] {
+    use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, describe_weighted};
+    let bits = |out: &[f32], norms: &[f64; PHI_SUB]| {
+        (
+            out.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            norms.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+        )
+    };
+    let (mut out, mut norms) = (vec![f32::NAN; DESCRIPTOR_LEN], [f64::NAN; PHI_SUB]);
+    describe_weighted(points, grid, &mut Vec::new(), &mut out, &mut norms);
+    let new = bits(&out, &norms);
+    let (mut out, mut norms) = (vec![f32::NAN; DESCRIPTOR_LEN], [f64::NAN; PHI_SUB]);
+    reference::describe_weighted(points, grid, &mut Vec::new(), &mut out, &mut norms);
+    [new, bits(&out, &norms)]
+}
+
+/// Issue 43, session 27 (a unit test of `similarity::histogram` until
+/// session 28, when the first version left the library): the cheaper
+/// binning (φ once per voxel column, φ-major fine bins, the re-binning over
+/// all rings at once) gives the first version's descriptors bit for bit —
+/// so no cached similarity or graph changes — on voxels of a posed capsule
+/// (one side pushed out) turned (also by a fraction of a fine bin),
+/// mirrored, rescaled, moved and in reversed order, and on surface samples
+/// (the colour measure's, not in columns).
+#[test]
+fn cheaper_binning_equals_the_first_version_bit_for_bit() {
+    use glam::{DQuat, DVec3};
+    use surfmotion::similarity::colour::surface_samples;
+    use surfmotion::similarity::histogram::ShapeGrid;
+    use surfmotion::similarity::voxel::{VoxelScratch, occupancy};
+    let m = surfmotion::synth::shapes::capsule_mesh(0.15, 0.8, 32, 8);
+    let posed = |turn: f64, bend: f64| -> Vec<DVec3> {
+        m.positions()
+            .iter()
+            .map(|p| {
+                let mut v = DVec3::from_array(*p);
+                if v.x > 0.05 {
+                    v.x += bend * (v.y + 0.6);
+                }
+                DQuat::from_rotation_y(turn) * v + DVec3::new(0.3, 0.0, -0.2)
+            })
+            .collect()
+    };
+    let grid = ShapeGrid {
+        voxel: 0.02,
+        r_max: 0.8,
+    };
+    let mut sc = VoxelScratch::default();
+    let variants: [&dyn Fn(DVec3) -> DVec3; 5] = [
+        &|v| v,
+        &|v| DQuat::from_rotation_y(0.0123) * v,
+        &|v| DVec3::new(-v.x, v.y, v.z),
+        &|v| v * 1.37 + DVec3::new(-2.1, 0.4, 7.3),
+        &|v| DQuat::from_rotation_x(0.4) * v * 0.61,
+    ];
+    let mut checked = 0;
+    for (k, f) in variants.iter().enumerate() {
+        for bend in [0.0, 0.3] {
+            let pts: Vec<DVec3> = posed(0.7 * k as f64, bend).into_iter().map(f).collect();
+            let mut voxels = Vec::new();
+            occupancy(&pts, m.triangles(), grid.voxel, &mut sc, |p, w| {
+                voxels.push((p, w))
+            });
+            assert!(voxels.len() > 1000);
+            let [new, old] = both_binnings(&voxels, &grid);
+            assert!(new == old, "variant {k}, bend {bend}: voxels differ");
+            voxels.reverse();
+            let [new, old] = both_binnings(&voxels, &grid);
+            assert!(
+                new == old,
+                "variant {k}, bend {bend}: reversed voxels differ"
+            );
+            let mut samples = Vec::new();
+            surface_samples(&pts, m.triangles(), &mut samples);
+            let [new, old] = both_binnings(&samples, &grid);
+            assert!(
+                new == old,
+                "variant {k}, bend {bend}: surface samples differ"
+            );
+            checked += 3;
+        }
+    }
+    assert_eq!(checked, 30);
+}
+
 /// The frames (every `step`th) of the real 4D capture `name`, with its
 /// triangles, and variants of each: as captured, mirrored (x → −x), turned
 /// 0.3 rad about the vertical and moved, rescaled by 1/100.
@@ -550,7 +658,6 @@ fn capture_variants(
 fn the_cheaper_descriptors_equal_the_first_versions_on_real_frames() {
     use surfmotion::similarity::ShapeSet;
     use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, ShapeScratch, describe};
-    use surfmotion::similarity::histogram_reference as reference;
     let Some(d) = common::data_dir() else { return };
     let mut checked = 0;
     for (name, step) in [("samba", 7), ("crane", 9)] {
@@ -603,7 +710,6 @@ fn the_cheaper_descriptors_equal_the_first_versions_on_real_frames() {
 fn descriptor_cost_per_frame() {
     use surfmotion::similarity::ShapeSet;
     use surfmotion::similarity::histogram::{DESCRIPTOR_LEN, PHI_SUB, ShapeScratch, describe};
-    use surfmotion::similarity::histogram_reference as reference;
     let d = common::data_path();
     let (tris, rest, frames) = capture_variants(&d, "samba", 1);
     let grid = ShapeSet::grid_for(&rest, &tris);

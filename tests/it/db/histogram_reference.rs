@@ -1,20 +1,21 @@
 //! The shape histogram's binning as it was written first (one `atan2`,
 //! `acos` and `rem_euclid` per sample, the coarse re-binning with an
-//! integer modulo per tap), kept verbatim as the reference that
-//! [`super::histogram::describe_weighted`] must equal bit for bit: the
-//! cached similarities and graphs of every database were computed with it,
-//! so a descriptor that differed in its last bit would change their keys'
-//! meaning. Not part of the API: the tests and `benches/similarity.rs`
-//! compare the two (Huang et al. 2015, Sec. 4.1, Eq. 1; see
-//! [`super::histogram`] for the method).
+//! integer modulo per tap), kept verbatim outside the library as the
+//! oracle that `surfmotion::similarity::histogram::describe_weighted` must
+//! equal bit for bit: the cached similarities and graphs of every database
+//! were computed with it, so a descriptor that differed in its last bit
+//! would change their keys' meaning. Read by the bit-identity tests
+//! (`db::sparse`) and, through `#[path]`, by `benches/similarity.rs` (the
+//! binning's "before"); Huang et al. 2015, Sec. 4.1, Eq. 1 (see
+//! `surfmotion::similarity::histogram` for the method).
 
-use super::histogram::{
+use glam::DVec3;
+use surfmotion::similarity::histogram::{
     DESCRIPTOR_LEN, FREQS, PHI_BINS, PHI_SUB, R_BINS, RING_PAD, RINGS, SUB_STRIDE, ShapeGrid,
     THETA_BINS, dft_table, freq_weight,
 };
-use glam::DVec3;
 
-/// [`super::histogram::describe_weighted`] as first written.
+/// `surfmotion::similarity::histogram::describe_weighted` as first written.
 pub fn describe_weighted(
     points: &[(DVec3, f64)],
     grid: &ShapeGrid,
@@ -103,13 +104,14 @@ pub fn describe_weighted(
 /// Reusable buffers of [`describe`], as the first version kept them.
 #[derive(Debug, Default, Clone)]
 pub struct Scratch {
-    voxels: super::voxel::VoxelScratch,
+    voxels: surfmotion::similarity::voxel::VoxelScratch,
     points: Vec<(DVec3, f64)>,
     fine: Vec<f64>,
 }
 
-/// [`super::histogram::describe`] with the first version's binning: the
-/// same occupied voxels ([`super::voxel::occupancy`], the vertices where a
+/// `surfmotion::similarity::histogram::describe` with the first version's
+/// binning: the same occupied voxels (`surfmotion::similarity::voxel::
+/// occupancy`, the vertices where a
 /// frame has no volume), binned by [`describe_weighted`]. Returns the
 /// volume in voxels.
 pub fn describe(
@@ -126,9 +128,13 @@ pub fn describe(
         fine,
     } = scratch;
     points.clear();
-    let mut volume = super::voxel::occupancy(positions, triangles, grid.voxel, voxels, |p, w| {
-        points.push((p, w))
-    });
+    let mut volume = surfmotion::similarity::voxel::occupancy(
+        positions,
+        triangles,
+        grid.voxel,
+        voxels,
+        |p, w| points.push((p, w)),
+    );
     if points.is_empty() {
         points.extend(positions.iter().map(|p| (*p, 1.0)));
         volume = positions.len() as f64;

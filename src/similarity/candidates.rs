@@ -1,0 +1,364 @@
+//! The sparse similarity's candidate frames from one nearest-neighbour
+//! index over all frames' cheap descriptors (issue 43): every frame's
+//! `neighbours` nearest frames overall, and every `stride`-th frame's
+//! `per_sequence` nearest frames in each sequence — from the same query's
+//! `pool` nearest frames (session 28: at most `pool` a frame, whatever the
+//! number of sequences), or from one k-d tree per sequence (`pool` 0;
+//! `n / stride · sequences · per_sequence` candidates, the per-sequence
+//! candidates' default to session 27). The options are the sparse
+//! similarity's (`SparseOptions`, of which [`CandidateOptions`] is the
+//! part read here).
+//!
+//! Exact: a query returns the nearest frames a scan of every frame would
+//! ([`KdTree::nearest`]; squared Euclidean distances of the projected
+//! descriptors, ties broken by frame number). The per-pair candidates of
+//! `pair_scan` come besides; the sparse similarity (`sparse_pairs`)
+//! evaluates the full measure around all of them.
+
+use super::kdtree::KdTree;
+use super::matrix::Span;
+use rayon::prelude::*;
+
+/// What makes a frame pair a candidate of the index (the fields of the
+/// same names of the sparse similarity's options).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CandidateOptions {
+    /// Nearest frames overall of every frame.
+    pub neighbours: usize,
+    /// Every `stride`-th frame takes per-sequence candidates.
+    pub stride: usize,
+    /// Nearest frames in each sequence of those frames.
+    pub per_sequence: usize,
+    /// Taken among this many nearest frames overall; 0: in every sequence
+    /// (one k-d tree per sequence).
+    pub pool: usize,
+    /// Within a sequence, frames closer than this are not candidates.
+    pub min_gap: usize,
+}
+
+/// The candidates of the nearest-neighbour index ([`index_candidates`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Candidates {
+    /// Per frame, its `neighbours` nearest frames overall,
+    /// nearest first (ties by frame number).
+    pub near: Vec<Vec<u32>>,
+    /// `(frame, candidate)`: every `stride`-th frame's
+    /// `per_sequence` nearest frames in each sequence —
+    /// among its `pool` nearest frames overall, or in
+    /// every sequence when `pool` is 0.
+    pub per_sequence: Vec<(usize, u32)>,
+}
+
+/// The candidates of the projected descriptors `features` (`n × dims`,
+/// row-major) of the frames of `spans`: a frame is never its own
+/// candidate, nor a frame of its own sequence closer than
+/// `min_gap`. Distances are squared Euclidean distances
+/// of the descriptors, ties broken by frame number: the exact nearest
+/// frames (one k-d tree over all frames; with `pool` 0, one per sequence
+/// besides).
+pub fn index_candidates(
+    features: &[f32],
+    dims: usize,
+    spans: &[Span],
+    opts: &CandidateOptions,
+) -> Candidates {
+    let n = spans.iter().map(|s| s.start + s.len).max().unwrap_or(0);
+    let seq = sequence_of(spans, n);
+    let index = Index {
+        features,
+        dims,
+        seq: &seq,
+        gap: opts.min_gap.max(1),
+    };
+    let stride = opts.stride.max(1);
+    let pool = if opts.per_sequence > 0 { opts.pool } else { 0 };
+    let (near, per_sequence) =
+        index.nearest_overall(opts.neighbours, stride, pool, opts.per_sequence);
+    let per_sequence = if opts.pool == 0 {
+        index.nearest_per_sequence(spans, stride, opts.per_sequence)
+    } else {
+        per_sequence
+    };
+    Candidates { near, per_sequence }
+}
+
+/// CPU seconds of the whole process so far (every thread): the stages'
+/// figure that load does not inflate as it does wall time; 0 where the
+/// platform does not say.
+pub fn process_cpu_seconds() -> f64 {
+    #[cfg(unix)]
+    {
+        let mut ts = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: `ts` is a valid, writable timespec for the call.
+        let r = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+        if r == 0 {
+            return ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9;
+        }
+    }
+    0.0
+}
+
+/// The sequence of every frame.
+pub(super) fn sequence_of(spans: &[Span], n: usize) -> Vec<u32> {
+    let mut seq = vec![0u32; n];
+    for (k, s) in spans.iter().enumerate() {
+        seq[s.start..s.start + s.len].fill(k as u32);
+    }
+    seq
+}
+
+/// Candidate pairs `(frame, candidate)`.
+type Seeds = Vec<(usize, u32)>;
+
+/// The projected descriptors and what makes a pair a candidate.
+struct Index<'a> {
+    features: &'a [f32],
+    dims: usize,
+    seq: &'a [u32],
+    /// Within a sequence, frames closer than this are not candidates.
+    gap: usize,
+}
+
+impl Index<'_> {
+    fn feature(&self, a: usize) -> &[f32] {
+        &self.features[a * self.dims..(a + 1) * self.dims]
+    }
+
+    /// Every frame's `k` nearest frames (one k-d tree over all frames);
+    /// and, when `pool` is not 0, every `stride`-th frame's `per_seq`
+    /// nearest frames in each sequence among its `pool` nearest (the same
+    /// query, `max(k, pool)` frames), as `(frame, candidate)` pairs.
+    fn nearest_overall(
+        &self,
+        k: usize,
+        stride: usize,
+        pool: usize,
+        per_seq: usize,
+    ) -> (Vec<Vec<u32>>, Vec<(usize, u32)>) {
+        let n = self.seq.len();
+        let sequences = self.seq.iter().map(|&s| s as usize + 1).max().unwrap_or(0);
+        let tree = KdTree::new(self.features.to_vec(), self.dims);
+        let both: Vec<(Vec<u32>, Seeds)> = (0..n)
+            .into_par_iter()
+            .map(|a| {
+                let keep = |b: u32| {
+                    b as usize != a
+                        && (self.seq[b as usize] != self.seq[a]
+                            || (b as usize).abs_diff(a) >= self.gap)
+                };
+                let pooled = pool > 0 && a % stride == 0;
+                let want = if pooled { k.max(pool) } else { k };
+                let found = tree.nearest(self.feature(a), want, &keep);
+                let near = found.iter().take(k).map(|&(_, b)| b).collect();
+                let mut per = Vec::new();
+                if pooled {
+                    let mut taken = vec![0usize; sequences];
+                    for &(_, b) in found.iter().take(pool) {
+                        let t = &mut taken[self.seq[b as usize] as usize];
+                        if *t < per_seq {
+                            *t += 1;
+                            per.push((a, b));
+                        }
+                    }
+                }
+                (near, per)
+            })
+            .collect();
+        let mut near = Vec::with_capacity(n);
+        let mut per = Vec::new();
+        for (a, p) in both {
+            near.push(a);
+            per.extend(p);
+        }
+        (near, per)
+    }
+
+    /// Every `stride`-th frame's `k` nearest frames in each sequence (one
+    /// k-d tree per sequence), as `(frame, candidate)` pairs.
+    fn nearest_per_sequence(&self, spans: &[Span], stride: usize, k: usize) -> Vec<(usize, u32)> {
+        if k == 0 {
+            return Vec::new();
+        }
+        let n = self.seq.len();
+        let per_seq: Vec<Vec<(usize, u32)>> = spans
+            .par_iter()
+            .map(|sj| {
+                let sub =
+                    self.features[sj.start * self.dims..(sj.start + sj.len) * self.dims].to_vec();
+                let tree = KdTree::new(sub, self.dims);
+                (0..n)
+                    .step_by(stride)
+                    .flat_map(|a| {
+                        let keep = |b: u32| {
+                            let b = sj.start + b as usize;
+                            self.seq[b] != self.seq[a] || b.abs_diff(a) >= self.gap
+                        };
+                        tree.nearest(self.feature(a), k, &keep)
+                            .into_iter()
+                            .map(move |(_, b)| (a, (sj.start + b as usize) as u32))
+                    })
+                    .collect()
+            })
+            .collect();
+        per_seq.into_iter().flatten().collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spans(lens: &[usize]) -> Vec<Span> {
+        let mut at = 0;
+        lens.iter()
+            .enumerate()
+            .map(|(k, &len)| {
+                at += len;
+                Span {
+                    name: format!("s{k}"),
+                    start: at - len,
+                    len,
+                }
+            })
+            .collect()
+    }
+
+    /// Squared distance of frames `a` and `b` of `f` (`dims` values each).
+    fn d2(f: &[f32], dims: usize, a: usize, b: usize) -> f32 {
+        let (x, y) = (&f[a * dims..(a + 1) * dims], &f[b * dims..(b + 1) * dims]);
+        x.iter().zip(y).map(|(p, q)| (p - q) * (p - q)).sum()
+    }
+
+    /// The candidates of [`index_candidates`] by brute force: every frame
+    /// against every other, sorted by squared distance then frame.
+    fn brute_candidates(
+        f: &[f32],
+        dims: usize,
+        spans: &[Span],
+        o: &CandidateOptions,
+    ) -> Candidates {
+        let n = f.len() / dims;
+        let seq = sequence_of(spans, n);
+        let gap = o.min_gap.max(1);
+        let ranked = |a: usize, only: Option<u32>| -> Vec<u32> {
+            let mut all: Vec<(f32, u32)> = (0..n)
+                .filter(|&b| b != a && (seq[b] != seq[a] || b.abs_diff(a) >= gap))
+                .filter(|&b| only.is_none_or(|s| seq[b] == s))
+                .map(|b| (d2(f, dims, a, b), b as u32))
+                .collect();
+            all.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+            all.into_iter().map(|x| x.1).collect()
+        };
+        let near = (0..n)
+            .map(|a| ranked(a, None).into_iter().take(o.neighbours).collect())
+            .collect();
+        let mut per_sequence = Vec::new();
+        for a in (0..n).step_by(o.stride.max(1)) {
+            if o.pool == 0 {
+                for j in 0..spans.len() as u32 {
+                    let r = ranked(a, Some(j));
+                    per_sequence.extend(r.into_iter().take(o.per_sequence).map(|b| (a, b)));
+                }
+            } else {
+                let mut taken = vec![0; spans.len()];
+                for b in ranked(a, None).into_iter().take(o.pool) {
+                    let t = &mut taken[seq[b as usize] as usize];
+                    if *t < o.per_sequence {
+                        *t += 1;
+                        per_sequence.push((a, b));
+                    }
+                }
+            }
+        }
+        Candidates { near, per_sequence }
+    }
+
+    /// Issue 43, session 28: the index's candidates are the exact nearest
+    /// frames — every frame's `neighbours` nearest overall, and the
+    /// per-sequence nearest from the one index's pool (or from one tree per
+    /// sequence) — as a brute-force scan finds them, on generated
+    /// descriptors: random, shuffled, with duplicated frames (exact ties),
+    /// one-frame sequences, one sequence only; the pool's candidates are
+    /// the per-sequence trees' ones when the pool holds every frame, a
+    /// subset of them otherwise, and never more than `pool` per frame.
+    #[test]
+    fn the_index_candidates_are_the_exact_nearest_frames() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        };
+        let dims = 4;
+        // A wandering path (frames near their neighbours, as motion is).
+        let mut f: Vec<f32> = Vec::new();
+        let mut p = [0.0f32; 4];
+        for _ in 0..260 {
+            p.iter_mut().for_each(|v| *v += 0.3 * rnd());
+            f.extend_from_slice(&p);
+        }
+        // Frames 200.. repeat frames 20..80 exactly (ties at every distance).
+        f.copy_within(20 * dims..80 * dims, 200 * dims);
+        let mut shuffled = f.clone();
+        let n = f.len() / dims;
+        let mut perm: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            let j = ((rnd() + 0.5) * (i + 1) as f32) as usize % (i + 1);
+            perm.swap(i, j);
+        }
+        for (to, &from) in perm.iter().enumerate() {
+            shuffled[to * dims..(to + 1) * dims]
+                .copy_from_slice(&f[from * dims..(from + 1) * dims]);
+        }
+        let cases: [(&[f32], Vec<usize>); 5] = [
+            (f.as_slice(), vec![60, 100, 40, 60]),
+            (shuffled.as_slice(), vec![60, 100, 40, 60]),
+            (f.as_slice(), vec![1, 80, 1, 1, 120, 56, 1]),
+            (f.as_slice(), vec![260]),
+            (shuffled.as_slice(), vec![13, 1, 246]),
+        ];
+        for (k, (feat, lens)) in cases.iter().enumerate() {
+            let sp = spans(lens);
+            for (neighbours, per_sequence, pool, stride) in [
+                (6, 3, 0, 4),
+                (6, 3, 16, 4),
+                (24, 2, 40, 3),
+                (5, 1, 1, 1),
+                (3, 4, 500, 2),
+                (0, 3, 8, 5),
+            ] {
+                let o = CandidateOptions {
+                    neighbours,
+                    per_sequence,
+                    pool,
+                    stride,
+                    min_gap: 10,
+                };
+                let what = format!("case {k}, {neighbours}/{per_sequence}/{pool}/{stride}");
+                let got = index_candidates(feat, dims, &sp, &o);
+                let want = brute_candidates(feat, dims, &sp, &o);
+                assert_eq!(got.near, want.near, "{what}");
+                let sorted = |mut v: Vec<(usize, u32)>| {
+                    v.sort_unstable();
+                    v
+                };
+                let per = sorted(got.per_sequence.clone());
+                assert_eq!(per, sorted(want.per_sequence), "{what}");
+                assert!(per.windows(2).all(|w| w[0] != w[1]), "{what}");
+                if pool > 0 {
+                    let trees = CandidateOptions { pool: 0, ..o };
+                    let every = sorted(index_candidates(feat, dims, &sp, &trees).per_sequence);
+                    assert!(per.iter().all(|c| every.binary_search(c).is_ok()), "{what}");
+                    if pool >= n {
+                        assert_eq!(per, every, "{what}");
+                    }
+                    assert!(per.len() <= n.div_ceil(stride) * pool, "{what}");
+                }
+            }
+        }
+    }
+}
