@@ -1,8 +1,12 @@
 //! Deformation stage on real data (Huang et al. 2015, Sec. 5.2.3): the
 //! samba capture as the database, the CMU 02_02 walk as the query. Every
-//! retrieved frame of the walk (75) is deformed in turn on one thread, with
-//! the turned-over-triangle repair and without it, against the floor: one
-//! prefactored full-size 2-ring solve (`LᵀL`, 3 right-hand sides).
+//! retrieved frame of the walk (75) is deformed in turn, with the
+//! turned-over-triangle repair and without it, against the floor: one
+//! prefactored full-size 2-ring solve (`LᵀL`, 3 right-hand sides, one
+//! thread). The default solves a level's regions and the repair's passes
+//! over the triangles on the pool's threads (`DeformOptions::parallel_regions`,
+//! session 28; `RAYON_NUM_THREADS` sets them); `part_sequential` solves
+//! the regions one after another (the same frames bit for bit).
 
 mod common;
 
@@ -86,8 +90,13 @@ fn main() {
         repair_turns: RepairTurns::Skin,
         ..Default::default()
     };
+    let sequential = DeformOptions {
+        parallel_regions: false,
+        ..Default::default()
+    };
     for (name, opts) in [
         ("part_75_frames", DeformOptions::default()),
+        ("part_sequential_75_frames", sequential),
         ("part_no_repair_75_frames", no_repair),
         ("part_old_default_75_frames", old),
         ("part_skin_repair_75_frames", skin_repair),
@@ -130,6 +139,7 @@ fn main() {
     if let Some(s) = med("solve_2ring") {
         for (name, what) in [
             ("part_75_frames", "part"),
+            ("part_sequential_75_frames", "regions one after another"),
             ("part_no_repair_75_frames", "without the repair"),
             ("part_old_default_75_frames", "the default up to session 26"),
             ("part_skin_repair_75_frames", "the skin's repair only"),

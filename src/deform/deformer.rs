@@ -1,9 +1,10 @@
 //! The `Deformer`: a character's prefactored part-based deformation
 //! (the module page, [`crate::deform`], describes the method).
 
+use super::levels::{Levels, RegionScratch};
 use super::near_turns::Neighbourhoods;
 use super::options::{DeformMode, DeformOptions, RepairBudget, RepairTurns, TurnedOver};
-use super::part_laplacian::{RegionSolver, RegionWorkspace, apply};
+use super::part_laplacian::{RegionSolver, apply};
 use super::regions::{
     Held, Region, Target, constraint_scale, region_constraints, region_examples, region_specs,
     region_weights, sibling_overlaps,
@@ -39,6 +40,9 @@ pub struct Deformer {
     surface_rounds: usize,
     triangles: usize,
     regions: Vec<Region>,
+    /// The regions' levels when they are solved level by level on several
+    /// threads ([`DeformOptions::parallel_regions`]), else `None`.
+    levels: Option<Levels>,
     rest_pose: Pose,
     n: usize,
     /// Constraint vertices (global) of the LBS.
@@ -68,24 +72,18 @@ pub struct RegionResult {
 pub struct DeformWorkspace {
     lbs: Vec<[f64; 3]>,
     turn: Vec<DQuat>,
-    xs: Vec<Vec<[f64; 3]>>,
-    delta: Vec<Vec<[f64; 3]>>,
     acc: Vec<[f64; 3]>,
     wsum: Vec<f64>,
-    /// Each region's result, world coordinates (local order).
-    world: Vec<Vec<[f64; 3]>>,
+    /// Each region's own scratch and result ([`RegionScratch`]).
+    regions: Vec<RegionScratch>,
     /// The overlap's shared targets (global ids).
     shared: Vec<[f64; 3]>,
     /// The last result solved at each vertex, world coordinates
-    /// ([`Target::Last`]).
+    /// ([`Target::Last`]; written by the sequential solve only).
     last: Vec<[f64; 3]>,
-    targets: Vec<Vec<[f64; 3]>>,
-    local: Vec<Vec<[f64; 3]>>,
-    ws: Vec<RegionWorkspace>,
-    /// The source's Laplacian coordinates, unturned, and each vertex's
-    /// rotation of the local steps (per region).
-    lsrc: Vec<Vec<[f64; 3]>>,
-    rots: Vec<Vec<DQuat>>,
+    /// The frame's source normals, unnormalised
+    /// ([`unflip::source_normals`]).
+    source_normals: Vec<DVec3>,
     /// Reference normals and source areas of the triangles (untangling).
     normals: Vec<DVec3>,
     areas: Vec<f64>,
@@ -147,6 +145,7 @@ impl Deformer {
             surface_rounds: opts.surface_rounds,
             triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
+            levels: None,
             rest_pose: *ch.rest_pose(),
             n,
             constraint_vertices: constraint_vertices.clone(),
@@ -275,6 +274,9 @@ impl Deformer {
             });
         }
         out.link_siblings(&parent_of);
+        if opts.parallel_regions {
+            out.levels = Levels::new(&out.regions, out.overlap_passes);
+        }
         Ok(out)
     }
 
@@ -318,8 +320,9 @@ impl Deformer {
         let _ = target;
         self.regions
             .iter()
-            .zip(&ws.world)
-            .map(|(r, world)| {
+            .zip(&ws.regions)
+            .map(|(r, s)| {
+                let world = &s.world;
                 let mut held = vec![Held::Free; r.solver.vertices.len()];
                 for (&(c, _), t) in r.solver.constraints.iter().zip(&r.targets) {
                     held[c as usize] = match t {
@@ -339,6 +342,13 @@ impl Deformer {
             .collect()
     }
 
+    /// How many levels the regions are solved in, one level's regions at
+    /// once on several threads ([`DeformOptions::parallel_regions`]), or
+    /// `None` when they are solved one after another.
+    pub fn levels(&self) -> Option<usize> {
+        self.levels.as_ref().map(Levels::count)
+    }
+
     /// The mode.
     pub fn mode(&self) -> DeformMode {
         self.mode
@@ -349,46 +359,16 @@ impl Deformer {
         DeformWorkspace {
             lbs: vec![[0.0; 3]; self.n],
             turn: vec![DQuat::IDENTITY; self.n],
-            xs: self
-                .regions
-                .iter()
-                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
-                .collect(),
-            delta: self
-                .regions
-                .iter()
-                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
-                .collect(),
             acc: vec![[0.0; 3]; self.n],
             wsum: vec![0.0; self.n],
-            world: self
+            regions: self
                 .regions
                 .iter()
-                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
+                .map(|r| RegionScratch::new(&r.solver, r.targets.len()))
                 .collect(),
             shared: vec![[0.0; 3]; self.n],
             last: vec![[0.0; 3]; self.n],
-            targets: self
-                .regions
-                .iter()
-                .map(|r| vec![[0.0; 3]; r.targets.len()])
-                .collect(),
-            local: self
-                .regions
-                .iter()
-                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
-                .collect(),
-            ws: self.regions.iter().map(|r| r.solver.workspace()).collect(),
-            lsrc: self
-                .regions
-                .iter()
-                .map(|r| vec![[0.0; 3]; r.solver.vertices.len()])
-                .collect(),
-            rots: self
-                .regions
-                .iter()
-                .map(|r| vec![DQuat::IDENTITY; r.solver.vertices.len()])
-                .collect(),
+            source_normals: vec![DVec3::ZERO; self.triangles],
             normals: vec![DVec3::ZERO; self.triangles],
             areas: vec![0.0; self.triangles],
             best: vec![[0.0; 3]; self.n],
@@ -427,27 +407,14 @@ impl Deformer {
         // blended by skin weight.
         unflip::skin_turns(&ch.rig().skin, &g, &mut ws.turn);
         ws.shared.copy_from_slice(&ws.lbs);
-        for k in 0..self.regions.len() {
-            let q = self.frame_of(k, &rot);
-            self.source_delta(k, q, source, ws);
-            self.solve_region(k, q, ws);
-            let r = &self.regions[k];
-            if self.overlap_passes > 1
-                && !r.siblings.is_empty()
-                && r.siblings.iter().all(|&j| j < k)
-            {
-                for _ in 1..self.overlap_passes {
-                    self.blend_shared(k, ws);
-                    for j in r.siblings.iter().copied().chain([k]) {
-                        self.solve_region(j, self.frame_of(j, &rot), ws);
-                    }
-                }
-            }
+        match &self.levels {
+            Some(levels) => self.solve_by_level(levels, &rot, source, ws),
+            None => self.solve_in_order(&rot, source, ws),
         }
         ws.acc.fill([0.0; 3]);
         ws.wsum.fill(0.0);
-        for (r, world) in self.regions.iter().zip(&ws.world) {
-            for ((x, &v), &w) in world.iter().zip(&r.solver.vertices).zip(&r.weights) {
+        for (r, s) in self.regions.iter().zip(&ws.regions) {
+            for ((x, &v), &w) in s.world.iter().zip(&r.solver.vertices).zip(&r.weights) {
                 let a = &mut ws.acc[v as usize];
                 for d in 0..3 {
                     a[d] += w * x[d];
@@ -477,27 +444,93 @@ impl Deformer {
         }
     }
 
-    /// Region `k`'s `δ₀` into `ws.delta[k]`: the source's Laplacian
-    /// coordinates, each turned by its vertex's skin-blended rotation from
-    /// the source skeleton to the target, in the part's frame `q` (a skirt
-    /// vertex shared by both thighs turns the same way in both solves).
-    fn source_delta(&self, k: usize, q: DQuat, source: &[[f64; 3]], ws: &mut DeformWorkspace) {
+    /// The regions solved one after another in solve order, each with its
+    /// overlap passes ([`DeformOptions::overlap_passes`]).
+    fn solve_in_order(&self, rot: &[DQuat], source: &[[f64; 3]], ws: &mut DeformWorkspace) {
+        for k in 0..self.regions.len() {
+            let q = self.frame_of(k, rot);
+            self.source_delta(k, q, source, &ws.turn, &mut ws.regions[k]);
+            self.solve_region(k, q, ws);
+            let r = &self.regions[k];
+            if self.overlap_passes > 1
+                && !r.siblings.is_empty()
+                && r.siblings.iter().all(|&j| j < k)
+            {
+                for _ in 1..self.overlap_passes {
+                    self.blend_shared(k, ws);
+                    for j in r.siblings.iter().copied().chain([k]) {
+                        self.solve_region(j, self.frame_of(j, rot), ws);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The regions solved level by level ([`super::levels`]): every
+    /// region's `δ₀` at once, then per level its regions' targets read
+    /// (one thread) and the level's regions solved at once, each into its
+    /// own scratch; the same bits as [`Deformer::solve_in_order`].
+    fn solve_by_level(
+        &self,
+        levels: &Levels,
+        rot: &[DQuat],
+        source: &[[f64; 3]],
+        ws: &mut DeformWorkspace,
+    ) {
+        let turn = &ws.turn;
+        ws.regions
+            .par_iter_mut()
+            .enumerate()
+            .with_max_len(1)
+            .for_each(|(k, s)| self.source_delta(k, self.frame_of(k, rot), source, turn, s));
+        for l in 0..levels.count() {
+            let members = levels.members(l);
+            for &k in members {
+                self.gather_targets(k, self.frame_of(k, rot), ws);
+            }
+            if let &[k] = members {
+                self.solve_own(k, self.frame_of(k, rot), &mut ws.regions[k]);
+                continue;
+            }
+            ws.regions
+                .par_iter_mut()
+                .enumerate()
+                .with_max_len(1)
+                .filter(|(k, _)| levels.of[*k] as usize == l)
+                .for_each(|(k, s)| self.solve_own(k, self.frame_of(k, rot), s));
+        }
+    }
+
+    /// Region `k`'s `δ₀` into `s.delta`: the source's Laplacian
+    /// coordinates, each turned by its vertex's skin-blended rotation
+    /// (`turn`) from the source skeleton to the target, in the part's
+    /// frame `q` (a skirt vertex shared by both thighs turns the same way
+    /// in both solves).
+    fn source_delta(
+        &self,
+        k: usize,
+        q: DQuat,
+        source: &[[f64; 3]],
+        turn: &[DQuat],
+        s: &mut RegionScratch,
+    ) {
         let r = &self.regions[k];
         let qi = q.inverse();
-        for (x, &v) in ws.xs[k].iter_mut().zip(&r.solver.vertices) {
+        for (x, &v) in s.xs.iter_mut().zip(&r.solver.vertices) {
             *x = source[v as usize];
         }
-        apply(r.solver.laplacian(), &ws.xs[k], &mut ws.delta[k]);
+        apply(r.solver.laplacian(), &s.xs, &mut s.delta);
         if self.local_steps > 0 {
-            ws.lsrc[k].copy_from_slice(&ws.delta[k]);
+            s.lsrc.copy_from_slice(&s.delta);
         }
-        for ((dv, &v), rq) in ws.delta[k]
+        for ((dv, &v), rq) in s
+            .delta
             .iter_mut()
             .zip(&r.solver.vertices)
-            .zip(ws.rots[k].iter_mut())
+            .zip(s.rots.iter_mut())
         {
             let turn = if self.local_frames {
-                qi * ws.turn[v as usize]
+                qi * turn[v as usize]
             } else {
                 DQuat::IDENTITY
             };
@@ -508,48 +541,56 @@ impl Deformer {
 
     /// Solves region `k` in its frame `q` (Eq. 32, then the local steps)
     /// with its constraints' targets read now (LBS, another region's
-    /// result, the overlap's shared target), into `ws.world[k]`.
+    /// result, the overlap's shared target), into its `world`, and
+    /// records it as the last result at its vertices.
     fn solve_region(&self, k: usize, q: DQuat, ws: &mut DeformWorkspace) {
+        self.gather_targets(k, q, ws);
+        let s = &mut ws.regions[k];
+        self.solve_own(k, q, s);
+        for (x, &v) in s.world.iter().zip(&self.regions[k].solver.vertices) {
+            ws.last[v as usize] = *x;
+        }
+    }
+
+    /// Region `k`'s constraint targets in its frame `q`, read now (LBS,
+    /// the result of a region solved before it, the overlap's shared
+    /// target, the last result solved at the vertex).
+    fn gather_targets(&self, k: usize, q: DQuat, ws: &mut DeformWorkspace) {
         let r = &self.regions[k];
         let qi = q.inverse();
-        for i in 0..r.targets.len() {
-            let p = match r.targets[i] {
+        let (done, rest) = ws.regions.split_at_mut(k);
+        for (t, out) in r.targets.iter().zip(rest[0].targets.iter_mut()) {
+            let p = match *t {
                 Target::Lbs(v) => ws.lbs[v as usize],
                 Target::Shared(v) => ws.shared[v as usize],
-                Target::Region(j, l) => ws.world[j as usize][l as usize],
+                Target::Region(j, l) => done[j as usize].world[l as usize],
                 Target::Last(v) => ws.last[v as usize],
             };
-            ws.targets[k][i] = (qi * DVec3::from_array(p)).to_array();
+            *out = (qi * DVec3::from_array(p)).to_array();
         }
-        r.solver.solve(
-            &ws.delta[k],
-            &ws.targets[k],
-            &mut ws.local[k],
-            &mut ws.ws[k],
-        );
+    }
+
+    /// Solves region `k` in its frame `q` (Eq. 32, then the local steps)
+    /// from its scratch's `δ₀` and targets, into `s.world`: reads nothing
+    /// but its own scratch.
+    fn solve_own(&self, k: usize, q: DQuat, s: &mut RegionScratch) {
+        let r = &self.regions[k];
+        r.solver
+            .solve(&s.delta, &s.targets, &mut s.local, &mut s.ws);
         for _ in 0..self.local_steps {
             arap::local_step(
                 r.solver.laplacian(),
-                &ws.xs[k],
-                &ws.local[k],
-                &ws.lsrc[k],
-                &mut ws.rots[k],
-                &mut ws.delta[k],
+                &s.xs,
+                &s.local,
+                &s.lsrc,
+                &mut s.rots,
+                &mut s.delta,
             );
-            r.solver.solve(
-                &ws.delta[k],
-                &ws.targets[k],
-                &mut ws.local[k],
-                &mut ws.ws[k],
-            );
+            r.solver
+                .solve(&s.delta, &s.targets, &mut s.local, &mut s.ws);
         }
-        for ((x, y), &v) in ws.world[k]
-            .iter_mut()
-            .zip(&ws.local[k])
-            .zip(&r.solver.vertices)
-        {
+        for (x, y) in s.world.iter_mut().zip(&s.local) {
             *x = (q * DVec3::from_array(*y)).to_array();
-            ws.last[v as usize] = *x;
         }
     }
 
@@ -569,7 +610,7 @@ impl Deformer {
             let r = &self.regions[j];
             for (&(c, _), t) in r.solver.constraints.iter().zip(&r.targets) {
                 if let Target::Shared(v) = *t {
-                    let (x, w) = (ws.world[j][c as usize], r.weights[c as usize]);
+                    let (x, w) = (ws.regions[j].world[c as usize], r.weights[c as usize]);
                     let a = &mut ws.acc[v as usize];
                     for d in 0..3 {
                         a[d] += w * x[d];
@@ -608,13 +649,18 @@ impl Deformer {
         ws: &mut DeformWorkspace,
     ) -> TurnedOver {
         ws.work = unflip::Work::default();
+        // The source's normals and areas once per frame; each reading
+        // below only turns them.
+        unflip::source_normals(tris, source, &mut ws.source_normals);
+        untangle::source_areas(&ws.source_normals, &mut ws.areas);
         let skin = std::mem::take(&mut ws.turn);
+        let bad = unflip::turned_over_from(tris, &ws.source_normals, out, &skin);
         let mut counts = match self.repair_turns {
             RepairTurns::Skin | RepairTurns::SkinThenSurface => {
-                self.repair_against(tris, adj, source, out, ws, &skin, 0)
+                self.repair_against(tris, adj, source, out, ws, &skin, bad, 0)
             }
             RepairTurns::Surface => TurnedOver {
-                before: unflip::turned_over(tris, source, out, &skin).len(),
+                before: bad.len(),
                 after: 0,
             },
         };
@@ -651,7 +697,8 @@ impl Deformer {
         let (mut least, mut last) = (usize::MAX, 0);
         for round in 0..=self.surface_rounds {
             near.turns(source, out, &mut ws.seeds, &mut turn);
-            last = unflip::turned_over(tris, source, out, &turn).len();
+            let bad = unflip::turned_over_from(tris, &ws.source_normals, out, &turn);
+            last = bad.len();
             if last == 0 {
                 least = 0;
                 break;
@@ -663,7 +710,7 @@ impl Deformer {
             if round == self.surface_rounds {
                 break;
             }
-            self.repair_against(tris, adj, source, out, ws, &turn, round);
+            self.repair_against(tris, adj, source, out, ws, &turn, bad, round);
         }
         if last > least {
             out.copy_from_slice(&ws.surface_best);
@@ -688,8 +735,12 @@ impl Deformer {
     /// nothing is left turned over either way, read 110 → 121 triangles
     /// turned over against the rest frame in its worst frame (s12-blocks3).
     ///
-    /// `grow`: doublings of the patch's rings added to every pass
+    /// `bad`: the triangles of `out` turned over under `turn` (sorted, as
+    /// [`unflip::turned_over_from`] gives them; the caller has counted
+    /// them). `grow`: doublings of the patch's rings added to every pass
     /// ([`Deformer::repair_surface`]'s later rounds; 0 for the skin's).
+    /// The source normals and areas in `ws` are the frame's
+    /// ([`Deformer::repair`]).
     #[allow(clippy::too_many_arguments)]
     fn repair_against(
         &self,
@@ -699,16 +750,16 @@ impl Deformer {
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
         turn: &[DQuat],
+        bad: Vec<u32>,
         grow: usize,
     ) -> TurnedOver {
-        let bad = unflip::turned_over(tris, source, out, turn);
         let before = bad.len();
         if before == 0 {
             return TurnedOver::default();
         }
         let mut budget = unflip::Budget::new(self.repair_budget.limit(before));
         let base = ws.work;
-        untangle::references(tris, source, turn, &mut ws.normals, &mut ws.areas);
+        untangle::turned_references(tris, &ws.source_normals, turn, &mut ws.normals);
         let fixed = untangle::UntangleOptions {
             max_steps: self.untangle.steps,
             ..self.untangle

@@ -50,6 +50,7 @@
 pub mod arap;
 pub mod deformer;
 pub mod lbs;
+pub mod levels;
 pub mod near_turns;
 pub mod options;
 pub mod part_laplacian;

@@ -16,11 +16,16 @@
 use super::unflip::Adjacency;
 use crate::mesh::frames::polar;
 use glam::{DMat3, DQuat, DVec3};
+use rayon::prelude::*;
 
 /// Edges from a seed to the farthest vertex of its neighbourhood: 3
 /// (about 37 vertices on a regular mesh, a few centimetres on the samba
 /// capture's): a fold of a few triangles moves a small share of it.
 pub const RINGS: usize = 3;
+
+/// Seeds (at least) a thread of [`Neighbourhoods::turns`] takes: a seed's
+/// alignment is ~1 µs.
+const SEEDS_CHUNK: usize = 128;
 
 /// The seeds and their neighbourhoods of a mesh, built once.
 #[derive(Debug, Clone)]
@@ -108,8 +113,15 @@ impl Neighbourhoods {
         seeds: &mut Vec<DQuat>,
         turn: &mut [DQuat],
     ) {
+        // Seeds in parallel, each its own sum in its own order: the same
+        // bits on any number of threads.
         seeds.clear();
-        seeds.extend((0..self.seeds()).map(|s| self.seed_turn(s, reference, frame)));
+        seeds.par_extend(
+            (0..self.seeds())
+                .into_par_iter()
+                .with_min_len(SEEDS_CHUNK)
+                .map(|s| self.seed_turn(s, reference, frame)),
+        );
         for (t, &s) in turn.iter_mut().zip(&self.seed_of) {
             *t = seeds[s as usize];
         }

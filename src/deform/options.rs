@@ -186,6 +186,13 @@ pub struct DeformOptions {
     /// their own neighbourhoods: CMU 02_02 on the real samba capture 8,
     /// 131_01 frame 96 3; README, issue 42).
     pub surface_rounds: usize,
+    /// Solve the regions level by level, the regions of one level (the
+    /// head, upper arms and thighs; then the forearms and shins; then the
+    /// feet) on several threads at once ([`super::levels`]). The result is
+    /// the sequential solve's bit for bit; configurations that read
+    /// results in solve order (`parent_seams` off, `overlap_passes` above
+    /// 1) are solved in order either way. Default true (session 28).
+    pub parallel_regions: bool,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -304,6 +311,7 @@ impl Default for DeformOptions {
             parent_seams: true,
             repair_turns: RepairTurns::default(),
             surface_rounds: 6,
+            parallel_regions: true,
         }
     }
 }

@@ -54,6 +54,7 @@
 
 use super::unflip::{Adjacency, Budget, WorkLimit, triangle_turn};
 use glam::{DQuat, DVec3};
+use rayon::prelude::*;
 
 /// Options of [`untangle`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,6 +98,31 @@ pub fn references(
         let c = (q - p).cross(r - p);
         *a = 0.5 * c.length();
         *n = (triangle_turn(t, turn) * c).normalize_or_zero();
+    }
+}
+
+/// [`references`]' normals from the source normals
+/// ([`super::unflip::source_normals`], computed once per frame): each
+/// turned by its triangle's rotation under `turn`, normalised, into
+/// `normals` (the same bits as [`references`]). Triangles in parallel.
+pub fn turned_references(
+    tris: &[[u32; 3]],
+    source_normals: &[DVec3],
+    turn: &[DQuat],
+    normals: &mut [DVec3],
+) {
+    normals
+        .par_iter_mut()
+        .zip(tris.par_iter().zip(source_normals.par_iter()))
+        .with_min_len(super::unflip::CHUNK)
+        .for_each(|(n, (t, c))| *n = (triangle_turn(t, turn) * *c).normalize_or_zero());
+}
+
+/// [`references`]' source areas from the source normals
+/// ([`super::unflip::source_normals`]), into `areas`.
+pub fn source_areas(source_normals: &[DVec3], areas: &mut [f64]) {
+    for (a, c) in areas.iter_mut().zip(source_normals) {
+        *a = 0.5 * c.length();
     }
 }
 

@@ -93,8 +93,42 @@ impl FixedSolver {
         Self::build(n, k, &[], false)
     }
 
+    /// [`FixedSolver::new`] from the matrix's compressed rows (`n` rows,
+    /// each its `(column, value)` pairs sorted by column without repeats,
+    /// as [`to_rows`] gives them), for a caller that assembles them
+    /// without sorting triplets. A column out of range is a typed error.
+    pub fn from_rows(
+        n: usize,
+        rows: Vec<Vec<(u32, f64)>>,
+        fixed: &[u32],
+    ) -> Result<FixedSolver, SolveError> {
+        if rows.len() != n {
+            return Err(SolveError::Factor(format!(
+                "{} rows given for {n} unknowns",
+                rows.len()
+            )));
+        }
+        if let Some(r) = rows
+            .iter()
+            .position(|r| r.iter().any(|&(c, _)| c as usize >= n))
+        {
+            return Err(SolveError::Factor(format!(
+                "row {r} has a column out of range (n = {n})"
+            )));
+        }
+        Self::build_rows(n, rows, fixed, true)
+    }
+
     fn build(n: usize, k: Triplets, fixed: &[u32], check: bool) -> Result<FixedSolver, SolveError> {
-        let rows = to_rows(n, k);
+        Self::build_rows(n, to_rows(n, k), fixed, check)
+    }
+
+    fn build_rows(
+        n: usize,
+        rows: Vec<Vec<(u32, f64)>>,
+        fixed: &[u32],
+        check: bool,
+    ) -> Result<FixedSolver, SolveError> {
         let mut free_of = vec![0u32; n];
         for &f in fixed {
             if f as usize >= n || free_of[f as usize] == u32::MAX {

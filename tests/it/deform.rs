@@ -449,3 +449,131 @@ fn a_real_retarget_keeps_every_vertex_in_its_ring() {
         100.0 * dist
     );
 }
+
+/// The real samba capture with its vertices in reverse order (and its
+/// triangles, each turned to start elsewhere): the same surface, another
+/// numbering, so another order of every region's unknowns and of the
+/// solver's elimination. Its chin landmark is renumbered with it. Made once
+/// per test binary.
+fn reversed_samba_db(d: &std::path::Path) -> std::path::PathBuf {
+    use std::sync::OnceLock;
+    use surfmotion::mesh::io::{obj, pc2};
+    static DB: OnceLock<std::path::PathBuf> = OnceLock::new();
+    DB.get_or_init(|| {
+        let dir = common::fixture_dir("deform-samba-reversed");
+        let mesh = obj::read_obj(&d.join("4d/samba/samba.obj")).unwrap();
+        let cache = pc2::read_pc2(&d.join("4d/samba/samba.pc2")).unwrap();
+        let n = mesh.positions().len() as u32;
+        let new = |v: u32| n - 1 - v;
+        let tris: Vec<[u32; 3]> = mesh
+            .triangles()
+            .iter()
+            .rev()
+            .map(|t| [new(t[1]), new(t[2]), new(t[0])])
+            .collect();
+        let rev = |p: &[[f64; 3]]| p.iter().rev().copied().collect::<Vec<_>>();
+        let m = surfmotion::mesh::Mesh::new(rev(mesh.positions()), tris).unwrap();
+        obj::write_obj(&m, None, &dir.join("samba.obj")).unwrap();
+        let frames: Vec<[f64; 3]> = cache.positions.chunks(n as usize).flat_map(rev).collect();
+        pc2::write_pc2(n as usize, &frames, &dir.join("samba.pc2")).unwrap();
+        let fixture = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/samba.landmarks.json");
+        let mut marks: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(fixture).unwrap()).unwrap();
+        let chin = marks["chin"].as_u64().unwrap() as u32;
+        marks["chin"] = serde_json::json!(new(chin));
+        std::fs::write(dir.join("marks.json"), marks.to_string()).unwrap();
+        let db = dir.join("db");
+        common::run_ok(
+            std::process::Command::new(common::bin())
+                .args(["db", "init", db.to_str().unwrap(), "--mesh"])
+                .arg(dir.join("samba.obj"))
+                .arg("--sequence")
+                .arg(format!("dance={}", dir.join("samba.pc2").display()))
+                .arg("--landmarks")
+                .arg(dir.join("marks.json")),
+        );
+        db
+    })
+    .clone()
+}
+
+/// The regions solved level by level, a level's regions on several
+/// threads at once (`DeformOptions::parallel_regions`, the default since
+/// session 28), give the sequential solve's frames bit for bit, repair
+/// included, and each region's own result too: on the real samba capture,
+/// on it with its vertices renumbered in reverse, and on the synthetic
+/// database; frames of a walk (CMU 02_02) and of kicks and lunges
+/// (131_01, the repair's hardest), retrieved and interpolated as
+/// `retarget` retrieves them. The levels must be in use (4 of them: torso;
+/// head, upper arms, thighs; forearms, shins; feet), and a configuration
+/// that reads results in solve order (`parent_seams` off) is solved in
+/// order.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn regions_solved_by_level_in_parallel_equal_the_sequential_solve_bit_for_bit() {
+    let Some(d) = common::data_dir() else { return };
+    let dbs = [
+        ("samba", samba_capture_db(&d)),
+        ("samba reversed", reversed_samba_db(&d)),
+        ("synthetic", common::synthetic_db(&d)),
+    ];
+    let bits =
+        |p: &[[f64; 3]]| -> Vec<[u64; 3]> { p.iter().map(|x| x.map(f64::to_bits)).collect() };
+    let mut compared = 0;
+    for (name, db) in dbs {
+        let ch = Character::load(&db, &surfmotion::db::Quiet).unwrap();
+        let n = ch.n();
+        let par = Deformer::new(&ch, DeformMode::Part, &DeformOptions::default()).unwrap();
+        let seq_opts = DeformOptions {
+            parallel_regions: false,
+            ..Default::default()
+        };
+        let seq = Deformer::new(&ch, DeformMode::Part, &seq_opts).unwrap();
+        assert_eq!(par.levels(), Some(4), "{name}: the levels are not in use");
+        assert_eq!(seq.levels(), None, "{name}");
+        let in_order = DeformOptions {
+            parent_seams: false,
+            ..Default::default()
+        };
+        let old = Deformer::new(&ch, DeformMode::Part, &in_order).unwrap();
+        assert_eq!(
+            old.levels(),
+            None,
+            "{name}: the last result's seams need the order"
+        );
+        let (mut wp, mut ws) = (par.workspace(), seq.workspace());
+        let (mut a, mut b) = (vec![[0.0; 3]; n], vec![[0.0; 3]; n]);
+        for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
+            let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), 30.0).unwrap();
+            let raw = run(&ch, &m, DeformMode::None);
+            let mut repaired = 0;
+            for k in (0..raw.report.frames).step_by(9) {
+                let src = &raw.positions[k * n..(k + 1) * n];
+                let sp = ch.rig().frame_joints(src);
+                let ca = par.deform(&ch, src, &sp, &raw.query[k], &mut a, &mut wp);
+                let cb = seq.deform(&ch, src, &sp, &raw.query[k], &mut b, &mut ws);
+                assert_eq!(ca, cb, "{name} {clip} frame {k}: turned-over counts");
+                assert!(
+                    bits(&a) == bits(&b),
+                    "{name} {clip} frame {k}: frames differ"
+                );
+                let (ra, rb) = (
+                    par.region_results(&raw.query[k], &wp),
+                    seq.region_results(&raw.query[k], &ws),
+                );
+                for (x, y) in ra.iter().zip(&rb) {
+                    assert!(
+                        bits(&x.positions) == bits(&y.positions),
+                        "{name} {clip} frame {k}: region {:?} differs",
+                        x.joint
+                    );
+                }
+                repaired += usize::from(ca.before > 0);
+                compared += 1;
+            }
+            eprintln!("{name} {clip}: frames equal bit for bit, {repaired} of them repaired");
+        }
+    }
+    assert!(compared >= 30, "{compared} frames compared");
+}
