@@ -1,6 +1,6 @@
 //! Evaluation of the automatic rig (issue 41): `cargo run --release
-//! --example autorig_eval -- [DATA] [real|synth|all]` (DATA defaults to
-//! `../shared/data`).
+//! --example autorig_eval -- [DATA] [real|synth|all|facing|orders|contact]`
+//! (DATA defaults to `../shared/data`).
 //!
 //! - real captures (samba, crane): the embedding from the automatic
 //!   landmarks (the parts found on the rest frame `db init` chooses)
@@ -16,7 +16,10 @@
 //!   two motion sets with `synth::database::drive`): the automatic rig's
 //!   joints read off every frame (its regressors) against the skeleton that
 //!   drove the frame, mean over joints and frames in % of the height, and
-//!   its part labels against the generating rig's.
+//!   its part labels against the generating rig's;
+//! - `facing`: the real captures turned about the vertical and mirrored,
+//!   the automatic facing, chin and head joint against the landmark rig's
+//!   moved alike.
 
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -108,8 +111,187 @@ fn real(data: &Path) {
             eprintln!("  {name}: {n}");
         }
         eprintln!("  {name}: {}", auto.summary());
+        eprintln!(
+            "  {name}: facing {:.1}° from the landmark rig's",
+            facing_deg(&auto, truth.facing)
+        );
         if name == "samba" {
             contact_first(&mesh, &frames, 130, false);
+        }
+    }
+}
+
+/// The angle (degrees) between the automatic rig's facing and `want`.
+fn facing_deg(auto: &surfmotion::embed::auto::report::AutoRig, want: [f64; 3]) -> f64 {
+    let (a, b) = (DVec3::from_array(auto.facing), DVec3::from_array(want));
+    a.normalize_or_zero()
+        .dot(b.normalize_or_zero())
+        .clamp(-1.0, 1.0)
+        .acos()
+        .to_degrees()
+}
+
+/// The automatic rig's facing on the real captures turned about +Y by
+/// 0°, 30°, 90°, 180°, 270°, each also mirrored (x → −x): the angle to
+/// the landmark rig's facing turned and mirrored alike, and the chin's
+/// and the head joint's distance to the landmark rig's (% of the height;
+/// the rig embedded on the topology, the rest `db init` keeps for them).
+fn facing(data: &Path) {
+    println!(
+        "| capture | turn | mirrored | facing off (°) | chin off (% h) | head joint off (% h) |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for name in ["samba", "crane"] {
+        let pc2 = data.join(format!("4d/{name}/{name}.pc2"));
+        let Ok(seq) = load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()) else {
+            println!("| {name} | not run |");
+            continue;
+        };
+        let fixture = PathBuf::from(format!("tests/fixtures/{name}.landmarks.json"));
+        let lm = Landmarks::load(&fixture, seq.mesh().vertex_count()).expect("fixture landmarks");
+        let truth = Embedding::new(seq.mesh(), &lm, None).expect("landmark rig");
+        let h = truth.height;
+        for yaw in [0.0_f64, 30.0, 90.0, 180.0, 270.0] {
+            for mirror in [false, true] {
+                let m = glam::DMat3::from_diagonal(DVec3::new(
+                    if mirror { -1.0 } else { 1.0 },
+                    1.0,
+                    1.0,
+                )) * glam::DMat3::from_rotation_y(yaw.to_radians());
+                let place = |f: &[[f64; 3]]| -> Vec<[f64; 3]> {
+                    f.iter()
+                        .map(|q| (m * DVec3::from_array(*q)).to_array())
+                        .collect()
+                };
+                let mut tris = seq.mesh().triangles().to_vec();
+                if mirror {
+                    tris.iter_mut().for_each(|t| t.swap(1, 2));
+                }
+                let Ok(mesh) = Mesh::new(place(seq.mesh().positions()), tris) else {
+                    continue;
+                };
+                let own: Vec<Vec<[f64; 3]>> = (0..seq.frame_count())
+                    .map(|f| place(seq.frame(f)))
+                    .collect();
+                let frames: Vec<&[[f64; 3]]> = own.iter().map(Vec::as_slice).collect();
+                let Ok(auto) = auto_rig(&mesh, &frames, &db_init_options(None)) else {
+                    println!("| {name} | {yaw} | {mirror} | refused |");
+                    continue;
+                };
+                let want = (m * DVec3::from_array(truth.facing)).to_array();
+                let joint =
+                    |e: &Embedding, c: Canonical| m * DVec3::from_array(e.joints[c.index()]);
+                let chin = |l: &Landmarks, p: &[[f64; 3]]| {
+                    l.point(surfmotion::embed::landmarks::Landmark::Chin, p)
+                        .map(DVec3::from_array)
+                };
+                let chin_off = match (
+                    chin(&auto.landmarks, mesh.positions()),
+                    chin(&lm, seq.mesh().positions()),
+                ) {
+                    (Some(a), Some(b)) => 100.0 * a.distance(m * b) / h,
+                    _ => f64::NAN,
+                };
+                let head_off = Embedding::new(&mesh, &auto.landmarks, None).map_or(f64::NAN, |e| {
+                    100.0
+                        * DVec3::from_array(e.joints[Canonical::Head.index()])
+                            .distance(joint(&truth, Canonical::Head))
+                        / h
+                });
+                println!(
+                    "| {name} | {yaw:.0}° | {mirror} | {:.1} | {chin_off:.2} | {head_off:.2} |",
+                    facing_deg(&auto, want)
+                );
+            }
+        }
+    }
+}
+
+/// Issue 41's held-rule question: samba rigged on rest frame `r` with the
+/// decomposition fitted to the pose-quantile sample seeded by frame `x`
+/// (`r`, `x` in 2 and 4, frames of one still start), the frames given in
+/// the sample's order (the rest frame first): the left elbow and right
+/// knee against the landmark rig (% of the height), the parts, and the
+/// same rest and sample with the vertices re-ordered (the decomposition's
+/// k-means seeding follows the vertex order).
+fn held_parts(data: &Path) {
+    use surfmotion::embed::auto::options::FrameSample;
+    use surfmotion::embed::pose_order::{descriptor, quantiles};
+    let pc2 = data.join("4d/samba/samba.pc2");
+    let Ok(seq) = load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()) else {
+        println!("samba: not run");
+        return;
+    };
+    let mesh = seq.mesh().clone();
+    let frames: Vec<&[[f64; 3]]> = (0..seq.frame_count()).map(|f| seq.frame(f)).collect();
+    let lm = Landmarks::load(
+        &PathBuf::from("tests/fixtures/samba.landmarks.json"),
+        mesh.vertex_count(),
+    )
+    .expect("fixture landmarks");
+    let truth = Embedding::new(&mesh, &lm, None).expect("landmark rig");
+    let h = truth.height;
+    let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
+    let sample = |x: usize| quantiles(&descs, &descs[x], 40);
+    println!(
+        "| rest | sample seeded by | vertices | l_elbow % | r_knee % | joints mean % | parts | sample shared |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    let (s2, s4) = (sample(2), sample(4));
+    let shared = s2.iter().filter(|f| s4.contains(f)).count();
+    for (r, x) in [(2, 2), (4, 4), (4, 2), (2, 4)] {
+        for shuffle in [false, true] {
+            let s = sample(x);
+            let mut f: Vec<&[[f64; 3]]> = vec![frames[r]];
+            f.extend(s.iter().skip(1).map(|&k| frames[k]));
+            let (m, own) = if shuffle {
+                let order = shuffled(mesh.vertex_count());
+                let mut new_of = vec![0u32; order.len()];
+                for (k, &o) in order.iter().enumerate() {
+                    new_of[o] = k as u32;
+                }
+                let tris: Vec<[u32; 3]> = mesh
+                    .triangles()
+                    .iter()
+                    .map(|t| t.map(|i| new_of[i as usize]))
+                    .collect();
+                let pos =
+                    |q: &[[f64; 3]]| -> Vec<[f64; 3]> { order.iter().map(|&o| q[o]).collect() };
+                let own: Vec<Vec<[f64; 3]>> = f.iter().map(|q| pos(q)).collect();
+                (Mesh::new(pos(mesh.positions()), tris).expect("mesh"), own)
+            } else {
+                (mesh.clone(), f.iter().map(|q| q.to_vec()).collect())
+            };
+            let fr: Vec<&[[f64; 3]]> = own.iter().map(Vec::as_slice).collect();
+            let opts = AutoOptions {
+                rest_frame: Some(0),
+                frames: FrameSample::PoseQuantiles,
+                max_frames: fr.len(),
+                ..db_init_options(None)
+            };
+            let Ok(auto) = auto_rig(&m, &fr, &opts) else {
+                println!("| {r} | {x} | refused |");
+                continue;
+            };
+            let Ok(e) = Embedding::new_on_frame(&m, fr[0], &auto.landmarks, None) else {
+                println!("| {r} | {x} | embedding refused |");
+                continue;
+            };
+            let d = |c: Canonical| {
+                100.0
+                    * DVec3::from_array(e.joints[c.index()])
+                        .distance(DVec3::from_array(truth.joints[c.index()]))
+                    / h
+            };
+            let (mean, _, _) = joint_error(&e.joints, &truth.joints);
+            println!(
+                "| {r} | {x} | {} | {:.1} | {:.1} | {:.2} | {} | {shared} of 40 |",
+                if shuffle { "re-ordered" } else { "as captured" },
+                d(Canonical::LElbow),
+                d(Canonical::RKnee),
+                100.0 * mean / h,
+                auto.parts
+            );
         }
     }
 }
@@ -546,10 +728,11 @@ fn synth(data: &Path) {
             );
             let (e, wj, wd) = joint_error(&mine.joints, &rig.joints);
             eprintln!(
-                "  rest frame {rest_frame:?} ({why}); rest joints {:.2}%, worst {} {:.1}%; {}",
+                "  rest frame {rest_frame:?} ({why}); rest joints {:.2}%, worst {} {:.1}%; facing {:.1}° from the rig's; {}",
                 100.0 * e / h,
                 Canonical::ALL[wj].name(),
                 100.0 * wd / h,
+                facing_deg(&auto, rig.facing),
                 auto.summary()
             );
         }
@@ -565,6 +748,12 @@ fn main() {
     }
     if what == "synth" || what == "all" {
         synth(&data);
+    }
+    if what == "held-parts" {
+        held_parts(&data);
+    }
+    if what == "facing" {
+        facing(&data);
     }
     if what == "orders" {
         orders(&data);

@@ -5,7 +5,7 @@
 
 use super::decompose::Decomposition;
 use super::humanoid::{self, Crossing, along, crossings, geodesic, match_joints};
-use super::options::AutoError;
+use super::options::{AutoError, Facing};
 use glam::DVec3;
 
 /// A limb: its tip, its path to the trunk (vertex, distance from the
@@ -41,6 +41,8 @@ pub struct Body<'a> {
     pub centre: DVec3,
     /// Legs' hips at the thigh's end ([`super::options::AutoOptions::thigh_hip`]).
     pub thigh_hip: bool,
+    /// Where the left-right axis is read ([`super::options::AutoOptions::facing`]).
+    pub facing: Facing,
 }
 
 /// The five chains' tips and the trunk they meet in.
@@ -185,8 +187,11 @@ pub fn knee(body: &Body, l: &Limb) -> DVec3 {
         .unwrap_or_else(|| along(body.rest, &l.1, LEG[1] * body.height))
 }
 
-/// The limbs of `chains`, sided; facing square to the line through the
-/// hips (or knees), on the side the toe tips point to from the knees.
+/// The limbs of `chains`, sided; facing square to the chest's widest
+/// horizontal axis ([`super::facing::widest_across`], with
+/// [`Facing::Trunk`] when the chest is clearly wider than deep) or to the
+/// line through the hips (or knees), on the side the toe tips point to
+/// from the knees.
 pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
     let (rest, up, height) = (body.rest, body.up, body.height);
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
@@ -200,7 +205,14 @@ pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
         Some(c) if hips_found => c.joint.position,
         _ => knee(body, l),
     };
-    let across = flat(side_point(&legs[0]) - side_point(&legs[1]));
+    let hips = flat(side_point(&legs[0]) - side_point(&legs[1]));
+    let chest = match body.facing {
+        Facing::Trunk => super::facing::widest_across(rest, up, body.lo, height)
+            .filter(|(_, ratio)| *ratio >= super::facing::MIN_RATIO),
+        Facing::Hips => None,
+    };
+    debug_across(hips, chest);
+    let across = chest.map_or(hips, |(a, _)| a);
     let mut toes = DVec3::ZERO;
     for l in &legs {
         toes += flat(v3(rest[l.0 as usize]) - knee(body, l)).normalize_or_zero();
@@ -243,6 +255,28 @@ pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
         facing,
         left,
     })
+}
+
+/// Logs the left-right axis read off the chest against the hips' line
+/// (tracing, debug level).
+fn debug_across(hips: DVec3, chest: Option<(DVec3, f64)>) {
+    if !tracing::enabled!(tracing::Level::DEBUG) {
+        return;
+    }
+    let angle = |a: DVec3| {
+        let c = a.normalize_or_zero().dot(hips.normalize_or_zero()).abs();
+        c.min(1.0).acos().to_degrees()
+    };
+    match chest {
+        Some((a, ratio)) => tracing::debug!(
+            "automatic rig, left-right: the chest's widest axis ({:.3}, {:.3}, {:.3}), {ratio:.1}× as wide as deep, {:.1}° from the hips' line",
+            a.x,
+            a.y,
+            a.z,
+            angle(a)
+        ),
+        None => tracing::debug!("automatic rig, left-right: the hips' line"),
+    }
 }
 
 /// Logs a limb's crossings (tracing, debug level): the parts, where, how

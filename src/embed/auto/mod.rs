@@ -2,7 +2,7 @@
 //! move together ([`decompose`], a rigid skinning decomposition after Le &
 //! Deng 2012/2014), the joints where the parts meet ([`joints`]), and the
 //! canonical humanoid read off the parts and the surface ([`humanoid`],
-//! [`up`], [`limbs`]); [`rig::auto_rig`] runs them in order.
+//! [`up`], [`facing`], [`limbs`]); [`rig::auto_rig`] runs them in order.
 //!
 //! The result is a set of landmarks on the rest frame ([`report::AutoRig`],
 //! written by `db init` as `auto.landmarks.json` beside the manifest):
@@ -14,6 +14,7 @@
 //! left nothing to edit.
 
 pub mod decompose;
+pub mod facing;
 pub mod humanoid;
 pub mod joints;
 pub mod limbs;

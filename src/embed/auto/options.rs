@@ -31,6 +31,10 @@ pub struct AutoOptions {
     /// trunk. Default false (sessions 20-26's; `hip=thigh` in
     /// [`AUTORIG_ENV`]).
     pub thigh_hip: bool,
+    /// How the body's left-right axis, and so its facing, is found on the
+    /// rest frame ([`Facing`]). Default [`Facing::Trunk`] (session 28;
+    /// `facing=hips` in [`AUTORIG_ENV`] gives sessions 20-27's).
+    pub facing: Facing,
     /// The decomposition's settings.
     pub decompose: DecomposeOptions,
 }
@@ -42,7 +46,34 @@ impl Default for AutoOptions {
             max_frames: 40,
             frames: FrameSample::InOrder,
             thigh_hip: false,
+            facing: Facing::Trunk,
             decompose: DecomposeOptions::default(),
+        }
+    }
+}
+
+/// Where the automatic rig reads the body's left-right axis on the rest
+/// frame ([`AutoOptions::facing`]); the facing is square to it, on the
+/// side the toes point to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Facing {
+    /// The widest horizontal axis of the chest and shoulders
+    /// ([`super::facing::widest_across`]); the hips' line when the band is
+    /// about as deep as it is wide.
+    Trunk,
+    /// The line through the hips found on the legs' paths (else the
+    /// knees): sessions 20-27's. A hip found at a skirt band put samba's
+    /// facing 31° off, (0.86, 0, −0.51).
+    Hips,
+}
+
+impl Facing {
+    /// The rule named `name` (`trunk`, `hips`).
+    pub fn parse(name: &str) -> Option<Facing> {
+        match name {
+            "trunk" => Some(Facing::Trunk),
+            "hips" => Some(Facing::Hips),
+            _ => None,
         }
     }
 }
@@ -85,7 +116,8 @@ impl FrameSample {
 /// The environment variable that overrides `db init`'s automatic rig for
 /// measurements (as `SURFMOTION_SPARSE` does `db build`'s graph):
 /// comma-separated `rest=first|held|standing|standing-near|median`,
-/// `frames=in-order|farthest|quantiles`, `hip=thigh|trunk`, `max=N`.
+/// `frames=in-order|farthest|quantiles`, `hip=thigh|trunk`,
+/// `facing=trunk|hips`, `max=N`.
 pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
 
 /// `db init`'s automatic rig: the rest frame's rule (main's,
@@ -117,7 +149,7 @@ pub fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles, hip=thigh|trunk, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles, hip=thigh|trunk, facing=trunk|hips, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -130,6 +162,7 @@ pub fn apply_override(
             "frames" => auto.frames = FrameSample::parse(v).ok_or_else(bad)?,
             "hip" if v == "thigh" => auto.thigh_hip = true,
             "hip" if v == "trunk" => auto.thigh_hip = false,
+            "facing" => auto.facing = Facing::parse(v).ok_or_else(bad)?,
             "max" => {
                 auto.max_frames = v
                     .parse::<usize>()
@@ -198,7 +231,17 @@ mod tests {
         assert_eq!(rule.pose_rule, PoseRule::Held);
         apply_override("hip=trunk", &mut rule, &mut auto).unwrap();
         assert!(!auto.thigh_hip);
-        for bad in ["rest=middle", "frames", "max=1", "sample=x", "hip=knee"] {
+        assert_eq!(auto.facing, Facing::Trunk);
+        apply_override("facing=hips", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.facing, Facing::Hips);
+        for bad in [
+            "rest=middle",
+            "frames",
+            "max=1",
+            "sample=x",
+            "hip=knee",
+            "facing=toes",
+        ] {
             let e = apply_override(bad, &mut rule, &mut auto).unwrap_err();
             assert!(e.contains(bad) && e.contains(AUTORIG_ENV), "{e}");
         }

@@ -309,6 +309,7 @@ fn find_body<'a>(
         seed,
         centre,
         thigh_hip: opts.thigh_hip,
+        facing: opts.facing,
     };
     Ok((body, tips, notes))
 }

@@ -175,7 +175,7 @@ fn samba_rigs_alike_in_any_order_of_its_frames() {
 
 /// The synthetic humanoid (2 cm grid) walking a 4 s turn: its mesh and
 /// frames.
-fn synthetic_walk() -> (Mesh, Vec<Vec<[f64; 3]>>) {
+pub(super) fn synthetic_walk() -> (Mesh, Vec<Vec<[f64; 3]>>) {
     use surfmotion::jobs::synth_db::SynthClip;
     use surfmotion::synth::clips::{Gait, gait_clip};
     use surfmotion::synth::database::{Dynamics, drive};

@@ -3,6 +3,7 @@
 mod auto;
 mod auto_arms;
 mod auto_contact;
+mod auto_facing;
 mod auto_hands;
 mod auto_held;
 mod auto_knees;
