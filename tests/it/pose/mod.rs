@@ -6,4 +6,5 @@ mod feet;
 mod ground;
 mod placement;
 mod toes;
+mod travel;
 mod two_files;

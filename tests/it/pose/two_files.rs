@@ -165,6 +165,24 @@
 //! not run on the other groups. The mirrored pair (both files reflected
 //! left for right) gives the plain pair's figures to 1e-3 of the height.
 //!
+//! Session 28: the pelvis's own gap decomposed (`pose::travel`): along the
+//! travel a drift of the two scales (the kernel's legs, 1.1638, against
+//! the conversion's standing hip height, 1.1446 / 1.1452 / 1.1473), across
+//! it 0.6-0.8 % plus the travel headings 0.5-0.6° apart, up 0.2 / 0.25 /
+//! −1.2 %. The travel's scale measured in the kernel (scratch switches,
+//! not kept; abs / the pelvis %, 02_01 / 02_02 / 02_03; the mirrored pair
+//! equal to 02_03 in every row): the legs (main) 1.81 / 2.07 / 2.12, the
+//! pelvis 2.15 / 2.43 / 2.15; the hips' standing height (90th percentile of
+//! the hips' midpoint over the lowest foot joint, against the character's
+//! rest) 1.91 / 2.11 / 2.39, the pelvis 1.26 / 1.37 / 1.44; with the
+//! pelvis-frame rule of session 27 1.82 / 1.98 / 2.21; the hip → ankle
+//! extension (90th percentile) 1.70 / 1.94 / 2.07 (frame rule 1.70 / 1.94
+//! / 1.98), but that lengthens every clip's travel 1-4 % (the AMC's too:
+//! it does not undo the conversion's scale, BVH / AMC 1.003); the knee over
+//! its foot 2.82 / 3.24 / 3.25; the travel fitted to keep the result's
+//! lowest foot joint still 2.77 / 2.42 / 2.12 (the fit reads 0.95-0.97 on
+//! both files of 02_01 and 02_02, 0.71 on 02_03: the rolling foot).
+//!
 //! Earlier figures (measured 2026-11-29):
 //! - 01_01: the cgspeed BVH retargets as the AMC does (0.00 %).
 //! - The CC conversions: 3.1-4.2 % apart, 1.7-2.7 % of it posture. The
@@ -226,7 +244,7 @@ fn drop_frames(c: &Clip, n: usize) -> Clip {
 /// The two clips from the same instant: BVH frame `k ≥ skip` is AMC frame
 /// `ratio · (k − skip) + o`, the pair (skip, o) whose knees' bend differ
 /// least (mean degrees, also returned).
-fn aligned(amc: &Clip, bvh: &Clip) -> (Clip, Clip, f64) {
+pub(super) fn aligned(amc: &Clip, bvh: &Clip) -> (Clip, Clip, f64) {
     let ratio = (amc.fps() / bvh.fps()).round() as i64;
     let pa = detect_clip(amc).unwrap().map.poses(amc).unwrap();
     let pb = detect_clip(bvh).unwrap().map.poses(bvh).unwrap();
@@ -297,7 +315,7 @@ fn other_side(c: C) -> C {
 /// pose's joints reflected and swapped left for right, and the file
 /// joints' world rotations `R` with them (`M R M`, `M` the reflection: a
 /// quaternion's y and z negated).
-fn mirrored(mut cp: ClipPoses) -> ClipPoses {
+pub(super) fn mirrored(mut cp: ClipPoses) -> ClipPoses {
     let flip = |p: &Pose| {
         let mut o = *p;
         for c in Canonical::ALL {
