@@ -167,14 +167,17 @@ pub fn read_rig(path: &Path, key: u64, n: usize) -> Result<Embedding, RigCacheEr
         return Err(header("made from other inputs (another key)"));
     }
     let body = &bytes[nl + 1..];
-    if body.len() as u64 != head.bytes
-        || format!("{:016x}", xxhash_rust::xxh3::xxh3_64(body)) != head.xxh3
-    {
+    if body.len() as u64 != head.bytes {
         return Err(header(&format!(
-            "its rig is {} bytes where {} were written, or changed since (checksum)",
+            "cut or grown: its rig is {} bytes where {} were written",
             body.len(),
             head.bytes
         )));
+    }
+    if format!("{:016x}", xxhash_rust::xxh3::xxh3_64(body)) != head.xxh3 {
+        return Err(header(
+            "changed since it was written (its checksum differs)",
+        ));
     }
     let text = std::str::from_utf8(body).map_err(|_| header("the rig is not UTF-8"))?;
     Ok(Embedding::parse(text, path, n)?)

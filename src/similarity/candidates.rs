@@ -211,20 +211,7 @@ impl Index<'_> {
 mod tests {
     use super::*;
 
-    fn spans(lens: &[usize]) -> Vec<Span> {
-        let mut at = 0;
-        lens.iter()
-            .enumerate()
-            .map(|(k, &len)| {
-                at += len;
-                Span {
-                    name: format!("s{k}"),
-                    start: at - len,
-                    len,
-                }
-            })
-            .collect()
-    }
+    use crate::similarity::sparse::tests::spans;
 
     /// Squared distance of frames `a` and `b` of `f` (`dims` values each).
     fn d2(f: &[f32], dims: usize, a: usize, b: usize) -> f32 {

@@ -954,7 +954,7 @@ fn radii(sim: &SparseSimilarity, near: &[Vec<u32>]) -> Vec<f32> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// Frames on a noisy 2-D loop: a periodic "motion" of period 40.
@@ -977,7 +977,9 @@ mod tests {
         }
     }
 
-    fn spans(lens: &[usize]) -> Vec<Span> {
+    /// Spans `s0`, `s1`, ... of the lengths `lens`, one after another (also
+    /// read by the tests of `candidates`).
+    pub(crate) fn spans(lens: &[usize]) -> Vec<Span> {
         let mut at = 0;
         lens.iter()
             .enumerate()
