@@ -183,6 +183,44 @@
 //! lowest foot joint still 2.77 / 2.42 / 2.12 (the fit reads 0.95-0.97 on
 //! both files of 02_01 and 02_02, 0.71 on 02_03: the rolling foot).
 //!
+//! Session 29: the posture about the pelvis per group and per axis
+//! (printed by this test: the gap about the pelvis left when the BVH's
+//! result takes the AMC result's rotations of one group, re-built on the
+//! character from the pelvis; and each torso joint's rotation in the two
+//! results apart, mean signed degrees about the AMC body's left-right /
+//! forward / vertical axes). With the pelvis fitted to its bones (main
+//! until then), `rel` 1.28 / 1.40 / 1.59 (02_01 / 02_02 / 02_03): the BVH's
+//! pelvis turned +7.1 / +7.3 / +7.0° about the left-right axis (further
+//! forward), −1.0 / −1.1 / −1.1 and −0.8 / −0.5 / +0.7 about the others;
+//! the spine +1.4 / +0.8 / +0.6°, the chest (and the neck and head on it)
+//! +2.1 / +3.8 / +3.9°. The cause: the fit weighs where the rigs put the
+//! hip and spine joints inside the pelvis (the CC rig's hips 9 cm higher
+//! and 4.5 cm back, its pelvis → spine bone 18-20° off the AMC's). The
+//! rest pose (T against A) does not reach the limbs (they take
+//! directions); the reference rule (the ASF rest against the BVH's mean
+//! carriage) is the candidate for the chest's 2-4° (session 27 measured
+//! its share at 0.03 / 0.38 / 0.36; not measured again). Rules measured (switched build, abs / rel / the
+//! pelvis %): the pelvis by the frame of the hips' line and the pelvis →
+//! chest line (kept): 1.82 / 2.09 / 2.08, rel 1.07 / 1.15 / 1.34, the
+//! pelvis 2.15 / 2.43 / 2.12, the pelvises +2.6 / +1.7 / +1.5° apart;
+//! with the spine turning with that pelvis (the trunk as one line):
+//! 1.90 / 2.19 / 2.11, rel 1.22 / 1.32 / 1.48; the spine halfway between
+//! the pelvis and the chest: 1.82 / 2.13 / 2.09, rel 1.18 / 1.40 / 1.58.
+//! The hip-height travel (`pose::travel`) on top of the kept rule: 1.78 /
+//! 1.96 / 2.19 (the pelvis 1.27 / 1.39 / 1.39, rel unchanged); on main's
+//! 1.91 / 2.11 / 2.39. The mirrored pair equals 02_03 in every row. What
+//! remains with the kept rule (`rel`, given the AMC's rotations of): the
+//! pelvis 0.94 / 1.02 / 1.24, the chest 0.90 / 0.84 / 1.05 (the chest
+//! +2.1 / +3.8 / +3.9° forward: its file rotation since a mean carriage
+//! levelled on the pelvis → chest line, against the ASF rest's), the
+//! thighs 0.81 / 0.90 / 0.98, the trunk (pelvis, spine, chest) 0.59 /
+//! 0.61 / 0.83, the legs 0.68 / 0.73 / 0.68; per joint (02_03, abs / rel)
+//! the toes 2.6-3.0 / 3.2-3.3, ankles 2.1-2.2 / 2.1-2.2, head 2.0 / 1.7,
+//! wrists 1.8 / 1.2-1.6, the pelvis 2.12 (horizontal 1.57, vertical
+//! 1.12). The 1 % is not reached: the pelvis's own gap (the travel's
+//! scale, 1.3-1.4 % at best) and the legs' (0.7 about the pelvis) each
+//! exceed what is left for the other.
+//!
 //! Earlier figures (measured 2026-11-29):
 //! - 01_01: the cgspeed BVH retargets as the AMC does (0.00 %).
 //! - The CC conversions: 3.1-4.2 % apart, 1.7-2.7 % of it posture. The
@@ -369,6 +407,145 @@ fn reordered_channels(path: &std::path::Path) -> std::path::PathBuf {
     out
 }
 
+/// A result's global joint rotations per frame.
+type Rotations = [DQuat; Canonical::COUNT];
+
+/// The joints whose rotations [`posture_shares`] swaps, by group.
+const GROUPS: [(&str, &[C]); 10] = [
+    ("the pelvis", &[C::Pelvis]),
+    ("the spine", &[C::Spine]),
+    ("the chest", &[C::Chest]),
+    ("the neck and head", &[C::Neck, C::Head]),
+    (
+        "the arms",
+        &[
+            C::LShoulder,
+            C::RShoulder,
+            C::LElbow,
+            C::RElbow,
+            C::LWrist,
+            C::RWrist,
+        ],
+    ),
+    ("the thighs", &[C::LHip, C::RHip]),
+    ("the shins", &[C::LKnee, C::RKnee]),
+    ("the feet", &[C::LAnkle, C::RAnkle, C::LToe, C::RToe]),
+    (
+        "the trunk (pelvis, spine, chest)",
+        &[C::Pelvis, C::Spine, C::Chest],
+    ),
+    (
+        "the legs",
+        &[
+            C::LHip,
+            C::RHip,
+            C::LKnee,
+            C::RKnee,
+            C::LAnkle,
+            C::RAnkle,
+            C::LToe,
+            C::RToe,
+        ],
+    ),
+];
+
+/// The mean distance about the pelvis (over frames and joints, over `h`)
+/// between `a`'s poses and `b`'s re-built on `character` from the pelvis
+/// with `b`'s global rotations, those of `swap` taken from `a`.
+fn rebuilt_rel(
+    character: &Pose,
+    a: &[(Pose, Rotations)],
+    b: &[(Pose, Rotations)],
+    swap: &[C],
+    h: f64,
+) -> f64 {
+    let p = C::Pelvis.index();
+    let mut sum = 0.0;
+    for ((pa, qa), (pb, qb)) in a.iter().zip(b) {
+        let mut g = *qb;
+        for c in swap {
+            g[c.index()] = qa[c.index()];
+        }
+        let mut t = [glam::DVec3::ZERO; Canonical::COUNT];
+        t[p] = pb[p];
+        for c in Canonical::ALL {
+            if let Some(q) = c.parent() {
+                let (j, k) = (c.index(), q.index());
+                t[j] = t[k] + g[k] * (character[j] - character[k]);
+            }
+            sum += (pa[c.index()] - pa[p]).distance(t[c.index()] - t[p]);
+        }
+    }
+    sum / (a.len() * Canonical::COUNT) as f64 / h
+}
+
+/// What each group's rotations carry of the posture's gap: the gap about
+/// the pelvis re-built from the BVH result's own rotations (returned, it
+/// must equal the measured one), and printed per group the gap left when
+/// the BVH's result takes the AMC's rotations of that group (% of `h`).
+fn posture_shares(
+    character: &Pose,
+    a: &[(Pose, Rotations)],
+    b: &[(Pose, Rotations)],
+    h: f64,
+) -> (f64, String) {
+    let base = rebuilt_rel(character, a, b, &[], h);
+    let per: Vec<String> = GROUPS
+        .iter()
+        .map(|(name, swap)| {
+            format!(
+                "{name} {:.2}",
+                100.0 * rebuilt_rel(character, a, b, swap, h)
+            )
+        })
+        .collect();
+    (
+        base,
+        format!("{:.2} % (none): {}", 100.0 * base, per.join(", ")),
+    )
+}
+
+/// The torso joints' rotations in the two results apart, per axis of the
+/// AMC result's body (mean signed degrees over the frames: about its
+/// left-right axis, + the BVH's leaning further forward; about its
+/// forward axis; about the vertical): the pelvis's, and all of them
+/// printed.
+fn torso_axes(a: &[(Pose, Rotations)], b: &[(Pose, Rotations)]) -> (glam::DVec3, String) {
+    let mut out = Vec::new();
+    let mut pelvis = glam::DVec3::ZERO;
+    for c in [C::Pelvis, C::Spine, C::Chest, C::Neck, C::Head] {
+        let j = c.index();
+        let mut sum = glam::DVec3::ZERO;
+        for ((pa, qa), (_, qb)) in a.iter().zip(b) {
+            let l = (pa[C::LHip.index()] - pa[C::RHip.index()])
+                + (pa[C::LShoulder.index()] - pa[C::RShoulder.index()]);
+            let left = glam::DVec3::new(l.x, 0.0, l.z).normalize_or_zero();
+            let fwd = glam::DVec3::Y.cross(left);
+            let mut d = qb[j] * qa[j].inverse();
+            if d.w < 0.0 {
+                d = -d;
+            }
+            let v = d.to_scaled_axis();
+            sum += glam::DVec3::new(v.dot(left), v.dot(fwd), v.y);
+        }
+        let m = sum / a.len() as f64;
+        if c == C::Pelvis {
+            pelvis = m.map(f64::to_degrees);
+        }
+        out.push(format!(
+            "{c:?} {:+.1}/{:+.1}/{:+.1}",
+            m.x.to_degrees(),
+            m.y.to_degrees(),
+            m.z.to_degrees()
+        ));
+    }
+    let text = format!(
+        "the torso's rotations apart (BVH against AMC, degrees about the left-right / forward / vertical axes) {}",
+        out.join(", ")
+    );
+    (pelvis, text)
+}
+
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn one_performance_as_amc_and_as_bvh_retargets_alike() {
@@ -390,41 +567,41 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
         (
             "cmu-amc/02/02_01.amc",
             "cmu-bvh-ccrig/002_01.bvh",
-            0.019,
-            0.0138,
+            0.0192,
+            0.0117,
             0.0224,
         ),
         (
             "cmu-amc/02/02_02.amc",
             "cmu-bvh-ccrig/002_02.bvh",
-            0.0216,
-            0.015,
+            0.0219,
+            0.0125,
             0.0252,
         ),
         (
             "cmu-amc/02/02_03.amc",
             "cmu-bvh-ccrig/002_03.bvh",
             0.022,
-            0.017,
+            0.0144,
             0.0226,
         ),
         // The same conversion written again with every joint's rotation
         // channels in another order (X Y Z for the file's Z Y X): the same
         // rotations, so the same figures.
-        ("cmu-amc/02/02_03.amc", REORDERED, 0.022, 0.017, 0.0226),
+        ("cmu-amc/02/02_03.amc", REORDERED, 0.022, 0.0144, 0.0226),
         // Turned 30° about the vertical and scaled by 1.37, the result
         // turned back: the same figures (asserted below to 1e-4 of the
         // height; the contact band is a fraction of the leg).
-        ("cmu-amc/02/02_03.amc", TURNED, 0.022, 0.017, 0.0226),
+        ("cmu-amc/02/02_03.amc", TURNED, 0.022, 0.0144, 0.0226),
         // Both files mirrored left for right: the same figures (asserted
         // below to 0.1 % of the height; the character is the generated
         // walk's, symmetric).
-        ("cmu-amc/02/02_03.amc", MIRRORED, 0.022, 0.017, 0.0226),
+        ("cmu-amc/02/02_03.amc", MIRRORED, 0.022, 0.0144, 0.0226),
         // Re-timed: the BVH resampled to 24 fps, then to the 30 fps every
         // clip is read at, so its frames are interpolated twice (a run at
         // 24 fps loses its footfalls' detail: 3.28 % apart, 1.84 % about
         // the pelvis, the pelvis 3.11 %, measured).
-        ("cmu-amc/02/02_03.amc", RETIMED, 0.035, 0.021, 0.034),
+        ("cmu-amc/02/02_03.amc", RETIMED, 0.035, 0.0166, 0.034),
     ];
     let mut got = Vec::new();
     let reordered = reordered_channels(&m.join("cmu-bvh-ccrig/002_03.bvh"));
@@ -453,7 +630,7 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
         let q = DQuat::from_rotation_y(30f64.to_radians());
         let c0 = character[C::Pelvis.index()] * glam::DVec3::new(1.0, 0.0, 1.0);
         let mirror = b == MIRRORED;
-        let on = |c: &Clip, turn: bool| -> (Vec<Pose>, f64, Vec<Pose>) {
+        let on = |c: &Clip, turn: bool| -> (Vec<(Pose, Rotations)>, f64, Vec<Pose>) {
             let c = c.try_resampled(30.0).unwrap();
             let map = detect_clip(&c).unwrap().map;
             let mut cp = clip_poses(&c, &map).unwrap();
@@ -466,18 +643,30 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
             }
             let out = retarget(&character, &cp.reference, &cp.poses)
                 .into_iter()
-                .map(|(p, _)| {
+                .map(|(p, g)| {
                     if turn {
-                        p.map(|x| c0 + q.inverse() * (x - c0))
+                        (
+                            p.map(|x| c0 + q.inverse() * (x - c0)),
+                            g.map(|r| q.inverse() * r),
+                        )
                     } else {
-                        p
+                        (p, g)
                     }
                 })
                 .collect();
             (out, leg_length(&cp.reference.pose), cp.poses)
         };
-        let ((ra, la, pa), (rb, lb, pb)) = (on(&amc, false), on(&bvh, b == TURNED));
-        let n = ra.len().min(rb.len());
+        let ((ga, la, pa), (gb, lb, pb)) = (on(&amc, false), on(&bvh, b == TURNED));
+        let n = ga.len().min(gb.len());
+        let (ra, rb): (Vec<Pose>, Vec<Pose>) = (
+            ga.iter().map(|x| x.0).collect(),
+            gb.iter().map(|x| x.0).collect(),
+        );
+        let (rel_fk, shares) = posture_shares(&character, &ga[..n], &gb[..n], h);
+        let (pelvis_turn, axes) = torso_axes(&ga[..n], &gb[..n]);
+        eprintln!(
+            "{a} vs {b}: about the pelvis, given the AMC result's rotations of {shares}; {axes}"
+        );
         let p = C::Pelvis.index();
         // The root's horizontal travel over the common span.
         let travel = |q: &[Pose]| {
@@ -527,6 +716,19 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
             rel / (n * Canonical::COUNT) as f64 / h,
         );
         let pelvis = pelvis / n as f64 / h;
+        // The pelvis turns by the frame of its hips' and trunk's lines:
+        // by the fit to its bones the CC rig's turned 7.0-7.3° further
+        // forward than the AMC's (session 29), by the frame 1.5°.
+        assert!(
+            pelvis_turn.abs().max_element() < 3.0,
+            "{a} vs {b}: the pelvises turned {pelvis_turn:.2} degrees apart"
+        );
+        // The breakdown re-builds the BVH's result from its rotations: it
+        // must give the measured posture back.
+        assert!(
+            (rel_fk - rel).abs() < 1e-9,
+            "{a} vs {b}: {rel_fk} re-built against {rel}"
+        );
         eprintln!(
             "{a} vs {b}: {n} frames at 30 fps, {:.2}% of the height apart, {:.2}% about the pelvis, \
              the pelvis {:.2}%; legs {:.4}, travel {:.4} times the AMC's",
