@@ -27,16 +27,6 @@ pub fn children() -> [Vec<Canonical>; Canonical::COUNT] {
 
 /// Global rotation of each joint taking `rest`'s bones onto `pose`'s.
 pub fn pose_rotations(rest: &Pose, pose: &Pose) -> [DQuat; Canonical::COUNT] {
-    pose_rotations_from(rest, pose, None)
-}
-
-/// [`pose_rotations`] with the root's rotation given (`None`: the fit);
-/// every other joint is measured on it as usual.
-pub fn pose_rotations_from(
-    rest: &Pose,
-    pose: &Pose,
-    root: Option<DQuat>,
-) -> [DQuat; Canonical::COUNT] {
     // Called per frame (and per part) by synthesis: the hierarchy is built once.
     static KIDS: std::sync::OnceLock<[Vec<Canonical>; Canonical::COUNT]> =
         std::sync::OnceLock::new();
@@ -52,7 +42,6 @@ pub fn pose_rotations_from(
             )
         };
         g[j.index()] = match ks.len() {
-            _ if j.parent().is_none() && root.is_some() => root.unwrap_or(DQuat::IDENTITY),
             0 => pr,
             1 => {
                 let (o, d) = bone(&ks[0]);

@@ -72,17 +72,13 @@ pub fn retarget(
 /// chest: CMU 01_01's cgspeed BVH conversion drops the thorax's length and
 /// hangs the neck and shoulders 11.7 cm lower on the same rotations than
 /// the AMC, and its chest, then its neck, head and arms, turned
-/// differently. The pelvis turns by its bones, not its file joint: the
+/// differently. The pelvis keeps the fit to its hips and spine bones: the
 /// root's own rotation leaves out the lower back's (CMU `lowerback`, a
 /// bone off the root in the ASF, a zero-length joint on `Hips` in the
 /// BVH, carries the spine), and the character's trunk then leaned up to
 /// 12° less than the clip's in CMU 131_01's lunges while its chest and
-/// head followed the clip (the head 3° past the clip's own line). Which
-/// bones: the frame of the hips' line and the pelvis → chest line, which
-/// any rig draws alike, not the fit to the hips' and spine's bones, which
-/// weighs where a rig puts its hip and spine joints inside the pelvis
-/// (the CC rig's BVH of a CMU capture turned the pelvis 7° further forward
-/// than the AMC by the fit, 1.5-2.6° by the frame; `pose::two_files`).
+/// head followed the clip (the head 3° past the clip's own line); the
+/// pelvis's bones sit alike in an AMC and its conversions.
 pub fn retarget_with_neutral(
     character: &Pose,
     neutral: &Pose,

@@ -15,10 +15,7 @@
 //!   bones onto frame `t`'s ([`pose_rotations`]) and `H` the turn about the
 //!   vertical that faces the character's rest frame the reference's way. A
 //!   clip standing neutrally gives the character standing as captured; the
-//!   clip's motion comes on top. The pelvis's `A` takes the reference's
-//!   pelvis frame (the hips' line and the pelvis → chest line) onto the
-//!   frame's: where a rig puts its hip and spine joints inside the pelvis
-//!   does not turn it.
+//!   clip's motion comes on top.
 //! - **Neck and head**: the neck's turn relative to the chest is taken
 //!   around the clip's *typical carriage* (the mean over the clip of
 //!   `L(t) = A_chest⁻¹ A_neck`, call it `M`):

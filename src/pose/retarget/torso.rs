@@ -63,8 +63,7 @@ pub(super) fn neck_carriage(rotations: &[[DQuat; Canonical::COUNT]]) -> DQuat {
 
 /// The clip's global joint rotations since its reference per pose of
 /// `mocap` (the poses turned by `tilt`, `r` the reference's pose as the
-/// kernel uses it): the fit to the bones ([`trunk_fit`]: the pelvis by
-/// the frame of its hips' line and its trunk's line), with the
+/// kernel uses it): the fit to the bones ([`pose_rotations`]), with the
 /// chest (and the spine and neck on it) from the clip's own
 /// joint rotations when the reference carries one per pose
 /// ([`Reference::rotations`], [`torso_from_file`]).
@@ -89,7 +88,7 @@ pub(super) fn clip_rotations_from(
     at: Option<JointRotations>,
 ) -> Vec<[DQuat; Canonical::COUNT]> {
     let mut rotations: Vec<[DQuat; Canonical::COUNT]> =
-        mocap.par_iter().map(|m| trunk_fit(r, m)).collect();
+        mocap.par_iter().map(|m| pose_rotations(r, m)).collect();
     let file = &reference.rotations;
     // The reference's own file rotations: the rest skeleton's are the
     // identity; a frame's, turned as the poses are.
@@ -110,46 +109,13 @@ pub(super) fn clip_rotations_from(
     rotations
 }
 
-/// The pelvis's frame: the hips' line (right → left) and the pelvis →
-/// chest line made square to it; `None` when either has no length.
-fn pelvis_frame(p: &Pose) -> Option<glam::DMat3> {
-    let x = (p[C::LHip.index()] - p[C::RHip.index()]).normalize_or_zero();
-    let s = p[C::Chest.index()] - p[C::Pelvis.index()];
-    let y = (s - x * s.dot(x)).normalize_or_zero();
-    (x != DVec3::ZERO && y != DVec3::ZERO).then(|| glam::DMat3::from_cols(x, y, x.cross(y)))
-}
-
-/// The rotations taking `r`'s bones onto `m`'s ([`pose_rotations`]),
-/// the pelvis's the one taking `r`'s pelvis frame onto `m`'s
-/// ([`pelvis_frame`]; the fit when either frame is undefined).
-///
-/// The fit to the pelvis's three bones (hips, spine) weighs where each
-/// rig puts its joints inside the pelvis: CMU's AMC hangs its hips 11 cm
-/// below the root, the Reallusion CC rig's 2 cm (and 4.5 cm further
-/// back), and the CC rig's pelvis → spine bone is pitched 18-20° from the
-/// AMC's, so the same performance's pelvis turned 7.0-7.3°
-/// further forward from the CC-rig BVH (mean over the frames of 02_01,
-/// 02_02, 02_03, about the body's left-right axis; `pose::two_files`).
-/// The hips' line and the trunk's line are where any rig puts them: from
-/// their frame the two pelvises turn 1.5-2.6° apart.
-fn trunk_fit(r: &Pose, m: &Pose) -> [DQuat; Canonical::COUNT] {
-    match (pelvis_frame(r), pelvis_frame(m)) {
-        (Some(fr), Some(fm)) => crate::pose::rotations::pose_rotations_from(
-            r,
-            m,
-            Some(DQuat::from_mat3(&(fm * fr.transpose())).normalize()),
-        ),
-        _ => pose_rotations(r, m),
-    }
-}
-
 /// Replaces the chest's rotation in `a` (the rotations taking the
 /// reference `r`'s bones onto `m`'s) by its file joint's rotation since
 /// the reference (`w · w_ref⁻¹`, when both are known) with its twist about
 /// the spine taken from the shoulders ([`shoulder_twist`]), and re-derives the
 /// single-child spine and neck (the least rotation of their bone,
 /// composed on the parent's, as [`pose_rotations`] does). The pelvis keeps
-/// its own rotation ([`trunk_fit`]; see [`retarget_with_neutral`](super::retarget_with_neutral)).
+/// the fit to its hips and spine bones (see [`retarget_with_neutral`](super::retarget_with_neutral)).
 pub(super) fn torso_from_file(
     a: &mut [DQuat; Canonical::COUNT],
     r: &Pose,
