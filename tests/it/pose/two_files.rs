@@ -188,38 +188,49 @@
 //! result takes the AMC result's rotations of one group, re-built on the
 //! character from the pelvis; and each torso joint's rotation in the two
 //! results apart, mean signed degrees about the AMC body's left-right /
-//! forward / vertical axes). With the pelvis fitted to its bones (main
-//! until then), `rel` 1.28 / 1.40 / 1.59 (02_01 / 02_02 / 02_03): the BVH's
-//! pelvis turned +7.1 / +7.3 / +7.0° about the left-right axis (further
-//! forward), −1.0 / −1.1 / −1.1 and −0.8 / −0.5 / +0.7 about the others;
-//! the spine +1.4 / +0.8 / +0.6°, the chest (and the neck and head on it)
-//! +2.1 / +3.8 / +3.9°. The cause: the fit weighs where the rigs put the
-//! hip and spine joints inside the pelvis (the CC rig's hips 9 cm higher
-//! and 4.5 cm back, its pelvis → spine bone 18-20° off the AMC's). The
-//! rest pose (T against A) does not reach the limbs (they take
-//! directions); the reference rule (the ASF rest against the BVH's mean
-//! carriage) is the candidate for the chest's 2-4° (session 27 measured
-//! its share at 0.03 / 0.38 / 0.36; not measured again). Rules measured (switched build, abs / rel / the
-//! pelvis %): the pelvis by the frame of the hips' line and the pelvis →
-//! chest line (kept): 1.82 / 2.09 / 2.08, rel 1.07 / 1.15 / 1.34, the
-//! pelvis 2.15 / 2.43 / 2.12, the pelvises +2.6 / +1.7 / +1.5° apart;
-//! with the spine turning with that pelvis (the trunk as one line):
-//! 1.90 / 2.19 / 2.11, rel 1.22 / 1.32 / 1.48; the spine halfway between
-//! the pelvis and the chest: 1.82 / 2.13 / 2.09, rel 1.18 / 1.40 / 1.58.
-//! The hip-height travel (`pose::travel`) on top of the kept rule: 1.78 /
-//! 1.96 / 2.19 (the pelvis 1.27 / 1.39 / 1.39, rel unchanged); on main's
-//! 1.91 / 2.11 / 2.39. The mirrored pair equals 02_03 in every row. What
-//! remains with the kept rule (`rel`, given the AMC's rotations of): the
-//! pelvis 0.94 / 1.02 / 1.24, the chest 0.90 / 0.84 / 1.05 (the chest
-//! +2.1 / +3.8 / +3.9° forward: its file rotation since a mean carriage
-//! levelled on the pelvis → chest line, against the ASF rest's), the
-//! thighs 0.81 / 0.90 / 0.98, the trunk (pelvis, spine, chest) 0.59 /
-//! 0.61 / 0.83, the legs 0.68 / 0.73 / 0.68; per joint (02_03, abs / rel)
-//! the toes 2.6-3.0 / 3.2-3.3, ankles 2.1-2.2 / 2.1-2.2, head 2.0 / 1.7,
-//! wrists 1.8 / 1.2-1.6, the pelvis 2.12 (horizontal 1.57, vertical
-//! 1.12). The 1 % is not reached: the pelvis's own gap (the travel's
-//! scale, 1.3-1.4 % at best) and the legs' (0.7 about the pelvis) each
-//! exceed what is left for the other.
+//! forward / vertical axes). Main's kernel, `rel` 1.28 / 1.40 / 1.59
+//! (02_01 / 02_02 / 02_03): the BVH's pelvis turned +7.1 / +7.3 / +7.0°
+//! about the left-right axis (further forward), −1.0 / −1.1 / −1.1 and
+//! −0.8 / −0.5 / +0.7° about the others; the spine +1.4 / +0.8 / +0.6°,
+//! the chest (and the neck and head on it) +2.1 / +3.8 / +3.9°. Given
+//! the AMC's rotations of one group, `rel` becomes: the pelvis 0.94 /
+//! 1.02 / 1.24, the spine 1.12 / 1.30 / 1.51, the chest 1.10 / 1.08 /
+//! 1.28, the neck and head 1.27 / 1.37 / 1.57, the arms 1.21 / 1.33 /
+//! 1.54, the thighs 1.08 / 1.22 / 1.29, the shins 1.19 / 1.32 / 1.51, the
+//! feet 1.25 / 1.38 / 1.47; the trunk (pelvis, spine, chest) 0.59 / 0.61
+//! / 0.83, the legs 0.99 / 1.10 / 1.05. The pelvis's 7° is the fit to its
+//! three bones weighing where the rigs put the hip and spine joints
+//! inside the pelvis (the CC rig's hips 9 cm higher and 4.5 cm back, its
+//! pelvis → spine bone 18-20° off the AMC's). The rest pose (T against
+//! A) does not reach the limbs (they take directions); the reference
+//! rule (the ASF rest against the BVH's mean carriage) is the candidate
+//! for the chest's 2-4° (session 27 measured its share at 0.03 / 0.38 /
+//! 0.36; not measured again).
+//!
+//! Rules measured with a switched build (not kept; abs / rel / the
+//! pelvis %, 02_01 / 02_02 / 02_03; the mirrored pair equal to 02_03 in
+//! every row, 01_01 0.00): the pelvis by the frame of the hips' line and
+//! the pelvis → chest line: 1.82 / 2.09 / 2.08, rel 1.07 / 1.15 / 1.34, the
+//! pelvises +2.6 / +1.7 / +1.5° apart (what remains given the AMC's
+//! rotations: the pelvis 0.94 / 1.02 / 1.24, the chest 0.90 / 0.84 / 1.05,
+//! the thighs 0.81 / 0.90 / 0.98, the trunk 0.59 / 0.61 / 0.83, the legs
+//! 0.68 / 0.73 / 0.68); with the hip-height travel (`pose::travel`) on top
+//! 1.78 / 1.96 / 2.19 (the pelvis 1.27 / 1.39 / 1.39); main with that
+//! travel 1.91 / 2.11 / 2.39. With the spine turning with that pelvis
+//! (the trunk as one line) 1.90 / 2.19 / 2.11, rel 1.22 / 1.32 / 1.48;
+//! the spine halfway between the pelvis and the chest 1.82 / 2.13 /
+//! 2.09, rel 1.18 / 1.40 / 1.58. The pelvis-and-chest-line frame passes
+//! `pose::`, `mocap::`, `drive::`, `jobs::` (CI=true) but is not kept:
+//! it turns the pelvis with the upper trunk's bend, and on one rig the
+//! result moves away from its clip: the yardstick (samba) head p95 / joint
+//! velocity error 02_02 4.0 / 0.119 → 6.2 / 0.122, 03_01 4.1 / 0.072 →
+//! 5.5 / 0.078, 02_03 1.8 / 0.184 → 4.1 / 0.195, 131_02 velocity 0.078 →
+//! 0.086; the FBX files' 01_01 head p95 15.4 → 21.3, Samba Dancing 9.6 →
+//! 12.1 (velocity 0.154 → 0.175). The 1 % is not reached by any rule: the
+//! pelvis's own gap (the travel's scale, 1.3-1.4 % at best) and the
+//! posture with the whole trunk given (0.59 / 0.61 / 0.83 about the
+//! pelvis, most of it the legs' directions) each leave too little for the
+//! other.
 //!
 //! Earlier figures (measured 2026-11-29):
 //! - 01_01: the cgspeed BVH retargets as the AMC does (0.00 %).
@@ -508,11 +519,9 @@ fn posture_shares(
 /// The torso joints' rotations in the two results apart, per axis of the
 /// AMC result's body (mean signed degrees over the frames: about its
 /// left-right axis, + the BVH's leaning further forward; about its
-/// forward axis; about the vertical): the pelvis's, and all of them
-/// printed.
-fn torso_axes(a: &[(Pose, Rotations)], b: &[(Pose, Rotations)]) -> (glam::DVec3, String) {
+/// forward axis; about the vertical), printed.
+fn torso_axes(a: &[(Pose, Rotations)], b: &[(Pose, Rotations)]) -> String {
     let mut out = Vec::new();
-    let mut pelvis = glam::DVec3::ZERO;
     for c in [C::Pelvis, C::Spine, C::Chest, C::Neck, C::Head] {
         let j = c.index();
         let mut sum = glam::DVec3::ZERO;
@@ -529,9 +538,6 @@ fn torso_axes(a: &[(Pose, Rotations)], b: &[(Pose, Rotations)]) -> (glam::DVec3,
             sum += glam::DVec3::new(v.dot(left), v.dot(fwd), v.y);
         }
         let m = sum / a.len() as f64;
-        if c == C::Pelvis {
-            pelvis = m.map(f64::to_degrees);
-        }
         out.push(format!(
             "{c:?} {:+.1}/{:+.1}/{:+.1}",
             m.x.to_degrees(),
@@ -539,11 +545,10 @@ fn torso_axes(a: &[(Pose, Rotations)], b: &[(Pose, Rotations)]) -> (glam::DVec3,
             m.z.to_degrees()
         ));
     }
-    let text = format!(
+    format!(
         "the torso's rotations apart (BVH against AMC, degrees about the left-right / forward / vertical axes) {}",
         out.join(", ")
-    );
-    (pelvis, text)
+    )
 }
 
 #[test]
@@ -567,41 +572,41 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
         (
             "cmu-amc/02/02_01.amc",
             "cmu-bvh-ccrig/002_01.bvh",
-            0.0192,
-            0.0117,
+            0.019,
+            0.0138,
             0.0224,
         ),
         (
             "cmu-amc/02/02_02.amc",
             "cmu-bvh-ccrig/002_02.bvh",
-            0.0219,
-            0.0125,
+            0.0216,
+            0.015,
             0.0252,
         ),
         (
             "cmu-amc/02/02_03.amc",
             "cmu-bvh-ccrig/002_03.bvh",
             0.022,
-            0.0144,
+            0.017,
             0.0226,
         ),
         // The same conversion written again with every joint's rotation
         // channels in another order (X Y Z for the file's Z Y X): the same
         // rotations, so the same figures.
-        ("cmu-amc/02/02_03.amc", REORDERED, 0.022, 0.0144, 0.0226),
+        ("cmu-amc/02/02_03.amc", REORDERED, 0.022, 0.017, 0.0226),
         // Turned 30° about the vertical and scaled by 1.37, the result
         // turned back: the same figures (asserted below to 1e-4 of the
         // height; the contact band is a fraction of the leg).
-        ("cmu-amc/02/02_03.amc", TURNED, 0.022, 0.0144, 0.0226),
+        ("cmu-amc/02/02_03.amc", TURNED, 0.022, 0.017, 0.0226),
         // Both files mirrored left for right: the same figures (asserted
         // below to 0.1 % of the height; the character is the generated
         // walk's, symmetric).
-        ("cmu-amc/02/02_03.amc", MIRRORED, 0.022, 0.0144, 0.0226),
+        ("cmu-amc/02/02_03.amc", MIRRORED, 0.022, 0.017, 0.0226),
         // Re-timed: the BVH resampled to 24 fps, then to the 30 fps every
         // clip is read at, so its frames are interpolated twice (a run at
         // 24 fps loses its footfalls' detail: 3.28 % apart, 1.84 % about
         // the pelvis, the pelvis 3.11 %, measured).
-        ("cmu-amc/02/02_03.amc", RETIMED, 0.035, 0.0166, 0.034),
+        ("cmu-amc/02/02_03.amc", RETIMED, 0.035, 0.021, 0.034),
     ];
     let mut got = Vec::new();
     let reordered = reordered_channels(&m.join("cmu-bvh-ccrig/002_03.bvh"));
@@ -663,7 +668,7 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
             gb.iter().map(|x| x.0).collect(),
         );
         let (rel_fk, shares) = posture_shares(&character, &ga[..n], &gb[..n], h);
-        let (pelvis_turn, axes) = torso_axes(&ga[..n], &gb[..n]);
+        let axes = torso_axes(&ga[..n], &gb[..n]);
         eprintln!(
             "{a} vs {b}: about the pelvis, given the AMC result's rotations of {shares}; {axes}"
         );
@@ -716,13 +721,6 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
             rel / (n * Canonical::COUNT) as f64 / h,
         );
         let pelvis = pelvis / n as f64 / h;
-        // The pelvis turns by the frame of its hips' and trunk's lines:
-        // by the fit to its bones the CC rig's turned 7.0-7.3° further
-        // forward than the AMC's (session 29), by the frame 1.5°.
-        assert!(
-            pelvis_turn.abs().max_element() < 3.0,
-            "{a} vs {b}: the pelvises turned {pelvis_turn:.2} degrees apart"
-        );
         // The breakdown re-builds the BVH's result from its rotations: it
         // must give the measured posture back.
         assert!(
