@@ -219,7 +219,12 @@
 //! travel 1.91 / 2.11 / 2.39. With the spine turning with that pelvis
 //! (the trunk as one line) 1.90 / 2.19 / 2.11, rel 1.22 / 1.32 / 1.48;
 //! the spine halfway between the pelvis and the chest 1.82 / 2.13 /
-//! 2.09, rel 1.18 / 1.40 / 1.58. The pelvis-and-chest-line frame passes
+//! 2.09, rel 1.18 / 1.40 / 1.58. The pelvis by the frame of the hips'
+//! line and the pelvis → spine bone (session 27's): 1.82 / 2.08 / 2.08,
+//! rel 1.13 / 1.18 / 1.38, the pelvises +3.8 / +2.5 / +2.2° apart; not
+//! kept either (yardstick head p95 / velocity error 02_02 4.0 / 0.119 →
+//! 5.8 / 0.122, 03_01 → 5.5 / 0.078, 03_02 3.4 / 0.129 → 3.7 / 0.145,
+//! 02_03 → 3.9 / 0.192, 131_01 ground penetration 1.45 → 3.21 cm). The pelvis-and-chest-line frame passes
 //! `pose::`, `mocap::`, `drive::`, `jobs::` (CI=true) but is not kept:
 //! it turns the pelvis with the upper trunk's bend, and on one rig the
 //! result moves away from its clip: the yardstick (samba) head p95 / joint
