@@ -183,6 +183,60 @@
 //! lowest foot joint still 2.77 / 2.42 / 2.12 (the fit reads 0.95-0.97 on
 //! both files of 02_01 and 02_02, 0.71 on 02_03: the rolling foot).
 //!
+//! Session 29: the posture about the pelvis per group and per axis
+//! (printed by this test: the gap about the pelvis left when the BVH's
+//! result takes the AMC result's rotations of one group, re-built on the
+//! character from the pelvis; and each torso joint's rotation in the two
+//! results apart, mean signed degrees about the AMC body's left-right /
+//! forward / vertical axes). Main's kernel, `rel` 1.28 / 1.40 / 1.59
+//! (02_01 / 02_02 / 02_03): the BVH's pelvis turned +7.1 / +7.3 / +7.0°
+//! about the left-right axis (further forward), −1.0 / −1.1 / −1.1 and
+//! −0.8 / −0.5 / +0.7° about the others; the spine +1.4 / +0.8 / +0.6°,
+//! the chest (and the neck and head on it) +2.1 / +3.8 / +3.9°. Given
+//! the AMC's rotations of one group, `rel` becomes: the pelvis 0.94 /
+//! 1.02 / 1.24, the spine 1.12 / 1.30 / 1.51, the chest 1.10 / 1.08 /
+//! 1.28, the neck and head 1.27 / 1.37 / 1.57, the arms 1.21 / 1.33 /
+//! 1.54, the thighs 1.08 / 1.22 / 1.29, the shins 1.19 / 1.32 / 1.51, the
+//! feet 1.25 / 1.38 / 1.47; the trunk (pelvis, spine, chest) 0.59 / 0.61
+//! / 0.83, the legs 0.99 / 1.10 / 1.05. The pelvis's 7° is the fit to its
+//! three bones weighing where the rigs put the hip and spine joints
+//! inside the pelvis (the CC rig's hips 9 cm higher and 4.5 cm back, its
+//! pelvis → spine bone 18-20° off the AMC's). The rest pose (T against
+//! A) does not reach the limbs (they take directions); the reference
+//! rule (the ASF rest against the BVH's mean carriage) is the candidate
+//! for the chest's 2-4° (session 27 measured its share at 0.03 / 0.38 /
+//! 0.36; not measured again).
+//!
+//! Rules measured with a switched build (not kept; abs / rel / the
+//! pelvis %, 02_01 / 02_02 / 02_03; the mirrored pair equal to 02_03 in
+//! every row, 01_01 0.00): the pelvis by the frame of the hips' line and
+//! the pelvis → chest line: 1.82 / 2.09 / 2.08, rel 1.07 / 1.15 / 1.34, the
+//! pelvises +2.6 / +1.7 / +1.5° apart (what remains given the AMC's
+//! rotations: the pelvis 0.94 / 1.02 / 1.24, the chest 0.90 / 0.84 / 1.05,
+//! the thighs 0.81 / 0.90 / 0.98, the trunk 0.59 / 0.61 / 0.83, the legs
+//! 0.68 / 0.73 / 0.68); with the hip-height travel (`pose::travel`) on top
+//! 1.78 / 1.96 / 2.19 (the pelvis 1.27 / 1.39 / 1.39); main with that
+//! travel 1.91 / 2.11 / 2.39. With the spine turning with that pelvis
+//! (the trunk as one line) 1.90 / 2.19 / 2.11, rel 1.22 / 1.32 / 1.48;
+//! the spine halfway between the pelvis and the chest 1.82 / 2.13 /
+//! 2.09, rel 1.18 / 1.40 / 1.58. The pelvis by the frame of the hips'
+//! line and the pelvis → spine bone (session 27's): 1.82 / 2.08 / 2.08,
+//! rel 1.13 / 1.18 / 1.38, the pelvises +3.8 / +2.5 / +2.2° apart; not
+//! kept either (yardstick head p95 / velocity error 02_02 4.0 / 0.119 →
+//! 5.8 / 0.122, 03_01 → 5.5 / 0.078, 03_02 3.4 / 0.129 → 3.7 / 0.145,
+//! 02_03 → 3.9 / 0.192, 131_01 ground penetration 1.45 → 3.21 cm). The pelvis-and-chest-line frame passes
+//! `pose::`, `mocap::`, `drive::`, `jobs::` (CI=true) but is not kept:
+//! it turns the pelvis with the upper trunk's bend, and on one rig the
+//! result moves away from its clip: the yardstick (samba) head p95 / joint
+//! velocity error 02_02 4.0 / 0.119 → 6.2 / 0.122, 03_01 4.1 / 0.072 →
+//! 5.5 / 0.078, 02_03 1.8 / 0.184 → 4.1 / 0.195, 131_02 velocity 0.078 →
+//! 0.086; the FBX files' 01_01 head p95 15.4 → 21.3, Samba Dancing 9.6 →
+//! 12.1 (velocity 0.154 → 0.175). The 1 % is not reached by any rule: the
+//! pelvis's own gap (the travel's scale, 1.3-1.4 % at best) and the
+//! posture with the whole trunk given (0.59 / 0.61 / 0.83 about the
+//! pelvis, most of it the legs' directions) each leave too little for the
+//! other.
+//!
 //! Earlier figures (measured 2026-11-29):
 //! - 01_01: the cgspeed BVH retargets as the AMC does (0.00 %).
 //! - The CC conversions: 3.1-4.2 % apart, 1.7-2.7 % of it posture. The
@@ -369,6 +423,139 @@ fn reordered_channels(path: &std::path::Path) -> std::path::PathBuf {
     out
 }
 
+/// A result's global joint rotations per frame.
+type Rotations = [DQuat; Canonical::COUNT];
+
+/// The joints whose rotations [`posture_shares`] swaps, by group.
+const GROUPS: [(&str, &[C]); 10] = [
+    ("the pelvis", &[C::Pelvis]),
+    ("the spine", &[C::Spine]),
+    ("the chest", &[C::Chest]),
+    ("the neck and head", &[C::Neck, C::Head]),
+    (
+        "the arms",
+        &[
+            C::LShoulder,
+            C::RShoulder,
+            C::LElbow,
+            C::RElbow,
+            C::LWrist,
+            C::RWrist,
+        ],
+    ),
+    ("the thighs", &[C::LHip, C::RHip]),
+    ("the shins", &[C::LKnee, C::RKnee]),
+    ("the feet", &[C::LAnkle, C::RAnkle, C::LToe, C::RToe]),
+    (
+        "the trunk (pelvis, spine, chest)",
+        &[C::Pelvis, C::Spine, C::Chest],
+    ),
+    (
+        "the legs",
+        &[
+            C::LHip,
+            C::RHip,
+            C::LKnee,
+            C::RKnee,
+            C::LAnkle,
+            C::RAnkle,
+            C::LToe,
+            C::RToe,
+        ],
+    ),
+];
+
+/// The mean distance about the pelvis (over frames and joints, over `h`)
+/// between `a`'s poses and `b`'s re-built on `character` from the pelvis
+/// with `b`'s global rotations, those of `swap` taken from `a`.
+fn rebuilt_rel(
+    character: &Pose,
+    a: &[(Pose, Rotations)],
+    b: &[(Pose, Rotations)],
+    swap: &[C],
+    h: f64,
+) -> f64 {
+    let p = C::Pelvis.index();
+    let mut sum = 0.0;
+    for ((pa, qa), (pb, qb)) in a.iter().zip(b) {
+        let mut g = *qb;
+        for c in swap {
+            g[c.index()] = qa[c.index()];
+        }
+        let mut t = [glam::DVec3::ZERO; Canonical::COUNT];
+        t[p] = pb[p];
+        for c in Canonical::ALL {
+            if let Some(q) = c.parent() {
+                let (j, k) = (c.index(), q.index());
+                t[j] = t[k] + g[k] * (character[j] - character[k]);
+            }
+            sum += (pa[c.index()] - pa[p]).distance(t[c.index()] - t[p]);
+        }
+    }
+    sum / (a.len() * Canonical::COUNT) as f64 / h
+}
+
+/// What each group's rotations carry of the posture's gap: the gap about
+/// the pelvis re-built from the BVH result's own rotations (returned, it
+/// must equal the measured one), and printed per group the gap left when
+/// the BVH's result takes the AMC's rotations of that group (% of `h`).
+fn posture_shares(
+    character: &Pose,
+    a: &[(Pose, Rotations)],
+    b: &[(Pose, Rotations)],
+    h: f64,
+) -> (f64, String) {
+    let base = rebuilt_rel(character, a, b, &[], h);
+    let per: Vec<String> = GROUPS
+        .iter()
+        .map(|(name, swap)| {
+            format!(
+                "{name} {:.2}",
+                100.0 * rebuilt_rel(character, a, b, swap, h)
+            )
+        })
+        .collect();
+    (
+        base,
+        format!("{:.2} % (none): {}", 100.0 * base, per.join(", ")),
+    )
+}
+
+/// The torso joints' rotations in the two results apart, per axis of the
+/// AMC result's body (mean signed degrees over the frames: about its
+/// left-right axis, + the BVH's leaning further forward; about its
+/// forward axis; about the vertical), printed.
+fn torso_axes(a: &[(Pose, Rotations)], b: &[(Pose, Rotations)]) -> String {
+    let mut out = Vec::new();
+    for c in [C::Pelvis, C::Spine, C::Chest, C::Neck, C::Head] {
+        let j = c.index();
+        let mut sum = glam::DVec3::ZERO;
+        for ((pa, qa), (_, qb)) in a.iter().zip(b) {
+            let l = (pa[C::LHip.index()] - pa[C::RHip.index()])
+                + (pa[C::LShoulder.index()] - pa[C::RShoulder.index()]);
+            let left = glam::DVec3::new(l.x, 0.0, l.z).normalize_or_zero();
+            let fwd = glam::DVec3::Y.cross(left);
+            let mut d = qb[j] * qa[j].inverse();
+            if d.w < 0.0 {
+                d = -d;
+            }
+            let v = d.to_scaled_axis();
+            sum += glam::DVec3::new(v.dot(left), v.dot(fwd), v.y);
+        }
+        let m = sum / a.len() as f64;
+        out.push(format!(
+            "{c:?} {:+.1}/{:+.1}/{:+.1}",
+            m.x.to_degrees(),
+            m.y.to_degrees(),
+            m.z.to_degrees()
+        ));
+    }
+    format!(
+        "the torso's rotations apart (BVH against AMC, degrees about the left-right / forward / vertical axes) {}",
+        out.join(", ")
+    )
+}
+
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn one_performance_as_amc_and_as_bvh_retargets_alike() {
@@ -453,7 +640,7 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
         let q = DQuat::from_rotation_y(30f64.to_radians());
         let c0 = character[C::Pelvis.index()] * glam::DVec3::new(1.0, 0.0, 1.0);
         let mirror = b == MIRRORED;
-        let on = |c: &Clip, turn: bool| -> (Vec<Pose>, f64, Vec<Pose>) {
+        let on = |c: &Clip, turn: bool| -> (Vec<(Pose, Rotations)>, f64, Vec<Pose>) {
             let c = c.try_resampled(30.0).unwrap();
             let map = detect_clip(&c).unwrap().map;
             let mut cp = clip_poses(&c, &map).unwrap();
@@ -466,18 +653,30 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
             }
             let out = retarget(&character, &cp.reference, &cp.poses)
                 .into_iter()
-                .map(|(p, _)| {
+                .map(|(p, g)| {
                     if turn {
-                        p.map(|x| c0 + q.inverse() * (x - c0))
+                        (
+                            p.map(|x| c0 + q.inverse() * (x - c0)),
+                            g.map(|r| q.inverse() * r),
+                        )
                     } else {
-                        p
+                        (p, g)
                     }
                 })
                 .collect();
             (out, leg_length(&cp.reference.pose), cp.poses)
         };
-        let ((ra, la, pa), (rb, lb, pb)) = (on(&amc, false), on(&bvh, b == TURNED));
-        let n = ra.len().min(rb.len());
+        let ((ga, la, pa), (gb, lb, pb)) = (on(&amc, false), on(&bvh, b == TURNED));
+        let n = ga.len().min(gb.len());
+        let (ra, rb): (Vec<Pose>, Vec<Pose>) = (
+            ga.iter().map(|x| x.0).collect(),
+            gb.iter().map(|x| x.0).collect(),
+        );
+        let (rel_fk, shares) = posture_shares(&character, &ga[..n], &gb[..n], h);
+        let axes = torso_axes(&ga[..n], &gb[..n]);
+        eprintln!(
+            "{a} vs {b}: about the pelvis, given the AMC result's rotations of {shares}; {axes}"
+        );
         let p = C::Pelvis.index();
         // The root's horizontal travel over the common span.
         let travel = |q: &[Pose]| {
@@ -527,6 +726,12 @@ fn one_performance_as_amc_and_as_bvh_retargets_alike() {
             rel / (n * Canonical::COUNT) as f64 / h,
         );
         let pelvis = pelvis / n as f64 / h;
+        // The breakdown re-builds the BVH's result from its rotations: it
+        // must give the measured posture back.
+        assert!(
+            (rel_fk - rel).abs() < 1e-9,
+            "{a} vs {b}: {rel_fk} re-built against {rel}"
+        );
         eprintln!(
             "{a} vs {b}: {n} frames at 30 fps, {:.2}% of the height apart, {:.2}% about the pelvis, \
              the pelvis {:.2}%; legs {:.4}, travel {:.4} times the AMC's",
