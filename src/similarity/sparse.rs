@@ -42,6 +42,7 @@
 use super::candidates::{CandidateOptions, index_candidates, process_cpu_seconds, sequence_of};
 use super::matrix::{Dissimilarity, PairDistance, Span};
 use super::pair_scan;
+use super::tiled::{self, Run};
 use rayon::prelude::*;
 
 /// Frames the principal axes are fitted on (evenly spaced).
@@ -99,6 +100,13 @@ pub struct SparseOptions {
     /// with 64 compares 6.5 M pairs in 301 s of CPU (702 s with 0). A
     /// recall drop, so not the default. Default: 0.
     pub pool: usize,
+    /// With a pool: a sequence pair that fewer than `cover` of the pool's
+    /// candidates link (either way) takes the per-sequence trees'
+    /// candidates instead, both ways ([`super::candidates`], session 29):
+    /// the pool for the sequences a frame is near, the trees for the
+    /// pairs no pooled frame reaches (a turned or mirrored piece, a motion
+    /// far from every other). 0: the pool's alone. Default: 0.
+    pub cover: usize,
     /// Best transitions by the cheap distances per unordered sequence pair
     /// whose centres are candidates ([`super::pair_scan`]); their count
     /// does not grow with the sequences' lengths, but the cheap ranking
@@ -142,6 +150,7 @@ impl Default for SparseOptions {
             stride: 4,
             per_sequence: 3,
             pool: 0,
+            cover: 0,
             per_pair: 8,
             spread: 5,
             min_window: 4,
@@ -173,6 +182,7 @@ impl SparseOptions {
                 "stride" => &mut self.stride,
                 "per_sequence" => &mut self.per_sequence,
                 "pool" => &mut self.pool,
+                "cover" => &mut self.cover,
                 "per_pair" => &mut self.per_pair,
                 "spread" => &mut self.spread,
                 "min_window" => &mut self.min_window,
@@ -318,14 +328,6 @@ struct Head {
     nnz: usize,
     cols_at: usize,
     vals_at: usize,
-}
-
-/// A run of pairs `(r, r + diag)` for `r` in `r0..=r1`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-struct Run {
-    diag: u32,
-    r0: u32,
-    r1: u32,
 }
 
 impl SparseSimilarity {
@@ -713,6 +715,7 @@ pub fn sparse_pairs(
         stride: opts.stride,
         per_sequence: opts.per_sequence,
         pool: opts.pool,
+        cover: opts.cover,
         min_gap: opts.min_gap,
     };
     let found = index_candidates(&features, dims, &spans, &copts);
@@ -754,8 +757,8 @@ pub fn sparse_pairs(
         runs.extend(merged);
     }
     let merged = merge_runs(runs);
-    let values = evaluate(set, &merged, progress);
-    let pairs: u64 = values.iter().map(|v| v.len() as u64).sum();
+    let values = tiled::evaluate(set, &merged, progress);
+    let pairs = values.len() as u64;
     let (offsets, cols, vals) = rows_of(n, &merged, &values);
     let mut sim = SparseSimilarity {
         spans,
@@ -873,22 +876,9 @@ fn merge_runs(mut runs: Vec<Run>) -> Vec<Run> {
     merged
 }
 
-/// The full measure along every run (in parallel over runs).
-fn evaluate(set: &dyn Features, runs: &[Run], progress: &(dyn Fn(u64) + Sync)) -> Vec<Vec<f32>> {
-    runs.par_iter()
-        .map(|r| {
-            let v: Vec<f32> = (r.r0..=r.r1)
-                .map(|a| set.distance(a as usize, (a + r.diag) as usize) as f32)
-                .collect();
-            progress(v.len() as u64);
-            v
-        })
-        .collect()
-}
-
 /// The runs' values stored both ways, row by row, columns ascending:
 /// row offsets, columns and values of a compressed sparse row matrix.
-fn rows_of(n: usize, merged: &[Run], values: &[Vec<f32>]) -> (Vec<u64>, Vec<u32>, Vec<f32>) {
+fn rows_of(n: usize, merged: &[Run], values: &[f32]) -> (Vec<u64>, Vec<u32>, Vec<f32>) {
     let mut deg = vec![0u64; n + 1];
     for r in merged {
         for a in r.r0..=r.r1 {
@@ -904,8 +894,9 @@ fn rows_of(n: usize, merged: &[Run], values: &[Vec<f32>]) -> (Vec<u64>, Vec<u32>
     let mut cols = vec![0u32; nnz];
     let mut vals = vec![0.0f32; nnz];
     let mut fill: Vec<u64> = offsets[..n].to_vec();
-    for (r, v) in merged.iter().zip(values) {
-        for (a, x) in (r.r0..=r.r1).zip(v) {
+    let at = tiled::offsets(merged);
+    for (k, r) in merged.iter().enumerate() {
+        for (a, x) in (r.r0..=r.r1).zip(&values[at[k]..at[k + 1]]) {
             let b = a + r.diag;
             for (p, q) in [(a, b), (b, a)] {
                 let at = fill[p as usize] as usize;
