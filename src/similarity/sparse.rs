@@ -98,14 +98,25 @@ pub struct SparseOptions {
     /// 93.6 % (64), 95.9 % (128, 256) for 2.25 → 1.21, 1.46, 1.76 M pairs;
     /// at 1,014 frames 100 % → 98.3 % (64), 100 % (128, 256); the 10⁴ build
     /// with 64 compares 6.5 M pairs in 301 s of CPU (702 s with 0). A
-    /// recall drop, so not the default. Default: 0.
+    /// recall drop alone (the generated variant database of `db::sparse`:
+    /// 91.2 % with 64, 92.3 % with 128 and `rerank` 128, 98.9 % with 0),
+    /// so the default since session 29 takes 128 with
+    /// [`SparseOptions::cover`]. Default: 128 (0 before session 29).
     pub pool: usize,
     /// With a pool: a sequence pair that fewer than `cover` of the pool's
     /// candidates link (either way) takes the per-sequence trees'
     /// candidates instead, both ways ([`super::candidates`], session 29):
     /// the pool for the sequences a frame is near, the trees for the
     /// pairs no pooled frame reaches (a turned or mirrored piece, a motion
-    /// far from every other). 0: the pool's alone. Default: 0.
+    /// far from every other). 0: the pool's alone. Measured (session 29,
+    /// with `pool` 128 and `rerank` 128): dense transitions found at 3,234
+    /// frames 97.2 % (0) → 98.2 % (16: its one sequence pair linked once
+    /// takes the trees), 1.46 → 1.51 M pairs; at 1,014 frames 100 %; the
+    /// variant database of `db::sparse` 92.3 % (0, 1, 4: every pair there
+    /// is linked at least 4 times) → 98.9 % (64) and passing at 16; at
+    /// 10⁴ frames 7.6 → 11.4 M pairs, 352 s of CPU, 96.6 % of the previous
+    /// default's transitions at the same frames (92.1 % with 0). Default:
+    /// 16.
     pub cover: usize,
     /// Best transitions by the cheap distances per unordered sequence pair
     /// whose centres are candidates ([`super::pair_scan`]); their count
@@ -136,7 +147,8 @@ pub struct SparseOptions {
     /// `per_sequence` 3 and spread 5, 97.2 % from 64 for 2.25 M pairs
     /// (+ 0.16 M re-ranking) where 12 per sequence alone compares 3.27 M
     /// for 96.3 % (session 26), at 110.9 s CPU against 129.8 s for the
-    /// whole `db build`. Default: 64.
+    /// whole `db build`. With `pool` 128 at 3,234 frames: 95.9 % from 64,
+    /// 97.2 % from 128 (session 28). Default: 128 (64 before session 29).
     pub rerank: usize,
 }
 
@@ -149,12 +161,12 @@ impl Default for SparseOptions {
             min_gap: 10,
             stride: 4,
             per_sequence: 3,
-            pool: 0,
-            cover: 0,
+            pool: 128,
+            cover: 16,
             per_pair: 8,
             spread: 5,
             min_window: 4,
-            rerank: 64,
+            rerank: 128,
         }
     }
 }
