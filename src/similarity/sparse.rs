@@ -113,7 +113,7 @@ pub struct SparseOptions {
     /// frames 97.2 % (0) → 98.2 % (16: its one sequence pair linked once
     /// takes the trees), 1.46 → 1.51 M pairs; at 1,014 frames 100 %; the
     /// variant database of `db::sparse` 92.3 % (0, 1, 4: every pair there
-    /// is linked at least 4 times) → 98.9 % (64) and passing at 16; at
+    /// is linked at least 4 times) → 95.6 % (16), 98.9 % (64); at
     /// 10⁴ frames 7.6 → 11.4 M pairs, 352 s of CPU, 96.6 % of the previous
     /// default's transitions at the same frames (92.1 % with 0). Default:
     /// 16.
