@@ -191,6 +191,10 @@ pub fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
     if opts.per_sequence > 0 && opts.pool > 0 {
         text += &format!(" pool {}", opts.pool);
     }
+    // The cover rule (session 29) likewise.
+    if opts.per_sequence > 0 && opts.pool > 0 && opts.cover > 0 {
+        text += &format!(" cover {}", opts.cover);
+    }
     k.text("sparse", &text);
     k.finish()
 }
@@ -650,7 +654,12 @@ fn sparse_similarity(
         thousands(stats.near_candidates as u128),
         thousands(stats.sequence_candidates as u128),
         opts.per_sequence,
-        if opts.pool > 0 {
+        if opts.pool > 0 && opts.cover > 0 {
+            format!(
+                "{} (the trees' for sequence pairs linked fewer than {} times)",
+                opts.pool, opts.cover
+            )
+        } else if opts.pool > 0 {
             opts.pool.to_string()
         } else {
             "frames of each sequence".into()

@@ -32,6 +32,10 @@ pub struct CandidateOptions {
     /// Taken among this many nearest frames overall; 0: in every sequence
     /// (one k-d tree per sequence).
     pub pool: usize,
+    /// With a pool: a sequence pair that fewer than this many of the
+    /// pool's candidates link (either way) takes the per-sequence trees'
+    /// candidates instead (both ways); 0: the pool's alone.
+    pub cover: usize,
     /// Within a sequence, frames closer than this are not candidates.
     pub min_gap: usize,
 }
@@ -74,12 +78,41 @@ pub fn index_candidates(
     let pool = if opts.per_sequence > 0 { opts.pool } else { 0 };
     let (near, per_sequence) =
         index.nearest_overall(opts.neighbours, stride, pool, opts.per_sequence);
-    let per_sequence = if opts.pool == 0 {
-        index.nearest_per_sequence(spans, stride, opts.per_sequence)
+    let per_sequence = if opts.pool == 0 || opts.per_sequence == 0 {
+        index.nearest_per_sequence(spans, stride, opts.per_sequence, &|_, _| true)
+    } else if opts.cover > 0 {
+        let weak = weakly_linked(&per_sequence, &seq, spans.len(), opts.cover);
+        let s = spans.len();
+        let mut kept: Vec<(usize, u32)> = per_sequence
+            .into_iter()
+            .filter(|&(a, b)| !weak[seq[a] as usize * s + seq[b as usize] as usize])
+            .collect();
+        let filled = |a: usize, j: usize| weak[seq[a] as usize * s + j];
+        kept.extend(index.nearest_per_sequence(spans, stride, opts.per_sequence, &filled));
+        kept
     } else {
         per_sequence
     };
     Candidates { near, per_sequence }
+}
+
+/// Per ordered sequence pair `(i, j)` (`i · sequences + j`), whether fewer
+/// than `cover` of the candidates `pooled` link `i` and `j`, either way.
+fn weakly_linked(
+    pooled: &[(usize, u32)],
+    seq: &[u32],
+    sequences: usize,
+    cover: usize,
+) -> Vec<bool> {
+    let mut links = vec![0usize; sequences * sequences];
+    for &(a, b) in pooled {
+        let (i, j) = (seq[a] as usize, seq[b as usize] as usize);
+        links[i * sequences + j] += 1;
+        if i != j {
+            links[j * sequences + i] += 1;
+        }
+    }
+    links.into_iter().map(|l| l < cover).collect()
 }
 
 /// CPU seconds of the whole process so far (every thread): the stages'
@@ -176,21 +209,33 @@ impl Index<'_> {
         (near, per)
     }
 
-    /// Every `stride`-th frame's `k` nearest frames in each sequence (one
-    /// k-d tree per sequence), as `(frame, candidate)` pairs.
-    fn nearest_per_sequence(&self, spans: &[Span], stride: usize, k: usize) -> Vec<(usize, u32)> {
+    /// Every `stride`-th frame's `k` nearest frames in each sequence `j`
+    /// for which `take(frame, j)` holds (one k-d tree per sequence that
+    /// some frame asks), as `(frame, candidate)` pairs.
+    fn nearest_per_sequence(
+        &self,
+        spans: &[Span],
+        stride: usize,
+        k: usize,
+        take: &(dyn Fn(usize, usize) -> bool + Sync),
+    ) -> Vec<(usize, u32)> {
         if k == 0 {
             return Vec::new();
         }
         let n = self.seq.len();
         let per_seq: Vec<Vec<(usize, u32)>> = spans
             .par_iter()
-            .map(|sj| {
+            .enumerate()
+            .map(|(j, sj)| {
+                let asking: Vec<usize> = (0..n).step_by(stride).filter(|&a| take(a, j)).collect();
+                if asking.is_empty() {
+                    return Vec::new();
+                }
                 let sub =
                     self.features[sj.start * self.dims..(sj.start + sj.len) * self.dims].to_vec();
                 let tree = KdTree::new(sub, self.dims);
-                (0..n)
-                    .step_by(stride)
+                asking
+                    .into_iter()
                     .flat_map(|a| {
                         let keep = |b: u32| {
                             let b = sj.start + b as usize;
@@ -260,7 +305,45 @@ mod tests {
                 }
             }
         }
+        if o.pool > 0 && o.cover > 0 {
+            let how = (spans.len(), o.stride.max(1), o.cover);
+            per_sequence = covered(&per_sequence, &seq, how, |a, j| {
+                ranked(a, Some(j))
+                    .into_iter()
+                    .take(o.per_sequence)
+                    .collect()
+            });
+        }
         Candidates { near, per_sequence }
+    }
+
+    /// The cover rule by counting: per unordered sequence pair, the links
+    /// of `pooled` counted; a pair linked fewer than `cover` times loses
+    /// its pooled candidates and takes every `stride`-th frame's
+    /// `nearest(a, j)` in the other sequence, both ways.
+    fn covered(
+        pooled: &[(usize, u32)],
+        seq: &[u32],
+        (sequences, stride, cover): (usize, usize, usize),
+        nearest: impl Fn(usize, u32) -> Vec<u32>,
+    ) -> Vec<(usize, u32)> {
+        let key = |i: u32, j: u32| (i.min(j), i.max(j));
+        let mut links = std::collections::HashMap::new();
+        for &(a, b) in pooled {
+            *links.entry(key(seq[a], seq[b as usize])).or_insert(0usize) += 1;
+        }
+        let weak = |i: u32, j: u32| links.get(&key(i, j)).copied().unwrap_or(0) < cover;
+        let mut out: Vec<(usize, u32)> = pooled
+            .iter()
+            .copied()
+            .filter(|&(a, b)| !weak(seq[a], seq[b as usize]))
+            .collect();
+        for a in (0..seq.len()).step_by(stride) {
+            for j in (0..sequences as u32).filter(|&j| weak(seq[a], j)) {
+                out.extend(nearest(a, j).into_iter().map(|b| (a, b)));
+            }
+        }
+        out
     }
 
     /// Issue 43, session 28: the index's candidates are the exact nearest
@@ -271,6 +354,10 @@ mod tests {
     /// one-frame sequences, one sequence only; the pool's candidates are
     /// the per-sequence trees' ones when the pool holds every frame, a
     /// subset of them otherwise, and never more than `pool` per frame.
+    /// Session 29, the cover rule: a sequence pair the pool links fewer
+    /// than `cover` times takes the trees' candidates, so that every
+    /// sequence pair the trees link is linked — also the far motion's
+    /// (frames moved away: nobody's nearest), which the pool alone loses.
     #[test]
     fn the_index_candidates_are_the_exact_nearest_frames() {
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
@@ -301,31 +388,47 @@ mod tests {
             shuffled[to * dims..(to + 1) * dims]
                 .copy_from_slice(&f[from * dims..(from + 1) * dims]);
         }
-        let cases: [(&[f32], Vec<usize>); 5] = [
+        // The last 60 frames moved far away: a motion whose frames are
+        // nobody's nearest (as a mirrored piece is), nearest to its own.
+        let mut far = f.clone();
+        far[200 * dims..]
+            .iter_mut()
+            .step_by(dims)
+            .for_each(|v| *v += 40.0);
+        let cases: [(&[f32], Vec<usize>); 7] = [
             (f.as_slice(), vec![60, 100, 40, 60]),
             (shuffled.as_slice(), vec![60, 100, 40, 60]),
             (f.as_slice(), vec![1, 80, 1, 1, 120, 56, 1]),
             (f.as_slice(), vec![260]),
             (shuffled.as_slice(), vec![13, 1, 246]),
+            (far.as_slice(), vec![70, 70, 60, 60]),
+            (far.as_slice(), vec![1, 99, 100, 1, 59]),
         ];
         for (k, (feat, lens)) in cases.iter().enumerate() {
             let sp = spans(lens);
-            for (neighbours, per_sequence, pool, stride) in [
-                (6, 3, 0, 4),
-                (6, 3, 16, 4),
-                (24, 2, 40, 3),
-                (5, 1, 1, 1),
-                (3, 4, 500, 2),
-                (0, 3, 8, 5),
+            for (neighbours, per_sequence, pool, stride, cover) in [
+                (6, 3, 0, 4, 0),
+                (6, 3, 16, 4, 0),
+                (6, 3, 16, 4, 1),
+                (6, 3, 16, 4, 6),
+                (24, 2, 40, 3, 0),
+                (24, 2, 40, 3, 2),
+                (5, 1, 1, 1, 0),
+                (5, 1, 1, 1, 1),
+                (3, 4, 500, 2, 0),
+                (3, 4, 500, 2, 3),
+                (0, 3, 8, 5, 1),
+                (6, 3, 16, 4, 100_000),
             ] {
                 let o = CandidateOptions {
                     neighbours,
                     per_sequence,
                     pool,
                     stride,
+                    cover,
                     min_gap: 10,
                 };
-                let what = format!("case {k}, {neighbours}/{per_sequence}/{pool}/{stride}");
+                let what = format!("case {k}, {neighbours}/{per_sequence}/{pool}/{stride}/{cover}");
                 let got = index_candidates(feat, dims, &sp, &o);
                 let want = brute_candidates(feat, dims, &sp, &o);
                 assert_eq!(got.near, want.near, "{what}");
@@ -340,12 +443,43 @@ mod tests {
                     let trees = CandidateOptions { pool: 0, ..o };
                     let every = sorted(index_candidates(feat, dims, &sp, &trees).per_sequence);
                     assert!(per.iter().all(|c| every.binary_search(c).is_ok()), "{what}");
-                    if pool >= n {
+                    if pool >= n || cover >= n * n {
                         assert_eq!(per, every, "{what}");
                     }
-                    assert!(per.len() <= n.div_ceil(stride) * pool, "{what}");
+                    if cover == 0 {
+                        assert!(per.len() <= n.div_ceil(stride) * pool, "{what}");
+                    } else {
+                        // Every sequence pair the trees link, the cover
+                        // rule links.
+                        let linked = |v: &[(usize, u32)]| linked_pairs(v, &sp);
+                        assert_eq!(linked(&per), linked(&every), "{what}");
+                    }
                 }
             }
         }
+        // Against the pool alone: the far motion loses sequence pairs.
+        let sp = spans(&[70, 70, 60, 60]);
+        let o = CandidateOptions {
+            neighbours: 6,
+            per_sequence: 3,
+            pool: 16,
+            stride: 4,
+            cover: 0,
+            min_gap: 10,
+        };
+        let pooled = index_candidates(&far, dims, &sp, &o).per_sequence;
+        let trees = index_candidates(&far, dims, &sp, &CandidateOptions { pool: 0, ..o });
+        assert!(linked_pairs(&pooled, &sp).len() < linked_pairs(&trees.per_sequence, &sp).len());
+    }
+
+    /// The unordered sequence pairs that candidates `v` link.
+    fn linked_pairs(v: &[(usize, u32)], sp: &[Span]) -> std::collections::BTreeSet<(u32, u32)> {
+        let seq = sequence_of(sp, sp.iter().map(|s| s.start + s.len).sum());
+        v.iter()
+            .map(|&(a, b)| {
+                let (i, j) = (seq[a], seq[b as usize]);
+                (i.min(j), i.max(j))
+            })
+            .collect()
     }
 }

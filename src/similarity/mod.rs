@@ -17,6 +17,7 @@ pub mod matrix;
 pub mod pair_scan;
 pub mod sets;
 pub mod sparse;
+pub mod tiled;
 pub mod transitions;
 pub mod vertex;
 pub mod voxel;

@@ -42,6 +42,7 @@
 use super::candidates::{CandidateOptions, index_candidates, process_cpu_seconds, sequence_of};
 use super::matrix::{Dissimilarity, PairDistance, Span};
 use super::pair_scan;
+use super::tiled::{self, Run};
 use rayon::prelude::*;
 
 /// Frames the principal axes are fitted on (evenly spaced).
@@ -97,8 +98,26 @@ pub struct SparseOptions {
     /// 93.6 % (64), 95.9 % (128, 256) for 2.25 → 1.21, 1.46, 1.76 M pairs;
     /// at 1,014 frames 100 % → 98.3 % (64), 100 % (128, 256); the 10⁴ build
     /// with 64 compares 6.5 M pairs in 301 s of CPU (702 s with 0). A
-    /// recall drop, so not the default. Default: 0.
+    /// recall drop alone (the generated variant database of `db::sparse`:
+    /// 91.2 % with 64, 92.3 % with 128 and `rerank` 128, 98.9 % with 0),
+    /// so the default since session 29 takes 128 with
+    /// [`SparseOptions::cover`]. Default: 128 (0 before session 29).
     pub pool: usize,
+    /// With a pool: a sequence pair that fewer than `cover` of the pool's
+    /// candidates link (either way) takes the per-sequence trees'
+    /// candidates instead, both ways ([`super::candidates`], session 29):
+    /// the pool for the sequences a frame is near, the trees for the
+    /// pairs no pooled frame reaches (a turned or mirrored piece, a motion
+    /// far from every other). 0: the pool's alone. Measured (session 29,
+    /// with `pool` 128 and `rerank` 128): dense transitions found at 3,234
+    /// frames 97.2 % (0) → 98.2 % (16: its one sequence pair linked once
+    /// takes the trees), 1.46 → 1.51 M pairs; at 1,014 frames 100 %; the
+    /// variant database of `db::sparse` 92.3 % (0, 1, 4: every pair there
+    /// is linked at least 4 times) → 95.6 % (16), 98.9 % (64); at
+    /// 10⁴ frames 7.6 → 11.4 M pairs, 352 s of CPU, 96.6 % of the previous
+    /// default's transitions at the same frames (92.1 % with 0). Default:
+    /// 16.
+    pub cover: usize,
     /// Best transitions by the cheap distances per unordered sequence pair
     /// whose centres are candidates ([`super::pair_scan`]); their count
     /// does not grow with the sequences' lengths, but the cheap ranking
@@ -128,7 +147,8 @@ pub struct SparseOptions {
     /// `per_sequence` 3 and spread 5, 97.2 % from 64 for 2.25 M pairs
     /// (+ 0.16 M re-ranking) where 12 per sequence alone compares 3.27 M
     /// for 96.3 % (session 26), at 110.9 s CPU against 129.8 s for the
-    /// whole `db build`. Default: 64.
+    /// whole `db build`. With `pool` 128 at 3,234 frames: 95.9 % from 64,
+    /// 97.2 % from 128 (session 28). Default: 128 (64 before session 29).
     pub rerank: usize,
 }
 
@@ -141,11 +161,12 @@ impl Default for SparseOptions {
             min_gap: 10,
             stride: 4,
             per_sequence: 3,
-            pool: 0,
+            pool: 128,
+            cover: 16,
             per_pair: 8,
             spread: 5,
             min_window: 4,
-            rerank: 64,
+            rerank: 128,
         }
     }
 }
@@ -173,6 +194,7 @@ impl SparseOptions {
                 "stride" => &mut self.stride,
                 "per_sequence" => &mut self.per_sequence,
                 "pool" => &mut self.pool,
+                "cover" => &mut self.cover,
                 "per_pair" => &mut self.per_pair,
                 "spread" => &mut self.spread,
                 "min_window" => &mut self.min_window,
@@ -318,14 +340,6 @@ struct Head {
     nnz: usize,
     cols_at: usize,
     vals_at: usize,
-}
-
-/// A run of pairs `(r, r + diag)` for `r` in `r0..=r1`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-struct Run {
-    diag: u32,
-    r0: u32,
-    r1: u32,
 }
 
 impl SparseSimilarity {
@@ -713,6 +727,7 @@ pub fn sparse_pairs(
         stride: opts.stride,
         per_sequence: opts.per_sequence,
         pool: opts.pool,
+        cover: opts.cover,
         min_gap: opts.min_gap,
     };
     let found = index_candidates(&features, dims, &spans, &copts);
@@ -754,8 +769,8 @@ pub fn sparse_pairs(
         runs.extend(merged);
     }
     let merged = merge_runs(runs);
-    let values = evaluate(set, &merged, progress);
-    let pairs: u64 = values.iter().map(|v| v.len() as u64).sum();
+    let values = tiled::evaluate(set, &merged, progress);
+    let pairs = values.len() as u64;
     let (offsets, cols, vals) = rows_of(n, &merged, &values);
     let mut sim = SparseSimilarity {
         spans,
@@ -873,22 +888,9 @@ fn merge_runs(mut runs: Vec<Run>) -> Vec<Run> {
     merged
 }
 
-/// The full measure along every run (in parallel over runs).
-fn evaluate(set: &dyn Features, runs: &[Run], progress: &(dyn Fn(u64) + Sync)) -> Vec<Vec<f32>> {
-    runs.par_iter()
-        .map(|r| {
-            let v: Vec<f32> = (r.r0..=r.r1)
-                .map(|a| set.distance(a as usize, (a + r.diag) as usize) as f32)
-                .collect();
-            progress(v.len() as u64);
-            v
-        })
-        .collect()
-}
-
 /// The runs' values stored both ways, row by row, columns ascending:
 /// row offsets, columns and values of a compressed sparse row matrix.
-fn rows_of(n: usize, merged: &[Run], values: &[Vec<f32>]) -> (Vec<u64>, Vec<u32>, Vec<f32>) {
+fn rows_of(n: usize, merged: &[Run], values: &[f32]) -> (Vec<u64>, Vec<u32>, Vec<f32>) {
     let mut deg = vec![0u64; n + 1];
     for r in merged {
         for a in r.r0..=r.r1 {
@@ -904,8 +906,9 @@ fn rows_of(n: usize, merged: &[Run], values: &[Vec<f32>]) -> (Vec<u64>, Vec<u32>
     let mut cols = vec![0u32; nnz];
     let mut vals = vec![0.0f32; nnz];
     let mut fill: Vec<u64> = offsets[..n].to_vec();
-    for (r, v) in merged.iter().zip(values) {
-        for (a, x) in (r.r0..=r.r1).zip(v) {
+    let at = tiled::offsets(merged);
+    for (k, r) in merged.iter().enumerate() {
+        for (a, x) in (r.r0..=r.r1).zip(&values[at[k]..at[k + 1]]) {
             let b = a + r.diag;
             for (p, q) in [(a, b), (b, a)] {
                 let at = fill[p as usize] as usize;

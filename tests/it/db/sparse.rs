@@ -367,12 +367,13 @@ fn options_measured_against_the_dense_cache() {
     for o in option_sets(sparse_options(&m)) {
         let (sim, stats) = sparse_pairs(&set, spans.clone(), &o, &|_| {});
         let mut line = format!(
-            "neighbours {} per_pair {} spread {} per_sequence {} pool {} rerank {} stride {}: candidates {} (nearest {}, per sequence {}, per pair {}), pairs {} (alone: nearest {}, per sequence {}, per pair {}) (+ {} re-ranking), ({:.1} % of {}), index {:.1} s (scan {:.1} s), CPU index {:.1} s, scan {:.1} s, pairs {:.1} s",
+            "neighbours {} per_pair {} spread {} per_sequence {} pool {} cover {} rerank {} stride {}: candidates {} (nearest {}, per sequence {}, per pair {}), pairs {} (alone: nearest {}, per sequence {}, per pair {}) (+ {} re-ranking), ({:.1} % of {}), index {:.1} s (scan {:.1} s), CPU index {:.1} s, scan {:.1} s, pairs {:.1} s",
             o.neighbours,
             o.per_pair,
             o.spread,
             o.per_sequence,
             o.pool,
+            o.cover,
             o.rerank,
             o.stride,
             stats.candidates,
@@ -415,11 +416,110 @@ fn options_measured_against_the_dense_cache() {
                 ) {
                     println!("  {l}");
                 }
+                for l in pool_ranks(reference, &g, &shape, &spans, &o) {
+                    println!("  {l}");
+                }
             }
             continue;
         }
         println!("{line}");
     }
+}
+
+/// Issue 43, session 29: for each dense transition the sparse graph
+/// misses, where its frames stand in the pool (the nearest frames overall
+/// by the cheap descriptor, as `candidates` ranks them): the rank of the
+/// target frame among the source frame's nearest, and the reverse; the
+/// rank of the first frame of the target sequence there; how many of the
+/// pool's per-sequence candidates link the sequence pair (either way);
+/// then per sequence pair the count of those links.
+fn pool_ranks(
+    dense: &surfmotion::graph::SurfaceMotionGraph,
+    sparse: &surfmotion::graph::SurfaceMotionGraph,
+    shape: &surfmotion::similarity::ShapeSet,
+    spans: &[surfmotion::similarity::Span],
+    o: &surfmotion::similarity::SparseOptions,
+) -> Vec<String> {
+    use surfmotion::similarity::candidates::{CandidateOptions, index_candidates};
+    use surfmotion::similarity::sparse::project;
+    let (f, dims) = project(shape, o.dims);
+    let n = f.len() / dims;
+    let seq = |x: usize| spans.iter().position(|s| x < s.start + s.len).unwrap();
+    let copts = CandidateOptions {
+        neighbours: 0,
+        stride: o.stride,
+        per_sequence: o.per_sequence,
+        pool: o.pool.max(64),
+        cover: 0,
+        min_gap: o.min_gap,
+    };
+    let pooled = index_candidates(&f, dims, spans, &copts).per_sequence;
+    let mut links = std::collections::BTreeMap::new();
+    for &(a, b) in &pooled {
+        let (i, j) = (seq(a), seq(b as usize));
+        *links.entry((i.min(j), i.max(j))).or_insert(0usize) += 1;
+    }
+    // Every frame ranked from `a` (nearer first, ties by frame), as the
+    // index keeps them: not `a`, not its own sequence within `min_gap`.
+    let ranked = |a: usize| -> Vec<usize> {
+        let d2 = |b: usize| -> f32 {
+            (0..dims)
+                .map(|k| (f[a * dims + k] - f[b * dims + k]).powi(2))
+                .sum()
+        };
+        let mut all: Vec<(f32, usize)> = (0..n)
+            .filter(|&b| b != a && (seq(b) != seq(a) || b.abs_diff(a) >= o.min_gap.max(1)))
+            .map(|b| (d2(b), b))
+            .collect();
+        all.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        all.into_iter().map(|x| x.1).collect()
+    };
+    let mut out = Vec::new();
+    for t in dense.transitions() {
+        let found = sparse.transitions().iter().any(|u| {
+            (u.from, u.to, u.m, u.n) == (t.from, t.to, t.m, t.n)
+                && (u.cost - t.cost).abs() <= 0.05 * t.cost.abs().max(1e-12)
+        });
+        if found {
+            continue;
+        }
+        let (ga, gb) = (spans[t.from].start + t.m, spans[t.to].start + t.n);
+        let (ra, rb) = (ranked(ga), ranked(gb));
+        let rank = |r: &[usize], x: usize| r.iter().position(|&y| y == x).map_or(0, |p| p + 1);
+        let first =
+            |r: &[usize], s: usize| r.iter().position(|&y| seq(y) == s).map_or(0, |p| p + 1);
+        let key = (t.from.min(t.to), t.from.max(t.to));
+        out.push(format!(
+            "pool miss {} -> {} ({}, {}): rank of target from source {}, of source from target {}; first frame of the target sequence at {}, of the source sequence at {}; pool links of the pair {}",
+            spans[t.from].name,
+            spans[t.to].name,
+            t.m,
+            t.n,
+            rank(&ra, gb),
+            rank(&rb, ga),
+            first(&ra, t.to),
+            first(&rb, t.from),
+            links.get(&key).copied().unwrap_or(0)
+        ));
+    }
+    let s = spans.len();
+    let unlinked: Vec<String> = (0..s)
+        .flat_map(|i| (i..s).map(move |j| (i, j)))
+        .filter(|k| !links.contains_key(k))
+        .map(|(i, j)| format!("{}-{}", spans[i].name, spans[j].name))
+        .collect();
+    let mut counts: Vec<usize> = links.values().copied().collect();
+    counts.sort_unstable();
+    out.push(format!(
+        "pool {}: {} of {} sequence pairs linked; links per linked pair min {:?} median {:?}; unlinked: {}",
+        copts.pool,
+        links.len(),
+        s * (s + 1) / 2,
+        counts.first(),
+        counts.get(counts.len() / 2),
+        unlinked.join(" ")
+    ));
+    out
 }
 
 /// A graph's transitions (one place that reads them).
