@@ -257,7 +257,7 @@ mod tests {
         apply_override("facing=hips", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.facing, Facing::Hips);
         use super::super::decompose::Seeding;
-        assert_eq!(auto.decompose.seeding, Seeding::Draws(8));
+        assert_eq!(auto.decompose.seeding, Seeding::Index);
         apply_override("seed=draws-3", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.decompose.seeding, Seeding::Draws(3));
         apply_override("seed=index,frames=spread", &mut rule, &mut auto).unwrap();

@@ -14,7 +14,7 @@
 //! other vertices enters it), with every neighbour list sorted in that
 //! order, so that every loop, sum, tie and label number of the
 //! decomposition follows the positions, the k-means++ draws
-//! (`decompose::Seeding::Draws`, the default) included. Relabelling the
+//! (`decompose::Seeding::Draws`) included. Relabelling the
 //! vertices of a capture therefore gives the same parts bit for bit,
 //! through the relabelling. Two seedings by farthest-point sampling
 //! (Gonzalez 1985, "Clustering to minimize the maximum intercluster
@@ -23,7 +23,7 @@
 //! middle of the body's bounding box (hands, feet and head first), and
 //! [`farthest_in`] of the motion signatures; both rigged samba worse
 //! (joints 3.07 and 1.60 % of the height from the landmark rig's, k-means++
-//! 0.69 %: session 29).
+//! 0.69 %: session 29). None is the default yet (`decompose::Seeding`).
 
 use glam::DVec3;
 use std::cmp::Ordering;
