@@ -49,6 +49,75 @@ pub fn descriptor(frame: &[[f64; 3]]) -> Vec<f64> {
     d
 }
 
+/// The [`DESCRIPTOR_VERTICES`] vertices (at most; all of a smaller mesh)
+/// of [`descriptor_at`], chosen by how the vertices move over `frames`
+/// rather than by their ids: the vertices sorted by their greatest squared
+/// distance from the middle of the frame's bounding box over the frames,
+/// then by their least, then by their least and greatest coordinates
+/// (min and max over frames and vertices: exact in any order of either),
+/// taken at evenly spaced ranks. The same vertices, through any
+/// renumbering, whatever the frames' order; [`descriptor`]'s every
+/// `n / K`-th id follows the numbering. O(F n + n log n).
+pub fn descriptor_vertices(frames: &[&[[f64; 3]]]) -> Vec<u32> {
+    use glam::DVec3;
+    let n = frames.iter().map(|f| f.len()).min().unwrap_or(0);
+    let mut far = vec![f64::NEG_INFINITY; n];
+    let mut near = vec![f64::INFINITY; n];
+    let mut lo = vec![[f64::INFINITY; 3]; n];
+    let mut hi = vec![[f64::NEG_INFINITY; 3]; n];
+    for f in frames {
+        let (a, b) = f[..n].iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(a, b), p| (a.min(DVec3::from_array(*p)), b.max(DVec3::from_array(*p))),
+        );
+        let mid = (a + b) * 0.5;
+        for (v, p) in f[..n].iter().enumerate() {
+            let d = (DVec3::from_array(*p) - mid).length_squared();
+            far[v] = far[v].max(d);
+            near[v] = near[v].min(d);
+            for k in 0..3 {
+                lo[v][k] = lo[v][k].min(p[k]);
+                hi[v][k] = hi[v][k].max(p[k]);
+            }
+        }
+    }
+    let cmp3 = |a: &[f64; 3], b: &[f64; 3]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| x.total_cmp(y))
+            .find(|o| o.is_ne())
+            .unwrap_or(Ordering::Equal)
+    };
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    order.sort_by(|&a, &b| {
+        let (a, b) = (a as usize, b as usize);
+        far[a]
+            .total_cmp(&far[b])
+            .then_with(|| near[a].total_cmp(&near[b]))
+            .then_with(|| cmp3(&lo[a], &lo[b]))
+            .then_with(|| cmp3(&hi[a], &hi[b]))
+    });
+    let k = DESCRIPTOR_VERTICES.min(n);
+    (0..k).map(|i| order[i * n / k]).collect()
+}
+
+/// [`descriptor`] on the vertices `picked` (of [`descriptor_vertices`]):
+/// the distances between every pair of them in `frame`.
+pub fn descriptor_at(frame: &[[f64; 3]], picked: &[u32]) -> Vec<f64> {
+    let p: Vec<glam::DVec3> = picked
+        .iter()
+        .filter_map(|&v| frame.get(v as usize))
+        .map(|q| glam::DVec3::from_array(*q))
+        .collect();
+    let mut d = Vec::with_capacity(p.len() * p.len().saturating_sub(1) / 2);
+    for (i, a) in p.iter().enumerate() {
+        for b in &p[i + 1..] {
+            d.push(a.distance(*b));
+        }
+    }
+    d
+}
+
 /// Squared distance of two descriptors.
 pub fn distance2(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()

@@ -16,6 +16,13 @@
 //!    transforms reproduce its positions best;
 //! 3. adjacent parts whose union still moves rigidly (RMS residual below a
 //!    fraction of the height) are merged, most rigid pair first.
+//!
+//! Except with [`Seeding::Index`] (sessions 20-29's default) all of it
+//! runs on the vertices in an order of their positions
+//! ([`super::seeding`]), the k-means seeded in that order (e.g.
+//! [`Seeding::Draws`]: the least potential of k-means++ draws): the parts
+//! do not depend on how the file numbers its vertices. Not yet the
+//! default: see [`DecomposeOptions::seeding`].
 
 use crate::mesh::frames::polar;
 use glam::{DMat3, DVec3};
@@ -61,6 +68,65 @@ pub struct DecomposeOptions {
     /// Merge adjacent parts while their union's RMS residual stays below
     /// this fraction of the height. Default 0.012.
     pub merge_below: f64,
+    /// How the k-means is seeded and in which order the vertices are
+    /// visited ([`Seeding`]). Default [`Seeding::Index`] (main's): no
+    /// seeding independent of the numbering rigged the real captures as
+    /// well yet (session 29, `autorig_eval … joints`: samba 0.69 % of the
+    /// height from the landmark rig as numbered, 0.78 % renumbered; every
+    /// order-free seeding tried 1.60-3.07 %).
+    pub seeding: Seeding,
+}
+
+/// [`DecomposeOptions::seeding`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Seeding {
+    /// The vertices in their positions' order
+    /// ([`super::seeding::canonical_order`]), the k-means seeded by
+    /// farthest-point sampling of the rest positions
+    /// ([`super::seeding::farthest_seeds`]): the same parts however the
+    /// vertices are numbered (`seed=position`). Session 29's first
+    /// candidate: samba's joints 3.07 % of the height from the landmark
+    /// rig's (the hips 11 %; index seeding 0.69 %).
+    Position,
+    /// The default (sessions 20-29): the vertices in index order,
+    /// k-means++ from vertex `n / 2` with a fixed pseudo-random sequence
+    /// walked in index order (`seed=index` in `SURFMOTION_AUTORIG`). The
+    /// rig follows the numbering: samba renumbered (reversed, shuffled,
+    /// odd ids first) moves a joint by up to 2.0-5.6 % of the height,
+    /// crane 1.9-7.0 %, the synthetic walk 0.6-0.8 % (session 29,
+    /// `embed::auto_vertex_order` with `seed=index`).
+    Index,
+    /// The vertices in their positions' order, the k-means seeded by
+    /// farthest-point sampling of the motion signatures from the vertex
+    /// nearest the middle of the body ([`super::seeding::farthest_in`]):
+    /// the most different motions first (`seed=motion`). Samba 1.60 %
+    /// (session 29).
+    Motion,
+    /// The vertices in their positions' order, the k-means seeded by
+    /// k-means++ (Arthur & Vassilvitskii 2007) drawn this many times
+    /// with fixed pseudo-random sequences walked in that order, the first
+    /// centre at the vertex nearest the middle of the body; the draw of
+    /// least potential (sum of squared distances to the nearest seed)
+    /// kept (`seed=draws-N`). With 8 draws (session 29): samba 1.82 %
+    /// of the height from the landmark rig (r_knee 3.18 %, parts 88.8 %),
+    /// crane 2.34 % (90.3 %); main's 0.69 % (96.3 %) and 1.94 % (91.7 %).
+    Draws(u32),
+}
+
+impl Seeding {
+    /// The seeding named `name` (`position`, `index`, `motion`,
+    /// `draws-N`).
+    pub fn parse(name: &str) -> Option<Seeding> {
+        if let Some(n) = name.strip_prefix("draws-") {
+            return n.parse().ok().filter(|&n| n >= 1).map(Seeding::Draws);
+        }
+        match name {
+            "position" => Some(Seeding::Position),
+            "motion" => Some(Seeding::Motion),
+            "index" => Some(Seeding::Index),
+            _ => None,
+        }
+    }
 }
 
 impl Default for DecomposeOptions {
@@ -69,6 +135,7 @@ impl Default for DecomposeOptions {
             clusters: 40,
             rounds: 8,
             merge_below: 0.012,
+            seeding: Seeding::Index,
         }
     }
 }
@@ -258,21 +325,65 @@ fn dist2(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }
 
-/// k-means (k-means++ seeding with a fixed pseudo-random sequence:
-/// deterministic) of the signatures.
-fn kmeans(sig: &[Vec<f64>], k: usize, iters: usize) -> Vec<u32> {
+/// k-means of the signatures from the centres `seeds` (vertex ids), or
+/// without them by k-means++ seeding with a fixed pseudo-random sequence
+/// walked in index order (deterministic, but dependent on the order).
+fn kmeans(sig: &[Vec<f64>], k: usize, iters: usize, seeds: Option<&[u32]>) -> Vec<u32> {
     let n = sig.len();
     let k = k.min(n).max(1);
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let centres = match seeds {
+        Some(s) if !s.is_empty() => s.iter().map(|&v| sig[v as usize].clone()).collect(),
+        _ => kmeans_pp(sig, k),
+    };
+    lloyd(sig, centres, iters)
+}
+
+/// k-means++ seeds (Arthur & Vassilvitskii 2007) drawn with a fixed
+/// pseudo-random sequence, the first at vertex `n / 2`.
+fn kmeans_pp(sig: &[Vec<f64>], k: usize) -> Vec<Vec<f64>> {
+    let ids = kmeans_pp_ids(sig, k, sig.len() / 2, 0x9E37_79B9_7F4A_7C15).0;
+    ids.iter().map(|&v| sig[v as usize].clone()).collect()
+}
+
+/// Of `draws` k-means++ seedings of `sig` (each from vertex 0 with its
+/// own fixed pseudo-random sequence), the one of least potential: its
+/// seed vertex ids. Deterministic; depends on the order of `sig` (given
+/// in [`super::seeding::canonical_order`]). O(draws k n) distances.
+fn least_potential_draw(sig: &[Vec<f64>], k: usize, draws: u32) -> Vec<u32> {
+    if sig.is_empty() {
+        return Vec::new();
+    }
+    let k = k.min(sig.len()).max(1);
+    (0..draws.max(1) as u64)
+        .map(|r| {
+            kmeans_pp_ids(
+                sig,
+                k,
+                0,
+                0x9E37_79B9_7F4A_7C15 ^ (r.wrapping_mul(0xD1B5_4A32_D192_ED03)),
+            )
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(ids, _)| ids)
+        .unwrap_or_default()
+}
+
+/// k-means++ seed ids of `sig` from vertex `first`, drawn with the
+/// xorshift sequence from `state` (non-zero), walked in index order, and
+/// the seeding's potential (sum over vertices of the squared distance to
+/// the nearest seed).
+fn kmeans_pp_ids(sig: &[Vec<f64>], k: usize, first: usize, state: u64) -> (Vec<u32>, f64) {
+    let n = sig.len();
+    let mut state = state.max(1);
     let mut rnd = move || {
         state ^= state << 13;
         state ^= state >> 7;
         state ^= state << 17;
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    let mut centres: Vec<Vec<f64>> = vec![sig[n / 2].clone()];
-    let mut d: Vec<f64> = sig.par_iter().map(|s| dist2(s, &centres[0])).collect();
-    while centres.len() < k {
+    let mut ids = vec![first as u32];
+    let mut d: Vec<f64> = sig.par_iter().map(|s| dist2(s, &sig[first])).collect();
+    while ids.len() < k {
         let total: f64 = d.iter().sum();
         if total <= 0.0 {
             break;
@@ -286,12 +397,19 @@ fn kmeans(sig: &[Vec<f64>], k: usize, iters: usize) -> Vec<u32> {
                 break;
             }
         }
-        let c = sig[pick].clone();
+        let c = &sig[pick];
         d.par_iter_mut()
             .zip(sig.par_iter())
-            .for_each(|(di, s)| *di = di.min(dist2(s, &c)));
-        centres.push(c);
+            .for_each(|(di, s)| *di = di.min(dist2(s, c)));
+        ids.push(pick as u32);
     }
+    (ids, d.iter().sum())
+}
+
+/// Lloyd's iterations from `centres`: each signature to its nearest
+/// centre, each centre to its members' mean, until no label changes.
+fn lloyd(sig: &[Vec<f64>], mut centres: Vec<Vec<f64>>, iters: usize) -> Vec<u32> {
+    let n = sig.len();
     let mut labels = vec![0u32; n];
     for _ in 0..iters {
         let new: Vec<u32> = sig
@@ -349,10 +467,48 @@ pub fn decompose(
     height: f64,
     opts: &DecomposeOptions,
 ) -> Decomposition {
+    if opts.seeding == Seeding::Index || rest.is_empty() {
+        return decompose_in_order(rest, frames, nb, height, opts);
+    }
+    use super::seeding::{canonical_order, permuted, permuted_neighbours, unpermuted};
+    let order = canonical_order(rest, frames);
+    let rest_c = permuted(rest, &order);
+    let frames_c: Vec<Vec<[f64; 3]>> = frames.iter().map(|f| permuted(f, &order)).collect();
+    let frames_c: Vec<&[[f64; 3]]> = frames_c.iter().map(Vec::as_slice).collect();
+    let nb_c = permuted_neighbours(nb, &order);
+    let mut dec = decompose_in_order(&rest_c, &frames_c, &nb_c, height, opts);
+    dec.labels = unpermuted(&dec.labels, &order);
+    dec
+}
+
+/// [`decompose`] on the vertices in their given order, the k-means seeded
+/// as `opts.seeding` says.
+fn decompose_in_order(
+    rest: &[[f64; 3]],
+    frames: &[&[[f64; 3]]],
+    nb: &[Vec<u32>],
+    height: f64,
+    opts: &DecomposeOptions,
+) -> Decomposition {
     let n = rest.len();
     let min_size = (n / 400).max(8);
     let sig = signatures(rest, frames, nb);
-    let mut labels = kmeans(&sig, opts.clusters, 20);
+    let seeds = match opts.seeding {
+        Seeding::Index => None,
+        Seeding::Position => Some(super::seeding::farthest_seeds(rest, opts.clusters)),
+        Seeding::Motion => {
+            let first = super::seeding::farthest_seeds(rest, 1);
+            let d2 = |a: &Vec<f64>, b: &Vec<f64>| dist2(a, b);
+            Some(super::seeding::farthest_in(
+                &sig,
+                first[0],
+                opts.clusters,
+                d2,
+            ))
+        }
+        Seeding::Draws(draws) => Some(least_potential_draw(&sig, opts.clusters, draws)),
+    };
+    let mut labels = kmeans(&sig, opts.clusters, 20, seeds.as_deref());
     drop(sig);
     let mut count = split_connected(&mut labels, nb, min_size);
     let mut motions = fit(rest, frames, &members_of(&labels, count));

@@ -21,4 +21,5 @@ pub mod limbs;
 pub mod options;
 pub mod report;
 pub mod rig;
+pub mod seeding;
 pub mod up;

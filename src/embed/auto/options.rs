@@ -99,15 +99,33 @@ pub enum FrameSample {
     /// spread in time gave them), near and far, in any order of the
     /// frames.
     PoseQuantiles,
+    /// Farthest-point first ([`crate::embed::pose_order::farthest_first`])
+    /// from the per-coordinate median of all frames' poses
+    /// ([`crate::embed::pose_order::median`]), the poses read on vertices
+    /// chosen by their motion ([`crate::embed::pose_order::descriptor_vertices`]):
+    /// the frames that spread the motion's poses widest, the same whichever
+    /// frame is the rest, in any order of the frames and of the vertices
+    /// (session 29).
+    Spread,
+    /// Evenly spaced ranks of the distance from the median pose
+    /// ([`crate::embed::pose_order::quantiles`] seeded by
+    /// [`crate::embed::pose_order::median`], on
+    /// [`crate::embed::pose_order::descriptor_vertices`]): the poses in
+    /// proportion to how long the capture holds them, independent of the
+    /// rest frame and of both orders (session 29).
+    MedianQuantiles,
 }
 
 impl FrameSample {
-    /// The sample named `name` (`in-order`, `farthest`, `quantiles`).
+    /// The sample named `name` (`in-order`, `farthest`, `quantiles`,
+    /// `spread`, `median-quantiles`).
     pub fn parse(name: &str) -> Option<FrameSample> {
         match name {
             "in-order" => Some(FrameSample::InOrder),
             "farthest" => Some(FrameSample::Farthest),
             "quantiles" => Some(FrameSample::PoseQuantiles),
+            "spread" => Some(FrameSample::Spread),
+            "median-quantiles" => Some(FrameSample::MedianQuantiles),
             _ => None,
         }
     }
@@ -116,8 +134,9 @@ impl FrameSample {
 /// The environment variable that overrides `db init`'s automatic rig for
 /// measurements (as `SURFMOTION_SPARSE` does `db build`'s graph):
 /// comma-separated `rest=first|held|standing|standing-near|median`,
-/// `frames=in-order|farthest|quantiles`, `hip=thigh|trunk`,
-/// `facing=trunk|hips`, `max=N`.
+/// `frames=in-order|farthest|quantiles|spread|median-quantiles`,
+/// `hip=thigh|trunk`, `facing=trunk|hips`, `seed=draws-N|position|motion|index` (the
+/// decomposition's [`super::decompose::Seeding`]), `max=N`.
 pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
 
 /// `db init`'s automatic rig: the rest frame's rule (main's,
@@ -149,7 +168,7 @@ pub fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles, hip=thigh|trunk, facing=trunk|hips, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|position|motion|index, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -163,6 +182,9 @@ pub fn apply_override(
             "hip" if v == "thigh" => auto.thigh_hip = true,
             "hip" if v == "trunk" => auto.thigh_hip = false,
             "facing" => auto.facing = Facing::parse(v).ok_or_else(bad)?,
+            "seed" => {
+                auto.decompose.seeding = super::decompose::Seeding::parse(v).ok_or_else(bad)?
+            }
             "max" => {
                 auto.max_frames = v
                     .parse::<usize>()
@@ -234,7 +256,18 @@ mod tests {
         assert_eq!(auto.facing, Facing::Trunk);
         apply_override("facing=hips", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.facing, Facing::Hips);
+        use super::super::decompose::Seeding;
+        assert_eq!(auto.decompose.seeding, Seeding::Index);
+        apply_override("seed=draws-3", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.decompose.seeding, Seeding::Draws(3));
+        apply_override("seed=index,frames=spread", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.decompose.seeding, Seeding::Index);
+        assert_eq!(auto.frames, FrameSample::Spread);
+        apply_override("frames=median-quantiles", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.frames, FrameSample::MedianQuantiles);
         for bad in [
+            "seed=random",
+            "seed=draws-0",
             "rest=middle",
             "frames",
             "max=1",
