@@ -193,6 +193,17 @@ pub struct DeformOptions {
     /// results in solve order (`parent_seams` off, `overlap_passes` above
     /// 1) are solved in order either way. Default true (session 28).
     pub parallel_regions: bool,
+    /// Weight `w` of the cloth stitch ([`super::cloth`]): after the part
+    /// solves are blended, the cloth vertices (a skirt:
+    /// [`super::soft::softness`] above 0) are solved once more as one
+    /// piece, their captured detail turned with them and pulled towards
+    /// the blend with `w`, so the steps between the overlapping pelvis and
+    /// thigh solves do not crumple the hem. 0 turns it off (the outputs of
+    /// session 28). Default 0.5 (session 29; README, issue 42).
+    pub cloth_stitch: f64,
+    /// Rotation fits per frame of the cloth stitch, each followed by a
+    /// prefactored solve ([`super::cloth`]). Default 2.
+    pub cloth_steps: usize,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -312,6 +323,8 @@ impl Default for DeformOptions {
             repair_turns: RepairTurns::default(),
             surface_rounds: 6,
             parallel_regions: true,
+            cloth_stitch: 0.5,
+            cloth_steps: 2,
         }
     }
 }
