@@ -39,8 +39,9 @@
 //! The manifest's `[deform]` section can give the constraint vertices and
 //! the example frames instead.
 //!
-//! After the blend, the cloth (a skirt: [`soft::softness`] above 0) is
-//! solved once more as one piece ([`cloth`], [`DeformOptions::cloth_stitch`]):
+//! With [`DeformOptions::cloth_stitch`] (an option, off by default), after
+//! the blend the cloth (a skirt: [`soft::softness`] above 0) is solved
+//! once more as one piece ([`cloth`]):
 //! its captured Laplacian coordinates turned by rotations fitted to the
 //! blended surface, pulled towards the blend. Each part's solve turns the
 //! cloth's coordinates by the skin's blend of its bones' turns, which is
