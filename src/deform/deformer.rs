@@ -1,6 +1,7 @@
 //! The `Deformer`: a character's prefactored part-based deformation
 //! (the module page, [`crate::deform`], describes the method).
 
+use super::cloth::{ClothStitch, StitchWorkspace};
 use super::levels::{Levels, RegionScratch};
 use super::near_turns::Neighbourhoods;
 use super::options::{DeformMode, DeformOptions, RepairBudget, RepairTurns, TurnedOver};
@@ -38,6 +39,8 @@ pub struct Deformer {
     /// Most repairs against the surface's turns
     /// ([`DeformOptions::surface_rounds`]).
     surface_rounds: usize,
+    /// The cloth stitched after the blend ([`DeformOptions::cloth_stitch`]).
+    cloth: Option<ClothStitch>,
     triangles: usize,
     regions: Vec<Region>,
     /// The regions' levels when they are solved level by level on several
@@ -99,6 +102,8 @@ pub struct DeformWorkspace {
     seeds: Vec<DQuat>,
     /// The surface repair's frame that faced least against its own turns.
     surface_best: Vec<[f64; 3]>,
+    /// The cloth stitch's scratch (when it runs).
+    cloth: Option<StitchWorkspace>,
 }
 
 impl DeformWorkspace {
@@ -143,6 +148,7 @@ impl Deformer {
             repair_turns: opts.repair_turns,
             near: None,
             surface_rounds: opts.surface_rounds,
+            cloth: None,
             triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
             levels: None,
@@ -162,6 +168,13 @@ impl Deformer {
                 .map(|a| Neighbourhoods::new(a, super::near_turns::RINGS));
         }
         let tris = ch.topology().triangles();
+        if mode == DeformMode::Part && opts.cloth_stitch > 0.0 {
+            let cloth: Vec<bool> = super::soft::softness(ch.topology(), ch.rig())
+                .iter()
+                .map(|&s| s > 0.0)
+                .collect();
+            out.cloth = ClothStitch::new(tris, &cloth, opts.cloth_stitch, opts.cloth_steps)?;
+        }
         let is_constraint = {
             let mut m = vec![false; n];
             for &v in &constraint_vertices {
@@ -377,6 +390,7 @@ impl Deformer {
             surface_turn: vec![DQuat::IDENTITY; self.n],
             seeds: Vec::new(),
             surface_best: vec![[0.0; 3]; self.n],
+            cloth: self.cloth.as_ref().map(ClothStitch::workspace),
         }
     }
 
@@ -426,6 +440,9 @@ impl Deformer {
             if w > 0.0 {
                 *o = [a[0] / w, a[1] / w, a[2] / w];
             }
+        }
+        if let (Some(c), Some(cw)) = (&self.cloth, ws.cloth.as_mut()) {
+            c.stitch(source, &ws.turn, out, cw);
         }
         match &self.adjacency {
             Some(adj) => self.repair(ch.topology().triangles(), adj, source, out, ws),

@@ -39,6 +39,15 @@
 //! The manifest's `[deform]` section can give the constraint vertices and
 //! the example frames instead.
 //!
+//! With [`DeformOptions::cloth_stitch`] (an option, off by default), after
+//! the blend the cloth (a skirt: [`soft::softness`] above 0) is solved
+//! once more as one piece ([`cloth`]):
+//! its captured Laplacian coordinates turned by rotations fitted to the
+//! blended surface, pulled towards the blend. Each part's solve turns the
+//! cloth's coordinates by the skin's blend of its bones' turns, which is
+//! not how a skirt between two thighs turns, and crumples it (README,
+//! issue 42, measured per stage).
+//!
 //! Where the solve turns triangles over (under the skirt, at the knees) a
 //! repair ([`unflip`], [`untangle`]) rebuilds them, first against the
 //! skin's turns, then against the surface's own ([`near_turns`],
@@ -48,6 +57,7 @@
 //! 68,743 (131_01) triangle-frames over (README, issue 42).
 
 pub mod arap;
+pub mod cloth;
 pub mod deformer;
 pub mod lbs;
 pub mod levels;

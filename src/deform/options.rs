@@ -193,6 +193,22 @@ pub struct DeformOptions {
     /// results in solve order (`parent_seams` off, `overlap_passes` above
     /// 1) are solved in order either way. Default true (session 28).
     pub parallel_regions: bool,
+    /// Weight `w` of the cloth stitch ([`super::cloth`]): after the part
+    /// solves are blended, the cloth vertices (a skirt:
+    /// [`super::soft::softness`] above 0) are solved once more as one
+    /// piece, their captured detail turned with them and pulled towards
+    /// the blend with `w`, so the steps between the overlapping pelvis and
+    /// thigh solves do not crumple the hem. 0 turns it off. Default 0 (the
+    /// outputs of session 28); 0.5 is the measured setting (session 29,
+    /// README, issue 42: the skirt's mean bend down on all eight
+    /// yardstick clips, 02_01 11.21° → 10.05°), not the default because
+    /// with it the repair leaves CMU 131_01 frame 102 one triangle facing
+    /// against its own neighbourhood
+    /// (`deform::a_real_retarget_keeps_every_vertex_in_its_ring`).
+    pub cloth_stitch: f64,
+    /// Rotation fits per frame of the cloth stitch, each followed by a
+    /// prefactored solve ([`super::cloth`]). Default 2.
+    pub cloth_steps: usize,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -312,6 +328,8 @@ impl Default for DeformOptions {
             repair_turns: RepairTurns::default(),
             surface_rounds: 6,
             parallel_regions: true,
+            cloth_stitch: 0.0,
+            cloth_steps: 2,
         }
     }
 }

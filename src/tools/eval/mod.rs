@@ -17,6 +17,7 @@ pub mod knee;
 pub mod plausibility;
 pub mod summary;
 pub mod surface;
+pub mod surface_crumple;
 pub mod surface_follow;
 pub mod triangles;
 pub mod velocity;

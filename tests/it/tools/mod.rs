@@ -2,5 +2,6 @@
 
 mod plausibility;
 mod surface;
+mod surface_crumple;
 mod surface_look;
 mod surface_repair;
