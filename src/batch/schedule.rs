@@ -43,9 +43,11 @@ impl ShardSource {
     pub fn describe(&self, shard: &Shard) -> String {
         let s = shard.spelled();
         match self {
-            ShardSource::Flag { ignored } if ignored.is_empty() => format!("shard {s} (--shard)"),
+            ShardSource::Flag { ignored } if ignored.is_empty() => {
+                format!("shard {s} (`BatchOptions::shard`)")
+            }
             ShardSource::Flag { ignored } => format!(
-                "shard {s} from --shard, which wins over {}",
+                "shard {s} from `BatchOptions::shard`, which wins over {}",
                 ignored.join(", ")
             ),
             ShardSource::Slurm { id, min, step } => format!(
@@ -118,7 +120,7 @@ fn slurm(
     let count = match (count, from_range) {
         (Some(c), Some(r)) if c != r => {
             return Err(ShardError::Array(format!(
-                "SLURM_ARRAY_TASK_COUNT={c} but the array {min}-{}:{step} holds {r} tasks: a split needs an evenly stepped range (--array=0-{}); or give --shard i/n",
+                "SLURM_ARRAY_TASK_COUNT={c} but the array {min}-{}:{step} holds {r} tasks: a split needs an evenly stepped range (an array 0-{}); or give `BatchOptions::shard` i/n",
                 max.unwrap_or(0),
                 c.saturating_sub(1)
             )));
@@ -128,7 +130,7 @@ fn slurm(
             Some(c) => c as u64,
             None => {
                 return Err(ShardError::Missing(format!(
-                    "SLURM_ARRAY_TASK_ID={id} is set but not SLURM_ARRAY_TASK_COUNT or _MAX: give --shard-count N (the array's size) or --shard i/n"
+                    "SLURM_ARRAY_TASK_ID={id} is set but not SLURM_ARRAY_TASK_COUNT or _MAX: give `shard_count` N (the array's size) or `BatchOptions::shard` i/n"
                 )));
             }
         },
@@ -137,12 +139,12 @@ fn slurm(
         && c as u64 != count
     {
         return Err(ShardError::Conflict(format!(
-            "--shard-count {c} disagrees with the Slurm array of {count} tasks (SLURM_ARRAY_TASK_COUNT); leave --shard-count out"
+            "`shard_count` {c} disagrees with the Slurm array of {count} tasks (SLURM_ARRAY_TASK_COUNT); leave `shard_count` out"
         )));
     }
     if id < min || (id - min) % step != 0 || (id - min) / step >= count {
         return Err(ShardError::Array(format!(
-            "SLURM_ARRAY_TASK_ID={id} is not task 0..{count} of an array from {min} in steps of {step}: a split needs an evenly stepped range; or give --shard i/n"
+            "SLURM_ARRAY_TASK_ID={id} is not task 0..{count} of an array from {min} in steps of {step}: a split needs an evenly stepped range; or give `BatchOptions::shard` i/n"
         )));
     }
     Ok(Some((
@@ -154,14 +156,14 @@ fn slurm(
 
 /// The shard of this run: `flag` (`--shard i/n`) if given, else the
 /// scheduler's (`env` looks a variable up, e.g. `|k| std::env::var(k).ok()`);
-/// `count` is `--shard-count`. None: the whole library.
+/// `count` is the shard count (`--shard-count` on the command line). None: the whole library.
 pub fn resolve(
     flag: Option<&str>,
     count: Option<usize>,
     env: &dyn Fn(&str) -> Option<String>,
 ) -> Result<Option<(Shard, ShardSource)>, ShardError> {
     if count == Some(0) {
-        return Err(ShardError::Flag("--shard-count 0: need at least 1".into()));
+        return Err(ShardError::Flag("`shard_count` 0: need at least 1".into()));
     }
     if let Some(f) = flag {
         let shard = Shard::parse(f).map_err(ShardError::Flag)?;
@@ -169,7 +171,7 @@ pub fn resolve(
             && c != shard.count
         {
             return Err(ShardError::Conflict(format!(
-                "--shard {f} and --shard-count {c} name different splits; give one"
+                "`BatchOptions::shard` {f} and `shard_count` {c} name different splits; give one"
             )));
         }
         let ignored = ["SLURM_ARRAY_TASK_ID", K8S_VAR]
@@ -187,13 +189,13 @@ pub fn resolve(
                 (None, Some((_, c, _))) => *c,
                 (None, None) => {
                     return Err(ShardError::Missing(format!(
-                        "{K8S_VAR}={index} is set (a Kubernetes Indexed Job) but not --shard-count: give the Job's completions, e.g. --shard-count N"
+                        "{K8S_VAR}={index} is set (a Kubernetes Indexed Job) but not `shard_count`: give the Job's completions, e.g. `shard_count` N"
                     )));
                 }
             };
             if index >= n {
                 return Err(ShardError::Array(format!(
-                    "{K8S_VAR}={index} is not below --shard-count {n}"
+                    "{K8S_VAR}={index} is not below `shard_count` {n}"
                 )));
             }
             Some((index, n, ShardSource::Kubernetes { index }))
@@ -202,7 +204,7 @@ pub fn resolve(
     let chosen = match (s, k) {
         (Some(a), Some(b)) if (a.0, a.1) != (b.0, b.1) => {
             return Err(ShardError::Conflict(format!(
-                "the Slurm array says shard {}/{} and {K8S_VAR} says {}/{}; unset one or give --shard i/n",
+                "the Slurm array says shard {}/{} and {K8S_VAR} says {}/{}; unset one or give `BatchOptions::shard` i/n",
                 a.0 + 1,
                 a.1,
                 b.0 + 1,
@@ -214,7 +216,7 @@ pub fn resolve(
         (None, None) => {
             return match count {
                 Some(c) => Err(ShardError::Missing(format!(
-                    "--shard-count {c} needs a shard index: {K8S_VAR} (a Kubernetes Indexed Job), SLURM_ARRAY_TASK_ID (a Slurm array) or --shard i/{c}"
+                    "`shard_count` {c} needs a shard index: {K8S_VAR} (a Kubernetes Indexed Job), SLURM_ARRAY_TASK_ID (a Slurm array) or `BatchOptions::shard` i/{c}"
                 ))),
                 None => Ok(None),
             };
@@ -307,7 +309,7 @@ mod tests {
     fn kubernetes_indexed_jobs_need_the_count() {
         let k = [("JOB_COMPLETION_INDEX", "0")];
         assert_eq!(shard(None, Some(5), &k).as_deref(), Some("1/5"));
-        assert!(error(None, None, &k).contains("--shard-count"));
+        assert!(error(None, None, &k).contains("`shard_count`"));
         assert!(error(None, Some(5), &[("JOB_COMPLETION_INDEX", "5")]).contains("not below"));
         assert!(error(None, Some(3), &[]).contains("needs a shard index"));
         // A Slurm array and an Indexed Job that agree; that disagree.

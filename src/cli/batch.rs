@@ -188,7 +188,7 @@ fn resolve_shard(a: &Args) -> anyhow::Result<Option<String>> {
     if let Some((s, source)) = &resolved
         && !matches!(source, ShardSource::Flag { ignored } if ignored.is_empty())
     {
-        crate::errln!("{}", source.describe(s));
+        crate::errln!("{}", super::flags::as_flags(&source.describe(s)));
     }
     Ok(resolved.map(|(s, _)| s.spelled()))
 }

@@ -43,6 +43,7 @@ const FLAGS: &[(&str, &str)] = &[
     ("`ProceduralOptions::gaits`", "--gait"),
     ("`ProceduralOptions::output`", "-o"),
     ("`ProceduralOptions::seconds`", "--seconds"),
+    ("`PickOptions::landmarks`", "--landmarks FILE"),
     ("`RenderOptions::facing`", "--facing"),
     ("`RenderOptions::size`", "--size"),
     ("`RenderOptions::up`", "--up"),
@@ -53,6 +54,7 @@ const FLAGS: &[(&str, &str)] = &[
     ("`TransferSpec::landmarks`", "--landmarks"),
     ("`TransferSpec::markers`", "--markers"),
     ("`force`", "--force"),
+    ("`shard_count`", "--shard-count"),
     ("`mocap_dir`", "--mocap-dir"),
 ];
 
@@ -74,5 +76,26 @@ mod tests {
             "-o out: the folder already holds 2 files; pass --force to replace"
         );
         assert_eq!(super::as_flags("no option here"), "no option here");
+    }
+
+    /// The library's refusals that name options read as flags on the
+    /// command line: the pick page's and the batch scheduler's.
+    #[test]
+    fn pick_and_shard_refusals_name_flags() {
+        let e = surfmotion::jobs::pick::PickError::NoLandmarks {
+            mesh: "db".into(),
+            why: "no contact".into(),
+            db: true,
+        };
+        let m = super::as_flags(&e.to_string());
+        assert!(m.contains("(--landmarks FILE: chin"), "{m}");
+        assert!(m.ends_with("or run `db init` with --landmarks"), "{m}");
+        let none = |_: &str| None;
+        let e = surfmotion::batch::schedule::resolve(Some("1/2"), Some(3), &none).unwrap_err();
+        let m = super::as_flags(&e.to_string());
+        assert_eq!(
+            m,
+            "--shard 1/2 and --shard-count 3 name different splits; give one"
+        );
     }
 }

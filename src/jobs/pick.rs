@@ -63,8 +63,8 @@ impl Default for PickOptions {
 pub enum PickError {
     /// No landmarks to start from: none given and none found automatically.
     #[error(
-        "{mesh}: no landmarks to start the page from ({why}); give a landmark file (--landmarks FILE: chin, groin, l_/r_wrist, l_/r_elbow, l_/r_knee as vertex ids or [x, y, z], rough places are fine, the page moves them){}",
-        if *.db { "; or run `db init` with --landmarks" } else { "" }
+        "{mesh}: no landmarks to start the page from ({why}); give a landmark file (`PickOptions::landmarks`: chin, groin, l_/r_wrist, l_/r_elbow, l_/r_knee as vertex ids or [x, y, z], rough places are fine, the page moves them){}",
+        if *.db { "; or run `db init` with `InitOptions::landmarks`" } else { "" }
     )]
     NoLandmarks {
         /// The mesh or database.
