@@ -8,7 +8,7 @@ pub mod compare;
 pub mod frame;
 pub mod parts;
 pub mod plot;
-pub mod smg;
+pub(crate) mod smg;
 /// The transition search (Eqs. 2–5) lives with the similarity it reads
 /// (`similarity/transitions.rs`: the sparse similarity searches per sequence
 /// pair with it, and the graph imports the similarity, not the reverse).

@@ -26,7 +26,7 @@ pub enum Side {
 
 /// The body part a name denotes (side apart).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Role {
+pub(crate) enum Role {
     /// `Hips`, `Pelvis`, `root`, `SpineBase`, unsided `hip`.
     Pelvis,
     /// A lower/mid spine joint, with a preference score (3 best):

@@ -148,7 +148,7 @@ pub struct OverBudget {
 }
 
 /// A byte count for people: "41.7 GB".
-pub struct Bytes(pub u128);
+pub(crate) struct Bytes(pub u128);
 
 impl fmt::Display for Bytes {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

@@ -261,7 +261,7 @@ pub(crate) fn write_atomic(
 /// a commit (an error, a panic), the temporary is removed and `path` keeps
 /// its old content. For outputs too large to hold in memory (a point cache
 /// streamed frame by frame; issue 18, item 12).
-pub struct AtomicFile {
+pub(crate) struct AtomicFile {
     /// The output as named (for messages).
     path: PathBuf,
     /// Where the temporary is renamed to: `path`, or the file a symbolic
@@ -444,7 +444,7 @@ pub(crate) fn process_alive(pid: u32) -> Option<bool> {
 
 /// A stale temporary removed by [`remove_stale_temporaries`].
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct StaleTemporary {
+pub(crate) struct StaleTemporary {
     /// The file removed.
     pub path: PathBuf,
     /// The process that wrote it (gone).

@@ -840,7 +840,7 @@ fn walk(
 
 /// What [`verify`] found: the counts of a valid `.sm4d` file.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Verified {
+pub(crate) struct Verified {
     /// The predictor the file used.
     pub predictor: Predictor,
     /// Vertices per frame.
