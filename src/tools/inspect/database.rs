@@ -53,7 +53,7 @@ pub struct CacheEntry {
     /// The file.
     pub file: PathBuf,
     /// `similarity matrix (MEASURE)`, `graph (MEASURE)`, `parametric
-    /// model` or `not a file db build writes`.
+    /// model`, `rig cache (...)` or `not a file db build writes`.
     pub what: String,
     /// Whether `db build` (or `play`) would use it as it is.
     pub up_to_date: bool,
@@ -337,6 +337,9 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
                 (e.up_to_date, e.state) =
                     (false, format!("damaged ({why}): `db build` rebuilds it"));
             }
+        } else if file == crate::db::rig_cache::rig_path(dir) {
+            e.what = super::rig_cache::what(m);
+            (e.up_to_date, e.state) = super::rig_cache::entry_state(&file, dir, m);
         } else if file == crate::parametric::store::cache_path(dir) {
             e.what = "parametric model (`play`)".into();
             let want =
