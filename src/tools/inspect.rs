@@ -6,6 +6,7 @@ mod error;
 mod fbx;
 mod json;
 mod other;
+mod place;
 mod rig_cache;
 
 pub use database::{CacheEntry, CacheReport, DatabaseReport, DbSequence, DbSkeleton};

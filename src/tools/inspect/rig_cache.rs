@@ -169,7 +169,7 @@ pub(crate) fn is_rig_cache(path: &Path) -> bool {
 
 /// The database whose rig cache `path` is.
 fn database_of(path: &Path) -> Option<PathBuf> {
-    let db = super::database::database_of_cache(path.parent()?)?;
+    let db = super::place::database_of_cache(path.parent()?)?;
     (path.file_name() == rig_path(&db).file_name()).then_some(db)
 }
 
