@@ -20,7 +20,10 @@
 //! database's rig is embedded by ([`RIG_SOURCES`]): the rig cache of a
 //! loaded character (`src/db/rig_cache.rs`) carries it in its key, so a
 //! change to the embedding's code embeds the rig again instead of reading
-//! the rig of the old code.
+//! the rig of the old code. `SURFMOTION_SKELETON_SOURCE` likewise for the
+//! skeleton cache (`cache/poses-KIND.bin`, keyed in `src/db/frames.rs`):
+//! the rig's sources and the cache's own reader and writer
+//! ([`SKELETON_SOURCES`]), so a changed reader or skeleton code rebuilds it.
 
 use std::path::{Path, PathBuf};
 
@@ -41,6 +44,11 @@ const RIG_SOURCES: &[&str] = &[
     "Cargo.lock",
 ];
 
+/// The files and folders whose bytes the skeleton cache's key covers: the
+/// rig's ([`RIG_SOURCES`]: the per-frame joints and the rigid fit are in
+/// `src/embed`) and the cache's reader and writer.
+const SKELETON_SOURCES: &[&str] = &["src/db/frames.rs"];
+
 /// Every file under `p` (or `p` itself), in no particular order.
 fn files_under(p: &Path, out: &mut Vec<PathBuf>) {
     if p.is_dir() {
@@ -52,11 +60,11 @@ fn files_under(p: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// FNV-1a (64 bit) of the [`RIG_SOURCES`]' relative paths and bytes, in
-/// path order; each is watched, so an edit reruns this script.
-fn rig_source_fingerprint(root: &Path) -> u64 {
+/// FNV-1a (64 bit) of the relative paths and bytes of the files under
+/// `sources`, in path order; each is watched, so an edit reruns this script.
+fn source_fingerprint(root: &Path, sources: &[&str]) -> u64 {
     let mut files = Vec::new();
-    for s in RIG_SOURCES {
+    for s in sources {
         println!("cargo::rerun-if-changed={s}");
         files_under(&root.join(s), &mut files);
     }
@@ -84,7 +92,16 @@ fn main() {
     let root = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").unwrap_or_default());
     println!(
         "cargo::rustc-env=SURFMOTION_RIG_SOURCE={:016x}",
-        rig_source_fingerprint(&root)
+        source_fingerprint(&root, RIG_SOURCES)
+    );
+    let skeleton: Vec<&str> = RIG_SOURCES
+        .iter()
+        .chain(SKELETON_SOURCES)
+        .copied()
+        .collect();
+    println!(
+        "cargo::rustc-env=SURFMOTION_SKELETON_SOURCE={:016x}",
+        source_fingerprint(&root, &skeleton)
     );
     println!("cargo::rerun-if-env-changed=SURFMOTION_DATA");
     let dir = match std::env::var_os("SURFMOTION_DATA") {

@@ -323,13 +323,33 @@ fn poses_len(count: usize) -> u64 {
 }
 
 /// The keys of the frame and skeleton caches: the database's frames (the
-/// files' bytes), the unit and up axis, and for the skeletons the rig and
-/// the kind.
+/// files' bytes), the unit and up axis, and for the skeletons the rig's
+/// inputs, the kind and the fingerprint of the code that makes and reads
+/// them ([`super::skeletons::SKELETON_SOURCE`]: a changed reader or
+/// skeleton code rebuilds the cache instead of reading the old one).
 pub fn keys(
     dir: &Path,
     m: &Manifest,
     metres_per_unit: f64,
     kind: SkeletonKind,
+) -> Result<(u64, u64), DbError> {
+    keys_of_code(
+        dir,
+        m,
+        metres_per_unit,
+        kind,
+        super::skeletons::SKELETON_SOURCE,
+    )
+}
+
+/// [`keys`] as a build whose skeleton code has the fingerprint `source`
+/// computes them (the keys of another version's caches).
+pub fn keys_of_code(
+    dir: &Path,
+    m: &Manifest,
+    metres_per_unit: f64,
+    kind: SkeletonKind,
+    source: &str,
 ) -> Result<(u64, u64), DbError> {
     let mut h = frames_key(dir, m)?;
     h.text("frame cache", "metres, y up, f64");
@@ -338,8 +358,10 @@ pub fn keys(
     let mut p = KeyHasher::for_db(dir);
     p.text("frames", &fk.to_string());
     add_rig(&mut p, dir, m)?;
+    super::rig_cache::add_rig_choice(&mut p, dir, m)?;
     p.save();
     p.text("skeleton", kind_name(kind));
+    p.text("skeleton source", source);
     let pk = p.finish();
     tracing::debug!(
         "{}: cache keys: frames {fk:016x}, poses ({}) {pk:016x}",

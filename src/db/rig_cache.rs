@@ -16,7 +16,9 @@
 //! to the code embeds the rig again).
 //!
 //! File (`cache/rig.json`): one line of JSON, `{"format": "surfmotion rig
-//! cache 1", "key": "16 hex digits", "bytes": N, "xxh3": "16 hex digits"}`,
+//! cache 1", "key": "16 hex digits", "bytes": N, "xxh3": "16 hex digits",
+//! "source": "16 hex digits"}` (`source`: the writer's `SURFMOTION_RIG_SOURCE`,
+//! since session 30; older files lack it and are read alike),
 //! then the rig as [`crate::embed::Embedding::save`] writes it (`N` bytes
 //! of JSON whose xxh3-64 is `xxh3`; f64 values written shortest and read
 //! back bit for bit, serde_json's `float_roundtrip`). Written atomically;
@@ -25,7 +27,7 @@
 //! [`RigCacheError`] naming it, logged, and the rig embedded and written
 //! again.
 
-use super::cache::{add_rig, cache_dir, frames_key};
+use super::cache::{KeyHasher, add_rig, cache_dir, frames_key};
 use super::manifest::{DbError, Manifest};
 use super::skeletons::embed_rig_with;
 use crate::embed::{EmbedError, Embedding};
@@ -38,7 +40,7 @@ use std::path::{Path, PathBuf};
 const FORMAT: &str = "surfmotion rig cache 1";
 
 /// The fingerprint of the embedding's source code (`build.rs`).
-const SOURCE: &str = env!("SURFMOTION_RIG_SOURCE");
+pub const SOURCE: &str = env!("SURFMOTION_RIG_SOURCE");
 
 /// Why a rig cache file cannot be used (the caller embeds the rig again).
 #[derive(Debug, thiserror::Error)]
@@ -81,6 +83,83 @@ struct Header {
     key: String,
     bytes: u64,
     xxh3: String,
+    /// [`SOURCE`] of the build that wrote it (since session 30; it is in
+    /// the key too: `inspect` tells other code from other inputs by it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    source: Option<String>,
+}
+
+/// What a rig cache file says of itself, checked against its own bytes
+/// (format, length, checksum), not against a database: `inspect`'s view.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct RigCacheHead {
+    /// The key it was written under (16 hex digits).
+    pub key: String,
+    /// [`SOURCE`] of the build that wrote it (`None`: written before
+    /// session 30, which did not record it).
+    pub source: Option<String>,
+    /// Bytes of its rig.
+    pub bytes: u64,
+}
+
+/// Reads the header of the rig cache `path` and checks its rig's length
+/// and checksum; returns the header and the rig's bytes.
+fn open(path: &Path) -> Result<(Header, Vec<u8>), RigCacheError> {
+    let header = |what: &str| RigCacheError::Header {
+        path: path.to_path_buf(),
+        what: what.into(),
+    };
+    let mut bytes = crate::util::fsutil::read_bytes(path).map_err(|e| RigCacheError::Io {
+        path: path.to_path_buf(),
+        source: e.source,
+    })?;
+    let nl = bytes
+        .iter()
+        .position(|&b| b == b'\n')
+        .ok_or_else(|| header("not a rig cache file (no header line)"))?;
+    let head: Header = serde_json::from_slice(&bytes[..nl])
+        .map_err(|_| header("not a rig cache file (no header line)"))?;
+    if head.format != FORMAT {
+        return Err(header(&format!(
+            "not a rig cache of this version ({:?})",
+            head.format
+        )));
+    }
+    let body = bytes.split_off(nl + 1);
+    Ok((head, body))
+}
+
+/// The rig's length and checksum against the header's.
+fn check_body(path: &Path, head: &Header, body: &[u8]) -> Result<(), RigCacheError> {
+    let header = |what: String| RigCacheError::Header {
+        path: path.to_path_buf(),
+        what,
+    };
+    if body.len() as u64 != head.bytes {
+        return Err(header(format!(
+            "cut or grown: its rig is {} bytes where {} were written",
+            body.len(),
+            head.bytes
+        )));
+    }
+    if format!("{:016x}", xxhash_rust::xxh3::xxh3_64(body)) != head.xxh3 {
+        return Err(header(
+            "changed since it was written (its checksum differs)".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The header of the rig cache `path`, its rig's length and checksum
+/// checked (not its key: that needs the database, [`rig_key`]).
+pub fn read_head(path: &Path) -> Result<RigCacheHead, RigCacheError> {
+    let (head, body) = open(path)?;
+    check_body(path, &head, &body)?;
+    Ok(RigCacheHead {
+        key: head.key,
+        source: head.source,
+        bytes: head.bytes,
+    })
 }
 
 /// The rig cache file of the database `dir`.
@@ -95,6 +174,18 @@ pub fn rig_key(dir: &Path, m: &Manifest, lens: Option<&[usize]>) -> Result<u64, 
     h.text("rig cache", FORMAT);
     h.text("rig source", SOURCE);
     add_rig(&mut h, dir, m)?;
+    add_rig_choice(&mut h, dir, m)?;
+    h.text("lengths", &format!("{lens:?}"));
+    h.save();
+    Ok(h.finish())
+}
+
+/// The rig's inputs beside the landmarks and parts ([`add_rig`]): the
+/// glTF skin and rig map files' bytes and the `[rig] rest` frame. The rig
+/// key hashes them, and so does the skeleton cache's
+/// ([`super::frames::keys`]): a rig embedded again on another rest frame
+/// must not meet the skeletons of the old one.
+pub(crate) fn add_rig_choice(h: &mut KeyHasher, dir: &Path, m: &Manifest) -> Result<(), DbError> {
     for (label, p) in [("gltf skin", &m.rig.gltf_skin), ("rig map", &m.rig.rig_map)] {
         if let Some(p) = p {
             h.text("rig", label);
@@ -105,9 +196,7 @@ pub fn rig_key(dir: &Path, m: &Manifest, lens: Option<&[usize]>) -> Result<u64, 
         Some(r) => h.text("rest", r),
         None => h.text("rest", "the topology's frame"),
     };
-    h.text("lengths", &format!("{lens:?}"));
-    h.save();
-    Ok(h.finish())
+    Ok(())
 }
 
 /// The rig of the database `dir` ([`embed_rig_with`]): read from the
@@ -147,39 +236,12 @@ pub fn read_rig(path: &Path, key: u64, n: usize) -> Result<Embedding, RigCacheEr
         path: path.to_path_buf(),
         what: what.into(),
     };
-    let bytes = crate::util::fsutil::read_bytes(path).map_err(|e| RigCacheError::Io {
-        path: path.to_path_buf(),
-        source: e.source,
-    })?;
-    let nl = bytes
-        .iter()
-        .position(|&b| b == b'\n')
-        .ok_or_else(|| header("not a rig cache file (no header line)"))?;
-    let head: Header = serde_json::from_slice(&bytes[..nl])
-        .map_err(|_| header("not a rig cache file (no header line)"))?;
-    if head.format != FORMAT {
-        return Err(header(&format!(
-            "not a rig cache of this version ({:?})",
-            head.format
-        )));
-    }
+    let (head, body) = open(path)?;
     if head.key != format!("{key:016x}") {
         return Err(header("made from other inputs (another key)"));
     }
-    let body = &bytes[nl + 1..];
-    if body.len() as u64 != head.bytes {
-        return Err(header(&format!(
-            "cut or grown: its rig is {} bytes where {} were written",
-            body.len(),
-            head.bytes
-        )));
-    }
-    if format!("{:016x}", xxhash_rust::xxh3::xxh3_64(body)) != head.xxh3 {
-        return Err(header(
-            "changed since it was written (its checksum differs)",
-        ));
-    }
-    let text = std::str::from_utf8(body).map_err(|_| header("the rig is not UTF-8"))?;
+    check_body(path, &head, &body)?;
+    let text = std::str::from_utf8(&body).map_err(|_| header("the rig is not UTF-8"))?;
     Ok(Embedding::parse(text, path, n)?)
 }
 
@@ -199,6 +261,7 @@ pub fn save_rig(path: &Path, key: u64, rig: &Embedding) -> Result<bool, FsError>
         key: format!("{key:016x}"),
         bytes: body.len() as u64,
         xxh3: format!("{:016x}", xxhash_rust::xxh3::xxh3_64(&body)),
+        source: Some(SOURCE.into()),
     })
     .map_err(fs)?;
     if let Some(d) = path.parent() {

@@ -16,6 +16,14 @@ use crate::util::fsutil::read_text;
 use serde::Serialize;
 use std::path::Path;
 
+/// The fingerprint of the code that makes and reads the skeleton cache
+/// (`cache/poses-KIND.bin`): `build.rs` hashes the rig's sources (the
+/// embedding, the per-frame joints, the rigid fit) and the cache's reader
+/// and writer (`src/db/frames.rs`); the cache's key carries it
+/// ([`super::frames::keys`]), so a build whose skeleton code changed
+/// rebuilds the cache instead of reading the skeletons the old code made.
+pub const SKELETON_SOURCE: &str = env!("SURFMOTION_SKELETON_SOURCE");
+
 /// The skeletons of one sequence.
 #[derive(Debug, Clone, Serialize)]
 pub struct SequenceSkeleton {

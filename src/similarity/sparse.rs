@@ -115,8 +115,13 @@ pub struct SparseOptions {
     /// variant database of `db::sparse` 92.3 % (0, 1, 4: every pair there
     /// is linked at least 4 times) → 95.6 % (16), 98.9 % (64); at
     /// 10⁴ frames 7.6 → 11.4 M pairs, 352 s of CPU, 96.6 % of the previous
-    /// default's transitions at the same frames (92.1 % with 0). Default:
-    /// 16.
+    /// default's transitions at the same frames (92.1 % with 0). Session
+    /// 30, cover 32 at 10⁴ frames (main's binary, load ~19): 13.2 M pairs,
+    /// 446.3 s of CPU (describe 88.8 s, where session 29's 16 measured
+    /// 71.6 s: the load's ~1.24×; full measure 276.9 s against 217.6 s),
+    /// 954 MB, 97.5 % of the trees' transitions (16: 96.6 %): over the
+    /// 360 s line even scaled for the load (≈ 360-387 s), so 16 stays.
+    /// Default: 16.
     pub cover: usize,
     /// Best transitions by the cheap distances per unordered sequence pair
     /// whose centres are candidates ([`super::pair_scan`]); their count

@@ -6,10 +6,13 @@ mod error;
 mod fbx;
 mod json;
 mod other;
+mod place;
+mod rig_cache;
 
 pub use database::{CacheEntry, CacheReport, DatabaseReport, DbSequence, DbSkeleton};
 pub use error::InspectError;
 pub use json::{JsonReport, json_kind};
+pub use rig_cache::RigCacheReport;
 
 use json::inspect_json;
 
@@ -126,6 +129,8 @@ pub enum Report {
     Database(DatabaseReport),
     /// The cache folder of a character database.
     Cache(CacheReport),
+    /// A database's rig cache (`cache/rig.json`, written by loads).
+    RigCache(RigCacheReport),
 }
 
 /// Options for [`inspect`].
@@ -141,6 +146,10 @@ pub struct InspectOptions {
 pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectError> {
     if let Some(fmt) = MocapFormat::of(path) {
         return inspect_mocap(path, fmt, opts).map(Report::Mocap);
+    }
+    // Before the JSON files: a rig cache is a header line, then the rig.
+    if rig_cache::is_rig_cache(path) {
+        return rig_cache::inspect_rig_cache(path).map(Report::RigCache);
     }
     if path
         .extension()
@@ -427,6 +436,7 @@ impl Report {
             }
             Report::Database(r) => s = r.to_text(),
             Report::Cache(r) => s = r.to_text(),
+            Report::RigCache(r) => s = r.to_text(),
         }
         s
     }

@@ -9,12 +9,12 @@
 //! once, as `db build` does before it reuses a cache.
 
 use super::error::InspectError;
+use crate::db::Manifest;
 use crate::db::build::{
     default_measure, graph_key, graph_path, read_graph_cache, similarity_key, similarity_path,
     sparse_key, sparse_options, sparse_path,
 };
 use crate::db::cache::cache_dir;
-use crate::db::{MANIFEST, Manifest};
 use crate::similarity::Measure;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -53,7 +53,7 @@ pub struct CacheEntry {
     /// The file.
     pub file: PathBuf,
     /// `similarity matrix (MEASURE)`, `graph (MEASURE)`, `parametric
-    /// model` or `not a file db build writes`.
+    /// model`, `rig cache (...)` or `not a file db build writes`.
     pub what: String,
     /// Whether `db build` (or `play`) would use it as it is.
     pub up_to_date: bool,
@@ -123,22 +123,7 @@ pub struct CacheReport {
     pub cache: Vec<CacheEntry>,
 }
 
-/// The database folder `path` is (it holds [`MANIFEST`]).
-pub(crate) fn is_database(path: &Path) -> bool {
-    path.is_dir() && path.join(MANIFEST).is_file()
-}
-
-/// The database whose cache folder `path` is.
-pub(crate) fn database_of_cache(path: &Path) -> Option<PathBuf> {
-    if !path.is_dir() || path.file_name()? != "cache" {
-        return None;
-    }
-    let parent = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    is_database(&parent).then_some(parent)
-}
+pub(crate) use super::place::{database_of_cache, is_database};
 
 fn err(e: impl std::fmt::Display) -> InspectError {
     InspectError::Json(e.to_string())
@@ -337,6 +322,9 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
                 (e.up_to_date, e.state) =
                     (false, format!("damaged ({why}): `db build` rebuilds it"));
             }
+        } else if file == crate::db::rig_cache::rig_path(dir) {
+            e.what = super::rig_cache::what(m);
+            (e.up_to_date, e.state) = super::rig_cache::entry_state(&file, dir, m);
         } else if file == crate::parametric::store::cache_path(dir) {
             e.what = "parametric model (`play`)".into();
             let want =

@@ -1,5 +1,6 @@
 //! Character databases: the real captures' manifests, synthetic databases.
 
+mod cache_trust;
 mod caches;
 mod captures;
 mod frames;
