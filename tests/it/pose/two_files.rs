@@ -432,17 +432,7 @@ const GROUPS: [(&str, &[C]); 10] = [
     ("the spine", &[C::Spine]),
     ("the chest", &[C::Chest]),
     ("the neck and head", &[C::Neck, C::Head]),
-    (
-        "the arms",
-        &[
-            C::LShoulder,
-            C::RShoulder,
-            C::LElbow,
-            C::RElbow,
-            C::LWrist,
-            C::RWrist,
-        ],
-    ),
+    ("the arms", &Canonical::ARMS),
     ("the thighs", &[C::LHip, C::RHip]),
     ("the shins", &[C::LKnee, C::RKnee]),
     ("the feet", &[C::LAnkle, C::RAnkle, C::LToe, C::RToe]),
