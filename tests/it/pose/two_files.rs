@@ -258,8 +258,14 @@
 //! 03_02 3.4, 0.129, 1.40 → 5.0, 0.078, 0.92; 02_03 1.8, 0.184, 2.79 →
 //! 2.2, 0.188, 2.44; the Bandai clips (frame references already)
 //! unchanged; no warning added. The head's p95 rises on five of six CMU
-//! clips (within their lines), abs improves on two pairs of three, and
-//! `drive::`/`jobs::` were not run with it.
+//! clips (within their lines), abs improves on two pairs of three,
+//! `pose::`/`mocap::` with it: 41 passed, 1 failed
+//! (`pose::toes::toes_in_the_air_stay_with_the_foot`: a swung leg's toe no
+//! longer turns with its ankle within 1e-9), and `drive::`/`jobs::` were
+//! not run with it. Looked (03_02 frame 85, the largest change, 19.1 cm,
+//! stepping up onto the block): main's trunk and head lean forward over
+//! the raised knee, the option's stand upright, and its skirt's front
+//! panel juts out before the knee in a thin flap; legs and feet alike.
 //!
 //! Earlier figures (measured 2026-11-29):
 //! - 01_01: the cgspeed BVH retargets as the AMC does (0.00 %).
