@@ -264,8 +264,8 @@
 //! clips (within their lines), abs improves on two pairs of three,
 //! `pose::`/`mocap::` with it: 41 passed, 1 failed
 //! (`pose::toes::toes_in_the_air_stay_with_the_foot`: a swung leg's toe no
-//! longer turns with its ankle within 1e-9), and `drive::`/`jobs::` were
-//! not run with it. Looked (03_02 frame 85, the largest change, 19.1 cm,
+//! longer turns with its ankle within 1e-9), `drive::` 14 and `jobs::` 37
+//! passed with it (CI=true). Looked (03_02 frame 85, the largest change, 19.1 cm,
 //! stepping up onto the block): main's trunk and head lean forward over
 //! the raised knee, the option's stand upright, and its skirt's front
 //! panel juts out before the knee in a thin flap; legs and feet alike.
