@@ -3,8 +3,9 @@
 .ci/usd-venv): what `usdchecker` does since USD 0.25, every validator the
 UsdValidation registry holds run on the opened stage (usd-core's wheel ships
 the library, not the usdchecker program). With --dump, also prints one JSON
-line per file: the layer metadata and, per time code, the Mesh prim's points
-and extent as pxr.Usd reads them.
+line per file: the layer metadata and, per time code, the Mesh prim's points,
+normals (with their interpolation; none when the file has no normals) and
+extent as pxr.Usd reads them.
 
 Usage: usdcheck.py [--dump] FILE.usda...   (exit 1 on any validation error)
 """
@@ -34,6 +35,7 @@ def dump(stage):
     pts = mesh.GetPointsAttr()
     ext = mesh.GetExtentAttr()
     times = pts.GetTimeSamples()
+    nrm = mesh.GetNormalsAttr()
     return {
         "metersPerUnit": UsdGeom.GetStageMetersPerUnit(stage),
         "upAxis": str(UsdGeom.GetStageUpAxis(stage)),
@@ -45,6 +47,10 @@ def dump(stage):
         "faceVertexIndices": list(mesh.GetFaceVertexIndicesAttr().Get()),
         "times": list(times),
         "points": [[list(p) for p in pts.Get(t)] for t in times],
+        "normalsInterpolation": str(mesh.GetNormalsInterpolation()),
+        "normalTimes": list(nrm.GetTimeSamples()),
+        "normals": [[list(n) for n in nrm.Get(t)] for t in nrm.GetTimeSamples()],
+        "restNormals": [list(n) for n in (nrm.Get() or [])],
         "extent": [[list(p) for p in ext.Get(t)] for t in ext.GetTimeSamples()],
     }
 

@@ -56,6 +56,17 @@ impl Canonical {
     /// Number of canonical joints.
     pub const COUNT: usize = 19;
 
+    /// The arm joints, left and right at each level from the shoulders
+    /// down (shoulders, elbows, wrists).
+    pub const ARMS: [Canonical; 6] = [
+        Canonical::LShoulder,
+        Canonical::RShoulder,
+        Canonical::LElbow,
+        Canonical::RElbow,
+        Canonical::LWrist,
+        Canonical::RWrist,
+    ];
+
     /// The leg joints, left then right, each from hip to toe (the last
     /// eight of [`Canonical::ALL`]).
     pub(crate) const LEGS: [Canonical; 8] = {

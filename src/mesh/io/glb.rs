@@ -299,7 +299,12 @@ fn snorm8(x: f64) -> i8 {
 }
 
 /// Vertex normals of `p` with a fallback where undefined.
-fn normals_or(p: &[[f64; 3]], tris: &[[u32; 3]], fallback: &[[f64; 3]], out: &mut Vec<[f64; 3]>) {
+pub(super) fn normals_or(
+    p: &[[f64; 3]],
+    tris: &[[u32; 3]],
+    fallback: &[[f64; 3]],
+    out: &mut Vec<[f64; 3]>,
+) {
     vertex_normals_into(p, tris, out);
     for (n, f) in out.iter_mut().zip(fallback) {
         if *n == [0.0; 3] {

@@ -1,6 +1,7 @@
 //! USD output of a mesh sequence: a `.usda` text layer (Pixar's Universal
-//! Scene Description) with one `Mesh` prim whose `points` are time-sampled,
-//! one sample per frame, and an `extent` per frame.
+//! Scene Description) with one `Mesh` prim whose `points` and vertex
+//! `normals` are time-sampled, one sample per frame, and an `extent` per
+//! frame.
 //!
 //! The layer's metadata says what the numbers mean: `metersPerUnit = 1`
 //! (the project's meshes are in metres), `upAxis = "Y"`,
@@ -10,17 +11,51 @@
 //! writer stores them), each written as the shortest decimal that reads
 //! back as the same `f32`.
 //!
+//! Normals (`normal3f[] normals`, `interpolation = "vertex"`, the
+//! UsdGeomPointBased attribute) are the GLB writer's: area-weighted unit
+//! vertex normals of each frame ([`crate::mesh::normals`]), a vertex on no
+//! triangle of non-zero area taking its rest normal (the rest's: +Z), so
+//! every normal is unit length. Viewers then shade the surface smoothly
+//! as it deforms instead of recomputing normals per frame (or shading it
+//! flat). [`UsdOptions::normals`] off leaves them out: the file is about
+//! half the size and written in about half the time (README, "USD
+//! output").
+//!
 //! Written frame by frame ([`UsdaWriter`]): the header needs the frame
 //! count, which a [`super::stream::SequenceWriter`] knows up front; each
-//! frame's points are appended as they come, and the extents (six numbers
-//! a frame) follow the last frame. Atomic: the file appears when the last
-//! frame is in. Checked in `tests/it/mesh/io.rs` by Pixar's `usd-core`
-//! (its validators pass; points read back equal ours).
+//! frame's points are appended as they come; its normals go to an
+//! anonymous temporary file beside the output (a USD attribute's samples
+//! are one block, so they cannot interleave with the points'), copied in
+//! after the last frame, then the extents (six numbers a frame). Memory:
+//! one frame of normals. Atomic: the file appears when the last frame is
+//! in. Checked in `tests/it/mesh/io.rs` by Pixar's `usd-core` (its
+//! validators pass; points and normals read back equal ours).
 
+use super::glb::normals_or;
 use crate::mesh::{Mesh, MeshError, MeshSequence};
-use crate::util::fsutil::AtomicFile;
+use crate::util::fsutil::{AtomicFile, FsError};
 use std::fmt::Write as _;
+use std::io::{Read as _, Seek as _, Write as _};
 use std::path::{Path, PathBuf};
+
+/// Options of the `.usda` writer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct UsdOptions {
+    /// Write each frame's vertex normals (see the module documentation).
+    /// Default value: `true`.
+    pub normals: bool,
+}
+
+impl UsdOptions {
+    /// Normals on.
+    pub const DEFAULT: UsdOptions = UsdOptions { normals: true };
+}
+
+impl Default for UsdOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
 
 /// A `.usda` sequence being written; see the module documentation.
 pub struct UsdaWriter {
@@ -31,6 +66,84 @@ pub struct UsdaWriter {
     written: usize,
     /// Per frame: min and max corner, as written (f32).
     extents: Vec<[f32; 6]>,
+    /// The normals' samples so far, when written.
+    normals: Option<NormalSpool>,
+}
+
+/// Each frame's normals as `.usda` sample lines, in an anonymous temporary
+/// file (removed by the system however the process ends) until
+/// [`UsdaWriter::finish`] copies them in after the points.
+struct NormalSpool {
+    file: std::io::BufWriter<std::fs::File>,
+    triangles: Vec<[u32; 3]>,
+    /// The rest normals: where a frame's normal is undefined.
+    rest: Vec<[f64; 3]>,
+    /// One frame's normals (reused).
+    frame: Vec<[f64; 3]>,
+    line: String,
+}
+
+impl NormalSpool {
+    /// A spool beside `out` (else in the system's temporary folder: an
+    /// output in `/dev`) for `mesh`'s topology; its rest normals.
+    fn create(mesh: &Mesh, out: &Path) -> Result<NormalSpool, MeshError> {
+        let dir = match out.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let file = tempfile::tempfile_in(dir)
+            .or_else(|_| tempfile::tempfile())
+            .map_err(|e| io_error(out, e))?;
+        let triangles = mesh.triangles().to_vec();
+        let mut rest = Vec::new();
+        let up = vec![[0.0, 0.0, 1.0]; mesh.vertex_count()];
+        normals_or(mesh.positions(), &triangles, &up, &mut rest);
+        Ok(NormalSpool {
+            file: std::io::BufWriter::with_capacity(1 << 20, file),
+            triangles,
+            rest,
+            frame: Vec::new(),
+            line: String::new(),
+        })
+    }
+
+    /// Appends frame `k`'s normals (of `points`) as one sample line.
+    fn push(&mut self, out: &Path, k: usize, points: &[[f64; 3]]) -> Result<(), MeshError> {
+        normals_or(points, &self.triangles, &self.rest, &mut self.frame);
+        self.line.clear();
+        let _ = write!(self.line, "        {k}: ");
+        push_points(&mut self.line, &self.frame);
+        self.line.push_str(",\n");
+        self.file
+            .write_all(self.line.as_bytes())
+            .map_err(|e| io_error(out, e))
+    }
+
+    /// Copies the samples into `dst` (the output, named `out`).
+    fn copy_into(self, out: &Path, dst: &mut AtomicFile) -> Result<(), MeshError> {
+        let mut f = self
+            .file
+            .into_inner()
+            .map_err(|e| io_error(out, e.into_error()))?;
+        f.rewind().map_err(|e| io_error(out, e))?;
+        let mut buf = vec![0u8; 1 << 20];
+        loop {
+            let n = f.read(&mut buf).map_err(|e| io_error(out, e))?;
+            if n == 0 {
+                return Ok(());
+            }
+            dst.write_all(&buf[..n])?;
+        }
+    }
+}
+
+/// An I/O error on the normals' temporary, named by the output.
+fn io_error(out: &Path, source: std::io::Error) -> MeshError {
+    FsError {
+        path: out.to_path_buf(),
+        source,
+    }
+    .into()
 }
 
 /// The prim name: the file stem as a USD identifier (letters, digits,
@@ -66,13 +179,26 @@ fn push_points(buf: &mut String, points: &[[f64; 3]]) {
 }
 
 impl UsdaWriter {
-    /// Starts `out` for `frames` frames of `mesh`'s topology at `fps`:
-    /// writes the layer header, the topology and the rest points.
+    /// Starts `out` for `frames` frames of `mesh`'s topology at `fps`
+    /// with the default options ([`UsdOptions::DEFAULT`]).
     pub fn create(
         mesh: &Mesh,
         out: &Path,
         frames: usize,
         fps: f64,
+    ) -> Result<UsdaWriter, MeshError> {
+        Self::create_with(mesh, out, frames, fps, UsdOptions::DEFAULT)
+    }
+
+    /// Starts `out` for `frames` frames of `mesh`'s topology at `fps`:
+    /// writes the layer header, the topology, the rest points and (with
+    /// `opts.normals`) the rest normals.
+    pub fn create_with(
+        mesh: &Mesh,
+        out: &Path,
+        frames: usize,
+        fps: f64,
+        opts: UsdOptions,
     ) -> Result<UsdaWriter, MeshError> {
         if frames == 0 {
             return Err(MeshError::invalid(out, "a USD sequence needs a frame"));
@@ -111,8 +237,18 @@ impl UsdaWriter {
         h.push_str("    uniform token subdivisionScheme = \"none\"\n");
         h.push_str("    point3f[] points = ");
         push_points(&mut h, mesh.positions());
-        h.push_str("\n    point3f[] points.timeSamples = {\n");
+        // The output first: it makes the folder the spool goes in.
         let mut file = AtomicFile::create(out)?;
+        let normals = match opts.normals {
+            true => Some(NormalSpool::create(mesh, out)?),
+            false => None,
+        };
+        if let Some(n) = &normals {
+            h.push_str("\n    normal3f[] normals = ");
+            push_points(&mut h, &n.rest);
+            h.push_str(" (\n        interpolation = \"vertex\"\n    )");
+        }
+        h.push_str("\n    point3f[] points.timeSamples = {\n");
         file.write_all(h.as_bytes())?;
         Ok(UsdaWriter {
             out: out.to_path_buf(),
@@ -121,6 +257,7 @@ impl UsdaWriter {
             frames,
             written: 0,
             extents: Vec::with_capacity(frames),
+            normals,
         })
     }
 
@@ -157,6 +294,9 @@ impl UsdaWriter {
         push_points(&mut buf, frame);
         buf.push_str(",\n");
         self.file.write_all(buf.as_bytes())?;
+        if let Some(n) = &mut self.normals {
+            n.push(&self.out, self.written, frame)?;
+        }
         self.written += 1;
         Ok(())
     }
@@ -166,11 +306,18 @@ impl UsdaWriter {
         self.written
     }
 
-    /// Writes the extents and closes the layer, once every announced frame
-    /// is in. Dropped before, it leaves no file.
+    /// Writes the normals, the extents and closes the layer, once every
+    /// announced frame is in. Dropped before, it leaves no file.
     pub fn finish(mut self) -> Result<(), MeshError> {
         super::frame_check::check_complete(&self.out, self.written, self.frames)?;
-        let mut t = String::from("    }\n    float3[] extent.timeSamples = {\n");
+        self.file.write_all(b"    }\n")?;
+        if let Some(n) = self.normals.take() {
+            self.file
+                .write_all(b"    normal3f[] normals.timeSamples = {\n")?;
+            n.copy_into(&self.out, &mut self.file)?;
+            self.file.write_all(b"    }\n")?;
+        }
+        let mut t = String::from("    float3[] extent.timeSamples = {\n");
         for (k, e) in self.extents.iter().enumerate() {
             let _ = writeln!(
                 t,
@@ -188,8 +335,18 @@ impl UsdaWriter {
 /// Writes a whole sequence as `.usda` at `fps` (the sequence's own rate
 /// first).
 pub(crate) fn write_usda(seq: &MeshSequence, fps: f64, out: &Path) -> Result<(), MeshError> {
+    write_usda_with(seq, fps, out, UsdOptions::DEFAULT)
+}
+
+/// [`write_usda`] with options.
+pub fn write_usda_with(
+    seq: &MeshSequence,
+    fps: f64,
+    out: &Path,
+    opts: UsdOptions,
+) -> Result<(), MeshError> {
     let fps = seq.fps.unwrap_or(fps);
-    let mut w = UsdaWriter::create(seq.mesh(), out, seq.frame_count(), fps)?;
+    let mut w = UsdaWriter::create_with(seq.mesh(), out, seq.frame_count(), fps, opts)?;
     for k in 0..seq.frame_count() {
         w.push(seq.frame(k))?;
     }
@@ -227,5 +384,52 @@ mod tests {
         assert!(s.contains("endTimeCode = 1\n"));
         assert!(s.contains("        1: [(0, 0, 0.1), (1, 0, 0.1), (0, 1, 0.1)],\n"));
         assert!(s.contains("        1: [(0, 0, 0.1), (1, 1, 0.1)],\n"));
+        assert!(s.contains(
+            "    normal3f[] normals = [(0, 0, 1), (0, 0, 1), (0, 0, 1)] (\n        interpolation = \"vertex\"\n    )\n"
+        ));
+        let normals = s.split("normals.timeSamples = {\n").nth(1).unwrap();
+        assert!(normals.starts_with(
+            "        0: [(0, 0, 1), (0, 0, 1), (0, 0, 1)],\n        1: [(0, 0, 1), (0, 0, 1), (0, 0, 1)],\n    }\n    float3[] extent"
+        ));
+    }
+
+    /// Frame 1 turns the triangle over (its normals flip); frame 2
+    /// collapses it to a point (no normal: the rest's, unit length).
+    #[test]
+    fn normals_follow_each_frame_and_fall_back_to_the_rest() {
+        let dir = tempfile::tempdir().unwrap();
+        let m = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 3.0]],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        let frames = [
+            m.positions().to_vec(),
+            vec![[0.0, 0.0, 0.0], [0.0, 0.0, 3.0], [0.0, 2.0, 0.0]],
+            vec![[0.5; 3]; 3],
+        ];
+        let text = |opts: UsdOptions| {
+            let out = dir.path().join("t.usda");
+            let mut w = UsdaWriter::create_with(&m, &out, 3, 30.0, opts).unwrap();
+            for f in &frames {
+                w.push(f).unwrap();
+            }
+            w.finish().unwrap();
+            std::fs::read_to_string(&out).unwrap()
+        };
+        let s = text(UsdOptions::DEFAULT);
+        let block = s.split("normals.timeSamples = {\n").nth(1).unwrap();
+        let want = "        0: [(1, 0, 0), (1, 0, 0), (1, 0, 0)],\n        1: [(-1, 0, 0), (-1, 0, 0), (-1, 0, 0)],\n        2: [(1, 0, 0), (1, 0, 0), (1, 0, 0)],\n    }\n";
+        assert!(block.starts_with(want), "{block}");
+        // Off: no normals anywhere, the points and extents as with them.
+        let off = text(UsdOptions { normals: false });
+        assert!(!off.contains("normal"), "{off}");
+        let block_of = |t: &str, key: &str| {
+            let after = t.split(key).nth(1).unwrap();
+            after.split("\n    }").next().unwrap().to_string()
+        };
+        for key in ["points.timeSamples = {", "extent.timeSamples = {"] {
+            assert_eq!(block_of(&s, key), block_of(&off, key), "{key}");
+        }
     }
 }

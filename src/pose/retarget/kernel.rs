@@ -4,7 +4,7 @@
 
 use super::feet::{Toes, flat_feet, place_feet};
 use super::ground::{Given, clip_support_given, foot_height};
-use super::motion_ref::torso_from_motion;
+use super::motion_ref::{carriage_for_rest, torso_reference};
 use super::reference::{Reference, ReferenceSource, leg_length};
 use super::root::root_from_legs;
 use super::torso::{clip_rotations_from, neck_carriage, upright};
@@ -157,11 +157,9 @@ pub(super) fn retarget_on_grounds(
         _ => &reference.pose,
     };
     // A frame standing in for the rest: the torso from the clip's mean
-    // carriage (see [`torso_from_motion`]).
-    let (carriage, at_ref) = match reference.source {
-        ReferenceSource::Frame(_) => torso_from_motion(r, mocap, &reference.rotations, tilt),
-        ReferenceSource::Rest => (*r, None),
-    };
+    // carriage (see [`torso_reference`]); an upright rest's too when
+    // [`REFERENCE_ENV`](super::REFERENCE_ENV) says `carriage`.
+    let (carriage, at_ref) = torso_reference(r, mocap, reference, tilt, carriage_for_rest());
     let r = &carriage;
     // The clip's floor and the support under each of its footfalls (the
     // leg's length does not depend on the feet).

@@ -87,6 +87,7 @@ pub use measures::{
     ground_offsets, on_character_given, on_character_with_grounds, stance_offsets,
     stance_offsets_given,
 };
+pub use motion_ref::REFERENCE_ENV;
 pub use reference::{
     CharacterNeutral, ClipPoses, JointRotations, NeutralSource, Reference, ReferenceSource,
     character_neutral, choose_reference, clip_poses, leg_length, neutral_score,

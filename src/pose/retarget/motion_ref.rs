@@ -16,12 +16,61 @@
 //! the frame's (they take the clip's directions; the reference's legs
 //! only give their length and the feet's stance).
 
-use super::reference::JointRotations;
+use super::reference::{JointRotations, Reference, ReferenceSource};
 use crate::pose::Pose;
 use crate::rig::Canonical;
 use glam::{DQuat, DVec3, DVec4};
 
 use Canonical as C;
+
+/// The environment variable that chooses the torso's reference of a clip
+/// whose rest skeleton stands upright (a measurement option, issue 44):
+/// `rest` (the default: the rest skeleton, the clip's own calibration
+/// pose) or `carriage` (the clip's mean carriage, as for a clip whose
+/// reference is a frame: both files of one performance then measure the
+/// torso from the same carriage). Another value warns and is the default.
+pub const REFERENCE_ENV: &str = "SURFMOTION_REFERENCE";
+
+/// Whether an upright rest skeleton's torso is replaced by the clip's
+/// mean carriage ([`REFERENCE_ENV`], read once per process; a value that
+/// is not a rule warns and is the default).
+pub(super) fn carriage_for_rest() -> bool {
+    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ON.get_or_init(|| {
+        let v = std::env::var(REFERENCE_ENV).ok();
+        reference_rule(v.as_deref()).unwrap_or_else(|why| {
+            tracing::warn!("{REFERENCE_ENV}: {why}; the rest skeleton is used");
+            false
+        })
+    })
+}
+
+/// [`REFERENCE_ENV`]'s value read: `Ok(true)` for `carriage`, `Ok(false)`
+/// for none, empty or `rest`; `Err` naming any other value.
+fn reference_rule(value: Option<&str>) -> Result<bool, String> {
+    match value.map(str::trim) {
+        None | Some("" | "rest") => Ok(false),
+        Some("carriage") => Ok(true),
+        Some(other) => Err(format!("'{other}' is not 'rest' or 'carriage'")),
+    }
+}
+
+/// The torso's reference of the kernel: a frame reference `r` (a frame
+/// of `mocap`, levelled by `tilt`) takes the clip's mean carriage
+/// ([`torso_from_motion`]); an upright rest skeleton keeps its own (and
+/// the identity as its file rotations, `None`) unless `carriage_rest`.
+pub(super) fn torso_reference(
+    r: &Pose,
+    mocap: &[Pose],
+    reference: &Reference,
+    tilt: DQuat,
+    carriage_rest: bool,
+) -> (Pose, Option<JointRotations>) {
+    match reference.source {
+        ReferenceSource::Rest if !carriage_rest => (*r, None),
+        _ => torso_from_motion(r, mocap, &reference.rotations, tilt),
+    }
+}
 
 /// The turn about the vertical taking `p`'s heading (the hips' and the
 /// shoulders' left-right lines, summed, seen from above) onto +X;
@@ -177,14 +226,7 @@ mod tests {
         set(C::RToe, -0.1, 0.02, 0.14);
         let q = DQuat::from_rotation_y(twist);
         let o = p[C::Chest.index()];
-        for c in [
-            C::LShoulder,
-            C::RShoulder,
-            C::LElbow,
-            C::RElbow,
-            C::LWrist,
-            C::RWrist,
-        ] {
+        for c in Canonical::ARMS {
             p[c.index()] = o + q * (p[c.index()] - o);
         }
         p
@@ -285,6 +327,41 @@ mod tests {
                 .1
                 .is_none()
         );
+    }
+
+    #[test]
+    fn the_reference_rule_reads_rest_and_carriage_and_names_any_other() {
+        assert_eq!(reference_rule(None), Ok(false));
+        assert_eq!(reference_rule(Some(" rest ")), Ok(false));
+        assert_eq!(reference_rule(Some("")), Ok(false));
+        assert_eq!(reference_rule(Some("carriage")), Ok(true));
+        let e = reference_rule(Some("Carriage")).unwrap_err();
+        assert!(e.contains("'Carriage'"), "{e}");
+    }
+
+    #[test]
+    fn an_upright_rest_takes_the_carriage_only_when_asked() {
+        let mocap = clip(30, 0.15, DQuat::IDENTITY, 1.0);
+        let rest = Reference {
+            pose: standing(0.0),
+            source: ReferenceSource::Rest,
+            rotations: std::sync::Arc::from(Vec::new()),
+        };
+        let r = rest.pose;
+        let (kept, at) = torso_reference(&r, &mocap, &rest, DQuat::IDENTITY, false);
+        assert_eq!((kept, at), (r, None));
+        let (moved, _) = torso_reference(&r, &mocap, &rest, DQuat::IDENTITY, true);
+        assert_eq!(moved, torso_places_from_motion(&r, &mocap));
+        // A frame reference takes it either way.
+        let frame = Reference {
+            source: ReferenceSource::Frame(4),
+            pose: mocap[4],
+            ..rest
+        };
+        for on in [false, true] {
+            let (p, _) = torso_reference(&mocap[4], &mocap, &frame, DQuat::IDENTITY, on);
+            assert_eq!(p, torso_places_from_motion(&mocap[4], &mocap));
+        }
     }
 
     #[test]

@@ -427,11 +427,39 @@ fn usd_python() -> Option<std::path::PathBuf> {
     None
 }
 
+/// Runs `.ci/usdcheck.py --dump` on `file`: the validators must pass; the
+/// dump's JSON.
+fn usd_dump(py: &Path, file: &Path) -> serde_json::Value {
+    let o = std::process::Command::new(py)
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join(".ci/usdcheck.py"))
+        .arg("--dump")
+        .arg(file)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "usd-core validation failed:\n{err}");
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// `v` (a JSON array of xyz arrays) as f32 triples.
+fn f32x3s(v: &serde_json::Value) -> Vec<[f32; 3]> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|q| [0, 1, 2].map(|a| q[a].as_f64().unwrap() as f32))
+        .collect()
+}
+
 /// Issue 44: a `.usda` sequence, written frame by frame through the
 /// sequence writer as every verb writes, passes Pixar's validators (what
 /// `usdchecker` runs) and reads back through `pxr.Usd` with our topology,
 /// metadata (metres, Y up, the frame rate, time codes 0..frames-1) and,
-/// per time code, our points and extent to the stored f32 precision.
+/// per time code, our points, extent and vertex normals to the stored f32
+/// precision: the normals are the area-weighted ones the GLB writer
+/// stores, unit length, each on the side its triangles wind
+/// counter-clockwise around (this tetrahedron's face inward) in every
+/// frame, and a frame collapsed to a point takes the rest normals. With
+/// `UsdOptions::normals` off the file has none and still passes.
 #[test]
 fn usda_output_passes_usd_core_and_reads_back_equal() {
     let Some(py) = usd_python() else { return };
@@ -448,7 +476,11 @@ fn usda_output_passes_usd_core_and_reads_back_equal() {
     )
     .unwrap();
     let frames = 7;
+    let collapsed = 3;
     let frame = |k: usize| -> Vec<[f64; 3]> {
+        if k == collapsed {
+            return vec![[0.25, -0.5, 2.0]; 4];
+        }
         mesh.positions()
             .iter()
             .enumerate()
@@ -473,15 +505,7 @@ fn usda_output_passes_usd_core_and_reads_back_equal() {
         w.push(&frame(k)).unwrap();
     }
     assert_eq!(w.finish().unwrap(), vec![out.clone()]);
-    let o = std::process::Command::new(&py)
-        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join(".ci/usdcheck.py"))
-        .arg("--dump")
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "usd-core validation failed:\n{err}");
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = usd_dump(&py, &out);
     assert_eq!(v["metersPerUnit"], 1.0);
     assert_eq!(v["upAxis"], "Y");
     assert_eq!(v["timeCodesPerSecond"], 24.0);
@@ -513,6 +537,81 @@ fn usda_output_passes_usd_core_and_reads_back_equal() {
         for a in 0..3 {
             assert_eq!(e[0][a].as_f64().unwrap() as f32, lo[a]);
             assert_eq!(e[1][a].as_f64().unwrap() as f32, hi[a]);
+        }
+    }
+    usda_normals_read_back_equal(&v, &mesh, frames, collapsed, &frame);
+    // Normals off: none written, the validators still pass.
+    let seq = MeshSequence::new(
+        mesh.clone(),
+        (0..frames).flat_map(&frame).collect(),
+        Some(24.0),
+    )
+    .unwrap();
+    let bare = dir.path().join("bare.usda");
+    surfmotion::mesh::io::usd::write_usda_with(
+        &seq,
+        24.0,
+        &bare,
+        surfmotion::mesh::io::usd::UsdOptions { normals: false },
+    )
+    .unwrap();
+    let b = usd_dump(&py, &bare);
+    assert_eq!(b["normalTimes"], serde_json::json!([]));
+    assert_eq!(b["restNormals"], serde_json::json!([]));
+    assert_eq!(b["points"], v["points"]);
+}
+
+/// The normals of [`usda_output_passes_usd_core_and_reads_back_equal`]'s
+/// dump `v`: vertex interpolation, one sample per frame, each equal (as
+/// f32) to the area-weighted normals of our frame (the rest's for the
+/// `collapsed` frame), unit length, and on the side the winding faces.
+fn usda_normals_read_back_equal(
+    v: &serde_json::Value,
+    mesh: &Mesh,
+    frames: usize,
+    collapsed: usize,
+    frame: &dyn Fn(usize) -> Vec<[f64; 3]>,
+) {
+    use surfmotion::mesh::normals::vertex_normals;
+    assert_eq!(v["normalsInterpolation"], "vertex");
+    let times: Vec<f64> = (0..frames).map(|k| k as f64).collect();
+    assert_eq!(v["normalTimes"], serde_json::json!(times));
+    let rest = vertex_normals(mesh.positions(), mesh.triangles());
+    let as_f32 =
+        |n: &[[f64; 3]]| -> Vec<[f32; 3]> { n.iter().map(|q| q.map(|x| x as f32)).collect() };
+    assert_eq!(f32x3s(&v["restNormals"]), as_f32(&rest));
+    let normals = v["normals"].as_array().unwrap();
+    assert_eq!(normals.len(), frames);
+    for (k, n) in normals.iter().enumerate() {
+        let p = frame(k);
+        let ours = match k == collapsed {
+            true => rest.clone(),
+            false => vertex_normals(&p, mesh.triangles()),
+        };
+        let theirs = f32x3s(n);
+        assert_eq!(theirs, as_f32(&ours), "frame {k}");
+        let c = p
+            .iter()
+            .fold([0.0; 3], |s, q| [0, 1, 2].map(|a| s[a] + q[a] / 4.0));
+        // Triangle 0 (0, 1, 2) faces away from vertex 3 when the winding
+        // faces out: `side` < 0 then, and each normal points away from
+        // the centroid.
+        let d = |i: usize| [0, 1, 2].map(|a| p[i][a] - p[0][a]);
+        let (e1, e2, e3) = (d(1), d(2), d(3));
+        let side = (e1[1] * e2[2] - e1[2] * e2[1]) * e3[0]
+            + (e1[2] * e2[0] - e1[0] * e2[2]) * e3[1]
+            + (e1[0] * e2[1] - e1[1] * e2[0]) * e3[2];
+        for (i, t) in theirs.iter().enumerate() {
+            let len = t.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>().sqrt();
+            assert!(
+                (len - 1.0).abs() < 1e-6,
+                "frame {k} vertex {i}: length {len}"
+            );
+            let out: f64 = (0..3).map(|a| f64::from(t[a]) * (p[i][a] - c[a])).sum();
+            assert!(
+                k == collapsed || out * side < 0.0,
+                "frame {k} vertex {i}: the normal is on the wrong side ({out}, {side})"
+            );
         }
     }
 }
