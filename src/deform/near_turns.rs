@@ -321,6 +321,8 @@ impl SurfaceReading {
         self.vertex_marked.resize(n, false);
         self.dirty.clear();
         self.changed.clear();
+        // `v` indexes `out`, `last` and the marks alike.
+        #[allow(clippy::needless_range_loop)]
         for v in 0..n {
             if out[v].map(f64::to_bits) == self.last[v].map(f64::to_bits) {
                 continue;
