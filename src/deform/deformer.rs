@@ -3,7 +3,7 @@
 
 use super::cloth::{ClothStitch, StitchWorkspace};
 use super::levels::{Levels, RegionScratch};
-use super::near_turns::Neighbourhoods;
+use super::near_turns::{Neighbourhoods, ReadingOf, SurfaceReading};
 use super::options::{DeformMode, DeformOptions, RepairBudget, RepairTurns, TurnedOver};
 use super::part_laplacian::{RegionSolver, apply};
 use super::regions::{
@@ -87,9 +87,12 @@ pub struct DeformWorkspace {
     /// The frame's source normals, unnormalised
     /// ([`unflip::source_normals`]).
     source_normals: Vec<DVec3>,
-    /// Reference normals and source areas of the triangles (untangling).
-    normals: Vec<DVec3>,
+    /// Reference normals (computed as the untangling reads them) and
+    /// source areas of the triangles.
+    references: untangle::LazyReferences,
     areas: Vec<f64>,
+    /// The surface repair's readings of the frame.
+    reading: SurfaceReading,
     /// The best repair pass so far.
     best: Vec<[f64; 3]>,
     /// The deformed frame before its repair, then the fixed budget's
@@ -382,8 +385,9 @@ impl Deformer {
             shared: vec![[0.0; 3]; self.n],
             last: vec![[0.0; 3]; self.n],
             source_normals: vec![DVec3::ZERO; self.triangles],
-            normals: vec![DVec3::ZERO; self.triangles],
+            references: untangle::LazyReferences::new(self.triangles),
             areas: vec![0.0; self.triangles],
+            reading: SurfaceReading::default(),
             best: vec![[0.0; 3]; self.n],
             start: vec![[0.0; 3]; self.n],
             work: unflip::Work::default(),
@@ -713,8 +717,18 @@ impl Deformer {
         let mut turn = std::mem::take(&mut ws.surface_turn);
         let (mut least, mut last) = (usize::MAX, 0);
         for round in 0..=self.surface_rounds {
-            near.turns(source, out, &mut ws.seeds, &mut turn);
-            let bad = unflip::turned_over_from(tris, &ws.source_normals, out, &turn);
+            let f = ReadingOf {
+                near,
+                adj,
+                tris,
+                source,
+                source_normals: &ws.source_normals,
+            };
+            let bad = if round == 0 {
+                ws.reading.read_all(&f, out, &mut ws.seeds, &mut turn)
+            } else {
+                ws.reading.read_again(&f, out, &mut ws.seeds, &mut turn)
+            };
             last = bad.len();
             if last == 0 {
                 least = 0;
@@ -776,7 +790,7 @@ impl Deformer {
         }
         let mut budget = unflip::Budget::new(self.repair_budget.limit(before));
         let base = ws.work;
-        untangle::turned_references(tris, &ws.source_normals, turn, &mut ws.normals);
+        ws.references.restart();
         let fixed = untangle::UntangleOptions {
             max_steps: self.untangle.steps,
             ..self.untangle
@@ -854,7 +868,12 @@ impl Deformer {
         // Untangling first: it is local and cheap, and fixes most frames
         // without a patch factorisation (measured: 12.4 → 8.6 ms a frame on
         // the real samba capture, still none left).
-        bad = untangle::untangle_within(tris, adj, &ws.normals, &ws.areas, out, bad, opts, budget);
+        let mut refs = untangle::OnDemand {
+            lazy: &mut ws.references,
+            source_normals: &ws.source_normals,
+            turn,
+        };
+        bad = untangle::untangle_with(tris, adj, &mut refs, &ws.areas, out, bad, opts, budget);
         if bad.len() < best {
             best = bad.len();
             best_bad.clone_from(&bad);
@@ -873,15 +892,13 @@ impl Deformer {
             };
             bad = unflip::unflip_within(tris, adj, source, out, turn, bad, &repair, budget);
             if !bad.is_empty() {
-                bad = untangle::untangle_within(
-                    tris,
-                    adj,
-                    &ws.normals,
-                    &ws.areas,
-                    out,
-                    bad,
-                    opts,
-                    budget,
+                let mut refs = untangle::OnDemand {
+                    lazy: &mut ws.references,
+                    source_normals: &ws.source_normals,
+                    turn,
+                };
+                bad = untangle::untangle_with(
+                    tris, adj, &mut refs, &ws.areas, out, bad, opts, budget,
                 );
             }
             if bad.len() < best {

@@ -84,6 +84,29 @@ impl Neighbourhoods {
         }
     }
 
+    /// The seeds whose neighbourhood holds each vertex, vertex `v`'s
+    /// `holding[start[v]..start[v + 1]]`, increasing: `(start, holding)`
+    /// (a counting pass over the neighbourhoods).
+    pub fn holders(&self) -> (Vec<usize>, Vec<u32>) {
+        let n = self.seed_of.len();
+        let mut at = vec![0usize; n + 1];
+        for &v in &self.near {
+            at[v as usize + 1] += 1;
+        }
+        for v in 0..n {
+            at[v + 1] += at[v];
+        }
+        let start = at.clone();
+        let mut holding = vec![0u32; self.near.len()];
+        for s in 0..self.seeds() {
+            for &v in &self.near[self.start[s]..self.start[s + 1]] {
+                holding[at[v as usize]] = s as u32;
+                at[v as usize] += 1;
+            }
+        }
+        (start, holding)
+    }
+
     /// Seeds.
     pub fn seeds(&self) -> usize {
         self.start.len() - 1
@@ -186,6 +209,181 @@ impl SurfaceFolds {
             &mut self.seeds,
             &mut self.turn,
         )
+    }
+}
+
+/// What a [`SurfaceReading`] reads a frame with: the mesh's
+/// neighbourhoods, adjacency and triangles, the retrieved frame and its
+/// source normals ([`super::unflip::source_normals`]).
+#[derive(Clone, Copy)]
+pub struct ReadingOf<'a> {
+    /// The seeds and their neighbourhoods.
+    pub near: &'a Neighbourhoods,
+    /// Triangles around each vertex.
+    pub adj: &'a Adjacency,
+    /// The triangles.
+    pub tris: &'a [[u32; 3]],
+    /// The retrieved frame (the turns' reference).
+    pub source: &'a [[f64; 3]],
+    /// Its triangles' normals, unnormalised.
+    pub source_normals: &'a [DVec3],
+}
+
+/// Seeds and triangles a reading evaluated (a measurement).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ReadingWork {
+    /// Seed turns computed.
+    pub seeds: usize,
+    /// Triangles asked.
+    pub triangles: usize,
+}
+
+/// The fold repair's readings of one frame against the surface's own
+/// turns (each vertex its neighbourhood's turn, [`Neighbourhoods::turns`];
+/// a triangle flagged by [`super::unflip::faces_against`]): the first
+/// over every seed and triangle, each later one only where the frame
+/// moved since the last (issue 45: the full readings were 34 % of the
+/// deformation on CMU 02_02 onto the samba capture, up to seven a frame).
+///
+/// A seed's turn depends on the frame only at its neighbourhood's
+/// vertices, and a triangle's flag only on its corners' positions and
+/// turns (its source normal is the frame's), so recomputing the seeds
+/// whose neighbourhood holds a moved vertex and asking again the
+/// triangles with a moved corner or a corner whose turn changed gives the
+/// full reading's turns and flags bit for bit. The moved vertices are
+/// found by comparing the frame with its copy at the last reading, bit
+/// for bit, so whatever moved them (patch solves, untangling, a pass put
+/// back to the best so far) is seen, and a vertex moved and put back is
+/// not.
+#[derive(Debug, Clone, Default)]
+pub struct SurfaceReading {
+    /// Whether each triangle faced against its turn at the last reading.
+    flagged: Vec<bool>,
+    /// The frame at the last reading.
+    last: Vec<[f64; 3]>,
+    /// Scratch: the seeds to compute again (marked, listed) and their
+    /// turns; the vertices whose triangles are asked again.
+    seed_marked: Vec<bool>,
+    dirty: Vec<u32>,
+    fresh: Vec<DQuat>,
+    vertex_marked: Vec<bool>,
+    changed: Vec<u32>,
+    /// The seeds holding each vertex ([`Neighbourhoods::holders`]), made
+    /// at the first [`SurfaceReading::read_again`].
+    holding_start: Vec<usize>,
+    holding: Vec<u32>,
+    /// What the last reading evaluated.
+    pub work: ReadingWork,
+}
+
+impl SurfaceReading {
+    /// Reads the whole frame `out`: each vertex's turn into `turn`, each
+    /// seed's into `seeds`; returns the triangles facing against their
+    /// turn, increasing ([`super::unflip::turned_over_from`]'s).
+    pub fn read_all(
+        &mut self,
+        f: &ReadingOf,
+        out: &[[f64; 3]],
+        seeds: &mut Vec<DQuat>,
+        turn: &mut [DQuat],
+    ) -> Vec<u32> {
+        f.near.turns(f.source, out, seeds, turn);
+        self.flagged.resize(f.tris.len(), false);
+        self.flagged
+            .par_iter_mut()
+            .zip(f.tris.par_iter().zip(f.source_normals.par_iter()))
+            .with_min_len(super::unflip::CHUNK)
+            .for_each(|(b, (t, n))| *b = super::unflip::faces_against(t, *n, out, turn));
+        self.last.clear();
+        self.last.extend_from_slice(out);
+        self.work = ReadingWork {
+            seeds: f.near.seeds(),
+            triangles: f.tris.len(),
+        };
+        self.flagged_list()
+    }
+
+    /// Reads `out` again after [`SurfaceReading::read_all`] (or this) read
+    /// it with the same `f`, `seeds` and `turn`: the same result as
+    /// `read_all`, evaluating only what the moves since can change.
+    pub fn read_again(
+        &mut self,
+        f: &ReadingOf,
+        out: &[[f64; 3]],
+        seeds: &mut [DQuat],
+        turn: &mut [DQuat],
+    ) -> Vec<u32> {
+        let (near, n) = (f.near, out.len());
+        if self.holding_start.len() != n + 1 {
+            (self.holding_start, self.holding) = near.holders();
+        }
+        self.seed_marked.resize(near.seeds(), false);
+        self.vertex_marked.resize(n, false);
+        self.dirty.clear();
+        self.changed.clear();
+        // `v` indexes `out`, `last` and the marks alike.
+        #[allow(clippy::needless_range_loop)]
+        for v in 0..n {
+            if out[v].map(f64::to_bits) == self.last[v].map(f64::to_bits) {
+                continue;
+            }
+            self.last[v] = out[v];
+            self.vertex_marked[v] = true;
+            self.changed.push(v as u32);
+            for &s in &self.holding[self.holding_start[v]..self.holding_start[v + 1]] {
+                if !self.seed_marked[s as usize] {
+                    self.seed_marked[s as usize] = true;
+                    self.dirty.push(s);
+                }
+            }
+        }
+        self.fresh.clear();
+        self.fresh.par_extend(
+            self.dirty
+                .par_iter()
+                .with_min_len(SEEDS_CHUNK)
+                .map(|&s| near.seed_turn(s as usize, f.source, out)),
+        );
+        for (&s, &q) in self.dirty.iter().zip(&self.fresh) {
+            seeds[s as usize] = q;
+        }
+        for (v, t) in turn.iter_mut().enumerate() {
+            let s = near.seed_of[v] as usize;
+            if self.seed_marked[s]
+                && seeds[s].to_array().map(f64::to_bits) != t.to_array().map(f64::to_bits)
+            {
+                *t = seeds[s];
+                if !self.vertex_marked[v] {
+                    self.vertex_marked[v] = true;
+                    self.changed.push(v as u32);
+                }
+            }
+        }
+        let mut asked = 0;
+        for &v in &self.changed {
+            for &t in &f.adj.triangles[v as usize] {
+                let t = t as usize;
+                self.flagged[t] =
+                    super::unflip::faces_against(&f.tris[t], f.source_normals[t], out, turn);
+                asked += 1;
+            }
+            self.vertex_marked[v as usize] = false;
+        }
+        for &s in &self.dirty {
+            self.seed_marked[s as usize] = false;
+        }
+        self.work = ReadingWork {
+            seeds: self.dirty.len(),
+            triangles: asked,
+        };
+        self.flagged_list()
+    }
+
+    /// The triangles flagged at the last reading, increasing.
+    fn flagged_list(&self) -> Vec<u32> {
+        (0..self.flagged.len() as u32)
+            .filter(|&t| self.flagged[t as usize])
+            .collect()
     }
 }
 

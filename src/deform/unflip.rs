@@ -147,9 +147,18 @@ pub fn turned_over_from(
         .zip(source_normals.par_iter())
         .enumerate()
         .with_min_len(CHUNK)
-        .filter(|(_, (t, n))| (triangle_turn(t, turn) * **n).dot(normal(t, out)) < 0.0)
+        .filter(|(_, (t, n))| faces_against(t, **n, out, turn))
         .map(|(i, _)| i as u32)
         .collect()
+}
+
+/// Whether triangle `t` of `out` faces against its source normal
+/// `source_normal` ([`source_normals`]) turned by its rotation under
+/// `turn`: the test of [`turned_over_from`], one triangle (the same
+/// arithmetic, so the same answer bit for bit wherever it is asked).
+#[inline]
+pub fn faces_against(t: &[u32; 3], source_normal: DVec3, out: &[[f64; 3]], turn: &[DQuat]) -> bool {
+    (triangle_turn(t, turn) * source_normal).dot(normal(t, out)) < 0.0
 }
 
 /// Triangles of `out` turned over against `source` under `turn`.

@@ -126,6 +126,90 @@ pub fn source_areas(source_normals: &[DVec3], areas: &mut [f64]) {
     }
 }
 
+/// The reference normals of a frame's untangling computed when it first
+/// reads them (issue 45): a normal is [`turned_references`]' arithmetic
+/// for its one triangle, so the same bits, but only the triangles around
+/// the vertices a sweep visits are computed, not all of them on every
+/// repair (the full pass was 12.6 % of the deformation on CMU 02_02 onto
+/// the samba capture, session 29's profile). Kept in the workspace;
+/// [`LazyReferences::restart`] forgets them when the turns change.
+#[derive(Debug, Clone, Default)]
+pub struct LazyReferences {
+    normals: Vec<DVec3>,
+    /// The reading each triangle's normal was computed in.
+    read_in: Vec<u32>,
+    reading: u32,
+    /// Normals computed so far (all readings; a measurement).
+    pub computed: usize,
+}
+
+impl LazyReferences {
+    /// Room for `triangles` normals, none computed.
+    pub fn new(triangles: usize) -> LazyReferences {
+        LazyReferences {
+            normals: vec![DVec3::ZERO; triangles],
+            read_in: vec![0; triangles],
+            reading: 1,
+            computed: 0,
+        }
+    }
+
+    /// Forgets every normal: the next reads are under other turns.
+    pub fn restart(&mut self) {
+        self.reading = self.reading.wrapping_add(1);
+        if self.reading == 0 {
+            self.read_in.fill(0);
+            self.reading = 1;
+        }
+    }
+}
+
+/// Where [`untangle_with`] reads each triangle's reference normal.
+pub trait Normals {
+    /// Makes the normals of the triangles around `verts` current.
+    fn ready(&mut self, tris: &[[u32; 3]], adj: &Adjacency, verts: &[u32]);
+    /// The normals (current at least around the vertices made ready).
+    fn normals(&self) -> &[DVec3];
+}
+
+impl Normals for &[DVec3] {
+    fn ready(&mut self, _: &[[u32; 3]], _: &Adjacency, _: &[u32]) {}
+    fn normals(&self) -> &[DVec3] {
+        self
+    }
+}
+
+/// [`LazyReferences`] of the source normals `source_normals`
+/// ([`super::unflip::source_normals`]) turned by `turn`.
+pub struct OnDemand<'a> {
+    /// The normals computed so far.
+    pub lazy: &'a mut LazyReferences,
+    /// The frame's source normals.
+    pub source_normals: &'a [DVec3],
+    /// Each vertex's rotation.
+    pub turn: &'a [DQuat],
+}
+
+impl Normals for OnDemand<'_> {
+    fn ready(&mut self, tris: &[[u32; 3]], adj: &Adjacency, verts: &[u32]) {
+        let l = &mut *self.lazy;
+        for &v in verts {
+            for &t in &adj.triangles[v as usize] {
+                let t = t as usize;
+                if l.read_in[t] != l.reading {
+                    l.normals[t] = (triangle_turn(&tris[t], self.turn) * self.source_normals[t])
+                        .normalize_or_zero();
+                    l.read_in[t] = l.reading;
+                    l.computed += 1;
+                }
+            }
+        }
+    }
+    fn normals(&self) -> &[DVec3] {
+        &self.lazy.normals
+    }
+}
+
 /// Signed area of triangle `t` of `x` against its reference normal `n`.
 #[inline]
 fn signed_area(t: &[u32; 3], x: &[[f64; 3]], n: DVec3) -> f64 {
@@ -156,7 +240,25 @@ pub fn untangle(
 pub fn untangle_within(
     tris: &[[u32; 3]],
     adj: &Adjacency,
-    normals: &[DVec3],
+    mut normals: &[DVec3],
+    areas: &[f64],
+    out: &mut [[f64; 3]],
+    bad: Vec<u32>,
+    opts: &UntangleOptions,
+    budget: &mut Budget,
+) -> Vec<u32> {
+    untangle_with(tris, adj, &mut normals, areas, out, bad, opts, budget)
+}
+
+/// [`untangle_within`] reading the reference normals from `normals`,
+/// each sweep making those around its vertices current first (a sweep
+/// reads no other: the fans of the vertices it moves, and the
+/// turned-over triangles, whose corners are among them).
+#[allow(clippy::too_many_arguments)]
+pub fn untangle_with<N: Normals>(
+    tris: &[[u32; 3]],
+    adj: &Adjacency,
+    normals: &mut N,
     areas: &[f64],
     out: &mut [[f64; 3]],
     mut bad: Vec<u32>,
@@ -164,8 +266,9 @@ pub fn untangle_within(
     budget: &mut Budget,
 ) -> Vec<u32> {
     let most = opts.max_steps.max(opts.steps) * opts.margins.len();
-    let flipped =
-        |out: &[[f64; 3]], t: u32| signed_area(&tris[t as usize], out, normals[t as usize]) <= 0.0;
+    let flipped = |normals: &[DVec3], out: &[[f64; 3]], t: u32| {
+        signed_area(&tris[t as usize], out, normals[t as usize]) <= 0.0
+    };
     let mut verts: Vec<u32> = Vec::new();
     let mut idle = 0;
     for sweep in 0..opts.sweeps {
@@ -187,6 +290,8 @@ pub fn untangle_within(
         }
         verts.sort_unstable();
         verts.dedup();
+        normals.ready(tris, adj, &verts);
+        let normals = normals.normals();
         let mut moved = false;
         let mut spent = false;
         for &v in &verts {
@@ -212,7 +317,7 @@ pub fn untangle_within(
         }
         bad.sort_unstable();
         bad.dedup();
-        bad.retain(|&t| flipped(out, t));
+        bad.retain(|&t| flipped(normals, out, t));
         idle = if moved { 0 } else { idle + 1 };
         if spent {
             break;

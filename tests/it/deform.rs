@@ -252,6 +252,208 @@ fn a_walk_on_the_real_capture_turns_no_triangle_over() {
     );
 }
 
+/// Checks the fold repair's restricted readings (issue 45) on one folded
+/// frame `out` of a surface `tris` whose retrieved frame is `src`: after
+/// the first reading (`SurfaceReading::read_all`), each move — the
+/// repair's patch solves with the reading's turns, as the deformation
+/// runs them, or one vertex pushed through the middle — is read again
+/// only near what moved (`read_again`), which must flag exactly the triangles a full
+/// reading flags, with the same turns bit for bit (one vertex moved: a
+/// few seeds computed again); and the untangling with its reference
+/// normals computed on demand (`untangle::OnDemand`) must move every
+/// vertex to the same bits as with all of them computed first, computing
+/// fewer than half. The moves change what is flagged, so a reading that
+/// kept its last flags would fail.
+fn check_readings(what: &str, tris: &[[u32; 3]], src: &[[f64; 3]], mut out: Vec<[f64; 3]>) {
+    use glam::DQuat;
+    use surfmotion::deform::near_turns::{Neighbourhoods, RINGS, ReadingOf, SurfaceReading};
+    use surfmotion::deform::unflip::{
+        Adjacency, Budget, RepairOptions, WorkLimit, source_normals, turned_over_from, unflip,
+    };
+    use surfmotion::deform::untangle::{
+        LazyReferences, OnDemand, UntangleOptions, turned_references, untangle, untangle_with,
+    };
+    let n = src.len();
+    let adj = Adjacency::new(n, tris);
+    let near = Neighbourhoods::new(&adj, RINGS);
+    let mut sn = vec![DVec3::ZERO; tris.len()];
+    source_normals(tris, src, &mut sn);
+    let f = ReadingOf {
+        near: &near,
+        adj: &adj,
+        tris,
+        source: src,
+        source_normals: &sn,
+    };
+    let bits = |q: &[DQuat]| -> Vec<[u64; 4]> {
+        q.iter().map(|q| q.to_array().map(f64::to_bits)).collect()
+    };
+    let pbits =
+        |x: &[[f64; 3]]| -> Vec<[u64; 3]> { x.iter().map(|p| p.map(f64::to_bits)).collect() };
+    let mut r = SurfaceReading::default();
+    let (mut seeds, mut turn) = (Vec::new(), vec![DQuat::IDENTITY; n]);
+    let mut bad = r.read_all(&f, &out, &mut seeds, &mut turn);
+    assert_eq!(bad, turned_over_from(tris, &sn, &out, &turn), "{what}");
+    assert!(bad.len() >= 5, "{what}: {} flagged", bad.len());
+    // The untangling: all normals first, or on demand.
+    let areas: Vec<f64> = sn.iter().map(|c| 0.5 * c.length()).collect();
+    let mut all = vec![DVec3::ZERO; tris.len()];
+    turned_references(tris, &sn, &turn, &mut all);
+    let folded: Vec<u32> = (0..tris.len() as u32)
+        .filter(|&t| {
+            let [a, b, c] = tris[t as usize].map(|v| DVec3::from_array(out[v as usize]));
+            all[t as usize].dot((b - a).cross(c - a)) <= 0.0
+        })
+        .collect();
+    let opts = UntangleOptions::default();
+    let (mut x, mut y) = (out.clone(), out.clone());
+    let left_x = untangle(tris, &adj, &all, &areas, &mut x, folded.clone(), &opts);
+    let mut lazy = LazyReferences::new(tris.len());
+    let mut refs = OnDemand {
+        lazy: &mut lazy,
+        source_normals: &sn,
+        turn: &turn,
+    };
+    let mut budget = Budget::new(WorkLimit::NONE);
+    let left_y = untangle_with(
+        tris,
+        &adj,
+        &mut refs,
+        &areas,
+        &mut y,
+        folded,
+        &opts,
+        &mut budget,
+    );
+    assert_eq!(left_x, left_y, "{what}: untangled");
+    assert!(
+        pbits(&x) == pbits(&y),
+        "{what}: the untangling moved other bits"
+    );
+    assert!(
+        pbits(&x) != pbits(&out),
+        "{what}: the untangling moved nothing"
+    );
+    assert!(
+        lazy.computed < tris.len() / 2,
+        "{what}: {} of {} normals computed",
+        lazy.computed,
+        tris.len()
+    );
+    // The repair's moves, read again.
+    let mut changes = 0;
+    for round in 0..6 {
+        if round % 2 == 0 {
+            let opts = RepairOptions {
+                rounds: 3 + round / 2,
+                ..Default::default()
+            };
+            unflip(tris, &adj, src, &mut out, &turn, bad.clone(), &opts);
+        } else {
+            // A vertex pushed through the middle: its fan turns over.
+            let v = (round * 3001 + 17) % n;
+            let mid = out.iter().map(|q| DVec3::from_array(*q)).sum::<DVec3>() / n as f64;
+            out[v] = (mid + (mid - DVec3::from_array(out[v])) * 0.3).to_array();
+        }
+        let again = r.read_again(&f, &out, &mut seeds, &mut turn);
+        let (mut s2, mut t2) = (Vec::new(), vec![DQuat::IDENTITY; n]);
+        let full = SurfaceReading::default().read_all(&f, &out, &mut s2, &mut t2);
+        assert_eq!(again, full, "{what}, round {round}");
+        assert!(
+            bits(&turn) == bits(&t2),
+            "{what}, round {round}: turns differ"
+        );
+        assert!(
+            bits(&seeds) == bits(&s2),
+            "{what}, round {round}: seed turns differ"
+        );
+        if round % 2 == 1 {
+            assert!(
+                r.work.seeds > 0 && r.work.seeds < 40,
+                "{what}, round {round}: {:?} of {} seeds",
+                r.work,
+                near.seeds()
+            );
+        }
+        changes += usize::from(full != bad);
+        bad = full;
+    }
+    assert!(changes >= 2, "{what}: the moves changed no flag");
+}
+
+/// [`check_readings`] on the real samba capture (frame 40 as the source,
+/// frame 120, the dancer turned and stepped, with six vertices pushed
+/// through the body by hand), in the capture's numbering and reversed;
+/// and on a generated sphere (bent and stretched, five vertices pushed
+/// through), in its numbering and shuffled with its triangles reversed.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn restricted_repair_readings_flag_what_full_readings_flag() {
+    use surfmotion::mesh::io::{obj, pc2};
+    use surfmotion::mesh::subdivide::{icosahedron, midpoint};
+    let Some(d) = common::data_dir() else { return };
+    let mesh = obj::read_obj(&d.join("4d/samba/samba.obj")).unwrap();
+    let cache = pc2::read_pc2(&d.join("4d/samba/samba.pc2")).unwrap();
+    let sphere = midpoint(&midpoint(&midpoint(&icosahedron())));
+    let pushed = |mut p: Vec<[f64; 3]>, k: usize, by: f64| {
+        let mid = p.iter().map(|q| DVec3::from_array(*q)).sum::<DVec3>() / p.len() as f64;
+        for j in 0..k {
+            let v = (j * 1601 + 250) % p.len();
+            p[v] = (mid + (mid - DVec3::from_array(p[v])) * by).to_array();
+        }
+        p
+    };
+    let n = mesh.positions().len();
+    let frame = |k: usize| cache.positions[k * n..(k + 1) * n].to_vec();
+    let bent: Vec<[f64; 3]> = sphere
+        .positions()
+        .iter()
+        .map(|p| {
+            let v = DVec3::from_array(*p);
+            (glam::DQuat::from_rotation_z(0.8 * v.y) * v * DVec3::new(1.3, 0.8, 1.0)).to_array()
+        })
+        .collect();
+    let cases = [
+        (
+            "samba",
+            mesh.triangles().to_vec(),
+            frame(40),
+            pushed(frame(120), 6, 0.3),
+        ),
+        (
+            "sphere",
+            sphere.triangles().to_vec(),
+            sphere.positions().to_vec(),
+            pushed(bent, 5, 0.4),
+        ),
+    ];
+    for (name, tris, src, out) in cases {
+        check_readings(name, &tris, &src, out.clone());
+        // Renumbered: the vertices shuffled (a fixed LCG), the triangles
+        // in reverse order, each starting at its second corner.
+        let m = src.len();
+        let mut order: Vec<usize> = (0..m).collect();
+        let mut s = 7u64;
+        for i in (1..m).rev() {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            order.swap(i, (s >> 33) as usize % (i + 1));
+        }
+        let mut new = vec![0u32; m];
+        for (k, &o) in order.iter().enumerate() {
+            new[o] = k as u32;
+        }
+        let t2: Vec<[u32; 3]> = tris
+            .iter()
+            .rev()
+            .map(|t| [t[1], t[2], t[0]].map(|v| new[v as usize]))
+            .collect();
+        let re = |p: &[[f64; 3]]| order.iter().map(|&o| p[o]).collect::<Vec<_>>();
+        check_readings(&format!("{name} renumbered"), &t2, &re(&src), re(&out));
+    }
+}
+
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn the_manifest_overrides_constraints_and_examples() {
