@@ -209,6 +209,18 @@ pub struct DeformOptions {
     /// Rotation fits per frame of the cloth stitch, each followed by a
     /// prefactored solve ([`super::cloth`]). Default 2.
     pub cloth_steps: usize,
+    /// With the cloth stitch, the fold repair reads "turned over" on the
+    /// cloth, and solves its patches there, with the rotations the stitch
+    /// fitted to the cloth's one-rings instead of the skin's blend of the
+    /// bones' turns ([`super::cloth`]), so a patch asks the cloth for the
+    /// shape the stitch gave it. The reported `before` count is still
+    /// against the skin's turns.
+    pub cloth_turns: bool,
+    /// With the cloth stitch, a frame whose repair leaves triangles facing
+    /// against their own neighbourhoods is repaired again from the blend
+    /// without the stitch, and the result that leaves fewer is kept
+    /// ([`super::cloth`]).
+    pub cloth_fallback: bool,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -328,8 +340,10 @@ impl Default for DeformOptions {
             repair_turns: RepairTurns::default(),
             surface_rounds: 6,
             parallel_regions: true,
-            cloth_stitch: 0.0,
+            cloth_stitch: 0.5,
             cloth_steps: 2,
+            cloth_turns: true,
+            cloth_fallback: true,
         }
     }
 }
