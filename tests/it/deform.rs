@@ -455,7 +455,7 @@ fn a_real_retarget_keeps_every_vertex_in_its_ring() {
 /// numbering, so another order of every region's unknowns and of the
 /// solver's elimination. Its chin landmark is renumbered with it. Made once
 /// per test binary.
-fn reversed_samba_db(d: &std::path::Path) -> std::path::PathBuf {
+pub(crate) fn reversed_samba_db(d: &std::path::Path) -> std::path::PathBuf {
     use std::sync::OnceLock;
     use surfmotion::mesh::io::{obj, pc2};
     static DB: OnceLock<std::path::PathBuf> = OnceLock::new();
