@@ -493,6 +493,9 @@ pub(crate) fn reversed_samba_db(d: &std::path::Path) -> std::path::PathBuf {
                 .arg("--landmarks")
                 .arg(dir.join("marks.json")),
         );
+        // Its graph built and cached once here, not by two tests loading
+        // it at once (`tools::surface_crumple` uses it too).
+        Character::load(&db, &surfmotion::db::Quiet).unwrap();
         db
     })
     .clone()
