@@ -31,10 +31,24 @@
 //! that repeats every `λ` edges follows the blend where the Laplacian's
 //! eigenvalue there, about `(2π/λ)²`, is below `w`.
 //!
+//! The fold repair ([`super::unflip`]) runs after the stitch. Reading the
+//! cloth with the skin's turns, it flags triangles the stitch turned the
+//! way the cloth turns and rebuilds them as the thighs turn, crumpling the
+//! hem again; so it reads and rebuilds the cloth with the rotations the
+//! stitch fitted ([`ClothStitch::fitted_turns`],
+//! [`super::DeformOptions::cloth_turns`]). A frame whose stitched repair
+//! still leaves triangles facing against their own neighbourhoods is
+//! repaired again from the unstitched blend, and the result that leaves
+//! fewer kept ([`super::DeformOptions::cloth_fallback`]). Measured (session
+//! 30, README, issue 42): onto the real samba capture the skirt's mean
+//! bend 12.84° → 11.02° on CMU 131_01 (the stitch with the skin's turns
+//! 11.52°), 11.21° → 10.00° on 02_01.
+//!
 //! Cost: one factorisation per character (`LᵀL + w² I` on the cloth, its
 //! outer ring held); per frame `steps + 1` prefactored 3-column solves and
 //! the rotation fits. No allocation per frame.
 
+use super::DeformOptions;
 use crate::mesh::solver::{FixedSolver, SolveError, Workspace};
 use glam::{DQuat, DVec3};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
@@ -186,6 +200,17 @@ impl ClothStitch {
         }
     }
 
+    /// The rotations the last [`ClothStitch::stitch`] with `ws` fitted,
+    /// written into `turn` (one per vertex) at the cloth's vertices; the
+    /// others are left as they are.
+    pub fn fitted_turns(&self, ws: &StitchWorkspace, turn: &mut [DQuat]) {
+        for (&v, q) in self.global[..self.cloth].iter().zip(&ws.rots) {
+            if let Some(t) = turn.get_mut(v as usize) {
+                *t = *q;
+            }
+        }
+    }
+
     /// One solve with the current rotations: `rhs = Σᵢ lᵢᵀ Rᵢ δᵢ + w² b`.
     fn solve(&self, out: &[[f64; 3]], ws: &mut StitchWorkspace) {
         let w2 = self.weight * self.weight;
@@ -236,6 +261,59 @@ impl ClothStitch {
             }
         }
     }
+}
+
+/// The environment variable whose `name=value` pairs override the cloth
+/// stitch's options (measurements of issue 42; [`with_overrides`]), e.g.
+/// `SURFMOTION_CLOTH=stitch=0` for the deformation without the stitch.
+pub const CLOTH_ENV: &str = "SURFMOTION_CLOTH";
+
+/// `opts` with [`CLOTH_ENV`]'s overrides (a warning, and none taken, when
+/// they cannot be read).
+pub fn with_env(opts: &DeformOptions) -> DeformOptions {
+    match std::env::var(CLOTH_ENV) {
+        Ok(text) => with_overrides(opts, &text).unwrap_or_else(|why| {
+            tracing::warn!("{CLOTH_ENV}: {why}; the default cloth options are used");
+            *opts
+        }),
+        Err(_) => *opts,
+    }
+}
+
+/// `opts` with the comma-separated `name=value` pairs of `text`:
+/// `stitch` (the weight, [`DeformOptions::cloth_stitch`], 0 turns it off),
+/// `steps` ([`DeformOptions::cloth_steps`]), `turns` and `fallback`
+/// ([`DeformOptions::cloth_turns`], [`DeformOptions::cloth_fallback`]:
+/// `on`/`off`). An error names the pair it could not read and every name
+/// accepted.
+pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
+    const NAMES: &str = "stitch=W, steps=N, turns=on|off, fallback=on|off";
+    let mut o = *opts;
+    for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let bad = |what: &str| format!("'{pair}': {what} (accepted: {NAMES})");
+        let (name, value) = pair.split_once('=').ok_or_else(|| bad("not name=value"))?;
+        let switch = || match value {
+            "on" | "1" | "true" => Ok(true),
+            "off" | "0" | "false" => Ok(false),
+            _ => Err(bad("the value is not on or off")),
+        };
+        match name {
+            "stitch" => {
+                o.cloth_stitch = value
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|w| w.is_finite() && *w >= 0.0)
+                    .ok_or_else(|| bad("the value is not a weight of 0 or more"))?;
+            }
+            "steps" => {
+                o.cloth_steps = value.parse().map_err(|_| bad("the value is not a count"))?;
+            }
+            "turns" => o.cloth_turns = switch()?,
+            "fallback" => o.cloth_fallback = switch()?,
+            _ => return Err(bad("unknown name")),
+        }
+    }
+    Ok(o)
 }
 
 /// Each vertex's neighbours (sorted) in a mesh of `n` vertices.
@@ -317,6 +395,57 @@ mod tests {
             if !cloth[i] {
                 assert_eq!(a, b);
             }
+        }
+    }
+
+    /// The stitch's rotations are the ones it fitted: on a rigidly moved
+    /// sheet, the motion's turn at every cloth vertex (a band across the
+    /// sheet), and nothing written elsewhere.
+    #[test]
+    fn the_fitted_turns_are_the_motion_s() {
+        let k = 8;
+        let (src, tris) = grid(k);
+        let cloth: Vec<bool> = (0..k * k).map(|i| (2..k - 2).contains(&(i % k))).collect();
+        let st = ClothStitch::new(&tris, &cloth, 0.5, 2).unwrap().unwrap();
+        let mut ws = st.workspace();
+        let q = DQuat::from_axis_angle(DVec3::new(1.0, 0.2, -0.4).normalize(), 1.1);
+        let mut out: Vec<[f64; 3]> = src
+            .iter()
+            .map(|p| (q * DVec3::from_array(*p)).to_array())
+            .collect();
+        st.stitch(&src, &vec![q; k * k], &mut out, &mut ws);
+        let mut turn = vec![DQuat::IDENTITY; k * k];
+        st.fitted_turns(&ws, &mut turn);
+        for (v, t) in turn.iter().enumerate() {
+            let want = if cloth[v] { q } else { DQuat::IDENTITY };
+            assert!(t.dot(want).abs() > 1.0 - 1e-6, "vertex {v}: {t:?}");
+        }
+    }
+
+    #[test]
+    fn the_overrides_are_read_and_bad_ones_named() {
+        let d = DeformOptions::default();
+        let o = with_overrides(&d, "stitch=0.3, steps=1,turns=off,fallback=off").unwrap();
+        assert_eq!(
+            (
+                o.cloth_stitch,
+                o.cloth_steps,
+                o.cloth_turns,
+                o.cloth_fallback
+            ),
+            (0.3, 1, false, false)
+        );
+        assert_eq!(with_overrides(&d, "").unwrap(), d);
+        for bad in [
+            "stitch=-1",
+            "stitch=nan",
+            "steps=x",
+            "turns=maybe",
+            "colour=1",
+            "stitch",
+        ] {
+            let e = with_overrides(&d, bad).unwrap_err();
+            assert!(e.contains(bad) && e.contains("fallback=on|off"), "{e}");
         }
     }
 

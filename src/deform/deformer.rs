@@ -41,6 +41,12 @@ pub struct Deformer {
     surface_rounds: usize,
     /// The cloth stitched after the blend ([`DeformOptions::cloth_stitch`]).
     cloth: Option<ClothStitch>,
+    /// The repair reads the cloth with the stitch's turns
+    /// ([`DeformOptions::cloth_turns`]).
+    cloth_turns: bool,
+    /// A frame the stitched repair leaves folded is repaired again without
+    /// the stitch ([`DeformOptions::cloth_fallback`]).
+    cloth_fallback: bool,
     triangles: usize,
     regions: Vec<Region>,
     /// The regions' levels when they are solved level by level on several
@@ -107,6 +113,15 @@ pub struct DeformWorkspace {
     surface_best: Vec<[f64; 3]>,
     /// The cloth stitch's scratch (when it runs).
     cloth: Option<StitchWorkspace>,
+    /// The repair's turns with the stitch's on the cloth
+    /// ([`DeformOptions::cloth_turns`]; empty without).
+    repair_turn: Vec<DQuat>,
+    /// The blend before the stitch ([`DeformOptions::cloth_fallback`];
+    /// empty without).
+    blend: Vec<[f64; 3]>,
+    /// Frames deformed with this workspace whose stitch was dropped
+    /// ([`DeformOptions::cloth_fallback`]).
+    unstitched: usize,
 }
 
 impl DeformWorkspace {
@@ -114,6 +129,13 @@ impl DeformWorkspace {
     /// workspace (zero when nothing was turned over).
     pub fn repair_work(&self) -> unflip::Work {
         self.work
+    }
+
+    /// How many frames deformed with this workspace were left without the
+    /// cloth stitch, their stitched repair leaving more folds
+    /// ([`DeformOptions::cloth_fallback`]).
+    pub fn unstitched(&self) -> usize {
+        self.unstitched
     }
 }
 
@@ -131,6 +153,7 @@ impl Deformer {
         mode: DeformMode,
         opts: &DeformOptions,
     ) -> Result<Deformer, SolveError> {
+        let opts = &super::cloth::with_env(opts);
         let n = ch.n();
         let constraint_vertices = match ch.constraint_override() {
             Some(c) => c.to_vec(),
@@ -152,6 +175,8 @@ impl Deformer {
             near: None,
             surface_rounds: opts.surface_rounds,
             cloth: None,
+            cloth_turns: opts.cloth_turns,
+            cloth_fallback: opts.cloth_fallback,
             triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
             levels: None,
@@ -395,6 +420,15 @@ impl Deformer {
             seeds: Vec::new(),
             surface_best: vec![[0.0; 3]; self.n],
             cloth: self.cloth.as_ref().map(ClothStitch::workspace),
+            repair_turn: match (&self.cloth, self.cloth_turns) {
+                (Some(_), true) => vec![DQuat::IDENTITY; self.n],
+                _ => Vec::new(),
+            },
+            blend: match (&self.cloth, self.cloth_fallback) {
+                (Some(_), true) => vec![[0.0; 3]; self.n],
+                _ => Vec::new(),
+            },
+            unstitched: 0,
         }
     }
 
@@ -445,13 +479,69 @@ impl Deformer {
                 *o = [a[0] / w, a[1] / w, a[2] / w];
             }
         }
-        if let (Some(c), Some(cw)) = (&self.cloth, ws.cloth.as_mut()) {
-            c.stitch(source, &ws.turn, out, cw);
+        let stitched = self.stitch(source, out, ws);
+        let Some(adj) = &self.adjacency else {
+            return TurnedOver::default();
+        };
+        let tris = ch.topology().triangles();
+        let counts = self.repair(tris, adj, source, out, ws, stitched && self.cloth_turns);
+        if stitched && self.cloth_fallback && counts.after > 0 {
+            return self.unstitched(tris, adj, source, out, ws, counts);
         }
-        match &self.adjacency {
-            Some(adj) => self.repair(ch.topology().triangles(), adj, source, out, ws),
-            None => TurnedOver::default(),
+        counts
+    }
+
+    /// The cloth stitch of the blend `out` ([`super::cloth`]), when it
+    /// runs: keeps the blend for the fallback and the stitch's turns for
+    /// the repair (when those options are on). Whether it ran.
+    fn stitch(&self, source: &[[f64; 3]], out: &mut [[f64; 3]], ws: &mut DeformWorkspace) -> bool {
+        let (Some(c), Some(cw)) = (&self.cloth, ws.cloth.as_mut()) else {
+            return false;
+        };
+        if self.cloth_fallback {
+            ws.blend.copy_from_slice(out);
         }
+        c.stitch(source, &ws.turn, out, cw);
+        if self.cloth_turns {
+            ws.repair_turn.copy_from_slice(&ws.turn);
+            c.fitted_turns(cw, &mut ws.repair_turn);
+        }
+        true
+    }
+
+    /// The frame's repair again from the blend without the stitch
+    /// ([`DeformOptions::cloth_fallback`]), after the stitched repair left
+    /// `stitched.after` triangles facing against their neighbourhoods: the
+    /// result that leaves fewer is kept (the stitched one on a tie), and
+    /// its counts returned.
+    fn unstitched(
+        &self,
+        tris: &[[u32; 3]],
+        adj: &unflip::Adjacency,
+        source: &[[f64; 3]],
+        out: &mut [[f64; 3]],
+        ws: &mut DeformWorkspace,
+        stitched: TurnedOver,
+    ) -> TurnedOver {
+        // The blend into `out`, the stitched result into `frame`.
+        let mut frame = std::mem::take(&mut ws.blend);
+        out.swap_with_slice(&mut frame);
+        let first = ws.work;
+        let plain = self.repair(tris, adj, source, out, ws, false);
+        ws.work = add_work(first, ws.work);
+        // `before` stays the stitched solve's (the deformation's count).
+        let kept = if plain.after < stitched.after {
+            ws.unstitched += 1;
+            TurnedOver {
+                before: stitched.before,
+                after: plain.after,
+            }
+        } else {
+            out.copy_from_slice(&frame);
+            stitched
+        };
+        ws.blend = frame;
+        kept
     }
 
     /// The rotation of region `k`'s frame (its joint's, with
@@ -668,6 +758,7 @@ impl Deformer {
         source: &[[f64; 3]],
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
+        cloth_turns: bool,
     ) -> TurnedOver {
         ws.work = unflip::Work::default();
         // The source's normals and areas once per frame; each reading
@@ -677,6 +768,18 @@ impl Deformer {
         let skin = std::mem::take(&mut ws.turn);
         let bad = unflip::turned_over_from(tris, &ws.source_normals, out, &skin);
         let mut counts = match self.repair_turns {
+            RepairTurns::Skin | RepairTurns::SkinThenSurface if cloth_turns => {
+                // Counted against the skin's turns, repaired against the
+                // stitch's on the cloth.
+                let turn = std::mem::take(&mut ws.repair_turn);
+                let own = unflip::turned_over_from(tris, &ws.source_normals, out, &turn);
+                let c = self.repair_against(tris, adj, source, out, ws, &turn, own, 0);
+                ws.repair_turn = turn;
+                TurnedOver {
+                    before: bad.len(),
+                    after: c.after,
+                }
+            }
             RepairTurns::Skin | RepairTurns::SkinThenSurface => {
                 self.repair_against(tris, adj, source, out, ws, &skin, bad, 0)
             }

@@ -39,14 +39,17 @@
 //! The manifest's `[deform]` section can give the constraint vertices and
 //! the example frames instead.
 //!
-//! With [`DeformOptions::cloth_stitch`] (an option, off by default), after
-//! the blend the cloth (a skirt: [`soft::softness`] above 0) is solved
-//! once more as one piece ([`cloth`]):
+//! With [`DeformOptions::cloth_stitch`] (on by default since session 30),
+//! after the blend the cloth (a skirt: [`soft::softness`] above 0) is
+//! solved once more as one piece ([`cloth`]):
 //! its captured Laplacian coordinates turned by rotations fitted to the
 //! blended surface, pulled towards the blend. Each part's solve turns the
 //! cloth's coordinates by the skin's blend of its bones' turns, which is
 //! not how a skirt between two thighs turns, and crumples it (README,
-//! issue 42, measured per stage).
+//! issue 42, measured per stage). The repair then reads and rebuilds the
+//! cloth with the stitch's rotations ([`DeformOptions::cloth_turns`]), and
+//! a frame it cannot leave unfolded is repaired from the unstitched blend
+//! instead ([`DeformOptions::cloth_fallback`]).
 //!
 //! Where the solve turns triangles over (under the skirt, at the knees) a
 //! repair ([`unflip`], [`untangle`]) rebuilds them, first against the

@@ -198,17 +198,39 @@ pub struct DeformOptions {
     /// [`super::soft::softness`] above 0) are solved once more as one
     /// piece, their captured detail turned with them and pulled towards
     /// the blend with `w`, so the steps between the overlapping pelvis and
-    /// thigh solves do not crumple the hem. 0 turns it off. Default 0 (the
-    /// outputs of session 28); 0.5 is the measured setting (session 29,
-    /// README, issue 42: the skirt's mean bend down on all eight
-    /// yardstick clips, 02_01 11.21° → 10.05°), not the default because
-    /// with it the repair leaves CMU 131_01 frame 102 one triangle facing
-    /// against its own neighbourhood
+    /// thigh solves do not crumple the hem. 0 turns it off (the outputs of
+    /// session 29; `SURFMOTION_CLOTH=stitch=0`, [`super::cloth::CLOTH_ENV`]).
+    /// Default 0.5 (session 30, with `cloth_turns` and `cloth_fallback`;
+    /// README, issue 42): the skirt's mean bend down on all eight yardstick
+    /// clips onto the real samba capture (02_01 11.21° → 10.00°, 131_01
+    /// 12.84° → 11.02°), nothing left facing against its own neighbourhood
+    /// after the repair. Session 29 measured the stitch alone, which left
+    /// CMU 131_01 frame 102 one triangle so
     /// (`deform::a_real_retarget_keeps_every_vertex_in_its_ring`).
     pub cloth_stitch: f64,
     /// Rotation fits per frame of the cloth stitch, each followed by a
     /// prefactored solve ([`super::cloth`]). Default 2.
     pub cloth_steps: usize,
+    /// With the cloth stitch, the fold repair reads "turned over" on the
+    /// cloth, and solves its patches there, with the rotations the stitch
+    /// fitted to the cloth's one-rings instead of the skin's blend of the
+    /// bones' turns ([`super::cloth`]), so a patch asks the cloth for the
+    /// shape the stitch gave it. The reported `before` count is still
+    /// against the skin's turns. Default true (session 30): without it the
+    /// repair's patches crumple the stitched skirt again where the solve
+    /// turned much over (CMU 131_01 on the real samba capture: skirt bend
+    /// 11.52° without, 11.02° with; 03_02 11.27° → 10.78° and joint-velocity
+    /// error 0.132 → 0.123 cm/frame).
+    pub cloth_turns: bool,
+    /// With the cloth stitch, a frame whose repair leaves triangles facing
+    /// against their own neighbourhoods is repaired again from the blend
+    /// without the stitch, and the result that leaves fewer is kept
+    /// ([`super::cloth`]). Default true (session 30): with `cloth_turns`
+    /// alone, 131_01's first 130 frames leave frame 117 five triangles
+    /// facing against their neighbourhoods, the stitch without either
+    /// frame 102 one; with the fallback, none (on the eight yardstick
+    /// clips it never changes a frame).
+    pub cloth_fallback: bool,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -328,8 +350,10 @@ impl Default for DeformOptions {
             repair_turns: RepairTurns::default(),
             surface_rounds: 6,
             parallel_regions: true,
-            cloth_stitch: 0.0,
+            cloth_stitch: 0.5,
             cloth_steps: 2,
+            cloth_turns: true,
+            cloth_fallback: true,
         }
     }
 }

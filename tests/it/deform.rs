@@ -657,7 +657,7 @@ fn a_real_retarget_keeps_every_vertex_in_its_ring() {
 /// numbering, so another order of every region's unknowns and of the
 /// solver's elimination. Its chin landmark is renumbered with it. Made once
 /// per test binary.
-fn reversed_samba_db(d: &std::path::Path) -> std::path::PathBuf {
+pub(crate) fn reversed_samba_db(d: &std::path::Path) -> std::path::PathBuf {
     use std::sync::OnceLock;
     use surfmotion::mesh::io::{obj, pc2};
     static DB: OnceLock<std::path::PathBuf> = OnceLock::new();
@@ -695,6 +695,9 @@ fn reversed_samba_db(d: &std::path::Path) -> std::path::PathBuf {
                 .arg("--landmarks")
                 .arg(dir.join("marks.json")),
         );
+        // Its graph built and cached once here, not by two tests loading
+        // it at once (`tools::surface_crumple` uses it too).
+        Character::load(&db, &surfmotion::db::Quiet).unwrap();
         db
     })
     .clone()

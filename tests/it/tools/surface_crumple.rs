@@ -1,8 +1,9 @@
 //! The skirt's crumple on real retargets (issue 42): the cloth of a CMU
-//! walk retargeted onto the real samba capture, and of the same walk
-//! mirrored left for right, bends about as sharply as the capture's own
-//! frames with the cloth stitch ([`surfmotion::deform::cloth`], weight
-//! 0.5); without it (the default) it bends beyond them.
+//! walk retargeted onto the real samba capture, of the same walk mirrored
+//! left for right, and of the walk onto the capture with its vertices
+//! renumbered, bends about as sharply as the capture's own frames with the
+//! default deformation (the cloth stitch, [`surfmotion::deform::cloth`]);
+//! without the stitch (the default up to session 29) it bends beyond them.
 
 use crate::common;
 
@@ -56,46 +57,33 @@ fn captured(ch: &Character, cloth: &ClothBends) -> Vec<FrameCrumple> {
         .collect()
 }
 
-/// The clip's frames retargeted onto `ch` with the cloth stitch's weight
-/// `stitch` (0: off).
+/// The clip's frames retargeted onto `ch` with `deform_options`.
 fn retargeted(
     ch: &Character,
     cloth: &ClothBends,
     poses: &[Pose],
     m: &MocapPoses,
-    stitch: f64,
+    deform_options: DeformOptions,
 ) -> Vec<FrameCrumple> {
     let opts = RetargetOptions {
         deform: DeformMode::Part,
-        deform_options: DeformOptions {
-            cloth_stitch: stitch,
-            ..Default::default()
-        },
+        deform_options,
         ..Default::default()
     };
     let out = synthesise(ch, poses, &m.reference, 30.0, &opts).unwrap();
     cloth.frames(&out.positions, ch.n())
 }
 
-/// CMU 02_01 and the same walk mirrored left for right on the real samba
-/// capture: over the clip, the skirt's mean bend and its share of sharp
-/// edges stay within the capture's most plus half the capture's own spread
-/// (median to most); with the stitch off both clips go beyond it.
+/// CMU 02_01, the same walk mirrored left for right, and the walk onto the
+/// capture with its vertices numbered in reverse (each on the real samba
+/// capture): over the clip, with the default deformation, the skirt's mean
+/// bend and its share of sharp edges stay within the capture's most plus
+/// half the capture's own spread (median to most); with the stitch off
+/// (session 29's default) every clip goes beyond it.
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_walk_keeps_the_skirt_about_as_smooth_as_the_capture() {
     let Some(d) = common::data_dir() else { return };
-    let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
-    let cloth = ClothBends::new(ch.topology(), ch.rig());
-    assert!(
-        cloth.len() > 1000,
-        "the samba dress: {} cloth edges",
-        cloth.len()
-    );
-    let cap = summary(&captured(&ch, &cloth));
-    let line_mean = cap.most_mean + 0.5 * (cap.most_mean - cap.median_mean);
-    let line_sharp = cap.most_sharp + 0.5 * (cap.most_sharp - cap.median_sharp);
-    eprintln!("capture: {cap:?}; lines {line_mean:.2}°, {line_sharp:.4}");
     let m = load_mocap(
         &d.join("mocap/cmu-amc/02/02_01.amc"),
         &Default::default(),
@@ -103,11 +91,36 @@ fn a_walk_keeps_the_skirt_about_as_smooth_as_the_capture() {
     )
     .unwrap();
     let mirrored = common::mirrored_clip(&m.poses);
-    // The measured setting (an option: README, issue 42).
-    let stitch = 0.5;
-    for (tag, poses) in [("02_01", &m.poses), ("02_01 mirrored", &mirrored)] {
-        let new = summary(&retargeted(&ch, &cloth, poses, &m, stitch));
-        let old = summary(&retargeted(&ch, &cloth, poses, &m, 0.0));
+    let samba = crate::deform::samba_capture_db(&d);
+    let reversed = crate::deform::reversed_samba_db(&d);
+    let unstitched = DeformOptions {
+        cloth_stitch: 0.0,
+        ..Default::default()
+    };
+    for (tag, db, poses) in [
+        ("02_01", &samba, &m.poses),
+        ("02_01 mirrored", &samba, &mirrored),
+        ("02_01 renumbered", &reversed, &m.poses),
+    ] {
+        let ch = Character::load(db, &surfmotion::db::Quiet).unwrap();
+        let cloth = ClothBends::new(ch.topology(), ch.rig());
+        assert!(
+            cloth.len() > 1000,
+            "{tag}: the samba dress: {} cloth edges",
+            cloth.len()
+        );
+        let cap = summary(&captured(&ch, &cloth));
+        let line_mean = cap.most_mean + 0.5 * (cap.most_mean - cap.median_mean);
+        let line_sharp = cap.most_sharp + 0.5 * (cap.most_sharp - cap.median_sharp);
+        eprintln!("{tag}: capture {cap:?}; lines {line_mean:.2}°, {line_sharp:.4}");
+        let new = summary(&retargeted(
+            &ch,
+            &cloth,
+            poses,
+            &m,
+            DeformOptions::default(),
+        ));
+        let old = summary(&retargeted(&ch, &cloth, poses, &m, unstitched));
         eprintln!(
             "{tag}: mean bend {:.2}° → {:.2}° (worst frame {:.2}° → {:.2}°), sharp share {:.4} → {:.4}",
             old.mean, new.mean, old.most_mean, new.most_mean, old.sharp, new.sharp
