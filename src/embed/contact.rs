@@ -45,6 +45,15 @@ pub struct ContactOptions {
     pub patches: usize,
     /// A touching region of fewer vertices is ignored (noise). Default 3.
     pub min_vertices: usize,
+    /// Seed the surface patches by position ([`first_seed`]: the vertex
+    /// nearest the middle of the reference frame's bounding box, ties by
+    /// coordinates), so that which pairs count as apart, and the rest
+    /// frame chosen on them, follow the body and not the vertex
+    /// numbering. Default false: the first seed is vertex 0 (main's;
+    /// samba with its odd ids numbered first then has "1 contact, 4
+    /// vertices" on its clear frame 0 and rests on frame 27: session 29).
+    /// `SURFMOTION_AUTORIG=patches=position` for the automatic rig.
+    pub seed_by_position: bool,
 }
 
 impl Default for ContactOptions {
@@ -55,6 +64,7 @@ impl Default for ContactOptions {
             apart: 0.3,
             patches: 600,
             min_vertices: 3,
+            seed_by_position: false,
         }
     }
 }
@@ -129,7 +139,11 @@ impl ContactFinder {
         let mut seeds: Vec<u32> = Vec::with_capacity(k);
         let mut apart = vec![false; k * k];
         let mut dist = vec![f64::INFINITY; n];
-        let mut next = first_seed(p);
+        let mut next = if opts.seed_by_position {
+            first_seed(p)
+        } else {
+            0
+        };
         // A mesh of several pieces: vertices no seed reaches stay at
         // infinity and become seeds in turn.
         while seeds.len() < k && n > 0 {
@@ -150,7 +164,13 @@ impl ContactFinder {
             let (far_v, far_d) = best
                 .iter()
                 .enumerate()
-                .max_by(|a, b| a.1.total_cmp(b.1).then_with(|| by_place(p[b.0], p[a.0])))
+                .max_by(|a, b| {
+                    let o = a.1.total_cmp(b.1);
+                    match opts.seed_by_position {
+                        true => o.then_with(|| by_place(p[b.0], p[a.0])),
+                        false => o,
+                    }
+                })
                 .map(|(v, d)| (v as u32, *d))
                 .unwrap_or((0, 0.0));
             if far_d <= 0.0 {
@@ -369,12 +389,9 @@ impl ContactFinder {
     }
 }
 
-/// The patches' first seed: the vertex nearest the middle of `p`'s
-/// bounding box (ties: the lesser coordinates), so that the patches, and
-/// with them which pairs count as apart, follow the body and not the
-/// vertex numbering (seeded at vertex 0, samba with its odd ids numbered
-/// first had "1 contact, 4 vertices" on its clear frame 0 and rested on
-/// frame 27: issue 41, session 29). 0 for an empty mesh.
+/// The patches' first seed with [`ContactOptions::seed_by_position`]:
+/// the vertex nearest the middle of `p`'s bounding box (ties: the lesser
+/// coordinates). 0 for an empty mesh.
 fn first_seed(p: &[[f64; 3]]) -> u32 {
     let Some(first) = p.first() else { return 0 };
     let (lo, hi) = p.iter().fold((*first, *first), |(mut lo, mut hi), q| {
@@ -512,6 +529,7 @@ mod tests {
         // are seeded decides which pairs are apart.
         let o = ContactOptions {
             patches: 6,
+            seed_by_position: true,
             ..ContactOptions::default()
         };
         let f = ContactFinder::new(&m, o);

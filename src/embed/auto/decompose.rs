@@ -17,13 +17,13 @@
 //! 3. adjacent parts whose union still moves rigidly (RMS residual below a
 //!    fraction of the height) are merged, most rigid pair first.
 //!
-//! Except with [`Seeding::Index`] (sessions 20-29's default) all of it
-//! runs on the vertices in an order of their positions
-//! ([`super::seeding`]), the k-means seeded in that order: the parts do
-//! not depend on how the file numbers its vertices. The default
-//! ([`Seeding::Vote`], session 30) draws several k-means++ seedings and
-//! keeps the clusters most of them agree on ([`super::consensus`]), so
-//! that the parts depend on no single draw either.
+//! Except with [`Seeding::Index`] (the default) all of it runs on the
+//! vertices in an order of their positions ([`super::seeding`]), the
+//! k-means seeded in that order: the parts do not depend on how the file
+//! numbers its vertices. [`Seeding::Vote`] and [`Seeding::Consensus`]
+//! (session 30) draw several k-means++ seedings and keep the parts most
+//! of them agree on ([`super::consensus`]), so that no single draw
+//! decides. Not yet the default: see [`DecomposeOptions::seeding`].
 
 use crate::mesh::frames::polar;
 use glam::{DMat3, DVec3};
@@ -70,11 +70,13 @@ pub struct DecomposeOptions {
     /// this fraction of the height. Default 0.012.
     pub merge_below: f64,
     /// How the k-means is seeded and in which order the vertices are
-    /// visited ([`Seeding`]). Default [`Seeding::Vote`] of 5 draws
-    /// (session 30). Sessions 20-29's [`Seeding::Index`] followed the
-    /// numbering and one fixed draw (samba 0.69 % of the height from the
-    /// landmark rig as numbered, 0.78 % renumbered; every single
-    /// order-free seeding tried in session 29: 1.60-3.07 %).
+    /// visited ([`Seeding`]). Default [`Seeding::Index`] (main's): no
+    /// seeding independent of the numbering rigged the real captures as
+    /// well yet (session 29, `autorig_eval … joints`: samba 0.69 % of the
+    /// height from the landmark rig as numbered, 0.78 % renumbered; every
+    /// order-free seeding tried 1.60-3.07 %; session 30's
+    /// [`Seeding::Vote`] of 5 draws 1.81 %, l_knee 5.1 %, and 13.6 s of
+    /// CPU for samba's `db init`).
     pub seeding: Seeding,
     /// Which pseudo-random draws the k-means++ seedings use: draw `r` of
     /// a seeding of N draws is the sequence number `salt · N + r` (0: the
@@ -95,7 +97,7 @@ pub enum Seeding {
     /// candidate: samba's joints 3.07 % of the height from the landmark
     /// rig's (the hips 11 %; index seeding 0.69 %).
     Position,
-    /// Sessions 20-29's default: the vertices in index order,
+    /// The default (sessions 20-30): the vertices in index order,
     /// k-means++ from vertex `n / 2` with a fixed pseudo-random sequence
     /// walked in index order (`seed=index` in `SURFMOTION_AUTORIG`). The
     /// rig follows the numbering: samba renumbered (reversed, shuffled,
@@ -163,7 +165,7 @@ impl Default for DecomposeOptions {
             clusters: 40,
             rounds: 8,
             merge_below: 0.012,
-            seeding: Seeding::Vote(5),
+            seeding: Seeding::Index,
             salt: 0,
         }
     }
