@@ -1,5 +1,5 @@
 //! Evaluation of the automatic rig (issue 41): `cargo run --release
-//! --example autorig_eval -- [DATA] [real|synth|all|facing|orders|contact|joints]`
+//! --example autorig_eval -- [DATA] [real|synth|all|facing|orders|contact|joints|spread]`
 //! (DATA defaults to `../shared/data`).
 //!
 //! - real captures (samba, crane): the embedding from the automatic
@@ -21,7 +21,10 @@
 //!   the automatic facing, chin and head joint against the landmark rig's
 //!   moved alike;
 //! - `joints`: per joint against the landmark rig, as numbered and with
-//!   the vertices renumbered, and samba on rest frames 2 and 4.
+//!   the vertices renumbered, and samba on rest frames 2 and 4;
+//! - `spread [SALTS]`: the same against the decomposition's pseudo-random
+//!   draws (`DecomposeOptions::salt` 0..SALTS, default 5): how far the
+//!   joints move from draw to draw.
 
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -55,11 +58,20 @@ fn agree(a: &[u8], b: &[u8]) -> f64 {
     a.iter().zip(b).filter(|(x, y)| x == y).count() as f64 / a.len() as f64
 }
 
-fn real(data: &Path) {
-    println!(
-        "| capture | joints vs landmark rig (% height) | worst joint | parts agree | confidence | time (s) |"
-    );
-    println!("|---|---|---|---|---|---|");
+/// A real capture (samba, crane) with its hand-made landmarks and their
+/// rig: what every per-capture table of this evaluation compares against.
+struct Capture<'a> {
+    name: &'a str,
+    mesh: &'a Mesh,
+    frames: &'a [&'a [[f64; 3]]],
+    landmarks: &'a Landmarks,
+    truth: &'a Embedding,
+}
+
+/// Calls `row` on each real capture, loaded with its fixture's landmarks
+/// and their rig; a capture that does not load prints `| NAME | not run:
+/// why |` (the table's first column) and is skipped.
+fn for_each_capture(data: &Path, mut row: impl FnMut(&Capture)) {
     for name in ["samba", "crane"] {
         let pc2 = data.join(format!("4d/{name}/{name}.pc2"));
         let seq = match load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()) {
@@ -69,27 +81,43 @@ fn real(data: &Path) {
                 continue;
             }
         };
-        let mesh = seq.mesh().clone();
         let frames: Vec<&[[f64; 3]]> = (0..seq.frame_count()).map(|f| seq.frame(f)).collect();
+        let fixture = PathBuf::from(format!("tests/fixtures/{name}.landmarks.json"));
+        let landmarks =
+            Landmarks::load(&fixture, seq.mesh().vertex_count()).expect("fixture landmarks");
+        let truth = Embedding::new(seq.mesh(), &landmarks, None).expect("landmark rig");
+        row(&Capture {
+            name,
+            mesh: seq.mesh(),
+            frames: &frames,
+            landmarks: &landmarks,
+            truth: &truth,
+        });
+    }
+}
+
+fn real(data: &Path) {
+    println!(
+        "| capture | joints vs landmark rig (% height) | worst joint | parts agree | confidence | time (s) |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for_each_capture(data, |c| {
+        let (name, mesh, frames, truth) = (c.name, c.mesh, c.frames, c.truth);
         let t = Instant::now();
-        let (rest, why) = rest_as_db_init(&mesh, &frames);
+        let (rest, why) = rest_as_db_init(mesh, frames);
         eprintln!("  {name}: rest frame {rest:?}: {why}");
-        let auto = match rig_as_db_init(&mesh, &frames) {
+        let auto = match rig_as_db_init(mesh, frames) {
             Ok(a) => a,
             Err(e) => {
                 println!("| {name} | refused: {e} |");
-                continue;
+                return;
             }
         };
         let secs = t.elapsed().as_secs_f64();
-        let fixture = PathBuf::from(format!("tests/fixtures/{name}.landmarks.json"));
-        let lm = Landmarks::load(&fixture, mesh.vertex_count()).expect("fixture landmarks");
-        let truth = Embedding::new(&mesh, &lm, None).expect("landmark rig");
-        let mine = embed_as_db_init(&mesh, &frames, auto.rest_frame, &auto.landmarks);
-        match mine {
+        match embed_as_db_init(mesh, frames, auto.rest_frame, &auto.landmarks) {
             Some(mine) => {
                 let (e, wj, wd) = joint_error(&mine.joints, &truth.joints);
-                let h = height(&truth);
+                let h = height(truth);
                 println!(
                     "| {name} | {:.2} | {} {:.1} | {:.1}% | {:.2} | {secs:.1} |",
                     100.0 * e / h,
@@ -104,11 +132,11 @@ fn real(data: &Path) {
                     eprint!("{} {:.1}  ", j.name(), 100.0 * d / h);
                 }
                 eprintln!();
-                knees_per_frame(name, &frames, &mine, &truth);
+                knees_per_frame(name, frames, &mine, truth);
             }
             None => println!("| {name} | embedding refused |"),
         }
-        arm_offsets(name, &mesh, &lm, &auto);
+        arm_offsets(name, mesh, c.landmarks, &auto);
         for n in &auto.notes {
             eprintln!("  {name}: {n}");
         }
@@ -118,9 +146,9 @@ fn real(data: &Path) {
             facing_deg(&auto, truth.facing)
         );
         if name == "samba" {
-            contact_first(&mesh, &frames, 130, false);
+            contact_first(mesh, frames, 130, false);
         }
-    }
+    });
 }
 
 /// The angle (degrees) between the automatic rig's facing and `want`.
@@ -143,15 +171,8 @@ fn facing(data: &Path) {
         "| capture | turn | mirrored | facing off (°) | chin off (% h) | head joint off (% h) |"
     );
     println!("|---|---|---|---|---|---|");
-    for name in ["samba", "crane"] {
-        let pc2 = data.join(format!("4d/{name}/{name}.pc2"));
-        let Ok(seq) = load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()) else {
-            println!("| {name} | not run |");
-            continue;
-        };
-        let fixture = PathBuf::from(format!("tests/fixtures/{name}.landmarks.json"));
-        let lm = Landmarks::load(&fixture, seq.mesh().vertex_count()).expect("fixture landmarks");
-        let truth = Embedding::new(seq.mesh(), &lm, None).expect("landmark rig");
+    for_each_capture(data, |c| {
+        let (name, lm, truth) = (c.name, c.landmarks, c.truth);
         let h = truth.height;
         for yaw in [0.0_f64, 30.0, 90.0, 180.0, 270.0] {
             for mirror in [false, true] {
@@ -165,16 +186,14 @@ fn facing(data: &Path) {
                         .map(|q| (m * DVec3::from_array(*q)).to_array())
                         .collect()
                 };
-                let mut tris = seq.mesh().triangles().to_vec();
+                let mut tris = c.mesh.triangles().to_vec();
                 if mirror {
                     tris.iter_mut().for_each(|t| t.swap(1, 2));
                 }
-                let Ok(mesh) = Mesh::new(place(seq.mesh().positions()), tris) else {
+                let Ok(mesh) = Mesh::new(place(c.mesh.positions()), tris) else {
                     continue;
                 };
-                let own: Vec<Vec<[f64; 3]>> = (0..seq.frame_count())
-                    .map(|f| place(seq.frame(f)))
-                    .collect();
+                let own: Vec<Vec<[f64; 3]>> = c.frames.iter().map(|f| place(f)).collect();
                 let frames: Vec<&[[f64; 3]]> = own.iter().map(Vec::as_slice).collect();
                 let Ok(auto) = auto_rig(&mesh, &frames, &db_init_options(None)) else {
                     println!("| {name} | {yaw} | {mirror} | refused |");
@@ -189,7 +208,7 @@ fn facing(data: &Path) {
                 };
                 let chin_off = match (
                     chin(&auto.landmarks, mesh.positions()),
-                    chin(&lm, seq.mesh().positions()),
+                    chin(lm, c.mesh.positions()),
                 ) {
                     (Some(a), Some(b)) => 100.0 * a.distance(m * b) / h,
                     _ => f64::NAN,
@@ -197,7 +216,7 @@ fn facing(data: &Path) {
                 let head_off = Embedding::new(&mesh, &auto.landmarks, None).map_or(f64::NAN, |e| {
                     100.0
                         * DVec3::from_array(e.joints[Canonical::Head.index()])
-                            .distance(joint(&truth, Canonical::Head))
+                            .distance(joint(truth, Canonical::Head))
                         / h
                 });
                 println!(
@@ -206,7 +225,7 @@ fn facing(data: &Path) {
                 );
             }
         }
-    }
+    });
 }
 
 /// Issue 41's held-rule question: samba rigged on rest frame `r` with the
@@ -741,6 +760,88 @@ fn synth(data: &Path) {
     }
 }
 
+/// One automatic rig scored against the landmark rig: each joint's
+/// distance (% of the height, [`Canonical`] order), their mean, the parts
+/// agreeing, the parts found, the joints themselves and the seconds the
+/// rig took.
+struct Scored {
+    off: [f64; 19],
+    mean: f64,
+    agree: f64,
+    parts: usize,
+    joints: [[f64; 3]; 19],
+    secs: f64,
+}
+
+impl Scored {
+    fn of(&self, c: Canonical) -> f64 {
+        self.off[c.index()]
+    }
+    fn worst(&self) -> (Canonical, f64) {
+        let j = (0..19)
+            .max_by(|&a, &b| self.off[a].total_cmp(&self.off[b]))
+            .unwrap_or(0);
+        (Canonical::ALL[j], self.off[j])
+    }
+}
+
+/// Capture `c` rigged as `db init` rigs it with `opts` on rest frame
+/// `rest` (its vertices renumbered by a fixed shuffle when `renumber`;
+/// the parts compared through it) and embedded on that frame, scored
+/// against the landmark rig. `Err`: which step refused.
+fn score(
+    c: &Capture,
+    rest: Option<usize>,
+    renumber: bool,
+    opts: AutoOptions,
+) -> Result<Scored, String> {
+    let n = c.mesh.vertex_count();
+    let order: Vec<usize> = if renumber {
+        shuffled(n)
+    } else {
+        (0..n).collect()
+    };
+    let mut new_of = vec![0u32; n];
+    for (k, &o) in order.iter().enumerate() {
+        new_of[o] = k as u32;
+    }
+    let tris: Vec<[u32; 3]> = c
+        .mesh
+        .triangles()
+        .iter()
+        .map(|t| t.map(|i| new_of[i as usize]))
+        .collect();
+    let pos = |q: &[[f64; 3]]| -> Vec<[f64; 3]> { order.iter().map(|&o| q[o]).collect() };
+    let own: Vec<Vec<[f64; 3]>> = c.frames.iter().map(|q| pos(q)).collect();
+    let fr: Vec<&[[f64; 3]]> = own.iter().map(Vec::as_slice).collect();
+    let m = Mesh::new(pos(c.mesh.positions()), tris).map_err(|e| e.to_string())?;
+    let t = Instant::now();
+    let auto = auto_rig(
+        &m,
+        &fr,
+        &AutoOptions {
+            rest_frame: rest,
+            ..opts
+        },
+    )
+    .map_err(|e| format!("refused: {e}"))?;
+    let secs = t.elapsed().as_secs_f64();
+    let e = embed_as_db_init(&m, &fr, rest, &auto.landmarks).ok_or("embedding refused")?;
+    let h = c.truth.height;
+    let off: [f64; 19] = std::array::from_fn(|j| {
+        100.0 * DVec3::from_array(e.joints[j]).distance(DVec3::from_array(c.truth.joints[j])) / h
+    });
+    let labels: Vec<u8> = (0..n).map(|o| e.labels[new_of[o] as usize]).collect();
+    Ok(Scored {
+        mean: off.iter().sum::<f64>() / 19.0,
+        off,
+        agree: 100.0 * agree(&labels, &c.truth.labels),
+        parts: auto.parts,
+        joints: e.joints,
+        secs,
+    })
+}
+
 /// Per joint, the automatic rig against the landmark rig (% of the
 /// height) as `db init` makes it (`SURFMOTION_AUTORIG` applied), with the
 /// vertices renumbered (a fixed shuffle; the joints compared through it),
@@ -752,22 +853,9 @@ fn joints(data: &Path) {
         "| capture | variant | rest | l_elbow % | r_knee % | joints mean % | worst | parts agree | parts |"
     );
     println!("|---|---|---|---|---|---|---|---|---|");
-    for name in ["samba", "crane"] {
-        let pc2 = data.join(format!("4d/{name}/{name}.pc2"));
-        let Ok(seq) = load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()) else {
-            println!("| {name} | not run |");
-            continue;
-        };
-        let mesh = seq.mesh().clone();
-        let frames: Vec<&[[f64; 3]]> = (0..seq.frame_count()).map(|f| seq.frame(f)).collect();
-        let lm = Landmarks::load(
-            &PathBuf::from(format!("tests/fixtures/{name}.landmarks.json")),
-            mesh.vertex_count(),
-        )
-        .expect("fixture landmarks");
-        let truth = Embedding::new(&mesh, &lm, None).expect("landmark rig");
-        let h = truth.height;
-        let (chosen, _) = rest_as_db_init(&mesh, &frames);
+    for_each_capture(data, |c| {
+        let name = c.name;
+        let (chosen, _) = rest_as_db_init(c.mesh, c.frames);
         let mut variants: Vec<(&str, Option<usize>, bool)> = vec![
             ("db init", chosen, false),
             ("db init, renumbered", chosen, true),
@@ -779,61 +867,106 @@ fn joints(data: &Path) {
             }
         }
         for (what, rest, renumber) in variants {
-            let order: Vec<usize> = if renumber {
-                shuffled(mesh.vertex_count())
-            } else {
-                (0..mesh.vertex_count()).collect()
+            let s = match score(c, rest, renumber, db_init_options(None)) {
+                Ok(s) => s,
+                Err(e) => {
+                    println!("| {name} | {what} | {rest:?} | {e} |");
+                    continue;
+                }
             };
-            let mut new_of = vec![0u32; order.len()];
-            for (k, &o) in order.iter().enumerate() {
-                new_of[o] = k as u32;
-            }
-            let tris: Vec<[u32; 3]> = mesh
-                .triangles()
-                .iter()
-                .map(|t| t.map(|i| new_of[i as usize]))
-                .collect();
-            let pos = |q: &[[f64; 3]]| -> Vec<[f64; 3]> { order.iter().map(|&o| q[o]).collect() };
-            let own: Vec<Vec<[f64; 3]>> = frames.iter().map(|q| pos(q)).collect();
-            let fr: Vec<&[[f64; 3]]> = own.iter().map(Vec::as_slice).collect();
-            let m = Mesh::new(pos(mesh.positions()), tris).expect("mesh");
-            let t = Instant::now();
-            let Ok(auto) = auto_rig(&m, &fr, &db_init_options(rest)) else {
-                println!("| {name} | {what} | {rest:?} | refused |");
-                continue;
-            };
-            let secs = t.elapsed().as_secs_f64();
-            let Some(e) = embed_as_db_init(&m, &fr, rest, &auto.landmarks) else {
-                println!("| {name} | {what} | {rest:?} | embedding refused |");
-                continue;
-            };
-            let d = |c: Canonical| {
-                100.0
-                    * DVec3::from_array(e.joints[c.index()])
-                        .distance(DVec3::from_array(truth.joints[c.index()]))
-                    / h
-            };
-            let (mean, wj, wd) = joint_error(&e.joints, &truth.joints);
-            let labels: Vec<u8> = (0..order.len())
-                .map(|o| e.labels[new_of[o] as usize])
-                .collect();
+            let (wj, wd) = s.worst();
             println!(
-                "| {name} | {what} | {rest:?} | {:.2} | {:.2} | {:.2} | {} {:.1} | {:.1}% | {} |",
-                d(Canonical::LElbow),
-                d(Canonical::RKnee),
-                100.0 * mean / h,
-                Canonical::ALL[wj].name(),
-                100.0 * wd / h,
-                100.0 * agree(&labels, &truth.labels),
-                auto.parts
+                "| {name} | {what} | {rest:?} | {:.2} | {:.2} | {:.2} | {} {wd:.1} | {:.1}% | {} |",
+                s.of(Canonical::LElbow),
+                s.of(Canonical::RKnee),
+                s.mean,
+                wj.name(),
+                s.agree,
+                s.parts
             );
-            eprint!("  {name} {what} {rest:?} ({secs:.1} s):");
+            eprint!("  {name} {what} {rest:?} ({:.1} s):", s.secs);
             for j in Canonical::ALL {
-                eprint!(" {} {:.2}", j.name(), d(j));
+                eprint!(" {} {:.2}", j.name(), s.of(j));
             }
             eprintln!();
         }
-    }
+    });
+}
+
+/// `spread [SALTS]`: the rig's spread from draw to draw. Each capture
+/// rigged as `db init` rigs it (`SURFMOTION_AUTORIG` applied) with the
+/// decomposition's salt 0..SALTS (default 5; other pseudo-random draws
+/// of the same seeding): per salt the mean joint, l_elbow, r_knee, worst
+/// joint, parts agreeing with the landmark rig, parts; then the spread:
+/// per joint the greatest distance between two salts' positions (% of the
+/// height), its mean over the joints and its worst, and the range of the
+/// mean joint error and of the parts agreeing.
+fn spread(data: &Path, salts: u32) {
+    println!(
+        "| capture | salt | joints mean % | l_elbow % | r_knee % | worst | parts agree | parts | s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for_each_capture(data, |c| {
+        let name = c.name;
+        let (rest, _) = rest_as_db_init(c.mesh, c.frames);
+        let mut all: Vec<Scored> = Vec::new();
+        for salt in 0..salts {
+            let mut o = db_init_options(None);
+            o.decompose.salt = salt;
+            match score(c, rest, false, o) {
+                Ok(s) => {
+                    let (wj, wd) = s.worst();
+                    println!(
+                        "| {name} | {salt} | {:.2} | {:.2} | {:.2} | {} {wd:.1} | {:.1}% | {} | {:.1} |",
+                        s.mean,
+                        s.of(Canonical::LElbow),
+                        s.of(Canonical::RKnee),
+                        wj.name(),
+                        s.agree,
+                        s.parts,
+                        s.secs
+                    );
+                    all.push(s);
+                }
+                Err(e) => println!("| {name} | {salt} | {e} |"),
+            }
+        }
+        let h = c.truth.height;
+        let per_joint: Vec<f64> = (0..19)
+            .map(|j| {
+                let mut w = 0.0f64;
+                for a in &all {
+                    for b in &all {
+                        let d =
+                            DVec3::from_array(a.joints[j]).distance(DVec3::from_array(b.joints[j]));
+                        w = w.max(100.0 * d / h);
+                    }
+                }
+                w
+            })
+            .collect();
+        let (wj, wd) = per_joint
+            .iter()
+            .enumerate()
+            .fold((0, 0.0f64), |w, (j, &x)| if x > w.1 { (j, x) } else { w });
+        let range = |f: &dyn Fn(&Scored) -> f64| {
+            let v = all.iter().map(f);
+            (
+                v.clone().fold(f64::INFINITY, f64::min),
+                v.fold(f64::NEG_INFINITY, f64::max),
+            )
+        };
+        let (m0, m1) = range(&|s| s.mean);
+        let (p0, p1) = range(&|s| s.agree);
+        let (k0, k1) = range(&|s| s.of(Canonical::RKnee));
+        let (e0, e1) = range(&|s| s.of(Canonical::LElbow));
+        println!(
+            "| {name} | spread over {} | mean {m0:.2}-{m1:.2} | {e0:.2}-{e1:.2} | {k0:.2}-{k1:.2} | joint spread mean {:.2}, worst {} {wd:.2} | {p0:.1}-{p1:.1}% | | |",
+            all.len(),
+            per_joint.iter().sum::<f64>() / 19.0,
+            Canonical::ALL[wj].name()
+        );
+    });
 }
 
 fn main() {
@@ -854,6 +987,10 @@ fn main() {
     }
     if what == "joints" {
         joints(&data);
+    }
+    if what == "spread" {
+        let salts = args.get(3).and_then(|a| a.parse().ok()).unwrap_or(5);
+        spread(&data, salts);
     }
     if what == "orders" {
         orders(&data);

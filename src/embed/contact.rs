@@ -45,6 +45,15 @@ pub struct ContactOptions {
     pub patches: usize,
     /// A touching region of fewer vertices is ignored (noise). Default 3.
     pub min_vertices: usize,
+    /// Seed the surface patches by position ([`first_seed`]: the vertex
+    /// nearest the middle of the reference frame's bounding box, ties by
+    /// coordinates), so that which pairs count as apart, and the rest
+    /// frame chosen on them, follow the body and not the vertex
+    /// numbering. Default false: the first seed is vertex 0 (main's;
+    /// samba with its odd ids numbered first then has "1 contact, 4
+    /// vertices" on its clear frame 0 and rests on frame 27: session 29).
+    /// `SURFMOTION_AUTORIG=patches=position` for the automatic rig.
+    pub seed_by_position: bool,
 }
 
 impl Default for ContactOptions {
@@ -55,6 +64,7 @@ impl Default for ContactOptions {
             apart: 0.3,
             patches: 600,
             min_vertices: 3,
+            seed_by_position: false,
         }
     }
 }
@@ -129,7 +139,11 @@ impl ContactFinder {
         let mut seeds: Vec<u32> = Vec::with_capacity(k);
         let mut apart = vec![false; k * k];
         let mut dist = vec![f64::INFINITY; n];
-        let mut next = 0u32;
+        let mut next = if opts.seed_by_position {
+            first_seed(p)
+        } else {
+            0
+        };
         // A mesh of several pieces: vertices no seed reaches stay at
         // infinity and become seeds in turn.
         while seeds.len() < k && n > 0 {
@@ -150,7 +164,13 @@ impl ContactFinder {
             let (far_v, far_d) = best
                 .iter()
                 .enumerate()
-                .max_by(|a, b| a.1.total_cmp(b.1))
+                .max_by(|a, b| {
+                    let o = a.1.total_cmp(b.1);
+                    match opts.seed_by_position {
+                        true => o.then_with(|| by_place(p[b.0], p[a.0])),
+                        false => o,
+                    }
+                })
                 .map(|(v, d)| (v as u32, *d))
                 .unwrap_or((0, 0.0));
             if far_d <= 0.0 {
@@ -369,6 +389,34 @@ impl ContactFinder {
     }
 }
 
+/// The patches' first seed with [`ContactOptions::seed_by_position`]:
+/// the vertex nearest the middle of `p`'s bounding box (ties: the lesser
+/// coordinates). 0 for an empty mesh.
+fn first_seed(p: &[[f64; 3]]) -> u32 {
+    let Some(first) = p.first() else { return 0 };
+    let (lo, hi) = p.iter().fold((*first, *first), |(mut lo, mut hi), q| {
+        for k in 0..3 {
+            lo[k] = lo[k].min(q[k]);
+            hi[k] = hi[k].max(q[k]);
+        }
+        (lo, hi)
+    });
+    let mid = DVec3::from_array(lo).lerp(DVec3::from_array(hi), 0.5);
+    let d = |v: usize| DVec3::from_array(p[v]).distance_squared(mid);
+    (0..p.len())
+        .min_by(|&a, &b| d(a).total_cmp(&d(b)).then_with(|| by_place(p[a], p[b])))
+        .unwrap_or(0) as u32
+}
+
+/// Two points ordered by their coordinates (x, then y, then z).
+fn by_place(a: [f64; 3], b: [f64; 3]) -> std::cmp::Ordering {
+    a.iter()
+        .zip(&b)
+        .map(|(x, y)| x.total_cmp(y))
+        .find(|o| o.is_ne())
+        .unwrap_or(std::cmp::Ordering::Equal)
+}
+
 /// Graph distances (edge lengths on `p`) from `source` into `dist`.
 fn dijkstra(p: &[[f64; 3]], nb: &[Vec<u32>], source: u32, dist: &mut [f64]) {
     dist.fill(f64::INFINITY);
@@ -471,6 +519,48 @@ mod tests {
             .collect();
         let c = f.find_with_near(&flat);
         assert!(c.contacts.is_empty() && c.near == 0, "{c:?}");
+    }
+
+    #[test]
+    fn the_patches_follow_the_surface_not_the_vertex_numbering() {
+        let m = folded(0.02);
+        let n = m.vertex_count();
+        // Few patches (on a person they are ~3 cm across): where they
+        // are seeded decides which pairs are apart.
+        let o = ContactOptions {
+            patches: 6,
+            seed_by_position: true,
+            ..ContactOptions::default()
+        };
+        let f = ContactFinder::new(&m, o);
+        for order in [
+            (0..n as u32).rev().collect::<Vec<u32>>(),
+            (0..n as u32).map(|v| (v * 37 + 11) % n as u32).collect(),
+        ] {
+            // New vertex k is old vertex order[k].
+            let mut new_of = vec![0u32; n];
+            for (k, &o) in order.iter().enumerate() {
+                new_of[o as usize] = k as u32;
+            }
+            let p: Vec<[f64; 3]> = order.iter().map(|&o| m.positions()[o as usize]).collect();
+            let t = m
+                .triangles()
+                .iter()
+                .map(|t| t.map(|i| new_of[i as usize]))
+                .collect();
+            let g = ContactFinder::new(&Mesh::new(p.clone(), t).unwrap(), o);
+            for a in 0..n as u32 {
+                for b in 0..n as u32 {
+                    assert_eq!(
+                        f.apart(a, b),
+                        g.apart(new_of[a as usize], new_of[b as usize]),
+                        "{a} {b}"
+                    );
+                }
+            }
+            let (c, d) = (f.find_with_near(m.positions()), g.find_with_near(&p));
+            assert_eq!((c.touching, c.near), (d.touching, d.near));
+        }
     }
 
     #[test]

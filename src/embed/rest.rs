@@ -168,11 +168,21 @@ pub fn choose_rest_frame(
 /// capture starts with). `None` without frames or on a frame that does not
 /// fit the mesh.
 fn reference_by_pose(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> Option<Mesh> {
-    use super::pose_order::{descriptor, standing_first};
-    let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
+    use super::pose_order::standing_first;
+    let descs = descriptors(frames);
     let all: Vec<usize> = (0..frames.len()).collect();
     let f = *standing_first(frames, &descs, &all).first()?;
     mesh.with_positions(frames[f]).ok()
+}
+
+/// Every frame's pose descriptor on vertices chosen by the motion
+/// ([`super::pose_order::descriptor_vertices`]): the held rule's hold
+/// radii and every tie by pose then follow the body, not the vertex
+/// numbering (on every `n / K`-th id they did: session 29).
+fn descriptors(frames: &[&[[f64; 3]]]) -> Vec<Vec<f64>> {
+    use super::pose_order::{descriptor_at, descriptor_vertices};
+    let picks = descriptor_vertices(frames);
+    frames.iter().map(|f| descriptor_at(f, &picks)).collect()
 }
 
 /// [`choose_rest_frame`] with a prepared finder.
@@ -295,8 +305,8 @@ fn by_pose(
     slack: usize,
     opts: &RestOptions,
 ) -> (usize, usize) {
-    use super::pose_order::{descriptor, held_first, median, nearest, standing_first};
-    let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
+    use super::pose_order::{held_first, median, nearest, standing_first};
+    let descs = descriptors(frames);
     let clearest: Vec<usize> = (0..found.len())
         .filter(|&f| found[f].touching == least)
         .collect();

@@ -17,12 +17,13 @@
 //! 3. adjacent parts whose union still moves rigidly (RMS residual below a
 //!    fraction of the height) are merged, most rigid pair first.
 //!
-//! Except with [`Seeding::Index`] (sessions 20-29's default) all of it
-//! runs on the vertices in an order of their positions
-//! ([`super::seeding`]), the k-means seeded in that order (e.g.
-//! [`Seeding::Draws`]: the least potential of k-means++ draws): the parts
-//! do not depend on how the file numbers its vertices. Not yet the
-//! default: see [`DecomposeOptions::seeding`].
+//! Except with [`Seeding::Index`] (the default) all of it runs on the
+//! vertices in an order of their positions ([`super::seeding`]), the
+//! k-means seeded in that order: the parts do not depend on how the file
+//! numbers its vertices. [`Seeding::Vote`] and [`Seeding::Consensus`]
+//! (session 30) draw several k-means++ seedings and keep the parts most
+//! of them agree on ([`super::consensus`]), so that no single draw
+//! decides. Not yet the default: see [`DecomposeOptions::seeding`].
 
 use crate::mesh::frames::polar;
 use glam::{DMat3, DVec3};
@@ -73,8 +74,16 @@ pub struct DecomposeOptions {
     /// seeding independent of the numbering rigged the real captures as
     /// well yet (session 29, `autorig_eval … joints`: samba 0.69 % of the
     /// height from the landmark rig as numbered, 0.78 % renumbered; every
-    /// order-free seeding tried 1.60-3.07 %).
+    /// order-free seeding tried 1.60-3.07 %; session 30's
+    /// [`Seeding::Vote`] of 5 draws 1.81 %, l_knee 5.1 %, and 13.6 s of
+    /// CPU for samba's `db init`).
     pub seeding: Seeding,
+    /// Which pseudo-random draws the k-means++ seedings use: draw `r` of
+    /// a seeding of N draws is the sequence number `salt · N + r` (0: the
+    /// default's; `salt=S` in `SURFMOTION_AUTORIG`). A measurement knob:
+    /// the rig's spread from draw to draw is its spread over salts.
+    /// Default 0.
+    pub salt: u32,
 }
 
 /// [`DecomposeOptions::seeding`].
@@ -88,7 +97,7 @@ pub enum Seeding {
     /// candidate: samba's joints 3.07 % of the height from the landmark
     /// rig's (the hips 11 %; index seeding 0.69 %).
     Position,
-    /// The default (sessions 20-29): the vertices in index order,
+    /// The default (sessions 20-30): the vertices in index order,
     /// k-means++ from vertex `n / 2` with a fixed pseudo-random sequence
     /// walked in index order (`seed=index` in `SURFMOTION_AUTORIG`). The
     /// rig follows the numbering: samba renumbered (reversed, shuffled,
@@ -111,14 +120,35 @@ pub enum Seeding {
     /// of the height from the landmark rig (r_knee 3.18 %, parts 88.8 %),
     /// crane 2.34 % (90.3 %); main's 0.69 % (96.3 %) and 1.94 % (91.7 %).
     Draws(u32),
+    /// The vertices in their positions' order; this many whole
+    /// decompositions, each from one k-means++ draw (as
+    /// [`Seeding::Draws`] draws them), combined by majority
+    /// ([`super::consensus`]: every vertex in the part of the draws'
+    /// medoid that most draws put it in), then refined once more (the
+    /// re-assignment rounds and the merges) from the vote
+    /// (`seed=consensus-N`). The boundaries are the majority's, not one
+    /// draw's. Costs N + 1 decompositions.
+    Consensus(u32),
+    /// As [`Seeding::Consensus`] but the vote taken on the draws' k-means
+    /// clusters (before the re-assignment and the merges), then one
+    /// decomposition from the voted clusters (`seed=vote-N`). Costs N
+    /// k-means and one decomposition.
+    Vote(u32),
 }
 
 impl Seeding {
     /// The seeding named `name` (`position`, `index`, `motion`,
-    /// `draws-N`).
+    /// `draws-N`, `consensus-N`, `vote-N`; N in 1..=64).
     pub fn parse(name: &str) -> Option<Seeding> {
+        let count = |n: &str| n.parse::<u32>().ok().filter(|&n| (1..=64).contains(&n));
         if let Some(n) = name.strip_prefix("draws-") {
-            return n.parse().ok().filter(|&n| n >= 1).map(Seeding::Draws);
+            return count(n).map(Seeding::Draws);
+        }
+        if let Some(n) = name.strip_prefix("consensus-") {
+            return count(n).map(Seeding::Consensus);
+        }
+        if let Some(n) = name.strip_prefix("vote-") {
+            return count(n).map(Seeding::Vote);
         }
         match name {
             "position" => Some(Seeding::Position),
@@ -136,6 +166,7 @@ impl Default for DecomposeOptions {
             rounds: 8,
             merge_below: 0.012,
             seeding: Seeding::Index,
+            salt: 0,
         }
     }
 }
@@ -326,43 +357,54 @@ fn dist2(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// k-means of the signatures from the centres `seeds` (vertex ids), or
-/// without them by k-means++ seeding with a fixed pseudo-random sequence
-/// walked in index order (deterministic, but dependent on the order).
-fn kmeans(sig: &[Vec<f64>], k: usize, iters: usize, seeds: Option<&[u32]>) -> Vec<u32> {
+/// without them by k-means++ seeding with the pseudo-random sequence
+/// number `salt` walked in index order (deterministic, but dependent on
+/// the order).
+fn kmeans(sig: &[Vec<f64>], k: usize, iters: usize, seeds: Option<&[u32]>, salt: u64) -> Vec<u32> {
     let n = sig.len();
     let k = k.min(n).max(1);
     let centres = match seeds {
         Some(s) if !s.is_empty() => s.iter().map(|&v| sig[v as usize].clone()).collect(),
-        _ => kmeans_pp(sig, k),
+        _ => kmeans_pp(sig, k, salt),
     };
     lloyd(sig, centres, iters)
 }
 
-/// k-means++ seeds (Arthur & Vassilvitskii 2007) drawn with a fixed
-/// pseudo-random sequence, the first at vertex `n / 2`.
-fn kmeans_pp(sig: &[Vec<f64>], k: usize) -> Vec<Vec<f64>> {
-    let ids = kmeans_pp_ids(sig, k, sig.len() / 2, 0x9E37_79B9_7F4A_7C15).0;
+/// The state of pseudo-random sequence number `r` (0: the default's).
+fn sequence(r: u64) -> u64 {
+    0x9E37_79B9_7F4A_7C15 ^ r.wrapping_mul(0xD1B5_4A32_D192_ED03)
+}
+
+/// k-means++ seeds (Arthur & Vassilvitskii 2007) drawn with the
+/// pseudo-random sequence number `salt`, the first at vertex `n / 2`.
+fn kmeans_pp(sig: &[Vec<f64>], k: usize, salt: u64) -> Vec<Vec<f64>> {
+    let ids = kmeans_pp_ids(sig, k, sig.len() / 2, sequence(salt)).0;
     ids.iter().map(|&v| sig[v as usize].clone()).collect()
 }
 
+/// The seed ids of k-means++ draw number `r` of `sig` (from vertex 0;
+/// given in [`super::seeding::canonical_order`], the vertex nearest the
+/// middle of the body).
+fn one_draw(sig: &[Vec<f64>], k: usize, r: u64) -> Vec<u32> {
+    if sig.is_empty() {
+        return Vec::new();
+    }
+    kmeans_pp_ids(sig, k.min(sig.len()).max(1), 0, sequence(r)).0
+}
+
 /// Of `draws` k-means++ seedings of `sig` (each from vertex 0 with its
-/// own fixed pseudo-random sequence), the one of least potential: its
-/// seed vertex ids. Deterministic; depends on the order of `sig` (given
-/// in [`super::seeding::canonical_order`]). O(draws k n) distances.
-fn least_potential_draw(sig: &[Vec<f64>], k: usize, draws: u32) -> Vec<u32> {
+/// own fixed pseudo-random sequence, numbers `salt · draws` on), the one
+/// of least potential: its seed vertex ids. Deterministic; depends on the
+/// order of `sig` (given in [`super::seeding::canonical_order`]).
+/// O(draws k n) distances.
+fn least_potential_draw(sig: &[Vec<f64>], k: usize, draws: u32, salt: u64) -> Vec<u32> {
     if sig.is_empty() {
         return Vec::new();
     }
     let k = k.min(sig.len()).max(1);
-    (0..draws.max(1) as u64)
-        .map(|r| {
-            kmeans_pp_ids(
-                sig,
-                k,
-                0,
-                0x9E37_79B9_7F4A_7C15 ^ (r.wrapping_mul(0xD1B5_4A32_D192_ED03)),
-            )
-        })
+    let first = salt * draws.max(1) as u64;
+    (first..first + draws.max(1) as u64)
+        .map(|r| kmeans_pp_ids(sig, k, 0, sequence(r)))
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(ids, _)| ids)
         .unwrap_or_default()
@@ -490,26 +532,64 @@ fn decompose_in_order(
     height: f64,
     opts: &DecomposeOptions,
 ) -> Decomposition {
+    let sig = signatures(rest, frames, nb);
+    let (k, salt) = (opts.clusters, opts.salt as u64);
+    let labels = match opts.seeding {
+        Seeding::Consensus(m) | Seeding::Vote(m) => {
+            let whole = matches!(opts.seeding, Seeding::Consensus(_));
+            let draws: Vec<Vec<u32>> = (0..m as u64)
+                .into_par_iter()
+                .map(|r| {
+                    let seeds = one_draw(&sig, k, salt * m as u64 + r);
+                    let l = kmeans(&sig, k, 20, Some(&seeds), 0);
+                    match whole {
+                        true => refine(rest, frames, nb, height, opts, l).labels,
+                        false => l,
+                    }
+                })
+                .collect();
+            drop(sig);
+            super::consensus::vote(&draws, super::consensus::medoid(&draws))
+        }
+        _ => {
+            let seeds = match opts.seeding {
+                Seeding::Position => Some(super::seeding::farthest_seeds(rest, k)),
+                Seeding::Motion => {
+                    let first = super::seeding::farthest_seeds(rest, 1);
+                    let d2 = |a: &Vec<f64>, b: &Vec<f64>| dist2(a, b);
+                    Some(super::seeding::farthest_in(&sig, first[0], k, d2))
+                }
+                Seeding::Draws(draws) => Some(least_potential_draw(&sig, k, draws, salt)),
+                _ => None,
+            };
+            let labels = match seeds {
+                Some(s) => kmeans(&sig, k, 20, Some(&s), 0),
+                None => kmeans(&sig, k, 20, None, salt),
+            };
+            drop(sig);
+            labels
+        }
+    };
+    refine(rest, frames, nb, height, opts, labels)
+}
+
+/// The SSDR rounds and the merges from the initial `labels` (one per
+/// vertex): each connected piece of a label its own part (pieces under
+/// `n / 400` vertices joined to a neighbour), then alternately each
+/// part's rigid motion fitted and each vertex given the part, among its
+/// own and its neighbours', that reproduces it best, then adjacent parts
+/// merged while their union stays rigid. Deterministic in the labels and
+/// the vertex order.
+fn refine(
+    rest: &[[f64; 3]],
+    frames: &[&[[f64; 3]]],
+    nb: &[Vec<u32>],
+    height: f64,
+    opts: &DecomposeOptions,
+    mut labels: Vec<u32>,
+) -> Decomposition {
     let n = rest.len();
     let min_size = (n / 400).max(8);
-    let sig = signatures(rest, frames, nb);
-    let seeds = match opts.seeding {
-        Seeding::Index => None,
-        Seeding::Position => Some(super::seeding::farthest_seeds(rest, opts.clusters)),
-        Seeding::Motion => {
-            let first = super::seeding::farthest_seeds(rest, 1);
-            let d2 = |a: &Vec<f64>, b: &Vec<f64>| dist2(a, b);
-            Some(super::seeding::farthest_in(
-                &sig,
-                first[0],
-                opts.clusters,
-                d2,
-            ))
-        }
-        Seeding::Draws(draws) => Some(least_potential_draw(&sig, opts.clusters, draws)),
-    };
-    let mut labels = kmeans(&sig, opts.clusters, 20, seeds.as_deref());
-    drop(sig);
     let mut count = split_connected(&mut labels, nb, min_size);
     let mut motions = fit(rest, frames, &members_of(&labels, count));
     for _ in 0..opts.rounds {

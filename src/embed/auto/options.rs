@@ -135,8 +135,12 @@ impl FrameSample {
 /// measurements (as `SURFMOTION_SPARSE` does `db build`'s graph):
 /// comma-separated `rest=first|held|standing|standing-near|median`,
 /// `frames=in-order|farthest|quantiles|spread|median-quantiles`,
-/// `hip=thigh|trunk`, `facing=trunk|hips`, `seed=draws-N|position|motion|index` (the
-/// decomposition's [`super::decompose::Seeding`]), `max=N`.
+/// `hip=thigh|trunk`, `facing=trunk|hips`,
+/// `seed=draws-N|consensus-N|vote-N|position|motion|index` (the
+/// decomposition's [`super::decompose::Seeding`]), `salt=N` (its
+/// [`super::decompose::DecomposeOptions::salt`]),
+/// `patches=position|vertex0` (the rest frame's contact patches,
+/// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
 pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
 
 /// `db init`'s automatic rig: the rest frame's rule (main's,
@@ -168,7 +172,7 @@ pub fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|position|motion|index, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, patches=position|vertex0, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -185,6 +189,9 @@ pub fn apply_override(
             "seed" => {
                 auto.decompose.seeding = super::decompose::Seeding::parse(v).ok_or_else(bad)?
             }
+            "salt" => auto.decompose.salt = v.parse::<u32>().map_err(|_| bad())?,
+            "patches" if v == "position" => rule.contact.seed_by_position = true,
+            "patches" if v == "vertex0" => rule.contact.seed_by_position = false,
             "max" => {
                 auto.max_frames = v
                     .parse::<usize>()
@@ -256,18 +263,28 @@ mod tests {
         assert_eq!(auto.facing, Facing::Trunk);
         apply_override("facing=hips", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.facing, Facing::Hips);
-        use super::super::decompose::Seeding;
-        assert_eq!(auto.decompose.seeding, Seeding::Index);
+        use super::super::decompose::{DecomposeOptions, Seeding};
+        assert_eq!(auto.decompose.seeding, DecomposeOptions::default().seeding);
         apply_override("seed=draws-3", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.decompose.seeding, Seeding::Draws(3));
         apply_override("seed=index,frames=spread", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.decompose.seeding, Seeding::Index);
         assert_eq!(auto.frames, FrameSample::Spread);
+        apply_override("seed=consensus-5,salt=3", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.decompose.seeding, Seeding::Consensus(5));
+        assert_eq!(auto.decompose.salt, 3);
+        apply_override("seed=vote-7,patches=position", &mut rule, &mut auto).unwrap();
+        assert!(rule.contact.seed_by_position);
+        assert_eq!(auto.decompose.seeding, Seeding::Vote(7));
         apply_override("frames=median-quantiles", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.frames, FrameSample::MedianQuantiles);
         for bad in [
             "seed=random",
             "seed=draws-0",
+            "seed=consensus-0",
+            "seed=vote-x",
+            "salt=-1",
+            "patches=first",
             "rest=middle",
             "frames",
             "max=1",

@@ -219,8 +219,12 @@ fn sample_by_pose<'a>(
     max_frames: usize,
     how: FrameSample,
 ) -> Vec<&'a [[f64; 3]]> {
-    let descs: Vec<Vec<f64>> = frames.iter().map(|f| pose_order::descriptor(f)).collect();
-    let seed = pose_order::descriptor(rest);
+    let picks = pose_order::descriptor_vertices(frames);
+    let descs: Vec<Vec<f64>> = frames
+        .iter()
+        .map(|f| pose_order::descriptor_at(f, &picks))
+        .collect();
+    let seed = pose_order::descriptor_at(rest, &picks);
     let k = max_frames.max(2);
     let picked = match how {
         FrameSample::PoseQuantiles => pose_order::quantiles(&descs, &seed, k),
