@@ -377,7 +377,7 @@ fn pick_without_landmarks_starts_from_the_automatic_ones() {
     .unwrap()
     .to_string();
     assert!(
-        e.contains("tet.obj") && e.contains("too few") && e.contains("--landmarks"),
+        e.contains("tet.obj") && e.contains("too few") && e.contains("`PickOptions::landmarks`"),
         "{e}"
     );
     let tmp = tempfile::tempdir().unwrap();
