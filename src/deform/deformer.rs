@@ -154,12 +154,45 @@ impl Deformer {
         opts: &DeformOptions,
     ) -> Result<Deformer, SolveError> {
         let opts = &super::cloth::with_env(opts);
+        let mut out = Deformer::options_of(ch, mode, opts);
+        if matches!(mode, DeformMode::Lbs | DeformMode::None) {
+            return Ok(out);
+        }
+        if opts.repair_turns != RepairTurns::Skin {
+            out.near = out
+                .adjacency
+                .as_ref()
+                .map(|a| Neighbourhoods::new(a, super::near_turns::RINGS));
+        }
+        if mode == DeformMode::Part && opts.cloth_stitch > 0.0 {
+            let cloth: Vec<bool> = super::soft::softness(ch.topology(), ch.rig())
+                .iter()
+                .map(|&s| s > 0.0)
+                .collect();
+            out.cloth = ClothStitch::new(
+                ch.topology().triangles(),
+                &cloth,
+                opts.cloth_stitch,
+                opts.cloth_steps,
+            )?;
+        }
+        let parent_of = out.add_regions(ch, opts)?;
+        out.link_siblings(&parent_of);
+        if opts.parallel_regions {
+            out.levels = Levels::new(&out.regions, out.overlap_passes);
+        }
+        Ok(out)
+    }
+
+    /// The deformer of `ch` with its options and the LBS constraint
+    /// vertices, nothing prefactored (what `Lbs` and `None` need).
+    fn options_of(ch: &Character, mode: DeformMode, opts: &DeformOptions) -> Deformer {
         let n = ch.n();
         let constraint_vertices = match ch.constraint_override() {
             Some(c) => c.to_vec(),
             None => lbs::constraint_vertices(ch, opts.stride),
         };
-        let mut out = Deformer {
+        Deformer {
             mode,
             local_frames: opts.local_frames,
             adjacency: (opts.repair.rounds > 0
@@ -182,34 +215,28 @@ impl Deformer {
             levels: None,
             rest_pose: *ch.rest_pose(),
             n,
-            constraint_vertices: constraint_vertices.clone(),
+            constraint_vertices,
             components: Vec::new(),
             examples: Vec::new(),
-        };
-        if matches!(mode, DeformMode::Lbs | DeformMode::None) {
-            return Ok(out);
         }
-        if opts.repair_turns != RepairTurns::Skin {
-            out.near = out
-                .adjacency
-                .as_ref()
-                .map(|a| Neighbourhoods::new(a, super::near_turns::RINGS));
-        }
+    }
+
+    /// Builds and prefactors the regions of `region_specs` in solve order
+    /// (parents first): per region its uniform Laplacian,
+    /// `region_examples`, the PCA basis, `region_weights`,
+    /// `region_constraints` (seams with the parent, then LBS vertices),
+    /// their targets and the Eq. 32 solver. Returns each region's parent.
+    fn add_regions(
+        &mut self,
+        ch: &Character,
+        opts: &DeformOptions,
+    ) -> Result<Vec<Option<usize>>, SolveError> {
+        let (n, mode) = (self.n, self.mode);
         let tris = ch.topology().triangles();
-        if mode == DeformMode::Part && opts.cloth_stitch > 0.0 {
-            let cloth: Vec<bool> = super::soft::softness(ch.topology(), ch.rig())
-                .iter()
-                .map(|&s| s > 0.0)
-                .collect();
-            out.cloth = ClothStitch::new(tris, &cloth, opts.cloth_stitch, opts.cloth_steps)?;
+        let mut is_constraint = vec![false; n];
+        for &v in &self.constraint_vertices {
+            is_constraint[v as usize] = true;
         }
-        let is_constraint = {
-            let mut m = vec![false; n];
-            for &v in &constraint_vertices {
-                m[v as usize] = true;
-            }
-            m
-        };
         // Vertices the held joints leave free: the soft ones (a skirt), when
         // `hold_soft` is off.
         let soft: Vec<bool> = if opts.hold_soft {
@@ -232,7 +259,7 @@ impl Deformer {
                 index_of.push(None);
                 continue;
             }
-            index_of.push(Some(out.regions.len()));
+            index_of.push(Some(self.regions.len()));
             let parent = parent.and_then(|p| index_of.get(p).copied().flatten());
             let mut local = vec![u32::MAX; n];
             for (i, &v) in verts.iter().enumerate() {
@@ -242,14 +269,14 @@ impl Deformer {
             let (chosen, examples) =
                 region_examples(ch, &verts, &lap, joint, &example_joints, opts, &mut buf);
             let basis = pca::pca(&examples, opts.keep);
-            let parent_verts: Option<&Vec<u32>> = parent.map(|p| &out.regions[p].solver.vertices);
+            let parent_verts: Option<&Vec<u32>> = parent.map(|p| &self.regions[p].solver.vertices);
             // With `sibling_seams`, the vertices shared with the last sibling
             // built (the left thigh for the right one) are seams too.
             let sibling = parent
                 .filter(|_| opts.sibling_seams)
                 .and_then(|p| parent_of.iter().rposition(|&q| q == Some(p)));
             let seams: Option<Vec<u32>> = sibling.map(|k| {
-                let mut all = out.regions[k].solver.vertices.clone();
+                let mut all = self.regions[k].solver.vertices.clone();
                 all.extend(parent_verts.into_iter().flatten());
                 all.sort_unstable();
                 all.dedup();
@@ -262,7 +289,7 @@ impl Deformer {
                 &verts,
                 &weights,
                 parent.map(|p| {
-                    let r = &out.regions[p];
+                    let r = &self.regions[p];
                     (r.solver.vertices.as_slice(), r.weights.as_slice())
                 }),
             );
@@ -278,35 +305,12 @@ impl Deformer {
                 overlaps.as_ref().map_or(&[][..], |o| o[i].as_slice()),
                 &scale,
             );
-            let targets = sources
-                .iter()
-                .map(|&(v, held)| match held {
-                    Held::Seam if !opts.parent_seams => Target::Last(v),
-                    Held::Seam => {
-                        // The sibling's result where it has the vertex
-                        // (`sibling_seams`), else the parent's own.
-                        let from = |k: usize| {
-                            out.regions[k]
-                                .solver
-                                .vertices
-                                .binary_search(&v)
-                                .ok()
-                                .map(|j| Target::Region(k as u32, j as u32))
-                        };
-                        sibling
-                            .and_then(from)
-                            .or_else(|| parent.and_then(from))
-                            .unwrap_or(Target::Lbs(v))
-                    }
-                    Held::Shared => Target::Shared(v),
-                    _ => Target::Lbs(v),
-                })
-                .collect();
+            let targets = self.targets_of(&sources, sibling, parent, opts.parent_seams);
             parent_of.push(parent);
-            out.components.push(basis.components.len());
-            out.examples.push(chosen);
+            self.components.push(basis.components.len());
+            self.examples.push(chosen);
             let solver = RegionSolver::new(tris, n, verts, constraints, &basis)?;
-            out.regions.push(Region {
+            self.regions.push(Region {
                 joint,
                 solver,
                 targets,
@@ -314,11 +318,42 @@ impl Deformer {
                 weights,
             });
         }
-        out.link_siblings(&parent_of);
-        if opts.parallel_regions {
-            out.levels = Levels::new(&out.regions, out.overlap_passes);
-        }
-        Ok(out)
+        Ok(parent_of)
+    }
+
+    /// The targets of a region's constraints `sources` (vertex and how
+    /// it is held): a seam takes the result of the region `sibling`
+    /// (`sibling_seams`) where it has the vertex, else the `parent`'s own
+    /// (else the LBS), or the last result solved there without
+    /// `parent_seams`; an overlap vertex the shared target; the rest the
+    /// LBS.
+    fn targets_of(
+        &self,
+        sources: &[(u32, Held)],
+        sibling: Option<usize>,
+        parent: Option<usize>,
+        parent_seams: bool,
+    ) -> Vec<Target> {
+        let from = |k: usize, v: u32| {
+            self.regions[k]
+                .solver
+                .vertices
+                .binary_search(&v)
+                .ok()
+                .map(|j| Target::Region(k as u32, j as u32))
+        };
+        sources
+            .iter()
+            .map(|&(v, held)| match held {
+                Held::Seam if !parent_seams => Target::Last(v),
+                Held::Seam => sibling
+                    .and_then(|k| from(k, v))
+                    .or_else(|| parent.and_then(|k| from(k, v)))
+                    .unwrap_or(Target::Lbs(v)),
+                Held::Shared => Target::Shared(v),
+                _ => Target::Lbs(v),
+            })
+            .collect()
     }
 
     /// Fills each region's `siblings`: the regions with the same parent
@@ -483,10 +518,14 @@ impl Deformer {
         let Some(adj) = &self.adjacency else {
             return TurnedOver::default();
         };
-        let tris = ch.topology().triangles();
-        let counts = self.repair(tris, adj, source, out, ws, stitched && self.cloth_turns);
+        let f = RepairOf {
+            tris: ch.topology().triangles(),
+            adj,
+            source,
+        };
+        let counts = self.repair(f, out, ws, stitched && self.cloth_turns);
         if stitched && self.cloth_fallback && counts.after > 0 {
-            return self.unstitched(tris, adj, source, out, ws, counts);
+            return self.unstitched(f, out, ws, counts);
         }
         counts
     }
@@ -516,9 +555,7 @@ impl Deformer {
     /// its counts returned.
     fn unstitched(
         &self,
-        tris: &[[u32; 3]],
-        adj: &unflip::Adjacency,
-        source: &[[f64; 3]],
+        f: RepairOf,
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
         stitched: TurnedOver,
@@ -527,7 +564,7 @@ impl Deformer {
         let mut frame = std::mem::take(&mut ws.blend);
         out.swap_with_slice(&mut frame);
         let first = ws.work;
-        let plain = self.repair(tris, adj, source, out, ws, false);
+        let plain = self.repair(f, out, ws, false);
         ws.work = add_work(first, ws.work);
         // `before` stays the stitched solve's (the deformation's count).
         let kept = if plain.after < stitched.after {
@@ -753,13 +790,12 @@ impl Deformer {
     /// skin's blend of two thighs' turns), else against the skin's.
     fn repair(
         &self,
-        tris: &[[u32; 3]],
-        adj: &unflip::Adjacency,
-        source: &[[f64; 3]],
+        f: RepairOf,
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
         cloth_turns: bool,
     ) -> TurnedOver {
+        let RepairOf { tris, source, .. } = f;
         ws.work = unflip::Work::default();
         // The source's normals and areas once per frame; each reading
         // below only turns them.
@@ -773,7 +809,7 @@ impl Deformer {
                 // stitch's on the cloth.
                 let turn = std::mem::take(&mut ws.repair_turn);
                 let own = unflip::turned_over_from(tris, &ws.source_normals, out, &turn);
-                let c = self.repair_against(tris, adj, source, out, ws, &turn, own, 0);
+                let c = self.repair_against(f, out, ws, &turn, own, 0);
                 ws.repair_turn = turn;
                 TurnedOver {
                     before: bad.len(),
@@ -781,7 +817,7 @@ impl Deformer {
                 }
             }
             RepairTurns::Skin | RepairTurns::SkinThenSurface => {
-                self.repair_against(tris, adj, source, out, ws, &skin, bad, 0)
+                self.repair_against(f, out, ws, &skin, bad, 0)
             }
             RepairTurns::Surface => TurnedOver {
                 before: bad.len(),
@@ -791,7 +827,7 @@ impl Deformer {
         if let (Some(near), RepairTurns::SkinThenSurface | RepairTurns::Surface) =
             (&self.near, self.repair_turns)
         {
-            counts.after = self.repair_surface(near, tris, adj, source, out, ws);
+            counts.after = self.repair_surface(near, f, out, ws);
         }
         ws.turn = skin;
         counts
@@ -811,26 +847,24 @@ impl Deformer {
     fn repair_surface(
         &self,
         near: &Neighbourhoods,
-        tris: &[[u32; 3]],
-        adj: &unflip::Adjacency,
-        source: &[[f64; 3]],
+        f: RepairOf,
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
     ) -> usize {
         let mut turn = std::mem::take(&mut ws.surface_turn);
         let (mut least, mut last) = (usize::MAX, 0);
         for round in 0..=self.surface_rounds {
-            let f = ReadingOf {
+            let r = ReadingOf {
                 near,
-                adj,
-                tris,
-                source,
+                adj: f.adj,
+                tris: f.tris,
+                source: f.source,
                 source_normals: &ws.source_normals,
             };
             let bad = if round == 0 {
-                ws.reading.read_all(&f, out, &mut ws.seeds, &mut turn)
+                ws.reading.read_all(&r, out, &mut ws.seeds, &mut turn)
             } else {
-                ws.reading.read_again(&f, out, &mut ws.seeds, &mut turn)
+                ws.reading.read_again(&r, out, &mut ws.seeds, &mut turn)
             };
             last = bad.len();
             if last == 0 {
@@ -844,7 +878,7 @@ impl Deformer {
             if round == self.surface_rounds {
                 break;
             }
-            self.repair_against(tris, adj, source, out, ws, &turn, bad, round);
+            self.repair_against(f, out, ws, &turn, bad, round);
         }
         if last > least {
             out.copy_from_slice(&ws.surface_best);
@@ -875,12 +909,9 @@ impl Deformer {
     /// ([`Deformer::repair_surface`]'s later rounds; 0 for the skin's).
     /// The source normals and areas in `ws` are the frame's
     /// ([`Deformer::repair`]).
-    #[allow(clippy::too_many_arguments)]
     fn repair_against(
         &self,
-        tris: &[[u32; 3]],
-        adj: &unflip::Adjacency,
-        source: &[[f64; 3]],
+        f: RepairOf,
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
         turn: &[DQuat],
@@ -902,18 +933,7 @@ impl Deformer {
         if adaptive {
             ws.start.copy_from_slice(out);
         }
-        let first = self.repair_with(
-            tris,
-            adj,
-            source,
-            out,
-            ws,
-            turn,
-            bad.clone(),
-            &fixed,
-            &mut budget,
-            grow,
-        );
+        let first = self.repair_with(f, out, ws, turn, bad.clone(), &fixed, &mut budget, grow);
         ws.work = add_work(base, budget.done);
         if first == 0 || !adaptive {
             return TurnedOver {
@@ -924,18 +944,7 @@ impl Deformer {
         // The last resort, from the deformed frame again; `ws.start` keeps
         // the first result.
         out.swap_with_slice(&mut ws.start);
-        let second = self.repair_with(
-            tris,
-            adj,
-            source,
-            out,
-            ws,
-            turn,
-            bad,
-            &self.untangle,
-            &mut budget,
-            grow,
-        );
+        let second = self.repair_with(f, out, ws, turn, bad, &self.untangle, &mut budget, grow);
         ws.work = add_work(base, budget.done);
         if second >= first {
             out.copy_from_slice(&ws.start);
@@ -954,9 +963,7 @@ impl Deformer {
     #[allow(clippy::too_many_arguments)]
     fn repair_with(
         &self,
-        tris: &[[u32; 3]],
-        adj: &unflip::Adjacency,
-        source: &[[f64; 3]],
+        f: RepairOf,
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
         turn: &[DQuat],
@@ -965,6 +972,7 @@ impl Deformer {
         budget: &mut unflip::Budget,
         grow: usize,
     ) -> usize {
+        let RepairOf { tris, adj, source } = f;
         let mut best = bad.len();
         let mut best_bad = bad.clone();
         ws.best.copy_from_slice(out);
@@ -1045,6 +1053,15 @@ impl Deformer {
                 after: a.after + b.after,
             })
     }
+}
+
+/// What a frame's fold repair reads: the mesh's triangles and adjacency
+/// and the retrieved frame (one argument for the repair's steps).
+#[derive(Clone, Copy)]
+struct RepairOf<'a> {
+    tris: &'a [[u32; 3]],
+    adj: &'a unflip::Adjacency,
+    source: &'a [[f64; 3]],
 }
 
 /// Two repairs' work added.

@@ -296,6 +296,9 @@ pub fn unflip_within(
 ) -> Vec<u32> {
     let n = out.len();
     let mut rings = 2;
+    // Triangles listed in `touch` (cleared after each round).
+    let mut listed = vec![false; tris.len()];
+    let mut union = Vec::new();
     for _ in 0..opts.rounds {
         if bad.is_empty() {
             break;
@@ -350,13 +353,23 @@ pub fn unflip_within(
             break;
         }
         budget.done.patch_vertices += m;
-        // Triangles touching a free vertex.
-        let mut touch: Vec<u32> = patch[..free]
-            .iter()
-            .flat_map(|&v| adj.triangles[v as usize].iter().copied())
-            .collect();
+        // Triangles touching a free vertex, each listed once, then sorted
+        // (the list sorting and deduplicating every vertex's triangles
+        // gave, from a third of the entries: a triangle touches up to
+        // three free vertices).
+        let mut touch: Vec<u32> = Vec::new();
+        for &v in &patch[..free] {
+            for &t in &adj.triangles[v as usize] {
+                if !listed[t as usize] {
+                    listed[t as usize] = true;
+                    touch.push(t);
+                }
+            }
+        }
         touch.sort_unstable();
-        touch.dedup();
+        for &t in &touch {
+            listed[t as usize] = false;
+        }
         let mut edges = Vec::with_capacity(touch.len() * 3);
         let mut b = vec![[0.0; 3]; m];
         for &ti in &touch {
@@ -402,9 +415,16 @@ pub fn unflip_within(
         for (k, &v) in patch[..free].iter().enumerate() {
             out[v as usize] = x[k];
         }
-        // Only triangles touching a moved vertex can have changed.
-        bad.extend_from_slice(&touch);
-        recount(tris, source, out, turn, &mut bad);
+        // Only triangles touching a moved vertex can have changed: the
+        // increasing union of both lists (a merge; `recount`'s sort of
+        // their concatenation gives the same), those still turned over.
+        if !bad.windows(2).all(|w| w[0] < w[1]) {
+            bad.sort_unstable();
+            bad.dedup();
+        }
+        union_sorted(&bad, &touch, &mut union);
+        std::mem::swap(&mut bad, &mut union);
+        bad.retain(|&t| is_turned_over(&tris[t as usize], source, out, turn));
         rings *= 2;
     }
     smooth(tris, adj, source, out, turn, &mut bad, opts.smooth);
@@ -455,6 +475,22 @@ fn edge_rows(m: usize, edges: &[(u32, u32, f64)]) -> Vec<Vec<(u32, f64)>> {
             out
         })
         .collect()
+}
+
+/// The union of the increasing lists `a` and `b` (each without repeats),
+/// increasing and without repeats, into `out`.
+fn union_sorted(a: &[u32], b: &[u32], out: &mut Vec<u32>) {
+    out.clear();
+    out.reserve(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        let (x, y) = (a[i], b[j]);
+        out.push(x.min(y));
+        i += usize::from(x <= y);
+        j += usize::from(y <= x);
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
 }
 
 /// Up to `steps` Jacobi steps of umbrella smoothing on the vertices of the

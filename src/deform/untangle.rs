@@ -341,7 +341,7 @@ fn relocate(
 ) -> bool {
     let fan = &adj.triangles[v as usize];
     // Each fan triangle as an affine function of the vertex: a(p) = c + g·p.
-    let mut lin: [(f64, DVec3, f64); 16] = [(0.0, DVec3::ZERO, 0.0); 16];
+    let mut lin: [Half; 16] = [Half::default(); 16];
     let k = fan.len().min(16);
     if k < fan.len() {
         return false;
@@ -356,11 +356,13 @@ fn relocate(
         let i = tri.iter().position(|&u| u == v).unwrap_or(0);
         let b = DVec3::from_array(out[tri[(i + 1) % 3] as usize]);
         let c = DVec3::from_array(out[tri[(i + 2) % 3] as usize]);
-        *l = (
-            0.5 * n.dot(b.cross(c)),
-            0.5 * (b - c).cross(n),
-            areas[t as usize],
-        );
+        let g = 0.5 * (b - c).cross(n);
+        *l = Half {
+            c: 0.5 * n.dot(b.cross(c)),
+            g,
+            area: areas[t as usize],
+            gg: g.length_squared(),
+        };
         worst = worst.min(signed_area(tri, out, n));
     }
     if worst > 0.0 {
@@ -370,7 +372,7 @@ fn relocate(
         let ratio = |p: DVec3| {
             lin[..k]
                 .iter()
-                .map(|&(c, g, a)| (c + g.dot(p)) / a.max(f64::MIN_POSITIVE))
+                .map(|h| (h.c + h.g.dot(p)) / h.area.max(f64::MIN_POSITIVE))
                 .fold(f64::INFINITY, f64::min)
         };
         let r0 = ratio(p0);
@@ -385,12 +387,7 @@ fn relocate(
         }
         return false;
     }
-    let wrong = |p: DVec3| {
-        lin[..k]
-            .iter()
-            .filter(|&&(c, g, _)| c + g.dot(p) <= 0.0)
-            .count()
-    };
+    let wrong = |p: DVec3| lin[..k].iter().filter(|h| h.c + h.g.dot(p) <= 0.0).count();
     let (w0, mut best) = (wrong(p0), None::<(usize, DVec3)>);
     // Each margin's projection continues from where the last budget left
     // it (the same point as restarting with the larger budget), the budget
@@ -463,6 +460,17 @@ fn ring_ball(adj: &Adjacency, out: &[[f64; 3]], v: u32, p0: DVec3) -> Ball {
     Ball { centre, radius }
 }
 
+/// A fan triangle's signed area as an affine function of the moved
+/// vertex, `a(p) = c + g·p`, with its source area and `|g|²` (computed
+/// once per fan, not on every projection step: the same value each time).
+#[derive(Debug, Clone, Copy, Default)]
+struct Half {
+    c: f64,
+    g: DVec3,
+    area: f64,
+    gg: f64,
+}
+
 /// Where a vertex may move ([`ring_ball`]).
 #[derive(Debug, Clone, Copy)]
 struct Ball {
@@ -489,7 +497,7 @@ impl Ball {
 /// there is one), for at most `steps` projections (those made are added
 /// to `made`).
 fn project(
-    lin: &[(f64, DVec3, f64)],
+    lin: &[Half],
     mut p: DVec3,
     m: f64,
     steps: usize,
@@ -499,9 +507,8 @@ fn project(
     for _ in 0..steps {
         let mut step = None;
         let mut most = 0.0;
-        for &(c, g, area) in lin {
+        for &Half { c, g, area, gg } in lin {
             let gap = m * area - (c + g.dot(p));
-            let gg = g.length_squared();
             if gap > 0.0 && gg > 0.0 && gap * gap / gg > most {
                 most = gap * gap / gg;
                 step = Some(g * (gap / gg));
