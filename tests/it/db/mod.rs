@@ -3,6 +3,7 @@
 mod cache_trust;
 mod caches;
 mod captures;
+mod examples;
 mod frames;
 mod histogram_reference;
 mod sparse;
