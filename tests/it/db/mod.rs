@@ -1,5 +1,6 @@
 //! Character databases: the real captures' manifests, synthetic databases.
 
+mod cache_inspect;
 mod cache_trust;
 mod caches;
 mod captures;
