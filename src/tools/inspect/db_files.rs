@@ -451,8 +451,7 @@ fn judge_file(
                 vertices: None,
                 bytes,
                 details: vec![format!(
-                    "{} chosen",
-                    crate::batch::summary::count(entries, "region's examples")
+                    "{entries} example sets (one for each region's joints and count)"
                 )],
             };
             let j = db.map_or_else(elsewhere, |(d, m)| judge_examples(d, m, key, frames));
