@@ -49,6 +49,10 @@ const RIG_SOURCES: &[&str] = &[
 /// `src/embed`) and the cache's reader and writer.
 const SKELETON_SOURCES: &[&str] = &["src/db/frames.rs"];
 
+/// The files whose bytes the example memo's key covers besides the
+/// skeleton's ([`SKELETON_SOURCES`]): the choice and the memo.
+const EXAMPLES_SOURCES: &[&str] = &["src/deform/regions.rs", "src/db/examples.rs"];
+
 /// Every file under `p` (or `p` itself), in no particular order.
 fn files_under(p: &Path, out: &mut Vec<PathBuf>) {
     if p.is_dir() {
@@ -102,6 +106,12 @@ fn main() {
     println!(
         "cargo::rustc-env=SURFMOTION_SKELETON_SOURCE={:016x}",
         source_fingerprint(&root, &skeleton)
+    );
+    // The deformation's example choice kept in `cache/examples.json`.
+    let examples: Vec<&str> = skeleton.iter().chain(EXAMPLES_SOURCES).copied().collect();
+    println!(
+        "cargo::rustc-env=SURFMOTION_EXAMPLES_SOURCE={:016x}",
+        source_fingerprint(&root, &examples)
     );
     println!("cargo::rerun-if-env-changed=SURFMOTION_DATA");
     let dir = match std::env::var_os("SURFMOTION_DATA") {

@@ -15,6 +15,7 @@
 //! skeleton` writes [`SkeletonKind::Rigid`] by default.
 
 use crate::db::build::{BuildOptions, BuildProgress, build_opened};
+use crate::db::examples::ExampleMemo;
 use crate::db::frames::{CacheInputs, Conversion, FrameStore, open_or_build};
 use crate::db::rig_cache::{RigSource, embed_rig_cached};
 use crate::db::{DbError, MANIFEST, Manifest};
@@ -89,6 +90,9 @@ pub struct Character {
     cache_key: u64,
     /// Whether the rig was read from the database's cache.
     rig_source: RigSource,
+    /// The part deformation's example frames, chosen once per database
+    /// (`cache/examples.json`).
+    examples: ExampleMemo,
 }
 
 impl Character {
@@ -142,6 +146,7 @@ impl Character {
             kind: opts.skeleton,
         })?;
         let rest_pose = rig.joints.map(|j| conv(DVec3::from_array(j)));
+        let examples = ExampleMemo::new(dir, cache_key, poses.len());
         let adjacency = graph.adjacency();
         let steps = successor_steps(&matrix, &graph);
         let bad = |msg: String| DbError::Manifest {
@@ -215,6 +220,7 @@ impl Character {
             dir: dir.to_path_buf(),
             cache_key,
             rig_source,
+            examples,
         })
     }
 
@@ -229,6 +235,12 @@ impl Character {
     /// its key includes this one.
     pub(crate) fn cache_key(&self) -> u64 {
         self.cache_key
+    }
+
+    /// The part deformation's example frames of this database, chosen
+    /// once and kept in its cache ([`crate::db::examples`]).
+    pub fn examples(&self) -> &ExampleMemo {
+        &self.examples
     }
 
     /// Whether the rig was read from the database's rig cache

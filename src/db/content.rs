@@ -209,6 +209,14 @@ impl ContentMemo {
 
 /// The memo's entries: `Ok` empty without a file, `Err` saying why a file
 /// that is there cannot be used.
+/// The number of files the memo `path` remembers, or why it cannot be
+/// read (`inspect`: a memo a load would not trust). A missing memo: 0.
+pub fn memo_entries(path: &Path) -> Result<usize, String> {
+    read_memo(path)
+        .map(|k| k.len())
+        .map_err(|why| format!("{}: {why}", path.display()))
+}
+
 fn read_memo(path: &Path) -> Result<BTreeMap<String, (Stamp, u64)>, String> {
     match std::fs::symlink_metadata(path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(BTreeMap::new()),

@@ -639,3 +639,172 @@ pub fn read_poses(path: &Path, key: u64, count: usize) -> Result<Vec<Pose>, Fram
         })
         .collect())
 }
+
+/// A frame or skeleton cache file's header, read and checked against the
+/// file's own length (`inspect` of the file: [`read_frames_head`],
+/// [`read_poses_head`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CacheHead {
+    /// The key it was written under.
+    pub key: u64,
+    /// Frames it holds.
+    pub frames: u64,
+    /// Vertices per frame (frame cache) or joints per pose (skeleton cache).
+    pub per_frame: u64,
+    /// Its length in bytes (the length its header needs).
+    pub bytes: u64,
+}
+
+/// The first `n` bytes of `path` (fewer when shorter), with its length.
+fn head_of(path: &Path, n: usize) -> Result<(Vec<u8>, u64), FrameCacheError> {
+    let io = FrameCacheError::io_at(path);
+    let f = std::fs::File::open(path).map_err(io)?;
+    let len = f.metadata().map_err(io)?.len();
+    let mut b = Vec::with_capacity(n);
+    f.take(n as u64).read_to_end(&mut b).map_err(io)?;
+    Ok((b, len))
+}
+
+/// The header of the frame cache `path`: its magic, then its length
+/// against the frames and vertices it declares (a file cut short, or of
+/// another kind, is an error naming it). The frames themselves are not
+/// read ([`verify_frames`]).
+pub fn read_frames_head(path: &Path) -> Result<CacheHead, FrameCacheError> {
+    let (b, len) = head_of(path, 32)?;
+    if b.len() < 8 || &b[..8] != FRAMES_MAGIC {
+        return Err(FrameCacheError::header_at(path)(
+            "not a frame cache file (no SMFRM001 header)".into(),
+        ));
+    }
+    if b.len() < 32 {
+        return Err(FrameCacheError::Length {
+            path: path.to_path_buf(),
+            len,
+            expected: HEADER as u64,
+        });
+    }
+    let word = |k: usize| u64::from_le_bytes(b[k..k + 8].try_into().unwrap_or([0; 8]));
+    let (key, n, count) = (word(8), word(16), word(24));
+    // Checked: a header of huge counts is a damaged file, not an overflow.
+    let expected = n
+        .checked_mul(count)
+        .and_then(|v| v.checked_mul(24))
+        .and_then(|v| v.checked_add(count.checked_mul(8)?))
+        .and_then(|v| v.checked_add(HEADER as u64))
+        .ok_or_else(|| {
+            FrameCacheError::header_at(path)(format!(
+                "{count} frames of {n} vertices: not a size a frame cache can have"
+            ))
+        })?;
+    if len != expected {
+        return Err(FrameCacheError::Length {
+            path: path.to_path_buf(),
+            len,
+            expected,
+        });
+    }
+    Ok(CacheHead {
+        key,
+        frames: count,
+        per_frame: n,
+        bytes: len,
+    })
+}
+
+/// Every frame of the frame cache `path` (header `head`, from
+/// [`read_frames_head`]) read once: each position finite and each frame's
+/// stored lowest point its positions' lowest Y (bit for bit), so that a
+/// file changed after it was written (a lowered point, bytes that are not
+/// numbers) is an error naming it and the frame. Pages are released as
+/// it goes. A changed coordinate that keeps the frame's lowest point and
+/// stays finite is not seen (the file carries no checksum).
+pub fn verify_frames(path: &Path, head: &CacheHead) -> Result<(), FrameCacheError> {
+    let (n, count) = (head.per_frame as usize, head.frames as usize);
+    let store = FrameStore::open(path, head.key, n, count)?;
+    let header = FrameCacheError::header_at(path);
+    for i in 0..count {
+        let id = FlatFrame::from_index(i);
+        let f = store.frame(id);
+        if let Some(v) = f.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(header(format!(
+                "frame {i}, vertex {v}: a coordinate that is not a finite number (changed after it was written)"
+            )));
+        }
+        let (low, stored) = (lowest(f), store.lowest(id));
+        if low.to_bits() != stored.to_bits() {
+            return Err(header(format!(
+                "frame {i}: its lowest point {low} m is not the {stored} m stored with it (changed after it was written)"
+            )));
+        }
+        if (i + 1) % 256 == 0 || i + 1 == count {
+            store.release(i + 1 - ((i % 256) + 1), (i % 256) + 1);
+        }
+    }
+    Ok(())
+}
+
+/// The header of the skeleton cache `path`: its magic and joints per pose,
+/// then its length against the poses it declares.
+pub fn read_poses_head(path: &Path) -> Result<CacheHead, FrameCacheError> {
+    let (b, len) = head_of(path, 32)?;
+    let header = FrameCacheError::header_at(path);
+    if b.len() < 8 || &b[..8] != POSES_MAGIC {
+        return Err(header(
+            "not a skeleton cache file (no SMPOS001 header)".into(),
+        ));
+    }
+    if b.len() < 32 {
+        return Err(FrameCacheError::Length {
+            path: path.to_path_buf(),
+            len,
+            expected: 32,
+        });
+    }
+    let word = |k: usize| u64::from_le_bytes(b[k..k + 8].try_into().unwrap_or([0; 8]));
+    let (key, count, joints) = (word(8), word(16), word(24));
+    if joints != JOINTS as u64 {
+        return Err(header(format!(
+            "{joints} joints a pose, where a skeleton cache has {JOINTS}"
+        )));
+    }
+    let expected = count
+        .checked_mul(JOINTS as u64 * 24)
+        .and_then(|v| v.checked_add(32))
+        .ok_or_else(|| {
+            header(format!(
+                "{count} poses: not a size a skeleton cache can have"
+            ))
+        })?;
+    if len != expected {
+        return Err(FrameCacheError::Length {
+            path: path.to_path_buf(),
+            len,
+            expected,
+        });
+    }
+    Ok(CacheHead {
+        key,
+        frames: count,
+        per_frame: joints,
+        bytes: len,
+    })
+}
+
+/// The skeleton kind of a skeleton cache file named as
+/// [`poses_path`] names it (`poses-regressor.bin`, ...).
+pub fn poses_kind_of(path: &Path) -> Option<SkeletonKind> {
+    let name = path.file_name()?.to_str()?;
+    let kind = name.strip_prefix("poses-")?.strip_suffix(".bin")?;
+    [
+        SkeletonKind::Rigid,
+        SkeletonKind::Regressor,
+        SkeletonKind::Centroid,
+    ]
+    .into_iter()
+    .find(|&k| kind_name(k) == kind)
+}
+
+/// The name of a skeleton kind in its cache file's name.
+pub fn skeleton_kind_name(kind: SkeletonKind) -> &'static str {
+    kind_name(kind)
+}

@@ -6,6 +6,7 @@ pub mod build;
 pub mod cache;
 pub mod character;
 pub mod content;
+pub mod examples;
 pub mod frames;
 pub mod init;
 pub mod manifest;

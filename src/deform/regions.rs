@@ -215,19 +215,22 @@ pub(super) fn region_examples(
     buf: &mut [[f64; 3]],
 ) -> (Vec<FlatFrame>, Vec<Vec<[f64; 3]>>) {
     let nf = ch.frame_count();
-    // Examples covering the region's rotations.
-    let rots: Vec<Vec<DQuat>> = (0..nf)
-        .map(|f| {
-            let g = pose_rotations(ch.rest_pose(), &ch.poses()[f]);
-            example_joints.iter().map(|j| g[j.index()]).collect()
-        })
-        .collect();
+    // Examples covering the region's rotations, chosen once per database
+    // (kept in its cache: `db::examples`).
     let mut chosen = match ch.example_override() {
         Some(e) => e.to_vec(),
-        None => fps_examples(&rots, opts.examples)
-            .into_iter()
-            .map(FlatFrame::from_index)
-            .collect(),
+        None => ch.examples().chosen(example_joints, opts.examples, || {
+            let rots: Vec<Vec<DQuat>> = (0..nf)
+                .map(|f| {
+                    let g = pose_rotations(ch.rest_pose(), &ch.poses()[f]);
+                    example_joints.iter().map(|j| g[j.index()]).collect()
+                })
+                .collect();
+            fps_examples(&rots, opts.examples)
+                .into_iter()
+                .map(FlatFrame::from_index)
+                .collect()
+        }),
     };
     if let Some(f) = opts
         .include

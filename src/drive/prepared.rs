@@ -158,6 +158,8 @@ impl Prepared {
         let deformer = if opts.deform != DeformMode::None {
             let t = Instant::now();
             let d = Deformer::new(ch, opts.deform, &opts.deform_options)?;
+            // The examples it chose, kept for the next load (issue 43).
+            ch.examples().save();
             timings.deform_factor = t.elapsed().as_secs_f64();
             Some(d)
         } else {

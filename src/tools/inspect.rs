@@ -1,6 +1,7 @@
 //! `inspect`: what any supported file holds, what was assumed, and problems.
 
 mod database;
+mod db_files;
 mod dot;
 mod error;
 mod fbx;
@@ -10,6 +11,7 @@ mod place;
 mod rig_cache;
 
 pub use database::{CacheEntry, CacheReport, DatabaseReport, DbSequence, DbSkeleton};
+pub use db_files::LoadCacheReport;
 pub use error::InspectError;
 pub use json::{JsonReport, json_kind};
 pub use rig_cache::RigCacheReport;
@@ -131,6 +133,9 @@ pub enum Report {
     Cache(CacheReport),
     /// A database's rig cache (`cache/rig.json`, written by loads).
     RigCache(RigCacheReport),
+    /// A load's other cache files (`cache/frames.bin`, `poses-KIND.bin`,
+    /// `plausibility-reference.json`, `content-hashes.json`).
+    LoadCache(LoadCacheReport),
 }
 
 /// Options for [`inspect`].
@@ -150,6 +155,9 @@ pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectErro
     // Before the JSON files: a rig cache is a header line, then the rig.
     if rig_cache::is_rig_cache(path) {
         return rig_cache::inspect_rig_cache(path).map(Report::RigCache);
+    }
+    if let Some(kind) = db_files::kind_of(path) {
+        return db_files::inspect_load_cache(path, kind).map(Report::LoadCache);
     }
     if path
         .extension()
@@ -437,6 +445,7 @@ impl Report {
             Report::Database(r) => s = r.to_text(),
             Report::Cache(r) => s = r.to_text(),
             Report::RigCache(r) => s = r.to_text(),
+            Report::LoadCache(r) => s = r.to_text(),
         }
         s
     }

@@ -141,6 +141,24 @@ fn read_reference(path: &std::path::Path, key: u64) -> Option<CachedReference> {
     }
 }
 
+/// The key the reference cache of the loaded character `ch` must carry
+/// for a retarget (its checker, default options) to read it: what
+/// `inspect` judges `cache/plausibility-reference.json` by.
+pub(crate) fn reference_key_for(ch: &Character) -> Result<u64, EvalError> {
+    let neutral = crate::pose::retarget::character_neutral(ch.rest_pose(), ch.poses());
+    let c = Checker::unmeasured(ch, &neutral, PlausibilityOptions::default())?;
+    Ok(c.reference_key(ch, &neutral))
+}
+
+/// The reference cache file `path` read strictly (`inspect`): its key,
+/// floor (metres) and reference, or why it cannot be read.
+pub(crate) fn read_reference_file(path: &std::path::Path) -> Result<(u64, f64, Reference), String> {
+    let text = crate::util::fsutil::read_text(path).map_err(|e| e.to_string())?;
+    let c: CachedReference = serde_json::from_str(&text)
+        .map_err(|e| format!("{}: not a plausibility reference ({e})", path.display()))?;
+    Ok((c.key, c.floor, c.reference))
+}
+
 fn write_reference(
     path: &std::path::Path,
     c: &CachedReference,
@@ -310,6 +328,38 @@ impl Checker {
         neutral: &crate::pose::retarget::CharacterNeutral,
         opts: PlausibilityOptions,
     ) -> Result<Checker, EvalError> {
+        let mut c = Checker::unmeasured(ch, neutral, opts)?;
+        // The floor and the reference are read from the database's cache
+        // when current (issue 43: measuring them reads every frame, 2.4 GB
+        // at 10⁴ frames), else measured and cached.
+        let path = reference_path(ch.dir());
+        let key = c.reference_key(ch, neutral);
+        if let Some(cached) = read_reference(&path, key) {
+            c.floor = cached.floor;
+            c.reference = Some(cached.reference);
+            return Ok(c);
+        }
+        let (floor, reference) = c.measure_database(ch);
+        c.floor = floor;
+        let cached = CachedReference {
+            key,
+            floor,
+            reference,
+        };
+        if let Err(e) = write_reference(&path, &cached) {
+            tracing::warn!("the plausibility reference is not cached: {e}");
+        }
+        c.reference = Some(cached.reference);
+        Ok(c)
+    }
+
+    /// [`Checker::for_character_with`] before the floor and the reference
+    /// are read or measured.
+    fn unmeasured(
+        ch: &Character,
+        neutral: &crate::pose::retarget::CharacterNeutral,
+        opts: PlausibilityOptions,
+    ) -> Result<Checker, EvalError> {
         let mut c = Checker::new(
             ch.topology(),
             ch.rig(),
@@ -335,27 +385,6 @@ impl Checker {
                 .head
                 .raw_deg(ch.frame(crate::graph::FlatFrame::from_index(i)));
         }
-        // The floor and the reference are read from the database's cache
-        // when current (issue 43: measuring them reads every frame, 2.4 GB
-        // at 10⁴ frames), else measured and cached.
-        let path = reference_path(ch.dir());
-        let key = c.reference_key(ch, neutral);
-        if let Some(cached) = read_reference(&path, key) {
-            c.floor = cached.floor;
-            c.reference = Some(cached.reference);
-            return Ok(c);
-        }
-        let (floor, reference) = c.measure_database(ch);
-        c.floor = floor;
-        let cached = CachedReference {
-            key,
-            floor,
-            reference,
-        };
-        if let Err(e) = write_reference(&path, &cached) {
-            tracing::warn!("the plausibility reference is not cached: {e}");
-        }
-        c.reference = Some(cached.reference);
         Ok(c)
     }
 

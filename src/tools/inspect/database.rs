@@ -53,7 +53,9 @@ pub struct CacheEntry {
     /// The file.
     pub file: PathBuf,
     /// `similarity matrix (MEASURE)`, `graph (MEASURE)`, `parametric
-    /// model`, `rig cache (...)` or `not a file db build writes`.
+    /// model`, `rig cache (...)`, a load's `frame cache (...)`, `skeleton
+    /// cache (...)`, `plausibility reference (...)`, `content-hash memo
+    /// (...)`, or `not a file db build writes`.
     pub what: String,
     /// Whether `db build` (or `play`) would use it as it is.
     pub up_to_date: bool,
@@ -123,6 +125,7 @@ pub struct CacheReport {
     pub cache: Vec<CacheEntry>,
 }
 
+use super::place::header_key;
 pub(crate) use super::place::{database_of_cache, is_database};
 
 fn err(e: impl std::fmt::Display) -> InspectError {
@@ -145,15 +148,7 @@ pub(crate) fn inspect_database(dir: &Path) -> Result<DatabaseReport, InspectErro
             fps: s.fps,
         })
         .collect();
-    let rig = [
-        ("landmarks", &m.rig.landmarks),
-        ("parts", &m.rig.parts),
-        ("glTF skin", &m.rig.gltf_skin),
-        ("rig map", &m.rig.rig_map),
-    ]
-    .into_iter()
-    .filter_map(|(what, p)| p.as_ref().map(|p| format!("{what} {}", p.display())))
-    .collect();
+    let rig = super::place::rig_files(&m);
     let mut skeletons = Vec::new();
     for sub in ["skeletons", "truth"] {
         let Ok(rd) = std::fs::read_dir(dir.join(sub)) else {
@@ -325,6 +320,9 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
         } else if file == crate::db::rig_cache::rig_path(dir) {
             e.what = super::rig_cache::what(m);
             (e.up_to_date, e.state) = super::rig_cache::entry_state(&file, dir, m);
+        } else if let Some(kind) = super::db_files::kind_in(&file, dir) {
+            e.what = kind.what();
+            (e.up_to_date, e.state) = super::db_files::entry_state(&file, kind, dir, m);
         } else if file == crate::parametric::store::cache_path(dir) {
             e.what = "parametric model (`play`)".into();
             let want =
@@ -416,17 +414,6 @@ fn check_matrix(path: &Path, key: u64, m: &Manifest) -> Result<(), String> {
         return Err("a value that is not a finite distance".into());
     }
     Ok(())
-}
-
-/// The key after an 8-byte magic at the start of a cache file.
-fn header_key(path: &Path, magic: &[u8; 8]) -> Result<u64, String> {
-    let b = super::other::head(path, 16).map_err(|e| e.to_string())?;
-    if b.len() < 16 || &b[..8] != magic {
-        return Err("not a cache file of its kind".into());
-    }
-    let mut k = [0u8; 8];
-    k.copy_from_slice(&b[8..16]);
-    Ok(u64::from_le_bytes(k))
 }
 
 /// The cache lines of a text report.

@@ -136,17 +136,9 @@ pub(crate) fn what(m: &Manifest) -> String {
     )
 }
 
-/// The rig's inputs the manifest names.
+/// The rig's inputs the manifest names: its files, then the rest frame.
 fn rig_inputs(m: &Manifest) -> Vec<String> {
-    let mut v: Vec<String> = [
-        ("landmarks", &m.rig.landmarks),
-        ("parts", &m.rig.parts),
-        ("glTF skin", &m.rig.gltf_skin),
-        ("rig map", &m.rig.rig_map),
-    ]
-    .into_iter()
-    .filter_map(|(what, p)| p.as_ref().map(|p| format!("{what} {}", p.display())))
-    .collect();
+    let mut v = super::place::rig_files(m);
     v.push(match &m.rig.rest {
         Some(r) => format!("rest frame {r}"),
         None => "rest frame: the topology's".into(),
