@@ -196,10 +196,11 @@ fn resolve_shard(a: &Args) -> anyhow::Result<Option<String>> {
 /// Refuses options of the other target and outputs that would land on a
 /// clip or an input, before the character loads.
 fn check_args(a: &Args, mocap_dir: &Path, output: &Path) -> anyhow::Result<()> {
-    a.glb.refuse_unless_glb(
-        matches!(a.format, super::values::FormatArg::Glb),
-        &format!("--format {}", format!("{:?}", a.format).to_lowercase()),
-    )?;
+    let format = format!("--format {}", format!("{:?}", a.format).to_lowercase());
+    a.glb
+        .refuse_unless_glb(matches!(a.format, super::values::FormatArg::Glb), &format)?;
+    a.glb
+        .refuse_unless_usda(matches!(a.format, super::values::FormatArg::Usda), &format)?;
     anyhow::ensure!(
         a.db.is_none() || a.scan_job.is_default(),
         "--group, --marker-count, --marker-margin and --fps apply to --scan (a database has its own frame rate)"
@@ -227,6 +228,7 @@ fn converter(a: &Args) -> anyhow::Result<Box<dyn Converter>> {
                 character: a.retarget_job.character(),
                 load,
                 glb: a.glb.options(),
+                usd: a.glb.usd_options(),
             },
             &super::Bars::new(),
         )?),
@@ -239,6 +241,7 @@ fn converter(a: &Args) -> anyhow::Result<Box<dyn Converter>> {
                 fps: scan_job.fps,
                 load,
                 glb: a.glb.options(),
+                usd: a.glb.usd_options(),
                 ..Default::default()
             };
             Box::new(ScanTransferJob::prepare(&mesh, &landmarks, scan, opts)?)

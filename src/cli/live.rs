@@ -122,6 +122,8 @@ pub struct Args {
     /// folder of OBJ frames), written atomically when the stream ends.
     #[arg(long, value_name = "OUT")]
     pub record: Option<PathBuf>,
+    #[command(flatten)]
+    pub glb: super::mesh::GlbArgs,
     /// Print the latency and throughput report (frames/s, arrival to mesh
     /// ready median and p99, drops, and where each frame's time went: the
     /// analysis, retrieval, timeline+placement, blending and deformation
@@ -176,6 +178,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             "warning: listening on {addr}, which other machines can reach (127.0.0.1 keeps it on this one)"
         );
     }
+    match &a.record {
+        Some(out) => a.glb.refuse_other_formats(out)?,
+        None => anyhow::ensure!(
+            !(a.glb.glb_quantize || a.glb.glb_no_normals || a.glb.usd_no_normals),
+            "--glb-quantize, --glb-no-normals and --usd-no-normals apply to the --record output: give --record OUT or leave them out"
+        ),
+    }
     if let Some(out) = &a.record {
         surfmotion::jobs::outputs::check_mesh_output(out)?;
         let mut inputs = surfmotion::jobs::outputs::database_inputs(&db);
@@ -204,6 +213,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         actor: a.actor.clone(),
         sample_every: a.sample_every,
         load: a.clip.load_options()?,
+        glb: a.glb.options(),
+        usd: a.glb.usd_options(),
         ..LiveOptions::default()
     };
     let stop = AtomicBool::new(false);

@@ -131,16 +131,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
     outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
     surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
-    a.glb.refuse_unless_glb(
-        super::mesh::GlbArgs::is_glb(&a.output),
-        &a.output.display().to_string(),
-    )?;
+    a.glb.refuse_other_formats(&a.output)?;
     surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
         character: a.job.character(),
         load: a.run.clip.load_options()?,
         glb: a.glb.options(),
+        usd: a.glb.usd_options(),
     };
     let job = RetargetJob::load(&a.db, opts, &super::Bars::new())?;
     let preview = a.run.preview.options();

@@ -26,6 +26,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             &spec,
             &a.output,
             a.glb.options(),
+            a.glb.usd_options(),
             a.report.is_some(),
             &|p| {
                 bar.set_length(p.total as u64);
@@ -78,6 +79,7 @@ fn spec(a: &Args, job_opts: &ScanJob) -> anyhow::Result<TransferSpec> {
             },
             load: a.run.clip.load_options()?,
             glb: a.glb.options(),
+            usd: a.glb.usd_options(),
         },
     })
 }
@@ -136,10 +138,7 @@ fn check_options_and_outputs(a: &Args) -> anyhow::Result<()> {
     outputs.extend(a.write_landmarks.clone().map(|p| ("--write-landmarks", p)));
     surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
-    a.glb.refuse_unless_glb(
-        super::mesh::GlbArgs::is_glb(&a.output),
-        &a.output.display().to_string(),
-    )?;
+    a.glb.refuse_other_formats(&a.output)?;
     surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
@@ -154,7 +153,12 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
     if let Some(path) = &a.run.preview.preview {
         outcome.write_preview(path, &a.run.preview.options())?;
     }
-    let report = outcome.write(&a.output, a.glb.options(), a.report.is_some())?;
+    let report = outcome.write(
+        &a.output,
+        a.glb.options(),
+        a.glb.usd_options(),
+        a.report.is_some(),
+    )?;
     print_report(a, &report)
 }
 

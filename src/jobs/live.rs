@@ -19,6 +19,8 @@ use crate::live::stages::{StageReport, StageTally};
 use crate::live::stream;
 use crate::live::vmc::Vmc;
 use crate::mesh::MeshSequence;
+use crate::mesh::io::glb::GlbOptions;
+use crate::mesh::io::usd::UsdOptions;
 use crate::pose::Pose;
 use crate::rig::LoadOptions;
 use serde::Serialize;
@@ -79,6 +81,11 @@ pub struct LiveOptions {
     pub sample_every: Option<f64>,
     /// The Rokoko actor that drives the character. Default: the first.
     pub actor: ActorChoice,
+    /// A GLB recording's options. Default: [`GlbOptions::DEFAULT`].
+    pub glb: GlbOptions,
+    /// A `.usda` recording's options. Default: [`UsdOptions::DEFAULT`]
+    /// (normals on).
+    pub usd: UsdOptions,
 }
 
 impl Default for LiveOptions {
@@ -102,6 +109,8 @@ impl Default for LiveOptions {
             loops: 1,
             sample_every: None,
             actor: ActorChoice::default(),
+            glb: GlbOptions::DEFAULT,
+            usd: UsdOptions::DEFAULT,
         }
     }
 }
@@ -597,7 +606,12 @@ pub fn run_live(
         Some(out) if tally.frames_out > 0 => {
             let held = std::mem::take(&mut tally.held);
             let seq = MeshSequence::new(prepared.topology_metres().clone(), held, Some(fps))?;
-            crate::mesh::io::save_sequence(&seq, out, Some(fps))?
+            let save = crate::mesh::io::SaveOptions {
+                fps: Some(fps),
+                glb: opts.glb,
+                usd: opts.usd,
+            };
+            crate::mesh::io::save_sequence_with(&seq, out, &save)?
         }
         _ => Vec::new(),
     };

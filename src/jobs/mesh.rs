@@ -2,6 +2,7 @@
 //! error a reader gets back from a quantised GLB.
 
 use crate::mesh::io::glb::GlbOptions;
+use crate::mesh::io::usd::UsdOptions;
 use crate::mesh::io::{LoadOptions, MeshFormat, SaveOptions, load_sequence, save_sequence_with};
 use std::path::PathBuf;
 
@@ -22,6 +23,8 @@ pub struct MeshConvertOptions {
     pub force: bool,
     /// GLB options (ignored for other outputs).
     pub glb: GlbOptions,
+    /// `.usda` options (ignored for other outputs).
+    pub usd: UsdOptions,
 }
 
 /// What `mesh convert` wrote.
@@ -65,6 +68,7 @@ pub fn convert_mesh(o: &MeshConvertOptions) -> Result<MeshConvertReport, JobErro
         &SaveOptions {
             fps: o.fps,
             glb: o.glb,
+            usd: o.usd,
         },
     )?;
     let glb = MeshFormat::of(&o.output) == Some(MeshFormat::Glb);

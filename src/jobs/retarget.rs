@@ -13,6 +13,7 @@ use crate::drive::{Analysed, Each, Output, Prepared, Report, RetargetOptions, Ti
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
+use crate::mesh::io::usd::UsdOptions;
 use crate::pose::Pose;
 use crate::pose::retarget::{character_neutral, clip_head_trunk_deg, foot_glide_cm};
 use crate::rig::LoadOptions;
@@ -38,6 +39,8 @@ pub struct RetargetJobOptions {
     pub load: LoadOptions,
     /// GLB output. Default: [`GlbOptions::DEFAULT`].
     pub glb: GlbOptions,
+    /// `.usda` output. Default: [`UsdOptions::DEFAULT`] (normals on).
+    pub usd: UsdOptions,
 }
 
 /// A database loaded and prepared once for retargeting many clips: the
@@ -214,6 +217,7 @@ impl RetargetJob {
             &SaveOptions {
                 fps: Some(fps),
                 glb: self.options.glb,
+                usd: self.options.usd,
             },
         )?;
         let keep = (keep_bytes / (24 * n.max(1))).clamp(1, frames);
@@ -306,6 +310,7 @@ impl RetargetJob {
             positions,
             ch.manifest().fps,
             self.options.glb,
+            self.options.usd,
             out,
         )
     }

@@ -13,6 +13,7 @@ use crate::mesh::Mesh;
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
+use crate::mesh::io::usd::UsdOptions;
 use crate::pose::Pose;
 use crate::rig::LoadOptions;
 use crate::tools::eval::{Checker, PlausibilityOptions, VelocityError, velocity_error};
@@ -38,6 +39,8 @@ pub struct ScanTransferOptions {
     pub load: LoadOptions,
     /// GLB output. Default: [`GlbOptions::DEFAULT`].
     pub glb: GlbOptions,
+    /// `.usda` output. Default: [`UsdOptions::DEFAULT`] (normals on).
+    pub usd: UsdOptions,
 }
 
 impl ScanTransferOptions {
@@ -69,6 +72,7 @@ impl Default for ScanTransferOptions {
             transfer: TransferOptions::default(),
             load: LoadOptions::default(),
             glb: GlbOptions::DEFAULT,
+            usd: UsdOptions::DEFAULT,
         }
     }
 }
@@ -198,6 +202,7 @@ impl ScanTransferJob {
             positions,
             self.options.fps,
             self.options.glb,
+            self.options.usd,
             out,
         )
     }
@@ -238,6 +243,7 @@ impl Converter for ScanTransferJob {
             &SaveOptions {
                 fps: Some(fps),
                 glb: self.options.glb,
+                usd: self.options.usd,
             },
         )
         .map_err(|e| e.to_string())?;
@@ -549,7 +555,7 @@ pub fn transfer_onto_scan(
 pub(crate) const PLAUSIBILITY_BYTES: usize = 256 << 20;
 
 /// [`transfer_onto_scan`] writing each frame to `out` as it is solved
-/// (GLB options `glb`), so a clip of any length needs the memory of its
+/// (GLB options `glb`, USD options `usd`), so a clip of any length needs the memory of its
 /// marker motion and one chunk of frames, not of every frame (issue 18,
 /// item 12): point caches and OBJ folders stream; a GLB, written whole, is
 /// checked against the memory budget and its format's size before the
@@ -562,6 +568,7 @@ pub fn transfer_onto_scan_to(
     spec: &TransferSpec,
     out: &Path,
     glb: GlbOptions,
+    usd: UsdOptions,
     per_frame: bool,
     progress: &(dyn Fn(FrameProgress) + Sync),
 ) -> Result<TransferReport, JobError> {
@@ -570,7 +577,7 @@ pub fn transfer_onto_scan_to(
             "a ground truth needs every frame held: use transfer_onto_scan".into(),
         ));
     }
-    let (outcome, output) = transfer_inner(scan, spec, progress, Some((out, glb)))?;
+    let (outcome, output) = transfer_inner(scan, spec, progress, Some((out, glb, usd)))?;
     Ok(outcome.report(output.unwrap_or_default(), per_frame))
 }
 
@@ -582,7 +589,7 @@ fn transfer_inner(
     scan: &Mesh,
     spec: &TransferSpec,
     progress: &(dyn Fn(FrameProgress) + Sync),
-    stream: Option<(&Path, GlbOptions)>,
+    stream: Option<(&Path, GlbOptions, UsdOptions)>,
 ) -> Result<(TransferOutcome, Option<Vec<PathBuf>>), JobError> {
     let t0 = std::time::Instant::now();
     let marks = scan_marks(scan, spec)?;
@@ -882,7 +889,7 @@ fn solve(
     spec: &TransferSpec,
     fps: f64,
     progress: &(dyn Fn(usize) + Sync),
-    stream: Option<(&Path, GlbOptions)>,
+    stream: Option<(&Path, GlbOptions, UsdOptions)>,
 ) -> Result<Solved, JobError> {
     let frames = job.motion.frames();
     let n = prepared.mesh.vertex_count();
@@ -899,7 +906,7 @@ fn solve(
             );
             (positions, stats, None)
         }
-        Some((out, glb)) => {
+        Some((out, glb, usd)) => {
             let mut writer = SequenceWriter::create(
                 &prepared.mesh,
                 out,
@@ -907,6 +914,7 @@ fn solve(
                 &SaveOptions {
                     fps: Some(fps),
                     glb,
+                    usd,
                 },
             )?;
             // The first frames, for the plausibility measure.
@@ -1002,12 +1010,14 @@ fn plausibility(
 }
 
 impl TransferOutcome {
-    /// Writes the result to `out` (by extension, GLB options `glb`) and
+    /// Writes the result to `out` (by extension, GLB options `glb`, USD
+    /// options `usd`) and
     /// returns its report; `per_frame` keeps the per-frame truth error.
     pub fn write(
         mut self,
         out: &Path,
         glb: GlbOptions,
+        usd: UsdOptions,
         per_frame: bool,
     ) -> Result<TransferReport, JobError> {
         let output = super::write_positions(
@@ -1015,6 +1025,7 @@ impl TransferOutcome {
             std::mem::take(&mut self.positions),
             self.fps,
             glb,
+            usd,
             out,
         )?;
         Ok(self.report(output, per_frame))

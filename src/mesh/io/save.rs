@@ -13,6 +13,8 @@ pub struct SaveOptions {
     pub fps: Option<f64>,
     /// GLB output (normals, quantisation). Default value: [`glb::GlbOptions::DEFAULT`].
     pub glb: glb::GlbOptions,
+    /// `.usda` output (normals). Default value: [`usd::UsdOptions::DEFAULT`].
+    pub usd: usd::UsdOptions,
 }
 
 /// Saves a sequence in the format of `out`'s extension. PC2 and MDD get a
@@ -33,7 +35,7 @@ pub fn save_sequence(
     )
 }
 
-/// [`save_sequence`] with options for the GLB writer.
+/// [`save_sequence`] with options for the GLB and USD writers.
 pub fn save_sequence_with(
     seq: &MeshSequence,
     out: &Path,
@@ -85,7 +87,7 @@ pub fn save_sequence_with(
         }
         MeshFormat::ObjFolder => objseq::write_obj_folder(seq, out)?,
         MeshFormat::Usda => {
-            usd::write_usda(seq, fps_v, out)?;
+            usd::write_usda_with(seq, fps_v, out, opts.usd)?;
             vec![out.to_path_buf()]
         }
     })

@@ -114,7 +114,9 @@ impl SequenceWriter {
                     big_endian: fmt == MeshFormat::Mdd,
                 }
             }
-            MeshFormat::Usda => Sink::Usd(super::usd::UsdaWriter::create(mesh, out, frames, fps)?),
+            MeshFormat::Usda => Sink::Usd(super::usd::UsdaWriter::create_with(
+                mesh, out, frames, fps, opts.usd,
+            )?),
             MeshFormat::ObjFolder => Sink::Folder {
                 width: frames.saturating_sub(1).to_string().len().max(4),
                 files: Vec::new(),
@@ -172,7 +174,7 @@ impl SequenceWriter {
             written: 0,
             opts: SaveOptions {
                 fps: Some(fps),
-                glb: opts.glb,
+                ..*opts
             },
             sink,
         })

@@ -333,12 +333,7 @@ impl UsdaWriter {
 }
 
 /// Writes a whole sequence as `.usda` at `fps` (the sequence's own rate
-/// first).
-pub(crate) fn write_usda(seq: &MeshSequence, fps: f64, out: &Path) -> Result<(), MeshError> {
-    write_usda_with(seq, fps, out, UsdOptions::DEFAULT)
-}
-
-/// [`write_usda`] with options.
+/// first) with `opts` ([`UsdOptions::DEFAULT`]: normals on).
 pub fn write_usda_with(
     seq: &MeshSequence,
     fps: f64,

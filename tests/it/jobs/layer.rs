@@ -374,7 +374,12 @@ fn transfer_onto_scan_animates_the_procedural_humanoid_from_a_clip() {
     // Written by one call, with its report.
     let path = tmp.path().join("walk.pc2");
     let report = out
-        .write(&path, surfmotion::mesh::io::glb::GlbOptions::DEFAULT, false)
+        .write(
+            &path,
+            surfmotion::mesh::io::glb::GlbOptions::DEFAULT,
+            surfmotion::mesh::io::usd::UsdOptions::DEFAULT,
+            false,
+        )
         .unwrap();
     assert_eq!(report.frames, 30);
     assert_eq!(report.output.len(), 2);

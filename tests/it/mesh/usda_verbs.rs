@@ -1,7 +1,7 @@
 //! `.usda` from the verbs that write a sequence by extension (issue 44):
 //! `batch --format usda` names each clip's output `CLIP.usda`, skips it
 //! when complete, and the files are USD text layers with one time sample
-//! per frame.
+//! per frame (without normals under `--usd-no-normals`).
 
 use crate::common;
 use std::path::Path;
@@ -38,7 +38,7 @@ fn batch_format_usda_writes_one_usda_per_clip_and_skips_complete_ones() {
     )
     .unwrap();
     let out = tmp.path().join("out");
-    let run = |extra: &[&str]| {
+    let run_into = |out: &Path, extra: &[&str]| {
         common::run_ok(
             std::process::Command::new(common::bin())
                 .args(["batch", "--scan"])
@@ -48,11 +48,12 @@ fn batch_format_usda_writes_one_usda_per_clip_and_skips_complete_ones() {
                 .arg("--mocap-dir")
                 .arg(&src)
                 .arg("-o")
-                .arg(&out)
+                .arg(out)
                 .args(["--format", "usda", "--json"])
                 .args(extra),
         )
     };
+    let run = |extra: &[&str]| run_into(&out, extra);
     run(&[]);
     let want = out.join("sub/run.usda");
     assert_eq!(
@@ -79,6 +80,30 @@ fn batch_format_usda_writes_one_usda_per_clip_and_skips_complete_ones() {
         std::fs::metadata(&want).unwrap().modified().unwrap(),
         before
     );
+    // `--usd-no-normals` reaches the batch's writer: the same points, no
+    // normals (the default file has one normal sample per frame).
+    let bare = tmp.path().join("bare");
+    run_into(&bare, &["--usd-no-normals"]);
+    let (with, without) = (
+        std::fs::read_to_string(&want).unwrap(),
+        std::fs::read_to_string(bare.join("sub/run.usda")).unwrap(),
+    );
+    let points = |t: &str| {
+        t.split("point3f[] points.timeSamples")
+            .nth(1)
+            .unwrap()
+            .split("\n    }")
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(points(&with), points(&without));
+    assert!(with.contains("normal3f[] normals.timeSamples"));
+    assert!(
+        !without.contains("normal3f"),
+        "normals written with --usd-no-normals"
+    );
+    assert_eq!(usda_frames(&bare.join("sub/run.usda")), frames);
 }
 
 #[test]
