@@ -15,7 +15,11 @@
 //!    among its own and its mesh neighbours' (spatial contiguity), whose
 //!    transforms reproduce its positions best;
 //! 3. adjacent parts whose union still moves rigidly (RMS residual below a
-//!    fraction of the height) are merged, most rigid pair first.
+//!    fraction of the height) are merged, most rigid pair first;
+//! 4. with [`MergeRule::Settle`] (an option, session 31) step 2 run again
+//!    on the merged parts until no vertex changes part, then step 3, and
+//!    again, so that the boundaries are the merged parts' own rather than
+//!    those of the clusters they were merged from.
 //!
 //! Except with [`Seeding::Index`] (the default) all of it runs on the
 //! vertices in an order of their positions ([`super::seeding`]), the
@@ -84,7 +88,51 @@ pub struct DecomposeOptions {
     /// the rig's spread from draw to draw is its spread over salts.
     /// Default 0.
     pub salt: u32,
+    /// What follows the greedy merges ([`MergeRule`]). Default
+    /// [`MergeRule::Greedy`] (sessions 20-30's: nothing).
+    pub merge: MergeRule,
 }
+
+/// [`DecomposeOptions::merge`]: what the decomposition does after its
+/// greedy merges of adjacent parts whose union stays rigid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MergeRule {
+    /// Nothing (sessions 20-30): the merged parts keep the boundaries of
+    /// the k-means clusters they were merged from, as the re-assignment
+    /// rounds on those clusters left them (`merge=greedy`). Which
+    /// cluster a band at the knee fell into, so which side of the knee
+    /// the boundary lies, depends on the draw (session 30: samba's
+    /// joints move 1.93 % of the height on average from draw to draw).
+    Greedy,
+    /// The merged parts settled (`merge=settle`, session 31): the SSDR
+    /// alternation (Le & Deng 2012, Sec. 3: each part's rigid transform
+    /// fitted, each vertex given the part that reproduces it best, here
+    /// among its own and its mesh neighbours') run again on the merged
+    /// parts until no vertex changes part (at most
+    /// [`SETTLE_ROUNDS`] rounds), then the merges tried again on the
+    /// settled parts, and again, until a merge changes nothing (at most
+    /// [`SETTLE_PASSES`] passes). A boundary then lies where the two
+    /// parts' motions reproduce the surface equally well, whichever
+    /// clusters the parts were merged from.
+    Settle,
+}
+
+impl MergeRule {
+    /// The rule named `name` (`greedy`, `settle`).
+    pub fn parse(name: &str) -> Option<MergeRule> {
+        match name {
+            "greedy" => Some(MergeRule::Greedy),
+            "settle" => Some(MergeRule::Settle),
+            _ => None,
+        }
+    }
+}
+
+/// [`MergeRule::Settle`]'s cap on the re-assignment rounds of one pass.
+pub const SETTLE_ROUNDS: usize = 40;
+
+/// [`MergeRule::Settle`]'s cap on its passes (settle, then merge).
+pub const SETTLE_PASSES: usize = 4;
 
 /// [`DecomposeOptions::seeding`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -167,6 +215,7 @@ impl Default for DecomposeOptions {
             merge_below: 0.012,
             seeding: Seeding::Index,
             salt: 0,
+            merge: MergeRule::Greedy,
         }
     }
 }
@@ -578,8 +627,9 @@ fn decompose_in_order(
 /// `n / 400` vertices joined to a neighbour), then alternately each
 /// part's rigid motion fitted and each vertex given the part, among its
 /// own and its neighbours', that reproduces it best, then adjacent parts
-/// merged while their union stays rigid. Deterministic in the labels and
-/// the vertex order.
+/// merged while their union stays rigid ([`merge_greedy`]), then, with
+/// [`MergeRule::Settle`], the merged parts re-assigned to convergence
+/// and merged again. Deterministic in the labels and the vertex order.
 fn refine(
     rest: &[[f64; 3]],
     frames: &[&[[f64; 3]]],
@@ -592,7 +642,73 @@ fn refine(
     let min_size = (n / 400).max(8);
     let mut count = split_connected(&mut labels, nb, min_size);
     let mut motions = fit(rest, frames, &members_of(&labels, count));
-    for _ in 0..opts.rounds {
+    reassign(
+        rest,
+        frames,
+        nb,
+        &mut labels,
+        &mut count,
+        &mut motions,
+        opts.rounds,
+        n / 1000,
+    );
+    let limit = opts.merge_below * height;
+    merge_greedy(rest, frames, nb, &mut labels, count, limit);
+    if opts.merge == MergeRule::Settle {
+        for _ in 0..SETTLE_PASSES {
+            count = split_connected(&mut labels, nb, min_size);
+            motions = fit(rest, frames, &members_of(&labels, count));
+            reassign(
+                rest,
+                frames,
+                nb,
+                &mut labels,
+                &mut count,
+                &mut motions,
+                SETTLE_ROUNDS,
+                1,
+            );
+            if merge_greedy(rest, frames, nb, &mut labels, count, limit) == 0 {
+                break;
+            }
+        }
+    }
+    let count = split_connected(&mut labels, nb, 1);
+    let members = members_of(&labels, count);
+    let (residual, motions): (Vec<f64>, Vec<Motion>) = members
+        .iter()
+        .map(|idx| union_rms(rest, frames, idx))
+        .unzip();
+    Decomposition {
+        labels,
+        count,
+        motions,
+        residual,
+    }
+}
+
+/// The SSDR alternation on `labels` (`count` parts, their `motions`):
+/// each vertex given the part, among its own and its mesh neighbours',
+/// whose motion reproduces it best over the frames (the current part on
+/// a tie), every label then cut into its connected pieces (pieces under
+/// `n / 400` vertices joined to a neighbour) and the motions fitted
+/// again; at most `rounds` rounds, stopping after a round that changed
+/// fewer than `stop_below` vertices. Deterministic in the labels and the
+/// vertex order. O(rounds · n · frames).
+#[allow(clippy::too_many_arguments)]
+fn reassign(
+    rest: &[[f64; 3]],
+    frames: &[&[[f64; 3]]],
+    nb: &[Vec<u32>],
+    labels: &mut Vec<u32>,
+    count: &mut usize,
+    motions: &mut Vec<Motion>,
+    rounds: usize,
+    stop_below: usize,
+) {
+    let n = rest.len();
+    let min_size = (n / 400).max(8);
+    for _ in 0..rounds {
         let new: Vec<u32> = (0..n)
             .into_par_iter()
             .map(|v| {
@@ -612,18 +728,37 @@ fn refine(
                 best.1
             })
             .collect();
-        let changed = new.iter().zip(&labels).filter(|(a, b)| a != b).count();
-        labels = new;
-        count = split_connected(&mut labels, nb, min_size);
-        motions = fit(rest, frames, &members_of(&labels, count));
-        if changed < n / 1000 {
+        let changed = new
+            .iter()
+            .zip(labels.iter())
+            .filter(|(a, b)| a != b)
+            .count();
+        *labels = new;
+        *count = split_connected(labels, nb, min_size);
+        *motions = fit(rest, frames, &members_of(labels, *count));
+        if changed < stop_below {
             break;
         }
     }
-    // Greedy merging of adjacent parts whose union stays rigid (two
-    // adjacent connected parts make a connected one: no re-splitting).
-    let limit = opts.merge_below * height;
-    let mut members = members_of(&labels, count);
+}
+
+/// Greedy merging of adjacent parts of `labels` (`count` parts, numbered
+/// 0..count) whose union stays rigid: the adjacent pair whose union's RMS
+/// residual (under its own best rigid motion) is least is merged, while
+/// it is below `limit`; the merged part keeps the lesser label, so labels
+/// are left with gaps. Two adjacent connected parts make a connected one:
+/// no re-splitting. Returns the merges made.
+fn merge_greedy(
+    rest: &[[f64; 3]],
+    frames: &[&[[f64; 3]]],
+    nb: &[Vec<u32>],
+    labels: &mut [u32],
+    count: usize,
+    limit: f64,
+) -> usize {
+    let n = rest.len();
+    let mut merges = 0;
+    let mut members = members_of(labels, count);
     let mut pairs = std::collections::BTreeSet::new();
     for v in 0..n {
         for &u in &nb[v] {
@@ -646,6 +781,7 @@ fn refine(
         if rms >= limit {
             break;
         }
+        merges += 1;
         let moved = std::mem::take(&mut members[b as usize]);
         for &v in &moved {
             labels[v as usize] = a;
@@ -670,16 +806,136 @@ fn refine(
             .collect();
         costs.extend(fresh);
     }
-    let count = split_connected(&mut labels, nb, 1);
-    let members = members_of(&labels, count);
-    let (residual, motions): (Vec<f64>, Vec<Motion>) = members
-        .iter()
-        .map(|idx| union_rms(rest, frames, idx))
-        .unzip();
-    Decomposition {
-        labels,
-        count,
-        motions,
-        residual,
+    merges
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DQuat;
+
+    /// A tube along +y (length 1, radius 0.05, `rings` rings of 12
+    /// vertices) bent at y = 1/3 and 2/3 about +z by `angles` per frame,
+    /// skinned linearly across ±0.03 of each joint (so the vertices'
+    /// motions change continuously there, as a body's do): the rest
+    /// positions, the frames and the neighbour lists.
+    #[allow(clippy::type_complexity)]
+    fn bent_tube(
+        rings: usize,
+        angles: &[(f64, f64)],
+    ) -> (Vec<[f64; 3]>, Vec<Vec<[f64; 3]>>, Vec<Vec<u32>>) {
+        let seg = 12;
+        let mut rest = Vec::new();
+        for r in 0..rings {
+            let y = r as f64 / (rings - 1) as f64;
+            for s in 0..seg {
+                let a = std::f64::consts::TAU * s as f64 / seg as f64;
+                rest.push([0.05 * a.cos(), y, 0.05 * a.sin()]);
+            }
+        }
+        let mut tris = Vec::new();
+        for r in 0..rings - 1 {
+            for s in 0..seg {
+                let (a, b) = ((r * seg + s) as u32, (r * seg + (s + 1) % seg) as u32);
+                let (c, d) = (a + seg as u32, b + seg as u32);
+                tris.push([a, b, d]);
+                tris.push([a, d, c]);
+            }
+        }
+        let nb = crate::embed::parts::neighbours(rest.len(), &tris);
+        let joints = [1.0 / 3.0, 2.0 / 3.0];
+        let weight = |y: f64, j: f64| ((y - j) / 0.06 + 0.5).clamp(0.0, 1.0);
+        let frames = angles
+            .iter()
+            .map(|&(a1, a2)| {
+                // Bone 1 turns about joint 1; bone 2 with it, and about joint 2.
+                let r1 = DQuat::from_rotation_z(a1);
+                let r2 = r1 * DQuat::from_rotation_z(a2);
+                let j1 = DVec3::new(0.0, joints[0], 0.0);
+                let j2 = j1 + r1 * DVec3::new(0.0, joints[1] - joints[0], 0.0);
+                rest.iter()
+                    .map(|&p| {
+                        let q = DVec3::from_array(p);
+                        let b1 = j1 + r1 * (q - j1);
+                        let b2 = j2 + r2 * (q - DVec3::new(0.0, joints[1], 0.0));
+                        let (w1, w2) = (weight(q.y, joints[0]), weight(q.y, joints[1]));
+                        let p1 = q.lerp(b1, w1);
+                        p1.lerp(b2, w2).to_array()
+                    })
+                    .collect()
+            })
+            .collect();
+        (rest, frames, nb)
+    }
+
+    /// The part most vertices with y in `lo..hi` of `rest` have.
+    fn part_of(rest: &[[f64; 3]], labels: &[u32], lo: f64, hi: f64) -> u32 {
+        let mut count = std::collections::BTreeMap::new();
+        for (p, &l) in rest.iter().zip(labels) {
+            if (lo..hi).contains(&p[1]) {
+                *count.entry(l).or_insert(0usize) += 1;
+            }
+        }
+        count
+            .into_iter()
+            .max_by_key(|&(l, c)| (c, std::cmp::Reverse(l)))
+            .map_or(u32::MAX, |x| x.0)
+    }
+
+    #[test]
+    fn settled_parts_are_the_bones_whichever_draw_seeded_them() {
+        for rings in [61, 73] {
+            let angles: Vec<(f64, f64)> = (0..12)
+                .map(|f| {
+                    let t = f as f64 / 11.0;
+                    (0.6 * (3.0 * t).sin(), 0.7 * (2.0 * t + 1.0).cos() - 0.3)
+                })
+                .collect();
+            let (rest, frames, nb) = bent_tube(rings, &angles);
+            let frames: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
+            let runs: Vec<Decomposition> = (0..4)
+                .map(|salt| {
+                    let opts = DecomposeOptions {
+                        salt,
+                        merge: MergeRule::Settle,
+                        ..DecomposeOptions::default()
+                    };
+                    decompose(&rest, &frames, &nb, 1.0, &opts)
+                })
+                .collect();
+            for (salt, d) in runs.iter().enumerate() {
+                // Three bones, each with its own part, the boundaries
+                // within the skinned bands (±0.03 of the joints).
+                let bones = [
+                    part_of(&rest, &d.labels, 0.0, 0.3),
+                    part_of(&rest, &d.labels, 0.37, 0.63),
+                    part_of(&rest, &d.labels, 0.7, 1.01),
+                ];
+                assert!(
+                    bones[0] != bones[1] && bones[1] != bones[2] && bones[0] != bones[2],
+                    "{rings} rings, salt {salt}: bones' parts {bones:?} ({} parts)",
+                    d.count
+                );
+                for (p, &l) in rest.iter().zip(&d.labels) {
+                    let want = match p[1] {
+                        y if y < 0.3 => bones[0],
+                        y if (0.37..0.63).contains(&y) => bones[1],
+                        y if y > 0.7 => bones[2],
+                        _ => continue,
+                    };
+                    assert_eq!(
+                        l, want,
+                        "{rings} rings, salt {salt}: a vertex at y {:.3} outside its bone's part",
+                        p[1]
+                    );
+                }
+                // The same partition from every draw.
+                let ari = super::super::consensus::adjusted_rand(&d.labels, &runs[0].labels);
+                assert!(
+                    ari > 0.99,
+                    "{rings} rings, salt {salt}: adjusted Rand index {ari:.4} to salt 0's"
+                );
+            }
+        }
     }
 }
