@@ -138,7 +138,7 @@ impl FrameSample {
 /// `hip=thigh|trunk`, `facing=trunk|hips`,
 /// `seed=draws-N|consensus-N|vote-N|position|motion|index` (the
 /// decomposition's [`super::decompose::Seeding`]), `salt=N` (its
-/// [`super::decompose::DecomposeOptions::salt`]), `merge=greedy|settle`
+/// [`super::decompose::DecomposeOptions::salt`]), `merge=greedy|settle|settle-split`
 /// (what follows its merges, [`super::decompose::MergeRule`]),
 /// `patches=position|vertex0` (the rest frame's contact patches,
 /// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
@@ -173,7 +173,7 @@ pub fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle, patches=position|vertex0, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, patches=position|vertex0, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -284,6 +284,8 @@ mod tests {
         assert_eq!(auto.decompose.merge, MergeRule::Greedy);
         apply_override("merge=settle", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.decompose.merge, MergeRule::Settle);
+        apply_override("merge=settle-split", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.decompose.merge, MergeRule::SettleSplit);
         apply_override("merge=greedy", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.decompose.merge, MergeRule::Greedy);
         apply_override("frames=median-quantiles", &mut rule, &mut auto).unwrap();
