@@ -22,8 +22,10 @@
 //!   moved alike;
 //! - `joints`: per joint against the landmark rig, as numbered and with
 //!   the vertices renumbered, and samba on rest frames 2 and 4;
-//! - `spread [SALTS]`: the same against the decomposition's pseudo-random
-//!   draws (`DecomposeOptions::salt` 0..SALTS, default 5): how far the
+//! - `spread [SALTS] [renumbered]`: the same against the decomposition's
+//!   pseudo-random draws (`DecomposeOptions::salt` 0..SALTS, default 5;
+//!   with `renumbered` each salt also on the vertices renumbered by a
+//!   fixed shuffle, another draw of the vertex order): how far the
 //!   joints move from draw to draw.
 
 use glam::DVec3;
@@ -36,6 +38,21 @@ use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::mesh::Mesh;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::Canonical;
+
+/// The process's user + system CPU seconds so far (every thread), from
+/// `/proc/self/stat` (0 where it cannot be read).
+fn cpu_secs() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let after = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let f: Vec<f64> = after
+        .split_whitespace()
+        .map(|x| x.parse().unwrap_or(0.0))
+        .collect();
+    // Fields 14 and 15 of the line (utime, stime), in clock ticks of 100 Hz.
+    f.get(11)
+        .zip(f.get(12))
+        .map_or(0.0, |(u, s)| (u + s) / 100.0)
+}
 
 fn height(rig: &Embedding) -> f64 {
     rig.height
@@ -771,6 +788,7 @@ struct Scored {
     parts: usize,
     joints: [[f64; 3]; 19],
     secs: f64,
+    cpu: f64,
 }
 
 impl Scored {
@@ -816,6 +834,7 @@ fn score(
     let fr: Vec<&[[f64; 3]]> = own.iter().map(Vec::as_slice).collect();
     let m = Mesh::new(pos(c.mesh.positions()), tris).map_err(|e| e.to_string())?;
     let t = Instant::now();
+    let c0 = cpu_secs();
     let auto = auto_rig(
         &m,
         &fr,
@@ -826,6 +845,7 @@ fn score(
     )
     .map_err(|e| format!("refused: {e}"))?;
     let secs = t.elapsed().as_secs_f64();
+    let cpu = cpu_secs() - c0;
     let e = embed_as_db_init(&m, &fr, rest, &auto.landmarks).ok_or("embedding refused")?;
     let h = c.truth.height;
     let off: [f64; 19] = std::array::from_fn(|j| {
@@ -839,6 +859,7 @@ fn score(
         parts: auto.parts,
         joints: e.joints,
         secs,
+        cpu,
     })
 }
 
@@ -900,35 +921,46 @@ fn joints(data: &Path) {
 /// joint, parts agreeing with the landmark rig, parts; then the spread:
 /// per joint the greatest distance between two salts' positions (% of the
 /// height), its mean over the joints and its worst, and the range of the
-/// mean joint error and of the parts agreeing.
-fn spread(data: &Path, salts: u32) {
+/// mean joint error and of the parts agreeing. With `renumber` each salt
+/// is rigged twice, as numbered and with the vertices renumbered
+/// (`score`'s fixed shuffle; the joints and parts compared through it).
+fn spread(data: &Path, salts: u32, renumber: bool) {
     println!(
-        "| capture | salt | joints mean % | l_elbow % | r_knee % | worst | parts agree | parts | s |"
+        "| capture | salt | joints mean % | l_elbow % | r_knee % | worst | parts agree | parts | wall s | CPU s |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for_each_capture(data, |c| {
         let name = c.name;
         let (rest, _) = rest_as_db_init(c.mesh, c.frames);
         let mut all: Vec<Scored> = Vec::new();
+        let orders: &[bool] = if renumber { &[false, true] } else { &[false] };
         for salt in 0..salts {
-            let mut o = db_init_options(None);
-            o.decompose.salt = salt;
-            match score(c, rest, false, o) {
-                Ok(s) => {
-                    let (wj, wd) = s.worst();
-                    println!(
-                        "| {name} | {salt} | {:.2} | {:.2} | {:.2} | {} {wd:.1} | {:.1}% | {} | {:.1} |",
-                        s.mean,
-                        s.of(Canonical::LElbow),
-                        s.of(Canonical::RKnee),
-                        wj.name(),
-                        s.agree,
-                        s.parts,
-                        s.secs
-                    );
-                    all.push(s);
+            for &shuffle in orders {
+                let mut o = db_init_options(None);
+                o.decompose.salt = salt;
+                let salt = if shuffle {
+                    format!("{salt} renumbered")
+                } else {
+                    salt.to_string()
+                };
+                match score(c, rest, shuffle, o) {
+                    Ok(s) => {
+                        let (wj, wd) = s.worst();
+                        println!(
+                            "| {name} | {salt} | {:.2} | {:.2} | {:.2} | {} {wd:.1} | {:.1}% | {} | {:.1} | {:.1} |",
+                            s.mean,
+                            s.of(Canonical::LElbow),
+                            s.of(Canonical::RKnee),
+                            wj.name(),
+                            s.agree,
+                            s.parts,
+                            s.secs,
+                            s.cpu
+                        );
+                        all.push(s);
+                    }
+                    Err(e) => println!("| {name} | {salt} | {e} |"),
                 }
-                Err(e) => println!("| {name} | {salt} | {e} |"),
             }
         }
         let h = c.truth.height;
@@ -960,11 +992,26 @@ fn spread(data: &Path, salts: u32) {
         let (p0, p1) = range(&|s| s.agree);
         let (k0, k1) = range(&|s| s.of(Canonical::RKnee));
         let (e0, e1) = range(&|s| s.of(Canonical::LElbow));
+        let k = all.len().max(1) as f64;
+        let avg = |f: &dyn Fn(&Scored) -> f64| all.iter().map(f).sum::<f64>() / k;
+        let worst = all
+            .iter()
+            .map(|s| s.worst())
+            .fold(
+                (Canonical::Pelvis, 0.0f64),
+                |w, x| if x.1 > w.1 { x } else { w },
+            );
         println!(
-            "| {name} | spread over {} | mean {m0:.2}-{m1:.2} | {e0:.2}-{e1:.2} | {k0:.2}-{k1:.2} | joint spread mean {:.2}, worst {} {wd:.2} | {p0:.1}-{p1:.1}% | | |",
+            "| {name} | spread over {} | mean {m0:.2}-{m1:.2} (avg {:.2}) | {e0:.2}-{e1:.2} | {k0:.2}-{k1:.2} | joint spread mean {:.2}, worst {} {wd:.2}; worst error {} {:.2} | {p0:.1}-{p1:.1}% (avg {:.1}) | | {:.1} | {:.1} |",
             all.len(),
+            avg(&|s| s.mean),
             per_joint.iter().sum::<f64>() / 19.0,
-            Canonical::ALL[wj].name()
+            Canonical::ALL[wj].name(),
+            worst.0.name(),
+            worst.1,
+            avg(&|s| s.agree),
+            avg(&|s| s.secs),
+            avg(&|s| s.cpu)
         );
     });
 }
@@ -990,7 +1037,7 @@ fn main() {
     }
     if what == "spread" {
         let salts = args.get(3).and_then(|a| a.parse().ok()).unwrap_or(5);
-        spread(&data, salts);
+        spread(&data, salts, args.get(4).is_some_and(|a| a == "renumbered"));
     }
     if what == "orders" {
         orders(&data);

@@ -138,7 +138,8 @@ impl FrameSample {
 /// `hip=thigh|trunk`, `facing=trunk|hips`,
 /// `seed=draws-N|consensus-N|vote-N|position|motion|index` (the
 /// decomposition's [`super::decompose::Seeding`]), `salt=N` (its
-/// [`super::decompose::DecomposeOptions::salt`]),
+/// [`super::decompose::DecomposeOptions::salt`]), `merge=greedy|settle|settle-split`
+/// (what follows its merges, [`super::decompose::MergeRule`]),
 /// `patches=position|vertex0` (the rest frame's contact patches,
 /// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
 pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
@@ -172,7 +173,7 @@ pub fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, patches=position|vertex0, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, patches=position|vertex0, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -190,6 +191,9 @@ pub fn apply_override(
                 auto.decompose.seeding = super::decompose::Seeding::parse(v).ok_or_else(bad)?
             }
             "salt" => auto.decompose.salt = v.parse::<u32>().map_err(|_| bad())?,
+            "merge" => {
+                auto.decompose.merge = super::decompose::MergeRule::parse(v).ok_or_else(bad)?
+            }
             "patches" if v == "position" => rule.contact.seed_by_position = true,
             "patches" if v == "vertex0" => rule.contact.seed_by_position = false,
             "max" => {
@@ -276,6 +280,14 @@ mod tests {
         apply_override("seed=vote-7,patches=position", &mut rule, &mut auto).unwrap();
         assert!(rule.contact.seed_by_position);
         assert_eq!(auto.decompose.seeding, Seeding::Vote(7));
+        use super::super::decompose::MergeRule;
+        assert_eq!(auto.decompose.merge, MergeRule::Greedy);
+        apply_override("merge=settle", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.decompose.merge, MergeRule::Settle);
+        apply_override("merge=settle-split", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.decompose.merge, MergeRule::SettleSplit);
+        apply_override("merge=greedy", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.decompose.merge, MergeRule::Greedy);
         apply_override("frames=median-quantiles", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.frames, FrameSample::MedianQuantiles);
         for bad in [
@@ -284,6 +296,7 @@ mod tests {
             "seed=consensus-0",
             "seed=vote-x",
             "salt=-1",
+            "merge=lazy",
             "patches=first",
             "rest=middle",
             "frames",

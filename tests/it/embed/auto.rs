@@ -2,15 +2,25 @@
 //! on the real captures against the landmark fixtures' rigs, on generated
 //! variants of samba (frames re-ordered, mirrored, turned Z-up, scaled to
 //! cm), and the refusals (one frame, another vertex count, not a body).
+//!
+//! The captures ([`capture`]) and the rigs `db init` makes of them and of
+//! their variants ([`db_init_rig`]) are made once for the whole
+//! `embed::` group and shared by `auto_knees`, `auto_arms`,
+//! `auto_facing`, `auto_hands`, `auto_held` and `auto_vertex_order`.
 
 use crate::common;
 
 use glam::DVec3;
+use std::borrow::Cow;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
 use surfmotion::embed::Embedding;
-use surfmotion::embed::auto::options::{AutoError, AutoOptions};
+use surfmotion::embed::auto::options::{AutoError, AutoOptions, automatic_setup};
+use surfmotion::embed::auto::report::AutoRig;
 use surfmotion::embed::auto::rig::auto_rig;
 use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::embed::rest::choose_rest_frame;
 use surfmotion::mesh::Mesh;
 use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::rig::Canonical;
@@ -52,16 +62,30 @@ pub(super) fn mean_percent(a: &[[f64; 3]; 19], b: &[[f64; 3]; 19], height: f64, 
     100.0 * s / 19.0 / height
 }
 
-/// The capture, its landmark rig, and the automatic rig's embedding of a
-/// variant made by `point` (applied to every position) with the triangles
-/// reversed when `flip`, frames in `order`.
+/// A real capture: its topology, frames and landmark rig (the fixture's
+/// landmarks through `Embedding::new`).
 pub(super) struct Capture {
     pub(super) mesh: Mesh,
     pub(super) frames: Vec<Vec<[f64; 3]>>,
     pub(super) truth: Embedding,
 }
 
-pub(super) fn capture(d: &Path, name: &str) -> Capture {
+/// Capture `name` (`samba` or `crane`), loaded once for the whole
+/// `embed::` group (every automatic-rig module reads the same two; each
+/// loaded it again, and built its landmark rig again, up to 14 times a
+/// run).
+pub(super) fn capture(d: &Path, name: &str) -> &'static Capture {
+    static SAMBA: OnceLock<Capture> = OnceLock::new();
+    static CRANE: OnceLock<Capture> = OnceLock::new();
+    let cell = match name {
+        "samba" => &SAMBA,
+        "crane" => &CRANE,
+        _ => panic!("embed::auto::capture: no capture fixture named {name}"),
+    };
+    cell.get_or_init(|| load_capture(d, name))
+}
+
+fn load_capture(d: &Path, name: &str) -> Capture {
     let seq = load_sequence(
         d.join(format!("4d/{name}/{name}.pc2")).to_str().unwrap(),
         &LoadOptions::default(),
@@ -84,11 +108,131 @@ pub(super) fn capture(d: &Path, name: &str) -> Capture {
     }
 }
 
-fn auto_embedding(mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> Embedding {
+/// A generated variant of a capture, as the automatic-rig tests make
+/// them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(super) enum Variant {
+    /// The capture as it is.
+    AsCaptured,
+    /// The frames in reverse order (the topology, frame 0, unchanged).
+    Reversed,
+    /// Mirrored across x = 0 (left and right swap; triangles reversed).
+    Mirrored,
+    /// Turned Z-up (y → z, z → −y).
+    ZUp,
+    /// Scaled to centimetres.
+    Cm,
+}
+
+impl Variant {
+    /// Where the variant puts point `p`.
+    pub(super) fn point(self, p: [f64; 3]) -> [f64; 3] {
+        match self {
+            Variant::AsCaptured | Variant::Reversed => p,
+            Variant::Mirrored => [-p[0], p[1], p[2]],
+            Variant::ZUp => [p[0], -p[2], p[1]],
+            Variant::Cm => p.map(|x| x * 100.0),
+        }
+    }
+
+    /// The variant's topology and frames.
+    fn of(self, c: &Capture) -> (Mesh, Vec<Vec<[f64; 3]>>) {
+        let mut tris = c.mesh.triangles().to_vec();
+        if self == Variant::Mirrored {
+            for t in &mut tris {
+                t.swap(1, 2);
+            }
+        }
+        let positions = c.mesh.positions().iter().map(|p| self.point(*p));
+        let mesh = Mesh::new(positions.collect(), tris).unwrap();
+        let mut frames: Vec<Vec<[f64; 3]>> = c
+            .frames
+            .iter()
+            .map(|fr| fr.iter().map(|p| self.point(*p)).collect())
+            .collect();
+        if self == Variant::Reversed {
+            frames.reverse();
+        }
+        (mesh, frames)
+    }
+}
+
+/// An automatic rig as `db init` makes it, and its embedding.
+pub(super) struct Rigged {
+    /// The automatic rig.
+    pub(super) rig: AutoRig,
+    /// Its landmarks embedded on the topology (`Embedding::new`).
+    pub(super) embedding: Embedding,
+    /// The rest frame chosen (`None`: the topology's positions).
+    pub(super) rest: Option<usize>,
+}
+
+/// The automatic rig as `db init` makes it: its rules (`automatic_setup`,
+/// `SURFMOTION_AUTORIG` applied), its parts found on the rest frame it
+/// would choose (the topology's positions, then every frame).
+pub(super) fn rig_as_db_init(mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> Rigged {
     let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
-    let rig = auto_rig(mesh, &f, &AutoOptions::default()).unwrap();
+    let mut all = vec![mesh.positions()];
+    all.extend_from_slice(&f);
+    let (rule, auto) = automatic_setup(&AutoOptions::default()).unwrap();
+    let choice = choose_rest_frame(mesh, &all, &rule).unwrap();
+    let rest = (choice.frame > 0).then(|| choice.frame - 1);
+    let opts = AutoOptions {
+        rest_frame: rest,
+        ..auto
+    };
+    let rig = auto_rig(mesh, &f, &opts).unwrap();
+    let embedding = Embedding::new(mesh, &rig.landmarks, None).unwrap();
+    Rigged {
+        rig,
+        embedding,
+        rest,
+    }
+}
+
+/// [`rig_as_db_init`] of capture `name` in variant `v`, made once for the
+/// whole `embed::` group: `embed::auto`, `auto_knees`, `auto_arms` and
+/// `auto_facing` check the same rigs (samba as captured was rigged five
+/// times a run, crane four, samba mirrored and Z-up three times each).
+/// A rig that panics is not kept: the next test asking makes it again.
+pub(super) fn db_init_rig(d: &Path, name: &str, v: Variant) -> &'static Rigged {
+    type Cells = BTreeMap<(String, Variant), &'static OnceLock<Rigged>>;
+    static RIGS: Mutex<Cells> = Mutex::new(BTreeMap::new());
+    let cell: &'static OnceLock<Rigged> = {
+        let mut cells = RIGS.lock().unwrap_or_else(|e| e.into_inner());
+        let key = (name.to_string(), v);
+        match cells.get(&key) {
+            Some(&cell) => cell,
+            None => {
+                let cell = Box::leak(Box::new(OnceLock::new()));
+                cells.insert(key, cell);
+                cell
+            }
+        }
+    };
+    cell.get_or_init(|| {
+        let (mesh, frames) = v.of(capture(d, name));
+        rig_as_db_init(&mesh, &frames)
+    })
+}
+
+/// The automatic rig's embedding of capture `name` in variant `v` with
+/// the parts found on the topology's positions (`db init`'s options), its
+/// confidence over 0.3: [`db_init_rig`]'s when `db init` keeps the
+/// topology as the rest frame (samba and crane and these variants of
+/// them), else made here.
+fn auto_embedding(d: &Path, name: &str, v: Variant) -> Cow<'static, Embedding> {
+    let r = db_init_rig(d, name, v);
+    if r.rest.is_none() {
+        assert!(r.rig.confidence > 0.3, "confidence {}", r.rig.confidence);
+        return Cow::Borrowed(&r.embedding);
+    }
+    let (mesh, frames) = v.of(capture(d, name));
+    let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
+    let (_, opts) = automatic_setup(&AutoOptions::default()).unwrap();
+    let rig = auto_rig(&mesh, &f, &opts).unwrap();
     assert!(rig.confidence > 0.3, "confidence {}", rig.confidence);
-    Embedding::new(mesh, &rig.landmarks, None).unwrap()
+    Cow::Owned(Embedding::new(&mesh, &rig.landmarks, None).unwrap())
 }
 
 #[test]
@@ -97,7 +241,7 @@ fn real_captures_rig_within_the_figure_of_their_landmark_rigs() {
     let Some(d) = common::data_dir() else { return };
     for name in ["samba", "crane"] {
         let c = capture(&d, name);
-        let e = auto_embedding(&c.mesh, &c.frames);
+        let e = auto_embedding(&d, name, Variant::AsCaptured);
         let err = mean_percent(&e.joints, &c.truth.joints, c.truth.height, false);
         assert!(err <= BOUND_PERCENT, "{name}: {err:.2}% of the height");
         let agree = e
@@ -124,40 +268,19 @@ fn samba_variants_rig_alike() {
     let Some(d) = common::data_dir() else { return };
     let c = capture(&d, "samba");
     let h = c.truth.height;
-    let variant = |f: &dyn Fn([f64; 3]) -> [f64; 3], flip: bool, reverse: bool| {
-        let mut tris = c.mesh.triangles().to_vec();
-        if flip {
-            for t in &mut tris {
-                t.swap(1, 2);
-            }
-        }
-        let mesh = Mesh::new(c.mesh.positions().iter().map(|p| f(*p)).collect(), tris).unwrap();
-        let mut frames: Vec<Vec<[f64; 3]>> = c
-            .frames
-            .iter()
-            .map(|fr| fr.iter().map(|p| f(*p)).collect())
-            .collect();
-        if reverse {
-            frames.reverse();
-        }
-        (mesh, frames)
-    };
     // Frames re-ordered (the rest frame is still the mesh).
-    let (m, fr) = variant(&|p| p, false, true);
-    let e = auto_embedding(&m, &fr);
+    let e = auto_embedding(&d, "samba", Variant::Reversed);
     let err = mean_percent(&e.joints, &c.truth.joints, h, false);
     assert!(err <= BOUND_PERCENT, "re-ordered: {err:.2}%");
     // Mirrored across x = 0: left and right swap.
     let mirror = |p: [f64; 3]| [-p[0], p[1], p[2]];
-    let (m, fr) = variant(&mirror, true, false);
-    let e = auto_embedding(&m, &fr);
+    let e = auto_embedding(&d, "samba", Variant::Mirrored);
     let truth: [[f64; 3]; 19] = c.truth.joints.map(mirror);
     let err = mean_percent(&e.joints, &truth, h, true);
     assert!(err <= BOUND_PERCENT, "mirrored: {err:.2}%");
     // Turned Z-up (y → z, z → −y).
     let zup = |p: [f64; 3]| [p[0], -p[2], p[1]];
-    let (m, fr) = variant(&zup, false, false);
-    let e = auto_embedding(&m, &fr);
+    let e = auto_embedding(&d, "samba", Variant::ZUp);
     assert!(
         DVec3::from_array(e.up).dot(DVec3::Z) > 0.99,
         "up {:?}",
@@ -167,8 +290,7 @@ fn samba_variants_rig_alike() {
     assert!(err <= BOUND_PERCENT, "Z-up: {err:.2}%");
     // Centimetres.
     let cm = |p: [f64; 3]| [p[0] * 100.0, p[1] * 100.0, p[2] * 100.0];
-    let (m, fr) = variant(&cm, false, false);
-    let e = auto_embedding(&m, &fr);
+    let e = auto_embedding(&d, "samba", Variant::Cm);
     let err = mean_percent(&e.joints, &c.truth.joints.map(cm), h * 100.0, false);
     assert!(err <= BOUND_PERCENT, "cm: {err:.2}%");
 }

@@ -11,12 +11,11 @@
 //! 10 %), no warning. The sinking was the hand's tip taken on the skirt
 //! (`embed::auto_hands`).
 
-use super::auto_knees::auto_embedding;
+use super::auto::{Variant, capture, db_init_rig};
 use crate::common;
 
 use glam::DVec3;
 use std::path::Path;
-use surfmotion::mesh::Mesh;
 use surfmotion::rig::Canonical;
 
 /// The figure's bound, in % of the height.
@@ -60,43 +59,25 @@ fn assert_arms(what: &str, a: [f64; 4]) {
 fn the_arms_of_the_real_captures_and_variants_are_the_landmark_rigs() {
     let Some(d) = common::data_dir() else { return };
     for name in ["samba", "crane"] {
-        let c = super::auto::capture(&d, name);
-        let e = auto_embedding(&c.mesh, &c.frames);
+        let c = capture(&d, name);
+        let e = &db_init_rig(&d, name, Variant::AsCaptured).embedding;
         assert_arms(
             name,
             arms(&e.joints, &c.truth.joints, c.truth.height, false),
         );
     }
-    let c = super::auto::capture(&d, "samba");
+    let c = capture(&d, "samba");
     let h = c.truth.height;
-    let variant = |f: &dyn Fn([f64; 3]) -> [f64; 3], flip: bool| {
-        let mut tris = c.mesh.triangles().to_vec();
-        if flip {
-            for t in &mut tris {
-                t.swap(1, 2);
-            }
-        }
-        let m = Mesh::new(c.mesh.positions().iter().map(|p| f(*p)).collect(), tris).unwrap();
-        let fr: Vec<Vec<[f64; 3]>> = c
-            .frames
-            .iter()
-            .map(|x| x.iter().map(|p| f(*p)).collect())
-            .collect();
-        (m, fr)
-    };
     // Mirrored across x = 0: the left arm is the landmark rig's right.
-    let mirror = |p: [f64; 3]| [-p[0], p[1], p[2]];
-    let (m, fr) = variant(&mirror, true);
-    let e = auto_embedding(&m, &fr);
-    assert_arms(
-        "mirrored",
-        arms(&e.joints, &c.truth.joints.map(mirror), h, true),
-    );
     // Z-up.
-    let zup = |p: [f64; 3]| [p[0], -p[2], p[1]];
-    let (m, fr) = variant(&zup, false);
-    let e = auto_embedding(&m, &fr);
-    assert_arms("Z-up", arms(&e.joints, &c.truth.joints.map(zup), h, false));
+    for (what, v, swap) in [
+        ("mirrored", Variant::Mirrored, true),
+        ("Z-up", Variant::ZUp, false),
+    ] {
+        let e = &db_init_rig(&d, "samba", v).embedding;
+        let want = c.truth.joints.map(|p| v.point(p));
+        assert_arms(what, arms(&e.joints, &want, h, swap));
+    }
 }
 
 #[test]

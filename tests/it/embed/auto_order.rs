@@ -174,8 +174,15 @@ fn samba_rigs_alike_in_any_order_of_its_frames() {
 }
 
 /// The synthetic humanoid (2 cm grid) walking a 4 s turn: its mesh and
-/// frames.
-pub(super) fn synthetic_walk() -> (Mesh, Vec<Vec<[f64; 3]>>) {
+/// frames, made once for the `embed::` group (`auto_order`,
+/// `auto_facing` and `auto_vertex_order` read it).
+pub(super) fn synthetic_walk() -> (&'static Mesh, &'static Vec<Vec<[f64; 3]>>) {
+    static WALK: std::sync::OnceLock<(Mesh, Vec<Vec<[f64; 3]>>)> = std::sync::OnceLock::new();
+    let (mesh, frames) = WALK.get_or_init(make_synthetic_walk);
+    (mesh, frames)
+}
+
+fn make_synthetic_walk() -> (Mesh, Vec<Vec<[f64; 3]>>) {
     use surfmotion::jobs::synth_db::SynthClip;
     use surfmotion::synth::clips::{Gait, gait_clip};
     use surfmotion::synth::database::{Dynamics, drive};
@@ -209,7 +216,7 @@ pub(super) fn synthetic_walk() -> (Mesh, Vec<Vec<[f64; 3]>>) {
 fn a_synthetic_walk_rigs_alike_in_any_order_of_its_frames() {
     let (mesh, frames) = synthetic_walk();
     let n = frames.len();
-    let failures = orders_agree("synthetic walk", &mesh, &frames, &[n / 3]);
+    let failures = orders_agree("synthetic walk", mesh, frames, &[n / 3]);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
@@ -217,7 +224,7 @@ fn a_synthetic_walk_rigs_alike_in_any_order_of_its_frames() {
 fn write_walk(dir: &Path) -> (String, String) {
     let (mesh, frames) = synthetic_walk();
     let (obj, pc2) = (dir.join("walk.obj"), dir.join("walk.pc2"));
-    write_obj(&mesh, None, &obj).unwrap();
+    write_obj(mesh, None, &obj).unwrap();
     let all: Vec<[f64; 3]> = frames.concat();
     write_pc2(mesh.vertex_count(), &all, &pc2).unwrap();
     (obj.display().to_string(), pc2.display().to_string())

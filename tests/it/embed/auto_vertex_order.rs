@@ -205,6 +205,6 @@ fn crane_renumbered_rigs_the_same() {
 #[test]
 fn a_synthetic_walk_renumbered_rigs_the_same() {
     let (mesh, frames) = super::auto_order::synthetic_walk();
-    let bad = numbering_failures("synthetic walk", &mesh, &frames);
+    let bad = numbering_failures("synthetic walk", mesh, frames);
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }
