@@ -21,25 +21,7 @@ use surfmotion::tools::eval::plausibility::{Checker, PlausibilityOptions, refere
 /// landmarks) in `dir/samba`, loaded once and its plausibility reference
 /// measured, so that every load cache is in its cache folder.
 fn loaded_samba(d: &Path, dir: &Path) -> PathBuf {
-    let db = dir.join("samba");
-    let landmarks =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
-    let r = common::run_cli(
-        &[
-            "db".as_ref(),
-            "init".as_ref(),
-            db.as_os_str(),
-            "--mesh".as_ref(),
-            d.join("4d/samba/samba.obj").as_os_str(),
-            "--sequence".as_ref(),
-            format!("dance={}", d.join("4d/samba/samba.pc2").display()).as_ref(),
-            "--landmarks".as_ref(),
-            landmarks.as_os_str(),
-        ],
-        None,
-        &[],
-    );
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let db = super::samba_db(d, dir);
     let ch = Character::load(&db, &Quiet).unwrap();
     Checker::for_character(&ch, PlausibilityOptions::default()).unwrap();
     Prepared::new(&ch, &RetargetOptions::default()).unwrap();

@@ -6,6 +6,7 @@
 //! key carries the code's fingerprint, so a cache another build wrote is
 //! rebuilt, not read.
 
+use super::samba_db;
 use crate::common;
 
 use std::path::{Path, PathBuf};
@@ -13,31 +14,6 @@ use surfmotion::db::frames::{keys, keys_of_code, poses_path};
 use surfmotion::db::rig_cache::rig_path;
 use surfmotion::db::{Character, Manifest, Quiet};
 use surfmotion::embed::frames::SkeletonKind;
-
-/// A database of the samba capture (175 frames, the rig from the test
-/// landmarks) in `dir/samba`, as `db init` writes it.
-fn samba_db(d: &Path, dir: &Path) -> PathBuf {
-    let db = dir.join("samba");
-    let landmarks =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
-    let r = common::run_cli(
-        &[
-            "db".as_ref(),
-            "init".as_ref(),
-            db.as_os_str(),
-            "--mesh".as_ref(),
-            d.join("4d/samba/samba.obj").as_os_str(),
-            "--sequence".as_ref(),
-            format!("dance={}", d.join("4d/samba/samba.pc2").display()).as_ref(),
-            "--landmarks".as_ref(),
-            landmarks.as_os_str(),
-        ],
-        None,
-        &[],
-    );
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
-    db
-}
 
 /// Each cache file's name and modification time.
 fn stamps(db: &Path) -> Vec<(String, std::time::SystemTime)> {

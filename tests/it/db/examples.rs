@@ -7,36 +7,13 @@
 //! of range are chosen again and the memo rewritten; a `retarget` with the
 //! memo writes the same bytes as one without.
 
+use super::samba_db;
 use crate::common;
 
 use std::path::{Path, PathBuf};
 use surfmotion::db::examples::examples_path;
 use surfmotion::db::{Character, FlatFrame, Quiet};
 use surfmotion::drive::{Prepared, RetargetOptions};
-
-/// A database of the samba capture in `dir/samba`, as `db init` writes it.
-fn samba_db(d: &Path, dir: &Path) -> PathBuf {
-    let db = dir.join("samba");
-    let landmarks =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/samba.landmarks.json");
-    let r = common::run_cli(
-        &[
-            "db".as_ref(),
-            "init".as_ref(),
-            db.as_os_str(),
-            "--mesh".as_ref(),
-            d.join("4d/samba/samba.obj").as_os_str(),
-            "--sequence".as_ref(),
-            format!("dance={}", d.join("4d/samba/samba.pc2").display()).as_ref(),
-            "--landmarks".as_ref(),
-            landmarks.as_os_str(),
-        ],
-        None,
-        &[],
-    );
-    assert_eq!(r.code, Some(0), "{}", r.stderr);
-    db
-}
 
 /// Each region's examples of a fresh load of `db` prepared with `want`
 /// examples a region.
