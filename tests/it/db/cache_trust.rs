@@ -9,7 +9,7 @@
 use super::samba_db;
 use crate::common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use surfmotion::db::frames::{keys, keys_of_code, poses_path};
 use surfmotion::db::rig_cache::rig_path;
 use surfmotion::db::{Character, Manifest, Quiet};

@@ -10,7 +10,7 @@
 use super::samba_db;
 use crate::common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use surfmotion::db::examples::examples_path;
 use surfmotion::db::{Character, FlatFrame, Quiet};
 use surfmotion::drive::{Prepared, RetargetOptions};
