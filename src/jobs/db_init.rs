@@ -15,7 +15,7 @@
 
 use super::JobError;
 use super::outputs::check_output_folder;
-use crate::db::init::{InitOptions, RestFrame, assemble_setup, assemble_setup_with};
+use crate::db::init::{InitError, InitOptions, RestFrame, assemble_setup, assemble_setup_with};
 use crate::db::{MANIFEST, Manifest};
 use crate::embed::auto::options::{AutoOptions, automatic_setup};
 use crate::embed::auto::report::AutoRig;
@@ -171,7 +171,13 @@ fn init_in(
         auto = Some(rig);
         file = Some(f);
     }
-    let (manifest, rest) = assemble_setup_with(dir, &o, &rule, &mut notes)?;
+    let (manifest, rest) = assemble_setup_with(dir, &o, &rule, &mut notes).map_err(|e| {
+        if wants_auto {
+            automatic_refused(e)
+        } else {
+            e.into()
+        }
+    })?;
     written.before(&dir.join(MANIFEST));
     manifest.save(dir)?;
     if let (Some(rig), Some(file)) = (&auto, &file) {
@@ -475,4 +481,60 @@ fn rig_capture(
             .push(format!("parts found on frame {f} of the sequences ({why})"));
     }
     Ok((rig, mesh.vertex_count()))
+}
+
+/// A refusal of the automatic rig's own landmarks. They are not the
+/// user's, and their file goes with everything else this call wrote, so
+/// the message says that the automatic rig failed its check and what to
+/// do instead, not "`InitOptions::landmarks` FILE: ..., landmarks of
+/// another mesh?" (a crane draw named the removed `auto.landmarks.json`).
+fn automatic_refused(e: InitError) -> JobError {
+    match e {
+        InitError::Read { option, source } if option.starts_with("`InitOptions::landmarks`") => {
+            let why = source.to_string();
+            let why = why
+                .split("; landmarks of another mesh")
+                .next()
+                .unwrap_or(&why);
+            JobError::Usage(format!(
+                "the automatic rig failed its own check ({why}); nothing was written: give the landmarks by hand (`InitOptions::landmarks`), or draw the automatic rig again (`SURFMOTION_AUTORIG=salt=N`, N = 1, 2, ...)"
+            ))
+        }
+        e => e.into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_refused_automatic_rig_names_no_landmark_file() {
+        let inner: Box<dyn std::error::Error + Send + Sync> = "landmark l_knee: 23% of the groin-chin distance on the right side of the body's mid-plane; landmarks of another mesh or character? (a file made for this mesh may record its \"vertex_count\")".into();
+        let e = InitError::Read {
+            option: "`InitOptions::landmarks` /db/auto.landmarks.json".into(),
+            source: inner,
+        };
+        let m = automatic_refused(e).to_string();
+        assert!(
+            m.starts_with("the automatic rig failed its own check (landmark l_knee: 23%"),
+            "{m}"
+        );
+        assert!(
+            !m.contains("auto.landmarks.json") && !m.contains("another mesh"),
+            "{m}"
+        );
+        assert!(
+            m.contains("`InitOptions::landmarks`") && m.contains("salt=N"),
+            "{m}"
+        );
+        // Any other refusal passes through as it was.
+        let other = automatic_refused(InitError::Option(
+            "`InitOptions::up` q: expected y, z or auto".into(),
+        ));
+        assert_eq!(
+            other.to_string(),
+            "`InitOptions::up` q: expected y, z or auto"
+        );
+    }
 }
