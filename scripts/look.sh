@@ -36,6 +36,8 @@ DB=$1 RESULT=$2 OUT=$3
 [ -x "$BIN" ] || { echo "no binary at $BIN (cargo build --release, or -b BIN)" >&2; exit 2; }
 [ -f "$DB/character.toml" ] || { echo "no database at $DB (no character.toml)" >&2; exit 2; }
 [ -f "$RESULT" ] || { echo "no result at $RESULT" >&2; exit 2; }
+case "$OUT" in *.png) ;; *) echo "OUT must be a .png (got $OUT)" >&2; exit 2 ;; esac
+[ "$(realpath -m "$OUT")" != "$(realpath -m "$RESULT")" ] || { echo "OUT is the result itself" >&2; exit 2; }
 command -v convert >/dev/null || { echo "needs ImageMagick's convert" >&2; exit 2; }
 PY=python3
 if ! $PY -c 'import numpy' 2>/dev/null; then
