@@ -696,19 +696,16 @@ pub fn read_frames_head(path: &Path) -> Result<CacheHead, FrameCacheError> {
                 "{count} frames of {n} vertices: not a size a frame cache can have"
             ))
         })?;
-    if len != expected {
-        return Err(FrameCacheError::Length {
-            path: path.to_path_buf(),
-            len,
-            expected,
-        });
-    }
-    Ok(CacheHead {
-        key,
-        frames: count,
-        per_frame: n,
-        bytes: len,
-    })
+    sized(
+        path,
+        CacheHead {
+            key,
+            frames: count,
+            per_frame: n,
+            bytes: len,
+        },
+        expected,
+    )
 }
 
 /// Every frame of the frame cache `path` (header `head`, from
@@ -775,19 +772,29 @@ pub fn read_poses_head(path: &Path) -> Result<CacheHead, FrameCacheError> {
                 "{count} poses: not a size a skeleton cache can have"
             ))
         })?;
-    if len != expected {
+    sized(
+        path,
+        CacheHead {
+            key,
+            frames: count,
+            per_frame: joints,
+            bytes: len,
+        },
+        expected,
+    )
+}
+
+/// `head` when the file's length (`head.bytes`) is the `expected` one its
+/// header declares; else the length error naming the file.
+fn sized(path: &Path, head: CacheHead, expected: u64) -> Result<CacheHead, FrameCacheError> {
+    if head.bytes != expected {
         return Err(FrameCacheError::Length {
             path: path.to_path_buf(),
-            len,
+            len: head.bytes,
             expected,
         });
     }
-    Ok(CacheHead {
-        key,
-        frames: count,
-        per_frame: joints,
-        bytes: len,
-    })
+    Ok(head)
 }
 
 /// The skeleton kind of a skeleton cache file named as
