@@ -62,7 +62,7 @@ impl std::str::FromStr for Method {
 /// Databases of at least this many frames get the sparse similarity by
 /// default (the dense matrix of 5,000 frames is 100 MB and about a minute
 /// on two cores; it grows with `n²`).
-pub const SPARSE_FRAMES: usize = 5000;
+pub(crate) const SPARSE_FRAMES: usize = 5000;
 
 /// Progress callbacks of a build (the library does not print).
 pub trait BuildProgress: Sync {
@@ -145,7 +145,7 @@ fn read_graph(path: &Path) -> Option<GraphFile> {
 /// The measure `db build` uses without `--measure`: the manifest's `[graph]
 /// measure`, else the paper's 6D colour measure when the database names
 /// vertex colours, else 3D shape.
-pub fn default_measure(m: &Manifest) -> Measure {
+pub(crate) fn default_measure(m: &Manifest) -> Measure {
     m.graph.measure.unwrap_or(if m.colors.is_some() {
         Measure::Colour
     } else {
@@ -170,7 +170,7 @@ pub fn sparse_path(dir: &Path, measure: Measure) -> PathBuf {
 }
 
 /// The key of a sparse similarity: the dense one's and the options.
-pub fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
+pub(crate) fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
     let mut k = KeyHasher::default();
     k.text("similarity", &similarity_key.to_string());
     let mut text = format!(
@@ -204,7 +204,7 @@ pub fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
 /// [`SparseOptions::with_overrides`]), e.g.
 /// `SURFMOTION_SPARSE=neighbours=12,rerank=0`. The cache key follows the
 /// options, so a build with other options never reads another's cache.
-pub const SPARSE_ENV: &str = "SURFMOTION_SPARSE";
+pub(crate) const SPARSE_ENV: &str = "SURFMOTION_SPARSE";
 
 /// The sparse options for a manifest's transition options: the band the
 /// longest window needs, its `min_gap`; then [`SPARSE_ENV`]'s overrides
@@ -259,7 +259,7 @@ pub fn similarity_key(dir: &Path, m: &Manifest, measure: Measure) -> Result<u64,
 
 /// The key a current graph cache carries: the similarity matrix's key,
 /// the transition options and the graph edits of the manifest.
-pub fn graph_key(m: &Manifest, similarity_key: u64) -> u64 {
+pub(crate) fn graph_key(m: &Manifest, similarity_key: u64) -> u64 {
     let mut gk = KeyHasher::default();
     gk.text("similarity", &similarity_key.to_string());
     gk.text(
@@ -343,7 +343,7 @@ fn cached_sparse(dir: &Path, m: &Manifest, measure: Measure, key: u64) -> Option
 /// frames for the shape measure, dense otherwise), from the cache if
 /// current. Returns the similarity, its key (the graph cache's input) and
 /// the report fields.
-pub fn similarity_with(
+pub(crate) fn similarity_with(
     dir: &Path,
     m: &Manifest,
     measure: Measure,
@@ -685,7 +685,7 @@ fn sparse_similarity(
 /// (`cache/similarity-MEASURE.partial`) as it finishes, so that a killed
 /// `db build` resumes from its last finished slice; smaller ones (seconds
 /// of work) at once, as before.
-pub const CHECKPOINT_FRAMES: usize = 1024;
+pub(crate) const CHECKPOINT_FRAMES: usize = 1024;
 
 /// A `tracing` notice (the CLI prints these as plain lines).
 fn notice(msg: String) {
@@ -824,7 +824,7 @@ pub fn build(
 
 /// [`build`] of a database whose manifest `m` is opened already
 /// ([`Manifest::load`] or [`Manifest::open`]).
-pub fn build_opened(
+pub(crate) fn build_opened(
     dir: &Path,
     m: &Manifest,
     opts: &BuildOptions,

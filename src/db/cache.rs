@@ -245,7 +245,7 @@ pub(crate) fn resume_rows(
 /// The checkpoint of a similarity build being written: finished rows are
 /// appended (and synced) as they come.
 #[derive(Debug)]
-pub struct Checkpoint {
+pub(crate) struct Checkpoint {
     path: PathBuf,
     file: std::fs::File,
     n: usize,

@@ -211,7 +211,7 @@ impl ContentMemo {
 /// that is there cannot be used.
 /// The number of files the memo `path` remembers, or why it cannot be
 /// read (`inspect`: a memo a load would not trust). A missing memo: 0.
-pub fn memo_entries(path: &Path) -> Result<usize, String> {
+pub(crate) fn memo_entries(path: &Path) -> Result<usize, String> {
     read_memo(path)
         .map(|k| k.len())
         .map_err(|why| format!("{}: {why}", path.display()))

@@ -29,7 +29,7 @@ use std::sync::Mutex;
 /// The fingerprint of the code that chooses the examples and keeps them
 /// (`build.rs`: the skeleton's sources, `src/deform/regions.rs` and this
 /// file): a build whose choice may differ chooses again.
-pub const EXAMPLES_SOURCE: &str = env!("SURFMOTION_EXAMPLES_SOURCE");
+pub(crate) const EXAMPLES_SOURCE: &str = env!("SURFMOTION_EXAMPLES_SOURCE");
 
 const FORMAT: &str = "surfmotion examples";
 
@@ -39,7 +39,7 @@ pub fn examples_path(dir: &Path) -> PathBuf {
 }
 
 /// The memo's key for a database whose skeleton cache key is `skeletons`.
-pub fn examples_key(skeletons: u64) -> u64 {
+pub(crate) fn examples_key(skeletons: u64) -> u64 {
     let mut h = super::cache::KeyHasher::default();
     h.text("examples", FORMAT);
     h.text("skeletons", &skeletons.to_string());
@@ -65,7 +65,7 @@ struct MemoFile {
 /// What the memo file `path` holds: its key, the database's frame count
 /// it was chosen over, and its entries (joints, wanted count, frames), or
 /// why it is not a memo (cut, changed, a frame out of range).
-pub fn read_examples(path: &Path) -> Result<(u64, usize, usize), String> {
+pub(crate) fn read_examples(path: &Path) -> Result<(u64, usize, usize), String> {
     let file = read_file(path)?;
     let key = parse_key(&file.key).ok_or_else(|| {
         format!(

@@ -374,7 +374,7 @@ pub fn keys_of_code(
 /// How one database's frames are converted (file units and axes to metres,
 /// Y-up).
 #[derive(Debug, Clone, Copy)]
-pub struct Conversion {
+pub(crate) struct Conversion {
     /// Metres per file unit.
     pub metres_per_unit: f64,
     /// The files are Z-up.
@@ -394,7 +394,7 @@ impl Conversion {
 /// database `dir` with its manifest and rig, `count` frames of `n`
 /// vertices, converted by `conv`, skeletons of `kind`.
 #[derive(Debug, Clone, Copy)]
-pub struct CacheInputs<'a> {
+pub(crate) struct CacheInputs<'a> {
     /// The database folder.
     pub dir: &'a Path,
     /// Its manifest.
@@ -644,7 +644,7 @@ pub fn read_poses(path: &Path, key: u64, count: usize) -> Result<Vec<Pose>, Fram
 /// file's own length (`inspect` of the file: [`read_frames_head`],
 /// [`read_poses_head`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct CacheHead {
+pub(crate) struct CacheHead {
     /// The key it was written under.
     pub key: u64,
     /// Frames it holds.
@@ -669,7 +669,7 @@ fn head_of(path: &Path, n: usize) -> Result<(Vec<u8>, u64), FrameCacheError> {
 /// against the frames and vertices it declares (a file cut short, or of
 /// another kind, is an error naming it). The frames themselves are not
 /// read ([`verify_frames`]).
-pub fn read_frames_head(path: &Path) -> Result<CacheHead, FrameCacheError> {
+pub(crate) fn read_frames_head(path: &Path) -> Result<CacheHead, FrameCacheError> {
     let (b, len) = head_of(path, 32)?;
     if b.len() < 8 || &b[..8] != FRAMES_MAGIC {
         return Err(FrameCacheError::header_at(path)(
@@ -715,7 +715,7 @@ pub fn read_frames_head(path: &Path) -> Result<CacheHead, FrameCacheError> {
 /// numbers) is an error naming it and the frame. Pages are released as
 /// it goes. A changed coordinate that keeps the frame's lowest point and
 /// stays finite is not seen (the file carries no checksum).
-pub fn verify_frames(path: &Path, head: &CacheHead) -> Result<(), FrameCacheError> {
+pub(crate) fn verify_frames(path: &Path, head: &CacheHead) -> Result<(), FrameCacheError> {
     let (n, count) = (head.per_frame as usize, head.frames as usize);
     let store = FrameStore::open(path, head.key, n, count)?;
     let header = FrameCacheError::header_at(path);
@@ -742,7 +742,7 @@ pub fn verify_frames(path: &Path, head: &CacheHead) -> Result<(), FrameCacheErro
 
 /// The header of the skeleton cache `path`: its magic and joints per pose,
 /// then its length against the poses it declares.
-pub fn read_poses_head(path: &Path) -> Result<CacheHead, FrameCacheError> {
+pub(crate) fn read_poses_head(path: &Path) -> Result<CacheHead, FrameCacheError> {
     let (b, len) = head_of(path, 32)?;
     let header = FrameCacheError::header_at(path);
     if b.len() < 8 || &b[..8] != POSES_MAGIC {
@@ -799,7 +799,7 @@ fn sized(path: &Path, head: CacheHead, expected: u64) -> Result<CacheHead, Frame
 
 /// The skeleton kind of a skeleton cache file named as
 /// [`poses_path`] names it (`poses-regressor.bin`, ...).
-pub fn poses_kind_of(path: &Path) -> Option<SkeletonKind> {
+pub(crate) fn poses_kind_of(path: &Path) -> Option<SkeletonKind> {
     let name = path.file_name()?.to_str()?;
     let kind = name.strip_prefix("poses-")?.strip_suffix(".bin")?;
     [
@@ -812,6 +812,6 @@ pub fn poses_kind_of(path: &Path) -> Option<SkeletonKind> {
 }
 
 /// The name of a skeleton kind in its cache file's name.
-pub fn skeleton_kind_name(kind: SkeletonKind) -> &'static str {
+pub(crate) fn skeleton_kind_name(kind: SkeletonKind) -> &'static str {
     kind_name(kind)
 }

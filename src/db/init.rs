@@ -138,7 +138,7 @@ pub fn assemble(
 
 /// The rest frame `db init` chose ([`InitOptions::choose_rest`]).
 #[derive(Clone, Debug, serde::Serialize)]
-pub struct RestFrame {
+pub(crate) struct RestFrame {
     /// The sequence of the frame chosen; `None`: the topology's own
     /// positions.
     pub sequence: Option<String>,
@@ -155,7 +155,7 @@ pub struct RestFrame {
 /// In steps: the options and paths ([`manifest_of`]), the files read and
 /// checked ([`check_files`], [`check_sequences`]), the rest frame
 /// ([`settle_rest`]), the folder and the relative paths ([`store_in`]).
-pub fn assemble_setup(
+pub(crate) fn assemble_setup(
     dir: &Path,
     opts: &InitOptions,
     notes: &mut Vec<String>,
@@ -165,7 +165,7 @@ pub fn assemble_setup(
 
 /// [`assemble_setup`] with the rest frame chosen by `rule` (the automatic
 /// rig's: [`RestOptions::by_pose`], the frame its parts were found on).
-pub fn assemble_setup_with(
+pub(crate) fn assemble_setup_with(
     dir: &Path,
     opts: &InitOptions,
     rule: &RestOptions,
@@ -497,7 +497,7 @@ fn check_sequences(dir: &Path, m: &Manifest, topo: &Mesh) -> Result<(), InitErro
 /// as Z-up is pushed onto `notes`): a capture whose body stands along +Z
 /// written as Y-up retargets into a contorted, tilted character with only
 /// indirect warnings (knee hyper-extension, turned-over triangles).
-pub fn resolve_up(
+pub(crate) fn resolve_up(
     up: &str,
     topo: &Mesh,
     landmarks: Option<&Path>,
@@ -571,7 +571,7 @@ pub fn resolve_up(
 /// unit is kept. A capture in
 /// millimetres read as metres built a 1.7 km dancer whose retargets
 /// reported 4.5 m of ground penetration.
-pub fn resolve_units(units: &str, topo: &Mesh, notes: &mut Vec<String>) -> String {
+pub(crate) fn resolve_units(units: &str, topo: &Mesh, notes: &mut Vec<String>) -> String {
     // The bounding box's largest side: the height standing, the span in a
     // T-pose (about the height), and the same whatever the up axis.
     let Some(h) = extent(topo.positions()) else {

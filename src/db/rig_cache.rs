@@ -40,11 +40,11 @@ use std::path::{Path, PathBuf};
 const FORMAT: &str = "surfmotion rig cache 1";
 
 /// The fingerprint of the embedding's source code (`build.rs`).
-pub const SOURCE: &str = env!("SURFMOTION_RIG_SOURCE");
+pub(crate) const SOURCE: &str = env!("SURFMOTION_RIG_SOURCE");
 
 /// Why a rig cache file cannot be used (the caller embeds the rig again).
 #[derive(Debug, thiserror::Error)]
-pub enum RigCacheError {
+pub(crate) enum RigCacheError {
     /// The file cannot be read.
     #[error("{}: {source}", path.display())]
     Io {
@@ -152,7 +152,7 @@ fn check_body(path: &Path, head: &Header, body: &[u8]) -> Result<(), RigCacheErr
 
 /// The header of the rig cache `path`, its rig's length and checksum
 /// checked (not its key: that needs the database, [`rig_key`]).
-pub fn read_head(path: &Path) -> Result<RigCacheHead, RigCacheError> {
+pub(crate) fn read_head(path: &Path) -> Result<RigCacheHead, RigCacheError> {
     let (head, body) = open(path)?;
     check_body(path, &head, &body)?;
     Ok(RigCacheHead {
@@ -169,7 +169,7 @@ pub fn rig_path(dir: &Path) -> PathBuf {
 
 /// The key of the rig a load embeds from the database `dir` given each
 /// sequence's frame count `lens` (see the module docs).
-pub fn rig_key(dir: &Path, m: &Manifest, lens: Option<&[usize]>) -> Result<u64, DbError> {
+pub(crate) fn rig_key(dir: &Path, m: &Manifest, lens: Option<&[usize]>) -> Result<u64, DbError> {
     let mut h = frames_key(dir, m)?;
     h.text("rig cache", FORMAT);
     h.text("rig source", SOURCE);
@@ -231,7 +231,7 @@ pub(crate) fn embed_rig_cached(
 
 /// Reads the rig cache `path` written for `key` and a topology of `n`
 /// vertices.
-pub fn read_rig(path: &Path, key: u64, n: usize) -> Result<Embedding, RigCacheError> {
+pub(crate) fn read_rig(path: &Path, key: u64, n: usize) -> Result<Embedding, RigCacheError> {
     let header = |what: &str| RigCacheError::Header {
         path: path.to_path_buf(),
         what: what.into(),
@@ -247,7 +247,7 @@ pub fn read_rig(path: &Path, key: u64, n: usize) -> Result<Embedding, RigCacheEr
 
 /// Writes `rig` to the cache `path` under `key`, atomically; `Ok(false)`
 /// (nothing written) when the rig would not read back equal to itself.
-pub fn save_rig(path: &Path, key: u64, rig: &Embedding) -> Result<bool, FsError> {
+pub(crate) fn save_rig(path: &Path, key: u64, rig: &Embedding) -> Result<bool, FsError> {
     let fs = |e: serde_json::Error| FsError {
         path: path.to_path_buf(),
         source: std::io::Error::other(e),

@@ -22,7 +22,7 @@ use std::path::Path;
 /// and writer (`src/db/frames.rs`); the cache's key carries it
 /// ([`super::frames::keys`]), so a build whose skeleton code changed
 /// rebuilds the cache instead of reading the skeletons the old code made.
-pub const SKELETON_SOURCE: &str = env!("SURFMOTION_SKELETON_SOURCE");
+pub(crate) const SKELETON_SOURCE: &str = env!("SURFMOTION_SKELETON_SOURCE");
 
 /// The skeletons of one sequence.
 #[derive(Debug, Clone, Serialize)]

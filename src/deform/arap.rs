@@ -23,7 +23,7 @@ const EXTRACT_ITERATIONS: usize = 8;
 /// (`source`, local order) to the solved ones (`solved`), and
 /// `delta[i] = Rᵢ · lsrc[i]` (`lsrc`: the source's Laplacian coordinates,
 /// unturned). `lap` gives the one-rings (a row's off-diagonal columns).
-pub fn local_step(
+pub(crate) fn local_step(
     lap: &[Vec<(u32, f64)>],
     source: &[[f64; 3]],
     solved: &[[f64; 3]],

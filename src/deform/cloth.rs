@@ -203,7 +203,7 @@ impl ClothStitch {
     /// The rotations the last [`ClothStitch::stitch`] with `ws` fitted,
     /// written into `turn` (one per vertex) at the cloth's vertices; the
     /// others are left as they are.
-    pub fn fitted_turns(&self, ws: &StitchWorkspace, turn: &mut [DQuat]) {
+    pub(crate) fn fitted_turns(&self, ws: &StitchWorkspace, turn: &mut [DQuat]) {
         for (&v, q) in self.global[..self.cloth].iter().zip(&ws.rots) {
             if let Some(t) = turn.get_mut(v as usize) {
                 *t = *q;
@@ -266,11 +266,11 @@ impl ClothStitch {
 /// The environment variable whose `name=value` pairs override the cloth
 /// stitch's options (measurements of issue 42; [`with_overrides`]), e.g.
 /// `SURFMOTION_CLOTH=stitch=0` for the deformation without the stitch.
-pub const CLOTH_ENV: &str = "SURFMOTION_CLOTH";
+pub(crate) const CLOTH_ENV: &str = "SURFMOTION_CLOTH";
 
 /// `opts` with [`CLOTH_ENV`]'s overrides (a warning, and none taken, when
 /// they cannot be read).
-pub fn with_env(opts: &DeformOptions) -> DeformOptions {
+pub(crate) fn with_env(opts: &DeformOptions) -> DeformOptions {
     match std::env::var(CLOTH_ENV) {
         Ok(text) => with_overrides(opts, &text).unwrap_or_else(|why| {
             tracing::warn!("{CLOTH_ENV}: {why}; the default cloth options are used");

@@ -87,7 +87,7 @@ impl Neighbourhoods {
     /// The seeds whose neighbourhood holds each vertex, vertex `v`'s
     /// `holding[start[v]..start[v + 1]]`, increasing: `(start, holding)`
     /// (a counting pass over the neighbourhoods).
-    pub fn holders(&self) -> (Vec<usize>, Vec<u32>) {
+    pub(crate) fn holders(&self) -> (Vec<usize>, Vec<u32>) {
         let n = self.seed_of.len();
         let mut at = vec![0usize; n + 1];
         for &v in &self.near {
@@ -114,7 +114,7 @@ impl Neighbourhoods {
 
     /// The rotation of seed `s`'s neighbourhood from `reference` onto
     /// `frame` (identity where it is degenerate or not finite).
-    pub fn seed_turn(&self, s: usize, reference: &[[f64; 3]], frame: &[[f64; 3]]) -> DQuat {
+    pub(crate) fn seed_turn(&self, s: usize, reference: &[[f64; 3]], frame: &[[f64; 3]]) -> DQuat {
         let near = &self.near[self.start[s]..self.start[s + 1]];
         let c = near
             .iter()
@@ -159,7 +159,7 @@ impl Neighbourhoods {
 /// surroundings, as a fold, crease or sliver does on screen, not when the
 /// skin's blend of two bones' turns (the skirt between the thighs) points
 /// elsewhere than the cloth went.
-pub fn turned_over_near(
+pub(crate) fn turned_over_near(
     near: &Neighbourhoods,
     tris: &[[u32; 3]],
     source: &[[f64; 3]],
@@ -392,7 +392,7 @@ impl SurfaceReading {
 /// to zero, so `x` needs no centring); the identity where the sum is
 /// degenerate or not finite. Shared with the surface measure
 /// ([`crate::tools::eval::triangles`]), which asks the same question.
-pub fn best_turn(pairs: impl Iterator<Item = (DVec3, DVec3)>) -> DQuat {
+pub(crate) fn best_turn(pairs: impl Iterator<Item = (DVec3, DVec3)>) -> DQuat {
     let mut h = DMat3::ZERO;
     for (x, o) in pairs {
         h += DMat3::from_cols(x * o.x, x * o.y, x * o.z);

@@ -22,7 +22,7 @@ use crate::mesh::solver::{FixedSolver, SolveError, Workspace};
 use nalgebra::DMatrix;
 
 /// A prefactored region.
-pub struct RegionSolver {
+pub(crate) struct RegionSolver {
     /// Global vertex ids of the region, in local order.
     pub vertices: Vec<u32>,
     /// Local constraint vertices and their weights.
@@ -36,7 +36,7 @@ pub struct RegionSolver {
 }
 
 /// Scratch of [`RegionSolver::solve`].
-pub struct RegionWorkspace {
+pub(crate) struct RegionWorkspace {
     rhs: Vec<[f64; 3]>,
     ws: Workspace,
     t: Vec<f64>,

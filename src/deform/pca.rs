@@ -14,7 +14,7 @@ use nalgebra::{DMatrix, SymmetricEigen};
 
 /// Mean and orthonormal basis of a deformation space.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Basis {
+pub(crate) struct Basis {
     /// Mean Laplacian coordinates `δ̄` (one `[x, y, z]` per vertex).
     pub mean: Vec<[f64; 3]>,
     /// Orthonormal components `e_k`, largest variance first.
@@ -32,7 +32,7 @@ fn dot(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 
 /// PCA of `examples` (each `n` rows), keeping components up to `keep` of the
 /// variance (0.95 in the paper; 1.0 keeps every non-zero one).
-pub fn pca(examples: &[Vec<[f64; 3]>], keep: f64) -> Basis {
+pub(crate) fn pca(examples: &[Vec<[f64; 3]>], keep: f64) -> Basis {
     let f = examples.len();
     let n = examples.first().map_or(0, Vec::len);
     let mut mean = vec![[0.0; 3]; n];

@@ -157,7 +157,12 @@ pub fn turned_over_from(
 /// `turn`: the test of [`turned_over_from`], one triangle (the same
 /// arithmetic, so the same answer bit for bit wherever it is asked).
 #[inline]
-pub fn faces_against(t: &[u32; 3], source_normal: DVec3, out: &[[f64; 3]], turn: &[DQuat]) -> bool {
+pub(crate) fn faces_against(
+    t: &[u32; 3],
+    source_normal: DVec3,
+    out: &[[f64; 3]],
+    turn: &[DQuat],
+) -> bool {
     (triangle_turn(t, turn) * source_normal).dot(normal(t, out)) < 0.0
 }
 
@@ -224,12 +229,12 @@ impl Budget {
     }
 
     /// Projections left.
-    pub fn projections_left(&self) -> usize {
+    pub(crate) fn projections_left(&self) -> usize {
         self.limit.projections.saturating_sub(self.done.projections)
     }
 
     /// Patch unknowns left.
-    pub fn patch_left(&self) -> usize {
+    pub(crate) fn patch_left(&self) -> usize {
         self.limit
             .patch_vertices
             .saturating_sub(self.done.patch_vertices)
@@ -284,7 +289,7 @@ pub fn unflip(
 /// vertices) would go past the patch unknowns left is not solved (the
 /// smoothing still runs); the patch unknowns solved are added to it.
 #[allow(clippy::too_many_arguments)]
-pub fn unflip_within(
+pub(crate) fn unflip_within(
     tris: &[[u32; 3]],
     adj: &Adjacency,
     source: &[[f64; 3]],

@@ -120,7 +120,7 @@ pub fn turned_references(
 
 /// [`references`]' source areas from the source normals
 /// ([`super::unflip::source_normals`]), into `areas`.
-pub fn source_areas(source_normals: &[DVec3], areas: &mut [f64]) {
+pub(crate) fn source_areas(source_normals: &[DVec3], areas: &mut [f64]) {
     for (a, c) in areas.iter_mut().zip(source_normals) {
         *a = 0.5 * c.length();
     }
@@ -155,7 +155,7 @@ impl LazyReferences {
     }
 
     /// Forgets every normal: the next reads are under other turns.
-    pub fn restart(&mut self) {
+    pub(crate) fn restart(&mut self) {
         self.reading = self.reading.wrapping_add(1);
         if self.reading == 0 {
             self.read_in.fill(0);
@@ -237,7 +237,7 @@ pub fn untangle(
 /// projections left cannot pay for its whole projection budget
 /// (`opts.max_steps` per margin); the projections made are added to it.
 #[allow(clippy::too_many_arguments)]
-pub fn untangle_within(
+pub(crate) fn untangle_within(
     tris: &[[u32; 3]],
     adj: &Adjacency,
     mut normals: &[DVec3],

@@ -16,7 +16,7 @@ use glam::DVec3;
 /// Before, only +Y was snapped to, and the samba scan turned Z-up was
 /// embedded about its leaning groin-chin line: joints up to 3.2 cm (1.8 %
 /// of the height) from the turned Y-up ones.
-pub fn body_up(body: DVec3) -> DVec3 {
+pub(crate) fn body_up(body: DVec3) -> DVec3 {
     let body = body.normalize_or(DVec3::Y);
     let best = nearest_axis(body);
     if best.dot(body) > 0.7 { best } else { body }
@@ -24,7 +24,7 @@ pub fn body_up(body: DVec3) -> DVec3 {
 
 /// The nearest of the six axis directions (±X, ±Y, ±Z) to `v` (+Y first on
 /// a tie; +Y for a zero or non-finite `v`).
-pub fn nearest_axis(v: DVec3) -> DVec3 {
+pub(crate) fn nearest_axis(v: DVec3) -> DVec3 {
     [
         DVec3::Y,
         DVec3::NEG_Y,

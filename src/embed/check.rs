@@ -185,7 +185,7 @@ pub fn check(e: &Embedding, mesh: &Mesh) -> EmbedCheck {
 /// steps (the mid-plane, central joints, twins, bones, joints inside,
 /// parts), each adding its warnings in that order.
 /// O(#joints · #F) for the inside test, O(#V) for the parts.
-pub fn check_with(e: &Embedding, mesh: &Mesh, o: &CheckOptions) -> EmbedCheck {
+pub(crate) fn check_with(e: &Embedding, mesh: &Mesh, o: &CheckOptions) -> EmbedCheck {
     let h = e.height.max(1e-12);
     let plane = check_plane(e);
     let headless = e.absent.iter().any(|a| a == "head");

@@ -354,7 +354,7 @@ impl Embedding {
 
     /// [`Embedding::new_on_frame`] with the skin weights fitted to the
     /// motion of `frames` ([`Embedding::new_moving`]).
-    pub fn new_on_frame_moving(
+    pub(crate) fn new_on_frame_moving(
         mesh: &Mesh,
         rest: &[[f64; 3]],
         lm: &Landmarks,
@@ -483,7 +483,7 @@ impl Embedding {
 
     /// The joints of a frame as plain centres of each joint's vertex set
     /// (the part-centroid skeleton of Huang et al. 2015, Sec. 3).
-    pub fn centroid_joints(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
+    pub(crate) fn centroid_joints(&self, positions: &[[f64; 3]]) -> [DVec3; Canonical::COUNT] {
         std::array::from_fn(|j| self.regressors[j].centroid(positions))
     }
 

@@ -61,7 +61,7 @@ pub fn poses(rig: &Embedding, frames: &[[f64; 3]], n: usize, kind: SkeletonKind)
 
 /// Calibrates the character's rigid skeleton over every measured sequence
 /// (one bone length for all) and fits it to each frame, in parallel.
-pub fn rigid_fit(rig: &Embedding, measured: &[&[Pose]]) -> (RigidSkeleton, Vec<Vec<Fit>>) {
+pub(crate) fn rigid_fit(rig: &Embedding, measured: &[&[Pose]]) -> (RigidSkeleton, Vec<Vec<Fit>>) {
     let all: Vec<Pose> = measured.iter().flat_map(|s| s.iter().copied()).collect();
     let rest = rig.joints.map(glam::DVec3::from_array);
     let sk = RigidSkeleton::calibrate(&rest, &all);

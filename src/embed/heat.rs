@@ -43,7 +43,7 @@ pub type Weights = Vec<[f64; Canonical::COUNT]>;
 /// a shoulder top beyond the shoulder joint is heated by the chest's bone
 /// and the side of the hip above the hip joint by the pelvis's (what an
 /// exact tie gave before).
-pub fn nearest_bones(positions: &[[f64; 3]], bones: &[Bone]) -> Vec<(usize, f64)> {
+pub(crate) fn nearest_bones(positions: &[[f64; 3]], bones: &[Bone]) -> Vec<(usize, f64)> {
     let (lo, hi) = positions.iter().fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
         |(lo, hi), q| {
@@ -71,7 +71,7 @@ pub fn nearest_bones(positions: &[[f64; 3]], bones: &[Bone]) -> Vec<(usize, f64)
 }
 
 /// Bone-heat weights for every vertex of `mesh`.
-pub fn bone_heat(mesh: &Mesh, bones: &[Bone]) -> Result<Weights, SolveError> {
+pub(crate) fn bone_heat(mesh: &Mesh, bones: &[Bone]) -> Result<Weights, SolveError> {
     let n = mesh.vertex_count();
     let diag = mesh.bounds().diagonal().max(1e-12);
     let near = nearest_bones(mesh.positions(), bones);
@@ -109,7 +109,7 @@ pub fn bone_heat(mesh: &Mesh, bones: &[Bone]) -> Result<Weights, SolveError> {
 
 /// Keeps the `K` largest weights of each row, dropping those below `min`,
 /// renormalised: `(joint indices, weights)`; unused slots have weight 0.
-pub fn sparsify<const K: usize>(w: &Weights, min: f64) -> Vec<([u8; K], [f64; K])> {
+pub(crate) fn sparsify<const K: usize>(w: &Weights, min: f64) -> Vec<([u8; K], [f64; K])> {
     w.iter()
         .map(|row| {
             let mut idx: Vec<usize> = (0..row.len()).collect();

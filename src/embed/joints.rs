@@ -149,7 +149,7 @@ fn mark(lm: &Landmarks, positions: &[[f64; 3]], l: Landmark) -> Option<DVec3> {
 /// named steps: the body's frame, neck and head, the mid-plane and the
 /// pelvis's centre, the ankles, the limbs (twice), the trunk, the toes,
 /// the hand tips.
-pub fn place_joints(
+pub(crate) fn place_joints(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     lm: &Landmarks,

@@ -238,7 +238,7 @@ fn missing_hint(missing: &str) -> String {
 /// groin, within 12 % of the height of it), moved forward by 4 % of the
 /// height (joint placement looks for the neck that far behind the chin).
 /// `None` without a groin or knees.
-pub fn neck_top(lm: &Landmarks, positions: &[[f64; 3]]) -> Option<[f64; 3]> {
+pub(crate) fn neck_top(lm: &Landmarks, positions: &[[f64; 3]]) -> Option<[f64; 3]> {
     use glam::DVec3;
     let at = |l: Landmark| lm.point(l, positions).map(DVec3::from_array);
     let g = at(Landmark::Groin)?;
@@ -556,7 +556,10 @@ impl Landmarks {
     /// the vertical from the groin→chin direction): what `db init`, `db
     /// info` and `inspect` check, so that a file no rig can be embedded
     /// from is refused there and not first by `retarget`.
-    pub fn load_checked(path: &Path, mesh: &crate::mesh::Mesh) -> Result<Landmarks, LandmarkError> {
+    pub(crate) fn load_checked(
+        path: &Path,
+        mesh: &crate::mesh::Mesh,
+    ) -> Result<Landmarks, LandmarkError> {
         let lm = Landmarks::load(path, mesh.vertex_count())?;
         let p = mesh.positions();
         let full = lm.completed(p);
@@ -583,7 +586,7 @@ impl Landmarks {
     /// The landmarks with, for a headless body ([`Landmarks::headless`]),
     /// the chin placed at the top of the neck on `positions`
     /// ([`neck_top`]); a copy otherwise.
-    pub fn completed(&self, positions: &[[f64; 3]]) -> Landmarks {
+    pub(crate) fn completed(&self, positions: &[[f64; 3]]) -> Landmarks {
         let mut lm = self.clone();
         if self.headless()
             && let Some(q) = neck_top(self, positions)
@@ -707,7 +710,7 @@ impl Landmarks {
     /// groin and every right one on the negative side, within 5 % of the
     /// groin-chin distance. Tolerant of the A-, T- and I-pose and of a body
     /// lying down (nothing assumes +Y).
-    pub fn check_anatomy(&self, positions: &[[f64; 3]]) -> Result<(), LandmarkError> {
+    pub(crate) fn check_anatomy(&self, positions: &[[f64; 3]]) -> Result<(), LandmarkError> {
         use Landmark as L;
         use glam::DVec3;
         let at = |l: Landmark| self.point(l, positions).map(DVec3::from_array);

@@ -34,7 +34,7 @@ impl MidPlane {
 
     /// The plane with normal `left` through the median of `points`' offsets
     /// along it (none: through the origin).
-    pub fn median_of(left: DVec3, points: &[DVec3]) -> MidPlane {
+    pub(crate) fn median_of(left: DVec3, points: &[DVec3]) -> MidPlane {
         let mut d: Vec<f64> = points.iter().map(|p| p.dot(left)).collect();
         MidPlane {
             normal: left.to_array(),
@@ -65,7 +65,7 @@ pub fn median(v: &mut [f64]) -> f64 {
 /// a loop wider than a quarter of the height `h` across on average (arms
 /// joined to it) is not used. Returns the plane and the estimates it is the
 /// median of (name, offset), for reports.
-pub fn estimate_mid_plane(
+pub(crate) fn estimate_mid_plane(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     marks: [DVec3; 3],

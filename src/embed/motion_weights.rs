@@ -38,7 +38,7 @@ use serde::Serialize;
 
 /// How [`refine`] fits.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MotionWeightOptions {
+pub(crate) struct MotionWeightOptions {
     /// τ: the RMS distance (fraction of the height) a unit change of the
     /// weights must save to be taken. Default 0.02.
     pub tolerance: f64,
@@ -65,7 +65,7 @@ impl Default for MotionWeightOptions {
 
 /// What [`refine`] changed.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct MotionWeightReport {
+pub(crate) struct MotionWeightReport {
     /// Frames fitted.
     pub frames: usize,
     /// Vertices whose part weights moved by more than 0.1 (largest part).
@@ -102,7 +102,7 @@ const MIN_SEGMENT: usize = 12;
 /// 370 torso vertices went to the thighs, the torso's slab at the pelvis
 /// shrank from 271 to 59 vertices, and differently from another rest
 /// frame: the head measure's drift between rest frames).
-pub fn refine(
+pub(crate) fn refine(
     rest: &[[f64; 3]],
     w: &mut Weights,
     labels: &[u8],
@@ -163,7 +163,7 @@ pub fn refine(
 /// checks' vertex sets). A vertex the fit takes off a part (a belly that
 /// touched the forearm in the rest frame: 0.89 → 0.01) is relabelled. The
 /// skin weights keep the whole fit.
-pub fn motion_labels(heat_labels: &[u8], w: &Weights, keep: f64) -> Vec<u8> {
+pub(crate) fn motion_labels(heat_labels: &[u8], w: &Weights, keep: f64) -> Vec<u8> {
     heat_labels
         .iter()
         .zip(w)

@@ -111,7 +111,7 @@ impl Part {
 }
 
 /// Per-vertex weight of each part (sum of its joints' weights).
-pub fn part_weights(w: &Weights) -> Vec<[f64; Part::COUNT]> {
+pub(crate) fn part_weights(w: &Weights) -> Vec<[f64; Part::COUNT]> {
     w.iter()
         .map(|row| {
             let mut p = [0.0; Part::COUNT];
@@ -168,7 +168,7 @@ fn pieces(labels: &[u8], nb: &[Vec<u32>], part: u8) -> Vec<Vec<u32>> {
 /// Labels each vertex with its heaviest part, then makes every part one
 /// connected region: each stray island of a part joins the neighbouring part
 /// it shares most edges with. Repeats until nothing changes.
-pub fn contiguous_labels(pw: &[[f64; Part::COUNT]], nb: &[Vec<u32>]) -> Vec<u8> {
+pub(crate) fn contiguous_labels(pw: &[[f64; Part::COUNT]], nb: &[Vec<u32>]) -> Vec<u8> {
     let mut labels: Vec<u8> = pw
         .iter()
         .map(|row| {
@@ -182,7 +182,7 @@ pub fn contiguous_labels(pw: &[[f64; Part::COUNT]], nb: &[Vec<u32>]) -> Vec<u8> 
 }
 
 /// Merges every part's islands but the largest into their neighbours.
-pub fn make_contiguous(labels: &mut [u8], nb: &[Vec<u32>]) {
+pub(crate) fn make_contiguous(labels: &mut [u8], nb: &[Vec<u32>]) {
     for _ in 0..32 {
         let mut changed = false;
         for p in 0..Part::COUNT as u8 {

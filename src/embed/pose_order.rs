@@ -29,7 +29,7 @@
 use std::cmp::Ordering;
 
 /// Vertices of the descriptor (at most; all of a smaller mesh).
-pub const DESCRIPTOR_VERTICES: usize = 96;
+pub(crate) const DESCRIPTOR_VERTICES: usize = 96;
 
 /// A frame's pose descriptor: the distances between every pair of
 /// [`DESCRIPTOR_VERTICES`] vertices spread evenly over the vertex indices
@@ -58,7 +58,7 @@ pub fn descriptor(frame: &[[f64; 3]]) -> Vec<f64> {
 /// taken at evenly spaced ranks. The same vertices, through any
 /// renumbering, whatever the frames' order; [`descriptor`]'s every
 /// `n / K`-th id follows the numbering. O(F n + n log n).
-pub fn descriptor_vertices(frames: &[&[[f64; 3]]]) -> Vec<u32> {
+pub(crate) fn descriptor_vertices(frames: &[&[[f64; 3]]]) -> Vec<u32> {
     use glam::DVec3;
     let n = frames.iter().map(|f| f.len()).min().unwrap_or(0);
     let mut far = vec![f64::NEG_INFINITY; n];
@@ -103,7 +103,7 @@ pub fn descriptor_vertices(frames: &[&[[f64; 3]]]) -> Vec<u32> {
 
 /// [`descriptor`] on the vertices `picked` (of [`descriptor_vertices`]):
 /// the distances between every pair of them in `frame`.
-pub fn descriptor_at(frame: &[[f64; 3]], picked: &[u32]) -> Vec<f64> {
+pub(crate) fn descriptor_at(frame: &[[f64; 3]], picked: &[u32]) -> Vec<f64> {
     let p: Vec<glam::DVec3> = picked
         .iter()
         .filter_map(|&v| frame.get(v as usize))
@@ -119,7 +119,7 @@ pub fn descriptor_at(frame: &[[f64; 3]], picked: &[u32]) -> Vec<f64> {
 }
 
 /// Squared distance of two descriptors.
-pub fn distance2(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn distance2(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }
 
@@ -136,7 +136,7 @@ fn by_pose(a: &[f64], b: &[f64]) -> Ordering {
 /// farthest from `seed` and those already taken (ties: the greater
 /// descriptor). The same poses give the same sequence of poses whatever
 /// their order in `descs`.
-pub fn farthest_first(descs: &[Vec<f64>], seed: &[f64], k: usize) -> Vec<usize> {
+pub(crate) fn farthest_first(descs: &[Vec<f64>], seed: &[f64], k: usize) -> Vec<usize> {
     let mut near: Vec<f64> = descs.iter().map(|d| distance2(d, seed)).collect();
     let mut taken = vec![false; descs.len()];
     let mut out = Vec::with_capacity(k.min(descs.len()));
@@ -211,7 +211,11 @@ fn largest_eigenvalue(a: [[f64; 3]; 3]) -> f64 {
 
 /// The indices `among` ordered by [`spread`] of their frames (the most
 /// standing, limbs-in pose first; ties: the lesser descriptor).
-pub fn standing_first(frames: &[&[[f64; 3]]], descs: &[Vec<f64>], among: &[usize]) -> Vec<usize> {
+pub(crate) fn standing_first(
+    frames: &[&[[f64; 3]]],
+    descs: &[Vec<f64>],
+    among: &[usize],
+) -> Vec<usize> {
     let mut order: Vec<(f64, usize)> = among.iter().map(|&i| (spread(frames[i]), i)).collect();
     order.sort_by(|a, b| {
         a.0.total_cmp(&b.0)
@@ -223,7 +227,7 @@ pub fn standing_first(frames: &[&[[f64; 3]]], descs: &[Vec<f64>], among: &[usize
 /// The number of nearest frames [`hold_radius`] asks of a capture of
 /// `frames` frames: about 3 % of them (5 of 175, a sixth of a second at
 /// 30 fps), at least 2 and at most 16, and fewer than the frames.
-pub fn hold_neighbours(frames: usize) -> usize {
+pub(crate) fn hold_neighbours(frames: usize) -> usize {
     (frames / 32).clamp(2, 16).min(frames.saturating_sub(1))
 }
 
@@ -233,7 +237,7 @@ pub fn hold_neighbours(frames: usize) -> usize {
 /// large for a pose passed through). 0 with `k` = 0; the farthest when
 /// fewer than `k` others. Depends on the set of poses alone, not their
 /// order. Cost O(F² K²) for F frames (samba's 175: 0.1 s).
-pub fn hold_radius(descs: &[Vec<f64>], k: usize) -> Vec<f64> {
+pub(crate) fn hold_radius(descs: &[Vec<f64>], k: usize) -> Vec<f64> {
     use rayon::prelude::*;
     descs
         .par_iter()
@@ -262,7 +266,11 @@ pub fn hold_radius(descs: &[Vec<f64>], k: usize) -> Vec<f64> {
 /// 4-10; its held end has the hands on the hips, a contact), on crane
 /// the A-pose start (frames 2-9), where [`standing_first`] chose a step
 /// of crane's walk (frame 86, a knee bent).
-pub fn held_first(frames: &[&[[f64; 3]]], descs: &[Vec<f64>], among: &[usize]) -> Vec<usize> {
+pub(crate) fn held_first(
+    frames: &[&[[f64; 3]]],
+    descs: &[Vec<f64>],
+    among: &[usize],
+) -> Vec<usize> {
     let radius = hold_radius(descs, hold_neighbours(descs.len()));
     let spreads: Vec<f64> = among.iter().map(|&i| spread(frames[i])).collect();
     let mut sorted = spreads.clone();

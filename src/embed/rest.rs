@@ -186,7 +186,7 @@ fn descriptors(frames: &[&[[f64; 3]]]) -> Vec<Vec<f64>> {
 }
 
 /// [`choose_rest_frame`] with a prepared finder.
-pub fn choose_with(
+pub(crate) fn choose_with(
     finder: &ContactFinder,
     frames: &[&[[f64; 3]]],
     opts: &RestOptions,

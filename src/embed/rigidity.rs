@@ -45,7 +45,7 @@ impl Rigid {
 
 /// The least-squares rigid motion taking `vertices` of `from` onto
 /// `to` (Kabsch). `None` for fewer than three vertices.
-pub fn rigid_motion(from: &[[f64; 3]], to: &[[f64; 3]], vertices: &[u32]) -> Option<Rigid> {
+pub(crate) fn rigid_motion(from: &[[f64; 3]], to: &[[f64; 3]], vertices: &[u32]) -> Option<Rigid> {
     if vertices.len() < 3 {
         return None;
     }
@@ -69,7 +69,7 @@ pub fn rigid_motion(from: &[[f64; 3]], to: &[[f64; 3]], vertices: &[u32]) -> Opt
 
 /// [`rigid_motion`] fitted again without the fifth of the vertices that
 /// fit worst (a mislabelled region or a contact does not drag it).
-pub fn robust_motion(from: &[[f64; 3]], to: &[[f64; 3]], vertices: &[u32]) -> Option<Rigid> {
+pub(crate) fn robust_motion(from: &[[f64; 3]], to: &[[f64; 3]], vertices: &[u32]) -> Option<Rigid> {
     let first = rigid_motion(from, to, vertices)?;
     let mut r: Vec<(f64, u32)> = vertices
         .iter()
@@ -87,7 +87,7 @@ pub fn robust_motion(from: &[[f64; 3]], to: &[[f64; 3]], vertices: &[u32]) -> Op
 
 /// Thresholds of [`part_rigidity`]; lengths are fractions of the height.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RigidityOptions {
+pub(crate) struct RigidityOptions {
     /// A vertex strays in a frame when its own part's motion misses it by
     /// more than this. Default 0.04 (7 cm on a 1.7 m person: more than a
     /// bulging muscle or a swinging skirt's hem near its part).
@@ -146,7 +146,7 @@ type Followed = (usize, Vec<u32>, Vec<(f64, usize)>);
 /// motion better than their own (see [`RigidityOptions`]). `height` in the
 /// frames' units. Cost: parts × frames × vertices distance evaluations over
 /// at most [`RigidityOptions::max_frames`] frames.
-pub fn part_rigidity(
+pub(crate) fn part_rigidity(
     labels: &[u8],
     rest: &[[f64; 3]],
     frames: &[&[[f64; 3]]],

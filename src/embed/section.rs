@@ -23,7 +23,7 @@ pub struct Loop {
 /// Cuts the mesh by the plane through `origin` with normal `normal` and
 /// returns its loops. Vertices exactly on the plane are nudged to one side,
 /// so every crossing lies strictly inside a mesh edge.
-pub fn cross_section(
+pub(crate) fn cross_section(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     origin: DVec3,
@@ -120,7 +120,7 @@ fn summarise(points: Vec<DVec3>) -> Loop {
 }
 
 /// Distance from `p` to the curve.
-pub fn distance_to(l: &Loop, p: DVec3) -> f64 {
+pub(crate) fn distance_to(l: &Loop, p: DVec3) -> f64 {
     let m = l.points.len();
     (0..m)
         .map(|i| segment_distance(p, l.points[i], l.points[(i + 1) % m]))
@@ -128,7 +128,7 @@ pub fn distance_to(l: &Loop, p: DVec3) -> f64 {
 }
 
 /// Distance from `p` to the segment `a b`.
-pub fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+pub(crate) fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
     let ab = b - a;
     let t = if ab.length_squared() > 0.0 {
         ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
@@ -140,7 +140,7 @@ pub fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
 
 /// Whether `p` (projected onto the loop's plane with normal `n`) is inside
 /// the loop, by the winding number.
-pub fn encloses(l: &Loop, p: DVec3, n: DVec3) -> bool {
+pub(crate) fn encloses(l: &Loop, p: DVec3, n: DVec3) -> bool {
     let u = n.any_orthonormal_vector();
     let v = n.cross(u);
     let q = |x: DVec3| ((x - p).dot(u), (x - p).dot(v));
@@ -156,7 +156,7 @@ pub fn encloses(l: &Loop, p: DVec3, n: DVec3) -> bool {
 /// The loop of the section through `origin` (normal `normal`) that belongs
 /// to the body part at `near`: the smallest loop enclosing `near`, else the
 /// loop passing closest to it.
-pub fn part_loop(
+pub(crate) fn part_loop(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     origin: DVec3,

@@ -12,7 +12,7 @@ use glam::DVec3;
 /// The generalised winding number of `q` with respect to the surface: 1
 /// inside a closed outward-oriented surface, 0 outside, in between near
 /// holes of an open one.
-pub fn winding_number(positions: &[[f64; 3]], triangles: &[[u32; 3]], q: DVec3) -> f64 {
+pub(crate) fn winding_number(positions: &[[f64; 3]], triangles: &[[u32; 3]], q: DVec3) -> f64 {
     let mut sum = 0.0;
     for t in triangles {
         let [a, b, c] = t.map(|v| DVec3::from_array(positions[v as usize]) - q);
@@ -31,7 +31,7 @@ pub fn is_inside(positions: &[[f64; 3]], triangles: &[[u32; 3]], q: DVec3) -> bo
 }
 
 /// The point of triangle `a b c` nearest to `p` (Ericson 2005, 5.1.5).
-pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+pub(crate) fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {

@@ -30,10 +30,10 @@ use crate::util::fsutil::write_atomic;
 use std::path::{Path, PathBuf};
 
 /// The setup report's file name in the database folder.
-pub const SETUP: &str = "setup.json";
+pub(crate) const SETUP: &str = "setup.json";
 
 /// The file the automatic landmarks are written to, in the database folder.
-pub const AUTO_LANDMARKS: &str = "auto.landmarks.json";
+pub(crate) const AUTO_LANDMARKS: &str = "auto.landmarks.json";
 
 /// What [`init_database`] wrote.
 #[derive(Clone, Debug, serde::Serialize)]

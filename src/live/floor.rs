@@ -23,7 +23,7 @@ use glam::{DQuat, DVec3};
 
 /// A running estimate of a stream's floor in each window's levelling.
 #[derive(Debug, Clone, PartialEq)]
-pub struct RunningFloor {
+pub(crate) struct RunningFloor {
     /// The estimate and the levelling it is a height in.
     held: Option<(f64, DQuat)>,
     /// The most the estimate moves per frame once it is held (metres).

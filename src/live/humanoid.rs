@@ -22,11 +22,11 @@ use std::collections::HashMap;
 
 /// A protocol's bones: `(name, parent)` in parents-first order (`""`: the
 /// root).
-pub type BoneTable = &'static [(&'static str, &'static str)];
+pub(crate) type BoneTable = &'static [(&'static str, &'static str)];
 
 /// Unity's humanoid body bones (`HumanBodyBones`, fingers left out), as
 /// VMC names them.
-pub const UNITY_BONES: BoneTable = &[
+pub(crate) const UNITY_BONES: BoneTable = &[
     ("Hips", ""),
     ("Spine", "Hips"),
     ("Chest", "Spine"),
@@ -56,7 +56,7 @@ pub const UNITY_BONES: BoneTable = &[
 
 /// The Unity bone each canonical joint is sent as ([`Canonical::ALL`]
 /// order).
-pub const UNITY_CANONICAL: [&str; Canonical::COUNT] = [
+pub(crate) const UNITY_CANONICAL: [&str; Canonical::COUNT] = [
     "Hips",
     "Spine",
     "Chest",
@@ -79,7 +79,7 @@ pub const UNITY_CANONICAL: [&str; Canonical::COUNT] = [
 ];
 
 /// Rokoko Studio Live's body joints (fingers left out).
-pub const ROKOKO_BONES: BoneTable = &[
+pub(crate) const ROKOKO_BONES: BoneTable = &[
     ("hip", ""),
     ("spine", "hip"),
     ("chest", "spine"),
@@ -106,7 +106,7 @@ pub const ROKOKO_BONES: BoneTable = &[
 ];
 
 /// The Rokoko joint each canonical joint is sent as.
-pub const ROKOKO_CANONICAL: [&str; Canonical::COUNT] = [
+pub(crate) const ROKOKO_CANONICAL: [&str; Canonical::COUNT] = [
     "hip",
     "spine",
     "chest",
@@ -139,17 +139,17 @@ pub struct Bone {
 }
 
 /// A point from the project's axes (right-handed, Y up) to Unity's.
-pub fn to_unity(p: DVec3) -> DVec3 {
+pub(crate) fn to_unity(p: DVec3) -> DVec3 {
     DVec3::new(-p.x, p.y, p.z)
 }
 
 /// A point from Unity's axes to the project's (the same mirror).
-pub fn from_unity(p: DVec3) -> DVec3 {
+pub(crate) fn from_unity(p: DVec3) -> DVec3 {
     to_unity(p)
 }
 
 /// A rotation mirrored between the two (its own inverse).
-pub fn mirror_rotation(q: DQuat) -> DQuat {
+pub(crate) fn mirror_rotation(q: DQuat) -> DQuat {
     DQuat::from_xyzw(q.x, -q.y, -q.z, q.w)
 }
 
@@ -184,7 +184,7 @@ impl BodyState {
     /// `offsets` gives the rest offset of each bone by name (this frame's
     /// translation for a bone it does not name). `None` when the root is
     /// missing.
-    pub fn to_clip(
+    pub(crate) fn to_clip(
         &self,
         table: BoneTable,
         local: bool,
@@ -321,7 +321,7 @@ pub fn local_bones(world: &[Bone; Canonical::COUNT]) -> [Bone; Canonical::COUNT]
 
 /// The rest offsets of a neutral pose along the canonical tree (each
 /// joint from its parent, the root from the origin).
-pub fn rest_offsets(pose: &Pose) -> [DVec3; Canonical::COUNT] {
+pub(crate) fn rest_offsets(pose: &Pose) -> [DVec3; Canonical::COUNT] {
     let mut out = [DVec3::ZERO; Canonical::COUNT];
     for c in Canonical::ALL {
         out[c.index()] = pose[c.index()] - c.parent().map_or(DVec3::ZERO, |p| pose[p.index()]);
@@ -332,7 +332,7 @@ pub fn rest_offsets(pose: &Pose) -> [DVec3; Canonical::COUNT] {
 /// The rest offsets of the joints of a received clip by name: the
 /// sender's reference's for the canonical joints sent under `names`, the
 /// clip's own translations (its first frame's) for the others.
-pub fn clip_offsets(
+pub(crate) fn clip_offsets(
     clip: &Clip,
     names: &[&str; Canonical::COUNT],
     reference: Option<&Pose>,

@@ -25,7 +25,7 @@ use glam::DQuat;
 
 /// The levelling and floor kept for a stream.
 #[derive(Debug, Clone, PartialEq)]
-pub struct KeptGround {
+pub(crate) struct KeptGround {
     /// Frames the stream must have before the levelling and floor are
     /// decided (the window's own decide until then).
     pub after: usize,

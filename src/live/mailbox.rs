@@ -27,7 +27,7 @@ pub struct Mailbox {
 }
 
 /// Frames a lossless mailbox holds at most (then the oldest is dropped).
-pub const LOSSLESS_CAP: usize = 100_000;
+pub(crate) const LOSSLESS_CAP: usize = 100_000;
 
 impl Mailbox {
     /// A mailbox where no frame replaces another: every frame is taken in
@@ -151,7 +151,7 @@ impl Fed {
     }
 
     /// The address listened on.
-    pub fn local_addr(&self) -> SocketAddr {
+    pub(crate) fn local_addr(&self) -> SocketAddr {
         self.addr
     }
 }

@@ -32,7 +32,7 @@ use serde::Serialize;
 /// Frames whose best-match costs set the scales (`T_skel`, `s_node`): the
 /// last 18,000 (10 minutes at 30 fps). A clip shorter than this has the
 /// offline scales; a longer stream's memory stays flat.
-pub const SCALE_WINDOW: usize = 18_000;
+pub(crate) const SCALE_WINDOW: usize = 18_000;
 
 /// Options of the online retrieval (besides the trellis's own).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -170,7 +170,7 @@ impl<'a> OnlineTrellis<'a> {
     }
 
     /// Frames received but not decided.
-    pub fn pending(&self) -> usize {
+    pub(crate) fn pending(&self) -> usize {
         self.rows.len()
     }
 
@@ -206,7 +206,7 @@ impl<'a> OnlineTrellis<'a> {
     /// its newer analysis: its candidates and its best-match cost in the
     /// scales' sample are `q`'s, as if `q` had been pushed. Decided frames
     /// stay decided; an index past the undecided ones is ignored.
-    pub fn revise(&mut self, k: usize, q: &Pose) {
+    pub(crate) fn revise(&mut self, k: usize, q: &Pose) {
         if self.db.poses.is_empty() || k >= self.rows.len() {
             return;
         }

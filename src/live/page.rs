@@ -27,16 +27,16 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
 /// The page.
-pub const LIVE_HTML: &str = include_str!("../web/assets/live.html");
+pub(crate) const LIVE_HTML: &str = include_str!("../web/assets/live.html");
 /// Its script.
-pub const LIVE_JS: &str = include_str!("../web/assets/live.js");
+pub(crate) const LIVE_JS: &str = include_str!("../web/assets/live.js");
 
 /// The path of the frames' WebSocket.
-pub const WS_PATH: &str = "/live";
+pub(crate) const WS_PATH: &str = "/live";
 
 /// What the page is told first.
 #[derive(Debug, Clone, Serialize)]
-pub struct Meta {
+pub(crate) struct Meta {
     /// Vertices of the character.
     pub vertices: usize,
     /// Its triangles (vertex indices, three a triangle).
@@ -63,13 +63,13 @@ struct Slot {
 /// The newest frame, shared by the session (which publishes) and every
 /// page connected (each sends the newest it has not sent).
 #[derive(Default)]
-pub struct Hub {
+pub(crate) struct Hub {
     slot: Mutex<Slot>,
     ready: Condvar,
 }
 
 /// One output frame as the page gets it.
-pub struct PageFrame<'a> {
+pub(crate) struct PageFrame<'a> {
     /// Output frame number.
     pub index: u64,
     /// Arrival to mesh ready (ms).
@@ -88,7 +88,7 @@ impl Hub {
     }
 
     /// Sets what a page is told first.
-    pub fn set_meta(&self, meta: &Meta) {
+    pub(crate) fn set_meta(&self, meta: &Meta) {
         let text = serde_json::to_string(meta).unwrap_or_default();
         self.lock().meta = Some(Arc::new(text));
         self.ready.notify_all();
@@ -97,7 +97,7 @@ impl Hub {
     /// Publishes a frame (replacing one no page has taken yet). The
     /// frame's buffer is the previous one's when no page still holds it,
     /// so a session with the page open does not allocate per frame.
-    pub fn publish(&self, f: &PageFrame<'_>) {
+    pub(crate) fn publish(&self, f: &PageFrame<'_>) {
         let mut bytes = self.lock().spare.take().unwrap_or_default();
         encode(f, &mut bytes);
         let mut s = self.lock();
@@ -167,7 +167,7 @@ impl Hub {
 }
 
 /// Bytes of a frame message before the positions.
-pub const FRAME_HEADER: usize = 52 + 12 * Canonical::COUNT;
+pub(crate) const FRAME_HEADER: usize = 52 + 12 * Canonical::COUNT;
 
 /// A frame as the page reads it (see the module doc), into `b` (cleared
 /// first; its capacity is kept).
@@ -223,7 +223,7 @@ fn quantisation(positions: &[[f64; 3]]) -> ([f64; 3], f64, [f64; 3]) {
 }
 
 /// The page's server, running until dropped.
-pub struct PageServer {
+pub(crate) struct PageServer {
     hub: Arc<Hub>,
     stop: Arc<AtomicBool>,
     url: String,
@@ -272,7 +272,7 @@ impl PageServer {
     }
 
     /// Publishes a frame to every page.
-    pub fn publish(&self, f: &PageFrame<'_>) {
+    pub(crate) fn publish(&self, f: &PageFrame<'_>) {
         self.hub.publish(f);
     }
 }

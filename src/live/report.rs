@@ -12,7 +12,7 @@ const BINS: usize = 40_000;
 
 /// Arrival-to-ready latencies, binned.
 #[derive(Debug, Clone)]
-pub struct Latencies {
+pub(crate) struct Latencies {
     bins: Vec<u32>,
     count: u64,
     sum_ms: f64,
@@ -37,7 +37,7 @@ impl Latencies {
     }
 
     /// Records one latency given in milliseconds.
-    pub fn add_ms(&mut self, ms: f64) {
+    pub(crate) fn add_ms(&mut self, ms: f64) {
         let b = ((ms / BIN_MS) as usize).min(BINS - 1);
         self.bins[b] += 1;
         self.count += 1;
@@ -46,7 +46,7 @@ impl Latencies {
     }
 
     /// The `q` quantile (0..1) in milliseconds (bin centre; 0 when empty).
-    pub fn quantile_ms(&self, q: f64) -> f64 {
+    pub(crate) fn quantile_ms(&self, q: f64) -> f64 {
         if self.count == 0 {
             return 0.0;
         }
@@ -143,7 +143,7 @@ pub struct Sample {
 
 /// The process's resident memory in MiB (`VmRSS` of `/proc/self/status`),
 /// `None` where it cannot be read.
-pub fn resident_mib() -> Option<f64> {
+pub(crate) fn resident_mib() -> Option<f64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = s.lines().find(|l| l.starts_with("VmRSS:"))?;
     let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;

@@ -11,7 +11,7 @@ use std::time::Instant;
 
 /// The stages of one output frame, in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stage {
+pub(crate) enum Stage {
     /// The pose kernel over the analysis window (and the window's upkeep).
     Analysis,
     /// The online trellis: candidates of the new frame, the fixed-lag solve.
@@ -51,7 +51,7 @@ impl Stage {
 /// CPU seconds of the whole process so far (every thread), or `None`
 /// where the platform does not say.
 #[cfg(unix)]
-pub fn process_cpu_seconds() -> Option<f64> {
+pub(crate) fn process_cpu_seconds() -> Option<f64> {
     let mut ts = libc::timespec {
         tv_sec: 0,
         tv_nsec: 0,
@@ -63,7 +63,7 @@ pub fn process_cpu_seconds() -> Option<f64> {
 
 /// CPU seconds of the whole process so far: `None` (not read here).
 #[cfg(not(unix))]
-pub fn process_cpu_seconds() -> Option<f64> {
+pub(crate) fn process_cpu_seconds() -> Option<f64> {
     None
 }
 
@@ -90,7 +90,7 @@ impl FrameStages {
 /// A running stage clock: [`StageClock::lap`] ends the current stage and
 /// starts the next.
 #[derive(Debug, Clone, Copy)]
-pub struct StageClock {
+pub(crate) struct StageClock {
     wall: Instant,
     cpu: Option<f64>,
 }
@@ -119,7 +119,7 @@ impl StageClock {
 
 /// The stage times of a session, binned (flat memory).
 #[derive(Debug, Clone, Default)]
-pub struct StageTally {
+pub(crate) struct StageTally {
     wall: [Latencies; 5],
     cpu: [Latencies; 5],
     /// Frames whose deformation ran the fold repair, and their

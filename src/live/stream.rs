@@ -27,7 +27,7 @@ use std::time::{Duration, Instant};
 
 /// A sender clock that goes back, or jumps ahead, by more than this many
 /// seconds is a sender that started again.
-pub const RESYNC_SECONDS: f64 = 2.0;
+pub(crate) const RESYNC_SECONDS: f64 = 2.0;
 
 /// What one datagram did.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -226,7 +226,7 @@ fn protocol_map<P: Protocol>(clip: &crate::mocap::Clip) -> Option<RigMap> {
 
 /// Where a source frame falls among the output frames.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Pace {
+pub(crate) enum Pace {
     /// The output frames (numbers) it is nearest to (maybe none).
     Due(std::ops::Range<u64>),
     /// The same time as the last frame.
@@ -240,7 +240,7 @@ pub enum Pace {
 
 /// The sender's clock against the output frames.
 #[derive(Debug, Clone, Default)]
-pub struct Pacer {
+pub(crate) struct Pacer {
     /// The sender time of output frame `base`.
     t0: f64,
     base: u64,
@@ -255,7 +255,7 @@ impl Pacer {
     /// the nearest to. Output frames before them that no source frame was
     /// nearest to (packets lost) are skipped: the gap in the numbering
     /// counts them as dropped.
-    pub fn due(&mut self, t: f64, fps: f64) -> Pace {
+    pub(crate) fn due(&mut self, t: f64, fps: f64) -> Pace {
         let mut restarted = false;
         match self.last {
             None => self.restart(t),

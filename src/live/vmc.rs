@@ -27,7 +27,7 @@ use rosc::{OscBundle, OscMessage, OscPacket, OscTime, OscType};
 pub const DEFAULT_PORT: u16 = 39539;
 
 /// The address of the reference extension.
-pub const REF_ADDR: &str = "/SurfMotion/Ref/Pos";
+pub(crate) const REF_ADDR: &str = "/SurfMotion/Ref/Pos";
 
 /// The VMC protocol's reader.
 #[derive(Debug, Default)]

@@ -42,7 +42,7 @@ pub(crate) fn half_cotangents(positions: &[[f64; 3]], triangles: &[[u32; 3]]) ->
 }
 
 /// A sparse symmetric matrix as summed triplets `(row, col, value)`.
-pub type Triplets = Vec<(u32, u32, f64)>;
+pub(crate) type Triplets = Vec<(u32, u32, f64)>;
 
 /// Triplets of the cotangent Laplacian (libigl sign: negative semi-definite).
 /// Duplicates are meant to be summed.

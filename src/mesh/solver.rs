@@ -97,7 +97,7 @@ impl FixedSolver {
     /// each its `(column, value)` pairs sorted by column without repeats,
     /// as [`to_rows`] gives them), for a caller that assembles them
     /// without sorting triplets. A column out of range is a typed error.
-    pub fn from_rows(
+    pub(crate) fn from_rows(
         n: usize,
         rows: Vec<Vec<(u32, f64)>>,
         fixed: &[u32],

@@ -551,7 +551,7 @@ fn build_tree(
 }
 
 /// Reads an ASF file.
-pub fn read_asf(path: &Path) -> Result<AsfSkeleton, MocapError> {
+pub(crate) fn read_asf(path: &Path) -> Result<AsfSkeleton, MocapError> {
     parse_asf(&crate::util::fsutil::read_text(path)?, path)
 }
 
@@ -651,7 +651,7 @@ impl AsfSkeleton {
     }
 
     /// The skeleton in its rest pose, as a one-frame clip.
-    pub fn rest_clip(&self, path: &Path) -> Result<Clip, MocapError> {
+    pub(crate) fn rest_clip(&self, path: &Path) -> Result<Clip, MocapError> {
         let zero: Vec<Vec<f64>> = self.bones.iter().map(|b| vec![0.0; b.dof.len()]).collect();
         let mut frame = zero;
         frame[0] = self.bones[0]
@@ -894,7 +894,7 @@ impl<'a> AmcFrames<'a> {
 }
 
 /// Reads an AMC file with its ASF.
-pub fn read_amc(amc: &Path, asf: &Path, opts: &AmcOptions) -> Result<Clip, MocapError> {
+pub(crate) fn read_amc(amc: &Path, asf: &Path, opts: &AmcOptions) -> Result<Clip, MocapError> {
     let skel = read_asf(asf)?;
     parse_amc(&crate::util::fsutil::read_text(amc)?, amc, &skel, opts)
 }

@@ -112,7 +112,7 @@ impl<'a> Tokens<'a> {
 }
 
 /// Most characters of file text an error or warning quotes.
-pub const QUOTE_CHARS: usize = 40;
+pub(crate) const QUOTE_CHARS: usize = 40;
 
 /// File text as errors and warnings quote it, in single quotes: at most
 /// [`QUOTE_CHARS`] characters (then `…`), and every character that does
@@ -158,7 +158,7 @@ pub fn quoted(s: &str) -> String {
 /// degrees): no capture comes near it, and beyond it sums overflow to
 /// infinity downstream (an OFFSET of 1e308 was read, and its unit printed
 /// as a 300-digit number).
-pub const MAX_ABS_VALUE: f64 = 1e9;
+pub(crate) const MAX_ABS_VALUE: f64 = 1e9;
 
 fn parse_f64(tok: &str, path: &Path, line: usize, what: &str) -> Result<f64, MocapError> {
     match tok.parse::<f64>() {

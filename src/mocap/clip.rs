@@ -34,7 +34,7 @@ pub enum Channel {
 
 impl Channel {
     /// The usual root channels: position, then Z Y X rotation.
-    pub const ROOT6: [Channel; 6] = [
+    pub(crate) const ROOT6: [Channel; 6] = [
         Channel::Xposition,
         Channel::Yposition,
         Channel::Zposition,
@@ -346,7 +346,7 @@ impl Clip {
     }
 
     /// Scales every length (offsets, tails, translations) by `s`.
-    pub fn scale_lengths(&mut self, s: f64) {
+    pub(crate) fn scale_lengths(&mut self, s: f64) {
         for j in &mut self.joints {
             j.offset *= s;
             if let Some(t) = &mut j.tail {
@@ -361,7 +361,7 @@ impl Clip {
     /// Rotates the whole clip's coordinate frame by `r` (a change of basis):
     /// offsets, tails and translations are rotated and local rotations are
     /// conjugated, so the rest pose keeps its meaning in the new frame.
-    pub fn change_basis(&mut self, r: DQuat) {
+    pub(crate) fn change_basis(&mut self, r: DQuat) {
         let inv = r.inverse();
         for j in &mut self.joints {
             j.offset = r * j.offset;

@@ -18,7 +18,7 @@ pub fn compose(axes: &[usize], radians: &[f64]) -> DQuat {
 }
 
 /// Rotation of `r` radians about axis `a` (0 = x, 1 = y, 2 = z).
-pub fn axis_rotation(a: usize, r: f64) -> DQuat {
+pub(crate) fn axis_rotation(a: usize, r: f64) -> DQuat {
     match a {
         0 => DQuat::from_rotation_x(r),
         1 => DQuat::from_rotation_y(r),
@@ -27,7 +27,7 @@ pub fn axis_rotation(a: usize, r: f64) -> DQuat {
 }
 
 /// The glam intrinsic Euler order for three rotation axes, if it is one.
-pub fn euler_order(axes: [usize; 3]) -> Option<EulerRot> {
+pub(crate) fn euler_order(axes: [usize; 3]) -> Option<EulerRot> {
     Some(match axes {
         [2, 1, 0] => EulerRot::ZYX,
         [2, 0, 1] => EulerRot::ZXY,
@@ -47,7 +47,7 @@ pub fn euler_order(axes: [usize; 3]) -> Option<EulerRot> {
 
 /// The rotation channels a writer can emit for `channels`: the joint's own
 /// order when it is a full three-angle sequence, else Z Y X.
-pub fn writable_rotation_order(channels: &[Channel]) -> [usize; 3] {
+pub(crate) fn writable_rotation_order(channels: &[Channel]) -> [usize; 3] {
     let axes: Vec<usize> = channels
         .iter()
         .filter(|c| c.is_rotation())
@@ -63,7 +63,7 @@ pub fn writable_rotation_order(channels: &[Channel]) -> [usize; 3] {
 
 /// Decomposes `q` into three angles (degrees) about `axes`, so that
 /// [`compose`] of them (in radians) gives `q` back.
-pub fn decompose_degrees(q: DQuat, axes: [usize; 3]) -> DVec3 {
+pub(crate) fn decompose_degrees(q: DQuat, axes: [usize; 3]) -> DVec3 {
     let order = euler_order(axes).unwrap_or(EulerRot::ZYX);
     let (a, b, c) = q.normalize().to_euler(order);
     DVec3::new(a.to_degrees(), b.to_degrees(), c.to_degrees())

@@ -46,7 +46,7 @@ const MAX_SAMPLES: f64 = 2e8;
 /// True when `bytes` start like an FBX file: the binary magic
 /// `Kaydara FBX Binary` or an ASCII file's `; FBX` header comment (after an
 /// optional UTF-8 byte-order mark and blank space).
-pub fn is_fbx(bytes: &[u8]) -> bool {
+pub(crate) fn is_fbx(bytes: &[u8]) -> bool {
     if bytes.starts_with(b"Kaydara FBX Binary") {
         return true;
     }
@@ -99,7 +99,7 @@ pub struct FbxInfo {
 
 /// Reads an FBX file's skeleton and one take as a clip (see the module
 /// documentation).
-pub fn read_fbx(path: &Path, opts: &FbxOptions) -> Result<Clip, MocapError> {
+pub(crate) fn read_fbx(path: &Path, opts: &FbxOptions) -> Result<Clip, MocapError> {
     let bytes = read_bytes(path)?;
     parse_fbx(&bytes, path, opts)
 }
@@ -111,7 +111,7 @@ pub fn parse_fbx(bytes: &[u8], path: &Path, opts: &FbxOptions) -> Result<Clip, M
 }
 
 /// Lists what an FBX file holds: version, units, axes, takes.
-pub fn fbx_info(path: &Path) -> Result<FbxInfo, MocapError> {
+pub(crate) fn fbx_info(path: &Path) -> Result<FbxInfo, MocapError> {
     let bytes = read_bytes(path)?;
     let scene = load_scene(&bytes, path, false)?;
     let takes = takes(&scene);

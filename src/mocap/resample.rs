@@ -11,13 +11,13 @@ const END_SLACK: f64 = 0.01;
 
 /// Bytes one frame of a clip holds per joint (a quaternion and a
 /// translation, f64).
-pub const CLIP_BYTES_PER_JOINT: u128 = 32 + 24;
+pub(crate) const CLIP_BYTES_PER_JOINT: u128 = 32 + 24;
 
 impl Clip {
     /// Frames of the clip resampled to `fps` (no allocation): the first
     /// frame, then one per `1/fps` up to the clip's end. `None` if `fps` is
     /// not a positive finite number.
-    pub fn resampled_frame_count(&self, fps: f64) -> Option<u128> {
+    pub(crate) fn resampled_frame_count(&self, fps: f64) -> Option<u128> {
         if !(fps.is_finite() && fps > 0.0) {
             return None;
         }

@@ -29,7 +29,7 @@ pub fn y_up(p: [f64; 3], z_up: bool) -> DVec3 {
 }
 
 /// CMU's length unit: 1/0.45 inch.
-pub const CMU_UNIT_M: f64 = 0.0254 / 0.45;
+pub(crate) const CMU_UNIT_M: f64 = 0.0254 / 0.45;
 
 /// A unit name users may give (`m`, `cm`, `mm`, `dm`, `inch`, `ft`, `cmu`,
 /// `mmd`) or a
@@ -64,7 +64,7 @@ pub fn parse_unit(s: &str) -> Option<Units> {
 }
 
 /// Largest span of the rest skeleton (joints and end sites), in file units.
-pub fn rest_extent(clip: &Clip) -> f64 {
+pub(crate) fn rest_extent(clip: &Clip) -> f64 {
     let (pos, ends) = clip.rest_positions();
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -78,7 +78,7 @@ pub fn rest_extent(clip: &Clip) -> f64 {
 /// Guesses the unit of a BVH clip from its rest skeleton's extent (the
 /// fallback when no humanoid's limbs are found: [`units_from_stature`] is
 /// the rule for humanoids). `cmu` says the names follow a CMU convention.
-pub fn guess_units(clip: &Clip, cmu: bool) -> Units {
+pub(crate) fn guess_units(clip: &Clip, cmu: bool) -> Units {
     let h = rest_extent(clip);
     let mut cands: Vec<(f64, &str)> = vec![(1.0, "m"), (0.01, "cm"), (0.001, "mm")];
     if cmu {
@@ -125,27 +125,27 @@ pub const BVH_UNITS: [(f64, &str); 6] = [
 /// 2.07 m read as inches: children from about 0.85 m (3 years) in
 /// centimetres and adults up to about 2.0 m in inches are read right.
 /// Between metres and feet the boundary is 0.72 m read as metres.
-pub const STATURE_CENTRE_M: f64 = 1.3;
+pub(crate) const STATURE_CENTRE_M: f64 = 1.3;
 
 /// Statures (m) for which a CMU-named rig keeps CMU's unit: the CMU
 /// database's subjects are adults (1.50 and 1.60 m by [`stature_from_limbs`]
 /// on subjects 131 and 01). Narrow on purpose: Xsens MVN carries every CMU
 /// 3dsMax name, and an Xsens body of 1.49 m written in decimetres reads
 /// 0.84 m in CMU units.
-pub const CMU_STATURE_M: (f64, f64) = (1.2, 2.2);
+pub(crate) const CMU_STATURE_M: (f64, f64) = (1.2, 2.2);
 
 /// The fractions of the stature `H` the limb bones span (Drillis & Contini
 /// 1966, joint centre to joint centre): thigh 0.245 H + shin 0.246 H, and
 /// upper arm 0.186 H + forearm 0.146 H.
-pub const LEG_OF_STATURE: f64 = 0.491;
+pub(crate) const LEG_OF_STATURE: f64 = 0.491;
 /// See [`LEG_OF_STATURE`].
-pub const ARM_OF_STATURE: f64 = 0.332;
+pub(crate) const ARM_OF_STATURE: f64 = 0.332;
 
 /// A humanoid's stature from its limb bones, in file units: (thigh + shin,
 /// mean of both legs) and (upper arm + forearm, mean of both arms) summed
 /// over [`LEG_OF_STATURE`] + [`ARM_OF_STATURE`]. `None` unless both are
 /// positive and finite.
-pub fn stature_from_limbs(leg: f64, arm: f64) -> Option<f64> {
+pub(crate) fn stature_from_limbs(leg: f64, arm: f64) -> Option<f64> {
     let h = (leg + arm) / (LEG_OF_STATURE + ARM_OF_STATURE);
     (leg > 0.0 && arm > 0.0 && h.is_finite()).then_some(h)
 }
@@ -157,17 +157,17 @@ pub fn stature_from_limbs(leg: f64, arm: f64) -> Option<f64> {
 /// rig carries MMD's standard trunk bones ([`crate::rig::names::mmd_rig`]:
 /// MMD exports are never written in dm, MakeHuman's dm rigs carry no MMD
 /// name).
-pub const MMD_UNIT_M: f64 = 0.08;
+pub(crate) const MMD_UNIT_M: f64 = 0.08;
 
 /// Statures (m) of human bodies, toddlers to the tallest adults: a unit is
 /// chosen only if it gives one. When none of the candidate units does (a
 /// game rig in an arbitrary unit), the clip is scaled to
 /// [`NOMINAL_STATURE_M`] instead, and the reason says so.
-pub const HUMAN_STATURE_M: (f64, f64) = (0.75, 2.2);
+pub(crate) const HUMAN_STATURE_M: (f64, f64) = (0.75, 2.2);
 
 /// The stature (m) a humanoid whose unit no candidate explains is scaled
 /// to: an adult's (the mean of men and women, about 1.70 m).
-pub const NOMINAL_STATURE_M: f64 = 1.7;
+pub(crate) const NOMINAL_STATURE_M: f64 = 1.7;
 
 /// Which family of exporters a rig's names point to, for the unit
 /// candidates of [`units_from_stature`].
@@ -269,7 +269,7 @@ fn dominant_up(d: DVec3) -> Option<UpAxis> {
 /// pose up is taken into account). `head` (or the neck when the head is
 /// derived) and `pelvis` are the clip's joints, as the rig map names them
 /// ([`crate::rig::guess_up`] finds them). Returns the axis and the reason.
-pub fn up_from_joints(
+pub(crate) fn up_from_joints(
     clip: &Clip,
     head: Option<JointId>,
     pelvis: Option<JointId>,
@@ -325,7 +325,7 @@ pub fn up_from_joints(
 /// does not say, and BVH's own convention
 /// (Y-up) is assumed and the reason says the axis is unknown. Head − pelvis
 /// is not used: a horizontal body's head lies ahead of its pelvis.
-pub fn up_from_ground(clip: &Clip) -> (UpAxis, String) {
+pub(crate) fn up_from_ground(clip: &Clip) -> (UpAxis, String) {
     let (pos, mut ends) = clip.rest_positions();
     let mut parent_of = vec![false; pos.len()];
     for j in &clip.joints {

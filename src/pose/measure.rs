@@ -17,7 +17,7 @@ use glam::{DQuat, DVec3};
 
 /// MotionBuilder names of the canonical joints (understood by every mocap
 /// viewer and by the rig detector).
-pub const BVH_NAMES: [&str; Canonical::COUNT] = [
+pub(crate) const BVH_NAMES: [&str; Canonical::COUNT] = [
     "Hips",
     "Spine",
     "Spine1",
@@ -42,7 +42,7 @@ pub const BVH_NAMES: [&str; Canonical::COUNT] = [
 /// A BVH-ready clip of poses on a skeleton whose bone offsets are `rest`'s:
 /// the root carries the pelvis position, every joint its local rotation.
 /// Playing it reproduces each pose's bone directions with `rest`'s lengths.
-pub fn pose_clip(rest: &Pose, poses: &[Pose], fps: f64) -> Result<Clip, ClipError> {
+pub(crate) fn pose_clip(rest: &Pose, poses: &[Pose], fps: f64) -> Result<Clip, ClipError> {
     let kids = children();
     let joints: Vec<Joint> = Canonical::ALL
         .iter()
@@ -86,7 +86,7 @@ pub fn pose_clip(rest: &Pose, poses: &[Pose], fps: f64) -> Result<Clip, ClipErro
 /// A clip of skeletons extracted from a Y-up mesh sequence: `rotations`
 /// (local) and `translations` hold one entry per joint per frame, frame
 /// after frame.
-pub fn extracted_clip(
+pub(crate) fn extracted_clip(
     joints: Vec<Joint>,
     fps: f64,
     rotations: Vec<DQuat>,
@@ -121,7 +121,7 @@ pub fn bone_lengths(p: &Pose) -> [f64; Canonical::COUNT] {
 /// (both centred). Returns `(cos θ, sin θ)` of the angle that turns `b`
 /// towards `a` with [`rotate_yaw`], and the aligned dot product gain
 /// `√(c² + s²)` (the maximum of `Σ a · R b` over θ, minus the vertical part).
-pub fn yaw_fit(c: f64, s: f64) -> (f64, f64, f64) {
+pub(crate) fn yaw_fit(c: f64, s: f64) -> (f64, f64, f64) {
     let m = c.hypot(s);
     if m <= f64::MIN_POSITIVE {
         (1.0, 0.0, 0.0)
@@ -143,7 +143,7 @@ pub fn rotate_yaw(p: DVec3, c: f64, s: f64) -> DVec3 {
 /// differs from a stand) and in heading (the least-squares rotation about
 /// the vertical axis, [`yaw_fit`]). Metres; 0 for a pose and any copy of it
 /// moved on the floor and turned about Y.
-pub fn skeleton_distance(a: &Pose, b: &Pose) -> f64 {
+pub(crate) fn skeleton_distance(a: &Pose, b: &Pose) -> f64 {
     let (cos, sin, ca, cb) = floor_fit(a, b);
     a.iter()
         .zip(b)
@@ -154,7 +154,7 @@ pub fn skeleton_distance(a: &Pose, b: &Pose) -> f64 {
 /// The floor alignment of `b` onto `a`: `(cos θ, sin θ, c_a, c_b)` with
 /// `c` the horizontal centroids, such that `rotate_yaw(q − c_b) + c_a`
 /// best matches `a` in least squares.
-pub fn floor_fit(a: &Pose, b: &Pose) -> (f64, f64, DVec3, DVec3) {
+pub(crate) fn floor_fit(a: &Pose, b: &Pose) -> (f64, f64, DVec3, DVec3) {
     let ca = horizontal_centroid(a);
     let cb = horizontal_centroid(b);
     let (mut c, mut s) = (0.0, 0.0);
@@ -168,7 +168,7 @@ pub fn floor_fit(a: &Pose, b: &Pose) -> (f64, f64, DVec3, DVec3) {
 }
 
 /// Mean of the joints' X and Z (Y = 0).
-pub fn horizontal_centroid(p: &Pose) -> DVec3 {
+pub(crate) fn horizontal_centroid(p: &Pose) -> DVec3 {
     let s: DVec3 = p.iter().copied().sum();
     DVec3::new(s.x, 0.0, s.z) / p.len() as f64
 }

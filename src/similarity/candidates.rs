@@ -118,7 +118,7 @@ fn weakly_linked(
 /// CPU seconds of the whole process so far (every thread): the stages'
 /// figure that load does not inflate as it does wall time; 0 where the
 /// platform does not say.
-pub fn process_cpu_seconds() -> f64 {
+pub(crate) fn process_cpu_seconds() -> f64 {
     #[cfg(unix)]
     {
         let mut ts = libc::timespec {

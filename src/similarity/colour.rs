@@ -27,7 +27,7 @@ use super::histogram::{PHI_BINS, PHI_SUB, R_BINS, ShapeGrid, THETA_BINS};
 use glam::DVec3;
 
 /// Bins per colour channel.
-pub const COLOUR_BINS: usize = 10;
+pub(crate) const COLOUR_BINS: usize = 10;
 
 /// A frame's non-empty fine 6D bins: `(r, θ, φ_fine, R, G, B)` packed, and
 /// their mass (unit sum).
@@ -94,7 +94,7 @@ pub fn signature(samples: &[(DVec3, f64)], colours: &[[f64; 3]], grid: &ShapeGri
 
 /// Scratch of [`emd`].
 #[derive(Debug, Default, Clone)]
-pub struct EmdScratch {
+pub(crate) struct EmdScratch {
     a: Vec<(u32, f32)>,
     b: Vec<(u32, f32)>,
 }
@@ -116,7 +116,7 @@ fn level(sig: &Signature, shift: usize, l: u32, out: &mut Vec<(u32, f32)>) {
 }
 
 /// The pyramid EMD between `a` and `b` turned by `shift` fine φ bins.
-pub fn emd(a: &Signature, b: &Signature, shift: usize, scratch: &mut EmdScratch) -> f64 {
+pub(crate) fn emd(a: &Signature, b: &Signature, shift: usize, scratch: &mut EmdScratch) -> f64 {
     let mut total = 0.0;
     // Levels until every axis has one bin (20 φ bins: 5 halvings).
     for l in 0..6u32 {

@@ -277,7 +277,7 @@ fn spectra(fine: &[f64], out: &mut [f32], norms: &mut [f64; PHI_SUB]) {
 }
 
 /// Values of [`magnitudes`]: one per `(frequency, ring)`.
-pub const MAGNITUDES_LEN: usize = FREQS * RINGS;
+pub(crate) const MAGNITUDES_LEN: usize = FREQS * RINGS;
 
 /// The rotation-invariant part of a descriptor of [`describe`]: the
 /// magnitude of each φ-frequency of each `(r, θ)` ring (sub-shift 0),
@@ -287,7 +287,7 @@ pub const MAGNITUDES_LEN: usize = FREQS * RINGS;
 /// |b||`, Parseval's weights as in [`ShapeKernel::distance`]). Writes
 /// [`MAGNITUDES_LEN`] values into `out`. The cheap descriptor of the
 /// sparse similarity ([`super::sparse`]).
-pub fn magnitudes(desc: &[f32], out: &mut [f32]) {
+pub(crate) fn magnitudes(desc: &[f32], out: &mut [f32]) {
     for k in 0..FREQS {
         let w = (freq_weight(k) / PHI_BINS as f64).sqrt();
         for ring in 0..RINGS {
@@ -326,7 +326,7 @@ pub fn dft_table() -> ([[f64; PHI_BINS]; FREQS], [[f64; PHI_BINS]; FREQS]) {
 
 /// Precomputed tables of [`distance`].
 #[derive(Debug, Clone)]
-pub struct ShapeKernel {
+pub(crate) struct ShapeKernel {
     /// `w_k cos(2π k c / N) / N` and `w_k sin(..) / N`, `[c][k]`.
     cos: [[f64; FREQS]; PHI_BINS],
     sin: [[f64; FREQS]; PHI_BINS],

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Rows per parallel task.
-pub const ROW_BLOCK: usize = 8;
+pub(crate) const ROW_BLOCK: usize = 8;
 
 /// Frames with a pairwise dissimilarity.
 pub trait PairDistance: Sync {

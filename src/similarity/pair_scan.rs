@@ -73,7 +73,7 @@ pub fn best_per_pair(
 /// What [`best_per_pair_refined`] re-ranks with: the full measure, and how
 /// many of each sequence pair's cheap transitions it examines.
 #[derive(Clone, Copy)]
-pub struct Rerank<'a> {
+pub(crate) struct Rerank<'a> {
     /// The full measure (Eq. 1) of the frames.
     pub full: &'a dyn PairDistance,
     /// Cheap transitions examined per unordered sequence pair (their
@@ -92,7 +92,7 @@ pub struct Rerank<'a> {
 /// which of a valley's near-equal minima Eq. 1 ranks first (session 24:
 /// 71 % of the dense transitions at 3,234 frames). Also returns the full
 /// measures evaluated (`examine · (steps · 5 + window)` per pair at most).
-pub fn best_per_pair_refined(
+pub(crate) fn best_per_pair_refined(
     features: &[f32],
     dims: usize,
     spans: &[Span],
@@ -125,7 +125,7 @@ pub fn best_per_pair_refined(
 /// Steps of [`Memo::descend`] at most (a valley's floor is a few frames
 /// from the cheap minimum; the bound keeps a long slope from costing more
 /// than a band).
-pub const MAX_DESCENT: usize = 32;
+pub(crate) const MAX_DESCENT: usize = 32;
 
 /// Runs `block(i, j)` on every unordered sequence pair `i ≤ j` (in
 /// parallel, results in a fixed order) when `top_n` is not 0; the centres
@@ -245,7 +245,7 @@ const NEIGHBOURS: [(isize, isize); 8] = [
 /// off the full measure's): each seed's `(a, b − spread)` and
 /// `(a, b + spread)` where they stay in `b`'s sequence. All of `seeds`
 /// alone when `spread` is 0.
-pub fn spread_seeds(
+pub(crate) fn spread_seeds(
     seeds: &[(usize, u32)],
     spread: usize,
     spans: &[Span],

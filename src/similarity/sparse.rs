@@ -46,7 +46,7 @@ use super::tiled::{self, Run};
 use rayon::prelude::*;
 
 /// Frames the principal axes are fitted on (evenly spaced).
-pub const PCA_SAMPLE: usize = 2048;
+pub(crate) const PCA_SAMPLE: usize = 2048;
 
 /// A set of frames with a cheap descriptor besides its full measure.
 pub trait Features: PairDistance {
@@ -455,7 +455,7 @@ impl SparseSimilarity {
     /// The bytes of [`SparseSimilarity::from_bytes`] (little-endian): `n`,
     /// `dims`, sequences (name length, name, start, length), radius,
     /// features, row offsets, columns, values.
-    pub fn to_bytes(&self) -> Vec<u8> {
+    pub(crate) fn to_bytes(&self) -> Vec<u8> {
         let mut b = Vec::with_capacity(
             32 + self.n * (12 + 4 * self.dims) + self.pairs.len() * 8 + self.spans.len() * 40,
         );
@@ -515,7 +515,7 @@ impl SparseSimilarity {
     /// row's columns and values (that would read the whole file): the file
     /// is the database's own, written atomically; a column out of range
     /// is then never found, never a panic.
-    pub fn from_mapped(
+    pub(crate) fn from_mapped(
         map: std::sync::Arc<memmap2::Mmap>,
         at: usize,
     ) -> Result<SparseSimilarity, String> {

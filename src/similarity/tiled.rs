@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Rows per block: 32 shape descriptors are 1.5 MB, within a core's cache
 /// beside the column being read.
-pub const TILE_ROWS: usize = 32;
+pub(crate) const TILE_ROWS: usize = 32;
 
 /// A run of pairs `(r, r + diag)` for `r` in `r0..=r1` (the sparse
 /// similarity's diagonal runs).

@@ -68,7 +68,7 @@ pub struct Transition {
 
 /// Eq. 3 normalised: the distortion per frame of the window `(m, n, L)` of
 /// `c(r, s)`.
-pub fn window_cost(c: &impl Fn(usize, usize) -> f32, m: usize, n: usize, l: usize) -> f64 {
+pub(crate) fn window_cost(c: &impl Fn(usize, usize) -> f32, m: usize, n: usize, l: usize) -> f64 {
     let mut d = 0.0;
     for k in -(l as i64)..=(l as i64) {
         let alpha = (k + l as i64) as f64 / (2 * l) as f64;
@@ -102,7 +102,7 @@ pub fn find(
 /// the transitions found are the dense method's wherever the stored pairs
 /// cover a minimum and its windows, and its unstored neighbours are not
 /// smaller.
-pub fn find_among(
+pub(crate) fn find_among(
     c: &impl Fn(usize, usize) -> f32,
     rows: usize,
     cols: usize,

@@ -160,7 +160,7 @@ pub fn occupancy(
 /// build (no SSE4.1 `roundsd`): truncate, then step down if that rounded
 /// up. `t as f64` is exact wherever `x` has a fraction (|x| < 2⁵²).
 #[inline(always)]
-pub fn floor_i64(x: f64) -> i64 {
+pub(crate) fn floor_i64(x: f64) -> i64 {
     let t = x as i64;
     if (t as f64) > x {
         t.saturating_sub(1)
@@ -171,7 +171,7 @@ pub fn floor_i64(x: f64) -> i64 {
 
 /// `x.ceil() as i64`, equal for every `x`, as [`floor_i64`].
 #[inline(always)]
-pub fn ceil_i64(x: f64) -> i64 {
+pub(crate) fn ceil_i64(x: f64) -> i64 {
     let t = x as i64;
     if (t as f64) < x {
         t.saturating_add(1)

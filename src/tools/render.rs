@@ -130,7 +130,7 @@ pub struct Scene<'a> {
 /// Where a view is placed in its image: pixels per unit and the view
 /// coordinates (right, up) drawn at the image centre.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Framing {
+pub(crate) struct Framing {
     /// Pixels per unit of length.
     pub scale: f64,
     /// View coordinates (along the screen's right and up) of the centre.

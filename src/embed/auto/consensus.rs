@@ -66,7 +66,7 @@ pub fn adjusted_rand(a: &[u32], b: &[u32]) -> f64 {
 
 /// The index of the medoid of `labelings`: the greatest summed
 /// [`adjusted_rand`] to the others (ties: the lesser index). 0 for none.
-pub fn medoid(labelings: &[Vec<u32>]) -> usize {
+pub(crate) fn medoid(labelings: &[Vec<u32>]) -> usize {
     use rayon::prelude::*;
     let m = labelings.len();
     let score: Vec<f64> = (0..m)

@@ -160,13 +160,13 @@ impl MergeRule {
 }
 
 /// [`MergeRule::Settle`]'s cap on the re-assignment rounds of one pass.
-pub const SETTLE_ROUNDS: usize = 40;
+pub(crate) const SETTLE_ROUNDS: usize = 40;
 
 /// [`MergeRule::Settle`]'s cap on its passes (settle, then merge).
-pub const SETTLE_PASSES: usize = 4;
+pub(crate) const SETTLE_PASSES: usize = 4;
 
 /// [`MergeRule::SettleSplit`]'s cap on its passes (split, settle, merge).
-pub const SPLIT_PASSES: usize = 3;
+pub(crate) const SPLIT_PASSES: usize = 3;
 
 /// [`DecomposeOptions::seeding`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -298,7 +298,7 @@ fn fit(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], members: &[Vec<u32>]) -> Vec<M
 /// parts given by `labels` (0..`count`): how points found on the rest
 /// frame are carried onto another frame (the topology's) that the
 /// decomposition did not fit.
-pub fn fit_onto(
+pub(crate) fn fit_onto(
     rest: &[[f64; 3]],
     frame: &[[f64; 3]],
     labels: &[u32],
@@ -332,7 +332,7 @@ fn members_of(labels: &[u32], count: usize) -> Vec<Vec<u32>> {
 /// piece of a label becomes its own label, and pieces below `min_size`
 /// vertices join the neighbouring label they touch most. Labels are then
 /// renumbered 0..count.
-pub fn split_connected(labels: &mut [u32], nb: &[Vec<u32>], min_size: usize) -> usize {
+pub(crate) fn split_connected(labels: &mut [u32], nb: &[Vec<u32>], min_size: usize) -> usize {
     let n = labels.len();
     let mut comp = vec![u32::MAX; n];
     let mut sizes: Vec<usize> = Vec::new();

@@ -25,18 +25,23 @@ use glam::DVec3;
 /// the bodies cut at 0.8-0.9 of their height (headless), gave an axis
 /// within 1.2° of the landmark fixtures' left-right (knees, elbows and
 /// wrists, as `embed::joints` reads it).
-pub const BAND: (f64, f64) = (0.55, 0.8);
+pub(crate) const BAND: (f64, f64) = (0.55, 0.8);
 
 /// The widest axis is trusted when its second moment is at least this many
 /// times the other's (samba's and crane's rest frames: 7.7 and 9.9).
-pub const MIN_RATIO: f64 = 1.5;
+pub(crate) const MIN_RATIO: f64 = 1.5;
 
 /// The widest horizontal axis (unit, square to `up`, its sign arbitrary)
 /// of the vertices of `rest` between [`BAND`] of `height` above `lo`
 /// (along `up`), and the ratio of the two horizontal second moments
 /// (largest over smallest). `None` with fewer than three vertices in the
 /// band or a band without spread.
-pub fn widest_across(rest: &[[f64; 3]], up: DVec3, lo: f64, height: f64) -> Option<(DVec3, f64)> {
+pub(crate) fn widest_across(
+    rest: &[[f64; 3]],
+    up: DVec3,
+    lo: f64,
+    height: f64,
+) -> Option<(DVec3, f64)> {
     let (a, b) = up.any_orthonormal_pair();
     let (from, to) = (lo + BAND.0 * height, lo + BAND.1 * height);
     let band: Vec<(f64, f64)> = rest

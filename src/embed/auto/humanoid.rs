@@ -101,7 +101,7 @@ pub struct Crossing {
 
 /// The path from vertex `tip` to the source of `prev` (vertex ids, tip
 /// first) and the geodesic distance from the tip of each.
-pub fn path_to_source(p: &[[f64; 3]], prev: &[u32], tip: u32) -> Vec<(u32, f64)> {
+pub(crate) fn path_to_source(p: &[[f64; 3]], prev: &[u32], tip: u32) -> Vec<(u32, f64)> {
     let mut out = vec![(tip, 0.0)];
     let mut v = tip;
     while prev[v as usize] != u32::MAX && out.len() <= p.len() {
@@ -116,7 +116,7 @@ pub fn path_to_source(p: &[[f64; 3]], prev: &[u32], tip: u32) -> Vec<(u32, f64)>
 
 /// Centre of the boundary between parts `a` and `b` (their vertices that
 /// touch the other part), if they touch.
-pub fn boundary_centre(
+pub(crate) fn boundary_centre(
     p: &[[f64; 3]],
     nb: &[Vec<u32>],
     labels: &[u32],
@@ -140,7 +140,7 @@ pub fn boundary_centre(
 
 /// The crossings of a limb's path (tip first), one per distinct part it
 /// enters, each with the joint between the part left and the part entered.
-pub fn crossings(
+pub(crate) fn crossings(
     p: &[[f64; 3]],
     nb: &[Vec<u32>],
     dec: &Decomposition,
@@ -195,7 +195,7 @@ pub struct Placed {
 /// to the expected distance was chosen before; on a dancer in a skirt
 /// it was the skirt's hem above the shin (the skirt moves in bands that
 /// bend with neither thigh), and the knee landed at the hem.
-pub fn match_joints(
+pub(crate) fn match_joints(
     crossings: &[Crossing],
     expected: &[f64],
     height: f64,

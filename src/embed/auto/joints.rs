@@ -25,7 +25,7 @@ pub struct PartJoint {
 
 /// The joint between motions `a` and `b`, regularised towards `centre`
 /// with weight `lambda` (relative to the data term's scale).
-pub fn joint_between(a: &Motion, b: &Motion, centre: DVec3, lambda: f64) -> PartJoint {
+pub(crate) fn joint_between(a: &Motion, b: &Motion, centre: DVec3, lambda: f64) -> PartJoint {
     let frames = a.r.len().min(b.r.len());
     let mut ata = DMat3::ZERO;
     let mut atd = DVec3::ZERO;

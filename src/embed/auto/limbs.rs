@@ -15,11 +15,11 @@ pub type Limb = (u32, Vec<(u32, f64)>, Vec<Option<Crossing>>);
 /// Expected distances from the tip (fractions of the height) of a leg's
 /// ankle, knee and hip, and of an arm's wrist, elbow and shoulder, along
 /// the surface.
-pub const LEG: [f64; 3] = [0.12, 0.37, 0.6];
+pub(crate) const LEG: [f64; 3] = [0.12, 0.37, 0.6];
 /// See [`LEG`].
-pub const ARM: [f64; 3] = [0.10, 0.25, 0.42];
+pub(crate) const ARM: [f64; 3] = [0.10, 0.25, 0.42];
 /// A joint must bend this much (RMS, degrees) in the capture.
-pub const MIN_BEND_DEG: f64 = 6.0;
+pub(crate) const MIN_BEND_DEG: f64 = 6.0;
 
 /// The rest frame, its parts and its axes, as the chains are read.
 pub struct Body<'a> {
@@ -315,7 +315,7 @@ fn debug_chain(what: &str, body: &Body, c: &[Crossing], h: f64) {
 /// Each knee's distance to its toe tip, left against right: a body's
 /// shins and feet have one length (whatever the pose, up to the ankle's
 /// bend). Returns `(left, right, difference)` in the height's units.
-pub fn knee_to_toe(body: &Body, sided: &Sided) -> (f64, f64, f64) {
+pub(crate) fn knee_to_toe(body: &Body, sided: &Sided) -> (f64, f64, f64) {
     let h = |l: &Limb| knee(body, l).distance(DVec3::from_array(body.rest[l.0 as usize]));
     let (l, r) = (h(&sided.legs[0]), h(&sided.legs[1]));
     (l, r, (l - r).abs())

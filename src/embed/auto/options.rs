@@ -164,7 +164,7 @@ pub fn automatic_setup(
 }
 
 /// [`automatic_setup`]'s override `text` applied to `rule` and `auto`.
-pub fn apply_override(
+pub(crate) fn apply_override(
     text: &str,
     rule: &mut crate::embed::rest::RestOptions,
     auto: &mut AutoOptions,

@@ -103,7 +103,7 @@ impl AutoRig {
 }
 
 /// "+Y", or the direction's coordinates when off the axes.
-pub fn axis_name(v: DVec3) -> String {
+pub(crate) fn axis_name(v: DVec3) -> String {
     let a = crate::embed::axes::nearest_axis(v);
     if a.dot(v) > 0.95 {
         let k = if a.x != 0.0 {

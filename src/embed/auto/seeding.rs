@@ -34,7 +34,7 @@ use std::cmp::Ordering;
 /// each frame's coordinates in turn (vertices at one place on the rest
 /// frame: seams). Only vertices identical in every frame keep their
 /// relative index order, and they are interchangeable. O(n log n).
-pub fn canonical_order(rest: &[[f64; 3]], frames: &[&[[f64; 3]]]) -> Vec<u32> {
+pub(crate) fn canonical_order(rest: &[[f64; 3]], frames: &[&[[f64; 3]]]) -> Vec<u32> {
     let mid = middle(rest);
     let key: Vec<f64> = rest
         .iter()
@@ -83,7 +83,7 @@ fn middle(points: &[[f64; 3]]) -> DVec3 {
 /// sampling of `points`: the first the vertex nearest the middle of their
 /// bounding box, each next the vertex farthest from those taken (ties: the
 /// lower id; given in [`canonical_order`], the earlier there). O(n k).
-pub fn farthest_seeds(points: &[[f64; 3]], k: usize) -> Vec<u32> {
+pub(crate) fn farthest_seeds(points: &[[f64; 3]], k: usize) -> Vec<u32> {
     let n = points.len();
     let k = k.min(n);
     if k == 0 {
@@ -110,7 +110,7 @@ pub fn farthest_seeds(points: &[[f64; 3]], k: usize) -> Vec<u32> {
 /// `k` ids (at most `items.len()`) by farthest-point sampling of `items`
 /// under the squared distance `d2` from `first`, each next the farthest
 /// from those taken (ties: the lower id). O(n k) calls of `d2`.
-pub fn farthest_in<T: Sync>(
+pub(crate) fn farthest_in<T: Sync>(
     items: &[T],
     first: u32,
     k: usize,
@@ -152,13 +152,13 @@ fn argbest(values: impl Iterator<Item = f64>) -> usize {
 }
 
 /// `values` (one per vertex) in `order`.
-pub fn permuted<T: Clone>(values: &[T], order: &[u32]) -> Vec<T> {
+pub(crate) fn permuted<T: Clone>(values: &[T], order: &[u32]) -> Vec<T> {
     order.iter().map(|&v| values[v as usize].clone()).collect()
 }
 
 /// Neighbour lists `nb` renumbered into `order` (vertex `order[i]` is new
 /// vertex `i`), each sorted.
-pub fn permuted_neighbours(nb: &[Vec<u32>], order: &[u32]) -> Vec<Vec<u32>> {
+pub(crate) fn permuted_neighbours(nb: &[Vec<u32>], order: &[u32]) -> Vec<Vec<u32>> {
     let mut new_of = vec![0u32; order.len()];
     for (i, &v) in order.iter().enumerate() {
         new_of[v as usize] = i as u32;
@@ -174,7 +174,7 @@ pub fn permuted_neighbours(nb: &[Vec<u32>], order: &[u32]) -> Vec<Vec<u32>> {
 }
 
 /// Per-vertex `labels` given in `order` put back in the original ids.
-pub fn unpermuted(labels: &[u32], order: &[u32]) -> Vec<u32> {
+pub(crate) fn unpermuted(labels: &[u32], order: &[u32]) -> Vec<u32> {
     let mut out = vec![0u32; labels.len()];
     for (&l, &v) in labels.iter().zip(order) {
         out[v as usize] = l;

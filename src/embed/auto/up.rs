@@ -8,7 +8,7 @@ use glam::DVec3;
 /// extremities are at the bottom of the rest frame and the third clearly
 /// higher, the one whose lowest point over the frames (the floor) varies
 /// least. Returns it with a note.
-pub fn find_up(
+pub(crate) fn find_up(
     rest: &[[f64; 3]],
     frames: &[&[[f64; 3]]],
     tips: &[(u32, f64)],

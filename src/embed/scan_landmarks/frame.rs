@@ -61,7 +61,7 @@ pub(super) struct Frame {
 
 impl Frame {
     /// Height above the floor.
-    pub fn hgt(&self, q: DVec3) -> f64 {
+    pub(crate) fn hgt(&self, q: DVec3) -> f64 {
         q.dot(self.up) - self.floor
     }
 
@@ -77,7 +77,7 @@ impl Frame {
 
     /// The point of the symmetry plane `y` above the floor, `depth` along
     /// the facing.
-    pub fn axis_at(&self, y: f64, depth: f64) -> DVec3 {
+    pub(crate) fn axis_at(&self, y: f64, depth: f64) -> DVec3 {
         let o = self.off * self.left0.dot(self.left);
         self.left * o + self.facing * depth + self.up * (self.floor + y)
     }

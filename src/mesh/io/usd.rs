@@ -193,7 +193,7 @@ impl UsdaWriter {
     /// Starts `out` for `frames` frames of `mesh`'s topology at `fps`:
     /// writes the layer header, the topology, the rest points and (with
     /// `opts.normals`) the rest normals.
-    pub fn create_with(
+    pub(crate) fn create_with(
         mesh: &Mesh,
         out: &Path,
         frames: usize,

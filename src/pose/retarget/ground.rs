@@ -213,7 +213,7 @@ pub struct Given<'a> {
 
 /// [`Given::support`]: called with the levelled clip and the support found
 /// over it, may change the support.
-pub type SupportHook<'a> = &'a dyn Fn(&[Pose], &mut Support);
+pub(crate) type SupportHook<'a> = &'a dyn Fn(&[Pose], &mut Support);
 
 impl Given<'_> {
     /// Only the floor given (or nothing).
@@ -225,7 +225,7 @@ impl Given<'_> {
     }
 
     /// The levelling: the given one, else [`ground_tilt`]'s over `mocap`.
-    pub fn tilt_of(&self, mocap: &[Pose]) -> DQuat {
+    pub(crate) fn tilt_of(&self, mocap: &[Pose]) -> DQuat {
         self.tilt.unwrap_or_else(|| ground_tilt(mocap))
     }
 }

@@ -21,7 +21,7 @@ use crate::mesh::quality::Edges;
 use serde::Serialize;
 
 /// An edge bent more than this (degrees) is sharp.
-pub const SHARP_DEG: f64 = 30.0;
+pub(crate) const SHARP_DEG: f64 = 30.0;
 
 /// The cloth's edges of a character, read once.
 pub struct ClothBends {
