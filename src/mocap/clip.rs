@@ -141,20 +141,49 @@ pub enum UpAxis {
 /// rotation and translation. Numbers are in file units until
 /// [`Clip::to_metres_y_up`] is called.
 ///
-/// Invariant (checked by [`Clip::new`]): joints are in depth-first order with
-/// parents before children, and `rotations`/`translations` hold
-/// `frames × joints` entries (frame-major).
+/// Invariant (checked by [`Clip::new`] and [`Clip::from_parts`]): joints are
+/// in depth-first order with parents before children, `rotations` and
+/// `translations` hold `frames × joints` finite entries (frame-major), and
+/// the frame time is a positive number of seconds. Outside the library the
+/// fields are read through accessors; an edit goes through [`ClipParts`].
 #[derive(Debug, Clone, Serialize)]
 pub struct Clip {
+    /// Joints, parents first.
+    pub(crate) joints: Vec<Joint>,
+    /// Seconds per frame.
+    pub(crate) frame_time: f64,
+    /// Local rotation of each joint, frame-major (`frame * joints + joint`).
+    #[serde(skip)]
+    pub(crate) rotations: Vec<DQuat>,
+    /// Local translation of each joint (the offset unless it has position channels).
+    #[serde(skip)]
+    pub(crate) translations: Vec<DVec3>,
+    /// Unit of lengths.
+    pub(crate) units: Units,
+    /// Up axis of the file.
+    pub(crate) up: UpAxis,
+    /// Why the up axis was chosen.
+    pub(crate) up_reason: String,
+    /// What `mocap positions` reports for this clip.
+    pub(crate) points: PointConvention,
+    /// Problems found while reading that did not stop it (frame count mismatch, ...).
+    pub(crate) warnings: Vec<String>,
+}
+
+/// A clip's data as plain fields: what [`Clip::into_parts`] gives and
+/// [`Clip::from_parts`] checks. A caller that edits a clip (cuts frames,
+/// renames, moves or re-roots joints, builds a variant) edits these and gets
+/// back a clip that holds [`Clip`]'s invariant again, or the reason it does
+/// not.
+#[derive(Debug, Clone)]
+pub struct ClipParts {
     /// Joints, parents first.
     pub joints: Vec<Joint>,
     /// Seconds per frame.
     pub frame_time: f64,
     /// Local rotation of each joint, frame-major (`frame * joints + joint`).
-    #[serde(skip)]
     pub rotations: Vec<DQuat>,
-    /// Local translation of each joint (the offset unless it has position channels).
-    #[serde(skip)]
+    /// Local translation of each joint, frame-major.
     pub translations: Vec<DVec3>,
     /// Unit of lengths.
     pub units: Units,
@@ -164,7 +193,7 @@ pub struct Clip {
     pub up_reason: String,
     /// What `mocap positions` reports for this clip.
     pub points: PointConvention,
-    /// Problems found while reading that did not stop it (frame count mismatch, ...).
+    /// Problems found while reading that did not stop it.
     pub warnings: Vec<String>,
 }
 
@@ -287,6 +316,90 @@ impl Clip {
             points,
             warnings: Vec::new(),
         })
+    }
+
+    /// The clip from its parts, when they hold the invariant ([`Clip`]).
+    pub fn from_parts(p: ClipParts) -> Result<Clip, ClipError> {
+        let mut c = Clip::new(
+            p.joints,
+            p.frame_time,
+            p.rotations,
+            p.translations,
+            p.units,
+            p.up,
+            p.points,
+        )?;
+        c.up_reason = p.up_reason;
+        c.warnings = p.warnings;
+        Ok(c)
+    }
+
+    /// The clip's data as plain fields, to edit and check again with
+    /// [`Clip::from_parts`].
+    pub fn into_parts(self) -> ClipParts {
+        ClipParts {
+            joints: self.joints,
+            frame_time: self.frame_time,
+            rotations: self.rotations,
+            translations: self.translations,
+            units: self.units,
+            up: self.up,
+            up_reason: self.up_reason,
+            points: self.points,
+            warnings: self.warnings,
+        }
+    }
+
+    /// The clip edited by `edit` and checked again ([`Clip::from_parts`]).
+    pub fn edited(self, edit: impl FnOnce(&mut ClipParts)) -> Result<Clip, ClipError> {
+        let mut p = self.into_parts();
+        edit(&mut p);
+        Clip::from_parts(p)
+    }
+
+    /// Joints, parents first.
+    pub fn joints(&self) -> &[Joint] {
+        &self.joints
+    }
+
+    /// Seconds per frame.
+    pub fn frame_time(&self) -> f64 {
+        self.frame_time
+    }
+
+    /// Local rotation of each joint, frame-major (`frame * joints + joint`).
+    pub fn rotations(&self) -> &[DQuat] {
+        &self.rotations
+    }
+
+    /// Local translation of each joint, frame-major.
+    pub fn translations(&self) -> &[DVec3] {
+        &self.translations
+    }
+
+    /// Unit of lengths.
+    pub fn units(&self) -> &Units {
+        &self.units
+    }
+
+    /// Up axis of the file.
+    pub fn up(&self) -> UpAxis {
+        self.up
+    }
+
+    /// Why the up axis was chosen.
+    pub fn up_reason(&self) -> &str {
+        &self.up_reason
+    }
+
+    /// What `mocap positions` reports for this clip.
+    pub fn points(&self) -> PointConvention {
+        self.points
+    }
+
+    /// Problems found while reading that did not stop it.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// Number of joints.

@@ -13,6 +13,8 @@ mod resample;
 pub mod skin;
 pub mod units;
 
-pub use clip::{Channel, Clip, ClipError, Joint, JointId, PointConvention, Units, UpAxis};
+pub use clip::{
+    Channel, Clip, ClipError, ClipParts, Joint, JointId, PointConvention, Units, UpAxis,
+};
 pub use error::MocapError;
 pub use load::{MocapFormat, find_asf, read_clip};

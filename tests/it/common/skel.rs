@@ -469,7 +469,7 @@ pub fn swap_side(c: Canonical) -> Canonical {
 /// kept).
 pub fn mirror(c: &Clip) -> Clip {
     let m = DVec3::new(-1.0, 1.0, 1.0);
-    let mut out = c.clone();
+    let mut out = c.clone().into_parts();
     for j in &mut out.joints {
         j.offset *= m;
         if let Some(t) = &mut j.tail {
@@ -482,12 +482,12 @@ pub fn mirror(c: &Clip) -> Clip {
     for q in &mut out.rotations {
         *q = DQuat::from_xyzw(q.x, -q.y, -q.z, q.w);
     }
-    out
+    Clip::from_parts(out).unwrap()
 }
 
 /// Every length of a clip (offsets, End Sites, translations) times `k`.
 pub fn scaled(c: &Clip, k: f64) -> Clip {
-    let mut out = c.clone();
+    let mut out = c.clone().into_parts();
     for j in &mut out.joints {
         j.offset *= k;
         j.tail = j.tail.map(|t| t * k);
@@ -495,5 +495,5 @@ pub fn scaled(c: &Clip, k: f64) -> Clip {
     for t in &mut out.translations {
         *t *= k;
     }
-    out
+    Clip::from_parts(out).unwrap()
 }

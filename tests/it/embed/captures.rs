@@ -246,7 +246,7 @@ fn db_skeleton_writes_json_and_a_bvh_that_reads_back() {
         // and for the rigid skeleton it gives every joint back.
         let clip = surfmotion::rig::load_clip(&out.join("dance.bvh"), &Default::default()).unwrap();
         assert_eq!(clip.frame_count(), 175);
-        let names: Vec<String> = clip.joints.iter().map(|j| j.name.clone()).collect();
+        let names: Vec<String> = clip.joints().iter().map(|j| j.name.clone()).collect();
         let det = surfmotion::rig::detect(&names);
         assert!(det.missing.is_empty(), "{:?}", det.missing);
         let frames = j["frames"].as_array().unwrap();

@@ -267,7 +267,7 @@ fn absurd_counts_are_refused() {
     let bvh = String::from_utf8(seeds("bvh")[1].clone()).unwrap();
     let c = parse_bvh(&bvh, Path::new("x.bvh"), &BvhOptions::default()).unwrap();
     assert_eq!(c.frame_count(), 2);
-    assert!(c.warnings[0].contains("99999999999"));
+    assert!(c.warnings()[0].contains("99999999999"));
     // Deep nesting does not overflow the stack.
     let deep = format!(
         "HIERARCHY\nROOT a\n{{\n{}",

@@ -74,7 +74,7 @@ fn clip_warning_is_a_tracing_event_and_kept_in_the_clip() {
         capture(|| surfmotion::rig::load_clip(&path, &surfmotion::rig::LoadOptions::default()));
     let clip = clip.unwrap();
     let want = "header says 3 frames, the data has 2; using the data";
-    assert_eq!(clip.warnings, vec![want.to_string()]);
+    assert_eq!(clip.warnings(), vec![want.to_string()]);
     assert_eq!(events.len(), 1, "{events:?}");
     assert_eq!(events[0].level, tracing::Level::WARN);
     assert_eq!(events[0].message, want);
@@ -88,7 +88,7 @@ fn clean_clip_raises_no_warning_event() {
     std::fs::write(&path, BVH).unwrap();
     let (clip, events) =
         capture(|| surfmotion::rig::load_clip(&path, &surfmotion::rig::LoadOptions::default()));
-    assert!(clip.unwrap().warnings.is_empty());
+    assert!(clip.unwrap().warnings().is_empty());
     assert!(events.is_empty(), "{events:?}");
 }
 

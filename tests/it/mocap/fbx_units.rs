@@ -61,11 +61,11 @@ fn a_missing_or_wrong_unit_scale_factor_is_judged_from_the_stature() {
     // Mixamo's dancer: centimetres, UnitScaleFactor 1, a human body.
     let real = std::fs::read(d.join("fbx/threejs/Samba Dancing.fbx")).unwrap();
     let file = load(tmp.path(), "as_is.fbx", &real);
-    assert_eq!(file.units.metres_per_unit, 0.01);
+    assert_eq!(file.units().metres_per_unit, 0.01);
     assert!(
-        file.units.reason.contains("the body agrees"),
+        file.units().reason.contains("the body agrees"),
         "{}",
-        file.units.reason
+        file.units().reason
     );
     let h = height(&file, 0);
     assert!((1.2..2.0).contains(&h), "height {h}");
@@ -75,27 +75,37 @@ fn a_missing_or_wrong_unit_scale_factor_is_judged_from_the_stature() {
         "wrong.fbx",
         &with_unit_scale(&real, Some(100.0)),
     );
-    assert_eq!(wrong.units.metres_per_unit, 0.01, "{}", wrong.units.reason);
-    assert!(
-        wrong.units.reason.contains("UnitScaleFactor 100")
-            && wrong.units.reason.contains("the body decides"),
+    assert_eq!(
+        wrong.units().metres_per_unit,
+        0.01,
         "{}",
-        wrong.units.reason
+        wrong.units().reason
+    );
+    assert!(
+        wrong.units().reason.contains("UnitScaleFactor 100")
+            && wrong.units().reason.contains("the body decides"),
+        "{}",
+        wrong.units().reason
     );
     // Declared as millimetres (0.1): a 17 cm dancer, likewise.
     let small = load(tmp.path(), "small.fbx", &with_unit_scale(&real, Some(0.1)));
-    assert_eq!(small.units.metres_per_unit, 0.01, "{}", small.units.reason);
+    assert_eq!(
+        small.units().metres_per_unit,
+        0.01,
+        "{}",
+        small.units().reason
+    );
     // No factor at all: the body decides, and says so.
     let none = load(tmp.path(), "none.fbx", &with_unit_scale(&real, None));
-    assert_eq!(none.units.metres_per_unit, 0.01);
+    assert_eq!(none.units().metres_per_unit, 0.01);
     assert!(
-        none.units.reason.contains("no UnitScaleFactor"),
+        none.units().reason.contains("no UnitScaleFactor"),
         "{}",
-        none.units.reason
+        none.units().reason
     );
     // The same motion either way, to the bit.
     for c in [&wrong, &small, &none] {
-        assert_eq!(c.translations, file.translations);
+        assert_eq!(c.translations(), file.translations());
         assert_eq!(height(c, 100), height(&file, 100));
     }
     // `inspect` says what the file declares and what was read.
@@ -132,9 +142,9 @@ fn cmu_01_01_fbx_declared_in_cm_but_30_m_tall_is_scaled_to_an_adult() {
     )
     .unwrap();
     assert!(
-        c.units.reason.contains("the body decides") && c.units.reason.contains("1.7 m adult"),
+        c.units().reason.contains("the body decides") && c.units().reason.contains("1.7 m adult"),
         "{}",
-        c.units.reason
+        c.units().reason
     );
     let h = height(&c, 1000);
     assert!((1.0..2.2).contains(&h), "height {h} m");

@@ -92,9 +92,13 @@ fn cmu_02_03_as_amc_and_as_cc_bvh_retarget_alike() {
     // Both retargeted onto one character at 30 fps, the AMC from its
     // second frame (the same instants as the BVH's frames).
     let n = amc.joint_count();
-    let mut amc1 = amc.clone();
-    amc1.rotations.drain(..n);
-    amc1.translations.drain(..n);
+    let amc1 = amc
+        .clone()
+        .edited(|p| {
+            p.rotations.drain(..n);
+            p.translations.drain(..n);
+        })
+        .unwrap();
     let walk = surfmotion::synth::gait_clip(surfmotion::synth::Gait::Walk, 2.0, 30.0);
     let character = detect_clip(&walk).unwrap().map.rest_pose(&walk).unwrap();
     let h = character[C::Head.index()].y - character[C::LToe.index()].y;

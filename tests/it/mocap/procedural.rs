@@ -19,7 +19,13 @@ fn committed_clips_match_the_generator() {
         let made = gait_clip(g, 4.0, 30.0);
         assert_eq!(file.frame_count(), made.frame_count(), "{}", g.name());
         assert!((file.fps() - 30.0).abs() < 1e-9);
-        assert_eq!(file.units.name, "m", "{}: {}", g.name(), file.units.reason);
+        assert_eq!(
+            file.units().name,
+            "m",
+            "{}: {}",
+            g.name(),
+            file.units().reason
+        );
         for f in 0..made.frame_count() {
             let (a, b) = (file.world_positions(f), made.world_positions(f));
             for (p, q) in a.iter().zip(&b) {
@@ -71,16 +77,16 @@ fn a_skating_clip_is_flagged() {
 
 /// `clip`'s first frame held, its root carried `step` metres along +Z a frame.
 fn glide(clip: &surfmotion::mocap::Clip, step: f64) -> surfmotion::mocap::Clip {
-    let n = clip.joints.len();
-    let mut c = clip.clone();
+    let n = clip.joints().len();
+    let mut c = clip.clone().into_parts();
     for f in 0..clip.frame_count() {
         for j in 0..n {
-            c.rotations[f * n + j] = clip.rotations[j];
-            c.translations[f * n + j] = clip.translations[j];
+            c.rotations[f * n + j] = clip.rotations()[j];
+            c.translations[f * n + j] = clip.translations()[j];
         }
         c.translations[f * n].z += step * f as f64;
     }
-    c
+    surfmotion::mocap::Clip::from_parts(c).unwrap()
 }
 
 /// Real walks and a jog (CMU 02_01, 02_02, 02_03, Bandai walks) read low on the same

@@ -146,7 +146,7 @@ fn amc_and_cgspeed_bvh_of_01_01_agree() {
         }
     }
     // Same units: both CMU 1/0.45 inch.
-    assert!((amc.units.metres_per_unit - bvh.units.metres_per_unit).abs() < 1e-12);
+    assert!((amc.units().metres_per_unit - bvh.units().metres_per_unit).abs() < 1e-12);
 }
 
 #[test]
@@ -165,10 +165,10 @@ fn bvh_write_read_round_trip_is_exact_on_every_clip() {
         )
         .unwrap();
         assert_eq!(a.frame_count(), b.frame_count(), "{}", f.display());
-        assert!((a.frame_time - b.frame_time).abs() < 1e-12);
+        assert!((a.frame_time() - b.frame_time()).abs() < 1e-12);
         // The writer emits joints depth-first; compare by name.
         let map: Vec<usize> = a
-            .joints
+            .joints()
             .iter()
             .map(|j| b.joint(&j.name).unwrap().idx())
             .collect();
@@ -247,7 +247,7 @@ fn fbx_fk_matches_the_ufbx_scene_evaluator_on_every_file() {
         assert_eq!(clip.frame_count(), expect, "{rel}");
         let m = fbx_basis(&scene.settings.axes);
         let mpu = scene.settings.unit_meters;
-        assert!((clip.units.metres_per_unit - mpu).abs() < 1e-12, "{rel}");
+        assert!((clip.units().metres_per_unit - mpu).abs() < 1e-12, "{rel}");
         // Height: the vertical span of the rest skeleton (metres).
         let (rest, _) = clip.rest_positions();
         let (lo, hi) = rest
@@ -262,7 +262,7 @@ fn fbx_fk_matches_the_ufbx_scene_evaluator_on_every_file() {
             let ev = ufbx::evaluate_scene(&scene, &stack.anim, t, ufbx::EvaluateOpts::default())
                 .unwrap();
             let ours = clip.world_positions(fr);
-            for (j, joint) in clip.joints.iter().enumerate() {
+            for (j, joint) in clip.joints().iter().enumerate() {
                 let node = ev
                     .nodes
                     .iter()
@@ -312,9 +312,9 @@ fn cmu_01_01_fbx_matches_the_bvh_of_the_same_capture() {
     fbx.to_metres_y_up();
     bvh.to_metres_y_up();
     assert_eq!(fbx.frame_count(), bvh.frame_count());
-    assert!((fbx.frame_time - bvh.frame_time).abs() < 1e-6);
+    assert!((fbx.frame_time() - bvh.frame_time()).abs() < 1e-6);
     let pairs: Vec<(usize, usize)> = bvh
-        .joints
+        .joints()
         .iter()
         .enumerate()
         .map(|(i, j)| {

@@ -1464,10 +1464,14 @@ fn an_mmd_figure_reads_to_one_stature_in_every_unit() {
         let map = detect_clip(&c).unwrap().map;
         let truth = stature(&c, &map).unwrap().0 * k.metres_per_unit();
         assert!((1.5..1.8).contains(&truth), "{name}: {truth} m");
-        let mut spaced = c.clone();
-        for j in &mut spaced.joints {
-            j.name = format!("Model|{}", j.name);
-        }
+        let spaced = c
+            .clone()
+            .edited(|p| {
+                for j in &mut p.joints {
+                    j.name = format!("Model|{}", j.name);
+                }
+            })
+            .unwrap();
         for (variant, v) in [
             ("", c.clone()),
             (" mirrored", mirror(&c)),
@@ -1486,11 +1490,11 @@ fn an_mmd_figure_reads_to_one_stature_in_every_unit() {
                 std::fs::write(&p, format_bvh(&w)).unwrap();
                 let got = load_clip(&p, &Default::default()).unwrap();
                 let map = detect_clip(&got).unwrap().map;
-                let h = stature(&got, &map).unwrap().0 * got.units.metres_per_unit;
+                let h = stature(&got, &map).unwrap().0 * got.units().metres_per_unit;
                 if (h / truth - 1.0).abs() > 0.03 {
                     fails.push(format!(
                         "{name}{variant} in {unit}: {h:.3} m, not {truth:.3} ({})",
-                        got.units.reason
+                        got.units().reason
                     ));
                 }
             }
@@ -1563,7 +1567,7 @@ fn walk_onto(k: &Skel, rest: &Clip, want: &[(Canonical, Vec<String>)], walk: &Cl
     }
     for j in 0..n {
         if owner[j].is_none()
-            && let Some(p) = rest.joints[j].parent
+            && let Some(p) = rest.joints()[j].parent
         {
             owner[j] = owner[p.idx()];
         }
@@ -1589,7 +1593,7 @@ fn walk_onto(k: &Skel, rest: &Clip, want: &[(Canonical, Vec<String>)], walk: &Cl
     let scale = legs(&tall, tall[pj]) / legs(&wrest, wrest[C::Pelvis.index()]);
     // The pelvis's own position channels carry the travel when it has
     // them (a Reference node above it stays put), else the root's do.
-    let pelvis_moves = rest.joints[pj].has_position_channels();
+    let pelvis_moves = rest.joints()[pj].has_position_channels();
     let frames = walk.frame_count();
     let mut rot = Vec::with_capacity(frames * n);
     let mut tr = Vec::with_capacity(frames * n);
@@ -1605,7 +1609,7 @@ fn walk_onto(k: &Skel, rest: &Clip, want: &[(Canonical, Vec<String>)], walk: &Cl
             .collect();
         let travel = wposes[f][C::Pelvis.index()] - wrest[C::Pelvis.index()];
         let pelvis_at = trest[pj] + a * (travel * scale);
-        for (j, joint) in rest.joints.iter().enumerate() {
+        for (j, joint) in rest.joints().iter().enumerate() {
             let pw = joint.parent.map_or(DQuat::IDENTITY, |p| world[p.idx()]);
             rot.push(pw.inverse() * world[j]);
             let above = joint.parent.map_or(DVec3::ZERO, |p| trest[p.idx()]);
@@ -1620,12 +1624,12 @@ fn walk_onto(k: &Skel, rest: &Clip, want: &[(Canonical, Vec<String>)], walk: &Cl
         }
     }
     Clip::new(
-        rest.joints.clone(),
-        walk.frame_time,
+        rest.joints().to_vec(),
+        walk.frame_time(),
         rot,
         tr,
-        rest.units.clone(),
-        rest.up,
+        rest.units().clone(),
+        rest.up(),
         PointConvention::JointOrigins,
     )
     .unwrap()

@@ -322,10 +322,12 @@ fn knees(p: &Pose) -> [f64; 2] {
 
 fn drop_frames(c: &Clip, n: usize) -> Clip {
     let j = c.joint_count();
-    let mut c = c.clone();
-    c.rotations.drain(..n * j);
-    c.translations.drain(..n * j);
-    c
+    c.clone()
+        .edited(|p| {
+            p.rotations.drain(..n * j);
+            p.translations.drain(..n * j);
+        })
+        .unwrap()
 }
 
 /// The two clips from the same instant: BVH frame `k ≥ skip` is AMC frame

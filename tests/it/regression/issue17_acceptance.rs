@@ -27,10 +27,12 @@ fn character() -> (Pose, f64) {
 /// `c` without its first `k` frames.
 fn drop_frames(c: &Clip, k: usize) -> Clip {
     let n = c.joint_count();
-    let mut out = c.clone();
-    out.rotations.drain(..k * n);
-    out.translations.drain(..k * n);
-    out
+    c.clone()
+        .edited(|p| {
+            p.rotations.drain(..k * n);
+            p.translations.drain(..k * n);
+        })
+        .unwrap()
 }
 
 /// The clip's canonical poses (no rig map) retargeted onto `character`.
@@ -100,14 +102,14 @@ fn a_third_party_bvh_conversion_drives_the_character_like_its_amc() {
 fn insert_zero_joint_above(c: &Clip, child: usize, name: &str) -> Clip {
     use surfmotion::mocap::JointId;
     let n = c.joint_count();
-    let mut out = c.clone();
-    let mut base = c.joints[child].clone();
+    let mut out = c.clone().into_parts();
+    let mut base = c.joints()[child].clone();
     base.name = name.to_string();
     base.offset = DVec3::ZERO;
     base.tail = None;
     let shift = |j: usize| if j >= child { j + 1 } else { j };
     let mut joints = Vec::with_capacity(n + 1);
-    for (j, jt) in c.joints.iter().enumerate() {
+    for (j, jt) in c.joints().iter().enumerate() {
         if j == child {
             joints.push(base.clone());
         }
@@ -124,7 +126,7 @@ fn insert_zero_joint_above(c: &Clip, child: usize, name: &str) -> Clip {
     out.translations.clear();
     for f in 0..c.frame_count() {
         for j in 0..n {
-            let (r, t) = (c.rotations[f * n + j], c.translations[f * n + j]);
+            let (r, t) = (c.rotations()[f * n + j], c.translations()[f * n + j]);
             if j == child {
                 // The new joint: the child's rotation at the parent's place.
                 out.rotations.push(r);
@@ -137,8 +139,8 @@ fn insert_zero_joint_above(c: &Clip, child: usize, name: &str) -> Clip {
             }
         }
     }
-    out.joints[child + 1].offset = c.joints[child].offset;
-    out
+    out.joints[child + 1].offset = c.joints()[child].offset;
+    Clip::from_parts(out).unwrap()
 }
 
 /// A joint on the chest with a zero offset that carries the neck chain
@@ -155,17 +157,22 @@ fn a_zero_length_joint_carrying_the_neck_on_the_chest_is_the_neck() {
     use surfmotion::synth::{Gait, gait_clip};
     let walk = gait_clip(Gait::Walk, 1.0, 30.0);
     let neck = walk.joint("Neck").unwrap().idx();
-    let mut named = insert_zero_joint_above(&walk, neck, "Neck");
-    named.joints[neck + 1].name = "Neck1".into();
+    let named = insert_zero_joint_above(&walk, neck, "Neck")
+        .edited(|p| p.joints[neck + 1].name = "Neck1".into())
+        .unwrap();
     // Every joint where it was.
     let (p0, _) = walk.rest_positions();
     let (p1, _) = named.rest_positions();
     assert!(p1[neck].distance(p0[neck - 1]) < 1e-12);
     assert!(p1[neck + 1].distance(p0[neck]) < 1e-12);
-    let mut bare = named.clone();
-    for (k, j) in bare.joints.iter_mut().enumerate() {
-        j.name = format!("J{k}");
-    }
+    let bare = named
+        .clone()
+        .edited(|p| {
+            for (k, j) in p.joints.iter_mut().enumerate() {
+                j.name = format!("J{k}");
+            }
+        })
+        .unwrap();
     for (what, c) in [("named", &named), ("no names", &bare)] {
         let d = detect_clip(c).unwrap_or_else(|e| panic!("{what}: {e}"));
         let at = |k: Canonical| c.joint(&d.map.joints[&k]).unwrap().idx();
@@ -198,8 +205,8 @@ fn moving_the_necks_and_clavicles_offsets_leaves_the_result_unchanged() {
     let mut clip = load_clip(&d.join("mocap/cmu-amc/01/01_01.amc"), &Default::default()).unwrap();
     clip.to_metres_y_up();
     let (character, height) = character();
-    let mut moved = clip.clone();
-    let n = moved.joint_count();
+    let n = clip.joint_count();
+    let mut moved = clip.clone().into_parts();
     // The neck and both clavicles onto the thorax's own origin (the
     // cgspeed conversion's geometry), the neck then 2 cm forward.
     for (name, extra) in [
@@ -207,13 +214,14 @@ fn moving_the_necks_and_clavicles_offsets_leaves_the_result_unchanged() {
         ("lclavicle", DVec3::ZERO),
         ("rclavicle", DVec3::ZERO),
     ] {
-        let j = moved.joint(name).unwrap().idx();
+        let j = clip.joint(name).unwrap().idx();
         let dv = extra - moved.joints[j].offset;
         moved.joints[j].offset += dv;
-        for f in 0..moved.frame_count() {
+        for f in 0..clip.frame_count() {
             moved.translations[f * n + j] += dv;
         }
     }
+    let moved = Clip::from_parts(moved).unwrap();
     let a = driven(&clip, &character);
     let b = driven(&moved, &character);
     // The change is real: the clip's own neck and shoulders moved.

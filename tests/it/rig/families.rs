@@ -137,13 +137,15 @@ fn helper_leaves(c: &Clip, map: &RigMap, scheme: usize) -> Vec<Node> {
 fn torso_of(c: &Clip, map: &RigMap) -> Vec<bool> {
     let mut out = vec![false; c.joint_count()];
     let pelvis = joint_of(c, map, C::Pelvis);
-    let mut k = c.joints[joint_of(c, map, C::Head)].parent.map(|p| p.idx());
+    let mut k = c.joints()[joint_of(c, map, C::Head)]
+        .parent
+        .map(|p| p.idx());
     while let Some(j) = k {
         out[j] = true;
         if j == pelvis {
             break;
         }
-        k = c.joints[j].parent.map(|p| p.idx());
+        k = c.joints()[j].parent.map(|p| p.idx());
     }
     out
 }
@@ -746,12 +748,12 @@ fn a_depth_sensor_skeleton_with_spread_legs_maps_from_its_rest_alone() {
             }
             let n = v.joint_count();
             let rest = Clip::new(
-                v.joints.clone(),
-                v.frame_time,
+                v.joints().to_vec(),
+                v.frame_time(),
                 vec![DQuat::IDENTITY; n],
-                v.joints.iter().map(|j| j.offset).collect(),
-                v.units.clone(),
-                v.up,
+                v.joints().iter().map(|j| j.offset).collect(),
+                v.units().clone(),
+                v.up(),
                 PointConvention::JointOrigins,
             )
             .unwrap();

@@ -38,7 +38,7 @@ fn kenney_fbx_character_embeds_with_a_human_skeleton() {
     // the clip's unit named in the asset's problems.
     assert!((2.3..2.6).contains(&tall), "height {tall} m");
     let clip = surfmotion::rig::load_clip(&f, &Default::default()).unwrap();
-    let said = format!("units: {} m per file unit", clip.units.metres_per_unit);
+    let said = format!("units: {} m per file unit", clip.units().metres_per_unit);
     assert!(
         a.problems.iter().any(|p| p.starts_with(&said)),
         "{said} not in {:?}",
@@ -57,7 +57,7 @@ fn kenney_fbx_character_embeds_with_a_human_skeleton() {
         declared.problems
     );
     // The same mesh, scaled about the origin by the two units' ratio.
-    let k = clip.units.metres_per_unit / 0.01;
+    let k = clip.units().metres_per_unit / 0.01;
     for (p, q) in a.mesh.positions().iter().zip(declared.mesh.positions()) {
         for i in 0..3 {
             assert!((p[i] - k * q[i]).abs() < 1e-9, "{p:?} vs {q:?} × {k}");

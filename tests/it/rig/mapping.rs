@@ -32,7 +32,7 @@ pub(super) struct Node {
 }
 
 pub(super) fn nodes_of(c: &Clip) -> Vec<Node> {
-    c.joints
+    c.joints()
         .iter()
         .enumerate()
         .map(|(i, j)| Node {
@@ -92,9 +92,9 @@ pub(super) fn build(c: &Clip, nodes: &[Node], reverse: bool) -> Clip {
             match nodes[i].src {
                 Some(s) => {
                     rot.push(q[s]);
-                    tr.push(if c.joints[s].parent.is_none() {
+                    tr.push(if c.joints()[s].parent.is_none() {
                         t[s]
-                    } else if c.joints[s].has_position_channels() {
+                    } else if c.joints()[s].has_position_channels() {
                         t[s] * nodes[i].scale
                     } else {
                         nodes[i].offset
@@ -108,25 +108,25 @@ pub(super) fn build(c: &Clip, nodes: &[Node], reverse: bool) -> Clip {
                         .iter()
                         .find(|m| m.parent == Some(i) && m.src.is_some() && m.scale < 1.0);
                     tr.push(match child.and_then(|m| m.src.map(|s| (s, m.scale))) {
-                        Some((s, k)) if c.joints[s].has_position_channels() => t[s] * (1.0 - k),
+                        Some((s, k)) if c.joints()[s].has_position_channels() => t[s] * (1.0 - k),
                         _ => nodes[i].offset,
                     });
                 }
             }
         }
     }
-    let mut out = Clip::new(
+    Clip::new(
         joints,
-        c.frame_time,
+        c.frame_time(),
         rot,
         tr,
-        c.units.clone(),
-        c.up,
+        c.units().clone(),
+        c.up(),
         PointConvention::JointOrigins,
     )
-    .unwrap();
-    out.up_reason = c.up_reason.clone();
-    out
+    .unwrap()
+    .edited(|p| p.up_reason = c.up_reason().to_string())
+    .unwrap()
 }
 
 /// Through the BVH writer and reader.
@@ -152,10 +152,12 @@ pub(super) fn short(c: &Clip) -> Clip {
         tr.extend_from_slice(c.frame_translations(f));
     }
     let _ = n;
-    let mut out = c.clone();
-    out.rotations = rot;
-    out.translations = tr;
-    out
+    c.clone()
+        .edited(|p| {
+            p.rotations = rot;
+            p.translations = tr;
+        })
+        .unwrap()
 }
 
 fn poses(c: &Clip) -> (RigMap, Pose, Vec<Pose>) {
@@ -1961,17 +1963,17 @@ pub(super) fn rerest(c: &Clip, top: usize, a: DQuat) -> Clip {
     let n = c.joint_count();
     let below: Vec<bool> = (0..n)
         .map(|i| {
-            let mut k = c.joints[i].parent.map(|p| p.idx());
+            let mut k = c.joints()[i].parent.map(|p| p.idx());
             while let Some(x) = k {
                 if x == top {
                     return true;
                 }
-                k = c.joints[x].parent.map(|p| p.idx());
+                k = c.joints()[x].parent.map(|p| p.idx());
             }
             false
         })
         .collect();
-    let mut out = c.clone();
+    let mut out = c.clone().into_parts();
     for (i, j) in out.joints.iter_mut().enumerate() {
         if below[i] {
             j.offset = a * j.offset;
@@ -1982,14 +1984,14 @@ pub(super) fn rerest(c: &Clip, top: usize, a: DQuat) -> Clip {
         for (i, &under) in below.iter().enumerate() {
             let k = f * n + i;
             if i == top {
-                out.rotations[k] = c.rotations[k] * a.inverse();
+                out.rotations[k] = c.rotations()[k] * a.inverse();
             } else if under {
-                out.rotations[k] = a * c.rotations[k] * a.inverse();
-                out.translations[k] = a * c.translations[k];
+                out.rotations[k] = a * c.rotations()[k] * a.inverse();
+                out.translations[k] = a * c.translations()[k];
             }
         }
     }
-    out
+    Clip::from_parts(out).unwrap()
 }
 
 /// A T-pose and an A-pose version of one clip (the arms' rest bones turned
@@ -2038,11 +2040,11 @@ fn t_and_a_pose_versions_of_a_clip_map_and_retarget_alike() {
             );
             let v = via_bvh(&v);
             let (rest, _) = v.rest_positions();
-            let arm = rest[v.joint(&base.joints[lu].name).unwrap().idx()];
+            let arm = rest[v.joint(&base.joints()[lu].name).unwrap().idx()];
             let below = (0..v.joint_count())
-                .filter(|&j| v.joints[j].parent.is_some_and(|p| p.idx() == lu))
+                .filter(|&j| v.joints()[j].parent.is_some_and(|p| p.idx() == lu))
                 .max_by(|&a, &b| {
-                    let l = |j: usize| v.joints[j].offset.length();
+                    let l = |j: usize| v.joints()[j].offset.length();
                     l(a).total_cmp(&l(b))
                 })
                 .unwrap();
@@ -2092,8 +2094,12 @@ fn an_amc_clip_and_its_third_party_bvh_conversion_map_alike() {
     b.to_metres_y_up();
     assert_eq!(a.frame_count() + 1, b.frame_count());
     let n = b.joint_count();
-    b.rotations.drain(..n);
-    b.translations.drain(..n);
+    let b = b
+        .edited(|p| {
+            p.rotations.drain(..n);
+            p.translations.drain(..n);
+        })
+        .unwrap();
     let (da, db) = (detect_clip(&a).unwrap(), detect_clip(&b).unwrap());
     assert!(da.sides.contains("confirmed by geometry"), "{}", da.sides);
     assert!(db.sides.contains("confirmed by geometry"), "{}", db.sides);
@@ -2563,10 +2569,14 @@ fn real_suites_without_names_place_the_limbs_alike() {
             continue; // nothing but the names tells left from right
         }
         let named = detect_clip(&c).unwrap().map.rest_pose(&c).unwrap();
-        let mut bare = c.clone();
-        for (k, j) in bare.joints.iter_mut().enumerate() {
-            j.name = format!("J{k}");
-        }
+        let bare = c
+            .clone()
+            .edited(|p| {
+                for (k, j) in p.joints.iter_mut().enumerate() {
+                    j.name = format!("J{k}");
+                }
+            })
+            .unwrap();
         let bare = via_bvh(&bare);
         let d = match detect_clip(&bare) {
             Ok(d) => d,
@@ -2691,10 +2701,12 @@ fn every_suite_is_read_in_its_unit_and_in_every_unit_it_is_written_in() {
         let c = suite_clip(s.name, s.skel);
         let unit = stated_unit(s.skel);
         let got = load_written(dir.path(), s.name, &c);
-        if got.units.name != unit {
+        if got.units().name != unit {
             fails.push(format!(
                 "{}: read in {} ({}), written in {unit}",
-                s.name, got.units.name, got.units.reason
+                s.name,
+                got.units().name,
+                got.units().reason
             ));
         }
         let map = detect_clip(&c).unwrap().map;
@@ -2707,10 +2719,12 @@ fn every_suite_is_read_in_its_unit_and_in_every_unit_it_is_written_in() {
             let v = scaled(&c, metres_per(unit) / u);
             let got = load_written(dir.path(), &format!("{}_{uname}", s.name), &v);
             let (hv, _) = surfmotion::rig::load::stature(&v, &map).unwrap();
-            if got.units.name != uname || (hv * u - h_m).abs() > 1e-9 * h_m {
+            if got.units().name != uname || (hv * u - h_m).abs() > 1e-9 * h_m {
                 fails.push(format!(
                     "{} written in {uname}: read in {} ({})",
-                    s.name, got.units.name, got.units.reason
+                    s.name,
+                    got.units().name,
+                    got.units().reason
                 ));
             }
         }
@@ -2756,10 +2770,11 @@ fn children_and_tall_adults_are_read_in_their_unit() {
         for unit in units {
             let v = scaled(&c, stature / h_m * metres_per("cm") / metres_per(unit));
             let got = load_written(dir.path(), &format!("h{stature}_{unit}"), &v);
-            if got.units.name != *unit {
+            if got.units().name != *unit {
                 fails.push(format!(
                     "{stature} m in {unit}: read in {} ({})",
-                    got.units.name, got.units.reason
+                    got.units().name,
+                    got.units().reason
                 ));
             }
         }
@@ -2776,8 +2791,8 @@ fn children_and_tall_adults_are_read_in_their_unit() {
 /// parent's +X, as LAFAN1 writes it), or random.
 fn rerest_all(c: &Clip, a: &[DQuat]) -> Clip {
     let n = c.joint_count();
-    let pa = |j: usize| c.joints[j].parent.map_or(DQuat::IDENTITY, |p| a[p.idx()]);
-    let mut out = c.clone();
+    let pa = |j: usize| c.joints()[j].parent.map_or(DQuat::IDENTITY, |p| a[p.idx()]);
+    let mut out = c.clone().into_parts();
     for (j, jt) in out.joints.iter_mut().enumerate() {
         if jt.parent.is_some() {
             jt.offset = pa(j).inverse() * jt.offset;
@@ -2787,13 +2802,13 @@ fn rerest_all(c: &Clip, a: &[DQuat]) -> Clip {
     for f in 0..c.frame_count() {
         for (j, aj) in a.iter().enumerate().take(n) {
             let k = f * n + j;
-            out.rotations[k] = pa(j).inverse() * c.rotations[k] * *aj;
-            if c.joints[j].parent.is_some() {
-                out.translations[k] = pa(j).inverse() * c.translations[k];
+            out.rotations[k] = pa(j).inverse() * c.rotations()[k] * *aj;
+            if c.joints()[j].parent.is_some() {
+                out.translations[k] = pa(j).inverse() * c.translations()[k];
             }
         }
     }
-    out
+    Clip::from_parts(out).unwrap()
 }
 
 /// The turn of each joint's frame that lays its longest child bone (or its
@@ -2802,11 +2817,11 @@ fn folding(c: &Clip) -> Vec<DQuat> {
     (0..c.joint_count())
         .map(|j| {
             let d = c
-                .joints
+                .joints()
                 .iter()
                 .filter(|k| k.parent.is_some_and(|p| p.idx() == j))
                 .map(|k| k.offset)
-                .chain(c.joints[j].tail)
+                .chain(c.joints()[j].tail)
                 .max_by(|a, b| a.length().total_cmp(&b.length()))
                 .unwrap_or(DVec3::X);
             if d.length() < 1e-12 {
@@ -2821,7 +2836,7 @@ fn folding(c: &Clip) -> Vec<DQuat> {
 /// A zero rest: every offset zero and six channels on every joint, the
 /// frames' position channels carrying the bones (as some exporters write).
 fn zero_rest(c: &Clip) -> Clip {
-    let mut out = c.clone();
+    let mut out = c.clone().into_parts();
     for j in &mut out.joints {
         if j.parent.is_some() {
             j.offset = DVec3::ZERO;
@@ -2841,7 +2856,7 @@ fn zero_rest(c: &Clip) -> Clip {
             })
             .collect();
     }
-    out
+    Clip::from_parts(out).unwrap()
 }
 
 /// The variants of a clip whose rest does not stand, the motion unchanged:
