@@ -153,7 +153,7 @@ impl Deformer {
         mode: DeformMode,
         opts: &DeformOptions,
     ) -> Result<Deformer, SolveError> {
-        let opts = &super::cloth::with_env(opts);
+        let opts = &super::options::with_repair_env(&super::cloth::with_env(opts));
         let mut out = Deformer::options_of(ch, mode, opts);
         if matches!(mode, DeformMode::Lbs | DeformMode::None) {
             return Ok(out);
@@ -1069,5 +1069,6 @@ fn add_work(a: unflip::Work, b: unflip::Work) -> unflip::Work {
     unflip::Work {
         projections: a.projections + b.projections,
         patch_vertices: a.patch_vertices + b.patch_vertices,
+        patches: a.patches + b.patches,
     }
 }

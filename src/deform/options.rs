@@ -357,3 +357,49 @@ impl Default for DeformOptions {
         }
     }
 }
+
+/// The environment variable that overrides the fold repair's options for
+/// measurement ([`with_repair_overrides`]), as [`super::cloth::CLOTH_ENV`]
+/// does the cloth's: e.g. `SURFMOTION_REPAIR=rings=16,passes=2`.
+pub const REPAIR_ENV: &str = "SURFMOTION_REPAIR";
+
+/// `opts` with [`REPAIR_ENV`]'s overrides (a warning, and none taken, when
+/// it cannot be read).
+pub fn with_repair_env(opts: &DeformOptions) -> DeformOptions {
+    match std::env::var(REPAIR_ENV) {
+        Ok(text) => with_repair_overrides(opts, &text).unwrap_or_else(|why| {
+            tracing::warn!("{REPAIR_ENV}: {why}; the default repair options are used");
+            *opts
+        }),
+        Err(_) => *opts,
+    }
+}
+
+/// `opts` with the comma-separated `name=value` pairs of `text`: `rings`
+/// (most rings of a patch, [`unflip::RepairOptions::most_rings`]; `all`
+/// for no bound), `rounds` ([`unflip::RepairOptions::rounds`]), `passes`
+/// ([`DeformOptions::repair_passes`]) and `surface`
+/// ([`DeformOptions::surface_rounds`]). An error names the pair it could
+/// not read and every name accepted.
+pub fn with_repair_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
+    const NAMES: &str = "rings=N|all, rounds=N, passes=N, surface=N";
+    let mut o = *opts;
+    for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let bad = |what: &str| format!("'{pair}': {what} (accepted: {NAMES})");
+        let (name, value) = pair.split_once('=').ok_or_else(|| bad("not name=value"))?;
+        let count = || {
+            value
+                .parse::<usize>()
+                .map_err(|_| bad("the value is not a count"))
+        };
+        match name {
+            "rings" if value == "all" => o.repair.most_rings = usize::MAX,
+            "rings" => o.repair.most_rings = count()?.max(1),
+            "rounds" => o.repair.rounds = count()?,
+            "passes" => o.repair_passes = count()?,
+            "surface" => o.surface_rounds = count()?,
+            _ => return Err(bad("unknown name")),
+        }
+    }
+    Ok(o)
+}

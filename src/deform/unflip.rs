@@ -191,6 +191,8 @@ pub struct Work {
     pub projections: usize,
     /// Patch unknowns solved by the Poisson repair.
     pub patch_vertices: usize,
+    /// Patch systems factored (one a round of [`unflip_within`]).
+    pub patches: usize,
 }
 
 /// Limits of a frame's [`Work`].
@@ -247,6 +249,18 @@ pub struct RepairOptions {
     /// Poisson rounds, the patch doubling each round from 2 rings. 0 turns
     /// the repair off. Default 3 (up to 8 rings).
     pub rounds: usize,
+    /// Most rings a patch grows around its turned-over triangles: the
+    /// doubling stops here and later rounds solve patches of this many
+    /// rings around what is still turned over. Default unbounded
+    /// (`usize::MAX`, the repair as before). Measured (session 32, live
+    /// `--replay` of CMU 02_02 at lag 0 onto the real samba capture,
+    /// three interleaved pairs at load 13-15): 8 rings cut the patch
+    /// unknowns a frame from 5,074 to 4,063 and the deformation's CPU from
+    /// 28.5-30.4 to 24.5-25.9 ms a frame (p99 110-127 → 50-69 ms), but
+    /// `eval --surface` flags 2 % more (22,822 → 23,290; creases 6,474 →
+    /// 6,695, turned over against the rest frame 118 → 125), so it is not
+    /// the default; CMU 131_02 is unchanged.
+    pub most_rings: usize,
     /// A triangle whose unit normal has a dot product with its turned source
     /// normal below this is rebuilt towards its source shape; the others
     /// keep their deformed shape. Default 0.3.
@@ -262,6 +276,7 @@ impl Default for RepairOptions {
     fn default() -> Self {
         RepairOptions {
             rounds: 3,
+            most_rings: usize::MAX,
             healthy_cos: 0.3,
             weight: 4.0,
             smooth: 20,
@@ -300,7 +315,8 @@ pub(crate) fn unflip_within(
     budget: &mut Budget,
 ) -> Vec<u32> {
     let n = out.len();
-    let mut rings = 2;
+    let most_rings = opts.most_rings.max(1);
+    let mut rings = most_rings.min(2);
     // Triangles listed in `touch` (cleared after each round).
     let mut listed = vec![false; tris.len()];
     let mut union = Vec::new();
@@ -358,6 +374,7 @@ pub(crate) fn unflip_within(
             break;
         }
         budget.done.patch_vertices += m;
+        budget.done.patches += 1;
         // Triangles touching a free vertex, each listed once, then sorted
         // (the list sorting and deduplicating every vertex's triangles
         // gave, from a third of the entries: a triangle touches up to
@@ -430,7 +447,7 @@ pub(crate) fn unflip_within(
         union_sorted(&bad, &touch, &mut union);
         std::mem::swap(&mut bad, &mut union);
         bad.retain(|&t| is_turned_over(&tris[t as usize], source, out, turn));
-        rings *= 2;
+        rings = rings.saturating_mul(2).min(most_rings);
     }
     smooth(tris, adj, source, out, turn, &mut bad, opts.smooth);
     bad
@@ -559,6 +576,102 @@ mod tests {
         let after = unflip(m.triangles(), &adj, &src, &mut out, &turn, bad, &opts).len();
         assert!(before > 0 && after == 0, "{before} -> {after}");
         assert!(DVec3::from_array(out[0]).distance(DVec3::from_array(src[0])) < 1e-6);
+    }
+
+    /// With the rings bounded ([`RepairOptions::most_rings`]) no round's
+    /// patch reaches past that many rings (plus its fixed ring) around the
+    /// triangles turned over when it starts, every round's factorisation
+    /// is counted, and generated folds (one to three vertices pushed
+    /// through a sphere, at several depths) are still all turned back;
+    /// without the bound the same rounds grow bigger patches.
+    #[test]
+    fn bounded_rings_keep_patches_small_and_still_unfold() {
+        let m = midpoint(&midpoint(&midpoint(&icosahedron())));
+        let (tris, src) = (m.triangles(), m.positions().to_vec());
+        let adj = Adjacency::new(src.len(), tris);
+        let turn = vec![DQuat::IDENTITY; src.len()];
+        // Vertices within `r` rings of `seeds`.
+        let within = |seeds: &[u32], r: usize| {
+            let mut seen = vec![false; src.len()];
+            let mut front: Vec<u32> = seeds.to_vec();
+            for &v in seeds {
+                seen[v as usize] = true;
+            }
+            for _ in 0..r {
+                let mut next = Vec::new();
+                for &v in &front {
+                    for &u in &adj.vertices[v as usize] {
+                        if !seen[u as usize] {
+                            seen[u as usize] = true;
+                            next.push(u);
+                        }
+                    }
+                }
+                front = next;
+            }
+            seen.iter().filter(|&&s| s).count()
+        };
+        let mut cases = 0;
+        for pushed in [&[0u32][..], &[0, 7], &[0, 7, 40]] {
+            for depth in [-0.2, -0.5, 0.3] {
+                let mut out = src.clone();
+                for &v in pushed {
+                    out[v as usize] = (DVec3::from_array(src[v as usize]) * depth).to_array();
+                }
+                let bad = turned_over(tris, &src, &out, &turn);
+                if bad.is_empty() {
+                    continue;
+                }
+                cases += 1;
+                let seeds: Vec<u32> = {
+                    let mut s: Vec<u32> = bad.iter().flat_map(|&t| tris[t as usize]).collect();
+                    s.sort_unstable();
+                    s.dedup();
+                    s
+                };
+                let run = |most_rings: usize, rounds: usize| {
+                    let opts = RepairOptions {
+                        rounds,
+                        most_rings,
+                        ..Default::default()
+                    };
+                    let mut o = out.clone();
+                    let mut budget = Budget::new(WorkLimit::NONE);
+                    let left = unflip_within(
+                        tris,
+                        &adj,
+                        &src,
+                        &mut o,
+                        &turn,
+                        bad.clone(),
+                        &opts,
+                        &mut budget,
+                    );
+                    (left.len(), budget.done)
+                };
+                // One round: its patch is the seeds' 2 rings plus the fixed ring.
+                let (_, one) = run(2, 1);
+                assert_eq!(one.patches, 1);
+                assert_eq!(one.patch_vertices, within(&seeds, 3), "{pushed:?} {depth}");
+                let (left, capped) = run(2, 4);
+                assert_eq!(left, 0, "{pushed:?} {depth}: left turned over");
+                assert!(capped.patches >= 1 && capped.patches <= 4);
+                // Each round's patch is within 3 rings of what it started
+                // from, which the first round's seeds bound from above
+                // only while the folds stay where they were: bound by the
+                // whole mesh, and by the unbounded run's work.
+                assert!(capped.patch_vertices <= capped.patches * src.len());
+                let (left_all, all) = run(usize::MAX, 4);
+                assert_eq!(left_all, 0);
+                if all.patches == capped.patches && all.patches > 2 {
+                    assert!(
+                        capped.patch_vertices < all.patch_vertices,
+                        "{pushed:?} {depth}: {capped:?} vs {all:?}"
+                    );
+                }
+            }
+        }
+        assert!(cases >= 6, "only {cases} generated folds turned over");
     }
 
     /// The counting pass gives `to_rows`' matrix bit for bit on the repair

@@ -527,6 +527,7 @@ impl<'a> Session<'a> {
                 let c = d.deform(ch, &self.blended, &sp, target, &mut self.deformed, ws);
                 self.turned_over += c.after;
                 self.stages.repaired = c.before > 0;
+                self.stages.repair_work = ws.repair_work();
                 &self.deformed
             }
             _ => &self.blended,

@@ -78,6 +78,9 @@ pub struct FrameStages {
     pub cpu_ms: [f64; 5],
     /// The deformation repaired turned-over triangles on this frame.
     pub repaired: bool,
+    /// The fold repair's work on this frame (patch systems factored and
+    /// their unknowns, projections).
+    pub repair_work: crate::deform::unflip::Work,
 }
 
 impl FrameStages {
@@ -127,6 +130,10 @@ pub(crate) struct StageTally {
     repaired: Latencies,
     /// The other frames' deformation wall time.
     plain: Latencies,
+    /// The fold repair's work summed over the frames.
+    work: crate::deform::unflip::Work,
+    /// Frames counted.
+    frames: u64,
 }
 
 impl StageTally {
@@ -138,6 +145,11 @@ impl StageTally {
         for (c, &ms) in self.cpu.iter_mut().zip(&f.cpu_ms) {
             c.add_ms(ms);
         }
+        let w = &f.repair_work;
+        self.work.patches += w.patches;
+        self.work.patch_vertices += w.patch_vertices;
+        self.work.projections += w.projections;
+        self.frames += 1;
         let d = f.wall_ms[Stage::Deformation as usize];
         if f.repaired {
             self.repaired.add_ms(d);
@@ -167,7 +179,11 @@ impl StageTally {
             })
             .collect();
         let (r, p) = (self.repaired.summary(), self.plain.summary());
+        let per_frame = |x: usize| x as f64 / self.frames.max(1) as f64;
         StageReport {
+            patch_solves_per_frame: per_frame(self.work.patches),
+            patch_unknowns_per_frame: per_frame(self.work.patch_vertices),
+            projections_per_frame: per_frame(self.work.projections),
             stages,
             repaired_frames: r.frames,
             deformation_repaired_mean_ms: r.mean_ms,
@@ -214,4 +230,11 @@ pub struct StageReport {
     pub deformation_plain_mean_ms: f64,
     /// The other frames' deformation wall time, 99th percentile.
     pub deformation_plain_p99_ms: f64,
+    /// The fold repair's patch systems factored per output frame, mean
+    /// ([`crate::deform::unflip::Work::patches`]).
+    pub patch_solves_per_frame: f64,
+    /// Their unknowns per output frame, mean.
+    pub patch_unknowns_per_frame: f64,
+    /// The untangling's projections per output frame, mean.
+    pub projections_per_frame: f64,
 }

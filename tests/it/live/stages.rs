@@ -90,6 +90,18 @@ fn stages_add_up_to_the_mesh_work() {
         "{r}"
     );
     assert_eq!(r["output"]["frames"].as_u64(), Some(frames), "{r}");
+    // The repair's work per frame: counts, so none without a repaired
+    // frame, and a patch system has at least one unknown.
+    let per = |k: &str| r["stages"][k].as_f64().unwrap_or(-1.0);
+    let (patches, unknowns) = (
+        per("patch_solves_per_frame"),
+        per("patch_unknowns_per_frame"),
+    );
+    assert!(patches >= 0.0 && unknowns >= patches, "{r}");
+    assert!(per("projections_per_frame") >= 0.0, "{r}");
+    if r["stages"]["repaired_frames"].as_u64() == Some(0) {
+        assert_eq!(patches, 0.0, "{r}");
+    }
 
     // The text report shows the same breakdown.
     let out = live(&["--report"]);
