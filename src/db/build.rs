@@ -219,7 +219,14 @@ pub fn sparse_options(m: &Manifest) -> SparseOptions {
     };
     match std::env::var(SPARSE_ENV) {
         Ok(text) => o.with_overrides(&text).unwrap_or_else(|why| {
-            tracing::warn!("{SPARSE_ENV}: {why}; the default sparse options are used");
+            // Once a process: `db build` reads the options again when it
+            // prepares the character (and a load reads them per database).
+            static WARNED: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+            let mut seen = WARNED.lock().unwrap_or_else(|e| e.into_inner());
+            if !seen.contains(&why) {
+                tracing::warn!("{SPARSE_ENV}: {why}; the default sparse options are used");
+                seen.push(why);
+            }
             o
         }),
         Err(_) => o,
