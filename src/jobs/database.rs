@@ -30,8 +30,9 @@ pub struct DatabaseReport {
     pub spaces_seconds: Option<f64>,
     /// Seconds spent loading the character as `retarget` does and writing
     /// what its first load would (frames, skeletons, rig, the deformation's
-    /// examples, the plausibility reference); absent without a `[rig]` and
-    /// for a measure other than the one a retarget loads.
+    /// examples, the plausibility reference); absent without a `[rig]`, for
+    /// a measure other than the one a retarget loads and for a build of a
+    /// given similarity method.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub prepared_seconds: Option<f64>,
     /// Why the character could not be prepared (the graph is built; a
@@ -82,11 +83,14 @@ pub fn build_database(
     // Every cache a `retarget` reads, written here (issue 43): a database
     // built once serves every later retarget read-only.
     let (mut prepared_seconds, mut prepare_failed) = (None, None);
-    // Only for the measure a retarget loads (another measure's build would
-    // otherwise make the default measure's graph too).
-    let default = opts
-        .measure
-        .is_none_or(|k| k == crate::db::build::default_measure(&m));
+    // Only for the measure and method a retarget loads: another measure's
+    // build would otherwise make the default measure's graph too, and a
+    // build of a given method (`--similarity`) could have its graph cache
+    // replaced by the one the load's own choice of method makes.
+    let default = opts.method.is_none()
+        && opts
+            .measure
+            .is_none_or(|k| k == crate::db::build::default_measure(&m));
     if default && (m.rig.landmarks.is_some() || m.rig.gltf_skin.is_some()) {
         let t = Instant::now();
         match prepare_for_retarget(dir, progress) {
