@@ -219,7 +219,14 @@ pub fn sparse_options(m: &Manifest) -> SparseOptions {
     };
     match std::env::var(SPARSE_ENV) {
         Ok(text) => o.with_overrides(&text).unwrap_or_else(|why| {
-            tracing::warn!("{SPARSE_ENV}: {why}; the default sparse options are used");
+            // Once a process: `db build` reads the options again when it
+            // prepares the character (and a load reads them per database).
+            static WARNED: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+            let mut seen = WARNED.lock().unwrap_or_else(|e| e.into_inner());
+            if !seen.contains(&why) {
+                tracing::warn!("{SPARSE_ENV}: {why}; the default sparse options are used");
+                seen.push(why);
+            }
             o
         }),
         Err(_) => o,
@@ -622,9 +629,25 @@ fn sparse_similarity(
     use crate::util::budget::thousands;
     let n = set.frames();
     let t = Instant::now();
-    progress.start("sparse pairs compared", 0);
-    let (sim, stats) = sparse_pairs(set, spans, opts, &|k| progress.advance(k));
-    progress.finish();
+    // Each stage with its total, so that the bar shows an estimate of the
+    // time left (it counted pairs against a total of 0 before).
+    struct Staged<'a>(&'a dyn BuildProgress, std::sync::atomic::AtomicBool);
+    impl crate::similarity::sparse::SparseProgress for Staged<'_> {
+        fn stage(&self, what: &str, total: u64) {
+            if self.1.swap(true, std::sync::atomic::Ordering::Relaxed) {
+                self.0.finish();
+            }
+            self.0.start(what, total);
+        }
+        fn advance(&self, k: u64) {
+            self.0.advance(k);
+        }
+    }
+    let staged = Staged(progress, std::sync::atomic::AtomicBool::new(false));
+    let (sim, stats) = sparse_pairs(set, spans, opts, &staged);
+    if staged.1.into_inner() {
+        progress.finish();
+    }
     let all = (n as u128) * (n as u128 + 1) / 2;
     notice(format!(
         "sparse similarity of {} frames: {} candidate pairs from the {} nearest frames of each and the {} best cheap transitions of each sequence pair ({} of them; {:.1} s, of which the sequence pairs {:.1} s), {} pairs compared ({:.2} % of the {} of the dense matrix) in {:.1} s",

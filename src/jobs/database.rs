@@ -28,6 +28,17 @@ pub struct DatabaseReport {
     /// Seconds spent on the parametric model (absent without spaces).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub spaces_seconds: Option<f64>,
+    /// Seconds spent loading the character as `retarget` does and writing
+    /// what its first load would (frames, skeletons, rig, the deformation's
+    /// examples, the plausibility reference); absent without a `[rig]`, for
+    /// a measure other than the one a retarget loads and for a build of a
+    /// given similarity method.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prepared_seconds: Option<f64>,
+    /// Why the character could not be prepared (the graph is built; a
+    /// `retarget` will say the same).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prepare_failed: Option<String>,
 }
 
 impl std::ops::Deref for DatabaseReport {
@@ -68,15 +79,56 @@ pub fn build_database(
             })?;
         (motion.summary(), Some(cached))
     };
+    let spaces_seconds = spaces_cached.map(|_| t.elapsed().as_secs_f64());
+    // Every cache a `retarget` reads, written here (issue 43): a database
+    // built once serves every later retarget read-only.
+    let (mut prepared_seconds, mut prepare_failed) = (None, None);
+    // Only for the measure and method a retarget loads: another measure's
+    // build would otherwise make the default measure's graph too, and a
+    // build of a given method (`--similarity`) could have its graph cache
+    // replaced by the one the load's own choice of method makes.
+    let default = opts.method.is_none()
+        && opts
+            .measure
+            .is_none_or(|k| k == crate::db::build::default_measure(&m));
+    if default && (m.rig.landmarks.is_some() || m.rig.gltf_skin.is_some()) {
+        let t = Instant::now();
+        match prepare_for_retarget(dir, progress) {
+            Ok(()) => prepared_seconds = Some(t.elapsed().as_secs_f64()),
+            Err(e) => {
+                tracing::warn!("{}: not prepared for retargeting: {e}", dir.display());
+                prepare_failed = Some(e.to_string());
+            }
+        }
+    }
     Ok((
         graph,
         DatabaseReport {
             build,
             spaces,
             spaces_cached,
-            spaces_seconds: spaces_cached.map(|_| t.elapsed().as_secs_f64()),
+            spaces_seconds,
+            prepared_seconds,
+            prepare_failed,
         },
     ))
+}
+
+/// Loads the database in `dir` and prepares it as a default `retarget`
+/// does ([`super::RetargetJob::load`], the plausibility checker), so that
+/// every cache that load reads is current: the frame and skeleton caches,
+/// the rig, the part deformation's examples (`db::examples`) and the
+/// plausibility reference.
+fn prepare_for_retarget(dir: &Path, progress: &dyn BuildProgress) -> Result<(), String> {
+    let job =
+        super::RetargetJob::load(dir, Default::default(), progress).map_err(|e| e.to_string())?;
+    crate::tools::eval::Checker::for_character_with(
+        &job.character,
+        job.prepared().neutral(),
+        crate::tools::eval::PlausibilityOptions::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(())
 }
 
 /// Loads the database in `dir` for synthesis (building its graph first if

@@ -65,6 +65,15 @@ pub fn database(dir: &Path, graph: &SurfaceMotionGraph, r: &DatabaseReport) -> S
     for e in graph.removed() {
         let _ = writeln!(out, "  removed by the manifest: {e}");
     }
+    if let Some(s) = r.prepared_seconds {
+        let _ = writeln!(
+            out,
+            "prepared for retargeting in {s:.2} s (frames, skeletons, rig, examples, plausibility reference cached)"
+        );
+    }
+    if let Some(why) = &r.prepare_failed {
+        let _ = writeln!(out, "not prepared for retargeting: {why}");
+    }
     let _ = writeln!(out, "cache: {}", r.cache.display());
     out
 }

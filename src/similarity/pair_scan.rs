@@ -60,7 +60,20 @@ pub fn best_per_pair(
     spans: &[Span],
     opts: &TransitionOptions,
 ) -> Vec<(usize, u32)> {
-    per_pair(spans, opts.top_n, |i, j| {
+    best_per_pair_with(features, dims, spans, opts, &|_| {})
+}
+
+/// [`best_per_pair`] telling `progress` the cheap distances of each
+/// sequence pair's block as it is done (`len_i × len_j`; all of them add
+/// up to [`scan_total`]).
+pub fn best_per_pair_with(
+    features: &[f32],
+    dims: usize,
+    spans: &[Span],
+    opts: &TransitionOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Vec<(usize, u32)> {
+    per_pair(spans, opts.top_n, progress, |i, j| {
         let (si, sj) = (&spans[i], &spans[j]);
         let c = cheap_block(features, dims, si, sj);
         let at = |r: usize, s: usize| c[r * sj.len + s];
@@ -98,12 +111,13 @@ pub(crate) fn best_per_pair_refined(
     spans: &[Span],
     opts: &TransitionOptions,
     rerank: Rerank<'_>,
+    progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<(usize, u32)>, u64) {
     let cheap = TransitionOptions {
         top_n: rerank.examine.max(opts.top_n),
         ..*opts
     };
-    per_pair(spans, opts.top_n, |i, j| {
+    per_pair(spans, opts.top_n, progress, |i, j| {
         let (si, sj) = (&spans[i], &spans[j]);
         let c = cheap_block(features, dims, si, sj);
         let at = |r: usize, s: usize| c[r * sj.len + s];
@@ -130,9 +144,20 @@ pub(crate) const MAX_DESCENT: usize = 32;
 /// Runs `block(i, j)` on every unordered sequence pair `i ≤ j` (in
 /// parallel, results in a fixed order) when `top_n` is not 0; the centres
 /// it returns and the sum of its counts.
+/// The cheap distances [`best_per_pair_with`] and
+/// [`best_per_pair_refined`] compute over `spans` (every unordered
+/// sequence pair's block, a sequence with itself included): what their
+/// progress adds up to, `(n² + Σ lenᵢ²) / 2`.
+pub fn scan_total(spans: &[Span]) -> u64 {
+    let n: u64 = spans.iter().map(|s| s.len as u64).sum();
+    let own: u64 = spans.iter().map(|s| (s.len as u64).pow(2)).sum();
+    (n * n + own) / 2
+}
+
 fn per_pair(
     spans: &[Span],
     top_n: usize,
+    progress: &(dyn Fn(u64) + Sync),
     block: impl Fn(usize, usize) -> (Vec<(usize, usize)>, u64) + Sync,
 ) -> (Vec<(usize, u32)>, u64) {
     if top_n == 0 {
@@ -145,6 +170,7 @@ fn per_pair(
         .par_iter()
         .map(|&(i, j)| {
             let (found, k) = block(i, j);
+            progress((spans[i].len * spans[j].len) as u64);
             let (a0, b0) = (spans[i].start, spans[j].start);
             let global = found
                 .into_iter()
@@ -399,8 +425,19 @@ mod tests {
                 full: &full,
                 examine: 8,
             };
-            let (refined, evaluated) = best_per_pair_refined(&features, 1, &spans, &opts, rerank);
+            let done = std::sync::atomic::AtomicU64::new(0);
+            let step = |k: u64| {
+                done.fetch_add(k, std::sync::atomic::Ordering::Relaxed);
+            };
+            let (refined, evaluated) =
+                best_per_pair_refined(&features, 1, &spans, &opts, rerank, &step);
             assert_eq!(across(refined), vec![(m, n)], "{k}");
+            // The progress adds up to the scan's total: every block once.
+            assert_eq!(done.into_inner(), scan_total(&spans), "{k}");
+            assert_eq!(
+                scan_total(&spans),
+                ((la + lb).pow(2) + la * la + lb * lb) as u64 / 2
+            );
             // Far fewer full measures than the block's pairs.
             assert!(
                 evaluated > 0 && evaluated < (la * lb) as u64 / 4,

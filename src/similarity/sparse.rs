@@ -48,6 +48,24 @@ use rayon::prelude::*;
 /// Frames the principal axes are fitted on (evenly spaced).
 pub(crate) const PCA_SAMPLE: usize = 2048;
 
+/// Progress of [`sparse_pairs`]: each stage whose size is known before it
+/// runs begins with its name and total ([`SparseProgress::stage`]), then
+/// advances by the steps done. A closure `Fn(u64)` takes the steps alone.
+pub trait SparseProgress: Sync {
+    /// A stage of `total` steps begins: the sequence-pair scan (cheap
+    /// distances, [`pair_scan::scan_total`]), then the full measure on the
+    /// stored pairs (their count).
+    fn stage(&self, _what: &str, _total: u64) {}
+    /// `k` more steps of the stage are done.
+    fn advance(&self, k: u64);
+}
+
+impl<F: Fn(u64) + Sync> SparseProgress for F {
+    fn advance(&self, k: u64) {
+        self(k)
+    }
+}
+
 /// A set of frames with a cheap descriptor besides its full measure.
 pub trait Features: PairDistance {
     /// Values of a frame's descriptor.
@@ -719,7 +737,7 @@ pub fn sparse_pairs(
     set: &dyn Features,
     spans: Vec<Span>,
     opts: &SparseOptions,
-    progress: &(dyn Fn(u64) + Sync),
+    progress: &dyn SparseProgress,
 ) -> (SparseSimilarity, SparseStats) {
     let t0 = std::time::Instant::now();
     let cpu = process_cpu_seconds;
@@ -739,14 +757,22 @@ pub fn sparse_pairs(
     let c1 = cpu();
     let t_scan = std::time::Instant::now();
     let popts = per_pair_options(opts);
+    if opts.per_pair > 0 {
+        progress.stage(
+            "sequence-pair distances scanned",
+            pair_scan::scan_total(&spans),
+        );
+    }
+    let step = |k| progress.advance(k);
     let (best, rerank_pairs) = if opts.rerank > 0 {
         let rerank = pair_scan::Rerank {
             full: set,
             examine: opts.rerank,
         };
-        pair_scan::best_per_pair_refined(&features, dims, &spans, &popts, rerank)
+        pair_scan::best_per_pair_refined(&features, dims, &spans, &popts, rerank, &step)
     } else {
-        (pair_scan::best_per_pair(&features, dims, &spans, &popts), 0)
+        let best = pair_scan::best_per_pair_with(&features, dims, &spans, &popts, &step);
+        (best, 0)
     };
     let per_pair = pair_scan::spread_seeds(&best, opts.spread, &spans, &seq);
     let scan_seconds = t_scan.elapsed().as_secs_f64();
@@ -774,7 +800,9 @@ pub fn sparse_pairs(
         runs.extend(merged);
     }
     let merged = merge_runs(runs);
-    let values = tiled::evaluate(set, &merged, progress);
+    let total: u64 = merged.iter().map(|r| (r.r1 - r.r0 + 1) as u64).sum();
+    progress.stage("sparse pairs compared", total);
+    let values = tiled::evaluate(set, &merged, &step);
     let pairs = values.len() as u64;
     let (offsets, cols, vals) = rows_of(n, &merged, &values);
     let mut sim = SparseSimilarity {
@@ -1046,13 +1074,13 @@ pub(crate) mod tests {
             rerank: 0,
             ..SparseOptions::default()
         };
-        let (with, _) = sparse_pairs(&set, spans.clone(), &base, &|_| {});
+        let (with, _) = sparse_pairs(&set, spans.clone(), &base, &|_: u64| {});
         let knn_only = SparseOptions {
             per_pair: 0,
             per_sequence: 0,
             ..base
         };
-        let (without, _) = sparse_pairs(&set, spans, &knn_only, &|_| {});
+        let (without, _) = sparse_pairs(&set, spans, &knn_only, &|_: u64| {});
         for (i, j) in [(0, 2), (2, 0), (1, 2), (2, 1), (0, 1)] {
             let (dense, sparse) = both_ways(&set, &with, i, j);
             assert!(!dense.is_empty(), "({i}, {j})");
@@ -1101,7 +1129,7 @@ pub(crate) mod tests {
             dims: 2,
             ..SparseOptions::default()
         };
-        let (s, stats) = sparse_pairs(&set, spans(&[120, 180]), &opts, &|_| {});
+        let (s, stats) = sparse_pairs(&set, spans(&[120, 180]), &opts, &|_: u64| {});
         assert!(stats.candidates >= 300 * 6);
         assert!(stats.pairs > 0 && (s.stored_pairs() as u64) == stats.pairs);
         assert!(

@@ -123,3 +123,114 @@ fn a_retarget_with_the_example_memo_writes_the_same_bytes() {
     let with = run(&tmp.path().join("b.pc2"));
     assert!(with == without, "the memo changed the output");
 }
+
+/// Every file of `dir` with its bytes and modification time.
+fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>, std::time::SystemTime)> {
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            let stamp = std::fs::metadata(&p).unwrap().modified().unwrap();
+            (name, std::fs::read(&p).unwrap(), stamp)
+        })
+        .collect();
+    v.sort_by(|a, b| a.0.cmp(&b.0));
+    v
+}
+
+/// Issue 43 (session 32): `db build` prepares the character as a default
+/// `retarget` does — the frame and skeleton caches, the rig, the
+/// deformation's example memo and the plausibility reference are written
+/// by the build, so a retarget after it writes nothing into the cache
+/// (every file the same bytes and time, none added), for the database as
+/// `db init` writes it and for one whose caches a retarget made first and
+/// whose memo was then removed (the build writes it again).
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn db_build_writes_every_cache_a_retarget_reads() {
+    let Some(d) = common::data_dir() else { return };
+    let tmp = tempfile::tempdir().unwrap();
+    let db = samba_db(&d, tmp.path());
+    let cache = surfmotion::db::cache::cache_dir(&db);
+    let clip = d.join("mocap/cmu-amc/02/02_01.amc");
+    let retarget = |out: &str| {
+        let r = common::run_cli(
+            &[
+                "retarget".as_ref(),
+                "--db".as_ref(),
+                db.as_os_str(),
+                "--mocap".as_ref(),
+                clip.as_os_str(),
+                "-o".as_ref(),
+                tmp.path().join(out).as_os_str(),
+            ],
+            None,
+            &[],
+        );
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+    };
+    let build = || {
+        let r = common::run_cli(
+            &["db".as_ref(), "build".as_ref(), db.as_os_str()],
+            None,
+            &[],
+        );
+        assert_eq!(r.code, Some(0), "{}", r.stderr);
+        assert!(
+            r.stdout.contains("prepared for retargeting"),
+            "{}",
+            r.stdout
+        );
+        r
+    };
+    for round in ["as db init wrote it", "memo removed after a retarget"] {
+        if round != "as db init wrote it" {
+            retarget("first.pc2");
+            std::fs::remove_file(examples_path(&db)).unwrap();
+        }
+        build();
+        for f in [
+            "examples.json",
+            "frames.bin",
+            "poses-regressor.bin",
+            "rig.json",
+            "plausibility-reference.json",
+        ] {
+            assert!(cache.join(f).is_file(), "{round}: db build wrote no {f}");
+        }
+        let before = snapshot(&cache);
+        // File times of a second apart at least on coarse file systems.
+        std::thread::sleep(std::time::Duration::from_millis(1100));
+        retarget("after.pc2");
+        let after = snapshot(&cache);
+        let names = |s: &[(String, Vec<u8>, std::time::SystemTime)]| {
+            s.iter().map(|f| f.0.clone()).collect::<Vec<_>>()
+        };
+        assert_eq!(names(&after), names(&before), "{round}: files added");
+        for (a, b) in before.iter().zip(&after) {
+            assert!(
+                a.1 == b.1 && a.2 == b.2,
+                "{round}: {} rewritten by the retarget",
+                a.0
+            );
+        }
+    }
+    // Without a rig: built, nothing prepared, no memo.
+    let bare = tmp.path().join("bare");
+    std::fs::create_dir(&bare).unwrap();
+    let manifest = std::fs::read_to_string(db.join("character.toml")).unwrap();
+    // `db init` writes absolute paths: the manifest without its [rig].
+    let cut = manifest.split("\n[rig]").next().unwrap();
+    assert!(cut.len() < manifest.len() && cut.contains("[[sequence]]"));
+    std::fs::write(bare.join("character.toml"), cut).unwrap();
+    let r = common::run_cli(
+        &["db".as_ref(), "build".as_ref(), bare.as_os_str()],
+        None,
+        &[],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(!r.stdout.contains("prepared"), "{}", r.stdout);
+    assert!(!examples_path(&bare).exists());
+}

@@ -365,7 +365,7 @@ fn options_measured_against_the_dense_cache() {
     };
     let topts = m.graph.transition_options();
     for o in option_sets(sparse_options(&m)) {
-        let (sim, stats) = sparse_pairs(&set, spans.clone(), &o, &|_| {});
+        let (sim, stats) = sparse_pairs(&set, spans.clone(), &o, &|_: u64| {});
         let mut line = format!(
             "neighbours {} per_pair {} spread {} per_sequence {} pool {} cover {} rerank {} stride {}: candidates {} (nearest {}, per sequence {}, per pair {}), pairs {} (alone: nearest {}, per sequence {}, per pair {}) (+ {} re-ranking), ({:.1} % of {}), index {:.1} s (scan {:.1} s), CPU index {:.1} s, scan {:.1} s, pairs {:.1} s",
             o.neighbours,
