@@ -482,7 +482,7 @@ fn forward_foot(r: &Pose, f: DVec3) -> DVec3 {
     let left = DVec3::new(lateral.x, 0.0, lateral.z).normalize_or_zero();
     let ahead = left.cross(DVec3::Y);
     let along = f.dot(ahead);
-    if left == DVec3::ZERO || !(along < 0.0) {
+    if left == DVec3::ZERO || along.is_nan() || along >= 0.0 {
         return f;
     }
     f - 2.0 * along * ahead
