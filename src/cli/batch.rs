@@ -76,7 +76,7 @@ pub struct Args {
     #[command(flatten)]
     pub retarget_job: super::retarget::JobOpts,
     #[command(flatten)]
-    pub glb: super::mesh::GlbArgs,
+    pub glb: super::mesh::SequenceOutputArgs,
 }
 
 /// Subcommands of `batch`.

@@ -21,6 +21,7 @@ fn check_outputs(a: &Args) -> anyhow::Result<()> {
     let mut outputs = Vec::new();
     if let Some(o) = &a.output {
         surfmotion::jobs::outputs::check_mesh_output(o)?;
+        a.glb.refuse_other_formats(o)?;
         outputs = super::mesh_outputs(o);
     }
     outputs.extend(a.report.clone().map(|p| ("--report", p)));
@@ -89,7 +90,12 @@ fn path(
     } else {
         super::spinner("finding the path and blending its meshes")
     };
-    let run = job::write_path(ch, keys, &targets, opts, out, &mut |m| {
+    let formats = surfmotion::mesh::io::SaveOptions {
+        glb: a.glb.options(),
+        usd: a.glb.usd_options(),
+        ..Default::default()
+    };
+    let run = job::write_path_with(ch, keys, &targets, opts, out, &formats, &mut |m| {
         bar.set_message(m.to_string())
     });
     bar.finish_and_clear();

@@ -123,7 +123,7 @@ pub struct Args {
     #[arg(long, value_name = "OUT")]
     pub record: Option<PathBuf>,
     #[command(flatten)]
-    pub glb: super::mesh::GlbArgs,
+    pub glb: super::mesh::SequenceOutputArgs,
     /// Print the latency and throughput report (frames/s, arrival to mesh
     /// ready median and p99, drops, and where each frame's time went: the
     /// analysis, retrieval, timeline+placement, blending and deformation

@@ -37,7 +37,7 @@ pub struct ConvertArgs {
     #[arg(long)]
     pub force: bool,
     #[command(flatten)]
-    pub glb: GlbArgs,
+    pub glb: SequenceOutputArgs,
     /// Print what was written as JSON on stdout (files, vertices,
     /// triangles, frames, fps, and for --glb-quantize the measured error
     /// in metres) instead of the line on stderr.
@@ -45,9 +45,10 @@ pub struct ConvertArgs {
     pub json: bool,
 }
 
-/// GLB and USD output options, shared by every verb that writes meshes.
+/// The sequence-output options (GLB and USD), flattened into every verb
+/// that writes a mesh sequence.
 #[derive(clap::Args, Debug, Clone, Default)]
-pub struct GlbArgs {
+pub struct SequenceOutputArgs {
     /// GLB only: quantise positions to 16 and normal changes to 8 bits
     /// (KHR_mesh_quantization, a required extension): half the size, error
     /// under 0.1 mm on a human-sized character; see the README.
@@ -64,7 +65,7 @@ pub struct GlbArgs {
     pub usd_no_normals: bool,
 }
 
-impl GlbArgs {
+impl SequenceOutputArgs {
     /// Refuses these flags for an output that is not a GLB (`output` names
     /// it, e.g. "out.pc2" or "--format pc2"): they were dropped without a
     /// word (issue 46, item 11).

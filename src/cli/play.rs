@@ -21,6 +21,8 @@ pub struct Args {
     /// Output: .glb, .pc2 (+ .obj), .mdd, or a folder of OBJ frames.
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub glb: super::mesh::SequenceOutputArgs,
     /// Write -o into a folder that already holds files (its OBJ frames are
     /// replaced).
     #[arg(long)]
@@ -57,6 +59,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // format, no input or other output overwritten, a folder that holds
     // files only with --force (none of it was checked).
     surfmotion::jobs::outputs::check_mesh_output(&a.output)?;
+    a.glb.refuse_other_formats(&a.output)?;
     let mut inputs = surfmotion::jobs::outputs::database_inputs(&a.db);
     inputs.push(a.script.clone());
     let mut outputs = super::mesh_outputs(&a.output);
@@ -65,6 +68,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
     let opts = PlayOptions {
         seconds: a.seconds,
+        glb: a.glb.options(),
+        usd: a.glb.usd_options(),
         ..Default::default()
     };
     let mut bar = None;

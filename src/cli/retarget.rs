@@ -31,7 +31,7 @@ pub struct Args {
     #[command(flatten)]
     pub run: super::RunOpts,
     #[command(flatten)]
-    pub glb: super::mesh::GlbArgs,
+    pub glb: super::mesh::SequenceOutputArgs,
 }
 
 /// The options of one retarget job, shared by `retarget` and `batch --db`

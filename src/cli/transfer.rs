@@ -79,7 +79,7 @@ pub struct Args {
     #[command(flatten)]
     pub run: super::RunOpts,
     #[command(flatten)]
-    pub glb: super::mesh::GlbArgs,
+    pub glb: super::mesh::SequenceOutputArgs,
 }
 
 /// The options of one transfer job, shared by `transfer` and `batch

@@ -24,6 +24,10 @@ pub struct PlayOptions {
     /// How the parametric model is built when it is not cached. Default:
     /// [`MotionOptions::default`] (that of `db build`).
     pub motion: MotionOptions,
+    /// GLB output (normals, quantisation). Default: [`GlbOptions::DEFAULT`](crate::mesh::io::glb::GlbOptions::DEFAULT).
+    pub glb: crate::mesh::io::glb::GlbOptions,
+    /// `.usda` output (normals). Default: [`UsdOptions::DEFAULT`](crate::mesh::io::usd::UsdOptions::DEFAULT).
+    pub usd: crate::mesh::io::usd::UsdOptions,
 }
 
 /// What can go wrong in [`play_session`].
@@ -133,7 +137,8 @@ pub fn play_session(
     let frames = session_frames(&requests, Some(seconds), motion.fps);
     let save = SaveOptions {
         fps: Some(motion.fps),
-        ..Default::default()
+        glb: opts.glb,
+        usd: opts.usd,
     };
     let mut writer = SequenceWriter::create(&motion.topology, out, frames, &save)?;
     let mut write_seconds = 0.0;

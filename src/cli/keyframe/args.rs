@@ -109,6 +109,8 @@ pub struct Args {
     /// Output: .glb, .pc2 (+ .obj), .mdd, or a folder of OBJ frames.
     #[arg(short, long, required_unless_present_any = ["grid", "floor"])]
     pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub glb: crate::cli::mesh::SequenceOutputArgs,
     /// Write -o into a folder that already holds files (its OBJ frames are
     /// replaced).
     #[arg(long)]

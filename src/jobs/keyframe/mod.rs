@@ -19,5 +19,5 @@ pub use floor::{FloorReport, FloorStage, PathFloors, floor};
 pub use grid::{GridTargets, LeastMean, grid, grid_planner, least_mean, least_mean_planner};
 pub use keys::{Keys, resolve_keys};
 pub use options::{DEFAULT_DISTANCES, DEFAULT_TIMES, KeyframeJobOptions};
-pub use path::{PathReport, PathRun, write_path};
+pub use path::{PathReport, PathRun, write_path, write_path_with};
 pub use verdict::{HEADING_TOLERANCE_DEG, Missed, missed_targets, segment_missed};

@@ -48,12 +48,34 @@ pub fn write_path(
     out: &Path,
     progress: &mut dyn FnMut(&str),
 ) -> Result<PathRun, KeyframeJobError> {
+    write_path_with(
+        ch,
+        keys,
+        targets,
+        opts,
+        out,
+        &SaveOptions::default(),
+        progress,
+    )
+}
+
+/// [`write_path`] with the writer's format options `formats` (GLB, USD;
+/// its frame rate is the database's).
+pub fn write_path_with(
+    ch: &Character,
+    keys: &Keys,
+    targets: &Targets,
+    opts: &KeyframeOptions,
+    out: &Path,
+    formats: &SaveOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<PathRun, KeyframeJobError> {
     let planned = plan_path(ch, &keys.ids, targets, opts, progress)?;
     let total = planned.frames();
     let fps = ch.manifest().fps;
     let save = SaveOptions {
         fps: Some(fps),
-        ..Default::default()
+        ..*formats
     };
     let prepared = prepare(ch)?;
     let mut writer = SequenceWriter::create(prepared.topology_metres(), out, total, &save)

@@ -377,6 +377,13 @@ pub(super) fn bend_toes(
 /// stood toes up by 50-60°, its heel 3-4 cm through the block's top. On
 /// a flat capture the two agree (within 3° on the README's walks and
 /// runs) and the lowest heights are kept.
+///
+/// A clip that never stands a foot flat for five frames nor plants it
+/// (an in-place walk cycle, its feet sliding back under the body: Kenney's
+/// Maya character, 26 frames at 30 fps, one or two per foot with ankle and
+/// toe near their lowest) takes the median over the frames near their
+/// lowest where the foot touches its ground; with none, `r` keeps the
+/// foot. The foot bone is first made to point forward ([`forward_foot`]).
 pub(super) fn flat_feet(r: &Pose, mocap: &[Pose], support: &Support) -> Pose {
     let mut out = *r;
     let low = |c: C| {
@@ -413,26 +420,42 @@ pub(super) fn flat_feet(r: &Pose, mocap: &[Pose], support: &Support) -> Pose {
             .collect();
         held.sort_by(f64::total_cmp);
         let held = (held.len() >= 5).then(|| held_elevation(&held));
-        let lowest = match (low(ankle), low(toe)) {
+        // The frames with the foot's ankle and toe both near their
+        // lowest, and of them those where the foot touches its ground.
+        let (lowest, few) = match (low(ankle), low(toe)) {
             (Some(la), Some(lt)) => {
-                let mut e: Vec<f64> = mocap
-                    .iter()
-                    .filter(|p| p[a].y <= la + 0.02 && p[t].y <= lt + 0.02)
-                    .map(|p| elevation(p[t] - p[a]))
+                let near = |i: &usize| mocap[*i][a].y <= la + 0.02 && mocap[*i][t].y <= lt + 0.02;
+                let median = |mut e: Vec<f64>| {
+                    e.sort_by(f64::total_cmp);
+                    e.get(e.len() / 2).copied()
+                };
+                let of = |i: usize| elevation(mocap[i][t] - mocap[i][a]);
+                let e: Vec<f64> = (0..mocap.len())
+                    .filter(near)
+                    .map(of)
                     .filter(|e| e.is_finite())
                     .collect();
-                e.sort_by(f64::total_cmp);
-                (e.len() >= 5).then(|| e[e.len() / 2])
+                let touching: Vec<f64> = (0..mocap.len())
+                    .filter(near)
+                    .filter(|&i| support.touch[foot].get(i).is_some_and(|g| g.is_some()))
+                    .map(of)
+                    .filter(|e| e.is_finite())
+                    .collect();
+                (
+                    (e.len() >= 5).then(|| median(e)).flatten(),
+                    median(touching),
+                )
             }
-            _ => None,
+            _ => (None, None),
         };
-        let flat = match (lowest, held) {
-            (Some(l), Some(h)) if (l - h).abs() > 5f64.to_radians() => h,
-            (Some(l), _) => l,
-            (None, Some(h)) => h,
-            (None, None) => continue,
+        let flat = match (lowest, held, few) {
+            (Some(l), Some(h), _) if (l - h).abs() > 5f64.to_radians() => h,
+            (Some(l), _, _) => l,
+            (None, Some(h), _) => h,
+            (None, None, Some(f)) => f,
+            (None, None, None) => continue,
         };
-        let f = r[t] - r[a];
+        let f = forward_foot(r, r[t] - r[a]);
         let axis = f.cross(DVec3::Y).normalize_or_zero();
         if axis == DVec3::ZERO || !f.is_finite() {
             continue;
@@ -441,6 +464,28 @@ pub(super) fn flat_feet(r: &Pose, mocap: &[Pose], support: &Support) -> Pose {
         out[t] = r[a] + turn * f;
     }
     out
+}
+
+/// The foot bone `f` of the pose `r` pointing forward: as it is when its
+/// horizontal part points ahead of the body (the hips' and shoulders'
+/// left-right axis turned a quarter about the vertical), else that part
+/// mirrored across the left-right axis (its elevation and its toe-out
+/// kept). A reference frame's foot can point backward: a clip whose most
+/// neutral frame kicks one shin up behind (Kenney's Maya walk in place,
+/// frame 8 of 26 at 30 fps: the right foot 53° down and backward); turned
+/// from there to its flat elevation it still pointed back, and the clip's
+/// rotation since then turned the character's foot toes-up by 64° at the
+/// next heel strike, its heel 7.2 cm through the floor.
+fn forward_foot(r: &Pose, f: DVec3) -> DVec3 {
+    let lateral = (r[C::LHip.index()] - r[C::RHip.index()])
+        + (r[C::LShoulder.index()] - r[C::RShoulder.index()]);
+    let left = DVec3::new(lateral.x, 0.0, lateral.z).normalize_or_zero();
+    let ahead = left.cross(DVec3::Y);
+    let along = f.dot(ahead);
+    if left == DVec3::ZERO || along.is_nan() || along >= 0.0 {
+        return f;
+    }
+    f - 2.0 * along * ahead
 }
 
 /// The elevation a foot holds longest among `e` (radians, sorted

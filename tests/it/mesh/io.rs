@@ -740,6 +740,18 @@ fn usd_no_normals_is_refused_for_other_outputs_on_every_verb() {
             "live --db db --replay w.bvh --usd-no-normals",
             &["--usd-no-normals", "--record"][..],
         ),
+        (
+            "play --db db --script s.json -o out.pc2 --usd-no-normals",
+            &["--usd-no-normals", "out.pc2", ".usda"][..],
+        ),
+        (
+            "play --db db --script s.json -o out.usda --glb-quantize",
+            &["--glb-quantize", "out.usda", ".glb"][..],
+        ),
+        (
+            "keyframe --db db --from a:0 --to a:1 --distance 1 --time 1 -o out.glb --usd-no-normals",
+            &["--usd-no-normals", "out.glb", ".usda"][..],
+        ),
     ] {
         let args: Vec<&str> = args.split(' ').collect();
         let r = common::run_cli(&args, Some(d), &[]);
