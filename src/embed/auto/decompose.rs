@@ -258,8 +258,10 @@ fn v3(p: [f64; 3]) -> DVec3 {
     DVec3::from_array(p)
 }
 
-/// Best rigid motion (Kabsch) taking rest points `idx` onto frame points.
-fn kabsch(rest: &[[f64; 3]], frame: &[[f64; 3]], idx: &[u32]) -> (DMat3, DVec3) {
+/// Best rigid motion (Kabsch) taking rest points `idx` onto frame points:
+/// `(R, t)` with `frame ≈ R · rest + t` (the identity and the centroids'
+/// offset for fewer than three points).
+pub fn kabsch(rest: &[[f64; 3]], frame: &[[f64; 3]], idx: &[u32]) -> (DMat3, DVec3) {
     if idx.is_empty() {
         return (DMat3::IDENTITY, DVec3::ZERO);
     }
