@@ -125,8 +125,9 @@ pub enum MergeRule {
     /// against greedy's 0.69 %. Crane: joints move 1.80 → 1.36 %, mean
     /// 2.25 → 2.37 %, l_hip 8.3 % in most draws, 2 of 10 draws' landmarks
     /// refused by the embedding (greedy's 1 of 10: a knee on the other
-    /// side of the mid-plane). 1.4-1.5 → 1.9-2.1 s of CPU a rig. Not the
-    /// default.
+    /// side of the mid-plane; none since session 32's sides,
+    /// [`super::sides`], `spread 10 renumbered`: 0 of 20 either way).
+    /// 1.4-1.5 → 1.9-2.1 s of CPU a rig. Not the default.
     Settle,
     /// [`MergeRule::Settle`], then each settled part that is not rigid
     /// (its RMS residual at or over the merge limit) split in two, the

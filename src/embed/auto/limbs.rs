@@ -207,7 +207,8 @@ pub fn knee(body: &Body, l: &Limb) -> DVec3 {
 /// horizontal axis ([`super::facing::widest_across`], with
 /// [`Facing::Trunk`] when the chest is clearly wider than deep) or to the
 /// line through the hips (or knees), on the side the toe tips point to
-/// from the knees.
+/// from the knees; the left limb of each pair is the one whose path lies
+/// more to the left of the mid-plane over the frames ([`super::sides`]).
 pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
     let (rest, up, height) = (body.rest, body.up, body.height);
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
