@@ -42,7 +42,11 @@ fn eval_shuffle(n: usize) -> Vec<usize> {
 }
 
 /// `mesh` and `frames` renumbered by `order`.
-fn renumbered(mesh: &Mesh, frames: &[Vec<[f64; 3]>], order: &[usize]) -> (Mesh, Vec<Vec<[f64; 3]>>) {
+fn renumbered(
+    mesh: &Mesh,
+    frames: &[Vec<[f64; 3]>],
+    order: &[usize],
+) -> (Mesh, Vec<Vec<[f64; 3]>>) {
     let mut new_of = vec![0u32; order.len()];
     for (k, &o) in order.iter().enumerate() {
         new_of[o] = k as u32;
@@ -66,11 +70,7 @@ fn variant(v: Variant, mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> (Mesh, Vec<Vec<
             t.swap(1, 2);
         }
     }
-    let m = Mesh::new(
-        mesh.positions().iter().map(|p| v.point(*p)).collect(),
-        tris,
-    )
-    .unwrap();
+    let m = Mesh::new(mesh.positions().iter().map(|p| v.point(*p)).collect(), tris).unwrap();
     let f = frames
         .iter()
         .map(|fr| fr.iter().map(|p| v.point(*p)).collect())
@@ -92,9 +92,18 @@ const PAIRS: [(Canonical, Canonical); 4] = [
 /// rigged as `db init` rigs it with the draw `merge`, `salt`, and
 /// embedded: the failures (refusals, joints on the wrong side, the
 /// crossing warning).
-fn failures(d: &std::path::Path, v: Variant, renumber: bool, merge: MergeRule, salt: u32) -> Vec<String> {
+fn failures(
+    d: &std::path::Path,
+    v: Variant,
+    renumber: bool,
+    merge: MergeRule,
+    salt: u32,
+) -> Vec<String> {
     let c = capture(d, "crane");
-    let what = format!("crane {v:?}{} {merge:?} salt {salt}", if renumber { " renumbered" } else { "" });
+    let what = format!(
+        "crane {v:?}{} {merge:?} salt {salt}",
+        if renumber { " renumbered" } else { "" }
+    );
     let (mut mesh, mut frames) = variant(v, &c.mesh, &c.frames);
     if renumber {
         (mesh, frames) = renumbered(&mesh, &frames, &eval_shuffle(mesh.vertex_count()));
