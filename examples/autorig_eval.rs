@@ -451,10 +451,22 @@ fn embed_as_db_init(
     rest: Option<usize>,
     lm: &Landmarks,
 ) -> Option<Embedding> {
+    embed_or_why(mesh, frames, rest, lm).ok()
+}
+
+/// [`embed_as_db_init`], `Err` with the embedding's refusal (which
+/// landmark, why).
+fn embed_or_why(
+    mesh: &Mesh,
+    frames: &[&[[f64; 3]]],
+    rest: Option<usize>,
+    lm: &Landmarks,
+) -> Result<Embedding, String> {
     match rest {
-        None => Embedding::new(mesh, lm, None).ok(),
-        Some(r) => Embedding::new_on_frame(mesh, frames[r], lm, None).ok(),
+        None => Embedding::new(mesh, lm, None),
+        Some(r) => Embedding::new_on_frame(mesh, frames[r], lm, None),
     }
+    .map_err(|e| format!("embedding refused: {e}"))
 }
 
 /// Issue 41's contact figure: the capture re-ordered so that frame
@@ -846,7 +858,7 @@ fn score(
     .map_err(|e| format!("refused: {e}"))?;
     let secs = t.elapsed().as_secs_f64();
     let cpu = cpu_secs() - c0;
-    let e = embed_as_db_init(&m, &fr, rest, &auto.landmarks).ok_or("embedding refused")?;
+    let e = embed_or_why(&m, &fr, rest, &auto.landmarks)?;
     let h = c.truth.height;
     let off: [f64; 19] = std::array::from_fn(|j| {
         100.0 * DVec3::from_array(e.joints[j]).distance(DVec3::from_array(c.truth.joints[j])) / h

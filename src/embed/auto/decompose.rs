@@ -125,8 +125,9 @@ pub enum MergeRule {
     /// against greedy's 0.69 %. Crane: joints move 1.80 → 1.36 %, mean
     /// 2.25 → 2.37 %, l_hip 8.3 % in most draws, 2 of 10 draws' landmarks
     /// refused by the embedding (greedy's 1 of 10: a knee on the other
-    /// side of the mid-plane). 1.4-1.5 → 1.9-2.1 s of CPU a rig. Not the
-    /// default.
+    /// side of the mid-plane; none since session 32's sides,
+    /// [`super::sides`], `spread 10 renumbered`: 0 of 20 either way).
+    /// 1.4-1.5 → 1.9-2.1 s of CPU a rig. Not the default.
     Settle,
     /// [`MergeRule::Settle`], then each settled part that is not rigid
     /// (its RMS residual at or over the merge limit) split in two, the
@@ -258,8 +259,10 @@ fn v3(p: [f64; 3]) -> DVec3 {
     DVec3::from_array(p)
 }
 
-/// Best rigid motion (Kabsch) taking rest points `idx` onto frame points.
-fn kabsch(rest: &[[f64; 3]], frame: &[[f64; 3]], idx: &[u32]) -> (DMat3, DVec3) {
+/// Best rigid motion (Kabsch) taking rest points `idx` onto frame points:
+/// `(R, t)` with `frame ≈ R · rest + t` (the identity and the centroids'
+/// offset for fewer than three points).
+pub fn kabsch(rest: &[[f64; 3]], frame: &[[f64; 3]], idx: &[u32]) -> (DMat3, DVec3) {
     if idx.is_empty() {
         return (DMat3::IDENTITY, DVec3::ZERO);
     }

@@ -6,6 +6,7 @@
 use super::decompose::Decomposition;
 use super::humanoid::{self, Crossing, along, crossings, geodesic, match_joints};
 use super::options::{AutoError, Facing};
+use super::sides::{TrunkFrames, first_is_left};
 use glam::DVec3;
 
 /// A limb: its tip, its path to the trunk (vertex, distance from the
@@ -25,6 +26,10 @@ pub(crate) const MIN_BEND_DEG: f64 = 6.0;
 pub struct Body<'a> {
     /// Rest-frame positions.
     pub rest: &'a [[f64; 3]],
+    /// The frames the decomposition fitted (each the rest frame's
+    /// vertices in order): the limbs' sides are read on them too
+    /// ([`super::sides`]).
+    pub frames: &'a [&'a [[f64; 3]]],
     /// Mesh neighbours.
     pub nb: &'a [Vec<u32>],
     /// The rigid parts.
@@ -57,6 +62,9 @@ pub struct Chains {
     prev: Vec<u32>,
     /// The trunk's parts.
     trunk: Vec<bool>,
+    /// The trunk's patch: the vertices within [`super::sides::CORE`] of
+    /// the height of the trunk's seed along the surface.
+    core: Vec<u32>,
 }
 
 impl Chains {
@@ -79,7 +87,10 @@ impl Chains {
                 d(a).total_cmp(&d(b))
             })
             .unwrap_or(0) as u32;
-        let (_, prev) = geodesic(rest, body.nb, &[trunk_seed]);
+        let (from_seed, prev) = geodesic(rest, body.nb, &[trunk_seed]);
+        let core = (0..n as u32)
+            .filter(|&v| from_seed[v as usize] <= super::sides::CORE * body.height)
+            .collect();
         // The trunk's parts: those on the paths of two limbs or more, and the
         // seed's (`rig::structure` reads the trunk of a joint tree the same
         // way: where the branches meet).
@@ -104,6 +115,7 @@ impl Chains {
             hands: [five[2], five[3]],
             prev,
             trunk,
+            core,
         }
     }
 
@@ -178,6 +190,10 @@ pub struct Sided {
     pub facing: DVec3,
     /// The character's left (unit).
     pub left: DVec3,
+    /// The legs' and the arms' lateral offsets from the mid-plane, left
+    /// limb first ([`super::sides::TrunkFrames::lateral`]; length units,
+    /// positive to the left).
+    pub lateral: [[f64; 2]; 2],
 }
 
 /// A leg's knee: found, or by proportion along the leg.
@@ -191,7 +207,8 @@ pub fn knee(body: &Body, l: &Limb) -> DVec3 {
 /// horizontal axis ([`super::facing::widest_across`], with
 /// [`Facing::Trunk`] when the chest is clearly wider than deep) or to the
 /// line through the hips (or knees), on the side the toe tips point to
-/// from the knees.
+/// from the knees; the left limb of each pair is the one whose path lies
+/// more to the left of the mid-plane over the frames ([`super::sides`]).
 pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
     let (rest, up, height) = (body.rest, body.up, body.height);
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
@@ -231,29 +248,32 @@ pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
         ));
     }
     let left = up.cross(facing).normalize();
-    // Sides: the limb whose root (or knee, elbow) lies more to the left is
-    // the left one.
-    if side_point(&legs[0]).dot(left) < side_point(&legs[1]).dot(left) {
+    // Sides: of each pair, the limb whose path lies more to the left of
+    // the mid-plane over the frames, in the trunk's frame
+    // ([`super::sides`]; the root's or knee's, elbow's position before).
+    let trunk = TrunkFrames::new(rest, body.frames, &chains.core);
+    let (first, mut leg_lat) =
+        first_is_left(&trunk, left, [&legs[0].1, &legs[1].1], LEG[2] * height);
+    if !first {
         legs.swap(0, 1);
+        leg_lat.swap(0, 1);
     }
     let mut arms = vec![
         chains.limb(body, chains.hands[0], &ARM, 0.08, false),
         chains.limb(body, chains.hands[1], &ARM, 0.08, false),
     ];
-    let arm_point = |l: &Limb| {
-        l.2[2]
-            .or(l.2[1])
-            .map(|c| c.joint.position)
-            .unwrap_or_else(|| along(rest, &l.1, ARM[1] * height))
-    };
-    if arm_point(&arms[0]).dot(left) < arm_point(&arms[1]).dot(left) {
+    let (first, mut arm_lat) =
+        first_is_left(&trunk, left, [&arms[0].1, &arms[1].1], ARM[2] * height);
+    if !first {
         arms.swap(0, 1);
+        arm_lat.swap(0, 1);
     }
     Ok(Sided {
         legs,
         arms,
         facing,
         left,
+        lateral: [leg_lat, arm_lat],
     })
 }
 

@@ -23,4 +23,5 @@ pub mod options;
 pub mod report;
 pub mod rig;
 pub mod seeding;
+pub mod sides;
 pub mod up;

@@ -44,6 +44,15 @@ pub fn auto_rig(
     let (body, tips, mut notes) = find_body(rest, &used, &nb, opts)?;
     let chains = Chains::find(&body, &tips);
     let sided = side(&body, &chains)?;
+    for (what, [l, r]) in ["legs", "arms"].iter().zip(sided.lateral) {
+        if l <= 0.0 || r >= 0.0 {
+            notes.push(format!(
+                "WARNING: the {what} lie {:.1}% and {:.1}% of the height to the left of the body's mid-plane over the capture (one of them across it): their sides may be swapped; look at the picture and correct the landmarks file, or give landmarks",
+                100.0 * l / body.height,
+                100.0 * r / body.height
+            ));
+        }
+    }
     let found = place_joints(&body, &sided);
     let get = |name: &str| get_joint(&found, name);
     // Symmetry of the limbs: tip to root lengths left against right.
@@ -286,7 +295,7 @@ type Found<'a> = (Body<'a>, Vec<(u32, f64)>, Vec<String>);
 /// Returns it with its six first extremities and the notes so far.
 fn find_body<'a>(
     rest: &'a [[f64; 3]],
-    used: &[&[[f64; 3]]],
+    used: &'a [&'a [[f64; 3]]],
     nb: &'a [Vec<u32>],
     opts: &AutoOptions,
 ) -> Result<Found<'a>, AutoError> {
@@ -334,6 +343,7 @@ fn find_body<'a>(
     }
     let body = Body {
         rest,
+        frames: used,
         nb,
         dec,
         up,

@@ -9,6 +9,7 @@ mod auto_held;
 mod auto_knees;
 mod auto_order;
 mod auto_settle;
+mod auto_sides;
 mod auto_vertex_order;
 mod bodies;
 mod captures;
