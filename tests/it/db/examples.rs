@@ -102,26 +102,31 @@ fn a_retarget_with_the_example_memo_writes_the_same_bytes() {
     let path = examples_path(&db);
     let clip = d.join("mocap/cmu-amc/02/02_01.amc");
     let run = |out: &Path| {
-        let r = common::run_cli(
-            &[
-                "retarget".as_ref(),
-                "--db".as_ref(),
-                db.as_os_str(),
-                "--mocap".as_ref(),
-                clip.as_os_str(),
-                "-o".as_ref(),
-                out.as_os_str(),
-            ],
-            None,
-            &[],
-        );
-        assert_eq!(r.code, Some(0), "{}", r.stderr);
+        retarget(&db, &clip, out);
         std::fs::read(out).unwrap()
     };
     let without = run(&tmp.path().join("a.pc2"));
     assert!(path.exists(), "the retarget wrote no memo");
     let with = run(&tmp.path().join("b.pc2"));
     assert!(with == without, "the memo changed the output");
+}
+
+/// `surfmotion retarget --db DB --mocap CLIP -o OUT`, which must succeed.
+fn retarget(db: &Path, clip: &Path, out: &Path) {
+    let r = common::run_cli(
+        &[
+            "retarget".as_ref(),
+            "--db".as_ref(),
+            db.as_os_str(),
+            "--mocap".as_ref(),
+            clip.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ],
+        None,
+        &[],
+    );
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
 }
 
 /// Every file of `dir` with its bytes and modification time.
@@ -155,22 +160,7 @@ fn db_build_writes_every_cache_a_retarget_reads() {
     let db = samba_db(&d, tmp.path());
     let cache = surfmotion::db::cache::cache_dir(&db);
     let clip = d.join("mocap/cmu-amc/02/02_01.amc");
-    let retarget = |out: &str| {
-        let r = common::run_cli(
-            &[
-                "retarget".as_ref(),
-                "--db".as_ref(),
-                db.as_os_str(),
-                "--mocap".as_ref(),
-                clip.as_os_str(),
-                "-o".as_ref(),
-                tmp.path().join(out).as_os_str(),
-            ],
-            None,
-            &[],
-        );
-        assert_eq!(r.code, Some(0), "{}", r.stderr);
-    };
+    let retarget = |out: &str| retarget(&db, &clip, &tmp.path().join(out));
     let build = || {
         let r = common::run_cli(
             &["db".as_ref(), "build".as_ref(), db.as_os_str()],

@@ -15,6 +15,7 @@
 //! the same parts and the same landmarks. And `db init`'s refusals leave
 //! nothing behind; a surface mark that overflows is named as not finite.
 
+use super::renumber::{EVAL_SEED, xorshift_order};
 use crate::common;
 
 use glam::DVec3;
@@ -64,19 +65,6 @@ fn rig_in_order(
     (all[c.frame].to_vec(), rig)
 }
 
-/// A fixed shuffle of `0..n`.
-fn shuffled(n: usize, seed: u64) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..n).collect();
-    let mut x = seed;
-    for i in (1..n).rev() {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        order.swap(i, (x % (i as u64 + 1)) as usize);
-    }
-    order
-}
-
 fn same(p: [f64; 3]) -> [f64; 3] {
     p
 }
@@ -97,7 +85,7 @@ fn orders_agree(
     let n = frames.len();
     let mut orders: Vec<(String, Vec<usize>)> = vec![
         ("reversed".into(), (0..n).rev().collect()),
-        ("shuffled".into(), shuffled(n, 0x2545_F491_4F6C_DD1D)),
+        ("shuffled".into(), xorshift_order(n, EVAL_SEED)),
     ];
     for &s in starts {
         orders.push((

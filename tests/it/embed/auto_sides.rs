@@ -16,6 +16,7 @@
 //! are those the evaluation found.
 
 use super::auto::{Variant, capture};
+use super::renumber::{EVAL_SEED, renumbered, xorshift_order};
 use crate::common;
 
 use glam::DVec3;
@@ -26,40 +27,6 @@ use surfmotion::embed::auto::rig::auto_rig;
 use surfmotion::embed::rest::choose_rest_frame;
 use surfmotion::mesh::Mesh;
 use surfmotion::rig::Canonical;
-
-/// `autorig_eval`'s fixed shuffle of `0..n` (xorshift): new vertex `k` is
-/// old vertex `order[k]`.
-fn eval_shuffle(n: usize) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..n).collect();
-    let mut x = 0x2545_F491_4F6C_DD1Du64;
-    for i in (1..n).rev() {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        order.swap(i, (x % (i as u64 + 1)) as usize);
-    }
-    order
-}
-
-/// `mesh` and `frames` renumbered by `order`.
-fn renumbered(
-    mesh: &Mesh,
-    frames: &[Vec<[f64; 3]>],
-    order: &[usize],
-) -> (Mesh, Vec<Vec<[f64; 3]>>) {
-    let mut new_of = vec![0u32; order.len()];
-    for (k, &o) in order.iter().enumerate() {
-        new_of[o] = k as u32;
-    }
-    let put = |f: &[[f64; 3]]| -> Vec<[f64; 3]> { order.iter().map(|&o| f[o]).collect() };
-    let tris = mesh
-        .triangles()
-        .iter()
-        .map(|t| t.map(|i| new_of[i as usize]))
-        .collect();
-    let m = Mesh::new(put(mesh.positions()), tris).unwrap();
-    (m, frames.iter().map(|f| put(f)).collect())
-}
 
 /// The variant's topology and frames (`Variant::point` on every
 /// position; a mirror's triangles reversed).
@@ -106,7 +73,11 @@ fn failures(
     );
     let (mut mesh, mut frames) = variant(v, &c.mesh, &c.frames);
     if renumber {
-        (mesh, frames) = renumbered(&mesh, &frames, &eval_shuffle(mesh.vertex_count()));
+        (mesh, frames) = renumbered(
+            &mesh,
+            &frames,
+            &xorshift_order(mesh.vertex_count(), EVAL_SEED),
+        );
     }
     let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
     let mut all = vec![mesh.positions()];

@@ -19,6 +19,7 @@
 //! 4 vertices touching" on its clear frame 0 and rests on frame 27
 //! (session 29).
 
+use super::renumber::renumbered;
 use crate::common;
 
 use glam::DVec3;
@@ -58,22 +59,6 @@ fn orders(n: usize) -> Vec<(&'static str, Vec<u32>)> {
         ("shuffled", shuffled),
         ("interleaved", interleaved),
     ]
-}
-
-/// `mesh` and `frames` renumbered by `order`.
-fn renumbered(mesh: &Mesh, frames: &[Vec<[f64; 3]>], order: &[u32]) -> (Mesh, Vec<Vec<[f64; 3]>>) {
-    let mut new_of = vec![0u32; order.len()];
-    for (k, &o) in order.iter().enumerate() {
-        new_of[o as usize] = k as u32;
-    }
-    let put = |f: &[[f64; 3]]| -> Vec<[f64; 3]> { order.iter().map(|&o| f[o as usize]).collect() };
-    let tris = mesh
-        .triangles()
-        .iter()
-        .map(|t| t.map(|i| new_of[i as usize]))
-        .collect();
-    let m = Mesh::new(put(mesh.positions()), tris).unwrap();
-    (m, frames.iter().map(|f| put(f)).collect())
 }
 
 /// The rig `db init` makes (its options; the decomposition its default

@@ -20,4 +20,5 @@ mod motion_skin;
 mod motion_tears;
 mod partial;
 mod placement;
+mod renumber;
 mod scan_auto;
