@@ -271,13 +271,7 @@ pub(crate) const CLOTH_ENV: &str = "SURFMOTION_CLOTH";
 /// `opts` with [`CLOTH_ENV`]'s overrides (a warning, and none taken, when
 /// they cannot be read).
 pub(crate) fn with_env(opts: &DeformOptions) -> DeformOptions {
-    match std::env::var(CLOTH_ENV) {
-        Ok(text) => with_overrides(opts, &text).unwrap_or_else(|why| {
-            tracing::warn!("{CLOTH_ENV}: {why}; the default cloth options are used");
-            *opts
-        }),
-        Err(_) => *opts,
-    }
+    super::options::with_env_overrides(opts, CLOTH_ENV, "cloth", with_overrides)
 }
 
 /// `opts` with the comma-separated `name=value` pairs of `text`:

@@ -366,9 +366,21 @@ pub const REPAIR_ENV: &str = "SURFMOTION_REPAIR";
 /// `opts` with [`REPAIR_ENV`]'s overrides (a warning, and none taken, when
 /// it cannot be read).
 pub fn with_repair_env(opts: &DeformOptions) -> DeformOptions {
-    match std::env::var(REPAIR_ENV) {
-        Ok(text) => with_repair_overrides(opts, &text).unwrap_or_else(|why| {
-            tracing::warn!("{REPAIR_ENV}: {why}; the default repair options are used");
+    with_env_overrides(opts, REPAIR_ENV, "repair", with_repair_overrides)
+}
+
+/// `opts` with the overrides the environment variable `var` holds, read
+/// by `parse` (a warning naming the `what` options, and none taken, when
+/// they cannot be read; `opts` when `var` is not set).
+pub(crate) fn with_env_overrides(
+    opts: &DeformOptions,
+    var: &str,
+    what: &str,
+    parse: fn(&DeformOptions, &str) -> Result<DeformOptions, String>,
+) -> DeformOptions {
+    match std::env::var(var) {
+        Ok(text) => parse(opts, &text).unwrap_or_else(|why| {
+            tracing::warn!("{var}: {why}; the default {what} options are used");
             *opts
         }),
         Err(_) => *opts,

@@ -465,6 +465,17 @@ pub fn swap_side(c: Canonical) -> Canonical {
     Canonical::from_name(&o).unwrap_or(c)
 }
 
+/// The clip with every joint renamed `J<k>` (its index): no name hints.
+pub fn unnamed(c: &Clip) -> Clip {
+    c.clone()
+        .edited(|p| {
+            for (k, j) in p.joints.iter_mut().enumerate() {
+                j.name = format!("J{k}");
+            }
+        })
+        .unwrap()
+}
+
 /// The clip mirrored left/right (x negated in the file's frame; the names
 /// kept).
 pub fn mirror(c: &Clip) -> Clip {

@@ -165,14 +165,7 @@ fn a_zero_length_joint_carrying_the_neck_on_the_chest_is_the_neck() {
     let (p1, _) = named.rest_positions();
     assert!(p1[neck].distance(p0[neck - 1]) < 1e-12);
     assert!(p1[neck + 1].distance(p0[neck]) < 1e-12);
-    let bare = named
-        .clone()
-        .edited(|p| {
-            for (k, j) in p.joints.iter_mut().enumerate() {
-                j.name = format!("J{k}");
-            }
-        })
-        .unwrap();
+    let bare = common::skel::unnamed(&named);
     for (what, c) in [("named", &named), ("no names", &bare)] {
         let d = detect_clip(c).unwrap_or_else(|e| panic!("{what}: {e}"));
         let at = |k: Canonical| c.joint(&d.map.joints[&k]).unwrap().idx();

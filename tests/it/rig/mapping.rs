@@ -2569,14 +2569,7 @@ fn real_suites_without_names_place_the_limbs_alike() {
             continue; // nothing but the names tells left from right
         }
         let named = detect_clip(&c).unwrap().map.rest_pose(&c).unwrap();
-        let bare = c
-            .clone()
-            .edited(|p| {
-                for (k, j) in p.joints.iter_mut().enumerate() {
-                    j.name = format!("J{k}");
-                }
-            })
-            .unwrap();
+        let bare = common::skel::unnamed(&c);
         let bare = via_bvh(&bare);
         let d = match detect_clip(&bare) {
             Ok(d) => d,
