@@ -431,3 +431,17 @@ pub fn mirrored_clip(clip: &[surfmotion::pose::Pose]) -> Vec<surfmotion::pose::P
         })
         .collect()
 }
+
+/// The character the pose-kernel tests retarget onto: the rest pose of the
+/// procedural walk (2 s at 30 fps), and its height (head over left toe).
+pub fn walk_character() -> (surfmotion::pose::Pose, f64) {
+    use surfmotion::rig::Canonical as C;
+    let walk = surfmotion::synth::gait_clip(surfmotion::synth::Gait::Walk, 2.0, 30.0);
+    let character = surfmotion::rig::detect_clip(&walk)
+        .unwrap()
+        .map
+        .rest_pose(&walk)
+        .unwrap();
+    let h = character[C::Head.index()].y - character[C::LToe.index()].y;
+    (character, h)
+}

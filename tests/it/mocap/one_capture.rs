@@ -99,9 +99,7 @@ fn cmu_02_03_as_amc_and_as_cc_bvh_retarget_alike() {
             p.translations.drain(..n);
         })
         .unwrap();
-    let walk = surfmotion::synth::gait_clip(surfmotion::synth::Gait::Walk, 2.0, 30.0);
-    let character = detect_clip(&walk).unwrap().map.rest_pose(&walk).unwrap();
-    let h = character[C::Head.index()].y - character[C::LToe.index()].y;
+    let (character, h) = common::walk_character();
     // `frame_reference`: both measured from their most neutral frame (the
     // rest skeleton not offered), to see what the choice of reference
     // accounts for.
@@ -187,9 +185,7 @@ fn apart(a: &[Pose], b: &[Pose], h: f64) -> f64 {
 fn a_clip_with_its_root_height_zeroed_retargets_close_to_the_original() {
     let Some(d) = common::data_dir() else { return };
     let m = d.join("mocap");
-    let walk = surfmotion::synth::gait_clip(surfmotion::synth::Gait::Walk, 2.0, 30.0);
-    let character = detect_clip(&walk).unwrap().map.rest_pose(&walk).unwrap();
-    let h = character[C::Head.index()].y - character[C::LToe.index()].y;
+    let (character, h) = common::walk_character();
     let mut got = Vec::new();
     for (file, limit) in [
         ("cmu-amc/02/02_03.amc", 0.015),

@@ -120,9 +120,7 @@ fn travel_scaled(poses: &[Pose], c0: DVec3, k: f64) -> Vec<Pose> {
 fn the_pelvis_gap_along_the_travel_is_the_conversions_hip_height_scale() {
     let Some(d) = common::data_dir() else { return };
     let m = d.join("mocap");
-    let walk = surfmotion::synth::gait_clip(surfmotion::synth::Gait::Walk, 2.0, 30.0);
-    let character = detect_clip(&walk).unwrap().map.rest_pose(&walk).unwrap();
-    let h = character[C::Head.index()].y - character[C::LToe.index()].y;
+    let (character, h) = common::walk_character();
     let c0 = character[C::Pelvis.index()] * DVec3::new(1.0, 0.0, 1.0);
     let r = C::Pelvis.index();
     let mut slopes = Vec::new();

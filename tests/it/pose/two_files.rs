@@ -586,9 +586,7 @@ fn torso_axes(a: &[(Pose, Rotations)], b: &[(Pose, Rotations)]) -> String {
 fn one_performance_as_amc_and_as_bvh_retargets_alike() {
     let Some(d) = common::data_dir() else { return };
     let m = d.join("mocap");
-    let walk = surfmotion::synth::gait_clip(surfmotion::synth::Gait::Walk, 2.0, 30.0);
-    let character = detect_clip(&walk).unwrap().map.rest_pose(&walk).unwrap();
-    let h = character[C::Head.index()].y - character[C::LToe.index()].y;
+    let (character, h) = common::walk_character();
     // (AMC, BVH, abs limit, rel limit, pelvis limit): the figures reached
     // (see the module docs), with a margin of 0.1 % of the height.
     let pairs = [
@@ -952,9 +950,7 @@ fn limb_gap(a: &[Vec<glam::DVec3>], b: &[Vec<glam::DVec3>], h: f64) -> f64 {
 fn the_limbs_gap_between_two_files_is_in_the_data() {
     let Some(d) = common::data_dir() else { return };
     let m = d.join("mocap");
-    let walk = surfmotion::synth::gait_clip(surfmotion::synth::Gait::Walk, 2.0, 30.0);
-    let character = detect_clip(&walk).unwrap().map.rest_pose(&walk).unwrap();
-    let h = character[C::Head.index()].y - character[C::LToe.index()].y;
+    let (character, h) = common::walk_character();
     let mut got = Vec::new();
     let mut got_slopes = Vec::new();
     for (a, b, mirror) in [
