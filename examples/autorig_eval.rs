@@ -55,7 +55,7 @@ fn cpu_secs() -> f64 {
 }
 
 fn height(rig: &Embedding) -> f64 {
-    rig.height
+    rig.height()
 }
 
 fn joint_error(a: &[[f64; 3]; 19], b: &[[f64; 3]; 19]) -> (f64, usize, f64) {
@@ -133,19 +133,19 @@ fn real(data: &Path) {
         let secs = t.elapsed().as_secs_f64();
         match embed_as_db_init(mesh, frames, auto.rest_frame, &auto.landmarks) {
             Some(mine) => {
-                let (e, wj, wd) = joint_error(&mine.joints, &truth.joints);
+                let (e, wj, wd) = joint_error(mine.joints(), truth.joints());
                 let h = height(truth);
                 println!(
                     "| {name} | {:.2} | {} {:.1} | {:.1}% | {:.2} | {secs:.1} |",
                     100.0 * e / h,
                     Canonical::ALL[wj].name(),
                     100.0 * wd / h,
-                    100.0 * agree(&mine.labels, &truth.labels),
+                    100.0 * agree(mine.labels(), truth.labels()),
                     auto.confidence
                 );
                 for j in Canonical::ALL {
-                    let d = DVec3::from_array(mine.joints[j.index()])
-                        .distance(DVec3::from_array(truth.joints[j.index()]));
+                    let d = DVec3::from_array(mine.joints()[j.index()])
+                        .distance(DVec3::from_array(truth.joints()[j.index()]));
                     eprint!("{} {:.1}  ", j.name(), 100.0 * d / h);
                 }
                 eprintln!();
@@ -160,7 +160,7 @@ fn real(data: &Path) {
         eprintln!("  {name}: {}", auto.summary());
         eprintln!(
             "  {name}: facing {:.1}° from the landmark rig's",
-            facing_deg(&auto, truth.facing)
+            facing_deg(&auto, truth.facing())
         );
         if name == "samba" {
             contact_first(mesh, frames, 130, false);
@@ -190,7 +190,7 @@ fn facing(data: &Path) {
     println!("|---|---|---|---|---|---|");
     for_each_capture(data, |c| {
         let (name, lm, truth) = (c.name, c.landmarks, c.truth);
-        let h = truth.height;
+        let h = truth.height();
         for yaw in [0.0_f64, 30.0, 90.0, 180.0, 270.0] {
             for mirror in [false, true] {
                 let m = glam::DMat3::from_diagonal(DVec3::new(
@@ -216,9 +216,9 @@ fn facing(data: &Path) {
                     println!("| {name} | {yaw} | {mirror} | refused |");
                     continue;
                 };
-                let want = (m * DVec3::from_array(truth.facing)).to_array();
+                let want = (m * DVec3::from_array(truth.facing())).to_array();
                 let joint =
-                    |e: &Embedding, c: Canonical| m * DVec3::from_array(e.joints[c.index()]);
+                    |e: &Embedding, c: Canonical| m * DVec3::from_array(e.joints()[c.index()]);
                 let chin = |l: &Landmarks, p: &[[f64; 3]]| {
                     l.point(surfmotion::embed::landmarks::Landmark::Chin, p)
                         .map(DVec3::from_array)
@@ -232,7 +232,7 @@ fn facing(data: &Path) {
                 };
                 let head_off = Embedding::new(&mesh, &auto.landmarks, None).map_or(f64::NAN, |e| {
                     100.0
-                        * DVec3::from_array(e.joints[Canonical::Head.index()])
+                        * DVec3::from_array(e.joints()[Canonical::Head.index()])
                             .distance(joint(truth, Canonical::Head))
                         / h
                 });
@@ -268,7 +268,7 @@ fn held_parts(data: &Path) {
     )
     .expect("fixture landmarks");
     let truth = Embedding::new(&mesh, &lm, None).expect("landmark rig");
-    let h = truth.height;
+    let h = truth.height();
     let descs: Vec<Vec<f64>> = frames.iter().map(|f| descriptor(f)).collect();
     let sample = |x: usize| quantiles(&descs, &descs[x], 40);
     println!(
@@ -317,11 +317,11 @@ fn held_parts(data: &Path) {
             };
             let d = |c: Canonical| {
                 100.0
-                    * DVec3::from_array(e.joints[c.index()])
-                        .distance(DVec3::from_array(truth.joints[c.index()]))
+                    * DVec3::from_array(e.joints()[c.index()])
+                        .distance(DVec3::from_array(truth.joints()[c.index()]))
                     / h
             };
-            let (mean, _, _) = joint_error(&e.joints, &truth.joints);
+            let (mean, _, _) = joint_error(e.joints(), truth.joints());
             println!(
                 "| {r} | {x} | {} | {:.1} | {:.1} | {:.2} | {} | {shared} of 40 |",
                 if shuffle { "re-ordered" } else { "as captured" },
@@ -338,7 +338,7 @@ fn held_parts(data: &Path) {
 /// joints read off the frame by its regressors), in % of the height:
 /// mean, the worst and its frame, and the five worst frames.
 fn knees_per_frame(name: &str, frames: &[&[[f64; 3]]], mine: &Embedding, truth: &Embedding) {
-    let h = truth.height;
+    let h = truth.height();
     for knee in [Canonical::LKnee, Canonical::RKnee] {
         let k = knee.index();
         let mut d: Vec<(f64, usize)> = frames
@@ -531,12 +531,12 @@ fn reordered(mesh: &Mesh, frames: &[&[[f64; 3]]], order: &[usize], what: &str, m
     let row3 = |case: &str, a: &Embedding, b: &Embedding, b_first: bool| {
         let carried = a.frame_joints(frames[first]);
         let other = if b_first {
-            b.joints.map(DVec3::from_array)
+            b.joints().map(DVec3::from_array)
         } else {
             b.frame_joints(frames[first])
         };
         let d: Vec<f64> = (0..19)
-            .map(|j| carried[j].distance(other[j]) / a.height * 100.0)
+            .map(|j| carried[j].distance(other[j]) / a.height() * 100.0)
             .collect();
         let (wj, wd) = d
             .iter()
@@ -547,7 +547,7 @@ fn reordered(mesh: &Mesh, frames: &[&[[f64; 3]]], order: &[usize], what: &str, m
             d.iter().sum::<f64>() / 19.0,
             Canonical::ALL[wj].name(),
             wd,
-            100.0 * agree(&a.labels, &b.labels),
+            100.0 * agree(a.labels(), b.labels()),
             contact.confidence,
             original(rest_b),
             clear_rest,
@@ -726,7 +726,7 @@ fn synth(data: &Path) {
         let rest: Mesh = humanoid_mesh_with(0.02, shape);
         let lm = humanoid_landmarks_with(&rest, shape);
         let rig = Embedding::new(&rest, &lm, None).expect("synthetic rig");
-        let h = rig.height;
+        let h = rig.height();
         for (mname, cp) in &motions {
             let out = drive(
                 &rest,
@@ -773,16 +773,16 @@ fn synth(data: &Path) {
                 "| {bname} | {mname} | {} | {:.2} | {:.1}% | {:.2} | {secs:.1} |",
                 frames.len(),
                 100.0 * s / k as f64 / h,
-                100.0 * agree(&mine.labels, &rig.labels),
+                100.0 * agree(mine.labels(), rig.labels()),
                 auto.confidence
             );
-            let (e, wj, wd) = joint_error(&mine.joints, &rig.joints);
+            let (e, wj, wd) = joint_error(mine.joints(), rig.joints());
             eprintln!(
                 "  rest frame {rest_frame:?} ({why}); rest joints {:.2}%, worst {} {:.1}%; facing {:.1}° from the rig's; {}",
                 100.0 * e / h,
                 Canonical::ALL[wj].name(),
                 100.0 * wd / h,
-                facing_deg(&auto, rig.facing),
+                facing_deg(&auto, rig.facing()),
                 auto.summary()
             );
         }
@@ -859,17 +859,18 @@ fn score(
     let secs = t.elapsed().as_secs_f64();
     let cpu = cpu_secs() - c0;
     let e = embed_or_why(&m, &fr, rest, &auto.landmarks)?;
-    let h = c.truth.height;
+    let h = c.truth.height();
     let off: [f64; 19] = std::array::from_fn(|j| {
-        100.0 * DVec3::from_array(e.joints[j]).distance(DVec3::from_array(c.truth.joints[j])) / h
+        100.0 * DVec3::from_array(e.joints()[j]).distance(DVec3::from_array(c.truth.joints()[j]))
+            / h
     });
-    let labels: Vec<u8> = (0..n).map(|o| e.labels[new_of[o] as usize]).collect();
+    let labels: Vec<u8> = (0..n).map(|o| e.labels()[new_of[o] as usize]).collect();
     Ok(Scored {
         mean: off.iter().sum::<f64>() / 19.0,
         off,
-        agree: 100.0 * agree(&labels, &c.truth.labels),
+        agree: 100.0 * agree(&labels, c.truth.labels()),
         parts: auto.parts,
-        joints: e.joints,
+        joints: *e.joints(),
         secs,
         cpu,
     })
@@ -975,7 +976,7 @@ fn spread(data: &Path, salts: u32, renumber: bool) {
                 }
             }
         }
-        let h = c.truth.height;
+        let h = c.truth.height();
         let per_joint: Vec<f64> = (0..19)
             .map(|j| {
                 let mut w = 0.0f64;

@@ -8,6 +8,6 @@ use std::path::Path;
 fuzz_target!(|data: &[u8]| {
     let t = String::from_utf8_lossy(data);
     if let Ok(e) = surfmotion::embed::Embedding::parse(&t, Path::new("rig.json"), 4) {
-        assert_eq!(e.labels.len(), 4);
+        assert_eq!(e.labels().len(), 4);
     }
 });

@@ -60,42 +60,46 @@ pub enum EmbedError {
 }
 
 /// A character's rig: everything derived once from its rest frame.
+/// Its fields are read through accessors and built or edited through
+/// [`super::EmbeddingParts`] ([`Embedding::from_parts`] checks them); a file is
+/// read through the same check.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "super::EmbeddingParts")]
 pub struct Embedding {
     /// Number of vertices of the mesh it was made for.
-    pub vertex_count: usize,
+    pub(crate) vertex_count: usize,
     /// Rest-frame joint positions, in [`Canonical::ALL`] order.
-    pub joints: [[f64; 3]; Canonical::COUNT],
+    pub(crate) joints: [[f64; 3]; Canonical::COUNT],
     /// Top of the head.
-    pub head_top: [f64; 3],
+    pub(crate) head_top: [f64; 3],
     /// Left and right hand tips.
-    pub hand_tips: [[f64; 3]; 2],
+    pub(crate) hand_tips: [[f64; 3]; 2],
     /// Left and right toe tips.
-    pub toe_tips: [[f64; 3]; 2],
+    pub(crate) toe_tips: [[f64; 3]; 2],
     /// Up, facing and left directions of the rest frame.
-    pub up: [f64; 3],
+    pub(crate) up: [f64; 3],
     /// Facing direction.
-    pub facing: [f64; 3],
+    pub(crate) facing: [f64; 3],
     /// The character's left.
-    pub left: [f64; 3],
+    pub(crate) left: [f64; 3],
     /// Height of the rest frame along `up`.
-    pub height: f64,
+    pub(crate) height: f64,
     /// Part of each vertex ([`Part::ALL`] index); every part one connected region.
-    pub labels: Vec<u8>,
+    pub(crate) labels: Vec<u8>,
     /// Overlapping region of each part (vertex lists, [`Part::ALL`] order).
-    pub regions: Vec<Vec<u32>>,
+    pub(crate) regions: Vec<Vec<u32>>,
     /// Skin: up to four (joint index, weight) per vertex, weights summing to 1.
-    pub skin: Vec<([u8; 4], [f64; 4])>,
+    pub(crate) skin: Vec<([u8; 4], [f64; 4])>,
     /// One regressor per joint, [`Canonical::ALL`] order.
-    pub regressors: Vec<Regressor>,
+    pub(crate) regressors: Vec<Regressor>,
     /// What was assumed while embedding.
-    pub notes: Vec<String>,
+    pub(crate) notes: Vec<String>,
     /// The body ends the mesh lacks (issue 41's partial bodies): `head`
     /// (the landmarks declare it, the chin placed at the top of the neck).
     /// The checks of an absent end are skipped. Empty (and not written)
     /// for a whole body.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub absent: Vec<String>,
+    pub(crate) absent: Vec<String>,
 }
 
 /// Refuses meshes no rig can be embedded in, with the reason (a face-less,
@@ -502,38 +506,19 @@ impl Embedding {
         Self::parse(&read_text(path)?, path, vertex_count)
     }
 
-    /// [`Embedding::load`] of a file's text (`path` names it in errors).
+    /// [`Embedding::load`] of a file's text (`path` names it in errors); the
+    /// file is checked as [`Embedding::from_parts`] checks.
     pub fn parse(text: &str, path: &Path, vertex_count: usize) -> Result<Embedding, EmbedError> {
         let e: Embedding = serde_json::from_str(text).map_err(|e| EmbedError::File {
             path: path.to_path_buf(),
             reason: e.to_string(),
         })?;
-        let bad = |reason: &str| EmbedError::File {
-            path: path.to_path_buf(),
-            reason: reason.into(),
-        };
         if e.vertex_count != vertex_count {
             return Err(EmbedError::Mismatch {
                 path: path.to_path_buf(),
                 have: e.vertex_count,
                 want: vertex_count,
             });
-        }
-        let n = vertex_count;
-        if e.labels.len() != n || e.skin.len() != n || e.regressors.len() != Canonical::COUNT {
-            return Err(bad("inconsistent sizes"));
-        }
-        let in_range = |v: &u32| (*v as usize) < n;
-        if e.regressors
-            .iter()
-            .any(|r| r.vertices.len() != r.weights.len() || !r.vertices.iter().all(in_range))
-            || e.regions.iter().any(|r| !r.iter().all(in_range))
-            || e.labels.iter().any(|&l| l as usize >= Part::COUNT)
-            || e.skin
-                .iter()
-                .any(|(j, _)| j.iter().any(|&x| x as usize >= Canonical::COUNT))
-        {
-            return Err(bad("an index is out of range"));
         }
         Ok(e)
     }

@@ -9,6 +9,7 @@ pub mod axes;
 pub mod check;
 pub mod contact;
 mod embedding;
+mod embedding_parts;
 pub mod frames;
 pub mod heat;
 pub mod joints;
@@ -28,3 +29,4 @@ pub mod surface;
 
 pub use check::{EmbedCheck, check};
 pub use embedding::{EmbedError, Embedding, bones, bones_of, check_body, parse_parts};
+pub use embedding_parts::EmbeddingParts;

@@ -658,9 +658,9 @@ fn facing_figures() {
     let lm = Landmarks::load(&fixtures.join("samba.landmarks.json"), rest.vertex_count()).unwrap();
     let rig = Embedding::new(&rest, &lm, None).unwrap();
     let torso: Vec<usize> = (0..rest.vertex_count())
-        .filter(|&v| rig.labels[v] as usize == Part::Torso as usize)
+        .filter(|&v| rig.labels()[v] as usize == Part::Torso as usize)
         .collect();
-    let front = DVec3::from_array(rig.facing);
+    let front = DVec3::from_array(rig.facing());
     let flat = |p: &[[f64; 3]]| -> Vec<(f64, f64)> {
         let n = torso.len() as f64;
         let (cx, cz) = torso
@@ -715,7 +715,7 @@ fn preview_faces_each_panel_from_its_own_body() {
     use glam::{DQuat, DVec3};
     use surfmotion::tools::render::preview::{PreviewOptions, panel_facing, preview_image};
     let ch = common::humanoid_character(0.04);
-    let front = DVec3::from_array(ch.rig.facing);
+    let front = DVec3::from_array(ch.rig.facing());
     let yaws: Vec<f64> = (0..12).map(|k| (k * 30) as f64).collect();
     let positions: Vec<[f64; 3]> = yaws
         .iter()
@@ -773,7 +773,7 @@ fn render_faces_each_panel_from_its_own_body() {
     let dir = common::fixture_dir("render_facing");
     let grid = 0.04;
     let ch = common::humanoid_character(grid);
-    let front = DVec3::from_array(ch.rig.facing);
+    let front = DVec3::from_array(ch.rig.facing());
     common::gaits::write_gaits(
         &dir.join("db"),
         &ch,
@@ -791,21 +791,21 @@ fn render_faces_each_panel_from_its_own_body() {
     // The same rig embedded in the rest mesh lying along +z (as a glTF's
     // bind pose can lie while its animation stands).
     let lie = DQuat::from_rotation_x(-std::f64::consts::FRAC_PI_2);
-    let mut zup = ch.rig.clone();
     let t = |p: &mut [f64; 3]| *p = (lie * DVec3::from_array(*p)).to_array();
-    zup.joints.iter_mut().for_each(t);
-    [
-        &mut zup.head_top,
-        &mut zup.up,
-        &mut zup.facing,
-        &mut zup.left,
-    ]
-    .into_iter()
-    .for_each(t);
-    zup.hand_tips
-        .iter_mut()
-        .chain(zup.toe_tips.iter_mut())
-        .for_each(t);
+    let zup = ch
+        .rig
+        .clone()
+        .edited(|z| {
+            z.joints.iter_mut().for_each(t);
+            [&mut z.head_top, &mut z.up, &mut z.facing, &mut z.left]
+                .into_iter()
+                .for_each(t);
+            z.hand_tips
+                .iter_mut()
+                .chain(z.toe_tips.iter_mut())
+                .for_each(t);
+        })
+        .unwrap();
     let zup_rig = dir.join("rig_zup.json");
     zup.save(&zup_rig).unwrap();
     let yaws: Vec<f64> = (0..12).map(|k| (k * 30) as f64).collect();

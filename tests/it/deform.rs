@@ -111,7 +111,7 @@ fn turned_over(ch: &Character, raw: &Output, res: &Output) -> Turned {
             &res.positions[k * n..(k + 1) * n],
         );
         let g = surfmotion::pose::pose_rotations(&ch.rig().frame_joints(a), &raw.query[k]);
-        surfmotion::deform::unflip::skin_turns(&ch.rig().skin, &g, &mut turn);
+        surfmotion::deform::unflip::skin_turns(ch.rig().skin(), &g, &mut turn);
         count.skin += surfmotion::deform::unflip::turned_over(tris, a, b, &turn).len();
         count.surface += folds.turned_over(tris, a, b).len();
     }

@@ -27,7 +27,7 @@ fn samba_rig(d: &Path) -> (surfmotion::mesh::Mesh, Embedding) {
 fn walk_and_run_have_the_right_frames_rigid_bones_and_measurable_dynamics() {
     let Some(d) = common::data_dir() else { return };
     let (rest, rig) = samba_rig(&d);
-    let rest_lengths = bone_lengths(&rig.joints.map(glam::DVec3::from_array));
+    let rest_lengths = bone_lengths(&rig.joints().map(glam::DVec3::from_array));
     for clip_name in ["02/02_01.amc", "02/02_03.amc"] {
         let mut clip = load_clip(
             &d.join("mocap/cmu-amc").join(clip_name),
@@ -81,13 +81,13 @@ fn walk_and_run_have_the_right_frames_rigid_bones_and_measurable_dynamics() {
                 let y = rest.positions()[v][1];
                 (0.55..0.75).contains(&y)
                     && matches!(
-                        Part::ALL[rig.labels[v] as usize],
+                        Part::ALL[rig.labels()[v] as usize],
                         Part::LThigh | Part::RThigh
                     )
             })
             .collect();
         let head: Vec<usize> = (0..n)
-            .filter(|&v| Part::ALL[rig.labels[v] as usize] == Part::Head)
+            .filter(|&v| Part::ALL[rig.labels()[v] as usize] == Part::Head)
             .collect();
         assert!(!skirt.is_empty() && !head.is_empty());
         let skirt_mean = skirt.iter().map(|&v| offset(v)).sum::<f64>() / skirt.len() as f64;

@@ -450,7 +450,7 @@ fn a_second_load_reads_the_cached_rig_and_gives_the_same_character() {
     let (m, topo) = surfmotion::db::Manifest::open(&db).unwrap();
     let full = surfmotion::db::skeletons::embed_rig(&db, &m, &topo).unwrap();
     assert_eq!(second.rig(), &full);
-    assert_eq!(second.rig().skin, full.skin, "the skin weights");
+    assert_eq!(second.rig().skin(), full.skin(), "the skin weights");
     assert_eq!(second.poses(), first.poses());
     assert_eq!(std::fs::read(rig_path(&db)).unwrap(), written);
     assert_eq!(
@@ -498,7 +498,7 @@ fn a_changed_cut_or_foreign_rig_cache_is_embedded_again() {
     foreign.extend_from_slice(body);
     // A forgery with its checksum mended: the rig of one more vertex.
     let mut rig: serde_json::Value = serde_json::from_slice(body).unwrap();
-    rig["vertex_count"] = (good_rig.vertex_count + 1).into();
+    rig["vertex_count"] = (good_rig.vertex_count() + 1).into();
     let forged_body = serde_json::to_vec(&rig).unwrap();
     let forged_head = format!(
         "{{\"format\":\"surfmotion rig cache 1\",\"key\":\"{key}\",\"bytes\":{},\"xxh3\":\"{:016x}\"}}\n",

@@ -271,7 +271,7 @@ fn an_amc_clip_and_its_bvh_conversions_drive_the_character_alike() {
     let Some(d) = common::data_dir() else { return };
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
-    let rest = rig.joints.map(glam::DVec3::from_array);
+    let rest = rig.joints().map(glam::DVec3::from_array);
     let tmp = tempfile::tempdir().unwrap();
     for clip in ["cmu-amc/02/02_01.amc", "cmu-amc/01/01_01.amc"] {
         let amc = d.join("mocap").join(clip);
@@ -298,7 +298,7 @@ fn an_amc_clip_and_its_bvh_conversions_drive_the_character_alike() {
                 .fold(0.0, f64::max);
             eprintln!("{clip} vs {name}: worst joint {:.2e} m", worst);
             assert!(
-                worst < 1e-3 * rig.height,
+                worst < 1e-3 * rig.height(),
                 "{clip} vs {name}: {worst} m apart"
             );
         }

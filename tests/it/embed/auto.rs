@@ -242,15 +242,15 @@ fn real_captures_rig_within_the_figure_of_their_landmark_rigs() {
     for name in ["samba", "crane"] {
         let c = capture(&d, name);
         let e = auto_embedding(&d, name, Variant::AsCaptured);
-        let err = mean_percent(&e.joints, &c.truth.joints, c.truth.height, false);
+        let err = mean_percent(e.joints(), c.truth.joints(), c.truth.height(), false);
         assert!(err <= BOUND_PERCENT, "{name}: {err:.2}% of the height");
         let agree = e
-            .labels
+            .labels()
             .iter()
-            .zip(&c.truth.labels)
+            .zip(c.truth.labels())
             .filter(|(a, b)| a == b)
             .count() as f64
-            / e.labels.len() as f64;
+            / e.labels().len() as f64;
         assert!(agree >= 0.8, "{name}: parts agree on {:.1}%", 100.0 * agree);
         // The facing the data README states.
         let want = if name == "samba" {
@@ -258,7 +258,7 @@ fn real_captures_rig_within_the_figure_of_their_landmark_rigs() {
         } else {
             DVec3::NEG_X
         };
-        assert!(DVec3::from_array(e.facing).dot(want) > 0.9, "{name}");
+        assert!(DVec3::from_array(e.facing()).dot(want) > 0.9, "{name}");
     }
 }
 
@@ -267,31 +267,31 @@ fn real_captures_rig_within_the_figure_of_their_landmark_rigs() {
 fn samba_variants_rig_alike() {
     let Some(d) = common::data_dir() else { return };
     let c = capture(&d, "samba");
-    let h = c.truth.height;
+    let h = c.truth.height();
     // Frames re-ordered (the rest frame is still the mesh).
     let e = auto_embedding(&d, "samba", Variant::Reversed);
-    let err = mean_percent(&e.joints, &c.truth.joints, h, false);
+    let err = mean_percent(e.joints(), c.truth.joints(), h, false);
     assert!(err <= BOUND_PERCENT, "re-ordered: {err:.2}%");
     // Mirrored across x = 0: left and right swap.
     let mirror = |p: [f64; 3]| [-p[0], p[1], p[2]];
     let e = auto_embedding(&d, "samba", Variant::Mirrored);
-    let truth: [[f64; 3]; 19] = c.truth.joints.map(mirror);
-    let err = mean_percent(&e.joints, &truth, h, true);
+    let truth: [[f64; 3]; 19] = c.truth.joints().map(mirror);
+    let err = mean_percent(e.joints(), &truth, h, true);
     assert!(err <= BOUND_PERCENT, "mirrored: {err:.2}%");
     // Turned Z-up (y → z, z → −y).
     let zup = |p: [f64; 3]| [p[0], -p[2], p[1]];
     let e = auto_embedding(&d, "samba", Variant::ZUp);
     assert!(
-        DVec3::from_array(e.up).dot(DVec3::Z) > 0.99,
+        DVec3::from_array(e.up()).dot(DVec3::Z) > 0.99,
         "up {:?}",
-        e.up
+        e.up()
     );
-    let err = mean_percent(&e.joints, &c.truth.joints.map(zup), h, false);
+    let err = mean_percent(e.joints(), &c.truth.joints().map(zup), h, false);
     assert!(err <= BOUND_PERCENT, "Z-up: {err:.2}%");
     // Centimetres.
     let cm = |p: [f64; 3]| [p[0] * 100.0, p[1] * 100.0, p[2] * 100.0];
     let e = auto_embedding(&d, "samba", Variant::Cm);
-    let err = mean_percent(&e.joints, &c.truth.joints.map(cm), h * 100.0, false);
+    let err = mean_percent(e.joints(), &c.truth.joints().map(cm), h * 100.0, false);
     assert!(err <= BOUND_PERCENT, "cm: {err:.2}%");
 }
 

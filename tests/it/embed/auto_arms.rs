@@ -63,11 +63,11 @@ fn the_arms_of_the_real_captures_and_variants_are_the_landmark_rigs() {
         let e = &db_init_rig(&d, name, Variant::AsCaptured).embedding;
         assert_arms(
             name,
-            arms(&e.joints, &c.truth.joints, c.truth.height, false),
+            arms(e.joints(), c.truth.joints(), c.truth.height(), false),
         );
     }
     let c = capture(&d, "samba");
-    let h = c.truth.height;
+    let h = c.truth.height();
     // Mirrored across x = 0: the left arm is the landmark rig's right.
     // Z-up.
     for (what, v, swap) in [
@@ -75,8 +75,8 @@ fn the_arms_of_the_real_captures_and_variants_are_the_landmark_rigs() {
         ("Z-up", Variant::ZUp, false),
     ] {
         let e = &db_init_rig(&d, "samba", v).embedding;
-        let want = c.truth.joints.map(|p| v.point(p));
-        assert_arms(what, arms(&e.joints, &want, h, swap));
+        let want = c.truth.joints().map(|p| v.point(p));
+        assert_arms(what, arms(e.joints(), &want, h, swap));
     }
 }
 

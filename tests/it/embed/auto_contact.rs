@@ -137,7 +137,7 @@ fn samba_started_in_contact_sets_up_as_from_its_clear_start() {
     let (run, db) = init(&seq, &clear, t.path());
     assert_eq!(run.code, Some(0), "clear order: {}", run.stderr);
     let (clear_m, truth) = rig_of(&db);
-    let h = truth.height;
+    let h = truth.height();
     let nf = seq.frame_count();
     // The rest frame as a frame of the capture's own order (the topology:
     // the start frame).
@@ -187,12 +187,12 @@ fn samba_started_in_contact_sets_up_as_from_its_clear_start() {
             .map(|p| map(p.to_array()));
         let scale =
             (DVec3::from_array(map([1.0, 0.0, 0.0])) - DVec3::from_array(map([0.0; 3]))).length();
-        let mean = super::auto::mean_percent(&rig.joints, &want, h * scale, flip);
+        let mean = super::auto::mean_percent(rig.joints(), &want, h * scale, flip);
         let (l, r) = (Canonical::LKnee, Canonical::RKnee);
         let knees =
             [(l, if flip { r } else { l }), (r, if flip { l } else { r })].map(|(k, twin)| {
                 100.0
-                    * DVec3::from_array(rig.joints[k.index()])
+                    * DVec3::from_array(rig.joints()[k.index()])
                         .distance(DVec3::from_array(want[twin.index()]))
                     / (h * scale)
             });
@@ -200,8 +200,12 @@ fn samba_started_in_contact_sets_up_as_from_its_clear_start() {
         let agree = if flip {
             None
         } else {
-            let same = rig.labels.iter().zip(&truth.labels).filter(|(a, b)| a == b);
-            Some(100.0 * same.count() as f64 / truth.labels.len() as f64)
+            let same = rig
+                .labels()
+                .iter()
+                .zip(truth.labels())
+                .filter(|(a, b)| a == b);
+            Some(100.0 * same.count() as f64 / truth.labels().len() as f64)
         };
         let rest = original(&m.rig.rest, first);
         eprintln!(

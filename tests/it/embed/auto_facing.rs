@@ -145,11 +145,11 @@ fn facing_errors(
                 Cow::Owned(auto_rig(&m, &f, &opts).unwrap())
             }
         };
-        let want = v.map() * DVec3::from_array(truth.facing);
+        let want = v.map() * DVec3::from_array(truth.facing());
         let got = DVec3::from_array(rig.facing);
         let deg = got.dot(want).clamp(-1.0, 1.0).acos().to_degrees();
         eprintln!("{name} {v:?}: facing {got:.3} against {want:.3}: {deg:.1}°");
-        let up = v.map() * DVec3::from_array(truth.up);
+        let up = v.map() * DVec3::from_array(truth.up());
         let left_ok = DVec3::from_array(rig.left).dot(up.cross(got)) > 0.999;
         if deg > BOUND_DEG || !left_ok {
             bad.push(format!(

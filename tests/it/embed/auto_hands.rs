@@ -55,7 +55,7 @@ fn landmarks_json(lm: &serde_json::Value, f: &dyn Fn([f64; 3]) -> [f64; 3], swap
 /// The total skin weight on each hand's bone (left, right).
 fn hand_weights(e: &Embedding) -> [f64; 2] {
     let on = |j: Canonical| {
-        e.skin
+        e.skin()
             .iter()
             .map(|(b, w)| {
                 b.iter()
@@ -83,7 +83,7 @@ fn the_automatic_wrists_keep_the_hands_on_the_hands() {
     for (k, p) in AUTO_WRISTS {
         lm[k] = serde_json::json!(p);
     }
-    let h = c.truth.height;
+    let h = c.truth.height();
     let truth_w = hand_weights(&c.truth);
     type Point = fn([f64; 3]) -> [f64; 3];
     let variants: [(&str, Point, bool, f64); 4] = [
@@ -110,8 +110,8 @@ fn the_automatic_wrists_keep_the_hands_on_the_hands() {
         let w = hand_weights(&e);
         for (k, &wk) in w.iter().enumerate() {
             let t = if swap { 1 - k } else { k };
-            let tip = DVec3::from_array(e.hand_tips[k]);
-            let want = DVec3::from_array(f(c.truth.hand_tips[t]));
+            let tip = DVec3::from_array(e.hand_tips()[k]);
+            let want = DVec3::from_array(f(c.truth.hand_tips()[t]));
             let off = 100.0 * tip.distance(want) / (h * scale);
             let rel = (wk - truth_w[t]).abs() / truth_w[t];
             assert!(

@@ -105,8 +105,8 @@ fn failures(
         }
     };
     // The landmark rig's joints in the variant (the mirror swaps the sides).
-    let truth = |j: Canonical| DVec3::from_array(v.point(c.truth.joints[j.index()]));
-    let at = |j: Canonical| DVec3::from_array(e.joints[j.index()]);
+    let truth = |j: Canonical| DVec3::from_array(v.point(c.truth.joints()[j.index()]));
+    let at = |j: Canonical| DVec3::from_array(e.joints()[j.index()]);
     for (l, r) in PAIRS {
         let (tl, tr) = if v == Variant::Mirrored {
             (truth(r), truth(l))
@@ -119,8 +119,8 @@ fn failures(
                 bad.push(format!(
                     "{what}: {} {:.1}% of the height from the landmark rig's, {:.1}% from its other side's",
                     j.name(),
-                    100.0 * a / c.truth.height,
-                    100.0 * b / c.truth.height
+                    100.0 * a / c.truth.height(),
+                    100.0 * b / c.truth.height()
                 ));
             }
         }

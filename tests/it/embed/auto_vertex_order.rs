@@ -95,7 +95,7 @@ fn rig_as_db_init(mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> (AutoRig, [[f64; 3];
         Some(r) => Embedding::new_on_frame(mesh, f[r], &rig.landmarks, None),
     }
     .unwrap();
-    (rig, e.joints)
+    (rig, *e.joints())
 }
 
 /// Every renumbering against the capture's own numbering: the failures.

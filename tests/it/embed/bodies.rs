@@ -123,10 +123,10 @@ fn generated_bodies_embed_on_their_mid_plane_and_pass_the_self_check() {
     let mut failures = Vec::new();
     for (name, s) in variants() {
         let (m, e) = embed(&s);
-        let h = e.height;
+        let h = e.height();
         assert!((h - s.height).abs() < 0.03 * s.height, "{name}: height {h}");
         let (o, n) = s.mid_plane();
-        let j = |c: C| DVec3::from_array(e.joints[c.index()]);
+        let j = |c: C| DVec3::from_array(e.joints()[c.index()]);
         let dist = |c: C| (j(c) - o).dot(n);
         let pelvis = dist(C::Pelvis).abs() / h;
         let (dl, dr) = (dist(C::LHip), -dist(C::RHip));
@@ -174,7 +174,7 @@ fn generated_bodies_embed_on_their_mid_plane_and_pass_the_self_check() {
                 worst_across = (err, c.name());
             }
         }
-        let pieces = piece_counts(&e.labels, &neighbours(m.vertex_count(), m.triangles()));
+        let pieces = piece_counts(e.labels(), &neighbours(m.vertex_count(), m.triangles()));
         let c = check(&e, &m);
         eprintln!(
             "{name}: {} vertices, height {h:.3}; pelvis {:.3}% of the height from the true mid-plane, hips {:.3} / {:.3} m from it ({:.3}%), worst twin bones {:.2}% ({}), worst limb joint across {:.2}% ({}), outside {outside:?}, pieces {pieces:?}, self-check {} warnings; notes {:?}",
@@ -188,7 +188,7 @@ fn generated_bodies_embed_on_their_mid_plane_and_pass_the_self_check() {
             100.0 * worst_across.0,
             worst_across.1,
             c.warnings.len(),
-            e.notes
+            e.notes()
         );
         for w in &c.warnings {
             eprintln!("    warning: {}", w.message);
@@ -274,22 +274,91 @@ fn degenerate_landmark_sets_are_refused_naming_the_landmark() {
     assert!(Embedding::new(&m, &good, None).is_ok());
 }
 
+/// An embedding is built or edited only through its checked parts
+/// (issue 40): every broken invariant is refused with the reason, an
+/// untouched round trip is the same embedding, and a file that breaks one
+/// is refused naming the file.
+#[test]
+fn an_edited_embedding_is_checked_again() {
+    let (m, e) = embed(&HumanoidShape::default());
+    let n = m.vertex_count();
+    assert_eq!(e.clone().edited(|_| {}).unwrap(), e);
+    type Edit<'a> = Box<dyn Fn(&mut surfmotion::embed::EmbeddingParts) + 'a>;
+    let breaks: [(&str, Edit); 7] = [
+        (
+            "inconsistent sizes",
+            Box::new(move |p| p.labels.truncate(n - 1)),
+        ),
+        (
+            "inconsistent sizes",
+            Box::new(move |p| p.skin.push(p.skin[0])),
+        ),
+        (
+            "inconsistent sizes",
+            Box::new(move |p| {
+                p.regressors.pop();
+            }),
+        ),
+        ("positive length", Box::new(move |p| p.height = 0.0)),
+        (
+            "part",
+            Box::new(move |p| p.labels[n / 2] = Part::COUNT as u8),
+        ),
+        (
+            "regressor",
+            Box::new(move |p| p.regressors[3].vertices[0] = n as u32),
+        ),
+        (
+            "skin",
+            Box::new(move |p| p.skin[7].0[1] = Canonical::COUNT as u8),
+        ),
+    ];
+    let dir = common::fixture_dir("embedding_parts");
+    for (k, (why, edit)) in breaks.iter().enumerate() {
+        let err = e.clone().edited(|p| edit(p)).unwrap_err();
+        assert!(err.contains(why), "break {k}: {err}");
+        // The same break in a file: refused on reading, naming the file.
+        let mut v = serde_json::to_value(&e).unwrap();
+        let mut p = e.clone().into_parts();
+        edit(&mut p);
+        for (key, val) in [
+            ("labels", serde_json::to_value(&p.labels).unwrap()),
+            ("skin", serde_json::to_value(&p.skin).unwrap()),
+            ("regressors", serde_json::to_value(&p.regressors).unwrap()),
+            ("height", serde_json::to_value(p.height).unwrap()),
+        ] {
+            v[key] = val;
+        }
+        let path = dir.join(format!("broken_{k}.json"));
+        std::fs::write(&path, v.to_string()).unwrap();
+        let err = Embedding::load(&path, n).unwrap_err().to_string();
+        assert!(
+            err.contains("broken_") && err.contains(why),
+            "break {k}: {err}"
+        );
+    }
+}
+
 #[test]
 fn the_self_check_warns_about_a_broken_embedding() {
     use Canonical as C;
     let s = HumanoidShape::default();
     let (m, e) = embed(&s);
     assert!(check(&e, &m).passed(), "{:?}", check(&e, &m).warnings);
-    let h = e.height;
-    let left = DVec3::from_array(e.left);
+    let h = e.height();
+    let left = DVec3::from_array(e.left());
 
     // The issue's failure: pelvis and hips moved to one side by the
     // thigh's offset (5.1 % of the height), spine and knees in place.
-    let mut bad = e.clone();
-    for c in [C::Pelvis, C::LHip, C::RHip] {
-        let p = DVec3::from_array(bad.joints[c.index()]) + left * 0.09;
-        bad.joints[c.index()] = p.to_array();
-    }
+    let bad = e
+        .clone()
+        .edited(|b| {
+            for c in [C::Pelvis, C::LHip, C::RHip] {
+                let p = DVec3::from_array(b.joints[c.index()]) + left * 0.09;
+                b.joints[c.index()] = p.to_array();
+            }
+        })
+        .unwrap();
     let r = check(&bad, &m);
     let off = r
         .warnings
@@ -307,9 +376,11 @@ fn the_self_check_warns_about_a_broken_embedding() {
     );
 
     // A wrist moved out of the arm: outside the body, and its bones unequal.
-    let mut bad = e.clone();
-    let wr = DVec3::from_array(bad.joints[C::LWrist.index()]) + DVec3::Z * 0.2;
-    bad.joints[C::LWrist.index()] = wr.to_array();
+    let wr = DVec3::from_array(e.joints()[C::LWrist.index()]) + DVec3::Z * 0.2;
+    let bad = e
+        .clone()
+        .edited(|b| b.joints[C::LWrist.index()] = wr.to_array())
+        .unwrap();
     let r = check(&bad, &m);
     let out = r
         .warnings
@@ -324,13 +395,17 @@ fn the_self_check_warns_about_a_broken_embedding() {
     );
 
     // A part emptied: its vertices given to the torso.
-    let mut bad = e.clone();
     let head = Part::ALL.iter().position(|p| p.name() == "head").unwrap() as u8;
-    for l in &mut bad.labels {
-        if *l == head {
-            *l = 0;
-        }
-    }
+    let bad = e
+        .clone()
+        .edited(|b| {
+            for l in &mut b.labels {
+                if *l == head {
+                    *l = 0;
+                }
+            }
+        })
+        .unwrap();
     let r = check(&bad, &m);
     assert!(
         r.warnings

@@ -53,37 +53,37 @@ fn landmarks_give_contiguous_parts_exact_regressors_and_steady_bones() {
         let e = Embedding::new(&rest, &lm, None).unwrap();
 
         // The character faces the way the data README says (judged from the feet).
-        let f = glam::DVec3::from_array(e.facing);
+        let f = glam::DVec3::from_array(e.facing());
         assert!(
             f.dot(glam::DVec3::from_array(c.facing)) > 0.9,
             "{}: facing {f}",
             c.name
         );
         // Every vertex has a part; every part is one connected region.
-        assert_eq!(e.labels.len(), n);
-        assert!(e.labels.iter().all(|&l| (l as usize) < Part::COUNT));
-        let pieces = piece_counts(&e.labels, &neighbours(n, rest.triangles()));
+        assert_eq!(e.labels().len(), n);
+        assert!(e.labels().iter().all(|&l| (l as usize) < Part::COUNT));
+        let pieces = piece_counts(e.labels(), &neighbours(n, rest.triangles()));
         for p in Part::ALL {
             assert_eq!(pieces[p.index()], 1, "{}: part {}", c.name, p.name());
         }
         // Regions contain their labelled vertices and may overlap.
         for p in Part::ALL {
             let labelled = e
-                .labels
+                .labels()
                 .iter()
                 .filter(|&&l| l as usize == p.index())
                 .count();
-            assert!(e.regions[p.index()].len() >= labelled);
+            assert!(e.regions()[p.index()].len() >= labelled);
         }
         // Skin weights: non-negative, summing to 1.
-        for (_, w) in &e.skin {
+        for (_, w) in e.skin() {
             assert!(w.iter().all(|&x| x >= 0.0));
             assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-9);
         }
         // Regressors reproduce the embedded joints on the rest frame.
         let j = e.frame_joints(rest.positions());
         for k in Canonical::ALL {
-            let err = (j[k.index()] - glam::DVec3::from_array(e.joints[k.index()])).length();
+            let err = (j[k.index()] - glam::DVec3::from_array(e.joints()[k.index()])).length();
             assert!(err < 1e-9, "{} {}: {err}", c.name, k.name());
         }
         // Anatomy: head above neck above chest above pelvis above knees above
@@ -92,7 +92,7 @@ fn landmarks_give_contiguous_parts_exact_regressors_and_steady_bones() {
         use Canonical as C;
         assert!(y(C::Head) > y(C::Neck) && y(C::Neck) > y(C::Chest) && y(C::Chest) > y(C::Pelvis));
         assert!(y(C::Pelvis) > y(C::LKnee) && y(C::LKnee) > y(C::LAnkle));
-        let left = glam::DVec3::from_array(e.left);
+        let left = glam::DVec3::from_array(e.left());
         for (l, r) in [
             (C::LWrist, C::RWrist),
             (C::LKnee, C::RKnee),
@@ -166,7 +166,7 @@ fn landmarks_give_contiguous_parts_exact_regressors_and_steady_bones() {
                 spread[b.index()]
             );
         }
-        let rest = e.joints.map(glam::DVec3::from_array);
+        let rest = e.joints().map(glam::DVec3::from_array);
         let height =
             rest[C::Head.index()].y - rest[C::LAnkle.index()].y.min(rest[C::RAnkle.index()].y);
         let mut rms: Vec<f64> = rigid
@@ -322,25 +322,25 @@ fn a_rigged_gltf_skin_gives_the_rig_matched_by_position() {
     // faces +X in its bind space, Z up) give the hand-made map's joints,
     // so without a map it gets the same rig.
     let unmapped = from_skin(&asset.mesh, &asset, None, &g).unwrap();
-    assert_eq!(unmapped.joints, rig.joints);
+    assert_eq!(unmapped.joints(), rig.joints());
     let mesh = &asset.mesh;
-    assert_eq!(rig.labels.len(), mesh.vertex_count());
+    assert_eq!(rig.labels().len(), mesh.vertex_count());
     // Joints are the bind pose's: the pelvis is the skin's root joint.
     let skin = asset.skin.as_ref().unwrap();
     let root = glam::Mat4::from_cols_array_2d(&skin.inverse_bind[0]).inverse();
-    let pelvis = rig.joints[Canonical::Pelvis.index()];
+    let pelvis = rig.joints()[Canonical::Pelvis.index()];
     assert!((pelvis[2] - root.w_axis.z as f64).abs() < 1e-6);
     // The regressors reproduce the joints on the rest frame.
     let sk = rig.frame_joints(mesh.positions());
     for c in Canonical::ALL {
-        let want = glam::DVec3::from_array(rig.joints[c.index()]);
+        let want = glam::DVec3::from_array(rig.joints()[c.index()]);
         assert!((sk[c.index()] - want).length() < 1e-6, "{}", c.name());
     }
     // Regression (issue 39 item 10): the spine's regressor was fitted on a
     // thin band with weights from -22 to +15, exact on the rest frame and
     // drawn off the body in every posed one (`render --rig`). Every weight
     // stays within the bound.
-    for (c, r) in Canonical::ALL.iter().zip(&rig.regressors) {
+    for (c, r) in Canonical::ALL.iter().zip(rig.regressors()) {
         let worst = r.weights.iter().fold(0.0f64, |m, w| m.max(w.abs()));
         assert!(
             worst <= surfmotion::embed::regress::MAX_WEIGHT,
@@ -351,12 +351,12 @@ fn a_rigged_gltf_skin_gives_the_rig_matched_by_position() {
     // Every part labelled somewhere; the limbs are one region each (the
     // head is split by the file's UV seams, which are cuts in the mesh).
     let pieces = piece_counts(
-        &rig.labels,
+        rig.labels(),
         &neighbours(mesh.vertex_count(), mesh.triangles()),
     );
     for p in Part::ALL {
         assert!(
-            rig.labels.iter().any(|&l| l == p.index() as u8),
+            rig.labels().iter().any(|&l| l == p.index() as u8),
             "{}",
             p.name()
         );
@@ -381,11 +381,11 @@ fn a_rigged_gltf_skin_gives_the_rig_matched_by_position() {
     )
     .unwrap();
     let again = from_skin(&shuffled, &asset, Some(&map), &g).unwrap();
-    assert_eq!(again.joints, rig.joints);
+    assert_eq!(again.joints(), rig.joints());
     let same = perm
         .iter()
         .enumerate()
-        .filter(|&(new, &old)| again.skin[new].0[0] == rig.skin[old].0[0])
+        .filter(|&(new, &old)| again.skin()[new].0[0] == rig.skin()[old].0[0])
         .count();
     // Vertices duplicated at seams may pick either copy: same weights anyway.
     assert!(same as f64 > 0.99 * n as f64, "{same} of {n}");
@@ -393,7 +393,7 @@ fn a_rigged_gltf_skin_gives_the_rig_matched_by_position() {
     let (world, _) = asset.rest_pose().unwrap();
     let upright = Mesh::new(world, mesh.triangles().to_vec()).unwrap();
     let w = from_skin(&upright, &asset, Some(&map), &g).unwrap();
-    assert!(w.up[1] > 0.99, "up {:?}", w.up);
+    assert!(w.up()[1] > 0.99, "up {:?}", w.up());
     // A different mesh is refused with the reason.
     let arm =
         surfmotion::mesh::io::obj::read_obj(&d.join("scans/armadillo/armadillo.obj")).unwrap();

@@ -135,9 +135,9 @@ fn a_capture_starting_in_contact_rigs_as_well_as_from_a_clear_frame() {
         let naive = Embedding::new(&topo, &lm_var, None);
 
         let agree = |e: &Embedding| {
-            e.labels
+            e.labels()
                 .iter()
-                .zip(&truth.labels)
+                .zip(truth.labels())
                 .filter(|(a, b)| a == b)
                 .count() as f64
                 / n as f64
@@ -149,7 +149,7 @@ fn a_capture_starting_in_contact_rigs_as_well_as_from_a_clear_frame() {
                 let a = e.frame_joints(seq.frame(f));
                 let b = truth.frame_joints(seq.frame(f));
                 for (x, y) in a.iter().zip(&b) {
-                    let d = x.distance(*y) / truth.height * 100.0;
+                    let d = x.distance(*y) / truth.height() * 100.0;
                     sum += d;
                     worst = worst.max(d);
                     count += 1;
@@ -189,7 +189,7 @@ fn a_capture_starting_in_contact_rigs_as_well_as_from_a_clear_frame() {
         }
         // The stored rest joints are the topology's (the contact frame's).
         let on_topo = rig.frame_joints(topo.positions());
-        for (j, p) in rig.joints.iter().enumerate() {
+        for (j, p) in rig.joints().iter().enumerate() {
             assert!(
                 glam::DVec3::from_array(*p).distance(on_topo[j]) < 1e-9,
                 "{}: joint {j}",

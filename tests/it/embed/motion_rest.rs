@@ -41,17 +41,17 @@ fn fitted_weights_keep_the_part_boundaries_and_agree_across_rest_frames() {
         let moving = Embedding::new_moving(&mesh, &lm, None, &frames).unwrap();
         assert!(
             moving
-                .notes
+                .notes()
                 .iter()
                 .any(|n| n.contains("fitted to the motion")),
             "{:?}",
-            moving.notes
+            moving.notes()
         );
         let hips = |e: &Embedding| {
-            let pelvis = DVec3::from_array(e.joints[C::Pelvis.index()]);
+            let pelvis = DVec3::from_array(e.joints()[C::Pelvis.index()]);
             HeadTorso::with_pelvis(
                 mesh.positions(),
-                &e.labels,
+                e.labels(),
                 DVec3::Y,
                 Some(pelvis),
                 &HeadOptions::default(),
@@ -62,9 +62,9 @@ fn fitted_weights_keep_the_part_boundaries_and_agree_across_rest_frames() {
         };
         let (hh, hm) = (hips(&heat), hips(&moving));
         let relabelled = heat
-            .labels
+            .labels()
             .iter()
-            .zip(&moving.labels)
+            .zip(moving.labels())
             .filter(|(a, b)| a != b)
             .count();
         println!(
@@ -74,9 +74,9 @@ fn fitted_weights_keep_the_part_boundaries_and_agree_across_rest_frames() {
         rigs.push((heat, moving));
     }
     let differ = |a: &Embedding, b: &Embedding| {
-        a.labels
+        a.labels()
             .iter()
-            .zip(&b.labels)
+            .zip(b.labels())
             .filter(|(x, y)| x != y)
             .count()
     };

@@ -94,13 +94,13 @@ fn pipeline(d: &Path, v: &Variant, t: &Path) -> (String, String, usize) {
     let rig = Embedding::new(&seq.frame_mesh(0), &lm, None).unwrap();
     let p0 = seq.frame(0);
     let keep: Vec<bool> = if v.headless {
-        rig.labels
+        rig.labels()
             .iter()
             .map(|&l| l as usize != Part::Head.index())
             .collect()
     } else {
         // Beyond each wrist along its forearm, 1 % of the height on.
-        let j = |c: Canonical| DVec3::from_array(rig.joints[c.index()]);
+        let j = |c: Canonical| DVec3::from_array(rig.joints()[c.index()]);
         let ends = [
             (j(Canonical::LElbow), j(Canonical::LWrist)),
             (j(Canonical::RElbow), j(Canonical::RWrist)),
@@ -108,10 +108,10 @@ fn pipeline(d: &Path, v: &Variant, t: &Path) -> (String, String, usize) {
         (0..n)
             .map(|i| {
                 let q = DVec3::from_array(p0[i]);
-                let part = rig.labels[i] as usize;
+                let part = rig.labels()[i] as usize;
                 !ends.iter().enumerate().any(|(k, (e, w))| {
                     let arm = [Part::LForearm, Part::RForearm][k].index();
-                    part == arm && (q - *w).dot((*w - *e).normalize()) > 0.01 * rig.height
+                    part == arm && (q - *w).dot((*w - *e).normalize()) > 0.01 * rig.height()
                 })
             })
             .collect()
@@ -215,7 +215,7 @@ fn a_headless_scan_embeds_and_a_forgotten_chin_is_still_refused() {
     let lm = Landmarks::load(&fixture("crane.landmarks.json"), n).unwrap();
     let rig = Embedding::new(&seq.frame_mesh(0), &lm, None).unwrap();
     let keep: Vec<bool> = rig
-        .labels
+        .labels()
         .iter()
         .map(|&l| l as usize != Part::Head.index())
         .collect();
@@ -244,19 +244,19 @@ fn a_headless_scan_embeds_and_a_forgotten_chin_is_still_refused() {
         None,
     );
     let e = Embedding::load(&out, mesh.vertex_count()).unwrap();
-    assert_eq!(e.absent, vec!["head".to_string()], "{}", r.stderr);
+    assert_eq!(e.absent(), vec!["head".to_string()], "{}", r.stderr);
     // Its neck is within 3 % of the height of the whole body's.
     let neck = Canonical::Neck.index();
-    let dn = DVec3::from_array(e.joints[neck]).distance(DVec3::from_array(rig.joints[neck]));
+    let dn = DVec3::from_array(e.joints()[neck]).distance(DVec3::from_array(rig.joints()[neck]));
     eprintln!(
         "headless crane: neck {:.2} % of the height from the whole body's\n{}",
-        100.0 * dn / rig.height,
+        100.0 * dn / rig.height(),
         r.stderr
     );
     // Measured 5.98 %: the neck is placed 5 % of the height below the
     // stump's top, which lies below the whole body's chin (the head part
     // takes the upper neck). Guarded at that level.
-    assert!(dn < 0.07 * rig.height, "{dn}");
+    assert!(dn < 0.07 * rig.height(), "{dn}");
     // A chin simply forgotten (nothing declared absent) is still refused.
     std::fs::write(&lmf, landmarks_json(&lm, &index, &[Landmark::Chin], &[])).unwrap();
     let r = common::run_cli(

@@ -147,20 +147,20 @@ fn gap(base: &Embedding, placed: &Embedding, pl: &Placement) -> Gap {
     };
     for c in Canonical::ALL {
         let c2 = if pl.mirror { twin_joint(c) } else { c };
-        let back = pl.unapply(DVec3::from_array(placed.joints[c2.index()]));
-        let d = back.distance(DVec3::from_array(base.joints[c.index()]));
+        let back = pl.unapply(DVec3::from_array(placed.joints()[c2.index()]));
+        let d = back.distance(DVec3::from_array(base.joints()[c.index()]));
         if d > g.joint {
             g.joint = d;
             g.worst = c.name();
         }
     }
     let changed = base
-        .labels
+        .labels()
         .iter()
-        .zip(&placed.labels)
+        .zip(placed.labels())
         .filter(|&(&a, &b)| a != if pl.mirror { twin_part(b) } else { b })
         .count();
-    g.labels = changed as f64 / base.labels.len() as f64;
+    g.labels = changed as f64 / base.labels().len() as f64;
     g
 }
 
@@ -254,7 +254,7 @@ fn a_placed_body_embeds_to_the_placed_embedding() {
     let m = humanoid_mesh_with(DEMO_GRID * s.height / 1.75, &s);
     let lm = humanoid_landmarks_with(&m, &s);
     let base = Embedding::new(&m, &lm, None).unwrap();
-    let h = base.height;
+    let h = base.height();
     let far = [37.0 * h, -12.0 * h, 91.0 * h];
     let cases = [
         ("+z", 37.0, 1.0, false),
@@ -310,7 +310,7 @@ fn placement_table() {
             continue;
         }
         let base = Embedding::new(&m, &lm, None).unwrap();
-        let h = base.height;
+        let h = base.height();
         println!("## {name} (height {h:.3}, {} vertices)", m.vertex_count());
         println!(
             "| placement | up | yaw | max joint (units/100) | % height | worst | labels changed |"

@@ -33,12 +33,12 @@ fn mixamo_fbx_character_embeds_as_a_gltf_skin_does() {
     assert!(b.min[1].abs() < 0.01, "feet at {}", b.min[1]);
     let e = from_skin(&a.mesh, &a, None, &f).unwrap();
     assert!(
-        e.notes.iter().any(|n| n.contains("HumanIK")),
+        e.notes().iter().any(|n| n.contains("HumanIK")),
         "{:?}",
-        e.notes
+        e.notes()
     );
-    assert!(e.facing[2] > 0.99, "facing {:?}", e.facing);
-    let j = |c: Canonical| glam::DVec3::from_array(e.joints[c.index()]);
+    assert!(e.facing()[2] > 0.99, "facing {:?}", e.facing());
+    let j = |c: Canonical| glam::DVec3::from_array(e.joints()[c.index()]);
     assert!(j(Canonical::LWrist).x > 0.5 && j(Canonical::RWrist).x < -0.5);
     assert!(j(Canonical::Head).y > j(Canonical::Chest).y);
     assert!(j(Canonical::Chest).y > j(Canonical::Pelvis).y);

@@ -1661,7 +1661,7 @@ fn the_walk_on_every_suite_skeleton_retargets_like_the_walk() {
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
-    let character: Pose = rig.joints.map(DVec3::from_array);
+    let character: Pose = rig.joints().map(DVec3::from_array);
     let dir = tempfile::tempdir().unwrap();
     let walk = gait_clip(Gait::Walk, 2.0, 30.0);
     let drive = |path: &std::path::Path| -> Result<Vec<Pose>, String> {
@@ -1677,7 +1677,7 @@ fn the_walk_on_every_suite_skeleton_retargets_like_the_walk() {
     let wpath = dir.path().join("walk.bvh");
     std::fs::write(&wpath, format_bvh(&walk)).unwrap();
     let base = from_travel(&drive(&wpath).unwrap());
-    let h = rig.height;
+    let h = rig.height();
     let mut fails = Vec::new();
     // This file's families with their expected maps; the fixtures'
     // families with their detected maps (checked against their expected

@@ -18,7 +18,7 @@ fn character() -> (Pose, f64) {
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
-    (rig.joints.map(DVec3::from_array), rig.height)
+    (rig.joints().map(DVec3::from_array), rig.height())
 }
 
 /// Whether `c` is carried by the chest (the neck, head and arms).

@@ -20,7 +20,7 @@ fn character() -> Pose {
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
-    rig.joints.map(DVec3::from_array)
+    rig.joints().map(DVec3::from_array)
 }
 
 /// The knee of a leg from hip `h` to ankle `a` with thigh `l1` and shin

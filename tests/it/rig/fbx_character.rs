@@ -71,8 +71,8 @@ fn kenney_fbx_character_embeds_with_a_human_skeleton() {
         "T-pose bounds {b:?}"
     );
     let e = from_skin(&a.mesh, &a, None, &f).unwrap();
-    assert!(e.facing[2] > 0.99, "facing {:?}", e.facing);
-    let j = |c: C| DVec3::from_array(e.joints[c.index()]);
+    assert!(e.facing()[2] > 0.99, "facing {:?}", e.facing());
+    let j = |c: C| DVec3::from_array(e.joints()[c.index()]);
     let len = |a: C, b: C| j(a).distance(j(b));
     // Left at +X, mirrored right.
     for (l, r) in [

@@ -1891,7 +1891,7 @@ fn rigged_gltf_skins_map_by_structure_like_clips() {
                 .unwrap_or_else(|e| panic!("CesiumMan without a map: {e}"));
             let with_map =
                 surfmotion::embed::skin::from_skin(&a.mesh, &a, Some(&hand_made), &f).unwrap();
-            assert_eq!(rig.joints, with_map.joints);
+            assert_eq!(rig.joints(), with_map.joints());
             continue;
         }
         let (map, ps) = got.unwrap_or_else(|e| panic!("{}: {e}", f.display()));
@@ -2609,7 +2609,7 @@ fn real_suites_drive_the_procedural_character() {
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let mesh = humanoid_mesh(DEMO_GRID);
     let rig = Embedding::new(&mesh, &humanoid_landmarks(&mesh), None).unwrap();
-    let character: Pose = rig.joints.map(DVec3::from_array);
+    let character: Pose = rig.joints().map(DVec3::from_array);
     let dir = tempfile::tempdir().unwrap();
     let mut fails = Vec::new();
     for s in SUITES {
@@ -2627,7 +2627,7 @@ fn real_suites_drive_the_procedural_character() {
             // A shin or thigh is about a quarter of the height: standing,
             // each knee is over 0.15 H below its hip and each ankle over
             // 0.15 H below its knee (a Z-up clip read as Y-up sits).
-            let h = rig.height;
+            let h = rig.height();
             let stands = p.iter().all(|q| q.is_finite())
                 && y(C::Head) > y(C::Neck)
                 && y(C::Neck) > y(C::Pelvis)

@@ -57,12 +57,12 @@ fn tilt_head(
         if n.length() > 1e-9 * (k - hip).length() * (c - k).length() {
             n.normalize()
         } else {
-            DVec3::from_array(rig.left)
+            DVec3::from_array(rig.left())
         }
     });
     let q = DQuat::from_axis_angle(axis.normalize(), deg.to_radians());
     rest.iter()
-        .zip(&rig.labels)
+        .zip(rig.labels())
         .map(|(p, &l)| {
             if l == Part::Head.index() as u8 {
                 (k + q * (DVec3::from_array(*p) - k)).to_array()
@@ -78,8 +78,8 @@ fn tilt_head(
 fn check_head_angle(name: &str, rest: &[[f64; 3]], rig: &Embedding) {
     let h = HeadTorso::new(
         rest,
-        &rig.labels,
-        DVec3::from_array(rig.up),
+        rig.labels(),
+        DVec3::from_array(rig.up()),
         &HeadOptions::default(),
     )
     .unwrap();
@@ -124,7 +124,7 @@ fn head_angle_is_zero_at_rest_and_under_rigid_motion_and_reads_a_tilt() {
     // whichever way, so |reading| stays within the rest angle of it.
     let h = HeadTorso::new(
         mesh.positions(),
-        &rig.labels,
+        rig.labels(),
         DVec3::Y,
         &HeadOptions::default(),
     )
@@ -135,7 +135,7 @@ fn head_angle_is_zero_at_rest_and_under_rigid_motion_and_reads_a_tilt() {
             &rig,
             &h,
             deg,
-            Some(DVec3::from_array(rig.left)),
+            Some(DVec3::from_array(rig.left())),
         );
         let a = h.angle_deg(&t);
         assert!(
@@ -176,8 +176,8 @@ fn head_angle_on_real_captures() {
         check_head_angle(name, rest.positions(), &rig);
         let h = HeadTorso::new(
             rest.positions(),
-            &rig.labels,
-            DVec3::from_array(rig.up),
+            rig.labels(),
+            DVec3::from_array(rig.up()),
             &HeadOptions::default(),
         )
         .unwrap();
@@ -233,7 +233,7 @@ fn folded(mesh: &Mesh, rig: &Embedding, k: usize) -> (Vec<[f64; 3]>, Vec<u32>) {
     let tris = mesh.triangles();
     let adj = surfmotion::deform::unflip::Adjacency::new(rest.len(), tris);
     let torso: Vec<usize> = (0..rest.len())
-        .filter(|&v| rig.labels[v] == Part::Torso.index() as u8)
+        .filter(|&v| rig.labels()[v] == Part::Torso.index() as u8)
         .collect();
     let mut frame = rest.to_vec();
     for i in 0..k {
@@ -478,12 +478,12 @@ fn foot_sliding_is_zero_when_planted_and_reads_a_dragged_foot() {
     // contact speed (and flat): the left foot slides v per frame, the right
     // none.
     let left = Part::LFoot.index() as u8;
-    let fwd = DVec3::from_array(rig.facing);
+    let fwd = DVec3::from_array(rig.facing());
     let opts = FootOptions::default();
     for v in [0.002, 0.005, 0.01] {
         assert!(v * 30.0 < opts.contact_speed);
         let dragged = animate(rest, 30, |t, i, p| {
-            if rig.labels[i] == left {
+            if rig.labels()[i] == left {
                 p + fwd * v * t as f64
             } else {
                 p
@@ -715,9 +715,9 @@ fn each_foot_is_measured_from_the_ground_under_it() {
     // body by `body`.
     let measure_body = |b: f64, dl: f64, dr: f64, body: f64| {
         let seq = animate(rest, frames, |_, i, p| {
-            if rig.labels[i] == left {
+            if rig.labels()[i] == left {
                 p + DVec3::Y * (b + dl)
-            } else if rig.labels[i] == right {
+            } else if rig.labels()[i] == right {
                 p + DVec3::Y * dr
             } else {
                 p + DVec3::Y * body

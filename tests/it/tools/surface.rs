@@ -144,7 +144,7 @@ fn a_dent_and_a_forearm_through_the_body_are_flagged_in_their_regions() {
     // A dent: a torso vertex at the height of the torso's centroid (the
     // trunk's side, front or back, not a hem), 4 cm towards the centroid.
     let torso: Vec<usize> = (0..frame.len())
-        .filter(|&v| rig.labels[v] as usize == Part::Torso.index())
+        .filter(|&v| rig.labels()[v] as usize == Part::Torso.index())
         .collect();
     let c: DVec3 = torso
         .iter()
@@ -171,7 +171,7 @@ fn a_dent_and_a_forearm_through_the_body_are_flagged_in_their_regions() {
 
     // The left forearm moved into the middle of the torso.
     let fore: Vec<usize> = (0..frame.len())
-        .filter(|&v| rig.labels[v] as usize == Part::LForearm.index())
+        .filter(|&v| rig.labels()[v] as usize == Part::LForearm.index())
         .collect();
     let fc: DVec3 = fore
         .iter()

@@ -79,7 +79,7 @@ fn where_the_tests_of_turned_over_disagree() {
                 let out = &mut all[k * n..(k + 1) * n];
                 def.deform(&ch, src, &sp, &raw.query[k], out, &mut ws);
                 let g = surfmotion::pose::pose_rotations(&sp, &raw.query[k]);
-                unflip::skin_turns(&ch.rig().skin, &g, &mut turn);
+                unflip::skin_turns(ch.rig().skin(), &g, &mut turn);
                 let skin = unflip::turned_over(tris, src, out, &turn);
                 let near = folds.turned_over(tris, src, out);
                 let r = Readings {

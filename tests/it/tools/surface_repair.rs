@@ -64,7 +64,7 @@ fn deform_frames(ch: &Character, raw: &Output, opts: &DeformOptions) -> Frames {
         let target = &raw.query[k];
         bare.deform(ch, src, &sp, target, &mut out, &mut wb);
         let g = surfmotion::pose::pose_rotations(&sp, target);
-        unflip::skin_turns(&ch.rig().skin, &g, &mut turn);
+        unflip::skin_turns(ch.rig().skin(), &g, &mut turn);
         f.before.push(unflip::turned_over(tris, src, &out, &turn));
         let t = std::time::Instant::now();
         let c = def.deform(ch, src, &sp, target, &mut out, &mut ws);
@@ -106,7 +106,7 @@ fn where_the_solve_folds_the_real_capture() {
     let soft = surfmotion::deform::soft::softness(ch.topology(), ch.rig());
     let mask: Vec<u32> = {
         let mut m = vec![0u32; ch.n()];
-        for (p, r) in ch.rig().regions.iter().enumerate() {
+        for (p, r) in ch.rig().regions().iter().enumerate() {
             for &v in r {
                 m[v as usize] |= 1 << p;
             }
@@ -115,7 +115,7 @@ fn where_the_solve_folds_the_real_capture() {
     };
     let in_regions: Vec<usize> = {
         let mut c = vec![0usize; ch.n()];
-        for r in &ch.rig().regions {
+        for r in ch.rig().regions() {
             for &v in r {
                 c[v as usize] += 1;
             }
@@ -206,7 +206,7 @@ fn where_the_solve_folds_the_real_capture() {
             for bad in &f.before {
                 for &t in bad {
                     let tri = tris[t as usize];
-                    let p = ch.rig().labels[tri[0] as usize] as usize;
+                    let p = ch.rig().labels()[tri[0] as usize] as usize;
                     let s = tri.iter().any(|&v| soft[v as usize] > 0.0);
                     let o = tri.iter().any(|&v| in_regions[v as usize] > 1);
                     per[p][0] += 1;
@@ -473,8 +473,8 @@ fn why_the_knees_fold() {
             e[8] += (rs.held[j] == Held::Seam) as u8 as f64;
             e[9] += folded.contains(&v) as u8 as f64;
             e[10] += (rs.held[j] == Held::Lbs) as u8 as f64;
-            e[11] +=
-                (ch.rig().labels[v as usize] as usize == Part::of_joint(shin).index()) as u8 as f64;
+            e[11] += (ch.rig().labels()[v as usize] as usize == Part::of_joint(shin).index()) as u8
+                as f64;
         }
         eprintln!(
             "{thigh:?}/{shin:?} overlap by position along the leg (1 = knee, 2 = ankle): n, cm |thigh-shin| |thigh-LBS| |shin-LBS| |blend-LBS|, weight thigh shin, thigh holds at LBS, shin seams, shin holds at LBS, shin-labelled, folded"
@@ -563,7 +563,7 @@ fn folds_before_repair(ch: &Character, raw: &Output, opts: &DeformOptions) -> us
             let target = &raw.query[k];
             bare.deform(ch, src, &sp, target, &mut out, &mut ws);
             let g = surfmotion::pose::pose_rotations(&sp, target);
-            unflip::skin_turns(&ch.rig().skin, &g, &mut turn);
+            unflip::skin_turns(ch.rig().skin(), &g, &mut turn);
             unflip::turned_over(tris, src, &out, &turn).len()
         })
         .sum()

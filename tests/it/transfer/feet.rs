@@ -109,8 +109,8 @@ fn feet_low(
     up: DVec3,
 ) -> impl Fn(&[[f64; 3]]) -> [f64; 2] + '_ {
     let feet = [Part::LFoot, Part::RFoot].map(|part| {
-        (0..rig.labels.len())
-            .filter(|&v| rig.labels[v] as usize == part.index())
+        (0..rig.labels().len())
+            .filter(|&v| rig.labels()[v] as usize == part.index())
             .collect::<Vec<_>>()
     });
     move |p| {
@@ -129,7 +129,7 @@ fn the_surface_stands_on_the_ground_where_the_clip_does() {
     let Some(d) = common::data_dir() else { return };
     let prepared = samba_prepared(&d);
     let rig = prepared.rig.as_ref().unwrap();
-    let rest: Pose = rig.joints.map(DVec3::from_array);
+    let rest: Pose = rig.joints().map(DVec3::from_array);
     let n = prepared.mesh.vertex_count();
     let low = feet_low(rig, DVec3::Y);
     let rest_low = low(prepared.mesh.positions());
@@ -215,7 +215,7 @@ fn a_scan_standing_along_another_axis_moves_as_the_y_up_one() {
         let up = surfmotion::transfer::up_axis(rig);
         // The clip is canonical (Y-up) whatever the scan: the Y-up
         // scan's skeleton, turned back.
-        let rest: Pose = rig.joints.map(|j| q.inverse() * DVec3::from_array(j));
+        let rest: Pose = rig.joints().map(|j| q.inverse() * DVec3::from_array(j));
         let mut poses = on_the_ball(&rest, 25.0, 6, 12);
         for (i, p) in poses.iter_mut().enumerate() {
             for j in p.iter_mut() {
@@ -236,7 +236,7 @@ fn a_scan_standing_along_another_axis_moves_as_the_y_up_one() {
         let back = out
             .iter()
             .map(|&p| (q.inverse() * DVec3::from_array(p)).to_array());
-        (back.collect(), gaps, rig.height, ankle_rise(&poses, 0, 6))
+        (back.collect(), gaps, rig.height(), ankle_rise(&poses, 0, 6))
     };
     let (y, _, height, _) = run(DQuat::IDENTITY);
     let turns = [
@@ -306,7 +306,7 @@ fn a_foot_rocking_between_heel_and_sole_moves_the_surface_smoothly() {
     let Some(d) = common::data_dir() else { return };
     let prepared = samba_prepared(&d);
     let rig = prepared.rig.as_ref().unwrap();
-    let rest: Pose = rig.joints.map(DVec3::from_array);
+    let rest: Pose = rig.joints().map(DVec3::from_array);
     let n = prepared.mesh.vertex_count();
     let low = feet_low(rig, DVec3::Y);
     let rest_low = low(prepared.mesh.positions());
@@ -421,13 +421,13 @@ fn spread_legs_carry_their_feet_where_the_skeleton_does() {
     let Some(d) = common::data_dir() else { return };
     let prepared = samba_prepared_with(&d, 80);
     let rig = prepared.rig.as_ref().unwrap();
-    let rest: Pose = rig.joints.map(DVec3::from_array);
-    let height = rig.height;
+    let rest: Pose = rig.joints().map(DVec3::from_array);
+    let height = rig.height();
     let n = prepared.mesh.vertex_count();
     let p0 = prepared.mesh.positions();
     let feet = [Part::LFoot, Part::RFoot].map(|part| {
         (0..n)
-            .filter(|&v| rig.labels[v] as usize == part.index())
+            .filter(|&v| rig.labels()[v] as usize == part.index())
             .collect::<Vec<_>>()
     });
     let (confluent, _) = Job::factor_mocap(&prepared).unwrap();
@@ -438,7 +438,7 @@ fn spread_legs_carry_their_feet_where_the_skeleton_does() {
         (&[0, 1][..], 12.0, 0.0),
         (&[0][..], 0.0, 40.0),
     ] {
-        let facing = DVec3::from_array(rig.facing);
+        let facing = DVec3::from_array(rig.facing());
         let poses = legs_apart(&rest, facing, legs, spread, bend, 6, 4);
         let reference = choose_reference(Some(&rest), &poses).unwrap();
         let skeleton = retarget_toes(&rest, &rest, &reference, &poses, Toes::Bending);

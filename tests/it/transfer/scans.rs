@@ -60,7 +60,7 @@ fn self_transfer(
         &TransferOptions { signs },
         &|_| {},
     );
-    (out, stats, rig.height)
+    (out, stats, rig.height())
 }
 
 fn assert_finite(p: &[[f64; 3]]) {
@@ -259,7 +259,7 @@ fn walk_on(name: &str, scan: &Mesh, landmarks: &str, clip: &Path) {
             .sum::<DVec3>()
             / n as f64
     };
-    let h = prepared.rig.as_ref().unwrap().height;
+    let h = prepared.rig.as_ref().unwrap().height();
     assert!(
         (c(stats.frames - 1) - c(0)).length() > h,
         "{name}: it did not travel"
@@ -350,7 +350,12 @@ fn raw_scans_are_repaired_and_stray_pieces_dropped() {
         &Default::default(),
         &|_| {},
     );
-    let e = vertex_error(&out, tpl.all_positions(), clean.vertex_count(), rig.height);
+    let e = vertex_error(
+        &out,
+        tpl.all_positions(),
+        clean.vertex_count(),
+        rig.height(),
+    );
     assert!(e.max_pct < 1e-5);
 }
 

@@ -203,7 +203,11 @@ fn pick_api_embeds_posted_landmarks_refuses_bad_requests_and_saves_beside_the_in
     let direct = surfmotion::embed::Embedding::new(&mesh, &lm, None).unwrap();
     assert_eq!(
         labels(&s1),
-        direct.labels.iter().map(|&l| l as u64).collect::<Vec<_>>()
+        direct
+            .labels()
+            .iter()
+            .map(|&l| l as u64)
+            .collect::<Vec<_>>()
     );
 
     // Refusals, each with a reason; the state is untouched.
