@@ -69,11 +69,6 @@ impl KeyHasher {
         self
     }
 
-    /// Large files hashed whole by this hasher (not found in its memo).
-    pub fn hashed(&self) -> usize {
-        self.1.as_ref().map_or(0, ContentMemo::hashed)
-    }
-
     /// Adds a labelled string.
     pub fn text(&mut self, label: &str, value: &str) -> &mut Self {
         for s in [label, value] {

@@ -1027,32 +1027,6 @@ impl Deformer {
         }
         best
     }
-
-    /// Deforms every frame of a sequence (frame-major) in parallel;
-    /// returns the turned-over triangle counts summed over the frames.
-    pub fn deform_all(
-        &self,
-        ch: &Character,
-        frames: &mut [[f64; 3]],
-        targets: &[Pose],
-    ) -> TurnedOver {
-        let n = self.n;
-        frames
-            .par_chunks_mut(n.max(1))
-            .zip(targets.par_iter())
-            .map_init(
-                || (self.workspace(), vec![[0.0; 3]; n]),
-                |(ws, src), (f, t)| {
-                    src.copy_from_slice(f);
-                    let sp = ch.rig().frame_joints(src);
-                    self.deform(ch, src, &sp, t, f, ws)
-                },
-            )
-            .reduce(TurnedOver::default, |a, b| TurnedOver {
-                before: a.before + b.before,
-                after: a.after + b.after,
-            })
-    }
 }
 
 /// What a frame's fold repair reads: the mesh's triangles and adjacency

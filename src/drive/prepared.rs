@@ -214,11 +214,6 @@ impl Prepared {
         &self.neutral
     }
 
-    /// The database's floor lift ([`super::query::database_floor_lift`]).
-    pub fn floor_lift(&self) -> f64 {
-        self.floor_lift
-    }
-
     /// Seconds spent preparing.
     pub fn timings(&self) -> PrepareTimings {
         self.timings

@@ -70,11 +70,6 @@ impl Mailbox {
         self.ready.notify_one();
     }
 
-    /// Forgets the sender numbering (a sender that starts again from 0).
-    pub fn restart_numbering(&self) {
-        self.lock().last_seq = None;
-    }
-
     /// The next frame, waiting at most `wait`.
     pub fn next(&self, wait: Duration) -> Result<Event, SourceError> {
         let mut s = self.lock();

@@ -8,8 +8,10 @@ use super::clip::Channel;
 use glam::{DQuat, DVec3, EulerRot};
 
 /// Composes rotations about the given axes (0 = x, 1 = y, 2 = z), in order,
-/// with angles in radians: `R = R_axes[0](a0) · R_axes[1](a1) · ...`.
-pub fn compose(axes: &[usize], radians: &[f64]) -> DQuat {
+/// with angles in radians: `R = R_axes[0](a0) · R_axes[1](a1) · ...` (the
+/// unit tests' reference for the readers' conversions).
+#[cfg(test)]
+pub(crate) fn compose(axes: &[usize], radians: &[f64]) -> DQuat {
     let mut q = DQuat::IDENTITY;
     for (&a, &r) in axes.iter().zip(radians) {
         q *= axis_rotation(a, r);
