@@ -7,13 +7,15 @@
 //! during contact ([`feet`]), ground penetration and floating ([`ground`]),
 //! knee hyper-extension ([`knee`]) and the triangles turned over against the
 //! rest frame ([`triangles`], the deformation's own test), each against the
-//! character's captured range.
+//! character's captured range. The automatic landmarks of a scan against a
+//! hand-made file: [`landmarks`].
 
 pub mod error;
 pub mod feet;
 pub mod ground;
 pub mod head;
 pub mod knee;
+pub mod landmarks;
 pub mod plausibility;
 pub mod summary;
 pub mod surface;
