@@ -359,6 +359,39 @@ cli = sorted((open(p).read().count("\n"), rel_of[p]) for m, p in files.items() i
 print(f"src/cli: {sum(n for n, _ in cli)} lines in {len(cli)} files; over 250 lines: "
       + ", ".join(f"{p} ({n})" for n, p in sorted(cli, reverse=True) if n > 250))
 
+
+def cli_kinds(text):
+    """Lines of a CLI file by kind: the command line's declaration (clap
+    `Args`/`Parser`/`Subcommand`/`ValueEnum` items, doc comments included:
+    the `--help` text), other comments, blank, and code (parse, call, print)."""
+    k = defaultdict(int)
+    in_decl = pending = False
+    for line in text.split("\n")[:-1]:
+        t = line.strip()
+        if t.startswith("#[derive(") and re.search(r"\b(Args|Parser|Subcommand|ValueEnum)\b", t):
+            pending = True
+        if in_decl or pending:
+            k["declaration"] += 1
+            if pending and re.match(r"(pub(\([^)]*\))?\s+)?(struct|enum)\b", t):
+                pending, in_decl = False, not t.endswith(";")
+            elif in_decl and line.startswith("}"):
+                in_decl = False
+        elif not t:
+            k["blank"] += 1
+        elif t.startswith("//"):
+            k["comment"] += 1
+        else:
+            k["code"] += 1
+    return k
+
+
+cli_total = defaultdict(int)
+for m, p in files.items():
+    if m and m[0] == "cli":
+        for kind, n in cli_kinds(open(p).read()).items():
+            cli_total[kind] += n
+print("src/cli by kind: " + ", ".join(f"{kind} {cli_total[kind]}" for kind in ("declaration", "code", "comment", "blank")))
+
 # --------------------------------------------------------------------------- visibility
 print()
 print("== 5. visibility (library: src/ without src/cli and main.rs; test code excluded)")
