@@ -195,6 +195,10 @@ pub(crate) fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
     if opts.per_sequence > 0 && opts.pool > 0 && opts.cover > 0 {
         text += &format!(" cover {}", opts.cover);
     }
+    // The sequence pairs reached (session 33) likewise.
+    if opts.reach > 0 {
+        text += &format!(" reach {}", opts.reach);
+    }
     k.text("sparse", &text);
     k.finish()
 }
@@ -668,6 +672,15 @@ fn sparse_similarity(
             "each sequence pair's {} best cheap transitions re-ranked by the full measure: {} pairs evaluated",
             opts.rerank,
             thousands(stats.rerank_pairs as u128)
+        ));
+    }
+    if opts.reach > 0 {
+        let s = sim.spans.len() as u128;
+        notice(format!(
+            "sequence pairs scanned: {} of {} (each sequence with the {} it is most linked to)",
+            thousands(stats.sequence_pairs as u128),
+            thousands(s * (s + 1) / 2),
+            opts.reach
         ));
     }
     let [p_near, p_seq, p_pair] = stats.pairs_by_source.map(|p| thousands(p as u128));

@@ -190,19 +190,28 @@ impl SurfaceMotionGraph {
         for f in &edits.forbid {
             removed.push(format!("forbidden: {f}"));
         }
+        // Edges in the order of their first transition; found by a map (a
+        // scan of the edges per transition grew with sequences⁴: 10⁵
+        // transitions and edges at 10⁵ frames, issue 43).
         let mut edges: Vec<SequenceEdge> = Vec::new();
+        let mut edge_of: std::collections::HashMap<(usize, usize), usize> =
+            std::collections::HashMap::new();
         for (k, t) in all.iter().enumerate() {
-            match edges.iter_mut().find(|e| e.from == t.from && e.to == t.to) {
-                Some(e) => {
+            match edge_of.get(&(t.from, t.to)) {
+                Some(&e) => {
+                    let e = &mut edges[e];
                     e.transitions.push(k);
                     e.cost = e.cost.min(t.cost);
                 }
-                None => edges.push(SequenceEdge {
-                    from: t.from,
-                    to: t.to,
-                    transitions: vec![k],
-                    cost: t.cost,
-                }),
+                None => {
+                    edge_of.insert((t.from, t.to), edges.len());
+                    edges.push(SequenceEdge {
+                        from: t.from,
+                        to: t.to,
+                        transitions: vec![k],
+                        cost: t.cost,
+                    });
+                }
             }
         }
         Ok(SurfaceMotionGraph {

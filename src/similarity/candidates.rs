@@ -38,6 +38,12 @@ pub struct CandidateOptions {
     pub cover: usize,
     /// Within a sequence, frames closer than this are not candidates.
     pub min_gap: usize,
+    /// Sequence pairs each sequence reaches (issue 43, session 33): its
+    /// `reach` most linked other sequences ([`reached_pairs`]); the trees'
+    /// candidates (`pool` 0, or a weak pair under the cover rule) only for
+    /// the pairs reached, either way. 0 (or at least the other sequences):
+    /// every pair.
+    pub reach: usize,
 }
 
 /// The candidates of the nearest-neighbour index ([`index_candidates`]).
@@ -51,6 +57,10 @@ pub struct Candidates {
     /// among its `pool` nearest frames overall, or in
     /// every sequence when `pool` is 0.
     pub per_sequence: Vec<(usize, u32)>,
+    /// With [`CandidateOptions::reach`]: per ordered sequence pair
+    /// (`i · sequences + j`, symmetric), whether it is reached
+    /// ([`reached_pairs`]); `None`: every pair.
+    pub reached: Option<Vec<bool>>,
 }
 
 /// The candidates of the projected descriptors `features` (`n × dims`,
@@ -78,22 +88,106 @@ pub fn index_candidates(
     let pool = if opts.per_sequence > 0 { opts.pool } else { 0 };
     let (near, per_sequence) =
         index.nearest_overall(opts.neighbours, stride, pool, opts.per_sequence);
+    let s = spans.len();
+    let reached = (opts.reach > 0 && opts.reach + 1 < s).then(|| {
+        reached_pairs(
+            features,
+            dims,
+            spans,
+            &seq,
+            &near,
+            &per_sequence,
+            opts.reach,
+        )
+    });
+    let reaches = |i: usize, j: usize| reached.as_ref().is_none_or(|r| r[i * s + j]);
     let per_sequence = if opts.pool == 0 || opts.per_sequence == 0 {
-        index.nearest_per_sequence(spans, stride, opts.per_sequence, &|_, _| true)
+        let take = |a: usize, j: usize| reaches(seq[a] as usize, j);
+        index.nearest_per_sequence(spans, stride, opts.per_sequence, &take)
     } else if opts.cover > 0 {
-        let weak = weakly_linked(&per_sequence, &seq, spans.len(), opts.cover);
-        let s = spans.len();
+        let weak = weakly_linked(&per_sequence, &seq, s, opts.cover);
+        // A weak pair takes the trees' candidates instead of the pool's
+        // where it is reached; one not reached keeps the pool's.
+        let replaced = |i: usize, j: usize| weak[i * s + j] && reaches(i, j);
         let mut kept: Vec<(usize, u32)> = per_sequence
             .into_iter()
-            .filter(|&(a, b)| !weak[seq[a] as usize * s + seq[b as usize] as usize])
+            .filter(|&(a, b)| !replaced(seq[a] as usize, seq[b as usize] as usize))
             .collect();
-        let filled = |a: usize, j: usize| weak[seq[a] as usize * s + j];
+        let filled = |a: usize, j: usize| replaced(seq[a] as usize, j);
         kept.extend(index.nearest_per_sequence(spans, stride, opts.per_sequence, &filled));
         kept
     } else {
         per_sequence
     };
-    Candidates { near, per_sequence }
+    Candidates {
+        near,
+        per_sequence,
+        reached,
+    }
+}
+
+/// The sequence pairs reached (issue 43, session 33), per ordered pair
+/// `i · sequences + j`: each sequence with itself, and with the `reach`
+/// other sequences its frames are most linked to — by the candidates
+/// `near` (every frame's nearest overall) and `pooled` (the pool's
+/// per-sequence ones), counted either way —, ties and unlinked sequences
+/// taken by the distance of the sequences' mean descriptors, then by
+/// number; a pair is reached when either sequence takes the other. At most
+/// `sequences · (reach + 1)` pairs, so that the candidates that are per
+/// sequence pair (the per-pair scan, the cover rule's trees) grow with the
+/// sequences, not with their square; every sequence reaches `reach`
+/// others, also one whose frames are nobody's nearest.
+pub fn reached_pairs(
+    features: &[f32],
+    dims: usize,
+    spans: &[Span],
+    seq: &[u32],
+    near: &[Vec<u32>],
+    pooled: &[(usize, u32)],
+    reach: usize,
+) -> Vec<bool> {
+    let s = spans.len();
+    let mut links = vec![0u64; s * s];
+    let mut link = |a: usize, b: usize| {
+        let (i, j) = (seq[a] as usize, seq[b] as usize);
+        if i != j {
+            links[i * s + j] += 1;
+            links[j * s + i] += 1;
+        }
+    };
+    for (a, bs) in near.iter().enumerate() {
+        bs.iter().for_each(|&b| link(a, b as usize));
+    }
+    pooled.iter().for_each(|&(a, b)| link(a, b as usize));
+    let mut mean = vec![0.0f64; s * dims];
+    for (k, sp) in spans.iter().enumerate() {
+        let m = &mut mean[k * dims..(k + 1) * dims];
+        for a in sp.start..sp.start + sp.len {
+            for (x, v) in m.iter_mut().zip(&features[a * dims..(a + 1) * dims]) {
+                *x += *v as f64;
+            }
+        }
+        m.iter_mut().for_each(|x| *x /= sp.len.max(1) as f64);
+    }
+    let apart = |i: usize, j: usize| -> f64 {
+        (0..dims)
+            .map(|d| (mean[i * dims + d] - mean[j * dims + d]).powi(2))
+            .sum()
+    };
+    let mut reached = vec![false; s * s];
+    for i in 0..s {
+        reached[i * s + i] = true;
+        let mut others: Vec<(u64, f64, usize)> = (0..s)
+            .filter(|&j| j != i)
+            .map(|j| (links[i * s + j], apart(i, j), j))
+            .collect();
+        others.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.total_cmp(&y.1)).then(x.2.cmp(&y.2)));
+        for &(_, _, j) in others.iter().take(reach) {
+            reached[i * s + j] = true;
+            reached[j * s + i] = true;
+        }
+    }
+    reached
 }
 
 /// Per ordered sequence pair `(i, j)` (`i · sequences + j`), whether fewer
@@ -314,7 +408,11 @@ mod tests {
                     .collect()
             });
         }
-        Candidates { near, per_sequence }
+        Candidates {
+            near,
+            per_sequence,
+            reached: None,
+        }
     }
 
     /// The cover rule by counting: per unordered sequence pair, the links
@@ -427,6 +525,7 @@ mod tests {
                     stride,
                     cover,
                     min_gap: 10,
+                    reach: 0,
                 };
                 let what = format!("case {k}, {neighbours}/{per_sequence}/{pool}/{stride}/{cover}");
                 let got = index_candidates(feat, dims, &sp, &o);
@@ -466,6 +565,7 @@ mod tests {
             stride: 4,
             cover: 0,
             min_gap: 10,
+            reach: 0,
         };
         let pooled = index_candidates(&far, dims, &sp, &o).per_sequence;
         let trees = index_candidates(&far, dims, &sp, &CandidateOptions { pool: 0, ..o });

@@ -60,20 +60,23 @@ pub fn best_per_pair(
     spans: &[Span],
     opts: &TransitionOptions,
 ) -> Vec<(usize, u32)> {
-    best_per_pair_with(features, dims, spans, opts, &|_| {})
+    best_per_pair_with(features, dims, spans, None, opts, &|_| {})
 }
 
 /// [`best_per_pair`] telling `progress` the cheap distances of each
 /// sequence pair's block as it is done (`len_i × len_j`; all of them add
-/// up to [`scan_total`]).
+/// up to [`scan_total`]), on the sequence pairs `reached` (per ordered
+/// pair `i · sequences + j`, [`super::candidates::reached_pairs`]) only,
+/// or on every pair (`None`).
 pub fn best_per_pair_with(
     features: &[f32],
     dims: usize,
     spans: &[Span],
+    reached: Option<&[bool]>,
     opts: &TransitionOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Vec<(usize, u32)> {
-    per_pair(spans, opts.top_n, progress, |i, j| {
+    per_pair(spans, reached, opts.top_n, progress, |i, j| {
         let (si, sj) = (&spans[i], &spans[j]);
         let c = cheap_block(features, dims, si, sj);
         let at = |r: usize, s: usize| c[r * sj.len + s];
@@ -109,6 +112,7 @@ pub(crate) fn best_per_pair_refined(
     features: &[f32],
     dims: usize,
     spans: &[Span],
+    reached: Option<&[bool]>,
     opts: &TransitionOptions,
     rerank: Rerank<'_>,
     progress: &(dyn Fn(u64) + Sync),
@@ -117,7 +121,7 @@ pub(crate) fn best_per_pair_refined(
         top_n: rerank.examine.max(opts.top_n),
         ..*opts
     };
-    per_pair(spans, opts.top_n, progress, |i, j| {
+    per_pair(spans, reached, opts.top_n, progress, |i, j| {
         let (si, sj) = (&spans[i], &spans[j]);
         let c = cheap_block(features, dims, si, sj);
         let at = |r: usize, s: usize| c[r * sj.len + s];
@@ -141,21 +145,39 @@ pub(crate) fn best_per_pair_refined(
 /// than a band).
 pub(crate) const MAX_DESCENT: usize = 32;
 
-/// Runs `block(i, j)` on every unordered sequence pair `i ≤ j` (in
-/// parallel, results in a fixed order) when `top_n` is not 0; the centres
-/// it returns and the sum of its counts.
 /// The cheap distances [`best_per_pair_with`] and
 /// [`best_per_pair_refined`] compute over `spans` (every unordered
 /// sequence pair's block, a sequence with itself included): what their
-/// progress adds up to, `(n² + Σ lenᵢ²) / 2`.
-pub fn scan_total(spans: &[Span]) -> u64 {
+/// progress adds up to, `(n² + Σ lenᵢ²) / 2`; over the pairs `reached`
+/// only when given.
+pub fn scan_total(spans: &[Span], reached: Option<&[bool]>) -> u64 {
+    if reached.is_some() {
+        return scanned_pairs(spans, reached)
+            .iter()
+            .map(|&(i, j)| (spans[i].len * spans[j].len) as u64)
+            .sum();
+    }
     let n: u64 = spans.iter().map(|s| s.len as u64).sum();
     let own: u64 = spans.iter().map(|s| (s.len as u64).pow(2)).sum();
     (n * n + own) / 2
 }
 
+/// The unordered sequence pairs `i ≤ j` scanned: every one, or those
+/// `reached` (per ordered pair `i · sequences + j`).
+pub fn scanned_pairs(spans: &[Span], reached: Option<&[bool]>) -> Vec<(usize, usize)> {
+    let s = spans.len();
+    (0..s)
+        .flat_map(|i| (i..s).map(move |j| (i, j)))
+        .filter(|&(i, j)| reached.is_none_or(|r| r[i * s + j]))
+        .collect()
+}
+
+/// Runs `block(i, j)` on every unordered sequence pair `i ≤ j` (or those
+/// `reached`; in parallel, results in a fixed order) when `top_n` is not
+/// 0; the centres it returns and the sum of its counts.
 fn per_pair(
     spans: &[Span],
+    reached: Option<&[bool]>,
     top_n: usize,
     progress: &(dyn Fn(u64) + Sync),
     block: impl Fn(usize, usize) -> (Vec<(usize, usize)>, u64) + Sync,
@@ -163,9 +185,7 @@ fn per_pair(
     if top_n == 0 {
         return (Vec::new(), 0);
     }
-    let pairs: Vec<(usize, usize)> = (0..spans.len())
-        .flat_map(|i| (i..spans.len()).map(move |j| (i, j)))
-        .collect();
+    let pairs = scanned_pairs(spans, reached);
     let per: Vec<(Vec<(usize, u32)>, u64)> = pairs
         .par_iter()
         .map(|&(i, j)| {
@@ -430,12 +450,12 @@ mod tests {
                 done.fetch_add(k, std::sync::atomic::Ordering::Relaxed);
             };
             let (refined, evaluated) =
-                best_per_pair_refined(&features, 1, &spans, &opts, rerank, &step);
+                best_per_pair_refined(&features, 1, &spans, None, &opts, rerank, &step);
             assert_eq!(across(refined), vec![(m, n)], "{k}");
             // The progress adds up to the scan's total: every block once.
-            assert_eq!(done.into_inner(), scan_total(&spans), "{k}");
+            assert_eq!(done.into_inner(), scan_total(&spans, None), "{k}");
             assert_eq!(
-                scan_total(&spans),
+                scan_total(&spans, None),
                 ((la + lb).pow(2) + la * la + lb * lb) as u64 / 2
             );
             // Far fewer full measures than the block's pairs.

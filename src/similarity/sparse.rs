@@ -173,6 +173,27 @@ pub struct SparseOptions {
     /// whole `db build`. With `pool` 128 at 3,234 frames: 95.9 % from 64,
     /// 97.2 % from 128 (session 28). Default: 128 (64 before session 29).
     pub rerank: usize,
+    /// Sequence pairs per sequence (issue 43, session 33): each sequence
+    /// takes the per-pair scan and the cover rule's trees only with itself
+    /// and the `reach` other sequences its frames are most linked to by
+    /// the index's candidates (its nearest frames and the pool), and a
+    /// pair reached by either sequence is scanned
+    /// ([`super::candidates::reached_pairs`]): at most `sequences ·
+    /// (reach + 1)` pairs scanned instead of `sequences² / 2`, so that the
+    /// pairs compared grow with the frames, not with frames × sequences
+    /// (session 32: 104.5 M pairs at 3×10⁴ frames, 98 sequences, where
+    /// 10⁴ frames compared 11.6 M). A pair not reached keeps only the
+    /// transitions its nearest and pooled candidates store. 0 (or at least
+    /// the other sequences): every pair, as before session 33. Measured
+    /// with 16 (session 33, the 2,600-vertex pool of `scripts/scale-db.sh`):
+    /// at 10⁴ frames (34 sequences) 369 of 595 pairs scanned, 7.16 M pairs
+    /// compared (11.63 M), 166.5 s of CPU (227.8 s), 66.2 % of the
+    /// transitions kept (98 % of the cheapest quarter, every one of the
+    /// cheapest tenth; the 02_01 retargets unchanged); at 3×10⁴ (98)
+    /// 25.3 M pairs (104.5 M), 562 s. Off by default: a third of the
+    /// graph's transitions (dissimilar pairs' best) are lost.
+    /// Default: 0.
+    pub reach: usize,
 }
 
 impl Default for SparseOptions {
@@ -190,6 +211,7 @@ impl Default for SparseOptions {
             spread: 5,
             min_window: 4,
             rerank: 128,
+            reach: 0,
         }
     }
 }
@@ -222,6 +244,7 @@ impl SparseOptions {
                 "spread" => &mut self.spread,
                 "min_window" => &mut self.min_window,
                 "rerank" => &mut self.rerank,
+                "reach" => &mut self.reach,
                 other => return Err(format!("'{other}' is not a sparse option")),
             };
             *field = v;
@@ -251,6 +274,10 @@ pub struct SparseStats {
     pub scan_seconds: f64,
     /// Full measures evaluated by the per-pair re-ranking (not stored).
     pub rerank_pairs: u64,
+    /// Unordered sequence pairs (a sequence with itself included) the
+    /// per-pair scan ran on: every one, or those reached
+    /// ([`SparseOptions::reach`]).
+    pub sequence_pairs: u64,
     /// Distinct pairs evaluated with the full measure.
     pub pairs: u64,
     /// Seconds: descriptors, projection and index.
@@ -752,15 +779,18 @@ pub fn sparse_pairs(
         pool: opts.pool,
         cover: opts.cover,
         min_gap: opts.min_gap,
+        reach: opts.reach,
     };
     let found = index_candidates(&features, dims, &spans, &copts);
+    let reached = found.reached.as_deref();
+    let sequence_pairs = pair_scan::scanned_pairs(&spans, reached).len() as u64;
     let c1 = cpu();
     let t_scan = std::time::Instant::now();
     let popts = per_pair_options(opts);
     if opts.per_pair > 0 {
         progress.stage(
             "sequence-pair distances scanned",
-            pair_scan::scan_total(&spans),
+            pair_scan::scan_total(&spans, reached),
         );
     }
     let step = |k| progress.advance(k);
@@ -769,9 +799,9 @@ pub fn sparse_pairs(
             full: set,
             examine: opts.rerank,
         };
-        pair_scan::best_per_pair_refined(&features, dims, &spans, &popts, rerank, &step)
+        pair_scan::best_per_pair_refined(&features, dims, &spans, reached, &popts, rerank, &step)
     } else {
-        let best = pair_scan::best_per_pair_with(&features, dims, &spans, &popts, &step);
+        let best = pair_scan::best_per_pair_with(&features, dims, &spans, reached, &popts, &step);
         (best, 0)
     };
     let per_pair = pair_scan::spread_seeds(&best, opts.spread, &spans, &seq);
@@ -823,6 +853,7 @@ pub fn sparse_pairs(
         pairs_by_source,
         scan_seconds,
         rerank_pairs,
+        sequence_pairs,
         pairs,
         index_seconds,
         pairs_seconds: t1.elapsed().as_secs_f64(),

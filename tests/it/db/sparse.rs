@@ -452,6 +452,7 @@ fn pool_ranks(
         pool: o.pool.max(64),
         cover: 0,
         min_gap: o.min_gap,
+        reach: 0,
     };
     let pooled = index_candidates(&f, dims, spans, &copts).per_sequence;
     let mut links = std::collections::BTreeMap::new();
@@ -841,6 +842,210 @@ fn descriptor_cost_per_frame() {
             1e3 * (t1 - t0) / n,
             1e3 * (t2 - t1) / n,
             (t2 - t1) / (t1 - t0)
+        );
+    }
+}
+
+/// Generated frames for the reach test: seven coordinates, the cheap
+/// descriptor the first six, the full measure all seven (so at least the
+/// cheap distance, and not ranked as it is).
+struct Motions(Vec<[f32; 7]>);
+
+impl surfmotion::similarity::PairDistance for Motions {
+    fn frames(&self) -> usize {
+        self.0.len()
+    }
+    fn distance(&self, a: usize, b: usize) -> f64 {
+        let (p, q) = (&self.0[a], &self.0[b]);
+        p.iter()
+            .zip(q)
+            .map(|(x, y)| ((x - y) as f64).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    }
+}
+
+impl surfmotion::similarity::sparse::Features for Motions {
+    fn feature_len(&self) -> usize {
+        6
+    }
+    fn feature(&self, a: usize, out: &mut [f32]) {
+        out.copy_from_slice(&self.0[a][..6]);
+    }
+}
+
+/// `sequences` generated motions (and their spans): groups of four
+/// re-timed, noisy copies of a loop around a group centre (a motion and its
+/// speed variants, as `scripts/scale-db.sh` makes them), lengths 50-97
+/// frames; the last sequence far from every other (nobody's nearest, as a
+/// mirrored piece is).
+fn generated_motions(sequences: usize) -> (Motions, Vec<surfmotion::similarity::Span>) {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut rnd = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+    };
+    let (mut frames, mut spans) = (Vec::new(), Vec::new());
+    for s in 0..sequences {
+        let group = s / 4;
+        let len = 50 + (s * 29) % 48;
+        let speed = 0.8 + 0.1 * (s % 4) as f32;
+        let centre = [
+            (group % 3) as f32 * 3.0,
+            (group / 3 % 3) as f32 * 3.0,
+            (group / 9) as f32 * 3.0,
+        ];
+        let far = if s + 1 == sequences { 40.0 } else { 0.0 };
+        let start = frames.len();
+        for t in 0..len {
+            let a = t as f32 * speed * std::f32::consts::TAU / 40.0 + group as f32;
+            frames.push([
+                centre[0] + a.cos() + 0.05 * rnd() + far,
+                centre[1] + a.sin() + 0.05 * rnd(),
+                centre[2] + 0.3 * (2.0 * a).sin() + 0.05 * rnd(),
+                0.2 * (3.0 * a).cos(),
+                0.1 * rnd(),
+                0.1 * rnd(),
+                0.2 * (5.0 * a + s as f32).sin(),
+            ]);
+        }
+        spans.push(surfmotion::similarity::Span {
+            name: format!("s{s}"),
+            start,
+            len,
+        });
+    }
+    (Motions(frames), spans)
+}
+
+/// Issue 43, session 33 (`SparseOptions::reach`): each sequence takes the
+/// per-pair scan and the cover rule's trees only with the `reach`
+/// sequences it is most linked to. On generated motions (groups of speed
+/// variants, one far motion) of 12, 24 and 48 sequences: at most
+/// `sequences · (reach + 1)` sequence pairs are scanned (all of them
+/// without a reach), every sequence reaches at least `reach` others (also
+/// the far one), the per-pair and per-sequence candidates stay within
+/// their bounds, which grow with the sequences, not their square; every
+/// reached pair's stored pairs, values and transitions are those of the
+/// build without a reach, exactly; the far motion keeps transitions both
+/// ways; and a reach of at least the other sequences changes nothing.
+#[test]
+fn a_reach_bounds_the_sequence_pairs_and_keeps_the_reached_ones_exact() {
+    use surfmotion::graph::{GraphEdits, SurfaceMotionGraph, TransitionOptions};
+    use surfmotion::similarity::Measure;
+    use surfmotion::similarity::candidates::{CandidateOptions, index_candidates};
+    use surfmotion::similarity::sparse::{SparseOptions, project, sparse_pairs};
+    let reach = 4;
+    for sequences in [12usize, 24, 48] {
+        let (set, spans) = generated_motions(sequences);
+        let n = spans.iter().map(|s| s.len).sum::<usize>();
+        let base = SparseOptions {
+            neighbours: 8,
+            dims: 6,
+            rerank: 16,
+            pool: 32,
+            ..SparseOptions::default()
+        };
+        let with = SparseOptions { reach, ..base };
+        let (all, all_stats) = sparse_pairs(&set, spans.clone(), &base, &|_: u64| {});
+        let (sim, stats) = sparse_pairs(&set, spans.clone(), &with, &|_: u64| {});
+        let s = sequences as u64;
+        let what = format!("{sequences} sequences: {stats:?} / {all_stats:?}");
+        assert_eq!(all_stats.sequence_pairs, s * (s + 1) / 2, "{what}");
+        assert!(stats.sequence_pairs <= s * (reach as u64 + 1), "{what}");
+        assert!(stats.pairs < all_stats.pairs, "{what}");
+        // The candidates that are per sequence pair: within their bounds.
+        assert!(
+            stats.pair_candidates <= stats.sequence_pairs * 3 * with.per_pair as u64,
+            "{what}"
+        );
+        // The reached pairs, from the index as the build takes them.
+        let (f, dims) = project(&set, with.dims);
+        let copts = CandidateOptions {
+            neighbours: with.neighbours,
+            stride: with.stride,
+            per_sequence: with.per_sequence,
+            pool: with.pool,
+            cover: with.cover,
+            min_gap: with.min_gap,
+            reach,
+        };
+        let found = index_candidates(&f, dims, &spans, &copts);
+        let reached = found.reached.clone().expect("a reach below the sequences");
+        let at = |i: usize, j: usize| reached[i * sequences + j];
+        let mut scanned = 0;
+        for i in 0..sequences {
+            let others = (0..sequences).filter(|&j| j != i && at(i, j)).count();
+            assert!(at(i, i) && others >= reach, "{what}: s{i} reaches {others}");
+            for j in 0..sequences {
+                assert_eq!(at(i, j), at(j, i), "{what}: ({i}, {j})");
+                scanned += usize::from(j >= i && at(i, j));
+            }
+        }
+        assert_eq!(scanned as u64, stats.sequence_pairs, "{what}");
+        // The trees' candidates only for reached pairs: at most the pool's
+        // (`per_sequence` in each sequence among `pool`) plus every
+        // `stride`-th frame's `per_sequence` in each reached sequence.
+        let asking = |len: usize| len.div_ceil(with.stride) as u64;
+        let trees: u64 = (0..sequences)
+            .flat_map(|i| (0..sequences).map(move |j| (i, j)))
+            .filter(|&(i, j)| at(i, j))
+            .map(|(i, _)| asking(spans[i].len) * with.per_sequence as u64)
+            .sum();
+        let pooled = n.div_ceil(with.stride) as u64 * with.pool as u64;
+        assert!(stats.sequence_candidates <= pooled + trees, "{what}");
+        // Every reached pair: the same stored pairs, values and transitions.
+        let topts = TransitionOptions::default();
+        let edits = GraphEdits::default();
+        let g_all = SurfaceMotionGraph::build(&all, Measure::Shape, &topts, &edits).unwrap();
+        let g = SurfaceMotionGraph::build(&sim, Measure::Shape, &topts, &edits).unwrap();
+        let of = |g: &SurfaceMotionGraph, i: usize, j: usize| -> Vec<_> {
+            g.transitions()
+                .iter()
+                .filter(|t| (t.from, t.to) == (i, j))
+                .map(|t| (t.m, t.n, t.window, t.cost.to_bits()))
+                .collect()
+        };
+        let mut kept = 0;
+        for i in 0..sequences {
+            for j in 0..sequences {
+                if !at(i, j) {
+                    continue;
+                }
+                let (b, b_all) = (sim.block(i, j), all.block(i, j));
+                assert_eq!(b, b_all, "{what}: block ({i}, {j})");
+                for &(r, c) in &b {
+                    let (x, y) = (spans[i].start + r, spans[j].start + c);
+                    assert_eq!(sim.get(x, y).to_bits(), all.get(x, y).to_bits());
+                }
+                let t = of(&g, i, j);
+                assert_eq!(t, of(&g_all, i, j), "{what}: transitions ({i}, {j})");
+                kept += t.len();
+            }
+        }
+        assert!(kept > 0 && kept <= g.transitions().len(), "{what}");
+        // The far motion keeps transitions to and from the others.
+        let far = sequences - 1;
+        let out = g.transitions().iter().any(|t| t.from == far && t.to != far);
+        let into = g.transitions().iter().any(|t| t.to == far && t.from != far);
+        assert!(out && into, "{what}: s{far} out {out}, in {into}");
+        // A reach of every other sequence: nothing changes.
+        let every = SparseOptions {
+            reach: sequences - 1,
+            ..base
+        };
+        let (same, _) = sparse_pairs(&set, spans.clone(), &every, &|_: u64| {});
+        assert_eq!(same, all, "{what}");
+        eprintln!(
+            "{sequences} sequences, {n} frames: sequence pairs scanned {} of {}, pairs compared {} of {}, transitions {} of {}",
+            stats.sequence_pairs,
+            all_stats.sequence_pairs,
+            stats.pairs,
+            all_stats.pairs,
+            g.transitions().len(),
+            g_all.transitions().len()
         );
     }
 }
