@@ -186,6 +186,12 @@ pub struct DeformOptions {
     /// their own neighbourhoods: CMU 02_02 on the real samba capture 8,
     /// 131_01 frame 96 3; README, issue 42).
     pub surface_rounds: usize,
+    /// Stop the surface repair's rounds ([`DeformOptions::surface_rounds`])
+    /// after this many rounds in a row that do not lower the count of
+    /// triangles facing against their own turns (the frame kept is still
+    /// the round's that faced least). Default `usize::MAX` (off: every
+    /// round runs until none face against their turns).
+    pub surface_stall: usize,
     /// Solve the regions level by level, the regions of one level (the
     /// head, upper arms and thighs; then the forearms and shins; then the
     /// feet) on several threads at once ([`super::levels`]). The result is
@@ -349,6 +355,7 @@ impl Default for DeformOptions {
             parent_seams: true,
             repair_turns: RepairTurns::default(),
             surface_rounds: 6,
+            surface_stall: usize::MAX,
             parallel_regions: true,
             cloth_stitch: 0.5,
             cloth_steps: 2,
@@ -390,11 +397,13 @@ pub(crate) fn with_env_overrides(
 /// `opts` with the comma-separated `name=value` pairs of `text`: `rings`
 /// (most rings of a patch, [`unflip::RepairOptions::most_rings`]; `all`
 /// for no bound), `rounds` ([`unflip::RepairOptions::rounds`]), `passes`
-/// ([`DeformOptions::repair_passes`]) and `surface`
-/// ([`DeformOptions::surface_rounds`]). An error names the pair it could
+/// ([`DeformOptions::repair_passes`]), `surface`
+/// ([`DeformOptions::surface_rounds`]), `stall`
+/// ([`DeformOptions::surface_stall`]) and `replay` (0 or 1,
+/// [`unflip::RepairOptions::replay`]). An error names the pair it could
 /// not read and every name accepted.
 pub fn with_repair_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
-    const NAMES: &str = "rings=N|all, rounds=N, passes=N, surface=N";
+    const NAMES: &str = "rings=N|all, rounds=N, passes=N, surface=N, stall=N, replay=0|1";
     let mut o = *opts;
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = |what: &str| format!("'{pair}': {what} (accepted: {NAMES})");
@@ -410,6 +419,8 @@ pub fn with_repair_overrides(opts: &DeformOptions, text: &str) -> Result<DeformO
             "rounds" => o.repair.rounds = count()?,
             "passes" => o.repair_passes = count()?,
             "surface" => o.surface_rounds = count()?,
+            "stall" => o.surface_stall = count()?.max(1),
+            "replay" => o.repair.replay = count()? != 0,
             _ => return Err(bad("unknown name")),
         }
     }
