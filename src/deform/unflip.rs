@@ -753,6 +753,78 @@ mod tests {
         assert!(cases >= 6, "only {cases} generated folds turned over");
     }
 
+    /// A pass resumed from the kept state of a pass with one round fewer
+    /// that started where it starts ([`Replay`]) gives the fresh pass's
+    /// frame and triangles bit for bit, solving only the round it adds;
+    /// over generated folds (one to three vertices pushed through a
+    /// sphere at several depths), rings bounded and not, 1-4 rounds.
+    #[test]
+    fn a_replayed_pass_is_the_fresh_pass() {
+        let m = midpoint(&midpoint(&midpoint(&icosahedron())));
+        let (tris, src) = (m.triangles(), m.positions().to_vec());
+        let adj = Adjacency::new(src.len(), tris);
+        let turn = vec![DQuat::IDENTITY; src.len()];
+        let (mut cases, mut moved) = (0, 0);
+        for pushed in [&[0u32][..], &[0, 7], &[0, 7, 40], &[3, 90, 200]] {
+            for depth in [-0.2, -0.5, 0.3, 0.6] {
+                let mut start = src.clone();
+                for &v in pushed {
+                    start[v as usize] = (DVec3::from_array(src[v as usize]) * depth).to_array();
+                }
+                let bad = turned_over(tris, &src, &start, &turn);
+                if bad.is_empty() {
+                    continue;
+                }
+                for most_rings in [2, usize::MAX] {
+                    for rounds in 1..4 {
+                        cases += 1;
+                        let opts = |rounds| RepairOptions {
+                            rounds,
+                            most_rings,
+                            ..Default::default()
+                        };
+                        let run = |rounds, replay: Option<(&mut Replay, bool)>| {
+                            let mut out = start.clone();
+                            let mut budget = Budget::new(WorkLimit::NONE);
+                            let left = unflip_within(
+                                tris,
+                                &adj,
+                                &src,
+                                &mut out,
+                                &turn,
+                                bad.clone(),
+                                &opts(rounds),
+                                &mut budget,
+                                replay,
+                            );
+                            (out, left, budget.done)
+                        };
+                        let (fresh, fresh_left, fresh_work) = run(rounds + 1, None);
+                        let mut kept = Replay::default();
+                        let (first, _, first_work) = run(rounds, Some((&mut kept, false)));
+                        moved += usize::from(first != start);
+                        let (again, again_left, again_work) =
+                            run(rounds + 1, Some((&mut kept, true)));
+                        let bits = |p: &[[f64; 3]]| -> Vec<u64> {
+                            p.iter().flatten().map(|c| c.to_bits()).collect()
+                        };
+                        assert_eq!(bits(&again), bits(&fresh), "{pushed:?} {depth} {rounds}");
+                        assert_eq!(again_left, fresh_left, "{pushed:?} {depth} {rounds}");
+                        assert_eq!(again_work.replayed_rounds, rounds);
+                        // Only the added round is solved, when it runs.
+                        assert!(again_work.patches <= 1);
+                        assert_eq!(
+                            again_work.patches + first_work.patches,
+                            fresh_work.patches,
+                            "{pushed:?} {depth} {rounds}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(cases >= 30 && moved > 0, "{cases} cases, {moved} moved");
+    }
+
     /// The counting pass gives `to_rows`' matrix bit for bit on the repair
     /// patch's weights (whole numbers), over generated edge lists: a mesh's
     /// edges in triangle order, reversed, shuffled, with repeats and an
