@@ -39,6 +39,9 @@ pub struct Deformer {
     /// Most repairs against the surface's turns
     /// ([`DeformOptions::surface_rounds`]).
     surface_rounds: usize,
+    /// Rounds without progress that end the surface repair
+    /// ([`DeformOptions::surface_stall`]).
+    surface_stall: usize,
     /// The cloth stitched after the blend ([`DeformOptions::cloth_stitch`]).
     cloth: Option<ClothStitch>,
     /// The repair reads the cloth with the stitch's turns
@@ -106,6 +109,8 @@ pub struct DeformWorkspace {
     start: Vec<[f64; 3]>,
     /// The last frame's repair work.
     work: unflip::Work,
+    /// A repair pass's state after its rounds ([`unflip::Replay`]).
+    replay: unflip::Replay,
     /// The surface's own rotations ([`RepairTurns`]) and one a seed.
     surface_turn: Vec<DQuat>,
     seeds: Vec<DQuat>,
@@ -207,6 +212,7 @@ impl Deformer {
             repair_turns: opts.repair_turns,
             near: None,
             surface_rounds: opts.surface_rounds,
+            surface_stall: opts.surface_stall,
             cloth: None,
             cloth_turns: opts.cloth_turns,
             cloth_fallback: opts.cloth_fallback,
@@ -451,6 +457,7 @@ impl Deformer {
             best: vec![[0.0; 3]; self.n],
             start: vec![[0.0; 3]; self.n],
             work: unflip::Work::default(),
+            replay: unflip::Replay::default(),
             surface_turn: vec![DQuat::IDENTITY; self.n],
             seeds: Vec::new(),
             surface_best: vec![[0.0; 3]; self.n],
@@ -827,7 +834,9 @@ impl Deformer {
         if let (Some(near), RepairTurns::SkinThenSurface | RepairTurns::Surface) =
             (&self.near, self.repair_turns)
         {
+            let skin = ws.work.patches;
             counts.after = self.repair_surface(near, f, out, ws);
+            ws.work.surface_patches += ws.work.patches - skin;
         }
         ws.turn = skin;
         counts
@@ -853,6 +862,8 @@ impl Deformer {
     ) -> usize {
         let mut turn = std::mem::take(&mut ws.surface_turn);
         let (mut least, mut last) = (usize::MAX, 0);
+        // Rounds in a row that did not lower the count.
+        let mut stalled = 0;
         for round in 0..=self.surface_rounds {
             let r = ReadingOf {
                 near,
@@ -873,9 +884,12 @@ impl Deformer {
             }
             if last < least {
                 least = last;
+                stalled = 0;
                 ws.surface_best.copy_from_slice(out);
+            } else {
+                stalled += 1;
             }
-            if round == self.surface_rounds {
+            if round == self.surface_rounds || stalled >= self.surface_stall {
                 break;
             }
             self.repair_against(f, out, ws, &turn, bad, round);
@@ -935,6 +949,7 @@ impl Deformer {
         }
         let first = self.repair_with(f, out, ws, turn, bad.clone(), &fixed, &mut budget, grow);
         ws.work = add_work(base, budget.done);
+        let before_retry = budget.done.patches;
         if first == 0 || !adaptive {
             return TurnedOver {
                 before,
@@ -945,6 +960,7 @@ impl Deformer {
         // the first result.
         out.swap_with_slice(&mut ws.start);
         let second = self.repair_with(f, out, ws, turn, bad, &self.untangle, &mut budget, grow);
+        budget.done.retry_patches += budget.done.patches - before_retry;
         ws.work = add_work(base, budget.done);
         if second >= first {
             out.copy_from_slice(&ws.start);
@@ -985,10 +1001,18 @@ impl Deformer {
             turn,
         };
         bad = untangle::untangle_with(tris, adj, &mut refs, &ws.areas, out, bad, opts, budget);
+        // Whether `out` and `bad` are the best state (`ws.best`,
+        // `best_bad`), and whether the last pass started there and went
+        // back to it: then the next pass's first rounds are the last
+        // pass's ([`unflip::Replay`]).
+        let mut at_best = false;
+        let mut resume = false;
+        ws.replay.clear();
         if bad.len() < best {
             best = bad.len();
             best_bad.clone_from(&bad);
             ws.best.copy_from_slice(out);
+            at_best = true;
         }
         if best == 0 {
             return 0;
@@ -1001,7 +1025,22 @@ impl Deformer {
                 rounds: self.repair.rounds + grow + pass,
                 ..self.repair
             };
-            bad = unflip::unflip_within(tris, adj, source, out, turn, bad, &repair, budget);
+            let started_at_best = at_best;
+            let patches = budget.done.patches;
+            bad = unflip::unflip_within(
+                tris,
+                adj,
+                source,
+                out,
+                turn,
+                bad,
+                &repair,
+                budget,
+                Some((&mut ws.replay, resume)),
+            );
+            if pass > 0 {
+                budget.done.later_pass_patches += budget.done.patches - patches;
+            }
             if !bad.is_empty() {
                 let mut refs = untangle::OnDemand {
                     lazy: &mut ws.references,
@@ -1016,11 +1055,15 @@ impl Deformer {
                 best = bad.len();
                 best_bad.clone_from(&bad);
                 ws.best.copy_from_slice(out);
+                resume = false;
             } else {
-                // A pass that did not help: back to the best so far.
+                // A pass that did not help: back to the best so far,
+                // where it started if `started_at_best`.
                 out.copy_from_slice(&ws.best);
                 bad.clone_from(&best_bad);
+                resume = started_at_best;
             }
+            at_best = true;
             if best == 0 {
                 break;
             }
@@ -1044,5 +1087,9 @@ fn add_work(a: unflip::Work, b: unflip::Work) -> unflip::Work {
         projections: a.projections + b.projections,
         patch_vertices: a.patch_vertices + b.patch_vertices,
         patches: a.patches + b.patches,
+        surface_patches: a.surface_patches + b.surface_patches,
+        retry_patches: a.retry_patches + b.retry_patches,
+        later_pass_patches: a.later_pass_patches + b.later_pass_patches,
+        replayed_rounds: a.replayed_rounds + b.replayed_rounds,
     }
 }

@@ -193,6 +193,17 @@ pub struct Work {
     pub patch_vertices: usize,
     /// Patch systems factored (one a round of [`unflip_within`]).
     pub patches: usize,
+    /// Of `patches`, those of the surface repair's rounds (the repair
+    /// against the surface's own turns, after the skin's).
+    pub surface_patches: usize,
+    /// Of `patches`, those of the adaptive retry (the repair again from
+    /// the deformed frame with the adaptive untangling budget).
+    pub retry_patches: usize,
+    /// Of `patches`, those of the second and later repair passes.
+    pub later_pass_patches: usize,
+    /// Rounds not solved again because a pass that did not help had
+    /// solved them from the same state ([`Replay`]): factorisations saved.
+    pub replayed_rounds: usize,
 }
 
 /// Limits of a frame's [`Work`].
@@ -270,6 +281,38 @@ pub struct RepairOptions {
     /// Most umbrella-smoothing steps on the vertices of triangles still
     /// turned over after the rounds. Default 20.
     pub smooth: usize,
+    /// Take a pass's rounds that the pass before solved from the same
+    /// state from that pass ([`Replay`]) instead of solving them again.
+    /// The result is the same bit for bit (the rounds are deterministic);
+    /// off only to measure what it saves. Default true.
+    pub replay: bool,
+}
+
+/// The state after a pass's Poisson rounds (before its smoothing), kept
+/// so the next pass, when it starts from the same state with the same
+/// triangles (the pass did not help and the repair went back to where it
+/// started), takes its first rounds from here instead of solving them
+/// again: the rounds are deterministic, so the next pass's first rounds
+/// would give this state bit for bit, and it only solves the rounds it
+/// adds (one more doubling). Allocated once per workspace.
+#[derive(Debug, Clone, Default)]
+pub struct Replay {
+    /// The frame after the rounds.
+    out: Vec<[f64; 3]>,
+    /// The triangles still turned over there.
+    bad: Vec<u32>,
+    /// Rounds solved and the rings of the next round.
+    rounds: usize,
+    rings: usize,
+    /// Whether the state above is one a next pass can take.
+    valid: bool,
+}
+
+impl Replay {
+    /// Forgets the kept state.
+    pub fn clear(&mut self) {
+        self.valid = false;
+    }
 }
 
 impl Default for RepairOptions {
@@ -280,6 +323,7 @@ impl Default for RepairOptions {
             healthy_cos: 0.3,
             weight: 4.0,
             smooth: 20,
+            replay: true,
         }
     }
 }
@@ -297,12 +341,18 @@ pub fn unflip(
     opts: &RepairOptions,
 ) -> Vec<u32> {
     let mut budget = Budget::new(WorkLimit::NONE);
-    unflip_within(tris, adj, source, out, turn, bad, opts, &mut budget)
+    unflip_within(tris, adj, source, out, turn, bad, opts, &mut budget, None)
 }
 
 /// [`unflip`] within `budget`: a round whose patch (free and fixed
 /// vertices) would go past the patch unknowns left is not solved (the
 /// smoothing still runs); the patch unknowns solved are added to it.
+///
+/// `replay`: `(kept, resume)`. With `resume` the call starts from the
+/// state `kept` holds (when it holds one: the caller asks only when `out`
+/// and `bad` are the state the last call that kept it started from, with
+/// the same options but `rounds`) and solves only the rounds after it;
+/// every call that runs all its rounds keeps its state in `kept`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn unflip_within(
     tris: &[[u32; 3]],
@@ -313,14 +363,29 @@ pub(crate) fn unflip_within(
     mut bad: Vec<u32>,
     opts: &RepairOptions,
     budget: &mut Budget,
+    mut replay: Option<(&mut Replay, bool)>,
 ) -> Vec<u32> {
     let n = out.len();
     let most_rings = opts.most_rings.max(1);
     let mut rings = most_rings.min(2);
+    let mut first = 0;
+    if let Some((kept, resume)) = replay.as_mut() {
+        if *resume && kept.valid && kept.rounds <= opts.rounds && kept.out.len() == n {
+            out.copy_from_slice(&kept.out);
+            bad.clone_from(&kept.bad);
+            rings = kept.rings;
+            first = kept.rounds;
+            budget.done.replayed_rounds += kept.rounds;
+        }
+        kept.valid = false;
+    }
+    // Whether every round ran (none stopped by the budget or a failed
+    // solve): only then is the state one a next pass can take.
+    let mut complete = true;
     // Triangles listed in `touch` (cleared after each round).
     let mut listed = vec![false; tris.len()];
     let mut union = Vec::new();
-    for _ in 0..opts.rounds {
+    for _ in first..opts.rounds {
         if bad.is_empty() {
             break;
         }
@@ -371,6 +436,7 @@ pub(crate) fn unflip_within(
         let fixed: Vec<u32> = (free as u32..patch.len() as u32).collect();
         let m = patch.len();
         if m > budget.patch_left() {
+            complete = false;
             break;
         }
         budget.done.patch_vertices += m;
@@ -429,9 +495,11 @@ pub(crate) fn unflip_within(
             Ok(x)
         })();
         let Ok(x) = solved else {
+            complete = false;
             break;
         };
         if x.iter().flatten().any(|c| !c.is_finite()) {
+            complete = false;
             break;
         }
         for (k, &v) in patch[..free].iter().enumerate() {
@@ -448,6 +516,16 @@ pub(crate) fn unflip_within(
         std::mem::swap(&mut bad, &mut union);
         bad.retain(|&t| is_turned_over(&tris[t as usize], source, out, turn));
         rings = rings.saturating_mul(2).min(most_rings);
+    }
+    if let Some((kept, _)) = replay {
+        if complete && opts.replay {
+            kept.out.resize(n, [0.0; 3]);
+            kept.out.copy_from_slice(out);
+            kept.bad.clone_from(&bad);
+            kept.rounds = opts.rounds;
+            kept.rings = rings;
+            kept.valid = true;
+        }
     }
     smooth(tris, adj, source, out, turn, &mut bad, opts.smooth);
     bad
@@ -646,6 +724,7 @@ mod tests {
                         bad.clone(),
                         &opts,
                         &mut budget,
+                        None,
                     );
                     (left.len(), budget.done)
                 };
@@ -672,6 +751,78 @@ mod tests {
             }
         }
         assert!(cases >= 6, "only {cases} generated folds turned over");
+    }
+
+    /// A pass resumed from the kept state of a pass with one round fewer
+    /// that started where it starts ([`Replay`]) gives the fresh pass's
+    /// frame and triangles bit for bit, solving only the round it adds;
+    /// over generated folds (one to three vertices pushed through a
+    /// sphere at several depths), rings bounded and not, 1-4 rounds.
+    #[test]
+    fn a_replayed_pass_is_the_fresh_pass() {
+        let m = midpoint(&midpoint(&midpoint(&icosahedron())));
+        let (tris, src) = (m.triangles(), m.positions().to_vec());
+        let adj = Adjacency::new(src.len(), tris);
+        let turn = vec![DQuat::IDENTITY; src.len()];
+        let (mut cases, mut moved) = (0, 0);
+        for pushed in [&[0u32][..], &[0, 7], &[0, 7, 40], &[3, 90, 200]] {
+            for depth in [-0.2, -0.5, 0.3, 0.6] {
+                let mut start = src.clone();
+                for &v in pushed {
+                    start[v as usize] = (DVec3::from_array(src[v as usize]) * depth).to_array();
+                }
+                let bad = turned_over(tris, &src, &start, &turn);
+                if bad.is_empty() {
+                    continue;
+                }
+                for most_rings in [2, usize::MAX] {
+                    for rounds in 1..4 {
+                        cases += 1;
+                        let opts = |rounds| RepairOptions {
+                            rounds,
+                            most_rings,
+                            ..Default::default()
+                        };
+                        let run = |rounds, replay: Option<(&mut Replay, bool)>| {
+                            let mut out = start.clone();
+                            let mut budget = Budget::new(WorkLimit::NONE);
+                            let left = unflip_within(
+                                tris,
+                                &adj,
+                                &src,
+                                &mut out,
+                                &turn,
+                                bad.clone(),
+                                &opts(rounds),
+                                &mut budget,
+                                replay,
+                            );
+                            (out, left, budget.done)
+                        };
+                        let (fresh, fresh_left, fresh_work) = run(rounds + 1, None);
+                        let mut kept = Replay::default();
+                        let (first, _, first_work) = run(rounds, Some((&mut kept, false)));
+                        moved += usize::from(first != start);
+                        let (again, again_left, again_work) =
+                            run(rounds + 1, Some((&mut kept, true)));
+                        let bits = |p: &[[f64; 3]]| -> Vec<u64> {
+                            p.iter().flatten().map(|c| c.to_bits()).collect()
+                        };
+                        assert_eq!(bits(&again), bits(&fresh), "{pushed:?} {depth} {rounds}");
+                        assert_eq!(again_left, fresh_left, "{pushed:?} {depth} {rounds}");
+                        assert_eq!(again_work.replayed_rounds, rounds);
+                        // Only the added round is solved, when it runs.
+                        assert!(again_work.patches <= 1);
+                        assert_eq!(
+                            again_work.patches + first_work.patches,
+                            fresh_work.patches,
+                            "{pushed:?} {depth} {rounds}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(cases >= 30 && moved > 0, "{cases} cases, {moved} moved");
     }
 
     /// The counting pass gives `to_rows`' matrix bit for bit on the repair

@@ -149,6 +149,10 @@ impl StageTally {
         self.work.patches += w.patches;
         self.work.patch_vertices += w.patch_vertices;
         self.work.projections += w.projections;
+        self.work.surface_patches += w.surface_patches;
+        self.work.retry_patches += w.retry_patches;
+        self.work.later_pass_patches += w.later_pass_patches;
+        self.work.replayed_rounds += w.replayed_rounds;
         self.frames += 1;
         let d = f.wall_ms[Stage::Deformation as usize];
         if f.repaired {
@@ -184,6 +188,10 @@ impl StageTally {
             patch_solves_per_frame: per_frame(self.work.patches),
             patch_unknowns_per_frame: per_frame(self.work.patch_vertices),
             projections_per_frame: per_frame(self.work.projections),
+            surface_patch_solves_per_frame: per_frame(self.work.surface_patches),
+            retry_patch_solves_per_frame: per_frame(self.work.retry_patches),
+            later_pass_patch_solves_per_frame: per_frame(self.work.later_pass_patches),
+            replayed_rounds_per_frame: per_frame(self.work.replayed_rounds),
             stages,
             repaired_frames: r.frames,
             deformation_repaired_mean_ms: r.mean_ms,
@@ -237,4 +245,14 @@ pub struct StageReport {
     pub patch_unknowns_per_frame: f64,
     /// The untangling's projections per output frame, mean.
     pub projections_per_frame: f64,
+    /// Of the patch solves, the surface repair's rounds', per output
+    /// frame ([`crate::deform::unflip::Work::surface_patches`]).
+    pub surface_patch_solves_per_frame: f64,
+    /// Of the patch solves, the adaptive retry's, per output frame.
+    pub retry_patch_solves_per_frame: f64,
+    /// Of the patch solves, the second and later passes', per output frame.
+    pub later_pass_patch_solves_per_frame: f64,
+    /// Rounds taken from the pass before instead of solved again, per
+    /// output frame ([`crate::deform::unflip::Replay`]).
+    pub replayed_rounds_per_frame: f64,
 }

@@ -786,3 +786,103 @@ fn the_parent_seams_and_surface_repair_leave_fewer_turned_over_after_the_repair(
         );
     }
 }
+
+/// The replay of a pass's rounds ([`unflip::Replay`]): the frames of CMU
+/// 02_02 deformed onto the real samba capture, with and without it, are
+/// the same bit for bit and turned over the same, under several repair
+/// configurations (the default; the skin's turns alone without the cloth
+/// stitch; two Poisson rounds a pass, which leave more passes that do not
+/// help); with it the rounds taken from the pass before are not solved
+/// again (the factorisations without it are those with it plus the rounds
+/// replayed), and some are, summed over the configurations (the offline
+/// sources of 02_02 with the defaults replay none, session 33: the check
+/// needs the others to have something to catch). Each stage's count is
+/// part of the total.
+#[test]
+#[ignore = "offline 02_02 sources replay no round in these configurations (session 33); live 02_02 does: needs live sources"]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn replayed_rounds_give_the_same_frames_for_fewer_solves() {
+    let Some(d) = common::data_dir() else { return };
+    let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
+    let raw = sources(&ch, &d, "cmu-amc/02/02_02.amc");
+    let n = ch.n();
+    assert!(DeformOptions::default().repair.replay);
+    let variants = [
+        ("default", DeformOptions::default()),
+        (
+            "skin turns, no stitch",
+            DeformOptions {
+                repair_turns: RepairTurns::Skin,
+                cloth_stitch: 0.0,
+                ..Default::default()
+            },
+        ),
+        (
+            "two rounds a pass",
+            DeformOptions {
+                repair: unflip::RepairOptions {
+                    rounds: 2,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+        ),
+    ];
+    let mut replayed_all = 0;
+    for (name, on) in variants {
+        let off = DeformOptions {
+            repair: unflip::RepairOptions {
+                replay: false,
+                ..on.repair
+            },
+            ..on
+        };
+        let (a, b) = (
+            Deformer::new(&ch, DeformMode::Part, &on).unwrap(),
+            Deformer::new(&ch, DeformMode::Part, &off).unwrap(),
+        );
+        let (mut wa, mut wb) = (a.workspace(), b.workspace());
+        let (mut oa, mut ob) = (vec![[0.0; 3]; n], vec![[0.0; 3]; n]);
+        let (mut replayed, mut solves_on, mut solves_off) = (0, 0, 0);
+        for k in 0..raw.report.frames {
+            let src = &raw.positions[k * n..(k + 1) * n];
+            let sp = ch.rig().frame_joints(src);
+            let ca = a.deform(&ch, src, &sp, &raw.query[k], &mut oa, &mut wa);
+            let cb = b.deform(&ch, src, &sp, &raw.query[k], &mut ob, &mut wb);
+            assert_eq!(ca, cb, "{name}: frame {k}");
+            assert!(
+                oa.iter()
+                    .flatten()
+                    .zip(ob.iter().flatten())
+                    .all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{name}: frame {k}: the replayed frame differs"
+            );
+            let (w, v) = (wa.repair_work(), wb.repair_work());
+            assert_eq!(v.replayed_rounds, 0, "{name}: frame {k}");
+            assert_eq!(
+                w.patches + w.replayed_rounds,
+                v.patches,
+                "{name}: frame {k}: {w:?} {v:?}"
+            );
+            for x in [w, v] {
+                assert!(
+                    x.surface_patches <= x.patches
+                        && x.later_pass_patches <= x.patches
+                        && x.retry_patches <= x.patches,
+                    "{name}: frame {k}: {x:?}"
+                );
+            }
+            replayed += w.replayed_rounds;
+            solves_on += w.patches;
+            solves_off += v.patches;
+        }
+        eprintln!(
+            "02_02 on samba, {name}: {solves_off} patch factorisations without the replay, {solves_on} with it ({replayed} rounds replayed)"
+        );
+        replayed_all += replayed;
+    }
+    assert!(
+        replayed_all > 0,
+        "no round replayed on 02_02 in any configuration"
+    );
+}
