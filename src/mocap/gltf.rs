@@ -174,7 +174,7 @@ fn key_rate(a: &NodeAnimation) -> (Option<f64>, Option<f64>) {
     let mut gaps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
     gaps.sort_by(f64::total_cmp);
     let dt = gaps[gaps.len() / 2];
-    if !(dt > 0.0) {
+    if dt.is_nan() || dt <= 0.0 {
         return (None, None);
     }
     let on_grid = t.iter().all(|&x| {
