@@ -25,7 +25,8 @@ pub struct ClipOpts {
     #[arg(long, value_name = "PATH")]
     pub asf: Option<std::path::PathBuf>,
     /// The take (animation stack) of an FBX clip, by name (default: the
-    /// first with keyed curves; `inspect` lists them).
+    /// first with keyed curves), or the animation of a glTF clip, by name
+    /// or index (default: the first that moves the skin); `inspect` lists them.
     #[arg(long, value_name = "NAME")]
     pub take: Option<String>,
     /// Length unit of the input: m, cm, mm, dm, inch, cmu (1/0.45 inch) or a

@@ -41,7 +41,7 @@ pub struct FbxOptions {
 
 /// Largest `frames × joints` a clip may hold (a corrupt take length must not
 /// allocate without bound): 200 million samples, about 10 GB of clip.
-const MAX_SAMPLES: f64 = 2e8;
+pub(super) const MAX_SAMPLES: f64 = 2e8;
 
 /// True when `bytes` start like an FBX file: the binary magic
 /// `Kaydara FBX Binary` or an ASCII file's `; FBX` header comment (after an
@@ -303,13 +303,13 @@ fn split(m: &ufbx::Matrix) -> (DMat3, DVec3) {
 
 /// The bones read as the clip's skeleton: scene node indices in depth-first
 /// order (parents first), each one's parent among them, and joint names.
-struct Skeleton {
+pub(super) struct Skeleton {
     /// Scene node index of each joint.
-    order: Vec<usize>,
+    pub(super) order: Vec<usize>,
     /// Parent joint of each joint (an index into `order`).
-    parent: Vec<Option<usize>>,
+    pub(super) parent: Vec<Option<usize>>,
     /// Joint names without namespaces (unless that makes two alike).
-    names: Vec<String>,
+    pub(super) names: Vec<String>,
 }
 
 /// How the take is sampled: its animation (`None`: the rest pose), the
@@ -324,10 +324,10 @@ struct Sampling<'a> {
 /// The rest (unanimated) skeleton in the project's axes: each joint's
 /// world rotation inverted (the motion is expressed relative to it), its
 /// world position and its offset from its parent.
-struct Rest {
-    rot_inv: Vec<DMat3>,
-    pos: Vec<DVec3>,
-    offsets: Vec<DVec3>,
+pub(super) struct Rest {
+    pub(super) rot_inv: Vec<DMat3>,
+    pub(super) pos: Vec<DVec3>,
+    pub(super) offsets: Vec<DVec3>,
 }
 
 fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<Clip, MocapError> {
@@ -666,7 +666,12 @@ fn sample_motion(
 /// Step 5 of [`clip_of_scene`]: the joints, with six channels for the root
 /// and for every joint whose translation moves away from its offset, three
 /// rotations for the rest.
-fn joints_of(skel: &Skeleton, rest: &Rest, translations: &[DVec3], frames: usize) -> Vec<Joint> {
+pub(super) fn joints_of(
+    skel: &Skeleton,
+    rest: &Rest,
+    translations: &[DVec3],
+    frames: usize,
+) -> Vec<Joint> {
     let n = skel.order.len();
     let extent = rest
         .pos

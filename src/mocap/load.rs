@@ -1,5 +1,5 @@
 //! Reading any supported clip file by its extension, or by its first bytes
-//! for an FBX file with another name (the rig-aware
+//! for an FBX or binary glTF file with another name (the rig-aware
 //! loader that decides a BVH's units and up axis is [`crate::rig::load_clip`]).
 
 use super::asfamc::{AmcOptions, read_amc, read_asf};
@@ -7,6 +7,7 @@ use super::bvh::{BvhOptions, read_bvh};
 use super::clip::Clip;
 use super::error::MocapError;
 use super::fbx::{FbxOptions, is_fbx, read_fbx};
+use super::gltf::{GltfClipOptions, is_glb, read_gltf_clip};
 use std::path::{Path, PathBuf};
 
 /// A mocap file format.
@@ -20,6 +21,9 @@ pub enum MocapFormat {
     Asf,
     /// Autodesk FBX, binary or ASCII (skeleton and one take).
     Fbx,
+    /// glTF 2.0 (`.gltf`, `.glb`): a skin and one animation
+    /// ([`super::gltf`]). Also a character file: `inspect` reads it as one.
+    Gltf,
 }
 
 impl MocapFormat {
@@ -31,12 +35,13 @@ impl MocapFormat {
             "amc" => MocapFormat::Amc,
             "asf" => MocapFormat::Asf,
             "fbx" => MocapFormat::Fbx,
+            "gltf" | "glb" => MocapFormat::Gltf,
             _ => return None,
         })
     }
 
     /// The format of a path by extension, else by its first bytes (an FBX
-    /// file's magic: `Kaydara FBX Binary` or `; FBX`).
+    /// file's magic: `Kaydara FBX Binary` or `; FBX`; a GLB's `glTF`).
     pub fn detect(path: &Path) -> Option<MocapFormat> {
         MocapFormat::of(path).or_else(|| {
             use std::io::Read;
@@ -44,7 +49,11 @@ impl MocapFormat {
             let f =
                 crate::util::fsutil::open_input(path, crate::util::fsutil::MAX_INPUT_BYTES).ok()?;
             let k = f.take(64).read(&mut head).ok()?;
-            is_fbx(&head[..k]).then_some(MocapFormat::Fbx)
+            if is_fbx(&head[..k]) {
+                Some(MocapFormat::Fbx)
+            } else {
+                is_glb(&head[..k]).then_some(MocapFormat::Gltf)
+            }
         })
     }
 }
@@ -85,12 +94,14 @@ pub fn find_asf(amc: &Path) -> Result<PathBuf, MocapError> {
     }
 }
 
-/// Reads a BVH, AMC (with its ASF), ASF or FBX file, in file units. AMC,
-/// ASF and FBX clips carry their units and up axis; a BVH's are left at the reader's
+/// Reads a BVH, AMC (with its ASF), ASF, FBX or glTF file, in file units.
+/// AMC, ASF, FBX and glTF clips carry their units and up axis; a BVH's are left at the reader's
 /// defaults (deciding them needs the rig convention:
 /// [`crate::rig::load_clip`] does it). `fps` overrides the frame rate, `asf`
 /// names the ASF of an AMC (default: the only `.asf` in its folder), `take`
-/// the FBX animation stack (default: the first with keyed curves).
+/// the FBX animation stack (default: the first with keyed curves) or the
+/// glTF animation, by name or index (default: the first that drives the
+/// skeleton).
 pub fn read_clip(
     path: &Path,
     fps: Option<f64>,
@@ -100,13 +111,13 @@ pub fn read_clip(
     let fmt = MocapFormat::detect(path).ok_or_else(|| {
         MocapError::invalid(
             path,
-            "unknown mocap format (expected .bvh, .amc, .asf or .fbx)",
+            "unknown mocap format (expected .bvh, .amc, .asf, .fbx, .gltf or .glb)",
         )
     })?;
-    if take.is_some() && fmt != MocapFormat::Fbx {
+    if take.is_some() && !matches!(fmt, MocapFormat::Fbx | MocapFormat::Gltf) {
         return Err(MocapError::invalid(
             path,
-            "--take names an FBX animation stack; this is not an FBX file",
+            "`take` names an FBX animation stack or a glTF animation; this is neither an FBX nor a glTF file",
         ));
     }
     Ok(match fmt {
@@ -125,6 +136,13 @@ pub fn read_clip(
         MocapFormat::Fbx => read_fbx(
             path,
             &FbxOptions {
+                fps,
+                take: take.map(str::to_string),
+            },
+        )?,
+        MocapFormat::Gltf => read_gltf_clip(
+            path,
+            &GltfClipOptions {
                 fps,
                 take: take.map(str::to_string),
             },

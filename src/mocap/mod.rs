@@ -1,4 +1,5 @@
-//! Skeletal motion capture: the [`Clip`], its readers (BVH, ASF/AMC, FBX), BVH
+//! Skeletal motion capture: the [`Clip`], its readers (BVH, ASF/AMC, FBX,
+//! glTF skin animation), BVH
 //! writer, forward kinematics, resampling and unit/up-axis normalisation.
 
 pub mod asfamc;
@@ -8,6 +9,7 @@ mod error;
 pub mod euler;
 pub mod fbx;
 mod fk;
+pub mod gltf;
 mod load;
 mod resample;
 pub mod skin;

@@ -89,6 +89,24 @@ pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
         let h = map.as_ref().and_then(|m| stature(&clip, m));
         clip.units = crate::mocap::fbx::units_with_stature(&clip.units, h);
     }
+    if MocapFormat::detect(path) == Some(MocapFormat::Gltf) {
+        // glTF's metre and Y up (glTF 2.0 §3.4) checked against the body:
+        // the stature, as for FBX, and head above pelvis (a Z-up skeleton
+        // written without the root's turn says Z).
+        let map = (opts.rig_map.clone()).or_else(|| detect_clip(&clip).ok().map(|d| d.map));
+        if opts.units.is_none() {
+            let h = map.as_ref().and_then(|m| stature(&clip, m));
+            clip.units = crate::mocap::fbx::units_with_stature(&clip.units, h);
+        }
+        if let Some(m) = &map {
+            let (up, why) = guess_up(&clip, Some(m));
+            if up != UpAxis::Y && why.starts_with("head above pelvis") {
+                clip.up = up;
+                clip.up_reason =
+                    format!("glTF is Y up (glTF 2.0 §3.4), but the body is not: {why}");
+            }
+        }
+    }
     if let Some(u) = &opts.units {
         clip.units = u.clone();
     }

@@ -149,7 +149,9 @@ pub struct InspectOptions {
 
 /// Reads `path` and reports what it holds.
 pub fn inspect(path: &Path, opts: &InspectOptions) -> Result<Report, InspectError> {
-    if let Some(fmt) = MocapFormat::of(path) {
+    // A glTF is a character first: its report lists the animations a
+    // clip reader's `take` chooses among.
+    if let Some(fmt) = MocapFormat::of(path).filter(|f| *f != MocapFormat::Gltf) {
         return inspect_mocap(path, fmt, opts).map(Report::Mocap);
     }
     // Before the JSON files: a rig cache is a header line, then the rig.
@@ -429,8 +431,8 @@ impl Report {
                 if r.morph_targets > 0 {
                     let _ = writeln!(s, "  morph       {} targets", r.morph_targets);
                 }
-                for (n, d) in &r.animations {
-                    let _ = writeln!(s, "  animation   '{n}' {d:.2} s");
+                for (i, (n, d)) in r.animations.iter().enumerate() {
+                    let _ = writeln!(s, "  animation   {i} '{n}' {d:.2} s");
                 }
                 for p in &r.problems {
                     let _ = writeln!(s, "  problem: {p}");

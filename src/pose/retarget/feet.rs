@@ -359,8 +359,9 @@ pub(super) fn bend_toes(
 
 /// `r` with each foot bone (ankle → toe) turned about its lateral axis to
 /// the elevation the clip's foot has when flat on its ground: the median
-/// over the frames where both the foot's ankle and toe are within 2 cm of
-/// their lowest (5th percentile) heights, unless it is more than 5° off
+/// over the frames where both the foot's ankle and toe are within 2.4 % of
+/// the leg's length (2 cm on a CMU actor) of their lowest (5th
+/// percentile) heights, unless it is more than 5° off
 /// the elevation the foot holds longest while planted on a support
 /// ([`held_elevation`] over the frames where it touches the floor or a
 /// block it stands on, `support`'s [`Support::touch`], or stands on a
@@ -376,7 +377,10 @@ pub(super) fn bend_toes(
 /// blocks) was taken for flat: on the blocks the character's left foot
 /// stood toes up by 50-60°, its heel 3-4 cm through the block's top. On
 /// a flat capture the two agree (within 3° on the README's walks and
-/// runs) and the lowest heights are kept.
+/// runs) and the lowest heights are kept. The band is a fraction of the
+/// leg, not 2 cm (session 32), so a small body's foot rolling onto its
+/// ball is not counted flat: a walk of a 1.1 m body (legs 0.54 m) stood
+/// the character's foot 16° toes-down where the clip's was flat.
 ///
 /// A clip that never stands a foot flat for five frames nor plants it
 /// (an in-place walk cycle, its feet sliding back under the body: Kenney's
@@ -396,7 +400,10 @@ pub(super) fn flat_feet(r: &Pose, mocap: &[Pose], support: &Support) -> Pose {
         h.get(h.len() / 20).copied()
     };
     let elevation = |f: DVec3| (f.y / f.length()).clamp(-1.0, 1.0).asin();
-    let still = 0.02 * leg_length(r).max(1e-9);
+    let leg = leg_length(r).max(1e-9);
+    let still = 0.02 * leg;
+    // "Near the lowest": 2.4 % of the leg (2 cm on CMU's 0.83 m legs).
+    let band = 0.024 * leg;
     for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
         .into_iter()
         .enumerate()
@@ -424,7 +431,7 @@ pub(super) fn flat_feet(r: &Pose, mocap: &[Pose], support: &Support) -> Pose {
         // lowest, and of them those where the foot touches its ground.
         let (lowest, few) = match (low(ankle), low(toe)) {
             (Some(la), Some(lt)) => {
-                let near = |i: &usize| mocap[*i][a].y <= la + 0.02 && mocap[*i][t].y <= lt + 0.02;
+                let near = |i: &usize| mocap[*i][a].y <= la + band && mocap[*i][t].y <= lt + band;
                 let median = |mut e: Vec<f64>| {
                     e.sort_by(f64::total_cmp);
                     e.get(e.len() / 2).copied()

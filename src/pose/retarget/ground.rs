@@ -163,7 +163,10 @@ pub(super) fn held_height(h: &[f64], band: f64) -> f64 {
 /// height is the footfall's lowest. A block 3-6 cm high is still the
 /// floor (CMU 131_02 holds a foot 3.8 cm above its floor for 6 frames;
 /// as a step it raised samba's penetration maximum 0.50 → 1.18 cm),
-/// which the foot on it does not touch; [`Support::held`] has it.
+/// which the foot on it does not touch; [`Support::held`] has it. The
+/// frames of the clip's trailing hold ([`frozen_frames`]: exact repeats
+/// of the whole pose up to the end) count neither toward a step's 5
+/// frames nor as its rest.
 pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
     clip_support_on(mocap, leg, None)
 }
@@ -256,6 +259,7 @@ pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support 
     let mut rests: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];
     let still = 0.02 * leg.max(1e-9);
     let band = contact_band(leg);
+    let frozen = frozen_frames(mocap);
     for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
         .into_iter()
         .enumerate()
@@ -313,10 +317,15 @@ pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support 
             // the two in some frame of the footfall (a leg held still in
             // the air, the other foot on the floor, is no step; nor a
             // gliding foot hovering over it).
+            // The clip's trailing hold (a take run past its last key) is
+            // no evidence of standing: held in the air, it made a step of
+            // nothing.
+            let live = run.clone().filter(|&i| !frozen[i]).count();
+            let rests_live = run.clone().any(|i| resting(i) && !frozen[i]);
             let bears = run
                 .clone()
                 .any(|i| low(&mocap[i]).y <= foot_height(&mocap[i]) + 1e-9);
-            if sup > floor + 2.0 * band && !(bears && !rests.is_empty() && run.len() >= 5) {
+            if sup > floor + 2.0 * band && !(bears && rests_live && live >= 5) {
                 continue;
             }
             for i in run.clone() {
@@ -370,6 +379,27 @@ pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support 
         rests,
         band,
     }
+}
+
+/// Per frame, whether it belongs to the clip's trailing hold: the frames
+/// from the first of a run that repeats the whole pose before it exactly
+/// (every joint within 1e-9 of the body's size) to the clip's end. A take
+/// that runs past its last key holds that key (Kenney's Maya walk holds
+/// its first pose, the loop's last key, over its last five frames, both
+/// feet in the air, and that hold read as a 7.5 cm step under the right
+/// foot: the result floated 8 cm over its last six frames). Only the end:
+/// a pose held still elsewhere (a figure standing on a block) is motion.
+pub(super) fn frozen_frames(mocap: &[Pose]) -> Vec<bool> {
+    let same = |t: usize| {
+        let (a, b) = (&mocap[t - 1], &mocap[t]);
+        let size = a[C::Pelvis.index()].distance(a[C::Head.index()]).max(1e-9);
+        (0..Canonical::COUNT).all(|j| a[j].distance(b[j]) <= 1e-9 * size)
+    };
+    let mut start = mocap.len();
+    while start > 1 && same(start - 1) {
+        start -= 1;
+    }
+    (0..mocap.len()).map(|t| t >= start).collect()
 }
 
 /// Fills the `None`s of `v` linearly between their known neighbours (the

@@ -123,6 +123,17 @@ fn readers() -> Vec<(&'static str, Reader)> {
                 },
             ))
         }),
+        // The glTF clip reader (skin + animation as a clip), at 1 fps too.
+        ("gltf-clip", |b| {
+            drop(surfmotion::mocap::gltf::parse_gltf_clip(
+                b,
+                Path::new("f.glb"),
+                &surfmotion::mocap::gltf::GltfClipOptions {
+                    fps: Some(1.0),
+                    take: None,
+                },
+            ))
+        }),
     ]
 }
 
@@ -160,7 +171,7 @@ fn seeds(fmt: &str) -> Vec<Vec<u8>> {
         "ply" => vec![ply::encode_ply(&mesh, None)],
         "pc2" => vec![pc2::encode_pc2(4, seq.all_positions())],
         "mdd" => vec![mdd::encode_mdd(4, seq.all_positions(), 30.0)],
-        "gltf" => vec![surfmotion::mesh::io::glb::encode_glb(&seq, None).unwrap()],
+        "gltf" | "gltf-clip" => vec![surfmotion::mesh::io::glb::encode_glb(&seq, None).unwrap()],
         "landmarks" => vec![br#"{"chin": 1, "groin": [0, 1, 0], "l_wrist": 2, "r_wrist": 3, "l_elbow": 4, "r_elbow": 5, "l_knee": 6, "r_knee": [1e308, -0.5, 0]}"#.to_vec()],
         "markers" => vec![br#"{"triangle_count": 100, "markers": [{"name": "l_forearm/0/1", "triangle": 7, "bone": "l_elbow"}, {"name": "x", "triangle": 99}]}"#.to_vec()],
         "parts" => vec![br#"{"torso": [0, 1], "head": [2], "l_shin": [3, 3]}"#.to_vec()],
@@ -188,7 +199,7 @@ fn real_seeds(fmt: &str) -> Vec<Vec<u8>> {
             "mocap/cmu-bvh-ccrig/002_03.bvh",
         ],
         "asf" => &["mocap/cmu-amc/02/02.asf"],
-        "gltf" => &["gltf/RiggedSimple/RiggedSimple.glb", "gltf/Fox/Fox.glb"],
+        "gltf" | "gltf-clip" => &["gltf/RiggedSimple/RiggedSimple.glb", "gltf/Fox/Fox.glb"],
         "fbx" => &[
             "fbx/ufbx/max_transformed_skin_7500_binary.fbx",
             "fbx/ufbx/maya_game_sausage_7500_ascii_combined.fbx",

@@ -2,6 +2,7 @@
 
 mod cartwheel;
 mod fbx_units;
+mod gltf_clip;
 mod one_capture;
 mod procedural;
 mod reference;

@@ -251,41 +251,75 @@ impl GltfAsset {
         MeshSequence::new(self.mesh.clone(), out, Some(fps)).map_err(MeshError::from)
     }
 
-    /// World positions of the skin's joints (in skin order) at time `t` of
-    /// node animation `index` (linear, slerp or step keys; the rest TRS of
-    /// nodes the animation does not drive). `None` without a skin or that
-    /// animation. For the joint mapping of rigged characters
-    /// ([`GltfAsset::skin_clip`]).
-    pub(crate) fn joint_positions_at(&self, index: usize, t: f32) -> Option<Vec<glam::DVec3>> {
+    /// World matrices of every node at time `t` of node animation `anim`
+    /// (`None`: every node at its rest TRS) into `world`, with `trs` as
+    /// scratch: channels sampled (linear, slerp or step keys; cubic-spline
+    /// keys by their values), the rest TRS of nodes the animation does not
+    /// drive, composed down the hierarchy (glTF 2.0 §3.5.3: `T · R · S`).
+    /// Both vectors are resized to the node count, so a caller that keeps
+    /// them allocates once. Nodes outside the scene keep the identity.
+    /// Returns false when there is no animation `anim`.
+    pub fn node_worlds_at(
+        &self,
+        anim: Option<usize>,
+        t: f32,
+        trs: &mut Vec<(glam::DVec3, glam::DQuat, glam::DVec3)>,
+        world: &mut Vec<glam::DMat4>,
+    ) -> bool {
         use glam::{DMat4, DQuat, DVec3};
-        self.skin.as_ref()?;
-        let anim = self.node_animations.get(index)?;
         let g = &self.graph;
-        let mut trs = g.rest.clone();
-        for ch in &anim.channels {
-            let Some(slot) = trs.get_mut(ch.node) else {
-                continue;
+        trs.clone_from(&g.rest);
+        if let Some(a) = anim {
+            let Some(anim) = self.node_animations.get(a) else {
+                return false;
             };
-            let v = sample(ch, t);
-            match ch.path {
-                TrsPath::Translation => slot.0 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
-                TrsPath::Rotation => {
-                    slot.1 = DQuat::from_xyzw(v[0] as f64, v[1] as f64, v[2] as f64, v[3] as f64)
-                        .normalize()
+            for ch in &anim.channels {
+                let Some(slot) = trs.get_mut(ch.node) else {
+                    continue;
+                };
+                let v = sample(ch, t);
+                match ch.path {
+                    TrsPath::Translation => {
+                        slot.0 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+                    }
+                    TrsPath::Rotation => {
+                        slot.1 =
+                            DQuat::from_xyzw(v[0] as f64, v[1] as f64, v[2] as f64, v[3] as f64)
+                                .normalize()
+                    }
+                    TrsPath::Scale => slot.2 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
                 }
-                TrsPath::Scale => slot.2 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
             }
         }
-        let mut world = vec![DMat4::IDENTITY; trs.len()];
+        world.clear();
+        world.resize(trs.len(), DMat4::IDENTITY);
         for &n in &g.order {
-            let local = DMat4::from_scale_rotation_translation(trs[n].2, trs[n].1, trs[n].0);
-            world[n] = match g.parent[n] {
-                Some(p) => world[p] * local,
+            let Some(&(tr, r, sc)) = trs.get(n) else {
+                continue;
+            };
+            let local = DMat4::from_scale_rotation_translation(sc, r, tr);
+            world[n] = match g.parent[n].and_then(|p| world.get(p)) {
+                Some(pw) => *pw * local,
                 None => local,
             };
         }
+        true
+    }
+
+    /// World positions of the skin's joints (in skin order) at time `t` of
+    /// node animation `index` ([`GltfAsset::node_worlds_at`]). `None`
+    /// without a skin or that animation. For the joint mapping of rigged
+    /// characters ([`GltfAsset::skin_clip`]).
+    pub(crate) fn joint_positions_at(&self, index: usize, t: f32) -> Option<Vec<glam::DVec3>> {
+        use glam::DVec3;
+        self.skin.as_ref()?;
+        let (mut trs, mut world) = (Vec::new(), Vec::new());
+        if !self.node_worlds_at(Some(index), t, &mut trs, &mut world) {
+            return None;
+        }
         Some(
-            g.skin_joints
+            self.graph
+                .skin_joints
                 .iter()
                 .map(|&jn| world.get(jn).map_or(DVec3::ZERO, |m| m.w_axis.truncate()))
                 .collect(),
