@@ -48,6 +48,10 @@ pub struct Body<'a> {
     pub thigh_hip: bool,
     /// Where the left-right axis is read ([`super::options::AutoOptions::facing`]).
     pub facing: Facing,
+    /// Knees at a boundary that is no joint moved ([`super::options::AutoOptions::split_knee`]).
+    pub split_knee: bool,
+    /// Loose fixed points moved onto the limb ([`super::options::AutoOptions::guard_pivots`]).
+    pub guard_pivots: bool,
 }
 
 /// The five chains' tips and the trunk they meet in.
@@ -126,7 +130,12 @@ impl Chains {
     pub fn limb(&self, body: &Body, tip: u32, exp: &[f64; 3], tol: f64, ring_knee: bool) -> Limb {
         let (rest, height) = (body.rest, body.height);
         let p = humanoid::path_to_source(rest, &self.prev, tip);
-        let c = crossings(rest, body.nb, &body.dec, &p, 0.05);
+        let mut c = crossings(rest, body.nb, &body.dec, &p, 0.05);
+        if body.guard_pivots {
+            for x in &mut c {
+                super::straddle::guard_pivot(body, &p, x);
+            }
+        }
         debug_chain("limb", body, &c, height);
         // Up to the limb's entry into the trunk.
         let end = c
@@ -157,8 +166,21 @@ impl Chains {
         // landmark in the leg's cross-section. Not the elbow: samba's
         // forearm ring lies as high as its fixed point or 2.5 cm higher
         // (the forearm's rigid part reaches over the olecranon).
+        //
+        // A knee matched at a boundary that is no joint (samba under
+        // `merge=settle`: the shin cut at mid-shin, its upper half in one
+        // part with the skirt's hem) is moved to where that part's two
+        // motions meet ([`super::straddle::split_knee`]); the ring there
+        // is already the split's.
         if ring_knee && let Some(k) = m[1].as_mut() {
-            if let Some(c) =
+            let split = body
+                .split_knee
+                .then(|| super::straddle::split_knee(body, tip, &p, k, exp[2] * height))
+                .flatten()
+                .filter(|s| (s.from_tip - exp[1] * height).abs() <= tol * height);
+            if let Some(s) = split {
+                *k = s;
+            } else if let Some(c) =
                 humanoid::boundary_centre(rest, body.nb, &body.dec.labels, k.distal, k.proximal)
             {
                 k.joint.position = c;

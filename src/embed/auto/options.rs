@@ -35,6 +35,19 @@ pub struct AutoOptions {
     /// rest frame ([`Facing`]). Default [`Facing::Trunk`] (session 28;
     /// `facing=hips` in [`AUTORIG_ENV`] gives sessions 20-27's).
     pub facing: Facing,
+    /// A leg's knee matched at a boundary that is no joint (the parts
+    /// either side of it move as one once the part above is split in two
+    /// by its motion) moved to where the split part's two motions meet
+    /// ([`super::straddle::split_knee`], session 33). Default true
+    /// (`knee=split`; `knee=crossing` in [`AUTORIG_ENV`] gives sessions
+    /// 20-32's).
+    pub split_knee: bool,
+    /// A joint's fixed point farther than [`super::straddle::LOOSE`] of the
+    /// height from its own limb's path moved to the centre of its two
+    /// parts' boundary ([`super::straddle::guard_pivot`], session 33).
+    /// Default true (`pivot=guarded`; `pivot=free` in [`AUTORIG_ENV`]
+    /// gives sessions 20-32's).
+    pub guard_pivots: bool,
     /// The decomposition's settings.
     pub decompose: DecomposeOptions,
 }
@@ -47,6 +60,8 @@ impl Default for AutoOptions {
             frames: FrameSample::InOrder,
             thigh_hip: false,
             facing: Facing::Trunk,
+            split_knee: true,
+            guard_pivots: true,
             decompose: DecomposeOptions::default(),
         }
     }
@@ -140,6 +155,8 @@ impl FrameSample {
 /// decomposition's [`super::decompose::Seeding`]), `salt=N` (its
 /// [`super::decompose::DecomposeOptions::salt`]), `merge=greedy|settle|settle-split`
 /// (what follows its merges, [`super::decompose::MergeRule`]),
+/// `knee=split|crossing` ([`AutoOptions::split_knee`]),
+/// `pivot=guarded|free` ([`AutoOptions::guard_pivots`]),
 /// `patches=position|vertex0` (the rest frame's contact patches,
 /// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
 pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
@@ -173,7 +190,7 @@ pub(crate) fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, patches=position|vertex0, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, patches=position|vertex0, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -194,6 +211,10 @@ pub(crate) fn apply_override(
             "merge" => {
                 auto.decompose.merge = super::decompose::MergeRule::parse(v).ok_or_else(bad)?
             }
+            "knee" if v == "split" => auto.split_knee = true,
+            "knee" if v == "crossing" => auto.split_knee = false,
+            "pivot" if v == "guarded" => auto.guard_pivots = true,
+            "pivot" if v == "free" => auto.guard_pivots = false,
             "patches" if v == "position" => rule.contact.seed_by_position = true,
             "patches" if v == "vertex0" => rule.contact.seed_by_position = false,
             "max" => {
