@@ -7,6 +7,7 @@ use super::decompose::Decomposition;
 use super::humanoid::{self, Crossing, along, crossings, geodesic, match_joints};
 use super::options::{AutoError, Facing};
 use super::sides::{TrunkFrames, first_is_left};
+use super::straddle::KneeCheck;
 use glam::DVec3;
 
 /// A limb: its tip, its path to the trunk (vertex, distance from the
@@ -167,21 +168,37 @@ impl Chains {
         // forearm ring lies as high as its fixed point or 2.5 cm higher
         // (the forearm's rigid part reaches over the olecranon).
         //
-        // A knee matched at a boundary that is no joint (samba under
-        // `merge=settle`: the shin cut at mid-shin, its upper half in one
-        // part with the skirt's hem) is moved to where that part's two
-        // motions meet ([`super::straddle::split_knee`]); the ring there
-        // is already the split's.
-        if ring_knee && let Some(k) = m[1].as_mut() {
-            let split = body
-                .split_knee
-                .then(|| super::straddle::split_knee(body, tip, &p, k, exp[2] * height))
-                .flatten()
-                .filter(|s| (s.from_tip - exp[1] * height).abs() <= tol * height);
-            if let Some(s) = split {
-                *k = s;
-            } else if let Some(c) =
-                humanoid::boundary_centre(rest, body.nb, &body.dec.labels, k.distal, k.proximal)
+        // A knee matched at a boundary that is no joint
+        // ([`super::straddle::split_knee`]): when the part above it
+        // straddles the knee, the knee is where that part's two motions
+        // meet (the ring there is the split's); when the boundary lies
+        // inside one bone (samba under `merge=settle`: the foot and the
+        // lower shin in one part, the shin cut at mid-shin), the knee is
+        // the next boundary that bends near the knee's distance, or placed
+        // by proportion.
+        if ring_knee && let Some(k) = m[1] {
+            let check = match body.split_knee {
+                true => super::straddle::split_knee(body, tip, &p, &k, exp[2] * height),
+                false => KneeCheck::Joint,
+            };
+            let near = |x: &Crossing| (x.from_tip - exp[1] * height).abs() <= tol * height;
+            m[1] = match check {
+                KneeCheck::Above(s) if near(&s) => Some(s),
+                // The next boundary that bends near the knee's distance.
+                KneeCheck::InsideBelow => c
+                    .iter()
+                    .find(|x| {
+                        x.from_tip > k.from_tip
+                            && x.joint.articulation_deg >= MIN_BEND_DEG
+                            && near(x)
+                    })
+                    .copied(),
+                _ => Some(k),
+            };
+            if let Some(k) = m[1].as_mut()
+                && !matches!(check, KneeCheck::Above(s) if near(&s))
+                && let Some(c) =
+                    humanoid::boundary_centre(rest, body.nb, &body.dec.labels, k.distal, k.proximal)
             {
                 k.joint.position = c;
             }
