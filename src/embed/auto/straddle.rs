@@ -16,6 +16,12 @@
 //!   along the limb); when the half next to the boundary moves with the
 //!   part across it (bending less than [`MIN_BEND_DEG`]) while the two
 //!   halves bend at least that much, the boundary lies inside one bone.
+//!   Not the default ([`super::options::AutoOptions::split_knee`]): on
+//!   salt 1 the halves bend 11.5° (below) and 13.9° (above) but the half
+//!   next to the cut bends 29.3° and 23.9° against the other part's
+//!   whole motion (which mixes the foot, or the hem, in), so no knee
+//!   moved in 20 draws. The next step compares the halves next to the
+//!   cut with each other.
 //! - [`guard_pivot`]: a joint's fixed point (Le & Deng 2014, Sec. 5) is
 //!   loose when the joint barely bends; one of crane's (the "shoulder" of
 //!   `merge=settle,salt=3`, bending 6°) lay 23 cm across the body. A fixed
