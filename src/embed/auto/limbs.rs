@@ -7,6 +7,7 @@ use super::decompose::Decomposition;
 use super::humanoid::{self, Crossing, along, crossings, geodesic, match_joints};
 use super::options::{AutoError, Facing};
 use super::sides::{TrunkFrames, first_is_left};
+use super::straddle::KneeCheck;
 use glam::DVec3;
 
 /// A limb: its tip, its path to the trunk (vertex, distance from the
@@ -48,6 +49,10 @@ pub struct Body<'a> {
     pub thigh_hip: bool,
     /// Where the left-right axis is read ([`super::options::AutoOptions::facing`]).
     pub facing: Facing,
+    /// Knees at a boundary that is no joint moved ([`super::options::AutoOptions::split_knee`]).
+    pub split_knee: bool,
+    /// Loose fixed points moved onto the limb ([`super::options::AutoOptions::guard_pivots`]).
+    pub guard_pivots: bool,
 }
 
 /// The five chains' tips and the trunk they meet in.
@@ -126,7 +131,12 @@ impl Chains {
     pub fn limb(&self, body: &Body, tip: u32, exp: &[f64; 3], tol: f64, ring_knee: bool) -> Limb {
         let (rest, height) = (body.rest, body.height);
         let p = humanoid::path_to_source(rest, &self.prev, tip);
-        let c = crossings(rest, body.nb, &body.dec, &p, 0.05);
+        let mut c = crossings(rest, body.nb, &body.dec, &p, 0.05);
+        if body.guard_pivots {
+            for x in &mut c {
+                super::straddle::guard_pivot(body, &p, x);
+            }
+        }
         debug_chain("limb", body, &c, height);
         // Up to the limb's entry into the trunk.
         let end = c
@@ -157,9 +167,38 @@ impl Chains {
         // landmark in the leg's cross-section. Not the elbow: samba's
         // forearm ring lies as high as its fixed point or 2.5 cm higher
         // (the forearm's rigid part reaches over the olecranon).
-        if ring_knee && let Some(k) = m[1].as_mut() {
-            if let Some(c) =
-                humanoid::boundary_centre(rest, body.nb, &body.dec.labels, k.distal, k.proximal)
+        //
+        // A knee matched at a boundary that is no joint
+        // ([`super::straddle::split_knee`]): when the part above it
+        // straddles the knee, the knee is where that part's two motions
+        // meet (the ring there is the split's); when the boundary lies
+        // inside one bone (samba under `merge=settle`: the foot and the
+        // lower shin in one part, the shin cut at mid-shin), the knee is
+        // the next boundary that bends near the knee's distance, or placed
+        // by proportion.
+        if ring_knee && let Some(k) = m[1] {
+            let check = match body.split_knee {
+                true => super::straddle::split_knee(body, tip, &p, &k, exp[2] * height),
+                false => KneeCheck::Joint,
+            };
+            let near = |x: &Crossing| (x.from_tip - exp[1] * height).abs() <= tol * height;
+            m[1] = match check {
+                KneeCheck::Above(s) if near(&s) => Some(s),
+                // The next boundary that bends near the knee's distance.
+                KneeCheck::InsideBelow => c
+                    .iter()
+                    .find(|x| {
+                        x.from_tip > k.from_tip
+                            && x.joint.articulation_deg >= MIN_BEND_DEG
+                            && near(x)
+                    })
+                    .copied(),
+                _ => Some(k),
+            };
+            if let Some(k) = m[1].as_mut()
+                && !matches!(check, KneeCheck::Above(s) if near(&s))
+                && let Some(c) =
+                    humanoid::boundary_centre(rest, body.nb, &body.dec.labels, k.distal, k.proximal)
             {
                 k.joint.position = c;
             }

@@ -24,4 +24,5 @@ pub mod report;
 pub mod rig;
 pub mod seeding;
 pub mod sides;
+pub mod straddle;
 pub mod up;

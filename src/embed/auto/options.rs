@@ -35,6 +35,22 @@ pub struct AutoOptions {
     /// rest frame ([`Facing`]). Default [`Facing::Trunk`] (session 28;
     /// `facing=hips` in [`AUTORIG_ENV`] gives sessions 20-27's).
     pub facing: Facing,
+    /// A leg's knee matched at a boundary that is no joint checked by
+    /// splitting the parts beside it by their motion
+    /// ([`super::straddle::split_knee`], session 33; `knee=split` in
+    /// [`AUTORIG_ENV`]). Default false (`knee=crossing`, sessions
+    /// 20-32's): measured on samba's `merge=settle` draws it moved no knee
+    /// (`autorig_eval … spread 10 renumbered`: salt 1's left leg, the
+    /// shin cut at mid-shin, splits into halves that bend 11.5° and 13.9°
+    /// but neither half next to the cut moves with the part across it:
+    /// 29.3° and 23.9°, each against the other part's whole motion).
+    pub split_knee: bool,
+    /// A joint's fixed point farther than [`super::straddle::LOOSE`] of the
+    /// height from its own limb's path moved to the centre of its two
+    /// parts' boundary ([`super::straddle::guard_pivot`], session 33).
+    /// Default true (`pivot=guarded`; `pivot=free` in [`AUTORIG_ENV`]
+    /// gives sessions 20-32's).
+    pub guard_pivots: bool,
     /// The decomposition's settings.
     pub decompose: DecomposeOptions,
 }
@@ -47,6 +63,8 @@ impl Default for AutoOptions {
             frames: FrameSample::InOrder,
             thigh_hip: false,
             facing: Facing::Trunk,
+            split_knee: false,
+            guard_pivots: true,
             decompose: DecomposeOptions::default(),
         }
     }
@@ -140,6 +158,8 @@ impl FrameSample {
 /// decomposition's [`super::decompose::Seeding`]), `salt=N` (its
 /// [`super::decompose::DecomposeOptions::salt`]), `merge=greedy|settle|settle-split`
 /// (what follows its merges, [`super::decompose::MergeRule`]),
+/// `knee=split|crossing` ([`AutoOptions::split_knee`]),
+/// `pivot=guarded|free` ([`AutoOptions::guard_pivots`]),
 /// `patches=position|vertex0` (the rest frame's contact patches,
 /// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
 pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
@@ -173,7 +193,7 @@ pub(crate) fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, patches=position|vertex0, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, patches=position|vertex0, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -194,6 +214,10 @@ pub(crate) fn apply_override(
             "merge" => {
                 auto.decompose.merge = super::decompose::MergeRule::parse(v).ok_or_else(bad)?
             }
+            "knee" if v == "split" => auto.split_knee = true,
+            "knee" if v == "crossing" => auto.split_knee = false,
+            "pivot" if v == "guarded" => auto.guard_pivots = true,
+            "pivot" if v == "free" => auto.guard_pivots = false,
             "patches" if v == "position" => rule.contact.seed_by_position = true,
             "patches" if v == "vertex0" => rule.contact.seed_by_position = false,
             "max" => {

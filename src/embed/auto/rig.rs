@@ -353,6 +353,8 @@ fn find_body<'a>(
         centre,
         thigh_hip: opts.thigh_hip,
         facing: opts.facing,
+        split_knee: opts.split_knee,
+        guard_pivots: opts.guard_pivots,
     };
     Ok((body, tips, notes))
 }

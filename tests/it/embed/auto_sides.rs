@@ -30,7 +30,11 @@ use surfmotion::rig::Canonical;
 
 /// The variant's topology and frames (`Variant::point` on every
 /// position; a mirror's triangles reversed).
-fn variant(v: Variant, mesh: &Mesh, frames: &[Vec<[f64; 3]>]) -> (Mesh, Vec<Vec<[f64; 3]>>) {
+pub(super) fn variant(
+    v: Variant,
+    mesh: &Mesh,
+    frames: &[Vec<[f64; 3]>],
+) -> (Mesh, Vec<Vec<[f64; 3]>>) {
     let mut tris = mesh.triangles().to_vec();
     if v == Variant::Mirrored {
         for t in &mut tris {

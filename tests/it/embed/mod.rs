@@ -10,6 +10,7 @@ mod auto_knees;
 mod auto_order;
 mod auto_settle;
 mod auto_sides;
+mod auto_straddle;
 mod auto_vertex_order;
 mod bodies;
 mod captures;
