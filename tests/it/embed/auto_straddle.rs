@@ -70,8 +70,8 @@ fn failures(d: &std::path::Path, v: Variant, renumber: bool, salt: u32) -> Vec<S
             return bad;
         }
     };
-    let truth = |j: Canonical| DVec3::from_array(v.point(c.truth.joints[j.index()]));
-    let at = |j: Canonical| DVec3::from_array(e.joints[j.index()]);
+    let truth = |j: Canonical| DVec3::from_array(v.point(c.truth.joints()[j.index()]));
+    let at = |j: Canonical| DVec3::from_array(e.joints()[j.index()]);
     let (l, r) = (Canonical::LKnee, Canonical::RKnee);
     let pairs = if v == Variant::Mirrored {
         [(l, r), (r, l)]
@@ -79,7 +79,7 @@ fn failures(d: &std::path::Path, v: Variant, renumber: bool, salt: u32) -> Vec<S
         [(l, l), (r, r)]
     };
     for (j, own) in pairs {
-        let off = 100.0 * at(j).distance(truth(own)) / c.truth.height;
+        let off = 100.0 * at(j).distance(truth(own)) / c.truth.height();
         eprintln!(
             "{what}: {} {off:.2}% of the height from the landmark rig's",
             j.name()
