@@ -3,7 +3,7 @@
 //! boundaries it crosses, and which of them are its joints; then facing
 //! and the sides.
 
-use super::decompose::Decomposition;
+use super::body::{Body, MIN_BEND_DEG};
 use super::humanoid::{self, Crossing, along, crossings, geodesic, match_joints};
 use super::options::{AutoError, Facing};
 use super::sides::{TrunkFrames, first_is_left};
@@ -20,41 +20,6 @@ pub type Limb = (u32, Vec<(u32, f64)>, Vec<Option<Crossing>>);
 pub(crate) const LEG: [f64; 3] = [0.12, 0.37, 0.6];
 /// See [`LEG`].
 pub(crate) const ARM: [f64; 3] = [0.10, 0.25, 0.42];
-/// A joint must bend this much (RMS, degrees) in the capture.
-pub(crate) const MIN_BEND_DEG: f64 = 6.0;
-
-/// The rest frame, its parts and its axes, as the chains are read.
-pub struct Body<'a> {
-    /// Rest-frame positions.
-    pub rest: &'a [[f64; 3]],
-    /// The frames the decomposition fitted (each the rest frame's
-    /// vertices in order): the limbs' sides are read on them too
-    /// ([`super::sides`]).
-    pub frames: &'a [&'a [[f64; 3]]],
-    /// Mesh neighbours.
-    pub nb: &'a [Vec<u32>],
-    /// The rigid parts.
-    pub dec: Decomposition,
-    /// Up (unit).
-    pub up: DVec3,
-    /// Lowest height along up.
-    pub lo: f64,
-    /// Height along up.
-    pub height: f64,
-    /// The vertex nearest the centroid.
-    pub seed: u32,
-    /// The centroid.
-    pub centre: DVec3,
-    /// Legs' hips at the thigh's end ([`super::options::AutoOptions::thigh_hip`]).
-    pub thigh_hip: bool,
-    /// Where the left-right axis is read ([`super::options::AutoOptions::facing`]).
-    pub facing: Facing,
-    /// Knees at a boundary that is no joint moved ([`super::options::AutoOptions::split_knee`]).
-    pub split_knee: bool,
-    /// Loose fixed points moved onto the limb ([`super::options::AutoOptions::guard_pivots`]).
-    pub guard_pivots: bool,
-}
-
 /// The five chains' tips and the trunk they meet in.
 pub struct Chains {
     /// The feet (the two lowest tips).

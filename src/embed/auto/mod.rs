@@ -13,6 +13,7 @@
 //! Writing a `JointEstimate` directly would have skipped those checks and
 //! left nothing to edit.
 
+pub mod body;
 pub mod consensus;
 pub mod decompose;
 pub mod facing;

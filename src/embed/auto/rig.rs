@@ -3,9 +3,10 @@
 //! five chains, the limbs sided, the joints placed (by the motion or by
 //! proportion), the landmarks, and everything carried onto the topology.
 
+use super::body::Body;
 use super::decompose::decompose;
 use super::humanoid::{Placed, along, extremities};
-use super::limbs::{ARM, Body, Chains, LEG, Sided, knee_to_toe, side};
+use super::limbs::{ARM, Chains, LEG, Sided, knee_to_toe, side};
 use super::options::{AutoError, AutoOptions, FrameSample};
 use super::report::{AutoRig, FoundJoint};
 use super::up::find_up;

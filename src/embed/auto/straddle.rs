@@ -29,10 +29,10 @@
 //!   is replaced by the centre of the two parts' boundary, which lies on
 //!   the limb.
 
+use super::body::{Body, MIN_BEND_DEG};
 use super::decompose::{Motion, kabsch};
 use super::humanoid::{Crossing, boundary_centre, geodesic};
 use super::joints::{PartJoint, joint_between};
-use super::limbs::{Body, MIN_BEND_DEG};
 use glam::DVec3;
 use rayon::prelude::*;
 
