@@ -389,50 +389,7 @@ pub(crate) fn unflip_within(
         if bad.is_empty() {
             break;
         }
-        // The patch: the bad triangles' vertices grown by `rings` rings.
-        let mut local = vec![u32::MAX; n];
-        let mut patch: Vec<u32> = Vec::new();
-        for &t in &bad {
-            for &v in &tris[t as usize] {
-                if local[v as usize] == u32::MAX {
-                    local[v as usize] = patch.len() as u32;
-                    patch.push(v);
-                }
-            }
-        }
-        // Ring by ring, only the last ring's vertices can reach new ones
-        // (every earlier vertex had all its neighbours added when its own
-        // ring was grown), so each ring scans the last ring alone, in patch
-        // order: the same patch in the same order as scanning the whole
-        // patch every ring, which cost rings × patch size (the later
-        // surface rounds reach 2¹⁰ rings, session 28). A ring that adds
-        // nothing ends the growth (the patch holds its whole component).
-        let mut last = 0;
-        for _ in 0..rings {
-            let end = patch.len();
-            for k in last..end {
-                for &u in &adj.vertices[patch[k] as usize] {
-                    if local[u as usize] == u32::MAX {
-                        local[u as usize] = patch.len() as u32;
-                        patch.push(u);
-                    }
-                }
-            }
-            if patch.len() == end {
-                break;
-            }
-            last = end;
-        }
-        let free = patch.len();
-        // The fixed ring around it.
-        for k in 0..free {
-            for &u in &adj.vertices[patch[k] as usize] {
-                if local[u as usize] == u32::MAX {
-                    local[u as usize] = patch.len() as u32;
-                    patch.push(u);
-                }
-            }
-        }
+        let (local, patch, free) = grow_patch(tris, adj, &bad, rings, n);
         let fixed: Vec<u32> = (free as u32..patch.len() as u32).collect();
         let m = patch.len();
         if m > budget.patch_left() {
@@ -529,6 +486,64 @@ pub(crate) fn unflip_within(
     }
     smooth(tris, adj, source, out, turn, &mut bad, opts.smooth);
     bad
+}
+
+/// A round's patch ([`unflip_within`]): the vertices of the `bad`
+/// triangles grown by `rings` rings, then the fixed ring around them.
+/// Returns each vertex's index in the patch (`u32::MAX` outside it), the
+/// patch's vertices (the free ones first) and the free count.
+fn grow_patch(
+    tris: &[[u32; 3]],
+    adj: &Adjacency,
+    bad: &[u32],
+    rings: usize,
+    n: usize,
+) -> (Vec<u32>, Vec<u32>, usize) {
+    // The patch: the bad triangles' vertices grown by `rings` rings.
+    let mut local = vec![u32::MAX; n];
+    let mut patch: Vec<u32> = Vec::new();
+    for &t in bad {
+        for &v in &tris[t as usize] {
+            if local[v as usize] == u32::MAX {
+                local[v as usize] = patch.len() as u32;
+                patch.push(v);
+            }
+        }
+    }
+    // Ring by ring, only the last ring's vertices can reach new ones
+    // (every earlier vertex had all its neighbours added when its own
+    // ring was grown), so each ring scans the last ring alone, in patch
+    // order: the same patch in the same order as scanning the whole
+    // patch every ring, which cost rings × patch size (the later
+    // surface rounds reach 2¹⁰ rings, session 28). A ring that adds
+    // nothing ends the growth (the patch holds its whole component).
+    let mut last = 0;
+    for _ in 0..rings {
+        let end = patch.len();
+        for k in last..end {
+            for &u in &adj.vertices[patch[k] as usize] {
+                if local[u as usize] == u32::MAX {
+                    local[u as usize] = patch.len() as u32;
+                    patch.push(u);
+                }
+            }
+        }
+        if patch.len() == end {
+            break;
+        }
+        last = end;
+    }
+    let free = patch.len();
+    // The fixed ring around it.
+    for k in 0..free {
+        for &u in &adj.vertices[patch[k] as usize] {
+            if local[u as usize] == u32::MAX {
+                local[u as usize] = patch.len() as u32;
+                patch.push(u);
+            }
+        }
+    }
+    (local, patch, free)
 }
 
 /// The compressed rows ([`crate::mesh::laplacian::to_rows`]' form) of the

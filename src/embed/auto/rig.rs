@@ -55,29 +55,8 @@ pub fn auto_rig(
         }
     }
     let found = place_joints(&body, &sided);
-    let get = |name: &str| get_joint(&found, name);
-    // Symmetry of the limbs: tip to root lengths left against right.
+    let (sym, confidence) = symmetry_and_confidence(rest, &body, &sided, &found, &mut notes);
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
-    let len = |tip: u32, root: &str| v3(rest[tip as usize]).distance(get(root).position);
-    let ratio = |a: f64, b: f64| a.min(b) / a.max(b).max(1e-12);
-    let (legs, arms) = (&sided.legs, &sided.arms);
-    let sym = ratio(len(legs[0].0, "l_hip"), len(legs[1].0, "r_hip")).min(ratio(
-        len(arms[0].0, "l_shoulder"),
-        len(arms[1].0, "r_shoulder"),
-    ));
-    let by_motion = found.iter().filter(|(_, p)| p.by_motion).count();
-    let mut confidence = by_motion as f64 / found.len() as f64 * sym;
-    // The knees as far from the toes (the legs' one length): a check, said
-    // loudly, and the confidence lowered in proportion.
-    let (kl, kr, kd) = knee_to_toe(&body, &sided);
-    if kd > KNEE_TOLERANCE * body.height {
-        notes.push(format!(
-            "WARNING: the knees are {kl:.3} and {kr:.3} from their toe tips, {:.1}% of the height apart (a body's legs have one length; tolerance {:.0}%): one knee is probably at a clothing edge; look at the picture (`--png`) and correct l_knee/r_knee in the landmarks file, or give landmarks",
-            100.0 * kd / body.height,
-            100.0 * KNEE_TOLERANCE
-        ));
-        confidence *= (1.0 - kd / body.height / (4.0 * KNEE_TOLERANCE)).max(0.0);
-    }
     let marks = landmark_points(&body, &chains, &sided, &found, &mut notes);
 
     // Onto the topology: by the motion of the part of the nearest vertex
@@ -172,6 +151,44 @@ pub fn auto_rig(
         confidence,
         notes,
     })
+}
+
+/// The limbs' symmetry (tip-to-root lengths left against right, the
+/// least of the legs' and the arms' ratios) and the rig's confidence: the
+/// share of joints the motion showed times the symmetry, lowered in
+/// proportion when the knees are not as far from their toes (a body's legs
+/// have one length), which is also said loudly in `notes`.
+fn symmetry_and_confidence(
+    rest: &[[f64; 3]],
+    body: &Body,
+    sided: &Sided,
+    found: &[(String, Placed)],
+    notes: &mut Vec<String>,
+) -> (f64, f64) {
+    let get = |name: &str| get_joint(found, name);
+    // Symmetry of the limbs: tip to root lengths left against right.
+    let v3 = |q: [f64; 3]| DVec3::from_array(q);
+    let len = |tip: u32, root: &str| v3(rest[tip as usize]).distance(get(root).position);
+    let ratio = |a: f64, b: f64| a.min(b) / a.max(b).max(1e-12);
+    let (legs, arms) = (&sided.legs, &sided.arms);
+    let sym = ratio(len(legs[0].0, "l_hip"), len(legs[1].0, "r_hip")).min(ratio(
+        len(arms[0].0, "l_shoulder"),
+        len(arms[1].0, "r_shoulder"),
+    ));
+    let by_motion = found.iter().filter(|(_, p)| p.by_motion).count();
+    let mut confidence = by_motion as f64 / found.len() as f64 * sym;
+    // The knees as far from the toes (the legs' one length): a check, said
+    // loudly, and the confidence lowered in proportion.
+    let (kl, kr, kd) = knee_to_toe(body, sided);
+    if kd > KNEE_TOLERANCE * body.height {
+        notes.push(format!(
+            "WARNING: the knees are {kl:.3} and {kr:.3} from their toe tips, {:.1}% of the height apart (a body's legs have one length; tolerance {:.0}%): one knee is probably at a clothing edge; look at the picture (`--png`) and correct l_knee/r_knee in the landmarks file, or give landmarks",
+            100.0 * kd / body.height,
+            100.0 * KNEE_TOLERANCE
+        ));
+        confidence *= (1.0 - kd / body.height / (4.0 * KNEE_TOLERANCE)).max(0.0);
+    }
+    (sym, confidence)
 }
 
 /// `q` fixed to its nearest triangle of `rest` among those of the part
