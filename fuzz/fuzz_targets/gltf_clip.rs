@@ -1,12 +1,12 @@
 //! Fuzz target: the glTF clip reader (a skin and one animation read as a
-//! mocap clip, `mocap::gltf`) must never panic, nor allocate beyond the
+//! mocap clip, `mesh::io::gltf::clip`) must never panic, nor allocate beyond the
 //! clip's sample limit. Sampled at 1 fps so a corrupt key time does not
 //! make one input run for hours.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
-use surfmotion::mocap::gltf::{GltfClipOptions, parse_gltf_clip};
+use surfmotion::mesh::io::gltf::clip::{GltfClipOptions, parse_gltf_clip};
 
 fuzz_target!(|data: &[u8]| {
     let opts = GltfClipOptions {

@@ -41,7 +41,7 @@ pub struct FbxOptions {
 
 /// Largest `frames × joints` a clip may hold (a corrupt take length must not
 /// allocate without bound): 200 million samples, about 10 GB of clip.
-pub(super) const MAX_SAMPLES: f64 = 2e8;
+pub(crate) const MAX_SAMPLES: f64 = 2e8;
 
 /// True when `bytes` start like an FBX file: the binary magic
 /// `Kaydara FBX Binary` or an ASCII file's `; FBX` header comment (after an
@@ -303,13 +303,13 @@ fn split(m: &ufbx::Matrix) -> (DMat3, DVec3) {
 
 /// The bones read as the clip's skeleton: scene node indices in depth-first
 /// order (parents first), each one's parent among them, and joint names.
-pub(super) struct Skeleton {
+pub(crate) struct Skeleton {
     /// Scene node index of each joint.
-    pub(super) order: Vec<usize>,
+    pub(crate) order: Vec<usize>,
     /// Parent joint of each joint (an index into `order`).
-    pub(super) parent: Vec<Option<usize>>,
+    pub(crate) parent: Vec<Option<usize>>,
     /// Joint names without namespaces (unless that makes two alike).
-    pub(super) names: Vec<String>,
+    pub(crate) names: Vec<String>,
 }
 
 /// How the take is sampled: its animation (`None`: the rest pose), the
@@ -324,10 +324,10 @@ struct Sampling<'a> {
 /// The rest (unanimated) skeleton in the project's axes: each joint's
 /// world rotation inverted (the motion is expressed relative to it), its
 /// world position and its offset from its parent.
-pub(super) struct Rest {
-    pub(super) rot_inv: Vec<DMat3>,
-    pub(super) pos: Vec<DVec3>,
-    pub(super) offsets: Vec<DVec3>,
+pub(crate) struct Rest {
+    pub(crate) rot_inv: Vec<DMat3>,
+    pub(crate) pos: Vec<DVec3>,
+    pub(crate) offsets: Vec<DVec3>,
 }
 
 fn clip_of_scene(scene: &ufbx::Scene, path: &Path, opts: &FbxOptions) -> Result<Clip, MocapError> {
@@ -666,7 +666,7 @@ fn sample_motion(
 /// Step 5 of [`clip_of_scene`]: the joints, with six channels for the root
 /// and for every joint whose translation moves away from its offset, three
 /// rotations for the rest.
-pub(super) fn joints_of(
+pub(crate) fn joints_of(
     skel: &Skeleton,
     rest: &Rest,
     translations: &[DVec3],

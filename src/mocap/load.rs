@@ -7,7 +7,6 @@ use super::bvh::{BvhOptions, read_bvh};
 use super::clip::Clip;
 use super::error::MocapError;
 use super::fbx::{FbxOptions, is_fbx, read_fbx};
-use super::gltf::{GltfClipOptions, is_glb, read_gltf_clip};
 use std::path::{Path, PathBuf};
 
 /// A mocap file format.
@@ -52,7 +51,7 @@ impl MocapFormat {
             if is_fbx(&head[..k]) {
                 Some(MocapFormat::Fbx)
             } else {
-                is_glb(&head[..k]).then_some(MocapFormat::Gltf)
+                head[..k].starts_with(b"glTF").then_some(MocapFormat::Gltf)
             }
         })
     }
@@ -140,12 +139,11 @@ pub fn read_clip(
                 take: take.map(str::to_string),
             },
         )?,
-        MocapFormat::Gltf => read_gltf_clip(
-            path,
-            &GltfClipOptions {
-                fps,
-                take: take.map(str::to_string),
-            },
-        )?,
+        MocapFormat::Gltf => {
+            return Err(MocapError::invalid(
+                path,
+                "a glTF clip is read by `rig::read_any_clip` (the glTF reader is `mesh::io`'s)",
+            ));
+        }
     })
 }

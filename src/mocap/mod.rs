@@ -9,7 +9,6 @@ mod error;
 pub mod euler;
 pub mod fbx;
 mod fk;
-pub mod gltf;
 mod load;
 mod resample;
 pub mod skin;

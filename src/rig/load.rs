@@ -5,6 +5,7 @@
 //! the rig detector, which reads clips.
 
 use super::{Canonical, RigMap, detect, detect_clip};
+use crate::mesh::io::gltf::clip::{GltfClipOptions, read_gltf_clip};
 use crate::mocap::read_clip;
 use crate::mocap::units::{
     UnitFamily, guess_units, stature_from_limbs, units_from_stature, up_from_ground, up_from_joints,
@@ -29,11 +30,35 @@ pub struct LoadOptions {
     pub rig_map: Option<RigMap>,
 }
 
+/// [`read_clip`] of any clip the tool reads, glTF included: a `.gltf` or
+/// `.glb` (by extension or magic) through the glTF reader of `mesh::io`
+/// ([`read_gltf_clip`]: the first skin driven by one animation, `take` by
+/// name or index), every other format through [`read_clip`]. Here rather
+/// than in `mocap` because the glTF document reader is `mesh`'s, which
+/// itself reads `mocap`.
+pub fn read_any_clip(
+    path: &Path,
+    fps: Option<f64>,
+    asf: Option<&Path>,
+    take: Option<&str>,
+) -> Result<Clip, MocapError> {
+    match MocapFormat::detect(path) {
+        Some(MocapFormat::Gltf) => read_gltf_clip(
+            path,
+            &GltfClipOptions {
+                fps,
+                take: take.map(str::to_string),
+            },
+        ),
+        _ => read_clip(path, fps, asf, take),
+    }
+}
+
 /// Reads a BVH, AMC (with its ASF) or ASF file, in file units, with the
 /// clip's `units` and `up` decided (from the header, the rig convention and
 /// the skeleton's size) or taken from `opts`.
 pub fn load_clip(path: &Path, opts: &LoadOptions) -> Result<Clip, MocapError> {
-    let mut clip = read_clip(path, opts.fps, opts.asf.as_deref(), opts.take.as_deref())?;
+    let mut clip = read_any_clip(path, opts.fps, opts.asf.as_deref(), opts.take.as_deref())?;
     // A given map is checked against the clip's hierarchy and rest pose
     // (a map with pelvis and head swapped was taken without a word).
     if let Some(m) = &opts.rig_map {

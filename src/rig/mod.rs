@@ -9,7 +9,7 @@ pub mod structure;
 
 pub use canonical::Canonical;
 pub use derive::Derive;
-pub use load::{LoadOptions, guess_up, load_clip, read_rigged_character};
+pub use load::{LoadOptions, guess_up, load_clip, read_any_clip, read_rigged_character};
 pub use map::{
     BY_NAMES, BY_STRUCTURE, CONVENTIONS, Convention, Detection, JointReport, RigError, RigMap,
     detect, detect_clip, normalise_name,

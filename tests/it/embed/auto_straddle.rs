@@ -96,6 +96,7 @@ fn failures(d: &std::path::Path, v: Variant, renumber: bool, salt: u32) -> Vec<S
 
 #[test]
 #[ignore = "issue 41: not solved yet; samba's left knee under merge=settle stays 5% low with knee=split (session 33)"]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn samba_settle_draws_main_cut_at_mid_shin_find_the_knee() {
     let Some(d) = common::data_dir() else { return };
     let mut bad = Vec::new();

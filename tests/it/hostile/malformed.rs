@@ -125,10 +125,10 @@ fn readers() -> Vec<(&'static str, Reader)> {
         }),
         // The glTF clip reader (skin + animation as a clip), at 1 fps too.
         ("gltf-clip", |b| {
-            drop(surfmotion::mocap::gltf::parse_gltf_clip(
+            drop(surfmotion::mesh::io::gltf::clip::parse_gltf_clip(
                 b,
                 Path::new("f.glb"),
-                &surfmotion::mocap::gltf::GltfClipOptions {
+                &surfmotion::mesh::io::gltf::clip::GltfClipOptions {
                     fps: Some(1.0),
                     take: None,
                 },

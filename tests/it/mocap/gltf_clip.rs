@@ -1,4 +1,4 @@
-//! glTF skin animations read as clips (`mocap::gltf`): forward kinematics
+//! glTF skin animations read as clips (`mesh::io::gltf::clip`, read by `rig::read_any_clip`): forward kinematics
 //! against a second evaluation of the file (the `gltf` crate's own reader
 //! and node matrices, composed here from the JSON's `children`), the
 //! Khronos samples and the Fox mapped or refused, generated variants of
@@ -9,8 +9,8 @@ use crate::common;
 use glam::{Mat4, Vec3};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
-use surfmotion::mocap::{Clip, UpAxis, read_clip};
-use surfmotion::rig::{Canonical, LoadOptions, detect_clip, load_clip};
+use surfmotion::mocap::{Clip, UpAxis};
+use surfmotion::rig::{Canonical, LoadOptions, detect_clip, load_clip, read_any_clip};
 
 const FILES: [&str; 4] = [
     "gltf/CesiumMan/CesiumMan.glb",
@@ -127,7 +127,7 @@ fn gltf_clip_fk_matches_the_files_node_matrices_at_every_key() {
                 .map(|w| (w[1] - w[0]) as f64)
                 .fold(f64::INFINITY, f64::min);
             let fps = if gap.is_finite() { 1.0 / gap } else { 30.0 };
-            let clip = read_clip(&path, Some(fps), None, Some(&a.to_string())).unwrap();
+            let clip = read_any_clip(&path, Some(fps), None, Some(&a.to_string())).unwrap();
             let h = height(&clip);
             let nodes: Vec<usize> = clip
                 .point_names()
@@ -377,7 +377,7 @@ fn generated_variants_of_a_rigged_figure_read_and_map_alike() {
         }
         for (name, vj, expect, up) in variants {
             let p = write(tmp.path(), &format!("{name}.glb"), &vj, &bin);
-            let raw = read_clip(&p, None, None, None).unwrap();
+            let raw = read_any_clip(&p, None, None, None).unwrap();
             assert_eq!(raw.frame_count(), base.frame_count(), "{rel} {name}");
             assert_eq!(raw.joint_count(), base.joint_count(), "{rel} {name}");
             let mut worst = 0.0f64;
@@ -434,7 +434,7 @@ fn a_gltf_without_skin_or_animation_or_the_named_one_is_a_one_line_error() {
     ];
     for (name, j, take, want) in cases {
         let p = write(tmp.path(), name, &j, &bin);
-        let e = read_clip(&p, None, None, take).unwrap_err().to_string();
+        let e = read_any_clip(&p, None, None, take).unwrap_err().to_string();
         assert!(e.starts_with(&format!("{}: ", p.display())), "{name}: {e}");
         assert!(e.contains(want), "{name}: {e}");
         assert_eq!(e.lines().count(), 1, "{name}: {e}");
@@ -442,12 +442,12 @@ fn a_gltf_without_skin_or_animation_or_the_named_one_is_a_one_line_error() {
     }
     // The Fox's animations by name and by index read the same clip.
     let fox = d.join(FILES[2]);
-    let by_name = read_clip(&fox, None, None, Some("Walk")).unwrap();
-    let by_index = read_clip(&fox, None, None, Some("1")).unwrap();
+    let by_name = read_any_clip(&fox, None, None, Some("Walk")).unwrap();
+    let by_index = read_any_clip(&fox, None, None, Some("1")).unwrap();
     assert_eq!(by_name.frame_count(), by_index.frame_count());
     assert_eq!(by_name.world_positions(5), by_index.world_positions(5));
     // A frame rate asked for is the clip's.
-    let c = read_clip(&d.join(FILES[0]), Some(60.0), None, None).unwrap();
+    let c = read_any_clip(&d.join(FILES[0]), Some(60.0), None, None).unwrap();
     assert_eq!(c.fps(), 60.0);
     assert_eq!(c.frame_count(), 121);
 }

@@ -16,6 +16,7 @@
 mod animation;
 mod asset;
 mod buffers;
+pub mod clip;
 mod geometry;
 mod read;
 mod skin;

@@ -6,7 +6,7 @@
 //! Each frame composes every node's TRS down the node hierarchy (glTF 2.0
 //! §3.5.3, `GltfAsset::node_worlds_at`: nodes above the skeleton, a Z-up
 //! root's matrix, a scale, all included) and expresses the joints' world
-//! frames as the FBX reader does ([`super::fbx`]): world rotations relative
+//! frames as the FBX reader does ([`crate::mocap::fbx`]): world rotations relative
 //! to the unanimated pose (every node at its rest TRS, so that pose is the
 //! clip's rest, every local rotation the identity), local translations in
 //! the parent's rotated frame. Forward kinematics of the clip reproduces
@@ -26,11 +26,11 @@
 //! cubic-spline keys are interpolated linearly between their values (the
 //! tangents are not read), exact at the keys.
 
-use super::clip::{Clip, PointConvention, Units, UpAxis};
-use super::error::MocapError;
-use super::fbx::{MAX_SAMPLES, Rest, Skeleton, joints_of, names_without_namespaces};
+use super::{GltfAsset, NodeAnimation, parse_gltf};
 use crate::mesh::MeshError;
-use crate::mesh::io::gltf::{GltfAsset, NodeAnimation, parse_gltf};
+use crate::mocap::MocapError;
+use crate::mocap::fbx::{MAX_SAMPLES, Rest, Skeleton, joints_of, names_without_namespaces};
+use crate::mocap::{Clip, PointConvention, Units, UpAxis};
 use crate::util::fsutil::{raise_warning, read_bytes};
 use crate::util::numfmt::Short;
 use glam::{DMat3, DMat4, DQuat, DVec3};
@@ -71,13 +71,9 @@ pub struct GltfTake {
 const KEY_FPS: std::ops::RangeInclusive<f64> = 10.0..=1000.0;
 
 /// True when `bytes` start like a binary glTF (`glTF` magic).
-pub(crate) fn is_glb(bytes: &[u8]) -> bool {
-    bytes.starts_with(b"glTF")
-}
-
 /// Reads a `.gltf` or `.glb` file's skin and one animation as a clip (see
 /// the module documentation).
-pub(crate) fn read_gltf_clip(path: &Path, opts: &GltfClipOptions) -> Result<Clip, MocapError> {
+pub fn read_gltf_clip(path: &Path, opts: &GltfClipOptions) -> Result<Clip, MocapError> {
     let bytes = read_bytes(path)?;
     parse_gltf_clip(&bytes, path, opts)
 }
