@@ -387,26 +387,7 @@ fn skeleton(
             "the FBX file has no skeleton (no LimbNode models)",
         ));
     }
-    // Depth-first order of each root's subtree (parents first).
-    let subtree = |r: usize| -> Vec<usize> {
-        let mut out = Vec::new();
-        let mut stack = vec![r];
-        while let Some(i) = stack.pop() {
-            if out.len() > nodes.len() {
-                break;
-            }
-            out.push(i);
-            stack.extend(children[i].iter().rev());
-        }
-        out
-    };
-    let mut best: Vec<usize> = Vec::new();
-    for &r in &roots {
-        let s = subtree(r);
-        if s.len() > best.len() {
-            best = s;
-        }
-    }
+    let best = largest_subtree(&children, &roots, nodes.len());
     if roots.len() > 1 {
         let dropped: Vec<String> = roots
             .iter()
@@ -661,6 +642,37 @@ fn sample_motion(
         }
     }
     Ok((rotations, translations))
+}
+
+/// The largest of the `roots`' subtrees under `children`, in depth-first
+/// order (parents first); a walk that passes `limit` nodes (a cycle in a
+/// malformed file) stops there, one past it, so the caller can tell. Shared
+/// by the FBX and glTF skeleton readers; empty without roots.
+pub(crate) fn largest_subtree(
+    children: &[Vec<usize>],
+    roots: &[usize],
+    limit: usize,
+) -> Vec<usize> {
+    let subtree = |r: usize| -> Vec<usize> {
+        let mut out = Vec::new();
+        let mut stack = vec![r];
+        while let Some(i) = stack.pop() {
+            if out.len() > limit {
+                break;
+            }
+            out.push(i);
+            stack.extend(children[i].iter().rev());
+        }
+        out
+    };
+    let mut best: Vec<usize> = Vec::new();
+    for &r in roots {
+        let s = subtree(r);
+        if s.len() > best.len() {
+            best = s;
+        }
+    }
+    best
 }
 
 /// Step 5 of [`clip_of_scene`]: the joints, with six channels for the root

@@ -29,7 +29,9 @@
 use super::{GltfAsset, NodeAnimation, parse_gltf};
 use crate::mesh::MeshError;
 use crate::mocap::MocapError;
-use crate::mocap::fbx::{MAX_SAMPLES, Rest, Skeleton, joints_of, names_without_namespaces};
+use crate::mocap::fbx::{
+    MAX_SAMPLES, Rest, Skeleton, joints_of, largest_subtree, names_without_namespaces,
+};
 use crate::mocap::{Clip, PointConvention, Units, UpAxis};
 use crate::util::fsutil::{raise_warning, read_bytes};
 use crate::util::numfmt::Short;
@@ -280,25 +282,7 @@ fn skeleton(
             None => roots.push(k),
         }
     }
-    let subtree = |r: usize| -> Vec<usize> {
-        let mut out = Vec::new();
-        let mut stack = vec![r];
-        while let Some(k) = stack.pop() {
-            if out.len() > n {
-                break;
-            }
-            out.push(k);
-            stack.extend(children[k].iter().rev());
-        }
-        out
-    };
-    let mut best: Vec<usize> = Vec::new();
-    for &r in &roots {
-        let s = subtree(r);
-        if s.len() > best.len() {
-            best = s;
-        }
-    }
+    let best = largest_subtree(&children, &roots, n);
     if best.is_empty() || best.len() > n {
         return Err(MocapError::invalid(
             path,

@@ -180,7 +180,7 @@ impl GltfAsset {
         index: usize,
         fps: f64,
     ) -> Result<MeshSequence, MeshError> {
-        use glam::{DMat4, DQuat, DVec3};
+        use glam::{DMat4, DVec3};
         let bad = |m: String| MeshError::invalid(std::path::Path::new("<gltf>"), m);
         let skin = self.skin.as_ref().ok_or_else(|| bad("no skin".into()))?;
         let anim = self
@@ -199,31 +199,8 @@ impl GltfAsset {
         let mut skinning = vec![DMat4::IDENTITY; g.skin_joints.len()];
         for f in 0..frames {
             let t = (f as f64 / fps) as f32;
-            trs.clone_from(&g.rest);
-            for ch in &anim.channels {
-                let Some(slot) = trs.get_mut(ch.node) else {
-                    continue;
-                };
-                let v = sample(ch, t);
-                match ch.path {
-                    TrsPath::Translation => {
-                        slot.0 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64)
-                    }
-                    TrsPath::Rotation => {
-                        slot.1 =
-                            DQuat::from_xyzw(v[0] as f64, v[1] as f64, v[2] as f64, v[3] as f64)
-                                .normalize()
-                    }
-                    TrsPath::Scale => slot.2 = DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
-                }
-            }
-            for &n in &g.order {
-                let local = DMat4::from_scale_rotation_translation(trs[n].2, trs[n].1, trs[n].0);
-                world[n] = match g.parent[n] {
-                    Some(p) => world[p] * local,
-                    None => local,
-                };
-            }
+            // The animation was found above: every frame composes.
+            self.node_worlds_at(Some(index), t, &mut trs, &mut world);
             for (k, &jn) in g.skin_joints.iter().enumerate() {
                 let ibm =
                     DMat4::from_cols_array_2d(&skin.inverse_bind[k].map(|c| c.map(f64::from)));
