@@ -15,7 +15,7 @@
 //! `autorig_eval spread … renumbered`'s fixed shuffle, so that the draws
 //! are those the evaluation found.
 
-use super::auto::{Variant, capture};
+use super::auto::{Capture, Variant, capture};
 use super::renumber::{EVAL_SEED, renumbered, xorshift_order};
 use crate::common;
 
@@ -59,6 +59,53 @@ const PAIRS: [(Canonical, Canonical); 4] = [
     (Canonical::LWrist, Canonical::RWrist),
 ];
 
+/// `c` in `v` (renumbered by the evaluation's shuffle when `renumber`)
+/// rigged as `db init` rigs it (the rest frame chosen clear of contact)
+/// with the options `edit` makes of the defaults, and embedded: the rig's
+/// notes that contain `watch`, a refusal or a refused embedding as
+/// failures named by `what`, and the embedding when there is one.
+pub(super) fn rigged(
+    c: &Capture,
+    v: Variant,
+    renumber: bool,
+    edit: impl FnOnce(&mut AutoOptions),
+    watch: &str,
+    what: &str,
+) -> (Vec<String>, Option<Embedding>) {
+    let (mut mesh, mut frames) = variant(v, &c.mesh, &c.frames);
+    if renumber {
+        (mesh, frames) = renumbered(
+            &mesh,
+            &frames,
+            &xorshift_order(mesh.vertex_count(), EVAL_SEED),
+        );
+    }
+    let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
+    let mut all = vec![mesh.positions()];
+    all.extend_from_slice(&f);
+    let (rule, mut auto) = automatic_setup(&AutoOptions::default()).unwrap();
+    edit(&mut auto);
+    let choice = choose_rest_frame(&mesh, &all, &rule).unwrap();
+    auto.rest_frame = (choice.frame > 0).then(|| choice.frame - 1);
+    let rig = match auto_rig(&mesh, &f, &auto) {
+        Ok(r) => r,
+        Err(e) => return (vec![format!("{what}: refused: {e}")], None),
+    };
+    let mut bad: Vec<String> = rig
+        .notes
+        .iter()
+        .filter(|n| n.contains(watch))
+        .map(|n| format!("{what}: {n}"))
+        .collect();
+    match Embedding::new(&mesh, &rig.landmarks, None) {
+        Ok(e) => (bad, Some(e)),
+        Err(err) => {
+            bad.push(format!("{what}: embedding refused: {err}"));
+            (bad, None)
+        }
+    }
+}
+
 /// Crane in `v` (renumbered by the evaluation's shuffle when `renumber`)
 /// rigged as `db init` rigs it with the draw `merge`, `salt`, and
 /// embedded: the failures (refusals, joints on the wrong side, the
@@ -75,39 +122,18 @@ fn failures(
         "crane {v:?}{} {merge:?} salt {salt}",
         if renumber { " renumbered" } else { "" }
     );
-    let (mut mesh, mut frames) = variant(v, &c.mesh, &c.frames);
-    if renumber {
-        (mesh, frames) = renumbered(
-            &mesh,
-            &frames,
-            &xorshift_order(mesh.vertex_count(), EVAL_SEED),
-        );
-    }
-    let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
-    let mut all = vec![mesh.positions()];
-    all.extend_from_slice(&f);
-    let (rule, mut auto) = automatic_setup(&AutoOptions::default()).unwrap();
-    auto.decompose.merge = merge;
-    auto.decompose.salt = salt;
-    let choice = choose_rest_frame(&mesh, &all, &rule).unwrap();
-    auto.rest_frame = (choice.frame > 0).then(|| choice.frame - 1);
-    let rig = match auto_rig(&mesh, &f, &auto) {
-        Ok(r) => r,
-        Err(e) => return vec![format!("{what}: refused: {e}")],
-    };
-    let mut bad: Vec<String> = rig
-        .notes
-        .iter()
-        .filter(|n| n.contains("sides may be swapped"))
-        .map(|n| format!("{what}: {n}"))
-        .collect();
-    let e = match Embedding::new(&mesh, &rig.landmarks, None) {
-        Ok(e) => e,
-        Err(err) => {
-            bad.push(format!("{what}: embedding refused: {err}"));
-            return bad;
-        }
-    };
+    let (mut bad, e) = rigged(
+        c,
+        v,
+        renumber,
+        |o| {
+            o.decompose.merge = merge;
+            o.decompose.salt = salt;
+        },
+        "sides may be swapped",
+        &what,
+    );
+    let Some(e) = e else { return bad };
     // The landmark rig's joints in the variant (the mirror swaps the sides).
     let truth = |j: Canonical| DVec3::from_array(v.point(c.truth.joints()[j.index()]));
     let at = |j: Canonical| DVec3::from_array(e.joints()[j.index()]);

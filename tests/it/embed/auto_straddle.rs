@@ -12,16 +12,11 @@
 //! the next step (run it with `--ignored`).
 
 use super::auto::{Variant, capture};
-use super::auto_sides::variant;
-use super::renumber::{EVAL_SEED, renumbered, xorshift_order};
+use super::auto_sides::rigged;
 use crate::common;
 
 use glam::DVec3;
-use surfmotion::embed::Embedding;
 use surfmotion::embed::auto::decompose::MergeRule;
-use surfmotion::embed::auto::options::{AutoOptions, automatic_setup};
-use surfmotion::embed::auto::rig::auto_rig;
-use surfmotion::embed::rest::choose_rest_frame;
 use surfmotion::rig::Canonical;
 
 /// Each knee's bound, in % of the height (`embed::auto_knees`'s).
@@ -36,40 +31,19 @@ fn failures(d: &std::path::Path, v: Variant, renumber: bool, salt: u32) -> Vec<S
         "samba {v:?}{} settle salt {salt}",
         if renumber { " renumbered" } else { "" }
     );
-    let (mut mesh, mut frames) = variant(v, &c.mesh, &c.frames);
-    if renumber {
-        (mesh, frames) = renumbered(
-            &mesh,
-            &frames,
-            &xorshift_order(mesh.vertex_count(), EVAL_SEED),
-        );
-    }
-    let f: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
-    let mut all = vec![mesh.positions()];
-    all.extend_from_slice(&f);
-    let (rule, mut auto) = automatic_setup(&AutoOptions::default()).unwrap();
-    auto.split_knee = true;
-    auto.decompose.merge = MergeRule::Settle;
-    auto.decompose.salt = salt;
-    let choice = choose_rest_frame(&mesh, &all, &rule).unwrap();
-    auto.rest_frame = (choice.frame > 0).then(|| choice.frame - 1);
-    let rig = match auto_rig(&mesh, &f, &auto) {
-        Ok(r) => r,
-        Err(e) => return vec![format!("{what}: refused: {e}")],
-    };
-    let mut bad: Vec<String> = rig
-        .notes
-        .iter()
-        .filter(|n| n.contains("the knees are"))
-        .map(|n| format!("{what}: {n}"))
-        .collect();
-    let e = match Embedding::new(&mesh, &rig.landmarks, None) {
-        Ok(e) => e,
-        Err(err) => {
-            bad.push(format!("{what}: embedding refused: {err}"));
-            return bad;
-        }
-    };
+    let (mut bad, e) = rigged(
+        c,
+        v,
+        renumber,
+        |o| {
+            o.split_knee = true;
+            o.decompose.merge = MergeRule::Settle;
+            o.decompose.salt = salt;
+        },
+        "the knees are",
+        &what,
+    );
+    let Some(e) = e else { return bad };
     let truth = |j: Canonical| DVec3::from_array(v.point(c.truth.joints()[j.index()]));
     let at = |j: Canonical| DVec3::from_array(e.joints()[j.index()]);
     let (l, r) = (Canonical::LKnee, Canonical::RKnee);
