@@ -626,22 +626,42 @@ fn sample_motion(
             let (r, p) = split(&node.node_to_world);
             // World rotation relative to the rest frame.
             let (q, p) = to_project(r * rest.rot_inv[k], p);
-            world_q[k] = q;
-            world_p[k] = p;
-            match skel.parent[k] {
-                None => {
-                    rotations.push(q);
-                    translations.push(p);
-                }
-                Some(pk) => {
-                    let pinv = world_q[pk].inverse();
-                    rotations.push((pinv * q).normalize());
-                    translations.push(pinv * (p - world_p[pk]));
-                }
-            }
+            push_local(
+                k,
+                skel.parent[k],
+                (q, p),
+                (&mut world_q, &mut world_p),
+                (&mut rotations, &mut translations),
+            );
         }
     }
     Ok((rotations, translations))
+}
+
+/// Joint `k`'s world rotation and position `(q, p)` kept in `world` and
+/// pushed onto `out` as local to its `parent` (whose world transform is
+/// already in `world`): the clip's local rotations and translations, shared
+/// by the FBX and glTF readers.
+pub(crate) fn push_local(
+    k: usize,
+    parent: Option<usize>,
+    (q, p): (DQuat, DVec3),
+    world: (&mut [DQuat], &mut [DVec3]),
+    out: (&mut Vec<DQuat>, &mut Vec<DVec3>),
+) {
+    world.0[k] = q;
+    world.1[k] = p;
+    match parent {
+        None => {
+            out.0.push(q);
+            out.1.push(p);
+        }
+        Some(pk) => {
+            let pinv = world.0[pk].inverse();
+            out.0.push((pinv * q).normalize());
+            out.1.push(pinv * (p - world.1[pk]));
+        }
+    }
 }
 
 /// The largest of the `roots`' subtrees under `children`, in depth-first

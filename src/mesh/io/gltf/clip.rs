@@ -30,7 +30,7 @@ use super::{GltfAsset, NodeAnimation, parse_gltf};
 use crate::mesh::MeshError;
 use crate::mocap::MocapError;
 use crate::mocap::fbx::{
-    MAX_SAMPLES, Rest, Skeleton, joints_of, largest_subtree, names_without_namespaces,
+    MAX_SAMPLES, Rest, Skeleton, joints_of, largest_subtree, names_without_namespaces, push_local,
 };
 use crate::mocap::{Clip, PointConvention, Units, UpAxis};
 use crate::util::fsutil::{raise_warning, read_bytes};
@@ -461,19 +461,13 @@ pub fn clip_of_asset(
                     ),
                 ));
             }
-            world_q[k] = q;
-            world_p[k] = p;
-            match skel.parent[k] {
-                None => {
-                    rotations.push(q);
-                    translations.push(p);
-                }
-                Some(pk) => {
-                    let pinv = world_q[pk].inverse();
-                    rotations.push((pinv * q).normalize());
-                    translations.push(pinv * (p - world_p[pk]));
-                }
-            }
+            push_local(
+                k,
+                skel.parent[k],
+                (q, p),
+                (&mut world_q, &mut world_p),
+                (&mut rotations, &mut translations),
+            );
         }
     }
     let joints = joints_of(&skel, &rest, &translations, frames);
