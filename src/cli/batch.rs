@@ -58,7 +58,7 @@ pub struct Args {
     #[arg(long, value_name = "N", value_parser = super::bounded_count(1, 1_000_000))]
     pub shard_count: Option<usize>,
     /// Output format.
-    #[arg(long, value_enum, default_value_t = super::values::FormatArg::Glb)]
+    #[arg(long, value_enum, default_value_t = surfmotion::jobs::BatchOptions::default().format.into())]
     pub format: super::values::FormatArg,
     /// Redo clips whose output is already complete.
     #[arg(long)]

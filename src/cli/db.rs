@@ -89,7 +89,7 @@ pub struct SkeletonArgs {
     /// skeleton per character, its bone lengths the median over all frames,
     /// nearest the regressor joints in each frame (least squares); `regressor`
     /// gives those joints as measured, `centroid` the paper's part centres.
-    #[arg(long, value_enum, default_value_t = super::values::SkeletonKindArg::Rigid)]
+    #[arg(long, value_enum, default_value_t = surfmotion::jobs::skeletons::SkeletonsOptions::default().kind.into())]
     pub kind: super::values::SkeletonKindArg,
     /// Print the summary as JSON.
     #[arg(long)]

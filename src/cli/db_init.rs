@@ -22,7 +22,7 @@ pub struct InitArgs {
     #[arg(long)]
     pub name: Option<String>,
     /// Frames per second of the captures.
-    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
+    #[arg(long, default_value_t = InitOptions::default().fps, value_parser = super::frame_rate)]
     pub fps: f64,
     /// Length unit of the files (m, cm, mm, dm, inch, metres per unit, or
     /// auto: m, cm or mm, whichever makes the rest frame's largest side
@@ -32,13 +32,13 @@ pub struct InitArgs {
         long = "input-units",
         alias = "units",
         value_name = "UNIT",
-        default_value = "auto"
+        default_value_t = InitOptions::default().units
     )]
     pub units: String,
     /// Up axis of the files: y, z, or auto (the landmarks' groin→chin
     /// direction decides; y without landmarks). An explicit axis the
     /// landmarks contradict is written as given, with a warning.
-    #[arg(long, default_value = "auto")]
+    #[arg(long, default_value_t = InitOptions::default().up)]
     pub up: String,
     /// Landmarks JSON on the rest frame.
     #[arg(long)]

@@ -17,6 +17,7 @@ const FLAGS: &[(&str, &str)] = &[
     ("`TransferSource::Template` frame", "--template-frame"),
     ("`GlbOptions::normals` false", "--glb-no-normals"),
     ("fewer via key-frames", "fewer --via"),
+    ("give `landmarks`", "give --landmarks"),
     ("`AmcOptions::fps`", "--input-fps"),
     ("`BatchOptions::shard`", "--shard"),
     ("`BlendOptions::alpha`", "--alpha"),

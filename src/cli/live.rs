@@ -68,14 +68,14 @@ pub struct Args {
     /// fixed-lag trellis); 0 decides each frame as it comes (greedy, with a
     /// hysteresis against flicker). Each lag frame adds one frame period
     /// of delay.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = LiveOptions::default().lag)]
     pub lag: usize,
     /// Frames of the stream the pose kernel analyses each frame with,
     /// besides the undecided ones (up to --lag): it levels the ground and
     /// finds the floor and the feet's support over them (offline it sees
     /// the whole clip). Frames that left the lag keep what they were
     /// decided with; the undecided ones are analysed and retrieved again.
-    #[arg(long = "analysis-window", default_value_t = 128, value_name = "FRAMES")]
+    #[arg(long = "analysis-window", default_value_t = LiveOptions::default().analysis_window, value_name = "FRAMES")]
     pub analysis_window: usize,
     /// Carry the floor the pose kernel stands the stream on from window to
     /// window, moving at most this many millimetres a frame once frames are
@@ -103,14 +103,14 @@ pub struct Args {
     pub open_end: bool,
     /// Decided frames kept for the timeline's blends and the placement's
     /// smoothing.
-    #[arg(long, default_value_t = 64, value_name = "FRAMES")]
+    #[arg(long, default_value_t = LiveOptions::default().history, value_name = "FRAMES")]
     pub history: usize,
     /// Replay speed: 1 plays the clip at its real rate, 2 twice as fast, 0
     /// as fast as meshes are made (for measuring throughput).
-    #[arg(long, default_value_t = 1.0, value_name = "FACTOR", value_parser = super::non_negative)]
+    #[arg(long, default_value_t = LiveOptions::default().speed, value_name = "FACTOR", value_parser = super::non_negative)]
     pub speed: f64,
     /// Play the replayed clip this many times (the stream's clock goes on).
-    #[arg(long = "loop", default_value_t = 1, requires = "replay")]
+    #[arg(long = "loop", default_value_t = LiveOptions::default().loops, requires = "replay")]
     pub loops: usize,
     /// Stop after this many seconds of streaming.
     #[arg(long, value_parser = super::positive)]
@@ -192,31 +192,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         inputs.extend(a.clip.rig_map.clone());
         surfmotion::jobs::outputs::refuse_colliding(&inputs, &super::mesh_outputs(out))?;
     }
-    let opts = LiveOptions {
-        lag: a.lag,
-        speed: a.speed,
-        seconds: a.seconds,
-        until_idle: a.until_idle,
-        lossless: a.lossless,
-        serve: a.serve,
-        analysis_window: a.analysis_window.max(1),
-        floor_step: a.floor_step.map(|mm| mm / 1000.0),
-        lift_settle: a.lift_settle.or(LiveOptions::default().lift_settle),
-        keep_ground: match a.keep_ground {
-            Some(0) => None,
-            Some(n) => Some(n),
-            None => LiveOptions::default().keep_ground,
-        },
-        open_end: LiveOptions::default().open_end || a.open_end,
-        history: a.history.max(1),
-        loops: a.loops,
-        actor: a.actor.clone(),
-        sample_every: a.sample_every,
-        load: a.clip.load_options()?,
-        glb: a.glb.options(),
-        usd: a.glb.usd_options(),
-        ..LiveOptions::default()
-    };
+    let opts = options(&a)?;
     let stop = AtomicBool::new(false);
     let report = run_live(
         &db,
@@ -242,4 +218,33 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         println!("wrote {}", f.display());
     }
     Ok(())
+}
+
+/// The session's options from the arguments.
+pub(super) fn options(a: &Args) -> anyhow::Result<LiveOptions> {
+    Ok(LiveOptions {
+        lag: a.lag,
+        speed: a.speed,
+        seconds: a.seconds,
+        until_idle: a.until_idle,
+        lossless: a.lossless,
+        serve: a.serve,
+        analysis_window: a.analysis_window.max(1),
+        floor_step: a.floor_step.map(|mm| mm / 1000.0),
+        lift_settle: a.lift_settle.or(LiveOptions::default().lift_settle),
+        keep_ground: match a.keep_ground {
+            Some(0) => None,
+            Some(n) => Some(n),
+            None => LiveOptions::default().keep_ground,
+        },
+        open_end: LiveOptions::default().open_end || a.open_end,
+        history: a.history.max(1),
+        loops: a.loops,
+        actor: a.actor.clone(),
+        sample_every: a.sample_every,
+        load: a.clip.load_options()?,
+        glb: a.glb.options(),
+        usd: a.glb.usd_options(),
+        ..LiveOptions::default()
+    })
 }

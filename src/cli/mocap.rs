@@ -102,10 +102,10 @@ pub struct ProceduralArgs {
     #[arg(long, value_enum)]
     pub gait: Vec<super::values::GaitArg>,
     /// Length of each clip in seconds.
-    #[arg(long, default_value_t = 4.0, value_parser = super::positive)]
+    #[arg(long, default_value_t = mocap::ProceduralOptions::default().seconds, value_parser = super::positive)]
     pub seconds: f64,
     /// Frames per second.
-    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
+    #[arg(long, default_value_t = mocap::ProceduralOptions::default().fps, value_parser = super::frame_rate)]
     pub fps: f64,
     /// Print the clips written as JSON (path, gait, frames, fps).
     #[arg(long)]

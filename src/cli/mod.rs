@@ -8,6 +8,8 @@ mod batch;
 mod blend;
 mod db;
 mod db_init;
+#[cfg(test)]
+mod defaults;
 mod demo;
 mod eval;
 mod flags;

@@ -21,7 +21,7 @@ pub struct Args {
     #[arg(long)]
     pub rig: Option<PathBuf>,
     /// Frame of a sequence to draw.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = RenderOptions::default().frame)]
     pub frame: usize,
     /// Direction the character faces (x, -x, z, -z): sets the front view
     /// of every panel. Defaults to each panel's own: across the hips and
@@ -39,7 +39,7 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true)]
     pub up: Option<String>,
     /// Image height in pixels, 16 to 8192 (each view is square).
-    #[arg(long, default_value_t = 600, value_parser = super::bounded_count(16, MAX_SIZE))]
+    #[arg(long, default_value_t = RenderOptions::default().size, value_parser = super::bounded_count(16, MAX_SIZE))]
     pub size: usize,
     /// Print what was written as JSON (picture, size, meshes, frame).
     #[arg(long)]
@@ -80,10 +80,10 @@ pub struct PreviewOpts {
     pub preview: Option<PathBuf>,
     /// Frames on the contact sheet, 1 to 100 (all frames when the result
     /// has fewer).
-    #[arg(long, default_value_t = 5, value_name = "N", value_parser = super::bounded_count(1, MAX_PREVIEW_FRAMES))]
+    #[arg(long, default_value_t = PreviewOptions::default().frames, value_name = "N", value_parser = super::bounded_count(1, MAX_PREVIEW_FRAMES))]
     pub preview_frames: usize,
     /// Size of each panel of the contact sheet (pixels, square), 16 to 4096.
-    #[arg(long, default_value_t = 300, value_name = "PX", value_parser = super::bounded_count(16, MAX_PREVIEW_SIZE))]
+    #[arg(long, default_value_t = PreviewOptions::default().size, value_name = "PX", value_parser = super::bounded_count(16, MAX_PREVIEW_SIZE))]
     pub preview_size: usize,
 }
 

@@ -16,7 +16,7 @@ pub struct Args {
     pub output: PathBuf,
     /// Also weld vertices closer than this fraction of the bounding-box
     /// diagonal (default: only exact duplicates).
-    #[arg(long, default_value_t = 0.0, value_parser = super::non_negative)]
+    #[arg(long, default_value_t = surfmotion::mesh::repair::RepairOptions::default().weld_tolerance, value_parser = super::non_negative)]
     pub weld_tolerance: f64,
     /// Keep only the largest connected component.
     #[arg(long)]

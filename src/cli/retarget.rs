@@ -46,7 +46,7 @@ pub struct JobOpts {
     /// How the retrieved frames follow the query skeleton: part-based PCA
     /// Laplacian deformation (the paper), one whole-body space, plain linear
     /// blend skinning, or none.
-    #[arg(long, value_enum, default_value_t = super::values::DeformModeArg::Part)]
+    #[arg(long, value_enum, default_value_t = RetargetOptions::default().deform.into())]
     pub deform: super::values::DeformModeArg,
     /// Skeleton dissimilarity threshold T_skel (metres, summed over 19
     /// joints), at most 1000. Default: chosen from the query's
@@ -55,7 +55,7 @@ pub struct JobOpts {
     pub t_skel: Option<f64>,
     /// Weight of matching the skeleton against avoiding transitions, at
     /// most 1e6.
-    #[arg(long, default_value_t = 1.0, value_parser = super::weight)]
+    #[arg(long, default_value_t = RetargetOptions::default().trellis.w_retr, value_parser = super::weight)]
     pub w_retr: f64,
     /// No temporal interpolation of repeated frames.
     #[arg(long)]
@@ -67,7 +67,7 @@ pub struct JobOpts {
     /// retrieval, placement, the deformation's binding and the
     /// plausibility checks: the measured regressor joints, the character's
     /// rigid skeleton, or part centroids.
-    #[arg(long, value_enum, default_value_t = super::values::SkeletonKindArg::Regressor)]
+    #[arg(long, value_enum, default_value_t = CharacterOptions::default().skeleton.into())]
     pub skeleton: super::values::SkeletonKindArg,
 }
 
@@ -109,13 +109,8 @@ impl JobOpts {
     /// True when every option has its default (they apply only to 4D
     /// characters).
     pub fn is_default(&self) -> bool {
-        !self.no_deform
-            && self.deform == super::values::DeformModeArg::Part
-            && self.t_skel.is_none()
-            && self.w_retr == 1.0
-            && !self.no_interpolate
-            && !self.no_blend
-            && self.skeleton == super::values::SkeletonKindArg::Regressor
+        self.options() == RetargetOptions::default()
+            && self.character() == CharacterOptions::default()
     }
 }
 

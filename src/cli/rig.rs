@@ -37,7 +37,7 @@ pub struct EmbedArgs {
     #[arg(long, conflicts_with = "skin")]
     pub landmarks: Option<PathBuf>,
     /// The confidence (0..1) below which automatic landmarks are refused.
-    #[arg(long, default_value_t = 0.5, value_name = "C")]
+    #[arg(long, default_value_t = surfmotion::embed::scan_landmarks::ScanOptions::default().min_confidence, value_name = "C")]
     pub min_confidence: f64,
     /// Write the automatic landmarks as a landmark file to edit and give
     /// back with --landmarks.

@@ -22,7 +22,7 @@ pub struct Args {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Frame rate of the database.
-    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
+    #[arg(long, default_value_t = SynthOptions::default().fps, value_parser = super::frame_rate)]
     pub fps: f64,
     /// Use at most this many seconds of each clip.
     #[arg(long, value_parser = super::positive)]
@@ -30,7 +30,7 @@ pub struct Args {
     /// Strength of the secondary dynamics: the scale of the softness map
     /// (0: pure skinning, 1: the default, at most 2; from about 3 the
     /// springs tear the surface at the waist).
-    #[arg(long, default_value_t = 1.0, value_parser = dynamics_amount)]
+    #[arg(long, default_value_t = Dynamics::default().amount, value_parser = dynamics_amount)]
     pub dynamics: f64,
     /// Overwrite an existing manifest in the output.
     #[arg(long)]
@@ -53,11 +53,9 @@ fn dynamics_amount(s: &str) -> Result<f64, String> {
     }
 }
 
-/// Runs `synth` ([`surfmotion::jobs::synth::synth_from_files`]).
-pub fn run(a: Args) -> anyhow::Result<()> {
-    super::warnings_in_summary(!a.run.json);
-    let dir = &a.output;
-    let opts = SynthOptions {
+/// The job's options from the arguments.
+pub(super) fn options(a: &Args) -> anyhow::Result<SynthOptions> {
+    Ok(SynthOptions {
         fps: a.fps,
         seconds: a.seconds,
         dynamics: Dynamics {
@@ -67,7 +65,14 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         force: a.force,
         load: a.run.clip.load_options()?,
         ..Default::default()
-    };
+    })
+}
+
+/// Runs `synth` ([`surfmotion::jobs::synth::synth_from_files`]).
+pub fn run(a: Args) -> anyhow::Result<()> {
+    super::warnings_in_summary(!a.run.json);
+    let dir = &a.output;
+    let opts = options(&a)?;
     let bar = super::progress(a.mocap.len() as u64, "clips");
     let preview = a
         .run

@@ -3,6 +3,8 @@
 //! 2007). [`super::transfer_run`] checks them, calls the job and prints.
 
 use std::path::PathBuf;
+use surfmotion::jobs::ScanTransferOptions;
+use surfmotion::jobs::transfer::AutoScanLandmarks;
 use surfmotion::transfer::MarkerOptions;
 
 /// Arguments of `transfer`.
@@ -24,7 +26,7 @@ pub struct Args {
     #[arg(long)]
     pub landmarks: Option<PathBuf>,
     /// The confidence (0..1) below which automatic landmarks are refused.
-    #[arg(long, default_value_t = 0.5, value_name = "C", conflicts_with_all = ["landmarks", "markers"])]
+    #[arg(long, default_value_t = AutoScanLandmarks::default().min_confidence, value_name = "C", conflicts_with_all = ["landmarks", "markers"])]
     pub min_confidence: f64,
     /// Write the automatic landmarks as a landmark file to edit and give
     /// back with --landmarks.
@@ -92,14 +94,14 @@ pub struct JobOpts {
     pub group: Vec<String>,
     /// Generated markers wanted in total (about; rays that leave their body
     /// part give none). The paper uses 140-220; ~20 already give the pose.
-    #[arg(long, default_value_t = 180)]
+    #[arg(long, default_value_t = MarkerOptions::default().count)]
     pub marker_count: usize,
     /// Distance of generated marker rings from the joints, as a fraction
     /// of the bone length (0-0.5): small gives sharp bends, large soft ones.
-    #[arg(long, default_value_t = 0.25, value_parser = super::non_negative)]
+    #[arg(long, default_value_t = MarkerOptions::default().margin, value_parser = super::non_negative)]
     pub marker_margin: f64,
     /// Output frame rate for a mocap source (the clip is resampled).
-    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
+    #[arg(long, default_value_t = ScanTransferOptions::default().fps, value_parser = super::frame_rate)]
     pub fps: f64,
 }
 
@@ -134,9 +136,10 @@ impl JobOpts {
 
     /// True when every option has its default (they apply only to scans).
     pub fn is_default(&self) -> bool {
+        let d = ScanTransferOptions::default();
         self.group.is_empty()
-            && self.marker_count == 180
-            && self.marker_margin == 0.25
-            && self.fps == 30.0
+            && self.marker_count == d.markers.count
+            && self.marker_margin == d.markers.margin
+            && self.fps == d.fps
     }
 }

@@ -47,6 +47,16 @@ pub enum SkeletonKindArg {
     Centroid,
 }
 
+impl From<SkeletonKind> for SkeletonKindArg {
+    fn from(k: SkeletonKind) -> SkeletonKindArg {
+        match k {
+            SkeletonKind::Rigid => SkeletonKindArg::Rigid,
+            SkeletonKind::Regressor => SkeletonKindArg::Regressor,
+            SkeletonKind::Centroid => SkeletonKindArg::Centroid,
+        }
+    }
+}
+
 impl From<SkeletonKindArg> for SkeletonKind {
     fn from(k: SkeletonKindArg) -> SkeletonKind {
         match k {
@@ -91,6 +101,17 @@ pub enum FormatArg {
     Usda,
 }
 
+impl From<Format> for FormatArg {
+    fn from(f: Format) -> FormatArg {
+        match f {
+            Format::Glb => FormatArg::Glb,
+            Format::Pc2 => FormatArg::Pc2,
+            Format::Obj => FormatArg::Obj,
+            Format::Usda => FormatArg::Usda,
+        }
+    }
+}
+
 impl From<FormatArg> for Format {
     fn from(f: FormatArg) -> Format {
         match f {
@@ -114,6 +135,17 @@ pub enum DeformModeArg {
     Lbs,
     /// No deformation: the interpolated retrieval.
     None,
+}
+
+impl From<DeformMode> for DeformModeArg {
+    fn from(d: DeformMode) -> DeformModeArg {
+        match d {
+            DeformMode::Part => DeformModeArg::Part,
+            DeformMode::Global => DeformModeArg::Global,
+            DeformMode::Lbs => DeformModeArg::Lbs,
+            DeformMode::None => DeformModeArg::None,
+        }
+    }
 }
 
 impl From<DeformModeArg> for DeformMode {

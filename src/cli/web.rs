@@ -46,14 +46,14 @@ pub struct Source {
     pub topology: Option<PathBuf>,
     /// Largest vertex error of the compressed geometry, in millimetres, at
     /// most 100 (guaranteed: checked after encoding).
-    #[arg(long, default_value_t = 1.0, value_name = "MM", value_parser = max_error_mm)]
+    #[arg(long, default_value_t = EncodeOptions::default().max_error * 1e3, value_name = "MM", value_parser = max_error_mm)]
     pub max_error: f64,
     /// Prediction of the geometry codec (measured: spatio-temporal is smaller).
-    #[arg(long, value_enum, default_value_t = PredictorArg::SpatioTemporal)]
+    #[arg(long, value_enum, default_value_t = EncodeOptions::default().predictor.into())]
     pub predictor: PredictorArg,
     /// DEFLATE level of the geometry (0-9): higher is smaller and slower
     /// (level 6: 1.8 % smaller, 20 % slower to export).
-    #[arg(long, default_value_t = surfmotion::web::codec::DEFAULT_LEVEL, value_parser = clap::value_parser!(u32).range(0..=9))]
+    #[arg(long, default_value_t = EncodeOptions::default().level, value_parser = clap::value_parser!(u32).range(0..=9))]
     pub level: u32,
     /// Let the page blend transitions linearly on the GPU instead of
     /// precomputing each window's non-linear blend (smaller, faster export).
@@ -68,6 +68,15 @@ pub enum PredictorArg {
     Temporal,
     /// The previous frame plus a neighbour's motion.
     SpatioTemporal,
+}
+
+impl From<Predictor> for PredictorArg {
+    fn from(p: Predictor) -> PredictorArg {
+        match p {
+            Predictor::Temporal => PredictorArg::Temporal,
+            Predictor::SpatioTemporal => PredictorArg::SpatioTemporal,
+        }
+    }
 }
 
 /// Arguments of `web export`.
@@ -111,7 +120,7 @@ fn bind_address(s: &str) -> Result<String, String> {
     }
 }
 
-fn options(s: &Source) -> anyhow::Result<ExportOptions> {
+pub(super) fn options(s: &Source) -> anyhow::Result<ExportOptions> {
     Ok(ExportOptions {
         codec: EncodeOptions {
             max_error: s.max_error * 1e-3,

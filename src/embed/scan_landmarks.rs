@@ -140,7 +140,7 @@ pub enum ScanLandmarkError {
     Mesh(String),
     /// The shape does not read as a human body clearly enough.
     #[error(
-        "automatic landmarks refused (confidence {confidence:.2} < {threshold:.2}): {reason}; give --landmarks"
+        "automatic landmarks refused (confidence {confidence:.2} < {threshold:.2}): {reason}; give `landmarks`"
     )]
     Refused {
         /// The confidence reached.

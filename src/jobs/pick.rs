@@ -50,7 +50,7 @@ impl Default for PickOptions {
         PickOptions {
             mesh: String::new(),
             landmarks: None,
-            min_confidence: 0.5,
+            min_confidence: crate::embed::scan_landmarks::ScanOptions::default().min_confidence,
             save: None,
             inputs: Vec::new(),
             bind: "127.0.0.1:0".into(),

@@ -374,7 +374,7 @@ pub struct AutoScanLandmarks {
 impl Default for AutoScanLandmarks {
     fn default() -> Self {
         AutoScanLandmarks {
-            min_confidence: 0.5,
+            min_confidence: crate::embed::scan_landmarks::ScanOptions::default().min_confidence,
             write: None,
         }
     }

@@ -1,0 +1,115 @@
+//! One source of truth for defaults (issue 40): a verb given only its
+//! required arguments runs with the library's documented defaults. The
+//! flags read their defaults off the library's options; these tests parse
+//! each verb's arguments with nothing optional given and compare the
+//! options the CLI builds with the library's `Default`, so a flag's
+//! conversion (millimetres, clamps, inversions) cannot drift either.
+
+use clap::Parser;
+use surfmotion::db::CharacterOptions;
+use surfmotion::drive::RetargetOptions;
+
+/// Parses `argv` (without the program name) into the arguments `T` of
+/// one verb, through a wrapper that flattens them.
+macro_rules! parse {
+    ($t:ty, $($arg:expr),* $(,)?) => {{
+        #[derive(clap::Parser)]
+        struct Wrapper {
+            #[command(flatten)]
+            args: $t,
+        }
+        match Wrapper::try_parse_from(["surfmotion", $($arg),*]) {
+            Ok(w) => w.args,
+            Err(e) => panic!("{}", e),
+        }
+    }};
+}
+
+/// `format!("{:?}")` of both, for option structs without `PartialEq`.
+fn same<A: std::fmt::Debug, B: std::fmt::Debug>(cli: &A, library: &B) {
+    assert_eq!(format!("{cli:?}"), format!("{library:?}"));
+}
+
+#[test]
+fn retarget_defaults_are_the_librarys() {
+    let a = parse!(super::retarget::JobOpts,);
+    assert_eq!(a.options(), RetargetOptions::default());
+    assert_eq!(a.character(), CharacterOptions::default());
+    assert!(a.is_default());
+    let a = parse!(super::retarget::JobOpts, "--w-retr", "2");
+    assert!(!a.is_default(), "a weight of 2 read as the default");
+    let a = parse!(super::retarget::JobOpts, "--no-deform");
+    assert!(!a.is_default(), "--no-deform read as the default");
+}
+
+#[test]
+fn transfer_defaults_are_the_librarys() {
+    let a = parse!(super::transfer::JobOpts,);
+    let job = a.job().expect("the default markers are valid");
+    let d = surfmotion::jobs::ScanTransferOptions::default();
+    assert_eq!(job.markers, d.markers);
+    assert_eq!(job.fps, d.fps);
+    assert!(a.is_default());
+    let a = parse!(
+        super::transfer::Args,
+        "--scan",
+        "s.obj",
+        "--mocap",
+        "m.bvh",
+        "-o",
+        "o.pc2"
+    );
+    let auto = surfmotion::jobs::transfer::AutoScanLandmarks::default();
+    assert_eq!(a.min_confidence, auto.min_confidence);
+    let scan = surfmotion::embed::scan_landmarks::ScanOptions::default();
+    assert_eq!(auto.min_confidence, scan.min_confidence);
+}
+
+#[test]
+fn live_defaults_are_the_librarys() {
+    let a = parse!(super::live::Args, "--db", "d", "--replay", "c.bvh");
+    let o = super::live::options(&a).expect("default options");
+    same(&o, &surfmotion::jobs::live::LiveOptions::default());
+}
+
+#[test]
+fn synth_defaults_are_the_librarys() {
+    let a = parse!(
+        super::synth::Args,
+        "--mesh",
+        "rest.obj",
+        "--landmarks",
+        "lm.json",
+        "--mocap",
+        "a.bvh",
+        "-o",
+        "out"
+    );
+    let o = super::synth::options(&a).expect("default options");
+    same(&o, &surfmotion::jobs::SynthOptions::default());
+}
+
+#[test]
+fn web_export_defaults_are_the_librarys() {
+    let a = parse!(super::web::Source, "--db", "d");
+    let o = super::web::options(&a).expect("default options");
+    same(&o, &surfmotion::web::ExportOptions::default());
+}
+
+#[test]
+fn preview_render_procedural_and_init_defaults_are_the_librarys() {
+    let a = parse!(super::render::PreviewOpts,);
+    same(
+        &a.options(),
+        &surfmotion::tools::render::preview::PreviewOptions::default(),
+    );
+    let a = parse!(super::render::Args, "m.obj", "-o", "m.png");
+    let r = surfmotion::jobs::render::RenderOptions::default();
+    assert_eq!((a.frame, a.size), (r.frame, r.size));
+    let a = parse!(super::mocap::ProceduralArgs, "-o", "out");
+    let p = surfmotion::jobs::mocap::ProceduralOptions::default();
+    assert_eq!((a.seconds, a.fps), (p.seconds, p.fps));
+    let a = parse!(super::db_init::InitArgs, "dir", "--mesh", "m.obj");
+    let i = surfmotion::db::init::InitOptions::default();
+    assert_eq!((a.fps, &a.units, &a.up), (i.fps, &i.units, &i.up));
+}
