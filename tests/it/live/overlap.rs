@@ -86,7 +86,6 @@ fn run(
     let input = links.input();
     let mut s = Session::new(ch, prepared, &input, reference.clone(), sopts);
     let mut outs = Vec::new();
-    let mut on = 0usize;
     let mut keep = |f: LiveFrame<'_>, on: usize| {
         outs.push((
             f.index,
@@ -101,9 +100,8 @@ fn run(
             f.positions.iter().flatten().map(|x| x.to_bits()).collect(),
         ));
     };
-    for p in pushed {
-        on += 1;
-        s.push(p, None, &mut |f| keep(f, on));
+    for (i, p) in pushed.iter().enumerate() {
+        s.push(p, None, &mut |f| keep(f, i + 1));
     }
     s.finish(&mut |f| keep(f, 0));
     outs
