@@ -64,6 +64,10 @@ pub struct Args {
     /// the character falls behind (for recordings; latency then grows).
     #[arg(long)]
     pub lossless: bool,
+    /// Deform two frames at once on two threads (each frame held until the
+    /// next is ready: one frame more of latency, up to twice the rate).
+    #[arg(long)]
+    pub overlap: bool,
     /// Frames of future the retrieval sees before it decides a frame (the
     /// fixed-lag trellis); 0 decides each frame as it comes (greedy, with a
     /// hysteresis against flicker). Each lag frame adds one frame period
@@ -228,6 +232,7 @@ pub(super) fn options(a: &Args) -> anyhow::Result<LiveOptions> {
         seconds: a.seconds,
         until_idle: a.until_idle,
         lossless: a.lossless,
+        overlap: a.overlap,
         serve: a.serve,
         analysis_window: a.analysis_window.max(1),
         floor_step: a.floor_step.map(|mm| mm / 1000.0),

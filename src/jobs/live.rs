@@ -86,6 +86,9 @@ pub struct LiveOptions {
     /// A `.usda` recording's options. Default: [`UsdOptions::DEFAULT`]
     /// (normals on).
     pub usd: UsdOptions,
+    /// Deform two frames at once ([`SessionOptions::overlap`]); false
+    /// keeps one frame at a time. Default: the session's (false).
+    pub overlap: bool,
 }
 
 impl Default for LiveOptions {
@@ -111,6 +114,7 @@ impl Default for LiveOptions {
             actor: ActorChoice::default(),
             glb: GlbOptions::DEFAULT,
             usd: UsdOptions::DEFAULT,
+            overlap: SessionOptions::default().overlap,
         }
     }
 }
@@ -501,6 +505,7 @@ fn session_options(opts: &LiveOptions) -> SessionOptions {
         lift_settle: opts.lift_settle,
         keep_ground: opts.keep_ground,
         open_end: opts.open_end,
+        overlap: opts.overlap,
         ..SessionOptions::default()
     }
 }
@@ -556,6 +561,9 @@ pub fn run_live(
     let mut tally = Tally::new(record.is_some(), opts.sample_every);
     let idle = opts.until_idle.map(Duration::from_secs_f64);
     let mut last_frame = Instant::now();
+    // The previous frame's arrival: a frame the overlap held was decided
+    // on it.
+    let mut previous: Option<Instant> = None;
     loop {
         if should_stop(opts, stop, tally.first) {
             break;
@@ -580,16 +588,25 @@ pub fn run_live(
         let Some(s) = session.as_mut() else { continue };
         tally.incoming.push_back(pose);
         let began = Instant::now();
+        let decided_on = previous.unwrap_or(arrived);
         let mut emit = |f: LiveFrame<'_>| {
             let now = Instant::now();
-            let lat = now.saturating_duration_since(arrived);
+            let (from, work) = match f.held {
+                0 => (arrived, now - began),
+                _ => (
+                    decided_on,
+                    Duration::from_secs_f64(f.stages.total_wall_ms() / 1e3),
+                ),
+            };
+            let lat = now.saturating_duration_since(from);
             tally.latencies.add(lat);
             tally.interval.add(lat);
-            tally.work.add(now - began);
+            tally.work.add(work);
             tally.stages.add(&f.stages);
             tally.out(f, lat, &pose, &mut on_frame);
         };
         s.push(&pose, rotations.as_ref(), &mut emit);
+        previous = Some(arrived);
         tally.last = Instant::now();
     }
     if let Some(s) = session.as_mut() {

@@ -33,9 +33,9 @@ use super::floor::RunningFloor;
 use super::ground::{OfflineGround, WindowGround};
 use super::kept::KeptGround;
 use super::online::{Advance, OnlineOptions, OnlineStats, OnlineTrellis};
-use super::stages::{FrameStages, Stage, StageClock};
+use super::stages::{FrameStages, Stage, StageClock, thread_cpu_seconds};
 use crate::db::Character;
-use crate::deform::DeformWorkspace;
+use crate::deform::{DeformWorkspace, Deformer};
 use crate::drive::placement::{BlendScratch, blend_placed, placements};
 use crate::drive::timeline::timeline;
 use crate::drive::trellis::TrellisInput;
@@ -121,6 +121,16 @@ pub struct SessionOptions {
     /// (`live::stream_rules`). Not measured on all eight clips of the
     /// fidelity table: false (the default) as s24.
     pub open_end: bool,
+    /// The two-frame overlap: a frame ready for its deformation is held
+    /// until the next one is, and the two are deformed at once on two
+    /// threads (`rayon::join`, each with its own workspace, prepared once),
+    /// then output in order; [`Session::finish`] deforms a lone held frame.
+    /// Every output frame is the one-frame path's bit for bit (the
+    /// deformation carries no state from frame to frame); a frame comes out
+    /// one decided frame later ([`LiveFrame::held`]), and up to two frames
+    /// are deformed in the time of one on two free cores. Default: false
+    /// (one frame at a time).
+    pub overlap: bool,
 }
 
 impl Default for SessionOptions {
@@ -135,6 +145,7 @@ impl Default for SessionOptions {
             lift_settle: None,
             keep_ground: None,
             open_end: false,
+            overlap: false,
         }
     }
 }
@@ -153,6 +164,68 @@ pub struct LiveFrame<'s> {
     /// Where the time making it went (the arriving frame's analysis and
     /// retrieval count with the first frame it outputs).
     pub stages: FrameStages,
+    /// Frames pushed since the one whose push decided this frame: 1 for a
+    /// frame the two-frame overlap held ([`SessionOptions::overlap`])
+    /// until the next push, 0 otherwise (and for every frame
+    /// [`Session::finish`] outputs).
+    pub held: usize,
+}
+
+/// A frame between its blending and its output: the blend, the pose it
+/// is deformed to, the result, and its own deformation workspace.
+struct Slot {
+    blended: Vec<[f64; 3]>,
+    deformed: Vec<[f64; 3]>,
+    ws: Option<DeformWorkspace>,
+    target: Pose,
+    index: usize,
+    id: FlatFrame,
+    stages: FrameStages,
+    /// The session's pushes when it was decided.
+    pushed: usize,
+    /// Triangles its deformation left turned over.
+    after: usize,
+}
+
+impl Slot {
+    fn new(n: usize, ws: Option<DeformWorkspace>) -> Slot {
+        Slot {
+            blended: vec![[0.0; 3]; n],
+            deformed: vec![[0.0; 3]; n],
+            ws,
+            target: [DVec3::ZERO; C::COUNT],
+            index: 0,
+            id: FlatFrame::new(0),
+            stages: FrameStages::default(),
+            pushed: 0,
+            after: 0,
+        }
+    }
+
+    /// Deforms the blend towards the target (with `d`, when the character
+    /// deforms); returns this thread's CPU seconds spent.
+    fn deform(&mut self, ch: &Character, d: Option<&Deformer>) -> f64 {
+        let began = thread_cpu_seconds();
+        if let (Some(d), Some(ws)) = (d, self.ws.as_mut()) {
+            let sp = ch.rig().frame_joints(&self.blended);
+            let c = d.deform(ch, &self.blended, &sp, &self.target, &mut self.deformed, ws);
+            self.after = c.after;
+            self.stages.repaired = c.before > 0;
+            self.stages.repair_work = ws.repair_work();
+        }
+        match (began, thread_cpu_seconds()) {
+            (Some(a), Some(b)) => (b - a).max(0.0),
+            _ => 0.0,
+        }
+    }
+
+    /// The frame's vertices: deformed when it has a workspace.
+    fn positions(&self) -> &[[f64; 3]] {
+        match self.ws {
+            Some(_) => &self.deformed,
+            None => &self.blended,
+        }
+    }
 }
 
 /// The state of a live session.
@@ -187,9 +260,13 @@ pub struct Session<'a> {
     blend_ws: BlendWorkspace,
     buf: Vec<[f64; 3]>,
     grads: Vec<FrameGradients>,
-    deform_ws: Option<DeformWorkspace>,
-    blended: Vec<[f64; 3]>,
-    deformed: Vec<[f64; 3]>,
+    /// One frame's blend, deformation and workspace; two with the
+    /// two-frame overlap ([`SessionOptions::overlap`]).
+    slots: Vec<Slot>,
+    /// The slot of a frame held for the overlap's next frame.
+    held: Option<usize>,
+    /// Frames pushed ([`Session::push`], [`Session::push_analysed`]).
+    pushes: usize,
     turned_over: usize,
     /// The running floor estimate (when `floor_step` is given).
     floor: Option<RunningFloor>,
@@ -217,7 +294,9 @@ impl<'a> Session<'a> {
         opts: SessionOptions,
     ) -> Self {
         let n = ch.n();
-        let deform_ws = prepared.deformer().map(|d| d.workspace());
+        let slots = (0..if opts.overlap { 2 } else { 1 })
+            .map(|_| Slot::new(n, prepared.deformer().map(|d| d.workspace())))
+            .collect();
         let band = contact_band(leg_length(&reference.pose));
         Session {
             ch,
@@ -239,9 +318,9 @@ impl<'a> Session<'a> {
             blend_ws: prepared.blender().workspace(),
             buf: vec![[0.0; 3]; n],
             grads: vec![FrameGradients::default(); 4],
-            deform_ws,
-            blended: vec![[0.0; 3]; n],
-            deformed: vec![[0.0; 3]; n],
+            slots,
+            held: None,
+            pushes: 0,
             turned_over: 0,
             floor: opts.floor_step.map(RunningFloor::new),
             kept: opts.keep_ground.map(KeptGround::new),
@@ -282,6 +361,7 @@ impl<'a> Session<'a> {
     ) {
         self.clock = StageClock::start();
         self.stages = FrameStages::default();
+        self.pushes += 1;
         // The window holds every undecided frame besides its context.
         let w = self
             .opts
@@ -422,6 +502,7 @@ impl<'a> Session<'a> {
     ) {
         self.clock = StageClock::start();
         self.stages = FrameStages::default();
+        self.pushes += 1;
         self.push_analysed_timed(query, on_floor, out);
     }
 
@@ -445,6 +526,16 @@ impl<'a> Session<'a> {
         let adv = self.trellis.finish();
         self.clock.lap(Stage::Retrieval, &mut self.stages);
         self.emit(adv, out);
+        // A lone frame the overlap holds has no partner coming.
+        if let Some(h) = self.held.take() {
+            self.clock = StageClock::start();
+            let (ch, d) = (self.ch, self.prepared.deformer());
+            self.slots[h].deform(ch, d);
+            self.clock
+                .lap(Stage::Deformation, &mut self.slots[h].stages);
+            self.slots[h].pushed = self.pushes;
+            self.output(h, out);
+        }
     }
 
     fn emit(&mut self, adv: Advance, out: &mut dyn FnMut(LiveFrame<'_>)) {
@@ -470,7 +561,10 @@ impl<'a> Session<'a> {
         }
     }
 
-    /// Makes output frame `k` (decided as `id`; `ahead`, the continuation).
+    /// Makes output frame `k` (decided as `id`; `ahead`, the continuation):
+    /// blends it, then deforms and outputs it, or with the two-frame
+    /// overlap holds it for the next frame, or deforms it with the held one
+    /// and outputs both in order.
     fn frame(
         &mut self,
         k: usize,
@@ -478,6 +572,61 @@ impl<'a> Session<'a> {
         ahead: &[FlatFrame],
         out: &mut dyn FnMut(LiveFrame<'_>),
     ) {
+        let s = self.held.map_or(0, |h| 1 - h);
+        self.blend_into(k, ahead, s);
+        let slot = &mut self.slots[s];
+        (slot.index, slot.id, slot.pushed) = (k, id, self.pushes);
+        slot.stages = std::mem::take(&mut self.stages);
+        let (ch, d) = (self.ch, self.prepared.deformer());
+        match self.held.take() {
+            None if self.slots.len() > 1 => {
+                self.held = Some(s);
+            }
+            None => {
+                self.slots[s].deform(ch, d);
+                self.clock
+                    .lap(Stage::Deformation, &mut self.slots[s].stages);
+                self.output(s, out);
+            }
+            Some(h) => {
+                let (a, b) = match &mut self.slots[..] {
+                    [x, y] if h == 0 => (x, y),
+                    [x, y] => (y, x),
+                    _ => unreachable!("a frame is held only with two slots"),
+                };
+                let (ta, tb) = rayon::join(|| a.deform(ch, d), || b.deform(ch, d));
+                let share = if ta + tb > 0.0 { ta / (ta + tb) } else { 0.5 };
+                self.clock
+                    .lap_pair(Stage::Deformation, &mut a.stages, &mut b.stages, share);
+                self.output(h, out);
+                self.output(s, out);
+            }
+        }
+        // The next frame of this arrival starts after the output.
+        self.clock = StageClock::start();
+    }
+
+    /// Outputs the frame in slot `s`.
+    fn output(&mut self, s: usize, out: &mut dyn FnMut(LiveFrame<'_>)) {
+        self.turned_over += self.slots[s].after;
+        let pushes = self.pushes;
+        let slot = &mut self.slots[s];
+        let stages = std::mem::take(&mut slot.stages);
+        let slot = &self.slots[s];
+        out(LiveFrame {
+            index: slot.index,
+            id: slot.id,
+            positions: slot.positions(),
+            query: &slot.target,
+            stages,
+            held: pushes - slot.pushed,
+        });
+    }
+
+    /// Settles output frame `k`'s query, times and places it over the
+    /// decided history and `ahead`, and blends it into slot `s` (its
+    /// target set); the stages timed into the session's.
+    fn blend_into(&mut self, k: usize, ahead: &[FlatFrame], s: usize) {
         let ch = self.ch;
         let h = k - self.path_start;
         if let Some(&q) = self.query.get(k - self.query_start) {
@@ -509,6 +658,7 @@ impl<'a> Session<'a> {
             buf: &mut self.buf,
             grads: &mut self.grads,
         };
+        let slot = &mut self.slots[s];
         blend_placed(
             ch,
             self.prepared.blender(),
@@ -517,32 +667,10 @@ impl<'a> Session<'a> {
             placed[h],
             |f| f == primary,
             &mut scratch,
-            &mut self.blended,
+            &mut slot.blended,
         );
+        slot.target = queries[h];
         self.clock.lap(Stage::Blending, &mut self.stages);
-        let target = &queries[h];
-        let positions: &[[f64; 3]] = match (self.prepared.deformer(), self.deform_ws.as_mut()) {
-            (Some(d), Some(ws)) => {
-                let sp = ch.rig().frame_joints(&self.blended);
-                let c = d.deform(ch, &self.blended, &sp, target, &mut self.deformed, ws);
-                self.turned_over += c.after;
-                self.stages.repaired = c.before > 0;
-                self.stages.repair_work = ws.repair_work();
-                &self.deformed
-            }
-            _ => &self.blended,
-        };
-        self.clock.lap(Stage::Deformation, &mut self.stages);
-        let stages = std::mem::take(&mut self.stages);
-        out(LiveFrame {
-            index: k,
-            id,
-            positions,
-            query: target,
-            stages,
-        });
-        // The next frame of this arrival starts after the output.
-        self.clock = StageClock::start();
     }
 }
 

@@ -67,6 +67,25 @@ pub(crate) fn process_cpu_seconds() -> Option<f64> {
     None
 }
 
+/// CPU seconds of the calling thread so far, or `None` where the platform
+/// does not say (splits a pair's process CPU between its two frames).
+#[cfg(unix)]
+pub(crate) fn thread_cpu_seconds() -> Option<f64> {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec for the call's duration.
+    let r = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    (r == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+}
+
+/// CPU seconds of the calling thread: `None` (not read here).
+#[cfg(not(unix))]
+pub(crate) fn thread_cpu_seconds() -> Option<f64> {
+    None
+}
+
 /// The stage times of one output frame (milliseconds). The analysis and
 /// retrieval of an arriving frame count with the first frame it lets the
 /// session output (at the end of a stream one arrival outputs several).
@@ -115,6 +134,27 @@ impl StageClock {
         into.wall_ms[i] += now.wall.saturating_duration_since(self.wall).as_secs_f64() * 1e3;
         if let (Some(a), Some(b)) = (self.cpu, now.cpu) {
             into.cpu_ms[i] += ((b - a) * 1e3).max(0.0);
+        }
+        *self = now;
+    }
+
+    /// Ends `stage` of two frames made at once (the two-frame overlap):
+    /// the wall time since the last lap goes to both (each frame's mesh is
+    /// ready when the pair's is), the process CPU time is split, `share`
+    /// of it to `a` (the threads' own CPU times' ratio: an estimate, as
+    /// the work rayon hands between the two threads counts with the
+    /// thread that runs it).
+    pub fn lap_pair(&mut self, stage: Stage, a: &mut FrameStages, b: &mut FrameStages, share: f64) {
+        let now = StageClock::start();
+        let i = stage as usize;
+        let wall = now.wall.saturating_duration_since(self.wall).as_secs_f64() * 1e3;
+        a.wall_ms[i] += wall;
+        b.wall_ms[i] += wall;
+        if let (Some(x), Some(y)) = (self.cpu, now.cpu) {
+            let cpu = ((y - x) * 1e3).max(0.0);
+            let share = share.clamp(0.0, 1.0);
+            a.cpu_ms[i] += cpu * share;
+            b.cpu_ms[i] += cpu * (1.0 - share);
         }
         *self = now;
     }

@@ -7,6 +7,7 @@ mod decompose;
 mod long;
 mod offline;
 mod online;
+mod overlap;
 mod page;
 mod protocols;
 mod stages;
