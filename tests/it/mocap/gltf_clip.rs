@@ -451,3 +451,159 @@ fn a_gltf_without_skin_or_animation_or_the_named_one_is_a_one_line_error() {
     assert_eq!(c.fps(), 60.0);
     assert_eq!(c.frame_count(), 121);
 }
+
+/// A cubic in `t` (coefficients per component, lowest first) and its
+/// derivative.
+fn cubic(c: &[[f64; 4]], t: f64) -> (Vec<f64>, Vec<f64>) {
+    c.iter()
+        .map(|k| {
+            (
+                k[0] + t * (k[1] + t * (k[2] + t * k[3])),
+                k[1] + t * (2.0 * k[2] + 3.0 * t * k[3]),
+            )
+        })
+        .unzip()
+}
+
+/// A GLB of one triangle and two animated nodes, node 1's translation and
+/// node 2's rotation keyed CUBICSPLINE at `times` (three keys): on the
+/// first interval the curve is the cubic `f`, on the second the cubic `g`
+/// (`g(t₁) = f(t₁)`, its own slope there), so key 1's in-tangent is `f′(t₁)`
+/// and its out-tangent `g′(t₁)`.
+fn cubic_spline_glb(times: [f64; 3], f: &[[f64; 4]], g: &[[f64; 4]]) -> Vec<u8> {
+    let mut bin: Vec<u8> = Vec::new();
+    let mut push = |v: &[f64]| {
+        for x in v {
+            bin.extend_from_slice(&(*x as f32).to_le_bytes());
+        }
+    };
+    push(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    push(&times);
+    // Per key: in-tangent, value, out-tangent (glTF 2.0 Appendix C).
+    let keys = |dims: usize| -> Vec<f64> {
+        let (f0, df0) = cubic(&f[..dims], times[0]);
+        let (f1, df1) = cubic(&f[..dims], times[1]);
+        let (_, dg1) = cubic(&g[..dims], times[1]);
+        let (g2, dg2) = cubic(&g[..dims], times[2]);
+        [df0.clone(), f0, df0, df1, f1, dg1, dg2.clone(), g2, dg2].concat()
+    };
+    let (tr, rot) = (keys(3), keys(4));
+    push(&tr);
+    push(&rot);
+    let view =
+        |offset: usize, len: usize| json!({"buffer": 0, "byteOffset": offset, "byteLength": len});
+    let (t0, t2) = (times[0] as f32, times[2] as f32);
+    let j = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [{"mesh": 0}, {"name": "mover"}, {"name": "turner"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [view(0, 36), view(36, 12), view(48, 4 * tr.len()), view(48 + 4 * tr.len(), 4 * rot.len())],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "SCALAR", "min": [t0], "max": [t2]},
+            {"bufferView": 2, "componentType": 5126, "count": 9, "type": "VEC3"},
+            {"bufferView": 3, "componentType": 5126, "count": 9, "type": "VEC4"}
+        ],
+        "animations": [{
+            "name": "curve",
+            "samplers": [
+                {"input": 1, "output": 2, "interpolation": "CUBICSPLINE"},
+                {"input": 1, "output": 3, "interpolation": "CUBICSPLINE"}
+            ],
+            "channels": [
+                {"sampler": 0, "target": {"node": 1, "path": "translation"}},
+                {"sampler": 1, "target": {"node": 2, "path": "rotation"}}
+            ]
+        }]
+    });
+    glb_join(&j, &bin)
+}
+
+/// glTF 2.0's CUBICSPLINE keys follow the cubic Hermite spline of their
+/// values and tangents (Appendix C), checked against generated curves: a
+/// translation whose two intervals are two different cubics (so key 1's
+/// in- and out-tangents differ: the spline reproduces each cubic exactly,
+/// which a linear reading between the values, or the tangents swapped,
+/// does not) and a rotation whose components are cubics (the spline's
+/// sum normalised), at uneven key times, through `GltfAsset::node_worlds_at`
+/// (what the clip reader samples).
+#[test]
+fn cubic_spline_keys_follow_the_generated_curves_between_the_keys() {
+    let f = [
+        [0.1, 1.3, -2.0, 1.7],
+        [-0.4, 0.2, 3.1, -2.2],
+        [0.9, -1.1, 0.4, 0.8],
+        [0.6, 0.5, -0.3, 0.2],
+    ];
+    let g = [
+        [0.0, -0.7, 1.9, -0.6],
+        [0.0, 2.4, -1.2, 0.5],
+        [0.0, 0.3, 0.9, -1.4],
+        [0.0, -0.2, 0.6, 0.1],
+    ];
+    for times in [[0.0, 0.3, 1.1], [0.5, 0.52, 2.0]] {
+        // `g` is written about t₁ and starts where `f` ends.
+        let (f1, _) = cubic(&f, times[1]);
+        let shift = |t: f64| t - times[1];
+        let g_at = |t: f64| -> Vec<f64> {
+            let (v, _) = cubic(&g, shift(t));
+            v.iter().zip(&f1).map(|(a, b)| a + b).collect()
+        };
+        // The spline's `g` in absolute time: its coefficients expanded.
+        let g_abs: Vec<[f64; 4]> = (0..4)
+            .map(|c| {
+                let (a, b, cc, d, s) = (g[c][0] + f1[c], g[c][1], g[c][2], g[c][3], times[1]);
+                [
+                    a - b * s + cc * s * s - d * s * s * s,
+                    b - 2.0 * cc * s + 3.0 * d * s * s,
+                    cc - 3.0 * d * s,
+                    d,
+                ]
+            })
+            .collect();
+        let bytes = cubic_spline_glb(times, &f, &g_abs);
+        let asset = surfmotion::mesh::io::gltf::parse_gltf(&bytes, Path::new("curve.glb")).unwrap();
+        let (mut trs, mut world) = (Vec::new(), Vec::new());
+        let (mut worst_t, mut worst_r, mut linear_gap) = (0.0f64, 0.0f64, 0.0f64);
+        for i in 0..=200 {
+            let t = times[0] + (times[2] - times[0]) * f64::from(i) / 200.0;
+            let want = if t <= times[1] {
+                cubic(&f, t).0
+            } else {
+                g_at(t)
+            };
+            assert!(asset.node_worlds_at(Some(0), t as f32, &mut trs, &mut world));
+            let (_, _, tr) = world[1].to_scale_rotation_translation();
+            for a in 0..3 {
+                worst_t = worst_t.max((tr[a] - want[a]).abs());
+            }
+            let q = glam::DQuat::from_xyzw(want[0], want[1], want[2], want[3]).normalize();
+            let (_, got, _) = world[2].to_scale_rotation_translation();
+            worst_r = worst_r.max(got.angle_between(q).to_degrees());
+            // What a linear reading between the values would give.
+            let (k0, k1) = if t <= times[1] { (0, 1) } else { (1, 2) };
+            let s = (t - times[k0]) / (times[k1] - times[k0]);
+            let at = |k: usize| {
+                if k < 2 {
+                    cubic(&f, times[k]).0
+                } else {
+                    g_at(times[2])
+                }
+            };
+            let (v0, v1) = (at(k0), at(k1));
+            for a in 0..3 {
+                linear_gap = linear_gap.max((v0[a] + s * (v1[a] - v0[a]) - want[a]).abs());
+            }
+        }
+        eprintln!(
+            "keys at {times:?}: translation off its curve by at most {worst_t:.2e}, rotation \
+             {worst_r:.2e}°; a linear reading would be {linear_gap:.3} off"
+        );
+        assert!(worst_t < 2e-4, "{times:?}: {worst_t}");
+        assert!(worst_r < 0.02, "{times:?}: {worst_r}°");
+        assert!(linear_gap > 100.0 * worst_t, "{times:?}: {linear_gap}");
+    }
+}

@@ -2,6 +2,7 @@
 
 mod character_neutral;
 mod chest;
+mod data_floor;
 mod feet;
 mod ground;
 mod placement;

@@ -435,7 +435,7 @@ pub(super) fn mirrored(mut cp: ClipPoses) -> ClipPoses {
 
 /// `cp` turned by `q` and scaled by `k` about the origin: the poses, the
 /// reference's pose and the file joints' world rotations.
-fn turned(mut cp: ClipPoses, q: DQuat, k: f64) -> ClipPoses {
+pub(super) fn turned(mut cp: ClipPoses, q: DQuat, k: f64) -> ClipPoses {
     for p in cp.poses.iter_mut().chain([&mut cp.reference.pose]) {
         *p = p.map(|x| q * x * k);
     }

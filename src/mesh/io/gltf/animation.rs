@@ -96,7 +96,8 @@ fn read_weights_channel(
 }
 
 /// A translation, rotation or scale channel of animation `a` (`None` for a
-/// morph-weights channel); cubic-spline keys keep their values only.
+/// morph-weights channel); cubic-spline keys keep their tangents (glTF 2.0
+/// Appendix C: each key's output is in-tangent, value, out-tangent).
 fn read_trs_channel(
     ctx: &Ctx,
     a: &gltf::Animation,
@@ -126,14 +127,26 @@ fn read_trs_channel(
             a.name().unwrap_or("")
         )));
     }
+    let at = |k: usize, part: usize| {
+        let o = (k * per_key + part) * comps;
+        let mut v = [0.0f32; 4];
+        v[..comps].copy_from_slice(&vals[o..o + comps]);
+        v
+    };
     let values = (0..times.len())
-        .map(|k| {
-            let o = (k * per_key + if cubic { 1 } else { 0 }) * comps;
-            let mut v = [0.0f32; 4];
-            v[..comps].copy_from_slice(&vals[o..o + comps]);
-            v
-        })
+        .map(|k| at(k, if cubic { 1 } else { 0 }))
         .collect();
+    let tangents: Vec<[[f32; 4]; 2]> = if cubic {
+        (0..times.len()).map(|k| [at(k, 0), at(k, 2)]).collect()
+    } else {
+        Vec::new()
+    };
+    if tangents.iter().flatten().flatten().any(|x| !x.is_finite()) {
+        return Err(ctx.err(format!(
+            "animation '{}': a cubic-spline tangent is not a finite number",
+            a.name().unwrap_or("")
+        )));
+    }
     let step = ch.sampler().interpolation() == gltf::animation::Interpolation::Step;
     Ok(Some(NodeChannel {
         node: ch.target().node().index(),
@@ -141,7 +154,37 @@ fn read_trs_channel(
         times,
         values,
         step,
+        tangents,
     }))
+}
+
+/// Cubic-spline channel `ch` between keys `k - 1` and `k`, at `s` (0..1)
+/// of the interval `td` seconds long: glTF 2.0 Appendix C's cubic Hermite
+/// spline, `p(s) = (2s³ − 3s² + 1)·v₀ + td·(s³ − 2s² + s)·b₀ + (−2s³ +
+/// 3s²)·v₁ + td·(s³ − s²)·a₁` (`b₀` the first key's out-tangent, `a₁` the
+/// second's in-tangent); a rotation is normalised (the first key's where
+/// the sum has no length).
+fn hermite(ch: &NodeChannel, k: usize, s: f32, td: f32) -> [f32; 4] {
+    let (s2, s3) = (s * s, s * s * s);
+    let (h00, h10, h01, h11) = (
+        2.0 * s3 - 3.0 * s2 + 1.0,
+        s3 - 2.0 * s2 + s,
+        -2.0 * s3 + 3.0 * s2,
+        s3 - s2,
+    );
+    let (v0, v1) = (ch.values[k - 1], ch.values[k]);
+    let (b0, a1) = (ch.tangents[k - 1][1], ch.tangents[k][0]);
+    let v: [f32; 4] =
+        std::array::from_fn(|i| h00 * v0[i] + td * h10 * b0[i] + h01 * v1[i] + td * h11 * a1[i]);
+    if ch.path != TrsPath::Rotation {
+        return v;
+    }
+    let q = glam::Quat::from_array(v);
+    if q.length() > 1e-12 {
+        q.normalize().to_array()
+    } else {
+        glam::Quat::from_array(v0).normalize().to_array()
+    }
 }
 
 /// Samples one channel at time `t`.
@@ -164,6 +207,9 @@ pub(super) fn sample(ch: &NodeChannel, t: f32) -> [f32; 4] {
         0.0
     };
     let (v0, v1) = (ch.values[k - 1], ch.values[k]);
+    if !ch.tangents.is_empty() {
+        return hermite(ch, k, a, t1 - t0);
+    }
     if ch.path == TrsPath::Rotation {
         let q0 = glam::Quat::from_array(v0).normalize();
         let q1 = glam::Quat::from_array(v1).normalize();

@@ -65,7 +65,7 @@ pub enum TrsPath {
     Scale,
 }
 
-/// One sampled channel of a node animation (CUBICSPLINE keys keep their values only).
+/// One sampled channel of a node animation.
 #[derive(Debug, Clone)]
 pub struct NodeChannel {
     /// Target node.
@@ -76,8 +76,11 @@ pub struct NodeChannel {
     pub times: Vec<f32>,
     /// Key values (xyz or xyzw).
     pub values: Vec<[f32; 4]>,
-    /// STEP interpolation (else linear / slerp).
+    /// STEP interpolation (else linear / slerp, or cubic with tangents).
     pub step: bool,
+    /// CUBICSPLINE keys: each key's in- and out-tangent (same layout as
+    /// `values`); empty for linear and step keys.
+    pub tangents: Vec<[[f32; 4]; 2]>,
 }
 
 /// A node animation: its name, duration and channels.

@@ -23,8 +23,8 @@
 //! index: `take`); it is sampled from its first key to its last at the
 //! keys' rate when they are evenly spaced at 10 to 1000 per second (24 for
 //! the Khronos samples and the Fox), else at 30 fps, unless `fps` is given. Linear keys are interpolated, rotations by slerp, step keys held;
-//! cubic-spline keys are interpolated linearly between their values (the
-//! tangents are not read), exact at the keys.
+//! cubic-spline keys by glTF 2.0's cubic Hermite spline (Appendix C: the
+//! keys' in- and out-tangents; a rotation normalised).
 
 use super::{GltfAsset, NodeAnimation, parse_gltf};
 use crate::mesh::MeshError;

@@ -230,8 +230,8 @@ impl GltfAsset {
 
     /// World matrices of every node at time `t` of node animation `anim`
     /// (`None`: every node at its rest TRS) into `world`, with `trs` as
-    /// scratch: channels sampled (linear, slerp or step keys; cubic-spline
-    /// keys by their values), the rest TRS of nodes the animation does not
+    /// scratch: channels sampled (linear, slerp, step or cubic-spline
+    /// keys), the rest TRS of nodes the animation does not
     /// drive, composed down the hierarchy (glTF 2.0 §3.5.3: `T · R · S`).
     /// Both vectors are resized to the node count, so a caller that keeps
     /// them allocates once. Nodes outside the scene keep the identity.
