@@ -198,6 +198,10 @@ pub(crate) fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
     // The sequence pairs reached (session 33) likewise.
     if opts.reach > 0 {
         text += &format!(" reach {}", opts.reach);
+        // The far search (session 34) with a reach only.
+        if opts.far > 0 && opts.per_pair > 0 {
+            text += &format!(" far {} {}", opts.far, opts.far_rerank);
+        }
     }
     k.text("sparse", &text);
     k.finish()
@@ -677,10 +681,15 @@ fn sparse_similarity(
     if opts.reach > 0 {
         let s = sim.spans.len() as u128;
         notice(format!(
-            "sequence pairs scanned: {} of {} (each sequence with the {} it is most linked to)",
+            "sequence pairs scanned: {} of {} (each sequence with the {} it is most linked to); the far search on the other {}: {} centres kept ({} best of {} cheap each), {} pairs evaluated",
             thousands(stats.sequence_pairs as u128),
             thousands(s * (s + 1) / 2),
-            opts.reach
+            opts.reach,
+            thousands(stats.far_sequence_pairs as u128),
+            thousands(stats.far_candidates as u128),
+            opts.far,
+            opts.far_rerank.max(opts.far),
+            thousands(stats.far_rerank_pairs as u128)
         ));
     }
     let [p_near, p_seq, p_pair] = stats.pairs_by_source.map(|p| thousands(p as u128));

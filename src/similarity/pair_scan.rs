@@ -76,7 +76,8 @@ pub fn best_per_pair_with(
     opts: &TransitionOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Vec<(usize, u32)> {
-    per_pair(spans, reached, opts.top_n, progress, |i, j| {
+    let pairs = scanned_pairs(spans, reached);
+    per_pair(spans, &pairs, opts.top_n, progress, |i, j| {
         let (si, sj) = (&spans[i], &spans[j]);
         let c = cheap_block(features, dims, si, sj);
         let at = |r: usize, s: usize| c[r * sj.len + s];
@@ -117,11 +118,33 @@ pub(crate) fn best_per_pair_refined(
     rerank: Rerank<'_>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<(usize, u32)>, u64) {
+    let pairs = scanned_pairs(spans, reached);
+    best_of_pairs(features, dims, spans, &pairs, opts, rerank, progress)
+}
+
+/// [`best_per_pair_refined`] on the unordered sequence pairs `pairs`
+/// (`i ≤ j`) only. The far search (issue 43, session 34) runs it on the
+/// pairs a reach does not scan ([`far_pairs`]) with a smaller `top_n`
+/// and `rerank.examine`: the whole cheap block of each (a lower bound of
+/// Eq. 1's, `dims` multiply-adds a frame pair), its best cheap
+/// transitions descended to the full measure's minima, the best of those
+/// by Eq. 3's window cost kept — the graph's per-pair rule (Sec. 4.2:
+/// the best `N` of every ordered pair) for the dissimilar pairs, at a few
+/// thousand full measures per pair instead of the reached pairs' ~20,000.
+pub(crate) fn best_of_pairs(
+    features: &[f32],
+    dims: usize,
+    spans: &[Span],
+    pairs: &[(usize, usize)],
+    opts: &TransitionOptions,
+    rerank: Rerank<'_>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Vec<(usize, u32)>, u64) {
     let cheap = TransitionOptions {
         top_n: rerank.examine.max(opts.top_n),
         ..*opts
     };
-    per_pair(spans, reached, opts.top_n, progress, |i, j| {
+    per_pair(spans, pairs, opts.top_n, progress, |i, j| {
         let (si, sj) = (&spans[i], &spans[j]);
         let c = cheap_block(features, dims, si, sj);
         let at = |r: usize, s: usize| c[r * sj.len + s];
@@ -152,10 +175,7 @@ pub(crate) const MAX_DESCENT: usize = 32;
 /// only when given.
 pub fn scan_total(spans: &[Span], reached: Option<&[bool]>) -> u64 {
     if reached.is_some() {
-        return scanned_pairs(spans, reached)
-            .iter()
-            .map(|&(i, j)| (spans[i].len * spans[j].len) as u64)
-            .sum();
+        return cells_of(spans, &scanned_pairs(spans, reached));
     }
     let n: u64 = spans.iter().map(|s| s.len as u64).sum();
     let own: u64 = spans.iter().map(|s| (s.len as u64).pow(2)).sum();
@@ -172,12 +192,34 @@ pub fn scanned_pairs(spans: &[Span], reached: Option<&[bool]>) -> Vec<(usize, us
         .collect()
 }
 
-/// Runs `block(i, j)` on every unordered sequence pair `i ≤ j` (or those
-/// `reached`; in parallel, results in a fixed order) when `top_n` is not
-/// 0; the centres it returns and the sum of its counts.
+/// The unordered sequence pairs `i < j` not `reached` (per ordered pair
+/// `i · sequences + j`): those the far search takes
+/// ([`best_of_pairs`]); none without a reach.
+pub fn far_pairs(spans: &[Span], reached: Option<&[bool]>) -> Vec<(usize, usize)> {
+    let s = spans.len();
+    let Some(r) = reached else {
+        return Vec::new();
+    };
+    (0..s)
+        .flat_map(|i| (i + 1..s).map(move |j| (i, j)))
+        .filter(|&(i, j)| !r[i * s + j])
+        .collect()
+}
+
+/// The cheap distances of the sequence pairs `pairs`: `Σ lenᵢ · lenⱼ`.
+pub fn cells_of(spans: &[Span], pairs: &[(usize, usize)]) -> u64 {
+    pairs
+        .iter()
+        .map(|&(i, j)| (spans[i].len * spans[j].len) as u64)
+        .sum()
+}
+
+/// Runs `block(i, j)` on the unordered sequence pairs `pairs` (`i ≤ j`; in
+/// parallel, results in a fixed order) when `top_n` is not 0; the centres
+/// it returns and the sum of its counts.
 fn per_pair(
     spans: &[Span],
-    reached: Option<&[bool]>,
+    pairs: &[(usize, usize)],
     top_n: usize,
     progress: &(dyn Fn(u64) + Sync),
     block: impl Fn(usize, usize) -> (Vec<(usize, usize)>, u64) + Sync,
@@ -185,7 +227,6 @@ fn per_pair(
     if top_n == 0 {
         return (Vec::new(), 0);
     }
-    let pairs = scanned_pairs(spans, reached);
     let per: Vec<(Vec<(usize, u32)>, u64)> = pairs
         .par_iter()
         .map(|&(i, j)| {

@@ -194,6 +194,33 @@ pub struct SparseOptions {
     /// graph's transitions (dissimilar pairs' best) are lost.
     /// Default: 0.
     pub reach: usize,
+    /// With a reach: transitions kept per sequence pair the reach does not
+    /// scan, found by the far search ([`pair_scan::best_of_pairs`], issue
+    /// 43, session 34): the pair's whole cheap block (the projected
+    /// descriptors' distance, `dims` multiply-adds a frame pair), its
+    /// [`SparseOptions::far_rerank`] best cheap transitions each descended
+    /// to the full measure's local minimum, and the `far` best of those by
+    /// the window cost (Eq. 3) stored with their windows: the centre's
+    /// diagonal `band` frames either way, the two diagonals either side
+    /// only at the centre (the 8-neighbour minimum test). So the graph's
+    /// best `top_n` of every ordered pair (Sec. 4.2), dissimilar ones
+    /// included, are kept for a few thousand full measures per pair. 0:
+    /// the far pairs keep only what their nearest and pooled candidates
+    /// store (session 33). Measured (session 34, the 2,600-vertex pool of
+    /// `scripts/scale-db.sh`, against main's graph at 10⁴ frames, 34
+    /// sequences, reach 16): 66.2 % of the transitions kept at the same
+    /// frames and costs without it, 88.2 % with 6 of 16 (2.6 s of CPU
+    /// more: 163 K full measures and 59 K stored pairs on the 226 far
+    /// pairs), 93.1 % with 8 of 128 (823 K full measures); every ordered
+    /// pair keeps transitions (188 had none). At 3,896 frames (11
+    /// sequences, reach 3) against the dense graph: 70.6 % → 85.5 % (6 of
+    /// 16), 89.7 % (8 of 128); main's default 94.3 %. The misses are
+    /// near-ties: the transition kept instead lies a median 12-26 frames
+    /// away at +0.8-1.5 % of the cost. Default: 6.
+    pub far: usize,
+    /// Cheap transitions examined per far pair ([`SparseOptions::far`]);
+    /// at least `far`. Default: 16.
+    pub far_rerank: usize,
 }
 
 impl Default for SparseOptions {
@@ -212,6 +239,8 @@ impl Default for SparseOptions {
             min_window: 4,
             rerank: 128,
             reach: 0,
+            far: 6,
+            far_rerank: 16,
         }
     }
 }
@@ -245,6 +274,8 @@ impl SparseOptions {
                 "min_window" => &mut self.min_window,
                 "rerank" => &mut self.rerank,
                 "reach" => &mut self.reach,
+                "far" => &mut self.far,
+                "far_rerank" => &mut self.far_rerank,
                 other => return Err(format!("'{other}' is not a sparse option")),
             };
             *field = v;
@@ -278,6 +309,15 @@ pub struct SparseStats {
     /// per-pair scan ran on: every one, or those reached
     /// ([`SparseOptions::reach`]).
     pub sequence_pairs: u64,
+    /// Unordered sequence pairs the far search ran on (those not reached,
+    /// [`SparseOptions::far`]).
+    pub far_sequence_pairs: u64,
+    /// Candidate pairs from the far search (in `candidates`, not in
+    /// `pair_candidates`; their pairs in `pairs_by_source`'s third).
+    pub far_candidates: u64,
+    /// Full measures evaluated by the far search's descents and windows
+    /// (not stored unless a window is).
+    pub far_rerank_pairs: u64,
     /// Distinct pairs evaluated with the full measure.
     pub pairs: u64,
     /// Seconds: descriptors, projection and index.
@@ -784,13 +824,18 @@ pub fn sparse_pairs(
     let found = index_candidates(&features, dims, &spans, &copts);
     let reached = found.reached.as_deref();
     let sequence_pairs = pair_scan::scanned_pairs(&spans, reached).len() as u64;
+    let far_pairs = if opts.far > 0 && opts.per_pair > 0 {
+        pair_scan::far_pairs(&spans, reached)
+    } else {
+        Vec::new()
+    };
     let c1 = cpu();
     let t_scan = std::time::Instant::now();
     let popts = per_pair_options(opts);
     if opts.per_pair > 0 {
         progress.stage(
             "sequence-pair distances scanned",
-            pair_scan::scan_total(&spans, reached),
+            pair_scan::scan_total(&spans, reached) + pair_scan::cells_of(&spans, &far_pairs),
         );
     }
     let step = |k| progress.advance(k);
@@ -805,6 +850,19 @@ pub fn sparse_pairs(
         (best, 0)
     };
     let per_pair = pair_scan::spread_seeds(&best, opts.spread, &spans, &seq);
+    let (far, far_rerank_pairs) = if far_pairs.is_empty() {
+        (Vec::new(), 0)
+    } else {
+        let fopts = super::transitions::TransitionOptions {
+            top_n: opts.far,
+            ..popts
+        };
+        let rerank = pair_scan::Rerank {
+            full: set,
+            examine: opts.far_rerank.max(opts.far),
+        };
+        pair_scan::best_of_pairs(&features, dims, &spans, &far_pairs, &fopts, rerank, &step)
+    };
     let scan_seconds = t_scan.elapsed().as_secs_f64();
     let c2 = cpu();
     let index_seconds = t0.elapsed().as_secs_f64();
@@ -815,10 +873,16 @@ pub fn sparse_pairs(
         .enumerate()
         .flat_map(|(a, bs)| bs.iter().map(move |&b| (a, b)));
     let band = opts.band as i64;
+    let (mut pair_runs, pair_count) =
+        runs_around(per_pair.iter().copied(), &spans, &seq, band, band);
+    // The far search's centres are the full measure's minima: their
+    // diagonal for the windows, the neighbours for the minimum test.
+    let (far_runs, far_count) = runs_around(far.iter().copied(), &spans, &seq, band, 1);
+    pair_runs.extend(far_runs);
     let sources = [
-        runs_around(near, &spans, &seq, band),
-        runs_around(found.per_sequence.iter().copied(), &spans, &seq, band),
-        runs_around(per_pair.iter().copied(), &spans, &seq, band),
+        runs_around(near, &spans, &seq, band, band),
+        runs_around(found.per_sequence.iter().copied(), &spans, &seq, band, band),
+        (pair_runs, pair_count),
     ];
     let mut pairs_by_source = [0u64; 3];
     let mut counts = [0u64; 3];
@@ -846,7 +910,7 @@ pub fn sparse_pairs(
     };
     sim.radius = radii(&sim, &found.near);
     let stats = SparseStats {
-        candidates: counts.iter().sum(),
+        candidates: counts.iter().sum::<u64>() + far_count,
         near_candidates: counts[0],
         sequence_candidates: counts[1],
         pair_candidates: counts[2],
@@ -854,6 +918,9 @@ pub fn sparse_pairs(
         scan_seconds,
         rerank_pairs,
         sequence_pairs,
+        far_sequence_pairs: far_pairs.len() as u64,
+        far_candidates: far_count,
+        far_rerank_pairs,
         pairs,
         index_seconds,
         pairs_seconds: t1.elapsed().as_secs_f64(),
@@ -875,13 +942,16 @@ fn per_pair_options(opts: &SparseOptions) -> super::transitions::TransitionOptio
 }
 
 /// The runs along the diagonals around each candidate `(a, b)`: the
-/// diagonal through it and the two either side, `band` frames each way,
-/// clipped to both sequences. Returns the runs and the candidates' count.
+/// diagonal through it `band` frames each way and the two either side
+/// `side` frames each way (`band`: the windows of every pair near the
+/// centre; 1: the centre's 8 neighbours), clipped to both sequences.
+/// Returns the runs and the candidates' count.
 fn runs_around(
     seeds: impl Iterator<Item = (usize, u32)>,
     spans: &[Span],
     seq: &[u32],
     band: i64,
+    side: i64,
 ) -> (Vec<Run>, u64) {
     let mut runs: Vec<Run> = Vec::new();
     let mut candidates = 0u64;
@@ -897,8 +967,9 @@ fn runs_around(
             if d == 0 {
                 continue;
             }
-            let r0 = (a - band).max(si.start as i64).max(sj.start as i64 - d);
-            let r1 = (a + band)
+            let reach = if e == 0 { band } else { side };
+            let r0 = (a - reach).max(si.start as i64).max(sj.start as i64 - d);
+            let r1 = (a + reach)
                 .min((si.start + si.len) as i64 - 1)
                 .min((sj.start + sj.len) as i64 - 1 - d);
             if r0 > r1 {

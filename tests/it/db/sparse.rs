@@ -1049,3 +1049,118 @@ fn a_reach_bounds_the_sequence_pairs_and_keeps_the_reached_ones_exact() {
         );
     }
 }
+
+/// Issue 43, session 34 (`SparseOptions::far`): the sequence pairs a reach
+/// does not scan get their best transitions from the far search (their
+/// whole cheap block, its best cheap transitions descended to the full
+/// measure's minima). On generated motions (groups of speed variants, one
+/// far motion; 16, 32 and 48 sequences, reach 2 and 4): the graph of the
+/// bounded build holds the dense graph's best transition (same frames,
+/// window and cost) of at least 90 % of the far pairs, both ways, and
+/// misses fewer of them and finds more of the dense transitions than
+/// without the far search (`far` 0), which misses at least twice as many.
+/// The far search scans each far pair once and keeps at most `far`
+/// centres of each. Measured (session 34): at 16 sequences, reach 2, the
+/// best of 95 of 100 far pairs kept (82.1 % of the dense transitions).
+#[test]
+fn the_far_search_keeps_every_sequence_pairs_best_transition() {
+    use surfmotion::graph::{GraphEdits, SurfaceMotionGraph, TransitionOptions};
+    use surfmotion::similarity::matrix::{SimilarityMatrix, all_pairs};
+    use surfmotion::similarity::sparse::{SparseOptions, sparse_pairs};
+    use surfmotion::similarity::{Measure, candidates};
+    let topts = TransitionOptions::default();
+    let edits = GraphEdits::default();
+    for (sequences, reach) in [(16usize, 2usize), (32, 4), (48, 2)] {
+        let (set, spans) = generated_motions(sequences);
+        let dense = SimilarityMatrix::new(spans.clone(), all_pairs(&set, &|_| {})).unwrap();
+        let g_dense = SurfaceMotionGraph::build(&dense, Measure::Shape, &topts, &edits).unwrap();
+        let base = SparseOptions {
+            neighbours: 8,
+            dims: 6,
+            rerank: 16,
+            pool: 32,
+            reach,
+            ..SparseOptions::default()
+        };
+        let of = |g: &SurfaceMotionGraph, i: usize, j: usize| -> Vec<_> {
+            g.transitions()
+                .iter()
+                .filter(|t| (t.from, t.to) == (i, j))
+                .map(|t| (t.m, t.n, t.window, t.cost.to_bits()))
+                .collect()
+        };
+        let mut seen = Vec::new();
+        for far in [base.far, 0] {
+            let opts = SparseOptions { far, ..base };
+            let (sim, stats) = sparse_pairs(&set, spans.clone(), &opts, &|_: u64| {});
+            let g = SurfaceMotionGraph::build(&sim, Measure::Shape, &topts, &edits).unwrap();
+            let what = format!("{sequences} sequences, reach {reach}, far {far}: {stats:?}");
+            // The far pairs: those not reached, from the index as the
+            // build takes them.
+            let (f, dims) = surfmotion::similarity::sparse::project(&set, opts.dims);
+            let copts = candidates::CandidateOptions {
+                neighbours: opts.neighbours,
+                stride: opts.stride,
+                per_sequence: opts.per_sequence,
+                pool: opts.pool,
+                cover: opts.cover,
+                min_gap: opts.min_gap,
+                reach,
+            };
+            let reached = candidates::index_candidates(&f, dims, &spans, &copts)
+                .reached
+                .expect("a reach below the sequences");
+            let far_pairs: Vec<(usize, usize)> = (0..sequences)
+                .flat_map(|i| (i + 1..sequences).map(move |j| (i, j)))
+                .filter(|&(i, j)| !reached[i * sequences + j])
+                .collect();
+            assert!(far_pairs.len() > sequences, "{what}");
+            if far > 0 {
+                assert_eq!(stats.far_sequence_pairs, far_pairs.len() as u64, "{what}");
+                assert!(
+                    stats.far_candidates <= (far * far_pairs.len()) as u64,
+                    "{what}"
+                );
+            } else {
+                assert_eq!(stats.far_sequence_pairs, 0, "{what}");
+            }
+            let mut missed = Vec::new();
+            for &(i, j) in &far_pairs {
+                for (x, y) in [(i, j), (j, i)] {
+                    let d = of(&g_dense, x, y);
+                    if let Some(best) = d.first()
+                        && !of(&g, x, y).contains(best)
+                    {
+                        missed.push((x, y, *best));
+                    }
+                }
+            }
+            let found = g_dense
+                .transitions()
+                .iter()
+                .filter(|t| of(&g, t.from, t.to).contains(&(t.m, t.n, t.window, t.cost.to_bits())))
+                .count();
+            let share = found as f64 / g_dense.transitions().len() as f64;
+            eprintln!(
+                "{sequences} sequences, reach {reach}, far {far}: far pairs {}, their best missed {}, dense transitions found {found} of {} ({:.1} %), pairs compared {}",
+                far_pairs.len(),
+                missed.len(),
+                g_dense.transitions().len(),
+                100.0 * share,
+                stats.pairs
+            );
+            if far > 0 {
+                assert!(
+                    missed.len() * 10 <= 2 * far_pairs.len(),
+                    "{what}: missed {missed:?}"
+                );
+            }
+            seen.push((missed.len(), share));
+        }
+        let ((with, share_with), (without, share_without)) = (seen[0], seen[1]);
+        assert!(
+            with * 2 <= without && share_with > share_without,
+            "{sequences} sequences: far pairs' best missed {with} with the far search, {without} without; dense found {share_with} / {share_without}"
+        );
+    }
+}
