@@ -226,6 +226,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 
 /// The session's options from the arguments.
 pub(super) fn options(a: &Args) -> anyhow::Result<LiveOptions> {
+    let d = LiveOptions::default();
     Ok(LiveOptions {
         lag: a.lag,
         speed: a.speed,
@@ -236,13 +237,11 @@ pub(super) fn options(a: &Args) -> anyhow::Result<LiveOptions> {
         serve: a.serve,
         analysis_window: a.analysis_window.max(1),
         floor_step: a.floor_step.map(|mm| mm / 1000.0),
-        lift_settle: a.lift_settle.or(LiveOptions::default().lift_settle),
-        keep_ground: match a.keep_ground {
-            Some(0) => None,
-            Some(n) => Some(n),
-            None => LiveOptions::default().keep_ground,
-        },
-        open_end: LiveOptions::default().open_end || a.open_end,
+        lift_settle: a.lift_settle.or(d.lift_settle),
+        keep_ground: a
+            .keep_ground
+            .map_or(d.keep_ground, |n| (n > 0).then_some(n)),
+        open_end: d.open_end || a.open_end,
         history: a.history.max(1),
         loops: a.loops,
         actor: a.actor.clone(),
@@ -250,6 +249,6 @@ pub(super) fn options(a: &Args) -> anyhow::Result<LiveOptions> {
         load: a.clip.load_options()?,
         glb: a.glb.options(),
         usd: a.glb.usd_options(),
-        ..LiveOptions::default()
+        ..d
     })
 }
