@@ -1,5 +1,5 @@
 //! Evaluation of the automatic rig (issue 41):
-//! [`surfmotion::tools::eval::autorig`] makes the tables (standard output)
+//! [`surfmotion::tools::autorig`] makes the tables (standard output)
 //! and the details (standard error).
 //!
 //! cargo run --release --example autorig_eval -- [DATA]
@@ -7,7 +7,7 @@
 //! (DATA defaults to `../shared/data`; run from the repository, where
 //! `tests/fixtures` is.) `SURFMOTION_AUTORIG` sets the rules as for `db init`.
 
-use surfmotion::tools::eval::autorig::{AutorigMode, evaluate_autorig};
+use surfmotion::tools::autorig::{AutorigMode, evaluate_autorig};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();

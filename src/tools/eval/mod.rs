@@ -10,7 +10,6 @@
 //! character's captured range. The automatic landmarks of a scan against a
 //! hand-made file: [`landmarks`].
 
-pub mod autorig;
 pub mod error;
 pub mod feet;
 pub mod ground;

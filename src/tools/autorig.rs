@@ -1,6 +1,6 @@
 //! The evaluation of the automatic rig ([`crate::embed::auto`], issue 41)
 //! that `cargo run --release --example autorig_eval -- [DATA]
-//! [real|synth|all|held-parts|facing|orders|contact|joints|spread]` runs
+//! [real|synth|bodies|all|held-parts|facing|orders|contact|joints|spread]` runs
 //! (DATA defaults to `../shared/data`; the fixtures are read from
 //! `tests/fixtures`, relative to the working folder): [`evaluate_autorig`]
 //! returns its tables ([`AutorigReport`]'s `Display`, the example's
@@ -40,6 +40,7 @@ use crate::embed::auto::rig::auto_rig;
 use crate::embed::landmarks::{LandmarkError, Landmarks};
 use crate::mesh::io::{LoadOptions, load_sequence};
 use crate::mesh::{Mesh, TopologyError};
+use crate::pose::retarget::ClipPoses;
 use crate::rig::Canonical;
 use glam::DVec3;
 use std::fmt::{self, Write as _};
@@ -51,7 +52,7 @@ use std::time::Instant;
 pub enum AutorigEvalError {
     /// The arguments name no evaluation.
     #[error(
-        "{0}: expected [DATA] [real|synth|all|held-parts|facing|orders|contact [FRAMES]|joints|spread [SALTS] [renumbered]]"
+        "{0}: expected [DATA] [real|synth|bodies|all|held-parts|facing|orders|contact [FRAMES]|joints|spread [SALTS] [renumbered]]"
     )]
     Usage(String),
     /// `SURFMOTION_AUTORIG` cannot be read.
@@ -77,6 +78,8 @@ pub enum AutorigMode {
     Real,
     /// The synthetic databases against the skeletons that drove them.
     Synth,
+    /// The same on samba's frame 0, the SMPL template and MakeHuman's body.
+    Bodies,
     /// [`AutorigMode::Real`], then [`AutorigMode::Synth`].
     All,
     /// Samba's rest frames 2 and 4 and their pose samples.
@@ -109,6 +112,7 @@ impl AutorigMode {
         let mode = match args.get(1).map_or("all", String::as_str) {
             "real" => AutorigMode::Real,
             "synth" => AutorigMode::Synth,
+            "bodies" => AutorigMode::Bodies,
             "all" => AutorigMode::All,
             "held-parts" => AutorigMode::HeldParts,
             "facing" => AutorigMode::Facing,
@@ -189,6 +193,7 @@ pub fn evaluate_autorig(
     match mode {
         AutorigMode::Real => real(data, &mut w)?,
         AutorigMode::Synth => synth(data, &mut w)?,
+        AutorigMode::Bodies => bodies(data, &mut w)?,
         AutorigMode::All => {
             real(data, &mut w)?;
             synth(data, &mut w)?;
@@ -887,9 +892,6 @@ fn orders(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
 }
 
 fn synth(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
-    use crate::drive::query::load_mocap;
-    use crate::jobs::synth_db::SynthClip;
-    use crate::synth::database::{Dynamics, drive};
     use crate::synth::humanoid::{HumanoidShape, humanoid_landmarks_with, humanoid_mesh_with};
     say!(
         w,
@@ -909,8 +911,95 @@ fn synth(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
             },
         ),
     ];
+    let motions = synth_motions(data, w);
+    for (bname, shape) in &bodies {
+        let rest: Mesh = humanoid_mesh_with(0.02, shape);
+        let lm = humanoid_landmarks_with(&rest, shape);
+        let rig = Embedding::new(&rest, &lm, None)?;
+        synth_rows(bname, &rest, &rig, &motions, w);
+    }
+    Ok(())
+}
+
+/// `bodies`: issue 41's synthetic figure on the bodies it names:
+/// samba's frame 0, the SMPL template and MakeHuman's `body` group (its
+/// unused vertices dropped), each rigged from its fixture's landmarks
+/// (`tests/fixtures/{samba,smpl,makehuman}.landmarks.json`) and driven by
+/// [`synth_motions`]; rows as [`synth`]'s.
+fn bodies(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
+    say!(
+        w,
+        "| body | motion | frames | joints vs truth (% height, mean over joints and frames) | parts agree | confidence | time (s) |"
+    );
+    say!(w, "|---|---|---|---|---|---|---|");
+    let motions = synth_motions(data, w);
+    for (bname, file, group, fixture) in [
+        ("samba frame 0", "4d/samba/samba.obj", None, "samba"),
+        (
+            "SMPL template",
+            "scans/smpl-template/human_man.obj",
+            None,
+            "smpl",
+        ),
+        (
+            "MakeHuman body",
+            "scans/makehuman/base.obj",
+            Some("body"),
+            "makehuman",
+        ),
+    ] {
+        let spec = data.join(file);
+        let seq = match load_sequence(&spec.to_string_lossy(), &LoadOptions::default()) {
+            Ok(s) => s,
+            Err(e) => {
+                say!(w, "| {bname} | not run: {e} |");
+                continue;
+            }
+        };
+        let whole = match group {
+            None => seq.frame_mesh(0),
+            Some(g) => match seq.mesh().select_groups(&[g.to_string()]) {
+                Some(m) => m,
+                None => {
+                    say!(w, "| {bname} | not run: no group {g} |");
+                    continue;
+                }
+            },
+        };
+        // Only the vertices the triangles use, in their order.
+        let mut used = vec![false; whole.vertex_count()];
+        whole
+            .triangles()
+            .iter()
+            .flatten()
+            .for_each(|&v| used[v as usize] = true);
+        let mut index = vec![u32::MAX; used.len()];
+        let mut kept = Vec::new();
+        for (v, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+            index[v] = kept.len() as u32;
+            kept.push(whole.positions()[v]);
+        }
+        let tris = whole
+            .triangles()
+            .iter()
+            .map(|t| t.map(|v| index[v as usize]))
+            .collect();
+        let rest = Mesh::new(kept, tris)?;
+        let fixture = PathBuf::from(format!("tests/fixtures/{fixture}.landmarks.json"));
+        let lm = Landmarks::load(&fixture, rest.vertex_count())?;
+        let rig = Embedding::new(&rest, &lm, None)?;
+        synth_rows(bname, &rest, &rig, &motions, w);
+    }
+    Ok(())
+}
+
+/// The synthetic databases' motions: the procedural gait turn (4 s) and
+/// CMU 02_05 and 05_06 (150 frames each), at 30 frames a second.
+fn synth_motions(data: &Path, w: &mut AutorigReport) -> Vec<(String, ClipPoses)> {
+    use crate::drive::query::load_mocap;
+    use crate::jobs::synth_db::SynthClip;
     let fps = 30.0;
-    let mut motions: Vec<(String, crate::pose::retarget::ClipPoses)> = Vec::new();
+    let mut motions: Vec<(String, ClipPoses)> = Vec::new();
     let walk = crate::synth::clips::gait_clip(crate::synth::clips::Gait::Turn, 4.0, fps);
     if let Ok(SynthClip::Poses { poses, .. }) = SynthClip::from_clip("turn", &walk) {
         motions.push(("gait turn (4 s)".into(), *poses));
@@ -929,43 +1018,51 @@ fn synth(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
                 let mut reference = c.reference;
                 poses.truncate(150);
                 reference.rotations = reference.rotations.iter().take(150).copied().collect();
-                motions.push((
-                    format!("CMU {clip} (5 s)"),
-                    crate::pose::retarget::ClipPoses { poses, reference },
-                ));
+                motions.push((format!("CMU {clip} (5 s)"), ClipPoses { poses, reference }));
             }
             Err(e) => note!(w, "{clip}: {e}"),
         }
     }
-    for (bname, shape) in &bodies {
-        let rest: Mesh = humanoid_mesh_with(0.02, shape);
-        let lm = humanoid_landmarks_with(&rest, shape);
-        let rig = Embedding::new(&rest, &lm, None)?;
-        let h = rig.height();
-        for (mname, cp) in &motions {
-            let out = drive(
-                &rest,
-                &rig,
-                &cp.poses,
-                &cp.reference,
-                fps,
-                Dynamics::default(),
-            );
-            let n = rest.vertex_count();
-            let frames: Vec<&[[f64; 3]]> = out.positions.chunks(n).collect();
-            let t = Instant::now();
-            let (rest_frame, why) = rest_as_db_init(&rest, &frames);
-            let auto = match auto_rig(&rest, &frames, &db_init_options(rest_frame)) {
-                Ok(a) => a,
-                Err(e) => {
-                    say!(w, "| {bname} | {mname} | {} | refused: {e} |", frames.len());
-                    continue;
-                }
-            };
-            let secs = t.elapsed().as_secs_f64();
-            let mine = match embed_as_db_init(&rest, &frames, rest_frame, &auto.landmarks)
-                .ok_or("refused")
-            {
+    motions
+}
+
+/// One row per motion: `rest` driven by each of `motions` through `rig`
+/// (`synth::database::drive`, its secondary dynamics), rigged
+/// automatically as `db init` rigs it, its joints read off every frame
+/// against the skeleton that drove the frame, its parts against `rig`'s.
+fn synth_rows(
+    bname: &str,
+    rest: &Mesh,
+    rig: &Embedding,
+    motions: &[(String, ClipPoses)],
+    w: &mut AutorigReport,
+) {
+    use crate::synth::database::{Dynamics, drive};
+    let h = rig.height();
+    let fps = 30.0;
+    for (mname, cp) in motions {
+        let out = drive(
+            rest,
+            rig,
+            &cp.poses,
+            &cp.reference,
+            fps,
+            Dynamics::default(),
+        );
+        let n = rest.vertex_count();
+        let frames: Vec<&[[f64; 3]]> = out.positions.chunks(n).collect();
+        let t = Instant::now();
+        let (rest_frame, why) = rest_as_db_init(rest, &frames);
+        let auto = match auto_rig(rest, &frames, &db_init_options(rest_frame)) {
+            Ok(a) => a,
+            Err(e) => {
+                say!(w, "| {bname} | {mname} | {} | refused: {e} |", frames.len());
+                continue;
+            }
+        };
+        let secs = t.elapsed().as_secs_f64();
+        let mine =
+            match embed_as_db_init(rest, &frames, rest_frame, &auto.landmarks).ok_or("refused") {
                 Ok(m) => m,
                 Err(e) => {
                     say!(
@@ -976,36 +1073,34 @@ fn synth(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
                     continue;
                 }
             };
-            let mut s = 0.0;
-            let mut k = 0usize;
-            for (f, pose) in frames.iter().zip(&out.poses) {
-                let j = mine.frame_joints(f);
-                for c in 0..19 {
-                    s += j[c].distance(pose[c]);
-                    k += 1;
-                }
+        let mut s = 0.0;
+        let mut k = 0usize;
+        for (f, pose) in frames.iter().zip(&out.poses) {
+            let j = mine.frame_joints(f);
+            for c in 0..19 {
+                s += j[c].distance(pose[c]);
+                k += 1;
             }
-            say!(
-                w,
-                "| {bname} | {mname} | {} | {:.2} | {:.1}% | {:.2} | {secs:.1} |",
-                frames.len(),
-                100.0 * s / k as f64 / h,
-                100.0 * agree(mine.labels(), rig.labels()),
-                auto.confidence
-            );
-            let (e, wj, wd) = joint_error(mine.joints(), rig.joints());
-            note!(
-                w,
-                "  rest frame {rest_frame:?} ({why}); rest joints {:.2}%, worst {} {:.1}%; facing {:.1}° from the rig's; {}",
-                100.0 * e / h,
-                Canonical::ALL[wj].name(),
-                100.0 * wd / h,
-                facing_deg(&auto, rig.facing()),
-                auto.summary()
-            );
         }
+        say!(
+            w,
+            "| {bname} | {mname} | {} | {:.2} | {:.1}% | {:.2} | {secs:.1} |",
+            frames.len(),
+            100.0 * s / k as f64 / h,
+            100.0 * agree(mine.labels(), rig.labels()),
+            auto.confidence
+        );
+        let (e, wj, wd) = joint_error(mine.joints(), rig.joints());
+        note!(
+            w,
+            "  rest frame {rest_frame:?} ({why}); rest joints {:.2}%, worst {} {:.1}%; facing {:.1}° from the rig's; {}",
+            100.0 * e / h,
+            Canonical::ALL[wj].name(),
+            100.0 * wd / h,
+            facing_deg(&auto, rig.facing()),
+            auto.summary()
+        );
     }
-    Ok(())
 }
 
 /// One automatic rig scored against the landmark rig: each joint's
