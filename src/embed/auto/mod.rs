@@ -20,7 +20,6 @@ pub mod facing;
 pub mod humanoid;
 pub mod joints;
 pub mod limbs;
-pub mod neck;
 pub mod options;
 pub mod report;
 pub mod rig;

@@ -56,16 +56,10 @@ pub struct AutoRig {
 
 impl AutoRig {
     /// The landmarks as the JSON a landmarks file holds (points rounded to
-    /// 10 µm, surface marks in full, with the mesh's vertex count; a
-    /// headless body's `"absent": ["head"]`).
+    /// 10 µm, surface marks in full, with the mesh's vertex count).
     pub fn landmarks_json(&self, vertex_count: usize) -> String {
         let r = |x: f64| (x * 1e5).round() / 1e5;
         let mut lines = vec![format!("  \"vertex_count\": {vertex_count}")];
-        if self.landmarks.headless() {
-            // A body cut at the neck ([`super::neck`]): no chin, and the
-            // file says why (`Landmarks::parse` asks for one otherwise).
-            lines.push("  \"absent\": [\"head\"]".into());
-        }
         for (l, mark) in &self.landmarks.marks {
             match mark {
                 Mark::Point(p) => lines.push(format!(

@@ -57,11 +57,7 @@ pub fn auto_rig(
     let found = place_joints(&body, &sided);
     let (sym, confidence) = symmetry_and_confidence(rest, &body, &sided, &found, &mut notes);
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
-    let cut = super::neck::cut_at_neck(&super::neck::section_widths(&body, chains.head));
-    if let Some(why) = &cut {
-        notes.push(format!("no head: {why}; the landmarks say \"absent\": [\"head\"] (the embedding finds the top of the neck, the head checks are skipped)"));
-    }
-    let marks = landmark_points(&body, &chains, &sided, &found, cut.is_none(), &mut notes);
+    let marks = landmark_points(&body, &chains, &sided, &found, &mut notes);
 
     // Onto the topology: by the motion of the part of the nearest vertex
     // (each part's rigid fit from the rest frame onto the topology's
@@ -428,8 +424,7 @@ fn get_joint(found: &[(String, Placed)], name: &str) -> Placed {
 }
 
 /// The landmarks as rest-frame points: the limb joints (the ankles only
-/// when the motion showed them), the groin, the chin and the head top
-/// (with `head`; a body cut at the neck has neither: [`super::neck`]).
+/// when the motion showed them), the groin, the chin, the head top.
 ///
 /// The shoulders are not written: the embedding places them as it does
 /// for landmarks without shoulders (hand-made ones, samba's fixture): from
@@ -448,7 +443,6 @@ fn landmark_points(
     chains: &Chains,
     sided: &Sided,
     found: &[(String, Placed)],
-    head: bool,
     notes: &mut Vec<String>,
 ) -> Vec<(Landmark, DVec3)> {
     let (up, lo, height) = (body.up, body.lo, body.height);
@@ -491,9 +485,6 @@ fn landmark_points(
         mid + up * (lo + 0.47 * height - mid.dot(up))
     };
     marks.push((Landmark::Groin, groin));
-    if !head {
-        return marks;
-    }
     // The chin: 12.5 % of the height below the top of the head, ahead of
     // its axis by `place_joints`'s chin offset.
     let top = DVec3::from_array(body.rest[chains.head as usize]);

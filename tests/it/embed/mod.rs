@@ -8,7 +8,6 @@ mod auto_hands;
 mod auto_held;
 mod auto_knees;
 mod auto_order;
-mod auto_partial;
 mod auto_settle;
 mod auto_sides;
 mod auto_straddle;

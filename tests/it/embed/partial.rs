@@ -28,11 +28,7 @@ fn fixture(name: &str) -> PathBuf {
 
 /// The first `frames` frames of `seq` keeping only the vertices `keep`
 /// (re-indexed in order; triangles with a dropped corner dropped).
-pub(super) fn cut(
-    seq: &MeshSequence,
-    keep: &[bool],
-    frames: usize,
-) -> (Mesh, Vec<[f64; 3]>, Vec<u32>) {
+fn cut(seq: &MeshSequence, keep: &[bool], frames: usize) -> (Mesh, Vec<[f64; 3]>, Vec<u32>) {
     let mut index = vec![u32::MAX; keep.len()];
     let mut old = Vec::new();
     for (v, &k) in keep.iter().enumerate() {
