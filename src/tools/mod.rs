@@ -1,7 +1,9 @@
 //! Tools over the pipeline's results: the papers' metrics and plausibility
-//! checks ([`eval`]), what any supported file holds ([`inspect`]), and a
-//! small software rasteriser for PNG views ([`render`]).
+//! checks ([`eval`]), what any supported file holds ([`inspect`]), a
+//! small software rasteriser for PNG views ([`render`]), and the
+//! evaluation of the automatic rig ([`autorig`]).
 
+pub mod autorig;
 pub mod eval;
 pub mod inspect;
 pub mod render;
