@@ -12,25 +12,7 @@
 //! other threads (the opt-in
 //! [`super::options::LatticeOptions::parallel_from`]) is not counted.
 
-/// CPU seconds the calling thread has run so far, or `None` where the
-/// platform does not say.
-#[cfg(unix)]
-pub(crate) fn thread_cpu_seconds() -> Option<f64> {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `ts` is a valid, writable timespec for the call's duration.
-    let r = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    (r == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
-}
-
-/// CPU seconds the calling thread has run so far: `None` (no portable
-/// thread clock here).
-#[cfg(not(unix))]
-pub(crate) fn thread_cpu_seconds() -> Option<f64> {
-    None
-}
+use crate::util::cpu::thread_cpu_seconds;
 
 /// A stopwatch of both clocks.
 #[derive(Debug, Clone, Copy)]

@@ -48,43 +48,7 @@ impl Stage {
     }
 }
 
-/// CPU seconds of the whole process so far (every thread), or `None`
-/// where the platform does not say.
-#[cfg(unix)]
-pub(crate) fn process_cpu_seconds() -> Option<f64> {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `ts` is a valid, writable timespec for the call's duration.
-    let r = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
-    (r == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
-}
-
-/// CPU seconds of the whole process so far: `None` (not read here).
-#[cfg(not(unix))]
-pub(crate) fn process_cpu_seconds() -> Option<f64> {
-    None
-}
-
-/// CPU seconds of the calling thread so far, or `None` where the platform
-/// does not say (splits a pair's process CPU between its two frames).
-#[cfg(unix)]
-pub(crate) fn thread_cpu_seconds() -> Option<f64> {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `ts` is a valid, writable timespec for the call's duration.
-    let r = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    (r == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
-}
-
-/// CPU seconds of the calling thread: `None` (not read here).
-#[cfg(not(unix))]
-pub(crate) fn thread_cpu_seconds() -> Option<f64> {
-    None
-}
+pub(crate) use crate::util::cpu::{process_cpu_seconds, thread_cpu_seconds};
 
 /// The stage times of one output frame (milliseconds). The analysis and
 /// retrieval of an arriving frame count with the first frame it lets the

@@ -213,19 +213,7 @@ fn weakly_linked(
 /// figure that load does not inflate as it does wall time; 0 where the
 /// platform does not say.
 pub(crate) fn process_cpu_seconds() -> f64 {
-    #[cfg(unix)]
-    {
-        let mut ts = libc::timespec {
-            tv_sec: 0,
-            tv_nsec: 0,
-        };
-        // SAFETY: `ts` is a valid, writable timespec for the call.
-        let r = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
-        if r == 0 {
-            return ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9;
-        }
-    }
-    0.0
+    crate::util::cpu::process_cpu_seconds().unwrap_or(0.0)
 }
 
 /// The sequence of every frame.

@@ -246,6 +246,21 @@ impl Default for SparseOptions {
 }
 
 impl SparseOptions {
+    /// The candidate index's options these options give (the index the
+    /// build takes its nearest-frame, pool and cover candidates and its
+    /// reached sequence pairs from).
+    pub fn candidates(&self) -> CandidateOptions {
+        CandidateOptions {
+            neighbours: self.neighbours,
+            stride: self.stride,
+            per_sequence: self.per_sequence,
+            pool: self.pool,
+            cover: self.cover,
+            min_gap: self.min_gap,
+            reach: self.reach,
+        }
+    }
+
     /// These options with `name=value` pairs applied (comma-separated,
     /// names of the fields, e.g. `per_pair=8,rerank=32,per_sequence=0`):
     /// how `db build` takes other options for a measurement
@@ -812,15 +827,7 @@ pub fn sparse_pairs(
     let n = set.frames();
     let seq = sequence_of(&spans, n);
     let (features, dims) = project(set, opts.dims);
-    let copts = CandidateOptions {
-        neighbours: opts.neighbours,
-        stride: opts.stride,
-        per_sequence: opts.per_sequence,
-        pool: opts.pool,
-        cover: opts.cover,
-        min_gap: opts.min_gap,
-        reach: opts.reach,
-    };
+    let copts = opts.candidates();
     let found = index_candidates(&features, dims, &spans, &copts);
     let reached = found.reached.as_deref();
     let sequence_pairs = pair_scan::scanned_pairs(&spans, reached).len() as u64;

@@ -839,10 +839,19 @@ fn contact(data: &Path, starts: &[usize], w: &mut AutorigReport) {
     }
 }
 
-/// A fixed shuffle of `0..n` (xorshift; the same every run).
+/// The seed of the evaluation's renumbered and shuffled orders.
+pub const EVAL_SEED: u64 = 0x2545_F491_4F6C_DD1D;
+
+/// A fixed shuffle of `0..n` with [`EVAL_SEED`].
 fn shuffled(n: usize) -> Vec<usize> {
+    xorshift_order(n, EVAL_SEED)
+}
+
+/// A fixed shuffle of `0..n` (xorshift from `seed`; the same every run):
+/// the orders the evaluation and the automatic-rig tests draw.
+pub fn xorshift_order(n: usize, seed: u64) -> Vec<usize> {
     let mut order: Vec<usize> = (0..n).collect();
-    let mut x = 0x2545_F491_4F6C_DD1Du64;
+    let mut x = seed;
     for i in (1..n).rev() {
         x ^= x << 13;
         x ^= x >> 7;

@@ -964,13 +964,8 @@ fn a_reach_bounds_the_sequence_pairs_and_keeps_the_reached_ones_exact() {
         // The reached pairs, from the index as the build takes them.
         let (f, dims) = project(&set, with.dims);
         let copts = CandidateOptions {
-            neighbours: with.neighbours,
-            stride: with.stride,
-            per_sequence: with.per_sequence,
-            pool: with.pool,
-            cover: with.cover,
-            min_gap: with.min_gap,
             reach,
+            ..with.candidates()
         };
         let found = index_candidates(&f, dims, &spans, &copts);
         let reached = found.reached.clone().expect("a reach below the sequences");
@@ -1001,13 +996,6 @@ fn a_reach_bounds_the_sequence_pairs_and_keeps_the_reached_ones_exact() {
         let edits = GraphEdits::default();
         let g_all = SurfaceMotionGraph::build(&all, Measure::Shape, &topts, &edits).unwrap();
         let g = SurfaceMotionGraph::build(&sim, Measure::Shape, &topts, &edits).unwrap();
-        let of = |g: &SurfaceMotionGraph, i: usize, j: usize| -> Vec<_> {
-            g.transitions()
-                .iter()
-                .filter(|t| (t.from, t.to) == (i, j))
-                .map(|t| (t.m, t.n, t.window, t.cost.to_bits()))
-                .collect()
-        };
         let mut kept = 0;
         for i in 0..sequences {
             for j in 0..sequences {
@@ -1020,8 +1008,12 @@ fn a_reach_bounds_the_sequence_pairs_and_keeps_the_reached_ones_exact() {
                     let (x, y) = (spans[i].start + r, spans[j].start + c);
                     assert_eq!(sim.get(x, y).to_bits(), all.get(x, y).to_bits());
                 }
-                let t = of(&g, i, j);
-                assert_eq!(t, of(&g_all, i, j), "{what}: transitions ({i}, {j})");
+                let t = transitions_between(&g, i, j);
+                assert_eq!(
+                    t,
+                    transitions_between(&g_all, i, j),
+                    "{what}: transitions ({i}, {j})"
+                );
                 kept += t.len();
             }
         }
@@ -1082,13 +1074,6 @@ fn the_far_search_keeps_every_sequence_pairs_best_transition() {
             reach,
             ..SparseOptions::default()
         };
-        let of = |g: &SurfaceMotionGraph, i: usize, j: usize| -> Vec<_> {
-            g.transitions()
-                .iter()
-                .filter(|t| (t.from, t.to) == (i, j))
-                .map(|t| (t.m, t.n, t.window, t.cost.to_bits()))
-                .collect()
-        };
         let mut seen = Vec::new();
         for far in [base.far, 0] {
             let opts = SparseOptions { far, ..base };
@@ -1099,13 +1084,8 @@ fn the_far_search_keeps_every_sequence_pairs_best_transition() {
             // build takes them.
             let (f, dims) = surfmotion::similarity::sparse::project(&set, opts.dims);
             let copts = candidates::CandidateOptions {
-                neighbours: opts.neighbours,
-                stride: opts.stride,
-                per_sequence: opts.per_sequence,
-                pool: opts.pool,
-                cover: opts.cover,
-                min_gap: opts.min_gap,
                 reach,
+                ..opts.candidates()
             };
             let reached = candidates::index_candidates(&f, dims, &spans, &copts)
                 .reached
@@ -1127,9 +1107,9 @@ fn the_far_search_keeps_every_sequence_pairs_best_transition() {
             let mut missed = Vec::new();
             for &(i, j) in &far_pairs {
                 for (x, y) in [(i, j), (j, i)] {
-                    let d = of(&g_dense, x, y);
+                    let d = transitions_between(&g_dense, x, y);
                     if let Some(best) = d.first()
-                        && !of(&g, x, y).contains(best)
+                        && !transitions_between(&g, x, y).contains(best)
                     {
                         missed.push((x, y, *best));
                     }
@@ -1138,7 +1118,14 @@ fn the_far_search_keeps_every_sequence_pairs_best_transition() {
             let found = g_dense
                 .transitions()
                 .iter()
-                .filter(|t| of(&g, t.from, t.to).contains(&(t.m, t.n, t.window, t.cost.to_bits())))
+                .filter(|t| {
+                    transitions_between(&g, t.from, t.to).contains(&(
+                        t.m,
+                        t.n,
+                        t.window,
+                        t.cost.to_bits(),
+                    ))
+                })
                 .count();
             let share = found as f64 / g_dense.transitions().len() as f64;
             eprintln!(
@@ -1163,4 +1150,18 @@ fn the_far_search_keeps_every_sequence_pairs_best_transition() {
             "{sequences} sequences: far pairs' best missed {with} with the far search, {without} without; dense found {share_with} / {share_without}"
         );
     }
+}
+
+/// The transitions of `g` from sequence `i` to `j`: frames, window and the
+/// cost's bits.
+fn transitions_between(
+    g: &surfmotion::graph::SurfaceMotionGraph,
+    i: usize,
+    j: usize,
+) -> Vec<(usize, usize, usize, u64)> {
+    g.transitions()
+        .iter()
+        .filter(|t| (t.from, t.to) == (i, j))
+        .map(|t| (t.m, t.n, t.window, t.cost.to_bits()))
+        .collect()
 }

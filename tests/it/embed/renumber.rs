@@ -3,22 +3,9 @@
 
 use surfmotion::mesh::Mesh;
 
-/// A fixed shuffle of `0..n` (xorshift from `seed`; the same every run):
-/// with seed [`EVAL_SEED`] the order `examples/autorig_eval.rs` draws.
-pub(super) fn xorshift_order(n: usize, seed: u64) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..n).collect();
-    let mut x = seed;
-    for i in (1..n).rev() {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        order.swap(i, (x % (i as u64 + 1)) as usize);
-    }
-    order
-}
-
-/// The seed of `autorig_eval`'s renumbering.
-pub(super) const EVAL_SEED: u64 = 0x2545_F491_4F6C_DD1D;
+/// The fixed orders `autorig_eval` draws (the library's, so the tests
+/// and the evaluation renumber alike).
+pub(super) use surfmotion::tools::autorig::{EVAL_SEED, xorshift_order};
 
 /// `mesh` and `frames` renumbered by `order`: new vertex `k` is old
 /// vertex `order[k]`.

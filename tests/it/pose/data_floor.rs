@@ -35,7 +35,7 @@
 
 use crate::common;
 
-use super::two_files::{aligned, mirrored, turned};
+use super::two_files::{aligned, best_yaw, mirrored, turned};
 use glam::{DQuat, DVec3};
 use surfmotion::mocap::Clip;
 use surfmotion::pose::Pose;
@@ -158,22 +158,7 @@ fn gap(a: &[Pose], b: &[Pose], h: f64) -> Gap {
 fn read_level(character: &Pose, pa: &[Pose], pb: &[Pose], h: f64) -> (Gap, f64) {
     let n = pa.len().min(pb.len());
     let bs = effective_bones(&pa[..n], &pb[..n]);
-    let cost = |q: DQuat| -> f64 {
-        (0..n)
-            .map(|f| {
-                bs.iter()
-                    .map(|&(x, y)| (q * dir(&pb[f], x, y)).distance_squared(dir(&pa[f], x, y)))
-                    .sum::<f64>()
-            })
-            .sum()
-    };
-    let yaw = (-800..=800)
-        .map(|k| f64::from(k) * 0.05)
-        .min_by(|u, v| {
-            cost(DQuat::from_rotation_y(u.to_radians()))
-                .total_cmp(&cost(DQuat::from_rotation_y(v.to_radians())))
-        })
-        .unwrap();
+    let yaw = best_yaw(&pa[..n], &pb[..n], &bs, 800);
     let q = DQuat::from_rotation_y(yaw.to_radians());
     let sa: Vec<Pose> = (0..n)
         .map(|f| {

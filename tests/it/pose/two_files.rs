@@ -977,23 +977,7 @@ fn the_limbs_gap_between_two_files_is_in_the_data() {
         let dir = |p: &Pose, x: C, y: C| (p[y.index()] - p[x.index()]).normalize();
         // World: one yaw for the whole clip, the best of a 0.05° scan.
         let bones = limb_bones();
-        let cost = |q: DQuat| -> f64 {
-            (0..n)
-                .map(|f| {
-                    bones
-                        .iter()
-                        .map(|&(x, y)| (q * dir(&pb[f], x, y)).distance_squared(dir(&pa[f], x, y)))
-                        .sum::<f64>()
-                })
-                .sum()
-        };
-        let yaw = (-400..=400)
-            .map(|k| f64::from(k) * 0.05)
-            .min_by(|u, v| {
-                cost(DQuat::from_rotation_y(u.to_radians()))
-                    .total_cmp(&cost(DQuat::from_rotation_y(v.to_radians())))
-            })
-            .unwrap();
+        let yaw = best_yaw(pa, pb, &bones, 400);
         let q = DQuat::from_rotation_y(yaw.to_radians());
         let la: Vec<_> = (0..n)
             .map(|f| limbs_on(&character, &|x, y| dir(&pa[f], x, y)))
@@ -1238,4 +1222,29 @@ fn apart_abs_rel(a: &[Pose], b: &[Pose], h: f64) -> (f64, f64) {
     }
     let k = (n * Canonical::COUNT) as f64 * h;
     (abs / k, rel / k)
+}
+
+/// The yaw (degrees; a 0.05° scan over ±`steps`·0.05°) that turns `pb`'s
+/// bone directions onto `pa`'s best over the frames both have.
+pub(super) fn best_yaw(pa: &[Pose], pb: &[Pose], bones: &[(C, C)], steps: i32) -> f64 {
+    let dir = |p: &Pose, x: C, y: C| (p[y.index()] - p[x.index()]).normalize_or_zero();
+    let n = pa.len().min(pb.len());
+    let cost = |yaw: f64| -> f64 {
+        let q = DQuat::from_rotation_y(yaw.to_radians());
+        (0..n)
+            .map(|f| {
+                bones
+                    .iter()
+                    .map(|&(x, y)| (q * dir(&pb[f], x, y)).distance_squared(dir(&pa[f], x, y)))
+                    .sum::<f64>()
+            })
+            .sum()
+    };
+    (-steps..=steps)
+        .map(|k| {
+            let yaw = f64::from(k) * 0.05;
+            (yaw, cost(yaw))
+        })
+        .min_by(|u, v| u.1.total_cmp(&v.1))
+        .map_or(0.0, |(yaw, _)| yaw)
 }
