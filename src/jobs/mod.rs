@@ -18,6 +18,9 @@
 //! 6. [`batch`]: convert a folder of clips with any [`Converter`]
 //!    (implemented by the retarget and transfer jobs).
 //!
+//! [`eval`] scores a result against its clip and database (the `eval`
+//! verb).
+//!
 //! [`outputs`] is the output policy every job checks before any work.
 //!
 //! JSON reports are meant to be printed through `serde_json::Value`
@@ -30,6 +33,7 @@ pub mod database;
 pub mod db_init;
 pub mod demo;
 mod error;
+pub mod eval;
 pub mod keyframe;
 pub mod live;
 pub mod mesh;
