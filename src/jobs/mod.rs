@@ -51,6 +51,7 @@ pub mod synth;
 pub mod synth_db;
 pub mod text;
 pub mod transfer;
+mod transfer_summary;
 
 pub use crate::batch::Converter;
 pub use batch::{BatchEvent, BatchOptions, BatchReport, batch_folder};
