@@ -45,6 +45,7 @@ mod positions;
 pub mod render;
 pub mod retarget;
 pub mod rig;
+mod rig_summary;
 pub mod setup_text;
 pub mod skeletons;
 pub mod synth;
