@@ -105,3 +105,33 @@ fn max_vertex_error(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
         .map(|(p, q)| glam::DVec3::from_array(*p).distance(glam::DVec3::from_array(*q)))
         .fold(0.0, f64::max)
 }
+
+/// The first frame of the mesh `spec` (a file, a folder of OBJ frames or
+/// `SEQ:FRAME`), keeping only the named OBJ groups when any are given (the
+/// scan of `transfer` and `batch --scan`, the mesh of `rig embed`).
+pub fn load_mesh_groups(spec: &str, groups: &[String]) -> Result<crate::mesh::Mesh, JobError> {
+    let seq = load_sequence(spec, &Default::default())?;
+    let mesh = seq.frame_mesh(0);
+    if groups.is_empty() {
+        return Ok(mesh);
+    }
+    let known: Vec<&str> = seq
+        .mesh()
+        .groups()
+        .iter()
+        .map(|g| g.name.as_str())
+        .collect();
+    let mut m = seq.mesh().select_groups(groups).ok_or_else(|| {
+        JobError::Usage(format!(
+            "{spec}: no group named {} (groups: {})",
+            groups.join(", "),
+            if known.is_empty() {
+                "none".to_string()
+            } else {
+                known.join(", ")
+            }
+        ))
+    })?;
+    m.set_positions(mesh.positions())?;
+    Ok(m)
+}
