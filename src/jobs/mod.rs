@@ -43,6 +43,7 @@ pub mod pick;
 pub mod play;
 mod positions;
 pub mod render;
+pub mod repair;
 pub mod retarget;
 pub mod rig;
 mod rig_summary;
