@@ -28,6 +28,7 @@
 //! CLI always has.
 
 pub mod batch;
+pub mod batch_verdict;
 pub mod blend;
 pub mod database;
 pub mod db_init;
