@@ -37,6 +37,7 @@ mod error;
 pub mod eval;
 pub mod keyframe;
 pub mod live;
+pub mod live_checks;
 pub mod mesh;
 pub mod mocap;
 pub mod outputs;
