@@ -16,6 +16,7 @@ const FLAGS: &[(&str, &str)] = &[
     ),
     ("`TransferSource::Template` frame", "--template-frame"),
     ("`GlbOptions::normals` false", "--glb-no-normals"),
+    ("the `GlbOptions` apply", "the --glb-* options apply"),
     ("fewer via key-frames", "fewer --via"),
     ("nearer via key-frames", "nearer --via"),
     ("`KeyframeJobOptions::w_dist`", "--w-dist"),

@@ -135,3 +135,32 @@ pub fn load_mesh_groups(spec: &str, groups: &[String]) -> Result<crate::mesh::Me
     m.set_positions(mesh.positions())?;
     Ok(m)
 }
+
+impl MeshConvertReport {
+    /// What `mesh convert` says on stderr, one line each: the files
+    /// written with their size, then the GLB options ignored (named as
+    /// [`GlbOptions`]) or the quantisation's largest vertex error.
+    pub fn lines(&self) -> Vec<String> {
+        use crate::batch::summary::count;
+        let mut v = vec![format!(
+            "wrote {}: {}, {}, {}",
+            super::text::written_list(&self.output, " and "),
+            count(self.vertices, "vertex"),
+            count(self.triangles, "triangle"),
+            count(self.frames, "frame")
+        )];
+        if self.glb_options_ignored {
+            v.push("note: the `GlbOptions` apply to .glb output only; ignored".into());
+        } else if let Some(e) = self.quantised_max_vertex_error {
+            v.push(match self.quantised_error_of_diagonal {
+                Some(rel) => format!(
+                    "quantised: max vertex error {e:.3e} ({rel:.2e} of the bounding-box diagonal)"
+                ),
+                None => format!(
+                    "quantised: max vertex error {e:.3e} m (every vertex sits at one point: the bounding box has no size to compare it with)"
+                ),
+            });
+        }
+        v
+    }
+}
