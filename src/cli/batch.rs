@@ -8,6 +8,7 @@ use surfmotion::batch::schedule::ShardSource;
 use surfmotion::batch::{ClipStatus, Converter, Format};
 use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::jobs::batch::{ClipRate, check_folders, outcome_line, report_text, target_inputs};
+use surfmotion::jobs::batch_verdict::none_failed;
 use surfmotion::jobs::{
     BatchEvent, BatchOptions, RetargetJob, RetargetJobOptions, ScanTransferJob,
     ScanTransferOptions, batch_folder,
@@ -116,19 +117,7 @@ fn run_merge(a: MergeArgs) -> anyhow::Result<()> {
         true => serde_json::to_string_pretty(s)? + "\n",
         false => r.text(),
     })?;
-    none_failed(s, &r.files)
-}
-
-/// An error when a clip failed, naming the report.
-fn none_failed(s: &surfmotion::batch::Summary, files: &[PathBuf]) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        s.failed == 0,
-        "{} of {} clips failed (see {})",
-        s.failed,
-        s.clips,
-        files[0].display()
-    );
-    Ok(())
+    Ok(none_failed(s, &r.files)?)
 }
 
 /// Runs `batch`: the retarget or transfer job (loaded or factored once)
@@ -177,7 +166,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         true => serde_json::to_string_pretty(s)? + "\n",
         false => report_text(s, &r.files, &super::flags::as_flags),
     })?;
-    none_failed(s, &r.files)
+    Ok(none_failed(s, &r.files)?)
 }
 
 /// The shard from `--shard`, a Slurm array or a Kubernetes Indexed Job

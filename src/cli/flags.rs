@@ -16,7 +16,12 @@ const FLAGS: &[(&str, &str)] = &[
     ),
     ("`TransferSource::Template` frame", "--template-frame"),
     ("`GlbOptions::normals` false", "--glb-no-normals"),
+    ("the `GlbOptions` apply", "the --glb-* options apply"),
     ("fewer via key-frames", "fewer --via"),
+    ("nearer via key-frames", "nearer --via"),
+    ("`KeyframeJobOptions::w_dist`", "--w-dist"),
+    ("`KeyframeJobOptions::w_heading`", "--w-heading"),
+    ("`KeyframeJobOptions::w_time`", "--w-time"),
     ("give `landmarks`", "give --landmarks"),
     ("`AmcOptions::fps`", "--input-fps"),
     ("`BatchOptions::shard`", "--shard"),
@@ -77,6 +82,18 @@ mod tests {
             "-o out: the folder already holds 2 files; pass --force to replace"
         );
         assert_eq!(super::as_flags("no option here"), "no option here");
+    }
+
+    /// A key-frame path's summary, written by the library with the job's
+    /// option names, prints the flags it printed when the CLI wrote it.
+    #[test]
+    fn keyframe_summary_options_read_as_flags() {
+        assert_eq!(
+            super::as_flags(
+                "(fewer or nearer via key-frames shorten it); `KeyframeJobOptions::w_dist` and `KeyframeJobOptions::w_time` weigh the two; `KeyframeJobOptions::w_heading` weighs it"
+            ),
+            "(fewer or nearer --via shorten it); --w-dist and --w-time weigh the two; --w-heading weighs it"
+        );
     }
 
     /// The library's refusals that name options read as flags on the

@@ -4,11 +4,11 @@
 
 mod args;
 mod parse;
-mod print;
 
 pub use args::Args;
 use parse::{flagged, grid_targets, numbers};
 use surfmotion::db::Character;
+use surfmotion::jobs::keyframe::summary;
 use surfmotion::jobs::keyframe::text::{self, GRID_HEADER, LEAST_MEAN_HEADER};
 use surfmotion::jobs::keyframe::{
     self as job, DEFAULT_DISTANCES, DEFAULT_TIMES, FloorStage, GridTargets, Keys,
@@ -62,7 +62,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     names.push(&a.to);
     let keys = job::resolve_keys(&ch, &names, &load).map_err(flagged)?;
     let opts = a.options().keyframe_options(ch.manifest().fps);
-    let head = print::resolved(&keys);
+    let head = summary::resolved(&keys);
     match &grid_targets {
         Some(t) if a.floor => floor(&ch, &keys, &a, &opts, t, head),
         Some(t) => grid(&ch, &keys, &a, &opts, t, head),
@@ -103,16 +103,14 @@ fn path(
     // The report and --json say which targets were missed, as the text does.
     let mut v = serde_json::to_value(&run.report)?;
     if let Some(p) = &a.report {
-        surfmotion::util::fsutil::write_bytes_atomic(
-            p,
-            serde_json::to_string_pretty(&v)?.as_bytes(),
-        )?;
+        super::write_json(p, &v)?;
     }
     if a.json {
         v["output"] = serde_json::to_value(&run.written)?;
         return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
     }
-    super::emit(&(head + &print::path_summary(&run, ch.manifest().fps)))
+    let text = summary::path_summary(&run, ch.manifest().fps);
+    super::emit(&(head + &super::flags::as_flags(&text)))
 }
 
 /// A bar of `n` targets on a terminal, none with `--json`. Minutes on a
@@ -127,13 +125,9 @@ fn bar(a: &Args, n: usize, what: &str) -> indicatif::ProgressBar {
     }
 }
 
-/// The JSON summary of a grid report: without its queries.
+/// The JSON summary of a grid report ([`text::summary_json`]).
 fn emit_json<T: serde::Serialize>(r: &T) -> anyhow::Result<()> {
-    let mut v = serde_json::to_value(r)?;
-    if let Some(o) = v.as_object_mut() {
-        o.remove("queries");
-    }
-    super::emit(&(serde_json::to_string_pretty(&v)? + "\n"))
+    super::emit(&(serde_json::to_string_pretty(&text::summary_json(r)?)? + "\n"))
 }
 
 /// `--grid` (Table III), or with `--least-mean` the least mean smoothness
@@ -166,8 +160,7 @@ fn grid(
         bar.finish_and_clear();
         let r = r.map_err(flagged)?;
         if let Some(p) = &a.report {
-            let json = serde_json::to_string_pretty(&r.report)?;
-            surfmotion::util::fsutil::write_bytes_atomic(p, json.as_bytes())?;
+            super::write_json(p, &r.report)?;
         }
         if a.json {
             return emit_json(&r.report);
@@ -183,10 +176,7 @@ fn grid(
     bar.finish_and_clear();
     let g = g.map_err(flagged)?;
     if let Some(p) = &a.report {
-        surfmotion::util::fsutil::write_bytes_atomic(
-            p,
-            serde_json::to_string_pretty(&g)?.as_bytes(),
-        )?;
+        super::write_json(p, &g)?;
     }
     if let Some(p) = &a.plot {
         surfmotion::keyframe::heatmap::save(&g, p)?;

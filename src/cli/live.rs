@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use surfmotion::jobs::live::{Listening, LiveInput, LiveOptions, run_live};
+use surfmotion::jobs::live_checks;
 
 /// Arguments of `live`.
 #[derive(clap::Args)]
@@ -177,10 +178,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
     };
     let reachable = [a.bvh_tcp, a.vmc, a.rokoko, a.serve].into_iter().flatten();
-    for addr in reachable.filter(|addr| !addr.ip().is_loopback()) {
-        eprintln!(
-            "warning: listening on {addr}, which other machines can reach (127.0.0.1 keeps it on this one)"
-        );
+    for warning in live_checks::exposed(reachable) {
+        eprintln!("{warning}");
     }
     match &a.record {
         Some(out) => a.glb.refuse_other_formats(out)?,
@@ -190,11 +189,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         ),
     }
     if let Some(out) = &a.record {
-        surfmotion::jobs::outputs::check_mesh_output(out)?;
-        let mut inputs = surfmotion::jobs::outputs::database_inputs(&db);
-        inputs.extend(a.replay.clone());
-        inputs.extend(a.clip.rig_map.clone());
-        surfmotion::jobs::outputs::refuse_colliding(&inputs, &super::mesh_outputs(out))?;
+        let (replay, rig_map) = (a.replay.as_deref(), a.clip.rig_map.as_deref());
+        live_checks::check_record(out, &db, replay, rig_map)?;
     }
     let opts = options(&a)?;
     let stop = AtomicBool::new(false);

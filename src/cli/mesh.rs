@@ -150,24 +150,8 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 let v = serde_json::to_value(&r)?;
                 return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
             }
-            crate::errln!(
-                "wrote {}: {}, {}, {}",
-                surfmotion::jobs::text::written_list(&r.output, " and "),
-                super::count(r.vertices, "vertex"),
-                super::count(r.triangles, "triangle"),
-                super::count(r.frames, "frame")
-            );
-            if r.glb_options_ignored {
-                crate::errln!("note: the --glb-* options apply to .glb output only; ignored");
-            } else if let Some(e) = r.quantised_max_vertex_error {
-                match r.quantised_error_of_diagonal {
-                    Some(rel) => crate::errln!(
-                        "quantised: max vertex error {e:.3e} ({rel:.2e} of the bounding-box diagonal)"
-                    ),
-                    None => crate::errln!(
-                        "quantised: max vertex error {e:.3e} m (every vertex sits at one point: the bounding box has no size to compare it with)"
-                    ),
-                }
+            for line in r.lines() {
+                crate::errln!("{}", super::flags::as_flags(&line));
             }
         }
     }

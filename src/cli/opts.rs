@@ -75,30 +75,7 @@ impl ClipOpts {
 }
 
 /// The first frame of a mesh file, keeping only the named OBJ groups when
-/// any are given.
+/// any are given ([`surfmotion::jobs::mesh::load_mesh_groups`]).
 pub fn load_mesh_groups(spec: &str, groups: &[String]) -> anyhow::Result<surfmotion::mesh::Mesh> {
-    let seq = surfmotion::mesh::io::load_sequence(spec, &Default::default())?;
-    let mesh = seq.frame_mesh(0);
-    if groups.is_empty() {
-        return Ok(mesh);
-    }
-    let known: Vec<&str> = seq
-        .mesh()
-        .groups()
-        .iter()
-        .map(|g| g.name.as_str())
-        .collect();
-    let mut m = seq.mesh().select_groups(groups).ok_or_else(|| {
-        anyhow::anyhow!(
-            "{spec}: no group named {} (groups: {})",
-            groups.join(", "),
-            if known.is_empty() {
-                "none".to_string()
-            } else {
-                known.join(", ")
-            }
-        )
-    })?;
-    m.set_positions(mesh.positions())?;
-    Ok(m)
+    Ok(surfmotion::jobs::mesh::load_mesh_groups(spec, groups)?)
 }

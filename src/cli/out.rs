@@ -15,6 +15,18 @@ pub fn emit(text: &str) -> anyhow::Result<()> {
     }
 }
 
+/// A report written to `path` as pretty JSON, atomically (`--report`).
+pub fn write_json<T: serde::Serialize + ?Sized>(
+    path: &std::path::Path,
+    v: &T,
+) -> anyhow::Result<()> {
+    let json = serde_json::to_string_pretty(v)?;
+    Ok(surfmotion::util::fsutil::write_bytes_atomic(
+        path,
+        json.as_bytes(),
+    )?)
+}
+
 /// `println!` through [`emit`].
 #[macro_export]
 macro_rules! outln {

@@ -121,32 +121,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
         let v = serde_json::to_value(&r)?;
         return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
     }
-    let mut text = String::new();
-    if let Some(auto) = &r.automatic {
-        text += &format!(
-            "landmarks: automatic (confidence {:.2}; up ({:.2}, {:.2}, {:.2}), symmetry fit {:.2}% of the height){}\n",
-            auto.confidence,
-            auto.up[0],
-            auto.up[1],
-            auto.up[2],
-            auto.symmetry_percent,
-            a.write_landmarks
-                .as_ref()
-                .map(|p| format!(" → {}", p.display()))
-                .unwrap_or_default()
-        );
-        for (name, m) in &auto.marks {
-            text += &format!(
-                "  {name:<10} ({:>8.3}, {:>8.3}, {:>8.3})  confidence {:.2}  {}\n",
-                m.point[0], m.point[1], m.point[2], m.confidence, m.how
-            );
-        }
-    }
-    for d in &r.disagreements {
-        text += &format!("warning: landmark {}: {}\n", d.landmark, d.reason);
-    }
-    text += &surfmotion::jobs::text::rig_embed(&r);
-    super::emit(&text)
+    super::emit(&r.summary_text(a.write_landmarks.as_deref()))
 }
 
 /// `rig embed --pick`: the page on the mesh and its landmarks.

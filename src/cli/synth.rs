@@ -97,24 +97,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             serde_json::to_string_pretty(&serde_json::to_value(r)?)?
         )?;
     } else {
-        crate::outln!(
-            "wrote {} ({}, {}): rig embedded in {:.2} s, {} synthesised in {:.2} s ({:.0} frames/s)",
-            dir.display(),
-            super::count(r.sequences.len(), "sequence"),
-            super::count(r.frames, "frame"),
-            r.embed_seconds,
-            super::count(r.frames, "frame"),
-            r.synth_seconds,
-            r.frames as f64 / r.synth_seconds.max(1e-9)
-        )?;
-        for s in &r.sequences {
-            crate::outln!(
-                "  {}: {} from {}",
-                s.sequence,
-                super::count(s.frames, "frame"),
-                s.source.display()
-            )?;
-        }
+        super::emit(&run.text(dir))?;
     }
     // The contact sheets of all sequences, one above the other; plausibility.
     if let (Some(p), Some(img)) = (&a.run.preview.preview, &run.sheet) {

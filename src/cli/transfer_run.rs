@@ -162,32 +162,15 @@ fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
     print_report(a, &report)
 }
 
-/// Writes the JSON report if asked and prints the summary of a transfer.
+/// Writes the JSON report if asked and prints the summary of a transfer
+/// ([`TransferReport::summary_text`](surfmotion::jobs::TransferReport::summary_text)).
 fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::Result<()> {
     if let Some(p) = &a.report {
-        let v = serde_json::to_string_pretty(&serde_json::to_value(report)?)?;
-        surfmotion::util::fsutil::write_bytes_atomic(p, v.as_bytes())?;
+        super::write_json(p, &serde_json::to_value(report)?)?;
     }
     if a.run.json {
-        let mut v = report.short_json()?;
-        if let (Some(auto), Some(o)) = (&report.automatic_landmarks, v.as_object_mut()) {
-            o.insert("automatic_landmarks".into(), serde_json::to_value(auto)?);
-        }
-        let v = serde_json::to_string_pretty(&v)?;
-        return super::emit(&(v + "\n"));
+        return super::emit(&(serde_json::to_string_pretty(&report.summary_json()?)? + "\n"));
     }
-    let mut text = String::new();
-    if let Some(auto) = &report.automatic_landmarks {
-        text += &format!(
-            "landmarks: automatic (confidence {:.2}; symmetry fit {:.2}% of the height){}\n",
-            auto.confidence,
-            auto.symmetry_percent,
-            a.write_landmarks
-                .as_ref()
-                .map(|p| format!(" → {}", p.display()))
-                .unwrap_or_default()
-        );
-    }
-    text += &surfmotion::jobs::text::transfer(&a.scan, a.truth.as_deref(), report);
-    super::emit(&text)
+    let truth = a.truth.as_deref();
+    super::emit(&report.summary_text(&a.scan, truth, a.write_landmarks.as_deref()))
 }

@@ -105,3 +105,62 @@ fn max_vertex_error(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
         .map(|(p, q)| glam::DVec3::from_array(*p).distance(glam::DVec3::from_array(*q)))
         .fold(0.0, f64::max)
 }
+
+/// The first frame of the mesh `spec` (a file, a folder of OBJ frames or
+/// `SEQ:FRAME`), keeping only the named OBJ groups when any are given (the
+/// scan of `transfer` and `batch --scan`, the mesh of `rig embed`).
+pub fn load_mesh_groups(spec: &str, groups: &[String]) -> Result<crate::mesh::Mesh, JobError> {
+    let seq = load_sequence(spec, &Default::default())?;
+    let mesh = seq.frame_mesh(0);
+    if groups.is_empty() {
+        return Ok(mesh);
+    }
+    let known: Vec<&str> = seq
+        .mesh()
+        .groups()
+        .iter()
+        .map(|g| g.name.as_str())
+        .collect();
+    let mut m = seq.mesh().select_groups(groups).ok_or_else(|| {
+        JobError::Usage(format!(
+            "{spec}: no group named {} (groups: {})",
+            groups.join(", "),
+            if known.is_empty() {
+                "none".to_string()
+            } else {
+                known.join(", ")
+            }
+        ))
+    })?;
+    m.set_positions(mesh.positions())?;
+    Ok(m)
+}
+
+impl MeshConvertReport {
+    /// What `mesh convert` says on stderr, one line each: the files
+    /// written with their size, then the GLB options ignored (named as
+    /// [`GlbOptions`]) or the quantisation's largest vertex error.
+    pub fn lines(&self) -> Vec<String> {
+        use crate::batch::summary::count;
+        let mut v = vec![format!(
+            "wrote {}: {}, {}, {}",
+            super::text::written_list(&self.output, " and "),
+            count(self.vertices, "vertex"),
+            count(self.triangles, "triangle"),
+            count(self.frames, "frame")
+        )];
+        if self.glb_options_ignored {
+            v.push("note: the `GlbOptions` apply to .glb output only; ignored".into());
+        } else if let Some(e) = self.quantised_max_vertex_error {
+            v.push(match self.quantised_error_of_diagonal {
+                Some(rel) => format!(
+                    "quantised: max vertex error {e:.3e} ({rel:.2e} of the bounding-box diagonal)"
+                ),
+                None => format!(
+                    "quantised: max vertex error {e:.3e} m (every vertex sits at one point: the bounding box has no size to compare it with)"
+                ),
+            });
+        }
+        v
+    }
+}

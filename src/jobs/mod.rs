@@ -18,6 +18,9 @@
 //! 6. [`batch`]: convert a folder of clips with any [`Converter`]
 //!    (implemented by the retarget and transfer jobs).
 //!
+//! [`eval`] scores a result against its clip and database (the `eval`
+//! verb).
+//!
 //! [`outputs`] is the output policy every job checks before any work.
 //!
 //! JSON reports are meant to be printed through `serde_json::Value`
@@ -25,13 +28,16 @@
 //! CLI always has.
 
 pub mod batch;
+pub mod batch_verdict;
 pub mod blend;
 pub mod database;
 pub mod db_init;
 pub mod demo;
 mod error;
+pub mod eval;
 pub mod keyframe;
 pub mod live;
+pub mod live_checks;
 pub mod mesh;
 pub mod mocap;
 pub mod outputs;
@@ -39,14 +45,17 @@ pub mod pick;
 pub mod play;
 mod positions;
 pub mod render;
+pub mod repair;
 pub mod retarget;
 pub mod rig;
+mod rig_summary;
 pub mod setup_text;
 pub mod skeletons;
 pub mod synth;
 pub mod synth_db;
 pub mod text;
 pub mod transfer;
+mod transfer_summary;
 
 pub use crate::batch::Converter;
 pub use batch::{BatchEvent, BatchOptions, BatchReport, batch_folder};

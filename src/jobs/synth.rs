@@ -103,3 +103,32 @@ pub fn synth_from_files(
         sheet,
     })
 }
+
+impl SynthRun {
+    /// `synth`'s summary of the database written to `dir`: its sequences
+    /// and frames, the embedding and synthesis times, then each sequence
+    /// and the clip it came from.
+    pub fn text(&self, dir: &Path) -> String {
+        use crate::batch::summary::count;
+        let r = &self.report;
+        let mut s = format!(
+            "wrote {} ({}, {}): rig embedded in {:.2} s, {} synthesised in {:.2} s ({:.0} frames/s)\n",
+            dir.display(),
+            count(r.sequences.len(), "sequence"),
+            count(r.frames, "frame"),
+            r.embed_seconds,
+            count(r.frames, "frame"),
+            r.synth_seconds,
+            r.frames as f64 / r.synth_seconds.max(1e-9)
+        );
+        for q in &r.sequences {
+            s += &format!(
+                "  {}: {} from {}\n",
+                q.sequence,
+                count(q.frames, "frame"),
+                q.source.display()
+            );
+        }
+        s
+    }
+}

@@ -2,7 +2,8 @@
 //! (Huang et al. 2015, Sec. 5.1) as one job: key-frames resolved
 //! ([`resolve_keys`]), one query written to a mesh output ([`write_path`]),
 //! the Table III grid ([`grid`]), the least mean smoothness per target
-//! ([`least_mean`]) and the smoothness floor ([`floor`]). The options
+//! ([`least_mean`]) and the smoothness floor ([`floor`]); a path's text
+//! summary ([`summary::path_summary`]). The options
 //! ([`KeyframeJobOptions`]) carry the defaults of `surfmotion keyframe`.
 
 pub mod error;
@@ -11,6 +12,7 @@ pub mod grid;
 pub mod keys;
 pub mod options;
 pub mod path;
+pub mod summary;
 pub mod text;
 pub mod verdict;
 

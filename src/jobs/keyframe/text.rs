@@ -203,3 +203,14 @@ pub fn grid_summary(g: &GridReport) -> String {
     );
     s
 }
+
+/// The JSON summary of a grid or least-mean report (`keyframe --grid
+/// --json`): the report without its queries (the `--report` file keeps
+/// them).
+pub fn summary_json<T: serde::Serialize>(r: &T) -> Result<serde_json::Value, serde_json::Error> {
+    let mut v = serde_json::to_value(r)?;
+    if let Some(o) = v.as_object_mut() {
+        o.remove("queries");
+    }
+    Ok(v)
+}

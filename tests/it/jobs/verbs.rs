@@ -140,3 +140,81 @@ fn written_list_names_a_folder_of_obj_frames_once() {
     let two = [PathBuf::from("a.pc2"), PathBuf::from("a.obj")];
     assert_eq!(written_list(&two, " and "), "a.pc2 and a.obj");
 }
+
+/// `repair` and `live`'s checks as library calls (session 35 moved them out
+/// of the CLI): the repaired humanoid written with its text, an output over
+/// the input refused, a mesh of degenerate or of flat triangles refused with
+/// nothing written; only the addresses other machines reach warned.
+#[test]
+fn repair_job_writes_reports_and_refuses_and_live_warns_of_exposed_addresses() {
+    use surfmotion::jobs::repair::{RepairJobError, RepairJobOptions, repair_file};
+    let tmp = tempfile::tempdir().unwrap();
+    let obj = humanoid_obj(tmp.path());
+    let out = tmp.path().join("fixed.obj");
+    let o = RepairJobOptions {
+        input: obj.display().to_string(),
+        output: out.clone(),
+        ..Default::default()
+    };
+    let r = repair_file(&o).unwrap();
+    assert!(out.is_file() && r.triangles > 0 && r.vertices > 0, "{r:?}");
+    let text = r.text();
+    assert!(
+        text.starts_with(&format!(
+            "wrote {} ({} vertices, ",
+            out.display(),
+            r.vertices
+        )),
+        "{text}"
+    );
+    assert_eq!(text.lines().count(), 8, "{text}");
+    let over = RepairJobOptions {
+        output: obj.clone(),
+        ..o.clone()
+    };
+    assert!(matches!(repair_file(&over), Err(RepairJobError::Mesh(_))));
+    // One triangle on a repeated vertex: degenerate, dropped, nothing left;
+    // one on three collinear vertices: kept, but no surface. Neither writes.
+    let refused = |name: &str, obj: &str| {
+        let input = tmp.path().join(name);
+        std::fs::write(&input, obj).unwrap();
+        let out = tmp.path().join("refused.obj");
+        let e = repair_file(&RepairJobOptions {
+            input: input.display().to_string(),
+            output: out.clone(),
+            ..Default::default()
+        })
+        .unwrap_err();
+        assert!(!out.exists(), "{e}");
+        e
+    };
+    let e = refused("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 1 2\n");
+    assert!(
+        matches!(e, RepairJobError::NothingLeft { triangles: 1, .. }),
+        "{e}"
+    );
+    assert!(e.to_string().ends_with("nothing to write"), "{e}");
+    let e = refused("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    assert!(
+        matches!(e, RepairJobError::ZeroArea { triangles: 1, .. }),
+        "{e}"
+    );
+    assert!(e.to_string().ends_with("not a surface"), "{e}");
+    let addrs = [
+        "127.0.0.1:7001",
+        "0.0.0.0:39539",
+        "[::1]:8080",
+        "192.168.1.5:80",
+    ]
+    .map(|a| a.parse::<std::net::SocketAddr>().unwrap());
+    let w = surfmotion::jobs::live_checks::exposed(addrs);
+    assert_eq!(w.len(), 2, "{w:?}");
+    assert!(
+        w[0].starts_with("warning: listening on 0.0.0.0:39539,"),
+        "{w:?}"
+    );
+    assert!(
+        w[1].starts_with("warning: listening on 192.168.1.5:80,"),
+        "{w:?}"
+    );
+}

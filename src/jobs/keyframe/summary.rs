@@ -1,7 +1,13 @@
-//! The text summary of one key-frame query (the flags it names are the
-//! command line's).
+//! The text summary of one key-frame query (Huang et al. 2015, Sec. 5.1,
+//! Eq. 7: the targets achieved, missed, and why), as `surfmotion
+//! keyframe` prints it. The options it names are
+//! [`KeyframeJobOptions`](super::KeyframeJobOptions)'s, in backticks (the
+//! command line prints its flags instead).
 
-use surfmotion::jobs::keyframe::{HEADING_TOLERANCE_DEG, Keys, Missed, PathRun, segment_missed};
+use super::keys::Keys;
+use super::path::PathRun;
+use super::verdict::{HEADING_TOLERANCE_DEG, Missed, segment_missed};
+use crate::batch::summary::count;
 
 /// The key-frames given as poses and the database frames they resolved to.
 pub fn resolved(keys: &Keys) -> String {
@@ -28,8 +34,8 @@ pub fn path_summary(run: &PathRun, fps: f64) -> String {
     s += &format!(
         "{} -> {}: {} at {} fps\n",
         r.keys.join(" -> "),
-        surfmotion::jobs::text::written_list(&run.written, ", "),
-        crate::cli::count(r.frames, "frame"),
+        crate::jobs::text::written_list(&run.written, ", "),
+        count(r.frames, "frame"),
         fps
     );
     s += &format!("achieved: {:.3} m in {:.3} s", r.distance, r.time);
@@ -52,7 +58,7 @@ pub fn path_summary(run: &PathRun, fps: f64) -> String {
     s += "\n";
     if let (true, Some(h)) = (missed.contains(&Missed::Heading), r.heading_target_deg) {
         s += &format!(
-            "heading not met within {HEADING_TOLERANCE_DEG}° (1 % of a turn): {:+.1}° for {h:+.1}°, the best compromise under Eq. 7 (the graph's transitions may not turn that far in this time; --w-heading weighs it against distance and time)\n",
+            "heading not met within {HEADING_TOLERANCE_DEG}° (1 % of a turn): {:+.1}° for {h:+.1}°, the best compromise under Eq. 7 (the graph's transitions may not turn that far in this time; `KeyframeJobOptions::w_heading` weighs it against distance and time)\n",
             r.final_facing_deg
         );
     }
@@ -71,15 +77,15 @@ pub fn path_summary(run: &PathRun, fps: f64) -> String {
     s += &segments(r);
     s += &format!(
         "{}, smoothness {}\n",
-        crate::cli::count(r.transitions.len(), "transition"),
+        count(r.transitions.len(), "transition"),
         r.smoothness
             .map_or("- (none)".to_string(), |x| format!("{x:.4} m"))
     );
     s += &format!(
         "search: {} nodes, {}, {} solved, {} pruned; {:.1} ms preparing, {:.1} ms searching{}, {:.2} s meshes\n",
         r.stats.nodes,
-        crate::cli::count(r.stats.cycles, "loop"),
-        crate::cli::count(r.stats.walks, "walk"),
+        count(r.stats.cycles, "loop"),
+        count(r.stats.walks, "walk"),
         r.stats.pruned,
         1e3 * r.prepare_seconds,
         1e3 * r.search_seconds,
@@ -95,7 +101,7 @@ pub fn path_summary(run: &PathRun, fps: f64) -> String {
 
 /// Why the distance and time targets `(dt, tt)` were not met within 1 %,
 /// and what the graph reaches.
-fn not_met(r: &surfmotion::keyframe::Report, (dt, tt): (f64, f64), fps: f64) -> String {
+fn not_met(r: &crate::keyframe::Report, (dt, tt): (f64, f64), fps: f64) -> String {
     let mut s = String::new();
     s += &format!(
         "not met within 1 %: {}\n",
@@ -104,13 +110,13 @@ fn not_met(r: &surfmotion::keyframe::Report, (dt, tt): (f64, f64), fps: f64) -> 
             // horizon: it is taken as it is, no compromise is searched
             // (1000 --via gave "within the 13.0 s horizon" for 55.6 s).
             Some(x) if r.time > x.horizon + 0.5 / fps => format!(
-                "the path through the {} key-frames takes {:.1} s, longer than the {:.1} s horizon of {dt:.3} m in {tt:.3} s, and is taken as it is (fewer or nearer --via shorten it)",
+                "the path through the {} key-frames takes {:.1} s, longer than the {:.1} s horizon of {dt:.3} m in {tt:.3} s, and is taken as it is (fewer or nearer via key-frames shorten it)",
                 r.keys.len(),
                 r.time,
                 x.horizon
             ),
             reach => format!(
-                "the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 within {} (the graph may not reach it; --w-dist and --w-time weigh the two)",
+                "the best compromise for {dt:.3} m in {tt:.3} s under Eq. 7 within {} (the graph may not reach it; `KeyframeJobOptions::w_dist` and `KeyframeJobOptions::w_time` weigh the two)",
                 reach.map_or("the horizon".to_string(), |x| format!(
                     "the {:.1} s horizon",
                     x.horizon
@@ -145,7 +151,7 @@ fn not_met(r: &surfmotion::keyframe::Report, (dt, tt): (f64, f64), fps: f64) -> 
 
 /// Each segment's distance and time (with its targets and errors), walk
 /// and loops, and how many missed their targets.
-fn segments(r: &surfmotion::keyframe::Report) -> String {
+fn segments(r: &crate::keyframe::Report) -> String {
     let mut s = String::new();
     // Per-segment targets: each segment's target and error (the summary
     // printed the achieved totals alone, with no word that 11.6 m in 6.5 s
@@ -171,8 +177,8 @@ fn segments(r: &surfmotion::keyframe::Report) -> String {
     }
     if missed_segments > 0 {
         s += &format!(
-            "not met within 1 % in {} of {}: the best compromise under Eq. 7 (the graph may not reach them; --w-dist and --w-time weigh the two)\n",
-            crate::cli::count(missed_segments, "segment"),
+            "not met within 1 % in {} of {}: the best compromise under Eq. 7 (the graph may not reach them; `KeyframeJobOptions::w_dist` and `KeyframeJobOptions::w_time` weigh the two)\n",
+            count(missed_segments, "segment"),
             r.segments.len()
         );
     }
