@@ -174,6 +174,10 @@ impl Deformer {
                 .iter()
                 .map(|&s| s > 0.0)
                 .collect();
+            let joints = super::cloth_reach::joint_zones(ch.rig(), opts.stitch_joints);
+            let cloth: Vec<bool> = cloth.iter().zip(&joints).map(|(a, b)| *a || *b).collect();
+            let cloth =
+                super::cloth_reach::grown(ch.topology().triangles(), &cloth, opts.cloth_rings);
             out.cloth = ClothStitch::new(
                 ch.topology().triangles(),
                 &cloth,

@@ -241,6 +241,14 @@ pub struct DeformOptions {
     /// frame 102 one; with the fallback, none (on the eight yardstick
     /// clips it never changes a frame).
     pub cloth_fallback: bool,
+    /// Rings of vertices the cloth stitch reaches beyond the cloth
+    /// ([`super::cloth_reach`]): the skirt's top, the waist and the
+    /// thighs' skin under the skirt, which the overlapping pelvis and
+    /// thigh solves share. Default 0 (the stitch on the cloth alone).
+    pub cloth_rings: usize,
+    /// Joints whose blend zones the cloth stitch solves too
+    /// ([`super::cloth_reach::StitchJoints`]). Default none.
+    pub stitch_joints: super::cloth_reach::StitchJoints,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -365,6 +373,8 @@ impl Default for DeformOptions {
             cloth_steps: 2,
             cloth_turns: true,
             cloth_fallback: true,
+            cloth_rings: 0,
+            stitch_joints: super::cloth_reach::StitchJoints::None,
         }
     }
 }
