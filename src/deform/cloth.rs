@@ -278,13 +278,13 @@ pub(crate) fn with_env(opts: &DeformOptions) -> DeformOptions {
 /// `stitch` (the weight, [`DeformOptions::cloth_stitch`], 0 turns it off),
 /// `steps` ([`DeformOptions::cloth_steps`]), `rings`
 /// ([`DeformOptions::cloth_rings`]), `joints`
-/// ([`DeformOptions::stitch_joints`]), `turns` and `fallback`
+/// ([`DeformOptions::stitch_joints`]), `apart`
+/// ([`DeformOptions::stitch_apart`]), `turns` and `fallback`
 /// ([`DeformOptions::cloth_turns`], [`DeformOptions::cloth_fallback`]:
 /// `on`/`off`). An error names the pair it could not read and every name
 /// accepted.
 pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
-    const NAMES: &str =
-        "stitch=W, steps=N, rings=N, joints=none|knees|limbs, turns=on|off, fallback=on|off";
+    const NAMES: &str = "stitch=W, steps=N, rings=N, joints=none|knees|limbs, apart=N, turns=on|off, fallback=on|off";
     let mut o = *opts;
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = |what: &str| format!("'{pair}': {what} (accepted: {NAMES})");
@@ -316,6 +316,9 @@ pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions,
                     "limbs" => J::Limbs,
                     _ => return Err(bad("the value is not none, knees or limbs")),
                 };
+            }
+            "apart" => {
+                o.stitch_apart = value.parse().map_err(|_| bad("the value is not a count"))?;
             }
             "turns" => o.cloth_turns = switch()?,
             "fallback" => o.cloth_fallback = switch()?,
@@ -436,12 +439,12 @@ mod tests {
         let d = DeformOptions::default();
         let o = with_overrides(
             &d,
-            "stitch=0.3, steps=1,rings=3,joints=knees,turns=off,fallback=off",
+            "stitch=0.3, steps=1,rings=3,joints=knees,apart=2,turns=off,fallback=off",
         )
         .unwrap();
         assert_eq!(
-            o.stitch_joints,
-            crate::deform::cloth_reach::StitchJoints::Knees
+            (o.stitch_joints, o.stitch_apart),
+            (crate::deform::cloth_reach::StitchJoints::Knees, 2)
         );
         assert_eq!(
             (
@@ -460,6 +463,7 @@ mod tests {
             "steps=x",
             "rings=-1",
             "joints=toes",
+            "apart=x",
             "turns=maybe",
             "colour=1",
             "stitch",

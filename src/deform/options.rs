@@ -267,6 +267,12 @@ pub struct DeformOptions {
     /// thighs above the knee (README, issue 42). `knees` alone: creases
     /// 2,548 / 5,550, turned over 32 / 178. Not the default.
     pub stitch_joints: super::cloth_reach::StitchJoints,
+    /// With `stitch_joints`, leave out of the joints' zones every vertex
+    /// within this many rings of the cloth, so a knee's zone is not
+    /// stitched as one piece with the hem it touches (the samba capture's
+    /// hem is joined to the legs by triangles: 260 of its knee zones'
+    /// 1,013 vertices are cloth). Default 0 (nothing left out).
+    pub stitch_apart: usize,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -393,6 +399,7 @@ impl Default for DeformOptions {
             cloth_fallback: true,
             cloth_rings: 0,
             stitch_joints: super::cloth_reach::StitchJoints::None,
+            stitch_apart: 0,
         }
     }
 }
