@@ -276,12 +276,15 @@ pub(crate) fn with_env(opts: &DeformOptions) -> DeformOptions {
 
 /// `opts` with the comma-separated `name=value` pairs of `text`:
 /// `stitch` (the weight, [`DeformOptions::cloth_stitch`], 0 turns it off),
-/// `steps` ([`DeformOptions::cloth_steps`]), `turns` and `fallback`
+/// `steps` ([`DeformOptions::cloth_steps`]), `rings`
+/// ([`DeformOptions::cloth_rings`]), `joints`
+/// ([`DeformOptions::stitch_joints`]), `apart`
+/// ([`DeformOptions::stitch_apart`]), `turns` and `fallback`
 /// ([`DeformOptions::cloth_turns`], [`DeformOptions::cloth_fallback`]:
 /// `on`/`off`). An error names the pair it could not read and every name
 /// accepted.
 pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
-    const NAMES: &str = "stitch=W, steps=N, turns=on|off, fallback=on|off";
+    const NAMES: &str = "stitch=W, steps=N, rings=N, joints=none|knees|limbs, apart=N, turns=on|off, fallback=on|off";
     let mut o = *opts;
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = |what: &str| format!("'{pair}': {what} (accepted: {NAMES})");
@@ -301,6 +304,21 @@ pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions,
             }
             "steps" => {
                 o.cloth_steps = value.parse().map_err(|_| bad("the value is not a count"))?;
+            }
+            "rings" => {
+                o.cloth_rings = value.parse().map_err(|_| bad("the value is not a count"))?;
+            }
+            "joints" => {
+                use super::cloth_reach::StitchJoints as J;
+                o.stitch_joints = match value {
+                    "none" => J::None,
+                    "knees" => J::Knees,
+                    "limbs" => J::Limbs,
+                    _ => return Err(bad("the value is not none, knees or limbs")),
+                };
+            }
+            "apart" => {
+                o.stitch_apart = value.parse().map_err(|_| bad("the value is not a count"))?;
             }
             "turns" => o.cloth_turns = switch()?,
             "fallback" => o.cloth_fallback = switch()?,
@@ -419,21 +437,33 @@ mod tests {
     #[test]
     fn the_overrides_are_read_and_bad_ones_named() {
         let d = DeformOptions::default();
-        let o = with_overrides(&d, "stitch=0.3, steps=1,turns=off,fallback=off").unwrap();
+        let o = with_overrides(
+            &d,
+            "stitch=0.3, steps=1,rings=3,joints=knees,apart=2,turns=off,fallback=off",
+        )
+        .unwrap();
+        assert_eq!(
+            (o.stitch_joints, o.stitch_apart),
+            (crate::deform::cloth_reach::StitchJoints::Knees, 2)
+        );
         assert_eq!(
             (
                 o.cloth_stitch,
                 o.cloth_steps,
+                o.cloth_rings,
                 o.cloth_turns,
                 o.cloth_fallback
             ),
-            (0.3, 1, false, false)
+            (0.3, 1, 3, false, false)
         );
         assert_eq!(with_overrides(&d, "").unwrap(), d);
         for bad in [
             "stitch=-1",
             "stitch=nan",
             "steps=x",
+            "rings=-1",
+            "joints=toes",
+            "apart=x",
             "turns=maybe",
             "colour=1",
             "stitch",

@@ -174,6 +174,13 @@ impl Deformer {
                 .iter()
                 .map(|&s| s > 0.0)
                 .collect();
+            let tris = ch.topology().triangles();
+            let joints = super::cloth_reach::joint_zones(ch.rig(), opts.stitch_joints);
+            let near = super::cloth_reach::grown(tris, &cloth, opts.stitch_apart);
+            let cloth: Vec<bool> = (cloth.iter().zip(&joints).zip(&near))
+                .map(|((c, j), a)| *c || (*j && (opts.stitch_apart == 0 || !*a)))
+                .collect();
+            let cloth = super::cloth_reach::grown(tris, &cloth, opts.cloth_rings);
             out.cloth = ClothStitch::new(
                 ch.topology().triangles(),
                 &cloth,

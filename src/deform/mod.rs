@@ -61,6 +61,7 @@
 
 pub mod arap;
 pub mod cloth;
+pub mod cloth_reach;
 pub mod deformer;
 pub mod lbs;
 pub mod levels;

@@ -241,6 +241,38 @@ pub struct DeformOptions {
     /// frame 102 one; with the fallback, none (on the eight yardstick
     /// clips it never changes a frame).
     pub cloth_fallback: bool,
+    /// Rings of vertices the cloth stitch reaches beyond the cloth
+    /// ([`super::cloth_reach`]): the skirt's top, the waist and the
+    /// thighs' skin under the skirt, which the overlapping pelvis and
+    /// thigh solves share. Default 0 (the stitch on the cloth alone).
+    /// Measured (session 35, `SURFMOTION_CLOTH=rings=4`, CMU 02_02 / 03_02
+    /// onto the real samba capture, `eval --surface`): creases 3,026 →
+    /// 2,779 / 5,908 → 5,232 element-frames, but turned over against the
+    /// rest frame 5 → 16 on 02_02 and crossings 2,962 → 3,403 on 03_02.
+    pub cloth_rings: usize,
+    /// Joints whose blend zones the cloth stitch solves too
+    /// ([`super::cloth_reach::StitchJoints`]). Default none. Session 35
+    /// found most creases off the cloth: of CMU 02_02's 3,026 crease
+    /// edge-frames onto the real samba capture, 2,625 are on edges
+    /// without a cloth end and 78 % lie within 8 cm of a knee (03_02: 50 %),
+    /// mostly behind it, where the thigh's and shin's solves are blended
+    /// (skinning alone creases there as much). Measured (`SURFMOTION_CLOTH=
+    /// joints=limbs`, 02_02 / 03_02, `eval --surface`, element-frames,
+    /// default → limbs): creases 3,026 → 2,415 / 5,908 → 4,625, rough
+    /// 2,885 → 1,703 / 7,070 → 3,569, stretched 1,252 → 885 / 3,981 →
+    /// 2,663, joint-velocity error 0.116 → 0.112 / 0.123 → 0.097 cm/frame,
+    /// the shins' joints regressed from the surface p95 (l, r) 03_02 9.93,
+    /// 6.56 → 4.51, 2.74 cm; but turned over against the rest frame 5 →
+    /// 31 / 92 → 164 and crossings 6,830 → 6,973 / 2,962 → 3,741, on the
+    /// thighs above the knee (README, issue 42). `knees` alone: creases
+    /// 2,548 / 5,550, turned over 32 / 178. Not the default.
+    pub stitch_joints: super::cloth_reach::StitchJoints,
+    /// With `stitch_joints`, leave out of the joints' zones every vertex
+    /// within this many rings of the cloth, so a knee's zone is not
+    /// stitched as one piece with the hem it touches (the samba capture's
+    /// hem is joined to the legs by triangles: 260 of its knee zones'
+    /// 1,013 vertices are cloth). Default 0 (nothing left out).
+    pub stitch_apart: usize,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -365,6 +397,9 @@ impl Default for DeformOptions {
             cloth_steps: 2,
             cloth_turns: true,
             cloth_fallback: true,
+            cloth_rings: 0,
+            stitch_joints: super::cloth_reach::StitchJoints::None,
+            stitch_apart: 0,
         }
     }
 }
