@@ -2,6 +2,7 @@
 //! (torso, neck and head, limbs, feet, toes), the root placed by the feet
 //! on their grounds. See the [module docs](super) for what is matched.
 
+use super::anchor::{Placement, place_anchor, placement_from_env};
 use super::feet::{Toes, flat_feet, place_feet};
 use super::ground::{Given, clip_support_given, foot_height};
 use super::motion_ref::{carriage_for_rest, torso_reference};
@@ -133,6 +134,35 @@ pub(super) fn retarget_on_grounds(
     toes: Toes,
     given: &Given<'_>,
 ) -> RetargetedOnGrounds {
+    let how = (toes, placement_from_env());
+    retarget_placed_on_grounds(character, neutral, reference, mocap, how, given)
+}
+
+/// [`retarget_toes`] with the body placed as `placement` says (issue 44;
+/// [`Placement::default`] is the kernel's own rule, what every other
+/// entry point uses unless [`PLACEMENT_ENV`](super::PLACEMENT_ENV) says
+/// otherwise).
+pub fn retarget_placed(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    toes: Toes,
+    placement: Placement,
+) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
+    let how = (toes, placement);
+    retarget_placed_on_grounds(character, neutral, reference, mocap, how, &Given::default()).0
+}
+
+/// [`retarget_on_grounds`] with the placement given.
+fn retarget_placed_on_grounds(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    (toes, placement): (Toes, Placement),
+    given: &Given<'_>,
+) -> RetargetedOnGrounds {
     // Counted by the tests of issue 40's "analysed once per clip".
     let _run = tracing::debug_span!("pose_kernel", frames = mocap.len()).entered();
     if mocap.is_empty() {
@@ -226,6 +256,10 @@ pub(super) fn retarget_on_grounds(
     // clip has no heel point, so a heel strike's foot is off the ground
     // by its joints, and standing the body on the other foot alone (its
     // toes, leaving) sank the striking heel 5-7 cm through the floor.
+    // The body's anchor following the clip's (issue 44; the root already
+    // does with the default placement: see [`place_anchor`]).
+    let floors = (clip_floor, char_floor);
+    place_anchor(character, mocap, placement, s, floors, &mut out);
     let grounds = place_feet(character, &support, s, toes, given.open_end, &mut out);
     (out, grounds)
 }

@@ -67,6 +67,7 @@
 //! (`motion_ref`): that frame's stride is the file's, not the
 //! performance's.
 
+mod anchor;
 mod feet;
 mod ground;
 mod kernel;
@@ -76,12 +77,13 @@ mod reference;
 mod root;
 mod torso;
 
+pub use anchor::{Anchor, PLACEMENT_ENV, Placement, TravelScale};
 pub use feet::Toes;
 pub use ground::{
     Given, Support, clip_floor, clip_support, clip_support_given, clip_support_on, contact_band,
     foot_height, ground_tilt,
 };
-pub use kernel::{retarget, retarget_toes, retarget_with_neutral};
+pub use kernel::{retarget, retarget_placed, retarget_toes, retarget_with_neutral};
 pub use measures::{
     OnCharacter, clip_foot_glide_cm, clip_head_trunk_deg, foot_glide_cm, foot_ground_offsets,
     ground_offsets, on_character_given, on_character_with_grounds, stance_offsets,

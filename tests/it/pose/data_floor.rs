@@ -99,7 +99,7 @@ fn built(character: &Pose, d: &[DVec3]) -> Pose {
 }
 
 /// The point `t` minimising Σ |d_j − t| (Weiszfeld's iteration).
-fn geometric_median(d: &[DVec3]) -> DVec3 {
+pub(super) fn geometric_median(d: &[DVec3]) -> DVec3 {
     let mut t = d.iter().copied().sum::<DVec3>() / d.len() as f64;
     for _ in 0..1000 {
         let (mut num, mut den) = (DVec3::ZERO, 0.0);

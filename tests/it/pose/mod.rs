@@ -1,5 +1,6 @@
 //! The pose kernel: a clip's poses on a character's skeleton (feet, toes, chest, ground, placement, neutral frame).
 
+mod anchor;
 mod character_neutral;
 mod chest;
 mod data_floor;
