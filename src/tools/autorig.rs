@@ -975,31 +975,35 @@ fn bodies(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
                 }
             },
         };
-        // Only the vertices the triangles use, in their order.
-        let mut used = vec![false; whole.vertex_count()];
-        whole
-            .triangles()
-            .iter()
-            .flatten()
-            .for_each(|&v| used[v as usize] = true);
-        let mut index = vec![u32::MAX; used.len()];
-        let mut kept = Vec::new();
-        for (v, _) in used.iter().enumerate().filter(|(_, u)| **u) {
-            index[v] = kept.len() as u32;
-            kept.push(whole.positions()[v]);
-        }
-        let tris = whole
-            .triangles()
-            .iter()
-            .map(|t| t.map(|v| index[v as usize]))
-            .collect();
-        let rest = Mesh::new(kept, tris)?;
+        let rest = used_vertices_only(&whole)?;
         let fixture = PathBuf::from(format!("tests/fixtures/{fixture}.landmarks.json"));
         let lm = Landmarks::load(&fixture, rest.vertex_count())?;
         let rig = Embedding::new(&rest, &lm, None)?;
         synth_rows(bname, &rest, &rig, &motions, w);
     }
     Ok(())
+}
+
+/// `mesh` with only the vertices its triangles use, in their order (a
+/// scan's helper meshes and MakeHuman's unused groups dropped).
+pub fn used_vertices_only(mesh: &Mesh) -> Result<Mesh, TopologyError> {
+    let mut used = vec![false; mesh.vertex_count()];
+    mesh.triangles()
+        .iter()
+        .flatten()
+        .for_each(|&v| used[v as usize] = true);
+    let mut index = vec![u32::MAX; used.len()];
+    let mut kept = Vec::new();
+    for (v, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+        index[v] = kept.len() as u32;
+        kept.push(mesh.positions()[v]);
+    }
+    let tris = mesh
+        .triangles()
+        .iter()
+        .map(|t| t.map(|v| index[v as usize]))
+        .collect();
+    Mesh::new(kept, tris)
 }
 
 /// The synthetic databases' motions: the procedural gait turn (4 s) and

@@ -14,6 +14,7 @@
 //! left nothing to edit.
 
 pub mod body;
+pub mod branches;
 pub mod consensus;
 pub mod decompose;
 pub mod facing;

@@ -4,8 +4,9 @@
 //! proportion), the landmarks, and everything carried onto the topology.
 
 use super::body::Body;
+use super::branches::{body_tips, sixth_limit};
 use super::decompose::decompose;
-use super::humanoid::{Placed, along, extremities};
+use super::humanoid::{Placed, along};
 use super::limbs::{ARM, Chains, LEG, Sided, knee_to_toe, side};
 use super::options::{AutoError, AutoOptions, FrameSample};
 use super::report::{AutoRig, FoundJoint};
@@ -42,7 +43,7 @@ pub fn auto_rig(
     };
     let in_order = opts.frames == FrameSample::InOrder;
     let nb = crate::embed::parts::neighbours(n, mesh.triangles());
-    let (body, tips, mut notes) = find_body(rest, &used, &nb, opts)?;
+    let (body, tips, mut notes) = find_body(rest, mesh.triangles(), &used, &nb, opts)?;
     let chains = Chains::find(&body, &tips);
     let sided = side(&body, &chains)?;
     for (what, [l, r]) in ["legs", "arms"].iter().zip(sided.lateral) {
@@ -305,32 +306,48 @@ fn sample_evenly<'a>(
     used
 }
 
-/// The body, its first six extremities (vertex, distance) and the notes.
+/// The body, its five extremities (vertex, reach) and the notes.
 type Found<'a> = (Body<'a>, Vec<(u32, f64)>, Vec<String>);
 
-/// The body: its extremities, up (two of them, the feet, on a floor over
-/// the frames), height, and rigid parts; refused when it is no humanoid.
-/// Returns it with its six first extremities and the notes so far.
+/// The body: its extremities (the tips of its first five branches,
+/// [`super::branches`]), up (two of them, the feet, on a floor over the
+/// frames), height, and rigid parts; refused when it is no humanoid (fewer
+/// than five branches, a sixth reaching [`sixth_limit`] of them, no floor, fewer
+/// than five rigid parts). Returns it with its five extremities and the
+/// notes so far.
 fn find_body<'a>(
     rest: &'a [[f64; 3]],
+    triangles: &[[u32; 3]],
     used: &'a [&'a [[f64; 3]]],
     nb: &'a [Vec<u32>],
     opts: &AutoOptions,
 ) -> Result<Found<'a>, AutoError> {
-    let n = rest.len();
-    let centre = rest.iter().map(|q| DVec3::from_array(*q)).sum::<DVec3>() / n as f64;
-    let seed = (0..n)
-        .min_by(|&a, &b| {
-            DVec3::from_array(rest[a])
-                .distance_squared(centre)
-                .total_cmp(&DVec3::from_array(rest[b]).distance_squared(centre))
-        })
-        .unwrap_or(0) as u32;
-    let tips = extremities(rest, nb, seed, 6);
-    if tips.len() < 6 {
+    let found = body_tips(rest, triangles, nb, sixth_limit);
+    for c in &found.candidates {
+        tracing::debug!(
+            "extremity candidate: vertex {} at {:?}, reach {:.4}, disc ratio {:.2}, detour {:.2}, branch {}",
+            c.vertex,
+            rest[c.vertex as usize],
+            c.reach,
+            c.sheet,
+            c.detour,
+            c.is_branch()
+        );
+    }
+    let (seed, centre, tips) = (found.seed, found.centre, found.five);
+    if tips.len() < 5 {
         return Err(AutoError::NotHumanoid(
             "the surface has fewer than five extremities".into(),
         ));
+    }
+    if let Some(six) = found.sixth {
+        let reaches: Vec<f64> = tips.iter().map(|t| t.1).collect();
+        return Err(AutoError::NotHumanoid(format!(
+            "a sixth extremity (vertex {}) reaches {:.0}% as far from the trunk as the fifth (limit {:.0}%): a tail or another limb",
+            six.vertex,
+            100.0 * six.reach / tips[4].1,
+            100.0 * sixth_limit(&reaches) / tips[4].1
+        )));
     }
     let (up, floor_note) = find_up(rest, used, &tips[..5])?;
     let hs = |q: [f64; 3]| DVec3::from_array(q).dot(up);
@@ -344,13 +361,6 @@ fn find_body<'a>(
         return Err(AutoError::NotHumanoid("the rest frame is flat".into()));
     }
     let notes = vec![floor_note];
-    if tips[5].1 > 0.75 * tips[4].1 {
-        return Err(AutoError::NotHumanoid(format!(
-            "a sixth extremity (vertex {}) reaches {:.0}% as far from the trunk as the fifth: a tail or another limb",
-            tips[5].0,
-            100.0 * tips[5].1 / tips[4].1
-        )));
-    }
     // The parts and their motion.
     let dec = decompose(rest, used, nb, height, &opts.decompose);
     if dec.count < 5 {

@@ -2,6 +2,7 @@
 
 mod auto;
 mod auto_arms;
+mod auto_branches;
 mod auto_contact;
 mod auto_facing;
 mod auto_hands;
