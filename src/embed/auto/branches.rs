@@ -36,7 +36,7 @@
 //! hand, which is then no extremity; a tail of 20 % of the height on the
 //! procedural body is not refused (one of 45 % and a third arm are).
 
-use super::humanoid::geodesic;
+use super::humanoid::{farthest, geodesic};
 use glam::DVec3;
 
 /// A candidate's detour less its disc ratio over which it is the tip of
@@ -142,12 +142,7 @@ pub fn candidates(
     let mut out: Vec<Candidate> = Vec::new();
     let mut fields: Vec<Vec<f64>> = Vec::new();
     while out.len() < MAX_CANDIDATES {
-        let Some((v, &reach)) = d
-            .iter()
-            .enumerate()
-            .filter(|(_, x)| x.is_finite())
-            .max_by(|a, b| a.1.total_cmp(b.1))
-        else {
+        let Some((v, reach)) = farthest(&d) else {
             break;
         };
         let branches: Vec<f64> = out

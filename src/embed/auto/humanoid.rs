@@ -69,12 +69,7 @@ pub fn extremities(p: &[[f64; 3]], nb: &[Vec<u32>], seed: u32, k: usize) -> Vec<
     let (mut d, _) = geodesic(p, nb, &[seed]);
     let mut out = Vec::new();
     for _ in 0..k {
-        let Some((v, &dv)) = d
-            .iter()
-            .enumerate()
-            .filter(|(_, x)| x.is_finite())
-            .max_by(|a, b| a.1.total_cmp(b.1))
-        else {
+        let Some((v, dv)) = farthest(&d) else {
             break;
         };
         out.push((v as u32, dv));
@@ -84,6 +79,15 @@ pub fn extremities(p: &[[f64; 3]], nb: &[Vec<u32>], seed: u32, k: usize) -> Vec<
         }
     }
     out
+}
+
+/// The vertex with the largest finite distance in `d`, and the distance.
+pub(crate) fn farthest(d: &[f64]) -> Option<(usize, f64)> {
+    d.iter()
+        .enumerate()
+        .filter(|(_, x)| x.is_finite())
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .map(|(v, &x)| (v, x))
 }
 
 /// One boundary crossed by a limb's path from its tip to the trunk.

@@ -14,15 +14,14 @@
 use crate::common;
 
 use super::data_floor::geometric_median;
-use super::two_files::{aligned, mirrored, turned};
+use super::two_files::{mirrored, poses_at_30, turned, two_files, varied};
 use glam::{DQuat, DVec3};
-use surfmotion::mocap::Clip;
 use surfmotion::pose::Pose;
 use surfmotion::pose::retarget::{
     Anchor, ClipPoses, Placement, Toes, TravelScale, choose_reference, clip_poses, leg_length,
     retarget, retarget_placed,
 };
-use surfmotion::rig::{Canonical, detect_clip, load_clip};
+use surfmotion::rig::{Canonical, detect_clip};
 
 use Canonical as C;
 
@@ -113,7 +112,6 @@ fn the_two_files_placed_by_each_anchor() {
     let Some(d) = common::data_dir() else { return };
     let m = d.join("mocap");
     let (character, h) = common::walk_character();
-    let q = DQuat::from_rotation_y(30f64.to_radians());
     let mut rows: Vec<(String, &str, Apart)> = Vec::new();
     for (a, b, variant) in [
         ("cmu-amc/02/02_01.amc", "cmu-bvh-ccrig/002_01.bvh", ""),
@@ -126,29 +124,8 @@ fn the_two_files_placed_by_each_anchor() {
         ),
         ("cmu-amc/02/02_03.amc", "cmu-bvh-ccrig/002_03.bvh", "turned"),
     ] {
-        let mut amc = load_clip(&m.join(a), &Default::default()).unwrap();
-        let mut bvh = load_clip(&m.join(b), &Default::default()).unwrap();
-        amc.to_metres_y_up();
-        bvh.to_metres_y_up();
-        let (al, bl, _) = aligned(&amc, &bvh);
-        let read = |c: &Clip| {
-            let c = c.try_resampled(30.0).unwrap();
-            let map = detect_clip(&c).unwrap().map;
-            clip_poses(&c, &map).unwrap()
-        };
-        let (mut ca, mut cb) = (read(&al), read(&bl));
-        let mut back = DQuat::IDENTITY;
-        match variant {
-            "mirrored" => {
-                ca = mirrored(ca);
-                cb = mirrored(cb);
-            }
-            "turned" => {
-                cb = turned(cb, q, 1.37);
-                back = q.inverse();
-            }
-            _ => {}
-        }
+        let f = two_files(&m, a, b);
+        let (ca, cb, back) = varied(poses_at_30(&f.al), poses_at_30(&f.bl), variant);
         let name = format!("{a} vs {b} {variant}");
         for (rule, pl) in placements() {
             // The result turned back about the character's rest anchor

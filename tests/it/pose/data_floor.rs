@@ -35,12 +35,12 @@
 
 use crate::common;
 
-use super::two_files::{aligned, best_yaw, mirrored, turned};
+use super::two_files::{TwoFiles, best_yaw, poses_at_30, two_files, varied};
 use glam::{DQuat, DVec3};
 use surfmotion::mocap::Clip;
 use surfmotion::pose::Pose;
-use surfmotion::pose::retarget::{ClipPoses, choose_reference, clip_poses, ground_tilt, retarget};
-use surfmotion::rig::{Canonical, detect_clip, load_clip};
+use surfmotion::pose::retarget::{ClipPoses, choose_reference, ground_tilt, retarget};
+use surfmotion::rig::{Canonical, detect_clip};
 
 use Canonical as C;
 
@@ -478,31 +478,9 @@ fn the_two_files_gap_decomposed_by_source() {
         ),
         ("cmu-amc/02/02_03.amc", "cmu-bvh-ccrig/002_03.bvh", "turned"),
     ] {
-        let mut amc = load_clip(&m.join(a), &Default::default()).unwrap();
-        let mut bvh = load_clip(&m.join(b), &Default::default()).unwrap();
-        amc.to_metres_y_up();
-        bvh.to_metres_y_up();
-        let (al, bl, _) = aligned(&amc, &bvh);
-        let read = |c: &Clip| {
-            let c = c.try_resampled(30.0).unwrap();
-            let map = detect_clip(&c).unwrap().map;
-            clip_poses(&c, &map).unwrap()
-        };
-        let (mut ca, mut cb) = (read(&al), read(&bl));
-        let q = DQuat::from_rotation_y(30f64.to_radians());
-        let mut back = DQuat::IDENTITY;
-        match variant {
-            "mirrored" => {
-                ca = mirrored(ca);
-                cb = mirrored(cb);
-            }
-            // The BVH turned 30° about the vertical and scaled by 1.37.
-            "turned" => {
-                cb = turned(cb, q, 1.37);
-                back = q.inverse();
-            }
-            _ => {}
-        }
+        let TwoFiles { amc, bvh, al, bl } = two_files(&m, a, b);
+        // "turned": the BVH turned 30° about the vertical and scaled by 1.37.
+        let (ca, cb, back) = varied(poses_at_30(&al), poses_at_30(&bl), variant);
         let name = format!(
             "{a} vs {b}{}",
             if variant.is_empty() {

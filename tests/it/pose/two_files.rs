@@ -333,6 +333,45 @@ fn drop_frames(c: &Clip, n: usize) -> Clip {
 /// The two clips from the same instant: BVH frame `k ≥ skip` is AMC frame
 /// `ratio · (k − skip) + o`, the pair (skip, o) whose knees' bend differ
 /// least (mean degrees, also returned).
+/// One capture's two files under the mocap folder `m` (`a` the AMC, `b`
+/// the BVH conversion), each in metres Y-up: as loaded (`amc`, `bvh`) and
+/// aligned in time by [`aligned`] (`al`, `bl`).
+pub(super) struct TwoFiles {
+    pub amc: Clip,
+    pub bvh: Clip,
+    pub al: Clip,
+    pub bl: Clip,
+}
+
+pub(super) fn two_files(m: &std::path::Path, a: &str, b: &str) -> TwoFiles {
+    let mut amc = load_clip(&m.join(a), &Default::default()).unwrap();
+    let mut bvh = load_clip(&m.join(b), &Default::default()).unwrap();
+    amc.to_metres_y_up();
+    bvh.to_metres_y_up();
+    let (al, bl, _) = aligned(&amc, &bvh);
+    TwoFiles { amc, bvh, al, bl }
+}
+
+/// A clip's canonical poses at 30 fps, its rig detected.
+pub(super) fn poses_at_30(c: &Clip) -> ClipPoses {
+    let c = c.try_resampled(30.0).unwrap();
+    let map = detect_clip(&c).unwrap().map;
+    clip_poses(&c, &map).unwrap()
+}
+
+/// The two-file tests' variants of a pair: `"mirrored"` mirrors both,
+/// `"turned"` turns the second 30° about the vertical and scales it by
+/// 1.37, anything else leaves them. Also the rotation that turns the
+/// second's results back (identity unless turned).
+pub(super) fn varied(ca: ClipPoses, cb: ClipPoses, variant: &str) -> (ClipPoses, ClipPoses, DQuat) {
+    let q = DQuat::from_rotation_y(30f64.to_radians());
+    match variant {
+        "mirrored" => (mirrored(ca), mirrored(cb), DQuat::IDENTITY),
+        "turned" => (ca, turned(cb, q, 1.37), q.inverse()),
+        _ => (ca, cb, DQuat::IDENTITY),
+    }
+}
+
 pub(super) fn aligned(amc: &Clip, bvh: &Clip) -> (Clip, Clip, f64) {
     let ratio = (amc.fps() / bvh.fps()).round() as i64;
     let pa = detect_clip(amc).unwrap().map.poses(amc).unwrap();
@@ -960,18 +999,12 @@ fn the_limbs_gap_between_two_files_is_in_the_data() {
         ("cmu-amc/02/02_03.amc", "cmu-bvh-ccrig/002_03.bvh", false),
         ("cmu-amc/02/02_03.amc", "cmu-bvh-ccrig/002_03.bvh", true),
     ] {
-        let mut amc = load_clip(&m.join(a), &Default::default()).unwrap();
-        let mut bvh = load_clip(&m.join(b), &Default::default()).unwrap();
-        amc.to_metres_y_up();
-        bvh.to_metres_y_up();
-        let (amc, bvh, _) = aligned(&amc, &bvh);
+        let f = two_files(&m, a, b);
         let read = |c: &Clip| {
-            let c = c.try_resampled(30.0).unwrap();
-            let map = detect_clip(&c).unwrap().map;
-            let cp = clip_poses(&c, &map).unwrap();
+            let cp = poses_at_30(c);
             if mirror { mirrored(cp) } else { cp }
         };
-        let (ca, cb) = (read(&amc), read(&bvh));
+        let (ca, cb) = (read(&f.al), read(&f.bl));
         let n = ca.poses.len().min(cb.poses.len());
         let (pa, pb) = (&ca.poses[..n], &cb.poses[..n]);
         let dir = |p: &Pose, x: C, y: C| (p[y.index()] - p[x.index()]).normalize();
