@@ -14,7 +14,7 @@
 use crate::common;
 
 use super::data_floor::geometric_median;
-use super::two_files::{mirrored, poses_at_30, turned, two_files, varied};
+use super::two_files::{CC_PAIRS, mirrored, poses_at_30, turned, two_files, varied};
 use glam::{DQuat, DVec3};
 use surfmotion::pose::Pose;
 use surfmotion::pose::retarget::{
@@ -113,17 +113,7 @@ fn the_two_files_placed_by_each_anchor() {
     let m = d.join("mocap");
     let (character, h) = common::walk_character();
     let mut rows: Vec<(String, &str, Apart)> = Vec::new();
-    for (a, b, variant) in [
-        ("cmu-amc/02/02_01.amc", "cmu-bvh-ccrig/002_01.bvh", ""),
-        ("cmu-amc/02/02_02.amc", "cmu-bvh-ccrig/002_02.bvh", ""),
-        ("cmu-amc/02/02_03.amc", "cmu-bvh-ccrig/002_03.bvh", ""),
-        (
-            "cmu-amc/02/02_03.amc",
-            "cmu-bvh-ccrig/002_03.bvh",
-            "mirrored",
-        ),
-        ("cmu-amc/02/02_03.amc", "cmu-bvh-ccrig/002_03.bvh", "turned"),
-    ] {
+    for (a, b, variant) in CC_PAIRS {
         let f = two_files(&m, a, b);
         let (ca, cb, back) = varied(poses_at_30(&f.al), poses_at_30(&f.bl), variant);
         let name = format!("{a} vs {b} {variant}");

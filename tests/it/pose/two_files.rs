@@ -333,6 +333,20 @@ fn drop_frames(c: &Clip, n: usize) -> Clip {
 /// The two clips from the same instant: BVH frame `k ≥ skip` is AMC frame
 /// `ratio · (k − skip) + o`, the pair (skip, o) whose knees' bend differ
 /// least (mean degrees, also returned).
+/// CMU 02_01, 02_02 and 02_03 as the AMC and the CC-rig BVH conversion,
+/// then 02_03's pair mirrored and turned (the variants of [`varied`]).
+pub(super) const CC_PAIRS: [(&str, &str, &str); 5] = [
+    ("cmu-amc/02/02_01.amc", "cmu-bvh-ccrig/002_01.bvh", ""),
+    ("cmu-amc/02/02_02.amc", "cmu-bvh-ccrig/002_02.bvh", ""),
+    ("cmu-amc/02/02_03.amc", "cmu-bvh-ccrig/002_03.bvh", ""),
+    (
+        "cmu-amc/02/02_03.amc",
+        "cmu-bvh-ccrig/002_03.bvh",
+        "mirrored",
+    ),
+    ("cmu-amc/02/02_03.amc", "cmu-bvh-ccrig/002_03.bvh", "turned"),
+];
+
 /// One capture's two files under the mocap folder `m` (`a` the AMC, `b`
 /// the BVH conversion), each in metres Y-up: as loaded (`amc`, `bvh`) and
 /// aligned in time by [`aligned`] (`al`, `bl`).
