@@ -17,11 +17,8 @@ use surfmotion::embed::auto::report::AutoRig;
 use surfmotion::embed::auto::rig::auto_rig;
 use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::embed::rest::choose_rest_frame;
-use surfmotion::jobs::synth_db::SynthClip;
 use surfmotion::mesh::Mesh;
-use surfmotion::synth::database::{Dynamics, drive};
 use surfmotion::synth::humanoid::{HumanoidShape, humanoid_landmarks_with, humanoid_mesh_with};
-use surfmotion::synth::{Gait, gait_clip};
 use surfmotion::tools::autorig::used_vertices_only;
 
 type Frames = Vec<Vec<[f64; 3]>>;
@@ -30,24 +27,7 @@ type Frames = Vec<Vec<[f64; 3]>>;
 /// 30 frames a second); the rig too.
 fn driven(rest: &Mesh, lm: &Landmarks) -> (Frames, Embedding) {
     let rig = Embedding::new(rest, lm, None).unwrap();
-    let clip = gait_clip(Gait::Turn, 2.0, 30.0);
-    let Ok(SynthClip::Poses { poses, .. }) = SynthClip::from_clip("turn", &clip) else {
-        panic!("the procedural turn makes no poses");
-    };
-    let out = drive(
-        rest,
-        &rig,
-        &poses.poses,
-        &poses.reference,
-        30.0,
-        Dynamics::default(),
-    );
-    let frames = out
-        .positions
-        .chunks(rest.vertex_count())
-        .map(<[_]>::to_vec)
-        .collect();
-    (frames, rig)
+    (super::auto_order::turn_frames(rest, &rig, 2.0), rig)
 }
 
 /// Variant `v` of a mesh and its frames (mirrored: triangles reversed).

@@ -171,33 +171,38 @@ pub(super) fn synthetic_walk() -> (&'static Mesh, &'static Vec<Vec<[f64; 3]>>) {
 }
 
 fn make_synthetic_walk() -> (Mesh, Vec<Vec<[f64; 3]>>) {
-    use surfmotion::jobs::synth_db::SynthClip;
-    use surfmotion::synth::clips::{Gait, gait_clip};
-    use surfmotion::synth::database::{Dynamics, drive};
     use surfmotion::synth::humanoid::{HumanoidShape, humanoid_landmarks_with, humanoid_mesh_with};
     let shape = HumanoidShape::default();
     let rest = humanoid_mesh_with(0.02, &shape);
     let lm = humanoid_landmarks_with(&rest, &shape);
     let rig = Embedding::new(&rest, &lm, None).unwrap();
+    let frames = turn_frames(&rest, &rig, 4.0);
+    (rest, frames)
+}
+
+/// `rest` driven through `rig` by the procedural turn (`seconds` long at
+/// 30 frames a second, default dynamics): its frames.
+pub(super) fn turn_frames(rest: &Mesh, rig: &Embedding, seconds: f64) -> Vec<Vec<[f64; 3]>> {
+    use surfmotion::jobs::synth_db::SynthClip;
+    use surfmotion::synth::clips::{Gait, gait_clip};
+    use surfmotion::synth::database::{Dynamics, drive};
     let fps = 30.0;
-    let clip = gait_clip(Gait::Turn, 4.0, fps);
+    let clip = gait_clip(Gait::Turn, seconds, fps);
     let Ok(SynthClip::Poses { poses, .. }) = SynthClip::from_clip("turn", &clip) else {
         panic!("the turn clip makes poses");
     };
     let out = drive(
-        &rest,
-        &rig,
+        rest,
+        rig,
         &poses.poses,
         &poses.reference,
         fps,
         Dynamics::default(),
     );
-    let frames = out
-        .positions
+    out.positions
         .chunks(rest.vertex_count())
         .map(<[_]>::to_vec)
-        .collect();
-    (rest, frames)
+        .collect()
 }
 
 #[test]
