@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 use surfmotion::db::info;
+use surfmotion::jobs::db_info::{self, Listed};
 use surfmotion::jobs::skeletons::SkeletonsOptions;
 use surfmotion::jobs::{export_skeletons, text};
 
@@ -117,26 +118,15 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             for p in &mut i.problems {
                 *p = super::flags::as_flags(&super::without_os_error_numbers(p));
             }
-            // A problem is exit 1, so that scripts can rely on `db info`
-            // (issue 39, item 6: it listed problems and exited 0).
-            let failed = |i: &surfmotion::db::DbInfo, where_: &str| {
-                anyhow::anyhow!(
-                    "{}: {} ({where_})",
-                    a.dir.display(),
-                    super::count(i.problems.len(), "problem")
-                )
-            };
-            if a.json {
+            // A problem is exit 1 ([`db_info::verdict`]).
+            let listed = if a.json {
                 crate::outln!("{}", serde_json::to_string_pretty(&i)?)?;
-                if !i.problems.is_empty() {
-                    return Err(failed(&i, "\"problems\" in the JSON"));
-                }
+                Listed::InJson
             } else {
                 super::emit(&text::info(&i))?;
-                if !i.problems.is_empty() {
-                    return Err(failed(&i, "listed above"));
-                }
-            }
+                Listed::Above
+            };
+            db_info::verdict(&i, &a.dir, listed)?;
         }
     }
     Ok(())

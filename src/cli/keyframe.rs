@@ -13,27 +13,21 @@ use surfmotion::jobs::keyframe::text::{self, GRID_HEADER, LEAST_MEAN_HEADER};
 use surfmotion::jobs::keyframe::{
     self as job, DEFAULT_DISTANCES, DEFAULT_TIMES, FloorStage, GridTargets, Keys,
 };
+use surfmotion::jobs::output_set::OutputSet;
 use surfmotion::keyframe::{KeyframeOptions, Targets};
 
 /// Refuses outputs over the inputs or over each other, and a folder
-/// output that holds files without `--force`.
+/// output that holds files without `--force` ([`OutputSet::check`]).
 fn check_outputs(a: &Args) -> anyhow::Result<()> {
-    let mut outputs = Vec::new();
+    let mut set = OutputSet::reading_database(&a.db)
+        .input(a.clip.asf.clone())
+        .input(a.clip.rig_map.clone());
     if let Some(o) = &a.output {
-        surfmotion::jobs::outputs::check_mesh_output(o)?;
-        a.glb.refuse_other_formats(o)?;
-        outputs = super::mesh_outputs(o);
+        set = set.mesh("-o", o, a.force);
     }
-    outputs.extend(a.report.clone().map(|p| ("--report", p)));
-    outputs.extend(a.plot.clone().map(|p| ("--plot", p)));
-    let mut inputs = surfmotion::jobs::outputs::database_inputs(&a.db);
-    inputs.extend(a.clip.asf.clone());
-    inputs.extend(a.clip.rig_map.clone());
-    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
-    if let Some(o) = &a.output {
-        surfmotion::jobs::outputs::check_folder_output("-o", o, a.force, &inputs)?;
-    }
-    Ok(())
+    set.file("--report", a.report.as_deref())
+        .file("--plot", a.plot.as_deref())
+        .check(|o| a.glb.refuse_other_formats(o))
 }
 
 /// Runs `keyframe`.

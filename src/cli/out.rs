@@ -1,8 +1,6 @@
 //! What the CLI prints: stdout through [`emit`] (a closed pipe is not an
 //! error), errors on one line, counts, progress bars, written files.
 
-use std::path::{Path, PathBuf};
-
 /// Writes to stdout; a closed pipe becomes [`OutputClosed`] instead of a panic.
 pub fn emit(text: &str) -> anyhow::Result<()> {
     use std::io::Write;
@@ -135,15 +133,6 @@ pub fn spinner(what: &str) -> indicatif::ProgressBar {
     bar.set_message(what.to_string());
     bar.enable_steady_tick(std::time::Duration::from_millis(120));
     bar
-}
-
-/// The files `-o OUT` writes (a point cache's topology OBJ beside it),
-/// labelled for [`refuse_colliding`].
-pub fn mesh_outputs(out: &Path) -> Vec<(&'static str, PathBuf)> {
-    surfmotion::mesh::io::output_files(out)
-        .into_iter()
-        .map(|p| ("-o", p))
-        .collect()
 }
 
 /// Progress bars for a build.

@@ -4,6 +4,7 @@
 //! Parses, calls [`surfmotion::jobs::play`] and prints.
 
 use std::path::PathBuf;
+use surfmotion::jobs::output_set::OutputSet;
 use surfmotion::jobs::play::{PlayOptions, PlayStage, play_session};
 
 /// Arguments of `play`.
@@ -58,14 +59,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // The output is checked before the work, as every verb does: its
     // format, no input or other output overwritten, a folder that holds
     // files only with --force (none of it was checked).
-    surfmotion::jobs::outputs::check_mesh_output(&a.output)?;
-    a.glb.refuse_other_formats(&a.output)?;
-    let mut inputs = surfmotion::jobs::outputs::database_inputs(&a.db);
-    inputs.push(a.script.clone());
-    let mut outputs = super::mesh_outputs(&a.output);
-    outputs.extend(a.report.clone().map(|p| ("--report", p)));
-    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
-    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
+    OutputSet::reading_database(&a.db)
+        .input([a.script.clone()])
+        .mesh("-o", &a.output, a.force)
+        .file("--report", a.report.as_deref())
+        .check(|o| a.glb.refuse_other_formats(o))?;
     let opts = PlayOptions {
         seconds: a.seconds,
         glb: a.glb.options(),

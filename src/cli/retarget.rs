@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use surfmotion::db::CharacterOptions;
 use surfmotion::drive::RetargetOptions;
+use surfmotion::jobs::output_set::OutputSet;
 use surfmotion::jobs::{RetargetJob, RetargetJobOptions};
 
 /// Arguments of `retarget`.
@@ -117,17 +118,18 @@ impl JobOpts {
 /// Runs `retarget`: one [`RetargetJob`] and one clip.
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::warnings_in_summary(!a.run.json);
-    surfmotion::jobs::outputs::check_mesh_output(&a.output)?;
-    let mut inputs = vec![a.mocap.clone()];
-    inputs.extend(a.run.clip.asf.clone());
-    inputs.extend(a.run.clip.rig_map.clone());
-    inputs.extend(surfmotion::jobs::outputs::database_inputs(&a.db));
-    let mut outputs = super::mesh_outputs(&a.output);
-    outputs.extend(a.report.clone().map(|p| ("--report", p)));
-    outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
-    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
+    // The GLB/USD flags are refused after collisions, as they always were.
+    let set = OutputSet::reading([a.mocap.clone()])
+        .input(a.run.clip.asf.clone())
+        .input(a.run.clip.rig_map.clone())
+        .input(surfmotion::jobs::outputs::database_inputs(&a.db))
+        .mesh("-o", &a.output, a.force)
+        .file("--report", a.report.as_deref())
+        .file("--preview", a.run.preview.preview.as_deref());
+    set.check_mesh_format()?;
+    set.refuse_colliding()?;
     a.glb.refuse_other_formats(&a.output)?;
-    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
+    set.check_folder()?;
     let opts = RetargetJobOptions {
         retarget: a.job.options(),
         character: a.job.character(),

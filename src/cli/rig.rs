@@ -94,13 +94,14 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
             .flatten()
             .cloned(),
     );
-    let mut outputs = vec![("-o", output.clone())];
-    outputs.extend(a.png.clone().map(|p| ("--png", p)));
-    outputs.extend(a.write_landmarks.clone().map(|p| ("--write-landmarks", p)));
+    let set = surfmotion::jobs::output_set::OutputSet::reading(inputs)
+        .file("-o", Some(&output))
+        .file("--png", a.png.as_deref())
+        .file("--write-landmarks", a.write_landmarks.as_deref());
     if !(0.0..=1.0).contains(&a.min_confidence) {
         anyhow::bail!("--min-confidence {}: expected 0 to 1", a.min_confidence);
     }
-    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
+    set.refuse_colliding()?;
     let mesh = super::load_mesh_groups(&a.mesh, &a.group)?;
     let r = embed_rig(
         mesh,

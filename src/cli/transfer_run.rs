@@ -2,6 +2,7 @@
 //! the job ([`surfmotion::jobs::transfer`]) called, its report printed.
 
 use super::transfer::{Args, ScanJob};
+use surfmotion::jobs::output_set::OutputSet;
 use surfmotion::jobs::{
     ScanTransferOptions, TransferOutcome, TransferSource, TransferSpec, transfer_onto_scan,
     transfer_onto_scan_to,
@@ -107,39 +108,35 @@ fn check_options_and_outputs(a: &Args) -> anyhow::Result<()> {
             );
         }
     }
-    let mut inputs = surfmotion::mesh::io::input_files(&a.scan, None);
+    use surfmotion::mesh::io::input_files;
+    let mut meshes = input_files(&a.scan, None);
     if let Some(t) = &a.template {
-        inputs.extend(surfmotion::mesh::io::input_files(t, None));
+        meshes.extend(input_files(t, None));
     }
-    surfmotion::mesh::io::refuse_overwriting(&inputs, &a.output)?;
-    inputs.extend(a.mocap.clone());
+    surfmotion::mesh::io::refuse_overwriting(&meshes, &a.output)?;
     // `--report LANDMARKS.json` replaced the scan's landmarks with the
     // report and exited 0: every file read is an input.
-    if let Some(t) = &a.truth {
-        inputs.extend(surfmotion::mesh::io::input_files(t, None));
-    }
-    inputs.extend(
-        [
-            &a.landmarks,
-            &a.markers,
-            &a.template_markers,
-            &a.template_landmarks,
-            &a.run.clip.asf,
-            &a.run.clip.rig_map,
-        ]
-        .into_iter()
-        .flatten()
-        .cloned(),
-    );
-    let mut outputs = super::mesh_outputs(&a.output);
-    outputs.extend(a.report.clone().map(|p| ("--report", p)));
-    outputs.extend(a.run.preview.preview.clone().map(|p| ("--preview", p)));
-    outputs.extend(a.save_markers.clone().map(|p| ("--save-markers", p)));
-    outputs.extend(a.write_landmarks.clone().map(|p| ("--write-landmarks", p)));
-    surfmotion::jobs::outputs::refuse_colliding(&inputs, &outputs)?;
+    let read = [
+        &a.landmarks,
+        &a.markers,
+        &a.template_markers,
+        &a.template_landmarks,
+        &a.run.clip.asf,
+        &a.run.clip.rig_map,
+    ];
+    let set = OutputSet::reading(meshes)
+        .input(a.mocap.clone())
+        .input(a.truth.iter().flat_map(|t| input_files(t, None)))
+        .input(read.into_iter().flatten().cloned())
+        .mesh("-o", &a.output, a.force)
+        .file("--report", a.report.as_deref())
+        .file("--preview", a.run.preview.preview.as_deref())
+        .file("--save-markers", a.save_markers.as_deref())
+        .file("--write-landmarks", a.write_landmarks.as_deref());
+    set.refuse_colliding()?;
     surfmotion::mesh::io::refuse_folder_as_file(&a.output)?;
     a.glb.refuse_other_formats(&a.output)?;
-    surfmotion::jobs::outputs::check_folder_output("-o", &a.output, a.force, &inputs)?;
+    set.check_folder()?;
     anyhow::ensure!(
         surfmotion::mesh::io::MeshFormat::of(&a.output).is_some(),
         "{}: unknown output format (use .glb .pc2 .mdd .obj or a folder)",

@@ -21,7 +21,9 @@
 //! [`eval`] scores a result against its clip and database (the `eval`
 //! verb).
 //!
-//! [`outputs`] is the output policy every job checks before any work.
+//! [`outputs`] is the output policy every job checks before any work;
+//! [`output_set::OutputSet`] holds a job's labelled outputs and inputs and
+//! checks them in its order. [`db_info::verdict`] is `db info`'s.
 //!
 //! JSON reports are meant to be printed through `serde_json::Value`
 //! (`serde_json::to_value`), whose objects keep their keys sorted, as the
@@ -31,6 +33,7 @@ pub mod batch;
 pub mod batch_verdict;
 pub mod blend;
 pub mod database;
+pub mod db_info;
 pub mod db_init;
 pub mod demo;
 mod error;
@@ -40,6 +43,7 @@ pub mod live;
 pub mod live_checks;
 pub mod mesh;
 pub mod mocap;
+pub mod output_set;
 pub mod outputs;
 pub mod pick;
 pub mod play;
