@@ -6,6 +6,7 @@ mod chest;
 mod data_floor;
 mod feet;
 mod ground;
+mod level;
 mod placement;
 mod toes;
 mod travel;
