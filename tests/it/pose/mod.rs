@@ -7,6 +7,7 @@ mod data_floor;
 mod feet;
 mod ground;
 mod level;
+mod level_variants;
 mod placement;
 mod toes;
 mod travel;
