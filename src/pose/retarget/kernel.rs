@@ -5,6 +5,7 @@
 use super::anchor::{Placement, place_anchor, placement_from_env};
 use super::feet::{Toes, flat_feet, place_feet};
 use super::ground::{Given, clip_support_given, foot_height};
+use super::level::{Level, level_from_env, levelling_line};
 use super::motion_ref::{carriage_for_rest, torso_reference};
 use super::reference::{Reference, ReferenceSource, leg_length};
 use super::root::root_from_legs;
@@ -134,7 +135,7 @@ pub(super) fn retarget_on_grounds(
     toes: Toes,
     given: &Given<'_>,
 ) -> RetargetedOnGrounds {
-    let how = (toes, placement_from_env());
+    let how = (toes, placement_from_env(), level_from_env());
     retarget_placed_on_grounds(character, neutral, reference, mocap, how, given)
 }
 
@@ -150,7 +151,31 @@ pub fn retarget_placed(
     toes: Toes,
     placement: Placement,
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
-    let how = (toes, placement);
+    retarget_levelled(
+        character,
+        neutral,
+        reference,
+        mocap,
+        toes,
+        placement,
+        level_from_env(),
+    )
+}
+
+/// [`retarget_placed`] with the torso's reference stood upright on the
+/// line `level` names (issue 44; [`Level::default`] is the kernel's own,
+/// what every other entry point uses unless
+/// [`LEVEL_ENV`](super::LEVEL_ENV) says otherwise).
+pub fn retarget_levelled(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &Reference,
+    mocap: &[Pose],
+    toes: Toes,
+    placement: Placement,
+    level: Level,
+) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
+    let how = (toes, placement, level);
     retarget_placed_on_grounds(character, neutral, reference, mocap, how, &Given::default()).0
 }
 
@@ -160,7 +185,7 @@ fn retarget_placed_on_grounds(
     neutral: &Pose,
     reference: &Reference,
     mocap: &[Pose],
-    (toes, placement): (Toes, Placement),
+    (toes, placement, level): (Toes, Placement, Level),
     given: &Given<'_>,
 ) -> RetargetedOnGrounds {
     // Counted by the tests of issue 40's "analysed once per clip".
@@ -204,7 +229,8 @@ fn retarget_placed_on_grounds(
     let root = C::Pelvis.index();
     let clip_floor = support.floor;
     let char_floor = foot_height(character);
-    let rotations = level_torso(clip_rotations_from(r, mocap, reference, tilt, at_ref), r);
+    let rotations = clip_rotations_from(r, mocap, reference, tilt, at_ref);
+    let rotations = level_torso(rotations, r, level);
     let carriage_inv = neck_carriage(&upright(mocap, &rotations)).inverse();
     let (chest, neck) = (C::Chest.index(), C::Neck.index());
     let mut out: Vec<(Pose, [DQuat; Canonical::COUNT])> = mocap
@@ -276,11 +302,14 @@ fn retarget_placed_on_grounds(
 /// its height apart about the pelvis. The line is the pelvis → chest one
 /// (not → neck or shoulders): a conversion that drops the thorax's length
 /// (CMU 01_01's cgspeed BVH) moves the neck and shoulders, not the chest.
+/// `level` chooses another line ([`Level`]: the pelvis is the root joint,
+/// and a rig that puts its root elsewhere turns this one).
 pub(super) fn level_torso(
     mut rotations: Vec<[DQuat; Canonical::COUNT]>,
     r: &Pose,
+    level: Level,
 ) -> Vec<[DQuat; Canonical::COUNT]> {
-    let line = (r[C::Chest.index()] - r[C::Pelvis.index()]).normalize_or_zero();
+    let line = levelling_line(r, level);
     if line == DVec3::ZERO {
         return rotations;
     }

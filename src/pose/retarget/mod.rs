@@ -71,6 +71,7 @@ mod anchor;
 mod feet;
 mod ground;
 mod kernel;
+mod level;
 mod measures;
 mod motion_ref;
 mod reference;
@@ -83,7 +84,10 @@ pub use ground::{
     Given, Support, clip_floor, clip_support, clip_support_given, clip_support_on, contact_band,
     foot_height, ground_tilt,
 };
-pub use kernel::{retarget, retarget_placed, retarget_toes, retarget_with_neutral};
+pub use kernel::{
+    retarget, retarget_levelled, retarget_placed, retarget_toes, retarget_with_neutral,
+};
+pub use level::{LEVEL_ENV, Level};
 pub use measures::{
     OnCharacter, clip_foot_glide_cm, clip_head_trunk_deg, foot_glide_cm, foot_ground_offsets,
     ground_offsets, on_character_given, on_character_with_grounds, stance_offsets,

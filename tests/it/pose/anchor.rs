@@ -48,7 +48,7 @@ fn rest_anchor(p: &Pose, a: Anchor) -> DVec3 {
 }
 
 /// The results' joint positions of `cp` on `character` placed as `pl`.
-fn placed(character: &Pose, cp: &ClipPoses, pl: Placement) -> Vec<Pose> {
+pub(super) fn placed(character: &Pose, cp: &ClipPoses, pl: Placement) -> Vec<Pose> {
     retarget_placed(
         character,
         character,
@@ -66,18 +66,18 @@ fn placed(character: &Pose, cp: &ClipPoses, pl: Placement) -> Vec<Pose> {
 /// frames of each frame's mean joint distance; the pelvises' mean; the
 /// mean after each frame's best translation).
 #[derive(Debug, Clone, Copy)]
-struct Apart {
-    mean: f64,
-    p95: f64,
-    pelvis: f64,
-    any: f64,
+pub(super) struct Apart {
+    pub(super) mean: f64,
+    pub(super) p95: f64,
+    pub(super) pelvis: f64,
+    pub(super) any: f64,
     /// Each frame's best translation, mean length horizontally and
     /// vertically (fractions of `h`): what the placement is off by.
     off_xz: f64,
     off_y: f64,
 }
 
-fn apart(a: &[Pose], b: &[Pose], h: f64) -> Apart {
+pub(super) fn apart(a: &[Pose], b: &[Pose], h: f64) -> Apart {
     let n = a.len().min(b.len());
     let k = Canonical::COUNT as f64 * h;
     let mut frames = Vec::with_capacity(n);
@@ -195,7 +195,7 @@ fn pelvis_frame(p: &Pose) -> glam::DMat3 {
 /// and `back` (fractions of its leg), as a rig that puts its root
 /// elsewhere (the CC rig's hips sit 9 cm higher and 4.5 cm back against
 /// the ASF's root, 0.11 and 0.05 of its leg).
-fn root_moved(mut cp: ClipPoses, up: f64, back: f64) -> ClipPoses {
+pub(super) fn root_moved(mut cp: ClipPoses, up: f64, back: f64) -> ClipPoses {
     let r = &cp.reference.pose;
     let leg = leg_length(r);
     let f = pelvis_frame(r);

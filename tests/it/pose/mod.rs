@@ -6,6 +6,8 @@ mod chest;
 mod data_floor;
 mod feet;
 mod ground;
+mod level;
+mod level_variants;
 mod placement;
 mod toes;
 mod travel;

@@ -433,7 +433,7 @@ const RETIMED: &str = "002_03 re-timed to 24 fps";
 const MIRRORED: &str = "002_03 mirrored, with its AMC";
 
 /// The joint on the other side (itself for the torso's).
-fn other_side(c: C) -> C {
+pub(super) fn other_side(c: C) -> C {
     match c {
         C::LShoulder => C::RShoulder,
         C::LElbow => C::RElbow,
