@@ -109,7 +109,7 @@ fn skin_weights_into(
             }
         }
         let norm = real.length();
-        if !(norm > 1e-12) {
+        if norm.is_nan() || norm <= 1e-12 {
             // No weight (or bones that cancel): the rest position.
             *o = *p;
             continue;

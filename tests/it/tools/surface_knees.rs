@@ -25,7 +25,8 @@ struct Count {
 /// thigh's and shin's own solve (its vertices put into the frame the
 /// blend gives, only the region's edges counted), the blend with the
 /// cloth stitch (no repair) and the output after the repair. A
-/// measurement: prints (`SURFACE_KNEE_CLIP`, default CMU 02_02).
+/// measurement: prints (`SURFACE_KNEE_CLIP`, default CMU 02_02;
+/// `SURFACE_KNEE_STEPS`: [`DeformOptions::local_steps`], default 0).
 #[test]
 #[ignore = "measurement: prints the knee-zone creases per stage"]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
@@ -57,6 +58,11 @@ fn where_the_knee_creases_come_from() {
                 .any(|k| (p - joints[k.index()]).length() < 0.08)
         })
         .collect();
+    // Rotation-aware local steps after each region's solve.
+    let steps: usize = std::env::var("SURFACE_KNEE_STEPS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
     let knee_edge = |e: &[u32; 2]| near_knee[e[0] as usize] && near_knee[e[1] as usize];
     for skin in [
         ConstraintSkin::Linear,
@@ -65,6 +71,7 @@ fn where_the_knee_creases_come_from() {
     ] {
         let opts = DeformOptions {
             constraint_skin: skin,
+            local_steps: steps,
             ..Default::default()
         };
         let bare_opts = DeformOptions {
@@ -141,7 +148,7 @@ fn where_the_knee_creases_come_from() {
             add(&mut c[6], &out, None);
         }
         eprintln!(
-            "{clip} onto samba, {} frames, constraints by {skin:?} skinning: crease edge-frames within 8 cm of a knee / all (region stages: the region's edges only)",
+            "{clip} onto samba, {} frames, constraints by {skin:?} skinning, {steps} local steps: crease edge-frames within 8 cm of a knee / all (region stages: the region's edges only)",
             raw.report.frames
         );
         for (name, c) in names.iter().zip(&c) {
