@@ -19,10 +19,11 @@ pub(crate) fn with_env(opts: &DeformOptions) -> DeformOptions {
 /// ([`DeformOptions::hold_joints`]), `by_weight`
 /// ([`DeformOptions::hold_by_weight`]), `spread`
 /// ([`DeformOptions::hold_spread`]) and `seams_by_weight`
-/// ([`DeformOptions::seam_by_weight`]): `on`/`off`. An error names the pair
+/// ([`DeformOptions::seam_by_weight`]): `on`/`off`; `steps`
+/// ([`DeformOptions::local_steps`], a count). An error names the pair
 /// it could not read and every name accepted.
 pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
-    const NAMES: &str = "skin=linear|dq|rigid, joints=on|off, by_weight=on|off, spread=on|off, seams_by_weight=on|off";
+    const NAMES: &str = "skin=linear|dq|rigid, joints=on|off, by_weight=on|off, spread=on|off, seams_by_weight=on|off, steps=N";
     let mut o = *opts;
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = |what: &str| format!("'{pair}': {what} (accepted: {NAMES})");
@@ -45,6 +46,9 @@ pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions,
             "by_weight" => o.hold_by_weight = switch()?,
             "spread" => o.hold_spread = switch()?,
             "seams_by_weight" => o.seam_by_weight = switch()?,
+            "steps" => {
+                o.local_steps = value.parse().map_err(|_| bad("the value is not a count"))?;
+            }
             _ => return Err(bad("unknown name")),
         }
     }
@@ -63,21 +67,23 @@ mod tests {
         assert_eq!(with_overrides(&d, "").unwrap(), d);
         let o = with_overrides(
             &d,
-            "skin=dq, joints=off,by_weight=on,spread=1,seams_by_weight=true",
+            "skin=dq, joints=off,by_weight=on,spread=1,seams_by_weight=true,steps=2",
         )
         .unwrap();
         assert_eq!(o.constraint_skin, ConstraintSkin::DualQuaternion);
         assert!(!o.hold_joints && o.hold_by_weight && o.hold_spread && o.seam_by_weight);
+        assert_eq!(o.local_steps, 2);
         let back = DeformOptions {
             constraint_skin: d.constraint_skin,
             hold_joints: d.hold_joints,
             hold_by_weight: d.hold_by_weight,
             hold_spread: d.hold_spread,
             seam_by_weight: d.seam_by_weight,
+            local_steps: d.local_steps,
             ..o
         };
         assert_eq!(back, d, "an override set another option");
-        for bad in ["skin", "skin=quat", "joints=maybe", "speed=2"] {
+        for bad in ["skin", "skin=quat", "joints=maybe", "speed=2", "steps=-1"] {
             let e = with_overrides(&d, bad).unwrap_err();
             assert!(
                 e.contains(&format!("'{bad}'")) && e.contains("skin=linear|dq|rigid"),
