@@ -144,6 +144,12 @@ pub struct DeformOptions {
     /// thighs 789 + 264 triangle-frames against the rest frame, shins
     /// 56 + 54, torso 2), where the overlapping thigh solves and their
     /// held LBS targets disagree, not in the turn of the coordinates.
+    /// On the knees' creases it does act (session 36,
+    /// `tools::surface_knees` with `SURFACE_KNEE_STEPS=2`, crease
+    /// edge-frames within 8 cm of a knee after the repair, CMU 02_02 / 03_02
+    /// onto the real samba capture): 1,517 → 865 / 1,512 → 1,055, all
+    /// creases 3,027 → 2,032 / 5,908 → 5,538; its other figures not yet
+    /// measured (`SURFMOTION_HOLD=steps=2`).
     pub local_steps: usize,
     /// The most work the fold repair may do on one frame
     /// ([`RepairBudget`]).
