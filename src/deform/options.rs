@@ -148,8 +148,9 @@ pub struct DeformOptions {
     /// `tools::surface_knees` with `SURFACE_KNEE_STEPS=2`, crease
     /// edge-frames within 8 cm of a knee after the repair, CMU 02_02 / 03_02
     /// onto the real samba capture): 1,517 → 865 / 1,512 → 1,055, all
-    /// creases 3,027 → 2,032 / 5,908 → 5,538; its other figures not yet
-    /// measured (`SURFMOTION_HOLD=steps=2`).
+    /// creases 3,027 → 2,032 / 5,908 → 5,538; through `retarget` + `eval`
+    /// (`SURFMOTION_HOLD=steps=2`) turned over against the rest frame 5 →
+    /// 10 / 92 → 102 and the retarget's CPU about 1.6× (README).
     pub local_steps: usize,
     /// The most work the fold repair may do on one frame
     /// ([`RepairBudget`]).
