@@ -2,6 +2,7 @@
 //! (the module page, [`crate::deform`], describes the method).
 
 use super::cloth::{ClothStitch, StitchWorkspace};
+use super::dqs::{self, ConstraintSkin};
 use super::levels::{Levels, RegionScratch};
 use super::near_turns::{Neighbourhoods, ReadingOf, SurfaceReading};
 use super::options::{DeformMode, DeformOptions, RepairBudget, RepairTurns, TurnedOver};
@@ -50,6 +51,8 @@ pub struct Deformer {
     /// A frame the stitched repair leaves folded is repaired again without
     /// the stitch ([`DeformOptions::cloth_fallback`]).
     cloth_fallback: bool,
+    /// The skinning of the constraints ([`DeformOptions::constraint_skin`]).
+    constraint_skin: ConstraintSkin,
     triangles: usize,
     regions: Vec<Region>,
     /// The regions' levels when they are solved level by level on several
@@ -158,7 +161,8 @@ impl Deformer {
         mode: DeformMode,
         opts: &DeformOptions,
     ) -> Result<Deformer, SolveError> {
-        let opts = &super::options::with_repair_env(&super::cloth::with_env(opts));
+        let opts =
+            &super::options::with_repair_env(&super::hold::with_env(&super::cloth::with_env(opts)));
         let mut out = Deformer::options_of(ch, mode, opts);
         if matches!(mode, DeformMode::Lbs | DeformMode::None) {
             return Ok(out);
@@ -223,6 +227,7 @@ impl Deformer {
             cloth: None,
             cloth_turns: opts.cloth_turns,
             cloth_fallback: opts.cloth_fallback,
+            constraint_skin: opts.constraint_skin,
             triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
             levels: None,
@@ -502,6 +507,15 @@ impl Deformer {
         out.copy_from_slice(&ws.lbs);
         if self.mode == DeformMode::Lbs {
             return TurnedOver::default();
+        }
+        match self.constraint_skin {
+            ConstraintSkin::Linear => {}
+            ConstraintSkin::DualQuaternion => {
+                dqs::skin_into(source, ch.rig(), source_pose, target, &g, &mut ws.lbs)
+            }
+            ConstraintSkin::Rigid => {
+                dqs::rigid_into(source, ch.rig(), source_pose, target, &g, &mut ws.lbs)
+            }
         }
         let rot = pose_rotations(&self.rest_pose, target);
         // Each vertex's rotation from source to target: its bones' turns,

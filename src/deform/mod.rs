@@ -25,7 +25,9 @@
 //! others to their LBS positions; the end of a region that reaches
 //! into a child part is held at LBS positions too
 //! ([`DeformOptions::hold_joints`]), so the joint is where the skeleton
-//! puts it before the child is solved. Where regions overlap (siblings such
+//! puts it before the child is solved ([`DeformOptions::constraint_skin`]
+//! places those targets by dual-quaternion skinning, [`dqs`], instead:
+//! off by default, measured in its doc). Where regions overlap (siblings such
 //! as the two thighs under a skirt, or a parent and child near a joint) the
 //! results are blended by the parts' skin weights, so parts join without
 //! seams ([`DeformOptions::overlap_weight`] holds the two thighs' shared
@@ -63,6 +65,8 @@ pub mod arap;
 pub mod cloth;
 pub mod cloth_reach;
 pub mod deformer;
+pub mod dqs;
+pub mod hold;
 pub mod lbs;
 pub mod levels;
 pub mod near_turns;

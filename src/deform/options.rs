@@ -114,14 +114,23 @@ pub struct DeformOptions {
     /// child part, held at LBS) by the region's share of the blending
     /// weights there, `w_region / (w_region + w_child)`, so the thigh's
     /// targets loosen below the knee where its result counts little in
-    /// the blend (issue 42).
+    /// the blend (issue 42). Default false. Measured (session 36,
+    /// `SURFMOTION_HOLD=by_weight=on`, CMU 02_02 / 03_02 onto the real
+    /// samba capture, `eval --surface`): creases 3,026 → 2,844 / 5,908 →
+    /// 5,356, crossings 6,830 → 5,496 / 2,962 → 2,507, but turned over
+    /// against the rest frame 5 → 9 / 92 → 104, rough 7,070 → 8,222 on
+    /// 03_02 and joint-velocity error 0.116 → 0.153 / 0.123 → 0.154
+    /// cm/frame: the loosened knee drifts from the skeleton.
     pub hold_by_weight: bool,
     /// Hold every vertex of a region's end inside a child part
     /// (`hold_joints`) with `constraint_weight / √stride`, instead of
     /// every `stride`-th with `constraint_weight`: the same total pull
     /// towards the LBS positions, spread evenly, so single held vertices
     /// do not dimple the surface around them (issue 42).
-    /// Default false (measured with `seam_by_weight`, above).
+    /// Default false (measured with `seam_by_weight`, above; alone,
+    /// session 36, `SURFMOTION_HOLD=spread=on`, CMU 02_02 / 03_02 onto the
+    /// real samba capture: creases 3,026 → 3,268 / 5,908 → 6,326, turned
+    /// over against the rest frame 5 → 20 / 92 → 124).
     pub hold_spread: bool,
     /// Rotation-aware local steps after each region's solve ([`super::arap`]):
     /// each vertex's rotation re-fitted to the solved one-ring, the source's
@@ -135,6 +144,13 @@ pub struct DeformOptions {
     /// thighs 789 + 264 triangle-frames against the rest frame, shins
     /// 56 + 54, torso 2), where the overlapping thigh solves and their
     /// held LBS targets disagree, not in the turn of the coordinates.
+    /// On the knees' creases it does act (session 36,
+    /// `tools::surface_knees` with `SURFACE_KNEE_STEPS=2`, crease
+    /// edge-frames within 8 cm of a knee after the repair, CMU 02_02 / 03_02
+    /// onto the real samba capture): 1,517 → 865 / 1,512 → 1,055, all
+    /// creases 3,027 → 2,032 / 5,908 → 5,538; through `retarget` + `eval`
+    /// (`SURFMOTION_HOLD=steps=2`) turned over against the rest frame 5 →
+    /// 10 / 92 → 102 and the retarget's CPU about 1.6× (README).
     pub local_steps: usize,
     /// The most work the fold repair may do on one frame
     /// ([`RepairBudget`]).
@@ -273,6 +289,27 @@ pub struct DeformOptions {
     /// hem is joined to the legs by triangles: 260 of its knee zones'
     /// 1,013 vertices are cloth). Default 0 (nothing left out).
     pub stitch_apart: usize,
+    /// The skinning that places the solve's positional constraints (the
+    /// LBS targets of Eq. 32, the held joint ends of `hold_joints`):
+    /// linear blend (Huang et al. 2015) or dual quaternions
+    /// ([`super::dqs`], Kavan et al. 2008), which do not pull a vertex
+    /// weighted between two bones towards their joint, or each vertex's
+    /// heaviest bone alone. `Deformer::deform`'s `Lbs` mode stays linear.
+    /// Default linear. Measured (session 36, `SURFMOTION_HOLD=skin=dq`,
+    /// [`super::hold::HOLD_ENV`]; CMU 02_02 / 03_02 onto the real samba
+    /// capture, `retarget --json` then `eval --surface`, element-frames,
+    /// linear → dual quaternions): creases 3,026 → 3,019 / 5,908 → 5,210,
+    /// rough 2,885 → 2,791 / 7,070 → 6,570, slivers 406 → 427 / 1,147 →
+    /// 813, stretched 1,252 → 1,250 / 3,981 → 3,376, but turned over
+    /// against the rest frame 5 → 10 / 92 → 107, crossings 6,830 → 7,086 /
+    /// 2,962 → 3,174 and joint-velocity error 0.116 → 0.119 / 0.123 →
+    /// 0.142 cm/frame: the knees' creases are not the held targets'
+    /// collapse (02_02's barely move). `rigid`: every figure worse
+    /// (creases 5,656 / 13,287). With `hold_by_weight` (`skin=dq,
+    /// by_weight=on`): creases 2,839 / 4,857, turned over 6 / 79, but
+    /// velocity error 0.155 / 0.157 and the shins' joint-follow p95 worse
+    /// (02_02 left 2.53 → 3.23 cm). README "The surface measure", issue 42.
+    pub constraint_skin: super::dqs::ConstraintSkin,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -400,6 +437,7 @@ impl Default for DeformOptions {
             cloth_rings: 0,
             stitch_joints: super::cloth_reach::StitchJoints::None,
             stitch_apart: 0,
+            constraint_skin: super::dqs::ConstraintSkin::Linear,
         }
     }
 }

@@ -674,6 +674,26 @@ impl<'a> SurfaceReference<'a> {
         out
     }
 
+    /// The edges (their two ends) of `frame` that [`SurfaceReference::frame`]
+    /// counts as creases (a bend more than the margin outside the captured
+    /// range at the edge, or not finite): where they lie, for a
+    /// diagnosis (issue 42's knees).
+    pub fn crease_edges(&self, frame: &[[f64; 3]]) -> Vec<[u32; 2]> {
+        let (b, s) = (&self.base, &self.stats);
+        let mut bends = Vec::new();
+        b.edges.bends(frame, &mut bends);
+        let margin = self.options.crease_margin_deg.to_radians();
+        bends
+            .iter()
+            .enumerate()
+            .filter(|&(e, &x)| {
+                let excess = bend_outside(x, s.bend_lo[e], s.bend_hi[e]);
+                excess.is_nan() || excess > margin
+            })
+            .map(|(e, _)| b.edges.ends[e])
+            .collect()
+    }
+
     /// The flags of each captured frame of the reference itself, measured
     /// as a result would be but with its nearest frame taken away from it
     /// in its sequence (as the reference was built): 0 everywhere, by

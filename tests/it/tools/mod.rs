@@ -3,5 +3,6 @@
 mod plausibility;
 mod surface;
 mod surface_crumple;
+mod surface_knees;
 mod surface_look;
 mod surface_repair;
