@@ -3,7 +3,7 @@
 //! and the details (standard error).
 //!
 //! cargo run --release --example autorig_eval -- [DATA]
-//!     [real|synth|all|held-parts|facing|orders|contact [FRAMES]|joints|spread [SALTS] [renumbered]]
+//!     [real|synth|bodies|headless|all|held-parts|facing|orders|contact [FRAMES]|joints|spread [SALTS] [renumbered]]
 //! (DATA defaults to `../shared/data`; run from the repository, where
 //! `tests/fixtures` is.) `SURFMOTION_AUTORIG` sets the rules as for `db init`.
 

@@ -1,6 +1,6 @@
 //! The evaluation of the automatic rig ([`crate::embed::auto`], issue 41)
 //! that `cargo run --release --example autorig_eval -- [DATA]
-//! [real|synth|bodies|all|held-parts|facing|orders|contact|joints|spread]` runs
+//! [real|synth|bodies|headless|all|held-parts|facing|orders|contact|joints|spread]` runs
 //! (DATA defaults to `../shared/data`; the fixtures are read from
 //! `tests/fixtures`, relative to the working folder): [`evaluate_autorig`]
 //! returns its tables ([`AutorigReport`]'s `Display`, the example's
@@ -22,6 +22,8 @@
 //!   joints read off every frame (its regressors) against the skeleton that
 //!   drove the frame, mean over joints and frames in % of the height, and
 //!   its part labels against the generating rig's;
+//! - `headless` ([`headless`]): the bodies whole and cut at the neck, the
+//!   trunk's depth below the top and whether the rig has a head;
 //! - `facing`: the real captures turned about the vertical and mirrored,
 //!   the automatic facing, chin and head joint against the landmark rig's
 //!   moved alike;
@@ -47,12 +49,14 @@ use std::fmt::{self, Write as _};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+pub mod headless;
+
 /// Why the evaluation could not run.
 #[derive(Debug, thiserror::Error)]
 pub enum AutorigEvalError {
     /// The arguments name no evaluation.
     #[error(
-        "{0}: expected [DATA] [real|synth|bodies|all|held-parts|facing|orders|contact [FRAMES]|joints|spread [SALTS] [renumbered]]"
+        "{0}: expected [DATA] [real|synth|bodies|headless|all|held-parts|facing|orders|contact [FRAMES]|joints|spread [SALTS] [renumbered]]"
     )]
     Usage(String),
     /// `SURFMOTION_AUTORIG` cannot be read.
@@ -99,6 +103,9 @@ pub enum AutorigMode {
     Orders,
     /// Samba started at each of these frames.
     Contact(Vec<usize>),
+    /// The bodies of [`AutorigMode::Bodies`] whole and cut at the neck,
+    /// and every frame of the captures whole and cut (`headless`).
+    Headless,
 }
 
 impl AutorigMode {
@@ -113,6 +120,7 @@ impl AutorigMode {
             "real" => AutorigMode::Real,
             "synth" => AutorigMode::Synth,
             "bodies" => AutorigMode::Bodies,
+            "headless" => AutorigMode::Headless,
             "all" => AutorigMode::All,
             "held-parts" => AutorigMode::HeldParts,
             "facing" => AutorigMode::Facing,
@@ -204,6 +212,7 @@ pub fn evaluate_autorig(
         AutorigMode::Spread { salts, renumbered } => spread(data, *salts, *renumbered, &mut w)?,
         AutorigMode::Orders => orders(data, &mut w)?,
         AutorigMode::Contact(starts) => contact(data, starts, &mut w),
+        AutorigMode::Headless => headless::headless(data, &mut w)?,
     }
     Ok(w)
 }
@@ -942,6 +951,20 @@ fn bodies(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
     );
     say!(w, "|---|---|---|---|---|---|---|");
     let motions = synth_motions(data, w);
+    for (bname, rest, rig) in body_meshes(data, w)? {
+        synth_rows(bname, &rest, &rig, &motions, w);
+    }
+    Ok(())
+}
+
+/// Samba's frame 0, the SMPL template and MakeHuman's `body` group (its
+/// unused vertices dropped), each with its rig from its fixture's
+/// landmarks; a body that does not load prints `| NAME | not run: why |`.
+fn body_meshes(
+    data: &Path,
+    w: &mut AutorigReport,
+) -> Result<Vec<(&'static str, Mesh, Embedding)>, AutorigEvalError> {
+    let mut out = Vec::new();
     for (bname, file, group, fixture) in [
         ("samba frame 0", "4d/samba/samba.obj", None, "samba"),
         (
@@ -979,9 +1002,9 @@ fn bodies(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
         let fixture = PathBuf::from(format!("tests/fixtures/{fixture}.landmarks.json"));
         let lm = Landmarks::load(&fixture, rest.vertex_count())?;
         let rig = Embedding::new(&rest, &lm, None)?;
-        synth_rows(bname, &rest, &rig, &motions, w);
+        out.push((bname, rest, rig));
     }
-    Ok(())
+    Ok(out)
 }
 
 /// `mesh` with only the vertices its triangles use, in their order (a
