@@ -22,8 +22,9 @@
 //!   joints read off every frame (its regressors) against the skeleton that
 //!   drove the frame, mean over joints and frames in % of the height, and
 //!   its part labels against the generating rig's;
-//! - `headless` ([`headless`]): the bodies whole and cut at the neck, the
-//!   trunk's depth below the top and whether the rig has a head;
+//! - `headless` ([`crate::tools::autorig_headless`], run by the example
+//!   itself): the bodies whole and cut at the neck, the trunk's depth
+//!   below the top and whether the rig has a head;
 //! - `facing`: the real captures turned about the vertical and mirrored,
 //!   the automatic facing, chin and head joint against the landmark rig's
 //!   moved alike;
@@ -48,8 +49,6 @@ use glam::DVec3;
 use std::fmt::{self, Write as _};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-pub mod headless;
 
 /// Why the evaluation could not run.
 #[derive(Debug, thiserror::Error)]
@@ -103,9 +102,6 @@ pub enum AutorigMode {
     Orders,
     /// Samba started at each of these frames.
     Contact(Vec<usize>),
-    /// The bodies of [`AutorigMode::Bodies`] whole and cut at the neck,
-    /// and every frame of the captures whole and cut (`headless`).
-    Headless,
 }
 
 impl AutorigMode {
@@ -120,7 +116,6 @@ impl AutorigMode {
             "real" => AutorigMode::Real,
             "synth" => AutorigMode::Synth,
             "bodies" => AutorigMode::Bodies,
-            "headless" => AutorigMode::Headless,
             "all" => AutorigMode::All,
             "held-parts" => AutorigMode::HeldParts,
             "facing" => AutorigMode::Facing,
@@ -212,7 +207,6 @@ pub fn evaluate_autorig(
         AutorigMode::Spread { salts, renumbered } => spread(data, *salts, *renumbered, &mut w)?,
         AutorigMode::Orders => orders(data, &mut w)?,
         AutorigMode::Contact(starts) => contact(data, starts, &mut w),
-        AutorigMode::Headless => headless::headless(data, &mut w)?,
     }
     Ok(w)
 }
@@ -249,7 +243,7 @@ fn joint_error(a: &[[f64; 3]; 19], b: &[[f64; 3]; 19]) -> (f64, usize, f64) {
     (s / 19.0, worst.0, worst.1)
 }
 
-fn agree(a: &[u8], b: &[u8]) -> f64 {
+pub(crate) fn agree(a: &[u8], b: &[u8]) -> f64 {
     a.iter().zip(b).filter(|(x, y)| x == y).count() as f64 / a.len() as f64
 }
 
@@ -623,7 +617,7 @@ fn db_init_rules() -> (crate::embed::rest::RestOptions, AutoOptions) {
 }
 
 /// `db init`'s automatic rig options with the rest frame `rest`.
-fn db_init_options(rest: Option<usize>) -> AutoOptions {
+pub(crate) fn db_init_options(rest: Option<usize>) -> AutoOptions {
     AutoOptions {
         rest_frame: rest,
         ..db_init_rules().1
@@ -632,7 +626,7 @@ fn db_init_options(rest: Option<usize>) -> AutoOptions {
 
 /// The rest frame `db init` chooses over the topology's positions and
 /// `frames` (an index into `frames`; `None`: the topology's), and why.
-fn rest_as_db_init(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> (Option<usize>, String) {
+pub(crate) fn rest_as_db_init(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> (Option<usize>, String) {
     use crate::embed::rest::choose_rest_frame;
     let mut all = vec![mesh.positions()];
     all.extend_from_slice(frames);
@@ -644,7 +638,7 @@ fn rest_as_db_init(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> (Option<usize>, Strin
 
 /// The embedding `db init` makes from automatic landmarks: on the rest
 /// frame it chose (`[rig] rest`), its joints carried to the topology.
-fn embed_as_db_init(
+pub(crate) fn embed_as_db_init(
     mesh: &Mesh,
     frames: &[&[[f64; 3]]],
     rest: Option<usize>,
@@ -960,7 +954,7 @@ fn bodies(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
 /// Samba's frame 0, the SMPL template and MakeHuman's `body` group (its
 /// unused vertices dropped), each with its rig from its fixture's
 /// landmarks; a body that does not load prints `| NAME | not run: why |`.
-fn body_meshes(
+pub(crate) fn body_meshes(
     data: &Path,
     w: &mut AutorigReport,
 ) -> Result<Vec<(&'static str, Mesh, Embedding)>, AutorigEvalError> {
@@ -1031,7 +1025,7 @@ pub fn used_vertices_only(mesh: &Mesh) -> Result<Mesh, TopologyError> {
 
 /// The synthetic databases' motions: the procedural gait turn (4 s) and
 /// CMU 02_05 and 05_06 (150 frames each), at 30 frames a second.
-fn synth_motions(data: &Path, w: &mut AutorigReport) -> Vec<(String, ClipPoses)> {
+pub(crate) fn synth_motions(data: &Path, w: &mut AutorigReport) -> Vec<(String, ClipPoses)> {
     use crate::drive::query::load_mocap;
     use crate::jobs::synth_db::SynthClip;
     let fps = 30.0;

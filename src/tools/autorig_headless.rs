@@ -1,4 +1,4 @@
-//! `headless`: issue 41's partial bodies. Samba's frame 0, the SMPL
+//! `autorig_eval … headless`: issue 41's partial bodies. Samba's frame 0, the SMPL
 //! template and MakeHuman's body ([`super::body_meshes`]), each driven by
 //! [`super::synth_motions`] through its fixture's rig, are rigged as
 //! `db init` rigs them whole and cut at the neck ([`Cut`]): the trunk's
@@ -9,7 +9,7 @@
 //! whole and cut: the trunk's depth below the highest of the five branch
 //! tips, least and greatest (the rule's margin over the captures' poses).
 
-use super::{
+use super::autorig::{
     AutorigEvalError, AutorigReport, agree, body_meshes, db_init_options, embed_as_db_init,
     rest_as_db_init, synth_motions,
 };
@@ -77,7 +77,7 @@ impl Cut {
 
 /// `mesh` with only the triangles whose corners are all `keep` and the
 /// vertices they use (in order), and those vertices' old numbers.
-pub(super) fn kept(mesh: &Mesh, keep: &[bool]) -> Option<(Mesh, Vec<usize>)> {
+fn kept(mesh: &Mesh, keep: &[bool]) -> Option<(Mesh, Vec<usize>)> {
     let tris: Vec<[u32; 3]> = mesh
         .triangles()
         .iter()
@@ -95,8 +95,20 @@ pub(super) fn kept(mesh: &Mesh, keep: &[bool]) -> Option<(Mesh, Vec<usize>)> {
     Some((Mesh::new(pos, tris).ok()?, old))
 }
 
-/// The table.
-pub(crate) fn headless(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
+/// The tables (`db init`'s rules for the automatic rig,
+/// `SURFMOTION_AUTORIG` applied).
+pub fn evaluate_headless(data: &Path) -> Result<AutorigReport, AutorigEvalError> {
+    crate::embed::auto::options::automatic_setup(
+        &crate::embed::auto::options::AutoOptions::default(),
+    )
+    .map_err(AutorigEvalError::Options)?;
+    let mut w = AutorigReport::default();
+    headless(data, &mut w)?;
+    Ok(w)
+}
+
+/// The tables into `w`.
+fn headless(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
     use crate::synth::database::{Dynamics, drive};
     let _ = writeln!(
         w.tables,
