@@ -3,7 +3,7 @@
 //! and the details (standard error).
 //!
 //! cargo run --release --example autorig_eval -- [DATA]
-//!     [real|synth|all|held-parts|facing|orders|contact [FRAMES]|joints|spread [SALTS] [renumbered]]
+//!     [real|synth|bodies|headless|all|held-parts|facing|orders|contact [FRAMES]|joints|spread [SALTS] [renumbered]]
 //! (DATA defaults to `../shared/data`; run from the repository, where
 //! `tests/fixtures` is.) `SURFMOTION_AUTORIG` sets the rules as for `db init`.
 
@@ -11,6 +11,13 @@ use surfmotion::tools::autorig::{AutorigMode, evaluate_autorig};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.get(1).map(String::as_str) == Some("headless") {
+        let data = std::path::PathBuf::from(&args[0]);
+        let report = surfmotion::tools::autorig_headless::evaluate_headless(&data)?;
+        eprint!("{}", report.details);
+        print!("{report}");
+        return Ok(());
+    }
     let (data, mode) = AutorigMode::parse(&args)?;
     let report = evaluate_autorig(&data, &mode)?;
     eprint!("{}", report.details);

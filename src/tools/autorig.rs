@@ -1,6 +1,6 @@
 //! The evaluation of the automatic rig ([`crate::embed::auto`], issue 41)
 //! that `cargo run --release --example autorig_eval -- [DATA]
-//! [real|synth|bodies|all|held-parts|facing|orders|contact|joints|spread]` runs
+//! [real|synth|bodies|headless|all|held-parts|facing|orders|contact|joints|spread]` runs
 //! (DATA defaults to `../shared/data`; the fixtures are read from
 //! `tests/fixtures`, relative to the working folder): [`evaluate_autorig`]
 //! returns its tables ([`AutorigReport`]'s `Display`, the example's
@@ -22,6 +22,9 @@
 //!   joints read off every frame (its regressors) against the skeleton that
 //!   drove the frame, mean over joints and frames in % of the height, and
 //!   its part labels against the generating rig's;
+//! - `headless` ([`crate::tools::autorig_headless`], run by the example
+//!   itself): the bodies whole and cut at the neck, the trunk's depth
+//!   below the top and whether the rig has a head;
 //! - `facing`: the real captures turned about the vertical and mirrored,
 //!   the automatic facing, chin and head joint against the landmark rig's
 //!   moved alike;
@@ -52,7 +55,7 @@ use std::time::Instant;
 pub enum AutorigEvalError {
     /// The arguments name no evaluation.
     #[error(
-        "{0}: expected [DATA] [real|synth|bodies|all|held-parts|facing|orders|contact [FRAMES]|joints|spread [SALTS] [renumbered]]"
+        "{0}: expected [DATA] [real|synth|bodies|headless|all|held-parts|facing|orders|contact [FRAMES]|joints|spread [SALTS] [renumbered]]"
     )]
     Usage(String),
     /// `SURFMOTION_AUTORIG` cannot be read.
@@ -240,7 +243,7 @@ fn joint_error(a: &[[f64; 3]; 19], b: &[[f64; 3]; 19]) -> (f64, usize, f64) {
     (s / 19.0, worst.0, worst.1)
 }
 
-fn agree(a: &[u8], b: &[u8]) -> f64 {
+pub(crate) fn agree(a: &[u8], b: &[u8]) -> f64 {
     a.iter().zip(b).filter(|(x, y)| x == y).count() as f64 / a.len() as f64
 }
 
@@ -614,7 +617,7 @@ fn db_init_rules() -> (crate::embed::rest::RestOptions, AutoOptions) {
 }
 
 /// `db init`'s automatic rig options with the rest frame `rest`.
-fn db_init_options(rest: Option<usize>) -> AutoOptions {
+pub(crate) fn db_init_options(rest: Option<usize>) -> AutoOptions {
     AutoOptions {
         rest_frame: rest,
         ..db_init_rules().1
@@ -623,7 +626,7 @@ fn db_init_options(rest: Option<usize>) -> AutoOptions {
 
 /// The rest frame `db init` chooses over the topology's positions and
 /// `frames` (an index into `frames`; `None`: the topology's), and why.
-fn rest_as_db_init(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> (Option<usize>, String) {
+pub(crate) fn rest_as_db_init(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> (Option<usize>, String) {
     use crate::embed::rest::choose_rest_frame;
     let mut all = vec![mesh.positions()];
     all.extend_from_slice(frames);
@@ -635,7 +638,7 @@ fn rest_as_db_init(mesh: &Mesh, frames: &[&[[f64; 3]]]) -> (Option<usize>, Strin
 
 /// The embedding `db init` makes from automatic landmarks: on the rest
 /// frame it chose (`[rig] rest`), its joints carried to the topology.
-fn embed_as_db_init(
+pub(crate) fn embed_as_db_init(
     mesh: &Mesh,
     frames: &[&[[f64; 3]]],
     rest: Option<usize>,
@@ -942,6 +945,20 @@ fn bodies(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
     );
     say!(w, "|---|---|---|---|---|---|---|");
     let motions = synth_motions(data, w);
+    for (bname, rest, rig) in body_meshes(data, w)? {
+        synth_rows(bname, &rest, &rig, &motions, w);
+    }
+    Ok(())
+}
+
+/// Samba's frame 0, the SMPL template and MakeHuman's `body` group (its
+/// unused vertices dropped), each with its rig from its fixture's
+/// landmarks; a body that does not load prints `| NAME | not run: why |`.
+pub(crate) fn body_meshes(
+    data: &Path,
+    w: &mut AutorigReport,
+) -> Result<Vec<(&'static str, Mesh, Embedding)>, AutorigEvalError> {
+    let mut out = Vec::new();
     for (bname, file, group, fixture) in [
         ("samba frame 0", "4d/samba/samba.obj", None, "samba"),
         (
@@ -979,9 +996,9 @@ fn bodies(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
         let fixture = PathBuf::from(format!("tests/fixtures/{fixture}.landmarks.json"));
         let lm = Landmarks::load(&fixture, rest.vertex_count())?;
         let rig = Embedding::new(&rest, &lm, None)?;
-        synth_rows(bname, &rest, &rig, &motions, w);
+        out.push((bname, rest, rig));
     }
-    Ok(())
+    Ok(out)
 }
 
 /// `mesh` with only the vertices its triangles use, in their order (a
@@ -1008,7 +1025,7 @@ pub fn used_vertices_only(mesh: &Mesh) -> Result<Mesh, TopologyError> {
 
 /// The synthetic databases' motions: the procedural gait turn (4 s) and
 /// CMU 02_05 and 05_06 (150 frames each), at 30 frames a second.
-fn synth_motions(data: &Path, w: &mut AutorigReport) -> Vec<(String, ClipPoses)> {
+pub(crate) fn synth_motions(data: &Path, w: &mut AutorigReport) -> Vec<(String, ClipPoses)> {
     use crate::drive::query::load_mocap;
     use crate::jobs::synth_db::SynthClip;
     let fps = 30.0;

@@ -36,6 +36,7 @@
 //! hand, which is then no extremity; a tail of 20 % of the height on the
 //! procedural body is not refused (one of 45 % and a third arm are).
 
+use super::centre::{TipSeed, geodesic_centre, nearest};
 use super::humanoid::{farthest, geodesic};
 use glam::DVec3;
 
@@ -79,11 +80,12 @@ pub fn sixth_limit(five: &[f64]) -> f64 {
 }
 
 /// The body's extremities on `rest`: every candidate examined from the
-/// trunk's seed (the vertex nearest the centroid) with
+/// trunk's seed ([`TipSeed`]) with
 /// [`candidates`] and `limit`, the first five branches (fewer when the
 /// body has fewer) and the sixth branch when there is one.
 pub struct Tips {
-    /// The seed: the vertex nearest the vertices' centroid.
+    /// The seed: the vertex nearest the vertices' centroid, or the
+    /// geodesic centre ([`TipSeed`]).
     pub seed: u32,
     /// The vertices' centroid.
     pub centre: DVec3,
@@ -95,23 +97,22 @@ pub struct Tips {
     pub sixth: Option<Candidate>,
 }
 
-/// [`Tips`] of `rest` (triangles `triangles`, neighbours `nb`).
+/// [`Tips`] of `rest` (triangles `triangles`, neighbours `nb`), sought
+/// from the seed `how` says ([`super::centre`]).
 pub fn body_tips(
     rest: &[[f64; 3]],
     triangles: &[[u32; 3]],
     nb: &[Vec<u32>],
     limit: impl Fn(&[f64]) -> f64,
+    how: TipSeed,
 ) -> Tips {
     let n = rest.len();
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
     let centre = rest.iter().map(|q| v3(*q)).sum::<DVec3>() / n.max(1) as f64;
-    let seed = (0..n)
-        .min_by(|&a, &b| {
-            v3(rest[a])
-                .distance_squared(centre)
-                .total_cmp(&v3(rest[b]).distance_squared(centre))
-        })
-        .unwrap_or(0) as u32;
+    let seed = match how {
+        TipSeed::Centroid => nearest(rest, centre),
+        TipSeed::Centre => geodesic_centre(rest, nb, nearest(rest, centre)),
+    };
     let found = candidates(rest, triangles, nb, seed, limit);
     let branches: Vec<Candidate> = found.iter().copied().filter(Candidate::is_branch).collect();
     Tips {

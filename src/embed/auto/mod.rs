@@ -15,12 +15,14 @@
 
 pub mod body;
 pub mod branches;
+pub mod centre;
 pub mod consensus;
 pub mod decompose;
 pub mod facing;
 pub mod humanoid;
 pub mod joints;
 pub mod limbs;
+pub mod neck;
 pub mod options;
 pub mod report;
 pub mod rig;

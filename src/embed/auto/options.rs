@@ -51,6 +51,15 @@ pub struct AutoOptions {
     /// Default true (`pivot=guarded`; `pivot=free` in [`AUTORIG_ENV`]
     /// gives sessions 20-32's).
     pub guard_pivots: bool,
+    /// The body's top read for a head ([`super::neck`], session 36): a
+    /// body cut at the neck is rigged without one (no chin, no head top,
+    /// `"absent": ["head"]`). Default true (`head=read`; `head=keep` in
+    /// [`AUTORIG_ENV`] rigs a head on any top, sessions 20-35's).
+    pub read_head: bool,
+    /// Where the extremities are sought from ([`super::centre`], session
+    /// 36): `tips=centroid` (default, sessions 20-35's) or `tips=centre`
+    /// in [`AUTORIG_ENV`].
+    pub tip_seed: super::centre::TipSeed,
     /// The decomposition's settings.
     pub decompose: DecomposeOptions,
 }
@@ -65,6 +74,8 @@ impl Default for AutoOptions {
             facing: Facing::Trunk,
             split_knee: false,
             guard_pivots: true,
+            read_head: true,
+            tip_seed: super::centre::TipSeed::Centroid,
             decompose: DecomposeOptions::default(),
         }
     }
@@ -160,6 +171,8 @@ impl FrameSample {
 /// (what follows its merges, [`super::decompose::MergeRule`]),
 /// `knee=split|crossing` ([`AutoOptions::split_knee`]),
 /// `pivot=guarded|free` ([`AutoOptions::guard_pivots`]),
+/// `head=read|keep` ([`AutoOptions::read_head`]),
+/// `tips=centroid|centre` ([`AutoOptions::tip_seed`]),
 /// `patches=position|vertex0` (the rest frame's contact patches,
 /// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
 pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
@@ -193,7 +206,7 @@ pub(crate) fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, patches=position|vertex0, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, head=read|keep, tips=centroid|centre, patches=position|vertex0, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -218,6 +231,9 @@ pub(crate) fn apply_override(
             "knee" if v == "crossing" => auto.split_knee = false,
             "pivot" if v == "guarded" => auto.guard_pivots = true,
             "pivot" if v == "free" => auto.guard_pivots = false,
+            "head" if v == "read" => auto.read_head = true,
+            "head" if v == "keep" => auto.read_head = false,
+            "tips" => auto.tip_seed = super::centre::TipSeed::parse(v).ok_or_else(bad)?,
             "patches" if v == "position" => rule.contact.seed_by_position = true,
             "patches" if v == "vertex0" => rule.contact.seed_by_position = false,
             "max" => {
@@ -314,7 +330,18 @@ mod tests {
         assert_eq!(auto.decompose.merge, MergeRule::Greedy);
         apply_override("frames=median-quantiles", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.frames, FrameSample::MedianQuantiles);
+        assert!(auto.read_head);
+        apply_override("head=keep", &mut rule, &mut auto).unwrap();
+        assert!(!auto.read_head);
+        apply_override("head=read", &mut rule, &mut auto).unwrap();
+        assert!(auto.read_head);
+        use super::super::centre::TipSeed;
+        assert_eq!(auto.tip_seed, TipSeed::Centroid);
+        apply_override("tips=centre", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.tip_seed, TipSeed::Centre);
         for bad in [
+            "head=cut",
+            "tips=middle",
             "seed=random",
             "seed=draws-0",
             "seed=consensus-0",

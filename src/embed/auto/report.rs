@@ -50,16 +50,26 @@ pub struct AutoRig {
     /// 0-1: the share of the twelve limb joints the motion showed, times
     /// the left/right agreement of the limbs' lengths.
     pub confidence: f64,
+    /// The body has no head ([`super::neck`]): its landmarks have no chin
+    /// and no head top, and their file says `"absent": ["head"]`.
+    pub headless: bool,
+    /// How far below the body's top the trunk begins (a fraction of the
+    /// height, [`super::neck::NeckReading::trunk_depth`]).
+    pub trunk_depth: f64,
     /// What was found and assumed, one line each.
     pub notes: Vec<String>,
 }
 
 impl AutoRig {
     /// The landmarks as the JSON a landmarks file holds (points rounded to
-    /// 10 µm, surface marks in full, with the mesh's vertex count).
+    /// 10 µm, surface marks in full, with the mesh's vertex count; a
+    /// headless body's `"absent": ["head"]`).
     pub fn landmarks_json(&self, vertex_count: usize) -> String {
         let r = |x: f64| (x * 1e5).round() / 1e5;
         let mut lines = vec![format!("  \"vertex_count\": {vertex_count}")];
+        if self.headless {
+            lines.push("  \"absent\": [\"head\"]".into());
+        }
         for (l, mark) in &self.landmarks.marks {
             match mark {
                 Mark::Point(p) => lines.push(format!(
@@ -86,7 +96,7 @@ impl AutoRig {
             .map(|j| j.name.as_str())
             .collect();
         format!(
-            "automatic rig: confidence {:.2}; {} rigid parts in {} frames; {by_motion} of {} limb joints found by the motion{}; up {}, facing {}",
+            "automatic rig: confidence {:.2}; {} rigid parts in {} frames; {by_motion} of {} limb joints found by the motion{}; up {}, facing {}{}",
             self.confidence,
             self.parts,
             self.frames_used,
@@ -98,6 +108,7 @@ impl AutoRig {
             },
             axis_name(DVec3::from_array(self.up)),
             axis_name(DVec3::from_array(self.facing)),
+            if self.headless { "; no head" } else { "" },
         )
     }
 }

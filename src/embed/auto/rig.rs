@@ -8,6 +8,7 @@ use super::branches::{body_tips, sixth_limit};
 use super::decompose::decompose;
 use super::humanoid::{Placed, along};
 use super::limbs::{ARM, Chains, LEG, Sided, knee_to_toe, side};
+use super::neck::NeckReading;
 use super::options::{AutoError, AutoOptions, FrameSample};
 use super::report::{AutoRig, FoundJoint};
 use super::up::find_up;
@@ -58,7 +59,12 @@ pub fn auto_rig(
     let found = place_joints(&body, &sided);
     let (sym, confidence) = symmetry_and_confidence(rest, &body, &sided, &found, &mut notes);
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
-    let marks = landmark_points(&body, &chains, &sided, &found, &mut notes);
+    let neck = NeckReading::read(rest, &nb, body.up, body.height, chains.head);
+    let cut = neck.cut().filter(|_| opts.read_head);
+    if let Some(why) = &cut {
+        notes.push(format!("no head: {why}; the landmarks say \"absent\": [\"head\"] (the embedding puts the chin at the top of the neck and skips the head checks)"));
+    }
+    let marks = landmark_points(&body, &chains, &sided, &found, cut.is_none(), &mut notes);
 
     // Onto the topology: by the motion of the part of the nearest vertex
     // (each part's rigid fit from the rest frame onto the topology's
@@ -150,6 +156,8 @@ pub fn auto_rig(
             })
             .collect(),
         confidence,
+        headless: cut.is_some(),
+        trunk_depth: neck.trunk_depth,
         notes,
     })
 }
@@ -312,8 +320,9 @@ type Found<'a> = (Body<'a>, Vec<(u32, f64)>, Vec<String>);
 /// The body: its extremities (the tips of its first five branches,
 /// [`super::branches`]), up (two of them, the feet, on a floor over the
 /// frames), height, and rigid parts; refused when it is no humanoid (fewer
-/// than five branches, a sixth reaching [`sixth_limit`] of them, no floor, fewer
-/// than five rigid parts). Returns it with its five extremities and the
+/// than five branches but a body cut at the neck's four and its top,
+/// [`super::neck::headless_top`]; a sixth reaching [`sixth_limit`] of
+/// them, no floor, fewer than five rigid parts). Returns it with its five extremities and the
 /// notes so far.
 fn find_body<'a>(
     rest: &'a [[f64; 3]],
@@ -322,7 +331,7 @@ fn find_body<'a>(
     nb: &'a [Vec<u32>],
     opts: &AutoOptions,
 ) -> Result<Found<'a>, AutoError> {
-    let found = body_tips(rest, triangles, nb, sixth_limit);
+    let found = body_tips(rest, triangles, nb, sixth_limit, opts.tip_seed);
     for c in &found.candidates {
         tracing::debug!(
             "extremity candidate: vertex {} at {:?}, reach {:.4}, disc ratio {:.2}, detour {:.2}, branch {}",
@@ -334,7 +343,14 @@ fn find_body<'a>(
             c.is_branch()
         );
     }
-    let (seed, centre, tips) = (found.seed, found.centre, found.five);
+    let (seed, centre, mut tips) = (found.seed, found.centre, found.five);
+    // Four branches: a body cut at the neck is topped by its stump.
+    if tips.len() == 4
+        && opts.read_head
+        && let Some(top) = super::neck::headless_top(rest, nb, used, &tips)
+    {
+        tips.push((top, 0.0));
+    }
     if tips.len() < 5 {
         return Err(AutoError::NotHumanoid(
             "the surface has fewer than five extremities".into(),
@@ -434,7 +450,8 @@ fn get_joint(found: &[(String, Placed)], name: &str) -> Placed {
 }
 
 /// The landmarks as rest-frame points: the limb joints (the ankles only
-/// when the motion showed them), the groin, the chin, the head top.
+/// when the motion showed them), the groin, the chin and the head top
+/// (with `head`; a body cut at the neck has neither: [`super::neck`]).
 ///
 /// The shoulders are not written: the embedding places them as it does
 /// for landmarks without shoulders (hand-made ones, samba's fixture): from
@@ -453,6 +470,7 @@ fn landmark_points(
     chains: &Chains,
     sided: &Sided,
     found: &[(String, Placed)],
+    head: bool,
     notes: &mut Vec<String>,
 ) -> Vec<(Landmark, DVec3)> {
     let (up, lo, height) = (body.up, body.lo, body.height);
@@ -495,6 +513,9 @@ fn landmark_points(
         mid + up * (lo + 0.47 * height - mid.dot(up))
     };
     marks.push((Landmark::Groin, groin));
+    if !head {
+        return marks;
+    }
     // The chin: 12.5 % of the height below the top of the head, ahead of
     // its axis by `place_joints`'s chin offset.
     let top = DVec3::from_array(body.rest[chains.head as usize]);

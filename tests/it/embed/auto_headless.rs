@@ -1,0 +1,171 @@
+//! Bodies cut at the neck rigged from their motion alone (issue 41,
+//! `embed::auto::neck`): the SMPL template and MakeHuman's body driven by
+//! the procedural turn through their fixtures' rigs, and samba's capture
+//! (its first 60 frames), each cut at the neck twice (the landmark rig's
+//! head part dropped; the torso cut across the neck 40 % up the neck→head
+//! bone too), as cut, mirrored, turned Z-up and in centimetres: no chin,
+//! no head top, the file says `"absent": ["head"]` and reads back, "no
+//! head" said once, the limb joints near the whole body's rig. The whole
+//! bodies keep their heads. Samba headless through `db init` (no
+//! landmarks) → `db build` → `retarget` CMU 02_02: no error, the head
+//! checks skipped and said once, no head-to-torso line.
+
+use super::auto::{Variant, capture};
+use super::auto_kit::{Frames, keep_only, rig_as_db_init, scan_driven, variant};
+use crate::common;
+
+use glam::DVec3;
+use std::path::Path;
+use surfmotion::embed::Embedding;
+use surfmotion::embed::landmarks::Landmarks;
+use surfmotion::mesh::Mesh;
+use surfmotion::rig::Canonical;
+use surfmotion::tools::autorig_headless::Cut;
+
+/// The limb joints compared with the whole body's rig.
+const LIMB: [Canonical; 8] = [
+    Canonical::LKnee,
+    Canonical::RKnee,
+    Canonical::LAnkle,
+    Canonical::RAnkle,
+    Canonical::LElbow,
+    Canonical::RElbow,
+    Canonical::LWrist,
+    Canonical::RWrist,
+];
+
+/// Mean distance of the limb joints from the whole body's rig (% of its
+/// height; a mirror swaps the sides).
+fn limb_percent(got: &Embedding, truth: &Embedding, v: Variant) -> f64 {
+    let side = |c: Canonical| {
+        let n = c.name();
+        let m = match (v, n.split_at(2)) {
+            (Variant::Mirrored, ("l_", r)) => format!("r_{r}"),
+            (Variant::Mirrored, ("r_", r)) => format!("l_{r}"),
+            _ => n.to_string(),
+        };
+        Canonical::from_name(&m).unwrap_or(c)
+    };
+    let h = truth.height() * if v == Variant::Cm { 100.0 } else { 1.0 };
+    let s: f64 = LIMB
+        .iter()
+        .map(|&c| {
+            let want = DVec3::from_array(v.point(truth.joints()[c.index()]));
+            DVec3::from_array(got.joints()[side(c).index()]).distance(want)
+        })
+        .sum();
+    100.0 * s / LIMB.len() as f64 / h
+}
+
+/// `mesh` (rigged by `truth`) and its frames cut by `cut`, in each variant:
+/// rigged headless (whole: with a head), said once, the file reads back,
+/// the limbs within `bound` % of the height of `truth`'s.
+fn rigs_as_cut(what: &str, mesh: &Mesh, frames: &Frames, truth: &Embedding, cut: Cut, bound: f64) {
+    let (m, f, _) = keep_only(mesh, frames, &cut.keep(mesh.positions(), truth));
+    let whole = cut == Cut::Whole;
+    for v in [
+        Variant::AsCaptured,
+        Variant::Mirrored,
+        Variant::ZUp,
+        Variant::Cm,
+    ] {
+        let (m, f) = variant(v, &m, &f);
+        let what = format!("{what}, {cut:?}, {v:?}");
+        let r = rig_as_db_init(&m, &f).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let said = r.notes.iter().filter(|n| n.starts_with("no head")).count();
+        eprintln!(
+            "{what}: {} vertices, trunk {:.1}% below the top, headless {}",
+            m.vertex_count(),
+            100.0 * r.trunk_depth,
+            r.headless
+        );
+        assert_eq!(r.headless, !whole, "{what}: {:?}", r.notes);
+        assert_eq!(said, usize::from(!whole), "{what}: {:?}", r.notes);
+        assert_eq!(r.landmarks.headless(), !whole, "{what}");
+        let n = m.vertex_count();
+        let json = r.landmarks_json(n);
+        assert_eq!(json.contains("\"absent\": [\"head\"]"), !whole, "{what}");
+        let back = Landmarks::parse(&json, Path::new("auto.landmarks.json"), n).unwrap();
+        assert_eq!(back.headless(), !whole, "{what}");
+        let e = match r.rest_frame {
+            None => Embedding::new(&m, &r.landmarks, None),
+            Some(k) => Embedding::new_on_frame(&m, &f[k], &r.landmarks, None),
+        }
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert_eq!(e.absent().is_empty(), whole, "{what}");
+        let off = limb_percent(&e, truth, v);
+        eprintln!("{what}: limb joints {off:.2}% of the height from the whole body's rig");
+        assert!(off <= bound, "{what}: {off:.2}%");
+    }
+}
+
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn bodies_cut_at_the_neck_rig_without_a_head_and_whole_ones_with_one() {
+    let Some(d) = common::data_dir() else { return };
+    let (smpl, smpl_frames, smpl_rig) =
+        scan_driven(&d, "scans/smpl-template/human_man.obj", None, "smpl");
+    let (mh, mh_frames, mh_rig) =
+        scan_driven(&d, "scans/makehuman/base.obj", Some("body"), "makehuman");
+    let c = capture(&d, "samba");
+    let samba: Frames = c.frames.iter().take(60).cloned().collect();
+    for cut in [Cut::Whole, Cut::HeadPart, Cut::Plane(0.4)] {
+        rigs_as_cut("SMPL", &smpl, &smpl_frames, &smpl_rig, cut, LIMB_BOUND);
+        rigs_as_cut("MakeHuman", &mh, &mh_frames, &mh_rig, cut, LIMB_BOUND);
+        rigs_as_cut("samba", &c.mesh, &samba, &c.truth, cut, LIMB_BOUND);
+    }
+}
+
+/// The limb joints' bound (% of the whole body's height) from its rig.
+const LIMB_BOUND: f64 = 5.0;
+
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn a_headless_capture_rigs_automatically_and_retargets_without_head_checks() {
+    use surfmotion::mesh::io::obj::write_obj;
+    use surfmotion::mesh::io::pc2::write_pc2;
+    let Some(d) = common::data_dir() else { return };
+    let t = tempfile::tempdir().unwrap();
+    let c = capture(&d, "samba");
+    let keep = Cut::HeadPart.keep(c.mesh.positions(), &c.truth);
+    let (mesh, frames, _) = keep_only(&c.mesh, &c.frames, &keep);
+    let obj = t.path().join("samba_headless.obj");
+    let pc2 = t.path().join("samba_headless.pc2");
+    write_obj(&mesh, None, &obj).unwrap();
+    write_pc2(mesh.vertex_count(), &frames.concat(), &pc2).unwrap();
+    let db = t.path().join("db");
+    let s = |p: &Path| p.display().to_string();
+    let init = common::cli_ok(
+        &[
+            "db".to_string(),
+            "init".into(),
+            s(&db),
+            "--mesh".into(),
+            s(&obj),
+            "--sequence".into(),
+            format!("dance={}", s(&pc2)),
+        ],
+        None,
+    );
+    let lm = std::fs::read_to_string(db.join("auto.landmarks.json")).unwrap();
+    assert!(lm.contains("\"absent\": [\"head\"]"), "{lm}");
+    common::cli_ok(&["db".to_string(), "build".into(), s(&db)], None);
+    let r = common::cli_ok(
+        &[
+            "retarget".to_string(),
+            "--db".into(),
+            s(&db),
+            "--mocap".into(),
+            s(&d.join("mocap/cmu-amc/02/02_02.amc")),
+            "-o".into(),
+            s(&t.path().join("out.pc2")),
+        ],
+        None,
+    );
+    let run = r.stderr + &r.stdout;
+    eprintln!("--- db init:\n{}\n--- retarget:\n{run}", init.stderr);
+    let said = |s: &str, what: &str| s.matches(what).count();
+    assert_eq!(said(&init.stderr, "no head: head checks skipped"), 1);
+    assert_eq!(said(&run, "no head: head checks skipped"), 1, "{run}");
+    assert_eq!(said(&run, "head-to-torso"), 0, "{run}");
+}
