@@ -31,8 +31,10 @@ pub enum Overlap {
 /// it the held frame's added latency buys little rate.
 const PAIR_AT_MOST: f64 = 0.8;
 
-/// A pair is tried again after this many frames deformed alone because
-/// pairs were measured slow (the machine's load changes).
+/// The other way is measured again after this many frames one way: a
+/// pair after this many lone frames when pairs were measured slow, a lone
+/// frame after this many pairs when they were fast (the machine's load
+/// changes).
 const RETRY_EVERY: u32 = 32;
 
 /// Weight of the newest measurement in the running means.
@@ -45,6 +47,7 @@ pub(crate) struct PairGain {
     single: Option<f64>,
     pair: Option<f64>,
     alone_since_pair: u32,
+    pairs_since_alone: u32,
 }
 
 impl PairGain {
@@ -52,24 +55,29 @@ impl PairGain {
     pub(crate) fn single(&mut self, wall: Duration) {
         self.single = Some(mean(self.single, wall.as_secs_f64()));
         self.alone_since_pair = self.alone_since_pair.saturating_add(1);
+        self.pairs_since_alone = 0;
     }
 
     /// Records a pair's deformation wall time.
     pub(crate) fn pair(&mut self, wall: Duration) {
         self.pair = Some(mean(self.pair, wall.as_secs_f64()));
         self.alone_since_pair = 0;
+        self.pairs_since_alone = self.pairs_since_alone.saturating_add(1);
     }
 
-    /// True when a frame should be held for a pair: pairs not yet
-    /// measured against lone frames, measured faster than two lone
-    /// frames by [`PAIR_AT_MOST`], or not tried for [`RETRY_EVERY`]
-    /// frames.
+    /// True when a frame should be held for a pair: a lone frame
+    /// measured and no pair yet, or pairs measured faster than two lone
+    /// frames by [`PAIR_AT_MOST`] (but a lone frame again every
+    /// [`RETRY_EVERY`] pairs), or measured slower but not tried for
+    /// [`RETRY_EVERY`] frames.
     pub(crate) fn worth_holding(&self) -> bool {
         match (self.single, self.pair) {
-            (Some(s), Some(p)) => {
-                p <= PAIR_AT_MOST * 2.0 * s || self.alone_since_pair >= RETRY_EVERY
+            (None, _) => false,
+            (Some(_), None) => true,
+            (Some(s), Some(p)) if p <= PAIR_AT_MOST * 2.0 * s => {
+                self.pairs_since_alone < RETRY_EVERY
             }
-            _ => true,
+            (Some(_), Some(_)) => self.alone_since_pair >= RETRY_EVERY,
         }
     }
 }
@@ -90,11 +98,20 @@ mod tests {
     #[test]
     fn pairs_are_held_while_they_gain_and_retried_when_they_do_not() {
         let mut g = PairGain::default();
-        assert!(g.worth_holding(), "nothing measured: try");
+        assert!(!g.worth_holding(), "nothing measured: a lone frame first");
         g.single(ms(20));
         assert!(g.worth_holding(), "no pair measured: try");
         g.pair(ms(22));
         assert!(g.worth_holding(), "a pair in 22 ms against 2 × 20: hold");
+        for _ in 1..RETRY_EVERY {
+            g.pair(ms(22));
+        }
+        assert!(
+            !g.worth_holding(),
+            "a lone frame again after {RETRY_EVERY} pairs"
+        );
+        g.single(ms(20));
+        assert!(g.worth_holding(), "pairs still faster: hold");
         // The second core taken: pairs take as long as two lone frames.
         for _ in 0..20 {
             g.pair(ms(40));
