@@ -72,6 +72,32 @@ fn live_defaults_are_the_librarys() {
     same(&o, &surfmotion::jobs::live::LiveOptions::default());
 }
 
+/// `--overlap` alone is `queued`; each named choice is its mode.
+#[test]
+fn live_overlap_forms() {
+    use surfmotion::live::Overlap;
+    let with = |extra: &[&str]| {
+        let mut argv = vec!["surfmotion", "--db", "d", "--replay", "c.bvh"];
+        argv.extend_from_slice(extra);
+        #[derive(clap::Parser)]
+        struct Wrapper {
+            #[command(flatten)]
+            args: super::live::Args,
+        }
+        let w = Wrapper::try_parse_from(argv).map_err(|e| e.to_string())?;
+        Ok::<_, String>(
+            super::live::options(&w.args)
+                .map_err(|e| e.to_string())?
+                .overlap,
+        )
+    };
+    assert_eq!(with(&["--overlap"]), Ok(Overlap::Queued));
+    assert_eq!(with(&["--overlap", "queued"]), Ok(Overlap::Queued));
+    assert_eq!(with(&["--overlap=always"]), Ok(Overlap::Always));
+    assert_eq!(with(&["--overlap", "off"]), Ok(Overlap::Off));
+    assert!(with(&["--overlap", "sometimes"]).is_err());
+}
+
 #[test]
 fn synth_defaults_are_the_librarys() {
     let a = parse!(

@@ -9,6 +9,7 @@ use crate::drive::trellis::DatabaseLinks;
 use crate::drive::{Prepared, RetargetError, RetargetOptions};
 use crate::live::bvh_tcp;
 use crate::live::online::{OnlineOptions, OnlineStats};
+use crate::live::overlap::Overlap;
 use crate::live::page::{Meta, PageFrame, PageServer};
 use crate::live::replay::Replay;
 use crate::live::report::{Counters, Latencies, LatencySummary, Sample, resident_mib};
@@ -86,9 +87,9 @@ pub struct LiveOptions {
     /// A `.usda` recording's options. Default: [`UsdOptions::DEFAULT`]
     /// (normals on).
     pub usd: UsdOptions,
-    /// Deform two frames at once ([`SessionOptions::overlap`]); false
-    /// keeps one frame at a time. Default: the session's (false).
-    pub overlap: bool,
+    /// When to deform two frames at once ([`SessionOptions::overlap`]).
+    /// Default: the session's ([`Overlap::Off`]).
+    pub overlap: Overlap,
 }
 
 impl Default for LiveOptions {
@@ -298,6 +299,9 @@ pub struct LiveReport {
     pub retrieval: OnlineStats,
     /// Triangle-frames left turned over by the deformation.
     pub turned_over: usize,
+    /// Output frames the two-frame overlap held for the next
+    /// ([`LiveOptions::overlap`]; each deformed in a pair with it).
+    pub frames_held: u64,
     /// The rate, latency and memory every `sample_every` seconds (and at
     /// the end), when asked for.
     pub samples: Vec<Sample>,
@@ -328,6 +332,13 @@ impl LiveReport {
             "live: {} frames out over {:.2} s = {:.1} frames/s ({} vertices, database at {} fps, lag {})",
             r.frames_out, r.seconds, r.output_fps, r.vertices, r.fps, r.lag
         );
+        if r.frames_held > 0 {
+            let _ = writeln!(
+                t,
+                "overlap: {} frames held for the next and deformed in pairs",
+                r.frames_held
+            );
+        }
         let _ = writeln!(
             t,
             "arrival -> mesh ready: median {:.2} ms, p99 {:.2} ms, max {:.2} ms (mesh work median {:.2} ms)",
@@ -405,6 +416,7 @@ struct Tally {
     stages: StageTally,
     output: Latencies,
     frames_out: u64,
+    frames_held: u64,
     /// The recording's vertices (empty unless recording).
     held: Vec<[f64; 3]>,
     recording: bool,
@@ -428,6 +440,7 @@ impl Tally {
             stages: StageTally::default(),
             output: Latencies::default(),
             frames_out: 0,
+            frames_held: 0,
             held: Vec::new(),
             recording,
             incoming: VecDeque::new(),
@@ -591,6 +604,7 @@ pub fn run_live(
         let decided_on = previous.unwrap_or(arrived);
         let mut emit = |f: LiveFrame<'_>| {
             let now = Instant::now();
+            tally.frames_held += u64::from(f.held > 0);
             let (from, work) = match f.held {
                 0 => (arrived, now - began),
                 _ => (
@@ -605,6 +619,7 @@ pub fn run_live(
             tally.stages.add(&f.stages);
             tally.out(f, lat, &pose, &mut on_frame);
         };
+        s.set_waiting(source.waiting());
         s.push(&pose, rotations.as_ref(), &mut emit);
         previous = Some(arrived);
         tally.last = Instant::now();
@@ -640,6 +655,7 @@ pub fn run_live(
         vertices: ch.n(),
         lag: opts.lag,
         frames_out: tally.frames_out,
+        frames_held: tally.frames_held,
         output_fps: if seconds > 0.0 {
             tally.frames_out as f64 / seconds
         } else {

@@ -91,6 +91,11 @@ impl Mailbox {
         f(&mut self.lock().counters);
     }
 
+    /// True when a frame is waiting to be taken.
+    pub fn waiting(&self) -> bool {
+        !self.lock().slot.is_empty()
+    }
+
     /// The counters.
     pub fn counters(&self) -> Counters {
         self.lock().counters
@@ -166,5 +171,8 @@ impl Source for Fed {
     }
     fn counters(&self) -> Counters {
         self.mailbox.counters()
+    }
+    fn waiting(&self) -> bool {
+        self.mailbox.waiting()
     }
 }

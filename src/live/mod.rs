@@ -10,7 +10,7 @@
 //! running floor the pose kernel stands the stream on, [`kept`] the levelling and floor
 //! decided once and kept, [`ground`] the
 //! offline ground decisions swapped in stage by stage, [`report`] the
-//! latency and throughput figures, [`stages`] where a frame's time goes, [`page`] the browser page and its
+//! latency and throughput figures, [`stages`] where a frame's time goes, [`overlap`] when two frames are deformed at once, [`page`] the browser page and its
 //! WebSocket.
 
 pub mod bvh_tcp;
@@ -20,6 +20,7 @@ pub mod humanoid;
 pub mod kept;
 pub mod mailbox;
 pub mod online;
+pub mod overlap;
 pub mod page;
 pub mod replay;
 pub mod report;
@@ -32,4 +33,5 @@ pub mod stream;
 pub mod vmc;
 
 pub use online::{Advance, Committed, OnlineOptions, OnlineStats, OnlineTrellis};
+pub use overlap::Overlap;
 pub use session::{LiveFrame, Session, SessionOptions};

@@ -92,4 +92,13 @@ impl Source for Replay {
     fn counters(&self) -> Counters {
         self.counters
     }
+
+    fn waiting(&self) -> bool {
+        self.next < self.total
+            && match self.start {
+                _ if self.speed == 0.0 => true,
+                Some(start) => self.due(start, self.next) <= Instant::now(),
+                None => false,
+            }
+    }
 }

@@ -33,6 +33,7 @@ use super::floor::RunningFloor;
 use super::ground::{OfflineGround, WindowGround};
 use super::kept::KeptGround;
 use super::online::{Advance, OnlineOptions, OnlineStats, OnlineTrellis};
+use super::overlap::{Overlap, PairGain};
 use super::stages::{FrameStages, Stage, StageClock, thread_cpu_seconds};
 use crate::db::Character;
 use crate::deform::{DeformWorkspace, Deformer};
@@ -50,6 +51,7 @@ use crate::rig::Canonical as C;
 use glam::{DQuat, DVec2, DVec3};
 use std::collections::VecDeque;
 use std::sync::Arc;
+use std::time::Instant;
 
 /// Options of a live session.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -121,16 +123,16 @@ pub struct SessionOptions {
     /// (`live::stream_rules`). Not measured on all eight clips of the
     /// fidelity table: false (the default) as s24.
     pub open_end: bool,
-    /// The two-frame overlap: a frame ready for its deformation is held
-    /// until the next one is, and the two are deformed at once on two
-    /// threads (`rayon::join`, each with its own workspace, prepared once),
-    /// then output in order; [`Session::finish`] deforms a lone held frame.
-    /// Every output frame is the one-frame path's bit for bit (the
-    /// deformation carries no state from frame to frame); a frame comes out
-    /// one decided frame later ([`LiveFrame::held`]), and up to two frames
-    /// are deformed in the time of one on two free cores. Default: false
-    /// (one frame at a time).
-    pub overlap: bool,
+    /// The two-frame overlap: when a frame ready for its deformation is
+    /// held until the next one is, the two deformed at once on two threads
+    /// (`rayon::join`, each with its own workspace, prepared once), then
+    /// output in order ([`Overlap`]); [`Session::finish`] deforms a lone
+    /// held frame. Every output frame is the one-frame path's bit for bit
+    /// (the deformation carries no state from frame to frame); a held frame
+    /// comes out one decided frame later ([`LiveFrame::held`]), and up to
+    /// two frames are deformed in the time of one on two free cores.
+    /// Default: [`Overlap::Off`] (one frame at a time).
+    pub overlap: Overlap,
 }
 
 impl Default for SessionOptions {
@@ -145,7 +147,7 @@ impl Default for SessionOptions {
             lift_settle: None,
             keep_ground: None,
             open_end: false,
-            overlap: false,
+            overlap: Overlap::Off,
         }
     }
 }
@@ -265,6 +267,10 @@ pub struct Session<'a> {
     slots: Vec<Slot>,
     /// The slot of a frame held for the overlap's next frame.
     held: Option<usize>,
+    /// The stream's next arrival is already waiting ([`Overlap::Queued`]).
+    waiting: bool,
+    /// The pairs' measured gain ([`Overlap::Queued`]).
+    gain: PairGain,
     /// Frames pushed ([`Session::push`], [`Session::push_analysed`]).
     pushes: usize,
     turned_over: usize,
@@ -294,7 +300,7 @@ impl<'a> Session<'a> {
         opts: SessionOptions,
     ) -> Self {
         let n = ch.n();
-        let slots = (0..if opts.overlap { 2 } else { 1 })
+        let slots = (0..if opts.overlap == Overlap::Off { 1 } else { 2 })
             .map(|_| Slot::new(n, prepared.deformer().map(|d| d.workspace())))
             .collect();
         let band = contact_band(leg_length(&reference.pose));
@@ -320,6 +326,8 @@ impl<'a> Session<'a> {
             grads: vec![FrameGradients::default(); 4],
             slots,
             held: None,
+            waiting: false,
+            gain: PairGain::default(),
             pushes: 0,
             turned_over: 0,
             floor: opts.floor_step.map(RunningFloor::new),
@@ -347,6 +355,13 @@ impl<'a> Session<'a> {
     /// Triangle-frames the deformation left turned over (after repair).
     pub fn turned_over(&self) -> usize {
         self.turned_over
+    }
+
+    /// Tells the session whether the stream's next arrival is already
+    /// waiting (before a push): with [`Overlap::Queued`] a frame is held
+    /// for its partner only then.
+    pub fn set_waiting(&mut self, waiting: bool) {
+        self.waiting = waiting;
     }
 
     /// Analyses the stream's next pose (`raw`: its canonical joints, metres,
@@ -548,7 +563,8 @@ impl<'a> Session<'a> {
         for (i, c) in adv.committed.iter().enumerate() {
             self.path.push_back(c.id);
             let ahead = &ids[i + 1..ids.len().min(i + 1 + self.opts.history.max(1))];
-            self.frame(c.index, c.id, ahead, out);
+            let more = i + 1 < adv.committed.len();
+            self.frame(c.index, c.id, ahead, more, out);
             // Keep `history` decided frames (and their query poses).
             while self.path.len() > self.opts.history.max(1) {
                 self.path.pop_front();
@@ -563,13 +579,15 @@ impl<'a> Session<'a> {
 
     /// Makes output frame `k` (decided as `id`; `ahead`, the continuation):
     /// blends it, then deforms and outputs it, or with the two-frame
-    /// overlap holds it for the next frame, or deforms it with the held one
-    /// and outputs both in order.
+    /// overlap holds it for the next frame (`more`: another frame of this
+    /// push follows), or deforms it with the held one and outputs both in
+    /// order.
     fn frame(
         &mut self,
         k: usize,
         id: FlatFrame,
         ahead: &[FlatFrame],
+        more: bool,
         out: &mut dyn FnMut(LiveFrame<'_>),
     ) {
         let s = self.held.map_or(0, |h| 1 - h);
@@ -578,12 +596,19 @@ impl<'a> Session<'a> {
         (slot.index, slot.id, slot.pushed) = (k, id, self.pushes);
         slot.stages = std::mem::take(&mut self.stages);
         let (ch, d) = (self.ch, self.prepared.deformer());
+        let hold = match self.opts.overlap {
+            Overlap::Off => false,
+            Overlap::Queued => (more || self.waiting) && self.gain.worth_holding(),
+            Overlap::Always => true,
+        };
         match self.held.take() {
-            None if self.slots.len() > 1 => {
+            None if hold && self.slots.len() > 1 => {
                 self.held = Some(s);
             }
             None => {
+                let began = Instant::now();
                 self.slots[s].deform(ch, d);
+                self.gain.single(began.elapsed());
                 self.clock
                     .lap(Stage::Deformation, &mut self.slots[s].stages);
                 self.output(s, out);
@@ -594,7 +619,9 @@ impl<'a> Session<'a> {
                     [x, y] => (y, x),
                     _ => unreachable!("a frame is held only with two slots"),
                 };
+                let began = Instant::now();
                 let (ta, tb) = rayon::join(|| a.deform(ch, d), || b.deform(ch, d));
+                self.gain.pair(began.elapsed());
                 let share = if ta + tb > 0.0 { ta / (ta + tb) } else { 0.5 };
                 self.clock
                     .lap_pair(Stage::Deformation, &mut a.stages, &mut b.stages, share);

@@ -58,4 +58,8 @@ pub trait Source {
     fn reference(&self) -> Option<Reference>;
     /// What happened to the incoming frames so far.
     fn counters(&self) -> Counters;
+    /// True when the next frame is already there (a call to `next` would
+    /// not wait): the session may then deform two frames at once
+    /// ([`super::Overlap::Queued`]).
+    fn waiting(&self) -> bool;
 }

@@ -19,7 +19,7 @@ use surfmotion::drive::trellis::DatabaseLinks;
 use surfmotion::drive::{Prepared, RetargetOptions};
 use surfmotion::live::mailbox::Mailbox;
 use surfmotion::live::source::{Event, Incoming};
-use surfmotion::live::{LiveFrame, OnlineOptions, Session, SessionOptions};
+use surfmotion::live::{LiveFrame, OnlineOptions, Overlap, Session, SessionOptions};
 use surfmotion::pose::Pose;
 use surfmotion::pose::retarget::Reference;
 
@@ -80,6 +80,7 @@ fn run(
     prepared: &Prepared,
     reference: &Reference,
     pushed: &[Pose],
+    waiting: &[bool],
     sopts: SessionOptions,
 ) -> Vec<Out> {
     let links = DatabaseLinks::of(ch);
@@ -101,6 +102,9 @@ fn run(
         ));
     };
     for (i, p) in pushed.iter().enumerate() {
+        if let Some(&w) = waiting.get(i) {
+            s.set_waiting(w);
+        }
         s.push(p, None, &mut |f| keep(f, i + 1));
     }
     s.finish(&mut |f| keep(f, 0));
@@ -133,7 +137,7 @@ fn the_overlap_outputs_the_one_frame_paths_frames_in_order() {
         let taken = through_mailbox(poses, n.min(poses.len()), 1 + seed as usize, seed);
         patterns.push((format!("bursts seed {seed}"), taken));
     }
-    let mut moving = 0;
+    let (mut moving, mut queued_holds) = (0, 0);
     for (name, pushed) in &patterns {
         for lag in [0, 3] {
             let base = SessionOptions {
@@ -144,14 +148,15 @@ fn the_overlap_outputs_the_one_frame_paths_frames_in_order() {
                 },
                 ..SessionOptions::default()
             };
-            let one = run(&ch, &prepared, &reference, pushed, base);
+            let one = run(&ch, &prepared, &reference, pushed, &[], base);
             let two = run(
                 &ch,
                 &prepared,
                 &reference,
                 pushed,
+                &[],
                 SessionOptions {
-                    overlap: true,
+                    overlap: Overlap::Always,
                     ..base
                 },
             );
@@ -184,8 +189,63 @@ fn the_overlap_outputs_the_one_frame_paths_frames_in_order() {
             let on_pushes = two.iter().filter(|o| o.2 > 0).count();
             assert_eq!(on_pushes, 2 * held, "{what}: pairs on the pushes");
             moving += one.iter().filter(|o| o.5 != one[0].5).count();
+            queued_holds +=
+                only_while_waiting(&ch, &prepared, &reference, pushed, &one, base, &what);
         }
     }
-    // The frames differ from each other (the test compares real meshes).
+    // The frames differ from each other (the test compares real meshes),
+    // and the queued overlap held frames where the next one waited.
     assert!(moving > 0);
+    assert!(queued_holds > 0, "the queued overlap never held a frame");
+}
+
+/// [`Overlap::Queued`] on `pushed` with generated waiting flags (and with
+/// none waiting): the one-frame path's frames `one` bit for bit, in order,
+/// and a frame held only when it was decided on a push told the next frame
+/// was waiting or that decided another frame after it. Returns the frames
+/// held.
+fn only_while_waiting(
+    ch: &Character,
+    prepared: &Prepared,
+    reference: &Reference,
+    pushed: &[Pose],
+    one: &[Out],
+    base: SessionOptions,
+    what: &str,
+) -> usize {
+    let opts = SessionOptions {
+        overlap: Overlap::Queued,
+        ..base
+    };
+    let mut rng = Rng(pushed.len() as u64 * 7919 + 17);
+    let generated: Vec<bool> = (0..pushed.len()).map(|_| rng.below(2) == 0).collect();
+    let never = vec![false; pushed.len()];
+    let mut held = 0;
+    for waiting in [&generated, &never] {
+        let q = run(ch, prepared, reference, pushed, waiting, opts);
+        assert_eq!(q.len(), one.len(), "{what}, queued: frames out");
+        for (k, (a, b)) in one.iter().zip(&q).enumerate() {
+            assert_eq!(b.0, k, "{what}, queued: output {k} out of order");
+            assert!(
+                a.1 == b.1 && a.4 == b.4 && a.5 == b.5,
+                "{what}, queued: frame {k} differs"
+            );
+        }
+        // The push each frame was decided on (the held ones one earlier).
+        let decided: Vec<usize> = q
+            .iter()
+            .map(|o| if o.3 == 1 { o.2 - 1 } else { o.2 })
+            .collect();
+        for (k, o) in q.iter().enumerate().filter(|(_, o)| o.3 == 1) {
+            let x = decided[k];
+            let others = decided.iter().filter(|&&d| d == x).count();
+            assert!(
+                waiting[x - 1] || others > 1,
+                "{what}, queued: frame {k} held on push {x}, nothing waiting"
+            );
+            held += 1;
+            assert!(o.3 <= 1);
+        }
+    }
+    held
 }
