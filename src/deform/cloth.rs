@@ -286,43 +286,32 @@ pub(crate) fn with_env(opts: &DeformOptions) -> DeformOptions {
 pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
     const NAMES: &str = "stitch=W, steps=N, rings=N, joints=none|knees|limbs, apart=N, turns=on|off, fallback=on|off";
     let mut o = *opts;
-    for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-        let bad = |what: &str| format!("'{pair}': {what} (accepted: {NAMES})");
-        let (name, value) = pair.split_once('=').ok_or_else(|| bad("not name=value"))?;
-        let switch = || match value {
-            "on" | "1" | "true" => Ok(true),
-            "off" | "0" | "false" => Ok(false),
-            _ => Err(bad("the value is not on or off")),
-        };
-        match name {
+    for p in super::overrides::pairs(text, NAMES) {
+        let p = p?;
+        match p.name {
             "stitch" => {
-                o.cloth_stitch = value
+                o.cloth_stitch = p
+                    .value
                     .parse::<f64>()
                     .ok()
                     .filter(|w| w.is_finite() && *w >= 0.0)
-                    .ok_or_else(|| bad("the value is not a weight of 0 or more"))?;
+                    .ok_or_else(|| p.bad("the value is not a weight of 0 or more"))?;
             }
-            "steps" => {
-                o.cloth_steps = value.parse().map_err(|_| bad("the value is not a count"))?;
-            }
-            "rings" => {
-                o.cloth_rings = value.parse().map_err(|_| bad("the value is not a count"))?;
-            }
+            "steps" => o.cloth_steps = p.count()?,
+            "rings" => o.cloth_rings = p.count()?,
             "joints" => {
                 use super::cloth_reach::StitchJoints as J;
-                o.stitch_joints = match value {
+                o.stitch_joints = match p.value {
                     "none" => J::None,
                     "knees" => J::Knees,
                     "limbs" => J::Limbs,
-                    _ => return Err(bad("the value is not none, knees or limbs")),
+                    _ => return Err(p.bad("the value is not none, knees or limbs")),
                 };
             }
-            "apart" => {
-                o.stitch_apart = value.parse().map_err(|_| bad("the value is not a count"))?;
-            }
-            "turns" => o.cloth_turns = switch()?,
-            "fallback" => o.cloth_fallback = switch()?,
-            _ => return Err(bad("unknown name")),
+            "apart" => o.stitch_apart = p.count()?,
+            "turns" => o.cloth_turns = p.switch()?,
+            "fallback" => o.cloth_fallback = p.switch()?,
+            _ => return p.unknown(),
         }
     }
     Ok(o)

@@ -25,31 +25,23 @@ pub(crate) fn with_env(opts: &DeformOptions) -> DeformOptions {
 pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
     const NAMES: &str = "skin=linear|dq|rigid, joints=on|off, by_weight=on|off, spread=on|off, seams_by_weight=on|off, steps=N";
     let mut o = *opts;
-    for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-        let bad = |what: &str| format!("'{pair}': {what} (accepted: {NAMES})");
-        let (name, value) = pair.split_once('=').ok_or_else(|| bad("not name=value"))?;
-        let switch = || match value {
-            "on" | "1" | "true" => Ok(true),
-            "off" | "0" | "false" => Ok(false),
-            _ => Err(bad("the value is not on or off")),
-        };
-        match name {
+    for p in super::overrides::pairs(text, NAMES) {
+        let p = p?;
+        match p.name {
             "skin" => {
-                o.constraint_skin = match value {
+                o.constraint_skin = match p.value {
                     "linear" | "lbs" => ConstraintSkin::Linear,
                     "dq" | "dqs" => ConstraintSkin::DualQuaternion,
                     "rigid" => ConstraintSkin::Rigid,
-                    _ => return Err(bad("the value is not linear, dq or rigid")),
+                    _ => return Err(p.bad("the value is not linear, dq or rigid")),
                 }
             }
-            "joints" => o.hold_joints = switch()?,
-            "by_weight" => o.hold_by_weight = switch()?,
-            "spread" => o.hold_spread = switch()?,
-            "seams_by_weight" => o.seam_by_weight = switch()?,
-            "steps" => {
-                o.local_steps = value.parse().map_err(|_| bad("the value is not a count"))?;
-            }
-            _ => return Err(bad("unknown name")),
+            "joints" => o.hold_joints = p.switch()?,
+            "by_weight" => o.hold_by_weight = p.switch()?,
+            "spread" => o.hold_spread = p.switch()?,
+            "seams_by_weight" => o.seam_by_weight = p.switch()?,
+            "steps" => o.local_steps = p.count()?,
+            _ => return p.unknown(),
         }
     }
     Ok(o)

@@ -71,6 +71,7 @@ pub mod lbs;
 pub mod levels;
 pub mod near_turns;
 pub mod options;
+pub(crate) mod overrides;
 pub mod part_laplacian;
 pub mod pca;
 pub mod regions;

@@ -482,23 +482,17 @@ pub(crate) fn with_env_overrides(
 pub fn with_repair_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
     const NAMES: &str = "rings=N|all, rounds=N, passes=N, surface=N, stall=N, replay=0|1";
     let mut o = *opts;
-    for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-        let bad = |what: &str| format!("'{pair}': {what} (accepted: {NAMES})");
-        let (name, value) = pair.split_once('=').ok_or_else(|| bad("not name=value"))?;
-        let count = || {
-            value
-                .parse::<usize>()
-                .map_err(|_| bad("the value is not a count"))
-        };
-        match name {
-            "rings" if value == "all" => o.repair.most_rings = usize::MAX,
-            "rings" => o.repair.most_rings = count()?.max(1),
-            "rounds" => o.repair.rounds = count()?,
-            "passes" => o.repair_passes = count()?,
-            "surface" => o.surface_rounds = count()?,
-            "stall" => o.surface_stall = count()?.max(1),
-            "replay" => o.repair.replay = count()? != 0,
-            _ => return Err(bad("unknown name")),
+    for p in super::overrides::pairs(text, NAMES) {
+        let p = p?;
+        match p.name {
+            "rings" if p.value == "all" => o.repair.most_rings = usize::MAX,
+            "rings" => o.repair.most_rings = p.count()?.max(1),
+            "rounds" => o.repair.rounds = p.count()?,
+            "passes" => o.repair_passes = p.count()?,
+            "surface" => o.surface_rounds = p.count()?,
+            "stall" => o.surface_stall = p.count()?.max(1),
+            "replay" => o.repair.replay = p.count()? != 0,
+            _ => return p.unknown(),
         }
     }
     Ok(o)

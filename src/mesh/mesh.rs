@@ -161,6 +161,34 @@ impl Mesh {
         Some(m)
     }
 
+    /// The mesh of the triangles whose corners all have `keep` set (one
+    /// flag per vertex; a vertex without one is not kept) and only the
+    /// vertices they use, in order; and those vertices' numbers in this
+    /// mesh (colours kept, groups dropped).
+    pub fn keep_vertices(&self, keep: &[bool]) -> Result<(Mesh, Vec<usize>), TopologyError> {
+        let kept = |v: u32| keep.get(v as usize).copied().unwrap_or(false);
+        let tris: Vec<[u32; 3]> = self
+            .triangles
+            .iter()
+            .copied()
+            .filter(|t| t.iter().all(|&v| kept(v)))
+            .collect();
+        let n = self.positions.len();
+        let mut index = vec![u32::MAX; n];
+        tris.iter().flatten().for_each(|&v| index[v as usize] = 0);
+        let old: Vec<usize> = (0..n).filter(|&v| index[v] == 0).collect();
+        for (i, &v) in old.iter().enumerate() {
+            index[v] = i as u32;
+        }
+        let pick = |f: &[[f64; 3]]| old.iter().map(|&v| f[v]).collect::<Vec<_>>();
+        let tris = tris.iter().map(|t| t.map(|v| index[v as usize])).collect();
+        let mut m = Mesh::new(pick(&self.positions), tris)?;
+        if let Some(c) = &self.colors {
+            m.colors = Some(pick(c));
+        }
+        Ok((m, old))
+    }
+
     /// Number of vertices.
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
@@ -288,5 +316,22 @@ mod tests {
             "{pr:?}"
         );
         assert!(pr.iter().any(|s| s.starts_with("1 duplicate")), "{pr:?}");
+    }
+
+    /// A strip of two triangles with the middle vertex dropped keeps no
+    /// triangle; with the first dropped, the second triangle renumbered;
+    /// a short flag list keeps nothing past it (no panic).
+    #[test]
+    fn keep_vertices_keeps_whole_triangles_renumbered() {
+        let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+        let m = Mesh::new(p.clone(), vec![[0, 1, 2], [1, 3, 2]]).unwrap();
+        let (k, old) = m.keep_vertices(&[false, true, true, true]).unwrap();
+        assert_eq!(old, vec![1, 2, 3]);
+        assert_eq!(k.triangles(), &[[0, 2, 1]]);
+        assert_eq!(k.positions(), &[p[1], p[2], p[3]]);
+        let (k, old) = m.keep_vertices(&[true, true, false, true]).unwrap();
+        assert!(old.is_empty() && k.triangle_count() == 0);
+        let (k, _) = m.keep_vertices(&[true, true, true]).unwrap();
+        assert_eq!(k.triangle_count(), 1);
     }
 }

@@ -17,7 +17,6 @@ use crate::embed::Embedding;
 use crate::embed::auto::neck::NeckReading;
 use crate::embed::auto::rig::auto_rig;
 use crate::embed::parts::{Part, neighbours};
-use crate::mesh::Mesh;
 use crate::mesh::io::{LoadOptions, load_sequence};
 use crate::rig::Canonical;
 use glam::DVec3;
@@ -75,26 +74,6 @@ impl Cut {
     }
 }
 
-/// `mesh` with only the triangles whose corners are all `keep` and the
-/// vertices they use (in order), and those vertices' old numbers.
-fn kept(mesh: &Mesh, keep: &[bool]) -> Option<(Mesh, Vec<usize>)> {
-    let tris: Vec<[u32; 3]> = mesh
-        .triangles()
-        .iter()
-        .copied()
-        .filter(|t| t.iter().all(|&v| keep[v as usize]))
-        .collect();
-    let mut index = vec![u32::MAX; keep.len()];
-    tris.iter().flatten().for_each(|&v| index[v as usize] = 0);
-    let old: Vec<usize> = (0..keep.len()).filter(|&v| index[v] == 0).collect();
-    for (i, &v) in old.iter().enumerate() {
-        index[v] = i as u32;
-    }
-    let pos = old.iter().map(|&v| mesh.positions()[v]).collect();
-    let tris = tris.iter().map(|t| t.map(|v| index[v as usize])).collect();
-    Some((Mesh::new(pos, tris).ok()?, old))
-}
-
 /// The tables (`db init`'s rules for the automatic rig,
 /// `SURFMOTION_AUTORIG` applied).
 pub fn evaluate_headless(data: &Path) -> Result<AutorigReport, AutorigEvalError> {
@@ -128,7 +107,7 @@ fn headless(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> 
             );
             for cut in Cut::ALL {
                 let keep = cut.keep(rest.positions(), &rig);
-                let Some((m, old)) = kept(&rest, &keep) else {
+                let Some((m, old)) = rest.keep_vertices(&keep).ok() else {
                     let _ = writeln!(w.tables, "| {bname} | {mname} | {} | no mesh |", cut.name());
                     continue;
                 };
@@ -209,7 +188,7 @@ fn every_frame(data: &Path, w: &mut AutorigReport) {
         };
         for cut in [Cut::Whole, Cut::HeadPart, Cut::Plane(0.4)] {
             let keep = cut.keep(seq.mesh().positions(), &rig);
-            let Some((m, old)) = kept(seq.mesh(), &keep) else {
+            let Some((m, old)) = seq.mesh().keep_vertices(&keep).ok() else {
                 continue;
             };
             let nb = neighbours(m.vertex_count(), m.triangles());

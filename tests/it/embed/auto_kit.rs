@@ -181,23 +181,11 @@ pub(super) fn without_hands(rig: &Embedding, rest: &[[f64; 3]]) -> Vec<bool> {
 /// `mesh` and its frames with only the triangles whose corners are all
 /// `keep`, and the vertices they use; and those vertices' old numbers.
 pub(super) fn keep_only(mesh: &Mesh, frames: &Frames, keep: &[bool]) -> (Mesh, Frames, Vec<usize>) {
-    let tris: Vec<[u32; 3]> = mesh
-        .triangles()
+    let (m, old) = mesh.keep_vertices(keep).unwrap();
+    let f = frames
         .iter()
-        .copied()
-        .filter(|t| t.iter().all(|&v| keep[v as usize]))
+        .map(|f| old.iter().map(|&v| f[v]).collect())
         .collect();
-    let mut used = vec![false; keep.len()];
-    tris.iter().flatten().for_each(|&v| used[v as usize] = true);
-    let old: Vec<usize> = (0..keep.len()).filter(|&v| used[v]).collect();
-    let mut index = vec![u32::MAX; keep.len()];
-    for (i, &v) in old.iter().enumerate() {
-        index[v] = i as u32;
-    }
-    let pick = |f: &[[f64; 3]]| old.iter().map(|&v| f[v]).collect::<Vec<_>>();
-    let tris = tris.iter().map(|t| t.map(|v| index[v as usize])).collect();
-    let m = Mesh::new(pick(mesh.positions()), tris).unwrap();
-    let f = frames.iter().map(|f| pick(f)).collect();
     (m, f, old)
 }
 
