@@ -12,6 +12,7 @@
 
 use super::auto::{Variant, capture};
 use super::auto_kit::{Frames, keep_only, rig_as_db_init, scan_driven, variant};
+use super::partial::init_build_retarget;
 use crate::common;
 
 use glam::DVec3;
@@ -122,50 +123,25 @@ const LIMB_BOUND: f64 = 5.0;
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_headless_capture_rigs_automatically_and_retargets_without_head_checks() {
-    use surfmotion::mesh::io::obj::write_obj;
-    use surfmotion::mesh::io::pc2::write_pc2;
     let Some(d) = common::data_dir() else { return };
     let t = tempfile::tempdir().unwrap();
     let c = capture(&d, "samba");
     let keep = Cut::HeadPart.keep(c.mesh.positions(), &c.truth);
     let (mesh, frames, _) = keep_only(&c.mesh, &c.frames, &keep);
-    let obj = t.path().join("samba_headless.obj");
-    let pc2 = t.path().join("samba_headless.pc2");
-    write_obj(&mesh, None, &obj).unwrap();
-    write_pc2(mesh.vertex_count(), &frames.concat(), &pc2).unwrap();
-    let db = t.path().join("db");
-    let s = |p: &Path| p.display().to_string();
-    let init = common::cli_ok(
-        &[
-            "db".to_string(),
-            "init".into(),
-            s(&db),
-            "--mesh".into(),
-            s(&obj),
-            "--sequence".into(),
-            format!("dance={}", s(&pc2)),
-        ],
+    let p = init_build_retarget(
+        &d,
+        t.path(),
+        "samba_headless",
+        &mesh,
+        &frames.concat(),
         None,
     );
-    let lm = std::fs::read_to_string(db.join("auto.landmarks.json")).unwrap();
+    let lm = std::fs::read_to_string(p.db.join("auto.landmarks.json")).unwrap();
     assert!(lm.contains("\"absent\": [\"head\"]"), "{lm}");
-    common::cli_ok(&["db".to_string(), "build".into(), s(&db)], None);
-    let r = common::cli_ok(
-        &[
-            "retarget".to_string(),
-            "--db".into(),
-            s(&db),
-            "--mocap".into(),
-            s(&d.join("mocap/cmu-amc/02/02_02.amc")),
-            "-o".into(),
-            s(&t.path().join("out.pc2")),
-        ],
-        None,
-    );
-    let run = r.stderr + &r.stdout;
-    eprintln!("--- db init:\n{}\n--- retarget:\n{run}", init.stderr);
+    let (init, run) = (p.init, p.retarget);
+    eprintln!("--- db init:\n{}\n--- retarget:\n{run}", init);
     let said = |s: &str, what: &str| s.matches(what).count();
-    assert_eq!(said(&init.stderr, "no head: head checks skipped"), 1);
+    assert_eq!(said(&init, "no head: head checks skipped"), 1);
     assert_eq!(said(&run, "no head: head checks skipped"), 1, "{run}");
     assert_eq!(said(&run, "head-to-torso"), 0, "{run}");
 }

@@ -118,48 +118,76 @@ fn pipeline(d: &Path, v: &Variant, t: &Path) -> (String, String, usize) {
     };
     let dropped = keep.iter().filter(|k| !**k).count();
     let (mesh, frames, index) = cut(&seq, &keep, 40);
-    let obj = t.join(format!("{}.obj", v.name));
-    let pc2 = t.join(format!("{}.pc2", v.name));
     let lmf = t.join(format!("{}.landmarks.json", v.name));
-    write_obj(&mesh, None, &obj).unwrap();
-    write_pc2(mesh.vertex_count(), &frames, &pc2).unwrap();
     let (drop, absent): (&[Landmark], &[&str]) = if v.headless {
         (&[Landmark::Chin, Landmark::HeadTop], &["head"])
     } else {
         (&[], &["hands"])
     };
     std::fs::write(&lmf, landmarks_json(&lm, &index, drop, absent)).unwrap();
-    let db = t.join(format!("{}_db", v.name));
+    let run = init_build_retarget(d, t, v.name, &mesh, &frames, Some(&lmf));
+    (run.init, run.retarget, dropped)
+}
+
+/// What [`init_build_retarget`] printed, and the database it made.
+pub(super) struct Pipeline {
+    /// `db init`'s stderr.
+    pub init: String,
+    /// `retarget`'s stderr and stdout.
+    pub retarget: String,
+    /// The database.
+    pub db: PathBuf,
+}
+
+/// `mesh` and its `frames` (concatenated) written as `NAME.obj` and
+/// `NAME.pc2` in `t`, then `db init` (with `landmarks` when given; the
+/// automatic rig otherwise) → `db build` → `retarget` of CMU 02_02 onto
+/// the database `NAME_db`, each expected to succeed.
+pub(super) fn init_build_retarget(
+    d: &Path,
+    t: &Path,
+    name: &str,
+    mesh: &Mesh,
+    frames: &[[f64; 3]],
+    landmarks: Option<&Path>,
+) -> Pipeline {
+    let obj = t.join(format!("{name}.obj"));
+    let pc2 = t.join(format!("{name}.pc2"));
+    write_obj(mesh, None, &obj).unwrap();
+    write_pc2(mesh.vertex_count(), frames, &pc2).unwrap();
+    let db = t.join(format!("{name}_db"));
     let s = |p: &Path| p.display().to_string();
-    let init = common::cli_ok(
-        &[
-            "db".to_string(),
-            "init".into(),
-            s(&db),
-            "--mesh".into(),
-            s(&obj),
-            "--sequence".into(),
-            format!("dance={}", s(&pc2)),
-            "--landmarks".into(),
-            s(&lmf),
-        ],
-        None,
-    );
+    let mut init = vec![
+        "db".to_string(),
+        "init".into(),
+        s(&db),
+        "--mesh".into(),
+        s(&obj),
+        "--sequence".into(),
+        format!("dance={}", s(&pc2)),
+    ];
+    if let Some(l) = landmarks {
+        init.extend(["--landmarks".to_string(), s(l)]);
+    }
+    let init = common::cli_ok(&init, None);
     common::cli_ok(&["db".to_string(), "build".into(), s(&db)], None);
-    let mocap = d.join("mocap/cmu-amc/02/02_02.amc");
     let r = common::cli_ok(
         &[
             "retarget".to_string(),
             "--db".into(),
             s(&db),
             "--mocap".into(),
-            s(&mocap),
+            s(&d.join("mocap/cmu-amc/02/02_02.amc")),
             "-o".into(),
-            s(&t.join(format!("{}.pc2", v.name)).with_extension("out.pc2")),
+            s(&t.join(format!("{name}.out.pc2"))),
         ],
         None,
     );
-    (init.stderr, r.stderr + &r.stdout, dropped)
+    Pipeline {
+        init: init.stderr,
+        retarget: r.stderr + &r.stdout,
+        db,
+    }
 }
 
 #[test]
