@@ -5,18 +5,6 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use surfmotion::jobs::live::{Listening, LiveInput, LiveOptions, run_live};
 use surfmotion::jobs::live_checks;
-use surfmotion::live::Overlap;
-
-/// `--overlap`'s choices ([`Overlap`]).
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum OverlapArg {
-    /// One frame at a time.
-    Off,
-    /// Two at once while frames queue.
-    Queued,
-    /// Every frame held for the next.
-    Always,
-}
 
 /// Arguments of `live`.
 #[derive(clap::Args)]
@@ -77,14 +65,10 @@ pub struct Args {
     /// the character falls behind (for recordings; latency then grows).
     #[arg(long)]
     pub lossless: bool,
-    /// Deform two frames at once on two threads, a frame held until the
-    /// next is ready: `queued` (`--overlap` alone) only while the next frame
-    /// is already waiting (no latency added while the character keeps up,
-    /// up to twice the rate when frames queue); `always` every frame (one
-    /// frame more of latency); `off` one frame at a time.
-    #[arg(long, value_enum, value_name = "WHEN", num_args = 0..=1,
-          default_value = "off", default_missing_value = "queued")]
-    pub overlap: OverlapArg,
+    /// Two frames deformed at once: `queued` (`--overlap` alone) while the next
+    /// one already waits, `always` every frame (a frame more latency), `off` never.
+    #[arg(long, value_enum, value_name = "WHEN", num_args = 0..=1, default_value = "off", default_missing_value = "queued")]
+    pub overlap: super::values::OverlapArg,
     /// Frames of future the retrieval sees before it decides a frame (the
     /// fixed-lag trellis); 0 decides each frame as it comes (greedy, with a
     /// hysteresis against flicker). Each lag frame adds one frame period
@@ -245,11 +229,7 @@ pub(super) fn options(a: &Args) -> anyhow::Result<LiveOptions> {
         seconds: a.seconds,
         until_idle: a.until_idle,
         lossless: a.lossless,
-        overlap: match a.overlap {
-            OverlapArg::Off => Overlap::Off,
-            OverlapArg::Queued => Overlap::Queued,
-            OverlapArg::Always => Overlap::Always,
-        },
+        overlap: a.overlap.into(),
         serve: a.serve,
         analysis_window: a.analysis_window.max(1),
         floor_step: a.floor_step.map(|mm| mm / 1000.0),

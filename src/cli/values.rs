@@ -6,6 +6,7 @@
 use surfmotion::batch::Format;
 use surfmotion::deform::DeformMode;
 use surfmotion::embed::frames::SkeletonKind;
+use surfmotion::live::Overlap;
 use surfmotion::similarity::Measure;
 use surfmotion::synth::Gait;
 
@@ -155,6 +156,27 @@ impl From<DeformModeArg> for DeformMode {
             DeformModeArg::Global => DeformMode::Global,
             DeformModeArg::Lbs => DeformMode::Lbs,
             DeformModeArg::None => DeformMode::None,
+        }
+    }
+}
+
+/// When `live` deforms two frames at once ([`Overlap`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OverlapArg {
+    /// One frame at a time.
+    Off,
+    /// Two at once while frames queue.
+    Queued,
+    /// Every frame held for the next.
+    Always,
+}
+
+impl From<OverlapArg> for Overlap {
+    fn from(o: OverlapArg) -> Overlap {
+        match o {
+            OverlapArg::Off => Overlap::Off,
+            OverlapArg::Queued => Overlap::Queued,
+            OverlapArg::Always => Overlap::Always,
         }
     }
 }
