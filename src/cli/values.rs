@@ -216,5 +216,10 @@ mod tests {
             // Format serialises with its variant name (`Glb`).
             assert_eq!(lib.as_str().map(str::to_lowercase), Some(name));
         }
+        for o in OverlapArg::value_variants() {
+            let name = o.to_possible_value().unwrap().get_name().to_string();
+            assert_eq!(format!("{:?}", Overlap::from(*o)).to_lowercase(), name);
+        }
+        assert_eq!(OverlapArg::value_variants().len(), 3);
     }
 }
