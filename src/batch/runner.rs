@@ -196,7 +196,8 @@ pub fn complete(out: &Path, format: Format) -> bool {
 /// One kind of conversion of a clip (a retarget through a database, a
 /// transfer onto a scan: [`crate::jobs`]); a new batch job is one impl.
 pub trait Converter: Sync {
-    /// What the run does, for the report (`retarget --db DIR`).
+    /// What the run does, for the report (`retarget onto DIR`); a caller
+    /// may name it in its own words ([`crate::jobs::BatchOptions::describe`]).
     fn describe(&self) -> String;
     /// Converts `clip` (a path to the clip) into `output`, which it must
     /// write (for OBJ folders, the folder it is given). Errors are the

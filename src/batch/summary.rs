@@ -19,7 +19,8 @@ use std::path::{Path, PathBuf};
 /// Totals of a batch.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Summary {
-    /// What was run (e.g. `retarget --db DIR`).
+    /// What was run (e.g. `retarget --db DIR` from the CLI, `retarget onto DIR`
+    /// by default: [`crate::jobs::BatchOptions::describe`]).
     pub what: String,
     /// False while the batch runs (and in the report of a killed run):
     /// `outcomes` then lists the clips finished so far.

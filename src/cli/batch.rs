@@ -137,6 +137,10 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         format: Format::from(a.format),
         force: a.force,
         jobs: a.jobs.unwrap_or(defaults.jobs),
+        describe: Some(match (&a.db, &a.scan) {
+            (Some(db), _) => format!("retarget --db {}", db.display()),
+            (None, scan) => format!("transfer --scan {}", scan.as_deref().unwrap_or_default()),
+        }),
     };
     let converter = converter(&a)?;
     let term = std::io::stderr().is_terminal();

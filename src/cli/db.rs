@@ -75,7 +75,7 @@ fn build(a: BuildArgs) -> anyhow::Result<()> {
     if a.json {
         return super::emit(&(serde_json::to_string_pretty(&r)? + "\n"));
     }
-    super::emit(&text::database(&a.dir, &graph, &r))
+    super::emit(&super::flags::as_flags(&text::database(&a.dir, &graph, &r)))
 }
 
 /// Arguments of `db skeleton`.

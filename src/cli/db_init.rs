@@ -130,6 +130,11 @@ pub fn init(a: InitArgs) -> anyhow::Result<()> {
         v["manifest"] = serde_json::to_value(&r.path)?;
         if let Some(s) = &r.setup {
             v["setup"] = serde_json::to_value(s)?;
+            // The automatic rig's notes name flags, as on stderr.
+            let notes = v["setup"]["rig_notes"].as_array_mut().into_iter().flatten();
+            for n in notes {
+                *n = super::flags::as_flags(n.as_str().unwrap_or_default()).into();
+            }
         }
         crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
     } else if let Some(s) = &r.setup {

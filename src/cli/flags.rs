@@ -6,6 +6,31 @@
 /// command line. Each entry is replaced as written, backticks included.
 /// Longer phrases come first.
 const FLAGS: &[(&str, &str)] = &[
+    ("`InitOptions::parts` of `db::init`", "`db init --parts`"),
+    (
+        "(`InitOptions::sequences` of `db::init`: NAME=PATH)",
+        "(`surfmotion db init --sequence NAME=PATH`)",
+    ),
+    (
+        "a `jobs::keyframe` key from POSE.json",
+        "`keyframe --from POSE.json`",
+    ),
+    (
+        "`jobs::play::play_session` checks it",
+        "`play --db DB --script` checks it",
+    ),
+    (
+        "the report of `jobs::keyframe::grid`",
+        "`keyframe --grid --report`",
+    ),
+    ("(`RigEmbedOptions::png` draws", "(`rig embed --png` draws"),
+    ("picture (`InitSetup::png`)", "picture (`--png`)"),
+    ("  ... (the graph of ", "  ... (`surfmotion graph "),
+    (" in JSON lists all)", " --json` lists all)"),
+    (
+        "(see `jobs::rig::embed_rig`)",
+        "(see `surfmotion rig embed --help`)",
+    ),
     (
         "set `InitOptions::human_sized` to false",
         "pass --not-human-sized",
@@ -115,5 +140,51 @@ mod tests {
             m,
             "--shard 1/2 and --shard-count 3 name different splits; give one"
         );
+    }
+
+    /// Session 37: the library's messages that named a verb's flags name
+    /// the option (or the job) now; printed, they read as before.
+    #[test]
+    fn messages_that_named_flags_print_as_before() {
+        for (library, printed) in [
+            (
+                "part labels (`InitOptions::parts` of `db::init`): head 2",
+                "part labels (`db init --parts`): head 2",
+            ),
+            (
+                "a key-frame pose (a `jobs::keyframe` key from POSE.json): 22 joints",
+                "a key-frame pose (`keyframe --from POSE.json`): 22 joints",
+            ),
+            (
+                "spaces -; `jobs::play::play_session` checks it against",
+                "spaces -; `play --db DB --script` checks it against",
+            ),
+            (
+                "a key-frame grid (the report of `jobs::keyframe::grid`): a",
+                "a key-frame grid (`keyframe --grid --report`): a",
+            ),
+            (
+                "rig from (`RigEmbedOptions::png` draws a glTF skin's)",
+                "rig from (`rig embed --png` draws a glTF skin's)",
+            ),
+            (
+                "look at the picture (`InitSetup::png`) and correct",
+                "look at the picture (`--png`) and correct",
+            ),
+            (
+                "  ... (the graph of db dir in JSON lists all)\n",
+                "  ... (`surfmotion graph db dir --json` lists all)\n",
+            ),
+            (
+                "entries (`InitOptions::sequences` of `db::init`: NAME=PATH)",
+                "entries (`surfmotion db init --sequence NAME=PATH`)",
+            ),
+            (
+                "under [rig] (see `jobs::rig::embed_rig`)",
+                "under [rig] (see `surfmotion rig embed --help`)",
+            ),
+        ] {
+            assert_eq!(super::as_flags(library), printed);
+        }
     }
 }

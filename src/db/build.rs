@@ -879,7 +879,7 @@ pub(crate) fn build_opened(
         return Err(DbError::Manifest {
             path: dir.join(super::MANIFEST),
             msg:
-                "no sequences: add [[sequence]] entries (`surfmotion db init --sequence NAME=PATH`)"
+                "no sequences: add [[sequence]] entries (`InitOptions::sequences` of `db::init`: NAME=PATH)"
                     .into(),
         });
     }

@@ -77,7 +77,7 @@ pub(crate) fn embed_rig_with(
         }
         return Err(DbError::Manifest {
             path: dir.join(super::MANIFEST),
-            msg: "no [rig] landmarks or gltf_skin: add `landmarks = \"FILE.json\"` under [rig] (see `surfmotion rig embed --help`)".into(),
+            msg: "no [rig] landmarks or gltf_skin: add `landmarks = \"FILE.json\"` under [rig] (see `jobs::rig::embed_rig`)".into(),
         });
     };
     let n = topology.vertex_count();

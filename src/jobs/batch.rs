@@ -28,6 +28,10 @@ pub struct BatchOptions {
     pub format: Format,
     /// Redo clips whose output is complete. Default: false.
     pub force: bool,
+    /// What the report says was run (the CLI gives its command line,
+    /// `retarget --db DIR`). Default: the converter's
+    /// [`Converter::describe`](crate::batch::Converter::describe).
+    pub describe: Option<String>,
 }
 
 impl Default for BatchOptions {
@@ -38,6 +42,7 @@ impl Default for BatchOptions {
             shard: None,
             format: r.format,
             force: r.force,
+            describe: None,
         }
     }
 }
@@ -137,7 +142,10 @@ pub fn batch_folder(
     let slots = Mutex::new(finished_earlier(&clips, &earlier, opts));
     let reports = Reports {
         output,
-        what: converter.describe(),
+        what: opts
+            .describe
+            .clone()
+            .unwrap_or_else(|| converter.describe()),
         run_opts: RunOptions {
             jobs: opts.jobs,
             force: opts.force,

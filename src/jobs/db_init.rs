@@ -193,7 +193,7 @@ fn init_in(
     } else {
         if setup.png.is_some() {
             notes.push(
-                "no picture written: the character has no landmarks to draw its rig from (`rig embed --png` draws a glTF skin's)"
+                "no picture written: the character has no landmarks to draw its rig from (`RigEmbedOptions::png` draws a glTF skin's)"
                     .into(),
             );
         }

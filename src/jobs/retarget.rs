@@ -498,7 +498,7 @@ pub(crate) fn per_frame_seconds(r: &Report) -> f64 {
 
 impl Converter for RetargetJob {
     fn describe(&self) -> String {
-        format!("retarget --db {}", self.db.display())
+        format!("retarget onto {}", self.db.display())
     }
 
     /// Streams the frames to `out` as they are made

@@ -58,7 +58,7 @@ pub fn database(dir: &Path, graph: &SurfaceMotionGraph, r: &DatabaseReport) -> S
     if graph.transitions().len() > 40 {
         let _ = writeln!(
             out,
-            "  ... (`surfmotion graph {} --json` lists all)",
+            "  ... (the graph of {} in JSON lists all)",
             dir.display()
         );
     }

@@ -85,7 +85,7 @@ pub struct ScanTransferJob {
     pub confluent: Confluent,
     /// The options.
     pub options: ScanTransferOptions,
-    /// What the job is, for reports (`transfer --scan SCAN`).
+    /// What the job is, for reports (`transfer onto SCAN`).
     pub what: String,
     /// Seconds repairing, placing markers and factoring (once).
     prepare_seconds: f64,
@@ -121,7 +121,7 @@ impl ScanTransferJob {
             prepared,
             confluent,
             options,
-            what: format!("transfer --scan {name}"),
+            what: format!("transfer onto {name}"),
             prepare_seconds: t.elapsed().as_secs_f64(),
             checker: OnceLock::new(),
         })

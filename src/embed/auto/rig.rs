@@ -191,7 +191,7 @@ fn symmetry_and_confidence(
     let (kl, kr, kd) = knee_to_toe(body, sided);
     if kd > KNEE_TOLERANCE * body.height {
         notes.push(format!(
-            "WARNING: the knees are {kl:.3} and {kr:.3} from their toe tips, {:.1}% of the height apart (a body's legs have one length; tolerance {:.0}%): one knee is probably at a clothing edge; look at the picture (`--png`) and correct l_knee/r_knee in the landmarks file, or give landmarks",
+            "WARNING: the knees are {kl:.3} and {kr:.3} from their toe tips, {:.1}% of the height apart (a body's legs have one length; tolerance {:.0}%): one knee is probably at a clothing edge; look at the picture (`InitSetup::png`) and correct l_knee/r_knee in the landmarks file, or give landmarks",
             100.0 * kd / body.height,
             100.0 * KNEE_TOLERANCE
         ));

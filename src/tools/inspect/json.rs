@@ -257,7 +257,7 @@ fn rig_lines(v: &serde_json::Value) -> Vec<String> {
 fn parts_lines(v: &serde_json::Value) -> Vec<String> {
     let o = v.as_object().into_iter().flatten();
     vec![format!(
-        "part labels (`db init --parts`): {}",
+        "part labels (`InitOptions::parts` of `db::init`): {}",
         o.map(|(k, ids)| format!("{k} {}", len_of(ids)))
             .collect::<Vec<_>>()
             .join(", ")
@@ -267,7 +267,7 @@ fn parts_lines(v: &serde_json::Value) -> Vec<String> {
 fn pose_lines(v: &serde_json::Value) -> Vec<String> {
     let n = len_of(v);
     vec![format!(
-        "a key-frame pose (`keyframe --from POSE.json`): {n} joints [x, y, z] in metres, Y up{}",
+        "a key-frame pose (a `jobs::keyframe` key from POSE.json): {n} joints [x, y, z] in metres, Y up{}",
         if n == crate::rig::Canonical::COUNT {
             String::new()
         } else {
@@ -283,7 +283,7 @@ fn play_script_lines(v: &serde_json::Value) -> Vec<String> {
     let mut spaces: Vec<&str> = a.iter().filter_map(|r| r["space"].as_str()).collect();
     spaces.dedup();
     lines.push(format!(
-        "a `play` script: {} over {} s, spaces {}; `play --db DB --script` checks it against the database's spaces",
+        "a `play` script: {} over {} s, spaces {}; `jobs::play::play_session` checks it against the database's spaces",
         count(a.len(), "request"),
         crate::util::numfmt::Short(last),
         if spaces.is_empty() { "-".to_string() } else { spaces.join(", ") }
@@ -321,7 +321,7 @@ fn grid_report_lines(v: &serde_json::Value) -> Vec<String> {
         .collect();
     vec![
         format!(
-            "a key-frame grid (`keyframe --grid --report`): {}, {} × {}",
+            "a key-frame grid (the report of `jobs::keyframe::grid`): {}, {} × {}",
             keys.join(" -> "),
             count(len(v, "distances"), "distance"),
             count(len(v, "times"), "time")
