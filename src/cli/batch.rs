@@ -5,7 +5,7 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use surfmotion::batch::schedule::ShardSource;
-use surfmotion::batch::{ClipStatus, Converter, Format};
+use surfmotion::batch::{ClipStatus, Converter, Format, Summary};
 use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::jobs::batch::{ClipRate, check_folders, outcome_line, report_text, target_inputs};
 use surfmotion::jobs::batch_verdict::none_failed;
@@ -112,12 +112,17 @@ pub struct MergeArgs {
 /// Runs `batch merge`.
 fn run_merge(a: MergeArgs) -> anyhow::Result<()> {
     let r = surfmotion::jobs::batch::merge_batches(&a.dirs, a.output.as_deref())?;
-    let s = &r.summary;
-    super::emit(&match a.json {
-        true => serde_json::to_string_pretty(s)? + "\n",
-        false => r.text(),
-    })?;
-    Ok(none_failed(s, &r.files)?)
+    print_summary(a.json, &r.summary, &r.files, r.text())
+}
+
+/// The summary of a run or merge, as JSON or text; refuses a run with
+/// failed clips ([`none_failed`]).
+fn print_summary(json: bool, s: &Summary, files: &[PathBuf], text: String) -> anyhow::Result<()> {
+    match json {
+        true => super::emit_json(s)?,
+        false => super::emit(&text)?,
+    }
+    Ok(none_failed(s, files)?)
 }
 
 /// Runs `batch`: the retarget or transfer job (loaded or factored once)
@@ -165,12 +170,8 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
     };
     let r = batch_folder(&mocap_dir, &output, converter.as_ref(), &opts, &log)?;
     bar.finish_and_clear();
-    let s = &r.summary;
-    super::emit(&match a.json {
-        true => serde_json::to_string_pretty(s)? + "\n",
-        false => report_text(s, &r.files, &super::flags::as_flags),
-    })?;
-    Ok(none_failed(s, &r.files)?)
+    let text = report_text(&r.summary, &r.files, &super::flags::as_flags);
+    print_summary(a.json, &r.summary, &r.files, text)
 }
 
 /// The shard from `--shard`, a Slurm array or a Kubernetes Indexed Job

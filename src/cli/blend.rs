@@ -42,18 +42,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         topology: a.topology,
     })?;
     if a.json {
-        let v = serde_json::to_value(&r)?;
-        return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
+        return super::emit_json(&serde_json::to_value(&r)?);
     }
-    crate::outln!(
-        "wrote {} ({} blend, α = {}, {:.1} ms)\n  edge-length distortion {:.4} (linear: {:.4})\n  volume distortion      {:.4} (linear: {:.4})\n  (relative to the mean of the inputs' edge lengths and volumes)",
-        r.output.display(),
-        r.method,
-        r.alpha,
-        r.seconds * 1e3,
-        r.edge_length_distortion,
-        r.linear_edge_length_distortion,
-        r.volume_distortion,
-        r.linear_volume_distortion
-    )
+    super::emit(&surfmotion::jobs::short_text::blend(&r))
 }

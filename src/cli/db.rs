@@ -73,7 +73,7 @@ fn build(a: BuildArgs) -> anyhow::Result<()> {
     };
     let (graph, r) = surfmotion::jobs::build_database(&a.dir, &opts, &super::Bars::new())?;
     if a.json {
-        return super::emit(&(serde_json::to_string_pretty(&r)? + "\n"));
+        return super::emit_json(&r);
     }
     super::emit(&super::flags::as_flags(&text::database(&a.dir, &graph, &r)))
 }
@@ -120,7 +120,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             }
             // A problem is exit 1 ([`db_info::verdict`]).
             let listed = if a.json {
-                crate::outln!("{}", serde_json::to_string_pretty(&i)?)?;
+                super::emit_json(&i)?;
                 Listed::InJson
             } else {
                 super::emit(&text::info(&i))?;
@@ -142,8 +142,7 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     let r = export_skeletons(&a.dir, &opts)?;
     if a.json {
         // Lengths and fit residuals are in the database's units.
-        let v = serde_json::to_value(&r)?;
-        return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
+        return super::emit_json(&serde_json::to_value(&r)?);
     }
     super::emit(&text::skeletons(&r))
 }

@@ -136,7 +136,7 @@ pub fn init(a: InitArgs) -> anyhow::Result<()> {
                 *n = super::flags::as_flags(n.as_str().unwrap_or_default()).into();
             }
         }
-        crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
+        super::emit_json(&v)?;
     } else if let Some(s) = &r.setup {
         crate::errln!("{}", super::flags::as_flags(&s.text()));
     }

@@ -16,8 +16,7 @@ pub struct Args {
 pub fn run(a: Args) -> anyhow::Result<()> {
     let r = surfmotion::jobs::demo::run_demo(&a.output, &super::Bars::new())?;
     if a.json {
-        let v = serde_json::to_value(&r)?;
-        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+        return super::emit_json(&serde_json::to_value(&r)?);
     }
     super::emit(&surfmotion::jobs::text::demo(&r))
 }

@@ -48,7 +48,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mocap = a.mocap.as_deref().zip(load.as_ref());
     let r = surfmotion::jobs::eval::evaluate(&ch, mocap, &a.result, a.surface)?;
     if a.json {
-        return super::emit(&(serde_json::to_string_pretty(&r.to_json()?)? + "\n"));
+        return super::emit_json(&r.to_json()?);
     }
     super::emit(&r.text())
 }

@@ -44,32 +44,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         return super::emit(&g.to_dot());
     }
     if a.json {
-        let adj = g.adjacency();
-        let v = serde_json::json!({
-            "graph": g,
-            "adjacency": {
-                "offsets": adj.offsets,
-                "targets": adj.targets,
-                "costs": adj.costs,
-            },
-        });
+        let v = surfmotion::jobs::short_text::graph_json(&g)?;
         return super::emit(&(serde_json::to_string(&v)? + "\n"));
     }
     if a.matrix.is_none() {
-        let mut out = String::new();
-        for s in g.sequences() {
-            out += &format!("{} ({})\n", s.name, super::count(s.len, "frame"));
-        }
-        for e in g.edges() {
-            out += &format!(
-                "{} -> {}: {}, best cost {:.4}\n",
-                g.sequences()[e.from].name,
-                g.sequences()[e.to].name,
-                super::count(e.transitions.len(), "transition"),
-                e.cost
-            );
-        }
-        super::emit(&out)?;
+        super::emit(&surfmotion::jobs::short_text::graph(&g))?;
     }
     Ok(())
 }

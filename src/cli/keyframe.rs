@@ -101,7 +101,7 @@ fn path(
     }
     if a.json {
         v["output"] = serde_json::to_value(&run.written)?;
-        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+        return super::emit_json(&v);
     }
     let text = summary::path_summary(&run, ch.manifest().fps);
     super::emit(&(head + &super::flags::as_flags(&text)))
@@ -121,7 +121,7 @@ fn bar(a: &Args, n: usize, what: &str) -> indicatif::ProgressBar {
 
 /// The JSON summary of a grid report ([`text::summary_json`]).
 fn emit_json<T: serde::Serialize>(r: &T) -> anyhow::Result<()> {
-    super::emit(&(serde_json::to_string_pretty(&text::summary_json(r)?)? + "\n"))
+    super::emit_json(&text::summary_json(r)?)
 }
 
 /// `--grid` (Table III), or with `--least-mean` the least mean smoothness
@@ -217,7 +217,7 @@ fn floor(
         b.finish_and_clear();
     }
     if a.json {
-        return super::emit(&(serde_json::to_string_pretty(&serde_json::to_value(&r)?)? + "\n"));
+        return super::emit_json(&serde_json::to_value(&r)?);
     }
     super::emit(&(head + &text::floor_summary(&r)))
 }

@@ -40,8 +40,8 @@ pub fn run(a: SendArgs) -> anyhow::Result<()> {
         _ => send_bvh(&a.clip, a.to, &load, a.fps, a.speed)?,
     };
     println!(
-        "sent {} frames at {:.1} fps to {} ({}) in {:.2} s",
-        r.frames, r.fps, a.to, a.protocol, r.seconds
+        "{}",
+        surfmotion::jobs::short_text::sent(&r, &a.to, &a.protocol)
     );
     Ok(())
 }

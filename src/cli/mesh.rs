@@ -147,8 +147,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 usd: a.glb.usd_options(),
             })?;
             if a.json {
-                let v = serde_json::to_value(&r)?;
-                return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
+                return super::emit_json(&serde_json::to_value(&r)?);
             }
             for line in r.lines() {
                 crate::errln!("{}", super::flags::as_flags(&line));

@@ -2,7 +2,7 @@
 
 use super::ClipOpts;
 use std::path::PathBuf;
-use surfmotion::jobs::mocap;
+use surfmotion::jobs::{mocap, short_text};
 
 /// Mocap subcommands.
 #[derive(clap::Subcommand)]
@@ -138,16 +138,9 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             let load = a.opts.load_options()?;
             let r = mocap::convert(&a.input, &load, &a.output, a.fps, metres)?;
             if a.json {
-                let v = serde_json::to_value(&r)?;
-                return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
+                return super::emit_json(&serde_json::to_value(&r)?);
             }
-            crate::errln!(
-                "wrote {} ({}, {} at {:.3} fps)",
-                r.output.display(),
-                super::count(r.joints, "joint"),
-                super::count(r.frames, "frame"),
-                r.fps
-            );
+            crate::errln!("{}", short_text::mocap_converted(&r));
             Ok(())
         }
         Cmd::Procedural(a) => {
@@ -158,16 +151,10 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                 fps: a.fps,
             };
             let written = mocap::procedural(&opts, &mut |c| {
-                crate::errln!(
-                    "wrote {} ({} at {} fps)",
-                    c.path.display(),
-                    super::count(c.frames, "frame"),
-                    c.fps
-                );
+                crate::errln!("{}", short_text::procedural_clip(c));
             })?;
             if a.json {
-                let v = serde_json::to_value(&written)?;
-                crate::outln!("{}", serde_json::to_string_pretty(&v)?)?;
+                super::emit_json(&serde_json::to_value(&written)?)?;
             }
             Ok(())
         }
@@ -205,7 +192,7 @@ fn rigmap(a: RigmapArgs) -> anyhow::Result<()> {
     }
     let det = mocap::rigmap(&a.clip, &a.opts.load_options()?, a.output.as_deref())?;
     if a.json {
-        return crate::outln!("{}", serde_json::to_string_pretty(&det)?);
+        return super::emit_json(&det);
     }
     crate::cli::emit(&surfmotion::tools::inspect::detection_text(&det))?;
     if !det.missing.is_empty() {

@@ -30,6 +30,7 @@ mod render;
 mod repair;
 mod retarget;
 mod rig;
+mod signals;
 mod synth;
 mod transfer;
 mod transfer_run;
@@ -40,12 +41,12 @@ pub use argv::Usage;
 pub use log::warnings_in_summary;
 pub use opts::{ClipOpts, RunOpts, load_mesh_groups};
 pub use out::{
-    Bars, OutputClosed, count, emit, one_line, progress, spinner, without_os_error_numbers,
-    write_json,
+    Bars, OutputClosed, count, emit, emit_json, one_line, progress, spinner,
+    without_os_error_numbers, write_json,
 };
 pub use parse::{
-    bounded_count, finite, fraction, frame_rate, length_unit, mesh_spec, non_negative, png_path,
-    positive, weight,
+    bounded_count, confidence, finite, fraction, frame_rate, length_unit, mesh_spec, non_negative,
+    png_path, positive, weight,
 };
 
 pub use app::main;

@@ -13,6 +13,12 @@ pub fn emit(text: &str) -> anyhow::Result<()> {
     }
 }
 
+/// `v` on stdout as pretty JSON and a newline ([`emit`]). A report whose
+/// keys are printed sorted goes through `serde_json::to_value` first.
+pub fn emit_json<T: serde::Serialize + ?Sized>(v: &T) -> anyhow::Result<()> {
+    emit(&(serde_json::to_string_pretty(v)? + "\n"))
+}
+
 /// A report written to `path` as pretty JSON, atomically (`--report`).
 pub fn write_json<T: serde::Serialize + ?Sized>(
     path: &std::path::Path,

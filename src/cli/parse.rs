@@ -116,6 +116,15 @@ pub fn png_path(s: &str) -> Result<PathBuf, String> {
     }
 }
 
+/// `--min-confidence` (automatic landmarks), checked after parsing: 0 to 1.
+pub fn confidence(v: f64) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        (0.0..=1.0).contains(&v),
+        "--min-confidence {v}: expected 0 to 1"
+    );
+    Ok(())
+}
+
 /// A count on the command line (pixels, frames) in `[lo, hi]`: clap's
 /// "0 is not in 16..=8192" instead of a silent clamp (`render --size 0`
 /// drew 16 pixels).

@@ -97,14 +97,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         );
     }
     if let Some(p) = &a.report {
-        surfmotion::util::fsutil::write_bytes_atomic(
-            p,
-            serde_json::to_string_pretty(report)?.as_bytes(),
-        )?;
+        super::write_json(p, report)?;
     }
     if a.json {
-        let v = serde_json::to_value(&run)?;
-        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+        return super::emit_json(&serde_json::to_value(&run)?);
     }
     super::emit(&surfmotion::jobs::text::play(&run, &a.output))?;
     for n in &report.notices {

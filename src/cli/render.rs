@@ -60,15 +60,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         size: a.size,
     })?;
     if a.json {
-        let v = serde_json::to_value(&r)?;
-        return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
+        return super::emit_json(&serde_json::to_value(&r)?);
     }
-    crate::outln!(
-        "wrote {} ({}x{}: front and left side of each, one scale)",
-        r.output.display(),
-        r.width,
-        r.height
-    )
+    super::emit(&surfmotion::jobs::short_text::render(&r))
 }
 
 /// Options of `--preview` (shared by retarget, synth and transfer).

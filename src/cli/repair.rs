@@ -38,7 +38,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         },
     })?;
     if a.json {
-        return crate::outln!("{}", serde_json::to_string_pretty(&r.report)?);
+        return super::emit_json(&r.report);
     }
     super::emit(&r.text())
 }

@@ -142,12 +142,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let preview = a.run.preview.preview.as_deref().map(|p| (p, &preview));
     let c = job.run_clip(&a.mocap, &a.output, preview)?;
     if let Some(p) = &a.report {
-        let v = serde_json::to_string_pretty(&c.report_json()?)?;
-        surfmotion::util::fsutil::write_bytes_atomic(p, v.as_bytes())?;
+        super::write_json(p, &c.report_json()?)?;
     }
     if a.run.json {
-        let v = serde_json::to_value(c.summary())?;
-        return super::emit(&(serde_json::to_string_pretty(&v)? + "\n"));
+        return super::emit_json(&serde_json::to_value(c.summary())?);
     }
     super::emit(&surfmotion::jobs::text::retarget(&a.mocap, &c))
 }

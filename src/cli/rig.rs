@@ -98,9 +98,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
         .file("-o", Some(&output))
         .file("--png", a.png.as_deref())
         .file("--write-landmarks", a.write_landmarks.as_deref());
-    if !(0.0..=1.0).contains(&a.min_confidence) {
-        anyhow::bail!("--min-confidence {}: expected 0 to 1", a.min_confidence);
-    }
+    super::confidence(a.min_confidence)?;
     set.refuse_colliding()?;
     let mesh = super::load_mesh_groups(&a.mesh, &a.group)?;
     let r = embed_rig(
@@ -119,8 +117,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
         },
     )?;
     if a.json {
-        let v = serde_json::to_value(&r)?;
-        return crate::outln!("{}", serde_json::to_string_pretty(&v)?);
+        return super::emit_json(&serde_json::to_value(&r)?);
     }
     super::emit(&r.summary_text(a.write_landmarks.as_deref()))
 }
@@ -129,9 +126,7 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
 fn pick(a: EmbedArgs) -> anyhow::Result<()> {
     let mut inputs = surfmotion::mesh::io::input_files(&a.mesh, None);
     inputs.extend(a.skin.iter().chain(&a.rig_map).cloned());
-    if !(0.0..=1.0).contains(&a.min_confidence) {
-        anyhow::bail!("--min-confidence {}: expected 0 to 1", a.min_confidence);
-    }
+    super::confidence(a.min_confidence)?;
     let mesh = super::load_mesh_groups(&a.mesh, &[])?;
     let o = surfmotion::jobs::pick::PickOptions {
         mesh: a.mesh,

@@ -92,10 +92,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let r = &run.report;
     if a.run.json {
-        crate::outln!(
-            "{}",
-            serde_json::to_string_pretty(&serde_json::to_value(r)?)?
-        )?;
+        super::emit_json(&serde_json::to_value(r)?)?;
     } else {
         super::emit(&run.text(dir))?;
     }

@@ -89,11 +89,7 @@ fn spec(a: &Args, job_opts: &ScanJob) -> anyhow::Result<TransferSpec> {
 /// outputs that would replace an input or another output, are not a
 /// mesh format, or a folder that holds files without --force.
 fn check_options_and_outputs(a: &Args) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        (0.0..=1.0).contains(&a.min_confidence),
-        "--min-confidence {}: expected 0 to 1",
-        a.min_confidence
-    );
+    super::confidence(a.min_confidence)?;
     // clap's `requires` let these through with --mocap, and they were
     // ignored without a word.
     if a.template.is_none() {
@@ -166,7 +162,7 @@ fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::
         super::write_json(p, &serde_json::to_value(report)?)?;
     }
     if a.run.json {
-        return super::emit(&(serde_json::to_string_pretty(&report.summary_json()?)? + "\n"));
+        return super::emit_json(&report.summary_json()?);
     }
     let truth = a.truth.as_deref();
     super::emit(&report.summary_text(&a.scan, truth, a.write_landmarks.as_deref()))

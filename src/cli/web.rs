@@ -143,26 +143,6 @@ fn export(s: &Source, out: &std::path::Path) -> anyhow::Result<web::ExportReport
     })
 }
 
-/// Set by SIGINT or SIGTERM while `web serve` serves.
-static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-#[cfg(unix)]
-extern "C" fn on_stop_signal(_: libc::c_int) {
-    // Only an atomic store: async-signal-safe.
-    STOP.store(true, std::sync::atomic::Ordering::Relaxed);
-}
-
-/// Makes SIGINT and SIGTERM set [`STOP`] instead of ending the process.
-fn stop_on_signals() {
-    #[cfg(unix)]
-    // SAFETY: the handler only stores to an atomic.
-    unsafe {
-        let h = on_stop_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
-        libc::signal(libc::SIGINT, h);
-        libc::signal(libc::SIGTERM, h);
-    }
-}
-
 /// Runs `web`.
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
@@ -172,7 +152,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             bar.finish_and_clear();
             let r = r?;
             if a.json {
-                super::emit(&(serde_json::to_string_pretty(&r)? + "\n"))
+                super::emit_json(&r)
             } else {
                 super::emit(&surfmotion::jobs::text::web_export(&r))
             }
@@ -217,9 +197,9 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             // Ctrl-C or SIGTERM stop the server and the temporary export
             // is removed (it stayed behind). A signal during the export
             // still ends the process: the next `web serve` removes it.
-            stop_on_signals();
+            let stop = super::signals::stop_on_signals();
             crate::outln!("serving {} at {}", root.display(), server.url())?;
-            server.run_until(&STOP);
+            server.run_until(stop);
             if let Some(t) = _tmp {
                 let p = t.path().to_path_buf();
                 match t.close() {

@@ -19,7 +19,7 @@
 //!    (implemented by the retarget and transfer jobs).
 //!
 //! [`eval`] scores a result against its clip and database (the `eval`
-//! verb).
+//! verb). [`text`] and [`short_text`] are the jobs' reports as text.
 //!
 //! [`outputs`] is the output policy every job checks before any work;
 //! [`output_set::OutputSet`] holds a job's labelled outputs and inputs and
@@ -54,6 +54,7 @@ pub mod retarget;
 pub mod rig;
 mod rig_summary;
 pub mod setup_text;
+pub mod short_text;
 pub mod skeletons;
 pub mod synth;
 pub mod synth_db;
