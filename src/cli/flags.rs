@@ -41,6 +41,7 @@ const FLAGS: &[(&str, &str)] = &[
     ),
     ("`TransferSource::Template` frame", "--template-frame"),
     ("`GlbOptions::normals` false", "--glb-no-normals"),
+    ("`UsdOptions::normals` false", "--usd-no-normals"),
     ("the `GlbOptions` apply", "the --glb-* options apply"),
     ("fewer via key-frames", "fewer --via"),
     ("nearer via key-frames", "nearer --via"),
@@ -186,5 +187,28 @@ mod tests {
         ] {
             assert_eq!(super::as_flags(library), printed);
         }
+    }
+
+    /// The format-only writer options, refused by the library in its
+    /// options' names, print the flags they printed when the CLI refused
+    /// them itself.
+    #[test]
+    fn format_only_refusals_name_flags() {
+        use surfmotion::jobs::format_options::{refuse_unless_glb, refuse_unless_usda};
+        use surfmotion::mesh::io::{glb::GlbOptions, usd::UsdOptions};
+        let glb = GlbOptions {
+            quantize: true,
+            normals: false,
+        };
+        let e = refuse_unless_glb(&glb, false, "--format pc2").unwrap_err();
+        assert_eq!(
+            super::as_flags(&e.to_string()),
+            "--glb-quantize and --glb-no-normals apply to .glb output only, not --format pc2: leave them out or write a .glb"
+        );
+        let e = refuse_unless_usda(&UsdOptions { normals: false }, false, "o.glb").unwrap_err();
+        assert_eq!(
+            super::as_flags(&e.to_string()),
+            "--usd-no-normals applies to .usda output only, not o.glb: leave it out or write a .usda"
+        );
     }
 }

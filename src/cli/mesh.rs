@@ -1,6 +1,7 @@
 //! `surfmotion mesh ...`.
 
 use std::path::PathBuf;
+use surfmotion::jobs::format_options;
 use surfmotion::jobs::mesh::{MeshConvertOptions, convert_mesh};
 
 /// Mesh subcommands.
@@ -67,49 +68,30 @@ pub struct SequenceOutputArgs {
 
 impl SequenceOutputArgs {
     /// Refuses these flags for an output that is not a GLB (`output` names
-    /// it, e.g. "out.pc2" or "--format pc2"): they were dropped without a
-    /// word (issue 46, item 11).
+    /// it, e.g. "out.pc2" or "--format pc2"):
+    /// [`format_options::refuse_unless_glb`].
     pub fn refuse_unless_glb(&self, glb: bool, output: &str) -> anyhow::Result<()> {
-        let given: Vec<&str> = [
-            (self.glb_quantize, "--glb-quantize"),
-            (self.glb_no_normals, "--glb-no-normals"),
-        ]
-        .into_iter()
-        .filter_map(|(on, flag)| on.then_some(flag))
-        .collect();
-        if !glb && !given.is_empty() {
-            anyhow::bail!(
-                "{} {} to .glb output only, not {output}: leave {} out or write a .glb",
-                given.join(" and "),
-                if given.len() > 1 { "apply" } else { "applies" },
-                if given.len() > 1 { "them" } else { "it" }
-            );
-        }
-        Ok(())
+        Ok(format_options::refuse_unless_glb(
+            &self.options(),
+            glb,
+            output,
+        )?)
     }
 
     /// Refuses `--usd-no-normals` for an output that is not a `.usda`
-    /// (`output` names it, as for [`Self::refuse_unless_glb`]).
+    /// (`output` names it): [`format_options::refuse_unless_usda`].
     pub fn refuse_unless_usda(&self, usda: bool, output: &str) -> anyhow::Result<()> {
-        if self.usd_no_normals && !usda {
-            anyhow::bail!(
-                "--usd-no-normals applies to .usda output only, not {output}: leave it out or write a .usda"
-            );
-        }
-        Ok(())
+        Ok(format_options::refuse_unless_usda(
+            &self.usd_options(),
+            usda,
+            output,
+        )?)
     }
 
     /// Both refusals for the output `path` (named as given).
     pub fn refuse_other_formats(&self, path: &std::path::Path) -> anyhow::Result<()> {
-        use surfmotion::mesh::io::MeshFormat;
-        let name = path.display().to_string();
-        self.refuse_unless_glb(Self::is_glb(path), &name)?;
-        self.refuse_unless_usda(MeshFormat::of(path) == Some(MeshFormat::Usda), &name)
-    }
-
-    /// True when `path` is written as a GLB.
-    pub fn is_glb(path: &std::path::Path) -> bool {
-        surfmotion::mesh::io::MeshFormat::of(path) == Some(surfmotion::mesh::io::MeshFormat::Glb)
+        let (glb, usd) = (self.options(), self.usd_options());
+        Ok(format_options::refuse_other_formats(&glb, &usd, path)?)
     }
 
     /// The writer options these flags ask for.
@@ -132,11 +114,10 @@ impl SequenceOutputArgs {
 pub fn run(c: Cmd) -> anyhow::Result<()> {
     match c {
         Cmd::Convert(a) => {
-            a.glb.refuse_unless_usda(
-                surfmotion::mesh::io::MeshFormat::of(&a.output)
-                    == Some(surfmotion::mesh::io::MeshFormat::Usda),
-                &a.output.display().to_string(),
-            )?;
+            let usda = surfmotion::mesh::io::MeshFormat::of(&a.output)
+                == Some(surfmotion::mesh::io::MeshFormat::Usda);
+            a.glb
+                .refuse_unless_usda(usda, &a.output.display().to_string())?;
             let r = convert_mesh(&MeshConvertOptions {
                 input: a.input,
                 output: a.output,

@@ -21,7 +21,8 @@
 //! [`eval`] scores a result against its clip and database (the `eval`
 //! verb). [`text`] and [`short_text`] are the jobs' reports as text.
 //!
-//! [`outputs`] is the output policy every job checks before any work;
+//! [`outputs`] is the output policy every job checks before any work
+//! ([`format_options`]: writer options of one format only);
 //! [`output_set::OutputSet`] holds a job's labelled outputs and inputs and
 //! checks them in its order. [`db_info::verdict`] is `db info`'s.
 //!
@@ -38,6 +39,7 @@ pub mod db_init;
 pub mod demo;
 mod error;
 pub mod eval;
+pub mod format_options;
 pub mod keyframe;
 pub mod live;
 pub mod live_checks;
