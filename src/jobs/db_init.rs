@@ -78,6 +78,10 @@ pub struct Setup {
     pub check: EmbedCheck,
     /// Where the report was written.
     pub path: PathBuf,
+    /// The missing head was said already (the automatic rig's note says
+    /// why): [`Setup::text`] does not say it again.
+    #[serde(skip)]
+    pub head_said: bool,
     /// The picture written (front and side; `InitSetup::png`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub png: Option<PathBuf>,
@@ -189,7 +193,9 @@ fn init_in(
         ));
     }
     let setup = if manifest.rig.landmarks.is_some() {
-        Some(write_setup(dir, &manifest, rest.as_ref(), setup, written)?)
+        let mut s = write_setup(dir, &manifest, rest.as_ref(), setup, written)?;
+        s.head_said = auto.as_ref().is_some_and(|r| r.headless);
+        Some(s)
     } else {
         if setup.png.is_some() {
             notes.push(
@@ -406,6 +412,7 @@ fn write_setup(
         check,
         path: dir.join(SETUP),
         png,
+        head_said: false,
     };
     let text = serde_json::to_string_pretty(&report).map_err(|e| JobError::Usage(e.to_string()))?;
     written.before(&report.path);

@@ -128,7 +128,13 @@ pub(crate) fn draw_framed(
     let mut lines = Vec::new();
     if let Some(r) = rig {
         let j = r.frame_joints(positions);
+        // A body without a head (`Embedding::absent`) has no head bone to
+        // draw: its joint lies above the neck's stump.
+        let headless = r.absent().iter().any(|a| a == "head");
         for c in Canonical::ALL {
+            if headless && c == Canonical::Head {
+                continue;
+            }
             if let Some(p) = c.parent() {
                 lines.push((j[p.index()].to_array(), j[c.index()].to_array(), [0, 0, 0]));
             }

@@ -65,11 +65,21 @@ impl Setup {
                 );
             }
         }
-        for n in &s.rig_notes {
+        // A missing head is said once: the checks skipped and the chin
+        // placed, on one line (none when the automatic rig said it).
+        let no_head = |n: &&String| n.starts_with("no head: ");
+        for n in s.rig_notes.iter().filter(|n| !no_head(n)) {
             out += &format!("rig: {n}\n");
         }
-        for k in &s.check.skipped {
+        for k in s.check.skipped.iter().filter(|n| !no_head(n)) {
             out += &format!("rig: {k}\n");
+        }
+        let head: Vec<&str> = (s.check.skipped.iter().filter(no_head))
+            .chain(s.rig_notes.iter().filter(no_head))
+            .map(|n| n.trim_start_matches("no head: "))
+            .collect();
+        if !head.is_empty() && !s.head_said {
+            out += &format!("rig: no head: {}\n", head.join("; "));
         }
         for w in &s.check.warnings {
             out += &format!("WARN rig: {}\n", w.message);

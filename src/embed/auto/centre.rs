@@ -25,18 +25,22 @@ const FAR_POINTS: usize = 5;
 /// ([`super::options::AutoOptions::tip_seed`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TipSeed {
-    /// The vertex nearest the vertices' centroid (sessions 20-35).
+    /// The vertex nearest the vertices' centroid (sessions 20-36).
     Centroid,
     /// The geodesic centre ([`geodesic_centre`]).
     Centre,
+    /// The centroid's vertex unless a measured sign says it is wrong, then
+    /// the geodesic centre ([`super::guard`], session 37; the default).
+    Guarded,
 }
 
 impl TipSeed {
-    /// `centroid` or `centre`.
+    /// `centroid`, `centre` or `guarded`.
     pub fn parse(name: &str) -> Option<TipSeed> {
         match name {
             "centroid" => Some(TipSeed::Centroid),
             "centre" => Some(TipSeed::Centre),
+            "guarded" => Some(TipSeed::Guarded),
             _ => None,
         }
     }

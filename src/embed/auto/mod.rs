@@ -19,6 +19,7 @@ pub mod centre;
 pub mod consensus;
 pub mod decompose;
 pub mod facing;
+pub mod guard;
 pub mod humanoid;
 pub mod joints;
 pub mod limbs;

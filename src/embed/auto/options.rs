@@ -57,8 +57,10 @@ pub struct AutoOptions {
     /// [`AUTORIG_ENV`] rigs a head on any top, sessions 20-35's).
     pub read_head: bool,
     /// Where the extremities are sought from ([`super::centre`], session
-    /// 36): `tips=centroid` (default, sessions 20-35's) or `tips=centre`
-    /// in [`AUTORIG_ENV`].
+    /// 36): default `tips=guarded` (the centroid's vertex unless it lies
+    /// on a limb's end or hides a sixth limb, [`super::guard`], session
+    /// 37); `tips=centroid` (sessions 20-36's) or `tips=centre` in
+    /// [`AUTORIG_ENV`].
     pub tip_seed: super::centre::TipSeed,
     /// The decomposition's settings.
     pub decompose: DecomposeOptions,
@@ -75,7 +77,7 @@ impl Default for AutoOptions {
             split_knee: false,
             guard_pivots: true,
             read_head: true,
-            tip_seed: super::centre::TipSeed::Centroid,
+            tip_seed: super::centre::TipSeed::Guarded,
             decompose: DecomposeOptions::default(),
         }
     }
@@ -172,7 +174,7 @@ impl FrameSample {
 /// `knee=split|crossing` ([`AutoOptions::split_knee`]),
 /// `pivot=guarded|free` ([`AutoOptions::guard_pivots`]),
 /// `head=read|keep` ([`AutoOptions::read_head`]),
-/// `tips=centroid|centre` ([`AutoOptions::tip_seed`]),
+/// `tips=centroid|centre|guarded` ([`AutoOptions::tip_seed`]),
 /// `patches=position|vertex0` (the rest frame's contact patches,
 /// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
 pub const AUTORIG_ENV: &str = "SURFMOTION_AUTORIG";
@@ -206,7 +208,7 @@ pub(crate) fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, head=read|keep, tips=centroid|centre, patches=position|vertex0, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, head=read|keep, tips=centroid|centre|guarded, patches=position|vertex0, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -336,9 +338,13 @@ mod tests {
         apply_override("head=read", &mut rule, &mut auto).unwrap();
         assert!(auto.read_head);
         use super::super::centre::TipSeed;
-        assert_eq!(auto.tip_seed, TipSeed::Centroid);
+        assert_eq!(auto.tip_seed, TipSeed::Guarded);
         apply_override("tips=centre", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.tip_seed, TipSeed::Centre);
+        apply_override("tips=centroid", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.tip_seed, TipSeed::Centroid);
+        apply_override("tips=guarded", &mut rule, &mut auto).unwrap();
+        assert_eq!(auto.tip_seed, TipSeed::Guarded);
         for bad in [
             "head=cut",
             "tips=middle",

@@ -62,7 +62,7 @@ pub fn auto_rig(
     let neck = NeckReading::read(rest, &nb, body.up, body.height, chains.head);
     let cut = neck.cut().filter(|_| opts.read_head);
     if let Some(why) = &cut {
-        notes.push(format!("no head: {why}; the landmarks say \"absent\": [\"head\"] (the embedding puts the chin at the top of the neck and skips the head checks)"));
+        notes.push(format!("no head: {why}; the landmarks say \"absent\": [\"head\"] (the embedding puts the chin at the top of the neck and skips the head checks: the head on the mid-plane, inside the body, the head part)"));
     }
     let marks = landmark_points(&body, &chains, &sided, &found, cut.is_none(), &mut notes);
 
@@ -376,7 +376,8 @@ fn find_body<'a>(
     if !(height > 0.0 && height.is_finite()) {
         return Err(AutoError::NotHumanoid("the rest frame is flat".into()));
     }
-    let notes = vec![floor_note];
+    let mut notes = vec![floor_note];
+    notes.extend(found.guard.and_then(|g| g.why()));
     // The parts and their motion.
     let dec = decompose(rest, used, nb, height, &opts.decompose);
     if dec.count < 5 {

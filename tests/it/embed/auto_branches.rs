@@ -88,6 +88,13 @@ fn a_grown_tail_or_third_arm_is_refused_from_the_geodesic_centre() {
     grown_limbs_are_refused(TipSeed::Centre);
 }
 
+/// Measured (session 37): guarded ([`surfmotion::embed::auto::guard`]),
+/// the tail of 20 % of the height is refused as from the centre.
+#[test]
+fn a_grown_tail_or_third_arm_is_refused_guarded() {
+    grown_limbs_are_refused(TipSeed::Guarded);
+}
+
 /// The procedural body, as it is and without hands, rigs from the seed
 /// `how` in every variant; with a tail of 20 % or 45 % of the height or a
 /// third arm it is refused for a sixth extremity.
@@ -215,13 +222,16 @@ fn five_tips_from(
     .collect();
     want.sort_unstable();
     let (mut no, mut yes) = (f64::MIN, f64::MAX);
-    let mut skipped = Vec::new();
+    let (mut skipped, mut centre_kept) = (Vec::new(), Vec::new());
     for (f, rest) in frames.iter().enumerate() {
         let t = body_tips(rest, mesh.triangles(), &nb, sixth_limit, how);
         let mut parts: Vec<u8> = t.five.iter().map(|&(v, _)| labels[v as usize]).collect();
         parts.sort_unstable();
         if parts != want {
             skipped.push(f);
+        }
+        if t.guard.is_some_and(|g| g.kept_centre) {
+            centre_kept.push(f);
         }
         assert!(t.sixth.is_none(), "{what} frame {f}: {:?}", t.sixth);
         for c in &t.candidates {
@@ -234,7 +244,7 @@ fn five_tips_from(
         }
     }
     eprintln!(
-        "{what} ({how:?}): {} frames as the rest, the five tips not the limbs' and the head's on {skipped:?}; scores: not a tip up to {no:.2}, tips from {yes:.2}",
+        "{what} ({how:?}): {} frames as the rest, the five tips not the limbs' and the head's on {skipped:?}; scores: not a tip up to {no:.2}, tips from {yes:.2}; the guard kept the centre's on {centre_kept:?}",
         frames.len()
     );
     assert!(skipped.len() * 10 < frames.len(), "{what}: {skipped:?}");
@@ -306,4 +316,13 @@ fn every_frame_of_samba_without_hands_has_five_tips_from_the_geodesic_centre() {
     let (m, f, old) = keep_only(&c.mesh, &c.frames, &keep);
     let labels: Vec<u8> = old.iter().map(|&v| c.truth.labels()[v]).collect();
     five_tips_from(TipSeed::Centre, "samba without hands", &m, &f, &labels);
+}
+
+/// Measured (session 37): guarded, every frame of samba, crane and samba
+/// without hands has the limbs' and the head's tips and no sixth.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn every_frame_of_the_captures_has_five_tips_guarded() {
+    let Some(d) = common::data_dir() else { return };
+    captures_have_five_tips(&d, TipSeed::Guarded, true);
 }
