@@ -167,7 +167,10 @@ pub(crate) fn travel_scale(
 ) -> f64 {
     match scale {
         TravelScale::Legs => s,
-        TravelScale::Stride => stride_scale(mocap, out, a, s, leg_length(character) / s),
+        TravelScale::Stride => {
+            let at = |p: &Pose| anchor_of(p, a);
+            stride_scale(mocap, out, &at, s, leg_length(character) / s)
+        }
         TravelScale::Stance => {
             let c = hip_height(character);
             match standing_hip_height(mocap) {

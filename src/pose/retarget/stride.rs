@@ -37,7 +37,6 @@
 //! its strides on the character 1.3-3.0 % shorter than the AMC's
 //! (`pose::stride`).
 
-use super::anchor::{Anchor, anchor_of};
 use crate::pose::Pose;
 use crate::rig::Canonical;
 use glam::{DQuat, DVec2, DVec3};
@@ -52,7 +51,8 @@ fn flat(v: DVec3) -> DVec2 {
 }
 
 /// The stride's scale of `out` (the character's poses, before placement)
-/// against `mocap` (the clip's, same length) for anchor `a`, with `s` the
+/// against `mocap` (the clip's, same length) for the anchor point `a` of
+/// a pose (the placement's anchor), with `s` the
 /// legs' ratio and `leg` the clip's leg length: see the module docs. `s`
 /// when the clip's planted foot joints move less than two legs against
 /// its anchor in all (a clip standing in place: nothing to read) or the
@@ -60,7 +60,7 @@ fn flat(v: DVec3) -> DVec2 {
 pub(crate) fn stride_scale(
     mocap: &[Pose],
     out: &[(Pose, [DQuat; Canonical::COUNT])],
-    a: Anchor,
+    a: &dyn Fn(&Pose) -> DVec3,
     s: f64,
     leg: f64,
 ) -> f64 {
@@ -76,7 +76,7 @@ pub(crate) fn stride_scale(
             if moved.is_nan() || moved >= still {
                 continue;
             }
-            let rel = |p: &Pose| flat(p[j.index()] - anchor_of(p, a));
+            let rel = |p: &Pose| flat(p[j.index()] - a(p));
             let (dc, dr) = (rel(m1) - rel(m0), rel(o1) - rel(o0));
             if dc.is_finite() && dr.is_finite() {
                 pairs.push((dc, dr));
@@ -140,6 +140,10 @@ mod tests {
             .collect()
     }
 
+    fn root(p: &Pose) -> DVec3 {
+        p[C::Pelvis.index()]
+    }
+
     #[test]
     fn the_stride_scale_keeps_planted_feet_and_falls_back_in_place() {
         let clip = walk(0.02, 0.2, 120);
@@ -155,10 +159,10 @@ mod tests {
                 )
             })
             .collect();
-        let k = stride_scale(&clip, &out, Anchor::Root, 1.2, 0.9);
+        let k = stride_scale(&clip, &out, &root, 1.2, 0.9);
         assert!((k - 1.3).abs() < 1e-9, "{k}");
         // Held within 15 % of the legs' ratio.
-        let k = stride_scale(&clip, &out, Anchor::Root, 1.0, 0.9);
+        let k = stride_scale(&clip, &out, &root, 1.0, 0.9);
         assert!((k - 1.15).abs() < 1e-12, "{k}");
         // A few frames whose character foot moves unlike the clip's (a
         // heel leaving) do not pull it.
@@ -166,11 +170,11 @@ mod tests {
         for i in [5, 45, 85] {
             odd[i].0[C::LToe.index()].x += 0.05;
         }
-        let k = stride_scale(&clip, &odd, Anchor::Root, 1.2, 0.9);
+        let k = stride_scale(&clip, &odd, &root, 1.2, 0.9);
         assert!((k - 1.3).abs() < 1e-3, "{k}");
         // Standing in place: nothing to read.
         let still: Vec<Pose> = vec![clip[0]; 60];
         let o: Vec<_> = out.iter().take(60).map(|_| out[0]).collect();
-        assert_eq!(stride_scale(&still, &o, Anchor::Root, 1.2, 0.9), 1.2);
+        assert_eq!(stride_scale(&still, &o, &root, 1.2, 0.9), 1.2);
     }
 }
