@@ -20,6 +20,8 @@
 //! kernel's own (root, legs), bit for bit; the others are an option
 //! ([`PLACEMENT_ENV`]), off by default.
 
+use super::reference::leg_length;
+use super::stride::stride_scale;
 use crate::pose::Pose;
 use crate::rig::Canonical;
 use glam::{DQuat, DVec3};
@@ -52,6 +54,11 @@ pub enum TravelScale {
     /// lengthens the legs but not the motion stands its hips lower than
     /// its legs reach); held within 15 % of the legs' ratio.
     Stance,
+    /// The stride's: the ratio under which the character's planted feet
+    /// stay where they are (the least-squares ratio of the character's
+    /// planted foot's motion against its anchor to the clip's; see
+    /// [`stride`](super::stride)); held within 15 % of the legs' ratio.
+    Stride,
 }
 
 /// How the kernel places the body: [`Anchor`] and [`TravelScale`].
@@ -66,7 +73,8 @@ pub struct Placement {
 /// The environment variable that chooses the placement (a measurement
 /// option, issue 44): `root` (the default), `hips` or `joints`, each
 /// optionally followed by `,stance` (the travel scaled by the standing
-/// hip height, [`TravelScale::Stance`]; `,legs` is the default). Read once
+/// hip height, [`TravelScale::Stance`]) or `,stride` (by the stride,
+/// [`TravelScale::Stride`]; `,legs` is the default). Read once
 /// per process; another value warns and is the default.
 pub const PLACEMENT_ENV: &str = "SURFMOTION_PLACEMENT";
 
@@ -95,16 +103,17 @@ fn placement_rule(value: Option<&str>) -> Result<Placement, String> {
         "joints" => Anchor::Joints,
         _ => {
             return Err(format!(
-                "'{v}': expected root, hips or joints[,legs|,stance]"
+                "'{v}': expected root, hips or joints[,legs|,stance|,stride]"
             ));
         }
     };
     let scale = match s.trim() {
         "legs" => TravelScale::Legs,
         "stance" => TravelScale::Stance,
+        "stride" => TravelScale::Stride,
         _ => {
             return Err(format!(
-                "'{v}': expected root, hips or joints[,legs|,stance]"
+                "'{v}': expected root, hips or joints[,legs|,stance|,stride]"
             ));
         }
     };
@@ -146,10 +155,22 @@ pub(crate) fn standing_hip_height(mocap: &[Pose]) -> Option<f64> {
 /// The scale of the travel: `s` (the legs' ratio) for [`TravelScale::Legs`];
 /// the standing hip heights' ratio (character's rest over the clip's),
 /// held within 15 % of `s`, for [`TravelScale::Stance`] (`s` where either
-/// height is not positive).
-pub(crate) fn travel_scale(character: &Pose, mocap: &[Pose], s: f64, scale: TravelScale) -> f64 {
+/// height is not positive); for [`TravelScale::Stride`] the stride's
+/// ratio of `out` (the character's poses before placement) with anchor
+/// `a` ([`stride_scale`]).
+pub(crate) fn travel_scale(
+    character: &Pose,
+    mocap: &[Pose],
+    s: f64,
+    scale: TravelScale,
+    (out, a): (&[(Pose, [DQuat; Canonical::COUNT])], Anchor),
+) -> f64 {
     match scale {
         TravelScale::Legs => s,
+        TravelScale::Stride => {
+            let at = |p: &Pose| anchor_of(p, a);
+            stride_scale(mocap, out, &at, s, leg_length(character) / s)
+        }
         TravelScale::Stance => {
             let c = hip_height(character);
             match standing_hip_height(mocap) {
@@ -181,8 +202,8 @@ pub(super) fn place_anchor(
         return;
     }
     let (clip_floor, char_floor) = floors;
-    let k = travel_scale(character, mocap, s, placement.scale);
     let a = placement.anchor;
+    let k = travel_scale(character, mocap, s, placement.scale, (out, a));
     let rest = anchor_of(character, a);
     let first = anchor_of(&mocap[0], a);
     for (m, (t, _)) in mocap.iter().zip(out.iter_mut()) {
@@ -228,6 +249,10 @@ mod tests {
         );
         let e = placement_rule(Some("feet")).unwrap_err();
         assert!(e.contains("'feet'"), "{e}");
+        assert_eq!(
+            placement_rule(Some("root,stride")),
+            p(Anchor::Root, TravelScale::Stride)
+        );
         assert!(placement_rule(Some("hips,knees")).is_err());
     }
 
@@ -248,12 +273,22 @@ mod tests {
         let low: Vec<Pose> = (0..10)
             .map(|i| p.map(|x| DVec3::new(x.x, x.y * (0.9 - 0.01 * (i % 2) as f64), x.z)))
             .collect();
-        let k = travel_scale(&p, &low, 1.0, TravelScale::Stance);
+        let k = travel_scale(&p, &low, 1.0, TravelScale::Stance, (&[], Anchor::Root));
         assert!((k - 1.0 / 0.9).abs() < 1e-9, "{k}");
-        assert_eq!(travel_scale(&p, &low, 1.0, TravelScale::Legs), 1.0);
+        assert_eq!(
+            travel_scale(&p, &low, 1.0, TravelScale::Legs, (&[], Anchor::Root)),
+            1.0
+        );
         // Held within 15 %.
         let crouched: Vec<Pose> = low.iter().map(|q| q.map(|x| x * 0.5)).collect();
-        assert!((travel_scale(&p, &crouched, 1.0, TravelScale::Stance) - 1.15).abs() < 1e-12);
-        assert_eq!(travel_scale(&p, &[], 1.0, TravelScale::Stance), 1.0);
+        assert!(
+            (travel_scale(&p, &crouched, 1.0, TravelScale::Stance, (&[], Anchor::Root)) - 1.15)
+                .abs()
+                < 1e-12
+        );
+        assert_eq!(
+            travel_scale(&p, &[], 1.0, TravelScale::Stance, (&[], Anchor::Root)),
+            1.0
+        );
     }
 }

@@ -56,12 +56,28 @@ pub enum Level {
     /// joints enters by its midpoint: the trunk's width does not pull the
     /// line sideways), pointing from the hips to the shoulders.
     Trunk,
+    /// The hips' midpoint → the shoulders' midpoint brought down the
+    /// vertical to the chest's height (the shoulders read on the chest's
+    /// axis, which stands near the vertical in a reference: the rest's
+    /// T- or A-pose, or the clip's mean carriage). A conversion that drops
+    /// the thorax's length (CMU 01_01's cgspeed BVH) hangs the shoulders
+    /// lower along that axis, which moves the midpoints line and not this
+    /// one; its lean is the shoulders' place ahead of or behind the hips,
+    /// not the chest joint's (placed ~11° off by the Reallusion CC rig).
+    /// Measured (session 37, `pose::stride`): 01_01's AMC against cgspeed
+    /// BVH 0.79 % (midpoints) → 0.19 (the kernel's 0.00; the conversion's
+    /// clavicles also move the shoulders' midpoint 1.2 mm); the CC pairs'
+    /// posture (each frame's best translation) 0.74 / 0.86 / 0.96 → 0.68 /
+    /// 0.64 / 1.07, as placed 1.81 / 2.06 / 2.12 → 2.16 / 2.17 / 2.12; the
+    /// yardstick's 131_01 head p95 14.1 → 15.1° (its line 15.8),
+    /// penetration 1.45 → 1.73 cm. Off by default.
+    Shoulders,
 }
 
 /// The environment variable that chooses the levelling line (a
-/// measurement option, issue 44): `chest` (the default), `midpoints` or
-/// `trunk`. Read once per process; another value warns and is the
-/// default.
+/// measurement option, issue 44): `chest` (the default), `midpoints`,
+/// `trunk` or `shoulders`. Read once per process; another value warns and
+/// is the default.
 pub const LEVEL_ENV: &str = "SURFMOTION_LEVEL";
 
 /// The line [`LEVEL_ENV`] chooses (read once per process).
@@ -82,7 +98,10 @@ fn level_rule(value: Option<&str>) -> Result<Level, String> {
         "" | "chest" => Ok(Level::Chest),
         "midpoints" => Ok(Level::Midpoints),
         "trunk" => Ok(Level::Trunk),
-        v => Err(format!("'{v}': expected chest, midpoints or trunk")),
+        "shoulders" => Ok(Level::Shoulders),
+        v => Err(format!(
+            "'{v}': expected chest, midpoints, trunk or shoulders"
+        )),
     }
 }
 
@@ -98,6 +117,7 @@ pub(crate) fn levelling_line(r: &Pose, level: Level) -> DVec3 {
     let v = match level {
         Level::Chest => r[C::Chest.index()] - r[C::Pelvis.index()],
         Level::Midpoints => shoulders - hips,
+        Level::Shoulders => DVec3::new(shoulders.x, r[C::Chest.index()].y, shoulders.z) - hips,
         Level::Trunk => {
             let pts = [
                 r[C::Pelvis.index()],
@@ -171,6 +191,7 @@ mod tests {
         assert_eq!(level_rule(Some(" chest ")), Ok(Level::Chest));
         assert_eq!(level_rule(Some("midpoints")), Ok(Level::Midpoints));
         assert_eq!(level_rule(Some("trunk")), Ok(Level::Trunk));
+        assert_eq!(level_rule(Some("shoulders")), Ok(Level::Shoulders));
         let e = level_rule(Some("neck")).unwrap_err();
         assert!(e.contains("'neck'"), "{e}");
     }
@@ -188,6 +209,24 @@ mod tests {
         }
         assert!(levelling_line(&moved, Level::Chest).angle_between(up) > 0.1);
         assert!(levelling_line(&moved, Level::Midpoints).angle_between(up) < 1e-9);
+        // The shoulders' line: the root's place does not move it, nor
+        // the shoulders (and neck) slid down the vertical (a dropped
+        // thorax); the midpoints line turns with them.
+        let lean = |p: &Pose| levelling_line(p, Level::Shoulders);
+        assert_eq!(lean(&moved), lean(&still));
+        let mut dropped = still;
+        for c in [C::LShoulder, C::RShoulder, C::Neck] {
+            dropped[c.index()].y -= 0.117;
+        }
+        assert!(lean(&dropped).angle_between(lean(&still)) < 1e-12);
+        let m = |p: &Pose| levelling_line(p, Level::Midpoints);
+        assert!(m(&dropped).angle_between(m(&still)) > 0.01);
+        // It leans as the shoulders do ahead of the hips.
+        let a = lean(&still);
+        assert!(
+            a.z > 0.0 && (a.z / a.y - (0.45 * up.z) / (0.3 * up.y)).abs() < 1e-9,
+            "{a}"
+        );
         // The trunk's line: one point of six moved, so turned less than
         // the chest line (not zero).
         let t = levelling_line(&moved, Level::Trunk).angle_between(up);
@@ -195,7 +234,12 @@ mod tests {
         assert!(t < 0.5 * c, "{t} against {c}");
         // A trunk with no length has no line.
         let flat = [DVec3::ONE; Canonical::COUNT];
-        for level in [Level::Chest, Level::Midpoints, Level::Trunk] {
+        for level in [
+            Level::Chest,
+            Level::Midpoints,
+            Level::Trunk,
+            Level::Shoulders,
+        ] {
             assert_eq!(levelling_line(&flat, level), DVec3::ZERO);
         }
     }

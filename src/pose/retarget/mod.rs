@@ -76,6 +76,7 @@ mod measures;
 mod motion_ref;
 mod reference;
 mod root;
+mod stride;
 mod torso;
 
 pub use anchor::{Anchor, PLACEMENT_ENV, Placement, TravelScale};

@@ -21,10 +21,11 @@ use surfmotion::rig::Canonical;
 
 use Canonical as C;
 
-pub(super) const LEVELS: [(&str, Level); 3] = [
+pub(super) const LEVELS: [(&str, Level); 4] = [
     ("chest", Level::Chest),
     ("midpoints", Level::Midpoints),
     ("trunk", Level::Trunk),
+    ("shoulders", Level::Shoulders),
 ];
 
 /// The kernel's placement and the body's (the joints' mean, the travel by

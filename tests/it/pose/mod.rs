@@ -9,6 +9,7 @@ mod ground;
 mod level;
 mod level_variants;
 mod placement;
+mod stride;
 mod toes;
 mod travel;
 mod two_files;
