@@ -23,6 +23,12 @@ const EXTRACT_ITERATIONS: usize = 8;
 /// (`source`, local order) to the solved ones (`solved`), and
 /// `delta[i] = Rᵢ · lsrc[i]` (`lsrc`: the source's Laplacian coordinates,
 /// unturned). `lap` gives the one-rings (a row's off-diagonal columns).
+///
+/// With `zone` (each vertex's weight and its skin-blended turn,
+/// [`super::step_zone`]) a vertex of weight 0 keeps its `rots` and
+/// `delta` as they are, and one of weight `w` turns its coordinate by the
+/// skin's turn slerped towards the fitted one by `w` (`rots` keeps the
+/// fitted turn, the next step's start).
 pub(crate) fn local_step(
     lap: &[Vec<(u32, f64)>],
     source: &[[f64; 3]],
@@ -30,8 +36,13 @@ pub(crate) fn local_step(
     lsrc: &[[f64; 3]],
     rots: &mut [DQuat],
     delta: &mut [[f64; 3]],
+    zone: Option<(&[f64], &[DQuat])>,
 ) {
     for (i, row) in lap.iter().enumerate() {
+        let w = zone.map_or(1.0, |(w, _)| w[i]);
+        if w <= 0.0 {
+            continue;
+        }
         let (si, yi) = (DVec3::from_array(source[i]), DVec3::from_array(solved[i]));
         let mut cov = Matrix3::<f64>::zeros();
         for &(j, _) in row.iter().filter(|&&(j, _)| j as usize != i) {
@@ -52,7 +63,11 @@ pub(crate) fn local_step(
         let nq = DQuat::from_xyzw(u.i, u.j, u.k, u.w);
         let nq = if nq.is_finite() { nq.normalize() } else { q };
         rots[i] = nq;
-        delta[i] = (nq * DVec3::from_array(lsrc[i])).to_array();
+        let turn = match zone {
+            Some((_, skin)) if w < 1.0 => skin[i].slerp(nq, w),
+            _ => nq,
+        };
+        delta[i] = (turn * DVec3::from_array(lsrc[i])).to_array();
     }
 }
 
@@ -91,10 +106,54 @@ mod tests {
         // iterations leave 0.02 rad of a 1.1 rad turn; a few warm-started
         // steps converge.
         for _ in 0..4 {
-            local_step(&lap, &s, &y, &ls, &mut rots, &mut delta);
+            local_step(&lap, &s, &y, &ls, &mut rots, &mut delta, None);
         }
         assert!(rots[0].angle_between(turn) < 1e-3, "{:?}", rots[0]);
         let d = DVec3::from_array(delta[0]) - DVec3::from_array(ly[0]);
         assert!(d.length() < 1e-3 * DVec3::from_array(ly[0]).length(), "{d}");
+    }
+
+    /// In a zone ([`super::super::step_zone`]): a vertex of weight 0 keeps
+    /// its rotation and coordinate; one of weight ½ turns its coordinate
+    /// half way from its skin turn to the fitted one, and keeps the fitted
+    /// one as the next start.
+    #[test]
+    fn a_zone_weight_slerps_from_the_skin_turn() {
+        let mut s = vec![[0.0, 0.0, 0.3]];
+        for k in 0..6 {
+            let a = k as f64 * std::f64::consts::TAU / 6.0;
+            s.push([a.cos(), a.sin(), 0.1 * (k % 2) as f64]);
+        }
+        let mut lap = vec![vec![(0u32, 1.0)]];
+        lap[0].extend((1..7u32).map(|j| (j, -1.0 / 6.0)));
+        for i in 1..7u32 {
+            lap.push(vec![(i, 1.0), (0, -1.0)]);
+        }
+        let turn = DQuat::from_axis_angle(DVec3::X, 0.8);
+        let y: Vec<[f64; 3]> = s
+            .iter()
+            .map(|p| (turn * DVec3::from_array(*p)).to_array())
+            .collect();
+        let mut ls = vec![[0.0; 3]; 7];
+        super::super::part_laplacian::apply(&lap, &s, &mut ls);
+        let skin = vec![DQuat::IDENTITY; 7];
+        for (w0, want) in [
+            (0.0, DQuat::IDENTITY),
+            (0.5, DQuat::from_axis_angle(DVec3::X, 0.4)),
+        ] {
+            let mut w = vec![0.0; 7];
+            w[0] = w0;
+            let mut rots = vec![turn; 7];
+            let mut delta = ls.clone();
+            local_step(&lap, &s, &y, &ls, &mut rots, &mut delta, Some((&w, &skin)));
+            let got = DVec3::from_array(delta[0]);
+            let d = got - want * DVec3::from_array(ls[0]);
+            assert!(d.length() < 1e-6, "w {w0}: {got} {d}");
+            assert!(rots[0].angle_between(turn) < 1e-6, "{:?}", rots[0]);
+            for i in 1..7 {
+                assert_eq!(delta[i], ls[i], "vertex {i} of weight 0 moved");
+                assert_eq!(rots[i], turn);
+            }
+        }
     }
 }

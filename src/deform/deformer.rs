@@ -31,6 +31,12 @@ pub struct Deformer {
     repair_budget: RepairBudget,
     /// Rotation-aware local steps after each region's solve.
     local_steps: usize,
+    /// Each vertex's weight in the local steps' and the constraint
+    /// skinning's zone ([`DeformOptions::step_zone`]); `None` everywhere.
+    zone: Option<Vec<f64>>,
+    /// Per region, its vertices' zone weights (local order); empty when
+    /// none is in the zone (no step); `None` everywhere.
+    region_zone: Vec<Option<Vec<f64>>>,
     /// Solves of overlapping siblings ([`DeformOptions::overlap_passes`]).
     overlap_passes: usize,
     /// The repair's rotations ([`DeformOptions::repair_turns`]).
@@ -86,6 +92,9 @@ pub struct RegionResult {
 /// Scratch of [`Deformer::deform`].
 pub struct DeformWorkspace {
     lbs: Vec<[f64; 3]>,
+    /// The constraint skinning's positions, blended into `lbs` by the
+    /// zone's weights (a zone and a non-linear skinning; else empty).
+    zone_skin: Vec<[f64; 3]>,
     turn: Vec<DQuat>,
     acc: Vec<[f64; 3]>,
     wsum: Vec<f64>,
@@ -194,6 +203,26 @@ impl Deformer {
         }
         let parent_of = out.add_regions(ch, opts)?;
         out.link_siblings(&parent_of);
+        out.zone = super::step_zone::zone_weights(
+            ch.topology_metres().positions(),
+            ch.rest_pose(),
+            opts.step_zone,
+            opts.step_reach,
+        );
+        out.region_zone = out
+            .regions
+            .iter()
+            .map(|r| {
+                out.zone.as_ref().map(|z| {
+                    let w: Vec<f64> = r.solver.vertices.iter().map(|&v| z[v as usize]).collect();
+                    if w.iter().any(|&x| x > 0.0) {
+                        w
+                    } else {
+                        Vec::new()
+                    }
+                })
+            })
+            .collect();
         if opts.parallel_regions {
             out.levels = Levels::new(&out.regions, out.overlap_passes);
         }
@@ -219,6 +248,8 @@ impl Deformer {
             repair_passes: opts.repair_passes,
             repair_budget: opts.repair_budget,
             local_steps: opts.local_steps,
+            zone: None,
+            region_zone: Vec::new(),
             overlap_passes: opts.overlap_passes.max(1),
             repair_turns: opts.repair_turns,
             near: None,
@@ -452,6 +483,12 @@ impl Deformer {
     pub fn workspace(&self) -> DeformWorkspace {
         DeformWorkspace {
             lbs: vec![[0.0; 3]; self.n],
+            zone_skin: match (&self.zone, self.constraint_skin) {
+                (Some(_), ConstraintSkin::DualQuaternion | ConstraintSkin::Rigid) => {
+                    vec![[0.0; 3]; self.n]
+                }
+                _ => Vec::new(),
+            },
             turn: vec![DQuat::IDENTITY; self.n],
             acc: vec![[0.0; 3]; self.n],
             wsum: vec![0.0; self.n],
@@ -508,13 +545,26 @@ impl Deformer {
         if self.mode == DeformMode::Lbs {
             return TurnedOver::default();
         }
+        let skinned = if self.zone.is_some() {
+            &mut ws.zone_skin
+        } else {
+            &mut ws.lbs
+        };
         match self.constraint_skin {
             ConstraintSkin::Linear => {}
             ConstraintSkin::DualQuaternion => {
-                dqs::skin_into(source, ch.rig(), source_pose, target, &g, &mut ws.lbs)
+                dqs::skin_into(source, ch.rig(), source_pose, target, &g, skinned)
             }
             ConstraintSkin::Rigid => {
-                dqs::rigid_into(source, ch.rig(), source_pose, target, &g, &mut ws.lbs)
+                dqs::rigid_into(source, ch.rig(), source_pose, target, &g, skinned)
+            }
+        }
+        if let Some(z) = &self.zone {
+            // The zone's vertices by the constraint skinning, the rest linear.
+            for ((p, q), &w) in ws.lbs.iter_mut().zip(&ws.zone_skin).zip(z) {
+                if w > 0.0 {
+                    *p = std::array::from_fn(|d| p[d] + w * (q[d] - p[d]));
+                }
             }
         }
         let rot = pose_rotations(&self.rest_pose, target);
@@ -699,6 +749,7 @@ impl Deformer {
         if self.local_steps > 0 {
             s.lsrc.copy_from_slice(&s.delta);
         }
+        let zoned = self.local_steps > 0 && self.zone.is_some();
         for ((dv, &v), rq) in s
             .delta
             .iter_mut()
@@ -712,6 +763,9 @@ impl Deformer {
             };
             *rq = turn;
             *dv = (turn * DVec3::from_array(*dv)).to_array();
+        }
+        if zoned {
+            s.skin.copy_from_slice(&s.rots);
         }
     }
 
@@ -753,7 +807,12 @@ impl Deformer {
         let r = &self.regions[k];
         r.solver
             .solve(&s.delta, &s.targets, &mut s.local, &mut s.ws);
-        for _ in 0..self.local_steps {
+        let zone = self.region_zone.get(k).and_then(Option::as_deref);
+        let steps = match zone {
+            Some([]) => 0,
+            _ => self.local_steps,
+        };
+        for _ in 0..steps {
             arap::local_step(
                 r.solver.laplacian(),
                 &s.xs,
@@ -761,6 +820,7 @@ impl Deformer {
                 &s.lsrc,
                 &mut s.rots,
                 &mut s.delta,
+                zone.map(|w| (w, s.skin.as_slice())),
             );
             r.solver
                 .solve(&s.delta, &s.targets, &mut s.local, &mut s.ws);

@@ -4,6 +4,7 @@
 
 use super::dqs::ConstraintSkin;
 use super::options::DeformOptions;
+use super::step_zone::StepZone;
 
 /// `SURFMOTION_HOLD`, e.g. `skin=dq` ([`with_overrides`]).
 pub(crate) const HOLD_ENV: &str = "SURFMOTION_HOLD";
@@ -20,10 +21,12 @@ pub(crate) fn with_env(opts: &DeformOptions) -> DeformOptions {
 /// ([`DeformOptions::hold_by_weight`]), `spread`
 /// ([`DeformOptions::hold_spread`]) and `seams_by_weight`
 /// ([`DeformOptions::seam_by_weight`]): `on`/`off`; `steps`
-/// ([`DeformOptions::local_steps`], a count). An error names the pair
-/// it could not read and every name accepted.
+/// ([`DeformOptions::local_steps`], a count); `zone` (`everywhere`,
+/// `knees` or `limbs`, [`DeformOptions::step_zone`]) and `reach`
+/// ([`DeformOptions::step_reach`], a number). An error names the pair it
+/// could not read and every name accepted.
 pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
-    const NAMES: &str = "skin=linear|dq|rigid, joints=on|off, by_weight=on|off, spread=on|off, seams_by_weight=on|off, steps=N";
+    const NAMES: &str = "skin=linear|dq|rigid, joints=on|off, by_weight=on|off, spread=on|off, seams_by_weight=on|off, steps=N, zone=everywhere|knees|limbs, reach=F";
     let mut o = *opts;
     for p in super::overrides::pairs(text, NAMES) {
         let p = p?;
@@ -41,6 +44,15 @@ pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions,
             "spread" => o.hold_spread = p.switch()?,
             "seams_by_weight" => o.seam_by_weight = p.switch()?,
             "steps" => o.local_steps = p.count()?,
+            "zone" => {
+                o.step_zone = match p.value {
+                    "everywhere" | "all" => StepZone::Everywhere,
+                    "knees" => StepZone::Knees,
+                    "limbs" => StepZone::Limbs,
+                    _ => return Err(p.bad("the value is not everywhere, knees or limbs")),
+                }
+            }
+            "reach" => o.step_reach = p.number()?,
             _ => return p.unknown(),
         }
     }
@@ -59,12 +71,14 @@ mod tests {
         assert_eq!(with_overrides(&d, "").unwrap(), d);
         let o = with_overrides(
             &d,
-            "skin=dq, joints=off,by_weight=on,spread=1,seams_by_weight=true,steps=2",
+            "skin=dq, joints=off,by_weight=on,spread=1,seams_by_weight=true,steps=2,zone=knees,reach=0.3",
         )
         .unwrap();
         assert_eq!(o.constraint_skin, ConstraintSkin::DualQuaternion);
         assert!(!o.hold_joints && o.hold_by_weight && o.hold_spread && o.seam_by_weight);
         assert_eq!(o.local_steps, 2);
+        assert_eq!(o.step_zone, StepZone::Knees);
+        assert_eq!(o.step_reach, 0.3);
         let back = DeformOptions {
             constraint_skin: d.constraint_skin,
             hold_joints: d.hold_joints,
@@ -72,10 +86,21 @@ mod tests {
             hold_spread: d.hold_spread,
             seam_by_weight: d.seam_by_weight,
             local_steps: d.local_steps,
+            step_zone: d.step_zone,
+            step_reach: d.step_reach,
             ..o
         };
         assert_eq!(back, d, "an override set another option");
-        for bad in ["skin", "skin=quat", "joints=maybe", "speed=2", "steps=-1"] {
+        for bad in [
+            "skin",
+            "skin=quat",
+            "joints=maybe",
+            "speed=2",
+            "steps=-1",
+            "zone=hips",
+            "reach=-1",
+            "reach=nan",
+        ] {
             let e = with_overrides(&d, bad).unwrap_err();
             assert!(
                 e.contains(&format!("'{bad}'")) && e.contains("skin=linear|dq|rigid"),

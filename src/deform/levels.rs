@@ -97,6 +97,9 @@ pub struct RegionScratch {
     pub(super) lsrc: Vec<[f64; 3]>,
     /// Each vertex's rotation of the local steps.
     pub(super) rots: Vec<DQuat>,
+    /// Each vertex's skin-blended turn (the local steps in a zone,
+    /// [`super::step_zone`]).
+    pub(super) skin: Vec<DQuat>,
 }
 
 impl RegionScratch {
@@ -112,6 +115,7 @@ impl RegionScratch {
             ws: solver.workspace(),
             lsrc: vec![[0.0; 3]; n],
             rots: vec![DQuat::IDENTITY; n],
+            skin: vec![DQuat::IDENTITY; n],
         }
     }
 

@@ -76,6 +76,7 @@ pub mod part_laplacian;
 pub mod pca;
 pub mod regions;
 pub mod soft;
+pub mod step_zone;
 pub mod unflip;
 pub mod untangle;
 

@@ -152,6 +152,31 @@ pub struct DeformOptions {
     /// (`SURFMOTION_HOLD=steps=2`) turned over against the rest frame 5 →
     /// 10 / 92 → 102 and the retarget's CPU about 1.6× (README).
     pub local_steps: usize,
+    /// Where the local steps (`local_steps`) and a non-linear
+    /// `constraint_skin` act ([`super::step_zone`]): everywhere (the
+    /// default, as measured above) or only near the knees (and elbows),
+    /// the rest of the body keeping the default's solve and linear
+    /// targets. Default `Everywhere`. Measured (session 37,
+    /// `SURFMOTION_HOLD=skin=dq,steps=2,zone=knees`, CMU 02_02 / 03_02 onto
+    /// the real samba capture, `retarget --json` then `eval --surface`,
+    /// element-frames, main → this): creases 3,026 → 2,369 / 5,908 →
+    /// 5,343, rough 2,885 → 2,621 / 7,070 → 6,592, crossings 6,830 →
+    /// 6,121 / 2,962 → 2,616, retarget CPU 1.17-1.19× (everywhere: 1.6×);
+    /// but turned over against the rest frame 5 → 7 / 92 → 91,
+    /// joint-velocity error 0.116 → 0.122 / 0.123 → 0.127 cm/frame and the
+    /// left shin's joint-follow p95 2.53 → 3.16 / 9.93 → 10.74 cm: not the
+    /// default. Linear targets (`steps=2,zone=knees`): creases 2,414 /
+    /// 5,723, turned over 15 / 82, velocity 0.116 / 0.128. The triangles
+    /// the steps turn over (everywhere or in the zone) lie behind the
+    /// knee, 4-6 cm behind the joint and 2-3.5 cm above it, where the bent
+    /// knee compresses the skin (`tools::surface_turned`). README "The
+    /// surface measure", issue 42.
+    pub step_zone: super::step_zone::StepZone,
+    /// The zone's reach: a vertex is fully in it within this fraction of
+    /// the child bone's rest length of the joint (the shin's for a knee),
+    /// half in at 1.5 times that, out from twice. Default 0.2 (8 cm on
+    /// the samba capture's knees).
+    pub step_reach: f64,
     /// The most work the fold repair may do on one frame
     /// ([`RepairBudget`]).
     pub repair_budget: RepairBudget,
@@ -421,6 +446,8 @@ impl Default for DeformOptions {
             hold_by_weight: false,
             hold_spread: false,
             local_steps: 0,
+            step_zone: super::step_zone::StepZone::Everywhere,
+            step_reach: 0.2,
             repair_budget: RepairBudget::default(),
             overlap_weight: 0.0,
             overlap_passes: 1,

@@ -36,6 +36,14 @@ impl Pair<'_> {
             .map_err(|_| self.bad("the value is not a count"))
     }
 
+    /// The value as a non-negative finite number.
+    pub fn number(&self) -> Result<f64, String> {
+        match self.value.parse::<f64>() {
+            Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+            _ => Err(self.bad("the value is not a non-negative number")),
+        }
+    }
+
     /// The name refused.
     pub fn unknown<T>(&self) -> Result<T, String> {
         Err(self.bad("unknown name"))

@@ -694,6 +694,19 @@ impl<'a> SurfaceReference<'a> {
             .collect()
     }
 
+    /// The triangles of `frame` that [`SurfaceReference::frame`] counts as
+    /// turned over against the rest frame (outside the capture's own zone):
+    /// where they lie, for a diagnosis (issue 42).
+    pub fn turned_rest_triangles(&self, frame: &[[f64; 3]]) -> Vec<u32> {
+        let zone = &self.stats.turned_rest;
+        let mut t = self
+            .base
+            .rest
+            .turned_over(frame, &mut TurnScratch::default());
+        t.retain(|&t| !zone[t as usize]);
+        t
+    }
+
     /// The flags of each captured frame of the reference itself, measured
     /// as a result would be but with its nearest frame taken away from it
     /// in its sequence (as the reference was built): 0 everywhere, by

@@ -6,3 +6,4 @@ mod surface_crumple;
 mod surface_knees;
 mod surface_look;
 mod surface_repair;
+mod surface_turned;
