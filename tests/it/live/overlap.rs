@@ -146,6 +146,7 @@ fn the_overlap_outputs_the_one_frame_paths_frames_in_order() {
                     lag,
                     ..OnlineOptions::default()
                 },
+                overlap: Overlap::Off,
                 ..SessionOptions::default()
             };
             let one = run(&ch, &prepared, &reference, pushed, &[], base);
