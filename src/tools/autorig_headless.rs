@@ -9,70 +9,18 @@
 //! whole and cut: the trunk's depth below the highest of the five branch
 //! tips, least and greatest (the rule's margin over the captures' poses).
 
-use super::autorig::{
-    AutorigEvalError, AutorigReport, agree, body_meshes, db_init_options, embed_as_db_init,
-    rest_as_db_init, synth_motions,
-};
+use super::autorig::{AutorigEvalError, AutorigReport, agree};
+use super::autorig_cut::{CutRig, Outcome, each_cut_rig};
 use crate::embed::Embedding;
 use crate::embed::auto::neck::NeckReading;
-use crate::embed::auto::rig::auto_rig;
 use crate::embed::parts::{Part, neighbours};
 use crate::mesh::io::{LoadOptions, load_sequence};
 use crate::rig::Canonical;
 use glam::DVec3;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
-/// Where a body is cut.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Cut {
-    /// Not cut.
-    Whole,
-    /// The fixture rig's head part dropped (`embed::partial`'s cut: the
-    /// neck goes with it, down to the shoulders).
-    HeadPart,
-    /// Every vertex of the head part and the torso beyond the plane across
-    /// the neck→head bone at `f` of its length from the neck joint (the
-    /// embedding puts them 5 % of the height below and 3 % above the
-    /// chin): a stump of neck left.
-    Plane(f64),
-}
-
-impl Cut {
-    /// The cuts the table shows.
-    pub const ALL: [Cut; 4] = [Cut::Whole, Cut::HeadPart, Cut::Plane(0.4), Cut::Plane(0.0)];
-
-    /// The cut's name in the table.
-    pub fn name(self) -> String {
-        match self {
-            Cut::Whole => "whole".into(),
-            Cut::HeadPart => "head part".into(),
-            Cut::Plane(f) => format!("neck at {:.0}%", 100.0 * f),
-        }
-    }
-
-    /// Which vertices of `rest` (rigged by `rig`) are kept.
-    pub fn keep(self, rest: &[[f64; 3]], rig: &Embedding) -> Vec<bool> {
-        let j = |c: Canonical| DVec3::from_array(rig.joints()[c.index()]);
-        let (neck, head) = (j(Canonical::Neck), j(Canonical::Head));
-        let axis = (head - neck).normalize_or_zero();
-        let at = neck + (head - neck) * if let Cut::Plane(f) = self { f } else { 0.0 };
-        let (hp, tp) = (Part::Head.index() as u8, Part::Torso.index() as u8);
-        (0..rest.len())
-            .map(|v| {
-                let l = rig.labels()[v];
-                match self {
-                    Cut::Whole => true,
-                    Cut::HeadPart => l != hp,
-                    Cut::Plane(_) => {
-                        !((l == hp || l == tp) && (DVec3::from_array(rest[v]) - at).dot(axis) > 0.0)
-                    }
-                }
-            })
-            .collect()
-    }
-}
+pub use super::autorig_cut::Cut;
 
 /// The tables (`db init`'s rules for the automatic rig,
 /// `SURFMOTION_AUTORIG` applied).
@@ -88,75 +36,55 @@ pub fn evaluate_headless(data: &Path) -> Result<AutorigReport, AutorigEvalError>
 
 /// The tables into `w`.
 fn headless(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
-    use crate::synth::database::{Dynamics, drive};
     let _ = writeln!(
         w.tables,
         "| body | motion | cut | vertices cut | trunk below the top (% height) | head | joints but the head vs truth (% height, every frame) | parts agree (kept vertices) | time (s) |\n|---|---|---|---|---|---|---|---|---|"
     );
-    let motions = synth_motions(data, w);
-    for (bname, rest, rig) in body_meshes(data, w)? {
-        let n = rest.vertex_count();
-        for (mname, cp) in &motions {
-            let out = drive(
-                &rest,
-                &rig,
-                &cp.poses,
-                &cp.reference,
-                30.0,
-                Dynamics::default(),
-            );
-            for cut in Cut::ALL {
-                let keep = cut.keep(rest.positions(), &rig);
-                let Some((m, old)) = rest.keep_vertices(&keep).ok() else {
-                    let _ = writeln!(w.tables, "| {bname} | {mname} | {} | no mesh |", cut.name());
-                    continue;
-                };
-                let own: Vec<Vec<[f64; 3]>> = out
-                    .positions
-                    .chunks(n)
-                    .map(|f| old.iter().map(|&v| f[v]).collect())
-                    .collect();
-                let frames: Vec<&[[f64; 3]]> = own.iter().map(Vec::as_slice).collect();
-                let row = format!("| {bname} | {mname} | {} | {} |", cut.name(), n - old.len());
-                let t = Instant::now();
-                let (rest_frame, _) = rest_as_db_init(&m, &frames);
-                let auto = match auto_rig(&m, &frames, &db_init_options(rest_frame)) {
-                    Ok(a) => a,
-                    Err(e) => {
-                        let _ = writeln!(w.tables, "{row} refused: {e} |");
-                        continue;
-                    }
-                };
-                let secs = t.elapsed().as_secs_f64();
-                let head = if auto.headless { "none" } else { "rigged" };
-                let depth = 100.0 * auto.trunk_depth;
-                let Some(mine) = embed_as_db_init(&m, &frames, rest_frame, &auto.landmarks) else {
-                    let _ = writeln!(w.tables, "{row} {depth:.0} | {head} | embedding refused |");
-                    continue;
-                };
-                let (mut s, mut k) = (0.0, 0usize);
-                for (f, pose) in frames.iter().zip(&out.poses) {
-                    let j = mine.frame_joints(f);
-                    for c in Canonical::ALL.iter().filter(|c| **c != Canonical::Head) {
-                        s += j[c.index()].distance(pose[c.index()]);
-                        k += 1;
-                    }
-                }
-                let truth: Vec<u8> = old.iter().map(|&v| rig.labels()[v]).collect();
-                let _ = writeln!(
-                    w.tables,
-                    "{row} {depth:.0} | {head} | {:.2} | {:.1}% | {secs:.1} |",
-                    100.0 * s / k.max(1) as f64 / rig.height(),
-                    100.0 * agree(mine.labels(), &truth),
-                );
-                for note in auto.notes.iter().filter(|x| x.starts_with("no head")) {
-                    let _ = writeln!(w.details, "  {bname}, {mname}, {}: {note}", cut.name());
-                }
-            }
-        }
-    }
+    each_cut_rig(data, &Cut::ALL, None, w, |w, case, _, _| row(w, case))?;
     every_frame(data, w);
     Ok(())
+}
+
+/// The table's row of `case`, and its "no head" notes into the details.
+fn row(w: &mut AutorigReport, case: &CutRig) {
+    let (bname, mname, cut) = (case.body, case.motion, case.cut.name());
+    let row = format!("| {bname} | {mname} | {cut} | {} |", case.vertices_cut);
+    let (auto, mine) = match &case.outcome {
+        Outcome::NoMesh => {
+            let _ = writeln!(w.tables, "| {bname} | {mname} | {cut} | no mesh |");
+            return;
+        }
+        Outcome::Refused(e) => {
+            let _ = writeln!(w.tables, "{row} refused: {e} |");
+            return;
+        }
+        Outcome::NotEmbedded(auto) => (auto, None),
+        Outcome::Rigged(b) => (&b.0, Some(&b.1)),
+    };
+    let head = if auto.headless { "none" } else { "rigged" };
+    let depth = 100.0 * auto.trunk_depth;
+    let Some(mine) = mine else {
+        let _ = writeln!(w.tables, "{row} {depth:.0} | {head} | embedding refused |");
+        return;
+    };
+    let (mut s, mut k) = (0.0, 0usize);
+    for (f, pose) in case.frames.iter().zip(case.poses) {
+        let j = mine.frame_joints(f);
+        for c in Canonical::ALL.iter().filter(|c| **c != Canonical::Head) {
+            s += j[c.index()].distance(pose[c.index()]);
+            k += 1;
+        }
+    }
+    let _ = writeln!(
+        w.tables,
+        "{row} {depth:.0} | {head} | {:.2} | {:.1}% | {:.1} |",
+        100.0 * s / k.max(1) as f64 / case.rig.height(),
+        100.0 * agree(mine.labels(), &case.truth()),
+        case.secs,
+    );
+    for note in auto.notes.iter().filter(|x| x.starts_with("no head")) {
+        let _ = writeln!(w.details, "  {bname}, {mname}, {cut}: {note}");
+    }
 }
 
 /// Every frame of samba and crane taken as the rest, whole and cut: the

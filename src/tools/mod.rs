@@ -6,6 +6,8 @@
 //! [`autorig_tips`]).
 
 pub mod autorig;
+pub mod autorig_confusion;
+pub mod autorig_cut;
 pub mod autorig_headless;
 pub mod autorig_tips;
 pub mod eval;

@@ -15,6 +15,7 @@
 
 pub mod body;
 pub mod branches;
+pub mod candidates;
 pub mod centre;
 pub mod consensus;
 pub mod decompose;
