@@ -302,7 +302,7 @@ impl Embedding {
             _ => DVec3::Y,
         };
         lm.validate(p, t, up.to_array())?;
-        let est = place_joints(p, t, lm);
+        let est = place_joints(p, t, lm, headless);
         let absent: Vec<String> = if headless {
             vec!["head".into()]
         } else {

@@ -148,11 +148,13 @@ fn mark(lm: &Landmarks, positions: &[[f64; 3]], l: Landmark) -> Option<DVec3> {
 /// Places every canonical joint of a rest mesh from its landmarks, in
 /// named steps: the body's frame, neck and head, the mid-plane and the
 /// pelvis's centre, the ankles, the limbs (twice), the trunk, the toes,
-/// the hand tips.
+/// the hand tips. `headless`: the body has no head (`lm` completed with a
+/// chin at the top of its neck, [`Landmarks::completed`]).
 pub(crate) fn place_joints(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     lm: &Landmarks,
+    headless: bool,
 ) -> JointEstimate {
     use Canonical as C;
     use Landmark as L;
@@ -176,7 +178,7 @@ pub(crate) fn place_joints(
         twin: None,
     };
     let mut j = [DVec3::ZERO; Canonical::COUNT];
-    let (neck_at, head_at, head_top) = neck_and_head(&mut cx, &b, lm, m.chin, &mut j);
+    let (neck_at, head_at, head_top) = neck_and_head(&mut cx, &b, lm, m.chin, headless, &mut j);
     let (plane, _) = estimate_mid_plane(
         positions,
         triangles,
@@ -269,12 +271,14 @@ fn body_frame(positions: &[[f64; 3]], m: &Marks) -> Body {
 /// Neck and head: horizontal sections below and above the chin, around a
 /// point behind the chin (inside the neck/head), written into `j`; the
 /// points they were looked for around and the head top (a landmark, or
-/// the highest vertex above the head).
+/// the highest vertex above the head). A `headless` body's head joint is
+/// the top of its stump ([`super::stump::stump_top`]).
 fn neck_and_head(
     cx: &mut Ctx,
     b: &Body,
     lm: &Landmarks,
     chin: DVec3,
+    headless: bool,
     j: &mut [DVec3; Canonical::COUNT],
 ) -> (DVec3, DVec3, DVec3) {
     use Canonical as C;
@@ -283,8 +287,20 @@ fn neck_and_head(
     let behind = chin - b.facing * 0.04 * h;
     let neck_at = b.at_height(behind, chin_h - 0.05 * h);
     j[C::Neck.index()] = cx.centre("neck", neck_at, up, neck_at, 0.08, neck_at);
-    let head_at = b.at_height(behind, chin_h + 0.03 * h);
-    j[C::Head.index()] = cx.centre("head", head_at, up, head_at, 0.1, head_at);
+    // A body without a head: its head joint at the top of the stump (the
+    // cut's centroid; it was sought 3 % of the height above the chin, over
+    // the stump, where no surface is).
+    let stump = headless
+        .then(|| super::stump::stump_top(lm, cx.p))
+        .flatten();
+    let head_at = match stump {
+        Some(s) => s.centre,
+        None => b.at_height(behind, chin_h + 0.03 * h),
+    };
+    j[C::Head.index()] = match stump {
+        Some(_) => head_at,
+        None => cx.centre("head", head_at, up, head_at, 0.1, head_at),
+    };
     let head_top = mark(lm, cx.p, Landmark::HeadTop).unwrap_or_else(|| {
         let hc = j[C::Head.index()];
         cx.p.iter()

@@ -232,56 +232,7 @@ fn missing_hint(missing: &str) -> String {
     s
 }
 
-/// The chin of a body without a head: the centre of the top of its neck
-/// (the vertices within 1.5 % of the height of the highest one near the
-/// body's axis: the vertical through the groin, up from the knees to the
-/// groin, within 12 % of the height of it), moved forward by 4 % of the
-/// height (joint placement looks for the neck that far behind the chin).
-/// `None` without a groin or knees.
-pub(crate) fn neck_top(lm: &Landmarks, positions: &[[f64; 3]]) -> Option<[f64; 3]> {
-    use glam::DVec3;
-    let at = |l: Landmark| lm.point(l, positions).map(DVec3::from_array);
-    let g = at(Landmark::Groin)?;
-    let (lk, rk) = (at(Landmark::LKnee)?, at(Landmark::RKnee)?);
-    let up = super::axes::body_up(g - (lk + rk) * 0.5);
-    let hs = positions.iter().map(|q| DVec3::from_array(*q).dot(up));
-    let (lo, hi) = hs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-        (a.min(x), b.max(x))
-    });
-    let h = (hi - lo).max(1e-9);
-    let flat = |q: DVec3| {
-        let d = q - g;
-        (d - up * d.dot(up)).length()
-    };
-    let axis: Vec<DVec3> = positions
-        .iter()
-        .map(|q| DVec3::from_array(*q))
-        .filter(|&q| flat(q) < 0.12 * h)
-        .collect();
-    let top = axis
-        .iter()
-        .map(|q| q.dot(up))
-        .fold(f64::NEG_INFINITY, f64::max);
-    let ring: Vec<DVec3> = axis
-        .into_iter()
-        .filter(|q| q.dot(up) >= top - 0.015 * h)
-        .collect();
-    if ring.is_empty() {
-        return None;
-    }
-    let centre = ring.iter().copied().sum::<DVec3>() / ring.len() as f64;
-    let side = [
-        (Landmark::LKnee, Landmark::RKnee),
-        (Landmark::LElbow, Landmark::RElbow),
-        (Landmark::LWrist, Landmark::RWrist),
-    ]
-    .into_iter()
-    .filter_map(|(a, b)| Some(at(a)? - at(b)?))
-    .sum::<DVec3>();
-    let left = (side - up * side.dot(up)).normalize_or(up.any_orthonormal_vector());
-    let facing = left.cross(up);
-    Some((centre + facing * 0.04 * h).to_array())
-}
+pub(crate) use super::stump::neck_top;
 
 /// Where a landmark was given.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -89,6 +89,18 @@ impl Chains {
         }
     }
 
+    /// The head's chain from `top` (a headless body's stump,
+    /// [`super::neck::headless_top`]), not the highest tip: a hand held as
+    /// high as the stump stays a hand. `top` must be one of the tips.
+    pub fn headed_by(&mut self, top: u32) {
+        for h in &mut self.hands {
+            if *h == top {
+                *h = self.head;
+                self.head = top;
+            }
+        }
+    }
+
     /// The limb from `tip` to the trunk, its joints matched to the
     /// expected distances `exp` within `tol` of the height.
     /// With `ring_knee` (legs), the middle joint is placed at the centre

@@ -93,9 +93,11 @@ impl NeckReading {
 /// The top of a body with four branches (the feet and the hands, no
 /// head: a body cut at the neck below the chin leaves a stump too short to
 /// be a branch, [`super::branches`]): its highest vertex along up (the
-/// feet on the floor, [`super::up::find_up`] over `frames`), when the
+/// feet on the floor, [`super::up::find_up`] over `frames`) near the
+/// body's axis and away from the four tips ([`on_the_trunk`]), when the
 /// sections below it read a cut ([`NeckReading::cut`]); `None` otherwise
-/// (a raised hand is the top: the body is refused as before).
+/// (a raised hand near the axis is the top: the body is refused as
+/// before).
 pub(crate) fn headless_top(
     rest: &[[f64; 3]],
     nb: &[Vec<u32>],
@@ -104,10 +106,50 @@ pub(crate) fn headless_top(
 ) -> Option<u32> {
     let (up, _) = super::up::find_up(rest, frames, four).ok()?;
     let h = |v: usize| DVec3::from_array(rest[v]).dot(up);
-    let top = (0..rest.len()).max_by(|&a, &b| h(a).total_cmp(&h(b)))?;
     let lo = (0..rest.len()).map(h).fold(f64::INFINITY, f64::min);
+    let hi = (0..rest.len()).map(h).fold(f64::NEG_INFINITY, f64::max);
+    let trunk = on_the_trunk(rest, nb, up, hi - lo, four);
+    let top = (0..rest.len())
+        .filter(|&v| trunk[v])
+        .max_by(|&a, &b| h(a).total_cmp(&h(b)))?;
     let reading = NeckReading::read(rest, nb, up, h(top) - lo, top as u32);
     reading.cut().map(|_| top as u32)
+}
+
+/// How far from the body's axis (the vertical through the vertices'
+/// centroid) a headless body's top may lie, a fraction of the height.
+/// Session 36's rule took the highest vertex: on the SMPL template in its
+/// T-pose cut at the neck joint (`autorig_eval … confusion`) that was the
+/// left hand, 45 % of the height off the axis, a little higher than the
+/// cut: the hand was rigged as the head and the left arm from the stump
+/// (elbow 14-24 %, wrist 34-37 % of the height off, parts 68-76 %).
+pub const TOP_AXIS: f64 = 0.12;
+/// A headless body's top lies farther along the surface than this from
+/// each of the four tips (a fraction of the height: a hand and forearm,
+/// 0.108 + 0.146 of it after Drillis & Contini 1966).
+pub const TOP_FROM_TIPS: f64 = 0.25;
+
+/// The vertices of `rest` that may top a headless body (up `up`, height
+/// `height`): within [`TOP_AXIS`] of the axis and farther than
+/// [`TOP_FROM_TIPS`] along the surface from each of `four` tips.
+fn on_the_trunk(
+    rest: &[[f64; 3]],
+    nb: &[Vec<u32>],
+    up: DVec3,
+    height: f64,
+    four: &[(u32, f64)],
+) -> Vec<bool> {
+    let v3 = |q: [f64; 3]| DVec3::from_array(q);
+    let c = rest.iter().map(|q| v3(*q)).sum::<DVec3>() / rest.len().max(1) as f64;
+    let tips: Vec<u32> = four.iter().map(|t| t.0).collect();
+    let (from_tips, _) = geodesic(rest, nb, &tips);
+    rest.iter()
+        .zip(&from_tips)
+        .map(|(q, d)| {
+            let off = v3(*q) - c;
+            (off - up * off.dot(up)).length() < TOP_AXIS * height && *d > TOP_FROM_TIPS * height
+        })
+        .collect()
 }
 
 /// The greatest distance between two of `s`.

@@ -45,7 +45,11 @@ pub fn auto_rig(
     let in_order = opts.frames == FrameSample::InOrder;
     let nb = crate::embed::parts::neighbours(n, mesh.triangles());
     let (body, tips, mut notes) = find_body(rest, mesh.triangles(), &used, &nb, opts)?;
-    let chains = Chains::find(&body, &tips);
+    let mut chains = Chains::find(&body, &tips);
+    if let Some(top) = tips.get(4).filter(|t| t.1 == 0.0) {
+        // The stump `find_body` added (reach 0): the head's chain.
+        chains.headed_by(top.0);
+    }
     let sided = side(&body, &chains)?;
     for (what, [l, r]) in ["legs", "arms"].iter().zip(sided.lateral) {
         if l <= 0.0 || r >= 0.0 {

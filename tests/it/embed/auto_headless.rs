@@ -94,10 +94,57 @@ fn rigs_as_cut(what: &str, mesh: &Mesh, frames: &Frames, truth: &Embedding, cut:
         }
         .unwrap_or_else(|e| panic!("{what}: {e}"));
         assert_eq!(e.absent().is_empty(), whole, "{what}");
+        if !whole {
+            head_on_the_stump(&what, &e, &m, rim_centre(mesh, truth, cut, v));
+        }
         let off = limb_percent(&e, truth, v);
         eprintln!("{what}: limb joints {off:.2}% of the height from the whole body's rig");
         assert!(off <= bound, "{what}: {off:.2}%");
     }
+}
+
+/// The centre of the cut's rim (the kept vertices of `mesh`, rigged by
+/// `truth`, next to one `cut` removes), where variant `v` puts it.
+fn rim_centre(mesh: &Mesh, truth: &Embedding, cut: Cut, v: Variant) -> DVec3 {
+    let keep = cut.keep(mesh.positions(), truth);
+    let nb = surfmotion::embed::parts::neighbours(mesh.vertex_count(), mesh.triangles());
+    let rim: Vec<DVec3> = (0..keep.len())
+        .filter(|&u| keep[u] && nb[u].iter().any(|&x| !keep[x as usize]))
+        .map(|u| DVec3::from_array(mesh.positions()[u]))
+        .collect();
+    assert!(!rim.is_empty(), "{cut:?} removed nothing");
+    DVec3::from_array(v.point((rim.iter().sum::<DVec3>() / rim.len() as f64).to_array()))
+}
+
+/// How far a headless body's head joint may lie from the centre of the
+/// cut's rim (% of the height): it is put on the stump's top
+/// (`embed::stump`); session 37's lay 3 % above the stump.
+const HEAD_TO_RIM: f64 = 2.5;
+
+/// A headless rig's head joint on its stump (`m`): not above the body's
+/// top and within [`HEAD_TO_RIM`] of the rim's centre `rim`.
+fn head_on_the_stump(what: &str, e: &Embedding, m: &Mesh, rim: DVec3) {
+    let up = DVec3::from_array(e.up());
+    let head = DVec3::from_array(e.joints()[Canonical::Head.index()]);
+    let top = m
+        .positions()
+        .iter()
+        .map(|q| DVec3::from_array(*q).dot(up))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let h = e.height();
+    let over = 100.0 * (head.dot(up) - top) / h;
+    let off = 100.0 * head.distance(rim) / h;
+    eprintln!(
+        "{what}: head joint {over:.2}% of the height above the top, {off:.2}% from the rim's centre"
+    );
+    assert!(
+        over <= 0.0,
+        "{what}: the head joint {over:.2}% above the body"
+    );
+    assert!(
+        off <= HEAD_TO_RIM,
+        "{what}: the head joint {off:.2}% from the rim's centre"
+    );
 }
 
 #[test]
