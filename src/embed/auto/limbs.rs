@@ -101,6 +101,28 @@ impl Chains {
         }
     }
 
+    /// The head's chain from the hand tip nearest the body's axis (the
+    /// vertical through the vertices' centroid) when the highest tip lies
+    /// farther from it than [`super::neck::TOP_AXIS`] of the height and
+    /// that hand tip within it ([`super::options::AutoOptions::head_axis`]).
+    pub fn head_nearest_axis(&mut self, body: &Body) {
+        let (rest, up) = (body.rest, body.up);
+        let flat = |v: u32| {
+            let q = DVec3::from_array(rest[v as usize]) - body.centre;
+            (q - up * q.dot(up)).length()
+        };
+        let limit = super::neck::TOP_AXIS * body.height;
+        if flat(self.head) <= limit {
+            return;
+        }
+        let near = (0..2)
+            .filter(|&k| flat(self.hands[k]) <= limit)
+            .min_by(|&a, &b| flat(self.hands[a]).total_cmp(&flat(self.hands[b])));
+        if let Some(k) = near {
+            std::mem::swap(&mut self.head, &mut self.hands[k]);
+        }
+    }
+
     /// The limb from `tip` to the trunk, its joints matched to the
     /// expected distances `exp` within `tol` of the height.
     /// With `ring_knee` (legs), the middle joint is placed at the centre

@@ -56,6 +56,13 @@ pub struct AutoOptions {
     /// `"absent": ["head"]`). Default true (`head=read`; `head=keep` in
     /// [`AUTORIG_ENV`] rigs a head on any top, sessions 20-35's).
     pub read_head: bool,
+    /// The head's chain from the non-foot tip nearest the body's axis when
+    /// the highest is farther from it than `neck::TOP_AXIS` of the height
+    /// ([`super::limbs::Chains::head_nearest_axis`]). Default `false`
+    /// (the highest tip); `SURFMOTION_AUTORIG=head=axis`: the SMPL
+    /// template cut at the neck joint has its hands 0.05 mm above the
+    /// stump, and the left hand was rigged as the head.
+    pub head_axis: bool,
     /// Where the extremities are sought from ([`super::centre`], session
     /// 36): default `tips=guarded` (the centroid's vertex unless it lies
     /// on a limb's end or hides a sixth limb, [`super::guard`], session
@@ -77,6 +84,7 @@ impl Default for AutoOptions {
             split_knee: false,
             guard_pivots: true,
             read_head: true,
+            head_axis: false,
             tip_seed: super::centre::TipSeed::Guarded,
             decompose: DecomposeOptions::default(),
         }
@@ -173,7 +181,7 @@ impl FrameSample {
 /// (what follows its merges, [`super::decompose::MergeRule`]),
 /// `knee=split|crossing` ([`AutoOptions::split_knee`]),
 /// `pivot=guarded|free` ([`AutoOptions::guard_pivots`]),
-/// `head=read|keep` ([`AutoOptions::read_head`]),
+/// `head=read|keep|axis` ([`AutoOptions::read_head`], [`AutoOptions::head_axis`]),
 /// `tips=centroid|centre|guarded` ([`AutoOptions::tip_seed`]),
 /// `patches=position|vertex0` (the rest frame's contact patches,
 /// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
@@ -208,7 +216,7 @@ pub(crate) fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, head=read|keep, tips=centroid|centre|guarded, patches=position|vertex0, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, head=read|keep|axis, tips=centroid|centre|guarded, patches=position|vertex0, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -235,6 +243,10 @@ pub(crate) fn apply_override(
             "pivot" if v == "free" => auto.guard_pivots = false,
             "head" if v == "read" => auto.read_head = true,
             "head" if v == "keep" => auto.read_head = false,
+            "head" if v == "axis" => {
+                auto.read_head = true;
+                auto.head_axis = true;
+            }
             "tips" => auto.tip_seed = super::centre::TipSeed::parse(v).ok_or_else(bad)?,
             "patches" if v == "position" => rule.contact.seed_by_position = true,
             "patches" if v == "vertex0" => rule.contact.seed_by_position = false,

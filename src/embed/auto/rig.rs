@@ -49,6 +49,8 @@ pub fn auto_rig(
     if let Some(top) = tips.get(4).filter(|t| t.1 == 0.0) {
         // The stump `find_body` added (reach 0): the head's chain.
         chains.headed_by(top.0);
+    } else if opts.head_axis {
+        chains.head_nearest_axis(&body);
     }
     let sided = side(&body, &chains)?;
     for (what, [l, r]) in ["legs", "arms"].iter().zip(sided.lateral) {
