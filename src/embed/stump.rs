@@ -19,8 +19,6 @@ pub(crate) struct StumpTop {
     /// of it). On a body cut across the neck, the cut's centroid (the
     /// rim's, or the cap's when it is closed).
     pub centre: DVec3,
-    /// Up: from the knees' midpoint to the groin.
-    pub up: DVec3,
     /// Facing: left × up, left from the limb landmarks' pairs.
     pub facing: DVec3,
     /// The height along up.
@@ -72,7 +70,6 @@ pub(crate) fn stump_top(lm: &Landmarks, positions: &[[f64; 3]]) -> Option<StumpT
     let left = (side - up * side.dot(up)).normalize_or(up.any_orthonormal_vector());
     Some(StumpTop {
         centre,
-        up,
         facing: left.cross(up),
         height: h,
     })
