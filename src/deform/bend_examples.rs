@@ -347,7 +347,7 @@ mod tests {
         let t = AngleTable::learn(&samples, 2).unwrap();
         let (lo, hi) = t.range();
         assert!(
-            (lo - 0.1).abs() < 1e-12 && hi >= 0.9 && hi < 0.9 + STEP,
+            (lo - 0.1).abs() < 1e-12 && (0.9..0.9 + STEP).contains(&hi),
             "{lo} {hi}"
         );
         for theta in [0.4, 0.5, 0.6] {
