@@ -62,6 +62,7 @@
 //! 68,743 (131_01) triangle-frames over (README, issue 42).
 
 pub mod arap;
+pub mod bend_examples;
 pub mod cloth;
 pub mod cloth_reach;
 pub mod deformer;
