@@ -660,7 +660,8 @@ mod tests {
         let m = midpoint(&midpoint(&midpoint(&icosahedron())));
         let tris = m.triangles();
         let r = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.8);
-        let variants: [(&str, fn(DVec3, DQuat) -> DVec3); 4] = [
+        type Map = fn(DVec3, DQuat) -> DVec3;
+        let variants: [(&str, Map); 4] = [
             ("plain", |p, _| p),
             ("mirrored", |p, _| DVec3::new(-p.x, p.y, p.z)),
             ("turned", |p, r| r * p),
