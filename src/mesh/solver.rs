@@ -97,6 +97,10 @@ impl FixedSolver {
     /// each its `(column, value)` pairs sorted by column without repeats,
     /// as [`to_rows`] gives them), for a caller that assembles them
     /// without sorting triplets. A column out of range is a typed error.
+    /// The fold repair's solver before its patch system
+    /// (`deform::patch_solve`), kept as that system's reference in the
+    /// tests.
+    #[cfg(test)]
     pub(crate) fn from_rows(
         n: usize,
         rows: Vec<Vec<(u32, f64)>>,
