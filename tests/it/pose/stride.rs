@@ -16,9 +16,7 @@ use super::level::levelled;
 use super::two_files::{CC_PAIRS, poses_at_30, two_files, varied};
 use glam::{DQuat, DVec3};
 use surfmotion::pose::Pose;
-use surfmotion::pose::retarget::{
-    Anchor, ClipPoses, Footfalls, Level, Placement, TravelScale, leg_length,
-};
+use surfmotion::pose::retarget::{Anchor, ClipPoses, Level, Placement, TravelScale, leg_length};
 use surfmotion::rig::Canonical;
 
 use Canonical as C;
@@ -31,23 +29,17 @@ pub(super) const LINES: [(&str, Level); 3] = [
 ];
 
 /// The placements measured: the kernel's first.
-pub(super) fn placements() -> [(&'static str, Placement); 6] {
+pub(super) fn placements() -> [(&'static str, Placement); 4] {
     let p = |anchor, scale| Placement {
         anchor,
         scale,
         ..Placement::default()
-    };
-    let feet = |scale| Placement {
-        footfalls: Footfalls::Targets,
-        ..p(Anchor::Root, scale)
     };
     [
         ("root,legs", Placement::default()),
         ("root,stance", p(Anchor::Root, TravelScale::Stance)),
         ("root,stride", p(Anchor::Root, TravelScale::Stride)),
         ("joints,stride", p(Anchor::Joints, TravelScale::Stride)),
-        ("root,legs,feet", feet(TravelScale::Legs)),
-        ("root,stance,feet", feet(TravelScale::Stance)),
     ]
 }
 
