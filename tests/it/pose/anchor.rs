@@ -27,7 +27,11 @@ use Canonical as C;
 
 /// The placements measured: the kernel's (root, legs) first.
 fn placements() -> Vec<(&'static str, Placement)> {
-    let p = |anchor, scale| Placement { anchor, scale };
+    let p = |anchor, scale| Placement {
+        anchor,
+        scale,
+        ..Placement::default()
+    };
     vec![
         ("root,legs", p(Anchor::Root, TravelScale::Legs)),
         ("root,stance", p(Anchor::Root, TravelScale::Stance)),
@@ -276,6 +280,7 @@ fn variants_of_one_motion_are_placed_alike_by_the_body() {
     let body = Placement {
         anchor: Anchor::Joints,
         scale: TravelScale::Stance,
+        ..Placement::default()
     };
     for (name, cp) in &variants[..2] {
         let turn = levelling_line_deg(&plain.reference.pose, &cp.reference.pose);

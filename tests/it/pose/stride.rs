@@ -31,7 +31,11 @@ pub(super) const LINES: [(&str, Level); 3] = [
 
 /// The placements measured: the kernel's first.
 pub(super) fn placements() -> [(&'static str, Placement); 4] {
-    let p = |anchor, scale| Placement { anchor, scale };
+    let p = |anchor, scale| Placement {
+        anchor,
+        scale,
+        ..Placement::default()
+    };
     [
         ("root,legs", Placement::default()),
         ("root,stance", p(Anchor::Root, TravelScale::Stance)),
