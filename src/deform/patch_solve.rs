@@ -21,7 +21,7 @@
 //! them), the same ordering and factor, and the held columns subtracted in
 //! the same order; so the repaired frame is the same bit for bit.
 
-use crate::mesh::solver::SolveError;
+use crate::mesh::solver::{SolveError, anchored_components};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, factorize_symbolic_cholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -266,47 +266,17 @@ impl PatchSystem {
     /// every component of the graph has a held vertex, and the first
     /// vertex of each, when free, has a neighbour.
     fn check_anchored(&mut self) -> Result<(), SolveError> {
-        let (m, free) = (self.m, self.free);
-        self.comp.clear();
-        self.comp.resize(m, u32::MAX);
-        let mut ncomp = 0u32;
-        for s in 0..m {
-            if self.comp[s] != u32::MAX {
-                continue;
-            }
-            let (cols, vals) = self.rows.row(s);
-            let lone = cols
-                .iter()
-                .zip(vals)
-                .all(|(&c, &v)| c as usize == s || v == 0.0);
-            if lone && s < free {
-                return Err(SolveError::Isolated { vertex: s as u32 });
-            }
-            let (mut anchored, mut size) = (false, 0);
-            self.comp[s] = ncomp;
-            self.stack.clear();
-            self.stack.push(s);
-            while let Some(v) = self.stack.pop() {
-                size += 1;
-                anchored |= v >= free;
-                let (cols, vals) = self.rows.row(v);
-                for (&c, &val) in cols.iter().zip(vals) {
-                    if val != 0.0 && self.comp[c as usize] == u32::MAX {
-                        self.comp[c as usize] = ncomp;
-                        self.stack.push(c as usize);
-                    }
-                }
-            }
-            if !anchored {
-                return Err(SolveError::UnanchoredComponent {
-                    component: ncomp as usize,
-                    vertices: size,
-                    first_vertex: s as u32,
-                });
-            }
-            ncomp += 1;
-        }
-        Ok(())
+        let (rows, free) = (&self.rows, self.free);
+        anchored_components(
+            self.m,
+            |v| {
+                let (cols, vals) = rows.row(v);
+                cols.iter().copied().zip(vals.iter().copied())
+            },
+            |v| v >= free,
+            &mut self.comp,
+            &mut self.stack,
+        )
     }
 
     /// Whether the last patch was factored by supernodes (faer's choice

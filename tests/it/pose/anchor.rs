@@ -53,6 +53,19 @@ fn rest_anchor(p: &Pose, a: Anchor) -> DVec3 {
 
 /// The results' joint positions of `cp` on `character` placed as `pl`.
 pub(super) fn placed(character: &Pose, cp: &ClipPoses, pl: Placement) -> Vec<Pose> {
+    placed_turned(character, cp, pl)
+        .into_iter()
+        .map(|(p, _)| p)
+        .collect()
+}
+
+/// The results of `cp` on `character` placed as `pl`: each frame's joint
+/// positions and joint rotations.
+pub(super) fn placed_turned(
+    character: &Pose,
+    cp: &ClipPoses,
+    pl: Placement,
+) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
     retarget_placed(
         character,
         character,
@@ -61,9 +74,6 @@ pub(super) fn placed(character: &Pose, cp: &ClipPoses, pl: Placement) -> Vec<Pos
         Toes::Rigid,
         pl,
     )
-    .into_iter()
-    .map(|(p, _)| p)
-    .collect()
 }
 
 /// Two results apart, fractions of `h`: (mean, 95th percentile over the

@@ -10,13 +10,13 @@
 
 use crate::common;
 
-use super::anchor::root_moved;
+use super::anchor::{placed_turned, root_moved};
 use super::stride::slide;
 use super::two_files::{mirrored, turned};
 use glam::{DQuat, DVec3};
 use surfmotion::pose::Pose;
 use surfmotion::pose::retarget::{
-    Anchor, ClipPoses, Footfalls, Placement, Toes, TravelScale, clip_poses, retarget_placed,
+    Anchor, ClipPoses, Footfalls, Placement, TravelScale, clip_poses,
 };
 use surfmotion::rig::{Canonical, detect_clip};
 
@@ -46,17 +46,6 @@ fn with_feet(scale: TravelScale) -> Placement {
         scale,
         footfalls: Footfalls::Targets,
     }
-}
-
-fn run(character: &Pose, cp: &ClipPoses, pl: Placement) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
-    retarget_placed(
-        character,
-        character,
-        &cp.reference,
-        &cp.poses,
-        Toes::Rigid,
-        pl,
-    )
 }
 
 /// The part of leg `l`'s hip → knee across its hip → ankle line (the
@@ -98,11 +87,11 @@ fn generated_variants_slide_less_on_their_footfalls() {
         (p[h].distance(p[k]), p[k].distance(p[a]))
     };
     for (name, cp) in &variants {
-        let free = run(&character, cp, Placement::default());
+        let free = placed_turned(&character, cp, Placement::default());
         let free_pos: Vec<Pose> = free.iter().map(|r| r.0).collect();
         let before = slide(&free_pos, &cp.poses);
         for scale in [TravelScale::Legs, TravelScale::Stance] {
-            let got: Vec<Pose> = run(&character, cp, with_feet(scale))
+            let got: Vec<Pose> = placed_turned(&character, cp, with_feet(scale))
                 .into_iter()
                 .map(|r| r.0)
                 .collect();
@@ -158,7 +147,7 @@ fn a_clip_with_no_footfall_is_unchanged() {
         }
     }
     for scale in [TravelScale::Legs, TravelScale::Stance] {
-        let free = run(
+        let free = placed_turned(
             &character,
             &glide,
             Placement {
@@ -166,7 +155,7 @@ fn a_clip_with_no_footfall_is_unchanged() {
                 ..Placement::default()
             },
         );
-        let feet = run(&character, &glide, with_feet(scale));
+        let feet = placed_turned(&character, &glide, with_feet(scale));
         assert_eq!(free.len(), feet.len());
         for (i, (a, b)) in free.iter().zip(&feet).enumerate() {
             assert!(a.0 == b.0 && a.1 == b.1, "{scale:?} frame {i}");
