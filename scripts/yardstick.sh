@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The yardstick: retarget 8 clips onto a database, score each with `eval`, and
 # print one row per clip (head-to-torso p95 and its line, joint velocity error,
-# ground penetration max, floating median, the warnings). The table checked on
+# ground penetration max, floating median, foot sliding in contact and while
+# touching (cm/frame), knee hyper-extension max (degrees), the warnings). The table checked on
 # every merge of retargeting work (README, "Retargeting: what is matched and why").
 #
 #   scripts/yardstick.sh [-b BIN] DB [OUTDIR]
@@ -11,7 +12,8 @@
 # repository, OUTDIR to a new temporary folder (the results and the JSON
 # reports stay there). Clips: CMU 131_01, 131_02 (BVH), 02_02, 03_01, 03_02,
 # 02_03 (AMC), Bandai Namco walk_happy and run_normal. Needs python3 (no
-# packages) to read the reports. Exit status 1 if any clip failed.
+# packages) to read the reports. Exit status 1 if any clip failed. The
+# retargeting options of the environment apply (e.g. SURFMOTION_PLACEMENT).
 set -u
 here=$(cd "$(dirname "$0")/.." && pwd)
 BIN=$here/target/release/surfmotion
@@ -28,7 +30,7 @@ S=${SURFMOTION_DATA:-$here/../shared/data}
 mkdir -p "$OUT"
 echo "# $BIN on $DB; results in $OUT"
 CLIPS="$S/mocap/cmu-bvh/131_01.bvh $S/mocap/cmu-bvh/131_02.bvh $S/mocap/cmu-amc/02/02_02.amc $S/mocap/cmu-amc/03/03_01.amc $S/mocap/cmu-amc/03/03_02.amc $S/mocap/cmu-amc/02/02_03.amc $S/mocap/bandai-namco/dataset-1_walk_happy_001.bvh $S/mocap/bandai-namco/dataset-1_run_normal_001.bvh"
-printf "%-32s %6s %6s %7s %7s %7s  %s\n" clip headp95 line vel pen_max float_md warnings
+printf "%-32s %6s %6s %7s %7s %7s %6s %6s %5s  %s\n" clip headp95 line vel pen_max float_md slide glide knee warnings
 failed=0
 for c in $CLIPS; do
   n=$(basename "$c"); n=${n%.*}
@@ -44,9 +46,11 @@ clip = (p.get('clip_head_torso_deg') or {}).get('p95', float('nan'))
 line = max(x for x in (ref, clip) if x == x) + 3
 w = [x[:60] for x in p['warnings'] if 'turned over' not in x]
 t = [x.split(' in frame')[0] for x in p['warnings'] if 'turned over' in x]
-print("%-32s %6.1f %6.1f %7.3f %7.2f %7.2f  %s" % (sys.argv[2], p['head_torso_deg']['p95'], line,
+s = p['foot_sliding']
+print("%-32s %6.1f %6.1f %7.3f %7.2f %7.2f %6.3f %6.3f %5.1f  %s" % (sys.argv[2], p['head_torso_deg']['p95'], line,
       d['velocity_error_cm_per_frame'], p['ground']['penetration_cm']['max'],
-      p['ground']['floating_cm']['median'], '; '.join(w + t)))
+      p['ground']['floating_cm']['median'], s['mean_cm_per_frame'],
+      s['touching_mean_cm_per_frame'], p['knee_hyperextension_deg']['max'], '; '.join(w + t)))
 PY
 done
 exit $failed

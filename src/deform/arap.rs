@@ -75,11 +75,13 @@ pub(crate) fn local_step(
 mod tests {
     use super::*;
 
-    /// A rigidly turned ring: the step finds the turn, and the turned
-    /// Laplacian coordinate is the solved one's.
-    #[test]
-    fn a_rigid_turn_is_found() {
-        // A fan: centre 0 and six neighbours, slightly out of plane.
+    /// A Laplacian's rows: (column, weight) pairs.
+    type Rows = Vec<Vec<(u32, f64)>>;
+
+    /// A fan: centre 0 and six neighbours, slightly out of plane, with its
+    /// umbrella Laplacian (the centre's row averages the six; each
+    /// neighbour's row is its difference from the centre).
+    fn fan() -> (Vec<[f64; 3]>, Rows) {
         let mut s = vec![[0.0, 0.0, 0.3]];
         for k in 0..6 {
             let a = k as f64 * std::f64::consts::TAU / 6.0;
@@ -90,6 +92,14 @@ mod tests {
         for i in 1..7u32 {
             lap.push(vec![(i, 1.0), (0, -1.0)]);
         }
+        (s, lap)
+    }
+
+    /// A rigidly turned ring: the step finds the turn, and the turned
+    /// Laplacian coordinate is the solved one's.
+    #[test]
+    fn a_rigid_turn_is_found() {
+        let (s, lap) = fan();
         let turn = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 1.1);
         let y: Vec<[f64; 3]> = s
             .iter()
@@ -119,16 +129,7 @@ mod tests {
     /// one as the next start.
     #[test]
     fn a_zone_weight_slerps_from_the_skin_turn() {
-        let mut s = vec![[0.0, 0.0, 0.3]];
-        for k in 0..6 {
-            let a = k as f64 * std::f64::consts::TAU / 6.0;
-            s.push([a.cos(), a.sin(), 0.1 * (k % 2) as f64]);
-        }
-        let mut lap = vec![vec![(0u32, 1.0)]];
-        lap[0].extend((1..7u32).map(|j| (j, -1.0 / 6.0)));
-        for i in 1..7u32 {
-            lap.push(vec![(i, 1.0), (0, -1.0)]);
-        }
+        let (s, lap) = fan();
         let turn = DQuat::from_axis_angle(DVec3::X, 0.8);
         let y: Vec<[f64; 3]> = s
             .iter()

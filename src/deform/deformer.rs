@@ -1,6 +1,7 @@
 //! The `Deformer`: a character's prefactored part-based deformation
 //! (the module page, [`crate::deform`], describes the method).
 
+use super::bend_examples::BendExamples;
 use super::cloth::{ClothStitch, StitchWorkspace};
 use super::dqs::{self, ConstraintSkin};
 use super::levels::{Levels, RegionScratch};
@@ -59,6 +60,9 @@ pub struct Deformer {
     cloth_fallback: bool,
     /// The skinning of the constraints ([`DeformOptions::constraint_skin`]).
     constraint_skin: ConstraintSkin,
+    /// The knees' example-based correction of the source
+    /// ([`DeformOptions::bend_examples`]).
+    bend: Option<BendExamples>,
     triangles: usize,
     regions: Vec<Region>,
     /// The regions' levels when they are solved level by level on several
@@ -91,6 +95,9 @@ pub struct RegionResult {
 
 /// Scratch of [`Deformer::deform`].
 pub struct DeformWorkspace {
+    /// The source with the knees' correction ([`DeformOptions::bend_examples`];
+    /// empty without).
+    bent: Vec<[f64; 3]>,
     lbs: Vec<[f64; 3]>,
     /// The constraint skinning's positions, blended into `lbs` by the
     /// zone's weights (a zone and a non-linear skinning; else empty).
@@ -226,6 +233,9 @@ impl Deformer {
         if opts.parallel_regions {
             out.levels = Levels::new(&out.regions, out.overlap_passes);
         }
+        if opts.bend_examples > 0.0 {
+            out.bend = BendExamples::new(ch, opts.step_reach, opts.bend_examples);
+        }
         Ok(out)
     }
 
@@ -259,6 +269,7 @@ impl Deformer {
             cloth_turns: opts.cloth_turns,
             cloth_fallback: opts.cloth_fallback,
             constraint_skin: opts.constraint_skin,
+            bend: None,
             triangles: ch.topology().triangle_count(),
             regions: Vec::new(),
             levels: None,
@@ -482,6 +493,10 @@ impl Deformer {
     /// Scratch space.
     pub fn workspace(&self) -> DeformWorkspace {
         DeformWorkspace {
+            bent: match &self.bend {
+                Some(_) => vec![[0.0; 3]; self.n],
+                None => Vec::new(),
+            },
             lbs: vec![[0.0; 3]; self.n],
             zone_skin: match (&self.zone, self.constraint_skin) {
                 (Some(_), ConstraintSkin::DualQuaternion | ConstraintSkin::Rigid) => {
@@ -525,8 +540,38 @@ impl Deformer {
 
     /// Deforms `source` (a retrieved frame whose skeleton is `source_pose`)
     /// to follow `target`, into `out`. Returns the triangles turned over
-    /// before and after the repair (zero for modes without one).
+    /// before and after the repair (zero for modes without one). With
+    /// [`DeformOptions::bend_examples`] the source's knees are first given
+    /// the capture's shape at the target's knee angles
+    /// ([`super::bend_examples`]).
     pub fn deform(
+        &self,
+        ch: &Character,
+        source: &[[f64; 3]],
+        source_pose: &Pose,
+        target: &Pose,
+        out: &mut [[f64; 3]],
+        ws: &mut DeformWorkspace,
+    ) -> TurnedOver {
+        let Some(b) = &self.bend else {
+            return self.deform_source(ch, source, source_pose, target, out, ws);
+        };
+        let mut bent = std::mem::take(&mut ws.bent);
+        b.bend(
+            source,
+            source_pose,
+            target,
+            &self.rest_pose,
+            ch.rig(),
+            &mut bent,
+        );
+        let c = self.deform_source(ch, &bent, source_pose, target, out, ws);
+        ws.bent = bent;
+        c
+    }
+
+    /// [`Deformer::deform`] of the source as given.
+    fn deform_source(
         &self,
         ch: &Character,
         source: &[[f64; 3]],

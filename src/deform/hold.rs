@@ -22,11 +22,12 @@ pub(crate) fn with_env(opts: &DeformOptions) -> DeformOptions {
 /// ([`DeformOptions::hold_spread`]) and `seams_by_weight`
 /// ([`DeformOptions::seam_by_weight`]): `on`/`off`; `steps`
 /// ([`DeformOptions::local_steps`], a count); `zone` (`everywhere`,
-/// `knees` or `limbs`, [`DeformOptions::step_zone`]) and `reach`
-/// ([`DeformOptions::step_reach`], a number). An error names the pair it
-/// could not read and every name accepted.
+/// `knees` or `limbs`, [`DeformOptions::step_zone`]), `reach`
+/// ([`DeformOptions::step_reach`], a number) and `bend`
+/// ([`DeformOptions::bend_examples`], a number, 0 off). An error names the
+/// pair it could not read and every name accepted.
 pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions, String> {
-    const NAMES: &str = "skin=linear|dq|rigid, joints=on|off, by_weight=on|off, spread=on|off, seams_by_weight=on|off, steps=N, zone=everywhere|knees|limbs, reach=F";
+    const NAMES: &str = "skin=linear|dq|rigid, joints=on|off, by_weight=on|off, spread=on|off, seams_by_weight=on|off, steps=N, zone=everywhere|knees|limbs, reach=F, bend=F";
     let mut o = *opts;
     for p in super::overrides::pairs(text, NAMES) {
         let p = p?;
@@ -53,6 +54,7 @@ pub fn with_overrides(opts: &DeformOptions, text: &str) -> Result<DeformOptions,
                 }
             }
             "reach" => o.step_reach = p.number()?,
+            "bend" => o.bend_examples = p.number()?,
             _ => return p.unknown(),
         }
     }
@@ -71,7 +73,7 @@ mod tests {
         assert_eq!(with_overrides(&d, "").unwrap(), d);
         let o = with_overrides(
             &d,
-            "skin=dq, joints=off,by_weight=on,spread=1,seams_by_weight=true,steps=2,zone=knees,reach=0.3",
+            "skin=dq, joints=off,by_weight=on,spread=1,seams_by_weight=true,steps=2,zone=knees,reach=0.3,bend=0.5",
         )
         .unwrap();
         assert_eq!(o.constraint_skin, ConstraintSkin::DualQuaternion);
@@ -79,6 +81,7 @@ mod tests {
         assert_eq!(o.local_steps, 2);
         assert_eq!(o.step_zone, StepZone::Knees);
         assert_eq!(o.step_reach, 0.3);
+        assert_eq!(o.bend_examples, 0.5);
         let back = DeformOptions {
             constraint_skin: d.constraint_skin,
             hold_joints: d.hold_joints,
@@ -88,6 +91,7 @@ mod tests {
             local_steps: d.local_steps,
             step_zone: d.step_zone,
             step_reach: d.step_reach,
+            bend_examples: d.bend_examples,
             ..o
         };
         assert_eq!(back, d, "an override set another option");
@@ -100,6 +104,8 @@ mod tests {
             "zone=hips",
             "reach=-1",
             "reach=nan",
+            "bend=-1",
+            "bend=x",
         ] {
             let e = with_overrides(&d, bad).unwrap_err();
             assert!(

@@ -62,6 +62,7 @@
 //! 68,743 (131_01) triangle-frames over (README, issue 42).
 
 pub mod arap;
+pub mod bend_examples;
 pub mod cloth;
 pub mod cloth_reach;
 pub mod deformer;
@@ -73,11 +74,13 @@ pub mod near_turns;
 pub mod options;
 pub(crate) mod overrides;
 pub mod part_laplacian;
+mod patch_solve;
 pub mod pca;
 pub mod regions;
 pub mod soft;
 pub mod step_zone;
 pub mod unflip;
+mod unflip_patch;
 pub mod untangle;
 
 pub use deformer::{DeformWorkspace, Deformer, RegionResult};

@@ -335,6 +335,15 @@ pub struct DeformOptions {
     /// velocity error 0.155 / 0.157 and the shins' joint-follow p95 worse
     /// (02_02 left 2.53 → 3.23 cm). README "The surface measure", issue 42.
     pub constraint_skin: super::dqs::ConstraintSkin,
+    /// Gain of the knees' example-based correction
+    /// ([`super::bend_examples`]): before the solve, the retrieved frame's
+    /// vertices near each knee (within twice `step_reach` of the shin's
+    /// length, cloth left out) are moved by the change the capture's own
+    /// frames show, against the skinned rest frame, between the retrieved
+    /// frame's knee angle and the target's (pose-space deformation learnt
+    /// from the database). 0 turns it off. Default 0 (off; measured in the
+    /// README, issue 42).
+    pub bend_examples: f64,
 }
 
 /// The rotations the fold repair ([`super::unflip`], [`super::untangle`])
@@ -465,6 +474,7 @@ impl Default for DeformOptions {
             stitch_joints: super::cloth_reach::StitchJoints::None,
             stitch_apart: 0,
             constraint_skin: super::dqs::ConstraintSkin::Linear,
+            bend_examples: 0.0,
         }
     }
 }

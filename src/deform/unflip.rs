@@ -23,7 +23,7 @@
 //! [`super::untangle`] finishes the job. Frames with nothing turned over
 //! cost one pass over the triangles.
 
-use crate::mesh::solver::{FixedSolver, SolveError};
+use super::unflip_patch::{RepairScratch, RoundOf};
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 
@@ -92,29 +92,20 @@ pub(crate) fn triangle_turn(t: &[u32; 3], turn: &[DQuat]) -> DQuat {
     }
 }
 
-fn normal(t: &[u32; 3], p: &[[f64; 3]]) -> DVec3 {
+pub(crate) fn normal(t: &[u32; 3], p: &[[f64; 3]]) -> DVec3 {
     let [a, b, c] = t.map(|v| DVec3::from_array(p[v as usize]));
     (b - a).cross(c - a)
 }
 
 /// Whether triangle `t` of `out` is turned over against `source`.
 #[inline]
-fn is_turned_over(t: &[u32; 3], source: &[[f64; 3]], out: &[[f64; 3]], turn: &[DQuat]) -> bool {
-    (triangle_turn(t, turn) * normal(t, source)).dot(normal(t, out)) < 0.0
-}
-
-/// Keeps, of the sorted candidate triangles `cand`, those turned over (the
-/// triangles a local change can have affected: no full pass).
-fn recount(
-    tris: &[[u32; 3]],
+pub(crate) fn is_turned_over(
+    t: &[u32; 3],
     source: &[[f64; 3]],
     out: &[[f64; 3]],
     turn: &[DQuat],
-    cand: &mut Vec<u32>,
-) {
-    cand.sort_unstable();
-    cand.dedup();
-    cand.retain(|&t| is_turned_over(&tris[t as usize], source, out, turn));
+) -> bool {
+    (triangle_turn(t, turn) * normal(t, source)).dot(normal(t, out)) < 0.0
 }
 
 /// Triangles (at least) each thread of a data-parallel pass over the
@@ -294,7 +285,8 @@ pub struct RepairOptions {
 /// started), takes its first rounds from here instead of solving them
 /// again: the rounds are deterministic, so the next pass's first rounds
 /// would give this state bit for bit, and it only solves the rounds it
-/// adds (one more doubling). Allocated once per workspace.
+/// adds (one more doubling). Allocated once per workspace, with the
+/// repair's buffers.
 #[derive(Debug, Clone, Default)]
 pub struct Replay {
     /// The frame after the rounds.
@@ -306,6 +298,9 @@ pub struct Replay {
     rings: usize,
     /// Whether the state above is one a next pass can take.
     valid: bool,
+    /// The repair's buffers, reused by every call given this state
+    /// ([`RepairScratch`]; not part of the state: a clone starts empty).
+    scratch: RepairScratch,
 }
 
 impl Replay {
@@ -379,102 +374,34 @@ pub(crate) fn unflip_within(
         }
         kept.valid = false;
     }
+    // The repair's memory: the workspace's (reused frame to frame), or
+    // this call's own.
+    let mut scratch = replay
+        .as_mut()
+        .map(|(kept, _)| std::mem::take(&mut kept.scratch))
+        .unwrap_or_default();
+    scratch.fit(n, tris.len());
+    let f = RoundOf {
+        tris,
+        adj,
+        source,
+        turn,
+        opts,
+    };
     // Whether every round ran (none stopped by the budget or a failed
     // solve): only then is the state one a next pass can take.
     let mut complete = true;
-    // Triangles listed in `touch` (cleared after each round).
-    let mut listed = vec![false; tris.len()];
-    let mut union = Vec::new();
     for _ in first..opts.rounds {
         if bad.is_empty() {
             break;
         }
-        let (local, patch, free) = grow_patch(tris, adj, &bad, rings, n);
-        let fixed: Vec<u32> = (free as u32..patch.len() as u32).collect();
-        let m = patch.len();
-        if m > budget.patch_left() {
+        if !scratch.round(&f, out, &mut bad, rings, budget) {
             complete = false;
             break;
         }
-        budget.done.patch_vertices += m;
-        budget.done.patches += 1;
-        // Triangles touching a free vertex, each listed once, then sorted
-        // (the list sorting and deduplicating every vertex's triangles
-        // gave, from a third of the entries: a triangle touches up to
-        // three free vertices).
-        let mut touch: Vec<u32> = Vec::new();
-        for &v in &patch[..free] {
-            for &t in &adj.triangles[v as usize] {
-                if !listed[t as usize] {
-                    listed[t as usize] = true;
-                    touch.push(t);
-                }
-            }
-        }
-        touch.sort_unstable();
-        for &t in &touch {
-            listed[t as usize] = false;
-        }
-        let mut edges = Vec::with_capacity(touch.len() * 3);
-        let mut b = vec![[0.0; 3]; m];
-        for &ti in &touch {
-            let t = &tris[ti as usize];
-            if t.iter().any(|&v| local[v as usize] == u32::MAX) {
-                continue;
-            }
-            let q = triangle_turn(t, turn);
-            let reference = (q * normal(t, source)).normalize_or_zero();
-            let keep = bad.binary_search(&ti).is_err()
-                && reference.dot(normal(t, out).normalize_or_zero()) >= opts.healthy_cos;
-            let w = if keep { 1.0 } else { opts.weight };
-            for k in 0..3 {
-                let (i, j) = (t[k], t[(k + 1) % 3]);
-                let (li, lj) = (local[i as usize], local[j as usize]);
-                edges.push((li, lj, w));
-                let e = if keep {
-                    DVec3::from_array(out[i as usize]) - DVec3::from_array(out[j as usize])
-                } else {
-                    q * (DVec3::from_array(source[i as usize])
-                        - DVec3::from_array(source[j as usize]))
-                } * w;
-                for d in 0..3 {
-                    b[li as usize][d] += e[d];
-                    b[lj as usize][d] -= e[d];
-                }
-            }
-        }
-        let solved: Result<Vec<[f64; 3]>, SolveError> = (|| {
-            let s = FixedSolver::from_rows(m, edge_rows(m, &edges), &fixed)?;
-            let vals: Vec<[f64; 3]> = patch[free..].iter().map(|&v| out[v as usize]).collect();
-            let mut x = vec![[0.0; 3]; m];
-            let mut ws = s.workspace(3);
-            s.solve(&b, &vals, &mut x, &mut ws);
-            Ok(x)
-        })();
-        let Ok(x) = solved else {
-            complete = false;
-            break;
-        };
-        if x.iter().flatten().any(|c| !c.is_finite()) {
-            complete = false;
-            break;
-        }
-        for (k, &v) in patch[..free].iter().enumerate() {
-            out[v as usize] = x[k];
-        }
-        // Only triangles touching a moved vertex can have changed: the
-        // increasing union of both lists (a merge; `recount`'s sort of
-        // their concatenation gives the same), those still turned over.
-        if !bad.windows(2).all(|w| w[0] < w[1]) {
-            bad.sort_unstable();
-            bad.dedup();
-        }
-        union_sorted(&bad, &touch, &mut union);
-        std::mem::swap(&mut bad, &mut union);
-        bad.retain(|&t| is_turned_over(&tris[t as usize], source, out, turn));
         rings = rings.saturating_mul(2).min(most_rings);
     }
-    if let Some((kept, _)) = replay {
+    if let Some((kept, _)) = replay.as_mut() {
         if complete && opts.replay {
             kept.out.resize(n, [0.0; 3]);
             kept.out.copy_from_slice(out);
@@ -484,164 +411,43 @@ pub(crate) fn unflip_within(
             kept.valid = true;
         }
     }
-    smooth(tris, adj, source, out, turn, &mut bad, opts.smooth);
+    smooth(&f, out, &mut bad, &mut scratch);
+    if let Some((kept, _)) = replay {
+        kept.scratch = scratch;
+    }
     bad
 }
 
-/// A round's patch ([`unflip_within`]): the vertices of the `bad`
-/// triangles grown by `rings` rings, then the fixed ring around them.
-/// Returns each vertex's index in the patch (`u32::MAX` outside it), the
-/// patch's vertices (the free ones first) and the free count.
-fn grow_patch(
-    tris: &[[u32; 3]],
-    adj: &Adjacency,
-    bad: &[u32],
-    rings: usize,
-    n: usize,
-) -> (Vec<u32>, Vec<u32>, usize) {
-    // The patch: the bad triangles' vertices grown by `rings` rings.
-    let mut local = vec![u32::MAX; n];
-    let mut patch: Vec<u32> = Vec::new();
-    for &t in bad {
-        for &v in &tris[t as usize] {
-            if local[v as usize] == u32::MAX {
-                local[v as usize] = patch.len() as u32;
-                patch.push(v);
-            }
-        }
-    }
-    // Ring by ring, only the last ring's vertices can reach new ones
-    // (every earlier vertex had all its neighbours added when its own
-    // ring was grown), so each ring scans the last ring alone, in patch
-    // order: the same patch in the same order as scanning the whole
-    // patch every ring, which cost rings × patch size (the later
-    // surface rounds reach 2¹⁰ rings, session 28). A ring that adds
-    // nothing ends the growth (the patch holds its whole component).
-    let mut last = 0;
-    for _ in 0..rings {
-        let end = patch.len();
-        for k in last..end {
-            for &u in &adj.vertices[patch[k] as usize] {
-                if local[u as usize] == u32::MAX {
-                    local[u as usize] = patch.len() as u32;
-                    patch.push(u);
-                }
-            }
-        }
-        if patch.len() == end {
-            break;
-        }
-        last = end;
-    }
-    let free = patch.len();
-    // The fixed ring around it.
-    for k in 0..free {
-        for &u in &adj.vertices[patch[k] as usize] {
-            if local[u as usize] == u32::MAX {
-                local[u as usize] = patch.len() as u32;
-                patch.push(u);
-            }
-        }
-    }
-    (local, patch, free)
-}
-
-/// The compressed rows ([`crate::mesh::laplacian::to_rows`]' form) of the
-/// `m × m` graph Laplacian of the weighted edges `(i, j, w)`: each adds `w`
-/// at `(i, i)` and `(j, j)` and `−w` at `(i, j)` and `(j, i)`. A counting
-/// pass places every entry in its row, then each row (a vertex's few
-/// neighbours) is sorted and its repeats summed, into a row allocated at
-/// its size: no sort of all the entries (the sort of the triplets was 17 %
-/// of a frame's deformation on CMU 02_02, session 27) and no row grown by
-/// pushes (session 27's binned version, 3 % slower for the reallocations).
-/// A row's repeats are summed in another order than the triplets' sort
-/// gave; the patch's weights (1 and [`RepairOptions::weight`], 4 by
-/// default) are whole numbers, whose sums are exact in any order, so the
-/// matrix is the same bit for bit.
-fn edge_rows(m: usize, edges: &[(u32, u32, f64)]) -> Vec<Vec<(u32, f64)>> {
-    let mut start = vec![0usize; m + 1];
-    for &(i, j, _) in edges {
-        start[i as usize + 1] += 2;
-        start[j as usize + 1] += 2;
-    }
-    for r in 0..m {
-        start[r + 1] += start[r];
-    }
-    let mut at = start[..m].to_vec();
-    let mut flat = vec![(0u32, 0.0f64); start[m]];
-    for &(i, j, w) in edges {
-        for (r, c, v) in [(i, i, w), (j, j, w), (i, j, -w), (j, i, -w)] {
-            flat[at[r as usize]] = (c, v);
-            at[r as usize] += 1;
-        }
-    }
-    (0..m)
-        .map(|r| {
-            let row = &mut flat[start[r]..start[r + 1]];
-            row.sort_unstable_by_key(|&(c, _)| c);
-            let distinct = row.len().min(1) + row.windows(2).filter(|p| p[0].0 != p[1].0).count();
-            let mut out: Vec<(u32, f64)> = Vec::with_capacity(distinct);
-            for &(c, v) in row.iter() {
-                match out.last_mut() {
-                    Some((lc, lv)) if *lc == c => *lv += v,
-                    _ => out.push((c, v)),
-                }
-            }
-            out
-        })
-        .collect()
-}
-
-/// The union of the increasing lists `a` and `b` (each without repeats),
-/// increasing and without repeats, into `out`.
-fn union_sorted(a: &[u32], b: &[u32], out: &mut Vec<u32>) {
-    out.clear();
-    out.reserve(a.len() + b.len());
-    let (mut i, mut j) = (0, 0);
-    while i < a.len() && j < b.len() {
-        let (x, y) = (a[i], b[j]);
-        out.push(x.min(y));
-        i += usize::from(x <= y);
-        j += usize::from(y <= x);
-    }
-    out.extend_from_slice(&a[i..]);
-    out.extend_from_slice(&b[j..]);
-}
-
-/// Up to `steps` Jacobi steps of umbrella smoothing on the vertices of the
-/// turned-over triangles `bad` (kept sorted and up to date).
-fn smooth(
-    tris: &[[u32; 3]],
-    adj: &Adjacency,
-    source: &[[f64; 3]],
-    out: &mut [[f64; 3]],
-    turn: &[DQuat],
-    bad: &mut Vec<u32>,
-    steps: usize,
-) {
-    let mut vs: Vec<u32> = Vec::new();
-    let mut moved: Vec<[f64; 3]> = Vec::new();
-    for _ in 0..steps {
+/// Up to [`RepairOptions::smooth`] Jacobi steps of umbrella smoothing on
+/// the vertices of the turned-over triangles `bad` (kept sorted and up to
+/// date), in `scratch`'s buffers.
+fn smooth(f: &RoundOf, out: &mut [[f64; 3]], bad: &mut Vec<u32>, scratch: &mut RepairScratch) {
+    let RoundOf {
+        tris,
+        adj,
+        source,
+        turn,
+        ..
+    } = *f;
+    for _ in 0..f.opts.smooth {
         if bad.is_empty() {
             break;
         }
+        let vs = &mut scratch.vs;
         vs.clear();
         vs.extend(bad.iter().flat_map(|&t| tris[t as usize]));
         vs.sort_unstable();
         vs.dedup();
-        moved.clear();
-        moved.extend(vs.iter().map(|&v| {
+        scratch.moved.clear();
+        scratch.moved.extend(vs.iter().map(|&v| {
             let nb = &adj.vertices[v as usize];
             let s: DVec3 = nb.iter().map(|&u| DVec3::from_array(out[u as usize])).sum();
             (s / nb.len().max(1) as f64).to_array()
         }));
-        for (&v, p) in vs.iter().zip(&moved) {
+        for (&v, p) in scratch.vs.iter().zip(&scratch.moved) {
             out[v as usize] = *p;
         }
-        for &v in &vs {
-            bad.extend_from_slice(&adj.triangles[v as usize]);
-        }
-        recount(tris, source, out, turn, bad);
+        scratch.recount_around(tris, adj, source, out, turn, bad);
     }
 }
 
@@ -840,65 +646,93 @@ mod tests {
         assert!(cases >= 30 && moved > 0, "{cases} cases, {moved} moved");
     }
 
-    /// The counting pass gives `to_rows`' matrix bit for bit on the repair
-    /// patch's weights (whole numbers), over generated edge lists: a mesh's
-    /// edges in triangle order, reversed, shuffled, with repeats and an
-    /// isolated row; with weights that are not whole numbers, within a few
-    /// units in the last place.
+    /// A second pass over the same frames makes no allocation call in the
+    /// repair but faer's symbolic analysis of each patch, a few calls a
+    /// patch whatever its size (the first pass grows the workspace's
+    /// buffers to the largest patch): generated folds (one to three
+    /// vertices pushed through a sphere at several depths) on the sphere
+    /// as made, mirrored, turned and scaled ×100, with the rings bounded
+    /// and not. The patches are larger than the bound a patch, so memory
+    /// taken a vertex or a row (the solver before: a row per vertex) fails.
     #[test]
-    fn counted_rows_are_the_sorted_triplets_rows() {
-        use crate::mesh::laplacian::to_rows;
-        let m = midpoint(&midpoint(&icosahedron()));
-        let n = m.positions().len();
-        let mut edges: Vec<(u32, u32, f64)> = Vec::new();
-        for (k, t) in m.triangles().iter().enumerate() {
-            for e in 0..3 {
-                let w = if k % 3 == 0 { 4.0 } else { 1.0 };
-                edges.push((t[e], t[(e + 1) % 3], w));
-            }
-        }
-        let triplets = |edges: &[(u32, u32, f64)]| {
-            let mut t = Vec::new();
-            for &(i, j, w) in edges {
-                t.extend([(i, i, w), (j, j, w), (i, j, -w), (j, i, -w)]);
-            }
-            t
-        };
-        let mut shuffled = edges.clone();
-        let mut seed = 12345u64;
-        for i in (1..shuffled.len()).rev() {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            shuffled.swap(i, (seed >> 33) as usize % (i + 1));
-        }
-        let reversed: Vec<_> = edges.iter().rev().copied().collect();
-        let repeated: Vec<_> = edges.iter().chain(&edges[..40]).copied().collect();
-        for (name, e, rows) in [
-            ("mesh", &edges, n),
-            ("reversed", &reversed, n),
-            ("shuffled", &shuffled, n),
-            ("repeated", &repeated, n),
-            ("isolated row", &edges, n + 1),
-        ] {
-            let (a, b) = (edge_rows(rows, e), to_rows(rows, triplets(e)));
-            assert_eq!(a.len(), b.len(), "{name}");
-            for (r, (x, y)) in a.iter().zip(&b).enumerate() {
-                assert_eq!(x.len(), y.len(), "{name}: row {r}");
-                for (p, q) in x.iter().zip(y) {
-                    assert!(
-                        p.0 == q.0 && p.1.to_bits() == q.1.to_bits(),
-                        "{name}: row {r}"
-                    );
+    fn a_second_pass_allocates_nothing_but_the_patches_orderings() {
+        use super::super::patch_solve::counted::calls;
+        let m = midpoint(&midpoint(&midpoint(&icosahedron())));
+        let tris = m.triangles();
+        let r = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.8);
+        type Map = fn(DVec3, DQuat) -> DVec3;
+        let variants: [(&str, Map); 4] = [
+            ("plain", |p, _| p),
+            ("mirrored", |p, _| DVec3::new(-p.x, p.y, p.z)),
+            ("turned", |p, r| r * p),
+            ("scaled", |p, _| p * 100.0),
+        ];
+        // Most allocation calls a patch may make (faer's ordering and
+        // symbolic factor).
+        const PER_PATCH: usize = 16;
+        for (name, map) in variants {
+            let src: Vec<[f64; 3]> = m
+                .positions()
+                .iter()
+                .map(|p| map(DVec3::from_array(*p), r).to_array())
+                .collect();
+            let adj = Adjacency::new(src.len(), tris);
+            let turn = vec![DQuat::IDENTITY; src.len()];
+            let mut frames = Vec::new();
+            for pushed in [&[0u32][..], &[0, 7], &[0, 7, 40], &[3, 90, 200]] {
+                for depth in [-0.2, -0.5, 0.3] {
+                    let mut start = src.clone();
+                    for &v in pushed {
+                        start[v as usize] = (DVec3::from_array(src[v as usize]) * depth).to_array();
+                    }
+                    let bad = turned_over(tris, &src, &start, &turn);
+                    if !bad.is_empty() {
+                        frames.push((start, bad));
+                    }
                 }
             }
-        }
-        let odd: Vec<_> = shuffled.iter().map(|&(i, j, w)| (i, j, w * 0.3)).collect();
-        for (x, y) in edge_rows(n, &odd).iter().zip(&to_rows(n, triplets(&odd))) {
-            for (p, q) in x.iter().zip(y) {
+            assert!(frames.len() >= 8, "{name}: {} folds", frames.len());
+            for most_rings in [2, usize::MAX] {
+                let opts = RepairOptions {
+                    most_rings,
+                    ..Default::default()
+                };
+                let mut kept = Replay::default();
+                let mut out = src.clone();
+                let mut bad = Vec::with_capacity(tris.len());
+                let mut pass = |kept: &mut Replay| {
+                    let (before, mut work) = (calls(), Work::default());
+                    for (start, b) in &frames {
+                        out.copy_from_slice(start);
+                        bad.clear();
+                        bad.extend_from_slice(b);
+                        let mut budget = Budget::new(WorkLimit::NONE);
+                        bad = unflip_within(
+                            tris,
+                            &adj,
+                            &src,
+                            &mut out,
+                            &turn,
+                            std::mem::take(&mut bad),
+                            &opts,
+                            &mut budget,
+                            Some((kept, false)),
+                        );
+                        work.patches += budget.done.patches;
+                        work.patch_vertices += budget.done.patch_vertices;
+                    }
+                    let after = calls();
+                    ([after[0] - before[0], after[1] - before[1]], work)
+                };
+                let (first, _) = pass(&mut kept);
+                let ([outside, faer], work) = pass(&mut kept);
+                let case = format!("{name}, rings {most_rings}: first pass {first:?}, {work:?}");
+                assert!(work.patches >= frames.len(), "{case}");
+                assert_eq!(outside, 0, "{case}: {outside} calls outside faer");
+                assert!(faer <= PER_PATCH * work.patches, "{case}: {faer} in faer");
                 assert!(
-                    p.0 == q.0 && (p.1 - q.1).abs() <= 1e-15 * q.1.abs(),
-                    "{p:?} {q:?}"
+                    work.patch_vertices > PER_PATCH * work.patches,
+                    "{case}: patches too small to tell"
                 );
             }
         }

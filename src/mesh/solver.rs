@@ -97,6 +97,10 @@ impl FixedSolver {
     /// each its `(column, value)` pairs sorted by column without repeats,
     /// as [`to_rows`] gives them), for a caller that assembles them
     /// without sorting triplets. A column out of range is a typed error.
+    /// The fold repair's solver before its patch system
+    /// (`deform::patch_solve`), kept as that system's reference in the
+    /// tests.
+    #[cfg(test)]
     pub(crate) fn from_rows(
         n: usize,
         rows: Vec<Vec<(u32, f64)>>,
@@ -282,25 +286,45 @@ impl FixedSolver {
 /// Every component of the matrix graph must contain a fixed unknown, and no
 /// unknown may have an empty row.
 fn check_anchored(rows: &[Vec<(u32, f64)>], free_of: &[u32]) -> Result<(), SolveError> {
-    let n = rows.len();
-    let mut comp = vec![u32::MAX; n];
-    let mut stack = Vec::new();
-    let mut ncomp = 0;
+    anchored_components(
+        rows.len(),
+        |v| rows[v].iter().copied(),
+        |v| free_of[v] == u32::MAX,
+        &mut Vec::new(),
+        &mut Vec::new(),
+    )
+}
+
+/// The anchoring check on a graph of `n` unknowns whose rows `row(v)` give
+/// (column, value) pairs: every connected component (through non-zero
+/// values) holds an unknown for which `held` is true, and no free unknown's
+/// row is empty but for its diagonal. `comp` and `stack` are scratch,
+/// reused by callers that keep them (the fold repair's patches).
+pub(crate) fn anchored_components<I: Iterator<Item = (u32, f64)>>(
+    n: usize,
+    row: impl Fn(usize) -> I,
+    held: impl Fn(usize) -> bool,
+    comp: &mut Vec<u32>,
+    stack: &mut Vec<usize>,
+) -> Result<(), SolveError> {
+    comp.clear();
+    comp.resize(n, u32::MAX);
+    let mut ncomp = 0u32;
     for s in 0..n {
         if comp[s] != u32::MAX {
             continue;
         }
-        if rows[s].iter().all(|&(c, v)| c as usize == s || v == 0.0) && free_of[s] != u32::MAX {
+        if !held(s) && row(s).all(|(c, v)| c as usize == s || v == 0.0) {
             return Err(SolveError::Isolated { vertex: s as u32 });
         }
-        let mut anchored = false;
-        let mut size = 0;
+        let (mut anchored, mut size) = (false, 0);
         comp[s] = ncomp;
+        stack.clear();
         stack.push(s);
         while let Some(v) = stack.pop() {
             size += 1;
-            anchored |= free_of[v] == u32::MAX;
-            for &(c, val) in &rows[v] {
+            anchored |= held(v);
+            for (c, val) in row(v) {
                 if val != 0.0 && comp[c as usize] == u32::MAX {
                     comp[c as usize] = ncomp;
                     stack.push(c as usize);

@@ -14,6 +14,7 @@ use super::autorig_cut::{CutRig, Outcome, each_cut_rig};
 use crate::embed::Embedding;
 use crate::embed::auto::neck::NeckReading;
 use crate::embed::parts::{Part, neighbours};
+use crate::mesh::MeshSequence;
 use crate::mesh::io::{LoadOptions, load_sequence};
 use crate::rig::Canonical;
 use glam::DVec3;
@@ -101,18 +102,12 @@ fn every_frame(data: &Path, w: &mut AutorigReport) {
         "\n| capture | cut | frames topped by a limb | trunk below the top (% height): least / median / greatest | frames read wrong (a whole body cut, a cut one whole) |\n|---|---|---|---|---|"
     );
     for name in ["samba", "crane"] {
-        let pc2 = data.join(format!("4d/{name}/{name}.pc2"));
-        let Ok(seq) = load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()) else {
-            let _ = writeln!(w.tables, "| {name} | not run |");
-            continue;
-        };
-        let fixture = PathBuf::from(format!("tests/fixtures/{name}.landmarks.json"));
-        let rig = crate::embed::landmarks::Landmarks::load(&fixture, seq.mesh().vertex_count())
-            .ok()
-            .and_then(|lm| Embedding::new(seq.mesh(), &lm, None).ok());
-        let Some(rig) = rig else {
-            let _ = writeln!(w.tables, "| {name} | no landmark rig |");
-            continue;
+        let (seq, rig) = match capture_with_rig(data, name) {
+            Ok(x) => x,
+            Err(why) => {
+                let _ = writeln!(w.tables, "| {name} | {why} |");
+                continue;
+            }
         };
         for cut in [Cut::Whole, Cut::HeadPart, Cut::Plane(0.4)] {
             let keep = cut.keep(seq.mesh().positions(), &rig);
@@ -161,4 +156,22 @@ fn every_frame(data: &Path, w: &mut AutorigReport) {
             );
         }
     }
+}
+
+/// The shared capture `name` (`4d/NAME/NAME.pc2` under `data`) and its
+/// landmark rig (`tests/fixtures/NAME.landmarks.json`), or the table's word
+/// for what is missing ("not run", "no landmark rig").
+pub(crate) fn capture_with_rig(
+    data: &Path,
+    name: &str,
+) -> Result<(MeshSequence, Embedding), &'static str> {
+    let pc2 = data.join(format!("4d/{name}/{name}.pc2"));
+    let seq =
+        load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()).map_err(|_| "not run")?;
+    let fixture = PathBuf::from(format!("tests/fixtures/{name}.landmarks.json"));
+    let rig = crate::embed::landmarks::Landmarks::load(&fixture, seq.mesh().vertex_count())
+        .ok()
+        .and_then(|lm| Embedding::new(seq.mesh(), &lm, None).ok())
+        .ok_or("no landmark rig")?;
+    Ok((seq, rig))
 }

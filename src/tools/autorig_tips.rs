@@ -9,15 +9,15 @@
 //! centroid's tips are right and where they are wrong.
 
 use super::autorig::AutorigReport;
+use super::autorig_headless::capture_with_rig;
 use crate::embed::Embedding;
 use crate::embed::auto::branches::{Tips, body_tips, sixth_limit};
 use crate::embed::auto::centre::TipSeed;
 use crate::embed::parts::{Part, neighbours};
-use crate::mesh::io::{LoadOptions, load_sequence};
 use crate::rig::Canonical;
 use glam::DVec3;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The hands cut off (`embed::auto_branches`' cut): the forearm parts'
 /// vertices more than 1 % of the height beyond the wrist.
@@ -38,8 +38,9 @@ fn without_hands(rig: &Embedding, rest: &[[f64; 3]]) -> Vec<bool> {
         .collect()
 }
 
-/// The five tips lie on the feet, the forearms and the head, no sixth.
-fn right(t: &Tips, labels: &[u8]) -> bool {
+/// The parts (label bytes, sorted) that the body's five tips lie on: the
+/// head, the feet and the forearms.
+pub fn five_on_extremities() -> Vec<u8> {
     let mut want: Vec<u8> = [
         Part::Head,
         Part::LFoot,
@@ -51,6 +52,12 @@ fn right(t: &Tips, labels: &[u8]) -> bool {
     .map(|p| p.index() as u8)
     .collect();
     want.sort_unstable();
+    want
+}
+
+/// The five tips lie on the feet, the forearms and the head, no sixth.
+fn right(t: &Tips, labels: &[u8]) -> bool {
+    let want = five_on_extremities();
     let mut got: Vec<u8> = t.five.iter().map(|&(v, _)| labels[v as usize]).collect();
     got.sort_unstable();
     got == want && t.sixth.is_none()
@@ -78,18 +85,12 @@ pub fn evaluate_tips(data: &Path) -> AutorigReport {
         "| capture | frames | wrong from the centroid's vertex | wrong from the centre | wrong guarded | centre kept by the guard | seed to a centre tip (× fifth reach): centroid right / wrong | centre's sixth: score, its five's least |\n|---|---|---|---|---|---|---|---|"
     );
     for (name, hands) in [("samba", true), ("crane", true), ("samba", false)] {
-        let pc2 = data.join(format!("4d/{name}/{name}.pc2"));
-        let Ok(seq) = load_sequence(&pc2.to_string_lossy(), &LoadOptions::default()) else {
-            let _ = writeln!(w.tables, "| {name} | not run |");
-            continue;
-        };
-        let fixture = PathBuf::from(format!("tests/fixtures/{name}.landmarks.json"));
-        let rig = crate::embed::landmarks::Landmarks::load(&fixture, seq.mesh().vertex_count())
-            .ok()
-            .and_then(|lm| Embedding::new(seq.mesh(), &lm, None).ok());
-        let Some(rig) = rig else {
-            let _ = writeln!(w.tables, "| {name} | no landmark rig |");
-            continue;
+        let (seq, rig) = match capture_with_rig(data, name) {
+            Ok(x) => x,
+            Err(why) => {
+                let _ = writeln!(w.tables, "| {name} | {why} |");
+                continue;
+            }
         };
         let keep = if hands {
             vec![true; seq.mesh().vertex_count()]

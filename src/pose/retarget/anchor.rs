@@ -61,21 +61,40 @@ pub enum TravelScale {
     Stride,
 }
 
-/// How the kernel places the body: [`Anchor`] and [`TravelScale`].
+/// Whether the character's feet are put on the clip's footfalls.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Footfalls {
+    /// The feet go where the limbs' directions put them (the kernel's
+    /// rule).
+    #[default]
+    Free,
+    /// Each planted foot of the clip becomes a target on the character
+    /// (its position during the contact, mapped by the travel's scale),
+    /// reached by two-bone leg IK, the body shifted where a planted foot
+    /// would be out of reach ([`footfall`](super::footfall)).
+    Targets,
+}
+
+/// How the kernel places the body: [`Anchor`], [`TravelScale`] and
+/// [`Footfalls`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Placement {
     /// The point whose travel the character's follows.
     pub anchor: Anchor,
     /// The scale of that travel.
     pub scale: TravelScale,
+    /// Whether the feet are put on the clip's footfalls (default: no).
+    pub footfalls: Footfalls,
 }
 
 /// The environment variable that chooses the placement (a measurement
 /// option, issue 44): `root` (the default), `hips` or `joints`, each
 /// optionally followed by `,stance` (the travel scaled by the standing
 /// hip height, [`TravelScale::Stance`]) or `,stride` (by the stride,
-/// [`TravelScale::Stride`]; `,legs` is the default). Read once
-/// per process; another value warns and is the default.
+/// [`TravelScale::Stride`]; `,legs` is the default), and optionally by
+/// `,feet` (the feet on the clip's footfalls, [`Footfalls::Targets`]):
+/// `root,feet`, `root,stance,feet`. Read once per process; another value
+/// warns and is the default.
 pub const PLACEMENT_ENV: &str = "SURFMOTION_PLACEMENT";
 
 /// The placement [`PLACEMENT_ENV`] chooses (read once per process).
@@ -96,28 +115,37 @@ fn placement_rule(value: Option<&str>) -> Result<Placement, String> {
     if v.is_empty() {
         return Ok(Placement::default());
     }
-    let (a, s) = v.split_once(',').unwrap_or((v, "legs"));
-    let anchor = match a.trim() {
-        "root" => Anchor::Root,
-        "hips" => Anchor::Hips,
-        "joints" => Anchor::Joints,
-        _ => {
-            return Err(format!(
-                "'{v}': expected root, hips or joints[,legs|,stance|,stride]"
-            ));
-        }
+    let bad = || format!("'{v}': expected root, hips or joints[,legs|,stance|,stride][,feet]");
+    let mut parts = v.split(',').map(str::trim);
+    let anchor = match parts.next() {
+        Some("root") => Anchor::Root,
+        Some("hips") => Anchor::Hips,
+        Some("joints") => Anchor::Joints,
+        _ => return Err(bad()),
     };
-    let scale = match s.trim() {
-        "legs" => TravelScale::Legs,
-        "stance" => TravelScale::Stance,
-        "stride" => TravelScale::Stride,
-        _ => {
-            return Err(format!(
-                "'{v}': expected root, hips or joints[,legs|,stance|,stride]"
-            ));
-        }
+    let mut p = Placement {
+        anchor,
+        ..Placement::default()
     };
-    Ok(Placement { anchor, scale })
+    let (mut scaled, mut feet) = (false, false);
+    for part in parts {
+        match part {
+            "legs" | "stance" | "stride" if !scaled && !feet => {
+                scaled = true;
+                p.scale = match part {
+                    "legs" => TravelScale::Legs,
+                    "stance" => TravelScale::Stance,
+                    _ => TravelScale::Stride,
+                };
+            }
+            "feet" if !feet => {
+                feet = true;
+                p.footfalls = Footfalls::Targets;
+            }
+            _ => return Err(bad()),
+        }
+    }
+    Ok(p)
 }
 
 /// The anchor's point of the pose `p`.
@@ -189,7 +217,8 @@ pub(crate) fn travel_scale(
 /// its first frame scaled; vertically the clip's anchor's height over its
 /// floor, scaled, over the character's floor (`floors`: the clip's, the
 /// character's). With the default placement nothing moves (the kernel
-/// placed the root so already).
+/// placed the root so already). Returns the travel's scale (`s` with
+/// the default anchor and scale).
 pub(super) fn place_anchor(
     character: &Pose,
     mocap: &[Pose],
@@ -197,9 +226,13 @@ pub(super) fn place_anchor(
     s: f64,
     floors: (f64, f64),
     out: &mut [(Pose, [DQuat; Canonical::COUNT])],
-) {
-    if placement == Placement::default() || mocap.is_empty() {
-        return;
+) -> f64 {
+    let kernel = Placement {
+        footfalls: Footfalls::Free,
+        ..placement
+    };
+    if kernel == Placement::default() || mocap.is_empty() {
+        return s;
     }
     let (clip_floor, char_floor) = floors;
     let a = placement.anchor;
@@ -221,6 +254,7 @@ pub(super) fn place_anchor(
             *p += d;
         }
     }
+    k
 }
 
 #[cfg(test)]
@@ -229,7 +263,13 @@ mod tests {
 
     #[test]
     fn the_rule_reads_each_anchor_and_scale_and_names_any_other() {
-        let p = |anchor, scale| -> Result<Placement, String> { Ok(Placement { anchor, scale }) };
+        let p = |anchor, scale| -> Result<Placement, String> {
+            Ok(Placement {
+                anchor,
+                scale,
+                ..Placement::default()
+            })
+        };
         assert_eq!(placement_rule(None), p(Anchor::Root, TravelScale::Legs));
         assert_eq!(
             placement_rule(Some(" ")),
@@ -254,6 +294,29 @@ mod tests {
             p(Anchor::Root, TravelScale::Stride)
         );
         assert!(placement_rule(Some("hips,knees")).is_err());
+        let feet = |anchor, scale| {
+            Ok(Placement {
+                anchor,
+                scale,
+                footfalls: Footfalls::Targets,
+            })
+        };
+        assert_eq!(
+            placement_rule(Some("root,feet")),
+            feet(Anchor::Root, TravelScale::Legs)
+        );
+        assert_eq!(
+            placement_rule(Some("root, stance ,feet")),
+            feet(Anchor::Root, TravelScale::Stance)
+        );
+        for wrong in [
+            "root,feet,stance",
+            "root,feet,feet",
+            "root,legs,stride",
+            "root,",
+        ] {
+            assert!(placement_rule(Some(wrong)).is_err(), "{wrong}");
+        }
     }
 
     #[test]

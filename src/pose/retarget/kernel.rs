@@ -2,8 +2,9 @@
 //! (torso, neck and head, limbs, feet, toes), the root placed by the feet
 //! on their grounds. See the [module docs](super) for what is matched.
 
-use super::anchor::{Placement, place_anchor, placement_from_env};
+use super::anchor::{Footfalls, Placement, place_anchor, placement_from_env};
 use super::feet::{Toes, flat_feet, place_feet};
+use super::footfall::plant_feet;
 use super::ground::{Given, clip_support_given, foot_height};
 use super::level::{Level, level_from_env, levelling_line};
 use super::motion_ref::{carriage_for_rest, torso_reference};
@@ -285,7 +286,12 @@ fn retarget_placed_on_grounds(
     // The body's anchor following the clip's (issue 44; the root already
     // does with the default placement: see [`place_anchor`]).
     let floors = (clip_floor, char_floor);
-    place_anchor(character, mocap, placement, s, floors, &mut out);
+    let k = place_anchor(character, mocap, placement, s, floors, &mut out);
+    // The feet on the clip's footfalls, mapped by the same travel scale
+    // (issue 44, an option: [`plant_feet`]).
+    if placement.footfalls == Footfalls::Targets {
+        plant_feet(mocap, &support, (k, leg_length(r)), &mut out);
+    }
     let grounds = place_feet(character, &support, s, toes, given.open_end, &mut out);
     (out, grounds)
 }

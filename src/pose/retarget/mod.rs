@@ -69,8 +69,10 @@
 
 mod anchor;
 mod feet;
+mod footfall;
 mod ground;
 mod kernel;
+mod leg_ik;
 mod level;
 mod measures;
 mod motion_ref;
@@ -79,7 +81,7 @@ mod root;
 mod stride;
 mod torso;
 
-pub use anchor::{Anchor, PLACEMENT_ENV, Placement, TravelScale};
+pub use anchor::{Anchor, Footfalls, PLACEMENT_ENV, Placement, TravelScale};
 pub use feet::Toes;
 pub use ground::{
     Given, Support, clip_floor, clip_support, clip_support_given, clip_support_on, contact_band,

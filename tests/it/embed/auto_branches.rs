@@ -208,19 +208,9 @@ fn five_tips_from(
     labels: &[u8],
 ) -> (f64, f64) {
     use surfmotion::embed::auto::branches::{body_tips, sixth_limit};
-    use surfmotion::embed::parts::{Part, neighbours};
+    use surfmotion::embed::parts::neighbours;
     let nb = neighbours(mesh.vertex_count(), mesh.triangles());
-    let mut want: Vec<u8> = [
-        Part::Head,
-        Part::LFoot,
-        Part::RFoot,
-        Part::LForearm,
-        Part::RForearm,
-    ]
-    .iter()
-    .map(|p| p.index() as u8)
-    .collect();
-    want.sort_unstable();
+    let want = surfmotion::tools::autorig_tips::five_on_extremities();
     let (mut no, mut yes) = (f64::MIN, f64::MAX);
     let (mut skipped, mut centre_kept) = (Vec::new(), Vec::new());
     for (f, rest) in frames.iter().enumerate() {

@@ -27,7 +27,11 @@ use Canonical as C;
 
 /// The placements measured: the kernel's (root, legs) first.
 fn placements() -> Vec<(&'static str, Placement)> {
-    let p = |anchor, scale| Placement { anchor, scale };
+    let p = |anchor, scale| Placement {
+        anchor,
+        scale,
+        ..Placement::default()
+    };
     vec![
         ("root,legs", p(Anchor::Root, TravelScale::Legs)),
         ("root,stance", p(Anchor::Root, TravelScale::Stance)),
@@ -49,6 +53,19 @@ fn rest_anchor(p: &Pose, a: Anchor) -> DVec3 {
 
 /// The results' joint positions of `cp` on `character` placed as `pl`.
 pub(super) fn placed(character: &Pose, cp: &ClipPoses, pl: Placement) -> Vec<Pose> {
+    placed_turned(character, cp, pl)
+        .into_iter()
+        .map(|(p, _)| p)
+        .collect()
+}
+
+/// The results of `cp` on `character` placed as `pl`: each frame's joint
+/// positions and joint rotations.
+pub(super) fn placed_turned(
+    character: &Pose,
+    cp: &ClipPoses,
+    pl: Placement,
+) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
     retarget_placed(
         character,
         character,
@@ -57,9 +74,6 @@ pub(super) fn placed(character: &Pose, cp: &ClipPoses, pl: Placement) -> Vec<Pos
         Toes::Rigid,
         pl,
     )
-    .into_iter()
-    .map(|(p, _)| p)
-    .collect()
 }
 
 /// Two results apart, fractions of `h`: (mean, 95th percentile over the
@@ -276,6 +290,7 @@ fn variants_of_one_motion_are_placed_alike_by_the_body() {
     let body = Placement {
         anchor: Anchor::Joints,
         scale: TravelScale::Stance,
+        ..Placement::default()
     };
     for (name, cp) in &variants[..2] {
         let turn = levelling_line_deg(&plain.reference.pose, &cp.reference.pose);

@@ -34,6 +34,7 @@ pub(super) fn placements() -> [(&'static str, Placement); 2] {
     let body = Placement {
         anchor: Anchor::Joints,
         scale: TravelScale::Stance,
+        ..Placement::default()
     };
     [("root,legs", Placement::default()), ("joints,stance", body)]
 }

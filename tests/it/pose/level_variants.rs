@@ -24,26 +24,8 @@ fn variants_of_one_motion_levelled_on_each_line() {
     let walk = surfmotion::synth::gait_clip(surfmotion::synth::Gait::Turn, 4.0, 30.0);
     let map = detect_clip(&walk).unwrap().map;
     let plain = clip_poses(&walk, &map).unwrap();
-    let q = DQuat::from_rotation_y(30f64.to_radians());
-    let variants: Vec<(&str, ClipPoses, DQuat)> = vec![
-        (
-            "root moved up and back",
-            root_moved(plain.clone(), 0.11, 0.05),
-            DQuat::IDENTITY,
-        ),
-        (
-            "root moved down and forward",
-            root_moved(plain.clone(), -0.06, -0.04),
-            DQuat::IDENTITY,
-        ),
-        ("mirrored", mirrored(plain.clone()), DQuat::IDENTITY),
-        (
-            "turned and rescaled to centimetres",
-            turned(plain.clone(), q, 100.0),
-            q.inverse(),
-        ),
-    ];
-    let cx = DVec3::new(character[C::Pelvis.index()].x, 0.0, 0.0);
+    let variants = walk_variants(&plain);
+    let flip = mirrored_back(&character);
     let mut got = Vec::new();
     for (pn, pl) in placements() {
         for (ln, l) in LEVELS {
@@ -51,16 +33,7 @@ fn variants_of_one_motion_levelled_on_each_line() {
             for (name, cp, back) in &variants {
                 let mut r = levelled(&character, cp, pl, l, *back);
                 if *name == "mirrored" {
-                    // Reflected back across the character's rest root.
-                    let flip = |p: Pose| {
-                        let mut o = p;
-                        for c in Canonical::ALL {
-                            let x = p[c.index()] - cx;
-                            o[other_side(c).index()] = cx + DVec3::new(-x.x, x.y, x.z);
-                        }
-                        o
-                    };
-                    r = r.into_iter().map(flip).collect();
+                    r = r.into_iter().map(&flip).collect();
                 }
                 let g = apart(&base, &r, h);
                 eprintln!(
@@ -101,5 +74,45 @@ fn variants_of_one_motion_levelled_on_each_line() {
         if *pn == "joints,stance" && *ln == "midpoints" {
             assert!(g.mean < 0.002 && g.mean < 0.2 * chest.mean, "{name}: {g:?}");
         }
+    }
+}
+
+/// The variants of one generated walk that both levelling tests compare with
+/// the plain clip: the root moved inside the body (up and back, down and
+/// forward), mirrored, and turned 30° and rescaled to centimetres; each with
+/// the rotation that turns its result back.
+pub(super) fn walk_variants(plain: &ClipPoses) -> Vec<(&'static str, ClipPoses, DQuat)> {
+    let q = DQuat::from_rotation_y(30f64.to_radians());
+    vec![
+        (
+            "root moved up and back",
+            root_moved(plain.clone(), 0.11, 0.05),
+            DQuat::IDENTITY,
+        ),
+        (
+            "root moved down and forward",
+            root_moved(plain.clone(), -0.06, -0.04),
+            DQuat::IDENTITY,
+        ),
+        ("mirrored", mirrored(plain.clone()), DQuat::IDENTITY),
+        (
+            "turned and rescaled to centimetres",
+            turned(plain.clone(), q, 100.0),
+            q.inverse(),
+        ),
+    ]
+}
+
+/// A mirrored clip's result reflected back across the character's rest root
+/// (sides swapped), to compare with the plain clip's.
+pub(super) fn mirrored_back(character: &Pose) -> impl Fn(Pose) -> Pose {
+    let cx = DVec3::new(character[C::Pelvis.index()].x, 0.0, 0.0);
+    move |p: Pose| {
+        let mut o = p;
+        for c in Canonical::ALL {
+            let x = p[c.index()] - cx;
+            o[other_side(c).index()] = cx + DVec3::new(-x.x, x.y, x.z);
+        }
+        o
     }
 }

@@ -5,6 +5,7 @@ mod character_neutral;
 mod chest;
 mod data_floor;
 mod feet;
+mod footfall;
 mod ground;
 mod level;
 mod level_variants;

@@ -13,6 +13,7 @@ use crate::common;
 
 use super::anchor::{Apart, apart};
 use super::level::levelled;
+use super::level_variants::{mirrored_back, walk_variants};
 use super::two_files::{CC_PAIRS, poses_at_30, two_files, varied};
 use glam::{DQuat, DVec3};
 use surfmotion::pose::Pose;
@@ -30,7 +31,11 @@ pub(super) const LINES: [(&str, Level); 3] = [
 
 /// The placements measured: the kernel's first.
 pub(super) fn placements() -> [(&'static str, Placement); 4] {
-    let p = |anchor, scale| Placement { anchor, scale };
+    let p = |anchor, scale| Placement {
+        anchor,
+        scale,
+        ..Placement::default()
+    };
     [
         ("root,legs", Placement::default()),
         ("root,stance", p(Anchor::Root, TravelScale::Stance)),
@@ -237,40 +242,12 @@ fn the_two_files_placed_by_the_stride_and_levelled_on_the_shoulders() {
 /// the plain clip's result (no data needed).
 #[test]
 fn variants_of_one_motion_placed_by_the_stride() {
-    use super::anchor::root_moved;
-    use super::two_files::{mirrored, other_side, turned};
     let (character, h) = common::walk_character();
     let walk = surfmotion::synth::gait_clip(surfmotion::synth::Gait::Turn, 4.0, 30.0);
     let map = surfmotion::rig::detect_clip(&walk).unwrap().map;
     let plain = surfmotion::pose::retarget::clip_poses(&walk, &map).unwrap();
-    let q = DQuat::from_rotation_y(30f64.to_radians());
-    let variants: Vec<(&str, ClipPoses, DQuat)> = vec![
-        (
-            "root moved up and back",
-            root_moved(plain.clone(), 0.11, 0.05),
-            DQuat::IDENTITY,
-        ),
-        (
-            "root moved down and forward",
-            root_moved(plain.clone(), -0.06, -0.04),
-            DQuat::IDENTITY,
-        ),
-        ("mirrored", mirrored(plain.clone()), DQuat::IDENTITY),
-        (
-            "turned and rescaled to centimetres",
-            turned(plain.clone(), q, 100.0),
-            q.inverse(),
-        ),
-    ];
-    let cx = DVec3::new(character[C::Pelvis.index()].x, 0.0, 0.0);
-    let flip = |p: Pose| {
-        let mut o = p;
-        for c in Canonical::ALL {
-            let x = p[c.index()] - cx;
-            o[other_side(c).index()] = cx + DVec3::new(-x.x, x.y, x.z);
-        }
-        o
-    };
+    let variants = walk_variants(&plain);
+    let flip = mirrored_back(&character);
     let l = Level::Shoulders;
     for (pn, pl) in placements() {
         let base = levelled(&character, &plain, pl, l, DQuat::IDENTITY);
@@ -283,7 +260,7 @@ fn variants_of_one_motion_placed_by_the_stride() {
         for (name, cp, back) in &variants {
             let mut r = levelled(&character, cp, pl, l, *back);
             if *name == "mirrored" {
-                r = r.into_iter().map(flip).collect();
+                r = r.into_iter().map(&flip).collect();
             }
             let g = apart(&base, &r, h);
             eprintln!(

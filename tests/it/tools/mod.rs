@@ -2,6 +2,7 @@
 
 mod plausibility;
 mod surface;
+mod surface_bend;
 mod surface_crumple;
 mod surface_knees;
 mod surface_look;
