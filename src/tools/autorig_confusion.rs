@@ -144,7 +144,7 @@ fn matrix(auto: &[u8], truth: &[u8]) -> [[usize; Part::COUNT]; Part::COUNT] {
 /// first, as "name share%".
 fn shares(r: &[usize; Part::COUNT], n: usize) -> String {
     let mut by: Vec<(usize, usize)> = r.iter().copied().enumerate().collect();
-    by.sort_by(|a, b| b.1.cmp(&a.1));
+    by.sort_by_key(|b| std::cmp::Reverse(b.1));
     by.iter()
         .filter(|(_, k)| *k * 100 > n)
         .map(|(t, k)| {

@@ -75,7 +75,7 @@ pub enum Outcome {
     /// The automatic rig refused (why).
     Refused(String),
     /// Rigged, but the embedding from its landmarks refused.
-    NotEmbedded(AutoRig),
+    NotEmbedded(Box<AutoRig>),
     /// Rigged and embedded (`db init`'s rest frame, carried to the
     /// topology).
     Rigged(Box<(AutoRig, Embedding)>),
@@ -204,7 +204,7 @@ fn rig_cut(m: &crate::mesh::Mesh, frames: &[Vec<[f64; 3]>]) -> (Outcome, f64) {
     };
     let outcome = match embed_as_db_init(m, &frames, rest_frame, &auto.landmarks) {
         Some(e) => Outcome::Rigged(Box::new((auto, e))),
-        None => Outcome::NotEmbedded(auto),
+        None => Outcome::NotEmbedded(Box::new(auto)),
     };
     (outcome, secs)
 }

@@ -59,7 +59,7 @@ fn row(w: &mut AutorigReport, case: &CutRig) {
             let _ = writeln!(w.tables, "{row} refused: {e} |");
             return;
         }
-        Outcome::NotEmbedded(auto) => (auto, None),
+        Outcome::NotEmbedded(auto) => (auto.as_ref(), None),
         Outcome::Rigged(b) => (&b.0, Some(&b.1)),
     };
     let head = if auto.headless { "none" } else { "rigged" };
