@@ -7,7 +7,8 @@
 //! allocates nothing but faer's symbolic analysis of its patch.
 
 use super::patch_solve::PatchSystem;
-use super::unflip::{Adjacency, Budget, RepairOptions, is_turned_over, normal, triangle_turn};
+use super::repair_options::{Budget, RepairOptions};
+use super::turned::{Adjacency, is_turned_over, normal, triangle_turn};
 use glam::{DQuat, DVec3};
 
 /// What a round reads: the mesh, the retrieved frame, the turns and the
