@@ -93,6 +93,15 @@ pub struct RegionResult {
     pub held: Vec<Held>,
 }
 
+/// One frame's inputs to [`Deformer::deform`]: the retrieved frame's
+/// vertices, the skeleton it was captured in, and the pose it must follow.
+#[derive(Clone, Copy)]
+struct Frame<'a> {
+    source: &'a [[f64; 3]],
+    source_pose: &'a Pose,
+    target: &'a Pose,
+}
+
 /// Scratch of [`Deformer::deform`].
 pub struct DeformWorkspace {
     /// The source with the knees' correction ([`DeformOptions::bend_examples`];
@@ -553,20 +562,27 @@ impl Deformer {
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
     ) -> TurnedOver {
-        let Some(b) = &self.bend else {
-            return self.deform_source(ch, source, source_pose, target, out, ws);
-        };
-        let mut bent = std::mem::take(&mut ws.bent);
-        b.bend(
-            source,
+        let bent = self.bend.as_ref().map(|b| {
+            let mut bent = std::mem::take(&mut ws.bent);
+            b.bend(
+                source,
+                source_pose,
+                target,
+                &self.rest_pose,
+                ch.rig(),
+                &mut bent,
+            );
+            bent
+        });
+        let frame = Frame {
+            source: bent.as_deref().unwrap_or(source),
             source_pose,
             target,
-            &self.rest_pose,
-            ch.rig(),
-            &mut bent,
-        );
-        let c = self.deform_source(ch, &bent, source_pose, target, out, ws);
-        ws.bent = bent;
+        };
+        let c = self.deform_source(ch, frame, out, ws);
+        if let Some(bent) = bent {
+            ws.bent = bent;
+        }
         c
     }
 
@@ -574,12 +590,15 @@ impl Deformer {
     fn deform_source(
         &self,
         ch: &Character,
-        source: &[[f64; 3]],
-        source_pose: &Pose,
-        target: &Pose,
+        frame: Frame<'_>,
         out: &mut [[f64; 3]],
         ws: &mut DeformWorkspace,
     ) -> TurnedOver {
+        let Frame {
+            source,
+            source_pose,
+            target,
+        } = frame;
         if self.mode == DeformMode::None {
             out.copy_from_slice(source);
             return TurnedOver::default();
