@@ -17,7 +17,11 @@
 //! method's exactly. Each transition that is not certified is descended on
 //! the full measure (8-neighbour steepest descent) to a true local
 //! minimum, which becomes a candidate: its runs are stored and the search
-//! runs again (a few rounds, [`super::SparseOptions::closure`]).
+//! runs again (a few rounds, [`super::SparseOptions::closure`]). The
+//! last round's new runs are not checked again: on noisy generated motions
+//! (`db::sparse::the_default_sparse_build_keeps_the_dense_candidates`)
+//! 192 of 2,108 graph transitions are still not the dense method's
+//! candidates after 3 rounds (198 without the closure).
 
 use super::matrix::{PairDistance, Span};
 use super::pair_scan::MAX_DESCENT;
