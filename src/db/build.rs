@@ -203,6 +203,12 @@ pub(crate) fn sparse_key(similarity_key: u64, opts: &SparseOptions) -> u64 {
             text += &format!(" far {} {}", opts.far, opts.far_rerank);
         }
     }
+    // The closure (session 39) likewise: a cache built before it (or
+    // with it off) keeps its key; one built with it never reads as one
+    // without.
+    if opts.closure > 0 {
+        text += &format!(" closure {}", opts.closure);
+    }
     k.text("sparse", &text);
     k.finish()
 }

@@ -9,6 +9,7 @@
 //! [`pair_scan`]); [`lookup`] reads either.
 
 pub mod candidates;
+pub(crate) mod closure;
 pub mod colour;
 pub mod histogram;
 pub mod kdtree;

@@ -171,7 +171,14 @@ pub struct SparseOptions {
     /// (+ 0.16 M re-ranking) where 12 per sequence alone compares 3.27 M
     /// for 96.3 % (session 26), at 110.9 s CPU against 129.8 s for the
     /// whole `db build`. With `pool` 128 at 3,234 frames: 95.9 % from 64,
-    /// 97.2 % from 128 (session 28). Default: 128 (64 before session 29).
+    /// 97.2 % from 128 (session 28). Session 39, the 3,896-frame prefix of
+    /// `scripts/scale-db.sh`'s 2,600-vertex pool (11 sequences, the
+    /// options harness on the dense cache): 494 of the dense 524
+    /// transitions (94.3 %) from 128, 502 (95.8 %) from 256; with the
+    /// [`SparseOptions::closure`] 500 (95.4 %) from 128, 504 (96.2 %)
+    /// from 192, 508 (96.9 %) from 256, for 0.57 M full measures of
+    /// re-ranking instead of 0.36 M (the stored pairs 2.04 M).
+    /// Default: 256 (128 from session 29, 64 before).
     pub rerank: usize,
     /// Sequence pairs per sequence (issue 43, session 33): each sequence
     /// takes the per-pair scan and the cover rule's trees only with itself
@@ -221,6 +228,19 @@ pub struct SparseOptions {
     /// Cheap transitions examined per far pair ([`SparseOptions::far`]);
     /// at least `far`. Default: 16.
     pub far_rerank: usize,
+    /// Rounds of the closure ([`super::closure`], issue 43, session 39):
+    /// each sequence pair's best `per_pair` transitions on the stored
+    /// pairs that the stored pairs cannot vouch for (a neighbour or a
+    /// window pair not stored: a minimum only because its smaller
+    /// neighbour is missing, at the edge of a re-timed copy's slanted
+    /// valley) are descended on the full measure to a true minimum, whose
+    /// runs are stored; then the search runs again (nothing without
+    /// `per_pair`). 0: none (before session 39). On the 3,896-frame
+    /// prefix of the 2,600-vertex pool (session 39, the options harness):
+    /// the dense transitions found 494 → 500 of 524 (1 round or 3) for
+    /// 953 / 1,483 more stored pairs (of 2.04 M); with `rerank` 256
+    /// 502 → 508. Default: 3.
+    pub closure: usize,
 }
 
 impl Default for SparseOptions {
@@ -237,10 +257,11 @@ impl Default for SparseOptions {
             per_pair: 8,
             spread: 5,
             min_window: 4,
-            rerank: 128,
+            rerank: 256,
             reach: 0,
             far: 6,
             far_rerank: 16,
+            closure: 3,
         }
     }
 }
@@ -291,6 +312,7 @@ impl SparseOptions {
                 "reach" => &mut self.reach,
                 "far" => &mut self.far,
                 "far_rerank" => &mut self.far_rerank,
+                "closure" => &mut self.closure,
                 other => return Err(format!("'{other}' is not a sparse option")),
             };
             *field = v;
@@ -333,6 +355,10 @@ pub struct SparseStats {
     /// Full measures evaluated by the far search's descents and windows
     /// (not stored unless a window is).
     pub far_rerank_pairs: u64,
+    /// Closure rounds that found transitions to settle
+    /// ([`SparseOptions::closure`]), the true minima they stored, and the
+    /// full measures their descents evaluated (stored or not).
+    pub closure: [u64; 3],
     /// Distinct pairs evaluated with the full measure.
     pub pairs: u64,
     /// Seconds: descriptors, projection and index.
@@ -900,11 +926,10 @@ pub fn sparse_pairs(
         counts[k] = c;
         runs.extend(merged);
     }
-    let merged = merge_runs(runs);
+    let mut merged = merge_runs(runs);
     let total: u64 = merged.iter().map(|r| (r.r1 - r.r0 + 1) as u64).sum();
     progress.stage("sparse pairs compared", total);
     let values = tiled::evaluate(set, &merged, &step);
-    let pairs = values.len() as u64;
     let (offsets, cols, vals) = rows_of(n, &merged, &values);
     let mut sim = SparseSimilarity {
         spans,
@@ -915,6 +940,8 @@ pub fn sparse_pairs(
         dims,
         features,
     };
+    let closure = close(&mut sim, &mut merged, set, opts, &seq, progress);
+    let pairs = sim.stored_pairs() as u64;
     sim.radius = radii(&sim, &found.near);
     let stats = SparseStats {
         candidates: counts.iter().sum::<u64>() + far_count,
@@ -928,12 +955,64 @@ pub fn sparse_pairs(
         far_sequence_pairs: far_pairs.len() as u64,
         far_candidates: far_count,
         far_rerank_pairs,
+        closure,
         pairs,
         index_seconds,
         pairs_seconds: t1.elapsed().as_secs_f64(),
         cpu_seconds: [c1 - c0, c2 - c1, cpu() - c2],
     };
     (sim, stats)
+}
+
+impl super::closure::StoredPairs for SparseSimilarity {
+    fn stored(&self, a: usize, b: usize) -> Option<f32> {
+        SparseSimilarity::stored(self, a, b)
+    }
+    fn block(&self, i: usize, j: usize) -> Vec<(usize, usize)> {
+        SparseSimilarity::block(self, i, j)
+    }
+}
+
+/// The closure's rounds on `sim`, whose pairs are `merged`'s
+/// ([`SparseOptions::closure`], [`super::closure`]): each round's true
+/// minima stored with their runs (the pairs stored already read, not
+/// evaluated again). Returns [`SparseStats::closure`].
+fn close(
+    sim: &mut SparseSimilarity,
+    merged: &mut Vec<Run>,
+    set: &dyn PairDistance,
+    opts: &SparseOptions,
+    seq: &[u32],
+    progress: &dyn SparseProgress,
+) -> [u64; 3] {
+    let topts = per_pair_options(opts);
+    let band = opts.band as i64;
+    let mut done = [0u64; 3];
+    for _ in 0..opts.closure {
+        let (seeds, evaluated) = super::closure::uncertified_minima(&*sim, set, &sim.spans, &topts);
+        done[2] += evaluated;
+        if seeds.is_empty() {
+            break;
+        }
+        done[0] += 1;
+        done[1] += seeds.len() as u64;
+        let (runs, _) = runs_around(seeds.into_iter(), &sim.spans, seq, band, band);
+        let mut all = std::mem::take(merged);
+        all.extend(runs);
+        let all = merge_runs(all);
+        let total: u64 = all.iter().map(|r| r.len() as u64).sum();
+        progress.stage("sparse pairs closed", total);
+        let known = super::closure::Known {
+            stored: &*sim,
+            full: set,
+        };
+        let values = tiled::evaluate(&known, &all, &|k| progress.advance(k));
+        let (offsets, cols, vals) = rows_of(sim.n, &all, &values);
+        sim.offsets = offsets;
+        sim.pairs = Stored::Owned { cols, vals };
+        *merged = all;
+    }
+    done
 }
 
 /// The transition search of the per-pair candidates: `per_pair` kept, the

@@ -1165,3 +1165,138 @@ fn transitions_between(
         .map(|t| (t.m, t.n, t.window, t.cost.to_bits()))
         .collect()
 }
+
+/// `set`'s motions with their sequences in reverse order and every value
+/// scaled by `scale` (a re-ordered, rescaled variant: the same motions, so
+/// the same transitions up to the sequences' numbering).
+fn reordered(
+    set: &Motions,
+    spans: &[surfmotion::similarity::Span],
+    scale: f32,
+) -> (Motions, Vec<surfmotion::similarity::Span>) {
+    let (mut frames, mut out) = (Vec::new(), Vec::new());
+    for s in spans.iter().rev() {
+        let start = frames.len();
+        frames.extend(
+            set.0[s.start..s.start + s.len]
+                .iter()
+                .map(|p| p.map(|x| x * scale)),
+        );
+        out.push(surfmotion::similarity::Span { start, ..s.clone() });
+    }
+    (Motions(frames), out)
+}
+
+/// The transitions of `g` that are not the dense method's candidates: not
+/// a local minimum of the dense matrix (a smaller 8-neighbour), or whose
+/// window cost (Eq. 3 per blended frame) on the dense matrix differs from
+/// the graph's by more than 1e-6 relative or is beaten by another window.
+fn not_dense_candidates(
+    dense: &surfmotion::similarity::SimilarityMatrix,
+    g: &surfmotion::graph::SurfaceMotionGraph,
+    topts: &surfmotion::graph::TransitionOptions,
+) -> usize {
+    let spans = &dense.spans;
+    let bad = |t: &surfmotion::similarity::transitions::Transition| {
+        let (si, sj) = (&spans[t.from], &spans[t.to]);
+        let c = |r: i64, s: i64| dense.get(si.start + r as usize, sj.start + s as usize) as f64;
+        let (m, n) = (t.m as i64, t.n as i64);
+        let smaller = (-1..=1i64)
+            .flat_map(|x| (-1..=1i64).map(move |y| (x, y)))
+            .any(|(x, y)| {
+                let (r, s) = (m + x, n + y);
+                r >= 0 && s >= 0 && r < si.len as i64 && s < sj.len as i64 && c(r, s) < c(m, n)
+            });
+        let cost = |l: i64| {
+            let mut d = 0.0;
+            for k in -l..=l {
+                let alpha = (k + l) as f64 / (2 * l) as f64;
+                d += alpha.min(1.0 - alpha) * c(m + k, n + k);
+            }
+            d / (2 * l + 1) as f64
+        };
+        let fit = (m.min(n))
+            .min(si.len as i64 - 1 - m)
+            .min(sj.len as i64 - 1 - n)
+            .min(topts.max_window as i64);
+        let own = cost(t.window as i64);
+        let beaten = (topts.min_window as i64..=fit).any(|l| cost(l) < own * (1.0 - 1e-6));
+        smaller || beaten || (own - t.cost).abs() > 1e-6 * t.cost.abs().max(1e-12)
+    };
+    g.transitions().iter().filter(|t| bad(t)).count()
+}
+
+/// Issue 43 where the dense method runs, on generated motions (groups of
+/// four re-timed copies of a loop — the slanted valleys of speed variants
+/// — and one far motion), 24 and 32 sequences, as made and re-ordered and
+/// rescaled ×1.37: the default options (session 39: the closure, `rerank`
+/// 256) against session 38's (no closure, `rerank` 128). Measured
+/// (session 39), 24 / 32 sequences as made: dense transitions found 1,906
+/// → 1,908 of 2,074 (91.9 → 92.0 %) and 3,356 → 3,360 of 3,624 (92.6 →
+/// 92.7 %); graph transitions that are not the dense method's candidates
+/// 198 → 192 and 304 → 296 (the closure's third round still finds some to
+/// settle on these noisy motions). Under the issue's 95 % here: the misses
+/// are valleys never evaluated. Asserted: no fewer found and no more
+/// non-candidates than session 38's options, the recall held at 90 %, the
+/// variant within 1 %.
+#[test]
+fn the_default_sparse_build_keeps_the_dense_candidates() {
+    use surfmotion::graph::{GraphEdits, SurfaceMotionGraph, TransitionOptions};
+    use surfmotion::similarity::Measure;
+    use surfmotion::similarity::matrix::{SimilarityMatrix, all_pairs};
+    use surfmotion::similarity::sparse::{SparseOptions, sparse_pairs};
+    let topts = TransitionOptions::default();
+    let edits = GraphEdits::default();
+    let now = SparseOptions {
+        dims: 6,
+        ..SparseOptions::default()
+    };
+    let before = SparseOptions {
+        closure: 0,
+        rerank: 128,
+        ..now
+    };
+    for sequences in [24usize, 32] {
+        let (made, spans) = generated_motions(sequences);
+        let mut found = Vec::new();
+        for (name, (set, spans)) in [
+            ("as made", (Motions(made.0.clone()), spans.clone())),
+            ("re-ordered, ×1.37", reordered(&made, &spans, 1.37)),
+        ] {
+            let dense = SimilarityMatrix::new(spans.clone(), all_pairs(&set, &|_| {})).unwrap();
+            let g_dense =
+                SurfaceMotionGraph::build(&dense, Measure::Shape, &topts, &edits).unwrap();
+            let n = set.0.len() as u64;
+            let mut row = Vec::new();
+            for (which, opts) in [("session 38", before), ("default", now)] {
+                let (sim, stats) = sparse_pairs(&set, spans.clone(), &opts, &|_: u64| {});
+                let g = SurfaceMotionGraph::build(&sim, Measure::Shape, &topts, &edits).unwrap();
+                let a = agreement(&g_dense, &g, 0, 0.05);
+                let odd = not_dense_candidates(&dense, &g, &topts);
+                eprintln!(
+                    "{sequences} sequences {name}, {which}: dense {} transitions, sparse {}, found {} ({:.1} %), not dense candidates {odd}; pairs compared {} of {}; closure {:?}",
+                    a.reference,
+                    a.compared,
+                    a.near_and_cost,
+                    100.0 * a.found(),
+                    stats.pairs,
+                    n * (n - 1) / 2,
+                    stats.closure
+                );
+                assert!(a.reference > 8 * sequences, "{name}: {a:?}");
+                assert!(stats.pairs < n * (n - 1) / 2, "{name}: {stats:?}");
+                row.push((a, odd));
+            }
+            let ((old, odd_old), (new, odd_new)) = (row[0], row[1]);
+            let what = format!("{sequences} sequences {name}: {old:?} -> {new:?}");
+            assert!(new.near_and_cost >= old.near_and_cost, "{what}");
+            assert!(new.found() >= 0.9, "{what}");
+            assert!(odd_new <= odd_old, "{what}: {odd_old} -> {odd_new}");
+            found.push(new.found());
+        }
+        assert!(
+            (found[0] - found[1]).abs() <= 0.01,
+            "{sequences} sequences: the variant {found:?}"
+        );
+    }
+}
