@@ -124,6 +124,12 @@ pub struct DeformWorkspace {
     /// The frame's source normals, unnormalised
     /// ([`unflip::source_normals`]).
     source_normals: Vec<DVec3>,
+    /// Each triangle's turned-over flag of the last reading
+    /// ([`unflip::turned_over_flagged`]).
+    flags: Vec<bool>,
+    /// The best repair pass's turned-over triangles
+    /// ([`Deformer::repair_with`]).
+    best_bad: Vec<u32>,
     /// Reference normals (computed as the untangling reads them) and
     /// source areas of the triangles.
     references: untangle::LazyReferences,
@@ -162,6 +168,17 @@ impl DeformWorkspace {
     /// workspace (zero when nothing was turned over).
     pub fn repair_work(&self) -> unflip::Work {
         self.work
+    }
+
+    /// Grows the fold repair's buffers to at least `other`'s capacities:
+    /// the two-frame overlap's second workspace grows to the first's
+    /// largest patch before a pair, on the calling thread, rather than on
+    /// meeting such a patch itself in a later pair on a pool thread
+    /// (the live session's two-frame overlap). The result of a
+    /// deformation does not depend on it (the buffers are cleared before
+    /// each use).
+    pub fn reserve_as(&mut self, other: &DeformWorkspace) {
+        self.replay.reserve_as(&other.replay);
     }
 
     /// How many frames deformed with this workspace were left without the
@@ -524,6 +541,8 @@ impl Deformer {
             shared: vec![[0.0; 3]; self.n],
             last: vec![[0.0; 3]; self.n],
             source_normals: vec![DVec3::ZERO; self.triangles],
+            flags: vec![false; self.triangles],
+            best_bad: Vec::new(),
             references: untangle::LazyReferences::new(self.triangles),
             areas: vec![0.0; self.triangles],
             reading: SurfaceReading::default(),
@@ -954,13 +973,19 @@ impl Deformer {
         unflip::source_normals(tris, source, &mut ws.source_normals);
         untangle::source_areas(&ws.source_normals, &mut ws.areas);
         let skin = std::mem::take(&mut ws.turn);
-        let bad = unflip::turned_over_from(tris, &ws.source_normals, out, &skin);
+        let bad = unflip::turned_over_flagged(tris, &ws.source_normals, out, &skin, &mut ws.flags);
         let mut counts = match self.repair_turns {
             RepairTurns::Skin | RepairTurns::SkinThenSurface if cloth_turns => {
                 // Counted against the skin's turns, repaired against the
                 // stitch's on the cloth.
                 let turn = std::mem::take(&mut ws.repair_turn);
-                let own = unflip::turned_over_from(tris, &ws.source_normals, out, &turn);
+                let own = unflip::turned_over_flagged(
+                    tris,
+                    &ws.source_normals,
+                    out,
+                    &turn,
+                    &mut ws.flags,
+                );
                 let c = self.repair_against(f, out, ws, &turn, own, 0);
                 ws.repair_turn = turn;
                 TurnedOver {
@@ -1092,7 +1117,12 @@ impl Deformer {
         if adaptive {
             ws.start.copy_from_slice(out);
         }
-        let first = self.repair_with(f, out, ws, turn, bad.clone(), &fixed, &mut budget, grow);
+        // The list is kept for the last resort only when it may run.
+        let (bad, kept) = match adaptive {
+            true => (bad.clone(), bad),
+            false => (bad, Vec::new()),
+        };
+        let first = self.repair_with(f, out, ws, turn, bad, &fixed, &mut budget, grow);
         ws.work = add_work(base, budget.done);
         let before_retry = budget.done.patches;
         if first == 0 || !adaptive {
@@ -1101,6 +1131,7 @@ impl Deformer {
                 after: first,
             };
         }
+        let bad = kept;
         // The last resort, from the deformed frame again; `ws.start` keeps
         // the first result.
         out.swap_with_slice(&mut ws.start);
@@ -1135,7 +1166,8 @@ impl Deformer {
     ) -> usize {
         let RepairOf { tris, adj, source } = f;
         let mut best = bad.len();
-        let mut best_bad = bad.clone();
+        let mut best_bad = std::mem::take(&mut ws.best_bad);
+        best_bad.clone_from(&bad);
         ws.best.copy_from_slice(out);
         // Untangling first: it is local and cheap, and fixes most frames
         // without a patch factorisation (measured: 12.4 → 8.6 ms a frame on
@@ -1160,6 +1192,7 @@ impl Deformer {
             at_best = true;
         }
         if best == 0 {
+            ws.best_bad = best_bad;
             return 0;
         }
         for pass in 0..self.repair_passes.max(1) {
@@ -1213,6 +1246,7 @@ impl Deformer {
                 break;
             }
         }
+        ws.best_bad = best_bad;
         best
     }
 }

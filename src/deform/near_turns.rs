@@ -379,11 +379,10 @@ impl SurfaceReading {
         self.flagged_list()
     }
 
-    /// The triangles flagged at the last reading, increasing.
+    /// The triangles flagged at the last reading, increasing (allocated
+    /// once, to its length: [`super::turned::flagged_list`]).
     fn flagged_list(&self) -> Vec<u32> {
-        (0..self.flagged.len() as u32)
-            .filter(|&t| self.flagged[t as usize])
-            .collect()
+        super::turned::flagged_list(&self.flagged)
     }
 }
 

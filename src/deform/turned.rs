@@ -122,6 +122,39 @@ pub fn turned_over_from(
         .collect()
 }
 
+/// [`turned_over_from`] through `flags` (one per triangle, kept by the
+/// caller): each triangle's test in parallel into its flag, then the
+/// flagged ones listed in increasing order — the same list, with no
+/// allocation but the list itself (none when nothing is turned over),
+/// where the parallel `collect` allocated per chunk.
+pub fn turned_over_flagged(
+    tris: &[[u32; 3]],
+    source_normals: &[DVec3],
+    out: &[[f64; 3]],
+    turn: &[DQuat],
+    flags: &mut Vec<bool>,
+) -> Vec<u32> {
+    flags.resize(tris.len(), false);
+    flags
+        .par_iter_mut()
+        .zip(tris.par_iter().zip(source_normals.par_iter()))
+        .with_min_len(CHUNK)
+        .for_each(|(b, (t, n))| *b = faces_against(t, *n, out, turn));
+    flagged_list(flags)
+}
+
+/// The indices of the set `flags`, increasing, in a list allocated once
+/// to its length (not at all when none is set).
+pub(crate) fn flagged_list(flags: &[bool]) -> Vec<u32> {
+    let count = flags.iter().filter(|&&b| b).count();
+    if count == 0 {
+        return Vec::new();
+    }
+    let mut list = Vec::with_capacity(count);
+    list.extend((0..flags.len() as u32).filter(|&t| flags[t as usize]));
+    list
+}
+
 /// Whether triangle `t` of `out` faces against its source normal
 /// `source_normal` ([`source_normals`]) turned by its rotation under
 /// `turn`: the test of [`turned_over_from`], one triangle (the same

@@ -24,7 +24,9 @@
 //! cost one pass over the triangles.
 
 pub use super::repair_options::{Budget, RepairOptions, Work, WorkLimit};
-pub use super::turned::{Adjacency, skin_turns, source_normals, turned_over, turned_over_from};
+pub use super::turned::{
+    Adjacency, skin_turns, source_normals, turned_over, turned_over_flagged, turned_over_from,
+};
 pub(crate) use super::turned::{CHUNK, faces_against, triangle_turn};
 use super::unflip_patch::{RepairScratch, RoundOf};
 use glam::{DQuat, DVec3};
@@ -57,6 +59,15 @@ impl Replay {
     /// Forgets the kept state.
     pub fn clear(&mut self) {
         self.valid = false;
+    }
+
+    /// Grows the kept frame's and the repair's buffers to at least
+    /// `other`'s capacities ([`RepairScratch::reserve_as`]); the kept
+    /// state is not touched.
+    pub(crate) fn reserve_as(&mut self, other: &Replay) {
+        super::patch_solve::reserve_as(&mut self.out, &other.out);
+        super::patch_solve::reserve_as(&mut self.bad, &other.bad);
+        self.scratch.reserve_as(&other.scratch);
     }
 }
 
@@ -391,6 +402,8 @@ mod tests {
     /// as made, mirrored, turned and scaled ×100, with the rings bounded
     /// and not. The patches are larger than the bound a patch, so memory
     /// taken a vertex or a row (the solver before: a row per vertex) fails.
+    /// A fresh state grown to the first ([`Replay::reserve_as`]) makes no
+    /// call outside faer on its first pass.
     #[test]
     fn a_second_pass_allocates_nothing_but_the_patches_orderings() {
         use super::super::patch_solve::counted::calls;
@@ -471,6 +484,12 @@ mod tests {
                     work.patch_vertices > PER_PATCH * work.patches,
                     "{case}: patches too small to tell"
                 );
+                // A second workspace grown to the first (the live overlap's
+                // second slot) allocates nothing on its first pass either.
+                let mut grown = Replay::default();
+                grown.reserve_as(&kept);
+                let ([outside, _], _) = pass(&mut grown);
+                assert_eq!(outside, 0, "{case}: grown to the first, {outside} calls");
             }
         }
     }
@@ -496,12 +515,21 @@ mod tests {
         let mut sn = vec![DVec3::ZERO; nt];
         source_normals(tris, &src, &mut sn);
         let mut seen = 0;
+        // One flag buffer for every reading, as a workspace keeps it.
+        let mut flags = Vec::new();
         for k in 0..4 {
             let turn: Vec<DQuat> = (0..src.len())
                 .map(|i| DQuat::from_rotation_y(k as f64 * 0.9 + (i % 7) as f64 * 0.2))
                 .collect();
             let bad = turned_over(tris, &src, &out, &turn);
             assert_eq!(turned_over_from(tris, &sn, &out, &turn), bad, "turns {k}");
+            let flagged = turned_over_flagged(tris, &sn, &out, &turn, &mut flags);
+            assert_eq!(flagged, bad, "turns {k}, flagged");
+            assert_eq!(
+                flagged.capacity(),
+                bad.len(),
+                "allocated once, to its length"
+            );
             seen += bad.len();
             let (mut n0, mut a0) = (vec![DVec3::ZERO; nt], vec![0.0; nt]);
             references(tris, &src, &turn, &mut n0, &mut a0);

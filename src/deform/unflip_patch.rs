@@ -6,7 +6,7 @@
 //! every buffer grows to the largest patch met and is kept: a round
 //! allocates nothing but faer's symbolic analysis of its patch.
 
-use super::patch_solve::PatchSystem;
+use super::patch_solve::{PatchSystem, reserve_as};
 use super::repair_options::{Budget, RepairOptions};
 use super::turned::{Adjacency, is_turned_over, normal, triangle_turn};
 use glam::{DQuat, DVec3};
@@ -74,6 +74,33 @@ impl RepairScratch {
         if self.listed.len() != triangles {
             self.listed.clear();
             self.listed.resize(triangles, false);
+        }
+    }
+
+    /// Grows every buffer to at least `other`'s capacity
+    /// ([`PatchSystem::reserve_as`]); the vertex and triangle maps are
+    /// sized by [`RepairScratch::fit`].
+    pub(crate) fn reserve_as(&mut self, other: &RepairScratch) {
+        for (v, o) in [
+            (&mut self.patch, &other.patch),
+            (&mut self.touch, &other.touch),
+            (&mut self.cand, &other.cand),
+            (&mut self.vs, &other.vs),
+        ] {
+            reserve_as(v, o);
+        }
+        reserve_as(&mut self.edges, &other.edges);
+        for (v, o) in [
+            (&mut self.b, &other.b),
+            (&mut self.held, &other.held),
+            (&mut self.x, &other.x),
+            (&mut self.moved, &other.moved),
+        ] {
+            reserve_as(v, o);
+        }
+        self.system.reserve_as(&other.system);
+        if self.local.is_empty() {
+            self.fit(other.local.len(), other.listed.len());
         }
     }
 

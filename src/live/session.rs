@@ -131,11 +131,18 @@ pub struct SessionOptions {
     /// (the deformation carries no state from frame to frame); a held frame
     /// comes out one decided frame later ([`LiveFrame::held`]), and up to
     /// two frames are deformed in the time of one on two free cores.
-    /// Default: [`Overlap::Off`] (one frame at a time): with
-    /// [`Overlap::Queued`] the resident memory of a looped replay under
-    /// load grew at each loop's start (147 → 166 MiB over five loops of
-    /// `live::long`), where the one-frame path's stays flat: the pairs'
-    /// deformation allocates on the pool's threads (session 37).
+    /// Default: [`Overlap::Off`] (one frame at a time). With
+    /// [`Overlap::Queued`] the resident memory of a looped replay grew
+    /// after the analysis window filled (`live::long`'s command, five
+    /// loops: 3.7-10.5 % over the full-window sample in six runs, session
+    /// 39): the second slot's fold-repair buffers grew by 8.9 MiB when it
+    /// first met a large patch, in a later pair on a pool thread
+    /// (heaptrack). The slots now grow to each other's before each pair
+    /// (`Slot::reserve_pair`) and the live heap is flat from the first
+    /// large repair on; the resident memory still rose 1.1-6.8 % after the
+    /// window filled (seven runs; 3.4-4.3 % in three with one malloc
+    /// arena), against 2.2-2.4 % one frame at a time, and sits 9-23 MiB
+    /// above it: not the default.
     pub overlap: Overlap,
 }
 
@@ -222,6 +229,19 @@ impl Slot {
         match (began, thread_cpu_seconds()) {
             (Some(a), Some(b)) => (b - a).max(0.0),
             _ => 0.0,
+        }
+    }
+
+    /// Grows each slot's fold-repair buffers to the other's before a pair
+    /// ([`DeformWorkspace::reserve_as`]), on the session's thread: a slot
+    /// grows once to the largest patch either has met, rather than when it
+    /// first meets one itself in a later pair, on a pool thread (measured,
+    /// heaptrack, `live::long`'s command queued: the second slot's buffers
+    /// grew by 8.9 MiB half way through the run, after the window filled).
+    fn reserve_pair(a: &mut Slot, b: &mut Slot) {
+        if let (Some(wa), Some(wb)) = (a.ws.as_mut(), b.ws.as_mut()) {
+            wa.reserve_as(wb);
+            wb.reserve_as(wa);
         }
     }
 
@@ -623,6 +643,7 @@ impl<'a> Session<'a> {
                     [x, y] => (y, x),
                     _ => unreachable!("a frame is held only with two slots"),
                 };
+                Slot::reserve_pair(a, b);
                 let (began, cpu) = (Instant::now(), process_cpu_seconds());
                 let (ta, tb) = rayon::join(|| a.deform(ch, d), || b.deform(ch, d));
                 self.gain.pair(began.elapsed(), cpu_since(cpu));
