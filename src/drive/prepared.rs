@@ -76,7 +76,9 @@ pub struct Analysed {
     /// placement and deformation follow and the joint-velocity error is
     /// measured against ([`super::query::to_database`], bit for bit).
     pub query: Vec<Pose>,
-    /// The query with the clip's stance height taken off: retrieval
+    /// The query with the clip's stance height taken off (with the feet
+    /// on the clip's footfalls, before they were put there:
+    /// [`OnCharacter::free_feet`]): retrieval
     /// compares poses as they stand on the database's floor (a block CMU
     /// subject 03 climbs is no part of the pose).
     pub on_floor: Vec<Pose>,
@@ -126,7 +128,15 @@ impl Analysed {
             .map(|(p, _)| p.map(|q| q + lift))
             .collect();
         let raised = stance_offsets_given(ch.rest_pose(), reference, mocap, given);
-        let on_floor = query
+        // With the feet on the clip's footfalls, retrieval compares the
+        // poses before (issue 44: CMU 03_02 on samba chose other frames).
+        let free: Option<Vec<Pose>> = on_character
+            .free_feet
+            .as_ref()
+            .map(|f| f.iter().map(|p| p.map(|q| q + lift)).collect());
+        let on_floor = free
+            .as_ref()
+            .unwrap_or(&query)
             .iter()
             .zip(raised.iter().chain(std::iter::repeat(&0.0)))
             .map(|(p, &r)| p.map(|q| q - DVec3::Y * r))

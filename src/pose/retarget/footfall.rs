@@ -11,25 +11,41 @@
 //! times as far, so its strides on the character are 1.3-3.0 % short,
 //! and a planted foot slides (session 37, `pose::stride`).
 //!
-//! Here each footfall of the clip (a run of frames in which a foot
-//! touches its ground, [`Support::touch`], and its ankle or toe joint
-//! moves less than 1 % of the clip's leg horizontally from the frame
-//! before) becomes a target: in each of its frames the clip's ankle
-//! mapped by the one travel scale `k` the body is carried by, `k a(t)`,
-//! plus the footfall's mean horizontal offset of the character's hip on
-//! that side from the clip's, scaled (`mean(h_char − k h_clip)`, so the
-//! character keeps its own hip width). A foot still in the clip is
-//! still on the character. Between footfalls the ankle's offset from
-//! where the limbs put it eases (smoothstep) from the last footfall's to
-//! the next's, so nothing pops; before the first and after the last it
-//! is held. The height is the limbs' own: only the horizontal place
-//! changes, so the feet's ground ([`place_feet`](super::feet::place_feet)),
-//! applied after, stands them as before. Where a planted foot's target
-//! lies beyond 0.997 of its leg's reach (or the posed leg's, if longer),
-//! the body is shifted horizontally (the least shift, by alternating
-//! projection over the planted feet, then smoothed over ±4 frames): the
-//! pelvis follows the feet. The legs reach the targets by two-bone IK
+//! Here each footfall of the clip (a run of three frames or more in
+//! which a foot touches its ground, [`Support::touch`], and its ankle or
+//! toe joint moves less than 1 % of the clip's leg horizontally from the
+//! frame before) becomes a target: the body is first carried by its
+//! hips' midpoint (the clip's scaled by the one travel scale `k`, so that
+//! no rig's root placement sways it about the held feet:
+//! [`carry_by_hips`]); in each footfall frame the target is the clip's
+//! ankle scaled, `k a(t)`, plus the footfall's mean horizontal offset of
+//! the character's hip on that side from the clip's, scaled
+//! (`mean(h_char − k h_clip)`, so the character keeps its own hip
+//! width). A foot still in the clip is still on the character. Between
+//! footfalls the ankle's offset from where the limbs put it eases
+//! (smoothstep) from the last footfall's to the next's, so nothing pops;
+//! before the first and after the last it is held. The height is the
+//! limbs' own: only the horizontal place changes, so the feet's ground
+//! ([`place_feet`](super::feet::place_feet)), applied after, stands them
+//! as before. Where a planted foot's target lies beyond 0.997 of its
+//! leg's reach (or the posed leg's, if longer), the body is shifted
+//! horizontally (the least shift, by alternating projection over the
+//! planted feet, then smoothed over ±4 frames): the pelvis follows the
+//! feet. The legs reach the targets by two-bone IK
 //! ([`leg_ik`](super::leg_ik)). A clip with no footfall is unchanged.
+//!
+//! Retrieval compares the poses before the feet were put on their
+//! footfalls (`OnCharacter::free_feet`): on the samba capture (a dance,
+//! no walking frame) CMU 03_02's query is 2.6 m (summed over 19 joints)
+//! from its nearest frames, and holding one frame (129) or another (0,
+//! the A-pose) cost within 0.1 % of each other; the planted legs (their
+//! ankles 1-2 cm off) tipped the choice to the A-pose, whose head carriage
+//! raised the head's p95 3.4° → 6.3° (session 38).
+//!
+//! An option, off by default: measured (session 39,
+//! `scripts/yardstick.sh` on samba) it still slides the Bandai Namco
+//! walk's and run's feet more than the default (0.324 → 0.348, 0.519 →
+//! 0.541 cm/frame) and raises CMU 03_02's velocity error 0.123 → 0.140.
 
 use super::ground::Support;
 use super::leg_ik::{LEGS, reach};
@@ -39,6 +55,10 @@ use glam::{DQuat, DVec3};
 
 /// A footfall: its first and last frame.
 type Plant = (usize, usize);
+
+/// The fewest frames a footfall lasts: a foot still for two frames is a
+/// pause in its swing (a run's stance lasts 6-8 frames at 30 fps).
+const MIN_FRAMES: usize = 3;
 
 /// Frames either side over which the body's shift is averaged.
 const SMOOTH: usize = 4;
@@ -65,10 +85,12 @@ pub(super) fn plant_feet(
     if n < 2 || !(k.is_finite() && k > 0.0 && leg.is_finite() && leg > 0.0) {
         return;
     }
-    let plants = [0, 1].map(|f| footfalls(&mocap[..n], support, f, 0.01 * leg));
+    let still = 0.01 * leg;
+    let plants = [0, 1].map(|f| footfalls(&mocap[..n], support, f, still));
     if plants.iter().all(Vec::is_empty) {
         return;
     }
+    carry_by_hips(&mocap[..n], k, &mut out[..n]);
     let offsets = [0, 1].map(|f| ankle_offsets(&mocap[..n], &out[..n], f, &plants[f], k));
     let goals: [Vec<DVec3>; 2] = [0, 1].map(|f| {
         let a = LEGS[f][2].index();
@@ -94,8 +116,8 @@ pub(super) fn plant_feet(
     }
 }
 
-/// The footfalls of foot `f` (0 left, 1 right): the runs of two frames
-/// or more in which it touches its ground and its ankle or toe moves
+/// The footfalls of foot `f` (0 left, 1 right): the runs of
+/// [`MIN_FRAMES`] frames or more in which it touches its ground and its ankle or toe moves
 /// less than `still` horizontally from the frame before (the first frame:
 /// to the next).
 fn footfalls(mocap: &[Pose], support: &Support, f: usize, still: f64) -> Vec<Plant> {
@@ -113,7 +135,7 @@ fn footfalls(mocap: &[Pose], support: &Support, f: usize, still: f64) -> Vec<Pla
         match (i < n && planted(i), start) {
             (true, None) => start = Some(i),
             (false, Some(s)) => {
-                if i - s >= 2 {
+                if i - s >= MIN_FRAMES {
                     out.push((s, i - 1));
                 }
                 start = None;
@@ -124,12 +146,41 @@ fn footfalls(mocap: &[Pose], support: &Support, f: usize, still: f64) -> Vec<Pla
     out
 }
 
+/// Moves each pose of `out` horizontally so that the character's hips'
+/// midpoint follows the clip's (`mocap`'s) scaled by `k`, from where it
+/// is at the first frame. The footfalls' targets are the clip's feet
+/// scaled, held still in the world, so the body they are reached from
+/// must be carried by a point every rig puts alike (the thighs' heads),
+/// not by the root, which a rig puts anywhere in the pelvis: carried by
+/// a root moved 11 % of the leg up and 5 % back, the body swayed about
+/// the held feet with the pelvis's turns and the result's posture
+/// differed by 0.065 % of the height (session 38). With the hips placed
+/// so already ([`Anchor::Hips`](super::Anchor::Hips)) nothing moves.
+fn carry_by_hips(mocap: &[Pose], k: f64, out: &mut [(Pose, [DQuat; Canonical::COUNT])]) {
+    let hips = |p: &Pose| flat(0.5 * (p[LEGS[0][0].index()] + p[LEGS[1][0].index()]));
+    let Some(first) = out.first().map(|(t, _)| hips(t) - k * hips(&mocap[0])) else {
+        return;
+    };
+    for (m, (t, _)) in mocap.iter().zip(out.iter_mut()) {
+        let d = first - (hips(t) - k * hips(m));
+        if !d.is_finite() {
+            continue;
+        }
+        for p in t.iter_mut() {
+            *p += d;
+        }
+    }
+}
+
 /// Per frame, the horizontal offset of foot `f`'s ankle from where the
 /// limbs put it (`out`) to its target: in a footfall (`plants`), the
 /// clip's ankle scaled by `k` plus the footfall's mean offset of the
 /// character's hip from the clip's, scaled; between footfalls eased from
 /// one's to the next's; held before the first and after the last; zero
-/// everywhere for a foot with none.
+/// everywhere for a foot with none. Held on the ankle, not on the toe
+/// from heel-off (measured, session 39: the toe held while the heel
+/// rises slid the surface's feet more, Bandai Namco's walk 0.348 → 0.617
+/// cm/frame on samba, its knees straightened up to 4.5° past straight).
 fn ankle_offsets(
     mocap: &[Pose],
     out: &[(Pose, [DQuat; Canonical::COUNT])],

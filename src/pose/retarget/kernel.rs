@@ -92,10 +92,15 @@ pub fn retarget_with_neutral(
 }
 
 /// A retargeted clip (per frame the character's joint positions and global
-/// rotations) and each foot's ground per frame ([`retarget_on_grounds`]).
+/// rotations), each foot's ground per frame ([`retarget_on_grounds`]) and,
+/// with the feet on the clip's footfalls ([`Footfalls::Targets`]), the
+/// joint positions as they were before (the feet where the limbs' directions put
+/// them, standing on the ground as the result does): what retrieval
+/// compares (`drive::Analysed::on_floor`).
 pub(super) type RetargetedOnGrounds = (
     Vec<(Pose, [DQuat; Canonical::COUNT])>,
     [Vec<Option<f64>>; 2],
+    Option<Vec<Pose>>,
 );
 
 /// [`retarget_with_neutral`] with the character's toes moving as `toes`
@@ -192,7 +197,7 @@ fn retarget_placed_on_grounds(
     // Counted by the tests of issue 40's "analysed once per clip".
     let _run = tracing::debug_span!("pose_kernel", frames = mocap.len()).entered();
     if mocap.is_empty() {
-        return (Vec::new(), [Vec::new(), Vec::new()]);
+        return (Vec::new(), [Vec::new(), Vec::new()], None);
     }
     // A clip whose root carries no vertical motion stood on its legs.
     let from_legs = root_from_legs(mocap);
@@ -288,12 +293,17 @@ fn retarget_placed_on_grounds(
     let floors = (clip_floor, char_floor);
     let k = place_anchor(character, mocap, placement, s, floors, &mut out);
     // The feet on the clip's footfalls, mapped by the same travel scale
-    // (issue 44, an option: [`plant_feet`]).
+    // (issue 44, an option: [`plant_feet`]); the poses as they were kept,
+    // grounded, for retrieval to compare.
+    let mut free = None;
     if placement.footfalls == Footfalls::Targets {
+        let mut was = out.clone();
+        place_feet(character, &support, s, toes, given.open_end, &mut was);
+        free = Some(was.into_iter().map(|(p, _)| p).collect());
         plant_feet(mocap, &support, (k, leg_length(r)), &mut out);
     }
     let grounds = place_feet(character, &support, s, toes, given.open_end, &mut out);
-    (out, grounds)
+    (out, grounds, free)
 }
 
 /// The torso's rotations (pelvis, spine, chest, neck, head) measured from

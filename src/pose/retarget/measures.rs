@@ -29,6 +29,14 @@ pub struct OnCharacter {
     /// character's floor per frame, gaps interpolated
     /// ([`foot_ground_offsets`]).
     pub foot_grounds: [Vec<f64>; 2],
+    /// With the feet on the clip's footfalls (issue 44,
+    /// [`Footfalls::Targets`](super::Footfalls::Targets)), the joint
+    /// positions before they were put there (the feet where the limbs'
+    /// directions put them, standing on the ground): what retrieval
+    /// compares, so that the database frames chosen are the clip's
+    /// pose's whatever the placement. `None` otherwise (`frames` is
+    /// compared).
+    pub free_feet: Option<Vec<Pose>>,
 }
 
 /// The clip `mocap` on the character's skeleton `character` measured from
@@ -54,11 +62,12 @@ pub fn on_character_given(
     mocap: &[Pose],
     given: &Given<'_>,
 ) -> OnCharacter {
-    let (frames, grounds) =
+    let (frames, grounds, free_feet) =
         retarget_on_grounds(character, neutral, reference, mocap, Toes::Rigid, given);
     OnCharacter {
         frames,
         foot_grounds: grounds.map(|g| interpolate_gaps(&g)),
+        free_feet,
     }
 }
 

@@ -6,6 +6,7 @@ mod chest;
 mod data_floor;
 mod feet;
 mod footfall;
+mod footfall_query;
 mod ground;
 mod level;
 mod level_variants;

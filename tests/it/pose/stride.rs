@@ -17,7 +17,9 @@ use super::level_variants::{mirrored_back, walk_variants};
 use super::two_files::{CC_PAIRS, poses_at_30, two_files, varied};
 use glam::{DQuat, DVec3};
 use surfmotion::pose::Pose;
-use surfmotion::pose::retarget::{Anchor, ClipPoses, Level, Placement, TravelScale, leg_length};
+use surfmotion::pose::retarget::{
+    Anchor, ClipPoses, Footfalls, Level, Placement, TravelScale, leg_length,
+};
 use surfmotion::rig::Canonical;
 
 use Canonical as C;
@@ -29,18 +31,26 @@ pub(super) const LINES: [(&str, Level); 3] = [
     ("shoulders", Level::Shoulders),
 ];
 
-/// The placements measured: the kernel's first.
-pub(super) fn placements() -> [(&'static str, Placement); 4] {
+/// The placements measured: the kernel's first; the last two with the
+/// feet on the clip's footfalls.
+pub(super) fn placements() -> [(&'static str, Placement); 6] {
     let p = |anchor, scale| Placement {
         anchor,
         scale,
         ..Placement::default()
+    };
+    let feet = |scale| Placement {
+        anchor: Anchor::Root,
+        scale,
+        footfalls: Footfalls::Targets,
     };
     [
         ("root,legs", Placement::default()),
         ("root,stance", p(Anchor::Root, TravelScale::Stance)),
         ("root,stride", p(Anchor::Root, TravelScale::Stride)),
         ("joints,stride", p(Anchor::Joints, TravelScale::Stride)),
+        ("root,legs,feet", feet(TravelScale::Legs)),
+        ("root,stance,feet", feet(TravelScale::Stance)),
     ]
 }
 
