@@ -187,7 +187,8 @@ impl FrameSample {
 /// `pivot=guarded|free` ([`AutoOptions::guard_pivots`]),
 /// `head=read|keep|axis|highest` ([`AutoOptions::read_head`], [`AutoOptions::head_axis`]),
 /// `neck=P` (a headless body's neck joint P % of the height below its
-/// stump's top, 0-10, read by the embedding: `crate::embed::stump`),
+/// stump's top, 0-10; default 5; read by the embedding:
+/// `crate::embed::stump`),
 /// `tips=centroid|centre|guarded` ([`AutoOptions::tip_seed`]),
 /// `patches=position|vertex0` (the rest frame's contact patches,
 /// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
