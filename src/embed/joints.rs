@@ -285,14 +285,22 @@ fn neck_and_head(
     let (up, h) = (b.up, b.h);
     let chin_h = chin.dot(up);
     let behind = chin - b.facing * 0.04 * h;
-    let neck_at = b.at_height(behind, chin_h - 0.05 * h);
+    let stump = headless
+        .then(|| super::stump::stump_top(lm, cx.p))
+        .flatten();
+    // The neck 5 % of the height below the chin; a headless body's chin is
+    // its stump's top, which lies between the neck joint and the chin:
+    // its neck as far below it unless the measurement override says
+    // otherwise ([`super::stump::neck_below_top`]).
+    let below = match stump {
+        Some(_) => super::stump::neck_below_top(),
+        None => 0.05,
+    };
+    let neck_at = b.at_height(behind, chin_h - below * h);
     j[C::Neck.index()] = cx.centre("neck", neck_at, up, neck_at, 0.08, neck_at);
     // A body without a head: its head joint at the top of the stump (the
     // cut's centroid; it was sought 3 % of the height above the chin, over
     // the stump, where no surface is).
-    let stump = headless
-        .then(|| super::stump::stump_top(lm, cx.p))
-        .flatten();
     let head_at = match stump {
         Some(s) => s.centre,
         None => b.at_height(behind, chin_h + 0.03 * h),

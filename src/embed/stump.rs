@@ -5,7 +5,9 @@
 //! chin is put 4 % of the height ahead of it ([`neck_top`]), where joint
 //! placement looks for a chin (the neck is sought 4 % behind the chin,
 //! [`super::joints`]), and the head joint is put on it
-//! (`joints::neck_and_head`): the head ends where the body does.
+//! (`joints::neck_and_head`): the head ends where the body does. The neck
+//! joint is sought [`neck_below_top`] below the stump's top (5 %, as
+//! below a whole body's chin, unless `SURFMOTION_AUTORIG` says `neck=P`).
 
 use super::landmarks::{Landmark, Landmarks};
 use glam::DVec3;
@@ -81,4 +83,57 @@ pub(crate) fn stump_top(lm: &Landmarks, positions: &[[f64; 3]]) -> Option<StumpT
 pub(crate) fn neck_top(lm: &Landmarks, positions: &[[f64; 3]]) -> Option<[f64; 3]> {
     let s = stump_top(lm, positions)?;
     Some((s.centre + s.facing * 0.04 * s.height).to_array())
+}
+
+/// How far below a headless body's stump top its neck joint is sought (a
+/// fraction of the height): 5 %, as a whole body's below its chin. A body
+/// read as cut at the neck ([`super::auto::neck`]) ends between its neck
+/// joint and its chin, and its stump's top (the highest 1.5 % ring) lies
+/// above the cut rim's centre by the rim's slant (1.2-2.0 % of the height
+/// on the SMPL template): its neck lay 2.2 % of the height below the rim
+/// of a cut at its neck joint (where the neck is) and 4.4 % below a cut
+/// 40 % up the neck→head bone (3.2 % below the rim's plane): too low.
+/// `neck=3` in [`crate::embed::auto::options::AUTORIG_ENV`] (session 39,
+/// `autorig_eval … headless`, 27 headless rows: three bodies × three
+/// motions × three cuts) lowered the joint error on 22 rows (the neck cut
+/// at 0 %: samba 2.07 / 2.64 / 1.64 → 1.76 / 2.33 / 1.36 % of the
+/// height) but raised it on 2 (the 40 % cut, gait: SMPL 1.46 → 1.51,
+/// MakeHuman 1.02 → 1.05) and lowered the parts on 7 (SMPL neck at 0 %,
+/// CMU 02_05: 95.6 → 95.5 %; the 40 % cut: samba 94.2 /
+/// 90.5 / 92.1 → 94.0 / 90.2 / 91.7 %, MakeHuman 97.3 / 97.6 / 97.1 →
+/// 96.8 / 97.0 / 96.6 %): not the default.
+pub(crate) const NECK_BELOW_TOP: f64 = 0.05;
+
+/// [`NECK_BELOW_TOP`], or the `neck=P` (percent of the height, 0-10) of
+/// [`crate::embed::auto::options::AUTORIG_ENV`] for measurements. Read
+/// once per process.
+pub(crate) fn neck_below_top() -> f64 {
+    static BELOW: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+    *BELOW.get_or_init(|| {
+        let text = std::env::var(crate::embed::auto::options::AUTORIG_ENV).unwrap_or_default();
+        neck_percent(&text).map_or(NECK_BELOW_TOP, |p| p / 100.0)
+    })
+}
+
+/// The `neck=P` of an override text (`P` a percent from 0 to 10); `None`
+/// when it has none or it does not parse.
+pub(crate) fn neck_percent(text: &str) -> Option<f64> {
+    text.split(',')
+        .filter_map(|p| p.trim().strip_prefix("neck="))
+        .filter_map(|v| v.parse::<f64>().ok())
+        .rfind(|p| (0.0..=10.0).contains(p))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_neck_override_reads_a_percent_and_ignores_the_rest() {
+        assert_eq!(neck_percent("head=axis"), None);
+        assert_eq!(neck_percent("head=axis, neck=5"), Some(5.0));
+        assert_eq!(neck_percent("neck=2.5,max=60"), Some(2.5));
+        assert_eq!(neck_percent("neck=11"), None);
+        assert_eq!(neck_percent("neck=x"), None);
+    }
 }

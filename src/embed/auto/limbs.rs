@@ -24,7 +24,8 @@ pub(crate) const ARM: [f64; 3] = [0.10, 0.25, 0.42];
 pub struct Chains {
     /// The feet (the two lowest tips).
     pub feet: [u32; 2],
-    /// The top of the head (the highest tip).
+    /// The top of the head (the highest tip; [`Chains::head_nearest_axis`]
+    /// and [`Chains::headed_by`] may choose another).
     pub head: u32,
     /// The hands (the other two).
     pub hands: [u32; 2],
@@ -104,7 +105,12 @@ impl Chains {
     /// The head's chain from the hand tip nearest the body's axis (the
     /// vertical through the vertices' centroid) when the highest tip lies
     /// farther from it than [`super::neck::TOP_AXIS`] of the height and
-    /// that hand tip within it ([`super::options::AutoOptions::head_axis`]).
+    /// that hand tip within it ([`super::options::AutoOptions::head_axis`],
+    /// the default since session 39). The body's axis holds its head and
+    /// its neck's stump in any pose; the highest tip is a hand when the
+    /// hands are held as high (the SMPL template's T-pose cut at the neck
+    /// joint: the left hand 0.05 mm above the stump, 45 % of the height
+    /// off the axis, was rigged as the head).
     pub fn head_nearest_axis(&mut self, body: &Body) {
         let (rest, up) = (body.rest, body.up);
         let flat = |v: u32| {

@@ -58,10 +58,14 @@ pub struct AutoOptions {
     pub read_head: bool,
     /// The head's chain from the non-foot tip nearest the body's axis when
     /// the highest is farther from it than `neck::TOP_AXIS` of the height
-    /// ([`super::limbs::Chains::head_nearest_axis`]). Default `false`
-    /// (the highest tip); `SURFMOTION_AUTORIG=head=axis`: the SMPL
-    /// template cut at the neck joint has its hands 0.05 mm above the
-    /// stump, and the left hand was rigged as the head.
+    /// ([`super::limbs::Chains::head_nearest_axis`]). Default `true`
+    /// (`head=axis`, session 39); `head=highest` in [`AUTORIG_ENV`] takes
+    /// the highest tip (sessions 20-38's): the SMPL template cut at the
+    /// neck joint has its hands 0.05 mm above the stump, and its left hand
+    /// was rigged as the head and the left arm from the stump
+    /// (`autorig_eval … confusion SMPL`, three motions: parts 70.3 / 68.0
+    /// / 76.4 % → 95.4 / 95.6 / 97.4 %, left wrist 34.3 / 33.9 / 36.8 % of
+    /// the height off → 3.1 / 3.1 / under 2 %).
     pub head_axis: bool,
     /// Where the extremities are sought from ([`super::centre`], session
     /// 36): default `tips=guarded` (the centroid's vertex unless it lies
@@ -84,7 +88,7 @@ impl Default for AutoOptions {
             split_knee: false,
             guard_pivots: true,
             read_head: true,
-            head_axis: false,
+            head_axis: true,
             tip_seed: super::centre::TipSeed::Guarded,
             decompose: DecomposeOptions::default(),
         }
@@ -181,7 +185,10 @@ impl FrameSample {
 /// (what follows its merges, [`super::decompose::MergeRule`]),
 /// `knee=split|crossing` ([`AutoOptions::split_knee`]),
 /// `pivot=guarded|free` ([`AutoOptions::guard_pivots`]),
-/// `head=read|keep|axis` ([`AutoOptions::read_head`], [`AutoOptions::head_axis`]),
+/// `head=read|keep|axis|highest` ([`AutoOptions::read_head`], [`AutoOptions::head_axis`]),
+/// `neck=P` (a headless body's neck joint P % of the height below its
+/// stump's top, 0-10; default 5; read by the embedding:
+/// `crate::embed::stump`),
 /// `tips=centroid|centre|guarded` ([`AutoOptions::tip_seed`]),
 /// `patches=position|vertex0` (the rest frame's contact patches,
 /// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
@@ -216,7 +223,7 @@ pub(crate) fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, head=read|keep|axis, tips=centroid|centre|guarded, patches=position|vertex0, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, head=read|keep|axis|highest, neck=P, tips=centroid|centre|guarded, patches=position|vertex0, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -246,6 +253,17 @@ pub(crate) fn apply_override(
             "head" if v == "axis" => {
                 auto.read_head = true;
                 auto.head_axis = true;
+            }
+            "head" if v == "highest" => {
+                auto.read_head = true;
+                auto.head_axis = false;
+            }
+            // Read by the embedding (`embed::stump::neck_below_top`).
+            "neck" => {
+                v.parse::<f64>()
+                    .ok()
+                    .filter(|p| (0.0..=10.0).contains(p))
+                    .ok_or_else(bad)?;
             }
             "tips" => auto.tip_seed = super::centre::TipSeed::parse(v).ok_or_else(bad)?,
             "patches" if v == "position" => rule.contact.seed_by_position = true,
@@ -344,7 +362,11 @@ mod tests {
         assert_eq!(auto.decompose.merge, MergeRule::Greedy);
         apply_override("frames=median-quantiles", &mut rule, &mut auto).unwrap();
         assert_eq!(auto.frames, FrameSample::MedianQuantiles);
-        assert!(auto.read_head);
+        assert!(auto.read_head && auto.head_axis);
+        apply_override("head=highest", &mut rule, &mut auto).unwrap();
+        assert!(auto.read_head && !auto.head_axis);
+        apply_override("head=axis,neck=5", &mut rule, &mut auto).unwrap();
+        assert!(auto.read_head && auto.head_axis);
         apply_override("head=keep", &mut rule, &mut auto).unwrap();
         assert!(!auto.read_head);
         apply_override("head=read", &mut rule, &mut auto).unwrap();
@@ -359,6 +381,8 @@ mod tests {
         assert_eq!(auto.tip_seed, TipSeed::Guarded);
         for bad in [
             "head=cut",
+            "neck=11",
+            "neck=x",
             "tips=middle",
             "seed=random",
             "seed=draws-0",
