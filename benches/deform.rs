@@ -16,7 +16,7 @@ use surfmotion::db::Character;
 use surfmotion::deform::unflip::RepairOptions;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer, RepairTurns};
 use surfmotion::drive::query::load_mocap;
-use surfmotion::drive::{RetargetOptions, synthesise};
+use surfmotion::drive::{DriveOptions, synthesise};
 use surfmotion::mesh::laplacian::uniform_region_rows;
 use surfmotion::mesh::solver::FixedSolver;
 
@@ -54,7 +54,7 @@ fn main() {
         30.0,
     )
     .unwrap();
-    let none = RetargetOptions {
+    let none = DriveOptions {
         deform: DeformMode::None,
         ..Default::default()
     };

@@ -7,7 +7,7 @@
 
 use clap::Parser;
 use surfmotion::db::CharacterOptions;
-use surfmotion::drive::RetargetOptions;
+use surfmotion::drive::DriveOptions;
 
 /// Parses `argv` (without the program name) into the arguments `T` of
 /// one verb, through a wrapper that flattens them.
@@ -33,7 +33,7 @@ fn same<A: std::fmt::Debug, B: std::fmt::Debug>(cli: &A, library: &B) {
 #[test]
 fn retarget_defaults_are_the_librarys() {
     let a = parse!(super::retarget::JobOpts,);
-    assert_eq!(a.options(), RetargetOptions::default());
+    assert_eq!(a.options(), DriveOptions::default());
     assert_eq!(a.character(), CharacterOptions::default());
     assert!(a.is_default());
     let a = parse!(super::retarget::JobOpts, "--w-retr", "2");

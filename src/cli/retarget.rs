@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 use surfmotion::db::CharacterOptions;
-use surfmotion::drive::RetargetOptions;
+use surfmotion::drive::DriveOptions;
 use surfmotion::jobs::output_set::OutputSet;
 use surfmotion::jobs::{RetargetJob, RetargetJobOptions};
 
@@ -47,7 +47,7 @@ pub struct JobOpts {
     /// How the retrieved frames follow the query skeleton: part-based PCA
     /// Laplacian deformation (the paper), one whole-body space, plain linear
     /// blend skinning, or none.
-    #[arg(long, value_enum, default_value_t = RetargetOptions::default().deform)]
+    #[arg(long, value_enum, default_value_t = DriveOptions::default().deform)]
     pub deform: surfmotion::deform::DeformMode,
     /// Skeleton dissimilarity threshold T_skel (metres, summed over 19
     /// joints), at most 1000. Default: chosen from the query's
@@ -56,7 +56,7 @@ pub struct JobOpts {
     pub t_skel: Option<f64>,
     /// Weight of matching the skeleton against avoiding transitions, at
     /// most 1e6.
-    #[arg(long, default_value_t = RetargetOptions::default().trellis.w_retr, value_parser = super::weight)]
+    #[arg(long, default_value_t = DriveOptions::default().trellis.w_retr, value_parser = super::weight)]
     pub w_retr: f64,
     /// No temporal interpolation of repeated frames.
     #[arg(long)]
@@ -86,8 +86,8 @@ fn t_skel(s: &str) -> Result<f64, String> {
 
 impl JobOpts {
     /// The options of [`synthesise`].
-    pub fn options(&self) -> RetargetOptions {
-        let mut opts = RetargetOptions::default();
+    pub fn options(&self) -> DriveOptions {
+        let mut opts = DriveOptions::default();
         opts.trellis.t_skel = self.t_skel;
         opts.trellis.w_retr = self.w_retr;
         opts.timeline.interpolate = !self.no_interpolate;
@@ -110,8 +110,7 @@ impl JobOpts {
     /// True when every option has its default (they apply only to 4D
     /// characters).
     pub fn is_default(&self) -> bool {
-        self.options() == RetargetOptions::default()
-            && self.character() == CharacterOptions::default()
+        self.options() == DriveOptions::default() && self.character() == CharacterOptions::default()
     }
 }
 

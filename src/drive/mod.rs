@@ -18,6 +18,8 @@ pub mod synthesis;
 pub mod timeline;
 pub mod trellis;
 
+pub use options::{DriveError, DriveOptions};
+#[allow(deprecated)]
 pub use options::{RetargetError, RetargetOptions};
 pub use placement::{BlendScratch, Floor, blend_placed};
 pub use prepared::{Analysed, PrepareTimings, Prepared};

@@ -9,7 +9,7 @@ use crate::mesh::solver::SolveError;
 
 /// Options of [`super::synthesise`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RetargetOptions {
+pub struct DriveOptions {
     /// Retrieval.
     pub trellis: TrellisOptions,
     /// Interpolation and blending.
@@ -23,9 +23,9 @@ pub struct RetargetOptions {
     pub deform_options: DeformOptions,
 }
 
-impl Default for RetargetOptions {
+impl Default for DriveOptions {
     fn default() -> Self {
-        RetargetOptions {
+        DriveOptions {
             trellis: TrellisOptions::default(),
             timeline: TimelineOptions::default(),
             smooth: 3,
@@ -35,9 +35,9 @@ impl Default for RetargetOptions {
     }
 }
 
-/// Why a retarget cannot run.
+/// Why surface synthesis (a retarget) cannot run.
 #[derive(Debug, thiserror::Error)]
-pub enum RetargetError {
+pub enum DriveError {
     /// A solver could not be factored (mesh problems).
     #[error(transparent)]
     Solve(#[from] SolveError),
@@ -50,8 +50,17 @@ pub enum RetargetError {
     Unprepared(String),
 }
 
-impl From<std::convert::Infallible> for RetargetError {
+impl From<std::convert::Infallible> for DriveError {
     fn from(e: std::convert::Infallible) -> Self {
         match e {}
     }
 }
+
+/// The old name of [`DriveOptions`] (before session 39: "retarget" names
+/// the pose kernel and the verb, "drive" the synthesis).
+#[deprecated(note = "renamed DriveOptions")]
+pub type RetargetOptions = DriveOptions;
+
+/// The old name of [`DriveError`].
+#[deprecated(note = "renamed DriveError")]
+pub type RetargetError = DriveError;

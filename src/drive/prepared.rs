@@ -19,7 +19,7 @@
 //! ([`Prepared::fits`]). The trellis, timeline and smoothing options are
 //! per clip.
 
-use super::options::{RetargetError, RetargetOptions};
+use super::options::{DriveError, DriveOptions};
 use super::query::database_floor_lift_on;
 use crate::db::Character;
 use crate::deform::{DeformMode, DeformOptions, Deformer};
@@ -153,7 +153,7 @@ impl Analysed {
 impl Prepared {
     /// Prepares `ch` for synthesis with the deformation of `opts`
     /// (factorisations made here, once).
-    pub fn new(ch: &Character, opts: &RetargetOptions) -> Result<Prepared, RetargetError> {
+    pub fn new(ch: &Character, opts: &DriveOptions) -> Result<Prepared, DriveError> {
         let t = Instant::now();
         let topology = ch.topology_metres();
         let neutral = character_neutral(ch.rest_pose(), ch.poses());
@@ -192,7 +192,7 @@ impl Prepared {
     /// True when this preparation serves `ch` driven with `opts` (same
     /// deformation mode and options; the character's vertex and frame
     /// counts as prepared).
-    pub fn fits(&self, ch: &Character, opts: &RetargetOptions) -> bool {
+    pub fn fits(&self, ch: &Character, opts: &DriveOptions) -> bool {
         self.deform == opts.deform
             && self.deform_options == opts.deform_options
             && self.vertices == ch.n()

@@ -1,7 +1,7 @@
 //! Surface synthesis of one clip (Huang et al. 2015, Sec. 5.2): retrieval,
 //! timeline, placement, blending and deformation, frame by frame.
 
-use super::options::{RetargetError, RetargetOptions};
+use super::options::{DriveError, DriveOptions};
 use super::placement::{BlendScratch, Floor, blend_placed, placements};
 use super::prepared::{Analysed, Prepared};
 use super::sink::FrameSink;
@@ -101,8 +101,8 @@ pub fn synthesise(
     mocap: &[Pose],
     reference: &Reference,
     fps: f64,
-    opts: &RetargetOptions,
-) -> Result<Output, RetargetError> {
+    opts: &DriveOptions,
+) -> Result<Output, DriveError> {
     // One output frame per query frame, each holding the character's
     // vertices: refuse before allocating (issue 18, item 12).
     crate::util::budget::check_frames(
@@ -114,7 +114,7 @@ pub fn synthesise(
     let prepared = Prepared::new(ch, opts)?;
     let clip = prepared.analyse(ch, reference, mocap);
     let mut positions = Vec::with_capacity(mocap.len() * ch.n());
-    let report = prepared.synthesise::<_, RetargetError>(
+    let report = prepared.synthesise::<_, DriveError>(
         ch,
         &clip,
         reference.source,
@@ -143,17 +143,17 @@ impl Prepared {
     /// times (made once). The first error of the sink stops the job and is
     /// returned. `reference` is the source of the clip's neutral pose, for
     /// the report.
-    pub fn synthesise<S: FrameSink, E: From<RetargetError> + From<S::Error>>(
+    pub fn synthesise<S: FrameSink, E: From<DriveError> + From<S::Error>>(
         &self,
         ch: &Character,
         clip: &Analysed,
         reference: ReferenceSource,
         fps: f64,
-        opts: &RetargetOptions,
+        opts: &DriveOptions,
         mut sink: S,
     ) -> Result<Report, E> {
         if !self.fits(ch, opts) {
-            return Err(RetargetError::Unprepared(format!(
+            return Err(DriveError::Unprepared(format!(
                 "prepared for {} vertices, {:?} deformation; asked for {} vertices, {:?} deformation",
                 self.topology_metres().vertex_count(),
                 self.deform(),
@@ -242,7 +242,7 @@ impl Prepared {
         &self,
         ch: &Character,
         clip: &Analysed,
-        opts: &RetargetOptions,
+        opts: &DriveOptions,
         timings: &mut Timings,
     ) -> (Retrieval, Vec<OutFrame>, Vec<Jump>, Vec<Floor>) {
         let t1 = Instant::now();

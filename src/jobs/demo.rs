@@ -1,7 +1,7 @@
 //! `demo`: the main job end to end on an embedded character, no files needed.
 
 use crate::db::{BuildProgress, Character};
-use crate::drive::{RetargetOptions, synthesise};
+use crate::drive::{DriveOptions, synthesise};
 use crate::mesh::MeshSequence;
 use crate::mesh::io::save_sequence;
 use crate::pose::retarget::clip_poses;
@@ -110,7 +110,7 @@ pub fn run_demo(dir: &Path, progress: &dyn BuildProgress) -> Result<DemoReport, 
         &mocap.poses,
         &mocap.reference,
         fps,
-        &RetargetOptions::default(),
+        &DriveOptions::default(),
     )?;
     let t_retarget = t2.elapsed().as_secs_f64();
     let result = dir.join("turn.glb");

@@ -31,7 +31,7 @@ pub enum JobError {
     Clip(#[from] crate::mocap::ClipError),
     /// Synthesis failed (a solver could not be factored).
     #[error(transparent)]
-    Retarget(#[from] crate::drive::RetargetError),
+    Retarget(#[from] crate::drive::DriveError),
     /// The rig could not be embedded.
     #[error(transparent)]
     Embed(#[from] crate::embed::EmbedError),

@@ -6,7 +6,7 @@
 use crate::db::{BuildProgress, Character};
 use crate::drive::query::{QueryError, load_mocap};
 use crate::drive::trellis::DatabaseLinks;
-use crate::drive::{Prepared, RetargetError, RetargetOptions};
+use crate::drive::{DriveError, DriveOptions, Prepared};
 use crate::live::bvh_tcp;
 use crate::live::online::{OnlineOptions, OnlineStats};
 use crate::live::overlap::Overlap;
@@ -34,7 +34,7 @@ use std::time::{Duration, Instant};
 #[derive(Debug, Clone)]
 pub struct LiveOptions {
     /// Synthesis (retrieval, timeline, placement, deformation) as offline.
-    pub retarget: RetargetOptions,
+    pub retarget: DriveOptions,
     /// Frames of future before a frame is decided. Default: 3.
     pub lag: usize,
     /// Extra cost of a jump at lag 0. Default: 1.
@@ -95,7 +95,7 @@ pub struct LiveOptions {
 impl Default for LiveOptions {
     fn default() -> Self {
         LiveOptions {
-            retarget: RetargetOptions::default(),
+            retarget: DriveOptions::default(),
             lag: 3,
             hysteresis: 1.0,
             history: 64,
@@ -234,7 +234,7 @@ pub enum LiveError {
     Query(#[from] QueryError),
     /// The character could not be prepared.
     #[error(transparent)]
-    Retarget(#[from] RetargetError),
+    Retarget(#[from] DriveError),
     /// The stream failed.
     #[error(transparent)]
     Source(#[from] SourceError),

@@ -9,7 +9,7 @@ use crate::batch::{Converted, Converter, Preparation};
 use crate::db::{BuildProgress, Character, CharacterOptions};
 use crate::deform::{DeformMode, TurnedOver};
 use crate::drive::query::{MocapPoses, database_floor_lift, load_mocap};
-use crate::drive::{Analysed, Each, Output, Prepared, Report, RetargetOptions, Timings};
+use crate::drive::{Analysed, DriveOptions, Each, Output, Prepared, Report, Timings};
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::stream::SequenceWriter;
@@ -31,8 +31,8 @@ use std::time::Instant;
 #[derive(Debug, Clone, Default)]
 pub struct RetargetJobOptions {
     /// Retrieval, timeline and deformation. Default:
-    /// [`RetargetOptions::default`] (part-based deformation).
-    pub retarget: RetargetOptions,
+    /// [`DriveOptions::default`] (part-based deformation).
+    pub retarget: DriveOptions,
     /// How the database is loaded. Default: regressor skeletons.
     pub character: CharacterOptions,
     /// How clips are read. Default: decide from the file.
@@ -162,12 +162,12 @@ impl RetargetJob {
             ch.n(),
             1,
         )
-        .map_err(crate::drive::RetargetError::from)?;
+        .map_err(crate::drive::DriveError::from)?;
         let fresh = self.fresh_preparation()?;
         let prepared = fresh.as_ref().unwrap_or(&self.prepared);
         let analysed = prepared.analyse(ch, &mocap.reference, &mocap.poses);
         let mut positions = Vec::with_capacity(mocap.poses.len() * ch.n());
-        let report = prepared.synthesise::<_, crate::drive::RetargetError>(
+        let report = prepared.synthesise::<_, crate::drive::DriveError>(
             ch,
             &analysed,
             mocap.reference.source,

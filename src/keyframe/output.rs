@@ -9,7 +9,7 @@ use super::report::*;
 use super::{place, pose, smoothness};
 use crate::db::Character;
 use crate::deform::DeformMode;
-use crate::drive::{FrameSink, Prepared, RetargetOptions};
+use crate::drive::{DriveOptions, FrameSink, Prepared};
 use crate::graph::FlatFrame;
 use std::time::Instant;
 
@@ -81,9 +81,9 @@ impl Planned {
 /// blender, built once per job and read by every query). Errors: a failed
 /// factorisation of the blender.
 pub fn prepare(ch: &Character) -> Result<Prepared, KeyframeError> {
-    let opts = RetargetOptions {
+    let opts = DriveOptions {
         deform: DeformMode::None,
-        ..RetargetOptions::default()
+        ..DriveOptions::default()
     };
     Prepared::new(ch, &opts).map_err(|e| KeyframeError::Search(format!("blending: {e}")))
 }

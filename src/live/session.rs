@@ -40,7 +40,7 @@ use crate::deform::{DeformWorkspace, Deformer};
 use crate::drive::placement::{BlendScratch, blend_placed, placements};
 use crate::drive::timeline::timeline;
 use crate::drive::trellis::TrellisInput;
-use crate::drive::{Prepared, RetargetOptions};
+use crate::drive::{DriveOptions, Prepared};
 use crate::graph::FlatFrame;
 use crate::mesh::blend::{BlendWorkspace, FrameGradients};
 use crate::pose::Pose;
@@ -58,7 +58,7 @@ use std::time::Instant;
 pub struct SessionOptions {
     /// Synthesis as offline (retrieval, timeline, placement smoothing,
     /// deformation).
-    pub retarget: RetargetOptions,
+    pub retarget: DriveOptions,
     /// The online retrieval's lag and hysteresis.
     pub online: OnlineOptions,
     /// Decided frames kept for the timeline and placement. Default: 64.
@@ -149,7 +149,7 @@ pub struct SessionOptions {
 impl Default for SessionOptions {
     fn default() -> Self {
         SessionOptions {
-            retarget: RetargetOptions::default(),
+            retarget: DriveOptions::default(),
             online: OnlineOptions::default(),
             history: 64,
             analysis_window: 128,

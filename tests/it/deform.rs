@@ -6,7 +6,7 @@ use glam::DVec3;
 use surfmotion::db::Character;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
 use surfmotion::drive::query::{MocapPoses, load_mocap};
-use surfmotion::drive::{Output, RetargetOptions, synthesise};
+use surfmotion::drive::{DriveOptions, Output, synthesise};
 use surfmotion::pose::Pose;
 
 fn height(p: &[[f64; 3]]) -> f64 {
@@ -75,7 +75,7 @@ fn skeleton_error(ch: &Character, p: &[[f64; 3]], q: &[Pose]) -> f64 {
 
 /// The query `m` on `ch` with deformation `mode` (default options).
 fn run(ch: &Character, m: &MocapPoses, mode: DeformMode) -> Output {
-    let opts = RetargetOptions {
+    let opts = DriveOptions {
         deform: mode,
         ..Default::default()
     };
@@ -161,7 +161,7 @@ fn deformation_follows_the_query_and_turns_no_triangle_over() {
             &m.poses,
             &m.reference,
             30.0,
-            &RetargetOptions {
+            &DriveOptions {
                 deform_options: DeformOptions {
                     repair: surfmotion::deform::unflip::RepairOptions {
                         rounds: 0,

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use surfmotion::db::examples::examples_path;
 use surfmotion::db::frames::{frames_path, poses_path};
 use surfmotion::db::{Character, Quiet};
-use surfmotion::drive::{Prepared, RetargetOptions};
+use surfmotion::drive::{DriveOptions, Prepared};
 use surfmotion::embed::frames::SkeletonKind;
 use surfmotion::tools::eval::plausibility::{Checker, PlausibilityOptions, reference_path};
 
@@ -24,7 +24,7 @@ fn loaded_samba(d: &Path, dir: &Path) -> PathBuf {
     let db = super::samba_db(d, dir);
     let ch = Character::load(&db, &Quiet).unwrap();
     Checker::for_character(&ch, PlausibilityOptions::default()).unwrap();
-    Prepared::new(&ch, &RetargetOptions::default()).unwrap();
+    Prepared::new(&ch, &DriveOptions::default()).unwrap();
     db
 }
 

@@ -13,13 +13,13 @@ use crate::common;
 use std::path::Path;
 use surfmotion::db::examples::examples_path;
 use surfmotion::db::{Character, FlatFrame, Quiet};
-use surfmotion::drive::{Prepared, RetargetOptions};
+use surfmotion::drive::{DriveOptions, Prepared};
 
 /// Each region's examples of a fresh load of `db` prepared with `want`
 /// examples a region.
 fn chosen(db: &Path, want: usize) -> Vec<Vec<FlatFrame>> {
     let ch = Character::load(db, &Quiet).unwrap();
-    let mut opts = RetargetOptions::default();
+    let mut opts = DriveOptions::default();
     opts.deform_options.examples = want;
     let p = Prepared::new(&ch, &opts).unwrap();
     p.deformer().unwrap().examples.clone()

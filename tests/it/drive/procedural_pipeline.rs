@@ -12,7 +12,7 @@ use std::sync::OnceLock;
 use surfmotion::db::Character;
 use surfmotion::db::Quiet;
 use surfmotion::deform::DeformMode;
-use surfmotion::drive::{Output, RetargetOptions, synthesise};
+use surfmotion::drive::{DriveOptions, Output, synthesise};
 use surfmotion::pose::Pose;
 use surfmotion::pose::retarget::clip_poses;
 use surfmotion::synth::{Gait, gait_clip};
@@ -62,9 +62,9 @@ fn fixture() -> &'static Fixture {
 
 fn retarget(mode: DeformMode) -> Output {
     let f = fixture();
-    let opts = RetargetOptions {
+    let opts = DriveOptions {
         deform: mode,
-        ..RetargetOptions::default()
+        ..DriveOptions::default()
     };
     let t = std::time::Instant::now();
     let out = synthesise(&f.ch, &f.query.poses, &f.query.reference, FPS, &opts).unwrap();

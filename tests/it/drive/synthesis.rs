@@ -8,7 +8,7 @@ use std::process::Command;
 use surfmotion::db::Character;
 use surfmotion::drive::query::load_mocap;
 use surfmotion::drive::timeline::plays_on;
-use surfmotion::drive::{RetargetOptions, synthesise};
+use surfmotion::drive::{DriveOptions, synthesise};
 use surfmotion::similarity::VertexSet;
 use surfmotion::similarity::vertex::VertexOptions;
 use surfmotion::tools::eval::velocity_error;
@@ -21,7 +21,7 @@ fn database(d: &Path) -> PathBuf {
     common::synthetic_db(d)
 }
 
-fn run(ch: &Character, clip: &Path, opts: &RetargetOptions) -> (surfmotion::drive::Output, usize) {
+fn run(ch: &Character, clip: &Path, opts: &DriveOptions) -> (surfmotion::drive::Output, usize) {
     let fps = ch.manifest().fps;
     let m = load_mocap(clip, &Default::default(), fps).unwrap();
     let out = synthesise(ch, &m.poses, &m.reference, fps, opts).unwrap();
@@ -36,11 +36,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
     let ch = Character::load(&db, &surfmotion::db::Quiet).unwrap();
     let n = ch.n();
     for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
-        let (out, frames) = run(
-            &ch,
-            &d.join("mocap").join(clip),
-            &RetargetOptions::default(),
-        );
+        let (out, frames) = run(&ch, &d.join("mocap").join(clip), &DriveOptions::default());
         let r = &out.report;
         // The query's length at the database frame rate, no NaN.
         assert_eq!(r.frames, frames, "{clip}");
@@ -83,7 +79,7 @@ fn paths_are_valid_outputs_complete_and_own_clips_come_back() {
     let (out, frames) = run(
         &ch,
         &d.join("mocap/cmu-amc/02/02_03.amc"),
-        &RetargetOptions::default(),
+        &DriveOptions::default(),
     );
     let seq = ch
         .graph()
@@ -141,7 +137,7 @@ fn interpolated_frames_lie_between_their_neighbours() {
         .collect();
     // Interpolation only (the deformation would move frames off the
     // captured ones on purpose).
-    let opts = RetargetOptions {
+    let opts = DriveOptions {
         deform: surfmotion::deform::DeformMode::None,
         ..Default::default()
     };

@@ -10,7 +10,7 @@ use super::offline::{character, offline, run_raw, undeformed, worst_difference};
 use crate::common;
 
 use surfmotion::drive::query::{MocapPoses, load_mocap};
-use surfmotion::drive::{Prepared, RetargetOptions};
+use surfmotion::drive::{DriveOptions, Prepared};
 use surfmotion::live::ground::{OfflineGround, Swap};
 use surfmotion::live::{OnlineOptions, SessionOptions};
 use surfmotion::pose::Pose;
@@ -22,7 +22,7 @@ use surfmotion::tools::eval::velocity::velocity_error;
 fn a_lag_covering_the_clip_pushed_raw_gives_the_offline_meshes_exactly() {
     let Some(d) = common::data_dir() else { return };
     let ch = character(&d);
-    let opts = RetargetOptions::default();
+    let opts = DriveOptions::default();
     let prepared = Prepared::new(&ch, &opts).unwrap();
     for clip in ["cmu-amc/02/02_02.amc", "cmu-bvh/131_01.bvh"] {
         // Offline on the same frames, without file rotations (the stream

@@ -21,7 +21,7 @@ use crate::common;
 use surfmotion::db::{Character, Quiet};
 use surfmotion::drive::query::{MocapPoses, load_mocap};
 use surfmotion::drive::trellis::DatabaseLinks;
-use surfmotion::drive::{Analysed, Prepared, RetargetError, RetargetOptions};
+use surfmotion::drive::{Analysed, DriveError, DriveOptions, Prepared};
 use surfmotion::live::ground::{OfflineGround, Swap};
 use surfmotion::live::{LiveFrame, OnlineOptions, Session, SessionOptions};
 use surfmotion::pose::Pose;
@@ -213,7 +213,7 @@ fn height_apart(live: &[Pose], offline: &[Pose]) -> (f64, f64) {
 /// The meshes' error at `lag`: offline, live, and live pushed the offline
 /// analysis.
 fn meshes(ch: &Character, m: &MocapPoses, a: &Analysed, lag: usize) {
-    let opts = RetargetOptions::default();
+    let opts = DriveOptions::default();
     let prepared = Prepared::new(ch, &opts).unwrap();
     let n = ch.n();
     let skel = |pos: &[[f64; 3]]| -> Vec<Pose> {
@@ -221,7 +221,7 @@ fn meshes(ch: &Character, m: &MocapPoses, a: &Analysed, lag: usize) {
     };
     let mut off = Vec::new();
     prepared
-        .synthesise::<_, RetargetError>(
+        .synthesise::<_, DriveError>(
             ch,
             a,
             m.reference.source,

@@ -11,7 +11,7 @@ use surfmotion::db::Character;
 use surfmotion::deform::DeformMode;
 use surfmotion::drive::query::{MocapPoses, load_mocap};
 use surfmotion::drive::trellis::DatabaseLinks;
-use surfmotion::drive::{Analysed, Prepared, RetargetError, RetargetOptions};
+use surfmotion::drive::{Analysed, DriveError, DriveOptions, Prepared};
 use surfmotion::live::ground::OfflineGround;
 use surfmotion::live::{LiveFrame, OnlineOptions, Session, SessionOptions};
 use surfmotion::pose::Pose;
@@ -24,10 +24,10 @@ pub(super) fn character(d: &Path) -> Character {
 
 /// Retarget options without deformation (the queries do not depend on
 /// it: quick) and `ch` prepared for them.
-pub(super) fn undeformed(ch: &Character) -> (RetargetOptions, Prepared) {
-    let opts = RetargetOptions {
+pub(super) fn undeformed(ch: &Character) -> (DriveOptions, Prepared) {
+    let opts = DriveOptions {
         deform: DeformMode::None,
-        ..RetargetOptions::default()
+        ..DriveOptions::default()
     };
     (opts, Prepared::new(ch, &opts).unwrap())
 }
@@ -54,7 +54,7 @@ pub(super) fn offline(
     d: &Path,
     ch: &Character,
     prepared: &Prepared,
-    opts: &RetargetOptions,
+    opts: &DriveOptions,
     clip: &str,
     reference: impl Fn(&MocapPoses) -> Reference,
 ) -> Offline {
@@ -65,7 +65,7 @@ pub(super) fn offline(
     let analysed = prepared.analyse(ch, &reference(&m), &poses);
     let mut meshes = Vec::new();
     prepared
-        .synthesise::<_, RetargetError>(ch, &analysed, m.reference.source, fps, opts, &mut meshes)
+        .synthesise::<_, DriveError>(ch, &analysed, m.reference.source, fps, opts, &mut meshes)
         .unwrap();
     let covering = SessionOptions {
         retarget: *opts,

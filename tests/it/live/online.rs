@@ -9,7 +9,7 @@ use crate::common;
 use surfmotion::drive::query::load_mocap;
 use surfmotion::drive::timeline::plays_on;
 use surfmotion::drive::trellis::{DatabaseLinks, TrellisInput, retrieve};
-use surfmotion::drive::{Prepared, RetargetOptions};
+use surfmotion::drive::{DriveOptions, Prepared};
 use surfmotion::live::{OnlineOptions, OnlineTrellis, Session};
 
 /// The database frame path the online decoder commits for `on_floor`.
@@ -27,7 +27,7 @@ fn decided(
     on_floor: &[surfmotion::pose::Pose],
     lag: usize,
 ) -> Vec<surfmotion::live::Committed> {
-    let opts = RetargetOptions::default();
+    let opts = DriveOptions::default();
     let mut t = OnlineTrellis::new(
         input,
         opts.trellis,
@@ -54,7 +54,7 @@ fn decided(
 fn a_lag_covering_the_clip_gives_the_offline_path_and_meshes_exactly() {
     let Some(d) = common::data_dir() else { return };
     let ch = character(&d);
-    let opts = RetargetOptions::default();
+    let opts = DriveOptions::default();
     let prepared = Prepared::new(&ch, &opts).unwrap();
     let links = DatabaseLinks::of(&ch);
     let input = links.input();
@@ -102,7 +102,7 @@ fn short_lags_commit_every_frame_in_order_along_the_graph() {
     let Some(d) = common::data_dir() else { return };
     let ch = character(&d);
     let fps = ch.manifest().fps;
-    let opts = RetargetOptions::default();
+    let opts = DriveOptions::default();
     let prepared = Prepared::new(&ch, &opts).unwrap();
     let links = DatabaseLinks::of(&ch);
     let input = links.input();

@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 use surfmotion::db::Character;
 use surfmotion::drive::query::load_mocap;
 use surfmotion::drive::trellis::DatabaseLinks;
-use surfmotion::drive::{Prepared, RetargetOptions};
+use surfmotion::drive::{DriveOptions, Prepared};
 use surfmotion::live::mailbox::Mailbox;
 use surfmotion::live::source::{Event, Incoming};
 use surfmotion::live::{LiveFrame, OnlineOptions, Overlap, Session, SessionOptions};
@@ -116,7 +116,7 @@ fn run(
 fn the_overlap_outputs_the_one_frame_paths_frames_in_order() {
     let Some(d) = common::data_dir() else { return };
     let ch = character(&d);
-    let opts = RetargetOptions::default();
+    let opts = DriveOptions::default();
     let prepared = Prepared::new(&ch, &opts).unwrap();
     assert!(prepared.deformer().is_some(), "the deformation must run");
     let fps = ch.manifest().fps;

@@ -9,7 +9,7 @@ use crate::common;
 use surfmotion::db::Character;
 use surfmotion::deform::DeformMode;
 use surfmotion::drive::query::load_mocap;
-use surfmotion::drive::{Prepared, RetargetOptions};
+use surfmotion::drive::{DriveOptions, Prepared};
 
 /// Writes to `FOOTFALL_QUERY` (a JSON path) the query poses of the clip
 /// `FOOTFALL_CLIP` (a path under the shared data; default CMU 03_02) on
@@ -28,9 +28,9 @@ fn the_query_the_retrieval_sees() {
     };
     let clip = std::env::var("FOOTFALL_CLIP").unwrap_or("mocap/cmu-amc/03/03_02.amc".into());
     let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
-    let opts = RetargetOptions {
+    let opts = DriveOptions {
         deform: DeformMode::None,
-        ..RetargetOptions::default()
+        ..DriveOptions::default()
     };
     let prep = Prepared::new(&ch, &opts).unwrap();
     let m = load_mocap(&d.join(clip), &Default::default(), ch.manifest().fps).unwrap();

@@ -10,7 +10,7 @@ use std::sync::OnceLock;
 use surfmotion::db::{Character, Quiet};
 use surfmotion::deform::DeformMode;
 use surfmotion::drive::query::database_floor_lift;
-use surfmotion::drive::{RetargetOptions, synthesise};
+use surfmotion::drive::{DriveOptions, synthesise};
 use surfmotion::pose::Pose;
 use surfmotion::pose::retarget::{choose_reference, clip_poses};
 use surfmotion::synth::{Gait, gait_clip};
@@ -57,10 +57,10 @@ fn lowered() -> &'static Character {
     })
 }
 
-fn options() -> RetargetOptions {
-    RetargetOptions {
+fn options() -> DriveOptions {
+    DriveOptions {
         deform: DeformMode::Lbs,
-        ..RetargetOptions::default()
+        ..DriveOptions::default()
     }
 }
 
@@ -194,14 +194,7 @@ fn a_walk_retargeted_onto_a_synth_database_stands_on_its_floor() {
         25.0,
     )
     .unwrap();
-    let out = synthesise(
-        ch,
-        &m.poses,
-        &m.reference,
-        25.0,
-        &RetargetOptions::default(),
-    )
-    .unwrap();
+    let out = synthesise(ch, &m.poses, &m.reference, 25.0, &DriveOptions::default()).unwrap();
     let result = floor_height(&lowest_heights(&out.positions, n, DVec3::Y));
     assert!(
         (result - floor).abs() < 0.005,

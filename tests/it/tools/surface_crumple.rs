@@ -10,7 +10,7 @@ use crate::common;
 use surfmotion::db::Character;
 use surfmotion::deform::{DeformMode, DeformOptions};
 use surfmotion::drive::query::{MocapPoses, load_mocap};
-use surfmotion::drive::{RetargetOptions, synthesise};
+use surfmotion::drive::{DriveOptions, synthesise};
 use surfmotion::graph::FlatFrame;
 use surfmotion::pose::Pose;
 use surfmotion::tools::eval::surface_crumple::{ClothBends, FrameCrumple};
@@ -65,7 +65,7 @@ fn retargeted(
     m: &MocapPoses,
     deform_options: DeformOptions,
 ) -> Vec<FrameCrumple> {
-    let opts = RetargetOptions {
+    let opts = DriveOptions {
         deform: DeformMode::Part,
         deform_options,
         ..Default::default()

@@ -9,7 +9,7 @@ use surfmotion::db::Character;
 use surfmotion::deform::dqs::ConstraintSkin;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer, unflip};
 use surfmotion::drive::query::load_mocap;
-use surfmotion::drive::{RetargetOptions, synthesise};
+use surfmotion::drive::{DriveOptions, synthesise};
 use surfmotion::rig::Canonical;
 use surfmotion::tools::eval::surface::{SurfaceOptions, SurfaceReference, captured_of, frame_ids};
 
@@ -35,7 +35,7 @@ fn where_the_knee_creases_come_from() {
     let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
     let clip = std::env::var("SURFACE_KNEE_CLIP").unwrap_or("cmu-amc/02/02_02.amc".into());
     let m = load_mocap(&d.join("mocap").join(&clip), &Default::default(), 30.0).unwrap();
-    let none = RetargetOptions {
+    let none = DriveOptions {
         deform: DeformMode::None,
         ..Default::default()
     };

@@ -8,7 +8,7 @@ use surfmotion::db::Character;
 use surfmotion::deform::near_turns::SurfaceFolds;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer, RepairTurns, unflip};
 use surfmotion::drive::query::load_mocap;
-use surfmotion::drive::{RetargetOptions, synthesise};
+use surfmotion::drive::{DriveOptions, synthesise};
 use surfmotion::tools::eval::triangles::{RestTriangles, TurnScratch};
 
 /// The three readings of "turned over" of one deformed frame `out` made
@@ -57,7 +57,7 @@ fn where_the_tests_of_turned_over_disagree() {
         ("cmu-bvh/131_01.bvh", "131_01"),
     ] {
         let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), 30.0).unwrap();
-        let raw_opts = RetargetOptions {
+        let raw_opts = DriveOptions {
             deform: DeformMode::None,
             ..Default::default()
         };
@@ -207,7 +207,7 @@ fn what_the_surface_repair_leaves_by_rounds() {
     let samba =
         Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
     let synth = Character::load(&common::synthetic_db(&d), &surfmotion::db::Quiet).unwrap();
-    let raw_opts = RetargetOptions {
+    let raw_opts = DriveOptions {
         deform: DeformMode::None,
         ..Default::default()
     };

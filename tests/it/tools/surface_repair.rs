@@ -7,14 +7,14 @@ use crate::common;
 use surfmotion::db::Character;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer, RepairBudget, RepairTurns, unflip};
 use surfmotion::drive::query::load_mocap;
-use surfmotion::drive::{Output, RetargetOptions, synthesise};
+use surfmotion::drive::{DriveOptions, Output, synthesise};
 use surfmotion::embed::parts::Part;
 
 /// The retrieved, interpolated frames of `clip` on `ch` (no deformation):
 /// the deformation's sources, with the query it follows.
 fn sources(ch: &Character, d: &std::path::Path, clip: &str) -> Output {
     let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), 30.0).unwrap();
-    let opts = RetargetOptions {
+    let opts = DriveOptions {
         deform: DeformMode::None,
         ..Default::default()
     };
@@ -762,7 +762,7 @@ fn the_parent_seams_and_surface_repair_leave_fewer_turned_over_after_the_repair(
         ("mirrored", common::mirrored_clip(&m.poses)),
         ("backwards", backwards),
     ] {
-        let opts = RetargetOptions {
+        let opts = DriveOptions {
             deform: DeformMode::None,
             ..Default::default()
         };
