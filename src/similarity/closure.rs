@@ -24,7 +24,7 @@
 //! candidates after 3 rounds (198 without the closure).
 
 use super::matrix::{PairDistance, Span};
-use super::pair_scan::MAX_DESCENT;
+use super::pair_scan::descend_on;
 use super::transitions::{TransitionOptions, find_among};
 use rayon::prelude::*;
 use std::cell::RefCell;
@@ -176,30 +176,8 @@ impl Descent<'_> {
     }
     /// From `(m, n)` to the smallest of the 8 neighbours while it is
     /// smaller (within one sequence never closer than `gap` frames to the
-    /// diagonal), at most [`MAX_DESCENT`] steps.
-    fn descend(&self, mut m: usize, mut n: usize, same: bool, gap: usize) -> (usize, usize) {
-        for _ in 0..MAX_DESCENT {
-            let mut best = (self.get(m, n), m, n);
-            for dm in -1isize..=1 {
-                for dn in -1isize..=1 {
-                    let (Some(r), Some(s)) = (m.checked_add_signed(dm), n.checked_add_signed(dn))
-                    else {
-                        continue;
-                    };
-                    if (dm, dn) == (0, 0) || (same && r.abs_diff(s) < gap.max(1)) {
-                        continue;
-                    }
-                    let v = self.get(r, s);
-                    if v < best.0 {
-                        best = (v, r, s);
-                    }
-                }
-            }
-            if (best.1, best.2) == (m, n) {
-                break;
-            }
-            (m, n) = (best.1, best.2);
-        }
-        (m, n)
+    /// diagonal), at most [`super::pair_scan::MAX_DESCENT`] steps.
+    fn descend(&self, m: usize, n: usize, same: bool, gap: usize) -> (usize, usize) {
+        descend_on(|r, s| self.get(r, s), (m, n), same, gap)
     }
 }

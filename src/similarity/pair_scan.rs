@@ -290,29 +290,41 @@ impl<'a> Memo<'a> {
     /// From `(m, n)` to the smallest of the 8 neighbours while it is
     /// smaller (within one sequence, never closer than `gap` frames to the
     /// diagonal), at most [`MAX_DESCENT`] steps.
-    fn descend(&self, mut m: usize, mut n: usize, same: bool, gap: usize) -> (usize, usize) {
-        for _ in 0..MAX_DESCENT {
-            let mut best = (self.get(m, n), m, n);
-            for (dm, dn) in NEIGHBOURS {
-                let (Some(r), Some(s)) = (m.checked_add_signed(dm), n.checked_add_signed(dn))
-                else {
-                    continue;
-                };
-                if same && r.abs_diff(s) < gap.max(1) {
-                    continue;
-                }
-                let v = self.get(r, s);
-                if v < best.0 {
-                    best = (v, r, s);
-                }
-            }
-            if (best.1, best.2) == (m, n) {
-                break;
-            }
-            (m, n) = (best.1, best.2);
-        }
-        (m, n)
+    fn descend(&self, m: usize, n: usize, same: bool, gap: usize) -> (usize, usize) {
+        descend_on(|r, s| self.get(r, s), (m, n), same, gap)
     }
+}
+
+/// From `(m, n)` to the smallest of its 8 neighbours under `get` while it
+/// is smaller (within one sequence, never closer than `gap` frames to the
+/// diagonal), at most [`MAX_DESCENT`] steps; ties keep the first neighbour
+/// in [`NEIGHBOURS`]' order. Shared by the pair scan and the closure.
+pub(crate) fn descend_on(
+    get: impl Fn(usize, usize) -> f32,
+    (mut m, mut n): (usize, usize),
+    same: bool,
+    gap: usize,
+) -> (usize, usize) {
+    for _ in 0..MAX_DESCENT {
+        let mut best = (get(m, n), m, n);
+        for (dm, dn) in NEIGHBOURS {
+            let (Some(r), Some(s)) = (m.checked_add_signed(dm), n.checked_add_signed(dn)) else {
+                continue;
+            };
+            if same && r.abs_diff(s) < gap.max(1) {
+                continue;
+            }
+            let v = get(r, s);
+            if v < best.0 {
+                best = (v, r, s);
+            }
+        }
+        if (best.1, best.2) == (m, n) {
+            break;
+        }
+        (m, n) = (best.1, best.2);
+    }
+    (m, n)
 }
 
 /// The 8 neighbours of a pair.
