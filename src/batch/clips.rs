@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 
 /// Output format of a batch.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Format {
     /// Binary glTF with one morph target per frame.
     Glb,
@@ -15,7 +14,7 @@ pub enum Format {
     Pc2,
     /// A folder of OBJ frames.
     Obj,
-    /// USD text layer (time-sampled points), one `.usda` per clip.
+    /// USD text layer, time-sampled points (`mesh::io::usd`).
     Usda,
 }
 

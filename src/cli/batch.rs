@@ -59,8 +59,8 @@ pub struct Args {
     #[arg(long, value_name = "N", value_parser = super::bounded_count(1, 1_000_000))]
     pub shard_count: Option<usize>,
     /// Output format.
-    #[arg(long, value_enum, default_value_t = surfmotion::jobs::BatchOptions::default().format)]
-    pub format: Format,
+    #[arg(long, value_enum, default_value_t = surfmotion::jobs::BatchOptions::default().format.into())]
+    pub format: super::values::FormatArg,
     /// Redo clips whose output is already complete.
     #[arg(long)]
     pub force: bool,
@@ -139,7 +139,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
     let defaults = BatchOptions::default();
     let opts = BatchOptions {
         shard,
-        format: a.format,
+        format: Format::from(a.format),
         force: a.force,
         jobs: a.jobs.unwrap_or(defaults.jobs),
         describe: Some(match (&a.db, &a.scan) {
@@ -192,9 +192,9 @@ fn resolve_shard(a: &Args) -> anyhow::Result<Option<String>> {
 fn check_args(a: &Args, mocap_dir: &Path, output: &Path) -> anyhow::Result<()> {
     let format = format!("--format {}", format!("{:?}", a.format).to_lowercase());
     a.glb
-        .refuse_unless_glb(matches!(a.format, Format::Glb), &format)?;
+        .refuse_unless_glb(matches!(a.format, super::values::FormatArg::Glb), &format)?;
     a.glb
-        .refuse_unless_usda(matches!(a.format, Format::Usda), &format)?;
+        .refuse_unless_usda(matches!(a.format, super::values::FormatArg::Usda), &format)?;
     anyhow::ensure!(
         a.db.is_none() || a.scan_job.is_default(),
         "--group, --marker-count, --marker-margin and --fps apply to --scan (a database has its own frame rate)"
@@ -206,7 +206,7 @@ fn check_args(a: &Args, mocap_dir: &Path, output: &Path) -> anyhow::Result<()> {
     let (db, scan) = (a.db.as_deref(), a.scan.as_deref());
     let files = [&a.landmarks, &a.clip.rig_map, &a.clip.asf];
     let inputs = target_inputs(db, scan, files.into_iter().flatten());
-    check_folders(mocap_dir, output, &inputs, a.format)
+    check_folders(mocap_dir, output, &inputs, Format::from(a.format))
         .map_err(|e| anyhow::anyhow!(super::flags::as_flags(&e.to_string())))
 }
 

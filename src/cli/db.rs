@@ -51,7 +51,7 @@ pub struct BuildArgs {
     pub dir: PathBuf,
     /// Dissimilarity measure (default: the manifest's [graph] measure, else shape).
     #[arg(long, value_enum)]
-    pub measure: Option<surfmotion::similarity::Measure>,
+    pub measure: Option<super::values::MeasureArg>,
     /// Recompute even if the cache is current.
     #[arg(long)]
     pub force: bool,
@@ -67,7 +67,7 @@ pub struct BuildArgs {
 
 fn build(a: BuildArgs) -> anyhow::Result<()> {
     let opts = surfmotion::db::BuildOptions {
-        measure: a.measure,
+        measure: a.measure.map(Into::into),
         force: a.force,
         method: a.similarity,
     };
@@ -90,8 +90,8 @@ pub struct SkeletonArgs {
     /// skeleton per character, its bone lengths the median over all frames,
     /// nearest the regressor joints in each frame (least squares); `regressor`
     /// gives those joints as measured, `centroid` the paper's part centres.
-    #[arg(long, value_enum, default_value_t = surfmotion::jobs::skeletons::SkeletonsOptions::default().kind)]
-    pub kind: surfmotion::embed::frames::SkeletonKind,
+    #[arg(long, value_enum, default_value_t = surfmotion::jobs::skeletons::SkeletonsOptions::default().kind.into())]
+    pub kind: super::values::SkeletonKindArg,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
@@ -136,7 +136,7 @@ fn skeleton(a: SkeletonArgs) -> anyhow::Result<()> {
     let out = a.output.clone().unwrap_or_else(|| a.dir.join("skeletons"));
     surfmotion::jobs::outputs::check_skeleton_outputs("-o", &a.dir, &out)?;
     let opts = SkeletonsOptions {
-        kind: a.kind,
+        kind: a.kind.into(),
         output: a.output.clone(),
     };
     let r = export_skeletons(&a.dir, &opts)?;

@@ -11,7 +11,7 @@ pub struct Args {
     pub dir: PathBuf,
     /// Dissimilarity measure (default: the manifest's, else shape).
     #[arg(long, value_enum)]
-    pub measure: Option<surfmotion::similarity::Measure>,
+    pub measure: Option<super::values::MeasureArg>,
     /// Print the graph in Graphviz DOT (`| dot -Tpng -o graph.png`).
     #[arg(long, conflicts_with = "json")]
     pub dot: bool,
@@ -31,7 +31,7 @@ pub struct Args {
 /// Runs `graph`.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let opts = surfmotion::db::BuildOptions {
-        measure: a.measure,
+        measure: a.measure.map(Into::into),
         force: false,
         ..Default::default()
     };

@@ -100,7 +100,7 @@ pub struct ProceduralArgs {
     pub output: PathBuf,
     /// Which gaits (default: all).
     #[arg(long, value_enum)]
-    pub gait: Vec<surfmotion::synth::Gait>,
+    pub gait: Vec<super::values::GaitArg>,
     /// Length of each clip in seconds.
     #[arg(long, default_value_t = mocap::ProceduralOptions::default().seconds, value_parser = super::positive)]
     pub seconds: f64,
@@ -146,7 +146,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
         Cmd::Procedural(a) => {
             let opts = mocap::ProceduralOptions {
                 output: a.output,
-                gaits: a.gait.clone(),
+                gaits: a.gait.iter().map(|&g| g.into()).collect(),
                 seconds: a.seconds,
                 fps: a.fps,
             };

@@ -47,8 +47,8 @@ pub struct JobOpts {
     /// How the retrieved frames follow the query skeleton: part-based PCA
     /// Laplacian deformation (the paper), one whole-body space, plain linear
     /// blend skinning, or none.
-    #[arg(long, value_enum, default_value_t = DriveOptions::default().deform)]
-    pub deform: surfmotion::deform::DeformMode,
+    #[arg(long, value_enum, default_value_t = DriveOptions::default().deform.into())]
+    pub deform: super::values::DeformModeArg,
     /// Skeleton dissimilarity threshold T_skel (metres, summed over 19
     /// joints), at most 1000. Default: chosen from the query's
     /// nearest-frame costs.
@@ -68,8 +68,8 @@ pub struct JobOpts {
     /// retrieval, placement, the deformation's binding and the
     /// plausibility checks: the measured regressor joints, the character's
     /// rigid skeleton, or part centroids.
-    #[arg(long, value_enum, default_value_t = CharacterOptions::default().skeleton)]
-    pub skeleton: surfmotion::embed::frames::SkeletonKind,
+    #[arg(long, value_enum, default_value_t = CharacterOptions::default().skeleton.into())]
+    pub skeleton: super::values::SkeletonKindArg,
 }
 
 /// `--t-skel`: metres summed over 19 joints, finite, ≥ 0 and at most 1000
@@ -95,7 +95,7 @@ impl JobOpts {
         opts.deform = if self.no_deform {
             surfmotion::deform::DeformMode::None
         } else {
-            self.deform
+            self.deform.into()
         };
         opts
     }
@@ -103,7 +103,7 @@ impl JobOpts {
     /// How the database is loaded.
     pub fn character(&self) -> CharacterOptions {
         CharacterOptions {
-            skeleton: self.skeleton,
+            skeleton: self.skeleton.into(),
         }
     }
 

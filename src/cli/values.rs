@@ -1,9 +1,164 @@
-//! The command line's mirror of [`Overlap`], whose library docs are too
-//! long for `--help`. The library's other option enums derive
-//! `clap::ValueEnum` themselves (with the `cli` feature), so their
-//! variants' doc comments are the help: one source.
+//! The command line's mirrors of the library's option enums. The library
+//! does not depend on clap; each mirror has the same variants, value names
+//! and help (the variants' doc comments) as the library type, and converts
+//! into it with `From`.
 
+use surfmotion::batch::Format;
+use surfmotion::deform::DeformMode;
+use surfmotion::embed::frames::SkeletonKind;
 use surfmotion::live::Overlap;
+use surfmotion::similarity::Measure;
+use surfmotion::synth::Gait;
+
+/// A frame dissimilarity measure ([`Measure`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MeasureArg {
+    /// 3D volumetric shape histogram, minimised over rotation about the
+    /// vertical (Eq. 1).
+    Shape,
+    /// Vertex positions and velocities after floor alignment (Casas 2013).
+    Vertex,
+    /// Canonical joint positions after floor alignment (Eq. 28); needs a rig.
+    Skeleton,
+    /// 6D shape-colour histogram with a pyramid EMD (Sec. 4.1); needs
+    /// vertex colours.
+    Colour,
+}
+
+impl From<MeasureArg> for Measure {
+    fn from(m: MeasureArg) -> Measure {
+        match m {
+            MeasureArg::Shape => Measure::Shape,
+            MeasureArg::Vertex => Measure::Vertex,
+            MeasureArg::Skeleton => Measure::Skeleton,
+            MeasureArg::Colour => Measure::Colour,
+        }
+    }
+}
+
+/// How joints are read off a frame ([`SkeletonKind`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SkeletonKindArg {
+    /// The character's rigid skeleton (bone lengths calibrated over the
+    /// database) posed per frame nearest the regressor joints.
+    Rigid,
+    /// Affine regressors: exact on the rest frame, rigid-motion equivariant.
+    Regressor,
+    /// Plain centres of each joint's vertex set (Huang et al. 2015, Sec. 3).
+    Centroid,
+}
+
+impl From<SkeletonKind> for SkeletonKindArg {
+    fn from(k: SkeletonKind) -> SkeletonKindArg {
+        match k {
+            SkeletonKind::Rigid => SkeletonKindArg::Rigid,
+            SkeletonKind::Regressor => SkeletonKindArg::Regressor,
+            SkeletonKind::Centroid => SkeletonKindArg::Centroid,
+        }
+    }
+}
+
+impl From<SkeletonKindArg> for SkeletonKind {
+    fn from(k: SkeletonKindArg) -> SkeletonKind {
+        match k {
+            SkeletonKindArg::Rigid => SkeletonKind::Rigid,
+            SkeletonKindArg::Regressor => SkeletonKind::Regressor,
+            SkeletonKindArg::Centroid => SkeletonKind::Centroid,
+        }
+    }
+}
+
+/// Which procedural motion ([`Gait`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum GaitArg {
+    /// Walk straight ahead at 1.4 m/s.
+    Walk,
+    /// Run straight ahead at 3.2 m/s.
+    Run,
+    /// Walk along a circle of 2 m radius.
+    Turn,
+}
+
+impl From<GaitArg> for Gait {
+    fn from(g: GaitArg) -> Gait {
+        match g {
+            GaitArg::Walk => Gait::Walk,
+            GaitArg::Run => Gait::Run,
+            GaitArg::Turn => Gait::Turn,
+        }
+    }
+}
+
+/// Output format of a batch ([`Format`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FormatArg {
+    /// Binary glTF with one morph target per frame.
+    Glb,
+    /// PC2 point cache with its topology OBJ beside it.
+    Pc2,
+    /// A folder of OBJ frames.
+    Obj,
+    /// USD text layer (time-sampled points), one `.usda` per clip.
+    Usda,
+}
+
+impl From<Format> for FormatArg {
+    fn from(f: Format) -> FormatArg {
+        match f {
+            Format::Glb => FormatArg::Glb,
+            Format::Pc2 => FormatArg::Pc2,
+            Format::Obj => FormatArg::Obj,
+            Format::Usda => FormatArg::Usda,
+        }
+    }
+}
+
+impl From<FormatArg> for Format {
+    fn from(f: FormatArg) -> Format {
+        match f {
+            FormatArg::Glb => Format::Glb,
+            FormatArg::Pc2 => Format::Pc2,
+            FormatArg::Obj => Format::Obj,
+            FormatArg::Usda => Format::Usda,
+        }
+    }
+}
+
+/// How retrieved frames are made to follow the query skeleton
+/// ([`DeformMode`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum DeformModeArg {
+    /// Part-based PCA Laplacian deformation (the paper's method).
+    Part,
+    /// One PCA Laplacian deformation space for the whole body.
+    Global,
+    /// Plain linear blend skinning of the retrieved frame.
+    Lbs,
+    /// No deformation: the interpolated retrieval.
+    None,
+}
+
+impl From<DeformMode> for DeformModeArg {
+    fn from(d: DeformMode) -> DeformModeArg {
+        match d {
+            DeformMode::Part => DeformModeArg::Part,
+            DeformMode::Global => DeformModeArg::Global,
+            DeformMode::Lbs => DeformModeArg::Lbs,
+            DeformMode::None => DeformModeArg::None,
+        }
+    }
+}
+
+impl From<DeformModeArg> for DeformMode {
+    fn from(d: DeformModeArg) -> DeformMode {
+        match d {
+            DeformModeArg::Part => DeformMode::Part,
+            DeformModeArg::Global => DeformMode::Global,
+            DeformModeArg::Lbs => DeformMode::Lbs,
+            DeformModeArg::None => DeformMode::None,
+        }
+    }
+}
 
 /// When `live` deforms two frames at once ([`Overlap`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -31,10 +186,36 @@ mod tests {
     use super::*;
     use clap::ValueEnum;
 
-    /// The mirror accepts exactly the library's variants, each converting
-    /// to the variant of the same name.
+    /// Every mirror accepts exactly the names the library type had, and
+    /// each converts to the library variant of the same name.
     #[test]
-    fn the_overlap_mirror_is_the_library_enum() {
+    fn cli_value_enums_mirror_the_library_enums() {
+        for m in MeasureArg::value_variants() {
+            let name = m.to_possible_value().unwrap().get_name().to_string();
+            assert_eq!(Measure::from(*m).name(), name);
+        }
+        assert_eq!(MeasureArg::value_variants().len(), 4);
+        for g in GaitArg::value_variants() {
+            let name = g.to_possible_value().unwrap().get_name().to_string();
+            assert_eq!(Gait::from(*g).name(), name);
+        }
+        assert_eq!(GaitArg::value_variants().len(), Gait::ALL.len());
+        for k in SkeletonKindArg::value_variants() {
+            let name = k.to_possible_value().unwrap().get_name().to_string();
+            let lib = serde_json::to_value(SkeletonKind::from(*k)).unwrap();
+            assert_eq!(lib, serde_json::json!(name));
+        }
+        for d in DeformModeArg::value_variants() {
+            let name = d.to_possible_value().unwrap().get_name().to_string();
+            let lib = serde_json::to_value(DeformMode::from(*d)).unwrap();
+            assert_eq!(lib, serde_json::json!(name));
+        }
+        for f in FormatArg::value_variants() {
+            let name = f.to_possible_value().unwrap().get_name().to_string();
+            let lib = serde_json::to_value(Format::from(*f)).unwrap();
+            // Format serialises with its variant name (`Glb`).
+            assert_eq!(lib.as_str().map(str::to_lowercase), Some(name));
+        }
         for o in OverlapArg::value_variants() {
             let name = o.to_possible_value().unwrap().get_name().to_string();
             assert_eq!(format!("{:?}", Overlap::from(*o)).to_lowercase(), name);

@@ -5,7 +5,6 @@ use super::untangle;
 
 /// How retrieved frames are made to follow the query skeleton.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "snake_case")]
 pub enum DeformMode {
     /// Part-based PCA Laplacian deformation (the paper's method).

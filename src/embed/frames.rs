@@ -14,7 +14,6 @@ use serde::Serialize;
 
 /// How joints are read off a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "snake_case")]
 pub enum SkeletonKind {
     /// The character's rigid skeleton (bone lengths calibrated over the

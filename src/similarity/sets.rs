@@ -12,7 +12,6 @@ use serde::{Deserialize, Serialize};
 
 /// A frame dissimilarity measure (Huang et al. 2015, Sec. 4.1 and Fig. 4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "snake_case")]
 pub enum Measure {
     /// 3D volumetric shape histogram, minimised over rotation about the

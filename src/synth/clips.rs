@@ -15,7 +15,6 @@ use std::f64::consts::{PI, TAU};
 
 /// Which procedural motion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Gait {
     /// Walk straight ahead at 1.4 m/s.
     Walk,
