@@ -24,11 +24,9 @@
 //! candidates after 3 rounds (198 without the closure).
 
 use super::matrix::{PairDistance, Span};
-use super::pair_scan::descend_on;
+use super::pair_scan::Memo;
 use super::transitions::{TransitionOptions, find_among};
 use rayon::prelude::*;
-use std::cell::RefCell;
-use std::collections::HashMap;
 
 /// The stored pairs a closure round reads: the stored value of a global
 /// frame pair, and the stored pairs of a sequence pair's block (frames
@@ -105,12 +103,8 @@ fn pair_minima(
             .unwrap_or(f32::INFINITY)
     };
     let found = find_among(&c, si.len, sj.len, same, opts, cells.into_iter());
-    let memo = Descent {
-        known: Known { stored, full },
-        si,
-        sj,
-        seen: RefCell::new(HashMap::new()),
-    };
+    let known = Known { stored, full };
+    let memo = Memo::new(&known, si, sj);
     let mut out = Vec::new();
     for &(m, n, _, _) in &found {
         if same && n < m {
@@ -124,7 +118,7 @@ fn pair_minima(
     }
     out.sort_unstable();
     out.dedup();
-    (out, memo.seen.borrow().len() as u64)
+    (out, memo.evaluated())
 }
 
 /// True when the transition search's result at `(m, n)` reads stored pairs
@@ -151,33 +145,4 @@ fn certified(
     }
     let fit = m.min(n).min(rows - 1 - m).min(cols - 1 - n).min(max_window);
     (1..=fit).all(|k| c(m - k, n - k).is_finite() && c(m + k, n + k).is_finite())
-}
-
-/// Steepest descent on the full measure of one block, each pair evaluated
-/// once (stored values read first).
-struct Descent<'a> {
-    known: Known<'a>,
-    si: &'a Span,
-    sj: &'a Span,
-    seen: RefCell<HashMap<(usize, usize), f32>>,
-}
-
-impl Descent<'_> {
-    fn get(&self, r: usize, s: usize) -> f32 {
-        if r >= self.si.len || s >= self.sj.len {
-            return f32::INFINITY;
-        }
-        if let Some(v) = self.seen.borrow().get(&(r, s)) {
-            return *v;
-        }
-        let v = self.known.distance(self.si.start + r, self.sj.start + s) as f32;
-        self.seen.borrow_mut().insert((r, s), v);
-        v
-    }
-    /// From `(m, n)` to the smallest of the 8 neighbours while it is
-    /// smaller (within one sequence never closer than `gap` frames to the
-    /// diagonal), at most [`super::pair_scan::MAX_DESCENT`] steps.
-    fn descend(&self, m: usize, n: usize, same: bool, gap: usize) -> (usize, usize) {
-        descend_on(|r, s| self.get(r, s), (m, n), same, gap)
-    }
 }

@@ -256,7 +256,7 @@ fn centres(found: Vec<(usize, usize, usize, f64)>, same: bool) -> Vec<(usize, us
 
 /// The full measure of a sequence pair's block (frame numbers within each
 /// sequence), each pair evaluated once.
-struct Memo<'a> {
+pub(crate) struct Memo<'a> {
     full: &'a dyn PairDistance,
     si: &'a Span,
     sj: &'a Span,
@@ -264,7 +264,7 @@ struct Memo<'a> {
 }
 
 impl<'a> Memo<'a> {
-    fn new(full: &'a dyn PairDistance, si: &'a Span, sj: &'a Span) -> Self {
+    pub(crate) fn new(full: &'a dyn PairDistance, si: &'a Span, sj: &'a Span) -> Self {
         Memo {
             full,
             si,
@@ -284,13 +284,13 @@ impl<'a> Memo<'a> {
         self.seen.borrow_mut().insert((r, s), v);
         v
     }
-    fn evaluated(&self) -> u64 {
+    pub(crate) fn evaluated(&self) -> u64 {
         self.seen.borrow().len() as u64
     }
     /// From `(m, n)` to the smallest of the 8 neighbours while it is
     /// smaller (within one sequence, never closer than `gap` frames to the
     /// diagonal), at most [`MAX_DESCENT`] steps.
-    fn descend(&self, m: usize, n: usize, same: bool, gap: usize) -> (usize, usize) {
+    pub(crate) fn descend(&self, m: usize, n: usize, same: bool, gap: usize) -> (usize, usize) {
         descend_on(|r, s| self.get(r, s), (m, n), same, gap)
     }
 }
