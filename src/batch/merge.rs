@@ -8,7 +8,7 @@
 //! shard it does not belong to (a report of another split rule).
 
 use super::clips::{Shard, shard_of};
-use super::summary::Summary;
+use super::summary::BatchSummary;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -118,7 +118,7 @@ pub struct ShardReport {
     /// The shard its name says.
     pub shard: Shard,
     /// What it holds.
-    pub summary: Summary,
+    pub summary: BatchSummary,
 }
 
 /// The shard a report's file name says (`batch-2of4.json` → 2/4).
@@ -179,7 +179,7 @@ pub fn read_report(path: &Path) -> Result<ShardReport, MergeError> {
         path: path.to_path_buf(),
         source: e.source,
     })?;
-    let summary: Summary = serde_json::from_str(&text).map_err(|e| MergeError::Parse {
+    let summary: BatchSummary = serde_json::from_str(&text).map_err(|e| MergeError::Parse {
         path: path.to_path_buf(),
         line: e.line(),
         column: e.column(),
@@ -206,7 +206,7 @@ pub fn read_report(path: &Path) -> Result<ShardReport, MergeError> {
 /// them; `seconds` is the longest shard's (the wall clock when the shards
 /// ran at once), `jobs` and the preparations add up; `merged_from` lists
 /// the reports.
-pub fn merge(reports: &[ShardReport], dirs: &[PathBuf]) -> Result<Summary, MergeError> {
+pub fn merge(reports: &[ShardReport], dirs: &[PathBuf]) -> Result<BatchSummary, MergeError> {
     let Some(first) = reports.first() else {
         return Err(MergeError::NoReports(list(dirs)));
     };
@@ -318,7 +318,7 @@ pub fn merge(reports: &[ShardReport], dirs: &[PathBuf]) -> Result<Summary, Merge
         .map(|r| r.summary.seconds)
         .fold(0.0, f64::max);
     let jobs = reports.iter().map(|r| r.summary.jobs).sum();
-    let mut s = Summary::new(first.summary.what.clone(), outcomes, seconds, jobs, None);
+    let mut s = BatchSummary::new(first.summary.what.clone(), outcomes, seconds, jobs, None);
     s.factorisations = reports.iter().map(|r| r.summary.factorisations).sum();
     s.prepare_seconds = reports.iter().map(|r| r.summary.prepare_seconds).sum();
     s.library_clips = first.summary.library_clips;
@@ -360,7 +360,7 @@ mod tests {
                     .filter(|c| shard.contains(Path::new(c)))
                     .map(|c| outcome(c))
                     .collect();
-                let mut summary = Summary::new(
+                let mut summary = BatchSummary::new(
                     "retarget --db x".into(),
                     mine,
                     i as f64,
@@ -405,7 +405,7 @@ mod tests {
         assert_eq!(s.merged_from.len(), 4);
         // Round trip through the JSON the shards write.
         let text = serde_json::to_string(&r[0].summary).unwrap();
-        let back: Summary = serde_json::from_str(&text).unwrap();
+        let back: BatchSummary = serde_json::from_str(&text).unwrap();
         assert_eq!(back.outcomes.len(), r[0].summary.outcomes.len());
     }
 

@@ -25,4 +25,6 @@ pub use merge::{MergeError, ShardReport, find_reports, merge, read_report};
 pub use runner::{
     ClipOutcome, ClipStatus, ClipWarning, Converted, Converter, Preparation, RunOptions, run,
 };
-pub use summary::{Earlier, Summary, report_stem, write_json, write_summary};
+#[allow(deprecated)]
+pub use summary::Summary;
+pub use summary::{BatchSummary, Earlier, report_stem, write_json, write_summary};

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 /// Totals of a batch.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Summary {
+pub struct BatchSummary {
     /// What was run (e.g. `retarget --db DIR` from the CLI, `retarget onto DIR`
     /// by default: [`crate::jobs::BatchOptions::describe`]).
     pub what: String,
@@ -71,7 +71,12 @@ pub struct Summary {
     pub outcomes: Vec<ClipOutcome>,
 }
 
-impl Summary {
+/// The old name of [`BatchSummary`] (before session 40: one name per concept,
+/// issue 40 — `Summary` named a batch's totals and two other things).
+#[deprecated(note = "renamed BatchSummary")]
+pub type Summary = BatchSummary;
+
+impl BatchSummary {
     /// Totals from outcomes.
     pub fn new(
         what: String,
@@ -79,7 +84,7 @@ impl Summary {
         seconds: f64,
         jobs: usize,
         shard: Option<String>,
-    ) -> Summary {
+    ) -> BatchSummary {
         let count = |s| outcomes.iter().filter(|o| o.status == s).count();
         let done = count(ClipStatus::Done);
         let frames = outcomes.iter().map(|o| o.frames).sum();
@@ -88,7 +93,7 @@ impl Summary {
             .filter(|o| o.status == ClipStatus::Done)
             .map(|o| o.frames)
             .sum();
-        Summary {
+        BatchSummary {
             what,
             finished: true,
             clips: outcomes.len(),
@@ -126,7 +131,7 @@ impl Summary {
     }
 }
 
-impl Summary {
+impl BatchSummary {
     /// One line of totals: clips converted, skipped, failed, frames, speed.
     pub fn line(&self) -> String {
         format!(
@@ -185,7 +190,7 @@ fn esc(s: &str) -> String {
 
 /// A bar chart: per clip, seconds (blue, left scale) and joint-velocity
 /// error (orange, right scale); failed clips marked red.
-pub(crate) fn plot_svg(s: &Summary) -> String {
+pub(crate) fn plot_svg(s: &BatchSummary) -> String {
     let n = s.outcomes.len().max(1);
     // At least wide enough for the two axis titles (a report of one or two
     // clips, as a killed run leaves, overlapped them).
@@ -250,7 +255,7 @@ pub(crate) fn plot_svg(s: &Summary) -> String {
 }
 
 /// An HTML page: totals, the plot, a table of clips.
-pub fn html(s: &Summary) -> String {
+pub fn html(s: &BatchSummary) -> String {
     let mut h = String::from(
         "<!doctype html>\n<meta charset=\"utf-8\">\n<title>surfmotion batch</title>\n<style>body{font-family:sans-serif;margin:2em}td,th{padding:2px 8px;text-align:left}.failed{color:#b00}</style>\n",
     );
@@ -309,7 +314,7 @@ pub fn html(s: &Summary) -> String {
 /// Writes `batch.json`, `batch.svg` and `batch.html` into `dir` (names
 /// carry the shard, `batch-2of8.json`, so shards sharing a folder do not
 /// overwrite each other). Returns the files.
-pub fn write_summary(dir: &Path, s: &Summary) -> Result<Vec<PathBuf>, FsError> {
+pub fn write_summary(dir: &Path, s: &BatchSummary) -> Result<Vec<PathBuf>, FsError> {
     let stem = report_stem(s.shard.as_deref());
     let json = dir.join(format!("{stem}.json"));
     let svg = dir.join(format!("{stem}.svg"));
@@ -421,7 +426,7 @@ pub fn report_stem(shard: Option<&str>) -> String {
 }
 
 /// Writes only `batch.json` (the report while the batch runs).
-pub fn write_json(dir: &Path, s: &Summary) -> Result<PathBuf, FsError> {
+pub fn write_json(dir: &Path, s: &BatchSummary) -> Result<PathBuf, FsError> {
     let json = dir.join(format!("{}.json", report_stem(s.shard.as_deref())));
     let text = serde_json::to_string_pretty(s).unwrap_or_default();
     write_bytes_atomic(&json, text.as_bytes())?;

@@ -5,7 +5,7 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use surfmotion::batch::schedule::ShardSource;
-use surfmotion::batch::{ClipStatus, Converter, Format, Summary};
+use surfmotion::batch::{BatchSummary, ClipStatus, Converter, Format};
 use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::jobs::batch::{ClipRate, check_folders, outcome_line, report_text, target_inputs};
 use surfmotion::jobs::batch_verdict::none_failed;
@@ -117,7 +117,12 @@ fn run_merge(a: MergeArgs) -> anyhow::Result<()> {
 
 /// The summary of a run or merge, as JSON or text; refuses a run with
 /// failed clips ([`none_failed`]).
-fn print_summary(json: bool, s: &Summary, files: &[PathBuf], text: String) -> anyhow::Result<()> {
+fn print_summary(
+    json: bool,
+    s: &BatchSummary,
+    files: &[PathBuf],
+    text: String,
+) -> anyhow::Result<()> {
     match json {
         true => super::emit_json(s)?,
         false => super::emit(&text)?,

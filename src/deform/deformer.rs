@@ -130,7 +130,7 @@ pub struct DeformWorkspace {
     /// The best repair pass's turned-over triangles
     /// ([`Deformer::repair_with`]).
     best_bad: Vec<u32>,
-    /// Reference normals (computed as the untangling reads them) and
+    /// ClipNeutral normals (computed as the untangling reads them) and
     /// source areas of the triangles.
     references: untangle::LazyReferences,
     areas: Vec<f64>,

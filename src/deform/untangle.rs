@@ -84,7 +84,7 @@ impl Default for UntangleOptions {
     }
 }
 
-/// Reference normals (unit, turned by each triangle's skin rotation) and
+/// ClipNeutral normals (unit, turned by each triangle's skin rotation) and
 /// source areas of `tris`, written into `normals` and `areas`.
 pub fn references(
     tris: &[[u32; 3]],

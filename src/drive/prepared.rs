@@ -27,7 +27,7 @@ use crate::mesh::Mesh;
 use crate::mesh::blend::Blender;
 use crate::pose::Pose;
 use crate::pose::retarget::{
-    CharacterNeutral, Given, OnCharacter, Reference, character_neutral, on_character_given,
+    CharacterNeutral, ClipNeutral, Given, OnCharacter, character_neutral, on_character_given,
     stance_offsets_given,
 };
 use glam::DVec3;
@@ -102,7 +102,7 @@ impl Analysed {
         ch: &Character,
         neutral: &Pose,
         floor_lift: f64,
-        reference: &Reference,
+        reference: &ClipNeutral,
         mocap: &[Pose],
     ) -> Analysed {
         Analysed::on_given(ch, neutral, floor_lift, reference, mocap, &Given::default())
@@ -115,7 +115,7 @@ impl Analysed {
         ch: &Character,
         neutral: &Pose,
         floor_lift: f64,
-        reference: &Reference,
+        reference: &ClipNeutral,
         mocap: &[Pose],
         given: &Given<'_>,
     ) -> Analysed {
@@ -232,7 +232,7 @@ impl Prepared {
     /// The clip `mocap` (the clip's own joints, metres, Y-up, the
     /// database's rate) with its neutral `reference`, analysed for `ch`
     /// (the pose kernel runs once here).
-    pub fn analyse(&self, ch: &Character, reference: &Reference, mocap: &[Pose]) -> Analysed {
+    pub fn analyse(&self, ch: &Character, reference: &ClipNeutral, mocap: &[Pose]) -> Analysed {
         Analysed::new(ch, &self.neutral.pose, self.floor_lift, reference, mocap)
     }
 
@@ -241,7 +241,7 @@ impl Prepared {
     pub(crate) fn analyse_given(
         &self,
         ch: &Character,
-        reference: &Reference,
+        reference: &ClipNeutral,
         mocap: &[Pose],
         given: &Given<'_>,
     ) -> Analysed {

@@ -17,7 +17,7 @@ use crate::db::Character;
 use crate::mocap::MocapError;
 use crate::pose::Pose;
 use crate::pose::retarget::{
-    ClipPoses, Reference, character_neutral, clip_poses, retarget, retarget_with_neutral,
+    ClipNeutral, ClipPoses, character_neutral, clip_poses, retarget, retarget_with_neutral,
 };
 use crate::rig::{LoadOptions, load_clip};
 use crate::rig::{RigError, detect_clip};
@@ -49,11 +49,11 @@ pub enum QueryError {
 
 /// A clip as canonical poses.
 #[derive(Debug, Clone)]
-pub struct MocapPoses {
+pub struct ClipQuery {
     /// The clip's own joints (metres, Y-up), one pose per frame.
     pub poses: Vec<Pose>,
     /// The clip's neutral reference pose (metres, Y-up).
-    pub reference: Reference,
+    pub reference: ClipNeutral,
     /// Frames per second (the requested rate).
     pub fps: f64,
     /// The rig convention used.
@@ -62,8 +62,13 @@ pub struct MocapPoses {
     pub source_fps: f64,
 }
 
+/// The old name of [`ClipQuery`] (before session 40: "clip" names
+/// skeletal input, "motion" a mesh's; issue 40).
+#[deprecated(note = "renamed ClipQuery (old name MocapPoses)")]
+pub type MocapPoses = ClipQuery; // old name
+
 /// Reads a clip and turns it into canonical poses at `fps`.
-pub fn load_mocap(path: &Path, opts: &LoadOptions, fps: f64) -> Result<MocapPoses, QueryError> {
+pub fn load_mocap(path: &Path, opts: &LoadOptions, fps: f64) -> Result<ClipQuery, QueryError> {
     let mut clip = load_clip(path, opts)?;
     let source_fps = clip.fps();
     clip.to_metres_y_up();
@@ -91,7 +96,7 @@ pub fn load_mocap(path: &Path, opts: &LoadOptions, fps: f64) -> Result<MocapPose
             path: path.to_path_buf(),
             msg: e.to_string(),
         })?;
-    Ok(MocapPoses {
+    Ok(ClipQuery {
         poses,
         reference,
         fps,
@@ -102,7 +107,7 @@ pub fn load_mocap(path: &Path, opts: &LoadOptions, fps: f64) -> Result<MocapPose
 
 /// The clip's poses on the character's skeleton `rest` (see
 /// [`crate::pose::retarget`]).
-pub fn to_character(rest: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<Pose> {
+pub fn to_character(rest: &Pose, reference: &ClipNeutral, mocap: &[Pose]) -> Vec<Pose> {
     retarget(rest, reference, mocap)
         .into_iter()
         .map(|(p, _)| p)
@@ -158,7 +163,7 @@ pub(crate) fn database_floor_lift_on(ch: &Character, topology: &crate::mesh::Mes
 /// its joint-velocity error is measured against.
 /// A prepared character ([`super::Prepared::analyse`]) holds the neutral
 /// pose and the lift instead of finding them per call.
-pub fn to_database(ch: &Character, reference: &Reference, mocap: &[Pose]) -> Vec<Pose> {
+pub fn to_database(ch: &Character, reference: &ClipNeutral, mocap: &[Pose]) -> Vec<Pose> {
     let neutral = character_neutral(ch.rest_pose(), ch.poses());
     on_character(
         ch.rest_pose(),
@@ -177,7 +182,7 @@ pub fn on_character(
     rest: &Pose,
     neutral: &Pose,
     lift: f64,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
 ) -> Vec<Pose> {
     let lift = glam::DVec3::new(0.0, lift, 0.0);

@@ -11,7 +11,7 @@ use crate::db::Character;
 use crate::deform::{DeformMode, Deformer, TurnedOver};
 use crate::mesh::blend::FrameGradients;
 use crate::pose::Pose;
-use crate::pose::retarget::{Reference, ReferenceSource};
+use crate::pose::retarget::{ClipNeutral, ClipNeutralSource};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
@@ -57,7 +57,7 @@ pub struct Report {
     pub fps: f64,
     /// The clip's neutral reference pose the retargeting measured the
     /// torso's rotations from (see [`crate::pose::retarget`]).
-    pub reference: ReferenceSource,
+    pub reference: ClipNeutralSource,
     /// The retrieval (path, threshold, costs, widened rows, cuts).
     pub retrieval: Retrieval,
     /// Jumps (transitions and cuts) with their blend windows.
@@ -99,7 +99,7 @@ pub const CHUNK_FRAMES: usize = 64;
 pub fn synthesise(
     ch: &Character,
     mocap: &[Pose],
-    reference: &Reference,
+    reference: &ClipNeutral,
     fps: f64,
     opts: &DriveOptions,
 ) -> Result<Output, DriveError> {
@@ -147,7 +147,7 @@ impl Prepared {
         &self,
         ch: &Character,
         clip: &Analysed,
-        reference: ReferenceSource,
+        reference: ClipNeutralSource,
         fps: f64,
         opts: &DriveOptions,
         mut sink: S,

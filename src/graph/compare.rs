@@ -12,10 +12,10 @@ pub struct Agreement {
     pub reference: usize,
     /// Transitions of the compared (sparse) graph.
     pub compared: usize,
-    /// Reference transitions found at the same frames (same sequences,
+    /// ClipNeutral transitions found at the same frames (same sequences,
     /// `m` and `n`).
     pub same_frames: usize,
-    /// Reference transitions found within `frames` frames on both sides.
+    /// ClipNeutral transitions found within `frames` frames on both sides.
     pub near: usize,
     /// Of those found near, the ones whose cost is within `cost` (relative)
     /// of the reference's.

@@ -6,8 +6,8 @@
 //! raised as `tracing` events with target [`NOTICE`] and kept in the report.
 
 use crate::batch::{
-    ClipOutcome, ClipStatus, Converter, Earlier, FolderLock, Format, MergeError, Planned,
-    RunOptions, Shard, Summary, clean_temporaries, find_clips, find_reports, lock_folder, merge,
+    BatchSummary, ClipOutcome, ClipStatus, Converter, Earlier, FolderLock, Format, MergeError,
+    Planned, RunOptions, Shard, clean_temporaries, find_clips, find_reports, lock_folder, merge,
     plan, read_report, report_stem, run, write_summary,
 };
 use std::path::{Path, PathBuf};
@@ -85,7 +85,7 @@ pub enum BatchError {
 #[derive(Debug, Clone)]
 pub struct BatchReport {
     /// The summary (also written as JSON, HTML, SVG).
-    pub summary: Summary,
+    pub summary: BatchSummary,
     /// The report files written.
     pub files: Vec<PathBuf>,
     /// Notices raised (also as `tracing` events with target [`NOTICE`]).
@@ -288,8 +288,8 @@ struct Reports<'a> {
 
 impl Reports<'_> {
     /// The summary of `outcomes` at this point of the run.
-    fn summary(&self, outcomes: Vec<ClipOutcome>) -> Summary {
-        let mut s = Summary::new(
+    fn summary(&self, outcomes: Vec<ClipOutcome>) -> BatchSummary {
+        let mut s = BatchSummary::new(
             self.what.clone(),
             outcomes,
             self.t0.elapsed().as_secs_f64(),
@@ -410,7 +410,7 @@ impl ClipRate {
 
 /// The text summary of a batch: its line, the report files and every
 /// failed clip with its reason (`flags` as in [`outcome_line`]).
-pub fn report_text(s: &Summary, files: &[PathBuf], flags: &dyn Fn(&str) -> String) -> String {
+pub fn report_text(s: &BatchSummary, files: &[PathBuf], flags: &dyn Fn(&str) -> String) -> String {
     let mut out = format!("{}\nreport: {}\n", s.line(), joined(files));
     for o in s.outcomes.iter().filter(|o| o.status == ClipStatus::Failed) {
         out += &format!(
@@ -453,7 +453,7 @@ pub enum MergeBatchError {
 #[derive(Debug, Clone)]
 pub struct MergeReport {
     /// The merged summary (also written as `batch.json`, `.html`, `.svg`).
-    pub summary: Summary,
+    pub summary: BatchSummary,
     /// The files written.
     pub files: Vec<PathBuf>,
     /// The shard reports read.
@@ -496,7 +496,7 @@ pub fn merge_batches(
     let own = out.join("batch.json");
     if own.is_file() {
         let text = crate::util::fsutil::read_text(&own)?;
-        let merged = serde_json::from_str::<Summary>(&text)
+        let merged = serde_json::from_str::<BatchSummary>(&text)
             .map(|s| !s.merged_from.is_empty())
             .unwrap_or(false);
         if !merged {

@@ -1,7 +1,7 @@
 //! A batch's verdict: it fails when a clip failed, naming the report
 //! that lists them (`batch` and `batch merge` exit 1).
 
-use crate::batch::Summary;
+use crate::batch::BatchSummary;
 use std::path::PathBuf;
 
 /// Clips of a batch failed.
@@ -18,7 +18,7 @@ pub struct ClipsFailed {
 
 /// Ok when no clip of `s` failed; else [`ClipsFailed`] naming `files[0]`,
 /// the report written.
-pub fn none_failed(s: &Summary, files: &[PathBuf]) -> Result<(), ClipsFailed> {
+pub fn none_failed(s: &BatchSummary, files: &[PathBuf]) -> Result<(), ClipsFailed> {
     if s.failed == 0 {
         return Ok(());
     }

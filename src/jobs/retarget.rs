@@ -8,7 +8,7 @@ use crate::batch::summary::count;
 use crate::batch::{Converted, Converter, Preparation};
 use crate::db::{BuildProgress, Character, CharacterOptions};
 use crate::deform::{DeformMode, TurnedOver};
-use crate::drive::query::{MocapPoses, database_floor_lift, load_mocap};
+use crate::drive::query::{ClipQuery, database_floor_lift, load_mocap};
 use crate::drive::{Analysed, DriveOptions, Each, Output, Prepared, Report, Timings};
 use crate::mesh::io::SaveOptions;
 use crate::mesh::io::glb::GlbOptions;
@@ -68,7 +68,7 @@ pub struct RetargetJob {
 /// One clip retargeted.
 pub struct RetargetRun {
     /// The clip as read (canonical poses, metres, Y-up, the database's rate).
-    pub mocap: MocapPoses,
+    pub mocap: ClipQuery,
     /// Positions, the query on the character's skeleton, and the report.
     pub output: Output,
     /// The clip analysed once ([`Prepared::analyse`]), which the
@@ -138,7 +138,7 @@ impl RetargetJob {
 
     /// The clip at `clip` at the database's frame rate, refused when it
     /// has no frames.
-    fn load_clip(&self, clip: &Path) -> Result<MocapPoses, JobError> {
+    fn load_clip(&self, clip: &Path) -> Result<ClipQuery, JobError> {
         let mocap = load_mocap(clip, &self.options.load, self.character.manifest().fps)?;
         if mocap.poses.is_empty() {
             return Err(JobError::Input {
@@ -324,7 +324,7 @@ pub fn plausibility(
     ch: &Character,
     positions: &[[f64; 3]],
     turned_over: Option<TurnedOver>,
-    clip: Option<(&MocapPoses, &Analysed)>,
+    clip: Option<(&ClipQuery, &Analysed)>,
 ) -> Option<(Plausibility, f64)> {
     match Checker::for_character(ch, PlausibilityOptions::default()) {
         Ok(c) => plausibility_with(&c, ch, positions, turned_over, clip),
@@ -342,7 +342,7 @@ pub(crate) fn plausibility_with(
     ch: &Character,
     positions: &[[f64; 3]],
     turned_over: Option<TurnedOver>,
-    clip: Option<(&MocapPoses, &Analysed)>,
+    clip: Option<(&ClipQuery, &Analysed)>,
 ) -> Option<(Plausibility, f64)> {
     match measure(c, ch, positions, turned_over, clip) {
         Ok(p) => Some(p),
@@ -361,7 +361,7 @@ fn measure(
     ch: &Character,
     positions: &[[f64; 3]],
     turned_over: Option<TurnedOver>,
-    clip: Option<(&MocapPoses, &Analysed)>,
+    clip: Option<(&ClipQuery, &Analysed)>,
 ) -> Result<(Plausibility, f64), crate::tools::eval::EvalError> {
     let opts = c.opts;
     let Some((m, a)) = clip else {
@@ -382,7 +382,7 @@ fn measure(
 /// One clip retargeted straight to a file ([`RetargetJob::run_to`]).
 pub struct StreamedRun {
     /// The clip as read (canonical poses, metres, Y-up, the database's rate).
-    pub mocap: MocapPoses,
+    pub mocap: ClipQuery,
     /// The clip analysed once ([`Prepared::analyse`]), which the
     /// plausibility checks read.
     pub analysed: Analysed,

@@ -13,7 +13,7 @@ use crate::embed::Embedding;
 use crate::mesh::io::save_sequence;
 use crate::mesh::{Mesh, MeshSequence};
 use crate::pose::Pose;
-use crate::pose::retarget::{ClipPoses, Reference};
+use crate::pose::retarget::{ClipNeutral, ClipPoses};
 use crate::rig::LoadOptions;
 use crate::synth::database::{Dynamics, drive};
 use crate::tools::eval::{Checker, Plausibility};
@@ -245,7 +245,7 @@ fn prepare_folder(
 fn clip_poses(
     clip: &SynthClip,
     opts: &SynthOptions,
-) -> Result<(String, PathBuf, Vec<Pose>, Reference), JobError> {
+) -> Result<(String, PathBuf, Vec<Pose>, ClipNeutral), JobError> {
     let fps = opts.fps;
     let (stem, source, mut poses, reference) = match clip {
         SynthClip::File(path) => {
@@ -297,7 +297,7 @@ struct Driven<'a> {
     name: String,
     source: PathBuf,
     poses: &'a [Pose],
-    reference: &'a Reference,
+    reference: &'a ClipNeutral,
     out: crate::synth::database::Synthesised,
 }
 
@@ -328,18 +328,14 @@ fn write_sequence(
             .and_then(|c| {
                 let clip = crate::pose::retarget::clip_head_trunk_deg(reference, poses);
                 // Floating from the clip's own ground under each foot
-                // (raised on a step).
-                let character = rig.joints.map(glam::DVec3::from_array);
-                let raised =
-                    crate::pose::retarget::foot_ground_offsets(&character, reference, poses);
-                Ok(c.measure_on(
-                    seq.all_positions(),
-                    rest.vertex_count(),
-                    None,
-                    Some(&raised),
-                )?
-                .with_clip_head(&clip, &c.opts.limits)
-                .logged())
+                // (raised on a step), from the kernel's run that drove the
+                // frames.
+                let raised = &out.foot_grounds;
+                Ok(
+                    c.measure_on(seq.all_positions(), rest.vertex_count(), None, Some(raised))?
+                        .with_clip_head(&clip, &c.opts.limits)
+                        .logged(),
+                )
             })
             .map_err(|e| tracing::warn!("{name}: plausibility not measured: {e}"))
             .ok()

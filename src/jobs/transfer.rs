@@ -7,7 +7,7 @@
 use super::JobError;
 use crate::batch::{ClipWarning, Converted, Converter, Preparation};
 use crate::drive::Each;
-use crate::drive::query::{MocapPoses, load_mocap, to_character};
+use crate::drive::query::{ClipQuery, load_mocap, to_character};
 use crate::embed::landmarks::Landmarks;
 use crate::mesh::Mesh;
 use crate::mesh::io::SaveOptions;
@@ -98,7 +98,7 @@ pub struct ScanTransferJob {
 /// One clip transferred.
 pub struct ScanTransferRun {
     /// The clip as read.
-    pub mocap: MocapPoses,
+    pub mocap: ClipQuery,
     /// Positions, frame-major (the scan's units).
     pub positions: Vec<[f64; 3]>,
     /// What the transfer did.
@@ -723,7 +723,7 @@ fn scan_height(prepared: &PreparedScan) -> f64 {
 /// borrows it).
 enum Driving {
     /// A clip's canonical poses.
-    Mocap(Box<MocapPoses>),
+    Mocap(Box<ClipQuery>),
     /// A template sequence with its markers.
     Template {
         frames: crate::mesh::MeshSequence,

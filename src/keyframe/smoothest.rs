@@ -272,7 +272,7 @@ pub fn lower_bound(
 
 /// Min / mean / median / max of a set.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Summary {
+pub struct SmoothestSummary {
     /// Values.
     pub n: usize,
     /// Least.
@@ -285,14 +285,19 @@ pub struct Summary {
     pub max: f64,
 }
 
-impl Summary {
+/// The old name of [`SmoothestSummary`] (before session 40: one name per concept,
+/// issue 40 — `Summary` named the smoothest-path grid's statistics and two other things).
+#[deprecated(note = "renamed SmoothestSummary")]
+pub type Summary = SmoothestSummary;
+
+impl SmoothestSummary {
     /// Of `v` (`None` when empty).
-    pub fn of(mut v: Vec<f64>) -> Option<Summary> {
+    pub fn of(mut v: Vec<f64>) -> Option<SmoothestSummary> {
         if v.is_empty() {
             return None;
         }
         v.sort_by(f64::total_cmp);
-        Some(Summary {
+        Some(SmoothestSummary {
             n: v.len(),
             min: v[0],
             mean: v.iter().sum::<f64>() / v.len() as f64,
@@ -310,11 +315,11 @@ pub struct FloorReport {
     /// Of them, those with a path with a transition found within 1 %.
     pub kept: usize,
     /// Least mean (priced) over the kept reachable targets.
-    pub least_mean: Option<Summary>,
+    pub least_mean: Option<SmoothestSummary>,
     /// Least mean as the grid measures it, over the same targets.
-    pub least_mean_measured: Option<Summary>,
+    pub least_mean_measured: Option<SmoothestSummary>,
     /// The exact lower bound over the reachable targets that have one.
-    pub lower_bound: Option<Summary>,
+    pub lower_bound: Option<SmoothestSummary>,
     /// Every target.
     pub queries: Vec<FloorQuery>,
 }
@@ -402,9 +407,11 @@ pub(crate) fn floor_grid_with(
     Ok(FloorReport {
         reachable: r.len(),
         kept: r.iter().filter(|q| q.least_mean.is_some()).count(),
-        least_mean: Summary::of(r.iter().filter_map(|q| q.least_mean).collect()),
-        least_mean_measured: Summary::of(r.iter().filter_map(|q| q.least_mean_measured).collect()),
-        lower_bound: Summary::of(r.iter().filter_map(|q| q.lower_bound).collect()),
+        least_mean: SmoothestSummary::of(r.iter().filter_map(|q| q.least_mean).collect()),
+        least_mean_measured: SmoothestSummary::of(
+            r.iter().filter_map(|q| q.least_mean_measured).collect(),
+        ),
+        lower_bound: SmoothestSummary::of(r.iter().filter_map(|q| q.lower_bound).collect()),
         queries,
     })
 }

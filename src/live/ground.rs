@@ -12,7 +12,7 @@
 
 use crate::pose::Pose;
 use crate::pose::retarget::{
-    Reference, ReferenceSource, Support, clip_support, ground_tilt, leg_length,
+    ClipNeutral, ClipNeutralSource, Support, clip_support, ground_tilt, leg_length,
 };
 use glam::DQuat;
 
@@ -55,11 +55,11 @@ impl OfflineGround {
     /// The decisions the kernel makes over all of `mocap` with `reference`
     /// (as [`crate::pose::retarget::retarget`] does), `swap` saying which a
     /// window is given.
-    pub fn of(reference: &Reference, mocap: &[Pose], swap: Swap) -> OfflineGround {
+    pub fn of(reference: &ClipNeutral, mocap: &[Pose], swap: Swap) -> OfflineGround {
         let tilt = ground_tilt(mocap);
         let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
         let r = match reference.source {
-            ReferenceSource::Frame(i) if i < levelled.len() => levelled[i],
+            ClipNeutralSource::Frame(i) if i < levelled.len() => levelled[i],
             _ => reference.pose,
         };
         OfflineGround {

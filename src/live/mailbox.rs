@@ -4,7 +4,7 @@
 
 use super::report::Counters;
 use super::source::{Event, Incoming, Source, SourceError};
-use crate::pose::retarget::Reference;
+use crate::pose::retarget::ClipNeutral;
 use std::net::SocketAddr;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
@@ -14,7 +14,7 @@ struct State {
     slot: std::collections::VecDeque<Incoming>,
     lossless: bool,
     last_seq: Option<u64>,
-    reference: Option<Reference>,
+    reference: Option<ClipNeutral>,
     counters: Counters,
     closed: bool,
 }
@@ -102,12 +102,12 @@ impl Mailbox {
     }
 
     /// The stream's reference, once decided.
-    pub fn reference(&self) -> Option<Reference> {
+    pub fn reference(&self) -> Option<ClipNeutral> {
         self.lock().reference.clone()
     }
 
     /// Sets the stream's reference.
-    pub fn set_reference(&self, r: Reference) {
+    pub fn set_reference(&self, r: ClipNeutral) {
         self.lock().reference = Some(r);
     }
 
@@ -166,7 +166,7 @@ impl Source for Fed {
     fn next(&mut self, wait: Duration) -> Result<Event, SourceError> {
         self.mailbox.next(wait)
     }
-    fn reference(&self) -> Option<Reference> {
+    fn reference(&self) -> Option<ClipNeutral> {
         self.mailbox.reference()
     }
     fn counters(&self) -> Counters {

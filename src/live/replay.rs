@@ -7,13 +7,13 @@
 
 use super::report::Counters;
 use super::source::{Event, Incoming, Source, SourceError};
-use crate::drive::query::MocapPoses;
-use crate::pose::retarget::Reference;
+use crate::drive::query::ClipQuery;
+use crate::pose::retarget::ClipNeutral;
 use std::time::{Duration, Instant};
 
 /// A clip played as a stream.
 pub struct Replay {
-    clip: MocapPoses,
+    clip: ClipQuery,
     speed: f64,
     /// Frames to play in all (the clip's length times the loops).
     total: usize,
@@ -26,7 +26,7 @@ impl Replay {
     /// Plays `clip` (canonical poses at the database's rate, from
     /// [`crate::drive::query::load_mocap`]) at `speed` times its rate (0:
     /// no waiting), `loops` times over (at least once).
-    pub fn new(clip: MocapPoses, speed: f64, loops: usize) -> Replay {
+    pub fn new(clip: ClipQuery, speed: f64, loops: usize) -> Replay {
         let total = clip.poses.len().saturating_mul(loops.max(1));
         Replay {
             total,
@@ -85,7 +85,7 @@ impl Source for Replay {
         }))
     }
 
-    fn reference(&self) -> Option<Reference> {
+    fn reference(&self) -> Option<ClipNeutral> {
         Some(self.clip.reference.without_rotations())
     }
 

@@ -45,7 +45,7 @@ use crate::graph::FlatFrame;
 use crate::mesh::blend::{BlendWorkspace, FrameGradients};
 use crate::pose::Pose;
 use crate::pose::retarget::{
-    Given, JointRotations, Reference, ReferenceSource, Support, contact_band, leg_length,
+    ClipNeutral, ClipNeutralSource, Given, JointRotations, Support, contact_band, leg_length,
 };
 use crate::rig::Canonical as C;
 use glam::{DQuat, DVec2, DVec3};
@@ -259,7 +259,7 @@ pub struct Session<'a> {
     ch: &'a Character,
     prepared: &'a Prepared,
     opts: SessionOptions,
-    reference: Reference,
+    reference: ClipNeutral,
     trellis: OnlineTrellis<'a>,
     /// The last `analysis_window + lag` raw frames, and their file joints'
     /// rotations when the stream gives them (one per raw frame).
@@ -320,7 +320,7 @@ impl<'a> Session<'a> {
         ch: &'a Character,
         prepared: &'a Prepared,
         input: &'a TrellisInput<'a>,
-        reference: Reference,
+        reference: ClipNeutral,
         opts: SessionOptions,
     ) -> Self {
         let n = ch.n();
@@ -417,14 +417,14 @@ impl<'a> Session<'a> {
         self.received += 1;
         let from_start = self.received == self.raw.len();
         let rots: Option<Vec<JointRotations>> = self.raw_rotations.iter().copied().collect();
-        let reference = Reference {
+        let reference = ClipNeutral {
             rotations: Arc::from(rots.unwrap_or_default()),
             // A reference frame of the stream is the window's frame of the
             // same index only while the window starts at the stream's first
             // frame (the kernel reads `Frame(i)` as the window's frame i);
             // then the reference's pose stands for it.
             source: match self.reference.source {
-                ReferenceSource::Frame(_) if !from_start => ReferenceSource::Frame(usize::MAX),
+                ClipNeutralSource::Frame(_) if !from_start => ClipNeutralSource::Frame(usize::MAX),
                 s => s,
             },
             ..self.reference.clone()
@@ -755,7 +755,7 @@ struct Stream {
 fn analyse(
     prepared: &Prepared,
     ch: &Character,
-    reference: &Reference,
+    reference: &ClipNeutral,
     window: &[Pose],
     stream: &Stream,
     swapped: &WindowGround,

@@ -3,7 +3,7 @@
 
 use super::report::Counters;
 use crate::pose::Pose;
-use crate::pose::retarget::{JointRotations, Reference};
+use crate::pose::retarget::{ClipNeutral, JointRotations};
 use std::time::{Duration, Instant};
 
 /// One frame of the stream.
@@ -55,7 +55,7 @@ pub trait Source {
     fn next(&mut self, wait: Duration) -> Result<Event, SourceError>;
     /// The stream's neutral reference pose (decided from its first frames
     /// or its header), once known.
-    fn reference(&self) -> Option<Reference>;
+    fn reference(&self) -> Option<ClipNeutral>;
     /// What happened to the incoming frames so far.
     fn counters(&self) -> Counters;
     /// True when the next frame is already there (a call to `next` would

@@ -18,7 +18,7 @@ use super::humanoid::{BodyState, BoneTable, clip_offsets};
 use super::mailbox::{Fed, Mailbox};
 use super::source::{Incoming, SourceError};
 use crate::pose::Pose;
-use crate::pose::retarget::{JointRotations, Reference, choose_reference};
+use crate::pose::retarget::{ClipNeutral, JointRotations, choose_reference};
 use crate::rig::{Canonical, LoadOptions, RigMap, detect_clip};
 use glam::DVec3;
 use std::collections::HashMap;
@@ -171,7 +171,7 @@ impl Decoder {
     fn pose<P: Protocol>(
         &mut self,
         state: &BodyState,
-    ) -> Option<(Pose, JointRotations, Option<Reference>)> {
+    ) -> Option<(Pose, JointRotations, Option<ClipNeutral>)> {
         let first = self.map.is_none();
         if first {
             let clip = state.to_clip(P::TABLE, P::LOCAL, None)?;

@@ -32,7 +32,7 @@ pub(crate) const REF_ADDR: &str = "/SurfMotion/Ref/Pos";
 /// The VMC protocol's reader.
 #[derive(Debug, Default)]
 pub struct Vmc {
-    /// Reference joints received so far (complete when all are).
+    /// ClipNeutral joints received so far (complete when all are).
     reference: [Option<DVec3>; Canonical::COUNT],
 }
 

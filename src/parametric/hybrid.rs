@@ -45,7 +45,7 @@ impl Default for HybridOptions {
 /// Where the references between two neighbouring sequences lie.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PairRefs {
-    /// Reference weights in `[0, 1]`, increasing; the first is 0 (sequence
+    /// ClipNeutral weights in `[0, 1]`, increasing; the first is 0 (sequence
     /// `a`), the last 1 (sequence `a + 1`).
     pub weights: Vec<f64>,
     /// The block of each reference (an index into [`HybridBlend::blocks`]).
@@ -67,7 +67,7 @@ pub struct HybridBlend {
     pub n: usize,
     /// Phase samples per cycle, `K`.
     pub grid: usize,
-    /// Reference blocks, `K · n · 3` f32 each (phase-major), body frames in
+    /// ClipNeutral blocks, `K · n · 3` f32 each (phase-major), body frames in
     /// metres; the first `N` are the space's sequences.
     pub blocks: Vec<Vec<f32>>,
     /// Per pair of neighbouring sequences, its references.

@@ -41,7 +41,7 @@ pub struct SpaceParts {
     pub parameters: Vec<Parameter>,
     /// The time alignment of the sequences.
     pub alignment: Alignment,
-    /// Reference weights per pair of neighbouring sequences (the blend's).
+    /// ClipNeutral weights per pair of neighbouring sequences (the blend's).
     pub pairs: Vec<PairRefs>,
     /// Root motion of each sequence on the phase grid.
     pub steps: Vec<RootSteps>,

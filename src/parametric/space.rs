@@ -430,7 +430,7 @@ pub struct SpaceSummary {
     pub alignment_rms_m: Vec<f64>,
     /// Phase samples per cycle.
     pub phase_samples: usize,
-    /// Reference weights per pair of neighbouring sequences.
+    /// ClipNeutral weights per pair of neighbouring sequences.
     pub references: Vec<Vec<f64>>,
     /// Largest tested hybrid error (mm).
     pub hybrid_max_error_mm: f64,

@@ -56,7 +56,7 @@ use crate::embed::Embedding;
 use crate::embed::parts::Part;
 use crate::mesh::Mesh;
 use crate::pose::Pose;
-use crate::pose::retarget::{Reference, retarget};
+use crate::pose::retarget::{ClipNeutral, on_character_with_grounds};
 use crate::rig::Canonical;
 use crate::tools::eval::triangles::{RestTriangles, TurnScratch};
 use glam::DVec3;
@@ -91,6 +91,12 @@ pub struct Synthesised {
     pub skinned: Vec<[f64; 3]>,
     /// The character's skeleton that drove each frame (ground truth).
     pub poses: Vec<Pose>,
+    /// The height of the ground under each foot (left, right) above the
+    /// character's floor per frame, from the same run of the pose kernel
+    /// that drove the frames ([`crate::pose::retarget::OnCharacter`]): what
+    /// the plausibility checks stand the feet on, without running the
+    /// kernel a second time (issue 40, "prepared once").
+    pub foot_grounds: [Vec<f64>; 2],
 }
 
 /// Drives `rest` (with its rig) by the clip's canonical poses (metres,
@@ -100,13 +106,16 @@ pub fn drive(
     rest: &Mesh,
     rig: &Embedding,
     mocap: &[Pose],
-    reference: &Reference,
+    reference: &ClipNeutral,
     fps: f64,
     dynamics: Dynamics,
 ) -> Synthesised {
     let n = rest.vertex_count();
     let rest_pose: Pose = rig.joints.map(DVec3::from_array);
-    let driven = retarget(&rest_pose, reference, mocap);
+    // One run of the kernel: the frames (`retarget`'s, bit for bit) and
+    // the ground under each foot.
+    let on = on_character_with_grounds(&rest_pose, &rest_pose, reference, mocap);
+    let (driven, foot_grounds) = (on.frames, on.foot_grounds);
     let soft: Vec<f64> = softness(rest, rig)
         .into_iter()
         .map(|s| (s * dynamics.amount).clamp(0.0, 1.0))
@@ -160,6 +169,7 @@ pub fn drive(
         positions,
         skinned,
         poses,
+        foot_grounds,
     }
 }
 

@@ -11,7 +11,7 @@ use crate::embed::parts::Part;
 use crate::mesh::{Bounds, MeshSequence};
 use crate::pose::Pose;
 use crate::pose::retarget::{
-    Reference, Toes, clip_support, ground_tilt, leg_length, retarget_toes,
+    ClipNeutral, Toes, clip_support, ground_tilt, leg_length, retarget_toes,
 };
 use glam::{DMat3, DQuat, DVec3};
 use std::collections::HashMap;
@@ -20,7 +20,7 @@ use std::collections::HashMap;
 pub enum Source<'a> {
     /// Canonical poses of a clip (metres, Y-up) and its neutral reference,
     /// as [`crate::drive::query::load_mocap`] gives them.
-    Mocap(&'a [Pose], &'a Reference),
+    Mocap(&'a [Pose], &'a ClipNeutral),
     /// A moving template mesh with its markers (paired with the scan's by
     /// name) and the frame that is its reference pose.
     Template {
@@ -109,7 +109,7 @@ const MOTION_BYTES: u128 = 56;
 pub fn mocap_motion(
     scan: &PreparedScan,
     poses: &[Pose],
-    reference: &Reference,
+    reference: &ClipNeutral,
 ) -> Result<MarkerMotion, SetupError> {
     let rig = scan.rig.as_ref().ok_or(SetupError::NoSkeleton)?;
     // The motion holds a rotation and a target per marker and frame
@@ -182,7 +182,7 @@ fn foot_ground(
     scan: &PreparedScan,
     rig: &Embedding,
     poses: &[Pose],
-    reference: &Reference,
+    reference: &ClipNeutral,
 ) -> Option<FootGround> {
     let p = scan.mesh.positions();
     if rig.labels.len() != p.len() || poses.is_empty() {

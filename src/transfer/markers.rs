@@ -270,7 +270,7 @@ pub fn generate(mesh: &Mesh, rig: &Embedding, opts: &MarkerOptions) -> Vec<Marke
         let Some(d) = axis.try_normalize() else {
             continue;
         };
-        // Reference direction across the bone: the facing direction, or the
+        // ClipNeutral direction across the bone: the facing direction, or the
         // up direction for bones along the facing (feet).
         let mut u = facing - d * facing.dot(d);
         if u.length() < 0.3 {

@@ -124,7 +124,7 @@ pub struct SiteSpace {
 /// The references between two neighbouring sequences of a space.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SitePair {
-    /// Reference weights in `[0, 1]`, increasing.
+    /// ClipNeutral weights in `[0, 1]`, increasing.
     pub weights: Vec<f64>,
     /// The geometry sequence of each reference.
     pub blocks: Vec<usize>,

@@ -5,7 +5,7 @@ use crate::common;
 use glam::DVec3;
 use surfmotion::db::Character;
 use surfmotion::deform::{DeformMode, DeformOptions, Deformer};
-use surfmotion::drive::query::{MocapPoses, load_mocap};
+use surfmotion::drive::query::{ClipQuery, load_mocap};
 use surfmotion::drive::{DriveOptions, Output, synthesise};
 use surfmotion::pose::Pose;
 
@@ -74,7 +74,7 @@ fn skeleton_error(ch: &Character, p: &[[f64; 3]], q: &[Pose]) -> f64 {
 }
 
 /// The query `m` on `ch` with deformation `mode` (default options).
-fn run(ch: &Character, m: &MocapPoses, mode: DeformMode) -> Output {
+fn run(ch: &Character, m: &ClipQuery, mode: DeformMode) -> Output {
     let opts = DriveOptions {
         deform: mode,
         ..Default::default()

@@ -5,7 +5,7 @@ use super::floor::FloorReport;
 use super::grid::LeastMean;
 use crate::keyframe::floor::{PathFloor, Window};
 use crate::keyframe::grid::{FloorQuery, GridQuery, GridReport};
-use crate::keyframe::smoothest::Summary;
+use crate::keyframe::smoothest::SmoothestSummary;
 
 /// The header of [`grid_row`]'s lines.
 pub const GRID_HEADER: &str =
@@ -49,7 +49,7 @@ pub fn least_mean_row(q: &FloorQuery) -> String {
 /// The least-mean summary over the reachable targets.
 pub fn least_mean_summary(lm: &LeastMean) -> String {
     let r = &lm.report;
-    let sum = |s: &Option<Summary>| match s {
+    let sum = |s: &Option<SmoothestSummary>| match s {
         Some(s) => format!(
             "mean {:.4} m, median {:.4}, min {:.4}, max {:.4} (over {})",
             s.mean, s.median, s.min, s.max, s.n

@@ -8,7 +8,7 @@ use super::footfall::plant_feet;
 use super::ground::{Given, clip_support_given, foot_height};
 use super::level::{Level, level_from_env, levelling_line};
 use super::motion_ref::{carriage_for_rest, torso_reference};
-use super::reference::{Reference, ReferenceSource, leg_length};
+use super::reference::{ClipNeutral, ClipNeutralSource, leg_length};
 use super::root::root_from_legs;
 use super::torso::{clip_rotations_from, neck_carriage, upright};
 use crate::pose::{Pose, pose_rotations};
@@ -53,7 +53,7 @@ pub(super) fn heading_between(from: &Pose, to: &Pose) -> DQuat {
 /// parent's rotation carries the rest bone.
 pub fn retarget(
     character: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
     retarget_with_neutral(character, character, reference, mocap)
@@ -67,7 +67,7 @@ pub fn retarget(
 /// onto the neutral's and `H` the turn facing the neutral the reference's
 /// way); bone lengths, the floor and the soles stay the rest pose's.
 ///
-/// With the clip's joint rotations ([`Reference::rotations`], one per pose
+/// With the clip's joint rotations ([`ClipNeutral::rotations`], one per pose
 /// of `mocap`) the chest turns by the rotation of the file joint mapped
 /// to it rather than by the fit to its children's bones. Those children
 /// (the neck, the shoulders) are carried by other file joints (the neck's
@@ -85,7 +85,7 @@ pub fn retarget(
 pub fn retarget_with_neutral(
     character: &Pose,
     neutral: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
     retarget_toes(character, neutral, reference, mocap, Toes::Rigid)
@@ -111,7 +111,7 @@ pub(super) type RetargetedOnGrounds = (
 pub fn retarget_toes(
     character: &Pose,
     neutral: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
     toes: Toes,
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
@@ -136,7 +136,7 @@ pub fn retarget_toes(
 pub(super) fn retarget_on_grounds(
     character: &Pose,
     neutral: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
     toes: Toes,
     given: &Given<'_>,
@@ -152,7 +152,7 @@ pub(super) fn retarget_on_grounds(
 pub fn retarget_placed(
     character: &Pose,
     neutral: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
     toes: Toes,
     placement: Placement,
@@ -175,7 +175,7 @@ pub fn retarget_placed(
 pub fn retarget_levelled(
     character: &Pose,
     neutral: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
     toes: Toes,
     placement: Placement,
@@ -189,7 +189,7 @@ pub fn retarget_levelled(
 fn retarget_placed_on_grounds(
     character: &Pose,
     neutral: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
     (toes, placement, level): (Toes, Placement, Level),
     given: &Given<'_>,
@@ -211,7 +211,7 @@ fn retarget_placed_on_grounds(
     let first = &mocap[0];
     let level_ref;
     let r = match reference.source {
-        ReferenceSource::Frame(i) if i < mocap.len() => {
+        ClipNeutralSource::Frame(i) if i < mocap.len() => {
             level_ref = mocap[i];
             &level_ref
         }

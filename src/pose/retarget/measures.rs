@@ -7,7 +7,7 @@ use super::feet::Toes;
 use super::feet::{foot_soles, sole_height};
 use super::ground::{Given, Support, clip_support_given, interpolate_gaps};
 use super::kernel::{retarget, retarget_on_grounds};
-use super::reference::{Reference, angle, leg_length};
+use super::reference::{ClipNeutral, angle, leg_length};
 use super::torso::{clip_rotations, neck_carriage, upright};
 use crate::pose::Pose;
 use crate::rig::Canonical;
@@ -47,7 +47,7 @@ pub struct OnCharacter {
 pub fn on_character_with_grounds(
     character: &Pose,
     neutral: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
 ) -> OnCharacter {
     on_character_given(character, neutral, reference, mocap, &Given::default())
@@ -58,7 +58,7 @@ pub fn on_character_with_grounds(
 pub fn on_character_given(
     character: &Pose,
     neutral: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
     given: &Given<'_>,
 ) -> OnCharacter {
@@ -85,7 +85,7 @@ pub fn on_character_given(
 /// at heel strike and toe-off, which a mostly planted capture (the samba
 /// dance) never does, so a result is held to its own clip's figure.
 /// Runs the kernel; [`foot_glide_cm`] reads a run already made.
-pub fn clip_foot_glide_cm(character: &Pose, reference: &Reference, mocap: &[Pose]) -> f64 {
+pub fn clip_foot_glide_cm(character: &Pose, reference: &ClipNeutral, mocap: &[Pose]) -> f64 {
     if mocap.len() < 2 {
         return 0.0;
     }
@@ -141,7 +141,7 @@ pub fn foot_glide_cm(character: &Pose, on: &OnCharacter) -> f64 {
 /// the character's rest). The skeleton analogue of the mesh measure
 /// [`crate::eval::HeadTorso`]: what a result's head should do relative to
 /// the character's rest when it follows the clip's head.
-pub fn clip_head_trunk_deg(reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+pub fn clip_head_trunk_deg(reference: &ClipNeutral, mocap: &[Pose]) -> Vec<f64> {
     // The neck → head bone in a frame attached to the trunk (up pelvis →
     // neck, lateral from the hips and shoulders).
     let local = |p: &Pose| {
@@ -175,7 +175,7 @@ pub fn clip_head_trunk_deg(reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
 /// plausibility checks measure floating and penetration from the
 /// character's floor raised by it. With one foot on a block and the other
 /// lower, in the air over the floor, it is the floor.
-pub fn ground_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+pub fn ground_offsets(character: &Pose, reference: &ClipNeutral, mocap: &[Pose]) -> Vec<f64> {
     let out = retarget(character, reference, mocap);
     offsets(character, reference, mocap, |s| {
         out.iter()
@@ -200,7 +200,7 @@ pub fn ground_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -
 /// ground, floating as the foot nearest its ground above it.
 pub fn foot_ground_offsets(
     character: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
 ) -> [Vec<f64>; 2] {
     on_character_with_grounds(character, character, reference, mocap).foot_grounds
@@ -211,7 +211,7 @@ pub fn foot_ground_offsets(
 /// clip touches ([`Support::ground`]), interpolated across frames in the
 /// air. Retrieval takes it off the query, comparing poses as they stand
 /// on the database's floor.
-pub fn stance_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -> Vec<f64> {
+pub fn stance_offsets(character: &Pose, reference: &ClipNeutral, mocap: &[Pose]) -> Vec<f64> {
     stance_offsets_given(character, reference, mocap, &Given::default())
 }
 
@@ -219,7 +219,7 @@ pub fn stance_offsets(character: &Pose, reference: &Reference, mocap: &[Pose]) -
 /// [`on_character_given`]).
 pub fn stance_offsets_given(
     character: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
     given: &Given<'_>,
 ) -> Vec<f64> {
@@ -230,7 +230,7 @@ pub fn stance_offsets_given(
 /// above its floor, scaled onto the character, gaps interpolated.
 pub(super) fn offsets(
     character: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
     pick: impl Fn(&Support) -> Vec<Option<f64>>,
 ) -> Vec<f64> {
@@ -240,7 +240,7 @@ pub(super) fn offsets(
 /// [`offsets`] with what the caller decides.
 fn offsets_on(
     character: &Pose,
-    reference: &Reference,
+    reference: &ClipNeutral,
     mocap: &[Pose],
     given: &Given<'_>,
     pick: impl Fn(&Support) -> Vec<Option<f64>>,

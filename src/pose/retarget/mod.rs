@@ -98,9 +98,11 @@ pub use measures::{
 };
 pub use motion_ref::REFERENCE_ENV;
 pub use reference::{
-    CharacterNeutral, ClipPoses, JointRotations, NeutralSource, Reference, ReferenceSource,
+    CharacterNeutral, ClipNeutral, ClipNeutralSource, ClipPoses, JointRotations, NeutralSource,
     character_neutral, choose_reference, clip_poses, leg_length, neutral_score,
 };
+#[allow(deprecated)]
+pub use reference::{Reference, ReferenceSource}; // old name
 
 #[cfg(test)]
 mod tests;

@@ -16,7 +16,7 @@
 //! the frame's (they take the clip's directions; the reference's legs
 //! only give their length and the feet's stance).
 
-use super::reference::{JointRotations, Reference, ReferenceSource};
+use super::reference::{ClipNeutral, ClipNeutralSource, JointRotations};
 use crate::pose::Pose;
 use crate::rig::Canonical;
 use glam::{DQuat, DVec3, DVec4};
@@ -62,12 +62,12 @@ fn reference_rule(value: Option<&str>) -> Result<bool, String> {
 pub(super) fn torso_reference(
     r: &Pose,
     mocap: &[Pose],
-    reference: &Reference,
+    reference: &ClipNeutral,
     tilt: DQuat,
     carriage_rest: bool,
 ) -> (Pose, Option<JointRotations>) {
     match reference.source {
-        ReferenceSource::Rest if !carriage_rest => (*r, None),
+        ClipNeutralSource::Rest if !carriage_rest => (*r, None),
         _ => torso_from_motion(r, mocap, &reference.rotations, tilt),
     }
 }
@@ -342,9 +342,9 @@ mod tests {
     #[test]
     fn an_upright_rest_takes_the_carriage_only_when_asked() {
         let mocap = clip(30, 0.15, DQuat::IDENTITY, 1.0);
-        let rest = Reference {
+        let rest = ClipNeutral {
             pose: standing(0.0),
-            source: ReferenceSource::Rest,
+            source: ClipNeutralSource::Rest,
             rotations: std::sync::Arc::from(Vec::new()),
         };
         let r = rest.pose;
@@ -353,8 +353,8 @@ mod tests {
         let (moved, _) = torso_reference(&r, &mocap, &rest, DQuat::IDENTITY, true);
         assert_eq!(moved, torso_places_from_motion(&r, &mocap));
         // A frame reference takes it either way.
-        let frame = Reference {
-            source: ReferenceSource::Frame(4),
+        let frame = ClipNeutral {
+            source: ClipNeutralSource::Frame(4),
             pose: mocap[4],
             ..rest
         };

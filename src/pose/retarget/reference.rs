@@ -14,43 +14,52 @@ use Canonical as C;
 /// Where a clip's neutral reference pose comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum ReferenceSource {
+pub enum ClipNeutralSource {
     /// The clip's rest (bind) skeleton, which stands upright.
     Rest,
     /// The clip's most neutral frame (the rest skeleton was not upright).
     Frame(usize),
 }
 
-impl std::fmt::Display for ReferenceSource {
+/// The old name of [`ClipNeutralSource`] (before session 40).
+#[deprecated(note = "renamed ClipNeutralSource (old name ReferenceSource)")]
+pub type ReferenceSource = ClipNeutralSource; // old name
+
+impl std::fmt::Display for ClipNeutralSource {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            ReferenceSource::Rest => write!(f, "rest skeleton"),
-            ReferenceSource::Frame(i) => write!(f, "most neutral frame ({i})"),
+            ClipNeutralSource::Rest => write!(f, "rest skeleton"),
+            ClipNeutralSource::Frame(i) => write!(f, "most neutral frame ({i})"),
         }
     }
 }
 
 /// A clip's neutral reference pose.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Reference {
+pub struct ClipNeutral {
     /// Canonical joint positions (the clip's units and axes).
     pub pose: Pose,
     /// Where it came from.
-    pub source: ReferenceSource,
+    pub source: ClipNeutralSource,
     /// The clip's own joint rotations per frame ([`JointRotations`], one
     /// per pose the reference was chosen among, in the clip's axes; empty
     /// when not known). [`retarget`](super::retarget) turns the chest by them
     /// when it is given that many poses, those the reference came with:
     /// poses changed since (moved, turned, resampled) must take a reference
-    /// without them ([`Reference::without_rotations`]).
+    /// without them ([`ClipNeutral::without_rotations`]).
     pub rotations: Arc<[JointRotations]>,
 }
 
-impl Reference {
+/// The old name of [`ClipNeutral`] (before session 40: "neutral" names a
+/// skeleton's neutral pose, "rest" a mesh's rest frame; issue 40).
+#[deprecated(note = "renamed ClipNeutral (old name Reference)")]
+pub type Reference = ClipNeutral; // old name
+
+impl ClipNeutral {
     /// The reference with no joint rotations: [`retarget`](super::retarget) turns the torso
     /// by the fit to the poses' bones alone.
-    pub fn without_rotations(&self) -> Reference {
-        Reference {
+    pub fn without_rotations(&self) -> ClipNeutral {
+        ClipNeutral {
             rotations: Arc::from(Vec::new()),
             ..self.clone()
         }
@@ -69,7 +78,7 @@ pub struct ClipPoses {
     pub poses: Vec<Pose>,
     /// The neutral reference the retargeting measures rotations from
     /// (with the file joints' rotations of every frame).
-    pub reference: Reference,
+    pub reference: ClipNeutral,
 }
 
 /// Canonical poses of every frame of `clip` and its neutral reference.
@@ -155,7 +164,7 @@ pub(super) fn rest_is_neutral(rest: &Pose, poses: &[Pose]) -> bool {
 /// upright with the motion's proportions, else its most neutral frame.
 /// Refuses a degenerate skeleton (legs or trunk of no length, non-finite
 /// joints), which could only retarget to garbage.
-pub fn choose_reference(rest: Option<&Pose>, poses: &[Pose]) -> Result<Reference, RigError> {
+pub fn choose_reference(rest: Option<&Pose>, poses: &[Pose]) -> Result<ClipNeutral, RigError> {
     let Some(first) = poses.first() else {
         return Err(RigError::Degenerate {
             reason: "the clip has no frames".into(),
@@ -166,9 +175,9 @@ pub fn choose_reference(rest: Option<&Pose>, poses: &[Pose]) -> Result<Reference
         && leg_length(r) > 0.0
         && rest_is_neutral(r, poses)
     {
-        return Ok(Reference {
+        return Ok(ClipNeutral {
             pose: *r,
-            source: ReferenceSource::Rest,
+            source: ClipNeutralSource::Rest,
             rotations: Arc::from(Vec::new()),
         });
     }
@@ -199,9 +208,9 @@ pub fn choose_reference(rest: Option<&Pose>, poses: &[Pose]) -> Result<Reference
             ),
         });
     }
-    Ok(Reference {
+    Ok(ClipNeutral {
         pose,
-        source: ReferenceSource::Frame(i),
+        source: ClipNeutralSource::Frame(i),
         rotations: Arc::from(Vec::new()),
     })
 }

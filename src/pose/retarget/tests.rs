@@ -59,7 +59,7 @@ fn a_neutral_clip_gives_the_character_as_captured() {
     let q = DQuat::from_rotation_y(1.1);
     let clip = map(&clip, |p| q * p * 1.7 + DVec3::new(3.0, 0.0, -2.0));
     let rf = choose_reference(Some(&clip), &[clip]).unwrap();
-    assert_eq!(rf.source, ReferenceSource::Rest);
+    assert_eq!(rf.source, ClipNeutralSource::Rest);
     let out = retarget(&ch, &rf, &[clip, clip]);
     for (p, _) in &out {
         assert!((head_tilt(p) - head_tilt(&ch)).abs() < 1e-9);
@@ -112,7 +112,7 @@ fn a_head_held_off_its_rest_joint_is_carried_as_the_character_carries_it() {
     m[C::Head.index()] =
         m[C::Neck.index()] + back * (rest[C::Head.index()] - rest[C::Neck.index()]);
     let rf = choose_reference(Some(&rest), &[m, m, m]).unwrap();
-    assert_eq!(rf.source, ReferenceSource::Rest);
+    assert_eq!(rf.source, ClipNeutralSource::Rest);
     for (p, _) in retarget(&ch, &rf, &[m, m, m]) {
         assert!(head_tilt(&p) < 1e-9, "{}", head_tilt(&p).to_degrees());
     }
@@ -124,7 +124,7 @@ fn a_lying_rest_skeleton_falls_back_to_the_most_neutral_frame() {
     let lying = map(&st, |p| DQuat::from_rotation_x(1.5) * p);
     let crouch = map(&st, |p| DQuat::from_rotation_x(0.4) * p);
     let rf = choose_reference(Some(&lying), &[crouch, st, crouch]).unwrap();
-    assert_eq!(rf.source, ReferenceSource::Frame(1));
+    assert_eq!(rf.source, ClipNeutralSource::Frame(1));
 }
 
 #[test]
@@ -185,7 +185,7 @@ fn t_and_a_pose_versions_of_a_clip_give_the_same_result() {
         let version = pose_clip(&rest, &poses, 30.0).unwrap();
         let map = crate::rig::detect(&version.point_names()).map;
         let cp = clip_poses(&version, &map).unwrap();
-        assert_eq!(cp.reference.source, ReferenceSource::Rest, "arm {arm}");
+        assert_eq!(cp.reference.source, ClipNeutralSource::Rest, "arm {arm}");
         results.push(retarget(&character, &cp.reference, &cp.poses));
     }
     let worst = results[0]
@@ -321,7 +321,7 @@ fn a_bent_rest_skeleton_falls_back_to_the_most_neutral_frame() {
     let version = pose_clip(&rest, &poses, 30.0).unwrap();
     let map = crate::rig::detect(&version.point_names()).map;
     let cp = clip_poses(&version, &map).unwrap();
-    let ReferenceSource::Frame(i) = cp.reference.source else {
+    let ClipNeutralSource::Frame(i) = cp.reference.source else {
         panic!("a bent rest skeleton was taken as the reference");
     };
     // The most neutral frame is as upright as the walk gets, and in it

@@ -2,7 +2,7 @@
 //! the bones, the chest from the clip's own file joint with its twist from
 //! the shoulders, and the neck's typical carriage read on upright frames.
 
-use super::reference::{JointRotations, Reference, ReferenceSource, angle};
+use super::reference::{ClipNeutral, ClipNeutralSource, JointRotations, angle};
 use crate::pose::{Pose, pose_rotations};
 use crate::rig::Canonical;
 use glam::{DQuat, DVec3};
@@ -66,11 +66,11 @@ pub(super) fn neck_carriage(rotations: &[[DQuat; Canonical::COUNT]]) -> DQuat {
 /// kernel uses it): the fit to the bones ([`pose_rotations`]), with the
 /// chest (and the spine and neck on it) from the clip's own
 /// joint rotations when the reference carries one per pose
-/// ([`Reference::rotations`], [`torso_from_file`]).
+/// ([`ClipNeutral::rotations`], [`torso_from_file`]).
 pub(super) fn clip_rotations(
     r: &Pose,
     mocap: &[Pose],
-    reference: &Reference,
+    reference: &ClipNeutral,
     tilt: DQuat,
 ) -> Vec<[DQuat; Canonical::COUNT]> {
     clip_rotations_from(r, mocap, reference, tilt, None)
@@ -83,7 +83,7 @@ pub(super) fn clip_rotations(
 pub(super) fn clip_rotations_from(
     r: &Pose,
     mocap: &[Pose],
-    reference: &Reference,
+    reference: &ClipNeutral,
     tilt: DQuat,
     at: Option<JointRotations>,
 ) -> Vec<[DQuat; Canonical::COUNT]> {
@@ -93,8 +93,8 @@ pub(super) fn clip_rotations_from(
     // The reference's own file rotations: the rest skeleton's are the
     // identity; a frame's, turned as the poses are.
     let at_ref: Option<JointRotations> = at.or_else(|| match reference.source {
-        ReferenceSource::Rest => Some([Some(DQuat::IDENTITY); Canonical::COUNT]),
-        ReferenceSource::Frame(i) => file.get(i).map(|w| w.map(|q| q.map(|q| tilt * q))),
+        ClipNeutralSource::Rest => Some([Some(DQuat::IDENTITY); Canonical::COUNT]),
+        ClipNeutralSource::Frame(i) => file.get(i).map(|w| w.map(|q| q.map(|q| tilt * q))),
     });
     if let Some(at_ref) = at_ref
         && file.len() == mocap.len()

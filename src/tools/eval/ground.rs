@@ -5,7 +5,7 @@
 //! vertex height (a capture stands on its floor in most frames); for a
 //! scan, the rest frame's lowest point ([`lowest_heights`] on it).
 
-use super::summary::Summary;
+use super::summary::EvalSummary;
 use glam::DVec3;
 use serde::Serialize;
 
@@ -25,16 +25,16 @@ pub fn lowest_heights(frames: &[[f64; 3]], n: usize, up: DVec3) -> Vec<f64> {
 
 /// The floor of a set of captured frames: the median of their lowest heights.
 pub fn floor_height(lowest: &[f64]) -> f64 {
-    Summary::of(lowest).median
+    EvalSummary::of(lowest).median
 }
 
 /// Penetration and floating over a sequence (centimetres, from metres).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct Ground {
     /// Depth of the lowest vertex below the floor, per frame (0 when above).
-    pub penetration_cm: Summary,
+    pub penetration_cm: EvalSummary,
     /// Height of the lowest vertex above the floor, per frame (0 when below).
-    pub floating_cm: Summary,
+    pub floating_cm: EvalSummary,
 }
 
 /// Penetration and floating of frames with lowest heights `lowest` (metres)
@@ -49,7 +49,7 @@ pub fn ground(lowest: &[f64], floor: f64) -> Ground {
         .map(|h| 100.0 * (h - floor).max(0.0))
         .collect();
     Ground {
-        penetration_cm: Summary::of(&below),
-        floating_cm: Summary::of(&above),
+        penetration_cm: EvalSummary::of(&below),
+        floating_cm: EvalSummary::of(&above),
     }
 }

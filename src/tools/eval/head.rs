@@ -32,7 +32,7 @@
 //! slab at the pelvis reads 6.2°.
 
 use super::EvalError;
-use super::summary::Summary;
+use super::summary::EvalSummary;
 use crate::embed::parts::Part;
 use glam::DVec3;
 
@@ -217,9 +217,9 @@ impl HeadTorso {
     }
 
     /// Median, p95 and max of `|angle|` over a series from [`HeadTorso::series`].
-    pub fn summary(series: &[f64]) -> Summary {
+    pub fn summary(series: &[f64]) -> EvalSummary {
         let abs: Vec<f64> = series.iter().map(|x| x.abs()).collect();
-        Summary::of(&abs)
+        EvalSummary::of(&abs)
     }
 }
 

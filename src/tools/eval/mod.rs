@@ -30,7 +30,11 @@ pub use feet::{ClipSliding, Feet, FootOptions, Sliding, clip_sliding, sole_ends,
 pub use ground::{Ground, floor_height, ground, lowest_heights};
 pub use head::{HeadOptions, HeadTorso};
 pub use knee::knee_hyperextension;
-pub use plausibility::{Checker, Limits, Plausibility, PlausibilityOptions, Reference};
+#[allow(deprecated)]
+pub use plausibility::Reference; // old name
+pub use plausibility::{Baseline, Checker, Limits, Plausibility, PlausibilityOptions};
+pub use summary::EvalSummary;
+#[allow(deprecated)]
 pub use summary::Summary;
 pub use triangles::{RestTriangles, TurnedOverCount};
 pub use velocity::{VelocityError, velocity_error};

@@ -10,7 +10,7 @@ use super::feet::{Feet, FootOptions, Sliding};
 use super::ground::{Ground, floor_height, ground, lowest_heights};
 use super::head::{HeadOptions, HeadTorso};
 use super::knee::knee_hyperextension;
-use super::summary::Summary;
+use super::summary::EvalSummary;
 use super::triangles::{OffRing, RestTriangles, TurnedOverCount};
 use crate::db::Character;
 use crate::deform::TurnedOver;
@@ -78,19 +78,19 @@ pub struct PlausibilityOptions {
 /// The checks on the character's own frames (a database's captured frames,
 /// or a scan's rest frame).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Reference {
+pub struct Baseline {
     /// What was measured (e.g. "database 'samba' (175 frames)").
     pub source: String,
     /// Frames measured.
     pub frames: usize,
     /// |head-to-torso angle| (degrees).
-    pub head_torso_deg: Summary,
+    pub head_torso_deg: EvalSummary,
     /// Foot sliding.
     pub foot_sliding: Sliding,
     /// Penetration and floating (cm).
     pub ground: Ground,
     /// Knee hyper-extension (degrees).
-    pub knee_hyperextension_deg: Summary,
+    pub knee_hyperextension_deg: EvalSummary,
     /// Triangles turned over against the rest frame in the captured frames
     /// (a captured fold; none on a scan's rest frame).
     pub turned_over: TurnedOverCount,
@@ -98,6 +98,10 @@ pub struct Reference {
     /// counted across the sequences).
     pub off_ring: OffRing,
 }
+
+/// The old name of [`Baseline`] (before session 40).
+#[deprecated(note = "renamed Baseline (old name Reference)")]
+pub type Reference = Baseline; // old name
 
 /// Bump when a check's measure changes: the database's cached reference
 /// (`cache/plausibility-reference.json`) is then measured again.
@@ -108,7 +112,7 @@ pub(crate) const REFERENCE_VERSION: u32 = 1;
 struct CachedReference {
     key: u64,
     floor: f64,
-    reference: Reference,
+    reference: Baseline,
 }
 
 /// The reference cache of the database `dir`.
@@ -152,7 +156,7 @@ pub(crate) fn reference_key_for(ch: &Character) -> Result<u64, EvalError> {
 
 /// The reference cache file `path` read strictly (`inspect`): its key,
 /// floor (metres) and reference, or why it cannot be read.
-pub(crate) fn read_reference_file(path: &std::path::Path) -> Result<(u64, f64, Reference), String> {
+pub(crate) fn read_reference_file(path: &std::path::Path) -> Result<(u64, f64, Baseline), String> {
     let text = crate::util::fsutil::read_text(path).map_err(|e| e.to_string())?;
     let c: CachedReference = serde_json::from_str(&text)
         .map_err(|e| format!("{}: not a plausibility reference ({e})", path.display()))?;
@@ -176,7 +180,7 @@ pub struct Plausibility {
     /// Frames measured.
     pub frames: usize,
     /// |head-to-torso angle| relative to rest (degrees; see [`HeadTorso`]).
-    pub head_torso_deg: Summary,
+    pub head_torso_deg: EvalSummary,
     /// The rest frame's `∠(chin→crown, hips→chin)` (degrees).
     pub head_torso_rest_deg: f64,
     /// Foot sliding during contact.
@@ -186,7 +190,7 @@ pub struct Plausibility {
     /// The floor height along up (metres).
     pub floor_m: f64,
     /// Knee hyper-extension of the skeleton extracted from each frame (degrees).
-    pub knee_hyperextension_deg: Summary,
+    pub knee_hyperextension_deg: EvalSummary,
     /// Triangles turned over against the character's rest frame
     /// ([`super::triangles`]), with what the deformation's repair left
     /// (`retarget` only) in its `deformation`.
@@ -195,13 +199,13 @@ pub struct Plausibility {
     /// shot off the surface.
     pub off_ring: OffRing,
     /// The same checks on the character's own frames.
-    pub reference: Option<Reference>,
+    pub reference: Option<Baseline>,
     /// |head-to-trunk angle| of the driving clip on its own skeleton,
     /// relative to its neutral carriage (degrees;
     /// [`crate::pose::retarget::clip_head_trunk_deg`]), when known. A clip
     /// whose head moves further than the database's does (a bow, a kick)
     /// is held to its own range: the head line is the larger p95 + margin.
-    pub clip_head_torso_deg: Option<Summary>,
+    pub clip_head_torso_deg: Option<EvalSummary>,
     /// The driving clip's own foot glide while touching its ground, scaled
     /// to the character (cm per touching foot-frame;
     /// [`crate::pose::retarget::clip_foot_glide_cm`]), when known: a walk's
@@ -224,7 +228,7 @@ pub struct Plausibility {
     pub headless: bool,
 }
 
-/// Per-frame series of one sequence, pooled to make a [`Reference`].
+/// Per-frame series of one sequence, pooled to make a [`Baseline`].
 struct Series {
     head: Vec<f64>,
     lowest: Vec<f64>,
@@ -257,7 +261,7 @@ pub struct Checker {
     /// Options.
     pub opts: PlausibilityOptions,
     /// The character's own figures, when known.
-    pub reference: Option<Reference>,
+    pub reference: Option<Baseline>,
     /// The character has no head: [`Checker::head`] has no vertices and
     /// the head checks are skipped.
     pub headless: bool,
@@ -393,7 +397,7 @@ impl Checker {
     /// at a time (no copy of the frames; each sequence's pages released
     /// after use): the same values, in the same order, as when every frame
     /// was copied out first.
-    fn measure_database(&mut self, ch: &Character) -> (f64, Reference) {
+    fn measure_database(&mut self, ch: &Character) -> (f64, Baseline) {
         let n = ch.n();
         let store = ch.frame_store();
         let all = store.all();
@@ -528,7 +532,7 @@ impl Checker {
             .collect()
     }
 
-    fn pool(&self, source: &str, series: &[Series]) -> Reference {
+    fn pool(&self, source: &str, series: &[Series]) -> Baseline {
         let cat = |f: fn(&Series) -> &Vec<f64>| -> Vec<f64> {
             series.iter().flat_map(|s| f(s).iter().copied()).collect()
         };
@@ -546,13 +550,13 @@ impl Checker {
         sliding.touching_frames = series.iter().map(|s| s.sliding.touching_frames).sum();
         sliding.touching_mean_cm_per_frame = touching / sliding.touching_frames.max(1) as f64;
         let head = cat(|s| &s.head);
-        Reference {
+        Baseline {
             source: source.to_string(),
             frames: head.len(),
             head_torso_deg: HeadTorso::summary(&head),
             foot_sliding: sliding,
             ground: ground(&cat(|s| &s.lowest), self.floor * self.metres_per_unit),
-            knee_hyperextension_deg: Summary::of(&cat(|s| &s.knee)),
+            knee_hyperextension_deg: EvalSummary::of(&cat(|s| &s.knee)),
             turned_over: TurnedOverCount::of(
                 &series
                     .iter()
@@ -617,7 +621,7 @@ impl Checker {
             foot_sliding: s.sliding,
             ground: ground(&s.lowest, self.floor * self.metres_per_unit),
             floor_m: self.floor * self.metres_per_unit,
-            knee_hyperextension_deg: Summary::of(&s.knee),
+            knee_hyperextension_deg: EvalSummary::of(&s.knee),
             turned_over: TurnedOverCount {
                 deformation: turned_over,
                 ..TurnedOverCount::of(&s.turned, self.triangles.triangle_count())
@@ -849,7 +853,7 @@ impl Plausibility {
     /// A short text block (a few lines) for the command line.
     pub fn text(&self) -> String {
         let r = self.reference.as_ref();
-        let refd = |f: &dyn Fn(&Reference) -> String| {
+        let refd = |f: &dyn Fn(&Baseline) -> String| {
             r.map(|r| format!(" [captured {}]", f(r)))
                 .unwrap_or_default()
         };
@@ -932,8 +936,8 @@ impl Plausibility {
 mod tests {
     use super::*;
 
-    fn summary(p95: f64) -> Summary {
-        Summary {
+    fn summary(p95: f64) -> EvalSummary {
+        EvalSummary {
             median: p95 / 2.0,
             p95,
             max: p95,
@@ -951,13 +955,13 @@ mod tests {
     /// gliding `glide` cm/frame when they touch, against a database whose
     /// head p95 is 7.7° and whose feet glide `db_glide`.
     fn result(head: f64, glide: f64, db_glide: f64) -> Plausibility {
-        let reference = Reference {
+        let reference = Baseline {
             source: "db".into(),
             frames: 10,
             head_torso_deg: summary(7.7),
             foot_sliding: sliding(db_glide),
             ground: Ground::default(),
-            knee_hyperextension_deg: Summary::default(),
+            knee_hyperextension_deg: EvalSummary::default(),
             turned_over: TurnedOverCount::default(),
             off_ring: OffRing::default(),
         };
@@ -968,7 +972,7 @@ mod tests {
             foot_sliding: sliding(glide),
             ground: Ground::default(),
             floor_m: 0.0,
-            knee_hyperextension_deg: Summary::default(),
+            knee_hyperextension_deg: EvalSummary::default(),
             turned_over: TurnedOverCount::default(),
             off_ring: OffRing::default(),
             reference: Some(reference),

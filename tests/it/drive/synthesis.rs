@@ -262,7 +262,7 @@ fn cli_writes_glb_report_and_evaluates() {
 fn an_amc_clip_and_its_bvh_conversions_drive_the_character_alike() {
     use surfmotion::drive::query::to_character;
     use surfmotion::embed::Embedding;
-    use surfmotion::pose::retarget::ReferenceSource;
+    use surfmotion::pose::retarget::ClipNeutralSource;
     use surfmotion::synth::humanoid::{DEMO_GRID, humanoid_landmarks, humanoid_mesh};
     let Some(d) = common::data_dir() else { return };
     let mesh = humanoid_mesh(DEMO_GRID);
@@ -272,7 +272,7 @@ fn an_amc_clip_and_its_bvh_conversions_drive_the_character_alike() {
     for clip in ["cmu-amc/02/02_01.amc", "cmu-amc/01/01_01.amc"] {
         let amc = d.join("mocap").join(clip);
         let a = load_mocap(&amc, &Default::default(), 30.0).unwrap();
-        assert_eq!(a.reference.source, ReferenceSource::Rest, "{clip}");
+        assert_eq!(a.reference.source, ClipNeutralSource::Rest, "{clip}");
         let qa = to_character(&rest, &a.reference, &a.poses);
         for (name, metres) in [("units.bvh", false), ("metres.bvh", true)] {
             let bvh = tmp.path().join(name);

@@ -9,12 +9,12 @@
 use super::offline::{character, offline, run_raw, undeformed, worst_difference};
 use crate::common;
 
-use surfmotion::drive::query::{MocapPoses, load_mocap};
+use surfmotion::drive::query::{ClipQuery, load_mocap};
 use surfmotion::drive::{DriveOptions, Prepared};
 use surfmotion::live::ground::{OfflineGround, Swap};
 use surfmotion::live::{OnlineOptions, SessionOptions};
 use surfmotion::pose::Pose;
-use surfmotion::pose::retarget::{Reference, ReferenceSource};
+use surfmotion::pose::retarget::{ClipNeutral, ClipNeutralSource};
 use surfmotion::tools::eval::velocity::velocity_error;
 
 #[test]
@@ -174,13 +174,13 @@ fn over_blocks_the_offline_ground_swapped_in_brings_live_closer_to_offline() {
         ];
         for (name, poses, pose) in variants {
             // The same neutral pose for the offline and the live analysis.
-            let reference = Reference {
+            let reference = ClipNeutral {
                 pose,
-                source: ReferenceSource::Rest,
+                source: ClipNeutralSource::Rest,
                 ..m.reference.without_rotations()
             };
             let a = prepared.analyse(&ch, &reference, &poses);
-            let clip_as = MocapPoses {
+            let clip_as = ClipQuery {
                 poses: poses.clone(),
                 reference,
                 ..m.clone()

@@ -19,7 +19,7 @@ use super::offline::{character, run_raw, undeformed};
 use crate::common;
 
 use surfmotion::db::{Character, Quiet};
-use surfmotion::drive::query::{MocapPoses, load_mocap};
+use surfmotion::drive::query::{ClipQuery, load_mocap};
 use surfmotion::drive::trellis::DatabaseLinks;
 use surfmotion::drive::{Analysed, DriveError, DriveOptions, Prepared};
 use surfmotion::live::ground::{OfflineGround, Swap};
@@ -59,7 +59,7 @@ fn at_lag(base: SessionOptions, lag: usize) -> SessionOptions {
 }
 
 /// One clip at one lag: prints a row per stage.
-fn stages(ch: &Character, prepared: &Prepared, m: &MocapPoses, a: &Analysed, base: SessionOptions) {
+fn stages(ch: &Character, prepared: &Prepared, m: &ClipQuery, a: &Analysed, base: SessionOptions) {
     let err = |q: &[Pose]| velocity_error(&a.query, q).mean_cm;
     let run = |sopts: SessionOptions, swap: Option<Swap>| {
         let g = swap.map(|s| OfflineGround::of(&m.reference, &m.poses, s));
@@ -212,7 +212,7 @@ fn height_apart(live: &[Pose], offline: &[Pose]) -> (f64, f64) {
 
 /// The meshes' error at `lag`: offline, live, and live pushed the offline
 /// analysis.
-fn meshes(ch: &Character, m: &MocapPoses, a: &Analysed, lag: usize) {
+fn meshes(ch: &Character, m: &ClipQuery, a: &Analysed, lag: usize) {
     let opts = DriveOptions::default();
     let prepared = Prepared::new(ch, &opts).unwrap();
     let n = ch.n();

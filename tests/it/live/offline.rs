@@ -9,13 +9,13 @@ use crate::common;
 use std::path::Path;
 use surfmotion::db::Character;
 use surfmotion::deform::DeformMode;
-use surfmotion::drive::query::{MocapPoses, load_mocap};
+use surfmotion::drive::query::{ClipQuery, load_mocap};
 use surfmotion::drive::trellis::DatabaseLinks;
 use surfmotion::drive::{Analysed, DriveError, DriveOptions, Prepared};
 use surfmotion::live::ground::OfflineGround;
 use surfmotion::live::{LiveFrame, OnlineOptions, Session, SessionOptions};
 use surfmotion::pose::Pose;
-use surfmotion::pose::retarget::Reference;
+use surfmotion::pose::retarget::ClipNeutral;
 
 /// The synthetic samba database's character (`common::synthetic_db`).
 pub(super) fn character(d: &Path) -> Character {
@@ -36,7 +36,7 @@ pub(super) fn undeformed(ch: &Character) -> (DriveOptions, Prepared) {
 /// tests quick, still several jumps) and their offline result.
 pub(super) struct Offline {
     /// The clip as loaded (all its frames).
-    pub m: MocapPoses,
+    pub m: ClipQuery,
     /// Its first frames.
     pub poses: Vec<Pose>,
     /// Those frames analysed on the character with the given reference.
@@ -56,7 +56,7 @@ pub(super) fn offline(
     prepared: &Prepared,
     opts: &DriveOptions,
     clip: &str,
-    reference: impl Fn(&MocapPoses) -> Reference,
+    reference: impl Fn(&ClipQuery) -> ClipNeutral,
 ) -> Offline {
     let fps = ch.manifest().fps;
     let m = load_mocap(&d.join("mocap").join(clip), &Default::default(), fps).unwrap();
@@ -100,7 +100,7 @@ pub(super) fn worst_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
 pub(super) fn run_raw(
     ch: &Character,
     prepared: &Prepared,
-    m: &surfmotion::drive::query::MocapPoses,
+    m: &surfmotion::drive::query::ClipQuery,
     poses: &[Pose],
     rotations: bool,
     sopts: SessionOptions,

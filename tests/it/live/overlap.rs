@@ -21,7 +21,7 @@ use surfmotion::live::mailbox::Mailbox;
 use surfmotion::live::source::{Event, Incoming};
 use surfmotion::live::{LiveFrame, OnlineOptions, Overlap, Session, SessionOptions};
 use surfmotion::pose::Pose;
-use surfmotion::pose::retarget::Reference;
+use surfmotion::pose::retarget::ClipNeutral;
 
 /// A small generator (xorshift), seeded per pattern.
 struct Rng(u64);
@@ -78,7 +78,7 @@ type Out = (usize, u32, usize, usize, Vec<u64>, Vec<u64>);
 fn run(
     ch: &Character,
     prepared: &Prepared,
-    reference: &Reference,
+    reference: &ClipNeutral,
     pushed: &[Pose],
     waiting: &[bool],
     sopts: SessionOptions,
@@ -208,7 +208,7 @@ fn the_overlap_outputs_the_one_frame_paths_frames_in_order() {
 fn only_while_waiting(
     ch: &Character,
     prepared: &Prepared,
-    reference: &Reference,
+    reference: &ClipNeutral,
     pushed: &[Pose],
     one: &[Out],
     base: SessionOptions,

@@ -11,10 +11,10 @@ use super::offline::{character, offline, run_raw, undeformed, worst_difference};
 use crate::common;
 
 use glam::{DQuat, DVec3};
-use surfmotion::drive::query::{MocapPoses, load_mocap};
+use surfmotion::drive::query::{ClipQuery, load_mocap};
 use surfmotion::live::{OnlineOptions, SessionOptions};
 use surfmotion::pose::Pose;
-use surfmotion::pose::retarget::{Reference, ReferenceSource};
+use surfmotion::pose::retarget::{ClipNeutral, ClipNeutralSource};
 use surfmotion::tools::eval::velocity::velocity_error;
 
 /// `poses` turned by `deg` about the vertical, scaled by `k` about the
@@ -25,7 +25,7 @@ fn moved(poses: &[Pose], deg: f64, k: f64, by: DVec3) -> Vec<Pose> {
 }
 
 /// The clip's variants: (name, poses, neutral pose).
-fn variants(m: &MocapPoses) -> Vec<(&'static str, Vec<Pose>, Pose)> {
+fn variants(m: &ClipQuery) -> Vec<(&'static str, Vec<Pose>, Pose)> {
     let start = m.poses.len() / 3;
     let by = DVec3::new(3.0, 0.4, -2.0);
     let one = |deg: f64, k: f64, by: DVec3| {
@@ -98,13 +98,13 @@ fn errors_with(
     for (name, poses, pose) in variants(&m) {
         // The same neutral pose for the offline and the live analysis,
         // without the file's rotations (the moved poses no longer match).
-        let reference = Reference {
+        let reference = ClipNeutral {
             pose,
-            source: ReferenceSource::Rest,
+            source: ClipNeutralSource::Rest,
             ..m.reference.without_rotations()
         };
         let a = prepared.analyse(&ch, &reference, &poses);
-        let clip_as = MocapPoses {
+        let clip_as = ClipQuery {
             poses: poses.clone(),
             reference,
             ..m.clone()

@@ -353,17 +353,17 @@ BPx_joint 0 95 0
               r_hip=RightUpLeg;r_knee=RightLeg;r_ankle=RightFoot;r_toe=RightToeBase",
         skel: "
 # MotionBuilder (HumanIK) BVH export of a characterised skeleton: a
-# Reference node at the origin above Hips (both with position channels),
+# ClipNeutral node at the origin above Hips (both with position channels),
 # HumanIK names with the roll helpers (LeftUpLegRoll, LeftLegRoll,
 # LeftArmRoll, LeftForeArmRoll) as leaves beside the limb bones,
 # LeftFootExtraFinger1, LeftHandThumb1.., HeadEnd. Names from the HumanIK
 # bone list (public HumanIK mapping tables: LeftUpLegRoll, LeftForeArmRoll,
-# Reference). cm, Y-up, facing +Z, T-pose; X Y Z rotation order; CRLF.
+# ClipNeutral). cm, Y-up, facing +Z, T-pose; X Y Z rotation order; CRLF.
 unit cm
 axes y
 order Xrotation Yrotation Zrotation
 crlf
-Reference 0 0 0
+ClipNeutral 0 0 0
  Hips 0 99 0 % 6
   LeftUpLeg 9 -4 0
    LeftUpLegRoll 0 -21 0 | 0 -5 0
@@ -1592,7 +1592,7 @@ fn walk_onto(k: &Skel, rest: &Clip, want: &[(Canonical, Vec<String>)], walk: &Cl
     let tall: Vec<DVec3> = trest.iter().map(|&p| ai * p).collect();
     let scale = legs(&tall, tall[pj]) / legs(&wrest, wrest[C::Pelvis.index()]);
     // The pelvis's own position channels carry the travel when it has
-    // them (a Reference node above it stays put), else the root's do.
+    // them (a ClipNeutral node above it stays put), else the root's do.
     let pelvis_moves = rest.joints()[pj].has_position_channels();
     let frames = walk.frame_count();
     let mut rot = Vec::with_capacity(frames * n);

@@ -649,7 +649,7 @@ fn walk_in_place(n: usize) -> Vec<Pose> {
 /// (session 32); the band is now 2.4 % of the clip's leg.
 #[test]
 fn a_clip_never_flat_footed_with_a_foot_kicked_back_keeps_the_heels_above_the_floor() {
-    use surfmotion::pose::retarget::{Reference, ReferenceSource};
+    use surfmotion::pose::retarget::{ClipNeutral, ClipNeutralSource};
     let n = 26;
     let base = walk_in_place(n);
     // The frames where a shin is kicked back (u = 0.55 of a leg's cycle),
@@ -676,9 +676,9 @@ fn a_clip_never_flat_footed_with_a_foot_kicked_back_keeps_the_heels_above_the_fl
                 for k in kicked {
                     refs.push((
                         format!("frame {k}"),
-                        Reference {
+                        ClipNeutral {
                             pose: clip[k],
-                            source: ReferenceSource::Frame(k),
+                            source: ClipNeutralSource::Frame(k),
                             rotations: std::sync::Arc::from(Vec::new()),
                         },
                     ));

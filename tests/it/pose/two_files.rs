@@ -1229,7 +1229,7 @@ fn about_pelvis(mut cp: ClipPoses, q: DQuat) -> ClipPoses {
     let p = C::Pelvis.index();
     let frame = matches!(
         cp.reference.source,
-        surfmotion::pose::retarget::ReferenceSource::Frame(_)
+        surfmotion::pose::retarget::ClipNeutralSource::Frame(_)
     );
     let reference = frame.then_some(&mut cp.reference.pose);
     for x in cp.poses.iter_mut().chain(reference) {

@@ -18,7 +18,7 @@ use glam::DVec3;
 use surfmotion::drive::query::load_mocap;
 use surfmotion::jobs::SynthCharacter;
 use surfmotion::pose::Pose;
-use surfmotion::pose::retarget::{Reference, clip_poses};
+use surfmotion::pose::retarget::{ClipNeutral, clip_poses};
 use surfmotion::rig::{Canonical, LoadOptions};
 use surfmotion::synth::database::{Dynamics, drive};
 use surfmotion::synth::humanoid::DEMO_GRID;
@@ -28,7 +28,7 @@ use surfmotion::tools::eval::{Checker, ClipSliding, FootOptions, track_sliding};
 const FPS: f64 = 30.0;
 
 /// The humanoid's vertices driven by `poses` (frame-major).
-fn skinned(h: &SynthCharacter, poses: &[Pose], reference: &Reference) -> Vec<[f64; 3]> {
+fn skinned(h: &SynthCharacter, poses: &[Pose], reference: &ClipNeutral) -> Vec<[f64; 3]> {
     let still = Dynamics {
         amount: 0.0,
         ..Dynamics::default()

@@ -476,7 +476,7 @@ fn judge(
     v: &Clip,
     plain: &(Vec<Pose>, Vec<Pose>),
     character: &Pose,
-    rest: Option<&surfmotion::pose::retarget::Reference>,
+    rest: Option<&surfmotion::pose::retarget::ClipNeutral>,
 ) -> Outcome {
     use surfmotion::pose::retarget::{clip_poses, retarget};
     let d = match detect_clip(v) {
@@ -724,7 +724,7 @@ fn a_convention_whose_named_legs_point_the_wrong_way_is_refused() {
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn a_depth_sensor_skeleton_with_spread_legs_maps_from_its_rest_alone() {
     use surfmotion::mocap::PointConvention;
-    use surfmotion::pose::retarget::{ReferenceSource, clip_poses};
+    use surfmotion::pose::retarget::{ClipNeutralSource, clip_poses};
     let Some(d) = common::data_dir() else { return };
     let dir = tempfile::tempdir().unwrap();
     let mut fails = Vec::new();
@@ -732,7 +732,7 @@ fn a_depth_sensor_skeleton_with_spread_legs_maps_from_its_rest_alone() {
     for (name, src) in sources(&d) {
         let c = reread(dir.path(), &format!("{name}-plain"), &src, 1.0);
         let map = detect_clip(&c).unwrap().map;
-        if clip_poses(&c, &map).unwrap().reference.source != ReferenceSource::Rest {
+        if clip_poses(&c, &map).unwrap().reference.source != ClipNeutralSource::Rest {
             continue;
         }
         for deg in [50.0f64, 60.0] {

@@ -2001,7 +2001,7 @@ pub(super) fn rerest(c: &Clip, top: usize, a: DQuat) -> Clip {
 /// neutral reference) within 1e-6 of its height.
 #[test]
 fn t_and_a_pose_versions_of_a_clip_map_and_retarget_alike() {
-    use surfmotion::pose::retarget::{ReferenceSource, clip_poses, retarget};
+    use surfmotion::pose::retarget::{ClipNeutralSource, clip_poses, retarget};
     let walk = via_bvh(&surfmotion::synth::gait_clip(
         surfmotion::synth::Gait::Walk,
         2.0,
@@ -2057,7 +2057,11 @@ fn t_and_a_pose_versions_of_a_clip_map_and_retarget_alike() {
             let base_map = detect_clip(&base).unwrap().map;
             assert_eq!(d.map.joints, base_map.joints, "{what} {deg}°");
             let cp = clip_poses(&v, &d.map).unwrap();
-            assert_eq!(cp.reference.source, ReferenceSource::Rest, "{what} {deg}°");
+            assert_eq!(
+                cp.reference.source,
+                ClipNeutralSource::Rest,
+                "{what} {deg}°"
+            );
             results.push(retarget(&character, &cp.reference, &cp.poses));
         }
         let worst = results[0]

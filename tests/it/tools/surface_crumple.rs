@@ -9,7 +9,7 @@ use crate::common;
 
 use surfmotion::db::Character;
 use surfmotion::deform::{DeformMode, DeformOptions};
-use surfmotion::drive::query::{MocapPoses, load_mocap};
+use surfmotion::drive::query::{ClipQuery, load_mocap};
 use surfmotion::drive::{DriveOptions, synthesise};
 use surfmotion::graph::FlatFrame;
 use surfmotion::pose::Pose;
@@ -62,7 +62,7 @@ fn retargeted(
     ch: &Character,
     cloth: &ClothBends,
     poses: &[Pose],
-    m: &MocapPoses,
+    m: &ClipQuery,
     deform_options: DeformOptions,
 ) -> Vec<FrameCrumple> {
     let opts = DriveOptions {
