@@ -11,6 +11,7 @@ use super::skeletons::embed_rig;
 use crate::embed::frames::{SkeletonKind, poses};
 use crate::graph::SurfaceMotionGraph;
 use crate::mocap::units::y_up;
+use crate::similarity::scan::{self, ScanChoice};
 use crate::similarity::sparse::{Features, SparseOptions, sparse_pairs};
 use crate::similarity::vertex::VertexOptions;
 use crate::similarity::{
@@ -111,6 +112,11 @@ pub struct BuildReport {
     pub edges: usize,
     /// The cache folder.
     pub cache: PathBuf,
+    /// A sparse similarity's sequence-pair scan: the full scan or a reach,
+    /// and the estimates it was chosen from ([`scan_options`]; absent for
+    /// the dense method).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scan: Option<ScanChoice>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -247,6 +253,37 @@ pub fn sparse_options(m: &Manifest) -> SparseOptions {
     }
 }
 
+/// Whether [`SPARSE_ENV`] gives a reach (`reach=N`, read): a reach given
+/// explicitly wins over the scan rule.
+fn reach_given() -> bool {
+    std::env::var(SPARSE_ENV).is_ok_and(|text| {
+        SparseOptions::default().with_overrides(&text).is_ok()
+            && text
+                .split(',')
+                .any(|p| p.split_once('=').is_some_and(|(n, _)| n.trim() == "reach"))
+    })
+}
+
+/// The sparse options of a database of `frames` frames: [`sparse_options`]
+/// with the reach the scan rule chooses from its estimate of the full
+/// scan (issue 43, session 40: [`scan::choose`]; a reach given in
+/// [`SPARSE_ENV`] wins), and the choice. The cache key follows the options:
+/// a database built with a chosen reach is never read as a full-scan one,
+/// nor the other way round.
+pub fn scan_options(m: &Manifest, frames: usize) -> (SparseOptions, ScanChoice) {
+    let base = sparse_options(m);
+    let choice = scan::choose(frames, m.sequences.len(), &base, reach_given());
+    (choice.options(&base), choice)
+}
+
+/// The frame count the sparse similarity cache of `measure` in `dir` says
+/// it holds (0 without one): what the scan rule reads to judge a cache
+/// before anything is described. Trusted through the key only: a cache of
+/// other frames carries another similarity key.
+pub(crate) fn cached_frames(dir: &Path, measure: Measure) -> usize {
+    cache::sparse_frames(&sparse_path(dir, measure)).unwrap_or(0)
+}
+
 /// The graph cache file of `measure` in the database `dir`.
 pub fn graph_path(dir: &Path, measure: Measure) -> PathBuf {
     cache_dir(dir).join(format!("graph-{}.json", measure.name()))
@@ -373,7 +410,7 @@ pub(crate) fn similarity_with(
     progress: &dyn BuildProgress,
 ) -> Result<(Similarity, u64, Option<Timing>), DbError> {
     let key = similarity_key(dir, m, measure)?;
-    let sopts = sparse_options(m);
+    let (sopts, _) = scan_options(m, cached_frames(dir, measure));
     let skey = sparse_key(key, &sopts);
     tracing::debug!(
         "{}: cache keys: similarity ({}) {key:016x}, sparse {skey:016x}",
@@ -409,6 +446,11 @@ pub(crate) fn similarity_with(
         notice(format!(
             "{frames} frames described in {describe:.1} s ({describe_cpu:.1} s of CPU)"
         ));
+        // Said before the long work: what the full scan would take and
+        // what runs.
+        let (sopts, choice) = scan_options(m, frames);
+        notice(format!("sequence-pair scan: {}", choice.describe()));
+        let skey = sparse_key(key, &sopts);
         return sparse_similarity(dir, measure, skey, set, spans, &sopts, describe, progress);
     }
     let t1 = Instant::now();
@@ -956,6 +998,8 @@ pub(crate) fn build_opened(
         transitions: graph.transitions().len(),
         edges: graph.edges().len(),
         cache: cache_dir(dir),
+        // The choice its key was made with (a cache's key vouches for it).
+        scan: matches!(mat, Similarity::Sparse(_)).then(|| scan_options(m, mat.len()).1),
     };
     Ok((mat, graph, report))
 }

@@ -345,6 +345,15 @@ pub(crate) fn save_sparse(path: &Path, key: u64, s: &SparseSimilarity) -> Result
     })
 }
 
+/// The frame count in a sparse similarity cache file's header (after its
+/// magic and key), the rest not read; `None` without such a file.
+pub(crate) fn sparse_frames(path: &Path) -> Option<usize> {
+    let mut head = [0u8; 24];
+    std::fs::File::open(path).ok()?.read_exact(&mut head).ok()?;
+    let n: [u8; 8] = head[16..24].try_into().ok()?;
+    (&head[..8] == SPARSE_MAGIC).then(|| u64::from_le_bytes(n) as usize)
+}
+
 /// Reads a sparse similarity, its pairs memory-mapped (read on demand,
 /// issue 43): `Ok(None)` when there is no such file or it has another
 /// key, `Err` saying why when it is there but cannot be used.

@@ -35,6 +35,9 @@ pub fn database(dir: &Path, graph: &SurfaceMotionGraph, r: &DatabaseReport) -> S
             1e6 * r.pairs_seconds / (r.pairs.max(1) as f64)
         );
     }
+    if let Some(scan) = &r.scan {
+        let _ = writeln!(out, "sequence-pair scan: {}", scan.describe());
+    }
     let _ = writeln!(
         out,
         "graph: {} on {}{} in {:.3} s",

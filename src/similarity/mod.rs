@@ -6,7 +6,8 @@
 //! ([`sets`]) compared all-pairs in parallel ([`matrix`]), or on the candidate pairs
 //! of a nearest-neighbour index and of each sequence pair's best cheap
 //! transitions only for large databases ([`sparse`], [`kdtree`],
-//! [`pair_scan`]); [`lookup`] reads either.
+//! [`pair_scan`]), the sequence pairs scanned chosen from an estimate
+//! ([`scan`]); [`lookup`] reads either.
 
 pub mod candidates;
 pub(crate) mod closure;
@@ -16,6 +17,7 @@ pub mod kdtree;
 pub mod lookup;
 pub mod matrix;
 pub mod pair_scan;
+pub mod scan;
 pub mod sets;
 pub mod sparse;
 pub mod tiled;

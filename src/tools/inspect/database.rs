@@ -11,8 +11,8 @@
 use super::error::InspectError;
 use crate::db::Manifest;
 use crate::db::build::{
-    default_measure, graph_key, graph_path, read_graph_cache, similarity_key, similarity_path,
-    sparse_key, sparse_options, sparse_path,
+    cached_frames, default_measure, graph_key, graph_path, read_graph_cache, scan_options,
+    similarity_key, similarity_path, sparse_key, sparse_path,
 };
 use crate::db::cache::cache_dir;
 use crate::similarity::Measure;
@@ -70,6 +70,10 @@ pub struct CacheEntry {
     /// A graph's frames.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frames: Option<usize>,
+    /// An up-to-date sparse similarity's sequence-pair scan (issue 43):
+    /// the full scan or the reach, and the estimates it was chosen from.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scan: Option<String>,
 }
 
 /// What a database folder holds.
@@ -259,6 +263,7 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
             transitions: None,
             edges: None,
             frames: None,
+            scan: None,
         };
         let judge = |e: &mut CacheEntry, found: Result<u64, String>, want: Result<u64, String>| {
             (e.up_to_date, e.state) = match (found, want) {
@@ -288,8 +293,14 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
             }
         } else if let Some(measure) = measures.into_iter().find(|&q| file == sparse_path(dir, q)) {
             e.what = format!("sparse similarity ({})", measure.name());
-            let want = key_of(measure).map(|k| sparse_key(k, &sparse_options(m)));
+            // The scan rule on the frames the file says it holds (its key
+            // vouches for the count).
+            let (opts, choice) = scan_options(m, cached_frames(dir, measure));
+            let want = key_of(measure).map(|k| sparse_key(k, &opts));
             judge(&mut e, header_key(&file, b"SMSPA001"), want.clone());
+            if e.up_to_date {
+                e.scan = Some(choice.describe());
+            }
             // Opened as `db build` opens it before reuse.
             if e.up_to_date
                 && let Ok(k) = want
@@ -307,7 +318,9 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
                 e.frames = Some(g.sequences().iter().map(|s| s.len).sum());
             }
             let found = read.as_ref().map(|(k, _)| *k).map_err(Clone::clone);
-            let (want, sparse) = graph_want(m, found.as_ref().ok().copied(), key_of(measure));
+            let frames = e.frames.unwrap_or(0);
+            let found_key = found.as_ref().ok().copied();
+            let (want, sparse) = graph_want(m, found_key, key_of(measure), frames);
             judge(&mut e, found, want);
             // Checked against its similarity, as `db build` does.
             if e.up_to_date
@@ -350,16 +363,18 @@ fn cache_entries(dir: &Path, m: &Manifest) -> Result<Vec<CacheEntry>, InspectErr
 /// the similarity it was built from — the dense matrix's key, or the sparse
 /// similarity's ([`sparse_key`]) for a database of
 /// [`crate::db::build::SPARSE_FRAMES`] frames or more (issue 43: judged
-/// with the dense key alone, every sparse database's graph read "stale").
+/// with the dense key alone, every sparse database's graph read "stale"),
+/// its scan chosen for the graph's `frames`.
 fn graph_want(
     m: &Manifest,
     found: Option<u64>,
     dense: Result<u64, String>,
+    frames: usize,
 ) -> (Result<u64, String>, bool) {
     match dense {
         Err(why) => (Err(why), false),
         Ok(k) => {
-            let sparse = graph_key(m, sparse_key(k, &sparse_options(m)));
+            let sparse = graph_key(m, sparse_key(k, &scan_options(m, frames).0));
             if found == Some(sparse) {
                 (Ok(sparse), true)
             } else {
@@ -381,7 +396,8 @@ fn validate_graph(
     sparse: bool,
 ) -> Result<(), String> {
     if sparse {
-        let skey = sparse_key(dense_key, &sparse_options(m));
+        let frames = g.sequences().iter().map(|s| s.len).sum();
+        let skey = sparse_key(dense_key, &scan_options(m, frames).0);
         match crate::db::cache::read_sparse(&sparse_path(dir, measure), skey) {
             Ok(Some(s)) => g.validate(&s),
             _ => Ok(()),
@@ -436,6 +452,9 @@ fn write_cache(s: &mut String, measure: &str, cache: &[CacheEntry]) {
             _ => String::new(),
         };
         let _ = writeln!(s, "  cache       {name}: {}{size}; {}", e.what, e.state);
+        if let Some(scan) = &e.scan {
+            let _ = writeln!(s, "              scan: {scan}");
+        }
     }
 }
 

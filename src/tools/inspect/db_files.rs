@@ -12,8 +12,8 @@
 use super::error::InspectError;
 use crate::db::Manifest;
 use crate::db::build::{
-    default_measure, graph_key, graph_path, read_graph_cache, similarity_key, similarity_path,
-    sparse_key, sparse_options, sparse_path,
+    cached_frames, default_measure, graph_key, graph_path, read_graph_cache, scan_options,
+    similarity_key, similarity_path, sparse_key, sparse_path,
 };
 use crate::db::frames::{
     CacheHead, FrameCacheError, frames_path, keys, poses_kind_of, poses_path, read_frames_head,
@@ -266,7 +266,7 @@ fn judge_examples(db: &Path, m: &Manifest, found: u64, frames: usize) -> Judged 
 fn load_reads_current(db: &Path, m: &Manifest) -> Result<(), String> {
     let measure = default_measure(m);
     let key = similarity_key(db, m, measure).map_err(|e| e.to_string())?;
-    let skey = sparse_key(key, &sparse_options(m));
+    let skey = sparse_key(key, &scan_options(m, cached_frames(db, measure)).0);
     let gpath = graph_path(db, measure);
     let (gk, _) = read_graph_cache(&gpath).map_err(|_| name_of(&gpath, "missing or unreadable"))?;
     let (spath, want, magic) = if gk == graph_key(m, skey) {

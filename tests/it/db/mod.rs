@@ -7,6 +7,7 @@ mod captures;
 mod examples;
 mod frames;
 mod histogram_reference;
+mod scan;
 mod sparse;
 mod synth;
 
