@@ -39,15 +39,19 @@ pub fn evaluate_headless(data: &Path) -> Result<AutorigReport, AutorigEvalError>
 fn headless(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
     let _ = writeln!(
         w.tables,
-        "| body | motion | cut | vertices cut | trunk below the top (% height) | head | joints but the head vs truth (% height, every frame) | parts agree (kept vertices) | time (s) |\n|---|---|---|---|---|---|---|---|---|"
+        "| body | motion | cut | vertices cut | trunk below the top (% height) | head | joints but the head vs truth (% height, every frame) | parts agree (kept vertices) | time (s) | head joint to the rim's centre (% height) | neck vs truth (% height, every frame) |\n|---|---|---|---|---|---|---|---|---|---|---|"
     );
-    each_cut_rig(data, &Cut::ALL, None, w, |w, case, _, _| row(w, case))?;
+    each_cut_rig(data, &Cut::ALL, None, w, |w, case, rest, nb| {
+        row(w, case, rest, nb)
+    })?;
     every_frame(data, w);
     Ok(())
 }
 
-/// The table's row of `case`, and its "no head" notes into the details.
-fn row(w: &mut AutorigReport, case: &CutRig) {
+/// The table's row of `case` (the whole body's rest positions `rest`,
+/// neighbours `nb`), and its "no head" notes and where its neck lies
+/// ([`super::autorig_stump`]) into the details.
+fn row(w: &mut AutorigReport, case: &CutRig, rest: &[[f64; 3]], nb: &[Vec<u32>]) {
     let (bname, mname, cut) = (case.body, case.motion, case.cut.name());
     let row = format!("| {bname} | {mname} | {cut} | {} |", case.vertices_cut);
     let (auto, mine) = match &case.outcome {
@@ -76,13 +80,19 @@ fn row(w: &mut AutorigReport, case: &CutRig) {
             k += 1;
         }
     }
+    let neck = super::autorig_stump::neck_and_head(case, mine, rest, nb);
+    let head_to_rim = neck
+        .head_to_rim
+        .map_or("–".to_string(), |x| format!("{x:.2}"));
     let _ = writeln!(
         w.tables,
-        "{row} {depth:.0} | {head} | {:.2} | {:.1}% | {:.1} |",
+        "{row} {depth:.0} | {head} | {:.2} | {:.1}% | {:.1} | {head_to_rim} | {:.2} |",
         100.0 * s / k.max(1) as f64 / case.rig.height(),
         100.0 * agree(mine.labels(), &case.truth()),
         case.secs,
+        neck.neck_error,
     );
+    let _ = writeln!(w.details, "  {bname}, {mname}, {cut}: {}", neck.depths);
     for note in auto.notes.iter().filter(|x| x.starts_with("no head")) {
         let _ = writeln!(w.details, "  {bname}, {mname}, {cut}: {note}");
     }

@@ -9,6 +9,7 @@ pub mod autorig;
 pub mod autorig_confusion;
 pub mod autorig_cut;
 pub mod autorig_headless;
+pub mod autorig_stump;
 pub mod autorig_tips;
 pub mod eval;
 pub mod inspect;
