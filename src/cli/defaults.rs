@@ -72,7 +72,8 @@ fn live_defaults_are_the_librarys() {
     same(&o, &surfmotion::jobs::live::LiveOptions::default());
 }
 
-/// `--overlap` alone is `queued`; each named choice is its mode.
+/// `--overlap` alone is `queued`, as is no `--overlap` (the library's
+/// default); each named choice is its mode.
 #[test]
 fn live_overlap_forms() {
     use surfmotion::live::Overlap;
@@ -91,6 +92,7 @@ fn live_overlap_forms() {
                 .overlap,
         )
     };
+    assert_eq!(with(&[]), Ok(Overlap::Queued), "the default (session 40)");
     assert_eq!(with(&["--overlap"]), Ok(Overlap::Queued));
     assert_eq!(with(&["--overlap", "queued"]), Ok(Overlap::Queued));
     assert_eq!(with(&["--overlap=always"]), Ok(Overlap::Always));

@@ -65,9 +65,9 @@ pub struct Args {
     /// the character falls behind (for recordings; latency then grows).
     #[arg(long)]
     pub lossless: bool,
-    /// Two frames deformed at once: `queued` (`--overlap` alone) while the next
-    /// one already waits, `always` every frame (a frame more latency), `off` never.
-    #[arg(long, value_enum, value_name = "WHEN", num_args = 0..=1, default_value = "off", default_missing_value = "queued")]
+    /// Two frames deformed at once: `queued` (default; `--overlap` alone) while
+    /// the next one waits, `always` every frame (a frame more latency), `off` never.
+    #[arg(long, value_enum, value_name = "WHEN", num_args = 0..=1, default_value_t = super::values::OverlapArg::from(LiveOptions::default().overlap), default_missing_value = "queued")]
     pub overlap: super::values::OverlapArg,
     /// Frames of future the retrieval sees before it decides a frame (the
     /// fixed-lag trellis); 0 decides each frame as it comes (greedy, with a
@@ -165,6 +165,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(Cmd::Send(s)) = a.send {
         return super::live_send::run(s);
     }
+    super::malloc::one_arena();
     let db =
         a.db.clone()
             .ok_or_else(|| anyhow::anyhow!("--db is required"))?;

@@ -19,6 +19,7 @@ mod keyframe;
 mod live;
 mod live_send;
 mod log;
+mod malloc;
 mod mesh;
 mod mocap;
 mod opts;

@@ -171,6 +171,16 @@ pub enum OverlapArg {
     Always,
 }
 
+impl From<Overlap> for OverlapArg {
+    fn from(o: Overlap) -> OverlapArg {
+        match o {
+            Overlap::Off => OverlapArg::Off,
+            Overlap::Queued => OverlapArg::Queued,
+            Overlap::Always => OverlapArg::Always,
+        }
+    }
+}
+
 impl From<OverlapArg> for Overlap {
     fn from(o: OverlapArg) -> Overlap {
         match o {

@@ -12,6 +12,7 @@ use super::regions::{
     Held, Region, Target, constraint_scale, region_constraints, region_examples, region_specs,
     region_weights, sibling_overlaps,
 };
+use super::resident::{Paged, Resident, page_in, page_in_grown};
 use super::{arap, lbs, pca, unflip, untangle};
 use crate::db::Character;
 use crate::mesh::laplacian::uniform_region_rows;
@@ -161,6 +162,8 @@ pub struct DeformWorkspace {
     /// Frames deformed with this workspace whose stitch was dropped
     /// ([`DeformOptions::cloth_fallback`]).
     unstitched: usize,
+    /// The capacity last paged in ([`DeformWorkspace::keep_resident`]).
+    paged: Paged,
 }
 
 impl DeformWorkspace {
@@ -179,6 +182,20 @@ impl DeformWorkspace {
     /// each use).
     pub fn reserve_as(&mut self, other: &DeformWorkspace) {
         self.replay.reserve_as(&other.replay);
+        self.keep_resident();
+    }
+
+    /// Makes the workspace's buffers resident (every page written once)
+    /// when their capacity changed since the last call, O(buffers) when
+    /// not: the repair's buffers, reserved or grown to a larger patch, and
+    /// the frame-sized buffers only a repair writes, are in the resident
+    /// memory from then on instead of paged in by a later frame
+    /// ([`crate::deform::resident`]). Values are kept; the result of a
+    /// deformation does not depend on it.
+    pub fn keep_resident(&mut self) {
+        let mut paged = self.paged;
+        page_in_grown(self, &mut paged);
+        self.paged = paged;
     }
 
     /// How many frames deformed with this workspace were left without the
@@ -186,6 +203,32 @@ impl DeformWorkspace {
     /// ([`DeformOptions::cloth_fallback`]).
     pub fn unstitched(&self) -> usize {
         self.unstitched
+    }
+}
+
+impl Resident for DeformWorkspace {
+    fn resident(&mut self, t: bool) -> usize {
+        let points = [
+            &mut self.lbs,
+            &mut self.acc,
+            &mut self.shared,
+            &mut self.last,
+            &mut self.best,
+            &mut self.start,
+            &mut self.surface_best,
+        ]
+        .into_iter()
+        .map(|v| page_in(v, t))
+        .sum::<usize>();
+        points
+            + page_in(&mut self.turn, t)
+            + page_in(&mut self.surface_turn, t)
+            + page_in(&mut self.wsum, t)
+            + page_in(&mut self.areas, t)
+            + page_in(&mut self.source_normals, t)
+            + page_in(&mut self.flags, t)
+            + page_in(&mut self.best_bad, t)
+            + self.replay.resident(t)
     }
 }
 
@@ -563,6 +606,7 @@ impl Deformer {
                 _ => Vec::new(),
             },
             unstitched: 0,
+            paged: Paged::default(),
         }
     }
 

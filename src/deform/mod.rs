@@ -78,6 +78,7 @@ mod patch_solve;
 pub mod pca;
 pub mod regions;
 mod repair_options;
+pub(crate) mod resident;
 pub mod soft;
 pub mod step_zone;
 mod turned;

@@ -21,6 +21,7 @@
 //! them), the same ordering and factor, and the held columns subtracted in
 //! the same order; so the repaired frame is the same bit for bit.
 
+use crate::deform::resident::{Resident, page_in, page_in_bytes};
 use crate::mesh::solver::{SolveError, anchored_components};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{LltRef, SymbolicCholesky, factorize_symbolic_cholesky};
@@ -67,6 +68,11 @@ impl Scratch {
             let _ = self.stack(req);
         }
     }
+
+    /// Its bytes ([`Resident`]).
+    fn resident(&mut self, touch: bool) -> usize {
+        self.buf.as_mut().map_or(0, |b| page_in_bytes(b, touch))
+    }
 }
 
 /// Grows `v` to at least `other`'s capacity, exactly (no amortised
@@ -74,6 +80,12 @@ impl Scratch {
 pub(crate) fn reserve_as<T>(v: &mut Vec<T>, other: &Vec<T>) {
     if v.capacity() < other.capacity() {
         v.reserve_exact(other.capacity() - v.len());
+    }
+}
+
+impl Resident for PatchSystem {
+    fn resident(&mut self, touch: bool) -> usize {
+        self.paged(touch)
     }
 }
 
@@ -133,6 +145,25 @@ impl PatchSystem {
         reserve_as(&mut self.rhs, &other.rhs);
         self.factor_scratch.reserve_as(&other.factor_scratch);
         self.solve_scratch.reserve_as(&other.solve_scratch);
+    }
+
+    /// Every buffer's capacity in bytes, each paged in with `touch`
+    /// ([`crate::deform::resident`]).
+    fn paged(&mut self, touch: bool) -> usize {
+        let t = touch;
+        self.rows.resident(t)
+            + page_in(&mut self.col_ptr, t)
+            + page_in(&mut self.row_idx, t)
+            + page_in(&mut self.col_vals, t)
+            + page_in(&mut self.col_at, t)
+            + page_in(&mut self.coupling_ptr, t)
+            + page_in(&mut self.coupling, t)
+            + page_in(&mut self.comp, t)
+            + page_in(&mut self.stack, t)
+            + page_in(&mut self.values, t)
+            + page_in(&mut self.rhs, t)
+            + self.factor_scratch.resident(t)
+            + self.solve_scratch.resident(t)
     }
 
     /// Factors the patch of `m` vertices whose first `free` are unknown,

@@ -24,6 +24,7 @@
 //! cost one pass over the triangles.
 
 pub use super::repair_options::{Budget, RepairOptions, Work, WorkLimit};
+use super::resident::{Resident, page_in};
 pub use super::turned::{
     Adjacency, skin_turns, source_normals, turned_over, turned_over_flagged, turned_over_from,
 };
@@ -68,6 +69,12 @@ impl Replay {
         super::patch_solve::reserve_as(&mut self.out, &other.out);
         super::patch_solve::reserve_as(&mut self.bad, &other.bad);
         self.scratch.reserve_as(&other.scratch);
+    }
+}
+
+impl Resident for Replay {
+    fn resident(&mut self, touch: bool) -> usize {
+        page_in(&mut self.out, touch) + page_in(&mut self.bad, touch) + self.scratch.resident(touch)
     }
 }
 

@@ -8,6 +8,7 @@
 
 use super::patch_solve::{PatchSystem, reserve_as};
 use super::repair_options::{Budget, RepairOptions};
+use super::resident::{Resident, page_in};
 use super::turned::{Adjacency, is_turned_over, normal, triangle_turn};
 use glam::{DQuat, DVec3};
 
@@ -60,6 +61,31 @@ impl std::fmt::Debug for RepairScratch {
             .field("patch", &self.patch.len())
             .field("system", &self.system)
             .finish_non_exhaustive()
+    }
+}
+
+impl Resident for RepairScratch {
+    fn resident(&mut self, touch: bool) -> usize {
+        let t = touch;
+        let lists = [
+            &mut self.local,
+            &mut self.patch,
+            &mut self.touch,
+            &mut self.cand,
+            &mut self.vs,
+        ]
+        .into_iter()
+        .map(|v| page_in(v, t))
+        .sum::<usize>();
+        let points = [&mut self.b, &mut self.held, &mut self.x, &mut self.moved]
+            .into_iter()
+            .map(|v| page_in(v, t))
+            .sum::<usize>();
+        lists
+            + points
+            + page_in(&mut self.listed, t)
+            + page_in(&mut self.edges, t)
+            + self.system.resident(t)
     }
 }
 

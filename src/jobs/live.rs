@@ -88,7 +88,7 @@ pub struct LiveOptions {
     /// (normals on).
     pub usd: UsdOptions,
     /// When to deform two frames at once ([`SessionOptions::overlap`]).
-    /// Default: the session's ([`Overlap::Off`]).
+    /// Default: the session's ([`Overlap::Queued`]).
     pub overlap: Overlap,
 }
 

@@ -36,6 +36,7 @@ use super::online::{Advance, OnlineOptions, OnlineStats, OnlineTrellis};
 use super::overlap::{Overlap, PairGain, cpu_since, process_cpu_seconds};
 use super::stages::{FrameStages, Stage, StageClock, thread_cpu_seconds};
 use crate::db::Character;
+use crate::deform::resident::page_in;
 use crate::deform::{DeformWorkspace, Deformer};
 use crate::drive::placement::{BlendScratch, blend_placed, placements};
 use crate::drive::timeline::timeline;
@@ -131,18 +132,16 @@ pub struct SessionOptions {
     /// (the deformation carries no state from frame to frame); a held frame
     /// comes out one decided frame later ([`LiveFrame::held`]), and up to
     /// two frames are deformed in the time of one on two free cores.
-    /// Default: [`Overlap::Off`] (one frame at a time). With
-    /// [`Overlap::Queued`] the resident memory of a looped replay grew
-    /// after the analysis window filled (`live::long`'s command, five
-    /// loops: 3.7-10.5 % over the full-window sample in six runs, session
-    /// 39): the second slot's fold-repair buffers grew by 8.9 MiB when it
-    /// first met a large patch, in a later pair on a pool thread
-    /// (heaptrack). The slots now grow to each other's before each pair
-    /// (`Slot::reserve_pair`) and the live heap is flat from the first
-    /// large repair on; the resident memory still rose 1.1-6.8 % after the
-    /// window filled (seven runs; 3.4-4.3 % in three with one malloc
-    /// arena), against 2.2-2.4 % one frame at a time, and sits 9-23 MiB
-    /// above it: not the default.
+    /// Default: [`Overlap::Queued`] (session 40). Its resident memory
+    /// had grown after the analysis window filled (`live::long`'s looped
+    /// replay: 2.7-9.1 % over the full-window sample in 19 runs of main's
+    /// binary, 10 over the test's 5 %). Every slot's buffers are now grown
+    /// to the other's and made resident after each deformation, on the
+    /// session's thread (`Slot::even_out`,
+    /// [`DeformWorkspace::keep_resident`]): 2.6-5.4 % in five runs; and the
+    /// `live` verb allocates from one malloc arena (the pool threads'
+    /// arenas grew at later loops' starts): 1.3-3.5 % in 20 runs, as the
+    /// one-frame path's 2.3 %. README, *Live*, session 40.
     pub overlap: Overlap,
 }
 
@@ -158,7 +157,7 @@ impl Default for SessionOptions {
             lift_settle: None,
             keep_ground: None,
             open_end: false,
-            overlap: Overlap::Off,
+            overlap: Overlap::Queued,
         }
     }
 }
@@ -202,9 +201,12 @@ struct Slot {
 
 impl Slot {
     fn new(n: usize, ws: Option<DeformWorkspace>) -> Slot {
+        let (mut blended, mut deformed) = (vec![[0.0; 3]; n], vec![[0.0; 3]; n]);
+        page_in(&mut blended, true);
+        page_in(&mut deformed, true);
         Slot {
-            blended: vec![[0.0; 3]; n],
-            deformed: vec![[0.0; 3]; n],
+            blended,
+            deformed,
             ws,
             target: [DVec3::ZERO; C::COUNT],
             index: 0,
@@ -232,16 +234,30 @@ impl Slot {
         }
     }
 
-    /// Grows each slot's fold-repair buffers to the other's before a pair
-    /// ([`DeformWorkspace::reserve_as`]), on the session's thread: a slot
-    /// grows once to the largest patch either has met, rather than when it
-    /// first meets one itself in a later pair, on a pool thread (measured,
-    /// heaptrack, `live::long`'s command queued: the second slot's buffers
-    /// grew by 8.9 MiB half way through the run, after the window filled).
-    fn reserve_pair(a: &mut Slot, b: &mut Slot) {
-        if let (Some(wa), Some(wb)) = (a.ws.as_mut(), b.ws.as_mut()) {
-            wa.reserve_as(wb);
-            wb.reserve_as(wa);
+    /// After a deformation, on the session's thread: each slot's
+    /// fold-repair buffers grown to the other's capacities
+    /// ([`DeformWorkspace::reserve_as`]) and every workspace's buffers
+    /// made resident where they grew ([`DeformWorkspace::keep_resident`]).
+    /// So both slots hold the largest patch either has met, in resident
+    /// memory, from the frame that met it on — not grown or paged in by a
+    /// later pair on a pool thread (session 39, heaptrack: the second
+    /// slot's 8.9 MiB grew after the analysis window filled; a reserved
+    /// buffer's pages are resident only once written). O(buffers) when
+    /// nothing grew.
+    fn even_out(slots: &mut [Slot]) {
+        match slots {
+            [a, b] => {
+                if let (Some(wa), Some(wb)) = (a.ws.as_mut(), b.ws.as_mut()) {
+                    wa.reserve_as(wb);
+                    wb.reserve_as(wa);
+                }
+            }
+            [a] => {
+                if let Some(w) = a.ws.as_mut() {
+                    w.keep_resident();
+                }
+            }
+            _ => {}
         }
     }
 
@@ -324,9 +340,10 @@ impl<'a> Session<'a> {
         opts: SessionOptions,
     ) -> Self {
         let n = ch.n();
-        let slots = (0..if opts.overlap == Overlap::Off { 1 } else { 2 })
+        let mut slots: Vec<Slot> = (0..if opts.overlap == Overlap::Off { 1 } else { 2 })
             .map(|_| Slot::new(n, prepared.deformer().map(|d| d.workspace())))
             .collect();
+        Slot::even_out(&mut slots);
         let band = contact_band(leg_length(&reference.pose));
         Session {
             ch,
@@ -572,6 +589,7 @@ impl<'a> Session<'a> {
             self.slots[h].deform(ch, d);
             self.clock
                 .lap(Stage::Deformation, &mut self.slots[h].stages);
+            Slot::even_out(&mut self.slots);
             self.slots[h].pushed = self.pushes;
             self.output(h, out);
         }
@@ -635,6 +653,7 @@ impl<'a> Session<'a> {
                 self.gain.single(began.elapsed(), cpu_since(cpu));
                 self.clock
                     .lap(Stage::Deformation, &mut self.slots[s].stages);
+                Slot::even_out(&mut self.slots);
                 self.output(s, out);
             }
             Some(h) => {
@@ -643,13 +662,13 @@ impl<'a> Session<'a> {
                     [x, y] => (y, x),
                     _ => unreachable!("a frame is held only with two slots"),
                 };
-                Slot::reserve_pair(a, b);
                 let (began, cpu) = (Instant::now(), process_cpu_seconds());
                 let (ta, tb) = rayon::join(|| a.deform(ch, d), || b.deform(ch, d));
                 self.gain.pair(began.elapsed(), cpu_since(cpu));
                 let share = if ta + tb > 0.0 { ta / (ta + tb) } else { 0.5 };
                 self.clock
                     .lap_pair(Stage::Deformation, &mut a.stages, &mut b.stages, share);
+                Slot::even_out(&mut self.slots);
                 self.output(h, out);
                 self.output(s, out);
             }

@@ -2,6 +2,7 @@
 //! fold repair's patch system, [`super::PatchSystem`]).
 
 use super::reserve_as;
+use crate::deform::resident::{Resident, page_in};
 
 /// A patch's Laplacian rows in compressed form, reused: row `r`'s
 /// `(column, value)` pairs are `cols[ptr[r]..ptr[r + 1]]` and `vals[..]`,
@@ -83,5 +84,15 @@ impl PatchRows {
     pub(crate) fn row(&self, r: usize) -> (&[u32], &[f64]) {
         let s = self.ptr[r]..self.ptr[r + 1];
         (&self.cols[s.clone()], &self.vals[s])
+    }
+}
+
+impl Resident for PatchRows {
+    fn resident(&mut self, touch: bool) -> usize {
+        page_in(&mut self.ptr, touch)
+            + page_in(&mut self.at, touch)
+            + page_in(&mut self.entries, touch)
+            + page_in(&mut self.cols, touch)
+            + page_in(&mut self.vals, touch)
     }
 }

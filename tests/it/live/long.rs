@@ -3,7 +3,9 @@
 //! memory (once the analysis window is full) and the output rate stay flat
 //! from the second sample on (the
 //! one-hour run, `live --replay CLIP --loop N --sample-every 60`, is an
-//! evaluation command: README, *Live*).
+//! evaluation command: README, *Live*). Run with the default overlap
+//! (queued: frames deformed in pairs while the replay's next one waits)
+//! and with `--overlap off`.
 
 use crate::common;
 use std::process::Command;
@@ -14,11 +16,18 @@ fn five_loops_keep_memory_and_rate_flat() {
     let Some(d) = common::data_dir() else { return };
     let db = common::synthetic_db(&d);
     let clip = d.join("mocap/cmu-bvh-altered/02_01.bvh");
-    let out = Command::new(env!("CARGO_BIN_EXE_surfmotion"))
-        .args(["live", "--db"])
-        .arg(&db)
+    for overlap in [None, Some("off")] {
+        five_loops(&db, &clip, overlap);
+    }
+}
+
+/// `live::long`'s run with `--overlap` given (`None`: the default).
+fn five_loops(db: &std::path::Path, clip: &std::path::Path, overlap: Option<&str>) {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_surfmotion"));
+    cmd.args(["live", "--db"])
+        .arg(db)
         .arg("--replay")
-        .arg(&clip)
+        .arg(clip)
         .args([
             "--speed",
             "0",
@@ -27,9 +36,11 @@ fn five_loops_keep_memory_and_rate_flat() {
             "--sample-every",
             "1",
             "--json",
-        ])
-        .output()
-        .unwrap();
+        ]);
+    if let Some(o) = overlap {
+        cmd.args(["--overlap", o]);
+    }
+    let out = cmd.output().unwrap();
     assert!(
         out.status.success(),
         "{}",
@@ -40,6 +51,10 @@ fn five_loops_keep_memory_and_rate_flat() {
     // 02_01 is 86 frames at the database's 30 fps.
     assert_eq!(frames, 5 * 86, "{r}");
     assert_eq!(r["input"]["received"].as_u64(), Some(frames), "{r}");
+    // The default pairs frames while the next one waits (a lone frame
+    // first, then a pair at least every 32 frames, however loaded).
+    let held = r["frames_held"].as_u64().unwrap_or(0);
+    assert_eq!(held > 0, overlap.is_none(), "{overlap:?}: {held} held");
     let samples = r["samples"].as_array().unwrap();
     assert!(samples.len() >= 4, "{r}");
     let rss: Vec<f64> = samples
@@ -51,7 +66,7 @@ fn five_loops_keep_memory_and_rate_flat() {
         .map(|s| s["output_fps"].as_f64().unwrap())
         .collect();
     eprintln!(
-        "{} samples: RSS {rss:?} MiB, output {fps:?} frames/s",
+        "{overlap:?}: {} samples: RSS {rss:?} MiB, output {fps:?} frames/s",
         samples.len()
     );
     // Memory: once the analysis window is full (128 frames of context and
