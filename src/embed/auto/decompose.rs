@@ -36,14 +36,19 @@ use rayon::prelude::*;
 /// One rigid part's motion: a rotation and translation per frame, taking
 /// the rest frame's positions onto the frame's.
 #[derive(Debug, Clone)]
-pub struct Motion {
+pub struct PartMotion {
     /// Per frame rotation.
     pub r: Vec<DMat3>,
     /// Per frame translation.
     pub t: Vec<DVec3>,
 }
 
-impl Motion {
+/// The old name of [`PartMotion`] (before session 40: "motion" names a mesh
+/// sequence's motion, `parametric::Motion`; issue 40).
+#[deprecated(note = "renamed PartMotion (old name Motion)")]
+pub type Motion = PartMotion; // old name
+
+impl PartMotion {
     /// Where rest point `p` is at frame `f`.
     pub fn apply(&self, f: usize, p: DVec3) -> DVec3 {
         self.r[f] * p + self.t[f]
@@ -58,7 +63,7 @@ pub struct Decomposition {
     /// Number of parts.
     pub count: usize,
     /// Each part's rigid motion over the frames.
-    pub motions: Vec<Motion>,
+    pub motions: Vec<PartMotion>,
     /// Each part's RMS residual (length units) over its vertices and frames.
     pub residual: Vec<f64>,
 }
@@ -282,7 +287,7 @@ pub fn kabsch(rest: &[[f64; 3]], frame: &[[f64; 3]], idx: &[u32]) -> (DMat3, DVe
 }
 
 /// Fits each part's motion over the frames.
-fn fit(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], members: &[Vec<u32>]) -> Vec<Motion> {
+fn fit(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], members: &[Vec<u32>]) -> Vec<PartMotion> {
     members
         .par_iter()
         .map(|idx| {
@@ -292,7 +297,7 @@ fn fit(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], members: &[Vec<u32>]) -> Vec<M
                 r.push(a);
                 t.push(b);
             }
-            Motion { r, t }
+            PartMotion { r, t }
         })
         .collect()
 }
@@ -314,7 +319,7 @@ pub(crate) fn fit_onto(
 }
 
 /// Squared error of vertex `v` under motion `m`, summed over frames.
-fn err(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], m: &Motion, v: usize) -> f64 {
+fn err(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], m: &PartMotion, v: usize) -> f64 {
     let p = v3(rest[v]);
     frames
         .iter()
@@ -572,11 +577,13 @@ fn lloyd(sig: &[Vec<f64>], mut centres: Vec<Vec<f64>>, iters: usize) -> Vec<u32>
 }
 
 /// RMS residual of the vertices `idx` under their own best rigid motion.
-fn union_rms(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], idx: &[u32]) -> (f64, Motion) {
-    let m = fit(rest, frames, &[idx.to_vec()]).pop().unwrap_or(Motion {
-        r: Vec::new(),
-        t: Vec::new(),
-    });
+fn union_rms(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], idx: &[u32]) -> (f64, PartMotion) {
+    let m = fit(rest, frames, &[idx.to_vec()])
+        .pop()
+        .unwrap_or(PartMotion {
+            r: Vec::new(),
+            t: Vec::new(),
+        });
     let e: f64 = idx
         .par_iter()
         .map(|&v| err(rest, frames, &m, v as usize))
@@ -704,7 +711,7 @@ fn refine(
     }
     let count = split_connected(&mut labels, nb, 1);
     let members = members_of(&labels, count);
-    let (residual, motions): (Vec<f64>, Vec<Motion>) = members
+    let (residual, motions): (Vec<f64>, Vec<PartMotion>) = members
         .iter()
         .map(|idx| union_rms(rest, frames, idx))
         .unzip();
@@ -845,7 +852,7 @@ fn reassign(
     nb: &[Vec<u32>],
     labels: &mut Vec<u32>,
     count: &mut usize,
-    motions: &mut Vec<Motion>,
+    motions: &mut Vec<PartMotion>,
     rounds: usize,
     stop_below: usize,
 ) {

@@ -7,7 +7,7 @@
 //! regularised towards the parts' boundary centre `c` (a hinge fixes its
 //! axis, not the point along it).
 
-use super::decompose::Motion;
+use super::decompose::PartMotion;
 use glam::{DMat3, DVec3};
 
 /// A joint found between two parts.
@@ -25,7 +25,12 @@ pub struct PartJoint {
 
 /// The joint between motions `a` and `b`, regularised towards `centre`
 /// with weight `lambda` (relative to the data term's scale).
-pub(crate) fn joint_between(a: &Motion, b: &Motion, centre: DVec3, lambda: f64) -> PartJoint {
+pub(crate) fn joint_between(
+    a: &PartMotion,
+    b: &PartMotion,
+    centre: DVec3,
+    lambda: f64,
+) -> PartJoint {
     let frames = a.r.len().min(b.r.len());
     let mut ata = DMat3::ZERO;
     let mut atd = DVec3::ZERO;

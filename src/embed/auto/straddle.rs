@@ -30,7 +30,7 @@
 //!   the limb.
 
 use super::body::{Body, MIN_BEND_DEG};
-use super::decompose::{Motion, kabsch};
+use super::decompose::{PartMotion, kabsch};
 use super::humanoid::{Crossing, boundary_centre, geodesic};
 use super::joints::{PartJoint, joint_between};
 use glam::DVec3;
@@ -51,13 +51,13 @@ fn v3(p: [f64; 3]) -> DVec3 {
 
 /// The rigid motion (Kabsch per frame) of the rest vertices `idx` over
 /// `frames`.
-fn motion_of(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], idx: &[u32]) -> Motion {
+fn motion_of(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], idx: &[u32]) -> PartMotion {
     let (r, t) = frames.iter().map(|f| kabsch(rest, f, idx)).unzip();
-    Motion { r, t }
+    PartMotion { r, t }
 }
 
 /// Squared error of rest vertex `v` under `m`, summed over `frames`.
-fn err(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], m: &Motion, v: u32) -> f64 {
+fn err(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], m: &PartMotion, v: u32) -> f64 {
     let p = v3(rest[v as usize]);
     frames
         .iter()
@@ -72,7 +72,12 @@ fn err(rest: &[[f64; 3]], frames: &[&[[f64; 3]]], m: &Motion, v: u32) -> f64 {
 /// nearer and farther halves by `d`. Returns the halves' motions (nearer
 /// first) and each vertex's half (0: not in the part; 1: the nearer; 2:
 /// the farther); `None` when a half would be smaller than the least part.
-fn split_part(body: &Body, d: &[f64], part: u32, reach: f64) -> Option<(Motion, Motion, Vec<u8>)> {
+fn split_part(
+    body: &Body,
+    d: &[f64],
+    part: u32,
+    reach: f64,
+) -> Option<(PartMotion, PartMotion, Vec<u8>)> {
     let (rest, frames, dec) = (body.rest, body.frames, &body.dec);
     let n = rest.len();
     let mut idx: Vec<u32> = (0..n as u32)
@@ -158,7 +163,7 @@ pub(crate) fn split_knee(
 ) -> KneeCheck {
     let (rest, dec, nb) = (body.rest, &body.dec, body.nb);
     let (d, _) = geodesic(rest, nb, &[tip]);
-    let bend = |a: &Motion, b: &Motion, c: DVec3| joint_between(a, b, c, 0.05);
+    let bend = |a: &PartMotion, b: &PartMotion, c: DVec3| joint_between(a, b, c, 0.05);
     let at = knee.joint.position;
     if let Some((ma, mb, _)) = split_part(body, &d, knee.distal, reach) {
         let (inside, across) = (
