@@ -341,7 +341,7 @@ pub(crate) fn save_sparse(path: &Path, key: u64, s: &SparseSimilarity) -> Result
     write_atomic(path, |w| {
         w.write_all(SPARSE_MAGIC)?;
         w.write_all(&key.to_le_bytes())?;
-        w.write_all(&s.to_bytes())
+        s.write_to(w)
     })
 }
 

@@ -26,12 +26,15 @@
 //! the mesh): stored pairs `frames · (125 + 60 · P / S)` for `P` sequence
 //! pairs scanned of `S` sequences (within 14 % of the nine measured
 //! builds, 3,896 to 100,009 frames, full scans and reach 16), 280 per far
-//! pair; re-ranking 34 full measures per cheap transition descended; memory
-//! 128 MiB, each frame's descriptors and 32 bytes per stored pair (1.00 GB
-//! measured at 10⁴ frames, 0.99 GB estimated; 7.68 GB at 10⁵ with reach 16,
-//! 7.96 GB estimated; the builds under 5,000 frames up to 25 % over).
+//! pair; re-ranking 34 full measures per cheap transition descended. Memory
+//! (session 41, after the build stopped holding the stored pairs twice in
+//! the closure and once more while writing its cache): 64 MiB, each
+//! frame's descriptors (47.4 KB) and 22 bytes per stored pair (16 held,
+//! 4 while the rows are made, 10 % for the runs and the pairs'
+//! estimate); session 40's 128 MiB and 32 bytes a pair were 9 % low at
+//! 10⁵ frames (8.77 GB measured, 7.96 GB estimated).
 
-use super::histogram::{DESCRIPTOR_LEN, MAGNITUDES_LEN};
+use super::histogram::{DESCRIPTOR_LEN, PHI_SUB};
 use super::sparse::SparseOptions;
 use serde::Serialize;
 
@@ -57,14 +60,22 @@ const FAR_STORED: f64 = 280.0;
 /// (0.57 M for 66 sequence pairs at `rerank` 256, session 39; 36.9 M for
 /// 48,057 far pairs at 16, session 34: 34 and 48).
 const PER_DESCENT: f64 = 34.0;
-/// Bytes held whatever the frames (the program, the mesh, the graph).
-const BASE_BYTES: f64 = (128u64 << 20) as f64;
-/// Bytes per frame: its shape descriptor, the cheap descriptor's 550
-/// magnitudes while they are projected, and the projection.
-const FRAME_BYTES: f64 = (4 * (DESCRIPTOR_LEN + MAGNITUDES_LEN + 24)) as f64;
-/// Bytes per stored pair at the build's peak: column and value both ways,
-/// and the runs and values they are made from.
-const PAIR_BYTES: f64 = 32.0;
+/// Bytes held whatever the frames (the program, the mesh, the index's
+/// fixed part).
+const BASE_BYTES: f64 = (64u64 << 20) as f64;
+/// Bytes per frame held at the build's peak: its shape descriptor and
+/// norms (held through the closure, whose descents read them), and 1,600
+/// bytes of the rest (the projected descriptor, the nearest frames, the
+/// radius, the rows' offsets): fitted on main's 10⁴ and 10⁵ builds
+/// (47.4 KB a frame with 40 bytes a pair, session 41).
+const FRAME_BYTES: f64 = (4 * DESCRIPTOR_LEN + 8 * PHI_SUB + 1600) as f64;
+/// Bytes per stored pair at the build's peak (session 41): column and
+/// value both ways (16) and the value while the rows are made from the
+/// runs (4), with 10 % for the runs and for the stored-pair estimate (5 %
+/// low at 10⁵ frames). Session 40 took 32, fitted on builds that held the
+/// pairs twice in the closure (40 bytes: 8.77 GB measured at 10⁵ frames,
+/// 7.96 GB estimated).
+const PAIR_BYTES: f64 = 22.0;
 
 /// What a scan of some reach would compare and hold (estimates).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

@@ -45,6 +45,9 @@ use super::pair_scan;
 use super::tiled::{self, Run};
 use rayon::prelude::*;
 
+/// Bytes [`SparseSimilarity::write_to`] gathers before each write.
+const WRITE_CHUNK: usize = 1 << 16;
+
 /// Frames the principal axes are fitted on (evenly spaced).
 pub(crate) const PCA_SAMPLE: usize = 2048;
 
@@ -451,6 +454,13 @@ impl std::fmt::Debug for Stored {
 }
 
 impl Stored {
+    /// No pairs (held in memory).
+    fn empty() -> Stored {
+        Stored::Owned {
+            cols: Vec::new(),
+            vals: Vec::new(),
+        }
+    }
     fn len(&self) -> usize {
         match self {
             Stored::Owned { cols, .. } => cols.len(),
@@ -601,37 +611,53 @@ impl SparseSimilarity {
 
     /// The bytes of [`SparseSimilarity::from_bytes`] (little-endian): `n`,
     /// `dims`, sequences (name length, name, start, length), radius,
-    /// features, row offsets, columns, values.
-    pub(crate) fn to_bytes(&self) -> Vec<u8> {
-        let mut b = Vec::with_capacity(
-            32 + self.n * (12 + 4 * self.dims) + self.pairs.len() * 8 + self.spans.len() * 40,
-        );
-        let u64le = |b: &mut Vec<u8>, v: u64| b.extend_from_slice(&v.to_le_bytes());
-        u64le(&mut b, self.n as u64);
-        u64le(&mut b, self.dims as u64);
-        u64le(&mut b, self.spans.len() as u64);
+    /// features, row offsets, columns, values. Written to `w` in pieces of
+    /// at most [`WRITE_CHUNK`] bytes (issue 43, session 41: the whole file
+    /// as one buffer was a second copy of the stored pairs, 1.6 GB at 10⁵
+    /// frames, while the descriptors were still held).
+    pub(crate) fn write_to(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        let mut b: Vec<u8> = Vec::with_capacity(WRITE_CHUNK + 64);
+        let mut put = |b: &mut Vec<u8>, bytes: &[u8]| -> std::io::Result<()> {
+            b.extend_from_slice(bytes);
+            if b.len() >= WRITE_CHUNK {
+                w.write_all(b)?;
+                b.clear();
+            }
+            Ok(())
+        };
+        for v in [self.n, self.dims, self.spans.len()] {
+            put(&mut b, &(v as u64).to_le_bytes())?;
+        }
         for s in &self.spans {
-            u64le(&mut b, s.name.len() as u64);
-            b.extend_from_slice(s.name.as_bytes());
-            u64le(&mut b, s.start as u64);
-            u64le(&mut b, s.len as u64);
+            put(&mut b, &(s.name.len() as u64).to_le_bytes())?;
+            put(&mut b, s.name.as_bytes())?;
+            put(&mut b, &(s.start as u64).to_le_bytes())?;
+            put(&mut b, &(s.len as u64).to_le_bytes())?;
         }
         for v in self.radius.iter().chain(&self.features) {
-            b.extend_from_slice(&v.to_le_bytes());
+            put(&mut b, &v.to_le_bytes())?;
         }
         for o in &self.offsets {
-            u64le(&mut b, *o);
+            put(&mut b, &o.to_le_bytes())?;
         }
         for k in 0..self.pairs.len() {
-            b.extend_from_slice(&self.pairs.col(k).to_le_bytes());
+            put(&mut b, &self.pairs.col(k).to_le_bytes())?;
         }
         for k in 0..self.pairs.len() {
-            b.extend_from_slice(&self.pairs.val(k).to_le_bytes());
+            put(&mut b, &self.pairs.val(k).to_le_bytes())?;
         }
+        w.write_all(&b)
+    }
+
+    /// [`SparseSimilarity::write_to`] into memory.
+    #[cfg(test)]
+    pub(crate) fn to_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::new();
+        self.write_to(&mut b).expect("writing to memory");
         b
     }
 
-    /// Reads [`SparseSimilarity::to_bytes`] into memory; `Err` naming what
+    /// Reads [`SparseSimilarity::write_to`]'s bytes into memory; `Err` naming what
     /// is wrong (truncated, sizes that disagree, a value that is not a
     /// finite distance, a column out of range or out of order).
     pub fn from_bytes(bytes: &[u8]) -> Result<SparseSimilarity, String> {
@@ -656,7 +682,7 @@ impl SparseSimilarity {
         Ok(Self::with_pairs(h, Stored::Owned { cols, vals }))
     }
 
-    /// Reads [`SparseSimilarity::to_bytes`] from byte `at` of a mapped
+    /// Reads [`SparseSimilarity::write_to`]'s bytes from byte `at` of a mapped
     /// cache file, the pairs left in the map and read on demand. Checked on
     /// opening as [`SparseSimilarity::from_bytes`] checks, except each
     /// row's columns and values (that would read the whole file): the file
@@ -688,7 +714,7 @@ impl SparseSimilarity {
         }
     }
 
-    /// Everything of [`SparseSimilarity::to_bytes`] before the pairs, checked
+    /// Everything of [`SparseSimilarity::write_to`]'s bytes before the pairs, checked
     /// (sizes, sequences tiling the frames, rows in order, radius and
     /// descriptors finite), and where the pairs are.
     fn head(bytes: &[u8]) -> Result<Head, String> {
@@ -875,7 +901,7 @@ pub fn sparse_pairs(
     let seq = sequence_of(&spans, n);
     let (features, dims) = project(set, opts.dims);
     let copts = opts.candidates();
-    let found = index_candidates(&features, dims, &spans, &copts);
+    let mut found = index_candidates(&features, dims, &spans, &copts);
     let reached = found.reached.as_deref();
     let sequence_pairs = pair_scan::scanned_pairs(&spans, reached).len() as u64;
     let far_pairs = if opts.far > 0 && opts.per_pair > 0 {
@@ -947,11 +973,16 @@ pub fn sparse_pairs(
         counts[k] = c;
         runs.extend(merged);
     }
+    // The candidate lists are spent: only their runs are evaluated.
+    drop((per_pair, far, best, std::mem::take(&mut found.per_sequence)));
     let mut merged = merge_runs(runs);
     let total: u64 = merged.iter().map(|r| (r.r1 - r.r0 + 1) as u64).sum();
     progress.stage("sparse pairs compared", total);
     let values = tiled::evaluate(set, &merged, &step);
     let (offsets, cols, vals) = rows_of(n, &merged, &values);
+    // Freed before the closure (issue 43, session 41: this buffer lived to
+    // the end, 4 bytes a pair at the build's peak).
+    drop(values);
     let mut sim = SparseSimilarity {
         spans,
         n,
@@ -996,8 +1027,12 @@ impl super::closure::StoredPairs for SparseSimilarity {
 
 /// The closure's rounds on `sim`, whose pairs are `merged`'s
 /// ([`SparseOptions::closure`], [`super::closure`]): each round's true
-/// minima stored with their runs (the pairs stored already read, not
-/// evaluated again). Returns [`SparseStats::closure`].
+/// minima stored with their runs. Only the pairs not stored yet are
+/// evaluated (a stored value is the full measure's already), and they are
+/// merged into the stored rows in place ([`merge_rows`]): the rows are
+/// [`rows_of`] every run's, bit for bit, without a second copy of the
+/// stored pairs (issue 43, session 41: that copy and the values of every
+/// pair were the 10⁵-frame build's peak). Returns [`SparseStats::closure`].
 fn close(
     sim: &mut SparseSimilarity,
     merged: &mut Vec<Run>,
@@ -1018,22 +1053,117 @@ fn close(
         done[0] += 1;
         done[1] += seeds.len() as u64;
         let (runs, _) = runs_around(seeds.into_iter(), &sim.spans, seq, band, band);
-        let mut all = std::mem::take(merged);
-        all.extend(runs);
-        let all = merge_runs(all);
-        let total: u64 = all.iter().map(|r| r.len() as u64).sum();
+        let old = std::mem::take(merged);
+        let all = merge_runs(old.iter().copied().chain(runs).collect());
+        let fresh = runs_minus(&all, &old);
+        drop(old);
+        let total: u64 = fresh.iter().map(|r| r.len() as u64).sum();
         progress.stage("sparse pairs closed", total);
-        let known = super::closure::Known {
-            stored: &*sim,
-            full: set,
+        let values = tiled::evaluate(set, &fresh, &|k| progress.advance(k));
+        let added = rows_of(sim.n, &fresh, &values);
+        drop(values);
+        let (mut cols, mut vals) = match std::mem::replace(&mut sim.pairs, Stored::empty()) {
+            Stored::Owned { cols, vals } => (cols, vals),
+            mapped => {
+                let cols = (0..mapped.len()).map(|k| mapped.col(k)).collect();
+                let vals = (0..mapped.len()).map(|k| mapped.val(k)).collect();
+                (cols, vals)
+            }
         };
-        let values = tiled::evaluate(&known, &all, &|k| progress.advance(k));
-        let (offsets, cols, vals) = rows_of(sim.n, &all, &values);
-        sim.offsets = offsets;
+        merge_rows(&mut sim.offsets, &mut cols, &mut vals, &added);
         sim.pairs = Stored::Owned { cols, vals };
         *merged = all;
     }
     done
+}
+
+/// The pairs of `all` that are not in `old` (both sorted and merged as
+/// [`merge_runs`] leaves them, each run of `old` within one of `all`'s),
+/// as runs in the same order.
+fn runs_minus(all: &[Run], old: &[Run]) -> Vec<Run> {
+    let mut out = Vec::new();
+    let mut j = 0;
+    for r in all {
+        while j < old.len() && (old[j].diag, old[j].r1) < (r.diag, r.r0) {
+            j += 1;
+        }
+        let mut from = r.r0;
+        while j < old.len() && old[j].diag == r.diag && old[j].r0 <= r.r1 {
+            let o = old[j];
+            if o.r0 > from {
+                out.push(Run {
+                    diag: r.diag,
+                    r0: from,
+                    r1: o.r0 - 1,
+                });
+            }
+            from = from.max(o.r1.saturating_add(1));
+            if o.r1 > r.r1 {
+                break;
+            }
+            j += 1;
+        }
+        if from <= r.r1 {
+            out.push(Run {
+                diag: r.diag,
+                r0: from,
+                r1: r.r1,
+            });
+        }
+    }
+    out
+}
+
+/// Rows of a compressed sparse row matrix: offsets (one more than the
+/// rows), columns and values.
+type Rows = (Vec<u64>, Vec<u32>, Vec<f32>);
+
+/// `added`'s rows (pairs none of which the rows `offsets`/`cols`/`vals`
+/// hold; as many rows) merged into those rows in place, each row's columns
+/// ascending: the rows [`rows_of`] gives of both matrices' runs together.
+/// The buffers grow by `added`'s pairs only, and the rows move from the
+/// last one back (a row never moves below where it was), so no second copy
+/// of the stored pairs is held.
+fn merge_rows(offsets: &mut [u64], cols: &mut Vec<u32>, vals: &mut Vec<f32>, added: &Rows) {
+    let (aoff, acols, avals) = added;
+    let n = offsets
+        .len()
+        .saturating_sub(1)
+        .min(aoff.len().saturating_sub(1));
+    if acols.is_empty() || n == 0 {
+        return;
+    }
+    let old = cols.len();
+    cols.reserve_exact(acols.len());
+    vals.reserve_exact(avals.len());
+    cols.resize(old + acols.len(), 0);
+    vals.resize(old + avals.len(), 0.0);
+    for a in (0..n).rev() {
+        let (os, oe) = (offsets[a] as usize, offsets[a + 1] as usize);
+        let (fs, fe) = (aoff[a] as usize, aoff[a + 1] as usize);
+        let start = os + fs;
+        let mut d = oe + fe;
+        let (mut i, mut k) = (oe, fe);
+        while k > fs {
+            d -= 1;
+            if i > os && cols[i - 1] > acols[k - 1] {
+                i -= 1;
+                cols[d] = cols[i];
+                vals[d] = vals[i];
+            } else {
+                k -= 1;
+                cols[d] = acols[k];
+                vals[d] = avals[k];
+            }
+        }
+        if start != os {
+            cols.copy_within(os..i, start);
+            vals.copy_within(os..i, start);
+        }
+    }
+    for (o, f) in offsets.iter_mut().zip(aoff.iter()) {
+        *o += *f;
+    }
 }
 
 /// The transition search of the per-pair candidates: `per_pair` kept, the
@@ -1132,7 +1262,7 @@ fn merge_runs(mut runs: Vec<Run>) -> Vec<Run> {
 
 /// The runs' values stored both ways, row by row, columns ascending:
 /// row offsets, columns and values of a compressed sparse row matrix.
-fn rows_of(n: usize, merged: &[Run], values: &[f32]) -> (Vec<u64>, Vec<u32>, Vec<f32>) {
+fn rows_of(n: usize, merged: &[Run], values: &[f32]) -> Rows {
     let mut deg = vec![0u64; n + 1];
     for r in merged {
         for a in r.r0..=r.r1 {
@@ -1299,6 +1429,145 @@ pub(crate) mod tests {
             let (_, sparse) = both_ways(&set, &without, i, j);
             assert!(sparse.is_empty(), "({i}, {j}): {sparse:?}");
         }
+    }
+
+    /// Each pair's own value (tells pairs and directions' slots apart).
+    fn value_of(runs: &[Run]) -> Vec<f32> {
+        runs.iter()
+            .flat_map(|r| (r.r0..=r.r1).map(move |a| a as f32 * 1e-3 + r.diag as f32))
+            .collect()
+    }
+
+    /// Issue 43, session 41: the closure's rows made in place — the stored
+    /// rows, grown by the new pairs only — are [`rows_of`] every run's,
+    /// offsets, columns and values bit for bit; [`runs_minus`] gives
+    /// exactly the pairs not stored. On random runs (overlapping, touching,
+    /// nested, one-pair runs, rows with nothing new, a first round with
+    /// nothing stored) over 400 frames.
+    #[test]
+    fn new_pairs_merged_in_place_are_the_rows_of_every_run() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = move |m: u32| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % m as u64) as u32
+        };
+        let n = 400u32;
+        let mut random_runs = |k: usize, rnd: &mut dyn FnMut(u32) -> u32| -> Vec<Run> {
+            (0..k)
+                .map(|_| {
+                    let diag = 1 + rnd(60);
+                    let r0 = rnd(n - diag);
+                    let r1 = (r0 + rnd(30)).min(n - 1 - diag);
+                    Run { diag, r0, r1 }
+                })
+                .collect()
+        };
+        for round in 0..40 {
+            let old = if round == 0 {
+                Vec::new()
+            } else {
+                merge_runs(random_runs(1 + round * 3, &mut rnd))
+            };
+            let new = random_runs(1 + (round % 7) * 5, &mut rnd);
+            let all = merge_runs(old.iter().copied().chain(new).collect());
+            let fresh = runs_minus(&all, &old);
+            // The new runs hold exactly the pairs of `all` not in `old`.
+            let pairs = |runs: &[Run]| -> Vec<(u32, u32)> {
+                let mut p: Vec<(u32, u32)> = runs
+                    .iter()
+                    .flat_map(|r| (r.r0..=r.r1).map(move |a| (a, a + r.diag)))
+                    .collect();
+                p.sort_unstable();
+                p
+            };
+            let (po, pf, pa) = (pairs(&old), pairs(&fresh), pairs(&all));
+            assert!(pf.iter().all(|p| po.binary_search(p).is_err()), "{round}");
+            let mut both = [po.clone(), pf.clone()].concat();
+            both.sort_unstable();
+            assert_eq!(both, pa, "{round}");
+            let want = rows_of(n as usize, &all, &value_of(&all));
+            let (mut offsets, mut cols, mut vals) = rows_of(n as usize, &old, &value_of(&old));
+            let added = rows_of(n as usize, &fresh, &value_of(&fresh));
+            merge_rows(&mut offsets, &mut cols, &mut vals, &added);
+            assert_eq!(offsets, want.0, "{round}");
+            assert_eq!(cols, want.1, "{round}");
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&vals), bits(&want.2), "{round}");
+        }
+    }
+
+    /// Issue 43, session 41: the stored pairs written in pieces
+    /// ([`SparseSimilarity::write_to`]) are the file's layout byte for byte
+    /// (written here in one piece as before) and read back exactly, in
+    /// memory and mapped; a build with the closure stores each pair's full
+    /// measure both ways.
+    #[test]
+    fn the_stored_pairs_round_trip_exactly() {
+        use std::io::Write as _;
+        let set = Loop(
+            (0..2600)
+                .map(|t| {
+                    let a = t as f32 * std::f32::consts::TAU / (37.0 + (t / 500) as f32);
+                    [
+                        a.cos() + 0.003 * (t % 11) as f32,
+                        a.sin() * (1.0 + 0.01 * (t % 5) as f32),
+                    ]
+                })
+                .collect(),
+        );
+        let opts = SparseOptions {
+            neighbours: 6,
+            dims: 2,
+            ..SparseOptions::default()
+        };
+        let (s, stats) = sparse_pairs(&set, spans(&[700, 500, 900, 500]), &opts, &|_: u64| {});
+        assert!(stats.closure[0] > 0, "the closure ran: {:?}", stats.closure);
+        for a in 0..2600 {
+            for (b, v) in s.row(a) {
+                let (lo, hi) = (a.min(b as usize), a.max(b as usize));
+                assert_eq!(v.to_bits(), (set.distance(lo, hi) as f32).to_bits());
+            }
+        }
+        // The layout of session 40's one-buffer writer.
+        let mut want: Vec<u8> = Vec::new();
+        for v in [s.n, s.dims, s.spans.len()] {
+            want.extend((v as u64).to_le_bytes());
+        }
+        for sp in &s.spans {
+            want.extend((sp.name.len() as u64).to_le_bytes());
+            want.extend(sp.name.as_bytes());
+            want.extend((sp.start as u64).to_le_bytes());
+            want.extend((sp.len as u64).to_le_bytes());
+        }
+        for v in s.radius.iter().chain(&s.features) {
+            want.extend(v.to_le_bytes());
+        }
+        for o in &s.offsets {
+            want.extend(o.to_le_bytes());
+        }
+        for k in 0..s.pairs.len() {
+            want.extend(s.pairs.col(k).to_le_bytes());
+        }
+        for k in 0..s.pairs.len() {
+            want.extend(s.pairs.val(k).to_le_bytes());
+        }
+        assert!(want.len() > 3 * WRITE_CHUNK, "{} bytes", want.len());
+        let got = s.to_bytes();
+        assert!(got == want, "{} bytes against {}", got.len(), want.len());
+        assert_eq!(SparseSimilarity::from_bytes(&got).unwrap(), s);
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("sparse.bin");
+        crate::util::fsutil::write_atomic(&p, |w| {
+            w.write_all(&[0u8; 16])?;
+            s.write_to(w)
+        })
+        .unwrap();
+        assert_eq!(std::fs::read(&p).unwrap()[16..], want[..]);
+        let map = unsafe { memmap2::Mmap::map(&std::fs::File::open(&p).unwrap()) }.unwrap();
+        let mapped = SparseSimilarity::from_mapped(std::sync::Arc::new(map), 16).unwrap();
+        assert_eq!(mapped, s);
     }
 
     #[test]
