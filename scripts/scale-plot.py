@@ -37,7 +37,7 @@ def panel(x0, y0, w, h, xs, ys, title, unit):
     """One log-log panel at (x0, y0) of size w × h: the measurements, the
     guide lines through the first point, the step slopes."""
     lx = [math.log10(v) for v in xs]
-    gx0, gx1 = math.floor(min(lx) * 2 + 1e-3) / 2, math.ceil(max(lx) * 2 - 1e-3) / 2
+    gx0, gx1 = math.floor(min(lx) * 2 + 0.05) / 2, math.ceil(max(lx) * 2 - 0.05) / 2
     # Guides run from the first point to the last frame count: the y range
     # covers the measurements and the n and n² guides.
     n0, c0 = xs[0], ys[0]
@@ -82,9 +82,12 @@ def panel(x0, y0, w, h, xs, ys, title, unit):
     for k, (a, b) in enumerate(zip(xs, ys)):
         out.append(f'<circle cx="{X(a):.1f}" cy="{Y(b):.1f}" r="4.5" fill="#1d3557"/>')
         label = f"{b:,.0f}" if b >= 100 else f"{b:.1f}"
+        # Below right of each point; the first above it (the axis labels
+        # are below), the last to its left (the panel's edge).
         anchor = "end" if k == len(xs) - 1 else "start"
         dx = -8 if k == len(xs) - 1 else 8
-        out.append(f'<text x="{X(a) + dx:.1f}" y="{Y(b) + 18:.1f}" text-anchor="{anchor}" font-size="12" fill="#1d3557">{label}</text>')
+        dy = -10 if k == 0 else 18
+        out.append(f'<text x="{X(a) + dx:.1f}" y="{Y(b) + dy:.1f}" text-anchor="{anchor}" font-size="12" fill="#1d3557">{label}</text>')
     for k, s in enumerate(slopes(xs, ys)):
         mx = math.sqrt(xs[k] * xs[k + 1])
         my = math.sqrt(ys[k] * ys[k + 1])
