@@ -286,7 +286,7 @@ fn neck_and_head(
     let chin_h = chin.dot(up);
     let behind = chin - b.facing * 0.04 * h;
     let stump = headless
-        .then(|| super::stump::stump_top(lm, cx.p))
+        .then(|| super::stump::stump_top(lm, cx.p, cx.t))
         .flatten();
     // The neck 5 % of the height below the chin; a headless body's chin is
     // its stump's top, which lies between the neck joint and the chin:
