@@ -508,7 +508,9 @@ pub(crate) fn resolve_up(
         // embeds the rig; here it only leaves the axis undecided.
         let pos = topo.positions();
         // A headless body's chin: the top of its neck.
-        let lm = Landmarks::load(p, topo.vertex_count()).ok()?.completed(pos);
+        let lm = Landmarks::load(p, topo.vertex_count())
+            .ok()?
+            .completed(pos, topo.triangles());
         let (c, g) = (
             lm.point(Landmark::Chin, pos)?,
             lm.point(Landmark::Groin, pos)?,

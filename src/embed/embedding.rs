@@ -288,7 +288,7 @@ impl Embedding {
         let headless = lm.headless();
         let full;
         let lm = if headless {
-            full = lm.completed(p);
+            full = lm.completed(p, t);
             &full
         } else {
             lm

@@ -286,17 +286,17 @@ fn neck_and_head(
     let chin_h = chin.dot(up);
     let behind = chin - b.facing * 0.04 * h;
     let stump = headless
-        .then(|| super::stump::stump_top(lm, cx.p))
+        .then(|| super::stump::stump_top(lm, cx.p, cx.t))
         .flatten();
-    // The neck 5 % of the height below the chin; a headless body's chin is
-    // its stump's top, which lies between the neck joint and the chin:
-    // its neck as far below it unless the measurement override says
-    // otherwise ([`super::stump::neck_below_top`]).
-    let below = match stump {
-        Some(_) => super::stump::neck_below_top(),
-        None => 0.05,
+    // The neck 5 % of the height below the chin; a headless body's as far
+    // below its stump's top ring, which lies between the neck joint and
+    // the chin, unless the measurement override says otherwise
+    // ([`super::stump::neck_below_top`]), even when its head is on the
+    // cut's rim ([`super::stump::StumpTop::ring`]).
+    let neck_at = match stump {
+        Some(s) => s.ring - up * (super::stump::neck_below_top() * h),
+        None => b.at_height(behind, chin_h - 0.05 * h),
     };
-    let neck_at = b.at_height(behind, chin_h - below * h);
     j[C::Neck.index()] = cx.centre("neck", neck_at, up, neck_at, 0.08, neck_at);
     // A body without a head: its head joint at the top of the stump (the
     // cut's centroid; it was sought 3 % of the height above the chin, over

@@ -513,7 +513,7 @@ impl Landmarks {
     ) -> Result<Landmarks, LandmarkError> {
         let lm = Landmarks::load(path, mesh.vertex_count())?;
         let p = mesh.positions();
-        let full = lm.completed(p);
+        let full = lm.completed(p, mesh.triangles());
         let up = match (
             full.point(Landmark::Chin, p),
             full.point(Landmark::Groin, p),
@@ -536,11 +536,12 @@ impl Landmarks {
 
     /// The landmarks with, for a headless body ([`Landmarks::headless`]),
     /// the chin placed at the top of the neck on `positions`
-    /// ([`neck_top`]); a copy otherwise.
-    pub(crate) fn completed(&self, positions: &[[f64; 3]]) -> Landmarks {
+    /// ([`neck_top`], the mesh's `triangles` for an open cut's rim); a
+    /// copy otherwise.
+    pub(crate) fn completed(&self, positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Landmarks {
         let mut lm = self.clone();
         if self.headless()
-            && let Some(q) = neck_top(self, positions)
+            && let Some(q) = neck_top(self, positions, triangles)
         {
             lm.marks.insert(Landmark::Chin, Mark::Point(q));
         }

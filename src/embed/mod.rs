@@ -25,7 +25,7 @@ pub mod rigidity;
 pub mod scan_landmarks;
 pub mod section;
 pub mod skin;
-mod stump;
+pub(crate) mod stump;
 pub mod surface;
 
 pub use check::{EmbedCheck, check};

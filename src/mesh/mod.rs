@@ -1,6 +1,7 @@
 //! Triangle meshes, mesh sequences and their file formats.
 
 pub mod blend;
+pub mod boundary;
 pub mod components;
 mod error;
 pub mod frames;

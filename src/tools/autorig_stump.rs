@@ -5,7 +5,7 @@
 //! frame, and the heights along up of the rim's centre, the necks and the
 //! shoulders (the rig's and the fixture rig's, on the rest positions).
 
-use super::autorig_cut::CutRig;
+use super::autorig_cut::{CutRig, Outcome};
 use crate::embed::Embedding;
 use crate::rig::Canonical;
 use glam::DVec3;
@@ -63,6 +63,7 @@ pub fn neck_and_head(
         );
         if let Some(m) = &case.mesh {
             depths += &format!("; radii below the rim's centre: {}", radii(m.positions(), c, up, h));
+            depths += &rim_loops(case, m);
         }
         100.0 * at(mine, Canonical::Head).distance(c) / mine.height()
     });
@@ -91,4 +92,54 @@ fn radii(p: &[[f64; 3]], c: DVec3, up: DVec3, h: f64) -> String {
         .map(|r| format!("{r:.1}"))
         .collect::<Vec<_>>()
         .join(" ")
+}
+
+/// The cut body's boundary loops as the embedding reads them for its
+/// stump's top (`embed::stump::rim_loops` on the rest frame the rig chose,
+/// the automatic landmarks moved to it), the highest four: centroid off
+/// the axis, vertices' reach, below the top, from the arms (% height),
+/// and whether each passes at the default reach; empty unless rigged
+/// headless.
+fn rim_loops(case: &CutRig, m: &crate::mesh::Mesh) -> String {
+    use crate::embed::stump;
+    let Outcome::Rigged(b) = &case.outcome else {
+        return String::new();
+    };
+    let auto = &b.0;
+    if !auto.headless {
+        return String::new();
+    }
+    let (p, lm) = match auto.rest_frame.and_then(|r| case.frames.get(r)) {
+        Some(f) => (
+            f.as_slice(),
+            auto.landmarks.moved(m.positions(), f, m.triangles()),
+        ),
+        None => (m.positions(), auto.landmarks.clone()),
+    };
+    let mut loops = stump::rim_loops(&lm, p, m.triangles());
+    loops.sort_by(|a, b| a.below_top.total_cmp(&b.below_top));
+    let each: Vec<String> = loops
+        .iter()
+        .take(4)
+        .map(|l| {
+            format!(
+                "{} v, off {:.1}, reach {:.1}, below {:.1}, arms {:.1}{}",
+                l.vertices,
+                100.0 * l.off_axis,
+                100.0 * l.reach,
+                100.0 * l.below_top,
+                100.0 * l.from_arms,
+                if l.passes(stump::RIM_REACH) {
+                    " (passes)"
+                } else {
+                    ""
+                }
+            )
+        })
+        .collect();
+    format!(
+        "; boundary loops ({} in all, the highest first): {}",
+        loops.len(),
+        each.join("; ")
+    )
 }

@@ -188,7 +188,9 @@ impl FrameSample {
 /// `head=read|keep|axis|highest` ([`AutoOptions::read_head`], [`AutoOptions::head_axis`]),
 /// `neck=P` (a headless body's neck joint P % of the height below its
 /// stump's top, 0-10; default 5; read by the embedding:
-/// `crate::embed::stump`),
+/// `crate::embed::stump`), `rim=P` (how far across from the body's axis
+/// an open cut's rim may reach, P % of the height, 0-100; default 25; 0
+/// reads no rim, session 40's top ring alone; read by the embedding),
 /// `tips=centroid|centre|guarded` ([`AutoOptions::tip_seed`]),
 /// `patches=position|vertex0` (the rest frame's contact patches,
 /// [`crate::embed::contact::ContactOptions::seed_by_position`]), `max=N`.
@@ -223,7 +225,7 @@ pub(crate) fn apply_override(
     for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let bad = || {
             format!(
-                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, head=read|keep|axis|highest, neck=P, tips=centroid|centre|guarded, patches=position|vertex0, max=N)"
+                "{AUTORIG_ENV}: '{pair}' is not an option (rest=first|held|standing|standing-near|median, frames=in-order|farthest|quantiles|spread|median-quantiles, hip=thigh|trunk, facing=trunk|hips, seed=draws-N|consensus-N|vote-N|position|motion|index, salt=N, merge=greedy|settle|settle-split, knee=split|crossing, pivot=guarded|free, head=read|keep|axis|highest, neck=P, rim=P, tips=centroid|centre|guarded, patches=position|vertex0, max=N)"
             )
         };
         let (k, v) = pair.split_once('=').ok_or_else(bad)?;
@@ -263,6 +265,13 @@ pub(crate) fn apply_override(
                 v.parse::<f64>()
                     .ok()
                     .filter(|p| (0.0..=10.0).contains(p))
+                    .ok_or_else(bad)?;
+            }
+            // Read by the embedding (`embed::stump::rim_reach`).
+            "rim" => {
+                v.parse::<f64>()
+                    .ok()
+                    .filter(|p| (0.0..=100.0).contains(p))
                     .ok_or_else(bad)?;
             }
             "tips" => auto.tip_seed = super::centre::TipSeed::parse(v).ok_or_else(bad)?,
@@ -366,6 +375,7 @@ mod tests {
         apply_override("head=highest", &mut rule, &mut auto).unwrap();
         assert!(auto.read_head && !auto.head_axis);
         apply_override("head=axis,neck=5", &mut rule, &mut auto).unwrap();
+        apply_override("rim=0,rim=30", &mut rule, &mut auto).unwrap();
         assert!(auto.read_head && auto.head_axis);
         apply_override("head=keep", &mut rule, &mut auto).unwrap();
         assert!(!auto.read_head);
@@ -383,6 +393,8 @@ mod tests {
             "head=cut",
             "neck=11",
             "neck=x",
+            "rim=101",
+            "rim=x",
             "tips=middle",
             "seed=random",
             "seed=draws-0",
