@@ -382,33 +382,16 @@ mod tests {
             let first = 3 * 24;
             t.extend((0..24).map(|j| [first + j, first + (j + 1) % 24, tip]));
         }
-        let arm = DVec3::new(0.24, 0.0, 0.0);
-        tube(
-            &[
-                ring(arm + c(0.70), 0.03, 0.03, 0.0, 8),
-                ring(arm + c(0.90), 0.03, 0.03, 0.0, 8),
-            ],
-            &mut p,
-            &mut t,
-        );
-        let hand = DVec3::new(0.0, 0.0, 0.09);
-        tube(
-            &[
-                ring(hand + c(0.76), 0.02, 0.02, 0.0, 8),
-                ring(hand + c(0.84), 0.02, 0.02, 0.0, 8),
-            ],
-            &mut p,
-            &mut t,
-        );
-        let foot = DVec3::new(0.05, 0.0, 0.0);
-        tube(
-            &[
-                ring(foot + c(0.0), 0.03, 0.03, 0.0, 8),
-                ring(foot + c(0.06), 0.03, 0.03, 0.0, 8),
-            ],
-            &mut p,
-            &mut t,
-        );
+        // An arm's stump off to the side, a hand's hole in front of the
+        // chest, a foot's hole: short open tubes of 8 points a ring.
+        for (at, r, from, to) in [
+            (DVec3::new(0.24, 0.0, 0.0), 0.03, 0.70, 0.90),
+            (DVec3::new(0.0, 0.0, 0.09), 0.02, 0.76, 0.84),
+            (DVec3::new(0.05, 0.0, 0.0), 0.03, 0.0, 0.06),
+        ] {
+            let rings = [from, to].map(|y| ring(at + c(y), r, r, 0.0, 8));
+            tube(&rings, &mut p, &mut t);
+        }
         let mut lm = Landmarks::default();
         for (l, q) in [
             (Landmark::Groin, [0.0, 0.45, 0.0]),
