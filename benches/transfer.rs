@@ -19,7 +19,7 @@ use surfmotion::mesh::poisson::Poisson;
 use surfmotion::mesh::subdivide::midpoint;
 use surfmotion::transfer::confluent::orient_frames;
 use surfmotion::transfer::markers::generate;
-use surfmotion::transfer::{Job, MarkerOptions, MarkerSpec, SignMode, Source, prepare};
+use surfmotion::transfer::{Driving, Job, MarkerOptions, MarkerSpec, SignMode, prepare};
 
 use common::{data, median_ns, samba, samba_landmarks};
 
@@ -53,8 +53,8 @@ fn bench(c: &mut Criterion, d: &std::path::Path, cases: &[Case]) {
             .as_ref()
             .map(|p| load_mocap(p, &Default::default(), 30.0).unwrap());
         let source = || match &clip {
-            Some(c) => Source::Mocap(&c.poses, &c.reference),
-            None => Source::Template {
+            Some(c) => Driving::Mocap(&c.poses, &c.reference),
+            None => Driving::Template {
                 frames: &seq,
                 markers: &tmarkers,
                 reference: 0,

@@ -258,7 +258,7 @@ pub fn rigmap(
             m.rest_pose(&c).map_err(named)?;
             Detection::from_map(
                 m.clone(),
-                crate::rig::Source::MapFile,
+                crate::rig::Provenance::MapFile,
                 1.0,
                 "from the map file",
             )

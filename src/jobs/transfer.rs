@@ -719,9 +719,9 @@ fn scan_height(prepared: &PreparedScan) -> f64 {
     }
 }
 
-/// What drives the scan, read and owned (a [`crate::transfer::Source`]
+/// What drives the scan, read and owned (a [`crate::transfer::Driving`]
 /// borrows it).
-enum Driving {
+enum OwnedDriving {
     /// A clip's canonical poses.
     Mocap(Box<ClipQuery>),
     /// A template sequence with its markers.
@@ -736,7 +736,7 @@ enum Driving {
 /// The driving source read, its frame rate, its description and (a clip)
 /// its own head-to-trunk angles.
 struct LoadedDriving {
-    driving: Driving,
+    driving: OwnedDriving,
     fps: f64,
     what: String,
     /// The driving clip's own head-to-trunk angles: its head line
@@ -745,16 +745,16 @@ struct LoadedDriving {
 }
 
 impl LoadedDriving {
-    fn source(&self) -> crate::transfer::Source<'_> {
-        use crate::transfer::Source;
+    fn source(&self) -> crate::transfer::Driving<'_> {
+        use crate::transfer::Driving;
         match &self.driving {
-            Driving::Mocap(clip) => Source::Mocap(&clip.poses, &clip.reference),
-            Driving::Template {
+            OwnedDriving::Mocap(clip) => Driving::Mocap(&clip.poses, &clip.reference),
+            OwnedDriving::Template {
                 frames,
                 markers,
                 reference,
                 align,
-            } => Source::Template {
+            } => Driving::Template {
                 frames,
                 markers,
                 reference: *reference,
@@ -786,7 +786,7 @@ fn load_driving(
             ));
             let what = format!("{} ({} rig)", m.display(), clip.convention);
             Ok(LoadedDriving {
-                driving: Driving::Mocap(Box::new(clip)),
+                driving: OwnedDriving::Mocap(Box::new(clip)),
                 fps: spec.options.fps,
                 what,
                 clip_head,
@@ -863,7 +863,7 @@ fn load_template(
     };
     let fps = template.fps.unwrap_or(spec.options.fps);
     Ok(LoadedDriving {
-        driving: Driving::Template {
+        driving: OwnedDriving::Template {
             frames: template,
             markers: template_markers,
             reference: frame,

@@ -3,7 +3,7 @@
 
 use super::canonical::Canonical;
 use super::derive::Derive;
-use super::structure::{self, Source};
+use super::structure::{self, Provenance};
 use crate::mocap::{Clip, JointId};
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
@@ -327,7 +327,7 @@ pub struct JointReport {
     /// The clip's joint, or `None` when derived or missing.
     pub joint: Option<String>,
     /// Where it came from.
-    pub source: Source,
+    pub source: Provenance,
     /// Confidence in [0, 1].
     pub confidence: f64,
 }
@@ -361,7 +361,12 @@ pub struct Detection {
 impl Detection {
     /// A detection that reports `map` as given, every joint from `source`
     /// with confidence `confidence`.
-    pub(crate) fn from_map(map: RigMap, source: Source, confidence: f64, sides: &str) -> Detection {
+    pub(crate) fn from_map(
+        map: RigMap,
+        source: Provenance,
+        confidence: f64,
+        sides: &str,
+    ) -> Detection {
         let joints = Canonical::ALL
             .iter()
             .map(|c| JointReport {
@@ -370,7 +375,7 @@ impl Detection {
                 source: if map.joints.contains_key(c) {
                     source
                 } else {
-                    Source::Derived
+                    Provenance::Derived
                 },
                 confidence: if map.joints.contains_key(c) || map.derived.contains_key(c) {
                     confidence
@@ -432,7 +437,7 @@ pub fn detect(names: &[String]) -> Detection {
                 derived: BTreeMap::new(),
                 file: None,
             },
-            Source::Convention,
+            Provenance::Convention,
             0.0,
             "none",
         )
@@ -486,7 +491,7 @@ fn detect_scored(names: &[String], prefix: Option<&str>) -> Option<(f64, Detecti
                 derived: BTreeMap::new(),
                 file: None,
             };
-            let mut d = Detection::from_map(map, Source::Convention, 1.0, "from names");
+            let mut d = Detection::from_map(map, Provenance::Convention, 1.0, "from names");
             d.signature = signature;
             best = Some((score, d));
         }
@@ -750,7 +755,7 @@ fn by_names_checked(
         derived: BTreeMap::new(),
         file: None,
     };
-    let mut d = Detection::from_map(map, Source::Names, 0.9, "");
+    let mut d = Detection::from_map(map, Provenance::Names, 0.9, "");
     d.structure_pose = pose_note(b);
     d.sides = format!(
         "from geometry (forward from the {}, confidence {:.2}); the names' left/right are mirrored",
@@ -769,7 +774,7 @@ fn by_structure(names: &[String], b: &structure::Body) -> Detection {
     for (c, p) in Canonical::ALL.iter().zip(&b.picks) {
         if let Some(j) = p.joint {
             joints.insert(*c, names[j].clone());
-            all_named &= p.source == Source::Names;
+            all_named &= p.source == Provenance::Names;
         } else if let Some(d) = &p.derive {
             derived.insert(*c, d.clone());
         }
@@ -853,7 +858,7 @@ fn chest_at_branch(d: &mut Detection, clip: &Clip, b: &structure::Body) {
             d.map.joints.insert(Canonical::Chest, name.clone());
             if let Some(r) = d.joints.get_mut(Canonical::Chest.index()) {
                 r.joint = Some(name);
-                r.source = Source::Structure;
+                r.source = Provenance::Structure;
             }
             return;
         }

@@ -14,4 +14,7 @@ pub use map::{
     BY_NAMES, BY_STRUCTURE, CONVENTIONS, Convention, Detection, JointReport, RigError, RigMap,
     detect, detect_clip, normalise_name,
 };
-pub use structure::Source;
+pub use structure::Provenance;
+/// The old name of [`Provenance`].
+#[deprecated(note = "renamed `Provenance` (issue 40: `Source` names a live input stream)")]
+pub type Source = Provenance;

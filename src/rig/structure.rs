@@ -54,10 +54,11 @@ use super::names::{Role, Side, is_helper, role, side};
 use crate::mocap::Clip;
 use glam::{DQuat, DVec3};
 
-/// Where a canonical joint came from.
+/// Where a canonical joint came from (its provenance: `Source` is the
+/// name of a live input stream, [`crate::live::source::Source`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Source {
+pub enum Provenance {
     /// A known convention's names.
     Convention,
     /// Name tokens (inside the chain structure found).
@@ -76,7 +77,7 @@ pub struct Pick {
     /// The clip joint (None when derived).
     pub joint: Option<usize>,
     /// How it was chosen.
-    pub source: Source,
+    pub source: Provenance,
     /// Confidence in [0, 1].
     pub confidence: f64,
     /// The derivation rule when there is no joint.
@@ -952,7 +953,7 @@ fn body(
     let mut picks: Vec<Pick> = (0..Canonical::COUNT)
         .map(|_| Pick {
             joint: None,
-            source: Source::Structure,
+            source: Provenance::Structure,
             confidence: 0.0,
             derive: None,
         })
@@ -1004,9 +1005,9 @@ fn set_pick(picks: &mut [Pick], c: Canonical, j: usize, named: bool) {
     picks[c.index()] = Pick {
         joint: Some(j),
         source: if named {
-            Source::Names
+            Provenance::Names
         } else {
-            Source::Structure
+            Provenance::Structure
         },
         confidence: if named { 0.95 } else { 0.8 },
         derive: None,
@@ -1017,7 +1018,7 @@ fn set_pick(picks: &mut [Pick], c: Canonical, j: usize, named: bool) {
 fn derive_pick(picks: &mut [Pick], c: Canonical, d: Derive) {
     picks[c.index()] = Pick {
         joint: None,
-        source: Source::Derived,
+        source: Provenance::Derived,
         confidence: 0.5,
         derive: Some(d),
     };

@@ -197,7 +197,7 @@ fn inspect_mocap(
     let det = match &opts.mocap.rig_map {
         Some(m) => Ok(crate::rig::Detection::from_map(
             m.clone(),
-            crate::rig::Source::MapFile,
+            crate::rig::Provenance::MapFile,
             1.0,
             "from the map file",
         )),

@@ -16,8 +16,9 @@ use crate::pose::retarget::{
 use glam::{DMat3, DQuat, DVec3};
 use std::collections::HashMap;
 
-/// What drives the scan.
-pub enum Source<'a> {
+/// What drives the scan: a clip's poses or a moving template, borrowed
+/// (`Source` names a live input stream, [`crate::live::source::Source`]).
+pub enum Driving<'a> {
     /// Canonical poses of a clip (metres, Y-up) and its neutral reference,
     /// as [`crate::drive::query::load_mocap`] gives them.
     Mocap(&'a [Pose], &'a ClipNeutral),
@@ -243,7 +244,7 @@ impl Job {
     }
 
     /// Pairs markers, factors the scan and computes the marker motion.
-    pub fn new(scan: &PreparedScan, source: Source<'_>) -> Result<Job, SetupError> {
+    pub fn new(scan: &PreparedScan, source: Driving<'_>) -> Result<Job, SetupError> {
         let p = scan.mesh.positions();
         let centroid = |m: &Marker| {
             scan.mesh.triangles()[m.triangle as usize]
@@ -253,7 +254,7 @@ impl Job {
                 / 3.0
         };
         match source {
-            Source::Mocap(poses, reference) => {
+            Driving::Mocap(poses, reference) => {
                 let (confluent, used) = Job::factor_mocap(scan)?;
                 let motion = mocap_motion(scan, poses, reference)?;
                 Ok(Job {
@@ -263,7 +264,7 @@ impl Job {
                     used,
                 })
             }
-            Source::Template {
+            Driving::Template {
                 frames,
                 markers,
                 reference,

@@ -18,7 +18,10 @@ pub mod signs;
 pub mod source;
 
 pub use confluent::{Confluent, ConfluentError};
-pub use job::{Job, SetupError, Source, alignment, mocap_motion, up_axis};
+pub use job::{Driving, Job, SetupError, alignment, mocap_motion, up_axis};
+/// The old name of [`Driving`].
+#[deprecated(note = "renamed `Driving` (issue 40: `Source` names a live input stream)")]
+pub type Source<'a> = Driving<'a>;
 pub use markers::{Marker, MarkerError, MarkerFile, MarkerOptions};
 pub use run::{TransferOptions, TransferStats, transfer, transfer_into};
 pub use scan::{MarkerSpec, PreparedScan, ScanError, prepare};

@@ -14,7 +14,7 @@ use surfmotion::mocap::bvh::{BvhOptions, format_bvh, parse_bvh};
 use surfmotion::mocap::{Channel, Clip, Joint, JointId, PointConvention, Units, UpAxis};
 use surfmotion::pose::Pose;
 use surfmotion::rig::load_clip;
-use surfmotion::rig::{Canonical, RigError, RigMap, Source, detect_clip};
+use surfmotion::rig::{Canonical, Provenance, RigError, RigMap, detect_clip};
 
 /// A joint of an edited hierarchy: where its per-frame data comes from.
 #[derive(Clone)]
@@ -562,7 +562,7 @@ fn toeless_and_headless_skeletons_derive_the_missing_joints() {
             }
             assert!(d.derived.contains(&k), "{what}: {k:?} not derived");
             let r = d.joints.iter().find(|j| j.canonical == k).unwrap();
-            assert_eq!(r.source, Source::Derived);
+            assert_eq!(r.source, Provenance::Derived);
             assert!((0.0..=1.0).contains(&r.confidence));
         }
         let got = (
@@ -1658,7 +1658,7 @@ fn generated_rig_families_map_like_the_original_clip() {
                 // name tokens inside the structure found).
                 for j in &d.joints {
                     assert!(
-                        matches!(j.source, Source::Convention | Source::Names),
+                        matches!(j.source, Provenance::Convention | Provenance::Names),
                         "{what}: {} from {:?}",
                         j.canonical.name(),
                         j.source

@@ -11,7 +11,7 @@ use surfmotion::mesh::io::{LoadOptions, load_sequence};
 use surfmotion::pose::Pose;
 use surfmotion::pose::retarget::choose_reference;
 use surfmotion::rig::Canonical as C;
-use surfmotion::transfer::{Job, MarkerOptions, MarkerSpec, Source, prepare, transfer};
+use surfmotion::transfer::{Driving, Job, MarkerOptions, MarkerSpec, prepare, transfer};
 
 /// The scan's own skeleton standing as at rest for `still` frames, then
 /// rising onto the ball of its left foot by `deg` (the ankle turned up
@@ -40,7 +40,7 @@ fn solve(
     poses: &[Pose],
 ) -> Vec<[f64; 3]> {
     let reference = choose_reference(Some(rest), poses).unwrap();
-    let mut job = Job::new(prepared, Source::Mocap(poses, &reference)).unwrap();
+    let mut job = Job::new(prepared, Driving::Mocap(poses, &reference)).unwrap();
     transfer(
         &job.confluent,
         &mut job.motion,

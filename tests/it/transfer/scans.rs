@@ -13,7 +13,7 @@ use surfmotion::mesh::{Mesh, MeshSequence};
 use surfmotion::tools::eval::vertex_error;
 use surfmotion::transfer::markers::generate;
 use surfmotion::transfer::{
-    Job, MarkerOptions, MarkerSpec, SignMode, Source, TransferOptions, TransferStats, prepare,
+    Driving, Job, MarkerOptions, MarkerSpec, SignMode, TransferOptions, TransferStats, prepare,
     transfer,
 };
 
@@ -46,7 +46,7 @@ fn self_transfer(
     let tmarkers = generate(&template.frame_mesh(0), rig, &opts);
     let mut job = Job::new(
         &prepared,
-        Source::Template {
+        Driving::Template {
             frames: template,
             markers: &tmarkers,
             reference: 0,
@@ -216,7 +216,7 @@ fn walk_on(name: &str, scan: &Mesh, landmarks: &str, clip: &Path) {
         prepared.markers.len()
     );
     let clip = load_mocap(clip, &Default::default(), 30.0).unwrap();
-    let mut job = Job::new(&prepared, Source::Mocap(&clip.poses, &clip.reference)).unwrap();
+    let mut job = Job::new(&prepared, Driving::Mocap(&clip.poses, &clip.reference)).unwrap();
     let (out, stats) = transfer(
         &job.confluent,
         &mut job.motion,
@@ -336,7 +336,7 @@ fn raw_scans_are_repaired_and_stray_pieces_dropped() {
     let tm = generate(&prepared.mesh, rig, &MarkerOptions::default());
     let mut job = Job::new(
         &prepared,
-        Source::Template {
+        Driving::Template {
             frames: &tpl,
             markers: &tm,
             reference: 0,
@@ -383,7 +383,7 @@ fn a_performance_moves_onto_another_character() {
     let tm = generate(&samba.frame_mesh(0), &srig, &opts);
     let mut job = Job::new(
         &prepared,
-        Source::Template {
+        Driving::Template {
             frames: &samba,
             markers: &tm,
             reference: 0,
