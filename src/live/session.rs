@@ -333,12 +333,14 @@ pub struct Session<'a> {
     /// (issue 45: no allocation in its clip-level steps per frame).
     kernel_ws: KernelWorkspace,
     /// The placement's window (decided frames and the continuation), its
-    /// queries, buffers and result, reused by every output frame.
+    /// queries, buffers and result, and the analysis window's rotations,
+    /// reused by every frame.
     place: PlaceBuffers,
 }
 
-/// The buffers of an output frame's placement over its window, reused
-/// from frame to frame ([`Session::blend_into`]).
+/// The buffers of an output frame's placement over its window
+/// ([`Session::blend_into`]) and of an arriving frame's rotations
+/// ([`Session::push`]), reused from frame to frame (issue 45).
 #[derive(Default)]
 struct PlaceBuffers {
     window: Vec<FlatFrame>,
@@ -346,6 +348,8 @@ struct PlaceBuffers {
     timeline: Timeline,
     scratch: PlacementScratch,
     placed: Vec<Floor>,
+    /// The analysis window's rotations ([`Session::push`]).
+    rotations: Vec<JointRotations>,
 }
 
 impl<'a> Session<'a> {
@@ -455,9 +459,15 @@ impl<'a> Session<'a> {
         self.raw_rotations.push_back(rotations.copied());
         self.received += 1;
         let from_start = self.received == self.raw.len();
-        let rots: Option<Vec<JointRotations>> = self.raw_rotations.iter().copied().collect();
+        // The window's rotations (none unless every frame has them), in
+        // a buffer kept from frame to frame.
+        let rots = &mut self.place.rotations;
+        rots.clear();
+        if self.raw_rotations.iter().all(Option::is_some) {
+            rots.extend(self.raw_rotations.iter().flatten().copied());
+        }
         let reference = ClipNeutral {
-            rotations: Arc::from(rots.unwrap_or_default()),
+            rotations: Arc::from(&rots[..]),
             // A reference frame of the stream is the window's frame of the
             // same index only while the window starts at the stream's first
             // frame (the kernel reads `Frame(i)` as the window's frame i);

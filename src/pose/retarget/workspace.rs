@@ -140,7 +140,7 @@ mod tests {
         let offsets = stance_offsets_in(character, &reference, clip, &given, ws);
         calls += allocation_calls() - before;
         assert_eq!(offsets, &fresh[..]);
-        assert!(fresh.iter().any(|&o| o == 0.0), "no frame on the floor");
+        assert!(fresh.contains(&0.0), "no frame on the floor");
         calls - extra
     }
 
