@@ -89,3 +89,11 @@ pub mod untangle;
 pub use deformer::{DeformWorkspace, Deformer, RegionResult};
 pub use options::{DeformMode, DeformOptions, RepairBudget, RepairTurns, TurnedOver};
 pub use regions::{Held, part_joint};
+
+/// This thread's allocation calls so far in the library's tests (outside
+/// faer's symbolic analysis; [`patch_solve::counted`]): other modules'
+/// tests of what allocates per frame read it too (issue 45).
+#[cfg(test)]
+pub(crate) fn allocation_calls() -> usize {
+    patch_solve::counted::calls()[0]
+}

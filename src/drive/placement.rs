@@ -122,13 +122,48 @@ pub(crate) fn placements(
     query: &[Pose],
     smooth: usize,
 ) -> Vec<Floor> {
+    let mut out = Vec::with_capacity(frames.len().min(query.len()));
+    let scratch = &mut PlacementScratch::default();
+    placements_into(ch, (path, frames, query), smooth, scratch, &mut out);
+    out
+}
+
+/// The buffers [`placements_into`] reuses from one window to the next (a
+/// live session's; cleared before use).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PlacementScratch {
+    /// Each frame's placement before smoothing.
+    raw: Vec<Floor>,
+    /// Their turns, unwrapped.
+    unwrapped: Vec<f64>,
+    /// Each frame's segment (between jumps).
+    segment: Vec<usize>,
+}
+
+/// [`placements`] into `out` (cleared), with `scratch` its buffers: no
+/// allocation once they and `out` hold the window's frames.
+pub(crate) fn placements_into(
+    ch: &Character,
+    (path, frames, query): (&[FlatFrame], &[OutFrame], &[Pose]),
+    smooth: usize,
+    scratch: &mut PlacementScratch,
+    out: &mut Vec<Floor>,
+) {
+    let PlacementScratch {
+        raw,
+        unwrapped,
+        segment,
+    } = scratch;
     // Placement of each output frame's primary source, smoothed.
-    let raw: Vec<Floor> = frames
-        .iter()
-        .zip(query)
-        .map(|(o, q)| Floor::fit(ch.pose(o.primary()), q))
-        .collect();
-    let mut unwrapped: Vec<f64> = raw.iter().map(|f| f.theta).collect();
+    raw.clear();
+    raw.extend(
+        frames
+            .iter()
+            .zip(query)
+            .map(|(o, q)| Floor::fit(ch.pose(o.primary()), q)),
+    );
+    unwrapped.clear();
+    unwrapped.extend(raw.iter().map(|f| f.theta));
     for k in 1..unwrapped.len() {
         let d = unwrapped[k] - unwrapped[k - 1];
         unwrapped[k] -= (d / std::f64::consts::TAU).round() * std::f64::consts::TAU;
@@ -136,25 +171,25 @@ pub(crate) fn placements(
     // Frames of one segment (between jumps) share their capture's world
     // frame, so their placements can be averaged; across a jump they
     // cannot (the two captures stand in different places).
-    let mut segment = vec![0usize; frames.len()];
+    segment.clear();
+    segment.resize(frames.len(), 0);
     for k in 1..frames.len() {
         segment[k] = segment[k - 1] + usize::from(!timeline::plays_on(ch, path[k - 1], path[k]));
     }
-    (0..raw.len())
-        .map(|k| {
-            let mut a = k.saturating_sub(smooth);
-            let mut b = (k + smooth + 1).min(raw.len());
-            while segment[a] != segment[k] {
-                a += 1;
-            }
-            while segment[b - 1] != segment[k] {
-                b -= 1;
-            }
-            let w = (b - a) as f64;
-            Floor {
-                theta: unwrapped[a..b].iter().sum::<f64>() / w,
-                t: raw[a..b].iter().map(|f| f.t).sum::<DVec3>() / w,
-            }
-        })
-        .collect()
+    out.clear();
+    out.extend((0..raw.len()).map(|k| {
+        let mut a = k.saturating_sub(smooth);
+        let mut b = (k + smooth + 1).min(raw.len());
+        while segment[a] != segment[k] {
+            a += 1;
+        }
+        while segment[b - 1] != segment[k] {
+            b -= 1;
+        }
+        let w = (b - a) as f64;
+        Floor {
+            theta: unwrapped[a..b].iter().sum::<f64>() / w,
+            t: raw[a..b].iter().map(|f| f.t).sum::<DVec3>() / w,
+        }
+    }));
 }

@@ -27,8 +27,8 @@ use crate::mesh::Mesh;
 use crate::mesh::blend::Blender;
 use crate::pose::Pose;
 use crate::pose::retarget::{
-    CharacterNeutral, ClipNeutral, Given, OnCharacter, character_neutral, on_character_given,
-    stance_offsets_given,
+    CharacterNeutral, ClipNeutral, Given, KernelWorkspace, OnCharacter, character_neutral,
+    on_character_in, stance_offsets_in,
 };
 use glam::DVec3;
 use serde::Serialize;
@@ -105,12 +105,24 @@ impl Analysed {
         reference: &ClipNeutral,
         mocap: &[Pose],
     ) -> Analysed {
-        Analysed::on_given(ch, neutral, floor_lift, reference, mocap, &Given::default())
+        let ws = &mut KernelWorkspace::new();
+        Analysed::on_given(
+            ch,
+            neutral,
+            floor_lift,
+            reference,
+            mocap,
+            &Given::default(),
+            ws,
+        )
     }
 
     /// [`Analysed::new`] with what the caller decides instead of the pose
     /// kernel over `mocap` ([`Given`]: the levelling, the floor, the
-    /// supports; a live session's decisions over its stream).
+    /// supports; a live session's decisions over its stream), the pose
+    /// kernel's clip-level steps in the buffers of `ws` (a live session's,
+    /// reused from frame to frame: the result is the same whatever it
+    /// held).
     pub(crate) fn on_given(
         ch: &Character,
         neutral: &Pose,
@@ -118,16 +130,18 @@ impl Analysed {
         reference: &ClipNeutral,
         mocap: &[Pose],
         given: &Given<'_>,
+        ws: &mut KernelWorkspace,
     ) -> Analysed {
         let t = Instant::now();
-        let on_character = on_character_given(ch.rest_pose(), neutral, reference, mocap, given);
+        let rest = ch.rest_pose();
+        let on_character = on_character_in(rest, neutral, reference, mocap, given, ws);
         let lift = DVec3::new(0.0, floor_lift, 0.0);
         let query: Vec<Pose> = on_character
             .frames
             .iter()
             .map(|(p, _)| p.map(|q| q + lift))
             .collect();
-        let raised = stance_offsets_given(ch.rest_pose(), reference, mocap, given);
+        let raised = stance_offsets_in(rest, reference, mocap, given, ws);
         // With the feet on the clip's footfalls, retrieval compares the
         // poses before (issue 44: CMU 03_02 on samba chose other frames).
         let free: Option<Vec<Pose>> = on_character
@@ -236,14 +250,15 @@ impl Prepared {
         Analysed::new(ch, &self.neutral.pose, self.floor_lift, reference, mocap)
     }
 
-    /// [`Prepared::analyse`] with what the caller decides
-    /// ([`Analysed::on_given`]).
+    /// [`Prepared::analyse`] with what the caller decides, in the
+    /// buffers of `ws` ([`Analysed::on_given`]).
     pub(crate) fn analyse_given(
         &self,
         ch: &Character,
         reference: &ClipNeutral,
         mocap: &[Pose],
         given: &Given<'_>,
+        ws: &mut KernelWorkspace,
     ) -> Analysed {
         Analysed::on_given(
             ch,
@@ -252,6 +267,7 @@ impl Prepared {
             reference,
             mocap,
             given,
+            ws,
         )
     }
 }

@@ -117,19 +117,49 @@ pub fn timeline(
     db: &dyn Frames,
     opts: &TimelineOptions,
 ) -> (Vec<OutFrame>, Vec<Jump>) {
+    let mut t = Timeline::default();
+    timeline_into(path, db, opts, &mut t);
+    (t.out, t.jumps)
+}
+
+/// [`timeline`]'s result and buffers, reused from one path to the next
+/// (a live session's window; cleared before use).
+#[derive(Debug, Clone, Default)]
+pub struct Timeline {
+    /// The output frames.
+    pub out: Vec<OutFrame>,
+    /// The jumps.
+    pub jumps: Vec<Jump>,
+    /// Each output frame's sequence and time, and a run's times.
+    tau: Vec<(usize, f64)>,
+    run: Vec<f64>,
+}
+
+/// [`timeline`] into `t` (its output frames and jumps): no allocation
+/// once its buffers hold the path's frames and jumps.
+pub fn timeline_into(
+    path: &[FlatFrame],
+    db: &dyn Frames,
+    opts: &TimelineOptions,
+    t: &mut Timeline,
+) {
+    let Timeline {
+        out,
+        jumps,
+        tau,
+        run,
+    } = t;
     let nq = path.len();
     let succ = |id: FlatFrame| {
         let (s, t) = db.frame_of(id);
         (t + 1 < db.len(s)).then(|| db.flat_id(s, t + 1))
     };
     // Sequence and time of each output frame.
-    let mut tau: Vec<(usize, f64)> = path
-        .iter()
-        .map(|&id| {
-            let (s, t) = db.frame_of(id);
-            (s, t as f64)
-        })
-        .collect();
+    tau.clear();
+    tau.extend(path.iter().map(|&id| {
+        let (s, t) = db.frame_of(id);
+        (s, t as f64)
+    }));
     if opts.interpolate {
         let mut k0 = 0;
         while k0 < nq {
@@ -149,32 +179,10 @@ pub fn timeline(
     // Smooth time within each run that plays on, so a skipped frame
     // becomes a brief speed-up rather than a doubled step.
     if opts.interpolate {
-        let mut k0 = 0;
-        while k0 < nq {
-            let mut k1 = k0 + 1;
-            while k1 < nq && plays_on(db, path[k1 - 1], path[k1]) {
-                k1 += 1;
-            }
-            let run: Vec<f64> = tau[k0..k1].iter().map(|t| t.1).collect();
-            for k in k0 + 1..k1.saturating_sub(1) {
-                let a = (k - 1).max(k0);
-                let b = (k + 2).min(k1);
-                let w = if b - a == 3 {
-                    [0.25, 0.5, 0.25]
-                } else {
-                    [0.0, 1.0, 0.0]
-                };
-                tau[k].1 = if b - a == 3 {
-                    w[0] * run[a - k0] + w[1] * run[a + 1 - k0] + w[2] * run[a + 2 - k0]
-                } else {
-                    run[k - k0]
-                };
-            }
-            k0 = k1;
-        }
+        smooth_runs(path, db, tau, run);
     }
     // Jumps (a repeat, the next frame or a skip of one frame plays on).
-    let mut jumps: Vec<Jump> = Vec::new();
+    jumps.clear();
     for k in 1..nq {
         let (a, b) = (path[k - 1], path[k]);
         if plays_on(db, a, b) {
@@ -213,19 +221,17 @@ pub fn timeline(
             out.push(db.flat_id(s, f + 1), w * frac);
         }
     };
-    let mut out: Vec<OutFrame> = tau
-        .iter()
-        .map(|&(s, t)| {
-            let mut o = OutFrame {
-                sources: [(FlatFrame::default(), 0.0); 4],
-                count: 0,
-            };
-            split(&mut o, s, t, 1.0);
-            o
-        })
-        .collect();
+    out.clear();
+    out.extend(tau.iter().map(|&(s, t)| {
+        let mut o = OutFrame {
+            sources: [(FlatFrame::default(), 0.0); 4],
+            count: 0,
+        };
+        split(&mut o, s, t, 1.0);
+        o
+    }));
     if opts.blend {
-        for j in &jumps {
+        for j in jumps.iter() {
             let (sa, ta) = db.frame_of(j.from);
             let (sb, tb) = db.frame_of(j.to);
             // B's time = A's time + offset (frame `to − 1` pairs with `from`).
@@ -250,7 +256,38 @@ pub fn timeline(
             }
         }
     }
-    (out, jumps)
+}
+
+/// Smooths the times `tau` of `path` within each run that plays on with
+/// a (¼, ½, ¼) filter (`run`, a buffer for a run's times).
+fn smooth_runs(path: &[FlatFrame], db: &dyn Frames, tau: &mut [(usize, f64)], run: &mut Vec<f64>) {
+    let nq = path.len();
+    run.clear();
+    run.reserve(nq);
+    let mut k0 = 0;
+    while k0 < nq {
+        let mut k1 = k0 + 1;
+        while k1 < nq && plays_on(db, path[k1 - 1], path[k1]) {
+            k1 += 1;
+        }
+        run.clear();
+        run.extend(tau[k0..k1].iter().map(|t| t.1));
+        for k in k0 + 1..k1.saturating_sub(1) {
+            let a = (k - 1).max(k0);
+            let b = (k + 2).min(k1);
+            let w = if b - a == 3 {
+                [0.25, 0.5, 0.25]
+            } else {
+                [0.0, 1.0, 0.0]
+            };
+            tau[k].1 = if b - a == 3 {
+                w[0] * run[a - k0] + w[1] * run[a + 1 - k0] + w[2] * run[a + 2 - k0]
+            } else {
+                run[k - k0]
+            };
+        }
+        k0 = k1;
+    }
 }
 
 #[cfg(test)]

@@ -312,11 +312,40 @@ pub(crate) fn relax_row(
     edge: &dyn Fn(FlatFrame, FlatFrame) -> f64,
     jump: f64,
 ) -> (Vec<f64>, Vec<(u32, bool)>) {
+    let (mut next, mut bp) = (Vec::new(), Vec::new());
+    let out = (&mut next, &mut bp);
+    relax_row_into(db, opts, prev, cost, row, slot, (node, edge, jump), out);
+    (next, bp)
+}
+
+/// [`relax_row`]'s `node`, `edge` and `jump`.
+pub(crate) type RowCosts<'a> = (
+    &'a dyn Fn(f32) -> f64,
+    &'a dyn Fn(FlatFrame, FlatFrame) -> f64,
+    f64,
+);
+
+/// [`relax_row`] into `next` and `bp` (cleared and refilled: the row's
+/// costs and back pointers), `node`, `edge` and `jump` as there: no
+/// allocation once both hold the row's nodes (a live session's trellis).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn relax_row_into(
+    db: &TrellisInput,
+    opts: &TrellisOptions,
+    prev: &[(f32, FlatFrame)],
+    cost: &[f64],
+    row: &[(f32, FlatFrame)],
+    slot: &mut [u32],
+    (node, edge, jump): RowCosts<'_>,
+    (next, bp): (&mut Vec<f64>, &mut Vec<(u32, bool)>),
+) {
     for (s, c) in row.iter().enumerate() {
         slot[c.1.index()] = s as u32;
     }
-    let mut next = vec![f64::INFINITY; row.len()];
-    let mut bp = vec![(u32::MAX, false); row.len()];
+    next.clear();
+    next.resize(row.len(), f64::INFINITY);
+    bp.clear();
+    bp.resize(row.len(), (u32::MAX, false));
     for (pi, p) in prev.iter().enumerate() {
         let base = cost[pi];
         if !base.is_finite() {
@@ -363,5 +392,4 @@ pub(crate) fn relax_row(
         next[s] += node(c.0);
         slot[c.1.index()] = u32::MAX;
     }
-    (next, bp)
 }

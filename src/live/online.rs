@@ -24,7 +24,7 @@
 //! controller's rule: leave the current motion only for a clearly better
 //! one).
 
-use crate::drive::trellis::{TrellisInput, TrellisOptions, relax_row};
+use crate::drive::trellis::{RowCosts, TrellisInput, TrellisOptions, relax_row_into};
 use crate::graph::FlatFrame;
 use crate::pose::{Pose, measure::skeleton_distance};
 use serde::Serialize;
@@ -123,6 +123,27 @@ pub struct OnlineTrellis<'a> {
     all: Vec<(f32, FlatFrame)>,
     /// Rows' buffers already decided, for reuse.
     spare: Vec<Vec<(f32, FlatFrame)>>,
+    /// The solver's buffers, reused by every decision (issue 45).
+    solver: SolveBuffers,
+}
+
+/// The buffers of [`OnlineTrellis`]'s decisions, reused from one to the
+/// next (each cleared before use): no allocation once they hold the
+/// undecided rows.
+#[derive(Debug, Default)]
+struct SolveBuffers {
+    /// Per undecided row, the nodes kept, and whether none was under
+    /// `T_skel` (the row widened to `kmin`).
+    keep: Vec<usize>,
+    widened: Vec<bool>,
+    /// The costs of the row relaxed from, and of the row relaxed.
+    cost: Vec<f64>,
+    next: Vec<f64>,
+    /// Per row, the back pointers (the rows' buffers past `rows` unused).
+    back: Vec<Vec<(u32, bool)>>,
+    /// Per row, the chosen node's slot and whether it was entered by a cut.
+    slots: Vec<usize>,
+    cuts: Vec<bool>,
 }
 
 impl<'a> OnlineTrellis<'a> {
@@ -161,6 +182,7 @@ impl<'a> OnlineTrellis<'a> {
             slot: vec![u32::MAX; ng],
             all: Vec::with_capacity(ng),
             spare: Vec::new(),
+            solver: SolveBuffers::default(),
         }
     }
 
@@ -285,23 +307,23 @@ impl<'a> OnlineTrellis<'a> {
         let (t_skel, node_scale) = self.scales();
         self.stats.t_skel = t_skel;
         self.stats.node_scale = node_scale;
-        let mut widened = Vec::with_capacity(self.rows.len());
-        let rows: Vec<&[(f32, FlatFrame)]> = self
-            .rows
-            .iter()
-            .map(|r| {
-                let under = r.iter().take_while(|c| (c.0 as f64) <= t_skel).count();
-                widened.push(under == 0);
-                let keep = under.max(self.kmin).min(r.len());
-                &r[..keep]
-            })
-            .collect();
+        let mut b = std::mem::take(&mut self.solver);
+        b.keep.clear();
+        b.widened.clear();
+        for r in &self.rows {
+            let under = r.iter().take_while(|c| (c.0 as f64) <= t_skel).count();
+            b.widened.push(under == 0);
+            b.keep.push(under.max(self.kmin).min(r.len()));
+        }
         let mut slot = std::mem::take(&mut self.slot);
-        let (slots, cuts) = self.solve(&rows, node_scale, &mut slot);
+        self.solve(node_scale, &mut slot, &mut b);
+        let (slots, cuts, widened) = (&b.slots, &b.cuts, &b.widened);
+        let rows = |k: usize| &self.rows[k][..b.keep[k]];
         let mut out = Advance::default();
-        let count = count.min(rows.len());
+        let count = count.min(self.rows.len());
         for k in 0..count {
-            let (c, id) = rows[k][slots[k]];
+            let (c, id) = rows(k)[slots[k]];
+            let (cut, widened) = (cuts[k], widened[k]);
             if let Some(a) = self.anchor
                 && !self.continues(a, id)
             {
@@ -309,19 +331,21 @@ impl<'a> OnlineTrellis<'a> {
             }
             self.anchor = Some(id);
             self.stats.committed += 1;
-            self.stats.cuts += usize::from(cuts[k]);
-            self.stats.widened += usize::from(widened[k]);
+            self.stats.cuts += usize::from(cut);
+            self.stats.widened += usize::from(widened);
             out.committed.push(Committed {
                 index: self.committed,
                 id,
                 skeleton_cost: c as f64,
-                cut: cuts[k],
+                cut,
             });
             self.committed += 1;
         }
-        out.lookahead = (count..rows.len()).map(|k| rows[k][slots[k]].1).collect();
-        drop(rows);
+        out.lookahead = (count..self.rows.len())
+            .map(|k| rows(k)[slots[k]].1)
+            .collect();
         self.slot = slot;
+        self.solver = b;
         for r in self.rows.drain(..count) {
             if self.spare.len() < 4 {
                 self.spare.push(r);
@@ -336,16 +360,12 @@ impl<'a> OnlineTrellis<'a> {
         a == b || s(a) == Some(b) || s(a).and_then(s) == Some(b)
     }
 
-    /// The shortest path through `rows` from the anchor (or from the
-    /// first row when nothing is decided yet): the slot of the chosen node
-    /// per row, and whether it was entered by a cut. The relaxation is
+    /// The shortest path through the undecided rows (each row's first
+    /// `b.keep` nodes) from the anchor (or from the first row when nothing
+    /// is decided yet), into `b`: the slot of the chosen node per row, and
+    /// whether it was entered by a cut. The relaxation is
     /// [`crate::drive::trellis::retrieve`]'s, operation for operation.
-    fn solve(
-        &self,
-        rows: &[&[(f32, FlatFrame)]],
-        node_scale: f64,
-        slot: &mut [u32],
-    ) -> (Vec<usize>, Vec<bool>) {
+    fn solve(&self, node_scale: f64, slot: &mut [u32], b: &mut SolveBuffers) {
         let db = self.db;
         let opts = self.trellis;
         let edge_scale = self.edge_scale;
@@ -363,28 +383,50 @@ impl<'a> OnlineTrellis<'a> {
                 None => (db.dissimilarity)(i, j) as f64 / edge_scale,
             }
         };
+        let SolveBuffers {
+            keep,
+            cost,
+            next,
+            back,
+            slots,
+            cuts,
+            ..
+        } = b;
+        let rows = |k: usize| &self.rows[k][..keep[k]];
+        let n = self.rows.len();
         let anchor_row = self.anchor.map(|a| [(0.0f32, a)]);
         // The first row relaxed from: the anchor (cost 0) or the first
         // undecided row (its node costs).
-        let (mut cost, first): (Vec<f64>, usize) = match &anchor_row {
-            Some(_) => (vec![0.0], 0),
-            None => (rows[0].iter().map(|c| node(c.0)).collect(), 1),
+        cost.clear();
+        let first = match &anchor_row {
+            Some(_) => {
+                cost.push(0.0);
+                0
+            }
+            None => {
+                cost.extend(rows(0).iter().map(|c| node(c.0)));
+                1
+            }
         };
-        let mut back: Vec<Vec<(u32, bool)>> = Vec::with_capacity(rows.len());
-        if first == 1 {
-            back.push(vec![(0, false); rows[0].len()]);
-        }
-        for k in first..rows.len() {
-            let row = rows[k];
+        for k in 0..n {
+            if back.len() == k {
+                back.push(Vec::new());
+            }
+            if k < first {
+                back[k].clear();
+                back[k].resize(rows(0).len(), (0, false));
+                continue;
+            }
+            let row = rows(k);
             // Row 0 is relaxed from only when there is an anchor.
             let prev: &[(f32, FlatFrame)] = if k == 0 {
                 anchor_row.as_ref().map_or(&[][..], |a| &a[..])
             } else {
-                rows[k - 1]
+                rows(k - 1)
             };
-            let (next, bp) = relax_row(db, &opts, prev, &cost, row, slot, &node, &edge, hysteresis);
-            cost = next;
-            back.push(bp);
+            let how: RowCosts<'_> = (&node, &edge, hysteresis);
+            relax_row_into(db, &opts, prev, cost, row, slot, how, (next, &mut back[k]));
+            std::mem::swap(cost, next);
         }
         let mut s = cost
             .iter()
@@ -392,9 +434,10 @@ impl<'a> OnlineTrellis<'a> {
             .min_by(|a, b| a.1.total_cmp(b.1))
             .map(|(s, _)| s)
             .unwrap_or(0);
-        let n = rows.len();
-        let mut slots = vec![0usize; n];
-        let mut cuts = vec![false; n];
+        slots.clear();
+        slots.resize(n, 0);
+        cuts.clear();
+        cuts.resize(n, false);
         for k in (0..n).rev() {
             slots[k] = s;
             let (p, cut) = back[k][s];
@@ -403,6 +446,5 @@ impl<'a> OnlineTrellis<'a> {
                 s = p as usize;
             }
         }
-        (slots, cuts)
     }
 }

@@ -38,15 +38,18 @@ use super::stages::{FrameStages, Stage, StageClock, thread_cpu_seconds};
 use crate::db::Character;
 use crate::deform::resident::page_in;
 use crate::deform::{DeformWorkspace, Deformer};
-use crate::drive::placement::{BlendScratch, blend_placed, placements};
-use crate::drive::timeline::timeline;
+use crate::drive::placement::{
+    BlendScratch, Floor, PlacementScratch, blend_placed, placements_into,
+};
+use crate::drive::timeline::{Timeline, timeline_into};
 use crate::drive::trellis::TrellisInput;
 use crate::drive::{DriveOptions, Prepared};
 use crate::graph::FlatFrame;
 use crate::mesh::blend::{BlendWorkspace, FrameGradients};
 use crate::pose::Pose;
 use crate::pose::retarget::{
-    ClipNeutral, ClipNeutralSource, Given, JointRotations, Support, contact_band, leg_length,
+    ClipNeutral, ClipNeutralSource, Given, JointRotations, KernelWorkspace, Support, contact_band,
+    leg_length,
 };
 use crate::rig::Canonical as C;
 use glam::{DQuat, DVec2, DVec3};
@@ -326,6 +329,27 @@ pub struct Session<'a> {
     /// The stage clock of the frame being made and its times so far.
     clock: StageClock,
     stages: FrameStages,
+    /// The pose kernel's buffers, reused by every frame's analysis
+    /// (issue 45: no allocation in its clip-level steps per frame).
+    kernel_ws: KernelWorkspace,
+    /// The placement's window (decided frames and the continuation), its
+    /// queries, buffers and result, and the analysis window's rotations,
+    /// reused by every frame.
+    place: PlaceBuffers,
+}
+
+/// The buffers of an output frame's placement over its window
+/// ([`Session::blend_into`]) and of an arriving frame's rotations
+/// ([`Session::push`]), reused from frame to frame (issue 45).
+#[derive(Default)]
+struct PlaceBuffers {
+    window: Vec<FlatFrame>,
+    queries: Vec<Pose>,
+    timeline: Timeline,
+    scratch: PlacementScratch,
+    placed: Vec<Floor>,
+    /// The analysis window's rotations ([`Session::push`]).
+    rotations: Vec<JointRotations>,
 }
 
 impl<'a> Session<'a> {
@@ -377,6 +401,8 @@ impl<'a> Session<'a> {
             offline: None,
             clock: StageClock::start(),
             stages: FrameStages::default(),
+            kernel_ws: KernelWorkspace::new(),
+            place: PlaceBuffers::default(),
         }
     }
 
@@ -433,9 +459,15 @@ impl<'a> Session<'a> {
         self.raw_rotations.push_back(rotations.copied());
         self.received += 1;
         let from_start = self.received == self.raw.len();
-        let rots: Option<Vec<JointRotations>> = self.raw_rotations.iter().copied().collect();
+        // The window's rotations (none unless every frame has them), in
+        // a buffer kept from frame to frame.
+        let rots = &mut self.place.rotations;
+        rots.clear();
+        if self.raw_rotations.iter().all(Option::is_some) {
+            rots.extend(self.raw_rotations.iter().flatten().copied());
+        }
         let reference = ClipNeutral {
-            rotations: Arc::from(rots.unwrap_or_default()),
+            rotations: Arc::from(&rots[..]),
             // A reference frame of the stream is the window's frame of the
             // same index only while the window starts at the stream's first
             // frame (the kernel reads `Frame(i)` as the window's frame i);
@@ -469,8 +501,8 @@ impl<'a> Session<'a> {
             self.ch,
             &reference,
             window,
-            &stream,
-            &swapped,
+            (&stream, &swapped),
+            &mut self.kernel_ws,
         );
         let (Some(first), Some(q), Some(f)) = (a.query.first(), a.query.last(), a.on_floor.last())
         else {
@@ -705,24 +737,26 @@ impl<'a> Session<'a> {
             self.query[k - self.query_start] = q;
             self.last_out = Some((k, q));
         }
-        let window: Vec<FlatFrame> = self
-            .path
-            .iter()
-            .copied()
-            .chain(ahead.iter().copied())
-            .collect();
-        let queries: Vec<Pose> = self
-            .query
-            .iter()
-            .skip(self.path_start - self.query_start)
-            .take(window.len())
-            .copied()
-            .collect();
-        let window = &window[..queries.len()];
-        let (frames, _) = timeline(window, ch, &self.opts.retarget.timeline);
-        let placed = placements(ch, window, &frames, &queries, self.opts.retarget.smooth);
+        let pl = &mut self.place;
+        pl.window.clear();
+        pl.window
+            .extend(self.path.iter().copied().chain(ahead.iter().copied()));
+        pl.queries.clear();
+        pl.queries.extend(
+            self.query
+                .iter()
+                .skip(self.path_start - self.query_start)
+                .take(pl.window.len())
+                .copied(),
+        );
+        let window = &pl.window[..pl.queries.len()];
+        timeline_into(window, ch, &self.opts.retarget.timeline, &mut pl.timeline);
+        let frames = &pl.timeline.out;
+        let smooth = self.opts.retarget.smooth;
+        let within = (window, &frames[..], &pl.queries[..]);
+        placements_into(ch, within, smooth, &mut pl.scratch, &mut pl.placed);
         self.clock.lap(Stage::Placement, &mut self.stages);
-        let o = frames[h];
+        let o = self.place.timeline.out[h];
         let primary = o.primary();
         let mut scratch = BlendScratch {
             ws: &mut self.blend_ws,
@@ -735,12 +769,12 @@ impl<'a> Session<'a> {
             self.prepared.blender(),
             o.used(),
             primary,
-            placed[h],
+            self.place.placed[h],
             |f| f == primary,
             &mut scratch,
             &mut slot.blended,
         );
-        slot.target = queries[h];
+        slot.target = self.place.queries[h];
         self.clock.lap(Stage::Blending, &mut self.stages);
     }
 }
@@ -770,14 +804,15 @@ struct Stream {
 }
 
 /// The pose kernel over the raw `window` on what the `stream` decides
-/// and with what `swapped` takes from the offline analysis (first).
+/// and with what `swapped` takes from the offline analysis (first), in
+/// the session's buffers `ws`.
 fn analyse(
     prepared: &Prepared,
     ch: &Character,
     reference: &ClipNeutral,
     window: &[Pose],
-    stream: &Stream,
-    swapped: &WindowGround,
+    (stream, swapped): (&Stream, &WindowGround),
+    ws: &mut KernelWorkspace,
 ) -> crate::drive::Analysed {
     let replace = |_: &[Pose], s: &mut Support| {
         if let Some(o) = &swapped.support {
@@ -793,7 +828,7 @@ fn analyse(
             .map(|_| &replace as &dyn Fn(&[Pose], &mut Support)),
         open_end: stream.open_end,
     };
-    prepared.analyse_given(ch, reference, window, &given)
+    prepared.analyse_given(ch, reference, window, &given, ws)
 }
 
 /// `query` settled from the previous output frame `prev` and this

@@ -2,7 +2,7 @@
 //! stands on the ground, toes bent up about the ball, and the reference's
 //! foot bones set to the elevation the clip's feet have when flat.
 
-use super::ground::{Support, grounds_either_side, interpolate_gaps};
+use super::ground::{Support, grounds_either_side_into, interpolate_gaps_into};
 use super::reference::leg_length;
 use crate::pose::Pose;
 use crate::rig::Canonical;
@@ -46,61 +46,76 @@ use Canonical as C;
 /// the rear foot on its toes on the block holds the body up while the
 /// front one strikes the floor; counted in the air, its toes went 4 cm
 /// into the block for that frame.
+///
+/// `scratch` holds its buffers (cleared before use; no allocation but the
+/// grounds returned once they hold the clip's frames).
 pub(super) fn place_feet(
     character: &Pose,
     support: &Support,
     s: f64,
-    toes: Toes,
-    open_end: bool,
+    (toes, open_end): (Toes, bool),
     out: &mut [(Pose, [DQuat; Canonical::COUNT])],
+    scratch: &mut FeetScratch,
 ) -> [Vec<Option<f64>>; 2] {
+    let FeetScratch {
+        soles,
+        settled,
+        settled_sides,
+        touch,
+        sides,
+        fix,
+        known,
+        lift,
+    } = scratch;
     let clip_floor = support.floor;
     let rest_soles = foot_soles(character, character, &[DQuat::IDENTITY; Canonical::COUNT]);
-    let soles: Vec<[f64; 2]> = out
-        .iter()
-        .map(|(t, g)| soles_of(character, t, g, toes))
-        .collect();
+    soles.clear();
+    soles.extend(out.iter().map(|(t, g)| soles_of(character, t, g, toes)));
+    let soles = &*soles;
     // How far frame `i` must be lifted for foot `f` to stand on ground
     // `y` (the clip's height).
     let need = |f: usize, i: usize, y: f64| rest_soles[f] + (y - clip_floor) * s - soles[i][f];
     let n = out.len();
     // The supports each foot is settled on: the floor, or a step while
     // the foot rests on it.
-    let settled: [Vec<Option<f64>>; 2] = [0, 1].map(|f| {
-        (0..n)
-            .map(|i| support.touch[f][i].filter(|&u| u <= clip_floor || support.rests[f][i]))
-            .collect()
-    });
-    let settled_sides = settled
-        .each_ref()
-        .map(|t| landing_open(grounds_either_side(t), clip_floor, open_end));
+    for (f, settled) in settled.iter_mut().enumerate() {
+        settled.clear();
+        settled.extend(
+            (0..n).map(|i| support.touch[f][i].filter(|&u| u <= clip_floor || support.rests[f][i])),
+        );
+    }
+    for (t, sides) in settled.iter().zip(settled_sides.iter_mut()) {
+        grounds_either_side_into(t, sides);
+        landing_open(sides, clip_floor, open_end);
+    }
     // A foot touching a step it is arriving on or leaving (not at rest on
     // it, and the step above the lower of the supports it settles on
     // before and after) while the other foot is settled on a support as
     // high (within the contact band) counts as in the air: the step is its
     // ground only once its sole is above the top.
-    let touch: [Vec<Option<f64>>; 2] = [0, 1].map(|f| {
-        (0..n)
-            .map(|i| {
-                let t = support.touch[f][i];
-                let (Some(u), None) = (t, settled[f][i]) else {
-                    return t;
-                };
-                let lo = match settled_sides[f][i] {
-                    (Some(a), Some(b)) => a.min(b),
-                    (a, b) => a.or(b).unwrap_or(u),
-                };
-                if u > lo && settled[1 - f][i].is_some_and(|o| o >= u - support.band) {
-                    None
-                } else {
-                    t
-                }
-            })
-            .collect()
-    });
-    let sides = touch
-        .each_ref()
-        .map(|t| landing_open(grounds_either_side(t), clip_floor, open_end));
+    for (f, touch) in touch.iter_mut().enumerate() {
+        touch.clear();
+        touch.extend((0..n).map(|i| {
+            let t = support.touch[f][i];
+            let (Some(u), None) = (t, settled[f][i]) else {
+                return t;
+            };
+            let lo = match settled_sides[f][i] {
+                (Some(a), Some(b)) => a.min(b),
+                (a, b) => a.or(b).unwrap_or(u),
+            };
+            if u > lo && settled[1 - f][i].is_some_and(|o| o >= u - support.band) {
+                None
+            } else {
+                t
+            }
+        }));
+    }
+    for (t, sides) in touch.iter().zip(sides.iter_mut()) {
+        grounds_either_side_into(t, sides);
+        landing_open(sides, clip_floor, open_end);
+    }
+    let (touch, sides) = (&*touch, &*sides);
     // A foot's ground when touching; in the air, the lower of the
     // supports it left and lands on.
     let lower = |f: usize, i: usize| -> Option<f64> {
@@ -109,18 +124,17 @@ pub(super) fn place_feet(
             (a, b) => a.or(b),
         })
     };
-    let fix: Vec<Option<f64>> = (0..out.len())
-        .map(|i| {
-            if touch.iter().all(|f| f[i].is_none()) {
-                return None;
-            }
-            (0..2)
-                .filter_map(|f| Some(need(f, i, lower(f, i)?)))
-                .filter(|d| d.is_finite())
-                .reduce(f64::max)
-        })
-        .collect();
-    let mut lift = interpolate_gaps(&fix);
+    fix.clear();
+    fix.extend((0..out.len()).map(|i| {
+        if touch.iter().all(|f| f[i].is_none()) {
+            return None;
+        }
+        (0..2)
+            .filter_map(|f| Some(need(f, i, lower(f, i)?)))
+            .filter(|d| d.is_finite())
+            .reduce(f64::max)
+    }));
+    interpolate_gaps_into(fix, known, lift);
     // A foot leaving a support for a lower one (stepping down off a
     // block) held the body up to the frame it left; from then until it
     // lands the lift comes down to the landing frame's at an even rate,
@@ -139,7 +153,7 @@ pub(super) fn place_feet(
     // dropped onto the floor under them (CMU 03_01 on samba at lag 3,
     // frame 40: 8 cm below offline where the leading foot left the block).
     let open = open_end.then(|| (clip_floor, fall_rate(out)));
-    ramp_step_downs(&mut lift, &touch, support.band, open);
+    ramp_step_downs(lift, touch, support.band, open);
     // The higher top under a foot in the air where the clip's joints are
     // above it and the character's sole, lifted, is too.
     let grounds: [Vec<Option<f64>>; 2] = [0, 1].map(|f| {
@@ -165,7 +179,7 @@ pub(super) fn place_feet(
             }
         }
     }
-    for ((t, _), d) in out.iter_mut().zip(&lift) {
+    for ((t, _), d) in out.iter_mut().zip(lift.iter()) {
         for p in t.iter_mut() {
             p.y += d;
         }
@@ -175,6 +189,27 @@ pub(super) fn place_feet(
             .map(|y| y.map(|y| (y - clip_floor) * s))
             .collect()
     })
+}
+
+/// The buffers [`place_feet`] reuses from one clip to the next (cleared
+/// before use).
+#[derive(Debug, Clone, Default)]
+pub struct FeetScratch {
+    /// Each frame's lowest sole point per foot.
+    soles: Vec<[f64; 2]>,
+    /// Per foot and frame, the support it is settled on, and the last and
+    /// next such.
+    settled: [Vec<Option<f64>>; 2],
+    settled_sides: [Vec<(Option<f64>, Option<f64>)>; 2],
+    /// Per foot and frame, the support it touches as placed, and the last
+    /// and next such.
+    touch: [Vec<Option<f64>>; 2],
+    sides: [Vec<(Option<f64>, Option<f64>)>; 2],
+    /// Per frame, the lift the feet need (none in the air), the known
+    /// ones, and the lift with the gaps filled.
+    fix: Vec<Option<f64>>,
+    known: Vec<(usize, f64)>,
+    lift: Vec<f64>,
 }
 
 /// The step-down ramps of [`place_feet`] (its comment above the call
@@ -246,16 +281,12 @@ fn carry_down(lift: &mut [f64], fall: f64) {
     }
 }
 
-/// A foot's last and next support per frame (`sides`,
-/// [`grounds_either_side`]) with, when the clip's end is `open` (a
+/// Sets in a foot's last and next support per frame (`sides`,
+/// [`grounds_either_side_into`]'s), when the clip's end is `open` (a
 /// stream's newest frame, [`Given::open_end`](super::Given::open_end)),
 /// `floor` for the next one of a foot that has left its last support and
 /// not landed in the clip: the lowest it can land on.
-fn landing_open(
-    mut sides: Vec<(Option<f64>, Option<f64>)>,
-    floor: f64,
-    open: bool,
-) -> Vec<(Option<f64>, Option<f64>)> {
+fn landing_open(sides: &mut [(Option<f64>, Option<f64>)], floor: f64, open: bool) {
     if open {
         for s in sides.iter_mut().rev() {
             match s {
@@ -264,7 +295,6 @@ fn landing_open(
             }
         }
     }
-    sides
 }
 
 /// The lowest sole point of the character posed as `t` with global
@@ -357,6 +387,41 @@ pub(super) fn bend_toes(
     }
 }
 
+/// The buffers [`flat_feet_with`] reuses from one clip to the next
+/// (cleared before use).
+#[derive(Debug, Clone, Default)]
+pub struct FlatScratch {
+    /// A joint's heights, sorted.
+    heights: Vec<f64>,
+    /// The elevations while planted.
+    held: Vec<f64>,
+    /// The elevations near the lowest.
+    near: Vec<f64>,
+    /// The elevations near the lowest while touching.
+    touching: Vec<f64>,
+}
+
+/// The 5th percentile of `c`'s finite heights over `mocap`, with
+/// `heights` the buffer they are sorted in.
+fn low_height(mocap: &[Pose], c: C, heights: &mut Vec<f64>) -> Option<f64> {
+    heights.clear();
+    heights.reserve(mocap.len());
+    heights.extend(
+        mocap
+            .iter()
+            .map(|p| p[c.index()].y)
+            .filter(|y| y.is_finite()),
+    );
+    heights.sort_by(f64::total_cmp);
+    heights.get(heights.len() / 20).copied()
+}
+
+/// The median of `e` (sorted in place; the upper one of an even count).
+fn median_of(e: &mut [f64]) -> Option<f64> {
+    e.sort_by(f64::total_cmp);
+    e.get(e.len() / 2).copied()
+}
+
 /// `r` with each foot bone (ankle → toe) turned about its lateral axis to
 /// the elevation the clip's foot has when flat on its ground: the median
 /// over the frames where both the foot's ankle and toe are within 2.4 % of
@@ -388,17 +453,16 @@ pub(super) fn bend_toes(
 /// toe near their lowest) takes the median over the frames near their
 /// lowest where the foot touches its ground; with none, `r` keeps the
 /// foot. The foot bone is first made to point forward ([`forward_foot`]).
-pub(super) fn flat_feet(r: &Pose, mocap: &[Pose], support: &Support) -> Pose {
+///
+/// `scratch` holds its buffers (cleared before use): no allocation once
+/// they hold the clip's frames.
+pub(super) fn flat_feet_with(
+    r: &Pose,
+    mocap: &[Pose],
+    support: &Support,
+    scratch: &mut FlatScratch,
+) -> Pose {
     let mut out = *r;
-    let low = |c: C| {
-        let mut h: Vec<f64> = mocap
-            .iter()
-            .map(|p| p[c.index()].y)
-            .filter(|y| y.is_finite())
-            .collect();
-        h.sort_by(f64::total_cmp);
-        h.get(h.len() / 20).copied()
-    };
     let elevation = |f: DVec3| (f.y / f.length()).clamp(-1.0, 1.0).asin();
     let leg = leg_length(r).max(1e-9);
     let still = 0.02 * leg;
@@ -420,37 +484,47 @@ pub(super) fn flat_feet(r: &Pose, mocap: &[Pose], support: &Support) -> Pose {
                 || support.held[foot].get(i).is_some_and(|&h| h);
             on && moved(i, j) <= still
         };
-        let mut held: Vec<f64> = (0..mocap.len())
-            .filter(|&i| planted(i))
-            .map(|i| elevation(mocap[i][t] - mocap[i][a]))
-            .filter(|e| e.is_finite())
-            .collect();
+        let held = &mut scratch.held;
+        held.clear();
+        held.reserve(mocap.len());
+        held.extend(
+            (0..mocap.len())
+                .filter(|&i| planted(i))
+                .map(|i| elevation(mocap[i][t] - mocap[i][a]))
+                .filter(|e| e.is_finite()),
+        );
         held.sort_by(f64::total_cmp);
-        let held = (held.len() >= 5).then(|| held_elevation(&held));
+        let held = (held.len() >= 5).then(|| held_elevation(held));
         // The frames with the foot's ankle and toe both near their
         // lowest, and of them those where the foot touches its ground.
-        let (lowest, few) = match (low(ankle), low(toe)) {
+        let la = low_height(mocap, ankle, &mut scratch.heights);
+        let lt = low_height(mocap, toe, &mut scratch.heights);
+        let (lowest, few) = match (la, lt) {
             (Some(la), Some(lt)) => {
                 let near = |i: &usize| mocap[*i][a].y <= la + band && mocap[*i][t].y <= lt + band;
-                let median = |mut e: Vec<f64>| {
-                    e.sort_by(f64::total_cmp);
-                    e.get(e.len() / 2).copied()
-                };
                 let of = |i: usize| elevation(mocap[i][t] - mocap[i][a]);
-                let e: Vec<f64> = (0..mocap.len())
-                    .filter(near)
-                    .map(of)
-                    .filter(|e| e.is_finite())
-                    .collect();
-                let touching: Vec<f64> = (0..mocap.len())
-                    .filter(near)
-                    .filter(|&i| support.touch[foot].get(i).is_some_and(|g| g.is_some()))
-                    .map(of)
-                    .filter(|e| e.is_finite())
-                    .collect();
+                let e = &mut scratch.near;
+                e.clear();
+                e.reserve(mocap.len());
+                e.extend(
+                    (0..mocap.len())
+                        .filter(near)
+                        .map(of)
+                        .filter(|e| e.is_finite()),
+                );
+                let touching = &mut scratch.touching;
+                touching.clear();
+                touching.reserve(mocap.len());
+                touching.extend(
+                    (0..mocap.len())
+                        .filter(near)
+                        .filter(|&i| support.touch[foot].get(i).is_some_and(|g| g.is_some()))
+                        .map(of)
+                        .filter(|e| e.is_finite()),
+                );
                 (
-                    (e.len() >= 5).then(|| median(e)).flatten(),
-                    median(touching),
+                    (e.len() >= 5).then(|| median_of(e)).flatten(),
+                    median_of(touching),
                 )
             }
             _ => (None, None),

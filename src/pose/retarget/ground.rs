@@ -17,7 +17,7 @@ pub fn foot_height(p: &Pose) -> f64 {
 
 /// Where a clip stands: its floor and, per frame, the height of the
 /// ground its planted foot stands on.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Support {
     /// The clip's floor: the 5th percentile of its lowest ankle or toe
     /// joint over the frames.
@@ -60,25 +60,42 @@ pub struct Support {
 /// support it touched and the next that the foot is not below (a foot
 /// above a block's top may be over it: at a heel strike on it, or its
 /// heel rising on it), else the lower.
-pub(super) fn ground_under(touch: &[Option<f64>], low: &[f64]) -> Vec<Option<f64>> {
-    grounds_either_side(touch)
-        .into_iter()
-        .enumerate()
-        .map(|(i, (last, next))| match (touch[i], last, next) {
-            (Some(t), _, _) => Some(t),
-            (None, Some(a), Some(b)) => {
-                let (lo, hi) = (a.min(b), a.max(b));
-                Some(if low[i] >= hi { hi } else { lo })
-            }
-            (None, a, b) => a.or(b),
-        })
-        .collect()
+///
+/// Into `out` (cleared), with `sides` a buffer for
+/// [`grounds_either_side_into`]: no allocation once both hold a clip's
+/// frames.
+pub(super) fn ground_under_into(
+    touch: &[Option<f64>],
+    low: &[f64],
+    sides: &mut Vec<(Option<f64>, Option<f64>)>,
+    out: &mut Vec<Option<f64>>,
+) {
+    grounds_either_side_into(touch, sides);
+    out.clear();
+    out.extend(
+        sides
+            .iter()
+            .enumerate()
+            .map(|(i, &(last, next))| match (touch[i], last, next) {
+                (Some(t), _, _) => Some(t),
+                (None, Some(a), Some(b)) => {
+                    let (lo, hi) = (a.min(b), a.max(b));
+                    Some(if low[i] >= hi { hi } else { lo })
+                }
+                (None, a, b) => a.or(b),
+            }),
+    );
 }
 
 /// Per frame, the last support a foot touched (this frame's when it
 /// touches one) and the next, from the supports it touches, `touch`.
-pub(super) fn grounds_either_side(touch: &[Option<f64>]) -> Vec<(Option<f64>, Option<f64>)> {
-    let mut out = vec![(None, None); touch.len()];
+/// Into `out` (cleared and refilled).
+pub(super) fn grounds_either_side_into(
+    touch: &[Option<f64>],
+    out: &mut Vec<(Option<f64>, Option<f64>)>,
+) {
+    out.clear();
+    out.resize(touch.len(), (None, None));
     let mut l: Option<f64> = None;
     for (o, t) in out.iter_mut().zip(touch) {
         l = t.or(l);
@@ -89,7 +106,6 @@ pub(super) fn grounds_either_side(touch: &[Option<f64>]) -> Vec<(Option<f64>, Op
         n = t.or(n);
         o.1 = n;
     }
-    out
 }
 
 /// The contact band as a fraction of the clip's leg length (hip, knee,
@@ -158,7 +174,7 @@ pub(super) fn held_height(h: &[f64], band: f64) -> f64 {
 /// run began, stepping down off 20 cm it dropped 4 cm past the edge, and
 /// the frames flat on the block, more than 3 cm above that lowest
 /// height, touched nothing (the foot's flat elevation was then read off
-/// its toe-off, [`flat_feet`](super::feet::flat_feet), and it stood toes up on the block). On the
+/// its toe-off, [`flat_feet_with`](super::feet::flat_feet_with), and it stood toes up on the block). On the
 /// README's walks at 30 frames per second the resting frames' lowest
 /// height is the footfall's lowest. A block 3-6 cm high is still the
 /// floor (CMU 131_02 holds a foot 3.8 cm above its floor for 6 frames;
@@ -175,11 +191,15 @@ pub fn clip_support(mocap: &[Pose], leg: f64) -> Support {
 /// 5th percentile of its frames' lowest ankle or toe joint (the first
 /// frame's pelvis height when no foot joint is finite).
 pub fn clip_floor(mocap: &[Pose]) -> f64 {
-    let mut lows: Vec<f64> = mocap
-        .iter()
-        .map(foot_height)
-        .filter(|h| h.is_finite())
-        .collect();
+    clip_floor_with(mocap, &mut Vec::new())
+}
+
+/// [`clip_floor`] with `lows` a buffer for the frames' lowest foot
+/// joints (cleared; no allocation once it holds the clip's frames).
+pub fn clip_floor_with(mocap: &[Pose], lows: &mut Vec<f64>) -> f64 {
+    lows.clear();
+    lows.reserve(mocap.len());
+    lows.extend(mocap.iter().map(foot_height).filter(|h| h.is_finite()));
     lows.sort_by(f64::total_cmp);
     lows.get(lows.len() / 20)
         .copied()
@@ -229,18 +249,58 @@ impl Given<'_> {
 
     /// The levelling: the given one, else [`ground_tilt`]'s over `mocap`.
     pub(crate) fn tilt_of(&self, mocap: &[Pose]) -> DQuat {
-        self.tilt.unwrap_or_else(|| ground_tilt(mocap))
+        self.tilt_with(mocap, &mut TiltScratch::default())
+    }
+
+    /// [`Given::tilt_of`] with `scratch` [`ground_tilt_with`]'s buffers.
+    pub(crate) fn tilt_with(&self, mocap: &[Pose], scratch: &mut TiltScratch) -> DQuat {
+        self.tilt
+            .unwrap_or_else(|| ground_tilt_with(mocap, scratch))
     }
 }
 
 /// [`clip_support_on`] with what `given` decides (the floor, the last
 /// word).
 pub fn clip_support_given(mocap: &[Pose], leg: f64, given: &Given<'_>) -> Support {
-    let mut s = clip_support_on(mocap, leg, given.floor);
-    if let Some(f) = given.support {
-        f(mocap, &mut s);
-    }
+    let mut s = Support::default();
+    clip_support_given_into(mocap, leg, given, &mut SupportScratch::default(), &mut s);
     s
+}
+
+/// [`clip_support_given`] into `out` (every field refilled), with
+/// `scratch` its buffers: no allocation once they and `out` hold the
+/// clip's frames (but what a [`Given::support`] hook makes).
+pub fn clip_support_given_into(
+    mocap: &[Pose],
+    leg: f64,
+    given: &Given<'_>,
+    scratch: &mut SupportScratch,
+    out: &mut Support,
+) {
+    clip_support_into(mocap, leg, given.floor, scratch, out);
+    if let Some(f) = given.support {
+        f(mocap, out);
+    }
+}
+
+/// The buffers [`clip_support_into`] reuses from one clip to the next
+/// (each cleared before use; what they hold between calls means
+/// nothing).
+#[derive(Debug, Clone, Default)]
+pub struct SupportScratch {
+    /// The frames' lowest foot joints ([`clip_floor_with`]), then one
+    /// foot's lowest joint per frame.
+    lows: Vec<f64>,
+    /// Per frame, how far the ankle and the toe joint moved.
+    moved: Vec<(f64, f64)>,
+    /// Per frame, whether the foot is planted.
+    planted: Vec<bool>,
+    /// A footfall's heights (at rest, or all of them).
+    heights: Vec<f64>,
+    /// The clip's trailing hold ([`frozen_frames`]).
+    frozen: Vec<bool>,
+    /// [`grounds_either_side_into`]'s buffer.
+    sides: Vec<(Option<f64>, Option<f64>)>,
 }
 
 /// [`clip_support`] on the floor `floor` when the caller gives one (the
@@ -250,134 +310,184 @@ pub fn clip_support_given(mocap: &[Pose], leg: f64, given: &Given<'_>) -> Suppor
 /// changed the frames a foot touches within the 3 cm band and the body's
 /// lift with them (see `live::floor`).
 pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support {
+    let mut s = Support::default();
+    clip_support_into(mocap, leg, floor, &mut SupportScratch::default(), &mut s);
+    s
+}
+
+/// Clears `v` and fills it with `n` copies of `x` (its capacity kept).
+fn refill<T: Clone>(v: &mut Vec<T>, n: usize, x: T) {
+    v.clear();
+    v.resize(n, x);
+}
+
+/// [`clip_support_on`] into `out` (every field refilled), with `scratch`
+/// its buffers: no allocation once they and `out` hold the clip's frames
+/// (a live session's analysis window, issue 45).
+pub fn clip_support_into(
+    mocap: &[Pose],
+    leg: f64,
+    floor: Option<f64>,
+    scratch: &mut SupportScratch,
+    out: &mut Support,
+) {
     let floor = match floor {
         Some(f) if f.is_finite() => f,
-        _ => clip_floor(mocap),
+        _ => clip_floor_with(mocap, &mut scratch.lows),
     };
-    let mut touch: [Vec<Option<f64>>; 2] = [vec![None; mocap.len()], vec![None; mocap.len()]];
-    let mut held: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];
-    let mut rests: [Vec<bool>; 2] = [vec![false; mocap.len()], vec![false; mocap.len()]];
+    let n = mocap.len();
+    for foot in 0..2 {
+        refill(&mut out.touch[foot], n, None);
+        refill(&mut out.held[foot], n, false);
+        refill(&mut out.rests[foot], n, false);
+    }
     let still = 0.02 * leg.max(1e-9);
     let band = contact_band(leg);
-    let frozen = frozen_frames(mocap);
+    frozen_frames(mocap, &mut scratch.frozen);
     for (foot, (ankle, toe)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
         .into_iter()
         .enumerate()
     {
-        let (a, k) = (ankle.index(), toe.index());
-        let low = |p: &Pose| if p[a].y <= p[k].y { p[a] } else { p[k] };
-        // Per frame, how far the ankle and the toe joint moved from the
-        // frame before (the first frame: to the next).
-        let moved: Vec<(f64, f64)> = (0..mocap.len())
-            .map(|t| {
-                let (i, j) = if t > 0 {
-                    (t - 1, t)
-                } else {
-                    (0, 1.min(mocap.len() - 1))
-                };
-                (
-                    (mocap[j][a] - mocap[i][a]).length(),
-                    (mocap[j][k] - mocap[i][k]).length(),
-                )
-            })
-            .collect();
-        let planted: Vec<bool> = (0..mocap.len())
-            .map(|t| moved[t].0.min(moved[t].1) <= still && low(&mocap[t]).is_finite())
-            .collect();
-        // At rest: the whole foot, ankle and toe, still (a quarter of the
-        // planted bound).
-        let resting = |t: usize| moved[t].0.max(moved[t].1) <= 0.25 * still;
-        for (t, r) in rests[foot].iter_mut().enumerate() {
-            *r = resting(t);
+        support_of_foot(
+            mocap,
+            (ankle, toe),
+            (floor, still, band),
+            scratch,
+            out,
+            foot,
+        );
+    }
+    out.ground.clear();
+    out.ground
+        .extend((0..n).map(|i| match (out.touch[0][i], out.touch[1][i]) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }));
+    for (foot, (a, k)) in [(C::LAnkle, C::LToe), (C::RAnkle, C::RToe)]
+        .into_iter()
+        .enumerate()
+    {
+        scratch.lows.clear();
+        scratch
+            .lows
+            .extend(mocap.iter().map(|p| p[a.index()].y.min(p[k.index()].y)));
+        ground_under_into(
+            &out.touch[foot],
+            &scratch.lows,
+            &mut scratch.sides,
+            &mut out.under[foot],
+        );
+    }
+    out.floor = floor;
+    out.band = band;
+}
+
+/// One foot's part of [`clip_support_into`] (`foot`, its ankle and toe
+/// joints; `floor`, the still bound and the contact band): its rests, the
+/// frames it is held on a footfall's support, and those it touches one.
+fn support_of_foot(
+    mocap: &[Pose],
+    (ankle, toe): (C, C),
+    (floor, still, band): (f64, f64, f64),
+    scratch: &mut SupportScratch,
+    out: &mut Support,
+    foot: usize,
+) {
+    let SupportScratch {
+        moved,
+        planted,
+        heights,
+        frozen,
+        ..
+    } = scratch;
+    let (a, k) = (ankle.index(), toe.index());
+    let low = |p: &Pose| if p[a].y <= p[k].y { p[a] } else { p[k] };
+    // Per frame, how far the ankle and the toe joint moved from the
+    // frame before (the first frame: to the next).
+    moved.clear();
+    moved.extend((0..mocap.len()).map(|t| {
+        let (i, j) = if t > 0 {
+            (t - 1, t)
+        } else {
+            (0, 1.min(mocap.len() - 1))
+        };
+        (
+            (mocap[j][a] - mocap[i][a]).length(),
+            (mocap[j][k] - mocap[i][k]).length(),
+        )
+    }));
+    planted.clear();
+    planted.extend(
+        (0..mocap.len()).map(|t| moved[t].0.min(moved[t].1) <= still && low(&mocap[t]).is_finite()),
+    );
+    // At rest: the whole foot, ankle and toe, still (a quarter of the
+    // planted bound).
+    let moved = &*moved;
+    let resting = |t: usize| moved[t].0.max(moved[t].1) <= 0.25 * still;
+    for (t, r) in out.rests[foot].iter_mut().enumerate() {
+        *r = resting(t);
+    }
+    let mut t = 0;
+    while t < mocap.len() {
+        if !planted[t] {
+            t += 1;
+            continue;
         }
-        let mut t = 0;
-        while t < mocap.len() {
-            if !planted[t] {
-                t += 1;
-                continue;
-            }
-            let start = t;
-            while t < mocap.len() && planted[t] {
-                t += 1;
-            }
-            let run = start..t;
-            let height = |i: usize| low(&mocap[i]).y;
-            let mut rests: Vec<f64> = run.clone().filter(|&i| resting(i)).map(height).collect();
-            rests.sort_by(f64::total_cmp);
-            let sup = if rests.is_empty() {
-                let mut lows: Vec<f64> = run.clone().map(height).collect();
-                lows.sort_by(f64::total_cmp);
-                held_height(&lows, band)
-            } else {
-                held_height(&rests, band)
-            };
-            // A step is twice the contact band above the floor (~6 cm; a
-            // kerb or a block), held at least 5 frames with the foot at
-            // rest in some, and bears weight: the foot is the lower of
-            // the two in some frame of the footfall (a leg held still in
-            // the air, the other foot on the floor, is no step; nor a
-            // gliding foot hovering over it).
-            // The clip's trailing hold (a take run past its last key) is
-            // no evidence of standing: held in the air, it made a step of
-            // nothing.
-            let live = run.clone().filter(|&i| !frozen[i]).count();
-            let rests_live = run.clone().any(|i| resting(i) && !frozen[i]);
-            let bears = run
-                .clone()
-                .any(|i| low(&mocap[i]).y <= foot_height(&mocap[i]) + 1e-9);
-            if sup > floor + 2.0 * band && !(bears && rests_live && live >= 5) {
-                continue;
-            }
-            for i in run.clone() {
-                if (low(&mocap[i]).y - sup).abs() <= band {
-                    held[foot][i] = true;
-                }
-            }
-            let sup = if sup <= floor + 2.0 * band {
-                floor
-            } else {
-                sup
-            };
-            // The frames within the contact band of it: not those where
-            // the foot, still counted planted, has dropped past the
-            // block's edge (stepping down) or not yet come down onto it.
-            for i in run {
-                if (low(&mocap[i]).y - sup).abs() <= band {
-                    touch[foot][i] = Some(sup);
-                }
+        let start = t;
+        while t < mocap.len() && planted[t] {
+            t += 1;
+        }
+        let run = start..t;
+        let height = |i: usize| low(&mocap[i]).y;
+        heights.clear();
+        heights.reserve(mocap.len());
+        heights.extend(run.clone().filter(|&i| resting(i)).map(height));
+        if heights.is_empty() {
+            heights.extend(run.clone().map(height));
+        }
+        heights.sort_by(f64::total_cmp);
+        let sup = held_height(heights, band);
+        // A step is twice the contact band above the floor (~6 cm; a
+        // kerb or a block), held at least 5 frames with the foot at
+        // rest in some, and bears weight: the foot is the lower of
+        // the two in some frame of the footfall (a leg held still in
+        // the air, the other foot on the floor, is no step; nor a
+        // gliding foot hovering over it).
+        // The clip's trailing hold (a take run past its last key) is
+        // no evidence of standing: held in the air, it made a step of
+        // nothing.
+        let live = run.clone().filter(|&i| !frozen[i]).count();
+        let rests_live = run.clone().any(|i| resting(i) && !frozen[i]);
+        let bears = run
+            .clone()
+            .any(|i| low(&mocap[i]).y <= foot_height(&mocap[i]) + 1e-9);
+        if sup > floor + 2.0 * band && !(bears && rests_live && live >= 5) {
+            continue;
+        }
+        for i in run.clone() {
+            if (low(&mocap[i]).y - sup).abs() <= band {
+                out.held[foot][i] = true;
             }
         }
-        // On the floor, as on a flat capture: the foot within the band of it.
-        for (i, p) in mocap.iter().enumerate() {
-            if low(p).y <= floor + band {
-                touch[foot][i] = Some(floor);
+        let sup = if sup <= floor + 2.0 * band {
+            floor
+        } else {
+            sup
+        };
+        // The frames within the contact band of it: not those where
+        // the foot, still counted planted, has dropped past the
+        // block's edge (stepping down) or not yet come down onto it.
+        for i in run {
+            if (low(&mocap[i]).y - sup).abs() <= band {
+                out.touch[foot][i] = Some(sup);
             }
         }
     }
-    let ground = (0..mocap.len())
-        .map(|i| match (touch[0][i], touch[1][i]) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        })
-        .collect();
-    let lows = |a: C, k: C| -> Vec<f64> {
-        mocap
-            .iter()
-            .map(|p| p[a.index()].y.min(p[k.index()].y))
-            .collect()
-    };
-    let under = [
-        ground_under(&touch[0], &lows(C::LAnkle, C::LToe)),
-        ground_under(&touch[1], &lows(C::RAnkle, C::RToe)),
-    ];
-    Support {
-        floor,
-        ground,
-        touch,
-        under,
-        held,
-        rests,
-        band,
+    // On the floor, as on a flat capture: the foot within the band of it.
+    for (i, p) in mocap.iter().enumerate() {
+        if low(p).y <= floor + band {
+            out.touch[foot][i] = Some(floor);
+        }
     }
 }
 
@@ -389,7 +499,17 @@ pub fn clip_support_on(mocap: &[Pose], leg: f64, floor: Option<f64>) -> Support 
 /// feet in the air, and that hold read as a 7.5 cm step under the right
 /// foot: the result floated 8 cm over its last six frames). Only the end:
 /// a pose held still elsewhere (a figure standing on a block) is motion.
-pub(super) fn frozen_frames(mocap: &[Pose]) -> Vec<bool> {
+///
+/// Into `out` (cleared and refilled).
+fn frozen_frames(mocap: &[Pose], out: &mut Vec<bool>) {
+    let start = hold_start(mocap);
+    out.clear();
+    out.extend((0..mocap.len()).map(|t| t >= start));
+}
+
+/// The first frame of the clip's trailing hold ([`frozen_frames`]; the
+/// clip's length when it has none).
+fn hold_start(mocap: &[Pose]) -> usize {
     let same = |t: usize| {
         let (a, b) = (&mocap[t - 1], &mocap[t]);
         let size = a[C::Pelvis.index()].distance(a[C::Head.index()]).max(1e-9);
@@ -399,21 +519,33 @@ pub(super) fn frozen_frames(mocap: &[Pose]) -> Vec<bool> {
     while start > 1 && same(start - 1) {
         start -= 1;
     }
-    (0..mocap.len()).map(|t| t >= start).collect()
+    start
 }
 
 /// Fills the `None`s of `v` linearly between their known neighbours (the
 /// nearest known value past either end; all zeros when none is known).
 pub(super) fn interpolate_gaps(v: &[Option<f64>]) -> Vec<f64> {
-    let known: Vec<(usize, f64)> = v
-        .iter()
-        .enumerate()
-        .filter_map(|(i, x)| x.map(|x| (i, x)))
-        .collect();
-    let (Some(&first), Some(&last)) = (known.first(), known.last()) else {
-        return vec![0.0; v.len()];
-    };
     let mut out = Vec::with_capacity(v.len());
+    interpolate_gaps_into(v, &mut Vec::new(), &mut out);
+    out
+}
+
+/// [`interpolate_gaps`] into `out` (cleared), with `known` a buffer for
+/// the known values: no allocation once both hold `v`'s length.
+pub(super) fn interpolate_gaps_into(
+    v: &[Option<f64>],
+    known: &mut Vec<(usize, f64)>,
+    out: &mut Vec<f64>,
+) {
+    known.clear();
+    known.reserve(v.len());
+    known.extend(v.iter().enumerate().filter_map(|(i, x)| x.map(|x| (i, x))));
+    out.clear();
+    out.reserve(v.len());
+    let (Some(&first), Some(&last)) = (known.first(), known.last()) else {
+        out.resize(v.len(), 0.0);
+        return;
+    };
     let mut k = 0;
     for i in 0..v.len() {
         while k + 1 < known.len() && known[k + 1].0 <= i {
@@ -432,7 +564,6 @@ pub(super) fn interpolate_gaps(v: &[Option<f64>]) -> Vec<f64> {
             }
         });
     }
-    out
 }
 
 /// The rotation that makes a clip's ground level: a plane
@@ -443,16 +574,38 @@ pub(super) fn interpolate_gaps(v: &[Option<f64>]) -> Vec<f64> {
 /// none, turned onto the horizontal. Identity for a clip of fewer than 10
 /// frames or a slope past 5° (a ramp or stairs, not a tilted floor).
 pub fn ground_tilt(mocap: &[Pose]) -> DQuat {
+    ground_tilt_with(mocap, &mut TiltScratch::default())
+}
+
+/// The buffers [`ground_tilt_with`] reuses from one clip to the next
+/// (cleared before use).
+#[derive(Debug, Clone, Default)]
+pub struct TiltScratch {
+    /// The lowest foot joint of each frame.
+    samples: Vec<DVec3>,
+    /// Their residuals to the plane.
+    residuals: Vec<f64>,
+    /// The samples on or below the median residual.
+    low: Vec<DVec3>,
+}
+
+/// [`ground_tilt`] with `scratch` its buffers: no allocation once they
+/// hold the clip's frames.
+pub fn ground_tilt_with(mocap: &[Pose], scratch: &mut TiltScratch) -> DQuat {
+    let TiltScratch {
+        samples,
+        residuals: r,
+        low,
+    } = scratch;
     let feet = [C::LAnkle, C::LToe, C::RAnkle, C::RToe];
-    let samples: Vec<DVec3> = mocap
-        .iter()
-        .filter_map(|p| {
-            feet.iter()
-                .map(|c| p[c.index()])
-                .filter(|q| q.is_finite())
-                .min_by(|a, b| a.y.total_cmp(&b.y))
-        })
-        .collect();
+    samples.clear();
+    samples.reserve(mocap.len());
+    samples.extend(mocap.iter().filter_map(|p| {
+        feet.iter()
+            .map(|c| p[c.index()])
+            .filter(|q| q.is_finite())
+            .min_by(|a, b| a.y.total_cmp(&b.y))
+    }));
     if samples.len() < 10 {
         return DQuat::IDENTITY;
     }
@@ -478,20 +631,24 @@ pub fn ground_tilt(mocap: &[Pose]) -> DQuat {
         let c = (szy * sxx - sxy * sxz) / det;
         Some((mean.y, b, c, mean))
     };
-    let Some(mut plane) = fit(&samples) else {
+    let Some(mut plane) = fit(samples) else {
         return DQuat::IDENTITY;
     };
     for _ in 0..3 {
         let (a, b, c, m) = plane;
         let res = |q: &DVec3| q.y - (a + b * (q.x - m.x) + c * (q.z - m.z));
-        let mut r: Vec<f64> = samples.iter().map(res).collect();
+        r.clear();
+        r.reserve(samples.len());
+        r.extend(samples.iter().map(res));
         r.sort_by(f64::total_cmp);
         let cut = r[r.len() / 2];
-        let low: Vec<DVec3> = samples.iter().copied().filter(|q| res(q) <= cut).collect();
+        low.clear();
+        low.reserve(samples.len());
+        low.extend(samples.iter().copied().filter(|q| res(q) <= cut));
         if low.len() < 5 {
             break;
         }
-        match fit(&low) {
+        match fit(low) {
             Some(p) => plane = p,
             None => break,
         }

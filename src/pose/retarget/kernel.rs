@@ -3,14 +3,15 @@
 //! on their grounds. See the [module docs](super) for what is matched.
 
 use super::anchor::{Footfalls, Placement, place_anchor, placement_from_env};
-use super::feet::{Toes, flat_feet, place_feet};
+use super::feet::{Toes, flat_feet_with, place_feet};
 use super::footfall::plant_feet;
-use super::ground::{Given, clip_support_given, foot_height};
+use super::ground::{Given, clip_support_given_into, foot_height};
 use super::level::{Level, level_from_env, levelling_line};
 use super::motion_ref::{carriage_for_rest, torso_reference};
 use super::reference::{ClipNeutral, ClipNeutralSource, leg_length};
 use super::root::root_from_legs;
-use super::torso::{clip_rotations_from, neck_carriage, upright};
+use super::torso::{clip_rotations_from, neck_carriage, upright_into};
+use super::workspace::KernelWorkspace;
 use crate::pose::{Pose, pose_rotations};
 use crate::rig::Canonical;
 use glam::{DQuat, DVec3};
@@ -122,6 +123,7 @@ pub fn retarget_toes(
         mocap,
         toes,
         &Given::default(),
+        &mut KernelWorkspace::new(),
     )
     .0
 }
@@ -132,7 +134,9 @@ pub fn retarget_toes(
 /// `given` holds what the caller decides instead of the kernel (the
 /// levelling, the floor, the supports: [`Given`]): a live session's
 /// decisions over the stream, where `mocap` is only its recent window;
-/// `Given::default()` decides nothing.
+/// `Given::default()` decides nothing. `ws` holds the buffers of the
+/// kernel's clip-level steps ([`KernelWorkspace`]: the result is the
+/// same whatever it held).
 pub(super) fn retarget_on_grounds(
     character: &Pose,
     neutral: &Pose,
@@ -140,9 +144,10 @@ pub(super) fn retarget_on_grounds(
     mocap: &[Pose],
     toes: Toes,
     given: &Given<'_>,
+    ws: &mut KernelWorkspace,
 ) -> RetargetedOnGrounds {
     let how = (toes, placement_from_env(), level_from_env());
-    retarget_placed_on_grounds(character, neutral, reference, mocap, how, given)
+    retarget_placed_on_grounds(character, neutral, reference, mocap, how, given, ws)
 }
 
 /// [`retarget_toes`] with the body placed as `placement` says (issue 44;
@@ -182,7 +187,17 @@ pub fn retarget_levelled(
     level: Level,
 ) -> Vec<(Pose, [DQuat; Canonical::COUNT])> {
     let how = (toes, placement, level);
-    retarget_placed_on_grounds(character, neutral, reference, mocap, how, &Given::default()).0
+    let ws = &mut KernelWorkspace::new();
+    retarget_placed_on_grounds(
+        character,
+        neutral,
+        reference,
+        mocap,
+        how,
+        &Given::default(),
+        ws,
+    )
+    .0
 }
 
 /// [`retarget_on_grounds`] with the placement given.
@@ -193,6 +208,7 @@ fn retarget_placed_on_grounds(
     mocap: &[Pose],
     (toes, placement, level): (Toes, Placement, Level),
     given: &Given<'_>,
+    ws: &mut KernelWorkspace,
 ) -> RetargetedOnGrounds {
     // Counted by the tests of issue 40's "analysed once per clip".
     let _run = tracing::debug_span!("pose_kernel", frames = mocap.len()).entered();
@@ -205,7 +221,7 @@ fn retarget_placed_on_grounds(
     // The clip's ground made level (a capture volume's floor is often a
     // degree or two off its vertical axis; CMU subject 02's rises 8 cm
     // over a 4 m walk), so that one floor height holds for every frame.
-    let tilt = given.tilt_of(mocap);
+    let tilt = given.tilt_with(mocap, &mut ws.tilt);
     let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
     let mocap = &levelled[..];
     let first = &mocap[0];
@@ -224,9 +240,11 @@ fn retarget_placed_on_grounds(
     let r = &carriage;
     // The clip's floor and the support under each of its footfalls (the
     // leg's length does not depend on the feet).
-    let support = clip_support_given(mocap, leg_length(r), given);
+    let support = &mut ws.found;
+    clip_support_given_into(mocap, leg_length(r), given, &mut ws.support, support);
+    let support = &*support;
     // The feet measured from how the clip holds them flat on its ground.
-    let stance_ref = flat_feet(r, mocap, &support);
+    let stance_ref = flat_feet_with(r, mocap, support, &mut ws.flat);
     let r = &stance_ref;
     let s = leg_length(character) / leg_length(r).max(1e-12);
     let face = heading_between(neutral, r);
@@ -237,7 +255,8 @@ fn retarget_placed_on_grounds(
     let char_floor = foot_height(character);
     let rotations = clip_rotations_from(r, mocap, reference, tilt, at_ref);
     let rotations = level_torso(rotations, r, level);
-    let carriage_inv = neck_carriage(&upright(mocap, &rotations)).inverse();
+    upright_into(mocap, &rotations, &mut ws.trunk, &mut ws.upright);
+    let carriage_inv = neck_carriage(&ws.upright).inverse();
     let (chest, neck) = (C::Chest.index(), C::Neck.index());
     let mut out: Vec<(Pose, [DQuat; Canonical::COUNT])> = mocap
         .par_iter()
@@ -291,6 +310,7 @@ fn retarget_placed_on_grounds(
     // The body's anchor following the clip's (issue 44; the root already
     // does with the default placement: see [`place_anchor`]).
     let floors = (clip_floor, char_floor);
+    let how = (toes, given.open_end);
     let k = place_anchor(character, mocap, placement, s, floors, &mut out);
     // The feet on the clip's footfalls, mapped by the same travel scale
     // (issue 44, an option: [`plant_feet`]); the poses as they were kept,
@@ -298,11 +318,11 @@ fn retarget_placed_on_grounds(
     let mut free = None;
     if placement.footfalls == Footfalls::Targets {
         let mut was = out.clone();
-        place_feet(character, &support, s, toes, given.open_end, &mut was);
+        place_feet(character, support, s, how, &mut was, &mut ws.feet);
         free = Some(was.into_iter().map(|(p, _)| p).collect());
-        plant_feet(mocap, &support, (k, leg_length(r)), &mut out);
+        plant_feet(mocap, support, (k, leg_length(r)), &mut out);
     }
-    let grounds = place_feet(character, &support, s, toes, given.open_end, &mut out);
+    let grounds = place_feet(character, support, s, how, &mut out, &mut ws.feet);
     (out, grounds, free)
 }
 

@@ -5,10 +5,14 @@
 
 use super::feet::Toes;
 use super::feet::{foot_soles, sole_height};
-use super::ground::{Given, Support, clip_support_given, interpolate_gaps};
+use super::ground::{
+    Given, Support, clip_support_given, clip_support_given_into, interpolate_gaps,
+    interpolate_gaps_into,
+};
 use super::kernel::{retarget, retarget_on_grounds};
 use super::reference::{ClipNeutral, angle, leg_length};
 use super::torso::{clip_rotations, neck_carriage, upright};
+use super::workspace::KernelWorkspace;
 use crate::pose::Pose;
 use crate::rig::Canonical;
 use glam::{DQuat, DVec3};
@@ -62,11 +66,36 @@ pub fn on_character_given(
     mocap: &[Pose],
     given: &Given<'_>,
 ) -> OnCharacter {
+    on_character_in(
+        character,
+        neutral,
+        reference,
+        mocap,
+        given,
+        &mut KernelWorkspace::new(),
+    )
+}
+
+/// [`on_character_given`] with `ws` the buffers of the kernel's
+/// clip-level steps (a live session's, reused from frame to frame: the
+/// result is the same whatever it held).
+pub fn on_character_in(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &ClipNeutral,
+    mocap: &[Pose],
+    given: &Given<'_>,
+    ws: &mut KernelWorkspace,
+) -> OnCharacter {
     let (frames, grounds, free_feet) =
-        retarget_on_grounds(character, neutral, reference, mocap, Toes::Rigid, given);
+        retarget_on_grounds(character, neutral, reference, mocap, Toes::Rigid, given, ws);
     OnCharacter {
         frames,
-        foot_grounds: grounds.map(|g| interpolate_gaps(&g)),
+        foot_grounds: grounds.map(|g| {
+            let mut out = Vec::with_capacity(g.len());
+            interpolate_gaps_into(&g, &mut ws.known, &mut out);
+            out
+        }),
         free_feet,
     }
 }
@@ -223,7 +252,42 @@ pub fn stance_offsets_given(
     mocap: &[Pose],
     given: &Given<'_>,
 ) -> Vec<f64> {
-    offsets_on(character, reference, mocap, given, |s| s.ground.clone())
+    let mut ws = KernelWorkspace::new();
+    stance_offsets_in(character, reference, mocap, given, &mut ws);
+    ws.offsets
+}
+
+/// [`stance_offsets_given`] with `ws` the buffers of its steps (a live
+/// session's), the offsets left in it: no allocation once they have
+/// held the clip's frames.
+pub fn stance_offsets_in<'w>(
+    character: &Pose,
+    reference: &ClipNeutral,
+    mocap: &[Pose],
+    given: &Given<'_>,
+    ws: &'w mut KernelWorkspace,
+) -> &'w [f64] {
+    ws.offsets.clear();
+    if mocap.is_empty() {
+        return &ws.offsets;
+    }
+    let tilt = given.tilt_with(mocap, &mut ws.tilt);
+    ws.levelled.clear();
+    ws.levelled
+        .extend(mocap.iter().map(|m| m.map(|p| tilt * p)));
+    let r = leg_length(&reference.pose).max(1e-12);
+    let s = leg_length(character) / r;
+    let support = &mut ws.found;
+    clip_support_given_into(&ws.levelled, r, given, &mut ws.support, support);
+    ws.raised.clear();
+    ws.raised.extend(
+        support
+            .ground
+            .iter()
+            .map(|g| g.map(|y| (y - support.floor) * s)),
+    );
+    interpolate_gaps_into(&ws.raised, &mut ws.known, &mut ws.offsets);
+    &ws.offsets
 }
 
 /// One per-frame height of the clip's [`Support`] (chosen by `pick`)

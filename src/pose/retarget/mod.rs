@@ -80,12 +80,14 @@ mod reference;
 mod root;
 mod stride;
 mod torso;
+mod workspace;
 
 pub use anchor::{Anchor, Footfalls, PLACEMENT_ENV, Placement, TravelScale};
 pub use feet::Toes;
 pub use ground::{
-    Given, Support, clip_floor, clip_support, clip_support_given, clip_support_on, contact_band,
-    foot_height, ground_tilt,
+    Given, Support, SupportScratch, TiltScratch, clip_floor, clip_floor_with, clip_support,
+    clip_support_given, clip_support_given_into, clip_support_into, clip_support_on, contact_band,
+    foot_height, ground_tilt, ground_tilt_with,
 };
 pub use kernel::{
     retarget, retarget_levelled, retarget_placed, retarget_toes, retarget_with_neutral,
@@ -93,8 +95,8 @@ pub use kernel::{
 pub use level::{LEVEL_ENV, Level};
 pub use measures::{
     OnCharacter, clip_foot_glide_cm, clip_head_trunk_deg, foot_glide_cm, foot_ground_offsets,
-    ground_offsets, on_character_given, on_character_with_grounds, stance_offsets,
-    stance_offsets_given,
+    ground_offsets, on_character_given, on_character_in, on_character_with_grounds, stance_offsets,
+    stance_offsets_given, stance_offsets_in,
 };
 pub use motion_ref::REFERENCE_ENV;
 pub use reference::{
@@ -102,7 +104,8 @@ pub use reference::{
     character_neutral, choose_reference, clip_poses, leg_length, neutral_score,
 };
 #[allow(deprecated)]
-pub use reference::{Reference, ReferenceSource}; // old name
+pub use reference::{Reference, ReferenceSource};
+pub use workspace::KernelWorkspace; // old name
 
 #[cfg(test)]
 mod tests;

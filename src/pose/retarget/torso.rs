@@ -19,23 +19,41 @@ pub(super) fn upright(
     mocap: &[Pose],
     rotations: &[[DQuat; Canonical::COUNT]],
 ) -> Vec<[DQuat; Canonical::COUNT]> {
+    let mut out = Vec::new();
+    upright_into(mocap, rotations, &mut Vec::new(), &mut out);
+    out
+}
+
+/// [`upright`] into `out` (cleared), with `tilt` a buffer for the
+/// frames' trunk angles: no allocation once both hold the clip's frames.
+pub(super) fn upright_into(
+    mocap: &[Pose],
+    rotations: &[[DQuat; Canonical::COUNT]],
+    tilt: &mut Vec<f64>,
+    out: &mut Vec<[DQuat; Canonical::COUNT]>,
+) {
     // The trunk as the pelvis → chest line: where the neck sits on the
     // chest (a conversion drops the thorax's length) must not choose them.
-    let tilt: Vec<f64> = mocap
-        .iter()
-        .map(|p| angle(p[C::Chest.index()] - p[C::Pelvis.index()], DVec3::Y))
-        .collect();
+    tilt.clear();
+    tilt.extend(
+        mocap
+            .iter()
+            .map(|p| angle(p[C::Chest.index()] - p[C::Pelvis.index()], DVec3::Y)),
+    );
     let least = tilt
         .iter()
         .copied()
         .filter(|t| t.is_finite())
         .fold(f64::INFINITY, f64::min);
-    rotations
-        .iter()
-        .zip(&tilt)
-        .filter(|&(_, &t)| t <= least + 10f64.to_radians())
-        .map(|(a, _)| *a)
-        .collect()
+    out.clear();
+    out.reserve(rotations.len());
+    out.extend(
+        rotations
+            .iter()
+            .zip(tilt.iter())
+            .filter(|&(_, &t)| t <= least + 10f64.to_radians())
+            .map(|(a, _)| *a),
+    );
 }
 
 /// The clip's typical carriage of the neck: the mean (sign-aligned,
