@@ -96,6 +96,10 @@ pub struct Character {
     examples: ExampleMemo,
 }
 
+/// The manifest's deformation overrides: constraint vertices, example
+/// frames.
+type Overrides = (Option<Vec<u32>>, Option<Vec<FlatFrame>>);
+
 /// The manifest's deformation overrides: the constraint vertices (from
 /// `[deform] constraints`, each below `n`) and the example frames (from
 /// `[deform] examples`, `SEQUENCE:FRAME` in `graph`).
@@ -104,7 +108,7 @@ fn deform_overrides(
     manifest: &Manifest,
     graph: &SurfaceMotionGraph,
     n: usize,
-) -> Result<(Option<Vec<u32>>, Option<Vec<FlatFrame>>), DbError> {
+) -> Result<Overrides, DbError> {
     let bad = |msg: String| DbError::Manifest {
         path: dir.join(MANIFEST),
         msg: format!("[deform] {msg}"),
