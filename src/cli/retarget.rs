@@ -141,7 +141,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let preview = a.run.preview.preview.as_deref().map(|p| (p, &preview));
     let c = job.run_clip(&a.mocap, &a.output, preview)?;
     if let Some(p) = &a.report {
-        super::write_json(p, &c.report_json()?)?;
+        let mut v = c.report_json()?;
+        v["stages"] = job.stages_json(&c);
+        super::write_json(p, &v)?;
     }
     if a.run.json {
         return super::emit_json(&serde_json::to_value(c.summary())?);

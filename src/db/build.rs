@@ -19,6 +19,7 @@ use crate::similarity::{
     VertexSet, all_pairs,
 };
 use crate::util::fsutil::{read_text, write_bytes_atomic};
+use crate::util::stages::Stages;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -923,6 +924,19 @@ pub(crate) fn build_opened(
     opts: &BuildOptions,
     progress: &dyn BuildProgress,
 ) -> Result<(Similarity, SurfaceMotionGraph, BuildReport), DbError> {
+    build_opened_staged(dir, m, opts, progress, None)
+}
+
+/// [`build_opened`], its two stages timed into `stages` when given:
+/// `similarity` (the keys of the inputs and the similarity read from its
+/// cache or built) and `graph` (read and checked, or built).
+pub(crate) fn build_opened_staged(
+    dir: &Path,
+    m: &Manifest,
+    opts: &BuildOptions,
+    progress: &dyn BuildProgress,
+    mut stages: Option<&mut Stages>,
+) -> Result<(Similarity, SurfaceMotionGraph, BuildReport), DbError> {
     if m.sequences.is_empty() {
         return Err(DbError::Manifest {
             path: dir.join(super::MANIFEST),
@@ -934,6 +948,9 @@ pub(crate) fn build_opened(
     let measure = opts.measure.unwrap_or_else(|| default_measure(m));
     let (mat, sim_key, timing) =
         similarity_with(dir, m, measure, opts.method, opts.force, progress)?;
+    if let Some(s) = stages.as_deref_mut() {
+        s.lap("similarity");
+    }
     let topts = m.graph.transition_options();
     let edits = m.graph.edits();
     let graph_key = graph_key(m, sim_key);
@@ -975,6 +992,9 @@ pub(crate) fn build_opened(
         }
     };
     let graph_seconds = t.elapsed().as_secs_f64();
+    if let Some(s) = stages {
+        s.lap("graph");
+    }
     let (describe_seconds, pairs_seconds, pairs) = timing
         .map(|t| (t.describe_seconds, t.pairs_seconds, t.pairs))
         .unwrap_or((0.0, 0.0, 0));

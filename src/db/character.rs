@@ -14,7 +14,7 @@
 //! `skeleton` measure reads the regressor joints in `db build`; `db
 //! skeleton` writes [`SkeletonKind::Rigid`] by default.
 
-use crate::db::build::{BuildOptions, BuildProgress, build_opened};
+use crate::db::build::{BuildOptions, BuildProgress, build_opened_staged};
 use crate::db::examples::ExampleMemo;
 use crate::db::frames::{CacheInputs, Conversion, FrameStore, open_or_build};
 use crate::db::rig_cache::{RigSource, embed_rig_cached};
@@ -26,6 +26,7 @@ use crate::mesh::Mesh;
 use crate::mocap::units::y_up;
 use crate::pose::Pose;
 use crate::similarity::Similarity;
+use crate::util::stages::Stages;
 use glam::DVec3;
 use std::path::Path;
 
@@ -95,6 +96,74 @@ pub struct Character {
     examples: ExampleMemo,
 }
 
+/// The manifest's deformation overrides: constraint vertices, example
+/// frames.
+type Overrides = (Option<Vec<u32>>, Option<Vec<FlatFrame>>);
+
+/// The manifest's deformation overrides: the constraint vertices (from
+/// `[deform] constraints`, each below `n`) and the example frames (from
+/// `[deform] examples`, `SEQUENCE:FRAME` in `graph`).
+fn deform_overrides(
+    dir: &Path,
+    manifest: &Manifest,
+    graph: &SurfaceMotionGraph,
+    n: usize,
+) -> Result<Overrides, DbError> {
+    let bad = |msg: String| DbError::Manifest {
+        path: dir.join(MANIFEST),
+        msg: format!("[deform] {msg}"),
+    };
+    let constraint_override = match &manifest.deform.constraints {
+        None => None,
+        Some(p) => {
+            let p = Manifest::resolve(dir, p);
+            let text = crate::util::fsutil::read_text(&p)?;
+            let ids: Vec<u32> = serde_json::from_str(&text).map_err(|e| {
+                bad(format!(
+                    "{}: expected a JSON array of vertex ids ({e})",
+                    p.display()
+                ))
+            })?;
+            if let Some(v) = ids.iter().find(|&&v| v as usize >= n) {
+                return Err(bad(format!(
+                    "{}: vertex {v} is out of range (the topology has {n})",
+                    p.display()
+                )));
+            }
+            Some(ids)
+        }
+    };
+    let example_override = if manifest.deform.examples.is_empty() {
+        None
+    } else {
+        let mut ids = Vec::new();
+        for e in &manifest.deform.examples {
+            let (name, f) = e
+                .rsplit_once(':')
+                .ok_or_else(|| bad(format!("example '{e}': expected SEQUENCE:FRAME")))?;
+            let s = graph
+                .sequences()
+                .iter()
+                .position(|q| q.name == name.trim())
+                .ok_or_else(|| bad(format!("example '{e}': no sequence '{name}'")))?;
+            let id = f
+                .trim()
+                .parse()
+                .ok()
+                .and_then(|frame| {
+                    graph.checked_flat_id(FrameId {
+                        seq: s as u32,
+                        frame,
+                    })
+                })
+                .ok_or_else(|| bad(format!("example '{e}': no frame '{f}' in '{name}'")))?;
+            ids.push(id);
+        }
+        Some(ids)
+    };
+    Ok((constraint_override, example_override))
+}
+
 impl Character {
     /// Loads the database in `dir`, building (or reading from the cache) its
     /// matrix and graph, with the default [`CharacterOptions`].
@@ -108,9 +177,31 @@ impl Character {
         progress: &dyn BuildProgress,
         opts: &CharacterOptions,
     ) -> Result<Character, DbError> {
+        Self::load_staged(dir, progress, opts, &mut Stages::start())
+    }
+
+    /// [`Character::load_with`], each stage of the load timed into
+    /// `stages` (issue 43: what a retarget spends before its first frame):
+    /// `manifest` (and the topology), `similarity` (its key and cache),
+    /// `graph`, `rig`, `frames` (the frame and skeleton caches mapped and
+    /// read), `links` (adjacency, successor steps, the manifest's
+    /// overrides).
+    pub fn load_staged(
+        dir: &Path,
+        progress: &dyn BuildProgress,
+        opts: &CharacterOptions,
+        stages: &mut Stages,
+    ) -> Result<Character, DbError> {
         // The topology read once: the size check and the character share it.
         let (manifest, topology) = Manifest::open(dir)?;
-        let (matrix, graph, _) = build_opened(dir, &manifest, &BuildOptions::default(), progress)?;
+        stages.lap("manifest");
+        let (matrix, graph, _) = build_opened_staged(
+            dir,
+            &manifest,
+            &BuildOptions::default(),
+            progress,
+            Some(&mut *stages),
+        )?;
         // The rig from the cache (`cache/rig.json`) when it is current, else
         // embedded from only the frames the skin's motion fit reads (the
         // graph's spans give each sequence's length) and cached: a load with
@@ -124,6 +215,7 @@ impl Character {
         let lens: Vec<usize> = spans.iter().map(|s| s.len).collect();
         let (rig, rig_source) =
             embed_rig_cached(dir, &manifest, &topology, same.then_some(&lens[..]))?;
+        stages.lap("rig");
         let n = topology.vertex_count();
         let metres_per_unit = crate::mocap::units::parse_unit(&manifest.units)
             .map(|u| u.metres_per_unit)
@@ -145,62 +237,13 @@ impl Character {
             },
             kind: opts.skeleton,
         })?;
+        stages.lap("frames");
         let rest_pose = rig.joints.map(|j| conv(DVec3::from_array(j)));
         let examples = ExampleMemo::new(dir, cache_key, poses.len());
         let adjacency = graph.adjacency();
         let steps = successor_steps(&matrix, &graph);
-        let bad = |msg: String| DbError::Manifest {
-            path: dir.join(MANIFEST),
-            msg: format!("[deform] {msg}"),
-        };
-        let constraint_override = match &manifest.deform.constraints {
-            None => None,
-            Some(p) => {
-                let p = Manifest::resolve(dir, p);
-                let text = crate::util::fsutil::read_text(&p)?;
-                let ids: Vec<u32> = serde_json::from_str(&text).map_err(|e| {
-                    bad(format!(
-                        "{}: expected a JSON array of vertex ids ({e})",
-                        p.display()
-                    ))
-                })?;
-                if let Some(v) = ids.iter().find(|&&v| v as usize >= n) {
-                    return Err(bad(format!(
-                        "{}: vertex {v} is out of range (the topology has {n})",
-                        p.display()
-                    )));
-                }
-                Some(ids)
-            }
-        };
-        let example_override = if manifest.deform.examples.is_empty() {
-            None
-        } else {
-            let mut ids = Vec::new();
-            for e in &manifest.deform.examples {
-                let (name, f) = e
-                    .rsplit_once(':')
-                    .ok_or_else(|| bad(format!("example '{e}': expected SEQUENCE:FRAME")))?;
-                let s = graph
-                    .sequences()
-                    .iter()
-                    .position(|q| q.name == name.trim())
-                    .ok_or_else(|| bad(format!("example '{e}': no sequence '{name}'")))?;
-                let id = f
-                    .trim()
-                    .parse()
-                    .ok()
-                    .and_then(|frame| {
-                        graph.checked_flat_id(FrameId {
-                            seq: s as u32,
-                            frame,
-                        })
-                    })
-                    .ok_or_else(|| bad(format!("example '{e}': no frame '{f}' in '{name}'")))?;
-                ids.push(id);
-            }
-            Some(ids)
-        };
+        let (constraint_override, example_override) = deform_overrides(dir, &manifest, &graph, n)?;
+        stages.lap("links");
         Ok(Character {
             manifest,
             topology,

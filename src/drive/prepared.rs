@@ -30,6 +30,7 @@ use crate::pose::retarget::{
     CharacterNeutral, ClipNeutral, Given, KernelWorkspace, OnCharacter, character_neutral,
     on_character_in, stance_offsets_in,
 };
+use crate::util::stages::Stages;
 use glam::DVec3;
 use serde::Serialize;
 use std::time::Instant;
@@ -168,10 +169,24 @@ impl Prepared {
     /// Prepares `ch` for synthesis with the deformation of `opts`
     /// (factorisations made here, once).
     pub fn new(ch: &Character, opts: &DriveOptions) -> Result<Prepared, DriveError> {
+        Prepared::new_staged(ch, opts, &mut Stages::start())
+    }
+
+    /// [`Prepared::new`], its stages timed into `stages` (issue 43):
+    /// `topology in metres`, `neutral pose`, `floor lift`, `blender`
+    /// (factored) and `deformer` (prefactored; when deforming).
+    pub fn new_staged(
+        ch: &Character,
+        opts: &DriveOptions,
+        stages: &mut Stages,
+    ) -> Result<Prepared, DriveError> {
         let t = Instant::now();
         let topology = ch.topology_metres();
+        stages.lap("topology in metres");
         let neutral = character_neutral(ch.rest_pose(), ch.poses());
+        stages.lap("neutral pose");
         let floor_lift = database_floor_lift_on(ch, &topology);
+        stages.lap("floor lift");
         let mut timings = PrepareTimings {
             character: t.elapsed().as_secs_f64(),
             ..PrepareTimings::default()
@@ -179,12 +194,14 @@ impl Prepared {
         let t = Instant::now();
         let blender = Blender::new(&topology)?;
         timings.factor = t.elapsed().as_secs_f64();
+        stages.lap("blender");
         let deformer = if opts.deform != DeformMode::None {
             let t = Instant::now();
             let d = Deformer::new(ch, opts.deform, &opts.deform_options)?;
             // The examples it chose, kept for the next load (issue 43).
             ch.examples().save();
             timings.deform_factor = t.elapsed().as_secs_f64();
+            stages.lap("deformer");
             Some(d)
         } else {
             None

@@ -21,6 +21,7 @@ use crate::tools::eval::{
     Checker, Plausibility, PlausibilityOptions, VelocityError, velocity_error,
 };
 use crate::tools::render::preview::PreviewOptions;
+use crate::util::stages::{self, Stage, Stages};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -63,6 +64,8 @@ pub struct RetargetJob {
     /// The plausibility checker of the character (built on first use;
     /// `None` when the rig cannot support the checks).
     checker: OnceLock<Option<Checker>>,
+    /// The stages of [`RetargetJob::load`], timed (issue 43).
+    load_stages: Vec<Stage>,
 }
 
 /// One clip retargeted.
@@ -83,8 +86,9 @@ impl RetargetJob {
         options: RetargetJobOptions,
         progress: &dyn BuildProgress,
     ) -> Result<RetargetJob, JobError> {
-        let character = Character::load_with(db, progress, &options.character)?;
-        let prepared = Prepared::new(&character, &options.retarget)?;
+        let mut stages = Stages::start();
+        let character = Character::load_staged(db, progress, &options.character, &mut stages)?;
+        let prepared = Prepared::new_staged(&character, &options.retarget, &mut stages)?;
         Ok(RetargetJob {
             character,
             options,
@@ -92,6 +96,32 @@ impl RetargetJob {
             prepared,
             preparations: AtomicUsize::new(1),
             checker: OnceLock::new(),
+            load_stages: stages.into_stages(),
+        })
+    }
+
+    /// The stages of the load ([`Character::load_staged`],
+    /// [`Prepared::new_staged`]), each with its wall and CPU seconds: what
+    /// the job spent before its first clip.
+    pub fn load_stages(&self) -> &[Stage] {
+        &self.load_stages
+    }
+
+    /// The stages of the load and of the clip `c` (issue 43: the per-clip
+    /// fixed cost separated), with their sums and the process's CPU
+    /// seconds so far (what the stages leave out: the program's start, the
+    /// options read, the outputs checked), for a `--report`.
+    pub fn stages_json(&self, c: &ClipResult) -> serde_json::Value {
+        let (load_wall, load_cpu) = stages::sum(&self.load_stages);
+        let (clip_wall, clip_cpu) = stages::sum(&c.stages);
+        serde_json::json!({
+            "load": self.load_stages,
+            "clip": c.stages,
+            "load_wall": load_wall,
+            "load_cpu": load_cpu,
+            "clip_wall": clip_wall,
+            "clip_cpu": clip_cpu,
+            "process_cpu": stages::process_cpu(),
         })
     }
 
@@ -203,9 +233,11 @@ impl RetargetJob {
         out: &Path,
         keep_bytes: usize,
     ) -> Result<StreamedRun, JobError> {
+        let mut stages = Stages::start();
         let ch = &self.character;
         let fps = ch.manifest().fps;
         let mocap = self.load_clip(clip)?;
+        stages.lap("clip read");
         let n = ch.n();
         let frames = mocap.poses.len();
         let fresh = self.fresh_preparation()?;
@@ -223,7 +255,9 @@ impl RetargetJob {
         let keep = (keep_bytes / (24 * n.max(1))).clamp(1, frames);
         let mut kept = Vec::with_capacity(keep * n);
         let mut skeletons: Vec<Pose> = Vec::with_capacity(frames);
+        stages.lap("output opened");
         let analysed = prepared.analyse(ch, &mocap.reference, &mocap.poses);
+        stages.lap("clip analysed");
         let mut sink_seconds = 0.0;
         let report = prepared.synthesise::<_, JobError>(
             ch,
@@ -242,10 +276,13 @@ impl RetargetJob {
                 Ok(())
             }),
         )?;
+        stages.lap("synthesis");
         let t = Instant::now();
         let written = writer.finish()?;
         sink_seconds += t.elapsed().as_secs_f64();
+        stages.lap("output finished");
         let velocity = velocity_error(&analysed.query, &skeletons);
+        stages.lap("velocity error");
         Ok(StreamedRun {
             mocap,
             analysed,
@@ -254,6 +291,7 @@ impl RetargetJob {
             kept,
             velocity,
             sink_seconds,
+            stages,
         })
     }
 
@@ -398,6 +436,9 @@ pub struct StreamedRun {
     pub velocity: VelocityError,
     /// Seconds handing frames on (skeletons read, frames written).
     pub sink_seconds: f64,
+    /// The run's stages so far (the clock still running: a caller laps
+    /// what it does next).
+    pub stages: Stages,
 }
 
 impl StreamedRun {
@@ -662,6 +703,8 @@ pub struct ClipResult {
     /// The plausibility was measured on this many first frames (streamed
     /// output); `None` when on every frame.
     pub partial: Option<usize>,
+    /// The clip's stages, timed (issue 43).
+    pub stages: Vec<Stage>,
 }
 
 impl RetargetJob {
@@ -680,9 +723,13 @@ impl RetargetJob {
         let Some((path, opts)) = preview else {
             let keep_bytes = super::transfer::PLAUSIBILITY_BYTES
                 .min((crate::util::budget::Budget::current().bytes / 4) as usize);
-            let run = self.run_to(clip, out, keep_bytes)?;
+            let mut run = self.run_to(clip, out, keep_bytes)?;
             let measured = run.kept.len() / ch.n().max(1);
+            // Built on the first clip of a job (made once, then read).
+            let _ = self.checker();
+            run.stages.lap("plausibility checker");
             let plausibility = self.plausibility_of_streamed(&run).map(|p| p.0);
+            run.stages.lap("plausibility");
             let partial = (measured < run.report.frames).then_some(measured);
             if let Some(k) = partial {
                 tracing::info!(
@@ -696,10 +743,14 @@ impl RetargetJob {
                 convention: run.mocap.convention,
                 plausibility,
                 partial,
+                stages: run.stages.into_stages(),
             });
         };
+        let mut stages = Stages::start();
         let run = self.run(clip)?;
+        stages.lap("clip retargeted");
         let plaus = self.plausibility_of(&run);
+        stages.lap("plausibility");
         crate::tools::render::preview::write_preview(
             path,
             &run.output.positions,
@@ -710,13 +761,16 @@ impl RetargetJob {
             plaus.as_ref().map(|p| p.1),
             opts,
         )?;
+        stages.lap("preview");
         let written = self.write(run.output.positions, out)?;
+        stages.lap("output written");
         Ok(ClipResult {
             report: run.output.report,
             written,
             convention: run.mocap.convention,
             plausibility: plaus.map(|p| p.0),
             partial: None,
+            stages: stages.into_stages(),
         })
     }
 }

@@ -44,6 +44,7 @@ use super::matrix::{Dissimilarity, PairDistance, Span};
 use super::pair_scan;
 use super::tiled::{self, Run};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Bytes [`SparseSimilarity::write_to`] gathers before each write.
 const WRITE_CHUNK: usize = 1 << 16;
@@ -978,11 +979,9 @@ pub fn sparse_pairs(
     let mut merged = merge_runs(runs);
     let total: u64 = merged.iter().map(|r| (r.r1 - r.r0 + 1) as u64).sum();
     progress.stage("sparse pairs compared", total);
-    let values = tiled::evaluate(set, &merged, &step);
-    let (offsets, cols, vals) = rows_of(n, &merged, &values);
-    // Freed before the closure (issue 43, session 41: this buffer lived to
-    // the end, 4 bytes a pair at the build's peak).
-    drop(values);
+    // Straight into the rows (issue 43, session 42: the flat values, 4
+    // bytes a pair, were held beside them at the 10⁵-frame build's peak).
+    let (offsets, cols, vals) = rows_evaluated(n, &merged, set, &step);
     let mut sim = SparseSimilarity {
         spans,
         n,
@@ -1059,9 +1058,7 @@ fn close(
         drop(old);
         let total: u64 = fresh.iter().map(|r| r.len() as u64).sum();
         progress.stage("sparse pairs closed", total);
-        let values = tiled::evaluate(set, &fresh, &|k| progress.advance(k));
-        let added = rows_of(sim.n, &fresh, &values);
-        drop(values);
+        let added = rows_evaluated(sim.n, &fresh, set, &|k| progress.advance(k));
         let (mut cols, mut vals) = match std::mem::replace(&mut sim.pairs, Stored::empty()) {
             Stored::Owned { cols, vals } => (cols, vals),
             mapped => {
@@ -1260,8 +1257,82 @@ fn merge_runs(mut runs: Vec<Run>) -> Vec<Run> {
     merged
 }
 
+/// The rows of `merged`'s pairs (runs as [`merge_runs`] leaves them: no
+/// pair twice) with the full measure of `set` evaluated straight into
+/// them ([`tiled::evaluate_each`]): [`rows_of`] the runs and
+/// [`tiled::evaluate`]'s values, bit for bit, without those values held
+/// beside the rows (4 bytes a pair; issue 43, session 42). The columns are
+/// laid out and sorted first; each value goes to its two slots, found by
+/// binary search in the sorted rows.
+fn rows_evaluated(
+    n: usize,
+    merged: &[Run],
+    set: &dyn PairDistance,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Rows {
+    let (offsets, cols) = row_columns(n, merged);
+    let slots: Vec<AtomicU32> = (0..cols.len()).map(|_| AtomicU32::new(0)).collect();
+    let slot = |a: u32, b: u32| {
+        let (s, e) = (
+            offsets[a as usize] as usize,
+            offsets[a as usize + 1] as usize,
+        );
+        // Every pair of the runs has its column in both rows.
+        s + cols[s..e].binary_search(&b).unwrap_or_else(|k| k)
+    };
+    tiled::evaluate_each(set, merged, progress, &|a, b, _, v| {
+        slots[slot(a, b)].store(v.to_bits(), Ordering::Relaxed);
+        slots[slot(b, a)].store(v.to_bits(), Ordering::Relaxed);
+    });
+    let vals = slots
+        .into_iter()
+        .map(|v| f32::from_bits(v.into_inner()))
+        .collect();
+    (offsets, cols, vals)
+}
+
+/// The row offsets and columns (ascending in each row) of the pairs of
+/// `merged` stored both ways.
+fn row_columns(n: usize, merged: &[Run]) -> (Vec<u64>, Vec<u32>) {
+    let mut offsets = vec![0u64; n + 1];
+    for r in merged {
+        for a in r.r0..=r.r1 {
+            offsets[a as usize + 1] += 1;
+            offsets[(a + r.diag) as usize + 1] += 1;
+        }
+    }
+    for a in 0..n {
+        offsets[a + 1] += offsets[a];
+    }
+    let mut cols = vec![0u32; offsets[n] as usize];
+    let mut fill: Vec<u64> = offsets[..n].to_vec();
+    for r in merged {
+        for a in r.r0..=r.r1 {
+            let b = a + r.diag;
+            for (p, q) in [(a, b), (b, a)] {
+                cols[fill[p as usize] as usize] = q;
+                fill[p as usize] += 1;
+            }
+        }
+    }
+    drop(fill);
+    let mut rows: Vec<&mut [u32]> = Vec::with_capacity(n);
+    let mut rest = cols.as_mut_slice();
+    for a in 0..n {
+        let k = (offsets[a + 1] - offsets[a]) as usize;
+        let (row, tail) = std::mem::take(&mut rest).split_at_mut(k);
+        rows.push(row);
+        rest = tail;
+    }
+    rows.par_iter_mut().for_each(|r| r.sort_unstable());
+    drop(rows);
+    (offsets, cols)
+}
+
 /// The runs' values stored both ways, row by row, columns ascending:
-/// row offsets, columns and values of a compressed sparse row matrix.
+/// row offsets, columns and values of a compressed sparse row matrix
+/// (the reference [`rows_evaluated`] is tested against).
+#[cfg(test)]
 fn rows_of(n: usize, merged: &[Run], values: &[f32]) -> Rows {
     let mut deg = vec![0u64; n + 1];
     for r in merged {
@@ -1295,6 +1366,7 @@ fn rows_of(n: usize, merged: &[Run], values: &[f32]) -> Rows {
 }
 
 /// Sorts each row (of `deg` entries) by column, in parallel over rows.
+#[cfg(test)]
 fn sort_rows(deg: &[u64], cols: &mut [u32], vals: &mut [f32]) {
     let mut rows: Vec<(&mut [u32], &mut [f32])> = Vec::with_capacity(deg.len());
     let (mut c, mut v) = (cols, vals);
@@ -1496,6 +1568,62 @@ pub(crate) mod tests {
             let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&vals), bits(&want.2), "{round}");
         }
+    }
+
+    /// Issue 43, session 42: the rows with the full measure evaluated
+    /// straight into them are [`rows_of`] the runs and
+    /// [`tiled::evaluate`]'s values — offsets, columns and value bits — on
+    /// random merged runs (overlapping, touching, one-pair runs, far
+    /// diagonals, rows with no pair, blocks' edges crossed) of a measure
+    /// that tells a pair's two orders apart, and on no runs.
+    #[test]
+    fn pairs_evaluated_straight_into_the_rows_are_the_rows_of_the_values() {
+        struct Asym(usize);
+        impl PairDistance for Asym {
+            fn frames(&self) -> usize {
+                self.0
+            }
+            fn distance(&self, a: usize, b: usize) -> f64 {
+                (a as f64 * 1.000_123).sin() * 3.0 + (b as f64).sqrt() + (a * 7 + b) as f64 * 1e-6
+            }
+        }
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = move |m: u32| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % m as u64) as u32
+        };
+        for round in 0..30u32 {
+            let n = 70 + rnd(600);
+            let mut runs = vec![Run {
+                diag: n - 1,
+                r0: 0,
+                r1: 0,
+            }];
+            for _ in 0..(1 + round * 7) {
+                let diag = 1 + rnd(n - 1);
+                let r0 = rnd(n - diag);
+                let r1 = (r0 + rnd(90)).min(n - 1 - diag);
+                runs.push(Run { diag, r0, r1 });
+            }
+            let runs = merge_runs(runs);
+            let set = Asym(n as usize);
+            let counted = std::sync::atomic::AtomicU64::new(0);
+            let got = rows_evaluated(n as usize, &runs, &set, &|k| {
+                counted.fetch_add(k, Ordering::Relaxed);
+            });
+            let want = rows_of(n as usize, &runs, &tiled::evaluate(&set, &runs, &|_| {}));
+            assert_eq!(got.0, want.0, "{round}: offsets");
+            assert_eq!(got.1, want.1, "{round}: columns");
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&got.2), bits(&want.2), "{round}: values");
+            let pairs: u64 = runs.iter().map(|r| r.len() as u64).sum();
+            assert_eq!(counted.into_inner(), pairs, "{round}: progress");
+            assert_eq!(got.1.len() as u64, 2 * pairs, "{round}");
+        }
+        let none = rows_evaluated(5, &[], &Asym(5), &|_| {});
+        assert_eq!(none, (vec![0u64; 6], Vec::new(), Vec::new()));
     }
 
     /// Issue 43, session 41: the closure that evaluates only the pairs not

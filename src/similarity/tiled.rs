@@ -61,23 +61,39 @@ pub fn offsets(runs: &[Run]) -> Vec<usize> {
 /// parallel over blocks of [`TILE_ROWS`] rows, columns ascending within a
 /// block. `progress` hears the pairs of each finished block.
 pub fn evaluate(set: &dyn PairDistance, runs: &[Run], progress: &(dyn Fn(u64) + Sync)) -> Vec<f32> {
-    let at = offsets(runs);
-    let total = at[runs.len()];
+    let total = offsets(runs)[runs.len()];
     let values: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
+    evaluate_each(set, runs, progress, &|_, _, slot, v| {
+        values[slot].store(v.to_bits(), Ordering::Relaxed)
+    });
+    values
+        .into_iter()
+        .map(|v| f32::from_bits(v.into_inner()))
+        .collect()
+}
+
+/// [`evaluate`]'s pairs in its order, each value handed to `put` as
+/// `(row, column, slot in evaluate's flat output, value)` instead of kept
+/// (issue 43, session 42: the sparse build writes them straight into its
+/// rows, without the flat output's 4 bytes a pair). `put` is called once a
+/// pair, from the pool's threads.
+pub fn evaluate_each(
+    set: &dyn PairDistance,
+    runs: &[Run],
+    progress: &(dyn Fn(u64) + Sync),
+    put: &(dyn Fn(u32, u32, usize, f32) + Sync),
+) {
+    let at = offsets(runs);
     let blocks = block_pieces(runs);
     blocks.par_iter().enumerate().for_each(|(blk, pieces)| {
         let mut pairs = block_pairs(runs, &at, pieces, blk);
         pairs.sort_unstable();
         for &(b, a, slot) in &pairs {
             let v = set.distance(a as usize, b as usize) as f32;
-            values[slot].store(v.to_bits(), Ordering::Relaxed);
+            put(a, b, slot, v);
         }
         progress(pairs.len() as u64);
     });
-    values
-        .into_iter()
-        .map(|v| f32::from_bits(v.into_inner()))
-        .collect()
 }
 
 /// A run's rows within one block: run `k`, rows `r0..=r1`.

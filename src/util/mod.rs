@@ -1,8 +1,9 @@
 //! Utilities shared by every stage: job limits ([`budget`]), CPU clocks
-//! ([`cpu`]), atomic writes and bounded reads ([`fsutil`]), and short
-//! numbers in messages ([`numfmt`]).
+//! ([`cpu`]), atomic writes and bounded reads ([`fsutil`]), short numbers
+//! in messages ([`numfmt`]) and a run's stages timed ([`stages`]).
 
 pub mod budget;
 pub mod cpu;
 pub mod fsutil;
 pub mod numfmt;
+pub mod stages;

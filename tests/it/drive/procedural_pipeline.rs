@@ -601,3 +601,100 @@ fn a_second_load_of_the_samba_capture_reads_no_sequence_file() {
     let last = surfmotion::graph::FlatFrame::from_index(first.frame_count() - 1);
     assert_eq!(second.frame(last), first.frame(last));
 }
+
+/// Issue 43, session 42: `retarget --report` times what runs before the
+/// first frame (the load: manifest, similarity, graph, rig, frames, links,
+/// the preparation's factorisations) and what runs per clip, each stage's
+/// wall and CPU seconds. The stages cover the run: their CPU adds up to
+/// no more than the process's at the report (each stage counted once) and
+/// to at least 80 % of it (nothing large left outside them); the
+/// synthesis's own stage timings fit in its stage.
+#[test]
+fn the_report_stages_cover_the_retarget() {
+    let f = fixture();
+    let tmp = tempfile::tempdir().unwrap();
+    let clip = tmp.path().join("walk.bvh");
+    surfmotion::mocap::bvh::write_bvh(&gait_clip(Gait::Walk, 2.0, FPS), &clip).unwrap();
+    let report = tmp.path().join("r.json");
+    common::run_ok(
+        std::process::Command::new(common::bin())
+            .arg("retarget")
+            .arg("--db")
+            .arg(&f.db)
+            .arg("--mocap")
+            .arg(&clip)
+            .arg("-o")
+            .arg(tmp.path().join("out.pc2"))
+            .arg("--report")
+            .arg(&report),
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let s = &r["stages"];
+    let names = |k: &str| -> Vec<String> {
+        s[k].as_array()
+            .unwrap_or_else(|| panic!("no stages.{k}: {s}"))
+            .iter()
+            .map(|x| x["stage"].as_str().unwrap().to_string())
+            .collect()
+    };
+    let load = names("load");
+    for want in [
+        "manifest",
+        "similarity",
+        "graph",
+        "rig",
+        "frames",
+        "links",
+        "neutral pose",
+        "blender",
+        "deformer",
+    ] {
+        assert!(
+            load.iter().any(|n| n == want),
+            "no load stage {want}: {load:?}"
+        );
+    }
+    let clip_stages = names("clip");
+    for want in ["clip read", "clip analysed", "synthesis", "plausibility"] {
+        assert!(
+            clip_stages.iter().any(|n| n == want),
+            "no clip stage {want}: {clip_stages:?}"
+        );
+    }
+    let num = |v: &serde_json::Value| v.as_f64().unwrap_or_else(|| panic!("{v} in {s}"));
+    let mut cpu = 0.0;
+    for k in ["load", "clip"] {
+        for st in s[k].as_array().unwrap() {
+            assert!(num(&st["wall"]) >= 0.0 && num(&st["cpu"]) >= 0.0, "{st}");
+            cpu += num(&st["cpu"]);
+        }
+    }
+    assert!((cpu - num(&s["load_cpu"]) - num(&s["clip_cpu"])).abs() < 1e-6);
+    let process = num(&s["process_cpu"]);
+    assert!(
+        cpu <= process + 0.02,
+        "stages {cpu} s of CPU, the process {process} s"
+    );
+    assert!(
+        cpu >= 0.8 * process,
+        "stages {cpu} s of CPU of the process's {process} s: {s}"
+    );
+    // The synthesis's per-stage timings (wall) within its stage.
+    let synthesis = s["clip"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|x| x["stage"] == "synthesis")
+        .map(|x| num(&x["wall"]))
+        .unwrap();
+    let t = &r["timings"];
+    let inside: f64 = ["retrieval", "timeline", "meshes", "deform"]
+        .iter()
+        .map(|k| num(&t[k]))
+        .sum();
+    assert!(
+        inside <= synthesis + 1e-3,
+        "{inside} s in a {synthesis} s synthesis: {t}"
+    );
+}
