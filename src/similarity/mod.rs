@@ -20,6 +20,8 @@ pub mod pair_scan;
 pub mod scan;
 pub mod sets;
 pub mod sparse;
+#[cfg(test)]
+pub(crate) mod test_rng;
 pub mod tiled;
 pub mod transitions;
 pub mod vertex;

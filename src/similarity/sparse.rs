@@ -1518,13 +1518,8 @@ pub(crate) mod tests {
     /// nothing stored) over 400 frames.
     #[test]
     fn new_pairs_merged_in_place_are_the_rows_of_every_run() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rnd = move |m: u32| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % m as u64) as u32
-        };
+        let mut rng = crate::similarity::test_rng::XorShift::new(0x9e37_79b9_7f4a_7c15);
+        let mut rnd = move |m: u32| rng.below(m);
         let n = 400u32;
         let random_runs = |k: usize, rnd: &mut dyn FnMut(u32) -> u32| -> Vec<Run> {
             (0..k)
@@ -1587,13 +1582,8 @@ pub(crate) mod tests {
                 (a as f64 * 1.000_123).sin() * 3.0 + (b as f64).sqrt() + (a * 7 + b) as f64 * 1e-6
             }
         }
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut rnd = move |m: u32| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % m as u64) as u32
-        };
+        let mut rng = crate::similarity::test_rng::XorShift::new(0x2545_f491_4f6c_dd1d);
+        let mut rnd = move |m: u32| rng.below(m);
         for round in 0..30u32 {
             let n = 70 + rnd(600);
             let mut runs = vec![Run {

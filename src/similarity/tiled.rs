@@ -151,13 +151,8 @@ mod tests {
     /// side, far diagonals, runs given in any order; and an empty list.
     #[test]
     fn the_tiled_order_gives_the_run_order_values_bit_for_bit() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut rnd = move |m: u32| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % m as u64) as u32
-        };
+        let mut rng = crate::similarity::test_rng::XorShift::new(0x2545_f491_4f6c_dd1d);
+        let mut rnd = move |m: u32| rng.below(m);
         let mut runs = vec![
             Run {
                 diag: 1,

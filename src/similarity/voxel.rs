@@ -268,11 +268,9 @@ mod tests {
             -f64::MIN_POSITIVE,
         ];
         // A deterministic spread of magnitudes and fractions.
-        let mut v = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rng = crate::similarity::test_rng::XorShift::new(0x9E37_79B9_7F4A_7C15);
         for _ in 0..100_000 {
-            v ^= v << 13;
-            v ^= v >> 7;
-            v ^= v << 17;
+            let v = rng.next_u64();
             let scale = 2f64.powi((v % 80) as i32 - 20);
             xs.push(((v >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * scale);
         }
