@@ -25,8 +25,8 @@ use crate::graph::{FlatFrame, FrameAdjacency, FrameId, SurfaceMotionGraph};
 use crate::mesh::Mesh;
 use crate::mocap::units::y_up;
 use crate::pose::Pose;
-use crate::pose::index::PoseIndex;
 use crate::similarity::Similarity;
+use crate::similarity::skeleton_index::PoseIndex;
 use crate::util::stages::Stages;
 use glam::DVec3;
 use std::path::Path;
@@ -347,7 +347,7 @@ impl Character {
     }
 
     /// The exact k-nearest index over [`Character::poses`] for the
-    /// skeletal dissimilarity ([`crate::pose::index`]), built on the first
+    /// skeletal dissimilarity ([`crate::similarity::skeleton_index`]), built on the first
     /// call and kept with the character (issue 43: retrieval's candidates
     /// without a scan of every frame).
     pub fn pose_index(&self) -> &PoseIndex {

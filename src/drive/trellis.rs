@@ -36,7 +36,7 @@
 
 use crate::graph::{FlatFrame, FrameAdjacency};
 use crate::pose::Pose;
-use crate::pose::index::{PoseIndex, Search, nearest_scan};
+use crate::similarity::skeleton_index::{PoseIndex, Search, nearest_scan};
 use rayon::prelude::*;
 use serde::Serialize;
 

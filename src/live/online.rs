@@ -27,7 +27,7 @@
 use crate::drive::trellis::{RowCosts, TrellisInput, TrellisOptions, relax_row_into, step_median};
 use crate::graph::FlatFrame;
 use crate::pose::Pose;
-use crate::pose::index::{Search, nearest_scan};
+use crate::similarity::skeleton_index::{Search, nearest_scan};
 use serde::Serialize;
 
 /// Frames whose best-match costs set the scales (`T_skel`, `s_node`): the

@@ -5,7 +5,6 @@
 //! Eq. 28), and the rest-pose-aware retargeting kernel that puts a clip's
 //! poses onto a character's own skeleton ([`retarget`]).
 
-pub mod index;
 pub mod measure;
 pub mod retarget;
 pub mod rotations;
