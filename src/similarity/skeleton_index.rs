@@ -49,8 +49,7 @@ use std::collections::BinaryHeap;
 const J: usize = Canonical::COUNT;
 /// Features per pose: `(y_j, r_j)` per joint.
 const F: usize = 2 * J;
-/// Frames per leaf (chosen by measurement, see the module tests and the
-/// session-43 report).
+/// Frames per leaf (16: not tuned by measurement yet).
 const LEAF: usize = 16;
 /// Relative pruning margin.
 const REL: f64 = 1e-6;
@@ -72,9 +71,21 @@ pub fn features(p: &Pose) -> [f64; F] {
 /// `LB(a, b)` of two poses' features: never above
 /// [`skeleton_distance`] of the poses (module docs).
 pub fn lower_bound(a: &[f64; F], b: &[f64]) -> f64 {
-    (0..J)
-        .map(|j| (a[2 * j] - b[2 * j]).hypot(a[2 * j + 1] - b[2 * j + 1]))
-        .sum()
+    lower_bound_until(a, b, f64::INFINITY)
+}
+
+/// [`lower_bound`], the sum stopped as soon as it passes `stop` (any
+/// value above `stop` is then returned: the terms are non-negative).
+fn lower_bound_until(a: &[f64; F], b: &[f64], stop: f64) -> f64 {
+    let mut s = 0.0;
+    for j in 0..J {
+        let (dy, dr) = (a[2 * j] - b[2 * j], a[2 * j + 1] - b[2 * j + 1]);
+        s += (dy * dy + dr * dr).sqrt();
+        if s > stop {
+            break;
+        }
+    }
+    s
 }
 
 /// A node of the tree: frames `lo..hi` of the tree order, its children
@@ -187,7 +198,8 @@ pub fn nearest_scan(poses: &[Pose], q: &Pose, k: usize, out: &mut Vec<(f32, u32)
 /// (the current k-th cost), with the rounding margins of the module docs.
 fn can_beat(lb: f64, worst: f32) -> bool {
     // Not `lb ≤ w`: a NaN `worst` (the k-th is a NaN cost) keeps everything.
-    !(lb * (1.0 - REL) > worst as f64 * (1.0 + REL) + ABS)
+    let w = worst as f64 * (1.0 + REL) + ABS;
+    w.is_nan() || lb * (1.0 - REL) <= w
 }
 
 impl PoseIndex {
@@ -278,7 +290,12 @@ impl PoseIndex {
         let b = &self.boxes[i as usize * 2 * F..(i as usize + 1) * 2 * F];
         let (min, max) = b.split_at(F);
         let gap = |d: usize| (min[d] - q[d]).max(q[d] - max[d]).max(0.0);
-        (0..J).map(|j| gap(2 * j).hypot(gap(2 * j + 1))).sum()
+        (0..J)
+            .map(|j| {
+                let (dy, dr) = (gap(2 * j), gap(2 * j + 1));
+                (dy * dy + dr * dr).sqrt()
+            })
+            .sum()
     }
 
     /// The `k` frames of `poses` (the poses indexed) nearest to `q`, as
@@ -343,8 +360,11 @@ impl PoseIndex {
                 continue;
             }
             for t in node.lo as usize..node.hi as usize {
-                let lb = lower_bound(&qf, &self.feats[t * F..(t + 1) * F]);
-                if best.len() < k || can_beat(lb, worst(best)) {
+                let w = worst(best);
+                // Past this the frame cannot beat the k-th (`can_beat`).
+                let stop = (w as f64 * (1.0 + REL) + ABS) / (1.0 - REL);
+                let lb = lower_bound_until(&qf, &self.feats[t * F..(t + 1) * F], stop);
+                if best.len() < k || can_beat(lb, w) {
                     offer(self.ids[t], best);
                 }
             }
