@@ -26,6 +26,7 @@ use crate::mesh::Mesh;
 use crate::mocap::units::y_up;
 use crate::pose::Pose;
 use crate::similarity::Similarity;
+use crate::similarity::skeleton_index::PoseIndex;
 use crate::util::stages::Stages;
 use glam::DVec3;
 use std::path::Path;
@@ -94,6 +95,12 @@ pub struct Character {
     /// The part deformation's example frames, chosen once per database
     /// (`cache/examples.json`).
     examples: ExampleMemo,
+    /// The k-nearest index over the skeletons, made on first use
+    /// ([`Character::pose_index`]).
+    pose_index: std::sync::OnceLock<PoseIndex>,
+    /// The median positive frame-to-next dissimilarity, made on first use
+    /// ([`Character::step_median`]).
+    step_median: std::sync::OnceLock<f64>,
 }
 
 /// The manifest's deformation overrides: constraint vertices, example
@@ -264,6 +271,8 @@ impl Character {
             cache_key,
             rig_source,
             examples,
+            pose_index: std::sync::OnceLock::new(),
+            step_median: std::sync::OnceLock::new(),
         })
     }
 
@@ -335,6 +344,32 @@ impl Character {
     /// ([`FlatFrame::index`]).
     pub fn poses(&self) -> &[Pose] {
         &self.poses
+    }
+
+    /// The exact k-nearest index over [`Character::poses`] for the
+    /// skeletal dissimilarity ([`crate::similarity::skeleton_index`]), built on the first
+    /// call and kept with the character (issue 43: retrieval's candidates
+    /// without a scan of every frame).
+    pub fn pose_index(&self) -> &PoseIndex {
+        self.pose_index.get_or_init(|| PoseIndex::new(&self.poses))
+    }
+
+    /// The median of the positive dissimilarities between a frame and its
+    /// natural successor (`None` when there is none): retrieval's edge
+    /// scale `s_edge`, the same value
+    /// [`crate::drive::trellis::retrieve`] takes over
+    /// [`Character::successor`] and [`Character::dissimilarity`], computed
+    /// once per character.
+    pub fn step_median(&self) -> Option<f64> {
+        let m = *self.step_median.get_or_init(|| {
+            let mut steps: Vec<f64> = FlatFrame::all(self.poses.len())
+                .filter_map(|f| self.successor(f).map(|g| self.dissimilarity(f, g) as f64))
+                .filter(|c| *c > 0.0)
+                .collect();
+            steps.sort_by(f64::total_cmp);
+            steps.get(steps.len() / 2).copied().unwrap_or(f64::NAN)
+        });
+        (!m.is_nan()).then_some(m)
     }
 
     /// The skeleton of frame `id` (metres, Y-up).

@@ -35,7 +35,8 @@
 //! search going and is reported.
 
 use crate::graph::{FlatFrame, FrameAdjacency};
-use crate::pose::{Pose, measure::skeleton_distance};
+use crate::pose::Pose;
+use crate::similarity::skeleton_index::{PoseIndex, Search, nearest_scan};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -96,6 +97,9 @@ pub struct Retrieval {
     pub node_scale: f64,
     /// `s_edge`: median frame-to-next dissimilarity.
     pub edge_scale: f64,
+    /// True skeleton distances computed to find the candidates (a scan:
+    /// query frames × database frames; fewer through the index).
+    pub distances: u64,
 }
 
 /// What the trellis needs from a database.
@@ -108,6 +112,13 @@ pub struct TrellisInput<'a> {
     pub successor: &'a (dyn Fn(FlatFrame) -> Option<FlatFrame> + Sync),
     /// Frame dissimilarity (the graph's measure).
     pub dissimilarity: &'a (dyn Fn(FlatFrame, FlatFrame) -> f32 + Sync),
+    /// An index over `poses` ([`PoseIndex`]); `None` scans every frame
+    /// (the same candidates, slower).
+    pub index: Option<&'a PoseIndex>,
+    /// `s_edge` computed beforehand (the median positive dissimilarity of
+    /// a frame and its natural successor); `None` computes it from the
+    /// links on each retrieval.
+    pub edge_scale: Option<f64>,
 }
 
 /// A database character's frame links for the trellis (its natural
@@ -137,8 +148,53 @@ impl<'a> DatabaseLinks<'a> {
             adjacency: self.ch.adjacency(),
             successor: &*self.successor,
             dissimilarity: &*self.dissimilarity,
+            index: Some(self.ch.pose_index()),
+            edge_scale: Some(self.ch.step_median().unwrap_or(1.0)),
         }
     }
+}
+
+/// The `kmax` database frames nearest to each query frame by `c_skel`,
+/// each row sorted by (cost as f32, frame id), and how many true
+/// distances were computed: through `db.index` when given (exact, the
+/// same rows), else by a scan of every frame.
+fn nearest_rows(
+    query: &[Pose],
+    db: &TrellisInput,
+    kmax: usize,
+) -> (Vec<Vec<(f32, FlatFrame)>>, u64) {
+    let rows: Vec<(Vec<(f32, FlatFrame)>, u64)> = query
+        .par_iter()
+        .map_init(
+            || (Search::default(), Vec::new()),
+            |(search, buf), q| {
+                let before = search.evaluated;
+                match db.index {
+                    Some(index) => index.nearest(db.poses, q, kmax, search, buf),
+                    None => {
+                        nearest_scan(db.poses, q, kmax, buf);
+                        search.evaluated += db.poses.len() as u64;
+                    }
+                }
+                let row = buf.iter().map(|&(c, i)| (c, FlatFrame::new(i))).collect();
+                (row, search.evaluated - before)
+            },
+        )
+        .collect();
+    let distances = rows.iter().map(|r| r.1).sum();
+    (rows.into_iter().map(|r| r.0).collect(), distances)
+}
+
+/// `s_edge` over `db`'s links: the median of the positive dissimilarities
+/// between a frame and its natural successor (1 when there is none).
+pub(crate) fn step_median(db: &TrellisInput) -> f64 {
+    let ng = db.poses.len();
+    let mut steps: Vec<f64> = FlatFrame::all(ng)
+        .filter_map(|f| (db.successor)(f).map(|g| (db.dissimilarity)(f, g) as f64))
+        .filter(|c| *c > 0.0)
+        .collect();
+    steps.sort_by(f64::total_cmp);
+    steps.get(steps.len() / 2).copied().unwrap_or(1.0)
 }
 
 /// Finds the optimal path for `query` (Eq. 29).
@@ -157,48 +213,20 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
             edge_cost: 0.0,
             node_scale: 0.0,
             edge_scale: 0.0,
+            distances: 0,
         };
     }
     let kmax = opts.max_candidates.max(1).min(ng);
     let kmin = opts.min_candidates.max(1).min(kmax);
-    // Nearest frames of every query frame (sorted by cost).
-    let near: Vec<Vec<(f32, FlatFrame)>> = query
-        .par_iter()
-        .map_init(
-            || Vec::with_capacity(ng),
-            |all, q| {
-                all.clear();
-                all.extend(
-                    db.poses
-                        .iter()
-                        .enumerate()
-                        .map(|(i, p)| (skeleton_distance(q, p) as f32, FlatFrame::from_index(i))),
-                );
-                if kmax < all.len() {
-                    all.select_nth_unstable_by(kmax - 1, |a, b| a.0.total_cmp(&b.0));
-                    all.truncate(kmax);
-                }
-                all.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                all.clone()
-            },
-        )
-        .collect();
+    // Nearest frames of every query frame (sorted by cost, then id).
+    let (near, distances) = nearest_rows(query, db, kmax);
     let mut best: Vec<f64> = near.iter().map(|r| r[0].0 as f64).collect();
     best.sort_by(f64::total_cmp);
     let median = best[best.len() / 2];
     let p90 = best[((best.len() as f64 * 0.9) as usize).min(best.len() - 1)];
     let t_skel = opts.t_skel.unwrap_or((2.0 * median).max(p90));
     let node_scale = median.max(1e-6);
-    let mut steps: Vec<f64> = FlatFrame::all(ng)
-        .filter_map(|f| (db.successor)(f).map(|g| (db.dissimilarity)(f, g) as f64))
-        .filter(|c| *c > 0.0)
-        .collect();
-    steps.sort_by(f64::total_cmp);
-    let edge_scale = steps
-        .get(steps.len() / 2)
-        .copied()
-        .unwrap_or(1.0)
-        .max(1e-12);
+    let edge_scale = db.edge_scale.unwrap_or_else(|| step_median(db)).max(1e-12);
     let mut widened = Vec::new();
     let rows: Vec<Vec<(f32, FlatFrame)>> = near
         .into_iter()
@@ -286,6 +314,7 @@ pub fn retrieve(query: &[Pose], db: &TrellisInput, opts: &TrellisOptions) -> Ret
         edge_cost,
         node_scale,
         edge_scale,
+        distances,
     }
 }
 

@@ -24,9 +24,10 @@
 //! controller's rule: leave the current motion only for a clearly better
 //! one).
 
-use crate::drive::trellis::{RowCosts, TrellisInput, TrellisOptions, relax_row_into};
+use crate::drive::trellis::{RowCosts, TrellisInput, TrellisOptions, relax_row_into, step_median};
 use crate::graph::FlatFrame;
-use crate::pose::{Pose, measure::skeleton_distance};
+use crate::pose::Pose;
+use crate::similarity::skeleton_index::{Search, nearest_scan};
 use serde::Serialize;
 
 /// Frames whose best-match costs set the scales (`T_skel`, `s_node`): the
@@ -119,8 +120,11 @@ pub struct OnlineTrellis<'a> {
     stats: OnlineStats,
     /// Row slot of each database frame (scratch; `u32::MAX` = none).
     slot: Vec<u32>,
-    /// Distances to every database frame (scratch).
+    /// The nearest `kmax` database frames to the last frame searched.
     all: Vec<(f32, FlatFrame)>,
+    /// The index's search scratch and its results (frame ids as `u32`).
+    search: Search,
+    found: Vec<(f32, u32)>,
     /// Rows' buffers already decided, for reuse.
     spare: Vec<Vec<(f32, FlatFrame)>>,
     /// The solver's buffers, reused by every decision (issue 45).
@@ -153,16 +157,7 @@ impl<'a> OnlineTrellis<'a> {
         let ng = db.poses.len();
         let kmax = trellis.max_candidates.max(1).min(ng.max(1));
         let kmin = trellis.min_candidates.max(1).min(kmax);
-        let mut steps: Vec<f64> = FlatFrame::all(ng)
-            .filter_map(|f| (db.successor)(f).map(|g| (db.dissimilarity)(f, g) as f64))
-            .filter(|c| *c > 0.0)
-            .collect();
-        steps.sort_by(f64::total_cmp);
-        let edge_scale = steps
-            .get(steps.len() / 2)
-            .copied()
-            .unwrap_or(1.0)
-            .max(1e-12);
+        let edge_scale = db.edge_scale.unwrap_or_else(|| step_median(db)).max(1e-12);
         OnlineTrellis {
             db,
             trellis,
@@ -180,7 +175,9 @@ impl<'a> OnlineTrellis<'a> {
                 ..OnlineStats::default()
             },
             slot: vec![u32::MAX; ng],
-            all: Vec::with_capacity(ng),
+            all: Vec::with_capacity(kmax),
+            search: Search::default(),
+            found: Vec::with_capacity(if db.index.is_some() { kmax } else { ng }),
             spare: Vec::new(),
             solver: SolveBuffers::default(),
         }
@@ -249,22 +246,14 @@ impl<'a> OnlineTrellis<'a> {
     /// Fills `all` with the nearest `kmax` database frames to `q`, sorted
     /// by cost then id; returns the best cost.
     fn nearest(&mut self, q: &Pose) -> f64 {
-        self.all.clear();
-        self.all.extend(
-            self.db
-                .poses
-                .iter()
-                .enumerate()
-                .map(|(i, p)| (skeleton_distance(q, p) as f32, FlatFrame::from_index(i))),
-        );
-        let kmax = self.kmax;
-        if kmax < self.all.len() {
-            self.all
-                .select_nth_unstable_by(kmax - 1, |a, b| a.0.total_cmp(&b.0));
-            self.all.truncate(kmax);
+        let (poses, kmax) = (self.db.poses, self.kmax);
+        match self.db.index {
+            Some(index) => index.nearest(poses, q, kmax, &mut self.search, &mut self.found),
+            None => nearest_scan(poses, q, kmax, &mut self.found),
         }
+        self.all.clear();
         self.all
-            .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            .extend(self.found.iter().map(|&(c, i)| (c, FlatFrame::new(i))));
         self.all[0].0 as f64
     }
 

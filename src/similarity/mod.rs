@@ -7,7 +7,9 @@
 //! of a nearest-neighbour index and of each sequence pair's best cheap
 //! transitions only for large databases ([`sparse`], [`kdtree`],
 //! [`pair_scan`]), the sequence pairs scanned chosen from an estimate
-//! ([`scan`]); [`lookup`] reads either.
+//! ([`scan`]); [`lookup`] reads either. Retrieval's nearest skeletons come
+//! from an exact index over floor-invariant skeleton features
+//! ([`skeleton_index`]).
 
 pub mod candidates;
 pub(crate) mod closure;
@@ -19,6 +21,7 @@ pub mod matrix;
 pub mod pair_scan;
 pub mod scan;
 pub mod sets;
+pub mod skeleton_index;
 pub mod sparse;
 #[cfg(test)]
 pub(crate) mod test_rng;
