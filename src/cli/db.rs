@@ -70,6 +70,7 @@ fn build(a: BuildArgs) -> anyhow::Result<()> {
         measure: a.measure.map(Into::into),
         force: a.force,
         method: a.similarity,
+        ..Default::default()
     };
     let (graph, r) = surfmotion::jobs::build_database(&a.dir, &opts, &super::Bars::new())?;
     if a.json {

@@ -37,6 +37,12 @@ pub struct BuildOptions {
     /// cache of either, else sparse from [`SPARSE_FRAMES`] frames (shape
     /// measure only), dense below.
     pub method: Option<Method>,
+    /// Also make the rig, frame and skeleton caches a default load reads
+    /// current, while the frames are compared
+    /// ([`super::character::prepare_frame_caches`]; `db build` of a
+    /// database with a rig, issue 43). Only when the similarity is
+    /// computed (a current cache leaves them to the load). Default: false.
+    pub prepare: bool,
 }
 
 /// How the frame similarity is computed.
@@ -118,6 +124,10 @@ pub struct BuildReport {
     /// the dense method).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub scan: Option<ScanChoice>,
+    /// Seconds the rig, frame and skeleton caches took, made while the
+    /// frames were compared ([`BuildOptions::prepare`]; absent when not).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub caches_beside_seconds: Option<f64>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -352,6 +362,9 @@ pub struct Timing {
     pub pairs_seconds: f64,
     /// Pairs compared (with the diagonal).
     pub pairs: u64,
+    /// Seconds of [`BuildOptions::prepare`]'s caches, made beside the
+    /// pairs (`None`: not asked for, or they failed: the load says why).
+    pub beside_seconds: Option<f64>,
 }
 
 /// The similarity matrix of a database for one measure, from the cache if
@@ -363,7 +376,14 @@ pub fn similarity(
     force: bool,
     progress: &dyn BuildProgress,
 ) -> Result<(SimilarityMatrix, u64, Option<Timing>), DbError> {
-    let (sim, key, t) = similarity_with(dir, m, measure, Some(Method::Dense), force, progress)?;
+    let (sim, key, t) = similarity_with(
+        dir,
+        m,
+        measure,
+        (Some(Method::Dense), false),
+        force,
+        progress,
+    )?;
     match sim {
         Similarity::Dense(mat) => Ok((mat, key, t)),
         Similarity::Sparse(_) => unreachable!("the dense method was asked for"),
@@ -400,13 +420,14 @@ fn cached_sparse(dir: &Path, m: &Manifest, measure: Measure, key: u64) -> Option
 /// The similarity of a database for one measure by `method` (`None`: a
 /// current cache of either method, else sparse from [`SPARSE_FRAMES`]
 /// frames for the shape measure, dense otherwise), from the cache if
-/// current. Returns the similarity, its key (the graph cache's input) and
-/// the report fields.
+/// current. With `prepare` ([`BuildOptions::prepare`]) the caches a load
+/// reads are made beside the comparison. Returns the similarity, its key
+/// (the graph cache's input) and the report fields.
 pub(crate) fn similarity_with(
     dir: &Path,
     m: &Manifest,
     measure: Measure,
-    method: Option<Method>,
+    (method, prepare): (Option<Method>, bool),
     force: bool,
     progress: &dyn BuildProgress,
 ) -> Result<(Similarity, u64, Option<Timing>), DbError> {
@@ -427,7 +448,6 @@ pub(crate) fn similarity_with(
             ),
         });
     }
-    let path = similarity_path(dir, measure);
     if let Some(found) = cached_similarity(dir, m, measure, method, force, (key, skey)) {
         return Ok(found);
     }
@@ -436,6 +456,98 @@ pub(crate) fn similarity_with(
     let (sets, spans) = describe(dir, m, measure, progress)?;
     let describe = t0.elapsed().as_secs_f64();
     let describe_cpu = crate::similarity::candidates::process_cpu_seconds() - c0;
+    let lens: Vec<usize> = spans.iter().map(|s| s.len).collect();
+    let times = (describe, describe_cpu);
+    let compare = || {
+        compare_described(
+            dir,
+            m,
+            measure,
+            (method, key),
+            &sets,
+            spans,
+            times,
+            progress,
+        )
+    };
+    let (sim, key, timing) = if prepare {
+        beside_caches(dir, m, &lens, compare)?
+    } else {
+        compare()?
+    };
+    Ok((sim, key, Some(timing)))
+}
+
+/// Runs `work` while the caches a default load reads are made current
+/// beside it ([`super::character::prepare_frame_caches`]) on a thread of
+/// their own; returns `work`'s result with their seconds in its timing. A
+/// failure there is only logged: the load after the build makes them
+/// again and says why it cannot.
+fn beside_caches(
+    dir: &Path,
+    m: &Manifest,
+    lens: &[usize],
+    work: impl FnOnce() -> Result<(Similarity, u64, Timing), DbError>,
+) -> Result<(Similarity, u64, Timing), DbError> {
+    std::thread::scope(|scope| {
+        let side = scope.spawn(|| {
+            let t = Instant::now();
+            let prepare = || super::character::prepare_frame_caches(dir, m, lens);
+            // A pool of its own: its parallel loops (the skeletons of each
+            // sequence's frames) queued on the global pool would wait
+            // until the pairs' blocks are done, putting this thread after
+            // the comparison instead of beside it (measured at 10⁴ frames).
+            match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+                Ok(pool) => pool.install(prepare),
+                Err(_) => prepare(),
+            }
+            .map(|()| t.elapsed().as_secs_f64())
+        });
+        let out = work();
+        let seconds = match side.join() {
+            Ok(Ok(s)) => Some(s),
+            Ok(Err(e)) => {
+                tracing::debug!("{}: caches not made beside the pairs: {e}", dir.display());
+                None
+            }
+            Err(_) => {
+                tracing::warn!(
+                    "{}: making the caches beside the pairs failed (a panic); the load makes them",
+                    dir.display()
+                );
+                None
+            }
+        };
+        out.map(|(sim, key, timing)| {
+            let beside_seconds = seconds;
+            (
+                sim,
+                key,
+                Timing {
+                    beside_seconds,
+                    ..timing
+                },
+            )
+        })
+    })
+}
+
+/// The similarity of the described frames `sets` (sequences `spans`) by
+/// `method` ([`similarity_with`]'s choice), saved to the cache under `key`
+/// (a sparse one under the sparse key derived from it); returns it with
+/// the key it was saved under.
+#[allow(clippy::too_many_arguments)]
+fn compare_described(
+    dir: &Path,
+    m: &Manifest,
+    measure: Measure,
+    (method, key): (Option<Method>, u64),
+    sets: &Sets,
+    spans: Vec<Span>,
+    (describe, describe_cpu): (f64, f64),
+    progress: &dyn BuildProgress,
+) -> Result<(Similarity, u64, Timing), DbError> {
+    let path = similarity_path(dir, measure);
     let set = sets.pair_distance();
     let frames = set.frames();
     let sparse = match method {
@@ -469,11 +581,12 @@ pub(crate) fn similarity_with(
     Ok((
         Similarity::Dense(mat),
         key,
-        Some(Timing {
+        Timing {
             describe_seconds: describe,
             pairs_seconds: pairs_s,
             pairs,
-        }),
+            beside_seconds: None,
+        },
     ))
 }
 
@@ -682,7 +795,7 @@ fn sparse_similarity(
     opts: &SparseOptions,
     describe: f64,
     progress: &dyn BuildProgress,
-) -> Result<(Similarity, u64, Option<Timing>), DbError> {
+) -> Result<(Similarity, u64, Timing), DbError> {
     use crate::util::budget::thousands;
     let n = set.frames();
     let t = Instant::now();
@@ -766,11 +879,12 @@ fn sparse_similarity(
     Ok((
         Similarity::Sparse(sim),
         key,
-        Some(Timing {
+        Timing {
             describe_seconds: describe,
             pairs_seconds: t.elapsed().as_secs_f64(),
             pairs: stats.pairs,
-        }),
+            beside_seconds: None,
+        },
     ))
 }
 
@@ -946,8 +1060,14 @@ pub(crate) fn build_opened_staged(
         });
     }
     let measure = opts.measure.unwrap_or_else(|| default_measure(m));
-    let (mat, sim_key, timing) =
-        similarity_with(dir, m, measure, opts.method, opts.force, progress)?;
+    let (mat, sim_key, timing) = similarity_with(
+        dir,
+        m,
+        measure,
+        (opts.method, opts.prepare),
+        opts.force,
+        progress,
+    )?;
     if let Some(s) = stages.as_deref_mut() {
         s.lap("similarity");
     }
@@ -1020,6 +1140,7 @@ pub(crate) fn build_opened_staged(
         cache: cache_dir(dir),
         // The choice its key was made with (a cache's key vouches for it).
         scan: matches!(mat, Similarity::Sparse(_)).then(|| scan_options(m, mat.len()).1),
+        caches_beside_seconds: timing.and_then(|t| t.beside_seconds),
     };
     Ok((mat, graph, report))
 }

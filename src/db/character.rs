@@ -224,10 +224,11 @@ impl Character {
             embed_rig_cached(dir, &manifest, &topology, same.then_some(&lens[..]))?;
         stages.lap("rig");
         let n = topology.vertex_count();
-        let metres_per_unit = crate::mocap::units::parse_unit(&manifest.units)
-            .map(|u| u.metres_per_unit)
-            .unwrap_or(1.0);
-        let z_up = manifest.up.eq_ignore_ascii_case("z");
+        let conversion = Conversion::of(&manifest);
+        let Conversion {
+            metres_per_unit,
+            z_up,
+        } = conversion;
         let conv = |p: DVec3| y_up(p.to_array(), z_up) * metres_per_unit;
         // Frames in metres, Y-up, memory-mapped from the cache (written on
         // the first load, a sequence at a time), and the skeletons read off
@@ -238,10 +239,7 @@ impl Character {
             rig: &rig,
             n,
             count: matrix.len(),
-            conv: Conversion {
-                metres_per_unit,
-                z_up,
-            },
+            conv: conversion,
             kind: opts.skeleton,
         })?;
         stages.lap("frames");
@@ -487,6 +485,34 @@ const STEP_ROWS: usize = 512;
 /// a sequence's last frame), the pages of a mapped similarity released
 /// every [`STEP_ROWS`] rows so that the pass does not keep the whole file
 /// resident.
+/// The rig, frame and skeleton caches a default load ([`Character::load`])
+/// reads, made current for the database `dir` whose sequences have `lens`
+/// frames (the manifest's order): the rig embedded (or read from its cache)
+/// on the same frames a load's takes, then every sequence streamed once into
+/// the frame and skeleton caches ([`open_or_build`]). `db build` runs this
+/// while it compares frames (issue 43): the sequences' second reading and
+/// the 2.4 GB frame cache's write at 10⁴ frames of 10K vertices, mostly
+/// waiting on the disk, overlap the pairs' computation instead of
+/// following the graph. Caches already current are only checked.
+pub(crate) fn prepare_frame_caches(
+    dir: &Path,
+    manifest: &Manifest,
+    lens: &[usize],
+) -> Result<(), DbError> {
+    let topology = manifest.load_topology(dir)?;
+    let (rig, _) = embed_rig_cached(dir, manifest, &topology, Some(lens))?;
+    open_or_build(&CacheInputs {
+        dir,
+        manifest,
+        rig: &rig,
+        n: topology.vertex_count(),
+        count: lens.iter().sum(),
+        conv: Conversion::of(manifest),
+        kind: CharacterOptions::default().skeleton,
+    })?;
+    Ok(())
+}
+
 fn successor_steps(matrix: &Similarity, graph: &SurfaceMotionGraph) -> Vec<f32> {
     let mut steps = vec![f32::NAN; matrix.len()];
     let sparse = match matrix {

@@ -382,6 +382,16 @@ pub(crate) struct Conversion {
 }
 
 impl Conversion {
+    /// The manifest's conversion: its `units` (1 metre a unit when they
+    /// cannot be read) and its `up` axis.
+    pub(crate) fn of(m: &Manifest) -> Conversion {
+        Conversion {
+            metres_per_unit: crate::mocap::units::parse_unit(&m.units)
+                .map(|u| u.metres_per_unit)
+                .unwrap_or(1.0),
+            z_up: m.up.eq_ignore_ascii_case("z"),
+        }
+    }
     fn point(&self, p: [f64; 3]) -> [f64; 3] {
         (y_up(p, self.z_up) * self.metres_per_unit).to_array()
     }

@@ -58,8 +58,23 @@ pub fn build_database(
     opts: &BuildOptions,
     progress: &dyn BuildProgress,
 ) -> Result<(SurfaceMotionGraph, DatabaseReport), JobError> {
-    let (_, graph, build) = crate::db::build(dir, opts, progress)?;
     let m = crate::db::Manifest::load(dir)?;
+    // Only for the measure and method a retarget loads: another measure's
+    // build would otherwise make the default measure's graph too, and a
+    // build of a given method (`--similarity`) could have its graph cache
+    // replaced by the one the load's own choice of method makes.
+    let default = opts.method.is_none()
+        && opts
+            .measure
+            .is_none_or(|k| k == crate::db::build::default_measure(&m));
+    let prepare = default && (m.rig.landmarks.is_some() || m.rig.gltf_skin.is_some());
+    // The rig, frame and skeleton caches made while the frames are
+    // compared (issue 43); the load below finds them current.
+    let build_opts = BuildOptions {
+        prepare,
+        ..opts.clone()
+    };
+    let (_, graph, build) = crate::db::build::build_opened(dir, &m, &build_opts, progress)?;
     let t = Instant::now();
     let (spaces, spaces_cached) = if m.spaces.is_empty() {
         (Vec::new(), None)
@@ -83,15 +98,7 @@ pub fn build_database(
     // Every cache a `retarget` reads, written here (issue 43): a database
     // built once serves every later retarget read-only.
     let (mut prepared_seconds, mut prepare_failed) = (None, None);
-    // Only for the measure and method a retarget loads: another measure's
-    // build would otherwise make the default measure's graph too, and a
-    // build of a given method (`--similarity`) could have its graph cache
-    // replaced by the one the load's own choice of method makes.
-    let default = opts.method.is_none()
-        && opts
-            .measure
-            .is_none_or(|k| k == crate::db::build::default_measure(&m));
-    if default && (m.rig.landmarks.is_some() || m.rig.gltf_skin.is_some()) {
+    if prepare {
         let t = Instant::now();
         match prepare_for_retarget(dir, progress) {
             Ok(()) => prepared_seconds = Some(t.elapsed().as_secs_f64()),

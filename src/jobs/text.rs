@@ -68,6 +68,12 @@ pub fn database(dir: &Path, graph: &SurfaceMotionGraph, r: &DatabaseReport) -> S
     for e in graph.removed() {
         let _ = writeln!(out, "  removed by the manifest: {e}");
     }
+    if let Some(s) = r.caches_beside_seconds {
+        let _ = writeln!(
+            out,
+            "rig, frames and skeletons cached in {s:.2} s while the frames were compared"
+        );
+    }
     if let Some(s) = r.prepared_seconds {
         let _ = writeln!(
             out,
