@@ -13,6 +13,7 @@ use super::regions::{
     region_weights, sibling_overlaps,
 };
 use super::resident::{Paged, Resident, page_in, page_in_grown};
+use super::turned::turned_over_flagged_in;
 use super::{arap, lbs, pca, unflip, untangle};
 use crate::db::Character;
 use crate::mesh::laplacian::uniform_region_rows;
@@ -164,9 +165,29 @@ pub struct DeformWorkspace {
     unstitched: usize,
     /// The capacity last paged in ([`DeformWorkspace::keep_resident`]).
     paged: Paged,
+    /// The repair's lists of triangles, each taken for a list the repair
+    /// makes and given back when it is done with it, and the untangling's
+    /// vertices: their buffers reused frame to frame (issue 45).
+    lists: Vec<Vec<u32>>,
+    verts: Vec<u32>,
 }
 
 impl DeformWorkspace {
+    /// An empty list of triangles for the repair, a buffer given back
+    /// earlier when there is one ([`DeformWorkspace::give_back`]).
+    fn take_list(&mut self) -> Vec<u32> {
+        self.lists.pop().unwrap_or_default()
+    }
+
+    /// Keeps `list`'s buffer for the repair's next list (none without
+    /// capacity).
+    fn give_back(&mut self, mut list: Vec<u32>) {
+        if list.capacity() > 0 {
+            list.clear();
+            self.lists.push(list);
+        }
+    }
+
     /// The work the fold repair did on the last frame deformed with this
     /// workspace (zero when nothing was turned over).
     pub fn repair_work(&self) -> unflip::Work {
@@ -607,6 +628,8 @@ impl Deformer {
             },
             unstitched: 0,
             paged: Paged::default(),
+            lists: Vec::new(),
+            verts: Vec::new(),
         }
     }
 
@@ -1017,33 +1040,33 @@ impl Deformer {
         unflip::source_normals(tris, source, &mut ws.source_normals);
         untangle::source_areas(&ws.source_normals, &mut ws.areas);
         let skin = std::mem::take(&mut ws.turn);
-        let bad = unflip::turned_over_flagged(tris, &ws.source_normals, out, &skin, &mut ws.flags);
+        let list = ws.take_list();
+        let bad = turned_over_flagged_in(tris, &ws.source_normals, out, &skin, &mut ws.flags, list);
         let mut counts = match self.repair_turns {
             RepairTurns::Skin | RepairTurns::SkinThenSurface if cloth_turns => {
                 // Counted against the skin's turns, repaired against the
                 // stitch's on the cloth.
                 let turn = std::mem::take(&mut ws.repair_turn);
-                let own = unflip::turned_over_flagged(
-                    tris,
-                    &ws.source_normals,
-                    out,
-                    &turn,
-                    &mut ws.flags,
-                );
+                let list = ws.take_list();
+                let sn = &ws.source_normals;
+                let own = turned_over_flagged_in(tris, sn, out, &turn, &mut ws.flags, list);
                 let c = self.repair_against(f, out, ws, &turn, own, 0);
                 ws.repair_turn = turn;
+                let before = bad.len();
+                ws.give_back(bad);
                 TurnedOver {
-                    before: bad.len(),
+                    before,
                     after: c.after,
                 }
             }
             RepairTurns::Skin | RepairTurns::SkinThenSurface => {
                 self.repair_against(f, out, ws, &skin, bad, 0)
             }
-            RepairTurns::Surface => TurnedOver {
-                before: bad.len(),
-                after: 0,
-            },
+            RepairTurns::Surface => {
+                let before = bad.len();
+                ws.give_back(bad);
+                TurnedOver { before, after: 0 }
+            }
         };
         if let (Some(near), RepairTurns::SkinThenSurface | RepairTurns::Surface) =
             (&self.near, self.repair_turns)
@@ -1086,14 +1109,18 @@ impl Deformer {
                 source: f.source,
                 source_normals: &ws.source_normals,
             };
+            let list = ws.lists.pop().unwrap_or_default();
             let bad = if round == 0 {
-                ws.reading.read_all(&r, out, &mut ws.seeds, &mut turn)
+                let turns = (&mut ws.seeds, &mut turn[..]);
+                ws.reading.read_all_in(&r, out, turns, list)
             } else {
-                ws.reading.read_again(&r, out, &mut ws.seeds, &mut turn)
+                let turns = (&mut ws.seeds[..], &mut turn[..]);
+                ws.reading.read_again_in(&r, out, turns, list)
             };
             last = bad.len();
             if last == 0 {
                 least = 0;
+                ws.give_back(bad);
                 break;
             }
             if last < least {
@@ -1104,6 +1131,7 @@ impl Deformer {
                 stalled += 1;
             }
             if round == self.surface_rounds || stalled >= self.surface_stall {
+                ws.give_back(bad);
                 break;
             }
             self.repair_against(f, out, ws, &turn, bad, round);
@@ -1148,6 +1176,7 @@ impl Deformer {
     ) -> TurnedOver {
         let before = bad.len();
         if before == 0 {
+            ws.give_back(bad);
             return TurnedOver::default();
         }
         let mut budget = unflip::Budget::new(self.repair_budget.limit(before));
@@ -1163,13 +1192,18 @@ impl Deformer {
         }
         // The list is kept for the last resort only when it may run.
         let (bad, kept) = match adaptive {
-            true => (bad.clone(), bad),
+            true => {
+                let mut copy = ws.take_list();
+                copy.extend_from_slice(&bad);
+                (copy, bad)
+            }
             false => (bad, Vec::new()),
         };
         let first = self.repair_with(f, out, ws, turn, bad, &fixed, &mut budget, grow);
         ws.work = add_work(base, budget.done);
         let before_retry = budget.done.patches;
         if first == 0 || !adaptive {
+            ws.give_back(kept);
             return TurnedOver {
                 before,
                 after: first,
@@ -1221,7 +1255,8 @@ impl Deformer {
             source_normals: &ws.source_normals,
             turn,
         };
-        bad = untangle::untangle_with(tris, adj, &mut refs, &ws.areas, out, bad, opts, budget);
+        let lists = (bad, &mut ws.verts);
+        bad = untangle::untangle_kept(tris, adj, &mut refs, &ws.areas, out, lists, opts, budget);
         // Whether `out` and `bad` are the best state (`ws.best`,
         // `best_bad`), and whether the last pass started there and went
         // back to it: then the next pass's first rounds are the last
@@ -1237,6 +1272,7 @@ impl Deformer {
         }
         if best == 0 {
             ws.best_bad = best_bad;
+            ws.give_back(bad);
             return 0;
         }
         for pass in 0..self.repair_passes.max(1) {
@@ -1269,8 +1305,9 @@ impl Deformer {
                     source_normals: &ws.source_normals,
                     turn,
                 };
-                bad = untangle::untangle_with(
-                    tris, adj, &mut refs, &ws.areas, out, bad, opts, budget,
+                let lists = (bad, &mut ws.verts);
+                bad = untangle::untangle_kept(
+                    tris, adj, &mut refs, &ws.areas, out, lists, opts, budget,
                 );
             }
             if bad.len() < best {
@@ -1291,6 +1328,7 @@ impl Deformer {
             }
         }
         ws.best_bad = best_bad;
+        ws.give_back(bad);
         best
     }
 }
