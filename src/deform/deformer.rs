@@ -203,6 +203,14 @@ impl DeformWorkspace {
     /// each use).
     pub fn reserve_as(&mut self, other: &DeformWorkspace) {
         self.replay.reserve_as(&other.replay);
+        super::patch_solve::reserve_as(&mut self.verts, &other.verts);
+        // As many lists as the other's, each as long as its longest.
+        let most = other.lists.iter().map(Vec::capacity).max().unwrap_or(0);
+        let count = self.lists.len().max(other.lists.len());
+        self.lists.resize_with(count, Vec::new);
+        for l in &mut self.lists {
+            l.reserve(most);
+        }
         self.keep_resident();
     }
 
@@ -249,6 +257,8 @@ impl Resident for DeformWorkspace {
             + page_in(&mut self.source_normals, t)
             + page_in(&mut self.flags, t)
             + page_in(&mut self.best_bad, t)
+            + page_in(&mut self.verts, t)
+            + self.lists.iter_mut().map(|l| page_in(l, t)).sum::<usize>()
             + self.replay.resident(t)
     }
 }

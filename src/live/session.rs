@@ -431,6 +431,16 @@ impl<'a> Session<'a> {
         self.trellis.stats()
     }
 
+    /// The bytes the deformation workspaces hold (their buffers'
+    /// capacities): the whole-step allocation test tells a buffer grown
+    /// to a larger repair than met before from a per-frame allocation.
+    #[cfg(test)]
+    pub(crate) fn deform_capacity(&mut self) -> usize {
+        use crate::deform::resident::Resident;
+        let ws = self.slots.iter_mut().filter_map(|s| s.ws.as_mut());
+        ws.map(|w| w.resident(false)).sum()
+    }
+
     /// Triangle-frames the deformation left turned over (after repair).
     pub fn turned_over(&self) -> usize {
         self.turned_over
