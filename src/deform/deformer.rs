@@ -204,13 +204,7 @@ impl DeformWorkspace {
     pub fn reserve_as(&mut self, other: &DeformWorkspace) {
         self.replay.reserve_as(&other.replay);
         super::patch_solve::reserve_as(&mut self.verts, &other.verts);
-        // As many lists as the other's, each as long as its longest.
-        let most = other.lists.iter().map(Vec::capacity).max().unwrap_or(0);
-        let count = self.lists.len().max(other.lists.len());
-        self.lists.resize_with(count, Vec::new);
-        for l in &mut self.lists {
-            l.reserve(most);
-        }
+        reserve_lists_as(&mut self.lists, &other.lists);
         self.keep_resident();
     }
 
@@ -1362,5 +1356,62 @@ fn add_work(a: unflip::Work, b: unflip::Work) -> unflip::Work {
         retry_patches: a.retry_patches + b.retry_patches,
         later_pass_patches: a.later_pass_patches + b.later_pass_patches,
         replayed_rounds: a.replayed_rounds + b.replayed_rounds,
+    }
+}
+
+/// Grows the repair's kept `lists` to as many as `other`'s, each holding
+/// at least `other`'s longest ([`DeformWorkspace::reserve_as`]), exactly:
+/// `Vec::reserve`'s amortised doubling here let two slots' lists double
+/// each other at every evening out once one list was within a factor two
+/// of the other slot's longest (session 44: `live::long`'s child killed
+/// at 19.8 GB; the pages are written as they grow, `keep_resident`).
+fn reserve_lists_as(lists: &mut Vec<Vec<u32>>, other: &[Vec<u32>]) {
+    let most = other.iter().map(Vec::capacity).max().unwrap_or(0);
+    let count = lists.len().max(other.len());
+    lists.resize_with(count, Vec::new);
+    for l in lists {
+        if l.capacity() < most {
+            l.reserve_exact(most - l.len());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The live session's two slots even their repair lists out after
+    /// every deformation (each grown to the other's, then the other to
+    /// it): the capacities settle at the largest either held, however
+    /// often they are evened out, never past it — not doubled by each call (session 44:
+    /// `Vec::reserve`'s amortised growth made two lists within a factor
+    /// two of the other slot's longest double each other every frame,
+    /// and `live::long`'s child was killed at 19.8 GB).
+    #[test]
+    fn evening_out_two_slots_lists_settles_at_the_largest() {
+        let with = |caps: &[usize]| -> Vec<Vec<u32>> {
+            caps.iter().map(|&c| Vec::with_capacity(c)).collect()
+        };
+        for (a, b) in [
+            (&[100, 60][..], &[150][..]),
+            (&[100, 80][..], &[100][..]),
+            (&[7][..], &[5, 6, 4][..]),
+            (&[][..], &[30][..]),
+        ] {
+            let (mut a, mut b) = (with(a), with(b));
+            let largest = a.iter().chain(&b).map(Vec::capacity).max().unwrap();
+            for round in 0..20 {
+                reserve_lists_as(&mut a, &b);
+                reserve_lists_as(&mut b, &a);
+                // Each grows to the other's longest: all of them to the
+                // largest from the second round on, none past it.
+                for l in a.iter().chain(&b) {
+                    let c = l.capacity();
+                    assert!(c <= largest, "round {round}: {c} held, largest {largest}");
+                    assert!(round == 0 || c == largest, "round {round}: {c} held");
+                }
+                assert_eq!(a.len(), b.len(), "round {round}");
+            }
+        }
     }
 }
