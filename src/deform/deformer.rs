@@ -13,6 +13,7 @@ use super::regions::{
     region_weights, sibling_overlaps,
 };
 use super::resident::{Paged, Resident, page_in, page_in_grown};
+use super::turned::turned_over_flagged_in;
 use super::{arap, lbs, pca, unflip, untangle};
 use crate::db::Character;
 use crate::mesh::laplacian::uniform_region_rows;
@@ -164,9 +165,29 @@ pub struct DeformWorkspace {
     unstitched: usize,
     /// The capacity last paged in ([`DeformWorkspace::keep_resident`]).
     paged: Paged,
+    /// The repair's lists of triangles, each taken for a list the repair
+    /// makes and given back when it is done with it, and the untangling's
+    /// vertices: their buffers reused frame to frame (issue 45).
+    lists: Vec<Vec<u32>>,
+    verts: Vec<u32>,
 }
 
 impl DeformWorkspace {
+    /// An empty list of triangles for the repair, a buffer given back
+    /// earlier when there is one ([`DeformWorkspace::give_back`]).
+    fn take_list(&mut self) -> Vec<u32> {
+        self.lists.pop().unwrap_or_default()
+    }
+
+    /// Keeps `list`'s buffer for the repair's next list (none without
+    /// capacity).
+    fn give_back(&mut self, mut list: Vec<u32>) {
+        if list.capacity() > 0 {
+            list.clear();
+            self.lists.push(list);
+        }
+    }
+
     /// The work the fold repair did on the last frame deformed with this
     /// workspace (zero when nothing was turned over).
     pub fn repair_work(&self) -> unflip::Work {
@@ -182,6 +203,8 @@ impl DeformWorkspace {
     /// each use).
     pub fn reserve_as(&mut self, other: &DeformWorkspace) {
         self.replay.reserve_as(&other.replay);
+        super::patch_solve::reserve_as(&mut self.verts, &other.verts);
+        reserve_lists_as(&mut self.lists, &other.lists);
         self.keep_resident();
     }
 
@@ -228,6 +251,8 @@ impl Resident for DeformWorkspace {
             + page_in(&mut self.source_normals, t)
             + page_in(&mut self.flags, t)
             + page_in(&mut self.best_bad, t)
+            + page_in(&mut self.verts, t)
+            + self.lists.iter_mut().map(|l| page_in(l, t)).sum::<usize>()
             + self.replay.resident(t)
     }
 }
@@ -607,6 +632,8 @@ impl Deformer {
             },
             unstitched: 0,
             paged: Paged::default(),
+            lists: Vec::new(),
+            verts: Vec::new(),
         }
     }
 
@@ -1017,33 +1044,33 @@ impl Deformer {
         unflip::source_normals(tris, source, &mut ws.source_normals);
         untangle::source_areas(&ws.source_normals, &mut ws.areas);
         let skin = std::mem::take(&mut ws.turn);
-        let bad = unflip::turned_over_flagged(tris, &ws.source_normals, out, &skin, &mut ws.flags);
+        let list = ws.take_list();
+        let bad = turned_over_flagged_in(tris, &ws.source_normals, out, &skin, &mut ws.flags, list);
         let mut counts = match self.repair_turns {
             RepairTurns::Skin | RepairTurns::SkinThenSurface if cloth_turns => {
                 // Counted against the skin's turns, repaired against the
                 // stitch's on the cloth.
                 let turn = std::mem::take(&mut ws.repair_turn);
-                let own = unflip::turned_over_flagged(
-                    tris,
-                    &ws.source_normals,
-                    out,
-                    &turn,
-                    &mut ws.flags,
-                );
+                let list = ws.take_list();
+                let sn = &ws.source_normals;
+                let own = turned_over_flagged_in(tris, sn, out, &turn, &mut ws.flags, list);
                 let c = self.repair_against(f, out, ws, &turn, own, 0);
                 ws.repair_turn = turn;
+                let before = bad.len();
+                ws.give_back(bad);
                 TurnedOver {
-                    before: bad.len(),
+                    before,
                     after: c.after,
                 }
             }
             RepairTurns::Skin | RepairTurns::SkinThenSurface => {
                 self.repair_against(f, out, ws, &skin, bad, 0)
             }
-            RepairTurns::Surface => TurnedOver {
-                before: bad.len(),
-                after: 0,
-            },
+            RepairTurns::Surface => {
+                let before = bad.len();
+                ws.give_back(bad);
+                TurnedOver { before, after: 0 }
+            }
         };
         if let (Some(near), RepairTurns::SkinThenSurface | RepairTurns::Surface) =
             (&self.near, self.repair_turns)
@@ -1086,14 +1113,18 @@ impl Deformer {
                 source: f.source,
                 source_normals: &ws.source_normals,
             };
+            let list = ws.lists.pop().unwrap_or_default();
             let bad = if round == 0 {
-                ws.reading.read_all(&r, out, &mut ws.seeds, &mut turn)
+                let turns = (&mut ws.seeds, &mut turn[..]);
+                ws.reading.read_all_in(&r, out, turns, list)
             } else {
-                ws.reading.read_again(&r, out, &mut ws.seeds, &mut turn)
+                let turns = (&mut ws.seeds[..], &mut turn[..]);
+                ws.reading.read_again_in(&r, out, turns, list)
             };
             last = bad.len();
             if last == 0 {
                 least = 0;
+                ws.give_back(bad);
                 break;
             }
             if last < least {
@@ -1104,6 +1135,7 @@ impl Deformer {
                 stalled += 1;
             }
             if round == self.surface_rounds || stalled >= self.surface_stall {
+                ws.give_back(bad);
                 break;
             }
             self.repair_against(f, out, ws, &turn, bad, round);
@@ -1148,6 +1180,7 @@ impl Deformer {
     ) -> TurnedOver {
         let before = bad.len();
         if before == 0 {
+            ws.give_back(bad);
             return TurnedOver::default();
         }
         let mut budget = unflip::Budget::new(self.repair_budget.limit(before));
@@ -1163,13 +1196,18 @@ impl Deformer {
         }
         // The list is kept for the last resort only when it may run.
         let (bad, kept) = match adaptive {
-            true => (bad.clone(), bad),
+            true => {
+                let mut copy = ws.take_list();
+                copy.extend_from_slice(&bad);
+                (copy, bad)
+            }
             false => (bad, Vec::new()),
         };
         let first = self.repair_with(f, out, ws, turn, bad, &fixed, &mut budget, grow);
         ws.work = add_work(base, budget.done);
         let before_retry = budget.done.patches;
         if first == 0 || !adaptive {
+            ws.give_back(kept);
             return TurnedOver {
                 before,
                 after: first,
@@ -1221,7 +1259,8 @@ impl Deformer {
             source_normals: &ws.source_normals,
             turn,
         };
-        bad = untangle::untangle_with(tris, adj, &mut refs, &ws.areas, out, bad, opts, budget);
+        let lists = (bad, &mut ws.verts);
+        bad = untangle::untangle_kept(tris, adj, &mut refs, &ws.areas, out, lists, opts, budget);
         // Whether `out` and `bad` are the best state (`ws.best`,
         // `best_bad`), and whether the last pass started there and went
         // back to it: then the next pass's first rounds are the last
@@ -1237,6 +1276,7 @@ impl Deformer {
         }
         if best == 0 {
             ws.best_bad = best_bad;
+            ws.give_back(bad);
             return 0;
         }
         for pass in 0..self.repair_passes.max(1) {
@@ -1269,8 +1309,9 @@ impl Deformer {
                     source_normals: &ws.source_normals,
                     turn,
                 };
-                bad = untangle::untangle_with(
-                    tris, adj, &mut refs, &ws.areas, out, bad, opts, budget,
+                let lists = (bad, &mut ws.verts);
+                bad = untangle::untangle_kept(
+                    tris, adj, &mut refs, &ws.areas, out, lists, opts, budget,
                 );
             }
             if bad.len() < best {
@@ -1291,6 +1332,7 @@ impl Deformer {
             }
         }
         ws.best_bad = best_bad;
+        ws.give_back(bad);
         best
     }
 }
@@ -1314,5 +1356,62 @@ fn add_work(a: unflip::Work, b: unflip::Work) -> unflip::Work {
         retry_patches: a.retry_patches + b.retry_patches,
         later_pass_patches: a.later_pass_patches + b.later_pass_patches,
         replayed_rounds: a.replayed_rounds + b.replayed_rounds,
+    }
+}
+
+/// Grows the repair's kept `lists` to as many as `other`'s, each holding
+/// at least `other`'s longest ([`DeformWorkspace::reserve_as`]), exactly:
+/// `Vec::reserve`'s amortised doubling here let two slots' lists double
+/// each other at every evening out once one list was within a factor two
+/// of the other slot's longest (session 44: `live::long`'s child killed
+/// at 19.8 GB; the pages are written as they grow, `keep_resident`).
+fn reserve_lists_as(lists: &mut Vec<Vec<u32>>, other: &[Vec<u32>]) {
+    let most = other.iter().map(Vec::capacity).max().unwrap_or(0);
+    let count = lists.len().max(other.len());
+    lists.resize_with(count, Vec::new);
+    for l in lists {
+        if l.capacity() < most {
+            l.reserve_exact(most - l.len());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The live session's two slots even their repair lists out after
+    /// every deformation (each grown to the other's, then the other to
+    /// it): the capacities settle at the largest either held, however
+    /// often they are evened out, never past it — not doubled by each call (session 44:
+    /// `Vec::reserve`'s amortised growth made two lists within a factor
+    /// two of the other slot's longest double each other every frame,
+    /// and `live::long`'s child was killed at 19.8 GB).
+    #[test]
+    fn evening_out_two_slots_lists_settles_at_the_largest() {
+        let with = |caps: &[usize]| -> Vec<Vec<u32>> {
+            caps.iter().map(|&c| Vec::with_capacity(c)).collect()
+        };
+        for (a, b) in [
+            (&[100, 60][..], &[150][..]),
+            (&[100, 80][..], &[100][..]),
+            (&[7][..], &[5, 6, 4][..]),
+            (&[][..], &[30][..]),
+        ] {
+            let (mut a, mut b) = (with(a), with(b));
+            let largest = a.iter().chain(&b).map(Vec::capacity).max().unwrap();
+            for round in 0..20 {
+                reserve_lists_as(&mut a, &b);
+                reserve_lists_as(&mut b, &a);
+                // Each grows to the other's longest: all of them to the
+                // largest from the second round on, none past it.
+                for l in a.iter().chain(&b) {
+                    let c = l.capacity();
+                    assert!(c <= largest, "round {round}: {c} held, largest {largest}");
+                    assert!(round == 0 || c == largest, "round {round}: {c} held");
+                }
+                assert_eq!(a.len(), b.len(), "round {round}");
+            }
+        }
     }
 }

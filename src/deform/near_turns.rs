@@ -287,6 +287,18 @@ impl SurfaceReading {
         seeds: &mut Vec<DQuat>,
         turn: &mut [DQuat],
     ) -> Vec<u32> {
+        self.read_all_in(f, out, (seeds, turn), Vec::new())
+    }
+
+    /// [`SurfaceReading::read_all`] listed into `list` (cleared; its
+    /// buffer reused, issue 45).
+    pub(crate) fn read_all_in(
+        &mut self,
+        f: &ReadingOf,
+        out: &[[f64; 3]],
+        (seeds, turn): (&mut Vec<DQuat>, &mut [DQuat]),
+        list: Vec<u32>,
+    ) -> Vec<u32> {
         f.near.turns(f.source, out, seeds, turn);
         self.flagged.resize(f.tris.len(), false);
         self.flagged
@@ -300,7 +312,7 @@ impl SurfaceReading {
             seeds: f.near.seeds(),
             triangles: f.tris.len(),
         };
-        self.flagged_list()
+        super::turned::flagged_into(&self.flagged, list)
     }
 
     /// Reads `out` again after [`SurfaceReading::read_all`] (or this) read
@@ -312,6 +324,18 @@ impl SurfaceReading {
         out: &[[f64; 3]],
         seeds: &mut [DQuat],
         turn: &mut [DQuat],
+    ) -> Vec<u32> {
+        self.read_again_in(f, out, (seeds, turn), Vec::new())
+    }
+
+    /// [`SurfaceReading::read_again`] listed into `list` (cleared; its
+    /// buffer reused, issue 45).
+    pub(crate) fn read_again_in(
+        &mut self,
+        f: &ReadingOf,
+        out: &[[f64; 3]],
+        (seeds, turn): (&mut [DQuat], &mut [DQuat]),
+        list: Vec<u32>,
     ) -> Vec<u32> {
         let (near, n) = (f.near, out.len());
         if self.holding_start.len() != n + 1 {
@@ -376,13 +400,7 @@ impl SurfaceReading {
             seeds: self.dirty.len(),
             triangles: asked,
         };
-        self.flagged_list()
-    }
-
-    /// The triangles flagged at the last reading, increasing (allocated
-    /// once, to its length: [`super::turned::flagged_list`]).
-    fn flagged_list(&self) -> Vec<u32> {
-        super::turned::flagged_list(&self.flagged)
+        super::turned::flagged_into(&self.flagged, list)
     }
 }
 

@@ -134,23 +134,37 @@ pub fn turned_over_flagged(
     turn: &[DQuat],
     flags: &mut Vec<bool>,
 ) -> Vec<u32> {
+    turned_over_flagged_in(tris, source_normals, out, turn, flags, Vec::new())
+}
+
+/// [`turned_over_flagged`] listed into `list` (cleared; its buffer
+/// reused: no allocation when it holds the count, issue 45).
+pub(crate) fn turned_over_flagged_in(
+    tris: &[[u32; 3]],
+    source_normals: &[DVec3],
+    out: &[[f64; 3]],
+    turn: &[DQuat],
+    flags: &mut Vec<bool>,
+    list: Vec<u32>,
+) -> Vec<u32> {
     flags.resize(tris.len(), false);
     flags
         .par_iter_mut()
         .zip(tris.par_iter().zip(source_normals.par_iter()))
         .with_min_len(CHUNK)
         .for_each(|(b, (t, n))| *b = faces_against(t, *n, out, turn));
-    flagged_list(flags)
+    flagged_into(flags, list)
 }
 
-/// The indices of the set `flags`, increasing, in a list allocated once
-/// to its length (not at all when none is set).
-pub(crate) fn flagged_list(flags: &[bool]) -> Vec<u32> {
+/// The indices of the set `flags`, increasing, in `list` (cleared; grown
+/// once to the count when it holds less, not at all when none is set).
+pub(crate) fn flagged_into(flags: &[bool], mut list: Vec<u32>) -> Vec<u32> {
+    list.clear();
     let count = flags.iter().filter(|&&b| b).count();
     if count == 0 {
-        return Vec::new();
+        return list;
     }
-    let mut list = Vec::with_capacity(count);
+    list.reserve_exact(count);
     list.extend((0..flags.len() as u32).filter(|&t| flags[t as usize]));
     list
 }

@@ -261,7 +261,25 @@ pub fn untangle_with<N: Normals>(
     normals: &mut N,
     areas: &[f64],
     out: &mut [[f64; 3]],
-    mut bad: Vec<u32>,
+    bad: Vec<u32>,
+    opts: &UntangleOptions,
+    budget: &mut Budget,
+) -> Vec<u32> {
+    let lists = (bad, &mut Vec::new());
+    untangle_kept(tris, adj, normals, areas, out, lists, opts, budget)
+}
+
+/// [`untangle_with`] with the sweeps' vertex list in `verts` (cleared
+/// before use; a deformation workspace's, reused frame to frame: issue
+/// 45).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn untangle_kept<N: Normals>(
+    tris: &[[u32; 3]],
+    adj: &Adjacency,
+    normals: &mut N,
+    areas: &[f64],
+    out: &mut [[f64; 3]],
+    (mut bad, verts): (Vec<u32>, &mut Vec<u32>),
     opts: &UntangleOptions,
     budget: &mut Budget,
 ) -> Vec<u32> {
@@ -269,7 +287,6 @@ pub fn untangle_with<N: Normals>(
     let flipped = |normals: &[DVec3], out: &[[f64; 3]], t: u32| {
         signed_area(&tris[t as usize], out, normals[t as usize]) <= 0.0
     };
-    let mut verts: Vec<u32> = Vec::new();
     let mut idle = 0;
     for sweep in 0..opts.sweeps {
         if bad.is_empty() || idle == 3 {
@@ -290,11 +307,11 @@ pub fn untangle_with<N: Normals>(
         }
         verts.sort_unstable();
         verts.dedup();
-        normals.ready(tris, adj, &verts);
+        normals.ready(tris, adj, verts);
         let normals = normals.normals();
         let mut moved = false;
         let mut spent = false;
-        for &v in &verts {
+        for &v in verts.iter() {
             if budget.projections_left() < most {
                 spent = true;
                 break;

@@ -28,7 +28,7 @@ use crate::mesh::blend::Blender;
 use crate::pose::Pose;
 use crate::pose::retarget::{
     CharacterNeutral, ClipNeutral, Given, KernelWorkspace, OnCharacter, character_neutral,
-    on_character_in, stance_offsets_in,
+    on_character_into, stance_offsets_in,
 };
 use crate::util::stages::Stages;
 use glam::DVec3;
@@ -70,7 +70,7 @@ pub struct Prepared {
 
 /// One clip analysed against a character: made once per clip by
 /// [`Prepared::analyse`] (or [`Analysed::new`] without a preparation).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct Analysed {
     /// The clip on the character's skeleton, measured from its neutral
     /// pose and standing on the database's floor (metres, Y-up): what
@@ -133,35 +133,50 @@ impl Analysed {
         given: &Given<'_>,
         ws: &mut KernelWorkspace,
     ) -> Analysed {
+        let mut out = Analysed::default();
+        let on = (neutral, floor_lift);
+        out.refill(ch, on, reference, mocap, (given, ws));
+        out
+    }
+
+    /// [`Analysed::on_given`] into this value (every part cleared and
+    /// refilled, `(neutral, floor_lift)` the character's neutral pose and
+    /// the database's floor lift): no allocation once it and `ws` hold
+    /// the clip's frames (issue 45: a live session keeps both).
+    pub(crate) fn refill(
+        &mut self,
+        ch: &Character,
+        (neutral, floor_lift): (&Pose, f64),
+        reference: &ClipNeutral,
+        mocap: &[Pose],
+        (given, ws): (&Given<'_>, &mut KernelWorkspace),
+    ) {
         let t = Instant::now();
         let rest = ch.rest_pose();
-        let on_character = on_character_in(rest, neutral, reference, mocap, given, ws);
-        let lift = DVec3::new(0.0, floor_lift, 0.0);
-        let query: Vec<Pose> = on_character
-            .frames
-            .iter()
-            .map(|(p, _)| p.map(|q| q + lift))
-            .collect();
-        let raised = stance_offsets_in(rest, reference, mocap, given, ws);
-        // With the feet on the clip's footfalls, retrieval compares the
-        // poses before (issue 44: CMU 03_02 on samba chose other frames).
-        let free: Option<Vec<Pose>> = on_character
-            .free_feet
-            .as_ref()
-            .map(|f| f.iter().map(|p| p.map(|q| q + lift)).collect());
-        let on_floor = free
-            .as_ref()
-            .unwrap_or(&query)
-            .iter()
-            .zip(raised.iter().chain(std::iter::repeat(&0.0)))
-            .map(|(p, &r)| p.map(|q| q - DVec3::Y * r))
-            .collect();
-        Analysed {
+        let Analysed {
             query,
             on_floor,
             on_character,
-            seconds: t.elapsed().as_secs_f64(),
+            ..
+        } = self;
+        on_character_into(rest, neutral, reference, mocap, given, ws, on_character);
+        let lift = DVec3::new(0.0, floor_lift, 0.0);
+        query.clear();
+        query.extend(on_character.frames.iter().map(|(p, _)| p.map(|q| q + lift)));
+        let raised = stance_offsets_in(rest, reference, mocap, given, ws);
+        // With the feet on the clip's footfalls, retrieval compares the
+        // poses before (issue 44: CMU 03_02 on samba chose other frames).
+        let raised = raised.iter().chain(std::iter::repeat(&0.0));
+        let down = |(p, &r): (Pose, &f64)| p.map(|q| q - DVec3::Y * r);
+        on_floor.clear();
+        match &on_character.free_feet {
+            Some(f) => {
+                let free = f.iter().map(|p| p.map(|q| q + lift));
+                on_floor.extend(free.zip(raised).map(down));
+            }
+            None => on_floor.extend(query.iter().copied().zip(raised).map(down)),
         }
+        self.seconds = t.elapsed().as_secs_f64();
     }
 }
 
@@ -268,23 +283,17 @@ impl Prepared {
     }
 
     /// [`Prepared::analyse`] with what the caller decides, in the
-    /// buffers of `ws` ([`Analysed::on_given`]).
-    pub(crate) fn analyse_given(
+    /// buffers of `ws` and into `out` ([`Analysed::refill`]: a live
+    /// session's, kept from frame to frame).
+    pub(crate) fn analyse_into(
         &self,
         ch: &Character,
         reference: &ClipNeutral,
         mocap: &[Pose],
-        given: &Given<'_>,
-        ws: &mut KernelWorkspace,
-    ) -> Analysed {
-        Analysed::on_given(
-            ch,
-            &self.neutral.pose,
-            self.floor_lift,
-            reference,
-            mocap,
-            given,
-            ws,
-        )
+        given: (&Given<'_>, &mut KernelWorkspace),
+        out: &mut Analysed,
+    ) {
+        let on = (&self.neutral.pose, self.floor_lift);
+        out.refill(ch, on, reference, mocap, given);
     }
 }

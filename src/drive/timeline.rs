@@ -181,8 +181,11 @@ pub fn timeline_into(
     if opts.interpolate {
         smooth_runs(path, db, tau, run);
     }
-    // Jumps (a repeat, the next frame or a skip of one frame plays on).
+    // Jumps (a repeat, the next frame or a skip of one frame plays on);
+    // at most one a frame, reserved so (no allocation as a window of the
+    // same length meets more jumps: issue 45).
     jumps.clear();
+    jumps.reserve(nq);
     for k in 1..nq {
         let (a, b) = (path[k - 1], path[k]);
         if plays_on(db, a, b) {

@@ -43,6 +43,14 @@ pub fn listen(
     }))
 }
 
+/// The longest frame time a sender's header may give (seconds). Each
+/// source frame is put as every output frame nearest its time, about
+/// `frame_time × fps` of them, so a header's `Frame Time: 1e12` (or
+/// `inf`) from the network made one frame a list of 10¹³ numbers (the
+/// receiver's memory without bound, session 44); a longer frame time is
+/// refused as malformed, as a non-positive one is.
+const MAX_FRAME_TIME: f64 = 10.0;
+
 /// What the first frame of the stream decided.
 struct Decided {
     map: RigMap,
@@ -85,7 +93,7 @@ fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
             }
             header.push_str(&line);
         }
-        if frame_time.is_nan() || frame_time <= 0.0 {
+        if !(frame_time > 0.0 && frame_time <= MAX_FRAME_TIME) {
             mb.count(|c| c.malformed += 1);
             continue;
         }
@@ -179,4 +187,59 @@ fn frame_pose(
         None
     };
     Some((*poses.first()?, *rots.first()?, rest))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::live::source::Source;
+    use crate::mocap::bvh::format_bvh;
+    use crate::synth::{Gait, gait_clip};
+    use std::io::Write;
+    use std::time::Duration;
+
+    /// A header whose frame time is huge or infinite is refused as
+    /// malformed (the session lives, no frame is put), and the next
+    /// sender with a sane one is read: before, the second frame line of
+    /// `Frame Time: 1e12` put 3·10¹³ output numbers in a list (run only
+    /// under a memory limit to see it).
+    #[test]
+    fn a_huge_frame_time_is_malformed_not_a_flood() {
+        let text = format_bvh(&gait_clip(Gait::Walk, 1.0, 30.0));
+        let fed = listen(
+            "127.0.0.1:0".parse().unwrap(),
+            30.0,
+            LoadOptions::default(),
+            true,
+        )
+        .unwrap();
+        let to = fed.local_addr();
+        let send = |frame_time: &str| {
+            let mut s = std::net::TcpStream::connect(to).unwrap();
+            for l in text.lines() {
+                let l = match l.starts_with("Frame Time:") {
+                    true => format!("Frame Time: {frame_time}"),
+                    false => l.to_string(),
+                };
+                // The receiver may have closed a refused sender.
+                if s.write_all(format!("{l}\n").as_bytes()).is_err() {
+                    break;
+                }
+            }
+        };
+        let wait_for = |what: &dyn Fn(&crate::live::report::Counters) -> bool| {
+            let end = Instant::now() + Duration::from_secs(20);
+            while !what(&fed.counters()) && Instant::now() < end {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            fed.counters()
+        };
+        send("1e12");
+        send("inf");
+        let c = wait_for(&|c| c.malformed >= 2);
+        assert_eq!((c.malformed, c.received), (2, 0), "{c:?}");
+        send("0.0333333");
+        let c = wait_for(&|c| c.received >= 20);
+        assert!(c.received >= 20, "{c:?}");
+    }
 }

@@ -32,6 +32,9 @@ pub mod stages;
 pub mod stream;
 pub mod vmc;
 
+#[cfg(test)]
+mod push_allocations;
+
 pub use online::{Advance, Committed, OnlineOptions, OnlineStats, OnlineTrellis};
 pub use overlap::Overlap;
 pub use session::{LiveFrame, Session, SessionOptions};

@@ -165,8 +165,11 @@ impl<'a> OnlineTrellis<'a> {
             kmax,
             kmin,
             edge_scale,
-            bests: Vec::new(),
-            recent: std::collections::VecDeque::new(),
+            // The scales' sample grows to its window and no further:
+            // reserved once (no allocation as frames arrive; pages are
+            // touched as it fills).
+            bests: Vec::with_capacity(SCALE_WINDOW),
+            recent: std::collections::VecDeque::with_capacity(SCALE_WINDOW),
             rows: std::collections::VecDeque::new(),
             anchor: None,
             committed: 0,
@@ -197,8 +200,19 @@ impl<'a> OnlineTrellis<'a> {
     /// floor, [`crate::drive::Analysed::on_floor`]); decides the frame
     /// `lag` back once it can.
     pub fn push(&mut self, q: &Pose) -> Advance {
+        let mut out = Advance::default();
+        self.push_into(q, &mut out);
+        out
+    }
+
+    /// [`OnlineTrellis::push`] into `out` (cleared and refilled): no
+    /// allocation once its buffers hold a step's frames (issue 45: the
+    /// live session keeps one).
+    pub fn push_into(&mut self, q: &Pose, out: &mut Advance) {
+        out.committed.clear();
+        out.lookahead.clear();
         if self.db.poses.is_empty() {
-            return Advance::default();
+            return;
         }
         let best = self.nearest(q);
         if self.recent.len() == SCALE_WINDOW
@@ -215,9 +229,7 @@ impl<'a> OnlineTrellis<'a> {
         self.rows.push_back(row);
         self.stats.frames += 1;
         if self.rows.len() > self.opts.lag {
-            self.decide(1)
-        } else {
-            Advance::default()
+            self.decide(1, out);
         }
     }
 
@@ -271,8 +283,17 @@ impl<'a> OnlineTrellis<'a> {
 
     /// Decides every frame still undecided (the stream ended).
     pub fn finish(&mut self) -> Advance {
+        let mut out = Advance::default();
+        self.finish_into(&mut out);
+        out
+    }
+
+    /// [`OnlineTrellis::finish`] into `out` (cleared and refilled).
+    pub fn finish_into(&mut self, out: &mut Advance) {
+        out.committed.clear();
+        out.lookahead.clear();
         let n = self.rows.len();
-        self.decide(n)
+        self.decide(n, out);
     }
 
     /// The current `(T_skel, s_node)`.
@@ -288,10 +309,10 @@ impl<'a> OnlineTrellis<'a> {
     }
 
     /// Solves the undecided rows from the anchor and commits the first
-    /// `count` of them.
-    fn decide(&mut self, count: usize) -> Advance {
+    /// `count` of them, appended to `out` (cleared by the caller).
+    fn decide(&mut self, count: usize, out: &mut Advance) {
         if self.rows.is_empty() || count == 0 {
-            return Advance::default();
+            return;
         }
         let (t_skel, node_scale) = self.scales();
         self.stats.t_skel = t_skel;
@@ -308,7 +329,6 @@ impl<'a> OnlineTrellis<'a> {
         self.solve(node_scale, &mut slot, &mut b);
         let (slots, cuts, widened) = (&b.slots, &b.cuts, &b.widened);
         let rows = |k: usize| &self.rows[k][..b.keep[k]];
-        let mut out = Advance::default();
         let count = count.min(self.rows.len());
         for k in 0..count {
             let (c, id) = rows(k)[slots[k]];
@@ -330,9 +350,8 @@ impl<'a> OnlineTrellis<'a> {
             });
             self.committed += 1;
         }
-        out.lookahead = (count..self.rows.len())
-            .map(|k| rows(k)[slots[k]].1)
-            .collect();
+        out.lookahead
+            .extend((count..self.rows.len()).map(|k| rows(k)[slots[k]].1));
         self.slot = slot;
         self.solver = b;
         for r in self.rows.drain(..count) {
@@ -340,7 +359,6 @@ impl<'a> OnlineTrellis<'a> {
                 self.spare.push(r);
             }
         }
-        out
     }
 
     /// True when `b` repeats `a`, is its natural successor or skips one.

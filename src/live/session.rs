@@ -43,7 +43,7 @@ use crate::drive::placement::{
 };
 use crate::drive::timeline::{Timeline, timeline_into};
 use crate::drive::trellis::TrellisInput;
-use crate::drive::{DriveOptions, Prepared};
+use crate::drive::{Analysed, DriveOptions, Prepared};
 use crate::graph::FlatFrame;
 use crate::mesh::blend::{BlendWorkspace, FrameGradients};
 use crate::pose::Pose;
@@ -333,14 +333,24 @@ pub struct Session<'a> {
     /// (issue 45: no allocation in its clip-level steps per frame).
     kernel_ws: KernelWorkspace,
     /// The placement's window (decided frames and the continuation), its
-    /// queries, buffers and result, and the analysis window's rotations,
-    /// reused by every frame.
+    /// queries, buffers and result, reused by every frame.
     place: PlaceBuffers,
+    /// The newest analysis (the pose kernel's run over the window),
+    /// refilled by every push (issue 45).
+    analysed: Analysed,
+    /// The analysis window's rotations (one per raw frame when every
+    /// frame has them, else none), updated in place while the window's
+    /// length stays (issue 45); the kernel reads them as the window's
+    /// [`ClipNeutral::rotations`].
+    rotations: Arc<[JointRotations]>,
+    /// The retrieval's last step and the frames it decided followed by
+    /// its continuation, refilled by every push (issue 45).
+    advance: Advance,
+    ids: Vec<FlatFrame>,
 }
 
 /// The buffers of an output frame's placement over its window
-/// ([`Session::blend_into`]) and of an arriving frame's rotations
-/// ([`Session::push`]), reused from frame to frame (issue 45).
+/// ([`Session::blend_into`]), reused from frame to frame (issue 45).
 #[derive(Default)]
 struct PlaceBuffers {
     window: Vec<FlatFrame>,
@@ -348,8 +358,6 @@ struct PlaceBuffers {
     timeline: Timeline,
     scratch: PlacementScratch,
     placed: Vec<Floor>,
-    /// The analysis window's rotations ([`Session::push`]).
-    rotations: Vec<JointRotations>,
 }
 
 impl<'a> Session<'a> {
@@ -403,6 +411,10 @@ impl<'a> Session<'a> {
             stages: FrameStages::default(),
             kernel_ws: KernelWorkspace::new(),
             place: PlaceBuffers::default(),
+            analysed: Analysed::default(),
+            rotations: Arc::from(Vec::new()),
+            advance: Advance::default(),
+            ids: Vec::new(),
         }
     }
 
@@ -417,6 +429,16 @@ impl<'a> Session<'a> {
     /// The retrieval's counts.
     pub fn stats(&self) -> OnlineStats {
         self.trellis.stats()
+    }
+
+    /// The bytes the deformation workspaces hold (their buffers'
+    /// capacities): the whole-step allocation test tells a buffer grown
+    /// to a larger repair than met before from a per-frame allocation.
+    #[cfg(test)]
+    pub(crate) fn deform_capacity(&mut self) -> usize {
+        use crate::deform::resident::Resident;
+        let ws = self.slots.iter_mut().filter_map(|s| s.ws.as_mut());
+        ws.map(|w| w.resident(false)).sum()
     }
 
     /// Triangle-frames the deformation left turned over (after repair).
@@ -459,15 +481,9 @@ impl<'a> Session<'a> {
         self.raw_rotations.push_back(rotations.copied());
         self.received += 1;
         let from_start = self.received == self.raw.len();
-        // The window's rotations (none unless every frame has them), in
-        // a buffer kept from frame to frame.
-        let rots = &mut self.place.rotations;
-        rots.clear();
-        if self.raw_rotations.iter().all(Option::is_some) {
-            rots.extend(self.raw_rotations.iter().flatten().copied());
-        }
+        window_rotations(&self.raw_rotations, &mut self.rotations);
         let reference = ClipNeutral {
-            rotations: Arc::from(&rots[..]),
+            pose: self.reference.pose,
             // A reference frame of the stream is the window's frame of the
             // same index only while the window starts at the stream's first
             // frame (the kernel reads `Frame(i)` as the window's frame i);
@@ -476,7 +492,7 @@ impl<'a> Session<'a> {
                 ClipNeutralSource::Frame(_) if !from_start => ClipNeutralSource::Frame(usize::MAX),
                 s => s,
             },
-            ..self.reference.clone()
+            rotations: Arc::clone(&self.rotations),
         };
         let decided = self.path_start + self.path.len() > 0;
         let first_frame = self.received - self.raw.len();
@@ -496,14 +512,18 @@ impl<'a> Session<'a> {
             kept,
             open_end: self.opts.open_end && decided,
         };
-        let a = analyse(
+        let a = &mut self.analysed;
+        let ws = &mut self.kernel_ws;
+        analyse(
             self.prepared,
             self.ch,
             &reference,
             window,
             (&stream, &swapped),
-            &mut self.kernel_ws,
+            (ws, a),
         );
+        drop(reference);
+        let a = &self.analysed;
         let (Some(first), Some(q), Some(f)) = (a.query.first(), a.query.last(), a.on_floor.last())
         else {
             return;
@@ -602,18 +622,18 @@ impl<'a> Session<'a> {
         out: &mut dyn FnMut(LiveFrame<'_>),
     ) {
         self.query.push_back(*query);
-        let adv = self.trellis.push(on_floor);
+        self.trellis.push_into(on_floor, &mut self.advance);
         self.clock.lap(Stage::Retrieval, &mut self.stages);
-        self.emit(adv, out);
+        self.emit(out);
     }
 
     /// Decides and outputs every frame still pending (the stream ended).
     pub fn finish(&mut self, out: &mut dyn FnMut(LiveFrame<'_>)) {
         self.clock = StageClock::start();
         self.stages = FrameStages::default();
-        let adv = self.trellis.finish();
+        self.trellis.finish_into(&mut self.advance);
         self.clock.lap(Stage::Retrieval, &mut self.stages);
-        self.emit(adv, out);
+        self.emit(out);
         // A lone frame the overlap holds has no partner coming.
         if let Some(h) = self.held.take() {
             self.clock = StageClock::start();
@@ -627,13 +647,15 @@ impl<'a> Session<'a> {
         }
     }
 
-    fn emit(&mut self, adv: Advance, out: &mut dyn FnMut(LiveFrame<'_>)) {
-        let ids: Vec<FlatFrame> = adv
-            .committed
-            .iter()
-            .map(|c| c.id)
-            .chain(adv.lookahead.iter().copied())
-            .collect();
+    /// Makes and outputs the frames the retrieval's last step decided
+    /// (kept in `advance`).
+    fn emit(&mut self, out: &mut dyn FnMut(LiveFrame<'_>)) {
+        // Taken while the frames are made (no allocation), put back after.
+        let adv = std::mem::take(&mut self.advance);
+        let mut ids = std::mem::take(&mut self.ids);
+        ids.clear();
+        ids.extend(adv.committed.iter().map(|c| c.id));
+        ids.extend(adv.lookahead.iter().copied());
         for (i, c) in adv.committed.iter().enumerate() {
             self.path.push_back(c.id);
             let ahead = &ids[i + 1..ids.len().min(i + 1 + self.opts.history.max(1))];
@@ -649,6 +671,7 @@ impl<'a> Session<'a> {
                 self.query_start += 1;
             }
         }
+        (self.advance, self.ids) = (adv, ids);
     }
 
     /// Makes output frame `k` (decided as `id`; `ahead`, the continuation):
@@ -803,17 +826,38 @@ struct Stream {
     open_end: bool,
 }
 
+/// The window's rotations into `kept` (one per raw frame when every
+/// frame of `raw` has them, else none): written in place while the
+/// length stays and nothing else holds them (the last analysis's
+/// reference is gone by the next push), so a full window allocates
+/// nothing; a new `Arc` while the window fills.
+fn window_rotations(raw: &VecDeque<Option<JointRotations>>, kept: &mut Arc<[JointRotations]>) {
+    let n = if raw.iter().all(Option::is_some) {
+        raw.len()
+    } else {
+        0
+    };
+    match Arc::get_mut(kept) {
+        Some(k) if k.len() == n => {
+            for (k, r) in k.iter_mut().zip(raw.iter().flatten()) {
+                *k = *r;
+            }
+        }
+        _ => *kept = raw.iter().take(n).flatten().copied().collect(),
+    }
+}
+
 /// The pose kernel over the raw `window` on what the `stream` decides
 /// and with what `swapped` takes from the offline analysis (first), in
-/// the session's buffers `ws`.
+/// the session's buffers `ws`, into the session's `out`.
 fn analyse(
     prepared: &Prepared,
     ch: &Character,
     reference: &ClipNeutral,
     window: &[Pose],
     (stream, swapped): (&Stream, &WindowGround),
-    ws: &mut KernelWorkspace,
-) -> crate::drive::Analysed {
+    (ws, out): (&mut KernelWorkspace, &mut Analysed),
+) {
     let replace = |_: &[Pose], s: &mut Support| {
         if let Some(o) = &swapped.support {
             *s = o.clone();
@@ -828,7 +872,7 @@ fn analyse(
             .map(|_| &replace as &dyn Fn(&[Pose], &mut Support)),
         open_end: stream.open_end,
     };
-    prepared.analyse_given(ch, reference, window, &given, ws)
+    prepared.analyse_into(ch, reference, window, (&given, ws), out);
 }
 
 /// `query` settled from the previous output frame `prev` and this

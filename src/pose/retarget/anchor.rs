@@ -4,7 +4,7 @@
 //! The kernel places the character's root where the clip's root goes, its
 //! travel scaled by the ratio of leg lengths (Huang et al. 2015, Sec. 5.2
 //! copy the root's translation; the scale is this project's), and stands
-//! the feet on the ground ([`place_feet`](super::feet::place_feet)). Two
+//! the feet on the ground ([`place_feet_into`](super::feet::place_feet_into)). Two
 //! files of one performance put their roots elsewhere in the body (CMU
 //! 02_03's CC-rig BVH conversion: the hips 9 cm higher and 4.5 cm back
 //! against the ASF's root) and scale it differently (the conversion's

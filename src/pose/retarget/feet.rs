@@ -10,10 +10,32 @@ use glam::{DQuat, DVec3};
 
 use Canonical as C;
 
+/// [`place_feet_into`] with fresh grounds, returned (the tests' form).
+#[cfg(test)]
+pub(super) fn place_feet(
+    character: &Pose,
+    support: &Support,
+    s: f64,
+    (toes, open_end): (Toes, bool),
+    out: &mut [(Pose, [DQuat; Canonical::COUNT])],
+    scratch: &mut FeetScratch,
+) -> [Vec<Option<f64>>; 2] {
+    let mut grounds = [Vec::new(), Vec::new()];
+    place_feet_into(
+        character,
+        support,
+        s,
+        (toes, open_end),
+        out,
+        (scratch, &mut grounds),
+    );
+    grounds
+}
+
 /// Lifts (or lowers) every pose of `out` (the character's, before its
 /// vertical correction) so that each foot stands on or above its ground,
-/// and with [`Toes::Bending`] turns the toes up onto it; returns each
-/// foot's ground per frame (raised above the character's floor by its
+/// and with [`Toes::Bending`] turns the toes up onto it; writes into
+/// `grounds` (each cleared and refilled) each foot's ground per frame (raised above the character's floor by its
 /// height above the clip's floor `support.floor`, scaled by `s`; `None`
 /// where the foot has none). See [`retarget_toes`](super::retarget_toes).
 ///
@@ -47,16 +69,16 @@ use Canonical as C;
 /// front one strikes the floor; counted in the air, its toes went 4 cm
 /// into the block for that frame.
 ///
-/// `scratch` holds its buffers (cleared before use; no allocation but the
-/// grounds returned once they hold the clip's frames).
-pub(super) fn place_feet(
+/// `scratch` holds its buffers (cleared before use): no allocation once
+/// they and `grounds` hold the clip's frames (issue 45).
+pub(super) fn place_feet_into(
     character: &Pose,
     support: &Support,
     s: f64,
     (toes, open_end): (Toes, bool),
     out: &mut [(Pose, [DQuat; Canonical::COUNT])],
-    scratch: &mut FeetScratch,
-) -> [Vec<Option<f64>>; 2] {
+    (scratch, grounds): (&mut FeetScratch, &mut [Vec<Option<f64>>; 2]),
+) {
     let FeetScratch {
         soles,
         settled,
@@ -156,17 +178,16 @@ pub(super) fn place_feet(
     ramp_step_downs(lift, touch, support.band, open);
     // The higher top under a foot in the air where the clip's joints are
     // above it and the character's sole, lifted, is too.
-    let grounds: [Vec<Option<f64>>; 2] = [0, 1].map(|f| {
-        (0..out.len())
-            .map(|i| {
-                let lo = lower(f, i)?;
-                match support.under[f][i] {
-                    Some(u) if u > lo && need(f, i, u) <= lift[i] + 1e-9 => Some(u),
-                    _ => Some(lo),
-                }
-            })
-            .collect()
-    });
+    for (f, g) in grounds.iter_mut().enumerate() {
+        g.clear();
+        g.extend((0..out.len()).map(|i| {
+            let lo = lower(f, i)?;
+            match support.under[f][i] {
+                Some(u) if u > lo && need(f, i, u) <= lift[i] + 1e-9 => Some(u),
+                _ => Some(lo),
+            }
+        }));
+    }
     if toes == Toes::Bending {
         for (i, (t, g)) in out.iter_mut().enumerate() {
             let d = lift[i];
@@ -184,14 +205,12 @@ pub(super) fn place_feet(
             p.y += d;
         }
     }
-    grounds.map(|g| {
-        g.into_iter()
-            .map(|y| y.map(|y| (y - clip_floor) * s))
-            .collect()
-    })
+    for y in grounds.iter_mut().flatten() {
+        *y = y.map(|y| (y - clip_floor) * s);
+    }
 }
 
-/// The buffers [`place_feet`] reuses from one clip to the next (cleared
+/// The buffers [`place_feet_into`] reuses from one clip to the next (cleared
 /// before use).
 #[derive(Debug, Clone, Default)]
 pub struct FeetScratch {
@@ -212,7 +231,7 @@ pub struct FeetScratch {
     lift: Vec<f64>,
 }
 
-/// The step-down ramps of [`place_feet`] (its comment above the call
+/// The step-down ramps of [`place_feet_into`] (its comment above the call
 /// says why): for each foot that leaves a support for a lower one, `lift`
 /// comes down to the landing frame's at an even rate, never below what it
 /// was; with `open` (`(clip floor, fall rate)`, a stream's open end), a

@@ -26,7 +26,7 @@
 //! (smoothstep) from the last footfall's to the next's, so nothing pops;
 //! before the first and after the last it is held. The height is the
 //! limbs' own: only the horizontal place changes, so the feet's ground
-//! ([`place_feet`](super::feet::place_feet)), applied after, stands them
+//! ([`place_feet_into`](super::feet::place_feet_into)), applied after, stands them
 //! as before. Where a planted foot's target lies beyond 0.997 of its
 //! leg's reach (or the posed leg's, if longer), the body is shifted
 //! horizontally (the least shift, by alternating projection over the

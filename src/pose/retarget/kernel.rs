@@ -3,14 +3,14 @@
 //! on their grounds. See the [module docs](super) for what is matched.
 
 use super::anchor::{Footfalls, Placement, place_anchor, placement_from_env};
-use super::feet::{Toes, flat_feet_with, place_feet};
+use super::feet::{Toes, flat_feet_with, place_feet_into};
 use super::footfall::plant_feet;
 use super::ground::{Given, clip_support_given_into, foot_height};
 use super::level::{Level, level_from_env, levelling_line};
 use super::motion_ref::{carriage_for_rest, torso_reference};
 use super::reference::{ClipNeutral, ClipNeutralSource, leg_length};
 use super::root::root_from_legs;
-use super::torso::{clip_rotations_from, neck_carriage, upright_into};
+use super::torso::{clip_rotations_into, neck_carriage, upright_into};
 use super::workspace::KernelWorkspace;
 use crate::pose::{Pose, pose_rotations};
 use crate::rig::Canonical;
@@ -130,7 +130,7 @@ pub fn retarget_toes(
 
 /// [`retarget_toes`] and the ground each foot of the result stands on or
 /// above per frame, raised above the character's floor (character's
-/// metres; `None` for a foot that never touches): see [`place_feet`].
+/// metres; `None` for a foot that never touches): see [`place_feet_into`].
 /// `given` holds what the caller decides instead of the kernel (the
 /// levelling, the floor, the supports: [`Given`]): a live session's
 /// decisions over the stream, where `mocap` is only its recent window;
@@ -206,14 +206,49 @@ fn retarget_placed_on_grounds(
     neutral: &Pose,
     reference: &ClipNeutral,
     mocap: &[Pose],
-    (toes, placement, level): (Toes, Placement, Level),
+    how: (Toes, Placement, Level),
     given: &Given<'_>,
     ws: &mut KernelWorkspace,
 ) -> RetargetedOnGrounds {
+    let mut out = Retargeted::default();
+    let poses = (character, neutral);
+    retarget_placed_into(poses, reference, mocap, how, given, ws, &mut out);
+    (out.frames, out.grounds, out.free)
+}
+
+/// What one run of the kernel over a clip gives ([`RetargetedOnGrounds`]
+/// as buffers): refilled by [`retarget_placed_into`], so a live session
+/// that keeps it makes no allocation for them once they hold its window
+/// (issue 45).
+#[derive(Debug, Clone, Default)]
+pub(super) struct Retargeted {
+    /// Per frame, the character's joint positions and global rotations.
+    pub(super) frames: Vec<(Pose, [DQuat; Canonical::COUNT])>,
+    /// Each foot's ground per frame ([`place_feet_into`]).
+    pub(super) grounds: [Vec<Option<f64>>; 2],
+    /// With the feet on the clip's footfalls, the joints before.
+    pub(super) free: Option<Vec<Pose>>,
+}
+
+/// [`retarget_placed_on_grounds`] into `out` (every part cleared and
+/// refilled; `(character, neutral)` the character's rest and neutral
+/// poses), the clip levelled and its rotations in the buffers of `ws`.
+pub(super) fn retarget_placed_into(
+    (character, neutral): (&Pose, &Pose),
+    reference: &ClipNeutral,
+    mocap: &[Pose],
+    (toes, placement, level): (Toes, Placement, Level),
+    given: &Given<'_>,
+    ws: &mut KernelWorkspace,
+    out: &mut Retargeted,
+) {
     // Counted by the tests of issue 40's "analysed once per clip".
     let _run = tracing::debug_span!("pose_kernel", frames = mocap.len()).entered();
+    out.frames.clear();
+    out.grounds.iter_mut().for_each(Vec::clear);
     if mocap.is_empty() {
-        return (Vec::new(), [Vec::new(), Vec::new()], None);
+        out.free = None;
+        return;
     }
     // A clip whose root carries no vertical motion stood on its legs.
     let from_legs = root_from_legs(mocap);
@@ -222,8 +257,10 @@ fn retarget_placed_on_grounds(
     // degree or two off its vertical axis; CMU subject 02's rises 8 cm
     // over a 4 m walk), so that one floor height holds for every frame.
     let tilt = given.tilt_with(mocap, &mut ws.tilt);
-    let levelled: Vec<Pose> = mocap.iter().map(|m| m.map(|p| tilt * p)).collect();
-    let mocap = &levelled[..];
+    ws.levelled.clear();
+    ws.levelled
+        .extend(mocap.iter().map(|m| m.map(|p| tilt * p)));
+    let mocap = &ws.levelled[..];
     let first = &mocap[0];
     let level_ref;
     let r = match reference.source {
@@ -253,15 +290,22 @@ fn retarget_placed_on_grounds(
     let root = C::Pelvis.index();
     let clip_floor = support.floor;
     let char_floor = foot_height(character);
-    let rotations = clip_rotations_from(r, mocap, reference, tilt, at_ref);
-    let rotations = level_torso(rotations, r, level);
-    upright_into(mocap, &rotations, &mut ws.trunk, &mut ws.upright);
+    let rotations = &mut ws.rotations;
+    clip_rotations_into(r, mocap, reference, (tilt, at_ref), rotations);
+    level_torso(rotations, r, level);
+    let rotations = &*rotations;
+    upright_into(mocap, rotations, &mut ws.trunk, &mut ws.upright);
     let carriage_inv = neck_carriage(&ws.upright).inverse();
     let (chest, neck) = (C::Chest.index(), C::Neck.index());
-    let mut out: Vec<(Pose, [DQuat; Canonical::COUNT])> = mocap
-        .par_iter()
-        .zip(&rotations)
-        .map(|(m, a)| {
+    let unset = (
+        [DVec3::ZERO; Canonical::COUNT],
+        [DQuat::IDENTITY; Canonical::COUNT],
+    );
+    out.frames.resize(mocap.len(), unset);
+    out.frames
+        .par_iter_mut()
+        .zip(mocap.par_iter().zip(rotations.par_iter()))
+        .for_each(|(o, (m, a))| {
             let mut g = [DQuat::IDENTITY; Canonical::COUNT];
             let mut t = [DVec3::ZERO; Canonical::COUNT];
             let d = (m[root] - first[root]) * s;
@@ -284,9 +328,8 @@ fn retarget_placed_on_grounds(
                     _ => limb_rotation(character, m, &g, c),
                 };
             }
-            (t, g)
-        })
-        .collect();
+            *o = (t, g);
+        });
     // Feet on the ground: in every frame where a foot of the clip touches
     // its ground (planted, its lowest joint within the contact band, 3.6 %
     // of the clip's leg, of that footfall's support, or of the floor), the body is lifted (or
@@ -295,7 +338,7 @@ fn retarget_placed_on_grounds(
     // above the character's floor by its height above the clip's floor,
     // scaled; for a foot in the air, the lower of the supports it left
     // and lands on unless its sole is above the higher's top:
-    // [`place_feet`]); the foot that
+    // [`place_feet_into`]); the foot that
     // needs the body highest stands on its
     // ground. Between such frames (a run's flight) the correction is
     // interpolated. Whatever the two skeletons' hip offsets and foot
@@ -311,19 +354,25 @@ fn retarget_placed_on_grounds(
     // does with the default placement: see [`place_anchor`]).
     let floors = (clip_floor, char_floor);
     let how = (toes, given.open_end);
-    let k = place_anchor(character, mocap, placement, s, floors, &mut out);
+    let k = place_anchor(character, mocap, placement, s, floors, &mut out.frames);
     // The feet on the clip's footfalls, mapped by the same travel scale
     // (issue 44, an option: [`plant_feet`]); the poses as they were kept,
     // grounded, for retrieval to compare.
-    let mut free = None;
     if placement.footfalls == Footfalls::Targets {
-        let mut was = out.clone();
-        place_feet(character, support, s, how, &mut was, &mut ws.feet);
-        free = Some(was.into_iter().map(|(p, _)| p).collect());
-        plant_feet(mocap, support, (k, leg_length(r)), &mut out);
+        let was = &mut ws.was;
+        was.clear();
+        was.extend_from_slice(&out.frames);
+        let feet = (&mut ws.feet, &mut out.grounds);
+        place_feet_into(character, support, s, how, was, feet);
+        let free = out.free.get_or_insert_with(Vec::new);
+        free.clear();
+        free.extend(was.iter().map(|(p, _)| *p));
+        plant_feet(mocap, support, (k, leg_length(r)), &mut out.frames);
+    } else {
+        out.free = None;
     }
-    let grounds = place_feet(character, support, s, how, &mut out, &mut ws.feet);
-    (out, grounds, free)
+    let feet = (&mut ws.feet, &mut out.grounds);
+    place_feet_into(character, support, s, how, &mut out.frames, feet);
 }
 
 /// The torso's rotations (pelvis, spine, chest, neck, head) measured from
@@ -340,22 +389,17 @@ fn retarget_placed_on_grounds(
 /// (CMU 01_01's cgspeed BVH) moves the neck and shoulders, not the chest.
 /// `level` chooses another line ([`Level`]: the pelvis is the root joint,
 /// and a rig that puts its root elsewhere turns this one).
-pub(super) fn level_torso(
-    mut rotations: Vec<[DQuat; Canonical::COUNT]>,
-    r: &Pose,
-    level: Level,
-) -> Vec<[DQuat; Canonical::COUNT]> {
+pub(super) fn level_torso(rotations: &mut [[DQuat; Canonical::COUNT]], r: &Pose, level: Level) {
     let line = levelling_line(r, level);
     if line == DVec3::ZERO {
-        return rotations;
+        return;
     }
     let undo = DQuat::from_rotation_arc(line, DVec3::Y).inverse();
-    for a in &mut rotations {
+    for a in rotations {
         for c in TORSO {
             a[c.index()] = (a[c.index()] * undo).normalize();
         }
     }
-    rotations
 }
 
 /// A limb joint's global rotation: the least rotation from where its

@@ -3,13 +3,15 @@
 //! (read by the plausibility checks and by retrieval), the clip's own foot
 //! glide and head-to-trunk angle.
 
+use super::anchor::placement_from_env;
 use super::feet::Toes;
 use super::feet::{foot_soles, sole_height};
 use super::ground::{
     Given, Support, clip_support_given, clip_support_given_into, interpolate_gaps,
     interpolate_gaps_into,
 };
-use super::kernel::{retarget, retarget_on_grounds};
+use super::kernel::{Retargeted, retarget, retarget_placed_into};
+use super::level::level_from_env;
 use super::reference::{ClipNeutral, angle, leg_length};
 use super::torso::{clip_rotations, neck_carriage, upright};
 use super::workspace::KernelWorkspace;
@@ -87,17 +89,35 @@ pub fn on_character_in(
     given: &Given<'_>,
     ws: &mut KernelWorkspace,
 ) -> OnCharacter {
-    let (frames, grounds, free_feet) =
-        retarget_on_grounds(character, neutral, reference, mocap, Toes::Rigid, given, ws);
-    OnCharacter {
-        frames,
-        foot_grounds: grounds.map(|g| {
-            let mut out = Vec::with_capacity(g.len());
-            interpolate_gaps_into(&g, &mut ws.known, &mut out);
-            out
-        }),
-        free_feet,
+    let mut out = OnCharacter::default();
+    on_character_into(character, neutral, reference, mocap, given, ws, &mut out);
+    out
+}
+
+/// [`on_character_in`] into `out` (every part cleared and refilled): no
+/// allocation once `out` and `ws` hold the clip's frames (issue 45: a
+/// live session keeps both from frame to frame).
+pub fn on_character_into(
+    character: &Pose,
+    neutral: &Pose,
+    reference: &ClipNeutral,
+    mocap: &[Pose],
+    given: &Given<'_>,
+    ws: &mut KernelWorkspace,
+    out: &mut OnCharacter,
+) {
+    let mut run = Retargeted {
+        frames: std::mem::take(&mut out.frames),
+        grounds: std::mem::take(&mut ws.grounds),
+        free: out.free_feet.take(),
+    };
+    let how = (Toes::Rigid, placement_from_env(), level_from_env());
+    let poses = (character, neutral);
+    retarget_placed_into(poses, reference, mocap, how, given, ws, &mut run);
+    for (g, o) in run.grounds.iter().zip(out.foot_grounds.iter_mut()) {
+        interpolate_gaps_into(g, &mut ws.known, o);
     }
+    (out.frames, ws.grounds, out.free_feet) = (run.frames, run.grounds, run.free);
 }
 
 /// The clip's own foot glide while touching its ground, on the
@@ -224,7 +244,7 @@ pub fn ground_offsets(character: &Pose, reference: &ClipNeutral, mocap: &[Pose])
 /// [`Support::under`] of that foot, levelled as [`retarget`] levels the
 /// clip and scaled by the ratio of leg lengths, except that a foot in the
 /// air is over a higher top only when the character's sole is above it:
-/// [`place_feet`](super::feet::place_feet); interpolated across frames where the foot has none).
+/// [`place_feet_into`](super::feet::place_feet_into); interpolated across frames where the foot has none).
 /// The plausibility checks measure penetration as any foot below its
 /// ground, floating as the foot nearest its ground above it.
 pub fn foot_ground_offsets(

@@ -95,8 +95,8 @@ pub use kernel::{
 pub use level::{LEVEL_ENV, Level};
 pub use measures::{
     OnCharacter, clip_foot_glide_cm, clip_head_trunk_deg, foot_glide_cm, foot_ground_offsets,
-    ground_offsets, on_character_given, on_character_in, on_character_with_grounds, stance_offsets,
-    stance_offsets_given, stance_offsets_in,
+    ground_offsets, on_character_given, on_character_in, on_character_into,
+    on_character_with_grounds, stance_offsets, stance_offsets_given, stance_offsets_in,
 };
 pub use motion_ref::REFERENCE_ENV;
 pub use reference::{

@@ -105,8 +105,27 @@ pub(super) fn clip_rotations_from(
     tilt: DQuat,
     at: Option<JointRotations>,
 ) -> Vec<[DQuat; Canonical::COUNT]> {
-    let mut rotations: Vec<[DQuat; Canonical::COUNT]> =
-        mocap.par_iter().map(|m| pose_rotations(r, m)).collect();
+    let mut rotations = Vec::new();
+    clip_rotations_into(r, mocap, reference, (tilt, at), &mut rotations);
+    rotations
+}
+
+/// [`clip_rotations_from`] into `rotations` (cleared and refilled, each
+/// frame's in parallel as before): no allocation once it holds the
+/// clip's frames (issue 45).
+pub(super) fn clip_rotations_into(
+    r: &Pose,
+    mocap: &[Pose],
+    reference: &ClipNeutral,
+    (tilt, at): (DQuat, Option<JointRotations>),
+    rotations: &mut Vec<[DQuat; Canonical::COUNT]>,
+) {
+    rotations.clear();
+    rotations.resize(mocap.len(), [DQuat::IDENTITY; Canonical::COUNT]);
+    rotations
+        .par_iter_mut()
+        .zip(mocap.par_iter())
+        .for_each(|(a, m)| *a = pose_rotations(r, m));
     let file = &reference.rotations;
     // The reference's own file rotations: the rest skeleton's are the
     // identity; a frame's, turned as the poses are.
@@ -124,7 +143,6 @@ pub(super) fn clip_rotations_from(
                 torso_from_file(a, r, m, &w.map(|q| q.map(|q| tilt * q)), &at_ref)
             });
     }
-    rotations
 }
 
 /// Replaces the chest's rotation in `a` (the rotations taking the

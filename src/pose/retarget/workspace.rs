@@ -12,9 +12,13 @@
 //! Offline callers keep the functions without a workspace (each makes a
 //! fresh one): the results are the same bit for bit.
 //!
-//! What still allocates per run: the kernel's outputs (the frames on the
-//! character, the rotations, the levelled clip as rayon collects them,
-//! the feet's grounds).
+//! The kernel's outputs are refilled too when the caller keeps them
+//! ([`super::on_character_into`], a live session's `Analysed`): the
+//! levelled clip and the rotations live here, the frames are written in
+//! parallel into the kept buffer (`par_iter_mut`), the feet's grounds
+//! into kept ones. What still allocates per run: a clip whose root
+//! carries no vertical motion stood on its legs (a copy), and rayon's
+//! own bookkeeping when its pool threads take the work.
 
 use super::feet::{FeetScratch, FlatScratch};
 use super::ground::{Support, SupportScratch, TiltScratch};
@@ -38,8 +42,13 @@ pub struct KernelWorkspace {
     pub(super) flat: FlatScratch,
     /// The feet's placement's buffers.
     pub(super) feet: FeetScratch,
-    /// The levelled clip (the stance offsets').
+    /// The levelled clip (the kernel's, then the stance offsets').
     pub(super) levelled: Vec<Pose>,
+    /// The clip's rotations since its reference (the kernel's).
+    pub(super) rotations: Vec<[DQuat; Canonical::COUNT]>,
+    /// The frames before the feet go on the clip's footfalls
+    /// ([`Footfalls::Targets`](super::Footfalls::Targets)).
+    pub(super) was: Vec<(Pose, [DQuat; Canonical::COUNT])>,
     /// The frames' trunk angles and the upright frames' rotations.
     pub(super) trunk: Vec<f64>,
     pub(super) upright: Vec<[DQuat; Canonical::COUNT]>,
@@ -47,6 +56,9 @@ pub struct KernelWorkspace {
     /// before their gaps are filled.
     pub(super) known: Vec<(usize, f64)>,
     pub(super) raised: Vec<Option<f64>>,
+    /// The feet's grounds as the kernel leaves them, before their gaps
+    /// are filled ([`super::on_character_into`]).
+    pub(super) grounds: [Vec<Option<f64>>; 2],
     /// The stance offsets ([`super::stance_offsets_in`]).
     pub(super) offsets: Vec<f64>,
 }
