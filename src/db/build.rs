@@ -39,7 +39,7 @@ pub struct BuildOptions {
     pub method: Option<Method>,
     /// Also make the rig, frame and skeleton caches a default load reads
     /// current, while the frames are compared
-    /// ([`super::character::prepare_frame_caches`]; `db build` of a
+    /// ([`super::frames::prepare_frame_caches`]; `db build` of a
     /// database with a rig, issue 43). Only when the similarity is
     /// computed (a current cache leaves them to the load). Default: false.
     pub prepare: bool,
@@ -479,7 +479,7 @@ pub(crate) fn similarity_with(
 }
 
 /// Runs `work` while the caches a default load reads are made current
-/// beside it ([`super::character::prepare_frame_caches`]) on a thread of
+/// beside it ([`super::frames::prepare_frame_caches`]) on a thread of
 /// their own; returns `work`'s result with their seconds in its timing. A
 /// failure there is only logged: the load after the build makes them
 /// again and says why it cannot.
@@ -492,7 +492,7 @@ fn beside_caches(
     std::thread::scope(|scope| {
         let side = scope.spawn(|| {
             let t = Instant::now();
-            let prepare = || super::character::prepare_frame_caches(dir, m, lens);
+            let prepare = || super::frames::prepare_frame_caches(dir, m, lens);
             // A pool of its own: its parallel loops (the skeletons of each
             // sequence's frames) queued on the global pool would wait
             // until the pairs' blocks are done, putting this thread after

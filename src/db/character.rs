@@ -45,7 +45,7 @@ pub struct CharacterOptions {
 impl Default for CharacterOptions {
     fn default() -> Self {
         CharacterOptions {
-            skeleton: SkeletonKind::Regressor,
+            skeleton: crate::db::frames::LOAD_SKELETON,
         }
     }
 }
@@ -485,34 +485,6 @@ const STEP_ROWS: usize = 512;
 /// a sequence's last frame), the pages of a mapped similarity released
 /// every [`STEP_ROWS`] rows so that the pass does not keep the whole file
 /// resident.
-/// The rig, frame and skeleton caches a default load ([`Character::load`])
-/// reads, made current for the database `dir` whose sequences have `lens`
-/// frames (the manifest's order): the rig embedded (or read from its cache)
-/// on the same frames a load's takes, then every sequence streamed once into
-/// the frame and skeleton caches ([`open_or_build`]). `db build` runs this
-/// while it compares frames (issue 43): the sequences' second reading and
-/// the 2.4 GB frame cache's write at 10⁴ frames of 10K vertices, mostly
-/// waiting on the disk, overlap the pairs' computation instead of
-/// following the graph. Caches already current are only checked.
-pub(crate) fn prepare_frame_caches(
-    dir: &Path,
-    manifest: &Manifest,
-    lens: &[usize],
-) -> Result<(), DbError> {
-    let topology = manifest.load_topology(dir)?;
-    let (rig, _) = embed_rig_cached(dir, manifest, &topology, Some(lens))?;
-    open_or_build(&CacheInputs {
-        dir,
-        manifest,
-        rig: &rig,
-        n: topology.vertex_count(),
-        count: lens.iter().sum(),
-        conv: Conversion::of(manifest),
-        kind: CharacterOptions::default().skeleton,
-    })?;
-    Ok(())
-}
-
 fn successor_steps(matrix: &Similarity, graph: &SurfaceMotionGraph) -> Vec<f32> {
     let mut steps = vec![f32::NAN; matrix.len()];
     let sparse = match matrix {

@@ -421,6 +421,38 @@ pub(crate) struct CacheInputs<'a> {
     pub kind: SkeletonKind,
 }
 
+/// The skeletons a load reads by default (`CharacterOptions::default`):
+/// the regressed joints.
+pub(crate) const LOAD_SKELETON: SkeletonKind = SkeletonKind::Regressor;
+
+/// The rig, frame and skeleton caches a default load (`Character::load`)
+/// reads, made current for the database `dir` whose sequences have `lens`
+/// frames (the manifest's order): the rig embedded (or read from its cache)
+/// on the same frames a load's takes, then every sequence streamed once into
+/// the frame and skeleton caches ([`open_or_build`]). `db build` runs this
+/// while it compares frames (issue 43, session 44): the sequences' second
+/// reading and the 2.4 GB frame cache's write at 10⁴ frames of 10K
+/// vertices, mostly waiting on the disk, overlap the comparison instead of
+/// following the graph. Caches already current are only checked.
+pub(crate) fn prepare_frame_caches(
+    dir: &Path,
+    manifest: &Manifest,
+    lens: &[usize],
+) -> Result<(), DbError> {
+    let topology = manifest.load_topology(dir)?;
+    let (rig, _) = super::rig_cache::embed_rig_cached(dir, manifest, &topology, Some(lens))?;
+    open_or_build(&CacheInputs {
+        dir,
+        manifest,
+        rig: &rig,
+        n: topology.vertex_count(),
+        count: lens.iter().sum(),
+        conv: Conversion::of(manifest),
+        kind: LOAD_SKELETON,
+    })?;
+    Ok(())
+}
+
 /// The frames and skeletons of the database `inp.dir`: from the cache
 /// when current, else streamed from the sequences (one at a time) into the
 /// cache and mapped. A cache that cannot be used is rebuilt with a warning
