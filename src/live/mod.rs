@@ -33,7 +33,7 @@ pub mod stream;
 pub mod vmc;
 
 #[cfg(test)]
-mod push_allocations;
+mod tests;
 
 pub use online::{Advance, Committed, OnlineOptions, OnlineStats, OnlineTrellis};
 pub use overlap::Overlap;
