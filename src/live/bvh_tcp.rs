@@ -11,7 +11,9 @@
 //! skeleton when it stands upright, else the first frame). Frames arrive at
 //! the sender's rate and are taken at the database's: the source frame
 //! nearest each output time. A line that does not read is counted as
-//! malformed and skipped; when the session is busy the newest frame wins
+//! malformed and skipped, as is a line longer than [`MAX_LINE`] (read past
+//! without being kept); a header longer than [`MAX_HEADER`] is malformed
+//! and its sender dropped. When the session is busy the newest frame wins
 //! (the ones it replaced are counted as dropped).
 
 use super::mailbox::{Fed, Mailbox};
@@ -20,7 +22,7 @@ use crate::mocap::Clip;
 use crate::mocap::bvh::{BvhOptions, parse_bvh};
 use crate::pose::retarget::{JointRotations, choose_reference};
 use crate::rig::{LoadOptions, RigMap, detect_clip, load_clip};
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read};
 use std::net::{SocketAddr, TcpListener};
 use std::path::Path;
 use std::time::Instant;
@@ -51,6 +53,61 @@ pub fn listen(
 /// refused as malformed, as a non-positive one is.
 const MAX_FRAME_TIME: f64 = 10.0;
 
+/// The longest line a sender may send, in bytes. A frame line is one
+/// number a channel (a 100-joint, 6-channel skeleton writes about 7 KB), a
+/// header line a joint's name or offset; without a bound one line without
+/// a newline held the receiver's memory without limit (session 45). A
+/// longer line is read past, not kept, and counted as malformed.
+pub const MAX_LINE: usize = 1 << 20;
+
+/// The longest header (`HIERARCHY` to `Frame Time:`) a sender may send, in
+/// bytes: a longer one is malformed and its sender is dropped.
+pub const MAX_HEADER: usize = 8 << 20;
+
+/// What one bounded line read gave.
+#[derive(Debug, PartialEq)]
+enum LineRead {
+    /// A line (with its newline, unless the stream ended before one).
+    Line,
+    /// A line longer than [`MAX_LINE`]: read past up to its newline.
+    TooLong,
+    /// The sender closed, or the bytes were not text.
+    End,
+}
+
+/// Reads one line of at most `max` bytes into `line` (cleared first); a
+/// longer line is consumed up to and including its newline without being
+/// kept.
+fn read_line_bounded(reader: &mut impl BufRead, line: &mut String, max: usize) -> LineRead {
+    line.clear();
+    match reader.by_ref().take(max as u64).read_line(line) {
+        Ok(0) | Err(_) => LineRead::End,
+        Ok(n) if n < max || line.ends_with('\n') => LineRead::Line,
+        Ok(_) => {
+            line.clear();
+            skip_past_newline(reader);
+            LineRead::TooLong
+        }
+    }
+}
+
+/// Consumes bytes up to and including the next newline (or the end).
+fn skip_past_newline(reader: &mut impl BufRead) {
+    loop {
+        let (used, done) = match reader.fill_buf() {
+            Ok([]) | Err(_) => return,
+            Ok(buf) => match buf.iter().position(|&b| b == b'\n') {
+                Some(i) => (i + 1, true),
+                None => (buf.len(), false),
+            },
+        };
+        reader.consume(used);
+        if done {
+            return;
+        }
+    }
+}
+
 /// What the first frame of the stream decided.
 struct Decided {
     map: RigMap,
@@ -78,10 +135,16 @@ fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
         let mut line = String::new();
         // The header, up to and including `Frame Time:`.
         loop {
-            line.clear();
-            match reader.read_line(&mut line) {
-                Ok(0) | Err(_) => break,
-                Ok(_) => {}
+            match read_line_bounded(&mut reader, &mut line, MAX_LINE) {
+                LineRead::End => break,
+                LineRead::TooLong => {
+                    mb.count(|c| c.malformed += 1);
+                    continue;
+                }
+                LineRead::Line => {}
+            }
+            if header.len() + line.len() > MAX_HEADER {
+                break;
             }
             let t = line.trim();
             if let Some(v) = t.strip_prefix("Frame Time:") {
@@ -101,10 +164,13 @@ fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
         // Output frames are numbered on from the last connection's.
         let base = out_index;
         loop {
-            line.clear();
-            match reader.read_line(&mut line) {
-                Ok(0) | Err(_) => break,
-                Ok(_) => {}
+            match read_line_bounded(&mut reader, &mut line, MAX_LINE) {
+                LineRead::End => break,
+                LineRead::TooLong => {
+                    mb.count(|c| c.malformed += 1);
+                    continue;
+                }
+                LineRead::Line => {}
             }
             if line.trim().is_empty() {
                 continue;
@@ -240,6 +306,92 @@ mod tests {
         assert_eq!((c.malformed, c.received), (2, 0), "{c:?}");
         send("0.0333333");
         let c = wait_for(&|c| c.received >= 20);
+        assert!(c.received >= 20, "{c:?}");
+    }
+
+    /// Lines are read up to the bound; a longer one is read past up to
+    /// its newline and not kept, and the next line reads whole.
+    #[test]
+    fn a_line_longer_than_the_bound_is_read_past_not_kept() {
+        let long = "9".repeat(5000);
+        let text = format!("short\n{long}\nafter\nlast-without-newline");
+        let mut r = BufReader::with_capacity(64, text.as_bytes());
+        let mut line = String::new();
+        let mut got = Vec::new();
+        loop {
+            let read = read_line_bounded(&mut r, &mut line, 100);
+            got.push((format!("{read:?}"), line.clone()));
+            if read == LineRead::End {
+                break;
+            }
+        }
+        let want: Vec<(String, String)> = [
+            ("Line", "short\n"),
+            ("TooLong", ""),
+            ("Line", "after\n"),
+            ("Line", "last-without-newline"),
+            ("End", ""),
+        ]
+        .iter()
+        .map(|(a, b)| (a.to_string(), b.to_string()))
+        .collect();
+        assert_eq!(got, want);
+        assert!(line.capacity() <= 200, "{}", line.capacity());
+    }
+
+    /// A sender's frame line of more than [`MAX_LINE`] bytes is counted as
+    /// malformed and the frames after it are read; a header of more than
+    /// [`MAX_HEADER`] bytes drops its sender as malformed, and the next
+    /// sender is read.
+    #[test]
+    fn an_endless_line_or_header_is_malformed_not_held() {
+        let text = format_bvh(&gait_clip(Gait::Walk, 1.0, 30.0));
+        let fed = listen(
+            "127.0.0.1:0".parse().unwrap(),
+            30.0,
+            LoadOptions::default(),
+            true,
+        )
+        .unwrap();
+        let to = fed.local_addr();
+        let wait_for = |what: &dyn Fn(&crate::live::report::Counters) -> bool| {
+            let end = Instant::now() + Duration::from_secs(30);
+            while !what(&fed.counters()) && Instant::now() < end {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            fed.counters()
+        };
+        // A header that never ends: the sender is dropped.
+        {
+            let mut s = std::net::TcpStream::connect(to).unwrap();
+            let chunk = format!("{}\n", "x".repeat(1000));
+            let mut sent = 0;
+            while sent <= MAX_HEADER + MAX_LINE {
+                if s.write_all(chunk.as_bytes()).is_err() {
+                    break;
+                }
+                sent += chunk.len();
+            }
+        }
+        let c = wait_for(&|c| c.malformed >= 1);
+        assert_eq!((c.malformed, c.received), (1, 0), "{c:?}");
+        // A frame line longer than the bound between good frames.
+        let mut s = std::net::TcpStream::connect(to).unwrap();
+        let (head, frames) = text.split_at(text.find("Frame Time:").unwrap());
+        let (ft, frames) = frames.split_at(frames.find('\n').unwrap() + 1);
+        s.write_all(head.as_bytes()).unwrap();
+        s.write_all(ft.as_bytes()).unwrap();
+        let mut lines = frames.lines();
+        for l in lines.by_ref().take(3) {
+            s.write_all(format!("{l}\n").as_bytes()).unwrap();
+        }
+        s.write_all("1 ".repeat(MAX_LINE).as_bytes()).unwrap();
+        s.write_all(b"\n").unwrap();
+        for l in lines {
+            s.write_all(format!("{l}\n").as_bytes()).unwrap();
+        }
+        let c = wait_for(&|c| c.received >= 20 && c.malformed >= 2);
+        assert_eq!(c.malformed, 2, "{c:?}");
         assert!(c.received >= 20, "{c:?}");
     }
 }
