@@ -451,6 +451,12 @@ impl Character {
         self.frames.frame(id)
     }
 
+    /// Asks for frames `ids` to be read from the frame cache now, at once
+    /// ([`FrameStore::prefetch`]): before a scattered read of many frames.
+    pub fn prefetch_frames(&self, ids: &[FlatFrame]) {
+        self.frames.prefetch(ids);
+    }
+
     /// Frame `id`'s positions in metres, Y-up, copied to `out` (kept for
     /// callers that own a buffer; [`Character::frame`] borrows instead).
     pub fn frame_metres(&self, id: FlatFrame, out: &mut [[f64; 3]]) {

@@ -238,6 +238,7 @@ pub(super) fn region_examples(
     {
         chosen.push(f);
     }
+    ch.prefetch_frames(&chosen);
     let mut examples = Vec::with_capacity(chosen.len());
     for &f in &chosen {
         ch.frame_metres(f, buf);

@@ -58,6 +58,16 @@ fn mapped_frames_equal_loaded_and_a_cut_cache_is_rebuilt() {
         assert_eq!(ch.lowest(id).to_bits(), low.to_bits(), "frame {id}");
     }
     assert_eq!(ch.poses(), &skel[..]);
+    // Released and prefetched (scattered, one past the end ignored): the
+    // same bytes read back.
+    let store = ch.frame_store();
+    store.release(0, count);
+    let last = surfmotion::graph::FlatFrame::from_index(count - 1);
+    let past = surfmotion::graph::FlatFrame::from_index(count + 5);
+    let first = surfmotion::graph::FlatFrame::from_index(0);
+    store.prefetch(&[last, past, first, last]);
+    assert_eq!(bits(store.frame(last)), bits(&frames[(count - 1) * n..]));
+    assert_eq!(bits(ch.frames()), bits(&frames));
     drop(ch);
 
     // A second load maps the same file (no rewrite).
