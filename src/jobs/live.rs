@@ -392,9 +392,12 @@ impl LiveReport {
         }
         for p in &r.samples {
             let rss = p.rss_mib.map_or("?".to_string(), |m| format!("{m:.1}"));
+            let cpu = p
+                .cpu_ms_per_frame
+                .map_or("?".to_string(), |m| format!("{m:.2}"));
             let _ = writeln!(
                 t,
-                "  at {:7.1} s: {} out, {} dropped, {:.1} frames/s, median {:.2} ms, RSS {rss} MiB",
+                "  at {:7.1} s: {} out, {} dropped, {:.1} frames/s, median {:.2} ms, CPU {cpu} ms a frame, RSS {rss} MiB",
                 p.seconds, p.frames_out, p.dropped, p.output_fps, p.latency_median_ms
             );
         }
@@ -423,12 +426,14 @@ struct Tally {
     /// The incoming skeletons not yet answered (at most lag + 1).
     incoming: VecDeque<Pose>,
     first: Option<Instant>,
+    /// The process's CPU seconds when the first frame arrived.
+    first_cpu: Option<f64>,
     last: Instant,
     /// The samples' period, the latencies since the last sample, when it
-    /// was taken and the frames out then.
+    /// was taken, the frames out and the process's CPU seconds then.
     sample_every: Option<Duration>,
     interval: Latencies,
-    sampled: Option<(Instant, u64)>,
+    sampled: Option<(Instant, u64, Option<f64>)>,
     samples: Vec<Sample>,
 }
 
@@ -445,6 +450,7 @@ impl Tally {
             recording,
             incoming: VecDeque::new(),
             first: None,
+            first_cpu: None,
             last: Instant::now(),
             sample_every: sample_every.map(Duration::from_secs_f64),
             interval: Latencies::default(),
@@ -485,11 +491,13 @@ impl Tally {
             return;
         };
         let now = Instant::now();
-        let (since, frames_then) = *self.sampled.get_or_insert((first, 0));
+        let (since, frames_then, cpu_then) =
+            *self.sampled.get_or_insert((first, 0, self.first_cpu));
         let dt = now.saturating_duration_since(since);
         if dt < every && !(force && dt.as_secs_f64() > 0.0) {
             return;
         }
+        let cpu = crate::util::cpu::process_cpu_seconds();
         self.samples.push(Sample {
             seconds: now.saturating_duration_since(first).as_secs_f64(),
             frames_out: self.frames_out,
@@ -498,9 +506,15 @@ impl Tally {
             output_fps: (self.frames_out - frames_then) as f64 / dt.as_secs_f64(),
             latency_median_ms: self.interval.quantile_ms(0.5),
             rss_mib: resident_mib(),
+            cpu_ms_per_frame: match (cpu_then, cpu) {
+                (Some(a), Some(b)) if self.frames_out > frames_then => {
+                    Some((b - a) * 1e3 / (self.frames_out - frames_then) as f64)
+                }
+                _ => None,
+            },
         });
         self.interval.clear();
-        self.sampled = Some((now, self.frames_out));
+        self.sampled = Some((now, self.frames_out, cpu));
     }
 }
 
@@ -592,7 +606,10 @@ pub fn run_live(
             Event::End => break,
             Event::Frame(f) => (f.pose, f.rotations, f.arrived),
         };
-        tally.first.get_or_insert(arrived);
+        if tally.first.is_none() {
+            tally.first = Some(arrived);
+            tally.first_cpu = crate::util::cpu::process_cpu_seconds();
+        }
         last_frame = Instant::now();
         if session.is_none() {
             let reference = source.reference().ok_or(LiveError::NoReference)?;

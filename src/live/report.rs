@@ -139,6 +139,11 @@ pub struct Sample {
     /// The process's resident memory (MiB; `None` where the system does
     /// not tell: only Linux's `/proc/self/status` is read).
     pub rss_mib: Option<f64>,
+    /// The process's CPU (every thread) per output frame since the
+    /// previous sample, milliseconds (`None` without a CPU clock or
+    /// without frames): the cost a frame, which other work on the
+    /// machine does not inflate as it does the rate.
+    pub cpu_ms_per_frame: Option<f64>,
 }
 
 /// The process's resident memory in MiB (`VmRSS` of `/proc/self/status`),

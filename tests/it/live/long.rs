@@ -1,6 +1,6 @@
 //! A replay looped five times (`--loop 5`) with the report's own samples
 //! (`--sample-every`): every frame of every loop comes out, and the resident
-//! memory (once the analysis window is full) and the output rate stay flat
+//! memory (once the analysis window is full) and the CPU a frame stay flat
 //! from the second sample on (the
 //! one-hour run, `live --replay CLIP --loop N --sample-every 60`, is an
 //! evaluation command: README, *Live*). Run with the default overlap
@@ -86,17 +86,33 @@ fn five_loops(db: &std::path::Path, clip: &std::path::Path, overlap: Option<&str
             "RSS not flat from sample {filled}: {rss:?}"
         );
     }
-    // Rate: the later half of the samples (the last, partial one aside)
-    // not below a third of the earlier half's, by their medians. A leak or
-    // a growing cost would slow the later loops steadily; one sample slowed
-    // by the shared machine's load is not (each sample below a third of
-    // the median failed here at load 15 while the rate did not drift).
+    // Cost: the later half of the samples (the last, partial one aside)
+    // not above three times the earlier half's CPU a frame (every thread),
+    // by their medians. A leak or a growing cost would make the later loops
+    // dearer steadily; other work on the machine does not, where it slowed
+    // the output rate (the wall-clock rate's check failed here under a
+    // compile beside it while the cost did not drift: session 44).
     let median = |v: &[f64]| {
         let mut s = v.to_vec();
         s.sort_by(f64::total_cmp);
         s[s.len() / 2]
     };
-    let half = fps.len() / 2;
-    let (early, late) = (median(&fps[..half.max(1)]), median(&fps[half..]));
-    assert!(late >= early / 3.0, "rate not flat: {fps:?}");
+    let cpu: Vec<f64> = samples[..samples.len() - 1]
+        .iter()
+        .filter_map(|s| s["cpu_ms_per_frame"].as_f64())
+        .collect();
+    assert!(
+        !cfg!(unix) || cpu.len() == samples.len() - 1,
+        "a sample without its CPU a frame: {r}"
+    );
+    if !cpu.is_empty() {
+        let half = cpu.len() / 2;
+        let (early, late) = (median(&cpu[..half.max(1)]), median(&cpu[half..]));
+        assert!(
+            early > 0.0 && late <= 3.0 * early,
+            "cost a frame not flat: {cpu:?} ms"
+        );
+    }
+    // The rate is reported (the README's hour-long replay measures it).
+    assert!(fps.iter().all(|f| *f > 0.0), "{fps:?}");
 }
