@@ -134,6 +134,33 @@ pub struct BuildReport {
 struct GraphFile {
     key: u64,
     graph: SurfaceMotionGraph,
+    /// Each frame's dissimilarity to the next frame of its sequence
+    /// ([`successor_steps`]; `None` for a sequence's last frame), each an
+    /// f32 of the similarity written as an f64 (exact in JSON). Absent in a
+    /// graph cache of session 44 and before, which a load then completes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    steps: Option<Vec<Option<f64>>>,
+}
+
+impl GraphFile {
+    /// The steps when there is one a frame of `n`.
+    fn steps(&self, n: usize) -> Option<Vec<f32>> {
+        let s = self.steps.as_ref().filter(|s| s.len() == n)?;
+        Some(s.iter().map(|v| v.map_or(f32::NAN, |v| v as f32)).collect())
+    }
+}
+
+/// The graph cache's text: `graph` and its `steps` under `key`.
+fn graph_text(key: u64, graph: &SurfaceMotionGraph, steps: &[f32]) -> serde_json::Result<String> {
+    let steps = steps
+        .iter()
+        .map(|v| (!v.is_nan()).then_some(f64::from(*v)))
+        .collect();
+    serde_json::to_string(&GraphFile {
+        key,
+        graph: graph.clone(),
+        steps: Some(steps),
+    })
 }
 
 /// The graph cache file at `path`: `None` when there is none, and also,
@@ -1020,6 +1047,40 @@ fn vertex_colours(
     Ok(c.to_vec())
 }
 
+/// Rows of a mapped sparse similarity read between two releases of its
+/// pages by [`successor_steps`].
+const STEP_ROWS: usize = 512;
+
+/// Each frame's dissimilarity to the next frame of its sequence (NaN for
+/// a sequence's last frame), the pages of a mapped similarity released
+/// every [`STEP_ROWS`] rows so that the pass does not keep the whole file
+/// resident.
+pub(crate) fn successor_steps(matrix: &Similarity, graph: &SurfaceMotionGraph) -> Vec<f32> {
+    let mut steps = vec![f32::NAN; matrix.len()];
+    let sparse = match matrix {
+        Similarity::Sparse(s) => Some(s),
+        Similarity::Dense(_) => None,
+    };
+    let mut read = 0;
+    for q in graph.sequences() {
+        for a in q.start..(q.start + q.len).saturating_sub(1) {
+            if let Some(v) = steps.get_mut(a) {
+                *v = matrix.get(a, a + 1);
+            }
+            read += 1;
+            if read % STEP_ROWS == 0
+                && let Some(s) = sparse
+            {
+                s.release();
+            }
+        }
+    }
+    if let Some(s) = sparse {
+        s.release();
+    }
+    steps
+}
+
 /// Builds (or loads from the cache) the similarity matrix and the Surface
 /// Motion Graph of the database in `dir`.
 pub fn build(
@@ -1038,19 +1099,79 @@ pub(crate) fn build_opened(
     opts: &BuildOptions,
     progress: &dyn BuildProgress,
 ) -> Result<(Similarity, SurfaceMotionGraph, BuildReport), DbError> {
-    build_opened_staged(dir, m, opts, progress, None)
+    build_opened_staged(dir, m, opts, progress, None).map(|(s, g, r, _)| (s, g, r))
+}
+
+/// The graph of `mat` from its cache at `path` when it has `key` and
+/// agrees with `mat`, else built and cached; with each frame's step to its
+/// successor, read from the same file (a retarget at 10⁴ frames read every
+/// row of the 177 MB sparse similarity for them: session 45), or computed
+/// and written into it (a cache without them, of session 44 or before, is
+/// completed once; that write failing is not an error). True when cached.
+fn graph_and_steps(
+    dir: &Path,
+    (path, key): (&Path, u64),
+    mat: &Similarity,
+    measure: Measure,
+    m: &Manifest,
+    force: bool,
+) -> Result<(SurfaceMotionGraph, bool, Vec<f32>), DbError> {
+    let cached = if force {
+        None
+    } else {
+        read_graph(path)
+            .filter(|g| g.key == key)
+            .filter(|g| match g.graph.validate(mat) {
+                Ok(()) => true,
+                Err(why) => {
+                    tracing::warn!(
+                        "{}: the cached graph disagrees with the database ({why}); rebuilding it",
+                        path.display()
+                    );
+                    false
+                }
+            })
+    };
+    if let Some(file) = cached {
+        if let Some(steps) = file.steps(mat.len()) {
+            return Ok((file.graph, true, steps));
+        }
+        let steps = successor_steps(mat, &file.graph);
+        let written = graph_text(key, &file.graph, &steps)
+            .map_err(|e| e.to_string())
+            .and_then(|t| write_bytes_atomic(path, t.as_bytes()).map_err(|e| e.to_string()));
+        if let Err(e) = written {
+            tracing::debug!("{}: steps not added: {e}", path.display());
+        }
+        return Ok((file.graph, true, steps));
+    }
+    let g = SurfaceMotionGraph::build(
+        mat,
+        measure,
+        &m.graph.transition_options(),
+        &m.graph.edits(),
+    )?;
+    let steps = successor_steps(mat, &g);
+    let text = graph_text(key, &g, &steps).map_err(|e| DbError::Manifest {
+        path: path.to_path_buf(),
+        msg: e.to_string(),
+    })?;
+    write_bytes_atomic(path, text.as_bytes()).map_err(|e| DbError::cache_write(dir, e))?;
+    Ok((g, false, steps))
 }
 
 /// [`build_opened`], its two stages timed into `stages` when given:
 /// `similarity` (the keys of the inputs and the similarity read from its
-/// cache or built) and `graph` (read and checked, or built).
+/// cache or built) and `graph` (read and checked, or built); also each
+/// frame's step to its successor ([`successor_steps`], kept in the graph
+/// cache).
 pub(crate) fn build_opened_staged(
     dir: &Path,
     m: &Manifest,
     opts: &BuildOptions,
     progress: &dyn BuildProgress,
     mut stages: Option<&mut Stages>,
-) -> Result<(Similarity, SurfaceMotionGraph, BuildReport), DbError> {
+) -> Result<(Similarity, SurfaceMotionGraph, BuildReport, Vec<f32>), DbError> {
     if m.sequences.is_empty() {
         return Err(DbError::Manifest {
             path: dir.join(super::MANIFEST),
@@ -1071,46 +1192,12 @@ pub(crate) fn build_opened_staged(
     if let Some(s) = stages.as_deref_mut() {
         s.lap("similarity");
     }
-    let topts = m.graph.transition_options();
-    let edits = m.graph.edits();
     let graph_key = graph_key(m, sim_key);
     let gpath = graph_path(dir, measure);
     tracing::debug!("{}: cache key {graph_key:016x}", gpath.display());
-    let cached: Option<SurfaceMotionGraph> = if opts.force {
-        None
-    } else {
-        read_graph(&gpath)
-            .filter(|g| g.key == graph_key)
-            .map(|g| g.graph)
-            .filter(|g| match g.validate(&mat) {
-                Ok(()) => true,
-                Err(why) => {
-                    tracing::warn!(
-                        "{}: the cached graph disagrees with the database ({why}); rebuilding it",
-                        gpath.display()
-                    );
-                    false
-                }
-            })
-    };
     let t = Instant::now();
-    let (graph, graph_cached) = match cached {
-        Some(g) => (g, true),
-        None => {
-            let g = SurfaceMotionGraph::build(&mat, measure, &topts, &edits)?;
-            let text = serde_json::to_string(&GraphFile {
-                key: graph_key,
-                graph: g.clone(),
-            })
-            .map_err(|e| DbError::Manifest {
-                path: gpath.clone(),
-                msg: e.to_string(),
-            })?;
-            write_bytes_atomic(&gpath, text.as_bytes())
-                .map_err(|e| DbError::cache_write(dir, e))?;
-            (g, false)
-        }
-    };
+    let (graph, graph_cached, steps) =
+        graph_and_steps(dir, (&gpath, graph_key), &mat, measure, m, opts.force)?;
     let graph_seconds = t.elapsed().as_secs_f64();
     if let Some(s) = stages {
         s.lap("graph");
@@ -1142,7 +1229,7 @@ pub(crate) fn build_opened_staged(
         scan: matches!(mat, Similarity::Sparse(_)).then(|| scan_options(m, mat.len()).1),
         caches_beside_seconds: timing.and_then(|t| t.beside_seconds),
     };
-    Ok((mat, graph, report))
+    Ok((mat, graph, report, steps))
 }
 
 #[cfg(test)]

@@ -202,7 +202,7 @@ impl Character {
         // The topology read once: the size check and the character share it.
         let (manifest, topology) = Manifest::open(dir)?;
         stages.lap("manifest");
-        let (matrix, graph, _) = build_opened_staged(
+        let (matrix, graph, _, steps) = build_opened_staged(
             dir,
             &manifest,
             &BuildOptions::default(),
@@ -246,7 +246,6 @@ impl Character {
         let rest_pose = rig.joints.map(|j| conv(DVec3::from_array(j)));
         let examples = ExampleMemo::new(dir, cache_key, poses.len());
         let adjacency = graph.adjacency();
-        let steps = successor_steps(&matrix, &graph);
         let (constraint_override, example_override) = deform_overrides(dir, &manifest, &graph, n)?;
         stages.lap("links");
         Ok(Character {
@@ -481,38 +480,4 @@ impl Character {
         let (s, t) = self.graph.frame_of(id);
         (t + 1 < self.graph.sequences()[s].len).then_some(id.next())
     }
-}
-
-/// Rows of a mapped sparse similarity read between two releases of its
-/// pages by [`successor_steps`].
-const STEP_ROWS: usize = 512;
-
-/// Each frame's dissimilarity to the next frame of its sequence (NaN for
-/// a sequence's last frame), the pages of a mapped similarity released
-/// every [`STEP_ROWS`] rows so that the pass does not keep the whole file
-/// resident.
-fn successor_steps(matrix: &Similarity, graph: &SurfaceMotionGraph) -> Vec<f32> {
-    let mut steps = vec![f32::NAN; matrix.len()];
-    let sparse = match matrix {
-        Similarity::Sparse(s) => Some(s),
-        Similarity::Dense(_) => None,
-    };
-    let mut read = 0;
-    for q in graph.sequences() {
-        for a in q.start..(q.start + q.len).saturating_sub(1) {
-            if let Some(v) = steps.get_mut(a) {
-                *v = matrix.get(a, a + 1);
-            }
-            read += 1;
-            if read % STEP_ROWS == 0
-                && let Some(s) = sparse
-            {
-                s.release();
-            }
-        }
-    }
-    if let Some(s) = sparse {
-        s.release();
-    }
-    steps
 }

@@ -147,3 +147,53 @@ fn mapped_frames_equal_loaded_and_a_cut_cache_is_rebuilt() {
     assert_eq!(bits(ch.frames()), bits(&frames));
     assert_eq!(std::fs::read(&ppath).unwrap(), pwhole);
 }
+
+/// Each frame's step to its successor (the dissimilarity retrieval scales
+/// its edge costs by) is kept in the graph cache, so a load reads no row of
+/// the similarity for it: the values equal the similarity's bit for bit,
+/// one `null` ends each sequence, and a graph cache written before the
+/// steps (session 44) loads the same and is completed once, to the same
+/// bytes as a fresh build's.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn successor_steps_are_kept_in_the_graph_cache_and_equal_the_similarity() {
+    let Some(d) = common::data_dir() else { return };
+    let db = common::walk_run_db(&d, "db_steps");
+    let check = |ch: &Character| {
+        let count = ch.frame_count();
+        let mut ends = 0;
+        for a in surfmotion::graph::FlatFrame::all(count) {
+            match ch.successor(a) {
+                Some(b) => {
+                    let want = ch.matrix().get(a.index(), b.index());
+                    assert_eq!(ch.dissimilarity(a, b).to_bits(), want.to_bits(), "{a}");
+                }
+                None => ends += 1,
+            }
+        }
+        ends
+    };
+    let ch = Character::load(&db, &Quiet).unwrap();
+    let ends = check(&ch);
+    let gpath = std::fs::read_dir(db.join("cache"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| {
+            let n = p.file_name().unwrap().to_string_lossy().to_string();
+            n.starts_with("graph-") && n.ends_with(".json")
+        })
+        .expect("a graph cache");
+    let whole = std::fs::read(&gpath).unwrap();
+    let mut v: serde_json::Value = serde_json::from_slice(&whole).unwrap();
+    let steps = v["steps"].as_array().expect("steps in the graph cache");
+    assert_eq!(steps.len(), ch.frame_count());
+    assert_eq!(steps.iter().filter(|s| s.is_null()).count(), ends);
+    assert!(ends >= 2, "{ends} sequences");
+    drop(ch);
+    // A cache of session 44 (no steps): the same values, the file completed.
+    v.as_object_mut().unwrap().remove("steps");
+    std::fs::write(&gpath, serde_json::to_vec(&v).unwrap()).unwrap();
+    let ch = Character::load(&db, &Quiet).unwrap();
+    assert_eq!(check(&ch), ends);
+    assert_eq!(std::fs::read(&gpath).unwrap(), whole);
+}
