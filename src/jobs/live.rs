@@ -19,7 +19,6 @@ use crate::live::source::{Event, Source, SourceError};
 use crate::live::stages::{StageReport, StageTally};
 use crate::live::stream;
 use crate::live::vmc::Vmc;
-use crate::mesh::MeshSequence;
 use crate::mesh::io::glb::GlbOptions;
 use crate::mesh::io::usd::UsdOptions;
 use crate::pose::Pose;
@@ -420,9 +419,8 @@ struct Tally {
     output: Latencies,
     frames_out: u64,
     frames_held: u64,
-    /// The recording's vertices (empty unless recording).
-    held: Vec<[f64; 3]>,
-    recording: bool,
+    /// The recording's frames, spooled to disk (`None` unless recording).
+    spool: Option<super::spool::Spool>,
     /// The incoming skeletons not yet answered (at most lag + 1).
     incoming: VecDeque<Pose>,
     first: Option<Instant>,
@@ -438,7 +436,7 @@ struct Tally {
 }
 
 impl Tally {
-    fn new(recording: bool, sample_every: Option<f64>) -> Tally {
+    fn new(spool: Option<super::spool::Spool>, sample_every: Option<f64>) -> Tally {
         Tally {
             latencies: Latencies::default(),
             work: Latencies::default(),
@@ -446,8 +444,7 @@ impl Tally {
             output: Latencies::default(),
             frames_out: 0,
             frames_held: 0,
-            held: Vec::new(),
-            recording,
+            spool,
             incoming: VecDeque::new(),
             first: None,
             first_cpu: None,
@@ -471,8 +468,8 @@ impl Tally {
     ) {
         let began = Instant::now();
         self.frames_out += 1;
-        if self.recording {
-            self.held.extend_from_slice(f.positions);
+        if let Some(s) = self.spool.as_mut() {
+            s.push(f.positions);
         }
         let inc = self.incoming.pop_front().unwrap_or(*fallback);
         on_frame(FrameOut {
@@ -585,7 +582,10 @@ pub fn run_live(
     let trellis = links.input();
     let sopts = session_options(opts);
     let mut session: Option<Session<'_>> = None;
-    let mut tally = Tally::new(record.is_some(), opts.sample_every);
+    let spool = record
+        .map(|out| super::spool::Spool::create(out, ch.n()))
+        .transpose()?;
+    let mut tally = Tally::new(spool, opts.sample_every);
     let idle = opts.until_idle.map(Duration::from_secs_f64);
     let mut last_frame = Instant::now();
     // The previous frame's arrival: a frame the overlap held was decided
@@ -651,16 +651,14 @@ pub fn run_live(
         tally.last = Instant::now();
     }
     tally.sample(source.counters(), true);
-    let recorded = match record {
-        Some(out) if tally.frames_out > 0 => {
-            let held = std::mem::take(&mut tally.held);
-            let seq = MeshSequence::new(prepared.topology_metres().clone(), held, Some(fps))?;
+    let recorded = match (record, tally.spool.take()) {
+        (Some(out), Some(spool)) if spool.frames() > 0 => {
             let save = crate::mesh::io::SaveOptions {
                 fps: Some(fps),
                 glb: opts.glb,
                 usd: opts.usd,
             };
-            crate::mesh::io::save_sequence_with(&seq, out, &save)?
+            spool.finish(prepared.topology_metres(), out, &save)?
         }
         _ => Vec::new(),
     };

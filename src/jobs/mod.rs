@@ -58,6 +58,7 @@ mod rig_summary;
 pub mod setup_text;
 pub mod short_text;
 pub mod skeletons;
+pub mod spool;
 pub mod synth;
 pub mod synth_db;
 pub mod text;
