@@ -157,19 +157,7 @@ impl Spool {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn tetra() -> Mesh {
-        Mesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, 0.0, 1.0],
-            ],
-            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        )
-        .unwrap()
-    }
+    use crate::mesh::io::stream::tests::tetra;
 
     /// Frames that are not round in decimal or binary: every bit must
     /// survive the spool.

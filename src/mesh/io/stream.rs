@@ -240,10 +240,11 @@ impl SequenceWriter {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn tetra() -> Mesh {
+    /// A closed tetrahedron, outward-facing (shared by the writers' tests).
+    pub(crate) fn tetra() -> Mesh {
         Mesh::new(
             vec![
                 [0.0, 0.0, 0.0],
