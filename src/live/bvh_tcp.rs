@@ -258,11 +258,32 @@ fn frame_pose(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::live::report::Counters;
     use crate::live::source::Source;
     use crate::mocap::bvh::format_bvh;
     use crate::synth::{Gait, gait_clip};
     use std::io::Write;
     use std::time::Duration;
+
+    /// A lossless listener on a free loopback port, at 30 frames a second.
+    fn listener() -> Fed {
+        listen(
+            "127.0.0.1:0".parse().unwrap(),
+            30.0,
+            LoadOptions::default(),
+            true,
+        )
+        .unwrap()
+    }
+
+    /// `fed`'s counters once `what` holds of them, or after 30 s.
+    fn wait_until(fed: &Fed, what: &dyn Fn(&Counters) -> bool) -> Counters {
+        let end = Instant::now() + Duration::from_secs(30);
+        while !what(&fed.counters()) && Instant::now() < end {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        fed.counters()
+    }
 
     /// A header whose frame time is huge or infinite is refused as
     /// malformed (the session lives, no frame is put), and the next
@@ -272,13 +293,7 @@ mod tests {
     #[test]
     fn a_huge_frame_time_is_malformed_not_a_flood() {
         let text = format_bvh(&gait_clip(Gait::Walk, 1.0, 30.0));
-        let fed = listen(
-            "127.0.0.1:0".parse().unwrap(),
-            30.0,
-            LoadOptions::default(),
-            true,
-        )
-        .unwrap();
+        let fed = listener();
         let to = fed.local_addr();
         let send = |frame_time: &str| {
             let mut s = std::net::TcpStream::connect(to).unwrap();
@@ -293,13 +308,7 @@ mod tests {
                 }
             }
         };
-        let wait_for = |what: &dyn Fn(&crate::live::report::Counters) -> bool| {
-            let end = Instant::now() + Duration::from_secs(20);
-            while !what(&fed.counters()) && Instant::now() < end {
-                std::thread::sleep(Duration::from_millis(20));
-            }
-            fed.counters()
-        };
+        let wait_for = |what: &dyn Fn(&Counters) -> bool| wait_until(&fed, what);
         send("1e12");
         send("inf");
         let c = wait_for(&|c| c.malformed >= 2);
@@ -346,21 +355,9 @@ mod tests {
     #[test]
     fn an_endless_line_or_header_is_malformed_not_held() {
         let text = format_bvh(&gait_clip(Gait::Walk, 1.0, 30.0));
-        let fed = listen(
-            "127.0.0.1:0".parse().unwrap(),
-            30.0,
-            LoadOptions::default(),
-            true,
-        )
-        .unwrap();
+        let fed = listener();
         let to = fed.local_addr();
-        let wait_for = |what: &dyn Fn(&crate::live::report::Counters) -> bool| {
-            let end = Instant::now() + Duration::from_secs(30);
-            while !what(&fed.counters()) && Instant::now() < end {
-                std::thread::sleep(Duration::from_millis(20));
-            }
-            fed.counters()
-        };
+        let wait_for = |what: &dyn Fn(&Counters) -> bool| wait_until(&fed, what);
         // A header that never ends: the sender is dropped.
         {
             let mut s = std::net::TcpStream::connect(to).unwrap();
