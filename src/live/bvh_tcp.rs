@@ -135,13 +135,8 @@ fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
         let mut line = String::new();
         // The header, up to and including `Frame Time:`.
         loop {
-            match read_line_bounded(&mut reader, &mut line, MAX_LINE) {
-                LineRead::End => break,
-                LineRead::TooLong => {
-                    mb.count(|c| c.malformed += 1);
-                    continue;
-                }
-                LineRead::Line => {}
+            if !next_line(&mut reader, &mut line, mb) {
+                break;
             }
             if header.len() + line.len() > MAX_HEADER {
                 break;
@@ -164,13 +159,8 @@ fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
         // Output frames are numbered on from the last connection's.
         let base = out_index;
         loop {
-            match read_line_bounded(&mut reader, &mut line, MAX_LINE) {
-                LineRead::End => break,
-                LineRead::TooLong => {
-                    mb.count(|c| c.malformed += 1);
-                    continue;
-                }
-                LineRead::Line => {}
+            if !next_line(&mut reader, &mut line, mb) {
+                break;
             }
             if line.trim().is_empty() {
                 continue;
@@ -212,6 +202,18 @@ fn serve(listener: TcpListener, fps: f64, load: LoadOptions, mb: &Mailbox) {
                     arrived,
                 });
             }
+        }
+    }
+}
+
+/// Reads the next line of at most [`MAX_LINE`] bytes into `line`; a longer
+/// one is read past and counted as malformed. False at the stream's end.
+fn next_line(reader: &mut impl BufRead, line: &mut String, mb: &Mailbox) -> bool {
+    loop {
+        match read_line_bounded(reader, line, MAX_LINE) {
+            LineRead::End => return false,
+            LineRead::TooLong => mb.count(|c| c.malformed += 1),
+            LineRead::Line => return true,
         }
     }
 }

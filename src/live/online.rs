@@ -150,6 +150,9 @@ struct SolveBuffers {
     cuts: Vec<bool>,
 }
 
+/// Decided rows' buffers kept for new rows ([`OnlineTrellis::decide`]).
+const SPARE_ROWS: usize = 4;
+
 impl<'a> OnlineTrellis<'a> {
     /// A decoder over `db` with the trellis options `trellis` (as offline)
     /// and the online options `opts`.
@@ -170,7 +173,9 @@ impl<'a> OnlineTrellis<'a> {
             // touched as it fills).
             bests: Vec::with_capacity(SCALE_WINDOW),
             recent: std::collections::VecDeque::with_capacity(SCALE_WINDOW),
-            rows: std::collections::VecDeque::new(),
+            // At most `lag + 1` undecided rows; their buffers made once
+            // and passed from decided rows to new ones (see `decide`).
+            rows: std::collections::VecDeque::with_capacity(opts.lag + 1),
             anchor: None,
             committed: 0,
             stats: OnlineStats {
@@ -181,7 +186,9 @@ impl<'a> OnlineTrellis<'a> {
             all: Vec::with_capacity(kmax),
             search: Search::default(),
             found: Vec::with_capacity(if db.index.is_some() { kmax } else { ng }),
-            spare: Vec::new(),
+            spare: (0..(opts.lag + 1).min(SPARE_ROWS))
+                .map(|_| Vec::with_capacity(kmax))
+                .collect(),
             solver: SolveBuffers::default(),
         }
     }
@@ -355,7 +362,7 @@ impl<'a> OnlineTrellis<'a> {
         self.slot = slot;
         self.solver = b;
         for r in self.rows.drain(..count) {
-            if self.spare.len() < 4 {
+            if self.spare.len() < SPARE_ROWS {
                 self.spare.push(r);
             }
         }

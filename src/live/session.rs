@@ -377,22 +377,26 @@ impl<'a> Session<'a> {
             .collect();
         Slot::even_out(&mut slots);
         let band = contact_band(leg_length(&reference.pose));
-        Session {
+        // The window's and the history's lengths, reserved once so that
+        // filling them does not grow them push by push.
+        let window = opts.analysis_window.max(1) + opts.online.lag;
+        let kept = opts.history.max(1) + opts.online.lag + 2;
+        let mut s = Session {
             ch,
             prepared,
             opts,
             reference,
             trellis: OnlineTrellis::new(input, opts.retarget.trellis, opts.online),
-            raw: VecDeque::new(),
-            raw_rotations: VecDeque::new(),
+            raw: VecDeque::with_capacity(window),
+            raw_rotations: VecDeque::with_capacity(window),
             received: 0,
-            roots: VecDeque::new(),
-            query: VecDeque::new(),
+            roots: VecDeque::with_capacity(window),
+            query: VecDeque::with_capacity(kept),
             query_start: 0,
-            latest: Vec::new(),
+            latest: Vec::with_capacity(window),
             latest_start: 0,
             last_out: None,
-            path: VecDeque::new(),
+            path: VecDeque::with_capacity(kept),
             path_start: 0,
             blend_ws: prepared.blender().workspace(),
             buf: vec![[0.0; 3]; n],
@@ -415,7 +419,37 @@ impl<'a> Session<'a> {
             rotations: Arc::from(Vec::new()),
             advance: Advance::default(),
             ids: Vec::new(),
-        }
+        };
+        s.size_analysis(window);
+        s
+    }
+
+    /// Grows the pose kernel's buffers and the analysis to a full window
+    /// once, by analysing `window` frames of the stream's neutral pose
+    /// (a body standing still), so the window filling frame by frame does
+    /// not grow them push by push (issue 45). Its result is left in
+    /// `analysed`, which every push refills before reading.
+    fn size_analysis(&mut self, window: usize) {
+        let still = vec![self.reference.pose; window];
+        let reference = ClipNeutral {
+            pose: self.reference.pose,
+            source: ClipNeutralSource::Frame(usize::MAX),
+            rotations: Arc::clone(&self.rotations),
+        };
+        let stream = Stream {
+            floor: None,
+            kept: None,
+            open_end: false,
+        };
+        let ws = (&mut self.kernel_ws, &mut self.analysed);
+        analyse(
+            self.prepared,
+            self.ch,
+            &reference,
+            &still,
+            (&stream, &WindowGround::default()),
+            ws,
+        );
     }
 
     /// Makes the analysis of every window take the ground decisions
@@ -830,7 +864,7 @@ struct Stream {
 /// frame of `raw` has them, else none): written in place while the
 /// length stays and nothing else holds them (the last analysis's
 /// reference is gone by the next push), so a full window allocates
-/// nothing; a new `Arc` while the window fills.
+/// nothing; one new `Arc` a push while the window fills.
 fn window_rotations(raw: &VecDeque<Option<JointRotations>>, kept: &mut Arc<[JointRotations]>) {
     let n = if raw.iter().all(Option::is_some) {
         raw.len()
@@ -843,7 +877,11 @@ fn window_rotations(raw: &VecDeque<Option<JointRotations>>, kept: &mut Arc<[Join
                 *k = *r;
             }
         }
-        _ => *kept = raw.iter().take(n).flatten().copied().collect(),
+        // From an iterator of known length (a range mapped), so the `Arc`
+        // is one allocation of exactly `n`: a flattened iterator was
+        // collected into a `Vec` first, doubling as it went (issue 45: 7
+        // allocation calls a push while a 128-frame window filled).
+        _ => *kept = (0..n).map(|i| raw[i].unwrap_or([None; C::COUNT])).collect(),
     }
 }
 
