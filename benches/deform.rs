@@ -6,7 +6,11 @@
 //! thread). The default solves a level's regions and the repair's passes
 //! over the triangles on the pool's threads (`DeformOptions::parallel_regions`,
 //! session 28; `RAYON_NUM_THREADS` sets them); `part_sequential` solves
-//! the regions one after another (the same frames bit for bit).
+//! the regions one after another (the same frames bit for bit);
+//! `part_in_pool` calls the default from a thread of rayon's pool (as
+//! `retarget` deforms its frames, and the live session since session 46),
+//! so its parallel steps are split inside the pool instead of each being
+//! sent to it from outside.
 
 mod common;
 
@@ -111,6 +115,19 @@ fn main() {
                 }
             })
         });
+        if name == "part_75_frames" {
+            g.bench_function("part_in_pool_75_frames", |b| {
+                b.iter(|| {
+                    rayon::scope(|_| {
+                        for ((src, sk), q) in
+                            raw.positions.chunks(n).zip(&skeletons).zip(&raw.query)
+                        {
+                            def.deform(&ch, black_box(src), sk, q, &mut out, &mut ws);
+                        }
+                    })
+                })
+            });
+        }
     }
     // The floor: the whole body's 2-ring system, prefactored, one solve.
     let all: Vec<u32> = (0..n as u32).collect();
@@ -139,6 +156,10 @@ fn main() {
     if let Some(s) = med("solve_2ring") {
         for (name, what) in [
             ("part_75_frames", "part"),
+            (
+                "part_in_pool_75_frames",
+                "part, called on a thread of the pool",
+            ),
             ("part_sequential_75_frames", "regions one after another"),
             ("part_no_repair_75_frames", "without the repair"),
             ("part_old_default_75_frames", "the default up to session 26"),
