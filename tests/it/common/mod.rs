@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 pub mod bvh;
+pub mod decimate;
 pub mod gaits;
 pub mod keygraph;
 pub mod skel;

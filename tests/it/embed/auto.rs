@@ -1,7 +1,7 @@
 //! The automatic rig from a capture's motion (`embed::auto`, issue 41):
 //! on the real captures against the landmark fixtures' rigs, on generated
 //! variants of samba (frames re-ordered, mirrored, turned Z-up, scaled to
-//! cm), and the refusals (one frame, another vertex count, not a body).
+//! cm, decimated to three quarters of its vertices), and the refusals (one frame, another vertex count, not a body).
 //!
 //! The captures ([`capture`]) and the rigs `db init` makes of them and of
 //! their variants ([`db_init_rig`]) are made once for the whole
@@ -122,13 +122,19 @@ pub(super) enum Variant {
     ZUp,
     /// Scaled to centimetres.
     Cm,
+    /// Decimated to three quarters of its vertices (half-edge collapses,
+    /// the vertices kept where they were: [`common::decimate`]). At half
+    /// its vertices samba's hips are found by the motion at the waist
+    /// (session 46: the groin 23 cm high, pelvis and hips 12.7 % of the
+    /// height off; issue 41, not yet mended).
+    Decimated,
 }
 
 impl Variant {
     /// Where the variant puts point `p`.
     pub(super) fn point(self, p: [f64; 3]) -> [f64; 3] {
         match self {
-            Variant::AsCaptured | Variant::Reversed => p,
+            Variant::AsCaptured | Variant::Reversed | Variant::Decimated => p,
             Variant::Mirrored => [-p[0], p[1], p[2]],
             Variant::ZUp => [p[0], -p[2], p[1]],
             Variant::Cm => p.map(|x| x * 100.0),
@@ -137,6 +143,18 @@ impl Variant {
 
     /// The variant's topology and frames.
     fn of(self, c: &Capture) -> (Mesh, Vec<Vec<[f64; 3]>>) {
+        if self == Variant::Decimated {
+            let (mesh, kept) = common::decimate::decimate(&c.mesh, 0.75);
+            let ours = common::decimate::closed_euler(&c.mesh);
+            assert_eq!(common::decimate::closed_euler(&mesh), ours, "decimation");
+            assert!(mesh.positions().len() * 10 <= c.mesh.positions().len() * 8);
+            let frames = c
+                .frames
+                .iter()
+                .map(|fr| kept.iter().map(|&v| fr[v as usize]).collect())
+                .collect();
+            return (mesh, frames);
+        }
         let mut tris = c.mesh.triangles().to_vec();
         if self == Variant::Mirrored {
             for t in &mut tris {
@@ -293,6 +311,10 @@ fn samba_variants_rig_alike() {
     let e = auto_embedding(&d, "samba", Variant::Cm);
     let err = mean_percent(e.joints(), &c.truth.joints().map(cm), h * 100.0, false);
     assert!(err <= BOUND_PERCENT, "cm: {err:.2}%");
+    // Decimated to three quarters of its vertices (closed, its topology kept).
+    let e = auto_embedding(&d, "samba", Variant::Decimated);
+    let err = mean_percent(e.joints(), c.truth.joints(), h, false);
+    assert!(err <= BOUND_PERCENT, "decimated: {err:.2}%");
 }
 
 #[test]
