@@ -21,6 +21,7 @@ pub mod consensus;
 pub mod decompose;
 pub mod facing;
 pub mod guard;
+pub mod hips;
 pub mod humanoid;
 pub mod joints;
 pub mod limbs;

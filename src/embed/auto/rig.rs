@@ -21,6 +21,10 @@ use glam::DVec3;
 /// the height before the rig warns (samba's, crane's: 2 %, 1 %).
 const KNEE_TOLERANCE: f64 = 0.03;
 
+/// A groin placed by proportion on a headless body stands this many times
+/// the knees' height above the floor ([`landmark_points`]).
+const GROIN_OVER_KNEES: f64 = 1.65;
+
 /// Rigs `mesh` (the topology; its positions are the capture's frame 0
 /// unless `opts.rest_frame` says another) from the capture's `frames`
 /// (each the mesh's vertices in order).
@@ -62,7 +66,8 @@ pub fn auto_rig(
             ));
         }
     }
-    let found = place_joints(&body, &sided);
+    let mut found = place_joints(&body, &sided);
+    super::hips::bound_hips(&body, &sided, &mut found, &mut notes);
     let (sym, confidence) = symmetry_and_confidence(rest, &body, &sided, &found, &mut notes);
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
     let neck = NeckReading::read(rest, &nb, body.up, body.height, chains.head);
@@ -514,10 +519,19 @@ fn landmark_points(
         let left = sided.left;
         g + left * (knees - g).dot(left)
     } else {
-        // Between the knees, at a usual crotch height (47 % of the height).
-        notes.push("groin: the hips do not show in the motion (clothing?); placed between the knees at 47% of the height".into());
+        // Between the knees, at a usual crotch height: 47 % of the height,
+        // or, with no head to measure the height by, 1.65 times the knees'
+        // (crotch 0.47, knee 0.285 of the stature: Winter 2009, §4.1; the
+        // fixtures' landmark rigs read 1.53-1.69).
         let mid = (get("l_knee").position + get("r_knee").position) * 0.5;
-        mid + up * (lo + 0.47 * height - mid.dot(up))
+        let over_floor = if head {
+            notes.push("groin: the hips do not show in the motion (clothing?); placed between the knees at 47% of the height".into());
+            0.47 * height
+        } else {
+            notes.push("groin: the hips do not show in the motion (clothing?); placed between the knees at 1.65 times their height".into());
+            GROIN_OVER_KNEES * (mid.dot(up) - lo)
+        };
+        mid + up * (lo + over_floor - mid.dot(up))
     };
     marks.push((Landmark::Groin, groin));
     if !head {
