@@ -81,9 +81,19 @@ pub(crate) fn bone_heat(mesh: &Mesh, bones: &[Bone]) -> Result<Weights, SolveErr
         .map(|(i, j, v)| (i, j, -v))
         .collect();
     let mut rhs = vec![[0.0; Canonical::COUNT]; n];
+    // A vertex in no triangle (a mesh cut with a script leaves them) has no
+    // mass and an empty row: given the mean mass it takes its nearest
+    // bone's weight alone (before, the factorisation stopped at a zero
+    // pivot, "not positive definite at vertex …", naming another vertex).
+    let (sum, count) = mass
+        .iter()
+        .filter(|m| **m > 0.0)
+        .fold((0.0, 0usize), |(s, c), m| (s + m, c + 1));
+    let mean_mass = if count > 0 { sum / count as f64 } else { 1.0 };
     for (i, &(b, d)) in near.iter().enumerate() {
         let d = d.max(1e-4 * diag);
-        let h = mass[i] / (d * d);
+        let m = if mass[i] > 0.0 { mass[i] } else { mean_mass };
+        let h = m / (d * d);
         k.push((i as u32, i as u32, h));
         rhs[i][bones[b].joint.index()] = h;
     }
@@ -131,4 +141,58 @@ pub(crate) fn sparsify<const K: usize>(w: &Weights, min: f64) -> Vec<([u8; K], [
             (j, v)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::shapes::capsule_mesh;
+
+    fn bones() -> [Bone; 2] {
+        [
+            Bone {
+                joint: Canonical::Pelvis,
+                a: DVec3::new(0.0, -0.6, 0.0),
+                b: DVec3::ZERO,
+            },
+            Bone {
+                joint: Canonical::Spine,
+                a: DVec3::ZERO,
+                b: DVec3::new(0.0, 0.6, 0.0),
+            },
+        ]
+    }
+
+    /// A vertex in no triangle (left by a cut made with a script) takes its
+    /// nearest bone's weight alone and changes no other vertex's weights;
+    /// before, the factorisation stopped at a zero pivot.
+    #[test]
+    fn a_vertex_in_no_triangle_takes_its_nearest_bone() {
+        let cap = capsule_mesh(0.1, 1.0, 16, 8);
+        let bones = bones();
+        let whole = bone_heat(&cap, &bones).unwrap();
+        for stray in [0usize, cap.vertex_count() / 2, cap.vertex_count()] {
+            let mut p = cap.positions().to_vec();
+            p.insert(stray, [0.05, 0.3, 0.02]);
+            let tris: Vec<[u32; 3]> = cap
+                .triangles()
+                .iter()
+                .map(|t| t.map(|v| v + u32::from(v as usize >= stray)))
+                .collect();
+            let mesh = Mesh::new(p, tris).unwrap();
+            let w = bone_heat(&mesh, &bones).unwrap();
+            let mut one_hot = [0.0; Canonical::COUNT];
+            one_hot[Canonical::Spine.index()] = 1.0;
+            assert_eq!(w[stray], one_hot, "stray vertex at {stray}");
+            let others: Vec<_> = (0..w.len()).filter(|&i| i != stray).map(|i| w[i]).collect();
+            for (i, (a, b)) in others.iter().zip(&whole).enumerate() {
+                let d = a
+                    .iter()
+                    .zip(b)
+                    .map(|(x, y)| (x - y).abs())
+                    .fold(0.0, f64::max);
+                assert!(d < 1e-9, "vertex {i}: weights moved by {d}");
+            }
+        }
+    }
 }

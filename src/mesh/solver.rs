@@ -153,6 +153,13 @@ impl FixedSolver {
         }
         if check {
             check_anchored(&rows, &free_of)?;
+        } else if let Some(v) = free
+            .iter()
+            .find(|&&v| rows[v as usize].iter().all(|&(_, x)| x == 0.0))
+        {
+            // A zero row fails the factorisation at a pivot that names
+            // another vertex (the pivot's supernode): say which it is.
+            return Err(SolveError::Isolated { vertex: *v });
         }
         let nf = free.len();
         let mut trip = Vec::with_capacity(rows.iter().map(Vec::len).sum());
@@ -341,4 +348,29 @@ pub(crate) fn anchored_components<I: Iterator<Item = (u32, f64)>>(
         ncomp += 1;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A zero row of a "definite" system is named as the isolated vertex
+    /// it is, not as the pivot where the factorisation stops.
+    #[test]
+    fn a_zero_row_of_a_definite_system_names_its_vertex() {
+        for zero in [0u32, 2, 4] {
+            let mut k: Triplets = Vec::new();
+            for i in 0..5u32 {
+                if i != zero {
+                    k.push((i, i, 2.0));
+                }
+            }
+            k.push((zero, zero, 0.0));
+            match FixedSolver::definite(5, k) {
+                Err(SolveError::Isolated { vertex }) => assert_eq!(vertex, zero),
+                Err(e) => panic!("{e}"),
+                Ok(_) => panic!("a zero row factored"),
+            }
+        }
+    }
 }
