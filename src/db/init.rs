@@ -253,6 +253,7 @@ fn check_files(
     let topo = m
         .load_topology(dir)
         .map_err(|e| read("`InitOptions::mesh`")(e.into()))?;
+    warn_stray_vertices(&topo, notes);
     // A landmark file that does not read or lacks a required landmark is
     // refused here, before the up axis is read off it (issue 39, item 7:
     // it was accepted and refused only by `retarget`); the checks on the
@@ -290,6 +291,25 @@ fn check_files(
         )));
     }
     Ok(topo)
+}
+
+/// A vertex in no triangle (a mesh cut with a script leaves them) is
+/// rigged (its nearest bone's weight), but the deformation's systems
+/// refuse it when a clip is retargeted: said at `db init`, not only then.
+fn warn_stray_vertices(topo: &Mesh, notes: &mut Vec<String>) {
+    let mut used = vec![false; topo.vertex_count()];
+    for t in topo.triangles() {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    let stray: Vec<usize> = (0..used.len()).filter(|&v| !used[v]).collect();
+    if let Some(first) = stray.first() {
+        notes.push(format!(
+            "WARNING: {} vertices of the topology are in no triangle (first: vertex {first}): retargeting refuses such a mesh (the deformation has no place for them); drop them from the mesh and, the same vertices, from its sequences",
+            stray.len()
+        ));
+    }
 }
 
 /// The rest frame (with landmarks and sequences), written into `m`'s

@@ -515,6 +515,50 @@ fn automatic_refused(e: InitError) -> JobError {
 mod tests {
     use super::*;
 
+    /// A topology with a vertex in no triangle is written with a warning
+    /// naming it (retargeting refuses it later), at any place in the file.
+    #[test]
+    fn a_vertex_in_no_triangle_is_warned_of_at_init() {
+        let cap = crate::synth::shapes::capsule_mesh(0.15, 1.4, 12, 6);
+        for stray in [0usize, cap.vertex_count()] {
+            let tmp = tempfile::tempdir().unwrap();
+            let mut p = cap.positions().to_vec();
+            p.insert(stray, [0.0, 0.2, 0.0]);
+            let tris = cap
+                .triangles()
+                .iter()
+                .map(|t| t.map(|v| v + u32::from(v as usize >= stray)))
+                .collect();
+            let mesh = crate::mesh::Mesh::new(p, tris).unwrap();
+            let obj = tmp.path().join("body.obj");
+            crate::mesh::io::obj::write_obj(&mesh, None, &obj).unwrap();
+            let opts = InitOptions {
+                mesh: obj,
+                ..InitOptions::default()
+            };
+            let setup = InitSetup {
+                no_rig: true,
+                ..InitSetup::default()
+            };
+            let r = init_database_with(&tmp.path().join("db"), &opts, &setup).unwrap();
+            let want =
+                format!("1 vertices of the topology are in no triangle (first: vertex {stray})");
+            assert!(r.notes.iter().any(|n| n.contains(&want)), "{:?}", r.notes);
+            // Without the stray vertex, no such warning.
+            crate::mesh::io::obj::write_obj(&cap, None, &tmp.path().join("whole.obj")).unwrap();
+            let opts = InitOptions {
+                mesh: tmp.path().join("whole.obj"),
+                ..InitOptions::default()
+            };
+            let r = init_database_with(&tmp.path().join("db2"), &opts, &setup).unwrap();
+            assert!(
+                !r.notes.iter().any(|n| n.contains("no triangle")),
+                "{:?}",
+                r.notes
+            );
+        }
+    }
+
     #[test]
     fn a_refused_automatic_rig_names_no_landmark_file() {
         let inner: Box<dyn std::error::Error + Send + Sync> = "landmark l_knee: 23% of the groin-chin distance on the right side of the body's mid-plane; landmarks of another mesh or character? (a file made for this mesh may record its \"vertex_count\")".into();
