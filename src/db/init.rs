@@ -297,13 +297,7 @@ fn check_files(
 /// rigged (its nearest bone's weight), but the deformation's systems
 /// refuse it when a clip is retargeted: said at `db init`, not only then.
 fn warn_stray_vertices(topo: &Mesh, notes: &mut Vec<String>) {
-    let mut used = vec![false; topo.vertex_count()];
-    for t in topo.triangles() {
-        for &v in t {
-            used[v as usize] = true;
-        }
-    }
-    let stray: Vec<usize> = (0..used.len()).filter(|&v| !used[v]).collect();
+    let stray = topo.unreferenced();
     if let Some(first) = stray.first() {
         notes.push(format!(
             "WARNING: {} vertices of the topology are in no triangle (first: vertex {first}): retargeting refuses such a mesh (the deformation has no place for them); drop them from the mesh and, the same vertices, from its sequences",

@@ -224,6 +224,17 @@ impl Mesh {
         Bounds::of(&self.positions)
     }
 
+    /// The vertices in no triangle, in order.
+    pub fn unreferenced(&self) -> Vec<usize> {
+        let mut used = vec![false; self.positions.len()];
+        for t in &self.triangles {
+            for &v in t {
+                used[v as usize] = true;
+            }
+        }
+        (0..used.len()).filter(|&v| !used[v]).collect()
+    }
+
     /// Non-fatal problems: degenerate triangles (a repeated vertex, or zero
     /// area), duplicate triangles, unreferenced vertices. Each message gives
     /// the count and the first index.
@@ -233,11 +244,7 @@ impl Mesh {
         let mut zero_area = Vec::new();
         let mut dup = Vec::new();
         let mut seen = HashSet::with_capacity(self.triangles.len());
-        let mut used = vec![false; self.positions.len()];
         for (t, &[a, b, c]) in self.triangles.iter().enumerate() {
-            for v in [a, b, c] {
-                used[v as usize] = true;
-            }
             if a == b || b == c || a == c {
                 repeated.push(t);
                 continue;
@@ -271,12 +278,7 @@ impl Mesh {
         say("triangles with a repeated vertex", &repeated);
         say("zero-area triangles", &zero_area);
         say("duplicate triangles", &dup);
-        let unused: Vec<usize> = used
-            .iter()
-            .enumerate()
-            .filter(|(_, u)| !**u)
-            .map(|(i, _)| i)
-            .collect();
+        let unused = self.unreferenced();
         if let Some(first) = unused.first() {
             out.push(format!(
                 "{} unreferenced vertices (first: vertex {first})",

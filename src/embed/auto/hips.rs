@@ -21,7 +21,7 @@
 //! (whole, head part cut, neck at 0 %) to 0.80 / 1.62 / 1.89 %.
 
 use super::body::Body;
-use super::humanoid::{Placed, along};
+use super::humanoid::{Placed, along, get_joint};
 use super::limbs::{LEG, Sided};
 
 /// Above this many times the knees' height over the floor, hips found by
@@ -37,15 +37,7 @@ pub fn bound_hips(
     found: &mut [(String, Placed)],
     notes: &mut Vec<String>,
 ) {
-    let joint = |name: &str| found.iter().find(|(n, _)| n == name).map(|(_, p)| *p);
-    let (Some(lh), Some(rh), Some(lk), Some(rk)) = (
-        joint("l_hip"),
-        joint("r_hip"),
-        joint("l_knee"),
-        joint("r_knee"),
-    ) else {
-        return;
-    };
+    let [lh, rh, lk, rk] = ["l_hip", "r_hip", "l_knee", "r_knee"].map(|n| get_joint(found, n));
     if !(lh.by_motion && rh.by_motion) {
         return;
     }

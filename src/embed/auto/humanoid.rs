@@ -229,3 +229,16 @@ pub fn along(p: &[[f64; 3]], path: &[(u32, f64)], d: f64) -> DVec3 {
     let i = path.partition_point(|x| x.1 < d).min(path.len() - 1);
     DVec3::from_array(p[path[i].0 as usize])
 }
+
+/// Joint `name` of `found` (the origin, by proportion, when missing).
+pub fn get_joint(found: &[(String, Placed)], name: &str) -> Placed {
+    found
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, p)| *p)
+        .unwrap_or(Placed {
+            position: DVec3::ZERO,
+            by_motion: false,
+            articulation_deg: 0.0,
+        })
+}

@@ -6,7 +6,7 @@
 use super::body::Body;
 use super::branches::{body_tips, sixth_limit};
 use super::decompose::decompose;
-use super::humanoid::{Placed, along};
+use super::humanoid::{Placed, along, get_joint};
 use super::limbs::{ARM, Chains, LEG, Sided, knee_to_toe, side};
 use super::neck::NeckReading;
 use super::options::{AutoError, AutoOptions, FrameSample};
@@ -446,19 +446,6 @@ fn place_joints(body: &Body, sided: &Sided) -> Vec<(String, Placed)> {
         }
     }
     found
-}
-
-/// Joint `name` of `found` (the origin, by proportion, when missing).
-fn get_joint(found: &[(String, Placed)], name: &str) -> Placed {
-    found
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|(_, p)| *p)
-        .unwrap_or(Placed {
-            position: DVec3::ZERO,
-            by_motion: false,
-            articulation_deg: 0.0,
-        })
 }
 
 /// The landmarks as rest-frame points: the limb joints (the ankles only
