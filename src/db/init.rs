@@ -294,13 +294,14 @@ fn check_files(
 }
 
 /// A vertex in no triangle (a mesh cut with a script leaves them) is
-/// rigged (its nearest bone's weight), but the deformation's systems
-/// refuse it when a clip is retargeted: said at `db init`, not only then.
+/// rigged (its nearest bone's weight) and, when the character is deformed,
+/// carried by its nearest vertex in a triangle ([`crate::mesh::stray`]):
+/// said at `db init`, so a user who wants it gone knows it is there.
 fn warn_stray_vertices(topo: &Mesh, notes: &mut Vec<String>) {
     let stray = topo.unreferenced();
     if let Some(first) = stray.first() {
         notes.push(format!(
-            "WARNING: {} vertices of the topology are in no triangle (first: vertex {first}): retargeting refuses such a mesh (the deformation has no place for them); drop them from the mesh and, the same vertices, from its sequences",
+            "{} vertices of the topology are in no triangle (first: vertex {first}): each follows its nearest vertex in a triangle when the character is deformed, and every output keeps it",
             stray.len()
         ));
     }

@@ -18,6 +18,7 @@ use super::{arap, lbs, pca, unflip, untangle};
 use crate::db::Character;
 use crate::mesh::laplacian::uniform_region_rows;
 use crate::mesh::solver::SolveError;
+use crate::mesh::stray::StrayVertices;
 use crate::pose::{Pose, pose_rotations};
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
@@ -72,6 +73,9 @@ pub struct Deformer {
     levels: Option<Levels>,
     rest_pose: Pose,
     n: usize,
+    /// Vertices in no triangle: carried by their nearest referenced vertex
+    /// after every mode ([`crate::mesh::stray`]).
+    stray: Option<StrayVertices>,
     /// Constraint vertices (global) of the LBS.
     pub constraint_vertices: Vec<u32>,
     /// Basis sizes (components per region).
@@ -369,6 +373,7 @@ impl Deformer {
             levels: None,
             rest_pose: *ch.rest_pose(),
             n,
+            stray: StrayVertices::of(ch.topology().positions(), ch.topology().triangles()),
             constraint_vertices,
             components: Vec::new(),
             examples: Vec::new(),
@@ -670,6 +675,15 @@ impl Deformer {
             target,
         };
         let c = self.deform_source(ch, frame, out, ws);
+        // A stray vertex keeps its offset from its carrier, turned by the
+        // carrier's skinning (`None` returns the source as it is).
+        if let Some(s) = &self.stray {
+            match self.mode {
+                DeformMode::None => {}
+                DeformMode::Lbs => s.carry(&ws.lbs, out),
+                _ => s.carry_turned(frame.source, &ws.turn, out),
+            }
+        }
         if let Some(bent) = bent {
             ws.bent = bent;
         }

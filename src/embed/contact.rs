@@ -134,15 +134,21 @@ impl ContactFinder {
         let k = opts.patches.clamp(1, n.max(1));
         // Farthest-point sampling along the surface; each run from a new
         // seed also gives its distance to every earlier seed (symmetric).
-        let mut best = vec![f64::INFINITY; n];
+        // A vertex in no triangle is no surface: never a seed (its best
+        // distance starts at 0) and never in a pair (`apart_pairs`).
+        let stray: Vec<bool> = nb.iter().map(Vec::is_empty).collect();
+        let mut best: Vec<f64> = stray
+            .iter()
+            .map(|&s| if s { 0.0 } else { f64::INFINITY })
+            .collect();
         let mut patch = vec![0u32; n];
         let mut seeds: Vec<u32> = Vec::with_capacity(k);
         let mut apart = vec![false; k * k];
         let mut dist = vec![f64::INFINITY; n];
         let mut next = if opts.seed_by_position {
-            first_seed(p)
+            first_seed(p, &stray)
         } else {
-            0
+            stray.iter().position(|&s| !s).unwrap_or(0) as u32
         };
         // A mesh of several pieces: vertices no seed reaches stay at
         // infinity and become seeds in turn.
@@ -268,7 +274,9 @@ impl ContactFinder {
         };
         let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
         for (v, x) in positions.iter().enumerate() {
-            grid.entry(cell(*x)).or_default().push(v as u32);
+            if !self.nb[v].is_empty() {
+                grid.entry(cell(*x)).or_default().push(v as u32);
+            }
         }
         let r2 = r * r;
         for (c, list) in &grid {
@@ -391,8 +399,9 @@ impl ContactFinder {
 
 /// The patches' first seed with [`ContactOptions::seed_by_position`]:
 /// the vertex nearest the middle of `p`'s bounding box (ties: the lesser
-/// coordinates). 0 for an empty mesh.
-fn first_seed(p: &[[f64; 3]]) -> u32 {
+/// coordinates), not a vertex in no triangle (`stray`). 0 for an empty
+/// mesh.
+fn first_seed(p: &[[f64; 3]], stray: &[bool]) -> u32 {
     let Some(first) = p.first() else { return 0 };
     let (lo, hi) = p.iter().fold((*first, *first), |(mut lo, mut hi), q| {
         for k in 0..3 {
@@ -404,6 +413,7 @@ fn first_seed(p: &[[f64; 3]]) -> u32 {
     let mid = DVec3::from_array(lo).lerp(DVec3::from_array(hi), 0.5);
     let d = |v: usize| DVec3::from_array(p[v]).distance_squared(mid);
     (0..p.len())
+        .filter(|&v| !stray[v])
         .min_by(|&a, &b| d(a).total_cmp(&d(b)).then_with(|| by_place(p[a], p[b])))
         .unwrap_or(0) as u32
 }
@@ -560,6 +570,40 @@ mod tests {
             }
             let (c, d) = (f.find_with_near(m.positions()), g.find_with_near(&p));
             assert_eq!((c.touching, c.near), (d.touching, d.near));
+        }
+    }
+
+    /// A point in no triangle 1 cm off a wide fold (no contact of its
+    /// own) is no surface: numbered first or last, by either seeding, the
+    /// fold stays as it is without the point.
+    #[test]
+    fn a_vertex_in_no_triangle_touches_nothing() {
+        let m = folded(0.06);
+        for seed_by_position in [false, true] {
+            let o = ContactOptions {
+                seed_by_position,
+                ..ContactOptions::default()
+            };
+            let clean = ContactFinder::new(&m, o).find_with_near(m.positions());
+            for first in [false, true] {
+                let (mut p, mut t) = (m.positions().to_vec(), m.triangles().to_vec());
+                // Beside vertex 10 (an arm), 1 cm towards the other arm.
+                let q = [p[10][0], p[10][1], p[10][2] + 0.01];
+                if first {
+                    p.insert(0, q);
+                    t.iter_mut().for_each(|t| *t = t.map(|v| v + 1));
+                } else {
+                    p.push(q);
+                }
+                let mesh = Mesh::new(p, t).unwrap();
+                let c = ContactFinder::new(&mesh, o).find_with_near(mesh.positions());
+                assert!(c.contacts.is_empty(), "{first}: {:?}", c.contacts);
+                assert_eq!(
+                    (c.touching, c.near),
+                    (clean.touching, clean.near),
+                    "{first}"
+                );
+            }
         }
     }
 

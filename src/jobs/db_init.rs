@@ -515,10 +515,10 @@ fn automatic_refused(e: InitError) -> JobError {
 mod tests {
     use super::*;
 
-    /// A topology with a vertex in no triangle is written with a warning
-    /// naming it (retargeting refuses it later), at any place in the file.
+    /// A topology with a vertex in no triangle is written with a note
+    /// naming it (the deformation carries it), at any place in the file.
     #[test]
-    fn a_vertex_in_no_triangle_is_warned_of_at_init() {
+    fn a_vertex_in_no_triangle_is_noted_at_init() {
         let cap = crate::synth::shapes::capsule_mesh(0.15, 1.4, 12, 6);
         for stray in [0usize, cap.vertex_count()] {
             let tmp = tempfile::tempdir().unwrap();

@@ -275,6 +275,17 @@ pub fn transfer(scan: &str, truth: Option<&str>, r: &super::TransferReport) -> S
         r.unpaired_markers,
         r.scan.dropped_components.len()
     );
+    let rep = &r.scan.repair;
+    if !rep.unchanged() {
+        let _ = writeln!(
+            s,
+            "scan repaired before the transfer (the outputs hold the repaired mesh): {} vertices welded, {} in no triangle dropped; {} degenerate and {} duplicate triangles dropped",
+            rep.welded_vertices,
+            rep.unreferenced_vertices,
+            rep.degenerate_triangles,
+            rep.duplicate_triangles
+        );
+    }
     let _ = writeln!(
         s,
         "time: setup {:.2} s, factor {:.2} s, {:.2} ms/frame ({:.0} frames/s); {} frames near 180°",

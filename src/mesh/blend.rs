@@ -19,6 +19,7 @@ use super::Mesh;
 use super::frames::RestFrames;
 use super::poisson::{Poisson, PoissonWorkspace, centroid};
 use super::solver::SolveError;
+use super::stray::StrayVertices;
 use glam::{DMat3, DQuat, DVec3};
 use rayon::prelude::*;
 
@@ -59,6 +60,10 @@ pub struct FrameGradients {
     pub stretch: Vec<Sym3>,
     /// Mean vertex position.
     pub centroid: DVec3,
+    /// Each vertex in no triangle's offset from its carrier
+    /// ([`crate::mesh::stray`]), blended as the centroid is; empty when
+    /// every vertex is in a triangle.
+    pub stray: Vec<[f64; 3]>,
 }
 
 /// A blender for one topology: reference frames and the prefactored Poisson system.
@@ -67,6 +72,9 @@ pub struct Blender {
     rest: RestFrames,
     poisson: Poisson,
     n: usize,
+    /// Vertices in no triangle, placed at their carrier's position plus
+    /// the inputs' offsets blended ([`crate::mesh::stray`]).
+    stray: Option<StrayVertices>,
 }
 
 /// Scratch for [`Blender::blend`]: no allocation per blended frame.
@@ -76,17 +84,21 @@ pub struct BlendWorkspace {
     gradients: Vec<DMat3>,
     pw: PoissonWorkspace,
     x: Vec<[f64; 3]>,
+    /// The blended offsets of the vertices in no triangle.
+    stray: Vec<[f64; 3]>,
 }
 
 impl Blender {
     /// Builds the blender for a reference mesh (any frame of the character
     /// works; the topology's rest frame is the natural choice).
     pub fn new(reference: &Mesh) -> Result<Blender, SolveError> {
+        let stray = StrayVertices::of(reference.positions(), reference.triangles());
         Ok(Blender {
             triangles: reference.triangles().to_vec(),
             rest: RestFrames::new(reference.positions(), reference.triangles()),
             poisson: Poisson::new(reference)?,
             n: reference.vertex_count(),
+            stray,
         })
     }
 
@@ -98,6 +110,7 @@ impl Blender {
             gradients: vec![DMat3::IDENTITY; self.triangles.len()],
             pw: self.poisson.workspace(),
             x: vec![[0.0; 3]; self.n],
+            stray: vec![[0.0; 3]; self.stray.as_ref().map_or(0, StrayVertices::len)],
         }
     }
 
@@ -135,6 +148,10 @@ impl Blender {
             });
         let s: DVec3 = positions.iter().map(|p| super::frames::dvec(*p)).sum();
         out.centroid = s / positions.len().max(1) as f64;
+        out.stray.clear();
+        if let Some(st) = &self.stray {
+            st.offsets_into(positions, &mut out.stray);
+        }
     }
 
     /// `G(a, b, α)`: the non-linear blend of two decomposed frames, written to `out`.
@@ -149,6 +166,9 @@ impl Blender {
         blend_edges(a, b, alpha, self.poisson.corner_vectors(), &mut ws.edges);
         self.poisson.assemble_shares(&ws.edges, &mut ws.pw);
         let c = a.centroid * (1.0 - alpha) + b.centroid * alpha;
+        for ((o, p), q) in ws.stray.iter_mut().zip(&a.stray).zip(&b.stray) {
+            *o = std::array::from_fn(|d| p[d] * (1.0 - alpha) + q[d] * alpha);
+        }
         self.finish(c, out, ws);
     }
 
@@ -188,6 +208,14 @@ impl Blender {
             *tr = rot_times_sym(q, &s);
         }
         let c: DVec3 = inputs.iter().map(|(g, w)| g.centroid * (w / total)).sum();
+        ws.stray.fill([0.0; 3]);
+        for (g, w) in inputs {
+            for (o, p) in ws.stray.iter_mut().zip(&g.stray) {
+                for d in 0..3 {
+                    o[d] += p[d] * (w / total);
+                }
+            }
+        }
         self.stitch(c, out, ws);
     }
 
@@ -200,6 +228,9 @@ impl Blender {
     /// Solves the assembled system and places the centroid at `c`.
     fn finish(&self, c: DVec3, out: &mut [[f64; 3]], ws: &mut BlendWorkspace) {
         self.poisson.solve(&mut ws.pw, &mut ws.x);
+        if let Some(s) = &self.stray {
+            s.carry_offsets(&ws.stray, &mut ws.x);
+        }
         let shift = c - centroid(&ws.x);
         for (o, x) in out.iter_mut().zip(&ws.x) {
             *o = (DVec3::from_array(*x) + shift).to_array();

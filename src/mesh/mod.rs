@@ -18,6 +18,7 @@ pub mod quality;
 pub mod repair;
 mod sequence;
 pub mod solver;
+pub mod stray;
 pub mod subdivide;
 
 pub use error::{MeshError, TopologyError};

@@ -41,18 +41,21 @@ pub struct PoissonWorkspace {
 
 impl Poisson {
     /// Factors the system for `reference`, anchoring the lowest vertex of each
-    /// connected component.
+    /// connected component. A vertex in no triangle has no equation: it is
+    /// its own anchor (held at its reference position; the caller places
+    /// it, [`crate::mesh::stray`]).
     pub fn new(reference: &Mesh) -> Result<Poisson, SolveError> {
         let c = components(reference);
-        if let Some(v) = c.label.iter().position(|&l| l == u32::MAX) {
-            return Err(SolveError::Isolated { vertex: v as u32 });
-        }
         let mut anchors = vec![u32::MAX; c.count];
+        let mut stray = Vec::new();
         for (v, &l) in c.label.iter().enumerate() {
-            if anchors[l as usize] == u32::MAX {
+            if l == u32::MAX {
+                stray.push(v as u32);
+            } else if anchors[l as usize] == u32::MAX {
                 anchors[l as usize] = v as u32;
             }
         }
+        anchors.append(&mut stray);
         Self::with_anchors(reference, &anchors)
     }
 
@@ -276,8 +279,27 @@ mod tests {
         p.push([9.0, 9.0, 9.0]);
         let loose = Mesh::new(p, m.triangles().to_vec()).unwrap();
         assert!(matches!(
-            Poisson::new(&loose),
+            Poisson::with_anchors(&loose, &[0]),
             Err(SolveError::Isolated { vertex: 12 })
         ));
+    }
+
+    #[test]
+    fn a_vertex_in_no_triangle_is_held_and_the_rest_solved_as_without_it() {
+        let m = icosphere();
+        let mut p = m.positions().to_vec();
+        p.push([9.0, 9.0, 9.0]);
+        let loose = Mesh::new(p, m.triangles().to_vec()).unwrap();
+        let (a, b) = (Poisson::new(&m).unwrap(), Poisson::new(&loose).unwrap());
+        assert_eq!(b.anchors(), &[0, 12]);
+        let g = vec![DMat3::from_diagonal(DVec3::new(1.1, 0.9, 1.0)); m.triangles().len()];
+        let (mut wa, mut wb) = (a.workspace(), b.workspace());
+        let (mut xa, mut xb) = (vec![[0.0; 3]; 12], vec![[0.0; 3]; 13]);
+        a.reconstruct(&g, &mut wa, &mut xa);
+        b.reconstruct(&g, &mut wb, &mut xb);
+        for (p, q) in xa.iter().zip(&xb) {
+            assert!((DVec3::from_array(*p) - DVec3::from_array(*q)).length() < 1e-12);
+        }
+        assert_eq!(xb[12], [9.0, 9.0, 9.0]);
     }
 }

@@ -26,3 +26,4 @@ mod partial;
 mod placement;
 mod renumber;
 mod scan_auto;
+mod stray;

@@ -55,7 +55,12 @@ fn cut(seq: &MeshSequence, keep: &[bool], frames: usize) -> (Mesh, Vec<[f64; 3]>
 
 /// The fixture landmarks re-indexed onto the cut mesh, without `drop`,
 /// with `absent` written, as JSON.
-fn landmarks_json(lm: &Landmarks, index: &[u32], drop: &[Landmark], absent: &[&str]) -> String {
+pub(super) fn landmarks_json(
+    lm: &Landmarks,
+    index: &[u32],
+    drop: &[Landmark],
+    absent: &[&str],
+) -> String {
     let mut o = serde_json::Map::new();
     for (l, m) in &lm.marks {
         if drop.contains(l) {
