@@ -392,7 +392,7 @@ impl<'a> Session<'a> {
         // The window's and the history's lengths, reserved once so that
         // filling them does not grow them push by push.
         let window = opts.analysis_window.max(1) + opts.online.lag;
-        let kept = opts.history.max(1) + opts.online.lag + 2;
+        let history = opts.history.max(1) + opts.online.lag + 2;
         let mut s = Session {
             ch,
             prepared,
@@ -403,12 +403,12 @@ impl<'a> Session<'a> {
             raw_rotations: VecDeque::with_capacity(window),
             received: 0,
             roots: VecDeque::with_capacity(window),
-            query: VecDeque::with_capacity(kept),
+            query: VecDeque::with_capacity(history),
             query_start: 0,
             latest: Vec::with_capacity(window),
             latest_start: 0,
             last_out: None,
-            path: VecDeque::with_capacity(kept),
+            path: VecDeque::with_capacity(history),
             path_start: 0,
             blend_ws: prepared.blender().workspace(),
             buf: vec![[0.0; 3]; n],
