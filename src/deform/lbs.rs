@@ -50,9 +50,19 @@ pub fn constraint_vertices(ch: &Character, stride: usize) -> Vec<u32> {
     let bones = bones_of(ch.rig());
     let rest = ch.topology().positions();
     let soft = super::soft::softness(ch.topology(), ch.rig());
+    // A vertex in no triangle is carried, not solved ([`crate::mesh::stray`]):
+    // never a constraint, nor counted (the others' choice stays the same
+    // wherever such vertices are numbered).
+    let mut stray = vec![false; rest.len()];
+    for v in ch.topology().unreferenced() {
+        stray[v] = true;
+    }
     let mut out = Vec::new();
     let mut count = 0usize;
     for (v, (js, ws)) in ch.rig().skin.iter().enumerate() {
+        if stray[v] {
+            continue;
+        }
         let (k, w) = ws
             .iter()
             .enumerate()

@@ -282,8 +282,25 @@ impl Embedding {
         parts: Option<Vec<u8>>,
         frames: &[&[[f64; 3]]],
     ) -> Result<Embedding, EmbedError> {
-        let (p, t) = (mesh.positions(), mesh.triangles());
         check_body(mesh)?;
+        if let Some(c) = super::stray::Compact::of(mesh) {
+            // Embedded without its vertices in no triangle, then given to
+            // them ([`super::stray`]).
+            let frames: Vec<Vec<[f64; 3]>> = frames
+                .iter()
+                .map(|f| c.frame(f))
+                .filter(|f| !f.is_empty())
+                .collect();
+            let frames: Vec<&[[f64; 3]]> = frames.iter().map(Vec::as_slice).collect();
+            let lm = c.landmarks(lm, mesh.positions());
+            let parts = parts.map(|l| c.labels(&l));
+            let compact = c.mesh(mesh).map_err(|e| {
+                EmbedError::Mesh(format!("without its vertices in no triangle: {e}"))
+            })?;
+            let e = Embedding::new_moving(&compact, &lm, parts, &frames)?;
+            return c.expand(e);
+        }
+        let (p, t) = (mesh.positions(), mesh.triangles());
         // A headless body's chin: the top of its neck.
         let headless = lm.headless();
         let full;

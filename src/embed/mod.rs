@@ -25,6 +25,7 @@ pub mod rigidity;
 pub mod scan_landmarks;
 pub mod section;
 pub mod skin;
+mod stray;
 pub(crate) mod stump;
 pub mod surface;
 
