@@ -322,6 +322,9 @@ pub enum AutoError {
     /// found.
     #[error("automatic rigging: not a humanoid: {0}; give landmarks")]
     NotHumanoid(String),
+    /// The mesh without its vertices in no triangle is no mesh.
+    #[error("automatic rigging: the mesh without its vertices in no triangle: {0}")]
+    WithoutStray(crate::mesh::TopologyError),
 }
 
 #[cfg(test)]

@@ -28,12 +28,36 @@ const GROIN_OVER_KNEES: f64 = 1.65;
 /// Rigs `mesh` (the topology; its positions are the capture's frame 0
 /// unless `opts.rest_frame` says another) from the capture's `frames`
 /// (each the mesh's vertices in order).
+///
+/// Vertices in no triangle ([`crate::mesh::stray`]: a cut's leftovers)
+/// take no part: the body is rigged without them (a leftover above the
+/// head was its top, and a headless body with one had a sixth
+/// extremity), and each takes its carrier's part.
 pub fn auto_rig(
     mesh: &Mesh,
     frames: &[&[[f64; 3]]],
     opts: &AutoOptions,
 ) -> Result<AutoRig, AutoError> {
     check_input(mesh, frames, opts)?;
+    let Some(c) = crate::embed::stray::Compact::of(mesh) else {
+        return rig_checked(mesh, frames, opts);
+    };
+    let own = c.frames(frames);
+    let frames: Vec<&[[f64; 3]]> = own.iter().map(Vec::as_slice).collect();
+    let compact = c.mesh(mesh).map_err(AutoError::WithoutStray)?;
+    let mut rig = rig_checked(&compact, &frames, opts)?;
+    rig.landmarks = c.landmarks_back(std::mem::take(&mut rig.landmarks));
+    rig.labels = c.spread(&rig.labels, 0);
+    Ok(rig)
+}
+
+/// [`auto_rig`] of a mesh whose every vertex is in a triangle, its input
+/// checked.
+fn rig_checked(
+    mesh: &Mesh,
+    frames: &[&[[f64; 3]]],
+    opts: &AutoOptions,
+) -> Result<AutoRig, AutoError> {
     let n = mesh.vertex_count();
     let topo = mesh.positions();
     let rest: &[[f64; 3]] = opts.rest_frame.map_or(topo, |r| frames[r]);

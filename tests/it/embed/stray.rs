@@ -95,8 +95,8 @@ fn stray_vertices_are_carried_through_retargeting_and_change_nothing_else() {
     .unwrap();
     let n = seq.mesh().vertex_count();
     let lm = Landmarks::load(&fixture("samba.landmarks.json"), n).unwrap();
-    // Inside the head 2 cm below its top, 2 cm off a middle vertex, 2 cm
-    // off the lowest (within the body's bounds, as a cut's leftovers are).
+    // 2 cm above the head's top (out of the body's bounds), 2 cm off a
+    // middle vertex, 2 cm off the lowest.
     let p0 = seq.frame(0);
     let by = |key: &dyn Fn(&[f64; 3]) -> f64| {
         (0..n as u32)
@@ -107,7 +107,7 @@ fn stray_vertices_are_carried_through_retargeting_and_change_nothing_else() {
     // Spread through the numbering (first, middle, last), and appended
     // after the body's vertices (its numbering unchanged).
     let spread = [
-        (0, top, [0.0, -0.02, 0.0]),
+        (0, top, [0.0, 0.02, 0.0]),
         (n / 2, n as u32 / 2, [0.02, 0.0, 0.0]),
         (n + 2, low, [0.0, 0.0, 0.02]),
     ];
@@ -147,10 +147,9 @@ fn stray_vertices_are_carried_through_retargeting_and_change_nothing_else() {
     for (ns, pos, index, strays) in &out[1..] {
         assert_eq!(*ns, n + 3);
         assert_eq!(pos.len() / (n + 3), frames);
-        // Every body vertex where the clean capture's result put it; with
-        // the body's numbering unchanged, to rounding in all but a few frames (the fold repair of a frame can
-        // take another turn on a last-bit difference: 3.5 mm at one vertex
-        // of one frame of 75 when this was written).
+        // Every body vertex where the clean capture's result put it, to
+        // rounding (0.013 mm when this was written), wherever the stray
+        // points are numbered.
         let (mut worst, mut moved) = (0.0f64, 0);
         for f in 0..frames {
             let mut here = 0.0f64;
@@ -166,13 +165,7 @@ fn stray_vertices_are_carried_through_retargeting_and_change_nothing_else() {
         eprintln!(
             "strays at {at:?}: body vertices differ by up to {worst:.3e} m; {moved} of {frames} frames by more than 0.1 mm"
         );
-        // Renumbered (the spread points shift the body's ids), the LBS
-        // constraints sampled by id differ: within millimetres.
-        let renumbered = index.iter().enumerate().any(|(v, &i)| i as usize != v);
-        assert!(
-            worst < 0.01 && (renumbered || moved * 20 <= frames),
-            "{at:?}: {worst} m, {moved} frames"
-        );
+        assert!(worst < 1e-4, "{at:?}: {worst} m, {moved} frames");
         // Each stray point at its captured distance from the body vertex
         // nearest it (its carrier) in every frame (the skinning turns the
         // offset, it does not stretch it), finite.
@@ -191,6 +184,102 @@ fn stray_vertices_are_carried_through_retargeting_and_change_nothing_else() {
                     p.iter().all(|x| x.is_finite()) && (r - r0).abs() < 0.002 + 0.1 * r0,
                     "stray {s} frame {f}: {r} m from vertex {carrier} ({r0} m captured)"
                 );
+            }
+        }
+    }
+}
+
+/// `seq`'s first [`FRAMES`] frames cut below its chin (the fixture's chin
+/// vertex, 1 cm down: the head and neck dropped, as a user's script cuts
+/// it), every vertex the cut leaves in no triangle dropped too.
+fn cut_below_the_chin(seq: &MeshSequence) -> MeshSequence {
+    let n = seq.mesh().vertex_count();
+    let lm = Landmarks::load(&fixture("samba.landmarks.json"), n).unwrap();
+    let chin = lm
+        .point(
+            surfmotion::embed::landmarks::Landmark::Chin,
+            seq.mesh().positions(),
+        )
+        .unwrap();
+    let p0 = seq.frame(0);
+    let below = |v: u32| p0[v as usize][1] < chin[1] - 0.01;
+    let tris: Vec<[u32; 3]> = seq
+        .mesh()
+        .triangles()
+        .iter()
+        .filter(|t| t.iter().all(|&v| below(v)))
+        .copied()
+        .collect();
+    let mut index = vec![u32::MAX; n];
+    let mut old = Vec::new();
+    for t in &tris {
+        for &v in t {
+            if index[v as usize] == u32::MAX {
+                index[v as usize] = 0;
+            }
+        }
+    }
+    for (v, slot) in index.iter_mut().enumerate() {
+        if *slot == 0 {
+            *slot = old.len() as u32;
+            old.push(v);
+        }
+    }
+    let tris = tris.iter().map(|t| t.map(|v| index[v as usize])).collect();
+    let pick = |f: &[[f64; 3]]| old.iter().map(|&v| f[v]).collect::<Vec<_>>();
+    let mesh = Mesh::new(pick(p0), tris).unwrap();
+    let frames = (0..FRAMES).flat_map(|f| pick(seq.frame(f))).collect();
+    MeshSequence::new(mesh, frames, None).unwrap()
+}
+
+/// The automatic rig (`db init` without landmarks) of a capture with
+/// stray points is the rig of the capture without them: a point 5 cm
+/// above the body's top was read as its top (the whole body's groin rose
+/// 21 cm) and, on a body cut below the chin, as a sixth extremity ("not a
+/// humanoid"). Samba whole and cut, each with the points first, in the
+/// middle and last, and appended.
+#[test]
+#[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
+fn the_automatic_rig_is_the_rig_without_the_stray_vertices() {
+    use surfmotion::embed::auto::options::{AutoOptions, automatic_setup};
+    use surfmotion::embed::auto::rig::auto_rig;
+    let Some(d) = common::data_dir() else { return };
+    let whole = load_sequence(
+        d.join("4d/samba/samba.pc2").to_str().unwrap(),
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let (_, opts) = automatic_setup(&AutoOptions::default()).unwrap();
+    for (body, seq) in [
+        ("whole", whole.clone()),
+        ("cut", cut_below_the_chin(&whole)),
+    ] {
+        let n = seq.mesh().vertex_count();
+        let frames: Vec<&[[f64; 3]]> = (0..FRAMES).map(|f| seq.frame(f)).collect();
+        // The topology as `with_strays` makes it: frame 0's positions.
+        let clean = auto_rig(&seq.frame_mesh(0), &frames, &opts).unwrap();
+        assert_eq!(clean.headless, body == "cut", "{body}");
+        let p0 = seq.frame(0);
+        let top = (0..n as u32)
+            .max_by(|&a, &b| p0[a as usize][1].total_cmp(&p0[b as usize][1]))
+            .unwrap();
+        let above = [0.0, 0.05, 0.0];
+        let spread = [
+            (0, top, above),
+            (n / 2, n as u32 / 2, [0.02, 0.0, 0.0]),
+            (n + 2, 0, [0.0, 0.0, 0.02]),
+        ];
+        let tail = [(n, top, above), (n + 1, 0, [0.02, 0.0, 0.0])];
+        for strays in [&spread[..], &tail[..]] {
+            let (m, f, index) = with_strays(&seq, strays);
+            let k = m.vertex_count();
+            let f: Vec<&[[f64; 3]]> = f.chunks(k).collect();
+            let rig = auto_rig(&m, &f, &opts)
+                .unwrap_or_else(|e| panic!("{body}, strays {strays:?}: {e}"));
+            assert_eq!(rig.landmarks, clean.landmarks, "{body}, {strays:?}");
+            assert_eq!(rig.headless, clean.headless, "{body}, {strays:?}");
+            for (v, &w) in index.iter().enumerate() {
+                assert_eq!(rig.labels[w as usize], clean.labels[v], "{body} {v}");
             }
         }
     }
