@@ -298,7 +298,7 @@ impl Embedding {
                 EmbedError::Mesh(format!("without its vertices in no triangle: {e}"))
             })?;
             let e = Embedding::new_moving(&compact, &lm, parts, &frames)?;
-            return c.expand(e);
+            return e.with_stray(&c);
         }
         let (p, t) = (mesh.positions(), mesh.triangles());
         // A headless body's chin: the top of its neck.

@@ -248,3 +248,43 @@ fn check_parts(p: &EmbeddingParts) -> Result<(), String> {
     }
     Ok(())
 }
+
+impl Embedding {
+    /// The embedding of a mesh without its vertices in no triangle
+    /// ([`super::stray::Compact`]) as the whole mesh's: each such vertex
+    /// with its carrier's label, skin and regions; the regressors' vertices
+    /// numbered back.
+    pub(crate) fn with_stray(
+        self,
+        c: &super::stray::Compact,
+    ) -> Result<Embedding, super::embedding::EmbedError> {
+        let n = c.vertex_count();
+        let mut p = self.into_parts();
+        p.labels = c.spread(&p.labels, 0u8);
+        p.skin = c.spread(&p.skin, ([0u8; 4], [1.0, 0.0, 0.0, 0.0]));
+        let mut member = vec![false; n];
+        for r in &mut p.regions {
+            member.fill(false);
+            for &v in r.iter() {
+                member[c.old(v) as usize] = true;
+            }
+            for &(s, k) in c.stray().pairs() {
+                member[s as usize] = member[k as usize];
+            }
+            *r = (0..n as u32).filter(|&v| member[v as usize]).collect();
+        }
+        for g in &mut p.regressors {
+            g.vertices.iter_mut().for_each(|v| *v = c.old(*v));
+        }
+        p.vertex_count = n;
+        p.notes.push(format!(
+            "{} vertices in no triangle: the rig embedded without them, each given the part and skin of its nearest vertex in a triangle",
+            c.stray().len()
+        ));
+        Embedding::from_parts(p).map_err(|e| {
+            super::embedding::EmbedError::Mesh(format!(
+                "with its vertices in no triangle given their carriers' rig: {e}"
+            ))
+        })
+    }
+}

@@ -9,10 +9,10 @@
 //! regions of its carrier, the vertex in a triangle nearest it; the
 //! regressors never read them. The rig of the mesh's other vertices is
 //! the rig of the mesh without the stray ones, whatever their number or
-//! place in the numbering.
+//! place in the numbering. [`Compact`] renumbers;
+//! `Embedding::with_stray` (embedding_parts.rs) gives the rig back to the
+//! whole mesh.
 
-use super::Embedding;
-use super::embedding::EmbedError;
 use super::landmarks::{Landmarks, Mark};
 use crate::mesh::stray::StrayVertices;
 use crate::mesh::{Mesh, TopologyError};
@@ -130,6 +130,21 @@ impl Compact {
             .collect()
     }
 
+    /// The whole mesh's vertex count.
+    pub(crate) fn vertex_count(&self) -> usize {
+        self.new_of.len()
+    }
+
+    /// The whole mesh's index of the compact mesh's vertex `v`.
+    pub(crate) fn old(&self, v: u32) -> u32 {
+        self.old_of[v as usize]
+    }
+
+    /// The stray vertices, each with its carrier.
+    pub(crate) fn stray(&self) -> &StrayVertices {
+        &self.stray
+    }
+
     /// Per-vertex values of the compact mesh as the whole mesh's: each
     /// stray vertex its carrier's.
     pub(crate) fn spread<T: Copy>(&self, per: &[T], fill: T) -> Vec<T> {
@@ -141,40 +156,6 @@ impl Compact {
             out[s as usize] = out[c as usize];
         }
         out
-    }
-
-    /// The embedding of the compact mesh as the whole mesh's: each stray
-    /// vertex with its carrier's label, skin and regions.
-    pub(crate) fn expand(&self, e: Embedding) -> Result<Embedding, EmbedError> {
-        let n = self.new_of.len();
-        let mut p = e.into_parts();
-        let back = |x: u32| self.old_of[x as usize];
-        p.labels = self.spread(&p.labels, 0u8);
-        p.skin = self.spread(&p.skin, ([0u8; 4], [1.0, 0.0, 0.0, 0.0]));
-        let mut member = vec![false; n];
-        for r in &mut p.regions {
-            member.fill(false);
-            for &v in r.iter() {
-                member[back(v) as usize] = true;
-            }
-            for &(s, c) in self.stray.pairs() {
-                member[s as usize] = member[c as usize];
-            }
-            *r = (0..n as u32).filter(|&v| member[v as usize]).collect();
-        }
-        for g in &mut p.regressors {
-            g.vertices.iter_mut().for_each(|v| *v = back(*v));
-        }
-        p.vertex_count = n;
-        p.notes.push(format!(
-            "{} vertices in no triangle: the rig embedded without them, each given the part and skin of its nearest vertex in a triangle",
-            self.stray.len()
-        ));
-        Embedding::from_parts(p).map_err(|e| {
-            EmbedError::Mesh(format!(
-                "with its vertices in no triangle given their carriers' rig: {e}"
-            ))
-        })
     }
 }
 
