@@ -40,4 +40,14 @@ pub struct Body<'a> {
     pub split_knee: bool,
     /// Loose fixed points moved onto the limb ([`super::options::AutoOptions::guard_pivots`]).
     pub guard_pivots: bool,
+    /// The open boundary loops of the rest frame ([`super::cut_ends`]).
+    pub(crate) rims: Vec<super::cut_ends::Rim>,
+}
+
+impl Body<'_> {
+    /// The centre of the cut the extremity `tip` ends in, if it ends in
+    /// one ([`super::cut_ends::cut_at`]).
+    pub(crate) fn cut_at(&self, tip: u32) -> Option<DVec3> {
+        super::cut_ends::cut_at(self.rest, &self.rims, tip, self.height)
+    }
 }

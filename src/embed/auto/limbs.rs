@@ -302,10 +302,16 @@ pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
         legs.swap(0, 1);
         leg_lat.swap(0, 1);
     }
-    let mut arms = vec![
-        chains.limb(body, chains.hands[0], &ARM, 0.08, false),
-        chains.limb(body, chains.hands[1], &ARM, 0.08, false),
-    ];
+    // An arm cut at the wrist ([`super::cut_ends`]) matched from the cut:
+    // the hand's length taken off every expected distance.
+    let arm = |tip: u32| {
+        let exp = match body.cut_at(tip) {
+            Some(_) => ARM.map(|d| d - ARM[0]),
+            None => ARM,
+        };
+        chains.limb(body, tip, &exp, 0.08, false)
+    };
+    let mut arms = vec![arm(chains.hands[0]), arm(chains.hands[1])];
     let (first, mut arm_lat) =
         first_is_left(&trunk, left, [&arms[0].1, &arms[1].1], ARM[2] * height);
     if !first {

@@ -91,6 +91,7 @@ fn rig_checked(
         }
     }
     let mut found = place_joints(&body, &sided);
+    notes.extend(cut_arms_note(&body, &sided));
     super::hips::bound_hips(&body, &sided, &mut found, &mut notes);
     let (sym, confidence) = symmetry_and_confidence(rest, &body, &sided, &found, &mut notes);
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
@@ -435,8 +436,26 @@ fn find_body<'a>(
         facing: opts.facing,
         split_knee: opts.split_knee,
         guard_pivots: opts.guard_pivots,
+        rims: super::cut_ends::rims(rest, triangles),
     };
     Ok((body, tips, notes))
+}
+
+/// What `db init` says of arms whose tips are on a cut
+/// ([`super::cut_ends`]), if any.
+fn cut_arms_note(body: &Body, sided: &Sided) -> Option<String> {
+    let cut: Vec<&str> = ["left", "right"]
+        .into_iter()
+        .zip(&sided.arms)
+        .filter(|(_, a)| body.cut_at(a.0).is_some())
+        .map(|(s, _)| s)
+        .collect();
+    (!cut.is_empty()).then(|| {
+        format!(
+            "no hand: the {} arm's tip is on a cut (an open boundary): its joints matched from the wrist, placed at the cut's centre",
+            cut.join(" and ")
+        )
+    })
 }
 
 /// The twelve limb joints, by motion or by proportion, left leg, right
@@ -461,12 +480,28 @@ fn place_joints(body: &Body, sided: &Sided) -> Vec<(String, Placed)> {
             found.push((format!("{side}_{name}"), place(m[k], p, LEG[k] * height)));
         }
     }
-    for (side, (_, p, m)) in ["l", "r"].iter().zip(&sided.arms) {
+    for (side, (tip, p, m)) in ["l", "r"].iter().zip(&sided.arms) {
+        // An arm cut at the wrist: its joints' distances from the cut.
+        let cut = body.cut_at(*tip);
+        let hand = if cut.is_some() { ARM[0] * height } else { 0.0 };
         // The wrist by proportion from the elbow when the hand does not bend.
-        let elbow_d = m[1].map_or(ARM[1] * height, |c| c.from_tip);
-        let dw = [elbow_d * 0.43, ARM[1] * height, ARM[2] * height];
+        let elbow_d = m[1].map_or(ARM[1] * height - hand, |c| c.from_tip);
+        let dw = [
+            elbow_d * 0.43,
+            ARM[1] * height - hand,
+            ARM[2] * height - hand,
+        ];
         for (k, name) in ["wrist", "elbow", "shoulder"].iter().enumerate() {
-            found.push((format!("{side}_{name}"), place(m[k], p, dw[k])));
+            let placed = match cut {
+                // The cut's centre, where the motion shows no wrist.
+                Some(c) if k == 0 && m[0].is_none() => Placed {
+                    position: c,
+                    by_motion: true,
+                    articulation_deg: 0.0,
+                },
+                _ => place(m[k], p, dw[k]),
+            };
+            found.push((format!("{side}_{name}"), placed));
         }
     }
     found

@@ -27,7 +27,7 @@ use surfmotion::rig::Canonical;
 
 /// The figure's bound (README, issue 41): mean joint distance in % of the
 /// height from the landmark rig.
-const BOUND_PERCENT: f64 = 3.0;
+pub(super) const BOUND_PERCENT: f64 = 3.0;
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
