@@ -144,8 +144,11 @@ pub fn lock_folder(dir: &Path, stem: &str, shard: Option<&str>) -> Result<Folder
     // then linked to its name only if that name is free.
     let mut held = None;
     for _ in 0..3 {
+        // Named by this process ([`owner_pid`]): another run's clean-up
+        // leaves it alone while this run lives.
+        let prefix = format!("{TEMP_PREFIX}pid{}lock", std::process::id());
         let mut tmp = tempfile::Builder::new()
-            .prefix(TEMP_PREFIX)
+            .prefix(&prefix)
             .suffix(".part")
             .tempfile_in(dir)
             .map_err(io)?;
@@ -171,6 +174,9 @@ pub fn lock_folder(dir: &Path, stem: &str, shard: Option<&str>) -> Result<Folder
                     }
                 }
             }
+            // The temporary removed under it (a run of an older version
+            // cleaning the folder): write it again.
+            Err(e) if e.error.kind() == std::io::ErrorKind::NotFound => {}
             Err(e) => return Err(io(e.error)),
         }
     }
@@ -204,8 +210,28 @@ pub fn lock_folder(dir: &Path, stem: &str, shard: Option<&str>) -> Result<Folder
     Ok(lock)
 }
 
+/// The process a temporary's name says wrote it (`.surfmotion-pid<PID>…`:
+/// an atomic write's, a lock's, a batch's folder of OBJ frames).
+fn owner_pid(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix(TEMP_PREFIX)?.strip_prefix("pid")?;
+    let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+    rest[..digits].parse().ok()
+}
+
+/// Whether the temporary named `name` belongs to a process that runs (or
+/// may: it cannot be told): another run's write in progress, left alone.
+/// Shards of one split start together, and one that found itself alone
+/// removed the lock another was about to take (CI, session 49: "batch-3of4.lock:
+/// No such file or directory").
+fn being_written(name: &str) -> bool {
+    owner_pid(name).is_some_and(|pid| {
+        pid == std::process::id() || crate::util::fsutil::process_alive(pid) != Some(false)
+    })
+}
+
 /// Removes, under `dir`, the temporaries of writes that never finished
-/// (files `.surfmotion-XXXXXX.part`, folders `.surfmotion-XXXXXX-partial`).
+/// (files `.surfmotion-XXXXXX.part`, folders `.surfmotion-XXXXXX-partial`)
+/// but those whose name carries the id of a process that runs ([`being_written`]).
 /// Call only while holding the folder's lock alone. Returns their paths and
 /// total size in bytes.
 pub fn clean_temporaries(dir: &Path) -> (Vec<PathBuf>, u64) {
@@ -220,7 +246,8 @@ pub fn clean_temporaries(dir: &Path) -> (Vec<PathBuf>, u64) {
             // Links are not followed: only what is in the folder itself.
             let Ok(ft) = e.file_type() else { continue };
             let p = e.path();
-            let temp = is_temporary(&e.file_name().to_string_lossy());
+            let name = e.file_name().to_string_lossy().to_string();
+            let temp = is_temporary(&name) && !being_written(&name);
             if ft.is_dir() {
                 if temp {
                     bytes += size_of_tree(&p);
@@ -316,8 +343,14 @@ mod tests {
         ] {
             std::fs::write(d.join(keep), b"k").unwrap();
         }
+        // Another run's, in progress (this process's id: alive), kept; a
+        // killed one's (no such process) removed.
+        let live = format!(".surfmotion-pid{}lockAb12cd.part", std::process::id());
+        std::fs::write(d.join(&live), b"l").unwrap();
+        std::fs::write(d.join(".surfmotion-pid2147483647oAb12cd.part"), b"").unwrap();
         let (removed, bytes) = clean_temporaries(d);
-        assert_eq!(removed.len(), 2, "{removed:?}");
+        assert_eq!(removed.len(), 3, "{removed:?}");
+        assert!(d.join(&live).exists());
         assert_eq!(bytes, 101);
         assert!(d.join("walk.glb").exists() && d.join("foo-partial").exists());
         assert!(d.join(".surfmotion-a.b.part").exists());

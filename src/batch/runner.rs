@@ -270,7 +270,7 @@ fn convert_one(
     let partial = match format {
         Format::Obj => Some(
             tempfile::Builder::new()
-                .prefix(TEMP_PREFIX)
+                .prefix(&format!("{TEMP_PREFIX}pid{}o", std::process::id()))
                 .suffix("-partial")
                 .tempdir_in(out.parent().unwrap_or(Path::new(".")))
                 .map_err(|e| format!("{}: {e}", out.display()))?,
