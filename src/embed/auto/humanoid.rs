@@ -185,7 +185,8 @@ pub(crate) fn crossings(
 pub struct Placed {
     /// Rest-frame position.
     pub position: DVec3,
-    /// Found from the parts' motion (else by proportion along the limb).
+    /// Found from the parts' motion, or at the centre of the cut an arm
+    /// ends in (`embed::auto::cut_ends`); else by proportion along the limb.
     pub by_motion: bool,
     /// How much it bends in the capture (degrees; 0 when by proportion).
     pub articulation_deg: f64,
