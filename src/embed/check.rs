@@ -189,17 +189,33 @@ pub(crate) fn check_with(e: &Embedding, mesh: &Mesh, o: &CheckOptions) -> EmbedC
     let h = e.height.max(1e-12);
     let plane = check_plane(e);
     let headless = e.absent.iter().any(|a| a == "head");
+    // A body cut above the feet (`embed::footless`): its toes are the
+    // embedding's guess on a foot that is not there.
+    let footless = e.absent.iter().any(|a| a == "feet");
+    let pairs: Vec<(Canonical, Canonical)> = PAIRS
+        .into_iter()
+        .filter(|(l, _)| !(footless && *l == Canonical::LToe))
+        .collect();
     let mut w = Warnings {
         h,
         list: Vec::new(),
     };
     let pelvis_offset = plane.distance(joint(e, Canonical::Pelvis));
     check_central(e, &plane, o, headless, &mut w);
-    let hip_distances = check_twins(e, &plane, o, &mut w);
-    let bones = check_bones(e, o, &mut w);
-    let outside = check_inside(e, mesh, headless, &mut w);
+    let hip_distances = check_twins(e, &plane, o, &pairs, &mut w);
+    let bones = check_bones(e, o, &pairs, &mut w);
+    let outside = check_inside(e, mesh, headless, footless, &mut w);
     let parts = check_parts(e, mesh, headless, &mut w);
-    check_feet(e, mesh, &mut w);
+    if !footless {
+        check_feet(e, mesh, &mut w);
+    }
+    let mut skipped = Vec::new();
+    if headless {
+        skipped.push("no head: head checks skipped (the head on the mid-plane, inside the body, the head part)".into());
+    }
+    if footless {
+        skipped.push("no feet: foot checks skipped (the toes' symmetry, bones and place inside the body, the feet's direction)".into());
+    }
     EmbedCheck {
         height: h,
         mid_plane: plane,
@@ -212,11 +228,7 @@ pub(crate) fn check_with(e: &Embedding, mesh: &Mesh, o: &CheckOptions) -> EmbedC
         parts,
         options: *o,
         warnings: w.list,
-        skipped: if headless {
-            vec!["no head: head checks skipped (the head on the mid-plane, inside the body, the head part)".into()]
-        } else {
-            Vec::new()
-        },
+        skipped,
     }
 }
 
@@ -306,11 +318,17 @@ fn check_central(
 
 /// Twins at the same distance from the mid-plane, and apart; the hips'
 /// distances.
-fn check_twins(e: &Embedding, plane: &MidPlane, o: &CheckOptions, w: &mut Warnings) -> [f64; 2] {
+fn check_twins(
+    e: &Embedding,
+    plane: &MidPlane,
+    o: &CheckOptions,
+    pairs: &[(Canonical, Canonical)],
+    w: &mut Warnings,
+) -> [f64; 2] {
     use Canonical as C;
     let h = w.h;
     let mut hip_distances = [0.0; 2];
-    for (l, r) in PAIRS {
+    for &(l, r) in pairs {
         let (dl, dr) = (plane.distance(joint(e, l)), -plane.distance(joint(e, r)));
         if l == C::LHip {
             hip_distances = [dl, dr];
@@ -347,9 +365,14 @@ fn check_twins(e: &Embedding, plane: &MidPlane, o: &CheckOptions, w: &mut Warnin
 }
 
 /// Twin bones of one length.
-fn check_bones(e: &Embedding, o: &CheckOptions, w: &mut Warnings) -> Vec<BonePair> {
+fn check_bones(
+    e: &Embedding,
+    o: &CheckOptions,
+    pairs: &[(Canonical, Canonical)],
+    w: &mut Warnings,
+) -> Vec<BonePair> {
     let mut bones = Vec::new();
-    for (l, r) in PAIRS {
+    for &(l, r) in pairs {
         let (Some(pl), Some(pr)) = (l.parent(), r.parent()) else {
             continue;
         };
@@ -379,11 +402,18 @@ fn check_bones(e: &Embedding, o: &CheckOptions, w: &mut Warnings) -> Vec<BonePai
 }
 
 /// Joints inside the body; the names of those outside.
-fn check_inside(e: &Embedding, mesh: &Mesh, headless: bool, w: &mut Warnings) -> Vec<String> {
+fn check_inside(
+    e: &Embedding,
+    mesh: &Mesh,
+    headless: bool,
+    footless: bool,
+    w: &mut Warnings,
+) -> Vec<String> {
     let (p, t) = (mesh.positions(), mesh.triangles());
     let mut outside = Vec::new();
     for c in Canonical::ALL {
-        if headless && c == Canonical::Head {
+        let toe = matches!(c, Canonical::LToe | Canonical::RToe);
+        if headless && c == Canonical::Head || footless && toe {
             continue;
         }
         let q = joint(e, c);

@@ -320,11 +320,15 @@ impl Embedding {
         };
         lm.validate(p, t, up.to_array())?;
         let est = place_joints(p, t, lm, headless);
-        let absent: Vec<String> = if headless {
+        let mut absent: Vec<String> = if headless {
             vec!["head".into()]
         } else {
             Vec::new()
         };
+        let footless = super::footless::feet_cut(p, t, &est.joints, est.height);
+        if footless {
+            absent.push("feet".into());
+        }
         let bs = bones(&est);
         let mut w = bone_heat(mesh, &bs)?;
         let mut moved = None;

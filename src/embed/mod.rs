@@ -10,6 +10,7 @@ pub mod check;
 pub mod contact;
 mod embedding;
 mod embedding_parts;
+mod footless;
 pub mod frames;
 pub mod heat;
 pub mod joints;

@@ -1,4 +1,4 @@
-//! Arms that end in a cut (issue 41: "a body without a head, hands or
+//! Arms and legs that end in a cut (issue 41: "a body without a head, hands or
 //! feet gets the joints it has"). A capture whose hands were cut off at
 //! the wrists by a script leaves an open boundary loop, the cut's rim,
 //! at each arm's end, and the arm's extremity (the geodesic farthest
@@ -10,6 +10,14 @@
 //! part was empty and the arms swung stiff in retargeting. An arm whose
 //! tip is on a rim is matched from the wrist instead (the hand's 0.10
 //! taken off every distance), its wrist at the rim's centre.
+//!
+//! Legs the same (session 50): a leg whose tip is on a rim is matched
+//! from the ankle ([`super::limbs::LEG`]'s foot 0.12 taken off), its ankle
+//! at the rim's centre. Matched from the missing toes, samba cut 10 cm up
+//! had its knees at the skirt's hem (11-13 % of the height high). A cut
+//! leg has no toes to read the facing's sign from: its knee's bend over
+//! the frames gives it ([`super::facing::knee_folds_towards`]), and the
+//! floor is found from the knees ([`super::floor`]).
 
 use glam::DVec3;
 

@@ -17,6 +17,7 @@
 //! the body and does not depend on the vertices' order. Cost: one pass over
 //! the rest frame.
 
+use super::decompose::PartMotion;
 use glam::DVec3;
 
 /// The heights (fractions of the height above the lowest point along up)
@@ -75,6 +76,32 @@ pub(crate) fn widest_across(
     let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
     let across = a * angle.cos() + b * angle.sin();
     Some((across, big / small.max(big * 1e-12)))
+}
+
+/// Where a knee's bend carries the ankle, horizontally, summed over the
+/// frames: the ankle's rest point `ankle` moved by the shin's motion and
+/// brought back by the thigh's (in the thigh's own frame, whatever the hip
+/// does), less its rest point, with the part along `up` taken off. A knee
+/// flexes one way (the shin folds back under the thigh; it does not
+/// extend past straight by more than a few degrees), so the sum points to
+/// the body's back: the facing's sign on legs cut above the toes
+/// ([`super::limbs::side`]), which the toes' direction from the knees gives
+/// on whole legs. Zero when the frames show no bend.
+pub(crate) fn knee_folds_towards(
+    shin: &PartMotion,
+    thigh: &PartMotion,
+    ankle: DVec3,
+    up: DVec3,
+) -> DVec3 {
+    let frames = shin.r.len().min(thigh.r.len());
+    let mut sum = DVec3::ZERO;
+    for f in 0..frames {
+        let world = shin.apply(f, ankle);
+        let in_thigh = thigh.r[f].transpose() * (world - thigh.t[f]);
+        let d = in_thigh - ankle;
+        sum += d - up * d.dot(up);
+    }
+    sum
 }
 
 #[cfg(test)]
@@ -153,5 +180,39 @@ mod tests {
         let low: Vec<[f64; 3]> = p.iter().filter(|q| q[1] < 0.5).copied().collect();
         assert!(widest_across(&low, DVec3::Y, 0.0, 1.0).is_none());
         assert!(widest_across(&[], DVec3::Y, 0.0, 1.0).is_none());
+    }
+
+    /// A shin folding back under its thigh, the thigh turned and moved
+    /// anyhow by the hip: the sum points back, whatever the hip does.
+    #[test]
+    fn a_folding_knee_points_to_the_back_whatever_the_hip_does() {
+        use glam::DMat3;
+        let (knee, ankle) = (DVec3::new(0.0, 0.5, 0.0), DVec3::ZERO);
+        let (mut shin, mut thigh) = (
+            PartMotion {
+                r: vec![],
+                t: vec![],
+            },
+            PartMotion {
+                r: vec![],
+                t: vec![],
+            },
+        );
+        for f in 0..10 {
+            let hip =
+                DMat3::from_rotation_y(0.4 * f as f64) * DMat3::from_rotation_x(-0.1 * f as f64);
+            let move_by = DVec3::new(0.1 * f as f64, 0.02, -0.3);
+            // The shin turned about the knee's lateral axis by the flexion.
+            let flex = DMat3::from_rotation_x(0.12 * f as f64);
+            thigh.r.push(hip);
+            thigh.t.push(move_by);
+            shin.r.push(hip * flex);
+            shin.t.push(hip * (knee - flex * knee) + move_by);
+        }
+        let back = knee_folds_towards(&shin, &thigh, ankle, DVec3::Y);
+        assert!(back.normalize().dot(DVec3::NEG_Z) > 0.999, "{back}");
+        // Still legs say nothing.
+        let still = knee_folds_towards(&thigh, &thigh, ankle, DVec3::Y);
+        assert!(still.length() < 1e-12, "{still}");
     }
 }

@@ -22,7 +22,7 @@
 
 use super::body::Body;
 use super::humanoid::{Placed, along, get_joint};
-use super::limbs::{LEG, Sided};
+use super::limbs::Sided;
 
 /// Above this many times the knees' height over the floor, hips found by
 /// the motion are taken for a clothing edge.
@@ -51,11 +51,12 @@ pub fn bound_hips(
     if !ratio.is_finite() || ratio <= HIP_OVER_KNEE {
         return;
     }
-    for (side, (_, path, _)) in ["l", "r"].iter().zip(&sided.legs) {
+    for (side, (tip, path, _)) in ["l", "r"].iter().zip(&sided.legs) {
         let name = format!("{side}_hip");
+        let d = super::limbs::leg_distances(body, *tip)[2];
         if let Some((_, p)) = found.iter_mut().find(|(n, _)| *n == name) {
             *p = Placed {
-                position: along(body.rest, path, LEG[2] * body.height),
+                position: along(body.rest, path, d * body.height),
                 by_motion: false,
                 articulation_deg: 0.0,
             };

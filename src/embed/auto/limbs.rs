@@ -240,11 +240,45 @@ pub struct Sided {
     pub lateral: [[f64; 2]; 2],
 }
 
+/// A leg's expected joint distances from its tip ([`LEG`]); from the cut,
+/// the foot's [`LEG`]`[0]` taken off, when the tip is on one.
+pub(crate) fn leg_distances(body: &Body, tip: u32) -> [f64; 3] {
+    match body.cut_at(tip) {
+        Some(_) => LEG.map(|d| d - LEG[0]),
+        None => LEG,
+    }
+}
+
 /// A leg's knee: found, or by proportion along the leg.
 pub fn knee(body: &Body, l: &Limb) -> DVec3 {
     l.2[1]
         .map(|c| c.joint.position)
-        .unwrap_or_else(|| along(body.rest, &l.1, LEG[1] * body.height))
+        .unwrap_or_else(|| along(body.rest, &l.1, leg_distances(body, l.0)[1] * body.height))
+}
+
+/// Where the feet point (horizontal, not unit; the facing's sign): the
+/// toe tips' directions from the knees, summed. A leg cut above the foot
+/// has no toes (its tip, the cut, lies under or behind the knee): its
+/// knee's bend over the frames says where the back is
+/// ([`super::facing::knee_folds_towards`]), when its knee was found by
+/// the motion.
+fn toes_point_to(body: &Body, legs: &[Limb]) -> DVec3 {
+    let up = body.up;
+    let flat = |d: DVec3| d - up * d.dot(up);
+    let mut toes = DVec3::ZERO;
+    for l in legs {
+        let tip = DVec3::from_array(body.rest[l.0 as usize]);
+        let Some(cut) = body.cut_at(l.0) else {
+            toes += flat(tip - knee(body, l)).normalize_or_zero();
+            continue;
+        };
+        if let Some(k) = l.2[1] {
+            let m = &body.dec.motions;
+            let (shin, thigh) = (&m[k.distal as usize], &m[k.proximal as usize]);
+            toes -= super::facing::knee_folds_towards(shin, thigh, cut, up).normalize_or_zero();
+        }
+    }
+    toes
 }
 
 /// The limbs of `chains`, sided; facing square to the chest's widest
@@ -255,11 +289,10 @@ pub fn knee(body: &Body, l: &Limb) -> DVec3 {
 /// more to the left of the mid-plane over the frames ([`super::sides`]).
 pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
     let (rest, up, height) = (body.rest, body.up, body.height);
-    let v3 = |q: [f64; 3]| DVec3::from_array(q);
-    let mut legs = vec![
-        chains.limb(body, chains.feet[0], &LEG, 0.1, true),
-        chains.limb(body, chains.feet[1], &LEG, 0.1, true),
-    ];
+    // A leg cut above the foot ([`super::cut_ends`]) matched from the
+    // cut: the foot's length taken off every expected distance.
+    let leg = |tip: u32| chains.limb(body, tip, &leg_distances(body, tip), 0.1, true);
+    let mut legs = vec![leg(chains.feet[0]), leg(chains.feet[1])];
     let flat = |d: DVec3| d - up * d.dot(up);
     let hips_found = legs.iter().all(|l| l.2[2].is_some());
     let side_point = |l: &Limb| match l.2[2] {
@@ -274,10 +307,7 @@ pub fn side(body: &Body, chains: &Chains) -> Result<Sided, AutoError> {
     };
     debug_across(hips, chest);
     let across = chest.map_or(hips, |(a, _)| a);
-    let mut toes = DVec3::ZERO;
-    for l in &legs {
-        toes += flat(v3(rest[l.0 as usize]) - knee(body, l)).normalize_or_zero();
-    }
+    let toes = toes_point_to(body, &legs);
     let square = up.cross(across).normalize_or_zero();
     let facing = if square == DVec3::ZERO {
         toes.normalize_or_zero()

@@ -21,6 +21,7 @@ pub mod consensus;
 mod cut_ends;
 pub mod decompose;
 pub mod facing;
+mod floor;
 pub mod guard;
 pub mod hips;
 pub mod humanoid;

@@ -7,7 +7,7 @@ use super::body::Body;
 use super::branches::{body_tips, sixth_limit};
 use super::decompose::decompose;
 use super::humanoid::{Placed, along, get_joint};
-use super::limbs::{ARM, Chains, LEG, Sided, knee_to_toe, side};
+use super::limbs::{ARM, Chains, Sided, knee_to_toe, side};
 use super::neck::NeckReading;
 use super::options::{AutoError, AutoOptions, FrameSample};
 use super::report::{AutoRig, FoundJoint};
@@ -72,7 +72,7 @@ fn rig_checked(
     };
     let in_order = opts.frames == FrameSample::InOrder;
     let nb = crate::embed::parts::neighbours(n, mesh.triangles());
-    let (body, tips, mut notes) = find_body(rest, mesh.triangles(), &used, &nb, opts)?;
+    let (mut body, tips, mut notes) = find_body(rest, mesh.triangles(), &used, &nb, opts)?;
     let mut chains = Chains::find(&body, &tips);
     if let Some(top) = tips.get(4).filter(|t| t.1 == 0.0) {
         // The stump `find_body` added (reach 0): the head's chain.
@@ -90,13 +90,18 @@ fn rig_checked(
             ));
         }
     }
+    notes.extend(cut_ends_notes(&body, &sided));
+    let neck = NeckReading::read(rest, &nb, body.up, body.height, chains.head);
+    let cut = neck.cut().filter(|_| opts.read_head);
+    notes.extend(super::floor::floor_under_cuts(
+        &mut body,
+        &sided,
+        cut.is_none(),
+    ));
     let mut found = place_joints(&body, &sided);
-    notes.extend(cut_arms_note(&body, &sided));
     super::hips::bound_hips(&body, &sided, &mut found, &mut notes);
     let (sym, confidence) = symmetry_and_confidence(rest, &body, &sided, &found, &mut notes);
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
-    let neck = NeckReading::read(rest, &nb, body.up, body.height, chains.head);
-    let cut = neck.cut().filter(|_| opts.read_head);
     if let Some(why) = &cut {
         notes.push(format!("no head: {why}; the landmarks say \"absent\": [\"head\"] (the embedding puts the chin at the top of the neck and skips the head checks: the head on the mid-plane, inside the body, the head part)"));
     }
@@ -417,9 +422,12 @@ fn find_body<'a>(
     // The parts and their motion.
     let dec = decompose(rest, used, nb, height, &opts.decompose);
     if dec.count < 5 {
+        // Two frames of a standing body (or a capture that holds still)
+        // move as one piece too: say how many frames were read.
         return Err(AutoError::NotHumanoid(format!(
-            "the capture moves as {} rigid piece(s), not an articulated body",
-            dec.count
+            "the capture moves as {} rigid piece(s) over the {} frame(s) read, not an articulated body (a body whose limbs bend in some of its frames shows five or more: too few frames, or a capture holding still?)",
+            dec.count,
+            used.len()
         )));
     }
     let body = Body {
@@ -441,21 +449,29 @@ fn find_body<'a>(
     Ok((body, tips, notes))
 }
 
-/// What `db init` says of arms whose tips are on a cut
-/// ([`super::cut_ends`]), if any.
-fn cut_arms_note(body: &Body, sided: &Sided) -> Option<String> {
-    let cut: Vec<&str> = ["left", "right"]
-        .into_iter()
-        .zip(&sided.arms)
-        .filter(|(_, a)| body.cut_at(a.0).is_some())
-        .map(|(s, _)| s)
-        .collect();
-    (!cut.is_empty()).then(|| {
-        format!(
-            "no hand: the {} arm's tip is on a cut (an open boundary): its joints matched from the wrist, placed at the cut's centre",
-            cut.join(" and ")
-        )
-    })
+/// What `db init` says of limbs whose tips are on a cut
+/// ([`super::cut_ends`]), one note per pair, if any.
+fn cut_ends_notes(body: &Body, sided: &Sided) -> Vec<String> {
+    let pairs = [
+        ("foot", "leg", "ankle", &sided.legs),
+        ("hand", "arm", "wrist", &sided.arms),
+    ];
+    let mut notes = Vec::new();
+    for (end, limb, joint, limbs) in pairs {
+        let cut: Vec<&str> = ["left", "right"]
+            .into_iter()
+            .zip(limbs.iter())
+            .filter(|(_, a)| body.cut_at(a.0).is_some())
+            .map(|(s, _)| s)
+            .collect();
+        if !cut.is_empty() {
+            notes.push(format!(
+                "no {end}: the {} {limb}'s tip is on a cut (an open boundary): its joints matched from the {joint}, placed at the cut's centre",
+                cut.join(" and ")
+            ));
+        }
+    }
+    notes
 }
 
 /// The twelve limb joints, by motion or by proportion, left leg, right
@@ -475,9 +491,21 @@ fn place_joints(body: &Body, sided: &Sided) -> Vec<(String, Placed)> {
             articulation_deg: 0.0,
         },
     };
-    for (side, (_, p, m)) in ["l", "r"].iter().zip(&sided.legs) {
+    for (side, (tip, p, m)) in ["l", "r"].iter().zip(&sided.legs) {
+        // A leg cut above the foot: its joints' distances from the cut,
+        // its ankle at the cut's centre where the motion shows none.
+        let cut = body.cut_at(*tip);
+        let d = super::limbs::leg_distances(body, *tip);
         for (k, name) in ["ankle", "knee", "hip"].iter().enumerate() {
-            found.push((format!("{side}_{name}"), place(m[k], p, LEG[k] * height)));
+            let placed = match cut {
+                Some(c) if k == 0 && m[0].is_none() => Placed {
+                    position: c,
+                    by_motion: true,
+                    articulation_deg: 0.0,
+                },
+                _ => place(m[k], p, d[k] * height),
+            };
+            found.push((format!("{side}_{name}"), placed));
         }
     }
     for (side, (tip, p, m)) in ["l", "r"].iter().zip(&sided.arms) {
@@ -571,10 +599,10 @@ fn landmark_points(
         // fixtures' landmark rigs read 1.53-1.69).
         let mid = (get("l_knee").position + get("r_knee").position) * 0.5;
         let over_floor = if head {
-            notes.push("groin: the hips do not show in the motion (clothing?); placed between the knees at 47% of the height".into());
+            notes.push("groin: no hips from the motion to place it by (they do not show, or were taken for a clothing edge); placed between the knees at 47% of the height".into());
             0.47 * height
         } else {
-            notes.push("groin: the hips do not show in the motion (clothing?); placed between the knees at 1.65 times their height".into());
+            notes.push("groin: no hips from the motion to place it by (they do not show, or were taken for a clothing edge); placed between the knees at 1.65 times their height".into());
             GROIN_OVER_KNEES * (mid.dot(up) - lo)
         };
         mid + up * (lo + over_floor - mid.dot(up))

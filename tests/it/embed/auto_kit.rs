@@ -178,6 +178,29 @@ pub(super) fn without_hands(rig: &Embedding, rest: &[[f64; 3]]) -> Vec<bool> {
         .collect()
 }
 
+/// Which vertices of `rest` to keep to cut `rig`'s feet off at the
+/// ankles: a plane square to each shin, `above` of the height up the shin
+/// from the ankle; the shin's and foot's vertices below it go.
+pub(super) fn without_feet(rig: &Embedding, rest: &[[f64; 3]], above: f64) -> Vec<bool> {
+    use surfmotion::embed::parts::Part;
+    use surfmotion::rig::Canonical as C;
+    let j = |c: C| DVec3::from_array(rig.joints()[c.index()]);
+    let legs = [
+        (j(C::LKnee), j(C::LAnkle), [Part::LShin, Part::LFoot]),
+        (j(C::RKnee), j(C::RAnkle), [Part::RShin, Part::RFoot]),
+    ];
+    (0..rest.len())
+        .map(|v| {
+            let q = DVec3::from_array(rest[v]);
+            let part = rig.labels()[v] as usize;
+            !legs.iter().any(|(k, a, parts)| {
+                parts.iter().any(|p| p.index() == part)
+                    && (q - *a).dot((*k - *a).normalize()) < above * rig.height()
+            })
+        })
+        .collect()
+}
+
 /// `mesh` and its frames with only the triangles whose corners are all
 /// `keep`, and the vertices they use; and those vertices' old numbers.
 pub(super) fn keep_only(mesh: &Mesh, frames: &Frames, keep: &[bool]) -> (Mesh, Frames, Vec<usize>) {
