@@ -1,7 +1,6 @@
 //! `surfmotion db init|info`.
 
 use std::path::PathBuf;
-use surfmotion::db::info;
 use surfmotion::jobs::db_info::{self, Listed};
 use surfmotion::jobs::skeletons::SkeletonsOptions;
 use surfmotion::jobs::{export_skeletons, text};
@@ -115,7 +114,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
         Cmd::Build(a) => return build(a),
         Cmd::Init(a) => super::db_init::init(a)?,
         Cmd::Info(a) => {
-            let mut i = info(&a.dir)?;
+            let mut i = db_info::info(&a.dir)?;
             for p in &mut i.problems {
                 *p = super::flags::as_flags(&super::without_os_error_numbers(p));
             }

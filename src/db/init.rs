@@ -147,6 +147,35 @@ pub(crate) struct RestFrame {
     /// The choice over the topology's frame followed by every frame of
     /// every sequence ([`RestChoice::frame`] indexes that list).
     pub choice: RestChoice,
+    /// The frames with a contact, by name: `topology`, `SEQUENCE:A-B`
+    /// (a run of frames) or `SEQUENCE:F`.
+    pub contact_frames: Vec<String>,
+}
+
+/// The runs of consecutive frames among `list` (`at` names each: its
+/// sequence, `None` for the topology, and frame) as `topology`,
+/// `NAME:A-B` or `NAME:F`.
+fn frame_runs(list: &[usize], at: &[(Option<usize>, usize)], names: &[String]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    let mut run: Option<(Option<usize>, usize, usize)> = None;
+    let name = |r: (Option<usize>, usize, usize)| match r {
+        (None, _, _) => "topology".to_string(),
+        (Some(k), a, b) if a == b => format!("{}:{a}", names[k]),
+        (Some(k), a, b) => format!("{}:{a}-{b}", names[k]),
+    };
+    for &i in list {
+        let Some(&(seq, f)) = at.get(i) else { continue };
+        run = match run {
+            Some((s, a, b)) if s == seq && seq.is_some() && f == b + 1 => Some((s, a, f)),
+            Some(r) => {
+                out.push(name(r));
+                Some((seq, f, f))
+            }
+            None => Some((seq, f, f)),
+        };
+    }
+    out.extend(run.map(name));
+    out
 }
 
 /// [`assemble`], with the rest frame chosen when
@@ -446,9 +475,11 @@ fn choose_rest(
         return Ok(None);
     };
     let (seq, frame) = at[choice.frame];
+    let names: Vec<String> = m.sequences.iter().map(|s| s.name.clone()).collect();
     Ok(Some(RestFrame {
         sequence: seq.map(|k| m.sequences[k].name.clone()),
         frame,
+        contact_frames: frame_runs(&choice.contact_frames, &at, &names),
         choice,
     }))
 }
@@ -613,4 +644,31 @@ pub(crate) fn resolve_units(units: &str, topo: &Mesh, notes: &mut Vec<String>) -
         return name.into();
     }
     units.into()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::frame_runs;
+
+    /// Runs of consecutive frames within a sequence, the topology on its
+    /// own, a run never across two sequences.
+    #[test]
+    fn contact_frames_are_named_in_runs() {
+        let at = [
+            (None, 0),
+            (Some(0), 0),
+            (Some(0), 1),
+            (Some(0), 2),
+            (Some(0), 3),
+            (Some(1), 0),
+            (Some(1), 1),
+        ];
+        let names = ["a".to_string(), "b".to_string()];
+        assert_eq!(
+            frame_runs(&[0, 1, 2, 4, 5, 6], &at, &names),
+            ["topology", "a:0-1", "a:3", "b:0-1"]
+        );
+        assert_eq!(frame_runs(&[4, 5], &at, &names), ["a:3", "b:0"]);
+        assert!(frame_runs(&[], &at, &names).is_empty());
+    }
 }

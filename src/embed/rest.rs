@@ -133,6 +133,8 @@ pub struct RestChoice {
     pub frames: usize,
     /// Frames with a contact.
     pub frames_in_contact: usize,
+    /// Which: their indices into the frames given, in order.
+    pub contact_frames: Vec<usize>,
     /// One line: why this frame.
     pub why: String,
 }
@@ -289,6 +291,9 @@ pub(crate) fn choose_with(
         first,
         frames: frames.len(),
         frames_in_contact: in_contact,
+        contact_frames: (0..found.len())
+            .filter(|&f| !found[f].contacts.is_empty())
+            .collect(),
         why,
     })
 }

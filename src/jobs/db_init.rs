@@ -65,6 +65,8 @@ pub struct Setup {
     pub frames_examined: usize,
     /// Frames with a contact.
     pub frames_in_contact: usize,
+    /// Which: `topology`, `SEQUENCE:A-B` (a run) or `SEQUENCE:F`.
+    pub contact_frames: Vec<String>,
     /// Contacts on the topology's frame (the parts named by the rig).
     pub topology_contacts: Vec<ContactReport>,
     /// Contacts on the rest frame chosen (empty when it is clear).
@@ -74,6 +76,10 @@ pub struct Setup {
     pub rigidity: Vec<PartRigidity>,
     /// The rig's notes (what was assumed while embedding).
     pub rig_notes: Vec<String>,
+    /// The automatic rig's summary line and its warnings (`db info` shows
+    /// them); empty when the landmarks were given.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub automatic: Vec<String>,
     /// The rig's self-check.
     pub check: EmbedCheck,
     /// Where the report was written.
@@ -193,7 +199,7 @@ fn init_in(
         ));
     }
     let setup = if manifest.rig.landmarks.is_some() {
-        let mut s = write_setup(dir, &manifest, rest.as_ref(), setup, written)?;
+        let mut s = write_setup(dir, &manifest, rest.as_ref(), auto.as_ref(), setup, written)?;
         s.head_said = auto.as_ref().is_some_and(|r| r.headless);
         Some(s)
     } else {
@@ -325,6 +331,7 @@ fn write_setup(
     dir: &Path,
     m: &Manifest,
     rest: Option<&RestFrame>,
+    auto: Option<&AutoRig>,
     o: &InitSetup,
     written: &mut Written,
 ) -> Result<Setup, JobError> {
@@ -405,10 +412,17 @@ fn write_setup(
         why,
         frames_examined: examined,
         frames_in_contact: in_contact,
+        contact_frames: rest.map_or_else(Vec::new, |r| r.contact_frames.clone()),
         topology_contacts,
         rest_contacts,
         rigidity,
         rig_notes: rig.notes.clone(),
+        automatic: auto.map_or_else(Vec::new, |a| {
+            let warnings = a.notes.iter().filter(|n| n.starts_with("WARNING"));
+            std::iter::once(a.summary())
+                .chain(warnings.cloned())
+                .collect()
+        }),
         check,
         path: dir.join(SETUP),
         png,

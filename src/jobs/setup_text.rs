@@ -36,9 +36,18 @@ impl Setup {
             );
         }
         if s.frames_examined > 0 {
+            // The topology's positions are examined as a frame of their
+            // own, before every sequence's.
+            let which = match s.contact_frames.len() {
+                0 => String::new(),
+                n if n <= 12 => format!(": {}", s.contact_frames.join(", ")),
+                n => format!(": {}, … ({n} runs)", s.contact_frames[..12].join(", ")),
+            };
             out += &format!(
-                "frames with a contact: {} of {}\n",
-                s.frames_in_contact, s.frames_examined
+                "frames with a contact: {} of {} (the topology and {} frames of the sequences){which}\n",
+                s.frames_in_contact,
+                s.frames_examined,
+                s.frames_examined - 1
             );
         }
         let worst = s
