@@ -217,6 +217,38 @@ fn samba_started_in_contact_sets_up_as_from_its_clear_start() {
                 "{name}: rest frame {rest:?} of the capture, the clear order's {clear_rest:?}"
             ));
         }
+        // The setup report names the frames in contact (the start frame,
+        // the topology, first) and keeps the automatic rig's summary;
+        // `db info` shows the rig's setup from it.
+        assert_eq!(
+            setup["contact_frames"][0], "topology",
+            "{name}: the start frame has a contact: {}",
+            setup["contact_frames"]
+        );
+        assert!(
+            setup["automatic"][0]
+                .as_str()
+                .is_some_and(|s| s.starts_with("automatic rig: confidence")),
+            "{name}: {}",
+            setup["automatic"]
+        );
+        let info = common::run_cli(
+            &[
+                "db".to_string(),
+                "info".into(),
+                db.display().to_string(),
+                "--json".into(),
+            ],
+            None,
+            &[],
+        );
+        let notes =
+            serde_json::from_str::<serde_json::Value>(&info.stdout).unwrap()["notes"].to_string();
+        assert!(
+            notes.contains("rig set up by `db init` on the rest frame dance:")
+                && notes.contains("automatic rig: confidence"),
+            "{name}: db info: {notes}"
+        );
         let lm = std::fs::read_to_string(db.join("auto.landmarks.json")).unwrap();
         assert!(
             lm.contains("\"triangle\""),
