@@ -21,6 +21,7 @@ mod live_send;
 mod log;
 mod malloc;
 mod mesh;
+mod mirror;
 mod mocap;
 mod opts;
 mod out;

@@ -70,14 +70,7 @@ pub enum PredictorArg {
     SpatioTemporal,
 }
 
-impl From<Predictor> for PredictorArg {
-    fn from(p: Predictor) -> PredictorArg {
-        match p {
-            Predictor::Temporal => PredictorArg::Temporal,
-            Predictor::SpatioTemporal => PredictorArg::SpatioTemporal,
-        }
-    }
-}
+super::mirror::mirror!(PredictorArg, Predictor, Temporal, SpatioTemporal);
 
 /// Arguments of `web export`.
 #[derive(clap::Args)]
@@ -124,10 +117,7 @@ pub(super) fn options(s: &Source) -> anyhow::Result<ExportOptions> {
     Ok(ExportOptions {
         codec: EncodeOptions {
             max_error: s.max_error * 1e-3,
-            predictor: match s.predictor {
-                PredictorArg::Temporal => Predictor::Temporal,
-                PredictorArg::SpatioTemporal => Predictor::SpatioTemporal,
-            },
+            predictor: s.predictor.into(),
             level: s.level,
         },
         linear_transitions: s.linear_transitions,

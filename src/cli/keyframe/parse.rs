@@ -3,6 +3,7 @@
 //! the command line's words.
 
 use super::args::{Args, CostArg, MethodArg, SolverArg, TransitionsArg};
+use crate::cli::mirror::mirror;
 use surfmotion::jobs::keyframe::{GridTargets, KeyframeJobError, KeyframeJobOptions};
 use surfmotion::keyframe::grid::parse_range;
 use surfmotion::keyframe::options::{Method, Solver};
@@ -53,25 +54,6 @@ pub fn numbers(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
         .collect()
 }
 
-/// The clap mirror of a library enum, both ways.
-macro_rules! mirror {
-    ($arg:ident, $lib:ty, $($v:ident),+) => {
-        impl From<$lib> for $arg {
-            fn from(v: $lib) -> Self {
-                match v {
-                    $(<$lib>::$v => $arg::$v,)+
-                }
-            }
-        }
-        impl From<$arg> for $lib {
-            fn from(v: $arg) -> Self {
-                match v {
-                    $($arg::$v => <$lib>::$v,)+
-                }
-            }
-        }
-    };
-}
 mirror!(SolverArg, Solver, Exact, Ilp);
 mirror!(MethodArg, Method, Lattice, Walks);
 mirror!(CostArg, TransitionCost, Graph, Smoothness);
