@@ -123,10 +123,7 @@ fn print_summary(
     files: &[PathBuf],
     text: String,
 ) -> anyhow::Result<()> {
-    match json {
-        true => super::emit_json(s)?,
-        false => super::emit(&text)?,
-    }
+    super::report(json, s, || text)?;
     Ok(none_failed(s, files)?)
 }
 

@@ -119,9 +119,14 @@ fn bar(a: &Args, n: usize, what: &str) -> indicatif::ProgressBar {
     }
 }
 
-/// The JSON summary of a grid report ([`text::summary_json`]).
-fn emit_json<T: serde::Serialize>(r: &T) -> anyhow::Result<()> {
-    super::emit_json(&text::summary_json(r)?)
+/// A grid report as its JSON summary ([`text::summary_json`]) with
+/// `--json`, else `text()`.
+fn report<T: serde::Serialize>(
+    a: &Args,
+    r: &T,
+    text: impl FnOnce() -> String,
+) -> anyhow::Result<()> {
+    super::report_with(a.json, || Ok(text::summary_json(r)?), text)
 }
 
 /// `--grid` (Table III), or with `--least-mean` the least mean smoothness
@@ -156,10 +161,7 @@ fn grid(
         if let Some(p) = &a.report {
             super::write_json(p, &r.report)?;
         }
-        if a.json {
-            return emit_json(&r.report);
-        }
-        return super::emit(&text::least_mean_summary(&r));
+        return report(a, &r.report, || text::least_mean_summary(&r));
     }
     let planner = job::grid_planner(ch, &keys.ids, opts).map_err(flagged)?;
     let bar = bar(a, n, "grid queries");
@@ -175,10 +177,7 @@ fn grid(
     if let Some(p) = &a.plot {
         surfmotion::keyframe::heatmap::save(&g, p)?;
     }
-    if a.json {
-        return emit_json(&g);
-    }
-    super::emit(&text::grid_summary(&g))
+    report(a, &g, || text::grid_summary(&g))
 }
 
 /// `--floor`: the transition floor of the database and the path floor
@@ -216,8 +215,5 @@ fn floor(
     if let Some((_, b)) = shown {
         b.finish_and_clear();
     }
-    if a.json {
-        return super::emit_json(&serde_json::to_value(&r)?);
-    }
-    super::emit(&(head + &text::floor_summary(&r)))
+    super::report_sorted(a.json, &r, || head + &text::floor_summary(&r))
 }

@@ -43,8 +43,8 @@ pub use argv::Usage;
 pub use log::warnings_in_summary;
 pub use opts::{ClipOpts, RunOpts, load_mesh_groups};
 pub use out::{
-    Bars, OutputClosed, count, emit, emit_json, one_line, progress, spinner,
-    without_os_error_numbers, write_json,
+    Bars, OutputClosed, count, emit, emit_json, one_line, progress, report, report_sorted,
+    report_with, spinner, without_os_error_numbers, write_json,
 };
 pub use parse::{
     bounded_count, confidence, finite, fraction, frame_rate, length_unit, mesh_spec, non_negative,

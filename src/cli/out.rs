@@ -19,6 +19,38 @@ pub fn emit_json<T: serde::Serialize + ?Sized>(v: &T) -> anyhow::Result<()> {
     emit(&(serde_json::to_string_pretty(v)? + "\n"))
 }
 
+/// A report on stdout: `value()` as pretty JSON with `--json` (`json`),
+/// else `text()` ([`emit`]); only the one asked for is computed.
+pub fn report_with<J: serde::Serialize>(
+    json: bool,
+    value: impl FnOnce() -> anyhow::Result<J>,
+    text: impl FnOnce() -> String,
+) -> anyhow::Result<()> {
+    match json {
+        true => emit_json(&value()?),
+        false => emit(&text()),
+    }
+}
+
+/// [`report_with`] of `r` as serde writes it (fields in declaration order).
+pub fn report<T: serde::Serialize + ?Sized>(
+    json: bool,
+    r: &T,
+    text: impl FnOnce() -> String,
+) -> anyhow::Result<()> {
+    report_with(json, || Ok(r), text)
+}
+
+/// [`report_with`] of `r` through a `serde_json::Value`: its keys printed
+/// sorted.
+pub fn report_sorted<T: serde::Serialize + ?Sized>(
+    json: bool,
+    r: &T,
+    text: impl FnOnce() -> String,
+) -> anyhow::Result<()> {
+    report_with(json, || Ok(serde_json::to_value(r)?), text)
+}
+
 /// A report written to `path` as pretty JSON, atomically (`--report`).
 pub fn write_json<T: serde::Serialize + ?Sized>(
     path: &std::path::Path,

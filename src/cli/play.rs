@@ -99,11 +99,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(p) = &a.report {
         super::write_json(p, report)?;
     }
-    if a.json {
-        return super::emit_json(&serde_json::to_value(&run)?);
-    }
-    super::emit(&surfmotion::jobs::text::play(&run, &a.output))?;
-    for n in &report.notices {
+    super::report_sorted(a.json, &run, || {
+        surfmotion::jobs::text::play(&run, &a.output)
+    })?;
+    for n in report.notices.iter().filter(|_| !a.json) {
         crate::errln!("note: request {} (t = {} s): {}", n.request, n.t, n.message);
     }
     Ok(())

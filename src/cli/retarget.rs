@@ -145,8 +145,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         v["stages"] = job.stages_json(&c);
         super::write_json(p, &v)?;
     }
-    if a.run.json {
-        return super::emit_json(&serde_json::to_value(c.summary())?);
-    }
-    super::emit(&surfmotion::jobs::text::retarget(&a.mocap, &c))
+    super::report_with(
+        a.run.json,
+        || Ok(serde_json::to_value(c.summary())?),
+        || surfmotion::jobs::text::retarget(&a.mocap, &c),
+    )
 }

@@ -91,11 +91,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     )?;
     bar.finish_and_clear();
     let r = &run.report;
-    if a.run.json {
-        super::emit_json(&serde_json::to_value(r)?)?;
-    } else {
-        super::emit(&run.text(dir))?;
-    }
+    super::report_sorted(a.run.json, r, || run.text(dir))?;
     // The contact sheets of all sequences, one above the other; plausibility.
     if let (Some(p), Some(img)) = (&a.run.preview.preview, &run.sheet) {
         img.save_png(p)?;

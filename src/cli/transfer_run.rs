@@ -161,9 +161,10 @@ fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::
     if let Some(p) = &a.report {
         super::write_json(p, &serde_json::to_value(report)?)?;
     }
-    if a.run.json {
-        return super::emit_json(&report.summary_json()?);
-    }
     let truth = a.truth.as_deref();
-    super::emit(&report.summary_text(&a.scan, truth, a.write_landmarks.as_deref()))
+    super::report_with(
+        a.run.json,
+        || Ok(report.summary_json()?),
+        || report.summary_text(&a.scan, truth, a.write_landmarks.as_deref()),
+    )
 }

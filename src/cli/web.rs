@@ -141,11 +141,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             let r = export(&a.source, &a.out);
             bar.finish_and_clear();
             let r = r?;
-            if a.json {
-                super::emit_json(&r)
-            } else {
-                super::emit(&surfmotion::jobs::text::web_export(&r))
-            }
+            super::report(a.json, &r, || surfmotion::jobs::text::web_export(&r))
         }
         Cmd::Serve(a) => {
             // The address is tried before the export (seconds to minutes):
