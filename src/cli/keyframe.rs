@@ -6,7 +6,7 @@ mod args;
 mod parse;
 
 pub use args::Args;
-use parse::{flagged, grid_targets, numbers};
+use parse::{flagged, grid_targets};
 use surfmotion::db::Character;
 use surfmotion::jobs::keyframe::summary;
 use surfmotion::jobs::keyframe::text::{self, GRID_HEADER, LEAST_MEAN_HEADER};
@@ -76,7 +76,11 @@ fn path(
         anyhow::bail!("--distance, --time and -o are needed (or --grid, --floor)");
     };
     let segments = keys.ids.len() - 1;
-    let targets = Targets::from_lists(&numbers("distance", d)?, &numbers("time", t)?, segments)?;
+    let targets = Targets::from_lists(
+        &super::targets("distance", d)?,
+        &super::targets("time", t)?,
+        segments,
+    )?;
     // 10-20 s on the README's synth3 (preparing, searching, blending the
     // meshes) with nothing on the screen before.
     let bar = if a.json {

@@ -47,8 +47,9 @@ pub use out::{
     report_with, spinner, without_os_error_numbers, write_json,
 };
 pub use parse::{
-    bounded_count, confidence, finite, fraction, frame_rate, length_unit, mesh_spec, non_negative,
-    png_path, positive, weight,
+    bounded_count, confidence, dynamics_amount, fraction, frame_rate, heading, horizon,
+    length_unit, max_error_mm, mesh_spec, non_negative, png_path, positive, session_seconds,
+    t_skel, targets, weight,
 };
 
 pub use app::main;

@@ -52,7 +52,7 @@ pub struct JobOpts {
     /// Skeleton dissimilarity threshold T_skel (metres, summed over 19
     /// joints), at most 1000. Default: chosen from the query's
     /// nearest-frame costs.
-    #[arg(long, value_parser = t_skel)]
+    #[arg(long, value_parser = super::t_skel)]
     pub t_skel: Option<f64>,
     /// Weight of matching the skeleton against avoiding transitions, at
     /// most 1e6.
@@ -70,18 +70,6 @@ pub struct JobOpts {
     /// rigid skeleton, or part centroids.
     #[arg(long, value_enum, default_value_t = CharacterOptions::default().skeleton.into())]
     pub skeleton: super::values::SkeletonKindArg,
-}
-
-/// `--t-skel`: metres summed over 19 joints, finite, ≥ 0 and at most 1000
-/// (every frame is admitted long before; `--t-skel 1e308` printed a
-/// 309-digit threshold).
-fn t_skel(s: &str) -> Result<f64, String> {
-    let v = super::non_negative(s)?;
-    if v <= 1e3 {
-        Ok(v)
-    } else {
-        Err(format!("{s}: expected metres in [0, 1000]"))
-    }
 }
 
 impl JobOpts {

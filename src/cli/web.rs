@@ -4,18 +4,6 @@
 use std::path::PathBuf;
 use surfmotion::web::{self, EncodeOptions, ExportOptions, Predictor};
 
-/// `--max-error`: millimetres in (0, 100]. (It took any number: NaN,
-/// negative, or 1e308, whose quantisation step overflowed and was reported
-/// as a "max vertex error 0.000 mm", exit 0.)
-fn max_error_mm(s: &str) -> Result<f64, String> {
-    let v = super::positive(s)?;
-    if v <= 100.0 {
-        Ok(v)
-    } else {
-        Err(format!("{s}: expected millimetres in (0, 100]"))
-    }
-}
-
 /// Subcommands of `web`.
 #[derive(clap::Subcommand)]
 pub enum Cmd {
@@ -46,7 +34,7 @@ pub struct Source {
     pub topology: Option<PathBuf>,
     /// Largest vertex error of the compressed geometry, in millimetres, at
     /// most 100 (guaranteed: checked after encoding).
-    #[arg(long, default_value_t = EncodeOptions::default().max_error * 1e3, value_name = "MM", value_parser = max_error_mm)]
+    #[arg(long, default_value_t = EncodeOptions::default().max_error * 1e3, value_name = "MM", value_parser = super::max_error_mm)]
     pub max_error: f64,
     /// Prediction of the geometry codec (measured: spatio-temporal is smaller).
     #[arg(long, value_enum, default_value_t = EncodeOptions::default().predictor.into())]

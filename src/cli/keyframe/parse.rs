@@ -7,7 +7,7 @@ use crate::cli::mirror::mirror;
 use surfmotion::jobs::keyframe::{GridTargets, KeyframeJobError, KeyframeJobOptions};
 use surfmotion::keyframe::grid::parse_range;
 use surfmotion::keyframe::options::{Method, Solver};
-use surfmotion::keyframe::{MAX_TARGET_METRES, MAX_TARGET_SECONDS, TransitionCost, TransitionSet};
+use surfmotion::keyframe::{TransitionCost, TransitionSet};
 
 /// The job's defaults.
 const D: KeyframeJobOptions = KeyframeJobOptions::DEFAULT;
@@ -28,30 +28,6 @@ pub fn grid_targets(a: &Args) -> anyhow::Result<GridTargets> {
     let ds = parse_range(&a.distances).map_err(|e| anyhow::anyhow!("--distances {e}"))?;
     let ts = parse_range(&a.times).map_err(|e| anyhow::anyhow!("--times {e}"))?;
     GridTargets::new(ds, ts).map_err(flagged)
-}
-
-/// `--distance`/`--time`: a number or a comma list. A value above the
-/// search's bound is refused here, quoted as typed (`--distance 1e308` was
-/// printed back as 309 digits).
-pub fn numbers(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
-    let (max, unit) = if what == "distance" {
-        (MAX_TARGET_METRES, "m")
-    } else {
-        (MAX_TARGET_SECONDS, "s")
-    };
-    s.split(',')
-        .map(|x| {
-            let v = x.trim().parse::<f64>().map_err(|_| {
-                anyhow::anyhow!("--{what} '{s}': expected a number or a comma list")
-            })?;
-            anyhow::ensure!(
-                v.is_nan() || v <= max,
-                "--{what} {}: at most {max} {unit} (the search's horizon grows with the target)",
-                x.trim()
-            );
-            Ok(v)
-        })
-        .collect()
 }
 
 mirror!(SolverArg, Solver, Exact, Ilp);
