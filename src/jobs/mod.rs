@@ -14,7 +14,8 @@
 //!    clips: skinning plus secondary dynamics).
 //! 4. [`retarget`]: retarget a clip through a database (Sec. 5.2).
 //! 5. [`transfer`]: transfer clips onto a scan, prepared and factored once
-//!    (de Aguiar et al. 2007).
+//!    (de Aguiar et al. 2007); [`transfer_files`]: one transfer written
+//!    to files (the `transfer` verb).
 //! 6. [`batch`]: convert a folder of clips with any [`Converter`]
 //!    (implemented by the retarget and transfer jobs).
 //!
@@ -63,6 +64,7 @@ pub mod synth;
 pub mod synth_db;
 pub mod text;
 pub mod transfer;
+pub mod transfer_files;
 mod transfer_summary;
 
 pub use crate::batch::Converter;
