@@ -17,7 +17,8 @@
 //!    (de Aguiar et al. 2007); [`transfer_files`]: one transfer written
 //!    to files (the `transfer` verb).
 //! 6. [`batch`]: convert a folder of clips with any [`Converter`]
-//!    (implemented by the retarget and transfer jobs).
+//!    (implemented by the retarget and transfer jobs; [`batch_target`]
+//!    loads or factors one).
 //!
 //! [`eval`] scores a result against its clip and database (the `eval`
 //! verb). [`text`] and [`short_text`] are the jobs' reports as text.
@@ -32,6 +33,7 @@
 //! CLI always has.
 
 pub mod batch;
+pub mod batch_target;
 pub mod batch_verdict;
 pub mod blend;
 pub mod database;
