@@ -2,6 +2,7 @@
 //! or serve it locally.
 
 use std::path::PathBuf;
+use surfmotion::jobs::web::{WebSource, check_listen, exported_site, temp_export};
 use surfmotion::web::{self, EncodeOptions, ExportOptions, Predictor};
 
 /// Subcommands of `web`.
@@ -112,13 +113,21 @@ pub(super) fn options(s: &Source) -> anyhow::Result<ExportOptions> {
     })
 }
 
-fn export(s: &Source, out: &std::path::Path) -> anyhow::Result<web::ExportReport> {
-    let opts = options(s)?;
+/// What `--db` or `--result` asked to export.
+fn source(s: &Source) -> anyhow::Result<WebSource> {
     Ok(match (&s.db, &s.result) {
-        (Some(db), _) => web::export_db(db, out, &opts)?,
-        (None, Some(r)) => web::export_result(r, s.topology.as_deref(), out, &opts)?,
+        (Some(db), _) => WebSource::Database(db.clone()),
+        (None, Some(r)) => WebSource::Result {
+            path: r.clone(),
+            topology: s.topology.clone(),
+        },
         (None, None) => return Err(super::Usage.into()),
     })
+}
+
+fn export(s: &Source, out: &std::path::Path) -> anyhow::Result<web::ExportReport> {
+    let opts = options(s)?;
+    Ok(source(s)?.export(out, &opts)?)
 }
 
 /// Runs `web`.
@@ -136,17 +145,10 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             // one this machine does not have, or a port in use, failed
             // only after it.
             let addr = format!("{}:{}", a.bind, a.port);
-            drop(
-                std::net::TcpListener::bind(addr.as_str())
-                    .map_err(|e| anyhow::anyhow!("cannot listen on {addr}: {e}"))?,
-            );
+            check_listen(&addr)?;
             let mut _tmp = None;
             let root = match &a.site {
-                Some(s) if !s.join("index.html").is_file() => anyhow::bail!(
-                    "{}: not an exported site (no index.html); make one with `surfmotion web export`",
-                    s.display()
-                ),
-                Some(s) => s.clone(),
+                Some(s) => exported_site(s)?,
                 None => {
                     let tmp = std::env::temp_dir();
                     for d in web::remove_stale_exports(&tmp) {
@@ -155,8 +157,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                             d.display()
                         );
                     }
-                    let t = web::export_folder(&tmp)
-                        .map_err(|e| anyhow::anyhow!("{}: {e}", tmp.display()))?;
+                    let t = temp_export(&tmp)?;
                     let site = t.path().join("site");
                     let bar = super::spinner("exporting the site");
                     let r = export(&a.source, &site);

@@ -20,6 +20,9 @@
 //!    (implemented by the retarget and transfer jobs; [`batch_target`]
 //!    loads or factors one).
 //!
+//! [`web`] exports a database or a result as a static site and prepares
+//! serving one.
+//!
 //! [`eval`] scores a result against its clip and database (the `eval`
 //! verb). [`text`] and [`short_text`] are the jobs' reports as text.
 //!
@@ -68,6 +71,7 @@ pub mod text;
 pub mod transfer;
 pub mod transfer_files;
 mod transfer_summary;
+pub mod web;
 
 pub use crate::batch::Converter;
 pub use batch::{BatchEvent, BatchOptions, BatchReport, batch_folder};
