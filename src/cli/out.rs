@@ -165,16 +165,3 @@ impl surfmotion::db::BuildProgress for Bars {
         }
     }
 }
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn count_says_one_frame_and_two_vertices() {
-        assert_eq!(super::count(1, "frame"), "1 frame");
-        assert_eq!(super::count(0, "transition"), "0 transitions");
-        assert_eq!(super::count(3, "vertex"), "3 vertices");
-        assert_eq!(super::count(2, "match"), "2 matches");
-        assert_eq!(super::count(9, "query"), "9 queries");
-        assert_eq!(super::count(2, "key"), "2 keys");
-    }
-}

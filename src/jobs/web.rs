@@ -94,3 +94,30 @@ pub fn temp_export(parent: &Path) -> Result<tempfile::TempDir, ServeError> {
         error,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    /// A folder without `index.html` is refused as a site, with what to do.
+    #[test]
+    fn a_folder_without_index_html_is_not_a_site() {
+        let d = tempfile::tempdir().unwrap();
+        let e = super::exported_site(d.path()).unwrap_err().to_string();
+        assert!(
+            e.ends_with(
+                "not an exported site (no index.html); make one with `surfmotion web export`"
+            ),
+            "{e}"
+        );
+        std::fs::write(d.path().join("index.html"), "").unwrap();
+        assert_eq!(super::exported_site(d.path()).unwrap(), d.path());
+    }
+
+    /// A port in use is refused, naming the address.
+    #[test]
+    fn an_address_in_use_is_refused() {
+        let held = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = held.local_addr().unwrap().to_string();
+        let e = super::check_listen(&addr).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("cannot listen on {addr}: ")), "{e}");
+    }
+}
