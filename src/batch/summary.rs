@@ -432,3 +432,18 @@ pub fn write_json(dir: &Path, s: &BatchSummary) -> Result<PathBuf, FsError> {
     write_bytes_atomic(&json, text.as_bytes())?;
     Ok(json)
 }
+
+#[cfg(test)]
+mod tests {
+    /// Plurals of the nouns the reports count (moved from the CLI, which
+    /// forwards to this function).
+    #[test]
+    fn count_says_one_frame_and_two_vertices() {
+        assert_eq!(super::count(1, "frame"), "1 frame");
+        assert_eq!(super::count(0, "transition"), "0 transitions");
+        assert_eq!(super::count(3, "vertex"), "3 vertices");
+        assert_eq!(super::count(2, "match"), "2 matches");
+        assert_eq!(super::count(9, "query"), "9 queries");
+        assert_eq!(super::count(2, "key"), "2 keys");
+    }
+}

@@ -6,12 +6,11 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use surfmotion::batch::schedule::ShardSource;
 use surfmotion::batch::{BatchSummary, ClipStatus, Converter, Format};
-use surfmotion::embed::landmarks::Landmarks;
 use surfmotion::jobs::batch::{ClipRate, check_folders, outcome_line, report_text, target_inputs};
+use surfmotion::jobs::batch_target::BatchTarget;
 use surfmotion::jobs::batch_verdict::none_failed;
 use surfmotion::jobs::{
-    BatchEvent, BatchOptions, RetargetJob, RetargetJobOptions, ScanTransferJob,
-    ScanTransferOptions, batch_folder,
+    BatchEvent, BatchOptions, RetargetJobOptions, ScanTransferOptions, batch_folder,
 };
 /// Arguments of `batch`.
 #[derive(clap::Args)]
@@ -123,10 +122,7 @@ fn print_summary(
     files: &[PathBuf],
     text: String,
 ) -> anyhow::Result<()> {
-    match json {
-        true => super::emit_json(s)?,
-        false => super::emit(&text)?,
-    }
+    super::report(json, s, || text)?;
     Ok(none_failed(s, files)?)
 }
 
@@ -216,35 +212,37 @@ fn check_args(a: &Args, mocap_dir: &Path, output: &Path) -> anyhow::Result<()> {
 }
 
 /// The retarget job (with --db) or the scan transfer job (with --scan and
-/// --landmarks), loaded or factored once for every clip.
+/// --landmarks), loaded or factored once for every clip ([`BatchTarget`]).
 fn converter(a: &Args) -> anyhow::Result<Box<dyn Converter>> {
     let load = a.clip.load_options()?;
-    Ok(match (&a.db, &a.scan, &a.landmarks) {
-        (Some(db), _, _) => Box::new(RetargetJob::load(
-            db,
-            RetargetJobOptions {
+    let target = match (&a.db, &a.scan, &a.landmarks) {
+        (Some(db), _, _) => BatchTarget::Database {
+            db: db.clone(),
+            options: RetargetJobOptions {
                 retarget: a.retarget_job.options(),
                 character: a.retarget_job.character(),
                 load,
                 glb: a.glb.options(),
                 usd: a.glb.usd_options(),
             },
-            &super::Bars::new(),
-        )?),
+        },
         (None, Some(scan), Some(lm)) => {
             let scan_job = a.scan_job.job()?;
-            let mesh = super::load_mesh_groups(scan, &scan_job.groups)?;
-            let landmarks = Landmarks::load(lm, mesh.vertex_count())?;
-            let opts = ScanTransferOptions {
-                markers: scan_job.markers,
-                fps: scan_job.fps,
-                load,
-                glb: a.glb.options(),
-                usd: a.glb.usd_options(),
-                ..Default::default()
-            };
-            Box::new(ScanTransferJob::prepare(&mesh, &landmarks, scan, opts)?)
+            BatchTarget::Scan {
+                scan: scan.clone(),
+                groups: scan_job.groups,
+                landmarks: lm.clone(),
+                options: ScanTransferOptions {
+                    markers: scan_job.markers,
+                    fps: scan_job.fps,
+                    load,
+                    glb: a.glb.options(),
+                    usd: a.glb.usd_options(),
+                    ..Default::default()
+                },
+            }
         }
         _ => anyhow::bail!("give --db, or --scan with --landmarks"),
-    })
+    };
+    Ok(target.converter(&super::Bars::new())?)
 }

@@ -41,8 +41,5 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         linear: a.linear,
         topology: a.topology,
     })?;
-    if a.json {
-        return super::emit_json(&serde_json::to_value(&r)?);
-    }
-    super::emit(&surfmotion::jobs::short_text::blend(&r))
+    super::report_sorted(a.json, &r, || surfmotion::jobs::short_text::blend(&r))
 }

@@ -15,8 +15,5 @@ pub struct Args {
 /// Runs the demo ([`surfmotion::jobs::demo::run_demo`]).
 pub fn run(a: Args) -> anyhow::Result<()> {
     let r = surfmotion::jobs::demo::run_demo(&a.output, &super::Bars::new())?;
-    if a.json {
-        return super::emit_json(&serde_json::to_value(&r)?);
-    }
-    super::emit(&surfmotion::jobs::text::demo(&r))
+    super::report_sorted(a.json, &r, || surfmotion::jobs::text::demo(&r))
 }

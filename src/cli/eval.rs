@@ -47,8 +47,5 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     };
     let mocap = a.mocap.as_deref().zip(load.as_ref());
     let r = surfmotion::jobs::eval::evaluate(&ch, mocap, &a.result, a.surface)?;
-    if a.json {
-        return super::emit_json(&r.to_json()?);
-    }
-    super::emit(&r.text())
+    super::report_with(a.json, || Ok(r.to_json()?), || r.text())
 }

@@ -6,7 +6,7 @@ mod args;
 mod parse;
 
 pub use args::Args;
-use parse::{flagged, grid_targets, numbers};
+use parse::{flagged, grid_targets};
 use surfmotion::db::Character;
 use surfmotion::jobs::keyframe::summary;
 use surfmotion::jobs::keyframe::text::{self, GRID_HEADER, LEAST_MEAN_HEADER};
@@ -76,7 +76,11 @@ fn path(
         anyhow::bail!("--distance, --time and -o are needed (or --grid, --floor)");
     };
     let segments = keys.ids.len() - 1;
-    let targets = Targets::from_lists(&numbers("distance", d)?, &numbers("time", t)?, segments)?;
+    let targets = Targets::from_lists(
+        &super::targets("distance", d)?,
+        &super::targets("time", t)?,
+        segments,
+    )?;
     // 10-20 s on the README's synth3 (preparing, searching, blending the
     // meshes) with nothing on the screen before.
     let bar = if a.json {
@@ -119,9 +123,14 @@ fn bar(a: &Args, n: usize, what: &str) -> indicatif::ProgressBar {
     }
 }
 
-/// The JSON summary of a grid report ([`text::summary_json`]).
-fn emit_json<T: serde::Serialize>(r: &T) -> anyhow::Result<()> {
-    super::emit_json(&text::summary_json(r)?)
+/// A grid report as its JSON summary ([`text::summary_json`]) with
+/// `--json`, else `text()`.
+fn report<T: serde::Serialize>(
+    a: &Args,
+    r: &T,
+    text: impl FnOnce() -> String,
+) -> anyhow::Result<()> {
+    super::report_with(a.json, || Ok(text::summary_json(r)?), text)
 }
 
 /// `--grid` (Table III), or with `--least-mean` the least mean smoothness
@@ -156,10 +165,7 @@ fn grid(
         if let Some(p) = &a.report {
             super::write_json(p, &r.report)?;
         }
-        if a.json {
-            return emit_json(&r.report);
-        }
-        return super::emit(&text::least_mean_summary(&r));
+        return report(a, &r.report, || text::least_mean_summary(&r));
     }
     let planner = job::grid_planner(ch, &keys.ids, opts).map_err(flagged)?;
     let bar = bar(a, n, "grid queries");
@@ -175,10 +181,7 @@ fn grid(
     if let Some(p) = &a.plot {
         surfmotion::keyframe::heatmap::save(&g, p)?;
     }
-    if a.json {
-        return emit_json(&g);
-    }
-    super::emit(&text::grid_summary(&g))
+    report(a, &g, || text::grid_summary(&g))
 }
 
 /// `--floor`: the transition floor of the database and the path floor
@@ -216,8 +219,5 @@ fn floor(
     if let Some((_, b)) = shown {
         b.finish_and_clear();
     }
-    if a.json {
-        return super::emit_json(&serde_json::to_value(&r)?);
-    }
-    super::emit(&(head + &text::floor_summary(&r)))
+    super::report_sorted(a.json, &r, || head + &text::floor_summary(&r))
 }

@@ -170,14 +170,7 @@ fn positions(a: PositionsArgs) -> anyhow::Result<()> {
     if a.json {
         return crate::outln!("{}", serde_json::to_string(&serde_json::to_value(&p)?)?);
     }
-    crate::outln!("units: {} ({}), {}-up", p.units, p.units_reason, p.up)?;
-    for (f, pts) in &p.frames {
-        crate::outln!("frame {f}")?;
-        for (n, v) in p.joints.iter().zip(pts) {
-            crate::outln!("  {n:<24} {:>12.6} {:>12.6} {:>12.6}", v[0], v[1], v[2])?;
-        }
-    }
-    Ok(())
+    super::emit(&p.text())
 }
 
 /// Runs `mocap rigmap`.

@@ -21,6 +21,7 @@ mod live_send;
 mod log;
 mod malloc;
 mod mesh;
+mod mirror;
 mod mocap;
 mod opts;
 mod out;
@@ -42,12 +43,14 @@ pub use argv::Usage;
 pub use log::warnings_in_summary;
 pub use opts::{ClipOpts, RunOpts, load_mesh_groups};
 pub use out::{
-    Bars, OutputClosed, count, emit, emit_json, one_line, progress, spinner,
-    without_os_error_numbers, write_json,
+    Bars, OutputClosed, count, emit, emit_json, one_line, progress, report, report_sorted,
+    report_with, spinner, write_json,
 };
 pub use parse::{
-    bounded_count, confidence, finite, fraction, frame_rate, length_unit, mesh_spec, non_negative,
-    png_path, positive, weight,
+    bounded_count, confidence, dynamics_amount, fraction, frame_rate, heading, horizon,
+    length_unit, max_error_mm, mesh_spec, non_negative, png_path, positive, session_seconds,
+    t_skel, targets, weight,
 };
+pub use surfmotion::util::errtext::without_os_error_numbers;
 
 pub use app::main;

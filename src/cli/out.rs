@@ -1,6 +1,8 @@
 //! What the CLI prints: stdout through [`emit`] (a closed pipe is not an
 //! error), errors on one line, counts, progress bars, written files.
 
+use surfmotion::util::errtext;
+
 /// Writes to stdout; a closed pipe becomes [`OutputClosed`] instead of a panic.
 pub fn emit(text: &str) -> anyhow::Result<()> {
     use std::io::Write;
@@ -17,6 +19,38 @@ pub fn emit(text: &str) -> anyhow::Result<()> {
 /// keys are printed sorted goes through `serde_json::to_value` first.
 pub fn emit_json<T: serde::Serialize + ?Sized>(v: &T) -> anyhow::Result<()> {
     emit(&(serde_json::to_string_pretty(v)? + "\n"))
+}
+
+/// A report on stdout: `value()` as pretty JSON with `--json` (`json`),
+/// else `text()` ([`emit`]); only the one asked for is computed.
+pub fn report_with<J: serde::Serialize>(
+    json: bool,
+    value: impl FnOnce() -> anyhow::Result<J>,
+    text: impl FnOnce() -> String,
+) -> anyhow::Result<()> {
+    match json {
+        true => emit_json(&value()?),
+        false => emit(&text()),
+    }
+}
+
+/// [`report_with`] of `r` as serde writes it (fields in declaration order).
+pub fn report<T: serde::Serialize + ?Sized>(
+    json: bool,
+    r: &T,
+    text: impl FnOnce() -> String,
+) -> anyhow::Result<()> {
+    report_with(json, || Ok(r), text)
+}
+
+/// [`report_with`] of `r` through a `serde_json::Value`: its keys printed
+/// sorted.
+pub fn report_sorted<T: serde::Serialize + ?Sized>(
+    json: bool,
+    r: &T,
+    text: impl FnOnce() -> String,
+) -> anyhow::Result<()> {
+    report_with(json, || Ok(serde_json::to_value(r)?), text)
 }
 
 /// A report written to `path` as pretty JSON, atomically (`--report`).
@@ -48,51 +82,10 @@ macro_rules! errln {
     }};
 }
 
-/// An error and its causes on one line. A cause already said is left
-/// out, and a cause that begins with what its context said continues it
-/// rather than repeating it (`eval --result FOLDER` printed "FOLDER:
-/// FOLDER: no .obj files in the folder").
+/// An error and its causes on one line ([`errtext::one_line`]), the
+/// library's option names printed as flags.
 pub fn one_line(e: &anyhow::Error) -> String {
-    let mut s = e.to_string();
-    for c in e.chain().skip(1) {
-        let c = c.to_string();
-        if s.contains(&c) {
-            continue;
-        }
-        // The longest tail of `s` (whole, or after a ": ") that `c` begins with.
-        let tails = std::iter::once(0).chain(s.match_indices(": ").map(|(i, _)| i + 2));
-        match tails.into_iter().find(|&i| c.starts_with(&s[i..])) {
-            Some(i) => {
-                s.truncate(i);
-                s.push_str(&c);
-            }
-            None => {
-                s.push_str(": ");
-                s.push_str(&c);
-            }
-        }
-    }
-    super::flags::as_flags(&without_os_error_numbers(&s.replace('\n', " ")))
-}
-
-/// `s` without the OS's " (os error N)" suffixes: "x.bvh: No such file or
-/// directory (os error 2)" says what is wrong without them.
-pub fn without_os_error_numbers(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    let mut rest = s;
-    while let Some(i) = rest.find(" (os error ") {
-        let tail = &rest[i + " (os error ".len()..];
-        let digits = tail.bytes().take_while(u8::is_ascii_digit).count();
-        if digits > 0 && tail[digits..].starts_with(')') {
-            out.push_str(&rest[..i]);
-            rest = &tail[digits + 1..];
-        } else {
-            out.push_str(&rest[..i + 1]);
-            rest = &rest[i + 1..];
-        }
-    }
-    out.push_str(rest);
-    out
+    super::flags::as_flags(&errtext::one_line(e.as_ref()))
 }
 
 /// Stdout was closed by the reader (e.g. `| head`): not an error.
@@ -170,58 +163,5 @@ impl surfmotion::db::BuildProgress for Bars {
         {
             b.finish_and_clear();
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn count_says_one_frame_and_two_vertices() {
-        assert_eq!(super::count(1, "frame"), "1 frame");
-        assert_eq!(super::count(0, "transition"), "0 transitions");
-        assert_eq!(super::count(3, "vertex"), "3 vertices");
-        assert_eq!(super::count(2, "match"), "2 matches");
-        assert_eq!(super::count(9, "query"), "9 queries");
-        assert_eq!(super::count(2, "key"), "2 keys");
-    }
-
-    /// The OS's error numbers are not printed.
-    #[test]
-    fn os_error_numbers_are_left_out() {
-        assert_eq!(
-            super::without_os_error_numbers(
-                "a.bvh: No such file or directory (os error 2); b: Permission denied (os error 13)"
-            ),
-            "a.bvh: No such file or directory; b: Permission denied"
-        );
-        assert_eq!(
-            super::without_os_error_numbers("x (os error y) (os error 7"),
-            "x (os error y) (os error 7"
-        );
-    }
-
-    /// Regression (session 6 review): `eval --result FOLDER` printed the
-    /// folder twice; a cause that begins with its context continues it.
-    #[test]
-    fn one_line_says_each_part_once() {
-        #[derive(Debug, thiserror::Error)]
-        #[error("{0}")]
-        struct E(String, #[source] Option<Box<E>>);
-        let e = |s: &str, c: Option<E>| E(s.into(), c.map(Box::new));
-        let chain = |x: E| super::one_line(&anyhow::Error::new(x));
-        let inner = || e("out: no .obj files in the folder", None);
-        assert_eq!(
-            chain(e("out", Some(inner()))),
-            "out: no .obj files in the folder"
-        );
-        assert_eq!(
-            chain(e("eval: out", Some(inner()))),
-            "eval: out: no .obj files in the folder"
-        );
-        assert_eq!(
-            chain(e("loading", Some(inner()))),
-            "loading: out: no .obj files in the folder"
-        );
-        assert_eq!(chain(e("a: b", Some(e("b", None)))), "a: b");
     }
 }

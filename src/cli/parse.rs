@@ -21,10 +21,7 @@ pub fn mesh_spec(s: &str) -> Result<String, String> {
 /// frames; issue 18, item 12.)
 pub fn frame_rate(s: &str) -> Result<f64, String> {
     use surfmotion::util::budget::{MAX_FPS, MIN_FPS, is_frame_rate};
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
+    let v = number(s)?;
     if is_frame_rate(v) {
         Ok(v)
     } else {
@@ -34,12 +31,23 @@ pub fn frame_rate(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `s` as a number (spaces around it allowed), or "'s' is not a number".
+fn number(s: &str) -> Result<f64, String> {
+    s.trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))
+}
+
+/// `v` when it is at most `max`, else the error `err()`: the upper bound
+/// of an option whose lower bound [`positive`], [`non_negative`] or
+/// [`finite`] checked.
+fn at_most(v: f64, max: f64, err: impl FnOnce() -> String) -> Result<f64, String> {
+    if v <= max { Ok(v) } else { Err(err()) }
+}
+
 /// A duration or size on the command line: a finite number > 0.
 pub fn positive(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
+    let v = number(s)?;
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
@@ -49,10 +57,7 @@ pub fn positive(s: &str) -> Result<f64, String> {
 
 /// A fraction on the command line: a finite number in [0, 1].
 pub fn fraction(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
+    let v = number(s)?;
     if v.is_finite() && (0.0..=1.0).contains(&v) {
         Ok(v)
     } else {
@@ -63,10 +68,7 @@ pub fn fraction(s: &str) -> Result<f64, String> {
 /// An angle or signed quantity on the command line: any finite number
 /// (NaN or infinity would make every cost NaN; issue 18, item 13).
 pub fn finite(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
+    let v = number(s)?;
     if v.is_finite() {
         Ok(v)
     } else {
@@ -77,10 +79,7 @@ pub fn finite(s: &str) -> Result<f64, String> {
 /// A weight or distance on the command line: a finite number ≥ 0 (NaN made
 /// the trellis panic; issue 18, item 13).
 pub fn non_negative(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}' is not a number"))?;
+    let v = number(s)?;
     if v.is_finite() && v >= 0.0 {
         Ok(v)
     } else {
@@ -92,12 +91,93 @@ pub fn non_negative(s: &str) -> Result<f64, String> {
 /// ≥ 0 and at most 1e6. Larger weights overflow the search's costs to
 /// infinity (`--w-time 1e308` reported "no path" for a reachable target).
 pub fn weight(s: &str) -> Result<f64, String> {
-    let v = non_negative(s)?;
-    if v <= 1e6 {
-        Ok(v)
+    at_most(non_negative(s)?, 1e6, || {
+        format!("{s}: a weight above 1e6 overflows the path costs")
+    })
+}
+
+/// `--max-error` of `web`: millimetres in (0, 100]. (It took any number:
+/// NaN, negative, or 1e308, whose quantisation step overflowed and was
+/// reported as a "max vertex error 0.000 mm", exit 0.)
+pub fn max_error_mm(s: &str) -> Result<f64, String> {
+    at_most(positive(s)?, 100.0, || {
+        format!("{s}: expected millimetres in (0, 100]")
+    })
+}
+
+/// `--dynamics` of `synth`: a scale in `[0, 2]`. Renders of the demo
+/// character's walk at 1 are smooth; at 3 a seam tears at the waist, at 10
+/// the torso and arms are jagged.
+pub fn dynamics_amount(s: &str) -> Result<f64, String> {
+    at_most(non_negative(s)?, 2.0, || {
+        format!("{s}: the dynamics scale is at most 2 (from about 3 the springs tear the surface)")
+    })
+}
+
+/// `--seconds` of `play`: a length in (0,
+/// [`MAX_SECONDS`](surfmotion::parametric::script::MAX_SECONDS)], as a
+/// script's times (`--seconds 1e12` was refused only by the memory
+/// budget, naming the script).
+pub fn session_seconds(s: &str) -> Result<f64, String> {
+    use surfmotion::parametric::script::MAX_SECONDS;
+    at_most(positive(s)?, MAX_SECONDS, || {
+        format!("{s}: expected seconds in (0, {MAX_SECONDS}]")
+    })
+}
+
+/// `--t-skel` of `retarget` and `batch`: metres summed over 19 joints,
+/// finite, ≥ 0 and at most 1000 (every frame is admitted long before;
+/// `--t-skel 1e308` printed a 309-digit threshold).
+pub fn t_skel(s: &str) -> Result<f64, String> {
+    at_most(non_negative(s)?, 1e3, || {
+        format!("{s}: expected metres in [0, 1000]")
+    })
+}
+
+/// `--horizon` of `keyframe`: seconds in [0,
+/// [`MAX_TARGET_SECONDS`](surfmotion::keyframe::MAX_TARGET_SECONDS)]
+/// (`--horizon 1e7` aborted on a 216 GB allocation).
+pub fn horizon(s: &str) -> Result<f64, String> {
+    use surfmotion::keyframe::MAX_TARGET_SECONDS;
+    at_most(non_negative(s)?, MAX_TARGET_SECONDS, || {
+        format!("{s}: at most {MAX_TARGET_SECONDS} seconds")
+    })
+}
+
+/// `--heading` of `keyframe`: degrees in [-360, 360] (`--heading 1e308`
+/// was taken and printed back as a 309-digit target).
+pub fn heading(s: &str) -> Result<f64, String> {
+    let v = finite(s)?;
+    at_most(v.abs(), 360.0, || {
+        format!("{s}: expected degrees in [-360, 360]")
+    })?;
+    Ok(v)
+}
+
+/// `--distance`/`--time` of `keyframe` (`what` names the option): a
+/// number or a comma list. A value above the
+/// search's bound is refused here, quoted as typed (`--distance 1e308` was
+/// printed back as 309 digits).
+pub fn targets(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
+    use surfmotion::keyframe::{MAX_TARGET_METRES, MAX_TARGET_SECONDS};
+    let (max, unit) = if what == "distance" {
+        (MAX_TARGET_METRES, "m")
     } else {
-        Err(format!("{s}: a weight above 1e6 overflows the path costs"))
-    }
+        (MAX_TARGET_SECONDS, "s")
+    };
+    s.split(',')
+        .map(|x| {
+            let v = x.trim().parse::<f64>().map_err(|_| {
+                anyhow::anyhow!("--{what} '{s}': expected a number or a comma list")
+            })?;
+            anyhow::ensure!(
+                v.is_nan() || v <= max,
+                "--{what} {}: at most {max} {unit} (the search's horizon grows with the target)",
+                x.trim()
+            );
+            Ok(v)
+        })
+        .collect()
 }
 
 /// A picture output on the command line: a name ending in `.png`, or an

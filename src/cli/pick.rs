@@ -16,8 +16,5 @@ pub fn serve(p: Pick, json: bool) -> anyhow::Result<()> {
     )?;
     p.run_until(stop);
     let r = finish(p)?;
-    if json {
-        return super::emit_json(&serde_json::to_value(&r)?);
-    }
-    super::emit(&surfmotion::jobs::short_text::pick(&r))
+    super::report_sorted(json, &r, || surfmotion::jobs::short_text::pick(&r))
 }

@@ -30,7 +30,7 @@ pub struct Args {
     pub force: bool,
     /// Length of the session in seconds, at most 3600 (default: the last
     /// request + 2 s).
-    #[arg(long, value_parser = session_seconds)]
+    #[arg(long, value_parser = super::session_seconds)]
     pub seconds: Option<f64>,
     /// Write the JSON report: parameters asked and achieved per second,
     /// transitions (request, start, end, latency, cost), notices, spaces.
@@ -39,19 +39,6 @@ pub struct Args {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
-}
-
-/// `--seconds`: a length in (0, [`MAX_SECONDS`]], as a script's times
-/// (`--seconds 1e12` was refused only by the memory budget, naming the
-/// script).
-fn session_seconds(s: &str) -> Result<f64, String> {
-    use surfmotion::parametric::script::MAX_SECONDS;
-    let v = super::positive(s)?;
-    if v <= MAX_SECONDS {
-        Ok(v)
-    } else {
-        Err(format!("{s}: expected seconds in (0, {MAX_SECONDS}]"))
-    }
 }
 
 /// Runs `play`.
@@ -99,11 +86,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(p) = &a.report {
         super::write_json(p, report)?;
     }
-    if a.json {
-        return super::emit_json(&serde_json::to_value(&run)?);
-    }
-    super::emit(&surfmotion::jobs::text::play(&run, &a.output))?;
-    for n in &report.notices {
+    super::report_sorted(a.json, &run, || {
+        surfmotion::jobs::text::play(&run, &a.output)
+    })?;
+    for n in report.notices.iter().filter(|_| !a.json) {
         crate::errln!("note: request {} (t = {} s): {}", n.request, n.t, n.message);
     }
     Ok(())

@@ -59,10 +59,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         up: a.up,
         size: a.size,
     })?;
-    if a.json {
-        return super::emit_json(&serde_json::to_value(&r)?);
-    }
-    super::emit(&surfmotion::jobs::short_text::render(&r))
+    super::report_sorted(a.json, &r, || surfmotion::jobs::short_text::render(&r))
 }
 
 /// Options of `--preview` (shared by retarget, synth and transfer).

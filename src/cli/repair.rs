@@ -37,8 +37,5 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             keep_largest: a.keep_largest,
         },
     })?;
-    if a.json {
-        return super::emit_json(&r.report);
-    }
-    super::emit(&r.text())
+    super::report(a.json, &r.report, || r.text())
 }

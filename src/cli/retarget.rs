@@ -52,7 +52,7 @@ pub struct JobOpts {
     /// Skeleton dissimilarity threshold T_skel (metres, summed over 19
     /// joints), at most 1000. Default: chosen from the query's
     /// nearest-frame costs.
-    #[arg(long, value_parser = t_skel)]
+    #[arg(long, value_parser = super::t_skel)]
     pub t_skel: Option<f64>,
     /// Weight of matching the skeleton against avoiding transitions, at
     /// most 1e6.
@@ -70,18 +70,6 @@ pub struct JobOpts {
     /// rigid skeleton, or part centroids.
     #[arg(long, value_enum, default_value_t = CharacterOptions::default().skeleton.into())]
     pub skeleton: super::values::SkeletonKindArg,
-}
-
-/// `--t-skel`: metres summed over 19 joints, finite, ≥ 0 and at most 1000
-/// (every frame is admitted long before; `--t-skel 1e308` printed a
-/// 309-digit threshold).
-fn t_skel(s: &str) -> Result<f64, String> {
-    let v = super::non_negative(s)?;
-    if v <= 1e3 {
-        Ok(v)
-    } else {
-        Err(format!("{s}: expected metres in [0, 1000]"))
-    }
 }
 
 impl JobOpts {
@@ -145,8 +133,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         v["stages"] = job.stages_json(&c);
         super::write_json(p, &v)?;
     }
-    if a.run.json {
-        return super::emit_json(&serde_json::to_value(c.summary())?);
-    }
-    super::emit(&surfmotion::jobs::text::retarget(&a.mocap, &c))
+    super::report_with(
+        a.run.json,
+        || Ok(serde_json::to_value(c.summary())?),
+        || surfmotion::jobs::text::retarget(&a.mocap, &c),
+    )
 }

@@ -116,10 +116,8 @@ fn embed(a: EmbedArgs) -> anyhow::Result<()> {
             write_landmarks: a.write_landmarks.clone(),
         },
     )?;
-    if a.json {
-        return super::emit_json(&serde_json::to_value(&r)?);
-    }
-    super::emit(&r.summary_text(a.write_landmarks.as_deref()))
+    let landmarks = a.write_landmarks.as_deref();
+    super::report_sorted(a.json, &r, || r.summary_text(landmarks))
 }
 
 /// `rig embed --pick`: the page on the mesh and its landmarks.

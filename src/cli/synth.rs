@@ -30,27 +30,13 @@ pub struct Args {
     /// Strength of the secondary dynamics: the scale of the softness map
     /// (0: pure skinning, 1: the default, at most 2; from about 3 the
     /// springs tear the surface at the waist).
-    #[arg(long, default_value_t = Dynamics::default().amount, value_parser = dynamics_amount)]
+    #[arg(long, default_value_t = Dynamics::default().amount, value_parser = super::dynamics_amount)]
     pub dynamics: f64,
     /// Overwrite an existing manifest in the output.
     #[arg(long)]
     pub force: bool,
     #[command(flatten)]
     pub run: super::RunOpts,
-}
-
-/// `--dynamics`: a scale in `[0, 2]`. Renders of the demo character's walk
-/// at 1 are smooth; at 3 a seam tears at the waist, at 10 the torso and
-/// arms are jagged.
-fn dynamics_amount(s: &str) -> Result<f64, String> {
-    let v = super::non_negative(s)?;
-    if v <= 2.0 {
-        Ok(v)
-    } else {
-        Err(format!(
-            "{s}: the dynamics scale is at most 2 (from about 3 the springs tear the surface)"
-        ))
-    }
 }
 
 /// The job's options from the arguments.
@@ -91,11 +77,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     )?;
     bar.finish_and_clear();
     let r = &run.report;
-    if a.run.json {
-        super::emit_json(&serde_json::to_value(r)?)?;
-    } else {
-        super::emit(&run.text(dir))?;
-    }
+    super::report_sorted(a.run.json, r, || run.text(dir))?;
     // The contact sheets of all sequences, one above the other; plausibility.
     if let (Some(p), Some(img)) = (&a.run.preview.preview, &run.sheet) {
         img.save_png(p)?;

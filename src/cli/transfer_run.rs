@@ -1,12 +1,10 @@
 //! `surfmotion transfer`: the arguments ([`super::transfer::Args`]) checked,
-//! the job ([`surfmotion::jobs::transfer`]) called, its report printed.
+//! the job ([`surfmotion::jobs::transfer_files`]) called, its report printed.
 
 use super::transfer::{Args, ScanJob};
 use surfmotion::jobs::output_set::OutputSet;
-use surfmotion::jobs::{
-    ScanTransferOptions, TransferOutcome, TransferSource, TransferSpec, transfer_onto_scan,
-    transfer_onto_scan_to,
-};
+use surfmotion::jobs::transfer_files::{TransferFiles, transfer_files};
+use surfmotion::jobs::{ScanTransferOptions, TransferSource, TransferSpec};
 use surfmotion::transfer::{SignMode, TransferOptions};
 
 /// Runs `transfer`.
@@ -16,33 +14,25 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let job_opts = a.job.job()?;
     let scan = super::load_mesh_groups(&a.scan, &job_opts.groups)?;
     let spec = spec(&a, &job_opts)?;
+    let files = TransferFiles {
+        output: a.output.clone(),
+        report: a.report.clone(),
+        preview: (a.run.preview.preview.clone()).map(|p| (p, a.run.preview.options())),
+    };
     // The number of frames is known once the source is read: the library
     // reports it with every frame solved.
     let bar = super::progress(0, "frames");
-    if a.truth.is_none() && a.run.preview.preview.is_none() {
-        // Nothing needs every frame at once: they go to the output as they
-        // are solved (issue 18, item 12).
-        let report = transfer_onto_scan_to(
-            &scan,
-            &spec,
-            &a.output,
-            a.glb.options(),
-            a.glb.usd_options(),
-            a.report.is_some(),
-            &|p| {
-                bar.set_length(p.total as u64);
-                bar.inc(1);
-            },
-        )?;
-        bar.finish_and_clear();
-        return print_report(&a, &report);
-    }
-    let outcome = transfer_onto_scan(&scan, &spec, &|p| {
+    let report = transfer_files(&scan, &spec, &files, &|p| {
         bar.set_length(p.total as u64);
         bar.inc(1);
     })?;
     bar.finish_and_clear();
-    print_outcome(&a, outcome)
+    let truth = a.truth.as_deref();
+    super::report_with(
+        a.run.json,
+        || Ok(report.summary_json()?),
+        || report.summary_text(&a.scan, truth, a.write_landmarks.as_deref()),
+    )
 }
 
 /// The job's spec from the arguments.
@@ -139,31 +129,4 @@ fn check_options_and_outputs(a: &Args) -> anyhow::Result<()> {
         a.output.display()
     );
     Ok(())
-}
-
-/// Writes the preview and the result of a transfer and prints its report.
-fn print_outcome(a: &Args, outcome: TransferOutcome) -> anyhow::Result<()> {
-    if let Some(path) = &a.run.preview.preview {
-        outcome.write_preview(path, &a.run.preview.options())?;
-    }
-    let report = outcome.write(
-        &a.output,
-        a.glb.options(),
-        a.glb.usd_options(),
-        a.report.is_some(),
-    )?;
-    print_report(a, &report)
-}
-
-/// Writes the JSON report if asked and prints the summary of a transfer
-/// ([`TransferReport::summary_text`](surfmotion::jobs::TransferReport::summary_text)).
-fn print_report(a: &Args, report: &surfmotion::jobs::TransferReport) -> anyhow::Result<()> {
-    if let Some(p) = &a.report {
-        super::write_json(p, &serde_json::to_value(report)?)?;
-    }
-    if a.run.json {
-        return super::emit_json(&report.summary_json()?);
-    }
-    let truth = a.truth.as_deref();
-    super::emit(&report.summary_text(&a.scan, truth, a.write_landmarks.as_deref()))
 }

@@ -10,6 +10,8 @@ use surfmotion::live::Overlap;
 use surfmotion::similarity::Measure;
 use surfmotion::synth::Gait;
 
+use super::mirror::mirror;
+
 /// A frame dissimilarity measure ([`Measure`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum MeasureArg {
@@ -25,17 +27,6 @@ pub enum MeasureArg {
     Colour,
 }
 
-impl From<MeasureArg> for Measure {
-    fn from(m: MeasureArg) -> Measure {
-        match m {
-            MeasureArg::Shape => Measure::Shape,
-            MeasureArg::Vertex => Measure::Vertex,
-            MeasureArg::Skeleton => Measure::Skeleton,
-            MeasureArg::Colour => Measure::Colour,
-        }
-    }
-}
-
 /// How joints are read off a frame ([`SkeletonKind`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum SkeletonKindArg {
@@ -46,26 +37,6 @@ pub enum SkeletonKindArg {
     Regressor,
     /// Plain centres of each joint's vertex set (Huang et al. 2015, Sec. 3).
     Centroid,
-}
-
-impl From<SkeletonKind> for SkeletonKindArg {
-    fn from(k: SkeletonKind) -> SkeletonKindArg {
-        match k {
-            SkeletonKind::Rigid => SkeletonKindArg::Rigid,
-            SkeletonKind::Regressor => SkeletonKindArg::Regressor,
-            SkeletonKind::Centroid => SkeletonKindArg::Centroid,
-        }
-    }
-}
-
-impl From<SkeletonKindArg> for SkeletonKind {
-    fn from(k: SkeletonKindArg) -> SkeletonKind {
-        match k {
-            SkeletonKindArg::Rigid => SkeletonKind::Rigid,
-            SkeletonKindArg::Regressor => SkeletonKind::Regressor,
-            SkeletonKindArg::Centroid => SkeletonKind::Centroid,
-        }
-    }
 }
 
 /// Which procedural motion ([`Gait`]).
@@ -79,16 +50,6 @@ pub enum GaitArg {
     Turn,
 }
 
-impl From<GaitArg> for Gait {
-    fn from(g: GaitArg) -> Gait {
-        match g {
-            GaitArg::Walk => Gait::Walk,
-            GaitArg::Run => Gait::Run,
-            GaitArg::Turn => Gait::Turn,
-        }
-    }
-}
-
 /// Output format of a batch ([`Format`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum FormatArg {
@@ -100,28 +61,6 @@ pub enum FormatArg {
     Obj,
     /// USD text layer (time-sampled points), one `.usda` per clip.
     Usda,
-}
-
-impl From<Format> for FormatArg {
-    fn from(f: Format) -> FormatArg {
-        match f {
-            Format::Glb => FormatArg::Glb,
-            Format::Pc2 => FormatArg::Pc2,
-            Format::Obj => FormatArg::Obj,
-            Format::Usda => FormatArg::Usda,
-        }
-    }
-}
-
-impl From<FormatArg> for Format {
-    fn from(f: FormatArg) -> Format {
-        match f {
-            FormatArg::Glb => Format::Glb,
-            FormatArg::Pc2 => Format::Pc2,
-            FormatArg::Obj => Format::Obj,
-            FormatArg::Usda => Format::Usda,
-        }
-    }
 }
 
 /// How retrieved frames are made to follow the query skeleton
@@ -138,28 +77,6 @@ pub enum DeformModeArg {
     None,
 }
 
-impl From<DeformMode> for DeformModeArg {
-    fn from(d: DeformMode) -> DeformModeArg {
-        match d {
-            DeformMode::Part => DeformModeArg::Part,
-            DeformMode::Global => DeformModeArg::Global,
-            DeformMode::Lbs => DeformModeArg::Lbs,
-            DeformMode::None => DeformModeArg::None,
-        }
-    }
-}
-
-impl From<DeformModeArg> for DeformMode {
-    fn from(d: DeformModeArg) -> DeformMode {
-        match d {
-            DeformModeArg::Part => DeformMode::Part,
-            DeformModeArg::Global => DeformMode::Global,
-            DeformModeArg::Lbs => DeformMode::Lbs,
-            DeformModeArg::None => DeformMode::None,
-        }
-    }
-}
-
 /// When `live` deforms two frames at once ([`Overlap`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum OverlapArg {
@@ -171,25 +88,12 @@ pub enum OverlapArg {
     Always,
 }
 
-impl From<Overlap> for OverlapArg {
-    fn from(o: Overlap) -> OverlapArg {
-        match o {
-            Overlap::Off => OverlapArg::Off,
-            Overlap::Queued => OverlapArg::Queued,
-            Overlap::Always => OverlapArg::Always,
-        }
-    }
-}
-
-impl From<OverlapArg> for Overlap {
-    fn from(o: OverlapArg) -> Overlap {
-        match o {
-            OverlapArg::Off => Overlap::Off,
-            OverlapArg::Queued => Overlap::Queued,
-            OverlapArg::Always => Overlap::Always,
-        }
-    }
-}
+mirror!(MeasureArg, Measure, Shape, Vertex, Skeleton, Colour);
+mirror!(SkeletonKindArg, SkeletonKind, Rigid, Regressor, Centroid);
+mirror!(GaitArg, Gait, Walk, Run, Turn);
+mirror!(FormatArg, Format, Glb, Pc2, Obj, Usda);
+mirror!(DeformModeArg, DeformMode, Part, Global, Lbs, None);
+mirror!(OverlapArg, Overlap, Off, Queued, Always);
 
 #[cfg(test)]
 mod tests {

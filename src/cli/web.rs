@@ -2,19 +2,8 @@
 //! or serve it locally.
 
 use std::path::PathBuf;
+use surfmotion::jobs::web::{WebSource, check_listen, exported_site, temp_export};
 use surfmotion::web::{self, EncodeOptions, ExportOptions, Predictor};
-
-/// `--max-error`: millimetres in (0, 100]. (It took any number: NaN,
-/// negative, or 1e308, whose quantisation step overflowed and was reported
-/// as a "max vertex error 0.000 mm", exit 0.)
-fn max_error_mm(s: &str) -> Result<f64, String> {
-    let v = super::positive(s)?;
-    if v <= 100.0 {
-        Ok(v)
-    } else {
-        Err(format!("{s}: expected millimetres in (0, 100]"))
-    }
-}
 
 /// Subcommands of `web`.
 #[derive(clap::Subcommand)]
@@ -46,7 +35,7 @@ pub struct Source {
     pub topology: Option<PathBuf>,
     /// Largest vertex error of the compressed geometry, in millimetres, at
     /// most 100 (guaranteed: checked after encoding).
-    #[arg(long, default_value_t = EncodeOptions::default().max_error * 1e3, value_name = "MM", value_parser = max_error_mm)]
+    #[arg(long, default_value_t = EncodeOptions::default().max_error * 1e3, value_name = "MM", value_parser = super::max_error_mm)]
     pub max_error: f64,
     /// Prediction of the geometry codec (measured: spatio-temporal is smaller).
     #[arg(long, value_enum, default_value_t = EncodeOptions::default().predictor.into())]
@@ -70,14 +59,7 @@ pub enum PredictorArg {
     SpatioTemporal,
 }
 
-impl From<Predictor> for PredictorArg {
-    fn from(p: Predictor) -> PredictorArg {
-        match p {
-            Predictor::Temporal => PredictorArg::Temporal,
-            Predictor::SpatioTemporal => PredictorArg::SpatioTemporal,
-        }
-    }
-}
+super::mirror::mirror!(PredictorArg, Predictor, Temporal, SpatioTemporal);
 
 /// Arguments of `web export`.
 #[derive(clap::Args)]
@@ -124,23 +106,28 @@ pub(super) fn options(s: &Source) -> anyhow::Result<ExportOptions> {
     Ok(ExportOptions {
         codec: EncodeOptions {
             max_error: s.max_error * 1e-3,
-            predictor: match s.predictor {
-                PredictorArg::Temporal => Predictor::Temporal,
-                PredictorArg::SpatioTemporal => Predictor::SpatioTemporal,
-            },
+            predictor: s.predictor.into(),
             level: s.level,
         },
         linear_transitions: s.linear_transitions,
     })
 }
 
-fn export(s: &Source, out: &std::path::Path) -> anyhow::Result<web::ExportReport> {
-    let opts = options(s)?;
+/// What `--db` or `--result` asked to export.
+fn source(s: &Source) -> anyhow::Result<WebSource> {
     Ok(match (&s.db, &s.result) {
-        (Some(db), _) => web::export_db(db, out, &opts)?,
-        (None, Some(r)) => web::export_result(r, s.topology.as_deref(), out, &opts)?,
+        (Some(db), _) => WebSource::Database(db.clone()),
+        (None, Some(r)) => WebSource::Result {
+            path: r.clone(),
+            topology: s.topology.clone(),
+        },
         (None, None) => return Err(super::Usage.into()),
     })
+}
+
+fn export(s: &Source, out: &std::path::Path) -> anyhow::Result<web::ExportReport> {
+    let opts = options(s)?;
+    Ok(source(s)?.export(out, &opts)?)
 }
 
 /// Runs `web`.
@@ -151,28 +138,17 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             let r = export(&a.source, &a.out);
             bar.finish_and_clear();
             let r = r?;
-            if a.json {
-                super::emit_json(&r)
-            } else {
-                super::emit(&surfmotion::jobs::text::web_export(&r))
-            }
+            super::report(a.json, &r, || surfmotion::jobs::text::web_export(&r))
         }
         Cmd::Serve(a) => {
             // The address is tried before the export (seconds to minutes):
             // one this machine does not have, or a port in use, failed
             // only after it.
             let addr = format!("{}:{}", a.bind, a.port);
-            drop(
-                std::net::TcpListener::bind(addr.as_str())
-                    .map_err(|e| anyhow::anyhow!("cannot listen on {addr}: {e}"))?,
-            );
+            check_listen(&addr)?;
             let mut _tmp = None;
             let root = match &a.site {
-                Some(s) if !s.join("index.html").is_file() => anyhow::bail!(
-                    "{}: not an exported site (no index.html); make one with `surfmotion web export`",
-                    s.display()
-                ),
-                Some(s) => s.clone(),
+                Some(s) => exported_site(s)?,
                 None => {
                     let tmp = std::env::temp_dir();
                     for d in web::remove_stale_exports(&tmp) {
@@ -181,8 +157,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
                             d.display()
                         );
                     }
-                    let t = web::export_folder(&tmp)
-                        .map_err(|e| anyhow::anyhow!("{}: {e}", tmp.display()))?;
+                    let t = temp_export(&tmp)?;
                     let site = t.path().join("site");
                     let bar = super::spinner("exporting the site");
                     let r = export(&a.source, &site);

@@ -27,6 +27,27 @@ pub struct Positions {
     pub frames: BTreeMap<usize, Vec<[f64; 3]>>,
 }
 
+impl Positions {
+    /// The text of `mocap positions`: the units and up axis, then per
+    /// frame one line per point (name, x, y, z to the micro-unit).
+    pub fn text(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "units: {} ({}), {}-up",
+            self.units, self.units_reason, self.up
+        );
+        for (f, pts) in &self.frames {
+            let _ = writeln!(s, "frame {f}");
+            for (n, v) in self.joints.iter().zip(pts) {
+                let _ = writeln!(s, "  {n:<24} {:>12.6} {:>12.6} {:>12.6}", v[0], v[1], v[2]);
+            }
+        }
+        s
+    }
+}
+
 /// The world positions of `clip`'s points at `frames` (in metres, Y-up
 /// when `metres`, else in the file's units and axes).
 pub fn positions(

@@ -14,9 +14,14 @@
 //!    clips: skinning plus secondary dynamics).
 //! 4. [`retarget`]: retarget a clip through a database (Sec. 5.2).
 //! 5. [`transfer`]: transfer clips onto a scan, prepared and factored once
-//!    (de Aguiar et al. 2007).
+//!    (de Aguiar et al. 2007); [`transfer_files`]: one transfer written
+//!    to files (the `transfer` verb).
 //! 6. [`batch`]: convert a folder of clips with any [`Converter`]
-//!    (implemented by the retarget and transfer jobs).
+//!    (implemented by the retarget and transfer jobs; [`batch_target`]
+//!    loads or factors one).
+//!
+//! [`web`] exports a database or a result as a static site and prepares
+//! serving one.
 //!
 //! [`eval`] scores a result against its clip and database (the `eval`
 //! verb). [`text`] and [`short_text`] are the jobs' reports as text.
@@ -31,6 +36,7 @@
 //! CLI always has.
 
 pub mod batch;
+pub mod batch_target;
 pub mod batch_verdict;
 pub mod blend;
 pub mod database;
@@ -63,7 +69,9 @@ pub mod synth;
 pub mod synth_db;
 pub mod text;
 pub mod transfer;
+pub mod transfer_files;
 mod transfer_summary;
+pub mod web;
 
 pub use crate::batch::Converter;
 pub use batch::{BatchEvent, BatchOptions, BatchReport, batch_folder};

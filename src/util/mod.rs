@@ -1,9 +1,10 @@
 //! Utilities shared by every stage: job limits ([`budget`]), CPU clocks
-//! ([`cpu`]), atomic writes and bounded reads ([`fsutil`]), short numbers
+//! ([`cpu`]), errors on one line ([`errtext`]), atomic writes and bounded reads ([`fsutil`]), short numbers
 //! in messages ([`numfmt`]) and a run's stages timed ([`stages`]).
 
 pub mod budget;
 pub mod cpu;
+pub mod errtext;
 pub mod fsutil;
 pub mod numfmt;
 pub mod stages;

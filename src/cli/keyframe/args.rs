@@ -68,7 +68,7 @@ pub struct Args {
     /// Target final facing, degrees relative to the start key-frame's
     /// (positive: from +Z towards +X); a cost term of the exact-length
     /// search and of the walks' search (--w-heading per degree).
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = heading)]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = crate::cli::heading)]
     pub heading: Option<f64>,
     /// Weight of the heading error, per degree. Default: 1/30 (30° cost as
     /// much as 0.3 m of distance).
@@ -78,7 +78,7 @@ pub struct Args {
     /// this many seconds): a target out of reach gets Eq. 7's best
     /// compromise within that horizon (Eq. 7 alone can ask for a path
     /// hundreds of times longer than the target, e.g. 1000 m in 3 s).
-    #[arg(long, value_name = "S", default_value_t = D.horizon_seconds, value_parser = horizon)]
+    #[arg(long, value_name = "S", default_value_t = D.horizon_seconds, value_parser = crate::cli::horizon)]
     pub horizon: f64,
     /// Prefer a path within this percentage of both the distance and the
     /// time target over a cheaper one (Eq. 7) that is not, when the graph
@@ -193,29 +193,6 @@ pub struct Args {
     /// a heading target; no heat-map.
     #[arg(long, requires = "grid", conflicts_with_all = ["plot", "heading"])]
     pub least_mean: bool,
-}
-
-/// `--horizon`: seconds in [0, MAX_TARGET_SECONDS] (`--horizon 1e7`
-/// aborted on a 216 GB allocation).
-fn horizon(s: &str) -> Result<f64, String> {
-    use surfmotion::keyframe::MAX_TARGET_SECONDS;
-    let v = crate::cli::non_negative(s)?;
-    if v <= MAX_TARGET_SECONDS {
-        Ok(v)
-    } else {
-        Err(format!("{s}: at most {MAX_TARGET_SECONDS} seconds"))
-    }
-}
-
-/// `--heading`: degrees in [-360, 360] (`--heading 1e308` was taken and
-/// printed back as a 309-digit target).
-fn heading(s: &str) -> Result<f64, String> {
-    let v = crate::cli::finite(s)?;
-    if v.abs() <= 360.0 {
-        Ok(v)
-    } else {
-        Err(format!("{s}: expected degrees in [-360, 360]"))
-    }
 }
 
 /// `--plot`: a `.svg` or a `.png` (`--plot g.txt` ran the whole grid,

@@ -3,10 +3,11 @@
 //! the command line's words.
 
 use super::args::{Args, CostArg, MethodArg, SolverArg, TransitionsArg};
+use crate::cli::mirror::mirror;
 use surfmotion::jobs::keyframe::{GridTargets, KeyframeJobError, KeyframeJobOptions};
 use surfmotion::keyframe::grid::parse_range;
 use surfmotion::keyframe::options::{Method, Solver};
-use surfmotion::keyframe::{MAX_TARGET_METRES, MAX_TARGET_SECONDS, TransitionCost, TransitionSet};
+use surfmotion::keyframe::{TransitionCost, TransitionSet};
 
 /// The job's defaults.
 const D: KeyframeJobOptions = KeyframeJobOptions::DEFAULT;
@@ -29,49 +30,6 @@ pub fn grid_targets(a: &Args) -> anyhow::Result<GridTargets> {
     GridTargets::new(ds, ts).map_err(flagged)
 }
 
-/// `--distance`/`--time`: a number or a comma list. A value above the
-/// search's bound is refused here, quoted as typed (`--distance 1e308` was
-/// printed back as 309 digits).
-pub fn numbers(what: &str, s: &str) -> anyhow::Result<Vec<f64>> {
-    let (max, unit) = if what == "distance" {
-        (MAX_TARGET_METRES, "m")
-    } else {
-        (MAX_TARGET_SECONDS, "s")
-    };
-    s.split(',')
-        .map(|x| {
-            let v = x.trim().parse::<f64>().map_err(|_| {
-                anyhow::anyhow!("--{what} '{s}': expected a number or a comma list")
-            })?;
-            anyhow::ensure!(
-                v.is_nan() || v <= max,
-                "--{what} {}: at most {max} {unit} (the search's horizon grows with the target)",
-                x.trim()
-            );
-            Ok(v)
-        })
-        .collect()
-}
-
-/// The clap mirror of a library enum, both ways.
-macro_rules! mirror {
-    ($arg:ident, $lib:ty, $($v:ident),+) => {
-        impl From<$lib> for $arg {
-            fn from(v: $lib) -> Self {
-                match v {
-                    $(<$lib>::$v => $arg::$v,)+
-                }
-            }
-        }
-        impl From<$arg> for $lib {
-            fn from(v: $arg) -> Self {
-                match v {
-                    $($arg::$v => <$lib>::$v,)+
-                }
-            }
-        }
-    };
-}
 mirror!(SolverArg, Solver, Exact, Ilp);
 mirror!(MethodArg, Method, Lattice, Walks);
 mirror!(CostArg, TransitionCost, Graph, Smoothness);
