@@ -216,23 +216,52 @@ fn symmetry_and_confidence(
     notes: &mut Vec<String>,
 ) -> (f64, f64) {
     let get = |name: &str| get_joint(found, name);
-    // Symmetry of the limbs: tip to root lengths left against right.
+    // Symmetry of the limbs: tip to root lengths left against right; a
+    // pair with a limb on a cut ([`super::cut_ends`]) from its distal
+    // joints (a cut limb's is the cut's centre), or one foot or hand cut
+    // off would read as limbs of two lengths.
     let v3 = |q: [f64; 3]| DVec3::from_array(q);
-    let len = |tip: u32, root: &str| v3(rest[tip as usize]).distance(get(root).position);
-    let ratio = |a: f64, b: f64| a.min(b) / a.max(b).max(1e-12);
+    let cut = |pair: &[super::limbs::Limb]| pair.iter().any(|l| body.cut_at(l.0).is_some());
     let (legs, arms) = (&sided.legs, &sided.arms);
-    let sym = ratio(len(legs[0].0, "l_hip"), len(legs[1].0, "r_hip")).min(ratio(
-        len(arms[0].0, "l_shoulder"),
-        len(arms[1].0, "r_shoulder"),
+    let (legs_cut, arms_cut) = (cut(legs), cut(arms));
+    let len =
+        |limb: &super::limbs::Limb, side: &str, distal: &str, root: &str, from_joint: bool| {
+            let root = get(&format!("{side}_{root}")).position;
+            match from_joint {
+                true => get(&format!("{side}_{distal}")).position.distance(root),
+                false => v3(rest[limb.0 as usize]).distance(root),
+            }
+        };
+    let ratio = |a: f64, b: f64| a.min(b) / a.max(b).max(1e-12);
+    let sym = ratio(
+        len(&legs[0], "l", "ankle", "hip", legs_cut),
+        len(&legs[1], "r", "ankle", "hip", legs_cut),
+    )
+    .min(ratio(
+        len(&arms[0], "l", "wrist", "shoulder", arms_cut),
+        len(&arms[1], "r", "wrist", "shoulder", arms_cut),
     ));
     let by_motion = found.iter().filter(|(_, p)| p.by_motion).count();
     let mut confidence = by_motion as f64 / found.len() as f64 * sym;
     // The knees as far from the toes (the legs' one length): a check, said
-    // loudly, and the confidence lowered in proportion.
-    let (kl, kr, kd) = knee_to_toe(body, sided);
+    // loudly, and the confidence lowered in proportion; from the ankles
+    // when a leg is on a cut.
+    let (kl, kr, kd) = match legs_cut {
+        false => knee_to_toe(body, sided),
+        true => {
+            let shin = |s: &str| {
+                get(&format!("{s}_knee"))
+                    .position
+                    .distance(get(&format!("{s}_ankle")).position)
+            };
+            let (l, r) = (shin("l"), shin("r"));
+            (l, r, (l - r).abs())
+        }
+    };
     if kd > KNEE_TOLERANCE * body.height {
         notes.push(format!(
-            "WARNING: the knees are {kl:.3} and {kr:.3} from their toe tips, {:.1}% of the height apart (a body's legs have one length; tolerance {:.0}%): one knee is probably at a clothing edge; look at the picture (`InitSetup::png`) and correct l_knee/r_knee in the landmarks file, or give landmarks",
+            "WARNING: the knees are {kl:.3} and {kr:.3} from their {}, {:.1}% of the height apart (a body's legs have one length; tolerance {:.0}%): one knee is probably at a clothing edge; look at the picture (`InitSetup::png`) and correct l_knee/r_knee in the landmarks file, or give landmarks",
+            if legs_cut { "ankles" } else { "toe tips" },
             100.0 * kd / body.height,
             100.0 * KNEE_TOLERANCE
         ));
