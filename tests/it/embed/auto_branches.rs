@@ -187,44 +187,90 @@ fn smpl_makehuman_and_handless_samba_rig_and_smpl_with_a_tail_is_refused() {
 /// were put at the shoulders (18 % of the height off) and its upper arms'
 /// parts were empty.
 fn handless_captures_rig_near_their_landmark_rigs(d: &Path) {
-    use surfmotion::rig::Canonical;
+    use surfmotion::rig::Canonical as C;
+    let cut = |c: &super::auto::Capture| without_hands(&c.truth, c.mesh.positions());
+    cut_captures_rig(d, "hands", cut, "no hand: the left and right arm", |r| {
+        let (l, r2) = (r.off(C::LElbow, C::RElbow), r.off(C::RElbow, C::LElbow));
+        eprintln!("{}: elbows {l:.2} / {r2:.2}%", r.what);
+        assert!(
+            r.err <= super::auto::BOUND_PERCENT,
+            "{}: {:.2}%",
+            r.what,
+            r.err
+        );
+        assert!(
+            l <= 5.0 && r2 <= 5.0,
+            "{}: elbows {l:.2} / {r2:.2}%",
+            r.what
+        );
+    });
+}
+
+/// One rig of a cut capture: its embedding against the landmark rig's
+/// joints (carried by the variant).
+struct CutRig {
+    what: String,
+    e: Embedding,
+    want: [[f64; 3]; surfmotion::rig::Canonical::COUNT],
+    h: f64,
+    mirrored: bool,
+    /// The mean joint distance, % of the height.
+    err: f64,
+}
+
+impl CutRig {
+    /// Joint `j`'s distance from the landmark rig's (its `twin`'s when
+    /// mirrored), % of the height.
+    fn off(&self, j: surfmotion::rig::Canonical, twin: surfmotion::rig::Canonical) -> f64 {
+        let k = if self.mirrored { twin } else { j };
+        100.0
+            * DVec3::from_array(self.e.joints()[j.index()])
+                .distance(DVec3::from_array(self.want[k.index()]))
+            / self.h
+    }
+}
+
+/// Samba and crane with `cut` (the vertices kept) applied to their first
+/// 60 frames, as captured and mirrored, rigged as `db init` does: the
+/// note starting `note` said, then `check` on each rig.
+fn cut_captures_rig(
+    d: &Path,
+    without: &str,
+    cut: impl Fn(&super::auto::Capture) -> Vec<bool>,
+    note: &str,
+    check: impl Fn(&CutRig),
+) {
     for name in ["samba", "crane"] {
         let c = super::auto::capture(d, name);
-        let keep = without_hands(&c.truth, c.mesh.positions());
+        let keep = cut(c);
         let frames: Frames = c.frames.iter().take(60).cloned().collect();
         let (m, f, _) = keep_only(&c.mesh, &frames, &keep);
         assert!(m.vertex_count() + 100 < c.mesh.vertex_count());
-        let h = c.truth.height();
         for v in [Variant::AsCaptured, Variant::Mirrored] {
             let (m, f) = variant(v, &m, &f);
-            let what = format!("{name} without hands {v:?}");
+            let what = format!("{name} without {without} {v:?}");
             let a = rig_as_db_init(&m, &f).unwrap_or_else(|e| panic!("{what}: {e}"));
-            let noted = a
-                .notes
-                .iter()
-                .any(|n| n.starts_with("no hand: the left and right arm"));
+            assert!(
+                a.notes.iter().any(|n| n.starts_with(note)),
+                "{what}: {:?}",
+                a.notes
+            );
             let e = Embedding::new(&m, &a.landmarks, None).unwrap();
             let want = c.truth.joints().map(|p| v.point(p));
-            let mirrored = v == Variant::Mirrored;
+            let (h, mirrored) = (c.truth.height(), v == Variant::Mirrored);
             let err = mean_percent(e.joints(), &want, h, mirrored);
-            let elbow = |j: Canonical, k: Canonical| {
-                let k = if mirrored { k } else { j };
-                100.0
-                    * DVec3::from_array(e.joints()[j.index()])
-                        .distance(DVec3::from_array(want[k.index()]))
-                    / h
-            };
-            let (l, r) = (
-                elbow(Canonical::LElbow, Canonical::RElbow),
-                elbow(Canonical::RElbow, Canonical::LElbow),
-            );
             eprintln!(
-                "{what}: joints {err:.2}% of the height from the landmark rig, elbows {l:.2} / {r:.2}%; {}",
+                "{what}: joints {err:.2}% of the height from the landmark rig; {}",
                 a.summary()
             );
-            assert!(noted, "{what}: {:?}", a.notes);
-            assert!(err <= super::auto::BOUND_PERCENT, "{what}: {err:.2}%");
-            assert!(l <= 5.0 && r <= 5.0, "{what}: elbows {l:.2} / {r:.2}%");
+            check(&CutRig {
+                what,
+                e,
+                want,
+                h,
+                mirrored,
+                err,
+            });
         }
     }
 }
@@ -244,51 +290,20 @@ fn handless_captures_rig_near_their_landmark_rigs(d: &Path) {
 /// m over `SURFMOTION_AUTORIG=salt=0..4`; 0.79-0.91 m without feet).
 fn footless_captures_rig_near_their_landmark_rigs(d: &Path) {
     use surfmotion::rig::Canonical as C;
-    for name in ["samba", "crane"] {
-        let c = super::auto::capture(d, name);
-        let keep = without_feet(&c.truth, c.mesh.positions(), 0.02);
-        let frames: Frames = c.frames.iter().take(60).cloned().collect();
-        let (m, f, _) = keep_only(&c.mesh, &frames, &keep);
-        assert!(m.vertex_count() + 100 < c.mesh.vertex_count());
-        let h = c.truth.height();
-        for v in [Variant::AsCaptured, Variant::Mirrored] {
-            let (m, f) = variant(v, &m, &f);
-            let what = format!("{name} without feet {v:?}");
-            let a = rig_as_db_init(&m, &f).unwrap_or_else(|e| panic!("{what}: {e}"));
-            let noted = a
-                .notes
-                .iter()
-                .any(|n| n.starts_with("no foot: the left and right leg"));
-            let e = Embedding::new(&m, &a.landmarks, None).unwrap();
-            let want = c.truth.joints().map(|p| v.point(p));
-            let mirrored = v == Variant::Mirrored;
-            let err = mean_percent(e.joints(), &want, h, mirrored);
-            let off = |j: C, twin: C| {
-                let k = if mirrored { twin } else { j };
-                100.0
-                    * DVec3::from_array(e.joints()[j.index()])
-                        .distance(DVec3::from_array(want[k.index()]))
-                    / h
-            };
-            let (l, r, pelvis) = (
-                off(C::LKnee, C::RKnee),
-                off(C::RKnee, C::LKnee),
-                off(C::Pelvis, C::Pelvis),
-            );
-            eprintln!(
-                "{what}: joints {err:.2}% of the height from the landmark rig, knees {l:.2} / {r:.2}%, pelvis {pelvis:.2}%; {}",
-                a.summary()
-            );
-            assert!(noted, "{what}: {:?}", a.notes);
-            assert!(
-                e.absent().iter().any(|x| x == "feet"),
-                "{what}: the embedding must say the feet are absent: {:?}",
-                e.absent()
-            );
-            assert!(err <= 4.0, "{what}: {err:.2}%");
-            assert!(l <= 5.0 && r <= 5.0, "{what}: knees {l:.2} / {r:.2}%");
-        }
-    }
+    let cut = |c: &super::auto::Capture| without_feet(&c.truth, c.mesh.positions(), 0.02);
+    cut_captures_rig(d, "feet", cut, "no foot: the left and right leg", |r| {
+        let (l, r2) = (r.off(C::LKnee, C::RKnee), r.off(C::RKnee, C::LKnee));
+        let pelvis = r.off(C::Pelvis, C::Pelvis);
+        eprintln!("{}: knees {l:.2} / {r2:.2}%, pelvis {pelvis:.2}%", r.what);
+        assert!(
+            r.e.absent().iter().any(|x| x == "feet"),
+            "{}: the embedding must say the feet are absent: {:?}",
+            r.what,
+            r.e.absent()
+        );
+        assert!(r.err <= 4.0, "{}: {:.2}%", r.what, r.err);
+        assert!(l <= 5.0 && r2 <= 5.0, "{}: knees {l:.2} / {r2:.2}%", r.what);
+    });
 }
 
 /// Every frame of `frames` taken as the rest: five branches, on the two
