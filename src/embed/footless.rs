@@ -14,36 +14,21 @@ use glam::DVec3;
 /// sits within a shin's radius of it.
 const NEAR_RIM: f64 = 0.04;
 
-/// How far a rim's vertices may lie from its centre (a fraction of the
-/// height): an ankle's or a shin's section is 3-4 % of the height across.
-const MAX_RADIUS: f64 = 0.05;
-
 /// Whether both ankles of `joints` (on `positions`, the body `height`
 /// tall) lie at the centre of an open boundary loop of `triangles` no
-/// wider than a shin.
+/// wider than a limb's section (the rims the automatic rig reads,
+/// [`super::auto::cut_ends::rims`]).
 pub(crate) fn feet_cut(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     joints: &[DVec3],
     height: f64,
 ) -> bool {
-    let loops = crate::mesh::boundary::boundary_loops(positions.len(), triangles);
-    if loops.is_empty() {
-        return false;
-    }
-    let rims: Vec<(DVec3, f64)> = loops
-        .iter()
-        .map(|l| {
-            let q = |v: &u32| DVec3::from_array(positions[*v as usize]);
-            let centre = l.iter().map(q).sum::<DVec3>() / l.len().max(1) as f64;
-            let radius = l.iter().map(|v| q(v).distance(centre)).fold(0.0, f64::max);
-            (centre, radius)
-        })
-        .collect();
+    let rims = super::auto::cut_ends::rims(positions, triangles);
     [Canonical::LAnkle, Canonical::RAnkle].iter().all(|a| {
         let ankle = joints[a.index()];
         rims.iter()
-            .any(|(c, r)| *r <= MAX_RADIUS * height && c.distance(ankle) <= NEAR_RIM * height)
+            .any(|r| r.is_limb_section(height) && r.centre.distance(ankle) <= NEAR_RIM * height)
     })
 }
 

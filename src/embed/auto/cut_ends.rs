@@ -29,13 +29,24 @@ const NEAR_TIP: f64 = 0.02;
 /// height): a wrist's section is 2-3 % of the height across, an ankle's
 /// 3-4 %; a larger opening at a tip (a sleeve left open round a hand
 /// inside it) is no cut wrist.
-const MAX_RADIUS: f64 = 0.05;
+pub(crate) const MAX_RADIUS: f64 = 0.05;
 
 /// One open boundary loop of the rest frame: its centre and vertices.
 pub(crate) struct Rim {
-    centre: DVec3,
-    radius: f64,
-    vertices: Vec<u32>,
+    /// The loop's vertices' centroid.
+    pub centre: DVec3,
+    /// The farthest vertex's distance from the centre.
+    pub radius: f64,
+    /// The loop's vertices, in order round it.
+    pub vertices: Vec<u32>,
+}
+
+impl Rim {
+    /// Whether the rim is no wider than a limb's section ([`MAX_RADIUS`])
+    /// on a body `height` tall.
+    pub(crate) fn is_limb_section(&self, height: f64) -> bool {
+        self.radius <= MAX_RADIUS * height
+    }
 }
 
 /// The open boundary loops of the mesh (`triangles` over the rest frame
@@ -65,7 +76,7 @@ pub(crate) fn rims(rest: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<Rim> {
 pub(crate) fn cut_at(rest: &[[f64; 3]], rims: &[Rim], tip: u32, height: f64) -> Option<DVec3> {
     let t = DVec3::from_array(rest[tip as usize]);
     rims.iter()
-        .filter(|r| r.radius <= MAX_RADIUS * height)
+        .filter(|r| r.is_limb_section(height))
         .filter(|r| {
             r.vertices
                 .iter()

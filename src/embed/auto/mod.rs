@@ -18,7 +18,7 @@ pub mod branches;
 pub mod candidates;
 pub mod centre;
 pub mod consensus;
-mod cut_ends;
+pub(crate) mod cut_ends;
 pub mod decompose;
 pub mod facing;
 mod floor;
