@@ -383,9 +383,11 @@ fn check_bones(
         let ratio = (a - b).abs() / a.max(b).max(1e-12);
         if ratio > o.bone_ratio {
             let message = format!(
-                "the bones to {} and {} are {a:.4} and {b:.4} long ({:.1}% apart; tolerance {:.0}%)",
+                "the bones to {} and {} are {:.1}% and {:.1}% of the height long ({a:.4} and {b:.4} in the mesh's units; {:.1}% apart; tolerance {:.0}%)",
                 l.name(),
                 r.name(),
+                w.pct(a),
+                w.pct(b),
                 100.0 * ratio,
                 100.0 * o.bone_ratio
             );
