@@ -1143,6 +1143,13 @@ struct Scored {
     agree: f64,
     parts: usize,
     joints: [[f64; 3]; 19],
+    /// The hips' midpoint above the landmark rig's (% of the height,
+    /// along the rig's up; negative below).
+    hips_up: f64,
+    /// The motion's hips above the knees over the knees above the floor
+    /// (`embed::auto::hips::bound_hips`'s ratio); `None` when the motion
+    /// did not give both hips.
+    hip_knee: Option<f64>,
     secs: f64,
     cpu: f64,
 }
@@ -1209,8 +1216,16 @@ fn score(
             / h
     });
     let labels: Vec<u8> = (0..n).map(|o| e.labels()[new_of[o] as usize]).collect();
+    let up = DVec3::from_array(auto.up);
+    let mid = |j: &[[f64; 3]; 19]| {
+        let (l, r) = (Canonical::LHip.index(), Canonical::RHip.index());
+        0.5 * (DVec3::from_array(j[l]) + DVec3::from_array(j[r])).dot(up)
+    };
+    let hips_up = 100.0 * (mid(e.joints()) - mid(c.truth.joints())) / h;
     Ok(Scored {
         mean: off.iter().sum::<f64>() / 19.0,
+        hips_up,
+        hip_knee: hip_over_knee(&auto, &fr, up),
         off,
         agree: 100.0 * agree(&labels, c.truth.labels()),
         parts: auto.parts,
@@ -1218,6 +1233,28 @@ fn score(
         secs,
         cpu,
     })
+}
+
+/// The motion's hips above the knees over the knees above the floor (the
+/// rest frame's lowest vertex along `up`), as `bound_hips` reads them.
+fn hip_over_knee(
+    auto: &crate::embed::auto::report::AutoRig,
+    frames: &[&[[f64; 3]]],
+    up: DVec3,
+) -> Option<f64> {
+    let rest = frames.get(auto.rest_frame.unwrap_or(0))?;
+    let lo = rest
+        .iter()
+        .map(|p| DVec3::from_array(*p).dot(up))
+        .fold(f64::INFINITY, f64::min);
+    let at = |name: &str| {
+        let j = auto.joints.iter().find(|j| j.name == name)?;
+        Some((DVec3::from_array(j.position).dot(up) - lo, j.by_motion))
+    };
+    let [(lh, a), (rh, b), (lk, _), (rk, _)] =
+        [at("l_hip")?, at("r_hip")?, at("l_knee")?, at("r_knee")?];
+    let knees = 0.5 * (lk + rk);
+    (a && b && knees > 0.0).then(|| (0.5 * (lh + rh) - knees) / knees)
 }
 
 /// Per joint, the automatic rig against the landmark rig (% of the
@@ -1280,7 +1317,11 @@ fn joints(data: &Path, w: &mut AutorigReport) -> Result<(), AutorigEvalError> {
 /// joint, parts agreeing with the landmark rig, parts; then the spread:
 /// per joint the greatest distance between two salts' positions (% of the
 /// height), its mean over the joints and its worst, and the range of the
-/// mean joint error and of the parts agreeing. With `renumber` each salt
+/// mean joint error and of the parts agreeing; per salt also the hips'
+/// midpoint above the landmark rig's (% of the height) and the motion's
+/// hips above the knees over the knees' height (`hips::bound_hips`'s
+/// ratio; "by proportion" when the motion did not give both hips). With
+/// `renumber` each salt
 /// is rigged twice, as numbered and with the vertices renumbered
 /// (`score`'s fixed shuffle; the joints and parts compared through it).
 fn spread(
@@ -1291,9 +1332,9 @@ fn spread(
 ) -> Result<(), AutorigEvalError> {
     say!(
         w,
-        "| capture | salt | joints mean % | l_elbow % | r_knee % | worst | parts agree | parts | wall s | CPU s |"
+        "| capture | salt | joints mean % | l_elbow % | r_knee % | worst | parts agree | parts | wall s | CPU s | hips up % | hip/knee |"
     );
-    say!(w, "|---|---|---|---|---|---|---|---|---|---|");
+    say!(w, "|---|---|---|---|---|---|---|---|---|---|---|---|");
     for_each_capture(data, w, |w, c| {
         let name = c.name;
         let (rest, _) = rest_as_db_init(c.mesh, c.frames);
@@ -1313,7 +1354,7 @@ fn spread(
                         let (wj, wd) = s.worst();
                         say!(
                             w,
-                            "| {name} | {salt} | {:.2} | {:.2} | {:.2} | {} {wd:.1} | {:.1}% | {} | {:.1} | {:.1} |",
+                            "| {name} | {salt} | {:.2} | {:.2} | {:.2} | {} {wd:.1} | {:.1}% | {} | {:.1} | {:.1} | {:+.2} | {} |",
                             s.mean,
                             s.of(Canonical::LElbow),
                             s.of(Canonical::RKnee),
@@ -1321,7 +1362,10 @@ fn spread(
                             s.agree,
                             s.parts,
                             s.secs,
-                            s.cpu
+                            s.cpu,
+                            s.hips_up,
+                            s.hip_knee
+                                .map_or("by proportion".into(), |r| format!("{r:.2}"))
                         );
                         all.push(s);
                     }
