@@ -120,7 +120,8 @@ pub struct PartRigidity {
     /// Its vertices.
     pub vertices: usize,
     /// Root mean square distance of its vertices from its rigid motion,
-    /// over the frames examined, in % of the height.
+    /// over the frames examined, in % of the height (0 for fewer than
+    /// three vertices).
     pub rms_percent: f64,
     /// Vertices that follow another part's motion (mislabelled).
     pub stray: Vec<Stray>,
@@ -246,7 +247,10 @@ pub(crate) fn part_rigidity(
             PartRigidity {
                 part: p.name(),
                 vertices: vs.len(),
-                rms_percent: if count == 0 {
+                // Fewer than three vertices have no rigid motion to be
+                // off (`rigid_motion`): 0, not an infinite figure (the
+                // foot of a leg cut above it kept one vertex).
+                rms_percent: if count == 0 || vs.len() < 3 {
                     0.0
                 } else {
                     100.0 * (sq[p.index()] / count as f64).sqrt() / h
