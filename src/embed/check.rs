@@ -191,7 +191,9 @@ pub(crate) fn check_with(e: &Embedding, mesh: &Mesh, o: &CheckOptions) -> EmbedC
     let headless = e.absent.iter().any(|a| a == "head");
     // A body cut above the feet (`embed::footless`): its toes are the
     // embedding's guess on a foot that is not there.
-    let footless = e.absent.iter().any(|a| a == "feet");
+    // One foot cut (`l_foot`, `r_foot`): its toe is the other's mirrored.
+    let cut = ["l_foot", "r_foot"].map(|f| e.absent.iter().any(|a| a == "feet" || a == f));
+    let footless = cut[0] || cut[1];
     let pairs: Vec<(Canonical, Canonical)> = PAIRS
         .into_iter()
         .filter(|(l, _)| !(footless && *l == Canonical::LToe))
@@ -204,7 +206,7 @@ pub(crate) fn check_with(e: &Embedding, mesh: &Mesh, o: &CheckOptions) -> EmbedC
     check_central(e, &plane, o, headless, &mut w);
     let hip_distances = check_twins(e, &plane, o, &pairs, &mut w);
     let bones = check_bones(e, o, &pairs, &mut w);
-    let outside = check_inside(e, mesh, headless, footless, &mut w);
+    let outside = check_inside(e, mesh, headless, cut, &mut w);
     let parts = check_parts(e, mesh, headless, &mut w);
     if !footless {
         check_feet(e, mesh, &mut w);
@@ -213,8 +215,13 @@ pub(crate) fn check_with(e: &Embedding, mesh: &Mesh, o: &CheckOptions) -> EmbedC
     if headless {
         skipped.push("no head: head checks skipped (the head on the mid-plane, inside the body, the head part)".into());
     }
-    if footless {
-        skipped.push("no feet: foot checks skipped (the toes' symmetry, bones and place inside the body, the feet's direction)".into());
+    match cut {
+        [true, true] => skipped.push("no feet: foot checks skipped (the toes' symmetry, bones and place inside the body, the feet's direction)".into()),
+        [true, false] | [false, true] => {
+            let side = if cut[0] { "left" } else { "right" };
+            skipped.push(format!("no {side} foot: foot checks skipped (the toes' symmetry and bones, the {side} toe's place inside the body, the feet's direction)"));
+        }
+        _ => {}
     }
     EmbedCheck {
         height: h,
@@ -403,19 +410,20 @@ fn check_bones(
     bones
 }
 
-/// Joints inside the body; the names of those outside.
+/// Joints inside the body (not the head of a headless body, nor the toe
+/// of a foot `cut`, left and right); the names of those outside.
 fn check_inside(
     e: &Embedding,
     mesh: &Mesh,
     headless: bool,
-    footless: bool,
+    cut: [bool; 2],
     w: &mut Warnings,
 ) -> Vec<String> {
     let (p, t) = (mesh.positions(), mesh.triangles());
     let mut outside = Vec::new();
     for c in Canonical::ALL {
-        let toe = matches!(c, Canonical::LToe | Canonical::RToe);
-        if headless && c == Canonical::Head || footless && toe {
+        let cut_toe = c == Canonical::LToe && cut[0] || c == Canonical::RToe && cut[1];
+        if headless && c == Canonical::Head || cut_toe {
             continue;
         }
         let q = joint(e, c);

@@ -319,16 +319,17 @@ impl Embedding {
             _ => DVec3::Y,
         };
         lm.validate(p, t, up.to_array())?;
-        let est = place_joints(p, t, lm, headless);
+        let mut est = place_joints(p, t, lm, headless);
         let mut absent: Vec<String> = if headless {
             vec!["head".into()]
         } else {
             Vec::new()
         };
-        let footless = super::footless::feet_cut(p, t, &est.joints, est.height);
-        if footless {
-            absent.push("feet".into());
+        let cut = super::footless::cut_feet(p, t, &est.joints, est.height);
+        if let [true, false] | [false, true] = cut {
+            super::footless::mirror_foot(&mut est, usize::from(cut[1]));
         }
+        absent.extend(super::footless::absent_names(cut).map(String::from));
         let bs = bones(&est);
         let mut w = bone_heat(mesh, &bs)?;
         let mut moved = None;

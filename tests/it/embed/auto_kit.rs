@@ -182,13 +182,27 @@ pub(super) fn without_hands(rig: &Embedding, rest: &[[f64; 3]]) -> Vec<bool> {
 /// ankles: a plane square to each shin, `above` of the height up the shin
 /// from the ankle; the shin's and foot's vertices below it go.
 pub(super) fn without_feet(rig: &Embedding, rest: &[[f64; 3]], above: f64) -> Vec<bool> {
+    without_feet_of(rig, rest, above, [true, true])
+}
+
+/// [`without_feet`] on the legs `sides` says (left, right) only.
+pub(super) fn without_feet_of(
+    rig: &Embedding,
+    rest: &[[f64; 3]],
+    above: f64,
+    sides: [bool; 2],
+) -> Vec<bool> {
     use surfmotion::embed::parts::Part;
     use surfmotion::rig::Canonical as C;
     let j = |c: C| DVec3::from_array(rig.joints()[c.index()]);
-    let legs = [
+    let legs: Vec<_> = [
         (j(C::LKnee), j(C::LAnkle), [Part::LShin, Part::LFoot]),
         (j(C::RKnee), j(C::RAnkle), [Part::RShin, Part::RFoot]),
-    ];
+    ]
+    .into_iter()
+    .zip(sides)
+    .filter_map(|(leg, cut)| cut.then_some(leg))
+    .collect();
     (0..rest.len())
         .map(|v| {
             let q = DVec3::from_array(rest[v]);
