@@ -9,9 +9,7 @@ use surfmotion::batch::{BatchSummary, ClipStatus, Converter, Format};
 use surfmotion::jobs::batch::{ClipRate, check_folders, outcome_line, report_text, target_inputs};
 use surfmotion::jobs::batch_target::BatchTarget;
 use surfmotion::jobs::batch_verdict::none_failed;
-use surfmotion::jobs::{
-    BatchEvent, BatchOptions, RetargetJobOptions, ScanTransferOptions, batch_folder,
-};
+use surfmotion::jobs::{BatchEvent, BatchOptions, ScanTransferOptions, batch_folder};
 /// Arguments of `batch`.
 #[derive(clap::Args)]
 #[command(group(clap::ArgGroup::new("target").required(true).args(["db", "scan"])))]
@@ -218,13 +216,7 @@ fn converter(a: &Args) -> anyhow::Result<Box<dyn Converter>> {
     let target = match (&a.db, &a.scan, &a.landmarks) {
         (Some(db), _, _) => BatchTarget::Database {
             db: db.clone(),
-            options: RetargetJobOptions {
-                retarget: a.retarget_job.options(),
-                character: a.retarget_job.character(),
-                load,
-                glb: a.glb.options(),
-                usd: a.glb.usd_options(),
-            },
+            options: a.retarget_job.job_options(load, &a.glb),
         },
         (None, Some(scan), Some(lm)) => {
             let scan_job = a.scan_job.job()?;
