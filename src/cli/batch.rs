@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use surfmotion::batch::schedule::ShardSource;
 use surfmotion::batch::{BatchSummary, ClipStatus, Converter, Format};
 use surfmotion::jobs::batch::{ClipRate, check_folders, outcome_line, report_text, target_inputs};
-use surfmotion::jobs::batch_target::BatchTarget;
+use surfmotion::jobs::batch_target::{BatchTarget, check_target_options};
 use surfmotion::jobs::batch_verdict::none_failed;
 use surfmotion::jobs::{BatchEvent, BatchOptions, ScanTransferOptions, batch_folder};
 /// Arguments of `batch`.
@@ -194,14 +194,8 @@ fn check_args(a: &Args, mocap_dir: &Path, output: &Path) -> anyhow::Result<()> {
         .refuse_unless_glb(matches!(a.format, super::values::FormatArg::Glb), &format)?;
     a.glb
         .refuse_unless_usda(matches!(a.format, super::values::FormatArg::Usda), &format)?;
-    anyhow::ensure!(
-        a.db.is_none() || a.scan_job.is_default(),
-        "--group, --marker-count, --marker-margin and --fps apply to --scan (a database has its own frame rate)"
-    );
-    anyhow::ensure!(
-        a.db.is_some() || a.retarget_job.is_default(),
-        "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db"
-    );
+    let (scan, retarget) = (a.scan_job.is_default(), a.retarget_job.is_default());
+    check_target_options(a.db.is_some(), scan, retarget)?;
     let (db, scan) = (a.db.as_deref(), a.scan.as_deref());
     let files = [&a.landmarks, &a.clip.rig_map, &a.clip.asf];
     let inputs = target_inputs(db, scan, files.into_iter().flatten());
