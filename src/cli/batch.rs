@@ -7,11 +7,9 @@ use std::path::{Path, PathBuf};
 use surfmotion::batch::schedule::ShardSource;
 use surfmotion::batch::{BatchSummary, ClipStatus, Converter, Format};
 use surfmotion::jobs::batch::{ClipRate, check_folders, outcome_line, report_text, target_inputs};
-use surfmotion::jobs::batch_target::BatchTarget;
+use surfmotion::jobs::batch_target::{BatchTarget, check_target_options};
 use surfmotion::jobs::batch_verdict::none_failed;
-use surfmotion::jobs::{
-    BatchEvent, BatchOptions, RetargetJobOptions, ScanTransferOptions, batch_folder,
-};
+use surfmotion::jobs::{BatchEvent, BatchOptions, ScanTransferOptions, batch_folder};
 /// Arguments of `batch`.
 #[derive(clap::Args)]
 #[command(group(clap::ArgGroup::new("target").required(true).args(["db", "scan"])))]
@@ -196,14 +194,8 @@ fn check_args(a: &Args, mocap_dir: &Path, output: &Path) -> anyhow::Result<()> {
         .refuse_unless_glb(matches!(a.format, super::values::FormatArg::Glb), &format)?;
     a.glb
         .refuse_unless_usda(matches!(a.format, super::values::FormatArg::Usda), &format)?;
-    anyhow::ensure!(
-        a.db.is_none() || a.scan_job.is_default(),
-        "--group, --marker-count, --marker-margin and --fps apply to --scan (a database has its own frame rate)"
-    );
-    anyhow::ensure!(
-        a.db.is_some() || a.retarget_job.is_default(),
-        "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db"
-    );
+    let (scan, retarget) = (a.scan_job.is_default(), a.retarget_job.is_default());
+    check_target_options(a.db.is_some(), scan, retarget)?;
     let (db, scan) = (a.db.as_deref(), a.scan.as_deref());
     let files = [&a.landmarks, &a.clip.rig_map, &a.clip.asf];
     let inputs = target_inputs(db, scan, files.into_iter().flatten());
@@ -218,13 +210,7 @@ fn converter(a: &Args) -> anyhow::Result<Box<dyn Converter>> {
     let target = match (&a.db, &a.scan, &a.landmarks) {
         (Some(db), _, _) => BatchTarget::Database {
             db: db.clone(),
-            options: RetargetJobOptions {
-                retarget: a.retarget_job.options(),
-                character: a.retarget_job.character(),
-                load,
-                glb: a.glb.options(),
-                usd: a.glb.usd_options(),
-            },
+            options: a.retarget_job.job_options(load, &a.glb),
         },
         (None, Some(scan), Some(lm)) => {
             let scan_job = a.scan_job.job()?;

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use surfmotion::jobs::db_info::{self, Listed};
 use surfmotion::jobs::skeletons::SkeletonsOptions;
 use surfmotion::jobs::{export_skeletons, text};
+use surfmotion::util::errtext;
 
 /// Database subcommands.
 #[derive(clap::Subcommand)]
@@ -116,7 +117,7 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
         Cmd::Info(a) => {
             let mut i = db_info::info(&a.dir)?;
             for p in &mut i.problems {
-                *p = super::flags::as_flags(&super::without_os_error_numbers(p));
+                *p = super::flags::as_flags(&errtext::without_os_error_numbers(p));
             }
             // A problem is exit 1 ([`db_info::verdict`]).
             let listed = if a.json {

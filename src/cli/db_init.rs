@@ -143,7 +143,7 @@ pub fn init(a: InitArgs) -> anyhow::Result<()> {
     crate::errln!(
         "wrote {} ({}); check it with `surfmotion db info {}`",
         r.path.display(),
-        super::count(r.manifest.sequences.len(), "sequence"),
+        surfmotion::batch::summary::count(r.manifest.sequences.len(), "sequence"),
         a.dir.display()
     );
     if a.pick {

@@ -8,6 +8,14 @@
 const FLAGS: &[(&str, &str)] = &[
     ("`InitOptions::parts` of `db::init`", "`db init --parts`"),
     (
+        "`ScanTransferOptions` (groups, markers, fps) apply to a scan target",
+        "--group, --marker-count, --marker-margin and --fps apply to --scan",
+    ),
+    (
+        "`RetargetJobOptions` (deform, t_skel, w_retr, interpolate, blend) apply to a database target",
+        "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db",
+    ),
+    (
         "(`InitOptions::sequences` of `db::init`: NAME=PATH)",
         "(`surfmotion db init --sequence NAME=PATH`)",
     ),
@@ -141,6 +149,26 @@ mod tests {
             m,
             "--shard 1/2 and --shard-count 3 name different splits; give one"
         );
+    }
+
+    /// `batch`'s refusals of the other target's options, made by
+    /// `jobs::batch_target` with the option groups' names, print the
+    /// flags the CLI printed when it made them itself.
+    #[test]
+    fn batch_target_option_refusals_print_as_before() {
+        use surfmotion::jobs::batch_target::check_target_options;
+        let e = check_target_options(true, false, true).unwrap_err();
+        assert_eq!(
+            super::as_flags(&e.to_string()),
+            "--group, --marker-count, --marker-margin and --fps apply to --scan (a database has its own frame rate)"
+        );
+        let e = check_target_options(false, true, false).unwrap_err();
+        assert_eq!(
+            super::as_flags(&e.to_string()),
+            "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db"
+        );
+        assert!(check_target_options(true, true, false).is_ok());
+        assert!(check_target_options(false, false, true).is_ok());
     }
 
     /// Session 37: the library's messages that named a verb's flags name

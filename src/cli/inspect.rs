@@ -3,6 +3,7 @@
 use super::ClipOpts;
 use std::path::PathBuf;
 use surfmotion::tools::inspect::{InspectOptions, inspect};
+use surfmotion::util::errtext;
 
 /// Arguments of `inspect`.
 #[derive(clap::Args)]
@@ -35,7 +36,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut r = inspect(&a.file, &opts)?;
     if let surfmotion::tools::inspect::Report::Database(d) = &mut r {
         for p in &mut d.problems {
-            *p = super::without_os_error_numbers(p);
+            *p = errtext::without_os_error_numbers(p);
         }
     }
     if a.json {

@@ -99,10 +99,7 @@ fn path(
     bar.finish_and_clear();
     let run = run.map_err(flagged)?;
     // The report and --json say which targets were missed, as the text does.
-    let mut v = serde_json::to_value(&run.report)?;
-    if let Some(p) = &a.report {
-        super::write_json(p, &v)?;
-    }
+    let mut v = job::write_path_report(&run, a.report.as_deref()).map_err(flagged)?;
     if a.json {
         v["output"] = serde_json::to_value(&run.written)?;
         return super::emit_json(&v);
@@ -162,9 +159,7 @@ fn grid(
         });
         bar.finish_and_clear();
         let r = r.map_err(flagged)?;
-        if let Some(p) = &a.report {
-            super::write_json(p, &r.report)?;
-        }
+        job::write_report(a.report.as_deref(), &r.report).map_err(flagged)?;
         return report(a, &r.report, || text::least_mean_summary(&r));
     }
     let planner = job::grid_planner(ch, &keys.ids, opts).map_err(flagged)?;
@@ -175,12 +170,7 @@ fn grid(
     let g = job::grid(ch, &planner, opts, t, &mut |q| row(&bar, text::grid_row(q)));
     bar.finish_and_clear();
     let g = g.map_err(flagged)?;
-    if let Some(p) = &a.report {
-        super::write_json(p, &g)?;
-    }
-    if let Some(p) = &a.plot {
-        surfmotion::keyframe::heatmap::save(&g, p)?;
-    }
+    job::write_grid_files(&g, a.report.as_deref(), a.plot.as_deref()).map_err(flagged)?;
     report(a, &g, || text::grid_summary(&g))
 }
 

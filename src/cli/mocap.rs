@@ -175,13 +175,9 @@ fn positions(a: PositionsArgs) -> anyhow::Result<()> {
 
 /// Runs `mocap rigmap`.
 fn rigmap(a: RigmapArgs) -> anyhow::Result<()> {
-    // `-o` onto the clip replaced the clip with the JSON map (exit 0).
     if let Some(o) = &a.output {
-        let mut inputs = vec![a.clip.clone()];
-        inputs.extend(a.opts.asf.clone());
-        // And onto the --rig-map it reads (rewritten in place, exit 0).
-        inputs.extend(a.opts.rig_map.clone());
-        surfmotion::mesh::io::refuse_overwriting(&inputs, o)?;
+        let (asf, map) = (a.opts.asf.as_deref(), a.opts.rig_map.as_deref());
+        mocap::check_rigmap_output(&a.clip, asf, map, o)?;
     }
     let det = mocap::rigmap(&a.clip, &a.opts.load_options()?, a.output.as_deref())?;
     if a.json {

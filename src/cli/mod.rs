@@ -43,14 +43,13 @@ pub use argv::Usage;
 pub use log::warnings_in_summary;
 pub use opts::{ClipOpts, RunOpts, load_mesh_groups};
 pub use out::{
-    Bars, OutputClosed, count, emit, emit_json, one_line, progress, report, report_sorted,
-    report_with, spinner, write_json,
+    Bars, OutputClosed, emit, emit_json, one_line, progress, report, report_sorted, report_with,
+    spinner, write_json,
 };
 pub use parse::{
     bounded_count, confidence, dynamics_amount, fraction, frame_rate, heading, horizon,
     length_unit, max_error_mm, mesh_spec, non_negative, png_path, positive, session_seconds,
     t_skel, targets, weight,
 };
-pub use surfmotion::util::errtext::without_os_error_numbers;
 
 pub use app::main;

@@ -1,5 +1,5 @@
 //! What the CLI prints: stdout through [`emit`] (a closed pipe is not an
-//! error), errors on one line, counts, progress bars, written files.
+//! error), errors on one line, progress bars, written files.
 
 use surfmotion::util::errtext;
 
@@ -92,12 +92,6 @@ pub fn one_line(e: &anyhow::Error) -> String {
 #[derive(Debug, thiserror::Error)]
 #[error("output closed")]
 pub struct OutputClosed;
-
-/// `n` and a noun, plural when `n` is not one: "1 frame", "2 frames",
-/// "3 vertices" ([`surfmotion::batch::summary::count`]).
-pub fn count(n: usize, noun: &str) -> String {
-    surfmotion::batch::summary::count(n, noun)
-}
 
 /// A progress bar on a terminal (hidden when stderr is not one).
 pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {

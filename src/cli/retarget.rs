@@ -95,6 +95,22 @@ impl JobOpts {
         }
     }
 
+    /// The options of a [`RetargetJob`]: these, the clip's `load` and the
+    /// output formats `glb` (as `retarget` and `batch --db` give them).
+    pub fn job_options(
+        &self,
+        load: surfmotion::rig::LoadOptions,
+        glb: &super::mesh::SequenceOutputArgs,
+    ) -> RetargetJobOptions {
+        RetargetJobOptions {
+            retarget: self.options(),
+            character: self.character(),
+            load,
+            glb: glb.options(),
+            usd: glb.usd_options(),
+        }
+    }
+
     /// True when every option has its default (they apply only to 4D
     /// characters).
     pub fn is_default(&self) -> bool {
@@ -117,21 +133,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     set.refuse_colliding()?;
     a.glb.refuse_other_formats(&a.output)?;
     set.check_folder()?;
-    let opts = RetargetJobOptions {
-        retarget: a.job.options(),
-        character: a.job.character(),
-        load: a.run.clip.load_options()?,
-        glb: a.glb.options(),
-        usd: a.glb.usd_options(),
-    };
+    let opts = a.job.job_options(a.run.clip.load_options()?, &a.glb);
     let job = RetargetJob::load(&a.db, opts, &super::Bars::new())?;
     let preview = a.run.preview.options();
     let preview = a.run.preview.preview.as_deref().map(|p| (p, &preview));
     let c = job.run_clip(&a.mocap, &a.output, preview)?;
     if let Some(p) = &a.report {
-        let mut v = c.report_json()?;
-        v["stages"] = job.stages_json(&c);
-        super::write_json(p, &v)?;
+        job.write_report(&c, p)?;
     }
     super::report_with(
         a.run.json,

@@ -2,7 +2,7 @@
 //! or serve it locally.
 
 use std::path::PathBuf;
-use surfmotion::jobs::web::{WebSource, check_listen, exported_site, temp_export};
+use surfmotion::jobs::web::{TempSite, WebSource, check_listen, exported_site};
 use surfmotion::web::{self, EncodeOptions, ExportOptions, Predictor};
 
 /// Subcommands of `web`.
@@ -150,15 +150,13 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             let root = match &a.site {
                 Some(s) => exported_site(s)?,
                 None => {
-                    let tmp = std::env::temp_dir();
-                    for d in web::remove_stale_exports(&tmp) {
+                    let t = TempSite::new(&std::env::temp_dir(), &mut |d| {
                         crate::errln!(
                             "removed {}: the export of an earlier `web serve` that was stopped",
                             d.display()
-                        );
-                    }
-                    let t = temp_export(&tmp)?;
-                    let site = t.path().join("site");
+                        )
+                    })?;
+                    let site = t.site();
                     let bar = super::spinner("exporting the site");
                     let r = export(&a.source, &site);
                     bar.finish_and_clear();
@@ -175,14 +173,14 @@ pub fn run(c: Cmd) -> anyhow::Result<()> {
             let stop = super::signals::stop_on_signals();
             crate::outln!("serving {} at {}", root.display(), server.url())?;
             server.run_until(stop);
-            if let Some(t) = _tmp {
-                let p = t.path().to_path_buf();
-                match t.close() {
-                    Ok(()) => {
-                        crate::errln!("stopped; removed the temporary export {}", p.display())
-                    }
-                    Err(e) => crate::errln!("stopped; could not remove {}: {e}", p.display()),
+            match _tmp.map(TempSite::close) {
+                Some((p, Ok(()))) => {
+                    crate::errln!("stopped; removed the temporary export {}", p.display())
                 }
+                Some((p, Err(e))) => {
+                    crate::errln!("stopped; could not remove {}: {e}", p.display())
+                }
+                None => {}
             }
             Ok(())
         }

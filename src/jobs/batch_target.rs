@@ -1,6 +1,7 @@
 //! The converter of a batch ([`super::batch_folder`]): a 4D character
 //! database driven by the retarget job, or a scan with landmarks taken by
-//! the scan transfer job, loaded or factored once for every clip.
+//! the scan transfer job, loaded or factored once for every clip; the
+//! options of the other target refused ([`check_target_options`]).
 
 use super::{RetargetJob, RetargetJobOptions, ScanTransferJob, ScanTransferOptions};
 use crate::batch::Converter;
@@ -35,6 +36,38 @@ pub enum BatchTarget {
         /// The transfer job's options.
         options: ScanTransferOptions,
     },
+}
+
+/// Options given for the other target than the batch's, refused before
+/// anything loads. The messages name the option groups; the CLI prints
+/// its flags.
+#[derive(Debug, thiserror::Error)]
+pub enum TargetOptionsError {
+    /// Scan transfer options with a database target.
+    #[error(
+        "`ScanTransferOptions` (groups, markers, fps) apply to a scan target (a database has its own frame rate)"
+    )]
+    ScanOptionsOnDatabase,
+    /// Retarget options with a scan target.
+    #[error(
+        "`RetargetJobOptions` (deform, t_skel, w_retr, interpolate, blend) apply to a database target"
+    )]
+    DatabaseOptionsOnScan,
+}
+
+/// Refuses scan transfer options with a database target (`database`) and
+/// retarget options with a scan target; `scan_default` and
+/// `retarget_default` say whether the caller left each at its defaults.
+pub fn check_target_options(
+    database: bool,
+    scan_default: bool,
+    retarget_default: bool,
+) -> Result<(), TargetOptionsError> {
+    match (database, scan_default, retarget_default) {
+        (true, false, _) => Err(TargetOptionsError::ScanOptionsOnDatabase),
+        (false, _, false) => Err(TargetOptionsError::DatabaseOptionsOnScan),
+        _ => Ok(()),
+    }
 }
 
 impl BatchTarget {

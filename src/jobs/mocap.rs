@@ -158,6 +158,21 @@ pub fn check_convert_output(input: &Path, output: &Path) -> Result<(), JobError>
     Ok(())
 }
 
+/// Refuses an `output` of [`rigmap`] over what it reads: the `clip`,
+/// its `asf` and the `rig_map` given (`-o` onto the clip replaced it with
+/// the JSON map; onto the map it read, rewrote it in place; both exit 0).
+pub fn check_rigmap_output(
+    clip: &Path,
+    asf: Option<&Path>,
+    rig_map: Option<&Path>,
+    output: &Path,
+) -> Result<(), JobError> {
+    let mut inputs = vec![clip.to_path_buf()];
+    inputs.extend(asf.map(Path::to_path_buf));
+    inputs.extend(rig_map.map(Path::to_path_buf));
+    Ok(crate::mesh::io::refuse_overwriting(&inputs, output)?)
+}
+
 fn context(what: String, e: JobError) -> JobError {
     JobError::Context {
         what,

@@ -125,6 +125,19 @@ impl RetargetJob {
         })
     }
 
+    /// The report file of clip `c` (`retarget --report`):
+    /// [`ClipResult::report_json`] with [`Self::stages_json`] under
+    /// `stages`, as pretty JSON written to `path` atomically.
+    pub fn write_report(&self, c: &ClipResult, path: &Path) -> Result<(), JobError> {
+        let mut v = c.report_json()?;
+        v["stages"] = self.stages_json(c);
+        let json = serde_json::to_string_pretty(&v)?;
+        Ok(crate::util::fsutil::write_bytes_atomic(
+            path,
+            json.as_bytes(),
+        )?)
+    }
+
     /// The prepared character (made on load with the options then given).
     pub fn prepared(&self) -> &Prepared {
         &self.prepared

@@ -2,7 +2,7 @@
 //! result as a static site ([`WebSource::export`]); before serving one,
 //! check the address is free ([`check_listen`]) and that a given folder is
 //! an exported site ([`exported_site`]); a temporary export for the
-//! server ([`temp_export`]).
+//! server ([`temp_export`], [`TempSite`]).
 
 use crate::web::{ExportOptions, ExportReport, WebError, export_db, export_result};
 use std::path::{Path, PathBuf};
@@ -93,6 +93,39 @@ pub fn temp_export(parent: &Path) -> Result<tempfile::TempDir, ServeError> {
         dir: parent.to_path_buf(),
         error,
     })
+}
+
+/// The temporary export of `web serve`: a folder made by [`temp_export`]
+/// after the exports of earlier servers that were stopped are removed
+/// ([`crate::web::remove_stale_exports`]); the site goes into
+/// [`TempSite::site`]. Removed on [`TempSite::close`] or when dropped.
+pub struct TempSite {
+    dir: tempfile::TempDir,
+}
+
+impl TempSite {
+    /// Removes the stale exports in `parent` (`removed` told each folder),
+    /// then makes a new temporary export folder there.
+    pub fn new(parent: &Path, removed: &mut dyn FnMut(&Path)) -> Result<TempSite, ServeError> {
+        for d in crate::web::remove_stale_exports(parent) {
+            removed(&d);
+        }
+        Ok(TempSite {
+            dir: temp_export(parent)?,
+        })
+    }
+
+    /// The folder the site is exported into (`site` in the temporary
+    /// folder).
+    pub fn site(&self) -> PathBuf {
+        self.dir.path().join("site")
+    }
+
+    /// Removes the temporary folder: its path, and whether that worked.
+    pub fn close(self) -> (PathBuf, std::io::Result<()>) {
+        let p = self.dir.path().to_path_buf();
+        (p, self.dir.close())
+    }
 }
 
 #[cfg(test)]

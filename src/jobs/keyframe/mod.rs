@@ -2,11 +2,13 @@
 //! (Huang et al. 2015, Sec. 5.1) as one job: key-frames resolved
 //! ([`resolve_keys`]), one query written to a mesh output ([`write_path`]),
 //! the Table III grid ([`grid`]), the least mean smoothness per target
-//! ([`least_mean`]) and the smoothness floor ([`floor`]); a path's text
-//! summary ([`summary::path_summary`]). The options
+//! ([`least_mean`]) and the smoothness floor ([`floor`]); the report and
+//! heat-map files ([`files`]); a path's text summary
+//! ([`summary::path_summary`]). The options
 //! ([`KeyframeJobOptions`]) carry the defaults of `surfmotion keyframe`.
 
 pub mod error;
+pub mod files;
 pub mod floor;
 pub mod grid;
 pub mod keys;
@@ -17,6 +19,7 @@ pub mod text;
 pub mod verdict;
 
 pub use error::KeyframeJobError;
+pub use files::{write_grid_files, write_path_report, write_report};
 pub use floor::{FloorReport, FloorStage, PathFloors, floor};
 pub use grid::{GridTargets, LeastMean, grid, grid_planner, least_mean, least_mean_planner};
 pub use keys::{Keys, resolve_keys};
