@@ -100,6 +100,57 @@ fn live_overlap_forms() {
     assert!(with(&["--overlap", "sometimes"]).is_err());
 }
 
+/// `--repair-budget` (issue 45): live's default is the live bound,
+/// `none` gives offline's deformation options exactly (the meshes the
+/// live-against-offline tests compare), a budget by keys is read key by
+/// key; text that is not a budget is refused with the bad part quoted.
+/// `retarget`'s default stays unbounded.
+#[test]
+fn repair_budget_forms() {
+    use surfmotion::deform::RepairBudget;
+    let with = |extra: &[&str]| {
+        let mut argv = vec!["surfmotion", "--db", "d", "--replay", "c.bvh"];
+        argv.extend_from_slice(extra);
+        #[derive(clap::Parser)]
+        struct Wrapper {
+            #[command(flatten)]
+            args: super::live::Args,
+        }
+        let w = Wrapper::try_parse_from(argv).map_err(|e| e.to_string())?;
+        let o = super::live::options(&w.args).map_err(|e| e.to_string())?;
+        Ok::<_, String>(o.retarget)
+    };
+    let budget = |extra: &[&str]| with(extra).map(|o| o.deform_options.repair_budget);
+    assert_eq!(budget(&[]), Ok(RepairBudget::LIVE));
+    assert_eq!(budget(&["--repair-budget", "live"]), Ok(RepairBudget::LIVE));
+    assert_eq!(
+        with(&["--repair-budget", "none"]),
+        Ok(DriveOptions::default()),
+        "none is offline's synthesis"
+    );
+    let b = budget(&["--repair-budget=patch=10,per-triangle-projections=7"]).unwrap();
+    assert_eq!(b.most.patch_vertices, 10);
+    assert_eq!(b.per_triangle.projections, 7);
+    assert_eq!(b.most.projections, usize::MAX);
+    for (bad, quoted) in [
+        ("fast", "\"fast\""),
+        ("patch=many", "\"many\""),
+        ("rings=3", "\"rings\""),
+        ("patch=1,patch=2", "\"patch\""),
+    ] {
+        let e = budget(&["--repair-budget", bad]).unwrap_err();
+        assert!(
+            e.contains(quoted) && e.contains("--repair-budget"),
+            "{bad}: {e}"
+        );
+    }
+    let a = parse!(super::retarget::JobOpts,);
+    assert_eq!(a.options().deform_options.repair_budget, RepairBudget::NONE);
+    let a = parse!(super::retarget::JobOpts, "--repair-budget", "live");
+    assert_eq!(a.options().deform_options.repair_budget, RepairBudget::LIVE);
+    assert!(!a.is_default());
+}
+
 #[test]
 fn synth_defaults_are_the_librarys() {
     let a = parse!(

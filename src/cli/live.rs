@@ -69,6 +69,22 @@ pub struct Args {
     /// the next one waits, `always` every frame (a frame more latency), `off` never.
     #[arg(long, value_enum, value_name = "WHEN", num_args = 0..=1, default_value_t = super::values::OverlapArg::from(LiveOptions::default().overlap), default_missing_value = "queued")]
     pub overlap: super::values::OverlapArg,
+    /// The fold repair's work limit a frame, so each frame's deformation
+    /// meets its deadline whatever the fold: `live` (the default: 30,000
+    /// untangling projections and 4,000 patch unknowns a frame at most,
+    /// 1,000 and 60 per triangle turned over), `none` (the unbounded
+    /// repair, as `retarget` runs it: offline's meshes, with a slow tail
+    /// on clips that fold much), or
+    /// `projections=N,patch=N[,per-triangle-projections=N,per-triangle-patch=N]`
+    /// (a key left out is not bounded). Counted work, not time: the same
+    /// frames are bounded on any machine. The bound leaves triangles
+    /// turned over that the unbounded repair turns back, many on clips
+    /// that fold much (README, Live, session 51: CMU 02_02 on samba, 114 →
+    /// 1,603 turned over against the rest frame; its deformation CPU p99
+    /// 74 → 30 ms): `--report` and `--json` say how many, and on how many
+    /// frames the repair stopped at the bound.
+    #[arg(long = "repair-budget", value_name = "BUDGET")]
+    pub repair_budget: Option<surfmotion::deform::RepairBudget>,
     /// Frames of future the retrieval sees before it decides a frame (the
     /// fixed-lag trellis); 0 decides each frame as it comes (greedy, with a
     /// hysteresis against flicker). Each lag frame adds one frame period
@@ -224,7 +240,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 /// The session's options from the arguments.
 pub(super) fn options(a: &Args) -> anyhow::Result<LiveOptions> {
     let d = LiveOptions::default();
+    let mut retarget = d.retarget;
+    if let Some(b) = a.repair_budget {
+        retarget.deform_options.repair_budget = b;
+    }
     Ok(LiveOptions {
+        retarget,
         lag: a.lag,
         speed: a.speed,
         seconds: a.seconds,

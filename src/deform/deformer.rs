@@ -149,6 +149,9 @@ pub struct DeformWorkspace {
     start: Vec<[f64; 3]>,
     /// The last frame's repair work.
     work: unflip::Work,
+    /// The frame's repair budget ran out ([`RepairBudget`]'s `most`: a
+    /// repair it bound stopped): no further repair starts on the frame.
+    budget_over: bool,
     /// A repair pass's state after its rounds ([`unflip::Replay`]).
     replay: unflip::Replay,
     /// The surface's own rotations ([`RepairTurns`]) and one a seed.
@@ -193,7 +196,8 @@ impl DeformWorkspace {
     }
 
     /// The work the fold repair did on the last frame deformed with this
-    /// workspace (zero when nothing was turned over).
+    /// workspace, all its repairs together (zero when nothing was turned
+    /// over): within [`DeformOptions::repair_budget`]'s `most`.
     pub fn repair_work(&self) -> unflip::Work {
         self.work
     }
@@ -622,6 +626,7 @@ impl Deformer {
             best: vec![[0.0; 3]; self.n],
             start: vec![[0.0; 3]; self.n],
             work: unflip::Work::default(),
+            budget_over: false,
             replay: unflip::Replay::default(),
             surface_turn: vec![DQuat::IDENTITY; self.n],
             seeds: Vec::new(),
@@ -769,8 +774,12 @@ impl Deformer {
             adj,
             source,
         };
+        // The frame's repairs add their work here, against the budget.
+        ws.work = unflip::Work::default();
+        ws.budget_over = false;
         let counts = self.repair(f, out, ws, stitched && self.cloth_turns);
-        if stitched && self.cloth_fallback && counts.after > 0 {
+        // A frame whose budget ran out is left as its repair left it.
+        if stitched && self.cloth_fallback && counts.after > 0 && !ws.budget_over {
             return self.unstitched(f, out, ws, counts);
         }
         counts
@@ -809,9 +818,7 @@ impl Deformer {
         // The blend into `out`, the stitched result into `frame`.
         let mut frame = std::mem::take(&mut ws.blend);
         out.swap_with_slice(&mut frame);
-        let first = ws.work;
         let plain = self.repair(f, out, ws, false);
-        ws.work = add_work(first, ws.work);
         // `before` stays the stitched solve's (the deformation's count).
         let kept = if plain.after < stitched.after {
             ws.unstitched += 1;
@@ -1052,7 +1059,6 @@ impl Deformer {
         cloth_turns: bool,
     ) -> TurnedOver {
         let RepairOf { tris, source, .. } = f;
-        ws.work = unflip::Work::default();
         // The source's normals and areas once per frame; each reading
         // below only turns them.
         unflip::source_normals(tris, source, &mut ws.source_normals);
@@ -1099,8 +1105,9 @@ impl Deformer {
 
     /// The repair against the surface's own turns: rounds of reading each
     /// neighbourhood's turn off the frame as it now is and repairing what
-    /// faces against it, until nothing does or
-    /// [`DeformOptions::surface_rounds`] repairs have run. A repair moves
+    /// faces against it, until nothing does,
+    /// [`DeformOptions::surface_rounds`] repairs have run or the frame's
+    /// repair budget ran out ([`RepairBudget`]). A repair moves
     /// vertices, and with them the turns it was read against, so a round
     /// can leave triangles that the next reading flags; each round after
     /// the first lets the patch solve reach one doubling of rings further
@@ -1148,7 +1155,8 @@ impl Deformer {
             } else {
                 stalled += 1;
             }
-            if round == self.surface_rounds || stalled >= self.surface_stall {
+            let over = ws.budget_over;
+            if round == self.surface_rounds || stalled >= self.surface_stall || over {
                 ws.give_back(bad);
                 break;
             }
@@ -1197,8 +1205,14 @@ impl Deformer {
             ws.give_back(bad);
             return TurnedOver::default();
         }
-        let mut budget = unflip::Budget::new(self.repair_budget.limit(before));
+        // Within the triangles' share and what the frame's earlier repairs
+        // left of its most ([`RepairBudget::limit_after`]).
         let base = ws.work;
+        let limit = self.repair_budget.limit_after(before, &base);
+        // The frame's remainder, not this repair's share, bounds it: a
+        // stop then ends the frame's repair (`budget_over`).
+        let frame_bound = self.repair_budget.frame_bound(before, &limit);
+        let mut budget = unflip::Budget::new(limit);
         ws.references.restart();
         let fixed = untangle::UntangleOptions {
             max_steps: self.untangle.steps,
@@ -1220,7 +1234,9 @@ impl Deformer {
         let first = self.repair_with(f, out, ws, turn, bad, &fixed, &mut budget, grow);
         ws.work = add_work(base, budget.done);
         let before_retry = budget.done.patches;
-        if first == 0 || !adaptive {
+        ws.budget_over |= frame_bound && budget.done.stopped > 0;
+        // The last resort is not tried on a repair the budget stopped.
+        if first == 0 || !adaptive || budget.done.stopped > 0 {
             ws.give_back(kept);
             return TurnedOver {
                 before,
@@ -1341,7 +1357,9 @@ impl Deformer {
                 resume = started_at_best;
             }
             at_best = true;
-            if best == 0 {
+            // No pass after one the budget stopped: its refused steps
+            // would be built again and refused again.
+            if best == 0 || budget.done.stopped > 0 {
                 break;
             }
         }
@@ -1370,6 +1388,7 @@ fn add_work(a: unflip::Work, b: unflip::Work) -> unflip::Work {
         retry_patches: a.retry_patches + b.retry_patches,
         later_pass_patches: a.later_pass_patches + b.later_pass_patches,
         replayed_rounds: a.replayed_rounds + b.replayed_rounds,
+        stopped: a.stopped + b.stopped,
     }
 }
 

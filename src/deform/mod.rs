@@ -77,6 +77,7 @@ pub mod part_laplacian;
 mod patch_solve;
 pub mod pca;
 pub mod regions;
+pub mod repair_budget;
 mod repair_options;
 pub(crate) mod resident;
 pub mod soft;
@@ -87,8 +88,9 @@ mod unflip_patch;
 pub mod untangle;
 
 pub use deformer::{DeformWorkspace, Deformer, RegionResult};
-pub use options::{DeformMode, DeformOptions, RepairBudget, RepairTurns, TurnedOver};
+pub use options::{DeformMode, DeformOptions, RepairTurns, TurnedOver};
 pub use regions::{Held, part_joint};
+pub use repair_budget::{RepairBudget, RepairBudgetError};
 
 /// This thread's allocation calls so far in the library's tests (outside
 /// faer's symbolic analysis; [`patch_solve::counted`]): other modules'

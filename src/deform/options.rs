@@ -1,5 +1,6 @@
 //! The deformation's mode, options and turned-over count.
 
+pub use super::repair_budget::RepairBudget;
 use super::unflip;
 use super::untangle;
 
@@ -178,7 +179,9 @@ pub struct DeformOptions {
     /// the samba capture's knees).
     pub step_reach: f64,
     /// The most work the fold repair may do on one frame
-    /// ([`RepairBudget`]).
+    /// ([`RepairBudget`]). Default [`RepairBudget::NONE`] (the unbounded
+    /// repair, what offline `retarget` runs); live sessions use
+    /// [`RepairBudget::LIVE`] (a deadline a frame).
     pub repair_budget: RepairBudget,
     /// Weight holding the vertices two sibling regions share (the two
     /// thighs' regions under a skirt) at one shared target in both solves:
@@ -382,57 +385,6 @@ pub enum RepairTurns {
     SkinThenSurface,
     /// The surface's own rotations only.
     Surface,
-}
-
-/// The fold repair's work limit on one frame ([`unflip::Work`]): for a
-/// frame the solve left `b` triangles turned over, `per_triangle × b`,
-/// at most `most`. Steps that would go past it are not started, so a
-/// frame's repair costs at most a fixed amount of work, whatever the
-/// fold; the triangles it could not turn back are counted as left.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct RepairBudget {
-    /// Work allowed per triangle turned over before the repair.
-    pub per_triangle: unflip::WorkLimit,
-    /// The most work on any frame.
-    pub most: unflip::WorkLimit,
-}
-
-impl RepairBudget {
-    /// No limit (the repair as it was before the budget).
-    pub const NONE: RepairBudget = RepairBudget {
-        per_triangle: unflip::WorkLimit::NONE,
-        most: unflip::WorkLimit::NONE,
-    };
-
-    /// The limit on a frame with `bad` triangles turned over.
-    pub fn limit(&self, bad: usize) -> unflip::WorkLimit {
-        unflip::WorkLimit {
-            projections: self
-                .per_triangle
-                .projections
-                .saturating_mul(bad)
-                .min(self.most.projections),
-            patch_vertices: self
-                .per_triangle
-                .patch_vertices
-                .saturating_mul(bad)
-                .min(self.most.patch_vertices),
-        }
-    }
-}
-
-impl Default for RepairBudget {
-    /// No limit: the repair as before the budget. Measured (session 22,
-    /// `tools::surface_repair`, the real samba capture): 30,000
-    /// projections and 4,000 patch unknowns a frame at most (1,000 and 60
-    /// per triangle turned over) bring `live --report`'s deformation CPU
-    /// p99 from 71.8 to 27.3 ms on CMU 02_02 and from 91.1 to 28.1 ms on
-    /// 131_01, but leave 11 (02_02) and 9,136 (131_01) triangle-frames
-    /// turned over that the unbounded repair turns back (60,000 / 8,000:
-    /// 0 and 4,869), so a bound is not the default.
-    fn default() -> Self {
-        RepairBudget::NONE
-    }
 }
 
 impl Default for DeformOptions {

@@ -25,6 +25,10 @@ pub struct Work {
     /// Rounds not solved again because a pass that did not help had
     /// solved them from the same state (`unflip::Replay`): factorisations saved.
     pub replayed_rounds: usize,
+    /// Steps not started because they would have gone past the budget
+    /// (`RepairBudget`; an untangling sweep cut short, a patch not
+    /// solved): 0 on a frame the budget did not bind.
+    pub stopped: usize,
 }
 
 /// Limits of a frame's [`Work`].

@@ -180,6 +180,7 @@ impl RepairScratch {
     ) -> bool {
         let m = self.patch.len();
         if m > budget.patch_left() {
+            budget.done.stopped += 1;
             return false;
         }
         budget.done.patch_vertices += m;

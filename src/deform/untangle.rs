@@ -314,6 +314,7 @@ pub(crate) fn untangle_kept<N: Normals>(
         for &v in verts.iter() {
             if budget.projections_left() < most {
                 spent = true;
+                budget.done.stopped += 1;
                 break;
             }
             if relocate(

@@ -4,6 +4,7 @@
 //! optionally recorded to any sequence format when the stream ends.
 
 use crate::db::{BuildProgress, Character};
+use crate::deform::{DeformOptions, RepairBudget};
 use crate::drive::query::{QueryError, load_mocap};
 use crate::drive::trellis::DatabaseLinks;
 use crate::drive::{DriveError, DriveOptions, Prepared};
@@ -32,7 +33,10 @@ use std::time::{Duration, Instant};
 /// Options of [`run_live`] (the defaults are the CLI's).
 #[derive(Debug, Clone)]
 pub struct LiveOptions {
-    /// Synthesis (retrieval, timeline, placement, deformation) as offline.
+    /// Synthesis (retrieval, timeline, placement, deformation) as offline,
+    /// but for the fold repair's budget. Default: offline's with
+    /// [`RepairBudget::LIVE`] (a frame's repair bounded, so it meets the
+    /// frame's deadline; [`RepairBudget::NONE`] gives offline's meshes).
     pub retarget: DriveOptions,
     /// Frames of future before a frame is decided. Default: 3.
     pub lag: usize,
@@ -94,7 +98,13 @@ pub struct LiveOptions {
 impl Default for LiveOptions {
     fn default() -> Self {
         LiveOptions {
-            retarget: DriveOptions::default(),
+            retarget: DriveOptions {
+                deform_options: DeformOptions {
+                    repair_budget: RepairBudget::LIVE,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
             lag: 3,
             hysteresis: 1.0,
             history: 64,
@@ -296,8 +306,13 @@ pub struct LiveReport {
     pub input: Counters,
     /// The retrieval: frames decided, jumps, cuts, widened, the scales.
     pub retrieval: OnlineStats,
-    /// Triangle-frames left turned over by the deformation.
+    /// Triangle-frames left turned over by the deformation (after its
+    /// repair; what the budget cost shows here).
     pub turned_over: usize,
+    /// The fold repair's budget in force ([`LiveOptions::retarget`]'s
+    /// [`crate::deform::DeformOptions::repair_budget`]; its text form,
+    /// `none` when unbounded).
+    pub repair_budget: RepairBudget,
     /// Output frames the two-frame overlap held for the next
     /// ([`LiveOptions::overlap`]; each deformed in a pair with it).
     pub frames_held: u64,
@@ -379,6 +394,11 @@ impl LiveReport {
             st.deformation_plain_p99_ms,
             r.output.median_ms,
             r.output.p99_ms
+        );
+        let _ = writeln!(
+            t,
+            "fold repair budget: {}; stopped at it on {} frames; {} triangle-frames left turned over",
+            r.repair_budget, st.budget_reached_frames, r.turned_over
         );
         let s = &r.retrieval;
         let _ = writeln!(
@@ -686,6 +706,7 @@ pub fn run_live(
         input: source.counters(),
         retrieval: session.as_ref().map(|s| s.stats()).unwrap_or_default(),
         turned_over: session.as_ref().map_or(0, |s| s.turned_over()),
+        repair_budget: opts.retarget.deform_options.repair_budget,
         samples: tally.samples,
         actors: seen.map_or_else(Vec::new, |s| {
             s.lock().unwrap_or_else(|e| e.into_inner()).clone()

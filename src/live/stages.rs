@@ -136,6 +136,9 @@ pub(crate) struct StageTally {
     plain: Latencies,
     /// The fold repair's work summed over the frames.
     work: crate::deform::unflip::Work,
+    /// Frames whose repair stopped at its budget
+    /// ([`crate::deform::unflip::Work::stopped`] above 0).
+    budget_reached: u64,
     /// Frames counted.
     frames: u64,
 }
@@ -157,6 +160,8 @@ impl StageTally {
         self.work.retry_patches += w.retry_patches;
         self.work.later_pass_patches += w.later_pass_patches;
         self.work.replayed_rounds += w.replayed_rounds;
+        self.work.stopped += w.stopped;
+        self.budget_reached += u64::from(w.stopped > 0);
         self.frames += 1;
         let d = f.wall_ms[Stage::Deformation as usize];
         if f.repaired {
@@ -196,6 +201,7 @@ impl StageTally {
             retry_patch_solves_per_frame: per_frame(self.work.retry_patches),
             later_pass_patch_solves_per_frame: per_frame(self.work.later_pass_patches),
             replayed_rounds_per_frame: per_frame(self.work.replayed_rounds),
+            budget_reached_frames: self.budget_reached,
             stages,
             repaired_frames: r.frames,
             deformation_repaired_mean_ms: r.mean_ms,
@@ -259,4 +265,7 @@ pub struct StageReport {
     /// Rounds taken from the pass before instead of solved again, per
     /// output frame ([`crate::deform::unflip::Replay`]).
     pub replayed_rounds_per_frame: f64,
+    /// Frames whose repair stopped at its budget (a step not started:
+    /// [`crate::deform::unflip::Work::stopped`]); 0 with no budget.
+    pub budget_reached_frames: u64,
 }

@@ -102,6 +102,15 @@ fn stages_add_up_to_the_mesh_work() {
     if r["stages"]["repaired_frames"].as_u64() == Some(0) {
         assert_eq!(patches, 0.0, "{r}");
     }
+    // The repair's budget in force (live's default) and what it cost.
+    assert_eq!(
+        r["repair_budget"].as_str(),
+        Some(surfmotion::deform::RepairBudget::LIVE.to_string().as_str()),
+        "{r}"
+    );
+    let reached = r["stages"]["budget_reached_frames"].as_u64().unwrap();
+    assert!(reached <= frames, "{r}");
+    assert!(r["turned_over"].as_u64().is_some(), "{r}");
 
     // The text report shows the same breakdown.
     let out = live(&["--report"]);
@@ -111,4 +120,20 @@ fn stages_add_up_to_the_mesh_work() {
         assert!(text.contains(n), "{n} missing from:\n{text}");
     }
     assert!(text.contains("fold repair on"), "{text}");
+    let budget = format!(
+        "fold repair budget: {};",
+        surfmotion::deform::RepairBudget::LIVE
+    );
+    assert!(text.contains(&budget), "{text}");
+
+    // Unbounded: said so, and never stopped at a bound.
+    let out = live(&["--json", "--repair-budget", "none"]);
+    assert!(out.status.success());
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(r["repair_budget"].as_str(), Some("none"), "{r}");
+    assert_eq!(
+        r["stages"]["budget_reached_frames"].as_u64(),
+        Some(0),
+        "{r}"
+    );
 }
