@@ -52,9 +52,14 @@ use super::DeformOptions;
 use crate::mesh::solver::{FixedSolver, SolveError, Workspace};
 use glam::{DQuat, DVec3};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
+use rayon::prelude::*;
 
 /// Iterations of the rotation extraction per fit (as [`super::arap`]).
 const EXTRACT_ITERATIONS: usize = 8;
+
+/// The fewest cloth vertices a thread fits at a time
+/// ([`ClothStitch::fit_rotations`]).
+const FIT_CHUNK: usize = 256;
 
 /// A character's prefactored cloth stitch.
 pub struct ClothStitch {
@@ -233,33 +238,40 @@ impl ClothStitch {
     }
 
     /// Each cloth vertex's rotation from the source's one-ring to the
-    /// solved one (`ws.x`), the extraction started from the last.
+    /// solved one (`ws.x`), the extraction started from the last. Each
+    /// vertex's fit reads only the solve and its own last rotation, so the
+    /// vertices are split over the threads (the same bits on any number).
     fn fit_rotations(&self, source: &[[f64; 3]], ws: &mut StitchWorkspace) {
         let g = |l: u32| self.global[l as usize] as usize;
-        for (i, ring) in self.rings.iter().enumerate() {
-            let si = DVec3::from_array(source[g(i as u32)]);
-            let yi = DVec3::from_array(ws.x[i]);
-            let mut cov = Matrix3::<f64>::zeros();
-            for &j in ring {
-                let e = si - DVec3::from_array(source[g(j)]);
-                let f = yi - DVec3::from_array(ws.x[j as usize]);
-                for a in 0..3 {
-                    for b in 0..3 {
-                        cov[(a, b)] += f[a] * e[b];
+        let x = &ws.x;
+        self.rings
+            .par_iter()
+            .zip(ws.rots.par_iter_mut())
+            .enumerate()
+            .with_min_len(FIT_CHUNK)
+            .for_each(|(i, (ring, q))| {
+                let si = DVec3::from_array(source[g(i as u32)]);
+                let yi = DVec3::from_array(x[i]);
+                let mut cov = Matrix3::<f64>::zeros();
+                for &j in ring {
+                    let e = si - DVec3::from_array(source[g(j)]);
+                    let f = yi - DVec3::from_array(x[j as usize]);
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            cov[(a, b)] += f[a] * e[b];
+                        }
                     }
                 }
-            }
-            let q = ws.rots[i];
-            let guess = Rotation3::from(UnitQuaternion::from_quaternion(
-                nalgebra::Quaternion::new(q.w, q.x, q.y, q.z),
-            ));
-            let r = Rotation3::from_matrix_eps(&cov, 1e-9, EXTRACT_ITERATIONS, guess);
-            let u = UnitQuaternion::from_rotation_matrix(&r);
-            let nq = DQuat::from_xyzw(u.i, u.j, u.k, u.w);
-            if nq.is_finite() {
-                ws.rots[i] = nq.normalize();
-            }
-        }
+                let guess = Rotation3::from(UnitQuaternion::from_quaternion(
+                    nalgebra::Quaternion::new(q.w, q.x, q.y, q.z),
+                ));
+                let r = Rotation3::from_matrix_eps(&cov, 1e-9, EXTRACT_ITERATIONS, guess);
+                let u = UnitQuaternion::from_rotation_matrix(&r);
+                let nq = DQuat::from_xyzw(u.i, u.j, u.k, u.w);
+                if nq.is_finite() {
+                    *q = nq.normalize();
+                }
+            });
     }
 }
 
