@@ -152,6 +152,9 @@ pub struct DeformWorkspace {
     /// The frame's repair budget ran out ([`RepairBudget`]'s `most`: a
     /// repair it bound stopped): no further repair starts on the frame.
     budget_over: bool,
+    /// The repair running is the frame's first, against the skin's turns
+    /// (bounded by [`RepairBudget::skin`] too).
+    skin_repair: bool,
     /// A repair pass's state after its rounds ([`unflip::Replay`]).
     replay: unflip::Replay,
     /// The surface's own rotations ([`RepairTurns`]) and one a seed.
@@ -627,6 +630,7 @@ impl Deformer {
             start: vec![[0.0; 3]; self.n],
             work: unflip::Work::default(),
             budget_over: false,
+            skin_repair: false,
             replay: unflip::Replay::default(),
             surface_turn: vec![DQuat::IDENTITY; self.n],
             seeds: Vec::new(),
@@ -1066,6 +1070,7 @@ impl Deformer {
         let skin = std::mem::take(&mut ws.turn);
         let list = ws.take_list();
         let bad = turned_over_flagged_in(tris, &ws.source_normals, out, &skin, &mut ws.flags, list);
+        ws.skin_repair = true;
         let mut counts = match self.repair_turns {
             RepairTurns::Skin | RepairTurns::SkinThenSurface if cloth_turns => {
                 // Counted against the skin's turns, repaired against the
@@ -1074,7 +1079,7 @@ impl Deformer {
                 let list = ws.take_list();
                 let sn = &ws.source_normals;
                 let own = turned_over_flagged_in(tris, sn, out, &turn, &mut ws.flags, list);
-                let c = self.repair_against(f, out, ws, &turn, own, 0);
+                let c = self.repair_skin(f, out, ws, &turn, own);
                 ws.repair_turn = turn;
                 let before = bad.len();
                 ws.give_back(bad);
@@ -1084,7 +1089,7 @@ impl Deformer {
                 }
             }
             RepairTurns::Skin | RepairTurns::SkinThenSurface => {
-                self.repair_against(f, out, ws, &skin, bad, 0)
+                self.repair_skin(f, out, ws, &skin, bad)
             }
             RepairTurns::Surface => {
                 let before = bad.len();
@@ -1092,6 +1097,7 @@ impl Deformer {
                 TurnedOver { before, after: 0 }
             }
         };
+        ws.skin_repair = false;
         if let (Some(near), RepairTurns::SkinThenSurface | RepairTurns::Surface) =
             (&self.near, self.repair_turns)
         {
@@ -1101,6 +1107,60 @@ impl Deformer {
         }
         ws.turn = skin;
         counts
+    }
+
+    /// The frame's first repair, against the skin's turns `turn` (or the
+    /// stitch's on the cloth): [`Deformer::repair_against`], or where the
+    /// budget gives it no work ([`RepairBudget::skips_skin`]) the umbrella
+    /// smoothing that ends a patch repair alone ([`unflip::unflip_within`]
+    /// with no rounds), kept when it leaves fewer turned over. Smoothing
+    /// projects nothing and solves no patch, so the budget's `most` is
+    /// left whole to the surface's repair.
+    fn repair_skin(
+        &self,
+        f: RepairOf,
+        out: &mut [[f64; 3]],
+        ws: &mut DeformWorkspace,
+        turn: &[DQuat],
+        bad: Vec<u32>,
+    ) -> TurnedOver {
+        if !self.repair_budget.skips_skin() {
+            return self.repair_against(f, out, ws, turn, bad, 0);
+        }
+        let before = bad.len();
+        if before == 0 {
+            ws.give_back(bad);
+            return TurnedOver::default();
+        }
+        ws.best.copy_from_slice(out);
+        let smooth = unflip::RepairOptions {
+            rounds: 0,
+            replay: false,
+            ..self.repair
+        };
+        let mut nothing = unflip::Budget::new(unflip::WorkLimit::NONE);
+        let RepairOf { tris, adj, source } = f;
+        let replay = Some((&mut ws.replay, false));
+        let left = unflip::unflip_within(
+            tris,
+            adj,
+            source,
+            out,
+            turn,
+            bad,
+            &smooth,
+            &mut nothing,
+            replay,
+        );
+        let after = left.len();
+        ws.give_back(left);
+        if after >= before {
+            out.copy_from_slice(&ws.best);
+        }
+        TurnedOver {
+            before,
+            after: after.min(before),
+        }
     }
 
     /// The repair against the surface's own turns: rounds of reading each
@@ -1208,10 +1268,15 @@ impl Deformer {
         // Within the triangles' share and what the frame's earlier repairs
         // left of its most ([`RepairBudget::limit_after`]).
         let base = ws.work;
-        let limit = self.repair_budget.limit_after(before, &base);
-        // The frame's remainder, not this repair's share, bounds it: a
-        // stop then ends the frame's repair (`budget_over`).
-        let frame_bound = self.repair_budget.frame_bound(before, &limit);
+        let plain = self.repair_budget.limit_after(before, &base);
+        // The frame's remainder, not this repair's share (nor the skin's
+        // limit, [`RepairBudget::skin`]), bounds it: a stop then ends the
+        // frame's repair (`budget_over`).
+        let limit = match ws.skin_repair {
+            true => self.repair_budget.skin_limit_after(before, &base),
+            false => plain,
+        };
+        let frame_bound = self.repair_budget.frame_bound(before, &plain) && limit == plain;
         let mut budget = unflip::Budget::new(limit);
         ws.references.restart();
         let fixed = untangle::UntangleOptions {
