@@ -209,7 +209,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let (replay, rig_map) = (a.replay.as_deref(), a.clip.rig_map.as_deref());
         live_checks::check_record(out, &db, replay, rig_map)?;
     }
-    let opts = options(&a)?;
+    let opts = super::live_options::options(&a)?;
     let stop = AtomicBool::new(false);
     let report = run_live(
         &db,
@@ -235,38 +235,4 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         println!("wrote {}", f.display());
     }
     Ok(())
-}
-
-/// The session's options from the arguments.
-pub(super) fn options(a: &Args) -> anyhow::Result<LiveOptions> {
-    let d = LiveOptions::default();
-    let mut retarget = d.retarget;
-    if let Some(b) = a.repair_budget {
-        retarget.deform_options.repair_budget = b;
-    }
-    Ok(LiveOptions {
-        retarget,
-        lag: a.lag,
-        speed: a.speed,
-        seconds: a.seconds,
-        until_idle: a.until_idle,
-        lossless: a.lossless,
-        overlap: a.overlap.into(),
-        serve: a.serve,
-        analysis_window: a.analysis_window.max(1),
-        floor_step: a.floor_step.map(|mm| mm / 1000.0),
-        lift_settle: a.lift_settle.or(d.lift_settle),
-        keep_ground: a
-            .keep_ground
-            .map_or(d.keep_ground, |n| (n > 0).then_some(n)),
-        open_end: d.open_end || a.open_end,
-        history: a.history.max(1),
-        loops: a.loops,
-        actor: a.actor.clone(),
-        sample_every: a.sample_every,
-        load: a.clip.load_options()?,
-        glb: a.glb.options(),
-        usd: a.glb.usd_options(),
-        ..d
-    })
 }

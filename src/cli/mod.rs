@@ -17,6 +17,7 @@ mod graph;
 mod inspect;
 mod keyframe;
 mod live;
+mod live_options;
 mod live_send;
 mod log;
 mod malloc;
