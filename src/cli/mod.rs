@@ -13,6 +13,7 @@ mod defaults;
 mod demo;
 mod eval;
 mod flags;
+mod given;
 mod graph;
 mod inspect;
 mod keyframe;
