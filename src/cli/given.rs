@@ -60,4 +60,29 @@ mod tests {
             ["--skeleton", "--repair-budget"]
         );
     }
+
+    /// `batch`'s refusal of each target's options, printed, names every
+    /// flag of the group it refuses (`--skeleton` and `--repair-budget`
+    /// were refused unnamed until session 52).
+    #[test]
+    fn the_refusals_name_every_flag_of_their_group() {
+        use crate::cli::{retarget, transfer};
+        use surfmotion::jobs::batch_target::check_target_options;
+        let all = |cmd: clap::Command| -> Vec<String> {
+            let longs = cmd.get_arguments().filter_map(|a| a.get_long());
+            longs.map(|l| format!("--{l}")).collect()
+        };
+        let printed = |database: bool| {
+            let e = check_target_options(database, !database, database).unwrap_err();
+            crate::cli::flags::as_flags(&e.to_string())
+        };
+        let scan = all(transfer::JobOpts::augment_args(clap::Command::new("t")));
+        let db = all(retarget::JobOpts::augment_args(clap::Command::new("t")));
+        for (flags, m) in [(scan, printed(true)), (db, printed(false))] {
+            for f in flags {
+                let named = m.split([' ', ',']).any(|w| w == f);
+                assert!(named, "{f} not named in: {m}");
+            }
+        }
+    }
 }

@@ -50,7 +50,7 @@ pub enum TargetOptionsError {
     ScanOptionsOnDatabase,
     /// Retarget options with a scan target.
     #[error(
-        "`RetargetJobOptions` (deform, t_skel, w_retr, interpolate, blend) apply to a database target"
+        "`RetargetJobOptions` (deform, t_skel, w_retr, interpolate, blend, skeleton, repair_budget) apply to a database target"
     )]
     DatabaseOptionsOnScan,
 }
