@@ -3,8 +3,8 @@
 
 use super::argv::{Usage, allow_negative_numbers, bad_value, non_utf8_argument};
 use super::{
-    batch, blend, db, demo, eval, graph, inspect, keyframe, live, log, mesh, mocap, play, render,
-    repair, retarget, rig, synth, transfer, transfer_run, web,
+    batch, blend, db, demo, eval, graph, inspect, keyframe, live, live_run, log, mesh, mocap, play,
+    render, repair, retarget, rig, synth, transfer, transfer_run, web,
 };
 use clap::{CommandFactory, FromArgMatches, Subcommand};
 
@@ -204,7 +204,7 @@ pub fn main() -> anyhow::Result<()> {
         Command::Transfer(a) => transfer_run::run(*a),
         Command::Batch(a) => batch::run_batch(*a, verb_matches(&matches)),
         Command::Play(a) => play::run(a),
-        Command::Live(a) => live::run(*a),
+        Command::Live(a) => live_run::run(*a),
         Command::Web(c) => web::run(c),
     }
 }

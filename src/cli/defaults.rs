@@ -67,7 +67,7 @@ fn transfer_defaults_are_the_librarys() {
 #[test]
 fn live_defaults_are_the_librarys() {
     let a = parse!(super::live::Args, "--db", "d", "--replay", "c.bvh");
-    let o = super::live_options::options(&a).expect("default options");
+    let o = super::live::options(&a).expect("default options");
     same(&o, &surfmotion::jobs::live::LiveOptions::default());
 }
 
@@ -82,7 +82,7 @@ fn live_options(extra: &[&str]) -> Result<surfmotion::jobs::live::LiveOptions, S
     let mut argv = vec!["surfmotion", "--db", "d", "--replay", "c.bvh"];
     argv.extend_from_slice(extra);
     let w = Wrapper::try_parse_from(argv).map_err(|e| e.to_string())?;
-    super::live_options::options(&w.args).map_err(|e| e.to_string())
+    super::live::options(&w.args).map_err(|e| e.to_string())
 }
 
 /// `--overlap` alone is `queued`, as is no `--overlap` (the library's

@@ -18,7 +18,7 @@ mod graph;
 mod inspect;
 mod keyframe;
 mod live;
-mod live_options;
+mod live_run;
 mod live_send;
 mod log;
 mod malloc;
