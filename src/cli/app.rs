@@ -3,8 +3,8 @@
 
 use super::argv::{Usage, allow_negative_numbers, bad_value, non_utf8_argument};
 use super::{
-    batch, blend, db, demo, eval, graph, inspect, keyframe, live, log, mesh, mocap, play, render,
-    repair, retarget, rig, synth, transfer, transfer_run, web,
+    batch, blend, db, demo, eval, graph, inspect, keyframe, live, live_run, log, mesh, mocap, play,
+    render, repair, retarget, rig, synth, transfer, transfer_run, web,
 };
 use clap::{CommandFactory, FromArgMatches, Subcommand};
 
@@ -152,9 +152,9 @@ enum Command {
 pub fn main() -> anyhow::Result<()> {
     // clap exits 2 on a usage error, which the exit-code contract keeps for
     // internal errors: print its message and exit 1 (help and version 0).
-    let cli = match allow_negative_numbers(Cli::command())
+    let (cli, matches) = match allow_negative_numbers(Cli::command())
         .try_get_matches()
-        .and_then(|m| Cli::from_arg_matches(&m))
+        .and_then(|m| Cli::from_arg_matches(&m).map(|c| (c, m)))
     {
         Ok(c) => c,
         // clap's "invalid UTF-8 was detected in one or more arguments"
@@ -202,9 +202,15 @@ pub fn main() -> anyhow::Result<()> {
         Command::Keyframe(a) => keyframe::run(*a),
         Command::Eval(a) => eval::run(a),
         Command::Transfer(a) => transfer_run::run(*a),
-        Command::Batch(a) => batch::run_batch(*a),
+        Command::Batch(a) => batch::run_batch(*a, verb_matches(&matches)),
         Command::Play(a) => play::run(a),
-        Command::Live(a) => live::run(*a),
+        Command::Live(a) => live_run::run(*a),
         Command::Web(c) => web::run(c),
     }
+}
+
+/// The matches of the verb `m` (the whole command line's) names: what
+/// [`super::given`] reads which options were typed from.
+fn verb_matches(m: &clap::ArgMatches) -> &clap::ArgMatches {
+    m.subcommand().map_or(m, |(_, verb)| verb)
 }

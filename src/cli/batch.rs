@@ -2,6 +2,7 @@
 //! (`--db`) or a scan (`--scan --landmarks`), with the per-clip options of
 //! `retarget` and `transfer` (the same option groups, flattened).
 
+use super::given::given;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use surfmotion::batch::schedule::ShardSource;
@@ -125,8 +126,9 @@ fn print_summary(
 }
 
 /// Runs `batch`: the retarget or transfer job (loaded or factored once)
-/// as the converter of [`batch_folder`].
-pub fn run_batch(a: Args) -> anyhow::Result<()> {
+/// as the converter of [`batch_folder`]; `m` are `batch`'s matches (which
+/// options the command line gave).
+pub fn run_batch(a: Args, m: &clap::ArgMatches) -> anyhow::Result<()> {
     if let Some(Sub::Merge(m)) = a.command {
         return run_merge(m);
     }
@@ -134,7 +136,7 @@ pub fn run_batch(a: Args) -> anyhow::Result<()> {
         anyhow::bail!("give --mocap-dir and -o (or `batch merge DIR...`)");
     };
     let shard = resolve_shard(&a)?;
-    check_args(&a, &mocap_dir, &output)?;
+    check_args(&a, m, &mocap_dir, &output)?;
     let defaults = BatchOptions::default();
     let opts = BatchOptions {
         shard,
@@ -186,15 +188,22 @@ fn resolve_shard(a: &Args) -> anyhow::Result<Option<String>> {
     Ok(resolved.map(|(s, _)| s.spelled()))
 }
 
-/// Refuses options of the other target and outputs that would land on a
-/// clip or an input, before the character loads.
-fn check_args(a: &Args, mocap_dir: &Path, output: &Path) -> anyhow::Result<()> {
+/// Refuses options of the other target (given on the command line `m`,
+/// whatever their values) and outputs that would land on a clip or an
+/// input, before the character loads.
+fn check_args(
+    a: &Args,
+    m: &clap::ArgMatches,
+    mocap_dir: &Path,
+    output: &Path,
+) -> anyhow::Result<()> {
     let format = format!("--format {}", format!("{:?}", a.format).to_lowercase());
     a.glb
         .refuse_unless_glb(matches!(a.format, super::values::FormatArg::Glb), &format)?;
     a.glb
         .refuse_unless_usda(matches!(a.format, super::values::FormatArg::Usda), &format)?;
-    let (scan, retarget) = (a.scan_job.is_default(), a.retarget_job.is_default());
+    let scan = given::<super::transfer::JobOpts>(m).is_empty();
+    let retarget = given::<super::retarget::JobOpts>(m).is_empty();
     check_target_options(a.db.is_some(), scan, retarget)?;
     let (db, scan) = (a.db.as_deref(), a.scan.as_deref());
     let files = [&a.landmarks, &a.clip.rig_map, &a.clip.asf];

@@ -12,8 +12,8 @@ const FLAGS: &[(&str, &str)] = &[
         "--group, --marker-count, --marker-margin and --fps apply to --scan",
     ),
     (
-        "`RetargetJobOptions` (deform, t_skel, w_retr, interpolate, blend) apply to a database target",
-        "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db",
+        "`RetargetJobOptions` (deform, t_skel, w_retr, interpolate, blend, skeleton, repair_budget) apply to a database target",
+        "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate, --no-blend, --skeleton and --repair-budget apply to --db",
     ),
     (
         "(`InitOptions::sequences` of `db::init`: NAME=PATH)",
@@ -165,7 +165,7 @@ mod tests {
         let e = check_target_options(false, true, false).unwrap_err();
         assert_eq!(
             super::as_flags(&e.to_string()),
-            "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate and --no-blend apply to --db"
+            "--deform, --no-deform, --t-skel, --w-retr, --no-interpolate, --no-blend, --skeleton and --repair-budget apply to --db"
         );
         assert!(check_target_options(true, true, false).is_ok());
         assert!(check_target_options(false, false, true).is_ok());

@@ -1,10 +1,9 @@
-//! `surfmotion live`: a mocap stream drives the 4D character now (issue
-//! 45). Parses, calls [`surfmotion::jobs::live::run_live`] and prints.
+//! `surfmotion live`'s arguments: a mocap stream drives the 4D character
+//! now (issue 45). [`super::live_run`] checks them, calls
+//! [`surfmotion::jobs::live::run_live`] and prints.
 
 use std::path::PathBuf;
-use std::sync::atomic::AtomicBool;
-use surfmotion::jobs::live::{Listening, LiveInput, LiveOptions, run_live};
-use surfmotion::jobs::live_checks;
+use surfmotion::jobs::live::LiveOptions;
 
 /// Arguments of `live`.
 #[derive(clap::Args)]
@@ -174,67 +173,6 @@ pub enum Cmd {
         after_help = "Example:\n  surfmotion live --db samba_synth --bvh-tcp 127.0.0.1:7001 --until-idle 2 --report &\n  surfmotion live send 02_02.amc --to 127.0.0.1:7001 --protocol bvh\n  surfmotion live --db samba_synth --vmc --until-idle 2 --report &\n  surfmotion live send 02_02.amc --to 127.0.0.1:39539 --protocol vmc"
     )]
     Send(super::live_send::SendArgs),
-}
-
-/// Runs `live`.
-pub fn run(a: Args) -> anyhow::Result<()> {
-    if let Some(Cmd::Send(s)) = a.send {
-        return super::live_send::run(s);
-    }
-    super::malloc::one_arena();
-    let db =
-        a.db.clone()
-            .ok_or_else(|| anyhow::anyhow!("--db is required"))?;
-    let input = match (&a.replay, a.bvh_tcp, a.vmc, a.rokoko) {
-        (Some(p), ..) => LiveInput::Replay(p.clone()),
-        (None, Some(addr), ..) => LiveInput::BvhTcp(addr),
-        (None, None, Some(addr), _) => LiveInput::Vmc(addr),
-        (None, None, None, Some(addr)) => LiveInput::Rokoko(addr),
-        (None, None, None, None) => {
-            anyhow::bail!("give --replay CLIP, --bvh-tcp ADDR:PORT, --vmc or --rokoko")
-        }
-    };
-    let reachable = [a.bvh_tcp, a.vmc, a.rokoko, a.serve].into_iter().flatten();
-    for warning in live_checks::exposed(reachable) {
-        eprintln!("{warning}");
-    }
-    match &a.record {
-        Some(out) => a.glb.refuse_other_formats(out)?,
-        None => anyhow::ensure!(
-            !(a.glb.glb_quantize || a.glb.glb_no_normals || a.glb.usd_no_normals),
-            "--glb-quantize, --glb-no-normals and --usd-no-normals apply to the --record output: give --record OUT or leave them out"
-        ),
-    }
-    if let Some(out) = &a.record {
-        let (replay, rig_map) = (a.replay.as_deref(), a.clip.rig_map.as_deref());
-        live_checks::check_record(out, &db, replay, rig_map)?;
-    }
-    let opts = options(&a)?;
-    let stop = AtomicBool::new(false);
-    let report = run_live(
-        &db,
-        &input,
-        a.record.as_deref(),
-        &opts,
-        &super::Bars::new(),
-        &stop,
-        &mut |l| match l {
-            Listening::Stream(addr) => eprintln!("listening for {} on {addr}", input.protocol()),
-            Listening::Page(url) => eprintln!("live page at {url}"),
-        },
-        &mut |_| {},
-    )?;
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else if a.report {
-        print!("{}", report.text());
-    } else {
-        println!("{}", report.line());
-    }
-    for f in &report.recorded {
-        println!("wrote {}", f.display());
-    }
-    Ok(())
 }
 
 /// The session's options from the arguments.

@@ -120,12 +120,6 @@ impl JobOpts {
             usd: glb.usd_options(),
         }
     }
-
-    /// True when every option has its default (they apply only to 4D
-    /// characters).
-    pub fn is_default(&self) -> bool {
-        self.options() == DriveOptions::default() && self.character() == CharacterOptions::default()
-    }
 }
 
 /// Runs `retarget`: one [`RetargetJob`] and one clip.

@@ -133,13 +133,4 @@ impl JobOpts {
             fps: self.fps,
         })
     }
-
-    /// True when every option has its default (they apply only to scans).
-    pub fn is_default(&self) -> bool {
-        let d = ScanTransferOptions::default();
-        self.group.is_empty()
-            && self.marker_count == d.markers.count
-            && self.marker_margin == d.markers.margin
-            && self.fps == d.fps
-    }
 }

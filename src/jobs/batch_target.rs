@@ -50,14 +50,17 @@ pub enum TargetOptionsError {
     ScanOptionsOnDatabase,
     /// Retarget options with a scan target.
     #[error(
-        "`RetargetJobOptions` (deform, t_skel, w_retr, interpolate, blend) apply to a database target"
+        "`RetargetJobOptions` (deform, t_skel, w_retr, interpolate, blend, skeleton, repair_budget) apply to a database target"
     )]
     DatabaseOptionsOnScan,
 }
 
 /// Refuses scan transfer options with a database target (`database`) and
 /// retarget options with a scan target; `scan_default` and
-/// `retarget_default` say whether the caller left each at its defaults.
+/// `retarget_default` say whether the caller left each unset. Setting one
+/// to its default value counts as setting it: the CLI passes whether the
+/// command line gave any of the group's flags (`batch --db --fps 30` is
+/// refused as `--fps 25` is), not whether the values differ.
 pub fn check_target_options(
     database: bool,
     scan_default: bool,

@@ -504,6 +504,10 @@ fn batch_scan_options_reach_every_clip() {
     bad(&["--marker-margin", "0.9"], "--marker-margin 0.9");
     bad(&["--up", "x"], "--up 'x'");
     bad(&["--deform", "none"], "apply to --db");
+    // At its default value too (session 52: a value equal to the default
+    // was taken for the option left out).
+    bad(&["--w-retr", "1"], "apply to --db");
+    bad(&["--deform", "part"], "apply to --db");
 }
 
 /// Regression (issue 18, item 2): `retarget`'s options reach every clip of
@@ -539,6 +543,17 @@ fn batch_db_options_reach_every_clip() {
     let (o, _) = run("group", &["--group", "body"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("apply to --scan"));
+    // Regression (session 52): a scan option typed at its default value
+    // (`--fps 30`) was let through, where `--fps 25` was refused; given is
+    // given. Left out (the plain run above), it is no refusal.
+    let (o, out) = run("fps", &["--fps", "30"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--fps") && err.contains("apply to --scan"),
+        "{err}"
+    );
+    assert!(!out.exists(), "a refused batch wrote {}", out.display());
 }
 
 /// Regression (issue 18, item 3): a rerun after completion wrote a report

@@ -21,6 +21,15 @@ fn sources(ch: &Character, d: &std::path::Path, clip: &str) -> Output {
     synthesise(ch, &m.poses, &m.reference, 30.0, &opts).unwrap()
 }
 
+/// The real samba capture and `clip` retargeted onto it (the
+/// [`sources`] of its deformation), or `None` without the shared data.
+fn samba_clip(clip: &str) -> Option<(Character, Output)> {
+    let d = common::data_dir()?;
+    let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
+    let raw = sources(&ch, &d, clip);
+    Some((ch, raw))
+}
+
 /// Per frame: the triangles the solve turned over before the repair, the
 /// triangles left after it and the repair's work.
 struct Frames {
@@ -313,9 +322,9 @@ fn where_the_solve_folds_the_real_capture() {
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn the_fold_repair_stays_within_its_budget() {
-    let Some(d) = common::data_dir() else { return };
-    let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
-    let raw = sources(&ch, &d, "cmu-amc/02/02_02.amc");
+    let Some((ch, raw)) = samba_clip("cmu-amc/02/02_02.amc") else {
+        return;
+    };
     let budget = budget(30_000, 4_000);
     // The budget bounds each repair; the skin's turns alone (one repair,
     // counted against them as `deform_frames` counts), on the solve
@@ -385,9 +394,9 @@ fn the_fold_repair_stays_within_its_budget() {
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn the_live_budget_bounds_each_frames_whole_repair() {
-    let Some(d) = common::data_dir() else { return };
-    let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
-    let raw = sources(&ch, &d, "cmu-bvh/131_01.bvh");
+    let Some((ch, raw)) = samba_clip("cmu-bvh/131_01.bvh") else {
+        return;
+    };
     let live = RepairBudget {
         most: unflip::WorkLimit {
             projections: RepairBudget::LIVE.most.projections / 4,
@@ -433,10 +442,10 @@ fn the_live_budget_bounds_each_frames_whole_repair() {
 fn why_the_knees_fold() {
     use surfmotion::deform::Held;
     use surfmotion::rig::Canonical as C;
-    let Some(d) = common::data_dir() else { return };
-    let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
     let clip = std::env::var("SURFACE_KNEE_CLIP").unwrap_or("cmu-amc/02/02_02.amc".into());
-    let raw = sources(&ch, &d, &clip);
+    let Some((ch, raw)) = samba_clip(&clip) else {
+        return;
+    };
     let opts = DeformOptions {
         repair: unflip::RepairOptions {
             rounds: 0,
@@ -630,9 +639,9 @@ fn folds_before_repair(ch: &Character, raw: &Output, opts: &DeformOptions) -> us
 #[test]
 #[cfg_attr(no_shared_data, ignore = "needs ../shared/data (set SURFMOTION_DATA)")]
 fn the_knees_fold_less_before_the_repair() {
-    let Some(d) = common::data_dir() else { return };
-    let ch = Character::load(&crate::deform::samba_capture_db(&d), &surfmotion::db::Quiet).unwrap();
-    let raw = sources(&ch, &d, "cmu-amc/02/02_02.amc");
+    let Some((ch, raw)) = samba_clip("cmu-amc/02/02_02.amc") else {
+        return;
+    };
     let old = folds_before_repair(
         &ch,
         &raw,
