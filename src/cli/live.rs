@@ -71,17 +71,19 @@ pub struct Args {
     /// The fold repair's work limit a frame, so each frame's deformation
     /// meets its deadline whatever the fold: `live` (the default: 30,000
     /// untangling projections and 4,000 patch unknowns a frame at most,
-    /// 1,000 and 60 per triangle turned over), `none` (the unbounded
-    /// repair, as `retarget` runs it: offline's meshes, with a slow tail
-    /// on clips that fold much), or
-    /// `projections=N,patch=N[,per-triangle-projections=N,per-triangle-patch=N]`
-    /// (a key left out is not bounded). Counted work, not time: the same
-    /// frames are bounded on any machine. The bound leaves triangles
-    /// turned over that the unbounded repair turns back, many on clips
-    /// that fold much (README, Live, session 51: CMU 02_02 on samba, 114 →
-    /// 1,603 turned over against the rest frame; its deformation CPU p99
-    /// 74 → 30 ms): `--report` and `--json` say how many, and on how many
-    /// frames the repair stopped at the bound.
+    /// 1,000 and 60 per triangle turned over, all spent on the repair
+    /// against the surface's own turns, the skin's repair being its
+    /// smoothing alone), `none` (the unbounded repair, as `retarget` runs
+    /// it: offline's meshes, with a slow tail on clips that fold much), or
+    /// `projections=N,patch=N[,per-triangle-projections=N,per-triangle-patch=N,skin-projections=N,skin-patch=N]`
+    /// (a key left out is not bounded; the skin keys bound the frame's
+    /// first repair, against the skin's turns, and 0 for both leaves it
+    /// its smoothing alone). Counted work, not time: the same frames are
+    /// bounded on any machine. `--report` and `--json` say on how many
+    /// frames the repair stopped at the bound and how many triangles it
+    /// left turned over (README, Live, session 52: CMU 02_02 on samba, 99
+    /// triangle-frames turned over against the rest frame under `live`,
+    /// 114 under `none`).
     #[arg(long = "repair-budget", value_name = "BUDGET")]
     pub repair_budget: Option<surfmotion::deform::RepairBudget>,
     /// Frames of future the retrieval sees before it decides a frame (the

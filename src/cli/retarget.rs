@@ -71,12 +71,12 @@ pub struct JobOpts {
     #[arg(long, value_enum, default_value_t = CharacterOptions::default().skeleton.into())]
     pub skeleton: super::values::SkeletonKindArg,
     /// The fold repair's work limit a frame (as `live --repair-budget`):
-    /// `none` (the default: the unbounded repair, the fewest triangles
-    /// left turned over), `live` (live's bound: 30,000 projections and
-    /// 4,000 patch unknowns a frame, 1,000 and 60 per triangle turned
-    /// over), or `projections=N,patch=N[,per-triangle-projections=N,per-triangle-patch=N]`
-    /// (a key left out is not bounded). For comparing with live's output;
-    /// a bound leaves folds the unbounded repair turns back.
+    /// `none` (the default: the unbounded repair), `live` (live's bound:
+    /// 30,000 projections and 4,000 patch unknowns a frame, 1,000 and 60
+    /// per triangle turned over, all on the repair against the surface's
+    /// own turns), or
+    /// `projections=N,patch=N[,per-triangle-projections=N,per-triangle-patch=N,skin-projections=N,skin-patch=N]`
+    /// (a key left out is not bounded). For comparing with live's output.
     #[arg(long = "repair-budget", value_name = "BUDGET", default_value_t = DriveOptions::default().deform_options.repair_budget)]
     pub repair_budget: surfmotion::deform::RepairBudget,
 }
