@@ -117,8 +117,24 @@ fn the_page_shows_the_character_moving_with_the_stream() {
         indices.push(idx);
         shots.push(p);
     }
+    // The draw rate apart from the screenshots' stalls: from after the
+    // second shot to the stream's end.
+    let after_shots = b.eval("({drawn: live.drawn, at: live.lastDrawAt})");
     assert!(sender.wait().unwrap().success());
     std::thread::sleep(Duration::from_millis(500));
+    let clean = b.eval(&format!(
+        "(live.drawn - {d}) / ((live.lastDrawAt - {t}) / 1000)",
+        d = after_shots["drawn"].as_f64().unwrap_or(0.0),
+        t = after_shots["at"].as_f64().unwrap_or(0.0)
+    ));
+    // The browser's animation-frame rate with nothing left to draw: the
+    // most the page could draw at.
+    let idle = b.eval(
+        "new Promise(r => { let n = 0; const t0 = performance.now();
+          const f = () => { n++; if (performance.now() - t0 < 1000) requestAnimationFrame(f);
+            else r(n / ((performance.now() - t0) / 1000)); };
+          requestAnimationFrame(f); })",
+    );
     let st = b.eval(
         "({frames: live.frames, drawn: live.drawn, skipped: live.skipped, error: live.error,
           inRate: (live.frames - 1) / ((live.lastFrameAt - live.firstFrameAt) / 1000),
@@ -135,7 +151,7 @@ fn the_page_shows_the_character_moving_with_the_stream() {
         .collect();
     let (left, right) = changed(&shots[0], &shots[1]);
     eprintln!(
-        "live page: {st}; shots {shots:?} at frames {indices:?}: {left} character pixels and {right} skeleton pixels changed"
+        "live page: {st}; drawn {clean} frames/s after the shots, animation frames {idle}/s idle; shots {shots:?} at frames {indices:?}: {left} character pixels and {right} skeleton pixels changed"
     );
     let out = child.wait_with_output().unwrap();
     assert!(out.status.success());
