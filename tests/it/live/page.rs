@@ -87,6 +87,12 @@ fn the_page_shows_the_character_moving_with_the_stream() {
     });
     let (url, port) = (url.unwrap(), port.unwrap());
     let mut b = cdp::Browser::launch(&browser);
+    // A measurement knob: options for the page's address (e.g.
+    // `antialias=1&scale=0.5`).
+    let url = match std::env::var("SURFMOTION_LIVE_PAGE_QUERY") {
+        Ok(q) if !q.is_empty() => format!("{url}?{q}"),
+        _ => url,
+    };
     b.navigate(&url);
     b.wait_for("window.live && live.meta", Duration::from_secs(60));
     let mut sender = Command::new(bin())
@@ -141,7 +147,7 @@ fn the_page_shows_the_character_moving_with_the_stream() {
           drawRate: (live.drawn - 1) / ((live.lastDrawAt - live.firstDrawAt) / 1000),
           latencyMs: live.latencyMs, deliveryMs: live.deliveryMs, shownMs: live.shownMs,
           drawMs: live.drawMs, bytes: live.bytes, vertices: live.meta.vertices,
-          outputFps: live.outputFps})",
+          outputFps: live.outputFps, antialias: live.antialias, renderer: live.renderer, together: live.together || 0})",
     );
     // The browser asks for a favicon the page does not have.
     let errors: Vec<String> = b
