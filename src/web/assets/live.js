@@ -47,6 +47,21 @@
   const cv = document.getElementById("screen");
   const gl = cv.getContext("webgl", { antialias: live.antialias, preserveDrawingBuffer: false });
   const derivatives = !!gl.getExtension("OES_standard_derivatives");
+  // A program of two shaders; a shader that does not compile or a program
+  // that does not link is the page's error, named.
+  function program(vs, fs, what) {
+    const sh = (t, src) => {
+      const x = gl.createShader(t); gl.shaderSource(x, src); gl.compileShader(x);
+      if (!gl.getShaderParameter(x, gl.COMPILE_STATUS)) live.error = what + " shader: " + gl.getShaderInfoLog(x);
+      return x;
+    };
+    const p = gl.createProgram();
+    gl.attachShader(p, sh(gl.VERTEX_SHADER, vs));
+    gl.attachShader(p, sh(gl.FRAGMENT_SHADER, fs));
+    gl.linkProgram(p);
+    if (!gl.getProgramParameter(p, gl.LINK_STATUS)) live.error = what + " program: " + gl.getProgramInfoLog(p);
+    return p;
+  }
   const prog = (() => {
     const vs = `attribute vec3 q; uniform vec3 o; uniform float s; uniform mat4 m; varying vec3 wp;
       void main() { wp = o + q * s; gl_Position = m * vec4(wp, 1.0); }`;
@@ -57,16 +72,7 @@
         float l = 0.25 + 0.6 * max(dot(n, normalize(vec3(0.4, 0.7, 0.6))), 0.0)
                 + 0.25 * max(dot(n, normalize(vec3(-0.6, 0.2, -0.5))), 0.0);
         gl_FragColor = vec4(vec3(0.80, 0.74, 0.68) * l, 1.0); }`;
-    const sh = (t, src) => {
-      const x = gl.createShader(t); gl.shaderSource(x, src); gl.compileShader(x);
-      if (!gl.getShaderParameter(x, gl.COMPILE_STATUS)) live.error = "shader: " + gl.getShaderInfoLog(x);
-      return x;
-    };
-    const p = gl.createProgram();
-    gl.attachShader(p, sh(gl.VERTEX_SHADER, vs));
-    gl.attachShader(p, sh(gl.FRAGMENT_SHADER, fs));
-    gl.linkProgram(p);
-    return p;
+    return program(vs, fs, "character");
   })();
   const loc = {
     q: gl.getAttribLocation(prog, "q"), o: gl.getUniformLocation(prog, "o"),
@@ -74,13 +80,9 @@
   };
   // The skeleton: flat-coloured triangles given in the half's pixels.
   const flat = (() => {
-    const p = gl.createProgram();
-    const sh = (t, src) => { const x = gl.createShader(t); gl.shaderSource(x, src); gl.compileShader(x); return x; };
-    gl.attachShader(p, sh(gl.VERTEX_SHADER, `attribute vec2 a; attribute vec3 c; uniform vec2 size; varying vec3 v;
-      void main() { v = c; gl_Position = vec4(2.0 * a.x / size.x - 1.0, 1.0 - 2.0 * a.y / size.y, 0.0, 1.0); }`));
-    gl.attachShader(p, sh(gl.FRAGMENT_SHADER, "precision mediump float; varying vec3 v; void main() { gl_FragColor = vec4(v, 1.0); }"));
-    gl.linkProgram(p);
-    if (!gl.getProgramParameter(p, gl.LINK_STATUS)) live.error = "skeleton shader: " + gl.getProgramInfoLog(p);
+    const p = program(`attribute vec2 a; attribute vec3 c; uniform vec2 size; varying vec3 v;
+      void main() { v = c; gl_Position = vec4(2.0 * a.x / size.x - 1.0, 1.0 - 2.0 * a.y / size.y, 0.0, 1.0); }`,
+      "precision mediump float; varying vec3 v; void main() { gl_FragColor = vec4(v, 1.0); }", "skeleton");
     return { p, a: gl.getAttribLocation(p, "a"), c: gl.getAttribLocation(p, "c"), size: gl.getUniformLocation(p, "size") };
   })();
   // 5 floats a vertex (x, y, r, g, b): the floor, 18 bones of 6 vertices,
